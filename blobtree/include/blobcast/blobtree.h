@@ -1,0 +1,444 @@
+/*
+ * The blobtree: a CSG tree of approximate signed distance primitives combined
+ * with sharp and compact smooth operators (Zanni 2024, §4-§7).
+ *
+ * A struct bc_tree holds two forms of one scene:
+ *  - the editable model: n-ary nodes with stable 32-bit ids chosen by the
+ *    scene (0 is invalid), primitives with parameters and a rigid transform,
+ *    operators with their blend parameters;
+ *  - the linearized form (struct bc_lin): the binary post-order layout of the
+ *    paper's §7 that renderers read. An n-ary operator is folded left,
+ *    ((c0 op c1) op c2)..., into binary nodes that all share one parameter
+ *    record, so editing the operator writes one place.
+ *
+ * Editing a primitive's parameters rewrites that primitive's parameter record
+ * and its ABV only; editing an operator's parameters recomputes the ROIs and
+ * ABVs of its subtree; structural edits re-linearize in linear time. Nothing
+ * else is re-processed, and the dirty ranges say what changed.
+ */
+#ifndef BLOBCAST_BLOBTREE_H
+#define BLOBCAST_BLOBTREE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "blobcast/error.h"
+
+/* ---- Limits ------------------------------------------------------------ */
+
+/* Linearized nodes are addressed by a 22-bit ancestor field in the GPU node
+ * word (paper §7); the all-ones value marks "no ancestor". */
+#define BC_TREE_MAX_NODES ((1u << 22) - 1u)
+/* Nesting of the n-ary scene tree. Scene files and the binary encoding are
+ * parsed recursively and evaluation stacks are sized from it; folded n-ary
+ * operators keep long chains (combs) flat, so real scenes stay far below. */
+#define BC_TREE_MAX_DEPTH 128
+/* Evaluation stack entries needed by any tree within the depth limit: each
+ * n-ary level adds at most one pending operand. */
+#define BC_EVAL_STACK (BC_TREE_MAX_DEPTH + 2)
+/* Largest primitive size parameter (world units) and largest |coordinate|:
+ * keeps squared distances far from float overflow. */
+#define BC_PARAM_MAX_ABS 1.0e6f
+/* Floats of shape parameters a primitive may have (round cone: a, b, two
+ * radii). */
+#define BC_PRIM_MAX_PARAMS 8
+/* Floats of packed shape data in a primitive's parameter record. */
+#define BC_PRIM_PACKED 8
+
+#define BC_NONE UINT32_MAX
+
+/* ---- Node kinds -------------------------------------------------------- */
+
+enum bc_prim {
+	BC_PRIM_INVALID = 0,
+	BC_PRIM_SPHERE,
+	BC_PRIM_BOX,
+	BC_PRIM_CAPSULE,
+	BC_PRIM_CYLINDER,
+	BC_PRIM_TORUS,
+	BC_PRIM_CONE,
+	BC_PRIM_ROUND_CONE,
+	BC_PRIM_ELLIPSOID,
+	BC_PRIM_HEX_PRISM,
+	BC_PRIM_OCTAHEDRON,
+	BC_PRIM_BOX_FRAME,
+	BC_PRIM_CAPPED_TORUS,
+	BC_PRIM_LINK,
+	BC_PRIM_SOLID_ANGLE,
+	BC_PRIM_PYRAMID,
+	BC_PRIM_TRI_PRISM,
+	BC_PRIM_COUNT
+};
+
+enum bc_op {
+	BC_OP_INVALID = 0,
+	BC_OP_UNION,
+	BC_OP_INTERSECTION,
+	BC_OP_DIFFERENCE,
+	BC_OP_SMOOTH_UNION,
+	BC_OP_SMOOTH_INTERSECTION,
+	BC_OP_SMOOTH_DIFFERENCE,
+	BC_OP_COUNT
+};
+
+/* How an operator selects an operand when the other is missing (outside all
+ * its ABVs, i.e. treated as +inf): the paper's ignoreMod. */
+enum bc_op_class {
+	BC_OPCLASS_UNION = 0,        /* pass the present operand through */
+	BC_OPCLASS_INTERSECTION = 1, /* the node itself becomes missing */
+	BC_OPCLASS_DIFFERENCE = 2,   /* left missing: missing; right: pass */
+};
+
+/* ---- Primitive descriptions (blobtree/prim.c) --------------------------- */
+
+enum bc_param_flags {
+	BC_PARAM_OPTIONAL = 1u << 0, /* may be absent: takes def */
+	BC_PARAM_POSITIVE = 1u << 1, /* every component > 0 */
+	BC_PARAM_NONNEG = 1u << 2,   /* every component >= 0 */
+};
+
+/* One named parameter of a primitive: `count` floats at params[offset]. */
+struct bc_param_desc {
+	const char *name; /* scene-file key, e.g. "half_extents" */
+	uint8_t offset;
+	uint8_t count; /* 1 or 3 */
+	uint8_t flags; /* enum bc_param_flags */
+	float def;     /* default of every component when optional */
+};
+
+struct bc_prim_info {
+	const char *name; /* scene-file "type", e.g. "round_cone" */
+	uint8_t nparams;
+	const struct bc_param_desc *params;
+	bool exact; /* the field is the exact Euclidean distance */
+};
+
+/* Returns the description of kind, or NULL when kind is out of range. */
+const struct bc_prim_info *bc_prim_info(enum bc_prim kind);
+/* Returns the kind named name ("sphere"), or BC_PRIM_INVALID. */
+enum bc_prim bc_prim_from_name(const char *name);
+
+/* ---- Operators (blobtree/ops.c) ----------------------------------------- */
+
+/* Returns "union", "smooth_union", ... or NULL when out of range. */
+const char *bc_op_name(enum bc_op kind);
+enum bc_op bc_op_from_name(const char *name);
+enum bc_op_class bc_op_class(enum bc_op kind);
+bool bc_op_is_smooth(enum bc_op kind);
+
+/* Evaluates operator kind on operands f0 (left) and f1 (right). blend = β
+ * and range = r_o (paper eq. 8-18) are ignored by the sharp operators.
+ * Either operand may be +INFINITY (a missing operand): the result is then
+ * the operand selection of enum bc_op_class. Never returns NaN for non-NaN
+ * inputs. */
+float bc_op_eval(enum bc_op kind, float blend, float range, float f0, float f1);
+
+/* ---- Model data -------------------------------------------------------- */
+
+struct bc_prim_data {
+	enum bc_prim kind;
+	float params[BC_PRIM_MAX_PARAMS]; /* laid out by bc_prim_info */
+	float translate[3];
+	float rotate[4]; /* unit quaternion (x, y, z, w) */
+	float color[3];  /* linear RGB in [0, 1] */
+	bool has_color;
+};
+
+struct bc_op_data {
+	enum bc_op kind;
+	float blend; /* β > 0 for smooth operators, 0 otherwise */
+	float range; /* r_o; for smooth operators >= blend (see docs) */
+};
+
+/* Sets *p to a primitive of kind with every parameter at its default (or 0
+ * when it has none), identity transform and no colour. */
+void bc_prim_data_init(struct bc_prim_data *p, enum bc_prim kind);
+
+/* The default r_o of a smooth operator with blend β when the scene gives
+ * none: r_o = β, the smallest range for which G is continuous (docs). */
+float bc_op_default_range(float blend);
+
+/* Checks a primitive's or operator's parameters against the limits (finite,
+ * positive sizes, |values| <= BC_PARAM_MAX_ABS, unit quaternion within 1e-3
+ * -- which is then renormalized --, shape-specific rules). Returns 0 or
+ * BC_ERANGE / BC_ENONFINITE with the reason in ei. */
+int bc_prim_validate(struct bc_prim_data *p, struct bc_errinfo *ei);
+int bc_op_validate(const struct bc_op_data *op, struct bc_errinfo *ei);
+
+/* ---- Augmented bounding volumes ---------------------------------------- */
+
+enum bc_abv_shape {
+	BC_ABV_INVALID = 0,
+	BC_ABV_SPHERE,
+	BC_ABV_BOX, /* oriented box */
+	BC_ABV_CAPSULE,
+	BC_ABV_SHAPE_COUNT
+};
+
+/* A bounding shape, in a primitive's local frame (bc_prim_bound) or in world
+ * space (an ABV: already transformed and offset by the ROI's upper bound). */
+struct bc_abv {
+	enum bc_abv_shape shape;
+	float center[3];  /* sphere and box centre, capsule end a */
+	float end[3];     /* capsule end b */
+	float axis[3][3]; /* box: unit axes (rows) */
+	float half[3];    /* box half extents */
+	float radius;     /* sphere and capsule radius */
+};
+
+/* Writes the local-frame bounding shape of primitive p (untransformed). */
+void bc_prim_bound(const struct bc_prim_data *p, struct bc_abv *out);
+/* Writes the world AABB of a world-space bounding shape. */
+void bc_abv_aabb(const struct bc_abv *abv, float lo[3], float hi[3]);
+/* Clips the ray o + t d (d unit) against the shape. Returns true and the
+ * entry/exit parameters (t0 may be negative when o is inside) on a hit. */
+bool bc_abv_ray(const struct bc_abv *abv, const float o[3], const float d[3],
+		float *t0, float *t1);
+/* Returns true when the shape may meet the axis-aligned box [lo, hi]
+ * (conservative: never false when they meet). */
+bool bc_abv_meets_box(const struct bc_abv *abv, const float lo[3],
+		      const float hi[3]);
+
+/* ---- Primitive fields (blobtree/prim.c) -------------------------------- */
+
+/* Packs p's shape parameters into the BC_PRIM_PACKED floats the evaluator
+ * reads (derived values such as sines are precomputed here). */
+void bc_prim_pack(const struct bc_prim_data *p, float packed[BC_PRIM_PACKED]);
+/* Field of primitive kind at local point (x, y, z), from packed data. Exact
+ * SDF where bc_prim_info says so; otherwise a bound that is never below the
+ * exact distance to the shape's bounding volume (so ABVs stay valid). */
+float bc_prim_sdf(enum bc_prim kind, const float packed[BC_PRIM_PACKED],
+		  float x, float y, float z);
+
+/* ---- Camera ------------------------------------------------------------ */
+
+struct bc_camera {
+	float eye[3];
+	float target[3];
+	float up[3];
+	float fov_y_deg; /* vertical field of view, (0, 180) */
+};
+
+/* The default camera (eye (0,0,6) looking at the origin, up +y, 45 deg). */
+void bc_camera_default(struct bc_camera *cam);
+/* Returns 0 or BC_ERANGE when eye == target, up is parallel to the view
+ * direction, or the fov is outside (0, 180). */
+int bc_camera_validate(const struct bc_camera *cam, struct bc_errinfo *ei);
+
+/* A camera prepared for an image size: ray for pixel (i, j), j counted from
+ * the top row, passes through the pixel centre; directions are unit. */
+struct bc_view_rays {
+	float eye[3];
+	float forward[3], right[3], up[3]; /* orthonormal */
+	float tan_half_y, aspect;
+	uint32_t width, height;
+};
+void bc_view_rays_init(struct bc_view_rays *vr, const struct bc_camera *cam,
+		       uint32_t width, uint32_t height);
+/* Direction for the (fractional) pixel coordinate (x, y): pixel centres are
+ * at (i + 0.5, j + 0.5). */
+void bc_view_rays_dir(const struct bc_view_rays *vr, float x, float y,
+		      float dir[3]);
+
+/* ---- The tree ---------------------------------------------------------- */
+
+struct bc_tree;
+
+/* Returns a new empty tree, or NULL on allocation failure. Free with
+ * bc_tree_destroy (which accepts NULL). */
+struct bc_tree *bc_tree_create(void);
+void bc_tree_destroy(struct bc_tree *t);
+
+/*
+ * Building, in pre-order: bc_tree_begin() clears the tree; then operators are
+ * opened with bc_tree_push_op(), their children given (primitives with
+ * bc_tree_put_prim(), nested operators), and closed with bc_tree_pop_op();
+ * bc_tree_end() checks the whole and linearizes. id 0 asks for a fresh id.
+ * A tree with a single primitive and no operator is valid.
+ * Each returns 0 or an error with the reason in ei; after an error the
+ * builder must be restarted with bc_tree_begin().
+ */
+int bc_tree_begin(struct bc_tree *t);
+int bc_tree_push_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
+		    struct bc_errinfo *ei);
+int bc_tree_pop_op(struct bc_tree *t, struct bc_errinfo *ei);
+int bc_tree_put_prim(struct bc_tree *t, uint32_t id,
+		     const struct bc_prim_data *p, struct bc_errinfo *ei);
+int bc_tree_end(struct bc_tree *t, struct bc_errinfo *ei);
+
+/* Counts of the model: scene nodes, primitives, operators. */
+uint32_t bc_tree_node_count(const struct bc_tree *t);
+uint32_t bc_tree_prim_count(const struct bc_tree *t);
+/* Returns the root's id, 0 for an empty tree. */
+uint32_t bc_tree_root(const struct bc_tree *t);
+
+/* Reading the model (for writers and encoders). Returns false if id is
+ * unknown. Exactly one of prim/op is filled (the other's kind set to
+ * INVALID); out-parameters may be NULL. */
+bool bc_tree_get(const struct bc_tree *t, uint32_t id, struct bc_prim_data *prim,
+		 struct bc_op_data *op);
+/* Number of children of id (0 for primitives and unknown ids) and the id of
+ * child k (0 when out of range). */
+uint32_t bc_tree_child_count(const struct bc_tree *t, uint32_t id);
+uint32_t bc_tree_child(const struct bc_tree *t, uint32_t id, uint32_t k);
+/* Returns the parent's id, 0 for the root or an unknown id. */
+uint32_t bc_tree_parent(const struct bc_tree *t, uint32_t id);
+
+/* ---- Edits -------------------------------------------------------------- */
+
+/* Replaces the parameters of primitive id (kind must be unchanged). Only its
+ * parameter record and ABV are rewritten. */
+int bc_tree_set_prim(struct bc_tree *t, uint32_t id,
+		     const struct bc_prim_data *p, struct bc_errinfo *ei);
+/* Replaces the parameters of operator id; the kind may change among
+ * operators (the subtree's ROIs and ABVs are recomputed, the layout stays). */
+int bc_tree_set_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
+		   struct bc_errinfo *ei);
+/* Inserts a copy of the whole of sub as child number pos of operator
+ * parent_id (pos may equal the child count: append). Ids of sub must not
+ * exist in t (BC_EDUPID); sub's ids are kept. Re-linearizes. */
+int bc_tree_insert(struct bc_tree *t, uint32_t parent_id, uint32_t pos,
+		   const struct bc_tree *sub, struct bc_errinfo *ei);
+/* Removes node id and its subtree. An operator left with one child is
+ * replaced by that child (operators always have two or more). Removing the
+ * root empties the tree. Re-linearizes. */
+int bc_tree_remove(struct bc_tree *t, uint32_t id, struct bc_errinfo *ei);
+/* Replaces node id (and its subtree) with a copy of sub at the same place.
+ * sub's ids must be new to t, except that sub's root may reuse id. */
+int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
+		    struct bc_errinfo *ei);
+/* Copies the whole tree src into dst (dst is cleared first). */
+int bc_tree_copy(struct bc_tree *dst, const struct bc_tree *src,
+		 struct bc_errinfo *ei);
+
+/* What changed since the last bc_tree_take_dirty(): ranges are half-open,
+ * [lo, hi) with lo == hi meaning nothing; structure means everything. */
+struct bc_dirty {
+	bool structure;           /* re-linearized: upload everything */
+	uint32_t param_lo, param_hi; /* parameter records, in vec4 units */
+	uint32_t prim_lo, prim_hi;   /* primitives whose ABV changed */
+	uint32_t edits;           /* edits applied since the last take */
+};
+void bc_tree_take_dirty(struct bc_tree *t, struct bc_dirty *out);
+
+/* ---- The linearized form (read-only for renderers) --------------------- */
+
+/* GPU node word (paper §7), most significant bit first:
+ * isLeaf(1) isLeft(1) type(8) ancestor(22). For operators type is
+ * ignoreMod(2) isUnary(1) nodeop(5). */
+#define BC_WORD_LEAF (1u << 31)
+#define BC_WORD_LEFT (1u << 30)
+#define BC_WORD_TYPE_SHIFT 22
+#define BC_WORD_TYPE_MASK 0xffu
+#define BC_WORD_ANCESTOR_MASK 0x3fffffu
+#define BC_WORD_NO_ANCESTOR BC_WORD_ANCESTOR_MASK
+
+/* Parameter record sizes, in vec4 (16-byte) units. A primitive's record is
+ * the world-to-local affine map (three rows: R^T and -R^T t) followed by
+ * its packed shape data; an operator's is (blend, range, 0, 0). */
+#define BC_PRIM_RECORD_VEC4 5
+#define BC_OP_RECORD_VEC4 1
+
+struct bc_lin {
+	uint32_t count;  /* linearized (binary) nodes, post-order slots */
+	uint32_t nprims; /* primitives, in post-order */
+	/* Per slot. */
+	uint32_t *node;   /* 2 per slot: GPU node word, parameter offset */
+	uint32_t *first;  /* leftmost slot of the subtree */
+	uint32_t *jump;   /* fast ancestor: jump pointer, BC_NONE at root */
+	uint32_t *kills;  /* number of operand-killing edges up to the root */
+	uint32_t *node_id; /* stable id of the scene node it comes from */
+	uint32_t *prim_of; /* primitive index of a leaf, BC_NONE for ops */
+	float *roi;        /* 2 per slot: r-, r+ (paper eq. 13-16) */
+	/* Per primitive. */
+	uint32_t *prim_slot;   /* slot of primitive k */
+	struct bc_abv *abv;    /* world ABV of primitive k */
+	float (*color)[3];     /* colour of primitive k */
+	/* Parameter records: vec4 stride, nparam vec4s. */
+	float *param;
+	uint32_t nparam;
+	/* AABB of every ABV (the volume rays must cross), and its diagonal. */
+	float lo[3], hi[3];
+	float size;
+	/* Stack entries a full evaluation needs. */
+	uint32_t stack;
+};
+
+/* Returns the tree's linearized form (valid until the next structural edit;
+ * parameter edits update it in place). NULL for an empty tree. */
+const struct bc_lin *bc_tree_lin(const struct bc_tree *t);
+
+static inline uint32_t bc_lin_parent(const struct bc_lin *l, uint32_t slot)
+{
+	uint32_t a = l->node[2 * slot] & BC_WORD_ANCESTOR_MASK;
+	return a == BC_WORD_NO_ANCESTOR ? BC_NONE : a;
+}
+static inline bool bc_lin_is_leaf(const struct bc_lin *l, uint32_t slot)
+{
+	return (l->node[2 * slot] & BC_WORD_LEAF) != 0;
+}
+static inline uint32_t bc_lin_type(const struct bc_lin *l, uint32_t slot)
+{
+	return (l->node[2 * slot] >> BC_WORD_TYPE_SHIFT) & BC_WORD_TYPE_MASK;
+}
+/* Primitive kind of a leaf, operator kind of an operator slot. */
+static inline uint32_t bc_lin_kind(const struct bc_lin *l, uint32_t slot)
+{
+	uint32_t type = bc_lin_type(l, slot);
+	return bc_lin_is_leaf(l, slot) ? type : (type & 0x1fu);
+}
+static inline const float *bc_lin_param(const struct bc_lin *l, uint32_t slot)
+{
+	return l->param + 4u * (size_t)l->node[2 * slot + 1];
+}
+
+/* ---- Field evaluation (blobtree/eval.c) --------------------------------- */
+
+/* Field of primitive k (world point p), and of the whole tree. The _id
+ * variants also return the primitive index that decides the value (the
+ * operand each operator selects or weights most). */
+float bc_eval_prim(const struct bc_lin *l, uint32_t k, const float p[3]);
+float bc_eval_full(const struct bc_lin *l, const float p[3]);
+float bc_eval_full_id(const struct bc_lin *l, const float p[3], uint32_t *prim);
+
+/* A pruned tree view (paper §6.2, Fig. 11): the straight-line program that
+ * evaluates the field equivalent to the tree's inside the volume where only
+ * the given primitives are active. Operators with a missing operand act as
+ * selectors at build time and cost nothing at evaluation time. */
+struct bc_view_instr {
+	uint32_t slot;  /* slot of the leaf or operator */
+	uint32_t param; /* parameter offset, vec4 units */
+	uint16_t kind;  /* bc_prim or bc_op */
+	uint8_t leaf;
+	uint8_t pad;
+};
+
+struct bc_view {
+	struct bc_view_instr *instr;
+	uint32_t n, cap;
+	uint32_t stack; /* entries the evaluation needs */
+	bool empty;     /* every active primitive was pruned: field is +inf */
+};
+
+/* init/finish work on caller memory; finish accepts a zeroed view. */
+void bc_view_init(struct bc_view *v);
+void bc_view_finish(struct bc_view *v);
+/* Builds the view for the active primitive indices active[0..n) (strictly
+ * increasing). Cost is O(n log depth) -- independent of tree size -- using
+ * the jump pointers. Returns 0, BC_EINVAL (unsorted or out of range) or
+ * BC_ENOMEM. */
+int bc_view_build(struct bc_view *v, const struct bc_lin *l,
+		  const uint32_t *active, uint32_t n);
+/* Evaluates a view at p; +INFINITY for an empty view. */
+float bc_view_eval(const struct bc_view *v, const struct bc_lin *l,
+		   const float p[3]);
+float bc_view_eval_id(const struct bc_view *v, const struct bc_lin *l,
+		      const float p[3], uint32_t *prim);
+
+/* Sparse evaluation in one call: builds a view of active[0..n) into scratch
+ * (a bc_view reused by the caller) and evaluates it at p. */
+float bc_eval_sparse(const struct bc_lin *l, const uint32_t *active, uint32_t n,
+		     struct bc_view *scratch, const float p[3]);
+
+#endif

@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# Installs every Debian package blobcast needs to build, test and run.
+# Idempotent: when everything is present it prints nothing and exits 0.
+set -euo pipefail
+
+pkgs=(
+	build-essential cmake ninja-build pkg-config clang
+	libjansson-dev
+	libopenimageio-dev openimageio-tools
+	libturbojpeg0-dev
+	libuv1-dev
+	libegl-dev libgl-dev libgles-dev libegl1-mesa-dev libgl1-mesa-dev
+	libgl1-mesa-dri libosmesa6-dev python3-glad glslang-tools
+)
+
+missing=()
+for p in "${pkgs[@]}"; do
+	if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null |
+		grep -q 'install ok installed'; then
+		missing+=("$p")
+	fi
+done
+[ ${#missing[@]} -eq 0 ] && exit 0
+
+SUDO=
+[ "$(id -u)" -ne 0 ] && SUDO=sudo
+echo "install-deps: installing ${missing[*]}" >&2
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq >/dev/null
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null

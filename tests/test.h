@@ -1,0 +1,122 @@
+/*
+ * The in-tree test runner: a test file lists its tests in a table and ends
+ * with BC_TEST_MAIN(table). Each test executable is one ctest entry; it runs
+ * every test (or those named on the command line), prints one line per test
+ * and exits 1 if any failed, 77 if every test asked to be skipped.
+ */
+#ifndef BLOBCAST_TESTS_TEST_H
+#define BLOBCAST_TESTS_TEST_H
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+struct bc_test {
+	const char *name;
+	void (*fn)(void);
+};
+
+/* Failures in the running test; a test that calls BC_SKIP() is skipped. */
+static int bc_test_failures;
+static int bc_test_skipped;
+
+#define CHECK(cond)                                                            \
+	do {                                                                   \
+		if (!(cond)) {                                                 \
+			fprintf(stderr, "  %s:%d: CHECK failed: %s\n",         \
+				__FILE__, __LINE__, #cond);                    \
+			bc_test_failures++;                                    \
+		}                                                              \
+	} while (0)
+
+/* Like CHECK but ends the test on failure. */
+#define REQUIRE(cond)                                                          \
+	do {                                                                   \
+		if (!(cond)) {                                                 \
+			fprintf(stderr, "  %s:%d: REQUIRE failed: %s\n",       \
+				__FILE__, __LINE__, #cond);                    \
+			bc_test_failures++;                                    \
+			return;                                                \
+		}                                                              \
+	} while (0)
+
+#define CHECK_EQ_INT(a, b)                                                     \
+	do {                                                                   \
+		long long va_ = (long long)(a), vb_ = (long long)(b);          \
+		if (va_ != vb_) {                                              \
+			fprintf(stderr, "  %s:%d: %s == %s failed: %lld vs %lld\n", \
+				__FILE__, __LINE__, #a, #b, va_, vb_);         \
+			bc_test_failures++;                                    \
+		}                                                              \
+	} while (0)
+
+#define CHECK_NEAR(a, b, tol)                                                  \
+	do {                                                                   \
+		double va_ = (double)(a), vb_ = (double)(b);                   \
+		if (!(fabs(va_ - vb_) <= (double)(tol))) {                     \
+			fprintf(stderr,                                        \
+				"  %s:%d: |%s - %s| <= %s failed: %.9g vs %.9g\n", \
+				__FILE__, __LINE__, #a, #b, #tol, va_, vb_);   \
+			bc_test_failures++;                                    \
+		}                                                              \
+	} while (0)
+
+#define BC_SKIP(why)                                                           \
+	do {                                                                   \
+		fprintf(stderr, "  skipped: %s\n", why);                       \
+		bc_test_skipped = 1;                                           \
+		return;                                                        \
+	} while (0)
+
+static int bc_test_selected(int argc, char **argv, const char *name)
+{
+	if (argc < 2) {
+		return 1;
+	}
+	for (int i = 1; i < argc; i++) {
+		if (strcmp(argv[i], name) == 0) {
+			return 1;
+		}
+	}
+	return 0;
+}
+
+static int bc_test_run(const struct bc_test *tests, size_t n, int argc,
+		       char **argv)
+{
+	int failed = 0, skipped = 0, ran = 0;
+	for (size_t i = 0; i < n; i++) {
+		if (!bc_test_selected(argc, argv, tests[i].name)) {
+			continue;
+		}
+		bc_test_failures = 0;
+		bc_test_skipped = 0;
+		tests[i].fn();
+		ran++;
+		if (bc_test_failures) {
+			failed++;
+			printf("FAIL %s\n", tests[i].name);
+		} else if (bc_test_skipped) {
+			skipped++;
+			printf("skip %s\n", tests[i].name);
+		} else {
+			printf("ok   %s\n", tests[i].name);
+		}
+	}
+	printf("%d passed, %d failed, %d skipped\n", ran - failed - skipped,
+	       failed, skipped);
+	if (failed) {
+		return 1;
+	}
+	return (ran > 0 && skipped == ran) ? 77 : 0;
+}
+
+#define BC_TEST_MAIN(table)                                                    \
+	int main(int argc, char **argv)                                        \
+	{                                                                      \
+		return bc_test_run(table, sizeof(table) / sizeof(table[0]),    \
+				   argc, argv);                                \
+	}
+
+#endif
