@@ -148,7 +148,7 @@ struct bc_prim_data {
 struct bc_op_data {
 	enum bc_op kind;
 	float blend; /* β > 0 for smooth operators, 0 otherwise */
-	float range; /* r_o; for smooth operators >= blend (see docs) */
+	float range; /* r_o > blend / 6; continuous for r_o >= 7/6 blend */
 };
 
 /* Sets *p to a primitive of kind with every parameter at its default (or 0
@@ -316,6 +316,7 @@ int bc_tree_copy(struct bc_tree *dst, const struct bc_tree *src,
  * [lo, hi) with lo == hi meaning nothing; structure means everything. */
 struct bc_dirty {
 	bool structure;           /* re-linearized: upload everything */
+	uint32_t slot_lo, slot_hi;   /* node words (an operator kind changed) */
 	uint32_t param_lo, param_hi; /* parameter records, in vec4 units */
 	uint32_t prim_lo, prim_hi;   /* primitives whose ABV changed */
 	uint32_t edits;           /* edits applied since the last take */
