@@ -349,6 +349,7 @@ struct bc_lin {
 	uint32_t *first;  /* leftmost slot of the subtree */
 	uint32_t *jump;   /* fast ancestor: jump pointer, BC_NONE at root */
 	uint32_t *kills;  /* number of operand-killing edges up to the root */
+	uint32_t *depth;  /* binary depth, 0 at the root */
 	uint32_t *node_id; /* stable id of the scene node it comes from */
 	uint32_t *prim_of; /* primitive index of a leaf, BC_NONE for ops */
 	float *roi;        /* 2 per slot: r-, r+ (paper eq. 13-16) */

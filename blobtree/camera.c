@@ -1,0 +1,116 @@
+/*
+ * Cameras: the scene's camera and the pixel rays derived from it. Pixel
+ * (i, j), j counted from the top row, looks through the pixel centre; the
+ * vertical field of view is fov_y_deg; directions are unit length so that
+ * ray parameters are world distances.
+ */
+#include "blobcast/blobtree.h"
+
+#include <math.h>
+
+static void sub3(const float a[3], const float b[3], float out[3])
+{
+	out[0] = a[0] - b[0];
+	out[1] = a[1] - b[1];
+	out[2] = a[2] - b[2];
+}
+
+static void cross3(const float a[3], const float b[3], float out[3])
+{
+	out[0] = a[1] * b[2] - a[2] * b[1];
+	out[1] = a[2] * b[0] - a[0] * b[2];
+	out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+static float norm3(const float a[3])
+{
+	return sqrtf(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+}
+
+static void normalize3(float a[3])
+{
+	float n = norm3(a);
+	if (n > 0.0f) {
+		a[0] /= n;
+		a[1] /= n;
+		a[2] /= n;
+	}
+}
+
+void bc_camera_default(struct bc_camera *cam)
+{
+	*cam = (struct bc_camera){
+		.eye = {0.0f, 0.0f, 6.0f},
+		.target = {0.0f, 0.0f, 0.0f},
+		.up = {0.0f, 1.0f, 0.0f},
+		.fov_y_deg = 45.0f,
+	};
+}
+
+int bc_camera_validate(const struct bc_camera *cam, struct bc_errinfo *ei)
+{
+	float fwd[3], side[3];
+	for (int i = 0; i < 3; i++) {
+		if (!isfinite(cam->eye[i]) || !isfinite(cam->target[i]) ||
+		    !isfinite(cam->up[i])) {
+			return bc_errinfo_set(ei, BC_ENONFINITE,
+					      "camera: coordinates must be "
+					      "finite");
+		}
+		if (fabsf(cam->eye[i]) > BC_PARAM_MAX_ABS ||
+		    fabsf(cam->target[i]) > BC_PARAM_MAX_ABS) {
+			return bc_errinfo_set(ei, BC_ERANGE,
+					      "camera: coordinates beyond %g",
+					      (double)BC_PARAM_MAX_ABS);
+		}
+	}
+	if (!(cam->fov_y_deg > 0.0f && cam->fov_y_deg < 180.0f)) {
+		return bc_errinfo_set(ei, BC_ERANGE,
+				      "camera: fov_y_deg %g outside (0, 180)",
+				      (double)cam->fov_y_deg);
+	}
+	sub3(cam->target, cam->eye, fwd);
+	if (!(norm3(fwd) > 1e-6f)) {
+		return bc_errinfo_set(ei, BC_ERANGE,
+				      "camera: eye and target coincide");
+	}
+	normalize3(fwd);
+	cross3(fwd, cam->up, side);
+	if (!(norm3(side) > 1e-6f * (norm3(cam->up) + 1e-30f)) ||
+	    !(norm3(cam->up) > 0.0f)) {
+		return bc_errinfo_set(ei, BC_ERANGE,
+				      "camera: up is zero or parallel to the "
+				      "view direction");
+	}
+	return 0;
+}
+
+void bc_view_rays_init(struct bc_view_rays *vr, const struct bc_camera *cam,
+		       uint32_t width, uint32_t height)
+{
+	const float pi = 3.14159265358979f;
+	vr->eye[0] = cam->eye[0];
+	vr->eye[1] = cam->eye[1];
+	vr->eye[2] = cam->eye[2];
+	sub3(cam->target, cam->eye, vr->forward);
+	normalize3(vr->forward);
+	cross3(vr->forward, cam->up, vr->right);
+	normalize3(vr->right);
+	cross3(vr->right, vr->forward, vr->up);
+	vr->tan_half_y = tanf(cam->fov_y_deg * pi / 360.0f);
+	vr->width = width ? width : 1;
+	vr->height = height ? height : 1;
+	vr->aspect = (float)vr->width / (float)vr->height;
+}
+
+void bc_view_rays_dir(const struct bc_view_rays *vr, float x, float y,
+		      float dir[3])
+{
+	float sx = (2.0f * x / (float)vr->width - 1.0f) * vr->tan_half_y *
+		   vr->aspect;
+	float sy = (1.0f - 2.0f * y / (float)vr->height) * vr->tan_half_y;
+	for (int i = 0; i < 3; i++) {
+		dir[i] = vr->forward[i] + sx * vr->right[i] + sy * vr->up[i];
+	}
+	normalize3(dir);
+}

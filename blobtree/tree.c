@@ -1,0 +1,911 @@
+/*
+ * The editable blobtree model: a pool of n-ary nodes with stable ids, the
+ * pre-order builder, read access, and edits.
+ *
+ * Structural edits keep a strict order so that a failure changes nothing:
+ * first everything that can fail (validation, the new linearized arrays,
+ * pool and id-map room) is done or reserved, then the model is changed and
+ * the new layout filled, which cannot fail.
+ */
+#include "tree_impl.h"
+
+#include <string.h>
+
+#include "blobcast/alloc.h"
+
+/* ---- id map ------------------------------------------------------------- */
+
+static uint32_t hash_id(uint32_t id)
+{
+	/* A 32-bit finalizer (murmur3's) spreads sequential ids. */
+	id ^= id >> 16;
+	id *= 0x85ebca6bu;
+	id ^= id >> 13;
+	id *= 0xc2b2ae35u;
+	id ^= id >> 16;
+	return id;
+}
+
+static uint32_t map_find(const struct bc__idmap *m, uint32_t id)
+{
+	if (!m->cap || id == 0) {
+		return BC_NONE;
+	}
+	for (uint32_t i = hash_id(id) & (m->cap - 1);; i = (i + 1) & (m->cap - 1)) {
+		if (m->keys[i] == id) {
+			return m->vals[i];
+		}
+		if (m->keys[i] == 0) {
+			return BC_NONE;
+		}
+	}
+}
+
+static void map_put_nogrow(struct bc__idmap *m, uint32_t id, uint32_t val)
+{
+	uint32_t i = hash_id(id) & (m->cap - 1);
+	while (m->keys[i] != 0 && m->keys[i] != id) {
+		i = (i + 1) & (m->cap - 1);
+	}
+	if (m->keys[i] == 0) {
+		m->count++;
+	}
+	m->keys[i] = id;
+	m->vals[i] = val;
+}
+
+/* Makes room for `more` insertions at load <= 1/2. */
+static int map_reserve(struct bc__idmap *m, uint32_t more)
+{
+	uint64_t need = ((uint64_t)m->count + more) * 2u;
+	uint32_t cap = m->cap ? m->cap : 16;
+	struct bc__idmap bigger;
+	if (need <= m->cap) {
+		return 0;
+	}
+	while (cap < need) {
+		if (cap >= (1u << 30)) {
+			return BC_ELIMIT;
+		}
+		cap *= 2;
+	}
+	bigger.cap = cap;
+	bigger.count = 0;
+	bigger.keys = bc_calloc(cap, sizeof(uint32_t));
+	bigger.vals = bc_calloc(cap, sizeof(uint32_t));
+	if (!bigger.keys || !bigger.vals) {
+		bc_free(bigger.keys);
+		bc_free(bigger.vals);
+		return BC_ENOMEM;
+	}
+	for (uint32_t i = 0; i < m->cap; i++) {
+		if (m->keys[i]) {
+			map_put_nogrow(&bigger, m->keys[i], m->vals[i]);
+		}
+	}
+	bc_free(m->keys);
+	bc_free(m->vals);
+	*m = bigger;
+	return 0;
+}
+
+/* Linear-probing deletion with backward shift: no tombstones. */
+static void map_del(struct bc__idmap *m, uint32_t id)
+{
+	uint32_t mask = m->cap - 1, i, j;
+	if (!m->cap || id == 0) {
+		return;
+	}
+	for (i = hash_id(id) & mask; m->keys[i] != id; i = (i + 1) & mask) {
+		if (m->keys[i] == 0) {
+			return;
+		}
+	}
+	m->count--;
+	for (j = (i + 1) & mask; m->keys[j] != 0; j = (j + 1) & mask) {
+		uint32_t home = hash_id(m->keys[j]) & mask;
+		/* Move j back to i unless its home lies cyclically in (i, j]. */
+		bool stays = (i <= j) ? (i < home && home <= j)
+				      : (i < home || home <= j);
+		if (!stays) {
+			m->keys[i] = m->keys[j];
+			m->vals[i] = m->vals[j];
+			i = j;
+		}
+	}
+	m->keys[i] = 0;
+}
+
+/* ---- pool --------------------------------------------------------------- */
+
+static int pool_reserve(struct bc_tree *t, uint32_t more)
+{
+	uint32_t free_count = 0;
+	uint64_t need;
+	uint32_t cap;
+	struct bc__node *grown;
+	for (uint32_t f = t->free_head; f != BC_NONE && free_count < more;
+	     f = t->pool[f].next) {
+		free_count++;
+	}
+	need = (uint64_t)t->npool + (more - free_count);
+	if (need <= t->cap) {
+		return 0;
+	}
+	if (need > 2u * (uint64_t)BC_TREE_MAX_NODES) {
+		return BC_ELIMIT;
+	}
+	cap = t->cap ? t->cap : 64;
+	while (cap < need) {
+		cap *= 2;
+	}
+	grown = bc_reallocarray(t->pool, cap, sizeof(*grown));
+	if (!grown) {
+		return BC_ENOMEM;
+	}
+	t->pool = grown;
+	t->cap = cap;
+	return 0;
+}
+
+/* Takes a node from the free chain or the end of the pool; room must have
+ * been reserved. */
+static uint32_t pool_take(struct bc_tree *t)
+{
+	uint32_t n;
+	if (t->free_head != BC_NONE) {
+		n = t->free_head;
+		t->free_head = t->pool[n].next;
+	} else {
+		n = t->npool++;
+	}
+	memset(&t->pool[n], 0, sizeof(t->pool[n]));
+	t->pool[n].parent = BC_NONE;
+	t->pool[n].first_child = BC_NONE;
+	t->pool[n].last_child = BC_NONE;
+	t->pool[n].next = BC_NONE;
+	t->pool[n].prev = BC_NONE;
+	t->pool[n].live = true;
+	return n;
+}
+
+static void pool_release(struct bc_tree *t, uint32_t n)
+{
+	t->pool[n].live = false;
+	t->pool[n].next = t->free_head;
+	t->free_head = n;
+}
+
+/* Returns an id not in use (ids wrap around past 2^32-1, skipping 0). */
+static uint32_t fresh_id(struct bc_tree *t)
+{
+	while (t->next_id == 0 || map_find(&t->ids, t->next_id) != BC_NONE) {
+		t->next_id++;
+	}
+	return t->next_id++;
+}
+
+/* ---- create/destroy ----------------------------------------------------- */
+
+static void tree_clear(struct bc_tree *t)
+{
+	bc_free(t->pool);
+	bc_free(t->ids.keys);
+	bc_free(t->ids.vals);
+	bc__lin_free(&t->lin);
+	memset(t, 0, sizeof(*t));
+	t->root = BC_NONE;
+	t->free_head = BC_NONE;
+	t->next_id = 1;
+}
+
+struct bc_tree *bc_tree_create(void)
+{
+	struct bc_tree *t = bc_calloc(1, sizeof(*t));
+	if (t) {
+		t->root = BC_NONE;
+		t->free_head = BC_NONE;
+		t->next_id = 1;
+	}
+	return t;
+}
+
+void bc_tree_destroy(struct bc_tree *t)
+{
+	if (!t) {
+		return;
+	}
+	tree_clear(t);
+	bc_free(t);
+}
+
+/* ---- model helpers ------------------------------------------------------ */
+
+static void link_child(struct bc_tree *t, uint32_t parent, uint32_t before,
+		       uint32_t child)
+{
+	struct bc__node *p = &t->pool[parent], *c = &t->pool[child];
+	c->parent = parent;
+	c->next = before;
+	if (before == BC_NONE) {
+		c->prev = p->last_child;
+		if (p->last_child != BC_NONE) {
+			t->pool[p->last_child].next = child;
+		} else {
+			p->first_child = child;
+		}
+		p->last_child = child;
+	} else {
+		c->prev = t->pool[before].prev;
+		if (c->prev != BC_NONE) {
+			t->pool[c->prev].next = child;
+		} else {
+			p->first_child = child;
+		}
+		t->pool[before].prev = child;
+	}
+	p->nchildren++;
+}
+
+static void unlink_child(struct bc_tree *t, uint32_t child)
+{
+	struct bc__node *c = &t->pool[child];
+	struct bc__node *p = &t->pool[c->parent];
+	if (c->prev != BC_NONE) {
+		t->pool[c->prev].next = c->next;
+	} else {
+		p->first_child = c->next;
+	}
+	if (c->next != BC_NONE) {
+		t->pool[c->next].prev = c->prev;
+	} else {
+		p->last_child = c->prev;
+	}
+	p->nchildren--;
+	c->parent = BC_NONE;
+	c->next = BC_NONE;
+	c->prev = BC_NONE;
+}
+
+/* Child number pos of parent, BC_NONE past the end. */
+static uint32_t child_at(const struct bc_tree *t, uint32_t parent, uint32_t pos)
+{
+	uint32_t c = t->pool[parent].first_child;
+	while (c != BC_NONE && pos-- > 0) {
+		c = t->pool[c].next;
+	}
+	return c;
+}
+
+/* Depth of node n (the root has depth 1). */
+static uint32_t depth_of(const struct bc_tree *t, uint32_t n)
+{
+	uint32_t d = 0;
+	for (; n != BC_NONE; n = t->pool[n].parent) {
+		d++;
+	}
+	return d;
+}
+
+struct subtree_stats {
+	uint32_t nodes, prims, ops, depth;
+};
+
+static void subtree_stats(const struct bc_tree *t, uint32_t n, uint32_t depth,
+			  struct subtree_stats *st)
+{
+	st->nodes++;
+	if (depth > st->depth) {
+		st->depth = depth;
+	}
+	if (!t->pool[n].is_op) {
+		st->prims++;
+		return;
+	}
+	st->ops++;
+	for (uint32_t c = t->pool[n].first_child; c != BC_NONE;
+	     c = t->pool[c].next) {
+		subtree_stats(t, c, depth + 1, st);
+	}
+}
+
+static void free_subtree(struct bc_tree *t, uint32_t n)
+{
+	uint32_t c = t->pool[n].first_child;
+	while (c != BC_NONE) {
+		uint32_t next = t->pool[c].next;
+		free_subtree(t, c);
+		c = next;
+	}
+	map_del(&t->ids, t->pool[n].id);
+	if (t->pool[n].is_op) {
+		t->nops--;
+	} else {
+		t->nprims--;
+	}
+	t->nnodes--;
+	pool_release(t, n);
+}
+
+/* Replaces t's layout with one built for the model's current counts. The
+ * arrays must have been allocated (into fresh) before the model changed. */
+static void install_lin(struct bc_tree *t, struct bc_lin *fresh)
+{
+	bc__lin_free(&t->lin);
+	t->has_lin = false;
+	if (t->root == BC_NONE) {
+		bc__lin_free(fresh);
+	} else {
+		t->lin = *fresh;
+		t->has_lin = true;
+		bc__lin_fill(t, &t->lin);
+	}
+	memset(fresh, 0, sizeof(*fresh));
+	t->dirty.structure = true;
+	t->dirty.edits++;
+}
+
+/* ---- builder ------------------------------------------------------------ */
+
+int bc_tree_begin(struct bc_tree *t)
+{
+	tree_clear(t);
+	t->building = true;
+	return 0;
+}
+
+/* Creates a node with id (0 = fresh) under the innermost open operator. */
+static int add_node(struct bc_tree *t, uint32_t id, bool is_op,
+		    struct bc_errinfo *ei, uint32_t *out)
+{
+	uint32_t n;
+	int rc;
+	if (!t->building) {
+		return bc_errinfo_set(ei, BC_ESTATE,
+				      "tree: bc_tree_begin() not called");
+	}
+	if (t->nopen == 0 && t->root != BC_NONE) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+				      "tree: a scene has exactly one root");
+	}
+	if (is_op && t->nopen >= BC_TREE_MAX_DEPTH) {
+		return bc_errinfo_set(ei, BC_EDEPTH,
+				      "tree: nesting deeper than %d",
+				      BC_TREE_MAX_DEPTH);
+	}
+	if (!is_op && t->nopen + 1 > BC_TREE_MAX_DEPTH) {
+		return bc_errinfo_set(ei, BC_EDEPTH,
+				      "tree: nesting deeper than %d",
+				      BC_TREE_MAX_DEPTH);
+	}
+	if (t->nnodes >= BC_TREE_MAX_NODES ||
+	    (!is_op && 2u * t->nprims + 1u > BC_TREE_MAX_NODES)) {
+		return bc_errinfo_set(ei, BC_ELIMIT,
+				      "tree: more than %u nodes",
+				      BC_TREE_MAX_NODES);
+	}
+	if (id != 0 && map_find(&t->ids, id) != BC_NONE) {
+		return bc_errinfo_set(ei, BC_EDUPID, "tree: duplicate id %u",
+				      id);
+	}
+	if ((rc = pool_reserve(t, 1)) || (rc = map_reserve(&t->ids, 1))) {
+		return bc_errinfo_set(ei, rc, "tree: %s", bc_strerror(rc));
+	}
+	n = pool_take(t);
+	t->pool[n].auto_id = id == 0;
+	t->pool[n].id = id ? id : fresh_id(t);
+	t->pool[n].is_op = is_op;
+	map_put_nogrow(&t->ids, t->pool[n].id, n);
+	if (t->nopen) {
+		link_child(t, t->open[t->nopen - 1], BC_NONE, n);
+	} else {
+		t->root = n;
+	}
+	t->nnodes++;
+	*out = n;
+	return 0;
+}
+
+int bc_tree_push_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
+		    struct bc_errinfo *ei)
+{
+	uint32_t n;
+	struct bc_op_data o = *op;
+	int rc;
+	if (bc_op_is_smooth(o.kind) && o.range == 0.0f) {
+		o.range = bc_op_default_range(o.blend);
+	}
+	if (!bc_op_is_smooth(o.kind)) {
+		o.blend = 0.0f;
+		o.range = 0.0f;
+	}
+	if ((rc = bc_op_validate(&o, ei)) || (rc = add_node(t, id, true, ei, &n))) {
+		return rc;
+	}
+	t->pool[n].u.op = o;
+	t->nops++;
+	t->open[t->nopen++] = n;
+	return 0;
+}
+
+int bc_tree_pop_op(struct bc_tree *t, struct bc_errinfo *ei)
+{
+	uint32_t n;
+	if (!t->building || t->nopen == 0) {
+		return bc_errinfo_set(ei, BC_ESTATE, "tree: no open operator");
+	}
+	n = t->open[t->nopen - 1];
+	if (t->pool[n].nchildren < 2) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+				      "tree: operator %u (%s) needs two or "
+				      "more children, has %u",
+				      t->pool[n].id,
+				      bc_op_name(t->pool[n].u.op.kind),
+				      t->pool[n].nchildren);
+	}
+	t->nopen--;
+	return 0;
+}
+
+int bc_tree_put_prim(struct bc_tree *t, uint32_t id,
+		     const struct bc_prim_data *p, struct bc_errinfo *ei)
+{
+	struct bc_prim_data copy = *p;
+	uint32_t n;
+	int rc;
+	if ((rc = bc_prim_validate(&copy, ei)) ||
+	    (rc = add_node(t, id, false, ei, &n))) {
+		return rc;
+	}
+	t->pool[n].u.prim = copy;
+	t->nprims++;
+	return 0;
+}
+
+int bc_tree_end(struct bc_tree *t, struct bc_errinfo *ei)
+{
+	struct bc_lin fresh;
+	int rc;
+	if (!t->building) {
+		return bc_errinfo_set(ei, BC_ESTATE,
+				      "tree: bc_tree_begin() not called");
+	}
+	if (t->nopen) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+				      "tree: operator %u not closed",
+				      t->pool[t->open[t->nopen - 1]].id);
+	}
+	if (t->root == BC_NONE) {
+		return bc_errinfo_set(ei, BC_EINVAL, "tree: no root node");
+	}
+	if ((rc = bc__lin_alloc(&fresh, t->nprims, t->nops))) {
+		return bc_errinfo_set(ei, rc, "tree: %s", bc_strerror(rc));
+	}
+	t->building = false;
+	install_lin(t, &fresh);
+	return 0;
+}
+
+/* ---- reading ------------------------------------------------------------ */
+
+uint32_t bc_tree_node_count(const struct bc_tree *t)
+{
+	return t->nnodes;
+}
+
+uint32_t bc_tree_prim_count(const struct bc_tree *t)
+{
+	return t->nprims;
+}
+
+uint32_t bc_tree_root(const struct bc_tree *t)
+{
+	return (t->root == BC_NONE || t->building) ? 0 : t->pool[t->root].id;
+}
+
+bool bc_tree_get(const struct bc_tree *t, uint32_t id, struct bc_prim_data *prim,
+		 struct bc_op_data *op)
+{
+	uint32_t n = map_find(&t->ids, id);
+	if (prim) {
+		memset(prim, 0, sizeof(*prim));
+	}
+	if (op) {
+		memset(op, 0, sizeof(*op));
+	}
+	if (n == BC_NONE) {
+		return false;
+	}
+	if (t->pool[n].is_op && op) {
+		*op = t->pool[n].u.op;
+	} else if (!t->pool[n].is_op && prim) {
+		*prim = t->pool[n].u.prim;
+	}
+	return true;
+}
+
+uint32_t bc_tree_child_count(const struct bc_tree *t, uint32_t id)
+{
+	uint32_t n = map_find(&t->ids, id);
+	return n == BC_NONE ? 0 : t->pool[n].nchildren;
+}
+
+uint32_t bc_tree_child(const struct bc_tree *t, uint32_t id, uint32_t k)
+{
+	uint32_t n = map_find(&t->ids, id), c;
+	if (n == BC_NONE) {
+		return 0;
+	}
+	c = child_at(t, n, k);
+	return c == BC_NONE ? 0 : t->pool[c].id;
+}
+
+uint32_t bc_tree_parent(const struct bc_tree *t, uint32_t id)
+{
+	uint32_t n = map_find(&t->ids, id);
+	if (n == BC_NONE || t->pool[n].parent == BC_NONE) {
+		return 0;
+	}
+	return t->pool[t->pool[n].parent].id;
+}
+
+const struct bc_lin *bc_tree_lin(const struct bc_tree *t)
+{
+	return t->has_lin ? &t->lin : NULL;
+}
+
+void bc_tree_take_dirty(struct bc_tree *t, struct bc_dirty *out)
+{
+	*out = t->dirty;
+	memset(&t->dirty, 0, sizeof(t->dirty));
+}
+
+/* ---- parameter edits ---------------------------------------------------- */
+
+static void dirty_range(uint32_t *lo, uint32_t *hi, uint32_t a, uint32_t b)
+{
+	if (*lo == *hi) {
+		*lo = a;
+		*hi = b;
+		return;
+	}
+	if (a < *lo) {
+		*lo = a;
+	}
+	if (b > *hi) {
+		*hi = b;
+	}
+}
+
+static uint32_t live_node(const struct bc_tree *t, uint32_t id)
+{
+	return t->building ? BC_NONE : map_find(&t->ids, id);
+}
+
+int bc_tree_set_prim(struct bc_tree *t, uint32_t id,
+		     const struct bc_prim_data *p, struct bc_errinfo *ei)
+{
+	uint32_t n = live_node(t, id);
+	struct bc_prim_data copy = *p;
+	int rc;
+	if (n == BC_NONE) {
+		return bc_errinfo_set(ei, BC_ENONODE, "no node with id %u", id);
+	}
+	if (t->pool[n].is_op || t->pool[n].u.prim.kind != p->kind) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+				      "node %u is not a primitive of that "
+				      "kind: replace it instead",
+				      id);
+	}
+	if ((rc = bc_prim_validate(&copy, ei))) {
+		return rc;
+	}
+	t->pool[n].u.prim = copy;
+	bc__lin_update_prim(t, &t->pool[n]);
+	dirty_range(&t->dirty.param_lo, &t->dirty.param_hi, t->pool[n].param,
+		    t->pool[n].param + BC_PRIM_RECORD_VEC4);
+	dirty_range(&t->dirty.prim_lo, &t->dirty.prim_hi, t->pool[n].prim,
+		    t->pool[n].prim + 1);
+	t->dirty.edits++;
+	return 0;
+}
+
+int bc_tree_set_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
+		   struct bc_errinfo *ei)
+{
+	uint32_t n = live_node(t, id);
+	struct bc_op_data o = *op;
+	const struct bc_lin *l = &t->lin;
+	uint32_t first_slot, k_lo, k_hi;
+	int rc;
+	if (n == BC_NONE) {
+		return bc_errinfo_set(ei, BC_ENONODE, "no node with id %u", id);
+	}
+	if (!t->pool[n].is_op) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+				      "node %u is a primitive, not an "
+				      "operator",
+				      id);
+	}
+	if (bc_op_is_smooth(o.kind) && o.range == 0.0f) {
+		o.range = bc_op_default_range(o.blend);
+	}
+	if (!bc_op_is_smooth(o.kind)) {
+		o.blend = 0.0f;
+		o.range = 0.0f;
+	}
+	if ((rc = bc_op_validate(&o, ei))) {
+		return rc;
+	}
+	t->pool[n].u.op = o;
+	bc__lin_update_op(t, &t->pool[n]);
+	/* The subtree's slots are [first, top]; its primitives are those with
+	 * indices from the first leaf's to the last leaf's. */
+	first_slot = l->first[t->pool[n].slot];
+	k_lo = l->prim_of[first_slot];
+	k_hi = l->prim_of[t->pool[n].slot - 1] + 1;
+	dirty_range(&t->dirty.slot_lo, &t->dirty.slot_hi, first_slot,
+		    t->pool[n].slot + 1);
+	dirty_range(&t->dirty.param_lo, &t->dirty.param_hi, t->pool[n].param,
+		    t->pool[n].param + BC_OP_RECORD_VEC4);
+	dirty_range(&t->dirty.prim_lo, &t->dirty.prim_hi, k_lo, k_hi);
+	t->dirty.edits++;
+	return 0;
+}
+
+/* ---- structural edits --------------------------------------------------- */
+
+/* Is pool node n inside the subtree rooted at pool node top? */
+static bool within(const struct bc_tree *t, uint32_t n, uint32_t top)
+{
+	for (; n != BC_NONE; n = t->pool[n].parent) {
+		if (n == top) {
+			return true;
+		}
+	}
+	return false;
+}
+
+/* Checks that every id sub chose is free in t, or (replace) belongs to the
+ * subtree `allowed` that is about to go. */
+static int check_ids(const struct bc_tree *t, const struct bc_tree *sub,
+		     uint32_t n, uint32_t allowed, struct bc_errinfo *ei)
+{
+	const struct bc__node *sn = &sub->pool[n];
+	if (!sn->auto_id) {
+		uint32_t m = map_find(&t->ids, sn->id);
+		if (m != BC_NONE &&
+		    (allowed == BC_NONE || !within(t, m, allowed))) {
+			return bc_errinfo_set(ei, BC_EDUPID,
+					      "id %u is already in the scene",
+					      sn->id);
+		}
+	}
+	for (uint32_t c = sn->first_child; c != BC_NONE; c = sub->pool[c].next) {
+		int rc = check_ids(t, sub, c, allowed, ei);
+		if (rc) {
+			return rc;
+		}
+	}
+	return 0;
+}
+
+/* Copies sub's subtree at n into t (room reserved, ids checked). Returns the
+ * new pool index. */
+static uint32_t copy_in(struct bc_tree *t, const struct bc_tree *sub,
+			uint32_t n, bool keep_ids)
+{
+	const struct bc__node *sn = &sub->pool[n];
+	uint32_t m = pool_take(t);
+	t->pool[m].is_op = sn->is_op;
+	t->pool[m].u = sn->u;
+	t->pool[m].auto_id = sn->auto_id;
+	t->pool[m].id = (sn->auto_id && !keep_ids) ? fresh_id(t) : sn->id;
+	map_put_nogrow(&t->ids, t->pool[m].id, m);
+	t->nnodes++;
+	if (sn->is_op) {
+		t->nops++;
+	} else {
+		t->nprims++;
+	}
+	for (uint32_t c = sn->first_child; c != BC_NONE; c = sub->pool[c].next) {
+		uint32_t cm = copy_in(t, sub, c, keep_ids);
+		link_child(t, m, BC_NONE, cm);
+	}
+	return m;
+}
+
+/* Shared by insert, replace and copy: checks sub against t's limits when
+ * `gone` (statistics of what leaves t) is removed and sub is placed at depth
+ * `at_depth`, then reserves every resource. */
+static int prepare_graft(struct bc_tree *t, const struct bc_tree *sub,
+			 uint32_t at_depth, const struct subtree_stats *gone,
+			 struct bc_lin *fresh,
+			 struct bc_errinfo *ei)
+{
+	struct subtree_stats st = {0};
+	uint64_t prims, ops;
+	int rc;
+	if (sub->building || sub->root == BC_NONE) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+				      "the subtree to graft is empty or "
+				      "unfinished");
+	}
+	subtree_stats(sub, sub->root, 1, &st);
+	if (at_depth + st.depth > BC_TREE_MAX_DEPTH + 1u) {
+		return bc_errinfo_set(ei, BC_EDEPTH,
+				      "the result would nest deeper than %d",
+				      BC_TREE_MAX_DEPTH);
+	}
+	prims = (uint64_t)t->nprims - gone->prims + st.prims;
+	ops = (uint64_t)t->nops - gone->ops + st.ops;
+	if (2u * prims - 1u > BC_TREE_MAX_NODES) {
+		return bc_errinfo_set(ei, BC_ELIMIT,
+				      "the result would exceed %u nodes",
+				      BC_TREE_MAX_NODES);
+	}
+	if ((rc = bc__lin_alloc(fresh, (uint32_t)prims, (uint32_t)ops))) {
+		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
+	}
+	if ((rc = pool_reserve(t, st.nodes)) ||
+	    (rc = map_reserve(&t->ids, st.nodes))) {
+		bc__lin_free(fresh);
+		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
+	}
+	return 0;
+}
+
+int bc_tree_insert(struct bc_tree *t, uint32_t parent_id, uint32_t pos,
+		   const struct bc_tree *sub, struct bc_errinfo *ei)
+{
+	uint32_t p = live_node(t, parent_id), before, m;
+	struct subtree_stats none = {0};
+	struct bc_lin fresh;
+	int rc;
+	if (p == BC_NONE) {
+		return bc_errinfo_set(ei, BC_ENONODE, "no node with id %u",
+				      parent_id);
+	}
+	if (!t->pool[p].is_op) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+				      "node %u is a primitive: children go "
+				      "under operators",
+				      parent_id);
+	}
+	if (pos > t->pool[p].nchildren) {
+		return bc_errinfo_set(ei, BC_ERANGE,
+				      "position %u beyond the %u children of "
+				      "node %u",
+				      pos, t->pool[p].nchildren, parent_id);
+	}
+	if (sub->building || sub->root == BC_NONE) {
+		return bc_errinfo_set(ei, BC_EINVAL, "the subtree is empty");
+	}
+	if ((rc = check_ids(t, sub, sub->root, BC_NONE, ei))) {
+		return rc;
+	}
+	if ((rc = prepare_graft(t, sub, depth_of(t, p), &none, &fresh, ei))) {
+		return rc;
+	}
+	before = child_at(t, p, pos);
+	m = copy_in(t, sub, sub->root, false);
+	link_child(t, p, before, m);
+	install_lin(t, &fresh);
+	return 0;
+}
+
+/* Detaches and frees pool node n's subtree; an operator left with one child
+ * is replaced by that child. */
+static void cut(struct bc_tree *t, uint32_t n)
+{
+	uint32_t p = t->pool[n].parent;
+	if (p == BC_NONE) {
+		free_subtree(t, n);
+		t->root = BC_NONE;
+		return;
+	}
+	unlink_child(t, n);
+	free_subtree(t, n);
+	if (t->pool[p].nchildren == 1) {
+		uint32_t only = t->pool[p].first_child;
+		uint32_t gp = t->pool[p].parent;
+		uint32_t after = t->pool[p].next;
+		unlink_child(t, only);
+		if (gp == BC_NONE) {
+			t->root = only;
+		} else {
+			unlink_child(t, p);
+			link_child(t, gp, after, only);
+		}
+		map_del(&t->ids, t->pool[p].id);
+		t->nops--;
+		t->nnodes--;
+		pool_release(t, p);
+	}
+}
+
+int bc_tree_remove(struct bc_tree *t, uint32_t id, struct bc_errinfo *ei)
+{
+	uint32_t n = live_node(t, id), p;
+	struct subtree_stats st = {0};
+	struct bc_lin fresh;
+	uint32_t collapse;
+	int rc;
+	if (n == BC_NONE) {
+		return bc_errinfo_set(ei, BC_ENONODE, "no node with id %u", id);
+	}
+	subtree_stats(t, n, 1, &st);
+	p = t->pool[n].parent;
+	collapse = (p != BC_NONE && t->pool[p].nchildren == 2) ? 1 : 0;
+	memset(&fresh, 0, sizeof(fresh));
+	if (p != BC_NONE &&
+	    (rc = bc__lin_alloc(&fresh, t->nprims - st.prims,
+				t->nops - st.ops - collapse))) {
+		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
+	}
+	cut(t, n);
+	install_lin(t, &fresh);
+	return 0;
+}
+
+int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
+		    struct bc_errinfo *ei)
+{
+	uint32_t n = live_node(t, id), p, after, m;
+	struct subtree_stats gone = {0};
+	struct bc_lin fresh;
+	int rc;
+	if (n == BC_NONE) {
+		return bc_errinfo_set(ei, BC_ENONODE, "no node with id %u", id);
+	}
+	if (sub->building || sub->root == BC_NONE) {
+		return bc_errinfo_set(ei, BC_EINVAL, "the replacement is empty");
+	}
+	if ((rc = check_ids(t, sub, sub->root, n, ei))) {
+		return rc;
+	}
+	subtree_stats(t, n, 1, &gone);
+	p = t->pool[n].parent;
+	if ((rc = prepare_graft(t, sub, p == BC_NONE ? 0 : depth_of(t, p),
+				&gone, &fresh, ei))) {
+		return rc;
+	}
+	after = t->pool[n].next;
+	if (p != BC_NONE) {
+		unlink_child(t, n);
+	}
+	free_subtree(t, n);
+	m = copy_in(t, sub, sub->root, false);
+	if (p == BC_NONE) {
+		t->root = m;
+	} else {
+		link_child(t, p, after, m);
+	}
+	install_lin(t, &fresh);
+	return 0;
+}
+
+int bc_tree_copy(struct bc_tree *dst, const struct bc_tree *src,
+		 struct bc_errinfo *ei)
+{
+	struct subtree_stats none = {0};
+	struct bc_lin fresh;
+	int rc;
+	if (dst == src) {
+		return 0;
+	}
+	tree_clear(dst);
+	if (src->root == BC_NONE) {
+		return 0;
+	}
+	if ((rc = prepare_graft(dst, src, 0, &none, &fresh, ei))) {
+		return rc;
+	}
+	dst->root = copy_in(dst, src, src->root, true);
+	/* Keep the numbering of fresh ids where src would continue it. */
+	if (src->next_id > dst->next_id) {
+		dst->next_id = src->next_id;
+	}
+	install_lin(dst, &fresh);
+	return 0;
+}

@@ -1,0 +1,73 @@
+/*
+ * Private state of struct bc_tree, shared by tree.c (model, ids, builder,
+ * edits) and linearize.c (the post-order layout, ROIs, ABVs).
+ */
+#ifndef BLOBCAST_BLOBTREE_TREE_IMPL_H
+#define BLOBCAST_BLOBTREE_TREE_IMPL_H
+
+#include "blobcast/blobtree.h"
+
+/* One node of the editable n-ary model, in a pool addressed by index. */
+struct bc__node {
+	uint32_t id;
+	uint32_t parent; /* pool index, BC_NONE for the root or detached */
+	uint32_t first_child, last_child, next, prev; /* pool indices */
+	uint32_t nchildren;
+	bool is_op;
+	bool live;
+	bool auto_id; /* id was assigned, not chosen by the scene */
+	union {
+		struct bc_prim_data prim;
+		struct bc_op_data op;
+	} u;
+	/* Set by linearization. */
+	uint32_t slot;  /* the node's top slot */
+	uint32_t param; /* parameter record, vec4 units */
+	uint32_t prim;  /* primitive index (primitives only) */
+};
+
+/* Open-addressing map from id (never 0) to pool index. */
+struct bc__idmap {
+	uint32_t *keys; /* 0 = empty */
+	uint32_t *vals;
+	uint32_t cap;   /* power of two */
+	uint32_t count;
+};
+
+struct bc_tree {
+	struct bc__node *pool;
+	uint32_t npool, cap;
+	uint32_t free_head; /* chain of dead pool entries through .next */
+	struct bc__idmap ids;
+	uint32_t root; /* pool index, BC_NONE when empty */
+	uint32_t nnodes, nprims, nops;
+	uint32_t next_id;
+
+	/* Builder state. */
+	uint32_t open[BC_TREE_MAX_DEPTH];
+	uint32_t nopen;
+	bool building;
+
+	struct bc_lin lin;
+	bool has_lin;
+	struct bc_dirty dirty;
+};
+
+/* linearize.c */
+
+/* Allocates the arrays of l for nprims primitives and nops operators.
+ * Returns 0 or BC_ENOMEM (l is then zeroed). */
+int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nops);
+void bc__lin_free(struct bc_lin *l);
+/* Fills l (allocated for t's counts) from t's model; cannot fail. */
+void bc__lin_fill(struct bc_tree *t, struct bc_lin *l);
+/* Rewrites primitive n's parameter record, colour and ABV in t->lin. */
+void bc__lin_update_prim(struct bc_tree *t, const struct bc__node *n);
+/* Rewrites operator n's node words and record, then the ROIs, kill counts
+ * and ABVs of its subtree. */
+void bc__lin_update_op(struct bc_tree *t, const struct bc__node *n);
+/* Transforms a local bounding shape by p's rigid transform and offsets it. */
+void bc__abv_place(const struct bc_prim_data *p, float offset,
+		   struct bc_abv *abv);
+
+#endif

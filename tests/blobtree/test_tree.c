@@ -1,0 +1,400 @@
+/*
+ * The blobtree model and its linearized form: builder rules, the GPU layout
+ * (node words, shared operator records, ROIs, jump pointers), and edits --
+ * a parameter edit rewrites only its own record and ABV, every edit leaves
+ * the same layout as building the edited scene afresh, and a failed edit
+ * changes nothing.
+ */
+#include "blobcast/alloc.h"
+#include "blobcast/blobtree.h"
+#include "test.h"
+
+#include "randtree.h"
+
+static void sphere(struct bc_prim_data *p, float r, float x)
+{
+	bc_prim_data_init(p, BC_PRIM_SPHERE);
+	p->params[0] = r;
+	p->translate[0] = x;
+}
+
+/* union#1(A#2, B#3, smooth_difference#4(C#5, D#6)) */
+static struct bc_tree *small_tree(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_op_data u = {BC_OP_UNION, 0, 0};
+	struct bc_op_data d = {BC_OP_SMOOTH_DIFFERENCE, 0.2f, 0.3f};
+	struct bc_prim_data p;
+	if (!t) {
+		return NULL;
+	}
+	bc_tree_begin(t);
+	bc_tree_push_op(t, 1, &u, NULL);
+	sphere(&p, 0.5f, -1.0f);
+	bc_tree_put_prim(t, 2, &p, NULL);
+	sphere(&p, 0.5f, 0.0f);
+	bc_tree_put_prim(t, 3, &p, NULL);
+	bc_tree_push_op(t, 4, &d, NULL);
+	sphere(&p, 0.5f, 1.0f);
+	bc_tree_put_prim(t, 5, &p, NULL);
+	sphere(&p, 0.25f, 1.3f);
+	bc_tree_put_prim(t, 6, &p, NULL);
+	bc_tree_pop_op(t, NULL);
+	bc_tree_pop_op(t, NULL);
+	if (bc_tree_end(t, NULL)) {
+		bc_tree_destroy(t);
+		return NULL;
+	}
+	return t;
+}
+
+static void layout_follows_the_paper(void)
+{
+	struct bc_tree *t = small_tree();
+	const struct bc_lin *l;
+	REQUIRE(t);
+	l = bc_tree_lin(t);
+	REQUIRE(l);
+	/* Post-order: A0 B1 u2 C3 D4 d5 u6 -- the n-ary union folds left. */
+	CHECK_EQ_INT(l->count, 7);
+	CHECK_EQ_INT(l->nprims, 4);
+	CHECK_EQ_INT(l->node_id[2], 1);
+	CHECK_EQ_INT(l->node_id[6], 1);
+	CHECK_EQ_INT(l->node_id[5], 4);
+	CHECK(bc_lin_is_leaf(l, 0) && bc_lin_is_leaf(l, 4));
+	CHECK(!bc_lin_is_leaf(l, 2) && !bc_lin_is_leaf(l, 6));
+	CHECK_EQ_INT(bc_lin_parent(l, 0), 2);
+	CHECK_EQ_INT(bc_lin_parent(l, 2), 6);
+	CHECK_EQ_INT(bc_lin_parent(l, 5), 6);
+	CHECK_EQ_INT(bc_lin_parent(l, 6), BC_NONE);
+	CHECK((l->node[0] & BC_WORD_LEFT) != 0);
+	CHECK((l->node[2] & BC_WORD_LEFT) == 0);
+	CHECK((l->node[2 * 2] & BC_WORD_LEFT) != 0);
+	CHECK_EQ_INT(bc_lin_kind(l, 5), BC_OP_SMOOTH_DIFFERENCE);
+	CHECK_EQ_INT(bc_lin_type(l, 5) >> 6, BC_OPCLASS_DIFFERENCE);
+	/* Both fold slots of the union share one parameter record. */
+	CHECK_EQ_INT(l->node[2 * 2 + 1], l->node[2 * 6 + 1]);
+	CHECK_EQ_INT(l->first[6], 0);
+	CHECK_EQ_INT(l->first[5], 3);
+	CHECK_EQ_INT(l->nparam, 4 * BC_PRIM_RECORD_VEC4 + 2 * BC_OP_RECORD_VEC4);
+	/* ROIs (eq. 13-16): root [0,0]; under the sharp union [0,0]; the
+	 * difference's left child [min(0,-ro), 0], right [-0, max(0, ro)]. */
+	CHECK(l->roi[2 * 6] == 0.0f && l->roi[2 * 6 + 1] == 0.0f);
+	CHECK(l->roi[2 * 3] == -0.3f && l->roi[2 * 3 + 1] == 0.0f);
+	CHECK(l->roi[2 * 4] == 0.0f && l->roi[2 * 4 + 1] == 0.3f);
+	/* ABV of D is its sphere grown by r+ = 0.3. */
+	CHECK_NEAR(l->abv[3].radius, 0.25f + 0.3f, 1e-6f);
+	CHECK_EQ_INT(l->kills[4], 1);
+	CHECK_EQ_INT(l->kills[3], 0);
+	bc_tree_destroy(t);
+}
+
+static void builder_rejects_malformed_trees(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_op_data u = {BC_OP_UNION, 0, 0};
+	struct bc_prim_data p;
+	struct bc_errinfo ei = {0};
+	REQUIRE(t);
+	sphere(&p, 1.0f, 0.0f);
+	/* An operator with one child. */
+	bc_tree_begin(t);
+	bc_tree_push_op(t, 0, &u, NULL);
+	bc_tree_put_prim(t, 0, &p, NULL);
+	CHECK(bc_tree_pop_op(t, &ei) == BC_EINVAL);
+	CHECK(strstr(ei.msg, "two or more") != NULL);
+	/* Two roots. */
+	bc_tree_begin(t);
+	bc_tree_put_prim(t, 0, &p, NULL);
+	CHECK(bc_tree_put_prim(t, 0, &p, &ei) == BC_EINVAL);
+	/* Duplicate ids. */
+	bc_tree_begin(t);
+	bc_tree_push_op(t, 5, &u, NULL);
+	CHECK(bc_tree_put_prim(t, 5, &p, &ei) == BC_EDUPID);
+	/* Unclosed operator. */
+	bc_tree_begin(t);
+	bc_tree_push_op(t, 0, &u, NULL);
+	bc_tree_put_prim(t, 0, &p, NULL);
+	bc_tree_put_prim(t, 0, &p, NULL);
+	CHECK(bc_tree_end(t, &ei) == BC_EINVAL);
+	/* Nesting over the limit. */
+	bc_tree_begin(t);
+	{
+		int rc = 0;
+		for (int d = 0; d <= BC_TREE_MAX_DEPTH && !rc; d++) {
+			rc = bc_tree_push_op(t, 0, &u, &ei);
+		}
+		CHECK(rc == BC_EDEPTH);
+	}
+	/* Bad parameters: a smooth operator with no blend. */
+	bc_tree_begin(t);
+	CHECK(bc_tree_push_op(t, 0, &(struct bc_op_data){BC_OP_SMOOTH_UNION, 0, 0},
+			      &ei) == BC_ERANGE);
+	/* A single primitive is a valid tree. */
+	bc_tree_begin(t);
+	CHECK(bc_tree_put_prim(t, 9, &p, NULL) == 0);
+	CHECK(bc_tree_end(t, NULL) == 0);
+	CHECK_EQ_INT(bc_tree_root(t), 9);
+	CHECK_EQ_INT(bc_tree_lin(t)->count, 1);
+	bc_tree_destroy(t);
+}
+
+/* Compares every array of two layouts; returns the number of differences. */
+static int lin_diff(const struct bc_lin *a, const struct bc_lin *b)
+{
+	int diffs = 0;
+	if (a->count != b->count || a->nprims != b->nprims ||
+	    a->nparam != b->nparam) {
+		return 1000;
+	}
+	diffs += memcmp(a->node, b->node, 8u * a->count) != 0;
+	diffs += memcmp(a->first, b->first, 4u * a->count) != 0;
+	diffs += memcmp(a->jump, b->jump, 4u * a->count) != 0;
+	diffs += memcmp(a->kills, b->kills, 4u * a->count) != 0;
+	diffs += memcmp(a->node_id, b->node_id, 4u * a->count) != 0;
+	diffs += memcmp(a->roi, b->roi, 8u * a->count) != 0;
+	diffs += memcmp(a->param, b->param, 16u * a->nparam) != 0;
+	diffs += memcmp(a->color, b->color, 12u * a->nprims) != 0;
+	for (uint32_t k = 0; k < a->nprims; k++) {
+		diffs += memcmp(&a->abv[k], &b->abv[k], sizeof(a->abv[k])) != 0;
+	}
+	return diffs;
+}
+
+/* Ids of the tree's primitives and operators in slot order. */
+static uint32_t pick(const struct bc_tree *t, bool want_op)
+{
+	const struct bc_lin *l = bc_tree_lin(t);
+	for (uint32_t tries = 0; tries < 1000; tries++) {
+		uint32_t s = rt_below(l->count);
+		if (bc_lin_is_leaf(l, s) != want_op) {
+			return l->node_id[s];
+		}
+	}
+	return 0;
+}
+
+static void parameter_edit_rewrites_only_its_own_record(void)
+{
+	struct bc_tree *t = bc_tree_create(), *fresh = bc_tree_create();
+	REQUIRE(t && fresh);
+	for (int i = 0; i < 50; i++) {
+		const struct bc_lin *l;
+		struct bc_lin before;
+		struct bc_prim_data p;
+		struct bc_dirty dirty;
+		uint32_t id, k, s;
+		float *params;
+		REQUIRE(rt_build(t, 300u + (uint64_t)i, 2 + (uint32_t)i) == 0);
+		l = bc_tree_lin(t);
+		before = *l;
+		params = bc_malloc(16u * l->nparam);
+		REQUIRE(params);
+		memcpy(params, l->param, 16u * l->nparam);
+		bc_tree_take_dirty(t, &dirty);
+		id = pick(t, false);
+		REQUIRE(bc_tree_get(t, id, &p, NULL));
+		p.translate[0] += 0.25f;
+		p.params[0] *= 1.1f;
+		REQUIRE(bc_tree_set_prim(t, id, &p, NULL) == 0);
+		l = bc_tree_lin(t);
+		/* Same arrays: nothing was re-linearized. */
+		CHECK(l->node == before.node && l->param == before.param);
+		bc_tree_take_dirty(t, &dirty);
+		CHECK(!dirty.structure);
+		s = 0;
+		while (l->node_id[s] != id) {
+			s++;
+		}
+		k = l->prim_of[s];
+		CHECK_EQ_INT(dirty.prim_lo, k);
+		CHECK_EQ_INT(dirty.prim_hi, k + 1);
+		CHECK_EQ_INT(dirty.param_hi - dirty.param_lo,
+			     BC_PRIM_RECORD_VEC4);
+		CHECK_EQ_INT(dirty.param_lo, l->node[2 * s + 1]);
+		for (uint32_t v = 0; v < l->nparam; v++) {
+			bool inside = v >= dirty.param_lo && v < dirty.param_hi;
+			if (!inside) {
+				CHECK(memcmp(params + 4 * v, l->param + 4 * v,
+					     16) == 0);
+			}
+		}
+		/* And the result is what a fresh build gives. */
+		REQUIRE(bc_tree_copy(fresh, t, NULL) == 0);
+		CHECK(lin_diff(bc_tree_lin(fresh), l) == 0);
+		bc_free(params);
+	}
+	bc_tree_destroy(fresh);
+	bc_tree_destroy(t);
+}
+
+static void operator_edit_equals_a_fresh_build(void)
+{
+	struct bc_tree *t = bc_tree_create(), *fresh = bc_tree_create();
+	REQUIRE(t && fresh);
+	for (int i = 0; i < 100; i++) {
+		struct bc_op_data op;
+		struct bc_dirty dirty;
+		uint32_t id;
+		REQUIRE(rt_build(t, 700u + (uint64_t)i, 3 + (uint32_t)i % 60) ==
+			0);
+		bc_tree_take_dirty(t, &dirty);
+		id = pick(t, true);
+		REQUIRE(bc_tree_get(t, id, NULL, &op));
+		rt_random_op(&op);
+		REQUIRE(bc_tree_set_op(t, id, &op, NULL) == 0);
+		bc_tree_take_dirty(t, &dirty);
+		CHECK(!dirty.structure && dirty.edits == 1);
+		CHECK(dirty.slot_hi > dirty.slot_lo);
+		REQUIRE(bc_tree_copy(fresh, t, NULL) == 0);
+		CHECK(lin_diff(bc_tree_lin(fresh), bc_tree_lin(t)) == 0);
+	}
+	bc_tree_destroy(fresh);
+	bc_tree_destroy(t);
+}
+
+static void structural_edits_keep_ids_and_order(void)
+{
+	struct bc_tree *t = small_tree(), *sub = bc_tree_create();
+	struct bc_prim_data p;
+	struct bc_errinfo ei = {0};
+	REQUIRE(t && sub);
+	/* Insert a sphere (auto id) as child 1 of the union. */
+	bc_tree_begin(sub);
+	sphere(&p, 0.3f, 2.0f);
+	bc_tree_put_prim(sub, 0, &p, NULL);
+	REQUIRE(bc_tree_end(sub, NULL) == 0);
+	REQUIRE(bc_tree_insert(t, 1, 1, sub, NULL) == 0);
+	CHECK_EQ_INT(bc_tree_child_count(t, 1), 4);
+	CHECK_EQ_INT(bc_tree_child(t, 1, 0), 2);
+	CHECK(bc_tree_child(t, 1, 1) > 6);
+	CHECK_EQ_INT(bc_tree_child(t, 1, 2), 3);
+	CHECK_EQ_INT(bc_tree_lin(t)->nprims, 5);
+	/* Inserting a chosen id that exists fails and changes nothing. */
+	bc_tree_begin(sub);
+	bc_tree_put_prim(sub, 3, &p, NULL);
+	REQUIRE(bc_tree_end(sub, NULL) == 0);
+	CHECK(bc_tree_insert(t, 1, 0, sub, &ei) == BC_EDUPID);
+	CHECK_EQ_INT(bc_tree_child_count(t, 1), 4);
+	/* Inserting under a primitive or past the end fails. */
+	CHECK(bc_tree_insert(t, 2, 0, sub, &ei) == BC_EINVAL);
+	CHECK(bc_tree_insert(t, 1, 9, sub, &ei) == BC_ERANGE);
+	/* Removing C leaves the difference with one child: D takes its
+	 * place and the operator's id is gone. */
+	REQUIRE(bc_tree_remove(t, 5, NULL) == 0);
+	CHECK(!bc_tree_get(t, 4, NULL, NULL));
+	CHECK_EQ_INT(bc_tree_child(t, 1, 3), 6);
+	CHECK_EQ_INT(bc_tree_parent(t, 6), 1);
+	/* Replace B by a subtree reusing its id. */
+	bc_tree_begin(sub);
+	bc_tree_push_op(sub, 3, &(struct bc_op_data){BC_OP_INTERSECTION, 0, 0},
+			NULL);
+	sphere(&p, 0.4f, 0.0f);
+	bc_tree_put_prim(sub, 40, &p, NULL);
+	sphere(&p, 0.4f, 0.2f);
+	bc_tree_put_prim(sub, 41, &p, NULL);
+	bc_tree_pop_op(sub, NULL);
+	REQUIRE(bc_tree_end(sub, NULL) == 0);
+	REQUIRE(bc_tree_replace(t, 3, sub, NULL) == 0);
+	CHECK_EQ_INT(bc_tree_child(t, 1, 2), 3);
+	CHECK_EQ_INT(bc_tree_child_count(t, 3), 2);
+	CHECK_EQ_INT(bc_tree_parent(t, 41), 3);
+	CHECK_EQ_INT(bc_tree_prim_count(t), 5);
+	/* Unknown ids. */
+	CHECK(bc_tree_remove(t, 999, &ei) == BC_ENONODE);
+	CHECK(bc_tree_set_prim(t, 999, &p, &ei) == BC_ENONODE);
+	/* Removing the root empties the tree. */
+	REQUIRE(bc_tree_remove(t, 1, NULL) == 0);
+	CHECK(bc_tree_lin(t) == NULL);
+	CHECK_EQ_INT(bc_tree_node_count(t), 0);
+	bc_tree_destroy(sub);
+	bc_tree_destroy(t);
+}
+
+static void structural_edits_equal_a_fresh_build(void)
+{
+	struct bc_tree *t = bc_tree_create(), *fresh = bc_tree_create();
+	struct bc_tree *sub = bc_tree_create();
+	REQUIRE(t && fresh && sub);
+	for (int i = 0; i < 100; i++) {
+		uint32_t target, op;
+		REQUIRE(rt_build(t, 40u + (uint64_t)i, 4 + (uint32_t)i % 40) ==
+			0);
+		REQUIRE(rt_build(sub, 90000u + (uint64_t)i,
+				 1 + (uint32_t)i % 5) == 0);
+		target = pick(t, false);
+		op = pick(t, true);
+		switch (i % 3) {
+		case 0:
+			REQUIRE(bc_tree_insert(t, op, 0, sub, NULL) == 0);
+			break;
+		case 1:
+			REQUIRE(bc_tree_remove(t, target, NULL) == 0);
+			break;
+		default:
+			REQUIRE(bc_tree_replace(t, target, sub, NULL) == 0);
+			break;
+		}
+		REQUIRE(bc_tree_copy(fresh, t, NULL) == 0);
+		CHECK(lin_diff(bc_tree_lin(fresh), bc_tree_lin(t)) == 0);
+		CHECK_EQ_INT(bc_tree_lin(t)->count,
+			     2 * bc_tree_prim_count(t) - 1);
+	}
+	bc_tree_destroy(sub);
+	bc_tree_destroy(fresh);
+	bc_tree_destroy(t);
+}
+
+/* Fails the Nth allocation for every N until the sequence succeeds: each
+ * failure must return an error and leak nothing (ASan's leak check). */
+static void allocation_failures_are_clean(void)
+{
+	int rounds = 0;
+	for (unsigned long n = 1; n < 10000; n++) {
+		struct bc_tree *t, *sub;
+		int rc = BC_ENOMEM;
+		bc_alloc_fail_after(n);
+		t = bc_tree_create();
+		sub = bc_tree_create();
+		if (t && sub && rt_build(t, 1, 30) == 0 &&
+		    rt_build(sub, 2, 4) == 0) {
+			uint32_t op = bc_tree_root(t);
+			rc = bc_tree_insert(t, op, 0, sub, NULL);
+			if (rc == 0) {
+				rc = bc_tree_remove(t, bc_tree_child(t, op, 0),
+						    NULL);
+			}
+			if (rc) {
+				/* A failed edit leaves a usable tree. */
+				bc_alloc_fail_after(0);
+				CHECK(bc_tree_lin(t) != NULL);
+				CHECK_EQ_INT(bc_tree_lin(t)->count,
+					     2 * bc_tree_prim_count(t) - 1);
+			}
+		}
+		bc_alloc_fail_after(0);
+		bc_tree_destroy(sub);
+		bc_tree_destroy(t);
+		rounds++;
+		if (rc == 0) {
+			break;
+		}
+	}
+	CHECK(rounds > 5);
+	CHECK(rounds < 10000);
+}
+
+static const struct bc_test tests[] = {
+	{"layout_follows_the_paper", layout_follows_the_paper},
+	{"builder_rejects_malformed_trees", builder_rejects_malformed_trees},
+	{"parameter_edit_rewrites_only_its_own_record",
+	 parameter_edit_rewrites_only_its_own_record},
+	{"operator_edit_equals_a_fresh_build",
+	 operator_edit_equals_a_fresh_build},
+	{"structural_edits_keep_ids_and_order",
+	 structural_edits_keep_ids_and_order},
+	{"structural_edits_equal_a_fresh_build",
+	 structural_edits_equal_a_fresh_build},
+	{"allocation_failures_are_clean", allocation_failures_are_clean},
+};
+BC_TEST_MAIN(tests)
