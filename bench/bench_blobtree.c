@@ -128,9 +128,11 @@ static struct bc_tree *comb(uint32_t n)
 	return t;
 }
 
-/* Builds the view of two neighbouring primitives and evaluates it once,
- * at varying places: the per-query cost of sparse evaluation. */
-static double sparse_query_ns(uint32_t n)
+/* Builds the view of two neighbouring primitives and evaluates it once:
+ * the per-query cost of sparse evaluation. With `spread`, each query takes
+ * another pair along the comb (memory-bound: the arrays leave the cache);
+ * without, the same pair in the middle (the traversal's own cost). */
+static double sparse_query_ns(uint32_t n, int spread)
 {
 	struct bc_tree *t = comb(n);
 	const struct bc_lin *l = bc_tree_lin(t);
@@ -141,7 +143,7 @@ static double sparse_query_ns(uint32_t n)
 	bc_view_init(&v);
 	t0 = now_s();
 	for (uint32_t q = 0; q < QUERIES; q++) {
-		uint32_t k = (q * 2654435761u) % (n - 1);
+		uint32_t k = spread ? (q * 2654435761u) % (n - 1) : n / 2;
 		uint32_t active[2] = {k, k + 1};
 		float p[3] = {0.5f * (float)k + 0.25f, 0.1f, 0.0f};
 		sink += bc_eval_sparse(l, active, 2, &v, p);
@@ -169,10 +171,15 @@ int main(int argc, char **argv)
 	for (int e = 3; e <= max_exp; e++, n *= 10) {
 		bench_relinearize(n);
 	}
-	small = sparse_query_ns(100);
-	large = sparse_query_ns(100000);
-	printf("sparse_comb prims=100    ns_per_query=%.1f\n", small);
-	printf("sparse_comb prims=100000 ns_per_query=%.1f ratio=%.2f\n", large,
-	       large / small);
+	for (int spread = 0; spread < 2; spread++) {
+		const char *what = spread ? "pairs_spread" : "same_pair";
+		small = sparse_query_ns(100, spread);
+		large = sparse_query_ns(100000, spread);
+		printf("sparse_comb %s prims=100    ns_per_query=%.1f\n", what,
+		       small);
+		printf("sparse_comb %s prims=100000 ns_per_query=%.1f "
+		       "ratio=%.2f\n",
+		       what, large, large / small);
+	}
 	return 0;
 }

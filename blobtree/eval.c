@@ -219,9 +219,16 @@ int bc_view_build(struct bc_view *v, const struct bc_lin *l,
 			struct entry *top = &st[sp - 1];
 			uint32_t lo = sp >= 2 ? st[sp - 2].slot + 1 : 0;
 			uint32_t x = top->slot, a;
-			/* Climb through ancestors that hold no other operand. */
+			/* Climb through ancestors that hold no other operand:
+			 * the fast index first (whole same-side runs), then
+			 * the jump pointer, then the parent. */
 			for (;;) {
-				uint32_t j = l->jump[x];
+				uint32_t j = l->fast[x];
+				if (j != BC_NONE && may_climb(l, j, q, lo)) {
+					x = j;
+					continue;
+				}
+				j = l->jump[x];
 				if (j != BC_NONE && may_climb(l, j, q, lo)) {
 					x = j;
 					continue;

@@ -4,11 +4,12 @@
  * sparse traversal, ROI propagation (eq. 13-16) and the ABVs that follow
  * from it. Also the in-place updates that parameter edits make.
  *
- * Jump pointers: the paper's fast ancestor indices jump along runs of
- * same-side children. We use the skew-binary jump pointers of Myers (1983)
- * instead: one index per node, and any monotone climb (the sparse traversal
- * climbs while an ancestor holds no other active operand) finishes in
- * O(log depth) steps whatever the tree's shape, left combs included.
+ * Ancestor shortcuts: the paper's fast ancestor index (§5) jumps to the top
+ * of the run of same-side edges above a node -- one step up a whole left
+ * comb. Zig-zag paths defeat it, so each slot also has a skew-binary jump
+ * pointer (Myers 1983): any monotone climb (the sparse traversal climbs while
+ * an ancestor holds no other active operand) then finishes in O(log depth)
+ * steps whatever the tree's shape. The climb tries the fast index first.
  */
 #include "tree_impl.h"
 
@@ -21,6 +22,7 @@ void bc__lin_free(struct bc_lin *l)
 {
 	bc_free(l->node);
 	bc_free(l->first);
+	bc_free(l->fast);
 	bc_free(l->jump);
 	bc_free(l->kills);
 	bc_free(l->depth);
@@ -47,18 +49,20 @@ int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nops)
 	l->nprims = nprims;
 	l->nparam = (uint32_t)nparam;
 	l->node = bc_calloc(2 * count, sizeof(uint32_t));
-	l->first = bc_calloc(count, sizeof(uint32_t));
-	l->jump = bc_calloc(count, sizeof(uint32_t));
-	l->kills = bc_calloc(count, sizeof(uint32_t));
-	l->depth = bc_calloc(count, sizeof(uint32_t));
-	l->node_id = bc_calloc(count, sizeof(uint32_t));
-	l->prim_of = bc_calloc(count, sizeof(uint32_t));
-	l->roi = bc_calloc(2 * count, sizeof(float));
-	l->prim_slot = bc_calloc(nprims, sizeof(uint32_t));
+	l->first = bc_malloc(count * sizeof(uint32_t));
+	l->fast = bc_malloc(count * sizeof(uint32_t));
+	l->jump = bc_malloc(count * sizeof(uint32_t));
+	l->kills = bc_malloc(count * sizeof(uint32_t));
+	l->depth = bc_malloc(count * sizeof(uint32_t));
+	l->node_id = bc_malloc(count * sizeof(uint32_t));
+	l->prim_of = bc_malloc(count * sizeof(uint32_t));
+	l->roi = bc_malloc(2 * count * sizeof(float));
+	l->prim_slot = bc_malloc(nprims * sizeof(uint32_t));
 	l->abv = bc_calloc(nprims, sizeof(struct bc_abv));
-	l->color = bc_calloc(nprims, sizeof(*l->color));
+	l->color = bc_malloc(nprims * sizeof(*l->color));
 	l->param = bc_calloc(4 * nparam, sizeof(float));
-	if (!l->node || !l->first || !l->jump || !l->kills || !l->depth ||
+	if (!l->node || !l->first || !l->fast || !l->jump || !l->kills ||
+	    !l->depth ||
 	    !l->node_id || !l->prim_of || !l->roi || !l->prim_slot ||
 	    !l->abv || !l->color || !l->param) {
 		bc__lin_free(l);
@@ -304,19 +308,26 @@ static void update_size(struct bc_lin *l)
 	l->size = sqrtf(dx * dx + dy * dy + dz * dz);
 }
 
-/* The model's primitives in index order, found by walking slots. */
+/* Places the ABVs of pool node n's subtree (ROIs must be known). */
+static void place_subtree(struct bc_tree *t, struct bc_lin *l, uint32_t n)
+{
+	const struct bc__node *nd = &t->pool[n];
+	if (!nd->is_op) {
+		place_abv(t, l, nd->prim, &nd->u.prim);
+		return;
+	}
+	for (uint32_t c = nd->first_child; c != BC_NONE; c = t->pool[c].next) {
+		place_subtree(t, l, c);
+	}
+}
+
 static void place_all_abvs(struct bc_tree *t, struct bc_lin *l)
 {
 	for (int i = 0; i < 3; i++) {
 		l->lo[i] = INFINITY;
 		l->hi[i] = -INFINITY;
 	}
-	for (uint32_t k = 0; k < l->nprims; k++) {
-		uint32_t s = l->prim_slot[k];
-		struct bc_prim_data p;
-		bc_tree_get(t, l->node_id[s], &p, NULL);
-		place_abv(t, l, k, &p);
-	}
+	place_subtree(t, l, t->root);
 	update_size(l);
 }
 
@@ -335,9 +346,17 @@ void bc__lin_fill(struct bc_tree *t, struct bc_lin *l)
 		if (a == BC_NONE) {
 			l->depth[s] = 0;
 			l->jump[s] = BC_NONE;
+			l->fast[s] = BC_NONE;
 			continue;
 		}
 		l->depth[s] = l->depth[a] + 1;
+		/* The run of same-side edges continues through a when a sits
+		 * on the same side of its own parent. */
+		l->fast[s] = a;
+		if (bc_lin_parent(l, a) != BC_NONE &&
+		    ((l->node[2 * a] ^ l->node[2 * s]) & BC_WORD_LEFT) == 0) {
+			l->fast[s] = l->fast[a];
+		}
 		/* Myers' rule: jump twice as far when the parent's jump and
 		 * its jump's jump span equal lengths. */
 		l->jump[s] = a;
@@ -389,12 +408,8 @@ void bc__lin_update_op(struct bc_tree *t, const struct bc__node *n)
 	for (uint32_t s = n->slot; s-- > first;) {
 		propagate(l, s);
 	}
-	for (uint32_t s = first; s < n->slot; s++) {
-		if (bc_lin_is_leaf(l, s)) {
-			struct bc_prim_data p;
-			bc_tree_get(t, l->node_id[s], &p, NULL);
-			place_abv(t, l, l->prim_of[s], &p);
-		}
+	for (uint32_t c = n->first_child; c != BC_NONE; c = t->pool[c].next) {
+		place_subtree(t, l, c);
 	}
 	update_size(l);
 }

@@ -150,6 +150,7 @@ static int lin_diff(const struct bc_lin *a, const struct bc_lin *b)
 	diffs += memcmp(a->node, b->node, 8u * a->count) != 0;
 	diffs += memcmp(a->first, b->first, 4u * a->count) != 0;
 	diffs += memcmp(a->jump, b->jump, 4u * a->count) != 0;
+	diffs += memcmp(a->fast, b->fast, 4u * a->count) != 0;
 	diffs += memcmp(a->kills, b->kills, 4u * a->count) != 0;
 	diffs += memcmp(a->node_id, b->node_id, 4u * a->count) != 0;
 	diffs += memcmp(a->roi, b->roi, 8u * a->count) != 0;

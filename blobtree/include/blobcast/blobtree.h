@@ -347,7 +347,9 @@ struct bc_lin {
 	/* Per slot. */
 	uint32_t *node;   /* 2 per slot: GPU node word, parameter offset */
 	uint32_t *first;  /* leftmost slot of the subtree */
-	uint32_t *jump;   /* fast ancestor: jump pointer, BC_NONE at root */
+	uint32_t *fast;   /* paper's fast ancestor: top of the run of same-side
+			     edges above the slot, BC_NONE at the root */
+	uint32_t *jump;   /* skew-binary jump pointer, BC_NONE at the root */
 	uint32_t *kills;  /* number of operand-killing edges up to the root */
 	uint32_t *depth;  /* binary depth, 0 at the root */
 	uint32_t *node_id; /* stable id of the scene node it comes from */
