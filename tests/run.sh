@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# The test command (README, CI): installs the Debian dependencies, builds
+# everything with AddressSanitizer + UBSan and warnings as errors, runs every
+# test, checks that the optimized build (benchmarks included) compiles with
+# warnings as errors too, and fuzzes each decoder for a bounded time when
+# clang is present (before the tests, so ctest's summary closes the log).
+#
+# Usage: bash tests/run.sh [--no-fuzz] [ctest -R regex]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+fuzz=1
+if [ "${1:-}" = "--no-fuzz" ]; then
+	fuzz=0
+	shift
+fi
+filter=${1:-}
+
+bash deploy/install-deps.sh
+
+jobs=$(nproc)
+export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=0}
+export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
+
+echo "== sanitizer build (ASan + UBSan, -Werror)"
+cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	-DBLOBCAST_SANITIZE=ON -DBLOBCAST_WERROR=ON >/dev/null
+cmake --build build-asan -j "$jobs"
+
+echo "== optimized build (-Werror)"
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release \
+	-DBLOBCAST_WERROR=ON >/dev/null
+cmake --build build -j "$jobs"
+
+if [ "$fuzz" = 1 ] && [ -f tests/fuzz/run.sh ]; then
+	echo "== fuzzing"
+	bash tests/fuzz/run.sh "${BLOBCAST_FUZZ_SECONDS:-20}"
+fi
+
+echo "== tests"
+if [ -n "$filter" ]; then
+	ctest --test-dir build-asan --output-on-failure -j "$jobs" -R "$filter"
+else
+	ctest --test-dir build-asan --output-on-failure -j "$jobs"
+fi
+
