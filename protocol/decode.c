@@ -1,0 +1,751 @@
+/*
+ * Payload decoders, one per message type. This file owns the order in which
+ * fields are checked, which PROTOCOL.md states as a rule: fields are read in
+ * wire order and each is checked as soon as it is read, so the first field
+ * that fails decides the error code. Every count is checked against its
+ * limit and against the bytes left (count x smallest element) before any
+ * element is read or any storage is reserved, so a short payload can never
+ * make the decoder allocate much.
+ *
+ * Strings and byte ranges point into the payload; arrays go to the caller's
+ * struct bc_proto_store, or nowhere when it is NULL (the encoder uses that
+ * to check a message it has just written).
+ */
+#include "wire.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+
+#include "blobcast/alloc.h"
+
+struct dec {
+	struct bc__cur c;
+	struct bc_proto_store *store; /* NULL: check only */
+	struct bc_errinfo *ei;
+	struct bc_msg *m;
+};
+
+#define TRY(expr)                                                              \
+	do {                                                                   \
+		int rc_ = (expr);                                              \
+		if (rc_ < 0) {                                                 \
+			return rc_;                                            \
+		}                                                              \
+	} while (0)
+
+/* Smallest encodings of repeated elements, for the count-versus-bytes-left
+ * checks (PROTOCOL.md gives the same numbers). */
+#define MEMBER_MIN 7u   /* u32 id, u8 role, empty name */
+#define OP_MIN 5u       /* REMOVE: u8 kind, u32 node */
+#define FIELD_MIN 6u    /* u8 field, u8 count, one f32 */
+#define RECT_MIN 13u    /* 4 x u16, u32 length, one byte */
+
+/* Records code with "TYPE: reason (payload byte N)" in d->ei. */
+static int fail(struct dec *d, int code, const char *fmt, ...)
+	BC__ERRINFO_PRINTF;
+
+static int fail(struct dec *d, int code, const char *fmt, ...)
+{
+	char reason[192];
+	va_list ap;
+	if (!d->ei) {
+		return code;
+	}
+	va_start(ap, fmt);
+	vsnprintf(reason, sizeof(reason), fmt, ap);
+	va_end(ap);
+	const char *name = bc_proto_type_name(d->m->type);
+	return bc_errinfo_set(d->ei, code, "%s: %s (payload byte %zu)",
+			      name ? name : "?", reason, d->c.pos);
+}
+
+static int truncated(struct dec *d, const char *what, size_t need)
+{
+	return fail(d, BC_EPROTO_TRUNCATED, "%s needs %zu bytes, %zu left",
+		    what, need, bc__cur_left(&d->c));
+}
+
+static int rd_u8(struct dec *d, const char *what, uint8_t *v)
+{
+	return bc__get_u8(&d->c, v) ? 0 : truncated(d, what, 1);
+}
+
+static int rd_u16(struct dec *d, const char *what, uint16_t *v)
+{
+	return bc__get_u16(&d->c, v) ? 0 : truncated(d, what, 2);
+}
+
+static int rd_u32(struct dec *d, const char *what, uint32_t *v)
+{
+	return bc__get_u32(&d->c, v) ? 0 : truncated(d, what, 4);
+}
+
+static int rd_u64(struct dec *d, const char *what, uint64_t *v)
+{
+	return bc__get_u64(&d->c, v) ? 0 : truncated(d, what, 8);
+}
+
+/* A u32 id that must not be 0. */
+static int rd_id(struct dec *d, const char *what, uint32_t *v)
+{
+	TRY(rd_u32(d, what, v));
+	if (*v == 0) {
+		return fail(d, BC_ERANGE, "%s is 0", what);
+	}
+	return 0;
+}
+
+/* Every f32 of a payload must be finite. */
+static int rd_f32(struct dec *d, const char *what, float *v)
+{
+	uint32_t u;
+	TRY(rd_u32(d, what, &u));
+	if (!bc__bits_finite(u)) {
+		return fail(d, BC_ENONFINITE, "%s is not finite (bits %08x)",
+			    what, u);
+	}
+	*v = bc__bits_f32(u);
+	return 0;
+}
+
+/* A finite f32 with |v| <= BC_PROTO_MAX_ABS. */
+static int rd_f32_abs(struct dec *d, const char *what, float *v)
+{
+	TRY(rd_f32(d, what, v));
+	if (fabsf(*v) > BC_PROTO_MAX_ABS) {
+		return fail(d, BC_ERANGE, "|%s| = %g is over %g", what,
+			    (double)fabsf(*v), (double)BC_PROTO_MAX_ABS);
+	}
+	return 0;
+}
+
+/* A finite f32 >= 0. */
+static int rd_f32_nonneg(struct dec *d, const char *what, float *v)
+{
+	TRY(rd_f32(d, what, v));
+	if (*v < 0.0f) {
+		return fail(d, BC_ERANGE, "%s = %g is negative", what,
+			    (double)*v);
+	}
+	return 0;
+}
+
+static int rd_u16_range(struct dec *d, const char *what, unsigned lo,
+			unsigned hi, uint16_t *v)
+{
+	TRY(rd_u16(d, what, v));
+	if (*v < lo || *v > hi) {
+		return fail(d, BC_ERANGE, "%s = %u is outside %u..%u", what,
+			    (unsigned)*v, lo, hi);
+	}
+	return 0;
+}
+
+static int rd_u8_range(struct dec *d, const char *what, unsigned lo,
+		       unsigned hi, uint8_t *v)
+{
+	TRY(rd_u8(d, what, v));
+	if (*v < lo || *v > hi) {
+		return fail(d, BC_ERANGE, "%s = %u is outside %u..%u", what,
+			    (unsigned)*v, lo, hi);
+	}
+	return 0;
+}
+
+static int rd_role(struct dec *d, const char *what,
+		   enum bc_proto_role *role)
+{
+	uint8_t v;
+	TRY(rd_u8(d, what, &v));
+	if (v == 0 || v >= BC_PROTO_ROLE_COUNT) {
+		return fail(d, BC_EENUM, "%s = %u is not a role", what,
+			    (unsigned)v);
+	}
+	*role = (enum bc_proto_role)v;
+	return 0;
+}
+
+static int rd_encoding(struct dec *d, const char *what,
+		       enum bc_proto_encoding *enc)
+{
+	uint8_t v;
+	TRY(rd_u8(d, what, &v));
+	if (v == 0 || v >= BC_PROTO_ENC_COUNT) {
+		return fail(d, BC_EENUM, "%s = %u is not an encoding", what,
+			    (unsigned)v);
+	}
+	*enc = (enum bc_proto_encoding)v;
+	return 0;
+}
+
+/* u16 byte length (min..max), then that many bytes of strict UTF-8. */
+static int rd_str(struct dec *d, const char *what, unsigned min, unsigned max,
+		  struct bc_proto_str *s)
+{
+	uint16_t n;
+	TRY(rd_u16(d, what, &n));
+	if (n < min || n > max) {
+		return fail(d, BC_EPROTO_LENGTH,
+			    "%s length %u is outside %u..%u", what,
+			    (unsigned)n, min, max);
+	}
+	if (n > bc__cur_left(&d->c)) {
+		return truncated(d, what, n);
+	}
+	const uint8_t *p = d->c.buf + d->c.pos;
+	size_t bad = bc__utf8_check(p, n);
+	if (bad < n) {
+		d->c.pos += bad;
+		return fail(d, BC_ESTRING,
+			    "%s: byte %zu (0x%02x) breaks UTF-8 or is NUL",
+			    what, bad, (unsigned)p[bad]);
+	}
+	s->ptr = (const char *)p;
+	s->len = n;
+	d->c.pos += n;
+	return 0;
+}
+
+/* u32 byte length (>= 1), then that many opaque bytes. */
+static int rd_blob(struct dec *d, const char *what, struct bc_proto_bytes *b)
+{
+	uint32_t n;
+	TRY(rd_u32(d, what, &n));
+	if (n == 0) {
+		return fail(d, BC_EPROTO_LENGTH, "%s is empty", what);
+	}
+	if (n > bc__cur_left(&d->c)) {
+		return truncated(d, what, n);
+	}
+	b->ptr = d->c.buf + d->c.pos;
+	b->len = n;
+	d->c.pos += n;
+	return 0;
+}
+
+/* A count n in min..max whose n elements of at least elem bytes each must
+ * fit in what is left. */
+static int check_count(struct dec *d, const char *what, unsigned n,
+		       unsigned min, unsigned max, size_t elem)
+{
+	if (n < min || n > max) {
+		return fail(d, BC_EPROTO_COUNT, "%s %u is outside %u..%u",
+			    what, n, min, max);
+	}
+	if ((size_t)n * elem > bc__cur_left(&d->c)) {
+		return fail(d, BC_EPROTO_COUNT,
+			    "%s %u needs at least %zu bytes, %zu left", what,
+			    n, (size_t)n * elem, bc__cur_left(&d->c));
+	}
+	return 0;
+}
+
+/* Grows one array of the store to hold need elements. The counts that
+ * reach here are bounded by proto_limits.h, so this never grows far. */
+static int reserve(struct dec *d, void **arr, size_t *cap, size_t need,
+		   size_t size)
+{
+	if (need <= *cap) {
+		return 0;
+	}
+	size_t n = *cap ? *cap : 16;
+	while (n < need) {
+		n *= 2;
+	}
+	void *p = bc_reallocarray(*arr, n, size);
+	if (!p) {
+		return fail(d, BC_ENOMEM, "no memory for %zu elements", n);
+	}
+	*arr = p;
+	*cap = n;
+	return 0;
+}
+
+/* ---- Types ---------------------------------------------------------------- */
+
+static int dec_hello(struct dec *d, struct bc_msg_hello *h)
+{
+	TRY(rd_u16(d, "version_min", &h->version_min));
+	if (h->version_min == 0) {
+		return fail(d, BC_ERANGE, "version_min is 0");
+	}
+	TRY(rd_u16(d, "version_max", &h->version_max));
+	if (h->version_max < h->version_min) {
+		return fail(d, BC_ERANGE, "version_max %u < version_min %u",
+			    (unsigned)h->version_max,
+			    (unsigned)h->version_min);
+	}
+	TRY(rd_u8(d, "encodings", &h->encodings));
+	if (h->encodings & ~BC_PROTO_ENCODINGS_ALL) {
+		return fail(d, BC_EPROTO_FLAGS,
+			    "encodings 0x%02x has reserved bits",
+			    (unsigned)h->encodings);
+	}
+	TRY(rd_u32(d, "max_frame_bytes", &h->max_frame_bytes));
+	if (h->max_frame_bytes != 0 &&
+	    h->max_frame_bytes < BC_PROTO_MIN_FRAME_BYTES) {
+		return fail(d, BC_ERANGE, "max_frame_bytes %u is under %u",
+			    h->max_frame_bytes, BC_PROTO_MIN_FRAME_BYTES);
+	}
+	TRY(rd_str(d, "client_name", 0, BC_PROTO_MAX_NAME, &h->client_name));
+	TRY(rd_str(d, "token", 0, BC_PROTO_MAX_TOKEN, &h->token));
+	return 0;
+}
+
+static int rd_u32_range(struct dec *d, const char *what, uint32_t lo,
+			uint32_t hi, uint32_t *v)
+{
+	TRY(rd_u32(d, what, v));
+	if (*v < lo || *v > hi) {
+		return fail(d, BC_ERANGE, "%s = %u is outside %u..%u", what,
+			    *v, lo, hi);
+	}
+	return 0;
+}
+
+static int dec_welcome(struct dec *d, struct bc_msg_welcome *w)
+{
+	TRY(rd_u16_range(d, "version", 1, UINT16_MAX, &w->version));
+	TRY(rd_id(d, "connection_id", &w->connection_id));
+	TRY(rd_u32_range(d, "max_payload", BC_PROTO_HELLO_MAX_PAYLOAD,
+			 BC_PROTO_MAX_PAYLOAD, &w->max_payload));
+	TRY(rd_u32_range(d, "max_frame_bytes", BC_PROTO_MIN_FRAME_BYTES,
+			 BC_PROTO_MAX_PAYLOAD, &w->max_frame_bytes));
+	TRY(rd_u32_range(d, "max_nodes", 1, BC_PROTO_SCENE_MAX_NODES,
+			 &w->max_nodes));
+	TRY(rd_u16_range(d, "max_dim", 1, BC_PROTO_MAX_DIM, &w->max_dim));
+	TRY(rd_u16_range(d, "max_members", 1, BC_PROTO_MAX_MEMBERS,
+			 &w->max_members));
+	TRY(rd_u16_range(d, "max_edit_ops", 1, BC_PROTO_MAX_EDIT_OPS,
+			 &w->max_edit_ops));
+	TRY(rd_str(d, "server_id", 0, BC_PROTO_MAX_NAME, &w->server_id));
+	return 0;
+}
+
+static int dec_error(struct dec *d, struct bc_msg_error *e)
+{
+	TRY(rd_u16_range(d, "code", 1, UINT16_MAX, &e->code));
+	TRY(rd_str(d, "text", 0, BC_PROTO_MAX_ERROR_TEXT, &e->text));
+	return 0;
+}
+
+static int dec_session(struct dec *d, struct bc_msg_session *s)
+{
+	TRY(rd_role(d, "role", &s->role));
+	TRY(rd_str(d, "name", 1, BC_PROTO_MAX_NAME, &s->name));
+	return 0;
+}
+
+static int dec_session_info(struct dec *d, struct bc_msg_session_info *s)
+{
+	TRY(rd_id(d, "session_id", &s->session_id));
+	TRY(rd_id(d, "member_id", &s->member_id));
+	TRY(rd_role(d, "role", &s->role));
+	TRY(rd_str(d, "name", 1, BC_PROTO_MAX_NAME, &s->name));
+	TRY(rd_u16(d, "member_count", &s->nmembers));
+	TRY(check_count(d, "member_count", s->nmembers, 1,
+			BC_PROTO_MAX_MEMBERS, MEMBER_MIN));
+	struct bc_proto_member *out = NULL;
+	if (d->store) {
+		TRY(reserve(d, (void **)&d->store->members,
+			    &d->store->members_cap, s->nmembers,
+			    sizeof(*out)));
+		out = d->store->members;
+	}
+	for (unsigned i = 0; i < s->nmembers; i++) {
+		struct bc_proto_member mb = {0};
+		TRY(rd_id(d, "member.id", &mb.id));
+		TRY(rd_role(d, "member.role", &mb.role));
+		TRY(rd_str(d, "member.name", 0, BC_PROTO_MAX_NAME, &mb.name));
+		if (out) {
+			out[i] = mb;
+		}
+	}
+	s->members = out;
+	return 0;
+}
+
+/* Field numbers and how many values each takes: 0 = not a field,
+ * -1 = a shape parameter (1..BC_PROTO_MAX_FIELD_VALUES values). */
+static int field_values(unsigned field)
+{
+	switch (field) {
+	case BC_PROTO_FIELD_TRANSLATE:
+	case BC_PROTO_FIELD_COLOR:
+		return 3;
+	case BC_PROTO_FIELD_ROTATE:
+		return 4;
+	case BC_PROTO_FIELD_BLEND:
+	case BC_PROTO_FIELD_RANGE:
+	case BC_PROTO_FIELD_OP_KIND:
+		return 1;
+	default:
+		if (field >= BC_PROTO_FIELD_PARAM0 &&
+		    field < BC_PROTO_FIELD_PARAM0 + BC_PROTO_MAX_PRIM_PARAMS) {
+			return -1;
+		}
+		return 0;
+	}
+}
+
+static int dec_field(struct dec *d, uint64_t *seen, struct bc_proto_field *f)
+{
+	TRY(rd_u8(d, "field", &f->field));
+	int want = field_values(f->field);
+	if (want == 0) {
+		return fail(d, BC_EENUM, "field %u is not a field number",
+			    (unsigned)f->field);
+	}
+	/* Field numbers are below 64, so one bit each. */
+	if (*seen & (UINT64_C(1) << f->field)) {
+		return fail(d, BC_EPARSE, "field %u given twice",
+			    (unsigned)f->field);
+	}
+	*seen |= UINT64_C(1) << f->field;
+	TRY(rd_u8(d, "field.count", &f->count));
+	bool ok = want > 0 ? f->count == (unsigned)want
+			   : (f->count >= 1 &&
+			      f->count <= BC_PROTO_MAX_FIELD_VALUES);
+	if (!ok) {
+		return fail(d, BC_EPROTO_COUNT,
+			    "field %u has %u values, expected %s%d",
+			    (unsigned)f->field, (unsigned)f->count,
+			    want > 0 ? "" : "1..",
+			    want > 0 ? want : (int)BC_PROTO_MAX_FIELD_VALUES);
+	}
+	if ((size_t)f->count * 4u > bc__cur_left(&d->c)) {
+		return fail(d, BC_EPROTO_COUNT,
+			    "field %u: %u values need %u bytes, %zu left",
+			    (unsigned)f->field, (unsigned)f->count,
+			    4u * f->count, bc__cur_left(&d->c));
+	}
+	for (unsigned k = 0; k < f->count; k++) {
+		TRY(rd_f32_abs(d, "field value", &f->v[k]));
+	}
+	if (f->field == BC_PROTO_FIELD_OP_KIND) {
+		float v = f->v[0];
+		if (!(v >= 1.0f && v <= (float)BC_PROTO_OP_KIND_MAX &&
+		      v == (float)(int)v)) {
+			return fail(d, BC_EENUM,
+				    "operator kind %g is not an integer 1..%u",
+				    (double)v, BC_PROTO_OP_KIND_MAX);
+		}
+	}
+	return 0;
+}
+
+static int dec_ops(struct dec *d, uint16_t *nops,
+		   const struct bc_proto_edit_op **ops_out)
+{
+	TRY(rd_u16(d, "op_count", nops));
+	TRY(check_count(d, "op_count", *nops, 1, BC_PROTO_MAX_EDIT_OPS,
+			OP_MIN));
+	struct bc_proto_edit_op *ops = NULL;
+	struct bc_proto_store *st = d->store;
+	if (st) {
+		TRY(reserve(d, (void **)&st->ops, &st->ops_cap, *nops,
+			    sizeof(*ops)));
+		ops = st->ops;
+	}
+	size_t nfields = 0;
+	for (unsigned i = 0; i < *nops; i++) {
+		struct bc_proto_edit_op op = {0};
+		uint8_t kind;
+		TRY(rd_u8(d, "op.kind", &kind));
+		if (kind == 0 || kind >= BC_PROTO_EDIT_COUNT) {
+			return fail(d, BC_EENUM, "op %u: kind %u is unknown",
+				    i, (unsigned)kind);
+		}
+		op.kind = (enum bc_proto_edit_kind)kind;
+		switch (op.kind) {
+		case BC_PROTO_EDIT_SET: {
+			TRY(rd_id(d, "op.node", &op.node));
+			TRY(rd_u8(d, "op.field_count", &op.nfields));
+			TRY(check_count(d, "op.field_count", op.nfields, 1,
+					BC_PROTO_MAX_SET_FIELDS, FIELD_MIN));
+			if (st) {
+				TRY(reserve(d, (void **)&st->fields,
+					    &st->fields_cap,
+					    nfields + op.nfields,
+					    sizeof(*st->fields)));
+			}
+			uint64_t seen = 0;
+			for (unsigned k = 0; k < op.nfields; k++) {
+				struct bc_proto_field f = {0};
+				TRY(dec_field(d, &seen, &f));
+				if (st) {
+					st->fields[nfields + k] = f;
+				}
+			}
+			nfields += op.nfields;
+			break;
+		}
+		case BC_PROTO_EDIT_INSERT:
+			TRY(rd_id(d, "op.parent", &op.node));
+			TRY(rd_u32(d, "op.position", &op.position));
+			TRY(rd_blob(d, "op.subtree", &op.subtree));
+			break;
+		case BC_PROTO_EDIT_REMOVE:
+			TRY(rd_id(d, "op.node", &op.node));
+			break;
+		case BC_PROTO_EDIT_REPLACE:
+			TRY(rd_id(d, "op.node", &op.node));
+			TRY(rd_blob(d, "op.subtree", &op.subtree));
+			break;
+		default:
+			break;
+		}
+		if (ops) {
+			ops[i] = op;
+		}
+	}
+	/* The fields array may have moved while it grew: point the set
+	 * operations at their fields only now. */
+	if (ops) {
+		size_t k = 0;
+		for (unsigned i = 0; i < *nops; i++) {
+			if (ops[i].kind == BC_PROTO_EDIT_SET) {
+				ops[i].fields = st->fields + k;
+				k += ops[i].nfields;
+			}
+		}
+	}
+	*ops_out = ops;
+	return 0;
+}
+
+static int dec_camera(struct dec *d, struct bc_msg_camera *c)
+{
+	static const char *const names[3][3] = {
+		{"eye.x", "eye.y", "eye.z"},
+		{"target.x", "target.y", "target.z"},
+		{"up.x", "up.y", "up.z"},
+	};
+	float *vec[3] = {c->eye, c->target, c->up};
+	for (int i = 0; i < 3; i++) {
+		for (int k = 0; k < 3; k++) {
+			TRY(rd_f32_abs(d, names[i][k], &vec[i][k]));
+		}
+	}
+	TRY(rd_f32(d, "fov_y_deg", &c->fov_y_deg));
+	if (!(c->fov_y_deg > 0.0f && c->fov_y_deg < 180.0f)) {
+		return fail(d, BC_ERANGE, "fov_y_deg %g is outside (0, 180)",
+			    (double)c->fov_y_deg);
+	}
+	return 0;
+}
+
+static int dec_view(struct dec *d, struct bc_msg_view *v)
+{
+	TRY(rd_u16_range(d, "width", 1, BC_PROTO_MAX_DIM, &v->width));
+	TRY(rd_u16_range(d, "height", 1, BC_PROTO_MAX_DIM, &v->height));
+	TRY(rd_encoding(d, "encoding", &v->encoding));
+	TRY(rd_u8_range(d, "quality_interactive", 1, BC_PROTO_MAX_QUALITY,
+			&v->quality_interactive));
+	TRY(rd_u8_range(d, "quality_still", 1, BC_PROTO_MAX_QUALITY,
+			&v->quality_still));
+	TRY(rd_u8_range(d, "downscale", 1, BC_PROTO_MAX_DOWNSCALE,
+			&v->downscale));
+	return 0;
+}
+
+static int dec_frame(struct dec *d, struct bc_msg_frame *f)
+{
+	bool snap = (d->m->flags & BC_PROTO_FLAG_SNAPSHOT) != 0;
+	bool full = snap || (d->m->flags & BC_PROTO_FLAG_STILL);
+	TRY(rd_u32(d, "frame_no", &f->frame_no));
+	TRY(rd_u64(d, "order", &f->order));
+	TRY(rd_u32(d, "camera_seq", &f->camera_seq));
+	TRY(rd_encoding(d, "encoding", &f->encoding));
+	if (snap && f->encoding == BC_PROTO_ENC_JPEG) {
+		return fail(d, BC_EENUM, "a snapshot cannot be JPEG");
+	}
+	TRY(rd_u16_range(d, "width", 1, BC_PROTO_MAX_DIM, &f->width));
+	TRY(rd_u16_range(d, "height", 1, BC_PROTO_MAX_DIM, &f->height));
+	TRY(rd_u16_range(d, "image_width", full ? f->width : 1, f->width,
+			 &f->image_width));
+	TRY(rd_u16_range(d, "image_height", full ? f->height : 1, f->height,
+			 &f->image_height));
+	TRY(rd_u16(d, "rect_count", &f->nrects));
+	TRY(check_count(d, "rect_count", f->nrects, 1,
+			snap ? 1u : BC_PROTO_MAX_RECTS, RECT_MIN));
+	struct bc_proto_rect *out = NULL;
+	if (d->store) {
+		TRY(reserve(d, (void **)&d->store->rects, &d->store->rects_cap,
+			    f->nrects, sizeof(*out)));
+		out = d->store->rects;
+	}
+	for (unsigned i = 0; i < f->nrects; i++) {
+		struct bc_proto_rect r = {0};
+		TRY(rd_u16(d, "rect.x", &r.x));
+		TRY(rd_u16(d, "rect.y", &r.y));
+		TRY(rd_u16(d, "rect.w", &r.w));
+		/* A snapshot's one rectangle is the whole image. */
+		unsigned wmin = snap ? f->image_width : 1u;
+		if (r.w < wmin || (unsigned)r.x + r.w > f->image_width) {
+			return fail(d, BC_ERANGE,
+				    "rect %u: x %u + w %u is outside 1..%u", i,
+				    (unsigned)r.x, (unsigned)r.w,
+				    (unsigned)f->image_width);
+		}
+		TRY(rd_u16(d, "rect.h", &r.h));
+		unsigned hmin = snap ? f->image_height : 1u;
+		if (r.h < hmin || (unsigned)r.y + r.h > f->image_height) {
+			return fail(d, BC_ERANGE,
+				    "rect %u: y %u + h %u is outside 1..%u", i,
+				    (unsigned)r.y, (unsigned)r.h,
+				    (unsigned)f->image_height);
+		}
+		uint32_t n;
+		TRY(rd_u32(d, "rect.length", &n));
+		uint64_t raw = (uint64_t)r.w * r.h * 4u;
+		if (n == 0 || (f->encoding == BC_PROTO_ENC_RAW && n != raw)) {
+			return fail(d, BC_EPROTO_LENGTH,
+				    "rect %u: length %u (raw needs %llu)", i, n,
+				    (unsigned long long)raw);
+		}
+		if (n > bc__cur_left(&d->c)) {
+			return truncated(d, "rect.data", n);
+		}
+		r.data.ptr = d->c.buf + d->c.pos;
+		r.data.len = n;
+		d->c.pos += n;
+		if (out) {
+			out[i] = r;
+		}
+	}
+	f->rects = out;
+	return 0;
+}
+
+static int dec_pick_result(struct dec *d, struct bc_msg_pick_result *p)
+{
+	static const char *const names[3] = {"position.x", "position.y",
+					     "position.z"};
+	TRY(rd_u16(d, "x", &p->x));
+	TRY(rd_u16(d, "y", &p->y));
+	TRY(rd_u32(d, "node", &p->node));
+	for (int k = 0; k < 3; k++) {
+		TRY(rd_f32(d, names[k], &p->position[k]));
+		if (p->node == 0 && p->position[k] != 0.0f) {
+			return fail(d, BC_ERANGE, "a miss has %s != 0",
+				    names[k]);
+		}
+	}
+	TRY(rd_f32_nonneg(d, "depth", &p->depth));
+	if (p->node == 0 && p->depth != 0.0f) {
+		return fail(d, BC_ERANGE, "a miss has depth != 0");
+	}
+	return 0;
+}
+
+static int dec_stats(struct dec *d, struct bc_msg_stats *s)
+{
+	TRY(rd_u64(d, "uptime_ms", &s->uptime_ms));
+	TRY(rd_u64(d, "frames", &s->frames));
+	TRY(rd_u64(d, "bytes", &s->bytes));
+	TRY(rd_u64(d, "order", &s->order));
+	TRY(rd_u32(d, "sessions", &s->sessions));
+	TRY(rd_u32(d, "clients", &s->clients));
+	TRY(rd_f32_nonneg(d, "render_ms_last", &s->render_ms_last));
+	TRY(rd_f32_nonneg(d, "render_ms_avg", &s->render_ms_avg));
+	TRY(rd_f32_nonneg(d, "encode_ms_last", &s->encode_ms_last));
+	TRY(rd_f32_nonneg(d, "encode_ms_avg", &s->encode_ms_avg));
+	TRY(rd_f32_nonneg(d, "edit_ms_avg", &s->edit_ms_avg));
+	TRY(rd_f32_nonneg(d, "fps", &s->fps));
+	return 0;
+}
+
+static int dec_body(struct dec *d, struct bc_msg *m)
+{
+	switch (m->type) {
+	case BC_MSG_HELLO:
+		return dec_hello(d, &m->hello);
+	case BC_MSG_WELCOME:
+		return dec_welcome(d, &m->welcome);
+	case BC_MSG_ERROR:
+		return dec_error(d, &m->error);
+	case BC_MSG_PING:
+	case BC_MSG_PONG:
+		return rd_u64(d, "stamp", &m->ping.stamp);
+	case BC_MSG_OK:
+	case BC_MSG_SESSION_LEAVE:
+	case BC_MSG_GET_STATS:
+		return 0;
+	case BC_MSG_SESSION_CREATE:
+	case BC_MSG_SESSION_JOIN:
+		return dec_session(d, &m->session);
+	case BC_MSG_SESSION_INFO:
+		return dec_session_info(d, &m->session_info);
+	case BC_MSG_SCENE_LOAD:
+		return rd_blob(d, "scene", &m->scene_load.scene);
+	case BC_MSG_SCENE_STATE:
+		TRY(rd_u64(d, "order", &m->scene_state.order));
+		TRY(rd_u32(d, "author", &m->scene_state.author));
+		TRY(rd_u32(d, "author_seq", &m->scene_state.author_seq));
+		return rd_blob(d, "scene", &m->scene_state.scene);
+	case BC_MSG_EDIT:
+		return dec_ops(d, &m->edit.nops, &m->edit.ops);
+	case BC_MSG_EDIT_APPLIED: {
+		struct bc_msg_edit_applied *a = &m->edit_applied;
+		TRY(rd_u64(d, "order", &a->order));
+		if (a->order == 0) {
+			return fail(d, BC_ERANGE, "order is 0");
+		}
+		TRY(rd_id(d, "author", &a->author));
+		TRY(rd_u32(d, "author_seq", &a->author_seq));
+		return dec_ops(d, &a->nops, &a->ops);
+	}
+	case BC_MSG_CAMERA:
+		return dec_camera(d, &m->camera);
+	case BC_MSG_VIEW:
+		return dec_view(d, &m->view);
+	case BC_MSG_FRAME:
+		return dec_frame(d, &m->frame);
+	case BC_MSG_PICK:
+		TRY(rd_u16(d, "x", &m->pick.x));
+		return rd_u16(d, "y", &m->pick.y);
+	case BC_MSG_PICK_RESULT:
+		return dec_pick_result(d, &m->pick_result);
+	case BC_MSG_SNAPSHOT: {
+		TRY(rd_encoding(d, "encoding", &m->snapshot.encoding));
+		if (m->snapshot.encoding == BC_PROTO_ENC_JPEG) {
+			return fail(d, BC_EENUM, "a snapshot cannot be JPEG");
+		}
+		return 0;
+	}
+	case BC_MSG_STATS:
+		return dec_stats(d, &m->stats);
+	default:
+		return fail(d, BC_EPROTO_TYPE, "type %d is unknown",
+			    (int)m->type);
+	}
+}
+
+int bc__decode_payload(struct bc_proto_store *store, struct bc_msg *out,
+		       const uint8_t *payload, size_t len,
+		       struct bc_errinfo *ei)
+{
+	struct dec d = {
+		.c = {.buf = payload, .len = len, .pos = 0},
+		.store = store,
+		.ei = ei,
+		.m = out,
+	};
+	TRY(dec_body(&d, out));
+	if (bc__cur_left(&d.c)) {
+		return fail(&d, BC_EPROTO_TRAILING, "%zu bytes after the last field",
+			    bc__cur_left(&d.c));
+	}
+	return 0;
+}
+
+void bc__store_free(struct bc_proto_store *s)
+{
+	bc_free(s->members);
+	bc_free(s->ops);
+	bc_free(s->fields);
+	bc_free(s->rects);
+	memset(s, 0, sizeof(*s));
+}

@@ -1,0 +1,354 @@
+/*
+ * Encoders: struct bc_msg to bytes. Each type has one writer that runs
+ * twice, first measuring (so the payload's size is known and checked before
+ * the buffer grows) and then writing. The writer itself only refuses what
+ * would not survive the trip onto the wire (a string longer than its length
+ * field, a count over its limit, an enum that does not fit its byte); the
+ * finished payload is then run through the decoder, so a message is
+ * appended only if the decoder accepts it, and with the decoder's error
+ * otherwise. That keeps one definition of "valid" for both directions.
+ */
+#include "wire.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+
+static void wfail(struct bc__w *w, int code, const char *fmt, ...)
+	BC__ERRINFO_PRINTF;
+
+static void wfail(struct bc__w *w, int code, const char *fmt, ...)
+{
+	char reason[192];
+	va_list ap;
+	if (w->err) {
+		return;
+	}
+	w->err = code;
+	va_start(ap, fmt);
+	vsnprintf(reason, sizeof(reason), fmt, ap);
+	va_end(ap);
+	bc_errinfo_set(w->ei, code, "encode: %s", reason);
+}
+
+static void w_str(struct bc__w *w, const char *what, struct bc_proto_str s,
+		  uint32_t max)
+{
+	if (s.len > max) {
+		wfail(w, BC_EPROTO_LENGTH, "%s length %u over %u", what, s.len,
+		      max);
+		return;
+	}
+	if (s.len && !s.ptr) {
+		wfail(w, BC_EINVAL, "%s has a length but no bytes", what);
+		return;
+	}
+	bc__put_u16(w, (uint16_t)s.len);
+	bc__put_raw(w, s.ptr, s.len);
+}
+
+static void w_blob(struct bc__w *w, const char *what, struct bc_proto_bytes b)
+{
+	if (b.len && !b.ptr) {
+		wfail(w, BC_EINVAL, "%s has a length but no bytes", what);
+		return;
+	}
+	bc__put_u32(w, b.len);
+	bc__put_raw(w, b.ptr, b.len);
+}
+
+/* Enums are held as ints but travel as one byte. */
+static void w_enum(struct bc__w *w, const char *what, int v, int count)
+{
+	if (v < 0 || v >= count) {
+		wfail(w, BC_EENUM, "%s = %d is out of range", what, v);
+		return;
+	}
+	bc__put_u8(w, (uint8_t)v);
+}
+
+/* An array of n elements must exist and n must fit its limit. */
+static bool w_count(struct bc__w *w, const char *what, unsigned n,
+		    unsigned max, const void *arr)
+{
+	if (n > max) {
+		wfail(w, BC_EPROTO_COUNT, "%s %u over %u", what, n, max);
+		return false;
+	}
+	if (n && !arr) {
+		wfail(w, BC_EINVAL, "%s %u with no array", what, n);
+		return false;
+	}
+	return true;
+}
+
+static void w_f32v(struct bc__w *w, const float *v, int n)
+{
+	for (int i = 0; i < n; i++) {
+		bc__put_f32(w, v[i]);
+	}
+}
+
+static void w_ops(struct bc__w *w, uint16_t nops,
+		  const struct bc_proto_edit_op *ops)
+{
+	if (!w_count(w, "op_count", nops, BC_PROTO_MAX_EDIT_OPS, ops)) {
+		return;
+	}
+	bc__put_u16(w, nops);
+	for (unsigned i = 0; i < nops && !w->err; i++) {
+		const struct bc_proto_edit_op *op = &ops[i];
+		w_enum(w, "op.kind", (int)op->kind, BC_PROTO_EDIT_COUNT);
+		switch (op->kind) {
+		case BC_PROTO_EDIT_SET:
+			bc__put_u32(w, op->node);
+			if (!w_count(w, "op.field_count", op->nfields,
+				     BC_PROTO_MAX_SET_FIELDS, op->fields)) {
+				return;
+			}
+			bc__put_u8(w, op->nfields);
+			for (unsigned k = 0; k < op->nfields; k++) {
+				const struct bc_proto_field *f = &op->fields[k];
+				if (f->count > BC_PROTO_MAX_FIELD_VALUES) {
+					wfail(w, BC_EPROTO_COUNT,
+					      "field %u has %u values",
+					      (unsigned)f->field,
+					      (unsigned)f->count);
+					return;
+				}
+				bc__put_u8(w, f->field);
+				bc__put_u8(w, f->count);
+				w_f32v(w, f->v, f->count);
+			}
+			break;
+		case BC_PROTO_EDIT_INSERT:
+			bc__put_u32(w, op->node);
+			bc__put_u32(w, op->position);
+			w_blob(w, "op.subtree", op->subtree);
+			break;
+		case BC_PROTO_EDIT_REMOVE:
+			bc__put_u32(w, op->node);
+			break;
+		case BC_PROTO_EDIT_REPLACE:
+			bc__put_u32(w, op->node);
+			w_blob(w, "op.subtree", op->subtree);
+			break;
+		default:
+			/* INVALID: w_enum lets 0 through; the decoder
+			 * refuses it with EENUM. */
+			break;
+		}
+	}
+}
+
+static void w_frame(struct bc__w *w, const struct bc_msg_frame *f)
+{
+	bc__put_u32(w, f->frame_no);
+	bc__put_u64(w, f->order);
+	bc__put_u32(w, f->camera_seq);
+	w_enum(w, "encoding", (int)f->encoding, BC_PROTO_ENC_COUNT);
+	bc__put_u16(w, f->width);
+	bc__put_u16(w, f->height);
+	bc__put_u16(w, f->image_width);
+	bc__put_u16(w, f->image_height);
+	if (!w_count(w, "rect_count", f->nrects, BC_PROTO_MAX_RECTS,
+		     f->rects)) {
+		return;
+	}
+	bc__put_u16(w, f->nrects);
+	for (unsigned i = 0; i < f->nrects; i++) {
+		const struct bc_proto_rect *r = &f->rects[i];
+		bc__put_u16(w, r->x);
+		bc__put_u16(w, r->y);
+		bc__put_u16(w, r->w);
+		bc__put_u16(w, r->h);
+		w_blob(w, "rect.data", r->data);
+	}
+}
+
+static void w_body(struct bc__w *w, const struct bc_msg *m)
+{
+	switch (m->type) {
+	case BC_MSG_HELLO: {
+		const struct bc_msg_hello *h = &m->hello;
+		bc__put_u16(w, h->version_min);
+		bc__put_u16(w, h->version_max);
+		bc__put_u8(w, h->encodings);
+		bc__put_u32(w, h->max_frame_bytes);
+		w_str(w, "client_name", h->client_name, BC_PROTO_MAX_NAME);
+		w_str(w, "token", h->token, BC_PROTO_MAX_TOKEN);
+		break;
+	}
+	case BC_MSG_WELCOME: {
+		const struct bc_msg_welcome *wl = &m->welcome;
+		bc__put_u16(w, wl->version);
+		bc__put_u32(w, wl->connection_id);
+		bc__put_u32(w, wl->max_payload);
+		bc__put_u32(w, wl->max_frame_bytes);
+		bc__put_u32(w, wl->max_nodes);
+		bc__put_u16(w, wl->max_dim);
+		bc__put_u16(w, wl->max_members);
+		bc__put_u16(w, wl->max_edit_ops);
+		w_str(w, "server_id", wl->server_id, BC_PROTO_MAX_NAME);
+		break;
+	}
+	case BC_MSG_ERROR:
+		bc__put_u16(w, m->error.code);
+		w_str(w, "text", m->error.text, BC_PROTO_MAX_ERROR_TEXT);
+		break;
+	case BC_MSG_PING:
+	case BC_MSG_PONG:
+		bc__put_u64(w, m->ping.stamp);
+		break;
+	case BC_MSG_SESSION_CREATE:
+	case BC_MSG_SESSION_JOIN:
+		w_enum(w, "role", (int)m->session.role, BC_PROTO_ROLE_COUNT);
+		w_str(w, "name", m->session.name, BC_PROTO_MAX_NAME);
+		break;
+	case BC_MSG_SESSION_INFO: {
+		const struct bc_msg_session_info *s = &m->session_info;
+		bc__put_u32(w, s->session_id);
+		bc__put_u32(w, s->member_id);
+		w_enum(w, "role", (int)s->role, BC_PROTO_ROLE_COUNT);
+		w_str(w, "name", s->name, BC_PROTO_MAX_NAME);
+		if (!w_count(w, "member_count", s->nmembers,
+			     BC_PROTO_MAX_MEMBERS, s->members)) {
+			break;
+		}
+		bc__put_u16(w, s->nmembers);
+		for (unsigned i = 0; i < s->nmembers; i++) {
+			bc__put_u32(w, s->members[i].id);
+			w_enum(w, "member.role", (int)s->members[i].role,
+			       BC_PROTO_ROLE_COUNT);
+			w_str(w, "member.name", s->members[i].name,
+			      BC_PROTO_MAX_NAME);
+		}
+		break;
+	}
+	case BC_MSG_SCENE_LOAD:
+		w_blob(w, "scene", m->scene_load.scene);
+		break;
+	case BC_MSG_SCENE_STATE:
+		bc__put_u64(w, m->scene_state.order);
+		bc__put_u32(w, m->scene_state.author);
+		bc__put_u32(w, m->scene_state.author_seq);
+		w_blob(w, "scene", m->scene_state.scene);
+		break;
+	case BC_MSG_EDIT:
+		w_ops(w, m->edit.nops, m->edit.ops);
+		break;
+	case BC_MSG_EDIT_APPLIED:
+		bc__put_u64(w, m->edit_applied.order);
+		bc__put_u32(w, m->edit_applied.author);
+		bc__put_u32(w, m->edit_applied.author_seq);
+		w_ops(w, m->edit_applied.nops, m->edit_applied.ops);
+		break;
+	case BC_MSG_CAMERA:
+		w_f32v(w, m->camera.eye, 3);
+		w_f32v(w, m->camera.target, 3);
+		w_f32v(w, m->camera.up, 3);
+		bc__put_f32(w, m->camera.fov_y_deg);
+		break;
+	case BC_MSG_VIEW:
+		bc__put_u16(w, m->view.width);
+		bc__put_u16(w, m->view.height);
+		w_enum(w, "encoding", (int)m->view.encoding,
+		       BC_PROTO_ENC_COUNT);
+		bc__put_u8(w, m->view.quality_interactive);
+		bc__put_u8(w, m->view.quality_still);
+		bc__put_u8(w, m->view.downscale);
+		break;
+	case BC_MSG_FRAME:
+		w_frame(w, &m->frame);
+		break;
+	case BC_MSG_PICK:
+		bc__put_u16(w, m->pick.x);
+		bc__put_u16(w, m->pick.y);
+		break;
+	case BC_MSG_PICK_RESULT:
+		bc__put_u16(w, m->pick_result.x);
+		bc__put_u16(w, m->pick_result.y);
+		bc__put_u32(w, m->pick_result.node);
+		w_f32v(w, m->pick_result.position, 3);
+		bc__put_f32(w, m->pick_result.depth);
+		break;
+	case BC_MSG_SNAPSHOT:
+		w_enum(w, "encoding", (int)m->snapshot.encoding,
+		       BC_PROTO_ENC_COUNT);
+		break;
+	case BC_MSG_STATS: {
+		const struct bc_msg_stats *s = &m->stats;
+		bc__put_u64(w, s->uptime_ms);
+		bc__put_u64(w, s->frames);
+		bc__put_u64(w, s->bytes);
+		bc__put_u64(w, s->order);
+		bc__put_u32(w, s->sessions);
+		bc__put_u32(w, s->clients);
+		bc__put_f32(w, s->render_ms_last);
+		bc__put_f32(w, s->render_ms_avg);
+		bc__put_f32(w, s->encode_ms_last);
+		bc__put_f32(w, s->encode_ms_avg);
+		bc__put_f32(w, s->edit_ms_avg);
+		bc__put_f32(w, s->fps);
+		break;
+	}
+	default: /* OK, SESSION_LEAVE, GET_STATS: no payload */
+		break;
+	}
+}
+
+int bc_proto_encode(struct bc_proto_buf *b, const struct bc_msg *m,
+		    struct bc_errinfo *ei)
+{
+	const struct bc__type_info *t = bc__type_info((unsigned)m->type);
+	if (!t) {
+		return bc_errinfo_set(ei, BC_EPROTO_TYPE,
+				      "encode: type %d is unknown",
+				      (int)m->type);
+	}
+	if (m->flags & ~t->flags) {
+		return bc_errinfo_set(ei, BC_EPROTO_FLAGS,
+				      "encode: %s does not define flags 0x%04x",
+				      t->name, (unsigned)(m->flags & ~t->flags));
+	}
+	struct bc__w measure = {.ei = ei};
+	w_body(&measure, m);
+	if (measure.err) {
+		return measure.err;
+	}
+	size_t n = measure.n;
+	if (n > t->max_payload) {
+		return bc_errinfo_set(ei, BC_EPROTO_LENGTH,
+				      "encode: %s payload of %zu bytes is over "
+				      "its maximum %u",
+				      t->name, n, t->max_payload);
+	}
+	int rc = bc__buf_reserve(b, BC_PROTO_HEADER_SIZE + n);
+	if (rc < 0) {
+		return bc_errinfo_set(ei, rc,
+				      "encode: %s of %zu bytes does not fit "
+				      "the buffer (%zu of %zu used)",
+				      t->name, n, b->len, b->max);
+	}
+	/* Written past b->len and committed only once checked, so a refused
+	 * message leaves b as it was. */
+	struct bc__w w = {.p = b->data + b->len, .cap = BC_PROTO_HEADER_SIZE + n};
+	bc__put_u8(&w, BC_PROTO_MAGIC0);
+	bc__put_u8(&w, BC_PROTO_MAGIC1);
+	bc__put_u8(&w, BC_PROTO_MAGIC2);
+	bc__put_u8(&w, BC_PROTO_MAGIC3);
+	bc__put_u8(&w, BC_PROTO_VERSION);
+	bc__put_u8(&w, (uint8_t)m->type);
+	bc__put_u16(&w, m->flags);
+	bc__put_u32(&w, (uint32_t)n);
+	bc__put_u32(&w, m->seq);
+	w_body(&w, m);
+	struct bc_msg check = {.type = m->type, .flags = m->flags,
+			       .seq = m->seq};
+	rc = bc__decode_payload(NULL, &check,
+				b->data + b->len + BC_PROTO_HEADER_SIZE, n, ei);
+	if (rc < 0) {
+		return rc;
+	}
+	b->len += BC_PROTO_HEADER_SIZE + n;
+	return 0;
+}

@@ -1,0 +1,485 @@
+/*
+ * The blobcast wire protocol codec: message structs to bytes and back, with
+ * no I/O. protocol/PROTOCOL.md is the specification; this header is its C
+ * form. The daemon and every C client link this same code.
+ *
+ * Reading is a push parser (hiredis reader style): feed it bytes as they
+ * arrive, then call next() until it says it needs more. Every length and
+ * count is checked against proto_limits.h and against the bytes actually
+ * present before anything is allocated; an error is sticky.
+ *
+ * Writing appends whole messages to a struct bc_proto_buf, a growable buffer
+ * whose ceiling is fixed at init. The encoder refuses any message that the
+ * decoder would refuse, so the two are exact inverses: decoding what was
+ * encoded gives back the same fields, and encoding what was decoded gives
+ * back the same bytes.
+ */
+#ifndef BLOBCAST_PROTO_H
+#define BLOBCAST_PROTO_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "blobcast/error.h"
+#include "blobcast/proto_limits.h"
+
+/* ---- Framing ------------------------------------------------------------ */
+
+/* Every message starts with this 16-byte header (all integers little-endian):
+ *   0  u8[4] magic "BCST"      4  u8 version      5  u8 type
+ *   6  u16 flags               8  u32 payload length
+ *  12  u32 seq
+ */
+#define BC_PROTO_HEADER_SIZE 16u
+#define BC_PROTO_MAGIC0 0x42u /* 'B' */
+#define BC_PROTO_MAGIC1 0x43u /* 'C' */
+#define BC_PROTO_MAGIC2 0x53u /* 'S' */
+#define BC_PROTO_MAGIC3 0x54u /* 'T' */
+/* The protocol version this code speaks (the only one so far). */
+#define BC_PROTO_VERSION 1u
+
+/* Message types; the numbers are the wire values and are never reused. */
+enum bc_msg_type {
+	BC_MSG_INVALID = 0,
+	BC_MSG_HELLO = 1,           /* client -> server */
+	BC_MSG_WELCOME = 2,         /* server -> client */
+	BC_MSG_ERROR = 3,           /* both */
+	BC_MSG_PING = 4,            /* both */
+	BC_MSG_PONG = 5,            /* both */
+	BC_MSG_OK = 6,              /* server -> client */
+	BC_MSG_SESSION_CREATE = 7,  /* client -> server */
+	BC_MSG_SESSION_JOIN = 8,    /* client -> server */
+	BC_MSG_SESSION_LEAVE = 9,   /* client -> server */
+	BC_MSG_SESSION_INFO = 10,   /* server -> client */
+	BC_MSG_SCENE_LOAD = 11,     /* client -> server */
+	BC_MSG_SCENE_STATE = 12,    /* server -> client */
+	BC_MSG_EDIT = 13,           /* client -> server */
+	BC_MSG_EDIT_APPLIED = 14,   /* server -> client */
+	BC_MSG_CAMERA = 15,         /* client -> server */
+	BC_MSG_VIEW = 16,           /* client -> server */
+	BC_MSG_FRAME = 17,          /* server -> client */
+	BC_MSG_PICK = 18,           /* client -> server */
+	BC_MSG_PICK_RESULT = 19,    /* server -> client */
+	BC_MSG_SNAPSHOT = 20,       /* client -> server */
+	BC_MSG_GET_STATS = 21,      /* client -> server */
+	BC_MSG_STATS = 22,          /* server -> client */
+	BC_MSG_COUNT
+};
+
+/* Header flag bits. Each is defined for some types only; a bit that is not
+ * defined for the message's type must be 0 (BC_EPROTO_FLAGS). */
+/* ERROR: the sender closes the connection after this message. */
+#define BC_PROTO_FLAG_FATAL 0x0001u
+/* CAMERA, EDIT: part of a continuous interaction (a drag); the server renders
+ * at interactive quality until a message without it arrives. */
+#define BC_PROTO_FLAG_INTERACTING 0x0001u
+/* FRAME: rendered at full size and still quality. */
+#define BC_PROTO_FLAG_STILL 0x0001u
+/* FRAME: the lossless answer to a SNAPSHOT (seq = that request's seq). */
+#define BC_PROTO_FLAG_SNAPSHOT 0x0002u
+
+/* Which peer's messages a reader accepts. */
+enum bc_proto_side {
+	BC_PROTO_SIDE_ANY = 0, /* every type (tools, tests) */
+	BC_PROTO_SIDE_SERVER,  /* a server reading what clients send */
+	BC_PROTO_SIDE_CLIENT,  /* a client reading what servers send */
+	BC_PROTO_SIDE_COUNT
+};
+
+enum bc_proto_role {
+	BC_PROTO_ROLE_INVALID = 0,
+	BC_PROTO_ROLE_EDITOR = 1,
+	BC_PROTO_ROLE_VIEWER = 2,
+	BC_PROTO_ROLE_COUNT
+};
+
+enum bc_proto_encoding {
+	BC_PROTO_ENC_INVALID = 0,
+	BC_PROTO_ENC_JPEG = 1,
+	BC_PROTO_ENC_PNG = 2,
+	BC_PROTO_ENC_RAW = 3, /* RGBA8, rows top to bottom, no padding */
+	BC_PROTO_ENC_COUNT
+};
+
+/* HELLO.encodings bits: bit (encoding - 1) set = the client decodes it. */
+#define BC_PROTO_ENCODINGS_ALL 0x07u
+
+enum bc_proto_edit_kind {
+	BC_PROTO_EDIT_INVALID = 0,
+	BC_PROTO_EDIT_SET = 1,     /* set fields of node */
+	BC_PROTO_EDIT_INSERT = 2,  /* insert subtree under node at position */
+	BC_PROTO_EDIT_REMOVE = 3,  /* remove node and its subtree */
+	BC_PROTO_EDIT_REPLACE = 4, /* replace node by subtree */
+	BC_PROTO_EDIT_COUNT
+};
+
+/* Field numbers of a set operation (sparse, so not an enum). Parameter k
+ * (0-based, in the order of docs/primitives.md) is BC_PROTO_FIELD_PARAM0 + k,
+ * k < BC_PROTO_MAX_PRIM_PARAMS. */
+#define BC_PROTO_FIELD_TRANSLATE 1u /* 3 values */
+#define BC_PROTO_FIELD_ROTATE 2u    /* 4 values, quaternion x y z w */
+#define BC_PROTO_FIELD_COLOR 3u     /* 3 values */
+#define BC_PROTO_FIELD_PARAM0 16u   /* 16..23: 1..4 values each */
+#define BC_PROTO_FIELD_BLEND 32u    /* 1 value */
+#define BC_PROTO_FIELD_RANGE 33u    /* 1 value */
+#define BC_PROTO_FIELD_OP_KIND 34u  /* 1 value: an integer 1..6 */
+
+/* Operator kinds as the scene encoding and the OP_KIND field number them
+ * (the same numbers as blobtree's enum bc_op). */
+#define BC_PROTO_OP_KIND_MAX 6u
+/* Primitive kinds run 1..16 (blobtree's enum bc_prim). */
+#define BC_PROTO_PRIM_KIND_MAX 16u
+
+/* ---- Message fields ------------------------------------------------------ */
+
+/* A string: UTF-8 without NUL, NOT NUL-terminated (print with "%.*s"). */
+struct bc_proto_str {
+	const char *ptr;
+	uint32_t len;
+};
+
+/* An opaque byte range (scene bytes, encoded image bytes). */
+struct bc_proto_bytes {
+	const uint8_t *ptr;
+	uint32_t len;
+};
+
+struct bc_msg_hello {
+	uint16_t version_min, version_max; /* versions the client speaks */
+	uint8_t encodings;        /* bit (encoding - 1): decodes it */
+	uint32_t max_frame_bytes; /* largest FRAME payload; 0 = server's */
+	struct bc_proto_str client_name; /* 0..BC_PROTO_MAX_NAME bytes */
+	struct bc_proto_str token;       /* 0..BC_PROTO_MAX_TOKEN bytes */
+};
+
+struct bc_msg_welcome {
+	uint16_t version;         /* the version both will speak */
+	uint32_t connection_id;   /* != 0 */
+	uint32_t max_payload;     /* server's payload limit after HELLO */
+	uint32_t max_frame_bytes; /* FRAME payloads this client will get */
+	uint32_t max_nodes;       /* nodes a session's scene may have */
+	uint16_t max_dim;         /* largest VIEW width or height */
+	uint16_t max_members;     /* clients per session */
+	uint16_t max_edit_ops;    /* operations per EDIT */
+	struct bc_proto_str server_id; /* 0..BC_PROTO_MAX_NAME bytes */
+};
+
+struct bc_msg_error {
+	uint16_t code; /* magnitude of a BC_E* code, >= 1 */
+	struct bc_proto_str text; /* 0..BC_PROTO_MAX_ERROR_TEXT bytes */
+};
+
+/* PING and PONG: PONG echoes the PING's stamp (the sender's clock, opaque
+ * to the receiver), so the pinger computes the round-trip time. */
+struct bc_msg_ping {
+	uint64_t stamp;
+};
+
+/* SESSION_CREATE and SESSION_JOIN. */
+struct bc_msg_session {
+	enum bc_proto_role role;
+	struct bc_proto_str name; /* 1..BC_PROTO_MAX_NAME bytes */
+};
+
+struct bc_proto_member {
+	uint32_t id; /* != 0, unique in the session */
+	enum bc_proto_role role;
+	struct bc_proto_str name; /* the member's HELLO client_name */
+};
+
+struct bc_msg_session_info {
+	uint32_t session_id;        /* != 0 */
+	uint32_t member_id;         /* the receiver's own id, != 0 */
+	enum bc_proto_role role;    /* the receiver's role */
+	struct bc_proto_str name;   /* session name */
+	uint16_t nmembers;          /* 1..BC_PROTO_MAX_MEMBERS */
+	const struct bc_proto_member *members;
+};
+
+struct bc_msg_scene_load {
+	struct bc_proto_bytes scene; /* scene encoding, >= 1 byte */
+};
+
+struct bc_msg_scene_state {
+	uint64_t order;      /* edit order number the state reflects */
+	uint32_t author;     /* member whose SCENE_LOAD this is, or 0 */
+	uint32_t author_seq; /* that member's SCENE_LOAD seq, or 0 */
+	struct bc_proto_bytes scene;
+};
+
+struct bc_proto_field {
+	uint8_t field; /* BC_PROTO_FIELD_* */
+	uint8_t count; /* number of values */
+	float v[BC_PROTO_MAX_FIELD_VALUES];
+};
+
+struct bc_proto_edit_op {
+	enum bc_proto_edit_kind kind;
+	uint32_t node;     /* SET, REMOVE, REPLACE: the node; INSERT: parent */
+	uint32_t position; /* INSERT: child index (== child count: append) */
+	struct bc_proto_bytes subtree; /* INSERT, REPLACE: scene encoding */
+	uint8_t nfields;   /* SET: 1..BC_PROTO_MAX_SET_FIELDS */
+	const struct bc_proto_field *fields;
+};
+
+struct bc_msg_edit {
+	uint16_t nops; /* 1..BC_PROTO_MAX_EDIT_OPS */
+	const struct bc_proto_edit_op *ops;
+};
+
+struct bc_msg_edit_applied {
+	uint64_t order;      /* server's order number, >= 1 */
+	uint32_t author;     /* member id, != 0 */
+	uint32_t author_seq; /* the EDIT's seq */
+	uint16_t nops;
+	const struct bc_proto_edit_op *ops;
+};
+
+struct bc_msg_camera {
+	float eye[3], target[3], up[3];
+	float fov_y_deg; /* (0, 180) */
+};
+
+struct bc_msg_view {
+	uint16_t width, height; /* 1..BC_PROTO_MAX_DIM */
+	enum bc_proto_encoding encoding;
+	uint8_t quality_interactive, quality_still; /* 1..100 */
+	uint8_t downscale; /* 1..BC_PROTO_MAX_DOWNSCALE */
+};
+
+struct bc_proto_rect {
+	uint16_t x, y, w, h; /* in image pixels, row 0 on top */
+	struct bc_proto_bytes data;
+};
+
+struct bc_msg_frame {
+	uint32_t frame_no;
+	uint64_t order;      /* last edit order number the frame reflects */
+	uint32_t camera_seq; /* seq of the last CAMERA it reflects, or 0 */
+	enum bc_proto_encoding encoding;
+	uint16_t width, height;             /* full (VIEW) size */
+	uint16_t image_width, image_height; /* encoded size (downscaled) */
+	uint16_t nrects; /* 1..BC_PROTO_MAX_RECTS */
+	const struct bc_proto_rect *rects;
+};
+
+struct bc_msg_pick {
+	uint16_t x, y; /* pixel in VIEW coordinates */
+};
+
+struct bc_msg_pick_result {
+	uint16_t x, y;
+	uint32_t node;     /* primitive hit, 0 on a miss */
+	float position[3]; /* world hit point; 0 on a miss */
+	float depth;       /* distance from the eye, >= 0; 0 on a miss */
+};
+
+struct bc_msg_snapshot {
+	enum bc_proto_encoding encoding; /* PNG or RAW */
+};
+
+struct bc_msg_stats {
+	uint64_t uptime_ms;
+	uint64_t frames; /* FRAMEs sent to this client */
+	uint64_t bytes;  /* bytes sent to this client */
+	uint64_t order;  /* latest edit order of the client's session */
+	uint32_t sessions, clients; /* on the whole server */
+	float render_ms_last, render_ms_avg;
+	float encode_ms_last, encode_ms_avg;
+	float edit_ms_avg; /* applying one EDIT */
+	float fps;         /* frames per second sent to this client */
+};
+
+/* One message. Variable parts (strings, byte ranges, arrays) of a decoded
+ * message point into the reader: strings and byte ranges into its input
+ * buffer (zero copy), arrays (members, ops, fields, rects) into storage the
+ * reader owns. Both stay valid until the next call of any function on that
+ * reader. For encoding, the caller points them at its own memory. Types
+ * without payload (OK, SESSION_LEAVE, GET_STATS) use no union member. */
+struct bc_msg {
+	enum bc_msg_type type;
+	uint16_t flags;
+	uint32_t seq;
+	union {
+		struct bc_msg_hello hello;
+		struct bc_msg_welcome welcome;
+		struct bc_msg_error error;
+		struct bc_msg_ping ping; /* PING and PONG */
+		struct bc_msg_session session; /* CREATE and JOIN */
+		struct bc_msg_session_info session_info;
+		struct bc_msg_scene_load scene_load;
+		struct bc_msg_scene_state scene_state;
+		struct bc_msg_edit edit;
+		struct bc_msg_edit_applied edit_applied;
+		struct bc_msg_camera camera;
+		struct bc_msg_view view;
+		struct bc_msg_frame frame;
+		struct bc_msg_pick pick;
+		struct bc_msg_pick_result pick_result;
+		struct bc_msg_snapshot snapshot;
+		struct bc_msg_stats stats;
+	};
+};
+
+/* ---- Reading ------------------------------------------------------------- */
+
+/* Zero means default for every field. */
+struct bc_proto_reader_opts {
+	enum bc_proto_side side; /* types from the other side: EPROTO_TYPE */
+	/* Payload limit; 0 or anything above BC_PROTO_MAX_PAYLOAD means
+	 * BC_PROTO_MAX_PAYLOAD. A client sets its HELLO max_frame_bytes. */
+	uint32_t max_payload;
+	/* Start in the pre-HELLO stage: only HELLO and PING are accepted
+	 * (others: BC_ESTATE) and payloads are limited to
+	 * BC_PROTO_HELLO_MAX_PAYLOAD, until bc_proto_reader_hello_done(). */
+	bool await_hello;
+};
+
+/* Array storage of decoded messages (private to the codec). */
+struct bc_proto_store {
+	struct bc_proto_member *members;
+	struct bc_proto_edit_op *ops;
+	struct bc_proto_field *fields;
+	struct bc_proto_rect *rects;
+	size_t members_cap, ops_cap, fields_cap, rects_cap;
+};
+
+struct bc_proto_reader {
+	int err;           /* 0 or the sticky BC_E* error */
+	char errstr[256];  /* the reason, when err != 0 */
+	/* Everything below is private. */
+	struct bc_proto_reader_opts opts;
+	bool pre_hello;
+	uint8_t *buf;
+	size_t len, pos, cap; /* bytes buffered, parsed, allocated */
+	struct bc_proto_store store;
+	uint64_t nmsgs; /* messages returned so far (for error reasons) */
+};
+
+/* Sets up r with opts (which may be NULL). Allocates nothing; returns 0, or
+ * BC_EINVAL for an out-of-range side. */
+int bc_proto_reader_init(struct bc_proto_reader *r,
+			 const struct bc_proto_reader_opts *opts);
+/* Frees everything r holds; accepts NULL and a zeroed reader. */
+void bc_proto_reader_finish(struct bc_proto_reader *r);
+
+/* Appends n bytes (copied) to r. Returns 0, the sticky error if there is
+ * one, BC_ENOMEM, or BC_ELIMIT when more than one whole message plus
+ * BC_PROTO_READ_SLACK bytes would be waiting unparsed (drain with
+ * bc_proto_reader_next() before feeding more). ENOMEM and ELIMIT are
+ * sticky. */
+int bc_proto_reader_feed(struct bc_proto_reader *r, const void *bytes,
+			 size_t n);
+
+/* Parses the next message into *out (reset on entry). Returns 1 (a
+ * message), 0 (more bytes needed) or a negative BC_E* code, which is also
+ * stored in r->err with a reason in r->errstr; after an error every call
+ * returns it again. Header errors are reported as soon as the offending
+ * header byte has arrived. See struct bc_msg for how long *out is valid. */
+int bc_proto_reader_next(struct bc_proto_reader *r, struct bc_msg *out);
+
+/* The stream has ended. Returns 0 if it ended between messages, otherwise
+ * (a partial message is buffered) sets the sticky BC_EPROTO_TRUNCATED. */
+int bc_proto_reader_eof(struct bc_proto_reader *r);
+
+/* Ends the pre-HELLO stage (call once the peer's HELLO was accepted). */
+void bc_proto_reader_hello_done(struct bc_proto_reader *r);
+
+/* Changes the payload limit for messages whose header has not been parsed
+ * yet (same rules as opts.max_payload). */
+void bc_proto_reader_set_max_payload(struct bc_proto_reader *r,
+				     uint32_t max_payload);
+
+/* Bytes buffered and not yet returned as messages. */
+size_t bc_proto_reader_pending(const struct bc_proto_reader *r);
+
+/* Decodes one payload of the given type, outside any stream: no header,
+ * no side or stage rules, only the type's own payload checks (including its
+ * maximum size). Arrays go to r's storage and byte ranges point into
+ * payload; r's stream and sticky error are untouched. Returns 0 or a
+ * negative BC_E* code with the reason in ei (which may be NULL). */
+int bc_proto_decode_payload(struct bc_proto_reader *r, enum bc_msg_type type,
+			    uint16_t flags, uint32_t seq, const uint8_t *payload,
+			    size_t len, struct bc_msg *out,
+			    struct bc_errinfo *ei);
+
+/* ---- Writing ------------------------------------------------------------- */
+
+/* A growable output buffer with a ceiling fixed at init. */
+struct bc_proto_buf {
+	uint8_t *data;
+	size_t len, cap, max;
+};
+
+/* max is the ceiling in bytes; 0 means one largest message
+ * (BC_PROTO_HEADER_SIZE + BC_PROTO_MAX_PAYLOAD). Allocates nothing. */
+void bc_proto_buf_init(struct bc_proto_buf *b, size_t max);
+/* Frees the buffer; accepts NULL and a zeroed buffer. */
+void bc_proto_buf_finish(struct bc_proto_buf *b);
+/* Forgets the contents, keeps the memory. */
+void bc_proto_buf_reset(struct bc_proto_buf *b);
+/* Drops the first n bytes (those sent), keeping the rest in order. */
+void bc_proto_buf_consume(struct bc_proto_buf *b, size_t n);
+
+/* Appends m, header included, to b. Returns 0 or a negative code, and then
+ * b is exactly as before: BC_EPROTO_TYPE (type out of range),
+ * BC_EPROTO_FLAGS, BC_EPROTO_LENGTH (payload over its type's maximum),
+ * BC_ELIMIT (b's ceiling), BC_ENOMEM, or the code the decoder would give
+ * for an invalid field (ESTRING, ENONFINITE, ERANGE, EENUM, EPROTO_COUNT,
+ * ...), with the reason in ei (which may be NULL). */
+int bc_proto_encode(struct bc_proto_buf *b, const struct bc_msg *m,
+		    struct bc_errinfo *ei);
+
+/* ---- The scene encoding (owned by blobtree; see PROTOCOL.md) -------------- */
+
+struct bc_proto_scene_info {
+	bool has_camera;
+	uint32_t nodes, prims, ops;
+	uint32_t depth; /* most operators on a path from the root */
+};
+
+/* Checks the structure of scene bytes as PROTOCOL.md describes it (flags,
+ * tags, counts, nesting, finite floats, exact length) without building
+ * anything: iterative, no allocation, linear time. blobtree's decoder checks
+ * meaning (parameter counts per kind, ranges, unique ids). Returns 0 with
+ * *info filled (it may be NULL), or a negative code with the reason in ei. */
+int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
+			struct bc_proto_scene_info *info, struct bc_errinfo *ei);
+
+/* Writers for the scene encoding, for clients and tests that build scene
+ * bytes without blobtree: begin, then every node in pre-order. camera is
+ * NULL or the 10 floats eye[3] target[3] up[3] fov_y_deg. color is NULL or
+ * 3 floats. Each returns 0, BC_ELIMIT or BC_ENOMEM (and then b is as
+ * before); the scanner, not the writers, checks the result. */
+int bc_proto_scene_begin(struct bc_proto_buf *b, const float *camera,
+			 uint32_t node_count);
+int bc_proto_scene_prim(struct bc_proto_buf *b, uint8_t kind, uint32_t id,
+			const float translate[3], const float rotate[4],
+			const float *color, uint8_t nparams,
+			const float *params);
+int bc_proto_scene_op(struct bc_proto_buf *b, uint8_t kind, uint32_t id,
+		      float blend, float range, uint32_t child_count);
+
+/* ---- Names and rules ------------------------------------------------------ */
+
+/* "HELLO", "FRAME", ...; NULL when type is out of range. Static. */
+const char *bc_proto_type_name(enum bc_msg_type type);
+/* Type named name (as above), or BC_MSG_INVALID. */
+enum bc_msg_type bc_proto_type_from_name(const char *name);
+
+/* Where a client connection stands (PROTOCOL.md, "State machine"). */
+enum bc_proto_stage {
+	BC_PROTO_STAGE_HELLO = 0, /* default: connected, no HELLO yet */
+	BC_PROTO_STAGE_READY,     /* WELCOME sent, in no session */
+	BC_PROTO_STAGE_SESSION,   /* member of a session, with a role */
+	BC_PROTO_STAGE_COUNT
+};
+
+/* Whether a client in stage (and, in a session, role) may send type.
+ * Returns 0, BC_EPROTO_TYPE (not a client message), BC_ESTATE (not in this
+ * stage) or BC_EPERM (not for this role). The server answers accordingly. */
+int bc_proto_client_may_send(enum bc_proto_stage stage,
+			     enum bc_proto_role role, enum bc_msg_type type);
+
+#endif

@@ -1,0 +1,118 @@
+/*
+ * The table of message types: names, which side sends each, the header
+ * flags each defines and the largest payload each can validly have (derived
+ * from proto_limits.h, so a header announcing more is refused before a
+ * single payload byte is buffered). Also the client state machine of
+ * PROTOCOL.md as a function the server calls for every message.
+ */
+#include "wire.h"
+
+#include <string.h>
+
+/* A string field at its longest: u16 length and the bytes. */
+#define STR_MAX(n) (2u + (n))
+
+#define HELLO_MAX                                                              \
+	(2u + 2u + 1u + 4u + STR_MAX(BC_PROTO_MAX_NAME) +                      \
+	 STR_MAX(BC_PROTO_MAX_TOKEN))
+#define WELCOME_MAX                                                            \
+	(2u + 4u + 4u + 4u + 4u + 2u + 2u + 2u + STR_MAX(BC_PROTO_MAX_NAME))
+#define ERROR_MAX (2u + STR_MAX(BC_PROTO_MAX_ERROR_TEXT))
+#define SESSION_MAX (1u + STR_MAX(BC_PROTO_MAX_NAME))
+#define SESSION_INFO_MAX                                                       \
+	(4u + 4u + 1u + STR_MAX(BC_PROTO_MAX_NAME) + 2u +                      \
+	 BC_PROTO_MAX_MEMBERS * (4u + 1u + STR_MAX(BC_PROTO_MAX_NAME)))
+#define BULK BC_PROTO_MAX_PAYLOAD
+
+static const struct bc__type_info types[BC_MSG_COUNT] = {
+	[BC_MSG_HELLO] = {"HELLO", BC__FROM_CLIENT, 0, HELLO_MAX},
+	[BC_MSG_WELCOME] = {"WELCOME", BC__FROM_SERVER, 0, WELCOME_MAX},
+	[BC_MSG_ERROR] = {"ERROR", BC__FROM_BOTH, BC_PROTO_FLAG_FATAL,
+			  ERROR_MAX},
+	[BC_MSG_PING] = {"PING", BC__FROM_BOTH, 0, 8},
+	[BC_MSG_PONG] = {"PONG", BC__FROM_BOTH, 0, 8},
+	[BC_MSG_OK] = {"OK", BC__FROM_SERVER, 0, 0},
+	[BC_MSG_SESSION_CREATE] = {"SESSION_CREATE", BC__FROM_CLIENT, 0,
+				   SESSION_MAX},
+	[BC_MSG_SESSION_JOIN] = {"SESSION_JOIN", BC__FROM_CLIENT, 0,
+				 SESSION_MAX},
+	[BC_MSG_SESSION_LEAVE] = {"SESSION_LEAVE", BC__FROM_CLIENT, 0, 0},
+	[BC_MSG_SESSION_INFO] = {"SESSION_INFO", BC__FROM_SERVER, 0,
+				 SESSION_INFO_MAX},
+	[BC_MSG_SCENE_LOAD] = {"SCENE_LOAD", BC__FROM_CLIENT, 0, BULK},
+	[BC_MSG_SCENE_STATE] = {"SCENE_STATE", BC__FROM_SERVER, 0, BULK},
+	[BC_MSG_EDIT] = {"EDIT", BC__FROM_CLIENT, BC_PROTO_FLAG_INTERACTING,
+			 BULK},
+	[BC_MSG_EDIT_APPLIED] = {"EDIT_APPLIED", BC__FROM_SERVER,
+				 BC_PROTO_FLAG_INTERACTING, BULK},
+	[BC_MSG_CAMERA] = {"CAMERA", BC__FROM_CLIENT,
+			   BC_PROTO_FLAG_INTERACTING, 40},
+	[BC_MSG_VIEW] = {"VIEW", BC__FROM_CLIENT, 0, 8},
+	[BC_MSG_FRAME] = {"FRAME", BC__FROM_SERVER,
+			  BC_PROTO_FLAG_STILL | BC_PROTO_FLAG_SNAPSHOT, BULK},
+	[BC_MSG_PICK] = {"PICK", BC__FROM_CLIENT, 0, 4},
+	[BC_MSG_PICK_RESULT] = {"PICK_RESULT", BC__FROM_SERVER, 0, 24},
+	[BC_MSG_SNAPSHOT] = {"SNAPSHOT", BC__FROM_CLIENT, 0, 1},
+	[BC_MSG_GET_STATS] = {"GET_STATS", BC__FROM_CLIENT, 0, 0},
+	[BC_MSG_STATS] = {"STATS", BC__FROM_SERVER, 0, 64},
+};
+
+const struct bc__type_info *bc__type_info(unsigned type)
+{
+	if (type == 0 || type >= BC_MSG_COUNT) {
+		return NULL;
+	}
+	return &types[type];
+}
+
+const char *bc_proto_type_name(enum bc_msg_type type)
+{
+	const struct bc__type_info *t = bc__type_info((unsigned)type);
+	return t ? t->name : NULL;
+}
+
+enum bc_msg_type bc_proto_type_from_name(const char *name)
+{
+	for (unsigned i = 1; name && i < BC_MSG_COUNT; i++) {
+		if (strcmp(types[i].name, name) == 0) {
+			return (enum bc_msg_type)i;
+		}
+	}
+	return BC_MSG_INVALID;
+}
+
+int bc_proto_client_may_send(enum bc_proto_stage stage,
+			     enum bc_proto_role role, enum bc_msg_type type)
+{
+	const struct bc__type_info *t = bc__type_info((unsigned)type);
+	if (!t || !(t->from & BC__FROM_CLIENT)) {
+		return BC_EPROTO_TYPE;
+	}
+	switch (type) {
+	case BC_MSG_HELLO:
+		return stage == BC_PROTO_STAGE_HELLO ? 0 : BC_ESTATE;
+	case BC_MSG_PING:
+		return 0;
+	case BC_MSG_PONG:
+	case BC_MSG_ERROR:
+	case BC_MSG_CAMERA:
+	case BC_MSG_VIEW:
+	case BC_MSG_GET_STATS:
+		return stage == BC_PROTO_STAGE_HELLO ? BC_ESTATE : 0;
+	case BC_MSG_SESSION_CREATE:
+	case BC_MSG_SESSION_JOIN:
+		return stage == BC_PROTO_STAGE_READY ? 0 : BC_ESTATE;
+	case BC_MSG_SESSION_LEAVE:
+	case BC_MSG_PICK:
+	case BC_MSG_SNAPSHOT:
+		return stage == BC_PROTO_STAGE_SESSION ? 0 : BC_ESTATE;
+	case BC_MSG_SCENE_LOAD:
+	case BC_MSG_EDIT:
+		if (stage != BC_PROTO_STAGE_SESSION) {
+			return BC_ESTATE;
+		}
+		return role == BC_PROTO_ROLE_EDITOR ? 0 : BC_EPERM;
+	default:
+		return BC_EPROTO_TYPE;
+	}
+}

@@ -1,0 +1,188 @@
+/*
+ * Byte-level helpers shared inside protocol/: a read cursor over untrusted
+ * bytes whose every read checks the bytes left first, a writer that either
+ * measures or writes (so an encoder runs once to size a message and once to
+ * fill it), strict UTF-8 and float checks, and the per-type table. Nothing
+ * here casts a struct onto a buffer: every integer is assembled byte by
+ * byte, little-endian, whatever the host's byte order.
+ */
+#ifndef BLOBCAST_PROTOCOL_WIRE_H
+#define BLOBCAST_PROTOCOL_WIRE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "blobcast/proto.h"
+
+/* ---- Reading ------------------------------------------------------------ */
+
+struct bc__cur {
+	const uint8_t *buf;
+	size_t len, pos;
+};
+
+static inline size_t bc__cur_left(const struct bc__cur *c)
+{
+	return c->len - c->pos;
+}
+
+/* Each getter returns false, reading nothing, when fewer than its size
+ * bytes are left. */
+static inline bool bc__get_u8(struct bc__cur *c, uint8_t *v)
+{
+	if (c->pos + 1 > c->len) {
+		return false;
+	}
+	*v = c->buf[c->pos];
+	c->pos += 1;
+	return true;
+}
+
+static inline bool bc__get_u16(struct bc__cur *c, uint16_t *v)
+{
+	if (bc__cur_left(c) < 2) {
+		return false;
+	}
+	const uint8_t *p = c->buf + c->pos;
+	*v = (uint16_t)(p[0] | (uint16_t)(p[1] << 8));
+	c->pos += 2;
+	return true;
+}
+
+static inline uint32_t bc__le32(const uint8_t *p)
+{
+	return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 |
+	       (uint32_t)p[3] << 24;
+}
+
+static inline bool bc__get_u32(struct bc__cur *c, uint32_t *v)
+{
+	if (bc__cur_left(c) < 4) {
+		return false;
+	}
+	*v = bc__le32(c->buf + c->pos);
+	c->pos += 4;
+	return true;
+}
+
+static inline bool bc__get_u64(struct bc__cur *c, uint64_t *v)
+{
+	if (bc__cur_left(c) < 8) {
+		return false;
+	}
+	const uint8_t *p = c->buf + c->pos;
+	*v = (uint64_t)bc__le32(p) | (uint64_t)bc__le32(p + 4) << 32;
+	c->pos += 8;
+	return true;
+}
+
+/* An IEEE 754 binary32 is its bit pattern as a u32; memcpy is the one
+ * portable way to reinterpret it. */
+static inline float bc__bits_f32(uint32_t u)
+{
+	float f;
+	memcpy(&f, &u, sizeof(f));
+	return f;
+}
+
+static inline uint32_t bc__f32_bits(float f)
+{
+	uint32_t u;
+	memcpy(&u, &f, sizeof(u));
+	return u;
+}
+
+/* Finite means the exponent is not all ones. Tested on the bits so that it
+ * still holds in code built with relaxed math. */
+static inline bool bc__bits_finite(uint32_t u)
+{
+	return (u & 0x7f800000u) != 0x7f800000u;
+}
+
+/* Returns the offset of the first byte of p[0..n) that breaks strict UTF-8
+ * (overlong forms, surrogates, code points above U+10FFFF, truncated
+ * sequences) or is NUL; n when the whole string is valid. */
+size_t bc__utf8_check(const uint8_t *p, size_t n);
+
+/* ---- Writing ------------------------------------------------------------ */
+
+/* With p == NULL the writer only counts (n grows, nothing is stored);
+ * otherwise it stores into p[0..cap), which the measuring pass sized. err
+ * keeps the first problem an encoder found in its input. */
+struct bc__w {
+	uint8_t *p;
+	size_t n, cap;
+	int err;
+	struct bc_errinfo *ei;
+};
+
+static inline void bc__put_raw(struct bc__w *w, const void *src, size_t k)
+{
+	if (w->p && k && w->n + k <= w->cap) {
+		memcpy(w->p + w->n, src, k);
+	}
+	w->n += k;
+}
+
+static inline void bc__put_u8(struct bc__w *w, uint8_t v)
+{
+	bc__put_raw(w, &v, 1);
+}
+
+static inline void bc__put_u16(struct bc__w *w, uint16_t v)
+{
+	uint8_t b[2] = {(uint8_t)v, (uint8_t)(v >> 8)};
+	bc__put_raw(w, b, 2);
+}
+
+static inline void bc__put_u32(struct bc__w *w, uint32_t v)
+{
+	uint8_t b[4] = {(uint8_t)v, (uint8_t)(v >> 8), (uint8_t)(v >> 16),
+			(uint8_t)(v >> 24)};
+	bc__put_raw(w, b, 4);
+}
+
+static inline void bc__put_u64(struct bc__w *w, uint64_t v)
+{
+	bc__put_u32(w, (uint32_t)v);
+	bc__put_u32(w, (uint32_t)(v >> 32));
+}
+
+static inline void bc__put_f32(struct bc__w *w, float f)
+{
+	bc__put_u32(w, bc__f32_bits(f));
+}
+
+/* Reserves room for k more bytes in b (growing by doubling up to b->max).
+ * Returns 0, BC_ELIMIT or BC_ENOMEM. */
+int bc__buf_reserve(struct bc_proto_buf *b, size_t k);
+
+/* ---- Types ---------------------------------------------------------------- */
+
+/* Who sends a type. */
+#define BC__FROM_CLIENT 1u
+#define BC__FROM_SERVER 2u
+#define BC__FROM_BOTH 3u
+
+struct bc__type_info {
+	const char *name;
+	uint8_t from;        /* BC__FROM_* */
+	uint16_t flags;      /* flag bits defined for the type */
+	uint32_t max_payload; /* largest valid payload of the type */
+};
+
+/* Returns the row of type, or NULL when it is not a message type. */
+const struct bc__type_info *bc__type_info(unsigned type);
+
+/* Decodes a payload into *out (header fields already set by the caller).
+ * store NULL: check only, arrays are not kept. Returns 0 or a code with the
+ * reason in ei. */
+int bc__decode_payload(struct bc_proto_store *store, struct bc_msg *out,
+		       const uint8_t *payload, size_t len,
+		       struct bc_errinfo *ei);
+
+void bc__store_free(struct bc_proto_store *s);
+
+#endif
