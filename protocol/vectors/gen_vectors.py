@@ -1,0 +1,1026 @@
+#!/usr/bin/env python3
+"""Generates the protocol test vectors in this folder from PROTOCOL.md.
+
+This is a second, independent encoder of the wire format, written from the
+specification with nothing but the Python standard library: the C tests
+check that the C codec decodes these bytes to these fields and re-encodes
+the fields to the same bytes, and the browser codec runs the same files.
+
+Run from anywhere:  python3 protocol/vectors/gen_vectors.py
+It rewrites every *.json file here; commit the result.
+"""
+
+import json
+import os
+import struct
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+# ---- Constants from PROTOCOL.md ---------------------------------------------
+
+MAGIC = b"BCST"
+VERSION = 1
+TYPES = {
+    "HELLO": 1, "WELCOME": 2, "ERROR": 3, "PING": 4, "PONG": 5, "OK": 6,
+    "SESSION_CREATE": 7, "SESSION_JOIN": 8, "SESSION_LEAVE": 9,
+    "SESSION_INFO": 10, "SCENE_LOAD": 11, "SCENE_STATE": 12, "EDIT": 13,
+    "EDIT_APPLIED": 14, "CAMERA": 15, "VIEW": 16, "FRAME": 17, "PICK": 18,
+    "PICK_RESULT": 19, "SNAPSHOT": 20, "GET_STATS": 21, "STATS": 22,
+}
+MAX_PAYLOAD = 64 * 1024 * 1024
+HELLO_MAX_PAYLOAD = 4096
+MAX_NAME, MAX_TOKEN, MAX_ERROR_TEXT = 64, 1024, 1024
+MAX_MEMBERS, MAX_DIM, MAX_RECTS = 64, 8192, 4096
+MAX_EDIT_OPS, MAX_SET_FIELDS = 1024, 14
+MIN_FRAME_BYTES = 65536
+MAX_ABS = 1.0e6
+SCENE_MAX_DEPTH = 128
+
+
+def strmax(n):
+    return 2 + n
+
+
+TYPE_MAX = {
+    "HELLO": 2 + 2 + 1 + 4 + strmax(MAX_NAME) + strmax(MAX_TOKEN),
+    "WELCOME": 2 + 4 * 4 + 2 * 3 + strmax(MAX_NAME),
+    "ERROR": 2 + strmax(MAX_ERROR_TEXT),
+    "PING": 8, "PONG": 8, "OK": 0,
+    "SESSION_CREATE": 1 + strmax(MAX_NAME),
+    "SESSION_JOIN": 1 + strmax(MAX_NAME),
+    "SESSION_LEAVE": 0,
+    "SESSION_INFO": 4 + 4 + 1 + strmax(MAX_NAME) + 2
+    + MAX_MEMBERS * (4 + 1 + strmax(MAX_NAME)),
+    "SCENE_LOAD": MAX_PAYLOAD, "SCENE_STATE": MAX_PAYLOAD,
+    "EDIT": MAX_PAYLOAD, "EDIT_APPLIED": MAX_PAYLOAD,
+    "CAMERA": 40, "VIEW": 8, "FRAME": MAX_PAYLOAD, "PICK": 4,
+    "PICK_RESULT": 24, "SNAPSHOT": 1, "GET_STATS": 0, "STATS": 64,
+}
+
+# ---- Byte helpers --------------------------------------------------------------
+
+
+def u8(v):
+    return struct.pack("<B", v)
+
+
+def u16(v):
+    return struct.pack("<H", v)
+
+
+def u32(v):
+    return struct.pack("<I", v)
+
+
+def u64(v):
+    return struct.pack("<Q", v)
+
+
+def f32(v):
+    return struct.pack("<f", v)
+
+
+def f32bits(bits):
+    return struct.pack("<I", bits)
+
+
+def fl(v):
+    """The float32 nearest to v, as a Python float (exact in JSON)."""
+    return struct.unpack("<f", struct.pack("<f", v))[0]
+
+
+def sstr(s):
+    b = s.encode("utf-8") if isinstance(s, str) else s
+    return u16(len(b)) + b
+
+
+def blob(b):
+    return u32(len(b)) + b
+
+
+def header(mtype, length, flags=0, seq=1, version=VERSION, magic=MAGIC):
+    t = TYPES[mtype] if isinstance(mtype, str) else mtype
+    return magic + u8(version) + u8(t) + u16(flags) + u32(length) + u32(seq)
+
+
+def frame(mtype, payload, flags=0, seq=1, **kw):
+    return header(mtype, len(payload), flags, seq, **kw) + payload
+
+
+# ---- Scene encoding ------------------------------------------------------------
+
+IDENT = [0.0, 0.0, 0.0, 1.0]
+
+
+def scene_prim(kind, nid, params, translate=(0, 0, 0), rotate=IDENT,
+               color=None):
+    b = u8(kind) + u32(nid)
+    b += b"".join(f32(v) for v in translate)
+    b += b"".join(f32(v) for v in rotate)
+    if color is None:
+        b += u8(0)
+    else:
+        b += u8(1) + b"".join(f32(v) for v in color)
+    b += u8(len(params)) + b"".join(f32(v) for v in params)
+    return b
+
+
+def scene_op(kind, nid, blend, rng, children):
+    return u8(0x80 | kind) + u32(nid) + f32(blend) + f32(rng) + u32(children)
+
+
+def scene(nodes, camera=None):
+    b = u8(1 if camera else 0)
+    if camera:
+        b += b"".join(f32(v) for v in camera)
+    return b + u32(len(nodes)) + b"".join(nodes)
+
+
+CAM = [0.0, 1.0, 6.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 45.0]
+SPHERE = scene_prim(1, 0, [1.0])
+SCENE_SMALL = scene([
+    scene_op(4, 1, 0.5, 0.5, 2),
+    scene_prim(1, 2, [1.0], translate=(-0.6, 0, 0), color=(1.0, 0.5, 0.25)),
+    scene_prim(2, 3, [0.5, 0.5, 0.5, 0.1], translate=(0.6, 0, 0)),
+], camera=CAM)
+SUBTREE = scene([scene_prim(3, 0, [0, 0, 0, 0, 1, 0, 0.25])])
+
+
+def deep_scene(depth):
+    """A left comb of `depth` nested unions, each with a sphere sibling."""
+    nodes = []
+    for i in range(depth):
+        nodes.append(scene_op(1, 0, 0.0, 0.0, 2))
+    for i in range(depth + 1):
+        nodes.append(SPHERE)
+    # Pre-order: op1, op2, ..., op_depth, s, s, then one sphere closing
+    # every enclosing operator in turn.
+    order = nodes[:depth] + [SPHERE, SPHERE] + [SPHERE] * (depth - 1)
+    return scene(order)
+
+
+# ---- Payload writers (fields -> bytes) -------------------------------------------
+
+
+def w_hello(f):
+    return (u16(f["version_min"]) + u16(f["version_max"]) + u8(f["encodings"])
+            + u32(f["max_frame_bytes"]) + sstr(f["client_name"])
+            + sstr(f["token"]))
+
+
+def w_welcome(f):
+    return (u16(f["version"]) + u32(f["connection_id"]) + u32(f["max_payload"])
+            + u32(f["max_frame_bytes"]) + u32(f["max_nodes"])
+            + u16(f["max_dim"]) + u16(f["max_members"])
+            + u16(f["max_edit_ops"]) + sstr(f["server_id"]))
+
+
+def w_error(f):
+    return u16(f["code"]) + sstr(f["text"])
+
+
+def w_ping(f):
+    return u64(int(f["stamp"]))
+
+
+def w_empty(f):
+    return b""
+
+
+def w_session(f):
+    return u8(f["role"]) + sstr(f["name"])
+
+
+def w_session_info(f):
+    b = (u32(f["session_id"]) + u32(f["member_id"]) + u8(f["role"])
+         + sstr(f["name"]) + u16(len(f["members"])))
+    for m in f["members"]:
+        b += u32(m["id"]) + u8(m["role"]) + sstr(m["name"])
+    return b
+
+
+def w_scene_load(f):
+    return blob(bytes.fromhex(f["scene"]))
+
+
+def w_scene_state(f):
+    return (u64(int(f["order"])) + u32(f["author"]) + u32(f["author_seq"])
+            + blob(bytes.fromhex(f["scene"])))
+
+
+def w_ops(ops):
+    b = u16(len(ops))
+    for op in ops:
+        k = op["kind"]
+        b += u8(k)
+        if k == 1:
+            b += u32(op["node"]) + u8(len(op["fields"]))
+            for fd in op["fields"]:
+                b += u8(fd["field"]) + u8(len(fd["values"]))
+                b += b"".join(f32(v) for v in fd["values"])
+        elif k == 2:
+            b += (u32(op["parent"]) + u32(op["position"])
+                  + blob(bytes.fromhex(op["subtree"])))
+        elif k == 3:
+            b += u32(op["node"])
+        elif k == 4:
+            b += u32(op["node"]) + blob(bytes.fromhex(op["subtree"]))
+    return b
+
+
+def w_edit(f):
+    return w_ops(f["ops"])
+
+
+def w_edit_applied(f):
+    return (u64(int(f["order"])) + u32(f["author"]) + u32(f["author_seq"])
+            + w_ops(f["ops"]))
+
+
+def w_camera(f):
+    return b"".join(f32(v) for v in f["eye"] + f["target"] + f["up"]
+                    + [f["fov_y_deg"]])
+
+
+def w_view(f):
+    return (u16(f["width"]) + u16(f["height"]) + u8(f["encoding"])
+            + u8(f["quality_interactive"]) + u8(f["quality_still"])
+            + u8(f["downscale"]))
+
+
+def w_rects(rects):
+    b = u16(len(rects))
+    for r in rects:
+        b += (u16(r["x"]) + u16(r["y"]) + u16(r["w"]) + u16(r["h"])
+              + blob(bytes.fromhex(r["data"])))
+    return b
+
+
+def w_frame(f):
+    return (u32(f["frame_no"]) + u64(int(f["order"])) + u32(f["camera_seq"])
+            + u8(f["encoding"]) + u16(f["width"]) + u16(f["height"])
+            + u16(f["image_width"]) + u16(f["image_height"])
+            + w_rects(f["rects"]))
+
+
+def w_pick(f):
+    return u16(f["x"]) + u16(f["y"])
+
+
+def w_pick_result(f):
+    return (u16(f["x"]) + u16(f["y"]) + u32(f["node"])
+            + b"".join(f32(v) for v in f["position"]) + f32(f["depth"]))
+
+
+def w_snapshot(f):
+    return u8(f["encoding"])
+
+
+STATS_F = ["render_ms_last", "render_ms_avg", "encode_ms_last",
+           "encode_ms_avg", "edit_ms_avg", "fps"]
+
+
+def w_stats(f):
+    b = b"".join(u64(int(f[k])) for k in ("uptime_ms", "frames", "bytes",
+                                            "order"))
+    b += u32(f["sessions"]) + u32(f["clients"])
+    return b + b"".join(f32(f[k]) for k in STATS_F)
+
+
+WRITERS = {
+    "HELLO": w_hello, "WELCOME": w_welcome, "ERROR": w_error,
+    "PING": w_ping, "PONG": w_ping, "OK": w_empty,
+    "SESSION_CREATE": w_session, "SESSION_JOIN": w_session,
+    "SESSION_LEAVE": w_empty, "SESSION_INFO": w_session_info,
+    "SCENE_LOAD": w_scene_load, "SCENE_STATE": w_scene_state,
+    "EDIT": w_edit, "EDIT_APPLIED": w_edit_applied, "CAMERA": w_camera,
+    "VIEW": w_view, "FRAME": w_frame, "PICK": w_pick,
+    "PICK_RESULT": w_pick_result, "SNAPSHOT": w_snapshot,
+    "GET_STATS": w_empty, "STATS": w_stats,
+}
+
+# ---- Vector tables -----------------------------------------------------------
+
+
+class Table:
+    def __init__(self, mtype):
+        self.mtype = mtype
+        self.valid = []
+        self.invalid = []
+
+    def ok(self, name, fields, flags=0, seq=1):
+        payload = WRITERS[self.mtype](fields)
+        assert len(payload) <= TYPE_MAX[self.mtype], name
+        full = dict(seq=seq, flags=flags)
+        full.update(fields)
+        self.valid.append({"name": name,
+                           "hex": frame(self.mtype, payload, flags,
+                                        seq).hex(),
+                           "fields": full})
+        return payload
+
+    def bad(self, name, raw, error, reader=None, messages=0):
+        e = {"name": name, "hex": raw.hex(), "error": error}
+        if reader:
+            e["reader"] = reader
+        if messages:
+            e["messages"] = messages
+        self.invalid.append(e)
+
+    def badp(self, name, payload, error, flags=0, **kw):
+        """An invalid payload under a correct header."""
+        self.bad(name, frame(self.mtype, payload, flags), error, **kw)
+
+    def common(self, payload):
+        """Cases every type gets: truncations, trailing byte, length over
+        the type's maximum, 2^31 and 2^32-1."""
+        t = self.mtype
+        if payload:
+            self.badp("payload one byte short", payload[:-1],
+                      "EPROTO_TRUNCATED")
+            self.badp("empty payload", b"", "EPROTO_TRUNCATED")
+        self.badp("one trailing byte", payload + b"\x00", "EPROTO_TRAILING"
+                  if len(payload) + 1 <= TYPE_MAX[t] else "EPROTO_LENGTH")
+        self.bad("length = type maximum + 1",
+                 header(t, TYPE_MAX[t] + 1), "EPROTO_LENGTH")
+        self.bad("length 2^31", header(t, 2 ** 31), "EPROTO_LENGTH")
+        self.bad("length 2^32-1", header(t, 2 ** 32 - 1), "EPROTO_LENGTH")
+        full = frame(t, payload)
+        self.bad("stream ends inside the header", full[:9],
+                 "EPROTO_TRUNCATED")
+        if payload:
+            self.bad("stream ends inside the payload", full[:-1],
+                     "EPROTO_TRUNCATED")
+
+    def dump(self, fname):
+        doc = {"type": self.mtype, "type_id": TYPES[self.mtype],
+               "valid": self.valid, "invalid": self.invalid}
+        write_json(fname, doc)
+
+
+def write_json(fname, doc):
+    with open(os.path.join(HERE, fname), "w", encoding="utf-8") as fp:
+        json.dump(doc, fp, indent=1, ensure_ascii=False)
+        fp.write("\n")
+
+
+SERVER = {"side": "server"}
+CLIENT = {"side": "client"}
+PRE_HELLO = {"side": "server", "await_hello": True}
+
+# ---- Per type ------------------------------------------------------------------
+
+
+def pad64(s):
+    """s padded with 'x' to exactly 64 UTF-8 bytes."""
+    return s + "x" * (64 - len(s.encode("utf-8")))
+
+
+def gen_hello():
+    t = Table("HELLO")
+    base = dict(version_min=1, version_max=1, encodings=7,
+                max_frame_bytes=8 * 1024 * 1024, client_name="viewer",
+                token="s3cret")
+    p = t.ok("viewer, all encodings", base, seq=1)
+    t.ok("no encodings, no name, no token, server's frame limit",
+         dict(base, encodings=0, max_frame_bytes=0, client_name="",
+              token=""), seq=1)
+    t.ok("non-ASCII name at 64 bytes, token at 1024 bytes",
+         dict(base, version_max=3, encodings=1,
+              max_frame_bytes=MIN_FRAME_BYTES,
+              client_name=pad64("Zoë's 🌐 viewer "),
+              token="t" * MAX_TOKEN), seq=7)
+    t.common(p)
+    hdr = u16(1) + u16(1) + u8(7) + u32(0)
+    t.badp("version_min 0", u16(0) + u16(1) + u8(7) + u32(0) + sstr("")
+           + sstr(""), "ERANGE")
+    t.badp("version_max below version_min", u16(2) + u16(1) + u8(7)
+           + u32(0) + sstr("") + sstr(""), "ERANGE")
+    t.badp("reserved encoding bit", u16(1) + u16(1) + u8(8) + u32(0)
+           + sstr("") + sstr(""), "EPROTO_FLAGS")
+    t.badp("max_frame_bytes under 64 KiB", u16(1) + u16(1) + u8(7)
+           + u32(65535) + sstr("") + sstr(""), "ERANGE")
+    t.badp("client_name of 65 bytes", hdr + sstr("n" * 65) + sstr(""),
+           "EPROTO_LENGTH")
+    t.badp("token of 1025 bytes", hdr + sstr("") + sstr("t" * 1025),
+           "EPROTO_LENGTH")
+    t.badp("name length larger than the bytes left", hdr + u16(40) + b"ab",
+           "EPROTO_TRUNCATED")
+    for why, raw in [("NUL", b"a\x00b"), ("overlong '/'", b"\xc0\xaf"),
+                     ("UTF-16 surrogate", b"\xed\xa0\x80"),
+                     ("stray continuation byte", b"\x80"),
+                     ("code point over U+10FFFF", b"\xf4\x90\x80\x80"),
+                     ("sequence cut short", b"ab\xe2\x82")]:
+        t.badp("client_name with " + why, hdr + sstr(raw) + sstr(""),
+               "ESTRING")
+    # Stream rules that HELLO exercises.
+    t.bad("accepted by a server before HELLO", frame("HELLO", p),
+          None, reader=PRE_HELLO, messages=1)
+    t.bad("refused by a client reader", frame("HELLO", p), "EPROTO_TYPE",
+          reader=CLIENT)
+    t.bad("header flags set", frame("HELLO", p, flags=1), "EPROTO_FLAGS")
+    t.dump("hello.json")
+
+
+def gen_welcome():
+    t = Table("WELCOME")
+    base = dict(version=1, connection_id=17, max_payload=MAX_PAYLOAD,
+                max_frame_bytes=8 * 1024 * 1024, max_nodes=4194303,
+                max_dim=8192, max_members=64, max_edit_ops=1024,
+                server_id="blobcastd@render-01")
+    p = t.ok("default limits", base)
+    t.ok("smallest limits", dict(base, max_payload=HELLO_MAX_PAYLOAD,
+                                 max_frame_bytes=MIN_FRAME_BYTES,
+                                 max_nodes=1, max_dim=1, max_members=1,
+                                 max_edit_ops=1, server_id=""), seq=3)
+    t.common(p)
+
+    def wl(**kw):
+        return w_welcome(dict(base, **kw))
+    t.badp("version 0", wl(version=0), "ERANGE")
+    t.badp("connection_id 0", wl(connection_id=0), "ERANGE")
+    t.badp("max_payload over 64 MiB", wl(max_payload=MAX_PAYLOAD + 1),
+           "ERANGE")
+    t.badp("max_payload under 4 KiB", wl(max_payload=4095), "ERANGE")
+    t.badp("max_frame_bytes under 64 KiB", wl(max_frame_bytes=65535),
+           "ERANGE")
+    t.badp("max_nodes 2^22", wl(max_nodes=1 << 22), "ERANGE")
+    t.badp("max_dim 8193", wl(max_dim=8193), "ERANGE")
+    t.badp("max_members 65", wl(max_members=65), "ERANGE")
+    t.badp("max_edit_ops 0", wl(max_edit_ops=0), "ERANGE")
+    t.bad("refused by a server reader", frame("WELCOME", p),
+          "EPROTO_TYPE", reader=SERVER)
+    t.dump("welcome.json")
+
+
+def gen_error():
+    t = Table("ERROR")
+    p = t.ok("fatal authentication failure",
+             dict(code=22, text="authentication failed: unknown token"),
+             flags=1, seq=1)
+    t.ok("not tied to a request", dict(code=14, text=""), seq=0)
+    t.ok("code from a newer server, longest text",
+         dict(code=65535, text="é" * 512), seq=9)
+    t.common(p)
+    t.badp("code 0", u16(0) + sstr("x"), "ERANGE")
+    t.badp("text of 1025 bytes", u16(1) + sstr("e" * 1025), "EPROTO_LENGTH")
+    t.badp("undefined flag bit 1", p, "EPROTO_FLAGS", flags=2)
+    t.dump("error.json")
+
+
+def gen_ping(name):
+    t = Table(name)
+    p = t.ok("stamp", dict(stamp=str(1234567890123)), seq=5)
+    t.ok("largest stamp", dict(stamp=str(2 ** 64 - 1)))
+    t.common(p)
+    if name == "PING":
+        t.bad("accepted by a server before HELLO", frame("PING", p), None,
+              reader=PRE_HELLO, messages=1)
+    else:
+        t.bad("refused by a server before HELLO", frame("PONG", p),
+              "ESTATE", reader=PRE_HELLO)
+    t.dump(name.lower() + ".json")
+
+
+def gen_empty(name, side):
+    t = Table(name)
+    t.ok("empty", {}, seq=12)
+    t.common(b"")
+    # A reader on the sending side never accepts the type.
+    wrong = SERVER if side == "server" else CLIENT
+    t.bad("sent by the wrong side", frame(name, b""), "EPROTO_TYPE",
+          reader=wrong)
+    if side == "client":
+        t.bad("refused by a server before HELLO", frame(name, b""),
+              "ESTATE", reader=PRE_HELLO)
+    t.dump(name.lower() + ".json")
+
+
+def gen_session(name):
+    t = Table(name)
+    p = t.ok("editor", dict(role=1, name="design-review"), seq=2)
+    t.ok("viewer, 64-byte name", dict(role=2, name="ü" * 32), seq=3)
+    t.common(p)
+    t.badp("role 0", u8(0) + sstr("x"), "EENUM")
+    t.badp("role 3", u8(3) + sstr("x"), "EENUM")
+    t.badp("empty name", u8(1) + sstr(""), "EPROTO_LENGTH")
+    t.badp("name of 65 bytes", u8(1) + sstr("s" * 65), "EPROTO_LENGTH")
+    t.badp("name with NUL", u8(1) + sstr(b"a\x00"), "ESTRING")
+    t.bad("refused by a server before HELLO", frame(name, p), "ESTATE",
+          reader=PRE_HELLO)
+    t.dump(name.lower() + ".json")
+
+
+def gen_session_info():
+    t = Table("SESSION_INFO")
+    base = dict(session_id=3, member_id=8, role=2, name="design-review",
+                members=[dict(id=5, role=1, name="alice's editor"),
+                         dict(id=8, role=2, name="viewer")])
+    p = t.ok("two members", base, seq=2)
+    t.ok("largest: 64 members with 64-byte names",
+         dict(base, name="n" * 64,
+              members=[dict(id=i + 1, role=1 + i % 2, name="%064d" % i)
+                       for i in range(MAX_MEMBERS)]), seq=0)
+    t.common(p)
+    head = u32(3) + u32(8) + u8(2) + sstr("s")
+    t.badp("session_id 0", u32(0) + u32(8) + u8(2) + sstr("s") + u16(1)
+           + u32(1) + u8(1) + sstr(""), "ERANGE")
+    t.badp("member_count 0", head + u16(0), "EPROTO_COUNT")
+    t.badp("member_count 65", head + u16(65), "EPROTO_COUNT")
+    t.badp("member_count larger than the bytes left",
+           head + u16(3) + (u32(1) + u8(1) + sstr("")) * 2, "EPROTO_COUNT")
+    t.badp("member id 0", head + u16(1) + u32(0) + u8(1) + sstr(""),
+           "ERANGE")
+    t.badp("member role 9", head + u16(1) + u32(1) + u8(9) + sstr(""),
+           "EENUM")
+    t.dump("session_info.json")
+
+
+def gen_scene_load():
+    t = Table("SCENE_LOAD")
+    p = t.ok("three nodes with camera", dict(scene=SCENE_SMALL.hex()),
+             seq=4)
+    t.ok("one sphere", dict(scene=scene([SPHERE]).hex()), seq=5)
+    t.ok("opaque bytes are not parsed here", dict(scene="ff"), seq=6)
+    t.common(p)
+    t.badp("scene length 0", u32(0), "EPROTO_LENGTH")
+    t.badp("scene length larger than the bytes left", u32(100) + b"\x00" * 10,
+           "EPROTO_TRUNCATED")
+    t.bad("refused by a server before HELLO", frame("SCENE_LOAD", p),
+          "ESTATE", reader=PRE_HELLO)
+    t.bad("over a reader limit of 64 bytes", frame("SCENE_LOAD", p),
+          "EPROTO_LENGTH", reader={"max_payload": 64})
+    t.dump("scene_load.json")
+
+
+def gen_scene_state():
+    t = Table("SCENE_STATE")
+    p = t.ok("after a load", dict(order="42", author=5, author_seq=4,
+                                  scene=SCENE_SMALL.hex()), seq=0)
+    t.ok("sent to a joiner", dict(order="0", author=0, author_seq=0,
+                                  scene=scene([SPHERE]).hex()), seq=0)
+    t.common(p)
+    t.badp("scene length 0", u64(1) + u32(0) + u32(0) + u32(0),
+           "EPROTO_LENGTH")
+    t.dump("scene_state.json")
+
+
+OPS = [
+    dict(kind=1, node=2, fields=[
+        dict(field=1, values=[0.25, -1.5, 3.0]),
+        dict(field=16, values=[fl(0.75)]),
+        dict(field=3, values=[1.0, 0.0, fl(0.1)]),
+    ]),
+    dict(kind=1, node=1, fields=[dict(field=32, values=[0.5]),
+                                 dict(field=33, values=[0.75]),
+                                 dict(field=34, values=[5.0])]),
+    dict(kind=2, parent=1, position=2, subtree=SUBTREE.hex()),
+    dict(kind=3, node=3),
+    dict(kind=4, node=2, subtree=SUBTREE.hex()),
+]
+
+
+def edit_bad_cases(t, prefix):
+    """Invalid operation lists; prefix is the payload before op_count."""
+    def one(op):
+        return prefix + u16(1) + op
+
+    def setop(fields, node=2):
+        return one(u8(1) + u32(node) + u8(len(fields)) + b"".join(fields))
+
+    def fld(num, vals):
+        return u8(num) + u8(len(vals)) + b"".join(f32(v) for v in vals)
+    t.badp("op_count 0", prefix + u16(0), "EPROTO_COUNT")
+    t.badp("op_count 1025", prefix + u16(1025) + (u8(3) + u32(1)) * 1025,
+           "EPROTO_COUNT")
+    t.badp("op_count larger than the bytes left",
+           prefix + u16(4) + (u8(3) + u32(1)) * 3, "EPROTO_COUNT")
+    t.badp("op kind 0", one(u8(0) + u32(1)), "EENUM")
+    t.badp("op kind 5", one(u8(5) + u32(1)), "EENUM")
+    t.badp("remove node 0", one(u8(3) + u32(0)), "ERANGE")
+    t.badp("set with no fields", one(u8(1) + u32(2) + u8(0)),
+           "EPROTO_COUNT")
+    t.badp("set with 15 fields", one(u8(1) + u32(2) + u8(15)
+                                     + fld(1, [0, 0, 0]) * 15),
+           "EPROTO_COUNT")
+    t.badp("field count larger than the bytes left",
+           one(u8(1) + u32(2) + u8(3) + fld(1, [0, 0, 0])), "EPROTO_COUNT")
+    t.badp("unknown field 4", setop([fld(4, [0])]), "EENUM")
+    t.badp("unknown field 24", setop([fld(24, [0])]), "EENUM")
+    t.badp("field given twice", setop([fld(1, [0, 0, 0]),
+                                       fld(1, [1, 1, 1])]), "EPARSE")
+    t.badp("translate with 2 values", setop([fld(1, [0, 0])]),
+           "EPROTO_COUNT")
+    t.badp("parameter with 5 values", setop([fld(17, [1] * 5)]),
+           "EPROTO_COUNT")
+    t.badp("value count larger than the bytes left",
+           one(u8(1) + u32(2) + u8(1) + u8(2) + u8(4) + f32(0) * 2),
+           "EPROTO_COUNT")
+    t.badp("NaN translate", setop([u8(1) + u8(3) + f32bits(0x7fc00000)
+                                   + f32(0) + f32(0)]), "ENONFINITE")
+    t.badp("+inf parameter", setop([u8(16) + u8(1) + f32bits(0x7f800000)]),
+           "ENONFINITE")
+    t.badp("-inf blend", setop([u8(32) + u8(1) + f32bits(0xff800000)],
+                               node=1), "ENONFINITE")
+    t.badp("translate over 1e6", setop([fld(1, [0, 2.0e6, 0])]), "ERANGE")
+    t.badp("operator kind 7", setop([fld(34, [7.0])], node=1), "EENUM")
+    t.badp("operator kind 2.5", setop([fld(34, [2.5])], node=1), "EENUM")
+    t.badp("insert with empty subtree",
+           one(u8(2) + u32(1) + u32(0) + u32(0)), "EPROTO_LENGTH")
+    t.badp("replace subtree longer than the bytes left",
+           one(u8(4) + u32(1) + u32(50) + b"\x00" * 8), "EPROTO_TRUNCATED")
+    t.badp("insert under parent 0",
+           one(u8(2) + u32(0) + u32(0) + blob(SUBTREE)), "ERANGE")
+
+
+def gen_edit():
+    t = Table("EDIT")
+    p = t.ok("every operation kind", dict(ops=OPS), seq=21)
+    t.ok("drag: one translate", dict(ops=[dict(kind=1, node=7, fields=[
+        dict(field=1, values=[fl(0.1), 0.0, -0.0])])]), flags=1, seq=22)
+    t.ok("every field at once", dict(ops=[dict(kind=1, node=9, fields=[
+        dict(field=1, values=[1.0, 2.0, 3.0]),
+        dict(field=2, values=[0.0, 0.0, fl(0.7071068), fl(0.7071068)]),
+        dict(field=3, values=[0.5, 0.5, 0.5]),
+    ] + [dict(field=16 + k, values=[float(k + 1)] * (1 + k % 4))
+         for k in range(8)] + [
+        dict(field=32, values=[0.25]), dict(field=33, values=[1e6]),
+        dict(field=34, values=[1.0])])]), seq=23)
+    t.ok("largest batch: 1024 removes",
+         dict(ops=[dict(kind=3, node=i + 1) for i in range(1024)]), seq=24)
+    t.common(p)
+    edit_bad_cases(t, b"")
+    t.badp("undefined flag bit 1", p, "EPROTO_FLAGS", flags=2)
+    t.bad("refused by a client reader", frame("EDIT", p), "EPROTO_TYPE",
+          reader=CLIENT)
+    t.dump("edit.json")
+
+
+def gen_edit_applied():
+    t = Table("EDIT_APPLIED")
+    p = t.ok("every operation kind", dict(order="1001", author=5,
+                                          author_seq=21, ops=OPS), seq=0)
+    t.ok("a drag step", dict(order="1002", author=5, author_seq=22, ops=[
+        dict(kind=1, node=7, fields=[dict(field=1,
+                                          values=[fl(0.1), 0.0, 0.0])])]),
+         flags=1, seq=0)
+    t.common(p)
+    t.badp("order 0", u64(0) + u32(5) + u32(1) + u16(1) + u8(3) + u32(1),
+           "ERANGE")
+    t.badp("author 0", u64(1) + u32(0) + u32(1) + u16(1) + u8(3) + u32(1),
+           "ERANGE")
+    edit_bad_cases(t, u64(1) + u32(5) + u32(1))
+    t.dump("edit_applied.json")
+
+
+def gen_camera():
+    t = Table("CAMERA")
+    base = dict(eye=[0.0, 1.0, 6.0], target=[0.0, 0.0, 0.0],
+                up=[0.0, 1.0, 0.0], fov_y_deg=45.0)
+    p = t.ok("default view", base, seq=30)
+    t.ok("dragging, extreme but valid values",
+         dict(eye=[1e6, -1e6, fl(0.1)], target=[-0.0, 0.0, 0.0],
+              up=[0.0, 0.0, 1.0], fov_y_deg=fl(179.9)), flags=1, seq=31)
+    t.common(p)
+
+    def cam(vals):
+        return b"".join(f32(v) if isinstance(v, float) else f32bits(v)
+                        for v in vals)
+    good = [0.0, 1.0, 6.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 45.0]
+    for i, bits, name in [(0, 0x7fc00000, "NaN eye.x"),
+                          (4, 0x7f800000, "+inf target.y"),
+                          (8, 0xff800000, "-inf up.z"),
+                          (9, 0x7fc00000, "NaN fov")]:
+        v = list(good)
+        v[i] = bits
+        t.badp(name, cam(v), "ENONFINITE")
+    v = list(good)
+    v[0] = 1.5e6
+    t.badp("eye.x over 1e6", cam(v), "ERANGE")
+    for fov in (0.0, 180.0, -10.0):
+        v = list(good)
+        v[9] = fov
+        t.badp("fov %g" % fov, cam(v), "ERANGE")
+    v = list(good)
+    v[0] = 0x7fc00000
+    t.badp("NaN eye.x in a short payload", cam(v)[:39],
+           "ENONFINITE")
+    t.dump("camera.json")
+
+
+def gen_view():
+    t = Table("VIEW")
+    base = dict(width=1280, height=720, encoding=1, quality_interactive=60,
+                quality_still=92, downscale=2)
+    p = t.ok("720p JPEG", base, seq=40)
+    t.ok("largest raw", dict(base, width=8192, height=8192, encoding=3,
+                             quality_interactive=100, quality_still=100,
+                             downscale=8), seq=41)
+    t.ok("smallest png", dict(base, width=1, height=1, encoding=2,
+                              quality_interactive=1, quality_still=1,
+                              downscale=1), seq=42)
+    t.common(p)
+
+    def vw(**kw):
+        return w_view(dict(base, **kw))
+    t.badp("width 0", vw(width=0), "ERANGE")
+    t.badp("height 8193", vw(height=8193), "ERANGE")
+    t.badp("encoding 0", vw(encoding=0), "EENUM")
+    t.badp("encoding 4", vw(encoding=4), "EENUM")
+    t.badp("quality 0", vw(quality_interactive=0), "ERANGE")
+    t.badp("quality 101", vw(quality_still=101), "ERANGE")
+    t.badp("downscale 9", vw(downscale=9), "ERANGE")
+    t.dump("view.json")
+
+
+def gen_frame():
+    t = Table("FRAME")
+    jpeg = "ffd8ffe000104a464946" + "00" * 6 + "ffd9"
+    base = dict(frame_no=77, order="1002", camera_seq=31, encoding=1,
+                width=1280, height=720, image_width=640, image_height=360,
+                rects=[dict(x=0, y=0, w=640, h=360, data=jpeg)])
+    p = t.ok("interactive, downscaled", base, seq=0)
+    t.ok("still, two damaged tiles",
+         dict(base, frame_no=78, image_width=1280, image_height=720,
+              rects=[dict(x=8, y=16, w=8, h=8, data=jpeg),
+                     dict(x=1272, y=712, w=8, h=8, data=jpeg)]),
+         flags=1, seq=0)
+    raw = bytes(range(16)).hex()
+    t.ok("snapshot, raw 2x2", dict(frame_no=79, order="1002", camera_seq=31,
+                                  encoding=3, width=2, height=2,
+                                  image_width=2, image_height=2,
+                                  rects=[dict(x=0, y=0, w=2, h=2,
+                                              data=raw)]),
+         flags=2 | 1, seq=55)
+    t.ok("snapshot, png", dict(frame_no=80, order="0", camera_seq=0,
+                              encoding=2, width=3, height=1,
+                              image_width=3, image_height=1,
+                              rects=[dict(x=0, y=0, w=3, h=1,
+                                          data="89504e47")]),
+         flags=2, seq=56)
+    t.common(p)
+
+    def fr(flags=0, rects=None, **kw):
+        f = dict(base, **kw)
+        if rects is not None:
+            f["rects"] = rects
+        return w_frame(f)
+    one = [dict(x=0, y=0, w=640, h=360, data="00")]
+    t.badp("encoding 0", fr(encoding=0), "EENUM")
+    t.badp("width 0", fr(width=0), "ERANGE")
+    t.badp("width 8193", fr(width=8193), "ERANGE")
+    t.badp("image wider than the frame", fr(image_width=1281), "ERANGE")
+    t.badp("still but downscaled", fr(), "ERANGE", flags=1)
+    t.badp("snapshot as JPEG", fr(image_width=1280, image_height=720),
+           "EENUM", flags=2)
+    t.badp("rect_count 0", fr(rects=[]), "EPROTO_COUNT")
+    t.badp("rect_count 4097",
+           fr(rects=[dict(x=0, y=0, w=1, h=1, data="00")] * 4097),
+           "EPROTO_COUNT")
+    t.badp("rect_count larger than the bytes left",
+           w_frame(dict(base, rects=[]))[:-2] + u16(3)
+           + w_rects(one)[2:] * 2, "EPROTO_COUNT")
+    t.badp("rect width 0", fr(rects=[dict(x=0, y=0, w=0, h=1, data="00")]),
+           "ERANGE")
+    t.badp("rect past the right edge",
+           fr(rects=[dict(x=600, y=0, w=41, h=1, data="00")]), "ERANGE")
+    t.badp("rect past the bottom edge",
+           fr(rects=[dict(x=0, y=359, w=1, h=2, data="00")]), "ERANGE")
+    # One byte more, so that the count check (13 bytes per rectangle)
+    # passes and the length itself is what fails.
+    t.badp("rect data length 0",
+           fr(rects=[dict(x=0, y=0, w=1, h=1, data="")]) + b"\x00",
+           "EPROTO_LENGTH")
+    t.badp("raw rect of the wrong length",
+           fr(encoding=3, rects=[dict(x=0, y=0, w=2, h=2, data="00" * 15)]),
+           "EPROTO_LENGTH")
+    t.badp("rect data longer than the bytes left",
+           fr(rects=[dict(x=0, y=0, w=1, h=1, data="0011")])[:-1],
+           "EPROTO_TRUNCATED")
+    snap = dict(frame_no=1, order="0", camera_seq=0, encoding=2, width=4,
+                height=4, image_width=4, image_height=4)
+    t.badp("snapshot with two rects", w_frame(dict(snap, rects=[
+        dict(x=0, y=0, w=4, h=4, data="00")] * 2)), "EPROTO_COUNT", flags=2)
+    t.badp("snapshot rect not the whole image", w_frame(dict(snap, rects=[
+        dict(x=0, y=0, w=4, h=3, data="00")])), "ERANGE", flags=2)
+    t.badp("undefined flag bit 2", p, "EPROTO_FLAGS", flags=4)
+    t.bad("over the client's 64 KiB frame limit",
+          header("FRAME", 65537), "EPROTO_LENGTH",
+          reader={"side": "client", "max_payload": 65536})
+    t.bad("refused by a server reader", frame("FRAME", p), "EPROTO_TYPE",
+          reader=SERVER)
+    t.dump("frame.json")
+
+
+def gen_pick():
+    t = Table("PICK")
+    p = t.ok("pixel", dict(x=640, y=360), seq=50)
+    t.ok("corner", dict(x=65535, y=0), seq=51)
+    t.common(p)
+    t.dump("pick.json")
+
+
+def gen_pick_result():
+    t = Table("PICK_RESULT")
+    p = t.ok("hit", dict(x=640, y=360, node=2, position=[fl(-0.6), 0.0,
+                                                        1.0],
+                         depth=fl(5.08)), seq=50)
+    t.ok("miss", dict(x=0, y=0, node=0, position=[0.0, 0.0, 0.0],
+                      depth=0.0), seq=51)
+    t.common(p)
+    t.badp("NaN position", u16(0) + u16(0) + u32(2) + f32bits(0x7fc00000)
+           + f32(0) + f32(0) + f32(1), "ENONFINITE")
+    t.badp("infinite depth", u16(0) + u16(0) + u32(2) + f32(0) * 3
+           + f32bits(0x7f800000), "ENONFINITE")
+    t.badp("negative depth", u16(0) + u16(0) + u32(2) + f32(0) * 3
+           + f32(-1), "ERANGE")
+    t.badp("a miss with a position", u16(0) + u16(0) + u32(0) + f32(1)
+           + f32(0) * 2 + f32(0), "ERANGE")
+    t.badp("a miss with a depth", u16(0) + u16(0) + u32(0) + f32(0) * 3
+           + f32(2), "ERANGE")
+    t.dump("pick_result.json")
+
+
+def gen_snapshot():
+    t = Table("SNAPSHOT")
+    p = t.ok("png", dict(encoding=2), seq=55)
+    t.ok("raw", dict(encoding=3), seq=56)
+    t.common(p)
+    t.badp("jpeg", u8(1), "EENUM")
+    t.badp("encoding 0", u8(0), "EENUM")
+    t.badp("encoding 200", u8(200), "EENUM")
+    t.dump("snapshot.json")
+
+
+def gen_stats():
+    t = Table("STATS")
+    base = dict(uptime_ms="3600000", frames="5400", bytes="812345678",
+                order="1002", sessions=2, clients=5,
+                render_ms_last=fl(11.5), render_ms_avg=fl(12.25),
+                encode_ms_last=fl(1.75), encode_ms_avg=fl(1.5),
+                edit_ms_avg=fl(0.03125), fps=fl(29.5))
+    p = t.ok("typical", base, seq=60)
+    t.ok("zeros", dict(uptime_ms="0", frames="0", bytes="0", order="0",
+                       sessions=0, clients=0, render_ms_last=0.0,
+                       render_ms_avg=0.0, encode_ms_last=0.0,
+                       encode_ms_avg=0.0, edit_ms_avg=0.0, fps=0.0),
+         seq=61)
+    t.common(p)
+    pre = p[:40]
+    t.badp("NaN render time", pre + f32bits(0x7fc00000) + p[44:],
+           "ENONFINITE")
+    t.badp("negative fps", p[:60] + f32(-1.0), "ERANGE")
+    t.dump("stats.json")
+
+
+# ---- Stream-level cases ------------------------------------------------------
+
+
+def gen_framing():
+    """Header and stream rules that do not belong to one type."""
+    ping = frame("PING", u64(1))
+    inv = []
+
+    def bad(name, raw, error, reader=None, messages=0):
+        e = {"name": name, "hex": raw.hex(), "error": error}
+        if reader:
+            e["reader"] = reader
+        if messages:
+            e["messages"] = messages
+        inv.append(e)
+    bad("empty stream is a clean end", b"", None)
+    bad("two messages back to back", ping + frame("OK", b"", seq=1), None,
+        messages=2)
+    bad("first byte is not the magic", b"G", "EPROTO_MAGIC")
+    bad("an HTTP request", b"GET / HTTP/1.1\r\n\r\n", "EPROTO_MAGIC")
+    bad("third magic byte wrong", b"BCX", "EPROTO_MAGIC")
+    bad("magic only, then the stream ends", MAGIC, "EPROTO_TRUNCATED")
+    bad("version 0", header("PING", 8, version=0) + u64(0),
+        "EPROTO_VERSION")
+    bad("version 2", header("PING", 8, version=2) + u64(0),
+        "EPROTO_VERSION")
+    bad("version 255, header cut after it", MAGIC + u8(255),
+        "EPROTO_VERSION")
+    bad("type 0", header(0, 0), "EPROTO_TYPE")
+    bad("type 23", header(23, 0), "EPROTO_TYPE")
+    bad("type 255", header(255, 0), "EPROTO_TYPE")
+    bad("unknown type is reported before the rest of the header",
+        MAGIC + u8(1) + u8(99), "EPROTO_TYPE")
+    bad("flags checked before the length", header("PING", 2 ** 32 - 1,
+                                                  flags=0x8000),
+        "EPROTO_FLAGS")
+    bad("truncated header (15 bytes)", ping[:15], "EPROTO_TRUNCATED")
+    bad("bad message after a good one", ping + b"XBCST", "EPROTO_MAGIC",
+        messages=1)
+    bad("good message, then a truncated one", ping + ping[:20],
+        "EPROTO_TRUNCATED", messages=1)
+    bad("before HELLO: EDIT", frame("EDIT", u16(1) + u8(3) + u32(1)),
+        "ESTATE", reader=PRE_HELLO)
+    bad("before HELLO: CAMERA", frame("CAMERA", b"\x00" * 40), "ESTATE",
+        reader=PRE_HELLO)
+    bad("before HELLO: a server-only type is EPROTO_TYPE, not ESTATE",
+        header("FRAME", 0), "EPROTO_TYPE", reader=PRE_HELLO)
+    bad("length over a reader's limit", header("SCENE_LOAD", 1025),
+        "EPROTO_LENGTH", reader={"max_payload": 1024})
+    bad("length at a reader's limit waits for the payload",
+        header("SCENE_LOAD", 1024), "EPROTO_TRUNCATED",
+        reader={"max_payload": 1024})
+    bad("64 MiB + 1 is over every limit", header("SCENE_LOAD",
+                                                  MAX_PAYLOAD + 1),
+        "EPROTO_LENGTH")
+    bad("64 MiB header waits for the payload", header("SCENE_LOAD",
+                                                       MAX_PAYLOAD),
+        "EPROTO_TRUNCATED")
+    write_json("framing.json", {"type": None, "valid": [], "invalid": inv})
+
+
+# ---- Scene encoding --------------------------------------------------------------
+
+
+def gen_scene():
+    valid, inv = [], []
+
+    def ok(name, b, nodes, prims, ops, depth, camera):
+        valid.append({"name": name, "hex": b.hex(),
+                      "fields": dict(has_camera=camera, nodes=nodes,
+                                     prims=prims, ops=ops, depth=depth)})
+
+    def bad(name, b, error):
+        inv.append({"name": name, "hex": b.hex(), "error": error})
+    ok("one sphere", scene([SPHERE]), 1, 1, 0, 0, False)
+    ok("smooth union with camera and colour", SCENE_SMALL, 3, 2, 1, 1, True)
+    ok("n-ary union of four", scene([scene_op(1, 10, 0, 0, 4)]
+                                    + [SPHERE] * 4), 5, 4, 1, 1, False)
+    ok("nested: difference of a union", scene([
+        scene_op(3, 1, 0, 0, 2), scene_op(1, 2, 0, 0, 2), SPHERE, SPHERE,
+        SPHERE]), 5, 3, 2, 2, False)
+    ok("depth 128", deep_scene(128), 257, 129, 128, 128, False)
+    ok("primitive with 8 floats", scene([scene_prim(7, 4, [0.5] * 8)]),
+       1, 1, 0, 0, False)
+    bad("empty", b"", "EPROTO_TRUNCATED")
+    bad("flags bit 1", u8(2) + u32(1) + SPHERE, "EPROTO_FLAGS")
+    bad("camera with NaN", u8(1) + f32bits(0x7fc00000) + f32(0) * 9
+        + u32(1) + SPHERE, "ENONFINITE")
+    bad("node_count 0", u8(0) + u32(0), "EPROTO_COUNT")
+    bad("node_count 2^22", u8(0) + u32(1 << 22), "EPROTO_COUNT")
+    bad("node_count larger than the bytes left", u8(0) + u32(3) + SPHERE,
+        "EPROTO_COUNT")
+    bad("depth 129", deep_scene(129), "EDEPTH")
+    bad("tag 0", u8(0) + u32(1) + u8(0) + SPHERE[1:], "EENUM")
+    bad("tag 17", u8(0) + u32(1) + u8(17) + SPHERE[1:], "EENUM")
+    bad("operator tag 0x87", u8(0) + u32(3) + u8(0x87) + scene_op(
+        1, 0, 0, 0, 2)[1:] + SPHERE * 2, "EENUM")
+    bad("operator with one child", scene([scene_op(1, 0, 0, 0, 1),
+                                          SPHERE, SPHERE]), "EPROTO_COUNT")
+    bad("children beyond node_count", u8(0) + u32(3) + scene_op(
+        1, 0, 0, 0, 3) + SPHERE * 3, "EPROTO_COUNT")
+    bad("tree ends before node_count", u8(0) + u32(2) + SPHERE * 2,
+        "EPROTO_COUNT")
+    bad("has_color 2", u8(0) + u32(1) + SPHERE[:33] + u8(2) + u8(0),
+        "EENUM")
+    bad("nfloats 9", scene([scene_prim(1, 0, [1.0] * 9)]), "EPROTO_COUNT")
+    bad("nfloats larger than the bytes left",
+        u8(0) + u32(1) + SPHERE[:34] + u8(3) + f32(1),
+        "EPROTO_COUNT")
+    bad("infinite radius", u8(0) + u32(1) + SPHERE[:35]
+        + f32bits(0x7f800000), "ENONFINITE")
+    bad("NaN blend", u8(0) + u32(3) + u8(0x81) + u32(0)
+        + f32bits(0x7fc00000) + f32(0) + u32(2) + SPHERE * 2, "ENONFINITE")
+    bad("trailing byte", scene([SPHERE]) + b"\x00", "EPROTO_TRAILING")
+    # 113 bytes precede the last node of SCENE_SMALL; 25 more end inside
+    # its rotation.
+    bad("bytes end inside a rotation", SCENE_SMALL[:113 + 25],
+        "EPROTO_TRUNCATED")
+    bad("last parameter cut short", scene([SPHERE])[:-1], "EPROTO_COUNT")
+    write_json("scene.json", {"type": None, "valid": valid, "invalid": inv})
+
+
+def main():
+    gen_hello()
+    gen_welcome()
+    gen_error()
+    gen_ping("PING")
+    gen_ping("PONG")
+    gen_empty("OK", "server")
+    gen_session("SESSION_CREATE")
+    gen_session("SESSION_JOIN")
+    gen_empty("SESSION_LEAVE", "client")
+    gen_session_info()
+    gen_scene_load()
+    gen_scene_state()
+    gen_edit()
+    gen_edit_applied()
+    gen_camera()
+    gen_view()
+    gen_frame()
+    gen_pick()
+    gen_pick_result()
+    gen_snapshot()
+    gen_empty("GET_STATS", "client")
+    gen_stats()
+    gen_framing()
+    gen_scene()
+
+
+if __name__ == "__main__":
+    main()
