@@ -549,6 +549,12 @@ uint32_t bc_tree_parent(const struct bc_tree *t, uint32_t id)
 	return t->pool[t->pool[n].parent].id;
 }
 
+uint32_t bc_tree_slot(const struct bc_tree *t, uint32_t id)
+{
+	uint32_t n = map_find(&t->ids, id);
+	return (n == BC_NONE || !t->has_lin) ? BC_NONE : t->pool[n].slot;
+}
+
 const struct bc_lin *bc_tree_lin(const struct bc_tree *t)
 {
 	return t->has_lin ? &t->lin : NULL;

@@ -7,7 +7,7 @@ pkgs=(
 	build-essential cmake ninja-build pkg-config clang
 	libjansson-dev
 	libopenimageio-dev openimageio-tools
-	libturbojpeg0-dev
+	libturbojpeg0-dev libpng-dev zlib1g-dev
 	libuv1-dev
 	libegl-dev libgl-dev libgles-dev libegl1-mesa-dev libgl1-mesa-dev
 	libgl1-mesa-dri libosmesa6-dev python3-glad glslang-tools

@@ -284,6 +284,10 @@ uint32_t bc_tree_child_count(const struct bc_tree *t, uint32_t id);
 uint32_t bc_tree_child(const struct bc_tree *t, uint32_t id, uint32_t k);
 /* Returns the parent's id, 0 for the root or an unknown id. */
 uint32_t bc_tree_parent(const struct bc_tree *t, uint32_t id);
+/* Returns node id's top slot in the linearized form (an n-ary operator's
+ * last fold slot), BC_NONE for an unknown id. Its primitives are the
+ * indices prim_of[first[slot]] .. + (slot - first[slot]) / 2. */
+uint32_t bc_tree_slot(const struct bc_tree *t, uint32_t id);
 
 /* ---- Edits -------------------------------------------------------------- */
 

@@ -1,0 +1,373 @@
+/*
+ * blobcastd: options, configuration file, start-up and shutdown.
+ *
+ * With no arguments it serves the embedded default scene in session
+ * "default" on 127.0.0.1:7878 with ./blobcast-data as its data directory.
+ * SIGTERM or SIGINT saves every session and stops.
+ */
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <jansson.h>
+
+#include "blobcast/alloc.h"
+#include "blobcast/log.h"
+#include "server.h"
+
+static void usage(FILE *out)
+{
+	fprintf(out,
+		"usage: blobcastd [options]\n"
+		"\n"
+		"Serves blobtree review sessions over the blobcast protocol.\n"
+		"With no options: session \"default\" with the embedded scene,\n"
+		"on 127.0.0.1:7878, data in ./blobcast-data.\n"
+		"\n"
+		"  --listen HOST:PORT  TCP address (default 127.0.0.1:7878;\n"
+		"                      \"none\" for no TCP listener)\n"
+		"  --unix PATH         also listen on a Unix socket\n"
+		"  --data DIR          data directory: sessions, journals\n"
+		"                      (default ./blobcast-data)\n"
+		"  --backend NAME      auto | cpu | tiled | naive | gl | svo\n"
+		"                      (auto and cpu: the CPU tile tracer)\n"
+		"  --gl-platform P     auto | device | surfaceless | osmesa\n"
+		"  --config FILE       JSON configuration (docs/operations.md);\n"
+		"                      options given here override it\n"
+		"  --server-id NAME    name sent to clients (default blobcastd)\n"
+		"  --log LEVEL         error | warn | info | debug (default "
+		"info)\n"
+		"  --help              this text\n"
+		"\n"
+		"Without tokens in the configuration only loopback and Unix\n"
+		"socket clients are accepted. SIGTERM saves and stops.\n");
+}
+
+static enum bc_backend parse_backend(const char *name)
+{
+	if (strcmp(name, "auto") == 0 || strcmp(name, "cpu") == 0) {
+		/* On hosts without a GPU the CPU tile tracer beats llvmpipe
+		 * (docs/benchmarks.md); a GPU host asks for gl. */
+		return BC_BACKEND_TILED;
+	}
+	return bc_backend_from_name(name);
+}
+
+static int set_str(char **dst, const char *v)
+{
+	char *copy = bc_strdup(v);
+	if (!copy) {
+		return BC_ENOMEM;
+	}
+	bc_free(*dst);
+	*dst = copy;
+	return 0;
+}
+
+static int load_config(struct bc_srv_config *cfg, const char *path,
+		       struct bc_errinfo *ei)
+{
+	json_error_t jerr;
+	json_t *root = json_load_file(path, JSON_REJECT_DUPLICATES, &jerr);
+	const char *key;
+	json_t *val;
+	int rc = 0;
+	if (!root) {
+		return bc_errinfo_set(ei, BC_EPARSE, "%s:%d: %s", path, jerr.line,
+				      jerr.text);
+	}
+	if (!json_is_object(root)) {
+		rc = bc_errinfo_set(ei, BC_EPARSE, "%s: expected an object",
+				    path);
+		goto out;
+	}
+	json_object_foreach(root, key, val)
+	{
+		if (strcmp(key, "tokens") == 0) {
+			size_t i;
+			json_t *tok;
+			if (!json_is_array(val) || json_array_size(val) > 1024) {
+				rc = bc_errinfo_set(ei, BC_EPARSE,
+						    "%s: tokens: expected an "
+						    "array of at most 1024",
+						    path);
+				goto out;
+			}
+			cfg->tokens = bc_calloc(json_array_size(val) + 1,
+						sizeof(*cfg->tokens));
+			if (!cfg->tokens) {
+				rc = BC_ENOMEM;
+				goto out;
+			}
+			json_array_foreach(val, i, tok)
+			{
+				const char *t = json_string_value(
+					json_object_get(tok, "token"));
+				const char *r = json_string_value(
+					json_object_get(tok, "role"));
+				if (!t || !*t || strlen(t) > BC_PROTO_MAX_TOKEN ||
+				    !r ||
+				    (strcmp(r, "editor") && strcmp(r, "viewer"))) {
+					rc = bc_errinfo_set(
+						ei, BC_EPARSE,
+						"%s: tokens[%zu]: needs "
+						"\"token\" (1..%u bytes) and "
+						"\"role\" (editor|viewer)",
+						path, i, BC_PROTO_MAX_TOKEN);
+					goto out;
+				}
+				if (!(cfg->tokens[i].token = bc_strdup(t))) {
+					rc = BC_ENOMEM;
+					goto out;
+				}
+				cfg->tokens[i].role =
+					strcmp(r, "editor") == 0
+						? BC_PROTO_ROLE_EDITOR
+						: BC_PROTO_ROLE_VIEWER;
+				cfg->ntokens++;
+			}
+			continue;
+		}
+		if (!json_is_string(val)) {
+			rc = bc_errinfo_set(ei, BC_EPARSE,
+					    "%s: %s: expected a string", path,
+					    key);
+			goto out;
+		}
+		if (strcmp(key, "listen") == 0) {
+			rc = set_str(&cfg->listen, json_string_value(val));
+		} else if (strcmp(key, "unix") == 0) {
+			rc = set_str(&cfg->unix_path, json_string_value(val));
+		} else if (strcmp(key, "data") == 0) {
+			rc = set_str(&cfg->data_dir, json_string_value(val));
+		} else if (strcmp(key, "server_id") == 0) {
+			rc = set_str(&cfg->server_id, json_string_value(val));
+		} else if (strcmp(key, "gl_platform") == 0) {
+			rc = set_str(&cfg->gl_platform, json_string_value(val));
+		} else if (strcmp(key, "backend") == 0) {
+			cfg->backend = parse_backend(json_string_value(val));
+			if (cfg->backend == BC_BACKEND_INVALID) {
+				rc = bc_errinfo_set(ei, BC_EPARSE,
+						    "%s: unknown backend %s",
+						    path,
+						    json_string_value(val));
+			}
+		} else {
+			rc = bc_errinfo_set(ei, BC_EPARSE, "%s: unknown key %s",
+					    path, key);
+		}
+		if (rc) {
+			goto out;
+		}
+	}
+out:
+	json_decref(root);
+	return rc;
+}
+
+static void config_free(struct bc_srv_config *cfg)
+{
+	for (uint32_t i = 0; i < cfg->ntokens; i++) {
+		bc_free(cfg->tokens[i].token);
+	}
+	bc_free(cfg->tokens);
+	bc_free(cfg->listen);
+	bc_free(cfg->unix_path);
+	bc_free(cfg->data_dir);
+	bc_free(cfg->gl_platform);
+	bc_free(cfg->server_id);
+	memset(cfg, 0, sizeof(*cfg));
+}
+
+static void on_signal(uv_signal_t *sig, int signum)
+{
+	struct bc_srv *srv = sig->data;
+	if (srv->stopping) {
+		return;
+	}
+	bc_log(BC_LOG_INFO, "signal %d: saving sessions and stopping", signum);
+	srv->stopping = true;
+	bc_sessions_save_all(srv);
+	bc_net_close_all(srv);
+	bc_sessions_free(srv);
+	bc_rthread_stop(srv);
+	uv_close((uv_handle_t *)&srv->sigterm, NULL);
+	uv_close((uv_handle_t *)&srv->sigint, NULL);
+}
+
+static void print_endpoints(struct bc_srv *srv)
+{
+	if (srv->has_tcp) {
+		struct sockaddr_storage sa;
+		int len = sizeof(sa);
+		char host[64] = "?";
+		int port = 0;
+		uv_tcp_getsockname(&srv->tcp_listener, (struct sockaddr *)&sa,
+				   &len);
+		if (sa.ss_family == AF_INET) {
+			struct sockaddr_in *in = (struct sockaddr_in *)&sa;
+			uv_ip4_name(in, host, sizeof(host));
+			port = ntohs(in->sin_port);
+		} else if (sa.ss_family == AF_INET6) {
+			struct sockaddr_in6 *in6 = (struct sockaddr_in6 *)&sa;
+			uv_ip6_name(in6, host, sizeof(host));
+			port = ntohs(in6->sin6_port);
+		}
+		fprintf(stderr, "blobcastd: listening on %s:%d\n", host, port);
+	}
+	if (srv->has_unix) {
+		fprintf(stderr, "blobcastd: listening on unix:%s\n",
+			srv->cfg.unix_path);
+	}
+}
+
+static const char *need_arg(int argc, char **argv, int *i)
+{
+	if (*i + 1 >= argc) {
+		fprintf(stderr, "blobcastd: %s needs a value (see --help)\n",
+			argv[*i]);
+		exit(2);
+	}
+	return argv[++*i];
+}
+
+int main(int argc, char **argv)
+{
+	struct bc_srv srv;
+	struct bc_errinfo ei = {0};
+	const char *config = NULL;
+	struct bc_srv_config cli = {0};
+	enum bc_log_level level = BC_LOG_INFO;
+	int rc = 1;
+
+	memset(&srv, 0, sizeof(srv));
+	for (int i = 1; i < argc; i++) {
+		const char *a = argv[i];
+		if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
+			usage(stdout);
+			return 0;
+		} else if (strcmp(a, "--listen") == 0) {
+			set_str(&cli.listen, need_arg(argc, argv, &i));
+		} else if (strcmp(a, "--unix") == 0) {
+			set_str(&cli.unix_path, need_arg(argc, argv, &i));
+		} else if (strcmp(a, "--data") == 0) {
+			set_str(&cli.data_dir, need_arg(argc, argv, &i));
+		} else if (strcmp(a, "--backend") == 0) {
+			const char *b = need_arg(argc, argv, &i);
+			cli.backend = parse_backend(b);
+			if (cli.backend == BC_BACKEND_INVALID) {
+				fprintf(stderr,
+					"blobcastd: unknown backend %s (auto, "
+					"cpu, tiled, naive, gl, svo)\n",
+					b);
+				return 2;
+			}
+		} else if (strcmp(a, "--gl-platform") == 0) {
+			set_str(&cli.gl_platform, need_arg(argc, argv, &i));
+		} else if (strcmp(a, "--config") == 0) {
+			config = need_arg(argc, argv, &i);
+		} else if (strcmp(a, "--server-id") == 0) {
+			set_str(&cli.server_id, need_arg(argc, argv, &i));
+		} else if (strcmp(a, "--log") == 0) {
+			const char *l = need_arg(argc, argv, &i);
+			static const char *names[] = {"silent", "error", "warn",
+						      "info", "debug"};
+			level = BC_LOG_LEVEL_COUNT;
+			for (int k = 0; k < BC_LOG_LEVEL_COUNT; k++) {
+				if (strcmp(l, names[k]) == 0) {
+					level = (enum bc_log_level)k;
+				}
+			}
+			if (level == BC_LOG_LEVEL_COUNT) {
+				fprintf(stderr, "blobcastd: unknown log level "
+						"%s\n",
+					l);
+				return 2;
+			}
+		} else {
+			fprintf(stderr, "blobcastd: unknown option %s (see "
+					"--help)\n",
+				a);
+			return 2;
+		}
+	}
+	bc_log_init(level);
+	if (config && load_config(&srv.cfg, config, &ei)) {
+		fprintf(stderr, "blobcastd: %s\n", ei.msg);
+		goto out;
+	}
+	/* Command-line options override the file. */
+	if (cli.listen) {
+		set_str(&srv.cfg.listen, cli.listen);
+	}
+	if (cli.unix_path) {
+		set_str(&srv.cfg.unix_path, cli.unix_path);
+	}
+	if (cli.data_dir) {
+		set_str(&srv.cfg.data_dir, cli.data_dir);
+	}
+	if (cli.gl_platform) {
+		set_str(&srv.cfg.gl_platform, cli.gl_platform);
+	}
+	if (cli.server_id) {
+		set_str(&srv.cfg.server_id, cli.server_id);
+	}
+	if (cli.backend) {
+		srv.cfg.backend = cli.backend;
+	}
+	if (!srv.cfg.listen) {
+		set_str(&srv.cfg.listen, "127.0.0.1:7878");
+	}
+	if (strcmp(srv.cfg.listen, "none") == 0) {
+		bc_free(srv.cfg.listen);
+		srv.cfg.listen = NULL;
+	}
+	if (!srv.cfg.data_dir) {
+		set_str(&srv.cfg.data_dir, "blobcast-data");
+	}
+	if (!srv.cfg.server_id) {
+		set_str(&srv.cfg.server_id, "blobcastd");
+	}
+	if (!srv.cfg.backend) {
+		srv.cfg.backend = BC_BACKEND_TILED;
+	}
+	if (strlen(srv.cfg.server_id) > BC_PROTO_MAX_NAME) {
+		fprintf(stderr, "blobcastd: --server-id longer than %u bytes\n",
+			BC_PROTO_MAX_NAME);
+		goto out;
+	}
+	signal(SIGPIPE, SIG_IGN);
+	srv.loop = uv_default_loop();
+	srv.started_ms = uv_now(srv.loop);
+	if (bc_store_open(&srv.store, srv.cfg.data_dir, &ei) ||
+	    bc_rthread_start(&srv, &ei) || bc_sessions_restore(&srv, &ei) ||
+	    bc_net_listen(&srv, &ei)) {
+		fprintf(stderr, "blobcastd: %s\n", ei.msg);
+		if (srv.rt) {
+			bc_sessions_free(&srv);
+			bc_rthread_stop(&srv);
+			bc_net_close_all(&srv);
+			uv_run(srv.loop, UV_RUN_DEFAULT);
+		}
+		goto out;
+	}
+	uv_signal_init(srv.loop, &srv.sigterm);
+	uv_signal_init(srv.loop, &srv.sigint);
+	srv.sigterm.data = srv.sigint.data = &srv;
+	uv_signal_start(&srv.sigterm, on_signal, SIGTERM);
+	uv_signal_start(&srv.sigint, on_signal, SIGINT);
+	print_endpoints(&srv);
+	fprintf(stderr, "blobcastd: backend %s, data in %s\n",
+		bc_backend_name(srv.cfg.backend), srv.cfg.data_dir);
+	uv_run(srv.loop, UV_RUN_DEFAULT);
+	rc = 0;
+out:
+	if (srv.loop) {
+		uv_loop_close(srv.loop);
+	}
+	bc_store_close(srv.store);
+	config_free(&srv.cfg);
+	config_free(&cli);
+	return rc;
+}

@@ -1,0 +1,575 @@
+/*
+ * Connections (loop thread): TCP and Unix listeners, the per-connection
+ * protocol reader and state machine up to the session layer, and output
+ * queues. Messages are written as they come; FRAMEs are written one at a
+ * time per client and a newer frame replaces one not yet started (frame
+ * spoiling), so a slow client gets fewer frames, never a growing backlog.
+ * A client whose queue still passes BC_SRV_MAX_CLIENT_QUEUE is dropped.
+ * Clients are freed from their close callback, never inside a callback that
+ * still uses them.
+ */
+#include <arpa/inet.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "blobcast/alloc.h"
+#include "blobcast/log.h"
+#include "server.h"
+
+/* Reads land in a buffer of this size before being fed to the reader. */
+#define READ_CHUNK (64u * 1024u)
+
+struct write_req {
+	uv_write_t req;
+	struct bc_client_ref who;
+	struct bc_srv *srv;
+	struct bc_shared *shared; /* a frame, or NULL */
+	uint8_t *owned;           /* a message's bytes, or NULL */
+	size_t len;
+};
+
+struct bc_shared *bc_shared_new(size_t len)
+{
+	struct bc_shared *s = bc_malloc(sizeof(*s) + len);
+	if (s) {
+		s->refs = 1;
+		s->len = len;
+	}
+	return s;
+}
+
+void bc_shared_unref(struct bc_shared *s)
+{
+	if (s && --s->refs == 0) {
+		bc_free(s);
+	}
+}
+
+uint64_t bc_now_ms(struct bc_srv *srv)
+{
+	return uv_now(srv->loop);
+}
+
+struct bc_client *bc_client_get(struct bc_srv *srv, struct bc_client_ref ref)
+{
+	struct bc_client *c;
+	if (ref.slot >= BC_SRV_MAX_CONNECTIONS) {
+		return NULL;
+	}
+	c = srv->clients[ref.slot];
+	return (c && c->gen == ref.gen && !c->closing) ? c : NULL;
+}
+
+struct bc_client_ref bc_client_ref_of(const struct bc_client *c)
+{
+	return (struct bc_client_ref){c->slot, c->gen};
+}
+
+static void handle_closed(uv_handle_t *h)
+{
+	struct bc_client *c = h->data;
+	if (--c->handles_open > 0) {
+		return;
+	}
+	bc_proto_reader_finish(&c->reader);
+	bc_shared_unref(c->frame_next);
+	bc_free(c->damage);
+	bc_free(c);
+}
+
+void bc_client_close(struct bc_client *c, const char *why)
+{
+	struct bc_srv *srv = c->srv;
+	if (c->closing) {
+		return;
+	}
+	bc_log(BC_LOG_INFO, "connection %u (%s) closed: %s", c->gen, c->name,
+	       why);
+	if (c->session) {
+		bc_session_leave(c);
+	}
+	c->closing = true;
+	srv->clients[c->slot] = NULL;
+	srv->nclients--;
+	c->handles_open = 2;
+	uv_close(&c->h.handle, handle_closed);
+	uv_close((uv_handle_t *)&c->hello_timer, handle_closed);
+}
+
+static void shutdown_done(uv_shutdown_t *req, int status)
+{
+	struct bc_client *c = req->data;
+	(void)status;
+	bc_client_close(c, c->drain_why);
+}
+
+void bc_client_close_after_flush(struct bc_client *c, const char *why)
+{
+	if (c->closing || c->draining) {
+		return;
+	}
+	if (c->session) {
+		bc_session_leave(c);
+	}
+	c->draining = true;
+	c->drain_why = why;
+	uv_read_stop(&c->h.stream);
+	c->shutdown.data = c;
+	if (uv_shutdown(&c->shutdown, &c->h.stream, shutdown_done) != 0) {
+		bc_client_close(c, why);
+	}
+}
+
+static void write_done(uv_write_t *req, int status)
+{
+	struct write_req *w = (struct write_req *)req;
+	struct bc_client *c = bc_client_get(w->srv, w->who);
+	if (c) {
+		c->queued -= w->len;
+		if (status < 0) {
+			bc_client_close(c, uv_strerror(status));
+		} else if (w->shared) {
+			c->frame_writing = false;
+			c->frames_sent++;
+			c->bytes_sent += w->len;
+			if (c->frame_next) {
+				struct bc_shared *next = c->frame_next;
+				c->frame_next = NULL;
+				bc_client_send_frame(c, next);
+				bc_shared_unref(next);
+			}
+		} else {
+			c->bytes_sent += w->len;
+		}
+	}
+	bc_shared_unref(w->shared);
+	bc_free(w->owned);
+	bc_free(w);
+}
+
+/* Queues bytes (taking owned or a reference to shared). */
+static void queue_bytes(struct bc_client *c, uint8_t *owned,
+			struct bc_shared *shared, const uint8_t *data,
+			size_t len)
+{
+	struct write_req *w;
+	uv_buf_t buf;
+	int rc;
+	if (c->queued + len > BC_SRV_MAX_CLIENT_QUEUE) {
+		bc_free(owned);
+		bc_log(BC_LOG_WARN,
+		       "dropping client %u (%s): %zu bytes queued, it stopped "
+		       "reading",
+		       c->gen, c->name, c->queued);
+		bc_client_close(c, "output queue over its limit");
+		return;
+	}
+	w = bc_calloc(1, sizeof(*w));
+	if (!w) {
+		bc_free(owned);
+		bc_client_close(c, "out of memory");
+		return;
+	}
+	w->srv = c->srv;
+	w->who = bc_client_ref_of(c);
+	w->owned = owned;
+	w->len = len;
+	if (shared) {
+		shared->refs++;
+		w->shared = shared;
+	}
+	buf = uv_buf_init((char *)data, (unsigned int)len);
+	c->queued += len;
+	rc = uv_write(&w->req, &c->h.stream, &buf, 1, write_done);
+	if (rc < 0) {
+		c->queued -= len;
+		bc_shared_unref(w->shared);
+		bc_free(w->owned);
+		bc_free(w);
+		bc_client_close(c, uv_strerror(rc));
+	}
+}
+
+void bc_client_send(struct bc_client *c, const struct bc_msg *m)
+{
+	struct bc_proto_buf b;
+	struct bc_errinfo ei = {0};
+	int rc;
+	if (c->closing || c->draining) {
+		return;
+	}
+	bc_proto_buf_init(&b, 0);
+	rc = bc_proto_encode(&b, m, &ei);
+	if (rc) {
+		bc_log(BC_LOG_ERROR, "cannot encode %s for client %u: %s",
+		       bc_proto_type_name(m->type), c->gen, ei.msg);
+		bc_proto_buf_finish(&b);
+		return;
+	}
+	queue_bytes(c, b.data, NULL, b.data, b.len);
+}
+
+void bc_client_send_error(struct bc_client *c, uint32_t seq, int code,
+			  bool fatal, const char *fmt, ...)
+{
+	char text[BC_PROTO_MAX_ERROR_TEXT];
+	struct bc_msg m = {.type = BC_MSG_ERROR, .seq = seq};
+	va_list args;
+	int n;
+	va_start(args, fmt);
+	n = vsnprintf(text, sizeof(text), fmt, args);
+	va_end(args);
+	if (n < 0) {
+		n = 0;
+	}
+	m.flags = fatal ? BC_PROTO_FLAG_FATAL : 0;
+	m.error.code = (uint16_t)(code < 0 ? -code : code);
+	m.error.text.ptr = text;
+	m.error.text.len = (uint32_t)((size_t)n < sizeof(text) ? (size_t)n
+							       : sizeof(text) - 1);
+	bc_log(BC_LOG_INFO, "client %u: error %s: %s", c->gen,
+	       bc_err_name(code), text);
+	bc_client_send(c, &m);
+}
+
+void bc_client_send_frame(struct bc_client *c, struct bc_shared *frame)
+{
+	if (c->closing || c->draining) {
+		return;
+	}
+	if (c->frame_writing) {
+		/* Spoil the unsent frame: the newer one supersedes it. */
+		if (c->frame_next) {
+			c->frames_spoiled++;
+			bc_shared_unref(c->frame_next);
+		}
+		frame->refs++;
+		c->frame_next = frame;
+		return;
+	}
+	c->frame_writing = true;
+	if (!c->first_frame_ms) {
+		c->first_frame_ms = bc_now_ms(c->srv);
+	}
+	queue_bytes(c, NULL, frame, frame->data, frame->len);
+}
+
+/* ---- HELLO -------------------------------------------------------------- */
+
+static enum bc_proto_role token_role(struct bc_srv *srv, struct bc_client *c,
+				     struct bc_proto_str tok)
+{
+	for (uint32_t i = 0; i < srv->cfg.ntokens; i++) {
+		const char *t = srv->cfg.tokens[i].token;
+		if (strlen(t) == tok.len && memcmp(t, tok.ptr, tok.len) == 0) {
+			return srv->cfg.tokens[i].role;
+		}
+	}
+	/* No token: only trusted peers, and only when no token is configured
+	 * or they come over the Unix socket (filesystem permissions). */
+	if (tok.len == 0 && c->trusted &&
+	    (srv->cfg.ntokens == 0 || !c->is_tcp)) {
+		return BC_PROTO_ROLE_EDITOR;
+	}
+	return BC_PROTO_ROLE_INVALID;
+}
+
+static void handle_hello(struct bc_client *c, const struct bc_msg *m)
+{
+	struct bc_srv *srv = c->srv;
+	const struct bc_msg_hello *h = &m->hello;
+	struct bc_msg w = {.type = BC_MSG_WELCOME, .seq = m->seq};
+	if (h->version_min > BC_PROTO_VERSION ||
+	    h->version_max < BC_PROTO_VERSION) {
+		bc_client_send_error(c, m->seq, BC_EPROTO_VERSION, true,
+				     "this server speaks version %u only",
+				     BC_PROTO_VERSION);
+		bc_client_close_after_flush(c, "version mismatch");
+		return;
+	}
+	c->max_role = token_role(srv, c, h->token);
+	if (c->max_role == BC_PROTO_ROLE_INVALID) {
+		bc_client_send_error(c, m->seq, BC_EAUTH, true,
+				     "a valid token is required");
+		bc_client_close_after_flush(c, "authentication failed");
+		return;
+	}
+	memcpy(c->name, h->client_name.ptr, h->client_name.len);
+	c->name[h->client_name.len] = '\0';
+	c->encodings = h->encodings ? h->encodings : BC_PROTO_ENCODINGS_ALL;
+	c->max_frame_bytes = h->max_frame_bytes ? h->max_frame_bytes
+						: BC_PROTO_MAX_PAYLOAD;
+	c->stage = BC_PROTO_STAGE_READY;
+	uv_timer_stop(&c->hello_timer);
+	bc_proto_reader_hello_done(&c->reader);
+	w.welcome.version = BC_PROTO_VERSION;
+	w.welcome.connection_id = c->gen;
+	w.welcome.max_payload = BC_PROTO_MAX_PAYLOAD;
+	w.welcome.max_frame_bytes = c->max_frame_bytes;
+	w.welcome.max_nodes = BC_SRV_MAX_NODES;
+	w.welcome.max_dim = BC_SRV_MAX_DIM;
+	w.welcome.max_members = BC_PROTO_MAX_MEMBERS;
+	w.welcome.max_edit_ops = BC_PROTO_MAX_EDIT_OPS;
+	w.welcome.server_id.ptr = srv->cfg.server_id;
+	w.welcome.server_id.len = (uint32_t)strlen(srv->cfg.server_id);
+	bc_client_send(c, &w);
+}
+
+static void dispatch(struct bc_client *c, const struct bc_msg *m)
+{
+	int rc = bc_proto_client_may_send(c->stage, c->role, m->type);
+	if (m->type == BC_MSG_PING) {
+		struct bc_msg pong = {.type = BC_MSG_PONG, .seq = m->seq};
+		pong.ping.stamp = m->ping.stamp;
+		bc_client_send(c, &pong);
+		return;
+	}
+	if (m->type == BC_MSG_PONG || m->type == BC_MSG_ERROR) {
+		return;
+	}
+	if (rc) {
+		bc_client_send_error(c, m->seq, rc, false,
+				     "%s is not allowed %s",
+				     bc_proto_type_name(m->type),
+				     rc == BC_EPERM ? "for a viewer"
+						    : "at this point");
+		return;
+	}
+	if (m->type == BC_MSG_HELLO) {
+		handle_hello(c, m);
+		return;
+	}
+	bc_session_handle(c, m);
+}
+
+static void on_alloc(uv_handle_t *h, size_t suggested, uv_buf_t *buf)
+{
+	static char chunk[READ_CHUNK];
+	(void)h;
+	(void)suggested;
+	/* One loop thread: a static chunk is fed to the reader (which copies)
+	 * before the next read can happen. */
+	*buf = uv_buf_init(chunk, sizeof(chunk));
+}
+
+static void on_read(uv_stream_t *s, ssize_t n, const uv_buf_t *buf)
+{
+	struct bc_client *c = s->data;
+	struct bc_msg m;
+	int rc;
+	if (c->closing || c->draining) {
+		return;
+	}
+	if (n < 0) {
+		if (bc_proto_reader_eof(&c->reader) < 0) {
+			bc_log(BC_LOG_INFO, "client %u: %s", c->gen,
+			       c->reader.errstr);
+		}
+		bc_client_close(c, n == UV_EOF ? "peer closed" : uv_strerror((int)n));
+		return;
+	}
+	if (n == 0) {
+		return;
+	}
+	rc = bc_proto_reader_feed(&c->reader, buf->base, (size_t)n);
+	while (rc == 0 && !c->closing && !c->draining) {
+		rc = bc_proto_reader_next(&c->reader, &m);
+		if (rc == 1) {
+			dispatch(c, &m);
+			rc = 0;
+		} else {
+			break;
+		}
+	}
+	if (rc < 0 && !c->closing && !c->draining) {
+		/* The stream cannot be resynchronized: say why, then close. */
+		bc_client_send_error(c, 0, rc, true, "%s", c->reader.errstr);
+		bc_client_close_after_flush(c, "protocol error");
+	}
+}
+
+static void hello_timeout(uv_timer_t *t)
+{
+	struct bc_client *c = t->data;
+	bc_client_send_error(c, 0, BC_ETIMEOUT, true,
+			     "no HELLO within %u ms", BC_SRV_HELLO_TIMEOUT_MS);
+	bc_client_close_after_flush(c, "HELLO timeout");
+}
+
+static bool is_loopback(uv_tcp_t *tcp)
+{
+	struct sockaddr_storage sa;
+	int len = sizeof(sa);
+	if (uv_tcp_getpeername(tcp, (struct sockaddr *)&sa, &len) != 0) {
+		return false;
+	}
+	if (sa.ss_family == AF_INET) {
+		const struct sockaddr_in *in = (const struct sockaddr_in *)&sa;
+		return (ntohl(in->sin_addr.s_addr) >> 24) == 127;
+	}
+	if (sa.ss_family == AF_INET6) {
+		const struct sockaddr_in6 *in6 = (const struct sockaddr_in6 *)&sa;
+		static const uint8_t lo[16] = {[15] = 1};
+		return memcmp(in6->sin6_addr.s6_addr, lo, 16) == 0;
+	}
+	return false;
+}
+
+static void on_connection(uv_stream_t *server, int status)
+{
+	struct bc_srv *srv = server->data;
+	bool tcp = server == (uv_stream_t *)&srv->tcp_listener;
+	struct bc_client *c;
+	uint32_t slot = 0;
+	if (status < 0) {
+		bc_log(BC_LOG_WARN, "accept: %s", uv_strerror(status));
+		return;
+	}
+	c = bc_calloc(1, sizeof(*c));
+	if (!c) {
+		return;
+	}
+	c->srv = srv;
+	if (tcp) {
+		uv_tcp_init(srv->loop, &c->h.tcp);
+	} else {
+		uv_pipe_init(srv->loop, &c->h.pipe, 0);
+	}
+	c->h.handle.data = c;
+	uv_timer_init(srv->loop, &c->hello_timer);
+	c->hello_timer.data = c;
+	c->is_tcp = tcp;
+	if (uv_accept(server, &c->h.stream) != 0) {
+		c->handles_open = 2;
+		c->closing = true;
+		uv_close(&c->h.handle, handle_closed);
+		uv_close((uv_handle_t *)&c->hello_timer, handle_closed);
+		return;
+	}
+	c->trusted = !tcp || is_loopback(&c->h.tcp);
+	while (slot < BC_SRV_MAX_CONNECTIONS && srv->clients[slot]) {
+		slot++;
+	}
+	if (srv->stopping || slot == BC_SRV_MAX_CONNECTIONS ||
+	    (tcp && !c->trusted && srv->cfg.ntokens == 0)) {
+		bc_log(BC_LOG_WARN, "refusing a connection: %s",
+		       srv->stopping ? "shutting down"
+		       : slot == BC_SRV_MAX_CONNECTIONS
+			       ? "too many connections"
+			       : "not loopback and no token configured");
+		c->handles_open = 2;
+		c->closing = true;
+		uv_close(&c->h.handle, handle_closed);
+		uv_close((uv_handle_t *)&c->hello_timer, handle_closed);
+		return;
+	}
+	c->slot = slot;
+	c->gen = ++srv->gens[slot] * BC_SRV_MAX_CONNECTIONS + slot;
+	srv->clients[slot] = c;
+	srv->nclients++;
+	snprintf(c->name, sizeof(c->name), "?");
+	bc_proto_reader_init(&c->reader,
+			     &(struct bc_proto_reader_opts){
+				     .side = BC_PROTO_SIDE_SERVER,
+				     .await_hello = true,
+			     });
+	if (tcp) {
+		uv_tcp_nodelay(&c->h.tcp, 1);
+	}
+	uv_timer_start(&c->hello_timer, hello_timeout, BC_SRV_HELLO_TIMEOUT_MS,
+		       0);
+	uv_read_start(&c->h.stream, on_alloc, on_read);
+	bc_log(BC_LOG_INFO, "connection %u from %s", c->gen,
+	       tcp ? (c->trusted ? "loopback" : "network") : "unix socket");
+}
+
+static int parse_listen(const char *spec, char *host, size_t hostlen, int *port)
+{
+	const char *colon = strrchr(spec, ':');
+	char *end;
+	long p;
+	size_t n;
+	if (!colon) {
+		return BC_EINVAL;
+	}
+	n = (size_t)(colon - spec);
+	if (n == 0 || n >= hostlen) {
+		return BC_EINVAL;
+	}
+	memcpy(host, spec, n);
+	host[n] = '\0';
+	p = strtol(colon + 1, &end, 10);
+	if (*end || p < 0 || p > 65535) {
+		return BC_EINVAL;
+	}
+	*port = (int)p;
+	return 0;
+}
+
+int bc_net_listen(struct bc_srv *srv, struct bc_errinfo *ei)
+{
+	int rc;
+	if (srv->cfg.listen) {
+		char host[256];
+		int port;
+		struct sockaddr_storage sa;
+		if (parse_listen(srv->cfg.listen, host, sizeof(host), &port)) {
+			return bc_errinfo_set(ei, BC_EINVAL,
+					      "--listen %s: expected HOST:PORT",
+					      srv->cfg.listen);
+		}
+		if (uv_ip4_addr(host, port, (struct sockaddr_in *)&sa) != 0 &&
+		    uv_ip6_addr(host, port, (struct sockaddr_in6 *)&sa) != 0) {
+			return bc_errinfo_set(ei, BC_EINVAL,
+					      "--listen %s: not an IP address",
+					      srv->cfg.listen);
+		}
+		uv_tcp_init(srv->loop, &srv->tcp_listener);
+		srv->tcp_listener.data = srv;
+		srv->has_tcp = true;
+		if ((rc = uv_tcp_bind(&srv->tcp_listener,
+				      (const struct sockaddr *)&sa, 0)) ||
+		    (rc = uv_listen((uv_stream_t *)&srv->tcp_listener, 64,
+				    on_connection))) {
+			return bc_errinfo_set(ei, BC_EIO, "listen on %s: %s",
+					      srv->cfg.listen, uv_strerror(rc));
+		}
+		bc_log(BC_LOG_INFO, "listening on %s", srv->cfg.listen);
+	}
+	if (srv->cfg.unix_path) {
+		uv_pipe_init(srv->loop, &srv->unix_listener, 0);
+		srv->unix_listener.data = srv;
+		srv->has_unix = true;
+		/* A socket file left by a daemon that died is replaced. */
+		unlink(srv->cfg.unix_path);
+		if ((rc = uv_pipe_bind(&srv->unix_listener,
+				       srv->cfg.unix_path)) ||
+		    (rc = uv_listen((uv_stream_t *)&srv->unix_listener, 64,
+				    on_connection))) {
+			return bc_errinfo_set(ei, BC_EIO, "listen on %s: %s",
+					      srv->cfg.unix_path,
+					      uv_strerror(rc));
+		}
+		bc_log(BC_LOG_INFO, "listening on unix:%s", srv->cfg.unix_path);
+	}
+	return 0;
+}
+
+void bc_net_close_all(struct bc_srv *srv)
+{
+	for (uint32_t i = 0; i < BC_SRV_MAX_CONNECTIONS; i++) {
+		if (srv->clients[i]) {
+			bc_client_close(srv->clients[i], "server stopping");
+		}
+	}
+	if (srv->has_tcp) {
+		uv_close((uv_handle_t *)&srv->tcp_listener, NULL);
+	}
+	if (srv->has_unix) {
+		uv_close((uv_handle_t *)&srv->unix_listener, NULL);
+		unlink(srv->cfg.unix_path);
+	}
+}

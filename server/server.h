@@ -1,0 +1,222 @@
+/*
+ * Private state of blobcastd, shared by its parts:
+ *  - net.c: the libuv loop thread: listeners, connections, the protocol
+ *    state machine, output queues with frame spoiling;
+ *  - session.c: sessions, members, edits (validation, journal, broadcast),
+ *    damage tracking and frame scheduling;
+ *  - rthread.c: the render thread: a replica of each session's scene, the
+ *    renderer, encoding; results come back to the loop through a uv_async;
+ *  - main.c: options, configuration, start-up, shutdown.
+ * Everything except rthread.c runs on the loop thread.
+ */
+#ifndef BLOBCAST_SERVER_SERVER_H
+#define BLOBCAST_SERVER_SERVER_H
+
+#include <stdbool.h>
+#include <stdint.h>
+#include <uv.h>
+
+#include "blobcast/blobtree.h"
+#include "blobcast/proto.h"
+#include "blobcast/render.h"
+#include "srv_limits.h"
+#include "store.h"
+
+struct bc_srv;
+struct bc_session;
+struct bc_rthread;
+
+/* A reference-counted byte buffer: one encoded FRAME shared by every client
+ * of a view group. */
+struct bc_shared {
+	uint32_t refs;
+	size_t len;
+	uint8_t data[];
+};
+struct bc_shared *bc_shared_new(size_t len);
+void bc_shared_unref(struct bc_shared *s);
+
+/* A connection handle that survives the connection: stale ones (another
+ * generation) are refused. */
+struct bc_client_ref {
+	uint32_t slot, gen;
+};
+
+struct bc_token {
+	char *token;
+	enum bc_proto_role role; /* the highest role it grants */
+};
+
+struct bc_srv_config {
+	char *listen; /* HOST:PORT, NULL = none */
+	char *unix_path;
+	char *data_dir;
+	enum bc_backend backend;
+	char *gl_platform;
+	char *server_id;
+	struct bc_token *tokens;
+	uint32_t ntokens;
+};
+
+struct bc_client {
+	struct bc_srv *srv;
+	uint32_t slot, gen;
+	union {
+		uv_tcp_t tcp;
+		uv_pipe_t pipe;
+		uv_stream_t stream;
+		uv_handle_t handle;
+	} h;
+	uv_timer_t hello_timer;
+	bool is_tcp, trusted; /* trusted: loopback TCP or Unix socket */
+	bool closing;
+	bool draining; /* shut down after the queued bytes are written */
+	uv_shutdown_t shutdown;
+	const char *drain_why;
+	uint32_t handles_open;
+	struct bc_proto_reader reader;
+	enum bc_proto_stage stage;
+	enum bc_proto_role max_role; /* from the token */
+	enum bc_proto_role role;
+	char name[BC_PROTO_MAX_NAME + 1];
+	uint8_t encodings;
+	uint32_t max_frame_bytes;
+
+	struct bc_session *session;
+	uint32_t member_id;
+
+	/* View and frames. */
+	bool has_view;
+	struct bc_msg_view view;
+	struct bc_camera camera;
+	uint32_t camera_seq;
+	uint64_t interacting_until; /* ms, loop clock */
+	bool dirty;          /* the scene or view changed since the last job */
+	bool render_pending; /* a job for this client is queued */
+	bool still_sent;     /* the last frame sent was the still of now */
+	bool has_base;       /* the client holds a full still to patch */
+	uint8_t *damage;     /* one byte per damage block */
+	uint32_t dmg_cols, dmg_rows;
+	bool damage_all;
+
+	/* Output: messages go out at once; frames one at a time. */
+	size_t queued;
+	bool frame_writing;
+	struct bc_shared *frame_next;
+	uint64_t frames_sent, bytes_sent, frames_spoiled;
+	uint64_t first_frame_ms;
+};
+
+struct bc_session {
+	struct bc_srv *srv;
+	uint32_t id;
+	char name[BC_PROTO_MAX_NAME + 1];
+	struct bc_tree *tree;
+	struct bc_camera camera; /* the scene's camera: new members start here */
+	uint64_t order;
+	struct bc_store_session *store;
+	bool store_failed; /* a write failed: edits are refused */
+	struct bc_client_ref members[BC_PROTO_MAX_MEMBERS];
+	uint32_t nmembers;
+	uint32_t next_member_id;
+	uv_timer_t still_timer;
+	double edit_ms_avg;
+};
+
+struct bc_srv {
+	uv_loop_t *loop;
+	struct bc_srv_config cfg;
+	struct bc_store *store;
+	uv_tcp_t tcp_listener;
+	uv_pipe_t unix_listener;
+	bool has_tcp, has_unix;
+	uv_signal_t sigterm, sigint;
+	uv_async_t results;
+	struct bc_rthread *rt;
+
+	struct bc_client *clients[BC_SRV_MAX_CONNECTIONS];
+	uint32_t gens[BC_SRV_MAX_CONNECTIONS];
+	uint32_t nclients;
+	uint32_t next_conn_id;
+
+	struct bc_session *sessions[BC_SRV_MAX_SESSIONS];
+	uint32_t nsessions;
+	uint32_t next_session_id;
+
+	uint64_t started_ms;
+	uint32_t frame_no;
+	bool stopping;
+	/* Render statistics, from the render thread's results. */
+	double render_ms_last, render_ms_avg, encode_ms_last, encode_ms_avg;
+};
+
+/* ---- net.c -------------------------------------------------------------- */
+int bc_net_listen(struct bc_srv *srv, struct bc_errinfo *ei);
+struct bc_client *bc_client_get(struct bc_srv *srv, struct bc_client_ref ref);
+struct bc_client_ref bc_client_ref_of(const struct bc_client *c);
+/* Encodes and queues m; on failure the client is closed. */
+void bc_client_send(struct bc_client *c, const struct bc_msg *m);
+void bc_client_send_error(struct bc_client *c, uint32_t seq, int code,
+			  bool fatal, const char *fmt, ...)
+	__attribute__((format(printf, 5, 6)));
+/* Queues a FRAME (spoiling an unsent older one). */
+void bc_client_send_frame(struct bc_client *c, struct bc_shared *frame);
+void bc_client_close(struct bc_client *c, const char *why);
+/* Stops reading, lets queued bytes (an ERROR) go out, then closes. */
+void bc_client_close_after_flush(struct bc_client *c, const char *why);
+uint64_t bc_now_ms(struct bc_srv *srv);
+void bc_net_close_all(struct bc_srv *srv);
+
+/* ---- session.c ---------------------------------------------------------- */
+int bc_sessions_restore(struct bc_srv *srv, struct bc_errinfo *ei);
+void bc_sessions_save_all(struct bc_srv *srv);
+void bc_sessions_free(struct bc_srv *srv);
+/* Dispatches a message from a client in stage READY or SESSION. */
+void bc_session_handle(struct bc_client *c, const struct bc_msg *m);
+void bc_session_leave(struct bc_client *c);
+/* A render job for these clients finished: schedule what is still owed. */
+void bc_session_frame_done(struct bc_srv *srv, uint32_t session_id,
+			   const struct bc_client_ref *targets, uint32_t n);
+struct bc_session *bc_session_by_id(struct bc_srv *srv, uint32_t id);
+
+/* ---- rthread.c ---------------------------------------------------------- */
+
+/* One frame to render for a group of clients sharing a view. */
+struct bc_rjob {
+	uint32_t session_id;
+	struct bc_camera camera;
+	uint32_t width, height;             /* full (VIEW) size */
+	uint32_t image_width, image_height; /* rendered size */
+	int encoding, quality;
+	uint16_t flags;
+	uint32_t camera_seq;
+	uint64_t order;
+	uint32_t frame_no;
+	uint32_t max_bytes;
+	uint32_t snapshot_seq; /* != 0: answer to a SNAPSHOT */
+	/* Rectangles to send, in image pixels; none = the whole frame. */
+	struct bc_proto_rect *rects;
+	uint32_t nrects;
+	struct bc_client_ref *targets;
+	uint32_t ntargets;
+	/* PICK: answer one ray instead of a frame. */
+	bool pick;
+	uint16_t pick_x, pick_y;
+	uint32_t pick_seq;
+};
+
+int bc_rthread_start(struct bc_srv *srv, struct bc_errinfo *ei);
+void bc_rthread_stop(struct bc_srv *srv);
+/* Each takes ownership of its argument. */
+void bc_rthread_scene(struct bc_srv *srv, uint32_t session_id,
+		      struct bc_tree *copy);
+void bc_rthread_set_prim(struct bc_srv *srv, uint32_t session_id, uint32_t id,
+			 const struct bc_prim_data *p);
+void bc_rthread_set_op(struct bc_srv *srv, uint32_t session_id, uint32_t id,
+		       const struct bc_op_data *op);
+void bc_rthread_drop(struct bc_srv *srv, uint32_t session_id);
+void bc_rthread_job(struct bc_srv *srv, struct bc_rjob *job);
+/* Called on the loop thread by the results async. */
+void bc_rthread_deliver(uv_async_t *async);
+
+#endif

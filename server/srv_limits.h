@@ -1,0 +1,54 @@
+/*
+ * Every limit of the daemon, each with the reason for its value. Limits of
+ * the wire format itself live in protocol/include/blobcast/proto_limits.h;
+ * these are the server's own, at or below those.
+ */
+#ifndef BLOBCAST_SERVER_LIMITS_H
+#define BLOBCAST_SERVER_LIMITS_H
+
+/* Open client connections. Each holds a reader buffer of up to one message
+ * plus an output queue, and each member of a session may cost a render per
+ * change; 256 is far beyond a review meeting while bounding memory. */
+#define BC_SRV_MAX_CONNECTIONS 256u
+
+/* Live sessions. Each keeps a scene (up to BC_SRV_MAX_NODES nodes, about
+ * 200 bytes a primitive in the model and its layout) and a renderer. */
+#define BC_SRV_MAX_SESSIONS 64u
+
+/* Nodes of a session's scene: the layout's own limit (22-bit ancestor
+ * indices, BC_TREE_MAX_NODES), which a SCENE_LOAD under the payload limit
+ * can reach. */
+#define BC_SRV_MAX_NODES ((1u << 22) - 1u)
+
+/* Largest view width or height. 4096^2 RGBA is 64 MiB per rendered frame;
+ * the protocol allows 8192 for future GPUs with more memory. */
+#define BC_SRV_MAX_DIM 4096u
+
+/* Seconds a connection may take to complete its HELLO: a client that never
+ * finishes one holds a slot only this long. */
+#define BC_SRV_HELLO_TIMEOUT_MS 5000u
+
+/* Bytes queued for one client (frames and messages not yet taken by the
+ * kernel). Frames are spoiled, so only a client that stopped reading fills
+ * this; 32 MiB holds several full-size PNG stills. Over it the client is
+ * dropped, with the reason in the log. */
+#define BC_SRV_MAX_CLIENT_QUEUE (32u * 1024u * 1024u)
+
+/* Idle time after the last change before the still (full quality) frame is
+ * rendered: long enough to coalesce a burst of slider events, short enough
+ * to feel immediate when the user lets go. */
+#define BC_SRV_STILL_DELAY_MS 300u
+
+/* A session's scene is written whole (and its journal restarted) after this
+ * many journaled edits: replaying at most this many on start stays fast. */
+#define BC_SRV_SNAPSHOT_EVERY 1000u
+
+/* Damage is tracked per 16x16 block: the JPEG MCU of 4:2:0 chroma, so a
+ * damaged rectangle encodes without partial blocks. */
+#define BC_SRV_DAMAGE_BLOCK 16u
+
+/* Length of a session name as a directory name under the data directory:
+ * letters, digits, '-', '_' and '.', not starting with '.'. */
+#define BC_SRV_MAX_SESSION_NAME 64u
+
+#endif

@@ -1,0 +1,252 @@
+/*
+ * Test helpers for driving a real blobcastd: start it on a temporary data
+ * directory and Unix socket, connect raw protocol clients (the bc_proto
+ * codec over a socket, no client library), send and await messages.
+ */
+#ifndef BLOBCAST_TESTS_DAEMON_H
+#define BLOBCAST_TESTS_DAEMON_H
+
+#include <errno.h>
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "blobcast/proto.h"
+
+struct daemon {
+	pid_t pid;
+	char dir[256];
+	char sock[300];
+};
+
+static int64_t t_now_ms(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (int64_t)ts.tv_sec * 1000 + ts.tv_nsec / 1000000;
+}
+
+/* Starts blobcastd on dir (created by the caller or here). */
+static int daemon_start(struct daemon *d, const char *dir)
+{
+	snprintf(d->dir, sizeof(d->dir), "%s", dir);
+	snprintf(d->sock, sizeof(d->sock), "%s.sock", dir);
+	d->pid = fork();
+	if (d->pid < 0) {
+		return -1;
+	}
+	if (d->pid == 0) {
+		int devnull = open("/dev/null", O_WRONLY);
+		if (devnull >= 0 && !getenv("BLOBCAST_TEST_VERBOSE")) {
+			dup2(devnull, 2);
+		}
+		execl(BLOBCASTD_PATH, "blobcastd", "--listen", "none", "--unix",
+		      d->sock, "--data", d->dir, "--log", "info", (char *)NULL);
+		_exit(127);
+	}
+	/* Wait for the socket to accept. */
+	for (int i = 0; i < 400; i++) {
+		struct sockaddr_un sa = {.sun_family = AF_UNIX};
+		int fd = socket(AF_UNIX, SOCK_STREAM, 0);
+		snprintf(sa.sun_path, sizeof(sa.sun_path), "%s", d->sock);
+		if (connect(fd, (struct sockaddr *)&sa, sizeof(sa)) == 0) {
+			close(fd);
+			return 0;
+		}
+		close(fd);
+		usleep(25000);
+	}
+	return -1;
+}
+
+static int daemon_stop(struct daemon *d, int sig)
+{
+	int status = 0;
+	if (d->pid <= 0) {
+		return -1;
+	}
+	kill(d->pid, sig);
+	waitpid(d->pid, &status, 0);
+	d->pid = 0;
+	return status;
+}
+
+struct conn {
+	int fd;
+	struct bc_proto_reader r;
+	uint32_t seq;
+	struct bc_msg m; /* the last message received */
+};
+
+static int conn_open(struct conn *c, const struct daemon *d)
+{
+	struct sockaddr_un sa = {.sun_family = AF_UNIX};
+	memset(c, 0, sizeof(*c));
+	c->fd = socket(AF_UNIX, SOCK_STREAM, 0);
+	snprintf(sa.sun_path, sizeof(sa.sun_path), "%s", d->sock);
+	if (connect(c->fd, (struct sockaddr *)&sa, sizeof(sa)) != 0) {
+		close(c->fd);
+		return -1;
+	}
+	bc_proto_reader_init(&c->r, &(struct bc_proto_reader_opts){
+					    .side = BC_PROTO_SIDE_CLIENT});
+	return 0;
+}
+
+static void conn_close(struct conn *c)
+{
+	if (c->fd > 0) {
+		close(c->fd);
+	}
+	bc_proto_reader_finish(&c->r);
+	c->fd = -1;
+}
+
+static int send_raw(struct conn *c, const void *bytes, size_t n)
+{
+	const uint8_t *p = bytes;
+	while (n > 0) {
+		ssize_t k = send(c->fd, p, n, MSG_NOSIGNAL);
+		if (k <= 0) {
+			return -1;
+		}
+		p += k;
+		n -= (size_t)k;
+	}
+	return 0;
+}
+
+/* Sends m with the next seq; returns that seq, 0 on failure. */
+static uint32_t conn_send(struct conn *c, struct bc_msg *m)
+{
+	struct bc_proto_buf b;
+	int rc;
+	m->seq = ++c->seq;
+	bc_proto_buf_init(&b, 0);
+	rc = bc_proto_encode(&b, m, NULL);
+	if (!rc) {
+		rc = send_raw(c, b.data, b.len);
+	}
+	bc_proto_buf_finish(&b);
+	return rc ? 0 : m->seq;
+}
+
+/* Receives the next message into c->m: 1, 0 on timeout, -1 closed/error. */
+static int conn_recv(struct conn *c, int timeout_ms)
+{
+	int64_t end = t_now_ms() + timeout_ms;
+	for (;;) {
+		uint8_t buf[65536];
+		struct pollfd pfd = {.fd = c->fd, .events = POLLIN};
+		int rc = bc_proto_reader_next(&c->r, &c->m);
+		int64_t left;
+		ssize_t n;
+		if (rc != 0) {
+			return rc > 0 ? 1 : -1;
+		}
+		left = end - t_now_ms();
+		if (left <= 0) {
+			return 0;
+		}
+		if (poll(&pfd, 1, (int)left) <= 0) {
+			return 0;
+		}
+		n = recv(c->fd, buf, sizeof(buf), 0);
+		if (n <= 0) {
+			return -1;
+		}
+		if (bc_proto_reader_feed(&c->r, buf, (size_t)n)) {
+			return -1;
+		}
+	}
+}
+
+/* Receives until a message of type arrives (others are skipped). */
+static int conn_expect(struct conn *c, enum bc_msg_type type, int timeout_ms)
+{
+	int64_t end = t_now_ms() + timeout_ms;
+	for (;;) {
+		int64_t left = end - t_now_ms();
+		int rc;
+		if (left <= 0) {
+			return 0;
+		}
+		rc = conn_recv(c, (int)left);
+		if (rc <= 0) {
+			return rc;
+		}
+		if (c->m.type == type) {
+			return 1;
+		}
+	}
+}
+
+static int conn_hello(struct conn *c, const char *name)
+{
+	struct bc_msg m = {.type = BC_MSG_HELLO};
+	m.hello.version_min = 1;
+	m.hello.version_max = 1;
+	m.hello.encodings = BC_PROTO_ENCODINGS_ALL;
+	m.hello.client_name.ptr = name;
+	m.hello.client_name.len = (uint32_t)strlen(name);
+	if (!conn_send(c, &m)) {
+		return -1;
+	}
+	return conn_expect(c, BC_MSG_WELCOME, 5000) == 1 ? 0 : -1;
+}
+
+static int conn_join(struct conn *c, const char *session,
+		     enum bc_proto_role role, bool create)
+{
+	struct bc_msg m = {.type = create ? BC_MSG_SESSION_CREATE
+					  : BC_MSG_SESSION_JOIN};
+	m.session.role = role;
+	m.session.name.ptr = session;
+	m.session.name.len = (uint32_t)strlen(session);
+	if (!conn_send(c, &m)) {
+		return -1;
+	}
+	return conn_expect(c, BC_MSG_SESSION_INFO, 5000) == 1 ? 0 : -1;
+}
+
+static uint32_t conn_view(struct conn *c, uint16_t w, uint16_t h,
+			  enum bc_proto_encoding enc)
+{
+	struct bc_msg m = {.type = BC_MSG_VIEW};
+	m.view.width = w;
+	m.view.height = h;
+	m.view.encoding = enc;
+	m.view.quality_interactive = 60;
+	m.view.quality_still = 90;
+	m.view.downscale = 2;
+	return conn_send(c, &m);
+}
+
+/* A SET edit of one translate field on node id. */
+static uint32_t conn_move(struct conn *c, uint32_t id, float x, float y,
+			  float z, bool interacting)
+{
+	struct bc_proto_field f = {.field = BC_PROTO_FIELD_TRANSLATE,
+				   .count = 3,
+				   .v = {x, y, z}};
+	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_SET,
+				      .node = id,
+				      .nfields = 1,
+				      .fields = &f};
+	struct bc_msg m = {.type = BC_MSG_EDIT};
+	m.flags = interacting ? BC_PROTO_FLAG_INTERACTING : 0;
+	m.edit.nops = 1;
+	m.edit.ops = &op;
+	return conn_send(c, &m);
+}
+
+#endif
