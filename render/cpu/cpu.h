@@ -1,0 +1,184 @@
+/*
+ * What the two CPU backends share: the renderer object, the tracing
+ * constants of Zanni 2024 §7, the field handle (the full tree or a pruned
+ * view), sphere tracing, shading and pixel output (so naive and tiled write
+ * identical pixels for identical hits), the worker threads and progress.
+ */
+#ifndef BLOBCAST_RENDER_CPU_PRIV_H
+#define BLOBCAST_RENDER_CPU_PRIV_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "blobcast/blobtree.h"
+#include "blobcast/render.h"
+#include "blobcast/render_cpu.h"
+
+/* ---- Constants ---------------------------------------------------------- */
+
+/* Tile edge in pixels (paper §6: 8x8 rays per workgroup). */
+#define BC_CPU_TILE 8u
+/* Most primitives active in one depth range (paper §7: M_overlap = 128).
+ * A tile whose overlaps exceed it is not failed: see tiled.c. */
+#define BC_CPU_M_OVERLAP 128u
+/* Most primitives fetched into the active set per range (paper §6.2). */
+#define BC_CPU_MAX_FETCH 8u
+/* Over-relaxation factor and Lipschitz bound of the sphere tracer (paper
+ * §7): the bound covers the field compression of the compact operators. */
+#define BC_CPU_OVERRELAX 1.7f
+#define BC_CPU_LIPSCHITZ 1.45f
+/* Minimal step, as a fraction of the scene's AABB diagonal (lin->size). The
+ * paper uses a fixed 0.005 world units, 1/22000 to 1/64000 of its scenes'
+ * depth; our scenes span a few units, so 1e-4 of the diagonal is of the
+ * same order and scales with the scene. It also bounds the hit epsilon
+ * from below and hence the number of steps per ray. */
+#define BC_CPU_MIN_STEP_REL 1.0e-4f
+/* A ray hits when the field is below this fraction of the pixel footprint
+ * at t (the width a pixel covers at that distance): finer would only add
+ * steps along grazing rays without changing the image. */
+#define BC_CPU_HIT_FOOTPRINT 0.5f
+/* Crossings are refined by bisection to this fraction of the scene's
+ * diagonal, so depth does not depend on where the steps happened to land. */
+#define BC_CPU_REFINE_REL 1.0e-5f
+/* Worker threads at most, whatever opts.threads asks. */
+#define BC_CPU_MAX_THREADS 64u
+/* Tile fragments (primitive x tile pairs) of one frame's A-buffer: 2^24
+ * fragments are 200 MiB of lists, far above real scenes (a 4096-primitive
+ * scene at 512^2 makes ~10^5). Frames beyond it fail with BC_ELIMIT. */
+#define BC_CPU_MAX_FRAGMENTS (1u << 24)
+/* Debug colour ramps saturate here (like the paper's Fig. 15, clamped for
+ * readability): field evaluations per ray, primitives per tile list. */
+#define BC_CPU_DEBUG_EVALS_MAX 256u
+#define BC_CPU_DEBUG_OVERLAPS_MAX 64u
+
+/* ---- The renderer ------------------------------------------------------- */
+
+enum bc__cpu_kind {
+	BC__CPU_INVALID = 0,
+	BC__CPU_NAIVE,
+	BC__CPU_TILED,
+	BC__CPU_KIND_COUNT
+};
+
+struct bc__tiled_bufs; /* tiled.c: buffers kept between frames */
+
+struct bc_renderer {
+	enum bc__cpu_kind kind;
+	struct bc_render_opts opts;
+	uint32_t threads;
+	const struct bc_tree *tree;
+	bc_render_progress_fn progress;
+	void *progress_user;
+	struct bc__tiled_bufs *tiled;
+};
+
+int bc__cpu_create(struct bc_renderer **out, enum bc__cpu_kind kind,
+		   const struct bc_render_opts *opts, struct bc_errinfo *ei);
+void bc__cpu_destroy(struct bc_renderer *r);
+int bc__cpu_sync(struct bc_renderer *r, const struct bc_tree *t,
+		 const struct bc_dirty *dirty, struct bc_errinfo *ei);
+/* tiled.c frees its buffers through this. */
+void bc__tiled_free(struct bc__tiled_bufs *b);
+
+/* ---- The field ---------------------------------------------------------- */
+
+/* The field a ray is traced in: the whole tree, or a pruned view that
+ * equals it inside the current depth range. evals counts calls. */
+struct bc__field {
+	const struct bc_lin *lin;
+	const struct bc_view *view; /* NULL: the full tree */
+	uint32_t evals;
+};
+
+static inline float bc__field_eval(struct bc__field *f, const float p[3])
+{
+	f->evals++;
+	return f->view ? bc_view_eval(f->view, f->lin, p)
+		       : bc_eval_full(f->lin, p);
+}
+
+static inline float bc__field_eval_id(struct bc__field *f, const float p[3],
+				      uint32_t *prim)
+{
+	f->evals++;
+	return f->view ? bc_view_eval_id(f->view, f->lin, p, prim)
+		       : bc_eval_full_id(f->lin, p, prim);
+}
+
+/* ---- One frame ---------------------------------------------------------- */
+
+/* Per-frame constants shared by every thread. */
+struct bc__frame_ctx {
+	const struct bc_lin *lin; /* NULL for an empty tree */
+	struct bc_view_rays vr;
+	struct bc_frame *out;
+	enum bc_debug_mode debug;
+	float min_step;   /* world units */
+	float pix_angle;  /* pixel footprint per unit of t */
+	float refine_tol; /* world units */
+	float light[3];   /* unit vector toward the light */
+	float ambient;
+};
+
+/* Fills fc for a frame. lin may be NULL (empty tree). */
+void bc__frame_setup(struct bc__frame_ctx *fc, const struct bc_lin *lin,
+		     const struct bc_camera *cam, struct bc_frame *out,
+		     enum bc_debug_mode debug);
+
+enum bc__trace_result {
+	BC__TRACE_INVALID = 0,
+	BC__TRACE_MISS,
+	BC__TRACE_HIT,      /* *t_hit is on the surface (or its silhouette) */
+	/* The ray is within the hit epsilon at the interval's end and still
+	 * approaching the surface: the crossing, if any, is beyond t1, where
+	 * the field traced may no longer hold. *t_hit is the closest point;
+	 * a caller without a following interval takes it as a hit. */
+	BC__TRACE_NEAR_END,
+	BC__TRACE_RESULT_COUNT
+};
+
+/* Sphere traces o + t d (d unit) over [t0, t1] in field f. */
+enum bc__trace_result bc__trace(struct bc__field *f,
+				const struct bc__frame_ctx *fc,
+				const float o[3], const float d[3], float t0,
+				float t1, float *t_hit);
+
+/* Writes pixel (x, y) of the frame for a ray d that hit at t in field f:
+ * identity of the primitive, shaded colour (or the debug colour from the
+ * evaluations counted in f, or from `overlaps`), depth and id. */
+void bc__put_hit(const struct bc__frame_ctx *fc, struct bc__field *f,
+		 uint32_t x, uint32_t y, const float d[3], float t,
+		 uint32_t overlaps);
+/* Writes pixel (x, y) for a ray that missed after `evals` evaluations. */
+void bc__put_miss(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
+		  uint32_t evals, uint32_t overlaps);
+
+/* Clips o + t d against the box [lo, hi]; t0 is clamped to >= 0. */
+bool bc__ray_box(const float lo[3], const float hi[3], const float o[3],
+		 const float d[3], float *t0, float *t1);
+
+/* ---- Threads, time, progress -------------------------------------------- */
+
+/* Runs fn(ctx, i) for i in [0, n) concurrently, i = 0 on the calling thread,
+ * and returns when all are done. Work is handed out by the functions
+ * themselves (atomic counters), so a thread that cannot be started only
+ * costs speed: its share is done by the others. */
+typedef void (*bc__work_fn)(void *ctx, uint32_t thread);
+void bc__parallel(uint32_t n, bc__work_fn fn, void *ctx);
+
+/* Milliseconds on a monotonic clock. */
+double bc__now_ms(void);
+
+struct bc__progress {
+	bc_render_progress_fn fn;
+	void *user;
+	uint32_t total;
+	double start, last;
+};
+void bc__progress_init(struct bc__progress *p, const struct bc_renderer *r,
+		       uint32_t total);
+/* Called by thread 0 only; reports at most every 250 ms after the first
+ * second. */
+void bc__progress_tick(struct bc__progress *p, uint32_t done);
+
+#endif

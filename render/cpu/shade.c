@@ -1,0 +1,195 @@
+/*
+ * Shading and pixel output shared by the CPU backends: one frame's
+ * constants (camera rays, minimal step, light), the normal from the field
+ * gradient, a directional light from the camera's upper left with ambient
+ * and a little specular, the background gradient, and the debug colour
+ * ramps. Colours are computed in linear RGB and stored as sRGB bytes.
+ */
+#include "cpu.h"
+
+#include <math.h>
+#include <string.h>
+
+static void normalize3(float v[3])
+{
+	float n = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+	if (n > 0.0f) {
+		v[0] /= n;
+		v[1] /= n;
+		v[2] /= n;
+	}
+}
+
+static inline float dot3(const float a[3], const float b[3])
+{
+	return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+void bc__frame_setup(struct bc__frame_ctx *fc, const struct bc_lin *lin,
+		     const struct bc_camera *cam, struct bc_frame *out,
+		     enum bc_debug_mode debug)
+{
+	float size;
+	memset(fc, 0, sizeof(*fc));
+	fc->lin = lin;
+	fc->out = out;
+	fc->debug = debug;
+	bc_view_rays_init(&fc->vr, cam, out->width, out->height);
+	/* A degenerate scene (one point) still needs a positive step. */
+	size = lin && lin->size > 0.0f && isfinite(lin->size) ? lin->size
+							      : 1.0f;
+	fc->min_step = BC_CPU_MIN_STEP_REL * size;
+	fc->refine_tol = BC_CPU_REFINE_REL * size;
+	fc->pix_angle = 2.0f * fc->vr.tan_half_y / (float)fc->vr.height;
+	/* Light from the camera's upper left, slightly from the front. */
+	for (int i = 0; i < 3; i++) {
+		fc->light[i] = -0.5f * fc->vr.right[i] + 0.6f * fc->vr.up[i] -
+			       0.6f * fc->vr.forward[i];
+	}
+	normalize3(fc->light);
+	fc->ambient = 0.18f;
+}
+
+static uint8_t to_srgb8(float c)
+{
+	float s;
+	if (!(c > 0.0f)) {
+		return 0;
+	}
+	if (c >= 1.0f) {
+		return 255;
+	}
+	s = c <= 0.0031308f ? 12.92f * c : 1.055f * powf(c, 1.0f / 2.4f) - 0.055f;
+	return (uint8_t)(s * 255.0f + 0.5f);
+}
+
+/* A perceptual ramp (viridis, sampled at five points and interpolated) for
+ * x in [0, 1]. */
+static void ramp(float x, uint8_t rgb[3])
+{
+	static const float stops[5][3] = {
+		{0.267f, 0.005f, 0.329f}, {0.229f, 0.322f, 0.545f},
+		{0.128f, 0.567f, 0.551f}, {0.369f, 0.789f, 0.383f},
+		{0.993f, 0.906f, 0.144f},
+	};
+	float s;
+	int i;
+	x = x < 0.0f ? 0.0f : (x > 1.0f ? 1.0f : x);
+	s = x * 4.0f;
+	i = s >= 4.0f ? 3 : (int)s;
+	s -= (float)i;
+	for (int c = 0; c < 3; c++) {
+		float v = stops[i][c] + (stops[i + 1][c] - stops[i][c]) * s;
+		rgb[c] = (uint8_t)(v * 255.0f + 0.5f);
+	}
+}
+
+static void debug_colour(const struct bc__frame_ctx *fc, uint32_t evals,
+			 uint32_t overlaps, uint8_t *px)
+{
+	if (fc->debug == BC_DEBUG_EVALS) {
+		ramp((float)evals / (float)BC_CPU_DEBUG_EVALS_MAX, px);
+	} else {
+		ramp((float)overlaps / (float)BC_CPU_DEBUG_OVERLAPS_MAX, px);
+	}
+	px[3] = 255;
+}
+
+void bc__put_miss(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
+		  uint32_t evals, uint32_t overlaps)
+{
+	struct bc_frame *out = fc->out;
+	size_t i = (size_t)y * out->width + x;
+	uint8_t *px = out->rgba + 4 * i;
+	if (fc->debug != BC_DEBUG_NONE) {
+		debug_colour(fc, evals, overlaps, px);
+	} else {
+		/* Dark vertical gradient, lighter at the top. */
+		float v = out->height > 1
+				  ? (float)y / (float)(out->height - 1)
+				  : 0.0f;
+		px[0] = (uint8_t)(30.0f - 22.0f * v);
+		px[1] = (uint8_t)(33.0f - 24.0f * v);
+		px[2] = (uint8_t)(42.0f - 30.0f * v);
+		px[3] = 255;
+	}
+	if (out->depth) {
+		out->depth[i] = INFINITY;
+	}
+	if (out->ids) {
+		out->ids[i] = 0;
+	}
+}
+
+void bc__put_hit(const struct bc__frame_ctx *fc, struct bc__field *f,
+		 uint32_t x, uint32_t y, const float d[3], float t,
+		 uint32_t overlaps)
+{
+	/* Tetrahedral differences: four samples give the gradient. */
+	static const float tet[4][3] = {
+		{1, -1, -1}, {-1, -1, 1}, {-1, 1, -1}, {1, 1, 1}};
+	const struct bc_lin *lin = fc->lin;
+	struct bc_frame *out = fc->out;
+	size_t i = (size_t)y * out->width + x;
+	uint8_t *px = out->rgba + 4 * i;
+	const float *eye = fc->vr.eye;
+	float p[3] = {eye[0] + t * d[0], eye[1] + t * d[1], eye[2] + t * d[2]};
+	float n[3] = {0.0f, 0.0f, 0.0f}, h;
+	uint32_t prim = BC_NONE;
+	(void)bc__field_eval_id(f, p, &prim);
+	/* Differences over the hit epsilon: the scale at which the surface
+	 * was resolved. */
+	h = fmaxf(BC_CPU_HIT_FOOTPRINT * fc->pix_angle * t, fc->min_step);
+	for (int k = 0; k < 4; k++) {
+		float q[3] = {p[0] + h * tet[k][0], p[1] + h * tet[k][1],
+			      p[2] + h * tet[k][2]};
+		float v = bc__field_eval(f, q);
+		for (int c = 0; c < 3; c++) {
+			n[c] += tet[k][c] * v;
+		}
+	}
+	if (!(isfinite(n[0]) && isfinite(n[1]) && isfinite(n[2])) ||
+	    dot3(n, n) == 0.0f) {
+		/* No usable gradient (a sample fell outside every active
+		 * primitive): face the viewer. */
+		n[0] = -d[0];
+		n[1] = -d[1];
+		n[2] = -d[2];
+	}
+	normalize3(n);
+	if (dot3(n, d) > 0.0f) {
+		/* Seen from inside (the eye is in the solid): light the side
+		 * that faces us. */
+		n[0] = -n[0];
+		n[1] = -n[1];
+		n[2] = -n[2];
+	}
+	if (fc->debug != BC_DEBUG_NONE) {
+		debug_colour(fc, f->evals, overlaps, px);
+	} else {
+		static const float grey[3] = {0.7f, 0.7f, 0.7f};
+		const float *albedo =
+			prim < lin->nprims ? lin->color[prim] : grey;
+		float hv[3] = {fc->light[0] - d[0], fc->light[1] - d[1],
+			       fc->light[2] - d[2]};
+		float diff = fmaxf(dot3(n, fc->light), 0.0f), spec;
+		normalize3(hv);
+		spec = diff > 0.0f ? powf(fmaxf(dot3(n, hv), 0.0f), 48.0f)
+				   : 0.0f;
+		for (int c = 0; c < 3; c++) {
+			float lit = albedo[c] * (fc->ambient +
+						 (1.0f - fc->ambient) * diff) +
+				    0.25f * spec;
+			px[c] = to_srgb8(lit);
+		}
+		px[3] = 255;
+	}
+	if (out->depth) {
+		out->depth[i] = t;
+	}
+	if (out->ids) {
+		out->ids[i] = prim < lin->nprims
+				      ? lin->node_id[lin->prim_slot[prim]]
+				      : 0;
+	}
+}

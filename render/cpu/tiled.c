@@ -1,0 +1,823 @@
+/*
+ * The tiled CPU backend: Zanni 2024 §6 on CPU threads.
+ *
+ * A-buffer. The screen is cut into 8x8 tiles. Each primitive's world ABV is
+ * projected (through its world AABB, conservatively) to a rectangle of
+ * tiles; for each such tile whose bounding cone of pixel rays meets the
+ * ABV's bounding sphere, the tile's pixel rays are clipped against the ABV
+ * itself and the hits aggregate into one fragment: min entry, max exit (no
+ * fragment when no ray hits). Fragments are bucketed per tile. Depths are
+ * ray parameters t along unit directions rather than the paper's NDC: a
+ * primitive's interval on every ray of the tile lies inside its fragment's
+ * [entry, exit], which is all the range walk below needs.
+ *
+ * Tracing. Each tile (one work item, on any thread) sorts its list by entry
+ * and walks depth ranges as §6.2 does (eq. 21-22): drop active primitives
+ * whose exit is <= the previous range end; start the next range there, or
+ * at the next entry if nothing is active; fetch while the next entry is <=
+ * the largest active exit, fewer than M_overlap (128) are active and fewer
+ * than 8 were fetched this turn; the range ends at min(next entry, largest
+ * active exit). The active set is kept sorted by primitive index, a pruned
+ * view is built for it (bc_view_build, one struct bc_view per thread) and
+ * every ray of the tile without a hit yet is sphere traced inside the range.
+ *
+ * Overflow. When M_overlap primitives are active and the next one enters at
+ * the range start itself, no smaller range exists that excludes it. The
+ * paper's shared-memory limit does not bind a CPU, so the walk degrades:
+ * it fetches past the limit everything entering there (making a bigger
+ * view), and the tile is still rendered exactly.
+ */
+#include "cpu.h"
+
+#include <math.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "blobcast/alloc.h"
+#include "blobcast/log.h"
+
+struct frag {
+	float t0, t1;
+	uint32_t prim;
+};
+
+/* Tiles [x0, x1) x [y0, y1) a primitive may cover. */
+struct rect {
+	uint32_t x0, y0, x1, y1;
+};
+
+/* Apex at the eye: every pixel ray of the tile is within `half` of axis. */
+struct cone {
+	float axis[3];
+	float half;
+};
+
+struct worker {
+	struct bc_view view;
+	uint32_t *act;  /* active primitive indices, increasing */
+	float *act_t1;  /* their exits */
+	uint32_t cap;
+	uint64_t evals;
+	uint32_t overflows;
+};
+
+struct bc__tiled_bufs {
+	float *dirs; /* 3 per pixel */
+	size_t dirs_cap;
+	struct cone *cones;
+	size_t cones_cap;
+	struct rect *rects;     /* per primitive */
+	uint64_t *cand_off;     /* per primitive + 1: candidate tiles */
+	size_t prims_cap;
+	float *cand;            /* 2 per candidate: entry, exit */
+	size_t cand_cap;
+	uint32_t *tile_off;     /* per tile + 1 */
+	uint32_t *tile_cur;
+	size_t tiles_cap;
+	struct frag *frags;
+	size_t frags_cap;
+	struct worker workers[BC_CPU_MAX_THREADS];
+};
+
+void bc__tiled_free(struct bc__tiled_bufs *b)
+{
+	if (!b) {
+		return;
+	}
+	bc_free(b->dirs);
+	bc_free(b->cones);
+	bc_free(b->rects);
+	bc_free(b->cand_off);
+	bc_free(b->cand);
+	bc_free(b->tile_off);
+	bc_free(b->tile_cur);
+	bc_free(b->frags);
+	for (uint32_t i = 0; i < BC_CPU_MAX_THREADS; i++) {
+		bc_view_finish(&b->workers[i].view);
+		bc_free(b->workers[i].act);
+		bc_free(b->workers[i].act_t1);
+	}
+	bc_free(b);
+}
+
+/* Grows *p to at least n elements of size bytes (contents not kept). */
+static int grow(void **p, size_t *cap, size_t n, size_t size)
+{
+	void *fresh;
+	if (n <= *cap) {
+		return 0;
+	}
+	fresh = bc_calloc(n, size);
+	if (!fresh) {
+		return BC_ENOMEM;
+	}
+	bc_free(*p);
+	*p = fresh;
+	*cap = n;
+	return 0;
+}
+
+/* Grows two arrays that share one capacity. */
+static int grow_pair(void **p, void **q, size_t *cap, size_t n, size_t psize,
+		     size_t qsize)
+{
+	void *fp, *fq;
+	if (n <= *cap) {
+		return 0;
+	}
+	fp = bc_calloc(n, psize);
+	fq = bc_calloc(n, qsize);
+	if (!fp || !fq) {
+		bc_free(fp);
+		bc_free(fq);
+		return BC_ENOMEM;
+	}
+	bc_free(*p);
+	bc_free(*q);
+	*p = fp;
+	*q = fq;
+	*cap = n;
+	return 0;
+}
+
+/* ---- One frame ---------------------------------------------------------- */
+
+struct tiled_frame {
+	const struct bc__frame_ctx *fc;
+	struct bc__tiled_bufs *b;
+	uint32_t tw, th, ntiles;
+	uint32_t nprims;
+	uint64_t ncand;
+	atomic_uint next;   /* work counter of the running phase */
+	atomic_uint tiles_done;
+	struct bc__progress progress;
+};
+
+static inline float dot3(const float a[3], const float b[3])
+{
+	return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static float angle_between(const float a[3], const float b[3])
+{
+	float c = dot3(a, b);
+	return acosf(c > 1.0f ? 1.0f : (c < -1.0f ? -1.0f : c));
+}
+
+/* Phase 1, per pixel row: ray directions; per tile row: tile cones. */
+static void phase_rays(void *arg, uint32_t thread)
+{
+	struct tiled_frame *tf = arg;
+	const struct bc__frame_ctx *fc = tf->fc;
+	uint32_t w = fc->out->width, h = fc->out->height;
+	(void)thread;
+	for (;;) {
+		uint32_t y = atomic_fetch_add(&tf->next, 1u);
+		float *row;
+		if (y >= h) {
+			break;
+		}
+		row = tf->b->dirs + 3 * (size_t)y * w;
+		for (uint32_t x = 0; x < w; x++) {
+			bc_view_rays_dir(&fc->vr, (float)x + 0.5f,
+					 (float)y + 0.5f, row + 3 * x);
+		}
+		if (y % BC_CPU_TILE != 0) {
+			continue;
+		}
+		for (uint32_t tx = 0; tx < tf->tw; tx++) {
+			struct cone *c = &tf->b->cones[(y / BC_CPU_TILE) * tf->tw +
+						       tx];
+			float x0 = (float)(tx * BC_CPU_TILE) + 0.5f;
+			float y0 = (float)y + 0.5f;
+			float x1 = (float)(tx * BC_CPU_TILE +
+					   (w - tx * BC_CPU_TILE < BC_CPU_TILE
+						    ? w - tx * BC_CPU_TILE
+						    : BC_CPU_TILE)) - 0.5f;
+			float y1 = (float)(y + (h - y < BC_CPU_TILE
+							? h - y
+							: BC_CPU_TILE)) - 0.5f;
+			float corner[3];
+			float cx[4] = {x0, x1, x0, x1}, cy[4] = {y0, y0, y1, y1};
+			bc_view_rays_dir(&fc->vr, 0.5f * (x0 + x1),
+					 0.5f * (y0 + y1), c->axis);
+			c->half = 0.0f;
+			for (int k = 0; k < 4; k++) {
+				bc_view_rays_dir(&fc->vr, cx[k], cy[k], corner);
+				c->half = fmaxf(c->half,
+						angle_between(corner, c->axis));
+			}
+			/* Margin for rounding in the angle computations. */
+			c->half += 1.0e-4f;
+		}
+	}
+}
+
+/* The tiles the box [lo, hi] can cover, conservatively. */
+static struct rect project_box(const struct tiled_frame *tf, const float lo[3],
+			       const float hi[3])
+{
+	const struct bc__frame_ctx *fc = tf->fc;
+	const struct bc_view_rays *vr = &fc->vr;
+	float w = (float)fc->out->width, h = (float)fc->out->height;
+	float px0 = INFINITY, px1 = -INFINITY, py0 = INFINITY, py1 = -INFINITY;
+	struct rect all = {0, 0, tf->tw, tf->th}, none = {0, 0, 0, 0}, r;
+	int behind = 0;
+	for (int c = 0; c < 8; c++) {
+		float p[3] = {(c & 1) ? hi[0] : lo[0], (c & 2) ? hi[1] : lo[1],
+			      (c & 4) ? hi[2] : lo[2]};
+		float v[3] = {p[0] - vr->eye[0], p[1] - vr->eye[1],
+			      p[2] - vr->eye[2]};
+		float z = dot3(v, vr->forward), sx, sy;
+		if (!(z > 1.0e-6f * (fabsf(v[0]) + fabsf(v[1]) + fabsf(v[2])))) {
+			behind++;
+			continue;
+		}
+		sx = dot3(v, vr->right) / (z * vr->tan_half_y * vr->aspect);
+		sy = dot3(v, vr->up) / (z * vr->tan_half_y);
+		px0 = fminf(px0, (sx + 1.0f) * 0.5f * w);
+		px1 = fmaxf(px1, (sx + 1.0f) * 0.5f * w);
+		py0 = fminf(py0, (1.0f - sy) * 0.5f * h);
+		py1 = fmaxf(py1, (1.0f - sy) * 0.5f * h);
+	}
+	if (behind == 8) {
+		return none; /* wholly behind the eye: no ray reaches it */
+	}
+	if (behind) {
+		return all; /* straddles the eye plane: anywhere on screen */
+	}
+	/* Pixel i is covered when its centre i + 0.5 is inside; one pixel of
+	 * margin absorbs rounding. */
+	px0 = fmaxf(px0 - 1.5f, 0.0f);
+	py0 = fmaxf(py0 - 1.5f, 0.0f);
+	px1 = fminf(px1 + 0.5f, w - 1.0f);
+	py1 = fminf(py1 + 0.5f, h - 1.0f);
+	if (!(px0 <= px1 && py0 <= py1)) {
+		return none;
+	}
+	r.x0 = (uint32_t)px0 / BC_CPU_TILE;
+	r.y0 = (uint32_t)py0 / BC_CPU_TILE;
+	r.x1 = (uint32_t)px1 / BC_CPU_TILE + 1;
+	r.y1 = (uint32_t)py1 / BC_CPU_TILE + 1;
+	return r;
+}
+
+/* The world ABV of primitive k widened by the hit epsilon (times the
+ * Lipschitz bound, since the tracer compares field / 1.45): a ray counts
+ * as a hit where the field is below that, which can be just outside the
+ * ABV itself when the ROI offset is 0 (sharp operators). Without the
+ * margin such near hits, which naive tracing finds, would fall between
+ * depth ranges. Widening only adds primitives to views, which is always
+ * safe. The epsilon grows with distance: the farthest point of the
+ * primitive's bounding sphere sets it. */
+static void widened_abv(const struct bc__frame_ctx *fc, uint32_t k,
+			struct bc_abv *out, float lo[3], float hi[3])
+{
+	const float *eye = fc->vr.eye;
+	float far = 0.0f, r2 = 0.0f, m;
+	*out = fc->lin->abv[k];
+	bc_abv_aabb(out, lo, hi);
+	for (int i = 0; i < 3; i++) {
+		float c = 0.5f * (lo[i] + hi[i]) - eye[i];
+		float e = 0.5f * (hi[i] - lo[i]);
+		far += c * c;
+		r2 += e * e;
+	}
+	far = sqrtf(far) + sqrtf(r2);
+	m = BC_CPU_LIPSCHITZ *
+	    fmaxf(BC_CPU_HIT_FOOTPRINT * fc->pix_angle * far, fc->min_step);
+	switch (out->shape) {
+	case BC_ABV_BOX:
+		for (int i = 0; i < 3; i++) {
+			out->half[i] += m;
+		}
+		break;
+	default:
+		out->radius += m;
+		break;
+	}
+	for (int i = 0; i < 3; i++) {
+		lo[i] -= m;
+		hi[i] += m;
+	}
+}
+
+/* Phase 2, per primitive: its tile rectangle. */
+static void phase_rects(void *arg, uint32_t thread)
+{
+	struct tiled_frame *tf = arg;
+	(void)thread;
+	for (;;) {
+		uint32_t k0 = atomic_fetch_add(&tf->next, 256u);
+		if (k0 >= tf->nprims) {
+			break;
+		}
+		for (uint32_t k = k0; k < tf->nprims && k < k0 + 256u; k++) {
+			struct bc_abv abv;
+			float lo[3], hi[3];
+			widened_abv(tf->fc, k, &abv, lo, hi);
+			tf->b->rects[k] = project_box(tf, lo, hi);
+		}
+	}
+}
+
+static bool cone_meets_sphere(const struct cone *c, const float eye[3],
+			      const float centre[3], float radius)
+{
+	float v[3] = {centre[0] - eye[0], centre[1] - eye[1],
+		      centre[2] - eye[2]};
+	float dist = sqrtf(dot3(v, v));
+	if (dist <= radius) {
+		return true;
+	}
+	v[0] /= dist;
+	v[1] /= dist;
+	v[2] /= dist;
+	return angle_between(v, c->axis) <= c->half + asinf(radius / dist);
+}
+
+/* Phase 3, per chunk of candidates: the fragment of primitive k in each
+ * candidate tile. */
+#define CAND_CHUNK 64u
+
+static void phase_intervals(void *arg, uint32_t thread)
+{
+	struct tiled_frame *tf = arg;
+	const struct bc__frame_ctx *fc = tf->fc;
+	struct bc__tiled_bufs *b = tf->b;
+	uint32_t w = fc->out->width, h = fc->out->height;
+	uint32_t nchunks = (uint32_t)((tf->ncand + CAND_CHUNK - 1) / CAND_CHUNK);
+	(void)thread;
+	for (;;) {
+		uint32_t chunk = atomic_fetch_add(&tf->next, 1u);
+		uint64_t c0, c1;
+		uint32_t lo = 0, hi;
+		if (chunk >= nchunks) {
+			break;
+		}
+		c0 = (uint64_t)chunk * CAND_CHUNK;
+		c1 = c0 + CAND_CHUNK < tf->ncand ? c0 + CAND_CHUNK : tf->ncand;
+		/* The primitive owning candidate c0: last k with
+		 * cand_off[k] <= c0. */
+		hi = tf->nprims;
+		while (hi - lo > 1) {
+			uint32_t mid = lo + (hi - lo) / 2;
+			if (b->cand_off[mid] <= c0) {
+				lo = mid;
+			} else {
+				hi = mid;
+			}
+		}
+		for (uint32_t k = lo; k < tf->nprims && b->cand_off[k] < c1;
+		     k++) {
+			const struct rect *r = &b->rects[k];
+			struct bc_abv abv;
+			uint32_t rw = r->x1 - r->x0;
+			uint64_t from = b->cand_off[k] > c0 ? b->cand_off[k] : c0;
+			uint64_t to = b->cand_off[k + 1] < c1 ? b->cand_off[k + 1]
+							      : c1;
+			float blo[3], bhi[3], centre[3], radius = 0.0f;
+			widened_abv(fc, k, &abv, blo, bhi);
+			for (int i = 0; i < 3; i++) {
+				float e = 0.5f * (bhi[i] - blo[i]);
+				centre[i] = 0.5f * (blo[i] + bhi[i]);
+				radius += e * e;
+			}
+			radius = sqrtf(radius);
+			for (uint64_t c = from; c < to; c++) {
+				uint32_t j = (uint32_t)(c - b->cand_off[k]);
+				uint32_t tx = r->x0 + j % rw, ty = r->y0 + j / rw;
+				float t0 = INFINITY, t1 = -INFINITY;
+				if (cone_meets_sphere(
+					    &b->cones[ty * tf->tw + tx],
+					    fc->vr.eye, centre, radius)) {
+					uint32_t x1 = (tx + 1) * BC_CPU_TILE,
+						 y1 = (ty + 1) * BC_CPU_TILE;
+					x1 = x1 < w ? x1 : w;
+					y1 = y1 < h ? y1 : h;
+					for (uint32_t y = ty * BC_CPU_TILE; y < y1;
+					     y++) {
+						for (uint32_t x = tx * BC_CPU_TILE;
+						     x < x1; x++) {
+							const float *d =
+								b->dirs +
+								3 * ((size_t)y * w + x);
+							float a, e;
+							if (bc_abv_ray(&abv, fc->vr.eye,
+								       d, &a, &e) &&
+							    e > 0.0f) {
+								t0 = fminf(t0, fmaxf(a, 0.0f));
+								t1 = fmaxf(t1, e);
+							}
+						}
+					}
+				}
+				b->cand[2 * c] = t0;
+				b->cand[2 * c + 1] = t1;
+			}
+		}
+	}
+}
+
+static int frag_cmp(const void *pa, const void *pb)
+{
+	const struct frag *a = pa, *b = pb;
+	if (a->t0 != b->t0) {
+		return a->t0 < b->t0 ? -1 : 1;
+	}
+	return (a->prim > b->prim) - (a->prim < b->prim);
+}
+
+/* Adds list entry e to the active set, keeping it sorted by primitive. */
+static void activate(struct worker *wk, uint32_t *na, const struct frag *e)
+{
+	uint32_t i = *na;
+	while (i > 0 && wk->act[i - 1] > e->prim) {
+		wk->act[i] = wk->act[i - 1];
+		wk->act_t1[i] = wk->act_t1[i - 1];
+		i--;
+	}
+	wk->act[i] = e->prim;
+	wk->act_t1[i] = e->t1;
+	(*na)++;
+}
+
+/* A near hit that no following range took over: shade it in the full
+ * tree, since the range whose view held there is gone (a few pixels per
+ * frame, on silhouettes). */
+static void settle(const struct bc__frame_ctx *fc, struct worker *wk,
+		   uint32_t x, uint32_t y, const float d[3], float t,
+		   uint32_t *evals, uint32_t overlaps)
+{
+	struct bc__field f = {fc->lin, NULL, *evals};
+	bc__put_hit(fc, &f, x, y, d, t, overlaps);
+	wk->evals += f.evals - *evals;
+	*evals = f.evals;
+}
+
+static void trace_tile(struct tiled_frame *tf, struct worker *wk, uint32_t tile)
+{
+	const struct bc__frame_ctx *fc = tf->fc;
+	const struct bc_lin *lin = fc->lin;
+	struct bc__tiled_bufs *b = tf->b;
+	uint32_t w = fc->out->width, h = fc->out->height;
+	uint32_t tx = tile % tf->tw, ty = tile / tf->tw;
+	uint32_t x0 = tx * BC_CPU_TILE, y0 = ty * BC_CPU_TILE;
+	uint32_t x1 = x0 + BC_CPU_TILE < w ? x0 + BC_CPU_TILE : w;
+	uint32_t y1 = y0 + BC_CPU_TILE < h ? y0 + BC_CPU_TILE : h;
+	struct frag *list = b->frags + b->tile_off[tile];
+	uint32_t n = b->tile_off[tile + 1] - b->tile_off[tile];
+	uint32_t evals[BC_CPU_TILE * BC_CPU_TILE] = {0};
+	bool done[BC_CPU_TILE * BC_CPU_TILE] = {false};
+	/* Rays that ended a range within the hit epsilon, still approaching
+	 * (BC__TRACE_NEAR_END): the next range decides, or if none follows
+	 * right there, the near hit stands. */
+	float pending[BC_CPU_TILE * BC_CPU_TILE];
+	bool has_pending[BC_CPU_TILE * BC_CPU_TILE] = {false};
+	uint32_t left = (x1 - x0) * (y1 - y0);
+	uint32_t na = 0, next = 0;
+	float z_end = 0.0f;
+	if (n > 1) {
+		qsort(list, n, sizeof(*list), frag_cmp);
+	}
+	while (left > 0) {
+		float z_begin, max_exit = -INFINITY;
+		uint32_t kept = 0, fetched = 0;
+		struct bc__field f = {lin, &wk->view, 0};
+		/* Retire primitives that ended with the previous range. */
+		for (uint32_t i = 0; i < na; i++) {
+			if (wk->act_t1[i] > z_end) {
+				wk->act[kept] = wk->act[i];
+				wk->act_t1[kept] = wk->act_t1[i];
+				max_exit = fmaxf(max_exit, wk->act_t1[i]);
+				kept++;
+			}
+		}
+		na = kept;
+		if (na == 0) {
+			if (next >= n) {
+				break;
+			}
+			z_begin = list[next].t0; /* eq. 21: skip empty space */
+		} else {
+			z_begin = z_end;
+		}
+		while (next < n && fetched < BC_CPU_MAX_FETCH &&
+		       na < BC_CPU_M_OVERLAP &&
+		       (na == 0 || list[next].t0 <= max_exit)) {
+			activate(wk, &na, &list[next]);
+			max_exit = fmaxf(max_exit, list[next].t1);
+			next++;
+			fetched++;
+		}
+		if (na >= BC_CPU_M_OVERLAP && next < n &&
+		    list[next].t0 <= z_begin) {
+			/* Over M_overlap at this very depth: degrade (see the
+			 * file comment). */
+			while (next < n && list[next].t0 <= z_begin) {
+				activate(wk, &na, &list[next]);
+				max_exit = fmaxf(max_exit, list[next].t1);
+				next++;
+			}
+			wk->overflows++;
+		}
+		/* eq. 22 */
+		z_end = next < n ? fminf(list[next].t0, max_exit) : max_exit;
+		if (!(z_end > z_begin)) {
+			continue;
+		}
+		if (bc_view_build(&wk->view, lin, wk->act, na) != 0) {
+			/* Cannot happen for a valid tree; the full tree is
+			 * always right, only slower. */
+			f.view = NULL;
+		} else if (wk->view.empty) {
+			continue; /* no surface can be in this range */
+		}
+		for (uint32_t y = y0; y < y1; y++) {
+			for (uint32_t x = x0; x < x1; x++) {
+				uint32_t p = (y - y0) * BC_CPU_TILE + (x - x0);
+				const float *d =
+					b->dirs + 3 * ((size_t)y * w + x);
+				float t = 0.0f;
+				enum bc__trace_result res;
+				if (done[p]) {
+					continue;
+				}
+				if (has_pending[p] && z_begin > pending[p]) {
+					settle(fc, wk, x, y, d, pending[p],
+					       &evals[p], n);
+					done[p] = true;
+					left--;
+					continue;
+				}
+				f.evals = evals[p];
+				res = bc__trace(&f, fc, fc->vr.eye, d, z_begin,
+						z_end, &t);
+				has_pending[p] = res == BC__TRACE_NEAR_END;
+				pending[p] = t;
+				if (res == BC__TRACE_HIT) {
+					bc__put_hit(fc, &f, x, y, d, t, n);
+					done[p] = true;
+					left--;
+				}
+				wk->evals += f.evals - evals[p];
+				evals[p] = f.evals;
+			}
+		}
+	}
+	for (uint32_t y = y0; y < y1; y++) {
+		for (uint32_t x = x0; x < x1; x++) {
+			uint32_t p = (y - y0) * BC_CPU_TILE + (x - x0);
+			if (done[p]) {
+				continue;
+			}
+			if (has_pending[p]) {
+				settle(fc, wk, x, y,
+				       b->dirs + 3 * ((size_t)y * w + x),
+				       pending[p], &evals[p], n);
+			} else {
+				bc__put_miss(fc, x, y, evals[p], n);
+			}
+		}
+	}
+}
+
+/* Phase 4, per tile: walk the depth ranges and trace. */
+static void phase_trace(void *arg, uint32_t thread)
+{
+	struct tiled_frame *tf = arg;
+	struct worker *wk = &tf->b->workers[thread];
+	for (;;) {
+		uint32_t tile = atomic_fetch_add(&tf->next, 1u);
+		if (tile >= tf->ntiles) {
+			break;
+		}
+		trace_tile(tf, wk, tile);
+		atomic_fetch_add(&tf->tiles_done, 1u);
+		if (thread == 0) {
+			bc__progress_tick(&tf->progress,
+					  atomic_load(&tf->tiles_done));
+		}
+	}
+}
+
+/* Buckets the candidates that hold a fragment by tile. Returns the longest
+ * tile list. */
+static uint32_t bucket(struct tiled_frame *tf)
+{
+	struct bc__tiled_bufs *b = tf->b;
+	uint32_t longest = 0;
+	memset(b->tile_cur, 0, tf->ntiles * sizeof(*b->tile_cur));
+	for (int pass = 0; pass < 2; pass++) {
+		for (uint32_t k = 0; k < tf->nprims; k++) {
+			const struct rect *r = &b->rects[k];
+			uint32_t rw = r->x1 - r->x0;
+			for (uint64_t c = b->cand_off[k]; c < b->cand_off[k + 1];
+			     c++) {
+				uint32_t j = (uint32_t)(c - b->cand_off[k]);
+				uint32_t tile = (r->y0 + j / rw) * tf->tw +
+						r->x0 + j % rw;
+				if (!(b->cand[2 * c + 1] >= b->cand[2 * c])) {
+					continue; /* no ray of the tile hit */
+				}
+				if (pass == 0) {
+					b->tile_cur[tile]++;
+				} else {
+					b->frags[b->tile_cur[tile]++] =
+						(struct frag){b->cand[2 * c],
+							      b->cand[2 * c + 1], k};
+				}
+			}
+		}
+		if (pass == 0) {
+			uint32_t sum = 0;
+			for (uint32_t t = 0; t < tf->ntiles; t++) {
+				uint32_t cnt = b->tile_cur[t];
+				b->tile_off[t] = sum;
+				b->tile_cur[t] = sum;
+				sum += cnt;
+				longest = cnt > longest ? cnt : longest;
+			}
+			b->tile_off[tf->ntiles] = sum;
+		}
+	}
+	return longest;
+}
+
+static int tiled_create(struct bc_renderer **out,
+			const struct bc_render_opts *opts, struct bc_errinfo *ei)
+{
+	return bc__cpu_create(out, BC__CPU_TILED, opts, ei);
+}
+
+/* Gives every worker room for `longest` active primitives and a view of
+ * them, here on the calling thread, so the workers never allocate. */
+static int prepare_workers(struct bc_renderer *r, const struct bc_lin *lin,
+			   uint32_t longest)
+{
+	struct bc__tiled_bufs *b = r->tiled;
+	uint32_t need = longest > 0 ? longest : 1;
+	for (uint32_t i = 0; i < r->threads; i++) {
+		struct worker *wk = &b->workers[i];
+		wk->evals = 0;
+		wk->overflows = 0;
+		if (wk->cap < need) {
+			uint32_t *act = bc_calloc(need, sizeof(*act));
+			float *t1 = bc_calloc(need, sizeof(*t1));
+			if (!act || !t1) {
+				bc_free(act);
+				bc_free(t1);
+				return BC_ENOMEM;
+			}
+			bc_free(wk->act);
+			bc_free(wk->act_t1);
+			wk->act = act;
+			wk->act_t1 = t1;
+			wk->cap = need;
+		}
+		if (longest > 0 && wk->view.cap < 2 * longest) {
+			/* A view of the first `longest` primitives reserves
+			 * what any active set of that size needs. */
+			uint32_t m = longest < lin->nprims ? longest
+							   : lin->nprims;
+			int rc;
+			for (uint32_t k = 0; k < m; k++) {
+				wk->act[k] = k;
+			}
+			if ((rc = bc_view_build(&wk->view, lin, wk->act, m))) {
+				return rc;
+			}
+		}
+	}
+	return 0;
+}
+
+static int tiled_render(struct bc_renderer *r, const struct bc_camera *cam,
+			struct bc_frame *out, struct bc_render_stats *stats,
+			struct bc_errinfo *ei)
+{
+	struct bc__frame_ctx fc;
+	struct tiled_frame tf = {0};
+	struct bc__tiled_bufs *b;
+	const struct bc_lin *lin;
+	double t_start = bc__now_ms(), t_ab;
+	uint32_t longest = 0, overflows = 0;
+	size_t npix;
+	int rc;
+	if (stats) {
+		*stats = (struct bc_render_stats){0};
+	}
+	if (!r || !cam || !out || !out->rgba || out->width == 0 ||
+	    out->height == 0 || out->width > BC_RENDER_MAX_DIM ||
+	    out->height > BC_RENDER_MAX_DIM) {
+		return bc_errinfo_set(ei, BC_EINVAL, "render: bad frame");
+	}
+	if (!r->tree) {
+		return bc_errinfo_set(ei, BC_ESTATE,
+				      "render: no tree synced yet");
+	}
+	if ((rc = bc_camera_validate(cam, ei))) {
+		return rc;
+	}
+	if (!r->tiled && !(r->tiled = bc_calloc(1, sizeof(*r->tiled)))) {
+		return bc_errinfo_set(ei, BC_ENOMEM, "render: out of memory");
+	}
+	b = r->tiled;
+	lin = bc_tree_lin(r->tree);
+	bc__frame_setup(&fc, lin, cam, out, r->opts.debug);
+	tf.fc = &fc;
+	tf.b = b;
+	tf.tw = (out->width + BC_CPU_TILE - 1) / BC_CPU_TILE;
+	tf.th = (out->height + BC_CPU_TILE - 1) / BC_CPU_TILE;
+	tf.ntiles = tf.tw * tf.th;
+	tf.nprims = lin ? lin->nprims : 0;
+	npix = (size_t)out->width * out->height;
+	if (grow((void **)&b->dirs, &b->dirs_cap, 3 * npix, sizeof(float)) ||
+	    grow((void **)&b->cones, &b->cones_cap, tf.ntiles,
+		 sizeof(*b->cones)) ||
+	    grow_pair((void **)&b->tile_off, (void **)&b->tile_cur,
+		      &b->tiles_cap, (size_t)tf.ntiles + 1, sizeof(uint32_t),
+		      sizeof(uint32_t))) {
+		goto nomem;
+	}
+	atomic_init(&tf.next, 0u);
+	atomic_init(&tf.tiles_done, 0u);
+	bc__parallel(r->threads, phase_rays, &tf);
+	if (tf.nprims > 0) {
+		if (grow_pair((void **)&b->rects, (void **)&b->cand_off,
+			      &b->prims_cap, (size_t)tf.nprims + 1,
+			      sizeof(*b->rects), sizeof(uint64_t))) {
+			goto nomem;
+		}
+		atomic_store(&tf.next, 0u);
+		bc__parallel(r->threads, phase_rects, &tf);
+		b->cand_off[0] = 0;
+		for (uint32_t k = 0; k < tf.nprims; k++) {
+			const struct rect *rc_ = &b->rects[k];
+			b->cand_off[k + 1] =
+				b->cand_off[k] + (uint64_t)(rc_->x1 - rc_->x0) *
+							 (rc_->y1 - rc_->y0);
+		}
+		tf.ncand = b->cand_off[tf.nprims];
+		if (tf.ncand > BC_CPU_MAX_FRAGMENTS) {
+			return bc_errinfo_set(
+				ei, BC_ELIMIT,
+				"render: %llu primitive-tile pairs exceed the "
+				"A-buffer limit of %u (fewer or smaller "
+				"primitives, or a smaller frame)",
+				(unsigned long long)tf.ncand,
+				BC_CPU_MAX_FRAGMENTS);
+		}
+		if (grow((void **)&b->cand, &b->cand_cap,
+			 2 * (size_t)(tf.ncand ? tf.ncand : 1), sizeof(float))) {
+			goto nomem;
+		}
+		atomic_store(&tf.next, 0u);
+		bc__parallel(r->threads, phase_intervals, &tf);
+		if (grow((void **)&b->frags, &b->frags_cap,
+			 (size_t)(tf.ncand ? tf.ncand : 1), sizeof(*b->frags))) {
+			goto nomem;
+		}
+		longest = bucket(&tf);
+	} else {
+		memset(b->tile_off, 0, ((size_t)tf.ntiles + 1) * sizeof(uint32_t));
+	}
+	if ((rc = prepare_workers(r, lin, longest))) {
+		goto nomem;
+	}
+	t_ab = bc__now_ms();
+	bc__progress_init(&tf.progress, r, tf.ntiles);
+	atomic_store(&tf.next, 0u);
+	bc__parallel(r->threads, phase_trace, &tf);
+	for (uint32_t i = 0; i < r->threads; i++) {
+		overflows += b->workers[i].overflows;
+	}
+	if (overflows) {
+		bc_log(BC_LOG_DEBUG,
+		       "render: %u depth ranges went over M_overlap=%u", overflows,
+		       BC_CPU_M_OVERLAP);
+	}
+	if (stats) {
+		double now = bc__now_ms();
+		stats->ms_abuffer = t_ab - t_start;
+		stats->ms_trace = now - t_ab;
+		stats->ms_total = now - t_start;
+		stats->max_overlap = longest;
+		for (uint32_t i = 0; i < r->threads; i++) {
+			stats->field_evals += b->workers[i].evals;
+		}
+	}
+	return 0;
+nomem:
+	return bc_errinfo_set(ei, BC_ENOMEM, "render: out of memory for a "
+			      "%ux%u frame", out->width, out->height);
+}
+
+const struct bc_backend_ops bc_backend_tiled_ops = {
+	.name = "tiled",
+	.create = tiled_create,
+	.destroy = bc__cpu_destroy,
+	.sync = bc__cpu_sync,
+	.render = tiled_render,
+};

@@ -1,0 +1,509 @@
+/*
+ * The CPU renderers. `tiled` (A-buffer, depth ranges, pruned views) must
+ * draw what `naive` (full tree per pixel) draws on the paper's scene
+ * families: hit masks equal on all but 0.5 % of pixels, median depth
+ * difference under 1e-3 of the scene size, the same primitive ids on at
+ * least 90 % of the pixels both hit (ids flip along seams and silhouettes,
+ * which small test frames are full of). Plus the camera's geometry against analytic values, the
+ * M_overlap degradation, thread-count independence, debug modes, the
+ * dispatcher, and allocation failures at every step of a tiled frame.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "blobcast/alloc.h"
+#include "blobcast/render.h"
+#include "blobcast/render_cpu.h"
+#include "test.h"
+
+#include "scenes.h"
+
+struct cmp {
+	double mask_frac; /* pixels hit by one renderer only */
+	double depth_med; /* median |depth delta| where both hit */
+	double id_frac;   /* pixels hit by both with equal ids */
+	uint32_t both;
+};
+
+static int cmp_float(const void *a, const void *b)
+{
+	float x = *(const float *)a, y = *(const float *)b;
+	return (x > y) - (x < y);
+}
+
+static struct cmp compare(const struct bc_frame *a, const struct bc_frame *b)
+{
+	size_t n = (size_t)a->width * a->height, diff = 0, both = 0, same = 0;
+	float *d = bc_calloc(n, sizeof(float));
+	struct cmp c = {1.0, INFINITY, 0.0, 0};
+	if (!d) {
+		return c;
+	}
+	for (size_t i = 0; i < n; i++) {
+		bool ha = isfinite(a->depth[i]), hb = isfinite(b->depth[i]);
+		if (ha != hb) {
+			diff++;
+		} else if (ha) {
+			d[both++] = fabsf(a->depth[i] - b->depth[i]);
+			same += a->ids[i] == b->ids[i];
+		}
+	}
+	qsort(d, both, sizeof(float), cmp_float);
+	c.mask_frac = (double)diff / (double)n;
+	c.depth_med = both ? (double)d[both / 2] : 0.0;
+	c.id_frac = both ? (double)same / (double)both : 1.0;
+	c.both = (uint32_t)both;
+	bc_free(d);
+	return c;
+}
+
+/* Renders t with naive and tiled at w x h and checks they agree. */
+static void check_agree(const char *what, struct bc_tree *t, uint32_t w,
+			uint32_t h)
+{
+	struct bc_frame fn = {0}, ft = {0};
+	struct bc_render_stats sn, st;
+	struct bc_errinfo ei = {0};
+	struct bc_camera cam;
+	const struct bc_lin *l = bc_tree_lin(t);
+	struct cmp c;
+	REQUIRE(l != NULL);
+	sc_frame(l, &cam);
+	REQUIRE(bc_frame_init(&fn, w, h) == 0);
+	REQUIRE(bc_frame_init(&ft, w, h) == 0);
+	CHECK_EQ_INT(bc_render_once(BC_BACKEND_NAIVE, NULL, t, &cam, &fn, &sn,
+				    &ei),
+		     0);
+	CHECK_EQ_INT(bc_render_once(BC_BACKEND_TILED, NULL, t, &cam, &ft, &st,
+				    &ei),
+		     0);
+	c = compare(&fn, &ft);
+	printf("  %-22s prims %5u: mask %.4f%%, depth median %.2e (size %.2f),"
+	       " ids %.2f%%, hit %u px, evals naive %llu tiled %llu, "
+	       "max overlap %u\n",
+	       what, l->nprims, 100.0 * c.mask_frac, c.depth_med,
+	       (double)l->size, 100.0 * c.id_frac, c.both,
+	       (unsigned long long)sn.field_evals,
+	       (unsigned long long)st.field_evals, st.max_overlap);
+	/* The scene must be on screen, or agreement would be vacuous. */
+	CHECK(c.both > w * h / 20);
+	CHECK(c.mask_frac < 0.005);
+	CHECK(c.depth_med < 1e-3 * (double)l->size);
+	CHECK(c.id_frac > 0.90);
+	CHECK(st.max_overlap >= 1);
+	bc_frame_finish(&fn);
+	bc_frame_finish(&ft);
+}
+
+static void test_tiled_matches_naive_fig16(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	REQUIRE(t);
+	for (int level = 1; level <= 2; level++) {
+		for (int smooth = 0; smooth <= 1; smooth++) {
+			char what[32];
+			snprintf(what, sizeof(what), "fig16 L%d %s", level,
+				 smooth ? "smooth" : "sharp");
+			REQUIRE(sc_fig16(t, level, smooth) == 0);
+			check_agree(what, t, level == 1 ? 96 : 128,
+				    level == 1 ? 80 : 112);
+		}
+	}
+	bc_tree_destroy(t);
+}
+
+static void test_tiled_matches_naive_fig18(void)
+{
+	static const uint32_t counts[] = {16, 64, 256};
+	struct bc_tree *t = bc_tree_create();
+	REQUIRE(t);
+	for (size_t i = 0; i < 3; i++) {
+		for (int kind = 0; kind < 4; kind++) {
+			bool boxes = kind & 1, smooth = kind & 2;
+			char what[48];
+			snprintf(what, sizeof(what), "fig18 %s %s %u",
+				 boxes ? "boxes" : "spheres",
+				 smooth ? "smooth" : "sharp", counts[i]);
+			REQUIRE(sc_fig18(t, counts[i], boxes, smooth,
+					 18 + i) == 0);
+			check_agree(what, t, 64 + 16 * (uint32_t)i, 64 + 16 * (uint32_t)i);
+		}
+	}
+	bc_tree_destroy(t);
+}
+
+static void test_tiled_matches_naive_comb_and_random(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	int tested = 0;
+	REQUIRE(t);
+	REQUIRE(sc_comb(t, 200, true) == 0);
+	check_agree("comb 200 smooth", t, 128, 64);
+	REQUIRE(sc_comb(t, 200, false) == 0);
+	check_agree("comb 200 sharp", t, 128, 64);
+	/* Random trees with every operator; many are nearly empty (their
+	 * intersections and differences remove most), so take the first six
+	 * that fill a fair part of the frame. */
+	for (uint64_t seed = 1; seed <= 100 && tested < 6; seed++) {
+		char what[32];
+		struct bc_frame f = {0};
+		struct bc_camera cam;
+		struct bc_errinfo ei = {0};
+		uint32_t hit = 0;
+		REQUIRE(rt_build(t, seed * 7919u, 8 + 3 * (uint32_t)seed) == 0);
+		sc_frame(bc_tree_lin(t), &cam);
+		REQUIRE(bc_frame_init(&f, 24, 24) == 0);
+		REQUIRE(bc_render_once(BC_BACKEND_NAIVE, NULL, t, &cam, &f, NULL,
+				       &ei) == 0);
+		for (uint32_t i = 0; i < 24 * 24; i++) {
+			hit += f.ids[i] != 0;
+		}
+		bc_frame_finish(&f);
+		if (hit < 24 * 24 / 8) {
+			continue;
+		}
+		snprintf(what, sizeof(what), "random seed %u", (unsigned)seed);
+		check_agree(what, t, 72, 72);
+		tested++;
+	}
+	CHECK_EQ_INT(tested, 6);
+	bc_tree_destroy(t);
+}
+
+/* 300 spheres around one spot: every tile near the centre lists more than
+ * M_overlap primitives entering at nearly the same depth, so the range
+ * walk must degrade rather than fail or drop primitives. */
+static void test_over_m_overlap_degrades_exactly(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_op_data op = sc_op(true, 0.05f);
+	REQUIRE(t);
+	rt_state = 99;
+	bc_tree_begin(t);
+	REQUIRE(bc_tree_push_op(t, 0, &op, NULL) == 0);
+	for (int i = 0; i < 300; i++) {
+		struct bc_prim_data p;
+		sc_sphere(&p, rt_float(-0.1f, 0.1f), rt_float(-0.1f, 0.1f),
+			  rt_float(-0.1f, 0.1f), rt_float(0.5f, 0.8f));
+		REQUIRE(bc_tree_put_prim(t, 0, &p, NULL) == 0);
+	}
+	REQUIRE(bc_tree_pop_op(t, NULL) == 0);
+	REQUIRE(bc_tree_end(t, NULL) == 0);
+	check_agree("300 overlapping", t, 48, 48);
+	bc_tree_destroy(t);
+}
+
+/* A unit sphere at the origin seen from (0, 0, 6): every hit pixel's depth
+ * equals the analytic ray-sphere intersection. */
+static void test_depth_of_sphere_is_analytic(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_prim_data p;
+	struct bc_camera cam;
+	struct bc_view_rays vr;
+	const uint32_t w = 101, h = 101;
+	float foot;
+	REQUIRE(t);
+	bc_tree_begin(t);
+	bc_prim_data_init(&p, BC_PRIM_SPHERE);
+	p.params[0] = 1.0f;
+	REQUIRE(bc_tree_put_prim(t, 77, &p, NULL) == 0);
+	REQUIRE(bc_tree_end(t, NULL) == 0);
+	bc_camera_default(&cam);
+	bc_view_rays_init(&vr, &cam, w, h);
+	foot = 5.0f * 2.0f * vr.tan_half_y / (float)h;
+	for (int b = BC_BACKEND_NAIVE; b <= BC_BACKEND_TILED; b++) {
+		struct bc_frame f = {0};
+		struct bc_errinfo ei = {0};
+		uint32_t hits = 0, bad = 0;
+		REQUIRE(bc_frame_init(&f, w, h) == 0);
+		REQUIRE(bc_render_once((enum bc_backend)b, NULL, t, &cam, &f,
+				       NULL, &ei) == 0);
+		/* The centre pixel looks straight at the sphere. */
+		CHECK_NEAR(f.depth[(h / 2) * w + w / 2], 5.0, 1e-3);
+		CHECK_EQ_INT(f.ids[(h / 2) * w + w / 2], 77);
+		for (uint32_t y = 0; y < h; y++) {
+			for (uint32_t x = 0; x < w; x++) {
+				float d[3], bq, disc, miss, expect;
+				size_t i = (size_t)y * w + x;
+				bc_view_rays_dir(&vr, (float)x + 0.5f,
+						 (float)y + 0.5f, d);
+				bq = cam.eye[0] * d[0] + cam.eye[1] * d[1] +
+				     cam.eye[2] * d[2];
+				disc = bq * bq - 35.0f;
+				/* How far the ray passes from the sphere,
+				 * relative to a pixel's footprint there. */
+				miss = (sqrtf(36.0f - bq * bq) - 1.0f) / foot;
+				if (miss > 1.0f) {
+					bad += isfinite(f.depth[i]);
+					continue;
+				}
+				if (miss > -2.0f) {
+					/* The silhouette: a ray within the hit
+					 * epsilon may or may not count. */
+					continue;
+				}
+				expect = -bq - sqrtf(disc);
+				hits++;
+				if (!(fabsf(f.depth[i] - expect) < 1e-3f)) {
+					bad++;
+				}
+			}
+		}
+		if (bad) {
+			fprintf(stderr, "  %s: %u of %u pixels off\n",
+				bc_backend_name((enum bc_backend)b), bad, hits);
+		}
+		CHECK(hits > 1000);
+		CHECK_EQ_INT(bad, 0);
+		bc_frame_finish(&f);
+	}
+	bc_tree_destroy(t);
+}
+
+static void test_centre_ray_points_at_target(void)
+{
+	struct bc_camera cam = {
+		.eye = {1.0f, 2.0f, 3.0f},
+		.target = {-2.0f, 0.5f, -1.0f},
+		.up = {0.0f, 1.0f, 0.0f},
+		.fov_y_deg = 50.0f,
+	};
+	struct bc_view_rays vr;
+	float d[3], f[3], n = 0.0f;
+	for (int i = 0; i < 3; i++) {
+		f[i] = cam.target[i] - cam.eye[i];
+		n += f[i] * f[i];
+	}
+	n = sqrtf(n);
+	/* 101 x 61: the middle pixel (50, 30) has its centre at (50.5, 30.5). */
+	bc_view_rays_init(&vr, &cam, 101, 61);
+	bc_view_rays_dir(&vr, 50.5f, 30.5f, d);
+	CHECK_NEAR(d[0], f[0] / n, 1e-5);
+	CHECK_NEAR(d[1], f[1] / n, 1e-5);
+	CHECK_NEAR(d[2], f[2] / n, 1e-5);
+	/* The top row looks up (positive along the camera's up). */
+	bc_view_rays_dir(&vr, 50.5f, 0.5f, d);
+	CHECK(d[0] * vr.up[0] + d[1] * vr.up[1] + d[2] * vr.up[2] > 0.0f);
+}
+
+static bool frames_equal(const struct bc_frame *a, const struct bc_frame *b)
+{
+	size_t n = (size_t)a->width * a->height;
+	return memcmp(a->rgba, b->rgba, 4 * n) == 0 &&
+	       memcmp(a->depth, b->depth, n * sizeof(float)) == 0 &&
+	       memcmp(a->ids, b->ids, n * sizeof(uint32_t)) == 0;
+}
+
+static void test_threads_do_not_change_pixels(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_frame a = {0}, b = {0};
+	struct bc_camera cam;
+	struct bc_errinfo ei = {0};
+	REQUIRE(t && sc_fig18(t, 64, false, true, 5) == 0);
+	sc_frame(bc_tree_lin(t), &cam);
+	REQUIRE(bc_frame_init(&a, 77, 45) == 0 && bc_frame_init(&b, 77, 45) == 0);
+	for (int be = BC_BACKEND_NAIVE; be <= BC_BACKEND_TILED; be++) {
+		struct bc_render_opts one = {.threads = 1}, three = {.threads = 3};
+		CHECK(bc_render_once((enum bc_backend)be, &one, t, &cam, &a, NULL,
+				     &ei) == 0);
+		CHECK(bc_render_once((enum bc_backend)be, &three, t, &cam, &b,
+				     NULL, &ei) == 0);
+		CHECK(frames_equal(&a, &b));
+	}
+	bc_frame_finish(&a);
+	bc_frame_finish(&b);
+	bc_tree_destroy(t);
+}
+
+/* One renderer, several frames and an edit in between: buffers kept from
+ * the previous frame must not leak into the next. */
+static void test_renderer_reuse_follows_edits(void)
+{
+	const struct bc_backend_ops *ops = bc_backend_get(BC_BACKEND_TILED);
+	struct bc_renderer *r = NULL;
+	struct bc_tree *t = bc_tree_create();
+	struct bc_frame a = {0}, b = {0};
+	struct bc_camera cam;
+	struct bc_errinfo ei = {0};
+	struct bc_prim_data p;
+	uint32_t id;
+	REQUIRE(ops && t && sc_fig18(t, 16, false, false, 3) == 0);
+	sc_frame(bc_tree_lin(t), &cam);
+	REQUIRE(bc_frame_init(&a, 40, 40) == 0 && bc_frame_init(&b, 64, 48) == 0);
+	REQUIRE(ops->create(&r, &(struct bc_render_opts){0}, &ei) == 0);
+	CHECK(ops->render(r, &cam, &a, NULL, &ei) == BC_ESTATE);
+	REQUIRE(ops->sync(r, t, NULL, &ei) == 0);
+	CHECK(ops->render(r, &cam, &b, NULL, &ei) == 0);
+	CHECK(ops->render(r, &cam, &a, NULL, &ei) == 0);
+	/* Move one sphere far out of view: its ids must disappear. */
+	id = bc_tree_child(t, bc_tree_root(t), 0);
+	REQUIRE(bc_tree_get(t, id, &p, NULL));
+	p.translate[0] += 100.0f;
+	REQUIRE(bc_tree_set_prim(t, id, &p, &ei) == 0);
+	REQUIRE(ops->sync(r, t, NULL, &ei) == 0);
+	CHECK(ops->render(r, &cam, &b, NULL, &ei) == 0);
+	{
+		struct bc_frame fresh = {0};
+		bool gone = true;
+		REQUIRE(bc_frame_init(&fresh, 64, 48) == 0);
+		CHECK(bc_render_once(BC_BACKEND_TILED, NULL, t, &cam, &fresh,
+				     NULL, &ei) == 0);
+		CHECK(frames_equal(&b, &fresh));
+		for (size_t i = 0; i < 64u * 48u; i++) {
+			gone = gone && b.ids[i] != id;
+		}
+		CHECK(gone);
+		bc_frame_finish(&fresh);
+	}
+	ops->destroy(r);
+	bc_frame_finish(&a);
+	bc_frame_finish(&b);
+	bc_tree_destroy(t);
+}
+
+static void test_debug_modes(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_frame plain = {0}, ev = {0}, ov = {0};
+	struct bc_camera cam;
+	struct bc_errinfo ei = {0};
+	struct bc_render_stats st;
+	size_t n = 64 * 64, changed = 0, distinct_tiles = 0;
+	REQUIRE(t && sc_fig18(t, 64, true, true, 8) == 0);
+	sc_frame(bc_tree_lin(t), &cam);
+	REQUIRE(bc_frame_init(&plain, 64, 64) == 0 &&
+		bc_frame_init(&ev, 64, 64) == 0 && bc_frame_init(&ov, 64, 64) == 0);
+	CHECK(bc_render_once(BC_BACKEND_TILED, NULL, t, &cam, &plain, NULL,
+			     &ei) == 0);
+	CHECK(bc_render_once(BC_BACKEND_TILED,
+			     &(struct bc_render_opts){.debug = BC_DEBUG_EVALS},
+			     t, &cam, &ev, NULL, &ei) == 0);
+	CHECK(bc_render_once(BC_BACKEND_TILED,
+			     &(struct bc_render_opts){.debug = BC_DEBUG_OVERLAPS},
+			     t, &cam, &ov, &st, &ei) == 0);
+	/* Debug modes change colours only. */
+	CHECK(memcmp(plain.depth, ev.depth, n * sizeof(float)) == 0);
+	CHECK(memcmp(plain.ids, ov.ids, n * sizeof(uint32_t)) == 0);
+	for (size_t i = 0; i < n; i++) {
+		changed += memcmp(plain.rgba + 4 * i, ev.rgba + 4 * i, 3) != 0;
+	}
+	CHECK(changed > n / 2);
+	/* Overlaps are per tile: every pixel of a tile has its colour, and
+	 * tiles differ. */
+	for (uint32_t ty = 0; ty < 8; ty++) {
+		for (uint32_t tx = 0; tx < 8; tx++) {
+			const uint8_t *c0 = ov.rgba + 4 * (ty * 8 * 64 + tx * 8);
+			for (uint32_t y = 0; y < 8; y++) {
+				for (uint32_t x = 0; x < 8; x++) {
+					const uint8_t *c =
+						ov.rgba + 4 * ((ty * 8 + y) * 64 +
+							       tx * 8 + x);
+					CHECK(memcmp(c, c0, 4) == 0);
+				}
+			}
+			distinct_tiles += memcmp(c0, ov.rgba, 4) != 0;
+		}
+	}
+	CHECK(distinct_tiles > 4);
+	CHECK(st.max_overlap > 1 && st.max_overlap <= 64);
+	bc_frame_finish(&plain);
+	bc_frame_finish(&ev);
+	bc_frame_finish(&ov);
+	bc_tree_destroy(t);
+}
+
+static void test_dispatcher_and_frames(void)
+{
+	struct bc_frame f = {0};
+	struct bc_errinfo ei = {0};
+	struct bc_camera cam;
+	struct bc_tree *t = bc_tree_create();
+	REQUIRE(t);
+	for (int b = BC_BACKEND_INVALID + 1; b < BC_BACKEND_COUNT; b++) {
+		CHECK_EQ_INT(bc_backend_from_name(bc_backend_name(
+				     (enum bc_backend)b)),
+			     b);
+	}
+	CHECK_EQ_INT(bc_backend_from_name("cpu"), BC_BACKEND_INVALID);
+	CHECK_EQ_INT(bc_backend_from_name(NULL), BC_BACKEND_INVALID);
+	CHECK(strcmp(bc_backend_name(BC_BACKEND_COUNT), "invalid") == 0);
+	CHECK(bc_backend_get(BC_BACKEND_INVALID) == NULL);
+	CHECK(bc_backend_get(BC_BACKEND_NAIVE) == &bc_backend_naive_ops);
+	CHECK(strcmp(bc_backend_get(BC_BACKEND_TILED)->name, "tiled") == 0);
+	CHECK_EQ_INT(bc_frame_init(&f, 0, 10), BC_ERANGE);
+	CHECK_EQ_INT(bc_frame_init(&f, 10, BC_RENDER_MAX_DIM + 1), BC_ERANGE);
+	CHECK(f.rgba == NULL);
+	bc_frame_finish(&f);
+	bc_frame_finish(NULL);
+	REQUIRE(bc_frame_init(&f, 16, 16) == 0);
+	bc_camera_default(&cam);
+	CHECK_EQ_INT(bc_render_once(BC_BACKEND_INVALID, NULL, t, &cam, &f,
+				    NULL, &ei),
+		     BC_ENOTSUP);
+	/* A bad camera is refused with a reason. */
+	memcpy(cam.target, cam.eye, sizeof(cam.eye));
+	REQUIRE(sc_comb(t, 4, false) == 0);
+	CHECK_EQ_INT(bc_render_once(BC_BACKEND_TILED, NULL, t, &cam, &f, NULL,
+				    &ei),
+		     BC_ERANGE);
+	CHECK(ei.msg[0] != '\0');
+	/* An empty tree renders background. */
+	bc_camera_default(&cam);
+	bc_tree_begin(t);
+	for (int b = BC_BACKEND_NAIVE; b <= BC_BACKEND_TILED; b++) {
+		CHECK_EQ_INT(bc_render_once((enum bc_backend)b, NULL, t, &cam, &f,
+					    NULL, &ei),
+			     0);
+		CHECK(isinf(f.depth[0]) && f.ids[255] == 0);
+	}
+	bc_frame_finish(&f);
+	bc_tree_destroy(t);
+}
+
+/* Every allocation of a tiled frame fails in turn: the render reports
+ * BC_ENOMEM and frees what it took (ASan's leak check sees the rest). */
+static void test_tiled_allocation_failures(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_frame f = {0};
+	struct bc_camera cam;
+	struct bc_errinfo ei = {0};
+	unsigned long n;
+	int rc = -1;
+	REQUIRE(t && sc_fig18(t, 16, false, true, 4) == 0);
+	sc_frame(bc_tree_lin(t), &cam);
+	REQUIRE(bc_frame_init(&f, 24, 24) == 0);
+	for (n = 1; n < 200 && rc != 0; n++) {
+		bc_alloc_fail_after(n);
+		rc = bc_render_once(BC_BACKEND_TILED,
+				    &(struct bc_render_opts){.threads = 2}, t,
+				    &cam, &f, NULL, &ei);
+		bc_alloc_fail_after(0);
+		CHECK(rc == 0 || rc == BC_ENOMEM);
+	}
+	CHECK_EQ_INT(rc, 0);
+	CHECK(n > 3);
+	bc_frame_finish(&f);
+	bc_tree_destroy(t);
+}
+
+static const struct bc_test tests[] = {
+	{"tiled_matches_naive_fig16", test_tiled_matches_naive_fig16},
+	{"tiled_matches_naive_fig18", test_tiled_matches_naive_fig18},
+	{"tiled_matches_naive_comb_and_random",
+	 test_tiled_matches_naive_comb_and_random},
+	{"over_m_overlap_degrades_exactly", test_over_m_overlap_degrades_exactly},
+	{"depth_of_sphere_is_analytic", test_depth_of_sphere_is_analytic},
+	{"centre_ray_points_at_target", test_centre_ray_points_at_target},
+	{"threads_do_not_change_pixels", test_threads_do_not_change_pixels},
+	{"renderer_reuse_follows_edits", test_renderer_reuse_follows_edits},
+	{"debug_modes", test_debug_modes},
+	{"dispatcher_and_frames", test_dispatcher_and_frames},
+	{"tiled_allocation_failures", test_tiled_allocation_failures},
+};
+
+BC_TEST_MAIN(tests)
