@@ -1,0 +1,122 @@
+/*
+ * libFuzzer harness for the scene-encoding scanner, differential: a short
+ * recursive reference written straight from PROTOCOL.md's grammar must
+ * accept exactly what bc_proto_scene_scan accepts, with the same counts.
+ * (The reference recurses at most BC_PROTO_SCENE_MAX_DEPTH + 1 levels; the
+ * scanner does not recurse at all.)
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "blobcast/proto.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+struct ref {
+	const uint8_t *p;
+	size_t n, pos;
+	uint32_t left, prims, ops, depth;
+};
+
+static int rd(struct ref *r, size_t k, uint32_t *v)
+{
+	if (r->n - r->pos < k) {
+		return -1;
+	}
+	uint32_t x = 0;
+	for (size_t i = 0; i < k; i++) {
+		x |= (uint32_t)r->p[r->pos + i] << (8 * i);
+	}
+	r->pos += k;
+	*v = x;
+	return 0;
+}
+
+static int floats(struct ref *r, uint32_t k)
+{
+	for (uint32_t i = 0; i < k; i++) {
+		uint32_t u;
+		if (rd(r, 4, &u) || (u & 0x7f800000u) == 0x7f800000u) {
+			return -1;
+		}
+	}
+	return 0;
+}
+
+/* One node and its subtree; depth = operators above it. */
+static int node(struct ref *r, uint32_t depth)
+{
+	uint32_t tag, id, v;
+	if (r->left == 0 || rd(r, 1, &tag)) {
+		return -1;
+	}
+	r->left--;
+	if (tag & 0x80u) {
+		uint32_t kind = tag & 0x7fu;
+		if (kind < 1 || kind > 6 || depth + 1 > BC_PROTO_SCENE_MAX_DEPTH ||
+		    rd(r, 4, &id) || floats(r, 2) || rd(r, 4, &v) || v < 2) {
+			return -1;
+		}
+		r->ops++;
+		if (depth + 1 > r->depth) {
+			r->depth = depth + 1;
+		}
+		for (uint32_t i = 0; i < v; i++) {
+			if (node(r, depth + 1)) {
+				return -1;
+			}
+		}
+		return 0;
+	}
+	if (tag < 1 || tag > 16 || rd(r, 4, &id) || floats(r, 7) ||
+	    rd(r, 1, &v) || v > 1 || floats(r, 3 * v) || rd(r, 1, &v) ||
+	    v > BC_PROTO_MAX_PRIM_PARAMS || floats(r, v)) {
+		return -1;
+	}
+	r->prims++;
+	return 0;
+}
+
+static int reference(const uint8_t *p, size_t n, struct ref *r)
+{
+	uint32_t flags, count;
+	memset(r, 0, sizeof(*r));
+	r->p = p;
+	r->n = n;
+	if (rd(r, 1, &flags) || flags > 1 || floats(r, 10 * flags) ||
+	    rd(r, 4, &count) || count < 1 ||
+	    count > BC_PROTO_SCENE_MAX_NODES) {
+		return -1;
+	}
+	r->left = count;
+	if (node(r, 0) || r->left != 0 || r->pos != n) {
+		return -1;
+	}
+	return 0;
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+	struct bc_proto_scene_info info;
+	struct bc_errinfo ei = {0};
+	struct ref r;
+	int rc = bc_proto_scene_scan(data, size, &info, &ei);
+	int want = reference(data, size, &r);
+	if ((rc == 0) != (want == 0)) {
+		fprintf(stderr, "scanner %d (%s), reference %d\n", rc, ei.msg,
+			want);
+		abort();
+	}
+	if (rc == 0 && (info.prims != r.prims || info.ops != r.ops ||
+			info.depth != r.depth ||
+			info.nodes != r.prims + r.ops)) {
+		fprintf(stderr, "counts differ\n");
+		abort();
+	}
+	if (rc < 0 && (ei.code != rc || ei.msg[0] == '\0')) {
+		fprintf(stderr, "refusal without a reason\n");
+		abort();
+	}
+	return 0;
+}
