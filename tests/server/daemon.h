@@ -24,9 +24,15 @@
 
 struct daemon {
 	pid_t pid;
-	char dir[256];
-	char sock[300];
+	char dir[80];
+	char sock[90]; /* fits sockaddr_un.sun_path (108) */
 };
+
+static void t_sleep_ms(long ms)
+{
+	struct timespec ts = {ms / 1000, (ms % 1000) * 1000000L};
+	nanosleep(&ts, NULL);
+}
 
 static int64_t t_now_ms(void)
 {
@@ -38,8 +44,12 @@ static int64_t t_now_ms(void)
 /* Starts blobcastd on dir (created by the caller or here). */
 static int daemon_start(struct daemon *d, const char *dir)
 {
-	snprintf(d->dir, sizeof(d->dir), "%s", dir);
-	snprintf(d->sock, sizeof(d->sock), "%s.sock", dir);
+	if (strlen(dir) + 6 > sizeof(d->sock)) {
+		return -1;
+	}
+	memcpy(d->dir, dir, strlen(dir) + 1);
+	memcpy(d->sock, dir, strlen(dir));
+	memcpy(d->sock + strlen(dir), ".sock", 6);
 	d->pid = fork();
 	if (d->pid < 0) {
 		return -1;
@@ -57,13 +67,13 @@ static int daemon_start(struct daemon *d, const char *dir)
 	for (int i = 0; i < 400; i++) {
 		struct sockaddr_un sa = {.sun_family = AF_UNIX};
 		int fd = socket(AF_UNIX, SOCK_STREAM, 0);
-		snprintf(sa.sun_path, sizeof(sa.sun_path), "%s", d->sock);
+		memcpy(sa.sun_path, d->sock, strlen(d->sock) + 1);
 		if (connect(fd, (struct sockaddr *)&sa, sizeof(sa)) == 0) {
 			close(fd);
 			return 0;
 		}
 		close(fd);
-		usleep(25000);
+		t_sleep_ms(25);
 	}
 	return -1;
 }
@@ -92,7 +102,7 @@ static int conn_open(struct conn *c, const struct daemon *d)
 	struct sockaddr_un sa = {.sun_family = AF_UNIX};
 	memset(c, 0, sizeof(*c));
 	c->fd = socket(AF_UNIX, SOCK_STREAM, 0);
-	snprintf(sa.sun_path, sizeof(sa.sun_path), "%s", d->sock);
+	memcpy(sa.sun_path, d->sock, strlen(d->sock) + 1);
 	if (connect(c->fd, (struct sockaddr *)&sa, sizeof(sa)) != 0) {
 		close(c->fd);
 		return -1;
