@@ -1,0 +1,1020 @@
+/*
+ * The connection: address parsing, connecting (TCP or Unix, non-blocking
+ * with a deadline), the HELLO/WELCOME handshake, whole-message writes, the
+ * receive loop over the protocol's push reader, the bookkeeping that
+ * SESSION_INFO, SCENE_STATE and EDIT_APPLIED drive (session details and the
+ * scene mirror), and the request/response helpers built on bc_client_wait().
+ */
+#include <errno.h>
+#include <fcntl.h>
+#include <netdb.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <poll.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "blobcast/alloc.h"
+#include "blobcast/log.h"
+#include "blobcast/scene.h"
+#include "client_impl.h"
+
+/* ---- small things ------------------------------------------------------ */
+
+double bc__client_now_ms(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
+}
+
+/* Milliseconds left until deadline (a bc__client_now_ms() value), for
+ * poll(); -1 when there is no deadline (deadline < 0). */
+static int ms_left(double deadline)
+{
+	double left;
+	if (deadline < 0.0) {
+		return -1;
+	}
+	left = deadline - bc__client_now_ms();
+	if (left <= 0.0) {
+		return 0;
+	}
+	/* Round up so that poll never wakes just before the deadline and
+	 * spins on a zero timeout. */
+	return left > 2e9 ? 2000000000 : (int)left + 1;
+}
+
+static double deadline_after(int timeout_ms)
+{
+	return timeout_ms < 0 ? -1.0 : bc__client_now_ms() + (double)timeout_ms;
+}
+
+/* Records a sticky error on c and returns it. */
+static int fail(struct bc_client *c, int code, const char *fmt, ...)
+	BC__ERRINFO_PRINTF;
+
+static int fail(struct bc_client *c, int code, const char *fmt, ...)
+{
+	va_list ap;
+	if (c->err) {
+		return c->err;
+	}
+	c->err = code;
+	va_start(ap, fmt);
+	vsnprintf(c->errstr, sizeof(c->errstr), fmt, ap);
+	va_end(ap);
+	return code;
+}
+
+static int send_or_say(struct bc_client *c, struct bc_msg *m, uint32_t *seq,
+		       struct bc_errinfo *ei);
+
+/* Copies the sticky error into ei and returns it. */
+static int sticky(const struct bc_client *c, struct bc_errinfo *ei)
+{
+	return bc_errinfo_set(ei, c->err, "%s", c->errstr);
+}
+
+static void copy_str(char *dst, size_t cap, struct bc_proto_str s)
+{
+	size_t n = s.len < cap - 1 ? s.len : cap - 1;
+	if (n) {
+		memcpy(dst, s.ptr, n);
+	}
+	dst[n] = '\0';
+}
+
+/* ---- addresses ----------------------------------------------------------- */
+
+/* Parses a decimal port 1..65535 from s[0..n). */
+static bool parse_port(const char *s, size_t n, uint16_t *port)
+{
+	unsigned long v = 0;
+	if (n == 0 || n > 5) {
+		return false;
+	}
+	for (size_t i = 0; i < n; i++) {
+		if (s[i] < '0' || s[i] > '9') {
+			return false;
+		}
+		v = v * 10u + (unsigned long)(s[i] - '0');
+	}
+	if (v == 0 || v > 65535u) {
+		return false;
+	}
+	*port = (uint16_t)v;
+	return true;
+}
+
+/* A host is printable ASCII without blanks, slashes or brackets; the
+ * resolver decides the rest. */
+static bool host_ok(const char *s, size_t n)
+{
+	if (n == 0 || n > BC_CLIENT_MAX_HOST) {
+		return false;
+	}
+	for (size_t i = 0; i < n; i++) {
+		unsigned char ch = (unsigned char)s[i];
+		if (ch <= ' ' || ch >= 0x7f || ch == '/' || ch == '[' ||
+		    ch == ']') {
+			return false;
+		}
+	}
+	return true;
+}
+
+int bc_client_addr_parse(const char *s, struct bc_client_addr *out,
+			 struct bc_errinfo *ei)
+{
+	const char *host, *port = NULL, *colon;
+	size_t hlen, plen = 0, len;
+	memset(out, 0, sizeof(*out));
+	if (!s || !*s) {
+		s = BC_CLIENT_DEFAULT_HOST;
+	}
+	len = strlen(s);
+	if (strncmp(s, "unix:", 5) == 0) {
+		size_t n = len - 5;
+		if (n == 0) {
+			return bc_errinfo_set(ei, BC_EINVAL,
+					      "\"unix:\" needs a socket path");
+		}
+		if (n > BC_CLIENT_MAX_UNIX_PATH) {
+			return bc_errinfo_set(ei, BC_EINVAL,
+					      "socket path of %zu bytes is over "
+					      "%u",
+					      n, BC_CLIENT_MAX_UNIX_PATH);
+		}
+		out->kind = BC_CLIENT_ADDR_UNIX;
+		memcpy(out->path, s + 5, n + 1);
+		return 0;
+	}
+	if (s[0] == '[') {
+		const char *close = strchr(s, ']');
+		if (!close) {
+			return bc_errinfo_set(ei, BC_EINVAL,
+					      "\"%.64s\": '[' without ']'", s);
+		}
+		host = s + 1;
+		hlen = (size_t)(close - host);
+		if (close[1] == ':') {
+			port = close + 2;
+			plen = strlen(port);
+		} else if (close[1] != '\0') {
+			return bc_errinfo_set(ei, BC_EINVAL,
+					      "\"%.64s\": expected ':PORT' after "
+					      "']'",
+					      s);
+		}
+	} else {
+		colon = strchr(s, ':');
+		if (colon && strchr(colon + 1, ':')) {
+			return bc_errinfo_set(ei, BC_EINVAL,
+					      "\"%.64s\": write an IPv6 address "
+					      "as [ADDRESS]:PORT",
+					      s);
+		}
+		host = s;
+		hlen = colon ? (size_t)(colon - s) : len;
+		if (colon) {
+			port = colon + 1;
+			plen = strlen(port);
+		}
+		if (hlen == 0) {
+			host = BC_CLIENT_DEFAULT_HOST;
+			hlen = strlen(host);
+		}
+	}
+	if (!host_ok(host, hlen)) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+				      "\"%.64s\": bad host name (1..%u "
+				      "printable characters)",
+				      s, BC_CLIENT_MAX_HOST);
+	}
+	out->port = (uint16_t)BC_CLIENT_DEFAULT_PORT;
+	if (port && !parse_port(port, plen, &out->port)) {
+		memset(out, 0, sizeof(*out));
+		return bc_errinfo_set(ei, BC_EINVAL,
+				      "\"%.64s\": port must be a number "
+				      "1..65535",
+				      s);
+	}
+	out->kind = BC_CLIENT_ADDR_TCP;
+	memcpy(out->host, host, hlen);
+	out->host[hlen] = '\0';
+	return 0;
+}
+
+/* ---- connecting -------------------------------------------------------------- */
+
+static int set_nonblock(int fd)
+{
+	int fl = fcntl(fd, F_GETFL);
+	if (fl < 0 || fcntl(fd, F_SETFL, fl | O_NONBLOCK) < 0 ||
+	    fcntl(fd, F_SETFD, FD_CLOEXEC) < 0) {
+		return -1;
+	}
+	return 0;
+}
+
+/* Connects a non-blocking socket, waiting until deadline. Returns 0 or an
+ * errno value (ETIMEDOUT for the deadline). */
+static int connect_wait(int fd, const struct sockaddr *sa, socklen_t len,
+			double deadline)
+{
+	struct pollfd p = {.fd = fd, .events = POLLOUT};
+	int soerr = 0, n;
+	socklen_t sl = sizeof(soerr);
+	if (connect(fd, sa, len) == 0) {
+		return 0;
+	}
+	if (errno != EINPROGRESS && errno != EINTR) {
+		return errno;
+	}
+	do {
+		n = poll(&p, 1, ms_left(deadline));
+	} while (n < 0 && errno == EINTR);
+	if (n == 0) {
+		return ETIMEDOUT;
+	}
+	if (n < 0) {
+		return errno;
+	}
+	if (getsockopt(fd, SOL_SOCKET, SO_ERROR, &soerr, &sl) < 0) {
+		return errno;
+	}
+	return soerr;
+}
+
+static int open_unix(const struct bc_client_addr *a, double deadline,
+		     int *fd_out, struct bc_errinfo *ei)
+{
+	struct sockaddr_un sun;
+	int fd, e;
+	memset(&sun, 0, sizeof(sun));
+	sun.sun_family = AF_UNIX;
+	memcpy(sun.sun_path, a->path, strlen(a->path) + 1);
+	fd = socket(AF_UNIX, SOCK_STREAM, 0);
+	if (fd < 0 || set_nonblock(fd) < 0) {
+		e = errno;
+		if (fd >= 0) {
+			close(fd);
+		}
+		return bc_errinfo_set(ei, BC_EIO, "socket: %s", strerror(e));
+	}
+	e = connect_wait(fd, (const struct sockaddr *)&sun, sizeof(sun),
+			 deadline);
+	if (e) {
+		close(fd);
+		return bc_errinfo_set(ei, e == ETIMEDOUT ? BC_ETIMEOUT : BC_EIO,
+				      "cannot connect to unix:%s: %s", a->path,
+				      strerror(e));
+	}
+	*fd_out = fd;
+	return 0;
+}
+
+static int open_tcp(const struct bc_client_addr *a, double deadline,
+		    int *fd_out, struct bc_errinfo *ei)
+{
+	struct addrinfo hints, *res = NULL, *ai;
+	char port[8];
+	int rc, e = 0, fd = -1, one = 1;
+	memset(&hints, 0, sizeof(hints));
+	hints.ai_family = AF_UNSPEC;
+	hints.ai_socktype = SOCK_STREAM;
+	hints.ai_flags = AI_NUMERICSERV;
+	snprintf(port, sizeof(port), "%u", (unsigned)a->port);
+	rc = getaddrinfo(a->host, port, &hints, &res);
+	if (rc != 0) {
+		return bc_errinfo_set(ei, BC_EIO, "cannot resolve %s: %s",
+				      a->host, gai_strerror(rc));
+	}
+	for (ai = res; ai; ai = ai->ai_next) {
+		fd = socket(ai->ai_family, ai->ai_socktype, ai->ai_protocol);
+		if (fd < 0) {
+			e = errno;
+			continue;
+		}
+		if (set_nonblock(fd) < 0) {
+			e = errno;
+		} else {
+			e = connect_wait(fd, ai->ai_addr, ai->ai_addrlen,
+					 deadline);
+		}
+		if (e == 0) {
+			break;
+		}
+		close(fd);
+		fd = -1;
+		if (e == ETIMEDOUT) {
+			break;
+		}
+	}
+	freeaddrinfo(res);
+	if (fd < 0) {
+		return bc_errinfo_set(ei, e == ETIMEDOUT ? BC_ETIMEOUT : BC_EIO,
+				      "cannot connect to %s:%u: %s", a->host,
+				      (unsigned)a->port,
+				      e ? strerror(e) : "no address");
+	}
+	/* Requests are small and latency-bound: do not let Nagle hold an EDIT
+	 * back waiting for the ACK of the previous one. */
+	if (setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one)) < 0) {
+		bc_log(BC_LOG_WARN, "TCP_NODELAY: %s", strerror(errno));
+	}
+	*fd_out = fd;
+	return 0;
+}
+
+static int hello(struct bc_client *c, const struct bc_client_opts *o,
+		 struct bc_errinfo *ei)
+{
+	struct bc_msg m = {.type = BC_MSG_HELLO};
+	const char *name = o->name ? o->name : "libblobcast";
+	const char *token = o->token ? o->token : "";
+	int rc;
+	if (strlen(name) > BC_PROTO_MAX_NAME) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+				      "client name over %u bytes",
+				      BC_PROTO_MAX_NAME);
+	}
+	if (strlen(token) > BC_PROTO_MAX_TOKEN) {
+		return bc_errinfo_set(ei, BC_EINVAL, "token over %u bytes",
+				      BC_PROTO_MAX_TOKEN);
+	}
+	m.hello.version_min = BC_PROTO_VERSION;
+	m.hello.version_max = BC_PROTO_VERSION;
+	m.hello.encodings = c->encodings;
+	m.hello.max_frame_bytes = o->max_frame_bytes;
+	m.hello.client_name.ptr = name;
+	m.hello.client_name.len = (uint32_t)strlen(name);
+	m.hello.token.ptr = token;
+	m.hello.token.len = (uint32_t)strlen(token);
+	if ((rc = send_or_say(c, &m, NULL, ei))) {
+		return rc;
+	}
+	if ((rc = bc_client_wait(c, BC_MSG_WELCOME, 0, &m, 0, ei))) {
+		return rc;
+	}
+	c->info.version = m.welcome.version;
+	c->info.connection_id = m.welcome.connection_id;
+	c->info.max_payload = m.welcome.max_payload;
+	c->info.max_frame_bytes = m.welcome.max_frame_bytes;
+	c->info.max_nodes = m.welcome.max_nodes;
+	c->info.max_dim = m.welcome.max_dim;
+	c->info.max_members = m.welcome.max_members;
+	c->info.max_edit_ops = m.welcome.max_edit_ops;
+	copy_str(c->info.server_id, sizeof(c->info.server_id),
+		 m.welcome.server_id);
+	return 0;
+}
+
+int bc_client_connect(struct bc_client **out, const struct bc_client_opts *opts,
+		      struct bc_errinfo *ei)
+{
+	static const struct bc_client_opts none = {0};
+	const struct bc_client_opts *o = opts ? opts : &none;
+	struct bc_client_addr addr;
+	struct bc_client *c = NULL;
+	struct bc_proto_reader_opts ro = {.side = BC_PROTO_SIDE_CLIENT};
+	double deadline;
+	int rc;
+	*out = NULL;
+	if ((rc = bc_client_addr_parse(o->addr, &addr, ei))) {
+		return rc;
+	}
+	if (o->encodings & ~BC_PROTO_ENCODINGS_ALL) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+				      "encodings 0x%02x has unknown bits",
+				      (unsigned)o->encodings);
+	}
+	if (!(c = bc_calloc(1, sizeof(*c))) ||
+	    !(c->chunk = bc_malloc(BC_CLIENT_READ_CHUNK))) {
+		rc = bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+		goto fail;
+	}
+	c->fd = -1;
+	c->next_seq = 1;
+	c->timeout_ms = o->timeout_ms == 0 ? BC_CLIENT_DEFAULT_TIMEOUT_MS
+					   : o->timeout_ms;
+	c->encodings = o->encodings ? o->encodings : BC_PROTO_ENCODINGS_ALL;
+	/* SCENE_STATE may be as large as any message, so the reader keeps the
+	 * protocol's limit; the server holds FRAMEs to max_frame_bytes. */
+	bc_proto_reader_init(&c->reader, &ro);
+	bc_proto_buf_init(&c->out, 0);
+	deadline = deadline_after(c->timeout_ms);
+	rc = addr.kind == BC_CLIENT_ADDR_UNIX
+		     ? open_unix(&addr, deadline, &c->fd, ei)
+		     : open_tcp(&addr, deadline, &c->fd, ei);
+	if (rc || (rc = hello(c, o, ei))) {
+		goto fail;
+	}
+	*out = c;
+	return 0;
+fail:
+	bc_client_destroy(c);
+	return rc;
+}
+
+void bc_client_destroy(struct bc_client *c)
+{
+	if (!c) {
+		return;
+	}
+	if (c->fd >= 0) {
+		close(c->fd);
+	}
+	bc_proto_reader_finish(&c->reader);
+	bc_proto_buf_finish(&c->out);
+	bc_tree_destroy(c->scene);
+	bc_free(c->chunk);
+	bc_free(c);
+}
+
+int bc_client_fd(const struct bc_client *c)
+{
+	return c->fd;
+}
+
+const struct bc_client_info *bc_client_info(const struct bc_client *c)
+{
+	return &c->info;
+}
+
+int bc_client_error(const struct bc_client *c, struct bc_errinfo *ei)
+{
+	if (!c->err) {
+		if (ei) {
+			ei->code = 0;
+			ei->msg[0] = '\0';
+		}
+		return 0;
+	}
+	return sticky(c, ei);
+}
+
+/* ---- sending ------------------------------------------------------------------ */
+
+/* bc_client_send(), with the reason of any failure in ei. */
+static int send_msg(struct bc_client *c, struct bc_msg *m, uint32_t *seq_out,
+		    struct bc_errinfo *ei)
+{
+	struct bc_errinfo why = {0};
+	double deadline;
+	size_t done = 0;
+	int rc;
+	if (seq_out) {
+		*seq_out = 0;
+	}
+	if (c->err) {
+		return sticky(c, ei);
+	}
+	m->seq = c->next_seq;
+	bc_proto_buf_reset(&c->out);
+	if ((rc = bc_proto_encode(&c->out, m, &why))) {
+		return bc_errinfo_set(ei, rc, "%s not sent: %s",
+				      bc_proto_type_name(m->type), why.msg);
+	}
+	/* Seq 0 means "no request" in answers: skip it when wrapping. */
+	c->next_seq = c->next_seq == UINT32_MAX ? 1 : c->next_seq + 1;
+	deadline = deadline_after(c->timeout_ms);
+	while (done < c->out.len) {
+		ssize_t n = send(c->fd, c->out.data + done, c->out.len - done,
+				 MSG_NOSIGNAL);
+		if (n > 0) {
+			done += (size_t)n;
+			continue;
+		}
+		if (n < 0 && errno == EINTR) {
+			continue;
+		}
+		if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
+			struct pollfd p = {.fd = c->fd, .events = POLLOUT};
+			int left = ms_left(deadline), k;
+			if (left == 0) {
+				return fail(c, BC_ETIMEOUT,
+					    "%s: %zu of %zu bytes sent when the "
+					    "%d ms timeout passed",
+					    bc_proto_type_name(m->type), done,
+					    c->out.len, c->timeout_ms);
+			}
+			k = poll(&p, 1, left);
+			if (k < 0 && errno != EINTR) {
+				return fail(c, BC_EIO, "poll: %s",
+					    strerror(errno));
+			}
+			continue;
+		}
+		if (n < 0 && (errno == EPIPE || errno == ECONNRESET)) {
+			return fail(c, BC_ECLOSED,
+				    "the server closed the connection");
+		}
+		return fail(c, BC_EIO, "send: %s",
+			    n < 0 ? strerror(errno) : "wrote nothing");
+	}
+	c->info.msgs_out++;
+	c->info.bytes_out += c->out.len;
+	if (seq_out) {
+		*seq_out = m->seq;
+	}
+	return 0;
+}
+
+int bc_client_send(struct bc_client *c, struct bc_msg *m, uint32_t *seq_out)
+{
+	return send_msg(c, m, seq_out, NULL);
+}
+
+/* ---- receiving ---------------------------------------------------------------- */
+
+static void drop_scene(struct bc_client *c, const char *why)
+{
+	if (c->has_scene) {
+		bc_log(BC_LOG_WARN, "scene mirror dropped: %s", why);
+	}
+	c->has_scene = false;
+}
+
+/* Keeps the session details and the scene mirror current. Failures here
+ * concern the mirror only, never the stream: they are logged and the
+ * mirror is dropped until the next SCENE_STATE. */
+static void track(struct bc_client *c, const struct bc_msg *m)
+{
+	struct bc_errinfo ei = {0};
+	switch (m->type) {
+	case BC_MSG_SESSION_INFO:
+		c->info.session_id = m->session_info.session_id;
+		c->info.member_id = m->session_info.member_id;
+		c->info.role = m->session_info.role;
+		c->info.nmembers = m->session_info.nmembers;
+		copy_str(c->info.session, sizeof(c->info.session),
+			 m->session_info.name);
+		break;
+	case BC_MSG_OK:
+		/* The only request answered with a bare OK is SESSION_LEAVE. */
+		break;
+	case BC_MSG_SCENE_STATE: {
+		struct bc_tree *t = c->scene ? c->scene : bc_tree_create();
+		bool has_cam = false;
+		c->info.order = m->scene_state.order;
+		c->scene = t;
+		if (!t) {
+			drop_scene(c, "out of memory");
+			break;
+		}
+		if (bc_scene_decode(m->scene_state.scene.ptr,
+				    m->scene_state.scene.len, t, &c->camera,
+				    &has_cam, &ei)) {
+			drop_scene(c, ei.msg);
+			bc_log(BC_LOG_WARN, "SCENE_STATE does not decode: %s",
+			       ei.msg);
+			break;
+		}
+		if (!has_cam) {
+			bc_camera_default(&c->camera);
+		}
+		c->has_scene = true;
+		c->scene_order = m->scene_state.order;
+		break;
+	}
+	case BC_MSG_EDIT_APPLIED:
+		if (m->edit_applied.order > c->info.order) {
+			c->info.order = m->edit_applied.order;
+		}
+		if (!c->has_scene) {
+			break;
+		}
+		if (m->edit_applied.order != c->scene_order + 1) {
+			drop_scene(c, "an edit order was skipped");
+			break;
+		}
+		if (bc__client_replay(c->scene, &m->edit_applied, &ei)) {
+			drop_scene(c, ei.msg);
+			break;
+		}
+		c->scene_order = m->edit_applied.order;
+		break;
+	case BC_MSG_ERROR:
+		if (m->flags & BC_PROTO_FLAG_FATAL) {
+			int code = m->error.code ? -(int)m->error.code
+						 : BC_ECLOSED;
+			fail(c, code, "server: %.*s", (int)m->error.text.len,
+			     m->error.text.ptr);
+		}
+		break;
+	default:
+		break;
+	}
+}
+
+int bc_client_recv(struct bc_client *c, struct bc_msg *out, int timeout_ms)
+{
+	double deadline = deadline_after(timeout_ms);
+	int rc;
+	memset(out, 0, sizeof(*out));
+	/* A FATAL ERROR is handed out once; what follows is its code. */
+	if (c->err) {
+		return c->err;
+	}
+	for (;;) {
+		size_t before = bc_proto_reader_pending(&c->reader);
+		struct pollfd p = {.fd = c->fd, .events = POLLIN};
+		ssize_t n;
+		int k;
+		rc = bc_proto_reader_next(&c->reader, out);
+		if (rc == 1) {
+			size_t size = before - bc_proto_reader_pending(&c->reader);
+			c->info.msgs_in++;
+			c->info.bytes_in += size;
+			c->info.last_msg_bytes = (uint32_t)size;
+			track(c, out);
+			return 1;
+		}
+		if (rc < 0) {
+			return fail(c, rc, "bad bytes from the server: %s",
+				    c->reader.errstr);
+		}
+		do {
+			k = poll(&p, 1, ms_left(deadline));
+		} while (k < 0 && errno == EINTR);
+		if (k < 0) {
+			return fail(c, BC_EIO, "poll: %s", strerror(errno));
+		}
+		if (k == 0) {
+			return 0;
+		}
+		n = read(c->fd, c->chunk, BC_CLIENT_READ_CHUNK);
+		if (n < 0) {
+			if (errno == EINTR || errno == EAGAIN ||
+			    errno == EWOULDBLOCK) {
+				continue;
+			}
+			if (errno == ECONNRESET) {
+				return fail(c, BC_ECLOSED,
+					    "the server reset the connection");
+			}
+			return fail(c, BC_EIO, "read: %s", strerror(errno));
+		}
+		if (n == 0) {
+			if (bc_proto_reader_eof(&c->reader) < 0) {
+				return fail(c, c->reader.err,
+					    "the server closed the connection "
+					    "mid-message: %s",
+					    c->reader.errstr);
+			}
+			return fail(c, BC_ECLOSED,
+				    "the server closed the connection");
+		}
+		if ((rc = bc_proto_reader_feed(&c->reader, c->chunk,
+					       (size_t)n))) {
+			return fail(c, rc, "reader: %s", c->reader.errstr);
+		}
+	}
+}
+
+/* ---- waiting for answers ------------------------------------------------------ */
+
+static bool matches(const struct bc_client *c, const struct bc_msg *m,
+		    enum bc_msg_type type, uint32_t seq)
+{
+	if (m->type != type) {
+		return false;
+	}
+	switch (type) {
+	case BC_MSG_EDIT_APPLIED:
+		return m->edit_applied.author == c->info.member_id &&
+		       (seq == 0 || m->edit_applied.author_seq == seq);
+	case BC_MSG_SCENE_STATE:
+		return seq == 0 ||
+		       (m->scene_state.author == c->info.member_id &&
+			m->scene_state.author_seq == seq);
+	default:
+		return seq == 0 || m->seq == seq;
+	}
+}
+
+int bc_client_wait(struct bc_client *c, enum bc_msg_type type, uint32_t seq,
+		   struct bc_msg *out, int timeout_ms, struct bc_errinfo *ei)
+{
+	double deadline = deadline_after(timeout_ms == 0 ? c->timeout_ms
+							 : timeout_ms);
+	for (;;) {
+		int rc = bc_client_recv(c, out, ms_left(deadline));
+		if (rc < 0) {
+			return sticky(c, ei);
+		}
+		if (rc == 0) {
+			return bc_errinfo_set(ei, BC_ETIMEOUT,
+					      "no %s from the server in time",
+					      bc_proto_type_name(type));
+		}
+		if (out->type == BC_MSG_ERROR) {
+			int code = out->error.code ? -(int)out->error.code
+						   : BC_EINVAL;
+			return bc_errinfo_set(ei, code, "%.*s",
+					      (int)out->error.text.len,
+					      out->error.text.ptr);
+		}
+		if (matches(c, out, type, seq)) {
+			return 0;
+		}
+	}
+}
+
+/* ---- sessions ------------------------------------------------------------------ */
+
+/* Sends m; a failure, sticky or not, comes back with its reason in ei. */
+static int send_or_say(struct bc_client *c, struct bc_msg *m, uint32_t *seq,
+		       struct bc_errinfo *ei)
+{
+	int rc = send_msg(c, m, seq, ei);
+	if (rc && c->err) {
+		return sticky(c, ei);
+	}
+	return rc;
+}
+
+static int join_once(struct bc_client *c, enum bc_msg_type type,
+		     const char *name, enum bc_proto_role role,
+		     struct bc_errinfo *ei)
+{
+	struct bc_msg m = {.type = type};
+	uint32_t seq;
+	int rc;
+	m.session.role = role;
+	m.session.name.ptr = name;
+	m.session.name.len = (uint32_t)strlen(name);
+	if ((rc = send_or_say(c, &m, &seq, ei)) ||
+	    (rc = bc_client_wait(c, BC_MSG_SESSION_INFO, 0, &m, 0, ei))) {
+		return rc;
+	}
+	/* The joiner's copy of the scene follows SESSION_INFO at once. */
+	return bc_client_wait(c, BC_MSG_SCENE_STATE, 0, &m, 0, ei);
+}
+
+int bc_client_join(struct bc_client *c, const char *name,
+		   enum bc_proto_role role, enum bc_client_join_mode mode,
+		   struct bc_errinfo *ei)
+{
+	int rc;
+	if (!name || !*name || strlen(name) > BC_PROTO_MAX_NAME) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+				      "session names have 1..%u bytes",
+				      BC_PROTO_MAX_NAME);
+	}
+	if ((unsigned)mode >= BC_CLIENT_JOIN_MODE_COUNT ||
+	    (unsigned)role >= BC_PROTO_ROLE_COUNT) {
+		return bc_errinfo_set(ei, BC_EINVAL, "bad join mode or role");
+	}
+	if (role == BC_PROTO_ROLE_INVALID) {
+		role = BC_PROTO_ROLE_EDITOR;
+	}
+	if (mode == BC_CLIENT_JOIN_CREATE) {
+		return join_once(c, BC_MSG_SESSION_CREATE, name, role, ei);
+	}
+	rc = join_once(c, BC_MSG_SESSION_JOIN, name, role, ei);
+	if (rc == BC_ENOSESSION && mode == BC_CLIENT_JOIN_ANY) {
+		rc = join_once(c, BC_MSG_SESSION_CREATE, name, role, ei);
+		/* Someone else created it between our two requests. */
+		if (rc == BC_EEXIST) {
+			rc = join_once(c, BC_MSG_SESSION_JOIN, name, role, ei);
+		}
+	}
+	return rc;
+}
+
+const struct bc_tree *bc_client_scene(const struct bc_client *c,
+				      struct bc_camera *cam)
+{
+	if (!c->has_scene) {
+		return NULL;
+	}
+	if (cam) {
+		*cam = c->camera;
+	}
+	return c->scene;
+}
+
+int bc_client_load_scene(struct bc_client *c, const uint8_t *bytes, size_t len,
+			 uint64_t *order, struct bc_errinfo *ei)
+{
+	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
+	uint32_t seq;
+	int rc;
+	if (order) {
+		*order = 0;
+	}
+	if (len == 0 || len > BC_PROTO_MAX_PAYLOAD - 4u) {
+		return bc_errinfo_set(ei, BC_ELIMIT,
+				      "a scene of %zu bytes does not fit one "
+				      "message (1..%u)",
+				      len, BC_PROTO_MAX_PAYLOAD - 4u);
+	}
+	m.scene_load.scene.ptr = bytes;
+	m.scene_load.scene.len = (uint32_t)len;
+	if ((rc = send_or_say(c, &m, &seq, ei)) ||
+	    (rc = bc_client_wait(c, BC_MSG_SCENE_STATE, seq, &m, 0, ei))) {
+		return rc;
+	}
+	if (order) {
+		*order = m.scene_state.order;
+	}
+	return 0;
+}
+
+int bc_client_load_scene_file(struct bc_client *c, const char *path,
+			      uint64_t *order, uint32_t *nodes,
+			      struct bc_errinfo *ei)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_camera cam;
+	uint8_t *bytes = NULL;
+	size_t len = 0;
+	int rc;
+	if (order) {
+		*order = 0;
+	}
+	if (nodes) {
+		*nodes = 0;
+	}
+	if (!t) {
+		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+	}
+	if ((rc = bc_scene_load_json(path, t, &cam, ei))) {
+		goto out;
+	}
+	if ((rc = bc_scene_encode(t, &cam, &bytes, &len))) {
+		rc = bc_errinfo_set(ei, rc, "%s: cannot encode the scene: %s",
+				    path, bc_strerror(rc));
+		goto out;
+	}
+	if ((rc = bc_client_load_scene(c, bytes, len, order, ei))) {
+		goto out;
+	}
+	if (nodes) {
+		*nodes = bc_tree_node_count(t);
+	}
+out:
+	bc_free(bytes);
+	bc_tree_destroy(t);
+	return rc;
+}
+
+int bc_client_view(struct bc_client *c, const struct bc_msg_view *view,
+		   uint32_t *seq_out, struct bc_errinfo *ei)
+{
+	struct bc_msg m = {.type = BC_MSG_VIEW};
+	if (seq_out) {
+		*seq_out = 0;
+	}
+	m.view = *view;
+	if (m.view.encoding == BC_PROTO_ENC_INVALID) {
+		bool jpeg = c->encodings & (1u << (BC_PROTO_ENC_JPEG - 1));
+		m.view.encoding = jpeg ? BC_PROTO_ENC_JPEG : BC_PROTO_ENC_PNG;
+	}
+	if (m.view.quality_interactive == 0) {
+		m.view.quality_interactive = 75;
+	}
+	if (m.view.quality_still == 0) {
+		m.view.quality_still = 90;
+	}
+	if (m.view.downscale == 0) {
+		m.view.downscale = 1;
+	}
+	return send_or_say(c, &m, seq_out, ei);
+}
+
+int bc_client_camera(struct bc_client *c, const struct bc_camera *cam,
+		     bool interacting, uint32_t *seq_out,
+		     struct bc_errinfo *ei)
+{
+	struct bc_msg m = {.type = BC_MSG_CAMERA};
+	if (seq_out) {
+		*seq_out = 0;
+	}
+	m.flags = interacting ? BC_PROTO_FLAG_INTERACTING : 0;
+	memcpy(m.camera.eye, cam->eye, sizeof(m.camera.eye));
+	memcpy(m.camera.target, cam->target, sizeof(m.camera.target));
+	memcpy(m.camera.up, cam->up, sizeof(m.camera.up));
+	m.camera.fov_y_deg = cam->fov_y_deg;
+	return send_or_say(c, &m, seq_out, ei);
+}
+
+int bc_client_stats(struct bc_client *c, struct bc_msg_stats *out,
+		    struct bc_errinfo *ei)
+{
+	struct bc_msg m = {.type = BC_MSG_GET_STATS};
+	uint32_t seq;
+	int rc;
+	memset(out, 0, sizeof(*out));
+	if ((rc = send_or_say(c, &m, &seq, ei)) ||
+	    (rc = bc_client_wait(c, BC_MSG_STATS, seq, &m, 0, ei))) {
+		return rc;
+	}
+	*out = m.stats;
+	return 0;
+}
+
+/* ---- edits ---------------------------------------------------------------------- */
+
+int bc_client_edit_set(struct bc_client *c, uint32_t node,
+		       const struct bc_proto_field *fields, uint8_t nfields,
+		       bool interacting, uint32_t *seq_out,
+		       struct bc_errinfo *ei)
+{
+	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_SET};
+	struct bc_msg m = {.type = BC_MSG_EDIT};
+	if (seq_out) {
+		*seq_out = 0;
+	}
+	op.node = node;
+	op.nfields = nfields;
+	op.fields = fields;
+	m.flags = interacting ? BC_PROTO_FLAG_INTERACTING : 0;
+	m.edit.nops = 1;
+	m.edit.ops = &op;
+	return send_or_say(c, &m, seq_out, ei);
+}
+
+int bc_client_edit_kv(struct bc_client *c, uint32_t node,
+		      const char *const *kv, size_t n, bool interacting,
+		      uint32_t *seq_out, struct bc_errinfo *ei)
+{
+	struct bc_proto_field fields[BC_PROTO_MAX_SET_FIELDS];
+	uint8_t nfields;
+	int rc;
+	if (seq_out) {
+		*seq_out = 0;
+	}
+	if (c->err) {
+		return sticky(c, ei);
+	}
+	if (!c->has_scene) {
+		return bc_errinfo_set(ei, BC_ESTATE,
+				      "no scene yet: join a session first");
+	}
+	if ((rc = bc_client_edit_parse(c->scene, node, kv, n, fields,
+				       &nfields, ei))) {
+		return rc;
+	}
+	return bc_client_edit_set(c, node, fields, nfields, interacting,
+				  seq_out, ei);
+}
+
+int bc_client_wait_applied(struct bc_client *c, uint32_t seq, uint64_t *order,
+			   struct bc_errinfo *ei)
+{
+	struct bc_msg m;
+	int rc;
+	if (order) {
+		*order = 0;
+	}
+	if ((rc = bc_client_wait(c, BC_MSG_EDIT_APPLIED, seq, &m, 0, ei))) {
+		return rc;
+	}
+	if (order) {
+		*order = m.edit_applied.order;
+	}
+	return 0;
+}
+
+/* ---- snapshots --------------------------------------------------------------------- */
+
+int bc_client_snapshot(struct bc_client *c, enum bc_proto_encoding encoding,
+		       struct bc_client_image *out, struct bc_errinfo *ei)
+{
+	struct bc_msg m = {.type = BC_MSG_SNAPSHOT};
+	uint32_t seq;
+	int rc;
+	if (encoding == BC_PROTO_ENC_INVALID) {
+		encoding = BC_PROTO_ENC_PNG;
+	}
+	if (encoding != BC_PROTO_ENC_PNG && encoding != BC_PROTO_ENC_RAW) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+				      "snapshots are PNG or raw");
+	}
+	m.snapshot.encoding = encoding;
+	if ((rc = send_or_say(c, &m, &seq, ei))) {
+		return rc;
+	}
+	for (;;) {
+		if ((rc = bc_client_wait(c, BC_MSG_FRAME, seq, &m, 0, ei))) {
+			return rc;
+		}
+		if (m.flags & BC_PROTO_FLAG_SNAPSHOT) {
+			break;
+		}
+	}
+	/* A snapshot is a picture of its own: never patched over whatever
+	 * the image held. */
+	bc_client_image_finish(out);
+	bc_client_image_init(out);
+	return bc_client_image_apply(out, &m, ei);
+}

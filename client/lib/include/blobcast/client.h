@@ -1,0 +1,322 @@
+/*
+ * libblobcast: the C client of blobcastd. It owns one connection to the
+ * daemon (TCP or a Unix socket), the HELLO/WELCOME handshake, sequence
+ * numbers, a blocking-with-timeout receive loop on top of the protocol's push
+ * reader, a mirror of the session's scene (kept current from SCENE_STATE and
+ * EDIT_APPLIED, so that `radius=0.4` can be mapped to the right field of the
+ * right kind of node), and the client-side framebuffer that FRAME rectangles
+ * (JPEG, PNG or raw) are decoded into.
+ *
+ * Two levels of use:
+ *  - a poll loop (a viewer): bc_client_fd(), bc_client_send() and
+ *    bc_client_recv(timeout 0), feeding every FRAME to
+ *    bc_client_image_apply();
+ *  - request/response helpers (tools, the CLI): bc_client_join(),
+ *    bc_client_load_scene_file(), bc_client_edit_kv(), bc_client_snapshot()
+ *    and bc_client_stats() send one request and wait for its answer,
+ *    consuming whatever else arrives meanwhile (frames included).
+ *
+ * Every function returns 0 or a negative BC_E* code. The connection keeps a
+ * sticky error: once the stream failed (closed, timed out mid-write, bytes
+ * the reader refused, a FATAL ERROR from the server) every later call
+ * returns that error, and bc_client_error() gives its reason. Failures of a
+ * single request (an ERROR answer, an edit string that does not parse, a
+ * wait that timed out between messages) are not sticky. Nothing here is
+ * thread-safe: one thread uses a client at a time.
+ */
+#ifndef BLOBCAST_CLIENT_H
+#define BLOBCAST_CLIENT_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "blobcast/blobtree.h"
+#include "blobcast/error.h"
+#include "blobcast/proto.h"
+
+/* ---- Defaults and limits -------------------------------------------------- */
+
+/* Where blobcastd listens when started without options. */
+#define BC_CLIENT_DEFAULT_HOST "127.0.0.1"
+#define BC_CLIENT_DEFAULT_PORT 7878u
+
+/* How long connecting and each helper's wait may take unless the options say
+ * otherwise: a local daemon answers in milliseconds, a remote one over a
+ * slow link well within ten seconds; a hung daemon should not hang a
+ * script forever. */
+#define BC_CLIENT_DEFAULT_TIMEOUT_MS 10000
+
+/* Longest host name (DNS allows 253 characters plus a trailing dot). */
+#define BC_CLIENT_MAX_HOST 255u
+/* Longest Unix socket path: Linux's sun_path holds 108 bytes with the NUL. */
+#define BC_CLIENT_MAX_UNIX_PATH 107u
+
+/* Bytes taken from the socket per read: big enough that a 1 MB frame costs
+ * a handful of system calls, small enough to live in every client. */
+#define BC_CLIENT_READ_CHUNK (64u * 1024u)
+
+/* Largest key=value list one edit takes: one per field number. */
+#define BC_CLIENT_MAX_EDIT_ARGS BC_PROTO_MAX_SET_FIELDS
+
+/* ---- Addresses -------------------------------------------------------------- */
+
+enum bc_client_addr_kind {
+	BC_CLIENT_ADDR_INVALID = 0,
+	BC_CLIENT_ADDR_TCP,
+	BC_CLIENT_ADDR_UNIX,
+	BC_CLIENT_ADDR_KIND_COUNT
+};
+
+struct bc_client_addr {
+	enum bc_client_addr_kind kind;
+	uint16_t port;                           /* TCP */
+	char host[BC_CLIENT_MAX_HOST + 1];       /* TCP, without brackets */
+	char path[BC_CLIENT_MAX_UNIX_PATH + 1];  /* UNIX */
+};
+
+/*
+ * Parses a server address into *out (reset on entry):
+ *   NULL or ""        127.0.0.1:7878
+ *   HOST:PORT         a name or IPv4 address and a port 1..65535
+ *   HOST              the default port
+ *   :PORT             the default host
+ *   [IPV6]:PORT, [IPV6]
+ *   unix:PATH         a Unix socket (PATH up to BC_CLIENT_MAX_UNIX_PATH bytes)
+ * Returns 0 or BC_EINVAL with the reason in ei (which may be NULL).
+ */
+int bc_client_addr_parse(const char *s, struct bc_client_addr *out,
+			 struct bc_errinfo *ei);
+
+/* ---- The connection --------------------------------------------------------- */
+
+/* Zero means default for every field. */
+struct bc_client_opts {
+	const char *addr;  /* as bc_client_addr_parse() takes it */
+	const char *name;  /* HELLO client_name; NULL: "libblobcast" */
+	const char *token; /* HELLO token; NULL: none */
+	uint8_t encodings; /* HELLO bits (1 << (encoding - 1)); 0: all */
+	uint32_t max_frame_bytes; /* 0: the server's limit */
+	/* Milliseconds for connecting, for completing one send, and for each
+	 * helper's wait; 0: BC_CLIENT_DEFAULT_TIMEOUT_MS; negative: none. */
+	int timeout_ms;
+};
+
+struct bc_client;
+
+/* What the server said in WELCOME and SESSION_INFO, and traffic counts.
+ * Strings are NUL-terminated copies. */
+struct bc_client_info {
+	uint16_t version;
+	uint32_t connection_id;
+	uint32_t max_payload;     /* largest message the server accepts */
+	uint32_t max_frame_bytes; /* largest FRAME it will send us */
+	uint32_t max_nodes;
+	uint16_t max_dim, max_members, max_edit_ops;
+	char server_id[BC_PROTO_MAX_NAME + 1];
+	/* The session, once joined (zero before and after leaving). */
+	uint32_t session_id, member_id;
+	enum bc_proto_role role;
+	uint16_t nmembers;
+	char session[BC_PROTO_MAX_NAME + 1];
+	/* The latest edit order heard of (SCENE_STATE, EDIT_APPLIED). */
+	uint64_t order;
+	/* Traffic: whole messages, header included. */
+	uint64_t msgs_in, msgs_out, bytes_in, bytes_out;
+	/* Size on the wire of the message bc_client_recv() returned last. */
+	uint32_t last_msg_bytes;
+};
+
+/*
+ * Connects to opts->addr (TCP with TCP_NODELAY, or a Unix socket), sends
+ * HELLO and waits for WELCOME. On success *out (reset on entry) is a client
+ * to free with bc_client_destroy(). Returns 0, BC_EINVAL (bad options),
+ * BC_EIO (no connection), BC_ETIMEOUT, BC_ENOMEM, a protocol error, or the
+ * code of the server's ERROR (BC_EAUTH, BC_EPROTO_VERSION...) with its text;
+ * the reason is in ei (which may be NULL).
+ */
+int bc_client_connect(struct bc_client **out, const struct bc_client_opts *opts,
+		      struct bc_errinfo *ei);
+/* Closes the connection and frees everything; accepts NULL. */
+void bc_client_destroy(struct bc_client *c);
+
+/* The socket, for poll(): readable means bc_client_recv() has bytes to work
+ * on. The client owns it; do not read, write or close it. */
+int bc_client_fd(const struct bc_client *c);
+/* WELCOME, session and traffic details (owned by c, updated by every call). */
+const struct bc_client_info *bc_client_info(const struct bc_client *c);
+/* Returns the sticky error (0 if none) and copies its reason into ei. */
+int bc_client_error(const struct bc_client *c, struct bc_errinfo *ei);
+
+/*
+ * Gives m the next sequence number (written to *seq_out, which may be NULL,
+ * and to m->seq), encodes it and writes it whole, waiting for the socket
+ * with poll() for at most the client's timeout. Returns 0; the encoder's
+ * error for an invalid message (nothing was sent, not sticky); or a sticky
+ * BC_ECLOSED, BC_EIO or BC_ETIMEOUT (the stream is unusable).
+ */
+int bc_client_send(struct bc_client *c, struct bc_msg *m, uint32_t *seq_out);
+
+/*
+ * Waits at most timeout_ms (0: only what is already buffered or readable
+ * now; negative: forever) for the next message. Returns 1 with *out (reset
+ * on entry) valid until the next call on c, 0 on timeout, or a sticky
+ * negative code: BC_ECLOSED when the server closed the stream, a protocol
+ * error, BC_EIO. A FATAL ERROR message is returned like any other, and its
+ * code becomes the sticky error of the calls that follow. SESSION_INFO,
+ * SCENE_STATE and EDIT_APPLIED also update bc_client_info() and the scene
+ * mirror before they are returned.
+ */
+int bc_client_recv(struct bc_client *c, struct bc_msg *out, int timeout_ms);
+
+/*
+ * Receives until the answer to request seq arrives, consuming other
+ * messages: type FRAME matches a FRAME whose seq is seq (a SNAPSHOT's
+ * answer), or any FRAME when seq is 0; EDIT_APPLIED and SCENE_STATE match
+ * when this client is the author and seq is the request's; every other type
+ * matches its own seq (0: any). Returns 0 with *out as bc_client_recv()
+ * gives it; the negated code of an ERROR that arrives meanwhile (whatever
+ * request it answers), with its text in ei; BC_ETIMEOUT (not sticky) after
+ * timeout_ms (0: the client's timeout, negative: none); or the sticky error.
+ */
+int bc_client_wait(struct bc_client *c, enum bc_msg_type type, uint32_t seq,
+		   struct bc_msg *out, int timeout_ms, struct bc_errinfo *ei);
+
+/* ---- Sessions and scenes ------------------------------------------------------ */
+
+enum bc_client_join_mode {
+	BC_CLIENT_JOIN_EXISTING = 0, /* SESSION_JOIN; no such session: error */
+	BC_CLIENT_JOIN_CREATE,       /* SESSION_CREATE; it exists: error */
+	BC_CLIENT_JOIN_ANY,          /* join, creating the session if missing */
+	BC_CLIENT_JOIN_MODE_COUNT
+};
+
+/*
+ * Enters session name with role (EDITOR or VIEWER; 0 means EDITOR) and waits
+ * for SESSION_INFO and the SCENE_STATE that follows it, which fills the
+ * scene mirror. bc_client_info() then holds the member id and role. Returns
+ * 0 or an error (the server's ENOSESSION, EEXIST, EPERM...) with the reason.
+ */
+int bc_client_join(struct bc_client *c, const char *name,
+		   enum bc_proto_role role, enum bc_client_join_mode mode,
+		   struct bc_errinfo *ei);
+
+/* The scene mirror: the session's scene as of bc_client_info()->order, or
+ * NULL before the first SCENE_STATE (or if an edit could not be replayed on
+ * it, which is logged). Owned by c; valid until the next call on c. cam
+ * (may be NULL) receives the scene's camera. */
+const struct bc_tree *bc_client_scene(const struct bc_client *c,
+				      struct bc_camera *cam);
+
+/* Sends SCENE_LOAD with scene bytes (the binary encoding) and waits for the
+ * SCENE_STATE that acknowledges it; *order (may be NULL, reset on entry)
+ * receives the new edit order. */
+int bc_client_load_scene(struct bc_client *c, const uint8_t *bytes, size_t len,
+			 uint64_t *order, struct bc_errinfo *ei);
+/* Reads a JSON scene file (blobtree's format), encodes it with its camera
+ * and loads it as bc_client_load_scene() does. *nodes (may be NULL) receives
+ * its node count. */
+int bc_client_load_scene_file(struct bc_client *c, const char *path,
+			      uint64_t *order, uint32_t *nodes,
+			      struct bc_errinfo *ei);
+
+/* Sends VIEW. Zero fields take defaults: encoding JPEG when this client
+ * decodes it (else PNG), interactive quality 75, still quality 90,
+ * downscale 1. width and height are required. */
+int bc_client_view(struct bc_client *c, const struct bc_msg_view *view,
+		   uint32_t *seq_out, struct bc_errinfo *ei);
+
+/* Sends CAMERA (this connection's camera; the server answers with a frame
+ * when a VIEW is set, or with ERROR for an invalid camera). */
+int bc_client_camera(struct bc_client *c, const struct bc_camera *cam,
+		     bool interacting, uint32_t *seq_out,
+		     struct bc_errinfo *ei);
+
+/* Sends GET_STATS and waits for STATS, copied into *out (reset on entry). */
+int bc_client_stats(struct bc_client *c, struct bc_msg_stats *out,
+		    struct bc_errinfo *ei);
+
+/* ---- Edits ----------------------------------------------------------------------- */
+
+/*
+ * Turns key=value strings into the fields of one SET operation on node, a
+ * node of scene: for primitives translate=x,y,z rotate=x,y,z,w color=r,g,b
+ * and the kind's parameter names (bc_prim_info: radius=0.4,
+ * half_extents=0.5,0.5,0.5, ...; field BC_PROTO_FIELD_PARAM0 + k for the
+ * k-th); for operators blend=B range=R kind=NAME (smooth_union, ...).
+ * Values are comma-separated finite floats, exactly as many as the field
+ * takes, each within BC_PROTO_MAX_ABS. fields must hold
+ * BC_PROTO_MAX_SET_FIELDS; *nfields is reset on entry. Returns 0,
+ * BC_ENONODE (node not in scene), BC_EINVAL (unknown or repeated key, wrong
+ * number of values, no arguments), BC_EPARSE (not a number), BC_ENONFINITE,
+ * BC_ERANGE or BC_ELIMIT (too many arguments), with the reason in ei.
+ */
+int bc_client_edit_parse(const struct bc_tree *scene, uint32_t node,
+			 const char *const *kv, size_t n,
+			 struct bc_proto_field *fields, uint8_t *nfields,
+			 struct bc_errinfo *ei);
+
+/* Sends EDIT with one SET operation on node. */
+int bc_client_edit_set(struct bc_client *c, uint32_t node,
+		       const struct bc_proto_field *fields, uint8_t nfields,
+		       bool interacting, uint32_t *seq_out,
+		       struct bc_errinfo *ei);
+
+/* bc_client_edit_parse() against the scene mirror, then
+ * bc_client_edit_set(). BC_ESTATE when there is no mirror (not joined). */
+int bc_client_edit_kv(struct bc_client *c, uint32_t node,
+		      const char *const *kv, size_t n, bool interacting,
+		      uint32_t *seq_out, struct bc_errinfo *ei);
+
+/* Waits for the EDIT_APPLIED of this client's EDIT seq; *order (may be NULL,
+ * reset on entry) receives the order number the server gave it. */
+int bc_client_wait_applied(struct bc_client *c, uint32_t seq, uint64_t *order,
+			   struct bc_errinfo *ei);
+
+/* ---- Frames ------------------------------------------------------------------------ */
+
+/*
+ * The client-side framebuffer that FRAMEs are assembled in. A frame carries
+ * rectangles of an image of image_width x image_height pixels (the VIEW size,
+ * or smaller when the server downscales an interactive frame); each one
+ * replaces those pixels. A frame of another image size starts a new, empty
+ * image. Fields are read-only for users.
+ */
+struct bc_client_image {
+	uint32_t width, height;           /* pixels held */
+	uint32_t view_width, view_height; /* the VIEW size they stand for */
+	uint8_t *rgba;  /* width * height * 4 bytes, row 0 on top, alpha 255 */
+	bool complete;  /* every pixel has come from a frame */
+	/* The last frame applied. */
+	uint32_t frame_no, camera_seq, seq;
+	uint64_t order;
+	uint16_t flags; /* BC_PROTO_FLAG_STILL, BC_PROTO_FLAG_SNAPSHOT */
+	enum bc_proto_encoding encoding;
+	uint32_t nrects;
+	/* Private. */
+	uint8_t *seen; /* one bit per pixel while !complete, or NULL */
+	uint64_t nseen;
+	void *tj;
+};
+
+/* init/finish on caller memory; finish accepts a zeroed image. */
+void bc_client_image_init(struct bc_client_image *img);
+void bc_client_image_finish(struct bc_client_image *img);
+
+/*
+ * Decodes the rectangles of FRAME m into img. Every rectangle must lie in
+ * the image and decode to exactly its size. Returns 0, BC_EINVAL (not a
+ * FRAME), BC_ERANGE (a rectangle outside the image), BC_ECODEC (bytes that
+ * do not decode, or decode to another size; the pixels already written stay
+ * and img->complete becomes false) or BC_ENOMEM, with the reason in ei.
+ */
+int bc_client_image_apply(struct bc_client_image *img, const struct bc_msg *m,
+			  struct bc_errinfo *ei);
+
+/* Sends SNAPSHOT (encoding PNG or RAW; 0 means PNG) and waits for its FRAME,
+ * decoded into *out (which must be initialized; its previous contents are
+ * replaced). A VIEW must have been sent: it gives the size. */
+int bc_client_snapshot(struct bc_client *c, enum bc_proto_encoding encoding,
+		       struct bc_client_image *out, struct bc_errinfo *ei);
+
+#endif

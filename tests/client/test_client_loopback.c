@@ -1,0 +1,987 @@
+/*
+ * libblobcast against a scripted fake server: a thread in this test that
+ * accepts one connection (loopback TCP or a Unix socket) and speaks the
+ * protocol through bc_proto, checking what the client sends and answering
+ * as blobcastd would -- or as a broken or hostile peer would. Covers the
+ * handshake, sessions, the scene mirror (parameter and structural edits,
+ * a skipped order), edit acknowledgements among other members' edits,
+ * frames and snapshots, messages larger than one read, and every way a
+ * connection can fail (refused, wrong protocol, silence, ERROR, a close
+ * between or inside messages).
+ */
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include "blobcast/alloc.h"
+#include "blobcast/client.h"
+#include "blobcast/scene.h"
+#include "test.h"
+
+/* ---- the fake server ------------------------------------------------------ */
+
+struct fake;
+typedef void (*script_fn)(struct fake *f, int fd);
+
+struct fake {
+	int lfd;
+	char addr[160];
+	char dir[64]; /* temp dir of a Unix socket, or "" */
+	pthread_t thread;
+	script_fn script;
+	int failures; /* checks that failed in the server thread */
+	struct bc_proto_reader r;
+};
+
+/* CHECK for the server thread: counted apart, added up at the end. */
+#define SCHECK(f, cond)                                                        \
+	do {                                                                   \
+		if (!(cond)) {                                                 \
+			fprintf(stderr, "  %s:%d: server CHECK failed: %s\n",  \
+				__FILE__, __LINE__, #cond);                    \
+			(f)->failures++;                                       \
+		}                                                              \
+	} while (0)
+
+static void write_all(int fd, const void *p, size_t n)
+{
+	const uint8_t *b = p;
+	while (n > 0) {
+		ssize_t k = send(fd, b, n, MSG_NOSIGNAL);
+		if (k <= 0) {
+			return;
+		}
+		b += k;
+		n -= (size_t)k;
+	}
+}
+
+static void srv_send(struct fake *f, int fd, const struct bc_msg *m)
+{
+	struct bc_proto_buf b;
+	struct bc_errinfo ei = {0};
+	bc_proto_buf_init(&b, 0);
+	if (bc_proto_encode(&b, m, &ei) != 0) {
+		fprintf(stderr, "  fake server cannot encode %s: %s\n",
+			bc_proto_type_name(m->type), ei.msg);
+		f->failures++;
+	}
+	write_all(fd, b.data, b.len);
+	bc_proto_buf_finish(&b);
+}
+
+/* Next message from the client; 0 when it closed or sent garbage. */
+static int srv_next(struct fake *f, int fd, struct bc_msg *m)
+{
+	for (;;) {
+		uint8_t buf[4096];
+		ssize_t n;
+		int rc = bc_proto_reader_next(&f->r, m);
+		if (rc != 0) {
+			return rc > 0;
+		}
+		n = read(fd, buf, sizeof(buf));
+		if (n <= 0 || bc_proto_reader_feed(&f->r, buf, (size_t)n)) {
+			return 0;
+		}
+	}
+}
+
+/* Waits for one message of type, failing the test on anything else. */
+static int srv_expect(struct fake *f, int fd, enum bc_msg_type type,
+		      struct bc_msg *m)
+{
+	if (!srv_next(f, fd, m)) {
+		fprintf(stderr, "  fake server: no %s\n",
+			bc_proto_type_name(type));
+		f->failures++;
+		return 0;
+	}
+	if (m->type != type) {
+		fprintf(stderr, "  fake server: %s instead of %s\n",
+			bc_proto_type_name(m->type), bc_proto_type_name(type));
+		f->failures++;
+		return 0;
+	}
+	return 1;
+}
+
+static void srv_error(struct fake *f, int fd, uint32_t seq, int code,
+		      bool fatal, const char *text)
+{
+	struct bc_msg e = {.type = BC_MSG_ERROR, .seq = seq};
+	e.flags = fatal ? BC_PROTO_FLAG_FATAL : 0;
+	e.error.code = (uint16_t)-code;
+	e.error.text.ptr = text;
+	e.error.text.len = (uint32_t)strlen(text);
+	srv_send(f, fd, &e);
+}
+
+/* HELLO -> WELCOME, the start of most scripts. */
+static int srv_hello(struct fake *f, int fd)
+{
+	struct bc_msg m, w = {.type = BC_MSG_WELCOME};
+	if (!srv_expect(f, fd, BC_MSG_HELLO, &m)) {
+		return 0;
+	}
+	SCHECK(f, m.hello.version_min <= BC_PROTO_VERSION &&
+			  m.hello.version_max >= BC_PROTO_VERSION);
+	bc_proto_reader_hello_done(&f->r);
+	w.seq = m.seq;
+	w.welcome.version = BC_PROTO_VERSION;
+	w.welcome.connection_id = 7;
+	w.welcome.max_payload = BC_PROTO_MAX_PAYLOAD;
+	w.welcome.max_frame_bytes = 1u << 20;
+	w.welcome.max_nodes = 100000;
+	w.welcome.max_dim = 4096;
+	w.welcome.max_members = 64;
+	w.welcome.max_edit_ops = 1024;
+	w.welcome.server_id.ptr = "fake";
+	w.welcome.server_id.len = 4;
+	srv_send(f, fd, &w);
+	return 1;
+}
+
+static void *fake_main(void *arg)
+{
+	struct fake *f = arg;
+	struct bc_proto_reader_opts ro = {.side = BC_PROTO_SIDE_SERVER,
+					  .await_hello = true};
+	int fd = accept(f->lfd, NULL, NULL);
+	if (fd < 0) {
+		f->failures++;
+		return NULL;
+	}
+	bc_proto_reader_init(&f->r, &ro);
+	f->script(f, fd);
+	bc_proto_reader_finish(&f->r);
+	close(fd);
+	return NULL;
+}
+
+static int fake_start(struct fake *f, script_fn script, bool unix_socket)
+{
+	memset(f, 0, sizeof(*f));
+	f->script = script;
+	if (unix_socket) {
+		struct sockaddr_un sun = {.sun_family = AF_UNIX};
+		snprintf(f->dir, sizeof(f->dir), "/tmp/bc-client-test-XXXXXX");
+		if (!mkdtemp(f->dir)) {
+			return -1;
+		}
+		snprintf(sun.sun_path, sizeof(sun.sun_path), "%s/s.sock",
+			 f->dir);
+		snprintf(f->addr, sizeof(f->addr), "unix:%s", sun.sun_path);
+		f->lfd = socket(AF_UNIX, SOCK_STREAM, 0);
+		if (f->lfd < 0 ||
+		    bind(f->lfd, (struct sockaddr *)&sun, sizeof(sun)) < 0) {
+			return -1;
+		}
+	} else {
+		struct sockaddr_in in = {.sin_family = AF_INET};
+		socklen_t len = sizeof(in);
+		in.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+		f->lfd = socket(AF_INET, SOCK_STREAM, 0);
+		if (f->lfd < 0 ||
+		    bind(f->lfd, (struct sockaddr *)&in, sizeof(in)) < 0 ||
+		    getsockname(f->lfd, (struct sockaddr *)&in, &len) < 0) {
+			return -1;
+		}
+		snprintf(f->addr, sizeof(f->addr), "127.0.0.1:%u",
+			 (unsigned)ntohs(in.sin_port));
+	}
+	if (listen(f->lfd, 1) < 0 ||
+	    pthread_create(&f->thread, NULL, fake_main, f) != 0) {
+		return -1;
+	}
+	return 0;
+}
+
+/* Joins the server thread and counts its failures into the test's. */
+static void fake_stop(struct fake *f)
+{
+	pthread_join(f->thread, NULL);
+	close(f->lfd);
+	if (f->dir[0]) {
+		char path[128];
+		snprintf(path, sizeof(path), "%s/s.sock", f->dir);
+		unlink(path);
+		rmdir(f->dir);
+	}
+	bc_test_failures += f->failures;
+}
+
+/* ---- scenes ------------------------------------------------------------------ */
+
+static const char scene_json[] =
+	"{\"blobcast\": 1, \"camera\": {\"eye\": [0, 0, 5], \"target\": "
+	"[0, 0, 0], \"up\": [0, 1, 0], \"fov_y_deg\": 40}, \"root\": "
+	"{\"type\": \"union\", \"id\": 1, \"children\": ["
+	"{\"type\": \"sphere\", \"id\": 2, \"radius\": 0.5},"
+	"{\"type\": \"box\", \"id\": 3, \"half_extents\": [0.3, 0.3, 0.3]},"
+	"{\"type\": \"sphere\", \"id\": 4, \"radius\": 0.2}]}}";
+
+/* Encodes a JSON scene, or a union of n spheres when json is NULL. */
+static uint8_t *scene_bytes(const char *json, uint32_t n, size_t *len)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_camera cam;
+	struct bc_errinfo ei = {0};
+	uint8_t *out = NULL;
+	*len = 0;
+	if (json) {
+		if (bc_scene_parse_json(json, strlen(json), t, &cam, &ei)) {
+			fprintf(stderr, "  scene: %s\n", ei.msg);
+			abort();
+		}
+	} else {
+		struct bc_op_data op = {.kind = BC_OP_UNION};
+		bc_camera_default(&cam);
+		bc_tree_begin(t);
+		bc_tree_push_op(t, 1, &op, &ei);
+		for (uint32_t i = 0; i < n; i++) {
+			struct bc_prim_data p;
+			bc_prim_data_init(&p, BC_PRIM_SPHERE);
+			p.params[0] = 0.1f;
+			p.translate[0] = (float)i * 0.01f;
+			if (bc_tree_put_prim(t, 100 + i, &p, &ei)) {
+				abort();
+			}
+		}
+		bc_tree_pop_op(t, &ei);
+		if (bc_tree_end(t, &ei)) {
+			fprintf(stderr, "  scene: %s\n", ei.msg);
+			abort();
+		}
+	}
+	if (bc_scene_encode(t, &cam, &out, len)) {
+		abort();
+	}
+	bc_tree_destroy(t);
+	return out;
+}
+
+static void srv_session(struct fake *f, int fd, uint32_t seq, uint64_t order)
+{
+	struct bc_proto_member me = {.id = 3, .role = BC_PROTO_ROLE_EDITOR};
+	struct bc_msg info = {.type = BC_MSG_SESSION_INFO, .seq = seq};
+	struct bc_msg st = {.type = BC_MSG_SCENE_STATE};
+	size_t len;
+	uint8_t *bytes = scene_bytes(scene_json, 0, &len);
+	me.name.ptr = "loopback-test";
+	me.name.len = 13;
+	info.session_info.session_id = 11;
+	info.session_info.member_id = 3;
+	info.session_info.role = BC_PROTO_ROLE_EDITOR;
+	info.session_info.name.ptr = "s1";
+	info.session_info.name.len = 2;
+	info.session_info.nmembers = 1;
+	info.session_info.members = &me;
+	srv_send(f, fd, &info);
+	st.scene_state.order = order;
+	st.scene_state.scene.ptr = bytes;
+	st.scene_state.scene.len = (uint32_t)len;
+	srv_send(f, fd, &st);
+	bc_free(bytes);
+}
+
+/* A recognisable raw image. */
+static uint8_t *pixels(uint32_t w, uint32_t h, uint8_t seed)
+{
+	uint8_t *p = malloc((size_t)w * h * 4u);
+	for (size_t i = 0; i < (size_t)w * h; i++) {
+		p[4 * i] = (uint8_t)(i + seed);
+		p[4 * i + 1] = (uint8_t)(i >> 8);
+		p[4 * i + 2] = seed;
+		p[4 * i + 3] = 255;
+	}
+	return p;
+}
+
+static void srv_frame(struct fake *f, int fd, uint32_t seq, uint16_t flags,
+		      uint16_t w, uint16_t h, uint8_t seed, uint64_t order)
+{
+	struct bc_msg m = {.type = BC_MSG_FRAME, .seq = seq, .flags = flags};
+	uint8_t *p = pixels(w, h, seed);
+	struct bc_proto_rect r = {0, 0, w, h, {p, (uint32_t)w * h * 4u}};
+	m.frame.frame_no = seed;
+	m.frame.order = order;
+	m.frame.encoding = BC_PROTO_ENC_RAW;
+	m.frame.width = m.frame.image_width = w;
+	m.frame.height = m.frame.image_height = h;
+	m.frame.nrects = 1;
+	m.frame.rects = &r;
+	srv_send(f, fd, &m);
+	free(p);
+}
+
+static struct bc_client *connect_to(struct fake *f, int timeout_ms)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	if (bc_client_connect(&c,
+			      &(struct bc_client_opts){
+				      .addr = f->addr,
+				      .name = "loopback-test",
+				      .timeout_ms = timeout_ms},
+			      &ei) != 0) {
+		fprintf(stderr, "  connect: %s\n", ei.msg);
+	}
+	return c;
+}
+
+/* ---- handshake and session ------------------------------------------------- */
+
+static void script_session(struct fake *f, int fd)
+{
+	struct bc_msg m;
+	if (!srv_hello(f, fd) ||
+	    !srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
+		return;
+	}
+	SCHECK(f, m.session.name.len == 2 &&
+			  memcmp(m.session.name.ptr, "s1", 2) == 0);
+	SCHECK(f, m.session.role == BC_PROTO_ROLE_EDITOR);
+	srv_error(f, fd, m.seq, BC_ENOSESSION, false, "no session named s1");
+	if (!srv_expect(f, fd, BC_MSG_SESSION_CREATE, &m)) {
+		return;
+	}
+	srv_session(f, fd, m.seq, 5);
+	if (!srv_expect(f, fd, BC_MSG_GET_STATS, &m)) {
+		return;
+	}
+	{
+		struct bc_msg st = {.type = BC_MSG_STATS, .seq = m.seq};
+		st.stats.frames = 12;
+		st.stats.order = 5;
+		st.stats.fps = 30.0f;
+		srv_send(f, fd, &st);
+	}
+	/* Then the client leaves: the server sees the stream end. */
+	SCHECK(f, !srv_next(f, fd, &m));
+}
+
+static void test_handshake_join_or_create_and_stats(void)
+{
+	struct fake f;
+	struct bc_client *c;
+	struct bc_errinfo ei = {0};
+	struct bc_msg_stats st;
+	struct bc_prim_data p;
+	struct bc_camera cam;
+	const struct bc_client_info *info;
+	const struct bc_tree *t;
+	REQUIRE(fake_start(&f, script_session, false) == 0);
+	c = connect_to(&f, 5000);
+	if (c) {
+		info = bc_client_info(c);
+		CHECK_EQ_INT(info->connection_id, 7);
+		CHECK_EQ_INT(info->max_frame_bytes, 1u << 20);
+		CHECK(strcmp(info->server_id, "fake") == 0);
+		CHECK(bc_client_fd(c) >= 0);
+		CHECK(bc_client_scene(c, NULL) == NULL);
+		CHECK_EQ_INT(bc_client_join(c, "s1", 0, BC_CLIENT_JOIN_ANY, &ei),
+			     0);
+		CHECK_EQ_INT(info->member_id, 3);
+		CHECK_EQ_INT(info->session_id, 11);
+		CHECK_EQ_INT(info->role, BC_PROTO_ROLE_EDITOR);
+		CHECK(strcmp(info->session, "s1") == 0);
+		CHECK_EQ_INT(info->order, 5);
+		t = bc_client_scene(c, &cam);
+		REQUIRE(t != NULL);
+		CHECK_EQ_INT(bc_tree_node_count(t), 4);
+		CHECK(bc_tree_get(t, 2, &p, NULL) && p.kind == BC_PRIM_SPHERE);
+		CHECK(cam.eye[2] == 5.0f && cam.fov_y_deg == 40.0f);
+		CHECK_EQ_INT(bc_client_stats(c, &st, &ei), 0);
+		CHECK_EQ_INT(st.frames, 12);
+		CHECK(st.fps == 30.0f);
+		CHECK(info->msgs_out == 4 && info->msgs_in == 5);
+	}
+	bc_client_destroy(c);
+	fake_stop(&f);
+}
+
+static void script_join_refused(struct fake *f, int fd)
+{
+	struct bc_msg m;
+	if (!srv_hello(f, fd) ||
+	    !srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
+		return;
+	}
+	srv_error(f, fd, m.seq, BC_ENOSESSION, false, "no session named zz");
+	if (!srv_expect(f, fd, BC_MSG_SESSION_CREATE, &m)) {
+		return;
+	}
+	srv_error(f, fd, m.seq, BC_EPERM, false,
+		  "your token grants the viewer role only");
+	SCHECK(f, !srv_next(f, fd, &m));
+}
+
+static void test_session_errors_carry_server_text(void)
+{
+	struct fake f;
+	struct bc_client *c;
+	struct bc_errinfo ei = {0};
+	REQUIRE(fake_start(&f, script_join_refused, false) == 0);
+	c = connect_to(&f, 5000);
+	if (c) {
+		CHECK_EQ_INT(bc_client_join(c, "zz", 0, BC_CLIENT_JOIN_EXISTING,
+					    &ei),
+			     BC_ENOSESSION);
+		CHECK(strstr(ei.msg, "no session named zz") != NULL);
+		/* Not sticky: the connection goes on. */
+		CHECK_EQ_INT(bc_client_error(c, NULL), 0);
+		CHECK_EQ_INT(bc_client_join(c, "zz", BC_PROTO_ROLE_EDITOR,
+					    BC_CLIENT_JOIN_CREATE, &ei),
+			     BC_EPERM);
+		CHECK(strstr(ei.msg, "viewer role only") != NULL);
+		CHECK_EQ_INT(bc_client_join(c, "", 0, BC_CLIENT_JOIN_ANY, &ei),
+			     BC_EINVAL);
+	}
+	bc_client_destroy(c);
+	fake_stop(&f);
+}
+
+/* ---- edits and the mirror ----------------------------------------------------- */
+
+static void script_edit(struct fake *f, int fd)
+{
+	struct bc_msg m;
+	struct bc_proto_field other_f = {.field = BC_PROTO_FIELD_TRANSLATE,
+					 .count = 3,
+					 .v = {2.0f, 0.0f, 0.0f}};
+	struct bc_proto_edit_op other = {.kind = BC_PROTO_EDIT_SET,
+					 .node = 3,
+					 .nfields = 1,
+					 .fields = &other_f};
+	struct bc_msg ea = {.type = BC_MSG_EDIT_APPLIED};
+	if (!srv_hello(f, fd) ||
+	    !srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
+		return;
+	}
+	srv_session(f, fd, m.seq, 5);
+	if (!srv_expect(f, fd, BC_MSG_EDIT, &m)) {
+		return;
+	}
+	SCHECK(f, m.flags == BC_PROTO_FLAG_INTERACTING);
+	SCHECK(f, m.edit.nops == 1 && m.edit.ops[0].kind == BC_PROTO_EDIT_SET);
+	SCHECK(f, m.edit.ops[0].node == 2 && m.edit.ops[0].nfields == 1);
+	SCHECK(f, m.edit.ops[0].fields[0].field == BC_PROTO_FIELD_PARAM0);
+	SCHECK(f, m.edit.ops[0].fields[0].v[0] == 0.4f);
+	/* Another member's edit is applied first and broadcast to all. */
+	ea.seq = 41;
+	ea.edit_applied.order = 6;
+	ea.edit_applied.author = 8;
+	ea.edit_applied.author_seq = 41;
+	ea.edit_applied.nops = 1;
+	ea.edit_applied.ops = &other;
+	srv_send(f, fd, &ea);
+	srv_frame(f, fd, 0, 0, 4, 4, 1, 6);
+	ea.seq = m.seq;
+	ea.edit_applied.order = 7;
+	ea.edit_applied.author = 3;
+	ea.edit_applied.author_seq = m.seq;
+	ea.edit_applied.nops = m.edit.nops;
+	ea.edit_applied.ops = m.edit.ops;
+	srv_send(f, fd, &ea);
+	/* A bad edit is answered with ERROR. */
+	if (!srv_expect(f, fd, BC_MSG_EDIT, &m)) {
+		return;
+	}
+	srv_error(f, fd, m.seq, BC_ERANGE, false,
+		  "edit refused: operation 0: radius must be > 0");
+	SCHECK(f, !srv_next(f, fd, &m));
+}
+
+static void test_edit_is_acknowledged_among_other_edits(void)
+{
+	struct fake f;
+	struct bc_client *c;
+	struct bc_errinfo ei = {0};
+	const char *kv[] = {"radius=0.4"}, *bad[] = {"radius=-1"};
+	const char *typo[] = {"radios=1"};
+	struct bc_prim_data p;
+	uint32_t seq;
+	uint64_t order;
+	REQUIRE(fake_start(&f, script_edit, false) == 0);
+	c = connect_to(&f, 5000);
+	if (c) {
+		CHECK_EQ_INT(bc_client_edit_kv(c, 2, kv, 1, false, &seq, &ei),
+			     BC_ESTATE);
+		REQUIRE(bc_client_join(c, "s1", 0, 0, &ei) == 0);
+		/* A typo never reaches the server. */
+		CHECK_EQ_INT(bc_client_edit_kv(c, 2, typo, 1, true, &seq, &ei),
+			     BC_EINVAL);
+		CHECK_EQ_INT(seq, 0);
+		REQUIRE(bc_client_edit_kv(c, 2, kv, 1, true, &seq, &ei) == 0);
+		CHECK(seq != 0);
+		CHECK_EQ_INT(bc_client_wait_applied(c, seq, &order, &ei), 0);
+		CHECK_EQ_INT(order, 7);
+		CHECK_EQ_INT(bc_client_info(c)->order, 7);
+		/* The mirror holds both edits, in order. */
+		REQUIRE(bc_client_scene(c, NULL) != NULL);
+		CHECK(bc_tree_get(bc_client_scene(c, NULL), 2, &p, NULL));
+		CHECK(p.params[0] == 0.4f);
+		CHECK(bc_tree_get(bc_client_scene(c, NULL), 3, &p, NULL));
+		CHECK(p.translate[0] == 2.0f);
+		REQUIRE(bc_client_edit_kv(c, 2, bad, 1, false, &seq, &ei) == 0);
+		CHECK_EQ_INT(bc_client_wait_applied(c, seq, &order, &ei),
+			     BC_ERANGE);
+		CHECK(strstr(ei.msg, "radius must be > 0") != NULL);
+		CHECK_EQ_INT(order, 0);
+	}
+	bc_client_destroy(c);
+	fake_stop(&f);
+}
+
+static void script_structural(struct fake *f, int fd)
+{
+	struct bc_msg m, ea = {.type = BC_MSG_EDIT_APPLIED};
+	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_REMOVE, .node = 4};
+	struct bc_proto_buf sub;
+	float one = 1.0f;
+	if (!srv_hello(f, fd) ||
+	    !srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
+		return;
+	}
+	srv_session(f, fd, m.seq, 5);
+	ea.edit_applied.author = 8;
+	ea.edit_applied.author_seq = 1;
+	ea.edit_applied.nops = 1;
+	ea.edit_applied.ops = &op;
+	ea.edit_applied.order = 6;
+	srv_send(f, fd, &ea);
+	/* Insert a sphere (id 40, radius 1) as the first child of node 1. */
+	bc_proto_buf_init(&sub, 0);
+	bc_proto_scene_begin(&sub, NULL, 1);
+	bc_proto_scene_prim(&sub, BC_PRIM_SPHERE, 40, (float[3]){0, 1, 0},
+			    (float[4]){0, 0, 0, 1}, NULL, 1, &one);
+	op = (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_INSERT,
+				       .node = 1,
+				       .position = 0};
+	op.subtree.ptr = sub.data;
+	op.subtree.len = (uint32_t)sub.len;
+	ea.edit_applied.order = 7;
+	srv_send(f, fd, &ea);
+	bc_proto_buf_finish(&sub);
+	/* Order 8 is never sent: the mirror cannot follow order 9. */
+	op = (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_REMOVE,
+				       .node = 3};
+	ea.edit_applied.order = 9;
+	srv_send(f, fd, &ea);
+	SCHECK(f, !srv_next(f, fd, &m));
+}
+
+static void test_mirror_follows_structural_edits(void)
+{
+	struct fake f;
+	struct bc_client *c;
+	struct bc_errinfo ei = {0};
+	struct bc_msg m;
+	struct bc_prim_data p;
+	const struct bc_tree *t;
+	REQUIRE(fake_start(&f, script_structural, false) == 0);
+	c = connect_to(&f, 5000);
+	if (c) {
+		REQUIRE(bc_client_join(c, "s1", 0, 0, &ei) == 0);
+		REQUIRE(bc_client_recv(c, &m, 5000) == 1);
+		CHECK_EQ_INT(m.type, BC_MSG_EDIT_APPLIED);
+		t = bc_client_scene(c, NULL);
+		REQUIRE(t != NULL);
+		CHECK(!bc_tree_get(t, 4, NULL, NULL));
+		CHECK_EQ_INT(bc_tree_node_count(t), 3);
+		REQUIRE(bc_client_recv(c, &m, 5000) == 1);
+		t = bc_client_scene(c, NULL);
+		REQUIRE(t != NULL);
+		CHECK(bc_tree_get(t, 40, &p, NULL));
+		CHECK(p.params[0] == 1.0f && p.translate[1] == 1.0f);
+		CHECK_EQ_INT(bc_tree_child(t, 1, 0), 40);
+		REQUIRE(bc_client_recv(c, &m, 5000) == 1);
+		CHECK_EQ_INT(m.edit_applied.order, 9);
+		CHECK(bc_client_scene(c, NULL) == NULL);
+		CHECK_EQ_INT(bc_client_info(c)->order, 9);
+	}
+	bc_client_destroy(c);
+	fake_stop(&f);
+}
+
+/* ---- frames and snapshots ---------------------------------------------------------- */
+
+static void script_frames(struct fake *f, int fd)
+{
+	struct bc_msg m;
+	if (!srv_hello(f, fd) ||
+	    !srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
+		return;
+	}
+	srv_session(f, fd, m.seq, 5);
+	if (!srv_expect(f, fd, BC_MSG_VIEW, &m)) {
+		return;
+	}
+	SCHECK(f, m.view.width == 8 && m.view.height == 4);
+	SCHECK(f, m.view.encoding == BC_PROTO_ENC_RAW);
+	SCHECK(f, m.view.quality_interactive == 75 &&
+			  m.view.quality_still == 90 && m.view.downscale == 1);
+	srv_frame(f, fd, 0, BC_PROTO_FLAG_STILL, 8, 4, 10, 5);
+	if (!srv_expect(f, fd, BC_MSG_CAMERA, &m)) {
+		return;
+	}
+	SCHECK(f, m.camera.eye[0] == 1.0f && m.camera.fov_y_deg == 30.0f);
+	SCHECK(f, m.flags == 0);
+	if (!srv_expect(f, fd, BC_MSG_SNAPSHOT, &m)) {
+		return;
+	}
+	SCHECK(f, m.snapshot.encoding == BC_PROTO_ENC_RAW);
+	/* A stream frame comes first; the snapshot is the one with its seq. */
+	srv_frame(f, fd, 0, BC_PROTO_FLAG_STILL, 8, 4, 20, 5);
+	srv_frame(f, fd, m.seq, BC_PROTO_FLAG_STILL | BC_PROTO_FLAG_SNAPSHOT,
+		  8, 4, 30, 5);
+	SCHECK(f, !srv_next(f, fd, &m));
+}
+
+static void test_frames_and_snapshot(void)
+{
+	struct fake f;
+	struct bc_client *c;
+	struct bc_errinfo ei = {0};
+	struct bc_client_image img, snap;
+	struct bc_camera cam = {{1, 0, 5}, {0, 0, 0}, {0, 1, 0}, 30.0f};
+	struct bc_msg m;
+	uint8_t *want;
+	uint32_t seq;
+	bc_client_image_init(&img);
+	bc_client_image_init(&snap);
+	REQUIRE(fake_start(&f, script_frames, false) == 0);
+	c = connect_to(&f, 5000);
+	if (c) {
+		REQUIRE(bc_client_join(c, "s1", 0, 0, &ei) == 0);
+		REQUIRE(bc_client_view(c,
+				       &(struct bc_msg_view){
+					       .width = 8,
+					       .height = 4,
+					       .encoding = BC_PROTO_ENC_RAW},
+				       &seq, &ei) == 0);
+		REQUIRE(bc_client_wait(c, BC_MSG_FRAME, 0, &m, 0, &ei) == 0);
+		CHECK(bc_client_info(c)->last_msg_bytes >
+		      BC_PROTO_HEADER_SIZE + 8 * 4 * 4);
+		REQUIRE(bc_client_image_apply(&img, &m, &ei) == 0);
+		want = pixels(8, 4, 10);
+		CHECK(img.complete && memcmp(img.rgba, want, 8 * 4 * 4) == 0);
+		free(want);
+		REQUIRE(bc_client_camera(c, &cam, false, &seq, &ei) == 0);
+		REQUIRE(bc_client_snapshot(c, BC_PROTO_ENC_RAW, &snap, &ei) ==
+			0);
+		want = pixels(8, 4, 30);
+		CHECK(snap.complete && memcmp(snap.rgba, want, 8 * 4 * 4) == 0);
+		CHECK(snap.flags & BC_PROTO_FLAG_SNAPSHOT);
+		free(want);
+		CHECK_EQ_INT(bc_client_snapshot(c, BC_PROTO_ENC_JPEG, &snap,
+						&ei),
+			     BC_EINVAL);
+	}
+	bc_client_destroy(c);
+	fake_stop(&f);
+	bc_client_image_finish(&img);
+	bc_client_image_finish(&snap);
+}
+
+/* ---- large messages -------------------------------------------------------------------- */
+
+static void script_large(struct fake *f, int fd)
+{
+	struct bc_msg m, st = {.type = BC_MSG_SCENE_STATE};
+	size_t len;
+	uint8_t *bytes;
+	if (!srv_hello(f, fd) ||
+	    !srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
+		return;
+	}
+	srv_session(f, fd, m.seq, 5);
+	bytes = scene_bytes(NULL, 8000, &len);
+	SCHECK(f, len > 3 * BC_CLIENT_READ_CHUNK);
+	st.scene_state.order = 6;
+	st.scene_state.scene.ptr = bytes;
+	st.scene_state.scene.len = (uint32_t)len;
+	srv_send(f, fd, &st);
+	bc_free(bytes);
+	srv_frame(f, fd, 0, 0, 320, 240, 3, 6);
+	/* Returning closes the connection. */
+}
+
+static void test_messages_larger_than_a_read(void)
+{
+	struct fake f;
+	struct bc_client *c;
+	struct bc_errinfo ei = {0};
+	struct bc_client_image img;
+	struct bc_msg m;
+	uint8_t *want;
+	bc_client_image_init(&img);
+	REQUIRE(fake_start(&f, script_large, false) == 0);
+	c = connect_to(&f, 5000);
+	if (c) {
+		REQUIRE(bc_client_join(c, "s1", 0, 0, &ei) == 0);
+		REQUIRE(bc_client_recv(c, &m, 5000) == 1);
+		CHECK_EQ_INT(m.type, BC_MSG_SCENE_STATE);
+		REQUIRE(bc_client_scene(c, NULL) != NULL);
+		CHECK_EQ_INT(bc_tree_node_count(bc_client_scene(c, NULL)),
+			     8001);
+		REQUIRE(bc_client_recv(c, &m, 5000) == 1);
+		REQUIRE(bc_client_image_apply(&img, &m, &ei) == 0);
+		want = pixels(320, 240, 3);
+		CHECK(memcmp(img.rgba, want, 320 * 240 * 4) == 0);
+		free(want);
+		/* Then the server closes between messages. */
+		CHECK_EQ_INT(bc_client_recv(c, &m, 5000), BC_ECLOSED);
+		CHECK_EQ_INT(bc_client_recv(c, &m, 0), BC_ECLOSED);
+		CHECK_EQ_INT(bc_client_error(c, &ei), BC_ECLOSED);
+		CHECK(strstr(ei.msg, "closed") != NULL);
+	}
+	bc_client_destroy(c);
+	fake_stop(&f);
+	bc_client_image_finish(&img);
+}
+
+/* ---- failures ------------------------------------------------------------------------------ */
+
+static void script_auth(struct fake *f, int fd)
+{
+	struct bc_msg m;
+	if (!srv_expect(f, fd, BC_MSG_HELLO, &m)) {
+		return;
+	}
+	SCHECK(f, m.hello.token.len == 6 &&
+			  memcmp(m.hello.token.ptr, "wrong!", 6) == 0);
+	srv_error(f, fd, m.seq, BC_EAUTH, true, "a valid token is required");
+}
+
+static void test_auth_error_is_reported(void)
+{
+	struct fake f;
+	struct bc_client *c = (struct bc_client *)&f; /* must be reset */
+	struct bc_errinfo ei = {0};
+	REQUIRE(fake_start(&f, script_auth, false) == 0);
+	CHECK_EQ_INT(bc_client_connect(&c,
+				       &(struct bc_client_opts){
+					       .addr = f.addr,
+					       .token = "wrong!"},
+				       &ei),
+		     BC_EAUTH);
+	CHECK(c == NULL);
+	CHECK(strstr(ei.msg, "a valid token is required") != NULL);
+	fake_stop(&f);
+}
+
+static void script_http(struct fake *f, int fd)
+{
+	static const char reply[] = "HTTP/1.1 400 Bad Request\r\n\r\n";
+	struct bc_msg m;
+	(void)srv_next(f, fd, &m);
+	write_all(fd, reply, sizeof(reply) - 1);
+}
+
+static void test_not_a_blobcast_server(void)
+{
+	struct fake f;
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	REQUIRE(fake_start(&f, script_http, false) == 0);
+	CHECK_EQ_INT(bc_client_connect(&c, &(struct bc_client_opts){.addr = f.addr},
+				       &ei),
+		     BC_EPROTO_MAGIC);
+	CHECK(c == NULL);
+	fake_stop(&f);
+}
+
+static void script_silent(struct fake *f, int fd)
+{
+	struct bc_msg m;
+	(void)srv_expect(f, fd, BC_MSG_HELLO, &m);
+	/* Say nothing until the client gives up and closes. */
+	SCHECK(f, !srv_next(f, fd, &m));
+}
+
+static void test_silent_server_times_out(void)
+{
+	struct fake f;
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	REQUIRE(fake_start(&f, script_silent, false) == 0);
+	CHECK_EQ_INT(bc_client_connect(&c,
+				       &(struct bc_client_opts){
+					       .addr = f.addr,
+					       .timeout_ms = 150},
+				       &ei),
+		     BC_ETIMEOUT);
+	CHECK(strstr(ei.msg, "WELCOME") != NULL);
+	fake_stop(&f);
+}
+
+static void script_truncated(struct fake *f, int fd)
+{
+	struct bc_msg m;
+	uint8_t half[10];
+	struct bc_proto_buf b;
+	if (!srv_hello(f, fd)) {
+		return;
+	}
+	m = (struct bc_msg){.type = BC_MSG_PONG};
+	m.ping.stamp = 99;
+	bc_proto_buf_init(&b, 0);
+	bc_proto_encode(&b, &m, NULL);
+	memcpy(half, b.data, sizeof(half));
+	bc_proto_buf_finish(&b);
+	write_all(fd, half, sizeof(half));
+}
+
+static void test_close_inside_a_message_is_sticky(void)
+{
+	struct fake f;
+	struct bc_client *c;
+	struct bc_errinfo ei = {0};
+	struct bc_msg m = {.type = BC_MSG_PING};
+	REQUIRE(fake_start(&f, script_truncated, false) == 0);
+	c = connect_to(&f, 5000);
+	if (c) {
+		CHECK_EQ_INT(bc_client_recv(c, &m, 5000),
+			     BC_EPROTO_TRUNCATED);
+		CHECK_EQ_INT(bc_client_recv(c, &m, 5000),
+			     BC_EPROTO_TRUNCATED);
+		m = (struct bc_msg){.type = BC_MSG_PING};
+		CHECK_EQ_INT(bc_client_send(c, &m, NULL), BC_EPROTO_TRUNCATED);
+		CHECK_EQ_INT(bc_client_error(c, &ei), BC_EPROTO_TRUNCATED);
+		CHECK(strstr(ei.msg, "mid-message") != NULL);
+	}
+	bc_client_destroy(c);
+	fake_stop(&f);
+}
+
+static void script_fatal(struct fake *f, int fd)
+{
+	if (!srv_hello(f, fd)) {
+		return;
+	}
+	srv_error(f, fd, 0, BC_EPROTO_LENGTH, true, "payload too long");
+}
+
+static void test_fatal_error_becomes_sticky(void)
+{
+	struct fake f;
+	struct bc_client *c;
+	struct bc_errinfo ei = {0};
+	struct bc_msg m;
+	REQUIRE(fake_start(&f, script_fatal, false) == 0);
+	c = connect_to(&f, 5000);
+	if (c) {
+		REQUIRE(bc_client_recv(c, &m, 5000) == 1);
+		CHECK_EQ_INT(m.type, BC_MSG_ERROR);
+		CHECK(m.flags & BC_PROTO_FLAG_FATAL);
+		CHECK_EQ_INT(bc_client_recv(c, &m, 5000), BC_EPROTO_LENGTH);
+		CHECK_EQ_INT(bc_client_error(c, &ei), BC_EPROTO_LENGTH);
+		CHECK(strstr(ei.msg, "payload too long") != NULL);
+	}
+	bc_client_destroy(c);
+	fake_stop(&f);
+}
+
+static void script_unix(struct fake *f, int fd)
+{
+	struct bc_msg m;
+	if (!srv_hello(f, fd) || !srv_expect(f, fd, BC_MSG_PING, &m)) {
+		return;
+	}
+	m.type = BC_MSG_PONG;
+	srv_send(f, fd, &m);
+	SCHECK(f, !srv_next(f, fd, &m));
+}
+
+static void test_unix_socket_ping(void)
+{
+	struct fake f;
+	struct bc_client *c;
+	struct bc_errinfo ei = {0};
+	struct bc_msg m = {.type = BC_MSG_PING};
+	uint32_t seq;
+	REQUIRE(fake_start(&f, script_unix, true) == 0);
+	c = connect_to(&f, 5000);
+	if (c) {
+		m.ping.stamp = 0x1122334455667788ull;
+		REQUIRE(bc_client_send(c, &m, &seq) == 0);
+		CHECK_EQ_INT(m.seq, seq);
+		REQUIRE(bc_client_wait(c, BC_MSG_PONG, seq, &m, 0, &ei) == 0);
+		CHECK(m.ping.stamp == 0x1122334455667788ull);
+		/* Nothing more: a zero timeout returns at once. */
+		CHECK_EQ_INT(bc_client_recv(c, &m, 0), 0);
+		CHECK_EQ_INT(bc_client_wait(c, BC_MSG_PONG, 0, &m, 50, &ei),
+			     BC_ETIMEOUT);
+		CHECK_EQ_INT(bc_client_error(c, NULL), 0);
+	}
+	bc_client_destroy(c);
+	fake_stop(&f);
+}
+
+static void test_refused_and_bad_options(void)
+{
+	struct sockaddr_in in = {.sin_family = AF_INET};
+	socklen_t len = sizeof(in);
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	char addr[64];
+	int fd = socket(AF_INET, SOCK_STREAM, 0);
+	in.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+	/* A port that was just free: nobody listens on it. */
+	REQUIRE(fd >= 0 && bind(fd, (struct sockaddr *)&in, sizeof(in)) == 0);
+	REQUIRE(getsockname(fd, (struct sockaddr *)&in, &len) == 0);
+	close(fd);
+	snprintf(addr, sizeof(addr), "127.0.0.1:%u",
+		 (unsigned)ntohs(in.sin_port));
+	CHECK_EQ_INT(bc_client_connect(&c, &(struct bc_client_opts){.addr = addr},
+				       &ei),
+		     BC_EIO);
+	CHECK(strstr(ei.msg, "cannot connect") != NULL);
+	CHECK_EQ_INT(bc_client_connect(&c,
+				       &(struct bc_client_opts){
+					       .addr = "unix:/nonexistent/x"},
+				       &ei),
+		     BC_EIO);
+	CHECK_EQ_INT(bc_client_connect(&c,
+				       &(struct bc_client_opts){.addr = "h:0"},
+				       &ei),
+		     BC_EINVAL);
+	CHECK_EQ_INT(bc_client_connect(&c,
+				       &(struct bc_client_opts){
+					       .addr = addr, .encodings = 0x80},
+				       &ei),
+		     BC_EINVAL);
+	CHECK(c == NULL);
+	bc_client_destroy(NULL);
+}
+
+static const struct bc_test tests[] = {
+	{"handshake_join_or_create_and_stats",
+	 test_handshake_join_or_create_and_stats},
+	{"session_errors_carry_server_text",
+	 test_session_errors_carry_server_text},
+	{"edit_is_acknowledged_among_other_edits",
+	 test_edit_is_acknowledged_among_other_edits},
+	{"mirror_follows_structural_edits",
+	 test_mirror_follows_structural_edits},
+	{"frames_and_snapshot", test_frames_and_snapshot},
+	{"messages_larger_than_a_read", test_messages_larger_than_a_read},
+	{"auth_error_is_reported", test_auth_error_is_reported},
+	{"not_a_blobcast_server", test_not_a_blobcast_server},
+	{"silent_server_times_out", test_silent_server_times_out},
+	{"close_inside_a_message_is_sticky",
+	 test_close_inside_a_message_is_sticky},
+	{"fatal_error_becomes_sticky", test_fatal_error_becomes_sticky},
+	{"unix_socket_ping", test_unix_socket_ping},
+	{"refused_and_bad_options", test_refused_and_bad_options},
+};
+
+BC_TEST_MAIN(tests)
