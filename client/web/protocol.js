@@ -1,0 +1,1710 @@
+/*
+ * The blobcast wire protocol in JavaScript: message objects to bytes and
+ * back, with no I/O, for the browser page and for node (tests, benchmark).
+ * It is the JavaScript form of protocol/include/blobcast/proto.h and follows
+ * the C codec rule for rule, so that both accept and refuse the same bytes
+ * with the same error codes; protocol/vectors/*.json pins that down.
+ *
+ * Reading is a push parser: feed() bytes as they arrive, then next() until
+ * it returns null. WebSocket frames from websockify do not line up with
+ * protocol messages, so the reader reassembles them. Every length and count
+ * is checked against the limits and against the bytes actually present
+ * before anything is copied; the first error is sticky, because a stream
+ * that went wrong once cannot be trusted to be in step again.
+ *
+ * Writing: encode(msg) writes a message and then runs the finished payload
+ * through the decoder, so one definition of "valid" serves both directions
+ * (the C encoder does the same).
+ *
+ * Message objects are plain objects { type, flags, seq, ...fields } whose
+ * field names are those of proto.h and of the test vectors. u64 fields
+ * (order, stamp, uptime_ms, frames, bytes) are BigInt; byte ranges (scene,
+ * subtree, rect data) are Uint8Array copies that outlive the reader.
+ */
+
+/* ---- Constants (proto.h, proto_limits.h, base/include/blobcast/error.h) - */
+
+export const HEADER_SIZE = 16;
+export const VERSION = 1;
+const MAGIC = [0x42, 0x43, 0x53, 0x54]; /* "BCST" */
+
+/* Each limit with the reason for its value is in proto_limits.h; these are
+ * the same numbers. */
+export const LIMITS = Object.freeze({
+	MAX_PAYLOAD: 64 * 1024 * 1024,
+	HELLO_MAX_PAYLOAD: 4096,
+	READ_SLACK: 1024 * 1024,
+	MAX_NAME: 64,
+	MAX_TOKEN: 1024,
+	MAX_ERROR_TEXT: 1024,
+	MAX_MEMBERS: 64,
+	MAX_DIM: 8192,
+	MIN_FRAME_BYTES: 64 * 1024,
+	MAX_RECTS: 4096,
+	MAX_DOWNSCALE: 8,
+	MAX_QUALITY: 100,
+	MAX_EDIT_OPS: 1024,
+	MAX_SET_FIELDS: 14,
+	MAX_FIELD_VALUES: 4,
+	MAX_PRIM_PARAMS: 8,
+	MAX_ABS: 1.0e6,
+	SCENE_MAX_NODES: (1 << 22) - 1,
+	SCENE_MAX_DEPTH: 128,
+	OP_KIND_MAX: 6,
+	PRIM_KIND_MAX: 16,
+});
+const L = LIMITS;
+
+export const MSG = Object.freeze({
+	HELLO: 1, WELCOME: 2, ERROR: 3, PING: 4, PONG: 5, OK: 6,
+	SESSION_CREATE: 7, SESSION_JOIN: 8, SESSION_LEAVE: 9,
+	SESSION_INFO: 10, SCENE_LOAD: 11, SCENE_STATE: 12, EDIT: 13,
+	EDIT_APPLIED: 14, CAMERA: 15, VIEW: 16, FRAME: 17, PICK: 18,
+	PICK_RESULT: 19, SNAPSHOT: 20, GET_STATS: 21, STATS: 22,
+});
+
+/* Header flag bits; each is defined for some types only. */
+export const FLAG = Object.freeze({
+	FATAL: 0x0001,       /* ERROR */
+	INTERACTING: 0x0001, /* CAMERA, EDIT, EDIT_APPLIED */
+	STILL: 0x0001,       /* FRAME */
+	SNAPSHOT: 0x0002,    /* FRAME */
+});
+
+export const ROLE = Object.freeze({ EDITOR: 1, VIEWER: 2 });
+export const ENC = Object.freeze({ JPEG: 1, PNG: 2, RAW: 3 });
+/* HELLO.encodings: bit (encoding - 1) set = the client decodes it. */
+export const ENCODINGS_ALL = 0x07;
+export const EDIT = Object.freeze({ SET: 1, INSERT: 2, REMOVE: 3, REPLACE: 4 });
+export const FIELD = Object.freeze({
+	TRANSLATE: 1, ROTATE: 2, COLOR: 3, PARAM0: 16,
+	BLEND: 32, RANGE: 33, OP_KIND: 34,
+});
+
+/* The project's error list: the same numbers travel in ERROR messages. */
+const ERRORS = [
+	['OK', 'success'],
+	['EINVAL', 'invalid argument'],
+	['ENOMEM', 'out of memory'],
+	['ERANGE', 'value out of range'],
+	['ELIMIT', 'a named limit was exceeded'],
+	['EIO', 'input/output error'],
+	['EPARSE', 'malformed input'],
+	['ENOTFOUND', 'no such object'],
+	['EEXIST', 'object already exists'],
+	['ENOTSUP', 'operation not supported'],
+	['ESTATE', 'operation not allowed in this state'],
+	['EAGAIN', 'more input needed'],
+	['EPROTO_MAGIC', 'bad protocol magic'],
+	['EPROTO_VERSION', 'unsupported protocol version'],
+	['EPROTO_TYPE', 'unknown message type'],
+	['EPROTO_LENGTH', 'payload length invalid or over the limit'],
+	['EPROTO_TRUNCATED', 'message body shorter than its fields'],
+	['EPROTO_TRAILING', "bytes left after the message's fields"],
+	['EPROTO_COUNT', 'a count exceeds its limit or the bytes left'],
+	['EPROTO_FLAGS', 'reserved flag bits set'],
+	['ENONFINITE', 'NaN or infinite number where a finite one is required'],
+	['EDEPTH', 'nesting deeper than the limit'],
+	['EAUTH', 'authentication failed'],
+	['EPERM', 'not permitted for this role'],
+	['ENOSESSION', 'no such session'],
+	['ENONODE', 'no node with that id'],
+	['EDUPID', 'duplicate node id'],
+	['EBUSY', 'resource busy, try again'],
+	['ETIMEOUT', 'timed out'],
+	['EGL', 'graphics driver error'],
+	['ECODEC', 'image encoding or decoding failed'],
+	['ESTRING', 'string not valid UTF-8 or contains NUL'],
+	['EENUM', 'enumeration value out of range'],
+	['ECLOSED', 'connection closed'],
+];
+
+/* ERR.ENOMEM === 2: magnitudes, as ERROR.code carries them. */
+export const ERR = Object.freeze(
+	Object.fromEntries(ERRORS.map(([name], i) => [name, i])));
+
+/* "ENOMEM" for 2 (or -2); "UNKNOWN" for codes not in the list. */
+export function errName(code) {
+	const e = ERRORS[Math.abs(code)];
+	return e ? e[0] : 'UNKNOWN';
+}
+
+/* The human sentence of an error code. */
+export function errText(code) {
+	const e = ERRORS[Math.abs(code)];
+	return e ? e[1] : 'unknown error';
+}
+
+/* Every failure of this module: code is the symbolic name ("EPROTO_MAGIC"),
+ * errno its number. */
+export class ProtoError extends Error {
+	constructor(code, message) {
+		super(message);
+		this.name = 'ProtoError';
+		this.code = code;
+		this.errno = ERR[code] ?? 0;
+	}
+}
+
+/* ---- The type table ------------------------------------------------------ */
+
+const FROM_CLIENT = 1, FROM_SERVER = 2, FROM_BOTH = 3;
+const strMax = (n) => 2 + n;
+const BULK = L.MAX_PAYLOAD;
+
+/* name, who sends it, the flag bits it defines, its largest valid payload
+ * (so a header announcing more is refused before its payload arrives). */
+const TYPES = [];
+function T(type, name, from, flags, max) {
+	TYPES[type] = Object.freeze({ type, name, from, flags, max });
+}
+T(1, 'HELLO', FROM_CLIENT, 0,
+	2 + 2 + 1 + 4 + strMax(L.MAX_NAME) + strMax(L.MAX_TOKEN));
+T(2, 'WELCOME', FROM_SERVER, 0, 2 + 4 * 4 + 2 * 3 + strMax(L.MAX_NAME));
+T(3, 'ERROR', FROM_BOTH, FLAG.FATAL, 2 + strMax(L.MAX_ERROR_TEXT));
+T(4, 'PING', FROM_BOTH, 0, 8);
+T(5, 'PONG', FROM_BOTH, 0, 8);
+T(6, 'OK', FROM_SERVER, 0, 0);
+T(7, 'SESSION_CREATE', FROM_CLIENT, 0, 1 + strMax(L.MAX_NAME));
+T(8, 'SESSION_JOIN', FROM_CLIENT, 0, 1 + strMax(L.MAX_NAME));
+T(9, 'SESSION_LEAVE', FROM_CLIENT, 0, 0);
+T(10, 'SESSION_INFO', FROM_SERVER, 0, 4 + 4 + 1 + strMax(L.MAX_NAME) + 2 +
+	L.MAX_MEMBERS * (4 + 1 + strMax(L.MAX_NAME)));
+T(11, 'SCENE_LOAD', FROM_CLIENT, 0, BULK);
+T(12, 'SCENE_STATE', FROM_SERVER, 0, BULK);
+T(13, 'EDIT', FROM_CLIENT, FLAG.INTERACTING, BULK);
+T(14, 'EDIT_APPLIED', FROM_SERVER, FLAG.INTERACTING, BULK);
+T(15, 'CAMERA', FROM_CLIENT, FLAG.INTERACTING, 40);
+T(16, 'VIEW', FROM_CLIENT, 0, 8);
+T(17, 'FRAME', FROM_SERVER, FLAG.STILL | FLAG.SNAPSHOT, BULK);
+T(18, 'PICK', FROM_CLIENT, 0, 4);
+T(19, 'PICK_RESULT', FROM_SERVER, 0, 24);
+T(20, 'SNAPSHOT', FROM_CLIENT, 0, 1);
+T(21, 'GET_STATS', FROM_CLIENT, 0, 0);
+T(22, 'STATS', FROM_SERVER, 0, 64);
+
+function typeInfo(type) {
+	return Number.isInteger(type) ? TYPES[type] ?? null : null;
+}
+
+/* "FRAME" for 17; null when type is not a message type. */
+export function typeName(type) {
+	const t = typeInfo(type);
+	return t ? t.name : null;
+}
+
+/* ---- Byte helpers -------------------------------------------------------- */
+
+const utf8enc = new TextEncoder();
+const utf8dec = new TextDecoder('utf-8', { fatal: true });
+
+function toU8(bytes) {
+	if (bytes instanceof Uint8Array) {
+		return bytes;
+	}
+	if (bytes instanceof ArrayBuffer) {
+		return new Uint8Array(bytes);
+	}
+	if (ArrayBuffer.isView(bytes)) {
+		return new Uint8Array(bytes.buffer, bytes.byteOffset,
+			bytes.byteLength);
+	}
+	throw new ProtoError('EINVAL', 'expected bytes');
+}
+
+/* Offset of the first byte of p[0..n) that breaks strict UTF-8 (overlong
+ * forms, surrogates, code points above U+10FFFF, cut sequences) or is NUL;
+ * n when the whole string is valid. The same rule as bc__utf8_check. */
+export function utf8Check(p, start = 0, n = p.length - start) {
+	let i = 0;
+	while (i < n) {
+		const c = p[start + i];
+		if (c >= 0x01 && c <= 0x7f) {
+			i++;
+			continue;
+		}
+		/* The lead byte fixes the length and the range of the second
+		 * byte, which excludes overlong forms, surrogates and code
+		 * points over U+10FFFF (RFC 3629, section 4). */
+		let len, lo = 0x80, hi = 0xbf;
+		if (c >= 0xc2 && c <= 0xdf) {
+			len = 2;
+		} else if (c === 0xe0) {
+			len = 3;
+			lo = 0xa0;
+		} else if (c === 0xed) {
+			len = 3;
+			hi = 0x9f;
+		} else if (c >= 0xe1 && c <= 0xef) {
+			len = 3;
+		} else if (c === 0xf0) {
+			len = 4;
+			lo = 0x90;
+		} else if (c >= 0xf1 && c <= 0xf3) {
+			len = 4;
+		} else if (c === 0xf4) {
+			len = 4;
+			hi = 0x8f;
+		} else {
+			return i;
+		}
+		if (n - i < len) {
+			return i;
+		}
+		const c1 = p[start + i + 1];
+		if (c1 < lo || c1 > hi) {
+			return i;
+		}
+		for (let k = 2; k < len; k++) {
+			const ck = p[start + i + k];
+			if (ck < 0x80 || ck > 0xbf) {
+				return i;
+			}
+		}
+		i += len;
+	}
+	return n;
+}
+
+/* Finite means the exponent is not all ones; tested on the bits. */
+const bitsFinite = (u) => (u & 0x7f800000) !== 0x7f800000;
+
+/* ---- Decoding -------------------------------------------------------------- */
+
+/* Smallest encodings of repeated elements, for the count-versus-bytes-left
+ * checks (the same numbers as protocol/decode.c). */
+const MEMBER_MIN = 7; /* u32 id, u8 role, empty name */
+const OP_MIN = 5;     /* REMOVE: u8 kind, u32 node */
+const FIELD_MIN = 6;  /* u8 field, u8 count, one f32 */
+const RECT_MIN = 13;  /* 4 x u16, u32 length, one byte */
+
+/* A read cursor over a payload; every read checks the bytes left first, and
+ * the first field that fails decides the error (fields are checked in wire
+ * order, as soon as each is read). */
+class Dec {
+	constructor(bytes, name) {
+		this.b = bytes;
+		this.dv = new DataView(bytes.buffer, bytes.byteOffset,
+			bytes.byteLength);
+		this.pos = 0;
+		this.name = name;
+	}
+
+	left() {
+		return this.b.length - this.pos;
+	}
+
+	fail(code, reason) {
+		throw new ProtoError(code,
+			`${this.name}: ${reason} (payload byte ${this.pos})`);
+	}
+
+	need(what, n) {
+		if (this.left() < n) {
+			this.fail('EPROTO_TRUNCATED',
+				`${what} needs ${n} bytes, ${this.left()} left`);
+		}
+	}
+
+	u8(what) {
+		this.need(what, 1);
+		return this.b[this.pos++];
+	}
+
+	u16(what) {
+		this.need(what, 2);
+		const v = this.dv.getUint16(this.pos, true);
+		this.pos += 2;
+		return v;
+	}
+
+	u32(what) {
+		this.need(what, 4);
+		const v = this.dv.getUint32(this.pos, true);
+		this.pos += 4;
+		return v;
+	}
+
+	u64(what) {
+		this.need(what, 8);
+		const v = this.dv.getBigUint64(this.pos, true);
+		this.pos += 8;
+		return v;
+	}
+
+	/* A u32 id that must not be 0. */
+	id(what) {
+		const v = this.u32(what);
+		if (v === 0) {
+			this.fail('ERANGE', `${what} is 0`);
+		}
+		return v;
+	}
+
+	/* Every f32 of a payload must be finite. */
+	f32(what) {
+		this.need(what, 4);
+		const u = this.dv.getUint32(this.pos, true);
+		if (!bitsFinite(u)) {
+			this.pos += 4;
+			this.fail('ENONFINITE', `${what} is not finite (bits ` +
+				`${u.toString(16).padStart(8, '0')})`);
+		}
+		const v = this.dv.getFloat32(this.pos, true);
+		this.pos += 4;
+		return v;
+	}
+
+	/* A finite f32 with |v| <= MAX_ABS. */
+	f32abs(what) {
+		const v = this.f32(what);
+		if (Math.abs(v) > L.MAX_ABS) {
+			this.fail('ERANGE', `|${what}| = ${Math.abs(v)} is over ` +
+				`${L.MAX_ABS}`);
+		}
+		return v;
+	}
+
+	f32nonneg(what) {
+		const v = this.f32(what);
+		if (v < 0) {
+			this.fail('ERANGE', `${what} = ${v} is negative`);
+		}
+		return v;
+	}
+
+	range(what, v, lo, hi) {
+		if (v < lo || v > hi) {
+			this.fail('ERANGE', `${what} = ${v} is outside ${lo}..${hi}`);
+		}
+		return v;
+	}
+
+	u8range(what, lo, hi) {
+		return this.range(what, this.u8(what), lo, hi);
+	}
+
+	u16range(what, lo, hi) {
+		return this.range(what, this.u16(what), lo, hi);
+	}
+
+	u32range(what, lo, hi) {
+		return this.range(what, this.u32(what), lo, hi);
+	}
+
+	role(what) {
+		const v = this.u8(what);
+		if (v === 0 || v > ROLE.VIEWER) {
+			this.fail('EENUM', `${what} = ${v} is not a role`);
+		}
+		return v;
+	}
+
+	encoding(what) {
+		const v = this.u8(what);
+		if (v === 0 || v > ENC.RAW) {
+			this.fail('EENUM', `${what} = ${v} is not an encoding`);
+		}
+		return v;
+	}
+
+	/* u16 byte length (min..max), then that many bytes of strict UTF-8. */
+	str(what, min, max) {
+		const n = this.u16(what);
+		if (n < min || n > max) {
+			this.fail('EPROTO_LENGTH',
+				`${what} length ${n} is outside ${min}..${max}`);
+		}
+		this.need(what, n);
+		const bad = utf8Check(this.b, this.pos, n);
+		if (bad < n) {
+			this.pos += bad;
+			this.fail('ESTRING',
+				`${what}: byte ${bad} breaks UTF-8 or is NUL`);
+		}
+		const s = utf8dec.decode(this.b.subarray(this.pos, this.pos + n));
+		this.pos += n;
+		return s;
+	}
+
+	/* u32 byte length (>= 1), then that many opaque bytes (copied). */
+	blob(what) {
+		const n = this.u32(what);
+		if (n === 0) {
+			this.fail('EPROTO_LENGTH', `${what} is empty`);
+		}
+		this.need(what, n);
+		const b = this.b.slice(this.pos, this.pos + n);
+		this.pos += n;
+		return b;
+	}
+
+	/* A count n in min..max whose n elements of at least elem bytes each
+	 * must fit in what is left: a lying count fails before any element
+	 * is read. */
+	count(what, n, min, max, elem) {
+		if (n < min || n > max) {
+			this.fail('EPROTO_COUNT', `${what} ${n} is outside ` +
+				`${min}..${max}`);
+		}
+		if (n * elem > this.left()) {
+			this.fail('EPROTO_COUNT', `${what} ${n} needs at least ` +
+				`${n * elem} bytes, ${this.left()} left`);
+		}
+	}
+}
+
+/* Values a field number takes: 0 = not a field, -1 = a shape parameter
+ * (1..MAX_FIELD_VALUES values). */
+function fieldValues(field) {
+	switch (field) {
+	case FIELD.TRANSLATE:
+	case FIELD.COLOR:
+		return 3;
+	case FIELD.ROTATE:
+		return 4;
+	case FIELD.BLEND:
+	case FIELD.RANGE:
+	case FIELD.OP_KIND:
+		return 1;
+	default:
+		return field >= FIELD.PARAM0 &&
+			field < FIELD.PARAM0 + L.MAX_PRIM_PARAMS ? -1 : 0;
+	}
+}
+
+function decField(d, seen) {
+	const field = d.u8('field');
+	const want = fieldValues(field);
+	if (want === 0) {
+		d.fail('EENUM', `field ${field} is not a field number`);
+	}
+	if (seen.has(field)) {
+		d.fail('EPARSE', `field ${field} given twice`);
+	}
+	seen.add(field);
+	const count = d.u8('field.count');
+	const ok = want > 0 ? count === want
+		: count >= 1 && count <= L.MAX_FIELD_VALUES;
+	if (!ok) {
+		d.fail('EPROTO_COUNT', `field ${field} has ${count} values, ` +
+			`expected ${want > 0 ? want : '1..' + L.MAX_FIELD_VALUES}`);
+	}
+	if (count * 4 > d.left()) {
+		d.fail('EPROTO_COUNT', `field ${field}: ${count} values need ` +
+			`${count * 4} bytes, ${d.left()} left`);
+	}
+	const values = [];
+	for (let k = 0; k < count; k++) {
+		values.push(d.f32abs('field value'));
+	}
+	if (field === FIELD.OP_KIND) {
+		const v = values[0];
+		if (!(v >= 1 && v <= L.OP_KIND_MAX && Number.isInteger(v))) {
+			d.fail('EENUM', `operator kind ${v} is not an integer ` +
+				`1..${L.OP_KIND_MAX}`);
+		}
+	}
+	return { field, values };
+}
+
+function decOps(d) {
+	const nops = d.u16('op_count');
+	d.count('op_count', nops, 1, L.MAX_EDIT_OPS, OP_MIN);
+	const ops = [];
+	for (let i = 0; i < nops; i++) {
+		const kind = d.u8('op.kind');
+		switch (kind) {
+		case EDIT.SET: {
+			const node = d.id('op.node');
+			const nfields = d.u8('op.field_count');
+			d.count('op.field_count', nfields, 1, L.MAX_SET_FIELDS,
+				FIELD_MIN);
+			const seen = new Set();
+			const fields = [];
+			for (let k = 0; k < nfields; k++) {
+				fields.push(decField(d, seen));
+			}
+			ops.push({ kind, node, fields });
+			break;
+		}
+		case EDIT.INSERT: {
+			const parent = d.id('op.parent');
+			const position = d.u32('op.position');
+			const subtree = d.blob('op.subtree');
+			ops.push({ kind, parent, position, subtree });
+			break;
+		}
+		case EDIT.REMOVE:
+			ops.push({ kind, node: d.id('op.node') });
+			break;
+		case EDIT.REPLACE: {
+			const node = d.id('op.node');
+			ops.push({ kind, node, subtree: d.blob('op.subtree') });
+			break;
+		}
+		default:
+			d.fail('EENUM', `op ${i}: kind ${kind} is unknown`);
+		}
+	}
+	return ops;
+}
+
+function decFrame(d, flags, m) {
+	const snap = (flags & FLAG.SNAPSHOT) !== 0;
+	const full = snap || (flags & FLAG.STILL) !== 0;
+	m.frame_no = d.u32('frame_no');
+	m.order = d.u64('order');
+	m.camera_seq = d.u32('camera_seq');
+	m.encoding = d.encoding('encoding');
+	if (snap && m.encoding === ENC.JPEG) {
+		d.fail('EENUM', 'a snapshot cannot be JPEG');
+	}
+	m.width = d.u16range('width', 1, L.MAX_DIM);
+	m.height = d.u16range('height', 1, L.MAX_DIM);
+	m.image_width = d.u16range('image_width', full ? m.width : 1, m.width);
+	m.image_height = d.u16range('image_height', full ? m.height : 1,
+		m.height);
+	const nrects = d.u16('rect_count');
+	d.count('rect_count', nrects, 1, snap ? 1 : L.MAX_RECTS, RECT_MIN);
+	m.rects = [];
+	for (let i = 0; i < nrects; i++) {
+		const x = d.u16('rect.x');
+		const y = d.u16('rect.y');
+		const w = d.u16('rect.w');
+		/* A snapshot's one rectangle is the whole image. */
+		if (w < (snap ? m.image_width : 1) || x + w > m.image_width) {
+			d.fail('ERANGE', `rect ${i}: x ${x} + w ${w} is outside ` +
+				`1..${m.image_width}`);
+		}
+		const h = d.u16('rect.h');
+		if (h < (snap ? m.image_height : 1) || y + h > m.image_height) {
+			d.fail('ERANGE', `rect ${i}: y ${y} + h ${h} is outside ` +
+				`1..${m.image_height}`);
+		}
+		const n = d.u32('rect.length');
+		const raw = w * h * 4;
+		if (n === 0 || (m.encoding === ENC.RAW && n !== raw)) {
+			d.fail('EPROTO_LENGTH',
+				`rect ${i}: length ${n} (raw needs ${raw})`);
+		}
+		d.need('rect.data', n);
+		const data = d.b.slice(d.pos, d.pos + n);
+		d.pos += n;
+		m.rects.push({ x, y, w, h, data });
+	}
+}
+
+const STATS_FLOATS = ['render_ms_last', 'render_ms_avg', 'encode_ms_last',
+	'encode_ms_avg', 'edit_ms_avg', 'fps'];
+
+function decBody(d, m) {
+	switch (m.type) {
+	case MSG.HELLO: {
+		m.version_min = d.u16('version_min');
+		if (m.version_min === 0) {
+			d.fail('ERANGE', 'version_min is 0');
+		}
+		m.version_max = d.u16('version_max');
+		if (m.version_max < m.version_min) {
+			d.fail('ERANGE', `version_max ${m.version_max} < ` +
+				`version_min ${m.version_min}`);
+		}
+		m.encodings = d.u8('encodings');
+		if (m.encodings & ~ENCODINGS_ALL) {
+			d.fail('EPROTO_FLAGS',
+				`encodings ${m.encodings} has reserved bits`);
+		}
+		m.max_frame_bytes = d.u32('max_frame_bytes');
+		if (m.max_frame_bytes !== 0 &&
+		    m.max_frame_bytes < L.MIN_FRAME_BYTES) {
+			d.fail('ERANGE', `max_frame_bytes ${m.max_frame_bytes} ` +
+				`is under ${L.MIN_FRAME_BYTES}`);
+		}
+		m.client_name = d.str('client_name', 0, L.MAX_NAME);
+		m.token = d.str('token', 0, L.MAX_TOKEN);
+		break;
+	}
+	case MSG.WELCOME:
+		m.version = d.u16range('version', 1, 0xffff);
+		m.connection_id = d.id('connection_id');
+		m.max_payload = d.u32range('max_payload', L.HELLO_MAX_PAYLOAD,
+			L.MAX_PAYLOAD);
+		m.max_frame_bytes = d.u32range('max_frame_bytes',
+			L.MIN_FRAME_BYTES, L.MAX_PAYLOAD);
+		m.max_nodes = d.u32range('max_nodes', 1, L.SCENE_MAX_NODES);
+		m.max_dim = d.u16range('max_dim', 1, L.MAX_DIM);
+		m.max_members = d.u16range('max_members', 1, L.MAX_MEMBERS);
+		m.max_edit_ops = d.u16range('max_edit_ops', 1, L.MAX_EDIT_OPS);
+		m.server_id = d.str('server_id', 0, L.MAX_NAME);
+		break;
+	case MSG.ERROR:
+		m.code = d.u16range('code', 1, 0xffff);
+		m.text = d.str('text', 0, L.MAX_ERROR_TEXT);
+		break;
+	case MSG.PING:
+	case MSG.PONG:
+		m.stamp = d.u64('stamp');
+		break;
+	case MSG.OK:
+	case MSG.SESSION_LEAVE:
+	case MSG.GET_STATS:
+		break;
+	case MSG.SESSION_CREATE:
+	case MSG.SESSION_JOIN:
+		m.role = d.role('role');
+		m.name = d.str('name', 1, L.MAX_NAME);
+		break;
+	case MSG.SESSION_INFO: {
+		m.session_id = d.id('session_id');
+		m.member_id = d.id('member_id');
+		m.role = d.role('role');
+		m.name = d.str('name', 1, L.MAX_NAME);
+		const n = d.u16('member_count');
+		d.count('member_count', n, 1, L.MAX_MEMBERS, MEMBER_MIN);
+		m.members = [];
+		for (let i = 0; i < n; i++) {
+			const id = d.id('member.id');
+			const role = d.role('member.role');
+			const name = d.str('member.name', 0, L.MAX_NAME);
+			m.members.push({ id, role, name });
+		}
+		break;
+	}
+	case MSG.SCENE_LOAD:
+		m.scene = d.blob('scene');
+		break;
+	case MSG.SCENE_STATE:
+		m.order = d.u64('order');
+		m.author = d.u32('author');
+		m.author_seq = d.u32('author_seq');
+		m.scene = d.blob('scene');
+		break;
+	case MSG.EDIT:
+		m.ops = decOps(d);
+		break;
+	case MSG.EDIT_APPLIED:
+		m.order = d.u64('order');
+		if (m.order === 0n) {
+			d.fail('ERANGE', 'order is 0');
+		}
+		m.author = d.id('author');
+		m.author_seq = d.u32('author_seq');
+		m.ops = decOps(d);
+		break;
+	case MSG.CAMERA:
+		for (const v of ['eye', 'target', 'up']) {
+			m[v] = ['x', 'y', 'z'].map((c) => d.f32abs(`${v}.${c}`));
+		}
+		m.fov_y_deg = d.f32('fov_y_deg');
+		if (!(m.fov_y_deg > 0 && m.fov_y_deg < 180)) {
+			d.fail('ERANGE',
+				`fov_y_deg ${m.fov_y_deg} is outside (0, 180)`);
+		}
+		break;
+	case MSG.VIEW:
+		m.width = d.u16range('width', 1, L.MAX_DIM);
+		m.height = d.u16range('height', 1, L.MAX_DIM);
+		m.encoding = d.encoding('encoding');
+		m.quality_interactive = d.u8range('quality_interactive', 1,
+			L.MAX_QUALITY);
+		m.quality_still = d.u8range('quality_still', 1, L.MAX_QUALITY);
+		m.downscale = d.u8range('downscale', 1, L.MAX_DOWNSCALE);
+		break;
+	case MSG.FRAME:
+		decFrame(d, m.flags, m);
+		break;
+	case MSG.PICK:
+		m.x = d.u16('x');
+		m.y = d.u16('y');
+		break;
+	case MSG.PICK_RESULT:
+		m.x = d.u16('x');
+		m.y = d.u16('y');
+		m.node = d.u32('node');
+		m.position = [];
+		for (const c of ['x', 'y', 'z']) {
+			const v = d.f32(`position.${c}`);
+			if (m.node === 0 && v !== 0) {
+				d.fail('ERANGE', `a miss has position.${c} != 0`);
+			}
+			m.position.push(v);
+		}
+		m.depth = d.f32nonneg('depth');
+		if (m.node === 0 && m.depth !== 0) {
+			d.fail('ERANGE', 'a miss has depth != 0');
+		}
+		break;
+	case MSG.SNAPSHOT:
+		m.encoding = d.encoding('encoding');
+		if (m.encoding === ENC.JPEG) {
+			d.fail('EENUM', 'a snapshot cannot be JPEG');
+		}
+		break;
+	case MSG.STATS:
+		for (const k of ['uptime_ms', 'frames', 'bytes', 'order']) {
+			m[k] = d.u64(k);
+		}
+		m.sessions = d.u32('sessions');
+		m.clients = d.u32('clients');
+		for (const k of STATS_FLOATS) {
+			m[k] = d.f32nonneg(k);
+		}
+		break;
+	default:
+		d.fail('EPROTO_TYPE', `type ${m.type} is unknown`);
+	}
+	if (d.left()) {
+		d.fail('EPROTO_TRAILING', `${d.left()} bytes after the last field`);
+	}
+	return m;
+}
+
+/* Decodes one payload of the given type outside any stream: no header, no
+ * side or stage rules, only the type's own checks (its flags and maximum
+ * size included). Returns the message; throws a ProtoError. */
+export function decodePayload(type, flags, seq, payload) {
+	const t = typeInfo(type);
+	if (!t) {
+		throw new ProtoError('EPROTO_TYPE', `message type ${type} is unknown`);
+	}
+	if (flags & ~t.flags) {
+		throw new ProtoError('EPROTO_FLAGS',
+			`${t.name} with undefined flags ${flags & ~t.flags}`);
+	}
+	const p = toU8(payload);
+	if (p.length > t.max) {
+		throw new ProtoError('EPROTO_LENGTH', `${t.name} payload length ` +
+			`${p.length} is over its maximum ${t.max}`);
+	}
+	return decBody(new Dec(p, t.name), { type, flags, seq });
+}
+
+/* ---- The push reader ------------------------------------------------------- */
+
+const SIDES = { any: FROM_BOTH, server: FROM_CLIENT, client: FROM_SERVER };
+
+function clampPayload(max) {
+	return !max || max > L.MAX_PAYLOAD ? L.MAX_PAYLOAD : max;
+}
+
+export class Reader {
+	/* side: 'any' (tools, tests), 'server' (reads what clients send) or
+	 * 'client' (reads what servers send). maxPayload: 0 = the protocol's
+	 * maximum; a client sets its HELLO max_frame_bytes. awaitHello: only
+	 * HELLO and PING, with small payloads, until helloDone(). */
+	constructor({ side = 'any', maxPayload = 0, awaitHello = false } = {}) {
+		if (!(side in SIDES)) {
+			throw new ProtoError('EINVAL', `side ${side} is unknown`);
+		}
+		this.want = SIDES[side];
+		this.maxPayload = clampPayload(maxPayload);
+		this.preHello = awaitHello;
+		this.buf = new Uint8Array(0);
+		this.len = 0; /* bytes buffered */
+		this.pos = 0; /* bytes parsed */
+		this.nmsgs = 0;
+		this.err = null; /* the sticky ProtoError */
+	}
+
+	/* The payload limit now in force. */
+	limit() {
+		return this.preHello ? Math.min(this.maxPayload,
+			L.HELLO_MAX_PAYLOAD) : this.maxPayload;
+	}
+
+	setError(code, message) {
+		this.err = new ProtoError(code, message);
+		return this.err;
+	}
+
+	helloDone() {
+		this.preHello = false;
+	}
+
+	setMaxPayload(max) {
+		this.maxPayload = clampPayload(max);
+	}
+
+	/* Bytes buffered and not yet returned as messages. */
+	get pending() {
+		return this.len - this.pos;
+	}
+
+	/* Appends bytes (copied). Throws the sticky error, or ELIMIT when more
+	 * than one whole message plus READ_SLACK would wait unparsed (drain
+	 * with next() between feeds). */
+	feed(bytes) {
+		if (this.err) {
+			throw this.err;
+		}
+		const b = toU8(bytes);
+		if (b.length === 0) {
+			return;
+		}
+		/* Drop what was parsed: only the unparsed tail moves. */
+		if (this.pos > 0) {
+			this.buf.copyWithin(0, this.pos, this.len);
+			this.len -= this.pos;
+			this.pos = 0;
+		}
+		const ceiling = HEADER_SIZE + this.limit() + L.READ_SLACK;
+		if (b.length > ceiling - this.len) {
+			throw this.setError('ELIMIT', `${this.len} unparsed bytes ` +
+				`plus ${b.length} more exceed the reader's ${ceiling}`);
+		}
+		if (this.len + b.length > this.buf.length) {
+			/* Grows with the bytes that arrive, never with what a
+			 * header announces. */
+			let cap = this.buf.length || 4096;
+			while (cap < this.len + b.length) {
+				cap = cap > ceiling / 2 ? ceiling : cap * 2;
+			}
+			const grown = new Uint8Array(cap);
+			grown.set(this.buf.subarray(0, this.len));
+			this.buf = grown;
+		}
+		this.buf.set(b, this.len);
+		this.len += b.length;
+	}
+
+	/* Checks the first avail (< 16 possible) header bytes field by field,
+	 * so a stream that is not ours fails on its first wrong byte. */
+	checkHeader(h, avail) {
+		for (let i = 0; i < 4 && i < avail; i++) {
+			if (h[i] !== MAGIC[i]) {
+				throw this.setError('EPROTO_MAGIC', `header byte ${i} ` +
+					`is 0x${h[i].toString(16)}, not the magic "BCST" ` +
+					`(message ${this.nmsgs + 1})`);
+			}
+		}
+		if (avail < 5) {
+			return;
+		}
+		if (h[4] !== VERSION) {
+			throw this.setError('EPROTO_VERSION',
+				`version ${h[4]} is not ${VERSION}`);
+		}
+		if (avail < 6) {
+			return;
+		}
+		const t = typeInfo(h[5]);
+		if (!t) {
+			throw this.setError('EPROTO_TYPE',
+				`message type ${h[5]} is unknown`);
+		}
+		if (!(t.from & this.want)) {
+			throw this.setError('EPROTO_TYPE', `${t.name} is never sent ` +
+				(this.want === FROM_CLIENT ? 'by clients' : 'by servers'));
+		}
+		if (this.preHello && h[5] !== MSG.HELLO && h[5] !== MSG.PING) {
+			throw this.setError('ESTATE', `${t.name} before HELLO`);
+		}
+		if (avail < 8) {
+			return;
+		}
+		const flags = h[6] | (h[7] << 8);
+		if (flags & ~t.flags) {
+			throw this.setError('EPROTO_FLAGS',
+				`${t.name} with undefined flags ${flags & ~t.flags}`);
+		}
+		if (avail < 12) {
+			return;
+		}
+		const len = (h[8] | h[9] << 8 | h[10] << 16 | h[11] << 24) >>> 0;
+		if (len > t.max) {
+			throw this.setError('EPROTO_LENGTH', `${t.name} payload ` +
+				`length ${len} is over its maximum ${t.max}`);
+		}
+		if (len > this.limit()) {
+			throw this.setError('EPROTO_LENGTH', `${t.name} payload ` +
+				`length ${len} is over the limit ${this.limit()}`);
+		}
+	}
+
+	/* The next whole message, or null when more bytes are needed. Throws
+	 * the (sticky) ProtoError of a bad stream; header errors are thrown as
+	 * soon as the offending byte has arrived. */
+	next() {
+		if (this.err) {
+			throw this.err;
+		}
+		const avail = this.len - this.pos;
+		if (avail === 0) {
+			return null;
+		}
+		const h = this.buf.subarray(this.pos,
+			this.pos + Math.min(avail, HEADER_SIZE));
+		this.checkHeader(h, h.length);
+		if (h.length < HEADER_SIZE) {
+			return null;
+		}
+		const dv = new DataView(h.buffer, h.byteOffset, HEADER_SIZE);
+		const len = dv.getUint32(8, true);
+		if (avail - HEADER_SIZE < len) {
+			return null;
+		}
+		const type = h[5];
+		const flags = dv.getUint16(6, true);
+		const seq = dv.getUint32(12, true);
+		const start = this.pos + HEADER_SIZE;
+		let m;
+		try {
+			m = decBody(new Dec(this.buf.subarray(start, start + len),
+				TYPES[type].name), { type, flags, seq });
+		} catch (e) {
+			this.err = e;
+			throw e;
+		}
+		this.pos += HEADER_SIZE + len;
+		this.nmsgs++;
+		if (this.pos === this.len) {
+			this.pos = this.len = 0;
+		}
+		return m;
+	}
+
+	/* The stream has ended: throws EPROTO_TRUNCATED (sticky) when a partial
+	 * message is buffered. */
+	eof() {
+		if (this.err) {
+			throw this.err;
+		}
+		const left = this.len - this.pos;
+		if (left) {
+			throw this.setError('EPROTO_TRUNCATED', `stream ended ${left} ` +
+				`bytes into message ${this.nmsgs + 1}`);
+		}
+	}
+}
+
+/* ---- Encoding -------------------------------------------------------------- */
+
+/* A growable little-endian writer. Values that do not fit their wire width
+ * are refused here; everything else is judged by the decoder afterwards. */
+class Enc {
+	constructor() {
+		this.b = new Uint8Array(256);
+		this.dv = new DataView(this.b.buffer);
+		this.n = 0;
+	}
+
+	room(k) {
+		if (this.n + k <= this.b.length) {
+			return;
+		}
+		let cap = this.b.length * 2;
+		while (cap < this.n + k) {
+			cap *= 2;
+		}
+		const grown = new Uint8Array(cap);
+		grown.set(this.b.subarray(0, this.n));
+		this.b = grown;
+		this.dv = new DataView(grown.buffer);
+	}
+
+	int(what, v, max, code = 'ERANGE') {
+		if (!Number.isInteger(v) || v < 0 || v > max) {
+			throw new ProtoError(code, `encode: ${what} = ${v} does not ` +
+				`fit 0..${max}`);
+		}
+		return v;
+	}
+
+	u8(what, v, code) {
+		this.int(what, v, 0xff, code);
+		this.room(1);
+		this.b[this.n++] = v;
+	}
+
+	u16(what, v, code) {
+		this.int(what, v, 0xffff, code);
+		this.room(2);
+		this.dv.setUint16(this.n, v, true);
+		this.n += 2;
+	}
+
+	u32(what, v, code) {
+		this.int(what, v, 0xffffffff, code);
+		this.room(4);
+		this.dv.setUint32(this.n, v, true);
+		this.n += 4;
+	}
+
+	u64(what, v) {
+		let big;
+		try {
+			big = BigInt(v ?? 0);
+		} catch {
+			throw new ProtoError('ERANGE', `encode: ${what} is not an integer`);
+		}
+		if (big < 0n || big > 0xffffffffffffffffn) {
+			throw new ProtoError('ERANGE', `encode: ${what} does not fit u64`);
+		}
+		this.room(8);
+		this.dv.setBigUint64(this.n, big, true);
+		this.n += 8;
+	}
+
+	f32(what, v) {
+		if (typeof v !== 'number') {
+			throw new ProtoError('EINVAL', `encode: ${what} is not a number`);
+		}
+		this.room(4);
+		this.dv.setFloat32(this.n, v, true);
+		this.n += 4;
+	}
+
+	f32v(what, arr, n) {
+		if (!Array.isArray(arr) && !ArrayBuffer.isView(arr)) {
+			throw new ProtoError('EINVAL', `encode: ${what} is not an array`);
+		}
+		if (arr.length !== n) {
+			throw new ProtoError('EPROTO_COUNT',
+				`encode: ${what} has ${arr.length} values, not ${n}`);
+		}
+		for (let i = 0; i < n; i++) {
+			this.f32(what, arr[i]);
+		}
+	}
+
+	raw(b) {
+		this.room(b.length);
+		this.b.set(b, this.n);
+		this.n += b.length;
+	}
+
+	str(what, s) {
+		const b = utf8enc.encode(s ?? '');
+		if (b.length > 0xffff) {
+			throw new ProtoError('EPROTO_LENGTH',
+				`encode: ${what} length ${b.length} is over 65535`);
+		}
+		this.u16(what, b.length);
+		this.raw(b);
+	}
+
+	blob(what, bytes) {
+		const b = toU8(bytes ?? new Uint8Array(0));
+		this.u32(what, b.length);
+		this.raw(b);
+	}
+
+	count(what, arr, max) {
+		const n = Array.isArray(arr) ? arr.length : -1;
+		if (n < 0) {
+			throw new ProtoError('EINVAL', `encode: ${what} is not an array`);
+		}
+		if (n > max) {
+			throw new ProtoError('EPROTO_COUNT',
+				`encode: ${what} ${n} is over ${max}`);
+		}
+		return n;
+	}
+
+	bytes() {
+		return this.b.slice(0, this.n);
+	}
+}
+
+function encOps(w, ops) {
+	w.u16('op_count', w.count('op_count', ops, L.MAX_EDIT_OPS));
+	for (const op of ops) {
+		w.u8('op.kind', op.kind, 'EENUM');
+		switch (op.kind) {
+		case EDIT.SET:
+			w.u32('op.node', op.node);
+			w.u8('op.field_count',
+				w.count('op.field_count', op.fields, L.MAX_SET_FIELDS));
+			for (const f of op.fields) {
+				w.u8('field', f.field, 'EENUM');
+				const n = w.count('field.values', f.values,
+					L.MAX_FIELD_VALUES);
+				w.u8('field.count', n);
+				w.f32v('field.values', f.values, n);
+			}
+			break;
+		case EDIT.INSERT:
+			w.u32('op.parent', op.parent);
+			w.u32('op.position', op.position);
+			w.blob('op.subtree', op.subtree);
+			break;
+		case EDIT.REMOVE:
+			w.u32('op.node', op.node);
+			break;
+		case EDIT.REPLACE:
+			w.u32('op.node', op.node);
+			w.blob('op.subtree', op.subtree);
+			break;
+		default:
+			throw new ProtoError('EENUM', `encode: op kind ${op.kind}`);
+		}
+	}
+}
+
+function encBody(w, m) {
+	switch (m.type) {
+	case MSG.HELLO:
+		w.u16('version_min', m.version_min);
+		w.u16('version_max', m.version_max);
+		w.u8('encodings', m.encodings, 'EPROTO_FLAGS');
+		w.u32('max_frame_bytes', m.max_frame_bytes);
+		w.str('client_name', m.client_name);
+		w.str('token', m.token);
+		break;
+	case MSG.WELCOME:
+		w.u16('version', m.version);
+		w.u32('connection_id', m.connection_id);
+		w.u32('max_payload', m.max_payload);
+		w.u32('max_frame_bytes', m.max_frame_bytes);
+		w.u32('max_nodes', m.max_nodes);
+		w.u16('max_dim', m.max_dim);
+		w.u16('max_members', m.max_members);
+		w.u16('max_edit_ops', m.max_edit_ops);
+		w.str('server_id', m.server_id);
+		break;
+	case MSG.ERROR:
+		w.u16('code', m.code);
+		w.str('text', m.text);
+		break;
+	case MSG.PING:
+	case MSG.PONG:
+		w.u64('stamp', m.stamp);
+		break;
+	case MSG.OK:
+	case MSG.SESSION_LEAVE:
+	case MSG.GET_STATS:
+		break;
+	case MSG.SESSION_CREATE:
+	case MSG.SESSION_JOIN:
+		w.u8('role', m.role, 'EENUM');
+		w.str('name', m.name);
+		break;
+	case MSG.SESSION_INFO:
+		w.u32('session_id', m.session_id);
+		w.u32('member_id', m.member_id);
+		w.u8('role', m.role, 'EENUM');
+		w.str('name', m.name);
+		w.u16('member_count', w.count('members', m.members,
+			L.MAX_MEMBERS));
+		for (const mb of m.members) {
+			w.u32('member.id', mb.id);
+			w.u8('member.role', mb.role, 'EENUM');
+			w.str('member.name', mb.name);
+		}
+		break;
+	case MSG.SCENE_LOAD:
+		w.blob('scene', m.scene);
+		break;
+	case MSG.SCENE_STATE:
+		w.u64('order', m.order);
+		w.u32('author', m.author);
+		w.u32('author_seq', m.author_seq);
+		w.blob('scene', m.scene);
+		break;
+	case MSG.EDIT:
+		encOps(w, m.ops);
+		break;
+	case MSG.EDIT_APPLIED:
+		w.u64('order', m.order);
+		w.u32('author', m.author);
+		w.u32('author_seq', m.author_seq);
+		encOps(w, m.ops);
+		break;
+	case MSG.CAMERA:
+		w.f32v('eye', m.eye, 3);
+		w.f32v('target', m.target, 3);
+		w.f32v('up', m.up, 3);
+		w.f32('fov_y_deg', m.fov_y_deg);
+		break;
+	case MSG.VIEW:
+		w.u16('width', m.width);
+		w.u16('height', m.height);
+		w.u8('encoding', m.encoding, 'EENUM');
+		w.u8('quality_interactive', m.quality_interactive);
+		w.u8('quality_still', m.quality_still);
+		w.u8('downscale', m.downscale);
+		break;
+	case MSG.FRAME:
+		w.u32('frame_no', m.frame_no);
+		w.u64('order', m.order);
+		w.u32('camera_seq', m.camera_seq);
+		w.u8('encoding', m.encoding, 'EENUM');
+		w.u16('width', m.width);
+		w.u16('height', m.height);
+		w.u16('image_width', m.image_width);
+		w.u16('image_height', m.image_height);
+		w.u16('rect_count', w.count('rects', m.rects, L.MAX_RECTS),
+			'EPROTO_COUNT');
+		for (const r of m.rects) {
+			w.u16('rect.x', r.x);
+			w.u16('rect.y', r.y);
+			w.u16('rect.w', r.w);
+			w.u16('rect.h', r.h);
+			w.blob('rect.data', r.data);
+		}
+		break;
+	case MSG.PICK:
+		w.u16('x', m.x);
+		w.u16('y', m.y);
+		break;
+	case MSG.PICK_RESULT:
+		w.u16('x', m.x);
+		w.u16('y', m.y);
+		w.u32('node', m.node);
+		w.f32v('position', m.position, 3);
+		w.f32('depth', m.depth);
+		break;
+	case MSG.SNAPSHOT:
+		w.u8('encoding', m.encoding, 'EENUM');
+		break;
+	case MSG.STATS:
+		for (const k of ['uptime_ms', 'frames', 'bytes', 'order']) {
+			w.u64(k, m[k]);
+		}
+		w.u32('sessions', m.sessions);
+		w.u32('clients', m.clients);
+		for (const k of STATS_FLOATS) {
+			w.f32(k, m[k]);
+		}
+		break;
+	default:
+		throw new ProtoError('EPROTO_TYPE', `encode: type ${m.type}`);
+	}
+}
+
+/* Encodes one message, header included. Returns a new Uint8Array; throws a
+ * ProtoError with the code the decoder would give for an invalid field
+ * (ENONFINITE, ERANGE, EENUM, EPROTO_COUNT, ...), EPROTO_TYPE, EPROTO_FLAGS
+ * or EPROTO_LENGTH (payload over the type's maximum). */
+export function encode(m) {
+	const t = typeInfo(m.type);
+	if (!t) {
+		throw new ProtoError('EPROTO_TYPE', `encode: type ${m.type}`);
+	}
+	const flags = m.flags ?? 0;
+	const seq = m.seq ?? 0;
+	const w = new Enc();
+	/* The header first, its length patched in below. */
+	w.raw(MAGIC);
+	w.u8('version', VERSION);
+	w.u8('type', t.type);
+	w.u16('flags', flags, 'EPROTO_FLAGS');
+	w.u32('length', 0);
+	w.u32('seq', seq);
+	if (flags & ~t.flags) {
+		throw new ProtoError('EPROTO_FLAGS',
+			`encode: ${t.name} with undefined flags ${flags & ~t.flags}`);
+	}
+	encBody(w, m);
+	const len = w.n - HEADER_SIZE;
+	if (len > t.max) {
+		throw new ProtoError('EPROTO_LENGTH', `encode: ${t.name} payload ` +
+			`${len} is over its maximum ${t.max}`);
+	}
+	w.dv.setUint32(8, len, true);
+	const out = w.bytes();
+	/* Only what the decoder accepts goes out. */
+	decBody(new Dec(out.subarray(HEADER_SIZE), t.name), { type: t.type,
+		flags, seq });
+	return out;
+}
+
+/* ---- The scene encoding (PROTOCOL.md section 8, owned by blobtree) ------ */
+
+/*
+ * u8 flags (bit 0: a camera follows), [10 f32 camera: eye, target, up,
+ * fov_y_deg], u32 node_count, then the nodes in pre-order:
+ *   primitive: u8 kind (1..16), u32 id, 3 f32 translate, 4 f32 rotate
+ *              (quaternion x y z w), u8 has_color, [3 f32 color],
+ *              u8 nfloats (the kind's count, at most 8), nfloats f32
+ *   operator:  u8 0x80 | kind (1..6), u32 id, f32 blend, f32 range,
+ *              u32 child_count (>= 2)
+ * The checks and their order are those of bc_proto_scene_scan: what the
+ * bytes alone decide. Each kind's exact float count, parameter ranges,
+ * camera geometry and unique ids are the server's to check.
+ */
+const NODE_MIN = 5; /* tag and id: the least any node takes */
+const OP_TAG = 0x80;
+
+class SceneCur {
+	constructor(bytes) {
+		this.b = toU8(bytes);
+		this.dv = new DataView(this.b.buffer, this.b.byteOffset,
+			this.b.byteLength);
+		this.pos = 0;
+		this.node = 0;
+	}
+
+	left() {
+		return this.b.length - this.pos;
+	}
+
+	fail(code, reason) {
+		throw new ProtoError(code,
+			`scene: node ${this.node}: ${reason} (byte ${this.pos})`);
+	}
+
+	need(n, what) {
+		if (n > this.left()) {
+			this.fail('EPROTO_TRUNCATED',
+				`${what} needs ${n} bytes, ${this.left()} left`);
+		}
+	}
+
+	u8(what) {
+		this.need(1, what);
+		return this.b[this.pos++];
+	}
+
+	u32(what) {
+		this.need(4, what);
+		const v = this.dv.getUint32(this.pos, true);
+		this.pos += 4;
+		return v;
+	}
+
+	/* A group of n floats: its length is checked as a whole first, then
+	 * each float must be finite. */
+	floats(n, what) {
+		this.need(4 * n, what);
+		const out = [];
+		for (let i = 0; i < n; i++) {
+			const u = this.dv.getUint32(this.pos, true);
+			this.pos += 4;
+			if (!bitsFinite(u)) {
+				this.fail('ENONFINITE', `${what}[${i}] is not finite`);
+			}
+			out.push(this.dv.getFloat32(this.pos - 4, true));
+		}
+		return out;
+	}
+}
+
+function scanOp(s, tag, id, after) {
+	const kind = tag & ~OP_TAG;
+	if (kind === 0 || kind > L.OP_KIND_MAX) {
+		s.fail('EENUM', `operator tag 0x${tag.toString(16)} is unknown`);
+	}
+	const [blend] = s.floats(1, 'blend');
+	const [range] = s.floats(1, 'range');
+	const children = s.u32('child_count');
+	/* Each child is at least one more node of the encoding. */
+	if (children < 2 || children > after) {
+		s.fail('EPROTO_COUNT', `child_count ${children} is outside ` +
+			`2..${after} (the nodes that follow)`);
+	}
+	/* Sharp operators (union, intersection, difference) have no blend. */
+	if (kind <= 3 && (blend !== 0 || range !== 0)) {
+		s.fail('ERANGE', 'a sharp operator has blend and range 0');
+	}
+	return { isOp: true, kind, id, blend, range, nchildren: children };
+}
+
+function scanPrim(s, tag, id) {
+	if (tag === 0 || tag > L.PRIM_KIND_MAX) {
+		s.fail('EENUM', `primitive tag 0x${tag.toString(16)} is unknown`);
+	}
+	const translate = s.floats(3, 'translate');
+	const rotate = s.floats(4, 'rotate');
+	const hasColor = s.u8('has_color');
+	if (hasColor > 1) {
+		s.fail('EPROTO_FLAGS', `has_color is ${hasColor}, not 0 or 1`);
+	}
+	const color = hasColor ? s.floats(3, 'color') : null;
+	const nfloats = s.u8('nfloats');
+	if (nfloats > L.MAX_PRIM_PARAMS) {
+		s.fail('EPROTO_COUNT', `nfloats ${nfloats} is over ` +
+			`${L.MAX_PRIM_PARAMS}`);
+	}
+	const params = s.floats(nfloats, 'params');
+	return { isOp: false, kind: tag, id, translate, rotate, color, params };
+}
+
+/* Walks scene bytes, checking them, and calls visit(node) for each node in
+ * pre-order when visit is given. Iterative, one pass, no recursion.
+ * Returns { has_camera, camera, nodes, prims, ops, depth } (depth: nodes
+ * on the deepest path, the root counting 1); throws a ProtoError. */
+function walkScene(bytes, visit) {
+	const s = new SceneCur(bytes);
+	const out = { has_camera: false, camera: null, nodes: 0, prims: 0,
+		ops: 0, depth: 0 };
+	const open = []; /* children still expected by each open operator */
+	const flags = s.u8('flags');
+	if (flags & ~1) {
+		s.fail('EPROTO_FLAGS', `scene flags ${flags}`);
+	}
+	out.has_camera = (flags & 1) !== 0;
+	if (out.has_camera) {
+		const c = s.floats(10, 'camera');
+		out.camera = { eye: c.slice(0, 3), target: c.slice(3, 6),
+			up: c.slice(6, 9), fov_y_deg: c[9] };
+	}
+	const count = s.u32('node_count');
+	if (count === 0 || count > L.SCENE_MAX_NODES) {
+		s.fail('EPROTO_COUNT', `node_count ${count} is outside ` +
+			`1..${L.SCENE_MAX_NODES}`);
+	}
+	if (count > Math.floor(s.left() / NODE_MIN)) {
+		s.fail('EPROTO_COUNT', `node_count ${count} needs at least ` +
+			`${count * NODE_MIN} bytes, ${s.left()} left`);
+	}
+	for (s.node = 0; s.node < count; s.node++) {
+		if (s.node > 0 && open.length === 0) {
+			s.fail('EPROTO_COUNT', `the root's subtree ended after ` +
+				`${s.node} of node_count ${count} nodes`);
+		}
+		/* This node would be number 129 on its path from the root. */
+		if (open.length >= L.SCENE_MAX_DEPTH) {
+			s.fail('EDEPTH', `nested deeper than ${L.SCENE_MAX_DEPTH}`);
+		}
+		const tag = s.u8('tag');
+		const id = s.u32('id');
+		if (open.length) {
+			open[open.length - 1]--;
+		}
+		if (tag & OP_TAG) {
+			const n = scanOp(s, tag, id, count - 1 - s.node);
+			open.push(n.nchildren);
+			if (visit) {
+				visit(n);
+			}
+			out.ops++;
+			continue;
+		}
+		const n = scanPrim(s, tag, id);
+		if (visit) {
+			visit(n);
+		}
+		out.prims++;
+		out.depth = Math.max(out.depth, open.length + 1);
+		/* The last child of an operator completes it, which may
+		 * complete its parent, and so on up. */
+		while (open.length && open[open.length - 1] === 0) {
+			open.pop();
+		}
+	}
+	if (open.length) {
+		s.fail('EPROTO_COUNT', `${open[open.length - 1]} children of an ` +
+			'operator are missing after the last node');
+	}
+	if (s.left()) {
+		s.fail('EPROTO_TRAILING', `${s.left()} bytes after the last node`);
+	}
+	out.nodes = count;
+	return out;
+}
+
+/* Checks scene bytes; returns { has_camera, nodes, prims, ops, depth }. */
+export function scanScene(bytes) {
+	const r = walkScene(bytes, null);
+	return { has_camera: r.has_camera, nodes: r.nodes, prims: r.prims,
+		ops: r.ops, depth: r.depth };
+}
+
+/* Builds a tree from scene bytes (checked as scanScene does): returns
+ * { camera, root, byId } where every node has parent and, for operators,
+ * children. Node ids of 0 are kept (a subtree may leave ids to the server)
+ * but are not indexed. Throws a ProtoError. */
+export function parseScene(bytes) {
+	const byId = new Map();
+	let root = null;
+	const stack = []; /* [operator, children still expected] */
+	const info = walkScene(bytes, (n) => {
+		n.parent = null;
+		if (n.isOp) {
+			n.children = [];
+		}
+		if (stack.length) {
+			const top = stack[stack.length - 1];
+			n.parent = top.op;
+			top.op.children.push(n);
+			top.left--;
+		} else {
+			root = n;
+		}
+		if (n.id) {
+			byId.set(n.id, n);
+		}
+		if (n.isOp) {
+			stack.push({ op: n, left: n.nchildren });
+			delete n.nchildren;
+		}
+		while (stack.length && stack[stack.length - 1].left === 0) {
+			stack.pop();
+		}
+	});
+	return { camera: info.camera, root, byId };
+}
+
+/* Encodes a tree ({ camera?, root }, nodes shaped as parseScene makes them)
+ * back to scene bytes; the result is checked with scanScene. */
+export function encodeScene({ camera = null, root }) {
+	const w = new Enc();
+	w.u8('flags', camera ? 1 : 0);
+	if (camera) {
+		w.f32v('camera.eye', camera.eye, 3);
+		w.f32v('camera.target', camera.target, 3);
+		w.f32v('camera.up', camera.up, 3);
+		w.f32('camera.fov_y_deg', camera.fov_y_deg);
+	}
+	const countAt = w.n;
+	w.u32('node_count', 0);
+	let count = 0;
+	const todo = [root];
+	while (todo.length) {
+		const n = todo.pop();
+		count++;
+		if (n.isOp) {
+			w.u8('tag', OP_TAG | n.kind, 'EENUM');
+			w.u32('id', n.id);
+			w.f32('blend', n.blend);
+			w.f32('range', n.range);
+			w.u32('child_count', n.children.length);
+			for (let i = n.children.length - 1; i >= 0; i--) {
+				todo.push(n.children[i]);
+			}
+			continue;
+		}
+		w.u8('tag', n.kind, 'EENUM');
+		w.u32('id', n.id);
+		w.f32v('translate', n.translate, 3);
+		w.f32v('rotate', n.rotate, 4);
+		w.u8('has_color', n.color ? 1 : 0);
+		if (n.color) {
+			w.f32v('color', n.color, 3);
+		}
+		w.u8('nfloats', n.params.length, 'EPROTO_COUNT');
+		w.f32v('params', n.params, n.params.length);
+	}
+	w.dv.setUint32(countAt, count, true);
+	const out = w.bytes();
+	scanScene(out);
+	return out;
+}
+
+/* ---- Applying edits to a parsed scene ----------------------------------------- */
+
+/* Applies the operations of an EDIT_APPLIED to a tree from parseScene, the
+ * way the server applied them, so a client's model follows the session
+ * without a new SCENE_STATE. layout(kind) gives a primitive kind's
+ * parameters as [{ offset, count }] in field order (docs/primitives.md), or
+ * null when the kind is unknown: a parameter edit of such a node marks it
+ * stale instead. Returns the ids of the nodes touched. Throws ProtoError
+ * ENONODE for an id the tree lacks (the caller then holds a stale model). */
+export function applyOps(scene, ops, layout = () => null) {
+	const touched = [];
+	const get = (id) => {
+		const n = scene.byId.get(id);
+		if (!n) {
+			throw new ProtoError('ENONODE', `no node with id ${id}`);
+		}
+		return n;
+	};
+	const forget = (n) => {
+		const todo = [n];
+		while (todo.length) {
+			const k = todo.pop();
+			if (k.id && scene.byId.get(k.id) === k) {
+				scene.byId.delete(k.id);
+			}
+			if (k.isOp) {
+				todo.push(...k.children);
+			}
+		}
+	};
+	const adopt = (sub, parent) => {
+		const t = parseScene(sub);
+		t.root.parent = parent;
+		for (const [id, n] of t.byId) {
+			scene.byId.set(id, n);
+		}
+		return t.root;
+	};
+	for (const op of ops) {
+		switch (op.kind) {
+		case EDIT.SET: {
+			const n = get(op.node);
+			for (const f of op.fields) {
+				setField(n, f, layout);
+			}
+			touched.push(op.node);
+			break;
+		}
+		case EDIT.INSERT: {
+			const p = get(op.parent);
+			if (!p.isOp) {
+				throw new ProtoError('EINVAL',
+					`node ${op.parent} is not an operator`);
+			}
+			const pos = Math.min(op.position, p.children.length);
+			p.children.splice(pos, 0, adopt(op.subtree, p));
+			touched.push(op.parent);
+			break;
+		}
+		case EDIT.REMOVE: {
+			const n = get(op.node);
+			if (n.parent) {
+				n.parent.children.splice(
+					n.parent.children.indexOf(n), 1);
+			} else {
+				scene.root = null;
+			}
+			forget(n);
+			touched.push(op.node);
+			break;
+		}
+		case EDIT.REPLACE: {
+			const n = get(op.node);
+			/* Forget first: the new subtree may reuse the old ids. */
+			forget(n);
+			const r = adopt(op.subtree, n.parent);
+			if (n.parent) {
+				n.parent.children[n.parent.children.indexOf(n)] = r;
+			} else {
+				scene.root = r;
+			}
+			touched.push(op.node);
+			break;
+		}
+		default:
+			throw new ProtoError('EENUM', `op kind ${op.kind}`);
+		}
+	}
+	return touched;
+}
+
+function setField(n, f, layout) {
+	const v = f.values;
+	switch (f.field) {
+	case FIELD.TRANSLATE:
+		n.translate = v.slice();
+		return;
+	case FIELD.ROTATE:
+		n.rotate = v.slice();
+		return;
+	case FIELD.COLOR:
+		n.color = v.slice();
+		return;
+	case FIELD.BLEND:
+		n.blend = v[0];
+		return;
+	case FIELD.RANGE:
+		n.range = v[0];
+		return;
+	case FIELD.OP_KIND:
+		n.kind = v[0];
+		return;
+	default: {
+		const params = n.isOp ? null : layout(n.kind);
+		const p = params ? params[f.field - FIELD.PARAM0] : null;
+		if (!p || p.count !== v.length) {
+			n.stale = true;
+			return;
+		}
+		for (let i = 0; i < p.count; i++) {
+			n.params[p.offset + i] = v[i];
+		}
+	}
+	}
+}

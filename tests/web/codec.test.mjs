@@ -1,0 +1,452 @@
+/*
+ * The browser codec (client/web/protocol.js) against the language-neutral
+ * test vectors of protocol/vectors/, the same files the C codec runs:
+ *  - valid entries decode to exactly the listed fields, and both the
+ *    decoded message and one built from the listed fields encode back to
+ *    the very same bytes;
+ *  - invalid entries fail with exactly the listed error code after exactly
+ *    the listed number of good messages, whether the bytes arrive at once,
+ *    one at a time, or in the uneven pieces websockify delivers;
+ *  - scene.json entries go through the scene scanner, and valid scenes
+ *    survive parse -> encode unchanged.
+ * Then the properties the page relies on: reassembly across arbitrary
+ * WebSocket frame boundaries, sticky errors, the reader's memory ceiling,
+ * the encoder refusing what the decoder refuses, and edits applied to a
+ * parsed scene. Run with: node --test tests/web/
+ */
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { readFileSync, readdirSync } from 'node:fs';
+import { dirname, join } from 'node:path';
+import { fileURLToPath } from 'node:url';
+
+import * as P from '../../client/web/protocol.js';
+
+const HERE = dirname(fileURLToPath(import.meta.url));
+const VECTORS = join(HERE, '..', '..', 'protocol', 'vectors');
+
+const load = (f) => JSON.parse(readFileSync(join(VECTORS, f), 'utf8'));
+const unhex = (h) => Uint8Array.from(Buffer.from(h, 'hex'));
+const fileOf = (name) => name.toLowerCase() + '.json';
+
+/* JSON fields -> the codec's shapes: u64 travel as decimal strings in the
+ * vectors and are BigInt here; byte ranges travel as hex. */
+const U64 = new Set(['order', 'stamp', 'uptime_ms', 'frames', 'bytes']);
+const BYTES = new Set(['scene', 'subtree', 'data']);
+
+function fromJson(v, key) {
+	if (Array.isArray(v)) {
+		return v.map((x) => fromJson(x, null));
+	}
+	if (v && typeof v === 'object') {
+		const o = {};
+		for (const [k, x] of Object.entries(v)) {
+			o[k] = fromJson(x, k);
+		}
+		return o;
+	}
+	if (U64.has(key) && typeof v === 'string') {
+		return BigInt(v);
+	}
+	if (BYTES.has(key) && typeof v === 'string') {
+		return unhex(v);
+	}
+	return v;
+}
+
+function readerOpts(e) {
+	const r = e.reader ?? {};
+	return { side: r.side ?? 'any', maxPayload: r.max_payload ?? 0,
+		awaitHello: r.await_hello === true };
+}
+
+/* Feeds bytes in pieces of the given sizes (cycled), draining after each;
+ * returns { code: null | 'ENAME', count }. */
+function runStream(opts, bytes, pieces) {
+	const r = new P.Reader(opts);
+	let count = 0;
+	try {
+		let off = 0, i = 0;
+		while (off < bytes.length) {
+			const k = Math.min(pieces[i++ % pieces.length],
+				bytes.length - off);
+			r.feed(bytes.subarray(off, off + k));
+			off += k;
+			while (r.next()) {
+				count++;
+			}
+		}
+		r.eof();
+		return { code: null, count };
+	} catch (e) {
+		assert.ok(e instanceof P.ProtoError, `not a ProtoError: ${e}`);
+		assert.equal(r.err, e, 'the error is sticky on the reader');
+		assert.ok(e.message.length > 0);
+		assert.throws(() => r.next(), (again) => again === e);
+		return { code: e.code, count };
+	}
+}
+
+const typeNames = Object.keys(P.MSG);
+let totals = { valid: 0, invalid: 0 };
+
+for (const name of typeNames) {
+	test(`vectors: ${name}`, () => {
+		const doc = load(fileOf(name));
+		const type = P.MSG[name];
+		assert.equal(doc.type, name);
+		assert.equal(doc.type_id, type);
+		assert.ok(doc.valid.length >= 1);
+		assert.ok(doc.invalid.length >= 5);
+		for (const e of doc.valid) {
+			const bytes = unhex(e.hex);
+			const want = { type, ...fromJson(e.fields, null) };
+			const r = new P.Reader();
+			r.feed(bytes);
+			const got = r.next();
+			assert.deepEqual(got, want, `${name}/${e.name}: fields`);
+			assert.equal(r.next(), null);
+			r.eof();
+			assert.deepEqual(P.encode(got), bytes,
+				`${name}/${e.name}: decoded -> bytes`);
+			assert.deepEqual(P.encode(want), bytes,
+				`${name}/${e.name}: fields -> bytes`);
+			assert.deepEqual(runStream({}, bytes, [1]),
+				{ code: null, count: 1 }, `${name}/${e.name}: bytewise`);
+			const alone = P.decodePayload(type, want.flags, want.seq,
+				bytes.subarray(P.HEADER_SIZE));
+			assert.deepEqual(alone, want, `${name}/${e.name}: payload`);
+			totals.valid++;
+		}
+		for (const e of doc.invalid) {
+			checkInvalid(`${name}/${e.name}`, e);
+		}
+	});
+}
+
+function checkInvalid(label, e) {
+	const bytes = unhex(e.hex);
+	const want = { code: e.error ?? null, count: e.messages ?? 0 };
+	for (const pieces of [[bytes.length || 1], [1], [7, 3, 16]]) {
+		assert.deepEqual(runStream(readerOpts(e), bytes, pieces), want,
+			`${label} (pieces ${pieces})`);
+	}
+	totals.invalid++;
+}
+
+test('vectors: framing', () => {
+	const doc = load('framing.json');
+	assert.ok(doc.invalid.length >= 20);
+	for (const e of doc.invalid) {
+		checkInvalid(`framing/${e.name}`, e);
+	}
+});
+
+test('vectors: scene encoding', () => {
+	const doc = load('scene.json');
+	for (const e of doc.valid) {
+		const bytes = unhex(e.hex);
+		assert.deepEqual(P.scanScene(bytes), e.fields, e.name);
+		/* parse -> encode gives the same bytes back */
+		assert.deepEqual(P.encodeScene(P.parseScene(bytes)), bytes, e.name);
+	}
+	for (const e of doc.invalid) {
+		const bytes = unhex(e.hex);
+		assert.throws(() => P.scanScene(bytes),
+			(err) => err instanceof P.ProtoError && err.code === e.error,
+			`scene/${e.name}: want ${e.error}`);
+		assert.throws(() => P.parseScene(bytes),
+			(err) => err.code === e.error, `parse ${e.name}`);
+	}
+});
+
+test('vectors: no unknown files, every type covered', () => {
+	const files = readdirSync(VECTORS).filter((f) => f.endsWith('.json'));
+	const known = new Set([...typeNames.map(fileOf), 'framing.json',
+		'scene.json']);
+	for (const f of files) {
+		assert.ok(known.has(f), `unknown vector file ${f}`);
+	}
+	assert.equal(files.length, typeNames.length + 2);
+	assert.equal(typeNames.length, 22);
+});
+
+/* ---- Properties the page relies on -------------------------------------- */
+
+/* Every valid message of every file, back to back: what a long session
+ * looks like on the wire. */
+function allValid() {
+	const msgs = [];
+	for (const name of typeNames) {
+		for (const e of load(fileOf(name)).valid) {
+			msgs.push({ bytes: unhex(e.hex), want: { type: P.MSG[name],
+				...fromJson(e.fields, null) } });
+		}
+	}
+	return msgs;
+}
+
+/* A small deterministic generator (xorshift32) so that failures repeat. */
+function rng(seed) {
+	let s = seed >>> 0 || 1;
+	return () => {
+		s ^= s << 13;
+		s >>>= 0;
+		s ^= s >>> 17;
+		s ^= s << 5;
+		s >>>= 0;
+		return s;
+	};
+}
+
+test('reassembly: any split of a stream gives the same messages', () => {
+	const msgs = allValid();
+	const total = msgs.reduce((n, m) => n + m.bytes.length, 0);
+	const stream = new Uint8Array(total);
+	let off = 0;
+	for (const m of msgs) {
+		stream.set(m.bytes, off);
+		off += m.bytes.length;
+	}
+	assert.ok(msgs.length > 40);
+	const next = rng(12345);
+	for (let round = 0; round < 20; round++) {
+		const r = new P.Reader();
+		const got = [];
+		let at = 0;
+		while (at < stream.length) {
+			/* Pieces from 1 byte to 8 KiB, the way websockify's frames
+			 * cut the TCP stream. */
+			const k = Math.min(1 + (next() % (round < 10 ? 64 : 8192)),
+				stream.length - at);
+			/* Feed a copy into a buffer the caller then scribbles on:
+			 * decoded messages must not alias it. */
+			const piece = stream.slice(at, at + k);
+			r.feed(piece);
+			piece.fill(0xee);
+			at += k;
+			for (let m; (m = r.next());) {
+				got.push(m);
+			}
+		}
+		r.eof();
+		assert.equal(got.length, msgs.length);
+		got.forEach((m, i) => assert.deepEqual(m, msgs[i].want));
+		assert.equal(r.pending, 0);
+	}
+});
+
+test('reader: feeding past one message plus the slack is ELIMIT', () => {
+	const r = new P.Reader({ maxPayload: 65536 });
+	const ceiling = P.HEADER_SIZE + 65536 + P.LIMITS.READ_SLACK;
+	/* Valid PINGs, never drained. */
+	const ping = P.encode({ type: P.MSG.PING, seq: 1, stamp: 7n });
+	const chunk = new Uint8Array(Math.floor(ceiling / ping.length) *
+		ping.length);
+	for (let i = 0; i < chunk.length; i += ping.length) {
+		chunk.set(ping, i);
+	}
+	r.feed(chunk);
+	assert.throws(() => r.feed(new Uint8Array(ping.length)),
+		(e) => e.code === 'ELIMIT');
+	assert.throws(() => r.next(), (e) => e.code === 'ELIMIT');
+});
+
+test('reader: side rules and the pre-HELLO stage', () => {
+	const frame = unhex(load('frame.json').valid[0].hex);
+	const hello = unhex(load('hello.json').valid[0].hex);
+	const client = new P.Reader({ side: 'client' });
+	client.feed(frame);
+	assert.equal(client.next().type, P.MSG.FRAME);
+	const server = new P.Reader({ side: 'server', awaitHello: true });
+	server.feed(hello);
+	assert.equal(server.next().type, P.MSG.HELLO);
+	server.helloDone();
+	const cam = P.encode({ type: P.MSG.CAMERA, seq: 2, eye: [0, 0, 5],
+		target: [0, 0, 0], up: [0, 1, 0], fov_y_deg: 40 });
+	server.feed(cam);
+	assert.equal(server.next().type, P.MSG.CAMERA);
+	assert.throws(() => new P.Reader({ side: 'peer' }),
+		(e) => e.code === 'EINVAL');
+});
+
+test('reader: a client lowers its payload limit to its frame limit', () => {
+	const r = new P.Reader({ side: 'client', maxPayload: 65536 });
+	const rects = [{ x: 0, y: 0, w: 1, h: 1, data: new Uint8Array(70000) }];
+	const big = P.encode({ type: P.MSG.FRAME, flags: P.FLAG.STILL, seq: 0,
+		frame_no: 1, order: 1n, camera_seq: 0, encoding: P.ENC.JPEG,
+		width: 1, height: 1, image_width: 1, image_height: 1, rects });
+	assert.throws(() => { r.feed(big.subarray(0, 12)); r.next(); },
+		(e) => e.code === 'EPROTO_LENGTH');
+	const ok = new P.Reader({ side: 'client' });
+	ok.feed(big);
+	assert.equal(ok.next().rects[0].data.length, 70000);
+});
+
+test('encoder refuses what the decoder refuses', () => {
+	const cam = { type: P.MSG.CAMERA, seq: 1, eye: [0, 0, 5],
+		target: [0, 0, 0], up: [0, 1, 0], fov_y_deg: 40 };
+	const cases = [
+		[{ ...cam, eye: [NaN, 0, 5] }, 'ENONFINITE'],
+		[{ ...cam, eye: [2e6, 0, 5] }, 'ERANGE'],
+		[{ ...cam, fov_y_deg: 180 }, 'ERANGE'],
+		[{ ...cam, eye: [0, 5] }, 'EPROTO_COUNT'],
+		[{ ...cam, flags: 2 }, 'EPROTO_FLAGS'],
+		[{ ...cam, type: 23 }, 'EPROTO_TYPE'],
+		[{ ...cam, type: 0 }, 'EPROTO_TYPE'],
+		[{ ...cam, seq: -1 }, 'ERANGE'],
+		[{ type: P.MSG.SESSION_JOIN, role: 3, name: 'x' }, 'EENUM'],
+		[{ type: P.MSG.SESSION_JOIN, role: 1, name: '' }, 'EPROTO_LENGTH'],
+		[{ type: P.MSG.SESSION_JOIN, role: 1, name: 'n'.repeat(65) },
+			'EPROTO_LENGTH'],
+		[{ type: P.MSG.SESSION_JOIN, role: 1, name: 'a\u0000b' },
+			'ESTRING'],
+		[{ type: P.MSG.EDIT, ops: [] }, 'EPROTO_COUNT'],
+		[{ type: P.MSG.EDIT, ops: [{ kind: P.EDIT.SET, node: 0,
+			fields: [{ field: 1, values: [0, 0, 0] }] }] }, 'ERANGE'],
+		[{ type: P.MSG.EDIT, ops: [{ kind: P.EDIT.SET, node: 4,
+			fields: [{ field: 16, values: [1, 2, 3, 4, 5] }] }] },
+			'EPROTO_COUNT'],
+		[{ type: P.MSG.EDIT, ops: [{ kind: P.EDIT.SET, node: 4,
+			fields: [{ field: 1, values: [0, 0, 0] },
+				{ field: 1, values: [0, 0, 0] }] }] }, 'EPARSE'],
+		[{ type: P.MSG.EDIT, ops: [{ kind: 9, node: 4 }] }, 'EENUM'],
+		[{ type: P.MSG.VIEW, width: 0, height: 1, encoding: 1,
+			quality_interactive: 1, quality_still: 1, downscale: 1 },
+			'ERANGE'],
+		[{ type: P.MSG.PICK, x: 70000, y: 0 }, 'ERANGE'],
+	];
+	for (const [m, code] of cases) {
+		assert.throws(() => P.encode(m), (e) => e instanceof P.ProtoError &&
+			e.code === code, `${JSON.stringify(m, (k, v) =>
+			typeof v === 'number' && !Number.isFinite(v) ? String(v) : v)}` +
+			` -> ${code}`);
+	}
+	/* The same message without the fault encodes and decodes back. */
+	const r = new P.Reader();
+	r.feed(P.encode(cam));
+	assert.deepEqual(r.next(), { ...cam, flags: 0 });
+});
+
+test('error names and numbers match error.h', () => {
+	assert.equal(P.ERR.ENOMEM, 2);
+	assert.equal(P.ERR.EPROTO_MAGIC, 12);
+	assert.equal(P.ERR.ENOSESSION, 24);
+	assert.equal(P.ERR.ECLOSED, 33);
+	assert.equal(P.errName(-25), 'ENONODE');
+	assert.equal(P.errName(99), 'UNKNOWN');
+	assert.equal(P.errText(31), 'string not valid UTF-8 or contains NUL');
+	assert.equal(new P.ProtoError('EDEPTH', 'x').errno, 21);
+	assert.equal(P.typeName(17), 'FRAME');
+	assert.equal(P.typeName(23), null);
+});
+
+test('utf8Check: the strict rules of the C codec', () => {
+	const enc = new TextEncoder();
+	assert.equal(P.utf8Check(enc.encode('Zoë 🌐')), 9);
+	assert.equal(P.utf8Check(Uint8Array.of(0x61, 0x00)), 1);
+	assert.equal(P.utf8Check(Uint8Array.of(0xc0, 0xaf)), 0);
+	assert.equal(P.utf8Check(Uint8Array.of(0xed, 0xa0, 0x80)), 0);
+	assert.equal(P.utf8Check(Uint8Array.of(0xf4, 0x90, 0x80, 0x80)), 0);
+	assert.equal(P.utf8Check(Uint8Array.of(0x61, 0x62, 0xe2, 0x82)), 2);
+	assert.equal(P.utf8Check(Uint8Array.of(0xef, 0xbf, 0xbf)), 3);
+});
+
+/* ---- Scenes and edits ------------------------------------------------------ */
+
+/* The vectors' three-node scene: a smooth union (id 1) of a sphere (2)
+ * and a box (3). */
+function smallScene() {
+	return P.parseScene(unhex(load('scene.json').valid[1].hex));
+}
+
+test('parseScene: tree shape, camera, ids', () => {
+	const s = smallScene();
+	assert.deepEqual(s.camera, { eye: [0, 1, 6], target: [0, 0, 0],
+		up: [0, 1, 0], fov_y_deg: 45 });
+	assert.equal(s.root.isOp, true);
+	assert.equal(s.root.kind, 4);
+	assert.deepEqual(s.root.children.map((c) => c.id), [2, 3]);
+	assert.equal(s.byId.get(2).parent, s.root);
+	assert.deepEqual(s.byId.get(2).color, [1, 0.5, 0.25]);
+	assert.equal(s.byId.get(3).color, null);
+	assert.deepEqual([...s.byId.keys()].sort(), [1, 2, 3]);
+	/* The deepest valid comb keeps its nesting: depth counts the nodes on
+	 * the path, the primitive at its end included. */
+	const e = load('scene.json').valid.find((v) => v.fields.depth ===
+		P.LIMITS.SCENE_MAX_DEPTH);
+	const deep = P.parseScene(unhex(e.hex));
+	let d = 1;
+	for (let n = deep.root; n.isOp; n = n.children[0]) {
+		d++;
+	}
+	assert.equal(d, P.LIMITS.SCENE_MAX_DEPTH);
+});
+
+test('applyOps: set, insert, remove, replace follow the server', () => {
+	const s = smallScene();
+	const layout = (kind) => (kind === 1 ? [{ offset: 0, count: 1 }]
+		: kind === 2 ? [{ offset: 0, count: 3 }, { offset: 3, count: 1 }]
+			: null);
+	const sub = P.encodeScene({ root: { isOp: false, kind: 1, id: 9,
+		translate: [1, 2, 3], rotate: [0, 0, 0, 1], color: null,
+		params: [0.5] } });
+	P.applyOps(s, [
+		{ kind: P.EDIT.SET, node: 2, fields: [
+			{ field: P.FIELD.TRANSLATE, values: [0.25, -1.5, 3] },
+			{ field: P.FIELD.PARAM0, values: [0.75] }] },
+		{ kind: P.EDIT.SET, node: 3, fields: [
+			{ field: P.FIELD.PARAM0, values: [1, 2, 3] },
+			{ field: P.FIELD.PARAM0 + 1, values: [0.2] }] },
+		{ kind: P.EDIT.SET, node: 1, fields: [
+			{ field: P.FIELD.BLEND, values: [0.3] },
+			{ field: P.FIELD.OP_KIND, values: [5] }] },
+		{ kind: P.EDIT.INSERT, parent: 1, position: 1, subtree: sub },
+	], layout);
+	assert.deepEqual(s.byId.get(2).translate, [0.25, -1.5, 3]);
+	assert.deepEqual(s.byId.get(2).params, [0.75]);
+	assert.equal(Math.fround(s.byId.get(3).params[3]), Math.fround(0.2));
+	assert.deepEqual(s.byId.get(3).params.slice(0, 3), [1, 2, 3]);
+	assert.equal(s.root.blend, 0.3);
+	assert.equal(s.root.kind, 5);
+	assert.deepEqual(s.root.children.map((c) => c.id), [2, 9, 3]);
+	assert.equal(s.byId.get(9).parent, s.root);
+
+	/* An unknown layout marks the node stale instead of guessing. */
+	P.applyOps(s, [{ kind: P.EDIT.SET, node: 2, fields: [
+		{ field: P.FIELD.PARAM0 + 5, values: [1] }] }], layout);
+	assert.equal(s.byId.get(2).stale, true);
+
+	P.applyOps(s, [{ kind: P.EDIT.REMOVE, node: 9 }]);
+	assert.equal(s.byId.has(9), false);
+	assert.deepEqual(s.root.children.map((c) => c.id), [2, 3]);
+
+	/* Replace may reuse the old id. */
+	const sub3 = P.encodeScene({ root: { isOp: false, kind: 1, id: 3,
+		translate: [0, 0, 0], rotate: [0, 0, 0, 1], color: [1, 1, 1],
+		params: [2] } });
+	P.applyOps(s, [{ kind: P.EDIT.REPLACE, node: 3, subtree: sub3 }]);
+	assert.deepEqual(s.byId.get(3).params, [2]);
+	assert.equal(s.root.children[1], s.byId.get(3));
+	assert.throws(() => P.applyOps(s, [{ kind: P.EDIT.REMOVE, node: 77 }]),
+		(e) => e.code === 'ENONODE');
+	/* The edited tree still encodes to a valid scene. */
+	const info = P.scanScene(P.encodeScene(s));
+	assert.deepEqual(info, { has_camera: true, nodes: 3, prims: 2, ops: 1,
+		depth: 2 });
+});
+
+test('totals', () => {
+	/* Runs last (node:test keeps file order): every entry of every
+	 * message file and of framing.json went through. */
+	let valid = 0, invalid = load('framing.json').invalid.length;
+	for (const name of typeNames) {
+		const doc = load(fileOf(name));
+		valid += doc.valid.length;
+		invalid += doc.invalid.length;
+	}
+	assert.equal(totals.valid, valid);
+	assert.equal(totals.invalid, invalid);
+	console.log(`# ${totals.valid} valid and ${totals.invalid} invalid ` +
+		'message vectors');
+});
