@@ -15,7 +15,7 @@
 #include <stdarg.h>
 #include <stdio.h>
 
-#define PRIM_MIN 35u /* tag, id, translate, rotate, has_color=0, nfloats=0 */
+#define NODE_MIN 5u /* tag and id: the least any node takes */
 #define OP_MIN 17u   /* tag, id, blend, range, child_count */
 #define OP_TAG 0x80u
 
@@ -42,36 +42,50 @@ static int sfail(struct scan *s, int code, const char *fmt, ...)
 			      s->node, reason, s->c.pos);
 }
 
-static int s_u8(struct scan *s, uint8_t *v)
+static int s_need(struct scan *s, size_t n, const char *what)
 {
-	if (!bc__get_u8(&s->c, v)) {
-		return sfail(s, BC_EPROTO_TRUNCATED, "bytes end inside it");
+	if (n > bc__cur_left(&s->c)) {
+		return sfail(s, BC_EPROTO_TRUNCATED, "%s needs %zu bytes, %zu left",
+			     what, n, bc__cur_left(&s->c));
 	}
 	return 0;
 }
 
-static int s_u32(struct scan *s, uint32_t *v)
+static int s_u8(struct scan *s, const char *what, uint8_t *v)
 {
-	if (!bc__get_u32(&s->c, v)) {
-		return sfail(s, BC_EPROTO_TRUNCATED, "bytes end inside it");
+	int rc = s_need(s, 1, what);
+	if (rc == 0) {
+		bc__get_u8(&s->c, v);
 	}
-	return 0;
+	return rc;
 }
 
-static int s_floats(struct scan *s, unsigned n, const char *what)
+static int s_u32(struct scan *s, const char *what, uint32_t *v)
 {
-	for (unsigned i = 0; i < n; i++) {
+	int rc = s_need(s, 4, what);
+	if (rc == 0) {
+		bc__get_u32(&s->c, v);
+	}
+	return rc;
+}
+
+/* A group of n floats: its length is checked as a whole first, then each
+ * float must be finite (the order blobtree's decoder uses). */
+static int s_floats(struct scan *s, unsigned n, const char *what, float *out)
+{
+	int rc = s_need(s, 4u * (size_t)n, what);
+	for (unsigned i = 0; rc == 0 && i < n; i++) {
 		uint32_t u;
-		int rc = s_u32(s, &u);
-		if (rc < 0) {
-			return rc;
-		}
+		bc__get_u32(&s->c, &u);
 		if (!bc__bits_finite(u)) {
-			return sfail(s, BC_ENONFINITE,
-				     "%s[%u] is not finite", what, i);
+			return sfail(s, BC_ENONFINITE, "%s[%u] is not finite",
+				     what, i);
+		}
+		if (out) {
+			out[i] = bc__bits_f32(u);
 		}
 	}
-	return 0;
+	return rc;
 }
 
 #define TRY(expr)                                                              \
@@ -82,6 +96,65 @@ static int s_floats(struct scan *s, unsigned n, const char *what)
 		}                                                              \
 	} while (0)
 
+/* Sharp operators (union, intersection, difference) have no blend. */
+static bool op_is_sharp(unsigned kind)
+{
+	return kind >= 1 && kind <= 3;
+}
+
+static int scan_op(struct scan *s, uint8_t tag, uint32_t after,
+		   uint32_t *children)
+{
+	unsigned kind = tag & ~OP_TAG;
+	float br[2];
+	if (kind == 0 || kind > BC_PROTO_OP_KIND_MAX) {
+		return sfail(s, BC_EENUM, "operator tag 0x%02x is unknown",
+			     (unsigned)tag);
+	}
+	TRY(s_floats(s, 1, "blend", &br[0]));
+	TRY(s_floats(s, 1, "range", &br[1]));
+	TRY(s_u32(s, "child_count", children));
+	/* Each child is at least one more node of the encoding. */
+	if (*children < 2 || *children > after) {
+		return sfail(s, BC_EPROTO_COUNT,
+			     "child_count %u is outside 2..%u (the nodes that "
+			     "follow)",
+			     *children, after);
+	}
+	if (op_is_sharp(kind) && (br[0] != 0.0f || br[1] != 0.0f)) {
+		return sfail(s, BC_ERANGE,
+			     "a sharp operator has blend and range 0");
+	}
+	return 0;
+}
+
+static int scan_prim(struct scan *s, uint8_t tag)
+{
+	uint8_t has_color, nfloats;
+	if (tag == 0 || tag > BC_PROTO_PRIM_KIND_MAX) {
+		return sfail(s, BC_EENUM, "primitive tag 0x%02x is unknown",
+			     (unsigned)tag);
+	}
+	TRY(s_floats(s, 3, "translate", NULL));
+	TRY(s_floats(s, 4, "rotate", NULL));
+	TRY(s_u8(s, "has_color", &has_color));
+	if (has_color > 1) {
+		return sfail(s, BC_EPROTO_FLAGS, "has_color is %u, not 0 or 1",
+			     (unsigned)has_color);
+	}
+	if (has_color) {
+		TRY(s_floats(s, 3, "color", NULL));
+	}
+	TRY(s_u8(s, "nfloats", &nfloats));
+	/* blobtree requires exactly the kind's count (docs/primitives.md),
+	 * which is at most BC_PROTO_MAX_PRIM_PARAMS. */
+	if (nfloats > BC_PROTO_MAX_PRIM_PARAMS) {
+		return sfail(s, BC_EPROTO_COUNT, "nfloats %u is over %u",
+			     (unsigned)nfloats, BC_PROTO_MAX_PRIM_PARAMS);
+	}
+	return s_floats(s, nfloats, "params", NULL);
+}
+
 int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
 			struct bc_proto_scene_info *info, struct bc_errinfo *ei)
 {
@@ -89,112 +162,74 @@ int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
 	struct bc_proto_scene_info out = {0};
 	/* Children still expected by each open operator, innermost last. */
 	uint32_t open[BC_PROTO_SCENE_MAX_DEPTH];
-	uint32_t depth = 0;
+	uint32_t nopen = 0;
 	if (info) {
 		memset(info, 0, sizeof(*info));
 	}
 	uint8_t flags;
-	TRY(s_u8(&s, &flags));
+	TRY(s_u8(&s, "flags", &flags));
 	if (flags & ~1u) {
 		return sfail(&s, BC_EPROTO_FLAGS, "scene flags 0x%02x",
 			     (unsigned)flags);
 	}
 	out.has_camera = flags & 1u;
 	if (out.has_camera) {
-		TRY(s_floats(&s, 10, "camera"));
+		TRY(s_floats(&s, 10, "camera", NULL));
 	}
 	uint32_t count;
-	TRY(s_u32(&s, &count));
+	TRY(s_u32(&s, "node_count", &count));
 	if (count == 0 || count > BC_PROTO_SCENE_MAX_NODES) {
 		return sfail(&s, BC_EPROTO_COUNT,
 			     "node_count %u is outside 1..%u", count,
 			     BC_PROTO_SCENE_MAX_NODES);
 	}
-	if ((uint64_t)count * OP_MIN > bc__cur_left(&s.c)) {
+	if (count > bc__cur_left(&s.c) / NODE_MIN) {
 		return sfail(&s, BC_EPROTO_COUNT,
 			     "node_count %u needs at least %llu bytes, %zu left",
-			     count, (unsigned long long)count * OP_MIN,
+			     count, (unsigned long long)count * NODE_MIN,
 			     bc__cur_left(&s.c));
 	}
-	/* Child slots still to fill, the root's included. Each needs at
-	 * least one node, which is what makes a lying child_count fail as
-	 * soon as it is read. */
-	uint64_t slots = 1;
 	for (s.node = 0; s.node < count; s.node++) {
-		if (slots == 0) {
+		if (s.node > 0 && nopen == 0) {
 			return sfail(&s, BC_EPROTO_COUNT,
-				     "the tree ended after %u of node_count %u "
-				     "nodes",
+				     "the root's subtree ended after %u of "
+				     "node_count %u nodes",
 				     s.node, count);
 		}
-		uint32_t left = count - s.node - 1; /* nodes after this one */
-		uint8_t tag;
-		uint32_t id;
-		TRY(s_u8(&s, &tag));
-		bool is_op = (tag & OP_TAG) != 0;
-		unsigned kind = tag & ~OP_TAG;
-		if (is_op ? (kind == 0 || kind > BC_PROTO_OP_KIND_MAX)
-			  : (kind == 0 || kind > BC_PROTO_PRIM_KIND_MAX)) {
-			return sfail(&s, BC_EENUM, "tag 0x%02x is unknown",
-				     (unsigned)tag);
-		}
-		if (is_op && depth == BC_PROTO_SCENE_MAX_DEPTH) {
-			return sfail(&s, BC_EDEPTH,
-				     "operator nested deeper than %u",
+		/* This node would be number 129 on its path from the root. */
+		if (nopen >= BC_PROTO_SCENE_MAX_DEPTH) {
+			return sfail(&s, BC_EDEPTH, "nested deeper than %u",
 				     BC_PROTO_SCENE_MAX_DEPTH);
 		}
-		TRY(s_u32(&s, &id));
-		slots--;
-		if (is_op) {
-			uint32_t children;
-			TRY(s_floats(&s, 2, "blend/range"));
-			TRY(s_u32(&s, &children));
-			if (children < 2 || slots + children > left) {
-				return sfail(&s, BC_EPROTO_COUNT,
-					     "child_count %u (at least 2, and "
-					     "%llu open slots in %u nodes left)",
-					     children,
-					     (unsigned long long)(slots + children),
-					     left);
-			}
-			slots += children;
-			open[depth++] = children;
+		uint8_t tag;
+		uint32_t id, children;
+		TRY(s_u8(&s, "tag", &tag));
+		TRY(s_u32(&s, "id", &id));
+		if (nopen) {
+			open[nopen - 1]--;
+		}
+		if (tag & OP_TAG) {
+			TRY(scan_op(&s, tag, count - 1 - s.node, &children));
+			open[nopen++] = children;
 			out.ops++;
-			if (depth > out.depth) {
-				out.depth = depth;
-			}
 			continue;
 		}
-		uint8_t has_color, nfloats;
-		TRY(s_floats(&s, 3, "translate"));
-		TRY(s_floats(&s, 4, "rotate"));
-		TRY(s_u8(&s, &has_color));
-		if (has_color > 1) {
-			return sfail(&s, BC_EENUM, "has_color is %u",
-				     (unsigned)has_color);
-		}
-		if (has_color) {
-			TRY(s_floats(&s, 3, "color"));
-		}
-		TRY(s_u8(&s, &nfloats));
-		if (nfloats > BC_PROTO_MAX_PRIM_PARAMS) {
-			return sfail(&s, BC_EPROTO_COUNT,
-				     "nfloats %u is over %u", (unsigned)nfloats,
-				     BC_PROTO_MAX_PRIM_PARAMS);
-		}
-		if ((size_t)nfloats * 4u > bc__cur_left(&s.c)) {
-			return sfail(&s, BC_EPROTO_COUNT,
-				     "nfloats %u needs %u bytes, %zu left",
-				     (unsigned)nfloats, 4u * nfloats,
-				     bc__cur_left(&s.c));
-		}
-		TRY(s_floats(&s, nfloats, "params"));
+		TRY(scan_prim(&s, tag));
 		out.prims++;
-		/* A primitive completes its parent, which may complete its
-		 * own parent, and so on up. */
-		while (depth > 0 && --open[depth - 1] == 0) {
-			depth--;
+		if (nopen + 1 > out.depth) {
+			out.depth = nopen + 1;
 		}
+		/* The last child of an operator completes it, which may
+		 * complete its parent, and so on up. */
+		while (nopen && open[nopen - 1] == 0) {
+			nopen--;
+		}
+	}
+	if (nopen) {
+		return sfail(&s, BC_EPROTO_COUNT,
+			     "%u children of an operator are missing after the "
+			     "last node",
+			     open[nopen - 1]);
 	}
 	if (bc__cur_left(&s.c)) {
 		return sfail(&s, BC_EPROTO_TRAILING,

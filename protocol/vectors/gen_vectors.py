@@ -34,7 +34,7 @@ MAX_MEMBERS, MAX_DIM, MAX_RECTS = 64, 8192, 4096
 MAX_EDIT_OPS, MAX_SET_FIELDS = 1024, 14
 MIN_FRAME_BYTES = 65536
 MAX_ABS = 1.0e6
-SCENE_MAX_DEPTH = 128
+SCENE_MAX_DEPTH = 128  # nodes on a path from the root, the root counting 1
 
 
 def strmax(n):
@@ -147,7 +147,8 @@ SUBTREE = scene([scene_prim(3, 0, [0, 0, 0, 0, 1, 0, 0.25])])
 
 
 def deep_scene(depth):
-    """A left comb of `depth` nested unions, each with a sphere sibling."""
+    """A left comb of `depth` nested unions, each with a sphere sibling:
+    its deepest path has depth + 1 nodes."""
     nodes = []
     for i in range(depth):
         nodes.append(scene_op(1, 0, 0.0, 0.0, 2))
@@ -947,25 +948,27 @@ def gen_scene():
 
     def bad(name, b, error):
         inv.append({"name": name, "hex": b.hex(), "error": error})
-    ok("one sphere", scene([SPHERE]), 1, 1, 0, 0, False)
-    ok("smooth union with camera and colour", SCENE_SMALL, 3, 2, 1, 1, True)
+    ok("one sphere", scene([SPHERE]), 1, 1, 0, 1, False)
+    ok("smooth union with camera and colour", SCENE_SMALL, 3, 2, 1, 2, True)
     ok("n-ary union of four", scene([scene_op(1, 10, 0, 0, 4)]
-                                    + [SPHERE] * 4), 5, 4, 1, 1, False)
+                                    + [SPHERE] * 4), 5, 4, 1, 2, False)
     ok("nested: difference of a union", scene([
         scene_op(3, 1, 0, 0, 2), scene_op(1, 2, 0, 0, 2), SPHERE, SPHERE,
-        SPHERE]), 5, 3, 2, 2, False)
-    ok("depth 128", deep_scene(128), 257, 129, 128, 128, False)
+        SPHERE]), 5, 3, 2, 3, False)
+    ok("depth 128: 127 nested operators",
+       deep_scene(SCENE_MAX_DEPTH - 1), 255, 128, 127, 128, False)
     ok("primitive with 8 floats", scene([scene_prim(7, 4, [0.5] * 8)]),
-       1, 1, 0, 0, False)
+       1, 1, 0, 1, False)
     bad("empty", b"", "EPROTO_TRUNCATED")
     bad("flags bit 1", u8(2) + u32(1) + SPHERE, "EPROTO_FLAGS")
     bad("camera with NaN", u8(1) + f32bits(0x7fc00000) + f32(0) * 9
         + u32(1) + SPHERE, "ENONFINITE")
     bad("node_count 0", u8(0) + u32(0), "EPROTO_COUNT")
     bad("node_count 2^22", u8(0) + u32(1 << 22), "EPROTO_COUNT")
-    bad("node_count larger than the bytes left", u8(0) + u32(3) + SPHERE,
-        "EPROTO_COUNT")
-    bad("depth 129", deep_scene(129), "EDEPTH")
+    bad("node_count larger than the bytes left / 5",
+        u8(0) + u32(100) + SPHERE, "EPROTO_COUNT")
+    bad("depth 129: 128 nested operators", deep_scene(SCENE_MAX_DEPTH),
+        "EDEPTH")
     bad("tag 0", u8(0) + u32(1) + u8(0) + SPHERE[1:], "EENUM")
     bad("tag 17", u8(0) + u32(1) + u8(17) + SPHERE[1:], "EENUM")
     bad("operator tag 0x87", u8(0) + u32(3) + u8(0x87) + scene_op(
@@ -977,11 +980,21 @@ def gen_scene():
     bad("tree ends before node_count", u8(0) + u32(2) + SPHERE * 2,
         "EPROTO_COUNT")
     bad("has_color 2", u8(0) + u32(1) + SPHERE[:33] + u8(2) + u8(0),
-        "EENUM")
+        "EPROTO_FLAGS")
+    bad("sharp union with a blend", scene([scene_op(1, 0, 0.5, 0.5, 2),
+                                           SPHERE, SPHERE]), "ERANGE")
+    # The tag and the id are read before the tag is judged.
+    bad("unknown tag, then the bytes end inside its id",
+        u8(0) + u32(3) + scene_op(1, 0, 0, 0, 2) + SPHERE + u8(0x87)
+        + u16(0), "EPROTO_TRUNCATED")
     bad("nfloats 9", scene([scene_prim(1, 0, [1.0] * 9)]), "EPROTO_COUNT")
-    bad("nfloats larger than the bytes left",
-        u8(0) + u32(1) + SPHERE[:34] + u8(3) + f32(1),
-        "EPROTO_COUNT")
+    # A box has 4 parameter floats; one is there.
+    bad("params longer than the bytes left",
+        u8(0) + u32(1) + u8(2) + SPHERE[1:34] + u8(4) + f32(1),
+        "EPROTO_TRUNCATED")
+    bad("translate cut short, NaN in what is there",
+        u8(0) + u32(1) + SPHERE[:5] + f32bits(0x7fc00000) + f32(0),
+        "EPROTO_TRUNCATED")
     bad("infinite radius", u8(0) + u32(1) + SPHERE[:35]
         + f32bits(0x7f800000), "ENONFINITE")
     bad("NaN blend", u8(0) + u32(3) + u8(0x81) + u32(0)
@@ -991,7 +1004,8 @@ def gen_scene():
     # its rotation.
     bad("bytes end inside a rotation", SCENE_SMALL[:113 + 25],
         "EPROTO_TRUNCATED")
-    bad("last parameter cut short", scene([SPHERE])[:-1], "EPROTO_COUNT")
+    bad("last parameter cut short", scene([SPHERE])[:-1],
+        "EPROTO_TRUNCATED")
     write_json("scene.json", {"type": None, "valid": valid, "invalid": inv})
 
 

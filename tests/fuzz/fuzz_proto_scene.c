@@ -2,7 +2,7 @@
  * libFuzzer harness for the scene-encoding scanner, differential: a short
  * recursive reference written straight from PROTOCOL.md's grammar must
  * accept exactly what bc_proto_scene_scan accepts, with the same counts.
- * (The reference recurses at most BC_PROTO_SCENE_MAX_DEPTH + 1 levels; the
+ * (The reference recurses at most BC_PROTO_SCENE_MAX_DEPTH levels; the
  * scanner does not recurse at all.)
  */
 #include <stdio.h>
@@ -33,35 +33,38 @@ static int rd(struct ref *r, size_t k, uint32_t *v)
 	return 0;
 }
 
-static int floats(struct ref *r, uint32_t k)
+static int floats(struct ref *r, uint32_t k, float *first)
 {
 	for (uint32_t i = 0; i < k; i++) {
 		uint32_t u;
 		if (rd(r, 4, &u) || (u & 0x7f800000u) == 0x7f800000u) {
 			return -1;
 		}
+		if (i == 0 && first) {
+			memcpy(first, &u, 4);
+		}
 	}
 	return 0;
 }
 
-/* One node and its subtree; depth = operators above it. */
+/* One node and its subtree; depth = nodes on its path, itself included. */
 static int node(struct ref *r, uint32_t depth)
 {
 	uint32_t tag, id, v;
-	if (r->left == 0 || rd(r, 1, &tag)) {
+	float blend = 0, range = 0;
+	if (r->left == 0 || depth > BC_PROTO_SCENE_MAX_DEPTH ||
+	    rd(r, 1, &tag) || rd(r, 4, &id)) {
 		return -1;
 	}
 	r->left--;
 	if (tag & 0x80u) {
 		uint32_t kind = tag & 0x7fu;
-		if (kind < 1 || kind > 6 || depth + 1 > BC_PROTO_SCENE_MAX_DEPTH ||
-		    rd(r, 4, &id) || floats(r, 2) || rd(r, 4, &v) || v < 2) {
+		if (kind < 1 || kind > 6 || floats(r, 1, &blend) ||
+		    floats(r, 1, &range) || rd(r, 4, &v) || v < 2 ||
+		    (kind <= 3 && (blend != 0.0f || range != 0.0f))) {
 			return -1;
 		}
 		r->ops++;
-		if (depth + 1 > r->depth) {
-			r->depth = depth + 1;
-		}
 		for (uint32_t i = 0; i < v; i++) {
 			if (node(r, depth + 1)) {
 				return -1;
@@ -69,12 +72,15 @@ static int node(struct ref *r, uint32_t depth)
 		}
 		return 0;
 	}
-	if (tag < 1 || tag > 16 || rd(r, 4, &id) || floats(r, 7) ||
-	    rd(r, 1, &v) || v > 1 || floats(r, 3 * v) || rd(r, 1, &v) ||
-	    v > BC_PROTO_MAX_PRIM_PARAMS || floats(r, v)) {
+	if (tag < 1 || tag > 16 || floats(r, 7, NULL) || rd(r, 1, &v) ||
+	    v > 1 || floats(r, 3 * v, NULL) || rd(r, 1, &v) ||
+	    v > BC_PROTO_MAX_PRIM_PARAMS || floats(r, v, NULL)) {
 		return -1;
 	}
 	r->prims++;
+	if (depth > r->depth) {
+		r->depth = depth;
+	}
 	return 0;
 }
 
@@ -84,13 +90,13 @@ static int reference(const uint8_t *p, size_t n, struct ref *r)
 	memset(r, 0, sizeof(*r));
 	r->p = p;
 	r->n = n;
-	if (rd(r, 1, &flags) || flags > 1 || floats(r, 10 * flags) ||
+	if (rd(r, 1, &flags) || flags > 1 || floats(r, 10 * flags, NULL) ||
 	    rd(r, 4, &count) || count < 1 ||
 	    count > BC_PROTO_SCENE_MAX_NODES) {
 		return -1;
 	}
 	r->left = count;
-	if (node(r, 0) || r->left != 0 || r->pos != n) {
+	if (node(r, 1) || r->left != 0 || r->pos != n) {
 		return -1;
 	}
 	return 0;

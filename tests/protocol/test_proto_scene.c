@@ -29,12 +29,15 @@ struct counts {
 	uint32_t nodes, prims, ops, depth;
 };
 
-/* Writes a subtree of exactly n nodes (n != 2) at operator nesting depth
- * d, in pre-order, without recursion deeper than the tree. Returns 0 or the
+/* Writes a subtree of exactly n nodes (n != 2) whose root is node number d
+ * on its path from the scene's root, in pre-order. Returns 0 or the
  * writer's error. */
 static int write_tree(struct bc_proto_buf *b, uint32_t n, uint32_t d,
 		      struct counts *c, int random_shape)
 {
+	if (d > c->depth) {
+		c->depth = d;
+	}
 	if (n == 1) {
 		float params[8];
 		uint8_t np = (uint8_t)(1 + rnd(8));
@@ -69,11 +72,11 @@ static int write_tree(struct bc_proto_buf *b, uint32_t n, uint32_t d,
 		}
 	}
 	c->ops++;
-	if (d + 1 > c->depth) {
-		c->depth = d + 1;
-	}
-	int rc = bc_proto_scene_op(b, (uint8_t)(1 + rnd(6)), c->nodes++ + 1,
-				   0.25f, 0.5f, k);
+	/* Sharp operators (kinds 1..3) carry blend = range = 0. */
+	uint8_t kind = (uint8_t)(1 + rnd(6));
+	float blend = kind > 3 ? 0.25f : 0.0f;
+	int rc = bc_proto_scene_op(b, kind, c->nodes++ + 1, blend, 2 * blend,
+				   k);
 	for (uint32_t i = 0; rc == 0 && i < k; i++) {
 		rc = write_tree(b, sizes[i], d + 1, c, random_shape);
 	}
@@ -86,7 +89,8 @@ static void test_random_trees_scan_to_their_counts(void)
 		struct bc_proto_buf b;
 		struct counts c = {0};
 		/* At most 250 nodes keeps any shape within the depth
-		 * limit: each level takes an operator and a sibling. */
+		 * limit: each level below the root takes an operator and a
+		 * sibling, so the deepest path has at most 125 nodes. */
 		uint32_t n = 1 + rnd(250);
 		if (n == 2) {
 			n = 3;
@@ -95,7 +99,7 @@ static void test_random_trees_scan_to_their_counts(void)
 		REQUIRE(bc_proto_scene_begin(&b, rnd(2) ? NULL : (const float[10]){
 						       0, 0, 5, 0, 0, 0, 0, 1, 0, 40},
 					     n) == 0);
-		REQUIRE(write_tree(&b, n, 0, &c, 1) == 0);
+		REQUIRE(write_tree(&b, n, 1, &c, 1) == 0);
 		REQUIRE(c.nodes == n);
 		struct bc_proto_scene_info info;
 		struct bc_errinfo ei = {0};
@@ -114,7 +118,8 @@ static void test_random_trees_scan_to_their_counts(void)
 	}
 }
 
-/* A comb of `depth` nested unions, each with a sphere as second child. */
+/* A comb of `depth` nested unions, each with a sphere as second child: its
+ * deepest path has depth + 1 nodes. */
 static int write_comb(struct bc_proto_buf *b, uint32_t depth)
 {
 	static const float r[1] = {1.0f};
@@ -133,11 +138,11 @@ static void test_depth_limit(void)
 	struct bc_proto_buf b;
 	struct bc_proto_scene_info info;
 	bc_proto_buf_init(&b, 0);
-	REQUIRE(write_comb(&b, BC_PROTO_SCENE_MAX_DEPTH) == 0);
+	REQUIRE(write_comb(&b, BC_PROTO_SCENE_MAX_DEPTH - 1) == 0);
 	CHECK(bc_proto_scene_scan(b.data, b.len, &info, NULL) == 0);
 	CHECK(info.depth == BC_PROTO_SCENE_MAX_DEPTH);
 	bc_proto_buf_reset(&b);
-	REQUIRE(write_comb(&b, BC_PROTO_SCENE_MAX_DEPTH + 1) == 0);
+	REQUIRE(write_comb(&b, BC_PROTO_SCENE_MAX_DEPTH) == 0);
 	CHECK(bc_proto_scene_scan(b.data, b.len, &info, NULL) == BC_EDEPTH);
 	/* Far deeper than the limit costs no stack: refused at 129. */
 	bc_proto_buf_reset(&b);
@@ -173,7 +178,7 @@ static void test_million_node_scene_load(void)
 	bc_proto_buf_init(&scene, 0);
 	bc_proto_buf_init(&wire, 0);
 	REQUIRE(bc_proto_scene_begin(&scene, NULL, n) == 0);
-	REQUIRE(write_tree(&scene, n, 0, &c, 0) == 0);
+	REQUIRE(write_tree(&scene, n, 1, &c, 0) == 0);
 	REQUIRE(c.nodes == n);
 	printf("  %u nodes (%u primitives, %u operators, depth %u): %zu "
 	       "bytes\n",

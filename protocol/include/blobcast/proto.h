@@ -436,14 +436,17 @@ int bc_proto_encode(struct bc_proto_buf *b, const struct bc_msg *m,
 struct bc_proto_scene_info {
 	bool has_camera;
 	uint32_t nodes, prims, ops;
-	uint32_t depth; /* most operators on a path from the root */
+	uint32_t depth; /* most nodes on a path from the root (root = 1) */
 };
 
-/* Checks the structure of scene bytes as PROTOCOL.md describes it (flags,
- * tags, counts, nesting, finite floats, exact length) without building
- * anything: iterative, no allocation, linear time. blobtree's decoder checks
- * meaning (parameter counts per kind, ranges, unique ids). Returns 0 with
- * *info filled (it may be NULL), or a negative code with the reason in ei. */
+/* Checks scene bytes as PROTOCOL.md describes them, with the checks and the
+ * check order of blobtree's decoder for everything the bytes alone decide
+ * (flags, tags, counts, nesting, finite floats, sharp operators without
+ * blend, exact length), without building anything: iterative, no
+ * allocation, linear time. What needs the primitive tables or the whole
+ * tree (each kind's exact float count, parameter ranges, camera geometry,
+ * unique ids) is left to blobtree. Returns 0 with *info filled (it may be
+ * NULL), or a negative code with the reason in ei. */
 int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
 			struct bc_proto_scene_info *info, struct bc_errinfo *ei);
 

@@ -109,8 +109,9 @@
  * 22-bit ancestor field whose all-ones value means "none"). */
 #define BC_PROTO_SCENE_MAX_NODES ((1u << 22) - 1u)
 
-/* Operators on any path from the root; equals BC_TREE_MAX_DEPTH (scene
- * parsers and evaluation stacks are sized from it). */
+/* Nodes on any path from the root, the root counting 1 (so at most 127
+ * nested operators); equals BC_TREE_MAX_DEPTH (scene parsers and evaluation
+ * stacks are sized from it). */
 #define BC_PROTO_SCENE_MAX_DEPTH 128u
 
 #endif
