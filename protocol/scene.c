@@ -53,6 +53,7 @@ static int s_need(struct scan *s, size_t n, const char *what)
 
 static int s_u8(struct scan *s, const char *what, uint8_t *v)
 {
+	*v = 0;
 	int rc = s_need(s, 1, what);
 	if (rc == 0) {
 		bc__get_u8(&s->c, v);
@@ -62,6 +63,7 @@ static int s_u8(struct scan *s, const char *what, uint8_t *v)
 
 static int s_u32(struct scan *s, const char *what, uint32_t *v)
 {
+	*v = 0;
 	int rc = s_need(s, 4, what);
 	if (rc == 0) {
 		bc__get_u32(&s->c, v);
@@ -202,7 +204,7 @@ int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
 				     BC_PROTO_SCENE_MAX_DEPTH);
 		}
 		uint8_t tag;
-		uint32_t id, children;
+		uint32_t id, children = 0;
 		TRY(s_u8(&s, "tag", &tag));
 		TRY(s_u32(&s, "id", &id));
 		if (nopen) {

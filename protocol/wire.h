@@ -28,10 +28,11 @@ static inline size_t bc__cur_left(const struct bc__cur *c)
 	return c->len - c->pos;
 }
 
-/* Each getter returns false, reading nothing, when fewer than its size
- * bytes are left. */
+/* Each getter resets *v, then returns false, reading nothing, when fewer
+ * than its size bytes are left. */
 static inline bool bc__get_u8(struct bc__cur *c, uint8_t *v)
 {
+	*v = 0;
 	if (c->pos + 1 > c->len) {
 		return false;
 	}
@@ -42,6 +43,7 @@ static inline bool bc__get_u8(struct bc__cur *c, uint8_t *v)
 
 static inline bool bc__get_u16(struct bc__cur *c, uint16_t *v)
 {
+	*v = 0;
 	if (bc__cur_left(c) < 2) {
 		return false;
 	}
@@ -59,6 +61,7 @@ static inline uint32_t bc__le32(const uint8_t *p)
 
 static inline bool bc__get_u32(struct bc__cur *c, uint32_t *v)
 {
+	*v = 0;
 	if (bc__cur_left(c) < 4) {
 		return false;
 	}
@@ -69,6 +72,7 @@ static inline bool bc__get_u32(struct bc__cur *c, uint32_t *v)
 
 static inline bool bc__get_u64(struct bc__cur *c, uint64_t *v)
 {
+	*v = 0;
 	if (bc__cur_left(c) < 8) {
 		return false;
 	}
