@@ -140,6 +140,7 @@ static void write_done(uv_write_t *req, int status)
 				c->frame_next = NULL;
 				bc_client_send_frame(c, next);
 				bc_shared_unref(next);
+				bc_session_client_ready(c);
 			}
 		} else {
 			c->bytes_sent += w->len;
@@ -240,6 +241,15 @@ void bc_client_send_frame(struct bc_client *c, struct bc_shared *frame)
 	if (c->closing || c->draining) {
 		return;
 	}
+	if (c->frame_writing &&
+	    bc_now_ms(c->srv) - c->frame_started_ms > BC_SRV_STALL_MS) {
+		bc_log(BC_LOG_WARN,
+		       "dropping client %u (%s): a frame has waited %u ms, it "
+		       "stopped reading",
+		       c->gen, c->name, BC_SRV_STALL_MS);
+		bc_client_close(c, "stopped reading");
+		return;
+	}
 	if (c->frame_writing) {
 		/* Spoil the unsent frame: the newer one supersedes it. */
 		if (c->frame_next) {
@@ -251,6 +261,7 @@ void bc_client_send_frame(struct bc_client *c, struct bc_shared *frame)
 		return;
 	}
 	c->frame_writing = true;
+	c->frame_started_ms = bc_now_ms(c->srv);
 	if (!c->first_frame_ms) {
 		c->first_frame_ms = bc_now_ms(c->srv);
 	}

@@ -102,6 +102,7 @@ struct bc_client {
 	/* Output: messages go out at once; frames one at a time. */
 	size_t queued;
 	bool frame_writing;
+	uint64_t frame_started_ms;
 	struct bc_shared *frame_next;
 	uint64_t frames_sent, bytes_sent, frames_spoiled;
 	uint64_t first_frame_ms;
@@ -174,6 +175,8 @@ void bc_sessions_free(struct bc_srv *srv);
 /* Dispatches a message from a client in stage READY or SESSION. */
 void bc_session_handle(struct bc_client *c, const struct bc_msg *m);
 void bc_session_leave(struct bc_client *c);
+/* c's frame backlog cleared: render for it again if it is owed a frame. */
+void bc_session_client_ready(struct bc_client *c);
 /* A render job for these clients finished: schedule what is still owed. */
 void bc_session_frame_done(struct bc_srv *srv, uint32_t session_id,
 			   const struct bc_client_ref *targets, uint32_t n);

@@ -804,8 +804,10 @@ static void schedule(struct bc_session *s)
 		struct bc_rjob *job;
 		uint32_t ng = 0, max_bytes;
 		bool still;
+		/* A client with a frame already waiting behind another is
+		 * not rendered for until that clears: it would be spoiled. */
 		if (!c || done[i] || !c->has_view || !c->dirty ||
-		    c->render_pending) {
+		    c->render_pending || c->frame_next) {
 			continue;
 		}
 		still = now >= c->interacting_until;
@@ -817,7 +819,7 @@ static void schedule(struct bc_session *s)
 		for (uint32_t j = i + 1; j < s->nmembers; j++) {
 			struct bc_client *o = bc_client_get(srv, s->members[j]);
 			if (o && !done[j] && o->has_view && o->dirty &&
-			    !o->render_pending &&
+			    !o->render_pending && !o->frame_next &&
 			    same_frame(c, o, still, now >= o->interacting_until)) {
 				group[ng++] = o;
 				done[j] = true;
@@ -898,6 +900,13 @@ static void schedule(struct bc_session *s)
 	}
 	if (next_still > now) {
 		uv_timer_start(&s->still_timer, still_due, next_still - now, 0);
+	}
+}
+
+void bc_session_client_ready(struct bc_client *c)
+{
+	if (c->session && c->dirty) {
+		schedule(c->session);
 	}
 }
 

@@ -34,6 +34,11 @@
  * dropped, with the reason in the log. */
 #define BC_SRV_MAX_CLIENT_QUEUE (32u * 1024u * 1024u)
 
+/* A client whose FRAME has been in the kernel's hands this long without
+ * being taken has stopped reading: it is dropped (with the reason in the
+ * log) instead of holding a frame and a render slot forever. */
+#define BC_SRV_STALL_MS 10000u
+
 /* Idle time after the last change before the still (full quality) frame is
  * rendered: long enough to coalesce a burst of slider events, short enough
  * to feel immediate when the user lets go. */

@@ -1,0 +1,210 @@
+/*
+ * blobcastd benchmarks, through its Unix socket with the raw protocol:
+ *  - edit -> frame latency (p50/p99) and bytes per frame for one-primitive
+ *    edits at 512^2 on a 1024-primitive fig18 scene, CPU backend: the still
+ *    frames carry damaged blocks only; a full still frame of the same view
+ *    for comparison;
+ *  - frames per second received by 1, 4 and 16 viewers sharing one view
+ *    while an editor drags a primitive (INTERACTING edits);
+ *  - the same latency with a second client that stops reading (it must be
+ *    spoiled, then dropped, without slowing the first).
+ *
+ * Usage: bench_daemon PATH/TO/blobcastd [edits]
+ * (BENCH_FPS_ONLY=1 in the environment skips the latency runs.)
+ */
+#include <stdint.h>
+
+#include "../tests/server/daemon.h"
+#include "blobcast/alloc.h"
+#include "blobcast/gen.h"
+#include "blobcast/scene.h"
+
+static int cmp_i64(const void *a, const void *b)
+{
+	int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
+	return (x > y) - (x < y);
+}
+
+static double frame_bytes(const struct bc_msg *m)
+{
+	double n = 0;
+	for (uint32_t i = 0; i < m->frame.nrects; i++) {
+		n += m->frame.rects[i].data.len;
+	}
+	return n;
+}
+
+static int load_fig18(struct conn *c, uint32_t count, uint32_t *prim_id)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_camera cam;
+	struct bc_gen_opts o = {.count = count,
+				.kind = BC_GEN_KIND_SPHERES,
+				.blend = BC_GEN_BLEND_SMOOTH};
+	uint8_t *bytes = NULL;
+	size_t len = 0;
+	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
+	const struct bc_lin *l;
+	if (!t || bc_gen("fig18", &o, t, &cam, NULL) ||
+	    bc_scene_encode(t, &cam, &bytes, &len)) {
+		return -1;
+	}
+	l = bc_tree_lin(t);
+	/* A primitive in the middle of the comb. */
+	*prim_id = l->node_id[l->prim_slot[l->nprims / 2]];
+	m.scene_load.scene.ptr = bytes;
+	m.scene_load.scene.len = (uint32_t)len;
+	conn_send(c, &m);
+	bc_free(bytes);
+	bc_tree_destroy(t);
+	return conn_expect(c, BC_MSG_SCENE_STATE, 30000) == 1 ? 0 : -1;
+}
+
+static struct bc_prim_data original;
+
+/* Edits then waits for the frame reflecting each edit. */
+static void latency(struct conn *c, struct daemon *d, uint32_t id, int edits,
+		    const char *label)
+{
+	int64_t *lat = bc_calloc((size_t)edits, sizeof(int64_t));
+	double bytes = 0, rects = 0;
+	int got = 0;
+	(void)d;
+	for (int i = 0; i < edits; i++) {
+		float dx = (i % 2) ? 0.02f : -0.02f;
+		int64_t t0 = t_now_ms();
+		uint64_t order = 0;
+		conn_move(c, id, original.translate[0] + dx,
+			  original.translate[1], original.translate[2], false);
+		while (conn_recv(c, 30000) == 1) {
+			if (c->m.type == BC_MSG_EDIT_APPLIED) {
+				order = c->m.edit_applied.order;
+			} else if (c->m.type == BC_MSG_FRAME && order &&
+				   c->m.frame.order >= order) {
+				lat[got++] = t_now_ms() - t0;
+				bytes += frame_bytes(&c->m);
+				rects += c->m.frame.nrects;
+				break;
+			}
+		}
+	}
+	qsort(lat, (size_t)got, sizeof(int64_t), cmp_i64);
+	if (got) {
+		printf("%s edits=%d p50_ms=%lld p99_ms=%lld "
+		       "bytes_per_frame=%.0f rects_per_frame=%.1f\n",
+		       label, got, (long long)lat[got / 2],
+		       (long long)lat[(got * 99) / 100], bytes / got,
+		       rects / got);
+	}
+	bc_free(lat);
+}
+
+static void fps(struct daemon *d, uint32_t id, int viewers)
+{
+	struct conn ed, *vs = bc_calloc((size_t)viewers, sizeof(struct conn));
+	int64_t t0, seconds = 4;
+	long frames = 0;
+	if (conn_open(&ed, d) || conn_hello(&ed, "editor") ||
+	    conn_join(&ed, "bench", BC_PROTO_ROLE_EDITOR, false)) {
+		fprintf(stderr, "editor connect failed\n");
+	}
+	for (int v = 0; v < viewers; v++) {
+		conn_open(&vs[v], d);
+		conn_hello(&vs[v], "viewer");
+		conn_join(&vs[v], "bench", BC_PROTO_ROLE_VIEWER, false);
+		conn_view(&vs[v], 512, 512, BC_PROTO_ENC_JPEG);
+		if (conn_expect(&vs[v], BC_MSG_FRAME, 30000) != 1) {
+			fprintf(stderr, "viewer %d: no first frame\n", v);
+		}
+	}
+	t0 = t_now_ms();
+	for (int i = 0; t_now_ms() - t0 < seconds * 1000; i++) {
+		conn_move(&ed, id, original.translate[0] + 0.001f * (float)(i % 50),
+			  original.translate[1], original.translate[2], true);
+		t_sleep_ms(16);
+		while (conn_recv(&ed, 0) == 1) {
+		}
+		for (int v = 0; v < viewers; v++) {
+			while (conn_recv(&vs[v], 0) == 1) {
+				frames += vs[v].m.type == BC_MSG_FRAME;
+			}
+		}
+	}
+	printf("viewers=%d frames_per_second_per_viewer=%.1f\n", viewers,
+	       (double)frames / (double)viewers / (double)seconds);
+	for (int v = 0; v < viewers; v++) {
+		conn_close(&vs[v]);
+	}
+	conn_close(&ed);
+	bc_free(vs);
+}
+
+int main(int argc, char **argv)
+{
+	struct daemon d;
+	struct conn c;
+	uint32_t id;
+	int edits = argc > 2 ? atoi(argv[2]) : 100;
+	char dir[64];
+	if (argc < 2) {
+		fprintf(stderr, "usage: bench_daemon PATH/TO/blobcastd [edits]\n");
+		return 2;
+	}
+	daemon_path = argv[1];
+	signal(SIGPIPE, SIG_IGN);
+	snprintf(dir, sizeof(dir), "/tmp/bc-bench-%d", (int)getpid());
+	if (daemon_start(&d, dir) != 0) {
+		fprintf(stderr, "cannot start %s\n", argv[1]);
+		return 1;
+	}
+	conn_open(&c, &d);
+	conn_hello(&c, "bench");
+	conn_join(&c, "bench", BC_PROTO_ROLE_EDITOR, true);
+	if (load_fig18(&c, 1024, &id)) {
+		fprintf(stderr, "scene load failed\n");
+		return 1;
+	}
+	{
+		struct bc_tree *t = bc_tree_create();
+		bc_scene_decode(c.m.scene_state.scene.ptr,
+				c.m.scene_state.scene.len, t, NULL, NULL, NULL);
+		bc_tree_get(t, id, &original, NULL);
+		bc_tree_destroy(t);
+	}
+	conn_view(&c, 512, 512, BC_PROTO_ENC_JPEG);
+	conn_expect(&c, BC_MSG_FRAME, 30000);
+	printf("full_still_frame bytes=%.0f\n", frame_bytes(&c.m));
+	if (!getenv("BENCH_FPS_ONLY")) latency(&c, &d, id, edits, "solo");
+	{
+		/* A second member with the same view that never reads. */
+		struct conn lazy;
+		conn_open(&lazy, &d);
+		conn_hello(&lazy, "lazy");
+		conn_join(&lazy, "bench", BC_PROTO_ROLE_VIEWER, false);
+		{
+			struct bc_msg v = {.type = BC_MSG_VIEW};
+			v.view.width = 1024;
+			v.view.height = 1024;
+			v.view.encoding = BC_PROTO_ENC_RAW;
+			v.view.quality_interactive = 50;
+			v.view.quality_still = 90;
+			v.view.downscale = 1;
+			conn_send(&lazy, &v);
+		}
+		if (!getenv("BENCH_FPS_ONLY")) latency(&c, &d, id, edits, "with_stalled_client");
+		conn_close(&lazy);
+	}
+	fps(&d, id, 1);
+	fps(&d, id, 4);
+	fps(&d, id, 16);
+	conn_close(&c);
+	daemon_stop(&d, SIGTERM);
+	{
+		char cmd[128];
+		snprintf(cmd, sizeof(cmd), "rm -rf %s %s.sock", dir, dir);
+		if (system(cmd) != 0) {
+			return 1;
+		}
+	}
+	return 0;
+}
