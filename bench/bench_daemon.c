@@ -174,7 +174,9 @@ int main(int argc, char **argv)
 	conn_view(&c, 512, 512, BC_PROTO_ENC_JPEG);
 	conn_expect(&c, BC_MSG_FRAME, 30000);
 	printf("full_still_frame bytes=%.0f\n", frame_bytes(&c.m));
-	if (!getenv("BENCH_FPS_ONLY")) latency(&c, &d, id, edits, "solo");
+	if (!getenv("BENCH_FPS_ONLY")) {
+		latency(&c, &d, id, edits, "solo");
+	}
 	{
 		/* A second member with the same view that never reads. */
 		struct conn lazy;
@@ -191,7 +193,9 @@ int main(int argc, char **argv)
 			v.view.downscale = 1;
 			conn_send(&lazy, &v);
 		}
-		if (!getenv("BENCH_FPS_ONLY")) latency(&c, &d, id, edits, "with_stalled_client");
+		if (!getenv("BENCH_FPS_ONLY")) {
+			latency(&c, &d, id, edits, "with_stalled_client");
+		}
 		conn_close(&lazy);
 	}
 	fps(&d, id, 1);
