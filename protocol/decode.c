@@ -36,14 +36,14 @@ struct dec {
 
 /* Smallest encodings of repeated elements, for the count-versus-bytes-left
  * checks (PROTOCOL.md gives the same numbers). */
-#define MEMBER_MIN 7u   /* u32 id, u8 role, empty name */
-#define OP_MIN 5u       /* REMOVE: u8 kind, u32 node */
-#define FIELD_MIN 6u    /* u8 field, u8 count, one f32 */
-#define RECT_MIN 13u    /* 4 x u16, u32 length, one byte */
+#define MEMBER_MIN 7u /* u32 id, u8 role, empty name */
+#define OP_MIN 5u     /* REMOVE: u8 kind, u32 node */
+#define FIELD_MIN 6u  /* u8 field, u8 count, one f32 */
+#define RECT_MIN 13u  /* 4 x u16, u32 length, one byte */
 
 /* Records code with "TYPE: reason (payload byte N)" in d->ei. */
-static int fail(struct dec *d, int code, const char *fmt, ...)
-	BC__ERRINFO_PRINTF;
+static int fail(struct dec *d, int code, const char *fmt,
+                ...) BC__ERRINFO_PRINTF;
 
 static int fail(struct dec *d, int code, const char *fmt, ...)
 {
@@ -57,13 +57,13 @@ static int fail(struct dec *d, int code, const char *fmt, ...)
 	va_end(ap);
 	const char *name = bc_proto_type_name(d->m->type);
 	return bc_errinfo_set(d->ei, code, "%s: %s (payload byte %zu)",
-			      name ? name : "?", reason, d->c.pos);
+	                      name ? name : "?", reason, d->c.pos);
 }
 
 static int truncated(struct dec *d, const char *what, size_t need)
 {
 	return fail(d, BC_EPROTO_TRUNCATED, "%s needs %zu bytes, %zu left",
-		    what, need, bc__cur_left(&d->c));
+	            what, need, bc__cur_left(&d->c));
 }
 
 static int rd_u8(struct dec *d, const char *what, uint8_t *v)
@@ -103,7 +103,7 @@ static int rd_f32(struct dec *d, const char *what, float *v)
 	TRY(rd_u32(d, what, &u));
 	if (!bc__bits_finite(u)) {
 		return fail(d, BC_ENONFINITE, "%s is not finite (bits %08x)",
-			    what, u);
+		            what, u);
 	}
 	*v = bc__bits_f32(u);
 	return 0;
@@ -115,7 +115,7 @@ static int rd_f32_abs(struct dec *d, const char *what, float *v)
 	TRY(rd_f32(d, what, v));
 	if (fabsf(*v) > BC_PROTO_MAX_ABS) {
 		return fail(d, BC_ERANGE, "|%s| = %g is over %g", what,
-			    (double)fabsf(*v), (double)BC_PROTO_MAX_ABS);
+		            (double)fabsf(*v), (double)BC_PROTO_MAX_ABS);
 	}
 	return 0;
 }
@@ -126,54 +126,53 @@ static int rd_f32_nonneg(struct dec *d, const char *what, float *v)
 	TRY(rd_f32(d, what, v));
 	if (*v < 0.0f) {
 		return fail(d, BC_ERANGE, "%s = %g is negative", what,
-			    (double)*v);
+		            (double)*v);
 	}
 	return 0;
 }
 
 static int rd_u16_range(struct dec *d, const char *what, unsigned lo,
-			unsigned hi, uint16_t *v)
+                        unsigned hi, uint16_t *v)
 {
 	TRY(rd_u16(d, what, v));
 	if (*v < lo || *v > hi) {
 		return fail(d, BC_ERANGE, "%s = %u is outside %u..%u", what,
-			    (unsigned)*v, lo, hi);
+		            (unsigned)*v, lo, hi);
 	}
 	return 0;
 }
 
 static int rd_u8_range(struct dec *d, const char *what, unsigned lo,
-		       unsigned hi, uint8_t *v)
+                       unsigned hi, uint8_t *v)
 {
 	TRY(rd_u8(d, what, v));
 	if (*v < lo || *v > hi) {
 		return fail(d, BC_ERANGE, "%s = %u is outside %u..%u", what,
-			    (unsigned)*v, lo, hi);
+		            (unsigned)*v, lo, hi);
 	}
 	return 0;
 }
 
-static int rd_role(struct dec *d, const char *what,
-		   enum bc_proto_role *role)
+static int rd_role(struct dec *d, const char *what, enum bc_proto_role *role)
 {
 	uint8_t v;
 	TRY(rd_u8(d, what, &v));
 	if (v == 0 || v >= BC_PROTO_ROLE_COUNT) {
 		return fail(d, BC_EENUM, "%s = %u is not a role", what,
-			    (unsigned)v);
+		            (unsigned)v);
 	}
 	*role = (enum bc_proto_role)v;
 	return 0;
 }
 
 static int rd_encoding(struct dec *d, const char *what,
-		       enum bc_proto_encoding *enc)
+                       enum bc_proto_encoding *enc)
 {
 	uint8_t v;
 	TRY(rd_u8(d, what, &v));
 	if (v == 0 || v >= BC_PROTO_ENC_COUNT) {
 		return fail(d, BC_EENUM, "%s = %u is not an encoding", what,
-			    (unsigned)v);
+		            (unsigned)v);
 	}
 	*enc = (enum bc_proto_encoding)v;
 	return 0;
@@ -181,14 +180,14 @@ static int rd_encoding(struct dec *d, const char *what,
 
 /* u16 byte length (min..max), then that many bytes of strict UTF-8. */
 static int rd_str(struct dec *d, const char *what, unsigned min, unsigned max,
-		  struct bc_proto_str *s)
+                  struct bc_proto_str *s)
 {
 	uint16_t n;
 	TRY(rd_u16(d, what, &n));
 	if (n < min || n > max) {
 		return fail(d, BC_EPROTO_LENGTH,
-			    "%s length %u is outside %u..%u", what,
-			    (unsigned)n, min, max);
+		            "%s length %u is outside %u..%u", what, (unsigned)n,
+		            min, max);
 	}
 	if (n > bc__cur_left(&d->c)) {
 		return truncated(d, what, n);
@@ -198,8 +197,8 @@ static int rd_str(struct dec *d, const char *what, unsigned min, unsigned max,
 	if (bad < n) {
 		d->c.pos += bad;
 		return fail(d, BC_ESTRING,
-			    "%s: byte %zu (0x%02x) breaks UTF-8 or is NUL",
-			    what, bad, (unsigned)p[bad]);
+		            "%s: byte %zu (0x%02x) breaks UTF-8 or is NUL",
+		            what, bad, (unsigned)p[bad]);
 	}
 	s->ptr = (const char *)p;
 	s->len = n;
@@ -227,16 +226,16 @@ static int rd_blob(struct dec *d, const char *what, struct bc_proto_bytes *b)
 /* A count n in min..max whose n elements of at least elem bytes each must
  * fit in what is left. */
 static int check_count(struct dec *d, const char *what, unsigned n,
-		       unsigned min, unsigned max, size_t elem)
+                       unsigned min, unsigned max, size_t elem)
 {
 	if (n < min || n > max) {
-		return fail(d, BC_EPROTO_COUNT, "%s %u is outside %u..%u",
-			    what, n, min, max);
+		return fail(d, BC_EPROTO_COUNT, "%s %u is outside %u..%u", what,
+		            n, min, max);
 	}
 	if ((size_t)n * elem > bc__cur_left(&d->c)) {
 		return fail(d, BC_EPROTO_COUNT,
-			    "%s %u needs at least %zu bytes, %zu left", what,
-			    n, (size_t)n * elem, bc__cur_left(&d->c));
+		            "%s %u needs at least %zu bytes, %zu left", what, n,
+		            (size_t)n * elem, bc__cur_left(&d->c));
 	}
 	return 0;
 }
@@ -244,7 +243,7 @@ static int check_count(struct dec *d, const char *what, unsigned n,
 /* Grows one array of the store to hold need elements. The counts that
  * reach here are bounded by proto_limits.h, so this never grows far. */
 static int reserve(struct dec *d, void **arr, size_t *cap, size_t need,
-		   size_t size)
+                   size_t size)
 {
 	if (need <= *cap) {
 		return 0;
@@ -262,7 +261,8 @@ static int reserve(struct dec *d, void **arr, size_t *cap, size_t need,
 	return 0;
 }
 
-/* ---- Types ---------------------------------------------------------------- */
+/* ---- Types ----------------------------------------------------------------
+ */
 
 static int dec_hello(struct dec *d, struct bc_msg_hello *h)
 {
@@ -273,20 +273,19 @@ static int dec_hello(struct dec *d, struct bc_msg_hello *h)
 	TRY(rd_u16(d, "version_max", &h->version_max));
 	if (h->version_max < h->version_min) {
 		return fail(d, BC_ERANGE, "version_max %u < version_min %u",
-			    (unsigned)h->version_max,
-			    (unsigned)h->version_min);
+		            (unsigned)h->version_max, (unsigned)h->version_min);
 	}
 	TRY(rd_u8(d, "encodings", &h->encodings));
 	if (h->encodings & ~BC_PROTO_ENCODINGS_ALL) {
 		return fail(d, BC_EPROTO_FLAGS,
-			    "encodings 0x%02x has reserved bits",
-			    (unsigned)h->encodings);
+		            "encodings 0x%02x has reserved bits",
+		            (unsigned)h->encodings);
 	}
 	TRY(rd_u32(d, "max_frame_bytes", &h->max_frame_bytes));
 	if (h->max_frame_bytes != 0 &&
 	    h->max_frame_bytes < BC_PROTO_MIN_FRAME_BYTES) {
 		return fail(d, BC_ERANGE, "max_frame_bytes %u is under %u",
-			    h->max_frame_bytes, BC_PROTO_MIN_FRAME_BYTES);
+		            h->max_frame_bytes, BC_PROTO_MIN_FRAME_BYTES);
 	}
 	TRY(rd_str(d, "client_name", 0, BC_PROTO_MAX_NAME, &h->client_name));
 	TRY(rd_str(d, "token", 0, BC_PROTO_MAX_TOKEN, &h->token));
@@ -294,12 +293,12 @@ static int dec_hello(struct dec *d, struct bc_msg_hello *h)
 }
 
 static int rd_u32_range(struct dec *d, const char *what, uint32_t lo,
-			uint32_t hi, uint32_t *v)
+                        uint32_t hi, uint32_t *v)
 {
 	TRY(rd_u32(d, what, v));
 	if (*v < lo || *v > hi) {
-		return fail(d, BC_ERANGE, "%s = %u is outside %u..%u", what,
-			    *v, lo, hi);
+		return fail(d, BC_ERANGE, "%s = %u is outside %u..%u", what, *v,
+		            lo, hi);
 	}
 	return 0;
 }
@@ -309,16 +308,16 @@ static int dec_welcome(struct dec *d, struct bc_msg_welcome *w)
 	TRY(rd_u16_range(d, "version", 1, UINT16_MAX, &w->version));
 	TRY(rd_id(d, "connection_id", &w->connection_id));
 	TRY(rd_u32_range(d, "max_payload", BC_PROTO_HELLO_MAX_PAYLOAD,
-			 BC_PROTO_MAX_PAYLOAD, &w->max_payload));
+	                 BC_PROTO_MAX_PAYLOAD, &w->max_payload));
 	TRY(rd_u32_range(d, "max_frame_bytes", BC_PROTO_MIN_FRAME_BYTES,
-			 BC_PROTO_MAX_PAYLOAD, &w->max_frame_bytes));
+	                 BC_PROTO_MAX_PAYLOAD, &w->max_frame_bytes));
 	TRY(rd_u32_range(d, "max_nodes", 1, BC_PROTO_SCENE_MAX_NODES,
-			 &w->max_nodes));
+	                 &w->max_nodes));
 	TRY(rd_u16_range(d, "max_dim", 1, BC_PROTO_MAX_DIM, &w->max_dim));
 	TRY(rd_u16_range(d, "max_members", 1, BC_PROTO_MAX_MEMBERS,
-			 &w->max_members));
+	                 &w->max_members));
 	TRY(rd_u16_range(d, "max_edit_ops", 1, BC_PROTO_MAX_EDIT_OPS,
-			 &w->max_edit_ops));
+	                 &w->max_edit_ops));
 	TRY(rd_str(d, "server_id", 0, BC_PROTO_MAX_NAME, &w->server_id));
 	return 0;
 }
@@ -344,13 +343,12 @@ static int dec_session_info(struct dec *d, struct bc_msg_session_info *s)
 	TRY(rd_role(d, "role", &s->role));
 	TRY(rd_str(d, "name", 1, BC_PROTO_MAX_NAME, &s->name));
 	TRY(rd_u16(d, "member_count", &s->nmembers));
-	TRY(check_count(d, "member_count", s->nmembers, 1,
-			BC_PROTO_MAX_MEMBERS, MEMBER_MIN));
+	TRY(check_count(d, "member_count", s->nmembers, 1, BC_PROTO_MAX_MEMBERS,
+	                MEMBER_MIN));
 	struct bc_proto_member *out = NULL;
 	if (d->store) {
 		TRY(reserve(d, (void **)&d->store->members,
-			    &d->store->members_cap, s->nmembers,
-			    sizeof(*out)));
+		            &d->store->members_cap, s->nmembers, sizeof(*out)));
 		out = d->store->members;
 	}
 	for (unsigned i = 0; i < s->nmembers; i++) {
@@ -395,30 +393,30 @@ static int dec_field(struct dec *d, uint64_t *seen, struct bc_proto_field *f)
 	int want = field_values(f->field);
 	if (want == 0) {
 		return fail(d, BC_EENUM, "field %u is not a field number",
-			    (unsigned)f->field);
+		            (unsigned)f->field);
 	}
 	/* Field numbers are below 64, so one bit each. */
 	if (*seen & (UINT64_C(1) << f->field)) {
 		return fail(d, BC_EPARSE, "field %u given twice",
-			    (unsigned)f->field);
+		            (unsigned)f->field);
 	}
 	*seen |= UINT64_C(1) << f->field;
 	TRY(rd_u8(d, "field.count", &f->count));
-	bool ok = want > 0 ? f->count == (unsigned)want
-			   : (f->count >= 1 &&
-			      f->count <= BC_PROTO_MAX_FIELD_VALUES);
+	bool ok =
+	    want > 0 ? f->count == (unsigned)want
+	             : (f->count >= 1 && f->count <= BC_PROTO_MAX_FIELD_VALUES);
 	if (!ok) {
 		return fail(d, BC_EPROTO_COUNT,
-			    "field %u has %u values, expected %s%d",
-			    (unsigned)f->field, (unsigned)f->count,
-			    want > 0 ? "" : "1..",
-			    want > 0 ? want : (int)BC_PROTO_MAX_FIELD_VALUES);
+		            "field %u has %u values, expected %s%d",
+		            (unsigned)f->field, (unsigned)f->count,
+		            want > 0 ? "" : "1..",
+		            want > 0 ? want : (int)BC_PROTO_MAX_FIELD_VALUES);
 	}
 	if ((size_t)f->count * 4u > bc__cur_left(&d->c)) {
 		return fail(d, BC_EPROTO_COUNT,
-			    "field %u: %u values need %u bytes, %zu left",
-			    (unsigned)f->field, (unsigned)f->count,
-			    4u * f->count, bc__cur_left(&d->c));
+		            "field %u: %u values need %u bytes, %zu left",
+		            (unsigned)f->field, (unsigned)f->count,
+		            4u * f->count, bc__cur_left(&d->c));
 	}
 	for (unsigned k = 0; k < f->count; k++) {
 		TRY(rd_f32_abs(d, "field value", &f->v[k]));
@@ -428,24 +426,24 @@ static int dec_field(struct dec *d, uint64_t *seen, struct bc_proto_field *f)
 		if (!(v >= 1.0f && v <= (float)BC_PROTO_OP_KIND_MAX &&
 		      v == (float)(int)v)) {
 			return fail(d, BC_EENUM,
-				    "operator kind %g is not an integer 1..%u",
-				    (double)v, BC_PROTO_OP_KIND_MAX);
+			            "operator kind %g is not an integer 1..%u",
+			            (double)v, BC_PROTO_OP_KIND_MAX);
 		}
 	}
 	return 0;
 }
 
 static int dec_ops(struct dec *d, uint16_t *nops,
-		   const struct bc_proto_edit_op **ops_out)
+                   const struct bc_proto_edit_op **ops_out)
 {
 	TRY(rd_u16(d, "op_count", nops));
 	TRY(check_count(d, "op_count", *nops, 1, BC_PROTO_MAX_EDIT_OPS,
-			OP_MIN));
+	                OP_MIN));
 	struct bc_proto_edit_op *ops = NULL;
 	struct bc_proto_store *st = d->store;
 	if (st) {
 		TRY(reserve(d, (void **)&st->ops, &st->ops_cap, *nops,
-			    sizeof(*ops)));
+		            sizeof(*ops)));
 		ops = st->ops;
 	}
 	size_t nfields = 0;
@@ -454,8 +452,8 @@ static int dec_ops(struct dec *d, uint16_t *nops,
 		uint8_t kind;
 		TRY(rd_u8(d, "op.kind", &kind));
 		if (kind == 0 || kind >= BC_PROTO_EDIT_COUNT) {
-			return fail(d, BC_EENUM, "op %u: kind %u is unknown",
-				    i, (unsigned)kind);
+			return fail(d, BC_EENUM, "op %u: kind %u is unknown", i,
+			            (unsigned)kind);
 		}
 		op.kind = (enum bc_proto_edit_kind)kind;
 		switch (op.kind) {
@@ -463,12 +461,11 @@ static int dec_ops(struct dec *d, uint16_t *nops,
 			TRY(rd_id(d, "op.node", &op.node));
 			TRY(rd_u8(d, "op.field_count", &op.nfields));
 			TRY(check_count(d, "op.field_count", op.nfields, 1,
-					BC_PROTO_MAX_SET_FIELDS, FIELD_MIN));
+			                BC_PROTO_MAX_SET_FIELDS, FIELD_MIN));
 			if (st) {
-				TRY(reserve(d, (void **)&st->fields,
-					    &st->fields_cap,
-					    nfields + op.nfields,
-					    sizeof(*st->fields)));
+				TRY(reserve(
+				    d, (void **)&st->fields, &st->fields_cap,
+				    nfields + op.nfields, sizeof(*st->fields)));
 			}
 			uint64_t seen = 0;
 			for (unsigned k = 0; k < op.nfields; k++) {
@@ -518,9 +515,9 @@ static int dec_ops(struct dec *d, uint16_t *nops,
 static int dec_camera(struct dec *d, struct bc_msg_camera *c)
 {
 	static const char *const names[3][3] = {
-		{"eye.x", "eye.y", "eye.z"},
-		{"target.x", "target.y", "target.z"},
-		{"up.x", "up.y", "up.z"},
+	    {"eye.x", "eye.y", "eye.z"},
+	    {"target.x", "target.y", "target.z"},
+	    {"up.x", "up.y", "up.z"},
 	};
 	float *vec[3] = {c->eye, c->target, c->up};
 	for (int i = 0; i < 3; i++) {
@@ -531,7 +528,7 @@ static int dec_camera(struct dec *d, struct bc_msg_camera *c)
 	TRY(rd_f32(d, "fov_y_deg", &c->fov_y_deg));
 	if (!(c->fov_y_deg > 0.0f && c->fov_y_deg < 180.0f)) {
 		return fail(d, BC_ERANGE, "fov_y_deg %g is outside (0, 180)",
-			    (double)c->fov_y_deg);
+		            (double)c->fov_y_deg);
 	}
 	return 0;
 }
@@ -542,11 +539,11 @@ static int dec_view(struct dec *d, struct bc_msg_view *v)
 	TRY(rd_u16_range(d, "height", 1, BC_PROTO_MAX_DIM, &v->height));
 	TRY(rd_encoding(d, "encoding", &v->encoding));
 	TRY(rd_u8_range(d, "quality_interactive", 1, BC_PROTO_MAX_QUALITY,
-			&v->quality_interactive));
+	                &v->quality_interactive));
 	TRY(rd_u8_range(d, "quality_still", 1, BC_PROTO_MAX_QUALITY,
-			&v->quality_still));
+	                &v->quality_still));
 	TRY(rd_u8_range(d, "downscale", 1, BC_PROTO_MAX_DOWNSCALE,
-			&v->downscale));
+	                &v->downscale));
 	return 0;
 }
 
@@ -564,16 +561,16 @@ static int dec_frame(struct dec *d, struct bc_msg_frame *f)
 	TRY(rd_u16_range(d, "width", 1, BC_PROTO_MAX_DIM, &f->width));
 	TRY(rd_u16_range(d, "height", 1, BC_PROTO_MAX_DIM, &f->height));
 	TRY(rd_u16_range(d, "image_width", full ? f->width : 1, f->width,
-			 &f->image_width));
+	                 &f->image_width));
 	TRY(rd_u16_range(d, "image_height", full ? f->height : 1, f->height,
-			 &f->image_height));
+	                 &f->image_height));
 	TRY(rd_u16(d, "rect_count", &f->nrects));
 	TRY(check_count(d, "rect_count", f->nrects, 1,
-			snap ? 1u : BC_PROTO_MAX_RECTS, RECT_MIN));
+	                snap ? 1u : BC_PROTO_MAX_RECTS, RECT_MIN));
 	struct bc_proto_rect *out = NULL;
 	if (d->store) {
 		TRY(reserve(d, (void **)&d->store->rects, &d->store->rects_cap,
-			    f->nrects, sizeof(*out)));
+		            f->nrects, sizeof(*out)));
 		out = d->store->rects;
 	}
 	for (unsigned i = 0; i < f->nrects; i++) {
@@ -585,25 +582,25 @@ static int dec_frame(struct dec *d, struct bc_msg_frame *f)
 		unsigned wmin = snap ? f->image_width : 1u;
 		if (r.w < wmin || (unsigned)r.x + r.w > f->image_width) {
 			return fail(d, BC_ERANGE,
-				    "rect %u: x %u + w %u is outside 1..%u", i,
-				    (unsigned)r.x, (unsigned)r.w,
-				    (unsigned)f->image_width);
+			            "rect %u: x %u + w %u is outside 1..%u", i,
+			            (unsigned)r.x, (unsigned)r.w,
+			            (unsigned)f->image_width);
 		}
 		TRY(rd_u16(d, "rect.h", &r.h));
 		unsigned hmin = snap ? f->image_height : 1u;
 		if (r.h < hmin || (unsigned)r.y + r.h > f->image_height) {
 			return fail(d, BC_ERANGE,
-				    "rect %u: y %u + h %u is outside 1..%u", i,
-				    (unsigned)r.y, (unsigned)r.h,
-				    (unsigned)f->image_height);
+			            "rect %u: y %u + h %u is outside 1..%u", i,
+			            (unsigned)r.y, (unsigned)r.h,
+			            (unsigned)f->image_height);
 		}
 		uint32_t n;
 		TRY(rd_u32(d, "rect.length", &n));
 		uint64_t raw = (uint64_t)r.w * r.h * 4u;
 		if (n == 0 || (f->encoding == BC_PROTO_ENC_RAW && n != raw)) {
 			return fail(d, BC_EPROTO_LENGTH,
-				    "rect %u: length %u (raw needs %llu)", i, n,
-				    (unsigned long long)raw);
+			            "rect %u: length %u (raw needs %llu)", i, n,
+			            (unsigned long long)raw);
 		}
 		if (n > bc__cur_left(&d->c)) {
 			return truncated(d, "rect.data", n);
@@ -622,7 +619,7 @@ static int dec_frame(struct dec *d, struct bc_msg_frame *f)
 static int dec_pick_result(struct dec *d, struct bc_msg_pick_result *p)
 {
 	static const char *const names[3] = {"position.x", "position.y",
-					     "position.z"};
+	                                     "position.z"};
 	TRY(rd_u16(d, "x", &p->x));
 	TRY(rd_u16(d, "y", &p->y));
 	TRY(rd_u32(d, "node", &p->node));
@@ -630,7 +627,7 @@ static int dec_pick_result(struct dec *d, struct bc_msg_pick_result *p)
 		TRY(rd_f32(d, names[k], &p->position[k]));
 		if (p->node == 0 && p->position[k] != 0.0f) {
 			return fail(d, BC_ERANGE, "a miss has %s != 0",
-				    names[k]);
+			            names[k]);
 		}
 	}
 	TRY(rd_f32_nonneg(d, "depth", &p->depth));
@@ -719,24 +716,25 @@ static int dec_body(struct dec *d, struct bc_msg *m)
 		return dec_stats(d, &m->stats);
 	default:
 		return fail(d, BC_EPROTO_TYPE, "type %d is unknown",
-			    (int)m->type);
+		            (int)m->type);
 	}
 }
 
 int bc__decode_payload(struct bc_proto_store *store, struct bc_msg *out,
-		       const uint8_t *payload, size_t len,
-		       struct bc_errinfo *ei)
+                       const uint8_t *payload, size_t len,
+                       struct bc_errinfo *ei)
 {
 	struct dec d = {
-		.c = {.buf = payload, .len = len, .pos = 0},
-		.store = store,
-		.ei = ei,
-		.m = out,
+	    .c = {.buf = payload, .len = len, .pos = 0},
+	    .store = store,
+	    .ei = ei,
+	    .m = out,
 	};
 	TRY(dec_body(&d, out));
 	if (bc__cur_left(&d.c)) {
-		return fail(&d, BC_EPROTO_TRAILING, "%zu bytes after the last field",
-			    bc__cur_left(&d.c));
+		return fail(&d, BC_EPROTO_TRAILING,
+		            "%zu bytes after the last field",
+		            bc__cur_left(&d.c));
 	}
 	return 0;
 }

@@ -13,8 +13,8 @@
 #include <stdarg.h>
 #include <stdio.h>
 
-static void wfail(struct bc__w *w, int code, const char *fmt, ...)
-	BC__ERRINFO_PRINTF;
+static void wfail(struct bc__w *w, int code, const char *fmt,
+                  ...) BC__ERRINFO_PRINTF;
 
 static void wfail(struct bc__w *w, int code, const char *fmt, ...)
 {
@@ -31,7 +31,7 @@ static void wfail(struct bc__w *w, int code, const char *fmt, ...)
 }
 
 static void w_str(struct bc__w *w, const char *what, struct bc_proto_str s,
-		  uint32_t max)
+                  uint32_t max)
 {
 	if (s.len > max) {
 		wfail(w, BC_EPROTO_LENGTH, "%s length %u over %u", what, s.len,
@@ -67,8 +67,8 @@ static void w_enum(struct bc__w *w, const char *what, int v, int count)
 }
 
 /* An array of n elements must exist and n must fit its limit. */
-static bool w_count(struct bc__w *w, const char *what, unsigned n,
-		    unsigned max, const void *arr)
+static bool w_count(struct bc__w *w, const char *what, unsigned n, unsigned max,
+                    const void *arr)
 {
 	if (n > max) {
 		wfail(w, BC_EPROTO_COUNT, "%s %u over %u", what, n, max);
@@ -89,7 +89,7 @@ static void w_f32v(struct bc__w *w, const float *v, int n)
 }
 
 static void w_ops(struct bc__w *w, uint16_t nops,
-		  const struct bc_proto_edit_op *ops)
+                  const struct bc_proto_edit_op *ops)
 {
 	if (!w_count(w, "op_count", nops, BC_PROTO_MAX_EDIT_OPS, ops)) {
 		return;
@@ -102,7 +102,7 @@ static void w_ops(struct bc__w *w, uint16_t nops,
 		case BC_PROTO_EDIT_SET:
 			bc__put_u32(w, op->node);
 			if (!w_count(w, "op.field_count", op->nfields,
-				     BC_PROTO_MAX_SET_FIELDS, op->fields)) {
+			             BC_PROTO_MAX_SET_FIELDS, op->fields)) {
 				return;
 			}
 			bc__put_u8(w, op->nfields);
@@ -151,7 +151,7 @@ static void w_frame(struct bc__w *w, const struct bc_msg_frame *f)
 	bc__put_u16(w, f->image_width);
 	bc__put_u16(w, f->image_height);
 	if (!w_count(w, "rect_count", f->nrects, BC_PROTO_MAX_RECTS,
-		     f->rects)) {
+	             f->rects)) {
 		return;
 	}
 	bc__put_u16(w, f->nrects);
@@ -211,7 +211,7 @@ static void w_body(struct bc__w *w, const struct bc_msg *m)
 		w_enum(w, "role", (int)s->role, BC_PROTO_ROLE_COUNT);
 		w_str(w, "name", s->name, BC_PROTO_MAX_NAME);
 		if (!w_count(w, "member_count", s->nmembers,
-			     BC_PROTO_MAX_MEMBERS, s->members)) {
+		             BC_PROTO_MAX_MEMBERS, s->members)) {
 			break;
 		}
 		bc__put_u16(w, s->nmembers);
@@ -297,18 +297,19 @@ static void w_body(struct bc__w *w, const struct bc_msg *m)
 }
 
 int bc_proto_encode(struct bc_proto_buf *b, const struct bc_msg *m,
-		    struct bc_errinfo *ei)
+                    struct bc_errinfo *ei)
 {
 	const struct bc__type_info *t = bc__type_info((unsigned)m->type);
 	if (!t) {
 		return bc_errinfo_set(ei, BC_EPROTO_TYPE,
-				      "encode: type %d is unknown",
-				      (int)m->type);
+		                      "encode: type %d is unknown",
+		                      (int)m->type);
 	}
 	if (m->flags & ~t->flags) {
 		return bc_errinfo_set(ei, BC_EPROTO_FLAGS,
-				      "encode: %s does not define flags 0x%04x",
-				      t->name, (unsigned)(m->flags & ~t->flags));
+		                      "encode: %s does not define flags 0x%04x",
+		                      t->name,
+		                      (unsigned)(m->flags & ~t->flags));
 	}
 	struct bc__w measure = {.ei = ei};
 	w_body(&measure, m);
@@ -318,20 +319,21 @@ int bc_proto_encode(struct bc_proto_buf *b, const struct bc_msg *m,
 	size_t n = measure.n;
 	if (n > t->max_payload) {
 		return bc_errinfo_set(ei, BC_EPROTO_LENGTH,
-				      "encode: %s payload of %zu bytes is over "
-				      "its maximum %u",
-				      t->name, n, t->max_payload);
+		                      "encode: %s payload of %zu bytes is over "
+		                      "its maximum %u",
+		                      t->name, n, t->max_payload);
 	}
 	int rc = bc__buf_reserve(b, BC_PROTO_HEADER_SIZE + n);
 	if (rc < 0) {
 		return bc_errinfo_set(ei, rc,
-				      "encode: %s of %zu bytes does not fit "
-				      "the buffer (%zu of %zu used)",
-				      t->name, n, b->len, b->max);
+		                      "encode: %s of %zu bytes does not fit "
+		                      "the buffer (%zu of %zu used)",
+		                      t->name, n, b->len, b->max);
 	}
 	/* Written past b->len and committed only once checked, so a refused
 	 * message leaves b as it was. */
-	struct bc__w w = {.p = b->data + b->len, .cap = BC_PROTO_HEADER_SIZE + n};
+	struct bc__w w = {.p = b->data + b->len,
+	                  .cap = BC_PROTO_HEADER_SIZE + n};
 	bc__put_u8(&w, BC_PROTO_MAGIC0);
 	bc__put_u8(&w, BC_PROTO_MAGIC1);
 	bc__put_u8(&w, BC_PROTO_MAGIC2);
@@ -342,10 +344,10 @@ int bc_proto_encode(struct bc_proto_buf *b, const struct bc_msg *m,
 	bc__put_u32(&w, (uint32_t)n);
 	bc__put_u32(&w, m->seq);
 	w_body(&w, m);
-	struct bc_msg check = {.type = m->type, .flags = m->flags,
-			       .seq = m->seq};
+	struct bc_msg check = {
+	    .type = m->type, .flags = m->flags, .seq = m->seq};
 	rc = bc__decode_payload(NULL, &check,
-				b->data + b->len + BC_PROTO_HEADER_SIZE, n, ei);
+	                        b->data + b->len + BC_PROTO_HEADER_SIZE, n, ei);
 	if (rc < 0) {
 		return rc;
 	}

@@ -14,8 +14,8 @@
 
 #include "blobcast/alloc.h"
 
-static int set_err(struct bc_proto_reader *r, int code, const char *fmt, ...)
-	BC__ERRINFO_PRINTF;
+static int set_err(struct bc_proto_reader *r, int code, const char *fmt,
+                   ...) BC__ERRINFO_PRINTF;
 
 static int set_err(struct bc_proto_reader *r, int code, const char *fmt, ...)
 {
@@ -30,7 +30,7 @@ static int set_err(struct bc_proto_reader *r, int code, const char *fmt, ...)
 static uint32_t clamp_payload(uint32_t max)
 {
 	return (max == 0 || max > BC_PROTO_MAX_PAYLOAD) ? BC_PROTO_MAX_PAYLOAD
-							: max;
+	                                                : max;
 }
 
 /* The payload limit now in force. */
@@ -44,7 +44,7 @@ static uint32_t limit(const struct bc_proto_reader *r)
 }
 
 int bc_proto_reader_init(struct bc_proto_reader *r,
-			 const struct bc_proto_reader_opts *opts)
+                         const struct bc_proto_reader_opts *opts)
 {
 	memset(r, 0, sizeof(*r));
 	if (opts) {
@@ -74,7 +74,7 @@ void bc_proto_reader_hello_done(struct bc_proto_reader *r)
 }
 
 void bc_proto_reader_set_max_payload(struct bc_proto_reader *r,
-				     uint32_t max_payload)
+                                     uint32_t max_payload)
 {
 	r->opts.max_payload = clamp_payload(max_payload);
 }
@@ -84,8 +84,7 @@ size_t bc_proto_reader_pending(const struct bc_proto_reader *r)
 	return r->len - r->pos;
 }
 
-int bc_proto_reader_feed(struct bc_proto_reader *r, const void *bytes,
-			 size_t n)
+int bc_proto_reader_feed(struct bc_proto_reader *r, const void *bytes, size_t n)
 {
 	if (r->err) {
 		return r->err;
@@ -100,13 +99,13 @@ int bc_proto_reader_feed(struct bc_proto_reader *r, const void *bytes,
 		r->len -= r->pos;
 		r->pos = 0;
 	}
-	size_t ceiling = (size_t)BC_PROTO_HEADER_SIZE + limit(r) +
-			 BC_PROTO_READ_SLACK;
+	size_t ceiling =
+	    (size_t)BC_PROTO_HEADER_SIZE + limit(r) + BC_PROTO_READ_SLACK;
 	if (n > ceiling - r->len) {
 		return set_err(r, BC_ELIMIT,
-			       "%zu unparsed bytes plus %zu more exceed the "
-			       "reader's %zu (drain with next() between reads)",
-			       r->len, n, ceiling);
+		               "%zu unparsed bytes plus %zu more exceed the "
+		               "reader's %zu (drain with next() between reads)",
+		               r->len, n, ceiling);
 	}
 	if (r->len + n > r->cap) {
 		size_t cap = r->cap ? r->cap : 4096;
@@ -116,7 +115,7 @@ int bc_proto_reader_feed(struct bc_proto_reader *r, const void *bytes,
 		uint8_t *p = bc_realloc(r->buf, cap);
 		if (!p) {
 			return set_err(r, BC_ENOMEM,
-				       "no memory for a %zu-byte buffer", cap);
+			               "no memory for a %zu-byte buffer", cap);
 		}
 		r->buf = p;
 		r->cap = cap;
@@ -130,26 +129,26 @@ int bc_proto_reader_feed(struct bc_proto_reader *r, const void *bytes,
  * in header order, so a stream that is not ours fails on its first byte.
  * Returns 0 or a code with the reason in r. */
 static int check_header(struct bc_proto_reader *r, const uint8_t *h,
-			size_t avail)
+                        size_t avail)
 {
 	static const uint8_t magic[4] = {BC_PROTO_MAGIC0, BC_PROTO_MAGIC1,
-					 BC_PROTO_MAGIC2, BC_PROTO_MAGIC3};
+	                                 BC_PROTO_MAGIC2, BC_PROTO_MAGIC3};
 	for (size_t i = 0; i < 4 && i < avail; i++) {
 		if (h[i] != magic[i]) {
-			return set_err(r, BC_EPROTO_MAGIC,
-				       "header byte %zu is 0x%02x, not the magic "
-				       "\"BCST\" (message %llu)",
-				       i, (unsigned)h[i],
-				       (unsigned long long)r->nmsgs + 1);
+			return set_err(
+			    r, BC_EPROTO_MAGIC,
+			    "header byte %zu is 0x%02x, not the magic "
+			    "\"BCST\" (message %llu)",
+			    i, (unsigned)h[i],
+			    (unsigned long long)r->nmsgs + 1);
 		}
 	}
 	if (avail < 5) {
 		return 0;
 	}
 	if (h[4] != BC_PROTO_VERSION) {
-		return set_err(r, BC_EPROTO_VERSION,
-			       "version %u is not %u", (unsigned)h[4],
-			       BC_PROTO_VERSION);
+		return set_err(r, BC_EPROTO_VERSION, "version %u is not %u",
+		               (unsigned)h[4], BC_PROTO_VERSION);
 	}
 	if (avail < 6) {
 		return 0;
@@ -157,22 +156,22 @@ static int check_header(struct bc_proto_reader *r, const uint8_t *h,
 	const struct bc__type_info *t = bc__type_info(h[5]);
 	if (!t) {
 		return set_err(r, BC_EPROTO_TYPE, "message type %u is unknown",
-			       (unsigned)h[5]);
+		               (unsigned)h[5]);
 	}
 	unsigned want = r->opts.side == BC_PROTO_SIDE_SERVER   ? BC__FROM_CLIENT
-			: r->opts.side == BC_PROTO_SIDE_CLIENT ? BC__FROM_SERVER
-							       : BC__FROM_BOTH;
+	                : r->opts.side == BC_PROTO_SIDE_CLIENT ? BC__FROM_SERVER
+	                                                       : BC__FROM_BOTH;
 	if (!(t->from & want)) {
 		return set_err(r, BC_EPROTO_TYPE, "%s (%u) is never sent %s",
-			       t->name, (unsigned)h[5],
-			       want == BC__FROM_CLIENT ? "by clients"
-						       : "by servers");
+		               t->name, (unsigned)h[5],
+		               want == BC__FROM_CLIENT ? "by clients"
+		                                       : "by servers");
 	}
 	if (r->pre_hello && h[5] != BC_MSG_HELLO && h[5] != BC_MSG_PING) {
 		return set_err(r, BC_ESTATE,
-			       "%s before HELLO (only HELLO and PING are "
-			       "allowed)",
-			       t->name);
+		               "%s before HELLO (only HELLO and PING are "
+		               "allowed)",
+		               t->name);
 	}
 	if (avail < 8) {
 		return 0;
@@ -180,8 +179,8 @@ static int check_header(struct bc_proto_reader *r, const uint8_t *h,
 	uint16_t flags = (uint16_t)(h[6] | (uint16_t)(h[7] << 8));
 	if (flags & ~t->flags) {
 		return set_err(r, BC_EPROTO_FLAGS,
-			       "%s with undefined flags 0x%04x", t->name,
-			       (unsigned)(flags & ~t->flags));
+		               "%s with undefined flags 0x%04x", t->name,
+		               (unsigned)(flags & ~t->flags));
 	}
 	if (avail < 12) {
 		return 0;
@@ -189,14 +188,14 @@ static int check_header(struct bc_proto_reader *r, const uint8_t *h,
 	uint32_t len = bc__le32(h + 8);
 	if (len > t->max_payload) {
 		return set_err(r, BC_EPROTO_LENGTH,
-			       "%s payload length %u is over its maximum %u",
-			       t->name, len, t->max_payload);
+		               "%s payload length %u is over its maximum %u",
+		               t->name, len, t->max_payload);
 	}
 	if (len > limit(r)) {
 		return set_err(r, BC_EPROTO_LENGTH,
-			       "%s payload length %u is over the limit %u%s",
-			       t->name, len, limit(r),
-			       r->pre_hello ? " before HELLO" : "");
+		               "%s payload length %u is over the limit %u%s",
+		               t->name, len, limit(r),
+		               r->pre_hello ? " before HELLO" : "");
 	}
 	return 0;
 }
@@ -212,8 +211,8 @@ int bc_proto_reader_next(struct bc_proto_reader *r, struct bc_msg *out)
 		return 0;
 	}
 	const uint8_t *h = r->buf + r->pos;
-	size_t hbytes = avail < BC_PROTO_HEADER_SIZE ? avail
-						     : BC_PROTO_HEADER_SIZE;
+	size_t hbytes =
+	    avail < BC_PROTO_HEADER_SIZE ? avail : BC_PROTO_HEADER_SIZE;
 	int rc = check_header(r, h, hbytes);
 	if (rc < 0 || hbytes < BC_PROTO_HEADER_SIZE) {
 		return rc;
@@ -227,7 +226,7 @@ int bc_proto_reader_next(struct bc_proto_reader *r, struct bc_msg *out)
 	out->seq = bc__le32(h + 12);
 	struct bc_errinfo ei = {0};
 	rc = bc__decode_payload(&r->store, out, h + BC_PROTO_HEADER_SIZE, len,
-				&ei);
+	                        &ei);
 	if (rc < 0) {
 		memset(out, 0, sizeof(*out));
 		return set_err(r, rc, "%s", ei.msg);
@@ -252,31 +251,31 @@ int bc_proto_reader_eof(struct bc_proto_reader *r)
 		return 0;
 	}
 	return set_err(r, BC_EPROTO_TRUNCATED,
-		       "stream ended %zu bytes into message %llu", left,
-		       (unsigned long long)r->nmsgs + 1);
+	               "stream ended %zu bytes into message %llu", left,
+	               (unsigned long long)r->nmsgs + 1);
 }
 
 int bc_proto_decode_payload(struct bc_proto_reader *r, enum bc_msg_type type,
-			    uint16_t flags, uint32_t seq, const uint8_t *payload,
-			    size_t len, struct bc_msg *out,
-			    struct bc_errinfo *ei)
+                            uint16_t flags, uint32_t seq,
+                            const uint8_t *payload, size_t len,
+                            struct bc_msg *out, struct bc_errinfo *ei)
 {
 	memset(out, 0, sizeof(*out));
 	const struct bc__type_info *t = bc__type_info((unsigned)type);
 	if (!t) {
 		return bc_errinfo_set(ei, BC_EPROTO_TYPE,
-				      "message type %d is unknown", (int)type);
+		                      "message type %d is unknown", (int)type);
 	}
 	if (flags & ~t->flags) {
 		return bc_errinfo_set(ei, BC_EPROTO_FLAGS,
-				      "%s with undefined flags 0x%04x", t->name,
-				      (unsigned)(flags & ~t->flags));
+		                      "%s with undefined flags 0x%04x", t->name,
+		                      (unsigned)(flags & ~t->flags));
 	}
 	if (len > t->max_payload) {
 		return bc_errinfo_set(ei, BC_EPROTO_LENGTH,
-				      "%s payload length %zu is over its "
-				      "maximum %u",
-				      t->name, len, t->max_payload);
+		                      "%s payload length %zu is over its "
+		                      "maximum %u",
+		                      t->name, len, t->max_payload);
 	}
 	out->type = type;
 	out->flags = flags;

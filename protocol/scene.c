@@ -16,7 +16,7 @@
 #include <stdio.h>
 
 #define NODE_MIN 5u /* tag and id: the least any node takes */
-#define OP_MIN 17u   /* tag, id, blend, range, child_count */
+#define OP_MIN 17u  /* tag, id, blend, range, child_count */
 #define OP_TAG 0x80u
 
 struct scan {
@@ -25,8 +25,8 @@ struct scan {
 	uint32_t node; /* index of the node being read */
 };
 
-static int sfail(struct scan *s, int code, const char *fmt, ...)
-	BC__ERRINFO_PRINTF;
+static int sfail(struct scan *s, int code, const char *fmt,
+                 ...) BC__ERRINFO_PRINTF;
 
 static int sfail(struct scan *s, int code, const char *fmt, ...)
 {
@@ -39,14 +39,15 @@ static int sfail(struct scan *s, int code, const char *fmt, ...)
 	vsnprintf(reason, sizeof(reason), fmt, ap);
 	va_end(ap);
 	return bc_errinfo_set(s->ei, code, "scene: node %u: %s (byte %zu)",
-			      s->node, reason, s->c.pos);
+	                      s->node, reason, s->c.pos);
 }
 
 static int s_need(struct scan *s, size_t n, const char *what)
 {
 	if (n > bc__cur_left(&s->c)) {
-		return sfail(s, BC_EPROTO_TRUNCATED, "%s needs %zu bytes, %zu left",
-			     what, n, bc__cur_left(&s->c));
+		return sfail(s, BC_EPROTO_TRUNCATED,
+		             "%s needs %zu bytes, %zu left", what, n,
+		             bc__cur_left(&s->c));
 	}
 	return 0;
 }
@@ -81,7 +82,7 @@ static int s_floats(struct scan *s, unsigned n, const char *what, float *out)
 		bc__get_u32(&s->c, &u);
 		if (!bc__bits_finite(u)) {
 			return sfail(s, BC_ENONFINITE, "%s[%u] is not finite",
-				     what, i);
+			             what, i);
 		}
 		if (out) {
 			out[i] = bc__bits_f32(u);
@@ -105,13 +106,13 @@ static bool op_is_sharp(unsigned kind)
 }
 
 static int scan_op(struct scan *s, uint8_t tag, uint32_t after,
-		   uint32_t *children)
+                   uint32_t *children)
 {
 	unsigned kind = tag & ~OP_TAG;
 	float br[2];
 	if (kind == 0 || kind > BC_PROTO_OP_KIND_MAX) {
 		return sfail(s, BC_EENUM, "operator tag 0x%02x is unknown",
-			     (unsigned)tag);
+		             (unsigned)tag);
 	}
 	TRY(s_floats(s, 1, "blend", &br[0]));
 	TRY(s_floats(s, 1, "range", &br[1]));
@@ -119,13 +120,13 @@ static int scan_op(struct scan *s, uint8_t tag, uint32_t after,
 	/* Each child is at least one more node of the encoding. */
 	if (*children < 2 || *children > after) {
 		return sfail(s, BC_EPROTO_COUNT,
-			     "child_count %u is outside 2..%u (the nodes that "
-			     "follow)",
-			     *children, after);
+		             "child_count %u is outside 2..%u (the nodes that "
+		             "follow)",
+		             *children, after);
 	}
 	if (op_is_sharp(kind) && (br[0] != 0.0f || br[1] != 0.0f)) {
 		return sfail(s, BC_ERANGE,
-			     "a sharp operator has blend and range 0");
+		             "a sharp operator has blend and range 0");
 	}
 	return 0;
 }
@@ -135,14 +136,14 @@ static int scan_prim(struct scan *s, uint8_t tag)
 	uint8_t has_color, nfloats;
 	if (tag == 0 || tag > BC_PROTO_PRIM_KIND_MAX) {
 		return sfail(s, BC_EENUM, "primitive tag 0x%02x is unknown",
-			     (unsigned)tag);
+		             (unsigned)tag);
 	}
 	TRY(s_floats(s, 3, "translate", NULL));
 	TRY(s_floats(s, 4, "rotate", NULL));
 	TRY(s_u8(s, "has_color", &has_color));
 	if (has_color > 1) {
 		return sfail(s, BC_EPROTO_FLAGS, "has_color is %u, not 0 or 1",
-			     (unsigned)has_color);
+		             (unsigned)has_color);
 	}
 	if (has_color) {
 		TRY(s_floats(s, 3, "color", NULL));
@@ -152,13 +153,13 @@ static int scan_prim(struct scan *s, uint8_t tag)
 	 * which is at most BC_PROTO_MAX_PRIM_PARAMS. */
 	if (nfloats > BC_PROTO_MAX_PRIM_PARAMS) {
 		return sfail(s, BC_EPROTO_COUNT, "nfloats %u is over %u",
-			     (unsigned)nfloats, BC_PROTO_MAX_PRIM_PARAMS);
+		             (unsigned)nfloats, BC_PROTO_MAX_PRIM_PARAMS);
 	}
 	return s_floats(s, nfloats, "params", NULL);
 }
 
 int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
-			struct bc_proto_scene_info *info, struct bc_errinfo *ei)
+                        struct bc_proto_scene_info *info, struct bc_errinfo *ei)
 {
 	struct scan s = {.c = {.buf = bytes, .len = len}, .ei = ei};
 	struct bc_proto_scene_info out = {0};
@@ -172,7 +173,7 @@ int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
 	TRY(s_u8(&s, "flags", &flags));
 	if (flags & ~1u) {
 		return sfail(&s, BC_EPROTO_FLAGS, "scene flags 0x%02x",
-			     (unsigned)flags);
+		             (unsigned)flags);
 	}
 	out.has_camera = flags & 1u;
 	if (out.has_camera) {
@@ -182,26 +183,26 @@ int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
 	TRY(s_u32(&s, "node_count", &count));
 	if (count == 0 || count > BC_PROTO_SCENE_MAX_NODES) {
 		return sfail(&s, BC_EPROTO_COUNT,
-			     "node_count %u is outside 1..%u", count,
-			     BC_PROTO_SCENE_MAX_NODES);
+		             "node_count %u is outside 1..%u", count,
+		             BC_PROTO_SCENE_MAX_NODES);
 	}
 	if (count > bc__cur_left(&s.c) / NODE_MIN) {
-		return sfail(&s, BC_EPROTO_COUNT,
-			     "node_count %u needs at least %llu bytes, %zu left",
-			     count, (unsigned long long)count * NODE_MIN,
-			     bc__cur_left(&s.c));
+		return sfail(
+		    &s, BC_EPROTO_COUNT,
+		    "node_count %u needs at least %llu bytes, %zu left", count,
+		    (unsigned long long)count * NODE_MIN, bc__cur_left(&s.c));
 	}
 	for (s.node = 0; s.node < count; s.node++) {
 		if (s.node > 0 && nopen == 0) {
 			return sfail(&s, BC_EPROTO_COUNT,
-				     "the root's subtree ended after %u of "
-				     "node_count %u nodes",
-				     s.node, count);
+			             "the root's subtree ended after %u of "
+			             "node_count %u nodes",
+			             s.node, count);
 		}
 		/* This node would be number 129 on its path from the root. */
 		if (nopen >= BC_PROTO_SCENE_MAX_DEPTH) {
 			return sfail(&s, BC_EDEPTH, "nested deeper than %u",
-				     BC_PROTO_SCENE_MAX_DEPTH);
+			             BC_PROTO_SCENE_MAX_DEPTH);
 		}
 		uint8_t tag;
 		uint32_t id, children = 0;
@@ -229,14 +230,14 @@ int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
 	}
 	if (nopen) {
 		return sfail(&s, BC_EPROTO_COUNT,
-			     "%u children of an operator are missing after the "
-			     "last node",
-			     open[nopen - 1]);
+		             "%u children of an operator are missing after the "
+		             "last node",
+		             open[nopen - 1]);
 	}
 	if (bc__cur_left(&s.c)) {
 		return sfail(&s, BC_EPROTO_TRAILING,
-			     "%zu bytes after the last node",
-			     bc__cur_left(&s.c));
+		             "%zu bytes after the last node",
+		             bc__cur_left(&s.c));
 	}
 	out.nodes = count;
 	if (info) {
@@ -245,7 +246,8 @@ int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
 	return 0;
 }
 
-/* ---- Writers ---------------------------------------------------------------- */
+/* ---- Writers ----------------------------------------------------------------
+ */
 
 /* Appends the k bytes w measured; b is unchanged on failure. */
 static int commit(struct bc_proto_buf *b, const struct bc__w *w)
@@ -260,7 +262,7 @@ static int commit(struct bc_proto_buf *b, const struct bc__w *w)
 }
 
 int bc_proto_scene_begin(struct bc_proto_buf *b, const float *camera,
-			 uint32_t node_count)
+                         uint32_t node_count)
 {
 	uint8_t tmp[1 + 40 + 4];
 	struct bc__w w = {.p = tmp, .cap = sizeof(tmp)};
@@ -273,9 +275,9 @@ int bc_proto_scene_begin(struct bc_proto_buf *b, const float *camera,
 }
 
 int bc_proto_scene_prim(struct bc_proto_buf *b, uint8_t kind, uint32_t id,
-			const float translate[3], const float rotate[4],
-			const float *color, uint8_t nparams,
-			const float *params)
+                        const float translate[3], const float rotate[4],
+                        const float *color, uint8_t nparams,
+                        const float *params)
 {
 	uint8_t tmp[1 + 4 + 12 + 16 + 1 + 12 + 1 + 4 * 255];
 	struct bc__w w = {.p = tmp, .cap = sizeof(tmp)};
@@ -299,7 +301,7 @@ int bc_proto_scene_prim(struct bc_proto_buf *b, uint8_t kind, uint32_t id,
 }
 
 int bc_proto_scene_op(struct bc_proto_buf *b, uint8_t kind, uint32_t id,
-		      float blend, float range, uint32_t child_count)
+                      float blend, float range, uint32_t child_count)
 {
 	uint8_t tmp[OP_MIN];
 	struct bc__w w = {.p = tmp, .cap = sizeof(tmp)};

@@ -25,36 +25,33 @@
 #define BULK BC_PROTO_MAX_PAYLOAD
 
 static const struct bc__type_info types[BC_MSG_COUNT] = {
-	[BC_MSG_HELLO] = {"HELLO", BC__FROM_CLIENT, 0, HELLO_MAX},
-	[BC_MSG_WELCOME] = {"WELCOME", BC__FROM_SERVER, 0, WELCOME_MAX},
-	[BC_MSG_ERROR] = {"ERROR", BC__FROM_BOTH, BC_PROTO_FLAG_FATAL,
-			  ERROR_MAX},
-	[BC_MSG_PING] = {"PING", BC__FROM_BOTH, 0, 8},
-	[BC_MSG_PONG] = {"PONG", BC__FROM_BOTH, 0, 8},
-	[BC_MSG_OK] = {"OK", BC__FROM_SERVER, 0, 0},
-	[BC_MSG_SESSION_CREATE] = {"SESSION_CREATE", BC__FROM_CLIENT, 0,
-				   SESSION_MAX},
-	[BC_MSG_SESSION_JOIN] = {"SESSION_JOIN", BC__FROM_CLIENT, 0,
-				 SESSION_MAX},
-	[BC_MSG_SESSION_LEAVE] = {"SESSION_LEAVE", BC__FROM_CLIENT, 0, 0},
-	[BC_MSG_SESSION_INFO] = {"SESSION_INFO", BC__FROM_SERVER, 0,
-				 SESSION_INFO_MAX},
-	[BC_MSG_SCENE_LOAD] = {"SCENE_LOAD", BC__FROM_CLIENT, 0, BULK},
-	[BC_MSG_SCENE_STATE] = {"SCENE_STATE", BC__FROM_SERVER, 0, BULK},
-	[BC_MSG_EDIT] = {"EDIT", BC__FROM_CLIENT, BC_PROTO_FLAG_INTERACTING,
-			 BULK},
-	[BC_MSG_EDIT_APPLIED] = {"EDIT_APPLIED", BC__FROM_SERVER,
-				 BC_PROTO_FLAG_INTERACTING, BULK},
-	[BC_MSG_CAMERA] = {"CAMERA", BC__FROM_CLIENT,
-			   BC_PROTO_FLAG_INTERACTING, 40},
-	[BC_MSG_VIEW] = {"VIEW", BC__FROM_CLIENT, 0, 8},
-	[BC_MSG_FRAME] = {"FRAME", BC__FROM_SERVER,
-			  BC_PROTO_FLAG_STILL | BC_PROTO_FLAG_SNAPSHOT, BULK},
-	[BC_MSG_PICK] = {"PICK", BC__FROM_CLIENT, 0, 4},
-	[BC_MSG_PICK_RESULT] = {"PICK_RESULT", BC__FROM_SERVER, 0, 24},
-	[BC_MSG_SNAPSHOT] = {"SNAPSHOT", BC__FROM_CLIENT, 0, 1},
-	[BC_MSG_GET_STATS] = {"GET_STATS", BC__FROM_CLIENT, 0, 0},
-	[BC_MSG_STATS] = {"STATS", BC__FROM_SERVER, 0, 64},
+    [BC_MSG_HELLO] = {"HELLO", BC__FROM_CLIENT, 0, HELLO_MAX},
+    [BC_MSG_WELCOME] = {"WELCOME", BC__FROM_SERVER, 0, WELCOME_MAX},
+    [BC_MSG_ERROR] = {"ERROR", BC__FROM_BOTH, BC_PROTO_FLAG_FATAL, ERROR_MAX},
+    [BC_MSG_PING] = {"PING", BC__FROM_BOTH, 0, 8},
+    [BC_MSG_PONG] = {"PONG", BC__FROM_BOTH, 0, 8},
+    [BC_MSG_OK] = {"OK", BC__FROM_SERVER, 0, 0},
+    [BC_MSG_SESSION_CREATE] = {"SESSION_CREATE", BC__FROM_CLIENT, 0,
+                               SESSION_MAX},
+    [BC_MSG_SESSION_JOIN] = {"SESSION_JOIN", BC__FROM_CLIENT, 0, SESSION_MAX},
+    [BC_MSG_SESSION_LEAVE] = {"SESSION_LEAVE", BC__FROM_CLIENT, 0, 0},
+    [BC_MSG_SESSION_INFO] = {"SESSION_INFO", BC__FROM_SERVER, 0,
+                             SESSION_INFO_MAX},
+    [BC_MSG_SCENE_LOAD] = {"SCENE_LOAD", BC__FROM_CLIENT, 0, BULK},
+    [BC_MSG_SCENE_STATE] = {"SCENE_STATE", BC__FROM_SERVER, 0, BULK},
+    [BC_MSG_EDIT] = {"EDIT", BC__FROM_CLIENT, BC_PROTO_FLAG_INTERACTING, BULK},
+    [BC_MSG_EDIT_APPLIED] = {"EDIT_APPLIED", BC__FROM_SERVER,
+                             BC_PROTO_FLAG_INTERACTING, BULK},
+    [BC_MSG_CAMERA] = {"CAMERA", BC__FROM_CLIENT, BC_PROTO_FLAG_INTERACTING,
+                       40},
+    [BC_MSG_VIEW] = {"VIEW", BC__FROM_CLIENT, 0, 8},
+    [BC_MSG_FRAME] = {"FRAME", BC__FROM_SERVER,
+                      BC_PROTO_FLAG_STILL | BC_PROTO_FLAG_SNAPSHOT, BULK},
+    [BC_MSG_PICK] = {"PICK", BC__FROM_CLIENT, 0, 4},
+    [BC_MSG_PICK_RESULT] = {"PICK_RESULT", BC__FROM_SERVER, 0, 24},
+    [BC_MSG_SNAPSHOT] = {"SNAPSHOT", BC__FROM_CLIENT, 0, 1},
+    [BC_MSG_GET_STATS] = {"GET_STATS", BC__FROM_CLIENT, 0, 0},
+    [BC_MSG_STATS] = {"STATS", BC__FROM_SERVER, 0, 64},
 };
 
 const struct bc__type_info *bc__type_info(unsigned type)
@@ -81,8 +78,8 @@ enum bc_msg_type bc_proto_type_from_name(const char *name)
 	return BC_MSG_INVALID;
 }
 
-int bc_proto_client_may_send(enum bc_proto_stage stage,
-			     enum bc_proto_role role, enum bc_msg_type type)
+int bc_proto_client_may_send(enum bc_proto_stage stage, enum bc_proto_role role,
+                             enum bc_msg_type type)
 {
 	const struct bc__type_info *t = bc__type_info((unsigned)type);
 	if (!t || !(t->from & BC__FROM_CLIENT)) {

@@ -84,8 +84,8 @@ int bc__buf_reserve(struct bc_proto_buf *b, size_t k)
 void bc_proto_buf_init(struct bc_proto_buf *b, size_t max)
 {
 	memset(b, 0, sizeof(*b));
-	b->max = max ? max
-		     : (size_t)BC_PROTO_HEADER_SIZE + BC_PROTO_MAX_PAYLOAD;
+	b->max =
+	    max ? max : (size_t)BC_PROTO_HEADER_SIZE + BC_PROTO_MAX_PAYLOAD;
 }
 
 void bc_proto_buf_finish(struct bc_proto_buf *b)

@@ -144,7 +144,7 @@ static inline void bc__put_u16(struct bc__w *w, uint16_t v)
 static inline void bc__put_u32(struct bc__w *w, uint32_t v)
 {
 	uint8_t b[4] = {(uint8_t)v, (uint8_t)(v >> 8), (uint8_t)(v >> 16),
-			(uint8_t)(v >> 24)};
+	                (uint8_t)(v >> 24)};
 	bc__put_raw(w, b, 4);
 }
 
@@ -163,7 +163,8 @@ static inline void bc__put_f32(struct bc__w *w, float f)
  * Returns 0, BC_ELIMIT or BC_ENOMEM. */
 int bc__buf_reserve(struct bc_proto_buf *b, size_t k);
 
-/* ---- Types ---------------------------------------------------------------- */
+/* ---- Types ----------------------------------------------------------------
+ */
 
 /* Who sends a type. */
 #define BC__FROM_CLIENT 1u
@@ -172,8 +173,8 @@ int bc__buf_reserve(struct bc_proto_buf *b, size_t k);
 
 struct bc__type_info {
 	const char *name;
-	uint8_t from;        /* BC__FROM_* */
-	uint16_t flags;      /* flag bits defined for the type */
+	uint8_t from;         /* BC__FROM_* */
+	uint16_t flags;       /* flag bits defined for the type */
 	uint32_t max_payload; /* largest valid payload of the type */
 };
 
@@ -184,8 +185,8 @@ const struct bc__type_info *bc__type_info(unsigned type);
  * store NULL: check only, arrays are not kept. Returns 0 or a code with the
  * reason in ei. */
 int bc__decode_payload(struct bc_proto_store *store, struct bc_msg *out,
-		       const uint8_t *payload, size_t len,
-		       struct bc_errinfo *ei);
+                       const uint8_t *payload, size_t len,
+                       struct bc_errinfo *ei);
 
 void bc__store_free(struct bc_proto_store *s);
 

@@ -34,7 +34,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	struct bc_errinfo ei = {0};
 	bc_proto_reader_init(&r, NULL);
 	int rc = bc_proto_decode_payload(&r, type, flags, 0x01020304u, payload,
-					 n, &m, &ei);
+	                                 n, &m, &ei);
 	if (rc < 0) {
 		if (ei.code != rc || ei.msg[0] == '\0') {
 			die("refusal without a reason");

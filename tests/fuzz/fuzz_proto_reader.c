@@ -28,9 +28,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	uint8_t o = data[0];
 	uint32_t cut = data[1];
 	struct bc_proto_reader_opts opts = {
-		.side = (enum bc_proto_side)(o % BC_PROTO_SIDE_COUNT),
-		.await_hello = (o >> 2) & 1u,
-		.max_payload = ((o >> 3) & 1u) ? 4096u : 0u,
+	    .side = (enum bc_proto_side)(o % BC_PROTO_SIDE_COUNT),
+	    .await_hello = (o >> 2) & 1u,
+	    .max_payload = ((o >> 3) & 1u) ? 4096u : 0u,
 	};
 	data += 2;
 	size -= 2;
@@ -55,9 +55,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		off += k;
 		while (rc >= 0 && (rc = bc_proto_reader_next(&r, &m)) == 1) {
 			const uint8_t *h = data + msg;
-			size_t len = BC_PROTO_HEADER_SIZE +
-				     ((size_t)h[8] | (size_t)h[9] << 8 |
-				      (size_t)h[10] << 16 | (size_t)h[11] << 24);
+			size_t len =
+			    BC_PROTO_HEADER_SIZE +
+			    ((size_t)h[8] | (size_t)h[9] << 8 |
+			     (size_t)h[10] << 16 | (size_t)h[11] << 24);
 			bc_proto_buf_reset(&b);
 			if (bc_proto_encode(&b, &m, NULL) != 0) {
 				die("a decoded message does not re-encode");

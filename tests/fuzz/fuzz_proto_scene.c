@@ -91,8 +91,7 @@ static int reference(const uint8_t *p, size_t n, struct ref *r)
 	r->p = p;
 	r->n = n;
 	if (rd(r, 1, &flags) || flags > 1 || floats(r, 10 * flags, NULL) ||
-	    rd(r, 4, &count) || count < 1 ||
-	    count > BC_PROTO_SCENE_MAX_NODES) {
+	    rd(r, 4, &count) || count < 1 || count > BC_PROTO_SCENE_MAX_NODES) {
 		return -1;
 	}
 	r->left = count;
@@ -111,12 +110,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	int want = reference(data, size, &r);
 	if ((rc == 0) != (want == 0)) {
 		fprintf(stderr, "scanner %d (%s), reference %d\n", rc, ei.msg,
-			want);
+		        want);
 		abort();
 	}
-	if (rc == 0 && (info.prims != r.prims || info.ops != r.ops ||
-			info.depth != r.depth ||
-			info.nodes != r.prims + r.ops)) {
+	if (rc == 0 &&
+	    (info.prims != r.prims || info.ops != r.ops ||
+	     info.depth != r.depth || info.nodes != r.prims + r.ops)) {
 		fprintf(stderr, "counts differ\n");
 		abort();
 	}

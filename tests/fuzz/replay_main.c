@@ -70,7 +70,7 @@ int main(int argc, char **argv)
 				continue;
 			}
 			snprintf(path, sizeof(path), "%s/%s", argv[i],
-				 de->d_name);
+			         de->d_name);
 			long rc = run_file(path);
 			failed |= rc < 0;
 			files += rc > 0 ? rc : 0;

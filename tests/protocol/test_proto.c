@@ -16,21 +16,22 @@
 
 /* The limits proto_limits.h repeats must match their owners'. */
 _Static_assert(BC_PROTO_SCENE_MAX_NODES == BC_TREE_MAX_NODES,
-	       "scene node limit differs from blobtree's");
+               "scene node limit differs from blobtree's");
 _Static_assert(BC_PROTO_SCENE_MAX_DEPTH == BC_TREE_MAX_DEPTH,
-	       "scene depth limit differs from blobtree's");
+               "scene depth limit differs from blobtree's");
 _Static_assert(BC_PROTO_MAX_PRIM_PARAMS == BC_PRIM_MAX_PARAMS,
-	       "primitive parameter limit differs from blobtree's");
+               "primitive parameter limit differs from blobtree's");
 _Static_assert(BC_PROTO_MAX_ABS == BC_PARAM_MAX_ABS,
-	       "coordinate limit differs from blobtree's");
+               "coordinate limit differs from blobtree's");
 _Static_assert(BC_PROTO_MAX_DIM == BC_RENDER_MAX_DIM,
-	       "frame size limit differs from render's");
+               "frame size limit differs from render's");
 _Static_assert(BC_PROTO_OP_KIND_MAX == BC_OP_COUNT - 1,
-	       "operator kinds differ from blobtree's");
+               "operator kinds differ from blobtree's");
 _Static_assert(BC_PROTO_PRIM_KIND_MAX == BC_PRIM_COUNT - 1,
-	       "primitive kinds differ from blobtree's");
+               "primitive kinds differ from blobtree's");
 
-/* ---- Byte building ---------------------------------------------------------- */
+/* ---- Byte building ----------------------------------------------------------
+ */
 
 struct bytes {
 	uint8_t b[8192];
@@ -79,7 +80,7 @@ static void hdr(struct bytes *s, unsigned type, uint32_t len)
 
 /* Feeds all bytes, drains, ends the stream; returns the final code. */
 static int decode_all(const struct bc_proto_reader_opts *o, const uint8_t *b,
-		      size_t n, int *nmsgs)
+                      size_t n, int *nmsgs)
 {
 	struct bc_proto_reader r;
 	struct bc_msg m;
@@ -101,7 +102,8 @@ static int decode_all(const struct bc_proto_reader_opts *o, const uint8_t *b,
 	return rc;
 }
 
-/* ---- Malformed input, one row per case ---------------------------------------- */
+/* ---- Malformed input, one row per case
+ * ---------------------------------------- */
 
 enum build_case {
 	C_EMPTY_STREAM,
@@ -217,7 +219,7 @@ static void build_case(enum build_case c, struct bytes *s)
 		hdr(s, BC_MSG_CAMERA, 40);
 		for (int i = 0; i < 9; i++) {
 			pf(s, i == 4 ? (c == C_NAN_CAMERA ? NAN : INFINITY)
-				     : 1.0f);
+			             : 1.0f);
 		}
 		pf(s, 45.0f);
 		break;
@@ -271,9 +273,9 @@ static void build_case(enum build_case c, struct bytes *s)
 static void test_malformed_table(void)
 {
 	static const struct bc_proto_reader_opts pre_hello = {
-		.side = BC_PROTO_SIDE_SERVER, .await_hello = true};
+	    .side = BC_PROTO_SIDE_SERVER, .await_hello = true};
 	static const struct bc_proto_reader_opts server = {
-		.side = BC_PROTO_SIDE_SERVER};
+	    .side = BC_PROTO_SIDE_SERVER};
 	static const struct {
 		const char *name;
 		enum build_case c;
@@ -281,41 +283,39 @@ static void test_malformed_table(void)
 		int want;
 		int msgs;
 	} rows[] = {
-		{"empty stream ends cleanly", C_EMPTY_STREAM, NULL, 0, 0},
-		{"truncated header", C_TRUNC_HEADER, NULL, BC_EPROTO_TRUNCATED,
-		 0},
-		{"truncated body", C_TRUNC_BODY, NULL, BC_EPROTO_TRUNCATED, 0},
-		{"length 0 for CAMERA", C_LEN0_CAMERA, NULL,
-		 BC_EPROTO_TRUNCATED, 0},
-		{"length 0 for OK", C_LEN0_EMPTY_TYPE, NULL, 0, 1},
-		{"length limit+1", C_LIMIT_PLUS1, NULL, BC_EPROTO_LENGTH, 0},
-		{"length 2^31", C_LEN_2_31, NULL, BC_EPROTO_LENGTH, 0},
-		{"length 2^32-1", C_LEN_2_32M1, NULL, BC_EPROTO_LENGTH, 0},
-		{"length = limit waits, then truncated", C_LIMIT_EXACT_WAITS,
-		 NULL, BC_EPROTO_TRUNCATED, 0},
-		{"unknown type", C_UNKNOWN_TYPE, NULL, BC_EPROTO_TYPE, 0},
-		{"wrong version", C_WRONG_VERSION, NULL, BC_EPROTO_VERSION, 0},
-		{"wrong magic", C_WRONG_MAGIC, NULL, BC_EPROTO_MAGIC, 0},
-		{"reserved flags", C_RESERVED_FLAGS, NULL, BC_EPROTO_FLAGS, 0},
-		{"count larger than the bytes left", C_COUNT_OVER_BYTES, NULL,
-		 BC_EPROTO_COUNT, 0},
-		{"count over its limit", C_COUNT_OVER_LIMIT, NULL,
-		 BC_EPROTO_COUNT, 0},
-		{"string longer than the bytes left", C_STRING_OVER_BYTES,
-		 NULL, BC_EPROTO_TRUNCATED, 0},
-		{"string not UTF-8", C_STRING_BAD_UTF8, NULL, BC_ESTRING, 0},
-		{"NaN camera", C_NAN_CAMERA, NULL, BC_ENONFINITE, 0},
-		{"infinite camera", C_INF_CAMERA, NULL, BC_ENONFINITE, 0},
-		{"-inf edit value", C_NEGINF_FIELD, NULL, BC_ENONFINITE, 0},
-		{"NaN statistic", C_NAN_STATS, NULL, BC_ENONFINITE, 0},
-		{"short PICK", C_SHORT_PICK, NULL, BC_EPROTO_TRUNCATED, 0},
-		{"trailing byte", C_TRAILING, NULL, BC_EPROTO_TRAILING, 0},
-		{"bad enum", C_BAD_ENUM, NULL, BC_EENUM, 0},
-		{"EDIT before HELLO", C_PRE_HELLO_EDIT, &pre_hello, BC_ESTATE,
-		 0},
-		{"EDIT after HELLO", C_PRE_HELLO_EDIT, &server, 0, 1},
-		{"WELCOME sent to a server", C_WRONG_SIDE, &server,
-		 BC_EPROTO_TYPE, 0},
+	    {"empty stream ends cleanly", C_EMPTY_STREAM, NULL, 0, 0},
+	    {"truncated header", C_TRUNC_HEADER, NULL, BC_EPROTO_TRUNCATED, 0},
+	    {"truncated body", C_TRUNC_BODY, NULL, BC_EPROTO_TRUNCATED, 0},
+	    {"length 0 for CAMERA", C_LEN0_CAMERA, NULL, BC_EPROTO_TRUNCATED,
+	     0},
+	    {"length 0 for OK", C_LEN0_EMPTY_TYPE, NULL, 0, 1},
+	    {"length limit+1", C_LIMIT_PLUS1, NULL, BC_EPROTO_LENGTH, 0},
+	    {"length 2^31", C_LEN_2_31, NULL, BC_EPROTO_LENGTH, 0},
+	    {"length 2^32-1", C_LEN_2_32M1, NULL, BC_EPROTO_LENGTH, 0},
+	    {"length = limit waits, then truncated", C_LIMIT_EXACT_WAITS, NULL,
+	     BC_EPROTO_TRUNCATED, 0},
+	    {"unknown type", C_UNKNOWN_TYPE, NULL, BC_EPROTO_TYPE, 0},
+	    {"wrong version", C_WRONG_VERSION, NULL, BC_EPROTO_VERSION, 0},
+	    {"wrong magic", C_WRONG_MAGIC, NULL, BC_EPROTO_MAGIC, 0},
+	    {"reserved flags", C_RESERVED_FLAGS, NULL, BC_EPROTO_FLAGS, 0},
+	    {"count larger than the bytes left", C_COUNT_OVER_BYTES, NULL,
+	     BC_EPROTO_COUNT, 0},
+	    {"count over its limit", C_COUNT_OVER_LIMIT, NULL, BC_EPROTO_COUNT,
+	     0},
+	    {"string longer than the bytes left", C_STRING_OVER_BYTES, NULL,
+	     BC_EPROTO_TRUNCATED, 0},
+	    {"string not UTF-8", C_STRING_BAD_UTF8, NULL, BC_ESTRING, 0},
+	    {"NaN camera", C_NAN_CAMERA, NULL, BC_ENONFINITE, 0},
+	    {"infinite camera", C_INF_CAMERA, NULL, BC_ENONFINITE, 0},
+	    {"-inf edit value", C_NEGINF_FIELD, NULL, BC_ENONFINITE, 0},
+	    {"NaN statistic", C_NAN_STATS, NULL, BC_ENONFINITE, 0},
+	    {"short PICK", C_SHORT_PICK, NULL, BC_EPROTO_TRUNCATED, 0},
+	    {"trailing byte", C_TRAILING, NULL, BC_EPROTO_TRAILING, 0},
+	    {"bad enum", C_BAD_ENUM, NULL, BC_EENUM, 0},
+	    {"EDIT before HELLO", C_PRE_HELLO_EDIT, &pre_hello, BC_ESTATE, 0},
+	    {"EDIT after HELLO", C_PRE_HELLO_EDIT, &server, 0, 1},
+	    {"WELCOME sent to a server", C_WRONG_SIDE, &server, BC_EPROTO_TYPE,
+	     0},
 	};
 	for (size_t i = 0; i < sizeof(rows) / sizeof(rows[0]); i++) {
 		struct bytes s;
@@ -324,39 +324,41 @@ static void test_malformed_table(void)
 		int rc = decode_all(rows[i].opts, s.b, s.n, &n);
 		if (rc != rows[i].want || n != rows[i].msgs) {
 			fprintf(stderr, "  %s: got %s/%d, want %s/%d\n",
-				rows[i].name, bc_err_name(rc), n,
-				bc_err_name(rows[i].want), rows[i].msgs);
+			        rows[i].name, bc_err_name(rc), n,
+			        bc_err_name(rows[i].want), rows[i].msgs);
 			bc_test_failures++;
 		}
 	}
 }
 
-/* ---- One valid sample of every type --------------------------------------------- */
+/* ---- One valid sample of every type
+ * --------------------------------------------- */
 
 #define S(lit) ((struct bc_proto_str){lit, sizeof(lit) - 1})
 
 static const uint8_t scene_bytes[] = {0, 1, 0, 0, 0, 1, 9, 9, 9};
 static const uint8_t image_bytes[16] = {0xff, 0xd8, 1, 2, 3, 4, 0xff, 0xd9};
 static const struct bc_proto_member members[] = {
-	{5, BC_PROTO_ROLE_EDITOR, S("alice")},
-	{6, BC_PROTO_ROLE_VIEWER, S("bob \xe2\x9c\x93")},
+    {5, BC_PROTO_ROLE_EDITOR, S("alice")},
+    {6, BC_PROTO_ROLE_VIEWER, S("bob \xe2\x9c\x93")},
 };
 static const struct bc_proto_field fields[] = {
-	{BC_PROTO_FIELD_TRANSLATE, 3, {1.0f, -2.0f, 3.5f, 0}},
-	{BC_PROTO_FIELD_PARAM0 + 2, 1, {0.25f, 0, 0, 0}},
-	{BC_PROTO_FIELD_OP_KIND, 1, {4.0f, 0, 0, 0}},
+    {BC_PROTO_FIELD_TRANSLATE, 3, {1.0f, -2.0f, 3.5f, 0}},
+    {BC_PROTO_FIELD_PARAM0 + 2, 1, {0.25f, 0, 0, 0}},
+    {BC_PROTO_FIELD_OP_KIND, 1, {4.0f, 0, 0, 0}},
 };
 static const struct bc_proto_edit_op ops[] = {
-	{.kind = BC_PROTO_EDIT_SET, .node = 3, .nfields = 3, .fields = fields},
-	{.kind = BC_PROTO_EDIT_INSERT, .node = 1, .position = 0,
-	 .subtree = {scene_bytes, sizeof(scene_bytes)}},
-	{.kind = BC_PROTO_EDIT_REMOVE, .node = 9},
-	{.kind = BC_PROTO_EDIT_REPLACE, .node = 4,
-	 .subtree = {scene_bytes, 3}},
+    {.kind = BC_PROTO_EDIT_SET, .node = 3, .nfields = 3, .fields = fields},
+    {.kind = BC_PROTO_EDIT_INSERT,
+     .node = 1,
+     .position = 0,
+     .subtree = {scene_bytes, sizeof(scene_bytes)}},
+    {.kind = BC_PROTO_EDIT_REMOVE, .node = 9},
+    {.kind = BC_PROTO_EDIT_REPLACE, .node = 4, .subtree = {scene_bytes, 3}},
 };
 static const struct bc_proto_rect rects[] = {
-	{0, 0, 8, 8, {image_bytes, sizeof(image_bytes)}},
-	{8, 8, 2, 2, {image_bytes, 5}},
+    {0, 0, 8, 8, {image_bytes, sizeof(image_bytes)}},
+    {8, 8, 2, 2, {image_bytes, 5}},
 };
 
 static void sample(enum bc_msg_type t, struct bc_msg *m)
@@ -366,13 +368,12 @@ static void sample(enum bc_msg_type t, struct bc_msg *m)
 	m->seq = 1000u + (uint32_t)t;
 	switch (t) {
 	case BC_MSG_HELLO:
-		m->hello = (struct bc_msg_hello){1, 2, 5, 1u << 20, S("cli"),
-						 S("tok")};
+		m->hello = (struct bc_msg_hello){1,        2,        5,
+		                                 1u << 20, S("cli"), S("tok")};
 		break;
 	case BC_MSG_WELCOME:
 		m->welcome = (struct bc_msg_welcome){
-			1, 77, 1u << 24, 1u << 20, 1000, 4096, 8, 64,
-			S("srv")};
+		    1, 77, 1u << 24, 1u << 20, 1000, 4096, 8, 64, S("srv")};
 		break;
 	case BC_MSG_ERROR:
 		m->flags = BC_PROTO_FLAG_FATAL;
@@ -384,55 +385,57 @@ static void sample(enum bc_msg_type t, struct bc_msg *m)
 		break;
 	case BC_MSG_SESSION_CREATE:
 	case BC_MSG_SESSION_JOIN:
-		m->session = (struct bc_msg_session){BC_PROTO_ROLE_EDITOR,
-						     S("review")};
+		m->session =
+		    (struct bc_msg_session){BC_PROTO_ROLE_EDITOR, S("review")};
 		break;
 	case BC_MSG_SESSION_INFO:
 		m->session_info = (struct bc_msg_session_info){
-			3, 6, BC_PROTO_ROLE_VIEWER, S("review"), 2, members};
+		    3, 6, BC_PROTO_ROLE_VIEWER, S("review"), 2, members};
 		break;
 	case BC_MSG_SCENE_LOAD:
-		m->scene_load.scene = (struct bc_proto_bytes){
-			scene_bytes, sizeof(scene_bytes)};
+		m->scene_load.scene =
+		    (struct bc_proto_bytes){scene_bytes, sizeof(scene_bytes)};
 		break;
 	case BC_MSG_SCENE_STATE:
 		m->scene_state = (struct bc_msg_scene_state){
-			UINT64_C(1) << 40, 5, 12,
-			{scene_bytes, sizeof(scene_bytes)}};
+		    UINT64_C(1) << 40,
+		    5,
+		    12,
+		    {scene_bytes, sizeof(scene_bytes)}};
 		break;
 	case BC_MSG_EDIT:
 		m->flags = BC_PROTO_FLAG_INTERACTING;
 		m->edit = (struct bc_msg_edit){4, ops};
 		break;
 	case BC_MSG_EDIT_APPLIED:
-		m->edit_applied = (struct bc_msg_edit_applied){9, 5, 12, 4,
-							       ops};
+		m->edit_applied =
+		    (struct bc_msg_edit_applied){9, 5, 12, 4, ops};
 		break;
 	case BC_MSG_CAMERA:
-		m->camera = (struct bc_msg_camera){{1, 2, 3}, {0, 0, 0},
-						   {0, 1, 0}, 50.0f};
+		m->camera = (struct bc_msg_camera){
+		    {1, 2, 3}, {0, 0, 0}, {0, 1, 0}, 50.0f};
 		break;
 	case BC_MSG_VIEW:
-		m->view = (struct bc_msg_view){640, 480, BC_PROTO_ENC_JPEG, 50,
-					       90, 2};
+		m->view = (struct bc_msg_view){640, 480, BC_PROTO_ENC_JPEG,
+		                               50,  90,  2};
 		break;
 	case BC_MSG_FRAME:
 		m->frame = (struct bc_msg_frame){
-			7, 9, 30, BC_PROTO_ENC_JPEG, 20, 20, 10, 10, 2, rects};
+		    7, 9, 30, BC_PROTO_ENC_JPEG, 20, 20, 10, 10, 2, rects};
 		break;
 	case BC_MSG_PICK:
 		m->pick = (struct bc_msg_pick){10, 20};
 		break;
 	case BC_MSG_PICK_RESULT:
 		m->pick_result = (struct bc_msg_pick_result){
-			10, 20, 4, {1.5f, -0.5f, 2.0f}, 4.25f};
+		    10, 20, 4, {1.5f, -0.5f, 2.0f}, 4.25f};
 		break;
 	case BC_MSG_SNAPSHOT:
 		m->snapshot.encoding = BC_PROTO_ENC_PNG;
 		break;
 	case BC_MSG_STATS:
-		m->stats = (struct bc_msg_stats){1, 2, 3, 4, 5, 6, 7.0f, 8.0f,
-						 9.0f, 10.0f, 11.0f, 12.0f};
+		m->stats = (struct bc_msg_stats){
+		    1, 2, 3, 4, 5, 6, 7.0f, 8.0f, 9.0f, 10.0f, 11.0f, 12.0f};
 		break;
 	default:
 		break;
@@ -456,7 +459,8 @@ static void test_round_trip_every_type(void)
 		int rc = bc_proto_encode(&all, &m, &ei);
 		if (rc) {
 			fprintf(stderr, "  %s: %s\n",
-				bc_proto_type_name((enum bc_msg_type)t), ei.msg);
+			        bc_proto_type_name((enum bc_msg_type)t),
+			        ei.msg);
 		}
 		REQUIRE(rc == 0);
 	}
@@ -467,9 +471,10 @@ static void test_round_trip_every_type(void)
 		int t = 1;
 		bc_proto_reader_init(&r, NULL);
 		for (size_t off = 0; off < all.len; off += chunk) {
-			size_t k = all.len - off < chunk ? all.len - off : chunk;
+			size_t k =
+			    all.len - off < chunk ? all.len - off : chunk;
 			REQUIRE(bc_proto_reader_feed(&r, all.data + off, k) ==
-				0);
+			        0);
 			int rc;
 			while ((rc = bc_proto_reader_next(&r, &m)) == 1) {
 				CHECK_EQ_INT(m.type, t);
@@ -479,7 +484,7 @@ static void test_round_trip_every_type(void)
 				size_t len = start[t + 1] - start[t];
 				CHECK(one.len == len &&
 				      memcmp(one.data, all.data + start[t],
-					     len) == 0);
+				             len) == 0);
 				t++;
 			}
 			CHECK(rc == 0);
@@ -511,7 +516,8 @@ static void test_zero_copy(void)
 	bc_proto_buf_finish(&b);
 }
 
-/* ---- Reader rules --------------------------------------------------------------- */
+/* ---- Reader rules
+ * --------------------------------------------------------------- */
 
 static void test_error_is_sticky(void)
 {
@@ -558,9 +564,9 @@ static void test_pre_hello_stage(void)
 	REQUIRE(bc_proto_encode(&b, &m, NULL) == 0);
 	sample(BC_MSG_SESSION_JOIN, &m);
 	REQUIRE(bc_proto_encode(&b, &m, NULL) == 0);
-	bc_proto_reader_init(&r, &(struct bc_proto_reader_opts){
-					 .side = BC_PROTO_SIDE_SERVER,
-					 .await_hello = true});
+	bc_proto_reader_init(
+	    &r, &(struct bc_proto_reader_opts){.side = BC_PROTO_SIDE_SERVER,
+	                                       .await_hello = true});
 	REQUIRE(bc_proto_reader_feed(&r, b.data, b.len) == 0);
 	CHECK(bc_proto_reader_next(&r, &m) == 1);
 	CHECK(m.type == BC_MSG_HELLO);
@@ -571,9 +577,9 @@ static void test_pre_hello_stage(void)
 	bc_proto_reader_finish(&r);
 
 	/* Without hello_done the pipelined JOIN is refused. */
-	bc_proto_reader_init(&r, &(struct bc_proto_reader_opts){
-					 .side = BC_PROTO_SIDE_SERVER,
-					 .await_hello = true});
+	bc_proto_reader_init(
+	    &r, &(struct bc_proto_reader_opts){.side = BC_PROTO_SIDE_SERVER,
+	                                       .await_hello = true});
 	REQUIRE(bc_proto_reader_feed(&r, b.data, b.len) == 0);
 	CHECK(bc_proto_reader_next(&r, &m) == 1);
 	CHECK(bc_proto_reader_next(&r, &m) == BC_ESTATE);
@@ -588,16 +594,16 @@ static void test_payload_limit_and_feed_ceiling(void)
 	struct bytes s;
 	memset(&s, 0, sizeof(s));
 	hdr(&s, BC_MSG_FRAME, 70000);
-	bc_proto_reader_init(&r, &(struct bc_proto_reader_opts){
-					 .side = BC_PROTO_SIDE_CLIENT,
-					 .max_payload = 65536});
+	bc_proto_reader_init(
+	    &r, &(struct bc_proto_reader_opts){.side = BC_PROTO_SIDE_CLIENT,
+	                                       .max_payload = 65536});
 	CHECK(bc_proto_reader_feed(&r, s.b, s.n) == 0);
 	CHECK(bc_proto_reader_next(&r, &m) == BC_EPROTO_LENGTH);
 	bc_proto_reader_finish(&r);
 
 	/* Raising the limit lets the same header through. */
-	bc_proto_reader_init(&r, &(struct bc_proto_reader_opts){
-					 .max_payload = 65536});
+	bc_proto_reader_init(
+	    &r, &(struct bc_proto_reader_opts){.max_payload = 65536});
 	bc_proto_reader_set_max_payload(&r, 1u << 20);
 	CHECK(bc_proto_reader_feed(&r, s.b, s.n) == 0);
 	CHECK(bc_proto_reader_next(&r, &m) == 0);
@@ -606,8 +612,8 @@ static void test_payload_limit_and_feed_ceiling(void)
 	/* A caller that never drains hits the ceiling: one message of the
 	 * limit plus BC_PROTO_READ_SLACK. */
 	static uint8_t zeros[64 * 1024];
-	bc_proto_reader_init(&r, &(struct bc_proto_reader_opts){
-					 .max_payload = 4096});
+	bc_proto_reader_init(
+	    &r, &(struct bc_proto_reader_opts){.max_payload = 4096});
 	int rc = 0;
 	size_t fed = 0;
 	while (rc == 0 && fed < 4 * BC_PROTO_READ_SLACK) {
@@ -616,7 +622,7 @@ static void test_payload_limit_and_feed_ceiling(void)
 	}
 	CHECK(rc == BC_ELIMIT);
 	CHECK(fed <= BC_PROTO_HEADER_SIZE + 4096 + BC_PROTO_READ_SLACK +
-			     sizeof(zeros));
+	                 sizeof(zeros));
 	CHECK(bc_proto_reader_feed(&r, zeros, 1) == BC_ELIMIT);
 	bc_proto_reader_finish(&r);
 }
@@ -646,7 +652,8 @@ static void test_many_messages_one_feed(void)
 	bc_proto_buf_finish(&b);
 }
 
-/* ---- Encoder refusals ------------------------------------------------------------ */
+/* ---- Encoder refusals
+ * ------------------------------------------------------------ */
 
 static void test_encoder_refuses_what_decoder_refuses(void)
 {
@@ -736,14 +743,15 @@ static void test_encoder_type_maximum(void)
 	bc_proto_buf_finish(&b);
 }
 
-/* ---- Allocation failures ------------------------------------------------------- */
+/* ---- Allocation failures
+ * ------------------------------------------------------- */
 
 /* Every allocation of encode and decode fails in turn; each run ends in
  * success or BC_ENOMEM and leaks nothing (ASan checks the leaks). */
 static void test_allocation_failures(void)
 {
 	static const enum bc_msg_type types[] = {
-		BC_MSG_SESSION_INFO, BC_MSG_EDIT, BC_MSG_FRAME, BC_MSG_HELLO};
+	    BC_MSG_SESSION_INFO, BC_MSG_EDIT, BC_MSG_FRAME, BC_MSG_HELLO};
 	for (size_t i = 0; i < sizeof(types) / sizeof(types[0]); i++) {
 		int done = 0;
 		for (unsigned long n = 1; n < 64 && !done; n++) {
@@ -774,7 +782,8 @@ static void test_allocation_failures(void)
 	}
 }
 
-/* ---- UTF-8 -------------------------------------------------------------------------- */
+/* ---- UTF-8
+ * -------------------------------------------------------------------------- */
 
 /* Reference: decode one sequence by the Unicode definition and say whether
  * it is a valid, shortest, non-surrogate, non-NUL code point. */
@@ -860,12 +869,13 @@ static void test_utf8_against_reference(void)
 				p[0] = (uint8_t)a;
 				p[1] = (uint8_t)b;
 				p[2] = (uint8_t)c;
-				mismatches += codec_valid(p, 3) !=
-					      ref_valid(p, 3);
+				mismatches +=
+				    codec_valid(p, 3) != ref_valid(p, 3);
 			}
 		}
 	}
-	static const uint8_t lead[] = {0xef, 0xf0, 0xf1, 0xf3, 0xf4, 0xf5, 0xf8};
+	static const uint8_t lead[] = {0xef, 0xf0, 0xf1, 0xf3,
+	                               0xf4, 0xf5, 0xf8};
 	for (size_t i = 0; i < sizeof(lead); i++) {
 		for (unsigned b = 0x70; b < 0xd0; b++) {
 			p[0] = lead[i];
@@ -878,7 +888,8 @@ static void test_utf8_against_reference(void)
 	CHECK_EQ_INT(mismatches, 0);
 }
 
-/* ---- Names and rules --------------------------------------------------------------- */
+/* ---- Names and rules
+ * --------------------------------------------------------------- */
 
 static void test_type_names(void)
 {
@@ -895,15 +906,13 @@ static void test_type_names(void)
 
 static void test_client_state_machine(void)
 {
-	enum bc_proto_stage H = BC_PROTO_STAGE_HELLO,
-			    R = BC_PROTO_STAGE_READY,
-			    S = BC_PROTO_STAGE_SESSION;
+	enum bc_proto_stage H = BC_PROTO_STAGE_HELLO, R = BC_PROTO_STAGE_READY,
+	                    S = BC_PROTO_STAGE_SESSION;
 	enum bc_proto_role E = BC_PROTO_ROLE_EDITOR, V = BC_PROTO_ROLE_VIEWER,
-			   N = BC_PROTO_ROLE_INVALID;
+	                   N = BC_PROTO_ROLE_INVALID;
 	CHECK(bc_proto_client_may_send(H, N, BC_MSG_HELLO) == 0);
 	CHECK(bc_proto_client_may_send(H, N, BC_MSG_PING) == 0);
-	CHECK(bc_proto_client_may_send(H, N, BC_MSG_SESSION_JOIN) ==
-	      BC_ESTATE);
+	CHECK(bc_proto_client_may_send(H, N, BC_MSG_SESSION_JOIN) == BC_ESTATE);
 	CHECK(bc_proto_client_may_send(H, N, BC_MSG_CAMERA) == BC_ESTATE);
 	CHECK(bc_proto_client_may_send(R, N, BC_MSG_HELLO) == BC_ESTATE);
 	CHECK(bc_proto_client_may_send(R, N, BC_MSG_SESSION_CREATE) == 0);
@@ -915,33 +924,31 @@ static void test_client_state_machine(void)
 	CHECK(bc_proto_client_may_send(S, E, BC_MSG_EDIT) == 0);
 	CHECK(bc_proto_client_may_send(S, E, BC_MSG_SCENE_LOAD) == 0);
 	CHECK(bc_proto_client_may_send(S, V, BC_MSG_SNAPSHOT) == 0);
-	CHECK(bc_proto_client_may_send(S, V, BC_MSG_SESSION_JOIN) ==
-	      BC_ESTATE);
+	CHECK(bc_proto_client_may_send(S, V, BC_MSG_SESSION_JOIN) == BC_ESTATE);
 	CHECK(bc_proto_client_may_send(S, E, BC_MSG_FRAME) == BC_EPROTO_TYPE);
-	CHECK(bc_proto_client_may_send(S, E, BC_MSG_WELCOME) ==
-	      BC_EPROTO_TYPE);
+	CHECK(bc_proto_client_may_send(S, E, BC_MSG_WELCOME) == BC_EPROTO_TYPE);
 	CHECK(bc_proto_client_may_send(S, E, (enum bc_msg_type)77) ==
 	      BC_EPROTO_TYPE);
 }
 
 static const struct bc_test tests[] = {
-	{"malformed_table", test_malformed_table},
-	{"round_trip_every_type", test_round_trip_every_type},
-	{"zero_copy", test_zero_copy},
-	{"error_is_sticky", test_error_is_sticky},
-	{"announced_length_allocates_nothing",
-	 test_announced_length_allocates_nothing},
-	{"pre_hello_stage", test_pre_hello_stage},
-	{"payload_limit_and_feed_ceiling", test_payload_limit_and_feed_ceiling},
-	{"many_messages_one_feed", test_many_messages_one_feed},
-	{"encoder_refuses_what_decoder_refuses",
-	 test_encoder_refuses_what_decoder_refuses},
-	{"buffer_ceiling", test_buffer_ceiling},
-	{"encoder_type_maximum", test_encoder_type_maximum},
-	{"allocation_failures", test_allocation_failures},
-	{"utf8_against_reference", test_utf8_against_reference},
-	{"type_names", test_type_names},
-	{"client_state_machine", test_client_state_machine},
+    {"malformed_table", test_malformed_table},
+    {"round_trip_every_type", test_round_trip_every_type},
+    {"zero_copy", test_zero_copy},
+    {"error_is_sticky", test_error_is_sticky},
+    {"announced_length_allocates_nothing",
+     test_announced_length_allocates_nothing},
+    {"pre_hello_stage", test_pre_hello_stage},
+    {"payload_limit_and_feed_ceiling", test_payload_limit_and_feed_ceiling},
+    {"many_messages_one_feed", test_many_messages_one_feed},
+    {"encoder_refuses_what_decoder_refuses",
+     test_encoder_refuses_what_decoder_refuses},
+    {"buffer_ceiling", test_buffer_ceiling},
+    {"encoder_type_maximum", test_encoder_type_maximum},
+    {"allocation_failures", test_allocation_failures},
+    {"utf8_against_reference", test_utf8_against_reference},
+    {"type_names", test_type_names},
+    {"client_state_machine", test_client_state_machine},
 };
 
 BC_TEST_MAIN(tests)

@@ -33,7 +33,7 @@ struct counts {
  * on its path from the scene's root, in pre-order. Returns 0 or the
  * writer's error. */
 static int write_tree(struct bc_proto_buf *b, uint32_t n, uint32_t d,
-		      struct counts *c, int random_shape)
+                      struct counts *c, int random_shape)
 {
 	if (d > c->depth) {
 		c->depth = d;
@@ -46,8 +46,8 @@ static int write_tree(struct bc_proto_buf *b, uint32_t n, uint32_t d,
 		}
 		c->prims++;
 		return bc_proto_scene_prim(b, (uint8_t)(1 + rnd(16)),
-					   c->nodes++ + 1, T0, R0,
-					   rnd(2) ? C0 : NULL, np, params);
+		                           c->nodes++ + 1, T0, R0,
+		                           rnd(2) ? C0 : NULL, np, params);
 	}
 	/* Split n - 1 nodes among k >= 2 children, none of size 2 (an
 	 * operator needs at least two children of its own): start from k
@@ -59,9 +59,9 @@ static int write_tree(struct bc_proto_buf *b, uint32_t n, uint32_t d,
 	}
 	uint32_t extra = n - 1 - k;
 	for (uint32_t i = 0; i < k; i++) {
-		uint32_t add = i + 1 == k ? extra
-			       : random_shape ? rnd(extra + 1)
-					      : extra / (k - i);
+		uint32_t add = i + 1 == k     ? extra
+		               : random_shape ? rnd(extra + 1)
+		                              : extra / (k - i);
 		sizes[i] = 1 + add;
 		extra -= add;
 	}
@@ -75,8 +75,8 @@ static int write_tree(struct bc_proto_buf *b, uint32_t n, uint32_t d,
 	/* Sharp operators (kinds 1..3) carry blend = range = 0. */
 	uint8_t kind = (uint8_t)(1 + rnd(6));
 	float blend = kind > 3 ? 0.25f : 0.0f;
-	int rc = bc_proto_scene_op(b, kind, c->nodes++ + 1, blend, 2 * blend,
-				   k);
+	int rc =
+	    bc_proto_scene_op(b, kind, c->nodes++ + 1, blend, 2 * blend, k);
 	for (uint32_t i = 0; rc == 0 && i < k; i++) {
 		rc = write_tree(b, sizes[i], d + 1, c, random_shape);
 	}
@@ -96,9 +96,12 @@ static void test_random_trees_scan_to_their_counts(void)
 			n = 3;
 		}
 		bc_proto_buf_init(&b, 0);
-		REQUIRE(bc_proto_scene_begin(&b, rnd(2) ? NULL : (const float[10]){
-						       0, 0, 5, 0, 0, 0, 0, 1, 0, 40},
-					     n) == 0);
+		REQUIRE(bc_proto_scene_begin(
+		            &b,
+		            rnd(2) ? NULL
+		                   : (const float[10]){0, 0, 5, 0, 0, 0, 0, 1,
+		                                       0, 40},
+		            n) == 0);
 		REQUIRE(write_tree(&b, n, 1, &c, 1) == 0);
 		REQUIRE(c.nodes == n);
 		struct bc_proto_scene_info info;
@@ -186,8 +189,8 @@ static void test_million_node_scene_load(void)
 	CHECK(scene.len <= BC_PROTO_MAX_PAYLOAD - 4);
 
 	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD, .seq = 4};
-	m.scene_load.scene = (struct bc_proto_bytes){scene.data,
-						     (uint32_t)scene.len};
+	m.scene_load.scene =
+	    (struct bc_proto_bytes){scene.data, (uint32_t)scene.len};
 	struct bc_errinfo ei = {0};
 	int rc = bc_proto_encode(&wire, &m, &ei);
 	if (rc) {
@@ -198,8 +201,8 @@ static void test_million_node_scene_load(void)
 	/* Through a server-side reader in 64 KiB reads, as from a socket. */
 	struct bc_proto_reader r;
 	struct bc_msg got;
-	bc_proto_reader_init(&r, &(struct bc_proto_reader_opts){
-					 .side = BC_PROTO_SIDE_SERVER});
+	bc_proto_reader_init(
+	    &r, &(struct bc_proto_reader_opts){.side = BC_PROTO_SIDE_SERVER});
 	int msgs = 0;
 	for (size_t off = 0; off < wire.len; off += 65536) {
 		size_t k = wire.len - off < 65536 ? wire.len - off : 65536;
@@ -209,11 +212,11 @@ static void test_million_node_scene_load(void)
 			CHECK(got.type == BC_MSG_SCENE_LOAD && got.seq == 4);
 			CHECK(got.scene_load.scene.len == scene.len);
 			CHECK(memcmp(got.scene_load.scene.ptr, scene.data,
-				     scene.len) == 0);
+			             scene.len) == 0);
 			struct bc_proto_scene_info info;
 			CHECK(bc_proto_scene_scan(got.scene_load.scene.ptr,
-						  got.scene_load.scene.len,
-						  &info, NULL) == 0);
+			                          got.scene_load.scene.len,
+			                          &info, NULL) == 0);
 			CHECK(info.nodes == n && info.prims == c.prims &&
 			      info.ops == c.ops && info.depth == c.depth);
 		}
@@ -229,11 +232,11 @@ static void test_million_node_scene_load(void)
 }
 
 static const struct bc_test tests[] = {
-	{"random_trees_scan_to_their_counts",
-	 test_random_trees_scan_to_their_counts},
-	{"depth_limit", test_depth_limit},
-	{"writers_respect_the_ceiling", test_writers_respect_the_ceiling},
-	{"million_node_scene_load", test_million_node_scene_load},
+    {"random_trees_scan_to_their_counts",
+     test_random_trees_scan_to_their_counts},
+    {"depth_limit", test_depth_limit},
+    {"writers_respect_the_ceiling", test_writers_respect_the_ceiling},
+    {"million_node_scene_load", test_million_node_scene_load},
 };
 
 BC_TEST_MAIN(tests)

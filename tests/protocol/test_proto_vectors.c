@@ -22,7 +22,8 @@
 #define BC_VECTORS_DIR "protocol/vectors"
 #endif
 
-/* ---- Small helpers -------------------------------------------------------- */
+/* ---- Small helpers --------------------------------------------------------
+ */
 
 /* Allocations made while building one message from JSON, freed together. */
 static void *keep[4096];
@@ -101,7 +102,7 @@ static struct bc_proto_str jstr(const json_t *o, const char *key)
 {
 	json_t *v = json_object_get(o, key);
 	return (struct bc_proto_str){json_string_value(v),
-				     (uint32_t)json_string_length(v)};
+	                             (uint32_t)json_string_length(v)};
 }
 
 static struct bc_proto_bytes jbytes(const json_t *o, const char *key)
@@ -111,7 +112,8 @@ static struct bc_proto_bytes jbytes(const json_t *o, const char *key)
 	return (struct bc_proto_bytes){b, n < 0 ? 0u : (uint32_t)n};
 }
 
-/* ---- Fields (JSON) -> struct bc_msg ------------------------------------------ */
+/* ---- Fields (JSON) -> struct bc_msg
+ * ------------------------------------------ */
 
 static const struct bc_proto_edit_op *jops(const json_t *f, uint16_t *n)
 {
@@ -123,7 +125,7 @@ static const struct bc_proto_edit_op *jops(const json_t *f, uint16_t *n)
 		struct bc_proto_edit_op *op = &ops[i];
 		op->kind = (enum bc_proto_edit_kind)jint(o, "kind");
 		op->node = (uint32_t)jint(
-			o, op->kind == BC_PROTO_EDIT_INSERT ? "parent" : "node");
+		    o, op->kind == BC_PROTO_EDIT_INSERT ? "parent" : "node");
 		op->position = (uint32_t)jint(o, "position");
 		if (json_object_get(o, "subtree")) {
 			op->subtree = jbytes(o, "subtree");
@@ -164,7 +166,8 @@ static void build(enum bc_msg_type type, const json_t *f, struct bc_msg *m)
 		m->welcome.version = (uint16_t)jint(f, "version");
 		m->welcome.connection_id = (uint32_t)jint(f, "connection_id");
 		m->welcome.max_payload = (uint32_t)jint(f, "max_payload");
-		m->welcome.max_frame_bytes = (uint32_t)jint(f, "max_frame_bytes");
+		m->welcome.max_frame_bytes =
+		    (uint32_t)jint(f, "max_frame_bytes");
 		m->welcome.max_nodes = (uint32_t)jint(f, "max_nodes");
 		m->welcome.max_dim = (uint16_t)jint(f, "max_dim");
 		m->welcome.max_members = (uint16_t)jint(f, "max_members");
@@ -231,7 +234,7 @@ static void build(enum bc_msg_type type, const json_t *f, struct bc_msg *m)
 		m->view.height = (uint16_t)jint(f, "height");
 		m->view.encoding = (enum bc_proto_encoding)jint(f, "encoding");
 		m->view.quality_interactive =
-			(uint8_t)jint(f, "quality_interactive");
+		    (uint8_t)jint(f, "quality_interactive");
 		m->view.quality_still = (uint8_t)jint(f, "quality_still");
 		m->view.downscale = (uint8_t)jint(f, "downscale");
 		break;
@@ -272,7 +275,7 @@ static void build(enum bc_msg_type type, const json_t *f, struct bc_msg *m)
 		break;
 	case BC_MSG_SNAPSHOT:
 		m->snapshot.encoding =
-			(enum bc_proto_encoding)jint(f, "encoding");
+		    (enum bc_proto_encoding)jint(f, "encoding");
 		break;
 	case BC_MSG_STATS: {
 		struct bc_msg_stats *s = &m->stats;
@@ -295,16 +298,19 @@ static void build(enum bc_msg_type type, const json_t *f, struct bc_msg *m)
 	}
 }
 
-/* ---- Deep comparison of two messages ------------------------------------------ */
+/* ---- Deep comparison of two messages
+ * ------------------------------------------ */
 
 static int str_eq(struct bc_proto_str a, struct bc_proto_str b)
 {
-	return a.len == b.len && (a.len == 0 || memcmp(a.ptr, b.ptr, a.len) == 0);
+	return a.len == b.len &&
+	       (a.len == 0 || memcmp(a.ptr, b.ptr, a.len) == 0);
 }
 
 static int bytes_eq(struct bc_proto_bytes a, struct bc_proto_bytes b)
 {
-	return a.len == b.len && (a.len == 0 || memcmp(a.ptr, b.ptr, a.len) == 0);
+	return a.len == b.len &&
+	       (a.len == 0 || memcmp(a.ptr, b.ptr, a.len) == 0);
 }
 
 /* Floats compare by bits: -0.0 must stay -0.0 through the codec. */
@@ -314,7 +320,7 @@ static int f_eq(const float *a, const float *b, size_t n)
 }
 
 static int ops_eq(const struct bc_proto_edit_op *a,
-		  const struct bc_proto_edit_op *b, unsigned n)
+                  const struct bc_proto_edit_op *b, unsigned n)
 {
 	for (unsigned i = 0; i < n; i++) {
 		if (a[i].kind != b[i].kind || a[i].node != b[i].node ||
@@ -356,7 +362,7 @@ static int msg_eq(const struct bc_msg *a, const struct bc_msg *b)
 		       a->welcome.connection_id == b->welcome.connection_id &&
 		       a->welcome.max_payload == b->welcome.max_payload &&
 		       a->welcome.max_frame_bytes ==
-			       b->welcome.max_frame_bytes &&
+		           b->welcome.max_frame_bytes &&
 		       a->welcome.max_nodes == b->welcome.max_nodes &&
 		       a->welcome.max_dim == b->welcome.max_dim &&
 		       a->welcome.max_members == b->welcome.max_members &&
@@ -403,10 +409,10 @@ static int msg_eq(const struct bc_msg *a, const struct bc_msg *b)
 		return a->edit_applied.order == b->edit_applied.order &&
 		       a->edit_applied.author == b->edit_applied.author &&
 		       a->edit_applied.author_seq ==
-			       b->edit_applied.author_seq &&
+		           b->edit_applied.author_seq &&
 		       a->edit_applied.nops == b->edit_applied.nops &&
 		       ops_eq(a->edit_applied.ops, b->edit_applied.ops,
-			      a->edit_applied.nops);
+		              a->edit_applied.nops);
 	case BC_MSG_CAMERA:
 		return f_eq(a->camera.eye, b->camera.eye, 3) &&
 		       f_eq(a->camera.target, b->camera.target, 3) &&
@@ -442,7 +448,7 @@ static int msg_eq(const struct bc_msg *a, const struct bc_msg *b)
 		       a->pick_result.y == b->pick_result.y &&
 		       a->pick_result.node == b->pick_result.node &&
 		       f_eq(a->pick_result.position, b->pick_result.position,
-			    3) &&
+		            3) &&
 		       f_eq(&a->pick_result.depth, &b->pick_result.depth, 1);
 	case BC_MSG_SNAPSHOT:
 		return a->snapshot.encoding == b->snapshot.encoding;
@@ -453,7 +459,8 @@ static int msg_eq(const struct bc_msg *a, const struct bc_msg *b)
 	}
 }
 
-/* ---- Running entries ----------------------------------------------------------- */
+/* ---- Running entries
+ * ----------------------------------------------------------- */
 
 static void reader_opts(const json_t *e, struct bc_proto_reader_opts *o)
 {
@@ -475,7 +482,7 @@ static void reader_opts(const json_t *e, struct bc_proto_reader_opts *o)
 /* Feeds bytes (all at once, or one at a time), drains, then ends the
  * stream. Returns the final code (0 = clean end) and counts messages. */
 static int run_stream(const struct bc_proto_reader_opts *o, const uint8_t *b,
-		      size_t n, int bytewise, int *nmsgs)
+                      size_t n, int bytewise, int *nmsgs)
 {
 	struct bc_proto_reader r;
 	struct bc_msg m;
@@ -519,14 +526,14 @@ static void run_valid(enum bc_msg_type type, const json_t *e)
 	int rc = bc_proto_reader_next(&r, &got);
 	if (rc != 1) {
 		fprintf(stderr, "  %s/%s: next = %d (%s)\n",
-			bc_proto_type_name(type), name, rc, r.errstr);
+		        bc_proto_type_name(type), name, rc, r.errstr);
 	}
 	CHECK(rc == 1);
 	if (rc == 1) {
 		CHECK(got.type == type);
 		if (!msg_eq(&got, &want)) {
 			fprintf(stderr, "  %s/%s: decoded fields differ\n",
-				bc_proto_type_name(type), name);
+			        bc_proto_type_name(type), name);
 			bc_test_failures++;
 		}
 		/* Decoded message -> same bytes. */
@@ -548,24 +555,24 @@ static void run_valid(enum bc_msg_type type, const json_t *e)
 	rc = bc_proto_encode(&b, &want, &ei);
 	if (rc != 0 || b.len != (size_t)n ||
 	    memcmp(b.data, bytes, (size_t)n) != 0) {
-		fprintf(stderr, "  %s/%s: encoding the fields gives %d (%s), "
-				"%zu bytes for %ld\n",
-			bc_proto_type_name(type), name, rc, ei.msg, b.len, n);
+		fprintf(stderr,
+		        "  %s/%s: encoding the fields gives %d (%s), "
+		        "%zu bytes for %ld\n",
+		        bc_proto_type_name(type), name, rc, ei.msg, b.len, n);
 		bc_test_failures++;
 	}
 	bc_proto_buf_finish(&b);
 
 	/* One byte at a time, and through the payload decoder alone. */
 	int count = 0;
-	CHECK(run_stream(&(struct bc_proto_reader_opts){0}, bytes, (size_t)n,
-			 1, &count) == 0);
+	CHECK(run_stream(&(struct bc_proto_reader_opts){0}, bytes, (size_t)n, 1,
+	                 &count) == 0);
 	CHECK(count == 1);
 	struct bc_proto_reader pr;
 	bc_proto_reader_init(&pr, NULL);
-	CHECK(bc_proto_decode_payload(&pr, type, want.flags, want.seq,
-				      bytes + BC_PROTO_HEADER_SIZE,
-				      (size_t)n - BC_PROTO_HEADER_SIZE, &got,
-				      NULL) == 0);
+	CHECK(bc_proto_decode_payload(
+	          &pr, type, want.flags, want.seq, bytes + BC_PROTO_HEADER_SIZE,
+	          (size_t)n - BC_PROTO_HEADER_SIZE, &got, NULL) == 0);
 	CHECK(msg_eq(&got, &want));
 	bc_proto_reader_finish(&pr);
 	total_valid++;
@@ -585,15 +592,15 @@ static void run_invalid(const json_t *e)
 		int count = 0;
 		int rc = run_stream(&o, bytes, (size_t)n, bytewise, &count);
 		const char *got = rc == 0 ? NULL : bc_err_name(rc);
-		int ok = (want == NULL) ? rc == 0
-					: (got && strcmp(got, want) == 0);
+		int ok =
+		    (want == NULL) ? rc == 0 : (got && strcmp(got, want) == 0);
 		if (!ok || count != want_msgs) {
 			fprintf(stderr,
-				"  %s: got %s after %d messages, want %s after "
-				"%d (%s)\n",
-				name, got ? got : "success", count,
-				want ? want : "success", want_msgs,
-				bytewise ? "bytewise" : "at once");
+			        "  %s: got %s after %d messages, want %s after "
+			        "%d (%s)\n",
+			        name, got ? got : "success", count,
+			        want ? want : "success", want_msgs,
+			        bytewise ? "bytewise" : "at once");
 			bc_test_failures++;
 		}
 	}
@@ -608,7 +615,7 @@ static json_t *load(const char *file)
 	json_t *doc = json_load_file(path, 0, &jerr);
 	if (!doc) {
 		fprintf(stderr, "  %s: %s (line %d)\n", path, jerr.text,
-			jerr.line);
+		        jerr.line);
 	}
 	return doc;
 }
@@ -679,15 +686,16 @@ static void test_scene_vectors(void)
 	json_array_foreach(json_object_get(doc, "valid"), i, e)
 	{
 		uint8_t *b = NULL;
-		long n = unhex(json_string_value(json_object_get(e, "hex")), &b);
+		long n =
+		    unhex(json_string_value(json_object_get(e, "hex")), &b);
 		json_t *f = json_object_get(e, "fields");
 		struct bc_proto_scene_info info;
 		struct bc_errinfo ei = {0};
 		int rc = bc_proto_scene_scan(b, (size_t)n, &info, &ei);
 		if (rc != 0) {
 			fprintf(stderr, "  %s: %s\n",
-				json_string_value(json_object_get(e, "name")),
-				ei.msg);
+			        json_string_value(json_object_get(e, "name")),
+			        ei.msg);
 		}
 		CHECK(rc == 0);
 		CHECK(info.has_camera ==
@@ -701,15 +709,16 @@ static void test_scene_vectors(void)
 	json_array_foreach(json_object_get(doc, "invalid"), i, e)
 	{
 		uint8_t *b = NULL;
-		long n = unhex(json_string_value(json_object_get(e, "hex")), &b);
+		long n =
+		    unhex(json_string_value(json_object_get(e, "hex")), &b);
 		const char *want =
-			json_string_value(json_object_get(e, "error"));
+		    json_string_value(json_object_get(e, "error"));
 		struct bc_errinfo ei = {0};
 		int rc = bc_proto_scene_scan(b, (size_t)n, NULL, &ei);
 		if (rc == 0 || strcmp(bc_err_name(rc), want) != 0) {
 			fprintf(stderr, "  %s: got %s (%s), want %s\n",
-				json_string_value(json_object_get(e, "name")),
-				rc ? bc_err_name(rc) : "success", ei.msg, want);
+			        json_string_value(json_object_get(e, "name")),
+			        rc ? bc_err_name(rc) : "success", ei.msg, want);
 			bc_test_failures++;
 		}
 		release();
@@ -732,13 +741,14 @@ static void test_no_unknown_vector_files(void)
 		files++;
 		char stem[64] = {0};
 		int known = strcmp(de->d_name, "framing.json") == 0 ||
-			    strcmp(de->d_name, "scene.json") == 0;
+		            strcmp(de->d_name, "scene.json") == 0;
 		for (int t = 1; !known && t < BC_MSG_COUNT; t++) {
 			file_of((enum bc_msg_type)t, stem, sizeof(stem));
 			known = strcmp(stem, de->d_name) == 0;
 		}
 		if (!known) {
-			fprintf(stderr, "  unknown vector file %s\n", de->d_name);
+			fprintf(stderr, "  unknown vector file %s\n",
+			        de->d_name);
 			bc_test_failures++;
 		}
 	}
@@ -747,10 +757,10 @@ static void test_no_unknown_vector_files(void)
 }
 
 static const struct bc_test tests[] = {
-	{"every_type_has_vectors", test_every_type_has_vectors},
-	{"framing_vectors", test_framing_vectors},
-	{"scene_vectors", test_scene_vectors},
-	{"no_unknown_vector_files", test_no_unknown_vector_files},
+    {"every_type_has_vectors", test_every_type_has_vectors},
+    {"framing_vectors", test_framing_vectors},
+    {"scene_vectors", test_scene_vectors},
+    {"no_unknown_vector_files", test_no_unknown_vector_files},
 };
 
 BC_TEST_MAIN(tests)

@@ -42,28 +42,28 @@
 /* Message types; the numbers are the wire values and are never reused. */
 enum bc_msg_type {
 	BC_MSG_INVALID = 0,
-	BC_MSG_HELLO = 1,           /* client -> server */
-	BC_MSG_WELCOME = 2,         /* server -> client */
-	BC_MSG_ERROR = 3,           /* both */
-	BC_MSG_PING = 4,            /* both */
-	BC_MSG_PONG = 5,            /* both */
-	BC_MSG_OK = 6,              /* server -> client */
-	BC_MSG_SESSION_CREATE = 7,  /* client -> server */
-	BC_MSG_SESSION_JOIN = 8,    /* client -> server */
-	BC_MSG_SESSION_LEAVE = 9,   /* client -> server */
-	BC_MSG_SESSION_INFO = 10,   /* server -> client */
-	BC_MSG_SCENE_LOAD = 11,     /* client -> server */
-	BC_MSG_SCENE_STATE = 12,    /* server -> client */
-	BC_MSG_EDIT = 13,           /* client -> server */
-	BC_MSG_EDIT_APPLIED = 14,   /* server -> client */
-	BC_MSG_CAMERA = 15,         /* client -> server */
-	BC_MSG_VIEW = 16,           /* client -> server */
-	BC_MSG_FRAME = 17,          /* server -> client */
-	BC_MSG_PICK = 18,           /* client -> server */
-	BC_MSG_PICK_RESULT = 19,    /* server -> client */
-	BC_MSG_SNAPSHOT = 20,       /* client -> server */
-	BC_MSG_GET_STATS = 21,      /* client -> server */
-	BC_MSG_STATS = 22,          /* server -> client */
+	BC_MSG_HELLO = 1,          /* client -> server */
+	BC_MSG_WELCOME = 2,        /* server -> client */
+	BC_MSG_ERROR = 3,          /* both */
+	BC_MSG_PING = 4,           /* both */
+	BC_MSG_PONG = 5,           /* both */
+	BC_MSG_OK = 6,             /* server -> client */
+	BC_MSG_SESSION_CREATE = 7, /* client -> server */
+	BC_MSG_SESSION_JOIN = 8,   /* client -> server */
+	BC_MSG_SESSION_LEAVE = 9,  /* client -> server */
+	BC_MSG_SESSION_INFO = 10,  /* server -> client */
+	BC_MSG_SCENE_LOAD = 11,    /* client -> server */
+	BC_MSG_SCENE_STATE = 12,   /* server -> client */
+	BC_MSG_EDIT = 13,          /* client -> server */
+	BC_MSG_EDIT_APPLIED = 14,  /* server -> client */
+	BC_MSG_CAMERA = 15,        /* client -> server */
+	BC_MSG_VIEW = 16,          /* client -> server */
+	BC_MSG_FRAME = 17,         /* server -> client */
+	BC_MSG_PICK = 18,          /* client -> server */
+	BC_MSG_PICK_RESULT = 19,   /* server -> client */
+	BC_MSG_SNAPSHOT = 20,      /* client -> server */
+	BC_MSG_GET_STATS = 21,     /* client -> server */
+	BC_MSG_STATS = 22,         /* server -> client */
 	BC_MSG_COUNT
 };
 
@@ -147,26 +147,26 @@ struct bc_proto_bytes {
 
 struct bc_msg_hello {
 	uint16_t version_min, version_max; /* versions the client speaks */
-	uint8_t encodings;        /* bit (encoding - 1): decodes it */
+	uint8_t encodings;                 /* bit (encoding - 1): decodes it */
 	uint32_t max_frame_bytes; /* largest FRAME payload; 0 = server's */
 	struct bc_proto_str client_name; /* 0..BC_PROTO_MAX_NAME bytes */
 	struct bc_proto_str token;       /* 0..BC_PROTO_MAX_TOKEN bytes */
 };
 
 struct bc_msg_welcome {
-	uint16_t version;         /* the version both will speak */
-	uint32_t connection_id;   /* != 0 */
-	uint32_t max_payload;     /* server's payload limit after HELLO */
-	uint32_t max_frame_bytes; /* FRAME payloads this client will get */
-	uint32_t max_nodes;       /* nodes a session's scene may have */
-	uint16_t max_dim;         /* largest VIEW width or height */
-	uint16_t max_members;     /* clients per session */
-	uint16_t max_edit_ops;    /* operations per EDIT */
+	uint16_t version;              /* the version both will speak */
+	uint32_t connection_id;        /* != 0 */
+	uint32_t max_payload;          /* server's payload limit after HELLO */
+	uint32_t max_frame_bytes;      /* FRAME payloads this client will get */
+	uint32_t max_nodes;            /* nodes a session's scene may have */
+	uint16_t max_dim;              /* largest VIEW width or height */
+	uint16_t max_members;          /* clients per session */
+	uint16_t max_edit_ops;         /* operations per EDIT */
 	struct bc_proto_str server_id; /* 0..BC_PROTO_MAX_NAME bytes */
 };
 
 struct bc_msg_error {
-	uint16_t code; /* magnitude of a BC_E* code, >= 1 */
+	uint16_t code;            /* magnitude of a BC_E* code, >= 1 */
 	struct bc_proto_str text; /* 0..BC_PROTO_MAX_ERROR_TEXT bytes */
 };
 
@@ -189,11 +189,11 @@ struct bc_proto_member {
 };
 
 struct bc_msg_session_info {
-	uint32_t session_id;        /* != 0 */
-	uint32_t member_id;         /* the receiver's own id, != 0 */
-	enum bc_proto_role role;    /* the receiver's role */
-	struct bc_proto_str name;   /* session name */
-	uint16_t nmembers;          /* 1..BC_PROTO_MAX_MEMBERS */
+	uint32_t session_id;      /* != 0 */
+	uint32_t member_id;       /* the receiver's own id, != 0 */
+	enum bc_proto_role role;  /* the receiver's role */
+	struct bc_proto_str name; /* session name */
+	uint16_t nmembers;        /* 1..BC_PROTO_MAX_MEMBERS */
 	const struct bc_proto_member *members;
 };
 
@@ -219,7 +219,7 @@ struct bc_proto_edit_op {
 	uint32_t node;     /* SET, REMOVE, REPLACE: the node; INSERT: parent */
 	uint32_t position; /* INSERT: child index (== child count: append) */
 	struct bc_proto_bytes subtree; /* INSERT, REPLACE: scene encoding */
-	uint8_t nfields;   /* SET: 1..BC_PROTO_MAX_SET_FIELDS */
+	uint8_t nfields;               /* SET: 1..BC_PROTO_MAX_SET_FIELDS */
 	const struct bc_proto_field *fields;
 };
 
@@ -260,7 +260,7 @@ struct bc_msg_frame {
 	enum bc_proto_encoding encoding;
 	uint16_t width, height;             /* full (VIEW) size */
 	uint16_t image_width, image_height; /* encoded size (downscaled) */
-	uint16_t nrects; /* 1..BC_PROTO_MAX_RECTS */
+	uint16_t nrects;                    /* 1..BC_PROTO_MAX_RECTS */
 	const struct bc_proto_rect *rects;
 };
 
@@ -305,7 +305,7 @@ struct bc_msg {
 		struct bc_msg_hello hello;
 		struct bc_msg_welcome welcome;
 		struct bc_msg_error error;
-		struct bc_msg_ping ping; /* PING and PONG */
+		struct bc_msg_ping ping;       /* PING and PONG */
 		struct bc_msg_session session; /* CREATE and JOIN */
 		struct bc_msg_session_info session_info;
 		struct bc_msg_scene_load scene_load;
@@ -346,8 +346,8 @@ struct bc_proto_store {
 };
 
 struct bc_proto_reader {
-	int err;           /* 0 or the sticky BC_E* error */
-	char errstr[256];  /* the reason, when err != 0 */
+	int err;          /* 0 or the sticky BC_E* error */
+	char errstr[256]; /* the reason, when err != 0 */
 	/* Everything below is private. */
 	struct bc_proto_reader_opts opts;
 	bool pre_hello;
@@ -360,7 +360,7 @@ struct bc_proto_reader {
 /* Sets up r with opts (which may be NULL). Allocates nothing; returns 0, or
  * BC_EINVAL for an out-of-range side. */
 int bc_proto_reader_init(struct bc_proto_reader *r,
-			 const struct bc_proto_reader_opts *opts);
+                         const struct bc_proto_reader_opts *opts);
 /* Frees everything r holds; accepts NULL and a zeroed reader. */
 void bc_proto_reader_finish(struct bc_proto_reader *r);
 
@@ -370,7 +370,7 @@ void bc_proto_reader_finish(struct bc_proto_reader *r);
  * bc_proto_reader_next() before feeding more). ENOMEM and ELIMIT are
  * sticky. */
 int bc_proto_reader_feed(struct bc_proto_reader *r, const void *bytes,
-			 size_t n);
+                         size_t n);
 
 /* Parses the next message into *out (reset on entry). Returns 1 (a
  * message), 0 (more bytes needed) or a negative BC_E* code, which is also
@@ -389,7 +389,7 @@ void bc_proto_reader_hello_done(struct bc_proto_reader *r);
 /* Changes the payload limit for messages whose header has not been parsed
  * yet (same rules as opts.max_payload). */
 void bc_proto_reader_set_max_payload(struct bc_proto_reader *r,
-				     uint32_t max_payload);
+                                     uint32_t max_payload);
 
 /* Bytes buffered and not yet returned as messages. */
 size_t bc_proto_reader_pending(const struct bc_proto_reader *r);
@@ -400,9 +400,9 @@ size_t bc_proto_reader_pending(const struct bc_proto_reader *r);
  * payload; r's stream and sticky error are untouched. Returns 0 or a
  * negative BC_E* code with the reason in ei (which may be NULL). */
 int bc_proto_decode_payload(struct bc_proto_reader *r, enum bc_msg_type type,
-			    uint16_t flags, uint32_t seq, const uint8_t *payload,
-			    size_t len, struct bc_msg *out,
-			    struct bc_errinfo *ei);
+                            uint16_t flags, uint32_t seq,
+                            const uint8_t *payload, size_t len,
+                            struct bc_msg *out, struct bc_errinfo *ei);
 
 /* ---- Writing ------------------------------------------------------------- */
 
@@ -429,9 +429,10 @@ void bc_proto_buf_consume(struct bc_proto_buf *b, size_t n);
  * for an invalid field (ESTRING, ENONFINITE, ERANGE, EENUM, EPROTO_COUNT,
  * ...), with the reason in ei (which may be NULL). */
 int bc_proto_encode(struct bc_proto_buf *b, const struct bc_msg *m,
-		    struct bc_errinfo *ei);
+                    struct bc_errinfo *ei);
 
-/* ---- The scene encoding (owned by blobtree; see PROTOCOL.md) -------------- */
+/* ---- The scene encoding (owned by blobtree; see PROTOCOL.md) --------------
+ */
 
 struct bc_proto_scene_info {
 	bool has_camera;
@@ -448,7 +449,8 @@ struct bc_proto_scene_info {
  * unique ids) is left to blobtree. Returns 0 with *info filled (it may be
  * NULL), or a negative code with the reason in ei. */
 int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
-			struct bc_proto_scene_info *info, struct bc_errinfo *ei);
+                        struct bc_proto_scene_info *info,
+                        struct bc_errinfo *ei);
 
 /* Writers for the scene encoding, for clients and tests that build scene
  * bytes without blobtree: begin, then every node in pre-order. camera is
@@ -456,15 +458,16 @@ int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
  * 3 floats. Each returns 0, BC_ELIMIT or BC_ENOMEM (and then b is as
  * before); the scanner, not the writers, checks the result. */
 int bc_proto_scene_begin(struct bc_proto_buf *b, const float *camera,
-			 uint32_t node_count);
+                         uint32_t node_count);
 int bc_proto_scene_prim(struct bc_proto_buf *b, uint8_t kind, uint32_t id,
-			const float translate[3], const float rotate[4],
-			const float *color, uint8_t nparams,
-			const float *params);
+                        const float translate[3], const float rotate[4],
+                        const float *color, uint8_t nparams,
+                        const float *params);
 int bc_proto_scene_op(struct bc_proto_buf *b, uint8_t kind, uint32_t id,
-		      float blend, float range, uint32_t child_count);
+                      float blend, float range, uint32_t child_count);
 
-/* ---- Names and rules ------------------------------------------------------ */
+/* ---- Names and rules ------------------------------------------------------
+ */
 
 /* "HELLO", "FRAME", ...; NULL when type is out of range. Static. */
 const char *bc_proto_type_name(enum bc_msg_type type);
@@ -482,7 +485,7 @@ enum bc_proto_stage {
 /* Whether a client in stage (and, in a session, role) may send type.
  * Returns 0, BC_EPROTO_TYPE (not a client message), BC_ESTATE (not in this
  * stage) or BC_EPERM (not for this role). The server answers accordingly. */
-int bc_proto_client_may_send(enum bc_proto_stage stage,
-			     enum bc_proto_role role, enum bc_msg_type type);
+int bc_proto_client_may_send(enum bc_proto_stage stage, enum bc_proto_role role,
+                             enum bc_msg_type type);
 
 #endif

@@ -34,7 +34,8 @@
  * draining, and the reader refuses to grow without bound. */
 #define BC_PROTO_READ_SLACK (1024u * 1024u)
 
-/* ---- Strings -------------------------------------------------------------- */
+/* ---- Strings --------------------------------------------------------------
+ */
 
 /* Client names, session names and the server id: shown in member lists and
  * logs, where 64 bytes (at least 16 characters of any script) is plenty. */
@@ -49,14 +50,16 @@
  * a field and a value, short enough that an error never costs much. */
 #define BC_PROTO_MAX_ERROR_TEXT 1024u
 
-/* ---- Sessions ------------------------------------------------------------- */
+/* ---- Sessions -------------------------------------------------------------
+ */
 
 /* Members listed in SESSION_INFO, hence the most clients one session can
  * have: a design review rarely has more than a dozen people, and every
  * member costs the server one render per camera change. */
 #define BC_PROTO_MAX_MEMBERS 64u
 
-/* ---- Frames and views ------------------------------------------------------ */
+/* ---- Frames and views ------------------------------------------------------
+ */
 
 /* Largest frame width or height; equals BC_RENDER_MAX_DIM (the largest
  * texture GL drivers guarantee, and w*h*16 bytes stays far below 2^32). */
@@ -79,7 +82,8 @@
 /* JPEG quality, as TurboJPEG takes it (1 worst .. 100 best). */
 #define BC_PROTO_MAX_QUALITY 100u
 
-/* ---- Edits ---------------------------------------------------------------- */
+/* ---- Edits ----------------------------------------------------------------
+ */
 
 /* Operations in one EDIT. A slider drag sends one per message; tools that
  * move a selection send one per selected node. The server applies a batch
@@ -103,7 +107,8 @@
  * float overflow). */
 #define BC_PROTO_MAX_ABS 1.0e6f
 
-/* ---- Scene encoding (documented here, validated by blobtree/) -------------- */
+/* ---- Scene encoding (documented here, validated by blobtree/) --------------
+ */
 
 /* Nodes of a scene; equals BC_TREE_MAX_NODES (the GPU node word has a
  * 22-bit ancestor field whose all-ones value means "none"). */
