@@ -1,0 +1,1258 @@
+/*
+ * The blobcast page: one connection to blobcastd through websockify, the
+ * session's frames on a canvas, and direct manipulation of the scene.
+ *
+ *  - Connection: HELLO, SESSION_JOIN, then VIEW for the canvas size; every
+ *    message goes through protocol.js, whose push reader reassembles the
+ *    WebSocket frames (websockify does not align them with messages).
+ *  - Frames: each rectangle is decoded off the main thread by
+ *    createImageBitmap (JPEG, PNG) or taken as ImageData (raw) and drawn in
+ *    order onto a backing canvas of the VIEW size, scaled from the encoded
+ *    image size; frames queued behind a newer full frame are skipped.
+ *  - Camera: orbit (drag), pan (right drag), zoom (wheel), sent as CAMERA
+ *    with INTERACTING while the mouse moves and once more without it.
+ *  - Picking and dragging: a press sends PICK; if it hits a primitive, the
+ *    drag moves that primitive in the view plane through the hit point
+ *    (EDITs with INTERACTING, at most one in flight, then a final EDIT
+ *    without it). The picked primitive is ringed on an overlay canvas.
+ *  - The side panel lists the members, who edited last, and sliders for the
+ *    selected primitive (position, shape parameters, colour, the blend of
+ *    its smooth parent).
+ *  - The overlay shows frames per second, edit -> frame latency (from
+ *    sending an EDIT to drawing the first frame whose order reflects it)
+ *    and kilobytes per frame.
+ *
+ * window.blobcast exposes the state read-only for the end-to-end test and
+ * for anyone curious in the developer console.
+ */
+import * as P from './protocol.js';
+
+/* ---- Primitive kinds (docs/primitives.md, blobtree/prim.c) ------------- */
+
+/* name, and each parameter: [name, component count, rule]. Rule 'pos' is
+ * > 0, 'nonneg' >= 0, 'deg' an angle in degrees, 'free' any coordinate.
+ * Field number 16 + k is the k-th parameter; its floats follow the earlier
+ * ones in the scene encoding. */
+const PRIMS = {
+	1: ['sphere', [['radius', 1, 'pos']]],
+	2: ['box', [['half_extents', 3, 'pos'], ['round', 1, 'nonneg']]],
+	3: ['capsule', [['a', 3, 'free'], ['b', 3, 'free'], ['radius', 1, 'pos']]],
+	4: ['cylinder', [['radius', 1, 'pos'], ['half_height', 1, 'pos']]],
+	5: ['torus', [['major', 1, 'pos'], ['minor', 1, 'pos']]],
+	6: ['cone', [['half_height', 1, 'pos'], ['radius_bottom', 1, 'nonneg'],
+		['radius_top', 1, 'nonneg']]],
+	7: ['round_cone', [['a', 3, 'free'], ['b', 3, 'free'],
+		['radius_a', 1, 'nonneg'], ['radius_b', 1, 'nonneg']]],
+	8: ['ellipsoid', [['radii', 3, 'pos']]],
+	9: ['hex_prism', [['radius', 1, 'pos'], ['half_depth', 1, 'pos']]],
+	10: ['octahedron', [['size', 1, 'pos']]],
+	11: ['box_frame', [['half_extents', 3, 'pos'], ['thickness', 1, 'pos']]],
+	12: ['capped_torus', [['major', 1, 'pos'], ['minor', 1, 'pos'],
+		['angle_deg', 1, 'deg']]],
+	13: ['link', [['half_length', 1, 'nonneg'], ['major', 1, 'pos'],
+		['minor', 1, 'pos']]],
+	14: ['solid_angle', [['radius', 1, 'pos'], ['angle_deg', 1, 'deg']]],
+	15: ['pyramid', [['half_base', 1, 'pos'], ['height', 1, 'pos']]],
+	16: ['tri_prism', [['radius', 1, 'pos'], ['half_depth', 1, 'pos']]],
+};
+const OPS = ['', 'union', 'intersection', 'difference', 'smooth_union',
+	'smooth_intersection', 'smooth_difference'];
+
+/* [{ name, offset, count, rule }] for a kind, or null if it is unknown. */
+function layout(kind) {
+	const p = PRIMS[kind];
+	if (!p) {
+		return null;
+	}
+	let offset = 0;
+	return p[1].map(([name, count, rule]) => {
+		const d = { name, offset, count, rule };
+		offset += count;
+		return d;
+	});
+}
+
+function kindName(n) {
+	return n.isOp ? OPS[n.kind] ?? `op ${n.kind}`
+		: PRIMS[n.kind]?.[0] ?? `kind ${n.kind}`;
+}
+
+/* ---- Small vector helpers ------------------------------------------------ */
+
+const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+const add = (a, b) => [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
+const scale = (a, s) => [a[0] * s, a[1] * s, a[2] * s];
+const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+const cross = (a, b) => [a[1] * b[2] - a[2] * b[1],
+	a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+const len = (a) => Math.sqrt(dot(a, a));
+const norm = (a) => scale(a, 1 / (len(a) || 1));
+
+/* Rotates v about the unit axis k by angle a (Rodrigues). */
+function rotate(v, k, a) {
+	const c = Math.cos(a), s = Math.sin(a);
+	return add(add(scale(v, c), scale(cross(k, v), s)),
+		scale(k, dot(k, v) * (1 - c)));
+}
+
+/* Rotates v by the unit quaternion q = (x, y, z, w). */
+function quatRotate(q, v) {
+	const u = [q[0], q[1], q[2]];
+	const t = scale(cross(u, v), 2);
+	return add(add(v, scale(t, q[3])), cross(u, t));
+}
+
+/* A primitive's local bounding box [lo, hi] from its parameters (the
+ * layouts of PRIMS; cylinders, cones and tori stand on their local y
+ * axis). Kinds without a simple rule get a cube of their largest
+ * parameter. */
+function localBox(n) {
+	const p = n.params;
+	const sym = (x, y, z) => [[-x, -y, -z], [x, y, z]];
+	const segment = (a, b, r) => [
+		[0, 1, 2].map((i) => Math.min(a[i], b[i]) - r),
+		[0, 1, 2].map((i) => Math.max(a[i], b[i]) + r)];
+	const m = Math.max(0.05, ...p.map(Math.abs));
+	if (p.length !== (layout(n.kind) ?? []).reduce((a, d) => a + d.count,
+		0)) {
+		return sym(m, m, m);
+	}
+	switch (n.kind) {
+	case 1:
+		return sym(p[0], p[0], p[0]);
+	case 2:
+	case 8:
+	case 11:
+		return sym(p[0], p[1], p[2]);
+	case 3:
+		return segment(p.slice(0, 3), p.slice(3, 6), p[6]);
+	case 4:
+		return sym(p[0], p[1], p[0]);
+	case 5:
+	case 12:
+		return sym(p[0] + p[1], p[1], p[0] + p[1]);
+	case 6: {
+		const r = Math.max(p[1], p[2]);
+		return sym(r, p[0], r);
+	}
+	case 7:
+		return segment(p.slice(0, 3), p.slice(3, 6), Math.max(p[6], p[7]));
+	default:
+		return sym(m, m, m);
+	}
+}
+
+/* The 12 edges of a box whose corner i has bit 0: x, bit 1: y, bit 2: z. */
+const BOX_EDGES = [[0, 1], [2, 3], [4, 5], [6, 7], [0, 2], [1, 3], [4, 6],
+	[5, 7], [0, 4], [1, 5], [2, 6], [3, 7]];
+
+/* ---- Camera ---------------------------------------------------------------- */
+
+/* The client's own camera, with the server's conventions
+ * (bc_view_rays_init): forward = target - eye, right = forward x up,
+ * up' = right x forward; pixel rows grow downwards. */
+class Camera {
+	constructor(c) {
+		this.set(c ?? { eye: [0, 1, 6], target: [0, 0, 0], up: [0, 1, 0],
+			fov_y_deg: 45 });
+	}
+
+	set(c) {
+		this.eye = c.eye.slice();
+		this.target = c.target.slice();
+		this.up = norm(c.up);
+		this.fov = c.fov_y_deg;
+	}
+
+	basis() {
+		const f = norm(sub(this.target, this.eye));
+		const r = norm(cross(f, this.up));
+		return { f, r, u: cross(r, f), t: Math.tan(this.fov * Math.PI / 360) };
+	}
+
+	/* World units per view pixel at forward distance z. */
+	pixelSize(z, height) {
+		return 2 * z * this.basis().t / height;
+	}
+
+	/* World point -> view pixel { x, y, z } (z: forward distance), or null
+	 * behind the eye. */
+	project(p, w, h) {
+		const { f, r, u, t } = this.basis();
+		const d = sub(p, this.eye);
+		const z = dot(d, f);
+		if (!(z > 1e-6)) {
+			return null;
+		}
+		const x = dot(d, r) / (z * t * (w / h));
+		const y = dot(d, u) / (z * t);
+		return { x: (x + 1) * 0.5 * w, y: (1 - y) * 0.5 * h, z };
+	}
+
+	/* Turns the eye about the target: dx about the world up, dy about the
+	 * camera's right, never past the poles (the server refuses an up
+	 * parallel to the view). */
+	orbit(dx, dy) {
+		let off = sub(this.eye, this.target);
+		off = rotate(off, this.up, -dx * 0.008);
+		const r = norm(cross(off, this.up));
+		const turned = rotate(off, r, dy * 0.008);
+		const cos = dot(norm(turned), this.up);
+		if (Math.abs(cos) < 0.995) {
+			off = turned;
+		}
+		this.eye = add(this.target, off);
+	}
+
+	/* Moves eye and target in the view plane by view pixels. */
+	pan(dx, dy, height) {
+		const { r, u } = this.basis();
+		const s = this.pixelSize(len(sub(this.target, this.eye)), height);
+		const m = add(scale(r, -dx * s), scale(u, dy * s));
+		this.eye = add(this.eye, m);
+		this.target = add(this.target, m);
+	}
+
+	zoom(steps) {
+		const off = sub(this.eye, this.target);
+		const d = Math.min(Math.max(len(off) * Math.exp(steps * 0.0015),
+			0.05), 1e5);
+		this.eye = add(this.target, scale(norm(off), d));
+	}
+
+	msg() {
+		const clamp = (v) => v.map((x) => Math.max(-P.LIMITS.MAX_ABS,
+			Math.min(P.LIMITS.MAX_ABS, x)));
+		return { eye: clamp(this.eye), target: clamp(this.target),
+			up: this.up.slice(), fov_y_deg: this.fov };
+	}
+}
+
+/* ---- Connection ------------------------------------------------------------ */
+
+/* One WebSocket to websockify, speaking the binary protocol. */
+class Connection {
+	constructor(url, onMessage, onState) {
+		this.url = url;
+		this.onMessage = onMessage;
+		this.onState = onState;
+		this.seq = 0;
+		this.ws = null;
+		this.reader = null;
+		this.bytesIn = 0;
+	}
+
+	open() {
+		this.reader = new P.Reader({ side: 'client' });
+		this.seq = 0;
+		/* websockify 0.10 relays binary frames under the 'binary'
+		 * subprotocol. */
+		const ws = new WebSocket(this.url, ['binary']);
+		ws.binaryType = 'arraybuffer';
+		this.ws = ws;
+		ws.onopen = () => this.onState('open');
+		ws.onclose = (e) => {
+			if (this.ws === ws) {
+				this.ws = null;
+				this.onState('closed', e.reason || `code ${e.code}`);
+			}
+		};
+		ws.onerror = () => {};
+		ws.onmessage = (e) => this.receive(e.data);
+	}
+
+	receive(data) {
+		this.bytesIn += data.byteLength;
+		try {
+			this.reader.feed(data);
+			for (let m; (m = this.reader.next());) {
+				this.onMessage(m);
+			}
+		} catch (e) {
+			/* A stream that broke the protocol cannot be resynchronized:
+			 * tell the server why and start over. */
+			this.onState('error', `${e.code ?? 'error'}: ${e.message}`);
+			if (e instanceof P.ProtoError) {
+				this.send(P.MSG.ERROR, { code: e.errno || P.ERR.EPARSE,
+					text: e.message.slice(0, 200) }, P.FLAG.FATAL);
+			} else {
+				console.error(e);
+			}
+			this.close();
+		}
+	}
+
+	/* Sends a message; returns its seq (1, 2, ...; 0 is never used). */
+	send(type, fields = {}, flags = 0) {
+		if (!this.ws || this.ws.readyState !== WebSocket.OPEN) {
+			return 0;
+		}
+		this.seq = this.seq >= 0xffffffff ? 1 : this.seq + 1;
+		this.ws.send(P.encode({ ...fields, type, flags, seq: this.seq }));
+		return this.seq;
+	}
+
+	/* Bytes the browser has not handed to the network yet. */
+	backlog() {
+		return this.ws ? this.ws.bufferedAmount : 0;
+	}
+
+	close() {
+		const ws = this.ws;
+		this.ws = null;
+		if (ws) {
+			ws.close();
+			this.onState('closed', 'closed');
+		}
+	}
+}
+
+/* ---- Frames ------------------------------------------------------------------- */
+
+/* Decodes FRAME rectangles and draws them, in order, onto a backing canvas
+ * of the VIEW size; the visible canvas shows that. */
+class FrameView {
+	constructor(canvas, onDrawn) {
+		this.canvas = canvas;
+		this.ctx = canvas.getContext('2d');
+		this.back = document.createElement('canvas');
+		this.bctx = this.back.getContext('2d');
+		this.queue = [];
+		this.busy = false;
+		this.onDrawn = onDrawn;
+	}
+
+	static isFull(m) {
+		const r = m.rects[0];
+		return m.rects.length === 1 && r.x === 0 && r.y === 0 &&
+			r.w === m.image_width && r.h === m.image_height;
+	}
+
+	push(m, receivedAt) {
+		this.queue.push({ m, receivedAt });
+		this.pump();
+	}
+
+	async pump() {
+		if (this.busy) {
+			return;
+		}
+		this.busy = true;
+		try {
+			while (this.queue.length) {
+				/* A newer full frame makes every frame before it moot:
+				 * a slow decoder catches up instead of falling behind. */
+				let start = 0;
+				this.queue.forEach((f, i) => {
+					if (FrameView.isFull(f.m)) {
+						start = i;
+					}
+				});
+				const skipped = this.queue.splice(0, start);
+				const { m, receivedAt } = this.queue.shift();
+				await this.draw(m);
+				this.onDrawn(m, receivedAt, skipped.length);
+			}
+		} finally {
+			this.busy = false;
+		}
+	}
+
+	async decode(m, r) {
+		if (m.encoding === P.ENC.RAW) {
+			const px = new Uint8ClampedArray(r.data.buffer, r.data.byteOffset,
+				r.data.byteLength);
+			return createImageBitmap(new ImageData(px, r.w, r.h));
+		}
+		const type = m.encoding === P.ENC.JPEG ? 'image/jpeg' : 'image/png';
+		return createImageBitmap(new Blob([r.data], { type }));
+	}
+
+	async draw(m) {
+		if (this.back.width !== m.width || this.back.height !== m.height) {
+			/* A new size: start from black, the next still is whole. */
+			this.back.width = m.width;
+			this.back.height = m.height;
+		}
+		const bitmaps = await Promise.all(m.rects.map((r) =>
+			this.decode(m, r).catch(() => null)));
+		const sx = m.width / m.image_width, sy = m.height / m.image_height;
+		m.rects.forEach((r, i) => {
+			if (bitmaps[i]) {
+				this.bctx.drawImage(bitmaps[i], r.x * sx, r.y * sy,
+					r.w * sx, r.h * sy);
+				bitmaps[i].close();
+			}
+		});
+		this.show();
+	}
+
+	show() {
+		if (this.back.width) {
+			this.ctx.drawImage(this.back, 0, 0, this.canvas.width,
+				this.canvas.height);
+		}
+	}
+}
+
+/* ---- Statistics ---------------------------------------------------------- */
+
+/* Rolling numbers for the overlay. */
+class Meter {
+	constructor() {
+		this.frameTimes = [];
+		this.frameBytes = [];
+		this.latencies = [];
+	}
+
+	frame(bytes, now) {
+		this.frameTimes.push(now);
+		this.frameBytes.push(bytes);
+		while (this.frameTimes.length && this.frameTimes[0] < now - 1000) {
+			this.frameTimes.shift();
+		}
+		if (this.frameBytes.length > 30) {
+			this.frameBytes.shift();
+		}
+	}
+
+	fps(now) {
+		return this.frameTimes.filter((t) => t >= now - 1000).length;
+	}
+
+	kbPerFrame() {
+		const n = this.frameBytes.length;
+		return n ? this.frameBytes.reduce((a, b) => a + b, 0) / n / 1024 : 0;
+	}
+
+	latency(ms) {
+		this.latencies.push(ms);
+		if (this.latencies.length > 50) {
+			this.latencies.shift();
+		}
+	}
+}
+
+/* ---- The application ------------------------------------------------------------ */
+
+const $ = (id) => document.getElementById(id);
+
+class App {
+	constructor() {
+		const q = new URLSearchParams(location.search);
+		this.cfg = {
+			ws: wsUrl(q.get('ws')),
+			session: q.get('session') || 'default',
+			name: (q.get('name') || 'browser').slice(0, 32),
+			role: q.get('role') === 'viewer' ? P.ROLE.VIEWER : P.ROLE.EDITOR,
+			encoding: q.get('enc') === 'png' ? P.ENC.PNG : P.ENC.JPEG,
+			downscale: clampInt(q.get('downscale'), 1, 8, 2),
+			quality: clampInt(q.get('quality'), 1, 100, 85),
+		};
+		this.canvas = $('view');
+		this.overlay = $('overlay');
+		this.octx = this.overlay.getContext('2d');
+		this.frames = new FrameView(this.canvas, (m, t, skipped) =>
+			this.drawn(m, t, skipped));
+		this.meter = new Meter();
+		this.camera = new Camera();
+		this.conn = new Connection(this.cfg.ws, (m) => this.handle(m),
+			(s, why) => this.connState(s, why));
+		this.reset();
+		this.framesDrawn = 0;
+		this.framesSkipped = 0;
+		this.retryMs = 500;
+		this.installInput();
+		new ResizeObserver(() => this.resize()).observe($('stage'));
+		setInterval(() => this.tick(), 250);
+		this.conn.open();
+	}
+
+	/* Everything tied to one connection. */
+	reset() {
+		this.welcome = null;
+		this.info = null;
+		this.scene = null;
+		this.order = 0n;
+		this.view = null;
+		this.selected = 0;
+		this.lastEdits = new Map(); /* member id -> { order, node, at } */
+		this.lastEdit = null;
+		this.lastRemoteEdit = null;
+		this.editSent = new Map(); /* my EDIT seq -> time sent */
+		this.awaitFrame = []; /* { order, sentAt } of my applied edits */
+		this.inflight = 0; /* seq of my interacting EDIT not yet applied */
+		this.pendingEdit = null; /* the newest edit waiting for it */
+		this.picks = new Map(); /* PICK seq -> resolve */
+		this.drag = null;
+		this.cameraDirty = false;
+	}
+
+	/* ---- connection and messages ---- */
+
+	connState(s, why) {
+		const el = $('conn');
+		if (s === 'open') {
+			el.textContent = 'connected';
+			el.className = 'conn up';
+			this.retryMs = 500;
+			this.conn.send(P.MSG.HELLO, { version_min: 1, version_max: 1,
+				encodings: P.ENCODINGS_ALL, max_frame_bytes: 0,
+				client_name: this.cfg.name, token: '' });
+			return;
+		}
+		if (s === 'error') {
+			this.say(why);
+			return;
+		}
+		el.textContent = `disconnected (${why}) – retrying`;
+		el.className = 'conn down';
+		for (const resolve of this.picks.values()) {
+			resolve(null);
+		}
+		this.reset();
+		this.renderPanel();
+		setTimeout(() => this.conn.open(), this.retryMs);
+		this.retryMs = Math.min(this.retryMs * 2, 8000);
+	}
+
+	say(text) {
+		$('message').textContent = text;
+		clearTimeout(this.sayTimer);
+		this.sayTimer = setTimeout(() => {
+			$('message').textContent = '';
+		}, 6000);
+	}
+
+	handle(m) {
+		switch (m.type) {
+		case P.MSG.WELCOME:
+			this.welcome = m;
+			this.conn.send(P.MSG.SESSION_JOIN, { role: this.cfg.role,
+				name: this.cfg.session });
+			break;
+		case P.MSG.SESSION_INFO:
+			this.info = m;
+			$('session').textContent = `session ${m.name}`;
+			if (!this.view) {
+				this.resize(true);
+				if (this.cameraMoved) {
+					/* Rejoined: the server starts from the session's
+					 * camera, this page keeps its own. */
+					this.sendCamera(false);
+				}
+			}
+			this.renderMembers();
+			break;
+		case P.MSG.SCENE_STATE:
+			this.sceneState(m);
+			break;
+		case P.MSG.EDIT_APPLIED:
+			this.editApplied(m);
+			break;
+		case P.MSG.FRAME:
+			this.frames.push(m, performance.now());
+			break;
+		case P.MSG.PICK_RESULT: {
+			const resolve = this.picks.get(m.seq);
+			this.picks.delete(m.seq);
+			if (resolve) {
+				resolve(m);
+			}
+			break;
+		}
+		case P.MSG.PING:
+			this.conn.send(P.MSG.PONG, { stamp: m.stamp });
+			break;
+		case P.MSG.ERROR:
+			this.serverError(m);
+			break;
+		default:
+			break;
+		}
+	}
+
+	serverError(m) {
+		this.say(`${P.errName(m.code)}: ${m.text}`);
+		if (m.seq === this.inflight) {
+			/* The server refused my interacting edit: let the next one go. */
+			this.inflight = 0;
+			this.flushEdit();
+		}
+		const resolve = this.picks.get(m.seq);
+		if (resolve) {
+			this.picks.delete(m.seq);
+			resolve(null);
+		}
+		if (m.code === P.ERR.EPERM && !this.info &&
+			this.cfg.role === P.ROLE.EDITOR) {
+			/* The token grants viewing only: look, do not touch. */
+			this.cfg.role = P.ROLE.VIEWER;
+			this.conn.send(P.MSG.SESSION_JOIN, { role: this.cfg.role,
+				name: this.cfg.session });
+		}
+		if (m.code === P.ERR.ENOSESSION && !this.info) {
+			/* The session does not exist yet: an editor creates it. */
+			if (this.cfg.role === P.ROLE.EDITOR) {
+				this.conn.send(P.MSG.SESSION_CREATE, { role: this.cfg.role,
+					name: this.cfg.session });
+			}
+		}
+	}
+
+	sceneState(m) {
+		try {
+			this.scene = P.parseScene(m.scene);
+		} catch (e) {
+			this.say(`scene not understood: ${e.message}`);
+			this.scene = null;
+			return;
+		}
+		this.order = m.order;
+		if (this.scene.camera && !this.cameraMoved) {
+			this.camera.set(this.scene.camera);
+		}
+		if (this.selected && !this.scene.byId.has(this.selected)) {
+			this.selected = 0;
+		}
+		this.renderPanel();
+	}
+
+	editApplied(m) {
+		const now = performance.now();
+		this.order = m.order;
+		const nodes = m.ops.map((op) => op.node ?? op.parent);
+		if (this.scene) {
+			try {
+				P.applyOps(this.scene, m.ops, layout);
+			} catch (e) {
+				/* Only a fresh SCENE_STATE can put it right: join
+				 * again on a new connection. */
+				this.say(`scene out of step (${e.message}); reconnecting`);
+				this.conn.close();
+				return;
+			}
+		}
+		const mine = this.info && m.author === this.info.member_id;
+		const rec = { order: m.order, author: m.author, node: nodes[0],
+			at: now, frameAt: 0, interacting: !!(m.flags &
+				P.FLAG.INTERACTING) };
+		this.lastEdits.set(m.author, rec);
+		this.lastEdit = rec;
+		if (mine) {
+			const sentAt = this.editSent.get(m.author_seq);
+			this.editSent.delete(m.author_seq);
+			if (sentAt !== undefined) {
+				this.awaitFrame.push({ order: m.order, sentAt });
+			}
+			if (m.author_seq === this.inflight) {
+				this.inflight = 0;
+				this.flushEdit();
+			}
+		} else {
+			this.lastRemoteEdit = rec;
+		}
+		this.renderMembers();
+		this.refreshSliders();
+		this.drawOverlay();
+	}
+
+	/* A frame is on screen: settle the latencies it answers. */
+	drawn(m, receivedAt, skipped) {
+		const now = performance.now();
+		/* Bytes on the wire: header, fixed fields, each rectangle's 12
+		 * bytes and data. */
+		this.meter.frame(m.rects.reduce((n, r) => n + r.data.length + 12,
+			P.HEADER_SIZE + 27), now);
+		this.framesDrawn++;
+		this.framesSkipped += skipped;
+		this.lastFrame = { frame_no: m.frame_no, order: m.order,
+			still: (m.flags & P.FLAG.STILL) !== 0, width: m.width,
+			height: m.height, image_width: m.image_width,
+			image_height: m.image_height, rects: m.rects.length,
+			encoding: m.encoding, at: now };
+		while (this.awaitFrame.length && this.awaitFrame[0].order <=
+			m.order) {
+			const a = this.awaitFrame.shift();
+			this.meter.latency(now - a.sentAt);
+			this.lastLatency = now - a.sentAt;
+		}
+		for (const rec of this.lastEdits.values()) {
+			if (!rec.frameAt && rec.order <= m.order) {
+				rec.frameAt = now;
+			}
+		}
+		this.drawOverlay();
+	}
+
+	/* ---- view, camera, edits ---- */
+
+	resize(force = false) {
+		const stage = $('stage');
+		const max = this.welcome ? this.welcome.max_dim : 4096;
+		const w = Math.max(1, Math.min(max, Math.round(stage.clientWidth)));
+		const h = Math.max(1, Math.min(max, Math.round(stage.clientHeight)));
+		if (!force && this.view && this.view.width === w &&
+			this.view.height === h) {
+			return;
+		}
+		for (const c of [this.canvas, this.overlay]) {
+			c.width = w;
+			c.height = h;
+		}
+		this.frames.show();
+		this.drawOverlay();
+		if (!this.info) {
+			return;
+		}
+		this.view = { width: w, height: h };
+		/* Resizing sends many sizes in a row: the last one counts. */
+		clearTimeout(this.viewTimer);
+		this.viewTimer = setTimeout(() => this.conn.send(P.MSG.VIEW, {
+			width: w, height: h, encoding: this.cfg.encoding,
+			quality_interactive: Math.min(this.cfg.quality, 70),
+			quality_still: this.cfg.quality, downscale: this.cfg.downscale,
+		}), force ? 0 : 120);
+	}
+
+	sendCamera(interacting) {
+		this.cameraMoved = true;
+		this.conn.send(P.MSG.CAMERA, this.camera.msg(),
+			interacting ? P.FLAG.INTERACTING : 0);
+		this.drawOverlay();
+	}
+
+	/* Queues a SET of node's fields. Interacting edits go one at a time
+	 * (the next when the server has applied the last), the newest values
+	 * replacing any not yet sent, so a slow server is never flooded and
+	 * never lags behind the mouse; a final edit goes at once. */
+	edit(node, fields, interacting) {
+		if (!this.info || this.info.role !== P.ROLE.EDITOR) {
+			this.say('viewers cannot edit');
+			return;
+		}
+		this.pendingEdit = { node, fields, interacting };
+		if (!interacting || !this.inflight) {
+			this.flushEdit();
+		}
+	}
+
+	flushEdit() {
+		const e = this.pendingEdit;
+		if (!e) {
+			return;
+		}
+		this.pendingEdit = null;
+		const ops = [{ kind: P.EDIT.SET, node: e.node, fields: e.fields }];
+		let seq;
+		try {
+			seq = this.conn.send(P.MSG.EDIT, { ops },
+				e.interacting ? P.FLAG.INTERACTING : 0);
+		} catch (err) {
+			this.say(`edit not sent: ${err.message}`);
+			return;
+		}
+		if (seq) {
+			this.editSent.set(seq, performance.now());
+			if (e.interacting) {
+				this.inflight = seq;
+			}
+		}
+	}
+
+	pick(x, y) {
+		return new Promise((resolve) => {
+			const seq = this.conn.send(P.MSG.PICK, { x, y });
+			if (!seq) {
+				resolve(null);
+				return;
+			}
+			this.picks.set(seq, resolve);
+		});
+	}
+
+	/* ---- input ---- */
+
+	viewXY(e) {
+		const r = this.canvas.getBoundingClientRect();
+		const w = this.view ? this.view.width : this.canvas.width;
+		const h = this.view ? this.view.height : this.canvas.height;
+		return {
+			x: Math.min(w - 1, Math.max(0, Math.floor((e.clientX - r.left) *
+				w / r.width))),
+			y: Math.min(h - 1, Math.max(0, Math.floor((e.clientY - r.top) *
+				h / r.height))),
+		};
+	}
+
+	installInput() {
+		const c = this.canvas;
+		c.addEventListener('contextmenu', (e) => e.preventDefault());
+		c.addEventListener('pointerdown', (e) => this.pointerDown(e));
+		c.addEventListener('pointermove', (e) => this.pointerMove(e));
+		c.addEventListener('pointerup', (e) => this.pointerUp(e));
+		c.addEventListener('pointercancel', (e) => this.pointerUp(e));
+		c.addEventListener('wheel', (e) => {
+			e.preventDefault();
+			this.camera.zoom(e.deltaY);
+			this.sendCamera(true);
+			clearTimeout(this.wheelTimer);
+			this.wheelTimer = setTimeout(() => this.sendCamera(false), 200);
+		}, { passive: false });
+		requestAnimationFrame(() => this.animate());
+	}
+
+	pointerDown(e) {
+		if (this.drag || !this.info) {
+			return;
+		}
+		this.canvas.setPointerCapture(e.pointerId);
+		this.canvas.classList.add('dragging');
+		const p = this.viewXY(e);
+		const d = { id: e.pointerId, start: p, last: p, now: p, moved: false,
+			mode: e.button === 2 || e.button === 1 || e.shiftKey ? 'pan'
+				: 'pending' };
+		this.drag = d;
+		if (d.mode === 'pan') {
+			return;
+		}
+		/* Whether this press starts a camera orbit or a shape drag
+		 * depends on what is under it: ask the server. */
+		this.pick(p.x, p.y).then((r) => {
+			if (this.drag !== d) {
+				return;
+			}
+			const n = r && r.node && this.scene ? this.scene.byId.get(r.node)
+				: null;
+			if (n && !n.isOp && this.info.role === P.ROLE.EDITOR) {
+				this.select(r.node);
+				const z = dot(sub(r.position, this.camera.eye),
+					this.camera.basis().f);
+				d.mode = 'move';
+				d.node = r.node;
+				d.origin = n.translate.slice();
+				d.perPixel = this.camera.pixelSize(z, this.view.height);
+			} else {
+				if (n && !n.isOp) {
+					this.select(r.node);
+				} else if (!d.moved) {
+					this.select(0);
+				}
+				d.mode = 'orbit';
+			}
+			this.dragStep();
+		});
+	}
+
+	pointerMove(e) {
+		const d = this.drag;
+		if (!d || d.id !== e.pointerId) {
+			return;
+		}
+		d.now = this.viewXY(e);
+		if (Math.abs(d.now.x - d.start.x) + Math.abs(d.now.y - d.start.y) >
+			2) {
+			d.moved = true;
+		}
+	}
+
+	/* Applies the pointer's motion since the last step; called once per
+	 * animation frame so that bursts of mouse events cost one message. */
+	dragStep(final = false) {
+		const d = this.drag;
+		if (!d || d.mode === 'pending') {
+			return;
+		}
+		const dx = d.now.x - d.last.x, dy = d.now.y - d.last.y;
+		if (!dx && !dy && !final) {
+			return;
+		}
+		d.last = d.now;
+		if (d.mode === 'orbit') {
+			this.camera.orbit(dx, dy);
+			this.sendCamera(!final);
+		} else if (d.mode === 'pan') {
+			this.camera.pan(dx, dy, this.view ? this.view.height : 1);
+			this.sendCamera(!final);
+		} else if (d.mode === 'move') {
+			/* Through the hit point, parallel to the screen. */
+			const { r, u } = this.camera.basis();
+			const tx = (d.now.x - d.start.x) * d.perPixel;
+			const ty = (d.now.y - d.start.y) * d.perPixel;
+			const t = add(d.origin, add(scale(r, tx), scale(u, -ty)));
+			d.translate = t;
+			this.edit(d.node, [{ field: P.FIELD.TRANSLATE, values: t }],
+				!final);
+		}
+	}
+
+	pointerUp(e) {
+		const d = this.drag;
+		if (!d || d.id !== e.pointerId) {
+			return;
+		}
+		this.canvas.classList.remove('dragging');
+		if (d.mode === 'pending') {
+			/* Let the pick answer decide, then finish. */
+			const wait = () => {
+				if (d.mode === 'pending' && this.drag === d) {
+					setTimeout(wait, 10);
+					return;
+				}
+				this.finishDrag(d);
+			};
+			wait();
+			return;
+		}
+		this.finishDrag(d);
+	}
+
+	finishDrag(d) {
+		if (this.drag !== d) {
+			return;
+		}
+		if (d.moved) {
+			this.dragStep(true);
+		}
+		this.drag = null;
+	}
+
+	animate() {
+		this.dragStep();
+		requestAnimationFrame(() => this.animate());
+	}
+
+	/* ---- selection and panel ---- */
+
+	select(id) {
+		if (this.selected === id) {
+			return;
+		}
+		this.selected = id;
+		this.renderPanel();
+		this.drawOverlay();
+	}
+
+	/* Rough size of a primitive, for slider ranges. */
+	static radius(n) {
+		const s = n.params.reduce((a, v) => a + v * v, 0);
+		return Math.max(0.05, Math.min(Math.sqrt(s), 1e3));
+	}
+
+	/* The corners of a primitive's bounding box, in view pixels (null if
+	 * one is behind the eye). */
+	corners(n) {
+		const [lo, hi] = localBox(n);
+		const out = [];
+		for (let i = 0; i < 8; i++) {
+			const c = [i & 1 ? hi[0] : lo[0], i & 2 ? hi[1] : lo[1],
+				i & 4 ? hi[2] : lo[2]];
+			const w = add(n.translate, quatRotate(n.rotate, c));
+			const p = this.camera.project(w, this.view.width,
+				this.view.height);
+			if (!p) {
+				return null;
+			}
+			out.push(p);
+		}
+		return out;
+	}
+
+	/* Where a primitive appears: its centre and half the diagonal of its
+	 * box's screen extent, in view pixels; null when off to the side or
+	 * behind. */
+	project(id) {
+		const n = this.scene?.byId.get(id);
+		if (!n || n.isOp || !this.view) {
+			return null;
+		}
+		const c = this.camera.project(n.translate, this.view.width,
+			this.view.height);
+		const k = this.corners(n);
+		if (!c || !k) {
+			return null;
+		}
+		const xs = k.map((p) => p.x), ys = k.map((p) => p.y);
+		const r = Math.hypot(Math.max(...xs) - Math.min(...xs),
+			Math.max(...ys) - Math.min(...ys)) / 2;
+		return { x: c.x, y: c.y, r };
+	}
+
+	/* Outlines the selected primitive's bounding box on the overlay. */
+	drawOverlay() {
+		const ctx = this.octx;
+		ctx.clearRect(0, 0, this.overlay.width, this.overlay.height);
+		const n = this.selected ? this.scene?.byId.get(this.selected) : null;
+		if (!n || n.isOp || !this.view) {
+			return;
+		}
+		const k = this.corners(n);
+		if (!k) {
+			return;
+		}
+		const sx = this.overlay.width / this.view.width;
+		const sy = this.overlay.height / this.view.height;
+		ctx.lineWidth = 1.5;
+		ctx.strokeStyle = '#f2b84b';
+		ctx.setLineDash([5, 3]);
+		ctx.beginPath();
+		for (const [a, b] of BOX_EDGES) {
+			ctx.moveTo(k[a].x * sx, k[a].y * sy);
+			ctx.lineTo(k[b].x * sx, k[b].y * sy);
+		}
+		ctx.stroke();
+		ctx.setLineDash([]);
+		const top = k.reduce((a, p) => (p.y < a.y ? p : a));
+		ctx.font = '12px system-ui, sans-serif';
+		ctx.fillStyle = '#f2b84b';
+		ctx.fillText(`${kindName(n)} #${n.id}`, top.x * sx + 6,
+			Math.max(14, top.y * sy - 6));
+	}
+
+	memberName(id) {
+		const m = this.info?.members.find((k) => k.id === id);
+		return m ? m.name || `member ${id}` : `member ${id}`;
+	}
+
+	renderMembers() {
+		const ul = $('members');
+		ul.textContent = '';
+		if (!this.info) {
+			return;
+		}
+		const last = this.lastEdit ? this.lastEdit.author : 0;
+		for (const m of this.info.members) {
+			const li = document.createElement('li');
+			const name = document.createElement('span');
+			name.textContent = (m.name || `member ${m.id}`) +
+				(m.id === this.info.member_id ? ' (you)' : '');
+			const role = document.createElement('span');
+			role.className = 'role';
+			role.textContent = m.role === P.ROLE.EDITOR ? 'editor' : 'viewer';
+			li.append(name, role);
+			if (m.id === last) {
+				const mark = document.createElement('span');
+				mark.className = 'last';
+				mark.textContent = '✎ last edit';
+				li.append(mark);
+			}
+			li.dataset.member = String(m.id);
+			ul.append(li);
+		}
+		this.renderLastEdit();
+	}
+
+	renderLastEdit() {
+		const e = this.lastEdit;
+		if (!e) {
+			$('lastedit').textContent = 'no edit yet';
+			return;
+		}
+		const n = this.scene?.byId.get(e.node);
+		const ago = ((performance.now() - e.at) / 1000).toFixed(1);
+		$('lastedit').textContent = `last edit: ${this.memberName(e.author)}` +
+			` · ${n ? kindName(n) + ' #' + n.id : 'node ' + e.node}` +
+			` · order ${e.order} · ${ago} s ago`;
+	}
+
+	renderPanel() {
+		const box = $('sliders');
+		box.textContent = '';
+		this.sliders = [];
+		const n = this.selected ? this.scene?.byId.get(this.selected) : null;
+		if (!n) {
+			$('selname').textContent = 'click a shape to select it';
+			return;
+		}
+		$('selname').textContent = `${kindName(n)} #${n.id}` +
+			(n.stale ? ' (parameters out of date)' : '');
+		const size = App.radius(n);
+		const group = (title) => {
+			this.group = title.split(' ')[0];
+			const g = document.createElement('div');
+			g.className = 'group';
+			g.textContent = title;
+			box.append(g);
+		};
+		group('position');
+		['x', 'y', 'z'].forEach((c, i) => this.slider(box, c,
+			() => n.translate[i], n.translate[i] - 3 * size - 1,
+			n.translate[i] + 3 * size + 1, (v, live) => {
+				const t = n.translate.slice();
+				t[i] = v;
+				this.edit(n.id, [{ field: P.FIELD.TRANSLATE, values: t }],
+					live);
+			}));
+		const lay = layout(n.kind);
+		if (lay && lay.reduce((a, d) => a + d.count, 0) === n.params.length) {
+			group('shape');
+			lay.forEach((d, k) => {
+				for (let i = 0; i < d.count; i++) {
+					const at = d.offset + i;
+					const v0 = n.params[at];
+					const [lo, hi] = d.rule === 'deg' ? [1, 359]
+						: d.rule === 'free' ? [v0 - 2 * size - 1,
+							v0 + 2 * size + 1]
+							: [d.rule === 'pos' ? 0.005 : 0,
+								Math.max(1, 3 * v0)];
+					const label = d.count > 1 ? `${d.name}.${'xyz'[i]}` : d.name;
+					this.slider(box, label, () => n.params[at], lo, hi,
+						(v, live) => {
+							const vals = n.params.slice(d.offset,
+								d.offset + d.count);
+							vals[i] = v;
+							this.edit(n.id, [{ field: P.FIELD.PARAM0 + k,
+								values: vals }], live);
+						});
+				}
+			});
+		} else if (n.params.length) {
+			group(`shape (${n.params.length} values, layout unknown)`);
+		}
+		group('colour');
+		const col = () => n.color ?? [0.8, 0.8, 0.8];
+		['r', 'g', 'b'].forEach((c, i) => this.slider(box, c,
+			() => col()[i], 0, 1, (v, live) => {
+				const rgb = col().slice();
+				rgb[i] = v;
+				this.edit(n.id, [{ field: P.FIELD.COLOR, values: rgb }], live);
+			}));
+		const op = n.parent;
+		if (op && op.kind >= 4) {
+			group(`${kindName(op)} #${op.id}`);
+			this.slider(box, 'blend', () => op.blend, 0.005,
+				Math.max(1, 3 * op.blend), (v, live) => {
+					/* The range must stay above blend / 6 (G is continuous
+					 * for range >= blend): raise it along when needed. */
+					const fields = [{ field: P.FIELD.BLEND, values: [v] }];
+					if (op.range < v) {
+						fields.push({ field: P.FIELD.RANGE, values: [v] });
+					}
+					this.edit(op.id, fields, live);
+				});
+		}
+	}
+
+	/* One slider: input events edit with INTERACTING, change ends it. */
+	slider(box, label, get, lo, hi, send) {
+		const row = document.createElement('div');
+		row.className = 'slider';
+		const l = document.createElement('label');
+		l.textContent = label;
+		const input = document.createElement('input');
+		input.type = 'range';
+		input.min = String(lo);
+		input.max = String(hi);
+		input.step = String((hi - lo) / 500);
+		input.value = String(get());
+		input.setAttribute('aria-label', label);
+		input.dataset.key = `${this.group}/${label}`;
+		const out = document.createElement('output');
+		out.textContent = get().toFixed(3);
+		input.addEventListener('input', () => {
+			out.textContent = Number(input.value).toFixed(3);
+			send(Number(input.value), true);
+		});
+		input.addEventListener('change', () => send(Number(input.value),
+			false));
+		row.append(l, input, out);
+		box.append(row);
+		this.sliders.push({ input, out, get });
+	}
+
+	/* New values from the session, except under the user's own hand. */
+	refreshSliders() {
+		for (const s of this.sliders ?? []) {
+			if (document.activeElement !== s.input) {
+				s.input.value = String(s.get());
+				s.out.textContent = s.get().toFixed(3);
+			}
+		}
+		const n = this.selected ? this.scene?.byId.get(this.selected) : null;
+		if (this.selected && !n) {
+			this.selected = 0;
+			this.renderPanel();
+		}
+	}
+
+	/* ---- the overlay numbers ---- */
+
+	tick() {
+		const now = performance.now();
+		$('fps').textContent = String(this.meter.fps(now));
+		const l = this.meter.latencies;
+		if (l.length) {
+			const avg = l.reduce((a, b) => a + b, 0) / l.length;
+			$('latency').textContent = `${this.lastLatency.toFixed(0)} ms ` +
+				`(avg ${avg.toFixed(0)})`;
+		}
+		const kb = this.meter.kbPerFrame();
+		$('kb').textContent = kb ? kb.toFixed(1) : '–';
+		const f = this.lastFrame;
+		if (f) {
+			$('frameinfo').textContent = `#${f.frame_no} · ` +
+				`${f.image_width}×${f.image_height}` +
+				(f.image_width !== f.width ? ` → ${f.width}×${f.height}` : '') +
+				` · ${['', 'jpeg', 'png', 'raw'][f.encoding]}` +
+				` · ${f.rects} rect${f.rects > 1 ? 's' : ''}` +
+				(f.still ? ' · still' : '') + ` · order ${f.order}`;
+		}
+		this.renderLastEdit();
+	}
+
+	/* ---- for tests and the console ---- */
+
+	state() {
+		return {
+			connected: !!this.info,
+			memberId: this.info?.member_id ?? 0,
+			members: this.info?.members.map((m) => ({ ...m })) ?? [],
+			order: String(this.order),
+			framesDrawn: this.framesDrawn,
+			lastFrame: this.lastFrame ? { ...this.lastFrame,
+				order: String(this.lastFrame.order) } : null,
+			selected: this.selected,
+			lastEdit: this.lastEdit ? { ...this.lastEdit,
+				order: String(this.lastEdit.order) } : null,
+			lastRemoteEdit: this.lastRemoteEdit ? { ...this.lastRemoteEdit,
+				order: String(this.lastRemoteEdit.order) } : null,
+			latencies: this.meter.latencies.slice(),
+			view: this.view,
+		};
+	}
+}
+
+function clampInt(s, lo, hi, def) {
+	const v = Number.parseInt(s ?? '', 10);
+	return Number.isFinite(v) ? Math.min(hi, Math.max(lo, v)) : def;
+}
+
+/* ?ws= takes a URL or a port; by default websockify listens on the page's
+ * port plus one (deploy/web-demo.sh). */
+function wsUrl(v) {
+	const host = location.hostname || '127.0.0.1';
+	if (v && /^wss?:\/\//.test(v)) {
+		return v;
+	}
+	const port = v && /^\d+$/.test(v) ? v : String(Number(location.port ||
+		80) + 1);
+	return `${location.protocol === 'https:' ? 'wss' : 'ws'}://${host}:${port}/`;
+}
+
+const app = new App();
+window.blobcast = {
+	state: () => app.state(),
+	/* View pixel of a node's centre and its ring radius, or null. */
+	project: (id) => app.project(id),
+	primitives: () => app.scene ? [...app.scene.byId.values()]
+		.filter((n) => !n.isOp).map((n) => ({ id: n.id, kind: kindName(n),
+			translate: n.translate.slice() })) : [],
+	node: (id) => {
+		const n = app.scene?.byId.get(id);
+		return n ? { id: n.id, kind: kindName(n), translate: n.isOp ? null
+			: n.translate.slice(), params: n.isOp ? null : n.params.slice() }
+			: null;
+	},
+	pick: (x, y) => app.pick(x, y).then((r) => r ? { node: r.node,
+		position: r.position, depth: r.depth } : null),
+};

@@ -1,0 +1,214 @@
+/*
+ * The processes the browser tests and the latency benchmark stand up, all
+ * on 127.0.0.1 and all stopped again by stopAll(): blobcastd on a free
+ * port with a throw-away data directory, websockify in front of it, and a
+ * static file server for client/web/ (in this process: node's http module,
+ * serving only the page's own files). Also the prerequisite check that
+ * turns a missing tool into a skip with a message naming it.
+ */
+import { spawn, spawnSync } from 'node:child_process';
+import { existsSync, mkdtempSync, readFileSync, rmSync, statSync } from 'node:fs';
+import { createServer } from 'node:http';
+import net from 'node:net';
+import { tmpdir } from 'node:os';
+import { dirname, extname, join, resolve } from 'node:path';
+import { fileURLToPath } from 'node:url';
+
+export const HERE = dirname(fileURLToPath(import.meta.url));
+export const ROOT = resolve(HERE, '..', '..');
+export const WEB = join(ROOT, 'client', 'web');
+export const CHROMIUM = '/usr/bin/chromium';
+/* PLATFORM.md: headless Debian chromium, no sandbox (root in CI), nothing
+ * that reaches out to the network. */
+export const CHROMIUM_ARGS = ['--headless', '--no-sandbox', '--disable-gpu',
+	'--disable-background-networking', '--disable-component-update',
+	'--disable-sync', '--no-first-run'];
+
+const children = [];
+const cleanups = [];
+
+/* The path of a program on PATH, or null. */
+export function which(prog) {
+	const r = spawnSync('sh', ['-c', `command -v ${prog}`], {
+		encoding: 'utf8' });
+	return r.status === 0 ? r.stdout.trim() : null;
+}
+
+/* blobcastd: --blobcastd PATH, $BLOBCASTD, or the first build folder that has
+ * one. */
+export function findDaemon(argv) {
+	const i = argv.indexOf('--blobcastd');
+	if (i >= 0 && argv[i + 1]) {
+		return argv[i + 1];
+	}
+	if (process.env.BLOBCASTD) {
+		return process.env.BLOBCASTD;
+	}
+	for (const d of ['build', 'build-web', 'build-release']) {
+		const p = join(ROOT, d, 'server', 'blobcastd');
+		if (existsSync(p)) {
+			return p;
+		}
+	}
+	return join(ROOT, 'build', 'server', 'blobcastd');
+}
+
+/* Names what is missing for a test that needs the given parts. */
+export function missing({ daemon, browser = false, proxy = true }) {
+	const out = [];
+	if (browser && !existsSync(CHROMIUM)) {
+		out.push(`${CHROMIUM} (apt package chromium)`);
+	}
+	if (browser && !existsSync(join(HERE, 'node_modules', 'playwright-core'))) {
+		out.push('tests/web/node_modules/playwright-core (npm ci --prefix ' +
+			'tests/web)');
+	}
+	if (proxy && !which('websockify')) {
+		out.push('websockify (apt package websockify)');
+	}
+	let ok = false;
+	try {
+		ok = statSync(daemon).isFile();
+	} catch {
+		ok = false;
+	}
+	if (!ok) {
+		out.push(`blobcastd (not built: ${daemon})`);
+	}
+	return out;
+}
+
+/* A port nobody listens on right now. */
+export function freePort() {
+	return new Promise((res, rej) => {
+		const s = net.createServer();
+		s.on('error', rej);
+		s.listen(0, '127.0.0.1', () => {
+			const { port } = s.address();
+			s.close(() => res(port));
+		});
+	});
+}
+
+function started(child, name) {
+	children.push(child);
+	child.name = name;
+	child.log = '';
+	const keep = (d) => {
+		child.log = (child.log + d.toString()).slice(-8000);
+	};
+	child.stdout?.on('data', keep);
+	child.stderr?.on('data', keep);
+	return child;
+}
+
+/* Resolves when text appears in the child's output; rejects when it exits
+ * first or after ms. */
+function waitOutput(child, text, ms) {
+	return new Promise((res, rej) => {
+		const t = setTimeout(() => rej(new Error(`${child.name}: no ` +
+			`"${text}" within ${ms} ms; output:\n${child.log}`)), ms);
+		const check = () => {
+			if (child.log.includes(text)) {
+				clearTimeout(t);
+				res();
+			}
+		};
+		child.stdout?.on('data', check);
+		child.stderr?.on('data', check);
+		child.on('exit', (code) => {
+			clearTimeout(t);
+			rej(new Error(`${child.name} exited (${code}):\n${child.log}`));
+		});
+		check();
+	});
+}
+
+/* Resolves once a TCP connection to port succeeds. */
+export async function waitPort(port, ms = 10000) {
+	const end = Date.now() + ms;
+	for (;;) {
+		const ok = await new Promise((res) => {
+			const s = net.connect(port, '127.0.0.1');
+			s.on('connect', () => {
+				s.destroy();
+				res(true);
+			});
+			s.on('error', () => res(false));
+		});
+		if (ok) {
+			return;
+		}
+		if (Date.now() > end) {
+			throw new Error(`nothing listens on ${port} after ${ms} ms`);
+		}
+		await new Promise((r) => setTimeout(r, 50));
+	}
+}
+
+/* blobcastd with the default session, on a free port. */
+export async function startDaemon(path, extra = []) {
+	const port = await freePort();
+	const data = mkdtempSync(join(tmpdir(), 'blobcast-web-'));
+	cleanups.push(() => rmSync(data, { recursive: true, force: true }));
+	const child = started(spawn(path, ['--listen', `127.0.0.1:${port}`,
+		'--data', data, ...extra], { stdio: ['ignore', 'pipe', 'pipe'] }),
+	'blobcastd');
+	await waitOutput(child, 'listening on', 30000);
+	return { port, child };
+}
+
+/* websockify from a free port to the daemon's. */
+export async function startProxy(target) {
+	const port = await freePort();
+	const child = started(spawn(which('websockify'), [`127.0.0.1:${port}`,
+		`127.0.0.1:${target}`], { stdio: ['ignore', 'pipe', 'pipe'] }),
+	'websockify');
+	await waitPort(port);
+	return { port, child };
+}
+
+const TYPES = { '.html': 'text/html; charset=utf-8', '.js': 'text/javascript',
+	'.css': 'text/css', '.json': 'application/json' };
+
+/* Serves the files of client/web/ and nothing else. */
+export async function startStatic() {
+	const files = new Set(['index.html', 'app.js', 'protocol.js',
+		'style.css']);
+	const server = createServer((req, res) => {
+		const name = new URL(req.url, 'http://x').pathname.slice(1) ||
+			'index.html';
+		if (!files.has(name)) {
+			res.writeHead(404).end();
+			return;
+		}
+		res.writeHead(200, { 'content-type': TYPES[extname(name)],
+			'cache-control': 'no-store' });
+		res.end(readFileSync(join(WEB, name)));
+	});
+	await new Promise((res) => server.listen(0, '127.0.0.1', res));
+	cleanups.push(() => server.close());
+	return { port: server.address().port, server };
+}
+
+/* Stops every child this module started (by its own pid) and removes the
+ * temporary data. */
+export async function stopAll() {
+	for (const c of children.splice(0)) {
+		if (c.exitCode === null && c.signalCode === null) {
+			const gone = new Promise((r) => c.once('exit', r));
+			c.kill('SIGTERM');
+			const t = setTimeout(() => c.kill('SIGKILL'), 3000);
+			await gone;
+			clearTimeout(t);
+		}
+	}
+	for (const f of cleanups.splice(0)) {
+		f();
+	}
+}
+
+/* The log tail of every child, for a failure report. */
+export function logs() {
+	return children.map((c) => `--- ${c.name}\n${c.log}`).join('\n');
+}
