@@ -1,0 +1,681 @@
+/*
+ * The binary scene encoding (docs/scene-format.md, quoted by PROTOCOL.md):
+ * the compact form of a scene that SCENE_LOAD and SCENE_STATE carry, and of
+ * the subtrees that structural edits insert. This file owns its encoder, its
+ * decoder and the linear-time pre-order walk both encodings use.
+ *
+ * Decoding reads untrusted bytes in two passes. The first checks everything
+ * the bytes alone decide -- lengths, counts, tags, flags, finiteness, the
+ * shape of the pre-order -- with an explicit stack bounded by
+ * BC_TREE_MAX_DEPTH, and allocates nothing but an id array sized from a count
+ * already checked against the bytes left. Only then does the second pass
+ * build the tree, where the builder validates parameters and ids. A node
+ * costs at least BC_SCENE_NODE_MIN_BYTES, so no count can make us loop or
+ * allocate beyond what the input's length pays for.
+ */
+#include "blobcast/scene.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "blobcast/alloc.h"
+
+/* ---- pre-order walk ------------------------------------------------------ */
+
+int bc_scene_walk_init(struct bc_scene_walk *w, const struct bc_tree *t)
+{
+	const struct bc_lin *l = bc_tree_lin(t);
+	memset(w, 0, sizeof(*w));
+	if (!l || l->count == 0 || bc_tree_root(t) == 0) {
+		return BC_EINVAL;
+	}
+	/* Every node is pushed exactly once. */
+	w->todo = bc_calloc(bc_tree_node_count(t), sizeof(uint32_t));
+	if (!w->todo) {
+		return BC_ENOMEM;
+	}
+	w->t = t;
+	w->l = l;
+	w->todo[0] = l->count - 1;
+	w->ntodo = 1;
+	return 0;
+}
+
+bool bc_scene_walk_next(struct bc_scene_walk *w, struct bc_scene_node *out)
+{
+	const struct bc_lin *l = w->l;
+	uint32_t s, id, k = 0;
+	memset(out, 0, sizeof(*out));
+	if (!w->ntodo) {
+		return false;
+	}
+	s = w->todo[--w->ntodo];
+	id = l->node_id[s];
+	out->id = id;
+	out->index = w->index++;
+	out->depth = w->nopen;
+	if (w->nopen) {
+		w->left[w->nopen - 1]--;
+	}
+	bc_tree_get(w->t, id, &out->prim, &out->op);
+	if (!bc_lin_is_leaf(l, s)) {
+		/*
+		 * An n-ary operator is the left fold ((c0 op c1) op c2)...
+		 * whose binary nodes all carry its id. Post-order puts a binary
+		 * node's right operand just before it (ending at s - 1) and its
+		 * left operand just before that operand's first slot. Going
+		 * down the left spine meets the children last to first: pushed
+		 * in that order, c0 ends on top of the stack.
+		 */
+		while (!bc_lin_is_leaf(l, s) && l->node_id[s] == id) {
+			w->todo[w->ntodo++] = s - 1;
+			s = l->first[s - 1] - 1;
+			k++;
+		}
+		w->todo[w->ntodo++] = s;
+		k++;
+		out->is_op = true;
+		out->nchildren = k;
+		w->left[w->nopen++] = k;
+		return true;
+	}
+	while (w->nopen && w->left[w->nopen - 1] == 0) {
+		w->nopen--;
+		out->closes++;
+	}
+	return true;
+}
+
+void bc_scene_walk_finish(struct bc_scene_walk *w)
+{
+	bc_free(w->todo);
+	memset(w, 0, sizeof(*w));
+}
+
+uint32_t bc_scene_prim_nfloats(enum bc_prim kind)
+{
+	const struct bc_prim_info *info = bc_prim_info(kind);
+	uint32_t n = 0;
+	if (!info || kind == BC_PRIM_INVALID) {
+		return 0;
+	}
+	for (uint32_t i = 0; i < info->nparams; i++) {
+		uint32_t end = (uint32_t)info->params[i].offset +
+			       info->params[i].count;
+		if (end > n) {
+			n = end;
+		}
+	}
+	return n;
+}
+
+/* ---- writing ------------------------------------------------------------- */
+
+struct wbuf {
+	uint8_t *p;
+	size_t len, cap;
+	bool failed;
+};
+
+static bool wb_room(struct wbuf *b, size_t n)
+{
+	size_t cap;
+	uint8_t *grown;
+	if (b->failed) {
+		return false;
+	}
+	if (n <= b->cap - b->len) {
+		return true;
+	}
+	cap = b->cap ? b->cap : 256;
+	while (cap - b->len < n) {
+		if (cap > SIZE_MAX / 2) {
+			b->failed = true;
+			return false;
+		}
+		cap *= 2;
+	}
+	grown = bc_realloc(b->p, cap);
+	if (!grown) {
+		b->failed = true;
+		return false;
+	}
+	b->p = grown;
+	b->cap = cap;
+	return true;
+}
+
+static void put_u8(struct wbuf *b, uint8_t v)
+{
+	if (wb_room(b, 1)) {
+		b->p[b->len++] = v;
+	}
+}
+
+static void put_u32(struct wbuf *b, uint32_t v)
+{
+	if (wb_room(b, 4)) {
+		b->p[b->len++] = (uint8_t)v;
+		b->p[b->len++] = (uint8_t)(v >> 8);
+		b->p[b->len++] = (uint8_t)(v >> 16);
+		b->p[b->len++] = (uint8_t)(v >> 24);
+	}
+}
+
+static void put_f32(struct wbuf *b, float f)
+{
+	uint32_t v;
+	memcpy(&v, &f, sizeof(v));
+	put_u32(b, v);
+}
+
+static void put_f32s(struct wbuf *b, const float *f, uint32_t n)
+{
+	for (uint32_t i = 0; i < n; i++) {
+		put_f32(b, f[i]);
+	}
+}
+
+static void put_node(struct wbuf *b, const struct bc_scene_node *n)
+{
+	if (n->is_op) {
+		put_u8(b, (uint8_t)(BC_SCENE_TAG_OP | (uint32_t)n->op.kind));
+		put_u32(b, n->id);
+		put_f32(b, n->op.blend);
+		put_f32(b, n->op.range);
+		put_u32(b, n->nchildren);
+		return;
+	}
+	{
+		uint32_t nf = bc_scene_prim_nfloats(n->prim.kind);
+		put_u8(b, (uint8_t)n->prim.kind);
+		put_u32(b, n->id);
+		put_f32s(b, n->prim.translate, 3);
+		put_f32s(b, n->prim.rotate, 4);
+		put_u8(b, n->prim.has_color ? 1 : 0);
+		if (n->prim.has_color) {
+			put_f32s(b, n->prim.color, 3);
+		}
+		put_u8(b, (uint8_t)nf);
+		put_f32s(b, n->prim.params, nf);
+	}
+}
+
+static int encode(const struct bc_tree *t, const struct bc_camera *cam,
+		  bool scene, uint8_t **out, size_t *len)
+{
+	struct bc_scene_walk w;
+	struct bc_scene_node n;
+	struct wbuf b = {0};
+	int rc;
+	*out = NULL;
+	*len = 0;
+	if ((rc = bc_scene_walk_init(&w, t))) {
+		return rc;
+	}
+	/* A sphere node is 51 bytes; start near the final size. */
+	wb_room(&b, 16 + 48 * (size_t)bc_tree_node_count(t));
+	if (scene) {
+		put_u8(&b, cam ? BC_SCENE_FLAG_CAMERA : 0);
+		if (cam) {
+			put_f32s(&b, cam->eye, 3);
+			put_f32s(&b, cam->target, 3);
+			put_f32s(&b, cam->up, 3);
+			put_f32(&b, cam->fov_y_deg);
+		}
+	}
+	put_u32(&b, bc_tree_node_count(t));
+	while (!b.failed && bc_scene_walk_next(&w, &n)) {
+		put_node(&b, &n);
+	}
+	bc_scene_walk_finish(&w);
+	if (b.failed) {
+		bc_free(b.p);
+		return BC_ENOMEM;
+	}
+	*out = b.p;
+	*len = b.len;
+	return 0;
+}
+
+int bc_scene_encode(const struct bc_tree *t, const struct bc_camera *cam,
+		    uint8_t **out, size_t *len)
+{
+	return encode(t, cam, true, out, len);
+}
+
+int bc_tree_encode(const struct bc_tree *t, uint8_t **out, size_t *len)
+{
+	return encode(t, NULL, false, out, len);
+}
+
+/* ---- reading ------------------------------------------------------------- */
+
+struct rd {
+	const uint8_t *p;
+	size_t len, pos;
+};
+
+static size_t rd_left(const struct rd *r)
+{
+	return r->len - r->pos;
+}
+
+/* Each get_* checks the bytes left first and fails with
+ * BC_EPROTO_TRUNCATED naming the node and field. */
+static int need(const struct rd *r, size_t n, uint32_t node, const char *what,
+		struct bc_errinfo *ei)
+{
+	if (n > rd_left(r)) {
+		return bc_errinfo_set(ei, BC_EPROTO_TRUNCATED,
+				      "node %u: %s needs %zu bytes, %zu left",
+				      node, what, n, rd_left(r));
+	}
+	return 0;
+}
+
+static uint8_t take_u8(struct rd *r)
+{
+	return r->p[r->pos++];
+}
+
+static uint32_t take_u32(struct rd *r)
+{
+	uint32_t v = (uint32_t)r->p[r->pos] | (uint32_t)r->p[r->pos + 1] << 8 |
+		     (uint32_t)r->p[r->pos + 2] << 16 |
+		     (uint32_t)r->p[r->pos + 3] << 24;
+	r->pos += 4;
+	return v;
+}
+
+static float take_f32(struct rd *r)
+{
+	uint32_t v = take_u32(r);
+	float f;
+	memcpy(&f, &v, sizeof(f));
+	return f;
+}
+
+static int get_u8(struct rd *r, uint8_t *v, uint32_t node, const char *what,
+		  struct bc_errinfo *ei)
+{
+	int rc = need(r, 1, node, what, ei);
+	if (!rc) {
+		*v = take_u8(r);
+	}
+	return rc;
+}
+
+static int get_u32(struct rd *r, uint32_t *v, uint32_t node, const char *what,
+		   struct bc_errinfo *ei)
+{
+	int rc = need(r, 4, node, what, ei);
+	if (!rc) {
+		*v = take_u32(r);
+	}
+	return rc;
+}
+
+/* Reads n finite floats. */
+static int get_f32s(struct rd *r, float *f, uint32_t n, uint32_t node,
+		    const char *what, struct bc_errinfo *ei)
+{
+	int rc = need(r, 4 * (size_t)n, node, what, ei);
+	if (rc) {
+		return rc;
+	}
+	for (uint32_t i = 0; i < n; i++) {
+		f[i] = take_f32(r);
+		if (!isfinite(f[i])) {
+			return bc_errinfo_set(ei, BC_ENONFINITE,
+					      "node %u: %s[%u] is not finite",
+					      node, what, i);
+		}
+	}
+	return 0;
+}
+
+/* One node as the bytes give it. */
+struct dnode {
+	uint32_t id;
+	bool is_op;
+	uint32_t nchildren;
+	struct bc_prim_data prim;
+	struct bc_op_data op;
+};
+
+/* Reads node number index of count, checking everything the bytes decide. */
+static int read_node(struct rd *r, uint32_t index, uint32_t count,
+		     struct dnode *n, struct bc_errinfo *ei)
+{
+	uint8_t tag, flag, nf;
+	int rc;
+	if ((rc = get_u8(r, &tag, index, "tag", ei)) ||
+	    (rc = get_u32(r, &n->id, index, "id", ei))) {
+		return rc;
+	}
+	n->is_op = (tag & BC_SCENE_TAG_OP) != 0;
+	if (n->is_op) {
+		uint32_t kind = tag & ~BC_SCENE_TAG_OP;
+		uint32_t after = count - 1 - index;
+		if (kind == BC_OP_INVALID || kind >= BC_OP_COUNT) {
+			return bc_errinfo_set(ei, BC_EENUM,
+					      "node %u: unknown operator tag "
+					      "0x%02x",
+					      index, tag);
+		}
+		memset(&n->op, 0, sizeof(n->op));
+		n->op.kind = (enum bc_op)kind;
+		if ((rc = get_f32s(r, &n->op.blend, 1, index, "blend", ei)) ||
+		    (rc = get_f32s(r, &n->op.range, 1, index, "range", ei)) ||
+		    (rc = get_u32(r, &n->nchildren, index, "child_count",
+				  ei))) {
+			return rc;
+		}
+		/* Each child is at least one more node of the encoding. */
+		if (n->nchildren < 2 || n->nchildren > after) {
+			return bc_errinfo_set(ei, BC_EPROTO_COUNT,
+					      "node %u: child_count %u outside "
+					      "2..%u (the nodes that follow)",
+					      index, n->nchildren, after);
+		}
+		if (!bc_op_is_smooth(n->op.kind) &&
+		    (n->op.blend != 0.0f || n->op.range != 0.0f)) {
+			return bc_errinfo_set(ei, BC_ERANGE,
+					      "node %u: %s takes no blend or "
+					      "range (both must be 0)",
+					      index, bc_op_name(n->op.kind));
+		}
+		return 0;
+	}
+	if (tag == BC_PRIM_INVALID || tag >= BC_PRIM_COUNT) {
+		return bc_errinfo_set(ei, BC_EENUM,
+				      "node %u: unknown primitive tag 0x%02x",
+				      index, tag);
+	}
+	n->nchildren = 0;
+	bc_prim_data_init(&n->prim, (enum bc_prim)tag);
+	if ((rc = get_f32s(r, n->prim.translate, 3, index, "translate", ei)) ||
+	    (rc = get_f32s(r, n->prim.rotate, 4, index, "rotate", ei)) ||
+	    (rc = get_u8(r, &flag, index, "has_color", ei))) {
+		return rc;
+	}
+	if (flag > 1) {
+		return bc_errinfo_set(ei, BC_EPROTO_FLAGS,
+				      "node %u: has_color is %u, not 0 or 1",
+				      index, flag);
+	}
+	n->prim.has_color = flag == 1;
+	if (n->prim.has_color &&
+	    (rc = get_f32s(r, n->prim.color, 3, index, "color", ei))) {
+		return rc;
+	}
+	if ((rc = get_u8(r, &nf, index, "nfloats", ei))) {
+		return rc;
+	}
+	if (nf != bc_scene_prim_nfloats(n->prim.kind)) {
+		return bc_errinfo_set(ei, BC_EPROTO_COUNT,
+				      "node %u: nfloats is %u but a %s has %u",
+				      index, nf, bc_prim_info(n->prim.kind)->name,
+				      bc_scene_prim_nfloats(n->prim.kind));
+	}
+	return get_f32s(r, n->prim.params, nf, index, "params", ei);
+}
+
+static int cmp_u32(const void *a, const void *b)
+{
+	uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+	return (x > y) - (x < y);
+}
+
+/* Fresh ids for nodes encoded with id 0: the smallest ids that no node of
+ * the encoding names, so an explicit id later in the stream never collides
+ * with one handed out earlier. */
+struct fresh {
+	const uint32_t *ids; /* explicit ids, sorted */
+	uint32_t n, p;
+	uint32_t next;
+};
+
+static uint32_t fresh_next(struct fresh *f)
+{
+	for (;;) {
+		uint32_t c = f->next++;
+		while (f->p < f->n && f->ids[f->p] < c) {
+			f->p++;
+		}
+		if (f->p == f->n || f->ids[f->p] != c) {
+			return c;
+		}
+	}
+}
+
+/* Adds builder error context: which node failed. */
+static int at_node(struct bc_errinfo *ei, int rc, uint32_t index, uint32_t id)
+{
+	char reason[sizeof(ei->msg)];
+	if (!ei) {
+		return rc;
+	}
+	memcpy(reason, ei->msg, sizeof(reason));
+	reason[sizeof(reason) - 1] = '\0';
+	return bc_errinfo_set(ei, rc, "node %u (id %u): %s", index, id, reason);
+}
+
+static int decode_tree(struct rd *r, struct bc_tree *t, struct bc_errinfo *ei)
+{
+	uint32_t count, nopen = 0, nids = 0, nzero = 0;
+	uint32_t left[BC_TREE_MAX_DEPTH], opener[BC_TREE_MAX_DEPTH];
+	uint32_t *ids = NULL;
+	struct dnode n;
+	struct fresh fr = {0};
+	size_t start;
+	int rc;
+
+	if ((rc = need(r, 4, 0, "node_count", ei))) {
+		return rc;
+	}
+	count = take_u32(r);
+	if (count == 0 || count > BC_TREE_MAX_NODES) {
+		return bc_errinfo_set(ei, BC_EPROTO_COUNT,
+				      "node_count %u outside 1..%u", count,
+				      BC_TREE_MAX_NODES);
+	}
+	if (count > rd_left(r) / BC_SCENE_NODE_MIN_BYTES) {
+		return bc_errinfo_set(ei, BC_EPROTO_COUNT,
+				      "node_count %u needs at least %zu bytes, "
+				      "%zu left",
+				      count,
+				      (size_t)count * BC_SCENE_NODE_MIN_BYTES,
+				      rd_left(r));
+	}
+	/* Bounded by the input: count <= len / 5. */
+	ids = bc_malloc(sizeof(uint32_t) * (size_t)count);
+	if (!ids) {
+		return bc_errinfo_set(ei, BC_ENOMEM, "scene: out of memory");
+	}
+
+	/* Pass 1: the bytes alone. */
+	start = r->pos;
+	for (uint32_t i = 0; i < count; i++) {
+		if (i > 0 && nopen == 0) {
+			rc = bc_errinfo_set(ei, BC_EPROTO_COUNT,
+					    "node %u: the root's subtree ended "
+					    "at node %u but node_count is %u",
+					    i, i - 1, count);
+			goto cleanup;
+		}
+		if (nopen >= BC_TREE_MAX_DEPTH) {
+			rc = bc_errinfo_set(ei, BC_EDEPTH,
+					    "node %u: nesting deeper than %d",
+					    i, BC_TREE_MAX_DEPTH);
+			goto cleanup;
+		}
+		if ((rc = read_node(r, i, count, &n, ei))) {
+			goto cleanup;
+		}
+		if (n.id) {
+			ids[nids++] = n.id;
+		} else {
+			nzero++;
+		}
+		if (nopen) {
+			left[nopen - 1]--;
+		}
+		if (n.is_op) {
+			opener[nopen] = i;
+			left[nopen++] = n.nchildren;
+		} else {
+			while (nopen && left[nopen - 1] == 0) {
+				nopen--;
+			}
+		}
+	}
+	if (nopen) {
+		rc = bc_errinfo_set(ei, BC_EPROTO_COUNT,
+				    "node %u: %u of its children are missing "
+				    "after the last node",
+				    opener[nopen - 1], left[nopen - 1]);
+		goto cleanup;
+	}
+	if (rd_left(r)) {
+		rc = bc_errinfo_set(ei, BC_EPROTO_TRAILING,
+				    "%zu bytes after the last node",
+				    rd_left(r));
+		goto cleanup;
+	}
+	if (nzero) {
+		qsort(ids, nids, sizeof(uint32_t), cmp_u32);
+		fr.ids = ids;
+		fr.n = nids;
+		fr.next = 1;
+	}
+
+	/* Pass 2: build; the builder validates parameters and ids. */
+	r->pos = start;
+	for (uint32_t i = 0; i < count; i++) {
+		uint32_t id;
+		if ((rc = read_node(r, i, count, &n, ei))) {
+			goto cleanup;
+		}
+		id = n.id ? n.id : fresh_next(&fr);
+		if (nopen) {
+			left[nopen - 1]--;
+		}
+		if (n.is_op) {
+			if ((rc = bc_tree_push_op(t, id, &n.op, ei))) {
+				rc = at_node(ei, rc, i, id);
+				goto cleanup;
+			}
+			left[nopen++] = n.nchildren;
+			continue;
+		}
+		if ((rc = bc_tree_put_prim(t, id, &n.prim, ei))) {
+			rc = at_node(ei, rc, i, id);
+			goto cleanup;
+		}
+		while (nopen && left[nopen - 1] == 0) {
+			nopen--;
+			if ((rc = bc_tree_pop_op(t, ei))) {
+				goto cleanup;
+			}
+		}
+	}
+	rc = bc_tree_end(t, ei);
+cleanup:
+	bc_free(ids);
+	return rc;
+}
+
+static int decode(const uint8_t *buf, size_t len, bool scene,
+		  struct bc_tree *t, struct bc_camera *cam, bool *has_camera,
+		  struct bc_errinfo *ei)
+{
+	struct rd r = {buf, len, 0};
+	struct bc_camera c;
+	bool with_cam = false;
+	int rc;
+	bc_camera_default(&c);
+	if (cam) {
+		*cam = c;
+	}
+	if (has_camera) {
+		*has_camera = false;
+	}
+	if (ei) {
+		ei->code = 0;
+		ei->msg[0] = '\0';
+	}
+	bc_tree_begin(t);
+	if (!buf) {
+		r.len = 0;
+	}
+	if (scene) {
+		uint8_t flags;
+		if (r.len < 1) {
+			return bc_errinfo_set(ei, BC_EPROTO_TRUNCATED,
+					      "scene: empty (no flags byte)");
+		}
+		flags = take_u8(&r);
+		if (flags & ~BC_SCENE_FLAG_CAMERA) {
+			return bc_errinfo_set(ei, BC_EPROTO_FLAGS,
+					      "scene: reserved flag bits 0x%02x "
+					      "set",
+					      flags & ~BC_SCENE_FLAG_CAMERA);
+		}
+		with_cam = (flags & BC_SCENE_FLAG_CAMERA) != 0;
+		if (with_cam) {
+			float f[10];
+			if (rd_left(&r) < sizeof(f)) {
+				return bc_errinfo_set(
+					ei, BC_EPROTO_TRUNCATED,
+					"camera: needs %zu bytes, %zu left",
+					sizeof(f), rd_left(&r));
+			}
+			for (int i = 0; i < 10; i++) {
+				f[i] = take_f32(&r);
+				if (!isfinite(f[i])) {
+					return bc_errinfo_set(
+						ei, BC_ENONFINITE,
+						"camera: float %d is not "
+						"finite",
+						i);
+				}
+			}
+			memcpy(c.eye, f, sizeof(c.eye));
+			memcpy(c.target, f + 3, sizeof(c.target));
+			memcpy(c.up, f + 6, sizeof(c.up));
+			c.fov_y_deg = f[9];
+			if ((rc = bc_camera_validate(&c, ei))) {
+				return rc;
+			}
+		}
+	}
+	if ((rc = decode_tree(&r, t, ei))) {
+		/* Leave the tree empty, not half built. */
+		bc_tree_begin(t);
+		return rc;
+	}
+	if (cam) {
+		*cam = c;
+	}
+	if (has_camera) {
+		*has_camera = with_cam;
+	}
+	return 0;
+}
+
+int bc_scene_decode(const uint8_t *buf, size_t len, struct bc_tree *t,
+		    struct bc_camera *cam, bool *has_camera,
+		    struct bc_errinfo *ei)
+{
+	return decode(buf, len, true, t, cam, has_camera, ei);
+}
+
+int bc_tree_decode(const uint8_t *buf, size_t len, struct bc_tree *t,
+		   struct bc_errinfo *ei)
+{
+	return decode(buf, len, false, t, NULL, NULL, ei);
+}

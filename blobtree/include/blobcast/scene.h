@@ -1,0 +1,152 @@
+/*
+ * Scene encodings: the JSON scene file (version 1) and the compact binary
+ * form that SCENE_LOAD and SCENE_STATE carry. Both are untrusted input: every
+ * length, count, depth and number is checked before anything is allocated or
+ * built, and every failure comes back as a BC_E* code with a sentence naming
+ * where (the JSON path, or the binary node index) and why.
+ *
+ * docs/scene-format.md is the reference for both formats; PROTOCOL.md quotes
+ * the binary one. Decoders rebuild the caller's tree through the public
+ * builder (bc_tree_begin ... bc_tree_end): on success it holds the scene, on
+ * failure it is left empty (decode into a scratch tree to keep the old scene
+ * when a load fails).
+ */
+#ifndef BLOBCAST_SCENE_H
+#define BLOBCAST_SCENE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "blobcast/blobtree.h"
+#include "blobcast/error.h"
+
+/* The JSON format version this build reads and writes ("blobcast": 1). */
+#define BC_SCENE_JSON_VERSION 1
+
+/* Largest scene file accepted, in bytes. The largest generated scene (fig16
+ * level 6: 1.1 M primitives) is about 200 MB of JSON; jansson holds roughly
+ * ten times the text size while a file is parsed, so this ceiling keeps a
+ * hostile file under a few GB of memory. Scenes sent over the network use
+ * the binary form, which is bounded by the protocol's message limit. */
+#define BC_SCENE_JSON_MAX_BYTES (384u * 1024u * 1024u)
+
+/* Smallest encoded node: a u8 tag and a u32 id. Decoders check every count
+ * against the bytes left divided by this before looping or allocating. */
+#define BC_SCENE_NODE_MIN_BYTES 5u
+
+/* Flags byte of the binary scene. */
+#define BC_SCENE_FLAG_CAMERA 0x01u
+/* Tag bit that marks an operator node in the binary form. */
+#define BC_SCENE_TAG_OP 0x80u
+
+/* ---- JSON --------------------------------------------------------------- */
+
+/*
+ * Parses a version-1 scene from text[0..len) (need not be NUL-terminated)
+ * into t, and its camera into *cam (bc_camera_default() when the file has
+ * none; cam may be NULL). Strict: unknown keys, wrong types, missing keys,
+ * non-finite numbers, nesting over BC_TREE_MAX_DEPTH and texts over
+ * BC_SCENE_JSON_MAX_BYTES are errors. Returns 0 or a BC_E* code with the
+ * JSON path and reason in ei.
+ */
+int bc_scene_parse_json(const char *text, size_t len, struct bc_tree *t,
+			struct bc_camera *cam, struct bc_errinfo *ei);
+/* Reads the file at path (refusing files over BC_SCENE_JSON_MAX_BYTES before
+ * reading them) and parses it as bc_scene_parse_json() does. */
+int bc_scene_load_json(const char *path, struct bc_tree *t,
+		       struct bc_camera *cam, struct bc_errinfo *ei);
+
+/*
+ * Writes t (and cam, when not NULL) as a version-1 scene. Every id and every
+ * float is written so that parsing it back reproduces the tree and camera
+ * bit for bit; optional fields equal to their defaults are left out (see
+ * docs/scene-format.md). Returns a NUL-terminated bc_malloc'd string the
+ * caller bc_free's, or NULL when t is empty or memory runs out.
+ */
+char *bc_scene_to_json(const struct bc_tree *t, const struct bc_camera *cam);
+/* Writes bc_scene_to_json()'s text to path atomically: a temporary file in
+ * the same directory, fsync, rename over path, fsync of the directory.
+ * Returns 0, BC_EINVAL (empty tree), BC_ENOMEM or BC_EIO with the reason. */
+int bc_scene_save_json(const char *path, const struct bc_tree *t,
+		       const struct bc_camera *cam, struct bc_errinfo *ei);
+
+/* The built-in scene: a small colourful composition that shows primitives of
+ * several kinds and sharp and smooth operators, framed by its camera. A
+ * static NUL-terminated string, never to be freed. */
+const char *bc_scene_default_json(void);
+
+/* ---- Binary ------------------------------------------------------------- */
+
+/*
+ * scene := u8 flags, [camera: 10 x f32] if flags & BC_SCENE_FLAG_CAMERA, tree
+ * tree  := u32 node_count, node_count nodes in pre-order
+ * (docs/scene-format.md gives every field). Little-endian, no padding.
+ *
+ * Encoders return 0, BC_EINVAL (empty tree) or BC_ENOMEM; on success *out is
+ * a bc_malloc'd buffer of *len bytes the caller bc_free's. *out and *len are
+ * reset on entry.
+ */
+int bc_scene_encode(const struct bc_tree *t, const struct bc_camera *cam,
+		    uint8_t **out, size_t *len);
+int bc_tree_encode(const struct bc_tree *t, uint8_t **out, size_t *len);
+
+/*
+ * Decodes exactly buf[0..len) (trailing bytes are an error). bc_scene_decode
+ * sets *has_camera (may be NULL) and, when the scene carries a camera, *cam
+ * (may be NULL; otherwise bc_camera_default()). Nodes with id 0 get fresh ids
+ * that no other node of the encoding uses. Returns 0 or a BC_E* code
+ * (BC_EPROTO_TRUNCATED, BC_EPROTO_TRAILING, BC_EPROTO_COUNT,
+ * BC_EPROTO_FLAGS, BC_EENUM, BC_ENONFINITE, BC_EDEPTH, BC_EDUPID, BC_ERANGE,
+ * BC_ELIMIT, BC_ENOMEM) with the node index and reason in ei.
+ */
+int bc_scene_decode(const uint8_t *buf, size_t len, struct bc_tree *t,
+		    struct bc_camera *cam, bool *has_camera,
+		    struct bc_errinfo *ei);
+int bc_tree_decode(const uint8_t *buf, size_t len, struct bc_tree *t,
+		   struct bc_errinfo *ei);
+
+/* Number of floats a primitive of kind carries in its binary node (the
+ * extent of its bc_prim_info parameter layout); 0 for an invalid kind. */
+uint32_t bc_scene_prim_nfloats(enum bc_prim kind);
+
+/* ---- Pre-order walk ------------------------------------------------------ */
+
+/*
+ * Visits every node of a built tree in pre-order (the order of both
+ * encodings) in time linear in the tree size, however wide its operators
+ * are. The children of an n-ary operator are read from the linearized form
+ * (its left fold), since asking the model for child k costs O(k).
+ */
+struct bc_scene_node {
+	uint32_t id;
+	uint32_t index;     /* pre-order index, 0 at the root */
+	uint32_t depth;     /* 0 at the root */
+	uint32_t nchildren; /* 0 for primitives */
+	/* Operators completed by this node: how many open operators this node
+	 * is the last descendant of (always 0 for an operator). */
+	uint32_t closes;
+	bool is_op;
+	struct bc_prim_data prim; /* when !is_op */
+	struct bc_op_data op;     /* when is_op */
+};
+
+struct bc_scene_walk {
+	const struct bc_tree *t;
+	const struct bc_lin *l;
+	uint32_t *todo; /* top slots still to visit, next on top */
+	uint32_t ntodo;
+	uint32_t index;
+	uint32_t nopen;
+	uint32_t left[BC_TREE_MAX_DEPTH]; /* children still to visit */
+};
+
+/* Starts a walk over t (which must stay unchanged during the walk). Returns
+ * 0, BC_EINVAL (empty or unfinished tree) or BC_ENOMEM. */
+int bc_scene_walk_init(struct bc_scene_walk *w, const struct bc_tree *t);
+/* Fills *out with the next node; returns false after the last one. */
+bool bc_scene_walk_next(struct bc_scene_walk *w, struct bc_scene_node *out);
+/* Frees the walk's memory; accepts a zeroed walk. */
+void bc_scene_walk_finish(struct bc_scene_walk *w);
+
+#endif

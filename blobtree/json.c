@@ -1,0 +1,1227 @@
+/*
+ * Scene files: the version-1 JSON format (docs/scene-format.md), read with
+ * jansson and written by a streaming writer, plus atomic saving and the
+ * built-in default scene.
+ *
+ * Reading is strict so that typos are caught rather than ignored: unknown
+ * keys, wrong types, missing keys, non-finite numbers and nesting over
+ * BC_TREE_MAX_DEPTH are errors, and every message starts with the JSON path
+ * of the offending value ("root.children[2].half_extents[1]: ..."). A first
+ * walk over the document only gathers the ids the file names, so that
+ * nodes without an id can be given ids no later node claims; the second
+ * walk feeds the builder, which validates every parameter.
+ *
+ * Writing does not go through jansson objects: a 10^6-node scene would
+ * need about a gigabyte of them just to print a few hundred megabytes, and
+ * jansson's pretty printer puts every number of a vector on its own line.
+ * The writer emits one primitive per line; the only strings it writes are
+ * key and type names from our own tables (plain ASCII identifiers), so no
+ * escaping is involved. Floats are written with the fewest digits that
+ * read back to the same bits (at most 9, "%.9g").
+ */
+#include "blobcast/scene.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <float.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <jansson.h>
+
+#include "blobcast/alloc.h"
+
+#if defined(__GNUC__)
+#define JSON_PRINTF(a, b) __attribute__((format(printf, a, b)))
+#else
+#define JSON_PRINTF(a, b)
+#endif
+
+/* Capacity of an error reason (struct bc_errinfo's message). */
+#define MSG_CAP sizeof(((struct bc_errinfo *)NULL)->msg)
+
+/* ---- jansson set-up ------------------------------------------------------ */
+
+static pthread_once_t alloc_once = PTHREAD_ONCE_INIT;
+
+/* Set when an allocation made for jansson fails. jansson does not report
+ * running out of memory reliably (a failed buffer reads as a syntax error,
+ * a failed object insertion as an empty message), so the parser asks this
+ * flag instead. Per thread: parses on other threads do not disturb it. */
+static _Thread_local bool jansson_oom;
+
+static void *jansson_malloc(size_t size)
+{
+	void *p = bc_malloc(size);
+	if (!p) {
+		jansson_oom = true;
+	}
+	return p;
+}
+
+/* jansson allocates through our hook, so the allocation-failure tests reach
+ * its failure paths too. bc_free is free(), so objects jansson made before
+ * this (or for other callers) are released correctly either way. */
+static void route_jansson_alloc(void)
+{
+	json_set_alloc_funcs(jansson_malloc, bc_free);
+}
+
+/* ---- reading: context and errors ---------------------------------------- */
+
+/* Fresh ids for nodes without one: the smallest ids the file does not name
+ * anywhere, so an explicit id later in the file never collides with one
+ * handed out earlier. */
+struct fresh {
+	uint32_t *ids; /* explicit ids, sorted */
+	uint32_t n, cap, p;
+	uint32_t next;
+};
+
+static uint32_t fresh_next(struct fresh *f)
+{
+	for (;;) {
+		uint32_t c = f->next++;
+		while (f->p < f->n && f->ids[f->p] < c) {
+			f->p++;
+		}
+		if (f->p == f->n || f->ids[f->p] != c) {
+			return c;
+		}
+	}
+}
+
+struct jctx {
+	struct bc_tree *t;
+	struct bc_errinfo *ei;
+	struct fresh fr;
+	uint32_t nodes;
+	/* idx[d] is the child index of the node at depth d (d >= 1) on the
+	 * path from the root to the node being read. */
+	uint32_t idx[BC_TREE_MAX_DEPTH + 1];
+	uint32_t depth;
+	bool in_tree; /* paths start at "root", else at a top-level key */
+};
+
+/* Copies s for an error message: at most 40 characters, anything not
+ * printable ASCII shown as '?'. */
+static void quote_untrusted(char *out, size_t cap, const char *s)
+{
+	size_t i = 0;
+	for (; s[i] && i + 4 < cap && i < 40; i++) {
+		unsigned char ch = (unsigned char)s[i];
+		out[i] = (ch >= 0x20 && ch < 0x7f) ? (char)ch : '?';
+	}
+	if (s[i]) {
+		out[i++] = '.';
+		out[i++] = '.';
+		out[i++] = '.';
+	}
+	out[i] = '\0';
+}
+
+/* snprintf at buf + len that never runs past cap; returns the new length. */
+static size_t append(char *buf, size_t cap, size_t len, const char *fmt, ...)
+	JSON_PRINTF(4, 5);
+
+static size_t append(char *buf, size_t cap, size_t len, const char *fmt, ...)
+{
+	va_list ap;
+	int n;
+	if (len + 1 >= cap) {
+		return len;
+	}
+	va_start(ap, fmt);
+	n = vsnprintf(buf + len, cap - len, fmt, ap);
+	va_end(ap);
+	if (n < 0) {
+		return len;
+	}
+	return (size_t)n < cap - len ? len + (size_t)n : cap - 1;
+}
+
+/*
+ * Records code with "PATH: reason" where PATH is the current node's path,
+ * then .key and [elem] when given (elem < 0: none). A path too long for the
+ * message keeps its end, where the offending value is.
+ */
+static int jfail(struct jctx *c, int code, const char *key, long elem,
+		 const char *fmt, ...) JSON_PRINTF(5, 6);
+
+static int jfail(struct jctx *c, int code, const char *key, long elem,
+		 const char *fmt, ...)
+{
+	char path[24 * (BC_TREE_MAX_DEPTH + 4)];
+	char reason[MSG_CAP];
+	size_t plen = 0, rlen, budget;
+	va_list ap;
+	va_start(ap, fmt);
+	vsnprintf(reason, sizeof(reason), fmt, ap);
+	va_end(ap);
+	path[0] = '\0';
+	if (!c->in_tree && key) {
+		/* A top-level key: the path is the key itself. */
+		plen = append(path, sizeof(path), plen, "%s", key);
+		key = NULL;
+	} else {
+		plen = append(path, sizeof(path), plen, "root");
+		for (uint32_t d = 1; d <= c->depth; d++) {
+			plen = append(path, sizeof(path), plen,
+				      ".children[%u]", c->idx[d]);
+		}
+	}
+	if (key) {
+		plen = append(path, sizeof(path), plen, ".%s", key);
+	}
+	if (elem >= 0) {
+		plen = append(path, sizeof(path), plen, "[%ld]", elem);
+	}
+	rlen = strlen(reason);
+	budget = rlen + 3 < sizeof(reason) ? sizeof(reason) - 3 - rlen : 0;
+	if (plen > budget && budget > 16) {
+		/* "root..." then the tail of the path. */
+		size_t keep = budget - 7;
+		return bc_errinfo_set(c->ei, code, "root...%s: %s",
+				      path + plen - keep, reason);
+	}
+	return bc_errinfo_set(c->ei, code, "%s: %s", path, reason);
+}
+
+static const char *json_kind(const json_t *v)
+{
+	switch (json_typeof(v)) {
+	case JSON_OBJECT:
+		return "object";
+	case JSON_ARRAY:
+		return "array";
+	case JSON_STRING:
+		return "string";
+	case JSON_INTEGER:
+		return "integer";
+	case JSON_REAL:
+		return "real number";
+	case JSON_TRUE:
+		return "true";
+	case JSON_FALSE:
+		return "false";
+	default:
+		return "null";
+	}
+}
+
+/* Reads a number member into a finite float. */
+static int get_float(struct jctx *c, const json_t *v, const char *key,
+		     long elem, float *out)
+{
+	double d;
+	if (!json_is_number(v)) {
+		return jfail(c, BC_EPARSE, key, elem,
+			     "expected a number, got %s", json_kind(v));
+	}
+	d = json_number_value(v);
+	/* Checked before converting: a double beyond the float range has no
+	 * float value. */
+	if (!isfinite(d) || fabs(d) > (double)FLT_MAX) {
+		return jfail(c, BC_ENONFINITE, key, elem,
+			     "%g is not a finite 32-bit float", d);
+	}
+	*out = (float)d;
+	if (!isfinite(*out)) {
+		return jfail(c, BC_ENONFINITE, key, elem,
+			     "%g is not a finite 32-bit float", d);
+	}
+	return 0;
+}
+
+/* Reads a member holding n numbers: a plain number when n == 1, an array of
+ * exactly n numbers otherwise. */
+static int get_floats(struct jctx *c, const json_t *v, const char *key,
+		      uint32_t n, float *out)
+{
+	int rc;
+	if (n == 1) {
+		return get_float(c, v, key, -1, out);
+	}
+	if (!json_is_array(v)) {
+		return jfail(c, BC_EPARSE, key, -1,
+			     "expected an array of %u numbers, got %s", n,
+			     json_kind(v));
+	}
+	if (json_array_size(v) != n) {
+		return jfail(c, BC_EPARSE, key, -1,
+			     "expected an array of %u numbers, got %zu", n,
+			     json_array_size(v));
+	}
+	for (uint32_t i = 0; i < n; i++) {
+		if ((rc = get_float(c, json_array_get(v, i), key, (long)i,
+				    &out[i]))) {
+			return rc;
+		}
+	}
+	return 0;
+}
+
+static int get_id(struct jctx *c, const json_t *obj, uint32_t *id)
+{
+	const json_t *v = json_object_get(obj, "id");
+	json_int_t x;
+	if (!v) {
+		*id = 0;
+		return 0;
+	}
+	if (!json_is_integer(v)) {
+		return jfail(c, BC_EPARSE, "id", -1,
+			     "expected an integer, got %s", json_kind(v));
+	}
+	x = json_integer_value(v);
+	if (x < 1 || x > (json_int_t)UINT32_MAX) {
+		return jfail(c, BC_ERANGE, "id", -1,
+			     "%lld is outside 1..4294967295", (long long)x);
+	}
+	*id = (uint32_t)x;
+	return 0;
+}
+
+/* Rejects keys outside allowed[0..n); extra names a key that would be
+ * allowed on a smooth operator, for a clearer message. */
+static int check_keys(struct jctx *c, json_t *obj, const char *const *allowed,
+		      size_t n, const char *what)
+{
+	const char *key;
+	json_t *v;
+	json_object_foreach(obj, key, v)
+	{
+		bool ok = false;
+		char q[48];
+		for (size_t i = 0; i < n && !ok; i++) {
+			ok = strcmp(key, allowed[i]) == 0;
+		}
+		if (ok) {
+			continue;
+		}
+		quote_untrusted(q, sizeof(q), key);
+		if (strcmp(key, "blend") == 0 || strcmp(key, "range") == 0) {
+			return jfail(c, BC_EPARSE, NULL, -1,
+				     "\"%s\" is only for smooth operators, "
+				     "not %s",
+				     q, what);
+		}
+		return jfail(c, BC_EPARSE, NULL, -1,
+			     "unknown key \"%s\" for %s", q, what);
+	}
+	return 0;
+}
+
+/* Adds the node path to an error the builder reported. */
+static int builder_fail(struct jctx *c, int rc)
+{
+	char reason[MSG_CAP];
+	if (!c->ei) {
+		return rc;
+	}
+	memcpy(reason, c->ei->msg, sizeof(reason));
+	reason[sizeof(reason) - 1] = '\0';
+	return jfail(c, rc, NULL, -1, "%s", reason);
+}
+
+/* ---- reading: nodes ------------------------------------------------------ */
+
+static int parse_node(struct jctx *c, json_t *obj);
+
+static int parse_prim(struct jctx *c, json_t *obj, enum bc_prim kind)
+{
+	const struct bc_prim_info *info = bc_prim_info(kind);
+	const char *allowed[5 + BC_PRIM_MAX_PARAMS];
+	size_t nallowed = 0;
+	struct bc_prim_data p;
+	const json_t *v;
+	uint32_t id;
+	int rc;
+
+	allowed[nallowed++] = "type";
+	allowed[nallowed++] = "id";
+	allowed[nallowed++] = "translate";
+	allowed[nallowed++] = "rotate";
+	allowed[nallowed++] = "color";
+	for (uint32_t i = 0; i < info->nparams && nallowed < 5 + BC_PRIM_MAX_PARAMS;
+	     i++) {
+		allowed[nallowed++] = info->params[i].name;
+	}
+	if ((rc = check_keys(c, obj, allowed, nallowed, info->name))) {
+		return rc;
+	}
+	bc_prim_data_init(&p, kind);
+	for (uint32_t i = 0; i < info->nparams; i++) {
+		const struct bc_param_desc *d = &info->params[i];
+		v = json_object_get(obj, d->name);
+		if (!v) {
+			if (d->flags & BC_PARAM_OPTIONAL) {
+				continue;
+			}
+			return jfail(c, BC_EPARSE, NULL, -1,
+				     "missing key \"%s\" (a %s needs it)",
+				     d->name, info->name);
+		}
+		if ((uint32_t)d->offset + d->count > BC_PRIM_MAX_PARAMS) {
+			return jfail(c, BC_EINVAL, d->name, -1,
+				     "parameter layout out of bounds");
+		}
+		if ((rc = get_floats(c, v, d->name, d->count,
+				     p.params + d->offset))) {
+			return rc;
+		}
+	}
+	if ((v = json_object_get(obj, "translate")) &&
+	    (rc = get_floats(c, v, "translate", 3, p.translate))) {
+		return rc;
+	}
+	if ((v = json_object_get(obj, "rotate")) &&
+	    (rc = get_floats(c, v, "rotate", 4, p.rotate))) {
+		return rc;
+	}
+	if ((v = json_object_get(obj, "color"))) {
+		if ((rc = get_floats(c, v, "color", 3, p.color))) {
+			return rc;
+		}
+		p.has_color = true;
+	}
+	if ((rc = get_id(c, obj, &id))) {
+		return rc;
+	}
+	if ((rc = bc_tree_put_prim(c->t, id ? id : fresh_next(&c->fr), &p,
+				   c->ei))) {
+		return builder_fail(c, rc);
+	}
+	return 0;
+}
+
+static int parse_op(struct jctx *c, json_t *obj, enum bc_op kind)
+{
+	static const char *const allowed[] = {"type", "id", "children", "blend",
+					      "range"};
+	bool smooth = bc_op_is_smooth(kind);
+	struct bc_op_data op = {kind, 0.0f, 0.0f};
+	json_t *children, *v;
+	uint32_t id;
+	size_t n;
+	int rc;
+
+	if ((rc = check_keys(c, obj, allowed, smooth ? 5 : 3,
+			     bc_op_name(kind)))) {
+		return rc;
+	}
+	if (smooth) {
+		if (!(v = json_object_get(obj, "blend"))) {
+			return jfail(c, BC_EPARSE, NULL, -1,
+				     "missing key \"blend\" (a %s needs it)",
+				     bc_op_name(kind));
+		}
+		if ((rc = get_float(c, v, "blend", -1, &op.blend))) {
+			return rc;
+		}
+		if ((v = json_object_get(obj, "range"))) {
+			if ((rc = get_float(c, v, "range", -1, &op.range))) {
+				return rc;
+			}
+			/* The builder reads 0 as "default": an explicit 0
+			 * is a mistake, not a request for the default. */
+			if (!(op.range > 0.0f)) {
+				return jfail(c, BC_ERANGE, "range", -1,
+					     "%g must be positive",
+					     (double)op.range);
+			}
+		}
+	}
+	children = json_object_get(obj, "children");
+	if (!children) {
+		return jfail(c, BC_EPARSE, NULL, -1,
+			     "missing key \"children\" (a %s needs it)",
+			     bc_op_name(kind));
+	}
+	if (!json_is_array(children)) {
+		return jfail(c, BC_EPARSE, "children", -1,
+			     "expected an array, got %s", json_kind(children));
+	}
+	n = json_array_size(children);
+	if (n < 2) {
+		return jfail(c, BC_EINVAL, "children", -1,
+			     "an operator needs two or more children, got %zu",
+			     n);
+	}
+	if ((rc = get_id(c, obj, &id))) {
+		return rc;
+	}
+	if ((rc = bc_tree_push_op(c->t, id ? id : fresh_next(&c->fr), &op,
+				  c->ei))) {
+		return builder_fail(c, rc);
+	}
+	c->depth++;
+	for (size_t i = 0; i < n; i++) {
+		c->idx[c->depth] = (uint32_t)i;
+		if ((rc = parse_node(c, json_array_get(children, i)))) {
+			return rc;
+		}
+	}
+	c->depth--;
+	if ((rc = bc_tree_pop_op(c->t, c->ei))) {
+		return builder_fail(c, rc);
+	}
+	return 0;
+}
+
+/* Recursion is bounded: depth is checked against BC_TREE_MAX_DEPTH first. */
+static int parse_node(struct jctx *c, json_t *obj)
+{
+	const json_t *type;
+	const char *name;
+	char q[48];
+	enum bc_prim pk;
+	enum bc_op ok;
+
+	if (c->depth >= BC_TREE_MAX_DEPTH) {
+		return jfail(c, BC_EDEPTH, NULL, -1,
+			     "nesting deeper than %d levels",
+			     BC_TREE_MAX_DEPTH);
+	}
+	if (!json_is_object(obj)) {
+		return jfail(c, BC_EPARSE, NULL, -1,
+			     "expected a node object, got %s", json_kind(obj));
+	}
+	if (++c->nodes > BC_TREE_MAX_NODES) {
+		return jfail(c, BC_ELIMIT, NULL, -1, "more than %u nodes",
+			     BC_TREE_MAX_NODES);
+	}
+	type = json_object_get(obj, "type");
+	if (!type) {
+		return jfail(c, BC_EPARSE, NULL, -1, "missing key \"type\"");
+	}
+	if (!json_is_string(type)) {
+		return jfail(c, BC_EPARSE, "type", -1,
+			     "expected a string, got %s", json_kind(type));
+	}
+	name = json_string_value(type);
+	if ((pk = bc_prim_from_name(name)) != BC_PRIM_INVALID) {
+		return parse_prim(c, obj, pk);
+	}
+	if ((ok = bc_op_from_name(name)) != BC_OP_INVALID) {
+		return parse_op(c, obj, ok);
+	}
+	quote_untrusted(q, sizeof(q), name);
+	return jfail(c, BC_EENUM, NULL, -1, "unknown %s type \"%s\"",
+		     json_object_get(obj, "children") ? "operator"
+						      : "primitive",
+		     q);
+}
+
+/* First walk: gathers the ids the file names. Malformed parts are skipped
+ * here and reported by the second walk. */
+static int collect_ids(struct jctx *c, const json_t *obj, uint32_t depth)
+{
+	const json_t *v, *children;
+	if (depth >= BC_TREE_MAX_DEPTH || !json_is_object(obj)) {
+		return 0;
+	}
+	if (++c->nodes > BC_TREE_MAX_NODES) {
+		return 0;
+	}
+	v = json_object_get(obj, "id");
+	if (v && json_is_integer(v) && json_integer_value(v) >= 1 &&
+	    json_integer_value(v) <= (json_int_t)UINT32_MAX) {
+		struct fresh *f = &c->fr;
+		if (f->n == f->cap) {
+			uint32_t cap = f->cap ? 2 * f->cap : 256;
+			uint32_t *grown =
+				bc_reallocarray(f->ids, cap, sizeof(uint32_t));
+			if (!grown) {
+				return bc_errinfo_set(c->ei, BC_ENOMEM,
+						      "scene: out of memory");
+			}
+			f->ids = grown;
+			f->cap = cap;
+		}
+		f->ids[f->n++] = (uint32_t)json_integer_value(v);
+	}
+	children = json_object_get(obj, "children");
+	if (json_is_array(children)) {
+		for (size_t i = 0; i < json_array_size(children); i++) {
+			int rc = collect_ids(c, json_array_get(children, i),
+					     depth + 1);
+			if (rc) {
+				return rc;
+			}
+		}
+	}
+	return 0;
+}
+
+static int cmp_u32(const void *a, const void *b)
+{
+	uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+	return (x > y) - (x < y);
+}
+
+static int parse_camera(struct jctx *c, json_t *obj, struct bc_camera *cam)
+{
+	static const char *const allowed[] = {"eye", "target", "up",
+					      "fov_y_deg"};
+	const char *key;
+	json_t *v;
+	int rc;
+	if (!json_is_object(obj)) {
+		return jfail(c, BC_EPARSE, "camera", -1,
+			     "expected an object, got %s", json_kind(obj));
+	}
+	json_object_foreach(obj, key, v)
+	{
+		char q[48], path[64];
+		float *dst = NULL;
+		uint32_t n = 3;
+		for (size_t i = 0; i < 4; i++) {
+			if (strcmp(key, allowed[i]) == 0) {
+				dst = i == 0   ? cam->eye
+				      : i == 1 ? cam->target
+				      : i == 2 ? cam->up
+					       : &cam->fov_y_deg;
+				n = i == 3 ? 1 : 3;
+			}
+		}
+		if (!dst) {
+			quote_untrusted(q, sizeof(q), key);
+			return jfail(c, BC_EPARSE, "camera", -1,
+				     "unknown key \"%s\"", q);
+		}
+		snprintf(path, sizeof(path), "camera.%s", key);
+		if ((rc = get_floats(c, v, path, n, dst))) {
+			return rc;
+		}
+	}
+	{
+		struct bc_errinfo local = {0};
+		if ((rc = bc_camera_validate(cam, &local))) {
+			return jfail(c, rc, "camera", -1, "%s", local.msg);
+		}
+	}
+	return 0;
+}
+
+int bc_scene_parse_json(const char *text, size_t len, struct bc_tree *t,
+			struct bc_camera *cam, struct bc_errinfo *ei)
+{
+	static const char *const top_keys[] = {"blobcast", "camera", "root"};
+	struct jctx c;
+	struct bc_camera view;
+	json_error_t jerr;
+	json_t *doc = NULL, *v;
+	const char *key;
+	int rc = 0;
+
+	memset(&c, 0, sizeof(c));
+	c.t = t;
+	c.ei = ei;
+	if (ei) {
+		ei->code = 0;
+		ei->msg[0] = '\0';
+	}
+	bc_camera_default(&view);
+	if (cam) {
+		*cam = view;
+	}
+	bc_tree_begin(t);
+	if (len > BC_SCENE_JSON_MAX_BYTES) {
+		return bc_errinfo_set(ei, BC_ELIMIT,
+				      "scene: %zu bytes, over the %u byte limit",
+				      len, BC_SCENE_JSON_MAX_BYTES);
+	}
+	if (!text) {
+		return bc_errinfo_set(ei, BC_EINVAL, "scene: no text");
+	}
+	pthread_once(&alloc_once, route_jansson_alloc);
+	jansson_oom = false;
+	doc = json_loadb(text, len, JSON_REJECT_DUPLICATES, &jerr);
+	if (!doc && jansson_oom) {
+		return bc_errinfo_set(ei, BC_ENOMEM, "scene: out of memory");
+	}
+	if (!doc) {
+		switch (json_error_code(&jerr)) {
+		case json_error_out_of_memory:
+			rc = BC_ENOMEM;
+			break;
+		case json_error_stack_overflow:
+			rc = BC_EDEPTH;
+			break;
+		case json_error_numeric_overflow:
+			/* "real number overflow" is a number that only
+			 * infinity could hold; integers out of range are
+			 * plain range errors. */
+			rc = strstr(jerr.text, "real") ? BC_ENONFINITE
+						       : BC_ERANGE;
+			break;
+		default:
+			rc = BC_EPARSE;
+			break;
+		}
+		return bc_errinfo_set(ei, rc, "line %d column %d: %s",
+				      jerr.line, jerr.column, jerr.text);
+	}
+	if (!json_is_object(doc)) {
+		rc = bc_errinfo_set(ei, BC_EPARSE,
+				    "(document): expected an object, got %s",
+				    json_kind(doc));
+		goto cleanup;
+	}
+	json_object_foreach(doc, key, v)
+	{
+		bool known = false;
+		for (size_t i = 0; i < 3; i++) {
+			known = known || strcmp(key, top_keys[i]) == 0;
+		}
+		if (!known) {
+			char q[48];
+			quote_untrusted(q, sizeof(q), key);
+			rc = bc_errinfo_set(ei, BC_EPARSE,
+					    "(document): unknown key \"%s\"", q);
+			goto cleanup;
+		}
+	}
+	v = json_object_get(doc, "blobcast");
+	if (!v) {
+		rc = bc_errinfo_set(ei, BC_EPARSE,
+				    "(document): missing key \"blobcast\" (the "
+				    "format version)");
+		goto cleanup;
+	}
+	if (!json_is_integer(v)) {
+		rc = jfail(&c, BC_EPARSE, "blobcast", -1,
+			   "expected an integer, got %s", json_kind(v));
+		goto cleanup;
+	}
+	if (json_integer_value(v) != BC_SCENE_JSON_VERSION) {
+		rc = jfail(&c, BC_ENOTSUP, "blobcast", -1,
+			   "version %lld is not supported (this build reads "
+			   "%d)",
+			   (long long)json_integer_value(v),
+			   BC_SCENE_JSON_VERSION);
+		goto cleanup;
+	}
+	if ((v = json_object_get(doc, "camera")) &&
+	    (rc = parse_camera(&c, v, &view))) {
+		goto cleanup;
+	}
+	v = json_object_get(doc, "root");
+	if (!v) {
+		rc = bc_errinfo_set(ei, BC_EPARSE,
+				    "(document): missing key \"root\"");
+		goto cleanup;
+	}
+	if ((rc = collect_ids(&c, v, 0))) {
+		goto cleanup;
+	}
+	if (c.fr.n) {
+		qsort(c.fr.ids, c.fr.n, sizeof(uint32_t), cmp_u32);
+	}
+	c.fr.next = 1;
+	c.nodes = 0;
+	c.in_tree = true;
+	if ((rc = parse_node(&c, v)) || (rc = bc_tree_end(t, ei))) {
+		goto cleanup;
+	}
+	if (cam) {
+		*cam = view;
+	}
+cleanup:
+	json_decref(doc);
+	bc_free(c.fr.ids);
+	if (rc) {
+		/* Leave the tree empty, not half built. */
+		bc_tree_begin(t);
+	}
+	return rc;
+}
+
+static void errno_text(int err, char *buf, size_t cap)
+{
+	if (strerror_r(err, buf, cap) != 0) {
+		snprintf(buf, cap, "errno %d", err);
+	}
+}
+
+int bc_scene_load_json(const char *path, struct bc_tree *t,
+		       struct bc_camera *cam, struct bc_errinfo *ei)
+{
+	struct stat st;
+	char *text = NULL, why[128];
+	size_t got = 0, size;
+	int fd, rc;
+
+	if (cam) {
+		bc_camera_default(cam);
+	}
+	bc_tree_begin(t);
+	fd = open(path, O_RDONLY | O_CLOEXEC);
+	if (fd < 0) {
+		errno_text(errno, why, sizeof(why));
+		return bc_errinfo_set(ei, errno == ENOENT ? BC_ENOTFOUND
+							  : BC_EIO,
+				      "%s: %s", path, why);
+	}
+	if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+		rc = bc_errinfo_set(ei, BC_EIO, "%s: not a regular file", path);
+		goto cleanup;
+	}
+	if ((uint64_t)st.st_size > BC_SCENE_JSON_MAX_BYTES) {
+		rc = bc_errinfo_set(ei, BC_ELIMIT,
+				    "%s: %lld bytes, over the %u byte limit",
+				    path, (long long)st.st_size,
+				    BC_SCENE_JSON_MAX_BYTES);
+		goto cleanup;
+	}
+	size = (size_t)st.st_size;
+	text = bc_malloc(size + 1);
+	if (!text) {
+		rc = bc_errinfo_set(ei, BC_ENOMEM, "%s: out of memory", path);
+		goto cleanup;
+	}
+	/* A file that shrinks while read is parsed as far as it goes; one
+	 * that grows is read up to the size fstat gave. */
+	while (got < size) {
+		ssize_t n = read(fd, text + got, size - got);
+		if (n < 0 && errno == EINTR) {
+			continue;
+		}
+		if (n < 0) {
+			errno_text(errno, why, sizeof(why));
+			rc = bc_errinfo_set(ei, BC_EIO, "%s: %s", path, why);
+			goto cleanup;
+		}
+		if (n == 0) {
+			break;
+		}
+		got += (size_t)n;
+	}
+	text[got] = '\0';
+	rc = bc_scene_parse_json(text, got, t, cam, ei);
+cleanup:
+	bc_free(text);
+	close(fd);
+	return rc;
+}
+
+/* ---- writing ------------------------------------------------------------- */
+
+struct sbuf {
+	char *p;
+	size_t len, cap;
+	bool failed;
+};
+
+static bool sb_room(struct sbuf *b, size_t n)
+{
+	size_t cap;
+	char *grown;
+	if (b->failed) {
+		return false;
+	}
+	if (n < b->cap - b->len) {
+		return true;
+	}
+	cap = b->cap ? b->cap : 1024;
+	while (cap - b->len <= n) {
+		if (cap > SIZE_MAX / 2) {
+			b->failed = true;
+			return false;
+		}
+		cap *= 2;
+	}
+	grown = bc_realloc(b->p, cap);
+	if (!grown) {
+		b->failed = true;
+		return false;
+	}
+	b->p = grown;
+	b->cap = cap;
+	return true;
+}
+
+static void sb_put(struct sbuf *b, const char *s, size_t n)
+{
+	if (sb_room(b, n)) {
+		memcpy(b->p + b->len, s, n);
+		b->len += n;
+		b->p[b->len] = '\0';
+	}
+}
+
+static void sb_puts(struct sbuf *b, const char *s)
+{
+	sb_put(b, s, strlen(s));
+}
+
+static void sb_indent(struct sbuf *b, uint32_t n)
+{
+	if (sb_room(b, n)) {
+		memset(b->p + b->len, ' ', n);
+		b->len += n;
+		b->p[b->len] = '\0';
+	}
+}
+
+static void sb_uint(struct sbuf *b, uint32_t v)
+{
+	char tmp[16];
+	int n = snprintf(tmp, sizeof(tmp), "%u", v);
+	sb_put(b, tmp, (size_t)n);
+}
+
+/* Writes f with the fewest digits that read back (as jansson reads: strtod,
+ * then a float conversion) to the same bits: six significant digits when
+ * they suffice (values typed by hand stay as typed), nine otherwise, which
+ * always suffice for binary32. */
+static void sb_float(struct sbuf *b, float f)
+{
+	char tmp[40];
+	int n;
+	if (f == 0.0f && signbit(f)) {
+		/* "-0" would read back as the integer 0. */
+		sb_puts(b, "-0.0");
+		return;
+	}
+	n = snprintf(tmp, sizeof(tmp), "%.6g", (double)f);
+	if ((float)strtod(tmp, NULL) != f) {
+		n = snprintf(tmp, sizeof(tmp), "%.9g", (double)f);
+	}
+	/* Under a locale with a decimal comma printf writes "0,5". */
+	for (int i = 0; i < n; i++) {
+		if (tmp[i] == ',') {
+			tmp[i] = '.';
+		}
+	}
+	sb_put(b, tmp, (size_t)n);
+}
+
+static void sb_floats(struct sbuf *b, const float *f, uint32_t n)
+{
+	if (n == 1) {
+		sb_float(b, f[0]);
+		return;
+	}
+	sb_puts(b, "[");
+	for (uint32_t i = 0; i < n; i++) {
+		if (i) {
+			sb_puts(b, ", ");
+		}
+		sb_float(b, f[i]);
+	}
+	sb_puts(b, "]");
+}
+
+/* `, "key": value`; key is one of our own identifiers. */
+static void sb_member(struct sbuf *b, const char *key, const float *f,
+		      uint32_t n)
+{
+	sb_puts(b, ", \"");
+	sb_puts(b, key);
+	sb_puts(b, "\": ");
+	sb_floats(b, f, n);
+}
+
+/* Bit equality: -0.0 is not the default 0.0, and must be written. */
+static bool same_bits(const float *a, const float *b, uint32_t n)
+{
+	return memcmp(a, b, n * sizeof(float)) == 0;
+}
+
+static void write_prim(struct sbuf *b, const struct bc_scene_node *n)
+{
+	static const float zero[3] = {0.0f, 0.0f, 0.0f};
+	static const float identity[4] = {0.0f, 0.0f, 0.0f, 1.0f};
+	const struct bc_prim_info *info = bc_prim_info(n->prim.kind);
+	sb_puts(b, "{\"type\": \"");
+	sb_puts(b, info->name);
+	sb_puts(b, "\", \"id\": ");
+	sb_uint(b, n->id);
+	for (uint32_t i = 0; i < info->nparams; i++) {
+		const struct bc_param_desc *d = &info->params[i];
+		const float *v = n->prim.params + d->offset;
+		if (d->flags & BC_PARAM_OPTIONAL) {
+			float def[3] = {d->def, d->def, d->def};
+			if (same_bits(v, def, d->count)) {
+				continue;
+			}
+		}
+		sb_member(b, d->name, v, d->count);
+	}
+	if (!same_bits(n->prim.translate, zero, 3)) {
+		sb_member(b, "translate", n->prim.translate, 3);
+	}
+	if (!same_bits(n->prim.rotate, identity, 4)) {
+		sb_member(b, "rotate", n->prim.rotate, 4);
+	}
+	if (n->prim.has_color) {
+		sb_member(b, "color", n->prim.color, 3);
+	}
+	sb_puts(b, "}");
+}
+
+static void write_op(struct sbuf *b, const struct bc_scene_node *n)
+{
+	sb_puts(b, "{\"type\": \"");
+	sb_puts(b, bc_op_name(n->op.kind));
+	sb_puts(b, "\", \"id\": ");
+	sb_uint(b, n->id);
+	if (bc_op_is_smooth(n->op.kind)) {
+		sb_member(b, "blend", &n->op.blend, 1);
+		sb_member(b, "range", &n->op.range, 1);
+	}
+	sb_puts(b, ", \"children\": [\n");
+}
+
+char *bc_scene_to_json(const struct bc_tree *t, const struct bc_camera *cam)
+{
+	struct bc_scene_walk w;
+	struct bc_scene_node n;
+	struct sbuf b = {0};
+	uint32_t rem[BC_TREE_MAX_DEPTH], nopen = 0;
+
+	if (bc_scene_walk_init(&w, t)) {
+		return NULL;
+	}
+	/* About 100 bytes per node: start near the final size. */
+	sb_room(&b, 256 + 100 * (size_t)bc_tree_node_count(t));
+	sb_puts(&b, "{\n  \"blobcast\": 1,\n");
+	if (cam) {
+		sb_puts(&b, "  \"camera\": {\"eye\": ");
+		sb_floats(&b, cam->eye, 3);
+		sb_member(&b, "target", cam->target, 3);
+		sb_member(&b, "up", cam->up, 3);
+		sb_member(&b, "fov_y_deg", &cam->fov_y_deg, 1);
+		sb_puts(&b, "},\n");
+	}
+	sb_puts(&b, "  \"root\": ");
+	while (!b.failed && bc_scene_walk_next(&w, &n)) {
+		if (n.depth) {
+			sb_indent(&b, 2 + 2 * n.depth);
+		}
+		if (n.is_op) {
+			write_op(&b, &n);
+			rem[nopen++] = n.nchildren;
+			continue;
+		}
+		write_prim(&b, &n);
+		/* A finished node: separate it from its next sibling, or
+		 * close every operator it was the last descendant of. */
+		while (nopen) {
+			if (--rem[nopen - 1] > 0) {
+				sb_puts(&b, ",\n");
+				break;
+			}
+			nopen--;
+			sb_puts(&b, "\n");
+			sb_indent(&b, 2 + 2 * nopen);
+			sb_puts(&b, "]}");
+		}
+	}
+	sb_puts(&b, "\n}\n");
+	bc_scene_walk_finish(&w);
+	if (b.failed) {
+		bc_free(b.p);
+		return NULL;
+	}
+	return b.p;
+}
+
+int bc_scene_save_json(const char *path, const struct bc_tree *t,
+		       const struct bc_camera *cam, struct bc_errinfo *ei)
+{
+	char *text = NULL, *tmp = NULL, *dir = NULL, why[128];
+	size_t len, off = 0, plen = strlen(path);
+	int fd = -1, dfd, rc = 0;
+	char *slash;
+
+	if (bc_tree_root(t) == 0) {
+		return bc_errinfo_set(ei, BC_EINVAL, "%s: empty scene", path);
+	}
+	text = bc_scene_to_json(t, cam);
+	tmp = bc_malloc(plen + 48);
+	dir = bc_malloc(plen + 2);
+	if (!text || !tmp || !dir) {
+		rc = bc_errinfo_set(ei, BC_ENOMEM, "%s: out of memory", path);
+		goto cleanup;
+	}
+	len = strlen(text);
+	/* The temporary file sits beside the target so that rename() stays
+	 * within one file system and is atomic. O_EXCL with a pid-and-try
+	 * name keeps concurrent savers apart; open() honours the umask. */
+	for (unsigned attempt = 0; fd < 0 && attempt < 64; attempt++) {
+		snprintf(tmp, plen + 48, "%s.tmp.%ld.%u", path, (long)getpid(),
+			 attempt);
+		fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+		if (fd < 0 && errno != EEXIST) {
+			break;
+		}
+	}
+	if (fd < 0) {
+		errno_text(errno, why, sizeof(why));
+		rc = bc_errinfo_set(ei, BC_EIO, "%s: %s", tmp, why);
+		goto cleanup;
+	}
+	while (off < len) {
+		ssize_t n = write(fd, text + off, len - off);
+		if (n < 0 && errno == EINTR) {
+			continue;
+		}
+		if (n <= 0) {
+			errno_text(errno, why, sizeof(why));
+			rc = bc_errinfo_set(ei, BC_EIO, "%s: write: %s", tmp,
+					    why);
+			goto cleanup;
+		}
+		off += (size_t)n;
+	}
+	if (fsync(fd) != 0) {
+		errno_text(errno, why, sizeof(why));
+		rc = bc_errinfo_set(ei, BC_EIO, "%s: fsync: %s", tmp, why);
+		goto cleanup;
+	}
+	if (close(fd) != 0) {
+		fd = -1;
+		errno_text(errno, why, sizeof(why));
+		rc = bc_errinfo_set(ei, BC_EIO, "%s: close: %s", tmp, why);
+		goto cleanup;
+	}
+	fd = -1;
+	if (rename(tmp, path) != 0) {
+		errno_text(errno, why, sizeof(why));
+		rc = bc_errinfo_set(ei, BC_EIO, "%s: rename: %s", path, why);
+		goto cleanup;
+	}
+	tmp[0] = '\0'; /* nothing left to remove */
+	/* The rename is durable only once the directory entry is. */
+	memcpy(dir, path, plen + 1);
+	slash = strrchr(dir, '/');
+	if (!slash) {
+		strcpy(dir, ".");
+	} else if (slash == dir) {
+		dir[1] = '\0';
+	} else {
+		*slash = '\0';
+	}
+	dfd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+	if (dfd < 0 || fsync(dfd) != 0) {
+		errno_text(errno, why, sizeof(why));
+		rc = bc_errinfo_set(ei, BC_EIO, "%s: directory fsync: %s", dir,
+				    why);
+	}
+	if (dfd >= 0) {
+		close(dfd);
+	}
+cleanup:
+	if (fd >= 0) {
+		close(fd);
+	}
+	if (rc && tmp && tmp[0]) {
+		unlink(tmp);
+	}
+	bc_free(text);
+	bc_free(tmp);
+	bc_free(dir);
+	return rc;
+}
+
+/* ---- the built-in scene --------------------------------------------------- */
+
+/*
+ * A small workshop on a grooved slab: the classic CSG emblem (a rounded cube
+ * smoothly intersected with a sphere, minus three cylinders), a blob
+ * creature (smooth union, with sharp eyes), a ring on a stand, and three
+ * marbles. 18 primitives of five kinds under every operator but the sharp
+ * intersection; cylinders and tori stand on their local y axis.
+ */
+static const char default_scene[] =
+	"{\n"
+	"  \"blobcast\": 1,\n"
+	"  \"camera\": {\"eye\": [2.4, 2.0, 5.0], \"target\": [0, -0.4, 0.15], "
+	"\"up\": [0, 1, 0], \"fov_y_deg\": 38},\n"
+	"  \"root\": {\"type\": \"union\", \"id\": 1, \"children\": [\n"
+	"    {\"type\": \"smooth_difference\", \"id\": 10, \"blend\": 0.05, "
+	"\"range\": 0.0625, \"children\": [\n"
+	"      {\"type\": \"box\", \"id\": 11, \"half_extents\": [2.3, 0.12, "
+	"1.3], \"round\": 0.04, \"translate\": [0, -1, 0], "
+	"\"color\": [0.36, 0.42, 0.52]},\n"
+	"      {\"type\": \"cylinder\", \"id\": 12, \"radius\": 0.08, "
+	"\"half_height\": 2.5, \"translate\": [0, -0.88, 0.95], "
+	"\"rotate\": [0, 0, 0.707106781, 0.707106781], "
+	"\"color\": [0.2, 0.22, 0.28]}\n"
+	"    ]},\n"
+	"    {\"type\": \"difference\", \"id\": 20, \"children\": [\n"
+	"      {\"type\": \"smooth_intersection\", \"id\": 21, \"blend\": 0.06, "
+	"\"children\": [\n"
+	"        {\"type\": \"box\", \"id\": 22, \"half_extents\": [0.55, 0.55, "
+	"0.55], \"round\": 0.02, \"translate\": [-1.15, -0.33, 0.1], "
+	"\"rotate\": [0, 0.258819045, 0, 0.965925826], "
+	"\"color\": [0.93, 0.55, 0.18]},\n"
+	"        {\"type\": \"sphere\", \"id\": 23, \"radius\": 0.75, "
+	"\"translate\": [-1.15, -0.33, 0.1], \"color\": [0.86, 0.25, 0.22]}\n"
+	"      ]},\n"
+	"      {\"type\": \"union\", \"id\": 24, \"children\": [\n"
+	"        {\"type\": \"cylinder\", \"id\": 25, \"radius\": 0.26, "
+	"\"half_height\": 0.9, \"translate\": [-1.15, -0.33, 0.1], "
+	"\"rotate\": [0.183012702, 0.183012702, 0.683012702, 0.683012702], "
+	"\"color\": [0.25, 0.45, 0.75]},\n"
+	"        {\"type\": \"cylinder\", \"id\": 26, \"radius\": 0.26, "
+	"\"half_height\": 0.9, \"translate\": [-1.15, -0.33, 0.1], "
+	"\"rotate\": [0, 0.258819045, 0, 0.965925826], "
+	"\"color\": [0.25, 0.45, 0.75]},\n"
+	"        {\"type\": \"cylinder\", \"id\": 27, \"radius\": 0.26, "
+	"\"half_height\": 0.9, \"translate\": [-1.15, -0.33, 0.1], "
+	"\"rotate\": [0.683012702, 0.183012702, -0.183012702, 0.683012702], "
+	"\"color\": [0.25, 0.45, 0.75]}\n"
+	"      ]}\n"
+	"    ]},\n"
+	"    {\"type\": \"union\", \"id\": 30, \"children\": [\n"
+	"      {\"type\": \"smooth_union\", \"id\": 31, \"blend\": 0.25, "
+	"\"children\": [\n"
+	"        {\"type\": \"sphere\", \"id\": 32, \"radius\": 0.5, "
+	"\"translate\": [1.1, -0.38, 0.2], \"color\": [0.42, 0.74, 0.45]},\n"
+	"        {\"type\": \"sphere\", \"id\": 33, \"radius\": 0.32, "
+	"\"translate\": [1.1, 0.32, 0.25], \"color\": [0.5, 0.8, 0.5]},\n"
+	"        {\"type\": \"capsule\", \"id\": 34, \"a\": [0.35, 0.05, 0], "
+	"\"b\": [0.75, 0.35, 0.1], \"radius\": 0.1, "
+	"\"translate\": [1.1, -0.3, 0.2], \"color\": [0.38, 0.68, 0.42]},\n"
+	"        {\"type\": \"capsule\", \"id\": 35, \"a\": [-0.35, 0.05, 0], "
+	"\"b\": [-0.72, 0.4, 0.05], \"radius\": 0.1, "
+	"\"translate\": [1.1, -0.3, 0.2], \"color\": [0.38, 0.68, 0.42]}\n"
+	"      ]},\n"
+	"      {\"type\": \"sphere\", \"id\": 36, \"radius\": 0.07, "
+	"\"translate\": [1.0, 0.38, 0.54], \"color\": [0.08, 0.08, 0.1]},\n"
+	"      {\"type\": \"sphere\", \"id\": 37, \"radius\": 0.07, "
+	"\"translate\": [1.2, 0.38, 0.54], \"color\": [0.08, 0.08, 0.1]}\n"
+	"    ]},\n"
+	"    {\"type\": \"smooth_union\", \"id\": 40, \"blend\": 0.1, "
+	"\"children\": [\n"
+	"      {\"type\": \"torus\", \"id\": 41, \"major\": 0.45, \"minor\": 0.09, "
+	"\"translate\": [0, 0, -0.55], "
+	"\"rotate\": [0.707106781, 0, 0, 0.707106781], "
+	"\"color\": [0.95, 0.78, 0.3]},\n"
+	"      {\"type\": \"capsule\", \"id\": 42, \"a\": [0, -0.88, 0], "
+	"\"b\": [0, -0.45, 0], \"radius\": 0.07, "
+	"\"translate\": [0, 0, -0.55], \"color\": [0.7, 0.6, 0.35]}\n"
+	"    ]},\n"
+	"    {\"type\": \"sphere\", \"id\": 50, \"radius\": 0.14, "
+	"\"translate\": [-0.2, -0.74, 0.75], \"color\": [0.9, 0.2, 0.3]},\n"
+	"    {\"type\": \"sphere\", \"id\": 51, \"radius\": 0.12, "
+	"\"translate\": [0.15, -0.76, 0.98], \"color\": [0.95, 0.85, 0.25]},\n"
+	"    {\"type\": \"sphere\", \"id\": 52, \"radius\": 0.1, "
+	"\"translate\": [0.45, -0.78, 0.7], \"color\": [0.25, 0.5, 0.95]}\n"
+	"  ]}\n"
+	"}\n";
+
+const char *bc_scene_default_json(void)
+{
+	return default_scene;
+}
