@@ -479,8 +479,8 @@ class App {
 		this.lastEdits = new Map(); /* member id -> { order, node, at } */
 		this.lastEdit = null;
 		this.lastRemoteEdit = null;
-		this.editSent = new Map(); /* my EDIT seq -> time sent */
-		this.awaitFrame = []; /* { order, sentAt } of my applied edits */
+		this.editSent = new Map(); /* my EDIT seq -> { sentAt, done } */
+		this.awaitFrame = []; /* { order, sentAt, done } of my applied edits */
 		this.inflight = 0; /* seq of my interacting EDIT not yet applied */
 		this.pendingEdit = null; /* the newest edit waiting for it */
 		this.picks = new Map(); /* PICK seq -> resolve */
@@ -640,10 +640,10 @@ class App {
 		this.lastEdits.set(m.author, rec);
 		this.lastEdit = rec;
 		if (mine) {
-			const sentAt = this.editSent.get(m.author_seq);
+			const sent = this.editSent.get(m.author_seq);
 			this.editSent.delete(m.author_seq);
-			if (sentAt !== undefined) {
-				this.awaitFrame.push({ order: m.order, sentAt });
+			if (sent) {
+				this.awaitFrame.push({ order: m.order, ...sent });
 			}
 			if (m.author_seq === this.inflight) {
 				this.inflight = 0;
@@ -676,6 +676,7 @@ class App {
 			const a = this.awaitFrame.shift();
 			this.meter.latency(now - a.sentAt);
 			this.lastLatency = now - a.sentAt;
+			a.done?.(now - a.sentAt);
 		}
 		for (const rec of this.lastEdits.values()) {
 			if (!rec.frameAt && rec.order <= m.order) {
@@ -726,12 +727,12 @@ class App {
 	 * (the next when the server has applied the last), the newest values
 	 * replacing any not yet sent, so a slow server is never flooded and
 	 * never lags behind the mouse; a final edit goes at once. */
-	edit(node, fields, interacting) {
+	edit(node, fields, interacting, done) {
 		if (!this.info || this.info.role !== P.ROLE.EDITOR) {
 			this.say('viewers cannot edit');
 			return;
 		}
-		this.pendingEdit = { node, fields, interacting };
+		this.pendingEdit = { node, fields, interacting, done };
 		if (!interacting || !this.inflight) {
 			this.flushEdit();
 		}
@@ -753,7 +754,8 @@ class App {
 			return;
 		}
 		if (seq) {
-			this.editSent.set(seq, performance.now());
+			this.editSent.set(seq, { sentAt: performance.now(),
+				done: e.done });
 			if (e.interacting) {
 				this.inflight = seq;
 			}
@@ -1255,4 +1257,9 @@ window.blobcast = {
 	},
 	pick: (x, y) => app.pick(x, y).then((r) => r ? { node: r.node,
 		position: r.position, depth: r.depth } : null),
+	/* Moves a primitive with one final EDIT; resolves with the ms from
+	 * sending it to drawing the first frame that reflects it (the
+	 * overlay's edit -> frame number, for the latency benchmark). */
+	moveTo: (id, translate) => new Promise((resolve) => app.edit(id,
+		[{ field: P.FIELD.TRANSLATE, values: translate }], false, resolve)),
 };

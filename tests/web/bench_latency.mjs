@@ -6,17 +6,23 @@
  * plain TCP socket to the daemon, one over a WebSocket (binary
  * subprotocol) through websockify, the page's transport. Each creates its
  * own session with the same small scene and view, so neither renders for
- * the other. Then, alternating between the two paths so that drift in the
- * machine's load hits both alike, each round sends one EDIT (a sphere
- * moved, no INTERACTING flag) and times:
+ * the other. Then, taking turns so that drift in the machine's load hits
+ * every path alike, each round sends one EDIT (a sphere moved, no
+ * INTERACTING flag) and times:
  *   ack:   EDIT sent -> its EDIT_APPLIED received,
- *   frame: EDIT sent -> the first FRAME whose order reflects it, complete.
+ *   frame: EDIT sent -> the first still FRAME whose order reflects it,
+ *          received whole.
+ * When chromium and playwright-core are there, the page itself is a third
+ * path (its own session, same scene, a view of the same size): the page's
+ * edit -> frame, from sending the EDIT to having decoded and drawn the
+ * frame, which is what its overlay shows.
  * Prints median, mean, p90 and min per path and the ws/tcp ratio.
  *
  * Usage: node tests/web/bench_latency.mjs [--blobcastd PATH] [--n N]
- *        [--size WxH]
+ *        [--size WxH] [--no-page]
  */
 import { spawnSync } from 'node:child_process';
+import { join } from 'node:path';
 import net from 'node:net';
 
 import * as P from '../../client/web/protocol.js';
@@ -123,6 +129,45 @@ function sceneBytes() {
 	});
 }
 
+/* The page as a third path: its session gets the same scene from a
+ * short-lived TCP client, then the page joins it with a view of the
+ * benchmark's size. Returns { round(i) -> ms, close() } or null. */
+async function pagePath(daemonPort, wsPort) {
+	if (process.argv.includes('--no-page') ||
+		H.missing({ daemon: H.findDaemon(process.argv), browser: true })
+			.length) {
+		return null;
+	}
+	const seed = await tcpClient(daemonPort);
+	await setUp(seed, 'bench-page');
+	seed.close();
+	const web = await H.startStatic();
+	const { chromium } = await import(join(H.HERE, 'node_modules',
+		'playwright-core', 'index.mjs'));
+	const browser = await chromium.launch({ executablePath: H.CHROMIUM,
+		args: H.CHROMIUM_ARGS });
+	/* The stage is the viewport less the 280-pixel side panel and the
+	 * header, measured once the page is up. */
+	const page = await browser.newPage({ viewport: { width: W + 280,
+		height: HT + 40 } });
+	await page.goto(`http://127.0.0.1:${web.port}/?ws=${wsPort}` +
+		'&session=bench-page&name=bench-page&downscale=1&quality=85');
+	const header = await page.evaluate(() =>
+		document.querySelector('header').getBoundingClientRect().height);
+	await page.setViewportSize({ width: W + 280,
+		height: HT + Math.round(header) });
+	await page.waitForFunction(([w, h]) => {
+		const s = window.blobcast.state();
+		return s.view && s.view.width === w && s.view.height === h &&
+			s.lastFrame && s.lastFrame.still && s.lastFrame.width === w;
+	}, [W, HT], { timeout: 30000 });
+	return {
+		round: (i) => page.evaluate(([x, y]) => window.blobcast.moveTo(2,
+			[x, y, 0]), [i % 2 ? -0.7 : -0.9, 0.05 * (i % 3)]),
+		close: () => browser.close(),
+	};
+}
+
 async function setUp(c, session) {
 	c.send(P.MSG.HELLO, { version_min: 1, version_max: 1,
 		encodings: P.ENCODINGS_ALL, max_frame_bytes: 0,
@@ -176,8 +221,9 @@ try {
 	const ws = await wsClient(proxy.port);
 	await setUp(tcp, 'bench-tcp');
 	await setUp(ws, 'bench-ws');
-	const res = { tcp: [], ws: [] };
-	/* Two warm-up rounds each, then N measured, alternating. */
+	const page = await pagePath(d.port, proxy.port);
+	const res = { tcp: [], ws: [], page: [] };
+	/* Two warm-up rounds each, then N measured, taking turns. */
 	for (let i = 0; i < N + 2; i++) {
 		for (const c of i % 2 ? [ws, tcp] : [tcp, ws]) {
 			const r = await round(c, i);
@@ -185,9 +231,19 @@ try {
 				res[c.name].push(r);
 			}
 		}
+		if (page) {
+			const ms = await page.round(i);
+			await new Promise((r) => setTimeout(r, 30));
+			if (i >= 2) {
+				res.page.push({ frame: ms });
+			}
+		}
+	}
+	if (page) {
+		await page.close();
 	}
 	console.log(`edit -> frame, ${W}x${HT} JPEG q85 still frames, ${N} ` +
-		'rounds per path, alternating');
+		'rounds per path, taking turns');
 	console.log('path        what     median    mean     p90     min  (ms)');
 	const med = {};
 	for (const path of ['tcp', 'ws']) {
@@ -197,6 +253,12 @@ try {
 			console.log(`${path.padEnd(11)} ${what.padEnd(6)} ${fmt(s.median)}` +
 				` ${fmt(s.mean)} ${fmt(s.p90)} ${fmt(s.min)}`);
 		}
+	}
+	if (res.page.length) {
+		const s = summary(res.page.map((r) => r.frame));
+		med['page.frame'] = s.median;
+		console.log(`${'page (ws)'.padEnd(11)} ${'drawn'.padEnd(6)} ` +
+			`${fmt(s.median)} ${fmt(s.mean)} ${fmt(s.p90)} ${fmt(s.min)}`);
 	}
 	const kb = res.ws.reduce((a, r) => a + r.bytes, 0) / res.ws.length / 1024;
 	console.log(`frame size ${kb.toFixed(1)} kB; ws/tcp median ratio: ack ` +
