@@ -1148,6 +1148,8 @@ class App {
 		input.step = String((hi - lo) / 500);
 		input.value = String(get());
 		input.setAttribute('aria-label', label);
+		/* Viewers see the values but cannot change them. */
+		input.disabled = this.info?.role !== P.ROLE.EDITOR;
 		input.dataset.key = `${this.group}/${label}`;
 		const out = document.createElement('output');
 		out.textContent = get().toFixed(3);
