@@ -21,7 +21,7 @@ import { join } from 'node:path';
 
 import * as H from './harness.mjs';
 
-const DEADLINE_MS = 90000;
+const DEADLINE_MS = 110000;
 
 const daemon = H.findDaemon(process.argv);
 const lacking = H.missing({ daemon, browser: true });
@@ -138,8 +138,10 @@ try {
 
 	/* Both pages show a frame and both members. */
 	for (const [p, who] of [[a, 'alice'], [b, 'bob']]) {
+		/* The first frame pays for starting the renderer, slow under
+		 * the sanitizers on a busy machine. */
 		await until(p, `${who}'s first frame`, () =>
-			window.blobcast.state().framesDrawn >= 1);
+			window.blobcast.state().framesDrawn >= 1, null, 45000);
 		await until(p, `${who} to see two members`, () =>
 			window.blobcast.state().members.length === 2);
 		const c = await p.evaluate(canvasContent);
