@@ -617,7 +617,9 @@ static inline float sdf_round_cone(const float *k, float x, float y, float z)
 		return sqrtf(p2) - ra;
 	}
 	float yl = px * ex + py * ey + pz * ez;
-	float xl = sqrtf(mxf(p2 * l2 - yl * yl, 0.0f));
+	/* |pa x ba| rather than sqrt(p2 l2 - yl^2), which cancels to noise
+	 * of sqrt(float eps) near the axis. */
+	float xl = len3f(py * ez - pz * ey, pz * ex - px * ez, px * ey - py * ex);
 	float rr = ra - rb;
 	float c = sqrtf(mxf(l2 - rr * rr, 0.0f));
 	float s = yl * c - xl * rr;
