@@ -46,10 +46,11 @@
  * fragments are 200 MiB of lists, far above real scenes (a 4096-primitive
  * scene at 512^2 makes ~10^5). Frames beyond it fail with BC_ELIMIT. */
 #define BC_CPU_MAX_FRAGMENTS (1u << 24)
-/* Debug colour ramps saturate here (like the paper's Fig. 15, clamped for
- * readability): field evaluations per ray, primitives per tile list. */
-#define BC_CPU_DEBUG_EVALS_MAX 256u
-#define BC_CPU_DEBUG_OVERLAPS_MAX 64u
+/* Debug colour ramps saturate here, clamped for readability like the
+ * paper's Fig. 15 (whose overlap scale ends at a quarter of M_overlap):
+ * field evaluations per ray, primitives per tile list. */
+#define BC_CPU_DEBUG_EVALS_MAX 128u
+#define BC_CPU_DEBUG_OVERLAPS_MAX 32u
 
 /* ---- The renderer ------------------------------------------------------- */
 
@@ -79,6 +80,18 @@ int bc__cpu_sync(struct bc_renderer *r, const struct bc_tree *t,
 		 const struct bc_dirty *dirty, struct bc_errinfo *ei);
 /* tiled.c frees its buffers through this. */
 void bc__tiled_free(struct bc__tiled_bufs *b);
+
+/* fminf and fmaxf without their NaN rules, which GCC will not inline:
+ * these compile to one instruction in the tracing loops. */
+static inline float bc__minf(float a, float b)
+{
+	return a < b ? a : b;
+}
+
+static inline float bc__maxf(float a, float b)
+{
+	return a > b ? a : b;
+}
 
 /* ---- The field ---------------------------------------------------------- */
 

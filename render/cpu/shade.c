@@ -139,7 +139,7 @@ void bc__put_hit(const struct bc__frame_ctx *fc, struct bc__field *f,
 	(void)bc__field_eval_id(f, p, &prim);
 	/* Differences over the hit epsilon: the scale at which the surface
 	 * was resolved. */
-	h = fmaxf(BC_CPU_HIT_FOOTPRINT * fc->pix_angle * t, fc->min_step);
+	h = bc__maxf(BC_CPU_HIT_FOOTPRINT * fc->pix_angle * t, fc->min_step);
 	for (int k = 0; k < 4; k++) {
 		float q[3] = {p[0] + h * tet[k][0], p[1] + h * tet[k][1],
 			      p[2] + h * tet[k][2]};
@@ -172,9 +172,9 @@ void bc__put_hit(const struct bc__frame_ctx *fc, struct bc__field *f,
 			prim < lin->nprims ? lin->color[prim] : grey;
 		float hv[3] = {fc->light[0] - d[0], fc->light[1] - d[1],
 			       fc->light[2] - d[2]};
-		float diff = fmaxf(dot3(n, fc->light), 0.0f), spec;
+		float diff = bc__maxf(dot3(n, fc->light), 0.0f), spec;
 		normalize3(hv);
-		spec = diff > 0.0f ? powf(fmaxf(dot3(n, hv), 0.0f), 48.0f)
+		spec = diff > 0.0f ? powf(bc__maxf(dot3(n, hv), 0.0f), 48.0f)
 				   : 0.0f;
 		for (int c = 0; c < 3; c++) {
 			float lit = albedo[c] * (fc->ambient +

@@ -47,11 +47,16 @@ struct rect {
 	uint32_t x0, y0, x1, y1;
 };
 
-/* Apex at the eye: every pixel ray of the tile is within `half` of axis. */
+/* Apex at the eye: every pixel ray of a block is within the half-angle
+ * (given by its cosine and sine) of axis. */
 struct cone {
 	float axis[3];
-	float half;
+	float cos_h, sin_h;
 };
+
+/* Cones per tile: the whole tile, then its four 4x4 quarters. */
+#define CONES_PER_TILE 5u
+#define QUARTER (BC_CPU_TILE / 2u)
 
 struct worker {
 	struct bc_view view;
@@ -165,6 +170,25 @@ static float angle_between(const float a[3], const float b[3])
 	return acosf(c > 1.0f ? 1.0f : (c < -1.0f ? -1.0f : c));
 }
 
+/* The cone of the pixel rays through pixel centres [x0, x1] x [y0, y1]
+ * (inclusive, in pixel coordinates). */
+static void make_cone(const struct bc_view_rays *vr, float x0, float y0,
+		      float x1, float y1, struct cone *c)
+{
+	float cx[4] = {x0, x1, x0, x1}, cy[4] = {y0, y0, y1, y1};
+	float half = 0.0f;
+	bc_view_rays_dir(vr, 0.5f * (x0 + x1), 0.5f * (y0 + y1), c->axis);
+	for (int k = 0; k < 4; k++) {
+		float corner[3];
+		bc_view_rays_dir(vr, cx[k], cy[k], corner);
+		half = bc__maxf(half, angle_between(corner, c->axis));
+	}
+	/* Margin for rounding in the angle computations. */
+	half += 1.0e-4f;
+	c->cos_h = cosf(half);
+	c->sin_h = sinf(half);
+}
+
 /* Phase 1, per pixel row: ray directions; per tile row: tile cones. */
 static void phase_rays(void *arg, uint32_t thread)
 {
@@ -187,29 +211,28 @@ static void phase_rays(void *arg, uint32_t thread)
 			continue;
 		}
 		for (uint32_t tx = 0; tx < tf->tw; tx++) {
-			struct cone *c = &tf->b->cones[(y / BC_CPU_TILE) * tf->tw +
-						       tx];
-			float x0 = (float)(tx * BC_CPU_TILE) + 0.5f;
-			float y0 = (float)y + 0.5f;
-			float x1 = (float)(tx * BC_CPU_TILE +
-					   (w - tx * BC_CPU_TILE < BC_CPU_TILE
-						    ? w - tx * BC_CPU_TILE
-						    : BC_CPU_TILE)) - 0.5f;
-			float y1 = (float)(y + (h - y < BC_CPU_TILE
-							? h - y
-							: BC_CPU_TILE)) - 0.5f;
-			float corner[3];
-			float cx[4] = {x0, x1, x0, x1}, cy[4] = {y0, y0, y1, y1};
-			bc_view_rays_dir(&fc->vr, 0.5f * (x0 + x1),
-					 0.5f * (y0 + y1), c->axis);
-			c->half = 0.0f;
-			for (int k = 0; k < 4; k++) {
-				bc_view_rays_dir(&fc->vr, cx[k], cy[k], corner);
-				c->half = fmaxf(c->half,
-						angle_between(corner, c->axis));
+			struct cone *c =
+				&tf->b->cones[CONES_PER_TILE *
+					      ((y / BC_CPU_TILE) * tf->tw + tx)];
+			uint32_t x0 = tx * BC_CPU_TILE;
+			uint32_t x1 = x0 + BC_CPU_TILE < w ? x0 + BC_CPU_TILE : w;
+			uint32_t y1 = y + BC_CPU_TILE < h ? y + BC_CPU_TILE : h;
+			make_cone(&fc->vr, (float)x0 + 0.5f, (float)y + 0.5f,
+				  (float)x1 - 0.5f, (float)y1 - 0.5f, &c[0]);
+			for (uint32_t q = 0; q < 4; q++) {
+				uint32_t qx0 = x0 + (q & 1u) * QUARTER;
+				uint32_t qy0 = y + (q >> 1) * QUARTER;
+				uint32_t qx1 = qx0 + QUARTER < x1 ? qx0 + QUARTER
+								  : x1;
+				uint32_t qy1 = qy0 + QUARTER < y1 ? qy0 + QUARTER
+								  : y1;
+				if (qx0 >= qx1 || qy0 >= qy1) {
+					continue; /* off the image's edge */
+				}
+				make_cone(&fc->vr, (float)qx0 + 0.5f,
+					  (float)qy0 + 0.5f, (float)qx1 - 0.5f,
+					  (float)qy1 - 0.5f, &c[1 + q]);
 			}
-			/* Margin for rounding in the angle computations. */
-			c->half += 1.0e-4f;
 		}
 	}
 }
@@ -236,10 +259,10 @@ static struct rect project_box(const struct tiled_frame *tf, const float lo[3],
 		}
 		sx = dot3(v, vr->right) / (z * vr->tan_half_y * vr->aspect);
 		sy = dot3(v, vr->up) / (z * vr->tan_half_y);
-		px0 = fminf(px0, (sx + 1.0f) * 0.5f * w);
-		px1 = fmaxf(px1, (sx + 1.0f) * 0.5f * w);
-		py0 = fminf(py0, (1.0f - sy) * 0.5f * h);
-		py1 = fmaxf(py1, (1.0f - sy) * 0.5f * h);
+		px0 = bc__minf(px0, (sx + 1.0f) * 0.5f * w);
+		px1 = bc__maxf(px1, (sx + 1.0f) * 0.5f * w);
+		py0 = bc__minf(py0, (1.0f - sy) * 0.5f * h);
+		py1 = bc__maxf(py1, (1.0f - sy) * 0.5f * h);
 	}
 	if (behind == 8) {
 		return none; /* wholly behind the eye: no ray reaches it */
@@ -249,10 +272,10 @@ static struct rect project_box(const struct tiled_frame *tf, const float lo[3],
 	}
 	/* Pixel i is covered when its centre i + 0.5 is inside; one pixel of
 	 * margin absorbs rounding. */
-	px0 = fmaxf(px0 - 1.5f, 0.0f);
-	py0 = fmaxf(py0 - 1.5f, 0.0f);
-	px1 = fminf(px1 + 0.5f, w - 1.0f);
-	py1 = fminf(py1 + 0.5f, h - 1.0f);
+	px0 = bc__maxf(px0 - 1.5f, 0.0f);
+	py0 = bc__maxf(py0 - 1.5f, 0.0f);
+	px1 = bc__minf(px1 + 0.5f, w - 1.0f);
+	py1 = bc__minf(py1 + 0.5f, h - 1.0f);
 	if (!(px0 <= px1 && py0 <= py1)) {
 		return none;
 	}
@@ -286,7 +309,7 @@ static void widened_abv(const struct bc__frame_ctx *fc, uint32_t k,
 	}
 	far = sqrtf(far) + sqrtf(r2);
 	m = BC_CPU_LIPSCHITZ *
-	    fmaxf(BC_CPU_HIT_FOOTPRINT * fc->pix_angle * far, fc->min_step);
+	    bc__maxf(BC_CPU_HIT_FOOTPRINT * fc->pix_angle * far, fc->min_step);
 	switch (out->shape) {
 	case BC_ABV_BOX:
 		for (int i = 0; i < 3; i++) {
@@ -322,19 +345,129 @@ static void phase_rects(void *arg, uint32_t thread)
 	}
 }
 
-static bool cone_meets_sphere(const struct cone *c, const float eye[3],
-			      const float centre[3], float radius)
+/* Does the sphere (centre relative to the eye v, radius r) meet the
+ * cone? With dist = |v| > r the sphere spans the angle asin(r / dist)
+ * around v, so they meet when the angle between v and the axis is at most
+ * half + asin(r / dist), i.e. (both angles below pi) when
+ * dot(v, axis) >= cos_h sqrt(dist^2 - r^2) - sin_h r. */
+static inline bool cone_meets_sphere(const struct cone *c, const float v[3],
+				     float dist2, float r)
 {
-	float v[3] = {centre[0] - eye[0], centre[1] - eye[1],
-		      centre[2] - eye[2]};
-	float dist = sqrtf(dot3(v, v));
-	if (dist <= radius) {
+	if (dist2 <= r * r) {
 		return true;
 	}
-	v[0] /= dist;
-	v[1] /= dist;
-	v[2] /= dist;
-	return angle_between(v, c->axis) <= c->half + asinf(radius / dist);
+	return dot3(v, c->axis) >=
+	       c->cos_h * sqrtf(dist2 - r * r) - c->sin_h * r;
+}
+
+/* A sphere around the (world) shape: tighter than the AABB's for spheres
+ * and capsules, which makes the cone tests sharper. */
+static void bounding_sphere(const struct bc_abv *abv, const float lo[3],
+			    const float hi[3], float c[3], float *r)
+{
+	float e2 = 0.0f;
+	switch (abv->shape) {
+	case BC_ABV_SPHERE:
+		memcpy(c, abv->center, sizeof(abv->center));
+		*r = abv->radius;
+		return;
+	case BC_ABV_CAPSULE:
+		for (int i = 0; i < 3; i++) {
+			float e = 0.5f * (abv->end[i] - abv->center[i]);
+			c[i] = abv->center[i] + e;
+			e2 += e * e;
+		}
+		*r = sqrtf(e2) + abv->radius;
+		return;
+	case BC_ABV_BOX:
+		memcpy(c, abv->center, sizeof(abv->center));
+		*r = sqrtf(dot3(abv->half, abv->half));
+		return;
+	default:
+		for (int i = 0; i < 3; i++) {
+			float e = 0.5f * (hi[i] - lo[i]);
+			c[i] = lo[i] + e;
+			e2 += e * e;
+		}
+		*r = sqrtf(e2);
+		return;
+	}
+}
+
+/* Ray (from the eye, unit d) against a sphere ABV (centre v relative to the
+ * eye, radius r): the one shape whose test is inlined here, because sphere
+ * ABVs are the most common and a call to bc_abv_ray per pixel ray (double
+ * precision, outward rounding) was most of the A-buffer's time at 4096
+ * primitives. Computing the squared distance of the centre from the ray
+ * directly avoids the cancellation of b^2 - c; the interval is padded
+ * outwards. Rays that graze the sphere within rounding may be lost, which
+ * is safe because the ABV was widened by the hit epsilon (widened_abv):
+ * every ray that meets the unwidened ABV crosses this sphere well inside. */
+static inline bool ray_sphere(const float v[3], float r, const float d[3],
+			      float *t0, float *t1)
+{
+	float b = dot3(v, d);
+	float p[3] = {v[0] - b * d[0], v[1] - b * d[1], v[2] - b * d[2]};
+	float disc = r * r - dot3(p, p), s, pad;
+	if (!(disc >= 0.0f)) {
+		return false;
+	}
+	s = sqrtf(disc);
+	pad = 1.0e-5f * (fabsf(b) + r);
+	*t0 = b - s - pad;
+	*t1 = b + s + pad;
+	return true;
+}
+
+/* The fragment of one ABV in tile (tx, ty): min entry and max exit over
+ * the tile's pixel rays that hit it, or (inf, -inf). The tile's cone, then
+ * each quarter's, are tested against the ABV's bounding sphere (v: centre
+ * relative to the eye) before any ray is. */
+static void fragment(const struct tiled_frame *tf, const struct bc_abv *abv,
+		     const float v[3], float dist2, float radius, uint32_t tx,
+		     uint32_t ty, float out[2])
+{
+	const struct bc__frame_ctx *fc = tf->fc;
+	const struct cone *cones =
+		&tf->b->cones[CONES_PER_TILE * (ty * tf->tw + tx)];
+	uint32_t w = fc->out->width, h = fc->out->height;
+	uint32_t x0 = tx * BC_CPU_TILE, y0 = ty * BC_CPU_TILE;
+	uint32_t x1 = x0 + BC_CPU_TILE < w ? x0 + BC_CPU_TILE : w;
+	uint32_t y1 = y0 + BC_CPU_TILE < h ? y0 + BC_CPU_TILE : h;
+	float t0 = INFINITY, t1 = -INFINITY;
+	out[0] = t0;
+	out[1] = t1;
+	if (!cone_meets_sphere(&cones[0], v, dist2, radius)) {
+		return;
+	}
+	for (uint32_t q = 0; q < 4; q++) {
+		uint32_t qx0 = x0 + (q & 1u) * QUARTER;
+		uint32_t qy0 = y0 + (q >> 1) * QUARTER;
+		uint32_t qx1 = qx0 + QUARTER < x1 ? qx0 + QUARTER : x1;
+		uint32_t qy1 = qy0 + QUARTER < y1 ? qy0 + QUARTER : y1;
+		if (qx0 >= qx1 || qy0 >= qy1 ||
+		    !cone_meets_sphere(&cones[1 + q], v, dist2, radius)) {
+			continue;
+		}
+		for (uint32_t y = qy0; y < qy1; y++) {
+			const float *d = tf->b->dirs + 3 * ((size_t)y * w + qx0);
+			for (uint32_t x = qx0; x < qx1; x++, d += 3) {
+				float a, e;
+				bool hit = abv->shape == BC_ABV_SPHERE
+						   ? ray_sphere(v, abv->radius, d,
+								&a, &e)
+						   : bc_abv_ray(abv, fc->vr.eye, d,
+								&a, &e);
+				if (hit && e > 0.0f) {
+					a = a > 0.0f ? a : 0.0f;
+					t0 = a < t0 ? a : t0;
+					t1 = e > t1 ? e : t1;
+				}
+			}
+		}
+	}
+	out[0] = t0;
+	out[1] = t1;
 }
 
 /* Phase 3, per chunk of candidates: the fragment of primitive k in each
@@ -346,7 +479,6 @@ static void phase_intervals(void *arg, uint32_t thread)
 	struct tiled_frame *tf = arg;
 	const struct bc__frame_ctx *fc = tf->fc;
 	struct bc__tiled_bufs *b = tf->b;
-	uint32_t w = fc->out->width, h = fc->out->height;
 	uint32_t nchunks = (uint32_t)((tf->ncand + CAND_CHUNK - 1) / CAND_CHUNK);
 	(void)thread;
 	for (;;) {
@@ -377,44 +509,18 @@ static void phase_intervals(void *arg, uint32_t thread)
 			uint64_t from = b->cand_off[k] > c0 ? b->cand_off[k] : c0;
 			uint64_t to = b->cand_off[k + 1] < c1 ? b->cand_off[k + 1]
 							      : c1;
-			float blo[3], bhi[3], centre[3], radius = 0.0f;
-			widened_abv(fc, k, &abv, blo, bhi);
+			float lo3[3], hi3[3], v[3], dist2, radius;
+			widened_abv(fc, k, &abv, lo3, hi3);
+			bounding_sphere(&abv, lo3, hi3, v, &radius);
 			for (int i = 0; i < 3; i++) {
-				float e = 0.5f * (bhi[i] - blo[i]);
-				centre[i] = 0.5f * (blo[i] + bhi[i]);
-				radius += e * e;
+				v[i] -= fc->vr.eye[i];
 			}
-			radius = sqrtf(radius);
+			dist2 = dot3(v, v);
 			for (uint64_t c = from; c < to; c++) {
 				uint32_t j = (uint32_t)(c - b->cand_off[k]);
-				uint32_t tx = r->x0 + j % rw, ty = r->y0 + j / rw;
-				float t0 = INFINITY, t1 = -INFINITY;
-				if (cone_meets_sphere(
-					    &b->cones[ty * tf->tw + tx],
-					    fc->vr.eye, centre, radius)) {
-					uint32_t x1 = (tx + 1) * BC_CPU_TILE,
-						 y1 = (ty + 1) * BC_CPU_TILE;
-					x1 = x1 < w ? x1 : w;
-					y1 = y1 < h ? y1 : h;
-					for (uint32_t y = ty * BC_CPU_TILE; y < y1;
-					     y++) {
-						for (uint32_t x = tx * BC_CPU_TILE;
-						     x < x1; x++) {
-							const float *d =
-								b->dirs +
-								3 * ((size_t)y * w + x);
-							float a, e;
-							if (bc_abv_ray(&abv, fc->vr.eye,
-								       d, &a, &e) &&
-							    e > 0.0f) {
-								t0 = fminf(t0, fmaxf(a, 0.0f));
-								t1 = fmaxf(t1, e);
-							}
-						}
-					}
-				}
-				b->cand[2 * c] = t0;
-				b->cand[2 * c + 1] = t1;
+				fragment(tf, &abv, v, dist2, radius,
+					 r->x0 + j % rw, r->y0 + j / rw,
+					 &b->cand[2 * c]);
 			}
 		}
 	}
@@ -490,7 +596,7 @@ static void trace_tile(struct tiled_frame *tf, struct worker *wk, uint32_t tile)
 			if (wk->act_t1[i] > z_end) {
 				wk->act[kept] = wk->act[i];
 				wk->act_t1[kept] = wk->act_t1[i];
-				max_exit = fmaxf(max_exit, wk->act_t1[i]);
+				max_exit = bc__maxf(max_exit, wk->act_t1[i]);
 				kept++;
 			}
 		}
@@ -507,7 +613,7 @@ static void trace_tile(struct tiled_frame *tf, struct worker *wk, uint32_t tile)
 		       na < BC_CPU_M_OVERLAP &&
 		       (na == 0 || list[next].t0 <= max_exit)) {
 			activate(wk, &na, &list[next]);
-			max_exit = fmaxf(max_exit, list[next].t1);
+			max_exit = bc__maxf(max_exit, list[next].t1);
 			next++;
 			fetched++;
 		}
@@ -517,13 +623,13 @@ static void trace_tile(struct tiled_frame *tf, struct worker *wk, uint32_t tile)
 			 * file comment). */
 			while (next < n && list[next].t0 <= z_begin) {
 				activate(wk, &na, &list[next]);
-				max_exit = fmaxf(max_exit, list[next].t1);
+				max_exit = bc__maxf(max_exit, list[next].t1);
 				next++;
 			}
 			wk->overflows++;
 		}
 		/* eq. 22 */
-		z_end = next < n ? fminf(list[next].t0, max_exit) : max_exit;
+		z_end = next < n ? bc__minf(list[next].t0, max_exit) : max_exit;
 		if (!(z_end > z_begin)) {
 			continue;
 		}
@@ -734,8 +840,8 @@ static int tiled_render(struct bc_renderer *r, const struct bc_camera *cam,
 	tf.nprims = lin ? lin->nprims : 0;
 	npix = (size_t)out->width * out->height;
 	if (grow((void **)&b->dirs, &b->dirs_cap, 3 * npix, sizeof(float)) ||
-	    grow((void **)&b->cones, &b->cones_cap, tf.ntiles,
-		 sizeof(*b->cones)) ||
+	    grow((void **)&b->cones, &b->cones_cap,
+		 (size_t)CONES_PER_TILE * tf.ntiles, sizeof(*b->cones)) ||
 	    grow_pair((void **)&b->tile_off, (void **)&b->tile_cur,
 		      &b->tiles_cap, (size_t)tf.ntiles + 1, sizeof(uint32_t),
 		      sizeof(uint32_t))) {

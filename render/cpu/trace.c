@@ -113,7 +113,7 @@ static enum bc__trace_result refine(struct bc__field *f,
 	/* Beyond this the ray is so oblique that the silhouette is as good
 	 * an answer as any. */
 	float cap = t + 64.0f * BC_CPU_LIPSCHITZ * eps;
-	float limit = fminf(cap, t1);
+	float limit = bc__minf(cap, t1);
 	for (int i = 0; i < 8; i++) {
 		float reach, probe, vp;
 		if (t > t_prev && v_prev > v) {
@@ -123,7 +123,7 @@ static enum bc__trace_result refine(struct bc__field *f,
 		} else {
 			break;
 		}
-		probe = fminf(t + fmaxf(reach, fc->min_step), limit);
+		probe = bc__minf(t + bc__maxf(reach, fc->min_step), limit);
 		if (!(probe > t)) {
 			/* Still descending at the interval's end: the
 			 * crossing, if any, lies beyond it. */
@@ -170,7 +170,7 @@ enum bc__trace_result bc__trace(struct bc__field *f,
 	for (;;) {
 		/* Hit epsilon: half a pixel at t, never below the minimal
 		 * step (which therefore bounds the steps per ray). */
-		float eps = fmaxf(BC_CPU_HIT_FOOTPRINT * fc->pix_angle * t,
+		float eps = bc__maxf(BC_CPU_HIT_FOOTPRINT * fc->pix_angle * t,
 				  fc->min_step);
 		float step, tn, vn;
 		if (v < eps) {
@@ -182,15 +182,15 @@ enum bc__trace_result bc__trace(struct bc__field *f,
 		}
 		/* The step never drops below float resolution at t, so the
 		 * loop advances even far from the origin. */
-		step = fmaxf(omega * v, 1.0e-6f * t);
-		tn = fminf(t + step, t1);
+		step = bc__maxf(omega * v, 1.0e-6f * t);
+		tn = bc__minf(t + step, t1);
 		vn = eval_at(f, o, d, tn);
 		if (omega > 1.0f && v + fabsf(vn) < tn - t) {
 			/* The unbounding spheres at t and tn are disjoint: the
 			 * gap between them was never proven empty. Take the
 			 * plain step, which is. */
 			omega = 1.0f;
-			tn = fminf(t + fmaxf(v, 1.0e-6f * t), t1);
+			tn = bc__minf(t + bc__maxf(v, 1.0e-6f * t), t1);
 			vn = eval_at(f, o, d, tn);
 		}
 		if (vn < 0.0f) {
@@ -220,8 +220,8 @@ bool bc__ray_box(const float lo[3], const float hi[3], const float o[3],
 				ta = tb;
 				tb = s;
 			}
-			a = fmaxf(a, ta);
-			b = fminf(b, tb);
+			a = bc__maxf(a, ta);
+			b = bc__minf(b, tb);
 		} else if (o[i] < lo[i] || o[i] > hi[i]) {
 			return false;
 		}
