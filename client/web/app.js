@@ -26,51 +26,7 @@
  * for anyone curious in the developer console.
  */
 import * as P from './protocol.js';
-
-/* ---- Primitive kinds (docs/primitives.md, blobtree/prim.c) ------------- */
-
-/* name, and each parameter: [name, component count, rule]. Rule 'pos' is
- * > 0, 'nonneg' >= 0, 'deg' an angle in degrees, 'free' any coordinate.
- * Field number 16 + k is the k-th parameter; its floats follow the earlier
- * ones in the scene encoding. */
-const PRIMS = {
-	1: ['sphere', [['radius', 1, 'pos']]],
-	2: ['box', [['half_extents', 3, 'pos'], ['round', 1, 'nonneg']]],
-	3: ['capsule', [['a', 3, 'free'], ['b', 3, 'free'], ['radius', 1, 'pos']]],
-	4: ['cylinder', [['radius', 1, 'pos'], ['half_height', 1, 'pos']]],
-	5: ['torus', [['major', 1, 'pos'], ['minor', 1, 'pos']]],
-	6: ['cone', [['half_height', 1, 'pos'], ['radius_bottom', 1, 'nonneg'],
-		['radius_top', 1, 'nonneg']]],
-	7: ['round_cone', [['a', 3, 'free'], ['b', 3, 'free'],
-		['radius_a', 1, 'nonneg'], ['radius_b', 1, 'nonneg']]],
-	8: ['ellipsoid', [['radii', 3, 'pos']]],
-	9: ['hex_prism', [['radius', 1, 'pos'], ['half_depth', 1, 'pos']]],
-	10: ['octahedron', [['size', 1, 'pos']]],
-	11: ['box_frame', [['half_extents', 3, 'pos'], ['thickness', 1, 'pos']]],
-	12: ['capped_torus', [['major', 1, 'pos'], ['minor', 1, 'pos'],
-		['angle_deg', 1, 'deg']]],
-	13: ['link', [['half_length', 1, 'nonneg'], ['major', 1, 'pos'],
-		['minor', 1, 'pos']]],
-	14: ['solid_angle', [['radius', 1, 'pos'], ['angle_deg', 1, 'deg']]],
-	15: ['pyramid', [['half_base', 1, 'pos'], ['height', 1, 'pos']]],
-	16: ['tri_prism', [['radius', 1, 'pos'], ['half_depth', 1, 'pos']]],
-};
-const OPS = ['', 'union', 'intersection', 'difference', 'smooth_union',
-	'smooth_intersection', 'smooth_difference'];
-
-/* [{ name, offset, count, rule }] for a kind, or null if it is unknown. */
-function layout(kind) {
-	const p = PRIMS[kind];
-	if (!p) {
-		return null;
-	}
-	let offset = 0;
-	return p[1].map(([name, count, rule]) => {
-		const d = { name, offset, count, rule };
-		offset += count;
-		return d;
-	});
-}
+import { OPS, PRIMS, layout } from './prims.js';
 
 function kindName(n) {
 	return n.isOp ? OPS[n.kind] ?? `op ${n.kind}`

@@ -174,7 +174,7 @@ const TYPES = { '.html': 'text/html; charset=utf-8', '.js': 'text/javascript',
 /* Serves the files of client/web/ and nothing else. */
 export async function startStatic() {
 	const files = new Set(['index.html', 'app.js', 'protocol.js',
-		'style.css']);
+		'prims.js', 'style.css']);
 	const server = createServer((req, res) => {
 		const name = new URL(req.url, 'http://x').pathname.slice(1) ||
 			'index.html';

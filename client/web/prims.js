@@ -1,0 +1,52 @@
+/*
+ * The primitive and operator kinds as the page names and edits them: each
+ * primitive kind's parameters in the order of docs/primitives.md (and of
+ * blobtree/prim.c, which tests/web/prims.test.mjs checks this table
+ * against), with their component counts. Field number 16 + k of an EDIT
+ * sets parameter k, and in the scene encoding its floats follow those of
+ * the parameters before it.
+ */
+
+/* kind -> [name, [[parameter, component count, rule], ...]]. Rule 'pos' is
+ * > 0, 'nonneg' >= 0, 'deg' an angle in degrees, 'free' any coordinate. */
+export const PRIMS = Object.freeze({
+	1: ['sphere', [['radius', 1, 'pos']]],
+	2: ['box', [['half_extents', 3, 'pos'], ['round', 1, 'nonneg']]],
+	3: ['capsule', [['a', 3, 'free'], ['b', 3, 'free'], ['radius', 1, 'pos']]],
+	4: ['cylinder', [['radius', 1, 'pos'], ['half_height', 1, 'pos']]],
+	5: ['torus', [['major', 1, 'pos'], ['minor', 1, 'pos']]],
+	6: ['cone', [['half_height', 1, 'pos'], ['radius_bottom', 1, 'nonneg'],
+		['radius_top', 1, 'nonneg']]],
+	7: ['round_cone', [['a', 3, 'free'], ['b', 3, 'free'],
+		['radius_a', 1, 'nonneg'], ['radius_b', 1, 'nonneg']]],
+	8: ['ellipsoid', [['radii', 3, 'pos']]],
+	9: ['hex_prism', [['radius', 1, 'pos'], ['half_depth', 1, 'pos']]],
+	10: ['octahedron', [['size', 1, 'pos']]],
+	11: ['box_frame', [['half_extents', 3, 'pos'], ['thickness', 1, 'pos']]],
+	12: ['capped_torus', [['major', 1, 'pos'], ['minor', 1, 'pos'],
+		['angle_deg', 1, 'deg']]],
+	13: ['link', [['half_length', 1, 'nonneg'], ['major', 1, 'pos'],
+		['minor', 1, 'pos']]],
+	14: ['solid_angle', [['radius', 1, 'pos'], ['angle_deg', 1, 'deg']]],
+	15: ['pyramid', [['half_base', 1, 'pos'], ['height', 1, 'pos']]],
+	16: ['tri_prism', [['radius', 1, 'pos'], ['half_depth', 1, 'pos']]],
+});
+
+/* Operator kinds 1..6 (the OP_KIND field's values). */
+export const OPS = Object.freeze(['', 'union', 'intersection', 'difference',
+	'smooth_union', 'smooth_intersection', 'smooth_difference']);
+
+/* [{ name, offset, count, rule }] for a primitive kind, or null if it is
+ * unknown. */
+export function layout(kind) {
+	const p = PRIMS[kind];
+	if (!p) {
+		return null;
+	}
+	let offset = 0;
+	return p[1].map(([name, count, rule]) => {
+		const d = { name, offset, count, rule };
+		offset += count;
+		return d;
+	});
+}
