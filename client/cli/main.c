@@ -1,0 +1,176 @@
+/*
+ * The `blobcast` command: dispatches the subcommands to their files in
+ * client/cli/ and prints the overview help. Subcommands whose source is not
+ * part of this build (CMake defines BLOBCAST_CLI_HAVE_* for those compiled
+ * in) are reported as unavailable rather than unknown.
+ */
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "blobcast/alloc.h"
+#include "blobcast/log.h"
+#include "cmd_render.h"
+#if defined(BLOBCAST_CLI_HAVE_GEN)
+#include "cmd_gen.h"
+#endif
+#if defined(BLOBCAST_CLI_HAVE_EVALBENCH)
+#include "cmd_evalbench.h"
+#endif
+#if defined(BLOBCAST_CLI_HAVE_CLIENT)
+#include "cmd_client.h"
+#endif
+
+#ifndef BLOBCAST_VERSION
+#define BLOBCAST_VERSION "unknown"
+#endif
+
+/* The subcommands that talk to a blobcastd (cmd_client.c). */
+static const char *const client_cmds[] = {
+	"load", "edit", "camera", "snapshot", "watch", "bench-latency",
+};
+
+static bool is_client_cmd(const char *s)
+{
+	for (size_t i = 0; i < sizeof(client_cmds) / sizeof(client_cmds[0]);
+	     i++) {
+		if (strcmp(s, client_cmds[i]) == 0) {
+			return true;
+		}
+	}
+	return false;
+}
+
+static void usage(FILE *out)
+{
+	fprintf(out,
+		"usage: blobcast [--server ADDR] COMMAND [options]\n"
+		"\n"
+		"Local commands:\n"
+		"  render      render a scene file to images on this machine\n"
+#if defined(BLOBCAST_CLI_HAVE_GEN)
+		"  gen         print a generated scene (the paper's synthetic\n"
+		"              families and more) as JSON\n"
+#endif
+#if defined(BLOBCAST_CLI_HAVE_EVALBENCH)
+		"  eval-bench  measure interval pruning and pruned evaluation\n"
+		"              on a scene (prints JSON)\n"
+#endif
+		"  help [COMMAND]  this overview, or a command's full help\n"
+		"  --version   print the version\n");
+#if defined(BLOBCAST_CLI_HAVE_CLIENT)
+	fprintf(out,
+		"\nCommands for a blobcastd server (--server HOST:PORT or\n"
+		"unix:PATH, before or after the command):\n");
+	bc_cli_client_usage(out);
+#endif
+	fprintf(out, "\n'blobcast COMMAND --help' describes each command's "
+		     "options.\n");
+}
+
+/* Runs one subcommand. argv[0] is its name. */
+static int dispatch(int argc, char **argv)
+{
+	const char *cmd = argv[0];
+	if (strcmp(cmd, "render") == 0) {
+		return bc_cli_render(argc, argv);
+	}
+	if (strcmp(cmd, "gen") == 0) {
+#if defined(BLOBCAST_CLI_HAVE_GEN)
+		return bc_cli_gen(argc, argv);
+#endif
+	} else if (strcmp(cmd, "eval-bench") == 0) {
+#if defined(BLOBCAST_CLI_HAVE_EVALBENCH)
+		return bc_cli_eval_bench(argc, argv);
+#endif
+	} else if (is_client_cmd(cmd)) {
+#if defined(BLOBCAST_CLI_HAVE_CLIENT)
+		return bc_cli_client(cmd, argc, argv);
+#endif
+	} else {
+		fprintf(stderr, "blobcast: unknown command '%s' (see "
+				"'blobcast --help')\n", cmd);
+		return 2;
+	}
+	fprintf(stderr, "blobcast: command '%s' is not built into this "
+			"blobcast\n", cmd);
+	return 2;
+}
+
+static int help(const char *cmd)
+{
+	char *args[3] = {NULL, "--help", NULL};
+	if (!cmd) {
+		usage(stdout);
+		return 0;
+	}
+	args[0] = (char *)cmd;
+	return dispatch(2, args);
+}
+
+int main(int argc, char **argv)
+{
+	const char *server = NULL;
+	int first = 1, status;
+	char **sub;
+	bc_log_init(BC_LOG_WARN);
+	/* Global options before the command. */
+	while (first < argc && argv[first][0] == '-') {
+		const char *a = argv[first];
+		if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
+			usage(stdout);
+			return 0;
+		}
+		if (strcmp(a, "--version") == 0) {
+			printf("blobcast %s\n", BLOBCAST_VERSION);
+			return 0;
+		}
+		if (strcmp(a, "--server") == 0 && first + 1 < argc) {
+			server = argv[first + 1];
+			first += 2;
+		} else if (strncmp(a, "--server=", 9) == 0) {
+			server = a + 9;
+			first++;
+		} else {
+			fprintf(stderr, "blobcast: unknown option '%s' (see "
+					"'blobcast --help')\n", a);
+			return 2;
+		}
+	}
+	if (first >= argc) {
+		usage(stderr);
+		return 2;
+	}
+	if (strcmp(argv[first], "help") == 0) {
+		if (server || first + 2 < argc) {
+			fprintf(stderr, "usage: blobcast help [COMMAND]\n");
+			return 2;
+		}
+		return help(first + 1 < argc ? argv[first + 1] : NULL);
+	}
+	if (!server) {
+		return dispatch(argc - first, argv + first);
+	}
+	if (!is_client_cmd(argv[first])) {
+		fprintf(stderr, "blobcast: --server applies to the server "
+				"commands only, not '%s'\n", argv[first]);
+		return 2;
+	}
+	/* The client commands parse --server themselves: pass it after the
+	 * command word. */
+	sub = bc_calloc((size_t)(argc - first) + 3, sizeof(*sub));
+	if (!sub) {
+		fprintf(stderr, "blobcast: out of memory\n");
+		return 1;
+	}
+	sub[0] = argv[first];
+	sub[1] = "--server";
+	sub[2] = (char *)server;
+	for (int i = first + 1; i < argc; i++) {
+		sub[i - first + 2] = argv[i];
+	}
+	status = dispatch(argc - first + 2, sub);
+	bc_free(sub);
+	return status;
+}
