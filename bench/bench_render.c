@@ -1,0 +1,201 @@
+/*
+ * CPU renderer benchmark: `tiled` (Zanni 2024 §6 on CPU threads) against
+ * `naive` (full-tree sphere tracing per pixel) at 512x512 on the paper's
+ * synthetic scenes -- Fig. 18 smooth spheres (256, 1024, 4096) and Fig. 16
+ * levels 1-4 -- with the same thread count, side by side in one run.
+ *
+ * Naive on these scenes takes minutes per frame, so both backends are also
+ * timed on a band of the frame: the central `rows` rows of the 512x512
+ * image, rendered as a 512 x rows frame whose vertical field of view is cut
+ * to match (the same pixel rays exactly). The speedup column is naive over
+ * tiled on that band; the naive full-frame figure is the band time scaled
+ * by 512 / rows and is marked as an estimate. Tiled is also timed on the
+ * full frame, which the growth figure uses.
+ *
+ * Usage: bench_render [--size N] [--threads T] [--reps R] [--quick]
+ *   --size N     frame edge (default 512)
+ *   --threads T  threads for both backends (default 1: steadier on a
+ *                shared machine; 0 = one per core)
+ *   --reps R     tiled runs per measurement, the fastest is kept (3)
+ *   --quick      only the first three scenes
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "blobcast/blobtree.h"
+#include "blobcast/gen.h"
+#include "blobcast/render.h"
+
+struct scene {
+	const char *label;
+	const char *gen;
+	struct bc_gen_opts opts;
+	uint32_t band; /* rows of the naive band */
+};
+
+static double now_ms(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+}
+
+/* Fastest of reps renders, and that render's stats. */
+static double time_render(enum bc_backend b, const struct bc_render_opts *o,
+			  const struct bc_tree *t, const struct bc_camera *cam,
+			  struct bc_frame *f, int reps,
+			  struct bc_render_stats *st)
+{
+	double best = INFINITY;
+	for (int i = 0; i < reps; i++) {
+		struct bc_errinfo ei = {0};
+		struct bc_render_stats s;
+		double t0 = now_ms(), ms;
+		if (bc_render_once(b, o, t, cam, f, &s, &ei)) {
+			fprintf(stderr, "render failed: %s\n", ei.msg);
+			exit(1);
+		}
+		ms = now_ms() - t0;
+		if (ms < best) {
+			best = ms;
+			*st = s;
+		}
+	}
+	return best;
+}
+
+/* The camera whose w x rows frame holds exactly the central rows of the
+ * w x h frame of cam: same eye and axes, vertical extent cut. */
+static struct bc_camera band_camera(const struct bc_camera *cam, uint32_t h,
+				    uint32_t rows)
+{
+	struct bc_camera c = *cam;
+	double half = (double)cam->fov_y_deg * 3.14159265358979 / 360.0;
+	double t = tan(half) * (double)rows / (double)h;
+	c.fov_y_deg = (float)(atan(t) * 360.0 / 3.14159265358979);
+	return c;
+}
+
+static uint32_t hits(const struct bc_frame *f)
+{
+	uint32_t n = 0;
+	for (size_t i = 0; i < (size_t)f->width * f->height; i++) {
+		n += f->ids[i] != 0;
+	}
+	return n;
+}
+
+int main(int argc, char **argv)
+{
+	struct scene scenes[] = {
+		{"fig18 smooth spheres 256", "fig18",
+		 {.count = 256, .kind = BC_GEN_KIND_SPHERES,
+		  .blend = BC_GEN_BLEND_SMOOTH},
+		 32},
+		{"fig18 smooth spheres 1024", "fig18",
+		 {.count = 1024, .kind = BC_GEN_KIND_SPHERES,
+		  .blend = BC_GEN_BLEND_SMOOTH},
+		 16},
+		{"fig18 smooth spheres 4096", "fig18",
+		 {.count = 4096, .kind = BC_GEN_KIND_SPHERES,
+		  .blend = BC_GEN_BLEND_SMOOTH},
+		 8},
+		{"fig16 L1 smooth", "fig16",
+		 {.level = 1, .blend = BC_GEN_BLEND_SMOOTH}, 32},
+		{"fig16 L2 smooth", "fig16",
+		 {.level = 2, .blend = BC_GEN_BLEND_SMOOTH}, 16},
+		{"fig16 L3 smooth", "fig16",
+		 {.level = 3, .blend = BC_GEN_BLEND_SMOOTH}, 8},
+		{"fig16 L4 smooth", "fig16",
+		 {.level = 4, .blend = BC_GEN_BLEND_SMOOTH}, 4},
+	};
+	size_t nscenes = sizeof(scenes) / sizeof(scenes[0]);
+	uint32_t size = 512;
+	int reps = 3;
+	struct bc_render_opts opts = {.threads = 1};
+	double tiled256 = 0.0, tiled4096 = 0.0;
+	for (int i = 1; i < argc; i++) {
+		if (strcmp(argv[i], "--size") == 0 && i + 1 < argc) {
+			size = (uint32_t)atoi(argv[++i]);
+		} else if (strcmp(argv[i], "--threads") == 0 && i + 1 < argc) {
+			opts.threads = (uint32_t)atoi(argv[++i]);
+		} else if (strcmp(argv[i], "--reps") == 0 && i + 1 < argc) {
+			reps = atoi(argv[++i]);
+		} else if (strcmp(argv[i], "--quick") == 0) {
+			nscenes = 3;
+		} else {
+			fprintf(stderr, "usage: bench_render [--size N] "
+					"[--threads T] [--reps R] [--quick]\n");
+			return 2;
+		}
+	}
+	if (size < 64 || size > BC_RENDER_MAX_DIM || reps < 1) {
+		fprintf(stderr, "bench_render: bad --size or --reps\n");
+		return 2;
+	}
+	printf("frame %ux%u, %u thread(s), tiled best of %d; naive and the "
+	       "speedup on the central band of `band` rows\n\n",
+	       size, size, opts.threads, reps);
+	printf("%-27s %7s %6s | %9s %8s %8s %9s | %5s %11s %11s %8s\n",
+	       "scene", "prims", "hit%", "tiled ms", "abuf ms", "trace ms",
+	       "maxovl", "band", "tiled ms", "naive ms", "speedup");
+	printf("%-27s %7s %6s | %9s %8s %8s %9s | %5s %11s %11s %8s\n", "", "",
+	       "", "(frame)", "", "", "", "rows", "(band)", "(band)",
+	       "(band)");
+	for (size_t s = 0; s < nscenes; s++) {
+		struct bc_tree *t = bc_tree_create();
+		struct bc_camera cam, bcam;
+		struct bc_errinfo ei = {0};
+		struct bc_frame full = {0}, band = {0};
+		struct bc_render_stats st = {0}, bst = {0}, nst = {0};
+		double tiled, tiled_band, naive_band;
+		uint32_t rows = scenes[s].band * size / 512;
+		rows = rows < 2 ? 2 : rows;
+		if (!t || bc_gen(scenes[s].gen, &scenes[s].opts, t, &cam, &ei)) {
+			fprintf(stderr, "%s: %s\n", scenes[s].label, ei.msg);
+			return 1;
+		}
+		if (bc_frame_init(&full, size, size) ||
+		    bc_frame_init(&band, size, rows)) {
+			fprintf(stderr, "out of memory\n");
+			return 1;
+		}
+		bcam = band_camera(&cam, size, rows);
+		tiled = time_render(BC_BACKEND_TILED, &opts, t, &cam, &full, reps,
+				    &st);
+		tiled_band = time_render(BC_BACKEND_TILED, &opts, t, &bcam, &band,
+					 reps, &bst);
+		naive_band = time_render(BC_BACKEND_NAIVE, &opts, t, &bcam, &band,
+					 1, &nst);
+		printf("%-27s %7u %5.1f%% | %9.1f %8.1f %8.1f %9u | %5u %11.1f "
+		       "%11.1f %7.1fx\n",
+		       scenes[s].label, bc_tree_prim_count(t),
+		       100.0 * hits(&full) / ((double)size * size), tiled,
+		       st.ms_abuffer, st.ms_trace, st.max_overlap, rows,
+		       tiled_band, naive_band, naive_band / tiled_band);
+		printf("%-27s %7s %6s   naive full frame estimated %.0f ms "
+		       "(band x %u/%u); evals per pixel: naive %.0f, tiled %.0f\n",
+		       "", "", "", naive_band * size / rows, size, rows,
+		       (double)nst.field_evals / ((double)size * rows),
+		       (double)st.field_evals / ((double)size * size));
+		if (s == 0) {
+			tiled256 = tiled;
+		}
+		if (s == 2) {
+			tiled4096 = tiled;
+		}
+		fflush(stdout);
+		bc_frame_finish(&full);
+		bc_frame_finish(&band);
+		bc_tree_destroy(t);
+	}
+	if (tiled256 > 0.0 && tiled4096 > 0.0) {
+		printf("\ntiled growth, fig18 smooth spheres 256 -> 4096: %.2fx "
+		       "(%.1f ms -> %.1f ms)\n",
+		       tiled4096 / tiled256, tiled256, tiled4096);
+	}
+	return 0;
+}
