@@ -11,6 +11,7 @@ pkgs=(
 	libuv1-dev
 	libegl-dev libgl-dev libgles-dev libegl1-mesa-dev libgl1-mesa-dev
 	libgl1-mesa-dri libosmesa6-dev python3-glad glslang-tools
+	libglfw3-dev xvfb
 )
 
 missing=()
@@ -20,7 +21,11 @@ for p in "${pkgs[@]}"; do
 		missing+=("$p")
 	fi
 done
-[ ${#missing[@]} -eq 0 ] && exit 0
+here=$(dirname "$0")
+if [ ${#missing[@]} -eq 0 ]; then
+	bash "$here/install-web-deps.sh"
+	exit 0
+fi
 
 SUDO=
 [ "$(id -u)" -ne 0 ] && SUDO=sudo
@@ -28,3 +33,6 @@ echo "install-deps: installing ${missing[*]}" >&2
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq >/dev/null
 $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+
+# The browser client and its tests: chromium, websockify, node and npm.
+bash "$here/install-web-deps.sh"

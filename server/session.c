@@ -1071,7 +1071,7 @@ static void handle_edit(struct bc_client *c, const struct bc_msg *m)
 			}
 		}
 	}
-	applied.flags = 0;
+	applied.flags = m->flags & BC_PROTO_FLAG_INTERACTING;
 	applied.edit_applied.order = s->order;
 	applied.edit_applied.author = c->member_id;
 	applied.edit_applied.author_seq = m->seq;
