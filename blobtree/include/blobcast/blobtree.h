@@ -151,8 +151,9 @@ struct bc_op_data {
 	float range; /* r_o > blend / 6; continuous for r_o >= 7/6 blend */
 };
 
-/* Sets *p to a primitive of kind with every parameter at its default (or 0
- * when it has none), identity transform and no colour. */
+/* Sets *p to a primitive of kind with every parameter at its default (a
+ * valid unit-sized shape, docs/primitives.md), identity transform and no
+ * colour. */
 void bc_prim_data_init(struct bc_prim_data *p, enum bc_prim kind);
 
 /* The default r_o of a smooth operator with blend β when the scene gives
@@ -161,8 +162,9 @@ float bc_op_default_range(float blend);
 
 /* Checks a primitive's or operator's parameters against the limits (finite,
  * positive sizes, |values| <= BC_PARAM_MAX_ABS, unit quaternion within 1e-3
- * -- which is then renormalized --, shape-specific rules). Returns 0 or
- * BC_ERANGE / BC_ENONFINITE with the reason in ei. */
+ * -- which is then renormalized --, shape-specific rules). Returns 0,
+ * BC_EENUM (unknown kind), BC_ERANGE or BC_ENONFINITE with the reason in
+ * ei. */
 int bc_prim_validate(struct bc_prim_data *p, struct bc_errinfo *ei);
 int bc_op_validate(const struct bc_op_data *op, struct bc_errinfo *ei);
 
@@ -192,7 +194,8 @@ void bc_prim_bound(const struct bc_prim_data *p, struct bc_abv *out);
 /* Writes the world AABB of a world-space bounding shape. */
 void bc_abv_aabb(const struct bc_abv *abv, float lo[3], float hi[3]);
 /* Clips the ray o + t d (d unit) against the shape. Returns true and the
- * entry/exit parameters (t0 may be negative when o is inside) on a hit. */
+ * entry/exit parameters (t0 may be negative when o is inside) on a hit; a
+ * shape wholly behind the origin is a miss. */
 bool bc_abv_ray(const struct bc_abv *abv, const float o[3], const float d[3],
 		float *t0, float *t1);
 /* Returns true when the shape may meet the axis-aligned box [lo, hi]
