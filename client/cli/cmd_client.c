@@ -1,0 +1,1187 @@
+/*
+ * `blobcast load|edit|camera|snapshot|watch|bench-latency`: the command-line
+ * client of blobcastd. It owns option parsing for these subcommands (strict:
+ * every value is checked, options a subcommand does not take are refused),
+ * their output formats, and the measurements of watch and bench-latency.
+ * All protocol work goes through libblobcast (blobcast/client.h); image
+ * files through bc_image (OpenImageIO).
+ *
+ * Exit status: 0 success, 1 the server or the connection failed (the
+ * server's ERROR text is printed), 2 usage error.
+ */
+#include "cmd_client.h"
+
+#include <errno.h>
+#include <jansson.h>
+#include <math.h>
+#include <signal.h>
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "blobcast/alloc.h"
+#include "blobcast/client.h"
+#include "blobcast/image.h"
+#include "blobcast/scene.h"
+
+#define EXIT_FAIL 1
+#define EXIT_USAGE 2
+
+/* Positional arguments a subcommand may take: edit's node id and one
+ * key=value per field is the most. */
+#define MAX_POSITIONAL (1 + BC_CLIENT_MAX_EDIT_ARGS)
+/* bench-latency: edits per run. A million at ~10 ms each is hours: more is
+ * a typing mistake. */
+#define MAX_BENCH_EDITS 1000000u
+/* How far bench-latency moves the primitive, in world units: visible in
+ * the picture (so the frame has damage to send) yet small. */
+#define BENCH_STEP 0.05f
+/* watch: the client's poll slice, so that Ctrl-C is noticed promptly. */
+#define WATCH_SLICE_MS 200
+/* watch: edit orders whose arrival time is remembered for the latency of
+ * the frame that shows them (frames lag edits by a few at most). */
+#define WATCH_ORDERS 256u
+
+/* Options; each subcommand accepts the common ones and those in its mask. */
+enum {
+	O_SESSION = 1u << 0,
+	O_SIZE = 1u << 1,
+	O_OUT = 1u << 2,
+	O_DEPTH = 1u << 3,
+	O_EYE = 1u << 4,
+	O_TARGET = 1u << 5,
+	O_UP = 1u << 6,
+	O_FOV = 1u << 7,
+	O_FRAMES = 1u << 8,
+	O_EDITS = 1u << 9,
+	O_NODE = 1u << 10,
+	O_ENCODING = 1u << 11,
+	O_INTERACTING = 1u << 12,
+	O_DOWNSCALE = 1u << 13,
+};
+#define O_CAMERA (O_EYE | O_TARGET | O_UP | O_FOV)
+
+struct args {
+	const char *cmd;
+	const char *server, *token, *name, *session, *out, *depth;
+	int timeout_ms;
+	uint16_t width, height;
+	bool has_size;
+	struct bc_camera cam;
+	bool has_eye, has_target, has_up, has_fov;
+	uint64_t frames;
+	uint32_t edits, node;
+	enum bc_proto_encoding encoding;
+	bool interacting;
+	uint8_t downscale;
+	const char *pos[MAX_POSITIONAL];
+	int npos;
+};
+
+struct cmd {
+	const char *name;
+	unsigned opts;
+	int min_pos, max_pos;
+	const char *synopsis;
+	const char *summary;
+	const char *help; /* the subcommand's own options */
+	int (*run)(struct args *a);
+};
+
+static const char common_help[] =
+	"  --server ADDR   HOST:PORT, [IPV6]:PORT or unix:PATH (default\n"
+	"                  $BLOBCAST_SERVER, else 127.0.0.1:7878)\n"
+	"  --token TOKEN   authentication token (default $BLOBCAST_TOKEN;\n"
+	"                  not needed over loopback or a Unix socket unless\n"
+	"                  the server requires one)\n"
+	"  --name NAME     client name shown to other members\n"
+	"  --timeout MS    limit for connecting and for each answer (default\n"
+	"                  10000; 0 waits forever)\n"
+	"  --help          this text\n";
+
+/* ---- small helpers ---------------------------------------------------------- */
+
+static double now_ms(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
+}
+
+static bool parse_u64(const char *s, uint64_t lo, uint64_t hi, uint64_t *out)
+{
+	char *end = NULL;
+	unsigned long long v;
+	if (!s || !*s || *s == '-' || *s == '+' || *s == ' ') {
+		return false;
+	}
+	errno = 0;
+	v = strtoull(s, &end, 10);
+	if (errno || *end != '\0' || v < lo || v > hi) {
+		return false;
+	}
+	*out = (uint64_t)v;
+	return true;
+}
+
+/* "x,y,z": exactly three finite floats within the protocol's range. */
+static bool parse_vec3(const char *s, float v[3])
+{
+	const char *p = s;
+	for (int i = 0; i < 3; i++) {
+		char *end;
+		if (!*p || *p == ' ' || *p == ',') {
+			return false;
+		}
+		errno = 0;
+		v[i] = strtof(p, &end);
+		if (end == p || !isfinite(v[i]) ||
+		    fabsf(v[i]) > BC_PROTO_MAX_ABS ||
+		    *end != (i < 2 ? ',' : '\0')) {
+			return false;
+		}
+		p = end + 1;
+	}
+	return true;
+}
+
+static bool parse_float(const char *s, float lo, float hi, float *out)
+{
+	char *end;
+	float v;
+	if (!s || !*s || *s == ' ') {
+		return false;
+	}
+	v = strtof(s, &end);
+	if (end == s || *end != '\0' || !isfinite(v) || !(v > lo) ||
+	    !(v < hi)) {
+		return false;
+	}
+	*out = v;
+	return true;
+}
+
+/* "WxH", each 1..BC_PROTO_MAX_DIM. */
+static bool parse_size(const char *s, uint16_t *w, uint16_t *h)
+{
+	const char *x = strchr(s, 'x');
+	char buf[16];
+	uint64_t a, b;
+	size_t n;
+	if (!x || (n = (size_t)(x - s)) == 0 || n >= sizeof(buf)) {
+		return false;
+	}
+	memcpy(buf, s, n);
+	buf[n] = '\0';
+	if (!parse_u64(buf, 1, BC_PROTO_MAX_DIM, &a) ||
+	    !parse_u64(x + 1, 1, BC_PROTO_MAX_DIM, &b)) {
+		return false;
+	}
+	*w = (uint16_t)a;
+	*h = (uint16_t)b;
+	return true;
+}
+
+static enum bc_proto_encoding encoding_from_name(const char *s)
+{
+	if (strcmp(s, "jpeg") == 0) {
+		return BC_PROTO_ENC_JPEG;
+	}
+	if (strcmp(s, "png") == 0) {
+		return BC_PROTO_ENC_PNG;
+	}
+	if (strcmp(s, "raw") == 0) {
+		return BC_PROTO_ENC_RAW;
+	}
+	return BC_PROTO_ENC_INVALID;
+}
+
+static const char *encoding_name(enum bc_proto_encoding e)
+{
+	switch (e) {
+	case BC_PROTO_ENC_JPEG:
+		return "jpeg";
+	case BC_PROTO_ENC_PNG:
+		return "png";
+	case BC_PROTO_ENC_RAW:
+		return "raw";
+	default:
+		return "?";
+	}
+}
+
+/* Matches "--name VALUE" and "--name=VALUE"; advances *i past the value. */
+static bool take_value(int argc, char **argv, int *i, const char *name,
+		       const char **value)
+{
+	const char *a = argv[*i];
+	size_t n = strlen(name);
+	if (strncmp(a, name, n) != 0) {
+		return false;
+	}
+	if (a[n] == '=') {
+		*value = a + n + 1;
+		return true;
+	}
+	if (a[n] != '\0') {
+		return false;
+	}
+	*value = *i + 1 < argc ? argv[++*i] : NULL;
+	return true;
+}
+
+/* Prints a failure of the server or the connection; returns EXIT_FAIL. */
+static int failed(const struct args *a, const char *what,
+		  const struct bc_errinfo *ei)
+{
+	fprintf(stderr, "blobcast %s: %s%s%s (%s)\n", a->cmd, what ? what : "",
+		what ? ": " : "", ei->msg[0] ? ei->msg : bc_strerror(ei->code),
+		bc_err_name(ei->code));
+	return EXIT_FAIL;
+}
+
+static int connect_to(const struct args *a, struct bc_client **c)
+{
+	struct bc_errinfo ei = {0};
+	const char *token = a->token ? a->token : getenv("BLOBCAST_TOKEN");
+	const char *addr = a->server ? a->server : getenv("BLOBCAST_SERVER");
+	if (bc_client_connect(c,
+			      &(struct bc_client_opts){
+				      .addr = addr,
+				      .name = a->name ? a->name : "blobcast-cli",
+				      .token = token,
+				      .timeout_ms = a->timeout_ms},
+			      &ei)) {
+		return failed(a, NULL, &ei);
+	}
+	return 0;
+}
+
+/* Connects and enters the session; viewers unless the command edits. */
+static int open_session(const struct args *a, enum bc_proto_role role,
+			enum bc_client_join_mode mode, struct bc_client **c)
+{
+	struct bc_errinfo ei = {0};
+	int status = connect_to(a, c);
+	if (status) {
+		return status;
+	}
+	if (bc_client_join(*c, a->session, role, mode, &ei)) {
+		char what[128];
+		snprintf(what, sizeof(what), "session %s", a->session);
+		return failed(a, what, &ei);
+	}
+	return 0;
+}
+
+/* ---- load --------------------------------------------------------------------- */
+
+static int run_load(struct args *a)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	struct bc_tree *t = bc_tree_create();
+	struct bc_camera cam;
+	uint8_t *bytes = NULL;
+	size_t len = 0;
+	uint64_t order;
+	int status = 0, rc;
+	if (!t) {
+		fprintf(stderr, "blobcast load: out of memory\n");
+		return EXIT_FAIL;
+	}
+	/* The file is read before connecting: a bad file is the caller's
+	 * mistake (status 2) and costs the server nothing. */
+	if (bc_scene_load_json(a->pos[0], t, &cam, &ei)) {
+		fprintf(stderr, "blobcast load: %s\n", ei.msg);
+		status = EXIT_USAGE;
+		goto out;
+	}
+	if ((rc = bc_scene_encode(t, &cam, &bytes, &len))) {
+		fprintf(stderr, "blobcast load: cannot encode %s: %s\n",
+			a->pos[0], bc_strerror(rc));
+		status = EXIT_FAIL;
+		goto out;
+	}
+	if ((status = open_session(a, BC_PROTO_ROLE_EDITOR, BC_CLIENT_JOIN_ANY,
+				   &c))) {
+		goto out;
+	}
+	if (bc_client_load_scene(c, bytes, len, &order, &ei)) {
+		status = failed(a, "scene not loaded", &ei);
+		goto out;
+	}
+	printf("session %s: loaded %s (%u nodes), edit order %llu\n",
+	       a->session, a->pos[0], bc_tree_node_count(t),
+	       (unsigned long long)order);
+out:
+	bc_free(bytes);
+	bc_tree_destroy(t);
+	bc_client_destroy(c);
+	return status;
+}
+
+/* ---- edit ------------------------------------------------------------------------ */
+
+static int run_edit(struct args *a)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	uint64_t id, order;
+	uint32_t seq;
+	int status;
+	if (!parse_u64(a->pos[0], 1, UINT32_MAX, &id)) {
+		fprintf(stderr,
+			"blobcast edit: \"%s\" is not a node id (1..%u)\n",
+			a->pos[0], UINT32_MAX);
+		return EXIT_USAGE;
+	}
+	if ((status = open_session(a, BC_PROTO_ROLE_EDITOR,
+				   BC_CLIENT_JOIN_EXISTING, &c))) {
+		goto out;
+	}
+	if (bc_client_edit_kv(c, (uint32_t)id, a->pos + 1,
+			      (size_t)(a->npos - 1), a->interacting, &seq,
+			      &ei)) {
+		/* Bad key=value text is the user's mistake, not the server's;
+		 * the connection failing is not. */
+		status = bc_client_error(c, NULL) ? failed(a, NULL, &ei)
+						  : EXIT_USAGE;
+		if (status == EXIT_USAGE) {
+			fprintf(stderr, "blobcast edit: %s\n", ei.msg);
+		}
+		goto out;
+	}
+	if (bc_client_wait_applied(c, seq, &order, &ei)) {
+		status = failed(a, NULL, &ei);
+		goto out;
+	}
+	printf("node %llu: edit applied, edit order %llu\n",
+	       (unsigned long long)id, (unsigned long long)order);
+out:
+	bc_client_destroy(c);
+	return status;
+}
+
+/* ---- camera -------------------------------------------------------------------------- */
+
+/* Overrides the parts of cam that the options give. */
+static void apply_camera_opts(const struct args *a, struct bc_camera *cam)
+{
+	if (a->has_eye) {
+		memcpy(cam->eye, a->cam.eye, sizeof(cam->eye));
+	}
+	if (a->has_target) {
+		memcpy(cam->target, a->cam.target, sizeof(cam->target));
+	}
+	if (a->has_up) {
+		memcpy(cam->up, a->cam.up, sizeof(cam->up));
+	}
+	if (a->has_fov) {
+		cam->fov_y_deg = a->cam.fov_y_deg;
+	}
+}
+
+/*
+ * The server keeps a camera per connection (CAMERA changes only the
+ * sender's view) and one per session: the scene's, which members start
+ * with and which is saved with the scene. The only message that sets the
+ * latter is SCENE_LOAD, so this re-sends the session's scene (the mirror)
+ * with the new camera.
+ */
+static int run_camera(struct args *a)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	struct bc_camera cam;
+	const struct bc_tree *t;
+	uint8_t *bytes = NULL;
+	size_t len = 0;
+	uint64_t before, order;
+	int status, rc;
+	if (!a->has_eye || !a->has_target) {
+		fprintf(stderr, "blobcast camera: --eye and --target are "
+				"required (see blobcast camera --help)\n");
+		return EXIT_USAGE;
+	}
+	if ((status = open_session(a, BC_PROTO_ROLE_EDITOR,
+				   BC_CLIENT_JOIN_EXISTING, &c))) {
+		goto out;
+	}
+	if (!(t = bc_client_scene(c, &cam))) {
+		fprintf(stderr, "blobcast camera: the session's scene did not "
+				"arrive intact\n");
+		status = EXIT_FAIL;
+		goto out;
+	}
+	apply_camera_opts(a, &cam);
+	if (bc_camera_validate(&cam, &ei)) {
+		fprintf(stderr, "blobcast camera: %s\n", ei.msg);
+		status = EXIT_USAGE;
+		goto out;
+	}
+	if ((rc = bc_scene_encode(t, &cam, &bytes, &len))) {
+		fprintf(stderr, "blobcast camera: cannot encode the scene: %s\n",
+			bc_strerror(rc));
+		status = EXIT_FAIL;
+		goto out;
+	}
+	before = bc_client_info(c)->order;
+	if (bc_client_load_scene(c, bytes, len, &order, &ei)) {
+		status = failed(a, "camera not set", &ei);
+		goto out;
+	}
+	if (order != before + 1) {
+		/* Edits by others landed between our copy and our load; the
+		 * load replaced them (there is no compare-and-swap). */
+		fprintf(stderr,
+			"blobcast camera: warning: %llu edit(s) by other "
+			"members arrived meanwhile and were replaced\n",
+			(unsigned long long)(order - before - 1));
+	}
+	printf("session %s: camera eye %g,%g,%g target %g,%g,%g up %g,%g,%g "
+	       "fov %g, edit order %llu\n",
+	       a->session, (double)cam.eye[0], (double)cam.eye[1],
+	       (double)cam.eye[2], (double)cam.target[0],
+	       (double)cam.target[1], (double)cam.target[2],
+	       (double)cam.up[0], (double)cam.up[1], (double)cam.up[2],
+	       (double)cam.fov_y_deg, (unsigned long long)order);
+out:
+	bc_free(bytes);
+	bc_client_destroy(c);
+	return status;
+}
+
+/* ---- snapshot --------------------------------------------------------------------------- */
+
+static int run_snapshot(struct args *a)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	struct bc_client_image img;
+	struct bc_camera cam;
+	uint32_t seq;
+	int status;
+	if (a->depth) {
+		fprintf(stderr,
+			"blobcast snapshot: --depth is not supported by the "
+			"server protocol yet (FRAME carries colour only)\n");
+		return EXIT_USAGE;
+	}
+	if (!a->has_size || !a->out) {
+		fprintf(stderr, "blobcast snapshot: --size and --out are "
+				"required (see blobcast snapshot --help)\n");
+		return EXIT_USAGE;
+	}
+	if (!bc_image_ext_supports(a->out, BC_IMAGE_U8)) {
+		fprintf(stderr,
+			"blobcast snapshot: \"%s\": no image format for this "
+			"extension (use .png, .tif, .exr, .jpg, ...)\n",
+			a->out);
+		return EXIT_USAGE;
+	}
+	bc_client_image_init(&img);
+	if ((status = open_session(a, BC_PROTO_ROLE_VIEWER,
+				   BC_CLIENT_JOIN_EXISTING, &c))) {
+		goto out;
+	}
+	if (a->has_eye || a->has_target || a->has_up || a->has_fov) {
+		bc_client_scene(c, &cam);
+		apply_camera_opts(a, &cam);
+		if (bc_camera_validate(&cam, &ei)) {
+			fprintf(stderr, "blobcast snapshot: %s\n", ei.msg);
+			status = EXIT_USAGE;
+			goto out;
+		}
+		/* Before VIEW, so that the one stream frame VIEW causes is
+		 * already from this camera. */
+		if (bc_client_camera(c, &cam, false, &seq, &ei)) {
+			status = failed(a, NULL, &ei);
+			goto out;
+		}
+	}
+	/* The VIEW gives the size; its stream frame is a cheap JPEG we skip.
+	 * The snapshot itself is lossless. */
+	if (bc_client_view(c,
+			   &(struct bc_msg_view){.width = a->width,
+						 .height = a->height,
+						 .encoding = BC_PROTO_ENC_JPEG,
+						 .quality_interactive = 30,
+						 .quality_still = 30},
+			   &seq, &ei) ||
+	    bc_client_snapshot(c, BC_PROTO_ENC_PNG, &img, &ei)) {
+		status = failed(a, "snapshot", &ei);
+		goto out;
+	}
+	if (!img.complete || img.width != a->width || img.height != a->height) {
+		fprintf(stderr,
+			"blobcast snapshot: the server sent a %ux%u picture%s "
+			"for a %ux%u request\n",
+			img.width, img.height, img.complete ? "" : " in part",
+			a->width, a->height);
+		status = EXIT_FAIL;
+		goto out;
+	}
+	if (bc_image_write_rgba8(a->out, img.width, img.height, img.rgba,
+				 &ei)) {
+		fprintf(stderr, "blobcast snapshot: %s\n", ei.msg);
+		status = EXIT_FAIL;
+		goto out;
+	}
+	printf("wrote %s (%ux%u, frame %u, edit order %llu, %u bytes from "
+	       "the server)\n",
+	       a->out, img.width, img.height, img.frame_no,
+	       (unsigned long long)img.order,
+	       bc_client_info(c)->last_msg_bytes);
+out:
+	bc_client_image_finish(&img);
+	bc_client_destroy(c);
+	return status;
+}
+
+/* ---- watch ---------------------------------------------------------------------------------- */
+
+static volatile sig_atomic_t interrupted;
+
+static void on_interrupt(int sig)
+{
+	(void)sig;
+	interrupted = 1;
+}
+
+/* Arrival times of edit orders, to measure frames against. */
+struct order_times {
+	uint64_t order[WATCH_ORDERS];
+	double at[WATCH_ORDERS];
+};
+
+static void order_seen(struct order_times *o, uint64_t order, double at)
+{
+	uint32_t k = (uint32_t)(order % WATCH_ORDERS);
+	o->order[k] = order;
+	o->at[k] = at;
+}
+
+static bool order_time(const struct order_times *o, uint64_t order,
+		       double *at)
+{
+	uint32_t k = (uint32_t)(order % WATCH_ORDERS);
+	if (order == 0 || o->order[k] != order) {
+		return false;
+	}
+	*at = o->at[k];
+	return true;
+}
+
+static const char *frame_kind(uint16_t flags)
+{
+	if (flags & BC_PROTO_FLAG_SNAPSHOT) {
+		return "snapshot";
+	}
+	return (flags & BC_PROTO_FLAG_STILL) ? "still" : "interactive";
+}
+
+/*
+ * Latency of a frame, as this client can measure it without a shared
+ * clock: from the moment this client learned of the newest change the
+ * frame shows to the moment the frame arrived. The change is an edit
+ * (EDIT_APPLIED, or SCENE_STATE for a load) when the frame's edit order is
+ * new; for the first frame it is our VIEW request. Frames that show
+ * nothing new (a still refining an interactive frame) get "-".
+ */
+static int run_watch(struct args *a)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	struct bc_client_image img;
+	struct order_times *times = NULL;
+	struct sigaction sa, old_int, old_term;
+	struct bc_msg m;
+	struct bc_msg_stats st;
+	uint64_t nframes = 0, last_order = 0, total_bytes = 0;
+	double view_at;
+	uint32_t seq;
+	int status;
+	bc_client_image_init(&img);
+	memset(&sa, 0, sizeof(sa));
+	sa.sa_handler = on_interrupt;
+	sigemptyset(&sa.sa_mask);
+	interrupted = 0;
+	sigaction(SIGINT, &sa, &old_int);
+	sigaction(SIGTERM, &sa, &old_term);
+	if (!(times = bc_calloc(1, sizeof(*times)))) {
+		fprintf(stderr, "blobcast watch: out of memory\n");
+		status = EXIT_FAIL;
+		goto out;
+	}
+	if ((status = open_session(a, BC_PROTO_ROLE_VIEWER,
+				   BC_CLIENT_JOIN_EXISTING, &c))) {
+		goto out;
+	}
+	order_seen(times, bc_client_info(c)->order, now_ms());
+	view_at = now_ms();
+	if (bc_client_view(c,
+			   &(struct bc_msg_view){.width = a->width,
+						 .height = a->height,
+						 .encoding = a->encoding,
+						 .downscale = a->downscale},
+			   &seq, &ei)) {
+		status = failed(a, NULL, &ei);
+		goto out;
+	}
+	while (!interrupted && (a->frames == 0 || nframes < a->frames)) {
+		double at, since;
+		const char *after = "-";
+		int rc = bc_client_recv(c, &m, WATCH_SLICE_MS);
+		if (rc == 0) {
+			continue;
+		}
+		if (rc < 0) {
+			bc_client_error(c, &ei);
+			status = failed(a, NULL, &ei);
+			goto out;
+		}
+		at = now_ms();
+		switch (m.type) {
+		case BC_MSG_EDIT_APPLIED:
+			order_seen(times, m.edit_applied.order, at);
+			break;
+		case BC_MSG_SCENE_STATE:
+			order_seen(times, m.scene_state.order, at);
+			break;
+		case BC_MSG_ERROR:
+			ei.code = -(int)m.error.code;
+			snprintf(ei.msg, sizeof(ei.msg), "%.*s",
+				 (int)m.error.text.len, m.error.text.ptr);
+			status = failed(a, NULL, &ei);
+			goto out;
+		case BC_MSG_FRAME:
+			nframes++;
+			total_bytes += bc_client_info(c)->last_msg_bytes;
+			if (bc_client_image_apply(&img, &m, &ei)) {
+				fprintf(stderr,
+					"blobcast watch: frame %u does not "
+					"decode: %s\n",
+					m.frame.frame_no, ei.msg);
+			}
+			since = -1.0;
+			if (nframes == 1) {
+				since = at - view_at;
+				after = "view";
+			} else if (m.frame.order > last_order &&
+				   order_time(times, m.frame.order, &since)) {
+				since = at - since;
+				after = "edit";
+			}
+			last_order = m.frame.order;
+			printf("frame %llu no=%u order=%llu bytes=%u rects=%u "
+			       "image=%ux%u %s latency_ms=",
+			       (unsigned long long)nframes, m.frame.frame_no,
+			       (unsigned long long)m.frame.order,
+			       bc_client_info(c)->last_msg_bytes,
+			       m.frame.nrects, m.frame.image_width,
+			       m.frame.image_height, frame_kind(m.flags));
+			if (since >= 0.0) {
+				printf("%.2f after=%s\n", since, after);
+			} else {
+				printf("- after=-\n");
+			}
+			fflush(stdout);
+			break;
+		default:
+			break;
+		}
+	}
+	if (bc_client_stats(c, &st, &ei)) {
+		status = failed(a, "stats", &ei);
+		goto out;
+	}
+	printf("stats frames=%llu bytes=%llu server_frames=%llu "
+	       "server_fps=%.1f render_ms_avg=%.2f encode_ms_avg=%.2f "
+	       "edit_ms_avg=%.3f\n",
+	       (unsigned long long)nframes, (unsigned long long)total_bytes,
+	       (unsigned long long)st.frames, (double)st.fps,
+	       (double)st.render_ms_avg, (double)st.encode_ms_avg,
+	       (double)st.edit_ms_avg);
+out:
+	sigaction(SIGINT, &old_int, NULL);
+	sigaction(SIGTERM, &old_term, NULL);
+	bc_free(times);
+	bc_client_image_finish(&img);
+	bc_client_destroy(c);
+	return status;
+}
+
+/* ---- bench-latency ------------------------------------------------------------------------------ */
+
+static int cmp_double(const void *x, const void *y)
+{
+	double a = *(const double *)x, b = *(const double *)y;
+	return (a > b) - (a < b);
+}
+
+/* Nearest-rank percentile of sorted v[0..n). */
+static double percentile(const double *v, uint32_t n, double p)
+{
+	double rank = ceil(p / 100.0 * (double)n);
+	uint32_t k = rank < 1.0 ? 0u : (uint32_t)rank - 1u;
+	return v[k < n ? k : n - 1];
+}
+
+/* The first primitive in pre-order, or 0. */
+static uint32_t first_prim(const struct bc_tree *t)
+{
+	struct bc_scene_walk w;
+	struct bc_scene_node node;
+	uint32_t id = 0;
+	if (bc_scene_walk_init(&w, t)) {
+		return 0;
+	}
+	while (bc_scene_walk_next(&w, &node)) {
+		if (!node.is_op) {
+			id = node.id;
+			break;
+		}
+	}
+	bc_scene_walk_finish(&w);
+	return id;
+}
+
+/* Sends one translate edit and waits for the first frame that shows it
+ * (its edit order is at least the one the server gave the edit). Returns 0
+ * with the frames and bytes received meanwhile added up, or an exit
+ * status. */
+static int one_edit(const struct args *a, struct bc_client *c, uint32_t node,
+		    const float pos[3], uint64_t *frames, uint64_t *bytes)
+{
+	struct bc_proto_field f = {.field = BC_PROTO_FIELD_TRANSLATE,
+				   .count = 3};
+	struct bc_errinfo ei = {0};
+	struct bc_msg m;
+	uint64_t want = 0;
+	uint32_t seq;
+	int timeout = a->timeout_ms == 0 ? BC_CLIENT_DEFAULT_TIMEOUT_MS
+					 : a->timeout_ms;
+	double deadline = now_ms() + (double)timeout;
+	memcpy(f.v, pos, 3 * sizeof(float));
+	if (bc_client_edit_set(c, node, &f, 1, a->interacting, &seq, &ei)) {
+		return failed(a, NULL, &ei);
+	}
+	for (;;) {
+		double left = deadline - now_ms();
+		int rc = bc_client_recv(c, &m,
+					timeout < 0 ? -1
+						    : (left > 0.0 ? (int)left + 1
+								  : 0));
+		if (rc < 0) {
+			bc_client_error(c, &ei);
+			return failed(a, NULL, &ei);
+		}
+		if (rc == 0) {
+			fprintf(stderr,
+				"blobcast %s: no frame showing edit %u within "
+				"%d ms\n",
+				a->cmd, seq, timeout);
+			return EXIT_FAIL;
+		}
+		if (m.type == BC_MSG_ERROR) {
+			ei.code = -(int)m.error.code;
+			snprintf(ei.msg, sizeof(ei.msg), "%.*s",
+				 (int)m.error.text.len, m.error.text.ptr);
+			return failed(a, NULL, &ei);
+		}
+		if (m.type == BC_MSG_EDIT_APPLIED &&
+		    m.edit_applied.author == bc_client_info(c)->member_id &&
+		    m.edit_applied.author_seq == seq) {
+			want = m.edit_applied.order;
+		} else if (m.type == BC_MSG_FRAME) {
+			(*frames)++;
+			*bytes += bc_client_info(c)->last_msg_bytes;
+			/* EDIT_APPLIED precedes every frame that shows it. */
+			if (want && m.frame.order >= want) {
+				return 0;
+			}
+		}
+	}
+}
+
+static int run_bench(struct args *a)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	struct bc_prim_data p;
+	struct bc_msg m;
+	struct bc_msg_stats st;
+	double *lat = NULL, sum = 0.0;
+	uint64_t frames = 0, bytes = 0;
+	uint32_t node = a->node, seq;
+	float origin[3], pos[3];
+	json_t *j = NULL;
+	char *line = NULL;
+	int status;
+	if (a->edits == 0) {
+		fprintf(stderr, "blobcast bench-latency: --edits N is required "
+				"(see blobcast bench-latency --help)\n");
+		return EXIT_USAGE;
+	}
+	if (!(lat = bc_calloc(a->edits, sizeof(*lat)))) {
+		fprintf(stderr, "blobcast bench-latency: out of memory\n");
+		return EXIT_FAIL;
+	}
+	if ((status = open_session(a, BC_PROTO_ROLE_EDITOR,
+				   BC_CLIENT_JOIN_EXISTING, &c))) {
+		goto out;
+	}
+	if (!bc_client_scene(c, NULL)) {
+		fprintf(stderr, "blobcast bench-latency: the session's scene "
+				"did not arrive intact\n");
+		status = EXIT_FAIL;
+		goto out;
+	}
+	if (node == 0) {
+		node = first_prim(bc_client_scene(c, NULL));
+	}
+	if (!bc_tree_get(bc_client_scene(c, NULL), node, &p, NULL) ||
+	    p.kind == BC_PRIM_INVALID) {
+		fprintf(stderr, "blobcast bench-latency: node %u is not a "
+				"primitive of the session's scene\n",
+			node);
+		status = EXIT_USAGE;
+		goto out;
+	}
+	memcpy(origin, p.translate, sizeof(origin));
+	if (bc_client_view(c,
+			   &(struct bc_msg_view){.width = a->width,
+						 .height = a->height,
+						 .encoding = a->encoding,
+						 .downscale = a->downscale},
+			   &seq, &ei) ||
+	    bc_client_wait(c, BC_MSG_FRAME, 0, &m, 0, &ei)) {
+		status = failed(a, "first frame", &ei);
+		goto out;
+	}
+	for (uint32_t i = 0; i < a->edits; i++) {
+		double t0;
+		memcpy(pos, origin, sizeof(pos));
+		if (i % 2 == 0) {
+			pos[0] += BENCH_STEP;
+		}
+		t0 = now_ms();
+		if ((status = one_edit(a, c, node, pos, &frames, &bytes))) {
+			goto out;
+		}
+		lat[i] = now_ms() - t0;
+		sum += lat[i];
+	}
+	if (a->edits % 2 == 1) {
+		/* Put the primitive back where it was. */
+		uint64_t fx = 0, bx = 0;
+		if ((status = one_edit(a, c, node, origin, &fx, &bx))) {
+			goto out;
+		}
+	}
+	if (bc_client_stats(c, &st, &ei)) {
+		status = failed(a, "stats", &ei);
+		goto out;
+	}
+	qsort(lat, a->edits, sizeof(*lat), cmp_double);
+	j = json_pack("{s:s, s:s, s:i, s:s, s:I, s:I, s:b, s:f, s:f, s:f, "
+		      "s:f, s:f, s:I, s:f, s:f, s:f, s:f}",
+		      "bench", "edit_to_frame_latency", "session", a->session,
+		      "edits", (int)a->edits, "encoding",
+		      encoding_name(a->encoding ? a->encoding
+						: BC_PROTO_ENC_JPEG),
+		      "width", (json_int_t)a->width, "height",
+		      (json_int_t)a->height, "interacting", a->interacting,
+		      "p50_ms", percentile(lat, a->edits, 50.0), "p99_ms",
+		      percentile(lat, a->edits, 99.0), "mean_ms",
+		      sum / (double)a->edits, "min_ms", lat[0], "max_ms",
+		      lat[a->edits - 1], "frames", (json_int_t)frames,
+		      "bytes_per_frame",
+		      frames ? (double)bytes / (double)frames : 0.0,
+		      "server_render_ms_avg", (double)st.render_ms_avg,
+		      "server_encode_ms_avg", (double)st.encode_ms_avg,
+		      "server_edit_ms_avg", (double)st.edit_ms_avg);
+	if (j) {
+		json_object_set_new(j, "node", json_integer(node));
+	}
+	if (!j || !(line = json_dumps(j, JSON_COMPACT | JSON_REAL_PRECISION(6)))) {
+		fprintf(stderr, "blobcast bench-latency: out of memory\n");
+		status = EXIT_FAIL;
+		goto out;
+	}
+	printf("%s\n", line);
+out:
+	free(line);
+	json_decref(j);
+	bc_free(lat);
+	bc_client_destroy(c);
+	return status;
+}
+
+/* ---- dispatch ------------------------------------------------------------------------------------ */
+
+static const struct cmd cmds[] = {
+	{"load", O_SESSION, 1, 1, "--session NAME SCENE.json",
+	 "load a JSON scene into a session (created if missing)",
+	 "Loads SCENE.json (blobtree's JSON scene format, with its camera)\n"
+	 "into session NAME, replacing its scene; every member sees it at\n"
+	 "once. Creates the session when it does not exist.\n",
+	 run_load},
+	{"edit", O_SESSION | O_INTERACTING, 2, MAX_POSITIONAL,
+	 "--session NAME ID key=value...", "set parameters of one node",
+	 "Sets fields of node ID and waits until the server has applied the\n"
+	 "edit. Primitives: translate=x,y,z rotate=x,y,z,w (unit quaternion)\n"
+	 "color=r,g,b and their kind's parameters (radius=0.4,\n"
+	 "half_extents=0.5,0.5,0.5, ...; see docs/primitives.md). Operators:\n"
+	 "blend=B range=R kind=NAME (union, smooth_union, ...).\n"
+	 "  --interacting   mark the edit as part of a drag (the server\n"
+	 "                  answers with fast interactive frames)\n",
+	 run_edit},
+	{"camera", O_SESSION | O_CAMERA, 0, 0,
+	 "--session NAME --eye x,y,z --target x,y,z [--up x,y,z] [--fov DEG]",
+	 "set the session's camera",
+	 "Sets the session's saved camera: the view members start with and\n"
+	 "the one every member is moved to now. The protocol sets it only\n"
+	 "with a scene load, so the session's scene is loaded again with the\n"
+	 "new camera; edits other members make at that very moment are\n"
+	 "replaced (a warning says so). --up and --fov default to the\n"
+	 "session's current values.\n",
+	 run_camera},
+	{"snapshot", O_SESSION | O_SIZE | O_OUT | O_DEPTH | O_CAMERA, 0, 0,
+	 "--session NAME --size WxH --out IMG [--depth IMG]",
+	 "save a lossless still of a session to an image file",
+	 "Asks the server for a lossless (PNG) still of session NAME at WxH\n"
+	 "and writes it to IMG (any format OpenImageIO writes, by extension;\n"
+	 ".jpg is lossy). The camera is the session's, or the one given by\n"
+	 "--eye/--target/--up/--fov (for this picture only).\n"
+	 "  --depth IMG     not supported by the server protocol yet: FRAME\n"
+	 "                  carries colour only (exits with status 2)\n",
+	 run_snapshot},
+	{"watch", O_SESSION | O_SIZE | O_FRAMES | O_ENCODING | O_DOWNSCALE, 0, 0,
+	 "--session NAME [--frames N] [--size WxH]",
+	 "print a line per frame the session sends",
+	 "Joins session NAME as a viewer and prints one line per frame:\n"
+	 "  frame K no=SERVER_FRAME_NO order=EDIT_ORDER bytes=B rects=R\n"
+	 "  image=WxH still|interactive latency_ms=L after=edit|view|-\n"
+	 "latency_ms is measured on this client: from the arrival of the\n"
+	 "newest change the frame shows (the EDIT_APPLIED or SCENE_STATE of\n"
+	 "its edit order; for the first frame, our VIEW request) to the\n"
+	 "arrival of the frame. It covers the server's render, encode and\n"
+	 "send, not the editor's upload; frames that show nothing new (a\n"
+	 "still after interactive frames) print '-'. At the end (after N\n"
+	 "frames, or Ctrl-C) one 'stats' line gives the server's averages.\n"
+	 "  --frames N      stop after N frames (default: run until stopped)\n"
+	 "  --size WxH      view size (default 640x480)\n"
+	 "  --encoding E    jpeg (default), png or raw for still frames\n"
+	 "  --downscale D   interactive frames at 1/D resolution (1..8)\n",
+	 run_watch},
+	{"bench-latency",
+	 O_SESSION | O_SIZE | O_EDITS | O_NODE | O_ENCODING | O_INTERACTING |
+		 O_DOWNSCALE,
+	 0, 0, "--session NAME --edits N [--size WxH]",
+	 "measure edit-to-frame latency (prints JSON)",
+	 "Moves one primitive back and forth by 0.05 in x, N times, each time\n"
+	 "waiting for the first frame whose edit order includes the edit,\n"
+	 "and prints one JSON line: p50_ms, p99_ms, mean_ms, min_ms, max_ms\n"
+	 "of edit sent -> frame received, frames and bytes_per_frame (mean\n"
+	 "over every frame received during the run), and the server's render,\n"
+	 "encode and edit averages. The primitive is put back at the end.\n"
+	 "  --edits N       number of edits (1..1000000)\n"
+	 "  --size WxH      view size (default 640x480)\n"
+	 "  --node ID       primitive to move (default: the first one)\n"
+	 "  --encoding E    jpeg (default), png or raw for still frames\n"
+	 "  --interacting   send the edits as a drag (interactive frames)\n"
+	 "  --downscale D   interactive frames at 1/D resolution (1..8)\n",
+	 run_bench},
+};
+
+static const struct cmd *find_cmd(const char *name)
+{
+	for (size_t i = 0; i < sizeof(cmds) / sizeof(cmds[0]); i++) {
+		if (strcmp(cmds[i].name, name) == 0) {
+			return &cmds[i];
+		}
+	}
+	return NULL;
+}
+
+static void cmd_usage(const struct cmd *k, FILE *out)
+{
+	fprintf(out, "usage: blobcast %s %s [options]\n\n%s\n%s%s", k->name,
+		k->synopsis, k->summary, k->help,
+		k->opts & O_CAMERA ? "  --eye x,y,z --target x,y,z --up x,y,z "
+				     "--fov DEG\n                  camera\n"
+				   : "");
+	fprintf(out, "\ncommon options:\n%s", common_help);
+	fprintf(out, "\nexit status: 0 done, 1 the server or the connection "
+		     "failed, 2 usage error\n");
+}
+
+void bc_cli_client_usage(FILE *out)
+{
+	for (size_t i = 0; i < sizeof(cmds) / sizeof(cmds[0]); i++) {
+		fprintf(out, "  %-14s %s\n", cmds[i].name, cmds[i].summary);
+	}
+}
+
+/* Parses one option at argv[*i] into a. Returns 0, or EXIT_USAGE after
+ * printing why. */
+static int parse_option(const struct cmd *k, int argc, char **argv, int *i,
+			struct args *a)
+{
+	const char *arg = argv[*i], *v = NULL;
+	uint64_t x;
+	unsigned need = 0;
+	bool ok = true;
+	if (take_value(argc, argv, i, "--server", &v)) {
+		struct bc_client_addr addr;
+		struct bc_errinfo ei = {0};
+		if (v && bc_client_addr_parse(v, &addr, &ei)) {
+			fprintf(stderr, "blobcast %s: --server: %s\n", k->name,
+				ei.msg);
+			return EXIT_USAGE;
+		}
+		a->server = v;
+	} else if (take_value(argc, argv, i, "--token", &v)) {
+		a->token = v;
+	} else if (take_value(argc, argv, i, "--name", &v)) {
+		ok = v && strlen(v) <= BC_PROTO_MAX_NAME;
+		a->name = v;
+	} else if (take_value(argc, argv, i, "--timeout", &v)) {
+		ok = v && parse_u64(v, 0, 86400000, &x);
+		a->timeout_ms = ok ? (x == 0 ? -1 : (int)x) : 0;
+	} else if (take_value(argc, argv, i, "--session", &v)) {
+		need = O_SESSION;
+		ok = v && *v && strlen(v) <= BC_PROTO_MAX_NAME;
+		a->session = v;
+	} else if (take_value(argc, argv, i, "--size", &v)) {
+		need = O_SIZE;
+		ok = v && parse_size(v, &a->width, &a->height);
+		a->has_size = true;
+	} else if (take_value(argc, argv, i, "--out", &v)) {
+		need = O_OUT;
+		ok = v && *v;
+		a->out = v;
+	} else if (take_value(argc, argv, i, "--depth", &v)) {
+		need = O_DEPTH;
+		ok = v && *v;
+		a->depth = v;
+	} else if (take_value(argc, argv, i, "--eye", &v)) {
+		need = O_EYE;
+		ok = v && parse_vec3(v, a->cam.eye);
+		a->has_eye = true;
+	} else if (take_value(argc, argv, i, "--target", &v)) {
+		need = O_TARGET;
+		ok = v && parse_vec3(v, a->cam.target);
+		a->has_target = true;
+	} else if (take_value(argc, argv, i, "--up", &v)) {
+		need = O_UP;
+		ok = v && parse_vec3(v, a->cam.up);
+		a->has_up = true;
+	} else if (take_value(argc, argv, i, "--fov", &v)) {
+		need = O_FOV;
+		ok = v && parse_float(v, 0.0f, 180.0f, &a->cam.fov_y_deg);
+		a->has_fov = true;
+	} else if (take_value(argc, argv, i, "--frames", &v)) {
+		need = O_FRAMES;
+		ok = v && parse_u64(v, 1, UINT64_MAX, &a->frames);
+	} else if (take_value(argc, argv, i, "--edits", &v)) {
+		need = O_EDITS;
+		ok = v && parse_u64(v, 1, MAX_BENCH_EDITS, &x);
+		a->edits = ok ? (uint32_t)x : 0;
+	} else if (take_value(argc, argv, i, "--node", &v)) {
+		need = O_NODE;
+		ok = v && parse_u64(v, 1, UINT32_MAX, &x);
+		a->node = ok ? (uint32_t)x : 0;
+	} else if (take_value(argc, argv, i, "--encoding", &v)) {
+		need = O_ENCODING;
+		ok = v && (a->encoding = encoding_from_name(v)) !=
+				  BC_PROTO_ENC_INVALID;
+	} else if (take_value(argc, argv, i, "--downscale", &v)) {
+		need = O_DOWNSCALE;
+		ok = v && parse_u64(v, 1, BC_PROTO_MAX_DOWNSCALE, &x);
+		a->downscale = ok ? (uint8_t)x : 0;
+	} else if (strcmp(arg, "--interacting") == 0) {
+		need = O_INTERACTING;
+		a->interacting = true;
+		v = "";
+	} else {
+		fprintf(stderr,
+			"blobcast %s: unknown option \"%s\" (see blobcast %s "
+			"--help)\n",
+			k->name, arg, k->name);
+		return EXIT_USAGE;
+	}
+	if (need && !(k->opts & need)) {
+		fprintf(stderr,
+			"blobcast %s: %s does not apply to this command (see "
+			"blobcast %s --help)\n",
+			k->name, arg, k->name);
+		return EXIT_USAGE;
+	}
+	if (!v || !ok) {
+		fprintf(stderr,
+			"blobcast %s: %s needs a valid value%s%s%s (see "
+			"blobcast %s --help)\n",
+			k->name, arg, v ? ", not \"" : "", v ? v : "",
+			v ? "\"" : "", k->name);
+		return EXIT_USAGE;
+	}
+	return 0;
+}
+
+int bc_cli_client(const char *subcommand, int argc, char **argv)
+{
+	const struct cmd *k = find_cmd(subcommand);
+	struct args a;
+	if (!k) {
+		fprintf(stderr, "blobcast: '%s' is not a client command\n",
+			subcommand);
+		return EXIT_USAGE;
+	}
+	memset(&a, 0, sizeof(a));
+	a.cmd = k->name;
+	bc_camera_default(&a.cam);
+	for (int i = 1; i < argc; i++) {
+		const char *arg = argv[i];
+		int status;
+		if (strcmp(arg, "--help") == 0 || strcmp(arg, "-h") == 0) {
+			cmd_usage(k, stdout);
+			return 0;
+		}
+		if (arg[0] == '-' && arg[1] == '-') {
+			if ((status = parse_option(k, argc, argv, &i, &a))) {
+				return status;
+			}
+			continue;
+		}
+		if (a.npos == k->max_pos) {
+			fprintf(stderr,
+				"blobcast %s: unexpected argument \"%s\" (see "
+				"blobcast %s --help)\n",
+				k->name, arg, k->name);
+			return EXIT_USAGE;
+		}
+		a.pos[a.npos++] = arg;
+	}
+	if (a.npos < k->min_pos) {
+		fprintf(stderr, "usage: blobcast %s %s\n", k->name, k->synopsis);
+		return EXIT_USAGE;
+	}
+	if ((k->opts & O_SESSION) && !a.session) {
+		fprintf(stderr,
+			"blobcast %s: --session NAME is required (see "
+			"blobcast %s --help)\n",
+			k->name, k->name);
+		return EXIT_USAGE;
+	}
+	if (!a.has_size) {
+		a.width = 640;
+		a.height = 480;
+	}
+	return k->run(&a);
+}
