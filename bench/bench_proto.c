@@ -277,6 +277,14 @@ int main(int argc, char **argv)
 		fprintf(stderr, "bench: scene synthesis failed\n");
 		return 1;
 	}
+	struct bc_proto_scene_info info;
+	if (bc_proto_scene_scan(scene.data, scene.len, &info, NULL) != 0) {
+		fprintf(stderr, "bench: synthesized scene does not scan\n");
+		return 1;
+	}
+	printf("(scene: %u nodes, %u primitives, %u operators, depth %u, "
+	       "%zu bytes)\n",
+	       info.nodes, info.prims, info.ops, info.depth, scene.len);
 	c = (struct codec_ctx){.count = 1};
 	c.msg = (struct bc_msg){.type = BC_MSG_SCENE_LOAD};
 	c.msg.scene_load.scene =
