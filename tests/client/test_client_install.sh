@@ -1,0 +1,95 @@
+#!/bin/sh
+# libblobcast as its users get it: installs the "client" component of a
+# build into a temporary prefix, then builds the example client/lib/
+# examples/nudge.c from the installed headers with the flags blobcast.pc
+# gives, against libblobcast.so and against libblobcast.a, and runs it:
+# without arguments (usage, exit 2) and, when blobcastd is built, against a
+# private daemon, where its edit must show up in a frame.
+#
+# usage: test_client_install.sh BUILD_DIR SOURCE_DIR CC SANITIZE [BLOBCASTD]
+# Exits 77 when the installed libraries have not been built.
+set -u
+build=$1 src=$2 cc=$3 sanitize=$4 blobcastd=${5:-}
+if [ ! -f "$build/client/lib/libblobcast.a" ] ||
+  ! ls "$build"/client/lib/libblobcast.so* > /dev/null 2>&1; then
+  echo "skip: libblobcast.so and libblobcast.a are not built"
+  exit 77
+fi
+if ! command -v pkg-config > /dev/null 2>&1; then
+  echo "skip: no pkg-config"
+  exit 77
+fi
+tmp=$(mktemp -d /tmp/bc-client-install.XXXXXX) || exit 1
+daemon=
+trap 'if [ -n "$daemon" ]; then kill -TERM "$daemon"; wait "$daemon"; fi;
+      rm -rf "$tmp"' EXIT
+trap 'exit 1' INT TERM
+
+fail() {
+  echo "FAIL: $*"
+  exit 1
+}
+
+cmake --install "$build" --component client --prefix "$tmp/prefix" \
+  > "$tmp/install.log" 2>&1 || fail "install: $(cat "$tmp/install.log")"
+pc=$(find "$tmp/prefix" -name blobcast.pc | head -n 1)
+[ -n "$pc" ] || fail "blobcast.pc was not installed"
+export PKG_CONFIG_PATH="${pc%/*}"
+cflags=$(pkg-config --cflags blobcast) || fail "pkg-config --cflags"
+libs=$(pkg-config --libs blobcast) || fail "pkg-config --libs"
+static_libs=$(pkg-config --static --libs-only-l blobcast | sed 's/-lblobcast//')
+libdir=$(pkg-config --variable=libdir blobcast)
+[ -f "$libdir/libblobcast.a" ] || fail "no libblobcast.a in $libdir"
+for h in client.h proto.h proto_limits.h blobtree.h scene.h error.h; do
+  [ -f "$(pkg-config --variable=includedir blobcast)/blobcast/$h" ] ||
+    fail "header blobcast/$h not installed"
+done
+extra=
+if [ "$sanitize" = ON ]; then
+  extra="-fsanitize=address,undefined"
+fi
+# shellcheck disable=SC2086
+"$cc" -std=c11 -Wall -Wextra -Werror $extra $cflags \
+  "$src/client/lib/examples/nudge.c" -o "$tmp/nudge" $libs \
+  > "$tmp/cc.log" 2>&1 || fail "shared build: $(cat "$tmp/cc.log")"
+# shellcheck disable=SC2086
+"$cc" -std=c11 -Wall -Wextra -Werror $extra $cflags \
+  "$src/client/lib/examples/nudge.c" -o "$tmp/nudge-static" \
+  "$libdir/libblobcast.a" $static_libs \
+  > "$tmp/cc.log" 2>&1 || fail "static build: $(cat "$tmp/cc.log")"
+if ldd "$tmp/nudge-static" | grep -q libblobcast; then
+  fail "the static build links libblobcast.so"
+fi
+export LD_LIBRARY_PATH="$libdir"
+for prog in nudge nudge-static; do
+  "$tmp/$prog" > "$tmp/out" 2>&1
+  [ $? -eq 2 ] && grep -q "usage: nudge" "$tmp/out" ||
+    fail "$prog without arguments: $(cat "$tmp/out")"
+  echo "ok   $prog builds and runs"
+done
+
+if [ -z "$blobcastd" ] || [ ! -x "$blobcastd" ]; then
+  echo "blobcastd not built: the example is not run against a server"
+  exit 0
+fi
+"$blobcastd" --listen 127.0.0.1:0 --data "$tmp/data" --backend cpu \
+  --log warn > "$tmp/daemon.log" 2>&1 &
+daemon=$!
+port=
+i=0
+while [ $i -lt 100 ] && [ -z "$port" ] && kill -0 "$daemon" 2>/dev/null; do
+  sleep 0.1
+  port=$(sed -n 's/^blobcastd: listening on 127\.0\.0\.1:\([0-9][0-9]*\)$/\1/p' \
+    "$tmp/daemon.log" | head -n 1)
+  i=$((i + 1))
+done
+[ -n "$port" ] || fail "blobcastd did not start: $(cat "$tmp/daemon.log")"
+# Node 32 of the default scene is a sphere.
+for prog in nudge nudge-static; do
+  "$tmp/$prog" "127.0.0.1:$port" default 32 translate=1.2,-0.4,0.2 \
+    > "$tmp/out" 2>&1 || fail "$prog: $(cat "$tmp/out")"
+  grep -q "^edit order [0-9]* shown in frame [0-9]* (320x240, complete)$" \
+    "$tmp/out" || fail "$prog printed: $(cat "$tmp/out")"
+  echo "ok   $prog: $(cat "$tmp/out")"
+done
+echo "all checks passed"
