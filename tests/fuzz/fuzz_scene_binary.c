@@ -1,0 +1,95 @@
+/*
+ * libFuzzer harness for the binary scene decoder, as a scene (flags and
+ * camera first) and as a bare tree. Oracle: a refused input has a reason
+ * and leaves the tree empty; an accepted one encodes to bytes of the same
+ * length that decode again to the same structure, and writes to JSON that
+ * parses back.
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "blobcast/alloc.h"
+#include "blobcast/blobtree.h"
+#include "blobcast/scene.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+static void die(const char *why)
+{
+	fprintf(stderr, "fuzz_scene_binary: %s\n", why);
+	abort();
+}
+
+static void check_refusal(int rc, const struct bc_errinfo *ei,
+			  const struct bc_tree *t)
+{
+	if (rc > 0 || (rc < 0 && (ei->code != rc || ei->msg[0] == '\0'))) {
+		die("refusal without a reason");
+	}
+	if (rc < 0 && (bc_tree_node_count(t) != 0 || bc_tree_root(t) != 0)) {
+		die("a refused scene left nodes behind");
+	}
+}
+
+/* Re-encodes an accepted tree and checks the bytes decode to it. */
+static void check_accepted(const struct bc_tree *t, const struct bc_camera *cam,
+			   size_t in_len, bool scene)
+{
+	struct bc_tree *u = bc_tree_create();
+	struct bc_errinfo ei = {0};
+	uint8_t *bytes = NULL;
+	size_t len = 0;
+	char *text;
+	int rc = scene ? bc_scene_encode(t, cam, &bytes, &len)
+		       : bc_tree_encode(t, &bytes, &len);
+	if (!u || rc != 0) {
+		die("an accepted scene does not encode");
+	}
+	/* Fields are fixed-size: the same scene takes the same bytes. */
+	if (len != in_len) {
+		die("re-encoding changed the length");
+	}
+	rc = scene ? bc_scene_decode(bytes, len, u, NULL, NULL, &ei)
+		   : bc_tree_decode(bytes, len, u, &ei);
+	if (rc != 0) {
+		fprintf(stderr, "%s\n", ei.msg);
+		die("re-encoded scene does not decode");
+	}
+	if (bc_tree_node_count(u) != bc_tree_node_count(t) ||
+	    bc_tree_root(u) != bc_tree_root(t)) {
+		die("round trip changed the tree");
+	}
+	text = bc_scene_to_json(t, cam);
+	if (!text || bc_scene_parse_json(text, strlen(text), u, NULL, &ei)) {
+		die("accepted scene does not survive JSON");
+	}
+	bc_free(text);
+	bc_free(bytes);
+	bc_tree_destroy(u);
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_camera cam;
+	struct bc_errinfo ei = {0};
+	bool has = false;
+	int rc;
+	if (!t) {
+		die("out of memory");
+	}
+	rc = bc_scene_decode(data, size, t, &cam, &has, &ei);
+	check_refusal(rc, &ei, t);
+	if (rc == 0) {
+		check_accepted(t, has ? &cam : NULL, size, true);
+	}
+	memset(&ei, 0, sizeof(ei));
+	rc = bc_tree_decode(data, size, t, &ei);
+	check_refusal(rc, &ei, t);
+	if (rc == 0) {
+		check_accepted(t, NULL, size, false);
+	}
+	bc_tree_destroy(t);
+	return 0;
+}
