@@ -603,8 +603,9 @@ static int parse_camera(struct jctx *c, json_t *obj, struct bc_camera *cam)
 	}
 	{
 		struct bc_errinfo local = {0};
+		/* Its reason already starts with "camera: ". */
 		if ((rc = bc_camera_validate(cam, &local))) {
-			return jfail(c, rc, "camera", -1, "%s", local.msg);
+			return bc_errinfo_set(c->ei, rc, "%s", local.msg);
 		}
 	}
 	return 0;

@@ -234,6 +234,40 @@ static void hand_written_scene_decodes_to_its_fields(void)
 	bc_tree_destroy(t);
 }
 
+/* The example of docs/scene-format.md, byte for byte. */
+static void documented_example_decodes(void)
+{
+	static const uint8_t doc[] = {
+		0x00, 0x03, 0x00, 0x00, 0x00, 0x81, 0x01, 0x00, 0x00, 0x00,
+		0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x02, 0x00,
+		0x00, 0x00, 0x01, 0x02, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
+		0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
+		0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
+		0x00, 0x00, 0x00, 0x80, 0x3f, 0x00, 0x01, 0x00, 0x00, 0x80,
+		0x3f, 0x01, 0x03, 0x00, 0x00, 0x00, 0x00, 0x00, 0x80, 0x3f,
+		0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
+		0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
+		0x00, 0x00, 0x80, 0x3f, 0x00, 0x01, 0x00, 0x00, 0x00, 0x3f};
+	struct bc_tree *t = bc_tree_create();
+	struct bc_prim_data p;
+	struct bc_errinfo ei = {0};
+	uint8_t *again = NULL;
+	size_t len = 0;
+	bool has = true;
+	REQUIRE(t);
+	CHECK_EQ_INT(bc_scene_decode(doc, sizeof(doc), t, NULL, &has, &ei), 0);
+	CHECK(!has);
+	CHECK_EQ_INT(bc_tree_root(t), 1);
+	CHECK_EQ_INT(bc_tree_child(t, 1, 1), 3);
+	CHECK(bc_tree_get(t, 3, &p, NULL) && p.params[0] == 0.5f &&
+	      p.translate[0] == 1.0f);
+	/* And our encoder writes exactly those bytes. */
+	CHECK_EQ_INT(bc_scene_encode(t, NULL, &again, &len), 0);
+	CHECK(len == sizeof(doc) && memcmp(again, doc, len) == 0);
+	bc_free(again);
+	bc_tree_destroy(t);
+}
+
 /* Nodes with id 0 get ids that no node of the encoding names, even ids
  * named later in the stream. */
 static void zero_ids_get_fresh_ids(void)
@@ -779,6 +813,7 @@ static const struct bc_test tests[] = {
 	 random_trees_round_trip_through_binary},
 	{"hand_written_scene_decodes_to_its_fields",
 	 hand_written_scene_decodes_to_its_fields},
+	{"documented_example_decodes", documented_example_decodes},
 	{"zero_ids_get_fresh_ids", zero_ids_get_fresh_ids},
 	{"malformed_encodings_fail_with_their_code",
 	 malformed_encodings_fail_with_their_code},
