@@ -1,0 +1,864 @@
+/*
+ * The gl backend (struct bc_backend_ops "gl"): the renderer object, the
+ * blobtree's GPU buffers and their updates, and one frame's passes.
+ *
+ * Buffers. The linearized tree goes up as storage buffers: node words with
+ * parameter offsets and the parameter records exactly as bc_lin holds them,
+ * the traversal indices (first, fast, jump, kills) per slot, and per
+ * primitive its slot, stable id, colour and world ABV. sync() with a
+ * parameter edit's dirty ranges sends only those bytes (glBufferSubData of
+ * the changed records, node words, traversal entries and ABVs); nothing is
+ * recompiled. A structural edit, a different tree or changed counts upload
+ * everything.
+ *
+ * A frame. (1) A-buffer: ABV imposters are rasterized at one pixel per 8x8
+ * tile (abuffer.vert/geom/frag), each fragment clipping the tile's rays
+ * against the ABV and pushing (entry, exit, primitive) on the tile's linked
+ * list; a scan gives each tile its offset and a sort pass lays each list out
+ * contiguously, ordered by entry. (2) Tracing: one workgroup per tile walks
+ * its list in shared depth ranges with a pruned view of the active
+ * primitives (trace.comp), and shades the hits. (3) Readback: the colour,
+ * depth and id images and the statistics are copied by the GPU into one
+ * pixel buffer object; the host waits on a single fence and maps it once.
+ * A frame whose fragments overflow the A-buffer is counted exactly (the
+ * count keeps running past the capacity), so the buffer is grown to fit and
+ * the frame drawn again, at most once more.
+ *
+ * Each entry point makes the context current and releases it before
+ * returning, so a renderer may be driven from any one thread at a time.
+ */
+#include "gl_priv.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+
+#include "blobcast/alloc.h"
+#include "blobcast/log.h"
+
+/* The shaders copy these enum values and layouts (shaders/common.glsl,
+ * prim.glsl); a change here must be made there too. */
+_Static_assert(BC_OP_SMOOTH_DIFFERENCE == 6, "shaders/common.glsl op kinds");
+_Static_assert(BC_PRIM_TRI_PRISM == 16 && BC_PRIM_COUNT == 17,
+	       "shaders/prim.glsl primitive kinds");
+_Static_assert(BC_ABV_CAPSULE == 3, "shaders/common.glsl ABV shapes");
+_Static_assert(BC_DEBUG_OVERLAPS == 2, "shaders/common.glsl debug modes");
+_Static_assert(BC_PRIM_RECORD_VEC4 == 5 && BC_OP_RECORD_VEC4 == 1,
+	       "shaders/common.glsl record sizes");
+_Static_assert(BC_PRIM_PACKED == 8, "shaders/prim.glsl packed parameters");
+_Static_assert(BC_EVAL_STACK == 130, "shaders/common.glsl BC_EVAL_STACK");
+_Static_assert(sizeof(struct bc__gl_frame_ubo) == 128, "std140 Frame block");
+/* Primitive indices share a 32-bit view instruction word with 11 bits of
+ * kind and flags (trace.comp). */
+_Static_assert(BC_TREE_MAX_NODES / 2 < (1u << 21), "primitive index bits");
+
+/* How long a frame may keep the GPU before the wait gives up: far beyond
+ * any frame llvmpipe renders at the largest size, short enough that a hung
+ * driver does not hold the render thread forever. */
+#define BC_GL_FENCE_TIMEOUT_S 300.0
+/* Bytes per fragment in the linked list, the sorted lists and scratch. */
+#define LINK_BYTES 16u
+#define SORTED_BYTES 16u
+#define SCRATCH_BYTES 24u
+
+enum {
+	Q_START = 0,
+	Q_ABUFFER,
+	Q_TRACE,
+	Q_COUNT
+};
+
+struct bc_renderer {
+	struct bc__gl_ctx ctx;
+	enum bc_debug_mode debug;
+	/* Sticky: a lost context refuses all further work. */
+	int err;
+	char errstr[200];
+	GLuint progs[BC__GL_PROG_COUNT];
+	GLuint vao, fbo, ubo, pbo;
+	GLuint bufs[BC__GL_BUF_COUNT];
+	size_t buf_size[BC__GL_BUF_COUNT];
+	GLuint tex[3]; /* rgba (r32ui), depth (r32f), ids (r32ui) */
+	uint32_t tex_w, tex_h;
+	GLuint queries[Q_COUNT];
+	/* The synced tree and the counts its buffers were sized for. */
+	const struct bc_tree *tree;
+	bool synced;
+	uint32_t count, nprims, nparam;
+	uint32_t frag_cap;
+	double upload_ms; /* since the last frame */
+	uint32_t builds;
+	uint64_t upload_bytes;
+	bool upload_full;
+	uint32_t full_uploads;
+};
+
+static double now_ms(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+}
+
+/* ---- Buffers ------------------------------------------------------------ */
+
+/* (Re)allocates storage buffer b with room for size bytes (never zero:
+ * binding an empty buffer is undefined). Contents are not kept. */
+static void buf_alloc(struct bc_renderer *r, int b, size_t size,
+		      const void *data)
+{
+	GladGLContext *gl = &r->ctx.gl;
+	if (size < 64) {
+		size = 64;
+		data = NULL;
+	}
+	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->bufs[b]);
+	gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)size, data,
+		       GL_DYNAMIC_DRAW);
+	r->buf_size[b] = size;
+	r->upload_bytes += data ? size : 0;
+}
+
+static void buf_update(struct bc_renderer *r, int b, size_t off, size_t size,
+		       const void *data)
+{
+	GladGLContext *gl = &r->ctx.gl;
+	if (size == 0) {
+		return;
+	}
+	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->bufs[b]);
+	gl->BufferSubData(GL_SHADER_STORAGE_BUFFER, (GLintptr)off,
+			  (GLsizeiptr)size, data);
+	r->upload_bytes += size;
+}
+
+static void fill_topo(const struct bc_lin *l, uint32_t lo, uint32_t hi,
+		      uint32_t *out)
+{
+	for (uint32_t s = lo; s < hi; s++, out += 4) {
+		out[0] = l->first[s];
+		out[1] = l->fast[s];
+		out[2] = l->jump[s];
+		out[3] = l->kills[s];
+	}
+}
+
+static void fill_prims(const struct bc_lin *l, uint32_t lo, uint32_t hi,
+		       float *out)
+{
+	for (uint32_t k = lo; k < hi; k++, out += BC_GL_PRIM_FLOATS) {
+		uint32_t u[2] = {l->prim_slot[k],
+				 l->node_id[l->prim_slot[k]]};
+		memcpy(out, u, sizeof(u));
+		out[2] = 0.0f;
+		out[3] = 0.0f;
+		out[4] = l->color[k][0];
+		out[5] = l->color[k][1];
+		out[6] = l->color[k][2];
+		out[7] = 1.0f;
+	}
+}
+
+static void fill_abvs(const struct bc_lin *l, uint32_t lo, uint32_t hi,
+		      float *out)
+{
+	for (uint32_t k = lo; k < hi; k++, out += BC_GL_ABV_FLOATS) {
+		const struct bc_abv *a = &l->abv[k];
+		float blo[3], bhi[3];
+		memset(out, 0, BC_GL_ABV_FLOATS * sizeof(float));
+		bc_abv_aabb(a, blo, bhi);
+		for (int i = 0; i < 3; i++) {
+			out[i] = blo[i];
+			out[4 + i] = bhi[i];
+			out[8 + i] = a->center[i];
+			out[12 + i] = a->shape == BC_ABV_BOX ? a->half[i]
+							     : a->end[i];
+			out[16 + i] = a->axis[0][i];
+			out[20 + i] = a->axis[1][i];
+			out[24 + i] = a->axis[2][i];
+		}
+		/* The shape as a float: see common.glsl. */
+		out[3] = (float)a->shape;
+		out[7] = a->radius;
+	}
+}
+
+/* Uploads slots [lo, hi) of the traversal indices. */
+static int put_topo(struct bc_renderer *r, const struct bc_lin *l, uint32_t lo,
+		    uint32_t hi, bool whole)
+{
+	size_t n = hi - lo;
+	uint32_t *tmp = bc_malloc((n ? n : 1) * 4 * sizeof(uint32_t));
+	if (!tmp) {
+		return BC_ENOMEM;
+	}
+	fill_topo(l, lo, hi, tmp);
+	if (whole) {
+		buf_alloc(r, BC__GL_BUF_TOPO, n * 16, tmp);
+	} else {
+		buf_update(r, BC__GL_BUF_TOPO, (size_t)lo * 16, n * 16, tmp);
+	}
+	bc_free(tmp);
+	return 0;
+}
+
+/* Uploads primitives [lo, hi) (slot, id, colour, ABV). */
+static int put_prims(struct bc_renderer *r, const struct bc_lin *l,
+		     uint32_t lo, uint32_t hi, bool whole)
+{
+	size_t n = hi - lo;
+	size_t pb = BC_GL_PRIM_FLOATS * sizeof(float);
+	size_t ab = BC_GL_ABV_FLOATS * sizeof(float);
+	float *tmp = bc_malloc((n ? n : 1) * (pb + ab));
+	if (!tmp) {
+		return BC_ENOMEM;
+	}
+	fill_prims(l, lo, hi, tmp);
+	fill_abvs(l, lo, hi, tmp + n * BC_GL_PRIM_FLOATS);
+	if (whole) {
+		buf_alloc(r, BC__GL_BUF_PRIMS, n * pb, tmp);
+		buf_alloc(r, BC__GL_BUF_ABVS, n * ab,
+			  tmp + n * BC_GL_PRIM_FLOATS);
+	} else {
+		buf_update(r, BC__GL_BUF_PRIMS, (size_t)lo * pb, n * pb, tmp);
+		buf_update(r, BC__GL_BUF_ABVS, (size_t)lo * ab, n * ab,
+			   tmp + n * BC_GL_PRIM_FLOATS);
+	}
+	bc_free(tmp);
+	return 0;
+}
+
+static int upload_all(struct bc_renderer *r, const struct bc_lin *l)
+{
+	int rc;
+	buf_alloc(r, BC__GL_BUF_NODES, (size_t)l->count * 8, l->node);
+	buf_alloc(r, BC__GL_BUF_PARAMS, (size_t)l->nparam * 16, l->param);
+	if ((rc = put_topo(r, l, 0, l->count, true)) ||
+	    (rc = put_prims(r, l, 0, l->nprims, true))) {
+		return rc;
+	}
+	r->count = l->count;
+	r->nprims = l->nprims;
+	r->nparam = l->nparam;
+	r->upload_full = true;
+	r->full_uploads++;
+	return 0;
+}
+
+/* Clamps [*lo, *hi) to [0, n); false when empty. */
+static bool clamp_range(uint32_t *lo, uint32_t *hi, uint32_t n)
+{
+	if (*hi > n) {
+		*hi = n;
+	}
+	return *lo < *hi;
+}
+
+static int upload_dirty(struct bc_renderer *r, const struct bc_lin *l,
+			const struct bc_dirty *d)
+{
+	uint32_t plo = d->param_lo, phi = d->param_hi;
+	uint32_t slo = d->slot_lo, shi = d->slot_hi;
+	uint32_t klo = d->prim_lo, khi = d->prim_hi;
+	int rc;
+	if (clamp_range(&plo, &phi, l->nparam)) {
+		buf_update(r, BC__GL_BUF_PARAMS, (size_t)plo * 16,
+			   (size_t)(phi - plo) * 16, l->param + 4u * plo);
+	}
+	if (clamp_range(&slo, &shi, l->count)) {
+		/* An operator edit changes node words (the kind) and, with
+		 * the kind's class, the kill counts of its whole subtree;
+		 * its primitives' ABVs moved with the new ROIs. The slot
+		 * range is that subtree, whose leaves are consecutive
+		 * primitives: the first leaf is slot_lo, and a subtree of
+		 * m slots has (m + 1) / 2 leaves. */
+		uint32_t k0 = l->prim_of[l->first[shi - 1]];
+		uint32_t k1 = k0 + (shi - l->first[shi - 1] + 1) / 2;
+		if (slo < l->first[shi - 1]) {
+			/* Several edited subtrees merged into one range:
+			 * refresh every primitive rather than work out
+			 * which. */
+			k0 = 0;
+			k1 = l->nprims;
+		}
+		buf_update(r, BC__GL_BUF_NODES, (size_t)slo * 8,
+			   (size_t)(shi - slo) * 8, l->node + 2u * slo);
+		if ((rc = put_topo(r, l, slo, shi, false))) {
+			return rc;
+		}
+		if (k0 < l->nprims) {
+			if (klo < khi && klo < l->nprims) {
+				klo = klo < k0 ? klo : k0;
+				khi = khi > k1 ? khi : k1;
+			} else {
+				klo = k0;
+				khi = k1;
+			}
+		}
+	}
+	if (clamp_range(&klo, &khi, l->nprims) &&
+	    (rc = put_prims(r, l, klo, khi, false))) {
+		return rc;
+	}
+	r->upload_full = false;
+	return 0;
+}
+
+/* ---- Create and destroy ------------------------------------------------- */
+
+static void release_gl(struct bc_renderer *r)
+{
+	GladGLContext *gl = &r->ctx.gl;
+	if (!gl->DeleteBuffers) {
+		return; /* entry points never loaded */
+	}
+	bc__gl_programs_free(&r->ctx, r->progs);
+	gl->DeleteBuffers(BC__GL_BUF_COUNT, r->bufs);
+	gl->DeleteBuffers(1, &r->ubo);
+	gl->DeleteBuffers(1, &r->pbo);
+	gl->DeleteTextures(3, r->tex);
+	gl->DeleteQueries(Q_COUNT, r->queries);
+	gl->DeleteFramebuffers(1, &r->fbo);
+	gl->DeleteVertexArrays(1, &r->vao);
+}
+
+static void gl_destroy(struct bc_renderer *r)
+{
+	struct bc_errinfo ei = {0};
+	if (!r) {
+		return;
+	}
+	if (r->ctx.plat.platform != BC_GL_PLATFORM_AUTO) {
+		/* Objects die with the context anyway; deleting them first
+		 * matters when the driver shares the display. */
+		if (bc__gl_ctx_bind(&r->ctx, &ei) == 0) {
+			release_gl(r);
+			bc__gl_ctx_unbind(&r->ctx);
+		}
+		bc__gl_ctx_close(&r->ctx);
+	}
+	bc_free(r);
+}
+
+static int gl_create(struct bc_renderer **out, const struct bc_render_opts *opts,
+		     struct bc_errinfo *ei)
+{
+	struct bc_renderer *r;
+	enum bc_gl_platform platform;
+	GladGLContext *gl;
+	int rc;
+	*out = NULL;
+	if (opts && (unsigned)opts->debug >= BC_DEBUG_COUNT) {
+		return bc_errinfo_set(ei, BC_EENUM,
+				      "render: debug mode %d out of range",
+				      (int)opts->debug);
+	}
+	platform = bc_gl_platform_from_name(opts ? opts->gl_platform : NULL);
+	if (platform == BC_GL_PLATFORM_COUNT) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+				      "gl: unknown platform '%s' (auto, "
+				      "device, surfaceless or osmesa)",
+				      opts->gl_platform);
+	}
+	if (!(r = bc_calloc(1, sizeof(*r)))) {
+		return bc_errinfo_set(ei, BC_ENOMEM, "gl: out of memory");
+	}
+	r->debug = opts ? opts->debug : BC_DEBUG_NONE;
+	if ((rc = bc__gl_ctx_open(&r->ctx, platform, ei))) {
+		goto fail;
+	}
+	gl = &r->ctx.gl;
+	if ((rc = bc__gl_programs_build(&r->ctx, r->progs, ei))) {
+		goto fail;
+	}
+	r->builds++;
+	gl->GenVertexArrays(1, &r->vao);
+	gl->GenFramebuffers(1, &r->fbo);
+	gl->GenBuffers(BC__GL_BUF_COUNT, r->bufs);
+	gl->GenBuffers(1, &r->ubo);
+	gl->GenBuffers(1, &r->pbo);
+	gl->GenQueries(Q_COUNT, r->queries);
+	gl->BindBuffer(GL_UNIFORM_BUFFER, r->ubo);
+	gl->BufferData(GL_UNIFORM_BUFFER, sizeof(struct bc__gl_frame_ubo), NULL,
+		       GL_DYNAMIC_DRAW);
+	for (int b = 0; b < BC__GL_BUF_COUNT; b++) {
+		buf_alloc(r, b, 64, NULL);
+	}
+	buf_alloc(r, BC__GL_BUF_STATS, BC_GL_STAT_WORDS * 4, NULL);
+	if ((rc = bc__gl_check(&r->ctx, "creating objects", ei))) {
+		goto fail;
+	}
+	bc__gl_ctx_unbind(&r->ctx);
+	*out = r;
+	return 0;
+fail:
+	gl_destroy(r);
+	return rc;
+}
+
+/* ---- Sync ----------------------------------------------------------------- */
+
+/* Makes the context current, refusing work after a loss. */
+static int enter(struct bc_renderer *r, struct bc_errinfo *ei)
+{
+	GladGLContext *gl = &r->ctx.gl;
+	int rc;
+	if (r->err) {
+		return bc_errinfo_set(ei, r->err, "%s", r->errstr);
+	}
+	if ((rc = bc__gl_ctx_bind(&r->ctx, ei))) {
+		return rc;
+	}
+	if (gl->GetGraphicsResetStatus) {
+		GLenum s = gl->GetGraphicsResetStatus();
+		if (s != GL_NO_ERROR) {
+			const char *why = s == GL_GUILTY_CONTEXT_RESET
+						  ? "GL_GUILTY_CONTEXT_RESET"
+					  : s == GL_INNOCENT_CONTEXT_RESET
+						  ? "GL_INNOCENT_CONTEXT_RESET"
+						  : "GL_UNKNOWN_CONTEXT_RESET";
+			r->err = BC_EGL;
+			snprintf(r->errstr, sizeof(r->errstr),
+				 "gl: context lost (%s): create a new renderer",
+				 why);
+			bc_log(BC_LOG_ERROR, "%s", r->errstr);
+			bc__gl_ctx_unbind(&r->ctx);
+			return bc_errinfo_set(ei, r->err, "%s", r->errstr);
+		}
+	}
+	return 0;
+}
+
+static int gl_sync(struct bc_renderer *r, const struct bc_tree *t,
+		   const struct bc_dirty *dirty, struct bc_errinfo *ei)
+{
+	const struct bc_lin *l;
+	double t0;
+	int rc;
+	if (!r || !t) {
+		return bc_errinfo_set(ei, BC_EINVAL, "render: no tree to sync");
+	}
+	if ((rc = enter(r, ei))) {
+		return rc;
+	}
+	t0 = now_ms();
+	r->upload_bytes = 0;
+	l = bc_tree_lin(t);
+	if (!l) {
+		/* An empty tree: nothing to upload, every ray misses. */
+		r->count = r->nprims = r->nparam = 0;
+		r->upload_full = true;
+	} else if (!dirty || dirty->structure || !r->synced || t != r->tree ||
+		   l->count != r->count || l->nprims != r->nprims ||
+		   l->nparam != r->nparam) {
+		rc = upload_all(r, l);
+	} else if (dirty->edits) {
+		rc = upload_dirty(r, l, dirty);
+	}
+	if (rc == 0) {
+		rc = bc__gl_check(&r->ctx, "uploading the tree", ei);
+	} else {
+		bc_errinfo_set(ei, rc, "gl: out of memory uploading the tree");
+	}
+	r->synced = rc == 0;
+	r->tree = t;
+	r->upload_ms += now_ms() - t0;
+	bc__gl_ctx_unbind(&r->ctx);
+	return rc;
+}
+
+/* ---- One frame ------------------------------------------------------------ */
+
+static void normalize3(float v[3])
+{
+	float n = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+	if (n > 0.0f) {
+		v[0] /= n;
+		v[1] /= n;
+		v[2] /= n;
+	}
+}
+
+/* The frame's uniforms: render/cpu/shade.c's frame setup. */
+static void frame_setup(struct bc__gl_frame_ubo *u, const struct bc_lin *l,
+			const struct bc_camera *cam, uint32_t w, uint32_t h,
+			enum bc_debug_mode debug, uint32_t nprims,
+			uint32_t cap)
+{
+	struct bc_view_rays vr;
+	float size, light[3];
+	memset(u, 0, sizeof(*u));
+	bc_view_rays_init(&vr, cam, w, h);
+	size = l && l->size > 0.0f && isfinite(l->size) ? l->size : 1.0f;
+	for (int i = 0; i < 3; i++) {
+		u->eye[i] = vr.eye[i];
+		u->forward[i] = vr.forward[i];
+		u->right[i] = vr.right[i];
+		u->up[i] = vr.up[i];
+		light[i] = -0.5f * vr.right[i] + 0.6f * vr.up[i] -
+			   0.6f * vr.forward[i];
+	}
+	normalize3(light);
+	memcpy(u->light, light, sizeof(light));
+	u->eye[3] = vr.tan_half_y;
+	u->forward[3] = vr.aspect;
+	u->right[3] = BC_GL_MIN_STEP_REL * size;
+	u->up[3] = 2.0f * vr.tan_half_y / (float)vr.height;
+	u->light[3] = BC_GL_AMBIENT;
+	u->misc[0] = BC_GL_REFINE_REL * size;
+	u->misc[1] = size;
+	u->size[0] = w;
+	u->size[1] = h;
+	u->size[2] = (w + BC_GL_TILE - 1) / BC_GL_TILE;
+	u->size[3] = (h + BC_GL_TILE - 1) / BC_GL_TILE;
+	u->counts[0] = nprims;
+	u->counts[1] = cap;
+	u->counts[2] = (uint32_t)debug;
+}
+
+/* Images, the tile table, the framebuffer and the readback buffer for a
+ * w x h frame. */
+static int frame_buffers(struct bc_renderer *r, uint32_t w, uint32_t h)
+{
+	GladGLContext *gl = &r->ctx.gl;
+	static const GLenum fmt[3] = {GL_R32UI, GL_R32F, GL_R32UI};
+	uint32_t tw = (w + BC_GL_TILE - 1) / BC_GL_TILE;
+	uint32_t th = (h + BC_GL_TILE - 1) / BC_GL_TILE;
+	size_t npix = (size_t)w * h;
+	if (r->tex_w == w && r->tex_h == h) {
+		return 0;
+	}
+	gl->DeleteTextures(3, r->tex);
+	gl->GenTextures(3, r->tex);
+	for (int i = 0; i < 3; i++) {
+		gl->BindTexture(GL_TEXTURE_2D, r->tex[i]);
+		gl->TexStorage2D(GL_TEXTURE_2D, 1, fmt[i], (GLsizei)w,
+				 (GLsizei)h);
+	}
+	gl->BindTexture(GL_TEXTURE_2D, 0);
+	buf_alloc(r, BC__GL_BUF_TILES, (size_t)tw * th * 16, NULL);
+	gl->BindFramebuffer(GL_FRAMEBUFFER, r->fbo);
+	gl->FramebufferParameteri(GL_FRAMEBUFFER, GL_FRAMEBUFFER_DEFAULT_WIDTH,
+				  (GLint)tw);
+	gl->FramebufferParameteri(GL_FRAMEBUFFER, GL_FRAMEBUFFER_DEFAULT_HEIGHT,
+				  (GLint)th);
+	gl->BindFramebuffer(GL_FRAMEBUFFER, 0);
+	gl->BindBuffer(GL_PIXEL_PACK_BUFFER, r->pbo);
+	gl->BufferData(GL_PIXEL_PACK_BUFFER,
+		       (GLsizeiptr)(12 * npix + BC_GL_STAT_WORDS * 4), NULL,
+		       GL_STREAM_READ);
+	gl->BindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+	r->tex_w = w;
+	r->tex_h = h;
+	return 0;
+}
+
+/* Fragment storage for cap fragments. */
+static void frag_buffers(struct bc_renderer *r, uint32_t cap)
+{
+	buf_alloc(r, BC__GL_BUF_LINKS, (size_t)cap * LINK_BYTES, NULL);
+	buf_alloc(r, BC__GL_BUF_SORTED, (size_t)cap * SORTED_BYTES, NULL);
+	buf_alloc(r, BC__GL_BUF_SCRATCH, (size_t)cap * SCRATCH_BYTES, NULL);
+	r->frag_cap = cap;
+}
+
+/* Largest fragment capacity: the limit, and the driver's storage block
+ * size for the largest per-fragment buffer. */
+static uint32_t frag_limit(struct bc_renderer *r)
+{
+	GLint64 block = 0;
+	uint64_t most = BC_GL_MAX_FRAGMENTS;
+	r->ctx.gl.GetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &block);
+	if (block > 0 && (uint64_t)block / SCRATCH_BYTES < most) {
+		most = (uint64_t)block / SCRATCH_BYTES;
+	}
+	return (uint32_t)most;
+}
+
+/* Issues the passes of one frame and the copies into the readback buffer. */
+static void draw(struct bc_renderer *r, const struct bc__gl_frame_ubo *u,
+		 uint32_t nprims)
+{
+	GladGLContext *gl = &r->ctx.gl;
+	static const uint32_t tile_init[4] = {0xffffffffu, 0u, 0u, 0u};
+	static const uint32_t zero = 0;
+	uint32_t tw = u->size[2], th = u->size[3];
+	size_t npix = (size_t)u->size[0] * u->size[1];
+	gl->BindBuffer(GL_UNIFORM_BUFFER, r->ubo);
+	gl->BufferSubData(GL_UNIFORM_BUFFER, 0, sizeof(*u), u);
+	gl->BindBufferBase(GL_UNIFORM_BUFFER, 0, r->ubo);
+	for (int b = 0; b < BC__GL_BUF_COUNT; b++) {
+		gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, (GLuint)b,
+				   r->bufs[b]);
+	}
+	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->bufs[BC__GL_BUF_TILES]);
+	gl->ClearBufferSubData(GL_SHADER_STORAGE_BUFFER, GL_RGBA32UI, 0,
+			       (GLsizeiptr)((size_t)tw * th * 16),
+			       GL_RGBA_INTEGER, GL_UNSIGNED_INT, tile_init);
+	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->bufs[BC__GL_BUF_STATS]);
+	gl->ClearBufferData(GL_SHADER_STORAGE_BUFFER, GL_R32UI, GL_RED_INTEGER,
+			    GL_UNSIGNED_INT, &zero);
+	gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+	gl->QueryCounter(r->queries[Q_START], GL_TIMESTAMP);
+
+	/* A-buffer: imposters at one pixel per tile, no attachments. */
+	if (nprims > 0) {
+		gl->UseProgram(r->progs[BC__GL_PROG_ABUFFER]);
+		gl->BindFramebuffer(GL_FRAMEBUFFER, r->fbo);
+		gl->Viewport(0, 0, (GLsizei)tw, (GLsizei)th);
+		gl->Disable(GL_DEPTH_TEST);
+		gl->Disable(GL_CULL_FACE);
+		gl->BindVertexArray(r->vao);
+		gl->DrawArrays(GL_POINTS, 0, (GLsizei)nprims);
+		gl->BindVertexArray(0);
+		gl->BindFramebuffer(GL_FRAMEBUFFER, 0);
+		gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+	}
+	gl->UseProgram(r->progs[BC__GL_PROG_SCAN]);
+	gl->DispatchCompute(1, 1, 1);
+	gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+	gl->UseProgram(r->progs[BC__GL_PROG_SORT]);
+	gl->DispatchCompute(tw, th, 1);
+	gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+	gl->QueryCounter(r->queries[Q_ABUFFER], GL_TIMESTAMP);
+
+	/* Tracing and shading. */
+	gl->UseProgram(r->progs[BC__GL_PROG_TRACE]);
+	gl->BindImageTexture(0, r->tex[0], 0, GL_FALSE, 0, GL_WRITE_ONLY,
+			     GL_R32UI);
+	gl->BindImageTexture(1, r->tex[1], 0, GL_FALSE, 0, GL_WRITE_ONLY,
+			     GL_R32F);
+	gl->BindImageTexture(2, r->tex[2], 0, GL_FALSE, 0, GL_WRITE_ONLY,
+			     GL_R32UI);
+	gl->DispatchCompute(tw, th, 1);
+	gl->MemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT |
+			  GL_PIXEL_BUFFER_BARRIER_BIT |
+			  GL_BUFFER_UPDATE_BARRIER_BIT);
+	gl->QueryCounter(r->queries[Q_TRACE], GL_TIMESTAMP);
+
+	/* Readback: every plane and the statistics into one buffer. */
+	gl->BindBuffer(GL_PIXEL_PACK_BUFFER, r->pbo);
+	gl->PixelStorei(GL_PACK_ALIGNMENT, 4);
+	gl->BindTexture(GL_TEXTURE_2D, r->tex[0]);
+	gl->GetTexImage(GL_TEXTURE_2D, 0, GL_RED_INTEGER, GL_UNSIGNED_INT,
+			(void *)0);
+	gl->BindTexture(GL_TEXTURE_2D, r->tex[1]);
+	gl->GetTexImage(GL_TEXTURE_2D, 0, GL_RED, GL_FLOAT,
+			(void *)(uintptr_t)(4 * npix));
+	gl->BindTexture(GL_TEXTURE_2D, r->tex[2]);
+	gl->GetTexImage(GL_TEXTURE_2D, 0, GL_RED_INTEGER, GL_UNSIGNED_INT,
+			(void *)(uintptr_t)(8 * npix));
+	gl->BindTexture(GL_TEXTURE_2D, 0);
+	gl->BindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+	gl->BindBuffer(GL_COPY_READ_BUFFER, r->bufs[BC__GL_BUF_STATS]);
+	gl->BindBuffer(GL_COPY_WRITE_BUFFER, r->pbo);
+	gl->CopyBufferSubData(GL_COPY_READ_BUFFER, GL_COPY_WRITE_BUFFER, 0,
+			      (GLintptr)(12 * npix), BC_GL_STAT_WORDS * 4);
+	gl->BindBuffer(GL_COPY_READ_BUFFER, 0);
+	gl->BindBuffer(GL_COPY_WRITE_BUFFER, 0);
+}
+
+/* Waits for everything issued so far. */
+static int wait_fence(struct bc_renderer *r, struct bc_errinfo *ei)
+{
+	GladGLContext *gl = &r->ctx.gl;
+	GLsync fence = gl->FenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+	double start = now_ms();
+	int rc = 0;
+	if (!fence) {
+		return bc__gl_check(&r->ctx, "glFenceSync", ei)
+			       ? BC_EGL
+			       : bc_errinfo_set(ei, BC_EGL,
+						"gl: glFenceSync failed");
+	}
+	for (;;) {
+		/* One second at a time, so a lost context is noticed. */
+		GLenum s = gl->ClientWaitSync(fence, GL_SYNC_FLUSH_COMMANDS_BIT,
+					      1000000000ull);
+		if (s == GL_ALREADY_SIGNALED || s == GL_CONDITION_SATISFIED) {
+			break;
+		}
+		if (s == GL_WAIT_FAILED) {
+			rc = bc__gl_check(&r->ctx, "glClientWaitSync", ei);
+			if (!rc) {
+				rc = bc_errinfo_set(ei, BC_EGL,
+						    "gl: glClientWaitSync "
+						    "failed");
+			}
+			break;
+		}
+		if (gl->GetGraphicsResetStatus &&
+		    gl->GetGraphicsResetStatus() != GL_NO_ERROR) {
+			rc = bc_errinfo_set(ei, BC_EGL,
+					    "gl: context lost during a frame");
+			break;
+		}
+		if (now_ms() - start > BC_GL_FENCE_TIMEOUT_S * 1e3) {
+			rc = bc_errinfo_set(ei, BC_ETIMEOUT,
+					    "gl: frame not done after %.0f s",
+					    BC_GL_FENCE_TIMEOUT_S);
+			break;
+		}
+	}
+	gl->DeleteSync(fence);
+	return rc;
+}
+
+static double query_ms(struct bc_renderer *r, int a, int b)
+{
+	GLuint64 ta = 0, tb = 0;
+	r->ctx.gl.GetQueryObjectui64v(r->queries[a], GL_QUERY_RESULT, &ta);
+	r->ctx.gl.GetQueryObjectui64v(r->queries[b], GL_QUERY_RESULT, &tb);
+	return tb > ta ? (double)(tb - ta) * 1e-6 : 0.0;
+}
+
+static int gl_render(struct bc_renderer *r, const struct bc_camera *cam,
+		     struct bc_frame *out, struct bc_render_stats *stats,
+		     struct bc_errinfo *ei)
+{
+	GladGLContext *gl;
+	struct bc__gl_frame_ubo u;
+	const struct bc_lin *l;
+	double t_start = now_ms();
+	uint32_t w, h, nprims, stat[BC_GL_STAT_WORDS], limit;
+	size_t npix;
+	int rc;
+	if (stats) {
+		memset(stats, 0, sizeof(*stats));
+	}
+	if (!r || !cam || !out || !out->rgba || out->width == 0 ||
+	    out->height == 0 || out->width > BC_RENDER_MAX_DIM ||
+	    out->height > BC_RENDER_MAX_DIM) {
+		return bc_errinfo_set(ei, BC_EINVAL, "render: bad frame");
+	}
+	if (!r->tree || !r->synced) {
+		return bc_errinfo_set(ei, BC_ESTATE,
+				      "render: no tree synced yet");
+	}
+	if ((rc = bc_camera_validate(cam, ei))) {
+		return rc;
+	}
+	if ((rc = enter(r, ei))) {
+		return rc;
+	}
+	gl = &r->ctx.gl;
+	w = out->width;
+	h = out->height;
+	npix = (size_t)w * h;
+	l = bc_tree_lin(r->tree);
+	nprims = l ? r->nprims : 0;
+	frame_buffers(r, w, h);
+	if (r->frag_cap == 0) {
+		uint32_t want = 4 * ((w + 7) / 8) * ((h + 7) / 8) + 4 * nprims;
+		frag_buffers(r, want > BC_GL_MIN_FRAGMENTS ? want
+							   : BC_GL_MIN_FRAGMENTS);
+	}
+	r->ctx.info.retries = 0;
+	for (;;) {
+		void *map;
+		frame_setup(&u, l, cam, w, h, r->debug, nprims, r->frag_cap);
+		draw(r, &u, nprims);
+		if ((rc = bc__gl_check(&r->ctx, "drawing a frame", ei)) ||
+		    (rc = wait_fence(r, ei))) {
+			goto done;
+		}
+		gl->BindBuffer(GL_PIXEL_PACK_BUFFER, r->pbo);
+		map = gl->MapBufferRange(GL_PIXEL_PACK_BUFFER, 0,
+					 (GLsizeiptr)(12 * npix +
+						      BC_GL_STAT_WORDS * 4),
+					 GL_MAP_READ_BIT);
+		if (!map) {
+			gl->BindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+			rc = bc__gl_check(&r->ctx, "glMapBufferRange", ei);
+			if (!rc) {
+				rc = bc_errinfo_set(ei, BC_EGL,
+						    "gl: glMapBufferRange "
+						    "failed");
+			}
+			goto done;
+		}
+		memcpy(stat, (const char *)map + 12 * npix, sizeof(stat));
+		if (stat[BC_GL_STAT_FRAGMENTS] <= r->frag_cap) {
+			memcpy(out->rgba, map, 4 * npix);
+			if (out->depth) {
+				memcpy(out->depth, (const char *)map + 4 * npix,
+				       4 * npix);
+			}
+			if (out->ids) {
+				memcpy(out->ids, (const char *)map + 8 * npix,
+				       4 * npix);
+			}
+		}
+		gl->UnmapBuffer(GL_PIXEL_PACK_BUFFER);
+		gl->BindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+		if (stat[BC_GL_STAT_FRAGMENTS] <= r->frag_cap) {
+			break;
+		}
+		/* Too many fragments: the count is exact, so one more
+		 * draw with room for them (and some to spare) fits. */
+		limit = frag_limit(r);
+		if (stat[BC_GL_STAT_FRAGMENTS] > limit ||
+		    r->ctx.info.retries > 0) {
+			rc = bc_errinfo_set(ei, BC_ELIMIT,
+					    "gl: %u A-buffer fragments exceed "
+					    "the limit of %u (fewer or smaller "
+					    "primitives, or a smaller frame)",
+					    stat[BC_GL_STAT_FRAGMENTS], limit);
+			goto done;
+		}
+		{
+			uint64_t want = (uint64_t)stat[BC_GL_STAT_FRAGMENTS] *
+					3 / 2;
+			frag_buffers(r, want < limit ? (uint32_t)want : limit);
+		}
+		r->ctx.info.retries++;
+	}
+	r->ctx.info.fragments = stat[BC_GL_STAT_FRAGMENTS];
+	r->ctx.info.ranges = stat[BC_GL_STAT_RANGES];
+	r->ctx.info.over_m = stat[BC_GL_STAT_OVER_M];
+	r->ctx.info.over_cache = stat[BC_GL_STAT_OVER_CACHE];
+	if (r->ctx.info.over_m) {
+		bc_log(BC_LOG_DEBUG, "gl: %u depth ranges went over M_overlap",
+		       r->ctx.info.over_m);
+	}
+	if (stats) {
+		stats->ms_abuffer = query_ms(r, Q_START, Q_ABUFFER);
+		stats->ms_trace = query_ms(r, Q_ABUFFER, Q_TRACE);
+		stats->ms_upload = r->upload_ms;
+		stats->max_overlap = stat[BC_GL_STAT_MAX_OVERLAP];
+		for (uint32_t i = 0; i < BC_GL_STAT_EVAL_BUCKETS; i++) {
+			stats->field_evals += stat[BC_GL_STAT_EVALS + i];
+		}
+	}
+	r->upload_ms = 0.0;
+	rc = bc__gl_check(&r->ctx, "reading a frame back", ei);
+done:
+	bc__gl_ctx_unbind(&r->ctx);
+	if (stats) {
+		stats->ms_total = now_ms() - t_start;
+	}
+	return rc;
+}
+
+int bc_render_gl_info(const struct bc_renderer *r, struct bc_gl_info *out)
+{
+	memset(out, 0, sizeof(*out));
+	if (!r) {
+		return BC_EINVAL;
+	}
+	*out = r->ctx.info;
+	out->program_builds = r->builds;
+	out->upload_bytes = r->upload_bytes;
+	out->upload_full = r->upload_full;
+	out->full_uploads = r->full_uploads;
+	return 0;
+}
+
+const struct bc_backend_ops bc_backend_gl_ops = {
+	.name = "gl",
+	.create = gl_create,
+	.destroy = gl_destroy,
+	.sync = gl_sync,
+	.render = gl_render,
+};

@@ -1,0 +1,130 @@
+/*
+ * What the files of the gl backend share: the context (EGL device or
+ * surfaceless display, or OSMesa) with its loaded GL entry points and what
+ * the driver granted; the renderer object; the constants, buffer bindings
+ * and layouts that shaders/common.glsl mirrors.
+ *
+ * GL entry points come from glad, generated at build time in its
+ * multi-context form: each context holds its own table (struct
+ * GladGLContext), loaded through eglGetProcAddress or OSMesaGetProcAddress.
+ * Calling libOpenGL's exports directly would bind whichever implementation
+ * the loader picked, which is wrong under OSMesa.
+ */
+#ifndef BLOBCAST_RENDER_GL_PRIV_H
+#define BLOBCAST_RENDER_GL_PRIV_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include <glad/gl.h>
+
+#include "blobcast/blobtree.h"
+#include "blobcast/error.h"
+#include "blobcast/render.h"
+#include "blobcast/render_gl.h"
+#include "gl_platform.h"
+
+/* ---- Constants (mirrored in shaders/common.glsl) ------------------------ */
+
+#define BC_GL_TILE 8u
+/* Tracing constants, the CPU renderers' (render/cpu/cpu.h): same values so
+ * that both backends draw the same surfaces. */
+#define BC_GL_MIN_STEP_REL 1.0e-4f
+#define BC_GL_REFINE_REL 1.0e-5f
+#define BC_GL_AMBIENT 0.18f
+/* Fragments of one frame's A-buffer: each costs 56 bytes of GPU memory
+ * (linked, sorted, scratch), so 2^22 is 224 MiB, and no buffer exceeds the
+ * 128 MiB storage block size llvmpipe offers. A 4096-primitive scene at
+ * 512^2 makes about 10^5. Frames beyond fail with BC_ELIMIT. */
+#define BC_GL_MAX_FRAGMENTS (1u << 22)
+/* The first frame's fragment capacity; frames that need more grow it. */
+#define BC_GL_MIN_FRAGMENTS (1u << 16)
+/* Statistics buffer: slots as in common.glsl. */
+#define BC_GL_STAT_FRAGMENTS 0u
+#define BC_GL_STAT_MAX_OVERLAP 1u
+#define BC_GL_STAT_OVER_M 2u
+#define BC_GL_STAT_OVER_CACHE 3u
+#define BC_GL_STAT_RANGES 4u
+#define BC_GL_STAT_EVALS 8u
+#define BC_GL_STAT_EVAL_BUCKETS 256u
+#define BC_GL_STAT_WORDS (BC_GL_STAT_EVALS + BC_GL_STAT_EVAL_BUCKETS)
+/* Workgroup size of the scan pass (abuffer_scan.comp). */
+#define BC_GL_SCAN_THREADS 256u
+
+/* Storage buffer binding points. */
+enum bc__gl_buf {
+	BC__GL_BUF_NODES = 0,
+	BC__GL_BUF_PARAMS,
+	BC__GL_BUF_TOPO,
+	BC__GL_BUF_PRIMS,
+	BC__GL_BUF_ABVS,
+	BC__GL_BUF_LINKS,
+	BC__GL_BUF_TILES,
+	BC__GL_BUF_SORTED,
+	BC__GL_BUF_SCRATCH,
+	BC__GL_BUF_STATS,
+	BC__GL_BUF_COUNT
+};
+
+/* Floats per primitive in the Prims and Abvs buffers. */
+#define BC_GL_PRIM_FLOATS 8u
+#define BC_GL_ABV_FLOATS 28u
+
+/* The Frame uniform block (std140: every member a vec4). */
+struct bc__gl_frame_ubo {
+	float eye[4];     /* w: tan(fov_y / 2) */
+	float forward[4]; /* w: aspect */
+	float right[4];   /* w: minimal step */
+	float up[4];      /* w: pixel footprint per unit of t */
+	float light[4];   /* w: ambient */
+	float misc[4];    /* x: bisection tolerance, y: scene size */
+	uint32_t size[4]; /* width, height, tiles across, tiles down */
+	uint32_t counts[4]; /* primitives, fragment capacity, debug mode */
+};
+
+/* ---- Context ------------------------------------------------------------ */
+
+struct bc__gl_ctx {
+	struct bc__gl_plat plat;
+	GladGLContext gl;
+	struct bc_gl_info info;
+};
+
+/* Creates a context on platform (AUTO tries a hardware device, then
+ * surfaceless, then OSMesa) and loads its entry points; it is left current.
+ * Returns 0, BC_EGL with the failed call and the error's name in ei,
+ * BC_ENOTSUP when the platform is not built in, or BC_ENOMEM. */
+int bc__gl_ctx_open(struct bc__gl_ctx *c, enum bc_gl_platform platform,
+		    struct bc_errinfo *ei);
+/* Destroys the context (which need not be current). Accepts a zeroed one. */
+void bc__gl_ctx_close(struct bc__gl_ctx *c);
+/* Makes c current on the calling thread / releases it. */
+int bc__gl_ctx_bind(struct bc__gl_ctx *c, struct bc_errinfo *ei);
+void bc__gl_ctx_unbind(struct bc__gl_ctx *c);
+
+/* Name of a GL error code ("GL_INVALID_OPERATION"); never NULL. */
+const char *bc__gl_error_name(GLenum e);
+/* Checks glGetError (draining it) after `stage`. Returns 0 or BC_EGL with
+ * every pending error named in ei. */
+int bc__gl_check(struct bc__gl_ctx *c, const char *stage,
+		 struct bc_errinfo *ei);
+
+/* ---- Programs ----------------------------------------------------------- */
+
+enum bc__gl_prog {
+	BC__GL_PROG_ABUFFER = 0, /* vert + geom + frag */
+	BC__GL_PROG_SCAN,
+	BC__GL_PROG_SORT,
+	BC__GL_PROG_TRACE,
+	BC__GL_PROG_COUNT
+};
+
+/* Compiles and links the embedded stages into progs[]. Info logs are
+ * always logged; a failure names the stage and carries the log's start in
+ * ei. Returns 0 or BC_EGL. */
+int bc__gl_programs_build(struct bc__gl_ctx *c, GLuint progs[BC__GL_PROG_COUNT],
+			  struct bc_errinfo *ei);
+void bc__gl_programs_free(struct bc__gl_ctx *c,
+			  GLuint progs[BC__GL_PROG_COUNT]);
+
+#endif

@@ -1,0 +1,63 @@
+/*
+ * The OpenGL backend (backend name "gl"): Zanni 2024's synchronized tracing
+ * as OpenGL 4.3+ compute work, on a context from the EGL device platform (a
+ * real GPU), EGL surfaceless (Mesa llvmpipe on CPU-only hosts) or OSMesa.
+ * It sits behind struct bc_backend_ops like every backend; this header adds
+ * what only it can say: which platform and driver it got, what the driver
+ * granted, and the limits the last frame ran into.
+ */
+#ifndef BLOBCAST_RENDER_GL_H
+#define BLOBCAST_RENDER_GL_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "blobcast/error.h"
+#include "blobcast/render.h"
+
+extern const struct bc_backend_ops bc_backend_gl_ops;
+
+enum bc_gl_platform {
+	BC_GL_PLATFORM_AUTO = 0, /* device, then surfaceless, then osmesa */
+	BC_GL_PLATFORM_DEVICE,   /* EGL_EXT_platform_device */
+	BC_GL_PLATFORM_SURFACELESS, /* EGL_MESA_platform_surfaceless */
+	BC_GL_PLATFORM_OSMESA,
+	BC_GL_PLATFORM_COUNT
+};
+
+/* "auto", "device", "surfaceless", "osmesa" <-> enum. NULL or "" is auto;
+ * an unknown name gives BC_GL_PLATFORM_COUNT. */
+enum bc_gl_platform bc_gl_platform_from_name(const char *name);
+const char *bc_gl_platform_name(enum bc_gl_platform p);
+
+struct bc_gl_info {
+	enum bc_gl_platform platform; /* the one that worked */
+	bool software_device;  /* device platform: a software (Mesa) device */
+	int major, minor;      /* context version */
+	char renderer[128];    /* GL_RENDERER */
+	char version[128];     /* GL_VERSION */
+	bool robust_access;    /* GL_CONTEXT_FLAG_ROBUST_ACCESS_BIT granted */
+	bool lose_on_reset;    /* reset strategy GL_LOSE_CONTEXT_ON_RESET */
+	bool debug_output;     /* GL_KHR_debug messages reach the log */
+	uint32_t shared_bytes; /* GL_MAX_COMPUTE_SHARED_MEMORY_SIZE */
+	/* The last frame. */
+	uint32_t fragments;    /* A-buffer fragments */
+	uint32_t ranges;       /* depth ranges traced, all tiles */
+	uint32_t over_m;       /* ranges whose active set spilled past
+				  M_overlap into global scratch */
+	uint32_t over_cache;   /* ranges whose records did not all fit the
+				  shared node cache */
+	uint32_t retries;      /* times the frame was redrawn after growing
+				  the A-buffer */
+	/* Since creation, and the last sync. */
+	uint32_t program_builds; /* shader programs built (once, at create) */
+	uint32_t full_uploads;   /* syncs that uploaded the whole tree */
+	bool upload_full;        /* the last sync uploaded everything */
+	uint64_t upload_bytes;   /* bytes the last sync sent */
+};
+
+/* Fills *out for r, which must come from bc_backend_gl_ops. Returns 0 or
+ * BC_EINVAL. */
+int bc_render_gl_info(const struct bc_renderer *r, struct bc_gl_info *out);
+
+#endif

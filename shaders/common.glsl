@@ -1,0 +1,157 @@
+// What every stage of the gl backend shares: the pipeline constants (the
+// same values as the CPU renderers', render/cpu/cpu.h, so the two give the
+// same pictures), the per-frame uniform block, and the storage buffers with
+// their binding points. render/gl/gl_priv.h mirrors the bindings, the
+// layouts and the limits, and checks the enum values copied here.
+
+// ---- Constants -----------------------------------------------------------
+
+// Tile edge in pixels: one 8x8 workgroup per tile (Zanni 2024 Sec. 6).
+#define BC_TILE 8u
+#define BC_TILE_RAYS 64u
+// Active primitives held in shared memory per depth range (paper Sec. 7). More
+// than this at one depth spill to the tile's global scratch: slower, never
+// wrong.
+#define BC_M_OVERLAP 128u
+// Primitives fetched into the active set per range (paper Sec. 6.2).
+#define BC_MAX_FETCH 8u
+// Pruned view instructions kept in shared memory: a view of M_overlap
+// primitives has at most 2 M_overlap - 1. Longer views (after an overflow)
+// continue in global scratch.
+#define BC_VIEW_SHARED 255u
+// Node parameter cache (D_cache), in vec4: 8 KiB, room for about a hundred
+// primitive records. Records that do not fit are read from global memory.
+#define BC_CACHE_VEC4 512u
+// Evaluation and traversal stack entries: blobtree.h's BC_EVAL_STACK, enough
+// for any tree within its depth limit.
+#define BC_EVAL_STACK 130u
+// Sphere tracing (paper Sec. 7): over-relaxation, Lipschitz bound.
+#define BC_OVERRELAX 1.7
+#define BC_LIPSCHITZ 1.45
+// Hit epsilon as a fraction of the pixel footprint at t.
+#define BC_HIT_FOOTPRINT 0.5
+// Debug colour ramps saturate here (as the CPU renderers').
+#define BC_DEBUG_EVALS_MAX 128.0
+#define BC_DEBUG_OVERLAPS_MAX 32.0
+// Tiles sorted in shared memory; longer lists are heap-sorted in place.
+#define BC_SORT_SHARED 512u
+
+#define BC_NONE 0xffffffffu
+#define BC_INF uintBitsToFloat(0x7f800000u)
+
+// Node words (blobtree.h).
+#define BC_WORD_LEAF 0x80000000u
+#define BC_WORD_TYPE_SHIFT 22u
+#define BC_WORD_TYPE_MASK 0xffu
+#define BC_WORD_ANCESTOR_MASK 0x3fffffu
+#define BC_PRIM_RECORD_VEC4 5u
+
+// enum bc_op and enum bc_op_class.
+#define BC_OP_UNION 1u
+#define BC_OP_INTERSECTION 2u
+#define BC_OP_DIFFERENCE 3u
+#define BC_OP_SMOOTH_UNION 4u
+#define BC_OP_SMOOTH_INTERSECTION 5u
+#define BC_OP_SMOOTH_DIFFERENCE 6u
+#define BC_OPCLASS_UNION 0u
+#define BC_OPCLASS_INTERSECTION 1u
+#define BC_OPCLASS_DIFFERENCE 2u
+
+// enum bc_abv_shape.
+#define BC_ABV_SPHERE 1u
+#define BC_ABV_BOX 2u
+#define BC_ABV_CAPSULE 3u
+
+// enum bc_debug_mode.
+#define BC_DEBUG_NONE 0u
+#define BC_DEBUG_EVALS 1u
+#define BC_DEBUG_OVERLAPS 2u
+
+// Slots of the statistics buffer.
+#define BC_STAT_FRAGMENTS 0u   // fragments produced (stored or not)
+#define BC_STAT_MAX_OVERLAP 1u // longest tile list
+#define BC_STAT_OVER_M 2u      // ranges that went over M_overlap
+#define BC_STAT_OVER_CACHE 3u  // ranges whose records did not all fit
+#define BC_STAT_RANGES 4u      // depth ranges traced
+#define BC_STAT_EVALS 8u       // 256 buckets of field evaluation counts
+#define BC_STAT_EVAL_BUCKETS 256u
+
+// ---- Per-frame uniforms ----------------------------------------------------
+
+layout(std140, binding = 0) uniform Frame {
+	vec4 u_eye;     // xyz: eye; w: tan(fov_y / 2)
+	vec4 u_forward; // xyz: unit view direction; w: aspect (width / height)
+	vec4 u_right;   // xyz: unit right; w: minimal step (world units)
+	vec4 u_up;      // xyz: unit up; w: pixel footprint per unit of t
+	vec4 u_light;   // xyz: unit vector toward the light; w: ambient
+	vec4 u_misc;    // x: bisection tolerance (world units)
+	uvec4 u_size;   // width, height, tiles across, tiles down
+	uvec4 u_counts; // primitives, fragment capacity, debug mode, 0
+};
+
+// ---- Storage buffers -------------------------------------------------------
+
+// The linearized blobtree (paper Sec. 7): per slot the node word and the offset
+// of its parameter record, in vec4 units.
+layout(std430, binding = 0) readonly buffer Nodes { uvec2 b_node[]; };
+layout(std430, binding = 1) readonly buffer Params { vec4 b_param[]; };
+// Per slot: leftmost slot of the subtree, fast ancestor, jump pointer, kills.
+layout(std430, binding = 2) readonly buffer Topo { uvec4 b_topo[]; };
+// Per primitive: (slot, stable id of its scene node, 0, 0) and its colour.
+struct bc_prim_rec {
+	uvec4 info;
+	vec4 color;
+};
+layout(std430, binding = 3) readonly buffer Prims { bc_prim_rec b_prim[]; };
+// Per primitive: its world ABV and that ABV's world AABB (lo, hi). lo.w is
+// the shape as a float (1.0, 2.0, 3.0: bit patterns of small integers are
+// denormals, which some drivers flush), hi.w the radius; a is
+// the centre (capsule: end a), b the capsule's end b or the box's half
+// extents, ax0..2 the box's unit axes.
+struct bc_abv_rec {
+	vec4 lo;
+	vec4 hi;
+	vec4 a;
+	vec4 b;
+	vec4 ax0;
+	vec4 ax1;
+	vec4 ax2;
+};
+layout(std430, binding = 4) readonly buffer Abvs { bc_abv_rec b_abv[]; };
+// A-buffer fragments as rasterized: entry, exit (float bits), primitive,
+// next fragment of the same tile (BC_NONE ends the list).
+layout(std430, binding = 5) buffer Links { uvec4 b_link[]; };
+// Per tile: list head, fragments stored, offset of its sorted list, 0.
+layout(std430, binding = 6) buffer Tiles { uvec4 b_tile[]; };
+// Sorted per-tile lists: entry, exit (float bits), primitive, 0.
+layout(std430, binding = 7) buffer Sorted { uvec4 b_frag[]; };
+// Global scratch of the tracing pass, indexed by the tile's list offset:
+// active primitives and their exits beyond M_overlap, view instructions
+// beyond BC_VIEW_SHARED. See trace.comp.
+layout(std430, binding = 8) buffer Scratch { uint b_scratch[]; };
+layout(std430, binding = 9) buffer Stats { uint b_stat[]; };
+
+// ---- ABVs as the A-buffer sees them -------------------------------------------
+
+// A ray counts as a hit within the hit epsilon of the surface, which can lie
+// just outside the ABV; so ABVs are widened by the epsilon (times the
+// Lipschitz bound) at their far side from the eye, as the tiled CPU renderer
+// widens them. Returns that margin for the ABV with world AABB [lo, hi].
+float bc_abv_margin(vec3 lo, vec3 hi)
+{
+	vec3 c = 0.5 * (lo + hi) - u_eye.xyz, e = 0.5 * (hi - lo);
+	float far = length(c) + length(e);
+	return BC_LIPSCHITZ * max(BC_HIT_FOOTPRINT * u_up.w * far, u_right.w);
+}
+
+// ---- Camera rays ------------------------------------------------------------
+
+// Direction through the fractional pixel position (x, y), y counted from the
+// top row: the formula of bc_view_rays_dir.
+vec3 bc_ray_dir(float x, float y)
+{
+	float w = float(u_size.x), h = float(u_size.y);
+	float sx = (2.0 * x / w - 1.0) * u_eye.w * u_forward.w;
+	float sy = (1.0 - 2.0 * y / h) * u_eye.w;
+	return normalize(u_forward.xyz + sx * u_right.xyz + sy * u_up.xyz);
+}

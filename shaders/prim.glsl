@@ -1,0 +1,261 @@
+// The primitive fields, ported from blobtree/prim.c (bc_prim_sdf) line for
+// line so that the gl backend and the CPU renderers trace the same surfaces:
+// the same folding into symmetry chambers, the same profile distances, the
+// same packed parameters (bc_prim_pack writes k0 = packed[0..3], k1 =
+// packed[4..7]). prim.c explains each shape; the comments here only say
+// where GLSL needed something different.
+
+// enum bc_prim.
+#define BC_PRIM_SPHERE 1u
+#define BC_PRIM_BOX 2u
+#define BC_PRIM_CAPSULE 3u
+#define BC_PRIM_CYLINDER 4u
+#define BC_PRIM_TORUS 5u
+#define BC_PRIM_CONE 6u
+#define BC_PRIM_ROUND_CONE 7u
+#define BC_PRIM_ELLIPSOID 8u
+#define BC_PRIM_HEX_PRISM 9u
+#define BC_PRIM_OCTAHEDRON 10u
+#define BC_PRIM_BOX_FRAME 11u
+#define BC_PRIM_CAPPED_TORUS 12u
+#define BC_PRIM_LINK 13u
+#define BC_PRIM_SOLID_ANGLE 14u
+#define BC_PRIM_PYRAMID 15u
+#define BC_PRIM_TRI_PRISM 16u
+
+// Signed distance to the box [-h, h] given d = |p| - h per axis.
+float bc_box_d(vec3 d)
+{
+	return length(max(d, vec3(0.0))) + min(max(d.x, max(d.y, d.z)), 0.0);
+}
+
+// Signed distance of an extrusion of the exact 2D distance d2.
+float bc_extrude(float d2, float dz)
+{
+	return min(max(d2, dz), 0.0) + length(vec2(max(d2, 0.0), max(dz, 0.0)));
+}
+
+// Squared distance from p to the segment from a along e (inv_e2 = 1/|e|^2).
+float bc_seg2(vec2 p, vec2 a, vec2 e, float inv_e2)
+{
+	vec2 w = p - a;
+	float t = clamp(dot(w, e) * inv_e2, 0.0, 1.0);
+	w -= e * t;
+	return dot(w, w);
+}
+
+float bc_sdf_cone(vec4 k0, vec4 k1, vec3 p)
+{
+	float h = k0.x, r1 = k0.y, r2 = k0.z, ex = k0.w, ey = k1.x;
+	float rho = length(p.xz);
+	float bx = max(rho - r1, 0.0), by = p.y + h;
+	float tx = max(rho - r2, 0.0), ty = p.y - h;
+	float d2 = min(bx * bx + by * by, tx * tx + ty * ty);
+	float wx = rho - r1, wy = p.y + h;
+	d2 = min(d2, bc_seg2(vec2(rho, p.y), vec2(r1, -h), vec2(ex, ey), k1.y));
+	bool inside = abs(p.y) < h && wx * ey - wy * ex < 0.0;
+	float d = sqrt(d2);
+	return inside ? -d : d;
+}
+
+float bc_sdf_round_cone(vec4 k0, vec4 k1, vec3 p)
+{
+	vec3 q = p - k0.xyz;
+	vec3 e = vec3(k0.w, k1.x, k1.y);
+	float ra = k1.z, rb = k1.w;
+	float l2 = dot(e, e);
+	float p2 = dot(q, q);
+	if (l2 == 0.0) {
+		return sqrt(p2) - ra;
+	}
+	float yl = dot(q, e);
+	float xl = sqrt(max(p2 * l2 - yl * yl, 0.0));
+	float rr = ra - rb;
+	float c = sqrt(max(l2 - rr * rr, 0.0));
+	float s = yl * c - xl * rr;
+	if (s < 0.0) {
+		return sqrt(p2) - ra;
+	}
+	if (s > c * l2) {
+		return length(q - e) - rb;
+	}
+	return (xl * c + yl * rr) / l2 - ra;
+}
+
+float bc_sdf_ellipsoid(vec4 k0, vec4 k1, vec3 p)
+{
+	vec3 inv = vec3(k0.w, k1.x, k1.y);
+	vec3 u = p * inv;
+	float g0 = length(u), f;
+	if (g0 < 1.0) {
+		f = k1.z * (g0 - 1.0);
+	} else {
+		float g1 = length(u * inv);
+		f = g0 * (g0 - 1.0) / g1;
+	}
+	return max(f, bc_box_d(abs(p) - k0.xyz));
+}
+
+float bc_sdf_hex_prism(vec4 k0, vec3 p)
+{
+	const vec2 n = vec2(-0.86602540378, 0.5);
+	float a = k0.x, half_side = k0.z;
+	vec2 q = abs(p.xy);
+	float m = min(dot(n, q), 0.0);
+	q -= 2.0 * m * n;
+	float dx = q.x - clamp(q.x, -half_side, half_side), dy = q.y - a;
+	float d2 = length(vec2(dx, dy));
+	return bc_extrude(dy < 0.0 ? -d2 : d2, abs(p.z) - k0.y);
+}
+
+float bc_sdf_octahedron(vec4 k0, vec3 p)
+{
+	float s = k0.x;
+	vec3 q = abs(p);
+	float m = q.x + q.y + q.z - s;
+	vec3 r; // (a, b, c): a is the coordinate that is 0 on the edge
+	if (3.0 * q.x < m) {
+		r = q.xyz;
+	} else if (3.0 * q.y < m) {
+		r = q.yzx;
+	} else if (3.0 * q.z < m) {
+		r = q.zxy;
+	} else {
+		return m * 0.57735026919;
+	}
+	float t = clamp(0.5 * (r.z - r.y + s), 0.0, s);
+	return length(vec3(r.x, r.y - s + t, r.z - t));
+}
+
+float bc_sdf_box_frame(vec4 k0, vec3 p)
+{
+	float e = k0.w;
+	vec3 q = abs(p) - k0.xyz;
+	vec3 w = abs(q + e) - e;
+	float d = bc_box_d(vec3(q.x, w.y, w.z));
+	d = min(d, bc_box_d(vec3(w.x, q.y, w.z)));
+	return min(d, bc_box_d(vec3(w.x, w.y, q.z)));
+}
+
+float bc_sdf_capped_torus(vec4 k0, vec4 k1, vec3 p)
+{
+	float big = k0.x, sn = k0.z, cs = k0.w;
+	float u = abs(p.x);
+	float d;
+	if (cs * u > sn * p.z) {
+		d = length(vec3(u - k1.x, p.y, p.z - k1.y));
+	} else {
+		d = length(vec2(length(vec2(u, p.z)) - big, p.y));
+	}
+	return d - k0.y;
+}
+
+float bc_sdf_solid_angle(vec4 k0, vec3 p)
+{
+	float ra = k0.x, sn = k0.y, cs = k0.z;
+	float rho = length(p.xz);
+	float l = length(vec2(rho, p.y)) - ra;
+	float t = clamp(rho * sn + p.y * cs, 0.0, ra);
+	float m = length(vec2(rho - sn * t, p.y - cs * t));
+	if (cs * rho - sn * p.y > 0.0) {
+		return m;
+	}
+	return l >= 0.0 ? l : max(l, -m);
+}
+
+float bc_sdf_pyramid(vec4 k0, vec4 k1, vec3 p)
+{
+	float b = k0.x, l = k0.z, nx = k0.w, ny = k1.x;
+	float ax = abs(p.x), az = abs(p.z), y = p.y;
+	if (az > ax) {
+		float t = ax;
+		ax = az;
+		az = t;
+	}
+	float bx = max(ax - b, 0.0), bz = max(az - b, 0.0);
+	float base2 = bx * bx + bz * bz + y * y;
+	float dx = ax - b;
+	float w = dx * nx + y * ny;
+	float v = y * nx - dx * ny;
+	float u = az;
+	float face2;
+	if (v >= 0.0 && u * l + v * b <= b * l) {
+		face2 = 0.0;
+	} else {
+		float ub = max(u - b, 0.0);
+		face2 = min(ub * ub + v * v,
+			    bc_seg2(vec2(u, v), vec2(b, 0.0), vec2(-b, l), k1.y));
+	}
+	face2 += w * w;
+	float d = sqrt(min(face2, base2));
+	return (y > 0.0 && w < 0.0) ? -d : d;
+}
+
+float bc_sdf_tri_prism(vec4 k0, vec3 p)
+{
+	float r = k0.x, hb = k0.z;
+	float ax = abs(p.x), y = p.y;
+	float side2 = bc_seg2(vec2(ax, y), vec2(0.0, 2.0 * r),
+			      vec2(hb, -3.0 * r), k0.w);
+	float bx = max(ax - hb, 0.0), by = y + r;
+	float d = sqrt(min(side2, bx * bx + by * by));
+	bool inside = y > -r && 0.86602540378 * ax + 0.5 * y < r;
+	return bc_extrude(inside ? -d : d, abs(p.z) - k0.y);
+}
+
+// bc_prim_sdf: field of primitive kind at the local point p.
+float bc_prim_sdf(uint kind, vec4 k0, vec4 k1, vec3 p)
+{
+	switch (kind) {
+	case BC_PRIM_SPHERE:
+		return length(p) - k0.x;
+	case BC_PRIM_BOX:
+		return bc_box_d(abs(p) - k0.xyz) - k0.w;
+	case BC_PRIM_CAPSULE: {
+		vec3 q = p - k0.xyz;
+		vec3 e = vec3(k0.w, k1.x, k1.y);
+		float t = clamp(dot(q, e) * k1.w, 0.0, 1.0);
+		return length(q - e * t) - k1.z;
+	}
+	case BC_PRIM_CYLINDER:
+		return bc_extrude(length(p.xz) - k0.x, abs(p.y) - k0.y);
+	case BC_PRIM_TORUS:
+		return length(vec2(length(p.xz) - k0.x, p.y)) - k0.y;
+	case BC_PRIM_CONE:
+		return bc_sdf_cone(k0, k1, p);
+	case BC_PRIM_ROUND_CONE:
+		return bc_sdf_round_cone(k0, k1, p);
+	case BC_PRIM_ELLIPSOID:
+		return bc_sdf_ellipsoid(k0, k1, p);
+	case BC_PRIM_HEX_PRISM:
+		return bc_sdf_hex_prism(k0, p);
+	case BC_PRIM_OCTAHEDRON:
+		return bc_sdf_octahedron(k0, p);
+	case BC_PRIM_BOX_FRAME:
+		return bc_sdf_box_frame(k0, p);
+	case BC_PRIM_CAPPED_TORUS:
+		return bc_sdf_capped_torus(k0, k1, p);
+	case BC_PRIM_LINK: {
+		float qy = max(abs(p.y) - k0.x, 0.0);
+		return length(vec2(length(vec2(p.x, qy)) - k0.y, p.z)) - k0.z;
+	}
+	case BC_PRIM_SOLID_ANGLE:
+		return bc_sdf_solid_angle(k0, p);
+	case BC_PRIM_PYRAMID:
+		return bc_sdf_pyramid(k0, k1, p);
+	case BC_PRIM_TRI_PRISM:
+		return bc_sdf_tri_prism(k0, p);
+	default:
+		return BC_INF;
+	}
+}
+
+// Field of the primitive whose record is r0..r2 (world-to-local rows) and
+// k0, k1 (packed shape), at world point p.
+float bc_prim_record(uint kind, vec4 r0, vec4 r1, vec4 r2, vec4 k0, vec4 k1,
+		     vec3 p)
+{
+	vec3 q = vec3(dot(r0.xyz, p) + r0.w, dot(r1.xyz, p) + r1.w,
+		      dot(r2.xyz, p) + r2.w);
+	return bc_prim_sdf(kind, k0, k1, q);
+}
