@@ -22,6 +22,9 @@ static const char *basename_of(const char *path)
 }
 
 static void stderr_sink(enum bc_log_level level, const char *file, int line,
+			const char *fmt, va_list args) BC__PRINTF(4, 0);
+
+static void stderr_sink(enum bc_log_level level, const char *file, int line,
 			const char *fmt, va_list args)
 {
 	fprintf(stderr, "[%s] [%s:%d] ", level_names[level], basename_of(file),
