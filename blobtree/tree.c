@@ -488,6 +488,16 @@ int bc_tree_end(struct bc_tree *t, struct bc_errinfo *ei)
 
 /* ---- reading ------------------------------------------------------------ */
 
+bool bc_tree_has_auto_ids(const struct bc_tree *t)
+{
+	for (uint32_t n = 0; n < t->npool; n++) {
+		if (t->pool[n].live && t->pool[n].auto_id) {
+			return true;
+		}
+	}
+	return false;
+}
+
 uint32_t bc_tree_node_count(const struct bc_tree *t)
 {
 	return t->nnodes;

@@ -147,6 +147,13 @@ static int apply_structural(struct bc_tree *t, const struct bc_proto_edit_op *e,
 	}
 	rc = bc_scene_decode(e->subtree.ptr, e->subtree.len, sub, NULL, NULL,
 			     ei);
+	if (!rc && bc_tree_has_auto_ids(sub)) {
+		/* EDIT_APPLIED repeats the subtree as sent: every member must
+		 * be able to name its nodes alike. */
+		rc = bc_errinfo_set(ei, BC_EINVAL,
+				    "every node of an inserted or replacing "
+				    "subtree needs an explicit id");
+	}
 	if (!rc) {
 		rc = e->kind == BC_PROTO_EDIT_INSERT
 			     ? bc_tree_insert(t, e->node, e->position, sub, ei)
@@ -1001,7 +1008,7 @@ static void handle_edit(struct bc_client *c, const struct bc_msg *m)
 	struct dmg_box *boxes = bc_calloc(2u * m->edit.nops, sizeof(*boxes));
 	struct bc_tree *old = NULL;
 	struct bc_proto_buf rec;
-	struct bc_msg applied = {.type = BC_MSG_EDIT_APPLIED, .seq = m->seq};
+	struct bc_msg applied = {.type = BC_MSG_EDIT_APPLIED};
 	struct bc_msg as_edit = {.type = BC_MSG_EDIT};
 	struct undo *undo = NULL;
 	uint32_t nundo = 0;

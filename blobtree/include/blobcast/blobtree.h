@@ -270,6 +270,9 @@ int bc_tree_put_prim(struct bc_tree *t, uint32_t id,
 		     const struct bc_prim_data *p, struct bc_errinfo *ei);
 int bc_tree_end(struct bc_tree *t, struct bc_errinfo *ei);
 
+/* Does any node carry an id the tree assigned (the scene gave 0)? */
+bool bc_tree_has_auto_ids(const struct bc_tree *t);
+
 /* Counts of the model: scene nodes, primitives, operators. */
 uint32_t bc_tree_node_count(const struct bc_tree *t);
 uint32_t bc_tree_prim_count(const struct bc_tree *t);
