@@ -102,8 +102,8 @@ uint32_t bc_scene_prim_nfloats(enum bc_prim kind)
 		return 0;
 	}
 	for (uint32_t i = 0; i < info->nparams; i++) {
-		uint32_t end = (uint32_t)info->params[i].offset +
-			       info->params[i].count;
+		uint32_t end =
+		    (uint32_t)info->params[i].offset + info->params[i].count;
 		if (end > n) {
 			n = end;
 		}
@@ -204,7 +204,7 @@ static void put_node(struct wbuf *b, const struct bc_scene_node *n)
 }
 
 static int encode(const struct bc_tree *t, const struct bc_camera *cam,
-		  bool scene, uint8_t **out, size_t *len)
+                  bool scene, uint8_t **out, size_t *len)
 {
 	struct bc_scene_walk w;
 	struct bc_scene_node n;
@@ -241,7 +241,7 @@ static int encode(const struct bc_tree *t, const struct bc_camera *cam,
 }
 
 int bc_scene_encode(const struct bc_tree *t, const struct bc_camera *cam,
-		    uint8_t **out, size_t *len)
+                    uint8_t **out, size_t *len)
 {
 	return encode(t, cam, true, out, len);
 }
@@ -266,12 +266,12 @@ static size_t rd_left(const struct rd *r)
 /* Each get_* checks the bytes left first and fails with
  * BC_EPROTO_TRUNCATED naming the node and field. */
 static int need(const struct rd *r, size_t n, uint32_t node, const char *what,
-		struct bc_errinfo *ei)
+                struct bc_errinfo *ei)
 {
 	if (n > rd_left(r)) {
 		return bc_errinfo_set(ei, BC_EPROTO_TRUNCATED,
-				      "node %u: %s needs %zu bytes, %zu left",
-				      node, what, n, rd_left(r));
+		                      "node %u: %s needs %zu bytes, %zu left",
+		                      node, what, n, rd_left(r));
 	}
 	return 0;
 }
@@ -284,8 +284,8 @@ static uint8_t take_u8(struct rd *r)
 static uint32_t take_u32(struct rd *r)
 {
 	uint32_t v = (uint32_t)r->p[r->pos] | (uint32_t)r->p[r->pos + 1] << 8 |
-		     (uint32_t)r->p[r->pos + 2] << 16 |
-		     (uint32_t)r->p[r->pos + 3] << 24;
+	             (uint32_t)r->p[r->pos + 2] << 16 |
+	             (uint32_t)r->p[r->pos + 3] << 24;
 	r->pos += 4;
 	return v;
 }
@@ -299,7 +299,7 @@ static float take_f32(struct rd *r)
 }
 
 static int get_u8(struct rd *r, uint8_t *v, uint32_t node, const char *what,
-		  struct bc_errinfo *ei)
+                  struct bc_errinfo *ei)
 {
 	int rc = need(r, 1, node, what, ei);
 	if (!rc) {
@@ -309,7 +309,7 @@ static int get_u8(struct rd *r, uint8_t *v, uint32_t node, const char *what,
 }
 
 static int get_u32(struct rd *r, uint32_t *v, uint32_t node, const char *what,
-		   struct bc_errinfo *ei)
+                   struct bc_errinfo *ei)
 {
 	int rc = need(r, 4, node, what, ei);
 	if (!rc) {
@@ -320,7 +320,7 @@ static int get_u32(struct rd *r, uint32_t *v, uint32_t node, const char *what,
 
 /* Reads n finite floats. */
 static int get_f32s(struct rd *r, float *f, uint32_t n, uint32_t node,
-		    const char *what, struct bc_errinfo *ei)
+                    const char *what, struct bc_errinfo *ei)
 {
 	int rc = need(r, 4 * (size_t)n, node, what, ei);
 	if (rc) {
@@ -330,8 +330,8 @@ static int get_f32s(struct rd *r, float *f, uint32_t n, uint32_t node,
 		f[i] = take_f32(r);
 		if (!isfinite(f[i])) {
 			return bc_errinfo_set(ei, BC_ENONFINITE,
-					      "node %u: %s[%u] is not finite",
-					      node, what, i);
+			                      "node %u: %s[%u] is not finite",
+			                      node, what, i);
 		}
 	}
 	return 0;
@@ -348,7 +348,7 @@ struct dnode {
 
 /* Reads node number index of count, checking everything the bytes decide. */
 static int read_node(struct rd *r, uint32_t index, uint32_t count,
-		     struct dnode *n, struct bc_errinfo *ei)
+                     struct dnode *n, struct bc_errinfo *ei)
 {
 	uint8_t tag, flag, nf;
 	int rc;
@@ -362,38 +362,38 @@ static int read_node(struct rd *r, uint32_t index, uint32_t count,
 		uint32_t after = count - 1 - index;
 		if (kind == BC_OP_INVALID || kind >= BC_OP_COUNT) {
 			return bc_errinfo_set(ei, BC_EENUM,
-					      "node %u: unknown operator tag "
-					      "0x%02x",
-					      index, tag);
+			                      "node %u: unknown operator tag "
+			                      "0x%02x",
+			                      index, tag);
 		}
 		memset(&n->op, 0, sizeof(n->op));
 		n->op.kind = (enum bc_op)kind;
 		if ((rc = get_f32s(r, &n->op.blend, 1, index, "blend", ei)) ||
 		    (rc = get_f32s(r, &n->op.range, 1, index, "range", ei)) ||
-		    (rc = get_u32(r, &n->nchildren, index, "child_count",
-				  ei))) {
+		    (rc =
+		         get_u32(r, &n->nchildren, index, "child_count", ei))) {
 			return rc;
 		}
 		/* Each child is at least one more node of the encoding. */
 		if (n->nchildren < 2 || n->nchildren > after) {
 			return bc_errinfo_set(ei, BC_EPROTO_COUNT,
-					      "node %u: child_count %u outside "
-					      "2..%u (the nodes that follow)",
-					      index, n->nchildren, after);
+			                      "node %u: child_count %u outside "
+			                      "2..%u (the nodes that follow)",
+			                      index, n->nchildren, after);
 		}
 		if (!bc_op_is_smooth(n->op.kind) &&
 		    (n->op.blend != 0.0f || n->op.range != 0.0f)) {
 			return bc_errinfo_set(ei, BC_ERANGE,
-					      "node %u: %s takes no blend or "
-					      "range (both must be 0)",
-					      index, bc_op_name(n->op.kind));
+			                      "node %u: %s takes no blend or "
+			                      "range (both must be 0)",
+			                      index, bc_op_name(n->op.kind));
 		}
 		return 0;
 	}
 	if (tag == BC_PRIM_INVALID || tag >= BC_PRIM_COUNT) {
 		return bc_errinfo_set(ei, BC_EENUM,
-				      "node %u: unknown primitive tag 0x%02x",
-				      index, tag);
+		                      "node %u: unknown primitive tag 0x%02x",
+		                      index, tag);
 	}
 	n->nchildren = 0;
 	bc_prim_data_init(&n->prim, (enum bc_prim)tag);
@@ -404,8 +404,8 @@ static int read_node(struct rd *r, uint32_t index, uint32_t count,
 	}
 	if (flag > 1) {
 		return bc_errinfo_set(ei, BC_EPROTO_FLAGS,
-				      "node %u: has_color is %u, not 0 or 1",
-				      index, flag);
+		                      "node %u: has_color is %u, not 0 or 1",
+		                      index, flag);
 	}
 	n->prim.has_color = flag == 1;
 	if (n->prim.has_color &&
@@ -417,9 +417,10 @@ static int read_node(struct rd *r, uint32_t index, uint32_t count,
 	}
 	if (nf != bc_scene_prim_nfloats(n->prim.kind)) {
 		return bc_errinfo_set(ei, BC_EPROTO_COUNT,
-				      "node %u: nfloats is %u but a %s has %u",
-				      index, nf, bc_prim_info(n->prim.kind)->name,
-				      bc_scene_prim_nfloats(n->prim.kind));
+		                      "node %u: nfloats is %u but a %s has %u",
+		                      index, nf,
+		                      bc_prim_info(n->prim.kind)->name,
+		                      bc_scene_prim_nfloats(n->prim.kind));
 	}
 	return get_f32s(r, n->prim.params, nf, index, "params", ei);
 }
@@ -480,16 +481,15 @@ static int decode_tree(struct rd *r, struct bc_tree *t, struct bc_errinfo *ei)
 	count = take_u32(r);
 	if (count == 0 || count > BC_TREE_MAX_NODES) {
 		return bc_errinfo_set(ei, BC_EPROTO_COUNT,
-				      "node_count %u outside 1..%u", count,
-				      BC_TREE_MAX_NODES);
+		                      "node_count %u outside 1..%u", count,
+		                      BC_TREE_MAX_NODES);
 	}
 	if (count > rd_left(r) / BC_SCENE_NODE_MIN_BYTES) {
-		return bc_errinfo_set(ei, BC_EPROTO_COUNT,
-				      "node_count %u needs at least %zu bytes, "
-				      "%zu left",
-				      count,
-				      (size_t)count * BC_SCENE_NODE_MIN_BYTES,
-				      rd_left(r));
+		return bc_errinfo_set(
+		    ei, BC_EPROTO_COUNT,
+		    "node_count %u needs at least %zu bytes, "
+		    "%zu left",
+		    count, (size_t)count * BC_SCENE_NODE_MIN_BYTES, rd_left(r));
 	}
 	/* Bounded by the input: count <= len / 5. */
 	ids = bc_malloc(sizeof(uint32_t) * (size_t)count);
@@ -502,15 +502,15 @@ static int decode_tree(struct rd *r, struct bc_tree *t, struct bc_errinfo *ei)
 	for (uint32_t i = 0; i < count; i++) {
 		if (i > 0 && nopen == 0) {
 			rc = bc_errinfo_set(ei, BC_EPROTO_COUNT,
-					    "node %u: the root's subtree ended "
-					    "at node %u but node_count is %u",
-					    i, i - 1, count);
+			                    "node %u: the root's subtree ended "
+			                    "at node %u but node_count is %u",
+			                    i, i - 1, count);
 			goto cleanup;
 		}
 		if (nopen >= BC_TREE_MAX_DEPTH) {
 			rc = bc_errinfo_set(ei, BC_EDEPTH,
-					    "node %u: nesting deeper than %d",
-					    i, BC_TREE_MAX_DEPTH);
+			                    "node %u: nesting deeper than %d",
+			                    i, BC_TREE_MAX_DEPTH);
 			goto cleanup;
 		}
 		if ((rc = read_node(r, i, count, &n, ei))) {
@@ -535,15 +535,15 @@ static int decode_tree(struct rd *r, struct bc_tree *t, struct bc_errinfo *ei)
 	}
 	if (nopen) {
 		rc = bc_errinfo_set(ei, BC_EPROTO_COUNT,
-				    "node %u: %u of its children are missing "
-				    "after the last node",
-				    opener[nopen - 1], left[nopen - 1]);
+		                    "node %u: %u of its children are missing "
+		                    "after the last node",
+		                    opener[nopen - 1], left[nopen - 1]);
 		goto cleanup;
 	}
 	if (rd_left(r)) {
-		rc = bc_errinfo_set(ei, BC_EPROTO_TRAILING,
-				    "%zu bytes after the last node",
-				    rd_left(r));
+		rc =
+		    bc_errinfo_set(ei, BC_EPROTO_TRAILING,
+		                   "%zu bytes after the last node", rd_left(r));
 		goto cleanup;
 	}
 	if (nzero) {
@@ -589,9 +589,9 @@ cleanup:
 	return rc;
 }
 
-static int decode(const uint8_t *buf, size_t len, bool scene,
-		  struct bc_tree *t, struct bc_camera *cam, bool *has_camera,
-		  struct bc_errinfo *ei)
+static int decode(const uint8_t *buf, size_t len, bool scene, struct bc_tree *t,
+                  struct bc_camera *cam, bool *has_camera,
+                  struct bc_errinfo *ei)
 {
 	struct rd r = {buf, len, 0};
 	struct bc_camera c;
@@ -616,32 +616,33 @@ static int decode(const uint8_t *buf, size_t len, bool scene,
 		uint8_t flags;
 		if (r.len < 1) {
 			return bc_errinfo_set(ei, BC_EPROTO_TRUNCATED,
-					      "scene: empty (no flags byte)");
+			                      "scene: empty (no flags byte)");
 		}
 		flags = take_u8(&r);
 		if (flags & ~BC_SCENE_FLAG_CAMERA) {
-			return bc_errinfo_set(ei, BC_EPROTO_FLAGS,
-					      "scene: reserved flag bits 0x%02x "
-					      "set",
-					      flags & ~BC_SCENE_FLAG_CAMERA);
+			return bc_errinfo_set(
+			    ei, BC_EPROTO_FLAGS,
+			    "scene: reserved flag bits 0x%02x "
+			    "set",
+			    flags & ~BC_SCENE_FLAG_CAMERA);
 		}
 		with_cam = (flags & BC_SCENE_FLAG_CAMERA) != 0;
 		if (with_cam) {
 			float f[10];
 			if (rd_left(&r) < sizeof(f)) {
 				return bc_errinfo_set(
-					ei, BC_EPROTO_TRUNCATED,
-					"camera: needs %zu bytes, %zu left",
-					sizeof(f), rd_left(&r));
+				    ei, BC_EPROTO_TRUNCATED,
+				    "camera: needs %zu bytes, %zu left",
+				    sizeof(f), rd_left(&r));
 			}
 			for (int i = 0; i < 10; i++) {
 				f[i] = take_f32(&r);
 				if (!isfinite(f[i])) {
 					return bc_errinfo_set(
-						ei, BC_ENONFINITE,
-						"camera: float %d is not "
-						"finite",
-						i);
+					    ei, BC_ENONFINITE,
+					    "camera: float %d is not "
+					    "finite",
+					    i);
 				}
 			}
 			memcpy(c.eye, f, sizeof(c.eye));
@@ -668,14 +669,14 @@ static int decode(const uint8_t *buf, size_t len, bool scene,
 }
 
 int bc_scene_decode(const uint8_t *buf, size_t len, struct bc_tree *t,
-		    struct bc_camera *cam, bool *has_camera,
-		    struct bc_errinfo *ei)
+                    struct bc_camera *cam, bool *has_camera,
+                    struct bc_errinfo *ei)
 {
 	return decode(buf, len, true, t, cam, has_camera, ei);
 }
 
 int bc_tree_decode(const uint8_t *buf, size_t len, struct bc_tree *t,
-		   struct bc_errinfo *ei)
+                   struct bc_errinfo *ei)
 {
 	return decode(buf, len, false, t, NULL, NULL, ei);
 }

@@ -161,7 +161,7 @@ static void frame_init(struct frame *f)
  * no such parameter of that size: a generator out of step with prim.c is a
  * bug that tests must see. */
 static int set_param(struct gen *g, struct bc_prim_data *p, const char *name,
-		     const float *v, uint32_t count)
+                     const float *v, uint32_t count)
 {
 	const struct bc_prim_info *info = bc_prim_info(p->kind);
 	for (uint32_t i = 0; info && i < info->nparams; i++) {
@@ -173,18 +173,18 @@ static int set_param(struct gen *g, struct bc_prim_data *p, const char *name,
 		}
 	}
 	return bc_errinfo_set(g->ei, BC_EINVAL,
-			      "generator: a %s has no %u-float parameter %s",
-			      info ? info->name : "?", count, name);
+	                      "generator: a %s has no %u-float parameter %s",
+	                      info ? info->name : "?", count, name);
 }
 
 static int set1(struct gen *g, struct bc_prim_data *p, const char *name,
-		float v)
+                float v)
 {
 	return set_param(g, p, name, &v, 1);
 }
 
 static int set3(struct gen *g, struct bc_prim_data *p, const char *name,
-		float x, float y, float z)
+                float x, float y, float z)
 {
 	float v[3] = {x, y, z};
 	return set_param(g, p, name, v, 3);
@@ -193,10 +193,10 @@ static int set3(struct gen *g, struct bc_prim_data *p, const char *name,
 /* Places p (built in local coordinates with its own offset and rotation)
  * into frame f. Sizes were already scaled by the caller. */
 static void place(struct bc_prim_data *p, const struct frame *f,
-		  const float local_pos[3], const float local_q[4])
+                  const float local_pos[3], const float local_q[4])
 {
 	float v[3] = {local_pos[0] * f->s, local_pos[1] * f->s,
-		      local_pos[2] * f->s};
+	              local_pos[2] * f->s};
 	float w[3];
 	quat_rotate(f->q, v, w);
 	for (int i = 0; i < 3; i++) {
@@ -221,10 +221,9 @@ static int put(struct gen *g, const struct bc_prim_data *p)
 
 static int push(struct gen *g, enum bc_op kind, float blend)
 {
-	struct bc_op_data op = {kind, bc_op_is_smooth(kind) ? blend : 0.0f,
-				bc_op_is_smooth(kind)
-					? bc_op_default_range(blend)
-					: 0.0f};
+	struct bc_op_data op = {
+	    kind, bc_op_is_smooth(kind) ? blend : 0.0f,
+	    bc_op_is_smooth(kind) ? bc_op_default_range(blend) : 0.0f};
 	return bc_tree_push_op(g->t, g->next_id++, &op, g->ei);
 }
 
@@ -235,14 +234,15 @@ static int pop(struct gen *g)
 
 static bool smooth_of(const struct bc_gen_opts *o, bool dflt)
 {
-	return o->blend == BC_GEN_BLEND_DEFAULT ? dflt
-					       : o->blend == BC_GEN_BLEND_SMOOTH;
+	return o->blend == BC_GEN_BLEND_DEFAULT
+	           ? dflt
+	           : o->blend == BC_GEN_BLEND_SMOOTH;
 }
 
 /* A camera looking at centre from direction dir (need not be unit), far
  * enough for a sphere of radius to fill most of a 40 degree view. */
 static void frame_camera(struct bc_camera *cam, const float centre[3],
-			 float radius, float dx, float dy, float dz)
+                         float radius, float dx, float dy, float dz)
 {
 	float n = sqrtf(dx * dx + dy * dy + dz * dz);
 	float fov = 40.0f;
@@ -287,8 +287,8 @@ static void fib_dir(uint32_t i, uint32_t n, float out[3])
 #define FIG16_EXTENT 1.15f
 
 static const float fig16_palette[BC_GEN_MAX_LEVEL][3] = {
-	{0.85f, 0.33f, 0.25f}, {0.93f, 0.62f, 0.22f}, {0.30f, 0.62f, 0.78f},
-	{0.45f, 0.75f, 0.40f}, {0.72f, 0.48f, 0.82f}, {0.90f, 0.85f, 0.55f},
+    {0.85f, 0.33f, 0.25f}, {0.93f, 0.62f, 0.22f}, {0.30f, 0.62f, 0.78f},
+    {0.45f, 0.75f, 0.40f}, {0.72f, 0.48f, 0.82f}, {0.90f, 0.85f, 0.55f},
 };
 
 /* Emits the ten primitives of an aggregate as one operator: a body sphere,
@@ -296,9 +296,9 @@ static const float fig16_palette[BC_GEN_MAX_LEVEL][3] = {
 static int fig16_aggregate(struct gen *g, const struct agg *a, bool smooth)
 {
 	static const float knob[4][3] = {{0.38f, 0.38f, 0.38f},
-					 {-0.38f, -0.38f, 0.38f},
-					 {-0.38f, 0.38f, -0.38f},
-					 {0.38f, -0.38f, -0.38f}};
+	                                 {-0.38f, -0.38f, 0.38f},
+	                                 {-0.38f, 0.38f, -0.38f},
+	                                 {0.38f, -0.38f, -0.38f}};
 	const float *base = fig16_palette[a->level % BC_GEN_MAX_LEVEL];
 	const float zero[3] = {0.0f, 0.0f, 0.0f};
 	float s = a->f.s, q[4], pos[3];
@@ -306,7 +306,7 @@ static int fig16_aggregate(struct gen *g, const struct agg *a, bool smooth)
 	int rc;
 
 	if ((rc = push(g, smooth ? BC_OP_SMOOTH_UNION : BC_OP_UNION,
-		       0.12f * s))) {
+	               0.12f * s))) {
 		return rc;
 	}
 	quat_identity(q);
@@ -340,7 +340,7 @@ static int fig16_aggregate(struct gen *g, const struct agg *a, bool smooth)
 		}
 		place(&p, &a->f, knob[k], q);
 		set_color(&p, 0.6f * base[0] + 0.4f, 0.6f * base[1] + 0.4f,
-			  0.6f * base[2] + 0.4f);
+		          0.6f * base[2] + 0.4f);
 		if ((rc = put(g, &p))) {
 			return rc;
 		}
@@ -349,7 +349,7 @@ static int fig16_aggregate(struct gen *g, const struct agg *a, bool smooth)
 	for (int k = 0; k < 2; k++) {
 		bc_prim_data_init(&p, BC_PRIM_BOX);
 		if ((rc = set3(g, &p, "half_extents", 0.16f * s, 0.16f * s,
-			       0.16f * s)) ||
+		               0.16f * s)) ||
 		    (rc = set1(g, &p, "round", 0.03f * s))) {
 			return rc;
 		}
@@ -369,8 +369,8 @@ static int fig16_aggregate(struct gen *g, const struct agg *a, bool smooth)
 		float sign = k ? -1.0f : 1.0f;
 		bc_prim_data_init(&p, BC_PRIM_CAPSULE);
 		if ((rc = set3(g, &p, "a", 0.0f, 0.3f * sign * s, 0.0f)) ||
-		    (rc = set3(g, &p, "b", 0.0f, 0.72f * sign * s,
-			       0.18f * s)) ||
+		    (rc =
+		         set3(g, &p, "b", 0.0f, 0.72f * sign * s, 0.18f * s)) ||
 		    (rc = set1(g, &p, "radius", 0.09f * s))) {
 			return rc;
 		}
@@ -403,8 +403,8 @@ static int gen_fig16(struct gen *g, struct bc_camera *cam)
 
 	if (level < 1 || level > BC_GEN_MAX_LEVEL) {
 		return bc_errinfo_set(g->ei, BC_ERANGE,
-				      "fig16: level %u outside 1..%d", level,
-				      BC_GEN_MAX_LEVEL);
+		                      "fig16: level %u outside 1..%d", level,
+		                      BC_GEN_MAX_LEVEL);
 	}
 	for (uint32_t k = 0; k < level; k++) {
 		start[k] = total;
@@ -423,13 +423,15 @@ static int gen_fig16(struct gen *g, struct bc_camera *cam)
 			const struct agg *pa = &aggs[i];
 			for (uint32_t c = 0; c < 10; c++) {
 				struct agg *ch =
-					&aggs[start[k] + (i - start[k - 1]) * 10 + c];
+				    &aggs[start[k] + (i - start[k - 1]) * 10 +
+				          c];
 				float d[3], w[3];
 				fib_dir(c, 10, d);
 				quat_rotate(pa->f.q, d, w);
 				for (int j = 0; j < 3; j++) {
-					ch->f.t[j] = pa->f.t[j] +
-						     FIG16_CHILD_DIST * pa->f.s * w[j];
+					ch->f.t[j] =
+					    pa->f.t[j] +
+					    FIG16_CHILD_DIST * pa->f.s * w[j];
 				}
 				ch->f.s = pa->f.s * FIG16_CHILD_SCALE;
 				quat_random(&g->rng, ch->f.q);
@@ -443,7 +445,7 @@ static int gen_fig16(struct gen *g, struct bc_camera *cam)
 	for (uint32_t k = level - 1; k >= 1; k--) {
 		float s = aggs[start[k]].f.s;
 		if ((rc = push(g, smooth ? BC_OP_SMOOTH_UNION : BC_OP_UNION,
-			       0.08f * s))) {
+		               0.08f * s))) {
 			goto cleanup;
 		}
 	}
@@ -460,7 +462,7 @@ static int gen_fig16(struct gen *g, struct bc_camera *cam)
 	if (cam) {
 		const float c[3] = {0.0f, 0.0f, 0.0f};
 		frame_camera(cam, c, level == 1 ? 0.8f : FIG16_EXTENT, 0.55f,
-			     0.45f, 1.0f);
+		             0.45f, 1.0f);
 	}
 cleanup:
 	bc_free(aggs);
@@ -471,23 +473,23 @@ cleanup:
 
 /* Emits one fig18 instance of the given kind at position pos with size r. */
 static int fig18_instance(struct gen *g, enum bc_gen_kind kind, bool smooth,
-			  const float pos[3], float r, const float col[3])
+                          const float pos[3], float r, const float col[3])
 {
 	struct bc_prim_data p;
 	int rc;
 	if (kind == BC_GEN_KIND_BOXES) {
 		bc_prim_data_init(&p, BC_PRIM_BOX);
 		if ((rc = set3(g, &p, "half_extents",
-			       r * rng_float(&g->rng, 0.45f, 0.8f),
-			       r * rng_float(&g->rng, 0.45f, 0.8f),
-			       r * rng_float(&g->rng, 0.45f, 0.8f)))) {
+		               r * rng_float(&g->rng, 0.45f, 0.8f),
+		               r * rng_float(&g->rng, 0.45f, 0.8f),
+		               r * rng_float(&g->rng, 0.45f, 0.8f)))) {
 			return rc;
 		}
 		quat_random(&g->rng, p.rotate);
 	} else if (kind == BC_GEN_KIND_SPHERES) {
 		bc_prim_data_init(&p, BC_PRIM_SPHERE);
 		if ((rc = set1(g, &p, "radius",
-			       r * rng_float(&g->rng, 0.6f, 0.9f)))) {
+		               r * rng_float(&g->rng, 0.6f, 0.9f)))) {
 			return rc;
 		}
 	} else {
@@ -496,9 +498,10 @@ static int fig18_instance(struct gen *g, enum bc_gen_kind kind, bool smooth,
 		float q[4], axis[3], z[3] = {0.0f, 0.0f, 1.0f};
 		quat_random(&g->rng, q);
 		quat_rotate(q, z, axis);
-		if ((rc = push(g, smooth ? BC_OP_SMOOTH_INTERSECTION
-					 : BC_OP_INTERSECTION,
-			       0.1f * r))) {
+		if ((rc = push(g,
+		               smooth ? BC_OP_SMOOTH_INTERSECTION
+		                      : BC_OP_INTERSECTION,
+		               0.1f * r))) {
 			return rc;
 		}
 		for (int k = 0; k < 2; k++) {
@@ -508,7 +511,8 @@ static int fig18_instance(struct gen *g, enum bc_gen_kind kind, bool smooth,
 				return rc;
 			}
 			for (int j = 0; j < 3; j++) {
-				p.translate[j] = pos[j] + sign * 0.6f * r * axis[j];
+				p.translate[j] =
+				    pos[j] + sign * 0.6f * r * axis[j];
 			}
 			set_color(&p, col[0], col[1], col[2]);
 			if ((rc = put(g, &p))) {
@@ -536,16 +540,18 @@ static int gen_fig18(struct gen *g, struct bc_camera *cam)
 	int rc;
 
 	if (kind >= BC_GEN_KIND_COUNT) {
-		return bc_errinfo_set(g->ei, BC_ERANGE, "fig18: unknown kind %d",
-				      (int)kind);
+		return bc_errinfo_set(g->ei, BC_ERANGE,
+		                      "fig18: unknown kind %d", (int)kind);
 	}
 	if ((uint64_t)count * per > BC_GEN_MAX_PRIMS) {
-		return bc_errinfo_set(g->ei, BC_ELIMIT,
-				      "fig18: %u instances exceed %u primitives",
-				      count, BC_GEN_MAX_PRIMS);
+		return bc_errinfo_set(
+		    g->ei, BC_ELIMIT,
+		    "fig18: %u instances exceed %u primitives", count,
+		    BC_GEN_MAX_PRIMS);
 	}
-	if (count > 1 && (rc = push(g, smooth ? BC_OP_SMOOTH_UNION : BC_OP_UNION,
-				     0.3f * r))) {
+	if (count > 1 &&
+	    (rc = push(g, smooth ? BC_OP_SMOOTH_UNION : BC_OP_UNION,
+	               0.3f * r))) {
 		return rc;
 	}
 	for (uint32_t i = 0; i < count; i++) {
@@ -578,8 +584,8 @@ static int gen_many_spheres(struct gen *g, struct bc_camera *cam)
 	int rc;
 	if (count > BC_GEN_MAX_PRIMS) {
 		return bc_errinfo_set(g->ei, BC_ELIMIT,
-				      "many-spheres: %u spheres exceed %u",
-				      count, BC_GEN_MAX_PRIMS);
+		                      "many-spheres: %u spheres exceed %u",
+		                      count, BC_GEN_MAX_PRIMS);
 	}
 	if (count > 1 && (rc = push(g, BC_OP_UNION, 0.0f))) {
 		return rc;
@@ -588,15 +594,15 @@ static int gen_many_spheres(struct gen *g, struct bc_camera *cam)
 		struct bc_prim_data p;
 		bc_prim_data_init(&p, BC_PRIM_SPHERE);
 		if ((rc = set1(g, &p, "radius",
-			       r * rng_float(&g->rng, 0.4f, 1.0f)))) {
+		               r * rng_float(&g->rng, 0.4f, 1.0f)))) {
 			return rc;
 		}
 		for (int j = 0; j < 3; j++) {
 			p.translate[j] = rng_float(&g->rng, -1.0f, 1.0f);
 		}
 		set_color(&p, rng_float(&g->rng, 0.2f, 1.0f),
-			  rng_float(&g->rng, 0.2f, 1.0f),
-			  rng_float(&g->rng, 0.2f, 1.0f));
+		          rng_float(&g->rng, 0.2f, 1.0f),
+		          rng_float(&g->rng, 0.2f, 1.0f));
 		if ((rc = put(g, &p))) {
 			return rc;
 		}
@@ -622,12 +628,12 @@ static int gen_comb(struct gen *g, struct bc_camera *cam)
 	int rc;
 	if (count > BC_GEN_MAX_PRIMS) {
 		return bc_errinfo_set(g->ei, BC_ELIMIT,
-				      "comb: %u spheres exceed %u", count,
-				      BC_GEN_MAX_PRIMS);
+		                      "comb: %u spheres exceed %u", count,
+		                      BC_GEN_MAX_PRIMS);
 	}
 	if (count > 1 &&
 	    (rc = push(g, smooth ? BC_OP_SMOOTH_UNION : BC_OP_UNION,
-		       0.5f * r))) {
+	               0.5f * r))) {
 		return rc;
 	}
 	for (uint32_t i = 0; i < count; i++) {
@@ -638,7 +644,8 @@ static int gen_comb(struct gen *g, struct bc_camera *cam)
 			return rc;
 		}
 		p.translate[0] = -2.0f + step * ((float)i + 0.5f);
-		set_color(&p, 0.9f - 0.6f * u, 0.35f + 0.3f * u, 0.3f + 0.6f * u);
+		set_color(&p, 0.9f - 0.6f * u, 0.35f + 0.3f * u,
+		          0.3f + 0.6f * u);
 		if ((rc = put(g, &p))) {
 			return rc;
 		}
@@ -653,7 +660,8 @@ static int gen_comb(struct gen *g, struct bc_camera *cam)
 	return 0;
 }
 
-/* ---- gears ---------------------------------------------------------------- */
+/* ---- gears ----------------------------------------------------------------
+ */
 
 /* Lightening holes in gears with this many teeth or more. */
 #define GEAR_HOLES_MIN_TEETH 12u
@@ -671,7 +679,7 @@ static uint32_t gear_prims(uint32_t teeth)
  * m teeth / 2), so gears of one module mesh. phase turns the gear.
  */
 static int gear(struct gen *g, const float c[3], uint32_t teeth, float m,
-		float phase, const float col[3])
+                float phase, const float col[3])
 {
 	/* The cylinder's axis is its local y: turn it onto z. */
 	float to_z[4];
@@ -701,8 +709,8 @@ static int gear(struct gen *g, const float c[3], uint32_t teeth, float m,
 		/* About half the circular pitch (pi m) wide, reaching
 		 * 0.44 m past the pitch circle: meshing teeth clear the
 		 * other gear's disc. */
-		if ((rc = set3(g, &p, "half_extents", 0.47f * m, 0.7f * m,
-			       h))) {
+		if ((rc =
+		         set3(g, &p, "half_extents", 0.47f * m, 0.7f * m, h))) {
 			return rc;
 		}
 		/* Radial along local x, then turned by a about z. */
@@ -732,7 +740,7 @@ static int gear(struct gen *g, const float c[3], uint32_t teeth, float m,
 	if (teeth >= GEAR_HOLES_MIN_TEETH) {
 		for (uint32_t i = 0; i < GEAR_HOLES; i++) {
 			float a = phase + 2.0f * PI_F * ((float)i + 0.5f) /
-						  (float)GEAR_HOLES;
+			                      (float)GEAR_HOLES;
 			bc_prim_data_init(&p, BC_PRIM_CYLINDER);
 			if ((rc = set1(g, &p, "radius", 0.2f * rp)) ||
 			    (rc = set1(g, &p, "half_height", 2.0f * h))) {
@@ -755,15 +763,15 @@ static int gear(struct gen *g, const float c[3], uint32_t teeth, float m,
 static int gen_gears(struct gen *g, struct bc_camera *cam)
 {
 	static const float col[3][3] = {{0.80f, 0.62f, 0.25f},
-					{0.62f, 0.66f, 0.72f},
-					{0.78f, 0.42f, 0.28f}};
+	                                {0.62f, 0.66f, 0.72f},
+	                                {0.78f, 0.42f, 0.28f}};
 	uint32_t t0 = g->o->teeth ? g->o->teeth : 24, tt[3];
 	float m, r[3], c[3][3] = {{0}}, centre[3], dir[2];
 	int rc;
 	if (t0 < 6 || t0 > BC_GEN_MAX_TEETH) {
 		return bc_errinfo_set(g->ei, BC_ERANGE,
-				      "gears: %u teeth outside 6..%u", t0,
-				      BC_GEN_MAX_TEETH);
+		                      "gears: %u teeth outside 6..%u", t0,
+		                      BC_GEN_MAX_TEETH);
 	}
 	tt[0] = t0;
 	tt[1] = t0 * 2 / 3 > 6 ? t0 * 2 / 3 : 6;
@@ -777,8 +785,9 @@ static int gen_gears(struct gen *g, struct bc_camera *cam)
 	 * about 63 degrees: both on directions where the first has a
 	 * tooth, and each turned so that a gap faces the first. */
 	dir[0] = 0.0f;
-	dir[1] = 2.0f * PI_F * floorf(1.1f * (float)tt[0] / (2.0f * PI_F) + 0.5f) /
-		 (float)tt[0];
+	dir[1] = 2.0f * PI_F *
+	         floorf(1.1f * (float)tt[0] / (2.0f * PI_F) + 0.5f) /
+	         (float)tt[0];
 	c[0][0] = -0.5f * (r[0] + r[1]);
 	for (int i = 1; i < 3; i++) {
 		c[i][0] = c[0][0] + (r[0] + r[i]) * cosf(dir[i - 1]);
@@ -788,8 +797,8 @@ static int gen_gears(struct gen *g, struct bc_camera *cam)
 		return rc;
 	}
 	for (int i = 0; i < 3; i++) {
-		float phase = i == 0 ? 0.0f
-				     : dir[i - 1] + PI_F + PI_F / (float)tt[i];
+		float phase =
+		    i == 0 ? 0.0f : dir[i - 1] + PI_F + PI_F / (float)tt[i];
 		if ((rc = gear(g, c[i], tt[i], m, phase, col[i]))) {
 			return rc;
 		}
@@ -810,8 +819,8 @@ static int gen_gears(struct gen *g, struct bc_camera *cam)
 		centre[1] = 0.5f * (lo[1] + hi[1]);
 		centre[2] = 0.0f;
 		frame_camera(cam, centre,
-			     0.5f * hypotf(hi[0] - lo[0], hi[1] - lo[1]), 0.25f,
-			     0.35f, 1.0f);
+		             0.5f * hypotf(hi[0] - lo[0], hi[1] - lo[1]), 0.25f,
+		             0.35f, 1.0f);
 	}
 	return 0;
 }
@@ -827,15 +836,15 @@ static int gen_many_gears(struct gen *g, struct bc_camera *cam)
 	int rc;
 	if (fixed && (fixed < 6 || fixed > BC_GEN_MAX_TEETH)) {
 		return bc_errinfo_set(g->ei, BC_ERANGE,
-				      "many-gears: %u teeth outside 6..%u",
-				      fixed, BC_GEN_MAX_TEETH);
+		                      "many-gears: %u teeth outside 6..%u",
+		                      fixed, BC_GEN_MAX_TEETH);
 	}
 	prims = (uint64_t)count * gear_prims(fixed ? fixed : 20);
 	if (prims > BC_GEN_MAX_PRIMS) {
 		return bc_errinfo_set(g->ei, BC_ELIMIT,
-				      "many-gears: %u gears exceed %u "
-				      "primitives",
-				      count, BC_GEN_MAX_PRIMS);
+		                      "many-gears: %u gears exceed %u "
+		                      "primitives",
+		                      count, BC_GEN_MAX_PRIMS);
 	}
 	while (cols * cols < count) {
 		cols++;
@@ -855,7 +864,7 @@ static int gen_many_gears(struct gen *g, struct bc_camera *cam)
 		col[1] = rng_float(&g->rng, 0.35f, 0.85f);
 		col[2] = rng_float(&g->rng, 0.25f, 0.75f);
 		if ((rc = gear(g, c, teeth, m,
-			       rng_float(&g->rng, 0.0f, 2.0f * PI_F), col))) {
+		               rng_float(&g->rng, 0.0f, 2.0f * PI_F), col))) {
 			return rc;
 		}
 	}
@@ -865,12 +874,13 @@ static int gen_many_gears(struct gen *g, struct bc_camera *cam)
 	if (cam) {
 		const float c[3] = {0.0f, 0.0f, 0.0f};
 		frame_camera(cam, c, 0.75f * pitch * (float)cols, 0.2f, 0.3f,
-			     1.0f);
+		             1.0f);
 	}
 	return 0;
 }
 
-/* ---- random trees ---------------------------------------------------------- */
+/* ---- random trees ----------------------------------------------------------
+ */
 
 /* Fills p with random parameters of a random kind. Shapes have rules of
  * their own (angles, radii orders), so draws are checked with
@@ -879,7 +889,7 @@ static int gen_many_gears(struct gen *g, struct bc_camera *cam)
 static void random_prim(struct gen *g, struct bc_prim_data *p, float spread)
 {
 	enum bc_prim kind =
-		(enum bc_prim)(1 + rng_below(&g->rng, BC_PRIM_COUNT - 1));
+	    (enum bc_prim)(1 + rng_below(&g->rng, BC_PRIM_COUNT - 1));
 	for (int attempt = 0; attempt < 64; attempt++) {
 		const struct bc_prim_info *info = bc_prim_info(kind);
 		bc_prim_data_init(p, kind);
@@ -905,8 +915,8 @@ static void random_prim(struct gen *g, struct bc_prim_data *p, float spread)
 		}
 		if (rng_below(&g->rng, 4) != 0) {
 			set_color(p, rng_float(&g->rng, 0.0f, 1.0f),
-				  rng_float(&g->rng, 0.0f, 1.0f),
-				  rng_float(&g->rng, 0.0f, 1.0f));
+			          rng_float(&g->rng, 0.0f, 1.0f),
+			          rng_float(&g->rng, 0.0f, 1.0f));
 		}
 		if (bc_prim_validate(p, NULL) == 0) {
 			return;
@@ -921,7 +931,7 @@ static void random_prim(struct gen *g, struct bc_prim_data *p, float spread)
  * depth limit takes all its primitives as direct children. Recursion is
  * bounded by the depth limit (<= BC_TREE_MAX_DEPTH). */
 static int random_emit(struct gen *g, uint32_t budget, uint32_t depth,
-		       uint32_t max_depth, float spread)
+                       uint32_t max_depth, float spread)
 {
 	struct bc_op_data op;
 	uint32_t nchild, left = budget;
@@ -950,12 +960,12 @@ static int random_emit(struct gen *g, uint32_t budget, uint32_t depth,
 		nchild = 2 + rng_below(&g->rng, budget < 4 ? budget - 1 : 3);
 	}
 	for (uint32_t c = 0; c < nchild; c++) {
-		uint32_t share = c + 1 == nchild
-					 ? left
-					 : 1 + rng_below(&g->rng,
-							 left - (nchild - c - 1));
-		if ((rc = random_emit(g, share, depth + 1, max_depth,
-				      spread))) {
+		uint32_t share =
+		    c + 1 == nchild
+		        ? left
+		        : 1 + rng_below(&g->rng, left - (nchild - c - 1));
+		if ((rc =
+		         random_emit(g, share, depth + 1, max_depth, spread))) {
 			return rc;
 		}
 		left -= share;
@@ -970,13 +980,13 @@ static int gen_random(struct gen *g, struct bc_camera *cam)
 	float spread = 0.5f * cbrtf((float)count);
 	if (count > BC_GEN_MAX_PRIMS) {
 		return bc_errinfo_set(g->ei, BC_ELIMIT,
-				      "random: %u primitives exceed %u", count,
-				      BC_GEN_MAX_PRIMS);
+		                      "random: %u primitives exceed %u", count,
+		                      BC_GEN_MAX_PRIMS);
 	}
 	if (depth < 2 || depth > BC_TREE_MAX_DEPTH) {
 		return bc_errinfo_set(g->ei, BC_ERANGE,
-				      "random: depth %u outside 2..%d", depth,
-				      BC_TREE_MAX_DEPTH);
+		                      "random: depth %u outside 2..%d", depth,
+		                      BC_TREE_MAX_DEPTH);
 	}
 	if (cam) {
 		const float c[3] = {0.0f, 0.0f, 0.0f};
@@ -985,53 +995,53 @@ static int gen_random(struct gen *g, struct bc_camera *cam)
 	return random_emit(g, count, 0, depth, spread);
 }
 
-/* ---- table and entry point ------------------------------------------------ */
+/* ---- table and entry point ------------------------------------------------
+ */
 
 /* The table, and beside it (same order) the function behind each entry. */
 static const struct bc_gen_info infos[] = {
-	{"fig16", "[--level L] [--blend sharp|smooth] [--seed S]",
-	 "recursive aggregates of the paper's Fig. 16: level L (1..6, "
-	 "default 2) has 10 (10^L - 1) / 9 primitives; smooth by default",
-	 BC_GEN_OPT_LEVEL | BC_GEN_OPT_BLEND | BC_GEN_OPT_SEED},
-	{"fig18",
-	 "[--count N] [--kind boxes|spheres|lenses] [--blend sharp|smooth] "
-	 "[--seed S]",
-	 "N (default 256) randomly rotated instances uniform in a cube under "
-	 "one left-heavy operator, as in the paper's Fig. 18; boxes and "
-	 "smooth by default; a lens is two intersected spheres",
-	 BC_GEN_OPT_COUNT | BC_GEN_OPT_KIND | BC_GEN_OPT_BLEND |
-		 BC_GEN_OPT_SEED},
-	{"comb", "[--count N] [--blend sharp|smooth]",
-	 "N (default 64) overlapping spheres along a line under one n-ary "
-	 "union: a left comb once linearized; sharp by default",
-	 BC_GEN_OPT_COUNT | BC_GEN_OPT_BLEND},
-	{"random", "[--count N] [--seed S] [--depth D]",
-	 "N (default 50) primitives of every kind under operators of every "
-	 "kind, randomly nested at most D (2..128, default 12) deep, random "
-	 "transforms and colours",
-	 BC_GEN_OPT_COUNT | BC_GEN_OPT_SEED | BC_GEN_OPT_DEPTH},
-	{"gears", "[--teeth T]",
-	 "three meshing gears of T (6..1000, default 24), 2T/3 and T/2 teeth: "
-	 "discs and teeth boxes unioned, minus hub and lightening holes",
-	 BC_GEN_OPT_TEETH},
-	{"many-gears", "[--count N] [--teeth T] [--seed S]",
-	 "N (default 64) gears on a grid, 10 to 20 teeth each unless --teeth "
-	 "is given, one sharp union",
-	 BC_GEN_OPT_COUNT | BC_GEN_OPT_TEETH | BC_GEN_OPT_SEED},
-	{"many-spheres", "[--count N] [--seed S]",
-	 "N (default 2745) spheres random in a cube, one sharp union",
-	 BC_GEN_OPT_COUNT | BC_GEN_OPT_SEED},
+    {"fig16", "[--level L] [--blend sharp|smooth] [--seed S]",
+     "recursive aggregates of the paper's Fig. 16: level L (1..6, "
+     "default 2) has 10 (10^L - 1) / 9 primitives; smooth by default",
+     BC_GEN_OPT_LEVEL | BC_GEN_OPT_BLEND | BC_GEN_OPT_SEED},
+    {"fig18",
+     "[--count N] [--kind boxes|spheres|lenses] [--blend sharp|smooth] "
+     "[--seed S]",
+     "N (default 256) randomly rotated instances uniform in a cube under "
+     "one left-heavy operator, as in the paper's Fig. 18; boxes and "
+     "smooth by default; a lens is two intersected spheres",
+     BC_GEN_OPT_COUNT | BC_GEN_OPT_KIND | BC_GEN_OPT_BLEND | BC_GEN_OPT_SEED},
+    {"comb", "[--count N] [--blend sharp|smooth]",
+     "N (default 64) overlapping spheres along a line under one n-ary "
+     "union: a left comb once linearized; sharp by default",
+     BC_GEN_OPT_COUNT | BC_GEN_OPT_BLEND},
+    {"random", "[--count N] [--seed S] [--depth D]",
+     "N (default 50) primitives of every kind under operators of every "
+     "kind, randomly nested at most D (2..128, default 12) deep, random "
+     "transforms and colours",
+     BC_GEN_OPT_COUNT | BC_GEN_OPT_SEED | BC_GEN_OPT_DEPTH},
+    {"gears", "[--teeth T]",
+     "three meshing gears of T (6..1000, default 24), 2T/3 and T/2 teeth: "
+     "discs and teeth boxes unioned, minus hub and lightening holes",
+     BC_GEN_OPT_TEETH},
+    {"many-gears", "[--count N] [--teeth T] [--seed S]",
+     "N (default 64) gears on a grid, 10 to 20 teeth each unless --teeth "
+     "is given, one sharp union",
+     BC_GEN_OPT_COUNT | BC_GEN_OPT_TEETH | BC_GEN_OPT_SEED},
+    {"many-spheres", "[--count N] [--seed S]",
+     "N (default 2745) spheres random in a cube, one sharp union",
+     BC_GEN_OPT_COUNT | BC_GEN_OPT_SEED},
 };
 
 static int (*const fns[])(struct gen *g, struct bc_camera *cam) = {
-	gen_fig16, gen_fig18,	   gen_comb,	     gen_random,
-	gen_gears, gen_many_gears, gen_many_spheres,
+    gen_fig16, gen_fig18,      gen_comb,         gen_random,
+    gen_gears, gen_many_gears, gen_many_spheres,
 };
 
 #define NGENS (sizeof(infos) / sizeof(infos[0]))
 
 _Static_assert(sizeof(fns) / sizeof(fns[0]) == NGENS,
-	       "one function per generator");
+               "one function per generator");
 
 const struct bc_gen_info *bc_gen_list(size_t *n)
 {
@@ -1058,7 +1068,7 @@ const struct bc_gen_info *bc_gen_find(const char *name)
 enum bc_gen_kind bc_gen_kind_from_name(const char *name)
 {
 	static const char *const names[BC_GEN_KIND_COUNT] = {
-		NULL, "boxes", "spheres", "lenses"};
+	    NULL, "boxes", "spheres", "lenses"};
 	for (int i = 1; name && i < BC_GEN_KIND_COUNT; i++) {
 		if (strcmp(name, names[i]) == 0) {
 			return (enum bc_gen_kind)i;
@@ -1078,8 +1088,8 @@ enum bc_gen_blend bc_gen_blend_from_name(const char *name)
 	return BC_GEN_BLEND_DEFAULT;
 }
 
-int bc_gen(const char *name, const struct bc_gen_opts *opts,
-	   struct bc_tree *t, struct bc_camera *cam, struct bc_errinfo *ei)
+int bc_gen(const char *name, const struct bc_gen_opts *opts, struct bc_tree *t,
+           struct bc_camera *cam, struct bc_errinfo *ei)
 {
 	static const struct bc_gen_opts none;
 	int idx = find(name);
@@ -1095,8 +1105,8 @@ int bc_gen(const char *name, const struct bc_gen_opts *opts,
 	}
 	if (!e) {
 		return bc_errinfo_set(ei, BC_ENOTFOUND,
-				      "no generator called \"%s\"",
-				      name ? name : "(null)");
+		                      "no generator called \"%s\"",
+		                      name ? name : "(null)");
 	}
 	given |= o->level ? BC_GEN_OPT_LEVEL : 0u;
 	given |= o->count ? BC_GEN_OPT_COUNT : 0u;
@@ -1106,15 +1116,13 @@ int bc_gen(const char *name, const struct bc_gen_opts *opts,
 	given |= o->teeth ? BC_GEN_OPT_TEETH : 0u;
 	given |= o->depth ? BC_GEN_OPT_DEPTH : 0u;
 	if (given & ~e->takes) {
-		return bc_errinfo_set(ei, BC_EINVAL,
-				      "%s: takes only %s", e->name,
-				      e->usage);
+		return bc_errinfo_set(ei, BC_EINVAL, "%s: takes only %s",
+		                      e->name, e->usage);
 	}
 	if ((unsigned)o->kind >= BC_GEN_KIND_COUNT ||
 	    (unsigned)o->blend >= BC_GEN_BLEND_COUNT) {
-		return bc_errinfo_set(ei, BC_ERANGE,
-				      "%s: kind or blend out of range",
-				      e->name);
+		return bc_errinfo_set(
+		    ei, BC_ERANGE, "%s: kind or blend out of range", e->name);
 	}
 	memset(&g, 0, sizeof(g));
 	g.t = t;

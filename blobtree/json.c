@@ -128,7 +128,7 @@ static void quote_untrusted(char *out, size_t cap, const char *s)
 
 /* snprintf at buf + len that never runs past cap; returns the new length. */
 static size_t append(char *buf, size_t cap, size_t len, const char *fmt, ...)
-	JSON_PRINTF(4, 5);
+    JSON_PRINTF(4, 5);
 
 static size_t append(char *buf, size_t cap, size_t len, const char *fmt, ...)
 {
@@ -152,10 +152,10 @@ static size_t append(char *buf, size_t cap, size_t len, const char *fmt, ...)
  * message keeps its end, where the offending value is.
  */
 static int jfail(struct jctx *c, int code, const char *key, long elem,
-		 const char *fmt, ...) JSON_PRINTF(5, 6);
+                 const char *fmt, ...) JSON_PRINTF(5, 6);
 
 static int jfail(struct jctx *c, int code, const char *key, long elem,
-		 const char *fmt, ...)
+                 const char *fmt, ...)
 {
 	char path[24 * (BC_TREE_MAX_DEPTH + 4)];
 	char reason[MSG_CAP];
@@ -172,8 +172,8 @@ static int jfail(struct jctx *c, int code, const char *key, long elem,
 	} else {
 		plen = append(path, sizeof(path), plen, "root");
 		for (uint32_t d = 1; d <= c->depth; d++) {
-			plen = append(path, sizeof(path), plen,
-				      ".children[%u]", c->idx[d]);
+			plen = append(path, sizeof(path), plen, ".children[%u]",
+			              c->idx[d]);
 		}
 	}
 	if (key) {
@@ -188,7 +188,7 @@ static int jfail(struct jctx *c, int code, const char *key, long elem,
 		/* "root..." then the tail of the path. */
 		size_t keep = budget - 7;
 		return bc_errinfo_set(c->ei, code, "root...%s: %s",
-				      path + plen - keep, reason);
+		                      path + plen - keep, reason);
 	}
 	return bc_errinfo_set(c->ei, code, "%s: %s", path, reason);
 }
@@ -217,24 +217,24 @@ static const char *json_kind(const json_t *v)
 
 /* Reads a number member into a finite float. */
 static int get_float(struct jctx *c, const json_t *v, const char *key,
-		     long elem, float *out)
+                     long elem, float *out)
 {
 	double d;
 	if (!json_is_number(v)) {
 		return jfail(c, BC_EPARSE, key, elem,
-			     "expected a number, got %s", json_kind(v));
+		             "expected a number, got %s", json_kind(v));
 	}
 	d = json_number_value(v);
 	/* Checked before converting: a double beyond the float range has no
 	 * float value. */
 	if (!isfinite(d) || fabs(d) > (double)FLT_MAX) {
 		return jfail(c, BC_ENONFINITE, key, elem,
-			     "%g is not a finite 32-bit float", d);
+		             "%g is not a finite 32-bit float", d);
 	}
 	*out = (float)d;
 	if (!isfinite(*out)) {
 		return jfail(c, BC_ENONFINITE, key, elem,
-			     "%g is not a finite 32-bit float", d);
+		             "%g is not a finite 32-bit float", d);
 	}
 	return 0;
 }
@@ -242,7 +242,7 @@ static int get_float(struct jctx *c, const json_t *v, const char *key,
 /* Reads a member holding n numbers: a plain number when n == 1, an array of
  * exactly n numbers otherwise. */
 static int get_floats(struct jctx *c, const json_t *v, const char *key,
-		      uint32_t n, float *out)
+                      uint32_t n, float *out)
 {
 	int rc;
 	if (n == 1) {
@@ -250,17 +250,17 @@ static int get_floats(struct jctx *c, const json_t *v, const char *key,
 	}
 	if (!json_is_array(v)) {
 		return jfail(c, BC_EPARSE, key, -1,
-			     "expected an array of %u numbers, got %s", n,
-			     json_kind(v));
+		             "expected an array of %u numbers, got %s", n,
+		             json_kind(v));
 	}
 	if (json_array_size(v) != n) {
 		return jfail(c, BC_EPARSE, key, -1,
-			     "expected an array of %u numbers, got %zu", n,
-			     json_array_size(v));
+		             "expected an array of %u numbers, got %zu", n,
+		             json_array_size(v));
 	}
 	for (uint32_t i = 0; i < n; i++) {
 		if ((rc = get_float(c, json_array_get(v, i), key, (long)i,
-				    &out[i]))) {
+		                    &out[i]))) {
 			return rc;
 		}
 	}
@@ -277,12 +277,12 @@ static int get_id(struct jctx *c, const json_t *obj, uint32_t *id)
 	}
 	if (!json_is_integer(v)) {
 		return jfail(c, BC_EPARSE, "id", -1,
-			     "expected an integer, got %s", json_kind(v));
+		             "expected an integer, got %s", json_kind(v));
 	}
 	x = json_integer_value(v);
 	if (x < 1 || x > (json_int_t)UINT32_MAX) {
 		return jfail(c, BC_ERANGE, "id", -1,
-			     "%lld is outside 1..4294967295", (long long)x);
+		             "%lld is outside 1..4294967295", (long long)x);
 	}
 	*id = (uint32_t)x;
 	return 0;
@@ -291,7 +291,7 @@ static int get_id(struct jctx *c, const json_t *obj, uint32_t *id)
 /* Rejects keys outside allowed[0..n); extra names a key that would be
  * allowed on a smooth operator, for a clearer message. */
 static int check_keys(struct jctx *c, json_t *obj, const char *const *allowed,
-		      size_t n, const char *what)
+                      size_t n, const char *what)
 {
 	const char *key;
 	json_t *v;
@@ -308,12 +308,12 @@ static int check_keys(struct jctx *c, json_t *obj, const char *const *allowed,
 		quote_untrusted(q, sizeof(q), key);
 		if (strcmp(key, "blend") == 0 || strcmp(key, "range") == 0) {
 			return jfail(c, BC_EPARSE, NULL, -1,
-				     "\"%s\" is only for smooth operators, "
-				     "not %s",
-				     q, what);
+			             "\"%s\" is only for smooth operators, "
+			             "not %s",
+			             q, what);
 		}
 		return jfail(c, BC_EPARSE, NULL, -1,
-			     "unknown key \"%s\" for %s", q, what);
+		             "unknown key \"%s\" for %s", q, what);
 	}
 	return 0;
 }
@@ -349,8 +349,8 @@ static int parse_prim(struct jctx *c, json_t *obj, enum bc_prim kind)
 	allowed[nallowed++] = "translate";
 	allowed[nallowed++] = "rotate";
 	allowed[nallowed++] = "color";
-	for (uint32_t i = 0; i < info->nparams && nallowed < 5 + BC_PRIM_MAX_PARAMS;
-	     i++) {
+	for (uint32_t i = 0;
+	     i < info->nparams && nallowed < 5 + BC_PRIM_MAX_PARAMS; i++) {
 		allowed[nallowed++] = info->params[i].name;
 	}
 	if ((rc = check_keys(c, obj, allowed, nallowed, info->name))) {
@@ -365,15 +365,15 @@ static int parse_prim(struct jctx *c, json_t *obj, enum bc_prim kind)
 				continue;
 			}
 			return jfail(c, BC_EPARSE, NULL, -1,
-				     "missing key \"%s\" (a %s needs it)",
-				     d->name, info->name);
+			             "missing key \"%s\" (a %s needs it)",
+			             d->name, info->name);
 		}
 		if ((uint32_t)d->offset + d->count > BC_PRIM_MAX_PARAMS) {
 			return jfail(c, BC_EINVAL, d->name, -1,
-				     "parameter layout out of bounds");
+			             "parameter layout out of bounds");
 		}
 		if ((rc = get_floats(c, v, d->name, d->count,
-				     p.params + d->offset))) {
+		                     p.params + d->offset))) {
 			return rc;
 		}
 	}
@@ -395,7 +395,7 @@ static int parse_prim(struct jctx *c, json_t *obj, enum bc_prim kind)
 		return rc;
 	}
 	if ((rc = bc_tree_put_prim(c->t, id ? id : fresh_next(&c->fr), &p,
-				   c->ei))) {
+	                           c->ei))) {
 		return builder_fail(c, rc);
 	}
 	return 0;
@@ -404,7 +404,7 @@ static int parse_prim(struct jctx *c, json_t *obj, enum bc_prim kind)
 static int parse_op(struct jctx *c, json_t *obj, enum bc_op kind)
 {
 	static const char *const allowed[] = {"type", "id", "children", "blend",
-					      "range"};
+	                                      "range"};
 	bool smooth = bc_op_is_smooth(kind);
 	struct bc_op_data op = {kind, 0.0f, 0.0f};
 	json_t *children, *v;
@@ -413,14 +413,14 @@ static int parse_op(struct jctx *c, json_t *obj, enum bc_op kind)
 	int rc;
 
 	if ((rc = check_keys(c, obj, allowed, smooth ? 5 : 3,
-			     bc_op_name(kind)))) {
+	                     bc_op_name(kind)))) {
 		return rc;
 	}
 	if (smooth) {
 		if (!(v = json_object_get(obj, "blend"))) {
 			return jfail(c, BC_EPARSE, NULL, -1,
-				     "missing key \"blend\" (a %s needs it)",
-				     bc_op_name(kind));
+			             "missing key \"blend\" (a %s needs it)",
+			             bc_op_name(kind));
 		}
 		if ((rc = get_float(c, v, "blend", -1, &op.blend))) {
 			return rc;
@@ -433,32 +433,32 @@ static int parse_op(struct jctx *c, json_t *obj, enum bc_op kind)
 			 * is a mistake, not a request for the default. */
 			if (!(op.range > 0.0f)) {
 				return jfail(c, BC_ERANGE, "range", -1,
-					     "%g must be positive",
-					     (double)op.range);
+				             "%g must be positive",
+				             (double)op.range);
 			}
 		}
 	}
 	children = json_object_get(obj, "children");
 	if (!children) {
 		return jfail(c, BC_EPARSE, NULL, -1,
-			     "missing key \"children\" (a %s needs it)",
-			     bc_op_name(kind));
+		             "missing key \"children\" (a %s needs it)",
+		             bc_op_name(kind));
 	}
 	if (!json_is_array(children)) {
 		return jfail(c, BC_EPARSE, "children", -1,
-			     "expected an array, got %s", json_kind(children));
+		             "expected an array, got %s", json_kind(children));
 	}
 	n = json_array_size(children);
 	if (n < 2) {
 		return jfail(c, BC_EINVAL, "children", -1,
-			     "an operator needs two or more children, got %zu",
-			     n);
+		             "an operator needs two or more children, got %zu",
+		             n);
 	}
 	if ((rc = get_id(c, obj, &id))) {
 		return rc;
 	}
 	if ((rc = bc_tree_push_op(c->t, id ? id : fresh_next(&c->fr), &op,
-				  c->ei))) {
+	                          c->ei))) {
 		return builder_fail(c, rc);
 	}
 	c->depth++;
@@ -486,16 +486,16 @@ static int parse_node(struct jctx *c, json_t *obj)
 
 	if (c->depth >= BC_TREE_MAX_DEPTH) {
 		return jfail(c, BC_EDEPTH, NULL, -1,
-			     "nesting deeper than %d levels",
-			     BC_TREE_MAX_DEPTH);
+		             "nesting deeper than %d levels",
+		             BC_TREE_MAX_DEPTH);
 	}
 	if (!json_is_object(obj)) {
 		return jfail(c, BC_EPARSE, NULL, -1,
-			     "expected a node object, got %s", json_kind(obj));
+		             "expected a node object, got %s", json_kind(obj));
 	}
 	if (++c->nodes > BC_TREE_MAX_NODES) {
 		return jfail(c, BC_ELIMIT, NULL, -1, "more than %u nodes",
-			     BC_TREE_MAX_NODES);
+		             BC_TREE_MAX_NODES);
 	}
 	type = json_object_get(obj, "type");
 	if (!type) {
@@ -503,7 +503,7 @@ static int parse_node(struct jctx *c, json_t *obj)
 	}
 	if (!json_is_string(type)) {
 		return jfail(c, BC_EPARSE, "type", -1,
-			     "expected a string, got %s", json_kind(type));
+		             "expected a string, got %s", json_kind(type));
 	}
 	name = json_string_value(type);
 	if ((pk = bc_prim_from_name(name)) != BC_PRIM_INVALID) {
@@ -513,10 +513,9 @@ static int parse_node(struct jctx *c, json_t *obj)
 		return parse_op(c, obj, ok);
 	}
 	quote_untrusted(q, sizeof(q), name);
-	return jfail(c, BC_EENUM, NULL, -1, "unknown %s type \"%s\"",
-		     json_object_get(obj, "children") ? "operator"
-						      : "primitive",
-		     q);
+	return jfail(
+	    c, BC_EENUM, NULL, -1, "unknown %s type \"%s\"",
+	    json_object_get(obj, "children") ? "operator" : "primitive", q);
 }
 
 /* First walk: gathers the ids the file names. Malformed parts are skipped
@@ -537,10 +536,10 @@ static int collect_ids(struct jctx *c, const json_t *obj, uint32_t depth)
 		if (f->n == f->cap) {
 			uint32_t cap = f->cap ? 2 * f->cap : 256;
 			uint32_t *grown =
-				bc_reallocarray(f->ids, cap, sizeof(uint32_t));
+			    bc_reallocarray(f->ids, cap, sizeof(uint32_t));
 			if (!grown) {
 				return bc_errinfo_set(c->ei, BC_ENOMEM,
-						      "scene: out of memory");
+				                      "scene: out of memory");
 			}
 			f->ids = grown;
 			f->cap = cap;
@@ -551,7 +550,7 @@ static int collect_ids(struct jctx *c, const json_t *obj, uint32_t depth)
 	if (json_is_array(children)) {
 		for (size_t i = 0; i < json_array_size(children); i++) {
 			int rc = collect_ids(c, json_array_get(children, i),
-					     depth + 1);
+			                     depth + 1);
 			if (rc) {
 				return rc;
 			}
@@ -569,13 +568,13 @@ static int cmp_u32(const void *a, const void *b)
 static int parse_camera(struct jctx *c, json_t *obj, struct bc_camera *cam)
 {
 	static const char *const allowed[] = {"eye", "target", "up",
-					      "fov_y_deg"};
+	                                      "fov_y_deg"};
 	const char *key;
 	json_t *v;
 	int rc;
 	if (!json_is_object(obj)) {
 		return jfail(c, BC_EPARSE, "camera", -1,
-			     "expected an object, got %s", json_kind(obj));
+		             "expected an object, got %s", json_kind(obj));
 	}
 	json_object_foreach(obj, key, v)
 	{
@@ -587,14 +586,14 @@ static int parse_camera(struct jctx *c, json_t *obj, struct bc_camera *cam)
 				dst = i == 0   ? cam->eye
 				      : i == 1 ? cam->target
 				      : i == 2 ? cam->up
-					       : &cam->fov_y_deg;
+				               : &cam->fov_y_deg;
 				n = i == 3 ? 1 : 3;
 			}
 		}
 		if (!dst) {
 			quote_untrusted(q, sizeof(q), key);
 			return jfail(c, BC_EPARSE, "camera", -1,
-				     "unknown key \"%s\"", q);
+			             "unknown key \"%s\"", q);
 		}
 		snprintf(path, sizeof(path), "camera.%s", key);
 		if ((rc = get_floats(c, v, path, n, dst))) {
@@ -612,7 +611,7 @@ static int parse_camera(struct jctx *c, json_t *obj, struct bc_camera *cam)
 }
 
 int bc_scene_parse_json(const char *text, size_t len, struct bc_tree *t,
-			struct bc_camera *cam, struct bc_errinfo *ei)
+                        struct bc_camera *cam, struct bc_errinfo *ei)
 {
 	static const char *const top_keys[] = {"blobcast", "camera", "root"};
 	struct jctx c;
@@ -635,9 +634,9 @@ int bc_scene_parse_json(const char *text, size_t len, struct bc_tree *t,
 	}
 	bc_tree_begin(t);
 	if (len > BC_SCENE_JSON_MAX_BYTES) {
-		return bc_errinfo_set(ei, BC_ELIMIT,
-				      "scene: %zu bytes, over the %u byte limit",
-				      len, BC_SCENE_JSON_MAX_BYTES);
+		return bc_errinfo_set(
+		    ei, BC_ELIMIT, "scene: %zu bytes, over the %u byte limit",
+		    len, BC_SCENE_JSON_MAX_BYTES);
 	}
 	if (!text) {
 		return bc_errinfo_set(ei, BC_EINVAL, "scene: no text");
@@ -661,19 +660,19 @@ int bc_scene_parse_json(const char *text, size_t len, struct bc_tree *t,
 			 * infinity could hold; integers out of range are
 			 * plain range errors. */
 			rc = strstr(jerr.text, "real") ? BC_ENONFINITE
-						       : BC_ERANGE;
+			                               : BC_ERANGE;
 			break;
 		default:
 			rc = BC_EPARSE;
 			break;
 		}
 		return bc_errinfo_set(ei, rc, "line %d column %d: %s",
-				      jerr.line, jerr.column, jerr.text);
+		                      jerr.line, jerr.column, jerr.text);
 	}
 	if (!json_is_object(doc)) {
 		rc = bc_errinfo_set(ei, BC_EPARSE,
-				    "(document): expected an object, got %s",
-				    json_kind(doc));
+		                    "(document): expected an object, got %s",
+		                    json_kind(doc));
 		goto cleanup;
 	}
 	json_object_foreach(doc, key, v)
@@ -685,29 +684,29 @@ int bc_scene_parse_json(const char *text, size_t len, struct bc_tree *t,
 		if (!known) {
 			char q[48];
 			quote_untrusted(q, sizeof(q), key);
-			rc = bc_errinfo_set(ei, BC_EPARSE,
-					    "(document): unknown key \"%s\"", q);
+			rc = bc_errinfo_set(
+			    ei, BC_EPARSE, "(document): unknown key \"%s\"", q);
 			goto cleanup;
 		}
 	}
 	v = json_object_get(doc, "blobcast");
 	if (!v) {
 		rc = bc_errinfo_set(ei, BC_EPARSE,
-				    "(document): missing key \"blobcast\" (the "
-				    "format version)");
+		                    "(document): missing key \"blobcast\" (the "
+		                    "format version)");
 		goto cleanup;
 	}
 	if (!json_is_integer(v)) {
 		rc = jfail(&c, BC_EPARSE, "blobcast", -1,
-			   "expected an integer, got %s", json_kind(v));
+		           "expected an integer, got %s", json_kind(v));
 		goto cleanup;
 	}
 	if (json_integer_value(v) != BC_SCENE_JSON_VERSION) {
 		rc = jfail(&c, BC_ENOTSUP, "blobcast", -1,
-			   "version %lld is not supported (this build reads "
-			   "%d)",
-			   (long long)json_integer_value(v),
-			   BC_SCENE_JSON_VERSION);
+		           "version %lld is not supported (this build reads "
+		           "%d)",
+		           (long long)json_integer_value(v),
+		           BC_SCENE_JSON_VERSION);
 		goto cleanup;
 	}
 	if ((v = json_object_get(doc, "camera")) &&
@@ -717,7 +716,7 @@ int bc_scene_parse_json(const char *text, size_t len, struct bc_tree *t,
 	v = json_object_get(doc, "root");
 	if (!v) {
 		rc = bc_errinfo_set(ei, BC_EPARSE,
-				    "(document): missing key \"root\"");
+		                    "(document): missing key \"root\"");
 		goto cleanup;
 	}
 	if ((rc = collect_ids(&c, v, 0))) {
@@ -753,7 +752,7 @@ static void errno_text(int err, char *buf, size_t cap)
 }
 
 int bc_scene_load_json(const char *path, struct bc_tree *t,
-		       struct bc_camera *cam, struct bc_errinfo *ei)
+                       struct bc_camera *cam, struct bc_errinfo *ei)
 {
 	struct stat st;
 	char *text = NULL, why[128];
@@ -767,19 +766,18 @@ int bc_scene_load_json(const char *path, struct bc_tree *t,
 	fd = open(path, O_RDONLY | O_CLOEXEC);
 	if (fd < 0) {
 		errno_text(errno, why, sizeof(why));
-		return bc_errinfo_set(ei, errno == ENOENT ? BC_ENOTFOUND
-							  : BC_EIO,
-				      "%s: %s", path, why);
+		return bc_errinfo_set(ei,
+		                      errno == ENOENT ? BC_ENOTFOUND : BC_EIO,
+		                      "%s: %s", path, why);
 	}
 	if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
 		rc = bc_errinfo_set(ei, BC_EIO, "%s: not a regular file", path);
 		goto cleanup;
 	}
 	if ((uint64_t)st.st_size > BC_SCENE_JSON_MAX_BYTES) {
-		rc = bc_errinfo_set(ei, BC_ELIMIT,
-				    "%s: %lld bytes, over the %u byte limit",
-				    path, (long long)st.st_size,
-				    BC_SCENE_JSON_MAX_BYTES);
+		rc = bc_errinfo_set(
+		    ei, BC_ELIMIT, "%s: %lld bytes, over the %u byte limit",
+		    path, (long long)st.st_size, BC_SCENE_JSON_MAX_BYTES);
 		goto cleanup;
 	}
 	size = (size_t)st.st_size;
@@ -923,7 +921,7 @@ static void sb_floats(struct sbuf *b, const float *f, uint32_t n)
 
 /* `, "key": value`; key is one of our own identifiers. */
 static void sb_member(struct sbuf *b, const char *key, const float *f,
-		      uint32_t n)
+                      uint32_t n)
 {
 	sb_puts(b, ", \"");
 	sb_puts(b, key);
@@ -1037,7 +1035,7 @@ char *bc_scene_to_json(const struct bc_tree *t, const struct bc_camera *cam)
 }
 
 int bc_scene_save_json(const char *path, const struct bc_tree *t,
-		       const struct bc_camera *cam, struct bc_errinfo *ei)
+                       const struct bc_camera *cam, struct bc_errinfo *ei)
 {
 	char *text = NULL, *tmp = NULL, *dir = NULL, why[128];
 	size_t len, off = 0, plen = strlen(path);
@@ -1060,7 +1058,7 @@ int bc_scene_save_json(const char *path, const struct bc_tree *t,
 	 * name keeps concurrent savers apart; open() honours the umask. */
 	for (unsigned attempt = 0; fd < 0 && attempt < 64; attempt++) {
 		snprintf(tmp, plen + 48, "%s.tmp.%ld.%u", path, (long)getpid(),
-			 attempt);
+		         attempt);
 		fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
 		if (fd < 0 && errno != EEXIST) {
 			break;
@@ -1079,7 +1077,7 @@ int bc_scene_save_json(const char *path, const struct bc_tree *t,
 		if (n <= 0) {
 			errno_text(errno, why, sizeof(why));
 			rc = bc_errinfo_set(ei, BC_EIO, "%s: write: %s", tmp,
-					    why);
+			                    why);
 			goto cleanup;
 		}
 		off += (size_t)n;
@@ -1116,7 +1114,7 @@ int bc_scene_save_json(const char *path, const struct bc_tree *t,
 	if (dfd < 0 || fsync(dfd) != 0) {
 		errno_text(errno, why, sizeof(why));
 		rc = bc_errinfo_set(ei, BC_EIO, "%s: directory fsync: %s", dir,
-				    why);
+		                    why);
 	}
 	if (dfd >= 0) {
 		close(dfd);
@@ -1134,7 +1132,8 @@ cleanup:
 	return rc;
 }
 
-/* ---- the built-in scene --------------------------------------------------- */
+/* ---- the built-in scene ---------------------------------------------------
+ */
 
 /*
  * A small workshop on a grooved slab: the classic CSG emblem (a rounded cube
@@ -1144,83 +1143,83 @@ cleanup:
  * intersection; cylinders and tori stand on their local y axis.
  */
 static const char default_scene[] =
-	"{\n"
-	"  \"blobcast\": 1,\n"
-	"  \"camera\": {\"eye\": [2.4, 2.0, 5.0], \"target\": [0, -0.4, 0.15], "
-	"\"up\": [0, 1, 0], \"fov_y_deg\": 38},\n"
-	"  \"root\": {\"type\": \"union\", \"id\": 1, \"children\": [\n"
-	"    {\"type\": \"smooth_difference\", \"id\": 10, \"blend\": 0.05, "
-	"\"range\": 0.0625, \"children\": [\n"
-	"      {\"type\": \"box\", \"id\": 11, \"half_extents\": [2.3, 0.12, "
-	"1.3], \"round\": 0.04, \"translate\": [0, -1, 0], "
-	"\"color\": [0.36, 0.42, 0.52]},\n"
-	"      {\"type\": \"cylinder\", \"id\": 12, \"radius\": 0.08, "
-	"\"half_height\": 2.5, \"translate\": [0, -0.88, 0.95], "
-	"\"rotate\": [0, 0, 0.707106781, 0.707106781], "
-	"\"color\": [0.2, 0.22, 0.28]}\n"
-	"    ]},\n"
-	"    {\"type\": \"difference\", \"id\": 20, \"children\": [\n"
-	"      {\"type\": \"smooth_intersection\", \"id\": 21, \"blend\": 0.06, "
-	"\"children\": [\n"
-	"        {\"type\": \"box\", \"id\": 22, \"half_extents\": [0.55, 0.55, "
-	"0.55], \"round\": 0.02, \"translate\": [-1.15, -0.33, 0.1], "
-	"\"rotate\": [0, 0.258819045, 0, 0.965925826], "
-	"\"color\": [0.93, 0.55, 0.18]},\n"
-	"        {\"type\": \"sphere\", \"id\": 23, \"radius\": 0.75, "
-	"\"translate\": [-1.15, -0.33, 0.1], \"color\": [0.86, 0.25, 0.22]}\n"
-	"      ]},\n"
-	"      {\"type\": \"union\", \"id\": 24, \"children\": [\n"
-	"        {\"type\": \"cylinder\", \"id\": 25, \"radius\": 0.26, "
-	"\"half_height\": 0.9, \"translate\": [-1.15, -0.33, 0.1], "
-	"\"rotate\": [0.183012702, 0.183012702, 0.683012702, 0.683012702], "
-	"\"color\": [0.25, 0.45, 0.75]},\n"
-	"        {\"type\": \"cylinder\", \"id\": 26, \"radius\": 0.26, "
-	"\"half_height\": 0.9, \"translate\": [-1.15, -0.33, 0.1], "
-	"\"rotate\": [0, 0.258819045, 0, 0.965925826], "
-	"\"color\": [0.25, 0.45, 0.75]},\n"
-	"        {\"type\": \"cylinder\", \"id\": 27, \"radius\": 0.26, "
-	"\"half_height\": 0.9, \"translate\": [-1.15, -0.33, 0.1], "
-	"\"rotate\": [0.683012702, 0.183012702, -0.183012702, 0.683012702], "
-	"\"color\": [0.25, 0.45, 0.75]}\n"
-	"      ]}\n"
-	"    ]},\n"
-	"    {\"type\": \"union\", \"id\": 30, \"children\": [\n"
-	"      {\"type\": \"smooth_union\", \"id\": 31, \"blend\": 0.25, "
-	"\"children\": [\n"
-	"        {\"type\": \"sphere\", \"id\": 32, \"radius\": 0.5, "
-	"\"translate\": [1.1, -0.38, 0.2], \"color\": [0.42, 0.74, 0.45]},\n"
-	"        {\"type\": \"sphere\", \"id\": 33, \"radius\": 0.32, "
-	"\"translate\": [1.1, 0.32, 0.25], \"color\": [0.5, 0.8, 0.5]},\n"
-	"        {\"type\": \"capsule\", \"id\": 34, \"a\": [0.35, 0.05, 0], "
-	"\"b\": [0.75, 0.35, 0.1], \"radius\": 0.1, "
-	"\"translate\": [1.1, -0.3, 0.2], \"color\": [0.38, 0.68, 0.42]},\n"
-	"        {\"type\": \"capsule\", \"id\": 35, \"a\": [-0.35, 0.05, 0], "
-	"\"b\": [-0.72, 0.4, 0.05], \"radius\": 0.1, "
-	"\"translate\": [1.1, -0.3, 0.2], \"color\": [0.38, 0.68, 0.42]}\n"
-	"      ]},\n"
-	"      {\"type\": \"sphere\", \"id\": 36, \"radius\": 0.07, "
-	"\"translate\": [1.0, 0.38, 0.54], \"color\": [0.08, 0.08, 0.1]},\n"
-	"      {\"type\": \"sphere\", \"id\": 37, \"radius\": 0.07, "
-	"\"translate\": [1.2, 0.38, 0.54], \"color\": [0.08, 0.08, 0.1]}\n"
-	"    ]},\n"
-	"    {\"type\": \"smooth_union\", \"id\": 40, \"blend\": 0.1, "
-	"\"children\": [\n"
-	"      {\"type\": \"torus\", \"id\": 41, \"major\": 0.45, \"minor\": 0.09, "
-	"\"translate\": [0, 0, -0.55], "
-	"\"rotate\": [0.707106781, 0, 0, 0.707106781], "
-	"\"color\": [0.95, 0.78, 0.3]},\n"
-	"      {\"type\": \"capsule\", \"id\": 42, \"a\": [0, -0.88, 0], "
-	"\"b\": [0, -0.45, 0], \"radius\": 0.07, "
-	"\"translate\": [0, 0, -0.55], \"color\": [0.7, 0.6, 0.35]}\n"
-	"    ]},\n"
-	"    {\"type\": \"sphere\", \"id\": 50, \"radius\": 0.14, "
-	"\"translate\": [-0.2, -0.74, 0.75], \"color\": [0.9, 0.2, 0.3]},\n"
-	"    {\"type\": \"sphere\", \"id\": 51, \"radius\": 0.12, "
-	"\"translate\": [0.15, -0.76, 0.98], \"color\": [0.95, 0.85, 0.25]},\n"
-	"    {\"type\": \"sphere\", \"id\": 52, \"radius\": 0.1, "
-	"\"translate\": [0.45, -0.78, 0.7], \"color\": [0.25, 0.5, 0.95]}\n"
-	"  ]}\n"
-	"}\n";
+    "{\n"
+    "  \"blobcast\": 1,\n"
+    "  \"camera\": {\"eye\": [2.4, 2.0, 5.0], \"target\": [0, -0.4, 0.15], "
+    "\"up\": [0, 1, 0], \"fov_y_deg\": 38},\n"
+    "  \"root\": {\"type\": \"union\", \"id\": 1, \"children\": [\n"
+    "    {\"type\": \"smooth_difference\", \"id\": 10, \"blend\": 0.05, "
+    "\"range\": 0.0625, \"children\": [\n"
+    "      {\"type\": \"box\", \"id\": 11, \"half_extents\": [2.3, 0.12, "
+    "1.3], \"round\": 0.04, \"translate\": [0, -1, 0], "
+    "\"color\": [0.36, 0.42, 0.52]},\n"
+    "      {\"type\": \"cylinder\", \"id\": 12, \"radius\": 0.08, "
+    "\"half_height\": 2.5, \"translate\": [0, -0.88, 0.95], "
+    "\"rotate\": [0, 0, 0.707106781, 0.707106781], "
+    "\"color\": [0.2, 0.22, 0.28]}\n"
+    "    ]},\n"
+    "    {\"type\": \"difference\", \"id\": 20, \"children\": [\n"
+    "      {\"type\": \"smooth_intersection\", \"id\": 21, \"blend\": 0.06, "
+    "\"children\": [\n"
+    "        {\"type\": \"box\", \"id\": 22, \"half_extents\": [0.55, 0.55, "
+    "0.55], \"round\": 0.02, \"translate\": [-1.15, -0.33, 0.1], "
+    "\"rotate\": [0, 0.258819045, 0, 0.965925826], "
+    "\"color\": [0.93, 0.55, 0.18]},\n"
+    "        {\"type\": \"sphere\", \"id\": 23, \"radius\": 0.75, "
+    "\"translate\": [-1.15, -0.33, 0.1], \"color\": [0.86, 0.25, 0.22]}\n"
+    "      ]},\n"
+    "      {\"type\": \"union\", \"id\": 24, \"children\": [\n"
+    "        {\"type\": \"cylinder\", \"id\": 25, \"radius\": 0.26, "
+    "\"half_height\": 0.9, \"translate\": [-1.15, -0.33, 0.1], "
+    "\"rotate\": [0.183012702, 0.183012702, 0.683012702, 0.683012702], "
+    "\"color\": [0.25, 0.45, 0.75]},\n"
+    "        {\"type\": \"cylinder\", \"id\": 26, \"radius\": 0.26, "
+    "\"half_height\": 0.9, \"translate\": [-1.15, -0.33, 0.1], "
+    "\"rotate\": [0, 0.258819045, 0, 0.965925826], "
+    "\"color\": [0.25, 0.45, 0.75]},\n"
+    "        {\"type\": \"cylinder\", \"id\": 27, \"radius\": 0.26, "
+    "\"half_height\": 0.9, \"translate\": [-1.15, -0.33, 0.1], "
+    "\"rotate\": [0.683012702, 0.183012702, -0.183012702, 0.683012702], "
+    "\"color\": [0.25, 0.45, 0.75]}\n"
+    "      ]}\n"
+    "    ]},\n"
+    "    {\"type\": \"union\", \"id\": 30, \"children\": [\n"
+    "      {\"type\": \"smooth_union\", \"id\": 31, \"blend\": 0.25, "
+    "\"children\": [\n"
+    "        {\"type\": \"sphere\", \"id\": 32, \"radius\": 0.5, "
+    "\"translate\": [1.1, -0.38, 0.2], \"color\": [0.42, 0.74, 0.45]},\n"
+    "        {\"type\": \"sphere\", \"id\": 33, \"radius\": 0.32, "
+    "\"translate\": [1.1, 0.32, 0.25], \"color\": [0.5, 0.8, 0.5]},\n"
+    "        {\"type\": \"capsule\", \"id\": 34, \"a\": [0.35, 0.05, 0], "
+    "\"b\": [0.75, 0.35, 0.1], \"radius\": 0.1, "
+    "\"translate\": [1.1, -0.3, 0.2], \"color\": [0.38, 0.68, 0.42]},\n"
+    "        {\"type\": \"capsule\", \"id\": 35, \"a\": [-0.35, 0.05, 0], "
+    "\"b\": [-0.72, 0.4, 0.05], \"radius\": 0.1, "
+    "\"translate\": [1.1, -0.3, 0.2], \"color\": [0.38, 0.68, 0.42]}\n"
+    "      ]},\n"
+    "      {\"type\": \"sphere\", \"id\": 36, \"radius\": 0.07, "
+    "\"translate\": [1.0, 0.38, 0.54], \"color\": [0.08, 0.08, 0.1]},\n"
+    "      {\"type\": \"sphere\", \"id\": 37, \"radius\": 0.07, "
+    "\"translate\": [1.2, 0.38, 0.54], \"color\": [0.08, 0.08, 0.1]}\n"
+    "    ]},\n"
+    "    {\"type\": \"smooth_union\", \"id\": 40, \"blend\": 0.1, "
+    "\"children\": [\n"
+    "      {\"type\": \"torus\", \"id\": 41, \"major\": 0.45, \"minor\": 0.09, "
+    "\"translate\": [0, 0, -0.55], "
+    "\"rotate\": [0.707106781, 0, 0, 0.707106781], "
+    "\"color\": [0.95, 0.78, 0.3]},\n"
+    "      {\"type\": \"capsule\", \"id\": 42, \"a\": [0, -0.88, 0], "
+    "\"b\": [0, -0.45, 0], \"radius\": 0.07, "
+    "\"translate\": [0, 0, -0.55], \"color\": [0.7, 0.6, 0.35]}\n"
+    "    ]},\n"
+    "    {\"type\": \"sphere\", \"id\": 50, \"radius\": 0.14, "
+    "\"translate\": [-0.2, -0.74, 0.75], \"color\": [0.9, 0.2, 0.3]},\n"
+    "    {\"type\": \"sphere\", \"id\": 51, \"radius\": 0.12, "
+    "\"translate\": [0.15, -0.76, 0.98], \"color\": [0.95, 0.85, 0.25]},\n"
+    "    {\"type\": \"sphere\", \"id\": 52, \"radius\": 0.1, "
+    "\"translate\": [0.45, -0.78, 0.7], \"color\": [0.25, 0.5, 0.95]}\n"
+    "  ]}\n"
+    "}\n";
 
 const char *bc_scene_default_json(void)
 {

@@ -25,30 +25,31 @@ static void usage(FILE *f)
 	size_t n;
 	const struct bc_gen_info *g = bc_gen_list(&n);
 	fprintf(f,
-		"usage: blobcast gen NAME [options] [--out FILE]\n"
-		"\n"
-		"Builds a scene and prints it as a JSON scene file (or writes "
-		"it to FILE,\natomically). The same options always give the "
-		"same scene.\n"
-		"\n"
-		"generators:\n");
+	        "usage: blobcast gen NAME [options] [--out FILE]\n"
+	        "\n"
+	        "Builds a scene and prints it as a JSON scene file (or writes "
+	        "it to FILE,\natomically). The same options always give the "
+	        "same scene.\n"
+	        "\n"
+	        "generators:\n");
 	for (size_t i = 0; i < n; i++) {
 		fprintf(f, "  %s %s\n      %s\n", g[i].name, g[i].usage,
-			g[i].summary);
+		        g[i].summary);
 	}
-	fprintf(f,
-		"\n"
-		"options (each generator takes only those listed with it):\n"
-		"  --level L   fig16 recursion level, 1..%d\n"
-		"  --count N   number of instances, primitives or gears\n"
-		"  --seed S    random seed, 0..2^64-1 (default 0)\n"
-		"  --kind K    fig18 instance shape: boxes, spheres or lenses\n"
-		"  --blend B   sharp or smooth operators\n"
-		"  --teeth T   teeth of the largest gear, 6..%u\n"
-		"  --depth D   random: deepest nesting, 2..%d\n"
-		"  --out FILE  write to FILE instead of stdout (\"-\": stdout)\n"
-		"  --help      this text\n",
-		BC_GEN_MAX_LEVEL, BC_GEN_MAX_TEETH, BC_TREE_MAX_DEPTH);
+	fprintf(
+	    f,
+	    "\n"
+	    "options (each generator takes only those listed with it):\n"
+	    "  --level L   fig16 recursion level, 1..%d\n"
+	    "  --count N   number of instances, primitives or gears\n"
+	    "  --seed S    random seed, 0..2^64-1 (default 0)\n"
+	    "  --kind K    fig18 instance shape: boxes, spheres or lenses\n"
+	    "  --blend B   sharp or smooth operators\n"
+	    "  --teeth T   teeth of the largest gear, 6..%u\n"
+	    "  --depth D   random: deepest nesting, 2..%d\n"
+	    "  --out FILE  write to FILE instead of stdout (\"-\": stdout)\n"
+	    "  --help      this text\n",
+	    BC_GEN_MAX_LEVEL, BC_GEN_MAX_TEETH, BC_TREE_MAX_DEPTH);
 }
 
 /* Parses a decimal unsigned number in [lo, hi]. */
@@ -70,7 +71,7 @@ static bool parse_u64(const char *s, uint64_t lo, uint64_t hi, uint64_t *out)
 
 /* Matches "--name VALUE" and "--name=VALUE"; advances *i past the value. */
 static bool take_value(int argc, char **argv, int *i, const char *name,
-		       const char **value, bool *missing)
+                       const char **value, bool *missing)
 {
 	const char *a = argv[*i];
 	size_t n = strlen(name);
@@ -98,7 +99,7 @@ static int write_stdout(const char *text)
 	size_t len = strlen(text);
 	if (fwrite(text, 1, len, stdout) != len || fflush(stdout) != 0) {
 		fprintf(stderr, "blobcast gen: writing to stdout: %s\n",
-			strerror(errno));
+		        strerror(errno));
 		return 1;
 	}
 	return 0;
@@ -127,9 +128,9 @@ int bc_cli_gen(int argc, char **argv)
 		if (a[0] != '-') {
 			if (name) {
 				fprintf(stderr,
-					"blobcast gen: one generator only "
-					"(got \"%s\" and \"%s\")\n",
-					name, a);
+				        "blobcast gen: one generator only "
+				        "(got \"%s\" and \"%s\")\n",
+				        name, a);
 				return EXIT_USAGE;
 			}
 			name = a;
@@ -141,7 +142,7 @@ int bc_cli_gen(int argc, char **argv)
 			}
 			o.level = (uint32_t)x;
 		} else if (take_value(argc, argv, &i, "--count", &v,
-				      &missing)) {
+		                      &missing)) {
 			if (missing || !parse_u64(v, 1, BC_GEN_MAX_PRIMS, &x)) {
 				goto bad_value;
 			}
@@ -152,30 +153,27 @@ int bc_cli_gen(int argc, char **argv)
 			}
 			o.seed = x;
 		} else if (take_value(argc, argv, &i, "--teeth", &v,
-				      &missing)) {
-			if (missing ||
-			    !parse_u64(v, 6, BC_GEN_MAX_TEETH, &x)) {
+		                      &missing)) {
+			if (missing || !parse_u64(v, 6, BC_GEN_MAX_TEETH, &x)) {
 				goto bad_value;
 			}
 			o.teeth = (uint32_t)x;
 		} else if (take_value(argc, argv, &i, "--depth", &v,
-				      &missing)) {
+		                      &missing)) {
 			if (missing ||
 			    !parse_u64(v, 2, BC_TREE_MAX_DEPTH, &x)) {
 				goto bad_value;
 			}
 			o.depth = (uint32_t)x;
 		} else if (take_value(argc, argv, &i, "--kind", &v, &missing)) {
-			if (missing ||
-			    (o.kind = bc_gen_kind_from_name(v)) ==
-				    BC_GEN_KIND_DEFAULT) {
+			if (missing || (o.kind = bc_gen_kind_from_name(v)) ==
+			                   BC_GEN_KIND_DEFAULT) {
 				goto bad_value;
 			}
 		} else if (take_value(argc, argv, &i, "--blend", &v,
-				      &missing)) {
-			if (missing ||
-			    (o.blend = bc_gen_blend_from_name(v)) ==
-				    BC_GEN_BLEND_DEFAULT) {
+		                      &missing)) {
+			if (missing || (o.blend = bc_gen_blend_from_name(v)) ==
+			                   BC_GEN_BLEND_DEFAULT) {
 				goto bad_value;
 			}
 		} else if (take_value(argc, argv, &i, "--out", &v, &missing)) {
@@ -185,17 +183,17 @@ int bc_cli_gen(int argc, char **argv)
 			out = v;
 		} else {
 			fprintf(stderr,
-				"blobcast gen: unknown option \"%s\" (see "
-				"blobcast gen --help)\n",
-				a);
+			        "blobcast gen: unknown option \"%s\" (see "
+			        "blobcast gen --help)\n",
+			        a);
 			return EXIT_USAGE;
 		}
 		continue;
 	bad_value:
 		fprintf(stderr,
-			"blobcast gen: %s needs a valid value%s%s%s (see "
-			"blobcast gen --help)\n",
-			a, v ? ", not \"" : "", v ? v : "", v ? "\"" : "");
+		        "blobcast gen: %s needs a valid value%s%s%s (see "
+		        "blobcast gen --help)\n",
+		        a, v ? ", not \"" : "", v ? v : "", v ? "\"" : "");
 		return EXIT_USAGE;
 	}
 	if (!name) {
@@ -205,9 +203,9 @@ int bc_cli_gen(int argc, char **argv)
 	}
 	if (!(info = bc_gen_find(name))) {
 		fprintf(stderr,
-			"blobcast gen: no generator called \"%s\" (see "
-			"blobcast gen --help)\n",
-			name);
+		        "blobcast gen: no generator called \"%s\" (see "
+		        "blobcast gen --help)\n",
+		        name);
 		return EXIT_USAGE;
 	}
 	if (!(t = bc_tree_create())) {
@@ -219,8 +217,8 @@ int bc_cli_gen(int argc, char **argv)
 		fprintf(stderr, "blobcast gen: %s\n", ei.msg);
 		/* Bad or inapplicable options are the user's to fix. */
 		status = (rc == BC_EINVAL || rc == BC_ERANGE || rc == BC_ELIMIT)
-				 ? EXIT_USAGE
-				 : 1;
+		             ? EXIT_USAGE
+		             : 1;
 		goto cleanup;
 	}
 	if (out && strcmp(out, "-") != 0) {

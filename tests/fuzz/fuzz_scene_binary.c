@@ -22,7 +22,7 @@ static void die(const char *why)
 }
 
 static void check_refusal(int rc, const struct bc_errinfo *ei,
-			  const struct bc_tree *t)
+                          const struct bc_tree *t)
 {
 	if (rc > 0 || (rc < 0 && (ei->code != rc || ei->msg[0] == '\0'))) {
 		die("refusal without a reason");
@@ -34,7 +34,7 @@ static void check_refusal(int rc, const struct bc_errinfo *ei,
 
 /* Re-encodes an accepted tree and checks the bytes decode to it. */
 static void check_accepted(const struct bc_tree *t, const struct bc_camera *cam,
-			   size_t in_len, bool scene)
+                           size_t in_len, bool scene)
 {
 	struct bc_tree *u = bc_tree_create();
 	struct bc_errinfo ei = {0};
@@ -42,7 +42,7 @@ static void check_accepted(const struct bc_tree *t, const struct bc_camera *cam,
 	size_t len = 0;
 	char *text;
 	int rc = scene ? bc_scene_encode(t, cam, &bytes, &len)
-		       : bc_tree_encode(t, &bytes, &len);
+	               : bc_tree_encode(t, &bytes, &len);
 	if (!u || rc != 0) {
 		die("an accepted scene does not encode");
 	}
@@ -51,7 +51,7 @@ static void check_accepted(const struct bc_tree *t, const struct bc_camera *cam,
 		die("re-encoding changed the length");
 	}
 	rc = scene ? bc_scene_decode(bytes, len, u, NULL, NULL, &ei)
-		   : bc_tree_decode(bytes, len, u, &ei);
+	           : bc_tree_decode(bytes, len, u, &ei);
 	if (rc != 0) {
 		fprintf(stderr, "%s\n", ei.msg);
 		die("re-encoded scene does not decode");

@@ -37,7 +37,7 @@ static void check_same_shape(const struct bc_tree *a, const struct bc_tree *b)
 		if (!bc_scene_walk_next(&wb, &nb) || na.id != nb.id ||
 		    na.is_op != nb.is_op || na.nchildren != nb.nchildren ||
 		    (na.is_op ? na.op.kind != nb.op.kind
-			      : na.prim.kind != nb.prim.kind)) {
+		              : na.prim.kind != nb.prim.kind)) {
 			die("node differs after a round trip");
 		}
 	}

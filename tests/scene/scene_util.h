@@ -18,7 +18,8 @@ static inline bool same_floats(const float *a, const float *b, size_t n)
 	return memcmp(a, b, n * sizeof(float)) == 0;
 }
 
-static inline bool same_camera(const struct bc_camera *a, const struct bc_camera *b)
+static inline bool same_camera(const struct bc_camera *a,
+                               const struct bc_camera *b)
 {
 	return same_floats(a->eye, b->eye, 3) &&
 	       same_floats(a->target, b->target, 3) &&
@@ -34,7 +35,7 @@ static inline bool same_camera(const struct bc_camera *a, const struct bc_camera
  * validating the written one gives -- never anything else.
  */
 static inline bool same_rotation(const struct bc_prim_data *written,
-				 const float read[4])
+                                 const float read[4])
 {
 	struct bc_prim_data v = *written;
 	if (same_floats(written->rotate, read, 4)) {
@@ -48,7 +49,8 @@ static inline bool same_rotation(const struct bc_prim_data *written,
  * index + 1 of the first node that differs (or UINT32_MAX for counts).
  * Children order is compared through the pre-order id sequence; parents
  * and child counts through the model's own accessors. */
-static inline uint32_t tree_diff(const struct bc_tree *a, const struct bc_tree *b)
+static inline uint32_t tree_diff(const struct bc_tree *a,
+                                 const struct bc_tree *b)
 {
 	struct bc_scene_walk wa, wb;
 	struct bc_scene_node na, nb;
@@ -65,13 +67,14 @@ static inline uint32_t tree_diff(const struct bc_tree *a, const struct bc_tree *
 	while (!bad && bc_scene_walk_next(&wa, &na)) {
 		struct bc_prim_data pb;
 		struct bc_op_data ob;
-		bool ok = bc_scene_walk_next(&wb, &nb) && na.id == nb.id &&
-			  na.is_op == nb.is_op && na.depth == nb.depth &&
-			  na.nchildren == nb.nchildren &&
-			  bc_tree_get(b, na.id, &pb, &ob) &&
-			  bc_tree_parent(a, na.id) == bc_tree_parent(b, na.id) &&
-			  bc_tree_child_count(a, na.id) ==
-				  bc_tree_child_count(b, na.id);
+		bool ok =
+		    bc_scene_walk_next(&wb, &nb) && na.id == nb.id &&
+		    na.is_op == nb.is_op && na.depth == nb.depth &&
+		    na.nchildren == nb.nchildren &&
+		    bc_tree_get(b, na.id, &pb, &ob) &&
+		    bc_tree_parent(a, na.id) == bc_tree_parent(b, na.id) &&
+		    bc_tree_child_count(a, na.id) ==
+		        bc_tree_child_count(b, na.id);
 		if (ok && na.is_op) {
 			ok = na.op.kind == ob.kind &&
 			     same_floats(&na.op.blend, &ob.blend, 1) &&
@@ -79,7 +82,7 @@ static inline uint32_t tree_diff(const struct bc_tree *a, const struct bc_tree *
 		} else if (ok) {
 			ok = na.prim.kind == pb.kind &&
 			     same_floats(na.prim.params, pb.params,
-					 BC_PRIM_MAX_PARAMS) &&
+			                 BC_PRIM_MAX_PARAMS) &&
 			     same_floats(na.prim.translate, pb.translate, 3) &&
 			     same_rotation(&na.prim, pb.rotate) &&
 			     na.prim.has_color == pb.has_color &&

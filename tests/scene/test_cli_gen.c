@@ -85,21 +85,21 @@ static void run_free(struct run *r)
 
 static void prints_the_generators_scene(void)
 {
-	static const char *const args[] = {"fig18", "--count", "30",
-					   "--kind=spheres", "--blend", "sharp",
-					   "--seed", "7", NULL};
+	static const char *const args[] = {"fig18",          "--count", "30",
+	                                   "--kind=spheres", "--blend", "sharp",
+	                                   "--seed",         "7",       NULL};
 	struct run r = run_gen(args);
 	struct bc_tree *t = bc_tree_create(), *ref = bc_tree_create();
 	struct bc_gen_opts o = {.count = 30,
-				.kind = BC_GEN_KIND_SPHERES,
-				.blend = BC_GEN_BLEND_SHARP,
-				.seed = 7};
+	                        .kind = BC_GEN_KIND_SPHERES,
+	                        .blend = BC_GEN_BLEND_SHARP,
+	                        .seed = 7};
 	struct bc_camera cam, cref;
 	struct bc_errinfo ei = {0};
 	REQUIRE(t && ref && r.out);
 	CHECK_EQ_INT(r.status, 0);
 	CHECK_EQ_INT(bc_scene_parse_json(r.out, strlen(r.out), t, &cam, &ei),
-		     0);
+	             0);
 	REQUIRE(bc_gen("fig18", &o, ref, &cref, NULL) == 0);
 	CHECK_EQ_INT(tree_diff(ref, t), 0);
 	CHECK(same_camera(&cam, &cref));
@@ -156,33 +156,34 @@ static void bad_command_lines_exit_2(void)
 		const char *args[8];
 		const char *msg;
 	} cases[] = {
-		{{NULL}, "which generator"},
-		{{"fig99", NULL}, "no generator called \"fig99\""},
-		{{"fig16", "comb", NULL}, "one generator only"},
-		{{"fig16", "--level", NULL}, "--level needs a valid value"},
-		{{"fig16", "--level", "7", NULL}, "not \"7\""},
-		{{"fig16", "--level", "two", NULL}, "not \"two\""},
-		{{"fig16", "--level", "-1", NULL}, "not \"-1\""},
-		{{"fig16", "--count", "5", NULL}, "fig16: takes only"},
-		{{"fig18", "--kind", "cubes", NULL}, "not \"cubes\""},
-		{{"fig18", "--blend", "soft", NULL}, "not \"soft\""},
-		{{"fig18", "--count", "0", NULL}, "not \"0\""},
-		{{"fig18", "--count", "99999999999", NULL}, "--count"},
-		{{"random", "--seed", "18446744073709551616", NULL}, "--seed"},
-		{{"random", "--depth", "1", NULL}, "--depth"},
-		{{"gears", "--teeth", "3", NULL}, "--teeth"},
-		{{"gears", "--frobnicate", NULL}, "unknown option"},
-		{{"gears", "--out", "", NULL}, "--out"},
-		{{"many-gears", "--count", "2000000", NULL}, "many-gears"},
+	    {{NULL}, "which generator"},
+	    {{"fig99", NULL}, "no generator called \"fig99\""},
+	    {{"fig16", "comb", NULL}, "one generator only"},
+	    {{"fig16", "--level", NULL}, "--level needs a valid value"},
+	    {{"fig16", "--level", "7", NULL}, "not \"7\""},
+	    {{"fig16", "--level", "two", NULL}, "not \"two\""},
+	    {{"fig16", "--level", "-1", NULL}, "not \"-1\""},
+	    {{"fig16", "--count", "5", NULL}, "fig16: takes only"},
+	    {{"fig18", "--kind", "cubes", NULL}, "not \"cubes\""},
+	    {{"fig18", "--blend", "soft", NULL}, "not \"soft\""},
+	    {{"fig18", "--count", "0", NULL}, "not \"0\""},
+	    {{"fig18", "--count", "99999999999", NULL}, "--count"},
+	    {{"random", "--seed", "18446744073709551616", NULL}, "--seed"},
+	    {{"random", "--depth", "1", NULL}, "--depth"},
+	    {{"gears", "--teeth", "3", NULL}, "--teeth"},
+	    {{"gears", "--frobnicate", NULL}, "unknown option"},
+	    {{"gears", "--out", "", NULL}, "--out"},
+	    {{"many-gears", "--count", "2000000", NULL}, "many-gears"},
 	};
 	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
 		struct run r = run_gen(cases[i].args);
 		bool ok = r.status == 2 && r.err &&
-			  strstr(r.err, cases[i].msg) != NULL && r.out &&
-			  r.out[0] == '\0';
+		          strstr(r.err, cases[i].msg) != NULL && r.out &&
+		          r.out[0] == '\0';
 		if (!ok) {
-			fprintf(stderr, "  case %zu: status %d, stderr \"%s\"\n",
-				i, r.status, r.err ? r.err : "");
+			fprintf(stderr,
+			        "  case %zu: status %d, stderr \"%s\"\n", i,
+			        r.status, r.err ? r.err : "");
 		}
 		CHECK(ok);
 		run_free(&r);
@@ -190,10 +191,10 @@ static void bad_command_lines_exit_2(void)
 }
 
 static const struct bc_test tests[] = {
-	{"prints_the_generators_scene", prints_the_generators_scene},
-	{"writes_the_scene_with_out", writes_the_scene_with_out},
-	{"help_lists_every_generator", help_lists_every_generator},
-	{"bad_command_lines_exit_2", bad_command_lines_exit_2},
+    {"prints_the_generators_scene", prints_the_generators_scene},
+    {"writes_the_scene_with_out", writes_the_scene_with_out},
+    {"help_lists_every_generator", help_lists_every_generator},
+    {"bad_command_lines_exit_2", bad_command_lines_exit_2},
 };
 
 BC_TEST_MAIN(tests)

@@ -16,7 +16,8 @@
 #include "scene_util.h"
 #include "test.h"
 
-/* ---- a byte writer independent of the encoder ----------------------------- */
+/* ---- a byte writer independent of the encoder -----------------------------
+ */
 
 struct bw {
 	uint8_t b[8192];
@@ -63,7 +64,7 @@ static void w_sphere(struct bw *w, uint32_t id, float r, float x)
 }
 
 static void w_op(struct bw *w, enum bc_op kind, uint32_t id, float blend,
-		 float range, uint32_t nchildren)
+                 float range, uint32_t nchildren)
 {
 	w8(w, 0x80u | (uint32_t)kind);
 	w32(w, id);
@@ -117,10 +118,11 @@ static void w_valid(struct bw *w)
 	w_sphere(w, 15, 0.3f, -1.0f);
 }
 
-/* ---- round trips ------------------------------------------------------------ */
+/* ---- round trips ------------------------------------------------------------
+ */
 
 static void check_binary_round_trip(const struct bc_tree *t,
-				    const struct bc_camera *cam)
+                                    const struct bc_camera *cam)
 {
 	struct bc_tree *u = bc_tree_create();
 	struct bc_camera cu;
@@ -159,17 +161,19 @@ static void every_generator_round_trips_through_binary(void)
 		const char *name;
 		struct bc_gen_opts o;
 	} cases[] = {
-		{"fig16", {.level = 1}},
-		{"fig16", {.level = 3, .blend = BC_GEN_BLEND_SHARP}},
-		{"fig18", {.count = 64, .kind = BC_GEN_KIND_BOXES}},
-		{"fig18", {.count = 64, .kind = BC_GEN_KIND_SPHERES}},
-		{"fig18", {.count = 30, .kind = BC_GEN_KIND_LENSES,
-			   .blend = BC_GEN_BLEND_SMOOTH}},
-		{"comb", {.count = 1000}},
-		{"random", {.count = 400, .seed = 9, .depth = 40}},
-		{"gears", {0}},
-		{"many-gears", {.count = 9}},
-		{"many-spheres", {.count = 300, .seed = 4}},
+	    {"fig16", {.level = 1}},
+	    {"fig16", {.level = 3, .blend = BC_GEN_BLEND_SHARP}},
+	    {"fig18", {.count = 64, .kind = BC_GEN_KIND_BOXES}},
+	    {"fig18", {.count = 64, .kind = BC_GEN_KIND_SPHERES}},
+	    {"fig18",
+	     {.count = 30,
+	      .kind = BC_GEN_KIND_LENSES,
+	      .blend = BC_GEN_BLEND_SMOOTH}},
+	    {"comb", {.count = 1000}},
+	    {"random", {.count = 400, .seed = 9, .depth = 40}},
+	    {"gears", {0}},
+	    {"many-gears", {.count = 9}},
+	    {"many-spheres", {.count = 300, .seed = 4}},
 	};
 	struct bc_tree *t = bc_tree_create();
 	REQUIRE(t);
@@ -187,8 +191,8 @@ static void random_trees_round_trip_through_binary(void)
 	REQUIRE(t);
 	for (uint64_t seed = 0; seed < 60; seed++) {
 		struct bc_gen_opts o = {.count = 1 + (uint32_t)(seed * 7 % 61),
-					.seed = seed,
-					.depth = 2 + (uint32_t)(seed % 30)};
+		                        .seed = seed,
+		                        .depth = 2 + (uint32_t)(seed % 30)};
 		struct bc_camera cam;
 		REQUIRE(bc_gen("random", &o, t, &cam, NULL) == 0);
 		check_binary_round_trip(t, seed % 2 ? &cam : NULL);
@@ -238,16 +242,16 @@ static void hand_written_scene_decodes_to_its_fields(void)
 static void documented_example_decodes(void)
 {
 	static const uint8_t doc[] = {
-		0x00, 0x03, 0x00, 0x00, 0x00, 0x81, 0x01, 0x00, 0x00, 0x00,
-		0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x02, 0x00,
-		0x00, 0x00, 0x01, 0x02, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
-		0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
-		0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
-		0x00, 0x00, 0x00, 0x80, 0x3f, 0x00, 0x01, 0x00, 0x00, 0x80,
-		0x3f, 0x01, 0x03, 0x00, 0x00, 0x00, 0x00, 0x00, 0x80, 0x3f,
-		0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
-		0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
-		0x00, 0x00, 0x80, 0x3f, 0x00, 0x01, 0x00, 0x00, 0x00, 0x3f};
+	    0x00, 0x03, 0x00, 0x00, 0x00, 0x81, 0x01, 0x00, 0x00, 0x00,
+	    0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x02, 0x00,
+	    0x00, 0x00, 0x01, 0x02, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
+	    0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
+	    0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
+	    0x00, 0x00, 0x00, 0x80, 0x3f, 0x00, 0x01, 0x00, 0x00, 0x80,
+	    0x3f, 0x01, 0x03, 0x00, 0x00, 0x00, 0x00, 0x00, 0x80, 0x3f,
+	    0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
+	    0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
+	    0x00, 0x00, 0x80, 0x3f, 0x00, 0x01, 0x00, 0x00, 0x00, 0x3f};
 	struct bc_tree *t = bc_tree_create();
 	struct bc_prim_data p;
 	struct bc_errinfo ei = {0};
@@ -293,7 +297,8 @@ static void zero_ids_get_fresh_ids(void)
 	bc_tree_destroy(t);
 }
 
-/* ---- malformed encodings ------------------------------------------------------ */
+/* ---- malformed encodings
+ * ------------------------------------------------------ */
 
 struct bad {
 	const char *what;
@@ -554,56 +559,53 @@ static void b_bad_quaternion(struct bw *w)
 static void malformed_encodings_fail_with_their_code(void)
 {
 	static const struct bad cases[] = {
-		{"empty", b_empty, BC_EPROTO_TRUNCATED, "empty"},
-		{"reserved flags", b_flags, BC_EPROTO_FLAGS, "0x02"},
-		{"camera cut", b_camera_short, BC_EPROTO_TRUNCATED, "camera"},
-		{"camera NaN", b_camera_nan, BC_ENONFINITE, "camera"},
-		{"camera eye == target", b_camera_degenerate, BC_ERANGE,
-		 "camera"},
-		{"node_count cut", b_count_short, BC_EPROTO_TRUNCATED,
-		 "node_count"},
-		{"node_count 0", b_count_zero, BC_EPROTO_COUNT, "node_count 0"},
-		{"node_count 2^32-1", b_count_max, BC_EPROTO_COUNT,
-		 "node_count 4294967295"},
-		{"node_count over the bytes left", b_count_far_over_bytes,
-		 BC_EPROTO_COUNT, "left"},
-		{"node_count beyond the nodes", b_count_over_bytes,
-		 BC_EPROTO_COUNT, "node 1"},
-		{"tag 0", b_tag_zero, BC_EENUM, "node 0: unknown primitive tag"},
-		{"tag past the kinds", b_tag_prim_count, BC_EENUM,
-		 "unknown primitive tag"},
-		{"operator tag 0x80", b_tag_op_zero, BC_EENUM,
-		 "node 0: unknown operator tag 0x80"},
-		{"operator tag past the kinds", b_tag_op_count, BC_EENUM,
-		 "unknown operator tag"},
-		{"has_color 2", b_has_color, BC_EPROTO_FLAGS, "has_color"},
-		{"nfloats mismatch", b_nfloats, BC_EPROTO_COUNT, "nfloats is 2"},
-		{"NaN translate", b_nan_translate, BC_ENONFINITE,
-		 "node 0: translate[0] is not finite"},
-		{"inf radius", b_inf_radius, BC_ENONFINITE, "params[0]"},
-		{"NaN blend", b_nan_blend, BC_ENONFINITE, "node 0: blend"},
-		{"child_count 1", b_child_count_one, BC_EPROTO_COUNT,
-		 "child_count 1"},
-		{"child_count over the nodes", b_child_count_over,
-		 BC_EPROTO_COUNT, "child_count 3"},
-		{"child_count 2^32-1", b_child_count_max, BC_EPROTO_COUNT,
-		 "child_count 4294967295"},
-		{"children missing", b_children_missing, BC_EPROTO_COUNT,
-		 "node 0: 1 of its children are missing"},
-		{"nodes beyond the root", b_beyond_root, BC_EPROTO_COUNT,
-		 "node 1: the root's subtree ended"},
-		{"too deep", b_too_deep, BC_EDEPTH, "nesting deeper than"},
-		{"trailing byte", b_trailing, BC_EPROTO_TRAILING,
-		 "1 bytes after"},
-		{"duplicate id", b_dup_id, BC_EDUPID, "node 2 (id 7)"},
-		{"sharp operator with a blend", b_sharp_with_blend, BC_ERANGE,
-		 "node 0: union takes no blend"},
-		{"smooth operator without blend", b_smooth_zero_blend,
-		 BC_ERANGE, "node 0 (id 1)"},
-		{"negative radius", b_negative_radius, BC_ERANGE,
-		 "node 0 (id 1)"},
-		{"non-unit quaternion", b_bad_quaternion, BC_ERANGE,
-		 "node 0 (id 1)"},
+	    {"empty", b_empty, BC_EPROTO_TRUNCATED, "empty"},
+	    {"reserved flags", b_flags, BC_EPROTO_FLAGS, "0x02"},
+	    {"camera cut", b_camera_short, BC_EPROTO_TRUNCATED, "camera"},
+	    {"camera NaN", b_camera_nan, BC_ENONFINITE, "camera"},
+	    {"camera eye == target", b_camera_degenerate, BC_ERANGE, "camera"},
+	    {"node_count cut", b_count_short, BC_EPROTO_TRUNCATED,
+	     "node_count"},
+	    {"node_count 0", b_count_zero, BC_EPROTO_COUNT, "node_count 0"},
+	    {"node_count 2^32-1", b_count_max, BC_EPROTO_COUNT,
+	     "node_count 4294967295"},
+	    {"node_count over the bytes left", b_count_far_over_bytes,
+	     BC_EPROTO_COUNT, "left"},
+	    {"node_count beyond the nodes", b_count_over_bytes, BC_EPROTO_COUNT,
+	     "node 1"},
+	    {"tag 0", b_tag_zero, BC_EENUM, "node 0: unknown primitive tag"},
+	    {"tag past the kinds", b_tag_prim_count, BC_EENUM,
+	     "unknown primitive tag"},
+	    {"operator tag 0x80", b_tag_op_zero, BC_EENUM,
+	     "node 0: unknown operator tag 0x80"},
+	    {"operator tag past the kinds", b_tag_op_count, BC_EENUM,
+	     "unknown operator tag"},
+	    {"has_color 2", b_has_color, BC_EPROTO_FLAGS, "has_color"},
+	    {"nfloats mismatch", b_nfloats, BC_EPROTO_COUNT, "nfloats is 2"},
+	    {"NaN translate", b_nan_translate, BC_ENONFINITE,
+	     "node 0: translate[0] is not finite"},
+	    {"inf radius", b_inf_radius, BC_ENONFINITE, "params[0]"},
+	    {"NaN blend", b_nan_blend, BC_ENONFINITE, "node 0: blend"},
+	    {"child_count 1", b_child_count_one, BC_EPROTO_COUNT,
+	     "child_count 1"},
+	    {"child_count over the nodes", b_child_count_over, BC_EPROTO_COUNT,
+	     "child_count 3"},
+	    {"child_count 2^32-1", b_child_count_max, BC_EPROTO_COUNT,
+	     "child_count 4294967295"},
+	    {"children missing", b_children_missing, BC_EPROTO_COUNT,
+	     "node 0: 1 of its children are missing"},
+	    {"nodes beyond the root", b_beyond_root, BC_EPROTO_COUNT,
+	     "node 1: the root's subtree ended"},
+	    {"too deep", b_too_deep, BC_EDEPTH, "nesting deeper than"},
+	    {"trailing byte", b_trailing, BC_EPROTO_TRAILING, "1 bytes after"},
+	    {"duplicate id", b_dup_id, BC_EDUPID, "node 2 (id 7)"},
+	    {"sharp operator with a blend", b_sharp_with_blend, BC_ERANGE,
+	     "node 0: union takes no blend"},
+	    {"smooth operator without blend", b_smooth_zero_blend, BC_ERANGE,
+	     "node 0 (id 1)"},
+	    {"negative radius", b_negative_radius, BC_ERANGE, "node 0 (id 1)"},
+	    {"non-unit quaternion", b_bad_quaternion, BC_ERANGE,
+	     "node 0 (id 1)"},
 	};
 	struct bc_tree *t = bc_tree_create();
 	REQUIRE(t);
@@ -615,11 +617,11 @@ static void malformed_encodings_fail_with_their_code(void)
 		cases[i].write(&w);
 		rc = bc_scene_decode(w.b, w.n, t, NULL, &has, &ei);
 		bool ok = rc == cases[i].code && ei.code == rc &&
-			  strstr(ei.msg, cases[i].reason) != NULL;
+		          strstr(ei.msg, cases[i].reason) != NULL;
 		if (!ok) {
 			fprintf(stderr, "  %s: got %s \"%s\", want %s \"%s\"\n",
-				cases[i].what, bc_err_name(rc), ei.msg,
-				bc_err_name(cases[i].code), cases[i].reason);
+			        cases[i].what, bc_err_name(rc), ei.msg,
+			        bc_err_name(cases[i].code), cases[i].reason);
 		}
 		CHECK(ok);
 		CHECK(!has);
@@ -683,7 +685,7 @@ static uint64_t mix_next(void)
 static void corrupted_encodings_never_crash(void)
 {
 	struct bc_tree *src = bc_tree_create(), *t = bc_tree_create(),
-		       *u = bc_tree_create();
+	               *u = bc_tree_create();
 	struct bc_gen_opts o = {.count = 25, .seed = 77};
 	struct bc_camera cam;
 	uint8_t *orig = NULL, *buf;
@@ -731,9 +733,8 @@ static void corrupted_encodings_never_crash(void)
 			size_t relen = 0;
 			accepted++;
 			CHECK_EQ_INT(bc_scene_encode(t, NULL, &re, &relen), 0);
-			CHECK_EQ_INT(bc_scene_decode(re, relen, u, NULL, NULL,
-						     NULL),
-				     0);
+			CHECK_EQ_INT(
+			    bc_scene_decode(re, relen, u, NULL, NULL, NULL), 0);
 			CHECK_EQ_INT(tree_diff(t, u), 0);
 			bc_free(re);
 		} else {
@@ -807,21 +808,21 @@ static void allocation_failures_are_survived(void)
 }
 
 static const struct bc_test tests[] = {
-	{"every_generator_round_trips_through_binary",
-	 every_generator_round_trips_through_binary},
-	{"random_trees_round_trip_through_binary",
-	 random_trees_round_trip_through_binary},
-	{"hand_written_scene_decodes_to_its_fields",
-	 hand_written_scene_decodes_to_its_fields},
-	{"documented_example_decodes", documented_example_decodes},
-	{"zero_ids_get_fresh_ids", zero_ids_get_fresh_ids},
-	{"malformed_encodings_fail_with_their_code",
-	 malformed_encodings_fail_with_their_code},
-	{"depth_at_the_limit_is_accepted", depth_at_the_limit_is_accepted},
-	{"every_truncation_fails", every_truncation_fails},
-	{"corrupted_encodings_never_crash", corrupted_encodings_never_crash},
-	{"empty_trees_do_not_encode", empty_trees_do_not_encode},
-	{"allocation_failures_are_survived", allocation_failures_are_survived},
+    {"every_generator_round_trips_through_binary",
+     every_generator_round_trips_through_binary},
+    {"random_trees_round_trip_through_binary",
+     random_trees_round_trip_through_binary},
+    {"hand_written_scene_decodes_to_its_fields",
+     hand_written_scene_decodes_to_its_fields},
+    {"documented_example_decodes", documented_example_decodes},
+    {"zero_ids_get_fresh_ids", zero_ids_get_fresh_ids},
+    {"malformed_encodings_fail_with_their_code",
+     malformed_encodings_fail_with_their_code},
+    {"depth_at_the_limit_is_accepted", depth_at_the_limit_is_accepted},
+    {"every_truncation_fails", every_truncation_fails},
+    {"corrupted_encodings_never_crash", corrupted_encodings_never_crash},
+    {"empty_trees_do_not_encode", empty_trees_do_not_encode},
+    {"allocation_failures_are_survived", allocation_failures_are_survived},
 };
 
 BC_TEST_MAIN(tests)

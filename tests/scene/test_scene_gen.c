@@ -17,17 +17,17 @@
 /* The camera is valid, its eye outside the scene's bounds and its target
  * inside them. */
 static void check_camera_frames(const struct bc_tree *t,
-				const struct bc_camera *cam)
+                                const struct bc_camera *cam)
 {
 	const struct bc_lin *l = bc_tree_lin(t);
 	bool eye_out = false, target_in = true;
 	CHECK_EQ_INT(bc_camera_validate(cam, NULL), 0);
 	REQUIRE(l);
 	for (int i = 0; i < 3; i++) {
-		eye_out = eye_out || cam->eye[i] < l->lo[i] ||
-			  cam->eye[i] > l->hi[i];
+		eye_out =
+		    eye_out || cam->eye[i] < l->lo[i] || cam->eye[i] > l->hi[i];
 		target_in = target_in && cam->target[i] >= l->lo[i] &&
-			    cam->target[i] <= l->hi[i];
+		            cam->target[i] <= l->hi[i];
 	}
 	CHECK(eye_out);
 	CHECK(target_in);
@@ -49,9 +49,9 @@ static void fig16_levels_have_the_papers_counts(void)
 	for (uint32_t level = 1; level <= 3; level++) {
 		for (int smooth = 0; smooth < 2; smooth++) {
 			struct bc_gen_opts o = {
-				.level = level,
-				.blend = smooth ? BC_GEN_BLEND_SMOOTH
-						: BC_GEN_BLEND_SHARP};
+			    .level = level,
+			    .blend = smooth ? BC_GEN_BLEND_SMOOTH
+			                    : BC_GEN_BLEND_SHARP};
 			struct bc_camera cam;
 			struct bc_op_data op;
 			uint32_t aggs = fig16_prims(level) / 10;
@@ -61,14 +61,14 @@ static void fig16_levels_have_the_papers_counts(void)
 			/* One operator per aggregate, one per level above
 			 * the base. */
 			CHECK_EQ_INT(bc_tree_node_count(t),
-				     fig16_prims(level) + aggs + level - 1);
+			             fig16_prims(level) + aggs + level - 1);
 			REQUIRE(bc_tree_get(t, bc_tree_root(t), NULL, &op));
-			CHECK_EQ_INT(op.kind, smooth ? BC_OP_SMOOTH_UNION
-						     : BC_OP_UNION);
+			CHECK_EQ_INT(op.kind,
+			             smooth ? BC_OP_SMOOTH_UNION : BC_OP_UNION);
 			/* The root holds everything larger, then the
 			 * smallest level's 10^(L-1) aggregates. */
 			CHECK_EQ_INT(bc_tree_child_count(t, bc_tree_root(t)),
-				     level == 1 ? 10 : 1 + last);
+			             level == 1 ? 10 : 1 + last);
 			check_camera_frames(t, &cam);
 		}
 	}
@@ -83,8 +83,8 @@ static void fig18_has_count_instances(void)
 	for (size_t i = 0; i < sizeof(counts) / sizeof(counts[0]); i++) {
 		for (int kind = 1; kind < BC_GEN_KIND_COUNT; kind++) {
 			struct bc_gen_opts o = {.count = counts[i],
-						.kind = (enum bc_gen_kind)kind,
-						.blend = BC_GEN_BLEND_SMOOTH};
+			                        .kind = (enum bc_gen_kind)kind,
+			                        .blend = BC_GEN_BLEND_SMOOTH};
 			struct bc_camera cam;
 			uint32_t per = kind == BC_GEN_KIND_LENSES ? 2 : 1;
 			uint32_t root;
@@ -95,7 +95,7 @@ static void fig18_has_count_instances(void)
 			 * comb once linearized. */
 			if (counts[i] > 1) {
 				CHECK_EQ_INT(bc_tree_child_count(t, root),
-					     counts[i]);
+				             counts[i]);
 			}
 			check_camera_frames(t, &cam);
 		}
@@ -146,7 +146,7 @@ static void gears_have_their_parts(void)
 	REQUIRE(t);
 	CHECK_EQ_INT(bc_gen("gears", &o, t, &cam, NULL), 0);
 	CHECK_EQ_INT(bc_tree_prim_count(t),
-		     gear_prims(30) + gear_prims(20) + gear_prims(15));
+	             gear_prims(30) + gear_prims(20) + gear_prims(15));
 	CHECK_EQ_INT(bc_tree_child_count(t, bc_tree_root(t)), 3);
 	check_camera_frames(t, &cam);
 	o.teeth = 6;
@@ -253,26 +253,26 @@ static void bad_options_are_refused(void)
 		struct bc_gen_opts o;
 		int code;
 	} cases[] = {
-		{"fig17", {0}, BC_ENOTFOUND},
-		{"fig16", {.level = BC_GEN_MAX_LEVEL + 1}, BC_ERANGE},
-		{"fig16", {.count = 5}, BC_EINVAL},
-		{"fig16", {.kind = BC_GEN_KIND_BOXES}, BC_EINVAL},
-		{"fig18", {.level = 2}, BC_EINVAL},
-		{"fig18", {.count = BC_GEN_MAX_PRIMS + 1}, BC_ELIMIT},
-		{"fig18", {.count = BC_GEN_MAX_PRIMS / 2 + 1,
-			   .kind = BC_GEN_KIND_LENSES},
-		 BC_ELIMIT},
-		{"fig18", {.kind = BC_GEN_KIND_COUNT}, BC_ERANGE},
-		{"comb", {.seed = 3}, BC_EINVAL},
-		{"comb", {.blend = BC_GEN_BLEND_COUNT}, BC_ERANGE},
-		{"random", {.depth = 1}, BC_ERANGE},
-		{"random", {.depth = BC_TREE_MAX_DEPTH + 1}, BC_ERANGE},
-		{"random", {.teeth = 12}, BC_EINVAL},
-		{"gears", {.teeth = 5}, BC_ERANGE},
-		{"gears", {.teeth = BC_GEN_MAX_TEETH + 1}, BC_ERANGE},
-		{"gears", {.count = 2}, BC_EINVAL},
-		{"many-gears", {.count = 200000}, BC_ELIMIT},
-		{"many-spheres", {.blend = BC_GEN_BLEND_SMOOTH}, BC_EINVAL},
+	    {"fig17", {0}, BC_ENOTFOUND},
+	    {"fig16", {.level = BC_GEN_MAX_LEVEL + 1}, BC_ERANGE},
+	    {"fig16", {.count = 5}, BC_EINVAL},
+	    {"fig16", {.kind = BC_GEN_KIND_BOXES}, BC_EINVAL},
+	    {"fig18", {.level = 2}, BC_EINVAL},
+	    {"fig18", {.count = BC_GEN_MAX_PRIMS + 1}, BC_ELIMIT},
+	    {"fig18",
+	     {.count = BC_GEN_MAX_PRIMS / 2 + 1, .kind = BC_GEN_KIND_LENSES},
+	     BC_ELIMIT},
+	    {"fig18", {.kind = BC_GEN_KIND_COUNT}, BC_ERANGE},
+	    {"comb", {.seed = 3}, BC_EINVAL},
+	    {"comb", {.blend = BC_GEN_BLEND_COUNT}, BC_ERANGE},
+	    {"random", {.depth = 1}, BC_ERANGE},
+	    {"random", {.depth = BC_TREE_MAX_DEPTH + 1}, BC_ERANGE},
+	    {"random", {.teeth = 12}, BC_EINVAL},
+	    {"gears", {.teeth = 5}, BC_ERANGE},
+	    {"gears", {.teeth = BC_GEN_MAX_TEETH + 1}, BC_ERANGE},
+	    {"gears", {.count = 2}, BC_EINVAL},
+	    {"many-gears", {.count = 200000}, BC_ELIMIT},
+	    {"many-spheres", {.blend = BC_GEN_BLEND_SMOOTH}, BC_EINVAL},
 	};
 	struct bc_tree *t = bc_tree_create();
 	REQUIRE(t);
@@ -282,7 +282,7 @@ static void bad_options_are_refused(void)
 		int rc = bc_gen(cases[i].name, &cases[i].o, t, &cam, &ei);
 		if (rc != cases[i].code) {
 			fprintf(stderr, "  case %zu (%s): got %s \"%s\"\n", i,
-				cases[i].name, bc_err_name(rc), ei.msg);
+			        cases[i].name, bc_err_name(rc), ei.msg);
 		}
 		CHECK_EQ_INT(rc, cases[i].code);
 		CHECK(ei.msg[0] != '\0');
@@ -319,17 +319,17 @@ static void generation_failures_free_everything(void)
 }
 
 static const struct bc_test tests[] = {
-	{"fig16_levels_have_the_papers_counts",
-	 fig16_levels_have_the_papers_counts},
-	{"fig18_has_count_instances", fig18_has_count_instances},
-	{"comb_and_many_spheres_counts", comb_and_many_spheres_counts},
-	{"gears_have_their_parts", gears_have_their_parts},
-	{"random_uses_every_kind_within_the_depth",
-	 random_uses_every_kind_within_the_depth},
-	{"generators_are_deterministic", generators_are_deterministic},
-	{"bad_options_are_refused", bad_options_are_refused},
-	{"generation_failures_free_everything",
-	 generation_failures_free_everything},
+    {"fig16_levels_have_the_papers_counts",
+     fig16_levels_have_the_papers_counts},
+    {"fig18_has_count_instances", fig18_has_count_instances},
+    {"comb_and_many_spheres_counts", comb_and_many_spheres_counts},
+    {"gears_have_their_parts", gears_have_their_parts},
+    {"random_uses_every_kind_within_the_depth",
+     random_uses_every_kind_within_the_depth},
+    {"generators_are_deterministic", generators_are_deterministic},
+    {"bad_options_are_refused", bad_options_are_refused},
+    {"generation_failures_free_everything",
+     generation_failures_free_everything},
 };
 
 BC_TEST_MAIN(tests)

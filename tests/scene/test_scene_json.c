@@ -22,7 +22,7 @@
 /* Writes t, parses the text, writes and parses again: every tree and
  * camera must be identical to the first. */
 static void check_json_round_trip(const struct bc_tree *t,
-				  const struct bc_camera *cam)
+                                  const struct bc_camera *cam)
 {
 	struct bc_tree *u = bc_tree_create(), *w = bc_tree_create();
 	struct bc_camera cu, cw;
@@ -42,7 +42,7 @@ static void check_json_round_trip(const struct bc_tree *t,
 	again = bc_scene_to_json(u, &cu);
 	REQUIRE(again != NULL);
 	CHECK_EQ_INT(bc_scene_parse_json(again, strlen(again), w, &cw, NULL),
-		     0);
+	             0);
 	CHECK_EQ_INT(tree_diff(u, w), 0);
 	CHECK(same_camera(&cu, &cw));
 	bc_free(text);
@@ -57,18 +57,20 @@ static void every_generator_round_trips_through_json(void)
 		const char *name;
 		struct bc_gen_opts o;
 	} cases[] = {
-		{"fig16", {.level = 1}},
-		{"fig16", {.level = 2, .blend = BC_GEN_BLEND_SHARP}},
-		{"fig16", {.level = 3, .seed = 5}},
-		{"fig18", {.count = 40, .kind = BC_GEN_KIND_BOXES}},
-		{"fig18", {.count = 33, .kind = BC_GEN_KIND_SPHERES,
-			   .blend = BC_GEN_BLEND_SHARP}},
-		{"fig18", {.count = 20, .kind = BC_GEN_KIND_LENSES}},
-		{"comb", {.count = 100, .blend = BC_GEN_BLEND_SMOOTH}},
-		{"random", {.count = 300, .seed = 11}},
-		{"gears", {.teeth = 30}},
-		{"many-gears", {.count = 6, .seed = 2}},
-		{"many-spheres", {.count = 500}},
+	    {"fig16", {.level = 1}},
+	    {"fig16", {.level = 2, .blend = BC_GEN_BLEND_SHARP}},
+	    {"fig16", {.level = 3, .seed = 5}},
+	    {"fig18", {.count = 40, .kind = BC_GEN_KIND_BOXES}},
+	    {"fig18",
+	     {.count = 33,
+	      .kind = BC_GEN_KIND_SPHERES,
+	      .blend = BC_GEN_BLEND_SHARP}},
+	    {"fig18", {.count = 20, .kind = BC_GEN_KIND_LENSES}},
+	    {"comb", {.count = 100, .blend = BC_GEN_BLEND_SMOOTH}},
+	    {"random", {.count = 300, .seed = 11}},
+	    {"gears", {.teeth = 30}},
+	    {"many-gears", {.count = 6, .seed = 2}},
+	    {"many-spheres", {.count = 500}},
 	};
 	struct bc_tree *t = bc_tree_create();
 	REQUIRE(t);
@@ -93,8 +95,8 @@ static void random_trees_round_trip_through_json(void)
 	REQUIRE(t);
 	for (uint64_t seed = 100; seed < 140; seed++) {
 		struct bc_gen_opts o = {.count = 1 + (uint32_t)(seed % 37),
-					.seed = seed,
-					.depth = 2 + (uint32_t)(seed % 20)};
+		                        .seed = seed,
+		                        .depth = 2 + (uint32_t)(seed % 20)};
 		struct bc_camera cam;
 		REQUIRE(bc_gen("random", &o, t, &cam, NULL) == 0);
 		check_json_round_trip(t, &cam);
@@ -147,11 +149,11 @@ static void awkward_floats_round_trip_exactly(void)
 static void defaults_and_assigned_ids(void)
 {
 	static const char text[] =
-		"{\"blobcast\": 1, \"root\": {\"type\": \"smooth_union\", "
-		"\"blend\": 0.2, \"children\": [\n"
-		"  {\"type\": \"sphere\", \"radius\": 1},\n"
-		"  {\"type\": \"box\", \"id\": 1, \"half_extents\": [1, 2, 3]},\n"
-		"  {\"type\": \"sphere\", \"id\": 3, \"radius\": 0.5}]}}";
+	    "{\"blobcast\": 1, \"root\": {\"type\": \"smooth_union\", "
+	    "\"blend\": 0.2, \"children\": [\n"
+	    "  {\"type\": \"sphere\", \"radius\": 1},\n"
+	    "  {\"type\": \"box\", \"id\": 1, \"half_extents\": [1, 2, 3]},\n"
+	    "  {\"type\": \"sphere\", \"id\": 3, \"radius\": 0.5}]}}";
 	struct bc_tree *t = bc_tree_create();
 	struct bc_camera cam, def;
 	struct bc_prim_data p;
@@ -159,7 +161,7 @@ static void defaults_and_assigned_ids(void)
 	uint32_t root, c0;
 	REQUIRE(t);
 	REQUIRE(bc_scene_parse_json(text, sizeof(text) - 1, t, &cam, NULL) ==
-		0);
+	        0);
 	bc_camera_default(&def);
 	CHECK(same_camera(&cam, &def));
 	CHECK_EQ_INT(bc_tree_node_count(t), 4);
@@ -199,15 +201,15 @@ static char *nested_unions(uint32_t n)
 		return NULL;
 	}
 	len += (size_t)snprintf(s + len, cap - len,
-				"{\"blobcast\": 1, \"root\": ");
+	                        "{\"blobcast\": 1, \"root\": ");
 	for (uint32_t i = 0; i < n; i++) {
 		len += (size_t)snprintf(
-			s + len, cap - len,
-			"{\"type\": \"union\", \"children\": [{\"type\": "
-			"\"sphere\", \"radius\": 1}, ");
+		    s + len, cap - len,
+		    "{\"type\": \"union\", \"children\": [{\"type\": "
+		    "\"sphere\", \"radius\": 1}, ");
 	}
 	len += (size_t)snprintf(s + len, cap - len,
-				"{\"type\": \"sphere\", \"radius\": 1}");
+	                        "{\"type\": \"sphere\", \"radius\": 1}");
 	for (uint32_t i = 0; i < n; i++) {
 		len += (size_t)snprintf(s + len, cap - len, "]}");
 	}
@@ -220,109 +222,108 @@ static void bad_files_fail_with_path_and_reason(void)
 #define DOC(root) "{\"blobcast\": 1, \"root\": " root "}"
 #define S1 "{\"type\": \"sphere\", \"radius\": 1}"
 	static const struct bad_case cases[] = {
-		{"", BC_EPARSE, "line 1"},
-		{"{\"blobcast\": 1, \"root\": " S1, BC_EPARSE, "line"},
-		{DOC(S1) " trailing", BC_EPARSE, "line"},
-		{"[1, 2]", BC_EPARSE, "expected an object, got array"},
-		{"{\"blobcast\": 2, \"root\": " S1 "}", BC_ENOTSUP,
-		 "blobcast: version 2 is not supported"},
-		{"{\"root\": " S1 "}", BC_EPARSE, "missing key \"blobcast\""},
-		{"{\"blobcast\": \"1\", \"root\": " S1 "}", BC_EPARSE,
-		 "blobcast: expected an integer, got string"},
-		{"{\"blobcast\": 1}", BC_EPARSE, "missing key \"root\""},
-		{"{\"blobcast\": 1, \"rooot\": " S1 "}", BC_EPARSE,
-		 "unknown key \"rooot\""},
-		{"{\"blobcast\": 1, \"blobcast\": 1, \"root\": " S1 "}",
-		 BC_EPARSE, "duplicate"},
-		{DOC("{\"type\": \"spher\", \"radius\": 1}"), BC_EENUM,
-		 "root: unknown primitive type \"spher\""},
-		{DOC("{\"type\": \"unoin\", \"children\": [" S1 ", " S1 "]}"),
-		 BC_EENUM, "root: unknown operator type \"unoin\""},
-		{DOC("{\"radius\": 1}"), BC_EPARSE, "root: missing key \"type\""},
-		{DOC("{\"type\": 7, \"radius\": 1}"), BC_EPARSE,
-		 "root.type: expected a string, got integer"},
-		{DOC("[1]"), BC_EPARSE, "root: expected a node object, got array"},
-		{DOC("{\"type\": \"union\", \"children\": [" S1 ", " S1 ", "
-		     "{\"type\": \"box\", \"half_extents\": [1, \"2\", 3]}]}"),
-		 BC_EPARSE,
-		 "root.children[2].half_extents[1]: expected a number, got "
-		 "string"},
-		{DOC("{\"type\": \"box\", \"half_extents\": [1, 2]}"), BC_EPARSE,
-		 "root.half_extents: expected an array of 3 numbers, got 2"},
-		{DOC("{\"type\": \"box\", \"half_extents\": 1}"), BC_EPARSE,
-		 "root.half_extents: expected an array of 3 numbers, got "
-		 "integer"},
-		{DOC("{\"type\": \"sphere\"}"), BC_EPARSE,
-		 "root: missing key \"radius\""},
-		{DOC("{\"type\": \"sphere\", \"radius\": 1, \"radius2\": 1}"),
-		 BC_EPARSE, "root: unknown key \"radius2\" for sphere"},
-		{DOC("{\"type\": \"sphere\", \"radius\": -1}"), BC_ERANGE,
-		 "root: "},
-		{DOC("{\"type\": \"sphere\", \"radius\": true}"), BC_EPARSE,
-		 "root.radius: expected a number, got true"},
-		{DOC("{\"type\": \"sphere\", \"radius\": 1, \"translate\": "
-		     "[1e39, 0, 0]}"),
-		 BC_ENONFINITE, "root.translate[0]: "},
-		{DOC("{\"type\": \"sphere\", \"radius\": 1e999}"), BC_ENONFINITE,
-		 "overflow"},
-		{DOC("{\"type\": \"sphere\", \"radius\": NaN}"), BC_EPARSE,
-		 "line 1"},
-		{DOC("{\"type\": \"sphere\", \"radius\": 1, \"color\": [\"red\", "
-		     "0, 0]}"),
-		 BC_EPARSE, "root.color[0]: expected a number, got string"},
-		{DOC("{\"type\": \"sphere\", \"radius\": 1, \"rotate\": [0, 0, "
-		     "0, 2]}"),
-		 BC_ERANGE, "root: "},
-		{DOC("{\"type\": \"sphere\", \"id\": 0, \"radius\": 1}"),
-		 BC_ERANGE, "root.id: 0 is outside 1..4294967295"},
-		{DOC("{\"type\": \"sphere\", \"id\": 4294967296, \"radius\": 1}"),
-		 BC_ERANGE, "root.id: 4294967296 is outside"},
-		{DOC("{\"type\": \"sphere\", \"id\": 1.5, \"radius\": 1}"),
-		 BC_EPARSE, "root.id: expected an integer, got real number"},
-		{DOC("{\"type\": \"union\", \"children\": [{\"type\": "
-		     "\"sphere\", \"id\": 5, \"radius\": 1}, {\"type\": "
-		     "\"sphere\", \"id\": 5, \"radius\": 1}]}"),
-		 BC_EDUPID, "root.children[1]: "},
-		{DOC("{\"type\": \"union\", \"children\": [" S1 "]}"), BC_EINVAL,
-		 "root.children: an operator needs two or more children, got "
-		 "1"},
-		{DOC("{\"type\": \"union\", \"children\": {}}"), BC_EPARSE,
-		 "root.children: expected an array, got object"},
-		{DOC("{\"type\": \"union\"}"), BC_EPARSE,
-		 "root: missing key \"children\""},
-		{DOC("{\"type\": \"union\", \"children\": [1, " S1 "]}"),
-		 BC_EPARSE,
-		 "root.children[0]: expected a node object, got integer"},
-		{DOC("{\"type\": \"smooth_union\", \"children\": [" S1 ", " S1
-		     "]}"),
-		 BC_EPARSE, "root: missing key \"blend\""},
-		{DOC("{\"type\": \"union\", \"blend\": 0.1, \"children\": [" S1
-		     ", " S1 "]}"),
-		 BC_EPARSE, "root: \"blend\" is only for smooth operators"},
-		{DOC("{\"type\": \"smooth_union\", \"blend\": 0, \"children\": "
-		     "[" S1 ", " S1 "]}"),
-		 BC_ERANGE, "root: "},
-		{DOC("{\"type\": \"smooth_union\", \"blend\": 0.1, \"range\": 0, "
-		     "\"children\": [" S1 ", " S1 "]}"),
-		 BC_ERANGE, "root.range: 0 must be positive"},
-		{DOC("{\"type\": \"smooth_union\", \"blend\": 0.6, \"range\": "
-		     "0.05, \"children\": [" S1 ", " S1 "]}"),
-		 BC_ERANGE, "root: "},
-		{DOC("{\"type\": \"sphere\", \"radius\": \"a\\u0000b\"}"),
-		 BC_EPARSE, "line 1"},
-		{"{\"blobcast\": 1, \"camera\": {\"fov\": 40}, \"root\": " S1 "}",
-		 BC_EPARSE, "camera: unknown key \"fov\""},
-		{"{\"blobcast\": 1, \"camera\": [], \"root\": " S1 "}", BC_EPARSE,
-		 "camera: expected an object, got array"},
-		{"{\"blobcast\": 1, \"camera\": {\"eye\": [0, 0, \"x\"]}, "
-		 "\"root\": " S1 "}",
-		 BC_EPARSE, "camera.eye[2]: expected a number, got string"},
-		{"{\"blobcast\": 1, \"camera\": {\"eye\": [0, 0, 0]}, "
-		 "\"root\": " S1 "}",
-		 BC_ERANGE, "camera: "},
-		{"{\"blobcast\": 1, \"camera\": {\"fov_y_deg\": 180}, "
-		 "\"root\": " S1 "}",
-		 BC_ERANGE, "camera: "},
+	    {"", BC_EPARSE, "line 1"},
+	    {"{\"blobcast\": 1, \"root\": " S1, BC_EPARSE, "line"},
+	    {DOC(S1) " trailing", BC_EPARSE, "line"},
+	    {"[1, 2]", BC_EPARSE, "expected an object, got array"},
+	    {"{\"blobcast\": 2, \"root\": " S1 "}", BC_ENOTSUP,
+	     "blobcast: version 2 is not supported"},
+	    {"{\"root\": " S1 "}", BC_EPARSE, "missing key \"blobcast\""},
+	    {"{\"blobcast\": \"1\", \"root\": " S1 "}", BC_EPARSE,
+	     "blobcast: expected an integer, got string"},
+	    {"{\"blobcast\": 1}", BC_EPARSE, "missing key \"root\""},
+	    {"{\"blobcast\": 1, \"rooot\": " S1 "}", BC_EPARSE,
+	     "unknown key \"rooot\""},
+	    {"{\"blobcast\": 1, \"blobcast\": 1, \"root\": " S1 "}", BC_EPARSE,
+	     "duplicate"},
+	    {DOC("{\"type\": \"spher\", \"radius\": 1}"), BC_EENUM,
+	     "root: unknown primitive type \"spher\""},
+	    {DOC("{\"type\": \"unoin\", \"children\": [" S1 ", " S1 "]}"),
+	     BC_EENUM, "root: unknown operator type \"unoin\""},
+	    {DOC("{\"radius\": 1}"), BC_EPARSE, "root: missing key \"type\""},
+	    {DOC("{\"type\": 7, \"radius\": 1}"), BC_EPARSE,
+	     "root.type: expected a string, got integer"},
+	    {DOC("[1]"), BC_EPARSE, "root: expected a node object, got array"},
+	    {DOC("{\"type\": \"union\", \"children\": [" S1 ", " S1 ", "
+	         "{\"type\": \"box\", \"half_extents\": [1, \"2\", 3]}]}"),
+	     BC_EPARSE,
+	     "root.children[2].half_extents[1]: expected a number, got "
+	     "string"},
+	    {DOC("{\"type\": \"box\", \"half_extents\": [1, 2]}"), BC_EPARSE,
+	     "root.half_extents: expected an array of 3 numbers, got 2"},
+	    {DOC("{\"type\": \"box\", \"half_extents\": 1}"), BC_EPARSE,
+	     "root.half_extents: expected an array of 3 numbers, got "
+	     "integer"},
+	    {DOC("{\"type\": \"sphere\"}"), BC_EPARSE,
+	     "root: missing key \"radius\""},
+	    {DOC("{\"type\": \"sphere\", \"radius\": 1, \"radius2\": 1}"),
+	     BC_EPARSE, "root: unknown key \"radius2\" for sphere"},
+	    {DOC("{\"type\": \"sphere\", \"radius\": -1}"), BC_ERANGE,
+	     "root: "},
+	    {DOC("{\"type\": \"sphere\", \"radius\": true}"), BC_EPARSE,
+	     "root.radius: expected a number, got true"},
+	    {DOC("{\"type\": \"sphere\", \"radius\": 1, \"translate\": "
+	         "[1e39, 0, 0]}"),
+	     BC_ENONFINITE, "root.translate[0]: "},
+	    {DOC("{\"type\": \"sphere\", \"radius\": 1e999}"), BC_ENONFINITE,
+	     "overflow"},
+	    {DOC("{\"type\": \"sphere\", \"radius\": NaN}"), BC_EPARSE,
+	     "line 1"},
+	    {DOC("{\"type\": \"sphere\", \"radius\": 1, \"color\": [\"red\", "
+	         "0, 0]}"),
+	     BC_EPARSE, "root.color[0]: expected a number, got string"},
+	    {DOC("{\"type\": \"sphere\", \"radius\": 1, \"rotate\": [0, 0, "
+	         "0, 2]}"),
+	     BC_ERANGE, "root: "},
+	    {DOC("{\"type\": \"sphere\", \"id\": 0, \"radius\": 1}"), BC_ERANGE,
+	     "root.id: 0 is outside 1..4294967295"},
+	    {DOC("{\"type\": \"sphere\", \"id\": 4294967296, \"radius\": 1}"),
+	     BC_ERANGE, "root.id: 4294967296 is outside"},
+	    {DOC("{\"type\": \"sphere\", \"id\": 1.5, \"radius\": 1}"),
+	     BC_EPARSE, "root.id: expected an integer, got real number"},
+	    {DOC("{\"type\": \"union\", \"children\": [{\"type\": "
+	         "\"sphere\", \"id\": 5, \"radius\": 1}, {\"type\": "
+	         "\"sphere\", \"id\": 5, \"radius\": 1}]}"),
+	     BC_EDUPID, "root.children[1]: "},
+	    {DOC("{\"type\": \"union\", \"children\": [" S1 "]}"), BC_EINVAL,
+	     "root.children: an operator needs two or more children, got "
+	     "1"},
+	    {DOC("{\"type\": \"union\", \"children\": {}}"), BC_EPARSE,
+	     "root.children: expected an array, got object"},
+	    {DOC("{\"type\": \"union\"}"), BC_EPARSE,
+	     "root: missing key \"children\""},
+	    {DOC("{\"type\": \"union\", \"children\": [1, " S1 "]}"), BC_EPARSE,
+	     "root.children[0]: expected a node object, got integer"},
+	    {DOC("{\"type\": \"smooth_union\", \"children\": [" S1 ", " S1
+	         "]}"),
+	     BC_EPARSE, "root: missing key \"blend\""},
+	    {DOC("{\"type\": \"union\", \"blend\": 0.1, \"children\": [" S1
+	         ", " S1 "]}"),
+	     BC_EPARSE, "root: \"blend\" is only for smooth operators"},
+	    {DOC("{\"type\": \"smooth_union\", \"blend\": 0, \"children\": "
+	         "[" S1 ", " S1 "]}"),
+	     BC_ERANGE, "root: "},
+	    {DOC("{\"type\": \"smooth_union\", \"blend\": 0.1, \"range\": 0, "
+	         "\"children\": [" S1 ", " S1 "]}"),
+	     BC_ERANGE, "root.range: 0 must be positive"},
+	    {DOC("{\"type\": \"smooth_union\", \"blend\": 0.6, \"range\": "
+	         "0.05, \"children\": [" S1 ", " S1 "]}"),
+	     BC_ERANGE, "root: "},
+	    {DOC("{\"type\": \"sphere\", \"radius\": \"a\\u0000b\"}"),
+	     BC_EPARSE, "line 1"},
+	    {"{\"blobcast\": 1, \"camera\": {\"fov\": 40}, \"root\": " S1 "}",
+	     BC_EPARSE, "camera: unknown key \"fov\""},
+	    {"{\"blobcast\": 1, \"camera\": [], \"root\": " S1 "}", BC_EPARSE,
+	     "camera: expected an object, got array"},
+	    {"{\"blobcast\": 1, \"camera\": {\"eye\": [0, 0, \"x\"]}, "
+	     "\"root\": " S1 "}",
+	     BC_EPARSE, "camera.eye[2]: expected a number, got string"},
+	    {"{\"blobcast\": 1, \"camera\": {\"eye\": [0, 0, 0]}, "
+	     "\"root\": " S1 "}",
+	     BC_ERANGE, "camera: "},
+	    {"{\"blobcast\": 1, \"camera\": {\"fov_y_deg\": 180}, "
+	     "\"root\": " S1 "}",
+	     BC_ERANGE, "camera: "},
 	};
 #undef DOC
 #undef S1
@@ -331,16 +332,15 @@ static void bad_files_fail_with_path_and_reason(void)
 	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
 		struct bc_errinfo ei = {0};
 		struct bc_camera cam, def;
-		int rc = bc_scene_parse_json(cases[i].text,
-					     strlen(cases[i].text), t, &cam,
-					     &ei);
+		int rc = bc_scene_parse_json(
+		    cases[i].text, strlen(cases[i].text), t, &cam, &ei);
 		bool ok = rc == cases[i].code && ei.code == rc &&
-			  strstr(ei.msg, cases[i].reason) != NULL;
+		          strstr(ei.msg, cases[i].reason) != NULL;
 		if (!ok) {
 			fprintf(stderr,
-				"  case %zu: got %s \"%s\", want %s \"%s\"\n",
-				i, bc_err_name(rc), ei.msg,
-				bc_err_name(cases[i].code), cases[i].reason);
+			        "  case %zu: got %s \"%s\", want %s \"%s\"\n",
+			        i, bc_err_name(rc), ei.msg,
+			        bc_err_name(cases[i].code), cases[i].reason);
 		}
 		CHECK(ok);
 		CHECK(tree_is_empty(t));
@@ -358,12 +358,11 @@ static void nesting_is_limited_to_the_tree_depth(void)
 	char *at_limit = nested_unions(BC_TREE_MAX_DEPTH - 1);
 	char *over = nested_unions(BC_TREE_MAX_DEPTH);
 	REQUIRE(t && at_limit && over);
-	CHECK_EQ_INT(bc_scene_parse_json(at_limit, strlen(at_limit), t, NULL,
-					 &ei),
-		     0);
+	CHECK_EQ_INT(
+	    bc_scene_parse_json(at_limit, strlen(at_limit), t, NULL, &ei), 0);
 	CHECK_EQ_INT(bc_tree_node_count(t), 2 * (BC_TREE_MAX_DEPTH - 1) + 1);
 	CHECK_EQ_INT(bc_scene_parse_json(over, strlen(over), t, NULL, &ei),
-		     BC_EDEPTH);
+	             BC_EDEPTH);
 	/* The message keeps the end of a path too long to print whole. */
 	CHECK(strstr(ei.msg, "root...") == ei.msg);
 	CHECK(strstr(ei.msg, ".children[1].children[0]: nesting deeper than") !=
@@ -382,9 +381,9 @@ static void oversized_text_is_refused_before_parsing(void)
 	REQUIRE(t);
 	/* The length is checked before a byte is read. */
 	CHECK_EQ_INT(bc_scene_parse_json(small,
-					 (size_t)BC_SCENE_JSON_MAX_BYTES + 1, t,
-					 NULL, &ei),
-		     BC_ELIMIT);
+	                                 (size_t)BC_SCENE_JSON_MAX_BYTES + 1, t,
+	                                 NULL, &ei),
+	             BC_ELIMIT);
 	CHECK(strstr(ei.msg, "limit") != NULL);
 	bc_tree_destroy(t);
 }
@@ -463,13 +462,13 @@ static void save_is_atomic_and_load_reads_it_back(void)
 
 /* Distance along the ray from eye in direction d to the first surface, by
  * sphere tracing the full field; negative when nothing is hit. */
-static float trace(const struct bc_lin *l, const float eye[3],
-		   const float d[3], float far)
+static float trace(const struct bc_lin *l, const float eye[3], const float d[3],
+                   float far)
 {
 	float t = 0.0f;
 	for (int i = 0; i < 400 && t < far; i++) {
 		float p[3] = {eye[0] + t * d[0], eye[1] + t * d[1],
-			      eye[2] + t * d[2]};
+		              eye[2] + t * d[2]};
 		float f = bc_eval_full(l, p);
 		if (f < 1e-3f) {
 			return t;
@@ -524,7 +523,7 @@ static void default_scene_is_valid_and_framed(void)
 		for (uint32_t i = 0; i < 24; i++) {
 			float d[3];
 			bc_view_rays_dir(&vr, (float)i + 0.5f, (float)j + 0.5f,
-					 d);
+			                 d);
 			hits += trace(l, cam.eye, d, 30.0f) >= 0.0f;
 		}
 	}
@@ -566,7 +565,7 @@ static void allocation_failures_are_survived(void)
 		failures++;
 		if (rc != BC_ENOMEM) {
 			fprintf(stderr, "  n=%lu: %s %s\n", n, bc_err_name(rc),
-				ei.msg);
+			        ei.msg);
 		}
 		CHECK_EQ_INT(rc, BC_ENOMEM);
 		CHECK(tree_is_empty(t));
@@ -591,22 +590,22 @@ static void allocation_failures_are_survived(void)
 }
 
 static const struct bc_test tests[] = {
-	{"every_generator_round_trips_through_json",
-	 every_generator_round_trips_through_json},
-	{"random_trees_round_trip_through_json",
-	 random_trees_round_trip_through_json},
-	{"awkward_floats_round_trip_exactly", awkward_floats_round_trip_exactly},
-	{"defaults_and_assigned_ids", defaults_and_assigned_ids},
-	{"bad_files_fail_with_path_and_reason",
-	 bad_files_fail_with_path_and_reason},
-	{"nesting_is_limited_to_the_tree_depth",
-	 nesting_is_limited_to_the_tree_depth},
-	{"oversized_text_is_refused_before_parsing",
-	 oversized_text_is_refused_before_parsing},
-	{"save_is_atomic_and_load_reads_it_back",
-	 save_is_atomic_and_load_reads_it_back},
-	{"default_scene_is_valid_and_framed", default_scene_is_valid_and_framed},
-	{"allocation_failures_are_survived", allocation_failures_are_survived},
+    {"every_generator_round_trips_through_json",
+     every_generator_round_trips_through_json},
+    {"random_trees_round_trip_through_json",
+     random_trees_round_trip_through_json},
+    {"awkward_floats_round_trip_exactly", awkward_floats_round_trip_exactly},
+    {"defaults_and_assigned_ids", defaults_and_assigned_ids},
+    {"bad_files_fail_with_path_and_reason",
+     bad_files_fail_with_path_and_reason},
+    {"nesting_is_limited_to_the_tree_depth",
+     nesting_is_limited_to_the_tree_depth},
+    {"oversized_text_is_refused_before_parsing",
+     oversized_text_is_refused_before_parsing},
+    {"save_is_atomic_and_load_reads_it_back",
+     save_is_atomic_and_load_reads_it_back},
+    {"default_scene_is_valid_and_framed", default_scene_is_valid_and_framed},
+    {"allocation_failures_are_survived", allocation_failures_are_survived},
 };
 
 BC_TEST_MAIN(tests)

@@ -44,13 +44,13 @@ enum bc_gen_blend {
  * does not read must be zero (BC_EINVAL otherwise), so that a mistyped
  * command line is caught instead of silently ignored. */
 struct bc_gen_opts {
-	uint32_t level;  /* fig16: recursion level 1..BC_GEN_MAX_LEVEL */
-	uint32_t count;  /* instances, primitives or gears */
-	uint64_t seed;   /* PRNG seed; 0 is a seed like any other */
+	uint32_t level; /* fig16: recursion level 1..BC_GEN_MAX_LEVEL */
+	uint32_t count; /* instances, primitives or gears */
+	uint64_t seed;  /* PRNG seed; 0 is a seed like any other */
 	enum bc_gen_kind kind;
 	enum bc_gen_blend blend;
-	uint32_t teeth;  /* gears: teeth of the largest gear */
-	uint32_t depth;  /* random: deepest nesting, 2..BC_TREE_MAX_DEPTH */
+	uint32_t teeth; /* gears: teeth of the largest gear */
+	uint32_t depth; /* random: deepest nesting, 2..BC_TREE_MAX_DEPTH */
 };
 
 /* Which options a generator reads (struct bc_gen_info.takes). */
@@ -88,7 +88,7 @@ enum bc_gen_blend bc_gen_blend_from_name(const char *name);
  * BC_GEN_MAX_PRIMS primitives) or BC_ENOMEM, with the reason in ei; the
  * tree is left empty on failure.
  */
-int bc_gen(const char *name, const struct bc_gen_opts *opts,
-	   struct bc_tree *t, struct bc_camera *cam, struct bc_errinfo *ei);
+int bc_gen(const char *name, const struct bc_gen_opts *opts, struct bc_tree *t,
+           struct bc_camera *cam, struct bc_errinfo *ei);
 
 #endif

@@ -51,11 +51,11 @@
  * JSON path and reason in ei.
  */
 int bc_scene_parse_json(const char *text, size_t len, struct bc_tree *t,
-			struct bc_camera *cam, struct bc_errinfo *ei);
+                        struct bc_camera *cam, struct bc_errinfo *ei);
 /* Reads the file at path (refusing files over BC_SCENE_JSON_MAX_BYTES before
  * reading them) and parses it as bc_scene_parse_json() does. */
 int bc_scene_load_json(const char *path, struct bc_tree *t,
-		       struct bc_camera *cam, struct bc_errinfo *ei);
+                       struct bc_camera *cam, struct bc_errinfo *ei);
 
 /*
  * Writes t (and cam, when not NULL) as a version-1 scene. Every id and every
@@ -69,7 +69,7 @@ char *bc_scene_to_json(const struct bc_tree *t, const struct bc_camera *cam);
  * the same directory, fsync, rename over path, fsync of the directory.
  * Returns 0, BC_EINVAL (empty tree), BC_ENOMEM or BC_EIO with the reason. */
 int bc_scene_save_json(const char *path, const struct bc_tree *t,
-		       const struct bc_camera *cam, struct bc_errinfo *ei);
+                       const struct bc_camera *cam, struct bc_errinfo *ei);
 
 /* The built-in scene: a small colourful composition that shows primitives of
  * several kinds and sharp and smooth operators, framed by its camera. A
@@ -88,7 +88,7 @@ const char *bc_scene_default_json(void);
  * reset on entry.
  */
 int bc_scene_encode(const struct bc_tree *t, const struct bc_camera *cam,
-		    uint8_t **out, size_t *len);
+                    uint8_t **out, size_t *len);
 int bc_tree_encode(const struct bc_tree *t, uint8_t **out, size_t *len);
 
 /*
@@ -101,10 +101,10 @@ int bc_tree_encode(const struct bc_tree *t, uint8_t **out, size_t *len);
  * BC_ELIMIT, BC_ENOMEM) with the node index and reason in ei.
  */
 int bc_scene_decode(const uint8_t *buf, size_t len, struct bc_tree *t,
-		    struct bc_camera *cam, bool *has_camera,
-		    struct bc_errinfo *ei);
+                    struct bc_camera *cam, bool *has_camera,
+                    struct bc_errinfo *ei);
 int bc_tree_decode(const uint8_t *buf, size_t len, struct bc_tree *t,
-		   struct bc_errinfo *ei);
+                   struct bc_errinfo *ei);
 
 /* Number of floats a primitive of kind carries in its binary node (the
  * extent of its bc_prim_info parameter layout); 0 for an invalid kind. */
