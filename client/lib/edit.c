@@ -283,6 +283,61 @@ static int set_fields(const struct bc_proto_edit_op *e, bool is_op,
 	return 0;
 }
 
+static uint32_t le32(const uint8_t *p)
+{
+	return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 |
+	       (uint32_t)p[3] << 24;
+}
+
+/* Whether a subtree's scene encoding (PROTOCOL.md section 8) has a node
+ * with id 0. The server gives such nodes ids that EDIT_APPLIED does not
+ * carry (it repeats the operation as sent), so a mirror cannot follow.
+ * Anything that does not parse counts as yes: the mirror is then dropped,
+ * which is always safe. */
+static bool has_unnamed_node(const uint8_t *b, size_t len)
+{
+	size_t pos = 1;
+	uint32_t n;
+	if (len < 1) {
+		return true;
+	}
+	if (b[0] & BC_SCENE_FLAG_CAMERA) {
+		pos += 40;
+	}
+	if (pos + 4 > len) {
+		return true;
+	}
+	n = le32(b + pos);
+	pos += 4;
+	for (uint32_t i = 0; i < n; i++) {
+		uint8_t tag;
+		if (len - pos < 5 || le32(b + pos + 1) == 0) {
+			return true;
+		}
+		tag = b[pos];
+		if (tag & BC_SCENE_TAG_OP) {
+			/* tag, id, blend, range, child_count */
+			pos += 17;
+			continue;
+		}
+		/* tag, id, translate, rotate, has_color [color] nfloats
+		 * params */
+		pos += 33;
+		if (pos >= len) {
+			return true;
+		}
+		pos += 1u + (b[pos] ? 12u : 0u);
+		if (pos >= len) {
+			return true;
+		}
+		pos += 1u + 4u * (size_t)b[pos];
+		if (pos > len) {
+			return true;
+		}
+	}
+	return false;
+}
+
 static int replay_op(struct bc_tree *t, const struct bc_proto_edit_op *e,
 		     struct bc_errinfo *ei)
 {
@@ -307,6 +362,13 @@ static int replay_op(struct bc_tree *t, const struct bc_proto_edit_op *e,
 		return bc_tree_remove(t, e->node, ei);
 	case BC_PROTO_EDIT_INSERT:
 	case BC_PROTO_EDIT_REPLACE:
+		if (has_unnamed_node(e->subtree.ptr, e->subtree.len)) {
+			return bc_errinfo_set(ei, BC_ENOTSUP,
+					      "node %u: a subtree with nodes "
+					      "of id 0 (ids only the server "
+					      "knows)",
+					      e->node);
+		}
 		if (!(sub = bc_tree_create())) {
 			return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
 		}

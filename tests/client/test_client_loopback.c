@@ -575,6 +575,22 @@ static void script_structural(struct fake *f, int fd)
 				       .node = 3};
 	ea.edit_applied.order = 9;
 	srv_send(f, fd, &ea);
+	/* A fresh SCENE_STATE brings it back; then a subtree whose node has
+	 * id 0 (the server picks the id, the edit does not say which) drops
+	 * it again. */
+	srv_session(f, fd, 0, 10);
+	bc_proto_buf_init(&sub, 0);
+	bc_proto_scene_begin(&sub, NULL, 1);
+	bc_proto_scene_prim(&sub, BC_PRIM_SPHERE, 0, (float[3]){0, 1, 0},
+			    (float[4]){0, 0, 0, 1}, NULL, 1, &one);
+	op = (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_INSERT,
+				       .node = 1,
+				       .position = 1};
+	op.subtree.ptr = sub.data;
+	op.subtree.len = (uint32_t)sub.len;
+	ea.edit_applied.order = 11;
+	srv_send(f, fd, &ea);
+	bc_proto_buf_finish(&sub);
 	SCHECK(f, !srv_next(f, fd, &m));
 }
 
@@ -606,6 +622,14 @@ static void test_mirror_follows_structural_edits(void)
 		CHECK_EQ_INT(m.edit_applied.order, 9);
 		CHECK(bc_client_scene(c, NULL) == NULL);
 		CHECK_EQ_INT(bc_client_info(c)->order, 9);
+		/* SESSION_INFO, then SCENE_STATE: the mirror is back. */
+		REQUIRE(bc_client_wait(c, BC_MSG_SCENE_STATE, 0, &m, 0, &ei) ==
+			0);
+		REQUIRE(bc_client_scene(c, NULL) != NULL);
+		CHECK_EQ_INT(bc_tree_node_count(bc_client_scene(c, NULL)), 4);
+		REQUIRE(bc_client_recv(c, &m, 5000) == 1);
+		CHECK_EQ_INT(m.edit_applied.order, 11);
+		CHECK(bc_client_scene(c, NULL) == NULL);
 	}
 	bc_client_destroy(c);
 	fake_stop(&f);
