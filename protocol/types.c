@@ -46,7 +46,9 @@ static const struct bc__type_info types[BC_MSG_COUNT] = {
                        40},
     [BC_MSG_VIEW] = {"VIEW", BC__FROM_CLIENT, 0, 8},
     [BC_MSG_FRAME] = {"FRAME", BC__FROM_SERVER,
-                      BC_PROTO_FLAG_STILL | BC_PROTO_FLAG_SNAPSHOT, BULK},
+                      BC_PROTO_FLAG_STILL | BC_PROTO_FLAG_SNAPSHOT |
+                              BC_PROTO_FLAG_INCOMPLETE,
+                      BULK},
     [BC_MSG_PICK] = {"PICK", BC__FROM_CLIENT, 0, 4},
     [BC_MSG_PICK_RESULT] = {"PICK_RESULT", BC__FROM_SERVER, 0, 24},
     [BC_MSG_SNAPSHOT] = {"SNAPSHOT", BC__FROM_CLIENT, 0, 1},

@@ -43,6 +43,7 @@ struct rresult {
 	float position[3], depth;
 	uint32_t node;
 	double render_ms, encode_ms;
+	bool incomplete;
 	struct rresult *next;
 };
 
@@ -237,6 +238,13 @@ static void run_job(struct bc_rthread *rt, struct bc_rjob *job)
 		rects[i].data.len = (uint32_t)enc[i].len;
 	}
 	m.flags = job->flags;
+	if (stats.incomplete) {
+		m.flags |= BC_PROTO_FLAG_INCOMPLETE;
+		res->incomplete = true;
+		bc_log(BC_LOG_WARN,
+		       "session %u: frame %u cut at the %u ms budget",
+		       job->session_id, job->frame_no, BC_SRV_FRAME_BUDGET_MS);
+	}
 	m.seq = job->snapshot_seq;
 	m.frame.frame_no = job->frame_no;
 	m.frame.order = job->order;
@@ -480,6 +488,10 @@ void bc_rthread_deliver(uv_async_t *async)
 					bc_client_get(srv, job->targets[i]);
 				if (c) {
 					bc_client_send_frame(c, res->frame);
+					/* Nothing to patch with damage: the
+					 * next frame is whole. */
+					c->has_base = c->has_base &&
+						      !res->incomplete;
 				}
 			}
 			if (!job->snapshot_seq) {
@@ -519,6 +531,7 @@ int bc_rthread_start(struct bc_srv *srv, struct bc_errinfo *ei)
 				      bc_backend_name(srv->cfg.backend));
 	}
 	rt->opts.gl_platform = srv->cfg.gl_platform;
+	rt->opts.budget_ms = BC_SRV_FRAME_BUDGET_MS;
 	if (!(rt->enc = bc_encoder_create())) {
 		bc_free(rt);
 		return bc_errinfo_set(ei, BC_ENOMEM, "cannot create encoder");

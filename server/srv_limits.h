@@ -48,6 +48,12 @@
  * many journaled edits: replaying at most this many on start stays fast. */
 #define BC_SRV_SNAPSHOT_EVERY 1000u
 
+/* Per-frame time budget of a render, milliseconds. Past it the CPU tracer
+ * starts no new tile and the frame goes out flagged INCOMPLETE, so one
+ * pathological scene cannot hold the render thread that every session
+ * shares for long. */
+#define BC_SRV_FRAME_BUDGET_MS 2000u
+
 /* Damage is tracked per 16x16 block: the JPEG MCU of 4:2:0 chroma, so a
  * damaged rectangle encodes without partial blocks. */
 #define BC_SRV_DAMAGE_BLOCK 16u

@@ -804,7 +804,7 @@ def gen_frame():
         dict(x=0, y=0, w=4, h=4, data="00")] * 2)), "EPROTO_COUNT", flags=2)
     t.badp("snapshot rect not the whole image", w_frame(dict(snap, rects=[
         dict(x=0, y=0, w=4, h=3, data="00")])), "ERANGE", flags=2)
-    t.badp("undefined flag bit 2", p, "EPROTO_FLAGS", flags=4)
+    t.badp("undefined flag bit 3", p, "EPROTO_FLAGS", flags=8)
     t.bad("over the client's 64 KiB frame limit",
           header("FRAME", 65537), "EPROTO_LENGTH",
           reader={"side": "client", "max_payload": 65536})

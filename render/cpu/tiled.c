@@ -157,6 +157,8 @@ struct tiled_frame {
 	atomic_uint next;   /* work counter of the running phase */
 	atomic_uint tiles_done;
 	struct bc__progress progress;
+	double deadline;   /* bc__now_ms() past which no tile starts; 0: none */
+	atomic_uint skipped; /* tiles left as background past the deadline */
 };
 
 static inline float dot3(const float a[3], const float b[3])
@@ -689,6 +691,21 @@ static void trace_tile(struct tiled_frame *tf, struct worker *wk, uint32_t tile)
 	}
 }
 
+/* Past the frame budget: the tile's pixels become background. */
+static void skip_tile(struct tiled_frame *tf, uint32_t tile)
+{
+	const struct bc__frame_ctx *fc = tf->fc;
+	uint32_t w = fc->out->width, h = fc->out->height;
+	uint32_t x0 = (tile % tf->tw) * BC_CPU_TILE;
+	uint32_t y0 = (tile / tf->tw) * BC_CPU_TILE;
+	for (uint32_t y = y0; y < y0 + BC_CPU_TILE && y < h; y++) {
+		for (uint32_t x = x0; x < x0 + BC_CPU_TILE && x < w; x++) {
+			bc__put_miss(fc, x, y, 0, 0);
+		}
+	}
+	atomic_fetch_add(&tf->skipped, 1u);
+}
+
 /* Phase 4, per tile: walk the depth ranges and trace. */
 static void phase_trace(void *arg, uint32_t thread)
 {
@@ -698,6 +715,10 @@ static void phase_trace(void *arg, uint32_t thread)
 		uint32_t tile = atomic_fetch_add(&tf->next, 1u);
 		if (tile >= tf->ntiles) {
 			break;
+		}
+		if (tf->deadline > 0.0 && bc__now_ms() > tf->deadline) {
+			skip_tile(tf, tile);
+			continue;
 		}
 		trace_tile(tf, wk, tile);
 		atomic_fetch_add(&tf->tiles_done, 1u);
@@ -849,6 +870,8 @@ static int tiled_render(struct bc_renderer *r, const struct bc_camera *cam,
 	}
 	atomic_init(&tf.next, 0u);
 	atomic_init(&tf.tiles_done, 0u);
+	atomic_init(&tf.skipped, 0u);
+	tf.deadline = r->opts.budget_ms ? t_start + r->opts.budget_ms : 0.0;
 	bc__parallel(r->threads, phase_rays, &tf);
 	if (tf.nprims > 0) {
 		if (grow_pair((void **)&b->rects, (void **)&b->cand_off,
@@ -910,6 +933,7 @@ static int tiled_render(struct bc_renderer *r, const struct bc_camera *cam,
 		stats->ms_trace = now - t_ab;
 		stats->ms_total = now - t_start;
 		stats->max_overlap = longest;
+		stats->incomplete = atomic_load(&tf.skipped) > 0;
 		for (uint32_t i = 0; i < r->threads; i++) {
 			stats->field_evals += b->workers[i].evals;
 		}

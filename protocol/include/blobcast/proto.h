@@ -78,6 +78,9 @@ enum bc_msg_type {
 #define BC_PROTO_FLAG_STILL 0x0001u
 /* FRAME: the lossless answer to a SNAPSHOT (seq = that request's seq). */
 #define BC_PROTO_FLAG_SNAPSHOT 0x0002u
+/* FRAME: the render hit the server's frame time budget; parts of the image
+ * are background. The next change renders the view whole again. */
+#define BC_PROTO_FLAG_INCOMPLETE 0x0004u
 
 /* Which peer's messages a reader accepts. */
 enum bc_proto_side {

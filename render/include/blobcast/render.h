@@ -64,6 +64,10 @@ struct bc_render_opts {
 	enum bc_range_arith svo_range;
 	uint32_t svo_threshold;  /* node-count threshold tau, 0 = default */
 	uint32_t svo_max_depth;  /* 0 = default */
+	/* Milliseconds a frame may take, 0 = no limit. Past it the tiled
+	 * tracer starts no new tile: the rest is background and the stats
+	 * say incomplete (one pathological scene cannot stall a server). */
+	uint32_t budget_ms;
 };
 
 /* Timings of one frame, milliseconds, and work counters. */
