@@ -1,0 +1,445 @@
+/*
+ * The `svo` backend: struct bc_backend_ops over the adaptive octree. sync()
+ * compiles the tree into an RPN (a copy: later edits do not reach it until
+ * the next sync); render() builds the octree when it has none or when the
+ * frame needs a thicker hit band than it was built with (the band depends
+ * on the camera and the resolution), then casts one ray per pixel centre
+ * on worker threads, 8x8 tiles at a time.
+ *
+ * Pixels mean what they mean for the CPU backends (render.h): the same hit
+ * criterion (svo.h), the same normals (tetrahedral differences over the
+ * hit thickness), light, colours, background and debug ramps, so frames of
+ * `svo` and `tiled` compare pixel by pixel. The octree's build time is
+ * reported as ms_abuffer, the slot for a frame's acceleration structure.
+ */
+#include "svo_impl.h"
+
+#include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "blobcast/alloc.h"
+
+/* Worker threads at most, whatever opts.threads asks. */
+#define SVO_MAX_THREADS 64u
+/* Tile edge in pixels: rays of a tile share leaves, so handing out tiles
+ * rather than rows keeps a thread's octree walk in cache. */
+#define SVO_TILE 8u
+/* The octree is built with this much more band than the frame needs, so a
+ * camera that moves a little does not force a rebuild every frame. */
+#define SVO_BAND_SLACK 1.5f
+/* Debug ramps saturate here (the CPU backends' values). */
+#define SVO_DEBUG_EVALS_MAX 256.0f
+#define SVO_DEBUG_TERMS_MAX 64.0f
+
+struct bc_renderer {
+	struct bc_render_opts opts;
+	uint32_t threads;
+	bool synced, empty;
+	struct bc_svo_rpn rpn;
+	struct bc_svo *svo;
+	float band; /* band the octree was built with */
+};
+
+static int svo_create(struct bc_renderer **out,
+		      const struct bc_render_opts *opts, struct bc_errinfo *ei)
+{
+	struct bc_renderer *r;
+	long ncpu;
+	*out = NULL;
+	if ((int)opts->svo_range < BC_RANGE_DEFAULT ||
+	    opts->svo_range >= BC_RANGE_COUNT) {
+		return bc_errinfo_set(ei, BC_EENUM, "svo: unknown range %d",
+				      (int)opts->svo_range);
+	}
+	if (opts->svo_max_depth > BC_SVO_MAX_DEPTH) {
+		return bc_errinfo_set(ei, BC_ERANGE,
+				      "svo: max depth %u exceeds %u",
+				      opts->svo_max_depth, BC_SVO_MAX_DEPTH);
+	}
+	if ((int)opts->debug < BC_DEBUG_NONE || opts->debug >= BC_DEBUG_COUNT) {
+		return bc_errinfo_set(ei, BC_EENUM, "svo: unknown debug mode %d",
+				      (int)opts->debug);
+	}
+	r = bc_calloc(1, sizeof(*r));
+	if (!r) {
+		return bc_errinfo_set(ei, BC_ENOMEM, "svo: out of memory");
+	}
+	r->opts = *opts;
+	r->opts.gl_platform = NULL; /* not ours to keep */
+	ncpu = sysconf(_SC_NPROCESSORS_ONLN);
+	r->threads = opts->threads ? opts->threads
+				   : (ncpu > 0 ? (uint32_t)ncpu : 1u);
+	if (r->threads > SVO_MAX_THREADS) {
+		r->threads = SVO_MAX_THREADS;
+	}
+	*out = r;
+	return 0;
+}
+
+static void svo_destroy(struct bc_renderer *r)
+{
+	if (!r) {
+		return;
+	}
+	bc_svo_destroy(r->svo);
+	bc_svo_rpn_finish(&r->rpn);
+	bc_free(r);
+}
+
+static bool unchanged(const struct bc_dirty *d)
+{
+	return d && !d->structure && d->slot_lo == d->slot_hi &&
+	       d->param_lo == d->param_hi && d->prim_lo == d->prim_hi &&
+	       d->edits == 0;
+}
+
+static int svo_sync(struct bc_renderer *r, const struct bc_tree *t,
+		    const struct bc_dirty *dirty, struct bc_errinfo *ei)
+{
+	const struct bc_lin *l;
+	int rc;
+	if (r->synced && unchanged(dirty)) {
+		return 0;
+	}
+	/* Any change moves the field somewhere: the octree is rebuilt. */
+	bc_svo_destroy(r->svo);
+	r->svo = NULL;
+	bc_svo_rpn_finish(&r->rpn);
+	r->synced = false;
+	l = t ? bc_tree_lin(t) : NULL;
+	r->empty = l == NULL;
+	if (l && (rc = bc_svo_rpn_init(&r->rpn, l))) {
+		return bc_errinfo_set(ei, rc, "svo: compiling the tree: %s",
+				      bc_strerror(rc));
+	}
+	r->synced = true;
+	return 0;
+}
+
+/* ---- Pixels --------------------------------------------------------------- */
+
+struct frame {
+	struct bc_renderer *r;
+	struct bc_frame *out;
+	struct bc_view_rays vr;
+	struct bc_svo_cast_params cp;
+	float light[3];
+	float ambient;
+	uint32_t tiles_x, ntiles;
+	atomic_uint next;
+	atomic_uint_fast64_t evals;
+	atomic_int err;
+};
+
+static void normalize3(float v[3])
+{
+	float n = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+	if (n > 0.0f) {
+		v[0] /= n;
+		v[1] /= n;
+		v[2] /= n;
+	}
+}
+
+static inline float dot3(const float a[3], const float b[3])
+{
+	return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static uint8_t to_srgb8(float c)
+{
+	float s;
+	if (!(c > 0.0f)) {
+		return 0;
+	}
+	if (c >= 1.0f) {
+		return 255;
+	}
+	s = c <= 0.0031308f ? 12.92f * c : 1.055f * powf(c, 1.0f / 2.4f) - 0.055f;
+	return (uint8_t)(s * 255.0f + 0.5f);
+}
+
+/* The viridis ramp of the CPU backends' debug views. */
+static void ramp(float x, uint8_t px[4])
+{
+	static const float stops[5][3] = {
+		{0.267f, 0.005f, 0.329f}, {0.229f, 0.322f, 0.545f},
+		{0.128f, 0.567f, 0.551f}, {0.369f, 0.789f, 0.383f},
+		{0.993f, 0.906f, 0.144f},
+	};
+	float s;
+	int i;
+	x = x < 0.0f ? 0.0f : (x > 1.0f ? 1.0f : x);
+	s = x * 4.0f;
+	i = s >= 4.0f ? 3 : (int)s;
+	s -= (float)i;
+	for (int c = 0; c < 3; c++) {
+		float v = stops[i][c] + (stops[i + 1][c] - stops[i][c]) * s;
+		px[c] = (uint8_t)(v * 255.0f + 0.5f);
+	}
+	px[3] = 255;
+}
+
+static void debug_px(const struct frame *fr, uint32_t evals, uint32_t terms,
+		     uint8_t px[4])
+{
+	if (fr->r->opts.debug == BC_DEBUG_EVALS) {
+		ramp((float)evals / SVO_DEBUG_EVALS_MAX, px);
+	} else {
+		ramp((float)terms / SVO_DEBUG_TERMS_MAX, px);
+	}
+}
+
+static void put_miss(const struct frame *fr, uint32_t x, uint32_t y,
+		     uint32_t evals)
+{
+	struct bc_frame *out = fr->out;
+	size_t i = (size_t)y * out->width + x;
+	uint8_t *px = out->rgba + 4 * i;
+	if (fr->r->opts.debug != BC_DEBUG_NONE) {
+		debug_px(fr, evals, 0, px);
+	} else {
+		float v = out->height > 1 ? (float)y / (float)(out->height - 1)
+					  : 0.0f;
+		px[0] = (uint8_t)(30.0f - 22.0f * v);
+		px[1] = (uint8_t)(33.0f - 24.0f * v);
+		px[2] = (uint8_t)(42.0f - 30.0f * v);
+		px[3] = 255;
+	}
+	if (out->depth) {
+		out->depth[i] = INFINITY;
+	}
+	if (out->ids) {
+		out->ids[i] = 0;
+	}
+}
+
+static void put_hit(const struct frame *fr, uint32_t x, uint32_t y,
+		    const float d[3], const struct bc_svo_hit *hit)
+{
+	static const float tet[4][3] = {
+		{1, -1, -1}, {-1, -1, 1}, {-1, 1, -1}, {1, 1, 1}};
+	const struct bc_svo_rpn *rpn = &fr->r->rpn;
+	struct bc_frame *out = fr->out;
+	size_t i = (size_t)y * out->width + x;
+	uint8_t *px = out->rgba + 4 * i;
+	const float *eye = fr->vr.eye;
+	float t = hit->t;
+	float p[3] = {eye[0] + t * d[0], eye[1] + t * d[1], eye[2] + t * d[2]};
+	float n[3] = {0.0f, 0.0f, 0.0f};
+	/* Differences over the hit thickness, the scale the surface was
+	 * resolved at (as the CPU backends take them). */
+	float h = fmaxf(BC_SVO_HIT_FOOTPRINT * fr->cp.pix_angle * t,
+			fr->cp.min_step);
+	for (int k = 0; k < 4; k++) {
+		float q[3] = {p[0] + h * tet[k][0], p[1] + h * tet[k][1],
+			      p[2] + h * tet[k][2]};
+		float v = bc_svo_cmask_eval(rpn, hit->mask, q);
+		for (int c = 0; c < 3; c++) {
+			n[c] += tet[k][c] * v;
+		}
+	}
+	if (!(isfinite(n[0]) && isfinite(n[1]) && isfinite(n[2])) ||
+	    dot3(n, n) == 0.0f) {
+		n[0] = -d[0];
+		n[1] = -d[1];
+		n[2] = -d[2];
+	}
+	normalize3(n);
+	if (dot3(n, d) > 0.0f) {
+		/* Seen from inside the solid: light the side facing us. */
+		n[0] = -n[0];
+		n[1] = -n[1];
+		n[2] = -n[2];
+	}
+	if (fr->r->opts.debug != BC_DEBUG_NONE) {
+		debug_px(fr, hit->evals + hit->range_evals + 4u,
+			 hit->leaf_terms, px);
+	} else {
+		static const float grey[3] = {0.7f, 0.7f, 0.7f};
+		const float *albedo =
+			hit->prim < rpn->nprims ? rpn->color[hit->prim] : grey;
+		float hv[3] = {fr->light[0] - d[0], fr->light[1] - d[1],
+			       fr->light[2] - d[2]};
+		float diff = fmaxf(dot3(n, fr->light), 0.0f), spec;
+		normalize3(hv);
+		spec = diff > 0.0f ? powf(fmaxf(dot3(n, hv), 0.0f), 48.0f)
+				   : 0.0f;
+		for (int c = 0; c < 3; c++) {
+			float lit = albedo[c] * (fr->ambient +
+						 (1.0f - fr->ambient) * diff) +
+				    0.25f * spec;
+			px[c] = to_srgb8(lit);
+		}
+		px[3] = 255;
+	}
+	if (out->depth) {
+		out->depth[i] = t;
+	}
+	if (out->ids) {
+		out->ids[i] = hit->prim < rpn->nprims ? rpn->prim_id[hit->prim]
+						      : 0;
+	}
+}
+
+static void *worker(void *arg)
+{
+	struct frame *fr = arg;
+	struct bc_svo_caster *c = NULL;
+	struct bc_frame *out = fr->out;
+	uint64_t evals = 0;
+	int rc = fr->r->svo ? bc_svo_caster_create(&c, fr->r->svo) : 0;
+	if (rc) {
+		/* The other threads take this one's share. */
+		atomic_store(&fr->err, rc);
+		return NULL;
+	}
+	for (;;) {
+		uint32_t tile = atomic_fetch_add(&fr->next, 1u);
+		uint32_t x0, y0;
+		if (tile >= fr->ntiles) {
+			break;
+		}
+		x0 = (tile % fr->tiles_x) * SVO_TILE;
+		y0 = (tile / fr->tiles_x) * SVO_TILE;
+		for (uint32_t y = y0; y < y0 + SVO_TILE && y < out->height; y++) {
+			for (uint32_t x = x0; x < x0 + SVO_TILE && x < out->width;
+			     x++) {
+				float d[3];
+				struct bc_svo_hit hit;
+				bc_view_rays_dir(&fr->vr, (float)x + 0.5f,
+						 (float)y + 0.5f, d);
+				if (c && bc_svo_cast(c, fr->vr.eye, d, 0.0f,
+						     INFINITY, &fr->cp, &hit)) {
+					put_hit(fr, x, y, d, &hit);
+				} else {
+					if (!c) {
+						memset(&hit, 0, sizeof(hit));
+					}
+					put_miss(fr, x, y,
+						 hit.evals + hit.range_evals);
+				}
+				evals += hit.evals + hit.range_evals;
+			}
+		}
+	}
+	atomic_fetch_add(&fr->evals, evals);
+	bc_svo_caster_destroy(c);
+	return NULL;
+}
+
+/* Hit thickness the frame needs: the band at the farthest corner of the
+ * tree's box from the eye. */
+static float frame_band(const struct bc_svo_rpn *rpn, const float eye[3],
+			const struct bc_svo_cast_params *cp)
+{
+	float far = 0.0f;
+	for (uint32_t k = 0; k < 8; k++) {
+		float s2 = 0.0f;
+		for (int i = 0; i < 3; i++) {
+			float c = (k >> i) & 1u ? rpn->hi[i] : rpn->lo[i];
+			s2 += (c - eye[i]) * (c - eye[i]);
+		}
+		far = fmaxf(far, sqrtf(s2));
+	}
+	return bc_svo_hit_band(cp, far);
+}
+
+static int svo_render(struct bc_renderer *r, const struct bc_camera *cam,
+		      struct bc_frame *out, struct bc_render_stats *stats,
+		      struct bc_errinfo *ei)
+{
+	struct frame fr;
+	pthread_t tids[SVO_MAX_THREADS];
+	uint32_t started = 0;
+	double t0 = bc__svo_now_ms(), t1;
+	float size;
+	int rc;
+	if (stats) {
+		memset(stats, 0, sizeof(*stats));
+	}
+	if (!r->synced) {
+		return bc_errinfo_set(ei, BC_ESTATE, "svo: render before sync");
+	}
+	if ((rc = bc_camera_validate(cam, ei))) {
+		return rc;
+	}
+	if (!out || !out->rgba || out->width == 0 || out->height == 0 ||
+	    out->width > BC_RENDER_MAX_DIM || out->height > BC_RENDER_MAX_DIM) {
+		return bc_errinfo_set(ei, BC_EINVAL, "svo: bad frame");
+	}
+	memset(&fr, 0, sizeof(fr));
+	fr.r = r;
+	fr.out = out;
+	bc_view_rays_init(&fr.vr, cam, out->width, out->height);
+	size = !r->empty && r->rpn.size > 0.0f && isfinite(r->rpn.size)
+		       ? r->rpn.size
+		       : 1.0f;
+	fr.cp.pix_angle = 2.0f * fr.vr.tan_half_y / (float)fr.vr.height;
+	fr.cp.min_step = BC_SVO_MIN_STEP_REL * size;
+	fr.cp.refine_tol = BC_SVO_REFINE_REL * size;
+	for (int i = 0; i < 3; i++) {
+		fr.light[i] = -0.5f * fr.vr.right[i] + 0.6f * fr.vr.up[i] -
+			      0.6f * fr.vr.forward[i];
+	}
+	normalize3(fr.light);
+	fr.ambient = 0.18f;
+	if (!r->empty) {
+		float need = frame_band(&r->rpn, fr.vr.eye, &fr.cp);
+		if (!r->svo || need > r->band) {
+			struct bc_svo_opts so = {
+				.arith = r->opts.svo_range,
+				.threshold = r->opts.svo_threshold,
+				.max_depth = r->opts.svo_max_depth,
+				.band = need * SVO_BAND_SLACK,
+			};
+			bc_svo_destroy(r->svo);
+			r->svo = NULL;
+			if ((rc = bc_svo_build(&r->svo, &r->rpn, &so, ei))) {
+				return rc;
+			}
+			r->band = so.band;
+		}
+	}
+	t1 = bc__svo_now_ms();
+	fr.tiles_x = (out->width + SVO_TILE - 1) / SVO_TILE;
+	fr.ntiles = fr.tiles_x * ((out->height + SVO_TILE - 1) / SVO_TILE);
+	atomic_init(&fr.next, 0u);
+	atomic_init(&fr.evals, 0u);
+	atomic_init(&fr.err, 0);
+	for (uint32_t i = 1; i < r->threads; i++) {
+		if (pthread_create(&tids[started], NULL, worker, &fr) != 0) {
+			break; /* fewer threads: slower, not wrong */
+		}
+		started++;
+	}
+	worker(&fr);
+	for (uint32_t i = 0; i < started; i++) {
+		pthread_join(tids[i], NULL);
+	}
+	if (atomic_load(&fr.next) < fr.ntiles) {
+		/* Every thread failed to get its scratch memory. */
+		rc = atomic_load(&fr.err);
+		return bc_errinfo_set(ei, rc ? rc : BC_ENOMEM,
+				      "svo: no memory for the casters");
+	}
+	if (stats) {
+		double t2 = bc__svo_now_ms();
+		stats->ms_total = t2 - t0;
+		stats->ms_abuffer = t1 - t0;
+		stats->ms_trace = t2 - t1;
+		stats->field_evals = atomic_load(&fr.evals);
+	}
+	return 0;
+}
+
+const struct bc_backend_ops bc_backend_svo_ops = {
+	.name = "svo",
+	.create = svo_create,
+	.destroy = svo_destroy,
+	.sync = svo_sync,
+	.render = svo_render,
+};

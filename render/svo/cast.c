@@ -1,0 +1,350 @@
+/*
+ * Ray casting through the octree (thesis §5.6, Alg. 5.7-5.8). The ray visits
+ * the leaves it crosses front to back: empty leaves are skipped, a full leaf
+ * is a hit where the ray enters it, and in a leaf that holds surface the
+ * segment is searched for its first root by interval bisection on the leaf's
+ * pruned variant, in the octree's arithmetic (the segment is an affine form
+ * of one noise symbol, so AA and RevAA keep the ray's correlation exactly).
+ *
+ * What is searched for is the first point where the field drops below the
+ * hit band c(t), the sphere tracer's criterion (svo.h), so that both
+ * renderers agree on silhouettes; the octree was built to keep the sign of
+ * f - c for every c the frame uses. Bisection stops once a bracket is as
+ * wide as the pixel footprint: then either its ends straddle the band and
+ * the Illinois variant of regula falsi refines the crossing (superlinear,
+ * unlike the thesis's plain bisection), or the dip is smaller than a pixel
+ * and is dropped. As the sphere tracer does, a real crossing of zero just
+ * behind a near miss is refined to, so depths compare.
+ */
+#include "svo_impl.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "blobcast/alloc.h"
+
+/* Bisection depth at most: a segment halves per level, and 2^-40 of any
+ * leaf is below float resolution. */
+#define CAST_MAX_LEVELS 40
+/* Iterations of the refinement at most; Illinois converges superlinearly,
+ * so this only bounds degenerate brackets. */
+#define CAST_MAX_REFINE 40
+
+struct bc_svo_caster {
+	const struct bc_svo *s;
+	struct bc_svo_ranger *g;
+	uint32_t *idx;
+};
+
+int bc_svo_caster_create(struct bc_svo_caster **out, const struct bc_svo *s)
+{
+	struct bc_svo_caster *c;
+	int rc;
+	*out = NULL;
+	c = bc_calloc(1, sizeof(*c));
+	if (!c) {
+		return BC_ENOMEM;
+	}
+	c->s = s;
+	c->idx = bc_calloc(s->rpn->n, sizeof(*c->idx));
+	if (!c->idx) {
+		bc_svo_caster_destroy(c);
+		return BC_ENOMEM;
+	}
+	if ((rc = bc_svo_ranger_create(&c->g, s->rpn, s->opts.arith))) {
+		bc_svo_caster_destroy(c);
+		return rc;
+	}
+	*out = c;
+	return 0;
+}
+
+void bc_svo_caster_destroy(struct bc_svo_caster *c)
+{
+	if (!c) {
+		return;
+	}
+	bc_svo_ranger_destroy(c->g);
+	bc_free(c->idx);
+	bc_free(c);
+}
+
+float bc_svo_hit_band(const struct bc_svo_cast_params *cp, float t)
+{
+	return BC_SVO_HIT_LIPSCHITZ *
+	       fmaxf(BC_SVO_HIT_FOOTPRINT * cp->pix_angle * t, cp->min_step);
+}
+
+/* A field along the ray: a leaf's variant, or the octree (mask NULL). */
+struct ray_field {
+	const struct bc_svo *s;
+	const struct bc_svo_cmask *mask;
+	const float *o, *d;
+	const struct bc_svo_cast_params *cp;
+	bool banded; /* subtract the hit band */
+	uint32_t *evals;
+};
+
+static float field_at(const struct ray_field *rf, float t)
+{
+	float p[3] = {rf->o[0] + t * rf->d[0], rf->o[1] + t * rf->d[1],
+		      rf->o[2] + t * rf->d[2]};
+	float v = rf->mask ? bc_svo_cmask_eval(rf->s->rpn, *rf->mask, p)
+			   : bc_svo_eval(rf->s, p);
+	(*rf->evals)++;
+	return rf->banded ? v - bc_svo_hit_band(rf->cp, t) : v;
+}
+
+/* Illinois refinement of a root of rf in [a, b] with fa > 0 >= fb, to the
+ * refinement tolerance; returns the root interpolated in the last bracket
+ * (as the sphere tracer does). */
+static float refine(const struct ray_field *rf, float a, float fa, float b,
+		    float fb)
+{
+	int side = 0;
+	for (int i = 0; i < CAST_MAX_REFINE && b - a > rf->cp->refine_tol; i++) {
+		float m = fa - fb > 0.0f ? a + (b - a) * fa / (fa - fb)
+					 : 0.5f * (a + b);
+		float fm;
+		if (!(m > a && m < b)) {
+			m = 0.5f * (a + b);
+			if (!(m > a && m < b)) {
+				break; /* float resolution */
+			}
+		}
+		fm = field_at(rf, m);
+		if (fm > 0.0f) {
+			a = m;
+			fa = fm;
+			if (side == 1) {
+				fb *= 0.5f; /* Illinois: unstick the far end */
+			}
+			side = 1;
+		} else {
+			b = m;
+			fb = fm;
+			if (side == -1) {
+				fa *= 0.5f;
+			}
+			side = -1;
+		}
+	}
+	if (fa - fb > 0.0f && isfinite(fa - fb)) {
+		float t = a + (b - a) * fa / (fa - fb);
+		return t < a ? a : (t > b ? b : t);
+	}
+	return a;
+}
+
+/* Alg. 5.7 on one leaf's segment [ta, tb]: the first t where the variant
+ * drops below the band, if any. */
+static bool leaf_root(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
+		      const float o[3], const float d[3], float ta, float tb,
+		      const struct bc_svo_cast_params *cp, struct bc_svo_hit *hit,
+		      float *t_out)
+{
+	struct {
+		float a, b;
+	} st[CAST_MAX_LEVELS + 2];
+	struct ray_field rf = {c->s, m, o, d, cp, true, &hit->evals};
+	struct bc_svo_region rg;
+	uint32_t n = 0, sp = 0;
+	for (uint32_t w = 0; w < m->nwords; w++) {
+		uint32_t base = m->pairs[2 * w] << 5, b = m->pairs[2 * w + 1];
+		while (b) {
+			c->idx[n++] = base + bc__svo_lowest(b);
+			b &= b - 1u;
+		}
+	}
+	memset(&rg, 0, sizeof(rg));
+	rg.segment = true;
+	memcpy(rg.o, o, sizeof(rg.o));
+	memcpy(rg.d, d, sizeof(rg.d));
+	st[sp].a = ta;
+	st[sp++].b = tb;
+	while (sp) {
+		float u0, u1, um, c0, c1;
+		struct bc_svo_ivl r;
+		sp--;
+		u0 = st[sp].a;
+		u1 = st[sp].b;
+		c0 = bc_svo_hit_band(cp, u0);
+		c1 = bc_svo_hit_band(cp, u1);
+		rg.t0 = u0;
+		rg.t1 = u1;
+		r = bc_svo_range(c->g, c->idx, n, &rg);
+		hit->range_evals++;
+		if (r.lo > (double)c1) {
+			continue; /* above the band all along: no hit here */
+		}
+		if (r.hi < (double)c0) {
+			/* Below it all along; everything before was above. */
+			*t_out = u0;
+			return true;
+		}
+		um = 0.5f * (u0 + u1);
+		if (u1 - u0 <= fmaxf(cp->pix_angle * u1, cp->min_step) ||
+		    sp >= CAST_MAX_LEVELS || !(um > u0 && um < u1)) {
+			float g0 = field_at(&rf, u0), g1;
+			if (g0 <= 0.0f) {
+				*t_out = u0;
+				return true;
+			}
+			g1 = field_at(&rf, u1);
+			if (g1 <= 0.0f) {
+				*t_out = refine(&rf, u0, g0, u1, g1);
+				return true;
+			}
+			continue; /* a dip narrower than a pixel */
+		}
+		st[sp].a = um;
+		st[sp++].b = u1;
+		st[sp].a = u0;
+		st[sp++].b = um;
+	}
+	return false;
+}
+
+/* The ray's parameter interval inside the box, clipped to [t0, t1]. */
+static bool clip(const float lo[3], const float hi[3], const float o[3],
+		 const float d[3], float *t0, float *t1)
+{
+	float a = *t0, b = *t1;
+	for (int i = 0; i < 3; i++) {
+		if (d[i] != 0.0f) {
+			float inv = 1.0f / d[i];
+			float ta = (lo[i] - o[i]) * inv, tb = (hi[i] - o[i]) * inv;
+			if (ta > tb) {
+				float s = ta;
+				ta = tb;
+				tb = s;
+			}
+			a = fmaxf(a, ta);
+			b = fminf(b, tb);
+		} else if (o[i] < lo[i] || o[i] > hi[i]) {
+			return false;
+		}
+	}
+	*t0 = a;
+	*t1 = b;
+	return a <= b;
+}
+
+struct ent {
+	uint32_t node;
+	float lo[3], hi[3];
+	float ta, tb;
+};
+
+bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
+		 float t0, float t1, const struct bc_svo_cast_params *cp,
+		 struct bc_svo_hit *hit)
+{
+	const struct bc_svo *s = c->s;
+	/* Each level pushes at most four children (a ray crosses at most four
+	 * octants of a node) and pops one. */
+	struct ent st[4 * (BC_SVO_MAX_DEPTH + 1) + 4];
+	struct bc_svo_cmask mask;
+	uint32_t sp = 0, terms = 0;
+	float th = 0.0f, ta = t0, tb = t1;
+	bool found = false;
+	memset(hit, 0, sizeof(*hit));
+	hit->prim = BC_NONE;
+	if (!clip(s->lo, s->hi, o, d, &ta, &tb)) {
+		return false;
+	}
+	st[0].node = 0;
+	memcpy(st[0].lo, s->lo, sizeof(st[0].lo));
+	memcpy(st[0].hi, s->hi, sizeof(st[0].hi));
+	st[0].ta = ta;
+	st[0].tb = tb;
+	sp = 1;
+	while (sp && !found) {
+		struct ent e = st[--sp];
+		const struct bc__svo_node *nd = &s->nodes[e.node];
+		float mid[3], cut[5];
+		uint32_t ncut = 0;
+		if (!nd->child) {
+			const struct bc__svo_leaf *lf = &s->leaves[nd->leaf];
+			if (lf->state == BC_SVO_STATE_FULL) {
+				mask = s->full_c;
+				th = e.ta;
+				found = true;
+			} else if (lf->state == BC_SVO_STATE_ACTIVE) {
+				mask.pairs = s->pool.v + 2u * (size_t)lf->off;
+				mask.nwords = lf->npairs;
+				terms = lf->nterms;
+				found = leaf_root(c, &mask, o, d, e.ta, e.tb, cp,
+						  hit, &th);
+			}
+			continue;
+		}
+		/* The octants the segment crosses, split where it crosses
+		 * the node's three mid planes. */
+		cut[ncut++] = e.ta;
+		for (int i = 0; i < 3; i++) {
+			mid[i] = 0.5f * (e.lo[i] + e.hi[i]);
+			if (d[i] != 0.0f) {
+				float tc = (mid[i] - o[i]) / d[i];
+				if (tc > e.ta && tc < e.tb) {
+					uint32_t k = ncut++;
+					while (k > 1 && cut[k - 1] > tc) {
+						cut[k] = cut[k - 1];
+						k--;
+					}
+					cut[k] = tc;
+				}
+			}
+		}
+		cut[ncut++] = e.tb;
+		/* Push back to front so the nearest piece is popped first. */
+		for (uint32_t k = ncut - 1; k > 0; k--) {
+			float u0 = cut[k - 1], u1 = cut[k], um = 0.5f * (u0 + u1);
+			struct ent *ch = &st[sp++];
+			uint32_t oct = 0;
+			for (int i = 0; i < 3; i++) {
+				float p = o[i] + um * d[i];
+				bool upper = p >= mid[i];
+				oct |= upper ? 1u << i : 0u;
+				ch->lo[i] = upper ? mid[i] : e.lo[i];
+				ch->hi[i] = upper ? e.hi[i] : mid[i];
+			}
+			ch->node = nd->child + oct;
+			ch->ta = u0;
+			ch->tb = u1;
+		}
+	}
+	if (!found) {
+		return false;
+	}
+	hit->leaf_terms = terms;
+	{
+		struct ray_field rf = {s, NULL, o, d, cp, false, &hit->evals};
+		float f = field_at(&rf, th);
+		float probe = fminf(th + 2.0f * bc_svo_hit_band(cp, th), tb);
+		/* A near miss with a real crossing just behind it: the
+		 * surface is the crossing. */
+		if (f >= 0.0f && probe > th) {
+			float fp = field_at(&rf, probe);
+			if (fp < 0.0f) {
+				th = refine(&rf, th, f, probe, fp);
+			}
+		}
+	}
+	hit->t = th;
+	hit->mask = mask;
+	{
+		float p[3] = {o[0] + th * d[0], o[1] + th * d[1],
+			      o[2] + th * d[2]};
+		struct bc_svo_leaf_ref ref;
+		/* The id from the variant of the leaf the point lies in, when
+		 * that leaf holds surface; else from the variant of the hit. */
+		if (bc_svo_locate(s, p, &ref) &&
+		    ref.state == BC_SVO_STATE_ACTIVE) {
+			hit->mask = ref.mask;
+		}
+		(void)bc_svo_cmask_eval_id(s->rpn, hit->mask, p, &hit->prim);
+		hit->evals++;
+	}
+	return true;
+}

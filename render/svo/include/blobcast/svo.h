@@ -1,0 +1,347 @@
+/*
+ * Adaptive CSG after Chulkov 2025: the blobtree as an RPN sequence whose
+ * pruned variants are bitmasks (thesis §5.1-5.2), range arithmetic over
+ * boxes and ray segments (IA, AA and revised AA, §4.3), pruning of a region
+ * (§5.3, extended to the compact smooth operators outside their blend
+ * range), a sparse voxel octree with a node-count threshold (§5.4) through
+ * which points are evaluated, and interval ray casting through its leaves
+ * (§5.6) with a secant refinement of the bracketed root.
+ *
+ * Everything here reads the linearized tree (struct bc_lin) once, when an
+ * RPN is compiled from it, and copies what it needs: an RPN, and what is
+ * built from it, stays valid after the tree changes (and describes the old
+ * tree). docs/svo.md explains the design choices.
+ */
+#ifndef BLOBCAST_SVO_H
+#define BLOBCAST_SVO_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "blobcast/blobtree.h"
+#include "blobcast/error.h"
+#include "blobcast/render.h"
+
+/* ---- Limits and defaults ------------------------------------------------ */
+
+/* Default node-count threshold tau: a region whose pruned RPN has more
+ * active terms than this is subdivided. The thesis finds the fastest
+ * evaluation between 2 and 10 on its large scenes (§6.5). */
+#define BC_SVO_DEFAULT_THRESHOLD 8u
+/* Default and largest octree depth. The thesis fixes 15 for its tables;
+ * 2^15 cells per axis is already far below float resolution of a scene a
+ * few units wide at the leaves' corners, so deeper trees buy nothing. */
+#define BC_SVO_DEFAULT_MAX_DEPTH 10u
+#define BC_SVO_MAX_DEPTH 15u
+/* Memory an octree may take (nodes, leaves and stored masks) before it stops
+ * subdividing: the thesis's Many Gears at the smallest threshold needs
+ * 3.5 GB, more than a render server should spend on one scene. Leaves made
+ * after the budget is spent keep more terms than tau: slower, still exact. */
+#define BC_SVO_DEFAULT_MAX_BYTES ((uint64_t)512u << 20)
+/* Largest uniform grid side (eval-bench --grid): 256^3 voxels of compressed
+ * masks stay within a few hundred MB for the scenes we benchmark. */
+#define BC_SVO_MAX_GRID 256u
+/* Noise symbols an AA form keeps before the non-input ones are condensed
+ * into a single fresh symbol (see docs/svo.md: without a cap the forms of a
+ * long union chain grow with the tree and pruning becomes quadratic). */
+#define BC_SVO_AA_MAX_TERMS 48u
+
+/* The hit criterion of the ray caster, chosen equal to the CPU sphere
+ * tracer's so that both renderers draw the same silhouettes: a ray hits
+ * where the field drops below BC_SVO_HIT_LIPSCHITZ * max(BC_SVO_HIT_FOOTPRINT
+ * * pixel angle * t, minimal step), the minimal step and the refinement
+ * tolerance being fractions of the scene's diagonal. */
+#define BC_SVO_HIT_LIPSCHITZ 1.45f
+#define BC_SVO_HIT_FOOTPRINT 0.5f
+#define BC_SVO_MIN_STEP_REL 1.0e-4f
+#define BC_SVO_REFINE_REL 1.0e-5f
+
+/* ---- RPN and bitmasks (rpn.c) ------------------------------------------- */
+
+enum bc_svo_term_type {
+	BC_SVO_TERM_INVALID = 0,
+	BC_SVO_TERM_PRIM, /* a primitive: pushes its field */
+	BC_SVO_TERM_NEG,  /* negates the top of the stack */
+	BC_SVO_TERM_OP,   /* a binary operator: pops two, pushes one */
+	BC_SVO_TERM_TYPE_COUNT
+};
+
+/* One RPN term. Differences are compiled as a negation of the right operand
+ * followed by the matching intersection (sharp or smooth: Zanni's G\ equals
+ * G∩ of (f0, -f1) exactly), so a pruned variant can keep the negated right
+ * operand alone -- the common case inside the left operand of a cut. */
+struct bc_svo_term {
+	uint8_t type; /* enum bc_svo_term_type */
+	uint8_t kind; /* bc_prim for PRIM; BC_OP_UNION / _INTERSECTION or their
+			 smooth forms for OP */
+	uint16_t pad;
+	uint32_t first; /* first term of this term's subtree */
+	uint32_t prim;  /* primitive index for PRIM, BC_NONE otherwise */
+	uint32_t rec;   /* PRIM: offset of its record in rpn->rec (12 affine
+			   floats then BC_PRIM_PACKED shape floats); OP: offset
+			   of (blend, range) */
+};
+
+/* Floats of a primitive record: world-to-local rows then packed shape. */
+#define BC_SVO_PRIM_REC (12u + BC_PRIM_PACKED)
+
+struct bc_svo_rpn {
+	struct bc_svo_term *terms;
+	uint32_t n;       /* terms */
+	uint32_t nwords;  /* 32-bit words of a dense bitmask */
+	uint32_t nprims;
+	uint32_t stack;   /* evaluation stack entries needed */
+	float *rec;       /* records (see struct bc_svo_term.rec) */
+	uint32_t *prim_id; /* stable id of primitive k */
+	float (*color)[3]; /* colour of primitive k */
+	float lo[3], hi[3]; /* the tree's AABB (bc_lin lo/hi) */
+	float size;         /* its diagonal */
+};
+
+/* Compiles the linearized tree l into *out (bc_svo_rpn_finish frees it).
+ * Returns 0, BC_EINVAL (l NULL or empty), BC_EDEPTH (a stack deeper than
+ * BC_EVAL_STACK) or BC_ENOMEM. */
+int bc_svo_rpn_init(struct bc_svo_rpn *out, const struct bc_lin *l);
+/* Frees an RPN; accepts a zeroed one. */
+void bc_svo_rpn_finish(struct bc_svo_rpn *r);
+
+/* Sets every bit of mask[0..nwords) that names a term (the unpruned
+ * variant) and clears the padding bits of the last word. */
+void bc_svo_mask_fill(const struct bc_svo_rpn *r, uint32_t *mask);
+/* Number of set bits of mask[0..nwords). */
+uint32_t bc_svo_mask_count(const uint32_t *mask, uint32_t nwords);
+
+/* Thesis Alg. 5.2: the first set bit at or after i, or UINT32_MAX when there
+ * is none below nwords * 32. The lowest bit of a word is found with the
+ * de Bruijn multiplication, without branches. */
+uint32_t bc_svo_bits_next(const uint32_t *mask, uint32_t nwords, uint32_t i);
+/* The reverse walk: the last set bit at or before i, or UINT32_MAX when
+ * there is none (i may be any value; bits at or beyond nwords*32 are not
+ * read, the caller passes i < nwords * 32). */
+uint32_t bc_svo_bits_prev(const uint32_t *mask, uint32_t i);
+
+/* Thesis Alg. 5.5: clears the bits of the active subtree rooted at term i
+ * (i itself and, walking backwards with bc_svo_bits_prev, every active term
+ * its operands need). */
+void bc_svo_rpn_clear_subtree(const struct bc_svo_rpn *r, uint32_t *mask,
+			      uint32_t i);
+
+/* Thesis Alg. 5.3: evaluates the variant selected by a dense mask at p;
+ * +INFINITY for an empty mask. The _id form also returns the primitive
+ * index that decides the value (as bc_eval_full_id does) or BC_NONE. */
+float bc_svo_rpn_eval(const struct bc_svo_rpn *r, const uint32_t *mask,
+		      const float p[3]);
+float bc_svo_rpn_eval_id(const struct bc_svo_rpn *r, const uint32_t *mask,
+			 const float p[3], uint32_t *prim);
+
+/* ---- Compressed masks (rpn.c) ------------------------------------------- */
+
+/* A stored variant: its non-zero mask words as (word index, bits) pairs in
+ * increasing word order, so iteration costs the active terms only, however
+ * long the RPN is (the dense form of a 30 000-term tree is 3.7 KB per
+ * variant; thesis §7.2 names this cost). */
+struct bc_svo_cmask {
+	const uint32_t *pairs; /* 2 * nwords entries */
+	uint32_t nwords;
+};
+
+float bc_svo_cmask_eval(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
+			const float p[3]);
+float bc_svo_cmask_eval_id(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
+			   const float p[3], uint32_t *prim);
+
+/* ---- Range arithmetic (ia.c, aa.c, revaa.c) ----------------------------- */
+
+/* A closed interval in double precision. Ranges computed here enclose the
+ * values the single-precision point evaluator returns (bc_prim_sdf,
+ * bc_op_eval) over the whole region: see docs/svo.md, "Rounding". */
+struct bc_svo_ivl {
+	double lo, hi;
+};
+
+/* The region a range is computed over: an axis-aligned box, or the segment
+ * o + t d, t in [t0, t1] (d unit). */
+struct bc_svo_region {
+	bool segment;
+	float lo[3], hi[3];  /* box */
+	float o[3], d[3];    /* segment */
+	float t0, t1;
+};
+
+struct bc_svo_ranger;
+
+/* A range evaluator for one arithmetic over one RPN (scratch memory sized
+ * for it; one per thread). arith BC_RANGE_DEFAULT means RevAA. Returns 0,
+ * BC_EENUM or BC_ENOMEM. */
+int bc_svo_ranger_create(struct bc_svo_ranger **out,
+			 const struct bc_svo_rpn *r, enum bc_range_arith arith);
+void bc_svo_ranger_destroy(struct bc_svo_ranger *g);
+enum bc_range_arith bc_svo_ranger_arith(const struct bc_svo_ranger *g);
+
+/* Range of the variant whose active terms are idx[0..n) (increasing) over
+ * region; n == 0 gives [+inf, +inf]. Also records every active term's range
+ * and operands for bc_svo_prune (the same ranger). */
+struct bc_svo_ivl bc_svo_range(struct bc_svo_ranger *g, const uint32_t *idx,
+			       uint32_t n, const struct bc_svo_region *region);
+
+/* Range of one primitive term (a PRIM term index of the ranger's RPN) over
+ * region, and of one operator given its operands' ranges as intervals:
+ * what the enclosure tests check. */
+struct bc_svo_ivl bc_svo_range_prim(struct bc_svo_ranger *g, uint32_t term,
+				    const struct bc_svo_region *region);
+struct bc_svo_ivl bc_svo_range_op(enum bc_op kind, float blend, float range,
+				  struct bc_svo_ivl a, struct bc_svo_ivl b);
+
+/* Kinds whose range is the Lipschitz enclosure f(c) +- r rather than a
+ * natural extension of their formula (docs/svo.md lists why). */
+bool bc_svo_prim_uses_lipschitz(enum bc_prim kind);
+
+/* ---- Pruning (prune.c) -------------------------------------------------- */
+
+enum bc_svo_state {
+	BC_SVO_STATE_INVALID = 0,
+	BC_SVO_STATE_ACTIVE, /* the region holds part of the surface band */
+	BC_SVO_STATE_EMPTY,  /* the field is above the band everywhere */
+	BC_SVO_STATE_FULL,   /* the field is below zero everywhere */
+	BC_SVO_STATE_COUNT
+};
+
+struct bc_svo_prune_result {
+	enum bc_svo_state state;
+	uint32_t nterms;        /* active terms left (0 unless ACTIVE) */
+	struct bc_svo_ivl root; /* range of the variant before pruning */
+};
+
+/* Thesis Alg. 5.4-5.5, extended: prunes the variant mask_in over region into
+ * mask_out (nwords words; may equal mask_in). The pruned variant has, at
+ * every point of the region, the same sign as the input variant minus c for
+ * every level c in [0, band] (band >= 0: the caster's hit thickness; 0 keeps
+ * the plain sign), and the same value under every smooth operator that
+ * blends there. Returns 0 or BC_EINVAL. */
+int bc_svo_prune(struct bc_svo_ranger *g, const uint32_t *mask_in,
+		 uint32_t *mask_out, const struct bc_svo_region *region,
+		 float band, struct bc_svo_prune_result *res);
+
+/* ---- Sparse voxel octree (octree.c) ------------------------------------- */
+
+/* Zero means default for every field. */
+struct bc_svo_opts {
+	enum bc_range_arith arith; /* pruning arithmetic (RevAA) */
+	uint32_t threshold;        /* tau */
+	uint32_t max_depth;        /* <= BC_SVO_MAX_DEPTH */
+	float band;                /* hit thickness preserved (0: sign only) */
+	uint64_t max_bytes;        /* memory budget */
+};
+
+struct bc_svo_stats {
+	uint32_t nodes, leaves;
+	uint32_t empty, full, active; /* leaves by state */
+	uint32_t max_depth;
+	uint32_t max_terms;   /* most active terms in a leaf */
+	double avg_depth;     /* leaf depth averaged over volume (a random
+				 point's leaf, thesis eq. 5.6) */
+	double avg_terms;     /* active terms likewise (0 for empty/full) */
+	double avg_depth_leaf; /* plain averages over leaves */
+	double avg_terms_leaf; /* over active leaves */
+	uint64_t bytes;       /* nodes + leaves + stored masks + RPN */
+	uint64_t pruned;      /* regions pruned while building */
+	double build_ms;
+	uint32_t stalled;     /* leaves kept over tau because splitting
+				 stopped removing terms (octree.c) */
+	bool truncated;       /* the memory budget stopped subdivision */
+};
+
+struct bc_svo;
+
+/* Builds the octree of rpn (which must outlive it) over the tree's AABB
+ * grown by the band. Returns 0, BC_EINVAL, BC_EENUM, BC_ERANGE (depth over
+ * BC_SVO_MAX_DEPTH, negative band) or BC_ENOMEM with a reason in ei. */
+int bc_svo_build(struct bc_svo **out, const struct bc_svo_rpn *rpn,
+		 const struct bc_svo_opts *opts, struct bc_errinfo *ei);
+void bc_svo_destroy(struct bc_svo *s);
+void bc_svo_get_stats(const struct bc_svo *s, struct bc_svo_stats *st);
+const struct bc_svo_rpn *bc_svo_rpn(const struct bc_svo *s);
+/* The octree's root box. */
+void bc_svo_bounds(const struct bc_svo *s, float lo[3], float hi[3]);
+
+/* A leaf found by a point or a ray. */
+struct bc_svo_leaf_ref {
+	enum bc_svo_state state;
+	struct bc_svo_cmask mask;
+	uint32_t nterms;
+	uint32_t depth;
+	float value; /* field bound standing for an empty or full leaf */
+	float lo[3], hi[3];
+};
+
+/* The leaf containing p; false when p is outside the root box. */
+bool bc_svo_locate(const struct bc_svo *s, const float p[3],
+		   struct bc_svo_leaf_ref *leaf);
+/* The field through the octree: the pruned variant of p's leaf (a bound of
+ * the right sign for empty and full leaves; the full tree outside the root
+ * box). Its sign equals the full field's everywhere. */
+float bc_svo_eval(const struct bc_svo *s, const float p[3]);
+float bc_svo_eval_id(const struct bc_svo *s, const float p[3],
+		     uint32_t *prim);
+
+/* ---- Uniform grid of pruned variants (grid.c; thesis §6.1) -------------- */
+
+struct bc_svo_grid;
+
+/* Prunes every voxel of an n^3 grid over the tree's AABB from the full
+ * variant and stores the compressed masks. *prune_ms gets the total pruning
+ * time. Returns 0, BC_ERANGE (n = 0 or over BC_SVO_MAX_GRID), BC_EENUM or
+ * BC_ENOMEM. */
+int bc_svo_grid_build(struct bc_svo_grid **out, const struct bc_svo_rpn *rpn,
+		      enum bc_range_arith arith, uint32_t n, double *prune_ms);
+void bc_svo_grid_destroy(struct bc_svo_grid *g);
+float bc_svo_grid_eval(const struct bc_svo_grid *g, const float p[3]);
+/* Active terms averaged over voxels, largest, and bytes stored. */
+void bc_svo_grid_stats(const struct bc_svo_grid *g, double *avg_terms,
+		       uint32_t *max_terms, uint64_t *bytes);
+
+/* ---- Ray casting (cast.c) ----------------------------------------------- */
+
+struct bc_svo_cast_params {
+	float pix_angle;  /* pixel footprint per unit of t */
+	float min_step;   /* world units */
+	float refine_tol; /* world units */
+};
+
+struct bc_svo_hit {
+	float t;
+	uint32_t prim;       /* primitive deciding the value, BC_NONE if unknown */
+	/* The variant the hit lies in (its leaf's, or the full tree's): the
+	 * field to take normals from. Points into the octree. */
+	struct bc_svo_cmask mask;
+	uint32_t leaf_terms; /* active terms of the leaf hit */
+	uint32_t evals;      /* point evaluations spent on the ray */
+	uint32_t range_evals; /* range evaluations spent on the ray */
+};
+
+/* Per-thread scratch of the caster. */
+struct bc_svo_caster;
+int bc_svo_caster_create(struct bc_svo_caster **out, const struct bc_svo *s);
+void bc_svo_caster_destroy(struct bc_svo_caster *c);
+
+/* The hit thickness the caster needs at ray parameter t: the octree must
+ * have been built with a band at least this large for every t it casts. */
+float bc_svo_hit_band(const struct bc_svo_cast_params *cp, float t);
+
+/* Thesis Alg. 5.7-5.8: casts o + t d (d unit), t in [t0, t1], through the
+ * leaves of the octree front to back. In a leaf holding surface, interval
+ * bisection in the octree's arithmetic brackets the first point where the
+ * field drops below the hit band, and the Illinois variant of the secant
+ * method refines it; a real crossing just behind a near miss is refined to
+ * the crossing as the sphere tracer does. Returns true and fills *hit on a
+ * hit; hit->evals and range_evals are filled either way. */
+bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
+		 float t0, float t1, const struct bc_svo_cast_params *cp,
+		 struct bc_svo_hit *hit);
+
+/* ---- The backend (backend.c) -------------------------------------------- */
+
+extern const struct bc_backend_ops bc_backend_svo_ops;
+
+#endif

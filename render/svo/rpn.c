@@ -1,0 +1,321 @@
+/*
+ * The blobtree as an RPN sequence (Chulkov 2025, §5.1-5.2): compilation from
+ * the linearized post-order tree, bitmasks that select pruned variants, the
+ * next/previous set bit walks (Alg. 5.2), the subtree clearing walk (Alg.
+ * 5.5) and the stack evaluation of a variant (Alg. 5.3), for dense masks and
+ * for the compressed masks the octree stores.
+ *
+ * The linearized form is already post-order, which is RPN; compiling only
+ * adds a negation in front of every difference (see struct bc_svo_term) and
+ * copies the parameter records so that the RPN does not depend on the tree
+ * staying unchanged.
+ */
+#include "svo_impl.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "blobcast/alloc.h"
+
+/* Position of the lowest bit of a power of two, indexed by the top five bits
+ * of its product with the de Bruijn sequence 0x077CB531. */
+const uint8_t bc__svo_debruijn_lo[32] = {
+	0,  1,	28, 2,	29, 14, 24, 3,	30, 22, 20, 15, 25, 17, 4,  8,
+	31, 27, 13, 23, 21, 19, 16, 7,	26, 12, 18, 6,	11, 5,	10, 9};
+/* Position of the highest bit of x once x is smeared to 2^(k+1) - 1,
+ * indexed by the top five bits of its product with 0x07C4ACDD. */
+const uint8_t bc__svo_debruijn_hi[32] = {
+	0, 9,  1,  10, 13, 21, 2,  29, 11, 14, 16, 18, 22, 25, 3, 30,
+	8, 12, 20, 28, 15, 17, 24, 7,  19, 27, 23, 6,  26, 5,  4, 31};
+
+int bc_svo_rpn_init(struct bc_svo_rpn *out, const struct bc_lin *l)
+{
+	uint32_t fst[BC_EVAL_STACK];
+	uint32_t n = 0, ndiff = 0, nops = 0, sp = 0, most = 0, t = 0;
+	uint32_t prec = 0, orec;
+	memset(out, 0, sizeof(*out));
+	if (!l || l->count == 0 || l->nprims == 0) {
+		return BC_EINVAL;
+	}
+	for (uint32_t s = 0; s < l->count; s++) {
+		if (!bc_lin_is_leaf(l, s)) {
+			enum bc_op k = (enum bc_op)bc_lin_kind(l, s);
+			nops++;
+			ndiff += bc_op_class(k) == BC_OPCLASS_DIFFERENCE;
+		}
+	}
+	n = l->count + ndiff;
+	out->terms = bc_calloc(n, sizeof(*out->terms));
+	out->rec = bc_calloc((size_t)l->nprims * BC_SVO_PRIM_REC + 2u * nops,
+			     sizeof(float));
+	out->prim_id = bc_calloc(l->nprims, sizeof(*out->prim_id));
+	out->color = bc_calloc(l->nprims, sizeof(*out->color));
+	if (!out->terms || !out->rec || !out->prim_id || !out->color) {
+		bc_svo_rpn_finish(out);
+		return BC_ENOMEM;
+	}
+	orec = l->nprims * BC_SVO_PRIM_REC;
+	for (uint32_t s = 0; s < l->count; s++) {
+		const float *src = bc_lin_param(l, s);
+		struct bc_svo_term *tm;
+		if (bc_lin_is_leaf(l, s)) {
+			if (sp >= BC_EVAL_STACK) {
+				bc_svo_rpn_finish(out);
+				return BC_EDEPTH;
+			}
+			tm = &out->terms[t];
+			tm->type = BC_SVO_TERM_PRIM;
+			tm->kind = (uint8_t)bc_lin_kind(l, s);
+			tm->first = t;
+			tm->prim = l->prim_of[s];
+			tm->rec = prec;
+			memcpy(out->rec + prec, src,
+			       BC_SVO_PRIM_REC * sizeof(float));
+			prec += BC_SVO_PRIM_REC;
+			fst[sp++] = t++;
+			most = sp > most ? sp : most;
+		} else {
+			enum bc_op k = (enum bc_op)bc_lin_kind(l, s);
+			if (sp < 2) {
+				bc_svo_rpn_finish(out);
+				return BC_EINVAL;
+			}
+			if (bc_op_class(k) == BC_OPCLASS_DIFFERENCE) {
+				tm = &out->terms[t];
+				tm->type = BC_SVO_TERM_NEG;
+				tm->first = fst[sp - 1];
+				tm->prim = BC_NONE;
+				t++;
+				k = k == BC_OP_DIFFERENCE
+					    ? BC_OP_INTERSECTION
+					    : BC_OP_SMOOTH_INTERSECTION;
+			}
+			tm = &out->terms[t];
+			tm->type = BC_SVO_TERM_OP;
+			tm->kind = (uint8_t)k;
+			tm->first = fst[sp - 2];
+			tm->prim = BC_NONE;
+			tm->rec = orec;
+			/* Sharp records hold zeros: bc_op_eval ignores them. */
+			out->rec[orec] = bc_op_is_smooth(k) ? src[0] : 0.0f;
+			out->rec[orec + 1] = bc_op_is_smooth(k) ? src[1] : 0.0f;
+			orec += 2;
+			t++;
+			sp--;
+		}
+	}
+	if (sp != 1 || t != n) {
+		bc_svo_rpn_finish(out);
+		return BC_EINVAL;
+	}
+	for (uint32_t k = 0; k < l->nprims; k++) {
+		out->prim_id[k] = l->node_id[l->prim_slot[k]];
+		memcpy(out->color[k], l->color[k], sizeof(out->color[k]));
+	}
+	out->n = n;
+	out->nwords = (n + 31u) / 32u;
+	out->nprims = l->nprims;
+	out->stack = most;
+	memcpy(out->lo, l->lo, sizeof(out->lo));
+	memcpy(out->hi, l->hi, sizeof(out->hi));
+	out->size = l->size;
+	return 0;
+}
+
+void bc_svo_rpn_finish(struct bc_svo_rpn *r)
+{
+	if (!r) {
+		return;
+	}
+	bc_free(r->terms);
+	bc_free(r->rec);
+	bc_free(r->prim_id);
+	bc_free(r->color);
+	memset(r, 0, sizeof(*r));
+}
+
+void bc_svo_mask_fill(const struct bc_svo_rpn *r, uint32_t *mask)
+{
+	if (r->nwords == 0) {
+		return;
+	}
+	memset(mask, 0xff, (size_t)r->nwords * sizeof(*mask));
+	if (r->n & 31u) {
+		mask[r->nwords - 1] = (1u << (r->n & 31u)) - 1u;
+	}
+}
+
+uint32_t bc_svo_mask_count(const uint32_t *mask, uint32_t nwords)
+{
+	uint32_t c = 0;
+	for (uint32_t w = 0; w < nwords; w++) {
+		/* Parallel bit count: no builtins in portable C11. */
+		uint32_t v = mask[w];
+		v = v - ((v >> 1) & 0x55555555u);
+		v = (v & 0x33333333u) + ((v >> 2) & 0x33333333u);
+		c += (((v + (v >> 4)) & 0x0f0f0f0fu) * 0x01010101u) >> 24;
+	}
+	return c;
+}
+
+uint32_t bc_svo_bits_next(const uint32_t *mask, uint32_t nwords, uint32_t i)
+{
+	uint32_t n = i >> 5, b;
+	if (n >= nwords) {
+		return UINT32_MAX;
+	}
+	b = mask[n];
+	if (b & (1u << (i & 31u))) {
+		return i; /* the trivial case: the current bit is set */
+	}
+	b &= 0xffffffffu << (i & 31u);
+	while (b == 0) {
+		if (++n >= nwords) {
+			return UINT32_MAX;
+		}
+		b = mask[n];
+	}
+	return (n << 5) + bc__svo_lowest(b);
+}
+
+uint32_t bc_svo_bits_prev(const uint32_t *mask, uint32_t i)
+{
+	uint32_t n, b;
+	if (i == UINT32_MAX) {
+		return UINT32_MAX;
+	}
+	n = i >> 5;
+	b = mask[n] & (0xffffffffu >> (31u - (i & 31u)));
+	while (b == 0) {
+		if (n == 0) {
+			return UINT32_MAX;
+		}
+		b = mask[--n];
+	}
+	return (n << 5) + bc__svo_highest(b);
+}
+
+static inline uint32_t arity(const struct bc_svo_term *t)
+{
+	return t->type == BC_SVO_TERM_OP ? 2u
+					 : (t->type == BC_SVO_TERM_NEG ? 1u : 0u);
+}
+
+void bc_svo_rpn_clear_subtree(const struct bc_svo_rpn *r, uint32_t *mask,
+			      uint32_t i)
+{
+	/* Terms still owed to the subtree: each visited term pays one and
+	 * asks for its operands. */
+	uint32_t owed = 1;
+	for (;;) {
+		bc__svo_clear(mask, i);
+		owed = owed - 1u + arity(&r->terms[i]);
+		if (owed == 0 || i == 0) {
+			break;
+		}
+		i = bc_svo_bits_prev(mask, i - 1u);
+		if (i == UINT32_MAX) {
+			break; /* not a well-formed variant: nothing left */
+		}
+	}
+}
+
+/* ---- Evaluation --------------------------------------------------------- */
+
+/* One step of the stack machine. */
+static inline void step(const struct bc_svo_rpn *r, uint32_t i, float *st,
+			uint32_t *who, uint32_t *sp, const float p[3], bool ids)
+{
+	const struct bc_svo_term *t = &r->terms[i];
+	uint32_t s = *sp;
+	switch (t->type) {
+	case BC_SVO_TERM_PRIM:
+		st[s] = bc__svo_prim_eval(r, t, p);
+		if (ids) {
+			who[s] = t->prim;
+		}
+		*sp = s + 1;
+		break;
+	case BC_SVO_TERM_NEG:
+		st[s - 1] = -st[s - 1];
+		break;
+	default: {
+		const float *rec = r->rec + t->rec;
+		float f1 = st[s - 1], f0 = st[s - 2];
+		st[s - 2] = bc_op_eval((enum bc_op)t->kind, rec[0], rec[1], f0,
+				       f1);
+		if (ids) {
+			/* The operand the value follows, as eval.c decides. */
+			bool right = t->kind == BC_OP_UNION ||
+						     t->kind == BC_OP_SMOOTH_UNION
+					     ? f1 < f0
+					     : f1 > f0;
+			if (right) {
+				who[s - 2] = who[s - 1];
+			}
+		}
+		*sp = s - 1;
+		break;
+	}
+	}
+}
+
+static float eval_dense(const struct bc_svo_rpn *r, const uint32_t *mask,
+			const float p[3], uint32_t *prim)
+{
+	float st[BC_EVAL_STACK];
+	uint32_t who[BC_EVAL_STACK];
+	uint32_t sp = 0;
+	for (uint32_t i = bc_svo_bits_next(mask, r->nwords, 0); i != UINT32_MAX;
+	     i = bc_svo_bits_next(mask, r->nwords, i + 1u)) {
+		step(r, i, st, who, &sp, p, prim != NULL);
+	}
+	if (prim) {
+		*prim = sp ? who[0] : BC_NONE;
+	}
+	return sp ? st[0] : INFINITY;
+}
+
+float bc_svo_rpn_eval(const struct bc_svo_rpn *r, const uint32_t *mask,
+		      const float p[3])
+{
+	return eval_dense(r, mask, p, NULL);
+}
+
+float bc_svo_rpn_eval_id(const struct bc_svo_rpn *r, const uint32_t *mask,
+			 const float p[3], uint32_t *prim)
+{
+	return eval_dense(r, mask, p, prim);
+}
+
+static float eval_cmask(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
+			const float p[3], uint32_t *prim)
+{
+	float st[BC_EVAL_STACK];
+	uint32_t who[BC_EVAL_STACK];
+	uint32_t sp = 0;
+	for (uint32_t w = 0; w < m.nwords; w++) {
+		uint32_t base = m.pairs[2 * w] << 5, b = m.pairs[2 * w + 1];
+		while (b) {
+			step(r, base + bc__svo_lowest(b), st, who, &sp, p,
+			     prim != NULL);
+			b &= b - 1u;
+		}
+	}
+	if (prim) {
+		*prim = sp ? who[0] : BC_NONE;
+	}
+	return sp ? st[0] : INFINITY;
+}
+
+float bc_svo_cmask_eval(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
+			const float p[3])
+{
+	return eval_cmask(r, m, p, NULL);
+}
+
+float bc_svo_cmask_eval_id(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
+			   const float p[3], uint32_t *prim)
+{
+	return eval_cmask(r, m, p, prim);
+}

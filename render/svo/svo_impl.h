@@ -1,0 +1,212 @@
+/*
+ * What the sources of the svo module share and nobody else needs: the range
+ * evaluator's scratch, the entry points of the three arithmetics, the
+ * operator-range rules that all of them and the pruner must agree on, the
+ * rounding margins, and inline helpers for the point evaluator.
+ */
+#ifndef BLOBCAST_SVO_IMPL_H
+#define BLOBCAST_SVO_IMPL_H
+
+#include <math.h>
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "blobcast/svo.h"
+
+/*
+ * Rounding margin. Ranges are computed in double precision; the values they
+ * must enclose come from the single-precision evaluator. Each primitive and
+ * each blending operator widens its range outward by BC__SVO_ROUND_REL times
+ * the magnitude scale of the computation (largest local coordinate plus
+ * largest shape parameter, or largest operand plus the blend). 2^-17 is 64
+ * float ulps of that scale: it covers the float evaluator's own rounding
+ * (a few tens of operations of at most half an ulp each, docs/svo.md) and
+ * dwarfs the double rounding of the range computation (2^-53 per step).
+ */
+#define BC__SVO_ROUND_REL (1.0 / 131072.0)
+/* Absolute floor of the margin: scales of zero still round. */
+#define BC__SVO_ROUND_ABS 1.0e-30
+
+/* Dense-mask helpers. */
+static inline bool bc__svo_bit(const uint32_t *mask, uint32_t i)
+{
+	return (mask[i >> 5] >> (i & 31u)) & 1u;
+}
+static inline void bc__svo_clear(uint32_t *mask, uint32_t i)
+{
+	mask[i >> 5] &= ~(1u << (i & 31u));
+}
+
+/* Index of the lowest set bit of a non-zero word (de Bruijn, thesis Alg.
+ * 5.2) and of the highest (the matching reverse table). */
+extern const uint8_t bc__svo_debruijn_lo[32];
+extern const uint8_t bc__svo_debruijn_hi[32];
+static inline uint32_t bc__svo_lowest(uint32_t b)
+{
+	return bc__svo_debruijn_lo[((b & (0u - b)) * 0x077CB531u) >> 27];
+}
+static inline uint32_t bc__svo_highest(uint32_t b)
+{
+	b |= b >> 1;
+	b |= b >> 2;
+	b |= b >> 4;
+	b |= b >> 8;
+	b |= b >> 16;
+	return bc__svo_debruijn_hi[(b * 0x07C4ACDDu) >> 27];
+}
+
+/* A primitive term's field at world point p, exactly as eval.c computes it
+ * (same operation order, so the same float). */
+static inline float bc__svo_prim_eval(const struct bc_svo_rpn *r,
+				      const struct bc_svo_term *t,
+				      const float p[3])
+{
+	const float *rec = r->rec + t->rec;
+	float x = rec[0] * p[0] + rec[1] * p[1] + rec[2] * p[2] + rec[3];
+	float y = rec[4] * p[0] + rec[5] * p[1] + rec[6] * p[2] + rec[7];
+	float z = rec[8] * p[0] + rec[9] * p[1] + rec[10] * p[2] + rec[11];
+	return bc_prim_sdf((enum bc_prim)t->kind, rec + 12, x, y, z);
+}
+
+/* ---- Range evaluator ---------------------------------------------------- */
+
+/* An AA form in the ranger's arena: centre and n (symbol, coefficient)
+ * pairs from off, symbols increasing. */
+struct bc__aa {
+	double c;
+	uint32_t off, n;
+};
+
+/* A revised affine form: centre, the three input symbols, and the
+ * magnitude of the accumulated error term (thesis eq. 4.14). */
+struct bc__rev {
+	double c;
+	double x[3];
+	double e;
+};
+
+struct bc_svo_ranger {
+	const struct bc_svo_rpn *rpn;
+	enum bc_range_arith arith;
+	/* Per term, written for the active terms of the last bc_svo_range
+	 * call: the range and the operand terms (NEG: kid0 only). */
+	struct bc_svo_ivl *ivl;
+	uint32_t *kid0, *kid1;
+	uint32_t *idx;  /* scratch list of active terms */
+	uint32_t *mark; /* scratch for the top-down pass */
+	uint8_t *mode;
+	/* AA arena, used as a stack. */
+	uint32_t *aa_sym;
+	double *aa_coef;
+	uint32_t aa_cap, aa_top, aa_next;
+};
+
+/* The region's geometry every arithmetic needs. */
+struct bc__svo_geo {
+	float c[3];    /* centre of the box, midpoint of the segment */
+	double radius; /* half diagonal, half length */
+};
+void bc__svo_geo_init(struct bc__svo_geo *geo, const struct bc_svo_region *rg);
+
+/* The arithmetics. record: store every term's range and operands. */
+struct bc_svo_ivl bc__svo_ia_run(struct bc_svo_ranger *g, const uint32_t *idx,
+				 uint32_t n, const struct bc_svo_region *rg);
+struct bc_svo_ivl bc__svo_aa_run(struct bc_svo_ranger *g, const uint32_t *idx,
+				 uint32_t n, const struct bc_svo_region *rg);
+struct bc_svo_ivl bc__svo_rev_run(struct bc_svo_ranger *g, const uint32_t *idx,
+				  uint32_t n, const struct bc_svo_region *rg);
+struct bc_svo_ivl bc__svo_ia_prim(struct bc_svo_ranger *g, uint32_t term,
+				  const struct bc_svo_region *rg);
+struct bc_svo_ivl bc__svo_aa_prim(struct bc_svo_ranger *g, uint32_t term,
+				  const struct bc_svo_region *rg);
+struct bc_svo_ivl bc__svo_rev_prim(struct bc_svo_ranger *g, uint32_t term,
+				   const struct bc_svo_region *rg);
+
+/* ---- Operator rules (ia.c) ---------------------------------------------- */
+
+/*
+ * Where a compact smooth operator with operand ranges a, b provably equals
+ * its sharp counterpart (docs/svo.md derives each test): union when an
+ * operand is above r_o, or the blend width b_r can no longer reach the
+ * operands' difference; intersection when an operand is outside
+ * [-r_o, r_o] or likewise. Sharp kinds always answer true.
+ */
+bool bc__svo_op_sharp_in(enum bc_op kind, double blend, double range,
+			 struct bc_svo_ivl a, struct bc_svo_ivl b);
+/* Upper bound of the blend amount a smooth operator adds (intersection) or
+ * subtracts (union) given the range of the sharp result m and of the
+ * operands a, b (for intersection-like kinds, b is the already negated
+ * right operand of a difference); 0 where sharp. */
+double bc__svo_op_blend_bound(enum bc_op kind, double blend, double range,
+			      struct bc_svo_ivl m, struct bc_svo_ivl a,
+			      struct bc_svo_ivl b);
+/* Outward widening of a blended result for the float evaluator. */
+double bc__svo_op_margin(double blend, struct bc_svo_ivl m);
+
+static inline struct bc_svo_ivl bc__svo_ivl_meet(struct bc_svo_ivl a,
+						 struct bc_svo_ivl b)
+{
+	struct bc_svo_ivl r = {a.lo > b.lo ? a.lo : b.lo,
+			       a.hi < b.hi ? a.hi : b.hi};
+	/* Both enclose the same values, so they meet unless one of them is
+	 * wrong; should that ever happen, the hull is still an enclosure. */
+	if (r.lo > r.hi) {
+		r.lo = a.lo < b.lo ? a.lo : b.lo;
+		r.hi = a.hi > b.hi ? a.hi : b.hi;
+	}
+	return r;
+}
+
+/* ---- Stored masks (octree.c) -------------------------------------------- */
+
+/* A growing array of (word index, bits) pairs holding compressed masks. */
+struct bc__svo_pool {
+	uint32_t *v;
+	size_t n, cap; /* in uint32 units */
+};
+
+/* Appends the non-zero words of mask[0..nwords) and sets *off (in pairs)
+ * and *npairs. Returns 0 or BC_ENOMEM. */
+int bc__svo_pool_put(struct bc__svo_pool *pool, const uint32_t *mask,
+		     uint32_t nwords, uint32_t *off, uint32_t *npairs);
+void bc__svo_pool_finish(struct bc__svo_pool *pool);
+
+/* ---- The octree (octree.c; cast.c walks it) ---------------------------- */
+
+struct bc__svo_node {
+	uint32_t child; /* first of eight children; 0 for a leaf */
+	uint32_t leaf;  /* leaf record of a leaf */
+};
+
+struct bc__svo_leaf {
+	uint32_t off;    /* first pair in the pool */
+	uint32_t npairs; /* non-zero mask words */
+	uint32_t nterms;
+	uint8_t state;
+	uint8_t depth;
+	uint16_t pad;
+	float value;
+};
+
+struct bc_svo {
+	const struct bc_svo_rpn *rpn;
+	struct bc_svo_opts opts;
+	float lo[3], hi[3];
+	struct bc__svo_node *nodes;
+	uint32_t nnodes, capnodes;
+	struct bc__svo_leaf *leaves;
+	uint32_t nleaves, capleaves;
+	struct bc__svo_pool pool;
+	uint32_t *full; /* the unpruned mask, for points outside the root */
+	struct bc_svo_cmask full_c; /* the same, compressed (after build) */
+	uint32_t full_off;          /* its place in the pool */
+	struct bc_svo_stats stats;
+};
+
+/* A stand-in value of an empty or full region's sign. */
+float bc__svo_state_value(enum bc_svo_state st, struct bc_svo_ivl root);
+
+/* Milliseconds on a monotonic clock. */
+double bc__svo_now_ms(void);
+
+#endif
