@@ -1,15 +1,49 @@
 #!/usr/bin/env bash
-# Quick start: installs the Debian dependencies, builds blobcast (Release)
-# and renders the embedded default scene to out.png with the CPU tile
-# tracer. Usage: bash deploy/quickstart.sh [WxH] [OUT]
+# Quick start: installs the Debian dependencies, builds blobcast (Release),
+# starts blobcastd on its embedded default scene (session "default",
+# 127.0.0.1:7878, data in ./blobcast-data) and fetches a lossless snapshot
+# of it through the `blobcast` client into out.png. The daemon is stopped
+# afterwards unless --keep is given.
+#
+# Usage: bash deploy/quickstart.sh [--keep] [WxH] [OUT]
 set -euo pipefail
 cd "$(dirname "$0")/.."
+keep=0
+if [ "${1:-}" = "--keep" ]; then
+	keep=1
+	shift
+fi
 size=${1:-800x600}
 out=${2:-out.png}
+addr=127.0.0.1:7878
 
 bash deploy/install-deps.sh
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build -j "$(nproc)" --target blobcast
-./build/client/blobcast render default --size "$size" --backend tiled \
-	--out "$out"
-echo "quickstart: wrote $out"
+cmake --build build -j "$(nproc)" --target blobcastd blobcast_cli
+
+log=$(mktemp)
+./build/server/blobcastd --listen "$addr" --data blobcast-data 2>"$log" &
+pid=$!
+stop() {
+	if [ "$keep" = 0 ] && kill -0 "$pid" 2>/dev/null; then
+		kill -TERM "$pid"
+		wait "$pid" || true
+	fi
+	rm -f "$log"
+}
+trap stop EXIT
+for _ in $(seq 1 100); do
+	grep -q "listening on" "$log" && break
+	if ! kill -0 "$pid" 2>/dev/null; then
+		cat "$log" >&2
+		echo "quickstart: blobcastd did not start (is $addr in use?)" >&2
+		exit 1
+	fi
+	sleep 0.1
+done
+./build/client/blobcast --server "$addr" snapshot --session default \
+	--size "$size" --out "$out"
+echo "quickstart: $out rendered by blobcastd (pid $pid) at $addr"
+if [ "$keep" = 1 ]; then
+	echo "quickstart: blobcastd keeps running; stop it with: kill $pid"
+fi
