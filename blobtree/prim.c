@@ -300,8 +300,17 @@ int bc_prim_validate(struct bc_prim_data *p, struct bc_errinfo *ei)
 		const struct bc_param_desc *d = &info->params[i];
 		for (uint32_t c = 0; c < d->count; c++) {
 			float v = p->params[d->offset + c];
-			const char *what =
-				comp_name(buf, sizeof(buf), d->name, d->count, c);
+			const char *what;
+			bool pos = (d->flags & BC_PARAM_POSITIVE) != 0;
+			bool nonneg = (d->flags & BC_PARAM_NONNEG) != 0;
+			/* Names are formatted only for a message: validation
+			 * runs for every node a decoder reads. */
+			if (isfinite(v) && fabsf(v) <= BC_PARAM_MAX_ABS &&
+			    (!pos || v >= PRIM_MIN_SIZE) &&
+			    (!nonneg || v >= 0.0f)) {
+				continue;
+			}
+			what = comp_name(buf, sizeof(buf), d->name, d->count, c);
 			if ((rc = check_float(ei, info->name, what, v))) {
 				return rc;
 			}
@@ -331,8 +340,12 @@ int bc_prim_validate(struct bc_prim_data *p, struct bc_errinfo *ei)
 		return rc;
 	}
 	for (int i = 0; i < 3; i++) {
-		const char *what = comp_name(buf, sizeof(buf), "translate", 3,
-					     (uint32_t)i);
+		const char *what;
+		if (isfinite(p->translate[i]) &&
+		    fabsf(p->translate[i]) <= BC_PARAM_MAX_ABS) {
+			continue;
+		}
+		what = comp_name(buf, sizeof(buf), "translate", 3, (uint32_t)i);
 		if ((rc = check_float(ei, info->name, what, p->translate[i]))) {
 			return rc;
 		}
@@ -354,8 +367,13 @@ int bc_prim_validate(struct bc_prim_data *p, struct bc_errinfo *ei)
 				      "of 1 (a unit quaternion)",
 				      info->name, n);
 	}
-	for (int i = 0; i < 4; i++) {
-		p->rotate[i] = (float)((double)p->rotate[i] / n);
+	/* Renormalize only what is not unit to float precision already, so
+	 * that validating a validated quaternion changes no bit (scenes
+	 * round-trip exactly). */
+	if (fabs(n - 1.0) > 0x1p-22) {
+		for (int i = 0; i < 4; i++) {
+			p->rotate[i] = (float)((double)p->rotate[i] / n);
+		}
 	}
 	if (p->has_color) {
 		for (int i = 0; i < 3; i++) {
