@@ -10,7 +10,8 @@
  * criterion (svo.h), the same normals (tetrahedral differences over the
  * hit thickness), light, colours, background and debug ramps, so frames of
  * `svo` and `tiled` compare pixel by pixel. The octree's build time is
- * reported as ms_abuffer, the slot for a frame's acceleration structure.
+ * reported as ms_abuffer, the slot for a frame's acceleration structure,
+ * and counts against the frame's time budget: past it no tile is started.
  */
 #include "svo_impl.h"
 
@@ -129,6 +130,8 @@ struct frame {
 	float light[3];
 	float ambient;
 	uint32_t tiles_x, ntiles;
+	double start, budget_ms; /* budget 0: none */
+	atomic_bool late;        /* the budget ran out: tiles left blank */
 	atomic_uint next;
 	atomic_uint_fast64_t evals;
 	atomic_int err;
@@ -305,6 +308,21 @@ static void *worker(void *arg)
 		}
 		x0 = (tile % fr->tiles_x) * SVO_TILE;
 		y0 = (tile / fr->tiles_x) * SVO_TILE;
+		if (fr->budget_ms > 0.0 &&
+		    (atomic_load(&fr->late) ||
+		     bc__svo_now_ms() - fr->start > fr->budget_ms)) {
+			/* Past the frame's budget no tile is started: the rest
+			 * is background, and the frame says so. */
+			atomic_store(&fr->late, true);
+			for (uint32_t y = y0; y < y0 + SVO_TILE && y < out->height;
+			     y++) {
+				for (uint32_t x = x0;
+				     x < x0 + SVO_TILE && x < out->width; x++) {
+					put_miss(fr, x, y, 0);
+				}
+			}
+			continue;
+		}
 		for (uint32_t y = y0; y < y0 + SVO_TILE && y < out->height; y++) {
 			for (uint32_t x = x0; x < x0 + SVO_TILE && x < out->width;
 			     x++) {
@@ -374,6 +392,8 @@ static int svo_render(struct bc_renderer *r, const struct bc_camera *cam,
 	memset(&fr, 0, sizeof(fr));
 	fr.r = r;
 	fr.out = out;
+	fr.start = t0;
+	fr.budget_ms = (double)r->opts.budget_ms;
 	bc_view_rays_init(&fr.vr, cam, out->width, out->height);
 	size = !r->empty && r->rpn.size > 0.0f && isfinite(r->rpn.size)
 		       ? r->rpn.size
@@ -410,6 +430,7 @@ static int svo_render(struct bc_renderer *r, const struct bc_camera *cam,
 	atomic_init(&fr.next, 0u);
 	atomic_init(&fr.evals, 0u);
 	atomic_init(&fr.err, 0);
+	atomic_init(&fr.late, false);
 	for (uint32_t i = 1; i < r->threads; i++) {
 		if (pthread_create(&tids[started], NULL, worker, &fr) != 0) {
 			break; /* fewer threads: slower, not wrong */
@@ -432,6 +453,7 @@ static int svo_render(struct bc_renderer *r, const struct bc_camera *cam,
 		stats->ms_abuffer = t1 - t0;
 		stats->ms_trace = t2 - t1;
 		stats->field_evals = atomic_load(&fr.evals);
+		stats->incomplete = atomic_load(&fr.late);
 	}
 	return 0;
 }

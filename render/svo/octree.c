@@ -96,16 +96,8 @@ struct build {
 	uint32_t *masks; /* one working mask per depth */
 	uint32_t tau, max_depth;
 	uint64_t rpn_bytes;
+	uint64_t used; /* bytes of nodes, leaves and stored masks so far */
 };
-
-static uint64_t bytes_now(const struct build *b)
-{
-	const struct bc_svo *s = b->s;
-	return b->rpn_bytes + (uint64_t)s->capnodes * sizeof(struct bc__svo_node) +
-	       (uint64_t)s->capleaves * sizeof(struct bc__svo_leaf) +
-	       (uint64_t)s->pool.cap * sizeof(uint32_t) +
-	       (uint64_t)(b->max_depth + 2u) * s->rpn->nwords * 4u;
-}
 
 static int grow_nodes(struct bc_svo *s, uint32_t more)
 {
@@ -158,6 +150,7 @@ static int make_leaf(struct build *b, uint32_t node, uint32_t depth,
 	} else {
 		lf->value = bc__svo_state_value(res->state, res->root);
 	}
+	b->used += sizeof(*lf) + 8u * (uint64_t)lf->npairs;
 	s->nodes[node].child = 0;
 	s->nodes[node].leaf = s->nleaves++;
 	s->stats.leaves++;
@@ -176,62 +169,113 @@ static int make_leaf(struct build *b, uint32_t node, uint32_t depth,
 	return 0;
 }
 
+/* Bytes a leaf for a variant with these mask words takes. */
+static uint64_t leaf_cost(const uint32_t *mask, uint32_t nwords,
+			  const struct bc_svo_prune_result *res)
+{
+	uint64_t k = 0;
+	if (res->state == BC_SVO_STATE_ACTIVE) {
+		for (uint32_t w = 0; w < nwords; w++) {
+			k += mask[w] != 0;
+		}
+	}
+	return sizeof(struct bc__svo_leaf) + 8u * k;
+}
+
+/*
+ * Builds the subtree of node, whose region [lo, hi] at depth has already
+ * been pruned into mask (result res). allow is the memory the subtree may
+ * take. The budget is shared out as the tree grows: a node prunes its eight
+ * children first, sets aside what those that will be leaves need, and
+ * divides the rest among the others in proportion to their terms, giving
+ * each what is left when its turn comes. A budget too small for the
+ * threshold thus coarsens the octree where it is most complex instead of
+ * starving whichever regions happen to be built last.
+ */
 static int build_node(struct build *b, uint32_t node, const float lo[3],
-		      const float hi[3], uint32_t depth, const uint32_t *mask_in,
-		      uint32_t parent_terms, uint32_t stall)
+		      const float hi[3], uint32_t depth, const uint32_t *mask,
+		      const struct bc_svo_prune_result *res,
+		      uint32_t parent_terms, uint32_t stall, uint64_t allow)
 {
 	struct bc_svo *s = b->s;
-	uint32_t *mask = b->masks + (size_t)depth * s->rpn->nwords;
-	struct bc_svo_region rg;
-	struct bc_svo_prune_result res;
+	uint32_t nw = s->rpn->nwords;
+	uint32_t *cm = b->masks + ((size_t)(depth + 1) * 8u) * nw;
+	struct bc_svo_prune_result cr[8];
+	float clo[8][3], chi[8][3];
+	uint64_t cost[8], weight[8], wsum = 0, reserve = 0, left;
 	uint32_t first;
 	int rc;
-	memset(&rg, 0, sizeof(rg));
-	memcpy(rg.lo, lo, sizeof(rg.lo));
-	memcpy(rg.hi, hi, sizeof(rg.hi));
-	if ((rc = bc_svo_prune(b->g, mask_in, mask, &rg, s->opts.band, &res))) {
-		return rc;
-	}
-	s->stats.pruned++;
-	if (res.state != BC_SVO_STATE_ACTIVE || res.nterms <= b->tau ||
+	if (res->state != BC_SVO_STATE_ACTIVE || res->nterms <= b->tau ||
 	    depth >= b->max_depth) {
-		return make_leaf(b, node, depth, mask, &res);
+		return make_leaf(b, node, depth, mask, res);
 	}
-	stall = res.nterms < parent_terms || depth < SVO_STALL_MIN_DEPTH
+	stall = res->nterms < parent_terms || depth < SVO_STALL_MIN_DEPTH
 			? 0
 			: stall + 1;
 	if (stall >= SVO_STALL_LEVELS) {
 		s->stats.stalled++;
-		return make_leaf(b, node, depth, mask, &res);
+		return make_leaf(b, node, depth, mask, res);
 	}
-	/* Eight more nodes and, at worst, eight leaves with their masks. */
-	if (bytes_now(b) + 8u * (sizeof(struct bc__svo_node) + sizeof(struct bc__svo_leaf) +
-				 8u * (uint64_t)res.nterms) >
-	    s->opts.max_bytes) {
+	for (uint32_t c = 0; c < 8; c++) {
+		struct bc_svo_region rg;
+		memset(&rg, 0, sizeof(rg));
+		for (int i = 0; i < 3; i++) {
+			float mid = 0.5f * (lo[i] + hi[i]);
+			bool upper = (c >> i) & 1u;
+			clo[c][i] = upper ? mid : lo[i];
+			chi[c][i] = upper ? hi[i] : mid;
+		}
+		memcpy(rg.lo, clo[c], sizeof(rg.lo));
+		memcpy(rg.hi, chi[c], sizeof(rg.hi));
+		if ((rc = bc_svo_prune(b->g, mask, cm + (size_t)c * nw, &rg,
+				       s->opts.band, &cr[c]))) {
+			return rc;
+		}
+		s->stats.pruned++;
+		cost[c] = leaf_cost(cm + (size_t)c * nw, nw, &cr[c]);
+		weight[c] = cr[c].state == BC_SVO_STATE_ACTIVE &&
+					    cr[c].nterms > b->tau &&
+					    depth + 1 < b->max_depth
+				    ? cr[c].nterms
+				    : 0;
+		wsum += weight[c];
+		reserve += cost[c];
+	}
+	if (8u * sizeof(struct bc__svo_node) + reserve > allow) {
+		/* Not even the children as leaves fit. */
 		s->stats.truncated = true;
-		return make_leaf(b, node, depth, mask, &res);
+		return make_leaf(b, node, depth, mask, res);
 	}
 	if ((rc = grow_nodes(s, 8))) {
 		return rc;
 	}
 	first = s->nnodes;
 	s->nnodes += 8;
+	b->used += 8u * sizeof(struct bc__svo_node);
 	s->nodes[node].child = first;
 	s->nodes[node].leaf = 0;
+	left = allow - 8u * sizeof(struct bc__svo_node) - reserve;
 	for (uint32_t c = 0; c < 8; c++) {
-		float clo[3], chi[3];
-		for (int i = 0; i < 3; i++) {
-			float mid = 0.5f * (lo[i] + hi[i]);
-			bool upper = (c >> i) & 1u;
-			clo[i] = upper ? mid : lo[i];
-			chi[i] = upper ? hi[i] : mid;
+		uint64_t before = b->used, spent, mine = cost[c];
+		if (weight[c]) {
+			/* A share of what is left, as a fraction computed in
+			 * double: the product could overflow 64 bits. */
+			mine += (uint64_t)((double)left * (double)weight[c] /
+					   (double)wsum);
 		}
 		s->nodes[first + c].child = 0;
 		s->nodes[first + c].leaf = 0;
-		if ((rc = build_node(b, first + c, clo, chi, depth + 1, mask,
-				     res.nterms, stall))) {
+		if ((rc = build_node(b, first + c, clo[c], chi[c], depth + 1,
+				     cm + (size_t)c * nw, &cr[c], res->nterms,
+				     stall, mine))) {
 			return rc;
 		}
+		/* What the child did not use of its share goes on to the
+		 * siblings still to come. */
+		spent = b->used - before;
+		left += cost[c];
+		left -= spent < left ? spent : left;
+		wsum -= weight[c];
 	}
 	return 0;
 }
@@ -297,7 +341,8 @@ int bc_svo_build(struct bc_svo **out, const struct bc_svo_rpn *rpn,
 		bc_svo_destroy(s);
 		return bc_errinfo_set(ei, rc, "svo: %s", bc_strerror(rc));
 	}
-	b.masks = bc_calloc((size_t)(b.max_depth + 1u) * rpn->nwords,
+	/* The variants of the eight children of one node per depth. */
+	b.masks = bc_calloc((size_t)(b.max_depth + 2u) * 8u * rpn->nwords,
 			    sizeof(*b.masks));
 	s->full = bc_calloc(rpn->nwords, sizeof(*s->full));
 	if (!b.masks || !s->full || grow_nodes(s, 1)) {
@@ -310,7 +355,28 @@ int bc_svo_build(struct bc_svo **out, const struct bc_svo_rpn *rpn,
 		goto cleanup;
 	}
 	s->nnodes = 1;
-	rc = build_node(&b, 0, s->lo, s->hi, 0, s->full, UINT32_MAX, 0);
+	{
+		/* What the build needs besides the tree: the RPN, the working
+		 * masks and the full variant. */
+		uint64_t fixed = b.rpn_bytes +
+				 (uint64_t)(b.max_depth + 3u) * 8u * rpn->nwords * 4u;
+		uint64_t allow = s->opts.max_bytes > fixed
+					 ? s->opts.max_bytes - fixed
+					 : 0;
+		struct bc_svo_region rg;
+		struct bc_svo_prune_result res;
+		memset(&rg, 0, sizeof(rg));
+		memcpy(rg.lo, s->lo, sizeof(rg.lo));
+		memcpy(rg.hi, s->hi, sizeof(rg.hi));
+		rc = bc_svo_prune(b.g, s->full, b.masks, &rg, s->opts.band, &res);
+		if (rc) {
+			goto cleanup;
+		}
+		s->stats.pruned++;
+		b.used = sizeof(struct bc__svo_node);
+		rc = build_node(&b, 0, s->lo, s->hi, 0, b.masks, &res,
+				UINT32_MAX, 0, allow);
+	}
 	if (rc) {
 		goto cleanup;
 	}
@@ -394,14 +460,15 @@ bool bc_svo_locate(const struct bc_svo *s, const float p[3],
 	}
 	while (s->nodes[node].child) {
 		uint32_t c = 0;
+		/* The same midpoints as the build computed, chosen without
+		 * branches: random points make every octant choice a
+		 * coin toss the branch predictor would lose. */
 		for (int i = 0; i < 3; i++) {
 			float mid = 0.5f * (lo[i] + hi[i]);
-			if (p[i] >= mid) {
-				c |= 1u << i;
-				lo[i] = mid;
-			} else {
-				hi[i] = mid;
-			}
+			uint32_t up = p[i] >= mid;
+			c |= up << i;
+			lo[i] = up ? mid : lo[i];
+			hi[i] = up ? hi[i] : mid;
 		}
 		node = s->nodes[node].child + c;
 	}

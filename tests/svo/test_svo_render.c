@@ -236,7 +236,38 @@ static void backend_follows_syncs_and_refuses_bad_input(void)
 	bc_tree_destroy(t);
 }
 
+/* A frame over its time budget starts no more tiles: what is left is
+ * background and the stats say the frame is incomplete. Building the
+ * octree of a few hundred spheres alone takes longer than 1 ms. */
+static void frame_over_budget_is_incomplete(void)
+{
+	struct bc_gen_opts o = {.count = 300};
+	struct bc_tree *t = bc_tree_create();
+	struct bc_camera cam;
+	struct bc_frame f;
+	struct bc_render_stats st;
+	struct bc_render_opts ro = {.threads = 1, .budget_ms = 1};
+	uint32_t hits = 0;
+	REQUIRE(t);
+	REQUIRE(bc_gen("many-spheres", &o, t, &cam, NULL) == 0);
+	REQUIRE(bc_frame_init(&f, 32, 32) == 0);
+	REQUIRE(bc_render_once(BC_BACKEND_SVO, &ro, t, &cam, &f, &st, NULL) ==
+		0);
+	CHECK(st.incomplete);
+	for (uint32_t i = 0; i < 32 * 32; i++) {
+		hits += f.ids[i] != 0;
+	}
+	CHECK(hits == 0);
+	ro.budget_ms = 0;
+	REQUIRE(bc_render_once(BC_BACKEND_SVO, &ro, t, &cam, &f, &st, NULL) ==
+		0);
+	CHECK(!st.incomplete);
+	bc_frame_finish(&f);
+	bc_tree_destroy(t);
+}
+
 static const struct bc_test tests[] = {
+	{"frame_over_budget_is_incomplete", frame_over_budget_is_incomplete},
 	{"svo_matches_tiled_on_generated_scenes",
 	 svo_matches_tiled_on_generated_scenes},
 	{"svo_matches_tiled_on_the_default_scene",

@@ -340,6 +340,30 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
 		 float t0, float t1, const struct bc_svo_cast_params *cp,
 		 struct bc_svo_hit *hit);
 
+/* ---- Measurements (measure.c) ------------------------------------------- */
+
+/* Evaluation cost at random points of the tree's box (the thesis's §6.1
+ * and §6.3 protocol): the same points through the full tree and through
+ * the pruned variants, on this thread. */
+struct bc_svo_timing {
+	uint32_t points;      /* points evaluated through the variants */
+	uint32_t full_points; /* of which through the full tree too */
+	double full_ns;       /* bc_eval_full, per point */
+	double pruned_ns;     /* finding the variant and evaluating it */
+	double locate_ns;     /* finding it only (octree walk, voxel index) */
+	uint64_t mismatches;  /* full_points whose signs differ: always 0 */
+};
+
+/* Times `points` random points (from seed) through s (or the grid g), and
+ * the full tree of l (the tree s or g was built from) on as many of them as
+ * fit in about BC_SVO_FULL_TIME_MS. Returns 0, BC_EINVAL or BC_ENOMEM. */
+#define BC_SVO_FULL_TIME_MS 300.0
+int bc_svo_time_octree(const struct bc_svo *s, const struct bc_lin *l,
+		       uint32_t points, uint64_t seed,
+		       struct bc_svo_timing *out);
+int bc_svo_time_grid(const struct bc_svo_grid *g, const struct bc_lin *l,
+		     uint32_t points, uint64_t seed, struct bc_svo_timing *out);
+
 /* ---- The backend (backend.c) -------------------------------------------- */
 
 extern const struct bc_backend_ops bc_backend_svo_ops;

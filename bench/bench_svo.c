@@ -1,0 +1,321 @@
+/*
+ * Benchmarks of the adaptive CSG evaluator (render/svo) in the shape of the
+ * thesis's tables (Chulkov 2025, §6), on our analogues of its scenes:
+ *
+ *   grid    Table 6.1/6.2: uniform grids of n^3 voxels, each pruned from the
+ *           whole tree; pruning time per voxel for IA, AA and RevAA, and
+ *           evaluation time per random point through the voxels' variants
+ *           against the unpruned tree.
+ *   sweep   Tables 6.4-6.7: the adaptive octree (RevAA, depth limit 15)
+ *           over a range of thresholds: average depth, largest and average
+ *           RPN length, construction time, traversal and evaluation time
+ *           per point, memory, and render time per pixel.
+ *   render  `svo` against the CPU `tiled` renderer on the same scenes,
+ *           cameras and thread count, side by side in one run.
+ *
+ * Usage: bench_svo [grid|sweep|render|all] [--quick]
+ * Every time is measured in this process, one thread unless stated; ratios
+ * compare numbers taken side by side in the same run.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "blobcast/gen.h"
+#include "blobcast/render.h"
+#include "blobcast/svo.h"
+
+struct scene {
+	const char *label; /* as the tables name it */
+	const char *gen;
+	struct bc_gen_opts o;
+};
+
+static double now_ms(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+}
+
+static struct bc_tree *make(const struct scene *sc, struct bc_camera *cam)
+{
+	struct bc_errinfo ei = {0};
+	struct bc_tree *t = bc_tree_create();
+	if (!t || bc_gen(sc->gen, &sc->o, t, cam, &ei)) {
+		fprintf(stderr, "bench_svo: %s: %s\n", sc->label, ei.msg);
+		bc_tree_destroy(t);
+		return NULL;
+	}
+	return t;
+}
+
+/* ---- Table 6.1 / 6.2 ------------------------------------------------------ */
+
+static int bench_grid(bool quick)
+{
+	static const struct scene scenes[] = {
+		{"Gears", "gears", {.teeth = 24}},
+		{"Many Gears 16", "many-gears", {.count = 16}},
+		{"Fig18 smooth 64", "fig18", {.count = 64}},
+	};
+	static const uint32_t sizes[] = {5, 10, 20, 40, 80};
+	uint32_t nsizes = quick ? 3 : 5;
+	printf("## Uniform grids (thesis Table 6.1)\n\n");
+	printf("| Scene | RPN len. | N voxels | prune IA (ms) | prune AA (ms) "
+	       "| prune RevAA (ms) | eval IA (ns) | eval AA (ns) "
+	       "| eval RevAA (ns) | Original (ns) | avg terms RevAA |\n");
+	printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
+	for (size_t s = 0; s < sizeof(scenes) / sizeof(scenes[0]); s++) {
+		struct bc_tree *t = make(&scenes[s], NULL);
+		struct bc_svo_rpn rpn;
+		const struct bc_lin *l;
+		double lo = INFINITY, hi = 0.0, sum = 0.0;
+		uint32_t lo_n = 0, hi_n = 0, nrat = 0;
+		if (!t) {
+			return 1;
+		}
+		l = bc_tree_lin(t);
+		if (bc_svo_rpn_init(&rpn, l)) {
+			return 1;
+		}
+		for (uint32_t k = 0; k < nsizes; k++) {
+			uint32_t n = sizes[k];
+			double prune[4] = {0}, eval[4] = {0}, full = 0.0;
+			double avg = 0.0;
+			uint32_t most;
+			uint64_t bytes;
+			for (int a = BC_RANGE_IA; a <= BC_RANGE_REVAA; a++) {
+				struct bc_svo_grid *g = NULL;
+				struct bc_svo_timing tm;
+				double ms;
+				/* AA costs tens of times more: like the thesis,
+				 * it is left out on the finest grids. */
+				if (a == BC_RANGE_AA && n > 20) {
+					prune[a] = eval[a] = NAN;
+					continue;
+				}
+				if (bc_svo_grid_build(&g, &rpn,
+						      (enum bc_range_arith)a, n,
+						      &ms) ||
+				    bc_svo_time_grid(g, l, quick ? 200000 : 1000000,
+						     7, &tm)) {
+					return 1;
+				}
+				if (tm.mismatches) {
+					fprintf(stderr, "bench_svo: sign "
+							"mismatch\n");
+					return 1;
+				}
+				prune[a] = ms / ((double)n * n * n);
+				eval[a] = tm.pruned_ns;
+				full = tm.full_ns;
+				if (a == BC_RANGE_REVAA) {
+					bc_svo_grid_stats(g, &avg, &most, &bytes);
+					double r = tm.full_ns / tm.pruned_ns;
+					sum += r;
+					nrat++;
+					if (r < lo) {
+						lo = r;
+						lo_n = n;
+					}
+					if (r > hi) {
+						hi = r;
+						hi_n = n;
+					}
+				}
+				bc_svo_grid_destroy(g);
+			}
+			printf("| %s | %u | %u^3 | %.6f | %.6f | %.6f | %.2f | "
+			       "%.2f | %.2f | %.1f | %.2f |\n",
+			       scenes[s].label, rpn.n, n, prune[1], prune[2],
+			       prune[3], eval[1], eval[2], eval[3], full, avg);
+			fflush(stdout);
+		}
+		printf("| %s: RevAA speedup lowest %.1fx at %u^3, highest "
+		       "%.1fx at %u^3, average %.1fx |||||||||||\n",
+		       scenes[s].label, lo, lo_n, hi, hi_n, sum / nrat);
+		bc_svo_rpn_finish(&rpn);
+		bc_tree_destroy(t);
+	}
+	printf("\n");
+	return 0;
+}
+
+/* ---- Tables 6.4-6.7 ------------------------------------------------------- */
+
+static double render_us_per_pixel(const struct bc_tree *t,
+				  const struct bc_camera *cam,
+				  const struct bc_render_opts *o, uint32_t side,
+				  double *build_ms)
+{
+	struct bc_frame f;
+	struct bc_render_stats st;
+	struct bc_errinfo ei = {0};
+	double us;
+	if (bc_frame_init(&f, side, side)) {
+		return NAN;
+	}
+	if (bc_render_once(o->svo_range ? BC_BACKEND_SVO : BC_BACKEND_TILED, o,
+			   t, cam, &f, &st, &ei)) {
+		fprintf(stderr, "bench_svo: render: %s\n", ei.msg);
+		bc_frame_finish(&f);
+		return NAN;
+	}
+	us = st.ms_trace * 1e3 / ((double)side * side);
+	if (build_ms) {
+		*build_ms = st.ms_abuffer;
+	}
+	bc_frame_finish(&f);
+	return us;
+}
+
+static int bench_sweep(bool quick)
+{
+	static const struct scene scenes[] = {
+		{"Gears", "gears", {.teeth = 24}},
+		{"Many Spheres", "many-spheres", {0}},
+		{"Many Gears", "many-gears", {0}},
+	};
+	static const uint32_t taus[] = {200, 160, 120, 80, 60, 40, 20, 10, 5, 2};
+	for (size_t s = 0; s < sizeof(scenes) / sizeof(scenes[0]); s++) {
+		struct bc_camera cam;
+		struct bc_tree *t = make(&scenes[s], &cam);
+		struct bc_svo_rpn rpn;
+		const struct bc_lin *l;
+		struct bc_svo_timing tm0;
+		if (!t) {
+			return 1;
+		}
+		l = bc_tree_lin(t);
+		if (bc_svo_rpn_init(&rpn, l)) {
+			return 1;
+		}
+		printf("## %s: %u primitives, RPN length %u (thesis Tables "
+		       "6.4-6.7)\n\n",
+		       scenes[s].label, rpn.nprims, rpn.n);
+		printf("| Thresh. | Avg depth | Max RPN len. | Avg RPN len. | "
+		       "SVO constr. (ms) | Avg trav. (ns) | Avg eval. (ns) | "
+		       "Avg total (ns) | Speedup | Memory (MB) | "
+		       "Render (us/px) |\n");
+		printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
+		for (size_t k = 0; k < sizeof(taus) / sizeof(taus[0]); k++) {
+			struct bc_svo_opts so = {.arith = BC_RANGE_REVAA,
+						 .threshold = taus[k],
+						 .max_depth = BC_SVO_MAX_DEPTH,
+						 .max_bytes = (uint64_t)3 << 30};
+			struct bc_render_opts ro = {.threads = 1,
+						    .svo_range = BC_RANGE_REVAA,
+						    .svo_threshold = taus[k],
+						    .svo_max_depth = BC_SVO_MAX_DEPTH};
+			struct bc_svo *sv = NULL;
+			struct bc_svo_stats st;
+			struct bc_errinfo ei = {0};
+			double px;
+			if (quick && k % 3 != 0) {
+				continue;
+			}
+			if (bc_svo_build(&sv, &rpn, &so, &ei) ||
+			    bc_svo_time_octree(sv, l, quick ? 200000 : 1000000,
+					       11, &tm0)) {
+				fprintf(stderr, "bench_svo: %s\n", ei.msg);
+				return 1;
+			}
+			if (tm0.mismatches) {
+				fprintf(stderr, "bench_svo: sign mismatch\n");
+				return 1;
+			}
+			bc_svo_get_stats(sv, &st);
+			px = render_us_per_pixel(t, &cam, &ro, quick ? 64 : 128,
+						 NULL);
+			printf("| %u | %.2f | %u | %.2f | %.1f | %.1f | %.1f | "
+			       "%.1f | %.0fx | %.1f | %.2f |%s\n",
+			       taus[k], st.avg_depth, st.max_terms, st.avg_terms,
+			       st.build_ms, tm0.locate_ns,
+			       tm0.pruned_ns - tm0.locate_ns, tm0.pruned_ns,
+			       tm0.full_ns / tm0.pruned_ns,
+			       (double)st.bytes / (1024.0 * 1024.0), px,
+			       st.truncated ? " (memory budget reached)" : "");
+			fflush(stdout);
+			bc_svo_destroy(sv);
+		}
+		printf("\nUnpruned evaluation: %.0f ns per point.\n\n",
+		       tm0.full_ns);
+		bc_svo_rpn_finish(&rpn);
+		bc_tree_destroy(t);
+	}
+	return 0;
+}
+
+/* ---- svo against tiled ---------------------------------------------------- */
+
+static int bench_render(bool quick)
+{
+	static const struct scene scenes[] = {
+		{"Gears", "gears", {.teeth = 24}},
+		{"Many Spheres", "many-spheres", {0}},
+		{"Many Gears", "many-gears", {0}},
+		{"Fig18 smooth 256", "fig18", {0}},
+		{"Fig16 level 3", "fig16", {.level = 3}},
+	};
+	uint32_t side = quick ? 128 : 256;
+	printf("## svo against tiled, %ux%u, 1 thread\n\n", side, side);
+	printf("| Scene | prims | tiled (ms) | svo RevAA build (ms) | "
+	       "svo RevAA trace (ms) | svo IA trace (ms) | tiled / svo trace "
+	       "|\n");
+	printf("|---|---|---|---|---|---|---|\n");
+	for (size_t s = 0; s < sizeof(scenes) / sizeof(scenes[0]); s++) {
+		struct bc_camera cam;
+		struct bc_tree *t = make(&scenes[s], &cam);
+		struct bc_render_opts tiled = {.threads = 1};
+		struct bc_render_opts rev = {.threads = 1,
+					     .svo_range = BC_RANGE_REVAA};
+		struct bc_render_opts ia = {.threads = 1,
+					    .svo_range = BC_RANGE_IA};
+		double build = 0.0, tt, tr, ti, b2;
+		if (!t) {
+			return 1;
+		}
+		tt = render_us_per_pixel(t, &cam, &tiled, side, NULL);
+		tr = render_us_per_pixel(t, &cam, &rev, side, &build);
+		ti = render_us_per_pixel(t, &cam, &ia, side, &b2);
+		tt *= (double)side * side / 1e3;
+		tr *= (double)side * side / 1e3;
+		ti *= (double)side * side / 1e3;
+		printf("| %s | %u | %.1f | %.1f | %.1f | %.1f | %.2f |\n",
+		       scenes[s].label, bc_tree_prim_count(t), tt, build, tr, ti,
+		       tt / tr);
+		fflush(stdout);
+		bc_tree_destroy(t);
+	}
+	printf("\n");
+	return 0;
+}
+
+int main(int argc, char **argv)
+{
+	const char *what = "all";
+	bool quick = false;
+	double t0 = now_ms();
+	int rc = 0;
+	for (int i = 1; i < argc; i++) {
+		if (strcmp(argv[i], "--quick") == 0) {
+			quick = true;
+		} else {
+			what = argv[i];
+		}
+	}
+	if (strcmp(what, "grid") == 0 || strcmp(what, "all") == 0) {
+		rc |= bench_grid(quick);
+	}
+	if (strcmp(what, "sweep") == 0 || strcmp(what, "all") == 0) {
+		rc |= bench_sweep(quick);
+	}
+	if (strcmp(what, "render") == 0 || strcmp(what, "all") == 0) {
+		rc |= bench_render(quick);
+	}
+	fprintf(stderr, "bench_svo: %.1f s\n", (now_ms() - t0) / 1e3);
+	return rc;
+}
