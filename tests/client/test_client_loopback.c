@@ -17,10 +17,12 @@
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/un.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "blobcast/alloc.h"
 #include "blobcast/client.h"
+#include "blobcast/log.h"
 #include "blobcast/scene.h"
 #include "test.h"
 
@@ -34,6 +36,7 @@ struct fake {
 	char addr[160];
 	char dir[64]; /* temp dir of a Unix socket, or "" */
 	pthread_t thread;
+	pid_t child; /* the server runs in a child process instead, or 0 */
 	script_fn script;
 	int failures; /* checks that failed in the server thread */
 	struct bc_proto_reader r;
@@ -203,9 +206,64 @@ static int fake_start(struct fake *f, script_fn script, bool unix_socket)
 	return 0;
 }
 
+/* The same server in a child process: the allocation-failure hook counts
+ * this process's allocations only, so the client's can be failed one by
+ * one while the server's never are. */
+static int fake_fork(struct fake *f, script_fn script)
+{
+	struct sockaddr_in in = {.sin_family = AF_INET};
+	socklen_t len = sizeof(in);
+	memset(f, 0, sizeof(*f));
+	f->script = script;
+	in.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+	f->lfd = socket(AF_INET, SOCK_STREAM, 0);
+	if (f->lfd < 0 || bind(f->lfd, (struct sockaddr *)&in, sizeof(in)) < 0 ||
+	    getsockname(f->lfd, (struct sockaddr *)&in, &len) < 0 ||
+	    listen(f->lfd, 1) < 0) {
+		return -1;
+	}
+	snprintf(f->addr, sizeof(f->addr), "127.0.0.1:%u",
+		 (unsigned)ntohs(in.sin_port));
+	fflush(NULL);
+	f->child = fork();
+	if (f->child < 0) {
+		return -1;
+	}
+	if (f->child == 0) {
+		fake_main(f);
+		close(f->lfd);
+		exit(f->failures ? 1 : 0);
+	}
+	return 0;
+}
+
 /* Joins the server thread and counts its failures into the test's. */
 static void fake_stop(struct fake *f)
 {
+	if (f->child > 0) {
+		struct sockaddr_in in;
+		socklen_t len = sizeof(in);
+		int st = 0, wake = socket(AF_INET, SOCK_STREAM, 0);
+		/* A client that failed before connecting leaves the server in
+		 * accept(): a connection that closes at once lets it finish.
+		 * (If it has served already, this one just waits in the
+		 * backlog until the listener closes.) */
+		if (wake >= 0 &&
+		    getsockname(f->lfd, (struct sockaddr *)&in, &len) == 0) {
+			(void)connect(wake, (struct sockaddr *)&in, len);
+		}
+		if (wake >= 0) {
+			close(wake);
+		}
+		close(f->lfd);
+		waitpid(f->child, &st, 0);
+		if (!WIFEXITED(st) || WEXITSTATUS(st) != 0) {
+			fprintf(stderr, "  fake server process failed (%d)\n",
+				st);
+			bc_test_failures++;
+		}
+		return;
+	}
 	pthread_join(f->thread, NULL);
 	close(f->lfd);
 	if (f->dir[0]) {
@@ -987,6 +1045,132 @@ static void test_refused_and_bad_options(void)
 	bc_client_destroy(NULL);
 }
 
+/* ---- allocation failures ------------------------------------------------- */
+
+/* Serves whatever a client asks, for as long as it stays; a client that
+ * vanishes at any point is normal here. */
+static void script_serve(struct fake *f, int fd)
+{
+	struct bc_msg m;
+	if (!srv_next(f, fd, &m) || m.type != BC_MSG_HELLO) {
+		return;
+	}
+	bc_proto_reader_hello_done(&f->r);
+	{
+		struct bc_msg w = {.type = BC_MSG_WELCOME, .seq = m.seq};
+		w.welcome.version = BC_PROTO_VERSION;
+		w.welcome.connection_id = 7;
+		w.welcome.max_payload = BC_PROTO_MAX_PAYLOAD;
+		w.welcome.max_frame_bytes = 1u << 20;
+		w.welcome.max_nodes = 1000;
+		w.welcome.max_dim = 4096;
+		w.welcome.max_members = 64;
+		w.welcome.max_edit_ops = 1024;
+		srv_send(f, fd, &w);
+	}
+	while (srv_next(f, fd, &m)) {
+		if (m.type == BC_MSG_SESSION_JOIN) {
+			srv_session(f, fd, m.seq, 5);
+		} else if (m.type == BC_MSG_EDIT) {
+			struct bc_msg ea = {.type = BC_MSG_EDIT_APPLIED};
+			ea.edit_applied.order = 6;
+			ea.edit_applied.author = 3;
+			ea.edit_applied.author_seq = m.seq;
+			ea.edit_applied.nops = m.edit.nops;
+			ea.edit_applied.ops = m.edit.ops;
+			srv_send(f, fd, &ea);
+		} else if (m.type == BC_MSG_VIEW) {
+			srv_frame(f, fd, 0, BC_PROTO_FLAG_STILL, 16, 8, 1, 6);
+		} else if (m.type == BC_MSG_GET_STATS) {
+			struct bc_msg st = {.type = BC_MSG_STATS, .seq = m.seq};
+			srv_send(f, fd, &st);
+		}
+	}
+}
+
+static unsigned long quiet_count;
+
+static void quiet(enum bc_log_level level, const char *file, int line,
+		  const char *fmt, va_list args)
+{
+	(void)level;
+	(void)file;
+	(void)line;
+	(void)fmt;
+	(void)args;
+	quiet_count++;
+}
+
+/* Connect, join, edit, frame, stats, with the client's Nth allocation
+ * failing, for every N until all succeed: each failure is reported as an
+ * error, never a crash, and frees what it took (ASan checks at exit). */
+static void test_allocation_failures_are_reported(void)
+{
+	const char *kv[] = {"radius=0.3", "color=0,1,0"};
+	unsigned long n;
+	/* A mirror that cannot be built is logged; that is expected here. */
+	bc_log_set_callback(quiet);
+	for (n = 1; n < 2000; n++) {
+		struct fake f;
+		struct bc_client *c = NULL;
+		struct bc_client_image img;
+		struct bc_errinfo ei = {0};
+		struct bc_msg_stats st;
+		struct bc_msg m;
+		uint32_t seq;
+		int rc;
+		REQUIRE(fake_fork(&f, script_serve) == 0);
+		bc_client_image_init(&img);
+		bc_alloc_fail_after(n);
+		rc = bc_client_connect(&c,
+				       &(struct bc_client_opts){
+					       .addr = f.addr, .timeout_ms = 5000},
+				       &ei);
+		if (!rc) {
+			rc = bc_client_join(c, "s1", 0, 0, &ei);
+		}
+		if (!rc) {
+			rc = bc_client_edit_kv(c, 2, kv, 2, false, &seq, &ei);
+		}
+		if (!rc) {
+			rc = bc_client_wait_applied(c, seq, NULL, &ei);
+		}
+		if (!rc) {
+			rc = bc_client_view(c,
+					    &(struct bc_msg_view){.width = 16,
+								  .height = 8},
+					    NULL, &ei);
+		}
+		if (!rc) {
+			rc = bc_client_wait(c, BC_MSG_FRAME, 0, &m, 0, &ei);
+		}
+		if (!rc) {
+			rc = bc_client_image_apply(&img, &m, &ei);
+		}
+		if (!rc) {
+			rc = bc_client_stats(c, &st, &ei);
+		}
+		bc_alloc_fail_after(0);
+		bc_client_destroy(c);
+		bc_client_image_finish(&img);
+		fake_stop(&f);
+		if (rc == 0) {
+			break;
+		}
+		/* Out of memory, or (when the mirror could not be built) no
+		 * scene to edit against. */
+		if (rc != BC_ENOMEM && rc != BC_ESTATE) {
+			fprintf(stderr, "  allocation %lu: %s (%s)\n", n,
+				bc_err_name(rc), ei.msg);
+			CHECK(0);
+		}
+	}
+	bc_log_set_callback(NULL);
+	CHECK(n > 5 && n < 2000);
+	CHECK(quiet_count > 0);
+	printf("  %lu allocation points failed in turn\n", n - 1);
+}
+
 static const struct bc_test tests[] = {
 	{"handshake_join_or_create_and_stats",
 	 test_handshake_join_or_create_and_stats},
@@ -1006,6 +1190,8 @@ static const struct bc_test tests[] = {
 	{"fatal_error_becomes_sticky", test_fatal_error_becomes_sticky},
 	{"unix_socket_ping", test_unix_socket_ping},
 	{"refused_and_bad_options", test_refused_and_bad_options},
+	{"allocation_failures_are_reported",
+	 test_allocation_failures_are_reported},
 };
 
 BC_TEST_MAIN(tests)
