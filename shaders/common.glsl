@@ -34,7 +34,7 @@
 #define BC_DEBUG_EVALS_MAX 128.0
 #define BC_DEBUG_OVERLAPS_MAX 32.0
 // Tiles sorted in shared memory; longer lists are heap-sorted in place.
-#define BC_SORT_SHARED 512u
+#define BC_SORT_SHARED 1024u
 
 #define BC_NONE 0xffffffffu
 #define BC_INF uintBitsToFloat(0x7f800000u)
@@ -73,8 +73,23 @@
 #define BC_STAT_OVER_M 2u      // ranges that went over M_overlap
 #define BC_STAT_OVER_CACHE 3u  // ranges whose records did not all fit
 #define BC_STAT_RANGES 4u      // depth ranges traced
-#define BC_STAT_EVALS 8u       // 256 buckets of field evaluation counts
+#define BC_STAT_SUSPENDED 5u   // tiles that suspended in this dispatch
+#define BC_STAT_SLOTS 6u       // suspension slots taken (all dispatches)
+#define BC_STAT_NO_SLOT 7u     // suspensions refused: the pool was full
+#define BC_STAT_OVER_BUDGET 8u // loop budget exceeded where no split exists
+#define BC_STAT_DISPATCHES 9u  // tracing dispatches that did work
+#define BC_STAT_GENERAL 10u    // ranges evaluated by the general path
+#define BC_STAT_EVALS 16u      // 256 buckets of field evaluation counts
 #define BC_STAT_EVAL_BUCKETS 256u
+
+// Tile status (the fourth word of a tile's entry): fresh, suspended with
+// its state in scratch slot (word >> 2), finished.
+#define BC_TILE_FRESH 0u
+#define BC_TILE_SUSPENDED 1u
+#define BC_TILE_FINISHED 2u
+// Words of one suspension slot: the tile's walk, then four per ray.
+#define BC_SLOT_TILE_WORDS 8u
+#define BC_SLOT_WORDS (BC_SLOT_TILE_WORDS + 4u * BC_TILE_RAYS)
 
 // ---- Per-frame uniforms ----------------------------------------------------
 
@@ -87,6 +102,9 @@ layout(std140, binding = 0) uniform Frame {
 	vec4 u_misc;    // x: bisection tolerance (world units)
 	uvec4 u_size;   // width, height, tiles across, tiles down
 	uvec4 u_counts; // primitives, fragment capacity, debug mode, 0
+	// Suspension (trace.comp): scratch word where the slots begin, slots,
+	// loop iterations one invocation may spend per dispatch (0: no limit).
+	uvec4 u_pool;
 };
 
 // ---- Storage buffers -------------------------------------------------------

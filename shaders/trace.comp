@@ -20,6 +20,15 @@
 // fragments, which bounds both); records that do not fit the cache are
 // read from the parameter buffer. Both only cost speed.
 //
+// Work per dispatch is bounded when the host asks (u_pool.z): llvmpipe
+// stops every loop of an invocation once 65535 loop iterations have run in
+// it, all loops together, which a dense tile exceeds. The workgroup counts
+// what it spends (the first invocation's traversal and fetching, and per
+// pass the longest ray's samples times the view's length); rays pause
+// between sphere tracing steps when a pass would go over, and the tile
+// suspends, its walk and rays saved in a scratch slot, when the dispatch's
+// budget is spent. The host dispatches again until no tile is suspended.
+//
 // The tracer and the shading are render/cpu/trace.c and shade.c, step for
 // step, so that the two backends draw the same pictures.
 #include "common.glsl"
@@ -47,6 +56,14 @@ layout(r32ui, binding = 2) uniform writeonly uimage2D img_ids;
 #define TRACE_MISS 1u
 #define TRACE_HIT 2u
 #define TRACE_NEAR_END 3u
+#define TRACE_PAUSED 4u // out of budget between two steps: resume at r_t
+
+// Samples a ray may still take after its step budget runs out (refinement,
+// bisection, closest approach and shading are not cut): 8 + 40 + 8 + 5.
+#define TAIL_SAMPLES 64u
+// The budget a dispatch keeps for loops it does not count (the pass and
+// range loops themselves, cache fills, the tile's start and end).
+#define BUDGET_MARGIN 2048u
 
 // A ray that still steps after this many evaluations in one range has met
 // a field the tracer cannot resolve (it cannot happen for valid scenes: the
@@ -67,13 +84,20 @@ shared uint s_nview, s_na, s_next, s_left, s_state, s_evals;
 // The view fits the fast evaluation path: all of it in shared memory, every
 // record cached, at most FAST_STACK + 1 values pending.
 shared bool s_fast;
-shared uint s_over_m, s_over_cache, s_ranges;
+shared uint s_over_m, s_over_cache, s_ranges, s_general;
 shared float s_zb, s_ze;
+// Suspension: loop iterations spent in this dispatch, the pass's step cap,
+// the longest ray's samples in the pass, rays left to trace in the range,
+// whether the range is resumed in the middle, the tile's slot.
+shared uint s_cost, s_budget, s_cap, s_rmax, s_todo, s_slot;
+shared bool s_mid, s_was_mid, s_suspend;
 
 // The tile's list: g_n fragments from g_off in b_frag (and as many scratch
 // entries there).
 uint g_off, g_n;
 uint g_evals;
+// Loop iterations the first invocation spends fetching and building.
+uint g_work;
 
 // ---- The tile's list, active set and view -------------------------------
 
@@ -148,6 +172,7 @@ void activate(uint na, uint j)
 	while (i > 0u && act_get(i - 1u) > f.z) {
 		act_set(i, act_get(i - 1u), act_t1_get(i - 1u));
 		i--;
+		g_work++;
 	}
 	act_set(i, f.z, uintBitsToFloat(f.y));
 }
@@ -182,6 +207,7 @@ bool build_view(uint na)
 	for (uint i = 0u; i < na; i++) {
 		uint k = act_get(i);
 		uint s = b_prim[k].info.x;
+		g_work++;
 		uint q = i + 1u < na ? b_prim[act_get(i + 1u)].info.x : BC_NONE;
 		if (sp >= BC_EVAL_STACK) {
 			return false; // beyond the tree depth limit: unreachable
@@ -197,8 +223,10 @@ bool build_view(uint na)
 			uint top = sp - 1u;
 			uint lo = sp >= 2u ? s_st_slot[sp - 2u] + 1u : 0u;
 			uint x = s_st_slot[top], a;
+			g_work++;
 			for (;;) {
 				uvec4 tp = b_topo[x];
+				g_work++;
 				if (tp.y != BC_NONE && may_climb(tp.y, q, lo)) {
 					x = tp.y;
 					continue;
@@ -256,6 +284,7 @@ bool build_view(uint na)
 	// The node cache: records in view order while they fit.
 	uint used = 0u;
 	bool over = false;
+	g_work += 2u * min(nview, BC_VIEW_SHARED);
 	for (uint i = 0u; i < min(nview, BC_VIEW_SHARED); i++) {
 		uint size = (s_view[i].x & VI_LEAF) != 0u ? BC_PRIM_RECORD_VEC4
 							  : 1u;
@@ -290,6 +319,7 @@ void next_range()
 	while (s_left > 0u) {
 		float max_exit = -BC_INF, z_begin;
 		uint kept = 0u, fetched = 0u;
+		g_work += na + 1u;
 		for (uint i = 0u; i < na; i++) {
 			float t1 = act_t1_get(i);
 			if (t1 > z_end) {
@@ -316,6 +346,7 @@ void next_range()
 			na++;
 			next++;
 			fetched++;
+			g_work++;
 		}
 		if (na >= BC_M_OVERLAP && next < g_n &&
 		    frag_t0(next) <= z_begin) {
@@ -329,6 +360,7 @@ void next_range()
 						       b_frag[g_off + next].y));
 				na++;
 				next++;
+				g_work++;
 			}
 			s_over_m++;
 		}
@@ -342,6 +374,7 @@ void next_range()
 		s_zb = z_begin;
 		s_state = STATE_TRACE;
 		s_ranges++;
+		s_general += s_fast ? 0u : 1u;
 		break;
 	}
 	s_na = na;
@@ -500,6 +533,7 @@ float field_general(vec3 p, out uint prim)
 #define GOLDEN 0.618034
 
 uint r_state, r_result, r_count, r_prim, r_which;
+uint r_steps; // samples taken in this pass
 float r_t, r_v, r_tp, r_vp, r_omega, r_t1, r_smp;
 float r_a, r_fa, r_b, r_fb, r_cap, r_limit, r_thit, r_h;
 float r_c, r_e, r_vc, r_ve;
@@ -624,6 +658,13 @@ void ray_step_check()
 	}
 	if (r_t >= r_t1 || r_count >= MAX_STEPS) {
 		ray_finish(TRACE_MISS, r_t);
+		return;
+	}
+	if (r_steps >= s_cap) {
+		// Out of this pass's budget: [.., r_t] is known empty, so the
+		// ray can start again from r_t in the next pass.
+		r_result = TRACE_PAUSED;
+		r_state = ST_END;
 		return;
 	}
 	r_count++;
@@ -833,25 +874,176 @@ void put_hit(ivec2 px, vec3 d, uint overlaps)
 		   uvec4(prim < u_counts.x ? b_prim[prim].info.y : 0u));
 }
 
+// ---- Suspension ----------------------------------------------------------------
+
+// Each ray's state across passes and dispatches.
+bool p_done, p_pending, p_todo;
+float p_pending_t, p_resume_t;
+
+uint slot_base(uint slot)
+{
+	return u_pool.x + slot * BC_SLOT_WORDS;
+}
+
+// Saves the tile's walk (first invocation) and every ray, and marks the
+// tile suspended. Returns false when no slot was free: the tile then goes
+// on over budget and the host, seeing the count, redraws with more slots.
+bool suspend(uint lid, uint tid)
+{
+	if (lid == 0u) {
+		uint slot = s_slot;
+		if (slot == BC_NONE) {
+			slot = atomicAdd(b_stat[BC_STAT_SLOTS], 1u);
+			if (slot >= u_pool.y) {
+				atomicAdd(b_stat[BC_STAT_NO_SLOT], 1u);
+				slot = BC_NONE;
+			}
+		}
+		s_slot = slot;
+		if (slot != BC_NONE) {
+			uint b = slot_base(slot);
+			b_scratch[b] = s_na;
+			b_scratch[b + 1u] = s_next;
+			b_scratch[b + 2u] = floatBitsToUint(s_ze);
+			b_scratch[b + 3u] = floatBitsToUint(s_zb);
+			b_scratch[b + 4u] = s_left;
+			b_scratch[b + 5u] = s_mid ? 1u : 0u;
+			// The part of the active set held in shared memory.
+			for (uint i = 0u; i < min(s_na, BC_M_OVERLAP); i++) {
+				b_scratch[scratch_act(i)] = s_act[i];
+				b_scratch[scratch_t1(i)] =
+					floatBitsToUint(s_act_t1[i]);
+			}
+			b_tile[tid].w = (slot << 2u) | BC_TILE_SUSPENDED;
+			atomicAdd(b_stat[BC_STAT_SUSPENDED], 1u);
+		}
+	}
+	memoryBarrierShared();
+	barrier();
+	if (s_slot == BC_NONE) {
+		return false;
+	}
+	uint b = slot_base(s_slot) + BC_SLOT_TILE_WORDS + 4u * lid;
+	b_scratch[b] = (p_done ? 1u : 0u) | (p_pending ? 2u : 0u) |
+		       (p_todo ? 4u : 0u) | (g_evals << 3u);
+	b_scratch[b + 1u] = floatBitsToUint(p_pending_t);
+	b_scratch[b + 2u] = floatBitsToUint(p_resume_t);
+	return true;
+}
+
+// Loads what suspend() saved.
+void resume(uint lid, uint slot)
+{
+	uint b = slot_base(slot);
+	if (lid == 0u) {
+		s_na = b_scratch[b];
+		s_next = b_scratch[b + 1u];
+		s_ze = uintBitsToFloat(b_scratch[b + 2u]);
+		s_zb = uintBitsToFloat(b_scratch[b + 3u]);
+		s_left = b_scratch[b + 4u];
+		s_mid = b_scratch[b + 5u] != 0u;
+		for (uint i = 0u; i < min(s_na, BC_M_OVERLAP); i++) {
+			s_act[i] = b_scratch[scratch_act(i)];
+			s_act_t1[i] = uintBitsToFloat(b_scratch[scratch_t1(i)]);
+		}
+	}
+	uint w = b_scratch[b + BC_SLOT_TILE_WORDS + 4u * lid];
+	p_done = (w & 1u) != 0u;
+	p_pending = (w & 2u) != 0u;
+	p_todo = (w & 4u) != 0u;
+	g_evals = w >> 3u;
+	p_pending_t = uintBitsToFloat(b_scratch[b + BC_SLOT_TILE_WORDS +
+						4u * lid + 1u]);
+	p_resume_t = uintBitsToFloat(b_scratch[b + BC_SLOT_TILE_WORDS +
+					       4u * lid + 2u]);
+}
+
+// Traces this ray inside the current range from p_resume_t, for at most
+// s_cap steps. Returns the samples taken.
+uint trace_pass(ivec2 px, vec3 d)
+{
+	uint samples = 0u;
+	r_state = ST_START;
+	r_t = p_resume_t;
+	r_t1 = s_ze;
+	r_tp = r_t;
+	r_vp = 0.0;
+	r_omega = BC_OVERRELAX;
+	r_smp = r_t;
+	r_result = TRACE_MISS;
+	r_steps = 0u;
+	if (!(r_t1 >= r_t)) {
+		r_state = ST_END;
+	}
+	vec3 hit_p = vec3(0.0);
+	while (r_state != ST_END) {
+		vec3 q;
+		if (r_state == ST_NORMAL) {
+			q = hit_p + r_h * tet[r_count];
+		} else {
+			q = u_eye.xyz + r_smp * d;
+			hit_p = q;
+		}
+		uint who;
+		float x = s_fast ? field_fast(q, who) : field_general(q, who);
+		g_evals++;
+		samples++;
+		r_steps++;
+		ray_take(x, who);
+	}
+	if (r_result == TRACE_PAUSED) {
+		p_resume_t = r_t;
+		return samples;
+	}
+	p_todo = false;
+	if (r_result == TRACE_MISS) {
+		p_pending = false;
+		return samples;
+	}
+	put_hit(px, d, g_n);
+	if (r_result == TRACE_HIT) {
+		p_done = true;
+		p_pending = false;
+		atomicAdd(s_left, 0xffffffffu);
+	} else {
+		// Within the hit epsilon at the range's end: the crossing, if
+		// any, is in a later range. This stands unless one is found.
+		p_pending = true;
+		p_pending_t = r_thit;
+	}
+	return samples;
+}
+
 // ---- The loop (Algorithm 3) ---------------------------------------------------
 
 void main()
 {
 	uint lid = gl_LocalInvocationIndex;
 	uvec2 tile = gl_WorkGroupID.xy;
-	uvec4 tl = b_tile[tile.y * u_size.z + tile.x];
+	uint tid = tile.y * u_size.z + tile.x;
+	uvec4 tl = b_tile[tid];
+	uint status = tl.w & 3u;
 	ivec2 px = ivec2(tile * BC_TILE + gl_LocalInvocationID.xy);
 	bool inside = uint(px.x) < u_size.x && uint(px.y) < u_size.y;
-	bool done = !inside;
-	// A ray that ended a range within the hit epsilon, still approaching
-	// (trace.c's NEAR_END): its provisional hit is written; the next
-	// range decides, and when none follows right there, it stands.
-	bool pending = false;
-	float pending_t = 0.0;
+	bool suspended = false;
 	vec3 d = bc_ray_dir(float(px.x) + 0.5, float(px.y) + 0.5);
+	uint evals_before;
+	if (status == BC_TILE_FINISHED) {
+		return;
+	}
 	g_off = tl.z;
 	g_n = tl.y;
 	g_evals = 0u;
+	g_work = 0u;
+	// A ray that ended a range within the hit epsilon, still approaching
+	// (trace.c's NEAR_END), is pending: its provisional hit is written;
+	// the next range decides, and when none follows right there, it
+	// stands.
+	p_done = !inside;
+	p_pending = false;
+	p_todo = false;
+	p_pending_t = 0.0;
+	p_resume_t = 0.0;
 	if (lid == 0u) {
 		uint w = min(u_size.x - tile.x * BC_TILE, BC_TILE);
 		uint h = min(u_size.y - tile.y * BC_TILE, BC_TILE);
@@ -863,75 +1055,143 @@ void main()
 		s_over_m = 0u;
 		s_over_cache = 0u;
 		s_ranges = 0u;
+		s_general = 0u;
+		s_cost = 0u;
+		s_budget = u_pool.z == 0u ? 0xffffffffu
+					  : u_pool.z - BUDGET_MARGIN;
+		s_mid = false;
+		s_suspend = false;
+		s_slot = status == BC_TILE_SUSPENDED ? tl.w >> 2u : BC_NONE;
+		atomicAdd(b_stat[BC_STAT_DISPATCHES], 1u);
 	}
+	memoryBarrierShared();
+	barrier();
+	if (status == BC_TILE_SUSPENDED) {
+		resume(lid, tl.w >> 2u);
+	}
+	evals_before = g_evals;
+	memoryBarrierShared();
 	barrier();
 	for (;;) {
+		// A range to trace: the one left in the middle, or the next.
 		if (lid == 0u) {
-			next_range();
+			s_was_mid = s_mid;
+			if (s_mid) {
+				// The same active set gives the same view.
+				s_state = build_view(s_na) ? STATE_TRACE
+							    : STATE_DONE;
+				s_mid = false;
+			} else {
+				next_range();
+			}
+			s_cost += g_work;
+			g_work = 0u;
+			if (s_budget != 0xffffffffu &&
+			    s_cost > s_budget + BUDGET_MARGIN / 2u) {
+				// One range's fetch and view alone went over:
+				// nothing smaller to split it into.
+				atomicAdd(b_stat[BC_STAT_OVER_BUDGET], 1u);
+			}
 		}
+		memoryBarrierShared();
+		memoryBarrierBuffer();
 		barrier();
 		if (s_state == STATE_DONE) {
 			break;
 		}
 		fill_cache(lid);
-		barrier();
-		r_state = ST_END;
-		if (!done) {
-			if (pending && s_zb > pending_t) {
-				done = true; // nothing right behind it
-				atomicAdd(s_left, 0xffffffffu);
-			} else {
-				r_state = ST_START;
-				r_t = s_zb;
-				r_t1 = s_ze;
-				r_tp = r_t;
-				r_vp = 0.0;
-				r_omega = BC_OVERRELAX;
-				r_smp = r_t;
-				r_result = TRACE_MISS;
-				if (!(r_t1 >= r_t)) {
-					r_state = ST_END;
+		if (!s_was_mid) {
+			p_todo = false;
+			if (!p_done) {
+				if (p_pending && s_zb > p_pending_t) {
+					p_done = true; // nothing right behind
+					atomicAdd(s_left, 0xffffffffu);
+				} else {
+					p_todo = true;
+					p_resume_t = s_zb;
 				}
 			}
 		}
-		vec3 hit_p = vec3(0.0);
-		while (r_state != ST_END) {
-			vec3 q;
-			if (r_state == ST_NORMAL) {
-				q = hit_p + r_h * tet[r_count];
-			} else {
-				q = u_eye.xyz + r_smp * d;
-				hit_p = q;
-			}
-			uint who;
-			float x = s_fast ? field_fast(q, who)
-					 : field_general(q, who);
-			g_evals++;
-			ray_take(x, who);
-		}
-		if (!done && r_state == ST_END && r_result != TRACE_MISS &&
-		    !(pending && s_zb > pending_t)) {
-			put_hit(px, d, g_n);
-			if (r_result == TRACE_HIT) {
-				done = true;
-				pending = false;
-				atomicAdd(s_left, 0xffffffffu);
-			} else {
-				pending = true;
-				pending_t = r_thit;
-			}
-		} else if (!done) {
-			pending = false;
-		}
+		memoryBarrierShared();
 		barrier();
+		// Passes over the range until every ray is through it, each
+		// within what is left of the budget.
+		for (;;) {
+			if (lid == 0u) {
+				uint per = s_nview + 2u;
+				uint left = s_cost < s_budget ? s_budget - s_cost
+							      : 0u;
+				uint cap = left / per;
+				// Two samples at least: the start and one step,
+				// so that every pass moves every ray on.
+				s_cap = cap > TAIL_SAMPLES + 2u ? cap - TAIL_SAMPLES
+								: 2u;
+				s_rmax = 0u;
+				s_todo = 0u;
+			}
+			memoryBarrierShared();
+			barrier();
+			uint samples = 0u;
+			if (p_todo) {
+				samples = trace_pass(px, d);
+				if (p_todo) {
+					atomicAdd(s_todo, 1u);
+				}
+			}
+			atomicMax(s_rmax, samples);
+			memoryBarrierShared();
+			barrier();
+			if (lid == 0u) {
+				s_cost += (s_rmax + 1u) * (s_nview + 2u);
+				if (s_budget != 0xffffffffu &&
+				    s_cost > s_budget + BUDGET_MARGIN / 2u) {
+					// A view so long that two steps of
+					// every ray do not fit.
+					atomicAdd(b_stat[BC_STAT_OVER_BUDGET], 1u);
+				}
+				s_suspend = s_todo > 0u && s_cost >= s_budget;
+				s_mid = s_suspend;
+			}
+			memoryBarrierShared();
+			barrier();
+			if (s_todo == 0u || s_suspend) {
+				break;
+			}
+		}
+		if (lid == 0u && !s_suspend && s_left > 0u) {
+			// Between ranges: stop while the next range's fetch,
+			// view and first pass still fit comfortably.
+			s_suspend = s_cost >= s_budget / 2u;
+		}
+		memoryBarrierShared();
+		barrier();
+		if (s_suspend) {
+			if (suspend(lid, tid)) {
+				suspended = true;
+				break;
+			}
+			// No slot left: go on without a budget; the host saw
+			// the refusal and draws the frame again with more.
+			if (lid == 0u) {
+				s_budget = 0xffffffffu;
+				s_suspend = false;
+			}
+			memoryBarrierShared();
+			barrier();
+		}
 	}
-	if (inside && !done && !pending) {
-		put_miss(px, g_n);
+	if (!suspended) {
+		if (inside && !p_done && !p_pending) {
+			put_miss(px, g_n);
+		}
+		if (lid == 0u) {
+			b_tile[tid].w = BC_TILE_FINISHED;
+		}
 	}
-	atomicAdd(s_evals, g_evals);
+	atomicAdd(s_evals, g_evals - evals_before);
+	memoryBarrierShared();
 	barrier();
 	if (lid == 0u) {
-		uint tid = tile.y * u_size.z + tile.x;
 		atomicAdd(b_stat[BC_STAT_EVALS + tid % BC_STAT_EVAL_BUCKETS],
 			  s_evals);
 		if (s_over_m > 0u) {
@@ -941,5 +1201,8 @@ void main()
 			atomicAdd(b_stat[BC_STAT_OVER_CACHE], s_over_cache);
 		}
 		atomicAdd(b_stat[BC_STAT_RANGES], s_ranges);
+		if (s_general > 0u) {
+			atomicAdd(b_stat[BC_STAT_GENERAL], s_general);
+		}
 	}
 }

@@ -48,7 +48,7 @@ _Static_assert(BC_PRIM_RECORD_VEC4 == 5 && BC_OP_RECORD_VEC4 == 1,
 	       "shaders/common.glsl record sizes");
 _Static_assert(BC_PRIM_PACKED == 8, "shaders/prim.glsl packed parameters");
 _Static_assert(BC_EVAL_STACK == 130, "shaders/common.glsl BC_EVAL_STACK");
-_Static_assert(sizeof(struct bc__gl_frame_ubo) == 128, "std140 Frame block");
+_Static_assert(sizeof(struct bc__gl_frame_ubo) == 144, "std140 Frame block");
 /* Primitive indices share a 32-bit view instruction word with 11 bits of
  * kind and flags (trace.comp). */
 _Static_assert(BC_TREE_MAX_NODES / 2 < (1u << 21), "primitive index bits");
@@ -87,6 +87,9 @@ struct bc_renderer {
 	bool synced;
 	uint32_t count, nprims, nparam;
 	uint32_t frag_cap;
+	uint32_t want_cap; /* capacity asked for, 0: none */
+	uint32_t slots;    /* suspension slots after the fragment scratch */
+	uint32_t budget;   /* loop budget per invocation, 0: none */
 	double upload_ms; /* since the last frame */
 	uint32_t builds;
 	uint64_t upload_bytes;
@@ -109,14 +112,15 @@ static void buf_alloc(struct bc_renderer *r, int b, size_t size,
 		      const void *data)
 {
 	GladGLContext *gl = &r->ctx.gl;
-	if (size < 64) {
-		size = 64;
-		data = NULL;
-	}
+	size_t room = size < 64 ? 64 : size;
 	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->bufs[b]);
-	gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)size, data,
-		       GL_DYNAMIC_DRAW);
-	r->buf_size[b] = size;
+	gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)room,
+		       room == size ? data : NULL, GL_DYNAMIC_DRAW);
+	if (data && room != size && size > 0) {
+		gl->BufferSubData(GL_SHADER_STORAGE_BUFFER, 0, (GLsizeiptr)size,
+				  data);
+	}
+	r->buf_size[b] = room;
 	r->upload_bytes += data ? size : 0;
 }
 
@@ -373,6 +377,10 @@ static int gl_create(struct bc_renderer **out, const struct bc_render_opts *opts
 		goto fail;
 	}
 	r->builds++;
+	if (strstr(r->ctx.info.renderer, "llvmpipe")) {
+		r->budget = BC_GL_LLVMPIPE_LOOP_LIMIT;
+	}
+	r->ctx.info.loop_budget = r->budget;
 	gl->GenVertexArrays(1, &r->vao);
 	gl->GenFramebuffers(1, &r->fbo);
 	gl->GenBuffers(BC__GL_BUF_COUNT, r->bufs);
@@ -484,7 +492,7 @@ static void normalize3(float v[3])
 static void frame_setup(struct bc__gl_frame_ubo *u, const struct bc_lin *l,
 			const struct bc_camera *cam, uint32_t w, uint32_t h,
 			enum bc_debug_mode debug, uint32_t nprims,
-			uint32_t cap)
+			uint32_t cap, uint32_t slots, uint32_t budget)
 {
 	struct bc_view_rays vr;
 	float size, light[3];
@@ -515,6 +523,10 @@ static void frame_setup(struct bc__gl_frame_ubo *u, const struct bc_lin *l,
 	u->counts[0] = nprims;
 	u->counts[1] = cap;
 	u->counts[2] = (uint32_t)debug;
+	/* Slots follow the fragment scratch: 6 words per fragment. */
+	u->pool[0] = 6u * cap;
+	u->pool[1] = slots;
+	u->pool[2] = budget;
 }
 
 /* Images, the tile table, the framebuffer and the readback buffer for a
@@ -554,13 +566,18 @@ static int frame_buffers(struct bc_renderer *r, uint32_t w, uint32_t h)
 	return 0;
 }
 
-/* Fragment storage for cap fragments. */
-static void frag_buffers(struct bc_renderer *r, uint32_t cap)
+/* Fragment storage for cap fragments, and scratch with `slots`
+ * suspension slots after it. */
+static void frag_buffers(struct bc_renderer *r, uint32_t cap, uint32_t slots)
 {
 	buf_alloc(r, BC__GL_BUF_LINKS, (size_t)cap * LINK_BYTES, NULL);
 	buf_alloc(r, BC__GL_BUF_SORTED, (size_t)cap * SORTED_BYTES, NULL);
-	buf_alloc(r, BC__GL_BUF_SCRATCH, (size_t)cap * SCRATCH_BYTES, NULL);
+	buf_alloc(r, BC__GL_BUF_SCRATCH,
+		  (size_t)cap * SCRATCH_BYTES +
+			  (size_t)slots * BC_GL_SLOT_WORDS * 4u,
+		  NULL);
 	r->frag_cap = cap;
+	r->slots = slots;
 }
 
 /* Largest fragment capacity: the limit, and the driver's storage block
@@ -570,13 +587,19 @@ static uint32_t frag_limit(struct bc_renderer *r)
 	GLint64 block = 0;
 	uint64_t most = BC_GL_MAX_FRAGMENTS;
 	r->ctx.gl.GetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &block);
-	if (block > 0 && (uint64_t)block / SCRATCH_BYTES < most) {
-		most = (uint64_t)block / SCRATCH_BYTES;
+	if (block > 0) {
+		/* The scratch block also holds the suspension slots. */
+		uint64_t room = (uint64_t)block -
+				(uint64_t)r->slots * BC_GL_SLOT_WORDS * 4u;
+		if ((uint64_t)block > (uint64_t)r->slots * BC_GL_SLOT_WORDS * 4u &&
+		    room / SCRATCH_BYTES < most) {
+			most = room / SCRATCH_BYTES;
+		}
 	}
 	return (uint32_t)most;
 }
 
-/* Issues the passes of one frame and the copies into the readback buffer. */
+/* Issues the passes of one frame, up to the first tracing dispatch. */
 static void draw(struct bc_renderer *r, const struct bc__gl_frame_ubo *u,
 		 uint32_t nprims)
 {
@@ -584,7 +607,6 @@ static void draw(struct bc_renderer *r, const struct bc__gl_frame_ubo *u,
 	static const uint32_t tile_init[4] = {0xffffffffu, 0u, 0u, 0u};
 	static const uint32_t zero = 0;
 	uint32_t tw = u->size[2], th = u->size[3];
-	size_t npix = (size_t)u->size[0] * u->size[1];
 	gl->BindBuffer(GL_UNIFORM_BUFFER, r->ubo);
 	gl->BufferSubData(GL_UNIFORM_BUFFER, 0, sizeof(*u), u);
 	gl->BindBufferBase(GL_UNIFORM_BUFFER, 0, r->ubo);
@@ -632,6 +654,47 @@ static void draw(struct bc_renderer *r, const struct bc__gl_frame_ubo *u,
 	gl->BindImageTexture(2, r->tex[2], 0, GL_FALSE, 0, GL_WRITE_ONLY,
 			     GL_R32UI);
 	gl->DispatchCompute(tw, th, 1);
+}
+
+/* Dispatches the tracing pass again while tiles are suspended (only with
+ * a loop budget). Returns 0, BC_ELIMIT or BC_EGL. */
+static int finish_tracing(struct bc_renderer *r, uint32_t tw, uint32_t th,
+			  uint32_t *dispatches, struct bc_errinfo *ei)
+{
+	GladGLContext *gl = &r->ctx.gl;
+	static const uint32_t zero = 0;
+	*dispatches = 1;
+	while (r->budget) {
+		uint32_t suspended = 0;
+		gl->MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+		gl->BindBuffer(GL_SHADER_STORAGE_BUFFER,
+			       r->bufs[BC__GL_BUF_STATS]);
+		gl->GetBufferSubData(GL_SHADER_STORAGE_BUFFER,
+				     4 * BC_GL_STAT_SUSPENDED, 4, &suspended);
+		if (!suspended) {
+			break;
+		}
+		if (*dispatches >= BC_GL_MAX_DISPATCHES) {
+			return bc_errinfo_set(ei, BC_ELIMIT,
+					      "gl: %u tiles still unfinished "
+					      "after %u dispatches",
+					      suspended, *dispatches);
+		}
+		gl->ClearBufferSubData(GL_SHADER_STORAGE_BUFFER, GL_R32UI,
+				       4 * BC_GL_STAT_SUSPENDED, 4,
+				       GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+		gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+		gl->DispatchCompute(tw, th, 1);
+		(*dispatches)++;
+	}
+	return bc__gl_check(&r->ctx, "tracing", ei);
+}
+
+/* Issues the copies of the planes and statistics into the readback
+ * buffer. */
+static void read_back(struct bc_renderer *r, size_t npix)
+{
+	GladGLContext *gl = &r->ctx.gl;
 	gl->MemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT |
 			  GL_PIXEL_BUFFER_BARRIER_BIT |
 			  GL_BUFFER_UPDATE_BARRIER_BIT);
@@ -749,18 +812,39 @@ static int gl_render(struct bc_renderer *r, const struct bc_camera *cam,
 	l = bc_tree_lin(r->tree);
 	nprims = l ? r->nprims : 0;
 	frame_buffers(r, w, h);
-	if (r->frag_cap == 0) {
+	if (r->want_cap) {
+		limit = frag_limit(r);
+		frag_buffers(r, r->want_cap < limit ? r->want_cap : limit,
+			     r->slots);
+		r->want_cap = 0;
+	} else if (r->frag_cap == 0) {
 		uint32_t want = 4 * ((w + 7) / 8) * ((h + 7) / 8) + 4 * nprims;
-		frag_buffers(r, want > BC_GL_MIN_FRAGMENTS ? want
-							   : BC_GL_MIN_FRAGMENTS);
+		frag_buffers(r,
+			     want > BC_GL_MIN_FRAGMENTS ? want
+							: BC_GL_MIN_FRAGMENTS,
+			     r->slots);
+	}
+	if (r->budget && r->slots == 0) {
+		uint32_t tiles = ((w + 7) / 8) * ((h + 7) / 8);
+		frag_buffers(r, r->frag_cap,
+			     tiles < BC_GL_MIN_SLOTS ? tiles : BC_GL_MIN_SLOTS);
 	}
 	r->ctx.info.retries = 0;
 	for (;;) {
+		uint32_t dispatches = 0, tiles;
+		bool fits;
 		void *map;
-		frame_setup(&u, l, cam, w, h, r->debug, nprims, r->frag_cap);
+		frame_setup(&u, l, cam, w, h, r->debug, nprims, r->frag_cap,
+			    r->slots, r->budget);
+		tiles = u.size[2] * u.size[3];
 		draw(r, &u, nprims);
 		if ((rc = bc__gl_check(&r->ctx, "drawing a frame", ei)) ||
-		    (rc = wait_fence(r, ei))) {
+		    (rc = finish_tracing(r, u.size[2], u.size[3], &dispatches,
+					 ei))) {
+			goto done;
+		}
+		read_back(r, npix);
+		if ((rc = wait_fence(r, ei))) {
 			goto done;
 		}
 		gl->BindBuffer(GL_PIXEL_PACK_BUFFER, r->pbo);
@@ -779,7 +863,9 @@ static int gl_render(struct bc_renderer *r, const struct bc_camera *cam,
 			goto done;
 		}
 		memcpy(stat, (const char *)map + 12 * npix, sizeof(stat));
-		if (stat[BC_GL_STAT_FRAGMENTS] <= r->frag_cap) {
+		fits = stat[BC_GL_STAT_FRAGMENTS] <= r->frag_cap &&
+		       stat[BC_GL_STAT_NO_SLOT] == 0;
+		if (fits) {
 			memcpy(out->rgba, map, 4 * npix);
 			if (out->depth) {
 				memcpy(out->depth, (const char *)map + 4 * npix,
@@ -792,14 +878,16 @@ static int gl_render(struct bc_renderer *r, const struct bc_camera *cam,
 		}
 		gl->UnmapBuffer(GL_PIXEL_PACK_BUFFER);
 		gl->BindBuffer(GL_PIXEL_PACK_BUFFER, 0);
-		if (stat[BC_GL_STAT_FRAGMENTS] <= r->frag_cap) {
+		r->ctx.info.dispatches = dispatches;
+		if (fits) {
 			break;
 		}
-		/* Too many fragments: the count is exact, so one more
-		 * draw with room for them (and some to spare) fits. */
+		/* Too many fragments or suspended tiles: both counts are
+		 * exact, so a draw with room for them (and some to spare)
+		 * fits. Two retries cover growing both. */
 		limit = frag_limit(r);
 		if (stat[BC_GL_STAT_FRAGMENTS] > limit ||
-		    r->ctx.info.retries > 0) {
+		    r->ctx.info.retries >= 2) {
 			rc = bc_errinfo_set(ei, BC_ELIMIT,
 					    "gl: %u A-buffer fragments exceed "
 					    "the limit of %u (fewer or smaller "
@@ -810,14 +898,43 @@ static int gl_render(struct bc_renderer *r, const struct bc_camera *cam,
 		{
 			uint64_t want = (uint64_t)stat[BC_GL_STAT_FRAGMENTS] *
 					3 / 2;
-			frag_buffers(r, want < limit ? (uint32_t)want : limit);
+			uint64_t slots = (uint64_t)stat[BC_GL_STAT_SLOTS] * 3 / 2;
+			uint32_t cap = r->frag_cap;
+			if (stat[BC_GL_STAT_FRAGMENTS] > r->frag_cap) {
+				cap = want < limit ? (uint32_t)want : limit;
+			}
+			if (slots < r->slots) {
+				slots = r->slots;
+			}
+			frag_buffers(r, cap,
+				     slots < tiles ? (uint32_t)slots : tiles);
 		}
 		r->ctx.info.retries++;
 	}
+	if (r->budget && stat[BC_GL_STAT_MAX_OVERLAP] > BC_GL_LLVMPIPE_SORT_MAX) {
+		rc = bc_errinfo_set(ei, BC_ELIMIT,
+				    "gl: a tile lists %u primitives, more than "
+				    "llvmpipe's loop limit lets one shader "
+				    "sort (%u)",
+				    stat[BC_GL_STAT_MAX_OVERLAP],
+				    BC_GL_LLVMPIPE_SORT_MAX);
+		goto done;
+	}
+	if (stat[BC_GL_STAT_OVER_BUDGET]) {
+		rc = bc_errinfo_set(ei, BC_ELIMIT,
+				    "gl: %u depth ranges need more loop "
+				    "iterations than llvmpipe allows one shader "
+				    "invocation (too many primitives meet at "
+				    "one depth in one tile)",
+				    stat[BC_GL_STAT_OVER_BUDGET]);
+		goto done;
+	}
 	r->ctx.info.fragments = stat[BC_GL_STAT_FRAGMENTS];
+	r->ctx.info.suspensions = stat[BC_GL_STAT_SLOTS];
 	r->ctx.info.ranges = stat[BC_GL_STAT_RANGES];
 	r->ctx.info.over_m = stat[BC_GL_STAT_OVER_M];
 	r->ctx.info.over_cache = stat[BC_GL_STAT_OVER_CACHE];
+	r->ctx.info.ranges_general = stat[BC_GL_STAT_GENERAL];
 	if (r->ctx.info.over_m) {
 		bc_log(BC_LOG_DEBUG, "gl: %u depth ranges went over M_overlap",
 		       r->ctx.info.over_m);
@@ -852,6 +969,15 @@ int bc_render_gl_info(const struct bc_renderer *r, struct bc_gl_info *out)
 	out->upload_bytes = r->upload_bytes;
 	out->upload_full = r->upload_full;
 	out->full_uploads = r->full_uploads;
+	return 0;
+}
+
+int bc_render_gl_set_capacity(struct bc_renderer *r, uint32_t fragments)
+{
+	if (!r || fragments == 0) {
+		return BC_EINVAL;
+	}
+	r->want_cap = fragments;
 	return 0;
 }
 

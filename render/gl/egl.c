@@ -12,8 +12,12 @@
  * routed to our logger.
  *
  * Displays are process-wide in EGL: eglGetPlatformDisplay returns the same
- * handle for the same device, and eglTerminate ends it for every context on
- * it. Renderers therefore share displays through a reference count here.
+ * handle for the same device, and eglTerminate would end it for every
+ * context on it. Displays are therefore initialized once and never
+ * terminated: each renderer destroys its own context, and the display
+ * lives as long as the process. Terminating the last one would also unload
+ * Mesa's driver module with its process-wide allocations still held (leak
+ * checkers report them) and make the next renderer load it again.
  */
 #define EGL_NO_X11
 #define MESA_EGL_NO_X11_HEADERS
@@ -33,10 +37,7 @@
 #define MAX_DISPLAYS (MAX_DEVICES + 1)
 
 static pthread_mutex_t lock = PTHREAD_MUTEX_INITIALIZER;
-static struct {
-	EGLDisplay display;
-	unsigned refs;
-} displays[MAX_DISPLAYS];
+static EGLDisplay displays[MAX_DISPLAYS];
 static bool debug_installed;
 
 static const char *egl_error_name(EGLint e)
@@ -145,47 +146,29 @@ static void install_debug(const char *client_exts)
 	}
 }
 
-/* Takes a reference on display d, initializing it on the first. Returns
- * 0 or BC_EGL / BC_ELIMIT. Called with lock held. */
-static int display_ref(EGLDisplay d, struct bc_errinfo *ei)
+/* Initializes display d, once per process. Called with lock held. */
+static int display_init(EGLDisplay d, struct bc_errinfo *ei)
 {
-	int free_slot = -1;
 	EGLint major, minor;
 	for (int i = 0; i < MAX_DISPLAYS; i++) {
-		if (displays[i].refs && displays[i].display == d) {
-			displays[i].refs++;
+		if (displays[i] == d) {
 			return 0;
 		}
-		if (!displays[i].refs && free_slot < 0) {
-			free_slot = i;
-		}
 	}
-	if (free_slot < 0) {
-		return bc_errinfo_set(ei, BC_ELIMIT,
-				      "EGL: more than %d displays open",
-				      MAX_DISPLAYS);
-	}
-	if (!eglInitialize(d, &major, &minor)) {
-		return fail(ei, "eglInitialize");
-	}
-	bc_log(BC_LOG_DEBUG, "EGL %d.%d display, vendor %s", (int)major,
-	       (int)minor, eglQueryString(d, EGL_VENDOR));
-	displays[free_slot].display = d;
-	displays[free_slot].refs = 1;
-	return 0;
-}
-
-static void display_unref(EGLDisplay d)
-{
 	for (int i = 0; i < MAX_DISPLAYS; i++) {
-		if (displays[i].refs && displays[i].display == d) {
-			if (--displays[i].refs == 0) {
-				eglTerminate(d);
-				displays[i].display = EGL_NO_DISPLAY;
+		if (displays[i] == EGL_NO_DISPLAY) {
+			if (!eglInitialize(d, &major, &minor)) {
+				return fail(ei, "eglInitialize");
 			}
-			return;
+			bc_log(BC_LOG_DEBUG, "EGL %d.%d display, vendor %s",
+			       (int)major, (int)minor,
+			       eglQueryString(d, EGL_VENDOR));
+			displays[i] = d;
+			return 0;
 		}
 	}
+	return bc_errinfo_set(ei, BC_ELIMIT, "EGL: more than %d displays",
+			      MAX_DISPLAYS);
 }
 
 /* Is the EGL version of d at least 1.5 (whose core has the robustness
@@ -304,21 +287,15 @@ static int create_context(struct bc__gl_plat *p, EGLDisplay d, bool debug,
 			      egl_error_name(eglGetError()));
 }
 
-/* Tries device d as a display. */
+/* Tries d as the display. */
 static int open_display(struct bc__gl_plat *p, EGLDisplay d, bool debug,
 			struct bc_errinfo *ei)
 {
 	int rc;
 	pthread_mutex_lock(&lock);
-	rc = display_ref(d, ei);
+	rc = display_init(d, ei);
 	pthread_mutex_unlock(&lock);
-	if (rc) {
-		return rc;
-	}
-	if ((rc = create_context(p, d, debug, ei))) {
-		pthread_mutex_lock(&lock);
-		display_unref(d);
-		pthread_mutex_unlock(&lock);
+	if (rc || (rc = create_context(p, d, debug, ei))) {
 		return rc;
 	}
 	p->display = d;
@@ -445,9 +422,6 @@ void bc__egl_close(struct bc__gl_plat *p)
 			       egl_error_name(eglGetError()));
 		}
 	}
-	pthread_mutex_lock(&lock);
-	display_unref(p->display);
-	pthread_mutex_unlock(&lock);
 	p->display = NULL;
 	p->context = NULL;
 }

@@ -45,11 +45,33 @@
 #define BC_GL_STAT_OVER_M 2u
 #define BC_GL_STAT_OVER_CACHE 3u
 #define BC_GL_STAT_RANGES 4u
-#define BC_GL_STAT_EVALS 8u
+#define BC_GL_STAT_SUSPENDED 5u
+#define BC_GL_STAT_SLOTS 6u
+#define BC_GL_STAT_NO_SLOT 7u
+#define BC_GL_STAT_OVER_BUDGET 8u
+#define BC_GL_STAT_DISPATCHES 9u
+#define BC_GL_STAT_GENERAL 10u
+#define BC_GL_STAT_EVALS 16u
 #define BC_GL_STAT_EVAL_BUCKETS 256u
 #define BC_GL_STAT_WORDS (BC_GL_STAT_EVALS + BC_GL_STAT_EVAL_BUCKETS)
 /* Workgroup size of the scan pass (abuffer_scan.comp). */
 #define BC_GL_SCAN_THREADS 256u
+/* llvmpipe ends every loop of a shader invocation once 65535 loop
+ * iterations have run in it, all loops together (gallivm's loop limiter).
+ * The tracing pass is told this budget and suspends tiles before it runs
+ * out; other drivers have no such limit and get none. */
+#define BC_GL_LLVMPIPE_LOOP_LIMIT 65535u
+/* Longest tile list the sort pass can order within that limit: lists up to
+ * 1024 are sorted in shared memory, longer ones by a heap sort in one
+ * invocation (about 2 n log2 n loop iterations). */
+#define BC_GL_LLVMPIPE_SORT_MAX 2048u
+/* Tracing dispatches of one frame at most: each moves every suspended
+ * tile on by at least one step of every ray, so this is only reached by a
+ * frame that cannot finish. */
+#define BC_GL_MAX_DISPATCHES 4096u
+/* Suspension slots of the first frame; a frame that needs more grows them
+ * and is drawn again. */
+#define BC_GL_MIN_SLOTS 256u
 
 /* Storage buffer binding points. */
 enum bc__gl_buf {
@@ -80,7 +102,12 @@ struct bc__gl_frame_ubo {
 	float misc[4];    /* x: bisection tolerance, y: scene size */
 	uint32_t size[4]; /* width, height, tiles across, tiles down */
 	uint32_t counts[4]; /* primitives, fragment capacity, debug mode */
+	uint32_t pool[4];   /* slot base (scratch words), slots, budget */
 };
+
+/* Suspension slots (trace.comp): 8 words for the tile's walk and 4 per
+ * ray. */
+#define BC_GL_SLOT_WORDS (8u + 4u * 64u)
 
 /* ---- Context ------------------------------------------------------------ */
 

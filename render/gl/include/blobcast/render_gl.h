@@ -47,8 +47,15 @@ struct bc_gl_info {
 				  M_overlap into global scratch */
 	uint32_t over_cache;   /* ranges whose records did not all fit the
 				  shared node cache */
+	uint32_t ranges_general; /* ranges whose view needed the general
+				    evaluation (deep stack, records or view
+				    in global memory) */
 	uint32_t retries;      /* times the frame was redrawn after growing
-				  the A-buffer */
+				  the A-buffer or the suspension slots */
+	uint32_t suspensions;  /* tiles that suspended (loop budget) */
+	uint32_t dispatches;   /* tracing dispatches the frame took */
+	uint32_t loop_budget;  /* loop iterations per shader invocation the
+				  driver allows (llvmpipe), 0: no limit */
 	/* Since creation, and the last sync. */
 	uint32_t program_builds; /* shader programs built (once, at create) */
 	uint32_t full_uploads;   /* syncs that uploaded the whole tree */
@@ -59,5 +66,11 @@ struct bc_gl_info {
 /* Fills *out for r, which must come from bc_backend_gl_ops. Returns 0 or
  * BC_EINVAL. */
 int bc_render_gl_info(const struct bc_renderer *r, struct bc_gl_info *out);
+
+/* Sets the A-buffer's fragment capacity for the next frame (at least 1,
+ * at most the backend's limit). Frames that need more grow it and draw
+ * again by themselves, so this only serves tests of that path and callers
+ * that know their scenes' needs in advance. Returns 0 or BC_EINVAL. */
+int bc_render_gl_set_capacity(struct bc_renderer *r, uint32_t fragments);
 
 #endif

@@ -1,0 +1,642 @@
+/*
+ * Tests of the gl backend against the CPU renderers: every generator family
+ * agrees with the tiled CPU renderer at 64x64 (silhouettes on < 0.5 % of
+ * pixels, median depth difference < 1e-3 of the scene's size, ids), a
+ * parameter edit then a frame equals a fresh load of the edited scene bit
+ * for bit and sends only the edited bytes, the overflow paths (M_overlap,
+ * the node cache, the A-buffer's capacity) still draw the right picture,
+ * the three platforms draw the same, and the debug modes and odd frame
+ * sizes mean what they mean on the CPU.
+ *
+ * Sizes stay small: llvmpipe shares two cores with everything else. Every
+ * test is skipped (exit 77) only when no GL context can be created at all.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "blobcast/gen.h"
+#include "blobcast/render.h"
+#include "blobcast/render_gl.h"
+#include "test.h"
+
+#define W 64
+#define H 64
+
+static const struct bc_backend_ops *gl_ops(void)
+{
+	return bc_backend_get(BC_BACKEND_GL);
+}
+
+/* A renderer on platform (NULL: auto), or NULL with the reason printed. */
+static struct bc_renderer *open_gl(const char *platform, enum bc_debug_mode dbg)
+{
+	struct bc_render_opts o = {.gl_platform = platform, .debug = dbg};
+	struct bc_errinfo ei = {0};
+	struct bc_renderer *r = NULL;
+	if (!gl_ops() || gl_ops()->create(&r, &o, &ei)) {
+		fprintf(stderr, "  no gl context (%s): %s\n",
+			platform ? platform : "auto", ei.msg);
+		return NULL;
+	}
+	return r;
+}
+
+static int draw(struct bc_renderer *r, const struct bc_tree *t,
+		const struct bc_dirty *dirty, const struct bc_camera *cam,
+		struct bc_frame *f)
+{
+	struct bc_errinfo ei = {0};
+	int rc = gl_ops()->sync(r, t, dirty, &ei);
+	if (rc == 0) {
+		rc = gl_ops()->render(r, cam, f, NULL, &ei);
+	}
+	if (rc) {
+		fprintf(stderr, "  gl: %s\n", ei.msg);
+	}
+	return rc;
+}
+
+static int draw_cpu(enum bc_debug_mode dbg, const struct bc_tree *t,
+		    const struct bc_camera *cam, struct bc_frame *f)
+{
+	struct bc_render_opts o = {.debug = dbg};
+	struct bc_errinfo ei = {0};
+	int rc = bc_render_once(BC_BACKEND_TILED, &o, t, cam, f, NULL, &ei);
+	if (rc) {
+		fprintf(stderr, "  tiled: %s\n", ei.msg);
+	}
+	return rc;
+}
+
+static int cmp_float(const void *a, const void *b)
+{
+	float x = *(const float *)a, y = *(const float *)b;
+	return (x > y) - (x < y);
+}
+
+struct agreement {
+	uint32_t mask_diff;  /* pixels hit by one and not the other */
+	uint32_t both;       /* pixels hit by both */
+	float median_dz;     /* over `both` */
+	uint32_t id_diff;    /* of `both` */
+	uint32_t rgba_diff;  /* pixels whose colour differs */
+};
+
+static void compare(const struct bc_frame *a, const struct bc_frame *b,
+		    struct agreement *out)
+{
+	size_t n = (size_t)a->width * a->height;
+	float *dz = malloc(n * sizeof(*dz));
+	memset(out, 0, sizeof(*out));
+	for (size_t i = 0; i < n; i++) {
+		bool ha = isfinite(a->depth[i]), hb = isfinite(b->depth[i]);
+		if (ha != hb) {
+			out->mask_diff++;
+		} else if (ha) {
+			if (dz) {
+				dz[out->both] = fabsf(a->depth[i] - b->depth[i]);
+			}
+			out->both++;
+			out->id_diff += a->ids[i] != b->ids[i];
+		}
+		out->rgba_diff += memcmp(a->rgba + 4 * i, b->rgba + 4 * i, 4) != 0;
+	}
+	if (dz && out->both) {
+		qsort(dz, out->both, sizeof(*dz), cmp_float);
+		out->median_dz = dz[out->both / 2];
+	}
+	free(dz);
+}
+
+static bool frames_equal(const struct bc_frame *a, const struct bc_frame *b)
+{
+	size_t n = (size_t)a->width * a->height;
+	return memcmp(a->rgba, b->rgba, 4 * n) == 0 &&
+	       memcmp(a->depth, b->depth, 4 * n) == 0 &&
+	       memcmp(a->ids, b->ids, 4 * n) == 0;
+}
+
+/* ---- Families ------------------------------------------------------------ */
+
+struct family {
+	const char *gen;
+	struct bc_gen_opts opts;
+	uint32_t min_hits; /* pixels the scene covers at least */
+};
+
+static const struct family families[] = {
+	{"fig16", {.level = 2}, 400},
+	{"fig16", {.level = 1, .blend = BC_GEN_BLEND_SHARP}, 400},
+	{"fig18", {.count = 64, .kind = BC_GEN_KIND_BOXES}, 400},
+	{"fig18", {.count = 64, .kind = BC_GEN_KIND_SPHERES,
+		   .blend = BC_GEN_BLEND_SHARP}, 400},
+	{"fig18", {.count = 64, .kind = BC_GEN_KIND_LENSES}, 400},
+	{"comb", {.count = 32}, 100},
+	{"comb", {.count = 32, .blend = BC_GEN_BLEND_SMOOTH}, 100},
+	/* Every primitive kind under every operator kind (most seeds
+	 * intersect away to nothing: these two do not). */
+	{"random", {.seed = 0}, 100},
+	{"random", {.seed = 4}, 100},
+	{"random", {.seed = 4, .count = 60, .depth = 40}, 16},
+	{"gears", {.teeth = 12}, 400},
+	{"many-gears", {.count = 6}, 200},
+	{"many-spheres", {.count = 300}, 400},
+};
+
+/* Nested binary operators leaning right, n deep: every view's stack grows
+ * with the depth, past what the fast evaluation keeps in registers. */
+static int right_comb(struct bc_tree *t, uint32_t n)
+{
+	int rc;
+	bc_tree_begin(t);
+	for (uint32_t i = 0; i < n; i++) {
+		struct bc_op_data op = {i % 3 == 2 ? BC_OP_SMOOTH_UNION
+						   : BC_OP_UNION,
+					0.0f, 0.0f};
+		struct bc_prim_data p;
+		if (op.kind == BC_OP_SMOOTH_UNION) {
+			op.blend = 0.15f;
+			op.range = bc_op_default_range(op.blend);
+		}
+		if (i + 1 < n && (rc = bc_tree_push_op(t, 0, &op, NULL))) {
+			return rc;
+		}
+		bc_prim_data_init(&p, i % 2 ? BC_PRIM_BOX : BC_PRIM_SPHERE);
+		p.params[0] = 0.3f;
+		p.params[1] = 0.2f;
+		p.params[2] = 0.25f;
+		p.translate[0] = 0.09f * (float)i - 0.9f;
+		p.translate[1] = 0.4f * sinf((float)i);
+		if ((rc = bc_tree_put_prim(t, 0, &p, NULL))) {
+			return rc;
+		}
+	}
+	for (uint32_t i = 0; i + 1 < n; i++) {
+		if ((rc = bc_tree_pop_op(t, NULL))) {
+			return rc;
+		}
+	}
+	return bc_tree_end(t, NULL);
+}
+static void test_families_agree_with_tiled(void)
+{
+	struct bc_renderer *r = open_gl(NULL, BC_DEBUG_NONE);
+	struct bc_tree *t = bc_tree_create();
+	struct bc_frame g = {0}, c = {0};
+	if (!r) {
+		bc_tree_destroy(t);
+		BC_SKIP("no GL context");
+	}
+	REQUIRE(t && bc_frame_init(&g, W, H) == 0 && bc_frame_init(&c, W, H) == 0);
+	for (size_t i = 0; i < sizeof(families) / sizeof(families[0]); i++) {
+		const struct family *fam = &families[i];
+		struct bc_errinfo ei = {0};
+		struct bc_camera cam;
+		struct agreement a;
+		float size;
+		if (bc_gen(fam->gen, &fam->opts, t, &cam, &ei)) {
+			fprintf(stderr, "  %s: %s\n", fam->gen, ei.msg);
+			CHECK(0);
+			continue;
+		}
+		size = bc_tree_lin(t)->size;
+		CHECK(draw(r, t, NULL, &cam, &g) == 0);
+		CHECK(draw_cpu(BC_DEBUG_NONE, t, &cam, &c) == 0);
+		compare(&g, &c, &a);
+		printf("  %-12s %2zu: mask %u/%u, median |dz| %.2g (limit %.2g), "
+		       "ids %u/%u, colours %u\n",
+		       fam->gen, i, a.mask_diff, W * H, (double)a.median_dz,
+		       1e-3 * (double)size, a.id_diff, a.both, a.rgba_diff);
+		CHECK(a.both >= fam->min_hits); /* the scene is in view */
+		CHECK(a.mask_diff * 200 < W * H);
+		CHECK(a.median_dz < 1e-3f * size);
+		CHECK(a.id_diff * 20 <= a.both);
+	}
+	{
+		struct bc_camera cam;
+		struct agreement a;
+		bc_camera_default(&cam);
+		REQUIRE(right_comb(t, 24) == 0);
+		CHECK(draw(r, t, NULL, &cam, &g) == 0);
+		CHECK(draw_cpu(BC_DEBUG_NONE, t, &cam, &c) == 0);
+		compare(&g, &c, &a);
+		printf("  right comb  : mask %u/%u, median |dz| %.2g, ids %u/%u, "
+		       "colours %u\n",
+		       a.mask_diff, W * H, (double)a.median_dz, a.id_diff,
+		       a.both, a.rgba_diff);
+		struct bc_gl_info info;
+		REQUIRE(bc_render_gl_info(r, &info) == 0);
+		CHECK(info.ranges_general > 0);
+		CHECK(a.both >= 200);
+		CHECK(a.mask_diff * 200 < W * H);
+		CHECK(a.median_dz < 1e-3f * bc_tree_lin(t)->size);
+		CHECK(a.id_diff * 20 <= a.both);
+	}
+	bc_frame_finish(&g);
+	bc_frame_finish(&c);
+	bc_tree_destroy(t);
+	gl_ops()->destroy(r);
+}
+
+/* ---- Edits --------------------------------------------------------------- */
+
+/* Renders t fresh in a new renderer. */
+static int fresh(const struct bc_tree *t, const struct bc_camera *cam,
+		 struct bc_frame *f)
+{
+	struct bc_renderer *r = open_gl(NULL, BC_DEBUG_NONE);
+	struct bc_tree *copy = bc_tree_create();
+	int rc = -1;
+	if (r && copy && bc_tree_copy(copy, t, NULL) == 0) {
+		rc = draw(r, copy, NULL, cam, f);
+	}
+	bc_tree_destroy(copy);
+	if (r) {
+		gl_ops()->destroy(r);
+	}
+	return rc;
+}
+
+/* The id of the first primitive and of the first operator of t. */
+static void find_nodes(const struct bc_tree *t, uint32_t *prim, uint32_t *op)
+{
+	const struct bc_lin *l = bc_tree_lin(t);
+	*prim = 0;
+	*op = 0;
+	for (uint32_t s = 0; s < l->count && (!*prim || !*op); s++) {
+		if (bc_lin_is_leaf(l, s) && !*prim) {
+			*prim = l->node_id[s];
+		} else if (!bc_lin_is_leaf(l, s) && !*op) {
+			*op = l->node_id[s];
+		}
+	}
+}
+
+static void test_param_edit_equals_fresh_load(void)
+{
+	struct bc_renderer *r = open_gl(NULL, BC_DEBUG_NONE);
+	struct bc_tree *t = bc_tree_create();
+	struct bc_frame a = {0}, b = {0};
+	struct bc_camera cam;
+	struct bc_errinfo ei = {0};
+	struct bc_dirty dirty;
+	struct bc_gl_info info;
+	struct bc_prim_data p;
+	struct bc_op_data op;
+	uint32_t prim_id, op_id;
+	if (!r) {
+		bc_tree_destroy(t);
+		BC_SKIP("no GL context");
+	}
+	REQUIRE(t && bc_frame_init(&a, W, H) == 0 && bc_frame_init(&b, W, H) == 0);
+	REQUIRE(bc_gen("fig16", &(struct bc_gen_opts){.level = 1}, t, &cam,
+		       &ei) == 0);
+	bc_tree_take_dirty(t, &dirty);
+	REQUIRE(draw(r, t, NULL, &cam, &a) == 0);
+	find_nodes(t, &prim_id, &op_id);
+	REQUIRE(prim_id && op_id);
+
+	/* A primitive grows and moves: one record, one ABV go up. */
+	REQUIRE(bc_tree_get(t, prim_id, &p, NULL));
+	p.translate[1] += 0.15f;
+	p.params[0] *= 1.3f;
+	REQUIRE(bc_tree_set_prim(t, prim_id, &p, &ei) == 0);
+	bc_tree_take_dirty(t, &dirty);
+	CHECK(!dirty.structure && dirty.edits == 1);
+	REQUIRE(draw(r, t, &dirty, &cam, &a) == 0);
+	REQUIRE(bc_render_gl_info(r, &info) == 0);
+	CHECK(!info.upload_full);
+	CHECK_EQ_INT(info.full_uploads, 1);
+	CHECK_EQ_INT(info.program_builds, 1);
+	/* The record (5 vec4), the primitive's entry (32 bytes) and its ABV
+	 * (112 bytes): nothing else. */
+	CHECK_EQ_INT(info.upload_bytes, 80 + 32 + 112);
+	REQUIRE(fresh(t, &cam, &b) == 0);
+	CHECK(frames_equal(&a, &b));
+
+	/* An operator changes kind (union to intersection): node words, kill
+	 * counts and the subtree's ABVs go up, not the whole tree. */
+	REQUIRE(bc_tree_get(t, op_id, NULL, &op));
+	op.kind = op.kind == BC_OP_SMOOTH_UNION ? BC_OP_SMOOTH_INTERSECTION
+						: BC_OP_INTERSECTION;
+	REQUIRE(bc_tree_set_op(t, op_id, &op, &ei) == 0);
+	op.kind = BC_OP_SMOOTH_UNION;
+	op.blend = 0.2f;
+	op.range = 0.0f;
+	REQUIRE(bc_tree_set_op(t, op_id, &op, &ei) == 0);
+	bc_tree_take_dirty(t, &dirty);
+	CHECK(!dirty.structure && dirty.edits == 2);
+	REQUIRE(draw(r, t, &dirty, &cam, &a) == 0);
+	REQUIRE(bc_render_gl_info(r, &info) == 0);
+	CHECK(!info.upload_full);
+	CHECK(info.upload_bytes > 0);
+	CHECK_EQ_INT(info.program_builds, 1);
+	REQUIRE(fresh(t, &cam, &b) == 0);
+	CHECK(frames_equal(&a, &b));
+
+	/* A structural edit uploads everything, and still draws right. */
+	REQUIRE(bc_tree_remove(t, prim_id, &ei) == 0);
+	bc_tree_take_dirty(t, &dirty);
+	CHECK(dirty.structure);
+	REQUIRE(draw(r, t, &dirty, &cam, &a) == 0);
+	REQUIRE(bc_render_gl_info(r, &info) == 0);
+	CHECK(info.upload_full);
+	CHECK_EQ_INT(info.full_uploads, 2);
+	CHECK_EQ_INT(info.program_builds, 1);
+	REQUIRE(fresh(t, &cam, &b) == 0);
+	CHECK(frames_equal(&a, &b));
+
+	bc_frame_finish(&a);
+	bc_frame_finish(&b);
+	bc_tree_destroy(t);
+	gl_ops()->destroy(r);
+}
+
+/* ---- Limits --------------------------------------------------------------- */
+
+/* n spheres of one radius around nearly one centre: every one enters every
+ * tile at the same depth, so the active set passes M_overlap at one range
+ * start and the view's records outgrow the node cache. */
+static int crowd(struct bc_tree *t, uint32_t n)
+{
+	struct bc_op_data u = {BC_OP_UNION, 0.0f, 0.0f};
+	int rc;
+	bc_tree_begin(t);
+	if ((rc = bc_tree_push_op(t, 0, &u, NULL))) {
+		return rc;
+	}
+	for (uint32_t i = 0; i < n; i++) {
+		struct bc_prim_data p;
+		bc_prim_data_init(&p, BC_PRIM_SPHERE);
+		p.params[0] = 1.0f;
+		p.translate[0] = 0.3f * sinf(0.7f * (float)i);
+		p.translate[1] = 0.3f * cosf(1.3f * (float)i);
+		p.has_color = true;
+		p.color[0] = (float)(i % 7) / 7.0f;
+		p.color[1] = 0.5f;
+		p.color[2] = (float)(i % 3) / 3.0f;
+		if ((rc = bc_tree_put_prim(t, 0, &p, NULL))) {
+			return rc;
+		}
+	}
+	if ((rc = bc_tree_pop_op(t, NULL))) {
+		return rc;
+	}
+	return bc_tree_end(t, NULL);
+}
+
+static void test_overflows_degrade_not_fail(void)
+{
+	struct bc_renderer *r = open_gl(NULL, BC_DEBUG_NONE);
+	struct bc_tree *t = bc_tree_create();
+	struct bc_frame g = {0}, c = {0}, again = {0};
+	struct bc_camera cam;
+	struct bc_gl_info info;
+	struct agreement a;
+	if (!r) {
+		bc_tree_destroy(t);
+		BC_SKIP("no GL context");
+	}
+	REQUIRE(t && bc_frame_init(&g, 32, 32) == 0 &&
+		bc_frame_init(&c, 32, 32) == 0 &&
+		bc_frame_init(&again, 32, 32) == 0);
+	REQUIRE(crowd(t, 160) == 0);
+	bc_camera_default(&cam);
+	REQUIRE(draw(r, t, NULL, &cam, &g) == 0);
+	REQUIRE(bc_render_gl_info(r, &info) == 0);
+	printf("  %u fragments, %u ranges, %u over M_overlap, %u over the "
+	       "cache, %u tiles suspended, %u dispatches\n",
+	       info.fragments, info.ranges, info.over_m, info.over_cache,
+	       info.suspensions, info.dispatches);
+	CHECK(info.over_m > 0);
+	CHECK(info.over_cache > 0);
+	CHECK(info.ranges_general > 0);
+	/* llvmpipe's loop limit: the crowded tiles suspend and resume. */
+	if (info.loop_budget) {
+		CHECK(info.suspensions > 0);
+		CHECK(info.dispatches > 1);
+	}
+	CHECK(draw_cpu(BC_DEBUG_NONE, t, &cam, &c) == 0);
+	compare(&g, &c, &a);
+	CHECK(a.mask_diff * 200 < 32 * 32);
+	CHECK(a.median_dz < 1e-3f * bc_tree_lin(t)->size);
+
+	/* Too small an A-buffer: counted, grown, drawn again, same frame. */
+	CHECK(bc_render_gl_set_capacity(r, 64) == 0);
+	CHECK(bc_render_gl_set_capacity(r, 0) == BC_EINVAL);
+	REQUIRE(draw(r, t, NULL, &cam, &again) == 0);
+	REQUIRE(bc_render_gl_info(r, &info) == 0);
+	CHECK_EQ_INT(info.retries, 1);
+	CHECK(info.fragments > 64);
+	CHECK(frames_equal(&g, &again));
+	bc_frame_finish(&g);
+	bc_frame_finish(&c);
+	bc_frame_finish(&again);
+	bc_tree_destroy(t);
+	gl_ops()->destroy(r);
+}
+
+/* ---- Platforms -------------------------------------------------------------- */
+
+static void test_platforms_draw_the_same(void)
+{
+	static const char *const names[] = {"surfaceless", "device", "osmesa"};
+	struct bc_tree *t = bc_tree_create();
+	struct bc_frame ref = {0}, f = {0};
+	struct bc_camera cam;
+	struct bc_render_opts bad = {.gl_platform = "vulkan"};
+	struct bc_renderer *r = NULL;
+	struct bc_errinfo ei = {0};
+	bool any = false;
+	REQUIRE(t && bc_frame_init(&ref, 32, 32) == 0 &&
+		bc_frame_init(&f, 32, 32) == 0);
+	REQUIRE(bc_gen("fig18", &(struct bc_gen_opts){.count = 27}, t, &cam,
+		       NULL) == 0);
+	if (gl_ops()) {
+		CHECK(gl_ops()->create(&r, &bad, &ei) == BC_EINVAL);
+		CHECK(r == NULL);
+	}
+	for (size_t i = 0; i < 3; i++) {
+		struct bc_renderer *pr = open_gl(names[i], BC_DEBUG_NONE);
+		struct bc_gl_info info;
+		if (!pr) {
+			/* This machine has surfaceless llvmpipe and OSMesa
+			 * (see PLATFORM.md): only a host without any GL may
+			 * lack them, and then no platform opens. */
+			CHECK(!any);
+			continue;
+		}
+		REQUIRE(bc_render_gl_info(pr, &info) == 0);
+		printf("  %s: %s, %s (%d.%d), robust access %s, reset %s\n",
+		       names[i], info.renderer, info.version, info.major,
+		       info.minor, info.robust_access ? "yes" : "no",
+		       info.lose_on_reset ? "loses context" : "no");
+		CHECK(strcmp(bc_gl_platform_name(info.platform), names[i]) == 0);
+		CHECK(info.major > 4 || (info.major == 4 && info.minor >= 3));
+		CHECK(info.renderer[0] != '\0');
+		CHECK(info.shared_bytes >= 16384);
+		CHECK(draw(pr, t, NULL, &cam, any ? &f : &ref) == 0);
+		/* Same driver underneath here: the same picture. Another
+		 * driver (a GPU) would only have to agree like the CPU. */
+		if (any && strstr(info.renderer, "llvmpipe")) {
+			CHECK(frames_equal(&ref, &f));
+		}
+		any = true;
+		gl_ops()->destroy(pr);
+	}
+	bc_frame_finish(&ref);
+	bc_frame_finish(&f);
+	bc_tree_destroy(t);
+	if (!any) {
+		BC_SKIP("no GL context");
+	}
+}
+
+/* ---- Debug modes, sizes, empty scenes, errors --------------------------- */
+
+static void test_debug_modes_match_cpu(void)
+{
+	struct bc_renderer *ov = open_gl(NULL, BC_DEBUG_OVERLAPS);
+	struct bc_renderer *ev = open_gl(NULL, BC_DEBUG_EVALS);
+	struct bc_tree *t = bc_tree_create();
+	struct bc_frame g = {0}, c = {0};
+	struct bc_camera cam;
+	struct agreement a;
+	uint32_t ramp_px = 0;
+	if (!ov || !ev) {
+		if (ov) {
+			gl_ops()->destroy(ov);
+		}
+		if (ev) {
+			gl_ops()->destroy(ev);
+		}
+		bc_tree_destroy(t);
+		BC_SKIP("no GL context");
+	}
+	REQUIRE(t && bc_frame_init(&g, W, H) == 0 && bc_frame_init(&c, W, H) == 0);
+	REQUIRE(bc_gen("fig18", &(struct bc_gen_opts){.count = 64}, t, &cam,
+		       NULL) == 0);
+	/* Overlaps: the tile lists' lengths, so the same colours. */
+	REQUIRE(draw(ov, t, NULL, &cam, &g) == 0);
+	REQUIRE(draw_cpu(BC_DEBUG_OVERLAPS, t, &cam, &c) == 0);
+	compare(&g, &c, &a);
+	printf("  overlaps: %u of %u pixels differ\n", a.rgba_diff, W * H);
+	CHECK(a.rgba_diff * 100 <= W * H);
+	/* Evaluations: counts differ a little between tracers; the corner
+	 * tiles list nothing and cost nothing, the middle is coloured. */
+	REQUIRE(draw(ev, t, NULL, &cam, &g) == 0);
+	REQUIRE(draw_cpu(BC_DEBUG_EVALS, t, &cam, &c) == 0);
+	CHECK(memcmp(g.rgba, c.rgba, 4) == 0);
+	for (size_t i = 0; i < (size_t)W * H; i++) {
+		ramp_px += memcmp(g.rgba + 4 * i, g.rgba, 3) != 0;
+	}
+	CHECK(ramp_px > W * H / 10);
+	compare(&g, &c, &a);
+	CHECK(a.mask_diff * 200 < W * H);
+	bc_frame_finish(&g);
+	bc_frame_finish(&c);
+	bc_tree_destroy(t);
+	gl_ops()->destroy(ov);
+	gl_ops()->destroy(ev);
+}
+
+static void test_odd_sizes_and_empty_scene(void)
+{
+	struct bc_renderer *r = open_gl(NULL, BC_DEBUG_NONE);
+	struct bc_tree *t = bc_tree_create();
+	struct bc_frame g = {0}, c = {0};
+	struct bc_camera cam;
+	struct agreement a;
+	uint8_t *rgba;
+	if (!r) {
+		bc_tree_destroy(t);
+		BC_SKIP("no GL context");
+	}
+	REQUIRE(t && bc_frame_init(&g, 37, 23) == 0 &&
+		bc_frame_init(&c, 37, 23) == 0);
+	REQUIRE(bc_gen("fig16", &(struct bc_gen_opts){.level = 1}, t, &cam,
+		       NULL) == 0);
+	REQUIRE(draw(r, t, NULL, &cam, &g) == 0);
+	REQUIRE(draw_cpu(BC_DEBUG_NONE, t, &cam, &c) == 0);
+	compare(&g, &c, &a);
+	CHECK(a.mask_diff * 200 < 37 * 23);
+	CHECK(a.median_dz < 1e-3f * bc_tree_lin(t)->size);
+	CHECK(a.both > 0);
+
+	/* Depth and ids are optional. */
+	rgba = malloc(4 * 37 * 23);
+	REQUIRE(rgba);
+	{
+		struct bc_frame only = {37, 23, rgba, NULL, NULL};
+		struct bc_errinfo ei = {0};
+		CHECK(gl_ops()->render(r, &cam, &only, NULL, &ei) == 0);
+		CHECK(memcmp(rgba, g.rgba, 4 * 37 * 23) == 0);
+	}
+	free(rgba);
+
+	/* An empty tree: the background, exactly the CPU's. */
+	{
+		struct bc_tree *empty = bc_tree_create();
+		REQUIRE(empty && bc_tree_lin(empty) == NULL);
+		REQUIRE(draw(r, empty, NULL, &cam, &g) == 0);
+		REQUIRE(draw_cpu(BC_DEBUG_NONE, empty, &cam, &c) == 0);
+		CHECK(frames_equal(&g, &c));
+		CHECK(isinf(g.depth[0]) && g.ids[0] == 0);
+		bc_tree_destroy(empty);
+	}
+	bc_frame_finish(&g);
+	bc_frame_finish(&c);
+	bc_tree_destroy(t);
+	gl_ops()->destroy(r);
+}
+
+static void test_bad_calls_are_refused(void)
+{
+	struct bc_renderer *r = open_gl(NULL, BC_DEBUG_NONE);
+	struct bc_render_opts bad_dbg = {.debug = BC_DEBUG_COUNT};
+	struct bc_renderer *nr = NULL;
+	struct bc_frame f = {0}, zero = {0};
+	struct bc_camera cam, same;
+	struct bc_errinfo ei = {0};
+	if (!r) {
+		BC_SKIP("no GL context");
+	}
+	REQUIRE(bc_frame_init(&f, 16, 16) == 0);
+	bc_camera_default(&cam);
+	CHECK(gl_ops()->create(&nr, &bad_dbg, &ei) == BC_EENUM && !nr);
+	CHECK(gl_ops()->render(r, &cam, &f, NULL, &ei) == BC_ESTATE);
+	CHECK(gl_ops()->sync(r, NULL, NULL, &ei) == BC_EINVAL);
+	{
+		struct bc_tree *t = bc_tree_create();
+		REQUIRE(t);
+		REQUIRE(bc_gen("comb", &(struct bc_gen_opts){.count = 4}, t,
+			       &cam, NULL) == 0);
+		CHECK(gl_ops()->sync(r, t, NULL, &ei) == 0);
+		CHECK(gl_ops()->render(r, &cam, &zero, NULL, &ei) == BC_EINVAL);
+		same = cam;
+		memcpy(same.target, same.eye, sizeof(same.eye));
+		CHECK(gl_ops()->render(r, &same, &f, NULL, &ei) == BC_ERANGE);
+		if (gl_ops()->render(r, &cam, &f, NULL, &ei) != 0) {
+			fprintf(stderr, "  render: %s\n", ei.msg);
+			CHECK(0);
+		}
+		bc_tree_destroy(t);
+	}
+	gl_ops()->destroy(NULL);
+	bc_frame_finish(&f);
+	gl_ops()->destroy(r);
+}
+
+static const struct bc_test tests[] = {
+	{"families_agree_with_tiled", test_families_agree_with_tiled},
+	{"param_edit_equals_fresh_load", test_param_edit_equals_fresh_load},
+	{"overflows_degrade_not_fail", test_overflows_degrade_not_fail},
+	{"platforms_draw_the_same", test_platforms_draw_the_same},
+	{"debug_modes_match_cpu", test_debug_modes_match_cpu},
+	{"odd_sizes_and_empty_scene", test_odd_sizes_and_empty_scene},
+	{"bad_calls_are_refused", test_bad_calls_are_refused},
+};
+
+BC_TEST_MAIN(tests)
