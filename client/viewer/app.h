@@ -1,0 +1,189 @@
+/*
+ * The state of one blobcast-view window, shared by its files: main.c
+ * (options, start-up, the loop, drawing), net.c (messages from the server,
+ * sending camera, view and edits) and input.c (mouse and keyboard).
+ * Everything runs on the main thread except the socket watcher of main.c,
+ * which only polls the socket and wakes the loop.
+ */
+#ifndef BLOBCAST_VIEWER_APP_H
+#define BLOBCAST_VIEWER_APP_H
+
+#include <stdatomic.h>
+#include <stdbool.h>
+#include <stdint.h>
+
+#include <pthread.h>
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+
+#include "blobcast/client.h"
+#include "viewer.h"
+#include "viewer_gl.h"
+
+/* Mouse motion, in window pixels, before a press counts as a drag rather
+ * than a click. */
+#define BC_VIEWER_CLICK_SLOP 3.0
+/* Interacting CAMERA messages are sent at most this often (ms): a 60 Hz
+ * display never shows more. */
+#define BC_VIEWER_CAMERA_EVERY_MS 15.0
+/* A wheel gesture ends this long (ms) after its last notch; its final,
+ * non-interacting message goes then. */
+#define BC_VIEWER_WHEEL_END_MS 250.0
+/* Resizing sends many sizes in a row; the VIEW goes this long (ms) after
+ * the last. */
+#define BC_VIEWER_RESIZE_MS 120.0
+/* Status messages stay on the overlay this long (ms). */
+#define BC_VIEWER_STATUS_MS 6000.0
+/* The window title and overlay numbers refresh this often (ms). */
+#define BC_VIEWER_STATS_EVERY_MS 500.0
+/* Messages handled per loop turn before input and drawing get their turn:
+ * a burst of frames must not freeze the window. */
+#define BC_VIEWER_MSGS_PER_TURN 64
+/* Largest number of vertices of overlay text. */
+#define BC_VIEWER_TEXT_FLOATS (64u * 1024u)
+
+struct bc_viewer_opts {
+	const char *server, *session, *name, *token;
+	enum bc_proto_role role;
+	uint32_t width, height;       /* window size asked for */
+	enum bc_proto_encoding encoding; /* still frames: JPEG or PNG */
+	uint8_t quality, downscale;
+	bool gles, overlay, verbose;
+	const char *screenshot; /* write the window here ... */
+	uint32_t frames;        /* ... once this many frames were shown */
+	float turn_deg;         /* camera turn between those frames */
+	const char *dump_frame; /* with --screenshot: the picture received */
+	const char *snapshot_dir;
+};
+
+enum bc_viewer_drag {
+	BC_VIEWER_DRAG_NONE = 0,
+	BC_VIEWER_DRAG_PENDING, /* pressed; waiting for the PICK answer */
+	BC_VIEWER_DRAG_ORBIT,
+	BC_VIEWER_DRAG_PAN,
+	BC_VIEWER_DRAG_MOVE, /* moving a primitive in the view plane */
+	BC_VIEWER_DRAG_COUNT
+};
+
+enum bc_viewer_wheel {
+	BC_VIEWER_WHEEL_NONE = 0,
+	BC_VIEWER_WHEEL_SIZE,  /* Shift: the primitive's size parameter */
+	BC_VIEWER_WHEEL_BLEND, /* Ctrl: the parent operator's blend */
+	BC_VIEWER_WHEEL_COUNT
+};
+
+struct bc_viewer_app {
+	struct bc_viewer_opts o;
+	GLFWwindow *win;
+	struct bc_viewer_gl gl;
+	bool gl_ready;
+	struct bc_client *c;
+	struct bc_viewer_frames frames;
+	struct bc_viewer_meter meter;
+	struct bc_viewer_edits edits;
+
+	/* Our camera; the scene's, for R. */
+	struct bc_camera cam, scene_cam;
+	bool cam_dirty, cam_interacting;
+	double cam_sent_at, cam_final_at; /* final_at: end of a wheel zoom */
+
+	/* The VIEW sent (0 before), and a resize waiting to be sent. */
+	uint32_t view_w, view_h;
+	double view_due;
+
+	/* Mouse. */
+	double mx, my; /* cursor, window pixels */
+	struct {
+		enum bc_viewer_drag mode;
+		int button;
+		double start_x, start_y, last_x, last_y;
+		bool moved, released;
+		uint32_t pick_seq;
+		uint32_t node;
+		float origin[3], z;
+	} drag;
+	struct {
+		enum bc_viewer_wheel what;
+		uint32_t sel; /* the selection the gesture began on */
+		struct bc_viewer_edit edit;
+		double end_at;
+	} wheel;
+	uint32_t selected;
+
+	/* Frames. */
+	uint64_t nframes;     /* shown, snapshots excluded */
+	uint64_t settle_order; /* newest order shown since the last draw */
+	bool settle;
+	struct {
+		uint32_t frame_no, width, height, image_width, image_height;
+		uint32_t nrects;
+		uint64_t order;
+		uint16_t flags;
+		enum bc_proto_encoding encoding;
+	} last;
+	bool redraw;
+	bool turn_pending; /* --frames: a camera turn asked for a frame */
+
+	/* S (lossless snapshot) and P (window screenshot). */
+	uint32_t snapshot_seq;
+	bool screenshot_now;
+	unsigned shots;
+
+	char status[200];
+	double status_at, stats_at;
+	float *text;
+
+	/* The socket watcher. */
+	int wake[2];
+	pthread_t watcher;
+	bool watching;
+	atomic_int fired; /* it woke the loop and waits to be re-armed */
+
+	bool offline; /* the connection failed; the status says why */
+	bool quit;
+	int exit_code;
+};
+
+/* Milliseconds on a monotonic clock. */
+double bc_viewer_now_ms(void);
+/* Shows a sentence on the overlay (and on stderr when verbose). */
+void bc_viewer_status(struct bc_viewer_app *a, const char *fmt, ...)
+#if defined(__GNUC__)
+	__attribute__((format(printf, 2, 3)))
+#endif
+	;
+
+/* net.c */
+/* Handles messages already received or readable, at most
+ * BC_VIEWER_MSGS_PER_TURN. Returns 1 when more may be waiting, 0 when
+ * drained, or the connection's negative error (the reason is shown). */
+int bc_viewer_pump(struct bc_viewer_app *a);
+/* Sends what is due: a VIEW after a resize, the camera, queued edits, the
+ * end of a wheel gesture. Returns the ms until something else falls due
+ * (negative: nothing scheduled). */
+double bc_viewer_send_due(struct bc_viewer_app *a, double now);
+/* Sends VIEW for the framebuffer's current size. */
+int bc_viewer_send_view(struct bc_viewer_app *a);
+/* Marks the camera changed; interacting false sends it at once. */
+void bc_viewer_camera_changed(struct bc_viewer_app *a, bool interacting);
+/* Queues an edit and sends it when the queue allows. */
+void bc_viewer_edit(struct bc_viewer_app *a, const struct bc_viewer_edit *e);
+/* Sends PICK for window pixel (x, y); returns its seq or 0. */
+uint32_t bc_viewer_pick(struct bc_viewer_app *a, double x, double y);
+/* Sends SNAPSHOT (PNG) unless one is on its way. */
+void bc_viewer_request_snapshot(struct bc_viewer_app *a);
+
+/* input.c */
+void bc_viewer_input_install(struct bc_viewer_app *a);
+/* Applies mouse motion since the last turn (at most one camera or edit
+ * message per turn however many events arrived). */
+void bc_viewer_drag_step(struct bc_viewer_app *a, bool final);
+/* The PICK answer for a pending press arrived (node 0: nothing hit). */
+void bc_viewer_pick_answer(struct bc_viewer_app *a, uint32_t seq,
+			   uint32_t node, const float position[3]);
+/* Window pixels to view pixels. */
+void bc_viewer_to_view(struct bc_viewer_app *a, double x, double y,
+		       float *vx, float *vy);
+
+#endif

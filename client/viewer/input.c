@@ -1,0 +1,344 @@
+/*
+ * Direct manipulation, as in the browser page (docs/web.md):
+ *  - a left press asks the server what is under the pointer (PICK); a
+ *    primitive becomes the selection and, for an editor, the drag moves it
+ *    in the view plane through the point grabbed; empty space (or a viewer's
+ *    drag) orbits the camera; right or middle drag, or Shift with the left
+ *    button, pans;
+ *  - the wheel zooms; with Shift it scales the selected primitive's size
+ *    parameter, with Ctrl the blend of the operator above it;
+ *  - keys: S lossless snapshot, P window screenshot, O overlay, R the
+ *    scene's camera, Escape or Q quit.
+ * Callbacks only record what happened; bc_viewer_drag_step() turns the
+ * motion of a whole loop turn into one message. Gestures send their
+ * messages with INTERACTING and end with one without it.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "app.h"
+
+void bc_viewer_to_view(struct bc_viewer_app *a, double x, double y,
+		       float *vx, float *vy)
+{
+	int ww = 0, wh = 0;
+	glfwGetWindowSize(a->win, &ww, &wh);
+	*vx = (float)(ww > 0 ? x * (double)a->view_w / (double)ww : x);
+	*vy = (float)(wh > 0 ? y * (double)a->view_h / (double)wh : y);
+}
+
+static bool is_editor(const struct bc_viewer_app *a)
+{
+	return bc_client_info(a->c)->role == BC_PROTO_ROLE_EDITOR;
+}
+
+static void select_node(struct bc_viewer_app *a, uint32_t node)
+{
+	if (a->selected != node) {
+		a->selected = node;
+		a->redraw = true;
+	}
+}
+
+void bc_viewer_drag_step(struct bc_viewer_app *a, bool final)
+{
+	float dx, dy, sx, sy, ex, ey;
+	if (a->drag.mode == BC_VIEWER_DRAG_NONE ||
+	    a->drag.mode == BC_VIEWER_DRAG_PENDING) {
+		return;
+	}
+	if (a->mx == a->drag.last_x && a->my == a->drag.last_y && !final) {
+		return;
+	}
+	/* Motion in view pixels: the camera's and the server's unit. */
+	bc_viewer_to_view(a, a->drag.last_x, a->drag.last_y, &sx, &sy);
+	bc_viewer_to_view(a, a->mx, a->my, &ex, &ey);
+	dx = ex - sx;
+	dy = ey - sy;
+	a->drag.last_x = a->mx;
+	a->drag.last_y = a->my;
+	switch (a->drag.mode) {
+	case BC_VIEWER_DRAG_ORBIT:
+		bc_viewer_orbit(&a->cam, dx, dy);
+		bc_viewer_camera_changed(a, !final);
+		break;
+	case BC_VIEWER_DRAG_PAN:
+		bc_viewer_pan(&a->cam, dx, dy, a->view_h);
+		bc_viewer_camera_changed(a, !final);
+		break;
+	case BC_VIEWER_DRAG_MOVE: {
+		struct bc_viewer_edit e = {.node = a->drag.node, .nfields = 1,
+					   .interacting = !final};
+		float x0, y0;
+		bc_viewer_to_view(a, a->drag.start_x, a->drag.start_y, &x0, &y0);
+		/* From where it was grabbed, so rounding never accumulates. */
+		bc_viewer_move_in_plane(&a->cam, a->view_h, a->drag.origin,
+					a->drag.z, ex - x0, ey - y0,
+					e.fields[0].v);
+		e.fields[0].field = BC_PROTO_FIELD_TRANSLATE;
+		e.fields[0].count = 3;
+		for (int i = 0; i < 3; i++) {
+			e.fields[0].v[i] = fminf(fmaxf(e.fields[0].v[i],
+						       -BC_PROTO_MAX_ABS),
+						 BC_PROTO_MAX_ABS);
+		}
+		bc_viewer_edit(a, &e);
+		break;
+	}
+	default:
+		break;
+	}
+}
+
+static void finish_drag(struct bc_viewer_app *a)
+{
+	if (a->drag.moved) {
+		bc_viewer_drag_step(a, true);
+	}
+	a->drag.mode = BC_VIEWER_DRAG_NONE;
+}
+
+void bc_viewer_pick_answer(struct bc_viewer_app *a, uint32_t seq,
+			   uint32_t node, const float position[3])
+{
+	const struct bc_tree *t = bc_client_scene(a->c, NULL);
+	struct bc_prim_data p;
+	bool prim;
+	if (a->drag.mode != BC_VIEWER_DRAG_PENDING || seq != a->drag.pick_seq) {
+		return;
+	}
+	prim = node && t && bc_tree_get(t, node, &p, NULL) &&
+	       p.kind != BC_PRIM_INVALID;
+	if (a->o.verbose) {
+		printf("pick node=%u\n", prim ? node : 0u);
+		fflush(stdout);
+	}
+	if (prim) {
+		select_node(a, node);
+	} else if (!a->drag.moved) {
+		select_node(a, 0);
+	}
+	a->drag.mode = BC_VIEWER_DRAG_ORBIT;
+	if (prim && is_editor(a) && position) {
+		float px[3];
+		memcpy(a->drag.origin, p.translate, sizeof(a->drag.origin));
+		a->drag.node = node;
+		/* The grabbed point's depth: moving the shape by the
+		 * pointer's motion at that depth keeps it under the
+		 * pointer. */
+		a->drag.z = bc_viewer_project(&a->cam, a->view_w, a->view_h,
+					      position, px)
+				    ? px[2]
+				    : 1.0f;
+		a->drag.mode = BC_VIEWER_DRAG_MOVE;
+	}
+	if (a->drag.released) {
+		finish_drag(a);
+	} else {
+		bc_viewer_drag_step(a, false);
+	}
+}
+
+static void on_button(GLFWwindow *w, int button, int action, int mods)
+{
+	struct bc_viewer_app *a = glfwGetWindowUserPointer(w);
+	if (action == GLFW_PRESS) {
+		if (a->drag.mode != BC_VIEWER_DRAG_NONE) {
+			return;
+		}
+		memset(&a->drag, 0, sizeof(a->drag));
+		a->drag.button = button;
+		a->drag.start_x = a->drag.last_x = a->mx;
+		a->drag.start_y = a->drag.last_y = a->my;
+		if (button == GLFW_MOUSE_BUTTON_RIGHT ||
+		    button == GLFW_MOUSE_BUTTON_MIDDLE ||
+		    (button == GLFW_MOUSE_BUTTON_LEFT && (mods & GLFW_MOD_SHIFT))) {
+			a->drag.mode = BC_VIEWER_DRAG_PAN;
+		} else if (button == GLFW_MOUSE_BUTTON_LEFT) {
+			/* Whether this starts an orbit or moves a shape
+			 * depends on what is under the pointer. */
+			a->drag.mode = BC_VIEWER_DRAG_PENDING;
+			a->drag.pick_seq = bc_viewer_pick(a, a->mx, a->my);
+			if (!a->drag.pick_seq) {
+				a->drag.mode = BC_VIEWER_DRAG_ORBIT;
+			}
+		}
+		return;
+	}
+	if (action == GLFW_RELEASE && button == a->drag.button) {
+		if (a->drag.mode == BC_VIEWER_DRAG_PENDING) {
+			a->drag.released = true;
+		} else if (a->drag.mode != BC_VIEWER_DRAG_NONE) {
+			finish_drag(a);
+		}
+	}
+}
+
+static void on_cursor(GLFWwindow *w, double x, double y)
+{
+	struct bc_viewer_app *a = glfwGetWindowUserPointer(w);
+	a->mx = x;
+	a->my = y;
+	if (a->drag.mode != BC_VIEWER_DRAG_NONE &&
+	    fabs(x - a->drag.start_x) + fabs(y - a->drag.start_y) >
+		    BC_VIEWER_CLICK_SLOP) {
+		a->drag.moved = true;
+	}
+}
+
+/* Starts or continues a Shift/Ctrl wheel gesture on the selection. */
+static void wheel_edit(struct bc_viewer_app *a, enum bc_viewer_wheel what,
+		       double notches)
+{
+	const struct bc_tree *t = bc_client_scene(a->c, NULL);
+	struct bc_prim_data p;
+	struct bc_op_data op;
+	float f = expf((float)notches * 0.1f);
+	struct bc_viewer_edit *e = &a->wheel.edit;
+	if (!is_editor(a)) {
+		bc_viewer_status(a, "viewers cannot edit");
+		return;
+	}
+	if (!a->selected || !t || !bc_tree_get(t, a->selected, &p, NULL) ||
+	    p.kind == BC_PRIM_INVALID) {
+		bc_viewer_status(a, "click a shape first");
+		return;
+	}
+	if (a->wheel.what != what || a->wheel.sel != a->selected) {
+		/* A new gesture starts from the scene's values; one still
+		 * under way ends first. */
+		if (a->wheel.what != BC_VIEWER_WHEEL_NONE) {
+			struct bc_viewer_edit last = *e;
+			last.interacting = false;
+			a->wheel.what = BC_VIEWER_WHEEL_NONE;
+			bc_viewer_edit(a, &last);
+		}
+		memset(e, 0, sizeof(*e));
+		if (what == BC_VIEWER_WHEEL_SIZE) {
+			const struct bc_prim_info *info = bc_prim_info(p.kind);
+			int k = bc_viewer_size_param(p.kind);
+			if (k < 0) {
+				bc_viewer_status(a, "a %s has no size", info->name);
+				return;
+			}
+			e->node = a->selected;
+			e->nfields = 1;
+			e->fields[0].field =
+				(uint8_t)(BC_PROTO_FIELD_PARAM0 + (unsigned)k);
+			e->fields[0].count = info->params[k].count;
+			memcpy(e->fields[0].v, p.params + info->params[k].offset,
+			       info->params[k].count * sizeof(float));
+		} else {
+			uint32_t parent = bc_tree_parent(t, a->selected);
+			if (!parent || !bc_tree_get(t, parent, NULL, &op) ||
+			    !bc_op_is_smooth(op.kind)) {
+				bc_viewer_status(a, "the shape's operator has no "
+						    "blend (not a smooth one)");
+				return;
+			}
+			e->node = parent;
+			e->nfields = 2;
+			e->fields[0].field = BC_PROTO_FIELD_BLEND;
+			e->fields[0].count = 1;
+			e->fields[0].v[0] = op.blend;
+			e->fields[1].field = BC_PROTO_FIELD_RANGE;
+			e->fields[1].count = 1;
+			e->fields[1].v[0] = op.range;
+		}
+		a->wheel.what = what;
+		a->wheel.sel = a->selected;
+	}
+	/* Blend and range scale together, keeping range > blend / 6. */
+	for (uint32_t i = 0; i < e->nfields; i++) {
+		for (uint32_t k = 0; k < e->fields[i].count; k++) {
+			float v = e->fields[i].v[k] * f;
+			e->fields[i].v[k] = fminf(fmaxf(v, 1e-4f), 1e5f);
+		}
+	}
+	e->interacting = true;
+	a->wheel.end_at = bc_viewer_now_ms() + BC_VIEWER_WHEEL_END_MS;
+	bc_viewer_edit(a, e);
+	a->redraw = true;
+}
+
+static void on_scroll(GLFWwindow *w, double xoff, double yoff)
+{
+	struct bc_viewer_app *a = glfwGetWindowUserPointer(w);
+	bool shift = glfwGetKey(w, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS ||
+		     glfwGetKey(w, GLFW_KEY_RIGHT_SHIFT) == GLFW_PRESS;
+	bool ctrl = glfwGetKey(w, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS ||
+		    glfwGetKey(w, GLFW_KEY_RIGHT_CONTROL) == GLFW_PRESS;
+	(void)xoff;
+	if (yoff == 0.0) {
+		return;
+	}
+	if (shift || ctrl) {
+		wheel_edit(a, ctrl ? BC_VIEWER_WHEEL_BLEND : BC_VIEWER_WHEEL_SIZE,
+			   yoff);
+		return;
+	}
+	/* Wheel up brings the camera closer. */
+	bc_viewer_zoom(&a->cam, (float)-yoff);
+	bc_viewer_camera_changed(a, true);
+	a->cam_final_at = bc_viewer_now_ms() + BC_VIEWER_WHEEL_END_MS;
+}
+
+static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
+{
+	struct bc_viewer_app *a = glfwGetWindowUserPointer(w);
+	(void)scancode;
+	(void)mods;
+	if (action != GLFW_PRESS) {
+		return;
+	}
+	switch (key) {
+	case GLFW_KEY_ESCAPE:
+	case GLFW_KEY_Q:
+		glfwSetWindowShouldClose(w, GLFW_TRUE);
+		break;
+	case GLFW_KEY_S:
+		bc_viewer_request_snapshot(a);
+		break;
+	case GLFW_KEY_P:
+		a->screenshot_now = true;
+		a->redraw = true;
+		break;
+	case GLFW_KEY_O:
+		a->o.overlay = !a->o.overlay;
+		a->redraw = true;
+		break;
+	case GLFW_KEY_R:
+		a->cam = a->scene_cam;
+		bc_viewer_camera_changed(a, false);
+		break;
+	default:
+		break;
+	}
+}
+
+static void on_resize(GLFWwindow *w, int width, int height)
+{
+	struct bc_viewer_app *a = glfwGetWindowUserPointer(w);
+	(void)width;
+	(void)height;
+	a->view_due = bc_viewer_now_ms() + BC_VIEWER_RESIZE_MS;
+	a->redraw = true;
+}
+
+static void on_refresh(GLFWwindow *w)
+{
+	struct bc_viewer_app *a = glfwGetWindowUserPointer(w);
+	a->redraw = true;
+}
+
+void bc_viewer_input_install(struct bc_viewer_app *a)
+{
+	glfwSetWindowUserPointer(a->win, a);
+	glfwSetMouseButtonCallback(a->win, on_button);
+	glfwSetCursorPosCallback(a->win, on_cursor);
+	glfwSetScrollCallback(a->win, on_scroll);
+	glfwSetKeyCallback(a->win, on_key);
+	glfwSetFramebufferSizeCallback(a->win, on_resize);
+	glfwSetWindowRefreshCallback(a->win, on_refresh);
+}

@@ -1,0 +1,787 @@
+/*
+ * blobcast-view: a desktop window on a blobcast session. It joins a session
+ * through libblobcast, shows the frames the daemon renders for its own
+ * camera and window size, lets the user orbit, pan and zoom, pick, move and
+ * resize primitives (input.c), and overlays frames per second, edit ->
+ * frame latency and kB per frame.
+ *
+ * This file owns the options, start-up and shutdown, the loop and drawing.
+ * The loop never waits on the network: a watcher thread polls the socket
+ * and wakes glfwWaitEventsTimeout() with glfwPostEmptyEvent() when bytes
+ * arrive; the main thread then drains them with zero-timeout receives. The
+ * watcher touches nothing but the socket's readiness, so libblobcast stays
+ * single-threaded as it requires.
+ */
+#include <errno.h>
+#include <math.h>
+#include <poll.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "app.h"
+#include "blobcast/alloc.h"
+#include "blobcast/image.h"
+#include "blobcast/log.h"
+
+#define EXIT_FAIL 1
+#define EXIT_USAGE 2
+
+double bc_viewer_now_ms(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
+}
+
+void bc_viewer_status(struct bc_viewer_app *a, const char *fmt, ...)
+{
+	va_list ap;
+	va_start(ap, fmt);
+	vsnprintf(a->status, sizeof(a->status), fmt, ap);
+	va_end(ap);
+	a->status_at = bc_viewer_now_ms();
+	a->redraw = true;
+	if (a->o.verbose) {
+		printf("status %s\n", a->status);
+		fflush(stdout);
+	}
+}
+
+/* ---- options -------------------------------------------------------------- */
+
+static void usage(FILE *out)
+{
+	fprintf(out,
+		"usage: blobcast-view [options]\n"
+		"\n"
+		"Shows a blobcast session in a window and edits it with the "
+		"mouse.\n"
+		"\n"
+		"  --server ADDR      HOST:PORT, [IPV6]:PORT or unix:PATH "
+		"(default 127.0.0.1:7878)\n"
+		"  --session NAME     session to join (default \"default\"; an "
+		"editor\n"
+		"                     creates it when it does not exist)\n"
+		"  --role ROLE        editor (default) or viewer\n"
+		"  --name NAME        the name other members see "
+		"(default blobcast-view)\n"
+		"  --token TOKEN      authentication token\n"
+		"  --size WxH         window size (default 960x600)\n"
+		"  --encoding ENC     still frames as jpeg (default) or png\n"
+		"  --quality Q        JPEG quality of still frames, 1..100 "
+		"(default 85;\n"
+		"                     interactive frames use at most 70)\n"
+		"  --downscale N      interactive frames at 1/N size, 1..8 "
+		"(default 2)\n"
+		"  --gles             use an OpenGL ES 2.0 context\n"
+		"  --no-overlay       start with the overlay hidden (O toggles)\n"
+		"  --snapshot-dir DIR where S saves lossless snapshots "
+		"(default .)\n"
+		"  --screenshot FILE  save the window to FILE once --frames "
+		"frames\n"
+		"                     were shown, then exit\n"
+		"  --frames N         frames before the screenshot (default 1)\n"
+		"  --turn DEG         with --frames > 1: turn the camera by DEG "
+		"after\n"
+		"                     each frame (the daemon renders on change "
+		"only;\n"
+		"                     default 15)\n"
+		"  --dump-frame FILE  with --screenshot: also save the picture "
+		"received\n"
+		"  --verbose          print frames, picks and edits on stdout\n"
+		"  --help             this text\n"
+		"\n"
+		"Mouse: drag orbits, or moves the shape under the pointer; "
+		"right drag\n"
+		"or Shift-drag pans; the wheel zooms, Shift+wheel sizes the "
+		"selected\n"
+		"shape, Ctrl+wheel changes its operator's blend. Keys: S "
+		"snapshot,\n"
+		"P screenshot, O overlay, R scene camera, Q or Escape quit.\n");
+}
+
+static bool parse_u32(const char *s, uint32_t lo, uint32_t hi, uint32_t *out)
+{
+	char *end;
+	unsigned long v;
+	if (!s || !*s || *s == '-' || *s == '+') {
+		return false;
+	}
+	errno = 0;
+	v = strtoul(s, &end, 10);
+	if (errno || *end || v < lo || v > hi) {
+		return false;
+	}
+	*out = (uint32_t)v;
+	return true;
+}
+
+static bool parse_size(const char *s, uint32_t *w, uint32_t *h)
+{
+	char buf[32];
+	char *x;
+	if (!s || strlen(s) >= sizeof(buf)) {
+		return false;
+	}
+	strcpy(buf, s);
+	if (!(x = strchr(buf, 'x'))) {
+		return false;
+	}
+	*x = '\0';
+	return parse_u32(buf, 1, BC_PROTO_MAX_DIM, w) &&
+	       parse_u32(x + 1, 1, BC_PROTO_MAX_DIM, h);
+}
+
+/* Returns 0, or EXIT_USAGE after printing why (or the help: -1). */
+static int parse_args(int argc, char **argv, struct bc_viewer_opts *o)
+{
+	uint32_t v;
+	*o = (struct bc_viewer_opts){
+		.session = "default",
+		.name = "blobcast-view",
+		.role = BC_PROTO_ROLE_EDITOR,
+		.width = 960,
+		.height = 600,
+		.encoding = BC_PROTO_ENC_JPEG,
+		.quality = 85,
+		.downscale = 2,
+		.overlay = true,
+		.frames = 1,
+		.turn_deg = 15.0f,
+		.snapshot_dir = ".",
+	};
+	for (int i = 1; i < argc; i++) {
+		const char *k = argv[i];
+		const char *val = i + 1 < argc ? argv[i + 1] : NULL;
+		bool takes = true;
+		if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
+			usage(stdout);
+			return -1;
+		} else if (strcmp(k, "--gles") == 0) {
+			o->gles = true;
+			takes = false;
+		} else if (strcmp(k, "--no-overlay") == 0) {
+			o->overlay = false;
+			takes = false;
+		} else if (strcmp(k, "--verbose") == 0) {
+			o->verbose = true;
+			takes = false;
+		} else if (!val) {
+			fprintf(stderr, "blobcast-view: %s needs a value\n", k);
+			return EXIT_USAGE;
+		} else if (strcmp(k, "--server") == 0) {
+			o->server = val;
+		} else if (strcmp(k, "--session") == 0) {
+			o->session = val;
+		} else if (strcmp(k, "--name") == 0) {
+			o->name = val;
+		} else if (strcmp(k, "--token") == 0) {
+			o->token = val;
+		} else if (strcmp(k, "--snapshot-dir") == 0) {
+			o->snapshot_dir = val;
+		} else if (strcmp(k, "--screenshot") == 0) {
+			o->screenshot = val;
+		} else if (strcmp(k, "--dump-frame") == 0) {
+			o->dump_frame = val;
+		} else if (strcmp(k, "--role") == 0) {
+			if (strcmp(val, "editor") == 0) {
+				o->role = BC_PROTO_ROLE_EDITOR;
+			} else if (strcmp(val, "viewer") == 0) {
+				o->role = BC_PROTO_ROLE_VIEWER;
+			} else {
+				fprintf(stderr, "blobcast-view: --role is editor "
+						"or viewer, not \"%s\"\n", val);
+				return EXIT_USAGE;
+			}
+		} else if (strcmp(k, "--encoding") == 0) {
+			if (strcmp(val, "jpeg") == 0) {
+				o->encoding = BC_PROTO_ENC_JPEG;
+			} else if (strcmp(val, "png") == 0) {
+				o->encoding = BC_PROTO_ENC_PNG;
+			} else {
+				fprintf(stderr, "blobcast-view: --encoding is jpeg "
+						"or png, not \"%s\"\n", val);
+				return EXIT_USAGE;
+			}
+		} else if (strcmp(k, "--size") == 0) {
+			if (!parse_size(val, &o->width, &o->height)) {
+				fprintf(stderr, "blobcast-view: --size takes WxH, "
+						"each 1..%u, not \"%s\"\n",
+					BC_PROTO_MAX_DIM, val);
+				return EXIT_USAGE;
+			}
+		} else if (strcmp(k, "--quality") == 0) {
+			if (!parse_u32(val, 1, BC_PROTO_MAX_QUALITY, &v)) {
+				fprintf(stderr, "blobcast-view: --quality is 1..%u\n",
+					BC_PROTO_MAX_QUALITY);
+				return EXIT_USAGE;
+			}
+			o->quality = (uint8_t)v;
+		} else if (strcmp(k, "--downscale") == 0) {
+			if (!parse_u32(val, 1, BC_PROTO_MAX_DOWNSCALE, &v)) {
+				fprintf(stderr, "blobcast-view: --downscale is "
+						"1..%u\n", BC_PROTO_MAX_DOWNSCALE);
+				return EXIT_USAGE;
+			}
+			o->downscale = (uint8_t)v;
+		} else if (strcmp(k, "--frames") == 0) {
+			if (!parse_u32(val, 1, 1000000, &o->frames)) {
+				fprintf(stderr, "blobcast-view: --frames is "
+						"1..1000000\n");
+				return EXIT_USAGE;
+			}
+		} else if (strcmp(k, "--turn") == 0) {
+			char *end;
+			double d = strtod(val, &end);
+			if (*end || !(fabs(d) <= 90.0)) {
+				fprintf(stderr, "blobcast-view: --turn is -90..90 "
+						"degrees\n");
+				return EXIT_USAGE;
+			}
+			o->turn_deg = (float)d;
+		} else {
+			fprintf(stderr, "blobcast-view: unknown option %s (see "
+					"--help)\n", k);
+			return EXIT_USAGE;
+		}
+		if (takes) {
+			i++;
+		}
+	}
+	if (o->dump_frame && !o->screenshot) {
+		fprintf(stderr, "blobcast-view: --dump-frame needs "
+				"--screenshot\n");
+		return EXIT_USAGE;
+	}
+	if (o->screenshot && !bc_image_ext_supports(o->screenshot, BC_IMAGE_U8)) {
+		fprintf(stderr, "blobcast-view: cannot write images named %s\n",
+			o->screenshot);
+		return EXIT_USAGE;
+	}
+	return 0;
+}
+
+/* ---- the socket watcher ---------------------------------------------------- */
+
+static void *watch_main(void *arg)
+{
+	struct bc_viewer_app *a = arg;
+	bool armed = true;
+	for (;;) {
+		struct pollfd p[2] = {
+			{.fd = a->wake[0], .events = POLLIN},
+			{.fd = bc_client_fd(a->c), .events = armed ? POLLIN : 0},
+		};
+		char b;
+		if (poll(p, 2, -1) < 0) {
+			if (errno == EINTR) {
+				continue;
+			}
+			return NULL;
+		}
+		if (p[0].revents) {
+			if (read(a->wake[0], &b, 1) != 1 || b == 'q') {
+				return NULL;
+			}
+			armed = true;
+			continue;
+		}
+		if (armed && p[1].revents) {
+			/* One wake-up per drain: the loop re-arms us once
+			 * it has read what is there. */
+			armed = false;
+			atomic_store(&a->fired, 1);
+			glfwPostEmptyEvent();
+		}
+	}
+}
+
+static int watch_start(struct bc_viewer_app *a)
+{
+	if (pipe(a->wake) != 0) {
+		return BC_EIO;
+	}
+	atomic_store(&a->fired, 0);
+	if (pthread_create(&a->watcher, NULL, watch_main, a) != 0) {
+		close(a->wake[0]);
+		close(a->wake[1]);
+		return BC_EIO;
+	}
+	a->watching = true;
+	return 0;
+}
+
+static void watch_rearm(struct bc_viewer_app *a)
+{
+	if (a->watching && atomic_exchange(&a->fired, 0)) {
+		ssize_t n = write(a->wake[1], "a", 1);
+		(void)n;
+	}
+}
+
+static void watch_stop(struct bc_viewer_app *a)
+{
+	ssize_t n;
+	if (!a->watching) {
+		return;
+	}
+	n = write(a->wake[1], "q", 1);
+	(void)n;
+	pthread_join(a->watcher, NULL);
+	close(a->wake[0]);
+	close(a->wake[1]);
+	a->watching = false;
+}
+
+/* ---- drawing --------------------------------------------------------------- */
+
+static const char *role_name(enum bc_proto_role r)
+{
+	return r == BC_PROTO_ROLE_VIEWER ? "viewer" : "editor";
+}
+
+static void fmt_latency(const struct bc_viewer_meter *m, char *out, size_t n)
+{
+	double avg = bc_viewer_meter_latency_avg(m);
+	if (avg < 0.0) {
+		snprintf(out, n, "-");
+	} else {
+		snprintf(out, n, "%.0f ms (avg %.0f)", m->last_latency, avg);
+	}
+}
+
+/* What the selection is, for the overlay's third line. */
+static void fmt_selection(struct bc_viewer_app *a, char *out, size_t n)
+{
+	const struct bc_tree *t = bc_client_scene(a->c, NULL);
+	struct bc_prim_data p;
+	struct bc_op_data op;
+	const struct bc_prim_info *info;
+	uint32_t parent;
+	int k, len;
+	if (!a->selected || !t || !bc_tree_get(t, a->selected, &p, NULL) ||
+	    !(info = bc_prim_info(p.kind))) {
+		snprintf(out, n, "%s - click a shape to select it",
+			 role_name(bc_client_info(a->c)->role));
+		return;
+	}
+	len = snprintf(out, n, "#%u %s", a->selected, info->name);
+	if ((k = bc_viewer_size_param(p.kind)) >= 0 && len >= 0 &&
+	    (size_t)len < n) {
+		len += snprintf(out + len, n - (size_t)len, " %s %.3g",
+				info->params[k].name,
+				(double)p.params[info->params[k].offset]);
+	}
+	parent = bc_tree_parent(t, a->selected);
+	if (parent && bc_tree_get(t, parent, NULL, &op) && len >= 0 &&
+	    (size_t)len < n) {
+		if (bc_op_is_smooth(op.kind)) {
+			snprintf(out + len, n - (size_t)len, " in %s blend %.3g",
+				 bc_op_name(op.kind), (double)op.blend);
+		} else {
+			snprintf(out + len, n - (size_t)len, " in %s",
+				 bc_op_name(op.kind));
+		}
+	}
+}
+
+static void draw_overlay(struct bc_viewer_app *a, uint32_t fw, uint32_t fh,
+			 double now)
+{
+	char text[800], lat[64], sel[200];
+	const float pad = 6.0f;
+	const float panel_rgba[4] = {0.0f, 0.0f, 0.0f, 0.6f};
+	const float text_rgba[4] = {0.95f, 0.95f, 0.9f, 1.0f};
+	float scale = fw >= 900 ? 2.0f : 1.0f, w, h, panel[12];
+	size_t nf;
+	int lines = 3;
+	(void)fh;
+	fmt_latency(&a->meter, lat, sizeof(lat));
+	fmt_selection(a, sel, sizeof(sel));
+	snprintf(text, sizeof(text),
+		 "%.0f fps  edit>frame %s  %.1f kB/frame\n"
+		 "frame %u %s %s %ux%u %u rect%s order %llu\n%s",
+		 bc_viewer_meter_fps(&a->meter, now), lat,
+		 bc_viewer_meter_kb(&a->meter), a->last.frame_no,
+		 (a->last.flags & BC_PROTO_FLAG_STILL) ? "still" : "interactive",
+		 a->last.encoding == BC_PROTO_ENC_PNG ? "png"
+		 : a->last.encoding == BC_PROTO_ENC_RAW ? "raw" : "jpeg",
+		 a->last.image_width, a->last.image_height, a->last.nrects,
+		 a->last.nrects == 1 ? "" : "s",
+		 (unsigned long long)a->last.order, sel);
+	if (a->status[0] &&
+	    (a->offline || now - a->status_at < BC_VIEWER_STATUS_MS)) {
+		size_t len = strlen(text);
+		snprintf(text + len, sizeof(text) - len, "\n%s", a->status);
+		lines++;
+	}
+	w = bc_viewer_text_width(text, scale) + 2.0f * pad;
+	h = (float)lines * BC_VIEWER_LINE_ADVANCE * scale + 2.0f * pad -
+	    2.0f * scale;
+	{
+		const float q[12] = {0.0f, 0.0f, w, 0.0f, w, h,
+				     0.0f, 0.0f, w, h, 0.0f, h};
+		memcpy(panel, q, sizeof(panel));
+	}
+	bc_viewer_gl_draw(&a->gl, GL_TRIANGLES, panel, 6, panel_rgba);
+	nf = bc_viewer_text_tris(text, pad, pad, scale, a->text,
+				 BC_VIEWER_TEXT_FLOATS);
+	if (nf > BC_VIEWER_TEXT_FLOATS) {
+		nf = BC_VIEWER_TEXT_FLOATS;
+	}
+	bc_viewer_gl_draw(&a->gl, GL_TRIANGLES, a->text, nf / 2u, text_rgba);
+}
+
+/* Outlines the selected primitive's bounding box, projected with our
+ * camera (the one the picture was rendered for, or about to be). */
+static void draw_highlight(struct bc_viewer_app *a, uint32_t fw, uint32_t fh)
+{
+	const struct bc_tree *t = bc_client_scene(a->c, NULL);
+	const float dark[4] = {0.0f, 0.0f, 0.0f, 0.7f};
+	const float bright[4] = {0.95f, 0.72f, 0.29f, 1.0f};
+	struct bc_prim_data p;
+	float corners[8][3], px[8][2], lines[48], shadow[48];
+	if (!a->selected || !t || !a->view_w ||
+	    !bc_tree_get(t, a->selected, &p, NULL) ||
+	    p.kind == BC_PRIM_INVALID) {
+		return;
+	}
+	bc_viewer_box_corners(&p, corners);
+	for (int i = 0; i < 8; i++) {
+		float v[3];
+		if (!bc_viewer_project(&a->cam, a->view_w, a->view_h, corners[i],
+				       v)) {
+			return;
+		}
+		px[i][0] = v[0] * (float)fw / (float)a->view_w;
+		px[i][1] = v[1] * (float)fh / (float)a->view_h;
+	}
+	for (int e = 0; e < 12; e++) {
+		for (int j = 0; j < 2; j++) {
+			int c = bc_viewer_box_edges[e][j];
+			lines[e * 4 + j * 2] = px[c][0];
+			lines[e * 4 + j * 2 + 1] = px[c][1];
+			shadow[e * 4 + j * 2] = px[c][0] + 1.0f;
+			shadow[e * 4 + j * 2 + 1] = px[c][1] + 1.0f;
+		}
+	}
+	bc_viewer_gl_draw(&a->gl, GL_LINES, shadow, 24, dark);
+	bc_viewer_gl_draw(&a->gl, GL_LINES, lines, 24, bright);
+}
+
+/* Writes the back buffer (before the swap) to path. */
+static int save_window(struct bc_viewer_app *a, const char *path,
+		       uint32_t fw, uint32_t fh)
+{
+	struct bc_errinfo ei = {0};
+	uint8_t *px = bc_malloc((size_t)fw * fh * 4u);
+	int rc;
+	if (!px) {
+		bc_viewer_status(a, "screenshot: out of memory");
+		return BC_ENOMEM;
+	}
+	if (!(rc = bc_viewer_gl_read(&a->gl, fw, fh, px, &ei))) {
+		rc = bc_image_write_rgba8(path, fw, fh, px, &ei);
+	}
+	bc_free(px);
+	if (rc) {
+		bc_viewer_status(a, "screenshot not saved: %s", ei.msg);
+		fprintf(stderr, "blobcast-view: %s: %s\n", path, ei.msg);
+		return rc;
+	}
+	bc_viewer_status(a, "saved %s (%ux%u)", path, fw, fh);
+	if (a->o.verbose) {
+		printf("screenshot %s %ux%u\n", path, fw, fh);
+		fflush(stdout);
+	}
+	return 0;
+}
+
+/* The picture as received (the composite, or the last downscaled image),
+ * for tests comparing it with the window. */
+static int dump_frame(struct bc_viewer_app *a, const char *path)
+{
+	struct bc_errinfo ei = {0};
+	const struct bc_viewer_frames *f = &a->frames;
+	int rc;
+	if (f->showing_small) {
+		rc = bc_image_write_rgba8(path, f->small.width, f->small.height,
+					  f->small.rgba, &ei);
+	} else if (f->comp) {
+		rc = bc_image_write_rgba8(path, f->width, f->height, f->comp,
+					  &ei);
+	} else {
+		rc = bc_errinfo_set(&ei, BC_ESTATE, "no frame yet");
+	}
+	if (rc) {
+		fprintf(stderr, "blobcast-view: %s: %s\n", path, ei.msg);
+	}
+	return rc;
+}
+
+static void draw(struct bc_viewer_app *a, double now)
+{
+	int fwi = 0, fhi = 0;
+	uint32_t fw, fh;
+	bool shot_done = a->o.screenshot && a->nframes >= a->o.frames;
+	glfwGetFramebufferSize(a->win, &fwi, &fhi);
+	if (fwi <= 0 || fhi <= 0) {
+		return;
+	}
+	fw = (uint32_t)fwi;
+	fh = (uint32_t)fhi;
+	bc_viewer_gl_begin(&a->gl, fw, fh);
+	if (a->frames.showing_small) {
+		bc_viewer_gl_image(&a->gl, BC_VIEWER_TEX_SMALL, 0.0f, 0.0f,
+				   (float)fw, (float)fh);
+	} else if (a->frames.have_full) {
+		bc_viewer_gl_image(&a->gl, BC_VIEWER_TEX_FULL, 0.0f, 0.0f,
+				   (float)fw, (float)fh);
+	}
+	draw_highlight(a, fw, fh);
+	if (a->o.overlay) {
+		draw_overlay(a, fw, fh, now);
+	}
+	if (shot_done) {
+		a->exit_code = save_window(a, a->o.screenshot, fw, fh) ||
+					       (a->o.dump_frame &&
+						dump_frame(a, a->o.dump_frame))
+				       ? EXIT_FAIL
+				       : 0;
+		a->quit = true;
+	} else if (a->screenshot_now) {
+		char path[64];
+		a->screenshot_now = false;
+		snprintf(path, sizeof(path), "blobcast-view-%03u.png",
+			 ++a->shots);
+		save_window(a, path, fw, fh);
+	}
+	glfwSwapBuffers(a->win);
+	a->redraw = false;
+	if (a->settle) {
+		bc_viewer_edits_frame(&a->edits, a->settle_order,
+				      bc_viewer_now_ms(), &a->meter);
+		a->settle = false;
+	}
+}
+
+static void update_title(struct bc_viewer_app *a, double now)
+{
+	const struct bc_client_info *info = bc_client_info(a->c);
+	char title[300], lat[64];
+	fmt_latency(&a->meter, lat, sizeof(lat));
+	snprintf(title, sizeof(title),
+		 "blobcast-view: %s (%s, %u member%s) - %.0f fps, edit>frame "
+		 "%s, %.1f kB/frame",
+		 info->session, role_name(info->role), info->nmembers,
+		 info->nmembers == 1 ? "" : "s",
+		 bc_viewer_meter_fps(&a->meter, now), lat,
+		 bc_viewer_meter_kb(&a->meter));
+	glfwSetWindowTitle(a->win, title);
+	a->stats_at = now;
+}
+
+/* --frames N: the daemon renders on change only; turning the camera after
+ * each frame gives it one. */
+static void maybe_turn(struct bc_viewer_app *a)
+{
+	if (!a->o.screenshot || a->nframes == 0 ||
+	    a->nframes >= a->o.frames || a->turn_pending) {
+		return;
+	}
+	bc_viewer_orbit(&a->cam,
+			a->o.turn_deg * 3.14159265f / 180.0f /
+				BC_VIEWER_ORBIT_PER_PX,
+			0.0f);
+	bc_viewer_camera_changed(a, false);
+	a->turn_pending = true;
+}
+
+static void run(struct bc_viewer_app *a)
+{
+	bool offline = false;
+	while (!a->quit && !glfwWindowShouldClose(a->win)) {
+		double now, due, wait;
+		int more = 0;
+		if (!offline) {
+			more = bc_viewer_pump(a);
+			if (more < 0) {
+				fprintf(stderr, "blobcast-view: %s\n", a->status);
+				offline = a->offline = true;
+				more = 0;
+				if (a->o.screenshot) {
+					a->exit_code = EXIT_FAIL;
+					break;
+				}
+				/* Keep the last picture and say why it stopped;
+				 * the socket is no longer watched. */
+				watch_stop(a);
+			}
+		}
+		now = bc_viewer_now_ms();
+		if (!offline) {
+			bc_viewer_drag_step(a, false);
+			maybe_turn(a);
+			due = bc_viewer_send_due(a, now);
+		} else {
+			due = -1.0;
+		}
+		if (now - a->stats_at >= BC_VIEWER_STATS_EVERY_MS) {
+			update_title(a, now);
+			a->redraw = a->redraw || a->o.overlay;
+		}
+		if (a->redraw) {
+			draw(a, now);
+		}
+		if (a->quit) {
+			break;
+		}
+		if (!offline) {
+			watch_rearm(a);
+		}
+		if (more) {
+			glfwPollEvents();
+			continue;
+		}
+		wait = BC_VIEWER_STATS_EVERY_MS - (bc_viewer_now_ms() - a->stats_at);
+		if (due >= 0.0 && due < wait) {
+			wait = due;
+		}
+		if (a->status[0] && !a->offline) {
+			double left = a->status_at + BC_VIEWER_STATUS_MS -
+				      bc_viewer_now_ms();
+			if (left > 0.0 && left < wait) {
+				wait = left;
+			}
+		}
+		glfwWaitEventsTimeout(wait > 1.0 ? wait / 1e3 : 0.001);
+	}
+}
+
+static void on_glfw_error(int code, const char *text)
+{
+	bc_log(BC_LOG_WARN, "GLFW error 0x%x: %s", (unsigned)code, text);
+}
+
+static GLFWwindow *open_window(const struct bc_viewer_opts *o, char *title)
+{
+	GLFWwindow *w;
+	glfwDefaultWindowHints();
+	glfwWindowHint(GLFW_DOUBLEBUFFER, GLFW_TRUE);
+	if (o->gles) {
+		glfwWindowHint(GLFW_CLIENT_API, GLFW_OPENGL_ES_API);
+		glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 2);
+		glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 0);
+	} else {
+		/* 2.1 and no profile: what old drivers offer; newer ones
+		 * give a compatibility context. */
+		glfwWindowHint(GLFW_CLIENT_API, GLFW_OPENGL_API);
+		glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 2);
+		glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 1);
+	}
+	w = glfwCreateWindow((int)o->width, (int)o->height, title, NULL, NULL);
+	if (!w && o->gles) {
+		/* Some X servers' GLX cannot make ES contexts; EGL can. */
+		glfwWindowHint(GLFW_CONTEXT_CREATION_API, GLFW_EGL_CONTEXT_API);
+		w = glfwCreateWindow((int)o->width, (int)o->height, title, NULL,
+				     NULL);
+	}
+	return w;
+}
+
+int main(int argc, char **argv)
+{
+	static struct bc_viewer_app app;
+	struct bc_viewer_app *a = &app;
+	struct bc_errinfo ei = {0};
+	const struct bc_tree *scene;
+	char title[128];
+	bool glfw_up = false;
+	int rc;
+	if ((rc = parse_args(argc, argv, &a->o))) {
+		return rc < 0 ? 0 : rc;
+	}
+	bc_log_init(a->o.verbose ? BC_LOG_INFO : BC_LOG_WARN);
+	bc_viewer_frames_init(&a->frames);
+	bc_viewer_meter_init(&a->meter);
+	bc_viewer_edits_init(&a->edits);
+	a->exit_code = EXIT_FAIL;
+	if (!(a->text = bc_malloc(BC_VIEWER_TEXT_FLOATS * sizeof(float)))) {
+		fprintf(stderr, "blobcast-view: out of memory\n");
+		goto cleanup;
+	}
+
+	if ((rc = bc_client_connect(&a->c,
+				    &(struct bc_client_opts){
+					    .addr = a->o.server,
+					    .name = a->o.name,
+					    .token = a->o.token,
+				    },
+				    &ei)) ||
+	    (rc = bc_client_join(a->c, a->o.session, a->o.role,
+				 a->o.role == BC_PROTO_ROLE_EDITOR
+					 ? BC_CLIENT_JOIN_ANY
+					 : BC_CLIENT_JOIN_EXISTING,
+				 &ei))) {
+		fprintf(stderr, "blobcast-view: %s: %s\n",
+			a->o.server ? a->o.server : "127.0.0.1:7878", ei.msg);
+		goto cleanup;
+	}
+	if ((scene = bc_client_scene(a->c, &a->cam)) == NULL) {
+		bc_camera_default(&a->cam);
+	}
+	a->scene_cam = a->cam;
+
+	glfwSetErrorCallback(on_glfw_error);
+	if (!glfwInit()) {
+		fprintf(stderr, "blobcast-view: no window system (is DISPLAY "
+				"set? headless: xvfb-run blobcast-view ...)\n");
+		goto cleanup;
+	}
+	glfw_up = true;
+	snprintf(title, sizeof(title), "blobcast-view: %s", a->o.session);
+	if (!(a->win = open_window(&a->o, title))) {
+		fprintf(stderr, "blobcast-view: no %s context for a window\n",
+			a->o.gles ? "OpenGL ES 2.0" : "OpenGL 2.1");
+		goto cleanup;
+	}
+	glfwMakeContextCurrent(a->win);
+	glfwSwapInterval(1);
+	if (bc_viewer_gl_init(&a->gl, a->o.gles, &ei)) {
+		fprintf(stderr, "blobcast-view: %s\n", ei.msg);
+		goto cleanup;
+	}
+	a->gl_ready = true;
+	bc_log(BC_LOG_INFO, "GL: %s, %s", a->gl.version, a->gl.renderer);
+	if (a->o.verbose) {
+		printf("gl %s | %s\n", a->gl.version, a->gl.renderer);
+		fflush(stdout);
+	}
+	bc_viewer_input_install(a);
+	if (bc_viewer_send_view(a) || watch_start(a)) {
+		fprintf(stderr, "blobcast-view: cannot start: %s\n", a->status);
+		goto cleanup;
+	}
+	a->exit_code = 0;
+	a->redraw = true;
+	run(a);
+cleanup:
+	watch_stop(a);
+	if (a->gl_ready) {
+		bc_viewer_gl_finish(&a->gl);
+	}
+	if (a->win) {
+		glfwDestroyWindow(a->win);
+	}
+	if (glfw_up) {
+		glfwTerminate();
+	}
+	bc_viewer_frames_finish(&a->frames);
+	bc_client_destroy(a->c);
+	bc_free(a->text);
+	return a->exit_code;
+}

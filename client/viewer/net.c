@@ -1,0 +1,406 @@
+/*
+ * blobcast-view's side of the conversation: every message from the server
+ * (frames into textures, PICK answers into the drag, EDIT_APPLIED into the
+ * edit queue and latency meter, SCENE_STATE into the camera) and every
+ * message to it (VIEW, CAMERA at a bounded rate, EDITs through the queue,
+ * PICK, SNAPSHOT). Nothing here waits for the network: receiving uses
+ * bc_client_recv() with a zero timeout, sending writes one small message.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "app.h"
+#include "blobcast/image.h"
+#include "blobcast/log.h"
+
+/* ---- sending ------------------------------------------------------------- */
+
+int bc_viewer_send_view(struct bc_viewer_app *a)
+{
+	struct bc_errinfo ei = {0};
+	const struct bc_client_info *info = bc_client_info(a->c);
+	int fw = 0, fh = 0, rc;
+	uint32_t w, h, max = info->max_dim ? info->max_dim : BC_PROTO_MAX_DIM;
+	glfwGetFramebufferSize(a->win, &fw, &fh);
+	if (a->gl.max_tex > 0 && (uint32_t)a->gl.max_tex < max) {
+		max = (uint32_t)a->gl.max_tex;
+	}
+	/* A minimized window has no size; keep the last view. */
+	if (fw <= 0 || fh <= 0) {
+		return 0;
+	}
+	w = (uint32_t)fw < max ? (uint32_t)fw : max;
+	h = (uint32_t)fh < max ? (uint32_t)fh : max;
+	rc = bc_client_view(
+		a->c,
+		&(struct bc_msg_view){
+			.width = (uint16_t)w,
+			.height = (uint16_t)h,
+			.encoding = a->o.encoding,
+			/* Interactive frames trade quality for speed. */
+			.quality_interactive =
+				(uint8_t)(a->o.quality < 70 ? a->o.quality : 70),
+			.quality_still = a->o.quality,
+			.downscale = a->o.downscale,
+		},
+		NULL, &ei);
+	if (rc) {
+		bc_viewer_status(a, "VIEW not sent: %s", ei.msg);
+		return rc;
+	}
+	a->view_w = w;
+	a->view_h = h;
+	if (a->o.verbose) {
+		printf("view %ux%u\n", w, h);
+		fflush(stdout);
+	}
+	return 0;
+}
+
+void bc_viewer_camera_changed(struct bc_viewer_app *a, bool interacting)
+{
+	a->cam_dirty = true;
+	a->cam_interacting = interacting;
+	a->redraw = true;
+}
+
+static void send_camera(struct bc_viewer_app *a, double now)
+{
+	struct bc_errinfo ei = {0};
+	bc_viewer_cam_clamp(&a->cam);
+	if (bc_client_camera(a->c, &a->cam, a->cam_interacting, NULL, &ei)) {
+		bc_viewer_status(a, "CAMERA not sent: %s", ei.msg);
+	}
+	a->cam_dirty = false;
+	a->cam_sent_at = now;
+}
+
+static void flush_edits(struct bc_viewer_app *a)
+{
+	while (bc_viewer_edits_ready(&a->edits)) {
+		const struct bc_viewer_edit *e = &a->edits.pending;
+		struct bc_errinfo ei = {0};
+		uint32_t seq = 0;
+		if (bc_client_edit_set(a->c, e->node, e->fields, e->nfields,
+				       e->interacting, &seq, &ei)) {
+			bc_viewer_status(a, "edit not sent: %s", ei.msg);
+			a->edits.has_pending = false;
+			return;
+		}
+		bc_viewer_edits_sent(&a->edits, seq, bc_viewer_now_ms());
+	}
+}
+
+void bc_viewer_edit(struct bc_viewer_app *a, const struct bc_viewer_edit *e)
+{
+	bc_viewer_edits_queue(&a->edits, e);
+	flush_edits(a);
+}
+
+uint32_t bc_viewer_pick(struct bc_viewer_app *a, double x, double y)
+{
+	struct bc_msg m = {.type = BC_MSG_PICK};
+	uint32_t seq = 0;
+	float vx, vy;
+	if (!a->view_w) {
+		return 0;
+	}
+	bc_viewer_to_view(a, x, y, &vx, &vy);
+	m.pick.x = (uint16_t)fminf(fmaxf(vx, 0.0f), (float)(a->view_w - 1));
+	m.pick.y = (uint16_t)fminf(fmaxf(vy, 0.0f), (float)(a->view_h - 1));
+	if (bc_client_send(a->c, &m, &seq)) {
+		return 0;
+	}
+	return seq;
+}
+
+void bc_viewer_request_snapshot(struct bc_viewer_app *a)
+{
+	struct bc_msg m = {.type = BC_MSG_SNAPSHOT};
+	if (a->snapshot_seq) {
+		bc_viewer_status(a, "a snapshot is on its way");
+		return;
+	}
+	m.snapshot.encoding = BC_PROTO_ENC_PNG;
+	if (bc_client_send(a->c, &m, &a->snapshot_seq)) {
+		a->snapshot_seq = 0;
+		bc_viewer_status(a, "SNAPSHOT not sent");
+		return;
+	}
+	bc_viewer_status(a, "snapshot requested");
+}
+
+double bc_viewer_send_due(struct bc_viewer_app *a, double now)
+{
+	double next = -1.0;
+#define DUE(t)                                                                 \
+	do {                                                                   \
+		double in_ = (t) - now;                                        \
+		if (next < 0.0 || in_ < next) {                                \
+			next = in_ > 0.0 ? in_ : 0.0;                          \
+		}                                                              \
+	} while (0)
+	if (a->view_due > 0.0) {
+		if (now >= a->view_due) {
+			a->view_due = 0.0;
+			bc_viewer_send_view(a);
+		} else {
+			DUE(a->view_due);
+		}
+	}
+	if (a->cam_final_at > 0.0) {
+		if (now >= a->cam_final_at) {
+			a->cam_final_at = 0.0;
+			bc_viewer_camera_changed(a, false);
+		} else {
+			DUE(a->cam_final_at);
+		}
+	}
+	if (a->cam_dirty) {
+		if (!a->cam_interacting ||
+		    now - a->cam_sent_at >= BC_VIEWER_CAMERA_EVERY_MS) {
+			send_camera(a, now);
+		} else {
+			DUE(a->cam_sent_at + BC_VIEWER_CAMERA_EVERY_MS);
+		}
+	}
+	if (a->wheel.what != BC_VIEWER_WHEEL_NONE) {
+		if (now >= a->wheel.end_at) {
+			struct bc_viewer_edit e = a->wheel.edit;
+			e.interacting = false;
+			a->wheel.what = BC_VIEWER_WHEEL_NONE;
+			bc_viewer_edit(a, &e);
+		} else {
+			DUE(a->wheel.end_at);
+		}
+	}
+	flush_edits(a);
+#undef DUE
+	return next;
+}
+
+/* ---- receiving ----------------------------------------------------------- */
+
+/* A name for a snapshot file that does not exist yet. */
+static void snapshot_name(struct bc_viewer_app *a, char *out, size_t n)
+{
+	for (unsigned k = 1; k < 100000; k++) {
+		snprintf(out, n, "%s/blobcast-snapshot-%03u.png",
+			 a->o.snapshot_dir, k);
+		if (access(out, F_OK) != 0) {
+			return;
+		}
+	}
+}
+
+static void got_snapshot(struct bc_viewer_app *a, const struct bc_msg *m)
+{
+	struct bc_client_image img;
+	struct bc_errinfo ei = {0};
+	char path[4096];
+	bc_client_image_init(&img);
+	a->snapshot_seq = 0;
+	if (bc_client_image_apply(&img, m, &ei)) {
+		bc_viewer_status(a, "snapshot does not decode: %s", ei.msg);
+		goto cleanup;
+	}
+	snapshot_name(a, path, sizeof(path));
+	/* Writing a PNG takes tens of milliseconds: one stutter on a key
+	 * press is acceptable for a file the user asked for. */
+	if (bc_image_write_rgba8(path, img.width, img.height, img.rgba, &ei)) {
+		bc_viewer_status(a, "snapshot not saved: %s", ei.msg);
+		goto cleanup;
+	}
+	bc_viewer_status(a, "saved %s (%ux%u, lossless)", path, img.width,
+			 img.height);
+	if (a->o.verbose) {
+		printf("snapshot %s %ux%u\n", path, img.width, img.height);
+		fflush(stdout);
+	}
+cleanup:
+	bc_client_image_finish(&img);
+}
+
+static const char *enc_name(enum bc_proto_encoding e)
+{
+	switch (e) {
+	case BC_PROTO_ENC_JPEG:
+		return "jpeg";
+	case BC_PROTO_ENC_PNG:
+		return "png";
+	case BC_PROTO_ENC_RAW:
+		return "raw";
+	default:
+		return "?";
+	}
+}
+
+static void got_frame(struct bc_viewer_app *a, const struct bc_msg *m)
+{
+	const struct bc_msg_frame *fr = &m->frame;
+	struct bc_viewer_update up;
+	struct bc_errinfo ei = {0};
+	const uint8_t *pixels;
+	uint32_t w, h;
+	if (m->flags & BC_PROTO_FLAG_SNAPSHOT) {
+		if (m->seq == a->snapshot_seq) {
+			got_snapshot(a, m);
+		}
+		return;
+	}
+	if (bc_viewer_frames_apply(&a->frames, m, &up, &ei)) {
+		bc_viewer_status(a, "frame %u: %s", fr->frame_no, ei.msg);
+		return;
+	}
+	if (up.tex == BC_VIEWER_TEX_FULL) {
+		pixels = a->frames.comp;
+		w = a->frames.width;
+		h = a->frames.height;
+	} else {
+		pixels = a->frames.small.rgba;
+		w = a->frames.small.width;
+		h = a->frames.small.height;
+	}
+	if (bc_viewer_gl_upload(&a->gl, up.tex, pixels, w, h, &up, &ei)) {
+		bc_viewer_status(a, "frame %u: %s", fr->frame_no, ei.msg);
+	}
+	if (up.want_refresh) {
+		/* Repeating the VIEW makes the server send a whole still. */
+		bc_viewer_send_view(a);
+	}
+	a->nframes++;
+	bc_viewer_meter_frame(&a->meter, bc_client_info(a->c)->last_msg_bytes,
+			      bc_viewer_now_ms());
+	a->last.frame_no = fr->frame_no;
+	a->last.width = fr->width;
+	a->last.height = fr->height;
+	a->last.image_width = fr->image_width;
+	a->last.image_height = fr->image_height;
+	a->last.nrects = fr->nrects;
+	a->last.order = fr->order;
+	a->last.flags = m->flags;
+	a->last.encoding = fr->encoding;
+	if (!a->settle || fr->order > a->settle_order) {
+		a->settle_order = fr->order;
+	}
+	a->settle = true;
+	a->redraw = true;
+	a->turn_pending = false;
+	if (a->o.verbose) {
+		printf("frame %llu no=%u order=%llu %s %s image=%ux%u rects=%u "
+		       "bytes=%u%s\n",
+		       (unsigned long long)a->nframes, fr->frame_no,
+		       (unsigned long long)fr->order,
+		       (m->flags & BC_PROTO_FLAG_STILL) ? "still" : "interactive",
+		       enc_name(fr->encoding), fr->image_width,
+		       fr->image_height, fr->nrects,
+		       bc_client_info(a->c)->last_msg_bytes,
+		       up.want_refresh ? " refresh" : "");
+		fflush(stdout);
+	}
+}
+
+static void got_scene(struct bc_viewer_app *a, const struct bc_msg *m)
+{
+	struct bc_proto_scene_info si;
+	struct bc_camera cam;
+	const struct bc_tree *t = bc_client_scene(a->c, &cam);
+	/* A scene that carries a camera resets every member's camera on the
+	 * server: follow it. */
+	if (t && bc_proto_scene_scan(m->scene_state.scene.ptr,
+				     m->scene_state.scene.len, &si, NULL) == 0 &&
+	    si.has_camera) {
+		a->cam = cam;
+		a->scene_cam = cam;
+	}
+	if (a->selected && (!t || !bc_tree_get(t, a->selected, NULL, NULL))) {
+		a->selected = 0;
+	}
+	a->redraw = true;
+}
+
+static void got_applied(struct bc_viewer_app *a, const struct bc_msg *m)
+{
+	const struct bc_msg_edit_applied *e = &m->edit_applied;
+	const struct bc_tree *t = bc_client_scene(a->c, NULL);
+	if (e->author == bc_client_info(a->c)->member_id) {
+		if (bc_viewer_edits_applied(&a->edits, e->author_seq, e->order)) {
+			flush_edits(a);
+		}
+	}
+	if (a->selected && t && !bc_tree_get(t, a->selected, NULL, NULL)) {
+		a->selected = 0;
+	}
+	if (a->o.verbose) {
+		printf("applied order=%llu author=%u seq=%u ops=%u\n",
+		       (unsigned long long)e->order, e->author, e->author_seq,
+		       e->nops);
+		fflush(stdout);
+	}
+	a->redraw = true;
+}
+
+static void got_error(struct bc_viewer_app *a, const struct bc_msg *m)
+{
+	bc_viewer_status(a, "server: %.*s (%s)", (int)m->error.text.len,
+			 m->error.text.ptr, bc_err_name(-(int)m->error.code));
+	if (m->seq == 0) {
+		return;
+	}
+	if (bc_viewer_edits_refused(&a->edits, m->seq)) {
+		flush_edits(a);
+	}
+	if (m->seq == a->snapshot_seq) {
+		a->snapshot_seq = 0;
+	}
+	if (a->drag.mode == BC_VIEWER_DRAG_PENDING && m->seq == a->drag.pick_seq) {
+		bc_viewer_pick_answer(a, m->seq, 0, NULL);
+	}
+	if (a->turn_pending) {
+		/* A refused camera makes no frame; do not wait for one. */
+		a->turn_pending = false;
+	}
+}
+
+int bc_viewer_pump(struct bc_viewer_app *a)
+{
+	for (int i = 0; i < BC_VIEWER_MSGS_PER_TURN; i++) {
+		struct bc_msg m;
+		struct bc_errinfo ei = {0};
+		int rc = bc_client_recv(a->c, &m, 0);
+		if (rc == 0) {
+			return 0;
+		}
+		if (rc < 0) {
+			bc_client_error(a->c, &ei);
+			bc_viewer_status(a, "connection lost: %s", ei.msg);
+			return rc;
+		}
+		switch (m.type) {
+		case BC_MSG_FRAME:
+			got_frame(a, &m);
+			break;
+		case BC_MSG_PICK_RESULT:
+			bc_viewer_pick_answer(a, m.seq, m.pick_result.node,
+					      m.pick_result.position);
+			break;
+		case BC_MSG_EDIT_APPLIED:
+			got_applied(a, &m);
+			break;
+		case BC_MSG_SCENE_STATE:
+			got_scene(a, &m);
+			break;
+		case BC_MSG_SESSION_INFO:
+			a->stats_at = 0.0;
+			break;
+		case BC_MSG_ERROR:
+			got_error(a, &m);
+			break;
+		default:
+			break;
+		}
+	}
+	return 1;
+}

@@ -1,0 +1,246 @@
+/*
+ * blobcast-view's parts that need neither a window nor a GL context, so that
+ * tests can link them alone (library bc_viewer_core):
+ *  - cam.c: the viewer's own camera (orbit, pan, zoom), projection of world
+ *    points to view pixels with the server's conventions, moving a point in
+ *    the view plane, a primitive's bounding box corners, which parameter is
+ *    its "size";
+ *  - meter.c: frames per second, edit -> frame latency and kB per frame;
+ *  - edits.c: the edit queue (at most one INTERACTING edit in flight, the
+ *    newest values replacing any not yet sent) and the matching of edits to
+ *    the frames that show them;
+ *  - frames.c: FRAME messages assembled into what the textures hold: a
+ *    view-size composite updated rectangle by rectangle, and the latest
+ *    downscaled interactive image;
+ *  - font.c: a 5x7 bitmap font turned into triangles.
+ */
+#ifndef BLOBCAST_VIEWER_H
+#define BLOBCAST_VIEWER_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "blobcast/blobtree.h"
+#include "blobcast/client.h"
+#include "blobcast/proto.h"
+
+/* ---- cam.c ------------------------------------------------------------------ */
+
+/* Radians the camera turns per pixel of mouse motion: a drag across a
+ * 800-pixel window turns it about 370 degrees, as in the browser page. */
+#define BC_VIEWER_ORBIT_PER_PX 0.008f
+/* The orbit stops this close to the poles (cosine between the view
+ * direction and up): the server refuses an up parallel to the view. */
+#define BC_VIEWER_ORBIT_MAX_COS 0.995f
+/* Zoom keeps the eye between these distances from the target. */
+#define BC_VIEWER_ZOOM_MIN 0.05f
+#define BC_VIEWER_ZOOM_MAX 1.0e5f
+
+/* Turns the eye about the target: dx pixels about the camera's up vector,
+ * dy about its right vector, never past the poles. */
+void bc_viewer_orbit(struct bc_camera *cam, float dx, float dy);
+/* Moves eye and target together by (dx, dy) view pixels in the view plane
+ * through the target, for a view height pixels tall. */
+void bc_viewer_pan(struct bc_camera *cam, float dx, float dy, uint32_t height);
+/* Multiplies the eye's distance to the target by exp(steps * 0.1): one
+ * wheel notch is 10 %. */
+void bc_viewer_zoom(struct bc_camera *cam, float steps);
+/* Clamps eye and target to the protocol's coordinate range. */
+void bc_viewer_cam_clamp(struct bc_camera *cam);
+
+/* Projects world point p into a width x height view: out[0], out[1] are
+ * pixel coordinates (row 0 on top, pixel centres at +0.5, as in
+ * bc_view_rays_dir) and out[2] the distance along the view direction.
+ * Returns false for a point at or behind the eye. */
+bool bc_viewer_project(const struct bc_camera *cam, uint32_t width,
+		       uint32_t height, const float p[3], float out[3]);
+/* World units per view pixel at forward distance z. */
+float bc_viewer_pixel_size(const struct bc_camera *cam, float z,
+			   uint32_t height);
+/* Moves origin by (dx, dy) view pixels parallel to the view plane at
+ * forward distance z: the result projects (dx, dy) pixels away. */
+void bc_viewer_move_in_plane(const struct bc_camera *cam, uint32_t height,
+			     const float origin[3], float z, float dx, float dy,
+			     float out[3]);
+
+/* The eight world-space corners of primitive p's bounding box (its local
+ * bound from bc_prim_bound, rotated and translated), corner i having bit 0
+ * for x, bit 1 for y and bit 2 for z. */
+void bc_viewer_box_corners(const struct bc_prim_data *p, float corners[8][3]);
+/* The 12 edges of such a box, as corner index pairs. */
+extern const uint8_t bc_viewer_box_edges[12][2];
+
+/* Which named parameter (bc_prim_info order) is p's size: the first whose
+ * values must be positive, else the first non-negative one. Returns its
+ * index, or -1 when the kind has none. */
+int bc_viewer_size_param(enum bc_prim kind);
+
+/* ---- meter.c ---------------------------------------------------------------- */
+
+/* Frames averaged for kB per frame. */
+#define BC_VIEWER_METER_BYTES 30
+/* Latencies averaged. */
+#define BC_VIEWER_METER_LATENCIES 50
+/* Frame times kept for the rate: one second of 240 Hz is plenty. */
+#define BC_VIEWER_METER_TIMES 256
+
+struct bc_viewer_meter {
+	double frame_at[BC_VIEWER_METER_TIMES]; /* ring of arrival times, ms */
+	uint32_t nframes_at, next_at;
+	uint32_t bytes[BC_VIEWER_METER_BYTES];
+	uint32_t nbytes, next_bytes;
+	double latency[BC_VIEWER_METER_LATENCIES];
+	uint32_t nlatency, next_latency;
+	double last_latency; /* ms, negative before the first */
+	uint64_t frames;     /* frames counted since init */
+};
+
+void bc_viewer_meter_init(struct bc_viewer_meter *m);
+/* A frame of bytes (on the wire, header included) was shown at now_ms. */
+void bc_viewer_meter_frame(struct bc_viewer_meter *m, uint32_t bytes,
+			   double now_ms);
+/* An edit took ms from being sent to being shown. */
+void bc_viewer_meter_latency(struct bc_viewer_meter *m, double ms);
+/* Frames shown in the second before now_ms. */
+double bc_viewer_meter_fps(const struct bc_viewer_meter *m, double now_ms);
+/* Average size of the last frames, in kB (1000 bytes); 0 before any. */
+double bc_viewer_meter_kb(const struct bc_viewer_meter *m);
+/* Average of the last latencies in ms; negative before any. */
+double bc_viewer_meter_latency_avg(const struct bc_viewer_meter *m);
+
+/* ---- edits.c ---------------------------------------------------------------- */
+
+/* Fields one viewer edit sets: a translation, a size, or blend and range. */
+#define BC_VIEWER_EDIT_FIELDS 2
+/* EDITs remembered between sending and EDIT_APPLIED, and applied edits
+ * remembered until a frame shows them. One interacting edit is in flight
+ * at a time, so only final edits queue up; a frame or an answer that never
+ * comes pushes out the oldest. */
+#define BC_VIEWER_EDITS_SENT 64
+
+struct bc_viewer_edit {
+	uint32_t node;
+	uint8_t nfields;
+	struct bc_proto_field fields[BC_VIEWER_EDIT_FIELDS];
+	bool interacting;
+};
+
+struct bc_viewer_edits {
+	bool has_pending;
+	struct bc_viewer_edit pending; /* the newest values not yet sent */
+	uint32_t inflight; /* seq of the interacting EDIT not yet applied */
+	struct {
+		uint32_t seq;
+		double at;
+	} sent[BC_VIEWER_EDITS_SENT];
+	uint32_t nsent;
+	struct {
+		uint64_t order;
+		double at;
+	} shown[BC_VIEWER_EDITS_SENT];
+	uint32_t nshown;
+};
+
+void bc_viewer_edits_init(struct bc_viewer_edits *q);
+/* Makes e the edit to send next, replacing one not yet sent. */
+void bc_viewer_edits_queue(struct bc_viewer_edits *q,
+			   const struct bc_viewer_edit *e);
+/* Whether the pending edit may go now: a final edit always may, an
+ * interacting one when no other interacting edit is in flight. */
+bool bc_viewer_edits_ready(const struct bc_viewer_edits *q);
+/* The pending edit was sent as seq at now_ms. */
+void bc_viewer_edits_sent(struct bc_viewer_edits *q, uint32_t seq,
+			  double now_ms);
+/* This client's EDIT seq was applied with order. Returns true when it was
+ * the one in flight (a pending edit may then go). */
+bool bc_viewer_edits_applied(struct bc_viewer_edits *q, uint32_t seq,
+			     uint64_t order);
+/* The server refused EDIT seq (an ERROR answered it). Returns true when it
+ * was ours. */
+bool bc_viewer_edits_refused(struct bc_viewer_edits *q, uint32_t seq);
+/* A frame reflecting edits up to order was shown at now_ms: every applied
+ * edit it shows is settled, its latency given to m. Returns how many. */
+uint32_t bc_viewer_edits_frame(struct bc_viewer_edits *q, uint64_t order,
+			       double now_ms, struct bc_viewer_meter *m);
+
+/* ---- frames.c --------------------------------------------------------------- */
+
+/* What a frame changed in the textures. Rectangles are those of the FRAME
+ * message (valid as long as it is). */
+enum bc_viewer_tex {
+	BC_VIEWER_TEX_NONE = 0,
+	BC_VIEWER_TEX_FULL,  /* the view-size composite */
+	BC_VIEWER_TEX_SMALL, /* the downscaled interactive image */
+	BC_VIEWER_TEX_COUNT
+};
+
+struct bc_viewer_update {
+	enum bc_viewer_tex tex;
+	bool resized; /* the texture must be (re)created at its new size */
+	bool whole;   /* upload all of it (otherwise rects only) */
+	const struct bc_proto_rect *rects;
+	uint32_t nrects;
+	/* The server sent a partial still on top of interactive frames: the
+	 * parts it did not resend may be stale; ask for a whole still. */
+	bool want_refresh;
+};
+
+struct bc_viewer_frames {
+	struct bc_client_image full;  /* full-size frames, decoded */
+	struct bc_client_image small; /* downscaled frames, decoded */
+	uint8_t *comp;   /* width x height RGBA: what the full texture holds */
+	uint32_t width, height;
+	bool have_full;     /* comp holds a picture */
+	bool comp_stale;    /* a downscaled frame came after comp's picture */
+	bool showing_small; /* the last frame was downscaled */
+	bool last_still;    /* the last frame had the STILL flag */
+};
+
+void bc_viewer_frames_init(struct bc_viewer_frames *f);
+void bc_viewer_frames_finish(struct bc_viewer_frames *f);
+/*
+ * Applies FRAME m (not a snapshot). A full-size frame is decoded and its
+ * rectangles copied into comp; when comp is stale and the frame does not
+ * cover it, the last downscaled image is first scaled up into comp, so that
+ * no pixel older than the newest interactive frame shows. A downscaled
+ * frame replaces the small image. *up says what to upload. Returns 0 or the
+ * error of bc_client_image_apply (the picture is then left as it was, as
+ * far as possible) or BC_ENOMEM, with the reason in ei.
+ */
+int bc_viewer_frames_apply(struct bc_viewer_frames *f, const struct bc_msg *m,
+			   struct bc_viewer_update *up, struct bc_errinfo *ei);
+/* Copies the w x h rectangle at (x, y) of an RGBA image `stride` pixels
+ * wide into dst, rows packed: for glTexSubImage2D, which GLES 2 cannot
+ * give a row length. */
+void bc_viewer_copy_rect(const uint8_t *src, uint32_t stride, uint32_t x,
+			 uint32_t y, uint32_t w, uint32_t h, uint8_t *dst);
+/* Scales src (sw x sh RGBA) to dst (dw x dh RGBA) bilinearly, sampling at
+ * pixel centres as GL's linear filter does. */
+void bc_viewer_upscale(const uint8_t *src, uint32_t sw, uint32_t sh,
+		       uint8_t *dst, uint32_t dw, uint32_t dh);
+
+/* ---- font.c ----------------------------------------------------------------- */
+
+#define BC_VIEWER_GLYPH_W 5
+#define BC_VIEWER_GLYPH_H 7
+/* Advance per character and per line, in font pixels. */
+#define BC_VIEWER_GLYPH_ADVANCE 6
+#define BC_VIEWER_LINE_ADVANCE 9
+
+/* Whether font pixel (col, row) of character ch is lit; characters outside
+ * printable ASCII draw as '?', lower case as upper case. */
+bool bc_viewer_glyph_bit(char ch, int col, int row);
+/*
+ * Appends two triangles (12 floats: x, y pairs) per lit font pixel of text,
+ * drawn at (x, y) (top left, window pixels) with font pixels scale window
+ * pixels wide, into out, which holds cap floats. Returns the number of
+ * floats the whole text needs; when that is more than cap only the first
+ * cap floats are written (call again with enough room).
+ */
+size_t bc_viewer_text_tris(const char *text, float x, float y, float scale,
+			   float *out, size_t cap);
+/* Width in window pixels of the longest line of text at scale. */
+float bc_viewer_text_width(const char *text, float scale);
+
+#endif

@@ -1,0 +1,781 @@
+/*
+ * blobcast-view's windowless parts (bc_viewer_core): the camera and its
+ * projection against blobtree's own ray generator, bounding boxes against
+ * the primitives' fields, the meters, the edit queue's one-in-flight rule
+ * and latency matching, frame assembly (rectangles, downscaled frames, the
+ * stale-base case, errors, allocation failures) and the bitmap font.
+ */
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "blobcast/alloc.h"
+#include "test.h"
+#include "viewer.h"
+
+/* A small deterministic generator (xorshift32), for repeatable cases. */
+static uint32_t rng_state = 2463534242u;
+
+static float frand(float lo, float hi)
+{
+	rng_state ^= rng_state << 13;
+	rng_state ^= rng_state >> 17;
+	rng_state ^= rng_state << 5;
+	return lo + (hi - lo) * (float)(rng_state >> 8) / 16777216.0f;
+}
+
+static float dot3(const float a[3], const float b[3])
+{
+	return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static float dist3(const float a[3], const float b[3])
+{
+	float d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+	return sqrtf(dot3(d, d));
+}
+
+static void random_camera(struct bc_camera *c)
+{
+	do {
+		for (int i = 0; i < 3; i++) {
+			c->eye[i] = frand(-8.0f, 8.0f);
+			c->target[i] = frand(-1.0f, 1.0f);
+		}
+		c->up[0] = frand(-0.3f, 0.3f);
+		c->up[1] = 1.0f;
+		c->up[2] = frand(-0.3f, 0.3f);
+		c->fov_y_deg = frand(20.0f, 90.0f);
+	} while (bc_camera_validate(c, NULL) != 0 || dist3(c->eye, c->target) < 1.0f);
+}
+
+/* ---- camera -------------------------------------------------------------- */
+
+/* A point on the ray bc_view_rays_dir() gives for (x, y) projects back to
+ * (x, y): the viewer and the server agree on every pixel. */
+static void test_project_inverts_view_rays(void)
+{
+	for (int n = 0; n < 200; n++) {
+		struct bc_camera c;
+		struct bc_view_rays vr;
+		uint32_t w = 64u + (uint32_t)frand(0.0f, 900.0f);
+		uint32_t h = 48u + (uint32_t)frand(0.0f, 700.0f);
+		float x = frand(0.0f, (float)w), y = frand(0.0f, (float)h);
+		float t = frand(0.5f, 30.0f), dir[3], p[3], out[3];
+		random_camera(&c);
+		bc_view_rays_init(&vr, &c, w, h);
+		bc_view_rays_dir(&vr, x, y, dir);
+		for (int i = 0; i < 3; i++) {
+			p[i] = c.eye[i] + t * dir[i];
+		}
+		REQUIRE(bc_viewer_project(&c, w, h, p, out));
+		CHECK_NEAR(out[0], x, 0.02 * (1.0 + t));
+		CHECK_NEAR(out[1], y, 0.02 * (1.0 + t));
+		CHECK_NEAR(out[2], t * dot3(dir, vr.forward), 1e-3 * t);
+	}
+}
+
+static void test_project_refuses_points_behind_the_eye(void)
+{
+	struct bc_camera c;
+	float p[3], out[3] = {7.0f, 7.0f, 7.0f};
+	bc_camera_default(&c); /* eye (0,0,6) looking at the origin */
+	p[0] = 0.0f;
+	p[1] = 0.0f;
+	p[2] = 7.0f;
+	CHECK(!bc_viewer_project(&c, 100, 100, p, out));
+	p[2] = 6.0f; /* at the eye */
+	CHECK(!bc_viewer_project(&c, 100, 100, p, out));
+	p[2] = 0.0f; /* the target: the centre */
+	REQUIRE(bc_viewer_project(&c, 100, 80, p, out));
+	CHECK_NEAR(out[0], 50.0, 1e-4);
+	CHECK_NEAR(out[1], 40.0, 1e-4);
+	CHECK_NEAR(out[2], 6.0, 1e-5);
+}
+
+/* Horizontal motion turns about up: the height above the target and the
+ * distance stay, the angle is dx * BC_VIEWER_ORBIT_PER_PX. */
+static void test_orbit_turns_about_up(void)
+{
+	struct bc_camera c;
+	float before[3], after[3], h0, h1, cosang;
+	bc_camera_default(&c);
+	c.eye[1] = 2.0f;
+	for (int i = 0; i < 3; i++) {
+		before[i] = c.eye[i] - c.target[i];
+	}
+	bc_viewer_orbit(&c, 100.0f, 0.0f);
+	for (int i = 0; i < 3; i++) {
+		after[i] = c.eye[i] - c.target[i];
+	}
+	h0 = before[1];
+	h1 = after[1];
+	CHECK_NEAR(h1, h0, 1e-5);
+	CHECK_NEAR(sqrtf(dot3(after, after)), sqrtf(dot3(before, before)), 1e-4);
+	/* The angle between the horizontal parts. */
+	cosang = (before[0] * after[0] + before[2] * after[2]) /
+		 (before[0] * before[0] + before[2] * before[2]);
+	CHECK_NEAR(acosf(cosang), 100.0f * BC_VIEWER_ORBIT_PER_PX, 1e-3);
+	CHECK(bc_camera_validate(&c, NULL) == 0);
+}
+
+/* Vertical motion never carries the eye over a pole, however far the
+ * mouse goes: the camera stays valid for the server. */
+static void test_orbit_stops_at_the_poles(void)
+{
+	struct bc_camera c;
+	bc_camera_default(&c);
+	for (int k = 0; k < 400; k++) {
+		float off[3], cosv;
+		bc_viewer_orbit(&c, 0.0f, 37.0f);
+		for (int i = 0; i < 3; i++) {
+			off[i] = c.eye[i] - c.target[i];
+		}
+		cosv = off[1] / sqrtf(dot3(off, off));
+		CHECK(fabsf(cosv) <= BC_VIEWER_ORBIT_MAX_COS + 1e-4f);
+		CHECK_NEAR(sqrtf(dot3(off, off)), 6.0, 1e-3);
+		CHECK(bc_camera_validate(&c, NULL) == 0);
+	}
+	/* It did climb: the eye ended up high above the target. */
+	CHECK(c.eye[1] > 5.0f);
+	for (int k = 0; k < 400; k++) {
+		bc_viewer_orbit(&c, 0.0f, -41.0f);
+		CHECK(bc_camera_validate(&c, NULL) == 0);
+	}
+	CHECK(c.eye[1] < -5.0f);
+}
+
+/* Panning moves eye and target together so that a point at the target's
+ * depth follows the mouse exactly. */
+static void test_pan_follows_the_mouse(void)
+{
+	for (int n = 0; n < 50; n++) {
+		struct bc_camera c, old;
+		float dx = frand(-200.0f, 200.0f), dy = frand(-200.0f, 200.0f);
+		float out[3], eye_shift[3], target_shift[3];
+		random_camera(&c);
+		old = c;
+		bc_viewer_pan(&c, dx, dy, 480);
+		REQUIRE(bc_viewer_project(&c, 640, 480, old.target, out));
+		CHECK_NEAR(out[0], 320.0 + dx, 0.05);
+		CHECK_NEAR(out[1], 240.0 + dy, 0.05);
+		for (int i = 0; i < 3; i++) {
+			eye_shift[i] = c.eye[i] - old.eye[i];
+			target_shift[i] = c.target[i] - old.target[i];
+		}
+		CHECK_NEAR(dist3(eye_shift, target_shift), 0.0, 1e-4);
+	}
+}
+
+static void test_zoom_scales_the_distance(void)
+{
+	struct bc_camera c;
+	bc_camera_default(&c);
+	bc_viewer_zoom(&c, 1.0f);
+	CHECK_NEAR(dist3(c.eye, c.target), 6.0 * exp(0.1), 1e-4);
+	bc_viewer_zoom(&c, -2.0f);
+	CHECK_NEAR(dist3(c.eye, c.target), 6.0 * exp(-0.1), 1e-4);
+	for (int k = 0; k < 1000; k++) {
+		bc_viewer_zoom(&c, -5.0f);
+	}
+	CHECK_NEAR(dist3(c.eye, c.target), BC_VIEWER_ZOOM_MIN, 1e-5);
+	CHECK(bc_camera_validate(&c, NULL) == 0);
+	for (int k = 0; k < 1000; k++) {
+		bc_viewer_zoom(&c, 5.0f);
+	}
+	CHECK_NEAR(dist3(c.eye, c.target), BC_VIEWER_ZOOM_MAX, 1.0);
+	bc_viewer_cam_clamp(&c);
+	for (int i = 0; i < 3; i++) {
+		CHECK(fabsf(c.eye[i]) <= 1.0e6f);
+	}
+}
+
+/* A point moved in the view plane by (dx, dy) pixels projects (dx, dy)
+ * pixels away, at the same depth. */
+static void test_move_in_plane_tracks_pixels(void)
+{
+	for (int n = 0; n < 100; n++) {
+		struct bc_camera c;
+		float p[3], a[3], b[3], q[3];
+		float dx = frand(-300.0f, 300.0f), dy = frand(-300.0f, 300.0f);
+		random_camera(&c);
+		for (int i = 0; i < 3; i++) {
+			p[i] = c.target[i] + frand(-0.5f, 0.5f);
+		}
+		REQUIRE(bc_viewer_project(&c, 800, 600, p, a));
+		bc_viewer_move_in_plane(&c, 600, p, a[2], dx, dy, q);
+		REQUIRE(bc_viewer_project(&c, 800, 600, q, b));
+		CHECK_NEAR(b[0] - a[0], dx, 0.05);
+		CHECK_NEAR(b[1] - a[1], dy, 0.05);
+		CHECK_NEAR(b[2], a[2], 1e-3 * a[2]);
+	}
+}
+
+/* Every point inside a primitive (its field negative) lies in the box the
+ * highlight draws, for every kind, rotated and moved. */
+static void test_box_contains_every_primitive(void)
+{
+	for (int kind = 1; kind < BC_PRIM_COUNT; kind++) {
+		struct bc_prim_data p;
+		float packed[BC_PRIM_PACKED], corners[8][3], e[3][3];
+		float len2[3], q[4], n = 0.0f;
+		int inside = 0;
+		bc_prim_data_init(&p, (enum bc_prim)kind);
+		for (int i = 0; i < 4; i++) {
+			q[i] = frand(-1.0f, 1.0f);
+			n += q[i] * q[i];
+		}
+		for (int i = 0; i < 4; i++) {
+			p.rotate[i] = q[i] / sqrtf(n);
+		}
+		for (int i = 0; i < 3; i++) {
+			p.translate[i] = frand(-3.0f, 3.0f);
+		}
+		REQUIRE(bc_prim_validate(&p, NULL) == 0);
+		bc_prim_pack(&p, packed);
+		bc_viewer_box_corners(&p, corners);
+		for (int a = 0; a < 3; a++) {
+			int c = 1 << a;
+			for (int i = 0; i < 3; i++) {
+				e[a][i] = corners[c][i] - corners[0][i];
+			}
+			len2[a] = dot3(e[a], e[a]);
+			REQUIRE(len2[a] > 0.0f);
+		}
+		for (int s = 0; s < 4000; s++) {
+			float l[3], w[3], d[3], t[3], u[3];
+			for (int i = 0; i < 3; i++) {
+				l[i] = frand(-2.5f, 2.5f);
+			}
+			if (!(bc_prim_sdf((enum bc_prim)kind, packed, l[0], l[1],
+					  l[2]) < 0.0f)) {
+				continue;
+			}
+			inside++;
+			/* World point: R l + t (the quaternion by hand). */
+			{
+				const float *r = p.rotate;
+				float cx[3] = {r[1] * l[2] - r[2] * l[1],
+					       r[2] * l[0] - r[0] * l[2],
+					       r[0] * l[1] - r[1] * l[0]};
+				for (int i = 0; i < 3; i++) {
+					t[i] = 2.0f * cx[i];
+				}
+				float ct[3] = {r[1] * t[2] - r[2] * t[1],
+					       r[2] * t[0] - r[0] * t[2],
+					       r[0] * t[1] - r[1] * t[0]};
+				for (int i = 0; i < 3; i++) {
+					w[i] = l[i] + r[3] * t[i] + ct[i] +
+					       p.translate[i];
+				}
+			}
+			for (int i = 0; i < 3; i++) {
+				d[i] = w[i] - corners[0][i];
+			}
+			for (int a = 0; a < 3; a++) {
+				u[a] = dot3(d, e[a]) / len2[a];
+				CHECK(u[a] >= -1e-3f && u[a] <= 1.0f + 1e-3f);
+			}
+		}
+		CHECK(inside > 0);
+	}
+}
+
+/* The box of a box is the box itself. */
+static void test_box_of_a_box_is_tight(void)
+{
+	struct bc_prim_data p;
+	float corners[8][3];
+	bc_prim_data_init(&p, BC_PRIM_BOX);
+	p.params[0] = 0.5f;
+	p.params[1] = 1.0f;
+	p.params[2] = 1.5f;
+	p.translate[0] = 2.0f;
+	bc_viewer_box_corners(&p, corners);
+	CHECK_NEAR(corners[0][0], 1.5, 1e-6);
+	CHECK_NEAR(corners[0][1], -1.0, 1e-6);
+	CHECK_NEAR(corners[0][2], -1.5, 1e-6);
+	CHECK_NEAR(corners[7][0], 2.5, 1e-6);
+	CHECK_NEAR(corners[7][1], 1.0, 1e-6);
+	CHECK_NEAR(corners[7][2], 1.5, 1e-6);
+	for (int e = 0; e < 12; e++) {
+		int a = bc_viewer_box_edges[e][0], b = bc_viewer_box_edges[e][1];
+		int diff = a ^ b;
+		/* Each edge joins corners differing in exactly one axis. */
+		CHECK(diff == 1 || diff == 2 || diff == 4);
+	}
+}
+
+static void test_size_parameter_of_every_kind(void)
+{
+	const struct bc_prim_info *info;
+	CHECK_EQ_INT(bc_viewer_size_param(BC_PRIM_SPHERE), 0);
+	CHECK_EQ_INT(bc_viewer_size_param(BC_PRIM_BOX), 0);
+	info = bc_prim_info(BC_PRIM_CAPSULE);
+	REQUIRE(info);
+	CHECK(strcmp(info->params[bc_viewer_size_param(BC_PRIM_CAPSULE)].name,
+		     "radius") == 0);
+	info = bc_prim_info(BC_PRIM_ROUND_CONE);
+	REQUIRE(info);
+	CHECK(strcmp(info->params[bc_viewer_size_param(BC_PRIM_ROUND_CONE)]
+			     .name,
+		     "radius_a") == 0);
+	CHECK_EQ_INT(bc_viewer_size_param(BC_PRIM_INVALID), -1);
+	CHECK_EQ_INT(bc_viewer_size_param(BC_PRIM_COUNT), -1);
+	for (int kind = 1; kind < BC_PRIM_COUNT; kind++) {
+		int k = bc_viewer_size_param((enum bc_prim)kind);
+		info = bc_prim_info((enum bc_prim)kind);
+		REQUIRE(info && k >= 0 && k < (int)info->nparams);
+		CHECK(info->params[k].flags &
+		      (BC_PARAM_POSITIVE | BC_PARAM_NONNEG));
+	}
+}
+
+/* ---- meter --------------------------------------------------------------- */
+
+static void test_meter_counts_the_last_second(void)
+{
+	struct bc_viewer_meter m;
+	bc_viewer_meter_init(&m);
+	CHECK_NEAR(bc_viewer_meter_fps(&m, 1000.0), 0.0, 0.0);
+	CHECK_NEAR(bc_viewer_meter_kb(&m), 0.0, 0.0);
+	CHECK(bc_viewer_meter_latency_avg(&m) < 0.0);
+	for (int i = 0; i < 90; i++) {
+		bc_viewer_meter_frame(&m, (uint32_t)(1000 * (i + 1)),
+				      1000.0 + 1000.0 * i / 30.0);
+	}
+	/* 30 frames per second: in the second before the last one, 30. */
+	CHECK_NEAR(bc_viewer_meter_fps(&m, 1000.0 + 89000.0 / 30.0), 30.0, 1.0);
+	/* A stalled stream reads 0 once a second has passed. */
+	CHECK_NEAR(bc_viewer_meter_fps(&m, 10000.0), 0.0, 0.0);
+	/* The last 30 frames were 61..90 kB: 75.5 on average. */
+	CHECK_NEAR(bc_viewer_meter_kb(&m), 75.5, 1e-9);
+	CHECK_EQ_INT(m.frames, 90);
+	for (int i = 0; i < 60; i++) {
+		bc_viewer_meter_latency(&m, (double)i);
+	}
+	CHECK_NEAR(m.last_latency, 59.0, 0.0);
+	/* The last 50: 10..59. */
+	CHECK_NEAR(bc_viewer_meter_latency_avg(&m), 34.5, 1e-9);
+}
+
+/* ---- edits --------------------------------------------------------------- */
+
+static struct bc_viewer_edit move_edit(uint32_t node, float x, bool interacting)
+{
+	struct bc_viewer_edit e = {.node = node, .nfields = 1,
+				   .interacting = interacting};
+	e.fields[0].field = BC_PROTO_FIELD_TRANSLATE;
+	e.fields[0].count = 3;
+	e.fields[0].v[0] = x;
+	return e;
+}
+
+/* Interacting edits go one at a time, the newest values replacing those
+ * not sent; a final edit goes at once; latencies settle on the first frame
+ * whose order reaches the edit's. */
+static void test_edits_one_in_flight(void)
+{
+	struct bc_viewer_edits q;
+	struct bc_viewer_meter m;
+	struct bc_viewer_edit e;
+	bc_viewer_edits_init(&q);
+	bc_viewer_meter_init(&m);
+	CHECK(!bc_viewer_edits_ready(&q));
+	e = move_edit(5, 1.0f, true);
+	bc_viewer_edits_queue(&q, &e);
+	REQUIRE(bc_viewer_edits_ready(&q));
+	bc_viewer_edits_sent(&q, 10, 100.0);
+	CHECK_EQ_INT(q.inflight, 10);
+	e = move_edit(5, 2.0f, true);
+	bc_viewer_edits_queue(&q, &e);
+	e = move_edit(5, 3.0f, true);
+	bc_viewer_edits_queue(&q, &e);
+	CHECK(!bc_viewer_edits_ready(&q));
+	CHECK_NEAR(q.pending.fields[0].v[0], 3.0, 0.0);
+	/* Someone else's order does not free the slot: only ours does. */
+	CHECK(!bc_viewer_edits_applied(&q, 99, 6));
+	CHECK(!bc_viewer_edits_ready(&q));
+	CHECK(bc_viewer_edits_applied(&q, 10, 7));
+	CHECK(bc_viewer_edits_ready(&q));
+	bc_viewer_edits_sent(&q, 11, 130.0);
+	/* A final edit does not wait for the one in flight. */
+	e = move_edit(5, 4.0f, false);
+	bc_viewer_edits_queue(&q, &e);
+	CHECK(bc_viewer_edits_ready(&q));
+	bc_viewer_edits_sent(&q, 12, 140.0);
+	CHECK_EQ_INT(q.inflight, 11);
+	CHECK(!bc_viewer_edits_ready(&q));
+	/* A frame older than the edit settles nothing. */
+	CHECK_EQ_INT(bc_viewer_edits_frame(&q, 6, 150.0, &m), 0);
+	CHECK_EQ_INT(bc_viewer_edits_frame(&q, 7, 160.0, &m), 1);
+	CHECK_NEAR(m.last_latency, 60.0, 1e-9);
+	CHECK(bc_viewer_edits_applied(&q, 11, 8));
+	CHECK(!bc_viewer_edits_applied(&q, 12, 9));
+	CHECK_EQ_INT(q.inflight, 0);
+	CHECK_EQ_INT(bc_viewer_edits_frame(&q, 9, 200.0, &m), 2);
+	CHECK_NEAR(m.last_latency, 60.0, 1e-9); /* 200 - 140 */
+	CHECK_NEAR(bc_viewer_meter_latency_avg(&m), (60.0 + 70.0 + 60.0) / 3,
+		   1e-9);
+	CHECK_EQ_INT(q.nsent, 0);
+	CHECK_EQ_INT(q.nshown, 0);
+}
+
+/* A refused edit frees the slot and is never measured. */
+static void test_edits_refused(void)
+{
+	struct bc_viewer_edits q;
+	struct bc_viewer_meter m;
+	struct bc_viewer_edit e = move_edit(5, 1.0f, true);
+	bc_viewer_edits_init(&q);
+	bc_viewer_meter_init(&m);
+	bc_viewer_edits_queue(&q, &e);
+	bc_viewer_edits_sent(&q, 3, 0.0);
+	bc_viewer_edits_queue(&q, &e);
+	CHECK(!bc_viewer_edits_ready(&q));
+	CHECK(!bc_viewer_edits_refused(&q, 4));
+	CHECK(bc_viewer_edits_refused(&q, 3));
+	CHECK(bc_viewer_edits_ready(&q));
+	CHECK_EQ_INT(bc_viewer_edits_frame(&q, 100, 10.0, &m), 0);
+	CHECK(bc_viewer_meter_latency_avg(&m) < 0.0);
+}
+
+/* Answers that never come do not grow anything. */
+static void test_edits_bounded(void)
+{
+	struct bc_viewer_edits q;
+	bc_viewer_edits_init(&q);
+	for (uint32_t s = 1; s <= 3 * BC_VIEWER_EDITS_SENT; s++) {
+		struct bc_viewer_edit e = move_edit(5, (float)s, false);
+		bc_viewer_edits_queue(&q, &e);
+		bc_viewer_edits_sent(&q, s, (double)s);
+		CHECK(q.nsent <= BC_VIEWER_EDITS_SENT);
+	}
+	/* The oldest were forgotten, the newest kept. */
+	CHECK(!bc_viewer_edits_applied(&q, 1, 1));
+	CHECK_EQ_INT(q.nshown, 0);
+	CHECK(!bc_viewer_edits_applied(&q, 3 * BC_VIEWER_EDITS_SENT, 2));
+	CHECK_EQ_INT(q.nshown, 1);
+	for (uint32_t s = 1; s <= 3 * BC_VIEWER_EDITS_SENT; s++) {
+		bc_viewer_edits_applied(&q, s, s);
+		CHECK(q.nshown <= BC_VIEWER_EDITS_SENT);
+	}
+}
+
+/* ---- frames ---------------------------------------------------------------- */
+
+static void fill(uint8_t *rgba, uint32_t w, uint32_t h, uint32_t seed)
+{
+	for (uint32_t y = 0; y < h; y++) {
+		for (uint32_t x = 0; x < w; x++) {
+			uint8_t *p = rgba + ((size_t)y * w + x) * 4u;
+			p[0] = (uint8_t)(x * 20u + seed);
+			p[1] = (uint8_t)(y * 30u + seed * 3u);
+			p[2] = (uint8_t)(seed * 11u);
+			p[3] = 255;
+		}
+	}
+}
+
+/* A raw FRAME of a w x h view, image iw x ih, with the given rectangles
+ * (their data taken from src, an iw x ih image). The data live in store. */
+static struct bc_msg raw_frame(uint16_t w, uint16_t h, uint16_t iw,
+			       uint16_t ih, bool still, struct bc_proto_rect *r,
+			       uint16_t n, const uint8_t *src, uint8_t *store)
+{
+	struct bc_msg m = {.type = BC_MSG_FRAME};
+	size_t at = 0;
+	m.flags = still ? BC_PROTO_FLAG_STILL : 0;
+	m.frame.encoding = BC_PROTO_ENC_RAW;
+	m.frame.width = w;
+	m.frame.height = h;
+	m.frame.image_width = iw;
+	m.frame.image_height = ih;
+	m.frame.nrects = n;
+	m.frame.rects = r;
+	for (uint16_t i = 0; i < n; i++) {
+		bc_viewer_copy_rect(src, iw, r[i].x, r[i].y, r[i].w, r[i].h,
+				    store + at);
+		r[i].data.ptr = store + at;
+		r[i].data.len = (uint32_t)r[i].w * r[i].h * 4u;
+		at += r[i].data.len;
+	}
+	return m;
+}
+
+static bool px_eq(const uint8_t *a, uint32_t aw, uint32_t x, uint32_t y,
+		  const uint8_t *b, uint32_t bw)
+{
+	return memcmp(a + ((size_t)y * aw + x) * 4u, b + ((size_t)y * bw + x) * 4u,
+		      4) == 0;
+}
+
+static void test_frames_rectangles_and_downscale(void)
+{
+	enum { W = 8, H = 6 };
+	uint8_t a[W * H * 4], b[W * H * 4], s[4 * 3 * 4], up_s[W * H * 4];
+	uint8_t store[W * H * 4 * 2];
+	struct bc_viewer_frames f;
+	struct bc_viewer_update up;
+	struct bc_proto_rect r[2];
+	struct bc_msg m;
+	bc_viewer_frames_init(&f);
+	fill(a, W, H, 1);
+	fill(b, W, H, 77);
+	fill(s, 4, 3, 150);
+
+	/* A whole still: a new texture, uploaded whole. */
+	r[0] = (struct bc_proto_rect){0, 0, W, H, {NULL, 0}};
+	m = raw_frame(W, H, W, H, true, r, 1, a, store);
+	REQUIRE(bc_viewer_frames_apply(&f, &m, &up, NULL) == 0);
+	CHECK_EQ_INT(up.tex, BC_VIEWER_TEX_FULL);
+	CHECK(up.resized && up.whole && !up.want_refresh);
+	CHECK(memcmp(f.comp, a, sizeof(a)) == 0);
+	CHECK(!f.showing_small);
+
+	/* A partial still on top of it: only its rectangles change and only
+	 * they are uploaded. */
+	r[0] = (struct bc_proto_rect){4, 2, 2, 2, {NULL, 0}};
+	r[1] = (struct bc_proto_rect){0, 5, 3, 1, {NULL, 0}};
+	m = raw_frame(W, H, W, H, true, r, 2, b, store);
+	REQUIRE(bc_viewer_frames_apply(&f, &m, &up, NULL) == 0);
+	CHECK(!up.resized && !up.whole && !up.want_refresh);
+	CHECK_EQ_INT(up.nrects, 2);
+	for (uint32_t y = 0; y < H; y++) {
+		for (uint32_t x = 0; x < W; x++) {
+			bool in = (x >= 4 && x < 6 && y >= 2 && y < 4) ||
+				  (y == 5 && x < 3);
+			CHECK(px_eq(f.comp, W, x, y, in ? b : a, W));
+		}
+	}
+
+	/* A downscaled interactive frame goes to the small texture. */
+	r[0] = (struct bc_proto_rect){0, 0, 4, 3, {NULL, 0}};
+	m = raw_frame(W, H, 4, 3, false, r, 1, s, store);
+	REQUIRE(bc_viewer_frames_apply(&f, &m, &up, NULL) == 0);
+	CHECK_EQ_INT(up.tex, BC_VIEWER_TEX_SMALL);
+	CHECK(up.resized && up.whole);
+	CHECK(f.showing_small && f.comp_stale);
+	CHECK(memcmp(f.small.rgba, s, sizeof(s)) == 0);
+
+	/* A partial still after it: laid over the small image scaled up,
+	 * not over the still from before, and a whole still is wanted. */
+	r[0] = (struct bc_proto_rect){0, 0, 2, 2, {NULL, 0}};
+	m = raw_frame(W, H, W, H, true, r, 1, a, store);
+	REQUIRE(bc_viewer_frames_apply(&f, &m, &up, NULL) == 0);
+	CHECK_EQ_INT(up.tex, BC_VIEWER_TEX_FULL);
+	CHECK(up.whole && up.want_refresh && !up.resized);
+	CHECK(!f.showing_small && !f.comp_stale);
+	bc_viewer_upscale(s, 4, 3, up_s, W, H);
+	for (uint32_t y = 0; y < H; y++) {
+		for (uint32_t x = 0; x < W; x++) {
+			bool in = x < 2 && y < 2;
+			CHECK(px_eq(f.comp, W, x, y, in ? a : up_s, W));
+		}
+	}
+
+	/* The whole still that answers the refresh replaces everything. */
+	r[0] = (struct bc_proto_rect){0, 0, W, H, {NULL, 0}};
+	m = raw_frame(W, H, W, H, true, r, 1, b, store);
+	REQUIRE(bc_viewer_frames_apply(&f, &m, &up, NULL) == 0);
+	CHECK(!up.want_refresh && !up.resized);
+	CHECK(memcmp(f.comp, b, sizeof(b)) == 0);
+
+	/* Whole interactive frames at full size, then a partial still: the
+	 * server's damage covers only the last change; ask again. */
+	m = raw_frame(W, H, W, H, false, r, 1, a, store);
+	REQUIRE(bc_viewer_frames_apply(&f, &m, &up, NULL) == 0);
+	CHECK(!up.want_refresh);
+	r[0] = (struct bc_proto_rect){1, 1, 2, 2, {NULL, 0}};
+	m = raw_frame(W, H, W, H, true, r, 1, b, store);
+	REQUIRE(bc_viewer_frames_apply(&f, &m, &up, NULL) == 0);
+	CHECK(up.want_refresh && !up.whole);
+
+	/* A new view size: a new picture. */
+	r[0] = (struct bc_proto_rect){0, 0, 4, 3, {NULL, 0}};
+	m = raw_frame(4, 3, 4, 3, true, r, 1, s, store);
+	REQUIRE(bc_viewer_frames_apply(&f, &m, &up, NULL) == 0);
+	CHECK(up.resized && up.whole);
+	CHECK_EQ_INT(f.width, 4);
+	CHECK(memcmp(f.comp, s, sizeof(s)) == 0);
+	bc_viewer_frames_finish(&f);
+	bc_viewer_frames_finish(NULL);
+}
+
+/* Bad rectangles are refused and leave the picture alone. */
+static void test_frames_refuse_bad_rectangles(void)
+{
+	enum { W = 8, H = 6 };
+	uint8_t a[W * H * 4], b[W * H * 4], store[W * H * 4];
+	struct bc_viewer_frames f;
+	struct bc_viewer_update up;
+	struct bc_errinfo ei = {0};
+	struct bc_proto_rect r[1];
+	struct bc_msg m;
+	bc_viewer_frames_init(&f);
+	fill(a, W, H, 3);
+	fill(b, W, H, 9);
+	r[0] = (struct bc_proto_rect){0, 0, W, H, {NULL, 0}};
+	m = raw_frame(W, H, W, H, true, r, 1, a, store);
+	REQUIRE(bc_viewer_frames_apply(&f, &m, &up, NULL) == 0);
+	r[0] = (struct bc_proto_rect){6, 4, 2, 2, {NULL, 0}};
+	m = raw_frame(W, H, W, H, true, r, 1, b, store);
+	r[0].x = 7; /* now past the right edge */
+	CHECK(bc_viewer_frames_apply(&f, &m, &up, &ei) == BC_ERANGE);
+	CHECK(ei.msg[0] != '\0');
+	CHECK_EQ_INT(up.tex, BC_VIEWER_TEX_NONE);
+	CHECK(memcmp(f.comp, a, sizeof(a)) == 0);
+	r[0].x = 6;
+	r[0].data.len -= 4; /* one pixel short */
+	CHECK(bc_viewer_frames_apply(&f, &m, &up, NULL) < 0);
+	CHECK(memcmp(f.comp, a, sizeof(a)) == 0);
+	m.type = BC_MSG_PING;
+	CHECK(bc_viewer_frames_apply(&f, &m, &up, NULL) == BC_EINVAL);
+	bc_viewer_frames_finish(&f);
+}
+
+/* Every allocation can fail: the error comes back and nothing leaks (the
+ * sanitizer build checks the second half). */
+static void test_frames_allocation_failures(void)
+{
+	enum { W = 16, H = 12 };
+	uint8_t a[W * H * 4], store[W * H * 4];
+	bool done = false;
+	for (unsigned long n = 1; n < 100 && !done; n++) {
+		struct bc_viewer_frames f;
+		struct bc_viewer_update up;
+		struct bc_proto_rect r[1] = {{2, 2, 5, 5, {NULL, 0}}};
+		struct bc_msg m;
+		int rc;
+		fill(a, W, H, (uint32_t)n);
+		bc_viewer_frames_init(&f);
+		m = raw_frame(W, H, W, H, true, r, 1, a, store);
+		bc_alloc_fail_after(n);
+		rc = bc_viewer_frames_apply(&f, &m, &up, NULL);
+		bc_alloc_fail_after(0);
+		if (rc == 0) {
+			done = true;
+			CHECK(px_eq(f.comp, W, 3, 3, a, W));
+		} else {
+			CHECK_EQ_INT(rc, BC_ENOMEM);
+			CHECK_EQ_INT(up.tex, BC_VIEWER_TEX_NONE);
+		}
+		bc_viewer_frames_finish(&f);
+	}
+	CHECK(done);
+}
+
+static void test_upscale_samples_pixel_centres(void)
+{
+	const uint8_t src[8] = {0, 100, 200, 255, 200, 20, 40, 255};
+	uint8_t dst[16], one[4] = {9, 8, 7, 255}, big[6 * 5 * 4];
+	bc_viewer_upscale(src, 2, 1, dst, 4, 1);
+	/* Centres 0.5..3.5 map to -0.25 (clamped), 0.25, 0.75, 1.25
+	 * (clamped). */
+	CHECK_EQ_INT(dst[0], 0);
+	CHECK_EQ_INT(dst[4], 50);
+	CHECK_EQ_INT(dst[8], 150);
+	CHECK_EQ_INT(dst[12], 200);
+	CHECK_EQ_INT(dst[5], 80);  /* 0.75 * 100 + 0.25 * 20 */
+	CHECK_EQ_INT(dst[13], 20);
+	bc_viewer_upscale(one, 1, 1, big, 6, 5);
+	for (int i = 0; i < 30; i++) {
+		CHECK(memcmp(big + i * 4, one, 4) == 0);
+	}
+	/* Same size: an exact copy. */
+	bc_viewer_upscale(src, 2, 1, dst, 2, 1);
+	CHECK(memcmp(dst, src, 8) == 0);
+}
+
+/* ---- font ------------------------------------------------------------------ */
+
+static int lit(char ch)
+{
+	int n = 0;
+	for (int r = 0; r < BC_VIEWER_GLYPH_H; r++) {
+		for (int c = 0; c < BC_VIEWER_GLYPH_W; c++) {
+			n += bc_viewer_glyph_bit(ch, c, r);
+		}
+	}
+	return n;
+}
+
+static void test_font_glyphs(void)
+{
+	const char *all = "0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZ.:/>-()%#";
+	/* Every glyph the overlay uses is drawn, and no two are the same. */
+	for (const char *p = all; *p; p++) {
+		CHECK(lit(*p) > 0);
+		for (const char *q = p + 1; *q; q++) {
+			bool same = true;
+			for (int r = 0; r < BC_VIEWER_GLYPH_H && same; r++) {
+				for (int c = 0; c < BC_VIEWER_GLYPH_W; c++) {
+					if (bc_viewer_glyph_bit(*p, c, r) !=
+					    bc_viewer_glyph_bit(*q, c, r)) {
+						same = false;
+						break;
+					}
+				}
+			}
+			CHECK(!same);
+		}
+	}
+	CHECK_EQ_INT(lit(' '), 0);
+	CHECK_EQ_INT(lit('a'), lit('A'));
+	CHECK_EQ_INT(lit('\x7f'), lit('?'));
+	CHECK(bc_viewer_glyph_bit('I', 2, 3));
+	CHECK(!bc_viewer_glyph_bit('I', 0, 3));
+	CHECK(!bc_viewer_glyph_bit('I', 5, 0));
+	CHECK(!bc_viewer_glyph_bit('I', 2, -1));
+}
+
+static void test_font_triangles(void)
+{
+	float buf[4096];
+	size_t need = bc_viewer_text_tris("fps 1", 10.0f, 20.0f, 2.0f, buf, 4096);
+	CHECK_EQ_INT(need, 12u * (size_t)(lit('F') + lit('P') + lit('S') + lit('1')));
+	/* The first quad: the first lit pixel of 'F' (top-left corner). */
+	CHECK_NEAR(buf[0], 10.0, 0.0);
+	CHECK_NEAR(buf[1], 20.0, 0.0);
+	CHECK_NEAR(buf[4], 12.0, 0.0);
+	CHECK_NEAR(buf[5], 22.0, 0.0);
+	/* Too little room: the size needed, nothing written past cap. */
+	buf[24] = -1.0f;
+	CHECK_EQ_INT(bc_viewer_text_tris("fps 1", 0.0f, 0.0f, 1.0f, buf, 24), need);
+	CHECK_NEAR(buf[24], -1.0, 0.0);
+	/* A second line starts LINE_ADVANCE lower. */
+	need = bc_viewer_text_tris("\n.", 0.0f, 0.0f, 1.0f, buf, 4096);
+	REQUIRE(need >= 12);
+	CHECK(buf[1] >= (float)BC_VIEWER_LINE_ADVANCE);
+	CHECK_NEAR(bc_viewer_text_width("ab\nlonger\nx", 2.0f),
+		   6.0 * BC_VIEWER_GLYPH_ADVANCE * 2.0, 0.0);
+	CHECK_NEAR(bc_viewer_text_width("", 1.0f), 0.0, 0.0);
+}
+
+static const struct bc_test tests[] = {
+	{"project_inverts_view_rays", test_project_inverts_view_rays},
+	{"project_refuses_points_behind_the_eye",
+	 test_project_refuses_points_behind_the_eye},
+	{"orbit_turns_about_up", test_orbit_turns_about_up},
+	{"orbit_stops_at_the_poles", test_orbit_stops_at_the_poles},
+	{"pan_follows_the_mouse", test_pan_follows_the_mouse},
+	{"zoom_scales_the_distance", test_zoom_scales_the_distance},
+	{"move_in_plane_tracks_pixels", test_move_in_plane_tracks_pixels},
+	{"box_contains_every_primitive", test_box_contains_every_primitive},
+	{"box_of_a_box_is_tight", test_box_of_a_box_is_tight},
+	{"size_parameter_of_every_kind", test_size_parameter_of_every_kind},
+	{"meter_counts_the_last_second", test_meter_counts_the_last_second},
+	{"edits_one_in_flight", test_edits_one_in_flight},
+	{"edits_refused", test_edits_refused},
+	{"edits_bounded", test_edits_bounded},
+	{"frames_rectangles_and_downscale",
+	 test_frames_rectangles_and_downscale},
+	{"frames_refuse_bad_rectangles", test_frames_refuse_bad_rectangles},
+	{"frames_allocation_failures", test_frames_allocation_failures},
+	{"upscale_samples_pixel_centres", test_upscale_samples_pixel_centres},
+	{"font_glyphs", test_font_glyphs},
+	{"font_triangles", test_font_triangles},
+};
+
+BC_TEST_MAIN(tests)
