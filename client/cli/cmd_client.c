@@ -516,6 +516,14 @@ static int run_snapshot(struct args *a)
 		status = failed(a, "snapshot", &ei);
 		goto out;
 	}
+	if (img.flags & BC_PROTO_FLAG_INCOMPLETE) {
+		fprintf(stderr,
+			"blobcast snapshot: the server hit its frame time budget "
+			"and sent a partial picture; nothing written (a smaller "
+			"--size renders faster)\n");
+		status = EXIT_FAIL;
+		goto out;
+	}
 	if (!img.complete || img.width != a->width || img.height != a->height) {
 		fprintf(stderr,
 			"blobcast snapshot: the server sent a %ux%u picture%s "
@@ -578,6 +586,14 @@ static bool order_time(const struct order_times *o, uint64_t order,
 
 static const char *frame_kind(uint16_t flags)
 {
+	if (flags & BC_PROTO_FLAG_INCOMPLETE) {
+		/* The render hit the server's frame time budget. */
+		if (flags & BC_PROTO_FLAG_SNAPSHOT) {
+			return "snapshot incomplete";
+		}
+		return (flags & BC_PROTO_FLAG_STILL) ? "still incomplete"
+						     : "interactive incomplete";
+	}
 	if (flags & BC_PROTO_FLAG_SNAPSHOT) {
 		return "snapshot";
 	}
@@ -755,7 +771,8 @@ static uint32_t first_prim(const struct bc_tree *t)
  * with the frames and bytes received meanwhile added up, or an exit
  * status. */
 static int one_edit(const struct args *a, struct bc_client *c, uint32_t node,
-		    const float pos[3], uint64_t *frames, uint64_t *bytes)
+		    const float pos[3], uint64_t *frames, uint64_t *bytes,
+		    uint64_t *incomplete)
 {
 	struct bc_proto_field f = {.field = BC_PROTO_FIELD_TRANSLATE,
 				   .count = 3};
@@ -800,6 +817,9 @@ static int one_edit(const struct args *a, struct bc_client *c, uint32_t node,
 		} else if (m.type == BC_MSG_FRAME) {
 			(*frames)++;
 			*bytes += bc_client_info(c)->last_msg_bytes;
+			if (m.flags & BC_PROTO_FLAG_INCOMPLETE) {
+				(*incomplete)++;
+			}
 			/* EDIT_APPLIED precedes every frame that shows it. */
 			if (want && m.frame.order >= want) {
 				return 0;
@@ -816,7 +836,7 @@ static int run_bench(struct args *a)
 	struct bc_msg m;
 	struct bc_msg_stats st;
 	double *lat = NULL, sum = 0.0;
-	uint64_t frames = 0, bytes = 0;
+	uint64_t frames = 0, bytes = 0, incomplete = 0;
 	uint32_t node = a->node, seq;
 	float origin[3], pos[3];
 	json_t *j = NULL;
@@ -870,7 +890,8 @@ static int run_bench(struct args *a)
 			pos[0] += BENCH_STEP;
 		}
 		t0 = now_ms();
-		if ((status = one_edit(a, c, node, pos, &frames, &bytes))) {
+		if ((status = one_edit(a, c, node, pos, &frames, &bytes,
+				       &incomplete))) {
 			goto out;
 		}
 		lat[i] = now_ms() - t0;
@@ -878,8 +899,8 @@ static int run_bench(struct args *a)
 	}
 	if (a->edits % 2 == 1) {
 		/* Put the primitive back where it was. */
-		uint64_t fx = 0, bx = 0;
-		if ((status = one_edit(a, c, node, origin, &fx, &bx))) {
+		uint64_t fx = 0, bx = 0, ix = 0;
+		if ((status = one_edit(a, c, node, origin, &fx, &bx, &ix))) {
 			goto out;
 		}
 	}
@@ -907,6 +928,9 @@ static int run_bench(struct args *a)
 		      "server_edit_ms_avg", (double)st.edit_ms_avg);
 	if (j) {
 		json_object_set_new(j, "node", json_integer(node));
+		/* Frames cut short by the server's frame time budget. */
+		json_object_set_new(j, "incomplete_frames",
+				    json_integer((json_int_t)incomplete));
 	}
 	if (!j || !(line = json_dumps(j, JSON_COMPACT | JSON_REAL_PRECISION(6)))) {
 		fprintf(stderr, "blobcast bench-latency: out of memory\n");
