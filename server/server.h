@@ -87,6 +87,7 @@ struct bc_client {
 
 	/* View and frames. */
 	bool has_view;
+	bool has_camera; /* the client sent its own CAMERA */
 	struct bc_msg_view view;
 	struct bc_camera camera;
 	uint32_t camera_seq;

@@ -540,7 +540,7 @@ void bc_session_leave(struct bc_client *c)
 	c->session = NULL;
 	c->stage = BC_PROTO_STAGE_READY;
 	c->role = BC_PROTO_ROLE_INVALID;
-	c->has_view = false;
+	c->render_pending = false;
 	send_info(s);
 }
 
@@ -575,12 +575,17 @@ static void join(struct bc_client *c, struct bc_session *s,
 	c->member_id = s->next_member_id++;
 	c->role = role;
 	c->stage = BC_PROTO_STAGE_SESSION;
-	c->camera = s->camera;
-	c->camera_seq = 0;
+	/* A camera the client chose (even before joining) stays its own. */
+	if (!c->has_camera) {
+		c->camera = s->camera;
+		c->camera_seq = 0;
+	}
 	c->has_base = false;
 	c->damage_all = true;
+	c->dirty = true;
 	send_info(s);
 	send_state(s, c, 0, 0);
+	schedule(s);
 }
 
 static void handle_session(struct bc_client *c, const struct bc_msg *m)
@@ -1136,13 +1141,17 @@ static void handle_camera(struct bc_client *c, const struct bc_msg *m)
 		return;
 	}
 	c->camera = cam;
+	c->has_camera = true;
 	c->camera_seq = m->seq;
 	c->dirty = true;
 	c->damage_all = true;
 	c->interacting_until = (m->flags & BC_PROTO_FLAG_INTERACTING)
 				       ? bc_now_ms(c->srv) + BC_SRV_STILL_DELAY_MS
 				       : 0;
-	schedule(c->session);
+	/* Before joining, the camera waits for the session. */
+	if (c->session) {
+		schedule(c->session);
+	}
 }
 
 static void handle_view(struct bc_client *c, const struct bc_msg *m)
@@ -1167,13 +1176,15 @@ static void handle_view(struct bc_client *c, const struct bc_msg *m)
 	ensure_damage_grid(c);
 	c->damage_all = true;
 	c->has_base = false;
-	schedule(c->session);
+	if (c->session) {
+		schedule(c->session);
+	}
 }
 
 static void handle_pick(struct bc_client *c, const struct bc_msg *m)
 {
 	struct bc_rjob *job;
-	if (!c->has_view || m->pick.x >= c->view.width ||
+	if (!c->session || !c->has_view || m->pick.x >= c->view.width ||
 	    m->pick.y >= c->view.height) {
 		bc_client_send_error(c, m->seq, BC_ERANGE, false,
 				     "pick outside the view (send VIEW first)");
@@ -1200,9 +1211,10 @@ static void handle_pick(struct bc_client *c, const struct bc_msg *m)
 static void handle_snapshot(struct bc_client *c, const struct bc_msg *m)
 {
 	struct bc_rjob *job;
-	if (!c->has_view) {
+	if (!c->session || !c->has_view) {
 		bc_client_send_error(c, m->seq, BC_ESTATE, false,
-				     "send VIEW before SNAPSHOT");
+				     "join a session and send VIEW before "
+				     "SNAPSHOT");
 		return;
 	}
 	if (!(job = bc_calloc(1, sizeof(*job))) ||

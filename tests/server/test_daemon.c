@@ -140,12 +140,20 @@ static void frames_follow_views_and_edits_send_damage_only(void)
 	make_dir_name(dir, sizeof(dir), "frames");
 	REQUIRE(daemon_start(&d, dir) == 0);
 	REQUIRE(conn_open(&a, &d) == 0 && conn_hello(&a, "a") == 0);
+	/* VIEW and CAMERA may come before joining: they wait for it. */
+	REQUIRE(conn_view(&a, 96, 64, BC_PROTO_ENC_RAW));
+	{
+		struct bc_msg cam = {.type = BC_MSG_CAMERA};
+		cam.camera.eye[2] = 9.0f;
+		cam.camera.up[1] = 1.0f;
+		cam.camera.fov_y_deg = 40.0f;
+		REQUIRE(conn_send(&a, &cam));
+	}
 	REQUIRE(conn_join(&a, "default", BC_PROTO_ROLE_EDITOR, false) == 0);
 	REQUIRE(conn_expect(&a, BC_MSG_SCENE_STATE, 5000) == 1);
 	REQUIRE((t = scene_of(&a)) != NULL);
 	id = smallest_prim_id(t);
 	bc_tree_destroy(t);
-	REQUIRE(conn_view(&a, 96, 64, BC_PROTO_ENC_RAW));
 	REQUIRE(conn_expect(&a, BC_MSG_FRAME, 20000) == 1);
 	CHECK(a.m.frame.width == 96 && a.m.frame.height == 64);
 	CHECK(a.m.frame.nrects == 1);
