@@ -10,10 +10,16 @@
  *           over a range of thresholds: average depth, largest and average
  *           RPN length, construction time, traversal and evaluation time
  *           per point, memory, and render time per pixel.
+ *   arith   the octree built with each arithmetic at one threshold: what
+ *           better ranges buy in construction time and leaf size.
  *   render  `svo` against the CPU `tiled` renderer on the same scenes,
  *           cameras and thread count, side by side in one run.
  *
- * Usage: bench_svo [grid|sweep|render|all] [--quick]
+ * Scenes: Gears is `gen gears --teeth 100` (RPN length 482; the thesis's
+ * has 506-571), Many Spheres `gen many-spheres` (5489, as the thesis's),
+ * Many Gears `gen many-gears --count 625` (28 234; the thesis's 30 377).
+ *
+ * Usage: bench_svo [grid|sweep|arith|render|all] [--quick]
  * Every time is measured in this process, one thread unless stated; ratios
  * compare numbers taken side by side in the same run.
  */
@@ -57,11 +63,13 @@ static struct bc_tree *make(const struct scene *sc, struct bc_camera *cam)
 static int bench_grid(bool quick)
 {
 	static const struct scene scenes[] = {
-		{"Gears", "gears", {.teeth = 24}},
+		{"Gears", "gears", {.teeth = 100}},
 		{"Many Gears 16", "many-gears", {.count = 16}},
 		{"Fig18 smooth 64", "fig18", {.count = 64}},
 	};
 	static const uint32_t sizes[] = {5, 10, 20, 40, 80};
+	/* Scenes of the thesis's Table 6.1 are 2D; ours are its 3D Gears,
+	 * a small Many Gears and a smooth scene (blends pruned). */
 	uint32_t nsizes = quick ? 3 : 5;
 	printf("## Uniform grids (thesis Table 6.1)\n\n");
 	printf("| Scene | RPN len. | N voxels | prune IA (ms) | prune AA (ms) "
@@ -172,15 +180,17 @@ static double render_us_per_pixel(const struct bc_tree *t,
 	return us;
 }
 
+static const struct scene big[] = {
+	{"Gears", "gears", {.teeth = 100}},
+	{"Many Spheres", "many-spheres", {0}},
+	{"Many Gears", "many-gears", {.count = 625}},
+};
+
 static int bench_sweep(bool quick)
 {
-	static const struct scene scenes[] = {
-		{"Gears", "gears", {.teeth = 24}},
-		{"Many Spheres", "many-spheres", {0}},
-		{"Many Gears", "many-gears", {0}},
-	};
-	static const uint32_t taus[] = {200, 160, 120, 80, 60, 40, 20, 10, 5, 2};
-	for (size_t s = 0; s < sizeof(scenes) / sizeof(scenes[0]); s++) {
+	const struct scene *scenes = big;
+	static const uint32_t taus[] = {200, 160, 120, 80, 60, 40, 20, 10, 5};
+	for (size_t s = 0; s < sizeof(big) / sizeof(big[0]); s++) {
 		struct bc_camera cam;
 		struct bc_tree *t = make(&scenes[s], &cam);
 		struct bc_svo_rpn rpn;
@@ -196,16 +206,16 @@ static int bench_sweep(bool quick)
 		printf("## %s: %u primitives, RPN length %u (thesis Tables "
 		       "6.4-6.7)\n\n",
 		       scenes[s].label, rpn.nprims, rpn.n);
-		printf("| Thresh. | Avg depth | Max RPN len. | Avg RPN len. | "
-		       "SVO constr. (ms) | Avg trav. (ns) | Avg eval. (ns) | "
-		       "Avg total (ns) | Speedup | Memory (MB) | "
-		       "Render (us/px) |\n");
-		printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
+		printf("| Thresh. | Avg depth (vol.) | Avg depth (leaves) | Max RPN "
+		       "len. | Avg RPN len. | SVO constr. (ms) | Avg trav. (ns) "
+		       "| Avg eval. (ns) | Avg total (ns) | Speedup | Memory (MB) "
+		       "| Render (us/px) |\n");
+		printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
 		for (size_t k = 0; k < sizeof(taus) / sizeof(taus[0]); k++) {
 			struct bc_svo_opts so = {.arith = BC_RANGE_REVAA,
 						 .threshold = taus[k],
 						 .max_depth = BC_SVO_MAX_DEPTH,
-						 .max_bytes = (uint64_t)3 << 30};
+						 .max_bytes = (uint64_t)1 << 30};
 			struct bc_render_opts ro = {.threads = 1,
 						    .svo_range = BC_RANGE_REVAA,
 						    .svo_threshold = taus[k],
@@ -230,9 +240,10 @@ static int bench_sweep(bool quick)
 			bc_svo_get_stats(sv, &st);
 			px = render_us_per_pixel(t, &cam, &ro, quick ? 64 : 128,
 						 NULL);
-			printf("| %u | %.2f | %u | %.2f | %.1f | %.1f | %.1f | "
-			       "%.1f | %.0fx | %.1f | %.2f |%s\n",
-			       taus[k], st.avg_depth, st.max_terms, st.avg_terms,
+			printf("| %u | %.2f | %.2f | %u | %.2f | %.1f | %.1f | "
+			       "%.1f | %.1f | %.0fx | %.1f | %.2f |%s\n",
+			       taus[k], st.avg_depth, st.avg_depth_leaf,
+			       st.max_terms, st.avg_terms,
 			       st.build_ms, tm0.locate_ns,
 			       tm0.pruned_ns - tm0.locate_ns, tm0.pruned_ns,
 			       tm0.full_ns / tm0.pruned_ns,
@@ -249,14 +260,67 @@ static int bench_sweep(bool quick)
 	return 0;
 }
 
+/* ---- the arithmetics on the octree ---------------------------------------- */
+
+static int bench_arith(bool quick)
+{
+	static const char *const names[] = {"", "IA", "AA", "RevAA"};
+	printf("## Octree by arithmetic, threshold 10, depth limit 15\n\n");
+	printf("| Scene | Arith. | SVO constr. (ms) | Regions pruned | "
+	       "Prune (us/region) | Leaves | Avg RPN len. | Avg total (ns) "
+	       "| Speedup |\n");
+	printf("|---|---|---|---|---|---|---|---|---|\n");
+	for (size_t s = 0; s < sizeof(big) / sizeof(big[0]); s++) {
+		struct bc_tree *t = make(&big[s], NULL);
+		struct bc_svo_rpn rpn;
+		const struct bc_lin *l;
+		if (!t) {
+			return 1;
+		}
+		l = bc_tree_lin(t);
+		if (bc_svo_rpn_init(&rpn, l)) {
+			return 1;
+		}
+		for (int a = BC_RANGE_IA; a <= BC_RANGE_REVAA; a++) {
+			struct bc_svo_opts so = {.arith = (enum bc_range_arith)a,
+						 .threshold = 10,
+						 .max_depth = BC_SVO_MAX_DEPTH,
+						 .max_bytes = (uint64_t)1 << 30};
+			struct bc_svo *sv = NULL;
+			struct bc_svo_stats st;
+			struct bc_svo_timing tm;
+			if (bc_svo_build(&sv, &rpn, &so, NULL) ||
+			    bc_svo_time_octree(sv, l, quick ? 200000 : 1000000,
+					       5, &tm) ||
+			    tm.mismatches) {
+				return 1;
+			}
+			bc_svo_get_stats(sv, &st);
+			printf("| %s | %s | %.1f | %llu | %.2f | %u | %.2f | %.1f "
+			       "| %.0fx |\n",
+			       big[s].label, names[a], st.build_ms,
+			       (unsigned long long)st.pruned,
+			       st.build_ms * 1e3 / (double)st.pruned, st.leaves,
+			       st.avg_terms, tm.pruned_ns,
+			       tm.full_ns / tm.pruned_ns);
+			fflush(stdout);
+			bc_svo_destroy(sv);
+		}
+		bc_svo_rpn_finish(&rpn);
+		bc_tree_destroy(t);
+	}
+	printf("\n");
+	return 0;
+}
+
 /* ---- svo against tiled ---------------------------------------------------- */
 
 static int bench_render(bool quick)
 {
 	static const struct scene scenes[] = {
-		{"Gears", "gears", {.teeth = 24}},
+		{"Gears", "gears", {.teeth = 100}},
 		{"Many Spheres", "many-spheres", {0}},
-		{"Many Gears", "many-gears", {0}},
+		{"Many Gears", "many-gears", {.count = 625}},
 		{"Fig18 smooth 256", "fig18", {0}},
 		{"Fig16 level 3", "fig16", {.level = 3}},
 	};
@@ -312,6 +376,9 @@ int main(int argc, char **argv)
 	}
 	if (strcmp(what, "sweep") == 0 || strcmp(what, "all") == 0) {
 		rc |= bench_sweep(quick);
+	}
+	if (strcmp(what, "arith") == 0 || strcmp(what, "all") == 0) {
+		rc |= bench_arith(quick);
 	}
 	if (strcmp(what, "render") == 0 || strcmp(what, "all") == 0) {
 		rc |= bench_render(quick);

@@ -209,6 +209,12 @@ static int build_node(struct build *b, uint32_t node, const float lo[3],
 	    depth >= b->max_depth) {
 		return make_leaf(b, node, depth, mask, res);
 	}
+	/* A cell narrower than the band cannot separate what lies within the
+	 * band of its surface: its children would keep the same terms. */
+	if (0.5f * (hi[0] - lo[0]) < s->opts.band) {
+		s->stats.stalled++;
+		return make_leaf(b, node, depth, mask, res);
+	}
 	stall = res->nterms < parent_terms || depth < SVO_STALL_MIN_DEPTH
 			? 0
 			: stall + 1;
