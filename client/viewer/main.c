@@ -563,8 +563,13 @@ static void draw(struct bc_viewer_app *a, double now)
 	glfwSwapBuffers(a->win);
 	a->redraw = false;
 	if (a->settle) {
-		bc_viewer_edits_frame(&a->edits, a->settle_order,
-				      bc_viewer_now_ms(), &a->meter);
+		uint32_t n = bc_viewer_edits_frame(&a->edits, a->settle_order,
+						   bc_viewer_now_ms(), &a->meter);
+		if (n && a->o.verbose) {
+			printf("latency edits=%u last_ms=%.1f\n", n,
+			       a->meter.last_latency);
+			fflush(stdout);
+		}
 		a->settle = false;
 	}
 }

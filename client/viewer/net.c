@@ -213,8 +213,9 @@ static void got_snapshot(struct bc_viewer_app *a, const struct bc_msg *m)
 		bc_viewer_status(a, "snapshot not saved: %s", ei.msg);
 		goto cleanup;
 	}
-	bc_viewer_status(a, "saved %s (%ux%u, lossless)", path, img.width,
-			 img.height);
+	bc_viewer_status(a, "saved %s (%ux%u, lossless)",
+			 strrchr(path, '/') ? strrchr(path, '/') + 1 : path,
+			 img.width, img.height);
 	if (a->o.verbose) {
 		printf("snapshot %s %ux%u\n", path, img.width, img.height);
 		fflush(stdout);
