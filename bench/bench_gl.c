@@ -1,0 +1,295 @@
+/*
+ * gl backend benchmark: `gl` (OpenGL compute, here on whatever driver the
+ * context gets: llvmpipe on a CPU-only host) against the CPU `tiled`
+ * renderer, side by side in one run, at 512x512 on the paper's synthetic
+ * scenes; and the cost of keeping the GPU copy of the tree current: a
+ * parameter edit (the edited records only) against a full upload, as the
+ * tree grows.
+ *
+ * Each frame is timed by wall clock and by process CPU time (which counts
+ * llvmpipe's worker threads as well as the tiled renderer's). The gl
+ * backend draws one frame first, untimed, so that shader compilation and
+ * buffer allocation are not counted; both then report the fastest of
+ * `reps` frames. The gl split (A-buffer, tracing) comes from GPU timer
+ * queries; `disp` is the number of tracing dispatches the frame needed
+ * (llvmpipe's loop limit makes dense tiles suspend and resume).
+ *
+ * Usage: bench_gl [--size N] [--reps R] [--platform P] [--quick]
+ *   --size N      frame edge (default 512)
+ *   --reps R      frames per measurement, the fastest is kept (3)
+ *   --platform P  auto | device | surfaceless | osmesa (auto)
+ *   --quick       the first two scenes and the smallest edit sizes only
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "blobcast/blobtree.h"
+#include "blobcast/gen.h"
+#include "blobcast/render.h"
+
+#if defined(__has_include)
+#if __has_include("blobcast/render_gl.h")
+#include "blobcast/render_gl.h"
+#define HAVE_GL 1
+#endif
+#endif
+
+#if defined(HAVE_GL)
+
+struct scene {
+	const char *label;
+	const char *gen;
+	struct bc_gen_opts opts;
+};
+
+static const struct scene scenes[] = {
+	{"fig18 smooth spheres 256", "fig18",
+	 {.count = 256, .kind = BC_GEN_KIND_SPHERES}},
+	{"fig16 L2 smooth", "fig16", {.level = 2}},
+	{"fig18 smooth boxes 256", "fig18",
+	 {.count = 256, .kind = BC_GEN_KIND_BOXES}},
+	{"fig18 smooth spheres 1024", "fig18",
+	 {.count = 1024, .kind = BC_GEN_KIND_SPHERES}},
+	{"fig16 L3 smooth", "fig16", {.level = 3}},
+	{"gears (24 teeth)", "gears", {.teeth = 24}},
+	{"many-spheres 2745", "many-spheres", {.count = 2745}},
+};
+
+static double clock_ms(clockid_t id)
+{
+	struct timespec ts;
+	clock_gettime(id, &ts);
+	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+}
+
+struct timing {
+	double wall, cpu; /* ms, of the fastest run by wall time */
+	struct bc_render_stats st;
+	int rc;
+};
+
+/* Fastest of reps frames of r (already synced). */
+static struct timing time_frames(const struct bc_backend_ops *ops,
+				 struct bc_renderer *r,
+				 const struct bc_camera *cam,
+				 struct bc_frame *f, int reps)
+{
+	struct timing best = {.wall = INFINITY, .cpu = INFINITY};
+	for (int i = 0; i < reps; i++) {
+		struct bc_errinfo ei = {0};
+		struct bc_render_stats st;
+		double w0 = clock_ms(CLOCK_MONOTONIC);
+		double c0 = clock_ms(CLOCK_PROCESS_CPUTIME_ID);
+		int rc = ops->render(r, cam, f, &st, &ei);
+		double w1 = clock_ms(CLOCK_MONOTONIC);
+		double c1 = clock_ms(CLOCK_PROCESS_CPUTIME_ID);
+		if (rc) {
+			fprintf(stderr, "%s: %s\n", ops->name, ei.msg);
+			best.rc = rc;
+			return best;
+		}
+		if (w1 - w0 < best.wall) {
+			best.wall = w1 - w0;
+			best.cpu = c1 - c0;
+			best.st = st;
+		}
+	}
+	return best;
+}
+
+static struct bc_renderer *open_backend(const struct bc_backend_ops *ops,
+					const struct bc_render_opts *o)
+{
+	struct bc_errinfo ei = {0};
+	struct bc_renderer *r = NULL;
+	if (ops->create(&r, o, &ei)) {
+		fprintf(stderr, "%s: %s\n", ops->name, ei.msg);
+		return NULL;
+	}
+	return r;
+}
+
+static int frames(const char *platform, uint32_t size, int reps, bool quick)
+{
+	const struct bc_backend_ops *gl = bc_backend_get(BC_BACKEND_GL);
+	const struct bc_backend_ops *tiled = bc_backend_get(BC_BACKEND_TILED);
+	struct bc_render_opts go = {.gl_platform = platform};
+	struct bc_render_opts to = {0};
+	struct bc_renderer *rg, *rt;
+	struct bc_frame f;
+	struct bc_gl_info info;
+	size_t n = quick ? 2 : sizeof(scenes) / sizeof(scenes[0]);
+	if (!gl || !tiled) {
+		fprintf(stderr, "bench_gl: gl or tiled backend not built in\n");
+		return 1;
+	}
+	if (bc_frame_init(&f, size, size)) {
+		return 1;
+	}
+	rg = open_backend(gl, &go);
+	rt = open_backend(tiled, &to);
+	if (!rg || !rt) {
+		return 1;
+	}
+	bc_render_gl_info(rg, &info);
+	printf("gl: %s platform, %s, %s\n", bc_gl_platform_name(info.platform),
+	       info.renderer, info.version);
+	printf("frame %ux%u, fastest of %d; tiled on every core; ms\n\n", size,
+	       size, reps);
+	printf("%-26s %6s | %8s %8s %7s %7s | %8s %8s %7s %7s %4s | %7s %7s\n",
+	       "scene", "prims", "tiled", "cpu", "abuf", "trace", "gl", "cpu",
+	       "abuf", "trace", "disp", "gl/tld", "cpu");
+	for (size_t s = 0; s < n; s++) {
+		struct bc_tree *t = bc_tree_create();
+		struct bc_camera cam;
+		struct bc_errinfo ei = {0};
+		struct timing tt, tg;
+		if (!t || bc_gen(scenes[s].gen, &scenes[s].opts, t, &cam, &ei)) {
+			fprintf(stderr, "%s: %s\n", scenes[s].label, ei.msg);
+			bc_tree_destroy(t);
+			continue;
+		}
+		if (tiled->sync(rt, t, NULL, &ei) || gl->sync(rg, t, NULL, &ei)) {
+			fprintf(stderr, "%s: %s\n", scenes[s].label, ei.msg);
+			bc_tree_destroy(t);
+			continue;
+		}
+		/* Warm-up: compilation, allocation, caches. */
+		(void)time_frames(gl, rg, &cam, &f, 1);
+		tg = time_frames(gl, rg, &cam, &f, reps);
+		tt = time_frames(tiled, rt, &cam, &f, reps);
+		bc_render_gl_info(rg, &info);
+		if (tg.rc == 0 && tt.rc == 0) {
+			printf("%-26s %6u | %8.1f %8.1f %7.1f %7.1f | %8.1f "
+			       "%8.1f %7.1f %7.1f %4u | %6.2fx %6.2fx\n",
+			       scenes[s].label, bc_tree_prim_count(t), tt.wall,
+			       tt.cpu, tt.st.ms_abuffer, tt.st.ms_trace,
+			       tg.wall, tg.cpu, tg.st.ms_abuffer,
+			       tg.st.ms_trace, info.dispatches,
+			       tg.wall / tt.wall, tg.cpu / tt.cpu);
+		}
+		bc_tree_destroy(t);
+	}
+	gl->destroy(rg);
+	tiled->destroy(rt);
+	bc_frame_finish(&f);
+	return 0;
+}
+
+/* Parameter edits against full uploads, as the tree grows. */
+static int edits(const char *platform, bool quick)
+{
+	static const uint32_t counts[] = {256, 4096, 65536, 262144};
+	const struct bc_backend_ops *gl = bc_backend_get(BC_BACKEND_GL);
+	struct bc_render_opts go = {.gl_platform = platform};
+	struct bc_renderer *r = open_backend(gl, &go);
+	size_t n = quick ? 2 : sizeof(counts) / sizeof(counts[0]);
+	if (!r) {
+		return 1;
+	}
+	printf("\nkeeping the GPU tree current (fig18 spheres; mean of 200 "
+	       "edits; ms and bytes per sync)\n");
+	printf("%8s | %10s %10s %9s | %10s %12s\n", "prims", "edit+sync",
+	       "bytes", "full", "full bytes", "full/edit");
+	for (size_t c = 0; c < n; c++) {
+		struct bc_tree *t = bc_tree_create();
+		struct bc_gen_opts o = {.count = counts[c],
+					.kind = BC_GEN_KIND_SPHERES};
+		struct bc_errinfo ei = {0};
+		struct bc_dirty dirty;
+		struct bc_gl_info info;
+		double t0, edit_ms, full_ms;
+		uint64_t edit_bytes, full_bytes;
+		const int rounds = 200;
+		if (!t || bc_gen("fig18", &o, t, NULL, &ei)) {
+			fprintf(stderr, "fig18 %u: %s\n", counts[c], ei.msg);
+			bc_tree_destroy(t);
+			continue;
+		}
+		bc_tree_take_dirty(t, &dirty);
+		t0 = clock_ms(CLOCK_MONOTONIC);
+		if (gl->sync(r, t, NULL, &ei)) {
+			fprintf(stderr, "sync: %s\n", ei.msg);
+			bc_tree_destroy(t);
+			break;
+		}
+		full_ms = clock_ms(CLOCK_MONOTONIC) - t0;
+		bc_render_gl_info(r, &info);
+		full_bytes = info.upload_bytes;
+		edit_bytes = 0;
+		t0 = clock_ms(CLOCK_MONOTONIC);
+		for (int i = 0; i < rounds; i++) {
+			/* A different primitive each time, moved a little. */
+			const struct bc_lin *l = bc_tree_lin(t);
+			uint32_t k = (uint32_t)(((uint64_t)i * 2654435761u) %
+						l->nprims);
+			uint32_t id = l->node_id[l->prim_slot[k]];
+			struct bc_prim_data p;
+			bc_tree_get(t, id, &p, NULL);
+			p.translate[0] += 0.001f;
+			if (bc_tree_set_prim(t, id, &p, &ei)) {
+				fprintf(stderr, "edit: %s\n", ei.msg);
+				break;
+			}
+			bc_tree_take_dirty(t, &dirty);
+			if (gl->sync(r, t, &dirty, &ei)) {
+				fprintf(stderr, "sync: %s\n", ei.msg);
+				break;
+			}
+			bc_render_gl_info(r, &info);
+			edit_bytes += info.upload_bytes;
+		}
+		edit_ms = (clock_ms(CLOCK_MONOTONIC) - t0) / rounds;
+		printf("%8u | %10.4f %10.0f %9.2f | %10llu %11.0fx\n",
+		       counts[c], edit_ms, (double)edit_bytes / rounds,
+		       full_ms, (unsigned long long)full_bytes,
+		       full_ms / edit_ms);
+		bc_tree_destroy(t);
+	}
+	gl->destroy(r);
+	return 0;
+}
+
+int main(int argc, char **argv)
+{
+	uint32_t size = 512;
+	int reps = 3;
+	bool quick = false;
+	const char *platform = NULL;
+	for (int i = 1; i < argc; i++) {
+		if (strcmp(argv[i], "--size") == 0 && i + 1 < argc) {
+			size = (uint32_t)atoi(argv[++i]);
+		} else if (strcmp(argv[i], "--reps") == 0 && i + 1 < argc) {
+			reps = atoi(argv[++i]);
+		} else if (strcmp(argv[i], "--platform") == 0 && i + 1 < argc) {
+			platform = argv[++i];
+		} else if (strcmp(argv[i], "--quick") == 0) {
+			quick = true;
+		} else {
+			fprintf(stderr, "usage: bench_gl [--size N] [--reps R] "
+				"[--platform P] [--quick]\n");
+			return 2;
+		}
+	}
+	if (size == 0 || size > BC_RENDER_MAX_DIM || reps < 1) {
+		fprintf(stderr, "bench_gl: bad --size or --reps\n");
+		return 2;
+	}
+	if (frames(platform, size, reps, quick)) {
+		return 1;
+	}
+	return edits(platform, quick);
+}
+
+#else
+
+int main(void)
+{
+	fprintf(stderr, "bench_gl: the gl backend is not built in\n");
+	return 0;
+}
+
+#endif
