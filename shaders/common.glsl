@@ -103,7 +103,9 @@ layout(std140, binding = 0) uniform Frame {
 	uvec4 u_size;   // width, height, tiles across, tiles down
 	uvec4 u_counts; // primitives, fragment capacity, debug mode, 0
 	// Suspension (trace.comp): scratch word where the slots begin, slots,
-	// loop iterations one invocation may spend per dispatch (0: no limit).
+	// loop iterations one invocation may spend per dispatch (0: no limit),
+	// and 1 when the frame is out of time: suspended tiles then finish
+	// with what they found.
 	uvec4 u_pool;
 };
 

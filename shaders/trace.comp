@@ -1072,7 +1072,9 @@ void main()
 	evals_before = g_evals;
 	memoryBarrierShared();
 	barrier();
-	for (;;) {
+	// Out of time (the frame's budget): keep the hits, the rest is
+	// background.
+	for (; u_pool.w == 0u;) {
 		// A range to trace: the one left in the middle, or the next.
 		if (lid == 0u) {
 			s_was_mid = s_mid;

@@ -90,6 +90,7 @@ struct bc_renderer {
 	uint32_t want_cap; /* capacity asked for, 0: none */
 	uint32_t slots;    /* suspension slots after the fragment scratch */
 	uint32_t budget;   /* loop budget per invocation, 0: none */
+	uint32_t budget_ms; /* frame time budget (opts), 0: none */
 	double upload_ms; /* since the last frame */
 	uint32_t builds;
 	uint64_t upload_bytes;
@@ -369,6 +370,7 @@ static int gl_create(struct bc_renderer **out, const struct bc_render_opts *opts
 		return bc_errinfo_set(ei, BC_ENOMEM, "gl: out of memory");
 	}
 	r->debug = opts ? opts->debug : BC_DEBUG_NONE;
+	r->budget_ms = opts ? opts->budget_ms : 0;
 	if ((rc = bc__gl_ctx_open(&r->ctx, platform, ei))) {
 		goto fail;
 	}
@@ -657,14 +659,19 @@ static void draw(struct bc_renderer *r, const struct bc__gl_frame_ubo *u,
 }
 
 /* Dispatches the tracing pass again while tiles are suspended (only with
- * a loop budget). Returns 0, BC_ELIMIT or BC_EGL. */
-static int finish_tracing(struct bc_renderer *r, uint32_t tw, uint32_t th,
-			  uint32_t *dispatches, struct bc_errinfo *ei)
+ * a loop budget). Past the frame's time budget (counted from t_start) the
+ * last dispatch tells suspended tiles to finish with what they found, and
+ * *incomplete is set. Returns 0, BC_ELIMIT or BC_EGL. */
+static int finish_tracing(struct bc_renderer *r, struct bc__gl_frame_ubo *u,
+			  double t_start, uint32_t *dispatches,
+			  bool *incomplete, struct bc_errinfo *ei)
 {
 	GladGLContext *gl = &r->ctx.gl;
 	static const uint32_t zero = 0;
+	uint32_t tw = u->size[2], th = u->size[3];
 	*dispatches = 1;
-	while (r->budget) {
+	*incomplete = false;
+	while (r->budget && !*incomplete) {
 		uint32_t suspended = 0;
 		gl->MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
 		gl->BindBuffer(GL_SHADER_STORAGE_BUFFER,
@@ -683,7 +690,16 @@ static int finish_tracing(struct bc_renderer *r, uint32_t tw, uint32_t th,
 		gl->ClearBufferSubData(GL_SHADER_STORAGE_BUFFER, GL_R32UI,
 				       4 * BC_GL_STAT_SUSPENDED, 4,
 				       GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
-		gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+		if (r->budget_ms && now_ms() - t_start > (double)r->budget_ms) {
+			/* Out of time: one last dispatch finishes every
+			 * suspended tile with what it has. */
+			u->pool[3] = 1;
+			gl->BindBuffer(GL_UNIFORM_BUFFER, r->ubo);
+			gl->BufferSubData(GL_UNIFORM_BUFFER, 0, sizeof(*u), u);
+			*incomplete = true;
+		}
+		gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT |
+				  GL_UNIFORM_BARRIER_BIT);
 		gl->DispatchCompute(tw, th, 1);
 		(*dispatches)++;
 	}
@@ -832,15 +848,15 @@ static int gl_render(struct bc_renderer *r, const struct bc_camera *cam,
 	r->ctx.info.retries = 0;
 	for (;;) {
 		uint32_t dispatches = 0, tiles;
-		bool fits;
+		bool fits, incomplete = false;
 		void *map;
 		frame_setup(&u, l, cam, w, h, r->debug, nprims, r->frag_cap,
 			    r->slots, r->budget);
 		tiles = u.size[2] * u.size[3];
 		draw(r, &u, nprims);
 		if ((rc = bc__gl_check(&r->ctx, "drawing a frame", ei)) ||
-		    (rc = finish_tracing(r, u.size[2], u.size[3], &dispatches,
-					 ei))) {
+		    (rc = finish_tracing(r, &u, t_start, &dispatches,
+					 &incomplete, ei))) {
 			goto done;
 		}
 		read_back(r, npix);
@@ -880,6 +896,9 @@ static int gl_render(struct bc_renderer *r, const struct bc_camera *cam,
 		gl->BindBuffer(GL_PIXEL_PACK_BUFFER, 0);
 		r->ctx.info.dispatches = dispatches;
 		if (fits) {
+			if (stats) {
+				stats->incomplete = incomplete;
+			}
 			break;
 		}
 		/* Too many fragments or suspended tiles: both counts are

@@ -431,6 +431,36 @@ static void test_overflows_degrade_not_fail(void)
 	CHECK_EQ_INT(info.retries, 1);
 	CHECK(info.fragments > 64);
 	CHECK(frames_equal(&g, &again));
+
+	/* Out of time (1 ms): with a loop budget the suspended tiles finish
+	 * with what they found -- hits as in the full frame, provisional
+	 * near hits never behind the full frame's surface, the rest
+	 * background -- and the frame says it is incomplete. */
+	if (info.loop_budget) {
+		struct bc_render_opts o = {.budget_ms = 1};
+		struct bc_renderer *rb = NULL;
+		struct bc_render_stats st;
+		struct bc_errinfo ei = {0};
+		uint32_t bg = 0, wrong = 0;
+		REQUIRE(gl_ops()->create(&rb, &o, &ei) == 0);
+		REQUIRE(gl_ops()->sync(rb, t, NULL, &ei) == 0);
+		REQUIRE(gl_ops()->render(rb, &cam, &again, &st, &ei) == 0);
+		CHECK(st.incomplete);
+		for (size_t i = 0; i < 32 * 32; i++) {
+			if (memcmp(again.rgba + 4 * i, g.rgba + 4 * i, 4) == 0) {
+				continue;
+			}
+			if (isinf(again.depth[i]) && again.ids[i] == 0) {
+				bg++;
+			} else if (!(again.depth[i] <=
+				     g.depth[i] + 1e-3f * bc_tree_lin(t)->size)) {
+				wrong++;
+			}
+		}
+		CHECK(bg > 0);
+		CHECK_EQ_INT(wrong, 0);
+		gl_ops()->destroy(rb);
+	}
 	bc_frame_finish(&g);
 	bc_frame_finish(&c);
 	bc_frame_finish(&again);
