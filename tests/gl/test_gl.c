@@ -468,6 +468,68 @@ static void test_overflows_degrade_not_fail(void)
 	gl_ops()->destroy(r);
 }
 
+/* n small spheres on the view axis, one behind the other: every tile near
+ * the middle lists all of them, at distinct depths. */
+static int queue(struct bc_tree *t, uint32_t n)
+{
+	struct bc_op_data u = {BC_OP_UNION, 0.0f, 0.0f};
+	int rc;
+	bc_tree_begin(t);
+	if ((rc = bc_tree_push_op(t, 0, &u, NULL))) {
+		return rc;
+	}
+	for (uint32_t i = 0; i < n; i++) {
+		struct bc_prim_data p;
+		bc_prim_data_init(&p, BC_PRIM_SPHERE);
+		p.params[0] = 0.02f + 0.01f * (float)(i % 5);
+		p.translate[0] = 0.03f * sinf((float)i);
+		p.translate[1] = 0.03f * cosf((float)i);
+		p.translate[2] = 2.0f - 4.0f * (float)i / (float)n;
+		if ((rc = bc_tree_put_prim(t, 0, &p, NULL))) {
+			return rc;
+		}
+	}
+	if ((rc = bc_tree_pop_op(t, NULL))) {
+		return rc;
+	}
+	return bc_tree_end(t, NULL);
+}
+
+static void test_long_tile_lists(void)
+{
+	struct bc_renderer *r = open_gl(NULL, BC_DEBUG_NONE);
+	struct bc_tree *t = bc_tree_create();
+	struct bc_frame g = {0}, c = {0};
+	struct bc_render_stats st;
+	struct bc_camera cam;
+	struct bc_errinfo ei = {0};
+	struct agreement a;
+	if (!r) {
+		bc_tree_destroy(t);
+		BC_SKIP("no GL context");
+	}
+	REQUIRE(t && bc_frame_init(&g, 16, 16) == 0 &&
+		bc_frame_init(&c, 16, 16) == 0);
+	REQUIRE(queue(t, 1200) == 0);
+	bc_camera_default(&cam);
+	cam.fov_y_deg = 4.0f;
+	REQUIRE(gl_ops()->sync(r, t, NULL, &ei) == 0);
+	REQUIRE(gl_ops()->render(r, &cam, &g, &st, &ei) == 0);
+	/* Past the 1024 sorted in shared memory: the heap sort's lists. */
+	printf("  longest tile list %u\n", st.max_overlap);
+	CHECK(st.max_overlap > 1024);
+	REQUIRE(draw_cpu(BC_DEBUG_NONE, t, &cam, &c) == 0);
+	compare(&g, &c, &a);
+	CHECK(a.both > 16);
+	CHECK(a.mask_diff * 200 < 16 * 16);
+	CHECK(a.median_dz < 1e-3f * bc_tree_lin(t)->size);
+	CHECK(a.id_diff * 20 <= a.both);
+	bc_frame_finish(&g);
+	bc_frame_finish(&c);
+	bc_tree_destroy(t);
+	gl_ops()->destroy(r);
+}
+
 /* ---- Platforms -------------------------------------------------------------- */
 
 static void test_platforms_draw_the_same(void)
@@ -663,6 +725,7 @@ static const struct bc_test tests[] = {
 	{"families_agree_with_tiled", test_families_agree_with_tiled},
 	{"param_edit_equals_fresh_load", test_param_edit_equals_fresh_load},
 	{"overflows_degrade_not_fail", test_overflows_degrade_not_fail},
+	{"long_tile_lists", test_long_tile_lists},
 	{"platforms_draw_the_same", test_platforms_draw_the_same},
 	{"debug_modes_match_cpu", test_debug_modes_match_cpu},
 	{"odd_sizes_and_empty_scene", test_odd_sizes_and_empty_scene},
