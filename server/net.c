@@ -140,6 +140,7 @@ static void write_done(uv_write_t *req, int status)
 				c->frame_next = NULL;
 				bc_client_send_frame(c, next);
 				bc_shared_unref(next);
+			} else {
 				bc_session_client_ready(c);
 			}
 		} else {
@@ -520,9 +521,30 @@ static int parse_listen(const char *spec, char *host, size_t hostlen, int *port)
 	return 0;
 }
 
+static void check_stalls(uv_timer_t *t)
+{
+	struct bc_srv *srv = t->data;
+	uint64_t now = bc_now_ms(srv);
+	for (uint32_t i = 0; i < BC_SRV_MAX_CONNECTIONS; i++) {
+		struct bc_client *c = srv->clients[i];
+		if (c && c->frame_writing &&
+		    now - c->frame_started_ms > BC_SRV_STALL_MS) {
+			bc_log(BC_LOG_WARN,
+			       "dropping client %u (%s): a frame has waited "
+			       "%llu ms, it stopped reading",
+			       c->gen, c->name,
+			       (unsigned long long)(now - c->frame_started_ms));
+			bc_client_close(c, "stopped reading");
+		}
+	}
+}
+
 int bc_net_listen(struct bc_srv *srv, struct bc_errinfo *ei)
 {
 	int rc;
+	uv_timer_init(srv->loop, &srv->stall_timer);
+	srv->stall_timer.data = srv;
+	uv_timer_start(&srv->stall_timer, check_stalls, 1000, 1000);
 	if (srv->cfg.listen) {
 		char host[256];
 		int port;
@@ -575,6 +597,11 @@ void bc_net_close_all(struct bc_srv *srv)
 		if (srv->clients[i]) {
 			bc_client_close(srv->clients[i], "server stopping");
 		}
+	}
+	if (uv_is_active((uv_handle_t *)&srv->stall_timer) ||
+	    srv->stall_timer.data == srv) {
+		uv_close((uv_handle_t *)&srv->stall_timer, NULL);
+		srv->stall_timer.data = NULL;
 	}
 	if (srv->has_tcp) {
 		uv_close((uv_handle_t *)&srv->tcp_listener, NULL);

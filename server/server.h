@@ -122,6 +122,8 @@ struct bc_session {
 	uint32_t nmembers;
 	uint32_t next_member_id;
 	uv_timer_t still_timer;
+	uv_timer_t kick; /* schedules frames once a loop turn's writes end */
+	uint32_t handles_open;
 	double edit_ms_avg;
 };
 
@@ -133,6 +135,7 @@ struct bc_srv {
 	uv_pipe_t unix_listener;
 	bool has_tcp, has_unix;
 	uv_signal_t sigterm, sigint;
+	uv_timer_t stall_timer; /* drops clients that stopped reading */
 	uv_async_t results;
 	struct bc_rthread *rt;
 

@@ -346,7 +346,17 @@ static void free_session(struct bc_session *s)
 
 static void still_closed(uv_handle_t *h)
 {
-	free_session(h->data);
+	struct bc_session *s = h->data;
+	if (--s->handles_open == 0) {
+		free_session(s);
+	}
+}
+
+static void schedule(struct bc_session *s);
+
+static void kick_due(uv_timer_t *t)
+{
+	schedule(t->data);
 }
 
 static void still_due(uv_timer_t *timer);
@@ -404,6 +414,9 @@ static int session_open(struct bc_srv *srv, const char *name,
 	s->next_member_id = 1;
 	uv_timer_init(srv->loop, &s->still_timer);
 	s->still_timer.data = s;
+	uv_timer_init(srv->loop, &s->kick);
+	s->kick.data = s;
+	s->handles_open = 2;
 	srv->sessions[slot] = s;
 	srv->nsessions++;
 	bc_rthread_scene(srv, s->id, copy);
@@ -456,6 +469,8 @@ void bc_sessions_free(struct bc_srv *srv)
 	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
 		if (srv->sessions[i]) {
 			uv_close((uv_handle_t *)&srv->sessions[i]->still_timer,
+				 still_closed);
+			uv_close((uv_handle_t *)&srv->sessions[i]->kick,
 				 still_closed);
 			srv->sessions[i] = NULL;
 		}
@@ -816,10 +831,12 @@ static void schedule(struct bc_session *s)
 		struct bc_rjob *job;
 		uint32_t ng = 0, max_bytes;
 		bool still;
-		/* A client with a frame already waiting behind another is
-		 * not rendered for until that clears: it would be spoiled. */
+		/* One frame in flight per client: while one is being
+		 * written, changes only accumulate (the next frame shows the
+		 * newest state); a client that stopped reading costs no
+		 * renders. */
 		if (!c || done[i] || !c->has_view || !c->dirty ||
-		    c->render_pending || c->frame_next) {
+		    c->render_pending || c->frame_writing) {
 			continue;
 		}
 		still = now >= c->interacting_until;
@@ -831,7 +848,7 @@ static void schedule(struct bc_session *s)
 		for (uint32_t j = i + 1; j < s->nmembers; j++) {
 			struct bc_client *o = bc_client_get(srv, s->members[j]);
 			if (o && !done[j] && o->has_view && o->dirty &&
-			    !o->render_pending && !o->frame_next &&
+			    !o->render_pending && !o->frame_writing &&
 			    same_frame(c, o, still, now >= o->interacting_until)) {
 				group[ng++] = o;
 				done[j] = true;
@@ -917,8 +934,11 @@ static void schedule(struct bc_session *s)
 
 void bc_session_client_ready(struct bc_client *c)
 {
+	/* Not at once: the other members' frame writes usually finish in the
+	 * same loop turn, and scheduling after them keeps equal views in one
+	 * shared render. */
 	if (c->session && c->dirty) {
-		schedule(c->session);
+		uv_timer_start(&c->session->kick, kick_due, 0, 0);
 	}
 }
 
