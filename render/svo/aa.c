@@ -204,7 +204,7 @@ static inline RT f_sqr(struct bc_svo_ranger *g, RT a)
 static inline RT f_sqrt(struct bc_svo_ranger *g, RT a)
 {
 	struct bc_svo_ivl v = f_range(g, a);
-	double lo = fmax(v.lo, 0.0), hi = fmax(v.hi, 0.0), alpha, d1, d2;
+	double lo = bc__dmax(v.lo, 0.0), hi = bc__dmax(v.hi, 0.0), alpha, d1, d2;
 	if (!isfinite(hi)) {
 		return whole();
 	}

@@ -86,8 +86,8 @@ static inline RT f_mul(struct bc_svo_ranger *g, RT a, RT b)
 	double p0 = prod(a.lo, b.lo), p1 = prod(a.lo, b.hi);
 	double p2 = prod(a.hi, b.lo), p3 = prod(a.hi, b.hi);
 	(void)g;
-	return mk(fmin(fmin(p0, p1), fmin(p2, p3)),
-		  fmax(fmax(p0, p1), fmax(p2, p3)));
+	return mk(bc__dmin(bc__dmin(p0, p1), bc__dmin(p2, p3)),
+		  bc__dmax(bc__dmax(p0, p1), bc__dmax(p2, p3)));
 }
 
 static inline RT f_sqr(struct bc_svo_ranger *g, RT a)
@@ -99,13 +99,13 @@ static inline RT f_sqr(struct bc_svo_ranger *g, RT a)
 	if (a.hi <= 0.0) {
 		return mk(a.hi * a.hi, a.lo * a.lo);
 	}
-	return mk(0.0, fmax(a.lo * a.lo, a.hi * a.hi));
+	return mk(0.0, bc__dmax(a.lo * a.lo, a.hi * a.hi));
 }
 
 static inline RT f_sqrt(struct bc_svo_ranger *g, RT a)
 {
 	(void)g;
-	return mk(sqrt(fmax(a.lo, 0.0)), sqrt(fmax(a.hi, 0.0)));
+	return mk(sqrt(bc__dmax(a.lo, 0.0)), sqrt(bc__dmax(a.hi, 0.0)));
 }
 
 static inline RT f_abs(struct bc_svo_ranger *g, RT a)
@@ -117,19 +117,19 @@ static inline RT f_abs(struct bc_svo_ranger *g, RT a)
 	if (a.hi <= 0.0) {
 		return mk(-a.hi, -a.lo);
 	}
-	return mk(0.0, fmax(-a.lo, a.hi));
+	return mk(0.0, bc__dmax(-a.lo, a.hi));
 }
 
 static inline RT f_min(struct bc_svo_ranger *g, RT a, RT b)
 {
 	(void)g;
-	return mk(fmin(a.lo, b.lo), fmin(a.hi, b.hi));
+	return mk(bc__dmin(a.lo, b.lo), bc__dmin(a.hi, b.hi));
 }
 
 static inline RT f_max(struct bc_svo_ranger *g, RT a, RT b)
 {
 	(void)g;
-	return mk(fmax(a.lo, b.lo), fmax(a.hi, b.hi));
+	return mk(bc__dmax(a.lo, b.lo), bc__dmax(a.hi, b.hi));
 }
 
 static inline RT f_recip(struct bc_svo_ranger *g, RT a)
@@ -149,7 +149,7 @@ static void f_input(struct bc_svo_ranger *g, const struct bc_svo_region *rg,
 		if (rg->segment) {
 			double a = (double)rg->o[i] + (double)rg->t0 * rg->d[i];
 			double b = (double)rg->o[i] + (double)rg->t1 * rg->d[i];
-			p[i] = mk(fmin(a, b), fmax(a, b));
+			p[i] = mk(bc__dmin(a, b), bc__dmax(a, b));
 		} else {
 			p[i] = mk(rg->lo[i], rg->hi[i]);
 		}

@@ -44,7 +44,7 @@ bool bc__svo_op_sharp_in(enum bc_op kind, double blend, double range,
 		if (a.lo > range || b.lo > range) {
 			return true;
 		}
-		bmax = blend * fmax(0.0, 1.0 + (blend - 6.0 * mlo) /
+		bmax = blend * bc__dmax(0.0, 1.0 + (blend - 6.0 * mlo) /
 						       (6.0 * range - blend));
 	} else {
 		if (a.lo > range || a.hi < -range || b.lo > range ||
@@ -90,7 +90,7 @@ double bc__svo_op_blend_bound(enum bc_op kind, double blend, double range,
 
 double bc__svo_op_margin(double blend, struct bc_svo_ivl m)
 {
-	double s = fmax(fabs(m.lo), fabs(m.hi));
+	double s = bc__dmax(fabs(m.lo), fabs(m.hi));
 	if (!isfinite(s)) {
 		return 0.0; /* an infinite bound needs no widening */
 	}
@@ -110,11 +110,11 @@ struct bc_svo_ivl bc_svo_range_op(enum bc_op kind, float blend, float range,
 				       blend, range, a, nb);
 	}
 	if (is_union(kind)) {
-		m.lo = fmin(a.lo, b.lo);
-		m.hi = fmin(a.hi, b.hi);
+		m.lo = bc__dmin(a.lo, b.lo);
+		m.hi = bc__dmin(a.hi, b.hi);
 	} else {
-		m.lo = fmax(a.lo, b.lo);
-		m.hi = fmax(a.hi, b.hi);
+		m.lo = bc__dmax(a.lo, b.lo);
+		m.hi = bc__dmax(a.hi, b.hi);
 	}
 	if (bc_op_is_smooth(kind) &&
 	    !bc__svo_op_sharp_in(kind, blend, range, a, b)) {
@@ -148,12 +148,12 @@ void bc__svo_geo_init(struct bc__svo_geo *geo, const struct bc_svo_region *rg)
 			e0 += (p0 - geo->c[i]) * (p0 - geo->c[i]);
 			e1 += (p1 - geo->c[i]) * (p1 - geo->c[i]);
 		}
-		r2 = fmax(e0, e1);
+		r2 = bc__dmax(e0, e1);
 	} else {
 		for (int i = 0; i < 3; i++) {
 			double h;
 			geo->c[i] = 0.5f * (rg->lo[i] + rg->hi[i]);
-			h = fmax((double)geo->c[i] - rg->lo[i],
+			h = bc__dmax((double)geo->c[i] - rg->lo[i],
 				 (double)rg->hi[i] - geo->c[i]);
 			r2 += h * h;
 		}

@@ -61,7 +61,7 @@ static inline RT t_extrude(struct bc_svo_ranger *g, RT d2, RT dz)
 static inline RT t_hull(struct bc_svo_ranger *g, RT a, RT b)
 {
 	struct bc_svo_ivl va = f_range(g, a), vb = f_range(g, b);
-	return f_from(g, fmin(va.lo, vb.lo), fmax(va.hi, vb.hi));
+	return f_from(g, bc__dmin(va.lo, vb.lo), bc__dmax(va.hi, vb.hi));
 }
 
 static RT t_ellipsoid(struct bc_svo_ranger *g, const float *k, const RT l[3])
@@ -83,8 +83,8 @@ static RT t_ellipsoid(struct bc_svo_ranger *g, const float *k, const RT l[3])
 		 * range is wider (or k1's reaches 0). */
 		RT km = f_addc(g, k0, -1.0);
 		struct bc_svo_ivl vk = f_range(g, km), vq;
-		double rmax = fmax(fmax(k[0], k[1]), k[2]);
-		double blo = fmax(vk.lo, 0.0) * k[6], bhi = fmax(vk.hi, 0.0) * rmax;
+		double rmax = bc__dmax(bc__dmax(k[0], k[1]), k[2]);
+		double blo = bc__dmax(vk.lo, 0.0) * k[6], bhi = bc__dmax(vk.hi, 0.0) * rmax;
 		RT k1 = t_len3(g, w[0], w[1], w[2]);
 		RT outer;
 		if (f_range(g, k1).lo > 0.0) {

@@ -37,7 +37,7 @@ static inline RT t_local(struct bc_svo_ranger *g, const float *rec, int k,
 
 static inline double t_mag(struct bc_svo_ivl v)
 {
-	return fmax(fabs(v.lo), fabs(v.hi));
+	return bc__dmax(fabs(v.lo), fabs(v.hi));
 }
 
 /* Range form of primitive term t over the region whose world forms are p
@@ -54,10 +54,18 @@ static RT t_prim(struct bc_svo_ranger *g, const struct bc_svo_term *t,
 	bool natural;
 	for (int k = 0; k < 3; k++) {
 		loc[k] = t_local(g, rec, k, p);
-		scale = fmax(scale, t_mag(f_range(g, loc[k])));
+		scale = bc__dmax(scale, t_mag(f_range(g, loc[k])));
 	}
-	for (uint32_t k = 0; k < BC_PRIM_PACKED; k++) {
-		scale = fmax(scale, fabs((double)pk[k]));
+	/* Lengths of the field are the point's distance from the local
+	 * origin and the primitive's own size (not its packed floats: some
+	 * are reciprocals, large for small shapes). An infinite or NaN size
+	 * (a degenerate ABV) falls back on the packed floats. */
+	if (isfinite(r->prim_size[t->prim])) {
+		scale += (double)r->prim_size[t->prim];
+	} else {
+		for (uint32_t k = 0; k < BC_PRIM_PACKED; k++) {
+			scale = bc__dmax(scale, fabs((double)pk[k]));
+		}
 	}
 	margin = BC__SVO_ROUND_REL * scale + BC__SVO_ROUND_ABS;
 	natural = !bc_svo_prim_uses_lipschitz(kind) &&

@@ -49,8 +49,10 @@ int bc_svo_rpn_init(struct bc_svo_rpn *out, const struct bc_lin *l)
 	out->rec = bc_calloc((size_t)l->nprims * BC_SVO_PRIM_REC + 2u * nops,
 			     sizeof(float));
 	out->prim_id = bc_calloc(l->nprims, sizeof(*out->prim_id));
+	out->prim_size = bc_calloc(l->nprims, sizeof(*out->prim_size));
 	out->color = bc_calloc(l->nprims, sizeof(*out->color));
-	if (!out->terms || !out->rec || !out->prim_id || !out->color) {
+	if (!out->terms || !out->rec || !out->prim_id || !out->prim_size ||
+	    !out->color) {
 		bc_svo_rpn_finish(out);
 		return BC_ENOMEM;
 	}
@@ -109,6 +111,12 @@ int bc_svo_rpn_init(struct bc_svo_rpn *out, const struct bc_lin *l)
 		return BC_EINVAL;
 	}
 	for (uint32_t k = 0; k < l->nprims; k++) {
+		float lo[3], hi[3], d2 = 0.0f;
+		bc_abv_aabb(&l->abv[k], lo, hi);
+		for (int i = 0; i < 3; i++) {
+			d2 += (hi[i] - lo[i]) * (hi[i] - lo[i]);
+		}
+		out->prim_size[k] = 0.5f * sqrtf(d2);
 		out->prim_id[k] = l->node_id[l->prim_slot[k]];
 		memcpy(out->color[k], l->color[k], sizeof(out->color[k]));
 	}
@@ -130,6 +138,7 @@ void bc_svo_rpn_finish(struct bc_svo_rpn *r)
 	bc_free(r->terms);
 	bc_free(r->rec);
 	bc_free(r->prim_id);
+	bc_free(r->prim_size);
 	bc_free(r->color);
 	memset(r, 0, sizeof(*r));
 }

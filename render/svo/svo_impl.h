@@ -17,8 +17,8 @@
  * Rounding margin. Ranges are computed in double precision; the values they
  * must enclose come from the single-precision evaluator. Each primitive and
  * each blending operator widens its range outward by BC__SVO_ROUND_REL times
- * the magnitude scale of the computation (largest local coordinate plus
- * largest shape parameter, or largest operand plus the blend). 2^-17 is 64
+ * the magnitude scale of the computation (largest local coordinate plus the
+ * primitive's size, or largest operand plus the blend). 2^-17 is 64
  * float ulps of that scale: it covers the float evaluator's own rounding
  * (a few tens of operations of at most half an ulp each, docs/svo.md) and
  * dwarfs the double rounding of the range computation (2^-53 per step).
@@ -26,6 +26,18 @@
 #define BC__SVO_ROUND_REL (1.0 / 131072.0)
 /* Absolute floor of the margin: scales of zero still round. */
 #define BC__SVO_ROUND_ABS 1.0e-30
+
+/* max and min of doubles without libm's fmax/fmin, which are calls (they
+ * must ignore a NaN operand): range code runs them by the million. A NaN
+ * operand gives the second operand back. */
+static inline double bc__dmax(double a, double b)
+{
+	return a > b ? a : b;
+}
+static inline double bc__dmin(double a, double b)
+{
+	return a < b ? a : b;
+}
 
 /* Dense-mask helpers. */
 static inline bool bc__svo_bit(const uint32_t *mask, uint32_t i)

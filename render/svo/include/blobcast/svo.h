@@ -94,6 +94,8 @@ struct bc_svo_rpn {
 	uint32_t stack;   /* evaluation stack entries needed */
 	float *rec;       /* records (see struct bc_svo_term.rec) */
 	uint32_t *prim_id; /* stable id of primitive k */
+	float *prim_size;  /* half diagonal of primitive k's ABV box: the
+			      length scale of its field (rounding margins) */
 	float (*color)[3]; /* colour of primitive k */
 	float lo[3], hi[3]; /* the tree's AABB (bc_lin lo/hi) */
 	float size;         /* its diagonal */
