@@ -566,8 +566,15 @@ static void draw(struct bc_viewer_app *a, double now)
 		uint32_t n = bc_viewer_edits_frame(&a->edits, a->settle_order,
 						   bc_viewer_now_ms(), &a->meter);
 		if (n && a->o.verbose) {
-			printf("latency edits=%u last_ms=%.1f\n", n,
-			       a->meter.last_latency);
+			/* The frame settles n edits, oldest first: the first
+			 * waited longest, the newest least. */
+			const struct bc_viewer_meter *m = &a->meter;
+			uint32_t k = n < m->nlatency ? n : m->nlatency;
+			uint32_t first = (m->next_latency +
+					  BC_VIEWER_METER_LATENCIES - k) %
+					 BC_VIEWER_METER_LATENCIES;
+			printf("latency edits=%u last_ms=%.1f oldest_ms=%.1f\n",
+			       n, m->last_latency, m->latency[first]);
 			fflush(stdout);
 		}
 		a->settle = false;

@@ -13,7 +13,8 @@
  *   keydown K, keyup K, key K
  *                    a key by its X keysym name (Shift_L, Control_L, s)
  *   sleep MS
- * Exits 0, or 1 when the window cannot be found or a command is wrong.
+ * Exits 0, or 1 when the window cannot be found, a command is wrong or
+ * the X server refused a request (the window is gone).
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -28,6 +29,20 @@ static Display *dpy;
 static Window win;
 static int px, py;        /* pointer, window pixels */
 static unsigned int state; /* modifier and button masks held */
+
+/* Xlib's default handler exits on the first error; ours reports it and
+ * lets the command fail at the end. */
+static int x_failed;
+
+static int on_x_error(Display *d, XErrorEvent *e)
+{
+	char text[128];
+	XGetErrorText(d, e->error_code, text, sizeof(text));
+	fprintf(stderr, "viewer_xpoke: X error: %s (request %u)\n", text,
+		(unsigned)e->request_code);
+	x_failed = 1;
+	return 0;
+}
 
 static void sleep_ms(long ms)
 {
@@ -149,6 +164,7 @@ int main(int argc, char **argv)
 		fprintf(stderr, "viewer_xpoke: no display\n");
 		return 1;
 	}
+	XSetErrorHandler(on_x_error);
 	if (strcmp(argv[i], "wait") == 0 && i + 1 < argc) {
 		long left = atol(argv[i + 1]);
 		while (!(win = find(DefaultRootWindow(dpy), argv[1])) &&
@@ -212,6 +228,7 @@ int main(int argc, char **argv)
 			return 1;
 		}
 	}
+	XSync(dpy, False);
 	XCloseDisplay(dpy);
-	return 0;
+	return x_failed;
 }
