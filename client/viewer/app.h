@@ -46,7 +46,7 @@
 struct bc_viewer_opts {
 	const char *server, *session, *name, *token;
 	enum bc_proto_role role;
-	uint32_t width, height;       /* window size asked for */
+	uint32_t width, height;          /* window size asked for */
 	enum bc_proto_encoding encoding; /* still frames: JPEG or PNG */
 	uint8_t quality, downscale;
 	bool gles, overlay, verbose;
@@ -112,7 +112,7 @@ struct bc_viewer_app {
 	uint32_t selected;
 
 	/* Frames. */
-	uint64_t nframes;     /* shown, snapshots excluded */
+	uint64_t nframes;      /* shown, snapshots excluded */
 	uint64_t settle_order; /* newest order shown since the last draw */
 	bool settle;
 	struct {
@@ -150,9 +150,9 @@ double bc_viewer_now_ms(void);
 /* Shows a sentence on the overlay (and on stderr when verbose). */
 void bc_viewer_status(struct bc_viewer_app *a, const char *fmt, ...)
 #if defined(__GNUC__)
-	__attribute__((format(printf, 2, 3)))
+    __attribute__((format(printf, 2, 3)))
 #endif
-	;
+    ;
 
 /* net.c */
 /* Handles messages already received or readable, at most
@@ -180,10 +180,10 @@ void bc_viewer_input_install(struct bc_viewer_app *a);
  * message per turn however many events arrived). */
 void bc_viewer_drag_step(struct bc_viewer_app *a, bool final);
 /* The PICK answer for a pending press arrived (node 0: nothing hit). */
-void bc_viewer_pick_answer(struct bc_viewer_app *a, uint32_t seq,
-			   uint32_t node, const float position[3]);
+void bc_viewer_pick_answer(struct bc_viewer_app *a, uint32_t seq, uint32_t node,
+                           const float position[3]);
 /* Window pixels to view pixels. */
-void bc_viewer_to_view(struct bc_viewer_app *a, double x, double y,
-		       float *vx, float *vy);
+void bc_viewer_to_view(struct bc_viewer_app *a, double x, double y, float *vx,
+                       float *vy);
 
 #endif

@@ -26,7 +26,7 @@ static float dot3(const float a[3], const float b[3])
 static void cross3(const float a[3], const float b[3], float out[3])
 {
 	float r[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-		      a[0] * b[1] - a[1] * b[0]};
+	              a[0] * b[1] - a[1] * b[0]};
 	memcpy(out, r, sizeof(r));
 }
 
@@ -91,7 +91,7 @@ void bc_viewer_orbit(struct bc_camera *cam, float dx, float dy)
 }
 
 float bc_viewer_pixel_size(const struct bc_camera *cam, float z,
-			   uint32_t height)
+                           uint32_t height)
 {
 	struct bc_view_rays vr;
 	bc_view_rays_init(&vr, cam, 1, height);
@@ -138,7 +138,7 @@ void bc_viewer_cam_clamp(struct bc_camera *cam)
 }
 
 bool bc_viewer_project(const struct bc_camera *cam, uint32_t width,
-		       uint32_t height, const float p[3], float out[3])
+                       uint32_t height, const float p[3], float out[3])
 {
 	struct bc_view_rays vr;
 	float d[3], z, x, y;
@@ -159,8 +159,8 @@ bool bc_viewer_project(const struct bc_camera *cam, uint32_t width,
 }
 
 void bc_viewer_move_in_plane(const struct bc_camera *cam, uint32_t height,
-			     const float origin[3], float z, float dx, float dy,
-			     float out[3])
+                             const float origin[3], float z, float dx, float dy,
+                             float out[3])
 {
 	struct bc_view_rays vr;
 	float s = bc_viewer_pixel_size(cam, z, height);
@@ -171,8 +171,8 @@ void bc_viewer_move_in_plane(const struct bc_camera *cam, uint32_t height,
 }
 
 const uint8_t bc_viewer_box_edges[12][2] = {
-	{0, 1}, {2, 3}, {4, 5}, {6, 7}, {0, 2}, {1, 3},
-	{4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6}, {3, 7},
+    {0, 1}, {2, 3}, {4, 5}, {6, 7}, {0, 2}, {1, 3},
+    {4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6}, {3, 7},
 };
 
 void bc_viewer_box_corners(const struct bc_prim_data *p, float corners[8][3])

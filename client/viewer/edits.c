@@ -20,7 +20,7 @@ void bc_viewer_edits_init(struct bc_viewer_edits *q)
 }
 
 void bc_viewer_edits_queue(struct bc_viewer_edits *q,
-			   const struct bc_viewer_edit *e)
+                           const struct bc_viewer_edit *e)
 {
 	q->pending = *e;
 	q->has_pending = true;
@@ -32,12 +32,12 @@ bool bc_viewer_edits_ready(const struct bc_viewer_edits *q)
 }
 
 void bc_viewer_edits_sent(struct bc_viewer_edits *q, uint32_t seq,
-			  double now_ms)
+                          double now_ms)
 {
 	if (q->nsent == BC_VIEWER_EDITS_SENT) {
 		/* An answer that never came: forget the oldest. */
 		memmove(&q->sent[0], &q->sent[1],
-			(BC_VIEWER_EDITS_SENT - 1) * sizeof(q->sent[0]));
+		        (BC_VIEWER_EDITS_SENT - 1) * sizeof(q->sent[0]));
 		q->nsent--;
 	}
 	q->sent[q->nsent].seq = seq;
@@ -57,7 +57,7 @@ static double take_sent(struct bc_viewer_edits *q, uint32_t seq)
 		if (q->sent[i].seq == seq) {
 			double at = q->sent[i].at;
 			memmove(&q->sent[i], &q->sent[i + 1],
-				(q->nsent - i - 1) * sizeof(q->sent[0]));
+			        (q->nsent - i - 1) * sizeof(q->sent[0]));
 			q->nsent--;
 			return at;
 		}
@@ -66,15 +66,15 @@ static double take_sent(struct bc_viewer_edits *q, uint32_t seq)
 }
 
 bool bc_viewer_edits_applied(struct bc_viewer_edits *q, uint32_t seq,
-			     uint64_t order)
+                             uint64_t order)
 {
 	double at = take_sent(q, seq);
 	bool was_inflight = seq != 0 && seq == q->inflight;
 	if (at >= 0.0) {
 		if (q->nshown == BC_VIEWER_EDITS_SENT) {
 			memmove(&q->shown[0], &q->shown[1],
-				(BC_VIEWER_EDITS_SENT - 1) *
-					sizeof(q->shown[0]));
+			        (BC_VIEWER_EDITS_SENT - 1) *
+			            sizeof(q->shown[0]));
 			q->nshown--;
 		}
 		q->shown[q->nshown].order = order;
@@ -97,7 +97,7 @@ bool bc_viewer_edits_refused(struct bc_viewer_edits *q, uint32_t seq)
 }
 
 uint32_t bc_viewer_edits_frame(struct bc_viewer_edits *q, uint64_t order,
-			       double now_ms, struct bc_viewer_meter *m)
+                               double now_ms, struct bc_viewer_meter *m)
 {
 	uint32_t n = 0, keep = 0;
 	/* Orders grow in the order EDIT_APPLIED arrives, but keep the test
@@ -105,7 +105,8 @@ uint32_t bc_viewer_edits_frame(struct bc_viewer_edits *q, uint64_t order,
 	for (uint32_t i = 0; i < q->nshown; i++) {
 		if (q->shown[i].order <= order) {
 			if (m) {
-				bc_viewer_meter_latency(m, now_ms - q->shown[i].at);
+				bc_viewer_meter_latency(m, now_ms -
+				                               q->shown[i].at);
 			}
 			n++;
 		} else {

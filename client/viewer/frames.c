@@ -42,7 +42,7 @@ void bc_viewer_frames_finish(struct bc_viewer_frames *f)
 }
 
 void bc_viewer_copy_rect(const uint8_t *src, uint32_t stride, uint32_t x,
-			 uint32_t y, uint32_t w, uint32_t h, uint8_t *dst)
+                         uint32_t y, uint32_t w, uint32_t h, uint8_t *dst)
 {
 	for (uint32_t j = 0; j < h; j++) {
 		memcpy(dst + (size_t)j * w * 4u,
@@ -54,7 +54,7 @@ void bc_viewer_copy_rect(const uint8_t *src, uint32_t stride, uint32_t x,
 /* Source coordinate of destination pixel centre i when n source pixels
  * stretch over m: the two neighbours and the weight of the second. */
 static void sample_at(uint32_t i, uint32_t n, uint32_t m, uint32_t *a,
-		      uint32_t *b, float *t)
+                      uint32_t *b, float *t)
 {
 	float s = ((float)i + 0.5f) * (float)n / (float)m - 0.5f;
 	float fl;
@@ -74,7 +74,7 @@ static void sample_at(uint32_t i, uint32_t n, uint32_t m, uint32_t *a,
 }
 
 void bc_viewer_upscale(const uint8_t *src, uint32_t sw, uint32_t sh,
-		       uint8_t *dst, uint32_t dw, uint32_t dh)
+                       uint8_t *dst, uint32_t dw, uint32_t dh)
 {
 	for (uint32_t y = 0; y < dh; y++) {
 		uint32_t y0, y1;
@@ -92,9 +92,9 @@ void bc_viewer_upscale(const uint8_t *src, uint32_t sw, uint32_t sh,
 			p11 = src + ((size_t)y1 * sw + x1) * 4u;
 			for (int c = 0; c < 4; c++) {
 				float top = (float)p00[c] +
-					    tx * (float)(p01[c] - p00[c]);
+				            tx * (float)(p01[c] - p00[c]);
 				float bot = (float)p10[c] +
-					    tx * (float)(p11[c] - p10[c]);
+				            tx * (float)(p11[c] - p10[c]);
 				d[c] = (uint8_t)(top + ty * (bot - top) + 0.5f);
 			}
 		}
@@ -119,7 +119,7 @@ static bool covers_all(const struct bc_msg_frame *fr)
 }
 
 static int apply_small(struct bc_viewer_frames *f, const struct bc_msg *m,
-		       struct bc_viewer_update *up, struct bc_errinfo *ei)
+                       struct bc_viewer_update *up, struct bc_errinfo *ei)
 {
 	const struct bc_msg_frame *fr = &m->frame;
 	uint32_t w = f->small.width, h = f->small.height;
@@ -139,7 +139,7 @@ static int apply_small(struct bc_viewer_frames *f, const struct bc_msg *m,
 }
 
 int bc_viewer_frames_apply(struct bc_viewer_frames *f, const struct bc_msg *m,
-			   struct bc_viewer_update *up, struct bc_errinfo *ei)
+                           struct bc_viewer_update *up, struct bc_errinfo *ei)
 {
 	const struct bc_msg_frame *fr = &m->frame;
 	bool covers, still = (m->flags & BC_PROTO_FLAG_STILL) != 0;
@@ -159,8 +159,8 @@ int bc_viewer_frames_apply(struct bc_viewer_frames *f, const struct bc_msg *m,
 		uint8_t *comp = bc_calloc(bytes, 1);
 		if (!comp) {
 			return bc_errinfo_set(ei, BC_ENOMEM,
-					      "no memory for a %ux%u picture",
-					      fr->width, fr->height);
+			                      "no memory for a %ux%u picture",
+			                      fr->width, fr->height);
 		}
 		bc_free(f->comp);
 		f->comp = comp;
@@ -178,16 +178,16 @@ int bc_viewer_frames_apply(struct bc_viewer_frames *f, const struct bc_msg *m,
 		    f->small.view_width == f->width &&
 		    f->small.view_height == f->height) {
 			bc_viewer_upscale(f->small.rgba, f->small.width,
-					  f->small.height, f->comp, f->width,
-					  f->height);
+			                  f->small.height, f->comp, f->width,
+			                  f->height);
 			up->whole = true;
 		}
 		/* The rectangles are relative to a base this picture may not
 		 * have: none at all, or an older one than the server thinks
 		 * (it counts damage since its last frame, interactive ones
 		 * included). */
-		up->want_refresh = still && (!f->have_full || !f->last_still ||
-					     f->comp_stale);
+		up->want_refresh =
+		    still && (!f->have_full || !f->last_still || f->comp_stale);
 	}
 	for (uint32_t i = 0; i < fr->nrects; i++) {
 		const struct bc_proto_rect *r = &fr->rects[i];

@@ -41,31 +41,64 @@ static const struct {
 	const char *name;
 	size_t offset;
 } glfn_table[] = {
-#define FN(n) {"gl" #n, offsetof(struct bc_viewer_glfn, n)}
-	FN(ActiveTexture), FN(AttachShader), FN(BindAttribLocation),
-	FN(BindTexture), FN(BlendFunc), FN(Clear), FN(ClearColor),
-	FN(CompileShader), FN(CreateProgram), FN(CreateShader),
-	FN(DeleteProgram), FN(DeleteShader), FN(DeleteTextures), FN(Disable),
-	FN(DisableVertexAttribArray), FN(DrawArrays), FN(Enable),
-	FN(EnableVertexAttribArray), FN(Finish), FN(GenTextures),
-	FN(GetError), FN(GetIntegerv), FN(GetProgramInfoLog),
-	FN(GetProgramiv), FN(GetShaderInfoLog), FN(GetShaderiv),
-	FN(GetString), FN(GetUniformLocation), FN(LinkProgram),
-	FN(PixelStorei), FN(ReadPixels), FN(ShaderSource), FN(TexImage2D),
-	FN(TexParameteri), FN(TexSubImage2D), FN(Uniform1f), FN(Uniform1i),
-	FN(Uniform2f), FN(Uniform4f), FN(UseProgram),
-	FN(VertexAttribPointer), FN(Viewport),
+#define FN(n)                                                                  \
+	{                                                                      \
+		"gl" #n, offsetof(struct bc_viewer_glfn, n)                    \
+	}
+    FN(ActiveTexture),
+    FN(AttachShader),
+    FN(BindAttribLocation),
+    FN(BindTexture),
+    FN(BlendFunc),
+    FN(Clear),
+    FN(ClearColor),
+    FN(CompileShader),
+    FN(CreateProgram),
+    FN(CreateShader),
+    FN(DeleteProgram),
+    FN(DeleteShader),
+    FN(DeleteTextures),
+    FN(Disable),
+    FN(DisableVertexAttribArray),
+    FN(DrawArrays),
+    FN(Enable),
+    FN(EnableVertexAttribArray),
+    FN(Finish),
+    FN(GenTextures),
+    FN(GetError),
+    FN(GetIntegerv),
+    FN(GetProgramInfoLog),
+    FN(GetProgramiv),
+    FN(GetShaderInfoLog),
+    FN(GetShaderiv),
+    FN(GetString),
+    FN(GetUniformLocation),
+    FN(LinkProgram),
+    FN(PixelStorei),
+    FN(ReadPixels),
+    FN(ShaderSource),
+    FN(TexImage2D),
+    FN(TexParameteri),
+    FN(TexSubImage2D),
+    FN(Uniform1f),
+    FN(Uniform1i),
+    FN(Uniform2f),
+    FN(Uniform4f),
+    FN(UseProgram),
+    FN(VertexAttribPointer),
+    FN(Viewport),
 #undef FN
 };
 
 static int load_functions(struct bc_viewer_gl *gl, struct bc_errinfo *ei)
 {
-	for (size_t i = 0; i < sizeof(glfn_table) / sizeof(glfn_table[0]); i++) {
+	for (size_t i = 0; i < sizeof(glfn_table) / sizeof(glfn_table[0]);
+	     i++) {
 		GLFWglproc p = glfwGetProcAddress(glfn_table[i].name);
 		if (!p) {
 			return bc_errinfo_set(ei, BC_EGL,
-					      "the GL driver lacks %s",
-					      glfn_table[i].name);
+			                      "the GL driver lacks %s",
+			                      glfn_table[i].name);
 		}
 		/* Every member is a function pointer of GLFWglproc's size;
 		 * copying the bytes avoids one cast per prototype. */
@@ -75,14 +108,15 @@ static int load_functions(struct bc_viewer_gl *gl, struct bc_errinfo *ei)
 }
 
 static GLuint compile(struct bc_viewer_gl *gl, GLenum stage, const char *name,
-		      const unsigned char *text, struct bc_errinfo *ei)
+                      const unsigned char *text, struct bc_errinfo *ei)
 {
 	const GLchar *src = (const GLchar *)text;
 	GLuint sh = gl->f.CreateShader(stage);
 	GLint ok = 0, len = 0;
 	char log[1024] = "";
 	if (!sh) {
-		bc_errinfo_set(ei, BC_EGL, "glCreateShader failed for %s", name);
+		bc_errinfo_set(ei, BC_EGL, "glCreateShader failed for %s",
+		               name);
 		return 0;
 	}
 	gl->f.ShaderSource(sh, 1, &src, NULL);
@@ -93,7 +127,8 @@ static GLuint compile(struct bc_viewer_gl *gl, GLenum stage, const char *name,
 		gl->f.GetShaderInfoLog(sh, (GLsizei)sizeof(log), NULL, log);
 	}
 	if (!ok) {
-		bc_errinfo_set(ei, BC_EGL, "%s does not compile: %s", name, log);
+		bc_errinfo_set(ei, BC_EGL, "%s does not compile: %s", name,
+		               log);
 		gl->f.DeleteShader(sh);
 		return 0;
 	}
@@ -111,9 +146,9 @@ static int build_program(struct bc_viewer_gl *gl, struct bc_errinfo *ei)
 	char log[1024] = "";
 	int rc = 0;
 	if (!(vs = compile(gl, GL_VERTEX_SHADER, "viewer.vert", viewer_vert,
-			   ei)) ||
+	                   ei)) ||
 	    !(fs = compile(gl, GL_FRAGMENT_SHADER, "viewer.frag", viewer_frag,
-			   ei))) {
+	                   ei))) {
 		rc = BC_EGL;
 		goto cleanup;
 	}
@@ -128,9 +163,12 @@ static int build_program(struct bc_viewer_gl *gl, struct bc_errinfo *ei)
 	gl->f.LinkProgram(gl->prog);
 	gl->f.GetProgramiv(gl->prog, GL_LINK_STATUS, &ok);
 	if (!ok) {
-		gl->f.GetProgramInfoLog(gl->prog, (GLsizei)sizeof(log), NULL, log);
-		rc = bc_errinfo_set(ei, BC_EGL, "the viewer's shaders do not "
-				    "link: %s", log);
+		gl->f.GetProgramInfoLog(gl->prog, (GLsizei)sizeof(log), NULL,
+		                        log);
+		rc = bc_errinfo_set(ei, BC_EGL,
+		                    "the viewer's shaders do not "
+		                    "link: %s",
+		                    log);
 		goto cleanup;
 	}
 	gl->u_size = gl->f.GetUniformLocation(gl->prog, "u_size");
@@ -150,7 +188,7 @@ cleanup:
 }
 
 static void copy_string(struct bc_viewer_gl *gl, GLenum what, char *dst,
-			size_t n)
+                        size_t n)
 {
 	const GLubyte *s = gl->f.GetString(what);
 	snprintf(dst, n, "%s", s ? (const char *)s : "?");
@@ -174,13 +212,13 @@ int bc_viewer_gl_init(struct bc_viewer_gl *gl, bool gles, struct bc_errinfo *ei)
 	for (int t = 1; t < BC_VIEWER_TEX_COUNT; t++) {
 		gl->f.BindTexture(GL_TEXTURE_2D, gl->tex[t]);
 		gl->f.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER,
-				    GL_LINEAR);
+		                    GL_LINEAR);
 		gl->f.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER,
-				    GL_LINEAR);
+		                    GL_LINEAR);
 		gl->f.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S,
-				    GL_CLAMP_TO_EDGE);
+		                    GL_CLAMP_TO_EDGE);
 		gl->f.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T,
-				    GL_CLAMP_TO_EDGE);
+		                    GL_CLAMP_TO_EDGE);
 	}
 	/* Rows of RGBA8 are always 4-byte aligned, but say so. */
 	gl->f.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
@@ -211,9 +249,9 @@ void bc_viewer_gl_finish(struct bc_viewer_gl *gl)
 }
 
 int bc_viewer_gl_upload(struct bc_viewer_gl *gl, enum bc_viewer_tex tex,
-			const uint8_t *rgba, uint32_t w, uint32_t h,
-			const struct bc_viewer_update *up,
-			struct bc_errinfo *ei)
+                        const uint8_t *rgba, uint32_t w, uint32_t h,
+                        const struct bc_viewer_update *up,
+                        struct bc_errinfo *ei)
 {
 	GLenum err;
 	if (tex <= BC_VIEWER_TEX_NONE || tex >= BC_VIEWER_TEX_COUNT || !rgba) {
@@ -221,18 +259,21 @@ int bc_viewer_gl_upload(struct bc_viewer_gl *gl, enum bc_viewer_tex tex,
 	}
 	if (w > (uint32_t)gl->max_tex || h > (uint32_t)gl->max_tex) {
 		return bc_errinfo_set(ei, BC_ELIMIT,
-				      "a %ux%u frame is larger than this GL's "
-				      "%d-pixel textures", w, h, gl->max_tex);
+		                      "a %ux%u frame is larger than this GL's "
+		                      "%d-pixel textures",
+		                      w, h, gl->max_tex);
 	}
 	gl->f.BindTexture(GL_TEXTURE_2D, gl->tex[tex]);
 	if (up->resized || gl->tex_w[tex] != w || gl->tex_h[tex] != h) {
 		gl->f.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA, (GLsizei)w,
-				 (GLsizei)h, 0, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
+		                 (GLsizei)h, 0, GL_RGBA, GL_UNSIGNED_BYTE,
+		                 rgba);
 		gl->tex_w[tex] = w;
 		gl->tex_h[tex] = h;
 	} else if (up->whole) {
 		gl->f.TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, (GLsizei)w,
-				    (GLsizei)h, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
+		                    (GLsizei)h, GL_RGBA, GL_UNSIGNED_BYTE,
+		                    rgba);
 	} else {
 		for (uint32_t i = 0; i < up->nrects; i++) {
 			const struct bc_proto_rect *r = &up->rects[i];
@@ -241,7 +282,7 @@ int bc_viewer_gl_upload(struct bc_viewer_gl *gl, enum bc_viewer_tex tex,
 				uint8_t *s = bc_realloc(gl->stage, need);
 				if (!s) {
 					return bc_errinfo_set(ei, BC_ENOMEM,
-							      "out of memory");
+					                      "out of memory");
 				}
 				gl->stage = s;
 				gl->stage_cap = need;
@@ -249,16 +290,16 @@ int bc_viewer_gl_upload(struct bc_viewer_gl *gl, enum bc_viewer_tex tex,
 			/* GLES 2 has no GL_UNPACK_ROW_LENGTH: pack the
 			 * rectangle's rows first. */
 			bc_viewer_copy_rect(rgba, w, r->x, r->y, r->w, r->h,
-					    gl->stage);
+			                    gl->stage);
 			gl->f.TexSubImage2D(GL_TEXTURE_2D, 0, r->x, r->y, r->w,
-					    r->h, GL_RGBA, GL_UNSIGNED_BYTE,
-					    gl->stage);
+			                    r->h, GL_RGBA, GL_UNSIGNED_BYTE,
+			                    gl->stage);
 		}
 	}
 	if ((err = gl->f.GetError()) != GL_NO_ERROR) {
 		return bc_errinfo_set(ei, BC_EGL,
-				      "texture upload failed (GL error 0x%x)",
-				      (unsigned)err);
+		                      "texture upload failed (GL error 0x%x)",
+		                      (unsigned)err);
 	}
 	return 0;
 }
@@ -275,11 +316,11 @@ void bc_viewer_gl_begin(struct bc_viewer_gl *gl, uint32_t w, uint32_t h)
 }
 
 void bc_viewer_gl_image(struct bc_viewer_gl *gl, enum bc_viewer_tex tex,
-			float x0, float y0, float x1, float y1)
+                        float x0, float y0, float x1, float y1)
 {
 	const float pos[12] = {x0, y0, x1, y0, x1, y1, x0, y0, x1, y1, x0, y1};
 	const float uv[12] = {0.0f, 0.0f, 1.0f, 0.0f, 1.0f, 1.0f,
-			      0.0f, 0.0f, 1.0f, 1.0f, 0.0f, 1.0f};
+	                      0.0f, 0.0f, 1.0f, 1.0f, 0.0f, 1.0f};
 	if (tex <= BC_VIEWER_TEX_NONE || tex >= BC_VIEWER_TEX_COUNT ||
 	    !gl->tex_w[tex]) {
 		return;
@@ -297,7 +338,7 @@ void bc_viewer_gl_image(struct bc_viewer_gl *gl, enum bc_viewer_tex tex,
 }
 
 void bc_viewer_gl_draw(struct bc_viewer_gl *gl, GLenum mode, const float *xy,
-		       size_t n, const float rgba[4])
+                       size_t n, const float rgba[4])
 {
 	if (n == 0) {
 		return;
@@ -312,17 +353,17 @@ void bc_viewer_gl_draw(struct bc_viewer_gl *gl, GLenum mode, const float *xy,
 }
 
 int bc_viewer_gl_read(struct bc_viewer_gl *gl, uint32_t w, uint32_t h,
-		      uint8_t *rgba, struct bc_errinfo *ei)
+                      uint8_t *rgba, struct bc_errinfo *ei)
 {
 	size_t row = (size_t)w * 4u;
 	GLenum err;
 	uint8_t tmp[256];
-	gl->f.ReadPixels(0, 0, (GLsizei)w, (GLsizei)h, GL_RGBA, GL_UNSIGNED_BYTE,
-			 rgba);
+	gl->f.ReadPixels(0, 0, (GLsizei)w, (GLsizei)h, GL_RGBA,
+	                 GL_UNSIGNED_BYTE, rgba);
 	if ((err = gl->f.GetError()) != GL_NO_ERROR) {
 		return bc_errinfo_set(ei, BC_EGL,
-				      "glReadPixels failed (GL error 0x%x)",
-				      (unsigned)err);
+		                      "glReadPixels failed (GL error 0x%x)",
+		                      (unsigned)err);
 	}
 	/* GL's rows run bottom up; images run top down. Swap in place, a
 	 * small piece at a time. */
@@ -330,8 +371,8 @@ int bc_viewer_gl_read(struct bc_viewer_gl *gl, uint32_t w, uint32_t h,
 		uint8_t *a = rgba + (size_t)y * row;
 		uint8_t *b = rgba + (size_t)(h - 1u - y) * row;
 		for (size_t off = 0; off < row; off += sizeof(tmp)) {
-			size_t n = row - off < sizeof(tmp) ? row - off
-							   : sizeof(tmp);
+			size_t n =
+			    row - off < sizeof(tmp) ? row - off : sizeof(tmp);
 			memcpy(tmp, a + off, n);
 			memcpy(a + off, b + off, n);
 			memcpy(b + off, tmp, n);

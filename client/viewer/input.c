@@ -19,8 +19,8 @@
 
 #include "app.h"
 
-void bc_viewer_to_view(struct bc_viewer_app *a, double x, double y,
-		       float *vx, float *vy)
+void bc_viewer_to_view(struct bc_viewer_app *a, double x, double y, float *vx,
+                       float *vy)
 {
 	int ww = 0, wh = 0;
 	glfwGetWindowSize(a->win, &ww, &wh);
@@ -68,20 +68,21 @@ void bc_viewer_drag_step(struct bc_viewer_app *a, bool final)
 		bc_viewer_camera_changed(a, !final);
 		break;
 	case BC_VIEWER_DRAG_MOVE: {
-		struct bc_viewer_edit e = {.node = a->drag.node, .nfields = 1,
-					   .interacting = !final};
+		struct bc_viewer_edit e = {
+		    .node = a->drag.node, .nfields = 1, .interacting = !final};
 		float x0, y0;
-		bc_viewer_to_view(a, a->drag.start_x, a->drag.start_y, &x0, &y0);
+		bc_viewer_to_view(a, a->drag.start_x, a->drag.start_y, &x0,
+		                  &y0);
 		/* From where it was grabbed, so rounding never accumulates. */
 		bc_viewer_move_in_plane(&a->cam, a->view_h, a->drag.origin,
-					a->drag.z, ex - x0, ey - y0,
-					e.fields[0].v);
+		                        a->drag.z, ex - x0, ey - y0,
+		                        e.fields[0].v);
 		e.fields[0].field = BC_PROTO_FIELD_TRANSLATE;
 		e.fields[0].count = 3;
 		for (int i = 0; i < 3; i++) {
-			e.fields[0].v[i] = fminf(fmaxf(e.fields[0].v[i],
-						       -BC_PROTO_MAX_ABS),
-						 BC_PROTO_MAX_ABS);
+			e.fields[0].v[i] =
+			    fminf(fmaxf(e.fields[0].v[i], -BC_PROTO_MAX_ABS),
+			          BC_PROTO_MAX_ABS);
 		}
 		bc_viewer_edit(a, &e);
 		break;
@@ -99,8 +100,8 @@ static void finish_drag(struct bc_viewer_app *a)
 	a->drag.mode = BC_VIEWER_DRAG_NONE;
 }
 
-void bc_viewer_pick_answer(struct bc_viewer_app *a, uint32_t seq,
-			   uint32_t node, const float position[3])
+void bc_viewer_pick_answer(struct bc_viewer_app *a, uint32_t seq, uint32_t node,
+                           const float position[3])
 {
 	const struct bc_tree *t = bc_client_scene(a->c, NULL);
 	struct bc_prim_data p;
@@ -128,9 +129,9 @@ void bc_viewer_pick_answer(struct bc_viewer_app *a, uint32_t seq,
 		 * pointer's motion at that depth keeps it under the
 		 * pointer. */
 		a->drag.z = bc_viewer_project(&a->cam, a->view_w, a->view_h,
-					      position, px)
-				    ? px[2]
-				    : 1.0f;
+		                              position, px)
+		                ? px[2]
+		                : 1.0f;
 		a->drag.mode = BC_VIEWER_DRAG_MOVE;
 	}
 	if (a->drag.released) {
@@ -153,7 +154,8 @@ static void on_button(GLFWwindow *w, int button, int action, int mods)
 		a->drag.start_y = a->drag.last_y = a->my;
 		if (button == GLFW_MOUSE_BUTTON_RIGHT ||
 		    button == GLFW_MOUSE_BUTTON_MIDDLE ||
-		    (button == GLFW_MOUSE_BUTTON_LEFT && (mods & GLFW_MOD_SHIFT))) {
+		    (button == GLFW_MOUSE_BUTTON_LEFT &&
+		     (mods & GLFW_MOD_SHIFT))) {
 			a->drag.mode = BC_VIEWER_DRAG_PAN;
 		} else if (button == GLFW_MOUSE_BUTTON_LEFT) {
 			/* Whether this starts an orbit or moves a shape
@@ -182,14 +184,14 @@ static void on_cursor(GLFWwindow *w, double x, double y)
 	a->my = y;
 	if (a->drag.mode != BC_VIEWER_DRAG_NONE &&
 	    fabs(x - a->drag.start_x) + fabs(y - a->drag.start_y) >
-		    BC_VIEWER_CLICK_SLOP) {
+	        BC_VIEWER_CLICK_SLOP) {
 		a->drag.moved = true;
 	}
 }
 
 /* Starts or continues a Shift/Ctrl wheel gesture on the selection. */
 static void wheel_edit(struct bc_viewer_app *a, enum bc_viewer_wheel what,
-		       double notches)
+                       double notches)
 {
 	const struct bc_tree *t = bc_client_scene(a->c, NULL);
 	struct bc_prim_data p;
@@ -219,22 +221,25 @@ static void wheel_edit(struct bc_viewer_app *a, enum bc_viewer_wheel what,
 			const struct bc_prim_info *info = bc_prim_info(p.kind);
 			int k = bc_viewer_size_param(p.kind);
 			if (k < 0) {
-				bc_viewer_status(a, "a %s has no size", info->name);
+				bc_viewer_status(a, "a %s has no size",
+				                 info->name);
 				return;
 			}
 			e->node = a->selected;
 			e->nfields = 1;
 			e->fields[0].field =
-				(uint8_t)(BC_PROTO_FIELD_PARAM0 + (unsigned)k);
+			    (uint8_t)(BC_PROTO_FIELD_PARAM0 + (unsigned)k);
 			e->fields[0].count = info->params[k].count;
-			memcpy(e->fields[0].v, p.params + info->params[k].offset,
+			memcpy(e->fields[0].v,
+			       p.params + info->params[k].offset,
 			       info->params[k].count * sizeof(float));
 		} else {
 			uint32_t parent = bc_tree_parent(t, a->selected);
 			if (!parent || !bc_tree_get(t, parent, NULL, &op) ||
 			    !bc_op_is_smooth(op.kind)) {
-				bc_viewer_status(a, "the shape's operator has no "
-						    "blend (not a smooth one)");
+				bc_viewer_status(a,
+				                 "the shape's operator has no "
+				                 "blend (not a smooth one)");
 				return;
 			}
 			e->node = parent;
@@ -266,16 +271,17 @@ static void on_scroll(GLFWwindow *w, double xoff, double yoff)
 {
 	struct bc_viewer_app *a = glfwGetWindowUserPointer(w);
 	bool shift = glfwGetKey(w, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS ||
-		     glfwGetKey(w, GLFW_KEY_RIGHT_SHIFT) == GLFW_PRESS;
+	             glfwGetKey(w, GLFW_KEY_RIGHT_SHIFT) == GLFW_PRESS;
 	bool ctrl = glfwGetKey(w, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS ||
-		    glfwGetKey(w, GLFW_KEY_RIGHT_CONTROL) == GLFW_PRESS;
+	            glfwGetKey(w, GLFW_KEY_RIGHT_CONTROL) == GLFW_PRESS;
 	(void)xoff;
 	if (yoff == 0.0) {
 		return;
 	}
 	if (shift || ctrl) {
-		wheel_edit(a, ctrl ? BC_VIEWER_WHEEL_BLEND : BC_VIEWER_WHEEL_SIZE,
-			   yoff);
+		wheel_edit(a,
+		           ctrl ? BC_VIEWER_WHEEL_BLEND : BC_VIEWER_WHEEL_SIZE,
+		           yoff);
 		return;
 	}
 	/* Wheel up brings the camera closer. */

@@ -51,57 +51,58 @@ void bc_viewer_status(struct bc_viewer_app *a, const char *fmt, ...)
 	}
 }
 
-/* ---- options -------------------------------------------------------------- */
+/* ---- options ------------------------------------------------------------- */
 
 static void usage(FILE *out)
 {
-	fprintf(out,
-		"usage: blobcast-view [options]\n"
-		"\n"
-		"Shows a blobcast session in a window and edits it with the "
-		"mouse.\n"
-		"\n"
-		"  --server ADDR      HOST:PORT, [IPV6]:PORT or unix:PATH "
-		"(default 127.0.0.1:7878)\n"
-		"  --session NAME     session to join (default \"default\"; an "
-		"editor\n"
-		"                     creates it when it does not exist)\n"
-		"  --role ROLE        editor (default) or viewer\n"
-		"  --name NAME        the name other members see "
-		"(default blobcast-view)\n"
-		"  --token TOKEN      authentication token\n"
-		"  --size WxH         window size (default 960x600)\n"
-		"  --encoding ENC     still frames as jpeg (default) or png\n"
-		"  --quality Q        JPEG quality of still frames, 1..100 "
-		"(default 85;\n"
-		"                     interactive frames use at most 70)\n"
-		"  --downscale N      interactive frames at 1/N size, 1..8 "
-		"(default 2)\n"
-		"  --gles             use an OpenGL ES 2.0 context\n"
-		"  --no-overlay       start with the overlay hidden (O toggles)\n"
-		"  --snapshot-dir DIR where S saves lossless snapshots "
-		"(default .)\n"
-		"  --screenshot FILE  save the window to FILE once --frames "
-		"frames\n"
-		"                     were shown, then exit\n"
-		"  --frames N         frames before the screenshot (default 1)\n"
-		"  --turn DEG         with --frames > 1: turn the camera by DEG "
-		"after\n"
-		"                     each frame (the daemon renders on change "
-		"only;\n"
-		"                     default 15)\n"
-		"  --dump-frame FILE  with --screenshot: also save the picture "
-		"received\n"
-		"  --verbose          print frames, picks and edits on stdout\n"
-		"  --help             this text\n"
-		"\n"
-		"Mouse: drag orbits, or moves the shape under the pointer; "
-		"right drag\n"
-		"or Shift-drag pans; the wheel zooms, Shift+wheel sizes the "
-		"selected\n"
-		"shape, Ctrl+wheel changes its operator's blend. Keys: S "
-		"snapshot,\n"
-		"P screenshot, O overlay, R scene camera, Q or Escape quit.\n");
+	fprintf(
+	    out,
+	    "usage: blobcast-view [options]\n"
+	    "\n"
+	    "Shows a blobcast session in a window and edits it with the "
+	    "mouse.\n"
+	    "\n"
+	    "  --server ADDR      HOST:PORT, [IPV6]:PORT or unix:PATH "
+	    "(default 127.0.0.1:7878)\n"
+	    "  --session NAME     session to join (default \"default\"; an "
+	    "editor\n"
+	    "                     creates it when it does not exist)\n"
+	    "  --role ROLE        editor (default) or viewer\n"
+	    "  --name NAME        the name other members see "
+	    "(default blobcast-view)\n"
+	    "  --token TOKEN      authentication token\n"
+	    "  --size WxH         window size (default 960x600)\n"
+	    "  --encoding ENC     still frames as jpeg (default) or png\n"
+	    "  --quality Q        JPEG quality of still frames, 1..100 "
+	    "(default 85;\n"
+	    "                     interactive frames use at most 70)\n"
+	    "  --downscale N      interactive frames at 1/N size, 1..8 "
+	    "(default 2)\n"
+	    "  --gles             use an OpenGL ES 2.0 context\n"
+	    "  --no-overlay       start with the overlay hidden (O toggles)\n"
+	    "  --snapshot-dir DIR where S saves lossless snapshots "
+	    "(default .)\n"
+	    "  --screenshot FILE  save the window to FILE once --frames "
+	    "frames\n"
+	    "                     were shown, then exit\n"
+	    "  --frames N         frames before the screenshot (default 1)\n"
+	    "  --turn DEG         with --frames > 1: turn the camera by DEG "
+	    "after\n"
+	    "                     each frame (the daemon renders on change "
+	    "only;\n"
+	    "                     default 15)\n"
+	    "  --dump-frame FILE  with --screenshot: also save the picture "
+	    "received\n"
+	    "  --verbose          print frames, picks and edits on stdout\n"
+	    "  --help             this text\n"
+	    "\n"
+	    "Mouse: drag orbits, or moves the shape under the pointer; "
+	    "right drag\n"
+	    "or Shift-drag pans; the wheel zooms, Shift+wheel sizes the "
+	    "selected\n"
+	    "shape, Ctrl+wheel changes its operator's blend. Keys: S "
+	    "snapshot,\n"
+	    "P screenshot, O overlay, R scene camera, Q or Escape quit.\n");
 }
 
 static bool parse_u32(const char *s, uint32_t lo, uint32_t hi, uint32_t *out)
@@ -141,18 +142,18 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o)
 {
 	uint32_t v;
 	*o = (struct bc_viewer_opts){
-		.session = "default",
-		.name = "blobcast-view",
-		.role = BC_PROTO_ROLE_EDITOR,
-		.width = 960,
-		.height = 600,
-		.encoding = BC_PROTO_ENC_JPEG,
-		.quality = 85,
-		.downscale = 2,
-		.overlay = true,
-		.frames = 1,
-		.turn_deg = 15.0f,
-		.snapshot_dir = ".",
+	    .session = "default",
+	    .name = "blobcast-view",
+	    .role = BC_PROTO_ROLE_EDITOR,
+	    .width = 960,
+	    .height = 600,
+	    .encoding = BC_PROTO_ENC_JPEG,
+	    .quality = 85,
+	    .downscale = 2,
+	    .overlay = true,
+	    .frames = 1,
+	    .turn_deg = 15.0f,
+	    .snapshot_dir = ".",
 	};
 	for (int i = 1; i < argc; i++) {
 		const char *k = argv[i];
@@ -193,8 +194,10 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o)
 			} else if (strcmp(val, "viewer") == 0) {
 				o->role = BC_PROTO_ROLE_VIEWER;
 			} else {
-				fprintf(stderr, "blobcast-view: --role is editor "
-						"or viewer, not \"%s\"\n", val);
+				fprintf(stderr,
+				        "blobcast-view: --role is editor "
+				        "or viewer, not \"%s\"\n",
+				        val);
 				return EXIT_USAGE;
 			}
 		} else if (strcmp(k, "--encoding") == 0) {
@@ -203,49 +206,58 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o)
 			} else if (strcmp(val, "png") == 0) {
 				o->encoding = BC_PROTO_ENC_PNG;
 			} else {
-				fprintf(stderr, "blobcast-view: --encoding is jpeg "
-						"or png, not \"%s\"\n", val);
+				fprintf(stderr,
+				        "blobcast-view: --encoding is jpeg "
+				        "or png, not \"%s\"\n",
+				        val);
 				return EXIT_USAGE;
 			}
 		} else if (strcmp(k, "--size") == 0) {
 			if (!parse_size(val, &o->width, &o->height)) {
-				fprintf(stderr, "blobcast-view: --size takes WxH, "
-						"each 1..%u, not \"%s\"\n",
-					BC_PROTO_MAX_DIM, val);
+				fprintf(stderr,
+				        "blobcast-view: --size takes WxH, "
+				        "each 1..%u, not \"%s\"\n",
+				        BC_PROTO_MAX_DIM, val);
 				return EXIT_USAGE;
 			}
 		} else if (strcmp(k, "--quality") == 0) {
 			if (!parse_u32(val, 1, BC_PROTO_MAX_QUALITY, &v)) {
-				fprintf(stderr, "blobcast-view: --quality is 1..%u\n",
-					BC_PROTO_MAX_QUALITY);
+				fprintf(stderr,
+				        "blobcast-view: --quality is 1..%u\n",
+				        BC_PROTO_MAX_QUALITY);
 				return EXIT_USAGE;
 			}
 			o->quality = (uint8_t)v;
 		} else if (strcmp(k, "--downscale") == 0) {
 			if (!parse_u32(val, 1, BC_PROTO_MAX_DOWNSCALE, &v)) {
-				fprintf(stderr, "blobcast-view: --downscale is "
-						"1..%u\n", BC_PROTO_MAX_DOWNSCALE);
+				fprintf(stderr,
+				        "blobcast-view: --downscale is "
+				        "1..%u\n",
+				        BC_PROTO_MAX_DOWNSCALE);
 				return EXIT_USAGE;
 			}
 			o->downscale = (uint8_t)v;
 		} else if (strcmp(k, "--frames") == 0) {
 			if (!parse_u32(val, 1, 1000000, &o->frames)) {
 				fprintf(stderr, "blobcast-view: --frames is "
-						"1..1000000\n");
+				                "1..1000000\n");
 				return EXIT_USAGE;
 			}
 		} else if (strcmp(k, "--turn") == 0) {
 			char *end;
 			double d = strtod(val, &end);
 			if (*end || !(fabs(d) <= 90.0)) {
-				fprintf(stderr, "blobcast-view: --turn is -90..90 "
-						"degrees\n");
+				fprintf(stderr,
+				        "blobcast-view: --turn is -90..90 "
+				        "degrees\n");
 				return EXIT_USAGE;
 			}
 			o->turn_deg = (float)d;
 		} else {
-			fprintf(stderr, "blobcast-view: unknown option %s (see "
-					"--help)\n", k);
+			fprintf(stderr,
+			        "blobcast-view: unknown option %s (see "
+			        "--help)\n",
+			        k);
 			return EXIT_USAGE;
 		}
 		if (takes) {
@@ -254,18 +266,19 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o)
 	}
 	if (o->dump_frame && !o->screenshot) {
 		fprintf(stderr, "blobcast-view: --dump-frame needs "
-				"--screenshot\n");
+		                "--screenshot\n");
 		return EXIT_USAGE;
 	}
-	if (o->screenshot && !bc_image_ext_supports(o->screenshot, BC_IMAGE_U8)) {
+	if (o->screenshot &&
+	    !bc_image_ext_supports(o->screenshot, BC_IMAGE_U8)) {
 		fprintf(stderr, "blobcast-view: cannot write images named %s\n",
-			o->screenshot);
+		        o->screenshot);
 		return EXIT_USAGE;
 	}
 	return 0;
 }
 
-/* ---- the socket watcher ---------------------------------------------------- */
+/* ---- the socket watcher -------------------------------------------------- */
 
 static void *watch_main(void *arg)
 {
@@ -273,8 +286,8 @@ static void *watch_main(void *arg)
 	bool armed = true;
 	for (;;) {
 		struct pollfd p[2] = {
-			{.fd = a->wake[0], .events = POLLIN},
-			{.fd = bc_client_fd(a->c), .events = armed ? POLLIN : 0},
+		    {.fd = a->wake[0], .events = POLLIN},
+		    {.fd = bc_client_fd(a->c), .events = armed ? POLLIN : 0},
 		};
 		char b;
 		if (poll(p, 2, -1) < 0) {
@@ -337,7 +350,7 @@ static void watch_stop(struct bc_viewer_app *a)
 	a->watching = false;
 }
 
-/* ---- drawing --------------------------------------------------------------- */
+/* ---- drawing ------------------------------------------------------------- */
 
 static const char *role_name(enum bc_proto_role r)
 {
@@ -366,31 +379,32 @@ static void fmt_selection(struct bc_viewer_app *a, char *out, size_t n)
 	if (!a->selected || !t || !bc_tree_get(t, a->selected, &p, NULL) ||
 	    !(info = bc_prim_info(p.kind))) {
 		snprintf(out, n, "%s - click a shape to select it",
-			 role_name(bc_client_info(a->c)->role));
+		         role_name(bc_client_info(a->c)->role));
 		return;
 	}
 	len = snprintf(out, n, "#%u %s", a->selected, info->name);
 	if ((k = bc_viewer_size_param(p.kind)) >= 0 && len >= 0 &&
 	    (size_t)len < n) {
 		len += snprintf(out + len, n - (size_t)len, " %s %.3g",
-				info->params[k].name,
-				(double)p.params[info->params[k].offset]);
+		                info->params[k].name,
+		                (double)p.params[info->params[k].offset]);
 	}
 	parent = bc_tree_parent(t, a->selected);
 	if (parent && bc_tree_get(t, parent, NULL, &op) && len >= 0 &&
 	    (size_t)len < n) {
 		if (bc_op_is_smooth(op.kind)) {
-			snprintf(out + len, n - (size_t)len, " in %s blend %.3g",
-				 bc_op_name(op.kind), (double)op.blend);
+			snprintf(out + len, n - (size_t)len,
+			         " in %s blend %.3g", bc_op_name(op.kind),
+			         (double)op.blend);
 		} else {
 			snprintf(out + len, n - (size_t)len, " in %s",
-				 bc_op_name(op.kind));
+			         bc_op_name(op.kind));
 		}
 	}
 }
 
 static void draw_overlay(struct bc_viewer_app *a, uint32_t fw, uint32_t fh,
-			 double now)
+                         double now)
 {
 	char text[800], lat[64], sel[200];
 	const float pad = 6.0f;
@@ -403,16 +417,18 @@ static void draw_overlay(struct bc_viewer_app *a, uint32_t fw, uint32_t fh,
 	fmt_latency(&a->meter, lat, sizeof(lat));
 	fmt_selection(a, sel, sizeof(sel));
 	snprintf(text, sizeof(text),
-		 "%.0f fps  edit>frame %s  %.1f kB/frame\n"
-		 "frame %u %s %s %ux%u %u rect%s order %llu\n%s",
-		 bc_viewer_meter_fps(&a->meter, now), lat,
-		 bc_viewer_meter_kb(&a->meter), a->last.frame_no,
-		 (a->last.flags & BC_PROTO_FLAG_STILL) ? "still" : "interactive",
-		 a->last.encoding == BC_PROTO_ENC_PNG ? "png"
-		 : a->last.encoding == BC_PROTO_ENC_RAW ? "raw" : "jpeg",
-		 a->last.image_width, a->last.image_height, a->last.nrects,
-		 a->last.nrects == 1 ? "" : "s",
-		 (unsigned long long)a->last.order, sel);
+	         "%.0f fps  edit>frame %s  %.1f kB/frame\n"
+	         "frame %u %s %s %ux%u %u rect%s order %llu\n%s",
+	         bc_viewer_meter_fps(&a->meter, now), lat,
+	         bc_viewer_meter_kb(&a->meter), a->last.frame_no,
+	         (a->last.flags & BC_PROTO_FLAG_STILL) ? "still"
+	                                               : "interactive",
+	         a->last.encoding == BC_PROTO_ENC_PNG   ? "png"
+	         : a->last.encoding == BC_PROTO_ENC_RAW ? "raw"
+	                                                : "jpeg",
+	         a->last.image_width, a->last.image_height, a->last.nrects,
+	         a->last.nrects == 1 ? "" : "s",
+	         (unsigned long long)a->last.order, sel);
 	if (a->status[0] &&
 	    (a->offline || now - a->status_at < BC_VIEWER_STATUS_MS)) {
 		size_t len = strlen(text);
@@ -423,13 +439,13 @@ static void draw_overlay(struct bc_viewer_app *a, uint32_t fw, uint32_t fh,
 	h = (float)lines * BC_VIEWER_LINE_ADVANCE * scale + 2.0f * pad -
 	    2.0f * scale;
 	{
-		const float q[12] = {0.0f, 0.0f, w, 0.0f, w, h,
-				     0.0f, 0.0f, w, h, 0.0f, h};
+		const float q[12] = {0.0f, 0.0f, w, 0.0f, w,    h,
+		                     0.0f, 0.0f, w, h,    0.0f, h};
 		memcpy(panel, q, sizeof(panel));
 	}
 	bc_viewer_gl_draw(&a->gl, GL_TRIANGLES, panel, 6, panel_rgba);
 	nf = bc_viewer_text_tris(text, pad, pad, scale, a->text,
-				 BC_VIEWER_TEXT_FLOATS);
+	                         BC_VIEWER_TEXT_FLOATS);
 	if (nf > BC_VIEWER_TEXT_FLOATS) {
 		nf = BC_VIEWER_TEXT_FLOATS;
 	}
@@ -453,8 +469,8 @@ static void draw_highlight(struct bc_viewer_app *a, uint32_t fw, uint32_t fh)
 	bc_viewer_box_corners(&p, corners);
 	for (int i = 0; i < 8; i++) {
 		float v[3];
-		if (!bc_viewer_project(&a->cam, a->view_w, a->view_h, corners[i],
-				       v)) {
+		if (!bc_viewer_project(&a->cam, a->view_w, a->view_h,
+		                       corners[i], v)) {
 			return;
 		}
 		px[i][0] = v[0] * (float)fw / (float)a->view_w;
@@ -474,8 +490,8 @@ static void draw_highlight(struct bc_viewer_app *a, uint32_t fw, uint32_t fh)
 }
 
 /* Writes the back buffer (before the swap) to path. */
-static int save_window(struct bc_viewer_app *a, const char *path,
-		       uint32_t fw, uint32_t fh)
+static int save_window(struct bc_viewer_app *a, const char *path, uint32_t fw,
+                       uint32_t fh)
 {
 	struct bc_errinfo ei = {0};
 	uint8_t *px = bc_malloc((size_t)fw * fh * 4u);
@@ -510,10 +526,10 @@ static int dump_frame(struct bc_viewer_app *a, const char *path)
 	int rc;
 	if (f->showing_small) {
 		rc = bc_image_write_rgba8(path, f->small.width, f->small.height,
-					  f->small.rgba, &ei);
+		                          f->small.rgba, &ei);
 	} else if (f->comp) {
 		rc = bc_image_write_rgba8(path, f->width, f->height, f->comp,
-					  &ei);
+		                          &ei);
 	} else {
 		rc = bc_errinfo_set(&ei, BC_ESTATE, "no frame yet");
 	}
@@ -537,42 +553,42 @@ static void draw(struct bc_viewer_app *a, double now)
 	bc_viewer_gl_begin(&a->gl, fw, fh);
 	if (a->frames.showing_small) {
 		bc_viewer_gl_image(&a->gl, BC_VIEWER_TEX_SMALL, 0.0f, 0.0f,
-				   (float)fw, (float)fh);
+		                   (float)fw, (float)fh);
 	} else if (a->frames.have_full) {
 		bc_viewer_gl_image(&a->gl, BC_VIEWER_TEX_FULL, 0.0f, 0.0f,
-				   (float)fw, (float)fh);
+		                   (float)fw, (float)fh);
 	}
 	draw_highlight(a, fw, fh);
 	if (a->o.overlay) {
 		draw_overlay(a, fw, fh, now);
 	}
 	if (shot_done) {
-		a->exit_code = save_window(a, a->o.screenshot, fw, fh) ||
-					       (a->o.dump_frame &&
-						dump_frame(a, a->o.dump_frame))
-				       ? EXIT_FAIL
-				       : 0;
+		a->exit_code =
+		    save_window(a, a->o.screenshot, fw, fh) ||
+		            (a->o.dump_frame && dump_frame(a, a->o.dump_frame))
+		        ? EXIT_FAIL
+		        : 0;
 		a->quit = true;
 	} else if (a->screenshot_now) {
 		char path[64];
 		a->screenshot_now = false;
 		snprintf(path, sizeof(path), "blobcast-view-%03u.png",
-			 ++a->shots);
+		         ++a->shots);
 		save_window(a, path, fw, fh);
 	}
 	glfwSwapBuffers(a->win);
 	a->redraw = false;
 	if (a->settle) {
-		uint32_t n = bc_viewer_edits_frame(&a->edits, a->settle_order,
-						   bc_viewer_now_ms(), &a->meter);
+		uint32_t n = bc_viewer_edits_frame(
+		    &a->edits, a->settle_order, bc_viewer_now_ms(), &a->meter);
 		if (n && a->o.verbose) {
 			/* The frame settles n edits, oldest first: the first
 			 * waited longest, the newest least. */
 			const struct bc_viewer_meter *m = &a->meter;
 			uint32_t k = n < m->nlatency ? n : m->nlatency;
-			uint32_t first = (m->next_latency +
-					  BC_VIEWER_METER_LATENCIES - k) %
-					 BC_VIEWER_METER_LATENCIES;
+			uint32_t first =
+			    (m->next_latency + BC_VIEWER_METER_LATENCIES - k) %
+			    BC_VIEWER_METER_LATENCIES;
 			printf("latency edits=%u last_ms=%.1f oldest_ms=%.1f\n",
 			       n, m->last_latency, m->latency[first]);
 			fflush(stdout);
@@ -587,12 +603,12 @@ static void update_title(struct bc_viewer_app *a, double now)
 	char title[300], lat[64];
 	fmt_latency(&a->meter, lat, sizeof(lat));
 	snprintf(title, sizeof(title),
-		 "blobcast-view: %s (%s, %u member%s) - %.0f fps, edit>frame "
-		 "%s, %.1f kB/frame",
-		 info->session, role_name(info->role), info->nmembers,
-		 info->nmembers == 1 ? "" : "s",
-		 bc_viewer_meter_fps(&a->meter, now), lat,
-		 bc_viewer_meter_kb(&a->meter));
+	         "blobcast-view: %s (%s, %u member%s) - %.0f fps, edit>frame "
+	         "%s, %.1f kB/frame",
+	         info->session, role_name(info->role), info->nmembers,
+	         info->nmembers == 1 ? "" : "s",
+	         bc_viewer_meter_fps(&a->meter, now), lat,
+	         bc_viewer_meter_kb(&a->meter));
 	glfwSetWindowTitle(a->win, title);
 	a->stats_at = now;
 }
@@ -601,14 +617,14 @@ static void update_title(struct bc_viewer_app *a, double now)
  * each frame gives it one. */
 static void maybe_turn(struct bc_viewer_app *a)
 {
-	if (!a->o.screenshot || a->nframes == 0 ||
-	    a->nframes >= a->o.frames || a->turn_pending) {
+	if (!a->o.screenshot || a->nframes == 0 || a->nframes >= a->o.frames ||
+	    a->turn_pending) {
 		return;
 	}
 	bc_viewer_orbit(&a->cam,
-			a->o.turn_deg * 3.14159265f / 180.0f /
-				BC_VIEWER_ORBIT_PER_PX,
-			0.0f);
+	                a->o.turn_deg * 3.14159265f / 180.0f /
+	                    BC_VIEWER_ORBIT_PER_PX,
+	                0.0f);
 	bc_viewer_camera_changed(a, false);
 	a->turn_pending = true;
 }
@@ -622,7 +638,8 @@ static void run(struct bc_viewer_app *a)
 		if (!offline) {
 			more = bc_viewer_pump(a);
 			if (more < 0) {
-				fprintf(stderr, "blobcast-view: %s\n", a->status);
+				fprintf(stderr, "blobcast-view: %s\n",
+				        a->status);
 				offline = a->offline = true;
 				more = 0;
 				if (a->o.screenshot) {
@@ -659,13 +676,14 @@ static void run(struct bc_viewer_app *a)
 			glfwPollEvents();
 			continue;
 		}
-		wait = BC_VIEWER_STATS_EVERY_MS - (bc_viewer_now_ms() - a->stats_at);
+		wait = BC_VIEWER_STATS_EVERY_MS -
+		       (bc_viewer_now_ms() - a->stats_at);
 		if (due >= 0.0 && due < wait) {
 			wait = due;
 		}
 		if (a->status[0] && !a->offline) {
 			double left = a->status_at + BC_VIEWER_STATUS_MS -
-				      bc_viewer_now_ms();
+			              bc_viewer_now_ms();
 			if (left > 0.0 && left < wait) {
 				wait = left;
 			}
@@ -700,7 +718,7 @@ static GLFWwindow *open_window(const struct bc_viewer_opts *o, char *title)
 		/* Some X servers' GLX cannot make ES contexts; EGL can. */
 		glfwWindowHint(GLFW_CONTEXT_CREATION_API, GLFW_EGL_CONTEXT_API);
 		w = glfwCreateWindow((int)o->width, (int)o->height, title, NULL,
-				     NULL);
+		                     NULL);
 	}
 	return w;
 }
@@ -728,19 +746,19 @@ int main(int argc, char **argv)
 	}
 
 	if ((rc = bc_client_connect(&a->c,
-				    &(struct bc_client_opts){
-					    .addr = a->o.server,
-					    .name = a->o.name,
-					    .token = a->o.token,
-				    },
-				    &ei)) ||
+	                            &(struct bc_client_opts){
+	                                .addr = a->o.server,
+	                                .name = a->o.name,
+	                                .token = a->o.token,
+	                            },
+	                            &ei)) ||
 	    (rc = bc_client_join(a->c, a->o.session, a->o.role,
-				 a->o.role == BC_PROTO_ROLE_EDITOR
-					 ? BC_CLIENT_JOIN_ANY
-					 : BC_CLIENT_JOIN_EXISTING,
-				 &ei))) {
+	                         a->o.role == BC_PROTO_ROLE_EDITOR
+	                             ? BC_CLIENT_JOIN_ANY
+	                             : BC_CLIENT_JOIN_EXISTING,
+	                         &ei))) {
 		fprintf(stderr, "blobcast-view: %s: %s\n",
-			a->o.server ? a->o.server : "127.0.0.1:7878", ei.msg);
+		        a->o.server ? a->o.server : "127.0.0.1:7878", ei.msg);
 		goto cleanup;
 	}
 	if ((scene = bc_client_scene(a->c, &a->cam)) == NULL) {
@@ -751,14 +769,14 @@ int main(int argc, char **argv)
 	glfwSetErrorCallback(on_glfw_error);
 	if (!glfwInit()) {
 		fprintf(stderr, "blobcast-view: no window system (is DISPLAY "
-				"set? headless: xvfb-run blobcast-view ...)\n");
+		                "set? headless: xvfb-run blobcast-view ...)\n");
 		goto cleanup;
 	}
 	glfw_up = true;
 	snprintf(title, sizeof(title), "blobcast-view: %s", a->o.session);
 	if (!(a->win = open_window(&a->o, title))) {
 		fprintf(stderr, "blobcast-view: no %s context for a window\n",
-			a->o.gles ? "OpenGL ES 2.0" : "OpenGL 2.1");
+		        a->o.gles ? "OpenGL ES 2.0" : "OpenGL 2.1");
 		goto cleanup;
 	}
 	glfwMakeContextCurrent(a->win);

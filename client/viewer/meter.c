@@ -16,7 +16,7 @@ void bc_viewer_meter_init(struct bc_viewer_meter *m)
 }
 
 void bc_viewer_meter_frame(struct bc_viewer_meter *m, uint32_t bytes,
-			   double now_ms)
+                           double now_ms)
 {
 	m->frame_at[m->next_at] = now_ms;
 	m->next_at = (m->next_at + 1) % BC_VIEWER_METER_TIMES;

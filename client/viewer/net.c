@@ -34,18 +34,18 @@ int bc_viewer_send_view(struct bc_viewer_app *a)
 	w = (uint32_t)fw < max ? (uint32_t)fw : max;
 	h = (uint32_t)fh < max ? (uint32_t)fh : max;
 	rc = bc_client_view(
-		a->c,
-		&(struct bc_msg_view){
-			.width = (uint16_t)w,
-			.height = (uint16_t)h,
-			.encoding = a->o.encoding,
-			/* Interactive frames trade quality for speed. */
-			.quality_interactive =
-				(uint8_t)(a->o.quality < 70 ? a->o.quality : 70),
-			.quality_still = a->o.quality,
-			.downscale = a->o.downscale,
-		},
-		NULL, &ei);
+	    a->c,
+	    &(struct bc_msg_view){
+	        .width = (uint16_t)w,
+	        .height = (uint16_t)h,
+	        .encoding = a->o.encoding,
+	        /* Interactive frames trade quality for speed. */
+	        .quality_interactive =
+	            (uint8_t)(a->o.quality < 70 ? a->o.quality : 70),
+	        .quality_still = a->o.quality,
+	        .downscale = a->o.downscale,
+	    },
+	    NULL, &ei);
 	if (rc) {
 		bc_viewer_status(a, "VIEW not sent: %s", ei.msg);
 		return rc;
@@ -84,7 +84,7 @@ static void flush_edits(struct bc_viewer_app *a)
 		struct bc_errinfo ei = {0};
 		uint32_t seq = 0;
 		if (bc_client_edit_set(a->c, e->node, e->fields, e->nfields,
-				       e->interacting, &seq, &ei)) {
+		                       e->interacting, &seq, &ei)) {
 			bc_viewer_status(a, "edit not sent: %s", ei.msg);
 			a->edits.has_pending = false;
 			return;
@@ -137,7 +137,7 @@ double bc_viewer_send_due(struct bc_viewer_app *a, double now)
 	double next = -1.0;
 #define DUE(t)                                                                 \
 	do {                                                                   \
-		double in_ = (t) - now;                                        \
+		double in_ = (t)-now;                                          \
 		if (next < 0.0 || in_ < next) {                                \
 			next = in_ > 0.0 ? in_ : 0.0;                          \
 		}                                                              \
@@ -188,7 +188,7 @@ static void snapshot_name(struct bc_viewer_app *a, char *out, size_t n)
 {
 	for (unsigned k = 1; k < 100000; k++) {
 		snprintf(out, n, "%s/blobcast-snapshot-%03u.png",
-			 a->o.snapshot_dir, k);
+		         a->o.snapshot_dir, k);
 		if (access(out, F_OK) != 0) {
 			return;
 		}
@@ -214,8 +214,8 @@ static void got_snapshot(struct bc_viewer_app *a, const struct bc_msg *m)
 		goto cleanup;
 	}
 	bc_viewer_status(a, "saved %s (%ux%u, lossless)",
-			 strrchr(path, '/') ? strrchr(path, '/') + 1 : path,
-			 img.width, img.height);
+	                 strrchr(path, '/') ? strrchr(path, '/') + 1 : path,
+	                 img.width, img.height);
 	if (a->o.verbose) {
 		printf("snapshot %s %ux%u\n", path, img.width, img.height);
 		fflush(stdout);
@@ -273,7 +273,7 @@ static void got_frame(struct bc_viewer_app *a, const struct bc_msg *m)
 	}
 	a->nframes++;
 	bc_viewer_meter_frame(&a->meter, bc_client_info(a->c)->last_msg_bytes,
-			      bc_viewer_now_ms());
+	                      bc_viewer_now_ms());
 	a->last.frame_no = fr->frame_no;
 	a->last.width = fr->width;
 	a->last.height = fr->height;
@@ -290,15 +290,15 @@ static void got_frame(struct bc_viewer_app *a, const struct bc_msg *m)
 	a->redraw = true;
 	a->turn_pending = false;
 	if (a->o.verbose) {
-		printf("frame %llu no=%u order=%llu %s %s image=%ux%u rects=%u "
-		       "bytes=%u%s\n",
-		       (unsigned long long)a->nframes, fr->frame_no,
-		       (unsigned long long)fr->order,
-		       (m->flags & BC_PROTO_FLAG_STILL) ? "still" : "interactive",
-		       enc_name(fr->encoding), fr->image_width,
-		       fr->image_height, fr->nrects,
-		       bc_client_info(a->c)->last_msg_bytes,
-		       up.want_refresh ? " refresh" : "");
+		printf(
+		    "frame %llu no=%u order=%llu %s %s image=%ux%u rects=%u "
+		    "bytes=%u%s\n",
+		    (unsigned long long)a->nframes, fr->frame_no,
+		    (unsigned long long)fr->order,
+		    (m->flags & BC_PROTO_FLAG_STILL) ? "still" : "interactive",
+		    enc_name(fr->encoding), fr->image_width, fr->image_height,
+		    fr->nrects, bc_client_info(a->c)->last_msg_bytes,
+		    up.want_refresh ? " refresh" : "");
 		fflush(stdout);
 	}
 }
@@ -310,8 +310,9 @@ static void got_scene(struct bc_viewer_app *a, const struct bc_msg *m)
 	const struct bc_tree *t = bc_client_scene(a->c, &cam);
 	/* A scene that carries a camera resets every member's camera on the
 	 * server: follow it. */
-	if (t && bc_proto_scene_scan(m->scene_state.scene.ptr,
-				     m->scene_state.scene.len, &si, NULL) == 0 &&
+	if (t &&
+	    bc_proto_scene_scan(m->scene_state.scene.ptr,
+	                        m->scene_state.scene.len, &si, NULL) == 0 &&
 	    si.has_camera) {
 		a->cam = cam;
 		a->scene_cam = cam;
@@ -327,7 +328,8 @@ static void got_applied(struct bc_viewer_app *a, const struct bc_msg *m)
 	const struct bc_msg_edit_applied *e = &m->edit_applied;
 	const struct bc_tree *t = bc_client_scene(a->c, NULL);
 	if (e->author == bc_client_info(a->c)->member_id) {
-		if (bc_viewer_edits_applied(&a->edits, e->author_seq, e->order)) {
+		if (bc_viewer_edits_applied(&a->edits, e->author_seq,
+		                            e->order)) {
 			flush_edits(a);
 		}
 	}
@@ -346,7 +348,7 @@ static void got_applied(struct bc_viewer_app *a, const struct bc_msg *m)
 static void got_error(struct bc_viewer_app *a, const struct bc_msg *m)
 {
 	bc_viewer_status(a, "server: %.*s (%s)", (int)m->error.text.len,
-			 m->error.text.ptr, bc_err_name(-(int)m->error.code));
+	                 m->error.text.ptr, bc_err_name(-(int)m->error.code));
 	if (m->seq == 0) {
 		return;
 	}
@@ -356,7 +358,8 @@ static void got_error(struct bc_viewer_app *a, const struct bc_msg *m)
 	if (m->seq == a->snapshot_seq) {
 		a->snapshot_seq = 0;
 	}
-	if (a->drag.mode == BC_VIEWER_DRAG_PENDING && m->seq == a->drag.pick_seq) {
+	if (a->drag.mode == BC_VIEWER_DRAG_PENDING &&
+	    m->seq == a->drag.pick_seq) {
 		bc_viewer_pick_answer(a, m->seq, 0, NULL);
 	}
 	if (a->turn_pending) {
@@ -385,7 +388,7 @@ int bc_viewer_pump(struct bc_viewer_app *a)
 			break;
 		case BC_MSG_PICK_RESULT:
 			bc_viewer_pick_answer(a, m.seq, m.pick_result.node,
-					      m.pick_result.position);
+			                      m.pick_result.position);
 			break;
 		case BC_MSG_EDIT_APPLIED:
 			got_applied(a, &m);

@@ -25,7 +25,7 @@
 #include "blobcast/client.h"
 #include "blobcast/proto.h"
 
-/* ---- cam.c ------------------------------------------------------------------ */
+/* ---- cam.c --------------------------------------------------------------- */
 
 /* Radians the camera turns per pixel of mouse motion: a drag across a
  * 800-pixel window turns it about 370 degrees, as in the browser page. */
@@ -54,15 +54,15 @@ void bc_viewer_cam_clamp(struct bc_camera *cam);
  * bc_view_rays_dir) and out[2] the distance along the view direction.
  * Returns false for a point at or behind the eye. */
 bool bc_viewer_project(const struct bc_camera *cam, uint32_t width,
-		       uint32_t height, const float p[3], float out[3]);
+                       uint32_t height, const float p[3], float out[3]);
 /* World units per view pixel at forward distance z. */
 float bc_viewer_pixel_size(const struct bc_camera *cam, float z,
-			   uint32_t height);
+                           uint32_t height);
 /* Moves origin by (dx, dy) view pixels parallel to the view plane at
  * forward distance z: the result projects (dx, dy) pixels away. */
 void bc_viewer_move_in_plane(const struct bc_camera *cam, uint32_t height,
-			     const float origin[3], float z, float dx, float dy,
-			     float out[3]);
+                             const float origin[3], float z, float dx, float dy,
+                             float out[3]);
 
 /* The eight world-space corners of primitive p's bounding box (its local
  * bound from bc_prim_bound, rotated and translated), corner i having bit 0
@@ -76,7 +76,7 @@ extern const uint8_t bc_viewer_box_edges[12][2];
  * index, or -1 when the kind has none. */
 int bc_viewer_size_param(enum bc_prim kind);
 
-/* ---- meter.c ---------------------------------------------------------------- */
+/* ---- meter.c ------------------------------------------------------------- */
 
 /* Frames averaged for kB per frame. */
 #define BC_VIEWER_METER_BYTES 30
@@ -99,7 +99,7 @@ struct bc_viewer_meter {
 void bc_viewer_meter_init(struct bc_viewer_meter *m);
 /* A frame of bytes (on the wire, header included) was shown at now_ms. */
 void bc_viewer_meter_frame(struct bc_viewer_meter *m, uint32_t bytes,
-			   double now_ms);
+                           double now_ms);
 /* An edit took ms from being sent to being shown. */
 void bc_viewer_meter_latency(struct bc_viewer_meter *m, double ms);
 /* Frames shown in the second before now_ms. */
@@ -109,7 +109,7 @@ double bc_viewer_meter_kb(const struct bc_viewer_meter *m);
 /* Average of the last latencies in ms; negative before any. */
 double bc_viewer_meter_latency_avg(const struct bc_viewer_meter *m);
 
-/* ---- edits.c ---------------------------------------------------------------- */
+/* ---- edits.c ------------------------------------------------------------- */
 
 /* Fields one viewer edit sets: a translation, a size, or blend and range. */
 #define BC_VIEWER_EDIT_FIELDS 2
@@ -145,26 +145,26 @@ struct bc_viewer_edits {
 void bc_viewer_edits_init(struct bc_viewer_edits *q);
 /* Makes e the edit to send next, replacing one not yet sent. */
 void bc_viewer_edits_queue(struct bc_viewer_edits *q,
-			   const struct bc_viewer_edit *e);
+                           const struct bc_viewer_edit *e);
 /* Whether the pending edit may go now: a final edit always may, an
  * interacting one when no other interacting edit is in flight. */
 bool bc_viewer_edits_ready(const struct bc_viewer_edits *q);
 /* The pending edit was sent as seq at now_ms. */
 void bc_viewer_edits_sent(struct bc_viewer_edits *q, uint32_t seq,
-			  double now_ms);
+                          double now_ms);
 /* This client's EDIT seq was applied with order. Returns true when it was
  * the one in flight (a pending edit may then go). */
 bool bc_viewer_edits_applied(struct bc_viewer_edits *q, uint32_t seq,
-			     uint64_t order);
+                             uint64_t order);
 /* The server refused EDIT seq (an ERROR answered it). Returns true when it
  * was ours. */
 bool bc_viewer_edits_refused(struct bc_viewer_edits *q, uint32_t seq);
 /* A frame reflecting edits up to order was shown at now_ms: every applied
  * edit it shows is settled, its latency given to m. Returns how many. */
 uint32_t bc_viewer_edits_frame(struct bc_viewer_edits *q, uint64_t order,
-			       double now_ms, struct bc_viewer_meter *m);
+                               double now_ms, struct bc_viewer_meter *m);
 
-/* ---- frames.c --------------------------------------------------------------- */
+/* ---- frames.c ------------------------------------------------------------ */
 
 /* What a frame changed in the textures. Rectangles are those of the FRAME
  * message (valid as long as it is). */
@@ -189,7 +189,7 @@ struct bc_viewer_update {
 struct bc_viewer_frames {
 	struct bc_client_image full;  /* full-size frames, decoded */
 	struct bc_client_image small; /* downscaled frames, decoded */
-	uint8_t *comp;   /* width x height RGBA: what the full texture holds */
+	uint8_t *comp; /* width x height RGBA: what the full texture holds */
 	uint32_t width, height;
 	bool have_full;     /* comp holds a picture */
 	bool comp_stale;    /* a downscaled frame came after comp's picture */
@@ -209,18 +209,18 @@ void bc_viewer_frames_finish(struct bc_viewer_frames *f);
  * far as possible) or BC_ENOMEM, with the reason in ei.
  */
 int bc_viewer_frames_apply(struct bc_viewer_frames *f, const struct bc_msg *m,
-			   struct bc_viewer_update *up, struct bc_errinfo *ei);
+                           struct bc_viewer_update *up, struct bc_errinfo *ei);
 /* Copies the w x h rectangle at (x, y) of an RGBA image `stride` pixels
  * wide into dst, rows packed: for glTexSubImage2D, which GLES 2 cannot
  * give a row length. */
 void bc_viewer_copy_rect(const uint8_t *src, uint32_t stride, uint32_t x,
-			 uint32_t y, uint32_t w, uint32_t h, uint8_t *dst);
+                         uint32_t y, uint32_t w, uint32_t h, uint8_t *dst);
 /* Scales src (sw x sh RGBA) to dst (dw x dh RGBA) bilinearly, sampling at
  * pixel centres as GL's linear filter does. */
 void bc_viewer_upscale(const uint8_t *src, uint32_t sw, uint32_t sh,
-		       uint8_t *dst, uint32_t dw, uint32_t dh);
+                       uint8_t *dst, uint32_t dw, uint32_t dh);
 
-/* ---- font.c ----------------------------------------------------------------- */
+/* ---- font.c -------------------------------------------------------------- */
 
 #define BC_VIEWER_GLYPH_W 5
 #define BC_VIEWER_GLYPH_H 7
@@ -239,7 +239,7 @@ bool bc_viewer_glyph_bit(char ch, int col, int row);
  * cap floats are written (call again with enough room).
  */
 size_t bc_viewer_text_tris(const char *text, float x, float y, float scale,
-			   float *out, size_t cap);
+                           float *out, size_t cap);
 /* Width in window pixels of the longest line of text at scale. */
 float bc_viewer_text_width(const char *text, float scale);
 

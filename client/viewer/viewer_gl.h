@@ -42,30 +42,32 @@ struct bc_viewer_glfn {
 	void(GLAPIENTRY *GenTextures)(GLsizei, GLuint *);
 	GLenum(GLAPIENTRY *GetError)(void);
 	void(GLAPIENTRY *GetIntegerv)(GLenum, GLint *);
-	void(GLAPIENTRY *GetProgramInfoLog)(GLuint, GLsizei, GLsizei *, GLchar *);
+	void(GLAPIENTRY *GetProgramInfoLog)(GLuint, GLsizei, GLsizei *,
+	                                    GLchar *);
 	void(GLAPIENTRY *GetProgramiv)(GLuint, GLenum, GLint *);
-	void(GLAPIENTRY *GetShaderInfoLog)(GLuint, GLsizei, GLsizei *, GLchar *);
+	void(GLAPIENTRY *GetShaderInfoLog)(GLuint, GLsizei, GLsizei *,
+	                                   GLchar *);
 	void(GLAPIENTRY *GetShaderiv)(GLuint, GLenum, GLint *);
 	const GLubyte *(GLAPIENTRY *GetString)(GLenum);
 	GLint(GLAPIENTRY *GetUniformLocation)(GLuint, const GLchar *);
 	void(GLAPIENTRY *LinkProgram)(GLuint);
 	void(GLAPIENTRY *PixelStorei)(GLenum, GLint);
 	void(GLAPIENTRY *ReadPixels)(GLint, GLint, GLsizei, GLsizei, GLenum,
-				     GLenum, void *);
+	                             GLenum, void *);
 	void(GLAPIENTRY *ShaderSource)(GLuint, GLsizei, const GLchar *const *,
-				       const GLint *);
+	                               const GLint *);
 	void(GLAPIENTRY *TexImage2D)(GLenum, GLint, GLint, GLsizei, GLsizei,
-				     GLint, GLenum, GLenum, const void *);
+	                             GLint, GLenum, GLenum, const void *);
 	void(GLAPIENTRY *TexParameteri)(GLenum, GLenum, GLint);
 	void(GLAPIENTRY *TexSubImage2D)(GLenum, GLint, GLint, GLint, GLsizei,
-					GLsizei, GLenum, GLenum, const void *);
+	                                GLsizei, GLenum, GLenum, const void *);
 	void(GLAPIENTRY *Uniform1f)(GLint, GLfloat);
 	void(GLAPIENTRY *Uniform1i)(GLint, GLint);
 	void(GLAPIENTRY *Uniform2f)(GLint, GLfloat, GLfloat);
 	void(GLAPIENTRY *Uniform4f)(GLint, GLfloat, GLfloat, GLfloat, GLfloat);
 	void(GLAPIENTRY *UseProgram)(GLuint);
 	void(GLAPIENTRY *VertexAttribPointer)(GLuint, GLint, GLenum, GLboolean,
-					      GLsizei, const void *);
+	                                      GLsizei, const void *);
 	void(GLAPIENTRY *Viewport)(GLint, GLint, GLsizei, GLsizei);
 };
 
@@ -89,7 +91,8 @@ struct bc_viewer_gl {
 /* With the window's context current: loads the entry points, builds the
  * program and creates the textures. Returns 0 or BC_EGL with the reason
  * (a missing function, a shader's info log) in ei. */
-int bc_viewer_gl_init(struct bc_viewer_gl *gl, bool gles, struct bc_errinfo *ei);
+int bc_viewer_gl_init(struct bc_viewer_gl *gl, bool gles,
+                      struct bc_errinfo *ei);
 /* Frees the GL objects (context still current) and the staging memory;
  * accepts a zeroed object. */
 void bc_viewer_gl_finish(struct bc_viewer_gl *gl);
@@ -99,22 +102,22 @@ void bc_viewer_gl_finish(struct bc_viewer_gl *gl);
  * otherwise only up's rectangles are sent with glTexSubImage2D. Returns 0,
  * BC_ELIMIT (larger than GL_MAX_TEXTURE_SIZE), BC_ENOMEM or BC_EGL. */
 int bc_viewer_gl_upload(struct bc_viewer_gl *gl, enum bc_viewer_tex tex,
-			const uint8_t *rgba, uint32_t w, uint32_t h,
-			const struct bc_viewer_update *up,
-			struct bc_errinfo *ei);
+                        const uint8_t *rgba, uint32_t w, uint32_t h,
+                        const struct bc_viewer_update *up,
+                        struct bc_errinfo *ei);
 
 /* Starts a frame in a window of w x h pixels: viewport, clear. */
 void bc_viewer_gl_begin(struct bc_viewer_gl *gl, uint32_t w, uint32_t h);
 /* Draws texture tex stretched over the window rectangle (x0, y0)-(x1, y1). */
 void bc_viewer_gl_image(struct bc_viewer_gl *gl, enum bc_viewer_tex tex,
-			float x0, float y0, float x1, float y1);
+                        float x0, float y0, float x1, float y1);
 /* Draws n vertices (x, y pairs in window pixels) as GL_TRIANGLES or
  * GL_LINES in one colour; alpha blends. */
 void bc_viewer_gl_draw(struct bc_viewer_gl *gl, GLenum mode, const float *xy,
-		       size_t n, const float rgba[4]);
+                       size_t n, const float rgba[4]);
 /* Reads the back buffer (w x h) into rgba, row 0 on top. Returns 0 or
  * BC_EGL. */
 int bc_viewer_gl_read(struct bc_viewer_gl *gl, uint32_t w, uint32_t h,
-		      uint8_t *rgba, struct bc_errinfo *ei);
+                      uint8_t *rgba, struct bc_errinfo *ei);
 
 #endif

@@ -47,7 +47,8 @@ static void random_camera(struct bc_camera *c)
 		c->up[1] = 1.0f;
 		c->up[2] = frand(-0.3f, 0.3f);
 		c->fov_y_deg = frand(20.0f, 90.0f);
-	} while (bc_camera_validate(c, NULL) != 0 || dist3(c->eye, c->target) < 1.0f);
+	} while (bc_camera_validate(c, NULL) != 0 ||
+	         dist3(c->eye, c->target) < 1.0f);
 }
 
 /* ---- camera -------------------------------------------------------------- */
@@ -112,10 +113,11 @@ static void test_orbit_turns_about_up(void)
 	h0 = before[1];
 	h1 = after[1];
 	CHECK_NEAR(h1, h0, 1e-5);
-	CHECK_NEAR(sqrtf(dot3(after, after)), sqrtf(dot3(before, before)), 1e-4);
+	CHECK_NEAR(sqrtf(dot3(after, after)), sqrtf(dot3(before, before)),
+	           1e-4);
 	/* The angle between the horizontal parts. */
 	cosang = (before[0] * after[0] + before[2] * after[2]) /
-		 (before[0] * before[0] + before[2] * before[2]);
+	         (before[0] * before[0] + before[2] * before[2]);
 	CHECK_NEAR(acosf(cosang), 100.0f * BC_VIEWER_ORBIT_PER_PX, 1e-3);
 	CHECK(bc_camera_validate(&c, NULL) == 0);
 }
@@ -248,8 +250,8 @@ static void test_box_contains_every_primitive(void)
 			for (int i = 0; i < 3; i++) {
 				l[i] = frand(-2.5f, 2.5f);
 			}
-			if (!(bc_prim_sdf((enum bc_prim)kind, packed, l[0], l[1],
-					  l[2]) < 0.0f)) {
+			if (!(bc_prim_sdf((enum bc_prim)kind, packed, l[0],
+			                  l[1], l[2]) < 0.0f)) {
 				continue;
 			}
 			inside++;
@@ -257,14 +259,14 @@ static void test_box_contains_every_primitive(void)
 			{
 				const float *r = p.rotate;
 				float cx[3] = {r[1] * l[2] - r[2] * l[1],
-					       r[2] * l[0] - r[0] * l[2],
-					       r[0] * l[1] - r[1] * l[0]};
+				               r[2] * l[0] - r[0] * l[2],
+				               r[0] * l[1] - r[1] * l[0]};
 				for (int i = 0; i < 3; i++) {
 					t[i] = 2.0f * cx[i];
 				}
 				float ct[3] = {r[1] * t[2] - r[2] * t[1],
-					       r[2] * t[0] - r[0] * t[2],
-					       r[0] * t[1] - r[1] * t[0]};
+				               r[2] * t[0] - r[0] * t[2],
+				               r[0] * t[1] - r[1] * t[0]};
 				for (int i = 0; i < 3; i++) {
 					w[i] = l[i] + r[3] * t[i] + ct[i] +
 					       p.translate[i];
@@ -300,7 +302,8 @@ static void test_box_of_a_box_is_tight(void)
 	CHECK_NEAR(corners[7][1], 1.0, 1e-6);
 	CHECK_NEAR(corners[7][2], 1.5, 1e-6);
 	for (int e = 0; e < 12; e++) {
-		int a = bc_viewer_box_edges[e][0], b = bc_viewer_box_edges[e][1];
+		int a = bc_viewer_box_edges[e][0],
+		    b = bc_viewer_box_edges[e][1];
 		int diff = a ^ b;
 		/* Each edge joins corners differing in exactly one axis. */
 		CHECK(diff == 1 || diff == 2 || diff == 4);
@@ -315,12 +318,12 @@ static void test_size_parameter_of_every_kind(void)
 	info = bc_prim_info(BC_PRIM_CAPSULE);
 	REQUIRE(info);
 	CHECK(strcmp(info->params[bc_viewer_size_param(BC_PRIM_CAPSULE)].name,
-		     "radius") == 0);
+	             "radius") == 0);
 	info = bc_prim_info(BC_PRIM_ROUND_CONE);
 	REQUIRE(info);
-	CHECK(strcmp(info->params[bc_viewer_size_param(BC_PRIM_ROUND_CONE)]
-			     .name,
-		     "radius_a") == 0);
+	CHECK(
+	    strcmp(info->params[bc_viewer_size_param(BC_PRIM_ROUND_CONE)].name,
+	           "radius_a") == 0);
 	CHECK_EQ_INT(bc_viewer_size_param(BC_PRIM_INVALID), -1);
 	CHECK_EQ_INT(bc_viewer_size_param(BC_PRIM_COUNT), -1);
 	for (int kind = 1; kind < BC_PRIM_COUNT; kind++) {
@@ -343,7 +346,7 @@ static void test_meter_counts_the_last_second(void)
 	CHECK(bc_viewer_meter_latency_avg(&m) < 0.0);
 	for (int i = 0; i < 90; i++) {
 		bc_viewer_meter_frame(&m, (uint32_t)(1000 * (i + 1)),
-				      1000.0 + 1000.0 * i / 30.0);
+		                      1000.0 + 1000.0 * i / 30.0);
 	}
 	/* 30 frames per second: in the second before the last one, 30. */
 	CHECK_NEAR(bc_viewer_meter_fps(&m, 1000.0 + 89000.0 / 30.0), 30.0, 1.0);
@@ -364,8 +367,8 @@ static void test_meter_counts_the_last_second(void)
 
 static struct bc_viewer_edit move_edit(uint32_t node, float x, bool interacting)
 {
-	struct bc_viewer_edit e = {.node = node, .nfields = 1,
-				   .interacting = interacting};
+	struct bc_viewer_edit e = {
+	    .node = node, .nfields = 1, .interacting = interacting};
 	e.fields[0].field = BC_PROTO_FIELD_TRANSLATE;
 	e.fields[0].count = 3;
 	e.fields[0].v[0] = x;
@@ -417,7 +420,7 @@ static void test_edits_one_in_flight(void)
 	CHECK_EQ_INT(bc_viewer_edits_frame(&q, 9, 200.0, &m), 2);
 	CHECK_NEAR(m.last_latency, 60.0, 1e-9); /* 200 - 140 */
 	CHECK_NEAR(bc_viewer_meter_latency_avg(&m), (60.0 + 70.0 + 60.0) / 3,
-		   1e-9);
+	           1e-9);
 	CHECK_EQ_INT(q.nsent, 0);
 	CHECK_EQ_INT(q.nshown, 0);
 }
@@ -463,7 +466,7 @@ static void test_edits_bounded(void)
 	}
 }
 
-/* ---- frames ---------------------------------------------------------------- */
+/* ---- frames -------------------------------------------------------------- */
 
 static void fill(uint8_t *rgba, uint32_t w, uint32_t h, uint32_t seed)
 {
@@ -480,9 +483,9 @@ static void fill(uint8_t *rgba, uint32_t w, uint32_t h, uint32_t seed)
 
 /* A raw FRAME of a w x h view, image iw x ih, with the given rectangles
  * (their data taken from src, an iw x ih image). The data live in store. */
-static struct bc_msg raw_frame(uint16_t w, uint16_t h, uint16_t iw,
-			       uint16_t ih, bool still, struct bc_proto_rect *r,
-			       uint16_t n, const uint8_t *src, uint8_t *store)
+static struct bc_msg raw_frame(uint16_t w, uint16_t h, uint16_t iw, uint16_t ih,
+                               bool still, struct bc_proto_rect *r, uint16_t n,
+                               const uint8_t *src, uint8_t *store)
 {
 	struct bc_msg m = {.type = BC_MSG_FRAME};
 	size_t at = 0;
@@ -496,7 +499,7 @@ static struct bc_msg raw_frame(uint16_t w, uint16_t h, uint16_t iw,
 	m.frame.rects = r;
 	for (uint16_t i = 0; i < n; i++) {
 		bc_viewer_copy_rect(src, iw, r[i].x, r[i].y, r[i].w, r[i].h,
-				    store + at);
+		                    store + at);
 		r[i].data.ptr = store + at;
 		r[i].data.len = (uint32_t)r[i].w * r[i].h * 4u;
 		at += r[i].data.len;
@@ -505,10 +508,10 @@ static struct bc_msg raw_frame(uint16_t w, uint16_t h, uint16_t iw,
 }
 
 static bool px_eq(const uint8_t *a, uint32_t aw, uint32_t x, uint32_t y,
-		  const uint8_t *b, uint32_t bw)
+                  const uint8_t *b, uint32_t bw)
 {
-	return memcmp(a + ((size_t)y * aw + x) * 4u, b + ((size_t)y * bw + x) * 4u,
-		      4) == 0;
+	return memcmp(a + ((size_t)y * aw + x) * 4u,
+	              b + ((size_t)y * bw + x) * 4u, 4) == 0;
 }
 
 static void test_frames_rectangles_and_downscale(void)
@@ -545,7 +548,7 @@ static void test_frames_rectangles_and_downscale(void)
 	for (uint32_t y = 0; y < H; y++) {
 		for (uint32_t x = 0; x < W; x++) {
 			bool in = (x >= 4 && x < 6 && y >= 2 && y < 4) ||
-				  (y == 5 && x < 3);
+			          (y == 5 && x < 3);
 			CHECK(px_eq(f.comp, W, x, y, in ? b : a, W));
 		}
 	}
@@ -677,7 +680,7 @@ static void test_upscale_samples_pixel_centres(void)
 	CHECK_EQ_INT(dst[4], 50);
 	CHECK_EQ_INT(dst[8], 150);
 	CHECK_EQ_INT(dst[12], 200);
-	CHECK_EQ_INT(dst[5], 80);  /* 0.75 * 100 + 0.25 * 20 */
+	CHECK_EQ_INT(dst[5], 80); /* 0.75 * 100 + 0.25 * 20 */
 	CHECK_EQ_INT(dst[13], 20);
 	bc_viewer_upscale(one, 1, 1, big, 6, 5);
 	for (int i = 0; i < 30; i++) {
@@ -688,7 +691,7 @@ static void test_upscale_samples_pixel_centres(void)
 	CHECK(memcmp(dst, src, 8) == 0);
 }
 
-/* ---- font ------------------------------------------------------------------ */
+/* ---- font ---------------------------------------------------------------- */
 
 static int lit(char ch)
 {
@@ -733,8 +736,10 @@ static void test_font_glyphs(void)
 static void test_font_triangles(void)
 {
 	float buf[4096];
-	size_t need = bc_viewer_text_tris("fps 1", 10.0f, 20.0f, 2.0f, buf, 4096);
-	CHECK_EQ_INT(need, 12u * (size_t)(lit('F') + lit('P') + lit('S') + lit('1')));
+	size_t need =
+	    bc_viewer_text_tris("fps 1", 10.0f, 20.0f, 2.0f, buf, 4096);
+	CHECK_EQ_INT(need,
+	             12u * (size_t)(lit('F') + lit('P') + lit('S') + lit('1')));
 	/* The first quad: the first lit pixel of 'F' (top-left corner). */
 	CHECK_NEAR(buf[0], 10.0, 0.0);
 	CHECK_NEAR(buf[1], 20.0, 0.0);
@@ -742,40 +747,40 @@ static void test_font_triangles(void)
 	CHECK_NEAR(buf[5], 22.0, 0.0);
 	/* Too little room: the size needed, nothing written past cap. */
 	buf[24] = -1.0f;
-	CHECK_EQ_INT(bc_viewer_text_tris("fps 1", 0.0f, 0.0f, 1.0f, buf, 24), need);
+	CHECK_EQ_INT(bc_viewer_text_tris("fps 1", 0.0f, 0.0f, 1.0f, buf, 24),
+	             need);
 	CHECK_NEAR(buf[24], -1.0, 0.0);
 	/* A second line starts LINE_ADVANCE lower. */
 	need = bc_viewer_text_tris("\n.", 0.0f, 0.0f, 1.0f, buf, 4096);
 	REQUIRE(need >= 12);
 	CHECK(buf[1] >= (float)BC_VIEWER_LINE_ADVANCE);
 	CHECK_NEAR(bc_viewer_text_width("ab\nlonger\nx", 2.0f),
-		   6.0 * BC_VIEWER_GLYPH_ADVANCE * 2.0, 0.0);
+	           6.0 * BC_VIEWER_GLYPH_ADVANCE * 2.0, 0.0);
 	CHECK_NEAR(bc_viewer_text_width("", 1.0f), 0.0, 0.0);
 }
 
 static const struct bc_test tests[] = {
-	{"project_inverts_view_rays", test_project_inverts_view_rays},
-	{"project_refuses_points_behind_the_eye",
-	 test_project_refuses_points_behind_the_eye},
-	{"orbit_turns_about_up", test_orbit_turns_about_up},
-	{"orbit_stops_at_the_poles", test_orbit_stops_at_the_poles},
-	{"pan_follows_the_mouse", test_pan_follows_the_mouse},
-	{"zoom_scales_the_distance", test_zoom_scales_the_distance},
-	{"move_in_plane_tracks_pixels", test_move_in_plane_tracks_pixels},
-	{"box_contains_every_primitive", test_box_contains_every_primitive},
-	{"box_of_a_box_is_tight", test_box_of_a_box_is_tight},
-	{"size_parameter_of_every_kind", test_size_parameter_of_every_kind},
-	{"meter_counts_the_last_second", test_meter_counts_the_last_second},
-	{"edits_one_in_flight", test_edits_one_in_flight},
-	{"edits_refused", test_edits_refused},
-	{"edits_bounded", test_edits_bounded},
-	{"frames_rectangles_and_downscale",
-	 test_frames_rectangles_and_downscale},
-	{"frames_refuse_bad_rectangles", test_frames_refuse_bad_rectangles},
-	{"frames_allocation_failures", test_frames_allocation_failures},
-	{"upscale_samples_pixel_centres", test_upscale_samples_pixel_centres},
-	{"font_glyphs", test_font_glyphs},
-	{"font_triangles", test_font_triangles},
+    {"project_inverts_view_rays", test_project_inverts_view_rays},
+    {"project_refuses_points_behind_the_eye",
+     test_project_refuses_points_behind_the_eye},
+    {"orbit_turns_about_up", test_orbit_turns_about_up},
+    {"orbit_stops_at_the_poles", test_orbit_stops_at_the_poles},
+    {"pan_follows_the_mouse", test_pan_follows_the_mouse},
+    {"zoom_scales_the_distance", test_zoom_scales_the_distance},
+    {"move_in_plane_tracks_pixels", test_move_in_plane_tracks_pixels},
+    {"box_contains_every_primitive", test_box_contains_every_primitive},
+    {"box_of_a_box_is_tight", test_box_of_a_box_is_tight},
+    {"size_parameter_of_every_kind", test_size_parameter_of_every_kind},
+    {"meter_counts_the_last_second", test_meter_counts_the_last_second},
+    {"edits_one_in_flight", test_edits_one_in_flight},
+    {"edits_refused", test_edits_refused},
+    {"edits_bounded", test_edits_bounded},
+    {"frames_rectangles_and_downscale", test_frames_rectangles_and_downscale},
+    {"frames_refuse_bad_rectangles", test_frames_refuse_bad_rectangles},
+    {"frames_allocation_failures", test_frames_allocation_failures},
+    {"upscale_samples_pixel_centres", test_upscale_samples_pixel_centres},
+    {"font_glyphs", test_font_glyphs},
+    {"font_triangles", test_font_triangles},
 };
 
 BC_TEST_MAIN(tests)

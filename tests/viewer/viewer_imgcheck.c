@@ -28,7 +28,7 @@ static int load(const char *path, struct bc_image *img)
 	}
 	if (img->channels < 3) {
 		fprintf(stderr, "viewer_imgcheck: %s: %u channels\n", path,
-			img->channels);
+		        img->channels);
 		bc_image_finish(img);
 		return -1;
 	}
@@ -56,7 +56,8 @@ static int info(const char *path)
 		return 2;
 	}
 	for (size_t i = 0; i < n; i++) {
-		const uint8_t *p = (const uint8_t *)img.pixels + i * img.channels;
+		const uint8_t *p =
+		    (const uint8_t *)img.pixels + i * img.channels;
 		rgb[i] = (uint32_t)p[0] << 16 | (uint32_t)p[1] << 8 | p[2];
 		for (int c = 0; c < 3; c++) {
 			sum += p[c];
@@ -128,7 +129,8 @@ static int count(const char *path, int r, int g, int b, int tol)
 		return 2;
 	}
 	for (size_t i = 0; i < (size_t)img.width * img.height; i++) {
-		const uint8_t *p = (const uint8_t *)img.pixels + i * img.channels;
+		const uint8_t *p =
+		    (const uint8_t *)img.pixels + i * img.channels;
 		n += abs(p[0] - r) <= tol && abs(p[1] - g) <= tol &&
 		     abs(p[2] - b) <= tol;
 	}
@@ -147,9 +149,9 @@ int main(int argc, char **argv)
 	}
 	if (argc == 7 && strcmp(argv[1], "count") == 0) {
 		return count(argv[2], atoi(argv[3]), atoi(argv[4]),
-			     atoi(argv[5]), atoi(argv[6]));
+		             atoi(argv[5]), atoi(argv[6]));
 	}
 	fprintf(stderr, "usage: viewer_imgcheck info FILE | same A B TOL | "
-			"count FILE R G B TOL\n");
+	                "count FILE R G B TOL\n");
 	return 2;
 }

@@ -27,7 +27,7 @@
 
 static Display *dpy;
 static Window win;
-static int px, py;        /* pointer, window pixels */
+static int px, py;         /* pointer, window pixels */
 static unsigned int state; /* modifier and button masks held */
 
 /* Xlib's default handler exits on the first error; ours reports it and
@@ -39,7 +39,7 @@ static int on_x_error(Display *d, XErrorEvent *e)
 	char text[128];
 	XGetErrorText(d, e->error_code, text, sizeof(text));
 	fprintf(stderr, "viewer_xpoke: X error: %s (request %u)\n", text,
-		(unsigned)e->request_code);
+	        (unsigned)e->request_code);
 	x_failed = 1;
 	return 0;
 }
@@ -80,7 +80,7 @@ static void fill_common(XEvent *e, int type)
 	int rx = px, ry = py;
 	memset(e, 0, sizeof(*e));
 	XTranslateCoordinates(dpy, win, DefaultRootWindow(dpy), px, py, &rx,
-			      &ry, &child);
+	                      &ry, &child);
 	e->type = type;
 	e->xany.display = dpy;
 	e->xany.window = win;
@@ -111,8 +111,10 @@ static void motion(void)
 
 static unsigned int button_mask(int b)
 {
-	return b == 1 ? Button1Mask : b == 2 ? Button2Mask
-		: b == 3 ? Button3Mask : 0;
+	return b == 1   ? Button1Mask
+	       : b == 2 ? Button2Mask
+	       : b == 3 ? Button3Mask
+	                : 0;
 }
 
 static void button(int b, int down)
@@ -177,7 +179,8 @@ int main(int argc, char **argv)
 		win = find(DefaultRootWindow(dpy), argv[1]);
 	}
 	if (!win) {
-		fprintf(stderr, "viewer_xpoke: no window named %s...\n", argv[1]);
+		fprintf(stderr, "viewer_xpoke: no window named %s...\n",
+		        argv[1]);
 		return 1;
 	}
 	for (; i < argc; i++) {
@@ -198,7 +201,7 @@ int main(int argc, char **argv)
 			}
 			i += 3;
 		} else if ((strcmp(c, "down") == 0 || strcmp(c, "up") == 0) &&
-			   i + 1 < argc) {
+		           i + 1 < argc) {
 			button(atoi(argv[i + 1]), c[0] == 'd');
 			i++;
 		} else if (strcmp(c, "wheel") == 0 && i + 1 < argc) {
@@ -212,8 +215,8 @@ int main(int argc, char **argv)
 			}
 			i++;
 		} else if ((strcmp(c, "keydown") == 0 ||
-			    strcmp(c, "keyup") == 0 || strcmp(c, "key") == 0) &&
-			   i + 1 < argc) {
+		            strcmp(c, "keyup") == 0 || strcmp(c, "key") == 0) &&
+		           i + 1 < argc) {
 			const char *k = argv[i + 1];
 			if ((strcmp(c, "keyup") != 0 && key(k, 1)) ||
 			    (strcmp(c, "keydown") != 0 && key(k, 0))) {
