@@ -169,7 +169,24 @@ static inline RT f_keep(struct bc_svo_ranger *g, uint32_t mark, RT a)
 	return a;
 }
 
+#define RP_INTERVAL_FALLBACK 0
 #include "range_tmpl.h"
+
+struct bc_svo_ivl bc__svo_ia_natural(struct bc_svo_ranger *g,
+				     const struct bc_svo_term *t,
+				     const struct bc_svo_region *rg)
+{
+	const float *rec = g->rpn->rec + t->rec;
+	RT p[3], loc[3], f;
+	f_input(g, rg, p);
+	for (int k = 0; k < 3; k++) {
+		loc[k] = t_local(g, rec, k, p);
+	}
+	if (!t_natural(g, (enum bc_prim)t->kind, rec + 12, loc, &f)) {
+		return mk(-INFINITY, INFINITY);
+	}
+	return f;
+}
 
 struct bc_svo_ivl bc__svo_ia_run(struct bc_svo_ranger *g, const uint32_t *idx,
 				 uint32_t n, const struct bc_svo_region *rg)

@@ -43,7 +43,8 @@ static inline double t_mag(struct bc_svo_ivl v)
 /* Range form of primitive term t over the region whose world forms are p
  * and geometry geo. */
 static RT t_prim(struct bc_svo_ranger *g, const struct bc_svo_term *t,
-		 const RT p[3], const struct bc__svo_geo *geo)
+		 const RT p[3], const struct bc__svo_geo *geo,
+		 const struct bc_svo_region *rg)
 {
 	const struct bc_svo_rpn *r = g->rpn;
 	const float *rec = r->rec + t->rec;
@@ -70,6 +71,21 @@ static RT t_prim(struct bc_svo_ranger *g, const struct bc_svo_term *t,
 	margin = BC__SVO_ROUND_REL * scale + BC__SVO_ROUND_ABS;
 	natural = !bc_svo_prim_uses_lipschitz(kind) &&
 		  RP_NATURAL(g, kind, pk, loc, &f);
+#if RP_INTERVAL_FALLBACK
+	if (natural) {
+		/* Distance formulas are made of kinks (|x|, max(x, 0)) that
+		 * affine forms straddle badly over any region the size of a
+		 * feature; the interval extension of the same formula is then
+		 * tighter. Keep the form only while it is the narrower. */
+		struct bc_svo_ivl iv = bc__svo_ia_natural(g, t, rg);
+		struct bc_svo_ivl fv = f_range(g, f);
+		if (iv.hi - iv.lo < fv.hi - fv.lo) {
+			f = f_from(g, iv.lo, iv.hi);
+		}
+	}
+#else
+	(void)rg;
+#endif
 	if (bc__svo_prim_exact(kind)) {
 		/* An exact SDF is 1-Lipschitz: f(region) lies within the
 		 * radius of its value at the centre. Rigid transforms keep
@@ -140,7 +156,7 @@ static struct bc_svo_ivl t_run(struct bc_svo_ranger *g, const uint32_t *idx,
 		switch (t->type) {
 		case BC_SVO_TERM_PRIM: {
 			uint32_t m0 = f_mark(g);
-			RT f = t_prim(g, t, p, &geo);
+			RT f = t_prim(g, t, p, &geo, rg);
 			st[sp] = f_keep(g, m0, f);
 			mk[sp] = m0;
 			si[sp++] = i;
@@ -185,7 +201,7 @@ static struct bc_svo_ivl t_prim_only(struct bc_svo_ranger *g, uint32_t term,
 	bc__svo_geo_init(&geo, rg);
 	m0 = f_mark(g);
 	f_input(g, rg, p);
-	f = t_prim(g, &g->rpn->terms[term], p, &geo);
+	f = t_prim(g, &g->rpn->terms[term], p, &geo, rg);
 	v = f_range(g, f);
 	(void)f_keep(g, m0, f_const(g, 0.0));
 	return v;

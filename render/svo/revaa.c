@@ -203,6 +203,20 @@ static inline RT f_recip(struct bc_svo_ranger *g, RT a)
 	return cheb(a, alpha, 0.5 * (dt + de), 0.5 * (de - dt));
 }
 
+/* The form f, or a fresh one for [lo, hi] (the interval rule's result)
+ * when that is narrower: for operands with little correlation the interval
+ * min and max are tighter than (a + b -+ |a - b|) / 2 (two independent
+ * [0, 1] give [0, 1.5] for the latter), and a narrower range prunes more
+ * than the correlations it forgets. */
+static inline RT narrower(struct bc_svo_ranger *g, RT f, double lo, double hi)
+{
+	struct bc_svo_ivl v = f_range(g, f);
+	if (hi - lo < v.hi - v.lo) {
+		return f_from(g, lo, hi);
+	}
+	return f;
+}
+
 static inline RT f_min(struct bc_svo_ranger *g, RT a, RT b)
 {
 	struct bc_svo_ivl va = f_range(g, a), vb = f_range(g, b);
@@ -212,9 +226,10 @@ static inline RT f_min(struct bc_svo_ranger *g, RT a, RT b)
 	if (vb.hi <= va.lo) {
 		return b;
 	}
-	/* (a + b - |a - b|) / 2 */
-	return f_scale(g, f_sub(g, f_add(g, a, b), f_abs(g, f_sub(g, a, b))),
-		       0.5);
+	return narrower(g, f_scale(g, f_sub(g, f_add(g, a, b),
+					    f_abs(g, f_sub(g, a, b))),
+				0.5),
+			bc__dmin(va.lo, vb.lo), bc__dmin(va.hi, vb.hi));
 }
 
 static inline RT f_max(struct bc_svo_ranger *g, RT a, RT b)
@@ -226,8 +241,10 @@ static inline RT f_max(struct bc_svo_ranger *g, RT a, RT b)
 	if (vb.lo >= va.hi) {
 		return b;
 	}
-	return f_scale(g, f_add(g, f_add(g, a, b), f_abs(g, f_sub(g, a, b))),
-		       0.5);
+	return narrower(g, f_scale(g, f_add(g, f_add(g, a, b),
+					    f_abs(g, f_sub(g, a, b))),
+				0.5),
+			bc__dmax(va.lo, vb.lo), bc__dmax(va.hi, vb.hi));
 }
 
 static void f_input(struct bc_svo_ranger *g, const struct bc_svo_region *rg,
@@ -261,6 +278,8 @@ static inline RT f_keep(struct bc_svo_ranger *g, uint32_t mark, RT a)
 	return a;
 }
 
+/* Primitives fall back on the interval extension where it is narrower. */
+#define RP_INTERVAL_FALLBACK 1
 #include "range_tmpl.h"
 
 struct bc_svo_ivl bc__svo_rev_run(struct bc_svo_ranger *g, const uint32_t *idx,

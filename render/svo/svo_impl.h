@@ -134,6 +134,13 @@ struct bc_svo_ivl bc__svo_aa_prim(struct bc_svo_ranger *g, uint32_t term,
 struct bc_svo_ivl bc__svo_rev_prim(struct bc_svo_ranger *g, uint32_t term,
 				   const struct bc_svo_region *rg);
 
+/* The interval extension of a primitive term's natural formula over rg,
+ * without rounding margin (the caller adds its own): the whole line for a
+ * kind that has none. AA and RevAA fall back on it where it is narrower. */
+struct bc_svo_ivl bc__svo_ia_natural(struct bc_svo_ranger *g,
+				     const struct bc_svo_term *t,
+				     const struct bc_svo_region *rg);
+
 /* ---- Operator rules (ia.c) ---------------------------------------------- */
 
 /*
