@@ -917,6 +917,10 @@ static void schedule(struct bc_session *s)
 			m->still_sent = still;
 			if (still && job->nrects == 0) {
 				m->has_base = true;
+			} else if (!still) {
+				/* The client now shows an interactive frame:
+				 * the still after it must be whole. */
+				m->has_base = false;
 			}
 			m->damage_all = false;
 			if (m->damage) {
