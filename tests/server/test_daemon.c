@@ -356,6 +356,56 @@ static void kill_9_loses_no_acknowledged_edit(void)
 	       (unsigned long long)restored);
 }
 
+static void a_client_that_stops_reading_is_dropped(void)
+{
+	struct daemon d;
+	struct conn lazy, busy;
+	char dir[64];
+	int64_t t0;
+	int rc = 1;
+	make_dir_name(dir, sizeof(dir), "stall");
+	REQUIRE(daemon_start(&d, dir) == 0);
+	REQUIRE(conn_open(&lazy, &d) == 0 && conn_hello(&lazy, "lazy") == 0);
+	REQUIRE(conn_join(&lazy, "default", BC_PROTO_ROLE_VIEWER, false) == 0);
+	/* A raw 1024^2 frame (4 MiB) cannot fit the socket buffer: its write
+	 * stays pending while the client does not read. */
+	{
+		struct bc_msg v = {.type = BC_MSG_VIEW};
+		v.view.width = 1024;
+		v.view.height = 1024;
+		v.view.encoding = BC_PROTO_ENC_RAW;
+		v.view.quality_interactive = 50;
+		v.view.quality_still = 90;
+		v.view.downscale = 1;
+		REQUIRE(conn_send(&lazy, &v));
+	}
+	REQUIRE(conn_open(&busy, &d) == 0 && conn_hello(&busy, "busy") == 0);
+	t0 = t_now_ms();
+	/* The other client keeps being served meanwhile. */
+	while (t_now_ms() - t0 < 25000) {
+		struct bc_msg ping = {.type = BC_MSG_PING};
+		struct pollfd pfd = {.fd = lazy.fd, .events = POLLIN};
+		ping.ping.stamp = 1;
+		conn_send(&busy, &ping);
+		REQUIRE(conn_expect(&busy, BC_MSG_PONG, 5000) == 1);
+		/* Look at the lazy socket without reading it (reading would
+		 * unblock the daemon's write): a Unix socket whose peer has
+		 * closed polls as hung up. */
+		if (poll(&pfd, 1, 0) == 1 && (pfd.revents & POLLHUP)) {
+			rc = 0;
+			break;
+		}
+		t_sleep_ms(500);
+	}
+	CHECK(rc == 0);
+	/* Dropped after the stall limit, not before. */
+	CHECK(t_now_ms() - t0 >= 9000);
+	printf("  dropped after %lld ms\n", (long long)(t_now_ms() - t0));
+	conn_close(&lazy);
+	conn_close(&busy);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
 static void setup(void)
 {
 	snprintf(base_dir, sizeof(base_dir), "/tmp/bc-daemon-test-%d",
@@ -371,6 +421,8 @@ static const struct bc_test tests[] = {
 	{"bad_input_never_disturbs_other_clients",
 	 bad_input_never_disturbs_other_clients},
 	{"kill_9_loses_no_acknowledged_edit", kill_9_loses_no_acknowledged_edit},
+	{"a_client_that_stops_reading_is_dropped",
+	 a_client_that_stops_reading_is_dropped},
 };
 
 int main(int argc, char **argv)
