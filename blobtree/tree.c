@@ -658,8 +658,10 @@ int bc_tree_set_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
 	/* The subtree's slots are [first, top]; its primitives are those with
 	 * indices from the first leaf's to the last leaf's. */
 	first_slot = l->first[t->pool[n].slot];
+	/* The leftmost slot is a leaf; a binary subtree of s slots has
+	 * (s + 1) / 2 leaves, all consecutive primitives. */
 	k_lo = l->prim_of[first_slot];
-	k_hi = l->prim_of[t->pool[n].slot - 1] + 1;
+	k_hi = k_lo + (t->pool[n].slot - first_slot) / 2 + 1;
 	dirty_range(&t->dirty.slot_lo, &t->dirty.slot_hi, first_slot,
 		    t->pool[n].slot + 1);
 	dirty_range(&t->dirty.param_lo, &t->dirty.param_hi, t->pool[n].param,

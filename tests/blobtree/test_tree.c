@@ -247,6 +247,16 @@ static void operator_edit_equals_a_fresh_build(void)
 		bc_tree_take_dirty(t, &dirty);
 		CHECK(!dirty.structure && dirty.edits == 1);
 		CHECK(dirty.slot_hi > dirty.slot_lo);
+		/* The dirty primitives are exactly the subtree's leaves. */
+		{
+			const struct bc_lin *l = bc_tree_lin(t);
+			uint32_t s = bc_tree_slot(t, id), leaves = 0;
+			for (uint32_t x = l->first[s]; x <= s; x++) {
+				leaves += bc_lin_is_leaf(l, x) ? 1u : 0u;
+			}
+			CHECK_EQ_INT(dirty.prim_hi - dirty.prim_lo, leaves);
+			CHECK_EQ_INT(dirty.prim_lo, l->prim_of[l->first[s]]);
+		}
 		REQUIRE(bc_tree_copy(fresh, t, NULL) == 0);
 		CHECK(lin_diff(bc_tree_lin(fresh), bc_tree_lin(t)) == 0);
 	}
