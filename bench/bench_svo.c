@@ -65,17 +65,18 @@ static struct bc_tree *make(const struct scene *sc, struct bc_camera *cam)
 
 /* The smallest of REPEATS timings of the same points. */
 static int time_min(const struct bc_svo *sv, const struct bc_svo_grid *g,
-		    const struct bc_lin *l, uint32_t points,
-		    struct bc_svo_timing *best)
+                    const struct bc_lin *l, uint32_t points,
+                    struct bc_svo_timing *best)
 {
 	for (int r = 0; r < REPEATS; r++) {
 		struct bc_svo_timing tm;
 		int rc = sv ? bc_svo_time_octree(sv, l, points, 7, &tm)
-			    : bc_svo_time_grid(g, l, points, 7, &tm);
+		            : bc_svo_time_grid(g, l, points, 7, &tm);
 		if (rc || tm.mismatches) {
-			fprintf(stderr, "bench_svo: timing failed (%d, %llu "
-					"sign mismatches)\n",
-				rc, (unsigned long long)tm.mismatches);
+			fprintf(stderr,
+			        "bench_svo: timing failed (%d, %llu "
+			        "sign mismatches)\n",
+			        rc, (unsigned long long)tm.mismatches);
 			return 1;
 		}
 		if (r == 0) {
@@ -89,14 +90,15 @@ static int time_min(const struct bc_svo *sv, const struct bc_svo_grid *g,
 	return 0;
 }
 
-/* ---- Table 6.1 / 6.2 ------------------------------------------------------ */
+/* ---- Table 6.1 / 6.2 ------------------------------------------------------
+ */
 
 static int bench_grid(bool quick)
 {
 	static const struct scene scenes[] = {
-		{"Gears", "gears", {.teeth = 100}},
-		{"Many Gears 16", "many-gears", {.count = 16}},
-		{"Fig18 smooth 64", "fig18", {.count = 64}},
+	    {"Gears", "gears", {.teeth = 100}},
+	    {"Many Gears 16", "many-gears", {.count = 16}},
+	    {"Fig18 smooth 64", "fig18", {.count = 64}},
 	};
 	static const uint32_t sizes[] = {5, 10, 20, 40, 80};
 	/* Scenes of the thesis's Table 6.1 are 2D; ours are its 3D Gears,
@@ -131,7 +133,8 @@ static int bench_grid(bool quick)
 				struct bc_svo_timing tm;
 				double ms;
 				/* AA costs several times more: as in the
-				 * thesis, it is left out on the finest grids. */
+				 * thesis, it is left out on the finest grids.
+				 */
 				if (a == BC_RANGE_AA && n > 20) {
 					prune[a] = eval[a] = NAN;
 					continue;
@@ -144,9 +147,9 @@ static int bench_grid(bool quick)
 						bc_svo_grid_destroy(g);
 						g = NULL;
 						if (bc_svo_grid_build(
-							    &g, &rpn,
-							    (enum bc_range_arith)a,
-							    n, &ms)) {
+						        &g, &rpn,
+						        (enum bc_range_arith)a,
+						        n, &ms)) {
 							return 1;
 						}
 						best = fmin(best, ms);
@@ -157,15 +160,16 @@ static int bench_grid(bool quick)
 					}
 					ms = best;
 				}
-				if (time_min(NULL, g, l, quick ? 200000 : 1000000,
-					     &tm)) {
+				if (time_min(NULL, g, l,
+				             quick ? 200000 : 1000000, &tm)) {
 					return 1;
 				}
 				prune[a] = ms / ((double)n * n * n);
 				eval[a] = tm.pruned_ns;
 				full = tm.full_ns;
 				if (a == BC_RANGE_REVAA) {
-					bc_svo_grid_stats(g, &avg, &most, &bytes);
+					bc_svo_grid_stats(g, &avg, &most,
+					                  &bytes);
 					double r = tm.full_ns / tm.pruned_ns;
 					sum += r;
 					nrat++;
@@ -196,18 +200,19 @@ static int bench_grid(bool quick)
 	return 0;
 }
 
-/* ---- Tables 6.4-6.7 ------------------------------------------------------- */
+/* ---- Tables 6.4-6.7 -------------------------------------------------------
+ */
 
 /* Trace time per pixel (the smallest of REPEATS frames) and the first
  * frame's acceleration structure time (the octree's build; tiled builds
  * its A-buffer every frame). */
 static double render_us_per_pixel(const struct bc_tree *t,
-				  const struct bc_camera *cam,
-				  const struct bc_render_opts *o, uint32_t side,
-				  double *build_ms)
+                                  const struct bc_camera *cam,
+                                  const struct bc_render_opts *o, uint32_t side,
+                                  double *build_ms)
 {
-	const struct bc_backend_ops *ops = bc_backend_get(
-		o->svo_range ? BC_BACKEND_SVO : BC_BACKEND_TILED);
+	const struct bc_backend_ops *ops =
+	    bc_backend_get(o->svo_range ? BC_BACKEND_SVO : BC_BACKEND_TILED);
 	struct bc_renderer *r = NULL;
 	struct bc_frame f;
 	struct bc_render_stats st;
@@ -239,9 +244,9 @@ static double render_us_per_pixel(const struct bc_tree *t,
 }
 
 static const struct scene big[] = {
-	{"Gears", "gears", {.teeth = 100}},
-	{"Many Spheres", "many-spheres", {0}},
-	{"Many Gears", "many-gears", {.count = 625}},
+    {"Gears", "gears", {.teeth = 100}},
+    {"Many Spheres", "many-spheres", {0}},
+    {"Many Gears", "many-gears", {.count = 625}},
 };
 
 static int bench_sweep(bool quick)
@@ -264,20 +269,24 @@ static int bench_sweep(bool quick)
 		printf("## %s: %u primitives, RPN length %u (thesis Tables "
 		       "6.4-6.7)\n\n",
 		       scenes[s].label, rpn.nprims, rpn.n);
-		printf("| Thresh. | Avg depth (vol.) | Avg depth (leaves) | Max RPN "
-		       "len. | Avg RPN len. | SVO constr. (ms) | Avg trav. (ns) "
-		       "| Avg eval. (ns) | Avg total (ns) | Speedup | Memory (MB) "
-		       "| Render (us/px) |\n");
+		printf(
+		    "| Thresh. | Avg depth (vol.) | Avg depth (leaves) | Max "
+		    "RPN "
+		    "len. | Avg RPN len. | SVO constr. (ms) | Avg trav. (ns) "
+		    "| Avg eval. (ns) | Avg total (ns) | Speedup | Memory (MB) "
+		    "| Render (us/px) |\n");
 		printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
 		for (size_t k = 0; k < sizeof(taus) / sizeof(taus[0]); k++) {
 			struct bc_svo_opts so = {.arith = BC_RANGE_REVAA,
-						 .threshold = taus[k],
-						 .max_depth = BC_SVO_MAX_DEPTH,
-						 .max_bytes = (uint64_t)1 << 30};
+			                         .threshold = taus[k],
+			                         .max_depth = BC_SVO_MAX_DEPTH,
+			                         .max_bytes = (uint64_t)1
+			                                      << 30};
 			struct bc_render_opts ro = {.threads = 1,
-						    .svo_range = BC_RANGE_REVAA,
-						    .svo_threshold = taus[k],
-						    .svo_max_depth = BC_SVO_MAX_DEPTH};
+			                            .svo_range = BC_RANGE_REVAA,
+			                            .svo_threshold = taus[k],
+			                            .svo_max_depth =
+			                                BC_SVO_MAX_DEPTH};
 			struct bc_svo *sv = NULL;
 			struct bc_svo_stats st;
 			struct bc_errinfo ei = {0};
@@ -287,20 +296,19 @@ static int bench_sweep(bool quick)
 			}
 			if (bc_svo_build(&sv, &rpn, &so, &ei) ||
 			    time_min(sv, NULL, l, quick ? 200000 : 1000000,
-				     &tm0)) {
+			             &tm0)) {
 				fprintf(stderr, "bench_svo: %s\n", ei.msg);
 				return 1;
 			}
 			bc_svo_get_stats(sv, &st);
 			px = render_us_per_pixel(t, &cam, &ro, quick ? 64 : 128,
-						 NULL);
+			                         NULL);
 			printf("| %u | %.2f | %.2f | %u | %.2f | %.1f | %.1f | "
 			       "%.1f | %.1f | %.0fx | %.1f | %.2f |%s\n",
 			       taus[k], st.avg_depth, st.avg_depth_leaf,
-			       st.max_terms, st.avg_terms,
-			       st.build_ms, tm0.locate_ns,
-			       tm0.pruned_ns - tm0.locate_ns, tm0.pruned_ns,
-			       tm0.full_ns / tm0.pruned_ns,
+			       st.max_terms, st.avg_terms, st.build_ms,
+			       tm0.locate_ns, tm0.pruned_ns - tm0.locate_ns,
+			       tm0.pruned_ns, tm0.full_ns / tm0.pruned_ns,
 			       (double)st.bytes / (1024.0 * 1024.0), px,
 			       st.truncated ? " (memory budget reached)" : "");
 			fflush(stdout);
@@ -314,7 +322,8 @@ static int bench_sweep(bool quick)
 	return 0;
 }
 
-/* ---- the arithmetics on the octree ---------------------------------------- */
+/* ---- the arithmetics on the octree ----------------------------------------
+ */
 
 static int bench_arith(bool quick)
 {
@@ -336,26 +345,28 @@ static int bench_arith(bool quick)
 			return 1;
 		}
 		for (int a = BC_RANGE_IA; a <= BC_RANGE_REVAA; a++) {
-			struct bc_svo_opts so = {.arith = (enum bc_range_arith)a,
-						 .threshold = 10,
-						 .max_depth = BC_SVO_MAX_DEPTH,
-						 .max_bytes = (uint64_t)1 << 30};
+			struct bc_svo_opts so = {
+			    .arith = (enum bc_range_arith)a,
+			    .threshold = 10,
+			    .max_depth = BC_SVO_MAX_DEPTH,
+			    .max_bytes = (uint64_t)1 << 30};
 			struct bc_svo *sv = NULL;
 			struct bc_svo_stats st;
 			struct bc_svo_timing tm;
 			if (bc_svo_build(&sv, &rpn, &so, NULL) ||
 			    time_min(sv, NULL, l, quick ? 200000 : 1000000,
-				     &tm)) {
+			             &tm)) {
 				return 1;
 			}
 			bc_svo_get_stats(sv, &st);
-			printf("| %s | %s | %.1f | %llu | %.2f | %u | %.2f | %.1f "
-			       "| %.0fx |\n",
-			       big[s].label, names[a], st.build_ms,
-			       (unsigned long long)st.pruned,
-			       st.build_ms * 1e3 / (double)st.pruned, st.leaves,
-			       st.avg_terms, tm.pruned_ns,
-			       tm.full_ns / tm.pruned_ns);
+			printf(
+			    "| %s | %s | %.1f | %llu | %.2f | %u | %.2f | %.1f "
+			    "| %.0fx |\n",
+			    big[s].label, names[a], st.build_ms,
+			    (unsigned long long)st.pruned,
+			    st.build_ms * 1e3 / (double)st.pruned, st.leaves,
+			    st.avg_terms, tm.pruned_ns,
+			    tm.full_ns / tm.pruned_ns);
 			fflush(stdout);
 			bc_svo_destroy(sv);
 		}
@@ -366,16 +377,17 @@ static int bench_arith(bool quick)
 	return 0;
 }
 
-/* ---- svo against tiled ---------------------------------------------------- */
+/* ---- svo against tiled ----------------------------------------------------
+ */
 
 static int bench_render(bool quick)
 {
 	static const struct scene scenes[] = {
-		{"Gears", "gears", {.teeth = 100}},
-		{"Many Spheres", "many-spheres", {0}},
-		{"Many Gears", "many-gears", {.count = 625}},
-		{"Fig18 smooth 256", "fig18", {0}},
-		{"Fig16 level 3", "fig16", {.level = 3}},
+	    {"Gears", "gears", {.teeth = 100}},
+	    {"Many Spheres", "many-spheres", {0}},
+	    {"Many Gears", "many-gears", {.count = 625}},
+	    {"Fig18 smooth 256", "fig18", {0}},
+	    {"Fig16 level 3", "fig16", {.level = 3}},
 	};
 	uint32_t side = quick ? 128 : 256;
 	printf("## svo against tiled, %ux%u, 1 thread\n\n", side, side);
@@ -388,9 +400,9 @@ static int bench_render(bool quick)
 		struct bc_tree *t = make(&scenes[s], &cam);
 		struct bc_render_opts tiled = {.threads = 1};
 		struct bc_render_opts rev = {.threads = 1,
-					     .svo_range = BC_RANGE_REVAA};
+		                             .svo_range = BC_RANGE_REVAA};
 		struct bc_render_opts ia = {.threads = 1,
-					    .svo_range = BC_RANGE_IA};
+		                            .svo_range = BC_RANGE_IA};
 		double build = 0.0, tt, tr, ti, b2;
 		if (!t) {
 			return 1;
@@ -402,8 +414,8 @@ static int bench_render(bool quick)
 		tr *= (double)side * side / 1e3;
 		ti *= (double)side * side / 1e3;
 		printf("| %s | %u | %.1f | %.1f | %.1f | %.1f | %.2f |\n",
-		       scenes[s].label, bc_tree_prim_count(t), tt, build, tr, ti,
-		       tt / tr);
+		       scenes[s].label, bc_tree_prim_count(t), tt, build, tr,
+		       ti, tt / tr);
 		fflush(stdout);
 		bc_tree_destroy(t);
 	}

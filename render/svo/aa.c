@@ -94,7 +94,7 @@ static inline struct bc_svo_ivl f_range(struct bc_svo_ranger *g, RT a)
 
 /* sa a + sb b (+ a fresh symbol of coefficient extra, when non-zero). */
 static RT combine(struct bc_svo_ranger *g, RT a, double sa, RT b, double sb,
-		  double extra)
+                  double extra)
 {
 	RT r;
 	uint32_t i = 0, j = 0, k;
@@ -113,7 +113,7 @@ static RT combine(struct bc_svo_ranger *g, RT a, double sa, RT b, double sb,
 		if (s1 == s2) {
 			g->aa_sym[k] = s1;
 			g->aa_coef[k++] = sa * g->aa_coef[a.off + i++] +
-					  sb * g->aa_coef[b.off + j++];
+			                  sb * g->aa_coef[b.off + j++];
 		} else if (s1 < s2) {
 			g->aa_sym[k] = s1;
 			g->aa_coef[k++] = sa * g->aa_coef[a.off + i++];
@@ -168,7 +168,7 @@ static inline RT f_add_ivl(struct bc_svo_ranger *g, RT a, double lo, double hi)
 
 /* alpha a + zeta +- delta. */
 static inline RT cheb(struct bc_svo_ranger *g, RT a, double alpha, double zeta,
-		      double delta)
+                      double delta)
 {
 	RT r = combine(g, a, alpha, f_const(g, 0.0), 0.0, delta);
 	r.c += zeta;
@@ -204,7 +204,8 @@ static inline RT f_sqr(struct bc_svo_ranger *g, RT a)
 static inline RT f_sqrt(struct bc_svo_ranger *g, RT a)
 {
 	struct bc_svo_ivl v = f_range(g, a);
-	double lo = bc__dmax(v.lo, 0.0), hi = bc__dmax(v.hi, 0.0), alpha, d1, d2;
+	double lo = bc__dmax(v.lo, 0.0), hi = bc__dmax(v.hi, 0.0), alpha, d1,
+	       d2;
 	if (!isfinite(hi)) {
 		return whole();
 	}
@@ -240,22 +241,21 @@ static inline RT f_recip(struct bc_svo_ranger *g, RT a)
 	struct bc_svo_ivl v = f_range(g, a);
 	double lo, hi, alpha, dt, de;
 	bool neg = v.hi < 0.0;
-	if (!(v.lo > 0.0 || v.hi < 0.0) || !isfinite(v.lo) ||
-	    !isfinite(v.hi)) {
+	if (!(v.lo > 0.0 || v.hi < 0.0) || !isfinite(v.lo) || !isfinite(v.hi)) {
 		return whole();
 	}
 	lo = neg ? -v.hi : v.lo;
 	hi = neg ? -v.lo : v.hi;
 	if (hi - lo <= 1.0e-12 * hi) {
 		return neg ? f_from(g, -1.0 / lo, -1.0 / hi)
-			   : f_from(g, 1.0 / hi, 1.0 / lo);
+		           : f_from(g, 1.0 / hi, 1.0 / lo);
 	}
 	alpha = -1.0 / (lo * hi);
 	de = 1.0 / lo + 1.0 / hi;
 	dt = 2.0 / sqrt(lo * hi);
 	if (neg) {
 		return f_neg(g, cheb(g, f_neg(g, a), alpha, 0.5 * (dt + de),
-				     0.5 * (de - dt)));
+		                     0.5 * (de - dt)));
 	}
 	return cheb(g, a, alpha, 0.5 * (dt + de), 0.5 * (de - dt));
 }
@@ -283,10 +283,10 @@ static inline RT f_min(struct bc_svo_ranger *g, RT a, RT b)
 	if (vb.hi <= va.lo) {
 		return b;
 	}
-	return narrower(g, f_scale(g, f_sub(g, f_add(g, a, b),
-					    f_abs(g, f_sub(g, a, b))),
-				0.5),
-			bc__dmin(va.lo, vb.lo), bc__dmin(va.hi, vb.hi));
+	return narrower(
+	    g,
+	    f_scale(g, f_sub(g, f_add(g, a, b), f_abs(g, f_sub(g, a, b))), 0.5),
+	    bc__dmin(va.lo, vb.lo), bc__dmin(va.hi, vb.hi));
 }
 
 static inline RT f_max(struct bc_svo_ranger *g, RT a, RT b)
@@ -298,14 +298,14 @@ static inline RT f_max(struct bc_svo_ranger *g, RT a, RT b)
 	if (vb.lo >= va.hi) {
 		return b;
 	}
-	return narrower(g, f_scale(g, f_add(g, f_add(g, a, b),
-					    f_abs(g, f_sub(g, a, b))),
-				0.5),
-			bc__dmax(va.lo, vb.lo), bc__dmax(va.hi, vb.hi));
+	return narrower(
+	    g,
+	    f_scale(g, f_add(g, f_add(g, a, b), f_abs(g, f_sub(g, a, b))), 0.5),
+	    bc__dmax(va.lo, vb.lo), bc__dmax(va.hi, vb.hi));
 }
 
 static void f_input(struct bc_svo_ranger *g, const struct bc_svo_region *rg,
-		    RT p[3])
+                    RT p[3])
 {
 	double tm = 0.5 * ((double)rg->t0 + rg->t1);
 	double tr = 0.5 * ((double)rg->t1 - rg->t0);
@@ -344,9 +344,9 @@ static RT f_keep(struct bc_svo_ranger *g, uint32_t mark, RT a)
 	}
 	if (a.off != mark) {
 		memmove(g->aa_sym + mark, g->aa_sym + a.off,
-			a.n * sizeof(*g->aa_sym));
+		        a.n * sizeof(*g->aa_sym));
 		memmove(g->aa_coef + mark, g->aa_coef + a.off,
-			a.n * sizeof(*g->aa_coef));
+		        a.n * sizeof(*g->aa_coef));
 		a.off = mark;
 	}
 	if (a.n > BC_SVO_AA_MAX_TERMS) {
@@ -374,7 +374,7 @@ static RT f_keep(struct bc_svo_ranger *g, uint32_t mark, RT a)
 #include "range_tmpl.h"
 
 struct bc_svo_ivl bc__svo_aa_run(struct bc_svo_ranger *g, const uint32_t *idx,
-				 uint32_t n, const struct bc_svo_region *rg)
+                                 uint32_t n, const struct bc_svo_region *rg)
 {
 	g->aa_top = 0;
 	g->aa_next = AA_INPUT_SYMBOLS + 1u;
@@ -382,7 +382,7 @@ struct bc_svo_ivl bc__svo_aa_run(struct bc_svo_ranger *g, const uint32_t *idx,
 }
 
 struct bc_svo_ivl bc__svo_aa_prim(struct bc_svo_ranger *g, uint32_t term,
-				  const struct bc_svo_region *rg)
+                                  const struct bc_svo_region *rg)
 {
 	g->aa_top = 0;
 	g->aa_next = AA_INPUT_SYMBOLS + 1u;

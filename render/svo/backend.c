@@ -45,7 +45,7 @@ struct bc_renderer {
 };
 
 static int svo_create(struct bc_renderer **out,
-		      const struct bc_render_opts *opts, struct bc_errinfo *ei)
+                      const struct bc_render_opts *opts, struct bc_errinfo *ei)
 {
 	struct bc_renderer *r;
 	long ncpu;
@@ -53,16 +53,17 @@ static int svo_create(struct bc_renderer **out,
 	if ((int)opts->svo_range < BC_RANGE_DEFAULT ||
 	    opts->svo_range >= BC_RANGE_COUNT) {
 		return bc_errinfo_set(ei, BC_EENUM, "svo: unknown range %d",
-				      (int)opts->svo_range);
+		                      (int)opts->svo_range);
 	}
 	if (opts->svo_max_depth > BC_SVO_MAX_DEPTH) {
 		return bc_errinfo_set(ei, BC_ERANGE,
-				      "svo: max depth %u exceeds %u",
-				      opts->svo_max_depth, BC_SVO_MAX_DEPTH);
+		                      "svo: max depth %u exceeds %u",
+		                      opts->svo_max_depth, BC_SVO_MAX_DEPTH);
 	}
 	if ((int)opts->debug < BC_DEBUG_NONE || opts->debug >= BC_DEBUG_COUNT) {
-		return bc_errinfo_set(ei, BC_EENUM, "svo: unknown debug mode %d",
-				      (int)opts->debug);
+		return bc_errinfo_set(ei, BC_EENUM,
+		                      "svo: unknown debug mode %d",
+		                      (int)opts->debug);
 	}
 	r = bc_calloc(1, sizeof(*r));
 	if (!r) {
@@ -71,8 +72,8 @@ static int svo_create(struct bc_renderer **out,
 	r->opts = *opts;
 	r->opts.gl_platform = NULL; /* not ours to keep */
 	ncpu = sysconf(_SC_NPROCESSORS_ONLN);
-	r->threads = opts->threads ? opts->threads
-				   : (ncpu > 0 ? (uint32_t)ncpu : 1u);
+	r->threads =
+	    opts->threads ? opts->threads : (ncpu > 0 ? (uint32_t)ncpu : 1u);
 	if (r->threads > SVO_MAX_THREADS) {
 		r->threads = SVO_MAX_THREADS;
 	}
@@ -98,7 +99,7 @@ static bool unchanged(const struct bc_dirty *d)
 }
 
 static int svo_sync(struct bc_renderer *r, const struct bc_tree *t,
-		    const struct bc_dirty *dirty, struct bc_errinfo *ei)
+                    const struct bc_dirty *dirty, struct bc_errinfo *ei)
 {
 	const struct bc_lin *l;
 	int rc;
@@ -114,13 +115,14 @@ static int svo_sync(struct bc_renderer *r, const struct bc_tree *t,
 	r->empty = l == NULL;
 	if (l && (rc = bc_svo_rpn_init(&r->rpn, l))) {
 		return bc_errinfo_set(ei, rc, "svo: compiling the tree: %s",
-				      bc_strerror(rc));
+		                      bc_strerror(rc));
 	}
 	r->synced = true;
 	return 0;
 }
 
-/* ---- Pixels --------------------------------------------------------------- */
+/* ---- Pixels ---------------------------------------------------------------
+ */
 
 struct frame {
 	struct bc_renderer *r;
@@ -161,7 +163,8 @@ static uint8_t to_srgb8(float c)
 	if (c >= 1.0f) {
 		return 255;
 	}
-	s = c <= 0.0031308f ? 12.92f * c : 1.055f * powf(c, 1.0f / 2.4f) - 0.055f;
+	s = c <= 0.0031308f ? 12.92f * c
+	                    : 1.055f * powf(c, 1.0f / 2.4f) - 0.055f;
 	return (uint8_t)(s * 255.0f + 0.5f);
 }
 
@@ -169,9 +172,9 @@ static uint8_t to_srgb8(float c)
 static void ramp(float x, uint8_t px[4])
 {
 	static const float stops[5][3] = {
-		{0.267f, 0.005f, 0.329f}, {0.229f, 0.322f, 0.545f},
-		{0.128f, 0.567f, 0.551f}, {0.369f, 0.789f, 0.383f},
-		{0.993f, 0.906f, 0.144f},
+	    {0.267f, 0.005f, 0.329f}, {0.229f, 0.322f, 0.545f},
+	    {0.128f, 0.567f, 0.551f}, {0.369f, 0.789f, 0.383f},
+	    {0.993f, 0.906f, 0.144f},
 	};
 	float s;
 	int i;
@@ -187,7 +190,7 @@ static void ramp(float x, uint8_t px[4])
 }
 
 static void debug_px(const struct frame *fr, uint32_t evals, uint32_t terms,
-		     uint8_t px[4])
+                     uint8_t px[4])
 {
 	if (fr->r->opts.debug == BC_DEBUG_EVALS) {
 		ramp((float)evals / SVO_DEBUG_EVALS_MAX, px);
@@ -197,7 +200,7 @@ static void debug_px(const struct frame *fr, uint32_t evals, uint32_t terms,
 }
 
 static void put_miss(const struct frame *fr, uint32_t x, uint32_t y,
-		     uint32_t evals)
+                     uint32_t evals)
 {
 	struct bc_frame *out = fr->out;
 	size_t i = (size_t)y * out->width + x;
@@ -206,7 +209,7 @@ static void put_miss(const struct frame *fr, uint32_t x, uint32_t y,
 		debug_px(fr, evals, 0, px);
 	} else {
 		float v = out->height > 1 ? (float)y / (float)(out->height - 1)
-					  : 0.0f;
+		                          : 0.0f;
 		px[0] = (uint8_t)(30.0f - 22.0f * v);
 		px[1] = (uint8_t)(33.0f - 24.0f * v);
 		px[2] = (uint8_t)(42.0f - 30.0f * v);
@@ -221,10 +224,10 @@ static void put_miss(const struct frame *fr, uint32_t x, uint32_t y,
 }
 
 static void put_hit(const struct frame *fr, uint32_t x, uint32_t y,
-		    const float d[3], const struct bc_svo_hit *hit)
+                    const float d[3], const struct bc_svo_hit *hit)
 {
 	static const float tet[4][3] = {
-		{1, -1, -1}, {-1, -1, 1}, {-1, 1, -1}, {1, 1, 1}};
+	    {1, -1, -1}, {-1, -1, 1}, {-1, 1, -1}, {1, 1, 1}};
 	const struct bc_svo_rpn *rpn = &fr->r->rpn;
 	struct bc_frame *out = fr->out;
 	size_t i = (size_t)y * out->width + x;
@@ -235,11 +238,11 @@ static void put_hit(const struct frame *fr, uint32_t x, uint32_t y,
 	float n[3] = {0.0f, 0.0f, 0.0f};
 	/* Differences over the hit thickness, the scale the surface was
 	 * resolved at (as the CPU backends take them). */
-	float h = fmaxf(BC_SVO_HIT_FOOTPRINT * fr->cp.pix_angle * t,
-			fr->cp.min_step);
+	float h =
+	    fmaxf(BC_SVO_HIT_FOOTPRINT * fr->cp.pix_angle * t, fr->cp.min_step);
 	for (int k = 0; k < 4; k++) {
 		float q[3] = {p[0] + h * tet[k][0], p[1] + h * tet[k][1],
-			      p[2] + h * tet[k][2]};
+		              p[2] + h * tet[k][2]};
 		float v = bc_svo_cmask_eval(rpn, hit->mask, q);
 		for (int c = 0; c < 3; c++) {
 			n[c] += tet[k][c] * v;
@@ -260,21 +263,21 @@ static void put_hit(const struct frame *fr, uint32_t x, uint32_t y,
 	}
 	if (fr->r->opts.debug != BC_DEBUG_NONE) {
 		debug_px(fr, hit->evals + hit->range_evals + 4u,
-			 hit->leaf_terms, px);
+		         hit->leaf_terms, px);
 	} else {
 		static const float grey[3] = {0.7f, 0.7f, 0.7f};
 		const float *albedo =
-			hit->prim < rpn->nprims ? rpn->color[hit->prim] : grey;
+		    hit->prim < rpn->nprims ? rpn->color[hit->prim] : grey;
 		float hv[3] = {fr->light[0] - d[0], fr->light[1] - d[1],
-			       fr->light[2] - d[2]};
+		               fr->light[2] - d[2]};
 		float diff = fmaxf(dot3(n, fr->light), 0.0f), spec;
 		normalize3(hv);
-		spec = diff > 0.0f ? powf(fmaxf(dot3(n, hv), 0.0f), 48.0f)
-				   : 0.0f;
+		spec =
+		    diff > 0.0f ? powf(fmaxf(dot3(n, hv), 0.0f), 48.0f) : 0.0f;
 		for (int c = 0; c < 3; c++) {
 			float lit = albedo[c] * (fr->ambient +
-						 (1.0f - fr->ambient) * diff) +
-				    0.25f * spec;
+			                         (1.0f - fr->ambient) * diff) +
+			            0.25f * spec;
 			px[c] = to_srgb8(lit);
 		}
 		px[3] = 255;
@@ -283,8 +286,8 @@ static void put_hit(const struct frame *fr, uint32_t x, uint32_t y,
 		out->depth[i] = t;
 	}
 	if (out->ids) {
-		out->ids[i] = hit->prim < rpn->nprims ? rpn->prim_id[hit->prim]
-						      : 0;
+		out->ids[i] =
+		    hit->prim < rpn->nprims ? rpn->prim_id[hit->prim] : 0;
 	}
 }
 
@@ -314,8 +317,8 @@ static void *worker(void *arg)
 			/* Past the frame's budget no tile is started: the rest
 			 * is background, and the frame says so. */
 			atomic_store(&fr->late, true);
-			for (uint32_t y = y0; y < y0 + SVO_TILE && y < out->height;
-			     y++) {
+			for (uint32_t y = y0;
+			     y < y0 + SVO_TILE && y < out->height; y++) {
 				for (uint32_t x = x0;
 				     x < x0 + SVO_TILE && x < out->width; x++) {
 					put_miss(fr, x, y, 0);
@@ -323,22 +326,23 @@ static void *worker(void *arg)
 			}
 			continue;
 		}
-		for (uint32_t y = y0; y < y0 + SVO_TILE && y < out->height; y++) {
-			for (uint32_t x = x0; x < x0 + SVO_TILE && x < out->width;
-			     x++) {
+		for (uint32_t y = y0; y < y0 + SVO_TILE && y < out->height;
+		     y++) {
+			for (uint32_t x = x0;
+			     x < x0 + SVO_TILE && x < out->width; x++) {
 				float d[3];
 				struct bc_svo_hit hit;
 				bc_view_rays_dir(&fr->vr, (float)x + 0.5f,
-						 (float)y + 0.5f, d);
+				                 (float)y + 0.5f, d);
 				if (c && bc_svo_cast(c, fr->vr.eye, d, 0.0f,
-						     INFINITY, &fr->cp, &hit)) {
+				                     INFINITY, &fr->cp, &hit)) {
 					put_hit(fr, x, y, d, &hit);
 				} else {
 					if (!c) {
 						memset(&hit, 0, sizeof(hit));
 					}
 					put_miss(fr, x, y,
-						 hit.evals + hit.range_evals);
+					         hit.evals + hit.range_evals);
 				}
 				evals += hit.evals + hit.range_evals;
 			}
@@ -352,7 +356,7 @@ static void *worker(void *arg)
 /* Hit thickness the frame needs: the band at the farthest corner of the
  * tree's box from the eye. */
 static float frame_band(const struct bc_svo_rpn *rpn, const float eye[3],
-			const struct bc_svo_cast_params *cp)
+                        const struct bc_svo_cast_params *cp)
 {
 	float far = 0.0f;
 	for (uint32_t k = 0; k < 8; k++) {
@@ -367,8 +371,8 @@ static float frame_band(const struct bc_svo_rpn *rpn, const float eye[3],
 }
 
 static int svo_render(struct bc_renderer *r, const struct bc_camera *cam,
-		      struct bc_frame *out, struct bc_render_stats *stats,
-		      struct bc_errinfo *ei)
+                      struct bc_frame *out, struct bc_render_stats *stats,
+                      struct bc_errinfo *ei)
 {
 	struct frame fr;
 	pthread_t tids[SVO_MAX_THREADS];
@@ -396,14 +400,14 @@ static int svo_render(struct bc_renderer *r, const struct bc_camera *cam,
 	fr.budget_ms = (double)r->opts.budget_ms;
 	bc_view_rays_init(&fr.vr, cam, out->width, out->height);
 	size = !r->empty && r->rpn.size > 0.0f && isfinite(r->rpn.size)
-		       ? r->rpn.size
-		       : 1.0f;
+	           ? r->rpn.size
+	           : 1.0f;
 	fr.cp.pix_angle = 2.0f * fr.vr.tan_half_y / (float)fr.vr.height;
 	fr.cp.min_step = BC_SVO_MIN_STEP_REL * size;
 	fr.cp.refine_tol = BC_SVO_REFINE_REL * size;
 	for (int i = 0; i < 3; i++) {
 		fr.light[i] = -0.5f * fr.vr.right[i] + 0.6f * fr.vr.up[i] -
-			      0.6f * fr.vr.forward[i];
+		              0.6f * fr.vr.forward[i];
 	}
 	normalize3(fr.light);
 	fr.ambient = 0.18f;
@@ -411,10 +415,10 @@ static int svo_render(struct bc_renderer *r, const struct bc_camera *cam,
 		float need = frame_band(&r->rpn, fr.vr.eye, &fr.cp);
 		if (!r->svo || need > r->band) {
 			struct bc_svo_opts so = {
-				.arith = r->opts.svo_range,
-				.threshold = r->opts.svo_threshold,
-				.max_depth = r->opts.svo_max_depth,
-				.band = need * SVO_BAND_SLACK,
+			    .arith = r->opts.svo_range,
+			    .threshold = r->opts.svo_threshold,
+			    .max_depth = r->opts.svo_max_depth,
+			    .band = need * SVO_BAND_SLACK,
 			};
 			bc_svo_destroy(r->svo);
 			r->svo = NULL;
@@ -445,7 +449,7 @@ static int svo_render(struct bc_renderer *r, const struct bc_camera *cam,
 		/* Every thread failed to get its scratch memory. */
 		rc = atomic_load(&fr.err);
 		return bc_errinfo_set(ei, rc ? rc : BC_ENOMEM,
-				      "svo: no memory for the casters");
+		                      "svo: no memory for the casters");
 	}
 	if (stats) {
 		double t2 = bc__svo_now_ms();
@@ -459,9 +463,9 @@ static int svo_render(struct bc_renderer *r, const struct bc_camera *cam,
 }
 
 const struct bc_backend_ops bc_backend_svo_ops = {
-	.name = "svo",
-	.create = svo_create,
-	.destroy = svo_destroy,
-	.sync = svo_sync,
-	.render = svo_render,
+    .name = "svo",
+    .create = svo_create,
+    .destroy = svo_destroy,
+    .sync = svo_sync,
+    .render = svo_render,
 };

@@ -88,9 +88,9 @@ struct ray_field {
 static float field_at(const struct ray_field *rf, float t)
 {
 	float p[3] = {rf->o[0] + t * rf->d[0], rf->o[1] + t * rf->d[1],
-		      rf->o[2] + t * rf->d[2]};
+	              rf->o[2] + t * rf->d[2]};
 	float v = rf->mask ? bc_svo_cmask_eval(rf->s->rpn, *rf->mask, p)
-			   : bc_svo_eval(rf->s, p);
+	                   : bc_svo_eval(rf->s, p);
 	(*rf->evals)++;
 	return rf->banded ? v - bc_svo_hit_band(rf->cp, t) : v;
 }
@@ -99,12 +99,13 @@ static float field_at(const struct ray_field *rf, float t)
  * refinement tolerance; returns the root interpolated in the last bracket
  * (as the sphere tracer does). */
 static float refine(const struct ray_field *rf, float a, float fa, float b,
-		    float fb)
+                    float fb)
 {
 	int side = 0;
-	for (int i = 0; i < CAST_MAX_REFINE && b - a > rf->cp->refine_tol; i++) {
+	for (int i = 0; i < CAST_MAX_REFINE && b - a > rf->cp->refine_tol;
+	     i++) {
 		float m = fa - fb > 0.0f ? a + (b - a) * fa / (fa - fb)
-					 : 0.5f * (a + b);
+		                         : 0.5f * (a + b);
 		float fm;
 		if (!(m > a && m < b)) {
 			m = 0.5f * (a + b);
@@ -139,9 +140,9 @@ static float refine(const struct ray_field *rf, float a, float fa, float b,
 /* Alg. 5.7 on one leaf's segment [ta, tb]: the first t where the variant
  * drops below the band, if any. */
 static bool leaf_root(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
-		      const float o[3], const float d[3], float ta, float tb,
-		      const struct bc_svo_cast_params *cp, struct bc_svo_hit *hit,
-		      float *t_out)
+                      const float o[3], const float d[3], float ta, float tb,
+                      const struct bc_svo_cast_params *cp,
+                      struct bc_svo_hit *hit, float *t_out)
 {
 	struct {
 		float a, b;
@@ -207,13 +208,14 @@ static bool leaf_root(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
 
 /* The ray's parameter interval inside the box, clipped to [t0, t1]. */
 static bool clip(const float lo[3], const float hi[3], const float o[3],
-		 const float d[3], float *t0, float *t1)
+                 const float d[3], float *t0, float *t1)
 {
 	float a = *t0, b = *t1;
 	for (int i = 0; i < 3; i++) {
 		if (d[i] != 0.0f) {
 			float inv = 1.0f / d[i];
-			float ta = (lo[i] - o[i]) * inv, tb = (hi[i] - o[i]) * inv;
+			float ta = (lo[i] - o[i]) * inv,
+			      tb = (hi[i] - o[i]) * inv;
 			if (ta > tb) {
 				float s = ta;
 				ta = tb;
@@ -237,8 +239,8 @@ struct ent {
 };
 
 bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
-		 float t0, float t1, const struct bc_svo_cast_params *cp,
-		 struct bc_svo_hit *hit)
+                 float t0, float t1, const struct bc_svo_cast_params *cp,
+                 struct bc_svo_hit *hit)
 {
 	const struct bc_svo *s = c->s;
 	/* Each level pushes at most four children (a ray crosses at most four
@@ -274,8 +276,8 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
 				mask.pairs = s->pool.v + 2u * (size_t)lf->off;
 				mask.nwords = lf->npairs;
 				terms = lf->nterms;
-				found = leaf_root(c, &mask, o, d, e.ta, e.tb, cp,
-						  hit, &th);
+				found = leaf_root(c, &mask, o, d, e.ta, e.tb,
+				                  cp, hit, &th);
 			}
 			continue;
 		}
@@ -299,7 +301,8 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
 		cut[ncut++] = e.tb;
 		/* Push back to front so the nearest piece is popped first. */
 		for (uint32_t k = ncut - 1; k > 0; k--) {
-			float u0 = cut[k - 1], u1 = cut[k], um = 0.5f * (u0 + u1);
+			float u0 = cut[k - 1], u1 = cut[k],
+			      um = 0.5f * (u0 + u1);
 			struct ent *ch = &st[sp++];
 			uint32_t oct = 0;
 			for (int i = 0; i < 3; i++) {
@@ -335,7 +338,7 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
 	hit->mask = mask;
 	{
 		float p[3] = {o[0] + th * d[0], o[1] + th * d[1],
-			      o[2] + th * d[2]};
+		              o[2] + th * d[2]};
 		struct bc_svo_leaf_ref ref;
 		/* The id from the variant of the leaf the point lies in, when
 		 * that leaf holds surface; else from the variant of the hit. */

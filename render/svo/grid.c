@@ -28,7 +28,7 @@ struct bc_svo_grid {
 };
 
 int bc_svo_grid_build(struct bc_svo_grid **out, const struct bc_svo_rpn *rpn,
-		      enum bc_range_arith arith, uint32_t n, double *prune_ms)
+                      enum bc_range_arith arith, uint32_t n, double *prune_ms)
 {
 	struct bc_svo_grid *gr;
 	struct bc_svo_ranger *g = NULL;
@@ -69,7 +69,7 @@ int bc_svo_grid_build(struct bc_svo_grid **out, const struct bc_svo_rpn *rpn,
 		for (uint32_t j = 0; j < n; j++) {
 			for (uint32_t i = 0; i < n; i++) {
 				struct voxel *v =
-					&gr->vox[((size_t)k * n + j) * n + i];
+				    &gr->vox[((size_t)k * n + j) * n + i];
 				struct bc_svo_region rg;
 				struct bc_svo_prune_result res;
 				uint32_t ijk[3] = {i, j, k};
@@ -77,13 +77,14 @@ int bc_svo_grid_build(struct bc_svo_grid **out, const struct bc_svo_rpn *rpn,
 				memset(&rg, 0, sizeof(rg));
 				for (int a = 0; a < 3; a++) {
 					rg.lo[a] = gr->lo[a] +
-						   (float)ijk[a] * gr->step[a];
-					rg.hi[a] = gr->lo[a] + (float)(ijk[a] + 1) *
-								       gr->step[a];
+					           (float)ijk[a] * gr->step[a];
+					rg.hi[a] =
+					    gr->lo[a] +
+					    (float)(ijk[a] + 1) * gr->step[a];
 				}
 				t0 = bc__svo_now_ms();
 				rc = bc_svo_prune(g, gr->full, mask, &rg, 0.0f,
-						  &res);
+				                  &res);
 				ms += bc__svo_now_ms() - t0;
 				if (rc) {
 					goto cleanup;
@@ -91,16 +92,15 @@ int bc_svo_grid_build(struct bc_svo_grid **out, const struct bc_svo_rpn *rpn,
 				v->state = (uint8_t)res.state;
 				v->nterms = res.nterms;
 				if (res.state == BC_SVO_STATE_ACTIVE) {
-					rc = bc__svo_pool_put(&gr->pool, mask,
-							      rpn->nwords,
-							      &v->off,
-							      &v->npairs);
+					rc = bc__svo_pool_put(
+					    &gr->pool, mask, rpn->nwords,
+					    &v->off, &v->npairs);
 					if (rc) {
 						goto cleanup;
 					}
 				} else {
 					v->value = bc__svo_state_value(
-						res.state, res.root);
+					    res.state, res.root);
 				}
 			}
 		}
@@ -142,11 +142,11 @@ float bc_svo_grid_eval(const struct bc_svo_grid *gr, const float p[3])
 		c[a] = u >= (float)gr->n ? gr->n - 1u : (uint32_t)u;
 		/* The division may round p into a neighbour: the voxel must be
 		 * the one whose bounds, computed as the build did, hold p. */
-		if (c[a] > 0 &&
-		    p[a] < gr->lo[a] + (float)c[a] * gr->step[a]) {
+		if (c[a] > 0 && p[a] < gr->lo[a] + (float)c[a] * gr->step[a]) {
 			c[a]--;
 		} else if (c[a] + 1u < gr->n &&
-			   p[a] > gr->lo[a] + (float)(c[a] + 1u) * gr->step[a]) {
+		           p[a] >
+		               gr->lo[a] + (float)(c[a] + 1u) * gr->step[a]) {
 			c[a]++;
 		}
 	}
@@ -160,7 +160,7 @@ float bc_svo_grid_eval(const struct bc_svo_grid *gr, const float p[3])
 }
 
 void bc_svo_grid_stats(const struct bc_svo_grid *gr, double *avg_terms,
-		       uint32_t *max_terms, uint64_t *bytes)
+                       uint32_t *max_terms, uint64_t *bytes)
 {
 	size_t nv = (size_t)gr->n * gr->n * gr->n;
 	double sum = 0.0;

@@ -87,7 +87,7 @@ static inline RT f_mul(struct bc_svo_ranger *g, RT a, RT b)
 	double p2 = prod(a.hi, b.lo), p3 = prod(a.hi, b.hi);
 	(void)g;
 	return mk(bc__dmin(bc__dmin(p0, p1), bc__dmin(p2, p3)),
-		  bc__dmax(bc__dmax(p0, p1), bc__dmax(p2, p3)));
+	          bc__dmax(bc__dmax(p0, p1), bc__dmax(p2, p3)));
 }
 
 static inline RT f_sqr(struct bc_svo_ranger *g, RT a)
@@ -142,7 +142,7 @@ static inline RT f_recip(struct bc_svo_ranger *g, RT a)
 }
 
 static void f_input(struct bc_svo_ranger *g, const struct bc_svo_region *rg,
-		    RT p[3])
+                    RT p[3])
 {
 	(void)g;
 	for (int i = 0; i < 3; i++) {
@@ -173,8 +173,8 @@ static inline RT f_keep(struct bc_svo_ranger *g, uint32_t mark, RT a)
 #include "range_tmpl.h"
 
 struct bc_svo_ivl bc__svo_ia_natural(struct bc_svo_ranger *g,
-				     const struct bc_svo_term *t,
-				     const struct bc_svo_region *rg)
+                                     const struct bc_svo_term *t,
+                                     const struct bc_svo_region *rg)
 {
 	const float *rec = g->rpn->rec + t->rec;
 	RT p[3], loc[3], f;
@@ -189,13 +189,13 @@ struct bc_svo_ivl bc__svo_ia_natural(struct bc_svo_ranger *g,
 }
 
 struct bc_svo_ivl bc__svo_ia_run(struct bc_svo_ranger *g, const uint32_t *idx,
-				 uint32_t n, const struct bc_svo_region *rg)
+                                 uint32_t n, const struct bc_svo_region *rg)
 {
 	return t_run(g, idx, n, rg);
 }
 
 struct bc_svo_ivl bc__svo_ia_prim(struct bc_svo_ranger *g, uint32_t term,
-				  const struct bc_svo_region *rg)
+                                  const struct bc_svo_region *rg)
 {
 	return t_prim_only(g, term, rg);
 }

@@ -47,8 +47,8 @@ static inline float eval_t(const struct target *t, const float p[3])
 	return t->s ? bc_svo_eval(t->s, p) : bc_svo_grid_eval(t->g, p);
 }
 
-static int time_any(const struct target *t, const struct bc_lin *l,
-		    uint32_t n, uint64_t seed, struct bc_svo_timing *out)
+static int time_any(const struct target *t, const struct bc_lin *l, uint32_t n,
+                    uint64_t seed, struct bc_svo_timing *out)
 {
 	float *p, *v;
 	volatile float sink = 0.0f;
@@ -82,8 +82,8 @@ static int time_any(const struct target *t, const struct bc_lin *l,
 		t0 = bc__svo_now_ms();
 		for (uint32_t i = 0; i < n; i++) {
 			acc += bc_svo_locate(t->s, p + 3u * i, &ref)
-				       ? (float)ref.depth
-				       : 0.0f;
+			           ? (float)ref.depth
+			           : 0.0f;
 		}
 		t1 = bc__svo_now_ms();
 		out->locate_ns = (t1 - t0) * 1e6 / n;
@@ -112,15 +112,15 @@ static int time_any(const struct target *t, const struct bc_lin *l,
 }
 
 int bc_svo_time_octree(const struct bc_svo *s, const struct bc_lin *l,
-		       uint32_t points, uint64_t seed,
-		       struct bc_svo_timing *out)
+                       uint32_t points, uint64_t seed,
+                       struct bc_svo_timing *out)
 {
 	struct target t = {s, NULL};
 	return time_any(&t, l, points, seed, out);
 }
 
 int bc_svo_time_grid(const struct bc_svo_grid *g, const struct bc_lin *l,
-		     uint32_t points, uint64_t seed, struct bc_svo_timing *out)
+                     uint32_t points, uint64_t seed, struct bc_svo_timing *out)
 {
 	struct target t = {NULL, g};
 	return time_any(&t, l, points, seed, out);

@@ -38,7 +38,7 @@ double bc__svo_now_ms(void)
 }
 
 int bc__svo_pool_put(struct bc__svo_pool *pool, const uint32_t *mask,
-		     uint32_t nwords, uint32_t *off, uint32_t *npairs)
+                     uint32_t nwords, uint32_t *off, uint32_t *npairs)
 {
 	uint32_t k = 0;
 	for (uint32_t w = 0; w < nwords; w++) {
@@ -81,11 +81,11 @@ float bc__svo_state_value(enum bc_svo_state st, struct bc_svo_ivl root)
 {
 	if (st == BC_SVO_STATE_EMPTY) {
 		return root.lo >= (double)FLT_MAX
-			       ? FLT_MAX
-			       : fmaxf((float)root.lo, FLT_MIN);
+		           ? FLT_MAX
+		           : fmaxf((float)root.lo, FLT_MIN);
 	}
 	return root.hi <= -(double)FLT_MAX ? -FLT_MAX
-					   : fminf((float)root.hi, -FLT_MIN);
+	                                   : fminf((float)root.hi, -FLT_MIN);
 }
 
 /* ---- Construction -------------------------------------------------------- */
@@ -121,7 +121,8 @@ static int grow_nodes(struct bc_svo *s, uint32_t more)
 }
 
 static int make_leaf(struct build *b, uint32_t node, uint32_t depth,
-		     const uint32_t *mask, const struct bc_svo_prune_result *res)
+                     const uint32_t *mask,
+                     const struct bc_svo_prune_result *res)
 {
 	struct bc_svo *s = b->s;
 	struct bc__svo_leaf *lf;
@@ -129,8 +130,8 @@ static int make_leaf(struct build *b, uint32_t node, uint32_t depth,
 	int rc;
 	if (s->nleaves == s->capleaves) {
 		uint32_t cap = s->capleaves ? 2 * s->capleaves : 64;
-		struct bc__svo_leaf *grown = bc_reallocarray(s->leaves, cap,
-						     sizeof(*grown));
+		struct bc__svo_leaf *grown =
+		    bc_reallocarray(s->leaves, cap, sizeof(*grown));
 		if (!grown) {
 			return BC_ENOMEM;
 		}
@@ -144,7 +145,7 @@ static int make_leaf(struct build *b, uint32_t node, uint32_t depth,
 	lf->nterms = res->nterms;
 	if (res->state == BC_SVO_STATE_ACTIVE) {
 		if ((rc = bc__svo_pool_put(&s->pool, mask, s->rpn->nwords,
-					   &lf->off, &lf->npairs))) {
+		                           &lf->off, &lf->npairs))) {
 			return rc;
 		}
 	} else {
@@ -157,11 +158,10 @@ static int make_leaf(struct build *b, uint32_t node, uint32_t depth,
 	s->stats.empty += res->state == BC_SVO_STATE_EMPTY;
 	s->stats.full += res->state == BC_SVO_STATE_FULL;
 	s->stats.active += res->state == BC_SVO_STATE_ACTIVE;
-	s->stats.max_depth = depth > s->stats.max_depth ? depth
-							: s->stats.max_depth;
-	s->stats.max_terms = res->nterms > s->stats.max_terms
-				     ? res->nterms
-				     : s->stats.max_terms;
+	s->stats.max_depth =
+	    depth > s->stats.max_depth ? depth : s->stats.max_depth;
+	s->stats.max_terms =
+	    res->nterms > s->stats.max_terms ? res->nterms : s->stats.max_terms;
 	s->stats.avg_depth += w * depth;
 	s->stats.avg_terms += w * res->nterms;
 	s->stats.avg_depth_leaf += depth;
@@ -171,7 +171,7 @@ static int make_leaf(struct build *b, uint32_t node, uint32_t depth,
 
 /* Bytes a leaf for a variant with these mask words takes. */
 static uint64_t leaf_cost(const uint32_t *mask, uint32_t nwords,
-			  const struct bc_svo_prune_result *res)
+                          const struct bc_svo_prune_result *res)
 {
 	uint64_t k = 0;
 	if (res->state == BC_SVO_STATE_ACTIVE) {
@@ -193,9 +193,9 @@ static uint64_t leaf_cost(const uint32_t *mask, uint32_t nwords,
  * starving whichever regions happen to be built last.
  */
 static int build_node(struct build *b, uint32_t node, const float lo[3],
-		      const float hi[3], uint32_t depth, const uint32_t *mask,
-		      const struct bc_svo_prune_result *res,
-		      uint32_t parent_terms, uint32_t stall, uint64_t allow)
+                      const float hi[3], uint32_t depth, const uint32_t *mask,
+                      const struct bc_svo_prune_result *res,
+                      uint32_t parent_terms, uint32_t stall, uint64_t allow)
 {
 	struct bc_svo *s = b->s;
 	uint32_t nw = s->rpn->nwords;
@@ -216,8 +216,8 @@ static int build_node(struct build *b, uint32_t node, const float lo[3],
 		return make_leaf(b, node, depth, mask, res);
 	}
 	stall = res->nterms < parent_terms || depth < SVO_STALL_MIN_DEPTH
-			? 0
-			: stall + 1;
+	            ? 0
+	            : stall + 1;
 	if (stall >= SVO_STALL_LEVELS) {
 		s->stats.stalled++;
 		return make_leaf(b, node, depth, mask, res);
@@ -234,16 +234,16 @@ static int build_node(struct build *b, uint32_t node, const float lo[3],
 		memcpy(rg.lo, clo[c], sizeof(rg.lo));
 		memcpy(rg.hi, chi[c], sizeof(rg.hi));
 		if ((rc = bc_svo_prune(b->g, mask, cm + (size_t)c * nw, &rg,
-				       s->opts.band, &cr[c]))) {
+		                       s->opts.band, &cr[c]))) {
 			return rc;
 		}
 		s->stats.pruned++;
 		cost[c] = leaf_cost(cm + (size_t)c * nw, nw, &cr[c]);
 		weight[c] = cr[c].state == BC_SVO_STATE_ACTIVE &&
-					    cr[c].nterms > b->tau &&
-					    depth + 1 < b->max_depth
-				    ? cr[c].nterms
-				    : 0;
+		                    cr[c].nterms > b->tau &&
+		                    depth + 1 < b->max_depth
+		                ? cr[c].nterms
+		                : 0;
 		wsum += weight[c];
 		reserve += cost[c];
 	}
@@ -267,13 +267,13 @@ static int build_node(struct build *b, uint32_t node, const float lo[3],
 			/* A share of what is left, as a fraction computed in
 			 * double: the product could overflow 64 bits. */
 			mine += (uint64_t)((double)left * (double)weight[c] /
-					   (double)wsum);
+			                   (double)wsum);
 		}
 		s->nodes[first + c].child = 0;
 		s->nodes[first + c].leaf = 0;
 		if ((rc = build_node(b, first + c, clo[c], chi[c], depth + 1,
-				     cm + (size_t)c * nw, &cr[c], res->nterms,
-				     stall, mine))) {
+		                     cm + (size_t)c * nw, &cr[c], res->nterms,
+		                     stall, mine))) {
 			return rc;
 		}
 		/* What the child did not use of its share goes on to the
@@ -287,7 +287,7 @@ static int build_node(struct build *b, uint32_t node, const float lo[3],
 }
 
 int bc_svo_build(struct bc_svo **out, const struct bc_svo_rpn *rpn,
-		 const struct bc_svo_opts *opts, struct bc_errinfo *ei)
+                 const struct bc_svo_opts *opts, struct bc_errinfo *ei)
 {
 	struct bc_svo *s;
 	struct build b;
@@ -300,12 +300,12 @@ int bc_svo_build(struct bc_svo **out, const struct bc_svo_rpn *rpn,
 	}
 	if (opts->max_depth > BC_SVO_MAX_DEPTH) {
 		return bc_errinfo_set(ei, BC_ERANGE,
-				      "svo: max depth %u exceeds %u",
-				      opts->max_depth, BC_SVO_MAX_DEPTH);
+		                      "svo: max depth %u exceeds %u",
+		                      opts->max_depth, BC_SVO_MAX_DEPTH);
 	}
 	if (!(opts->band >= 0.0f) || !isfinite(opts->band)) {
 		return bc_errinfo_set(ei, BC_ERANGE,
-				      "svo: band must be finite and >= 0");
+		                      "svo: band must be finite and >= 0");
 	}
 	s = bc_calloc(1, sizeof(*s));
 	if (!s) {
@@ -313,12 +313,12 @@ int bc_svo_build(struct bc_svo **out, const struct bc_svo_rpn *rpn,
 	}
 	s->rpn = rpn;
 	s->opts = *opts;
-	s->opts.threshold = opts->threshold ? opts->threshold
-					    : BC_SVO_DEFAULT_THRESHOLD;
-	s->opts.max_depth = opts->max_depth ? opts->max_depth
-					    : BC_SVO_DEFAULT_MAX_DEPTH;
-	s->opts.max_bytes = opts->max_bytes ? opts->max_bytes
-					    : BC_SVO_DEFAULT_MAX_BYTES;
+	s->opts.threshold =
+	    opts->threshold ? opts->threshold : BC_SVO_DEFAULT_THRESHOLD;
+	s->opts.max_depth =
+	    opts->max_depth ? opts->max_depth : BC_SVO_DEFAULT_MAX_DEPTH;
+	s->opts.max_bytes =
+	    opts->max_bytes ? opts->max_bytes : BC_SVO_DEFAULT_MAX_BYTES;
 	if (s->opts.arith == BC_RANGE_DEFAULT) {
 		s->opts.arith = BC_RANGE_REVAA;
 	}
@@ -342,46 +342,46 @@ int bc_svo_build(struct bc_svo **out, const struct bc_svo_rpn *rpn,
 	b.tau = s->opts.threshold;
 	b.max_depth = s->opts.max_depth;
 	b.rpn_bytes = (uint64_t)rpn->n * sizeof(struct bc_svo_term) +
-		      (uint64_t)rpn->nprims * (BC_SVO_PRIM_REC * 4u + 16u);
+	              (uint64_t)rpn->nprims * (BC_SVO_PRIM_REC * 4u + 16u);
 	if ((rc = bc_svo_ranger_create(&b.g, rpn, s->opts.arith))) {
 		bc_svo_destroy(s);
 		return bc_errinfo_set(ei, rc, "svo: %s", bc_strerror(rc));
 	}
 	/* The variants of the eight children of one node per depth. */
 	b.masks = bc_calloc((size_t)(b.max_depth + 2u) * 8u * rpn->nwords,
-			    sizeof(*b.masks));
+	                    sizeof(*b.masks));
 	s->full = bc_calloc(rpn->nwords, sizeof(*s->full));
 	if (!b.masks || !s->full || grow_nodes(s, 1)) {
 		rc = BC_ENOMEM;
 		goto cleanup;
 	}
 	bc_svo_mask_fill(rpn, s->full);
-	if ((rc = bc__svo_pool_put(&s->pool, s->full, rpn->nwords,
-				   &s->full_off, &s->full_c.nwords))) {
+	if ((rc = bc__svo_pool_put(&s->pool, s->full, rpn->nwords, &s->full_off,
+	                           &s->full_c.nwords))) {
 		goto cleanup;
 	}
 	s->nnodes = 1;
 	{
 		/* What the build needs besides the tree: the RPN, the working
 		 * masks and the full variant. */
-		uint64_t fixed = b.rpn_bytes +
-				 (uint64_t)(b.max_depth + 3u) * 8u * rpn->nwords * 4u;
-		uint64_t allow = s->opts.max_bytes > fixed
-					 ? s->opts.max_bytes - fixed
-					 : 0;
+		uint64_t fixed = b.rpn_bytes + (uint64_t)(b.max_depth + 3u) *
+		                                   8u * rpn->nwords * 4u;
+		uint64_t allow =
+		    s->opts.max_bytes > fixed ? s->opts.max_bytes - fixed : 0;
 		struct bc_svo_region rg;
 		struct bc_svo_prune_result res;
 		memset(&rg, 0, sizeof(rg));
 		memcpy(rg.lo, s->lo, sizeof(rg.lo));
 		memcpy(rg.hi, s->hi, sizeof(rg.hi));
-		rc = bc_svo_prune(b.g, s->full, b.masks, &rg, s->opts.band, &res);
+		rc = bc_svo_prune(b.g, s->full, b.masks, &rg, s->opts.band,
+		                  &res);
 		if (rc) {
 			goto cleanup;
 		}
 		s->stats.pruned++;
 		b.used = sizeof(struct bc__svo_node);
 		rc = build_node(&b, 0, s->lo, s->hi, 0, b.masks, &res,
-				UINT32_MAX, 0, allow);
+		                UINT32_MAX, 0, allow);
 	}
 	if (rc) {
 		goto cleanup;
@@ -396,9 +396,9 @@ int bc_svo_build(struct bc_svo **out, const struct bc_svo_rpn *rpn,
 		s->stats.avg_terms_leaf /= s->stats.active;
 	}
 	s->stats.bytes = b.rpn_bytes +
-			 (uint64_t)s->nnodes * sizeof(struct bc__svo_node) +
-			 (uint64_t)s->nleaves * sizeof(struct bc__svo_leaf) +
-			 (uint64_t)s->pool.n * sizeof(uint32_t);
+	                 (uint64_t)s->nnodes * sizeof(struct bc__svo_node) +
+	                 (uint64_t)s->nleaves * sizeof(struct bc__svo_leaf) +
+	                 (uint64_t)s->pool.n * sizeof(uint32_t);
 	s->stats.build_ms = bc__svo_now_ms() - t0;
 cleanup:
 	bc_svo_ranger_destroy(b.g);
@@ -442,7 +442,7 @@ void bc_svo_bounds(const struct bc_svo *s, float lo[3], float hi[3])
 /* ---- Queries ------------------------------------------------------------- */
 
 static void fill_ref(const struct bc_svo *s, const struct bc__svo_leaf *lf,
-		     struct bc_svo_leaf_ref *ref)
+                     struct bc_svo_leaf_ref *ref)
 {
 	ref->state = (enum bc_svo_state)lf->state;
 	ref->mask.pairs = s->pool.v ? s->pool.v + 2u * (size_t)lf->off : NULL;
@@ -453,7 +453,7 @@ static void fill_ref(const struct bc_svo *s, const struct bc__svo_leaf *lf,
 }
 
 bool bc_svo_locate(const struct bc_svo *s, const float p[3],
-		   struct bc_svo_leaf_ref *ref)
+                   struct bc_svo_leaf_ref *ref)
 {
 	float lo[3], hi[3];
 	uint32_t node = 0;
@@ -489,7 +489,7 @@ static float eval(const struct bc_svo *s, const float p[3], uint32_t *prim)
 	struct bc_svo_leaf_ref ref;
 	if (!bc_svo_locate(s, p, &ref)) {
 		return prim ? bc_svo_cmask_eval_id(s->rpn, s->full_c, p, prim)
-			    : bc_svo_cmask_eval(s->rpn, s->full_c, p);
+		            : bc_svo_cmask_eval(s->rpn, s->full_c, p);
 	}
 	if (ref.state != BC_SVO_STATE_ACTIVE) {
 		if (prim) {
@@ -498,7 +498,7 @@ static float eval(const struct bc_svo *s, const float p[3], uint32_t *prim)
 		return ref.value;
 	}
 	return prim ? bc_svo_cmask_eval_id(s->rpn, ref.mask, p, prim)
-		    : bc_svo_cmask_eval(s->rpn, ref.mask, p);
+	            : bc_svo_cmask_eval(s->rpn, ref.mask, p);
 }
 
 float bc_svo_eval(const struct bc_svo *s, const float p[3])

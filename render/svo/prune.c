@@ -43,8 +43,8 @@ static inline bool is_union(uint8_t kind)
 }
 
 int bc_svo_prune(struct bc_svo_ranger *g, const uint32_t *mask_in,
-		 uint32_t *mask_out, const struct bc_svo_region *region,
-		 float band, struct bc_svo_prune_result *res)
+                 uint32_t *mask_out, const struct bc_svo_region *region,
+                 float band, struct bc_svo_prune_result *res)
 {
 	const struct bc_svo_rpn *r = g->rpn;
 	uint32_t *stk = g->mark;
@@ -56,14 +56,16 @@ int bc_svo_prune(struct bc_svo_ranger *g, const uint32_t *mask_in,
 	}
 	/* The active terms, in order (Alg. 5.2 iteration). */
 	for (uint32_t i = bc_svo_bits_next(mask_in, r->nwords, 0);
-	     i != UINT32_MAX; i = bc_svo_bits_next(mask_in, r->nwords, i + 1u)) {
+	     i != UINT32_MAX;
+	     i = bc_svo_bits_next(mask_in, r->nwords, i + 1u)) {
 		if (i >= r->n) {
 			return BC_EINVAL; /* padding bits set */
 		}
 		g->idx[n++] = i;
 	}
 	if (mask_out != mask_in) {
-		memcpy(mask_out, mask_in, (size_t)r->nwords * sizeof(*mask_out));
+		memcpy(mask_out, mask_in,
+		       (size_t)r->nwords * sizeof(*mask_out));
 	}
 	if (n == 0) {
 		res->state = BC_SVO_STATE_EMPTY;
@@ -75,7 +77,7 @@ int bc_svo_prune(struct bc_svo_ranger *g, const uint32_t *mask_in,
 		/* The thesis's last step: the whole region is on one side of
 		 * every level, nothing needs evaluating. */
 		res->state = res->root.lo > (double)band ? BC_SVO_STATE_EMPTY
-							  : BC_SVO_STATE_FULL;
+		                                         : BC_SVO_STATE_FULL;
 		memset(mask_out, 0, (size_t)r->nwords * sizeof(*mask_out));
 		return 0;
 	}
@@ -108,27 +110,30 @@ int bc_svo_prune(struct bc_svo_ranger *g, const uint32_t *mask_in,
 		lo = (m & MODE_FLIP) ? -(double)band : 0.0;
 		hi = (m & MODE_FLIP) ? 0.0 : (double)band;
 		sharp = bc__svo_op_sharp_in((enum bc_op)t->kind, rec[0], rec[1],
-					    A, B);
+		                            A, B);
 		if (sharp) {
 			if (is_union(t->kind)) {
 				keep = A.hi <= B.lo ? a
-						    : (B.hi <= A.lo ? b : keep);
+				                    : (B.hi <= A.lo ? b : keep);
 				if (keep == UINT32_MAX && !(m & MODE_VALUE)) {
-					keep = A.lo > hi ? b
-							 : (B.lo > hi ? a : keep);
+					keep = A.lo > hi
+					           ? b
+					           : (B.lo > hi ? a : keep);
 				}
 			} else {
 				keep = A.lo >= B.hi ? a
-						    : (B.lo >= A.hi ? b : keep);
+				                    : (B.lo >= A.hi ? b : keep);
 				if (keep == UINT32_MAX && !(m & MODE_VALUE)) {
-					keep = A.hi < lo ? b
-							 : (B.hi < lo ? a : keep);
+					keep = A.hi < lo
+					           ? b
+					           : (B.hi < lo ? a : keep);
 				}
 			}
 		}
 		if (keep != UINT32_MAX) {
 			bc__svo_clear(mask_out, i);
-			bc_svo_rpn_clear_subtree(r, mask_out, keep == a ? b : a);
+			bc_svo_rpn_clear_subtree(r, mask_out,
+			                         keep == a ? b : a);
 			stk[sp] = keep;
 			mode[sp++] = m;
 			continue;

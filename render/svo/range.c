@@ -32,7 +32,7 @@ static inline bool is_union(enum bc_op k)
 }
 
 bool bc__svo_op_sharp_in(enum bc_op kind, double blend, double range,
-			 struct bc_svo_ivl a, struct bc_svo_ivl b)
+                         struct bc_svo_ivl a, struct bc_svo_ivl b)
 {
 	double bmax, dlo, dhi;
 	if (!bc_op_is_smooth(kind)) {
@@ -45,7 +45,7 @@ bool bc__svo_op_sharp_in(enum bc_op kind, double blend, double range,
 			return true;
 		}
 		bmax = blend * bc__dmax(0.0, 1.0 + (blend - 6.0 * mlo) /
-						       (6.0 * range - blend));
+		                                       (6.0 * range - blend));
 	} else {
 		if (a.lo > range || a.hi < -range || b.lo > range ||
 		    b.hi < -range) {
@@ -60,14 +60,15 @@ bool bc__svo_op_sharp_in(enum bc_op kind, double blend, double range,
 }
 
 double bc__svo_op_blend_bound(enum bc_op kind, double blend, double range,
-			      struct bc_svo_ivl m, struct bc_svo_ivl a,
-			      struct bc_svo_ivl b)
+                              struct bc_svo_ivl m, struct bc_svo_ivl a,
+                              struct bc_svo_ivl b)
 {
 	double d = 6.0 * range - blend, t, bmax, dlo, dhi, dmin, h;
 	if (is_union(kind)) {
 		t = 1.0 + (blend - 6.0 * m.lo) / d;
 	} else {
-		/* |g| is at least the distance of [m.lo, m.hi + beta/6] to 0. */
+		/* |g| is at least the distance of [m.lo, m.hi + beta/6] to 0.
+		 */
 		double glo = m.lo, ghi = m.hi + blend / 6.0;
 		double gmin = glo > 0.0 ? glo : (ghi < 0.0 ? -ghi : 0.0);
 		t = 1.0 - 6.0 * gmin / d;
@@ -98,16 +99,16 @@ double bc__svo_op_margin(double blend, struct bc_svo_ivl m)
 }
 
 struct bc_svo_ivl bc_svo_range_op(enum bc_op kind, float blend, float range,
-				  struct bc_svo_ivl a, struct bc_svo_ivl b)
+                                  struct bc_svo_ivl a, struct bc_svo_ivl b)
 {
 	struct bc_svo_ivl m;
 	if (kind == BC_OP_DIFFERENCE || kind == BC_OP_SMOOTH_DIFFERENCE) {
 		/* G\ (f0, f1) is G∩ (f0, -f1) exactly (ops.c). */
 		struct bc_svo_ivl nb = {-b.hi, -b.lo};
 		return bc_svo_range_op(kind == BC_OP_DIFFERENCE
-					       ? BC_OP_INTERSECTION
-					       : BC_OP_SMOOTH_INTERSECTION,
-				       blend, range, a, nb);
+		                           ? BC_OP_INTERSECTION
+		                           : BC_OP_SMOOTH_INTERSECTION,
+		                       blend, range, a, nb);
 	}
 	if (is_union(kind)) {
 		m.lo = bc__dmin(a.lo, b.lo);
@@ -118,8 +119,8 @@ struct bc_svo_ivl bc_svo_range_op(enum bc_op kind, float blend, float range,
 	}
 	if (bc_op_is_smooth(kind) &&
 	    !bc__svo_op_sharp_in(kind, blend, range, a, b)) {
-		double amax = bc__svo_op_blend_bound(kind, blend, range, m, a,
-						     b);
+		double amax =
+		    bc__svo_op_blend_bound(kind, blend, range, m, a, b);
 		double mg = bc__svo_op_margin(blend + amax, m);
 		if (is_union(kind)) {
 			m.lo -= amax + mg;
@@ -143,8 +144,10 @@ void bc__svo_geo_init(struct bc__svo_geo *geo, const struct bc_svo_region *rg)
 		}
 		/* The farthest point of a segment from any point is an end. */
 		for (int i = 0; i < 3; i++) {
-			double p0 = (double)rg->o[i] + (double)rg->t0 * rg->d[i];
-			double p1 = (double)rg->o[i] + (double)rg->t1 * rg->d[i];
+			double p0 =
+			    (double)rg->o[i] + (double)rg->t0 * rg->d[i];
+			double p1 =
+			    (double)rg->o[i] + (double)rg->t1 * rg->d[i];
 			e0 += (p0 - geo->c[i]) * (p0 - geo->c[i]);
 			e1 += (p1 - geo->c[i]) * (p1 - geo->c[i]);
 		}
@@ -154,7 +157,7 @@ void bc__svo_geo_init(struct bc__svo_geo *geo, const struct bc_svo_region *rg)
 			double h;
 			geo->c[i] = 0.5f * (rg->lo[i] + rg->hi[i]);
 			h = bc__dmax((double)geo->c[i] - rg->lo[i],
-				 (double)rg->hi[i] - geo->c[i]);
+			             (double)rg->hi[i] - geo->c[i]);
 			r2 += h * h;
 		}
 	}
@@ -163,8 +166,8 @@ void bc__svo_geo_init(struct bc__svo_geo *geo, const struct bc_svo_region *rg)
 
 /* ---- The range evaluator ------------------------------------------------ */
 
-int bc_svo_ranger_create(struct bc_svo_ranger **out,
-			 const struct bc_svo_rpn *r, enum bc_range_arith arith)
+int bc_svo_ranger_create(struct bc_svo_ranger **out, const struct bc_svo_rpn *r,
+                         enum bc_range_arith arith)
 {
 	struct bc_svo_ranger *g;
 	*out = NULL;
@@ -198,7 +201,8 @@ int bc_svo_ranger_create(struct bc_svo_ranger **out,
 		/* The stack of forms, each capped, plus the temporaries of one
 		 * primitive or operator (a few dozen, each at most two capped
 		 * forms merged). */
-		g->aa_cap = (BC_EVAL_STACK + 64u) * (2u * BC_SVO_AA_MAX_TERMS + 8u);
+		g->aa_cap =
+		    (BC_EVAL_STACK + 64u) * (2u * BC_SVO_AA_MAX_TERMS + 8u);
 		g->aa_sym = bc_calloc(g->aa_cap, sizeof(*g->aa_sym));
 		g->aa_coef = bc_calloc(g->aa_cap, sizeof(*g->aa_coef));
 		if (!g->aa_sym || !g->aa_coef) {
@@ -232,7 +236,7 @@ enum bc_range_arith bc_svo_ranger_arith(const struct bc_svo_ranger *g)
 }
 
 struct bc_svo_ivl bc_svo_range(struct bc_svo_ranger *g, const uint32_t *idx,
-			       uint32_t n, const struct bc_svo_region *region)
+                               uint32_t n, const struct bc_svo_region *region)
 {
 	struct bc_svo_ivl none = {INFINITY, INFINITY};
 	if (n == 0) {
@@ -249,7 +253,7 @@ struct bc_svo_ivl bc_svo_range(struct bc_svo_ranger *g, const uint32_t *idx,
 }
 
 struct bc_svo_ivl bc_svo_range_prim(struct bc_svo_ranger *g, uint32_t term,
-				    const struct bc_svo_region *region)
+                                    const struct bc_svo_region *region)
 {
 	switch (g->arith) {
 	case BC_RANGE_IA:

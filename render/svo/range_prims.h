@@ -24,8 +24,8 @@ static inline RT t_len2(struct bc_svo_ranger *g, RT a, RT b)
 
 static inline RT t_len3(struct bc_svo_ranger *g, RT a, RT b, RT c)
 {
-	return f_sqrt(g, f_add(g, f_add(g, f_sqr(g, a), f_sqr(g, b)),
-			       f_sqr(g, c)));
+	return f_sqrt(
+	    g, f_add(g, f_add(g, f_sqr(g, a), f_sqr(g, b)), f_sqr(g, c)));
 }
 
 static inline RT t_max0(struct bc_svo_ranger *g, RT a)
@@ -54,7 +54,7 @@ static inline RT t_box_d(struct bc_svo_ranger *g, RT dx, RT dy, RT dz)
 static inline RT t_extrude(struct bc_svo_ranger *g, RT d2, RT dz)
 {
 	return f_add(g, t_min0(g, f_max(g, d2, dz)),
-		     t_len2(g, t_max0(g, d2), t_max0(g, dz)));
+	             t_len2(g, t_max0(g, d2), t_max0(g, dz)));
 }
 
 /* The hull of two forms: a fresh form (correlations are lost). */
@@ -84,7 +84,8 @@ static RT t_ellipsoid(struct bc_svo_ranger *g, const float *k, const RT l[3])
 		RT km = f_addc(g, k0, -1.0);
 		struct bc_svo_ivl vk = f_range(g, km), vq;
 		double rmax = bc__dmax(bc__dmax(k[0], k[1]), k[2]);
-		double blo = bc__dmax(vk.lo, 0.0) * k[6], bhi = bc__dmax(vk.hi, 0.0) * rmax;
+		double blo = bc__dmax(vk.lo, 0.0) * k[6],
+		       bhi = bc__dmax(vk.hi, 0.0) * rmax;
 		RT k1 = t_len3(g, w[0], w[1], w[2]);
 		RT outer;
 		if (f_range(g, k1).lo > 0.0) {
@@ -104,9 +105,9 @@ static RT t_ellipsoid(struct bc_svo_ranger *g, const float *k, const RT l[3])
 		}
 	}
 	return f_max(g, f,
-		     t_box_d(g, f_addc(g, f_abs(g, l[0]), -(double)k[0]),
-			     f_addc(g, f_abs(g, l[1]), -(double)k[1]),
-			     f_addc(g, f_abs(g, l[2]), -(double)k[2])));
+	             t_box_d(g, f_addc(g, f_abs(g, l[0]), -(double)k[0]),
+	                     f_addc(g, f_abs(g, l[1]), -(double)k[1]),
+	                     f_addc(g, f_abs(g, l[2]), -(double)k[2])));
 }
 
 static RT t_box_frame(struct bc_svo_ranger *g, const float *k, const RT l[3])
@@ -125,27 +126,28 @@ static RT t_box_frame(struct bc_svo_ranger *g, const float *k, const RT l[3])
 /* Writes the natural range form of kind at local forms l into *out and
  * returns true, or returns false when kind has none. */
 static bool t_natural(struct bc_svo_ranger *g, enum bc_prim kind,
-		      const float *k, const RT l[3], RT *out)
+                      const float *k, const RT l[3], RT *out)
 {
 	switch (kind) {
 	case BC_PRIM_SPHERE:
 		*out = f_addc(g, t_len3(g, l[0], l[1], l[2]), -(double)k[0]);
 		return true;
 	case BC_PRIM_BOX:
-		*out = f_addc(g,
-			      t_box_d(g, f_addc(g, f_abs(g, l[0]), -(double)k[0]),
-				      f_addc(g, f_abs(g, l[1]), -(double)k[1]),
-				      f_addc(g, f_abs(g, l[2]), -(double)k[2])),
-			      -(double)k[3]);
+		*out =
+		    f_addc(g,
+		           t_box_d(g, f_addc(g, f_abs(g, l[0]), -(double)k[0]),
+		                   f_addc(g, f_abs(g, l[1]), -(double)k[1]),
+		                   f_addc(g, f_abs(g, l[2]), -(double)k[2])),
+		           -(double)k[3]);
 		return true;
 	case BC_PRIM_CAPSULE: {
 		RT p[3], t, dot;
 		for (int i = 0; i < 3; i++) {
 			p[i] = f_addc(g, l[i], -(double)k[i]);
 		}
-		dot = f_add(g, f_add(g, f_scale(g, p[0], k[3]),
-				     f_scale(g, p[1], k[4])),
-			    f_scale(g, p[2], k[5]));
+		dot = f_add(
+		    g, f_add(g, f_scale(g, p[0], k[3]), f_scale(g, p[1], k[4])),
+		    f_scale(g, p[2], k[5]));
 		t = t_clamp(g, f_scale(g, dot, k[7]), 0.0, 1.0);
 		for (int i = 0; i < 3; i++) {
 			p[i] = f_sub(g, p[i], f_scale(g, t, k[3 + i]));
@@ -154,15 +156,16 @@ static bool t_natural(struct bc_svo_ranger *g, enum bc_prim kind,
 		return true;
 	}
 	case BC_PRIM_CYLINDER:
-		*out = t_extrude(g, f_addc(g, t_len2(g, l[0], l[2]), -(double)k[0]),
-				 f_addc(g, f_abs(g, l[1]), -(double)k[1]));
+		*out = t_extrude(
+		    g, f_addc(g, t_len2(g, l[0], l[2]), -(double)k[0]),
+		    f_addc(g, f_abs(g, l[1]), -(double)k[1]));
 		return true;
 	case BC_PRIM_TORUS:
-		*out = f_addc(g,
-			      t_len2(g, f_addc(g, t_len2(g, l[0], l[2]),
-					       -(double)k[0]),
-				     l[1]),
-			      -(double)k[1]);
+		*out = f_addc(
+		    g,
+		    t_len2(g, f_addc(g, t_len2(g, l[0], l[2]), -(double)k[0]),
+		           l[1]),
+		    -(double)k[1]);
 		return true;
 	case BC_PRIM_ELLIPSOID:
 		*out = t_ellipsoid(g, k, l);
@@ -172,11 +175,11 @@ static bool t_natural(struct bc_svo_ranger *g, enum bc_prim kind,
 		return true;
 	case BC_PRIM_LINK: {
 		RT qy = t_max0(g, f_addc(g, f_abs(g, l[1]), -(double)k[0]));
-		*out = f_addc(g,
-			      t_len2(g, f_addc(g, t_len2(g, l[0], qy),
-					       -(double)k[1]),
-				     l[2]),
-			      -(double)k[2]);
+		*out = f_addc(
+		    g,
+		    t_len2(g, f_addc(g, t_len2(g, l[0], qy), -(double)k[1]),
+		           l[2]),
+		    -(double)k[2]);
 		return true;
 	}
 	default:

@@ -26,7 +26,7 @@
 /* Local coordinate k of a primitive record: row k of the world-to-local
  * map applied to the world forms. */
 static inline RT t_local(struct bc_svo_ranger *g, const float *rec, int k,
-			 const RT p[3])
+                         const RT p[3])
 {
 	const float *row = rec + 4 * k;
 	RT v = f_scale(g, p[0], row[0]);
@@ -43,8 +43,8 @@ static inline double t_mag(struct bc_svo_ivl v)
 /* Range form of primitive term t over the region whose world forms are p
  * and geometry geo. */
 static RT t_prim(struct bc_svo_ranger *g, const struct bc_svo_term *t,
-		 const RT p[3], const struct bc__svo_geo *geo,
-		 const struct bc_svo_region *rg)
+                 const RT p[3], const struct bc__svo_geo *geo,
+                 const struct bc_svo_region *rg)
 {
 	const struct bc_svo_rpn *r = g->rpn;
 	const float *rec = r->rec + t->rec;
@@ -70,7 +70,7 @@ static RT t_prim(struct bc_svo_ranger *g, const struct bc_svo_term *t,
 	}
 	margin = BC__SVO_ROUND_REL * scale + BC__SVO_ROUND_ABS;
 	natural = !bc_svo_prim_uses_lipschitz(kind) &&
-		  RP_NATURAL(g, kind, pk, loc, &f);
+	          RP_NATURAL(g, kind, pk, loc, &f);
 #if RP_INTERVAL_FALLBACK
 	if (natural) {
 		/* Distance formulas are made of kinks (|x|, max(x, 0)) that
@@ -114,9 +114,9 @@ static RT t_prim(struct bc_svo_ranger *g, const struct bc_svo_term *t,
 
 /* Range form of operator term t on operand forms a, b with recorded
  * intervals ia, ib; *out gets the interval to record. */
-static RT t_op(struct bc_svo_ranger *g, const struct bc_svo_term *t, RT a,
-	       RT b, struct bc_svo_ivl ia, struct bc_svo_ivl ib,
-	       struct bc_svo_ivl *out)
+static RT t_op(struct bc_svo_ranger *g, const struct bc_svo_term *t, RT a, RT b,
+               struct bc_svo_ivl ia, struct bc_svo_ivl ib,
+               struct bc_svo_ivl *out)
 {
 	const float *rec = g->rpn->rec + t->rec;
 	enum bc_op k = (enum bc_op)t->kind;
@@ -126,11 +126,11 @@ static RT t_op(struct bc_svo_ranger *g, const struct bc_svo_term *t, RT a,
 	if (bc_op_is_smooth(k) &&
 	    !bc__svo_op_sharp_in(k, rec[0], rec[1], ia, ib)) {
 		struct bc_svo_ivl mi = f_range(g, m);
-		double amax = bc__svo_op_blend_bound(k, rec[0], rec[1], mi,
-						     ia, ib);
+		double amax =
+		    bc__svo_op_blend_bound(k, rec[0], rec[1], mi, ia, ib);
 		double mg = bc__svo_op_margin((double)rec[0] + amax, mi);
 		m = uni ? f_add_ivl(g, m, -amax - mg, mg)
-			: f_add_ivl(g, m, -mg, amax + mg);
+		        : f_add_ivl(g, m, -mg, amax + mg);
 	}
 	*out = bc__svo_ivl_meet(f_range(g, m), box);
 	return m;
@@ -139,7 +139,7 @@ static RT t_op(struct bc_svo_ranger *g, const struct bc_svo_term *t, RT a,
 /* Bottom-up evaluation of the variant idx[0..n) over rg; records every
  * term's range and operands in g. */
 static struct bc_svo_ivl t_run(struct bc_svo_ranger *g, const uint32_t *idx,
-			       uint32_t n, const struct bc_svo_region *rg)
+                               uint32_t n, const struct bc_svo_region *rg)
 {
 	const struct bc_svo_rpn *r = g->rpn;
 	RT st[BC_EVAL_STACK];
@@ -165,8 +165,8 @@ static struct bc_svo_ivl t_run(struct bc_svo_ranger *g, const uint32_t *idx,
 		}
 		case BC_SVO_TERM_NEG: {
 			struct bc_svo_ivl v = g->ivl[si[sp - 1]];
-			st[sp - 1] = f_keep(g, mk[sp - 1],
-					    f_neg(g, st[sp - 1]));
+			st[sp - 1] =
+			    f_keep(g, mk[sp - 1], f_neg(g, st[sp - 1]));
 			g->ivl[i].lo = -v.hi;
 			g->ivl[i].hi = -v.lo;
 			g->kid0[i] = si[sp - 1];
@@ -177,7 +177,7 @@ static struct bc_svo_ivl t_run(struct bc_svo_ranger *g, const uint32_t *idx,
 			uint32_t a = si[sp - 2], b = si[sp - 1];
 			struct bc_svo_ivl out;
 			RT f = t_op(g, t, st[sp - 2], st[sp - 1], g->ivl[a],
-				    g->ivl[b], &out);
+			            g->ivl[b], &out);
 			sp--;
 			st[sp - 1] = f_keep(g, mk[sp - 1], f);
 			g->ivl[i] = out;
@@ -192,7 +192,7 @@ static struct bc_svo_ivl t_run(struct bc_svo_ranger *g, const uint32_t *idx,
 }
 
 static struct bc_svo_ivl t_prim_only(struct bc_svo_ranger *g, uint32_t term,
-				     const struct bc_svo_region *rg)
+                                     const struct bc_svo_region *rg)
 {
 	RT p[3], f;
 	struct bc__svo_geo geo;

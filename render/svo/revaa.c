@@ -141,7 +141,8 @@ static inline RT cheb(RT a, double alpha, double zeta, double delta)
 static inline RT f_sqrt(struct bc_svo_ranger *g, RT a)
 {
 	struct bc_svo_ivl v = f_range(g, a);
-	double lo = bc__dmax(v.lo, 0.0), hi = bc__dmax(v.hi, 0.0), alpha, d1, d2;
+	double lo = bc__dmax(v.lo, 0.0), hi = bc__dmax(v.hi, 0.0), alpha, d1,
+	       d2;
 	if (!isfinite(hi)) {
 		return f_from(g, sqrt(lo), INFINITY);
 	}
@@ -180,15 +181,14 @@ static inline RT f_recip(struct bc_svo_ranger *g, RT a)
 	struct bc_svo_ivl v = f_range(g, a);
 	double lo, hi, alpha, dt, de;
 	bool neg = v.hi < 0.0;
-	if (!(v.lo > 0.0 || v.hi < 0.0) || !isfinite(v.lo) ||
-	    !isfinite(v.hi)) {
+	if (!(v.lo > 0.0 || v.hi < 0.0) || !isfinite(v.lo) || !isfinite(v.hi)) {
 		return f_from(g, -INFINITY, INFINITY);
 	}
 	lo = neg ? -v.hi : v.lo;
 	hi = neg ? -v.lo : v.hi;
 	if (hi - lo <= 1.0e-12 * hi) {
 		return neg ? f_from(g, -1.0 / lo, -1.0 / hi)
-			   : f_from(g, 1.0 / hi, 1.0 / lo);
+		           : f_from(g, 1.0 / hi, 1.0 / lo);
 	}
 	/* Convex and decreasing on [lo, hi]: chord above, tangent of the
 	 * chord's slope at sqrt(lo hi). */
@@ -197,7 +197,8 @@ static inline RT f_recip(struct bc_svo_ranger *g, RT a)
 	dt = 2.0 / sqrt(lo * hi);
 	if (neg) {
 		/* 1/x = -(1/(-x)). */
-		RT r = cheb(f_neg(g, a), alpha, 0.5 * (dt + de), 0.5 * (de - dt));
+		RT r =
+		    cheb(f_neg(g, a), alpha, 0.5 * (dt + de), 0.5 * (de - dt));
 		return f_neg(g, r);
 	}
 	return cheb(a, alpha, 0.5 * (dt + de), 0.5 * (de - dt));
@@ -226,10 +227,10 @@ static inline RT f_min(struct bc_svo_ranger *g, RT a, RT b)
 	if (vb.hi <= va.lo) {
 		return b;
 	}
-	return narrower(g, f_scale(g, f_sub(g, f_add(g, a, b),
-					    f_abs(g, f_sub(g, a, b))),
-				0.5),
-			bc__dmin(va.lo, vb.lo), bc__dmin(va.hi, vb.hi));
+	return narrower(
+	    g,
+	    f_scale(g, f_sub(g, f_add(g, a, b), f_abs(g, f_sub(g, a, b))), 0.5),
+	    bc__dmin(va.lo, vb.lo), bc__dmin(va.hi, vb.hi));
 }
 
 static inline RT f_max(struct bc_svo_ranger *g, RT a, RT b)
@@ -241,14 +242,14 @@ static inline RT f_max(struct bc_svo_ranger *g, RT a, RT b)
 	if (vb.lo >= va.hi) {
 		return b;
 	}
-	return narrower(g, f_scale(g, f_add(g, f_add(g, a, b),
-					    f_abs(g, f_sub(g, a, b))),
-				0.5),
-			bc__dmax(va.lo, vb.lo), bc__dmax(va.hi, vb.hi));
+	return narrower(
+	    g,
+	    f_scale(g, f_add(g, f_add(g, a, b), f_abs(g, f_sub(g, a, b))), 0.5),
+	    bc__dmax(va.lo, vb.lo), bc__dmax(va.hi, vb.hi));
 }
 
 static void f_input(struct bc_svo_ranger *g, const struct bc_svo_region *rg,
-		    RT p[3])
+                    RT p[3])
 {
 	double tm = 0.5 * ((double)rg->t0 + rg->t1);
 	double tr = 0.5 * ((double)rg->t1 - rg->t0);
@@ -283,13 +284,13 @@ static inline RT f_keep(struct bc_svo_ranger *g, uint32_t mark, RT a)
 #include "range_tmpl.h"
 
 struct bc_svo_ivl bc__svo_rev_run(struct bc_svo_ranger *g, const uint32_t *idx,
-				  uint32_t n, const struct bc_svo_region *rg)
+                                  uint32_t n, const struct bc_svo_region *rg)
 {
 	return t_run(g, idx, n, rg);
 }
 
 struct bc_svo_ivl bc__svo_rev_prim(struct bc_svo_ranger *g, uint32_t term,
-				   const struct bc_svo_region *rg)
+                                   const struct bc_svo_region *rg)
 {
 	return t_prim_only(g, term, rg);
 }

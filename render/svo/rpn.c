@@ -20,13 +20,13 @@
 /* Position of the lowest bit of a power of two, indexed by the top five bits
  * of its product with the de Bruijn sequence 0x077CB531. */
 const uint8_t bc__svo_debruijn_lo[32] = {
-	0,  1,	28, 2,	29, 14, 24, 3,	30, 22, 20, 15, 25, 17, 4,  8,
-	31, 27, 13, 23, 21, 19, 16, 7,	26, 12, 18, 6,	11, 5,	10, 9};
+    0,  1,  28, 2,  29, 14, 24, 3, 30, 22, 20, 15, 25, 17, 4,  8,
+    31, 27, 13, 23, 21, 19, 16, 7, 26, 12, 18, 6,  11, 5,  10, 9};
 /* Position of the highest bit of x once x is smeared to 2^(k+1) - 1,
  * indexed by the top five bits of its product with 0x07C4ACDD. */
 const uint8_t bc__svo_debruijn_hi[32] = {
-	0, 9,  1,  10, 13, 21, 2,  29, 11, 14, 16, 18, 22, 25, 3, 30,
-	8, 12, 20, 28, 15, 17, 24, 7,  19, 27, 23, 6,  26, 5,  4, 31};
+    0, 9,  1,  10, 13, 21, 2,  29, 11, 14, 16, 18, 22, 25, 3, 30,
+    8, 12, 20, 28, 15, 17, 24, 7,  19, 27, 23, 6,  26, 5,  4, 31};
 
 int bc_svo_rpn_init(struct bc_svo_rpn *out, const struct bc_lin *l)
 {
@@ -47,7 +47,7 @@ int bc_svo_rpn_init(struct bc_svo_rpn *out, const struct bc_lin *l)
 	n = l->count + ndiff;
 	out->terms = bc_calloc(n, sizeof(*out->terms));
 	out->rec = bc_calloc((size_t)l->nprims * BC_SVO_PRIM_REC + 2u * nops,
-			     sizeof(float));
+	                     sizeof(float));
 	out->prim_id = bc_calloc(l->nprims, sizeof(*out->prim_id));
 	out->prim_size = bc_calloc(l->nprims, sizeof(*out->prim_size));
 	out->color = bc_calloc(l->nprims, sizeof(*out->color));
@@ -89,8 +89,8 @@ int bc_svo_rpn_init(struct bc_svo_rpn *out, const struct bc_lin *l)
 				tm->prim = BC_NONE;
 				t++;
 				k = k == BC_OP_DIFFERENCE
-					    ? BC_OP_INTERSECTION
-					    : BC_OP_SMOOTH_INTERSECTION;
+				        ? BC_OP_INTERSECTION
+				        : BC_OP_SMOOTH_INTERSECTION;
 			}
 			tm = &out->terms[t];
 			tm->type = BC_SVO_TERM_OP;
@@ -206,12 +206,13 @@ uint32_t bc_svo_bits_prev(const uint32_t *mask, uint32_t i)
 
 static inline uint32_t arity(const struct bc_svo_term *t)
 {
-	return t->type == BC_SVO_TERM_OP ? 2u
-					 : (t->type == BC_SVO_TERM_NEG ? 1u : 0u);
+	return t->type == BC_SVO_TERM_OP
+	           ? 2u
+	           : (t->type == BC_SVO_TERM_NEG ? 1u : 0u);
 }
 
 void bc_svo_rpn_clear_subtree(const struct bc_svo_rpn *r, uint32_t *mask,
-			      uint32_t i)
+                              uint32_t i)
 {
 	/* Terms still owed to the subtree: each visited term pays one and
 	 * asks for its operands. */
@@ -233,7 +234,7 @@ void bc_svo_rpn_clear_subtree(const struct bc_svo_rpn *r, uint32_t *mask,
 
 /* One step of the stack machine. */
 static inline void step(const struct bc_svo_rpn *r, uint32_t i, float *st,
-			uint32_t *who, uint32_t *sp, const float p[3], bool ids)
+                        uint32_t *who, uint32_t *sp, const float p[3], bool ids)
 {
 	const struct bc_svo_term *t = &r->terms[i];
 	uint32_t s = *sp;
@@ -251,14 +252,14 @@ static inline void step(const struct bc_svo_rpn *r, uint32_t i, float *st,
 	default: {
 		const float *rec = r->rec + t->rec;
 		float f1 = st[s - 1], f0 = st[s - 2];
-		st[s - 2] = bc_op_eval((enum bc_op)t->kind, rec[0], rec[1], f0,
-				       f1);
+		st[s - 2] =
+		    bc_op_eval((enum bc_op)t->kind, rec[0], rec[1], f0, f1);
 		if (ids) {
 			/* The operand the value follows, as eval.c decides. */
 			bool right = t->kind == BC_OP_UNION ||
-						     t->kind == BC_OP_SMOOTH_UNION
-					     ? f1 < f0
-					     : f1 > f0;
+			                     t->kind == BC_OP_SMOOTH_UNION
+			                 ? f1 < f0
+			                 : f1 > f0;
 			if (right) {
 				who[s - 2] = who[s - 1];
 			}
@@ -270,7 +271,7 @@ static inline void step(const struct bc_svo_rpn *r, uint32_t i, float *st,
 }
 
 static float eval_dense(const struct bc_svo_rpn *r, const uint32_t *mask,
-			const float p[3], uint32_t *prim)
+                        const float p[3], uint32_t *prim)
 {
 	float st[BC_EVAL_STACK];
 	uint32_t who[BC_EVAL_STACK];
@@ -286,19 +287,19 @@ static float eval_dense(const struct bc_svo_rpn *r, const uint32_t *mask,
 }
 
 float bc_svo_rpn_eval(const struct bc_svo_rpn *r, const uint32_t *mask,
-		      const float p[3])
+                      const float p[3])
 {
 	return eval_dense(r, mask, p, NULL);
 }
 
 float bc_svo_rpn_eval_id(const struct bc_svo_rpn *r, const uint32_t *mask,
-			 const float p[3], uint32_t *prim)
+                         const float p[3], uint32_t *prim)
 {
 	return eval_dense(r, mask, p, prim);
 }
 
 static float eval_cmask(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
-			const float p[3], uint32_t *prim)
+                        const float p[3], uint32_t *prim)
 {
 	float st[BC_EVAL_STACK];
 	uint32_t who[BC_EVAL_STACK];
@@ -318,13 +319,13 @@ static float eval_cmask(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
 }
 
 float bc_svo_cmask_eval(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
-			const float p[3])
+                        const float p[3])
 {
 	return eval_cmask(r, m, p, NULL);
 }
 
 float bc_svo_cmask_eval_id(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
-			   const float p[3], uint32_t *prim)
+                           const float p[3], uint32_t *prim)
 {
 	return eval_cmask(r, m, p, prim);
 }

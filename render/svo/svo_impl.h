@@ -70,8 +70,8 @@ static inline uint32_t bc__svo_highest(uint32_t b)
 /* A primitive term's field at world point p, exactly as eval.c computes it
  * (same operation order, so the same float). */
 static inline float bc__svo_prim_eval(const struct bc_svo_rpn *r,
-				      const struct bc_svo_term *t,
-				      const float p[3])
+                                      const struct bc_svo_term *t,
+                                      const float p[3])
 {
 	const float *rec = r->rec + t->rec;
 	float x = rec[0] * p[0] + rec[1] * p[1] + rec[2] * p[2] + rec[3];
@@ -122,24 +122,24 @@ void bc__svo_geo_init(struct bc__svo_geo *geo, const struct bc_svo_region *rg);
 
 /* The arithmetics. record: store every term's range and operands. */
 struct bc_svo_ivl bc__svo_ia_run(struct bc_svo_ranger *g, const uint32_t *idx,
-				 uint32_t n, const struct bc_svo_region *rg);
+                                 uint32_t n, const struct bc_svo_region *rg);
 struct bc_svo_ivl bc__svo_aa_run(struct bc_svo_ranger *g, const uint32_t *idx,
-				 uint32_t n, const struct bc_svo_region *rg);
+                                 uint32_t n, const struct bc_svo_region *rg);
 struct bc_svo_ivl bc__svo_rev_run(struct bc_svo_ranger *g, const uint32_t *idx,
-				  uint32_t n, const struct bc_svo_region *rg);
+                                  uint32_t n, const struct bc_svo_region *rg);
 struct bc_svo_ivl bc__svo_ia_prim(struct bc_svo_ranger *g, uint32_t term,
-				  const struct bc_svo_region *rg);
+                                  const struct bc_svo_region *rg);
 struct bc_svo_ivl bc__svo_aa_prim(struct bc_svo_ranger *g, uint32_t term,
-				  const struct bc_svo_region *rg);
+                                  const struct bc_svo_region *rg);
 struct bc_svo_ivl bc__svo_rev_prim(struct bc_svo_ranger *g, uint32_t term,
-				   const struct bc_svo_region *rg);
+                                   const struct bc_svo_region *rg);
 
 /* The interval extension of a primitive term's natural formula over rg,
  * without rounding margin (the caller adds its own): the whole line for a
  * kind that has none. AA and RevAA fall back on it where it is narrower. */
 struct bc_svo_ivl bc__svo_ia_natural(struct bc_svo_ranger *g,
-				     const struct bc_svo_term *t,
-				     const struct bc_svo_region *rg);
+                                     const struct bc_svo_term *t,
+                                     const struct bc_svo_region *rg);
 
 /* ---- Operator rules (ia.c) ---------------------------------------------- */
 
@@ -151,22 +151,22 @@ struct bc_svo_ivl bc__svo_ia_natural(struct bc_svo_ranger *g,
  * [-r_o, r_o] or likewise. Sharp kinds always answer true.
  */
 bool bc__svo_op_sharp_in(enum bc_op kind, double blend, double range,
-			 struct bc_svo_ivl a, struct bc_svo_ivl b);
+                         struct bc_svo_ivl a, struct bc_svo_ivl b);
 /* Upper bound of the blend amount a smooth operator adds (intersection) or
  * subtracts (union) given the range of the sharp result m and of the
  * operands a, b (for intersection-like kinds, b is the already negated
  * right operand of a difference); 0 where sharp. */
 double bc__svo_op_blend_bound(enum bc_op kind, double blend, double range,
-			      struct bc_svo_ivl m, struct bc_svo_ivl a,
-			      struct bc_svo_ivl b);
+                              struct bc_svo_ivl m, struct bc_svo_ivl a,
+                              struct bc_svo_ivl b);
 /* Outward widening of a blended result for the float evaluator. */
 double bc__svo_op_margin(double blend, struct bc_svo_ivl m);
 
 static inline struct bc_svo_ivl bc__svo_ivl_meet(struct bc_svo_ivl a,
-						 struct bc_svo_ivl b)
+                                                 struct bc_svo_ivl b)
 {
 	struct bc_svo_ivl r = {a.lo > b.lo ? a.lo : b.lo,
-			       a.hi < b.hi ? a.hi : b.hi};
+	                       a.hi < b.hi ? a.hi : b.hi};
 	/* Both enclose the same values, so they meet unless one of them is
 	 * wrong; should that ever happen, the hull is still an enclosure. */
 	if (r.lo > r.hi) {
@@ -187,7 +187,7 @@ struct bc__svo_pool {
 /* Appends the non-zero words of mask[0..nwords) and sets *off (in pairs)
  * and *npairs. Returns 0 or BC_ENOMEM. */
 int bc__svo_pool_put(struct bc__svo_pool *pool, const uint32_t *mask,
-		     uint32_t nwords, uint32_t *off, uint32_t *npairs);
+                     uint32_t nwords, uint32_t *off, uint32_t *npairs);
 void bc__svo_pool_finish(struct bc__svo_pool *pool);
 
 /* ---- The octree (octree.c; cast.c walks it) ---------------------------- */

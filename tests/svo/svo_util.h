@@ -42,7 +42,7 @@ static inline uint32_t rng_below(struct rng *r, uint32_t n)
 /* A tree from generator name with options (NULL: defaults); returns NULL
  * (and prints why) on failure. */
 static inline struct bc_tree *gen_tree(const char *name,
-				       const struct bc_gen_opts *o)
+                                       const struct bc_gen_opts *o)
 {
 	struct bc_errinfo ei = {0};
 	struct bc_tree *t = bc_tree_create();
@@ -120,7 +120,7 @@ static inline struct bc_tree *prim_tree(enum bc_prim kind, struct rng *r)
 
 /* A random point in the tree's box grown by margin on every side. */
 static inline void rng_point(struct rng *r, const struct bc_lin *l,
-			     float margin, float p[3])
+                             float margin, float p[3])
 {
 	for (int i = 0; i < 3; i++) {
 		p[i] = rng_f(r, l->lo[i] - margin, l->hi[i] + margin);
@@ -130,7 +130,7 @@ static inline void rng_point(struct rng *r, const struct bc_lin *l,
 /* A random box of edge up to `edge` times the tree's diagonal, inside the
  * tree's box grown by a tenth. */
 static inline void rng_box(struct rng *r, const struct bc_lin *l, float edge,
-			   struct bc_svo_region *rg)
+                           struct bc_svo_region *rg)
 {
 	float c[3], h;
 	memset(rg, 0, sizeof(*rg));
@@ -146,7 +146,7 @@ static inline void rng_box(struct rng *r, const struct bc_lin *l, float edge,
 
 /* A random segment of length up to `edge` times the diagonal. */
 static inline void rng_segment(struct rng *r, const struct bc_lin *l,
-			       float edge, struct bc_svo_region *rg)
+                               float edge, struct bc_svo_region *rg)
 {
 	float n = 0.0f, len;
 	memset(rg, 0, sizeof(*rg));
@@ -170,7 +170,7 @@ static inline void rng_segment(struct rng *r, const struct bc_lin *l,
 
 /* A random point of the region. */
 static inline void rng_in(struct rng *r, const struct bc_svo_region *rg,
-			  float p[3])
+                          float p[3])
 {
 	if (rg->segment) {
 		float t = rng_f(r, rg->t0, rg->t1);

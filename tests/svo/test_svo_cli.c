@@ -61,10 +61,13 @@ static double num(const json_t *o, const char *key)
 
 static void eval_bench_reports_a_grid(void)
 {
-	json_t *o = report("eval-bench default --grid 6 --range ia --points 5000");
+	json_t *o =
+	    report("eval-bench default --grid 6 --range ia --points 5000");
 	REQUIRE(o);
-	CHECK(strcmp(json_string_value(json_object_get(o, "mode")), "grid") == 0);
-	CHECK(strcmp(json_string_value(json_object_get(o, "range")), "ia") == 0);
+	CHECK(strcmp(json_string_value(json_object_get(o, "mode")), "grid") ==
+	      0);
+	CHECK(strcmp(json_string_value(json_object_get(o, "range")), "ia") ==
+	      0);
 	CHECK(num(o, "terms") > 10);
 	CHECK(num(o, "voxels") == 216);
 	CHECK(num(o, "prune_ms_per_voxel") > 0.0);
@@ -73,8 +76,8 @@ static void eval_bench_reports_a_grid(void)
 	CHECK(num(o, "full_points") >= 1 && num(o, "full_points") <= 5000);
 	CHECK(num(o, "eval_ns_full") > 0.0 && num(o, "eval_ns_pruned") > 0.0);
 	CHECK(fabs(num(o, "speedup") -
-		   num(o, "eval_ns_full") / num(o, "eval_ns_pruned")) < 1e-3 *
-								  num(o, "speedup"));
+	           num(o, "eval_ns_full") / num(o, "eval_ns_pruned")) <
+	      1e-3 * num(o, "speedup"));
 	CHECK(num(o, "sign_mismatches") == 0);
 	json_decref(o);
 }
@@ -86,18 +89,18 @@ static void eval_bench_reports_an_octree(void)
 		char args[256];
 		json_t *o;
 		snprintf(args, sizeof(args),
-			 "eval-bench default --threshold 4 --max-depth 6 "
-			 "--range %s --points 5000 --seed 3",
-			 ranges[i]);
+		         "eval-bench default --threshold 4 --max-depth 6 "
+		         "--range %s --points 5000 --seed 3",
+		         ranges[i]);
 		o = report(args);
 		REQUIRE(o);
 		CHECK(strcmp(json_string_value(json_object_get(o, "mode")),
-			     "octree") == 0);
+		             "octree") == 0);
 		CHECK(num(o, "threshold") == 4 && num(o, "max_depth") == 6);
 		CHECK(num(o, "max_depth_reached") <= 6);
 		CHECK(num(o, "leaves") == num(o, "leaves_empty") +
-						  num(o, "leaves_full") +
-						  num(o, "leaves_surface"));
+		                              num(o, "leaves_full") +
+		                              num(o, "leaves_surface"));
 		CHECK(num(o, "nodes") >= num(o, "leaves"));
 		CHECK(num(o, "build_ms") > 0.0 && num(o, "bytes") > 0.0);
 		CHECK(num(o, "avg_terms") <= num(o, "max_terms"));
@@ -110,16 +113,16 @@ static void eval_bench_reports_an_octree(void)
 static void eval_bench_refuses_bad_arguments(void)
 {
 	static const char *const bad[] = {
-		"eval-bench",
-		"eval-bench default --range xa",
-		"eval-bench default --grid 0",
-		"eval-bench default --grid 100000",
-		"eval-bench default --grid 4 --threshold 3",
-		"eval-bench default --max-depth 16",
-		"eval-bench default --points 0",
-		"eval-bench default --frobnicate 1",
-		"eval-bench default other",
-		"eval-bench default --seed",
+	    "eval-bench",
+	    "eval-bench default --range xa",
+	    "eval-bench default --grid 0",
+	    "eval-bench default --grid 100000",
+	    "eval-bench default --grid 4 --threshold 3",
+	    "eval-bench default --max-depth 16",
+	    "eval-bench default --points 0",
+	    "eval-bench default --frobnicate 1",
+	    "eval-bench default other",
+	    "eval-bench default --seed",
 	};
 	for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); i++) {
 		int rc = run(bad[i]);
@@ -139,19 +142,19 @@ static void render_draws_with_the_svo_backend(void)
 	char path[64], args[256];
 	snprintf(path, sizeof(path), "/tmp/bc_svo_cli_%d.png", (int)getpid());
 	snprintf(args, sizeof(args),
-		 "render default --backend svo --range aa --threshold 6 "
-		 "--max-depth 7 --size 40x30 --out %s --quiet",
-		 path);
+	         "render default --backend svo --range aa --threshold 6 "
+	         "--max-depth 7 --size 40x30 --out %s --quiet",
+	         path);
 	CHECK(run(args) == 0);
 	CHECK(access(path, R_OK) == 0);
 	unlink(path);
 }
 
 static const struct bc_test tests[] = {
-	{"eval_bench_reports_a_grid", eval_bench_reports_a_grid},
-	{"eval_bench_reports_an_octree", eval_bench_reports_an_octree},
-	{"eval_bench_refuses_bad_arguments", eval_bench_refuses_bad_arguments},
-	{"render_draws_with_the_svo_backend", render_draws_with_the_svo_backend},
+    {"eval_bench_reports_a_grid", eval_bench_reports_a_grid},
+    {"eval_bench_reports_an_octree", eval_bench_reports_an_octree},
+    {"eval_bench_refuses_bad_arguments", eval_bench_refuses_bad_arguments},
+    {"render_draws_with_the_svo_backend", render_draws_with_the_svo_backend},
 };
 
 BC_TEST_MAIN(tests)

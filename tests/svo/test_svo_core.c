@@ -13,7 +13,7 @@
 #include "test.h"
 
 static const enum bc_range_arith ariths[] = {BC_RANGE_IA, BC_RANGE_AA,
-					     BC_RANGE_REVAA};
+                                             BC_RANGE_REVAA};
 static const char *const arith_names[] = {"", "ia", "aa", "revaa"};
 
 static uint32_t scan_next(const uint32_t *m, uint32_t nwords, uint32_t i)
@@ -50,10 +50,10 @@ static void bits_walks_match_a_plain_scan(void)
 			uint64_t v = rng_next(&r);
 			m[w] = kind == 0   ? 0u
 			       : kind == 1 ? (uint32_t)v & (uint32_t)(v >> 32) &
-						     (uint32_t)(v >> 16)
+			                         (uint32_t)(v >> 16)
 			       : kind == 2 ? (uint32_t)v
 			       : kind == 3 ? (1u << (v % 32u)) * (v % 3u == 0)
-					   : 0xffffffffu;
+			                   : 0xffffffffu;
 		}
 		if (round % 7 == 0) {
 			m[0] = 1u;
@@ -61,7 +61,7 @@ static void bits_walks_match_a_plain_scan(void)
 		}
 		for (uint32_t i = 0; i < 9 * 32; i++) {
 			CHECK_EQ_INT(bc_svo_bits_next(m, 9, i),
-				     scan_next(m, 9, i));
+			             scan_next(m, 9, i));
 			CHECK_EQ_INT(bc_svo_bits_prev(m, i), scan_prev(m, i));
 		}
 		CHECK_EQ_INT(bc_svo_bits_next(m, 9, 9 * 32), UINT32_MAX);
@@ -93,7 +93,7 @@ static void mask_fill_sets_exactly_the_terms(void)
 static void full_variant_equals_reference_evaluator(void)
 {
 	static const char *const names[] = {"random", "random", "gears",
-					    "fig16", "fig18", "comb"};
+	                                    "fig16",  "fig18",  "comb"};
 	struct rng r = {7};
 	for (size_t s = 0; s < sizeof(names) / sizeof(names[0]); s++) {
 		struct bc_gen_opts o = {0};
@@ -190,7 +190,8 @@ static void ranges_enclose_every_primitive_kind(void)
 			uint32_t bad = 0, n = 0;
 			double width = 0.0;
 			for (int tr = 0; tr < 6; tr++) {
-				struct bc_tree *t = prim_tree((enum bc_prim)k, &r);
+				struct bc_tree *t =
+				    prim_tree((enum bc_prim)k, &r);
 				const struct bc_lin *l;
 				struct bc_svo_rpn rpn;
 				struct bc_svo_ranger *g;
@@ -198,7 +199,7 @@ static void ranges_enclose_every_primitive_kind(void)
 				l = bc_tree_lin(t);
 				REQUIRE(bc_svo_rpn_init(&rpn, l) == 0);
 				REQUIRE(bc_svo_ranger_create(&g, &rpn,
-							     ariths[a]) == 0);
+				                             ariths[a]) == 0);
 				for (int b = 0; b < 60; b++) {
 					struct bc_svo_region rg;
 					struct bc_svo_ivl v;
@@ -216,11 +217,21 @@ static void ranges_enclose_every_primitive_kind(void)
 						n++;
 						if (!(f >= v.lo && f <= v.hi)) {
 							if (bad++ < 3) {
-								fprintf(stderr,
-									"  %s %s: %.9g not in [%.9g, %.9g]\n",
-									bc_prim_info((enum bc_prim)k)->name,
-									arith_names[ariths[a]],
-									(double)f, v.lo, v.hi);
+								fprintf(
+								    stderr,
+								    "  %s %s: "
+								    "%.9g not "
+								    "in [%.9g, "
+								    "%.9g]\n",
+								    bc_prim_info(
+								        (enum bc_prim)
+								            k)
+								        ->name,
+								    arith_names
+								        [ariths
+								             [a]],
+								    (double)f,
+								    v.lo, v.hi);
 							}
 						}
 					}
@@ -233,8 +244,8 @@ static void ranges_enclose_every_primitive_kind(void)
 			/* A range must say something: not the whole line. */
 			if (!isfinite(width)) {
 				fprintf(stderr, "  %s %s: unbounded range\n",
-					bc_prim_info((enum bc_prim)k)->name,
-					arith_names[ariths[a]]);
+				        bc_prim_info((enum bc_prim)k)->name,
+				        arith_names[ariths[a]]);
 			}
 			CHECK(isfinite(width));
 			(void)n;
@@ -256,7 +267,7 @@ static void ranges_enclose_every_operator(void)
 			float ca = rng_f(&r, -2.0f, 2.0f) * ro;
 			float cb = rng_f(&r, -2.0f, 2.0f) * ro;
 			float wa = rng_f(&r, 0.0f, 2.0f) * ro *
-				   (rng_below(&r, 4) == 0 ? 0.0f : 1.0f);
+			           (rng_below(&r, 4) == 0 ? 0.0f : 1.0f);
 			float wb = rng_f(&r, 0.0f, 2.0f) * ro;
 			A.lo = ca - wa;
 			A.hi = ca + wa;
@@ -264,22 +275,23 @@ static void ranges_enclose_every_operator(void)
 			B.hi = cb + wb;
 			v = bc_svo_range_op((enum bc_op)k, beta, ro, A, B);
 			for (int s = 0; s < 16; s++) {
-				float f0 = s == 0 ? (float)A.lo
-					   : s == 1 ? (float)A.hi
-						    : rng_f(&r, (float)A.lo,
-							    (float)A.hi);
-				float f1 = s == 2 ? (float)B.lo
-					   : s == 3 ? (float)B.hi
-						    : rng_f(&r, (float)B.lo,
-							    (float)B.hi);
-				float f = bc_op_eval((enum bc_op)k, beta, ro,
-						     f0, f1);
+				float f0 = s == 0   ? (float)A.lo
+				           : s == 1 ? (float)A.hi
+				                    : rng_f(&r, (float)A.lo,
+				                            (float)A.hi);
+				float f1 = s == 2   ? (float)B.lo
+				           : s == 3 ? (float)B.hi
+				                    : rng_f(&r, (float)B.lo,
+				                            (float)B.hi);
+				float f =
+				    bc_op_eval((enum bc_op)k, beta, ro, f0, f1);
 				if (!(f >= v.lo && f <= v.hi) && bad++ < 3) {
 					fprintf(stderr,
-						"  %s(%g, %g) = %.9g not in [%.9g, %.9g]\n",
-						bc_op_name((enum bc_op)k),
-						(double)f0, (double)f1,
-						(double)f, v.lo, v.hi);
+					        "  %s(%g, %g) = %.9g not in "
+					        "[%.9g, %.9g]\n",
+					        bc_op_name((enum bc_op)k),
+					        (double)f0, (double)f1,
+					        (double)f, v.lo, v.hi);
 				}
 			}
 		}
@@ -291,9 +303,8 @@ static void ranges_enclose_every_operator(void)
  * (which make AA condense its forms), in all three arithmetics. */
 static void ranges_enclose_whole_trees(void)
 {
-	static const char *const names[] = {"random", "random", "random",
-					    "fig16",  "fig18",  "comb",
-					    "gears"};
+	static const char *const names[] = {
+	    "random", "random", "random", "fig16", "fig18", "comb", "gears"};
 	struct rng r = {45};
 	for (size_t s = 0; s < sizeof(names) / sizeof(names[0]); s++) {
 		struct bc_gen_opts o = {0};
@@ -342,12 +353,14 @@ static void ranges_enclose_whole_trees(void)
 					float p[3], f;
 					sample(&r, &rg, p);
 					f = bc_eval_full(l, p);
-					if (!(f >= v.lo && f <= v.hi) && bad++ < 3) {
+					if (!(f >= v.lo && f <= v.hi) &&
+					    bad++ < 3) {
 						fprintf(stderr,
-							"  %s %s: %.9g not in [%.9g, %.9g]\n",
-							names[s],
-							arith_names[ariths[a]],
-							(double)f, v.lo, v.hi);
+						        "  %s %s: %.9g not in "
+						        "[%.9g, %.9g]\n",
+						        names[s],
+						        arith_names[ariths[a]],
+						        (double)f, v.lo, v.hi);
 					}
 				}
 			}
@@ -394,17 +407,17 @@ static void ranges_shrink_with_the_region(void)
 }
 
 static const struct bc_test tests[] = {
-	{"bits_walks_match_a_plain_scan", bits_walks_match_a_plain_scan},
-	{"mask_fill_sets_exactly_the_terms", mask_fill_sets_exactly_the_terms},
-	{"full_variant_equals_reference_evaluator",
-	 full_variant_equals_reference_evaluator},
-	{"clear_subtree_clears_exactly_the_subtree",
-	 clear_subtree_clears_exactly_the_subtree},
-	{"ranges_enclose_every_primitive_kind",
-	 ranges_enclose_every_primitive_kind},
-	{"ranges_enclose_every_operator", ranges_enclose_every_operator},
-	{"ranges_enclose_whole_trees", ranges_enclose_whole_trees},
-	{"ranges_shrink_with_the_region", ranges_shrink_with_the_region},
+    {"bits_walks_match_a_plain_scan", bits_walks_match_a_plain_scan},
+    {"mask_fill_sets_exactly_the_terms", mask_fill_sets_exactly_the_terms},
+    {"full_variant_equals_reference_evaluator",
+     full_variant_equals_reference_evaluator},
+    {"clear_subtree_clears_exactly_the_subtree",
+     clear_subtree_clears_exactly_the_subtree},
+    {"ranges_enclose_every_primitive_kind",
+     ranges_enclose_every_primitive_kind},
+    {"ranges_enclose_every_operator", ranges_enclose_every_operator},
+    {"ranges_enclose_whole_trees", ranges_enclose_whole_trees},
+    {"ranges_shrink_with_the_region", ranges_shrink_with_the_region},
 };
 
 BC_TEST_MAIN(tests)

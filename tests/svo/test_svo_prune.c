@@ -22,21 +22,21 @@ struct family {
 /* Every generator family, sharp and smooth variants, spread over the
  * arithmetics. 15 000 points each: 1.65 * 10^5 in all. */
 static const struct family families[] = {
-	{"fig16", {.level = 2}, BC_RANGE_REVAA},
-	{"fig18", {.count = 96}, BC_RANGE_IA},
-	{"fig18",
-	 {.count = 96, .kind = BC_GEN_KIND_SPHERES, .blend = BC_GEN_BLEND_SHARP},
-	 BC_RANGE_REVAA},
-	{"fig18", {.count = 48, .kind = BC_GEN_KIND_LENSES}, BC_RANGE_AA},
-	{"comb", {.count = 64, .blend = BC_GEN_BLEND_SMOOTH}, BC_RANGE_REVAA},
-	/* Random trees are mostly empty (intersections of random shapes):
-	 * these seeds make some solid. */
-	{"random", {.count = 60, .seed = 17}, BC_RANGE_REVAA},
-	{"random", {.count = 60, .seed = 18}, BC_RANGE_AA},
-	{"random", {.count = 60, .seed = 28}, BC_RANGE_IA},
-	{"gears", {.teeth = 24}, BC_RANGE_REVAA},
-	{"many-gears", {.count = 9}, BC_RANGE_IA},
-	{"many-spheres", {.count = 400}, BC_RANGE_REVAA},
+    {"fig16", {.level = 2}, BC_RANGE_REVAA},
+    {"fig18", {.count = 96}, BC_RANGE_IA},
+    {"fig18",
+     {.count = 96, .kind = BC_GEN_KIND_SPHERES, .blend = BC_GEN_BLEND_SHARP},
+     BC_RANGE_REVAA},
+    {"fig18", {.count = 48, .kind = BC_GEN_KIND_LENSES}, BC_RANGE_AA},
+    {"comb", {.count = 64, .blend = BC_GEN_BLEND_SMOOTH}, BC_RANGE_REVAA},
+    /* Random trees are mostly empty (intersections of random shapes):
+     * these seeds make some solid. */
+    {"random", {.count = 60, .seed = 17}, BC_RANGE_REVAA},
+    {"random", {.count = 60, .seed = 18}, BC_RANGE_AA},
+    {"random", {.count = 60, .seed = 28}, BC_RANGE_IA},
+    {"gears", {.teeth = 24}, BC_RANGE_REVAA},
+    {"many-gears", {.count = 9}, BC_RANGE_IA},
+    {"many-spheres", {.count = 400}, BC_RANGE_REVAA},
 };
 #define POINTS_PER_FAMILY 15000
 
@@ -46,7 +46,7 @@ static const char *const arith_names[] = {"", "ia", "aa", "revaa"};
  * until one lands within 2% of the diagonal from the surface (a few dozen
  * tries at most), where pruning decisions are closest to wrong. */
 static void near_surface_point(struct rng *r, const struct bc_lin *l, int i,
-			       float p[3])
+                               float p[3])
 {
 	rng_point(r, l, 0.05f * l->size, p);
 	for (int k = 0; (i & 1) && k < 64; k++) {
@@ -86,10 +86,11 @@ static void octree_sign_equals_full_sign_for_every_family(void)
 			inside += a < 0.0f;
 			if ((a < 0.0f) != (b < 0.0f) && bad++ < 3) {
 				fprintf(stderr,
-					"  %s/%s at (%g %g %g): full %.9g, svo %.9g\n",
-					fam->name, arith_names[fam->arith],
-					(double)p[0], (double)p[1],
-					(double)p[2], (double)a, (double)b);
+				        "  %s/%s at (%g %g %g): full %.9g, svo "
+				        "%.9g\n",
+				        fam->name, arith_names[fam->arith],
+				        (double)p[0], (double)p[1],
+				        (double)p[2], (double)a, (double)b);
 			}
 		}
 		total += POINTS_PER_FAMILY;
@@ -117,9 +118,9 @@ static void octree_sign_equals_full_sign_for_every_family(void)
 static void octree_keeps_the_sign_against_every_band_level(void)
 {
 	static const struct family fams[] = {
-		{"gears", {.teeth = 16}, BC_RANGE_REVAA},
-		{"random", {.count = 50, .seed = 9}, BC_RANGE_IA},
-		{"fig18", {.count = 64}, BC_RANGE_AA},
+	    {"gears", {.teeth = 16}, BC_RANGE_REVAA},
+	    {"random", {.count = 50, .seed = 9}, BC_RANGE_IA},
+	    {"fig18", {.count = 64}, BC_RANGE_AA},
 	};
 	for (size_t f = 0; f < sizeof(fams) / sizeof(fams[0]); f++) {
 		struct bc_tree *t = gen_tree(fams[f].name, &fams[f].o);
@@ -134,7 +135,8 @@ static void octree_keeps_the_sign_against_every_band_level(void)
 		band = 0.02f * l->size;
 		{
 			struct bc_svo_opts so = {.arith = fams[f].arith,
-						 .band = band, .max_depth = 7};
+			                         .band = band,
+			                         .max_depth = 7};
 			REQUIRE(bc_svo_rpn_init(&rpn, l) == 0);
 			REQUIRE(bc_svo_build(&s, &rpn, &so, NULL) == 0);
 		}
@@ -186,9 +188,9 @@ static void prune_counts_what_it_keeps(void)
 			rng_in(&r, &rg, p);
 			a = bc_eval_full(l, p);
 			b = res.state == BC_SVO_STATE_ACTIVE
-				    ? bc_svo_rpn_eval(&rpn, m, p)
-				    : (res.state == BC_SVO_STATE_EMPTY ? 1.0f
-								       : -1.0f);
+			        ? bc_svo_rpn_eval(&rpn, m, p)
+			        : (res.state == BC_SVO_STATE_EMPTY ? 1.0f
+			                                           : -1.0f);
 			bad += (a < 0.0f) != (b < 0.0f);
 		}
 	}
@@ -237,7 +239,7 @@ static void grid_sign_equals_full_sign(void)
 	bc_svo_grid_destroy(gr);
 	CHECK(bc_svo_grid_build(&gr, &rpn, BC_RANGE_IA, 0, &ms) == BC_ERANGE);
 	CHECK(bc_svo_grid_build(&gr, &rpn, BC_RANGE_IA, BC_SVO_MAX_GRID + 1,
-				&ms) == BC_ERANGE);
+	                        &ms) == BC_ERANGE);
 	CHECK(gr == NULL);
 	bc_svo_rpn_finish(&rpn);
 	bc_tree_destroy(t);
@@ -299,7 +301,8 @@ static void memory_budget_truncates_but_stays_exact(void)
 	for (int i = 0; i < 5000; i++) {
 		float p[3];
 		rng_point(&r, l, 0.0f, p);
-		bad += (bc_eval_full(l, p) < 0.0f) != (bc_svo_eval(s, p) < 0.0f);
+		bad +=
+		    (bc_eval_full(l, p) < 0.0f) != (bc_svo_eval(s, p) < 0.0f);
 	}
 	CHECK_EQ_INT(bad, 0);
 	bc_svo_destroy(s);
@@ -317,15 +320,16 @@ static void bad_options_are_refused(void)
 	struct bc_errinfo ei = {0};
 	REQUIRE(t);
 	REQUIRE(bc_svo_rpn_init(&rpn, bc_tree_lin(t)) == 0);
-	CHECK(bc_svo_build(&s, &rpn,
-			   &(struct bc_svo_opts){.max_depth = BC_SVO_MAX_DEPTH + 1},
-			   &ei) == BC_ERANGE);
+	CHECK(bc_svo_build(
+	          &s, &rpn,
+	          &(struct bc_svo_opts){.max_depth = BC_SVO_MAX_DEPTH + 1},
+	          &ei) == BC_ERANGE);
 	CHECK(strstr(ei.msg, "depth") != NULL);
 	CHECK(bc_svo_build(&s, &rpn, &(struct bc_svo_opts){.band = -1.0f},
-			   &ei) == BC_ERANGE);
+	                   &ei) == BC_ERANGE);
 	CHECK(bc_svo_build(&s, &rpn,
-			   &(struct bc_svo_opts){.arith = BC_RANGE_COUNT},
-			   &ei) == BC_EENUM);
+	                   &(struct bc_svo_opts){.arith = BC_RANGE_COUNT},
+	                   &ei) == BC_EENUM);
 	CHECK(s == NULL);
 	CHECK(bc_svo_ranger_create(&g, &rpn, (enum bc_range_arith)77) ==
 	      BC_EENUM);
@@ -353,7 +357,7 @@ static void allocation_failures_free_everything(void)
 		struct bc_svo_rpn rpn;
 		struct bc_svo *s = NULL;
 		struct bc_svo_opts so = {.arith = n % 2 ? BC_RANGE_AA
-							 : BC_RANGE_REVAA};
+		                                        : BC_RANGE_REVAA};
 		int rc;
 		bc_alloc_fail_after(n);
 		rc = bc_svo_rpn_init(&rpn, bc_tree_lin(t));
@@ -371,18 +375,18 @@ static void allocation_failures_free_everything(void)
 }
 
 static const struct bc_test tests[] = {
-	{"octree_sign_equals_full_sign_for_every_family",
-	 octree_sign_equals_full_sign_for_every_family},
-	{"octree_keeps_the_sign_against_every_band_level",
-	 octree_keeps_the_sign_against_every_band_level},
-	{"prune_counts_what_it_keeps", prune_counts_what_it_keeps},
-	{"grid_sign_equals_full_sign", grid_sign_equals_full_sign},
-	{"threshold_trades_depth_for_terms", threshold_trades_depth_for_terms},
-	{"memory_budget_truncates_but_stays_exact",
-	 memory_budget_truncates_but_stays_exact},
-	{"bad_options_are_refused", bad_options_are_refused},
-	{"allocation_failures_free_everything",
-	 allocation_failures_free_everything},
+    {"octree_sign_equals_full_sign_for_every_family",
+     octree_sign_equals_full_sign_for_every_family},
+    {"octree_keeps_the_sign_against_every_band_level",
+     octree_keeps_the_sign_against_every_band_level},
+    {"prune_counts_what_it_keeps", prune_counts_what_it_keeps},
+    {"grid_sign_equals_full_sign", grid_sign_equals_full_sign},
+    {"threshold_trades_depth_for_terms", threshold_trades_depth_for_terms},
+    {"memory_budget_truncates_but_stays_exact",
+     memory_budget_truncates_but_stays_exact},
+    {"bad_options_are_refused", bad_options_are_refused},
+    {"allocation_failures_free_everything",
+     allocation_failures_free_everything},
 };
 
 BC_TEST_MAIN(tests)

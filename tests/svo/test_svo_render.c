@@ -21,7 +21,7 @@ struct cmp {
 
 /* Renders t with cam through tiled and svo (arith) and compares. */
 static int compare(const struct bc_tree *t, const struct bc_camera *cam,
-		   enum bc_range_arith arith, struct cmp *c)
+                   enum bc_range_arith arith, struct cmp *c)
 {
 	struct bc_frame a, b;
 	struct bc_render_opts ot = {.threads = 2};
@@ -50,9 +50,10 @@ static int compare(const struct bc_tree *t, const struct bc_camera *cam,
 		c->mask_diff += ha != hb;
 		if (ha && hb) {
 			c->both++;
-			float band = BC_SVO_HIT_LIPSCHITZ *
-				     fmaxf(BC_SVO_HIT_FOOTPRINT * pix * a.depth[i],
-					   BC_SVO_MIN_STEP_REL * l->size);
+			float band =
+			    BC_SVO_HIT_LIPSCHITZ *
+			    fmaxf(BC_SVO_HIT_FOOTPRINT * pix * a.depth[i],
+			          BC_SVO_MIN_STEP_REL * l->size);
 			c->id_diff += a.ids[i] != b.ids[i];
 			/* Where a ray crosses the surface both refine to the
 			 * crossing. Where it only grazes it (within the hit
@@ -60,10 +61,10 @@ static int compare(const struct bc_tree *t, const struct bc_camera *cam,
 			 * lands in the band -- up to about two bands past
 			 * its entry, where the caster stops -- or steps over
 			 * a short dip and goes on to what lies behind. */
-			c->depth_close += fabsf(a.depth[i] - b.depth[i]) <=
-					  1e-3f * l->size;
-			c->depth_bad += fabsf(a.depth[i] - b.depth[i]) >
-					3.0f * band;
+			c->depth_close +=
+			    fabsf(a.depth[i] - b.depth[i]) <= 1e-3f * l->size;
+			c->depth_bad +=
+			    fabsf(a.depth[i] - b.depth[i]) > 3.0f * band;
 		}
 	}
 	bc_frame_finish(&a);
@@ -72,14 +73,15 @@ static int compare(const struct bc_tree *t, const struct bc_camera *cam,
 }
 
 static void check_scene(const char *what, const struct bc_tree *t,
-			const struct bc_camera *cam, enum bc_range_arith arith)
+                        const struct bc_camera *cam, enum bc_range_arith arith)
 {
 	struct cmp c;
 	REQUIRE(compare(t, cam, arith, &c) == 0);
 	printf("  %-13s %-5s: mask diff %2u/%u, of %4u hits: ids differ %3u, "
 	       "depth within 1e-3 %4u, beyond 3 bands %3u\n",
 	       what,
-	       arith == BC_RANGE_IA ? "ia" : (arith == BC_RANGE_AA ? "aa" : "revaa"),
+	       arith == BC_RANGE_IA ? "ia"
+	                            : (arith == BC_RANGE_AA ? "aa" : "revaa"),
 	       c.mask_diff, W * H, c.both, c.id_diff, c.depth_close,
 	       c.depth_bad);
 	CHECK(c.mask_diff * 200u < W * H); /* < 0.5 % */
@@ -97,22 +99,25 @@ static void svo_matches_tiled_on_generated_scenes(void)
 		struct bc_gen_opts o;
 		enum bc_range_arith arith;
 	} scenes[] = {
-		{"gears", {.teeth = 24}, BC_RANGE_REVAA},
-		{"gears", {.teeth = 16}, BC_RANGE_IA},
-		{"gears", {.teeth = 12}, BC_RANGE_AA},
-		{"many-gears", {.count = 9}, BC_RANGE_REVAA},
-		{"many-spheres", {.count = 300}, BC_RANGE_REVAA},
-		{"fig18", {.count = 48, .kind = BC_GEN_KIND_SPHERES}, BC_RANGE_REVAA},
-		{"fig18", {.count = 32}, BC_RANGE_REVAA},
-		{"fig16", {.level = 2}, BC_RANGE_REVAA},
-		{"random", {.count = 60, .seed = 18}, BC_RANGE_REVAA},
+	    {"gears", {.teeth = 24}, BC_RANGE_REVAA},
+	    {"gears", {.teeth = 16}, BC_RANGE_IA},
+	    {"gears", {.teeth = 12}, BC_RANGE_AA},
+	    {"many-gears", {.count = 9}, BC_RANGE_REVAA},
+	    {"many-spheres", {.count = 300}, BC_RANGE_REVAA},
+	    {"fig18",
+	     {.count = 48, .kind = BC_GEN_KIND_SPHERES},
+	     BC_RANGE_REVAA},
+	    {"fig18", {.count = 32}, BC_RANGE_REVAA},
+	    {"fig16", {.level = 2}, BC_RANGE_REVAA},
+	    {"random", {.count = 60, .seed = 18}, BC_RANGE_REVAA},
 	};
 	for (size_t i = 0; i < sizeof(scenes) / sizeof(scenes[0]); i++) {
 		struct bc_tree *t = bc_tree_create();
 		struct bc_camera cam;
 		struct bc_errinfo ei = {0};
 		REQUIRE(t);
-		REQUIRE(bc_gen(scenes[i].name, &scenes[i].o, t, &cam, &ei) == 0);
+		REQUIRE(bc_gen(scenes[i].name, &scenes[i].o, t, &cam, &ei) ==
+		        0);
 		check_scene(scenes[i].name, t, &cam, scenes[i].arith);
 		bc_tree_destroy(t);
 	}
@@ -143,13 +148,14 @@ static void camera_inside_a_solid_hits_at_once(void)
 	REQUIRE(t);
 	bc_prim_data_init(&p, BC_PRIM_SPHERE);
 	p.params[0] = 2.0f;
-	REQUIRE(bc_tree_begin(t) == 0 && bc_tree_put_prim(t, 7, &p, NULL) == 0 &&
-		bc_tree_end(t, NULL) == 0);
+	REQUIRE(bc_tree_begin(t) == 0 &&
+	        bc_tree_put_prim(t, 7, &p, NULL) == 0 &&
+	        bc_tree_end(t, NULL) == 0);
 	bc_camera_default(&cam);
 	cam.eye[2] = 0.5f;
 	REQUIRE(bc_frame_init(&f, 16, 16) == 0);
 	REQUIRE(bc_render_once(BC_BACKEND_SVO, NULL, t, &cam, &f, NULL, NULL) ==
-		0);
+	        0);
 	for (uint32_t i = 0; i < 16 * 16; i++) {
 		CHECK(f.depth[i] == 0.0f);
 		CHECK(f.ids[i] == 7);
@@ -175,14 +181,15 @@ static void backend_follows_syncs_and_refuses_bad_input(void)
 	uint32_t hits = 0, hits2 = 0;
 	REQUIRE(ops && t);
 	CHECK(strcmp(ops->name, "svo") == 0);
-	CHECK(ops->create(&r, &(struct bc_render_opts){.svo_range = BC_RANGE_COUNT},
-			  &ei) == BC_EENUM);
 	CHECK(ops->create(&r,
-			  &(struct bc_render_opts){.svo_max_depth =
-							   BC_SVO_MAX_DEPTH + 1},
-			  &ei) == BC_ERANGE);
+	                  &(struct bc_render_opts){.svo_range = BC_RANGE_COUNT},
+	                  &ei) == BC_EENUM);
+	CHECK(ops->create(&r,
+	                  &(struct bc_render_opts){.svo_max_depth =
+	                                               BC_SVO_MAX_DEPTH + 1},
+	                  &ei) == BC_ERANGE);
 	REQUIRE(ops->create(&r, &(struct bc_render_opts){.threads = 1}, &ei) ==
-		0);
+	        0);
 	bc_camera_default(&cam);
 	REQUIRE(bc_frame_init(&f, 32, 32) == 0);
 	CHECK(ops->render(r, &cam, &f, &st, &ei) == BC_ESTATE);
@@ -195,8 +202,9 @@ static void backend_follows_syncs_and_refuses_bad_input(void)
 	/* A sphere. */
 	bc_prim_data_init(&p, BC_PRIM_SPHERE);
 	p.params[0] = 1.0f;
-	REQUIRE(bc_tree_begin(t) == 0 && bc_tree_put_prim(t, 5, &p, NULL) == 0 &&
-		bc_tree_end(t, NULL) == 0);
+	REQUIRE(bc_tree_begin(t) == 0 &&
+	        bc_tree_put_prim(t, 5, &p, NULL) == 0 &&
+	        bc_tree_end(t, NULL) == 0);
 	bc_tree_take_dirty(t, &d);
 	REQUIRE(ops->sync(r, t, &d, &ei) == 0);
 	REQUIRE(ops->render(r, &cam, &f, &st, &ei) == 0);
@@ -223,8 +231,9 @@ static void backend_follows_syncs_and_refuses_bad_input(void)
 	CHECK(hits2 > hits);
 	/* Debug views colour every pixel. */
 	ops->destroy(r);
-	REQUIRE(ops->create(&r, &(struct bc_render_opts){.debug = BC_DEBUG_EVALS},
-			    &ei) == 0);
+	REQUIRE(ops->create(&r,
+	                    &(struct bc_render_opts){.debug = BC_DEBUG_EVALS},
+	                    &ei) == 0);
 	REQUIRE(ops->sync(r, t, NULL, &ei) == 0);
 	REQUIRE(ops->render(r, &cam, &f, &st, &ei) == 0);
 	CHECK(f.rgba[3] == 255);
@@ -252,7 +261,7 @@ static void frame_over_budget_is_incomplete(void)
 	REQUIRE(bc_gen("many-spheres", &o, t, &cam, NULL) == 0);
 	REQUIRE(bc_frame_init(&f, 32, 32) == 0);
 	REQUIRE(bc_render_once(BC_BACKEND_SVO, &ro, t, &cam, &f, &st, NULL) ==
-		0);
+	        0);
 	CHECK(st.incomplete);
 	for (uint32_t i = 0; i < 32 * 32; i++) {
 		hits += f.ids[i] != 0;
@@ -260,22 +269,21 @@ static void frame_over_budget_is_incomplete(void)
 	CHECK(hits == 0);
 	ro.budget_ms = 0;
 	REQUIRE(bc_render_once(BC_BACKEND_SVO, &ro, t, &cam, &f, &st, NULL) ==
-		0);
+	        0);
 	CHECK(!st.incomplete);
 	bc_frame_finish(&f);
 	bc_tree_destroy(t);
 }
 
 static const struct bc_test tests[] = {
-	{"frame_over_budget_is_incomplete", frame_over_budget_is_incomplete},
-	{"svo_matches_tiled_on_generated_scenes",
-	 svo_matches_tiled_on_generated_scenes},
-	{"svo_matches_tiled_on_the_default_scene",
-	 svo_matches_tiled_on_the_default_scene},
-	{"camera_inside_a_solid_hits_at_once",
-	 camera_inside_a_solid_hits_at_once},
-	{"backend_follows_syncs_and_refuses_bad_input",
-	 backend_follows_syncs_and_refuses_bad_input},
+    {"frame_over_budget_is_incomplete", frame_over_budget_is_incomplete},
+    {"svo_matches_tiled_on_generated_scenes",
+     svo_matches_tiled_on_generated_scenes},
+    {"svo_matches_tiled_on_the_default_scene",
+     svo_matches_tiled_on_the_default_scene},
+    {"camera_inside_a_solid_hits_at_once", camera_inside_a_solid_hits_at_once},
+    {"backend_follows_syncs_and_refuses_bad_input",
+     backend_follows_syncs_and_refuses_bad_input},
 };
 
 BC_TEST_MAIN(tests)

@@ -74,13 +74,13 @@ enum bc_svo_term_type {
 struct bc_svo_term {
 	uint8_t type; /* enum bc_svo_term_type */
 	uint8_t kind; /* bc_prim for PRIM; BC_OP_UNION / _INTERSECTION or their
-			 smooth forms for OP */
+	                 smooth forms for OP */
 	uint16_t pad;
 	uint32_t first; /* first term of this term's subtree */
 	uint32_t prim;  /* primitive index for PRIM, BC_NONE otherwise */
 	uint32_t rec;   /* PRIM: offset of its record in rpn->rec (12 affine
-			   floats then BC_PRIM_PACKED shape floats); OP: offset
-			   of (blend, range) */
+	                   floats then BC_PRIM_PACKED shape floats); OP: offset
+	                   of (blend, range) */
 };
 
 /* Floats of a primitive record: world-to-local rows then packed shape. */
@@ -88,15 +88,15 @@ struct bc_svo_term {
 
 struct bc_svo_rpn {
 	struct bc_svo_term *terms;
-	uint32_t n;       /* terms */
-	uint32_t nwords;  /* 32-bit words of a dense bitmask */
+	uint32_t n;      /* terms */
+	uint32_t nwords; /* 32-bit words of a dense bitmask */
 	uint32_t nprims;
-	uint32_t stack;   /* evaluation stack entries needed */
-	float *rec;       /* records (see struct bc_svo_term.rec) */
-	uint32_t *prim_id; /* stable id of primitive k */
-	float *prim_size;  /* half diagonal of primitive k's ABV box: the
-			      length scale of its field (rounding margins) */
-	float (*color)[3]; /* colour of primitive k */
+	uint32_t stack;     /* evaluation stack entries needed */
+	float *rec;         /* records (see struct bc_svo_term.rec) */
+	uint32_t *prim_id;  /* stable id of primitive k */
+	float *prim_size;   /* half diagonal of primitive k's ABV box: the
+	                       length scale of its field (rounding margins) */
+	float (*color)[3];  /* colour of primitive k */
 	float lo[3], hi[3]; /* the tree's AABB (bc_lin lo/hi) */
 	float size;         /* its diagonal */
 };
@@ -127,15 +127,15 @@ uint32_t bc_svo_bits_prev(const uint32_t *mask, uint32_t i);
  * (i itself and, walking backwards with bc_svo_bits_prev, every active term
  * its operands need). */
 void bc_svo_rpn_clear_subtree(const struct bc_svo_rpn *r, uint32_t *mask,
-			      uint32_t i);
+                              uint32_t i);
 
 /* Thesis Alg. 5.3: evaluates the variant selected by a dense mask at p;
  * +INFINITY for an empty mask. The _id form also returns the primitive
  * index that decides the value (as bc_eval_full_id does) or BC_NONE. */
 float bc_svo_rpn_eval(const struct bc_svo_rpn *r, const uint32_t *mask,
-		      const float p[3]);
+                      const float p[3]);
 float bc_svo_rpn_eval_id(const struct bc_svo_rpn *r, const uint32_t *mask,
-			 const float p[3], uint32_t *prim);
+                         const float p[3], uint32_t *prim);
 
 /* ---- Compressed masks (rpn.c) ------------------------------------------- */
 
@@ -149,9 +149,9 @@ struct bc_svo_cmask {
 };
 
 float bc_svo_cmask_eval(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
-			const float p[3]);
+                        const float p[3]);
 float bc_svo_cmask_eval_id(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
-			   const float p[3], uint32_t *prim);
+                           const float p[3], uint32_t *prim);
 
 /* ---- Range arithmetic (ia.c, aa.c, revaa.c) ----------------------------- */
 
@@ -166,8 +166,8 @@ struct bc_svo_ivl {
  * o + t d, t in [t0, t1] (d unit). */
 struct bc_svo_region {
 	bool segment;
-	float lo[3], hi[3];  /* box */
-	float o[3], d[3];    /* segment */
+	float lo[3], hi[3]; /* box */
+	float o[3], d[3];   /* segment */
 	float t0, t1;
 };
 
@@ -176,8 +176,8 @@ struct bc_svo_ranger;
 /* A range evaluator for one arithmetic over one RPN (scratch memory sized
  * for it; one per thread). arith BC_RANGE_DEFAULT means RevAA. Returns 0,
  * BC_EENUM or BC_ENOMEM. */
-int bc_svo_ranger_create(struct bc_svo_ranger **out,
-			 const struct bc_svo_rpn *r, enum bc_range_arith arith);
+int bc_svo_ranger_create(struct bc_svo_ranger **out, const struct bc_svo_rpn *r,
+                         enum bc_range_arith arith);
 void bc_svo_ranger_destroy(struct bc_svo_ranger *g);
 enum bc_range_arith bc_svo_ranger_arith(const struct bc_svo_ranger *g);
 
@@ -185,15 +185,15 @@ enum bc_range_arith bc_svo_ranger_arith(const struct bc_svo_ranger *g);
  * region; n == 0 gives [+inf, +inf]. Also records every active term's range
  * and operands for bc_svo_prune (the same ranger). */
 struct bc_svo_ivl bc_svo_range(struct bc_svo_ranger *g, const uint32_t *idx,
-			       uint32_t n, const struct bc_svo_region *region);
+                               uint32_t n, const struct bc_svo_region *region);
 
 /* Range of one primitive term (a PRIM term index of the ranger's RPN) over
  * region, and of one operator given its operands' ranges as intervals:
  * what the enclosure tests check. */
 struct bc_svo_ivl bc_svo_range_prim(struct bc_svo_ranger *g, uint32_t term,
-				    const struct bc_svo_region *region);
+                                    const struct bc_svo_region *region);
 struct bc_svo_ivl bc_svo_range_op(enum bc_op kind, float blend, float range,
-				  struct bc_svo_ivl a, struct bc_svo_ivl b);
+                                  struct bc_svo_ivl a, struct bc_svo_ivl b);
 
 /* Kinds whose range is the Lipschitz enclosure f(c) +- r rather than a
  * natural extension of their formula (docs/svo.md lists why). */
@@ -222,8 +222,8 @@ struct bc_svo_prune_result {
  * the plain sign), and the same value under every smooth operator that
  * blends there. Returns 0 or BC_EINVAL. */
 int bc_svo_prune(struct bc_svo_ranger *g, const uint32_t *mask_in,
-		 uint32_t *mask_out, const struct bc_svo_region *region,
-		 float band, struct bc_svo_prune_result *res);
+                 uint32_t *mask_out, const struct bc_svo_region *region,
+                 float band, struct bc_svo_prune_result *res);
 
 /* ---- Sparse voxel octree (octree.c) ------------------------------------- */
 
@@ -240,18 +240,18 @@ struct bc_svo_stats {
 	uint32_t nodes, leaves;
 	uint32_t empty, full, active; /* leaves by state */
 	uint32_t max_depth;
-	uint32_t max_terms;   /* most active terms in a leaf */
-	double avg_depth;     /* leaf depth averaged over volume (a random
-				 point's leaf, thesis eq. 5.6) */
-	double avg_terms;     /* active terms likewise (0 for empty/full) */
+	uint32_t max_terms;    /* most active terms in a leaf */
+	double avg_depth;      /* leaf depth averaged over volume (a random
+	                          point's leaf, thesis eq. 5.6) */
+	double avg_terms;      /* active terms likewise (0 for empty/full) */
 	double avg_depth_leaf; /* plain averages over leaves */
 	double avg_terms_leaf; /* over active leaves */
-	uint64_t bytes;       /* nodes + leaves + stored masks + RPN */
-	uint64_t pruned;      /* regions pruned while building */
+	uint64_t bytes;        /* nodes + leaves + stored masks + RPN */
+	uint64_t pruned;       /* regions pruned while building */
 	double build_ms;
-	uint32_t stalled;     /* leaves kept over tau because splitting
-				 stopped removing terms (octree.c) */
-	bool truncated;       /* the memory budget stopped subdivision */
+	uint32_t stalled; /* leaves kept over tau because splitting
+	                     stopped removing terms (octree.c) */
+	bool truncated;   /* the memory budget stopped subdivision */
 };
 
 struct bc_svo;
@@ -260,7 +260,7 @@ struct bc_svo;
  * grown by the band. Returns 0, BC_EINVAL, BC_EENUM, BC_ERANGE (depth over
  * BC_SVO_MAX_DEPTH, negative band) or BC_ENOMEM with a reason in ei. */
 int bc_svo_build(struct bc_svo **out, const struct bc_svo_rpn *rpn,
-		 const struct bc_svo_opts *opts, struct bc_errinfo *ei);
+                 const struct bc_svo_opts *opts, struct bc_errinfo *ei);
 void bc_svo_destroy(struct bc_svo *s);
 void bc_svo_get_stats(const struct bc_svo *s, struct bc_svo_stats *st);
 const struct bc_svo_rpn *bc_svo_rpn(const struct bc_svo *s);
@@ -279,13 +279,12 @@ struct bc_svo_leaf_ref {
 
 /* The leaf containing p; false when p is outside the root box. */
 bool bc_svo_locate(const struct bc_svo *s, const float p[3],
-		   struct bc_svo_leaf_ref *leaf);
+                   struct bc_svo_leaf_ref *leaf);
 /* The field through the octree: the pruned variant of p's leaf (a bound of
  * the right sign for empty and full leaves; the full tree outside the root
  * box). Its sign equals the full field's everywhere. */
 float bc_svo_eval(const struct bc_svo *s, const float p[3]);
-float bc_svo_eval_id(const struct bc_svo *s, const float p[3],
-		     uint32_t *prim);
+float bc_svo_eval_id(const struct bc_svo *s, const float p[3], uint32_t *prim);
 
 /* ---- Uniform grid of pruned variants (grid.c; thesis §6.1) -------------- */
 
@@ -296,12 +295,12 @@ struct bc_svo_grid;
  * time. Returns 0, BC_ERANGE (n = 0 or over BC_SVO_MAX_GRID), BC_EENUM or
  * BC_ENOMEM. */
 int bc_svo_grid_build(struct bc_svo_grid **out, const struct bc_svo_rpn *rpn,
-		      enum bc_range_arith arith, uint32_t n, double *prune_ms);
+                      enum bc_range_arith arith, uint32_t n, double *prune_ms);
 void bc_svo_grid_destroy(struct bc_svo_grid *g);
 float bc_svo_grid_eval(const struct bc_svo_grid *g, const float p[3]);
 /* Active terms averaged over voxels, largest, and bytes stored. */
 void bc_svo_grid_stats(const struct bc_svo_grid *g, double *avg_terms,
-		       uint32_t *max_terms, uint64_t *bytes);
+                       uint32_t *max_terms, uint64_t *bytes);
 
 /* ---- Ray casting (cast.c) ----------------------------------------------- */
 
@@ -313,12 +312,12 @@ struct bc_svo_cast_params {
 
 struct bc_svo_hit {
 	float t;
-	uint32_t prim;       /* primitive deciding the value, BC_NONE if unknown */
+	uint32_t prim; /* primitive deciding the value, BC_NONE if unknown */
 	/* The variant the hit lies in (its leaf's, or the full tree's): the
 	 * field to take normals from. Points into the octree. */
 	struct bc_svo_cmask mask;
-	uint32_t leaf_terms; /* active terms of the leaf hit */
-	uint32_t evals;      /* point evaluations spent on the ray */
+	uint32_t leaf_terms;  /* active terms of the leaf hit */
+	uint32_t evals;       /* point evaluations spent on the ray */
 	uint32_t range_evals; /* range evaluations spent on the ray */
 };
 
@@ -339,8 +338,8 @@ float bc_svo_hit_band(const struct bc_svo_cast_params *cp, float t);
  * the crossing as the sphere tracer does. Returns true and fills *hit on a
  * hit; hit->evals and range_evals are filled either way. */
 bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
-		 float t0, float t1, const struct bc_svo_cast_params *cp,
-		 struct bc_svo_hit *hit);
+                 float t0, float t1, const struct bc_svo_cast_params *cp,
+                 struct bc_svo_hit *hit);
 
 /* ---- Measurements (measure.c) ------------------------------------------- */
 
@@ -361,10 +360,10 @@ struct bc_svo_timing {
  * fit in about BC_SVO_FULL_TIME_MS. Returns 0, BC_EINVAL or BC_ENOMEM. */
 #define BC_SVO_FULL_TIME_MS 300.0
 int bc_svo_time_octree(const struct bc_svo *s, const struct bc_lin *l,
-		       uint32_t points, uint64_t seed,
-		       struct bc_svo_timing *out);
+                       uint32_t points, uint64_t seed,
+                       struct bc_svo_timing *out);
 int bc_svo_time_grid(const struct bc_svo_grid *g, const struct bc_lin *l,
-		     uint32_t points, uint64_t seed, struct bc_svo_timing *out);
+                     uint32_t points, uint64_t seed, struct bc_svo_timing *out);
 
 /* ---- The backend (backend.c) -------------------------------------------- */
 
