@@ -27,7 +27,7 @@
 /* Largest scene file accepted, in bytes. The largest generated scene (fig16
  * level 6: 1.1 M primitives) is 289 MB of JSON, which this admits with room
  * to spare; jansson holds about eleven times the text size while a file is
- * parsed (docs/bench-scene.md), so the ceiling also keeps a hostile file
+ * parsed (docs/benchmarks.md), so the ceiling also keeps a hostile file
  * near 4 GB of memory. Scenes sent over the network use the binary form,
  * which is bounded by the protocol's message limit. */
 #define BC_SCENE_JSON_MAX_BYTES (384u * 1024u * 1024u)
