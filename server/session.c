@@ -1205,6 +1205,24 @@ static void handle_view(struct bc_client *c, const struct bc_msg *m)
 	}
 }
 
+/* A render job for c alone at its full view size, or NULL (out of
+ * memory). */
+static struct bc_rjob *single_job(struct bc_client *c)
+{
+	struct bc_rjob *job = bc_calloc(1, sizeof(*job));
+	if (!job || !(job->targets = bc_calloc(1, sizeof(*job->targets)))) {
+		bc_free(job);
+		return NULL;
+	}
+	job->session_id = c->session->id;
+	job->camera = c->camera;
+	job->width = job->image_width = c->view.width;
+	job->height = job->image_height = c->view.height;
+	job->targets[0] = bc_client_ref_of(c);
+	job->ntargets = 1;
+	return job;
+}
+
 static void handle_pick(struct bc_client *c, const struct bc_msg *m)
 {
 	struct bc_rjob *job;
@@ -1214,21 +1232,13 @@ static void handle_pick(struct bc_client *c, const struct bc_msg *m)
 				     "pick outside the view (send VIEW first)");
 		return;
 	}
-	if (!(job = bc_calloc(1, sizeof(*job))) ||
-	    !(job->targets = bc_calloc(1, sizeof(*job->targets)))) {
-		bc_free(job);
+	if (!(job = single_job(c))) {
 		return;
 	}
-	job->session_id = c->session->id;
-	job->camera = c->camera;
-	job->width = job->image_width = c->view.width;
-	job->height = job->image_height = c->view.height;
 	job->pick = true;
 	job->pick_x = m->pick.x;
 	job->pick_y = m->pick.y;
 	job->pick_seq = m->seq;
-	job->targets[0] = bc_client_ref_of(c);
-	job->ntargets = 1;
 	bc_rthread_job(c->srv, job);
 }
 
@@ -1241,15 +1251,9 @@ static void handle_snapshot(struct bc_client *c, const struct bc_msg *m)
 				     "SNAPSHOT");
 		return;
 	}
-	if (!(job = bc_calloc(1, sizeof(*job))) ||
-	    !(job->targets = bc_calloc(1, sizeof(*job->targets)))) {
-		bc_free(job);
+	if (!(job = single_job(c))) {
 		return;
 	}
-	job->session_id = c->session->id;
-	job->camera = c->camera;
-	job->width = job->image_width = c->view.width;
-	job->height = job->image_height = c->view.height;
 	job->encoding = (int)m->snapshot.encoding;
 	job->quality = 100;
 	job->flags = BC_PROTO_FLAG_STILL | BC_PROTO_FLAG_SNAPSHOT;
@@ -1258,8 +1262,6 @@ static void handle_snapshot(struct bc_client *c, const struct bc_msg *m)
 	job->frame_no = ++c->srv->frame_no;
 	job->max_bytes = c->max_frame_bytes;
 	job->snapshot_seq = m->seq;
-	job->targets[0] = bc_client_ref_of(c);
-	job->ntargets = 1;
 	bc_rthread_job(c->srv, job);
 }
 
