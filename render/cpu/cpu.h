@@ -12,6 +12,7 @@
 
 #include "blobcast/blobtree.h"
 #include "blobcast/render.h"
+#include "blobcast/shade.h"
 #include "blobcast/render_cpu.h"
 
 /* ---- Constants ---------------------------------------------------------- */
@@ -129,8 +130,7 @@ struct bc__frame_ctx {
 	float min_step;   /* world units */
 	float pix_angle;  /* pixel footprint per unit of t */
 	float refine_tol; /* world units */
-	float light[3];   /* unit vector toward the light */
-	float ambient;
+	struct bc_shade shade;
 };
 
 /* Fills fc for a frame. lin may be NULL (empty tree). */

@@ -6,6 +6,7 @@
  * ramps. Colours are computed in linear RGB and stored as sRGB bytes.
  */
 #include "cpu.h"
+#include "blobcast/shade.h"
 
 #include <math.h>
 #include <string.h>
@@ -41,13 +42,18 @@ void bc__frame_setup(struct bc__frame_ctx *fc, const struct bc_lin *lin,
 	fc->min_step = BC_CPU_MIN_STEP_REL * size;
 	fc->refine_tol = BC_CPU_REFINE_REL * size;
 	fc->pix_angle = 2.0f * fc->vr.tan_half_y / (float)fc->vr.height;
+	bc_shade_init(&fc->shade, &fc->vr);
+}
+
+void bc_shade_init(struct bc_shade *s, const struct bc_view_rays *vr)
+{
 	/* Light from the camera's upper left, slightly from the front. */
 	for (int i = 0; i < 3; i++) {
-		fc->light[i] = -0.5f * fc->vr.right[i] + 0.6f * fc->vr.up[i] -
-			       0.6f * fc->vr.forward[i];
+		s->light[i] = -0.5f * vr->right[i] + 0.6f * vr->up[i] -
+			      0.6f * vr->forward[i];
 	}
-	normalize3(fc->light);
-	fc->ambient = 0.18f;
+	normalize3(s->light);
+	s->ambient = 0.18f;
 }
 
 static uint8_t to_srgb8(float c)
@@ -65,7 +71,7 @@ static uint8_t to_srgb8(float c)
 
 /* A perceptual ramp (viridis, sampled at five points and interpolated) for
  * x in [0, 1]. */
-static void ramp(float x, uint8_t rgb[3])
+void bc_shade_ramp(float x, uint8_t rgb[4])
 {
 	static const float stops[5][3] = {
 		{0.267f, 0.005f, 0.329f}, {0.229f, 0.322f, 0.545f},
@@ -82,17 +88,63 @@ static void ramp(float x, uint8_t rgb[3])
 		float v = stops[i][c] + (stops[i + 1][c] - stops[i][c]) * s;
 		rgb[c] = (uint8_t)(v * 255.0f + 0.5f);
 	}
+	rgb[3] = 255;
+}
+
+void bc_shade_miss(uint32_t y, uint32_t height, uint8_t px[4])
+{
+	/* Dark vertical gradient, lighter at the top. */
+	float v = height > 1 ? (float)y / (float)(height - 1) : 0.0f;
+	px[0] = (uint8_t)(30.0f - 22.0f * v);
+	px[1] = (uint8_t)(33.0f - 24.0f * v);
+	px[2] = (uint8_t)(42.0f - 30.0f * v);
+	px[3] = 255;
+}
+
+void bc_shade_hit(const struct bc_shade *s, const float grad[3],
+		  const float d[3], const float albedo[3], uint8_t px[4])
+{
+	float n[3] = {grad[0], grad[1], grad[2]};
+	float hv[3] = {s->light[0] - d[0], s->light[1] - d[1],
+		       s->light[2] - d[2]};
+	float diff, spec;
+	if (!(isfinite(n[0]) && isfinite(n[1]) && isfinite(n[2])) ||
+	    dot3(n, n) == 0.0f) {
+		/* No usable gradient (a sample fell outside every active
+		 * primitive): face the viewer. */
+		n[0] = -d[0];
+		n[1] = -d[1];
+		n[2] = -d[2];
+	}
+	normalize3(n);
+	if (dot3(n, d) > 0.0f) {
+		/* Seen from inside (the eye is in the solid): light the side
+		 * that faces us. */
+		n[0] = -n[0];
+		n[1] = -n[1];
+		n[2] = -n[2];
+	}
+	diff = bc__maxf(dot3(n, s->light), 0.0f);
+	normalize3(hv);
+	spec = diff > 0.0f ? powf(bc__maxf(dot3(n, hv), 0.0f), 48.0f) : 0.0f;
+	for (int c = 0; c < 3; c++) {
+		float lit = albedo[c] * (s->ambient + (1.0f - s->ambient) * diff) +
+			    0.25f * spec;
+		px[c] = to_srgb8(lit);
+	}
+	px[3] = 255;
 }
 
 static void debug_colour(const struct bc__frame_ctx *fc, uint32_t evals,
 			 uint32_t overlaps, uint8_t *px)
 {
 	if (fc->debug == BC_DEBUG_EVALS) {
-		ramp((float)evals / (float)BC_CPU_DEBUG_EVALS_MAX, px);
+		bc_shade_ramp((float)evals / (float)BC_CPU_DEBUG_EVALS_MAX, px);
 	} else {
-		ramp((float)overlaps / (float)BC_CPU_DEBUG_OVERLAPS_MAX, px);
+		bc_shade_ramp((float)overlaps /
+				      (float)BC_CPU_DEBUG_OVERLAPS_MAX,
+			      px);
 	}
-	px[3] = 255;
 }
 
 void bc__put_miss(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
@@ -104,14 +156,7 @@ void bc__put_miss(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
 	if (fc->debug != BC_DEBUG_NONE) {
 		debug_colour(fc, evals, overlaps, px);
 	} else {
-		/* Dark vertical gradient, lighter at the top. */
-		float v = out->height > 1
-				  ? (float)y / (float)(out->height - 1)
-				  : 0.0f;
-		px[0] = (uint8_t)(30.0f - 22.0f * v);
-		px[1] = (uint8_t)(33.0f - 24.0f * v);
-		px[2] = (uint8_t)(42.0f - 30.0f * v);
-		px[3] = 255;
+		bc_shade_miss(y, out->height, px);
 	}
 	if (out->depth) {
 		out->depth[i] = INFINITY;
@@ -148,41 +193,12 @@ void bc__put_hit(const struct bc__frame_ctx *fc, struct bc__field *f,
 			n[c] += tet[k][c] * v;
 		}
 	}
-	if (!(isfinite(n[0]) && isfinite(n[1]) && isfinite(n[2])) ||
-	    dot3(n, n) == 0.0f) {
-		/* No usable gradient (a sample fell outside every active
-		 * primitive): face the viewer. */
-		n[0] = -d[0];
-		n[1] = -d[1];
-		n[2] = -d[2];
-	}
-	normalize3(n);
-	if (dot3(n, d) > 0.0f) {
-		/* Seen from inside (the eye is in the solid): light the side
-		 * that faces us. */
-		n[0] = -n[0];
-		n[1] = -n[1];
-		n[2] = -n[2];
-	}
 	if (fc->debug != BC_DEBUG_NONE) {
 		debug_colour(fc, f->evals, overlaps, px);
 	} else {
 		static const float grey[3] = {0.7f, 0.7f, 0.7f};
-		const float *albedo =
-			prim < lin->nprims ? lin->color[prim] : grey;
-		float hv[3] = {fc->light[0] - d[0], fc->light[1] - d[1],
-			       fc->light[2] - d[2]};
-		float diff = bc__maxf(dot3(n, fc->light), 0.0f), spec;
-		normalize3(hv);
-		spec = diff > 0.0f ? powf(bc__maxf(dot3(n, hv), 0.0f), 48.0f)
-				   : 0.0f;
-		for (int c = 0; c < 3; c++) {
-			float lit = albedo[c] * (fc->ambient +
-						 (1.0f - fc->ambient) * diff) +
-				    0.25f * spec;
-			px[c] = to_srgb8(lit);
-		}
-		px[3] = 255;
+		bc_shade_hit(&fc->shade, n, d,
+			     prim < lin->nprims ? lin->color[prim] : grey, px);
 	}
 	if (out->depth) {
 		out->depth[i] = t;

@@ -22,6 +22,7 @@
 #include <unistd.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/shade.h"
 
 /* Worker threads at most, whatever opts.threads asks. */
 #define SVO_MAX_THREADS 64u
@@ -129,8 +130,7 @@ struct frame {
 	struct bc_frame *out;
 	struct bc_view_rays vr;
 	struct bc_svo_cast_params cp;
-	float light[3];
-	float ambient;
+	struct bc_shade shade;
 	uint32_t tiles_x, ntiles;
 	double start, budget_ms; /* budget 0: none */
 	atomic_bool late;        /* the budget ran out: tiles left blank */
@@ -139,63 +139,18 @@ struct frame {
 	atomic_int err;
 };
 
-static void normalize3(float v[3])
-{
-	float n = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-	if (n > 0.0f) {
-		v[0] /= n;
-		v[1] /= n;
-		v[2] /= n;
-	}
-}
-
 static inline float dot3(const float a[3], const float b[3])
 {
 	return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static uint8_t to_srgb8(float c)
-{
-	float s;
-	if (!(c > 0.0f)) {
-		return 0;
-	}
-	if (c >= 1.0f) {
-		return 255;
-	}
-	s = c <= 0.0031308f ? 12.92f * c
-	                    : 1.055f * powf(c, 1.0f / 2.4f) - 0.055f;
-	return (uint8_t)(s * 255.0f + 0.5f);
-}
-
-/* The viridis ramp of the CPU backends' debug views. */
-static void ramp(float x, uint8_t px[4])
-{
-	static const float stops[5][3] = {
-	    {0.267f, 0.005f, 0.329f}, {0.229f, 0.322f, 0.545f},
-	    {0.128f, 0.567f, 0.551f}, {0.369f, 0.789f, 0.383f},
-	    {0.993f, 0.906f, 0.144f},
-	};
-	float s;
-	int i;
-	x = x < 0.0f ? 0.0f : (x > 1.0f ? 1.0f : x);
-	s = x * 4.0f;
-	i = s >= 4.0f ? 3 : (int)s;
-	s -= (float)i;
-	for (int c = 0; c < 3; c++) {
-		float v = stops[i][c] + (stops[i + 1][c] - stops[i][c]) * s;
-		px[c] = (uint8_t)(v * 255.0f + 0.5f);
-	}
-	px[3] = 255;
 }
 
 static void debug_px(const struct frame *fr, uint32_t evals, uint32_t terms,
                      uint8_t px[4])
 {
 	if (fr->r->opts.debug == BC_DEBUG_EVALS) {
-		ramp((float)evals / SVO_DEBUG_EVALS_MAX, px);
+		bc_shade_ramp((float)evals / SVO_DEBUG_EVALS_MAX, px);
 	} else {
-		ramp((float)terms / SVO_DEBUG_TERMS_MAX, px);
+		bc_shade_ramp((float)terms / SVO_DEBUG_TERMS_MAX, px);
 	}
 }
 
@@ -208,12 +163,7 @@ static void put_miss(const struct frame *fr, uint32_t x, uint32_t y,
 	if (fr->r->opts.debug != BC_DEBUG_NONE) {
 		debug_px(fr, evals, 0, px);
 	} else {
-		float v = out->height > 1 ? (float)y / (float)(out->height - 1)
-		                          : 0.0f;
-		px[0] = (uint8_t)(30.0f - 22.0f * v);
-		px[1] = (uint8_t)(33.0f - 24.0f * v);
-		px[2] = (uint8_t)(42.0f - 30.0f * v);
-		px[3] = 255;
+		bc_shade_miss(y, out->height, px);
 	}
 	if (out->depth) {
 		out->depth[i] = INFINITY;
@@ -248,39 +198,15 @@ static void put_hit(const struct frame *fr, uint32_t x, uint32_t y,
 			n[c] += tet[k][c] * v;
 		}
 	}
-	if (!(isfinite(n[0]) && isfinite(n[1]) && isfinite(n[2])) ||
-	    dot3(n, n) == 0.0f) {
-		n[0] = -d[0];
-		n[1] = -d[1];
-		n[2] = -d[2];
-	}
-	normalize3(n);
-	if (dot3(n, d) > 0.0f) {
-		/* Seen from inside the solid: light the side facing us. */
-		n[0] = -n[0];
-		n[1] = -n[1];
-		n[2] = -n[2];
-	}
 	if (fr->r->opts.debug != BC_DEBUG_NONE) {
 		debug_px(fr, hit->evals + hit->range_evals + 4u,
 		         hit->leaf_terms, px);
 	} else {
 		static const float grey[3] = {0.7f, 0.7f, 0.7f};
-		const float *albedo =
-		    hit->prim < rpn->nprims ? rpn->color[hit->prim] : grey;
-		float hv[3] = {fr->light[0] - d[0], fr->light[1] - d[1],
-		               fr->light[2] - d[2]};
-		float diff = fmaxf(dot3(n, fr->light), 0.0f), spec;
-		normalize3(hv);
-		spec =
-		    diff > 0.0f ? powf(fmaxf(dot3(n, hv), 0.0f), 48.0f) : 0.0f;
-		for (int c = 0; c < 3; c++) {
-			float lit = albedo[c] * (fr->ambient +
-			                         (1.0f - fr->ambient) * diff) +
-			            0.25f * spec;
-			px[c] = to_srgb8(lit);
-		}
-		px[3] = 255;
+		bc_shade_hit(&fr->shade, n, d,
+		             hit->prim < rpn->nprims ? rpn->color[hit->prim]
+		                                     : grey,
+		             px);
 	}
 	if (out->depth) {
 		out->depth[i] = t;
@@ -405,12 +331,7 @@ static int svo_render(struct bc_renderer *r, const struct bc_camera *cam,
 	fr.cp.pix_angle = 2.0f * fr.vr.tan_half_y / (float)fr.vr.height;
 	fr.cp.min_step = BC_SVO_MIN_STEP_REL * size;
 	fr.cp.refine_tol = BC_SVO_REFINE_REL * size;
-	for (int i = 0; i < 3; i++) {
-		fr.light[i] = -0.5f * fr.vr.right[i] + 0.6f * fr.vr.up[i] -
-		              0.6f * fr.vr.forward[i];
-	}
-	normalize3(fr.light);
-	fr.ambient = 0.18f;
+	bc_shade_init(&fr.shade, &fr.vr);
 	if (!r->empty) {
 		float need = frame_band(&r->rpn, fr.vr.eye, &fr.cp);
 		if (!r->svo || need > r->band) {
