@@ -9,6 +9,7 @@
  * any work.
  */
 #include "cmd_evalbench.h"
+#include "cmd_render.h"
 
 #include <errno.h>
 #include <jansson.h>
@@ -173,68 +174,6 @@ static int parse(int argc, char **argv, struct args *a)
 	return 0;
 }
 
-/* Reads all of stdin, at most BC_SCENE_JSON_MAX_BYTES. */
-static int read_stdin(char **text, size_t *len, struct bc_errinfo *ei)
-{
-	size_t cap = 1u << 16, n = 0;
-	char *buf = bc_malloc(cap);
-	*text = NULL;
-	*len = 0;
-	if (!buf) {
-		return bc_errinfo_set(ei, BC_ENOMEM, "stdin: out of memory");
-	}
-	for (;;) {
-		size_t got;
-		if (n == cap) {
-			char *grown;
-			if (cap > BC_SCENE_JSON_MAX_BYTES) {
-				bc_free(buf);
-				return bc_errinfo_set(
-				    ei, BC_ELIMIT, "stdin: scene over %u bytes",
-				    BC_SCENE_JSON_MAX_BYTES);
-			}
-			cap *= 2;
-			if (!(grown = bc_realloc(buf, cap))) {
-				bc_free(buf);
-				return bc_errinfo_set(ei, BC_ENOMEM,
-				                      "stdin: out of memory");
-			}
-			buf = grown;
-		}
-		got = fread(buf + n, 1, cap - n, stdin);
-		n += got;
-		if (got == 0) {
-			break;
-		}
-	}
-	if (ferror(stdin)) {
-		bc_free(buf);
-		return bc_errinfo_set(ei, BC_EIO, "stdin: read error");
-	}
-	*text = buf;
-	*len = n;
-	return 0;
-}
-
-static int load(const char *scene, struct bc_tree *t, struct bc_errinfo *ei)
-{
-	if (strcmp(scene, "default") == 0) {
-		const char *json = bc_scene_default_json();
-		return bc_scene_parse_json(json, strlen(json), t, NULL, ei);
-	}
-	if (strcmp(scene, "-") == 0) {
-		char *text;
-		size_t len;
-		int rc = read_stdin(&text, &len, ei);
-		if (rc == 0) {
-			rc = bc_scene_parse_json(text, len, t, NULL, ei);
-			bc_free(text);
-		}
-		return rc;
-	}
-	return bc_scene_load_json(scene, t, NULL, ei);
-}
-
 static const char *arith_name(enum bc_range_arith a)
 {
 	return a == BC_RANGE_IA ? "ia" : (a == BC_RANGE_AA ? "aa" : "revaa");
@@ -356,6 +295,7 @@ int bc_cli_eval_bench(int argc, char **argv)
 	struct args a;
 	struct bc_errinfo ei = {0};
 	struct bc_tree *t = NULL;
+	struct bc_camera cam; /* read with the scene, unused here */
 	const struct bc_lin *l;
 	json_t *o = NULL;
 	char *text = NULL;
@@ -367,7 +307,7 @@ int bc_cli_eval_bench(int argc, char **argv)
 		fprintf(stderr, "blobcast eval-bench: out of memory\n");
 		goto cleanup;
 	}
-	if (load(a.scene, t, &ei)) {
+	if (bc_cli_load_scene(a.scene, t, &cam, &ei)) {
 		fprintf(stderr, "blobcast eval-bench: %s\n", ei.msg);
 		goto cleanup;
 	}

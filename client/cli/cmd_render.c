@@ -336,7 +336,7 @@ static int read_stdin(char **text, size_t *len, struct bc_errinfo *ei)
 }
 #endif
 
-static int load_scene(const char *scene, struct bc_tree *t,
+int bc_cli_load_scene(const char *scene, struct bc_tree *t,
 		      struct bc_camera *cam, struct bc_errinfo *ei)
 {
 	bc_camera_default(cam);
@@ -426,7 +426,7 @@ int bc_cli_render(int argc, char **argv)
 		fprintf(stderr, "blobcast render: out of memory\n");
 		goto cleanup;
 	}
-	if ((rc = load_scene(a.scene, t, &cam, &ei))) {
+	if ((rc = bc_cli_load_scene(a.scene, t, &cam, &ei))) {
 		fprintf(stderr, "blobcast render: %s\n",
 			ei.msg[0] ? ei.msg : bc_strerror(rc));
 		goto cleanup;
