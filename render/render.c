@@ -1,17 +1,23 @@
 /*
- * The dispatcher behind blobcast/render.h: which backends this build holds,
- * their names, frames, and the create-sync-render-destroy shorthand. The
+ * The front of blobcast/render.h: which backends this build holds, their
+ * names, frames, and the functions every caller goes through. They check a
+ * frame, a camera and a region once, keep the base part of every renderer
+ * (tree, options, structure generation), decide when a region must become
+ * the whole frame (the frame's key), and hand the rest to the backend. The
  * backends are compiled in when CMake found their libraries (it defines
  * BLOBCAST_HAVE_CPU, _GL, _SVO); a backend not built in is simply absent.
  */
 #include "blobcast/render.h"
 
+#include <math.h>
 #include <string.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/render_backend.h"
 
 #if defined(BLOBCAST_HAVE_CPU)
-#include "blobcast/render_cpu.h"
+extern const struct bc_backend_ops bc_backend_naive_ops;
+extern const struct bc_backend_ops bc_backend_tiled_ops;
 #endif
 #if defined(BLOBCAST_HAVE_GL)
 extern const struct bc_backend_ops bc_backend_gl_ops;
@@ -27,7 +33,7 @@ static const char *const names[BC_BACKEND_COUNT] = {
 	[BC_BACKEND_SVO] = "svo",
 };
 
-const struct bc_backend_ops *bc_backend_get(enum bc_backend b)
+static const struct bc_backend_ops *backend_ops(enum bc_backend b)
 {
 	switch (b) {
 #if defined(BLOBCAST_HAVE_CPU)
@@ -71,6 +77,11 @@ const char *bc_backend_name(enum bc_backend b)
 	return names[b];
 }
 
+bool bc_backend_available(enum bc_backend b)
+{
+	return backend_ops(b) != NULL;
+}
+
 int bc_frame_init(struct bc_frame *f, uint32_t width, uint32_t height)
 {
 	size_t n;
@@ -103,29 +114,189 @@ void bc_frame_finish(struct bc_frame *f)
 	memset(f, 0, sizeof(*f));
 }
 
-int bc_render_once(enum bc_backend b, const struct bc_render_opts *opts,
-		   const struct bc_tree *t, const struct bc_camera *cam,
-		   struct bc_frame *out, struct bc_render_stats *stats,
-		   struct bc_errinfo *ei)
+/* ---- The front ---------------------------------------------------------- */
+
+int bc_renderer_create(struct bc_renderer **out, enum bc_backend b,
+		       const struct bc_render_opts *opts,
+		       struct bc_errinfo *ei)
 {
-	const struct bc_backend_ops *ops = bc_backend_get(b);
-	struct bc_render_opts defaults = {0};
-	struct bc_renderer *r = NULL;
+	const struct bc_backend_ops *ops = backend_ops(b);
+	struct bc_render_opts o = {0};
 	int rc;
-	if (stats) {
-		memset(stats, 0, sizeof(*stats));
-	}
+	*out = NULL;
 	if (!ops) {
 		return bc_errinfo_set(ei, BC_ENOTSUP,
 				      "render: backend '%s' is not built in",
 				      bc_backend_name(b));
 	}
-	if ((rc = ops->create(&r, opts ? opts : &defaults, ei))) {
+	if (opts) {
+		o = *opts;
+	}
+	if ((unsigned)o.debug >= BC_DEBUG_COUNT) {
+		return bc_errinfo_set(ei, BC_EENUM,
+				      "render: debug mode %d out of range",
+				      (int)o.debug);
+	}
+	if ((unsigned)o.simd >= BC_SIMD_COUNT) {
+		return bc_errinfo_set(ei, BC_EENUM,
+				      "render: simd mode %d out of range",
+				      (int)o.simd);
+	}
+	if ((rc = ops->create(out, &o, ei))) {
+		*out = NULL;
 		return rc;
 	}
-	if ((rc = ops->sync(r, t, NULL, ei)) == 0) {
-		rc = ops->render(r, cam, out, stats, ei);
+	(*out)->ops = ops;
+	(*out)->backend = b;
+	(*out)->opts = o;
+	/* Strings belong to the caller; backends copy what they need. */
+	(*out)->opts.gl_platform = NULL;
+	(*out)->tree = NULL;
+	(*out)->generation = 1;
+	return 0;
+}
+
+void bc_renderer_destroy(struct bc_renderer *r)
+{
+	if (r) {
+		r->ops->destroy(r);
 	}
-	ops->destroy(r);
+}
+
+enum bc_backend bc_renderer_backend(const struct bc_renderer *r)
+{
+	return r ? r->backend : BC_BACKEND_INVALID;
+}
+
+int bc_renderer_sync(struct bc_renderer *r, const struct bc_tree *t,
+		     const struct bc_dirty *dirty, struct bc_errinfo *ei)
+{
+	if (!r || !t) {
+		return bc_errinfo_set(ei, BC_EINVAL, "render: no tree to sync");
+	}
+	if (!dirty || dirty->structure || t != r->tree) {
+		r->generation++;
+	}
+	r->tree = t;
+	return r->ops->sync ? r->ops->sync(r, t, dirty, ei) : 0;
+}
+
+/* FNV-1a over the bytes of what shapes every pixel of a frame. */
+static uint64_t hash_bytes(uint64_t h, const void *p, size_t n)
+{
+	const uint8_t *b = p;
+	for (size_t i = 0; i < n; i++) {
+		h = (h ^ b[i]) * 0x100000001b3ull;
+	}
+	return h;
+}
+
+static uint64_t frame_key(struct bc_renderer *r, const struct bc_camera *cam,
+			  uint32_t w, uint32_t h)
+{
+	uint64_t k = 0xcbf29ce484222325ull, backend = 0;
+	uint32_t dims[3] = {w, h, (uint32_t)r->opts.debug};
+	if (r->ops->key) {
+		backend = r->ops->key(r, cam, w, h);
+	}
+	k = hash_bytes(k, cam, sizeof(*cam));
+	k = hash_bytes(k, dims, sizeof(dims));
+	k = hash_bytes(k, &r->generation, sizeof(r->generation));
+	k = hash_bytes(k, &backend, sizeof(backend));
+	return k ? k : 1; /* 0 means "nothing rendered" */
+}
+
+int bc_renderer_render_region(struct bc_renderer *r,
+			      const struct bc_camera *cam,
+			      struct bc_frame *out,
+			      const struct bc_render_region *region,
+			      struct bc_render_stats *stats,
+			      struct bc_errinfo *ei)
+{
+	struct bc_render_stats local;
+	struct bc_render_region whole = {NULL, 0, false};
+	uint64_t key;
+	int rc;
+	if (!stats) {
+		stats = &local;
+	}
+	memset(stats, 0, sizeof(*stats));
+	if (!r || !cam || !out || !out->rgba || out->width == 0 ||
+	    out->height == 0 || out->width > BC_RENDER_MAX_DIM ||
+	    out->height > BC_RENDER_MAX_DIM) {
+		return bc_errinfo_set(ei, BC_EINVAL, "render: bad frame");
+	}
+	if (region && region->level > BC_RENDER_MAX_LEVEL) {
+		return bc_errinfo_set(ei, BC_ERANGE,
+				      "render: level %u over %u", region->level,
+				      BC_RENDER_MAX_LEVEL);
+	}
+	if (!r->tree) {
+		return bc_errinfo_set(ei, BC_ESTATE,
+				      "render: no tree synced yet");
+	}
+	if ((rc = bc_camera_validate(cam, ei))) {
+		return rc;
+	}
+	key = frame_key(r, cam, out->width, out->height);
+	if (!region) {
+		region = &whole;
+	} else if (out->key != key && (region->tiles || region->refine)) {
+		/* The frame holds another rendering: redraw all of it at
+		 * this level. */
+		whole.level = region->level;
+		region = &whole;
+		stats->whole = true;
+	}
+	out->key = 0; /* unknown until the backend succeeds */
+	if ((rc = r->ops->render(r, cam, out, region, stats, ei))) {
+		return rc;
+	}
+	if (!stats->incomplete) {
+		out->key = key;
+	}
+	return 0;
+}
+
+int bc_renderer_render(struct bc_renderer *r, const struct bc_camera *cam,
+		       struct bc_frame *out, struct bc_render_stats *stats,
+		       struct bc_errinfo *ei)
+{
+	return bc_renderer_render_region(r, cam, out, NULL, stats, ei);
+}
+
+void bc_renderer_damage(struct bc_renderer *r, const struct bc_camera *cam,
+			uint32_t width, uint32_t height,
+			const struct bc_abv *abv, uint8_t *tiles)
+{
+	size_t n = (size_t)bc_render_tiles_x(width) * bc_render_tiles_y(height);
+	if (!r || !tiles || width == 0 || height == 0) {
+		return;
+	}
+	if (!r->ops->damage || !cam || !abv ||
+	    bc_camera_validate(cam, NULL) != 0) {
+		memset(tiles, 1, n);
+		return;
+	}
+	r->ops->damage(r, cam, width, height, abv, tiles);
+}
+
+int bc_render_once(enum bc_backend b, const struct bc_render_opts *opts,
+		   const struct bc_tree *t, const struct bc_camera *cam,
+		   struct bc_frame *out, struct bc_render_stats *stats,
+		   struct bc_errinfo *ei)
+{
+	struct bc_renderer *r = NULL;
+	int rc;
+	if (stats) {
+		memset(stats, 0, sizeof(*stats));
+	}
+	if ((rc = bc_renderer_create(&r, b, opts, ei))) {
+		return rc;
+	}
+	if ((rc = bc_renderer_sync(r, t, NULL, ei)) == 0) {
+		rc = bc_renderer_render(r, cam, out, stats, ei);
+	}
+	bc_renderer_destroy(r);
 	return rc;
 }

@@ -12,13 +12,15 @@
 
 #include "blobcast/blobtree.h"
 #include "blobcast/render.h"
+#include "blobcast/render_backend.h"
+#include "blobcast/render_common.h"
 #include "blobcast/shade.h"
 #include "blobcast/render_cpu.h"
 
 /* ---- Constants ---------------------------------------------------------- */
 
 /* Tile edge in pixels (paper §6: 8x8 rays per workgroup). */
-#define BC_CPU_TILE 8u
+#define BC_CPU_TILE BC_RENDER_TILE
 /* Most primitives active in one depth range (paper §7: M_overlap = 128).
  * A tile whose overlaps exceed it is not failed: see tiled.c. */
 #define BC_CPU_M_OVERLAP 128u
@@ -42,7 +44,7 @@
  * diagonal, so depth does not depend on where the steps happened to land. */
 #define BC_CPU_REFINE_REL 1.0e-5f
 /* Worker threads at most, whatever opts.threads asks. */
-#define BC_CPU_MAX_THREADS 64u
+#define BC_CPU_MAX_THREADS BC_POOL_MAX_THREADS
 /* Tile fragments (primitive x tile pairs) of one frame's A-buffer: 2^24
  * fragments are 200 MiB of lists, far above real scenes (a 4096-primitive
  * scene at 512^2 makes ~10^5). Frames beyond it fail with BC_ELIMIT. */
@@ -64,21 +66,34 @@ enum bc__cpu_kind {
 
 struct bc__tiled_bufs; /* tiled.c: buffers kept between frames */
 
-struct bc_renderer {
+/* A CPU renderer: the front's base first (options, synced tree). */
+struct bc__cpu {
+	struct bc_renderer base;
 	enum bc__cpu_kind kind;
-	struct bc_render_opts opts;
 	uint32_t threads;
-	const struct bc_tree *tree;
 	bc_render_progress_fn progress;
 	void *progress_user;
 	struct bc__tiled_bufs *tiled;
 };
 
+static inline struct bc__cpu *bc__cpu_of(struct bc_renderer *r)
+{
+	return (struct bc__cpu *)r; /* base is the first member */
+}
+
 int bc__cpu_create(struct bc_renderer **out, enum bc__cpu_kind kind,
 		   const struct bc_render_opts *opts, struct bc_errinfo *ei);
 void bc__cpu_destroy(struct bc_renderer *r);
-int bc__cpu_sync(struct bc_renderer *r, const struct bc_tree *t,
-		 const struct bc_dirty *dirty, struct bc_errinfo *ei);
+/* The backends' key hook: the frame constants derive from the scene's
+ * scale (blobcast/render_common.h). */
+uint64_t bc__cpu_key(struct bc_renderer *r, const struct bc_camera *cam,
+		     uint32_t width, uint32_t height);
+/* Reads the region's tile byte for tile t (NULL tiles: all). Returns the
+ * mask of the tile's 64 pixels (bit (y % 8) * 8 + x % 8) the region
+ * traces, 0 for none; bits of pixels beyond the frame's edge are clear. */
+uint64_t bc__region_mask(const struct bc_render_region *region,
+			 uint32_t tx, uint32_t ty, uint32_t width,
+			 uint32_t height);
 /* tiled.c frees its buffers through this. */
 void bc__tiled_free(struct bc__tiled_bufs *b);
 
@@ -92,6 +107,16 @@ static inline float bc__minf(float a, float b)
 static inline float bc__maxf(float a, float b)
 {
 	return a > b ? a : b;
+}
+
+/* Bits set in x. */
+static inline uint32_t bc__popcount64(uint64_t x)
+{
+	uint32_t n = 0;
+	for (; x; x &= x - 1) {
+		n++;
+	}
+	return n;
 }
 
 /* ---- The field ---------------------------------------------------------- */
@@ -172,23 +197,13 @@ bool bc__ray_box(const float lo[3], const float hi[3], const float o[3],
 
 /* ---- Threads, time, progress -------------------------------------------- */
 
-/* Runs fn(ctx, i) for i in [0, n) concurrently, i = 0 on the calling thread,
- * and returns when all are done. Work is handed out by the functions
- * themselves (atomic counters), so a thread that cannot be started only
- * costs speed: its share is done by the others. */
-typedef void (*bc__work_fn)(void *ctx, uint32_t thread);
-void bc__parallel(uint32_t n, bc__work_fn fn, void *ctx);
-
-/* Milliseconds on a monotonic clock. */
-double bc__now_ms(void);
-
 struct bc__progress {
 	bc_render_progress_fn fn;
 	void *user;
 	uint32_t total;
 	double start, last;
 };
-void bc__progress_init(struct bc__progress *p, const struct bc_renderer *r,
+void bc__progress_init(struct bc__progress *p, const struct bc__cpu *r,
 		       uint32_t total);
 /* Called by thread 0 only; reports at most every 250 ms after the first
  * second. */

@@ -3,7 +3,9 @@
  * and sphere traced in the full tree (bc_eval_full), with no acceleration
  * structure at all. It is the baseline the tiled backend is measured
  * against and the oracle the tests compare it with. Rows are shared among
- * the worker threads.
+ * the worker threads. Because each step sees every primitive, an edit
+ * anywhere can change any pixel in the last bits: naive has no local
+ * damage (the front marks every tile).
  */
 #include "cpu.h"
 
@@ -14,9 +16,11 @@
 
 struct naive_frame {
 	const struct bc__frame_ctx *fc;
+	const struct bc_render_region *region;
 	struct bc__progress progress;
 	atomic_uint next_row;
 	uint64_t evals[BC_CPU_MAX_THREADS];
+	uint64_t rays[BC_CPU_MAX_THREADS];
 };
 
 static void naive_rows(void *arg, uint32_t thread)
@@ -26,7 +30,9 @@ static void naive_rows(void *arg, uint32_t thread)
 	const struct bc_lin *lin = fc->lin;
 	uint32_t w = fc->out->width, h = fc->out->height;
 	uint32_t overlaps = lin ? lin->nprims : 0;
-	uint64_t evals = 0;
+	uint64_t evals = 0, rays = 0;
+	const struct bc_render_region *rg = nf->region;
+	uint32_t tw = bc_render_tiles_x(w);
 	for (;;) {
 		uint32_t y = atomic_fetch_add(&nf->next_row, 1u);
 		if (y >= h) {
@@ -35,6 +41,13 @@ static void naive_rows(void *arg, uint32_t thread)
 		for (uint32_t x = 0; x < w; x++) {
 			struct bc__field f = {lin, NULL, 0};
 			float d[3], t0, t1, t;
+			if ((rg->tiles && !rg->tiles[(y / BC_CPU_TILE) * tw +
+						     x / BC_CPU_TILE]) ||
+			    !bc_render_level_has(x, y, rg->level,
+						 rg->refine)) {
+				continue;
+			}
+			rays++;
 			bc_view_rays_dir(&fc->vr, (float)x + 0.5f,
 					 (float)y + 0.5f, d);
 			if (lin &&
@@ -55,6 +68,7 @@ static void naive_rows(void *arg, uint32_t thread)
 		}
 	}
 	nf->evals[thread] = evals;
+	nf->rays[thread] = rays;
 }
 
 static int naive_create(struct bc_renderer **out,
@@ -63,42 +77,32 @@ static int naive_create(struct bc_renderer **out,
 	return bc__cpu_create(out, BC__CPU_NAIVE, opts, ei);
 }
 
-static int naive_render(struct bc_renderer *r, const struct bc_camera *cam,
-			struct bc_frame *out, struct bc_render_stats *stats,
-			struct bc_errinfo *ei)
+static int naive_render(struct bc_renderer *base, const struct bc_camera *cam,
+			struct bc_frame *out,
+			const struct bc_render_region *region,
+			struct bc_render_stats *stats, struct bc_errinfo *ei)
 {
+	struct bc__cpu *r = bc__cpu_of(base);
 	struct bc__frame_ctx fc;
 	struct naive_frame nf = {0};
-	double t0 = bc__now_ms();
-	int rc;
-	if (stats) {
-		*stats = (struct bc_render_stats){0};
-	}
-	if (!r || !cam || !out || !out->rgba || out->width == 0 ||
-	    out->height == 0 || out->width > BC_RENDER_MAX_DIM ||
-	    out->height > BC_RENDER_MAX_DIM) {
-		return bc_errinfo_set(ei, BC_EINVAL, "render: bad frame");
-	}
-	if (!r->tree) {
-		return bc_errinfo_set(ei, BC_ESTATE,
-				      "render: no tree synced yet");
-	}
-	if ((rc = bc_camera_validate(cam, ei))) {
-		return rc;
-	}
-	bc__frame_setup(&fc, bc_tree_lin(r->tree), cam, out, r->opts.debug);
+	double t0 = bc_render_now_ms();
+	(void)ei;
+	bc__frame_setup(&fc, bc_tree_lin(base->tree), cam, out,
+			base->opts.debug);
 	nf.fc = &fc;
+	nf.region = region;
 	atomic_init(&nf.next_row, 0u);
 	bc__progress_init(&nf.progress, r, out->height);
-	bc__parallel(r->threads, naive_rows, &nf);
-	if (stats) {
-		for (uint32_t i = 0; i < BC_CPU_MAX_THREADS; i++) {
-			stats->field_evals += nf.evals[i];
-		}
-		stats->max_overlap = fc.lin ? fc.lin->nprims : 0;
-		stats->ms_trace = bc__now_ms() - t0;
-		stats->ms_total = stats->ms_trace;
+	bc_pool_run(r->threads, naive_rows, &nf);
+	for (uint32_t i = 0; i < BC_CPU_MAX_THREADS; i++) {
+		stats->field_evals += nf.evals[i];
+		stats->rays += nf.rays[i];
 	}
+	stats->tiles = bc_render_tiles_x(out->width) *
+		       bc_render_tiles_y(out->height);
+	stats->max_overlap = fc.lin ? fc.lin->nprims : 0;
+	stats->ms_trace = bc_render_now_ms() - t0;
+	stats->ms_total = stats->ms_trace;
 	return 0;
 }
 
@@ -106,6 +110,9 @@ const struct bc_backend_ops bc_backend_naive_ops = {
 	.name = "naive",
 	.create = naive_create,
 	.destroy = bc__cpu_destroy,
-	.sync = bc__cpu_sync,
 	.render = naive_render,
+	.key = bc__cpu_key,
+	/* No damage hook: a step of the full tree's sphere tracing is the
+	 * distance to the nearest surface, wherever it is, so every pixel
+	 * can depend on every primitive. */
 };

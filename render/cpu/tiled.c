@@ -27,7 +27,7 @@
  * it fetches past the limit everything entering there (making a bigger
  * view), and the tile is still rendered exactly.
  */
-#include "cpu.h"
+#include "tiled.h"
 
 #include <math.h>
 #include <stdatomic.h>
@@ -37,9 +37,25 @@
 #include "blobcast/alloc.h"
 #include "blobcast/log.h"
 
-struct frag {
-	float t0, t1;
-	uint32_t prim;
+struct bc__tiled_bufs {
+	float *dirs; /* 3 per pixel */
+	size_t dirs_cap;
+	/* The view dirs and cones were made for: kept while it stays. */
+	struct bc_camera rays_cam;
+	uint32_t rays_w, rays_h;
+	struct cone *cones;
+	size_t cones_cap;
+	struct rect *rects;     /* per primitive */
+	uint64_t *cand_off;     /* per primitive + 1: candidate tiles */
+	size_t prims_cap;
+	float *cand;            /* 2 per candidate: entry, exit */
+	size_t cand_cap;
+	uint32_t *tile_off;     /* per tile + 1 */
+	uint32_t *tile_cur;
+	size_t tiles_cap;
+	struct bc__frag *frags;
+	size_t frags_cap;
+	struct bc__tile_worker workers[BC_CPU_MAX_THREADS];
 };
 
 /* Tiles [x0, x1) x [y0, y1) a primitive may cover. */
@@ -57,33 +73,6 @@ struct cone {
 /* Cones per tile: the whole tile, then its four 4x4 quarters. */
 #define CONES_PER_TILE 5u
 #define QUARTER (BC_CPU_TILE / 2u)
-
-struct worker {
-	struct bc_view view;
-	uint32_t *act;  /* active primitive indices, increasing */
-	float *act_t1;  /* their exits */
-	uint32_t cap;
-	uint64_t evals;
-	uint32_t overflows;
-};
-
-struct bc__tiled_bufs {
-	float *dirs; /* 3 per pixel */
-	size_t dirs_cap;
-	struct cone *cones;
-	size_t cones_cap;
-	struct rect *rects;     /* per primitive */
-	uint64_t *cand_off;     /* per primitive + 1: candidate tiles */
-	size_t prims_cap;
-	float *cand;            /* 2 per candidate: entry, exit */
-	size_t cand_cap;
-	uint32_t *tile_off;     /* per tile + 1 */
-	uint32_t *tile_cur;
-	size_t tiles_cap;
-	struct frag *frags;
-	size_t frags_cap;
-	struct worker workers[BC_CPU_MAX_THREADS];
-};
 
 void bc__tiled_free(struct bc__tiled_bufs *b)
 {
@@ -153,12 +142,14 @@ struct tiled_frame {
 	struct bc__tiled_bufs *b;
 	uint32_t tw, th, ntiles;
 	uint32_t nprims;
+	const struct bc_render_region *region;
 	uint64_t ncand;
 	atomic_uint next;   /* work counter of the running phase */
 	atomic_uint tiles_done;
 	struct bc__progress progress;
-	double deadline;   /* bc__now_ms() past which no tile starts; 0: none */
+	double deadline;   /* bc_render_now_ms() past which no tile starts; 0: none */
 	atomic_uint skipped; /* tiles left as background past the deadline */
+	atomic_uint tiles_asked, rays; /* tiles and pixels the region asks */
 };
 
 static inline float dot3(const float a[3], const float b[3])
@@ -296,12 +287,13 @@ static struct rect project_box(const struct tiled_frame *tf, const float lo[3],
  * depth ranges. Widening only adds primitives to views, which is always
  * safe. The epsilon grows with distance: the farthest point of the
  * primitive's bounding sphere sets it. */
-static void widened_abv(const struct bc__frame_ctx *fc, uint32_t k,
-			struct bc_abv *out, float lo[3], float hi[3])
+static void widened_abv(const struct bc__frame_ctx *fc,
+			const struct bc_abv *abv, struct bc_abv *out,
+			float lo[3], float hi[3])
 {
 	const float *eye = fc->vr.eye;
 	float far = 0.0f, r2 = 0.0f, m;
-	*out = fc->lin->abv[k];
+	*out = *abv;
 	bc_abv_aabb(out, lo, hi);
 	for (int i = 0; i < 3; i++) {
 		float c = 0.5f * (lo[i] + hi[i]) - eye[i];
@@ -341,7 +333,7 @@ static void phase_rects(void *arg, uint32_t thread)
 		for (uint32_t k = k0; k < tf->nprims && k < k0 + 256u; k++) {
 			struct bc_abv abv;
 			float lo[3], hi[3];
-			widened_abv(tf->fc, k, &abv, lo, hi);
+			widened_abv(tf->fc, &tf->fc->lin->abv[k], &abv, lo, hi);
 			tf->b->rects[k] = project_box(tf, lo, hi);
 		}
 	}
@@ -512,7 +504,7 @@ static void phase_intervals(void *arg, uint32_t thread)
 			uint64_t to = b->cand_off[k + 1] < c1 ? b->cand_off[k + 1]
 							      : c1;
 			float lo3[3], hi3[3], v[3], dist2, radius;
-			widened_abv(fc, k, &abv, lo3, hi3);
+			widened_abv(fc, &fc->lin->abv[k], &abv, lo3, hi3);
 			bounding_sphere(&abv, lo3, hi3, v, &radius);
 			for (int i = 0; i < 3; i++) {
 				v[i] -= fc->vr.eye[i];
@@ -520,207 +512,77 @@ static void phase_intervals(void *arg, uint32_t thread)
 			dist2 = dot3(v, v);
 			for (uint64_t c = from; c < to; c++) {
 				uint32_t j = (uint32_t)(c - b->cand_off[k]);
-				fragment(tf, &abv, v, dist2, radius,
-					 r->x0 + j % rw, r->y0 + j / rw,
+				uint32_t tx = r->x0 + j % rw, ty = r->y0 + j / rw;
+				if (tf->region->tiles &&
+				    !tf->region->tiles[ty * tf->tw + tx]) {
+					/* Not drawn: no list needed. */
+					b->cand[2 * c] = INFINITY;
+					b->cand[2 * c + 1] = -INFINITY;
+					continue;
+				}
+				fragment(tf, &abv, v, dist2, radius, tx, ty,
 					 &b->cand[2 * c]);
 			}
 		}
 	}
 }
 
-static int frag_cmp(const void *pa, const void *pb)
-{
-	const struct frag *a = pa, *b = pb;
-	if (a->t0 != b->t0) {
-		return a->t0 < b->t0 ? -1 : 1;
-	}
-	return (a->prim > b->prim) - (a->prim < b->prim);
-}
-
-/* Adds list entry e to the active set, keeping it sorted by primitive. */
-static void activate(struct worker *wk, uint32_t *na, const struct frag *e)
-{
-	uint32_t i = *na;
-	while (i > 0 && wk->act[i - 1] > e->prim) {
-		wk->act[i] = wk->act[i - 1];
-		wk->act_t1[i] = wk->act_t1[i - 1];
-		i--;
-	}
-	wk->act[i] = e->prim;
-	wk->act_t1[i] = e->t1;
-	(*na)++;
-}
-
-/* A near hit that no following range took over: shade it in the full
- * tree, since the range whose view held there is gone (a few pixels per
- * frame, on silhouettes). */
-static void settle(const struct bc__frame_ctx *fc, struct worker *wk,
-		   uint32_t x, uint32_t y, const float d[3], float t,
-		   uint32_t *evals, uint32_t overlaps)
-{
-	struct bc__field f = {fc->lin, NULL, *evals};
-	bc__put_hit(fc, &f, x, y, d, t, overlaps);
-	wk->evals += f.evals - *evals;
-	*evals = f.evals;
-}
-
-static void trace_tile(struct tiled_frame *tf, struct worker *wk, uint32_t tile)
+/* Past the frame budget: the tile's asked pixels become background. */
+static void skip_tile(struct tiled_frame *tf, uint32_t tx, uint32_t ty,
+		      uint64_t mask)
 {
 	const struct bc__frame_ctx *fc = tf->fc;
-	const struct bc_lin *lin = fc->lin;
-	struct bc__tiled_bufs *b = tf->b;
 	uint32_t w = fc->out->width, h = fc->out->height;
-	uint32_t tx = tile % tf->tw, ty = tile / tf->tw;
 	uint32_t x0 = tx * BC_CPU_TILE, y0 = ty * BC_CPU_TILE;
-	uint32_t x1 = x0 + BC_CPU_TILE < w ? x0 + BC_CPU_TILE : w;
-	uint32_t y1 = y0 + BC_CPU_TILE < h ? y0 + BC_CPU_TILE : h;
-	struct frag *list = b->frags + b->tile_off[tile];
-	uint32_t n = b->tile_off[tile + 1] - b->tile_off[tile];
-	uint32_t evals[BC_CPU_TILE * BC_CPU_TILE] = {0};
-	bool done[BC_CPU_TILE * BC_CPU_TILE] = {false};
-	/* Rays that ended a range within the hit epsilon, still approaching
-	 * (BC__TRACE_NEAR_END): the next range decides, or if none follows
-	 * right there, the near hit stands. */
-	float pending[BC_CPU_TILE * BC_CPU_TILE];
-	bool has_pending[BC_CPU_TILE * BC_CPU_TILE] = {false};
-	uint32_t left = (x1 - x0) * (y1 - y0);
-	uint32_t na = 0, next = 0;
-	float z_end = 0.0f;
-	if (n > 1) {
-		qsort(list, n, sizeof(*list), frag_cmp);
-	}
-	while (left > 0) {
-		float z_begin, max_exit = -INFINITY;
-		uint32_t kept = 0, fetched = 0;
-		struct bc__field f = {lin, &wk->view, 0};
-		/* Retire primitives that ended with the previous range. */
-		for (uint32_t i = 0; i < na; i++) {
-			if (wk->act_t1[i] > z_end) {
-				wk->act[kept] = wk->act[i];
-				wk->act_t1[kept] = wk->act_t1[i];
-				max_exit = bc__maxf(max_exit, wk->act_t1[i]);
-				kept++;
-			}
-		}
-		na = kept;
-		if (na == 0) {
-			if (next >= n) {
-				break;
-			}
-			z_begin = list[next].t0; /* eq. 21: skip empty space */
-		} else {
-			z_begin = z_end;
-		}
-		while (next < n && fetched < BC_CPU_MAX_FETCH &&
-		       na < BC_CPU_M_OVERLAP &&
-		       (na == 0 || list[next].t0 <= max_exit)) {
-			activate(wk, &na, &list[next]);
-			max_exit = bc__maxf(max_exit, list[next].t1);
-			next++;
-			fetched++;
-		}
-		if (na >= BC_CPU_M_OVERLAP && next < n &&
-		    list[next].t0 <= z_begin) {
-			/* Over M_overlap at this very depth: degrade (see the
-			 * file comment). */
-			while (next < n && list[next].t0 <= z_begin) {
-				activate(wk, &na, &list[next]);
-				max_exit = bc__maxf(max_exit, list[next].t1);
-				next++;
-			}
-			wk->overflows++;
-		}
-		/* eq. 22 */
-		z_end = next < n ? bc__minf(list[next].t0, max_exit) : max_exit;
-		if (!(z_end > z_begin)) {
-			continue;
-		}
-		if (bc_view_build(&wk->view, lin, wk->act, na) != 0) {
-			/* Cannot happen for a valid tree; the full tree is
-			 * always right, only slower. */
-			f.view = NULL;
-		} else if (wk->view.empty) {
-			continue; /* no surface can be in this range */
-		}
-		for (uint32_t y = y0; y < y1; y++) {
-			for (uint32_t x = x0; x < x1; x++) {
-				uint32_t p = (y - y0) * BC_CPU_TILE + (x - x0);
-				const float *d =
-					b->dirs + 3 * ((size_t)y * w + x);
-				float t = 0.0f;
-				enum bc__trace_result res;
-				if (done[p]) {
-					continue;
-				}
-				if (has_pending[p] && z_begin > pending[p]) {
-					settle(fc, wk, x, y, d, pending[p],
-					       &evals[p], n);
-					done[p] = true;
-					left--;
-					continue;
-				}
-				f.evals = evals[p];
-				res = bc__trace(&f, fc, fc->vr.eye, d, z_begin,
-						z_end, &t);
-				has_pending[p] = res == BC__TRACE_NEAR_END;
-				pending[p] = t;
-				if (res == BC__TRACE_HIT) {
-					bc__put_hit(fc, &f, x, y, d, t, n);
-					done[p] = true;
-					left--;
-				}
-				wk->evals += f.evals - evals[p];
-				evals[p] = f.evals;
-			}
-		}
-	}
-	for (uint32_t y = y0; y < y1; y++) {
-		for (uint32_t x = x0; x < x1; x++) {
-			uint32_t p = (y - y0) * BC_CPU_TILE + (x - x0);
-			if (done[p]) {
-				continue;
-			}
-			if (has_pending[p]) {
-				settle(fc, wk, x, y,
-				       b->dirs + 3 * ((size_t)y * w + x),
-				       pending[p], &evals[p], n);
-			} else {
-				bc__put_miss(fc, x, y, evals[p], n);
-			}
-		}
-	}
-}
-
-/* Past the frame budget: the tile's pixels become background. */
-static void skip_tile(struct tiled_frame *tf, uint32_t tile)
-{
-	const struct bc__frame_ctx *fc = tf->fc;
-	uint32_t w = fc->out->width, h = fc->out->height;
-	uint32_t x0 = (tile % tf->tw) * BC_CPU_TILE;
-	uint32_t y0 = (tile / tf->tw) * BC_CPU_TILE;
 	for (uint32_t y = y0; y < y0 + BC_CPU_TILE && y < h; y++) {
 		for (uint32_t x = x0; x < x0 + BC_CPU_TILE && x < w; x++) {
-			bc__put_miss(fc, x, y, 0, 0);
+			if ((mask >> ((y - y0) * BC_CPU_TILE + (x - x0))) & 1u) {
+				bc__put_miss(fc, x, y, 0, 0);
+			}
 		}
 	}
 	atomic_fetch_add(&tf->skipped, 1u);
 }
 
-/* Phase 4, per tile: walk the depth ranges and trace. */
+/* Phase 4, per tile of the region: walk the depth ranges and trace. */
 static void phase_trace(void *arg, uint32_t thread)
 {
 	struct tiled_frame *tf = arg;
-	struct worker *wk = &tf->b->workers[thread];
+	struct bc__tile_worker *wk = &tf->b->workers[thread];
+	const struct bc__frame_ctx *fc = tf->fc;
+	uint32_t w = fc->out->width, h = fc->out->height;
 	for (;;) {
 		uint32_t tile = atomic_fetch_add(&tf->next, 1u);
+		uint32_t tx = tile % tf->tw, ty = tile / tf->tw;
+		struct bc__tile_job job;
+		uint64_t mask;
 		if (tile >= tf->ntiles) {
 			break;
 		}
-		if (tf->deadline > 0.0 && bc__now_ms() > tf->deadline) {
-			skip_tile(tf, tile);
+		mask = bc__region_mask(tf->region, tx, ty, w, h);
+		if (!mask) {
 			continue;
 		}
-		trace_tile(tf, wk, tile);
+		atomic_fetch_add(&tf->tiles_asked, 1u);
+		atomic_fetch_add(&tf->rays, bc__popcount64(mask));
+		if (tf->deadline > 0.0 && bc_render_now_ms() > tf->deadline) {
+			skip_tile(tf, tx, ty, mask);
+			continue;
+		}
+		job = (struct bc__tile_job){
+			.fc = fc,
+			.dirs = tf->b->dirs,
+			.list = tf->b->frags + tf->b->tile_off[tile],
+			.n = tf->b->tile_off[tile + 1] - tf->b->tile_off[tile],
+			.x0 = tx * BC_CPU_TILE,
+			.y0 = ty * BC_CPU_TILE,
+			.x1 = (tx + 1) * BC_CPU_TILE < w ? (tx + 1) * BC_CPU_TILE
+							 : w,
+			.y1 = (ty + 1) * BC_CPU_TILE < h ? (ty + 1) * BC_CPU_TILE
+							 : h,
+			.mask = mask,
+		};
+		bc__trace_tile(wk, &job);
 		atomic_fetch_add(&tf->tiles_done, 1u);
 		if (thread == 0) {
 			bc__progress_tick(&tf->progress,
@@ -752,7 +614,7 @@ static uint32_t bucket(struct tiled_frame *tf)
 					b->tile_cur[tile]++;
 				} else {
 					b->frags[b->tile_cur[tile]++] =
-						(struct frag){b->cand[2 * c],
+						(struct bc__frag){b->cand[2 * c],
 							      b->cand[2 * c + 1], k};
 				}
 			}
@@ -780,13 +642,13 @@ static int tiled_create(struct bc_renderer **out,
 
 /* Gives every worker room for `longest` active primitives and a view of
  * them, here on the calling thread, so the workers never allocate. */
-static int prepare_workers(struct bc_renderer *r, const struct bc_lin *lin,
+static int prepare_workers(struct bc__cpu *r, const struct bc_lin *lin,
 			   uint32_t longest)
 {
 	struct bc__tiled_bufs *b = r->tiled;
 	uint32_t need = longest > 0 ? longest : 1;
 	for (uint32_t i = 0; i < r->threads; i++) {
-		struct worker *wk = &b->workers[i];
+		struct bc__tile_worker *wk = &b->workers[i];
 		wk->evals = 0;
 		wk->overflows = 0;
 		if (wk->cap < need) {
@@ -820,40 +682,28 @@ static int prepare_workers(struct bc_renderer *r, const struct bc_lin *lin,
 	return 0;
 }
 
-static int tiled_render(struct bc_renderer *r, const struct bc_camera *cam,
-			struct bc_frame *out, struct bc_render_stats *stats,
-			struct bc_errinfo *ei)
+static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
+			struct bc_frame *out,
+			const struct bc_render_region *region,
+			struct bc_render_stats *stats, struct bc_errinfo *ei)
 {
+	struct bc__cpu *r = bc__cpu_of(base);
 	struct bc__frame_ctx fc;
 	struct tiled_frame tf = {0};
 	struct bc__tiled_bufs *b;
 	const struct bc_lin *lin;
-	double t_start = bc__now_ms(), t_ab;
+	double t_start = bc_render_now_ms(), t_ab;
 	uint32_t longest = 0, overflows = 0;
 	size_t npix;
 	int rc;
-	if (stats) {
-		*stats = (struct bc_render_stats){0};
-	}
-	if (!r || !cam || !out || !out->rgba || out->width == 0 ||
-	    out->height == 0 || out->width > BC_RENDER_MAX_DIM ||
-	    out->height > BC_RENDER_MAX_DIM) {
-		return bc_errinfo_set(ei, BC_EINVAL, "render: bad frame");
-	}
-	if (!r->tree) {
-		return bc_errinfo_set(ei, BC_ESTATE,
-				      "render: no tree synced yet");
-	}
-	if ((rc = bc_camera_validate(cam, ei))) {
-		return rc;
-	}
 	if (!r->tiled && !(r->tiled = bc_calloc(1, sizeof(*r->tiled)))) {
 		return bc_errinfo_set(ei, BC_ENOMEM, "render: out of memory");
 	}
 	b = r->tiled;
-	lin = bc_tree_lin(r->tree);
-	bc__frame_setup(&fc, lin, cam, out, r->opts.debug);
+	lin = bc_tree_lin(base->tree);
+	bc__frame_setup(&fc, lin, cam, out, base->opts.debug);
 	tf.fc = &fc;
+	tf.region = region;
 	tf.b = b;
 	tf.tw = (out->width + BC_CPU_TILE - 1) / BC_CPU_TILE;
 	tf.th = (out->height + BC_CPU_TILE - 1) / BC_CPU_TILE;
@@ -871,8 +721,19 @@ static int tiled_render(struct bc_renderer *r, const struct bc_camera *cam,
 	atomic_init(&tf.next, 0u);
 	atomic_init(&tf.tiles_done, 0u);
 	atomic_init(&tf.skipped, 0u);
-	tf.deadline = r->opts.budget_ms ? t_start + r->opts.budget_ms : 0.0;
-	bc__parallel(r->threads, phase_rays, &tf);
+	atomic_init(&tf.tiles_asked, 0u);
+	atomic_init(&tf.rays, 0u);
+	tf.deadline = base->opts.budget_ms ? t_start + base->opts.budget_ms
+					 : 0.0;
+	/* Directions and cones depend on the view only: a region drawn into
+	 * the same view (damage, refinement) reuses them. */
+	if (b->rays_w != out->width || b->rays_h != out->height ||
+	    memcmp(&b->rays_cam, cam, sizeof(*cam)) != 0) {
+		bc_pool_run(r->threads, phase_rays, &tf);
+		b->rays_cam = *cam;
+		b->rays_w = out->width;
+		b->rays_h = out->height;
+	}
 	if (tf.nprims > 0) {
 		if (grow_pair((void **)&b->rects, (void **)&b->cand_off,
 			      &b->prims_cap, (size_t)tf.nprims + 1,
@@ -880,7 +741,7 @@ static int tiled_render(struct bc_renderer *r, const struct bc_camera *cam,
 			goto nomem;
 		}
 		atomic_store(&tf.next, 0u);
-		bc__parallel(r->threads, phase_rects, &tf);
+		bc_pool_run(r->threads, phase_rects, &tf);
 		b->cand_off[0] = 0;
 		for (uint32_t k = 0; k < tf.nprims; k++) {
 			const struct rect *rc_ = &b->rects[k];
@@ -903,7 +764,7 @@ static int tiled_render(struct bc_renderer *r, const struct bc_camera *cam,
 			goto nomem;
 		}
 		atomic_store(&tf.next, 0u);
-		bc__parallel(r->threads, phase_intervals, &tf);
+		bc_pool_run(r->threads, phase_intervals, &tf);
 		if (grow((void **)&b->frags, &b->frags_cap,
 			 (size_t)(tf.ncand ? tf.ncand : 1), sizeof(*b->frags))) {
 			goto nomem;
@@ -915,10 +776,10 @@ static int tiled_render(struct bc_renderer *r, const struct bc_camera *cam,
 	if ((rc = prepare_workers(r, lin, longest))) {
 		goto nomem;
 	}
-	t_ab = bc__now_ms();
+	t_ab = bc_render_now_ms();
 	bc__progress_init(&tf.progress, r, tf.ntiles);
 	atomic_store(&tf.next, 0u);
-	bc__parallel(r->threads, phase_trace, &tf);
+	bc_pool_run(r->threads, phase_trace, &tf);
 	for (uint32_t i = 0; i < r->threads; i++) {
 		overflows += b->workers[i].overflows;
 	}
@@ -927,13 +788,15 @@ static int tiled_render(struct bc_renderer *r, const struct bc_camera *cam,
 		       "render: %u depth ranges went over M_overlap=%u", overflows,
 		       BC_CPU_M_OVERLAP);
 	}
-	if (stats) {
-		double now = bc__now_ms();
+	{
+		double now = bc_render_now_ms();
 		stats->ms_abuffer = t_ab - t_start;
 		stats->ms_trace = now - t_ab;
 		stats->ms_total = now - t_start;
 		stats->max_overlap = longest;
 		stats->incomplete = atomic_load(&tf.skipped) > 0;
+		stats->tiles = atomic_load(&tf.tiles_asked);
+		stats->rays = atomic_load(&tf.rays);
 		for (uint32_t i = 0; i < r->threads; i++) {
 			stats->field_evals += b->workers[i].evals;
 		}
@@ -944,10 +807,36 @@ nomem:
 			      "%ux%u frame", out->width, out->height);
 }
 
+/* The tiles whose lists can hold a primitive of world ABV abv: the same
+ * widening and projection the A-buffer applies (phase_rects), so a tile
+ * left unmarked never lists it, and its pixels cannot change with it. */
+static void tiled_damage(struct bc_renderer *base, const struct bc_camera *cam,
+			 uint32_t width, uint32_t height,
+			 const struct bc_abv *abv, uint8_t *tiles)
+{
+	struct bc_frame dims = {.width = width, .height = height};
+	struct bc__frame_ctx fc;
+	struct tiled_frame tf = {0};
+	struct bc_abv wide;
+	struct rect rc;
+	float lo[3], hi[3];
+	bc__frame_setup(&fc, base->tree ? bc_tree_lin(base->tree) : NULL, cam,
+			&dims, base->opts.debug);
+	tf.fc = &fc;
+	tf.tw = bc_render_tiles_x(width);
+	tf.th = bc_render_tiles_y(height);
+	widened_abv(&fc, abv, &wide, lo, hi);
+	rc = project_box(&tf, lo, hi);
+	for (uint32_t ty = rc.y0; ty < rc.y1; ty++) {
+		memset(tiles + (size_t)ty * tf.tw + rc.x0, 1, rc.x1 - rc.x0);
+	}
+}
+
 const struct bc_backend_ops bc_backend_tiled_ops = {
 	.name = "tiled",
 	.create = tiled_create,
 	.destroy = bc__cpu_destroy,
-	.sync = bc__cpu_sync,
 	.render = tiled_render,
+	.key = bc__cpu_key,
+	.damage = tiled_damage,
 };

@@ -16,16 +16,16 @@
 #include "svo_impl.h"
 
 #include <math.h>
-#include <pthread.h>
 #include <stdatomic.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/render_backend.h"
+#include "blobcast/render_common.h"
 #include "blobcast/shade.h"
 
 /* Worker threads at most, whatever opts.threads asks. */
-#define SVO_MAX_THREADS 64u
+#define SVO_MAX_THREADS BC_POOL_MAX_THREADS
 /* Tile edge in pixels: rays of a tile share leaves, so handing out tiles
  * rather than rows keeps a thread's octree walk in cache. */
 #define SVO_TILE 8u
@@ -36,8 +36,8 @@
 #define SVO_DEBUG_EVALS_MAX 256.0f
 #define SVO_DEBUG_TERMS_MAX 64.0f
 
-struct bc_renderer {
-	struct bc_render_opts opts;
+struct svo_renderer {
+	struct bc_renderer base; /* the front's part, first */
 	uint32_t threads;
 	bool synced, empty;
 	struct bc_svo_rpn rpn;
@@ -45,11 +45,15 @@ struct bc_renderer {
 	float band; /* band the octree was built with */
 };
 
+static struct svo_renderer *svo_of(struct bc_renderer *base)
+{
+	return (struct svo_renderer *)base; /* base is the first member */
+}
+
 static int svo_create(struct bc_renderer **out,
                       const struct bc_render_opts *opts, struct bc_errinfo *ei)
 {
-	struct bc_renderer *r;
-	long ncpu;
+	struct svo_renderer *r;
 	*out = NULL;
 	if ((int)opts->svo_range < BC_RANGE_DEFAULT ||
 	    opts->svo_range >= BC_RANGE_COUNT) {
@@ -70,20 +74,17 @@ static int svo_create(struct bc_renderer **out,
 	if (!r) {
 		return bc_errinfo_set(ei, BC_ENOMEM, "svo: out of memory");
 	}
-	r->opts = *opts;
-	r->opts.gl_platform = NULL; /* not ours to keep */
-	ncpu = sysconf(_SC_NPROCESSORS_ONLN);
-	r->threads =
-	    opts->threads ? opts->threads : (ncpu > 0 ? (uint32_t)ncpu : 1u);
+	r->threads = opts->threads ? opts->threads : bc_pool_default_threads();
 	if (r->threads > SVO_MAX_THREADS) {
 		r->threads = SVO_MAX_THREADS;
 	}
-	*out = r;
+	*out = &r->base;
 	return 0;
 }
 
-static void svo_destroy(struct bc_renderer *r)
+static void svo_destroy(struct bc_renderer *base)
 {
+	struct svo_renderer *r = svo_of(base);
 	if (!r) {
 		return;
 	}
@@ -99,9 +100,10 @@ static bool unchanged(const struct bc_dirty *d)
 	       d->edits == 0;
 }
 
-static int svo_sync(struct bc_renderer *r, const struct bc_tree *t,
+static int svo_sync(struct bc_renderer *base, const struct bc_tree *t,
                     const struct bc_dirty *dirty, struct bc_errinfo *ei)
 {
+	struct svo_renderer *r = svo_of(base);
 	const struct bc_lin *l;
 	int rc;
 	if (r->synced && unchanged(dirty)) {
@@ -126,8 +128,9 @@ static int svo_sync(struct bc_renderer *r, const struct bc_tree *t,
  */
 
 struct frame {
-	struct bc_renderer *r;
+	struct svo_renderer *r;
 	struct bc_frame *out;
+	const struct bc_render_region *region;
 	struct bc_view_rays vr;
 	struct bc_svo_cast_params cp;
 	struct bc_shade shade;
@@ -135,7 +138,8 @@ struct frame {
 	double start, budget_ms; /* budget 0: none */
 	atomic_bool late;        /* the budget ran out: tiles left blank */
 	atomic_uint next;
-	atomic_uint_fast64_t evals;
+	atomic_uint_fast64_t evals, rays;
+	atomic_uint tiles;
 	atomic_int err;
 };
 
@@ -147,7 +151,7 @@ static inline float dot3(const float a[3], const float b[3])
 static void debug_px(const struct frame *fr, uint32_t evals, uint32_t terms,
                      uint8_t px[4])
 {
-	if (fr->r->opts.debug == BC_DEBUG_EVALS) {
+	if (fr->r->base.opts.debug == BC_DEBUG_EVALS) {
 		bc_shade_ramp((float)evals / SVO_DEBUG_EVALS_MAX, px);
 	} else {
 		bc_shade_ramp((float)terms / SVO_DEBUG_TERMS_MAX, px);
@@ -160,7 +164,7 @@ static void put_miss(const struct frame *fr, uint32_t x, uint32_t y,
 	struct bc_frame *out = fr->out;
 	size_t i = (size_t)y * out->width + x;
 	uint8_t *px = out->rgba + 4 * i;
-	if (fr->r->opts.debug != BC_DEBUG_NONE) {
+	if (fr->r->base.opts.debug != BC_DEBUG_NONE) {
 		debug_px(fr, evals, 0, px);
 	} else {
 		bc_shade_miss(y, out->height, px);
@@ -198,7 +202,7 @@ static void put_hit(const struct frame *fr, uint32_t x, uint32_t y,
 			n[c] += tet[k][c] * v;
 		}
 	}
-	if (fr->r->opts.debug != BC_DEBUG_NONE) {
+	if (fr->r->base.opts.debug != BC_DEBUG_NONE) {
 		debug_px(fr, hit->evals + hit->range_evals + 4u,
 		         hit->leaf_terms, px);
 	} else {
@@ -217,24 +221,30 @@ static void put_hit(const struct frame *fr, uint32_t x, uint32_t y,
 	}
 }
 
-static void *worker(void *arg)
+static void worker(void *arg, uint32_t thread)
 {
 	struct frame *fr = arg;
+	const struct bc_render_region *rg = fr->region;
 	struct bc_svo_caster *c = NULL;
 	struct bc_frame *out = fr->out;
-	uint64_t evals = 0;
+	uint64_t evals = 0, rays = 0;
 	int rc = fr->r->svo ? bc_svo_caster_create(&c, fr->r->svo) : 0;
 	if (rc) {
 		/* The other threads take this one's share. */
 		atomic_store(&fr->err, rc);
-		return NULL;
+		return;
 	}
+	(void)thread;
 	for (;;) {
 		uint32_t tile = atomic_fetch_add(&fr->next, 1u);
 		uint32_t x0, y0;
 		if (tile >= fr->ntiles) {
 			break;
 		}
+		if (rg->tiles && !rg->tiles[tile]) {
+			continue;
+		}
+		atomic_fetch_add(&fr->tiles, 1u);
 		x0 = (tile % fr->tiles_x) * SVO_TILE;
 		y0 = (tile / fr->tiles_x) * SVO_TILE;
 		if (fr->budget_ms > 0.0 &&
@@ -247,7 +257,10 @@ static void *worker(void *arg)
 			     y < y0 + SVO_TILE && y < out->height; y++) {
 				for (uint32_t x = x0;
 				     x < x0 + SVO_TILE && x < out->width; x++) {
-					put_miss(fr, x, y, 0);
+					if (bc_render_level_has(x, y, rg->level,
+					                        rg->refine)) {
+						put_miss(fr, x, y, 0);
+					}
 				}
 			}
 			continue;
@@ -258,6 +271,11 @@ static void *worker(void *arg)
 			     x < x0 + SVO_TILE && x < out->width; x++) {
 				float d[3];
 				struct bc_svo_hit hit;
+				if (!bc_render_level_has(x, y, rg->level,
+				                         rg->refine)) {
+					continue;
+				}
+				rays++;
 				bc_view_rays_dir(&fr->vr, (float)x + 0.5f,
 				                 (float)y + 0.5f, d);
 				if (c && bc_svo_cast(c, fr->vr.eye, d, 0.0f,
@@ -275,8 +293,8 @@ static void *worker(void *arg)
 		}
 	}
 	atomic_fetch_add(&fr->evals, evals);
+	atomic_fetch_add(&fr->rays, rays);
 	bc_svo_caster_destroy(c);
-	return NULL;
 }
 
 /* Hit thickness the frame needs: the band at the farthest corner of the
@@ -296,34 +314,25 @@ static float frame_band(const struct bc_svo_rpn *rpn, const float eye[3],
 	return bc_svo_hit_band(cp, far);
 }
 
-static int svo_render(struct bc_renderer *r, const struct bc_camera *cam,
-                      struct bc_frame *out, struct bc_render_stats *stats,
-                      struct bc_errinfo *ei)
+static int svo_render(struct bc_renderer *base, const struct bc_camera *cam,
+                      struct bc_frame *out,
+                      const struct bc_render_region *region,
+                      struct bc_render_stats *stats, struct bc_errinfo *ei)
 {
+	struct svo_renderer *r = svo_of(base);
 	struct frame fr;
-	pthread_t tids[SVO_MAX_THREADS];
-	uint32_t started = 0;
 	double t0 = bc__svo_now_ms(), t1;
 	float size;
 	int rc;
-	if (stats) {
-		memset(stats, 0, sizeof(*stats));
-	}
 	if (!r->synced) {
 		return bc_errinfo_set(ei, BC_ESTATE, "svo: render before sync");
-	}
-	if ((rc = bc_camera_validate(cam, ei))) {
-		return rc;
-	}
-	if (!out || !out->rgba || out->width == 0 || out->height == 0 ||
-	    out->width > BC_RENDER_MAX_DIM || out->height > BC_RENDER_MAX_DIM) {
-		return bc_errinfo_set(ei, BC_EINVAL, "svo: bad frame");
 	}
 	memset(&fr, 0, sizeof(fr));
 	fr.r = r;
 	fr.out = out;
+	fr.region = region;
 	fr.start = t0;
-	fr.budget_ms = (double)r->opts.budget_ms;
+	fr.budget_ms = (double)base->opts.budget_ms;
 	bc_view_rays_init(&fr.vr, cam, out->width, out->height);
 	size = !r->empty && r->rpn.size > 0.0f && isfinite(r->rpn.size)
 	           ? r->rpn.size
@@ -336,9 +345,9 @@ static int svo_render(struct bc_renderer *r, const struct bc_camera *cam,
 		float need = frame_band(&r->rpn, fr.vr.eye, &fr.cp);
 		if (!r->svo || need > r->band) {
 			struct bc_svo_opts so = {
-			    .arith = r->opts.svo_range,
-			    .threshold = r->opts.svo_threshold,
-			    .max_depth = r->opts.svo_max_depth,
+			    .arith = base->opts.svo_range,
+			    .threshold = base->opts.svo_threshold,
+			    .max_depth = base->opts.svo_max_depth,
 			    .band = need * SVO_BAND_SLACK,
 			};
 			bc_svo_destroy(r->svo);
@@ -356,28 +365,23 @@ static int svo_render(struct bc_renderer *r, const struct bc_camera *cam,
 	atomic_init(&fr.evals, 0u);
 	atomic_init(&fr.err, 0);
 	atomic_init(&fr.late, false);
-	for (uint32_t i = 1; i < r->threads; i++) {
-		if (pthread_create(&tids[started], NULL, worker, &fr) != 0) {
-			break; /* fewer threads: slower, not wrong */
-		}
-		started++;
-	}
-	worker(&fr);
-	for (uint32_t i = 0; i < started; i++) {
-		pthread_join(tids[i], NULL);
-	}
+	atomic_init(&fr.rays, 0u);
+	atomic_init(&fr.tiles, 0u);
+	bc_pool_run(r->threads, worker, &fr);
 	if (atomic_load(&fr.next) < fr.ntiles) {
 		/* Every thread failed to get its scratch memory. */
 		rc = atomic_load(&fr.err);
 		return bc_errinfo_set(ei, rc ? rc : BC_ENOMEM,
 		                      "svo: no memory for the casters");
 	}
-	if (stats) {
+	{
 		double t2 = bc__svo_now_ms();
 		stats->ms_total = t2 - t0;
 		stats->ms_abuffer = t1 - t0;
 		stats->ms_trace = t2 - t1;
 		stats->field_evals = atomic_load(&fr.evals);
+		stats->rays = atomic_load(&fr.rays);
+		stats->tiles = atomic_load(&fr.tiles);
 		stats->incomplete = atomic_load(&fr.late);
 	}
 	return 0;
@@ -389,4 +393,6 @@ const struct bc_backend_ops bc_backend_svo_ops = {
     .destroy = svo_destroy,
     .sync = svo_sync,
     .render = svo_render,
+    /* No key and no damage hook: any edit rebuilds the octree, whose
+     * cells (and so every pixel) depend on all primitives. */
 };

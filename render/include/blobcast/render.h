@@ -18,13 +18,26 @@
  * matches the largest texture GL drivers guarantee. */
 #define BC_RENDER_MAX_DIM 8192u
 
+/* Tile edge in pixels (paper §6: 8x8 rays share one workgroup and one
+ * A-buffer list). Every backend renders in these tiles, so regions, damage
+ * and refinement levels are counted in them. */
+#define BC_RENDER_TILE 8u
+/* Coarsest refinement level: one ray per 2^3 x 2^3 = 8x8 block, the tile. */
+#define BC_RENDER_MAX_LEVEL 3u
+
 /* Row 0 is the top row. Any of the three planes may be NULL when the caller
- * does not want it (rgba is always allocated by bc_frame_init). */
+ * does not want it (rgba is always allocated by bc_frame_init). `key` names
+ * the conditions the planes were rendered under (camera, size, debug mode,
+ * scene structure, the backend's frame constants): a render of a region
+ * into a frame whose key no longer matches renders the whole frame instead
+ * (stats.whole), so a caller can never assemble pixels of two different
+ * renderings. 0: nothing rendered yet. */
 struct bc_frame {
 	uint32_t width, height;
 	uint8_t *rgba;   /* width * height * 4 */
 	float *depth;    /* width * height */
 	uint32_t *ids;   /* width * height */
+	uint64_t key;
 };
 
 /* Allocates all three planes. Returns 0, BC_ERANGE (size 0 or over
@@ -56,6 +69,13 @@ enum bc_range_arith {
 	BC_RANGE_COUNT
 };
 
+/* Vector instructions of the CPU tracers. */
+enum bc_simd {
+	BC_SIMD_AUTO = 0, /* the widest the CPU has (AVX-512, AVX2), else off */
+	BC_SIMD_OFF,      /* the portable scalar path */
+	BC_SIMD_COUNT
+};
+
 /* Zero means default for every field. */
 struct bc_render_opts {
 	enum bc_debug_mode debug;
@@ -68,6 +88,7 @@ struct bc_render_opts {
 	 * tracer starts no new tile: the rest is background and the stats
 	 * say incomplete (one pathological scene cannot stall a server). */
 	uint32_t budget_ms;
+	enum bc_simd simd;
 };
 
 /* Timings of one frame, milliseconds, and work counters. */
@@ -77,32 +98,104 @@ struct bc_render_stats {
 	double ms_trace;
 	double ms_upload;  /* gl: data sent to the GPU for this frame */
 	uint64_t field_evals;
+	uint64_t rays;        /* pixels traced by this call */
 	uint32_t max_overlap; /* most primitives listed in one tile */
+	uint32_t tiles;       /* tiles rendered by this call */
 	bool incomplete;      /* cut short by a time budget */
+	bool whole;           /* a region was asked, the whole frame drawn */
+};
+
+/*
+ * Which pixels a render call draws. Tiles are BC_RENDER_TILE squares in
+ * row-major order, ceil(width / 8) x ceil(height / 8) of them.
+ *
+ * Refinement levels nest: level n traces the pixels (x, y) whose x and y
+ * are both multiples of 2^n (one ray per 2^n x 2^n block, at the block's
+ * top-left pixel); a level-n `refine` call traces only those of them that
+ * level n + 1 did not (three of every four), so a frame refined from level
+ * 3 down to 0 traces every pixel exactly once. Each pixel's value does not
+ * depend on the level it was traced at: a frame refined to level 0 is the
+ * same, bit for bit, as a whole render.
+ */
+struct bc_render_region {
+	const uint8_t *tiles; /* non-zero byte: draw the tile; NULL: all */
+	uint32_t level;       /* 0..BC_RENDER_MAX_LEVEL */
+	bool refine;          /* skip the pixels level + 1 traced */
 };
 
 struct bc_renderer;
 
-/* A backend's entry points. sync() tells it the tree and what changed since
- * its previous sync (dirty == NULL: everything); render() draws the tree it
- * last synced. */
-struct bc_backend_ops {
-	const char *name;
-	int (*create)(struct bc_renderer **out, const struct bc_render_opts *opts,
-		      struct bc_errinfo *ei);
-	void (*destroy)(struct bc_renderer *r);
-	int (*sync)(struct bc_renderer *r, const struct bc_tree *t,
-		    const struct bc_dirty *dirty, struct bc_errinfo *ei);
-	int (*render)(struct bc_renderer *r, const struct bc_camera *cam,
-		      struct bc_frame *out, struct bc_render_stats *stats,
-		      struct bc_errinfo *ei);
-};
-
-/* Returns the ops of backend b, or NULL when it is not built in. */
-const struct bc_backend_ops *bc_backend_get(enum bc_backend b);
 /* "naive", "tiled", "gl", "svo" <-> enum; BC_BACKEND_INVALID if unknown. */
 enum bc_backend bc_backend_from_name(const char *name);
 const char *bc_backend_name(enum bc_backend b);
+/* Whether backend b is built in. */
+bool bc_backend_available(enum bc_backend b);
+
+/* Creates a renderer of backend b (opts may be NULL: defaults). Returns 0,
+ * BC_ENOTSUP when b is not built in, or the backend's error; *out is NULL
+ * on failure. bc_renderer_destroy accepts NULL. */
+int bc_renderer_create(struct bc_renderer **out, enum bc_backend b,
+		       const struct bc_render_opts *opts,
+		       struct bc_errinfo *ei);
+void bc_renderer_destroy(struct bc_renderer *r);
+enum bc_backend bc_renderer_backend(const struct bc_renderer *r);
+
+/* Tells r the tree to draw and what changed since the previous sync
+ * (dirty == NULL or dirty->structure: everything, and every frame's key
+ * changes). The tree must outlive its use by r. */
+int bc_renderer_sync(struct bc_renderer *r, const struct bc_tree *t,
+		     const struct bc_dirty *dirty, struct bc_errinfo *ei);
+
+/* Draws the whole frame (every pixel) of the last synced tree. Returns 0,
+ * BC_EINVAL (bad frame), BC_ERANGE (bad camera), BC_ESTATE (nothing synced)
+ * or the backend's error. */
+int bc_renderer_render(struct bc_renderer *r, const struct bc_camera *cam,
+		       struct bc_frame *out, struct bc_render_stats *stats,
+		       struct bc_errinfo *ei);
+
+/* Draws only region's pixels into out, leaving the others as they are.
+ * When out->key differs from this rendering's, draws every tile at the
+ * region's level without `refine` instead and sets stats->whole. */
+int bc_renderer_render_region(struct bc_renderer *r,
+			      const struct bc_camera *cam,
+			      struct bc_frame *out,
+			      const struct bc_render_region *region,
+			      struct bc_render_stats *stats,
+			      struct bc_errinfo *ei);
+
+/* Marks (sets to 1) in tiles, ceil(width / 8) x ceil(height / 8) bytes,
+ * every tile of a width x height frame through cam whose pixels can depend
+ * on a primitive with world ABV abv, margins of the backend's own tile
+ * lists included. A parameter edit that changes only primitives' ABVs and
+ * data changes a frame only in the tiles marked for their ABVs before and
+ * after the edit. Backends whose pixels see every primitive (naive and
+ * svo: a sphere tracing step or an octree cell depends on all of them)
+ * mark every tile. */
+void bc_renderer_damage(struct bc_renderer *r, const struct bc_camera *cam,
+			uint32_t width, uint32_t height,
+			const struct bc_abv *abv, uint8_t *tiles);
+
+/* Tiles across and down a width x height frame. */
+static inline uint32_t bc_render_tiles_x(uint32_t width)
+{
+	return (width + BC_RENDER_TILE - 1) / BC_RENDER_TILE;
+}
+static inline uint32_t bc_render_tiles_y(uint32_t height)
+{
+	return (height + BC_RENDER_TILE - 1) / BC_RENDER_TILE;
+}
+
+/* Whether pixel (x, y) is traced by a call at `level` (with `refine`). */
+static inline bool bc_render_level_has(uint32_t x, uint32_t y,
+				       uint32_t level, bool refine)
+{
+	uint32_t m = (1u << level) - 1u, m2 = (2u << level) - 1u;
+	if ((x & m) || (y & m)) {
+		return false;
+	}
+	return !(refine && level < BC_RENDER_MAX_LEVEL && !(x & m2) &&
+		 !(y & m2));
+}
 
 /* Convenience: create, sync, render once, destroy. */
 int bc_render_once(enum bc_backend b, const struct bc_render_opts *opts,

@@ -1,0 +1,43 @@
+/*
+ * What the CPU backends share besides shading (blobcast/shade.h): one
+ * process-wide pool of worker threads, the clock frames are timed with,
+ * and the scene scale that frame constants derive from. Only the render
+ * modules include this.
+ */
+#ifndef BLOBCAST_RENDER_COMMON_H
+#define BLOBCAST_RENDER_COMMON_H
+
+#include <stdint.h>
+
+#include "blobcast/blobtree.h"
+
+/* Worker threads at most, whatever a renderer's opts.threads asks. */
+#define BC_POOL_MAX_THREADS 64u
+
+/* One share of a parallel run: fn(ctx, thread) for thread in [0, n). */
+typedef void (*bc_pool_fn)(void *ctx, uint32_t thread);
+
+/* Runs fn(ctx, i) for i in [0, n) concurrently and returns when all are
+ * done; i = 0 runs on the calling thread, the others on the pool's
+ * workers, which are started once and kept. Work is handed out by the
+ * functions themselves (atomic counters), so a worker that cannot be
+ * started only costs speed: its share runs on the calling thread. Runs
+ * from several threads at once are serialized. n is clamped to
+ * [1, BC_POOL_MAX_THREADS]. */
+void bc_pool_run(uint32_t n, bc_pool_fn fn, void *ctx);
+
+/* The threads a renderer uses for opts.threads == 0: one per online
+ * core, at least 1, at most BC_POOL_MAX_THREADS. */
+uint32_t bc_pool_default_threads(void);
+
+/* Milliseconds on a monotonic clock. */
+double bc_render_now_ms(void);
+
+/* The scene scale that frame constants (minimal steps, tolerances) derive
+ * from: the scene's AABB diagonal rounded up to a power of two, so that
+ * parameter edits that move the scene's bounds a little keep every pixel's
+ * computation as it was (damage renders stay exact); 1 for an empty or
+ * degenerate tree. */
+float bc_render_scale(const struct bc_lin *lin);
+
+#endif

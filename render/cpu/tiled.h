@@ -1,0 +1,49 @@
+/*
+ * Between the tiled backend's A-buffer (tiled.c) and its tile tracer
+ * (tile_trace.c): one tile's depth-sorted list of primitive fragments, the
+ * per-thread scratch of the tracer, and the call that walks a tile's depth
+ * ranges and traces the pixels asked of it.
+ */
+#ifndef BLOBCAST_RENDER_CPU_TILED_H
+#define BLOBCAST_RENDER_CPU_TILED_H
+
+#include <stdint.h>
+
+#include "cpu.h"
+
+/* A primitive's depth interval over a tile's rays: min entry, max exit. */
+struct bc__frag {
+	float t0, t1;
+	uint32_t prim;
+};
+
+/* One thread's scratch, reserved before a frame so tracing never
+ * allocates. */
+struct bc__tile_worker {
+	struct bc_view view;
+	uint32_t *act;  /* active primitive indices, increasing */
+	float *act_t1;  /* their exits */
+	uint32_t cap;   /* room in act and act_t1 */
+	uint64_t evals;
+	uint32_t overflows;
+};
+
+/* One tile's work. */
+struct bc__tile_job {
+	const struct bc__frame_ctx *fc;
+	const float *dirs;      /* unit ray directions, 3 per frame pixel */
+	struct bc__frag *list;  /* the tile's fragments (sorted in place) */
+	uint32_t n;
+	uint32_t x0, y0, x1, y1; /* the tile's pixels [x0, x1) x [y0, y1) */
+	/* Pixels to trace: bit (y - y0) * 8 + (x - x0). Others are left as
+	 * they are. Which pixels are traced does not change any pixel's
+	 * value: the depth ranges follow from the list alone. */
+	uint64_t mask;
+};
+
+/* Walks the tile's depth ranges (paper §6.2, eq. 21-22) and sphere traces
+ * its masked pixels in each range's pruned view; writes their colour,
+ * depth and id. */
+void bc__trace_tile(struct bc__tile_worker *wk, const struct bc__tile_job *job);
+
+#endif

@@ -1,0 +1,60 @@
+/*
+ * What a backend implements behind blobcast/render.h: the renderer base
+ * struct that every backend embeds as its first member, and its entry
+ * points. Only the render modules include this; everyone else goes through
+ * the front functions (render/render.c), which validate a frame, a camera
+ * and a region once, so backends need not.
+ */
+#ifndef BLOBCAST_RENDER_BACKEND_H
+#define BLOBCAST_RENDER_BACKEND_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "blobcast/render.h"
+
+struct bc_backend_ops;
+
+/* The part of every renderer the front owns. Backends embed it first:
+ * `struct bc__cpu { struct bc_renderer base; ... }`. */
+struct bc_renderer {
+	const struct bc_backend_ops *ops;
+	enum bc_backend backend;
+	struct bc_render_opts opts; /* gl_platform is not kept (NULL) */
+	const struct bc_tree *tree; /* last synced, NULL before */
+	/* Counts syncs that changed the tree's structure: part of every
+	 * frame's key, so no region is drawn over a frame of another
+	 * structure. */
+	uint64_t generation;
+};
+
+struct bc_backend_ops {
+	const char *name;
+	/* Allocates the backend's renderer; the front fills the base after. */
+	int (*create)(struct bc_renderer **out,
+		      const struct bc_render_opts *opts, struct bc_errinfo *ei);
+	void (*destroy)(struct bc_renderer *r);
+	/* Optional (NULL: nothing to do beyond the base's tree). Called
+	 * after the front stored t in r->tree. */
+	int (*sync)(struct bc_renderer *r, const struct bc_tree *t,
+		    const struct bc_dirty *dirty, struct bc_errinfo *ei);
+	/* Draws region's pixels (region is never NULL; the front checked
+	 * the frame, the camera, the level, and that a tree is synced).
+	 * stats is never NULL and zeroed. */
+	int (*render)(struct bc_renderer *r, const struct bc_camera *cam,
+		      struct bc_frame *out,
+		      const struct bc_render_region *region,
+		      struct bc_render_stats *stats, struct bc_errinfo *ei);
+	/* Optional: a hash of the backend's own constants that shape every
+	 * pixel of the next frame (e.g. a step length derived from the
+	 * scene's size). NULL: none. */
+	uint64_t (*key)(struct bc_renderer *r, const struct bc_camera *cam,
+			uint32_t width, uint32_t height);
+	/* Optional: the tiles an ABV can reach (see bc_renderer_damage).
+	 * NULL: pixels depend on every primitive, the front marks all. */
+	void (*damage)(struct bc_renderer *r, const struct bc_camera *cam,
+		       uint32_t width, uint32_t height,
+		       const struct bc_abv *abv, uint8_t *tiles);
+};
+
+#endif
