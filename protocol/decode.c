@@ -547,10 +547,21 @@ static int dec_view(struct dec *d, struct bc_msg_view *v)
 	return 0;
 }
 
+/* VIEW's downscale names the coarsest block a client accepts; the coarsest
+ * level's block must be exactly the largest downscale. */
+_Static_assert((1u << BC_PROTO_MAX_LEVEL) == BC_PROTO_MAX_DOWNSCALE,
+               "the coarsest level is the largest downscale");
+
 static int dec_frame(struct dec *d, struct bc_msg_frame *f)
 {
 	bool snap = (d->m->flags & BC_PROTO_FLAG_SNAPSHOT) != 0;
 	bool full = snap || (d->m->flags & BC_PROTO_FLAG_STILL);
+	/* The header rule (bc__check_flags) keeps STILL and SNAPSHOT off
+	 * levels above 0, so full and level > 0 never meet. */
+	unsigned level = bc_proto_flags_level(d->m->flags);
+	/* A snapshot and a refinement frame are one rectangle that is the
+	 * whole image. */
+	bool whole = snap || level > 0;
 	TRY(rd_u32(d, "frame_no", &f->frame_no));
 	TRY(rd_u64(d, "order", &f->order));
 	TRY(rd_u32(d, "camera_seq", &f->camera_seq));
@@ -560,13 +571,17 @@ static int dec_frame(struct dec *d, struct bc_msg_frame *f)
 	}
 	TRY(rd_u16_range(d, "width", 1, BC_PROTO_MAX_DIM, &f->width));
 	TRY(rd_u16_range(d, "height", 1, BC_PROTO_MAX_DIM, &f->height));
-	TRY(rd_u16_range(d, "image_width", full ? f->width : 1, f->width,
+	/* Level n: one ray per 2^n block, so exactly the blocks that cover
+	 * the view; level 0: at most the view (the view itself when full). */
+	uint16_t iw = bc_proto_level_dim(f->width, level);
+	uint16_t ih = bc_proto_level_dim(f->height, level);
+	TRY(rd_u16_range(d, "image_width", full || level > 0 ? iw : 1, iw,
 	                 &f->image_width));
-	TRY(rd_u16_range(d, "image_height", full ? f->height : 1, f->height,
+	TRY(rd_u16_range(d, "image_height", full || level > 0 ? ih : 1, ih,
 	                 &f->image_height));
 	TRY(rd_u16(d, "rect_count", &f->nrects));
 	TRY(check_count(d, "rect_count", f->nrects, 1,
-	                snap ? 1u : BC_PROTO_MAX_RECTS, RECT_MIN));
+	                whole ? 1u : BC_PROTO_MAX_RECTS, RECT_MIN));
 	struct bc_proto_rect *out = NULL;
 	if (d->store) {
 		TRY(reserve(d, (void **)&d->store->rects, &d->store->rects_cap,
@@ -578,8 +593,9 @@ static int dec_frame(struct dec *d, struct bc_msg_frame *f)
 		TRY(rd_u16(d, "rect.x", &r.x));
 		TRY(rd_u16(d, "rect.y", &r.y));
 		TRY(rd_u16(d, "rect.w", &r.w));
-		/* A snapshot's one rectangle is the whole image. */
-		unsigned wmin = snap ? f->image_width : 1u;
+		/* A snapshot's or a refinement's one rectangle is the
+		 * whole image. */
+		unsigned wmin = whole ? f->image_width : 1u;
 		if (r.w < wmin || (unsigned)r.x + r.w > f->image_width) {
 			return fail(d, BC_ERANGE,
 			            "rect %u: x %u + w %u is outside 1..%u", i,
@@ -587,7 +603,7 @@ static int dec_frame(struct dec *d, struct bc_msg_frame *f)
 			            (unsigned)f->image_width);
 		}
 		TRY(rd_u16(d, "rect.h", &r.h));
-		unsigned hmin = snap ? f->image_height : 1u;
+		unsigned hmin = whole ? f->image_height : 1u;
 		if (r.h < hmin || (unsigned)r.y + r.h > f->image_height) {
 			return fail(d, BC_ERANGE,
 			            "rect %u: y %u + h %u is outside 1..%u", i,

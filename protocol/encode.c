@@ -305,11 +305,9 @@ int bc_proto_encode(struct bc_proto_buf *b, const struct bc_msg *m,
 		                      "encode: type %d is unknown",
 		                      (int)m->type);
 	}
-	if (m->flags & ~t->flags) {
-		return bc_errinfo_set(ei, BC_EPROTO_FLAGS,
-		                      "encode: %s does not define flags 0x%04x",
-		                      t->name,
-		                      (unsigned)(m->flags & ~t->flags));
+	int rc = bc__check_flags(t, m->flags, ei);
+	if (rc < 0) {
+		return rc;
 	}
 	struct bc__w measure = {.ei = ei};
 	w_body(&measure, m);
@@ -323,7 +321,7 @@ int bc_proto_encode(struct bc_proto_buf *b, const struct bc_msg *m,
 		                      "its maximum %u",
 		                      t->name, n, t->max_payload);
 	}
-	int rc = bc__buf_reserve(b, BC_PROTO_HEADER_SIZE + n);
+	rc = bc__buf_reserve(b, BC_PROTO_HEADER_SIZE + n);
 	if (rc < 0) {
 		return bc_errinfo_set(ei, rc,
 		                      "encode: %s of %zu bytes does not fit "

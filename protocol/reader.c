@@ -177,10 +177,10 @@ static int check_header(struct bc_proto_reader *r, const uint8_t *h,
 		return 0;
 	}
 	uint16_t flags = (uint16_t)(h[6] | (uint16_t)(h[7] << 8));
-	if (flags & ~t->flags) {
-		return set_err(r, BC_EPROTO_FLAGS,
-		               "%s with undefined flags 0x%04x", t->name,
-		               (unsigned)(flags & ~t->flags));
+	struct bc_errinfo ei = {0};
+	int rc = bc__check_flags(t, flags, &ei);
+	if (rc < 0) {
+		return set_err(r, rc, "%s", ei.msg);
 	}
 	if (avail < 12) {
 		return 0;
@@ -266,10 +266,9 @@ int bc_proto_decode_payload(struct bc_proto_reader *r, enum bc_msg_type type,
 		return bc_errinfo_set(ei, BC_EPROTO_TYPE,
 		                      "message type %d is unknown", (int)type);
 	}
-	if (flags & ~t->flags) {
-		return bc_errinfo_set(ei, BC_EPROTO_FLAGS,
-		                      "%s with undefined flags 0x%04x", t->name,
-		                      (unsigned)(flags & ~t->flags));
+	int rc = bc__check_flags(t, flags, ei);
+	if (rc < 0) {
+		return rc;
 	}
 	if (len > t->max_payload) {
 		return bc_errinfo_set(ei, BC_EPROTO_LENGTH,
@@ -280,7 +279,7 @@ int bc_proto_decode_payload(struct bc_proto_reader *r, enum bc_msg_type type,
 	out->type = type;
 	out->flags = flags;
 	out->seq = seq;
-	int rc = bc__decode_payload(&r->store, out, payload, len, ei);
+	rc = bc__decode_payload(&r->store, out, payload, len, ei);
 	if (rc < 0) {
 		memset(out, 0, sizeof(*out));
 	}

@@ -47,7 +47,7 @@ static const struct bc__type_info types[BC_MSG_COUNT] = {
     [BC_MSG_VIEW] = {"VIEW", BC__FROM_CLIENT, 0, 8},
     [BC_MSG_FRAME] = {"FRAME", BC__FROM_SERVER,
                       BC_PROTO_FLAG_STILL | BC_PROTO_FLAG_SNAPSHOT |
-                              BC_PROTO_FLAG_INCOMPLETE,
+                          BC_PROTO_FLAG_INCOMPLETE | BC_PROTO_FLAG_LEVEL_MASK,
                       BULK},
     [BC_MSG_PICK] = {"PICK", BC__FROM_CLIENT, 0, 4},
     [BC_MSG_PICK_RESULT] = {"PICK_RESULT", BC__FROM_SERVER, 0, 24},
@@ -62,6 +62,28 @@ const struct bc__type_info *bc__type_info(unsigned type)
 		return NULL;
 	}
 	return &types[type];
+}
+
+int bc__check_flags(const struct bc__type_info *t, uint16_t flags,
+                    struct bc_errinfo *ei)
+{
+	if (flags & ~t->flags) {
+		return bc_errinfo_set(ei, BC_EPROTO_FLAGS,
+		                      "%s with undefined flags 0x%04x", t->name,
+		                      (unsigned)(flags & ~t->flags));
+	}
+	/* A refinement frame is never the final picture: STILL and SNAPSHOT
+	 * name full-size images only. Only FRAME defines the level bits, so
+	 * the test needs no look at the type. */
+	unsigned level = bc_proto_flags_level(flags);
+	if (level > 0 &&
+	    (flags & (BC_PROTO_FLAG_STILL | BC_PROTO_FLAG_SNAPSHOT))) {
+		return bc_errinfo_set(
+		    ei, BC_EPROTO_FLAGS, "%s at level %u with %s", t->name,
+		    level,
+		    (flags & BC_PROTO_FLAG_SNAPSHOT) ? "SNAPSHOT" : "STILL");
+	}
+	return 0;
 }
 
 const char *bc_proto_type_name(enum bc_msg_type type)

@@ -181,6 +181,12 @@ struct bc__type_info {
 /* Returns the row of type, or NULL when it is not a message type. */
 const struct bc__type_info *bc__type_info(unsigned type);
 
+/* The header flag rule (PROTOCOL.md 3.1 step 5) for t's row: bits the type
+ * does not define, and on FRAME a level above 0 with STILL or SNAPSHOT.
+ * Returns 0 or BC_EPROTO_FLAGS with the reason in ei. */
+int bc__check_flags(const struct bc__type_info *t, uint16_t flags,
+                    struct bc_errinfo *ei);
+
 /* Decodes a payload into *out (header fields already set by the caller).
  * store NULL: check only, arrays are not kept. Returns 0 or a code with the
  * reason in ei. */

@@ -33,6 +33,20 @@ MAX_NAME, MAX_TOKEN, MAX_ERROR_TEXT = 64, 1024, 1024
 MAX_MEMBERS, MAX_DIM, MAX_RECTS = 64, 8192, 4096
 MAX_EDIT_OPS, MAX_SET_FIELDS = 1024, 14
 MIN_FRAME_BYTES = 65536
+# FRAME header flags (section 2): STILL, SNAPSHOT, INCOMPLETE, and the
+# refinement level in bits 3..4.
+STILL, SNAPSHOT, INCOMPLETE = 1, 2, 4
+LEVEL_SHIFT = 3
+
+
+def level(n):
+    """The FRAME flags bits of refinement level n."""
+    return n << LEVEL_SHIFT
+
+
+def level_dim(dim, n):
+    """ceil(dim / 2^n): the image size of a level-n frame."""
+    return -(-dim // (1 << n))
 MAX_ABS = 1.0e6
 SCENE_MAX_DEPTH = 128  # nodes on a path from the root, the root counting 1
 
@@ -466,6 +480,8 @@ def gen_error():
     t.badp("code 0", u16(0) + sstr("x"), "ERANGE")
     t.badp("text of 1025 bytes", u16(1) + sstr("e" * 1025), "EPROTO_LENGTH")
     t.badp("undefined flag bit 1", p, "EPROTO_FLAGS", flags=2)
+    t.badp("FRAME's level bits (level 2)", p, "EPROTO_FLAGS",
+           flags=level(2))
     t.dump("error.json")
 
 
@@ -652,6 +668,8 @@ def gen_edit():
     t.common(p)
     edit_bad_cases(t, b"")
     t.badp("undefined flag bit 1", p, "EPROTO_FLAGS", flags=2)
+    t.badp("FRAME's level bits (level 3) with INTERACTING", p,
+           "EPROTO_FLAGS", flags=level(3) | 1)
     t.bad("refused by a client reader", frame("EDIT", p), "EPROTO_TYPE",
           reader=CLIENT)
     t.dump("edit.json")
@@ -706,6 +724,8 @@ def gen_camera():
     v[0] = 0x7fc00000
     t.badp("NaN eye.x in a short payload", cam(v)[:39],
            "ENONFINITE")
+    t.badp("FRAME's level bits (level 1)", p, "EPROTO_FLAGS",
+           flags=level(1))
     t.dump("camera.json")
 
 
@@ -730,6 +750,7 @@ def gen_view():
     t.badp("encoding 4", vw(encoding=4), "EENUM")
     t.badp("quality 0", vw(quality_interactive=0), "ERANGE")
     t.badp("quality 101", vw(quality_still=101), "ERANGE")
+    t.badp("downscale 0", vw(downscale=0), "ERANGE")
     t.badp("downscale 9", vw(downscale=9), "ERANGE")
     t.dump("view.json")
 
@@ -759,6 +780,31 @@ def gen_frame():
                               rects=[dict(x=0, y=0, w=3, h=1,
                                           data="89504e47")]),
          flags=2, seq=56)
+    # Refinement levels: one rectangle, image ceil(view / 2^n).
+    t.ok("level 1, 1280x720 as 640x360",
+         dict(base, frame_no=81, image_width=640, image_height=360),
+         flags=level(1), seq=0)
+    t.ok("level 1, odd 1281x721 as 641x361",
+         dict(base, frame_no=82, width=1281, height=721, image_width=641,
+              image_height=361,
+              rects=[dict(x=0, y=0, w=641, h=361, data=jpeg)]),
+         flags=level(1), seq=0)
+    t.ok("level 2, incomplete, raw 7x5 as 2x2",
+         dict(frame_no=83, order="6", camera_seq=9, encoding=3, width=7,
+              height=5, image_width=2, image_height=2,
+              rects=[dict(x=0, y=0, w=2, h=2, data=(
+                  "ff000080" "00ff00ff" "0000ffff" "ffffffff"))]),
+         flags=level(2) | INCOMPLETE, seq=0)
+    t.ok("level 3, 8192x8192 as 1024x1024 png",
+         dict(frame_no=84, order="7", camera_seq=10, encoding=2,
+              width=8192, height=8192, image_width=1024, image_height=1024,
+              rects=[dict(x=0, y=0, w=1024, h=1024, data="89504e47")]),
+         flags=level(3), seq=0)
+    t.ok("level 3, a 1x1 view as 1x1",
+         dict(frame_no=85, order="7", camera_seq=10, encoding=3, width=1,
+              height=1, image_width=1, image_height=1,
+              rects=[dict(x=0, y=0, w=1, h=1, data="01020304")]),
+         flags=level(3) | INCOMPLETE, seq=0)
     t.common(p)
 
     def fr(flags=0, rects=None, **kw):
@@ -804,7 +850,61 @@ def gen_frame():
         dict(x=0, y=0, w=4, h=4, data="00")] * 2)), "EPROTO_COUNT", flags=2)
     t.badp("snapshot rect not the whole image", w_frame(dict(snap, rects=[
         dict(x=0, y=0, w=4, h=3, data="00")])), "ERANGE", flags=2)
-    t.badp("undefined flag bit 3", p, "EPROTO_FLAGS", flags=8)
+    t.badp("undefined flag bit 5", p, "EPROTO_FLAGS", flags=0x20)
+    t.badp("undefined flag bit 15", p, "EPROTO_FLAGS", flags=0x8000)
+
+    # Refinement levels. A level above 0 is never STILL or SNAPSHOT, and
+    # that is a header rule: decided before the length, like any flag.
+    lv1 = fr(image_width=640, image_height=360)
+    t.badp("level 1 with STILL", lv1, "EPROTO_FLAGS",
+           flags=level(1) | STILL)
+    t.badp("level 2 with SNAPSHOT", w_frame(dict(
+        snap, image_width=1, image_height=1,
+        rects=[dict(x=0, y=0, w=1, h=1, data="00")])), "EPROTO_FLAGS",
+        flags=level(2) | SNAPSHOT)
+    t.badp("level 3 with STILL and SNAPSHOT", lv1, "EPROTO_FLAGS",
+           flags=level(3) | STILL | SNAPSHOT)
+    t.bad("level 1 with STILL, refused before the length",
+          header("FRAME", 2 ** 32 - 1, flags=level(1) | STILL, seq=0)[:8],
+          "EPROTO_FLAGS")
+    t.badp("level 1, image one column narrow",
+           fr(image_width=639, image_height=360,
+              rects=[dict(x=0, y=0, w=639, h=360, data="00")]),
+           "ERANGE", flags=level(1))
+    t.badp("level 1, image one row tall",
+           fr(image_width=640, image_height=361,
+              rects=[dict(x=0, y=0, w=640, h=361, data="00")]),
+           "ERANGE", flags=level(1))
+    t.badp("level 1, full-size image", fr(image_width=1280,
+                                          image_height=720), "ERANGE",
+           flags=level(1))
+    t.badp("level 2, image rounded down (7 / 4 = 1)",
+           w_frame(dict(base, width=7, height=5, image_width=1,
+                        image_height=2,
+                        rects=[dict(x=0, y=0, w=1, h=2, data="00")])),
+           "ERANGE", flags=level(2))
+    t.badp("level 3, the image of level 2",
+           fr(image_width=level_dim(1280, 2), image_height=level_dim(720, 2),
+              rects=[dict(x=0, y=0, w=320, h=180, data="00")]),
+           "ERANGE", flags=level(3))
+    t.badp("level 1 with two rects", fr(
+        image_width=640, image_height=360,
+        rects=[dict(x=0, y=0, w=640, h=180, data="00"),
+               dict(x=0, y=180, w=640, h=180, data="00")]),
+        "EPROTO_COUNT", flags=level(1))
+    t.badp("level 2, rect narrower than the image",
+           fr(image_width=320, image_height=180,
+              rects=[dict(x=0, y=0, w=319, h=180, data="00")]),
+           "ERANGE", flags=level(2))
+    t.badp("level 2, rect shorter than the image",
+           fr(image_width=320, image_height=180,
+              rects=[dict(x=0, y=0, w=320, h=179, data="00")]),
+           "ERANGE", flags=level(2))
+    t.badp("level 1, raw rect of the wrong length",
+           w_frame(dict(base, encoding=3, width=3, height=3,
+                        image_width=2, image_height=2,
+                        rects=[dict(x=0, y=0, w=2, h=2, data="00" * 15)])),
+           "EPROTO_LENGTH", flags=level(1))
     t.bad("over the client's 64 KiB frame limit",
           header("FRAME", 65537), "EPROTO_LENGTH",
           reader={"side": "client", "max_payload": 65536})

@@ -708,6 +708,192 @@ static void test_encoder_refuses_what_decoder_refuses(void)
 	bc_proto_buf_finish(&b);
 }
 
+/* ---- Refinement levels
+ * ------------------------------------------------------------ */
+
+static void test_level_flag_helpers(void)
+{
+	CHECK_EQ_INT(BC_PROTO_FLAG_LEVEL_MASK,
+	             BC_PROTO_MAX_LEVEL << BC_PROTO_FLAG_LEVEL_SHIFT);
+	CHECK_EQ_INT(bc_proto_flags_level(0), 0);
+	CHECK_EQ_INT(bc_proto_flags_level(0x0008), 1);
+	CHECK_EQ_INT(bc_proto_flags_level(0x0010 | BC_PROTO_FLAG_INCOMPLETE),
+	             2);
+	CHECK_EQ_INT(bc_proto_flags_level(0xffff), 3);
+	CHECK_EQ_INT(bc_proto_flags_with_level(BC_PROTO_FLAG_INCOMPLETE, 2),
+	             0x0014);
+	CHECK_EQ_INT(bc_proto_flags_with_level(0x001f, 0), 0x0007);
+	CHECK_EQ_INT(bc_proto_flags_with_level(0x0008, 3), 0x0018);
+	CHECK_EQ_INT(bc_proto_level_dim(1280, 1), 640);
+	CHECK_EQ_INT(bc_proto_level_dim(1281, 1), 641);
+	CHECK_EQ_INT(bc_proto_level_dim(7, 2), 2);
+	CHECK_EQ_INT(bc_proto_level_dim(1, 3), 1);
+	CHECK_EQ_INT(bc_proto_level_dim(8192, 3), 1024);
+	CHECK_EQ_INT(bc_proto_level_dim(8191, 3), 1024);
+	CHECK_EQ_INT(bc_proto_level_dim(9, 0), 9);
+}
+
+/* A raw level frame of a view w x h with an image iw x ih in one rectangle
+ * of rw x rh pixels at the origin; pixels points at enough bytes. */
+static struct bc_msg level_frame(unsigned level, uint16_t w, uint16_t h,
+                                 uint16_t iw, uint16_t ih,
+                                 struct bc_proto_rect *rect,
+                                 const uint8_t *pixels)
+{
+	*rect = (struct bc_proto_rect){
+	    0, 0, iw, ih, {pixels, (uint32_t)iw * ih * 4u}};
+	struct bc_msg m = {.type = BC_MSG_FRAME,
+	                   .flags = bc_proto_flags_with_level(0, level)};
+	m.frame = (struct bc_msg_frame){1,  2, 3,   BC_PROTO_ENC_RAW, w, h, iw,
+	                                ih, 1, rect};
+	return m;
+}
+
+/* Every view size up to 19 x 19 at every level: the one image size
+ * ceil(view / 2^n) round-trips with its level, one pixel more or less
+ * either way is ERANGE, on the encoder and on the reader alike. */
+static void test_frame_level_sizes(void)
+{
+	static uint8_t pixels[19 * 19 * 4];
+	struct bc_proto_buf b;
+	struct bc_proto_reader r;
+	struct bc_proto_rect rect;
+	struct bc_msg m, out;
+	bc_proto_buf_init(&b, 0);
+	int bad = 0;
+	for (unsigned level = 1; level <= BC_PROTO_MAX_LEVEL; level++) {
+		for (uint16_t w = 1; w < 20; w++) {
+			for (uint16_t h = 1; h < 20; h++) {
+				uint16_t iw = bc_proto_level_dim(w, level);
+				uint16_t ih = bc_proto_level_dim(h, level);
+				bc_proto_buf_reset(&b);
+				m = level_frame(level, w, h, iw, ih, &rect,
+				                pixels);
+				m.flags |= BC_PROTO_FLAG_INCOMPLETE;
+				if (bc_proto_encode(&b, &m, NULL) != 0) {
+					bad++;
+					continue;
+				}
+				bc_proto_reader_init(
+				    &r, &(struct bc_proto_reader_opts){
+				            .side = BC_PROTO_SIDE_CLIENT});
+				bc_proto_reader_feed(&r, b.data, b.len);
+				if (bc_proto_reader_next(&r, &out) != 1 ||
+				    bc_proto_flags_level(out.flags) != level ||
+				    !(out.flags & BC_PROTO_FLAG_INCOMPLETE) ||
+				    out.frame.image_width != iw ||
+				    out.frame.image_height != ih) {
+					bad++;
+				}
+				bc_proto_reader_finish(&r);
+				/* One column or row more or fewer. */
+				uint16_t dw[4] = {(uint16_t)(iw + 1),
+				                  (uint16_t)(iw - 1), iw, iw};
+				uint16_t dh[4] = {ih, ih, (uint16_t)(ih + 1),
+				                  (uint16_t)(ih - 1)};
+				for (int k = 0; k < 4; k++) {
+					if (dw[k] == 0 || dh[k] == 0) {
+						continue;
+					}
+					m = level_frame(level, w, h, dw[k],
+					                dh[k], &rect, pixels);
+					if (bc_proto_encode(&b, &m, NULL) !=
+					    BC_ERANGE) {
+						bad++;
+					}
+				}
+			}
+		}
+	}
+	CHECK_EQ_INT(bad, 0);
+	bc_proto_buf_finish(&b);
+}
+
+static void test_frame_level_refusals(void)
+{
+	static uint8_t pixels[10 * 10 * 4];
+	struct bc_proto_buf b;
+	struct bc_proto_rect rect;
+	struct bc_errinfo ei;
+	bc_proto_buf_init(&b, 0);
+
+	/* A level frame is never STILL or SNAPSHOT. */
+	struct bc_msg m = level_frame(1, 20, 20, 10, 10, &rect, pixels);
+	REQUIRE(bc_proto_encode(&b, &m, NULL) == 0);
+	size_t len = b.len;
+	m.flags |= BC_PROTO_FLAG_STILL;
+	CHECK(bc_proto_encode(&b, &m, &ei) == BC_EPROTO_FLAGS);
+	CHECK(strstr(ei.msg, "STILL") != NULL);
+	m = level_frame(2, 20, 20, 5, 5, &rect, pixels);
+	m.flags |= BC_PROTO_FLAG_SNAPSHOT;
+	CHECK(bc_proto_encode(&b, &m, &ei) == BC_EPROTO_FLAGS);
+	CHECK(strstr(ei.msg, "SNAPSHOT") != NULL);
+	/* Level 0 keeps STILL, SNAPSHOT and a full-size image. */
+	m = level_frame(0, 10, 10, 10, 10, &rect, pixels);
+	m.flags |= BC_PROTO_FLAG_STILL | BC_PROTO_FLAG_SNAPSHOT;
+	CHECK(bc_proto_encode(&b, &m, NULL) == 0);
+	len = b.len;
+
+	/* One rectangle, the whole image. */
+	struct bc_proto_rect two[2] = {
+	    {0, 0, 10, 5, {pixels, 10 * 5 * 4}},
+	    {0, 5, 10, 5, {pixels, 10 * 5 * 4}},
+	};
+	m = level_frame(1, 20, 20, 10, 10, &rect, pixels);
+	m.frame.nrects = 2;
+	m.frame.rects = two;
+	CHECK(bc_proto_encode(&b, &m, NULL) == BC_EPROTO_COUNT);
+	m.flags = 0; /* the same two damage rectangles at level 0 */
+	m.frame.image_width = m.frame.image_height = 10;
+	CHECK(bc_proto_encode(&b, &m, NULL) == 0);
+	len = b.len;
+	m = level_frame(1, 20, 20, 10, 10, &rect, pixels);
+	rect.w = 9;
+	rect.data.len = 9 * 10 * 4;
+	CHECK(bc_proto_encode(&b, &m, NULL) == BC_ERANGE);
+
+	/* The level bits belong to FRAME only. */
+	struct bc_msg cam;
+	sample(BC_MSG_CAMERA, &cam);
+	cam.flags = bc_proto_flags_with_level(0, 1);
+	CHECK(bc_proto_encode(&b, &cam, NULL) == BC_EPROTO_FLAGS);
+	sample(BC_MSG_EDIT, &cam);
+	cam.flags |= BC_PROTO_FLAG_LEVEL_MASK;
+	CHECK(bc_proto_encode(&b, &cam, NULL) == BC_EPROTO_FLAGS);
+	CHECK(b.len == len);
+
+	/* The reader refuses level with STILL from the header alone, and
+	 * decode_payload makes the same check. */
+	struct bytes s = {0};
+	praw(&s, "BCST", 4);
+	p8(&s, BC_PROTO_VERSION);
+	p8(&s, BC_MSG_FRAME);
+	p16(&s, 0x0008 | BC_PROTO_FLAG_STILL);
+	struct bc_proto_reader r;
+	struct bc_msg out;
+	bc_proto_reader_init(&r, NULL);
+	bc_proto_reader_feed(&r, s.b, s.n);
+	CHECK(bc_proto_reader_next(&r, &out) == BC_EPROTO_FLAGS);
+	bc_proto_reader_finish(&r);
+	bc_proto_reader_init(&r, NULL);
+	m = level_frame(1, 20, 20, 10, 10, &rect, pixels);
+	bc_proto_buf_reset(&b);
+	REQUIRE(bc_proto_encode(&b, &m, NULL) == 0);
+	const uint8_t *payload = b.data + BC_PROTO_HEADER_SIZE;
+	size_t n = b.len - BC_PROTO_HEADER_SIZE;
+	CHECK(bc_proto_decode_payload(&r, BC_MSG_FRAME, 0x0008, 0, payload, n,
+	                              &out, NULL) == 0);
+	CHECK(bc_proto_flags_level(out.flags) == 1);
+	CHECK(bc_proto_decode_payload(&r, BC_MSG_FRAME,
+	                              0x0008 | BC_PROTO_FLAG_STILL, 0, payload,
+	                              n, &out, NULL) == BC_EPROTO_FLAGS);
+	CHECK(bc_proto_decode_payload(&r, BC_MSG_PICK_RESULT, 0x0008, 0,
+	                              payload, n, &out,
+	                              NULL) == BC_EPROTO_FLAGS);
+	bc_proto_reader_finish(&r);
+	bc_proto_buf_finish(&b);
+}
+
 static void test_buffer_ceiling(void)
 {
 	struct bc_proto_buf b;
@@ -943,6 +1129,9 @@ static const struct bc_test tests[] = {
     {"many_messages_one_feed", test_many_messages_one_feed},
     {"encoder_refuses_what_decoder_refuses",
      test_encoder_refuses_what_decoder_refuses},
+    {"level_flag_helpers", test_level_flag_helpers},
+    {"frame_level_sizes", test_frame_level_sizes},
+    {"frame_level_refusals", test_frame_level_refusals},
     {"buffer_ceiling", test_buffer_ceiling},
     {"encoder_type_maximum", test_encoder_type_maximum},
     {"allocation_failures", test_allocation_failures},

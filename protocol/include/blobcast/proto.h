@@ -78,9 +78,44 @@ enum bc_msg_type {
 #define BC_PROTO_FLAG_STILL 0x0001u
 /* FRAME: the lossless answer to a SNAPSHOT (seq = that request's seq). */
 #define BC_PROTO_FLAG_SNAPSHOT 0x0002u
-/* FRAME: the render hit the server's frame time budget; parts of the image
- * are background. The next change renders the view whole again. */
+/* FRAME: the server's time budget stopped refinement. The picture is
+ * complete at its level (no background band); the server refines it when it
+ * can. */
 #define BC_PROTO_FLAG_INCOMPLETE 0x0004u
+/* FRAME: the refinement level n (0..BC_PROTO_MAX_LEVEL) in bits 3..4. A
+ * level n > 0 frame is one whole picture with one ray per 2^n x 2^n block
+ * of the view: image_width = ceil(width / 2^n), image_height likewise, one
+ * rectangle covering it, image pixel (i, j) being the view's pixel
+ * (2^n i, 2^n j); never with STILL or SNAPSHOT. Frames at lower levels
+ * follow unless the view, camera or scene changes. Level 0 is the frame
+ * as it always was (whole image or damaged rectangles). */
+#define BC_PROTO_FLAG_LEVEL_SHIFT 3
+#define BC_PROTO_FLAG_LEVEL_MASK 0x0018u
+/* The coarsest level: 2^3 = 8 = BC_PROTO_MAX_DOWNSCALE, the coarsest block
+ * a client may accept (VIEW downscale). */
+#define BC_PROTO_MAX_LEVEL 3u
+
+/* The level of a FRAME's flags, 0..BC_PROTO_MAX_LEVEL. */
+static inline unsigned bc_proto_flags_level(uint16_t flags)
+{
+	return (flags & BC_PROTO_FLAG_LEVEL_MASK) >> BC_PROTO_FLAG_LEVEL_SHIFT;
+}
+
+/* flags with its level field replaced by level (taken modulo 4; levels
+ * above BC_PROTO_MAX_LEVEL do not exist). */
+static inline uint16_t bc_proto_flags_with_level(uint16_t flags, unsigned level)
+{
+	return (uint16_t)((flags & ~BC_PROTO_FLAG_LEVEL_MASK) |
+	                  ((level << BC_PROTO_FLAG_LEVEL_SHIFT) &
+	                   BC_PROTO_FLAG_LEVEL_MASK));
+}
+
+/* The image size of a level's frame for a view size: ceil(dim / 2^level),
+ * the number of 2^level blocks that cover dim pixels. */
+static inline uint16_t bc_proto_level_dim(uint16_t dim, unsigned level)
+{
+	return (uint16_t)(((unsigned)dim + (1u << level) - 1u) >> level);
+}
 
 /* Which peer's messages a reader accepts. */
 enum bc_proto_side {
@@ -248,7 +283,9 @@ struct bc_msg_view {
 	uint16_t width, height; /* 1..BC_PROTO_MAX_DIM */
 	enum bc_proto_encoding encoding;
 	uint8_t quality_interactive, quality_still; /* 1..100 */
-	uint8_t downscale; /* 1..BC_PROTO_MAX_DOWNSCALE */
+	/* 1..BC_PROTO_MAX_DOWNSCALE: the coarsest block the client accepts;
+	 * frames have 2^level <= downscale. */
+	uint8_t downscale;
 };
 
 struct bc_proto_rect {
@@ -261,9 +298,12 @@ struct bc_msg_frame {
 	uint64_t order;      /* last edit order number the frame reflects */
 	uint32_t camera_seq; /* seq of the last CAMERA it reflects, or 0 */
 	enum bc_proto_encoding encoding;
-	uint16_t width, height;             /* full (VIEW) size */
-	uint16_t image_width, image_height; /* encoded size (downscaled) */
-	uint16_t nrects;                    /* 1..BC_PROTO_MAX_RECTS */
+	uint16_t width, height; /* full (VIEW) size */
+	/* Encoded size: at level n > 0 (bc_proto_flags_level(flags)) exactly
+	 * ceil(width / 2^n) x ceil(height / 2^n); at level 0 at most the full
+	 * size. */
+	uint16_t image_width, image_height;
+	uint16_t nrects; /* 1..BC_PROTO_MAX_RECTS */
 	const struct bc_proto_rect *rects;
 };
 

@@ -75,8 +75,9 @@
  * to encode and to draw than many small ones. */
 #define BC_PROTO_MAX_RECTS 4096u
 
-/* Largest interactive downscale divisor: beyond 1/8 of the resolution a
- * moving image carries too little to be useful. */
+/* Largest VIEW downscale: the coarsest block (pixels per side) a client
+ * accepts in a refinement frame, so 2^BC_PROTO_MAX_LEVEL. Beyond 1/8 of the
+ * resolution a moving image carries too little to be useful. */
 #define BC_PROTO_MAX_DOWNSCALE 8u
 
 /* JPEG quality, as TurboJPEG takes it (1 worst .. 100 best). */
