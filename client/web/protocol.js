@@ -69,8 +69,32 @@ export const FLAG = Object.freeze({
 	INTERACTING: 0x0001, /* CAMERA, EDIT, EDIT_APPLIED */
 	STILL: 0x0001,       /* FRAME */
 	SNAPSHOT: 0x0002,    /* FRAME */
-	INCOMPLETE: 0x0004,  /* FRAME */
+	INCOMPLETE: 0x0004,  /* FRAME: refinement stopped by the time budget */
+	LEVEL_MASK: 0x0018,  /* FRAME: the refinement level, bits 3..4 */
 });
+/* FRAME's refinement level n (0..MAX_LEVEL) is flags bits 3..4. A level
+ * n > 0 frame is one whole picture with one ray per 2^n x 2^n block of the
+ * view: its image is exactly ceil(width / 2^n) x ceil(height / 2^n) in one
+ * rectangle, image pixel (i, j) being the view's pixel (2^n i, 2^n j); it
+ * is never STILL or SNAPSHOT. Level 0 is a full-resolution frame. */
+export const LEVEL_SHIFT = 3;
+export const MAX_LEVEL = 3;
+
+/* The refinement level of a FRAME's flags. */
+export function frameLevel(flags) {
+	return (flags & FLAG.LEVEL_MASK) >> LEVEL_SHIFT;
+}
+
+/* flags with its level field set to level (0..MAX_LEVEL). */
+export function flagsWithLevel(flags, level) {
+	return (flags & ~FLAG.LEVEL_MASK) |
+		((level << LEVEL_SHIFT) & FLAG.LEVEL_MASK);
+}
+
+/* ceil(dim / 2^level): a level frame's image size for a view size. */
+export function levelDim(dim, level) {
+	return (dim + (1 << level) - 1) >> level;
+}
 
 export const ROLE = Object.freeze({ EDITOR: 1, VIEWER: 2 });
 export const ENC = Object.freeze({ JPEG: 1, PNG: 2, RAW: 3 });
@@ -177,7 +201,8 @@ T(13, 'EDIT', FROM_CLIENT, FLAG.INTERACTING, BULK);
 T(14, 'EDIT_APPLIED', FROM_SERVER, FLAG.INTERACTING, BULK);
 T(15, 'CAMERA', FROM_CLIENT, FLAG.INTERACTING, 40);
 T(16, 'VIEW', FROM_CLIENT, 0, 8);
-T(17, 'FRAME', FROM_SERVER, FLAG.STILL | FLAG.SNAPSHOT | FLAG.INCOMPLETE,
+T(17, 'FRAME', FROM_SERVER, FLAG.STILL | FLAG.SNAPSHOT | FLAG.INCOMPLETE |
+	FLAG.LEVEL_MASK,
   BULK);
 T(18, 'PICK', FROM_CLIENT, 0, 4);
 T(19, 'PICK_RESULT', FROM_SERVER, 0, 24);
@@ -555,6 +580,11 @@ function decOps(d) {
 function decFrame(d, flags, m) {
 	const snap = (flags & FLAG.SNAPSHOT) !== 0;
 	const full = snap || (flags & FLAG.STILL) !== 0;
+	/* checkFlags keeps STILL and SNAPSHOT off levels above 0. */
+	const level = frameLevel(flags);
+	/* A snapshot and a refinement frame are one rectangle that is the
+	 * whole image. */
+	const whole = snap || level > 0;
 	m.frame_no = d.u32('frame_no');
 	m.order = d.u64('order');
 	m.camera_seq = d.u32('camera_seq');
@@ -564,23 +594,27 @@ function decFrame(d, flags, m) {
 	}
 	m.width = d.u16range('width', 1, L.MAX_DIM);
 	m.height = d.u16range('height', 1, L.MAX_DIM);
-	m.image_width = d.u16range('image_width', full ? m.width : 1, m.width);
-	m.image_height = d.u16range('image_height', full ? m.height : 1,
-		m.height);
+	/* Level n: exactly the 2^n blocks that cover the view; level 0: at
+	 * most the view (the view itself when full). */
+	const iw = levelDim(m.width, level), ih = levelDim(m.height, level);
+	const exact = full || level > 0;
+	m.image_width = d.u16range('image_width', exact ? iw : 1, iw);
+	m.image_height = d.u16range('image_height', exact ? ih : 1, ih);
 	const nrects = d.u16('rect_count');
-	d.count('rect_count', nrects, 1, snap ? 1 : L.MAX_RECTS, RECT_MIN);
+	d.count('rect_count', nrects, 1, whole ? 1 : L.MAX_RECTS, RECT_MIN);
 	m.rects = [];
 	for (let i = 0; i < nrects; i++) {
 		const x = d.u16('rect.x');
 		const y = d.u16('rect.y');
 		const w = d.u16('rect.w');
-		/* A snapshot's one rectangle is the whole image. */
-		if (w < (snap ? m.image_width : 1) || x + w > m.image_width) {
+		/* A snapshot's or a refinement's one rectangle is the
+		 * whole image. */
+		if (w < (whole ? m.image_width : 1) || x + w > m.image_width) {
 			d.fail('ERANGE', `rect ${i}: x ${x} + w ${w} is outside ` +
 				`1..${m.image_width}`);
 		}
 		const h = d.u16('rect.h');
-		if (h < (snap ? m.image_height : 1) || y + h > m.image_height) {
+		if (h < (whole ? m.image_height : 1) || y + h > m.image_height) {
 			d.fail('ERANGE', `rect ${i}: y ${y} + h ${h} is outside ` +
 				`1..${m.image_height}`);
 		}
@@ -762,6 +796,22 @@ function decBody(d, m) {
 	return m;
 }
 
+/* The header flag rule (PROTOCOL.md 3.1 step 5): bits the type does not
+ * define, and on FRAME a level above 0 with STILL or SNAPSHOT, are
+ * EPROTO_FLAGS. Only FRAME defines the level bits. Throws a ProtoError. */
+function checkFlags(t, flags, prefix = '') {
+	if (flags & ~t.flags) {
+		throw new ProtoError('EPROTO_FLAGS',
+			`${prefix}${t.name} with undefined flags ${flags & ~t.flags}`);
+	}
+	const level = frameLevel(flags);
+	if (level > 0 && (flags & (FLAG.STILL | FLAG.SNAPSHOT))) {
+		throw new ProtoError('EPROTO_FLAGS', `${prefix}${t.name} at ` +
+			`level ${level} with ` +
+			((flags & FLAG.SNAPSHOT) ? 'SNAPSHOT' : 'STILL'));
+	}
+}
+
 /* Decodes one payload of the given type outside any stream: no header, no
  * side or stage rules, only the type's own checks (its flags and maximum
  * size included). Returns the message; throws a ProtoError. */
@@ -770,10 +820,7 @@ export function decodePayload(type, flags, seq, payload) {
 	if (!t) {
 		throw new ProtoError('EPROTO_TYPE', `message type ${type} is unknown`);
 	}
-	if (flags & ~t.flags) {
-		throw new ProtoError('EPROTO_FLAGS',
-			`${t.name} with undefined flags ${flags & ~t.flags}`);
-	}
+	checkFlags(t, flags);
 	const p = toU8(payload);
 	if (p.length > t.max) {
 		throw new ProtoError('EPROTO_LENGTH', `${t.name} payload length ` +
@@ -906,9 +953,10 @@ export class Reader {
 			return;
 		}
 		const flags = h[6] | (h[7] << 8);
-		if (flags & ~t.flags) {
-			throw this.setError('EPROTO_FLAGS',
-				`${t.name} with undefined flags ${flags & ~t.flags}`);
+		try {
+			checkFlags(t, flags);
+		} catch (e) {
+			throw this.setError(e.code, e.message);
 		}
 		if (avail < 12) {
 			return;
@@ -1294,10 +1342,7 @@ export function encode(m) {
 	w.u16('flags', flags, 'EPROTO_FLAGS');
 	w.u32('length', 0);
 	w.u32('seq', seq);
-	if (flags & ~t.flags) {
-		throw new ProtoError('EPROTO_FLAGS',
-			`encode: ${t.name} with undefined flags ${flags & ~t.flags}`);
-	}
+	checkFlags(t, flags, 'encode: ');
 	encBody(w, m);
 	const len = w.n - HEADER_SIZE;
 	if (len > t.max) {

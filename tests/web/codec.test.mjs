@@ -328,6 +328,63 @@ test('encoder refuses what the decoder refuses', () => {
 	assert.deepEqual(r.next(), { ...cam, flags: 0 });
 });
 
+test('frame levels: helpers, every size, and the refusals', () => {
+	assert.equal(P.FLAG.LEVEL_MASK, P.MAX_LEVEL << P.LEVEL_SHIFT);
+	assert.equal(P.frameLevel(0x0014), 2);
+	assert.equal(P.frameLevel(0xffff), 3);
+	assert.equal(P.flagsWithLevel(P.FLAG.INCOMPLETE, 2), 0x0014);
+	assert.equal(P.flagsWithLevel(0x001f, 0), 0x0007);
+	assert.deepEqual([P.levelDim(1281, 1), P.levelDim(7, 2),
+		P.levelDim(1, 3), P.levelDim(8191, 3)], [641, 2, 1, 1024]);
+	const frame = (level, w, h, iw, ih, rects) => ({ type: P.MSG.FRAME,
+		flags: P.flagsWithLevel(0, level), seq: 0, frame_no: 1, order: 2n,
+		camera_seq: 3, encoding: P.ENC.RAW, width: w, height: h,
+		image_width: iw, image_height: ih, rects: rects ?? [{ x: 0, y: 0,
+			w: iw, h: ih, data: new Uint8Array(iw * ih * 4) }] });
+	const refused = (m, code) => assert.throws(() => P.encode(m),
+		(e) => e.code === code, `${m.width}x${m.height} level ` +
+		`${P.frameLevel(m.flags)} as ${m.image_width}x${m.image_height}`);
+	/* The one image size round-trips with its level; a pixel more or
+	 * less either way is ERANGE. */
+	for (let level = 1; level <= P.MAX_LEVEL; level++) {
+		for (let w = 1; w < 20; w++) {
+			for (let h = 1; h < 20; h++) {
+				const iw = P.levelDim(w, level);
+				const ih = P.levelDim(h, level);
+				const r = new P.Reader({ side: 'client' });
+				r.feed(P.encode(frame(level, w, h, iw, ih)));
+				const m = r.next();
+				assert.equal(P.frameLevel(m.flags), level);
+				assert.deepEqual([m.image_width, m.image_height],
+					[iw, ih]);
+				for (const [dw, dh] of [[1, 0], [-1, 0], [0, 1], [0, -1]]) {
+					if (iw + dw > 0 && ih + dh > 0) {
+						refused(frame(level, w, h, iw + dw, ih + dh),
+							'ERANGE');
+					}
+				}
+			}
+		}
+	}
+	const lv1 = frame(1, 20, 20, 10, 10);
+	refused({ ...lv1, flags: lv1.flags | P.FLAG.STILL }, 'EPROTO_FLAGS');
+	refused({ ...lv1, flags: lv1.flags | P.FLAG.SNAPSHOT }, 'EPROTO_FLAGS');
+	const half = { x: 0, y: 0, w: 10, h: 5, data: new Uint8Array(200) };
+	const two = [half, { ...half, y: 5 }];
+	refused(frame(1, 20, 20, 10, 10, two), 'EPROTO_COUNT');
+	/* The same rectangles are damage at level 0. */
+	assert.ok(P.encode(frame(0, 10, 10, 10, 10, two)).length > 0);
+	refused(frame(1, 20, 20, 10, 10, [{ ...half, h: 10, w: 9,
+		data: new Uint8Array(360) }]), 'ERANGE');
+	/* The level bits belong to FRAME only. */
+	refused({ type: P.MSG.CAMERA, flags: 0x0008, eye: [0, 0, 5],
+		target: [0, 0, 0], up: [0, 1, 0], fov_y_deg: 40 }, 'EPROTO_FLAGS');
+	/* The reader refuses level with STILL on the header's byte 7. */
+	const r = new P.Reader({ side: 'client' });
+	r.feed(Uint8Array.of(0x42, 0x43, 0x53, 0x54, 1, 17, 0x09, 0));
+	assert.throws(() => r.next(), (e) => e.code === 'EPROTO_FLAGS');
+});
+
 test('error names and numbers match error.h', () => {
 	assert.equal(P.ERR.ENOMEM, 2);
 	assert.equal(P.ERR.EPROTO_MAGIC, 12);
