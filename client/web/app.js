@@ -8,7 +8,9 @@
  *  - Frames: each rectangle is decoded off the main thread by
  *    createImageBitmap (JPEG, PNG) or taken as ImageData (raw) and drawn in
  *    order onto a backing canvas of the VIEW size, scaled from the encoded
- *    image size; frames queued behind a newer full frame are skipped.
+ *    image size (a refinement level n image by 2^n); frames queued behind
+ *    a newer full frame are skipped. A "refining · level N" mark shows
+ *    while the last frame drawn had a level above 0 or INCOMPLETE.
  *  - Camera: orbit (drag), pan (right drag), zoom (wheel), sent as CAMERA
  *    with INTERACTING while the mouse moves and once more without it.
  *  - Picking and dragging: a press sends PICK; if it hits a primitive, the
@@ -332,7 +334,10 @@ class FrameView {
 		}
 		const bitmaps = await Promise.all(m.rects.map((r) =>
 			this.decode(m, r).catch(() => null)));
-		const sx = m.width / m.image_width, sy = m.height / m.image_height;
+		/* A level-n image is one pixel per 2^n block, drawn from the
+		 * view's top-left; the backing canvas clips what a last block
+		 * reaches past the view. */
+		const [sx, sy] = P.frameScale(m);
 		m.rects.forEach((r, i) => {
 			if (bitmaps[i]) {
 				this.bctx.drawImage(bitmaps[i], r.x * sx, r.y * sy,
@@ -623,7 +628,9 @@ class App {
 		this.framesDrawn++;
 		this.framesSkipped += skipped;
 		this.lastFrame = { frame_no: m.frame_no, order: m.order,
-			still: (m.flags & P.FLAG.STILL) !== 0, width: m.width,
+			still: (m.flags & P.FLAG.STILL) !== 0,
+			level: P.frameLevel(m.flags),
+			refining: P.frameRefining(m.flags), width: m.width,
 			height: m.height, image_width: m.image_width,
 			image_height: m.image_height, rects: m.rects.length,
 			encoding: m.encoding, at: now };
@@ -639,7 +646,18 @@ class App {
 				rec.frameAt = now;
 			}
 		}
+		this.showRefining();
 		this.drawOverlay();
+	}
+
+	/* The "refining" mark follows the last frame drawn: shown while it
+	 * was coarse (level > 0) or cut by the time budget, hidden by the
+	 * first finished level-0 frame. */
+	showRefining() {
+		const f = this.lastFrame;
+		const el = $('refining');
+		el.hidden = !f?.refining;
+		el.textContent = f?.refining ? `refining · level ${f.level}` : '';
 	}
 
 	/* ---- view, camera, edits ---- */
@@ -1155,6 +1173,7 @@ class App {
 				(f.image_width !== f.width ? ` → ${f.width}×${f.height}` : '') +
 				` · ${['', 'jpeg', 'png', 'raw'][f.encoding]}` +
 				` · ${f.rects} rect${f.rects > 1 ? 's' : ''}` +
+				(f.level ? ` · level ${f.level}` : '') +
 				(f.still ? ' · still' : '') + ` · order ${f.order}`;
 		}
 		this.renderLastEdit();

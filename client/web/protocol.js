@@ -96,6 +96,24 @@ export function levelDim(dim, level) {
 	return (dim + (1 << level) - 1) >> level;
 }
 
+/* Whether a FRAME leaves the picture still refining: a level above 0, or
+ * INCOMPLETE (the time budget stopped refinement); more frames follow. */
+export function frameRefining(flags) {
+	return frameLevel(flags) > 0 || (flags & FLAG.INCOMPLETE) !== 0;
+}
+
+/* View pixels per image pixel of a decoded FRAME, [sx, sy]: 2^n at level
+ * n > 0, where image pixel (i, j) stands for the view's 2^n block at
+ * (2^n i, 2^n j) (the last column or row may reach past the view); at
+ * level 0 the image stretched over the view. */
+export function frameScale(m) {
+	const level = frameLevel(m.flags);
+	if (level > 0) {
+		return [1 << level, 1 << level];
+	}
+	return [m.width / m.image_width, m.height / m.image_height];
+}
+
 export const ROLE = Object.freeze({ EDITOR: 1, VIEWER: 2 });
 export const ENC = Object.freeze({ JPEG: 1, PNG: 2, RAW: 3 });
 /* HELLO.encodings: bit (encoding - 1) set = the client decodes it. */

@@ -385,6 +385,23 @@ test('frame levels: helpers, every size, and the refusals', () => {
 	assert.throws(() => r.next(), (e) => e.code === 'EPROTO_FLAGS');
 });
 
+test('frame levels: what the page shows and how it scales', () => {
+	const m = { flags: 0, width: 7, height: 5, image_width: 7,
+		image_height: 5 };
+	assert.equal(P.frameRefining(0), false);
+	assert.equal(P.frameRefining(P.FLAG.STILL), false);
+	assert.equal(P.frameRefining(P.FLAG.INCOMPLETE), true);
+	assert.equal(P.frameRefining(P.flagsWithLevel(0, 1)), true);
+	assert.deepEqual(P.frameScale(m), [1, 1]);
+	/* Level 2 of a 7x5 view is 2x2, each pixel a 4x4 block from the
+	 * top-left, not the image stretched to 3.5 x 2.5. */
+	assert.deepEqual(P.frameScale({ ...m, flags: P.flagsWithLevel(0, 2),
+		image_width: 2, image_height: 2 }), [4, 4]);
+	/* A level-0 image smaller than the view is stretched over it. */
+	assert.deepEqual(P.frameScale({ ...m, width: 1280, height: 720,
+		image_width: 640, image_height: 240 }), [2, 3]);
+});
+
 test('error names and numbers match error.h', () => {
 	assert.equal(P.ERR.ENOMEM, 2);
 	assert.equal(P.ERR.EPROTO_MAGIC, 12);
