@@ -587,7 +587,8 @@ static bool order_time(const struct order_times *o, uint64_t order,
 static const char *frame_kind(uint16_t flags)
 {
 	if (flags & BC_PROTO_FLAG_INCOMPLETE) {
-		/* The render hit the server's frame time budget. */
+		/* The server's time budget stopped refinement; the picture is
+		 * whole at its level and finer frames follow. */
 		if (flags & BC_PROTO_FLAG_SNAPSHOT) {
 			return "snapshot incomplete";
 		}
@@ -606,7 +607,8 @@ static const char *frame_kind(uint16_t flags)
  * frame shows to the moment the frame arrived. The change is an edit
  * (EDIT_APPLIED, or SCENE_STATE for a load) when the frame's edit order is
  * new; for the first frame it is our VIEW request. Frames that show
- * nothing new (a still refining an interactive frame) get "-".
+ * nothing new (a finer level or the still refining an earlier frame) get
+ * "-".
  */
 static int run_watch(struct args *a)
 {
@@ -694,12 +696,14 @@ static int run_watch(struct args *a)
 			}
 			last_order = m.frame.order;
 			printf("frame %llu no=%u order=%llu bytes=%u rects=%u "
-			       "image=%ux%u %s latency_ms=",
+			       "image=%ux%u level=%u %s latency_ms=",
 			       (unsigned long long)nframes, m.frame.frame_no,
 			       (unsigned long long)m.frame.order,
 			       bc_client_info(c)->last_msg_bytes,
 			       m.frame.nrects, m.frame.image_width,
-			       m.frame.image_height, frame_kind(m.flags));
+			       m.frame.image_height,
+			       bc_proto_flags_level(m.flags),
+			       frame_kind(m.flags));
 			if (since >= 0.0) {
 				printf("%.2f after=%s\n", since, after);
 			} else {
@@ -990,18 +994,21 @@ static const struct cmd cmds[] = {
 	 "print a line per frame the session sends",
 	 "Joins session NAME as a viewer and prints one line per frame:\n"
 	 "  frame K no=SERVER_FRAME_NO order=EDIT_ORDER bytes=B rects=R\n"
-	 "  image=WxH still|interactive latency_ms=L after=edit|view|-\n"
-	 "latency_ms is measured on this client: from the arrival of the\n"
-	 "newest change the frame shows (the EDIT_APPLIED or SCENE_STATE of\n"
-	 "its edit order; for the first frame, our VIEW request) to the\n"
-	 "arrival of the frame. It covers the server's render, encode and\n"
-	 "send, not the editor's upload; frames that show nothing new (a\n"
-	 "still after interactive frames) print '-'. At the end (after N\n"
-	 "frames, or Ctrl-C) one 'stats' line gives the server's averages.\n"
+	 "  image=WxH level=N still|interactive latency_ms=L after=edit|view|-\n"
+	 "level is the frame's refinement level (0: full resolution; N: one\n"
+	 "pixel per 2^N block, finer frames follow). latency_ms is measured\n"
+	 "on this client: from the arrival of the newest change the frame\n"
+	 "shows (the EDIT_APPLIED or SCENE_STATE of its edit order; for the\n"
+	 "first frame, our VIEW request) to the arrival of the frame. It\n"
+	 "covers the server's render, encode and send, not the editor's\n"
+	 "upload; frames that show nothing new (a finer level, a still after\n"
+	 "interactive frames) print '-'. At the end (after N frames, or\n"
+	 "Ctrl-C) one 'stats' line gives the server's averages.\n"
 	 "  --frames N      stop after N frames (default: run until stopped)\n"
 	 "  --size WxH      view size (default 640x480)\n"
 	 "  --encoding E    jpeg (default), png or raw for still frames\n"
-	 "  --downscale D   interactive frames at 1/D resolution (1..8)\n",
+	 "  --downscale D   coarsest block accepted (1..8): refinement frames at\n"
+	 "                  1/2^n resolution with 2^n <= D (default 1)\n",
 	 run_watch},
 	{"bench-latency",
 	 O_SESSION | O_SIZE | O_EDITS | O_NODE | O_ENCODING | O_INTERACTING |
@@ -1019,7 +1026,8 @@ static const struct cmd cmds[] = {
 	 "  --node ID       primitive to move (default: the first one)\n"
 	 "  --encoding E    jpeg (default), png or raw for still frames\n"
 	 "  --interacting   send the edits as a drag (interactive frames)\n"
-	 "  --downscale D   interactive frames at 1/D resolution (1..8)\n",
+	 "  --downscale D   coarsest block accepted (1..8): refinement frames at\n"
+	 "                  1/2^n resolution with 2^n <= D (default 1)\n",
 	 run_bench},
 };
 

@@ -312,6 +312,8 @@ int bc_client_image_apply(struct bc_client_image *img, const struct bc_msg *m,
 	img->seq = m->seq;
 	img->order = f->order;
 	img->flags = m->flags;
+	img->level = (uint8_t)bc_proto_flags_level(m->flags);
+	img->refining = img->level > 0 || (m->flags & BC_PROTO_FLAG_INCOMPLETE);
 	img->encoding = f->encoding;
 	img->nrects = f->nrects;
 	for (uint32_t i = 0; i < f->nrects; i++) {

@@ -190,7 +190,7 @@ sed 's/^/    /' "$tmp/watch"
 if [ "$status" -ne 0 ]; then
   fail "watch exited $status"
 fi
-if [ "$(grep -c '^frame [0-9]* no=[0-9]* order=[0-9]* bytes=[0-9]* rects=[0-9]* image=64x48 ' "$tmp/watch")" -ne 3 ]; then
+if [ "$(grep -c '^frame [0-9]* no=[0-9]* order=[0-9]* bytes=[0-9]* rects=[0-9]* image=64x48 level=0 ' "$tmp/watch")" -ne 3 ]; then
   fail "watch did not print three frame lines"
 fi
 if ! grep -q '^frame 1 .*latency_ms=[0-9.]* after=view$' "$tmp/watch"; then

@@ -269,6 +269,54 @@ static void test_new_size_starts_new_picture(void)
 	bc_client_image_finish(&img);
 }
 
+/* Refinement: a level-2 picture of a 7x5 view is 2x2 pixels, one per 4x4
+ * block; the image reports its level and that it is still refining until
+ * a level-0 frame without INCOMPLETE arrives. */
+static void test_levels_are_reported(void)
+{
+	uint8_t coarse[2 * 2 * 4], fine[7 * 5 * 4];
+	struct bc_client_image img;
+	struct bc_errinfo ei = {0};
+	struct bc_proto_rect r_coarse = {0, 0, 2, 2, {coarse, sizeof(coarse)}};
+	struct bc_proto_rect r_fine = {0, 0, 7, 5, {fine, sizeof(fine)}};
+	struct bc_msg m;
+	pattern(coarse, 2, 2, 5);
+	pattern(fine, 7, 5, 6);
+	bc_client_image_init(&img);
+	m = frame_msg(7, 5, BC_PROTO_ENC_RAW, &r_coarse, 1);
+	m.flags = bc_proto_flags_with_level(0, 2);
+	m.frame.image_width = bc_proto_level_dim(7, 2);
+	m.frame.image_height = bc_proto_level_dim(5, 2);
+	REQUIRE(m.frame.image_width == 2 && m.frame.image_height == 2);
+	REQUIRE(bc_client_image_apply(&img, &m, &ei) == 0);
+	CHECK_EQ_INT(img.level, 2);
+	CHECK(img.refining);
+	CHECK(img.complete);
+	CHECK_EQ_INT(img.width, 2);
+	CHECK_EQ_INT(img.view_width, 7);
+	CHECK(memcmp(img.rgba, coarse, sizeof(coarse)) == 0);
+	/* Level 1, cut by the budget: still refining. */
+	m.flags = bc_proto_flags_with_level(BC_PROTO_FLAG_INCOMPLETE, 1);
+	REQUIRE(bc_client_image_apply(&img, &m, &ei) == 0);
+	CHECK_EQ_INT(img.level, 1);
+	CHECK(img.refining);
+	/* Level 0 but INCOMPLETE: the budget stopped refinement. */
+	m = frame_msg(7, 5, BC_PROTO_ENC_RAW, &r_fine, 1);
+	m.flags = BC_PROTO_FLAG_INCOMPLETE;
+	REQUIRE(bc_client_image_apply(&img, &m, &ei) == 0);
+	CHECK_EQ_INT(img.level, 0);
+	CHECK(img.refining);
+	/* The still ends it. */
+	m.flags = BC_PROTO_FLAG_STILL;
+	REQUIRE(bc_client_image_apply(&img, &m, &ei) == 0);
+	CHECK_EQ_INT(img.level, 0);
+	CHECK(!img.refining);
+	CHECK(memcmp(img.rgba, fine, sizeof(fine)) == 0);
+	bc_client_image_finish(&img);
+	CHECK_EQ_INT(img.level, 0);
+	CHECK(!img.refining);
+}
+
 static void test_jpeg_rect_decodes_in_place(void)
 {
 	uint8_t base[32 * 24 * 4], grad[16 * 8 * 4];
@@ -482,6 +530,7 @@ static const struct bc_test tests[] = {
 	 test_partial_rects_replace_only_their_pixels},
 	{"coverage_completes_from_pieces", test_coverage_completes_from_pieces},
 	{"new_size_starts_new_picture", test_new_size_starts_new_picture},
+	{"levels_are_reported", test_levels_are_reported},
 	{"jpeg_rect_decodes_in_place", test_jpeg_rect_decodes_in_place},
 	{"png_rects_decode_exactly", test_png_rects_decode_exactly},
 	{"rect_outside_image_is_refused_untouched",

@@ -278,9 +278,16 @@ int bc_client_wait_applied(struct bc_client *c, uint32_t seq, uint64_t *order,
 /*
  * The client-side framebuffer that FRAMEs are assembled in. A frame carries
  * rectangles of an image of image_width x image_height pixels (the VIEW size,
- * or smaller when the server downscales an interactive frame); each one
- * replaces those pixels. A frame of another image size starts a new, empty
- * image. Fields are read-only for users.
+ * or smaller: a refinement level n > 0 frame is one pixel per 2^n x 2^n
+ * block of the view, ceil(view / 2^n) pixels, and a level-0 frame may be
+ * downscaled); each one replaces those pixels. A frame of another image size
+ * starts a new, empty image. Fields are read-only for users.
+ *
+ * Showing it: at level n > 0 pixel (i, j) is the view's pixel
+ * (2^n i, 2^n j), the top-left of its block, so scale by 2^n from the top
+ * left (the last column and row may reach past the view); at level 0 scale
+ * width x height to view_width x view_height. While refining is true the
+ * server sends finer frames without being asked.
  */
 struct bc_client_image {
 	uint32_t width, height;           /* pixels held */
@@ -290,7 +297,13 @@ struct bc_client_image {
 	/* The last frame applied. */
 	uint32_t frame_no, camera_seq, seq;
 	uint64_t order;
-	uint16_t flags; /* BC_PROTO_FLAG_STILL, BC_PROTO_FLAG_SNAPSHOT */
+	uint16_t flags; /* STILL, SNAPSHOT, INCOMPLETE and the level bits */
+	/* The refinement level, bc_proto_flags_level(flags): 0 full
+	 * resolution, n in 1..BC_PROTO_MAX_LEVEL one pixel per 2^n block. */
+	uint8_t level;
+	/* The picture is still being refined: level > 0 or INCOMPLETE (the
+	 * server's time budget stopped refinement; more frames follow). */
+	bool refining;
 	enum bc_proto_encoding encoding;
 	uint32_t nrects;
 	/* Private. */
