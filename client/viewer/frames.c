@@ -1,15 +1,19 @@
 /*
  * FRAME messages turned into what the viewer's two textures hold.
  *
- * The server sends three kinds of frames (server/session.c): interactive
- * ones during a gesture, at 1/downscale of the view size and covering it
- * whole; stills at the view size, whole or -- after a parameter edit --
- * only the blocks the edit damaged; and snapshots, which the caller keeps
- * apart. Full-size frames are decoded into one bc_client_image and their
+ * The server sends three kinds of frames: coarse ones after a change, a
+ * whole picture at refinement level n > 0 (one pixel per 2^n block of the
+ * view, PROTOCOL.md 7.15) or, from servers without levels, a level-0
+ * image at 1/downscale of the view; frames at the view size (level 0),
+ * whole or -- after a parameter edit -- only the blocks the edit damaged,
+ * the last of them the still; and snapshots, which the caller keeps apart.
+ * Full-size frames are decoded into one bc_client_image and their
  * rectangles copied into `comp`, the view-size picture the full texture
- * mirrors, so only those rectangles are uploaded. Downscaled frames are
+ * mirrors, so only those rectangles are uploaded. Smaller frames are
  * decoded into a second image and uploaded whole to a small texture that
- * the GPU stretches over the window.
+ * the GPU stretches over the window: a level image by 2^n from the
+ * top-left (small_u, small_v say how much of it spans the view), a
+ * downscaled one over the whole window.
  *
  * A partial still that follows interactive frames is laid over the last
  * interactive image scaled up, never over the still from before the
@@ -18,6 +22,7 @@
  * change, so the caller is told to ask for a whole still (want_refresh).
  */
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "blobcast/alloc.h"
@@ -51,12 +56,13 @@ void bc_viewer_copy_rect(const uint8_t *src, uint32_t stride, uint32_t x,
 	}
 }
 
-/* Source coordinate of destination pixel centre i when n source pixels
- * stretch over m: the two neighbours and the weight of the second. */
-static void sample_at(uint32_t i, uint32_t n, uint32_t m, uint32_t *a,
-                      uint32_t *b, float *t)
+/* Source coordinate of destination pixel centre i when the first span of
+ * n source pixels (span <= n) stretches over m: the two neighbours and the
+ * weight of the second. */
+static void sample_at(uint32_t i, uint32_t n, float span, uint32_t m,
+                      uint32_t *a, uint32_t *b, float *t)
 {
-	float s = ((float)i + 0.5f) * (float)n / (float)m - 0.5f;
+	float s = ((float)i + 0.5f) * span / (float)m - 0.5f;
 	float fl;
 	if (s < 0.0f) {
 		s = 0.0f;
@@ -76,16 +82,24 @@ static void sample_at(uint32_t i, uint32_t n, uint32_t m, uint32_t *a,
 void bc_viewer_upscale(const uint8_t *src, uint32_t sw, uint32_t sh,
                        uint8_t *dst, uint32_t dw, uint32_t dh)
 {
+	bc_viewer_upscale_part(src, sw, sh, 1.0f, 1.0f, dst, dw, dh);
+}
+
+void bc_viewer_upscale_part(const uint8_t *src, uint32_t sw, uint32_t sh,
+                            float su, float sv, uint8_t *dst, uint32_t dw,
+                            uint32_t dh)
+{
+	float spanx = su * (float)sw, spany = sv * (float)sh;
 	for (uint32_t y = 0; y < dh; y++) {
 		uint32_t y0, y1;
 		float ty;
-		sample_at(y, sh, dh, &y0, &y1, &ty);
+		sample_at(y, sh, spany, dh, &y0, &y1, &ty);
 		for (uint32_t x = 0; x < dw; x++) {
 			uint32_t x0, x1;
 			float tx;
 			const uint8_t *p00, *p01, *p10, *p11;
 			uint8_t *d = dst + ((size_t)y * dw + x) * 4u;
-			sample_at(x, sw, dw, &x0, &x1, &tx);
+			sample_at(x, sw, spanx, dw, &x0, &x1, &tx);
 			p00 = src + ((size_t)y0 * sw + x0) * 4u;
 			p01 = src + ((size_t)y0 * sw + x1) * 4u;
 			p10 = src + ((size_t)y1 * sw + x0) * 4u;
@@ -118,15 +132,46 @@ static bool covers_all(const struct bc_msg_frame *fr)
 	return area >= (uint64_t)fr->image_width * fr->image_height;
 }
 
+const char *bc_viewer_refining_text(uint16_t flags, char *out, size_t n)
+{
+	unsigned level = bc_proto_flags_level(flags);
+	if (level > 0 || (flags & BC_PROTO_FLAG_INCOMPLETE)) {
+		snprintf(out, n, "refining (level %u)", level);
+	} else if (n > 0) {
+		out[0] = '\0';
+	}
+	return out;
+}
+
+/* Remembers what the last frame says about refinement. */
+static void note_level(struct bc_viewer_frames *f, const struct bc_msg *m)
+{
+	f->level = (uint8_t)bc_proto_flags_level(m->flags);
+	f->refining =
+	    f->level > 0 || (m->flags & BC_PROTO_FLAG_INCOMPLETE) != 0;
+}
+
 static int apply_small(struct bc_viewer_frames *f, const struct bc_msg *m,
                        struct bc_viewer_update *up, struct bc_errinfo *ei)
 {
 	const struct bc_msg_frame *fr = &m->frame;
 	uint32_t w = f->small.width, h = f->small.height;
+	unsigned level = bc_proto_flags_level(m->flags);
 	int rc = bc_client_image_apply(&f->small, m, ei);
 	if (rc) {
 		return rc;
 	}
+	/* A level image's pixels are 2^n blocks from the top-left, so its
+	 * last column and row may stand partly outside the view. */
+	f->small_u = 1.0f;
+	f->small_v = 1.0f;
+	if (level > 0) {
+		f->small_u = (float)fr->width /
+		             (float)((uint32_t)fr->image_width << level);
+		f->small_v = (float)fr->height /
+		             (float)((uint32_t)fr->image_height << level);
+	}
+	note_level(f, m);
 	up->tex = BC_VIEWER_TEX_SMALL;
 	up->resized = f->small.width != w || f->small.height != h;
 	up->whole = up->resized;
@@ -177,9 +222,10 @@ int bc_viewer_frames_apply(struct bc_viewer_frames *f, const struct bc_msg *m,
 		if (f->comp_stale && f->small.rgba &&
 		    f->small.view_width == f->width &&
 		    f->small.view_height == f->height) {
-			bc_viewer_upscale(f->small.rgba, f->small.width,
-			                  f->small.height, f->comp, f->width,
-			                  f->height);
+			bc_viewer_upscale_part(f->small.rgba, f->small.width,
+			                       f->small.height, f->small_u,
+			                       f->small_v, f->comp, f->width,
+			                       f->height);
 			up->whole = true;
 		}
 		/* The rectangles are relative to a base this picture may not
@@ -204,5 +250,6 @@ int bc_viewer_frames_apply(struct bc_viewer_frames *f, const struct bc_msg *m,
 	f->comp_stale = false;
 	f->showing_small = false;
 	f->last_still = still;
+	note_level(f, m);
 	return 0;
 }

@@ -316,11 +316,12 @@ void bc_viewer_gl_begin(struct bc_viewer_gl *gl, uint32_t w, uint32_t h)
 }
 
 void bc_viewer_gl_image(struct bc_viewer_gl *gl, enum bc_viewer_tex tex,
-                        float x0, float y0, float x1, float y1)
+                        float x0, float y0, float x1, float y1, float u1,
+                        float v1)
 {
 	const float pos[12] = {x0, y0, x1, y0, x1, y1, x0, y0, x1, y1, x0, y1};
-	const float uv[12] = {0.0f, 0.0f, 1.0f, 0.0f, 1.0f, 1.0f,
-	                      0.0f, 0.0f, 1.0f, 1.0f, 0.0f, 1.0f};
+	const float uv[12] = {0.0f, 0.0f, u1, 0.0f, u1,   v1,
+	                      0.0f, 0.0f, u1, v1,   0.0f, v1};
 	if (tex <= BC_VIEWER_TEX_NONE || tex >= BC_VIEWER_TEX_COUNT ||
 	    !gl->tex_w[tex]) {
 		return;

@@ -406,7 +406,7 @@ static void fmt_selection(struct bc_viewer_app *a, char *out, size_t n)
 static void draw_overlay(struct bc_viewer_app *a, uint32_t fw, uint32_t fh,
                          double now)
 {
-	char text[800], lat[64], sel[200];
+	char text[800], lat[64], sel[200], refining[32];
 	const float pad = 6.0f;
 	const float panel_rgba[4] = {0.0f, 0.0f, 0.0f, 0.6f};
 	const float text_rgba[4] = {0.95f, 0.95f, 0.9f, 1.0f};
@@ -416,19 +416,20 @@ static void draw_overlay(struct bc_viewer_app *a, uint32_t fw, uint32_t fh,
 	(void)fh;
 	fmt_latency(&a->meter, lat, sizeof(lat));
 	fmt_selection(a, sel, sizeof(sel));
-	snprintf(text, sizeof(text),
-	         "%.0f fps  edit>frame %s  %.1f kB/frame\n"
-	         "frame %u %s %s %ux%u %u rect%s order %llu\n%s",
-	         bc_viewer_meter_fps(&a->meter, now), lat,
-	         bc_viewer_meter_kb(&a->meter), a->last.frame_no,
-	         (a->last.flags & BC_PROTO_FLAG_STILL) ? "still"
-	                                               : "interactive",
-	         a->last.encoding == BC_PROTO_ENC_PNG   ? "png"
-	         : a->last.encoding == BC_PROTO_ENC_RAW ? "raw"
-	                                                : "jpeg",
-	         a->last.image_width, a->last.image_height, a->last.nrects,
-	         a->last.nrects == 1 ? "" : "s",
-	         (unsigned long long)a->last.order, sel);
+	bc_viewer_refining_text(a->last.flags, refining, sizeof(refining));
+	snprintf(
+	    text, sizeof(text),
+	    "%.0f fps  edit>frame %s  %.1f kB/frame\n"
+	    "frame %u %s %s %ux%u %u rect%s order %llu%s%s\n%s",
+	    bc_viewer_meter_fps(&a->meter, now), lat,
+	    bc_viewer_meter_kb(&a->meter), a->last.frame_no,
+	    (a->last.flags & BC_PROTO_FLAG_STILL) ? "still" : "interactive",
+	    a->last.encoding == BC_PROTO_ENC_PNG   ? "png"
+	    : a->last.encoding == BC_PROTO_ENC_RAW ? "raw"
+	                                           : "jpeg",
+	    a->last.image_width, a->last.image_height, a->last.nrects,
+	    a->last.nrects == 1 ? "" : "s", (unsigned long long)a->last.order,
+	    refining[0] ? "  " : "", refining, sel);
 	if (a->status[0] &&
 	    (a->offline || now - a->status_at < BC_VIEWER_STATUS_MS)) {
 		size_t len = strlen(text);
@@ -552,11 +553,13 @@ static void draw(struct bc_viewer_app *a, double now)
 	fh = (uint32_t)fhi;
 	bc_viewer_gl_begin(&a->gl, fw, fh);
 	if (a->frames.showing_small) {
+		/* A level image spans the view with its top-left part. */
 		bc_viewer_gl_image(&a->gl, BC_VIEWER_TEX_SMALL, 0.0f, 0.0f,
-		                   (float)fw, (float)fh);
+		                   (float)fw, (float)fh, a->frames.small_u,
+		                   a->frames.small_v);
 	} else if (a->frames.have_full) {
 		bc_viewer_gl_image(&a->gl, BC_VIEWER_TEX_FULL, 0.0f, 0.0f,
-		                   (float)fw, (float)fh);
+		                   (float)fw, (float)fh, 1.0f, 1.0f);
 	}
 	draw_highlight(a, fw, fh);
 	if (a->o.overlay) {

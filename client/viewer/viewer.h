@@ -171,7 +171,7 @@ uint32_t bc_viewer_edits_frame(struct bc_viewer_edits *q, uint64_t order,
 enum bc_viewer_tex {
 	BC_VIEWER_TEX_NONE = 0,
 	BC_VIEWER_TEX_FULL,  /* the view-size composite */
-	BC_VIEWER_TEX_SMALL, /* the downscaled interactive image */
+	BC_VIEWER_TEX_SMALL, /* a coarse (level > 0) or downscaled image */
 	BC_VIEWER_TEX_COUNT
 };
 
@@ -188,13 +188,22 @@ struct bc_viewer_update {
 
 struct bc_viewer_frames {
 	struct bc_client_image full;  /* full-size frames, decoded */
-	struct bc_client_image small; /* downscaled frames, decoded */
+	struct bc_client_image small; /* coarse or downscaled frames, decoded */
 	uint8_t *comp; /* width x height RGBA: what the full texture holds */
 	uint32_t width, height;
 	bool have_full;     /* comp holds a picture */
-	bool comp_stale;    /* a downscaled frame came after comp's picture */
-	bool showing_small; /* the last frame was downscaled */
+	bool comp_stale;    /* a smaller frame came after comp's picture */
+	bool showing_small; /* the last frame was smaller than the view */
 	bool last_still;    /* the last frame had the STILL flag */
+	/* The part of the small image that spans the view, as a fraction of
+	 * its width and height: at level n > 0 each pixel is a 2^n block from
+	 * the top-left, so view / (image * 2^n) (the last block may reach past
+	 * the view); 1 for a downscaled level-0 image. */
+	float small_u, small_v;
+	/* The last frame's refinement level, and whether the picture is still
+	 * being refined (level > 0 or INCOMPLETE: more frames follow). */
+	uint8_t level;
+	bool refining;
 };
 
 void bc_viewer_frames_init(struct bc_viewer_frames *f);
@@ -202,9 +211,10 @@ void bc_viewer_frames_finish(struct bc_viewer_frames *f);
 /*
  * Applies FRAME m (not a snapshot). A full-size frame is decoded and its
  * rectangles copied into comp; when comp is stale and the frame does not
- * cover it, the last downscaled image is first scaled up into comp, so that
- * no pixel older than the newest interactive frame shows. A downscaled
- * frame replaces the small image. *up says what to upload. Returns 0 or the
+ * cover it, the last small image is first scaled up into comp, so that
+ * no pixel older than the newest interactive frame shows. A frame smaller
+ * than the view (a refinement level above 0, or a downscaled level-0 frame)
+ * replaces the small image. *up says what to upload. Returns 0 or the
  * error of bc_client_image_apply (the picture is then left as it was, as
  * far as possible) or BC_ENOMEM, with the reason in ei.
  */
@@ -219,6 +229,15 @@ void bc_viewer_copy_rect(const uint8_t *src, uint32_t stride, uint32_t x,
  * pixel centres as GL's linear filter does. */
 void bc_viewer_upscale(const uint8_t *src, uint32_t sw, uint32_t sh,
                        uint8_t *dst, uint32_t dw, uint32_t dh);
+/* The same for the top-left su x sv fraction of src (0 < su, sv <= 1)
+ * spread over dst: a level image, whose pixels are blocks anchored at the
+ * view's top-left. */
+void bc_viewer_upscale_part(const uint8_t *src, uint32_t sw, uint32_t sh,
+                            float su, float sv, uint8_t *dst, uint32_t dw,
+                            uint32_t dh);
+/* The overlay's words for a frame's flags: "refining (level N)" while it is
+ * not final (a level above 0 or INCOMPLETE), else "". Returns out. */
+const char *bc_viewer_refining_text(uint16_t flags, char *out, size_t n);
 
 /* ---- font.c -------------------------------------------------------------- */
 

@@ -108,9 +108,11 @@ int bc_viewer_gl_upload(struct bc_viewer_gl *gl, enum bc_viewer_tex tex,
 
 /* Starts a frame in a window of w x h pixels: viewport, clear. */
 void bc_viewer_gl_begin(struct bc_viewer_gl *gl, uint32_t w, uint32_t h);
-/* Draws texture tex stretched over the window rectangle (x0, y0)-(x1, y1). */
+/* Draws the top-left u1 x v1 fraction of texture tex (1, 1: all of it)
+ * stretched over the window rectangle (x0, y0)-(x1, y1). */
 void bc_viewer_gl_image(struct bc_viewer_gl *gl, enum bc_viewer_tex tex,
-                        float x0, float y0, float x1, float y1);
+                        float x0, float y0, float x1, float y1, float u1,
+                        float v1);
 /* Draws n vertices (x, y pairs in window pixels) as GL_TRIANGLES or
  * GL_LINES in one colour; alpha blends. */
 void bc_viewer_gl_draw(struct bc_viewer_gl *gl, GLenum mode, const float *xy,

@@ -606,6 +606,83 @@ static void test_frames_rectangles_and_downscale(void)
 	bc_viewer_frames_finish(NULL);
 }
 
+/* Refinement levels: a level-2 frame of a 7 x 5 view is a 2 x 2 image,
+ * shown on the small texture with the top-left 7/8 x 5/8 of it spanning
+ * the view; the viewer says "refining (level 2)" until a finished level-0
+ * frame arrives, and a partial still after it starts from the level image
+ * scaled by its blocks, not stretched. */
+static void test_frames_levels(void)
+{
+	enum { W = 7, H = 5 };
+	uint8_t c[2 * 2 * 4], a[W * H * 4], want[W * H * 4];
+	uint8_t store[W * H * 4];
+	struct bc_viewer_frames f;
+	struct bc_viewer_update up;
+	struct bc_proto_rect r[1];
+	struct bc_msg m;
+	char text[32];
+	bc_viewer_frames_init(&f);
+	fill(c, 2, 2, 40);
+	fill(a, W, H, 90);
+
+	r[0] = (struct bc_proto_rect){0, 0, 2, 2, {NULL, 0}};
+	m = raw_frame(W, H, 2, 2, false, r, 1, c, store);
+	m.flags = bc_proto_flags_with_level(0, 2);
+	REQUIRE(bc_viewer_frames_apply(&f, &m, &up, NULL) == 0);
+	CHECK_EQ_INT(up.tex, BC_VIEWER_TEX_SMALL);
+	CHECK(f.showing_small && f.comp_stale);
+	CHECK_EQ_INT(f.level, 2);
+	CHECK(f.refining);
+	CHECK_NEAR(f.small_u, 7.0 / 8.0, 1e-6);
+	CHECK_NEAR(f.small_v, 5.0 / 8.0, 1e-6);
+	CHECK(strcmp(bc_viewer_refining_text(m.flags, text, sizeof(text)),
+	             "refining (level 2)") == 0);
+
+	/* A partial still: the rest comes from the level image, each of its
+	 * pixels a 4 x 4 block from the top-left. Column 3 samples source
+	 * x = 3.5 * 8 / 4 / 7 ... = 0.375, not 0.5 as a stretch would. */
+	r[0] = (struct bc_proto_rect){0, 0, 1, 1, {NULL, 0}};
+	m = raw_frame(W, H, W, H, true, r, 1, a, store);
+	REQUIRE(bc_viewer_frames_apply(&f, &m, &up, NULL) == 0);
+	CHECK(up.whole && up.want_refresh);
+	CHECK_EQ_INT(f.level, 0);
+	CHECK(!f.refining);
+	CHECK(strcmp(bc_viewer_refining_text(m.flags, text, sizeof(text)),
+	             "") == 0);
+	bc_viewer_upscale_part(c, 2, 2, 7.0f / 8.0f, 5.0f / 8.0f, want, W, H);
+	for (uint32_t y = 0; y < H; y++) {
+		for (uint32_t x = 0; x < W; x++) {
+			CHECK(px_eq(f.comp, W, x, y, x < 1 && y < 1 ? a : want,
+			            W));
+		}
+	}
+	/* Red of c: 40 at x 0, 60 at x 1; view column 3 is 0.375 of the
+	 * way: 47.5, where stretching 2 over 7 would give 50. */
+	CHECK_EQ_INT(f.comp[(size_t)3 * 4u], 48);
+
+	/* Level 0 cut by the budget is still refining, at level 0. */
+	r[0] = (struct bc_proto_rect){0, 0, W, H, {NULL, 0}};
+	m = raw_frame(W, H, W, H, false, r, 1, a, store);
+	m.flags = BC_PROTO_FLAG_INCOMPLETE;
+	REQUIRE(bc_viewer_frames_apply(&f, &m, &up, NULL) == 0);
+	CHECK(f.refining);
+	CHECK_EQ_INT(f.level, 0);
+	CHECK(strcmp(bc_viewer_refining_text(m.flags, text, sizeof(text)),
+	             "refining (level 0)") == 0);
+	/* A level-1 frame after a downscaled level-0 one: the same small
+	 * texture, new extents. */
+	r[0] = (struct bc_proto_rect){0, 0, 4, 3, {NULL, 0}};
+	m = raw_frame(W, H, 4, 3, false, r, 1, a, store);
+	REQUIRE(bc_viewer_frames_apply(&f, &m, &up, NULL) == 0);
+	CHECK_NEAR(f.small_u, 1.0, 1e-6);
+	m.flags = bc_proto_flags_with_level(BC_PROTO_FLAG_INCOMPLETE, 1);
+	REQUIRE(bc_viewer_frames_apply(&f, &m, &up, NULL) == 0);
+	CHECK_EQ_INT(f.level, 1);
+	CHECK_NEAR(f.small_u, 7.0 / 8.0, 1e-6);
+	CHECK_NEAR(f.small_v, 5.0 / 6.0, 1e-6);
+	bc_viewer_frames_finish(&f);
+}
+
 /* Bad rectangles are refused and leave the picture alone. */
 static void test_frames_refuse_bad_rectangles(void)
 {
@@ -776,6 +853,7 @@ static const struct bc_test tests[] = {
     {"edits_refused", test_edits_refused},
     {"edits_bounded", test_edits_bounded},
     {"frames_rectangles_and_downscale", test_frames_rectangles_and_downscale},
+    {"frames_levels", test_frames_levels},
     {"frames_refuse_bad_rectangles", test_frames_refuse_bad_rectangles},
     {"frames_allocation_failures", test_frames_allocation_failures},
     {"upscale_samples_pixel_centres", test_upscale_samples_pixel_centres},
