@@ -92,17 +92,18 @@ struct cmd {
 };
 
 static const char common_help[] =
-	"  --server ADDR   HOST:PORT, [IPV6]:PORT or unix:PATH (default\n"
-	"                  $BLOBCAST_SERVER, else 127.0.0.1:7878)\n"
-	"  --token TOKEN   authentication token (default $BLOBCAST_TOKEN;\n"
-	"                  not needed over loopback or a Unix socket unless\n"
-	"                  the server requires one)\n"
-	"  --name NAME     client name shown to other members\n"
-	"  --timeout MS    limit for connecting and for each answer (default\n"
-	"                  10000; 0 waits forever)\n"
-	"  --help          this text\n";
+    "  --server ADDR   HOST:PORT, [IPV6]:PORT or unix:PATH (default\n"
+    "                  $BLOBCAST_SERVER, else 127.0.0.1:7878)\n"
+    "  --token TOKEN   authentication token (default $BLOBCAST_TOKEN;\n"
+    "                  not needed over loopback or a Unix socket unless\n"
+    "                  the server requires one)\n"
+    "  --name NAME     client name shown to other members\n"
+    "  --timeout MS    limit for connecting and for each answer (default\n"
+    "                  10000; 0 waits forever)\n"
+    "  --help          this text\n";
 
-/* ---- small helpers ---------------------------------------------------------- */
+/* ---- small helpers ----------------------------------------------------------
+ */
 
 static double now_ms(void)
 {
@@ -215,7 +216,7 @@ static const char *encoding_name(enum bc_proto_encoding e)
 
 /* Matches "--name VALUE" and "--name=VALUE"; advances *i past the value. */
 static bool take_value(int argc, char **argv, int *i, const char *name,
-		       const char **value)
+                       const char **value)
 {
 	const char *a = argv[*i];
 	size_t n = strlen(name);
@@ -235,11 +236,11 @@ static bool take_value(int argc, char **argv, int *i, const char *name,
 
 /* Prints a failure of the server or the connection; returns EXIT_FAIL. */
 static int failed(const struct args *a, const char *what,
-		  const struct bc_errinfo *ei)
+                  const struct bc_errinfo *ei)
 {
 	fprintf(stderr, "blobcast %s: %s%s%s (%s)\n", a->cmd, what ? what : "",
-		what ? ": " : "", ei->msg[0] ? ei->msg : bc_strerror(ei->code),
-		bc_err_name(ei->code));
+	        what ? ": " : "", ei->msg[0] ? ei->msg : bc_strerror(ei->code),
+	        bc_err_name(ei->code));
 	return EXIT_FAIL;
 }
 
@@ -249,12 +250,12 @@ static int connect_to(const struct args *a, struct bc_client **c)
 	const char *token = a->token ? a->token : getenv("BLOBCAST_TOKEN");
 	const char *addr = a->server ? a->server : getenv("BLOBCAST_SERVER");
 	if (bc_client_connect(c,
-			      &(struct bc_client_opts){
-				      .addr = addr,
-				      .name = a->name ? a->name : "blobcast-cli",
-				      .token = token,
-				      .timeout_ms = a->timeout_ms},
-			      &ei)) {
+	                      &(struct bc_client_opts){
+	                          .addr = addr,
+	                          .name = a->name ? a->name : "blobcast-cli",
+	                          .token = token,
+	                          .timeout_ms = a->timeout_ms},
+	                      &ei)) {
 		return failed(a, NULL, &ei);
 	}
 	return 0;
@@ -262,7 +263,7 @@ static int connect_to(const struct args *a, struct bc_client **c)
 
 /* Connects and enters the session; viewers unless the command edits. */
 static int open_session(const struct args *a, enum bc_proto_role role,
-			enum bc_client_join_mode mode, struct bc_client **c)
+                        enum bc_client_join_mode mode, struct bc_client **c)
 {
 	struct bc_errinfo ei = {0};
 	int status = connect_to(a, c);
@@ -277,7 +278,8 @@ static int open_session(const struct args *a, enum bc_proto_role role,
 	return 0;
 }
 
-/* ---- load --------------------------------------------------------------------- */
+/* ---- load
+ * --------------------------------------------------------------------- */
 
 static int run_load(struct args *a)
 {
@@ -302,12 +304,12 @@ static int run_load(struct args *a)
 	}
 	if ((rc = bc_scene_encode(t, &cam, &bytes, &len))) {
 		fprintf(stderr, "blobcast load: cannot encode %s: %s\n",
-			a->pos[0], bc_strerror(rc));
+		        a->pos[0], bc_strerror(rc));
 		status = EXIT_FAIL;
 		goto out;
 	}
 	if ((status = open_session(a, BC_PROTO_ROLE_EDITOR, BC_CLIENT_JOIN_ANY,
-				   &c))) {
+	                           &c))) {
 		goto out;
 	}
 	if (bc_client_load_scene(c, bytes, len, &order, &ei)) {
@@ -324,7 +326,8 @@ out:
 	return status;
 }
 
-/* ---- edit ------------------------------------------------------------------------ */
+/* ---- edit
+ * ------------------------------------------------------------------------ */
 
 static int run_edit(struct args *a)
 {
@@ -335,21 +338,21 @@ static int run_edit(struct args *a)
 	int status;
 	if (!parse_u64(a->pos[0], 1, UINT32_MAX, &id)) {
 		fprintf(stderr,
-			"blobcast edit: \"%s\" is not a node id (1..%u)\n",
-			a->pos[0], UINT32_MAX);
+		        "blobcast edit: \"%s\" is not a node id (1..%u)\n",
+		        a->pos[0], UINT32_MAX);
 		return EXIT_USAGE;
 	}
 	if ((status = open_session(a, BC_PROTO_ROLE_EDITOR,
-				   BC_CLIENT_JOIN_EXISTING, &c))) {
+	                           BC_CLIENT_JOIN_EXISTING, &c))) {
 		goto out;
 	}
 	if (bc_client_edit_kv(c, (uint32_t)id, a->pos + 1,
-			      (size_t)(a->npos - 1), a->interacting, &seq,
-			      &ei)) {
+	                      (size_t)(a->npos - 1), a->interacting, &seq,
+	                      &ei)) {
 		/* Bad key=value text is the user's mistake, not the server's;
 		 * the connection failing is not. */
 		status = bc_client_error(c, NULL) ? failed(a, NULL, &ei)
-						  : EXIT_USAGE;
+		                                  : EXIT_USAGE;
 		if (status == EXIT_USAGE) {
 			fprintf(stderr, "blobcast edit: %s\n", ei.msg);
 		}
@@ -366,7 +369,8 @@ out:
 	return status;
 }
 
-/* ---- camera -------------------------------------------------------------------------- */
+/* ---- camera
+ * -------------------------------------------------------------------------- */
 
 /* Overrides the parts of cam that the options give. */
 static void apply_camera_opts(const struct args *a, struct bc_camera *cam)
@@ -404,16 +408,16 @@ static int run_camera(struct args *a)
 	int status, rc;
 	if (!a->has_eye || !a->has_target) {
 		fprintf(stderr, "blobcast camera: --eye and --target are "
-				"required (see blobcast camera --help)\n");
+		                "required (see blobcast camera --help)\n");
 		return EXIT_USAGE;
 	}
 	if ((status = open_session(a, BC_PROTO_ROLE_EDITOR,
-				   BC_CLIENT_JOIN_EXISTING, &c))) {
+	                           BC_CLIENT_JOIN_EXISTING, &c))) {
 		goto out;
 	}
 	if (!(t = bc_client_scene(c, &cam))) {
 		fprintf(stderr, "blobcast camera: the session's scene did not "
-				"arrive intact\n");
+		                "arrive intact\n");
 		status = EXIT_FAIL;
 		goto out;
 	}
@@ -424,8 +428,9 @@ static int run_camera(struct args *a)
 		goto out;
 	}
 	if ((rc = bc_scene_encode(t, &cam, &bytes, &len))) {
-		fprintf(stderr, "blobcast camera: cannot encode the scene: %s\n",
-			bc_strerror(rc));
+		fprintf(stderr,
+		        "blobcast camera: cannot encode the scene: %s\n",
+		        bc_strerror(rc));
 		status = EXIT_FAIL;
 		goto out;
 	}
@@ -438,24 +443,26 @@ static int run_camera(struct args *a)
 		/* Edits by others landed between our copy and our load; the
 		 * load replaced them (there is no compare-and-swap). */
 		fprintf(stderr,
-			"blobcast camera: warning: %llu edit(s) by other "
-			"members arrived meanwhile and were replaced\n",
-			(unsigned long long)(order - before - 1));
+		        "blobcast camera: warning: %llu edit(s) by other "
+		        "members arrived meanwhile and were replaced\n",
+		        (unsigned long long)(order - before - 1));
 	}
 	printf("session %s: camera eye %g,%g,%g target %g,%g,%g up %g,%g,%g "
 	       "fov %g, edit order %llu\n",
 	       a->session, (double)cam.eye[0], (double)cam.eye[1],
-	       (double)cam.eye[2], (double)cam.target[0],
-	       (double)cam.target[1], (double)cam.target[2],
-	       (double)cam.up[0], (double)cam.up[1], (double)cam.up[2],
-	       (double)cam.fov_y_deg, (unsigned long long)order);
+	       (double)cam.eye[2], (double)cam.target[0], (double)cam.target[1],
+	       (double)cam.target[2], (double)cam.up[0], (double)cam.up[1],
+	       (double)cam.up[2], (double)cam.fov_y_deg,
+	       (unsigned long long)order);
 out:
 	bc_free(bytes);
 	bc_client_destroy(c);
 	return status;
 }
 
-/* ---- snapshot --------------------------------------------------------------------------- */
+/* ---- snapshot
+ * ---------------------------------------------------------------------------
+ */
 
 static int run_snapshot(struct args *a)
 {
@@ -467,25 +474,25 @@ static int run_snapshot(struct args *a)
 	int status;
 	if (a->depth) {
 		fprintf(stderr,
-			"blobcast snapshot: --depth is not supported by the "
-			"server protocol yet (FRAME carries colour only)\n");
+		        "blobcast snapshot: --depth is not supported by the "
+		        "server protocol yet (FRAME carries colour only)\n");
 		return EXIT_USAGE;
 	}
 	if (!a->has_size || !a->out) {
 		fprintf(stderr, "blobcast snapshot: --size and --out are "
-				"required (see blobcast snapshot --help)\n");
+		                "required (see blobcast snapshot --help)\n");
 		return EXIT_USAGE;
 	}
 	if (!bc_image_ext_supports(a->out, BC_IMAGE_U8)) {
 		fprintf(stderr,
-			"blobcast snapshot: \"%s\": no image format for this "
-			"extension (use .png, .tif, .exr, .jpg, ...)\n",
-			a->out);
+		        "blobcast snapshot: \"%s\": no image format for this "
+		        "extension (use .png, .tif, .exr, .jpg, ...)\n",
+		        a->out);
 		return EXIT_USAGE;
 	}
 	bc_client_image_init(&img);
 	if ((status = open_session(a, BC_PROTO_ROLE_VIEWER,
-				   BC_CLIENT_JOIN_EXISTING, &c))) {
+	                           BC_CLIENT_JOIN_EXISTING, &c))) {
 		goto out;
 	}
 	if (a->has_eye || a->has_target || a->has_up || a->has_fov) {
@@ -506,35 +513,36 @@ static int run_snapshot(struct args *a)
 	/* The VIEW gives the size; its stream frame is a cheap JPEG we skip.
 	 * The snapshot itself is lossless. */
 	if (bc_client_view(c,
-			   &(struct bc_msg_view){.width = a->width,
-						 .height = a->height,
-						 .encoding = BC_PROTO_ENC_JPEG,
-						 .quality_interactive = 30,
-						 .quality_still = 30},
-			   &seq, &ei) ||
+	                   &(struct bc_msg_view){.width = a->width,
+	                                         .height = a->height,
+	                                         .encoding = BC_PROTO_ENC_JPEG,
+	                                         .quality_interactive = 30,
+	                                         .quality_still = 30},
+	                   &seq, &ei) ||
 	    bc_client_snapshot(c, BC_PROTO_ENC_PNG, &img, &ei)) {
 		status = failed(a, "snapshot", &ei);
 		goto out;
 	}
 	if (img.flags & BC_PROTO_FLAG_INCOMPLETE) {
-		fprintf(stderr,
-			"blobcast snapshot: the server hit its frame time budget "
-			"and sent a partial picture; nothing written (a smaller "
-			"--size renders faster)\n");
+		fprintf(
+		    stderr,
+		    "blobcast snapshot: the server hit its frame time budget "
+		    "and sent a partial picture; nothing written (a smaller "
+		    "--size renders faster)\n");
 		status = EXIT_FAIL;
 		goto out;
 	}
 	if (!img.complete || img.width != a->width || img.height != a->height) {
 		fprintf(stderr,
-			"blobcast snapshot: the server sent a %ux%u picture%s "
-			"for a %ux%u request\n",
-			img.width, img.height, img.complete ? "" : " in part",
-			a->width, a->height);
+		        "blobcast snapshot: the server sent a %ux%u picture%s "
+		        "for a %ux%u request\n",
+		        img.width, img.height, img.complete ? "" : " in part",
+		        a->width, a->height);
 		status = EXIT_FAIL;
 		goto out;
 	}
 	if (bc_image_write_rgba8(a->out, img.width, img.height, img.rgba,
-				 &ei)) {
+	                         &ei)) {
 		fprintf(stderr, "blobcast snapshot: %s\n", ei.msg);
 		status = EXIT_FAIL;
 		goto out;
@@ -550,7 +558,9 @@ out:
 	return status;
 }
 
-/* ---- watch ---------------------------------------------------------------------------------- */
+/* ---- watch
+ * ----------------------------------------------------------------------------------
+ */
 
 static volatile sig_atomic_t interrupted;
 
@@ -573,8 +583,7 @@ static void order_seen(struct order_times *o, uint64_t order, double at)
 	o->at[k] = at;
 }
 
-static bool order_time(const struct order_times *o, uint64_t order,
-		       double *at)
+static bool order_time(const struct order_times *o, uint64_t order, double *at)
 {
 	uint32_t k = (uint32_t)(order % WATCH_ORDERS);
 	if (order == 0 || o->order[k] != order) {
@@ -593,7 +602,7 @@ static const char *frame_kind(uint16_t flags)
 			return "snapshot incomplete";
 		}
 		return (flags & BC_PROTO_FLAG_STILL) ? "still incomplete"
-						     : "interactive incomplete";
+		                                     : "interactive incomplete";
 	}
 	if (flags & BC_PROTO_FLAG_SNAPSHOT) {
 		return "snapshot";
@@ -636,17 +645,17 @@ static int run_watch(struct args *a)
 		goto out;
 	}
 	if ((status = open_session(a, BC_PROTO_ROLE_VIEWER,
-				   BC_CLIENT_JOIN_EXISTING, &c))) {
+	                           BC_CLIENT_JOIN_EXISTING, &c))) {
 		goto out;
 	}
 	order_seen(times, bc_client_info(c)->order, now_ms());
 	view_at = now_ms();
 	if (bc_client_view(c,
-			   &(struct bc_msg_view){.width = a->width,
-						 .height = a->height,
-						 .encoding = a->encoding,
-						 .downscale = a->downscale},
-			   &seq, &ei)) {
+	                   &(struct bc_msg_view){.width = a->width,
+	                                         .height = a->height,
+	                                         .encoding = a->encoding,
+	                                         .downscale = a->downscale},
+	                   &seq, &ei)) {
 		status = failed(a, NULL, &ei);
 		goto out;
 	}
@@ -673,7 +682,7 @@ static int run_watch(struct args *a)
 		case BC_MSG_ERROR:
 			ei.code = -(int)m.error.code;
 			snprintf(ei.msg, sizeof(ei.msg), "%.*s",
-				 (int)m.error.text.len, m.error.text.ptr);
+			         (int)m.error.text.len, m.error.text.ptr);
 			status = failed(a, NULL, &ei);
 			goto out;
 		case BC_MSG_FRAME:
@@ -681,29 +690,28 @@ static int run_watch(struct args *a)
 			total_bytes += bc_client_info(c)->last_msg_bytes;
 			if (bc_client_image_apply(&img, &m, &ei)) {
 				fprintf(stderr,
-					"blobcast watch: frame %u does not "
-					"decode: %s\n",
-					m.frame.frame_no, ei.msg);
+				        "blobcast watch: frame %u does not "
+				        "decode: %s\n",
+				        m.frame.frame_no, ei.msg);
 			}
 			since = -1.0;
 			if (nframes == 1) {
 				since = at - view_at;
 				after = "view";
 			} else if (m.frame.order > last_order &&
-				   order_time(times, m.frame.order, &since)) {
+			           order_time(times, m.frame.order, &since)) {
 				since = at - since;
 				after = "edit";
 			}
 			last_order = m.frame.order;
-			printf("frame %llu no=%u order=%llu bytes=%u rects=%u "
-			       "image=%ux%u level=%u %s latency_ms=",
-			       (unsigned long long)nframes, m.frame.frame_no,
-			       (unsigned long long)m.frame.order,
-			       bc_client_info(c)->last_msg_bytes,
-			       m.frame.nrects, m.frame.image_width,
-			       m.frame.image_height,
-			       bc_proto_flags_level(m.flags),
-			       frame_kind(m.flags));
+			printf(
+			    "frame %llu no=%u order=%llu bytes=%u rects=%u "
+			    "image=%ux%u level=%u %s latency_ms=",
+			    (unsigned long long)nframes, m.frame.frame_no,
+			    (unsigned long long)m.frame.order,
+			    bc_client_info(c)->last_msg_bytes, m.frame.nrects,
+			    m.frame.image_width, m.frame.image_height,
+			    bc_proto_flags_level(m.flags), frame_kind(m.flags));
 			if (since >= 0.0) {
 				printf("%.2f after=%s\n", since, after);
 			} else {
@@ -735,7 +743,9 @@ out:
 	return status;
 }
 
-/* ---- bench-latency ------------------------------------------------------------------------------ */
+/* ---- bench-latency
+ * ------------------------------------------------------------------------------
+ */
 
 static int cmp_double(const void *x, const void *y)
 {
@@ -775,17 +785,17 @@ static uint32_t first_prim(const struct bc_tree *t)
  * with the frames and bytes received meanwhile added up, or an exit
  * status. */
 static int one_edit(const struct args *a, struct bc_client *c, uint32_t node,
-		    const float pos[3], uint64_t *frames, uint64_t *bytes,
-		    uint64_t *incomplete)
+                    const float pos[3], uint64_t *frames, uint64_t *bytes,
+                    uint64_t *incomplete)
 {
 	struct bc_proto_field f = {.field = BC_PROTO_FIELD_TRANSLATE,
-				   .count = 3};
+	                           .count = 3};
 	struct bc_errinfo ei = {0};
 	struct bc_msg m;
 	uint64_t want = 0;
 	uint32_t seq;
-	int timeout = a->timeout_ms == 0 ? BC_CLIENT_DEFAULT_TIMEOUT_MS
-					 : a->timeout_ms;
+	int timeout =
+	    a->timeout_ms == 0 ? BC_CLIENT_DEFAULT_TIMEOUT_MS : a->timeout_ms;
 	double deadline = now_ms() + (double)timeout;
 	memcpy(f.v, pos, 3 * sizeof(float));
 	if (bc_client_edit_set(c, node, &f, 1, a->interacting, &seq, &ei)) {
@@ -793,25 +803,23 @@ static int one_edit(const struct args *a, struct bc_client *c, uint32_t node,
 	}
 	for (;;) {
 		double left = deadline - now_ms();
-		int rc = bc_client_recv(c, &m,
-					timeout < 0 ? -1
-						    : (left > 0.0 ? (int)left + 1
-								  : 0));
+		int rc = bc_client_recv(
+		    c, &m, timeout < 0 ? -1 : (left > 0.0 ? (int)left + 1 : 0));
 		if (rc < 0) {
 			bc_client_error(c, &ei);
 			return failed(a, NULL, &ei);
 		}
 		if (rc == 0) {
 			fprintf(stderr,
-				"blobcast %s: no frame showing edit %u within "
-				"%d ms\n",
-				a->cmd, seq, timeout);
+			        "blobcast %s: no frame showing edit %u within "
+			        "%d ms\n",
+			        a->cmd, seq, timeout);
 			return EXIT_FAIL;
 		}
 		if (m.type == BC_MSG_ERROR) {
 			ei.code = -(int)m.error.code;
 			snprintf(ei.msg, sizeof(ei.msg), "%.*s",
-				 (int)m.error.text.len, m.error.text.ptr);
+			         (int)m.error.text.len, m.error.text.ptr);
 			return failed(a, NULL, &ei);
 		}
 		if (m.type == BC_MSG_EDIT_APPLIED &&
@@ -848,7 +856,7 @@ static int run_bench(struct args *a)
 	int status;
 	if (a->edits == 0) {
 		fprintf(stderr, "blobcast bench-latency: --edits N is required "
-				"(see blobcast bench-latency --help)\n");
+		                "(see blobcast bench-latency --help)\n");
 		return EXIT_USAGE;
 	}
 	if (!(lat = bc_calloc(a->edits, sizeof(*lat)))) {
@@ -856,12 +864,12 @@ static int run_bench(struct args *a)
 		return EXIT_FAIL;
 	}
 	if ((status = open_session(a, BC_PROTO_ROLE_EDITOR,
-				   BC_CLIENT_JOIN_EXISTING, &c))) {
+	                           BC_CLIENT_JOIN_EXISTING, &c))) {
 		goto out;
 	}
 	if (!bc_client_scene(c, NULL)) {
 		fprintf(stderr, "blobcast bench-latency: the session's scene "
-				"did not arrive intact\n");
+		                "did not arrive intact\n");
 		status = EXIT_FAIL;
 		goto out;
 	}
@@ -870,19 +878,20 @@ static int run_bench(struct args *a)
 	}
 	if (!bc_tree_get(bc_client_scene(c, NULL), node, &p, NULL) ||
 	    p.kind == BC_PRIM_INVALID) {
-		fprintf(stderr, "blobcast bench-latency: node %u is not a "
-				"primitive of the session's scene\n",
-			node);
+		fprintf(stderr,
+		        "blobcast bench-latency: node %u is not a "
+		        "primitive of the session's scene\n",
+		        node);
 		status = EXIT_USAGE;
 		goto out;
 	}
 	memcpy(origin, p.translate, sizeof(origin));
 	if (bc_client_view(c,
-			   &(struct bc_msg_view){.width = a->width,
-						 .height = a->height,
-						 .encoding = a->encoding,
-						 .downscale = a->downscale},
-			   &seq, &ei) ||
+	                   &(struct bc_msg_view){.width = a->width,
+	                                         .height = a->height,
+	                                         .encoding = a->encoding,
+	                                         .downscale = a->downscale},
+	                   &seq, &ei) ||
 	    bc_client_wait(c, BC_MSG_FRAME, 0, &m, 0, &ei)) {
 		status = failed(a, "first frame", &ei);
 		goto out;
@@ -895,7 +904,7 @@ static int run_bench(struct args *a)
 		}
 		t0 = now_ms();
 		if ((status = one_edit(a, c, node, pos, &frames, &bytes,
-				       &incomplete))) {
+		                       &incomplete))) {
 			goto out;
 		}
 		lat[i] = now_ms() - t0;
@@ -913,30 +922,30 @@ static int run_bench(struct args *a)
 		goto out;
 	}
 	qsort(lat, a->edits, sizeof(*lat), cmp_double);
-	j = json_pack("{s:s, s:s, s:i, s:s, s:I, s:I, s:b, s:f, s:f, s:f, "
-		      "s:f, s:f, s:I, s:f, s:f, s:f, s:f}",
-		      "bench", "edit_to_frame_latency", "session", a->session,
-		      "edits", (int)a->edits, "encoding",
-		      encoding_name(a->encoding ? a->encoding
-						: BC_PROTO_ENC_JPEG),
-		      "width", (json_int_t)a->width, "height",
-		      (json_int_t)a->height, "interacting", a->interacting,
-		      "p50_ms", percentile(lat, a->edits, 50.0), "p99_ms",
-		      percentile(lat, a->edits, 99.0), "mean_ms",
-		      sum / (double)a->edits, "min_ms", lat[0], "max_ms",
-		      lat[a->edits - 1], "frames", (json_int_t)frames,
-		      "bytes_per_frame",
-		      frames ? (double)bytes / (double)frames : 0.0,
-		      "server_render_ms_avg", (double)st.render_ms_avg,
-		      "server_encode_ms_avg", (double)st.encode_ms_avg,
-		      "server_edit_ms_avg", (double)st.edit_ms_avg);
+	j = json_pack(
+	    "{s:s, s:s, s:i, s:s, s:I, s:I, s:b, s:f, s:f, s:f, "
+	    "s:f, s:f, s:I, s:f, s:f, s:f, s:f}",
+	    "bench", "edit_to_frame_latency", "session", a->session, "edits",
+	    (int)a->edits, "encoding",
+	    encoding_name(a->encoding ? a->encoding : BC_PROTO_ENC_JPEG),
+	    "width", (json_int_t)a->width, "height", (json_int_t)a->height,
+	    "interacting", a->interacting, "p50_ms",
+	    percentile(lat, a->edits, 50.0), "p99_ms",
+	    percentile(lat, a->edits, 99.0), "mean_ms", sum / (double)a->edits,
+	    "min_ms", lat[0], "max_ms", lat[a->edits - 1], "frames",
+	    (json_int_t)frames, "bytes_per_frame",
+	    frames ? (double)bytes / (double)frames : 0.0,
+	    "server_render_ms_avg", (double)st.render_ms_avg,
+	    "server_encode_ms_avg", (double)st.encode_ms_avg,
+	    "server_edit_ms_avg", (double)st.edit_ms_avg);
 	if (j) {
 		json_object_set_new(j, "node", json_integer(node));
 		/* Frames cut short by the server's frame time budget. */
 		json_object_set_new(j, "incomplete_frames",
-				    json_integer((json_int_t)incomplete));
+		                    json_integer((json_int_t)incomplete));
 	}
-	if (!j || !(line = json_dumps(j, JSON_COMPACT | JSON_REAL_PRECISION(6)))) {
+	if (!j ||
+	    !(line = json_dumps(j, JSON_COMPACT | JSON_REAL_PRECISION(6)))) {
 		fprintf(stderr, "blobcast bench-latency: out of memory\n");
 		status = EXIT_FAIL;
 		goto out;
@@ -950,85 +959,87 @@ out:
 	return status;
 }
 
-/* ---- dispatch ------------------------------------------------------------------------------------ */
+/* ---- dispatch
+ * ------------------------------------------------------------------------------------
+ */
 
 static const struct cmd cmds[] = {
-	{"load", O_SESSION, 1, 1, "--session NAME SCENE.json",
-	 "load a JSON scene into a session (created if missing)",
-	 "Loads SCENE.json (blobtree's JSON scene format, with its camera)\n"
-	 "into session NAME, replacing its scene; every member sees it at\n"
-	 "once. Creates the session when it does not exist.\n",
-	 run_load},
-	{"edit", O_SESSION | O_INTERACTING, 2, MAX_POSITIONAL,
-	 "--session NAME ID key=value...", "set parameters of one node",
-	 "Sets fields of node ID and waits until the server has applied the\n"
-	 "edit. Primitives: translate=x,y,z rotate=x,y,z,w (unit quaternion)\n"
-	 "color=r,g,b and their kind's parameters (radius=0.4,\n"
-	 "half_extents=0.5,0.5,0.5, ...; see docs/primitives.md). Operators:\n"
-	 "blend=B range=R kind=NAME (union, smooth_union, ...).\n"
-	 "  --interacting   mark the edit as part of a drag (the server\n"
-	 "                  answers with fast interactive frames)\n",
-	 run_edit},
-	{"camera", O_SESSION | O_CAMERA, 0, 0,
-	 "--session NAME --eye x,y,z --target x,y,z [--up x,y,z] [--fov DEG]",
-	 "set the session's camera",
-	 "Sets the session's saved camera: the view members start with and\n"
-	 "the one every member is moved to now. The protocol sets it only\n"
-	 "with a scene load, so the session's scene is loaded again with the\n"
-	 "new camera; edits other members make at that very moment are\n"
-	 "replaced (a warning says so). --up and --fov default to the\n"
-	 "session's current values.\n",
-	 run_camera},
-	{"snapshot", O_SESSION | O_SIZE | O_OUT | O_DEPTH | O_CAMERA, 0, 0,
-	 "--session NAME --size WxH --out IMG [--depth IMG]",
-	 "save a lossless still of a session to an image file",
-	 "Asks the server for a lossless (PNG) still of session NAME at WxH\n"
-	 "and writes it to IMG (any format OpenImageIO writes, by extension;\n"
-	 ".jpg is lossy). The camera is the session's, or the one given by\n"
-	 "--eye/--target/--up/--fov (for this picture only).\n"
-	 "  --depth IMG     not supported by the server protocol yet: FRAME\n"
-	 "                  carries colour only (exits with status 2)\n",
-	 run_snapshot},
-	{"watch", O_SESSION | O_SIZE | O_FRAMES | O_ENCODING | O_DOWNSCALE, 0, 0,
-	 "--session NAME [--frames N] [--size WxH]",
-	 "print a line per frame the session sends",
-	 "Joins session NAME as a viewer and prints one line per frame:\n"
-	 "  frame K no=SERVER_FRAME_NO order=EDIT_ORDER bytes=B rects=R\n"
-	 "  image=WxH level=N still|interactive latency_ms=L after=edit|view|-\n"
-	 "level is the frame's refinement level (0: full resolution; N: one\n"
-	 "pixel per 2^N block, finer frames follow). latency_ms is measured\n"
-	 "on this client: from the arrival of the newest change the frame\n"
-	 "shows (the EDIT_APPLIED or SCENE_STATE of its edit order; for the\n"
-	 "first frame, our VIEW request) to the arrival of the frame. It\n"
-	 "covers the server's render, encode and send, not the editor's\n"
-	 "upload; frames that show nothing new (a finer level, a still after\n"
-	 "interactive frames) print '-'. At the end (after N frames, or\n"
-	 "Ctrl-C) one 'stats' line gives the server's averages.\n"
-	 "  --frames N      stop after N frames (default: run until stopped)\n"
-	 "  --size WxH      view size (default 640x480)\n"
-	 "  --encoding E    jpeg (default), png or raw for still frames\n"
-	 "  --downscale D   coarsest block accepted (1..8): refinement frames at\n"
-	 "                  1/2^n resolution with 2^n <= D (default 1)\n",
-	 run_watch},
-	{"bench-latency",
-	 O_SESSION | O_SIZE | O_EDITS | O_NODE | O_ENCODING | O_INTERACTING |
-		 O_DOWNSCALE,
-	 0, 0, "--session NAME --edits N [--size WxH]",
-	 "measure edit-to-frame latency (prints JSON)",
-	 "Moves one primitive back and forth by 0.05 in x, N times, each time\n"
-	 "waiting for the first frame whose edit order includes the edit,\n"
-	 "and prints one JSON line: p50_ms, p99_ms, mean_ms, min_ms, max_ms\n"
-	 "of edit sent -> frame received, frames and bytes_per_frame (mean\n"
-	 "over every frame received during the run), and the server's render,\n"
-	 "encode and edit averages. The primitive is put back at the end.\n"
-	 "  --edits N       number of edits (1..1000000)\n"
-	 "  --size WxH      view size (default 640x480)\n"
-	 "  --node ID       primitive to move (default: the first one)\n"
-	 "  --encoding E    jpeg (default), png or raw for still frames\n"
-	 "  --interacting   send the edits as a drag (interactive frames)\n"
-	 "  --downscale D   coarsest block accepted (1..8): refinement frames at\n"
-	 "                  1/2^n resolution with 2^n <= D (default 1)\n",
-	 run_bench},
+    {"load", O_SESSION, 1, 1, "--session NAME SCENE.json",
+     "load a JSON scene into a session (created if missing)",
+     "Loads SCENE.json (blobtree's JSON scene format, with its camera)\n"
+     "into session NAME, replacing its scene; every member sees it at\n"
+     "once. Creates the session when it does not exist.\n",
+     run_load},
+    {"edit", O_SESSION | O_INTERACTING, 2, MAX_POSITIONAL,
+     "--session NAME ID key=value...", "set parameters of one node",
+     "Sets fields of node ID and waits until the server has applied the\n"
+     "edit. Primitives: translate=x,y,z rotate=x,y,z,w (unit quaternion)\n"
+     "color=r,g,b and their kind's parameters (radius=0.4,\n"
+     "half_extents=0.5,0.5,0.5, ...; see docs/primitives.md). Operators:\n"
+     "blend=B range=R kind=NAME (union, smooth_union, ...).\n"
+     "  --interacting   mark the edit as part of a drag (the server\n"
+     "                  answers with fast interactive frames)\n",
+     run_edit},
+    {"camera", O_SESSION | O_CAMERA, 0, 0,
+     "--session NAME --eye x,y,z --target x,y,z [--up x,y,z] [--fov DEG]",
+     "set the session's camera",
+     "Sets the session's saved camera: the view members start with and\n"
+     "the one every member is moved to now. The protocol sets it only\n"
+     "with a scene load, so the session's scene is loaded again with the\n"
+     "new camera; edits other members make at that very moment are\n"
+     "replaced (a warning says so). --up and --fov default to the\n"
+     "session's current values.\n",
+     run_camera},
+    {"snapshot", O_SESSION | O_SIZE | O_OUT | O_DEPTH | O_CAMERA, 0, 0,
+     "--session NAME --size WxH --out IMG [--depth IMG]",
+     "save a lossless still of a session to an image file",
+     "Asks the server for a lossless (PNG) still of session NAME at WxH\n"
+     "and writes it to IMG (any format OpenImageIO writes, by extension;\n"
+     ".jpg is lossy). The camera is the session's, or the one given by\n"
+     "--eye/--target/--up/--fov (for this picture only).\n"
+     "  --depth IMG     not supported by the server protocol yet: FRAME\n"
+     "                  carries colour only (exits with status 2)\n",
+     run_snapshot},
+    {"watch", O_SESSION | O_SIZE | O_FRAMES | O_ENCODING | O_DOWNSCALE, 0, 0,
+     "--session NAME [--frames N] [--size WxH]",
+     "print a line per frame the session sends",
+     "Joins session NAME as a viewer and prints one line per frame:\n"
+     "  frame K no=SERVER_FRAME_NO order=EDIT_ORDER bytes=B rects=R\n"
+     "  image=WxH level=N still|interactive latency_ms=L after=edit|view|-\n"
+     "level is the frame's refinement level (0: full resolution; N: one\n"
+     "pixel per 2^N block, finer frames follow). latency_ms is measured\n"
+     "on this client: from the arrival of the newest change the frame\n"
+     "shows (the EDIT_APPLIED or SCENE_STATE of its edit order; for the\n"
+     "first frame, our VIEW request) to the arrival of the frame. It\n"
+     "covers the server's render, encode and send, not the editor's\n"
+     "upload; frames that show nothing new (a finer level, a still after\n"
+     "interactive frames) print '-'. At the end (after N frames, or\n"
+     "Ctrl-C) one 'stats' line gives the server's averages.\n"
+     "  --frames N      stop after N frames (default: run until stopped)\n"
+     "  --size WxH      view size (default 640x480)\n"
+     "  --encoding E    jpeg (default), png or raw for still frames\n"
+     "  --downscale D   coarsest block accepted (1..8): refinement frames at\n"
+     "                  1/2^n resolution with 2^n <= D (default 1)\n",
+     run_watch},
+    {"bench-latency",
+     O_SESSION | O_SIZE | O_EDITS | O_NODE | O_ENCODING | O_INTERACTING |
+         O_DOWNSCALE,
+     0, 0, "--session NAME --edits N [--size WxH]",
+     "measure edit-to-frame latency (prints JSON)",
+     "Moves one primitive back and forth by 0.05 in x, N times, each time\n"
+     "waiting for the first frame whose edit order includes the edit,\n"
+     "and prints one JSON line: p50_ms, p99_ms, mean_ms, min_ms, max_ms\n"
+     "of edit sent -> frame received, frames and bytes_per_frame (mean\n"
+     "over every frame received during the run), and the server's render,\n"
+     "encode and edit averages. The primitive is put back at the end.\n"
+     "  --edits N       number of edits (1..1000000)\n"
+     "  --size WxH      view size (default 640x480)\n"
+     "  --node ID       primitive to move (default: the first one)\n"
+     "  --encoding E    jpeg (default), png or raw for still frames\n"
+     "  --interacting   send the edits as a drag (interactive frames)\n"
+     "  --downscale D   coarsest block accepted (1..8): refinement frames at\n"
+     "                  1/2^n resolution with 2^n <= D (default 1)\n",
+     run_bench},
 };
 
 static const struct cmd *find_cmd(const char *name)
@@ -1044,13 +1055,13 @@ static const struct cmd *find_cmd(const char *name)
 static void cmd_usage(const struct cmd *k, FILE *out)
 {
 	fprintf(out, "usage: blobcast %s %s [options]\n\n%s\n%s%s", k->name,
-		k->synopsis, k->summary, k->help,
-		k->opts & O_CAMERA ? "  --eye x,y,z --target x,y,z --up x,y,z "
-				     "--fov DEG\n                  camera\n"
-				   : "");
+	        k->synopsis, k->summary, k->help,
+	        k->opts & O_CAMERA ? "  --eye x,y,z --target x,y,z --up x,y,z "
+	                             "--fov DEG\n                  camera\n"
+	                           : "");
 	fprintf(out, "\ncommon options:\n%s", common_help);
 	fprintf(out, "\nexit status: 0 done, 1 the server or the connection "
-		     "failed, 2 usage error\n");
+	             "failed, 2 usage error\n");
 }
 
 void bc_cli_client_usage(FILE *out)
@@ -1063,7 +1074,7 @@ void bc_cli_client_usage(FILE *out)
 /* Parses one option at argv[*i] into a. Returns 0, or EXIT_USAGE after
  * printing why. */
 static int parse_option(const struct cmd *k, int argc, char **argv, int *i,
-			struct args *a)
+                        struct args *a)
 {
 	const char *arg = argv[*i], *v = NULL;
 	uint64_t x;
@@ -1074,7 +1085,7 @@ static int parse_option(const struct cmd *k, int argc, char **argv, int *i,
 		struct bc_errinfo ei = {0};
 		if (v && bc_client_addr_parse(v, &addr, &ei)) {
 			fprintf(stderr, "blobcast %s: --server: %s\n", k->name,
-				ei.msg);
+			        ei.msg);
 			return EXIT_USAGE;
 		}
 		a->server = v;
@@ -1132,7 +1143,7 @@ static int parse_option(const struct cmd *k, int argc, char **argv, int *i,
 	} else if (take_value(argc, argv, i, "--encoding", &v)) {
 		need = O_ENCODING;
 		ok = v && (a->encoding = encoding_from_name(v)) !=
-				  BC_PROTO_ENC_INVALID;
+		              BC_PROTO_ENC_INVALID;
 	} else if (take_value(argc, argv, i, "--downscale", &v)) {
 		need = O_DOWNSCALE;
 		ok = v && parse_u64(v, 1, BC_PROTO_MAX_DOWNSCALE, &x);
@@ -1143,24 +1154,24 @@ static int parse_option(const struct cmd *k, int argc, char **argv, int *i,
 		v = "";
 	} else {
 		fprintf(stderr,
-			"blobcast %s: unknown option \"%s\" (see blobcast %s "
-			"--help)\n",
-			k->name, arg, k->name);
+		        "blobcast %s: unknown option \"%s\" (see blobcast %s "
+		        "--help)\n",
+		        k->name, arg, k->name);
 		return EXIT_USAGE;
 	}
 	if (need && !(k->opts & need)) {
 		fprintf(stderr,
-			"blobcast %s: %s does not apply to this command (see "
-			"blobcast %s --help)\n",
-			k->name, arg, k->name);
+		        "blobcast %s: %s does not apply to this command (see "
+		        "blobcast %s --help)\n",
+		        k->name, arg, k->name);
 		return EXIT_USAGE;
 	}
 	if (!v || !ok) {
 		fprintf(stderr,
-			"blobcast %s: %s needs a valid value%s%s%s (see "
-			"blobcast %s --help)\n",
-			k->name, arg, v ? ", not \"" : "", v ? v : "",
-			v ? "\"" : "", k->name);
+		        "blobcast %s: %s needs a valid value%s%s%s (see "
+		        "blobcast %s --help)\n",
+		        k->name, arg, v ? ", not \"" : "", v ? v : "",
+		        v ? "\"" : "", k->name);
 		return EXIT_USAGE;
 	}
 	return 0;
@@ -1172,7 +1183,7 @@ int bc_cli_client(const char *subcommand, int argc, char **argv)
 	struct args a;
 	if (!k) {
 		fprintf(stderr, "blobcast: '%s' is not a client command\n",
-			subcommand);
+		        subcommand);
 		return EXIT_USAGE;
 	}
 	memset(&a, 0, sizeof(a));
@@ -1193,22 +1204,23 @@ int bc_cli_client(const char *subcommand, int argc, char **argv)
 		}
 		if (a.npos == k->max_pos) {
 			fprintf(stderr,
-				"blobcast %s: unexpected argument \"%s\" (see "
-				"blobcast %s --help)\n",
-				k->name, arg, k->name);
+			        "blobcast %s: unexpected argument \"%s\" (see "
+			        "blobcast %s --help)\n",
+			        k->name, arg, k->name);
 			return EXIT_USAGE;
 		}
 		a.pos[a.npos++] = arg;
 	}
 	if (a.npos < k->min_pos) {
-		fprintf(stderr, "usage: blobcast %s %s\n", k->name, k->synopsis);
+		fprintf(stderr, "usage: blobcast %s %s\n", k->name,
+		        k->synopsis);
 		return EXIT_USAGE;
 	}
 	if ((k->opts & O_SESSION) && !a.session) {
 		fprintf(stderr,
-			"blobcast %s: --session NAME is required (see "
-			"blobcast %s --help)\n",
-			k->name, k->name);
+		        "blobcast %s: --session NAME is required (see "
+		        "blobcast %s --help)\n",
+		        k->name, k->name);
 		return EXIT_USAGE;
 	}
 	if (!a.has_size) {

@@ -85,51 +85,52 @@ static void mark_damaged(struct bc_client_image *img)
 /* ---- decoders ------------------------------------------------------------ */
 
 static int decode_raw(struct bc_client_image *img,
-		      const struct bc_proto_rect *r, struct bc_errinfo *ei)
+                      const struct bc_proto_rect *r, struct bc_errinfo *ei)
 {
 	size_t row = (size_t)r->w * 4u;
 	if ((uint64_t)r->data.len != (uint64_t)row * r->h) {
 		return bc_errinfo_set(ei, BC_ECODEC,
-				      "raw rectangle %ux%u has %u bytes, not "
-				      "%zu",
-				      r->w, r->h, r->data.len, row * r->h);
+		                      "raw rectangle %ux%u has %u bytes, not "
+		                      "%zu",
+		                      r->w, r->h, r->data.len, row * r->h);
 	}
 	for (uint32_t y = 0; y < r->h; y++) {
-		memcpy(img->rgba + (((size_t)r->y + y) * img->width + r->x) * 4u,
+		memcpy(img->rgba +
+		           (((size_t)r->y + y) * img->width + r->x) * 4u,
 		       r->data.ptr + row * y, row);
 	}
 	return 0;
 }
 
 static int decode_jpeg(struct bc_client_image *img,
-		       const struct bc_proto_rect *r, struct bc_errinfo *ei)
+                       const struct bc_proto_rect *r, struct bc_errinfo *ei)
 {
 	int w = 0, h = 0, subsamp = 0, colorspace = 0;
 	unsigned char *dst;
 	if (!img->tj && !(img->tj = tjInitDecompress())) {
 		return bc_errinfo_set(ei, BC_ENOMEM,
-				      "cannot start a JPEG decoder");
+		                      "cannot start a JPEG decoder");
 	}
 	if (r->data.len == 0 ||
 	    tjDecompressHeader3(img->tj, r->data.ptr, r->data.len, &w, &h,
-				&subsamp, &colorspace) != 0) {
+	                        &subsamp, &colorspace) != 0) {
 		return bc_errinfo_set(ei, BC_ECODEC, "JPEG header: %s",
-				      r->data.len ? tjGetErrorStr2(img->tj)
-						  : "no bytes");
+		                      r->data.len ? tjGetErrorStr2(img->tj)
+		                                  : "no bytes");
 	}
 	if (w != (int)r->w || h != (int)r->h) {
 		return bc_errinfo_set(ei, BC_ECODEC,
-				      "JPEG of %dx%d in a %ux%u rectangle", w,
-				      h, r->w, r->h);
+		                      "JPEG of %dx%d in a %ux%u rectangle", w,
+		                      h, r->w, r->h);
 	}
 	dst = img->rgba + ((size_t)r->y * img->width + r->x) * 4u;
 	/* Warnings (a truncated stream) count as errors: the pixels they
 	 * leave are not the ones the server rendered. */
 	if (tjDecompress2(img->tj, r->data.ptr, r->data.len, dst, w,
-			  (int)(img->width * 4u), h, TJPF_RGBA,
-			  TJFLAG_STOPONWARNING) != 0) {
+	                  (int)(img->width * 4u), h, TJPF_RGBA,
+	                  TJFLAG_STOPONWARNING) != 0) {
 		return bc_errinfo_set(ei, BC_ECODEC, "JPEG: %s",
-				      tjGetErrorStr2(img->tj));
+		                      tjGetErrorStr2(img->tj));
 	}
 	return 0;
 }
@@ -178,7 +179,7 @@ static void png_dealloc(png_structp png, png_voidp p)
 }
 
 static int decode_png(struct bc_client_image *img,
-		      const struct bc_proto_rect *r, struct bc_errinfo *ei)
+                      const struct bc_proto_rect *r, struct bc_errinfo *ei)
 {
 	struct png_src src = {.data = r->data.ptr, .len = r->data.len};
 	png_structp png;
@@ -190,7 +191,7 @@ static int decode_png(struct bc_client_image *img,
 		return bc_errinfo_set(ei, BC_ECODEC, "not a PNG");
 	}
 	png = png_create_read_struct_2(PNG_LIBPNG_VER_STRING, &src, png_fail,
-				       png_warn, NULL, png_alloc, png_dealloc);
+	                               png_warn, NULL, png_alloc, png_dealloc);
 	if (!png || !(info = png_create_info_struct(png))) {
 		png_destroy_read_struct(&png, NULL, NULL);
 		return bc_errinfo_set(ei, BC_ENOMEM, "cannot start libpng");
@@ -206,8 +207,8 @@ static int decode_png(struct bc_client_image *img,
 	png_get_IHDR(png, info, &w, &h, &depth, &color, NULL, NULL, NULL);
 	if (w != r->w || h != r->h) {
 		rc = bc_errinfo_set(ei, BC_ECODEC,
-				    "PNG of %ux%u in a %ux%u rectangle",
-				    (unsigned)w, (unsigned)h, r->w, r->h);
+		                    "PNG of %ux%u in a %ux%u rectangle",
+		                    (unsigned)w, (unsigned)h, r->w, r->h);
 		goto out;
 	}
 	/* Whatever the server chose to store, we want 8-bit RGBA. */
@@ -221,10 +222,9 @@ static int decode_png(struct bc_client_image *img,
 	png_set_interlace_handling(png);
 	png_read_update_info(png, info);
 	if (png_get_rowbytes(png, info) != (size_t)r->w * 4u) {
-		rc = bc_errinfo_set(ei, BC_ECODEC,
-				    "PNG rows of %zu bytes, expected %u",
-				    (size_t)png_get_rowbytes(png, info),
-				    r->w * 4u);
+		rc = bc_errinfo_set(
+		    ei, BC_ECODEC, "PNG rows of %zu bytes, expected %u",
+		    (size_t)png_get_rowbytes(png, info), r->w * 4u);
 		goto out;
 	}
 	if (!(rows = bc_calloc(r->h, sizeof(*rows)))) {
@@ -232,8 +232,8 @@ static int decode_png(struct bc_client_image *img,
 		goto out;
 	}
 	for (uint32_t y = 0; y < r->h; y++) {
-		rows[y] = img->rgba +
-			  (((size_t)r->y + y) * img->width + r->x) * 4u;
+		rows[y] =
+		    img->rgba + (((size_t)r->y + y) * img->width + r->x) * 4u;
 	}
 	png_read_image(png, rows);
 	png_read_end(png, NULL);
@@ -244,18 +244,19 @@ out:
 	return rc;
 }
 
-/* ---- frames ---------------------------------------------------------------- */
+/* ---- frames ----------------------------------------------------------------
+ */
 
 /* Gives img the size of frame f: a new size is a new, empty picture. */
 static int fit(struct bc_client_image *img, const struct bc_msg_frame *f,
-	       struct bc_errinfo *ei)
+               struct bc_errinfo *ei)
 {
 	size_t bytes;
 	if (f->image_width == 0 || f->image_height == 0 ||
 	    f->image_width > BC_PROTO_MAX_DIM ||
 	    f->image_height > BC_PROTO_MAX_DIM) {
 		return bc_errinfo_set(ei, BC_ERANGE, "frame image %ux%u",
-				      f->image_width, f->image_height);
+		                      f->image_width, f->image_height);
 	}
 	if (img->rgba && img->width == f->image_width &&
 	    img->height == f->image_height) {
@@ -267,8 +268,8 @@ static int fit(struct bc_client_image *img, const struct bc_msg_frame *f,
 	img->width = img->height = 0;
 	if (!(img->rgba = bc_calloc(bytes, 1))) {
 		return bc_errinfo_set(ei, BC_ENOMEM,
-				      "no memory for a %ux%u image",
-				      f->image_width, f->image_height);
+		                      "no memory for a %ux%u image",
+		                      f->image_width, f->image_height);
 	}
 	img->width = f->image_width;
 	img->height = f->image_height;
@@ -276,7 +277,7 @@ static int fit(struct bc_client_image *img, const struct bc_msg_frame *f,
 }
 
 int bc_client_image_apply(struct bc_client_image *img, const struct bc_msg *m,
-			  struct bc_errinfo *ei)
+                          struct bc_errinfo *ei)
 {
 	const struct bc_msg_frame *f = &m->frame;
 	int rc;
@@ -294,16 +295,16 @@ int bc_client_image_apply(struct bc_client_image *img, const struct bc_msg *m,
 		    (uint32_t)r->x + r->w > img->width ||
 		    (uint32_t)r->y + r->h > img->height) {
 			return bc_errinfo_set(ei, BC_ERANGE,
-					      "rectangle %u (%u,%u %ux%u) is "
-					      "outside the %ux%u image",
-					      i, r->x, r->y, r->w, r->h,
-					      img->width, img->height);
+			                      "rectangle %u (%u,%u %ux%u) is "
+			                      "outside the %ux%u image",
+			                      i, r->x, r->y, r->w, r->h,
+			                      img->width, img->height);
 		}
 	}
 	if (f->encoding <= BC_PROTO_ENC_INVALID ||
 	    f->encoding >= BC_PROTO_ENC_COUNT) {
 		return bc_errinfo_set(ei, BC_EENUM, "frame encoding %d",
-				      (int)f->encoding);
+		                      (int)f->encoding);
 	}
 	img->view_width = f->width;
 	img->view_height = f->height;

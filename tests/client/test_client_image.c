@@ -45,8 +45,8 @@ static void gradient(uint8_t *rgba, uint32_t w, uint32_t h)
 }
 
 static struct bc_msg frame_msg(uint16_t w, uint16_t h,
-			       enum bc_proto_encoding enc,
-			       const struct bc_proto_rect *rects, uint16_t n)
+                               enum bc_proto_encoding enc,
+                               const struct bc_proto_rect *rects, uint16_t n)
 {
 	struct bc_msg m = {.type = BC_MSG_FRAME};
 	m.flags = BC_PROTO_FLAG_STILL;
@@ -65,13 +65,14 @@ static struct bc_msg frame_msg(uint16_t w, uint16_t h,
 
 /* The pixel (x, y) of img equals pixel (sx, sy) of src (src_w wide). */
 static int same_px(const struct bc_client_image *img, uint32_t x, uint32_t y,
-		   const uint8_t *src, uint32_t src_w, uint32_t sx, uint32_t sy)
+                   const uint8_t *src, uint32_t src_w, uint32_t sx, uint32_t sy)
 {
 	return memcmp(img->rgba + ((size_t)y * img->width + x) * 4u,
-		      src + ((size_t)sy * src_w + sx) * 4u, 4) == 0;
+	              src + ((size_t)sy * src_w + sx) * 4u, 4) == 0;
 }
 
-/* ---- encoders for test data ----------------------------------------------- */
+/* ---- encoders for test data -----------------------------------------------
+ */
 
 struct membuf {
 	uint8_t *data;
@@ -97,22 +98,22 @@ static void png_mem_flush(png_structp png)
 /* Encodes w x h pixels of channels (1 gray, 3 RGB, 4 RGBA) taken from the
  * first channels of rgba. Returns malloc'd bytes. */
 static uint8_t *make_png(const uint8_t *rgba, uint32_t w, uint32_t h,
-			 int channels, size_t *len)
+                         int channels, size_t *len)
 {
 	struct membuf m = {0};
 	png_structp png =
-		png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+	    png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
 	png_infop info = png_create_info_struct(png);
 	uint8_t *row = malloc((size_t)w * 4u);
 	int type = channels == 1   ? PNG_COLOR_TYPE_GRAY
-		   : channels == 3 ? PNG_COLOR_TYPE_RGB
-				   : PNG_COLOR_TYPE_RGB_ALPHA;
+	           : channels == 3 ? PNG_COLOR_TYPE_RGB
+	                           : PNG_COLOR_TYPE_RGB_ALPHA;
 	if (setjmp(png_jmpbuf(png))) {
 		abort();
 	}
 	png_set_write_fn(png, &m, png_mem_write, png_mem_flush);
 	png_set_IHDR(png, info, w, h, 8, type, PNG_INTERLACE_NONE,
-		     PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+	             PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
 	png_write_info(png, info);
 	for (uint32_t y = 0; y < h; y++) {
 		for (uint32_t x = 0; x < w; x++) {
@@ -130,14 +131,14 @@ static uint8_t *make_png(const uint8_t *rgba, uint32_t w, uint32_t h,
 }
 
 static uint8_t *make_jpeg(const uint8_t *rgba, uint32_t w, uint32_t h,
-			  size_t *len)
+                          size_t *len)
 {
 	tjhandle tj = tjInitCompress();
 	unsigned char *jpeg = NULL;
 	unsigned long size = 0;
 	uint8_t *copy;
 	if (tjCompress2(tj, rgba, (int)w, 0, (int)h, TJPF_RGBA, &jpeg, &size,
-			TJSAMP_444, 100, 0) != 0) {
+	                TJSAMP_444, 100, 0) != 0) {
 		abort();
 	}
 	copy = malloc(size);
@@ -148,7 +149,8 @@ static uint8_t *make_jpeg(const uint8_t *rgba, uint32_t w, uint32_t h,
 	return copy;
 }
 
-/* ---- tests ------------------------------------------------------------------ */
+/* ---- tests ------------------------------------------------------------------
+ */
 
 static void test_raw_full_frame_fills_image(void)
 {
@@ -180,8 +182,8 @@ static void test_partial_rects_replace_only_their_pixels(void)
 	struct bc_errinfo ei = {0};
 	struct bc_proto_rect full = {0, 0, 8, 8, {base, sizeof(base)}};
 	struct bc_proto_rect two[2] = {
-		{5, 6, 3, 2, {patch, sizeof(patch)}},
-		{0, 0, 1, 1, {patch2, sizeof(patch2)}},
+	    {5, 6, 3, 2, {patch, sizeof(patch)}},
+	    {0, 0, 1, 1, {patch2, sizeof(patch2)}},
 	};
 	struct bc_msg m = frame_msg(8, 8, BC_PROTO_ENC_RAW, &full, 1);
 	pattern(base, 8, 8, 0);
@@ -196,7 +198,7 @@ static void test_partial_rects_replace_only_their_pixels(void)
 		for (uint32_t x = 0; x < 8; x++) {
 			if (x >= 5 && y >= 6) {
 				CHECK(same_px(&img, x, y, patch, 3, x - 5,
-					      y - 6));
+				              y - 6));
 			} else if (x == 0 && y == 0) {
 				CHECK(same_px(&img, x, y, patch2, 1, 0, 0));
 			} else {
@@ -346,7 +348,7 @@ static void test_jpeg_rect_decodes_in_place(void)
 			const uint8_t *p = img.rgba + ((size_t)y * 32 + x) * 4;
 			if (x >= 16 && y >= 8 && y < 16) {
 				const uint8_t *q =
-					grad + ((size_t)(y - 8) * 16 + x - 16) * 4;
+				    grad + ((size_t)(y - 8) * 16 + x - 16) * 4;
 				for (int c = 0; c < 3; c++) {
 					int d = abs((int)p[c] - (int)q[c]);
 					worst = d > worst ? d : worst;
@@ -378,7 +380,7 @@ static void test_png_rects_decode_exactly(void)
 		struct bc_msg m = frame_msg(12, 10, BC_PROTO_ENC_PNG, &r, 1);
 		if (bc_client_image_apply(&img, &m, &ei) != 0) {
 			fprintf(stderr, "  channels %d: %s\n", channels[i],
-				ei.msg);
+			        ei.msg);
 			CHECK(0);
 		}
 		for (size_t p = 0; p < 12 * 10; p++) {
@@ -404,10 +406,10 @@ static void test_rect_outside_image_is_refused_untouched(void)
 	struct bc_errinfo ei = {0};
 	struct bc_proto_rect r_base = {0, 0, 4, 4, {base, sizeof(base)}};
 	struct bc_proto_rect bad[] = {
-		{3, 0, 2, 2, {patch, sizeof(patch)}},
-		{0, 3, 2, 2, {patch, sizeof(patch)}},
-		{0, 0, 0, 2, {patch, 0}},
-		{65535, 65535, 2, 2, {patch, sizeof(patch)}},
+	    {3, 0, 2, 2, {patch, sizeof(patch)}},
+	    {0, 3, 2, 2, {patch, sizeof(patch)}},
+	    {0, 0, 0, 2, {patch, 0}},
+	    {65535, 65535, 2, 2, {patch, sizeof(patch)}},
 	};
 	struct bc_msg m;
 	pattern(base, 4, 4, 1);
@@ -418,7 +420,7 @@ static void test_rect_outside_image_is_refused_untouched(void)
 	for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); i++) {
 		/* A good first rectangle must not be written either. */
 		struct bc_proto_rect two[2] = {
-			{0, 0, 2, 2, {patch, sizeof(patch)}}, bad[i]};
+		    {0, 0, 2, 2, {patch, sizeof(patch)}}, bad[i]};
 		m = frame_msg(4, 4, BC_PROTO_ENC_RAW, two, 2);
 		CHECK_EQ_INT(bc_client_image_apply(&img, &m, &ei), BC_ERANGE);
 		CHECK(memcmp(img.rgba, base, sizeof(base)) == 0);
@@ -505,8 +507,8 @@ static void test_allocation_failures_are_reported(void)
 		struct bc_client_image img;
 		struct bc_errinfo ei = {0};
 		struct bc_proto_rect r[2] = {
-			{0, 0, 20, 12, {png, (uint32_t)len}},
-			{0, 0, 20, 12, {png, (uint32_t)len}},
+		    {0, 0, 20, 12, {png, (uint32_t)len}},
+		    {0, 0, 20, 12, {png, (uint32_t)len}},
 		};
 		struct bc_msg m = frame_msg(20, 12, BC_PROTO_ENC_PNG, r, 2);
 		int rc;
@@ -525,19 +527,18 @@ static void test_allocation_failures_are_reported(void)
 }
 
 static const struct bc_test tests[] = {
-	{"raw_full_frame_fills_image", test_raw_full_frame_fills_image},
-	{"partial_rects_replace_only_their_pixels",
-	 test_partial_rects_replace_only_their_pixels},
-	{"coverage_completes_from_pieces", test_coverage_completes_from_pieces},
-	{"new_size_starts_new_picture", test_new_size_starts_new_picture},
-	{"levels_are_reported", test_levels_are_reported},
-	{"jpeg_rect_decodes_in_place", test_jpeg_rect_decodes_in_place},
-	{"png_rects_decode_exactly", test_png_rects_decode_exactly},
-	{"rect_outside_image_is_refused_untouched",
-	 test_rect_outside_image_is_refused_untouched},
-	{"bad_bytes_are_codec_errors", test_bad_bytes_are_codec_errors},
-	{"allocation_failures_are_reported",
-	 test_allocation_failures_are_reported},
+    {"raw_full_frame_fills_image", test_raw_full_frame_fills_image},
+    {"partial_rects_replace_only_their_pixels",
+     test_partial_rects_replace_only_their_pixels},
+    {"coverage_completes_from_pieces", test_coverage_completes_from_pieces},
+    {"new_size_starts_new_picture", test_new_size_starts_new_picture},
+    {"levels_are_reported", test_levels_are_reported},
+    {"jpeg_rect_decodes_in_place", test_jpeg_rect_decodes_in_place},
+    {"png_rects_decode_exactly", test_png_rects_decode_exactly},
+    {"rect_outside_image_is_refused_untouched",
+     test_rect_outside_image_is_refused_untouched},
+    {"bad_bytes_are_codec_errors", test_bad_bytes_are_codec_errors},
+    {"allocation_failures_are_reported", test_allocation_failures_are_reported},
 };
 
 BC_TEST_MAIN(tests)

@@ -35,7 +35,8 @@
 #include "blobcast/error.h"
 #include "blobcast/proto.h"
 
-/* ---- Defaults and limits -------------------------------------------------- */
+/* ---- Defaults and limits --------------------------------------------------
+ */
 
 /* Where blobcastd listens when started without options. */
 #define BC_CLIENT_DEFAULT_HOST "127.0.0.1"
@@ -59,7 +60,8 @@
 /* Largest key=value list one edit takes: one per field number. */
 #define BC_CLIENT_MAX_EDIT_ARGS BC_PROTO_MAX_SET_FIELDS
 
-/* ---- Addresses -------------------------------------------------------------- */
+/* ---- Addresses --------------------------------------------------------------
+ */
 
 enum bc_client_addr_kind {
 	BC_CLIENT_ADDR_INVALID = 0,
@@ -70,9 +72,9 @@ enum bc_client_addr_kind {
 
 struct bc_client_addr {
 	enum bc_client_addr_kind kind;
-	uint16_t port;                           /* TCP */
-	char host[BC_CLIENT_MAX_HOST + 1];       /* TCP, without brackets */
-	char path[BC_CLIENT_MAX_UNIX_PATH + 1];  /* UNIX */
+	uint16_t port;                          /* TCP */
+	char host[BC_CLIENT_MAX_HOST + 1];      /* TCP, without brackets */
+	char path[BC_CLIENT_MAX_UNIX_PATH + 1]; /* UNIX */
 };
 
 /*
@@ -86,16 +88,17 @@ struct bc_client_addr {
  * Returns 0 or BC_EINVAL with the reason in ei (which may be NULL).
  */
 int bc_client_addr_parse(const char *s, struct bc_client_addr *out,
-			 struct bc_errinfo *ei);
+                         struct bc_errinfo *ei);
 
-/* ---- The connection --------------------------------------------------------- */
+/* ---- The connection ---------------------------------------------------------
+ */
 
 /* Zero means default for every field. */
 struct bc_client_opts {
-	const char *addr;  /* as bc_client_addr_parse() takes it */
-	const char *name;  /* HELLO client_name; NULL: "libblobcast" */
-	const char *token; /* HELLO token; NULL: none */
-	uint8_t encodings; /* HELLO bits (1 << (encoding - 1)); 0: all */
+	const char *addr;         /* as bc_client_addr_parse() takes it */
+	const char *name;         /* HELLO client_name; NULL: "libblobcast" */
+	const char *token;        /* HELLO token; NULL: none */
+	uint8_t encodings;        /* HELLO bits (1 << (encoding - 1)); 0: all */
 	uint32_t max_frame_bytes; /* 0: the server's limit */
 	/* Milliseconds for connecting, for completing one send, and for each
 	 * helper's wait; 0: BC_CLIENT_DEFAULT_TIMEOUT_MS; negative: none. */
@@ -136,7 +139,7 @@ struct bc_client_info {
  * the reason is in ei (which may be NULL).
  */
 int bc_client_connect(struct bc_client **out, const struct bc_client_opts *opts,
-		      struct bc_errinfo *ei);
+                      struct bc_errinfo *ei);
 /* Closes the connection and frees everything; accepts NULL. */
 void bc_client_destroy(struct bc_client *c);
 
@@ -180,9 +183,10 @@ int bc_client_recv(struct bc_client *c, struct bc_msg *out, int timeout_ms);
  * timeout_ms (0: the client's timeout, negative: none); or the sticky error.
  */
 int bc_client_wait(struct bc_client *c, enum bc_msg_type type, uint32_t seq,
-		   struct bc_msg *out, int timeout_ms, struct bc_errinfo *ei);
+                   struct bc_msg *out, int timeout_ms, struct bc_errinfo *ei);
 
-/* ---- Sessions and scenes ------------------------------------------------------ */
+/* ---- Sessions and scenes
+ * ------------------------------------------------------ */
 
 enum bc_client_join_mode {
 	BC_CLIENT_JOIN_EXISTING = 0, /* SESSION_JOIN; no such session: error */
@@ -198,45 +202,46 @@ enum bc_client_join_mode {
  * 0 or an error (the server's ENOSESSION, EEXIST, EPERM...) with the reason.
  */
 int bc_client_join(struct bc_client *c, const char *name,
-		   enum bc_proto_role role, enum bc_client_join_mode mode,
-		   struct bc_errinfo *ei);
+                   enum bc_proto_role role, enum bc_client_join_mode mode,
+                   struct bc_errinfo *ei);
 
 /* The scene mirror: the session's scene as of bc_client_info()->order, or
  * NULL before the first SCENE_STATE (or if an edit could not be replayed on
  * it, which is logged). Owned by c; valid until the next call on c. cam
  * (may be NULL) receives the scene's camera. */
 const struct bc_tree *bc_client_scene(const struct bc_client *c,
-				      struct bc_camera *cam);
+                                      struct bc_camera *cam);
 
 /* Sends SCENE_LOAD with scene bytes (the binary encoding) and waits for the
  * SCENE_STATE that acknowledges it; *order (may be NULL, reset on entry)
  * receives the new edit order. */
 int bc_client_load_scene(struct bc_client *c, const uint8_t *bytes, size_t len,
-			 uint64_t *order, struct bc_errinfo *ei);
+                         uint64_t *order, struct bc_errinfo *ei);
 /* Reads a JSON scene file (blobtree's format), encodes it with its camera
  * and loads it as bc_client_load_scene() does. *nodes (may be NULL) receives
  * its node count. */
 int bc_client_load_scene_file(struct bc_client *c, const char *path,
-			      uint64_t *order, uint32_t *nodes,
-			      struct bc_errinfo *ei);
+                              uint64_t *order, uint32_t *nodes,
+                              struct bc_errinfo *ei);
 
 /* Sends VIEW. Zero fields take defaults: encoding JPEG when this client
  * decodes it (else PNG), interactive quality 75, still quality 90,
  * downscale 1. width and height are required. */
 int bc_client_view(struct bc_client *c, const struct bc_msg_view *view,
-		   uint32_t *seq_out, struct bc_errinfo *ei);
+                   uint32_t *seq_out, struct bc_errinfo *ei);
 
 /* Sends CAMERA (this connection's camera; the server answers with a frame
  * when a VIEW is set, or with ERROR for an invalid camera). */
 int bc_client_camera(struct bc_client *c, const struct bc_camera *cam,
-		     bool interacting, uint32_t *seq_out,
-		     struct bc_errinfo *ei);
+                     bool interacting, uint32_t *seq_out,
+                     struct bc_errinfo *ei);
 
 /* Sends GET_STATS and waits for STATS, copied into *out (reset on entry). */
 int bc_client_stats(struct bc_client *c, struct bc_msg_stats *out,
-		    struct bc_errinfo *ei);
+                    struct bc_errinfo *ei);
 
-/* ---- Edits ----------------------------------------------------------------------- */
+/* ---- Edits
+ * ----------------------------------------------------------------------- */
 
 /*
  * Turns key=value strings into the fields of one SET operation on node, a
@@ -252,28 +257,29 @@ int bc_client_stats(struct bc_client *c, struct bc_msg_stats *out,
  * BC_ERANGE or BC_ELIMIT (too many arguments), with the reason in ei.
  */
 int bc_client_edit_parse(const struct bc_tree *scene, uint32_t node,
-			 const char *const *kv, size_t n,
-			 struct bc_proto_field *fields, uint8_t *nfields,
-			 struct bc_errinfo *ei);
+                         const char *const *kv, size_t n,
+                         struct bc_proto_field *fields, uint8_t *nfields,
+                         struct bc_errinfo *ei);
 
 /* Sends EDIT with one SET operation on node. */
 int bc_client_edit_set(struct bc_client *c, uint32_t node,
-		       const struct bc_proto_field *fields, uint8_t nfields,
-		       bool interacting, uint32_t *seq_out,
-		       struct bc_errinfo *ei);
+                       const struct bc_proto_field *fields, uint8_t nfields,
+                       bool interacting, uint32_t *seq_out,
+                       struct bc_errinfo *ei);
 
 /* bc_client_edit_parse() against the scene mirror, then
  * bc_client_edit_set(). BC_ESTATE when there is no mirror (not joined). */
-int bc_client_edit_kv(struct bc_client *c, uint32_t node,
-		      const char *const *kv, size_t n, bool interacting,
-		      uint32_t *seq_out, struct bc_errinfo *ei);
+int bc_client_edit_kv(struct bc_client *c, uint32_t node, const char *const *kv,
+                      size_t n, bool interacting, uint32_t *seq_out,
+                      struct bc_errinfo *ei);
 
 /* Waits for the EDIT_APPLIED of this client's EDIT seq; *order (may be NULL,
  * reset on entry) receives the order number the server gave it. */
 int bc_client_wait_applied(struct bc_client *c, uint32_t seq, uint64_t *order,
-			   struct bc_errinfo *ei);
+                           struct bc_errinfo *ei);
 
-/* ---- Frames ------------------------------------------------------------------------ */
+/* ---- Frames
+ * ------------------------------------------------------------------------ */
 
 /*
  * The client-side framebuffer that FRAMEs are assembled in. A frame carries
@@ -292,8 +298,8 @@ int bc_client_wait_applied(struct bc_client *c, uint32_t seq, uint64_t *order,
 struct bc_client_image {
 	uint32_t width, height;           /* pixels held */
 	uint32_t view_width, view_height; /* the VIEW size they stand for */
-	uint8_t *rgba;  /* width * height * 4 bytes, row 0 on top, alpha 255 */
-	bool complete;  /* every pixel has come from a frame */
+	uint8_t *rgba; /* width * height * 4 bytes, row 0 on top, alpha 255 */
+	bool complete; /* every pixel has come from a frame */
 	/* The last frame applied. */
 	uint32_t frame_no, camera_seq, seq;
 	uint64_t order;
@@ -324,12 +330,12 @@ void bc_client_image_finish(struct bc_client_image *img);
  * and img->complete becomes false) or BC_ENOMEM, with the reason in ei.
  */
 int bc_client_image_apply(struct bc_client_image *img, const struct bc_msg *m,
-			  struct bc_errinfo *ei);
+                          struct bc_errinfo *ei);
 
 /* Sends SNAPSHOT (encoding PNG or RAW; 0 means PNG) and waits for its FRAME,
  * decoded into *out (which must be initialized; its previous contents are
  * replaced). A VIEW must have been sent: it gives the size. */
 int bc_client_snapshot(struct bc_client *c, enum bc_proto_encoding encoding,
-		       struct bc_client_image *out, struct bc_errinfo *ei);
+                       struct bc_client_image *out, struct bc_errinfo *ei);
 
 #endif
