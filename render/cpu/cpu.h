@@ -187,6 +187,13 @@ enum bc__trace_result bc__trace(struct bc__field *f,
 void bc__put_hit(const struct bc__frame_ctx *fc, struct bc__field *f,
 		 uint32_t x, uint32_t y, const float d[3], float t,
 		 uint32_t overlaps);
+/* The second half of bc__put_hit, for tracers that took the gradient
+ * samples (bc__put_hit's tetrahedral differences, summed in its order) and
+ * the primitive themselves: writes pixel (x, y) from normal n (not
+ * necessarily unit), primitive index prim and the ray's evaluations. */
+void bc__put_shaded(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
+		    const float d[3], float t, const float n[3], uint32_t prim,
+		    uint32_t evals, uint32_t overlaps);
 /* Writes pixel (x, y) for a ray that missed after `evals` evaluations. */
 void bc__put_miss(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
 		  uint32_t evals, uint32_t overlaps);

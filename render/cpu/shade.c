@@ -67,10 +67,6 @@ void bc__put_hit(const struct bc__frame_ctx *fc, struct bc__field *f,
 	/* Tetrahedral differences: four samples give the gradient. */
 	static const float tet[4][3] = {
 		{1, -1, -1}, {-1, -1, 1}, {-1, 1, -1}, {1, 1, 1}};
-	const struct bc_lin *lin = fc->lin;
-	struct bc_frame *out = fc->out;
-	size_t i = (size_t)y * out->width + x;
-	uint8_t *px = out->rgba + 4 * i;
 	const float *eye = fc->vr.eye;
 	float p[3] = {eye[0] + t * d[0], eye[1] + t * d[1], eye[2] + t * d[2]};
 	float n[3] = {0.0f, 0.0f, 0.0f}, h;
@@ -87,8 +83,19 @@ void bc__put_hit(const struct bc__frame_ctx *fc, struct bc__field *f,
 			n[c] += tet[k][c] * v;
 		}
 	}
+	bc__put_shaded(fc, x, y, d, t, n, prim, f->evals, overlaps);
+}
+
+void bc__put_shaded(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
+		    const float d[3], float t, const float n[3], uint32_t prim,
+		    uint32_t evals, uint32_t overlaps)
+{
+	const struct bc_lin *lin = fc->lin;
+	struct bc_frame *out = fc->out;
+	size_t i = (size_t)y * out->width + x;
+	uint8_t *px = out->rgba + 4 * i;
 	if (fc->debug != BC_DEBUG_NONE) {
-		debug_colour(fc, f->evals, overlaps, px);
+		debug_colour(fc, evals, overlaps, px);
 	} else {
 		static const float grey[3] = {0.7f, 0.7f, 0.7f};
 		bc_shade_hit(&fc->shade, n, d,

@@ -7,13 +7,19 @@
  * are active and fewer than 8 were fetched this turn; the range ends at
  * min(next entry, largest active exit)), a pruned view built for each
  * range's active set, and every asked pixel without a hit yet sphere traced
- * inside the range.
+ * inside the range: one ray at a time through bc__trace (opts.simd off), or
+ * in packets of 8 or 16 rays through a vector kernel (packet.h). Packets
+ * take the range's pixels in row-major order and a lane whose ray ends
+ * takes the next pixel; each lane's arithmetic is its own, so a pixel's
+ * value does not depend on which other pixels are traced.
  */
 #include "tiled.h"
 
 #include <math.h>
 #include <stdbool.h>
 #include <stdlib.h>
+
+#include "packet.h"
 
 static int frag_cmp(const void *pa, const void *pb)
 {
@@ -25,7 +31,8 @@ static int frag_cmp(const void *pa, const void *pb)
 }
 
 /* Adds list entry e to the active set, keeping it sorted by primitive. */
-static void activate(struct bc__tile_worker *wk, uint32_t *na, const struct bc__frag *e)
+static void activate(struct bc__tile_worker *wk, uint32_t *na,
+                     const struct bc__frag *e)
 {
 	uint32_t i = *na;
 	while (i > 0 && wk->act[i - 1] > e->prim) {
@@ -42,13 +49,194 @@ static void activate(struct bc__tile_worker *wk, uint32_t *na, const struct bc__
  * tree, since the range whose view held there is gone (a few pixels per
  * frame, on silhouettes). */
 static void settle(const struct bc__frame_ctx *fc, struct bc__tile_worker *wk,
-		   uint32_t x, uint32_t y, const float d[3], float t,
-		   uint32_t *evals, uint32_t overlaps)
+                   uint32_t x, uint32_t y, const float d[3], float t,
+                   uint32_t *evals, uint32_t overlaps)
 {
 	struct bc__field f = {fc->lin, NULL, *evals};
 	bc__put_hit(fc, &f, x, y, d, t, overlaps);
 	wk->evals += f.evals - *evals;
 	*evals = f.evals;
+}
+
+/* What one tile's trace keeps per pixel across its depth ranges. */
+struct tile_px {
+	uint32_t evals[BC_CPU_TILE * BC_CPU_TILE];
+	bool done[BC_CPU_TILE * BC_CPU_TILE];
+	/* Rays that ended a range within the hit epsilon, still approaching
+	 * (BC__TRACE_NEAR_END): the next range decides, or if none follows
+	 * right there, the near hit stands. */
+	float pending[BC_CPU_TILE * BC_CPU_TILE];
+	bool has_pending[BC_CPU_TILE * BC_CPU_TILE];
+	uint32_t left;
+};
+
+/* Shades the hits of one range in its view, as bc__put_hit does, with
+ * the five samples of each (the primitive at the hit, then the four
+ * tetrahedral differences) taken in packets. */
+static void shade_packets(struct bc__tile_worker *wk,
+                          const struct bc__tile_job *job,
+                          struct bc__pk_kernel k, struct tile_px *px,
+                          const uint8_t *hit_px, const float *hit_t,
+                          uint32_t nh)
+{
+	/* bc__put_hit's offsets, in its order; sample 0 is the hit itself. */
+	static const float tet[5][3] = {
+	    {0, 0, 0}, {1, -1, -1}, {-1, -1, 1}, {-1, 1, -1}, {1, 1, 1}};
+	const struct bc__frame_ctx *fc = job->fc;
+	const float *eye = fc->vr.eye;
+	uint32_t w = fc->out->width;
+	uint32_t total = 5 * nh;
+	struct bc__pk_lanes ln;
+	float n[BC_CPU_TILE * BC_CPU_TILE][3];
+	uint32_t prim[BC_CPU_TILE * BC_CPU_TILE];
+	for (uint32_t s0 = 0; s0 < total; s0 += k.lanes) {
+		uint32_t m = total - s0 < k.lanes ? total - s0 : k.lanes;
+		for (uint32_t i = 0; i < m; i++) {
+			uint32_t h = (s0 + i) / 5, s = (s0 + i) % 5;
+			uint32_t p = hit_px[h];
+			uint32_t x = job->x0 + p % BC_CPU_TILE;
+			uint32_t y = job->y0 + p / BC_CPU_TILE;
+			const float *d = job->dirs + 3 * ((size_t)y * w + x);
+			float t = hit_t[h];
+			ln.ox[i] = eye[0] + t * d[0];
+			ln.oy[i] = eye[1] + t * d[1];
+			ln.oz[i] = eye[2] + t * d[2];
+			/* o + h tet is exact in the kernel's fused multiply-add
+			 * (h tet is +-h): bc__put_hit's p + h tet. */
+			ln.t[i] =
+			    bc__maxf(BC_CPU_HIT_FOOTPRINT * fc->pix_angle * t,
+			             fc->min_step);
+			ln.dx[i] = tet[s][0];
+			ln.dy[i] = tet[s][1];
+			ln.dz[i] = tet[s][2];
+		}
+		for (uint32_t i = m; i < k.lanes; i++) {
+			ln.ox[i] = ln.oy[i] = ln.oz[i] = 0.0f;
+			ln.dx[i] = ln.dy[i] = ln.dz[i] = ln.t[i] = 0.0f;
+		}
+		k.eval_id(&wk->view, fc->lin, &ln,
+		          m == 32 ? UINT32_MAX : (1u << m) - 1u);
+		for (uint32_t i = 0; i < m; i++) {
+			uint32_t h = (s0 + i) / 5, s = (s0 + i) % 5;
+			if (s == 0) {
+				prim[h] = ln.id[i];
+				n[h][0] = n[h][1] = n[h][2] = 0.0f;
+				continue;
+			}
+			for (int c = 0; c < 3; c++) {
+				n[h][c] += tet[s][c] * ln.v[i];
+			}
+		}
+	}
+	for (uint32_t h = 0; h < nh; h++) {
+		uint32_t p = hit_px[h];
+		uint32_t x = job->x0 + p % BC_CPU_TILE;
+		uint32_t y = job->y0 + p / BC_CPU_TILE;
+		px->evals[p] += 5;
+		wk->evals += 5;
+		bc__put_shaded(fc, x, y, job->dirs + 3 * ((size_t)y * w + x),
+		               hit_t[h], n[h], prim[h], px->evals[p], job->n);
+	}
+}
+
+/* Traces the tile's pixels that are still open through [z_begin, z_end]
+ * in the range's view, in packets of kernel k's width, and shades those
+ * that hit. */
+static void trace_range_packets(struct bc__tile_worker *wk,
+                                const struct bc__tile_job *job,
+                                struct bc__pk_kernel k, struct tile_px *px,
+                                float z_begin, float z_end)
+{
+	const struct bc__frame_ctx *fc = job->fc;
+	uint32_t w = fc->out->width;
+	uint8_t queue[BC_CPU_TILE * BC_CPU_TILE];
+	uint8_t hit_px[BC_CPU_TILE * BC_CPU_TILE];
+	float hit_t[BC_CPU_TILE * BC_CPU_TILE];
+	uint32_t nq = 0, head = 0, nh = 0, active = 0;
+	struct bc__pk_lanes ln;
+	struct bc__pk_ray ray[BC_PK_MAX_LANES];
+	uint8_t lane_px[BC_PK_MAX_LANES];
+	for (uint32_t y = job->y0; y < job->y1; y++) {
+		for (uint32_t x = job->x0; x < job->x1; x++) {
+			uint32_t p =
+			    (y - job->y0) * BC_CPU_TILE + (x - job->x0);
+			if (px->done[p]) {
+				continue;
+			}
+			if (px->has_pending[p] && z_begin > px->pending[p]) {
+				settle(fc, wk, x, y,
+				       job->dirs + 3 * ((size_t)y * w + x),
+				       px->pending[p], &px->evals[p], job->n);
+				px->done[p] = true;
+				px->left--;
+				continue;
+			}
+			queue[nq++] = (uint8_t)p;
+		}
+	}
+	for (uint32_t i = 0; i < k.lanes; i++) {
+		ln.ox[i] = fc->vr.eye[0];
+		ln.oy[i] = fc->vr.eye[1];
+		ln.oz[i] = fc->vr.eye[2];
+		ln.t[i] = 0.0f;
+		ln.dx[i] = ln.dy[i] = ln.dz[i] = 0.0f;
+	}
+	for (;;) {
+		/* Free lanes take the next pixels, in queue order. */
+		for (uint32_t i = 0; i < k.lanes && head < nq; i++) {
+			while (!((active >> i) & 1u) && head < nq) {
+				uint32_t p = queue[head++];
+				uint32_t x = job->x0 + p % BC_CPU_TILE;
+				uint32_t y = job->y0 + p / BC_CPU_TILE;
+				const float *d =
+				    job->dirs + 3 * ((size_t)y * w + x);
+				if (bc__pk_ray_start(&ray[i], fc, z_begin,
+				                     z_end)) {
+					/* An empty interval: a miss. */
+					px->has_pending[p] = false;
+					continue;
+				}
+				lane_px[i] = (uint8_t)p;
+				ln.dx[i] = d[0];
+				ln.dy[i] = d[1];
+				ln.dz[i] = d[2];
+				ln.t[i] = ray[i].q;
+				active |= 1u << i;
+			}
+		}
+		if (!active) {
+			break;
+		}
+		k.eval(&wk->view, fc->lin, &ln, active);
+		for (uint32_t i = 0; i < k.lanes; i++) {
+			struct bc__pk_ray *r = &ray[i];
+			uint32_t p;
+			if (!((active >> i) & 1u)) {
+				continue;
+			}
+			/* trace.c's eval_at: the field over the bound. */
+			if (!bc__pk_ray_feed(
+			        r, fc, ln.v[i] * (1.0f / BC_CPU_LIPSCHITZ))) {
+				ln.t[i] = r->q;
+				continue;
+			}
+			active &= ~(1u << i);
+			p = lane_px[i];
+			px->evals[p] += r->evals;
+			wk->evals += r->evals;
+			px->has_pending[p] = r->res == BC__TRACE_NEAR_END;
+			px->pending[p] = r->t_hit;
+			if (r->res == BC__TRACE_HIT) {
+				hit_px[nh] = (uint8_t)p;
+				hit_t[nh++] = r->t_hit;
+				px->done[p] = true;
+				px->left--;
+			}
+		}
+	}
+	if (nh > 0) {
+		shade_packets(wk, job, k, px, hit_px, hit_t, nh);
+	}
 }
 
 void bc__trace_tile(struct bc__tile_worker *wk, const struct bc__tile_job *job)
@@ -59,27 +247,25 @@ void bc__trace_tile(struct bc__tile_worker *wk, const struct bc__tile_job *job)
 	uint32_t x0 = job->x0, y0 = job->y0, x1 = job->x1, y1 = job->y1;
 	struct bc__frag *list = job->list;
 	uint32_t n = job->n;
-	uint32_t evals[BC_CPU_TILE * BC_CPU_TILE] = {0};
-	bool done[BC_CPU_TILE * BC_CPU_TILE];
-	/* Rays that ended a range within the hit epsilon, still approaching
-	 * (BC__TRACE_NEAR_END): the next range decides, or if none follows
-	 * right there, the near hit stands. */
-	float pending[BC_CPU_TILE * BC_CPU_TILE];
-	bool has_pending[BC_CPU_TILE * BC_CPU_TILE] = {false};
-	uint32_t left = 0;
+	struct bc__pk_kernel k = bc__pk_kernel_for(wk->simd);
+	struct tile_px px;
 	uint32_t na = 0, next = 0;
 	float z_end = 0.0f;
+	px.left = 0;
 	for (uint32_t p = 0; p < BC_CPU_TILE * BC_CPU_TILE; p++) {
-		done[p] = !((job->mask >> p) & 1u);
-		left += done[p] ? 0u : 1u;
+		px.evals[p] = 0;
+		px.has_pending[p] = false;
+		px.pending[p] = 0.0f;
+		px.done[p] = !((job->mask >> p) & 1u);
+		px.left += px.done[p] ? 0u : 1u;
 	}
-	if (left == 0) {
+	if (px.left == 0) {
 		return;
 	}
 	if (n > 1) {
 		qsort(list, n, sizeof(*list), frag_cmp);
 	}
-	while (left > 0) {
+	while (px.left > 0) {
 		float z_begin, max_exit = -INFINITY;
 		uint32_t kept = 0, fetched = 0;
 		struct bc__field f = {lin, &wk->view, 0};
@@ -132,50 +318,55 @@ void bc__trace_tile(struct bc__tile_worker *wk, const struct bc__tile_job *job)
 		} else if (wk->view.empty) {
 			continue; /* no surface can be in this range */
 		}
+		if (k.eval && f.view) {
+			trace_range_packets(wk, job, k, &px, z_begin, z_end);
+			continue;
+		}
 		for (uint32_t y = y0; y < y1; y++) {
 			for (uint32_t x = x0; x < x1; x++) {
 				uint32_t p = (y - y0) * BC_CPU_TILE + (x - x0);
 				const float *d =
-					job->dirs + 3 * ((size_t)y * w + x);
+				    job->dirs + 3 * ((size_t)y * w + x);
 				float t = 0.0f;
 				enum bc__trace_result res;
-				if (done[p]) {
+				if (px.done[p]) {
 					continue;
 				}
-				if (has_pending[p] && z_begin > pending[p]) {
-					settle(fc, wk, x, y, d, pending[p],
-					       &evals[p], n);
-					done[p] = true;
-					left--;
+				if (px.has_pending[p] &&
+				    z_begin > px.pending[p]) {
+					settle(fc, wk, x, y, d, px.pending[p],
+					       &px.evals[p], n);
+					px.done[p] = true;
+					px.left--;
 					continue;
 				}
-				f.evals = evals[p];
+				f.evals = px.evals[p];
 				res = bc__trace(&f, fc, fc->vr.eye, d, z_begin,
-						z_end, &t);
-				has_pending[p] = res == BC__TRACE_NEAR_END;
-				pending[p] = t;
+				                z_end, &t);
+				px.has_pending[p] = res == BC__TRACE_NEAR_END;
+				px.pending[p] = t;
 				if (res == BC__TRACE_HIT) {
 					bc__put_hit(fc, &f, x, y, d, t, n);
-					done[p] = true;
-					left--;
+					px.done[p] = true;
+					px.left--;
 				}
-				wk->evals += f.evals - evals[p];
-				evals[p] = f.evals;
+				wk->evals += f.evals - px.evals[p];
+				px.evals[p] = f.evals;
 			}
 		}
 	}
 	for (uint32_t y = y0; y < y1; y++) {
 		for (uint32_t x = x0; x < x1; x++) {
 			uint32_t p = (y - y0) * BC_CPU_TILE + (x - x0);
-			if (done[p]) {
+			if (px.done[p]) {
 				continue;
 			}
-			if (has_pending[p]) {
+			if (px.has_pending[p]) {
 				settle(fc, wk, x, y,
 				       job->dirs + 3 * ((size_t)y * w + x),
-				       pending[p], &evals[p], n);
+				       px.pending[p], &px.evals[p], n);
 			} else {
-				bc__put_miss(fc, x, y, evals[p], n);
+				bc__put_miss(fc, x, y, px.evals[p], n);
 			}
 		}
 	}

@@ -651,6 +651,7 @@ static int prepare_workers(struct bc__cpu *r, const struct bc_lin *lin,
 		struct bc__tile_worker *wk = &b->workers[i];
 		wk->evals = 0;
 		wk->overflows = 0;
+		wk->simd = r->base.opts.simd;
 		if (wk->cap < need) {
 			uint32_t *act = bc_calloc(need, sizeof(*act));
 			float *t1 = bc_calloc(need, sizeof(*t1));

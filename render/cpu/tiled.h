@@ -21,18 +21,20 @@ struct bc__frag {
  * allocates. */
 struct bc__tile_worker {
 	struct bc_view view;
-	uint32_t *act;  /* active primitive indices, increasing */
-	float *act_t1;  /* their exits */
-	uint32_t cap;   /* room in act and act_t1 */
+	uint32_t *act; /* active primitive indices, increasing */
+	float *act_t1; /* their exits */
+	uint32_t cap;  /* room in act and act_t1 */
 	uint64_t evals;
 	uint32_t overflows;
+	/* The renderer's opts.simd, set before each frame (0: AUTO). */
+	enum bc_simd simd;
 };
 
 /* One tile's work. */
 struct bc__tile_job {
 	const struct bc__frame_ctx *fc;
-	const float *dirs;      /* unit ray directions, 3 per frame pixel */
-	struct bc__frag *list;  /* the tile's fragments (sorted in place) */
+	const float *dirs;     /* unit ray directions, 3 per frame pixel */
+	struct bc__frag *list; /* the tile's fragments (sorted in place) */
 	uint32_t n;
 	uint32_t x0, y0, x1, y1; /* the tile's pixels [x0, x1) x [y0, y1) */
 	/* Pixels to trace: bit (y - y0) * 8 + (x - x0). Others are left as

@@ -73,6 +73,8 @@ enum bc_range_arith {
 enum bc_simd {
 	BC_SIMD_AUTO = 0, /* the widest the CPU has (AVX-512, AVX2), else off */
 	BC_SIMD_OFF,      /* the portable scalar path */
+	BC_SIMD_AVX2,     /* 8-ray packets; the scalar path without AVX2 */
+	BC_SIMD_AVX512,   /* 16-ray packets; scalar without AVX-512F */
 	BC_SIMD_COUNT
 };
 

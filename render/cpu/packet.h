@@ -1,0 +1,98 @@
+/*
+ * Packet tracing for the tiled backend: 8 (AVX2) or 16 (AVX-512) rays of a
+ * tile sphere traced together through one depth range's pruned view.
+ *
+ * The work splits in two. The field of a range's view is evaluated for all
+ * lanes at once by an ISA-specific kernel (packet_avx2.c, packet_avx512.c,
+ * each compiled with its own target flags and chosen at run time): the
+ * kernel interprets the view's flat instruction list (a post-order program
+ * of primitive records and operators) with every primitive and operator
+ * written inline in vector arithmetic, so no per-node call is made. Each
+ * lane's sphere tracing logic (trace.c's steps, fallback, refinement and
+ * bisection) runs as a small resumable state machine per lane, in portable
+ * C (packet.c): it says at which t it needs the field next, the kernel
+ * evaluates every lane's request, and each lane consumes its own value.
+ * Nothing crosses lanes, so a pixel's value does not depend on which other
+ * pixels share its packet.
+ */
+#ifndef BLOBCAST_RENDER_CPU_PACKET_H
+#define BLOBCAST_RENDER_CPU_PACKET_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "cpu.h"
+
+/* Widest packet of any kernel (AVX-512: 16 floats). */
+#define BC_PK_MAX_LANES 16u
+
+/* The samples of one packet, structure of arrays: lane i wants the field
+ * at o + t d (the kernel computes it with one fused multiply-add per
+ * axis). Tracing lanes share the eye as o; shading lanes put the hit point
+ * in o and a tetrahedral offset in t d. Lanes outside `active` are not
+ * read or written. */
+struct bc__pk_lanes {
+	_Alignas(64) float ox[BC_PK_MAX_LANES];
+	_Alignas(64) float oy[BC_PK_MAX_LANES];
+	_Alignas(64) float oz[BC_PK_MAX_LANES];
+	_Alignas(64) float dx[BC_PK_MAX_LANES];
+	_Alignas(64) float dy[BC_PK_MAX_LANES];
+	_Alignas(64) float dz[BC_PK_MAX_LANES];
+	_Alignas(64) float t[BC_PK_MAX_LANES];
+	_Alignas(64) float v[BC_PK_MAX_LANES]; /* out: the field */
+	/* out, bc__pk_eval_id_fn only: the primitive whose value decides
+	 * the field (bc_view_eval_id's), BC_NONE where none does. */
+	_Alignas(64) uint32_t id[BC_PK_MAX_LANES];
+};
+
+/* Evaluates view v (not empty) of lin for the lanes whose bit is set in
+ * active: v[i] = field at o + t d. */
+typedef void (*bc__pk_eval_fn)(const struct bc_view *v,
+                               const struct bc_lin *lin,
+                               struct bc__pk_lanes *ln, uint32_t active);
+
+struct bc__pk_kernel {
+	bc__pk_eval_fn eval;    /* NULL: trace one ray at a time (scalar) */
+	bc__pk_eval_fn eval_id; /* the same, and id[] */
+	uint32_t lanes;
+};
+
+/* The kernel for a simd choice on this CPU: AUTO takes the widest one it
+ * has; a forced width the CPU lacks, or OFF, gives the scalar path. */
+struct bc__pk_kernel bc__pk_kernel_for(enum bc_simd simd);
+
+#if defined(BLOBCAST_SIMD_X86)
+void bc__pk_eval_avx2(const struct bc_view *v, const struct bc_lin *lin,
+                      struct bc__pk_lanes *ln, uint32_t active);
+void bc__pk_eval_id_avx2(const struct bc_view *v, const struct bc_lin *lin,
+                         struct bc__pk_lanes *ln, uint32_t active);
+void bc__pk_eval_avx512(const struct bc_view *v, const struct bc_lin *lin,
+                        struct bc__pk_lanes *ln, uint32_t active);
+void bc__pk_eval_id_avx512(const struct bc_view *v, const struct bc_lin *lin,
+                           struct bc__pk_lanes *ln, uint32_t active);
+#endif
+
+/* One lane's sphere tracing over [t0, t1], trace.c's bc__trace as a state
+ * machine: after bc__pk_ray_start or bc__pk_ray_feed returns false, q is
+ * where the ray needs the field (divided by the Lipschitz bound) next;
+ * when they return true, res and t_hit hold the result. evals counts the
+ * values fed. */
+struct bc__pk_ray {
+	uint8_t state;
+	uint8_t res; /* enum bc__trace_result */
+	uint8_t i;   /* iterations of the current refinement phase */
+	float q;
+	float t0, t1;
+	float t, v, t_prev, v_prev, omega, tn; /* marching */
+	float cap, limit;                      /* secant refinement */
+	float a, fa, b, fb, c, e, vc, ve;      /* bisection, golden section */
+	float t_hit;
+	uint32_t evals;
+};
+
+bool bc__pk_ray_start(struct bc__pk_ray *r, const struct bc__frame_ctx *fc,
+                      float t0, float t1);
+bool bc__pk_ray_feed(struct bc__pk_ray *r, const struct bc__frame_ctx *fc,
+                     float value);
+
+#endif

@@ -1,0 +1,97 @@
+/*
+ * The AVX-512 packet kernel (packet.h): 16 rays per packet. This file
+ * alone is compiled with -mavx512f (render/cpu/CMakeLists.txt) and is only
+ * called when the CPU has it (packet.c checks).
+ */
+#include "packet.h"
+
+#include <immintrin.h>
+
+#define PK_LANES 16u
+#define PK_EVAL bc__pk_eval_avx512
+#define PK_EVAL_ID bc__pk_eval_id_avx512
+
+typedef __m512 vf;
+typedef __mmask16 vm;
+
+static inline vf vset1(float a)
+{
+	return _mm512_set1_ps(a);
+}
+static inline vf vload(const float *p)
+{
+	return _mm512_load_ps(p);
+}
+static inline void vstore(float *p, vf a)
+{
+	_mm512_store_ps(p, a);
+}
+static inline vf vadd(vf a, vf b)
+{
+	return _mm512_add_ps(a, b);
+}
+static inline vf vsub(vf a, vf b)
+{
+	return _mm512_sub_ps(a, b);
+}
+static inline vf vmul(vf a, vf b)
+{
+	return _mm512_mul_ps(a, b);
+}
+static inline vf vdiv(vf a, vf b)
+{
+	return _mm512_div_ps(a, b);
+}
+static inline vf vfma(vf a, vf b, vf c)
+{
+	return _mm512_fmadd_ps(a, b, c);
+}
+/* As AVX2's minps: a < b ? a : b, as bc__minf. */
+static inline vf vmin(vf a, vf b)
+{
+	return _mm512_min_ps(a, b);
+}
+static inline vf vmax(vf a, vf b)
+{
+	return _mm512_max_ps(a, b);
+}
+static inline vf vsqrt(vf a)
+{
+	return _mm512_sqrt_ps(a);
+}
+static inline vf vabs(vf a)
+{
+	return _mm512_abs_ps(a);
+}
+static inline vf vneg(vf a)
+{
+	/* A sign flip, as AVX2's (AVX-512F has no float xor). */
+	return _mm512_castsi512_ps(_mm512_xor_si512(
+	    _mm512_castps_si512(a), _mm512_set1_epi32(INT32_MIN)));
+}
+static inline vm vlt(vf a, vf b)
+{
+	return _mm512_cmp_ps_mask(a, b, _CMP_LT_OQ);
+}
+static inline vm vle(vf a, vf b)
+{
+	return _mm512_cmp_ps_mask(a, b, _CMP_LE_OQ);
+}
+static inline vm vgt(vf a, vf b)
+{
+	return _mm512_cmp_ps_mask(a, b, _CMP_GT_OQ);
+}
+static inline vm mand(vm a, vm b)
+{
+	return (vm)(a & b);
+}
+static inline vf vsel(vm m, vf a, vf b)
+{
+	return _mm512_mask_blend_ps(m, b, a);
+}
+static inline vf vbits(uint32_t u)
+{
+	return _mm512_castsi512_ps(_mm512_set1_epi32((int)u));
+}
+
+#include "packet_kernel.h"

@@ -1,0 +1,255 @@
+/*
+ * The body of a packet kernel (packet.h), written once over a small vector
+ * vocabulary that the including file defines for its instruction set:
+ *
+ *   vf, vm            float vector of PK_LANES lanes, lane mask
+ *   vset1 vload vstore vadd vsub vmul vdiv vfma(a, b, c) = a * b + c
+ *   vmin vmax         a < b ? a : b and a > b ? a : b, as bc__minf/maxf
+ *   vsqrt vabs vneg
+ *   vlt vle vgt       ordered comparisons (false on NaN)
+ *   mand vsel(m, a, b) = m ? a : b (bitwise)
+ *   vbits(u)          every lane holds the bits of uint32_t u
+ *
+ * and PK_EVAL, PK_EVAL_ID, the kernels' names. Including it twice (AVX2 and
+ * AVX-512) gives two kernels whose lanes do the same operations in the same
+ * order.
+ *
+ * The view is interpreted instruction by instruction: each primitive's
+ * affine map and field and each operator are inlined vector code over the
+ * whole packet. NaN never steers a lane: the compact operators' tests are
+ * ordered comparisons, so a NaN (from +inf - +inf between two missing
+ * operands) selects the sharp operator, as ops.c's `!(h > 0)` does. Kinds
+ * without a vector form here take bc_prim_sdf lane by lane.
+ */
+
+#include <math.h>
+#include <stdbool.h>
+#include <string.h>
+
+static inline vf vclamp(vf v, vf lo, vf hi)
+{
+	return vmin(vmax(v, lo), hi);
+}
+
+static inline vf vlen2(vf x, vf y)
+{
+	return vsqrt(vfma(x, x, vmul(y, y)));
+}
+
+static inline vf vlen3(vf x, vf y, vf z)
+{
+	return vsqrt(vfma(x, x, vfma(y, y, vmul(z, z))));
+}
+
+/* prim.c's box_d. */
+static inline vf vbox_d(vf dx, vf dy, vf dz)
+{
+	vf zero = vset1(0.0f);
+	vf out = vlen3(vmax(dx, zero), vmax(dy, zero), vmax(dz, zero));
+	return vadd(out, vmin(vmax(dx, vmax(dy, dz)), zero));
+}
+
+/* prim.c's extrude. */
+static inline vf vextrude(vf d2, vf dz)
+{
+	vf zero = vset1(0.0f);
+	return vadd(vmin(vmax(d2, dz), zero),
+	            vlen2(vmax(d2, zero), vmax(dz, zero)));
+}
+
+/* A kind without a vector form: the scalar field, lane by lane. */
+static vf scalar_sdf(uint32_t kind, const float *k, vf x, vf y, vf z,
+                     uint32_t active)
+{
+	_Alignas(64) float xs[PK_LANES], ys[PK_LANES], zs[PK_LANES];
+	_Alignas(64) float out[PK_LANES] = {0};
+	vstore(xs, x);
+	vstore(ys, y);
+	vstore(zs, z);
+	for (uint32_t i = 0; i < PK_LANES; i++) {
+		if ((active >> i) & 1u) {
+			out[i] = bc_prim_sdf((enum bc_prim)kind, k, xs[i],
+			                     ys[i], zs[i]);
+		}
+	}
+	return vload(out);
+}
+
+/* The field of a primitive record (affine map, then packed shape) at the
+ * world points (px, py, pz). */
+static inline vf prim_field(uint32_t kind, const float *rec, vf px, vf py,
+                            vf pz, uint32_t active)
+{
+	const float *k = rec + 12;
+	vf x = vfma(
+	    vset1(rec[0]), px,
+	    vfma(vset1(rec[1]), py, vfma(vset1(rec[2]), pz, vset1(rec[3]))));
+	vf y = vfma(
+	    vset1(rec[4]), px,
+	    vfma(vset1(rec[5]), py, vfma(vset1(rec[6]), pz, vset1(rec[7]))));
+	vf z = vfma(
+	    vset1(rec[8]), px,
+	    vfma(vset1(rec[9]), py, vfma(vset1(rec[10]), pz, vset1(rec[11]))));
+	switch (kind) {
+	case BC_PRIM_SPHERE:
+		return vsub(vlen3(x, y, z), vset1(k[0]));
+	case BC_PRIM_BOX:
+		return vsub(vbox_d(vsub(vabs(x), vset1(k[0])),
+		                   vsub(vabs(y), vset1(k[1])),
+		                   vsub(vabs(z), vset1(k[2]))),
+		            vset1(k[3]));
+	case BC_PRIM_CAPSULE: {
+		vf ex = vset1(k[3]), ey = vset1(k[4]), ez = vset1(k[5]);
+		vf qx = vsub(x, vset1(k[0])), qy = vsub(y, vset1(k[1])),
+		   qz = vsub(z, vset1(k[2]));
+		vf t = vclamp(
+		    vmul(vfma(qx, ex, vfma(qy, ey, vmul(qz, ez))), vset1(k[7])),
+		    vset1(0.0f), vset1(1.0f));
+		return vsub(vlen3(vsub(qx, vmul(ex, t)), vsub(qy, vmul(ey, t)),
+		                  vsub(qz, vmul(ez, t))),
+		            vset1(k[6]));
+	}
+	case BC_PRIM_CYLINDER:
+		return vextrude(vsub(vlen2(x, z), vset1(k[0])),
+		                vsub(vabs(y), vset1(k[1])));
+	case BC_PRIM_TORUS:
+		return vsub(vlen2(vsub(vlen2(x, z), vset1(k[0])), y),
+		            vset1(k[1]));
+	case BC_PRIM_LINK: {
+		vf qy = vmax(vsub(vabs(y), vset1(k[0])), vset1(0.0f));
+		return vsub(vlen2(vsub(vlen2(x, qy), vset1(k[1])), z),
+		            vset1(k[2]));
+	}
+	default:
+		return scalar_sdf(kind, k, x, y, z, active);
+	}
+}
+
+/* ops.c's blend_amount, beta per lane: 0 where beta <= 0 or h <= 0. */
+static inline vf vblend_amount(vf f0, vf f1, vf beta)
+{
+	vf zero = vset1(0.0f);
+	vf h = vsub(vset1(1.0f), vdiv(vabs(vsub(f0, f1)), beta));
+	vf amount = vmul(vmul(vmul(vdiv(beta, vset1(6.0f)), h), h), h);
+	return vsel(mand(vgt(beta, zero), vgt(h, zero)), amount, zero);
+}
+
+/* ops.c's transition (eq. 18): den = 6 r_o - beta > 0 was checked. */
+static inline vf vtransition(vf x, float beta, float den)
+{
+	vf t = vsub(vset1(1.0f), vdiv(vmul(vset1(6.0f), x), vset1(den)));
+	return vsel(vgt(t, vset1(0.0f)), vmul(vset1(beta), t), vset1(0.0f));
+}
+
+/* ops.c's bc_op_eval. */
+static inline vf op_field(uint32_t kind, float blend, float range, vf f0, vf f1)
+{
+	float den = 6.0f * range - blend;
+	vf r = vset1(range), beta = vset1(blend);
+	switch (kind) {
+	case BC_OP_UNION:
+		return vmin(f0, f1);
+	case BC_OP_INTERSECTION:
+		return vmax(f0, f1);
+	case BC_OP_DIFFERENCE:
+		return vmax(f0, vneg(f1));
+	case BC_OP_SMOOTH_UNION: {
+		vf sharp = vmin(f0, f1), g, b;
+		vm in = mand(vle(f0, r), vle(f1, r));
+		if (!(den > 0.0f)) {
+			return sharp; /* b_r is 0: G is the sharp operator */
+		}
+		g = vsub(sharp, vblend_amount(f0, f1, beta));
+		b = vtransition(g, blend, den);
+		return vsel(in, vsub(sharp, vblend_amount(f0, f1, b)), sharp);
+	}
+	case BC_OP_SMOOTH_INTERSECTION: {
+		vf sharp = vmax(f0, f1), g, b;
+		vm in = mand(vle(vabs(f0), r), vle(vabs(f1), r));
+		if (!(den > 0.0f)) {
+			return sharp;
+		}
+		g = vadd(sharp, vblend_amount(f0, f1, beta));
+		b = vtransition(vabs(g), blend, den);
+		return vsel(in, vadd(sharp, vblend_amount(f0, f1, b)), sharp);
+	}
+	case BC_OP_SMOOTH_DIFFERENCE: {
+		vf nf1 = vneg(f1), sharp = vmax(f0, nf1), g, b;
+		vm in = mand(vle(vabs(f0), r), vle(vabs(f1), r));
+		if (!(den > 0.0f)) {
+			return sharp;
+		}
+		g = vadd(sharp, vblend_amount(f0, nf1, beta));
+		b = vtransition(vabs(g), blend, den);
+		return vsel(in, vadd(sharp, vblend_amount(f0, nf1, b)), sharp);
+	}
+	default:
+		return vset1(INFINITY);
+	}
+}
+
+/* ops.c's follows_right: where the operator's value follows f1. */
+static inline vm op_follows_right(uint32_t kind, vf f0, vf f1)
+{
+	switch (bc_op_class((enum bc_op)kind)) {
+	case BC_OPCLASS_UNION:
+		return vlt(f1, f0);
+	case BC_OPCLASS_INTERSECTION:
+		return vgt(f1, f0);
+	case BC_OPCLASS_DIFFERENCE:
+	default:
+		return vgt(vneg(f1), f0);
+	}
+}
+
+/* The interpreter; with_id is a constant at each call, so the id tracking
+ * costs the tracing kernel nothing. */
+static inline void run(const struct bc_view *v, const struct bc_lin *lin,
+                       struct bc__pk_lanes *ln, uint32_t active, bool with_id)
+{
+	vf stack[BC_EVAL_STACK];
+	vf who[BC_EVAL_STACK]; /* primitive indices, as float bits */
+	uint32_t sp = 0;
+	vf t = vload(ln->t);
+	vf px = vfma(t, vload(ln->dx), vload(ln->ox));
+	vf py = vfma(t, vload(ln->dy), vload(ln->oy));
+	vf pz = vfma(t, vload(ln->dz), vload(ln->oz));
+	for (uint32_t i = 0; i < v->n; i++) {
+		const struct bc_view_instr *in = &v->instr[i];
+		const float *rec = lin->param + 4u * (size_t)in->param;
+		if (in->leaf) {
+			if (with_id) {
+				who[sp] = vbits(lin->prim_of[in->slot]);
+			}
+			stack[sp++] =
+			    prim_field(in->kind, rec, px, py, pz, active);
+		} else {
+			vf f1 = stack[--sp], f0 = stack[sp - 1];
+			if (with_id) {
+				who[sp - 1] =
+				    vsel(op_follows_right(in->kind, f0, f1),
+				         who[sp], who[sp - 1]);
+			}
+			stack[sp - 1] =
+			    op_field(in->kind, rec[0], rec[1], f0, f1);
+		}
+	}
+	vstore(ln->v, sp ? stack[0] : vset1(INFINITY));
+	if (with_id) {
+		_Alignas(64) float bits[PK_LANES];
+		vstore(bits, sp ? who[0] : vbits(BC_NONE));
+		memcpy(ln->id, bits, sizeof(bits));
+	}
+}
+
+void PK_EVAL(const struct bc_view *v, const struct bc_lin *lin,
+             struct bc__pk_lanes *ln, uint32_t active)
+{
+	run(v, lin, ln, active, false);
+}
+
+void PK_EVAL_ID(const struct bc_view *v, const struct bc_lin *lin,
+                struct bc__pk_lanes *ln, uint32_t active)
+{
+	run(v, lin, ln, active, true);
+}
