@@ -68,6 +68,10 @@ void bc_cli_render_usage(FILE *out)
 		"                                lists every primitive)\n"
 		"  --threads N        CPU threads, 0 = one per core (default 0);\n"
 		"                     the naive and tiled backends use at most 64\n"
+		"  --simd MODE        tiled backend only: vector instructions of\n"
+		"                     the tracer, auto (the widest the CPU has) |\n"
+		"                     off (one ray at a time) | avx2 | avx512\n"
+		"                     (default auto)\n"
 		"  --gl-platform P    gl backend only: auto | device | surfaceless\n"
 		"                     | osmesa (default auto)\n"
 		"  --range A          svo backend only: interval arithmetic ia |\n"
@@ -140,7 +144,7 @@ static bool parse_size(const char *s, uint32_t *w, uint32_t *h)
 static const char *const valued[] = {
 	"--size",    "--out",   "--depth",       "--ids",
 	"--backend", "--debug", "--threads",     "--gl-platform",
-	"--range",   "--threshold", "--max-depth",
+	"--range",   "--threshold", "--max-depth", "--simd",
 };
 
 static int parse(int argc, char **argv, struct args *a)
@@ -233,6 +237,19 @@ static int parse(int argc, char **argv, struct args *a)
 			if (!parse_u32(val, 0, MAX_THREADS, &a->opts.threads)) {
 				return usage_error("--threads '%s' is not a "
 						   "number in 0..1024", val);
+			}
+		} else if (strcmp(name, "--simd") == 0) {
+			if (strcmp(val, "auto") == 0) {
+				a->opts.simd = BC_SIMD_AUTO;
+			} else if (strcmp(val, "off") == 0) {
+				a->opts.simd = BC_SIMD_OFF;
+			} else if (strcmp(val, "avx2") == 0) {
+				a->opts.simd = BC_SIMD_AVX2;
+			} else if (strcmp(val, "avx512") == 0) {
+				a->opts.simd = BC_SIMD_AVX512;
+			} else {
+				return usage_error("unknown --simd '%s' (auto, "
+						   "off, avx2, avx512)", val);
 			}
 		} else if (strcmp(name, "--gl-platform") == 0) {
 			if (strcmp(val, "auto") && strcmp(val, "device") &&
