@@ -1,0 +1,344 @@
+/*
+ * The tiled backend's packet tracer (opts.simd) against its scalar one
+ * (BC_SIMD_OFF), for every width this CPU runs (auto, AVX2, AVX-512; a
+ * width the CPU lacks falls back to scalar and compares trivially). On the
+ * generator families (Fig. 16 aggregates, Fig. 18 spheres, boxes and
+ * lenses, sharp and smooth, a comb, random trees with every primitive and
+ * operator kind) the two must agree within the tolerances the tiled-vs-naive
+ * tests use (test_render.c): hit masks equal on all but 0.5 % of pixels,
+ * median depth difference under 1e-3 of the scene size, the same ids on at
+ * least 90 % of the pixels both hit. With packets, a pixel's value must
+ * still not depend on which other pixels are traced: regions of tiles and
+ * the refinement levels reassemble the whole render bit for bit, and the
+ * thread count changes nothing.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "blobcast/alloc.h"
+#include "blobcast/render.h"
+#include "test.h"
+
+#include "scenes.h"
+
+static const struct {
+	enum bc_simd simd;
+	const char *name;
+} modes[] = {
+    {BC_SIMD_AUTO, "auto"},
+    {BC_SIMD_AVX2, "avx2"},
+    {BC_SIMD_AVX512, "avx512"},
+};
+#define NMODES (sizeof(modes) / sizeof(modes[0]))
+
+struct cmp {
+	double mask_frac; /* pixels hit by one renderer only */
+	double depth_med; /* median |depth delta| where both hit */
+	double id_frac;   /* pixels hit by both with equal ids */
+	uint32_t both;
+};
+
+static int cmp_float(const void *a, const void *b)
+{
+	float x = *(const float *)a, y = *(const float *)b;
+	return (x > y) - (x < y);
+}
+
+static struct cmp compare(const struct bc_frame *a, const struct bc_frame *b)
+{
+	size_t n = (size_t)a->width * a->height, diff = 0, both = 0, same = 0;
+	float *d = bc_calloc(n, sizeof(float));
+	struct cmp c = {1.0, INFINITY, 0.0, 0};
+	if (!d) {
+		return c;
+	}
+	for (size_t i = 0; i < n; i++) {
+		bool ha = isfinite(a->depth[i]), hb = isfinite(b->depth[i]);
+		if (ha != hb) {
+			diff++;
+		} else if (ha) {
+			d[both++] = fabsf(a->depth[i] - b->depth[i]);
+			same += a->ids[i] == b->ids[i];
+		}
+	}
+	qsort(d, both, sizeof(float), cmp_float);
+	c.mask_frac = (double)diff / (double)n;
+	c.depth_med = both ? (double)d[both / 2] : 0.0;
+	c.id_frac = both ? (double)same / (double)both : 1.0;
+	c.both = (uint32_t)both;
+	bc_free(d);
+	return c;
+}
+
+static int render(struct bc_tree *t, enum bc_simd simd, uint32_t threads,
+                  const struct bc_camera *cam, struct bc_frame *f)
+{
+	struct bc_render_opts o = {.simd = simd, .threads = threads};
+	struct bc_errinfo ei = {0};
+	return bc_render_once(BC_BACKEND_TILED, &o, t, cam, f, NULL, &ei);
+}
+
+/* Renders t at w x h with simd off and with each mode; checks they agree.
+ * At least 1/cover of the pixels must show the scene. */
+static void check_agree_cover(const char *what, struct bc_tree *t, uint32_t w,
+                              uint32_t h, uint32_t cover)
+{
+	struct bc_frame off = {0}, on = {0};
+	struct bc_camera cam;
+	const struct bc_lin *l = bc_tree_lin(t);
+	REQUIRE(l != NULL);
+	sc_frame(l, &cam);
+	REQUIRE(bc_frame_init(&off, w, h) == 0);
+	REQUIRE(bc_frame_init(&on, w, h) == 0);
+	CHECK_EQ_INT(render(t, BC_SIMD_OFF, 1, &cam, &off), 0);
+	for (size_t m = 0; m < NMODES; m++) {
+		struct cmp c;
+		CHECK_EQ_INT(render(t, modes[m].simd, 1, &cam, &on), 0);
+		c = compare(&off, &on);
+		printf("  %-22s %-6s prims %5u: mask %.4f%%, depth median "
+		       "%.2e (size %.2f), ids %.2f%%, hit %u px\n",
+		       what, modes[m].name, l->nprims, 100.0 * c.mask_frac,
+		       c.depth_med, (double)l->size, 100.0 * c.id_frac, c.both);
+		CHECK(c.both > w * h / cover);
+		CHECK(c.mask_frac < 0.005);
+		CHECK(c.depth_med < 1e-3 * (double)l->size);
+		CHECK(c.id_frac > 0.90);
+	}
+	bc_frame_finish(&off);
+	bc_frame_finish(&on);
+}
+
+static void test_simd_matches_scalar_fig18(void)
+{
+	static const uint32_t counts[] = {16, 64, 256};
+	struct bc_tree *t = bc_tree_create();
+	REQUIRE(t);
+	for (size_t i = 0; i < 3; i++) {
+		for (int kind = 0; kind < 4; kind++) {
+			bool boxes = kind & 1, smooth = kind & 2;
+			char what[48];
+			snprintf(what, sizeof(what), "fig18 %s %s %u",
+			         boxes ? "boxes" : "spheres",
+			         smooth ? "smooth" : "sharp", counts[i]);
+			REQUIRE(sc_fig18(t, counts[i], boxes, smooth, 18 + i) ==
+			        0);
+			check_agree_cover(what, t, 64 + 12 * (uint32_t)i,
+			                  64 + 12 * (uint32_t)i, 20);
+		}
+	}
+	/* Lenses: two spheres under an intersection each. */
+	REQUIRE(sc_gen(t, "fig18",
+	               (struct bc_gen_opts){.count = 64,
+	                                    .seed = 3,
+	                                    .kind = BC_GEN_KIND_LENSES}) == 0);
+	check_agree_cover("fig18 lenses 64", t, 80, 80, 20);
+	bc_tree_destroy(t);
+}
+
+static void test_simd_matches_scalar_fig16_comb_random(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	int tested = 0;
+	REQUIRE(t);
+	for (uint32_t level = 1; level <= 2; level++) {
+		for (int smooth = 0; smooth <= 1; smooth++) {
+			char what[32];
+			snprintf(what, sizeof(what), "fig16 L%u %s", level,
+			         smooth ? "smooth" : "sharp");
+			REQUIRE(sc_fig16(t, level, smooth) == 0);
+			check_agree_cover(what, t, 96 + 32 * (level - 1),
+			                  80 + 32 * (level - 1), 20);
+		}
+	}
+	REQUIRE(sc_comb(t, 24, true) == 0);
+	check_agree_cover("comb 24 smooth", t, 160, 64, 40);
+	/* Random trees: every primitive kind (those without a vector form
+	 * go through the scalar field lane by lane) and every operator. Take
+	 * the first eight that fill a fair part of the frame. */
+	for (uint64_t seed = 1; seed <= 100 && tested < 8; seed++) {
+		char what[32];
+		struct bc_frame f = {0};
+		struct bc_camera cam;
+		uint32_t hit = 0;
+		REQUIRE(sc_random(t, 8 + 3 * (uint32_t)seed, seed) == 0);
+		sc_frame(bc_tree_lin(t), &cam);
+		REQUIRE(bc_frame_init(&f, 24, 24) == 0);
+		REQUIRE(render(t, BC_SIMD_OFF, 1, &cam, &f) == 0);
+		for (uint32_t i = 0; i < 24 * 24; i++) {
+			hit += f.ids[i] != 0;
+		}
+		bc_frame_finish(&f);
+		if (hit < 24 * 24 / 8) {
+			continue;
+		}
+		snprintf(what, sizeof(what), "random seed %u", (unsigned)seed);
+		check_agree_cover(what, t, 72, 72, 20);
+		tested++;
+	}
+	CHECK_EQ_INT(tested, 8);
+	bc_tree_destroy(t);
+}
+
+/* 300 smooth-unioned spheres around one spot: ranges past M_overlap, so
+ * the packets run views of hundreds of instructions. */
+static void test_simd_matches_scalar_over_m_overlap(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_op_data op = sc_op(true, 0.05f);
+	uint64_t x = 99;
+	REQUIRE(t);
+	bc_tree_begin(t);
+	REQUIRE(bc_tree_push_op(t, 0, &op, NULL) == 0);
+	for (int i = 0; i < 300; i++) {
+		struct bc_prim_data p;
+		float u[4];
+		for (int k = 0; k < 4; k++) {
+			/* xorshift: uniform in [0, 1) */
+			x ^= x << 13;
+			x ^= x >> 7;
+			x ^= x << 17;
+			u[k] = (float)(x >> 40) / 16777216.0f;
+		}
+		sc_sphere(&p, 0.2f * u[0] - 0.1f, 0.2f * u[1] - 0.1f,
+		          0.2f * u[2] - 0.1f, 0.5f + 0.3f * u[3]);
+		REQUIRE(bc_tree_put_prim(t, 0, &p, NULL) == 0);
+	}
+	REQUIRE(bc_tree_pop_op(t, NULL) == 0);
+	REQUIRE(bc_tree_end(t, NULL) == 0);
+	check_agree_cover("300 overlapping", t, 48, 48, 20);
+	bc_tree_destroy(t);
+}
+
+/* Pixel i of a and b agree bit for bit (rgba, depth, id). */
+static bool pixel_equal(const struct bc_frame *a, const struct bc_frame *b,
+                        size_t i)
+{
+	return memcmp(a->rgba + 4 * i, b->rgba + 4 * i, 4) == 0 &&
+	       memcmp(&a->depth[i], &b->depth[i], sizeof(float)) == 0 &&
+	       a->ids[i] == b->ids[i];
+}
+
+static size_t frames_differ(const struct bc_frame *a, const struct bc_frame *b)
+{
+	size_t n = (size_t)a->width * a->height, bad = 0;
+	for (size_t i = 0; i < n; i++) {
+		bad += !pixel_equal(a, b, i);
+	}
+	return bad;
+}
+
+/* Whole render, then (1) the refinement levels 3, 2, 1, 0 into a fresh
+ * frame and (2) a scattered subset of tiles redrawn over a scrambled copy:
+ * both must equal the whole render bit for bit. */
+static void check_regions(const char *what, struct bc_tree *t, uint32_t w,
+                          uint32_t h, enum bc_simd simd)
+{
+	struct bc_renderer *r = NULL;
+	struct bc_frame whole = {0}, f = {0};
+	struct bc_render_stats st;
+	struct bc_errinfo ei = {0};
+	struct bc_camera cam;
+	struct bc_render_opts o = {.simd = simd, .threads = 2};
+	uint32_t tx = bc_render_tiles_x(w), ty = bc_render_tiles_y(h);
+	uint8_t *tiles = bc_calloc((size_t)tx * ty, 1);
+	size_t n = (size_t)w * h, bad;
+	REQUIRE(tiles);
+	sc_frame(bc_tree_lin(t), &cam);
+	REQUIRE(bc_frame_init(&whole, w, h) == 0);
+	REQUIRE(bc_frame_init(&f, w, h) == 0);
+	REQUIRE(bc_renderer_create(&r, BC_BACKEND_TILED, &o, &ei) == 0);
+	REQUIRE(bc_renderer_sync(r, t, NULL, &ei) == 0);
+	CHECK_EQ_INT(bc_renderer_render(r, &cam, &whole, &st, &ei), 0);
+	/* (1) Progressive refinement: level 3 traces one pixel per tile. */
+	for (int level = 3; level >= 0; level--) {
+		struct bc_render_region rg = {NULL, (uint32_t)level, level < 3};
+		CHECK_EQ_INT(
+		    bc_renderer_render_region(r, &cam, &f, &rg, &st, &ei), 0);
+	}
+	bad = frames_differ(&whole, &f);
+	printf("  %-22s simd %d: levels 3..0 differ on %zu px\n", what,
+	       (int)simd, bad);
+	CHECK(bad == 0);
+	/* (2) Every third tile, over a scrambled copy of the whole frame. */
+	memcpy(f.rgba, whole.rgba, 4 * n);
+	memcpy(f.depth, whole.depth, n * sizeof(float));
+	memcpy(f.ids, whole.ids, n * sizeof(uint32_t));
+	f.key = whole.key;
+	for (uint32_t i = 0; i < tx * ty; i++) {
+		tiles[i] = i % 3 == 1;
+	}
+	for (uint32_t y = 0; y < h; y++) {
+		for (uint32_t x = 0; x < w; x++) {
+			size_t i = (size_t)y * w + x;
+			if (tiles[(y / BC_RENDER_TILE) * tx +
+			          x / BC_RENDER_TILE]) {
+				memset(f.rgba + 4 * i, 0x5a, 4);
+				f.depth[i] = -1.0f;
+				f.ids[i] = 0xdeadbeefu;
+			}
+		}
+	}
+	{
+		struct bc_render_region rg = {tiles, 0, false};
+		CHECK_EQ_INT(
+		    bc_renderer_render_region(r, &cam, &f, &rg, &st, &ei), 0);
+		CHECK(!st.whole);
+	}
+	bad = frames_differ(&whole, &f);
+	printf("  %-22s simd %d: tile subset differs on %zu px\n", what,
+	       (int)simd, bad);
+	CHECK(bad == 0);
+	bc_renderer_destroy(r);
+	bc_frame_finish(&whole);
+	bc_frame_finish(&f);
+	bc_free(tiles);
+}
+
+static void test_region_equals_whole_with_simd(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	REQUIRE(t);
+	for (size_t m = 0; m < NMODES; m++) {
+		REQUIRE(sc_fig18(t, 64, false, true, 7) == 0);
+		check_regions("fig18 spheres smooth", t, 83, 61, modes[m].simd);
+		REQUIRE(sc_fig18(t, 64, true, false, 8) == 0);
+		check_regions("fig18 boxes sharp", t, 64, 72, modes[m].simd);
+		REQUIRE(sc_random(t, 40, 5) == 0);
+		check_regions("random 40", t, 57, 49, modes[m].simd);
+	}
+	bc_tree_destroy(t);
+}
+
+static void test_threads_do_not_change_simd_pixels(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_frame a = {0}, b = {0};
+	struct bc_camera cam;
+	REQUIRE(t && sc_fig18(t, 64, false, true, 5) == 0);
+	sc_frame(bc_tree_lin(t), &cam);
+	REQUIRE(bc_frame_init(&a, 77, 45) == 0 &&
+	        bc_frame_init(&b, 77, 45) == 0);
+	for (size_t m = 0; m < NMODES; m++) {
+		CHECK_EQ_INT(render(t, modes[m].simd, 1, &cam, &a), 0);
+		CHECK_EQ_INT(render(t, modes[m].simd, 3, &cam, &b), 0);
+		CHECK(frames_differ(&a, &b) == 0);
+	}
+	bc_frame_finish(&a);
+	bc_frame_finish(&b);
+	bc_tree_destroy(t);
+}
+
+static const struct bc_test tests[] = {
+    {"simd_matches_scalar_fig18", test_simd_matches_scalar_fig18},
+    {"simd_matches_scalar_fig16_comb_random",
+     test_simd_matches_scalar_fig16_comb_random},
+    {"simd_matches_scalar_over_m_overlap",
+     test_simd_matches_scalar_over_m_overlap},
+    {"region_equals_whole_with_simd", test_region_equals_whole_with_simd},
+    {"threads_do_not_change_simd_pixels",
+     test_threads_do_not_change_simd_pixels},
+};
+
+BC_TEST_MAIN(tests)
