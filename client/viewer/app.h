@@ -112,7 +112,10 @@ struct bc_viewer_app {
 	uint32_t selected;
 
 	/* Frames. */
-	uint64_t nframes;      /* shown, snapshots excluded */
+	uint64_t nframes; /* shown, snapshots excluded */
+	/* Finished pictures among them: frames that left nothing to refine
+	 * (level 0 without INCOMPLETE). --frames counts these. */
+	uint64_t npictures;
 	uint64_t settle_order; /* newest order shown since the last draw */
 	bool settle;
 	struct {

@@ -83,12 +83,14 @@ static void usage(FILE *out)
 	    "  --snapshot-dir DIR where S saves lossless snapshots "
 	    "(default .)\n"
 	    "  --screenshot FILE  save the window to FILE once --frames "
-	    "frames\n"
+	    "pictures\n"
 	    "                     were shown, then exit\n"
-	    "  --frames N         frames before the screenshot (default 1)\n"
+	    "  --frames N         finished pictures before the screenshot "
+	    "(the\n"
+	    "                     last frame of each refinement; default 1)\n"
 	    "  --turn DEG         with --frames > 1: turn the camera by DEG "
 	    "after\n"
-	    "                     each frame (the daemon renders on change "
+	    "                     each picture (the daemon renders on change "
 	    "only;\n"
 	    "                     default 15)\n"
 	    "  --dump-frame FILE  with --screenshot: also save the picture "
@@ -544,7 +546,7 @@ static void draw(struct bc_viewer_app *a, double now)
 {
 	int fwi = 0, fhi = 0;
 	uint32_t fw, fh;
-	bool shot_done = a->o.screenshot && a->nframes >= a->o.frames;
+	bool shot_done = a->o.screenshot && a->npictures >= a->o.frames;
 	glfwGetFramebufferSize(a->win, &fwi, &fhi);
 	if (fwi <= 0 || fhi <= 0) {
 		return;
@@ -617,11 +619,13 @@ static void update_title(struct bc_viewer_app *a, double now)
 }
 
 /* --frames N: the daemon renders on change only; turning the camera after
- * each frame gives it one. */
+ * each finished picture gives it one. Turning while it refines would cut
+ * the refinement short. */
 static void maybe_turn(struct bc_viewer_app *a)
 {
-	if (!a->o.screenshot || a->nframes == 0 || a->nframes >= a->o.frames ||
-	    a->turn_pending) {
+	if (!a->o.screenshot || a->npictures == 0 ||
+	    a->npictures >= a->o.frames || a->turn_pending ||
+	    a->frames.refining) {
 		return;
 	}
 	bc_viewer_orbit(&a->cam,

@@ -272,6 +272,9 @@ static void got_frame(struct bc_viewer_app *a, const struct bc_msg *m)
 		bc_viewer_send_view(a);
 	}
 	a->nframes++;
+	if (!a->frames.refining) {
+		a->npictures++;
+	}
 	bc_viewer_meter_frame(&a->meter, bc_client_info(a->c)->last_msg_bytes,
 	                      bc_viewer_now_ms());
 	a->last.frame_no = fr->frame_no;
@@ -290,15 +293,17 @@ static void got_frame(struct bc_viewer_app *a, const struct bc_msg *m)
 	a->redraw = true;
 	a->turn_pending = false;
 	if (a->o.verbose) {
-		printf(
-		    "frame %llu no=%u order=%llu %s %s image=%ux%u rects=%u "
-		    "bytes=%u%s\n",
-		    (unsigned long long)a->nframes, fr->frame_no,
-		    (unsigned long long)fr->order,
-		    (m->flags & BC_PROTO_FLAG_STILL) ? "still" : "interactive",
-		    enc_name(fr->encoding), fr->image_width, fr->image_height,
-		    fr->nrects, bc_client_info(a->c)->last_msg_bytes,
-		    up.want_refresh ? " refresh" : "");
+		printf("frame %llu no=%u order=%llu %s %s image=%ux%u level=%u "
+		       "rects=%u bytes=%u%s%s\n",
+		       (unsigned long long)a->nframes, fr->frame_no,
+		       (unsigned long long)fr->order,
+		       (m->flags & BC_PROTO_FLAG_STILL) ? "still"
+		                                        : "interactive",
+		       enc_name(fr->encoding), fr->image_width,
+		       fr->image_height, (unsigned)a->frames.level, fr->nrects,
+		       bc_client_info(a->c)->last_msg_bytes,
+		       a->frames.refining ? " refining" : "",
+		       up.want_refresh ? " refresh" : "");
 		fflush(stdout);
 	}
 }
