@@ -33,6 +33,13 @@ static void usage(FILE *out)
 		"  --backend NAME      auto | cpu | tiled | naive | gl | svo\n"
 		"                      (auto and cpu: the CPU tile tracer)\n"
 		"  --gl-platform P     auto | device | surfaceless | osmesa\n"
+		"  --simd MODE         auto | off: vector instructions of the\n"
+		"                      CPU tracers (default auto)\n"
+		"  --no-damage         edits re-render whole views instead of\n"
+		"                      the tiles they change (to compare)\n"
+		"  --frame-budget MS   time one refinement step may take\n"
+		"                      (default 2000); past it the picture\n"
+		"                      stays at its coarser level\n"
 		"  --config FILE       JSON configuration (docs/operations.md);\n"
 		"                      options given here override it\n"
 		"  --server-id NAME    name sent to clients (default blobcastd)\n"
@@ -265,6 +272,31 @@ int main(int argc, char **argv)
 			}
 		} else if (strcmp(a, "--gl-platform") == 0) {
 			set_str(&cli.gl_platform, need_arg(argc, argv, &i));
+		} else if (strcmp(a, "--simd") == 0) {
+			const char *m = need_arg(argc, argv, &i);
+			if (strcmp(m, "auto") == 0) {
+				cli.simd = BC_SIMD_AUTO;
+			} else if (strcmp(m, "off") == 0) {
+				cli.simd = BC_SIMD_OFF;
+			} else {
+				fprintf(stderr, "blobcastd: --simd is auto or "
+						"off, not %s\n",
+					m);
+				return 2;
+			}
+		} else if (strcmp(a, "--no-damage") == 0) {
+			cli.no_damage = true;
+		} else if (strcmp(a, "--frame-budget") == 0) {
+			const char *v = need_arg(argc, argv, &i);
+			char *end = NULL;
+			unsigned long ms = strtoul(v, &end, 10);
+			if (!end || *end || end == v || ms < 1 || ms > 600000) {
+				fprintf(stderr, "blobcastd: --frame-budget is "
+						"1..600000 ms, not %s\n",
+					v);
+				return 2;
+			}
+			cli.frame_budget_ms = (uint32_t)ms;
 		} else if (strcmp(a, "--config") == 0) {
 			config = need_arg(argc, argv, &i);
 		} else if (strcmp(a, "--server-id") == 0) {
@@ -316,6 +348,9 @@ int main(int argc, char **argv)
 	if (cli.backend) {
 		srv.cfg.backend = cli.backend;
 	}
+	srv.cfg.simd = cli.simd;
+	srv.cfg.no_damage = cli.no_damage;
+	srv.cfg.frame_budget_ms = cli.frame_budget_ms;
 	if (!srv.cfg.listen) {
 		set_str(&srv.cfg.listen, "127.0.0.1:7878");
 	}

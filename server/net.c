@@ -76,7 +76,6 @@ static void handle_closed(uv_handle_t *h)
 	}
 	bc_proto_reader_finish(&c->reader);
 	bc_shared_unref(c->frame_next);
-	bc_free(c->damage);
 	bc_free(c);
 }
 

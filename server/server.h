@@ -56,6 +56,22 @@ struct bc_srv_config {
 	char *server_id;
 	struct bc_token *tokens;
 	uint32_t ntokens;
+	enum bc_simd simd;
+	bool no_damage; /* edits re-render whole views (for comparison) */
+	uint32_t frame_budget_ms; /* 0: BC_SRV_FRAME_BUDGET_MS */
+};
+
+/* What a client holds of a view after a frame (set by the render thread,
+ * kept by the loop): the view's id (0: nothing), its version, the level of
+ * the picture, whether every pixel came losslessly, whether finer levels
+ * will follow, and whether the frame was the still. */
+struct bc_shown {
+	uint32_t view;
+	uint32_t version;
+	int8_t level;
+	bool lossless;
+	bool refining;
+	bool still;
 };
 
 struct bc_client {
@@ -92,13 +108,10 @@ struct bc_client {
 	struct bc_camera camera;
 	uint32_t camera_seq;
 	uint64_t interacting_until; /* ms, loop clock */
-	bool dirty;          /* the scene or view changed since the last job */
+	bool dirty;          /* owed a frame: a change, or a finer level */
 	bool render_pending; /* a job for this client is queued */
 	bool still_sent;     /* the last frame sent was the still of now */
-	bool has_base;       /* the client holds a full still to patch */
-	uint8_t *damage;     /* one byte per damage block */
-	uint32_t dmg_cols, dmg_rows;
-	bool damage_all;
+	struct bc_shown shown; /* what its last frame left it holding */
 
 	/* Output: messages go out at once; frames one at a time. */
 	size_t queued;
@@ -188,22 +201,24 @@ struct bc_session *bc_session_by_id(struct bc_srv *srv, uint32_t id);
 
 /* ---- rthread.c ---------------------------------------------------------- */
 
-/* One frame to render for a group of clients sharing a view. */
+/* One frame to render for a group of clients sharing a view and holding
+ * the same picture of it. The render thread decides the level and the
+ * rectangles (see rthread.c). */
 struct bc_rjob {
 	uint32_t session_id;
 	struct bc_camera camera;
-	uint32_t width, height;             /* full (VIEW) size */
-	uint32_t image_width, image_height; /* rendered size */
-	int encoding, quality;
-	uint16_t flags;
+	uint32_t width, height; /* VIEW size */
+	int encoding;           /* of stills and snapshots */
+	int encoding_interactive;
+	int quality_still, quality_interactive;
+	uint32_t max_level; /* coarsest level the clients accept */
+	bool final;         /* the interaction is over: refine to the still */
+	struct bc_shown shown; /* what the targets hold */
 	uint32_t camera_seq;
 	uint64_t order;
 	uint32_t frame_no;
 	uint32_t max_bytes;
 	uint32_t snapshot_seq; /* != 0: answer to a SNAPSHOT */
-	/* Rectangles to send, in image pixels; none = the whole frame. */
-	struct bc_proto_rect *rects;
-	uint32_t nrects;
 	struct bc_client_ref *targets;
 	uint32_t ntargets;
 	/* PICK: answer one ray instead of a frame. */

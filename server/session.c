@@ -170,49 +170,11 @@ struct undo {
 	struct bc_op_data op;
 };
 
-/* A world box that an edit may have changed the picture in. */
-struct dmg_box {
-	float lo[3], hi[3];
-};
-
-static void grow_box(struct dmg_box *b, const struct bc_abv *abv)
-{
-	float lo[3], hi[3];
-	bc_abv_aabb(abv, lo, hi);
-	for (int i = 0; i < 3; i++) {
-		b->lo[i] = fminf(b->lo[i], lo[i]);
-		b->hi[i] = fmaxf(b->hi[i], hi[i]);
-	}
-}
-
-static void empty_box(struct dmg_box *b)
-{
-	for (int i = 0; i < 3; i++) {
-		b->lo[i] = INFINITY;
-		b->hi[i] = -INFINITY;
-	}
-}
-
-/* Grows b by the ABVs of node id's primitives. */
-static void node_box(const struct bc_tree *t, uint32_t id, struct dmg_box *b)
-{
-	const struct bc_lin *l = bc_tree_lin(t);
-	uint32_t s = bc_tree_slot(t, id), k0, n;
-	if (!l || s == BC_NONE) {
-		return;
-	}
-	k0 = l->prim_of[l->first[s]];
-	n = (s - l->first[s]) / 2 + 1;
-	for (uint32_t k = k0; k < k0 + n; k++) {
-		grow_box(b, &l->abv[k]);
-	}
-}
-
 /*
  * Applies a batch to the session's tree, whole or not at all. Parameter
  * batches are applied in place with an undo list; batches with structural
- * operations are applied to a copy. boxes (nboxes = 2 per SET op) receive
- * the damaged world boxes; *structural tells whether the layout changed.
+ * operations are applied to a copy; *structural tells whether the layout
+ * changed.
  */
 /* Restores the parameters saved in undo, newest first: each restore puts
  * back a state that was valid, so it cannot fail. */
@@ -228,7 +190,7 @@ static void roll_back(struct bc_tree *t, const struct undo *undo, uint32_t n)
 }
 
 static int apply_batch(struct bc_tree **tp, const struct bc_msg_edit *ed,
-		       struct dmg_box *boxes, bool *structural,
+		       bool *structural,
 		       struct bc_tree **replaced, struct undo **undo_out,
 		       uint32_t *nundo_out, struct bc_errinfo *ei)
 {
@@ -258,9 +220,6 @@ static int apply_batch(struct bc_tree **tp, const struct bc_msg_edit *ed,
 		const struct bc_proto_edit_op *e = &ed->ops[i];
 		if (e->kind == BC_PROTO_EDIT_SET) {
 			if (!*structural) {
-				empty_box(&boxes[2 * i]);
-				empty_box(&boxes[2 * i + 1]);
-				node_box(work, e->node, &boxes[2 * i]);
 				undo[nundo].id = e->node;
 				bc_tree_get(work, e->node, &undo[nundo].p,
 					    &undo[nundo].op);
@@ -268,7 +227,6 @@ static int apply_batch(struct bc_tree **tp, const struct bc_msg_edit *ed,
 			rc = apply_set(work, e, ei);
 			if (!rc && !*structural) {
 				nundo++;
-				node_box(work, e->node, &boxes[2 * i + 1]);
 			}
 		} else {
 			rc = apply_structural(work, e, ei);
@@ -312,7 +270,6 @@ static int replay_record(void *ud, uint64_t order, const uint8_t *rec,
 	struct bc_proto_reader r;
 	struct bc_msg m;
 	struct bc_errinfo ei = {0};
-	struct dmg_box *boxes;
 	struct bc_tree *old = NULL;
 	struct undo *undo = NULL;
 	uint32_t nundo = 0;
@@ -322,11 +279,8 @@ static int replay_record(void *ud, uint64_t order, const uint8_t *rec,
 	bc_proto_reader_init(&r, NULL);
 	rc = bc_proto_decode_payload(&r, BC_MSG_EDIT, 0, 0, rec, len, &m, &ei);
 	if (!rc) {
-		boxes = bc_calloc(2u * m.edit.nops, sizeof(*boxes));
-		rc = boxes ? apply_batch(ctx->tree, &m.edit, boxes, &structural,
-					 &old, &undo, &nundo, &ei)
-			   : BC_ENOMEM;
-		bc_free(boxes);
+		rc = apply_batch(ctx->tree, &m.edit, &structural, &old, &undo,
+				 &nundo, &ei);
 		bc_free(undo);
 		bc_tree_destroy(old);
 	}
@@ -564,7 +518,7 @@ static void mark_all(struct bc_session *s)
 	for (uint32_t i = 0; i < s->nmembers; i++) {
 		struct bc_client *m = bc_client_get(s->srv, s->members[i]);
 		if (m) {
-			m->damage_all = true;
+			m->shown.view = 0; /* the next frame is whole */
 			m->dirty = true;
 		}
 	}
@@ -595,8 +549,7 @@ static void join(struct bc_client *c, struct bc_session *s,
 		c->camera = s->camera;
 		c->camera_seq = 0;
 	}
-	c->has_base = false;
-	c->damage_all = true;
+	c->shown.view = 0;
 	c->dirty = true;
 	send_info(s);
 	send_state(s, c, 0, 0);
@@ -643,139 +596,7 @@ static void handle_session(struct bc_client *c, const struct bc_msg *m)
 	join(c, s, req->role, m->seq);
 }
 
-/* ---- damage and frames --------------------------------------------------- */
-
-static void ensure_damage_grid(struct bc_client *c)
-{
-	uint32_t cols = (c->view.width + BC_SRV_DAMAGE_BLOCK - 1) /
-			BC_SRV_DAMAGE_BLOCK;
-	uint32_t rows = (c->view.height + BC_SRV_DAMAGE_BLOCK - 1) /
-			BC_SRV_DAMAGE_BLOCK;
-	if (cols == c->dmg_cols && rows == c->dmg_rows && c->damage) {
-		return;
-	}
-	bc_free(c->damage);
-	c->damage = bc_calloc((size_t)cols * rows, 1);
-	c->dmg_cols = c->damage ? cols : 0;
-	c->dmg_rows = c->damage ? rows : 0;
-	c->damage_all = true;
-	c->has_base = false;
-}
-
-/* Marks the blocks a world box can cover in c's view. */
-static void damage_box(struct bc_client *c, const struct dmg_box *b)
-{
-	struct bc_view_rays vr;
-	float xmin = INFINITY, ymin = INFINITY, xmax = -INFINITY,
-	      ymax = -INFINITY;
-	if (!(b->lo[0] <= b->hi[0])) {
-		return;
-	}
-	if (!c->damage) {
-		c->damage_all = true;
-		return;
-	}
-	bc_view_rays_init(&vr, &c->camera, c->view.width, c->view.height);
-	for (int corner = 0; corner < 8; corner++) {
-		float p[3], d[3], z, x, y;
-		for (int i = 0; i < 3; i++) {
-			p[i] = ((corner >> i) & 1) ? b->hi[i] : b->lo[i];
-			d[i] = p[i] - vr.eye[i];
-		}
-		z = d[0] * vr.forward[0] + d[1] * vr.forward[1] +
-		    d[2] * vr.forward[2];
-		if (!(z > 1e-6f)) {
-			/* A corner behind the eye: the box may cover anything. */
-			c->damage_all = true;
-			return;
-		}
-		x = (d[0] * vr.right[0] + d[1] * vr.right[1] +
-		     d[2] * vr.right[2]) /
-		    (z * vr.tan_half_y * vr.aspect);
-		y = (d[0] * vr.up[0] + d[1] * vr.up[1] + d[2] * vr.up[2]) /
-		    (z * vr.tan_half_y);
-		/* Back to pixels: x in [-1, 1] left to right, y bottom up. */
-		x = (x + 1.0f) * 0.5f * (float)vr.width;
-		y = (1.0f - y) * 0.5f * (float)vr.height;
-		xmin = fminf(xmin, x);
-		xmax = fmaxf(xmax, x);
-		ymin = fminf(ymin, y);
-		ymax = fmaxf(ymax, y);
-	}
-	/* One pixel of slack for rounding at the edges. */
-	xmin = fmaxf(xmin - 1.0f, 0.0f);
-	ymin = fmaxf(ymin - 1.0f, 0.0f);
-	xmax = fminf(xmax + 1.0f, (float)vr.width - 1.0f);
-	ymax = fminf(ymax + 1.0f, (float)vr.height - 1.0f);
-	if (xmin > xmax || ymin > ymax) {
-		return;
-	}
-	for (uint32_t by = (uint32_t)ymin / BC_SRV_DAMAGE_BLOCK;
-	     by <= (uint32_t)ymax / BC_SRV_DAMAGE_BLOCK; by++) {
-		for (uint32_t bx = (uint32_t)xmin / BC_SRV_DAMAGE_BLOCK;
-		     bx <= (uint32_t)xmax / BC_SRV_DAMAGE_BLOCK; bx++) {
-			c->damage[by * c->dmg_cols + bx] = 1;
-		}
-	}
-}
-
-/* Merges damaged blocks into rectangles: runs along each block row, then
- * runs of equal spans down the rows. Returns the count, or 0 when there
- * are more than max (a full frame is then cheaper). */
-static uint32_t damage_rects(struct bc_client *c, struct bc_proto_rect *out,
-			     uint32_t max)
-{
-	uint32_t n = 0, B = BC_SRV_DAMAGE_BLOCK;
-	uint8_t *seen = bc_calloc((size_t)c->dmg_cols * c->dmg_rows, 1);
-	if (!seen) {
-		return 0;
-	}
-	for (uint32_t by = 0; by < c->dmg_rows; by++) {
-		for (uint32_t bx = 0; bx < c->dmg_cols; bx++) {
-			uint32_t w = 0, h = 1;
-			bool same = true;
-			if (!c->damage[by * c->dmg_cols + bx] ||
-			    seen[by * c->dmg_cols + bx]) {
-				continue;
-			}
-			while (bx + w < c->dmg_cols &&
-			       c->damage[by * c->dmg_cols + bx + w] &&
-			       !seen[by * c->dmg_cols + bx + w]) {
-				w++;
-			}
-			while (same && by + h < c->dmg_rows) {
-				for (uint32_t i = 0; i < w; i++) {
-					size_t at = (size_t)(by + h) * c->dmg_cols +
-						    bx + i;
-					if (!c->damage[at] || seen[at]) {
-						same = false;
-						break;
-					}
-				}
-				h += same ? 1 : 0;
-			}
-			for (uint32_t j = 0; j < h; j++) {
-				memset(seen + (size_t)(by + j) * c->dmg_cols + bx,
-				       1, w);
-			}
-			if (n == max) {
-				bc_free(seen);
-				return 0;
-			}
-			out[n].x = (uint16_t)(bx * B);
-			out[n].y = (uint16_t)(by * B);
-			out[n].w = (uint16_t)((bx + w) * B > c->view.width
-						      ? c->view.width - bx * B
-						      : w * B);
-			out[n].h = (uint16_t)((by + h) * B > c->view.height
-						      ? c->view.height - by * B
-						      : h * B);
-			n++;
-		}
-	}
-	bc_free(seen);
-	return n;
-}
+/* ---- frames -------------------------------------------------------------- */
 
 /* Two members can share a render when everything that shapes the frame is
  * equal. */
@@ -790,10 +611,19 @@ static bool same_frame(const struct bc_client *a, const struct bc_client *b,
 	       a->view.quality_interactive == b->view.quality_interactive &&
 	       a->view.quality_still == b->view.quality_still &&
 	       a->view.downscale == b->view.downscale &&
-	       a->damage_all == b->damage_all && a->has_base == b->has_base &&
-	       (a->damage_all || !a->damage ||
-		memcmp(a->damage, b->damage,
-		       (size_t)a->dmg_cols * a->dmg_rows) == 0);
+	       a->encodings == b->encodings &&
+	       memcmp(&a->shown, &b->shown, sizeof(a->shown)) == 0;
+}
+
+/* The coarsest refinement level a VIEW's downscale d accepts: the largest
+ * n with 2^n <= d. */
+static uint32_t max_level(uint32_t d)
+{
+	uint32_t n = 0;
+	while (n < BC_PROTO_MAX_LEVEL && (2u << n) <= d) {
+		n++;
+	}
+	return n;
 }
 
 static int frame_encoding(const struct bc_client *c, bool still)
@@ -814,7 +644,6 @@ static void still_due(uv_timer_t *timer)
 		if (m && m->has_view && !m->still_sent &&
 		    now >= m->interacting_until) {
 			m->dirty = true;
-			m->damage_all = true;
 		}
 	}
 	schedule(s);
@@ -866,67 +695,22 @@ static void schedule(struct bc_session *s)
 		job->camera = c->camera;
 		job->width = c->view.width;
 		job->height = c->view.height;
-		job->encoding = frame_encoding(c, still);
-		if (still) {
-			job->image_width = c->view.width;
-			job->image_height = c->view.height;
-			job->quality = c->view.quality_still;
-			job->flags = BC_PROTO_FLAG_STILL;
-		} else {
-			uint32_t d = c->view.downscale ? c->view.downscale : 1;
-			job->image_width = (c->view.width + d - 1) / d;
-			job->image_height = (c->view.height + d - 1) / d;
-			job->quality = c->view.quality_interactive;
-		}
+		job->encoding = frame_encoding(c, true);
+		job->encoding_interactive = frame_encoding(c, false);
+		job->quality_still = c->view.quality_still;
+		job->quality_interactive = c->view.quality_interactive;
+		job->max_level = max_level(c->view.downscale);
+		job->final = still;
+		job->shown = c->shown;
 		job->camera_seq = c->camera_seq;
 		job->order = s->order;
 		job->frame_no = ++srv->frame_no;
 		job->max_bytes = max_bytes;
-		if (still && c->has_base && !c->damage_all && c->damage) {
-			job->rects = bc_calloc(BC_PROTO_MAX_RECTS,
-					       sizeof(*job->rects));
-			if (job->rects) {
-				job->nrects = damage_rects(c, job->rects,
-							   BC_PROTO_MAX_RECTS);
-				if (job->nrects == 0 && job->rects) {
-					/* Nothing visible changed (or too
-					 * much did): the smallest frame
-					 * still tells the order reached. */
-					bool any = false;
-					for (size_t k = 0;
-					     k < (size_t)c->dmg_cols * c->dmg_rows;
-					     k++) {
-						any = any || c->damage[k];
-					}
-					if (!any) {
-						job->rects[0] = (struct bc_proto_rect){
-							0, 0,
-							(uint16_t)(c->view.width < 16 ? c->view.width : 16),
-							(uint16_t)(c->view.height < 16 ? c->view.height : 16),
-							{NULL, 0}};
-						job->nrects = 1;
-					}
-				}
-			}
-		}
 		for (uint32_t g = 0; g < ng; g++) {
 			struct bc_client *m = group[g];
 			job->targets[g] = bc_client_ref_of(m);
 			m->dirty = false;
 			m->render_pending = true;
-			m->still_sent = still;
-			if (still && job->nrects == 0) {
-				m->has_base = true;
-			} else if (!still) {
-				/* The client now shows an interactive frame:
-				 * the still after it must be whole. */
-				m->has_base = false;
-			}
-			m->damage_all = false;
-			if (m->damage) {
-				memset(m->damage, 0,
-				       (size_t)m->dmg_cols * m->dmg_rows);
-			}
 		}
 		job->ntargets = ng;
 		bc_rthread_job(srv, job);
@@ -1014,12 +798,6 @@ static void handle_scene_load(struct bc_client *c, const struct bc_msg *m)
 		}
 	}
 	mark_all(s);
-	for (uint32_t i = 0; i < s->nmembers; i++) {
-		struct bc_client *o = bc_client_get(c->srv, s->members[i]);
-		if (o) {
-			o->has_base = false;
-		}
-	}
 	schedule(s);
 	return;
 fail:
@@ -1034,7 +812,6 @@ static void handle_edit(struct bc_client *c, const struct bc_msg *m)
 	struct bc_session *s = c->session;
 	struct bc_srv *srv = c->srv;
 	struct bc_errinfo ei = {0};
-	struct dmg_box *boxes = bc_calloc(2u * m->edit.nops, sizeof(*boxes));
 	struct bc_tree *old = NULL;
 	struct bc_proto_buf rec;
 	struct bc_msg applied = {.type = BC_MSG_EDIT_APPLIED};
@@ -1045,18 +822,14 @@ static void handle_edit(struct bc_client *c, const struct bc_msg *m)
 	uint64_t t0 = uv_hrtime();
 	int rc;
 	bc_proto_buf_init(&rec, 0);
-	if (!boxes) {
-		rc = bc_errinfo_set(&ei, BC_ENOMEM, "out of memory");
-		goto fail;
-	}
 	if (s->store_failed) {
 		rc = bc_errinfo_set(&ei, BC_EIO,
 				    "the session cannot be saved: edits are "
 				    "refused");
 		goto fail;
 	}
-	if ((rc = apply_batch(&s->tree, &m->edit, boxes, &structural, &old,
-			      &undo, &nundo, &ei))) {
+	if ((rc = apply_batch(&s->tree, &m->edit, &structural, &old, &undo,
+			      &nundo, &ei))) {
 		goto fail;
 	}
 	/* The journal record is the EDIT payload: sync it before anyone
@@ -1125,13 +898,8 @@ static void handle_edit(struct bc_client *c, const struct bc_msg *m)
 		} else {
 			o->interacting_until = 0;
 		}
-		if (structural || !o->has_view) {
-			o->damage_all = true;
-			continue;
-		}
-		ensure_damage_grid(o);
-		for (uint32_t k = 0; k < 2u * m->edit.nops; k++) {
-			damage_box(o, &boxes[k]);
+		if (structural) {
+			o->shown.view = 0;
 		}
 	}
 	if (bc_store_journal_records(s->store) >= BC_SRV_SNAPSHOT_EVERY &&
@@ -1139,14 +907,12 @@ static void handle_edit(struct bc_client *c, const struct bc_msg *m)
 		bc_log(BC_LOG_ERROR, "session %s: %s", s->name, ei.msg);
 	}
 	bc_tree_destroy(old);
-	bc_free(boxes);
 	bc_free(undo);
 	bc_proto_buf_finish(&rec);
 	schedule(s);
 	return;
 fail:
 	bc_tree_destroy(old);
-	bc_free(boxes);
 	bc_free(undo);
 	bc_proto_buf_finish(&rec);
 	bc_client_send_error(c, m->seq, rc, false, "edit refused: %s", ei.msg);
@@ -1168,7 +934,6 @@ static void handle_camera(struct bc_client *c, const struct bc_msg *m)
 	c->has_camera = true;
 	c->camera_seq = m->seq;
 	c->dirty = true;
-	c->damage_all = true;
 	c->interacting_until = (m->flags & BC_PROTO_FLAG_INTERACTING)
 				       ? bc_now_ms(c->srv) + BC_SRV_STILL_DELAY_MS
 				       : 0;
@@ -1197,9 +962,7 @@ static void handle_view(struct bc_client *c, const struct bc_msg *m)
 	c->view = *v;
 	c->has_view = true;
 	c->dirty = true;
-	ensure_damage_grid(c);
-	c->damage_all = true;
-	c->has_base = false;
+	c->shown.view = 0;
 	if (c->session) {
 		schedule(c->session);
 	}
@@ -1216,8 +979,8 @@ static struct bc_rjob *single_job(struct bc_client *c)
 	}
 	job->session_id = c->session->id;
 	job->camera = c->camera;
-	job->width = job->image_width = c->view.width;
-	job->height = job->image_height = c->view.height;
+	job->width = c->view.width;
+	job->height = c->view.height;
 	job->targets[0] = bc_client_ref_of(c);
 	job->ntargets = 1;
 	return job;
@@ -1255,8 +1018,8 @@ static void handle_snapshot(struct bc_client *c, const struct bc_msg *m)
 		return;
 	}
 	job->encoding = (int)m->snapshot.encoding;
-	job->quality = 100;
-	job->flags = BC_PROTO_FLAG_STILL | BC_PROTO_FLAG_SNAPSHOT;
+	job->quality_still = 100;
+	job->final = true;
 	job->camera_seq = c->camera_seq;
 	job->order = c->session->order;
 	job->frame_no = ++c->srv->frame_no;

@@ -48,15 +48,35 @@
  * many journaled edits: replaying at most this many on start stays fast. */
 #define BC_SRV_SNAPSHOT_EVERY 1000u
 
-/* Per-frame time budget of a render, milliseconds. Past it the CPU tracer
- * starts no new tile and the frame goes out flagged INCOMPLETE, so one
- * pathological scene cannot hold the render thread that every session
- * shares for long. */
+/* Time budget of one refinement step, milliseconds (default of
+ * --frame-budget). A level is refined in BC_SRV_REFINE_BANDS bands of tile
+ * rows; past the budget no band starts, so one pathological scene cannot
+ * hold the render thread that every session shares for long. The picture
+ * then stays complete at its coarser level, flagged INCOMPLETE, until the
+ * next change. */
 #define BC_SRV_FRAME_BUDGET_MS 2000u
+#define BC_SRV_REFINE_BANDS 8u
 
-/* Damage is tracked per 16x16 block: the JPEG MCU of 4:2:0 chroma, so a
- * damaged rectangle encodes without partial blocks. */
-#define BC_SRV_DAMAGE_BLOCK 16u
+/* Views whose planes (colour, depth, ids: 12 bytes a pixel) the render
+ * thread keeps for damage renders and refinement: a few per member of a
+ * busy session, least recently used dropped first, and at most
+ * BC_SRV_VIEW_BYTES in all (about 14 views of 1920x1080). */
+#define BC_SRV_MAX_VIEWS 32u
+#define BC_SRV_VIEW_BYTES (384u * 1024u * 1024u)
+
+/* Milliseconds the first, coarse picture of a new view should take: the
+ * render thread picks the finest level its cost model says fits, so a
+ * camera drag shows a complete picture at about 10 frames a second. */
+#define BC_SRV_COARSE_MS 60.0
+
+/* A damage over this percentage of a view's tiles starts a new coarse
+ * picture instead of re-rendering the tiles at full resolution: beyond
+ * it the damage render costs about as much as a whole frame. */
+#define BC_SRV_DAMAGE_PCT 40u
+
+/* An edit whose subtree holds more primitives than this damages whole
+ * views without projecting each ABV (an operator near the root). */
+#define BC_SRV_DAMAGE_PRIMS 4096u
 
 /* Length of a session name as a directory name under the data directory:
  * letters, digits, '-', '_' and '.', not starting with '.'. */

@@ -47,9 +47,15 @@ static int64_t t_now_ms(void)
 	return (int64_t)ts.tv_sec * 1000 + ts.tv_nsec / 1000000;
 }
 
-/* Starts blobcastd on dir (created by the caller or here). */
-static int daemon_start(struct daemon *d, const char *dir)
+/* Starts blobcastd on dir (created by the caller or here), with up to four
+ * extra options (NULL-terminated; extra may be NULL). */
+static int daemon_start_with(struct daemon *d, const char *dir,
+			     const char *const *extra)
 {
+	const char *more[5] = {NULL};
+	for (int i = 0; extra && i < 4 && extra[i]; i++) {
+		more[i] = extra[i];
+	}
 	if (strlen(dir) + 6 > sizeof(d->sock)) {
 		return -1;
 	}
@@ -66,7 +72,8 @@ static int daemon_start(struct daemon *d, const char *dir)
 			dup2(devnull, 2);
 		}
 		execl(daemon_path, "blobcastd", "--listen", "none", "--unix",
-		      d->sock, "--data", d->dir, "--log", "info", (char *)NULL);
+		      d->sock, "--data", d->dir, "--log", "info", more[0],
+		      more[1], more[2], more[3], (char *)NULL);
 		_exit(127);
 	}
 	/* Wait for the socket to accept. */
@@ -82,6 +89,11 @@ static int daemon_start(struct daemon *d, const char *dir)
 		t_sleep_ms(25);
 	}
 	return -1;
+}
+
+static int daemon_start(struct daemon *d, const char *dir)
+{
+	return daemon_start_with(d, dir, NULL);
 }
 
 static int daemon_stop(struct daemon *d, int sig)
@@ -204,18 +216,24 @@ static int conn_expect(struct conn *c, enum bc_msg_type type, int timeout_ms)
 	}
 }
 
-static int conn_hello(struct conn *c, const char *name)
+/* HELLO listing the encodings in mask (bit e - 1: encoding e). */
+static int conn_hello_enc(struct conn *c, const char *name, uint8_t mask)
 {
 	struct bc_msg m = {.type = BC_MSG_HELLO};
 	m.hello.version_min = 1;
 	m.hello.version_max = 1;
-	m.hello.encodings = BC_PROTO_ENCODINGS_ALL;
+	m.hello.encodings = mask;
 	m.hello.client_name.ptr = name;
 	m.hello.client_name.len = (uint32_t)strlen(name);
 	if (!conn_send(c, &m)) {
 		return -1;
 	}
 	return conn_expect(c, BC_MSG_WELCOME, 5000) == 1 ? 0 : -1;
+}
+
+static int conn_hello(struct conn *c, const char *name)
+{
+	return conn_hello_enc(c, name, BC_PROTO_ENCODINGS_ALL);
 }
 
 static int conn_join(struct conn *c, const char *session,

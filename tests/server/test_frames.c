@@ -1,0 +1,255 @@
+/*
+ * blobcastd's frames against the renderer itself: progressive pictures
+ * refine level by level to the still, each one exactly the picture a local
+ * render of that level gives; a parameter edit sends only the tiles it
+ * changed, and those patched onto the still give exactly a whole render of
+ * the edited scene; a refinement cut by the frame budget leaves a complete
+ * coarse picture (no band of background), flagged INCOMPLETE.
+ */
+#include <math.h>
+
+#include "blobcast/blobtree.h"
+#include "blobcast/render.h"
+#include "blobcast/scene.h"
+#include "daemon.h"
+#include "test.h"
+
+#define VW 96u
+#define VH 72u
+
+static struct bc_tree *scene_of(struct conn *c)
+{
+	struct bc_tree *t = bc_tree_create();
+	if (!t || bc_scene_decode(c->m.scene_state.scene.ptr,
+				  c->m.scene_state.scene.len, t, NULL, NULL,
+				  NULL)) {
+		bc_tree_destroy(t);
+		return NULL;
+	}
+	return t;
+}
+
+static void test_camera(struct bc_camera *cam)
+{
+	*cam = (struct bc_camera){{0.3f, 1.0f, 7.0f}, {0, 0, 0}, {0, 1, 0},
+				  40.0f};
+}
+
+static uint32_t send_camera(struct conn *c, const struct bc_camera *cam)
+{
+	struct bc_msg m = {.type = BC_MSG_CAMERA};
+	memcpy(m.camera.eye, cam->eye, sizeof(cam->eye));
+	memcpy(m.camera.target, cam->target, sizeof(cam->target));
+	memcpy(m.camera.up, cam->up, sizeof(cam->up));
+	m.camera.fov_y_deg = cam->fov_y_deg;
+	return conn_send(c, &m);
+}
+
+/* A raw VIEW that accepts the coarsest level (downscale 8). */
+static uint32_t view8(struct conn *c)
+{
+	uint32_t seq = conn_view(c, VW, VH, BC_PROTO_ENC_RAW);
+	struct bc_msg m = {.type = BC_MSG_VIEW};
+	m.view.width = VW;
+	m.view.height = VH;
+	m.view.encoding = BC_PROTO_ENC_RAW;
+	m.view.quality_interactive = 60;
+	m.view.quality_still = 90;
+	m.view.downscale = 8;
+	return seq && conn_send(c, &m);
+}
+
+/* A local render of t at `level` (whole), as the picture a FRAME of that
+ * level carries: every 2^level-th pixel. Returns a malloc'ed RGBA image. */
+static uint8_t *local_picture(const struct bc_tree *t,
+			      const struct bc_camera *cam, uint32_t level,
+			      uint32_t *w, uint32_t *h)
+{
+	struct bc_renderer *r = NULL;
+	struct bc_frame f = {0};
+	struct bc_render_region rg = {NULL, level, false};
+	uint8_t *out = NULL;
+	*w = (VW + (1u << level) - 1) >> level;
+	*h = (VH + (1u << level) - 1) >> level;
+	if (bc_frame_init(&f, VW, VH) ||
+	    bc_renderer_create(&r, BC_BACKEND_TILED, NULL, NULL) ||
+	    bc_renderer_sync(r, t, NULL, NULL) ||
+	    bc_renderer_render_region(r, cam, &f, &rg, NULL, NULL) ||
+	    !(out = malloc((size_t)*w * *h * 4u))) {
+		goto out;
+	}
+	for (uint32_t y = 0; y < *h; y++) {
+		for (uint32_t x = 0; x < *w; x++) {
+			memcpy(out + ((size_t)y * *w + x) * 4u,
+			       f.rgba + ((size_t)(y << level) * VW +
+					 (x << level)) * 4u,
+			       4);
+		}
+	}
+out:
+	bc_renderer_destroy(r);
+	bc_frame_finish(&f);
+	return out;
+}
+
+/* Pastes the raw rectangles of the FRAME in c->m onto img (iw wide). */
+static void paste(const struct conn *c, uint8_t *img, uint32_t iw)
+{
+	for (uint32_t i = 0; i < c->m.frame.nrects; i++) {
+		const struct bc_proto_rect *rc = &c->m.frame.rects[i];
+		for (uint32_t y = 0; y < rc->h; y++) {
+			memcpy(img + ((size_t)(rc->y + y) * iw + rc->x) * 4u,
+			       rc->data.ptr + (size_t)y * rc->w * 4u,
+			       (size_t)rc->w * 4u);
+		}
+	}
+}
+
+static void join_with_view(struct daemon *d, struct conn *a,
+			   struct bc_tree **t, const struct bc_camera *cam)
+{
+	/* Raw only, so every picture compares bit for bit. */
+	REQUIRE(conn_open(a, d) == 0 &&
+		conn_hello_enc(a, "frames",
+			       1u << (BC_PROTO_ENC_RAW - 1)) == 0);
+	REQUIRE(view8(a));
+	REQUIRE(send_camera(a, cam));
+	REQUIRE(conn_join(a, "default", BC_PROTO_ROLE_EDITOR, false) == 0);
+	REQUIRE(conn_expect(a, BC_MSG_SCENE_STATE, 5000) == 1);
+	REQUIRE((*t = scene_of(a)) != NULL);
+}
+
+static void pictures_refine_to_the_still_and_edits_patch_exactly(void)
+{
+	struct daemon d;
+	struct conn a;
+	struct bc_tree *t = NULL;
+	struct bc_camera cam;
+	uint8_t *still = NULL;
+	int last_level = 4;
+	uint32_t coarse = 0, id, nprims;
+	test_camera(&cam);
+	REQUIRE(daemon_start(&d, "/tmp/bc-test-frames-a") == 0);
+	join_with_view(&d, &a, &t, &cam);
+	/* Levels go down one at a time; every picture is the local render's
+	 * picture of its level, bit for bit. */
+	for (;;) {
+		uint32_t level, w, h;
+		uint8_t *want;
+		REQUIRE(conn_expect(&a, BC_MSG_FRAME, 30000) == 1);
+		level = bc_proto_flags_level(a.m.flags);
+		CHECK((int)level < last_level);
+		last_level = (int)level;
+		CHECK(a.m.frame.nrects == 1);
+		REQUIRE((want = local_picture(t, &cam, level, &w, &h)) != NULL);
+		CHECK(a.m.frame.image_width == w && a.m.frame.image_height == h);
+		CHECK(a.m.frame.rects[0].w == w && a.m.frame.rects[0].h == h);
+		CHECK(a.m.frame.rects[0].data.len == (size_t)w * h * 4u &&
+		      memcmp(a.m.frame.rects[0].data.ptr, want,
+			     (size_t)w * h * 4u) == 0);
+		CHECK(!(a.m.flags & BC_PROTO_FLAG_INCOMPLETE));
+		if (level > 0) {
+			CHECK(!(a.m.flags & BC_PROTO_FLAG_STILL));
+			coarse++;
+			free(want);
+			continue;
+		}
+		CHECK((a.m.flags & BC_PROTO_FLAG_STILL) != 0);
+		still = want;
+		break;
+	}
+	CHECK(coarse >= 1); /* downscale 8 allows a coarse start */
+	/* Edits of single primitives: the frame carries the changed tiles
+	 * only; patched onto the still they give the whole render. */
+	nprims = bc_tree_lin(t)->nprims;
+	for (uint32_t e = 0; e < 6; e++) {
+		const struct bc_lin *l = bc_tree_lin(t);
+		struct bc_prim_data p;
+		uint64_t area = 0;
+		uint32_t w, h, order;
+		uint8_t *want;
+		id = l->node_id[l->prim_slot[(e * 7u + 3u) % nprims]];
+		REQUIRE(bc_tree_get(t, id, &p, NULL));
+		p.translate[0] += 0.05f;
+		p.translate[1] -= 0.03f;
+		REQUIRE(bc_tree_set_prim(t, id, &p, NULL) == 0);
+		REQUIRE(conn_move(&a, id, p.translate[0], p.translate[1],
+				  p.translate[2], false));
+		REQUIRE(conn_expect(&a, BC_MSG_EDIT_APPLIED, 5000) == 1);
+		order = (uint32_t)a.m.edit_applied.order;
+		do {
+			REQUIRE(conn_expect(&a, BC_MSG_FRAME, 30000) == 1);
+		} while (a.m.frame.order < order);
+		CHECK(bc_proto_flags_level(a.m.flags) == 0);
+		CHECK((a.m.flags & BC_PROTO_FLAG_STILL) != 0);
+		for (uint32_t i = 0; i < a.m.frame.nrects; i++) {
+			area += (uint64_t)a.m.frame.rects[i].w *
+				a.m.frame.rects[i].h;
+		}
+		CHECK(area < (uint64_t)VW * VH);
+		paste(&a, still, VW);
+		REQUIRE((want = local_picture(t, &cam, 0, &w, &h)) != NULL);
+		CHECK(memcmp(still, want, (size_t)VW * VH * 4u) == 0);
+		free(want);
+	}
+	free(still);
+	bc_tree_destroy(t);
+	conn_close(&a);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
+/* A budget far too small for any refinement: the first picture is whole
+ * at the coarse level, and the next one says INCOMPLETE while still being
+ * that whole coarse picture (never a band of background). */
+static void a_budget_cut_frame_is_a_complete_coarse_picture(void)
+{
+	static const char *const opts[] = {"--frame-budget", "1", NULL};
+	struct daemon d;
+	struct conn a;
+	struct bc_tree *t = NULL;
+	struct bc_camera cam;
+	bool cut = false;
+	test_camera(&cam);
+	REQUIRE(daemon_start_with(&d, "/tmp/bc-test-frames-b", opts) == 0);
+	join_with_view(&d, &a, &t, &cam);
+	for (int n = 0; n < 8 && !cut; n++) {
+		uint32_t level, w, h;
+		uint8_t *want;
+		if (conn_expect(&a, BC_MSG_FRAME, 5000) != 1) {
+			break;
+		}
+		level = bc_proto_flags_level(a.m.flags);
+		REQUIRE((want = local_picture(t, &cam, level, &w, &h)) != NULL);
+		CHECK(a.m.frame.nrects == 1 && a.m.frame.image_width == w &&
+		      a.m.frame.image_height == h);
+		CHECK(memcmp(a.m.frame.rects[0].data.ptr, want,
+			     (size_t)w * h * 4u) == 0);
+		free(want);
+		if (a.m.flags & BC_PROTO_FLAG_INCOMPLETE) {
+			CHECK(level > 0);
+			cut = true;
+		}
+	}
+	CHECK(cut);
+	bc_tree_destroy(t);
+	conn_close(&a);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
+static const struct bc_test tests[] = {
+	{"pictures_refine_to_the_still_and_edits_patch_exactly",
+	 pictures_refine_to_the_still_and_edits_patch_exactly},
+	{"a_budget_cut_frame_is_a_complete_coarse_picture",
+	 a_budget_cut_frame_is_a_complete_coarse_picture},
+};
+
+int main(int argc, char **argv)
+{
+	signal(SIGPIPE, SIG_IGN);
+	(void)conn_hello; /* daemon.h's all-encodings HELLO: not used here */
+	if (system("rm -rf /tmp/bc-test-frames-a /tmp/bc-test-frames-b") != 0) {
+		return 1;
+	}
+	return bc_test_run(tests, sizeof(tests) / sizeof(tests[0]), argc,
+			   argv);
+}
