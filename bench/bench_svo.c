@@ -211,24 +211,24 @@ static double render_us_per_pixel(const struct bc_tree *t,
                                   const struct bc_render_opts *o, uint32_t side,
                                   double *build_ms)
 {
-	const struct bc_backend_ops *ops =
-	    bc_backend_get(o->svo_range ? BC_BACKEND_SVO : BC_BACKEND_TILED);
+	enum bc_backend b = o->svo_range ? BC_BACKEND_SVO : BC_BACKEND_TILED;
 	struct bc_renderer *r = NULL;
 	struct bc_frame f;
 	struct bc_render_stats st;
 	struct bc_errinfo ei = {0};
 	double best = INFINITY;
-	if (!ops || bc_frame_init(&f, side, side)) {
+	if (bc_frame_init(&f, side, side)) {
 		return NAN;
 	}
-	if (ops->create(&r, o, &ei) || ops->sync(r, t, NULL, &ei)) {
+	if (bc_renderer_create(&r, b, o, &ei) ||
+	    bc_renderer_sync(r, t, NULL, &ei)) {
 		fprintf(stderr, "bench_svo: render: %s\n", ei.msg);
-		ops->destroy(r);
+		bc_renderer_destroy(r);
 		bc_frame_finish(&f);
 		return NAN;
 	}
 	for (int k = 0; k < REPEATS; k++) {
-		if (ops->render(r, cam, &f, &st, &ei)) {
+		if (bc_renderer_render(r, cam, &f, &st, &ei)) {
 			fprintf(stderr, "bench_svo: render: %s\n", ei.msg);
 			best = NAN;
 			break;
@@ -238,7 +238,7 @@ static double render_us_per_pixel(const struct bc_tree *t,
 		}
 		best = fmin(best, st.ms_trace);
 	}
-	ops->destroy(r);
+	bc_renderer_destroy(r);
 	bc_frame_finish(&f);
 	return best * 1e3 / ((double)side * side);
 }

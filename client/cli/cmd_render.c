@@ -220,7 +220,7 @@ static int parse(int argc, char **argv, struct args *a)
 				return usage_error("unknown backend '%s' (naive, "
 						   "tiled, gl, svo)", val);
 			}
-			if (!bc_backend_get(a->backend)) {
+			if (!bc_backend_available(a->backend)) {
 				return usage_error("backend '%s' is not built "
 						   "into this blobcast", val);
 			}
@@ -404,11 +404,10 @@ static int render(const struct args *a, const struct bc_tree *t,
 		  const struct bc_camera *cam, struct bc_frame *frame,
 		  struct bc_render_stats *stats, struct bc_errinfo *ei)
 {
-	const struct bc_backend_ops *ops = bc_backend_get(a->backend);
 	struct bc_renderer *r = NULL;
 	struct progress prog = {isatty(STDERR_FILENO) == 1, 0};
 	int rc;
-	if ((rc = ops->create(&r, &a->opts, ei))) {
+	if ((rc = bc_renderer_create(&r, a->backend, &a->opts, ei))) {
 		return rc;
 	}
 #if defined(BLOBCAST_HAVE_CPU)
@@ -417,13 +416,13 @@ static int render(const struct args *a, const struct bc_tree *t,
 		bc_render_cpu_set_progress(r, on_progress, &prog);
 	}
 #endif
-	if ((rc = ops->sync(r, t, NULL, ei)) == 0) {
-		rc = ops->render(r, cam, frame, stats, ei);
+	if ((rc = bc_renderer_sync(r, t, NULL, ei)) == 0) {
+		rc = bc_renderer_render(r, cam, frame, stats, ei);
 	}
 	if (prog.tty && prog.last) {
 		fputc('\n', stderr);
 	}
-	ops->destroy(r);
+	bc_renderer_destroy(r);
 	return rc;
 }
 

@@ -169,7 +169,6 @@ static void camera_inside_a_solid_hits_at_once(void)
  * octree; bad options and a render before sync are refused. */
 static void backend_follows_syncs_and_refuses_bad_input(void)
 {
-	const struct bc_backend_ops *ops = bc_backend_get(BC_BACKEND_SVO);
 	struct bc_renderer *r = NULL;
 	struct bc_tree *t = bc_tree_create();
 	struct bc_prim_data p;
@@ -179,23 +178,26 @@ static void backend_follows_syncs_and_refuses_bad_input(void)
 	struct bc_dirty d;
 	struct bc_errinfo ei = {0};
 	uint32_t hits = 0, hits2 = 0;
-	REQUIRE(ops && t);
-	CHECK(strcmp(ops->name, "svo") == 0);
-	CHECK(ops->create(&r,
-	                  &(struct bc_render_opts){.svo_range = BC_RANGE_COUNT},
-	                  &ei) == BC_EENUM);
-	CHECK(ops->create(&r,
-	                  &(struct bc_render_opts){.svo_max_depth =
-	                                               BC_SVO_MAX_DEPTH + 1},
-	                  &ei) == BC_ERANGE);
-	REQUIRE(ops->create(&r, &(struct bc_render_opts){.threads = 1}, &ei) ==
-	        0);
+	REQUIRE(t && bc_backend_available(BC_BACKEND_SVO));
+	CHECK(bc_renderer_create(
+	          &r, BC_BACKEND_SVO,
+	          &(struct bc_render_opts){.svo_range = BC_RANGE_COUNT},
+	          &ei) == BC_EENUM);
+	CHECK(r == NULL);
+	CHECK(bc_renderer_create(&r, BC_BACKEND_SVO,
+	                         &(struct bc_render_opts){
+	                             .svo_max_depth = BC_SVO_MAX_DEPTH + 1},
+	                         &ei) == BC_ERANGE);
+	REQUIRE(bc_renderer_create(&r, BC_BACKEND_SVO,
+	                           &(struct bc_render_opts){.threads = 1},
+	                           &ei) == 0);
+	CHECK(bc_renderer_backend(r) == BC_BACKEND_SVO);
 	bc_camera_default(&cam);
 	REQUIRE(bc_frame_init(&f, 32, 32) == 0);
-	CHECK(ops->render(r, &cam, &f, &st, &ei) == BC_ESTATE);
+	CHECK(bc_renderer_render(r, &cam, &f, &st, &ei) == BC_ESTATE);
 	/* An empty tree. */
-	REQUIRE(ops->sync(r, t, NULL, &ei) == 0);
-	REQUIRE(ops->render(r, &cam, &f, &st, &ei) == 0);
+	REQUIRE(bc_renderer_sync(r, t, NULL, &ei) == 0);
+	REQUIRE(bc_renderer_render(r, &cam, &f, &st, &ei) == 0);
 	for (uint32_t i = 0; i < 32 * 32; i++) {
 		CHECK(f.ids[i] == 0 && isinf(f.depth[i]));
 	}
@@ -206,8 +208,8 @@ static void backend_follows_syncs_and_refuses_bad_input(void)
 	        bc_tree_put_prim(t, 5, &p, NULL) == 0 &&
 	        bc_tree_end(t, NULL) == 0);
 	bc_tree_take_dirty(t, &d);
-	REQUIRE(ops->sync(r, t, &d, &ei) == 0);
-	REQUIRE(ops->render(r, &cam, &f, &st, &ei) == 0);
+	REQUIRE(bc_renderer_sync(r, t, &d, &ei) == 0);
+	REQUIRE(bc_renderer_render(r, &cam, &f, &st, &ei) == 0);
 	for (uint32_t i = 0; i < 32 * 32; i++) {
 		hits += f.ids[i] == 5;
 	}
@@ -216,31 +218,32 @@ static void backend_follows_syncs_and_refuses_bad_input(void)
 	CHECK(st.field_evals > 0);
 	/* Nothing changed: the octree stays (no build time). */
 	bc_tree_take_dirty(t, &d);
-	REQUIRE(ops->sync(r, t, &d, &ei) == 0);
-	REQUIRE(ops->render(r, &cam, &f, &st, &ei) == 0);
+	REQUIRE(bc_renderer_sync(r, t, &d, &ei) == 0);
+	REQUIRE(bc_renderer_render(r, &cam, &f, &st, &ei) == 0);
 	CHECK(st.ms_abuffer < 1.0);
 	/* A parameter edit: the sphere grows. */
 	p.params[0] = 1.5f;
 	REQUIRE(bc_tree_set_prim(t, 5, &p, &ei) == 0);
 	bc_tree_take_dirty(t, &d);
-	REQUIRE(ops->sync(r, t, &d, &ei) == 0);
-	REQUIRE(ops->render(r, &cam, &f, &st, &ei) == 0);
+	REQUIRE(bc_renderer_sync(r, t, &d, &ei) == 0);
+	REQUIRE(bc_renderer_render(r, &cam, &f, &st, &ei) == 0);
 	for (uint32_t i = 0; i < 32 * 32; i++) {
 		hits2 += f.ids[i] == 5;
 	}
 	CHECK(hits2 > hits);
 	/* Debug views colour every pixel. */
-	ops->destroy(r);
-	REQUIRE(ops->create(&r,
-	                    &(struct bc_render_opts){.debug = BC_DEBUG_EVALS},
-	                    &ei) == 0);
-	REQUIRE(ops->sync(r, t, NULL, &ei) == 0);
-	REQUIRE(ops->render(r, &cam, &f, &st, &ei) == 0);
+	bc_renderer_destroy(r);
+	REQUIRE(bc_renderer_create(
+	            &r, BC_BACKEND_SVO,
+	            &(struct bc_render_opts){.debug = BC_DEBUG_EVALS},
+	            &ei) == 0);
+	REQUIRE(bc_renderer_sync(r, t, NULL, &ei) == 0);
+	REQUIRE(bc_renderer_render(r, &cam, &f, &st, &ei) == 0);
 	CHECK(f.rgba[3] == 255);
 	cam.fov_y_deg = 0.0f;
-	CHECK(ops->render(r, &cam, &f, &st, &ei) == BC_ERANGE);
-	ops->destroy(r);
-	ops->destroy(NULL);
+	CHECK(bc_renderer_render(r, &cam, &f, &st, &ei) == BC_ERANGE);
+	bc_renderer_destroy(r);
+	bc_renderer_destroy(NULL);
 	bc_frame_finish(&f);
 	bc_tree_destroy(t);
 }

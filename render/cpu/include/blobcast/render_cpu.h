@@ -2,9 +2,9 @@
  * The CPU renderers: `naive` (sphere tracing of the full tree per pixel, the
  * tests' oracle) and `tiled` (Zanni 2024 §6 on CPU threads: an A-buffer of
  * primitive ABVs per 8x8 tile, depth ranges walked per tile, a pruned tree
- * view per range). Both sit behind struct bc_backend_ops; the dispatcher
- * (render/render.c) hands them out by name. This header adds what only the
- * CPU backends offer: a progress report for long frames.
+ * view per range). Both sit behind the front of blobcast/render.h
+ * (bc_renderer_create with BC_BACKEND_NAIVE or _TILED). This header adds
+ * what only the CPU backends offer: a progress report for long frames.
  */
 #ifndef BLOBCAST_RENDER_CPU_H
 #define BLOBCAST_RENDER_CPU_H
@@ -12,9 +12,6 @@
 #include <stdint.h>
 
 #include "blobcast/render.h"
-
-extern const struct bc_backend_ops bc_backend_naive_ops;
-extern const struct bc_backend_ops bc_backend_tiled_ops;
 
 /* Called from the rendering thread while a frame is drawn: `done` of
  * `total` work items (tiles for tiled, rows for naive) are finished. Calls
