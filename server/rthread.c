@@ -429,7 +429,9 @@ static int update_view(struct bc_rthread *rt, struct replica *rp,
 			ndamaged += v->damage[t] ? 1u : 0u;
 		}
 	}
-	if (v->level >= 0 && v->damaged &&
+	/* With damage off (to compare) every edit redraws the whole view at
+	 * its level, as a renderer without damage would. */
+	if (v->level >= 0 && v->damaged && !rt->damage_off &&
 	    (uint64_t)ndamaged * 100u > (uint64_t)v->ntiles * BC_SRV_DAMAGE_PCT &&
 	    !job->snapshot_seq) {
 		v->level = -1; /* large: a fresh progressive picture */

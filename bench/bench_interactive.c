@@ -1,0 +1,239 @@
+/*
+ * What a person waits for, through blobcastd's Unix socket with the raw
+ * protocol, at 1024x768 JPEG on fig18 1024 smooth spheres (CPU backend):
+ *  - drag: one sphere moved by INTERACTING edits, each waiting for the
+ *    FRAME that reflects it: edit -> frame p50 / p99, bytes and rectangles
+ *    per frame; the same daemon binary with --no-damage (edits re-render
+ *    the whole view) beside it, for the ratio;
+ *  - orbit: INTERACTING cameras around the scene, each sent when the frame
+ *    of the previous one arrived: camera -> first (coarse) frame p50 / p99,
+ *    the levels seen, and frames per second while orbiting.
+ *
+ * Usage: bench_interactive PATH/TO/blobcastd [edits] [cameras]
+ */
+#include <math.h>
+#include <stdint.h>
+
+#include "../tests/server/daemon.h"
+#include "blobcast/alloc.h"
+#include "blobcast/gen.h"
+#include "blobcast/scene.h"
+
+#define W 1024u
+#define H 768u
+
+static int cmp_i64(const void *a, const void *b)
+{
+	int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
+	return (x > y) - (x < y);
+}
+
+static double frame_bytes(const struct bc_msg *m)
+{
+	double n = 0;
+	for (uint32_t i = 0; i < m->frame.nrects; i++) {
+		n += m->frame.rects[i].data.len;
+	}
+	return n;
+}
+
+static struct bc_camera scene_cam;
+static struct bc_prim_data original;
+
+static int load_scene(struct conn *c, uint32_t *prim_id)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_gen_opts o = {.count = 1024,
+				.kind = BC_GEN_KIND_SPHERES,
+				.blend = BC_GEN_BLEND_SMOOTH};
+	uint8_t *bytes = NULL;
+	size_t len = 0;
+	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
+	const struct bc_lin *l;
+	if (!t || bc_gen("fig18", &o, t, &scene_cam, NULL) ||
+	    bc_scene_encode(t, &scene_cam, &bytes, &len)) {
+		return -1;
+	}
+	l = bc_tree_lin(t);
+	/* A sphere in the middle of the grid. */
+	*prim_id = l->node_id[l->prim_slot[l->nprims / 2]];
+	bc_tree_get(t, *prim_id, &original, NULL);
+	m.scene_load.scene.ptr = bytes;
+	m.scene_load.scene.len = (uint32_t)len;
+	conn_send(c, &m);
+	bc_free(bytes);
+	bc_tree_destroy(t);
+	return conn_expect(c, BC_MSG_SCENE_STATE, 30000) == 1 ? 0 : -1;
+}
+
+static void send_view(struct conn *c)
+{
+	struct bc_msg v = {.type = BC_MSG_VIEW};
+	v.view.width = W;
+	v.view.height = H;
+	v.view.encoding = BC_PROTO_ENC_JPEG;
+	v.view.quality_interactive = 70;
+	v.view.quality_still = 90;
+	v.view.downscale = 8;
+	conn_send(c, &v);
+}
+
+static void send_camera(struct conn *c, const struct bc_camera *cam,
+			bool interacting)
+{
+	struct bc_msg m = {.type = BC_MSG_CAMERA};
+	m.flags = interacting ? BC_PROTO_FLAG_INTERACTING : 0;
+	memcpy(m.camera.eye, cam->eye, sizeof(cam->eye));
+	memcpy(m.camera.target, cam->target, sizeof(cam->target));
+	memcpy(m.camera.up, cam->up, sizeof(cam->up));
+	m.camera.fov_y_deg = cam->fov_y_deg;
+	conn_send(c, &m);
+}
+
+/* Reads frames until the still of the current state. */
+static int settle(struct conn *c)
+{
+	while (conn_recv(c, 60000) == 1) {
+		if (c->m.type == BC_MSG_FRAME &&
+		    (c->m.flags & BC_PROTO_FLAG_STILL)) {
+			return 0;
+		}
+	}
+	return -1;
+}
+
+static void drag(struct conn *c, uint32_t id, int edits, const char *label)
+{
+	int64_t *lat = bc_calloc((size_t)edits, sizeof(int64_t));
+	double bytes = 0, rects = 0;
+	int got = 0;
+	for (int i = 0; i < edits; i++) {
+		float dx = 0.004f * (float)(i % 25);
+		int64_t t0 = t_now_ms();
+		uint64_t order = 0;
+		conn_move(c, id, original.translate[0] + dx,
+			  original.translate[1], original.translate[2], true);
+		while (conn_recv(c, 30000) == 1) {
+			if (c->m.type == BC_MSG_EDIT_APPLIED) {
+				order = c->m.edit_applied.order;
+			} else if (c->m.type == BC_MSG_FRAME && order &&
+				   c->m.frame.order >= order) {
+				lat[got++] = t_now_ms() - t0;
+				bytes += frame_bytes(&c->m);
+				rects += c->m.frame.nrects;
+				break;
+			}
+		}
+	}
+	qsort(lat, (size_t)got, sizeof(int64_t), cmp_i64);
+	if (got) {
+		printf("drag %-10s edits=%d p50_ms=%lld p99_ms=%lld "
+		       "max_ms=%lld bytes_per_frame=%.0f rects_per_frame=%.1f\n",
+		       label, got, (long long)lat[got / 2],
+		       (long long)lat[(got * 99) / 100],
+		       (long long)lat[got - 1], bytes / got, rects / got);
+	}
+	bc_free(lat);
+}
+
+static void orbit(struct conn *c, int cameras)
+{
+	int64_t *lat = bc_calloc((size_t)cameras, sizeof(int64_t));
+	int64_t t_start = t_now_ms();
+	int levels[4] = {0};
+	int got = 0;
+	float dx = scene_cam.eye[0] - scene_cam.target[0];
+	float dz = scene_cam.eye[2] - scene_cam.target[2];
+	float r = sqrtf(dx * dx + dz * dz), a0 = atan2f(dz, dx);
+	for (int i = 0; i < cameras; i++) {
+		struct bc_camera cam = scene_cam;
+		float a = a0 + 0.02f * (float)(i + 1);
+		int64_t t0 = t_now_ms();
+		cam.eye[0] = scene_cam.target[0] + r * cosf(a);
+		cam.eye[2] = scene_cam.target[2] + r * sinf(a);
+		send_camera(c, &cam, true);
+		/* The first frame that reflects this camera. */
+		while (conn_recv(c, 30000) == 1) {
+			if (c->m.type == BC_MSG_FRAME) {
+				levels[bc_proto_flags_level(c->m.flags)]++;
+				if (c->m.frame.camera_seq == c->seq) {
+					lat[got++] = t_now_ms() - t0;
+					break;
+				}
+			}
+		}
+	}
+	qsort(lat, (size_t)got, sizeof(int64_t), cmp_i64);
+	if (got) {
+		double secs = (double)(t_now_ms() - t_start) / 1000.0;
+		printf("orbit cameras=%d first_frame_p50_ms=%lld p99_ms=%lld "
+		       "frames_per_second=%.1f levels_seen=%d/%d/%d/%d "
+		       "(0/1/2/3)\n",
+		       got, (long long)lat[got / 2],
+		       (long long)lat[(got * 99) / 100], (double)got / secs,
+		       levels[0], levels[1], levels[2], levels[3]);
+	}
+	bc_free(lat);
+}
+
+static int run(const char *label, const char *const *opts, int edits,
+	       int cameras)
+{
+	struct daemon d;
+	struct conn c;
+	uint32_t id;
+	char dir[64];
+	snprintf(dir, sizeof(dir), "/tmp/bc-bench-i-%d-%s", (int)getpid(),
+		 label);
+	if (daemon_start_with(&d, dir, opts) != 0) {
+		fprintf(stderr, "cannot start %s\n", daemon_path);
+		return 1;
+	}
+	if (conn_open(&c, &d) || conn_hello(&c, "bench") ||
+	    conn_join(&c, "bench", BC_PROTO_ROLE_EDITOR, true) ||
+	    load_scene(&c, &id)) {
+		fprintf(stderr, "scene load failed\n");
+		daemon_stop(&d, SIGTERM);
+		return 1;
+	}
+	send_view(&c);
+	if (settle(&c)) {
+		fprintf(stderr, "no still frame\n");
+	}
+	drag(&c, id, 3, "warm-up");
+	drag(&c, id, edits, label);
+	if (cameras > 0) {
+		settle(&c);
+		orbit(&c, cameras);
+	}
+	conn_close(&c);
+	daemon_stop(&d, SIGTERM);
+	{
+		char cmd[160];
+		snprintf(cmd, sizeof(cmd), "rm -rf %s %s.sock", dir, dir);
+		if (system(cmd) != 0) {
+			return 1;
+		}
+	}
+	return 0;
+}
+
+int main(int argc, char **argv)
+{
+	static const char *const no_damage[] = {"--no-damage", NULL};
+	int edits = argc > 2 ? atoi(argv[2]) : 100;
+	int cameras = argc > 3 ? atoi(argv[3]) : 60;
+	if (argc < 2) {
+		fprintf(stderr, "usage: bench_interactive PATH/TO/blobcastd "
+				"[edits] [cameras]\n");
+		return 2;
+	}
+	daemon_path = argv[1];
+	signal(SIGPIPE, SIG_IGN);
+	(void)conn_view;
+	if (run("damage", NULL, edits, cameras) ||
+	    run("no-damage", no_damage, edits, 0)) {
+		return 1;
+	}
+	return 0;
+}
