@@ -14,8 +14,8 @@
 
 enum state {
 	S_DONE = 0,
-	S_INIT,    /* value at t0 */
-	S_STEP,    /* value at the relaxed step tn */
+	S_INIT,               /* value at t0 */
+	S_STEP = BC__PK_STEP, /* value at the step tn (packet.h) */
 	S_STEP2,   /* value at the plain step after a failed relaxed one */
 	S_REFINE,  /* value at the secant probe q */
 	S_BISECT,  /* value at the midpoint q */
@@ -264,9 +264,9 @@ struct bc__pk_kernel bc__pk_kernel_for(enum bc_simd simd)
 {
 	struct bc__pk_kernel none = {NULL, NULL, 1};
 #if defined(BLOBCAST_SIMD_X86)
-#define AVX2 ((struct bc__pk_kernel){bc__pk_eval_avx2, bc__pk_eval_id_avx2, 8})
+#define AVX2 ((struct bc__pk_kernel){bc__pk_march_avx2, bc__pk_eval_id_avx2, 8})
 #define AVX512                                                                 \
-	((struct bc__pk_kernel){bc__pk_eval_avx512, bc__pk_eval_id_avx512, 16})
+	((struct bc__pk_kernel){bc__pk_march_avx512, bc__pk_eval_id_avx512, 16})
 	bool avx2, avx512;
 	__builtin_cpu_init();
 	avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");

@@ -43,6 +43,16 @@ struct bc__pk_lanes {
 	/* out, bc__pk_eval_id_fn only: the primitive whose value decides
 	 * the field (bc_view_eval_id's), BC_NONE where none does. */
 	_Alignas(64) uint32_t id[BC_PK_MAX_LANES];
+	/* Marching lanes (bc__pk_march_fn): bc__pk_ray's t, v, t_prev,
+	 * v_prev, omega and t1, its tn being t[] above, and the values
+	 * taken since the ray last went through the state machine. */
+	_Alignas(64) float mt[BC_PK_MAX_LANES];
+	_Alignas(64) float mv[BC_PK_MAX_LANES];
+	_Alignas(64) float mt_prev[BC_PK_MAX_LANES];
+	_Alignas(64) float mv_prev[BC_PK_MAX_LANES];
+	_Alignas(64) float momega[BC_PK_MAX_LANES];
+	_Alignas(64) float mt1[BC_PK_MAX_LANES];
+	_Alignas(64) float mevals[BC_PK_MAX_LANES];
 };
 
 /* Evaluates view v (not empty) of lin for the lanes whose bit is set in
@@ -51,9 +61,23 @@ typedef void (*bc__pk_eval_fn)(const struct bc_view *v,
                                const struct bc_lin *lin,
                                struct bc__pk_lanes *ln, uint32_t active);
 
+/* Evaluates as bc__pk_eval_fn, then takes the next step of every lane of
+ * `march` (lanes waiting at a marching step, their state in the m* arrays)
+ * whose step is ordinary (the relaxed sphere held, no crossing, not within
+ * the hit epsilon, not at the interval's end) as packet.c's state machine
+ * would, with the same float operations: t[] is then the next step. Returns the
+ * active lanes it did not step (v[] holds their field, not yet divided by the
+ * Lipschitz bound). eps_per_t and min_step are the frame's hit epsilon
+ * terms (BC_CPU_HIT_FOOTPRINT * pix_angle, min_step). */
+typedef uint32_t (*bc__pk_march_fn)(const struct bc_view *v,
+                                    const struct bc_lin *lin,
+                                    struct bc__pk_lanes *ln, uint32_t active,
+                                    uint32_t march, float eps_per_t,
+                                    float min_step);
+
 struct bc__pk_kernel {
-	bc__pk_eval_fn eval;    /* NULL: trace one ray at a time (scalar) */
-	bc__pk_eval_fn eval_id; /* the same, and id[] */
+	bc__pk_march_fn march;  /* NULL: trace one ray at a time (scalar) */
+	bc__pk_eval_fn eval_id; /* evaluation with id[] */
 	uint32_t lanes;
 };
 
@@ -62,12 +86,14 @@ struct bc__pk_kernel {
 struct bc__pk_kernel bc__pk_kernel_for(enum bc_simd simd);
 
 #if defined(BLOBCAST_SIMD_X86)
-void bc__pk_eval_avx2(const struct bc_view *v, const struct bc_lin *lin,
-                      struct bc__pk_lanes *ln, uint32_t active);
+uint32_t bc__pk_march_avx2(const struct bc_view *v, const struct bc_lin *lin,
+                           struct bc__pk_lanes *ln, uint32_t active,
+                           uint32_t march, float eps_per_t, float min_step);
 void bc__pk_eval_id_avx2(const struct bc_view *v, const struct bc_lin *lin,
                          struct bc__pk_lanes *ln, uint32_t active);
-void bc__pk_eval_avx512(const struct bc_view *v, const struct bc_lin *lin,
-                        struct bc__pk_lanes *ln, uint32_t active);
+uint32_t bc__pk_march_avx512(const struct bc_view *v, const struct bc_lin *lin,
+                             struct bc__pk_lanes *ln, uint32_t active,
+                             uint32_t march, float eps_per_t, float min_step);
 void bc__pk_eval_id_avx512(const struct bc_view *v, const struct bc_lin *lin,
                            struct bc__pk_lanes *ln, uint32_t active);
 #endif
@@ -94,5 +120,9 @@ bool bc__pk_ray_start(struct bc__pk_ray *r, const struct bc__frame_ctx *fc,
                       float t0, float t1);
 bool bc__pk_ray_feed(struct bc__pk_ray *r, const struct bc__frame_ctx *fc,
                      float value);
+
+/* The state that waits for the value at a marching step: such lanes may
+ * take their ordinary steps in the kernel (bc__pk_march_fn). */
+#define BC__PK_STEP 2
 
 #endif

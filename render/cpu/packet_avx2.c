@@ -8,7 +8,7 @@
 #include <immintrin.h>
 
 #define PK_LANES 8u
-#define PK_EVAL bc__pk_eval_avx2
+#define PK_MARCH bc__pk_march_avx2
 #define PK_EVAL_ID bc__pk_eval_id_avx2
 
 typedef __m256 vf;
@@ -87,6 +87,24 @@ static inline vm mand(vm a, vm b)
 static inline vf vsel(vm m, vf a, vf b)
 {
 	return _mm256_blendv_ps(b, a, m);
+}
+static inline vm vge(vf a, vf b)
+{
+	return _mm256_cmp_ps(a, b, _CMP_GE_OQ);
+}
+static inline vm mnot(vm a)
+{
+	return _mm256_xor_ps(a, _mm256_castsi256_ps(_mm256_set1_epi32(-1)));
+}
+static inline vm mfrombits(uint32_t bits)
+{
+	__m256i sel = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+	__m256i b = _mm256_and_si256(_mm256_set1_epi32((int)bits), sel);
+	return _mm256_castsi256_ps(_mm256_cmpeq_epi32(b, sel));
+}
+static inline uint32_t mtobits(vm m)
+{
+	return (uint32_t)_mm256_movemask_ps(m);
 }
 static inline vf vbits(uint32_t u)
 {

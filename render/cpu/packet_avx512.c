@@ -8,7 +8,7 @@
 #include <immintrin.h>
 
 #define PK_LANES 16u
-#define PK_EVAL bc__pk_eval_avx512
+#define PK_MARCH bc__pk_march_avx512
 #define PK_EVAL_ID bc__pk_eval_id_avx512
 
 typedef __m512 vf;
@@ -88,6 +88,22 @@ static inline vm mand(vm a, vm b)
 static inline vf vsel(vm m, vf a, vf b)
 {
 	return _mm512_mask_blend_ps(m, b, a);
+}
+static inline vm vge(vf a, vf b)
+{
+	return _mm512_cmp_ps_mask(a, b, _CMP_GE_OQ);
+}
+static inline vm mnot(vm a)
+{
+	return (vm)~a;
+}
+static inline vm mfrombits(uint32_t bits)
+{
+	return (vm)bits;
+}
+static inline uint32_t mtobits(vm m)
+{
+	return (uint32_t)m;
 }
 static inline vf vbits(uint32_t u)
 {

@@ -7,10 +7,12 @@
  *   vmin vmax         a < b ? a : b and a > b ? a : b, as bc__minf/maxf
  *   vsqrt vabs vneg
  *   vlt vle vgt       ordered comparisons (false on NaN)
- *   mand vsel(m, a, b) = m ? a : b (bitwise)
+ *   vge               ordered a >= b
+ *   mand mnot mfrombits(bits) mtobits(m)
+ *   vsel(m, a, b) = m ? a : b (bitwise)
  *   vbits(u)          every lane holds the bits of uint32_t u
  *
- * and PK_EVAL, PK_EVAL_ID, the kernels' names. Including it twice (AVX2 and
+ * and PK_MARCH, PK_EVAL_ID, the kernels' names. Including it twice (AVX2 and
  * AVX-512) gives two kernels whose lanes do the same operations in the same
  * order.
  *
@@ -202,10 +204,15 @@ static inline vm op_follows_right(uint32_t kind, vf f0, vf f1)
 	}
 }
 
-/* The interpreter; with_id is a constant at each call, so the id tracking
- * costs the tracing kernel nothing. */
-static inline void run(const struct bc_view *v, const struct bc_lin *lin,
-                       struct bc__pk_lanes *ln, uint32_t active, bool with_id)
+/* The interpreter; with_id is a constant at each call, and the forced
+ * inlining makes two copies, so the id tracking costs the tracing kernel
+ * nothing. */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline void
+run(const struct bc_view *v, const struct bc_lin *lin, struct bc__pk_lanes *ln,
+    uint32_t active, bool with_id)
 {
 	vf stack[BC_EVAL_STACK];
 	vf who[BC_EVAL_STACK]; /* primitive indices, as float bits */
@@ -242,10 +249,49 @@ static inline void run(const struct bc_view *v, const struct bc_lin *lin,
 	}
 }
 
-void PK_EVAL(const struct bc_view *v, const struct bc_lin *lin,
-             struct bc__pk_lanes *ln, uint32_t active)
+uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
+                  struct bc__pk_lanes *ln, uint32_t active, uint32_t march,
+                  float eps_per_t, float min_step)
 {
+	vf zero = vset1(0.0f), vn, t, fv, tn, om, t1, eps, step, next;
+	vm fast;
+	uint32_t fast_bits;
 	run(v, lin, ln, active, false);
+	march &= active;
+	if (!march) {
+		return active;
+	}
+	/* packet.c's step_check and march_head for an ordinary step (the
+	 * same expressions, in their order), lane-wise. */
+	vn = vmul(vload(ln->v), vset1(1.0f / BC_CPU_LIPSCHITZ));
+	t = vload(ln->mt);
+	fv = vload(ln->mv);
+	tn = vload(ln->t);
+	om = vload(ln->momega);
+	t1 = vload(ln->mt1);
+	eps = vmax(vmul(vset1(eps_per_t), tn), vset1(min_step));
+	/* Not the fallback, vn >= 0 (not NaN), not within eps, not at t1. */
+	fast = mand(
+	    mfrombits(march),
+	    mand(vge(vn, zero),
+	         mand(vge(vn, eps),
+	              mand(vlt(tn, t1),
+	                   mnot(mand(vgt(om, vset1(1.0f)),
+	                             vlt(vadd(fv, vabs(vn)), vsub(tn, t))))))));
+	fast_bits = mtobits(fast);
+	if (!fast_bits) {
+		return active;
+	}
+	step = vmax(vmul(om, vn), vmul(vset1(1.0e-6f), tn));
+	next = vmin(vadd(tn, step), t1);
+	vstore(ln->mt_prev, vsel(fast, t, vload(ln->mt_prev)));
+	vstore(ln->mv_prev, vsel(fast, fv, vload(ln->mv_prev)));
+	vstore(ln->mt, vsel(fast, tn, t));
+	vstore(ln->mv, vsel(fast, vn, fv));
+	vstore(ln->t, vsel(fast, next, tn));
+	vstore(ln->mevals,
+	       vadd(vload(ln->mevals), vsel(fast, vset1(1.0f), zero)));
+	return active & ~fast_bits;
 }
 
 void PK_EVAL_ID(const struct bc_view *v, const struct bc_lin *lin,

@@ -70,6 +70,42 @@ struct tile_px {
 	uint32_t left;
 };
 
+/* A marching lane's state moves between the ray (the state machine's)
+ * and the packet's arrays (the vector step's). */
+static void to_lanes(const struct bc__pk_ray *r, struct bc__pk_lanes *ln,
+                     uint32_t i)
+{
+	ln->mt[i] = r->t;
+	ln->mv[i] = r->v;
+	ln->mt_prev[i] = r->t_prev;
+	ln->mv_prev[i] = r->v_prev;
+	ln->momega[i] = r->omega;
+	ln->mt1[i] = r->t1;
+	ln->mevals[i] = 0.0f;
+}
+
+static void from_lanes(struct bc__pk_ray *r, const struct bc__pk_lanes *ln,
+                       uint32_t i)
+{
+	r->t = ln->mt[i];
+	r->v = ln->mv[i];
+	r->t_prev = ln->mt_prev[i];
+	r->v_prev = ln->mv_prev[i];
+	r->tn = ln->t[i];
+	r->q = ln->t[i];
+	r->evals += (uint32_t)ln->mevals[i];
+}
+
+/* Index of the lowest set bit of x (x != 0). */
+static inline uint32_t lowest_bit(uint32_t x)
+{
+	uint32_t i = 0;
+	while (!((x >> i) & 1u)) {
+		i++;
+	}
+	return i;
+}
+
 /* Shades the hits of one range in its view, as bc__put_hit does, with
  * the five samples of each (the primitive at the hit, then the four
  * tetrahedral differences) taken in packets. */
@@ -152,7 +188,7 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 	uint8_t queue[BC_CPU_TILE * BC_CPU_TILE];
 	uint8_t hit_px[BC_CPU_TILE * BC_CPU_TILE];
 	float hit_t[BC_CPU_TILE * BC_CPU_TILE];
-	uint32_t nq = 0, head = 0, nh = 0, active = 0;
+	uint32_t nq = 0, head = 0, nh = 0, active = 0, march = 0, slow;
 	struct bc__pk_lanes ln;
 	struct bc__pk_ray ray[BC_PK_MAX_LANES];
 	uint8_t lane_px[BC_PK_MAX_LANES];
@@ -207,19 +243,28 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 		if (!active) {
 			break;
 		}
-		k.eval(&wk->view, fc->lin, &ln, active);
-		for (uint32_t i = 0; i < k.lanes; i++) {
+		slow =
+		    k.march(&wk->view, fc->lin, &ln, active, march,
+		            BC_CPU_HIT_FOOTPRINT * fc->pix_angle, fc->min_step);
+		for (uint32_t bits = slow; bits; bits &= bits - 1) {
+			uint32_t i = lowest_bit(bits), p;
 			struct bc__pk_ray *r = &ray[i];
-			uint32_t p;
-			if (!((active >> i) & 1u)) {
-				continue;
+			if ((march >> i) & 1u) {
+				from_lanes(r, &ln, i);
 			}
 			/* trace.c's eval_at: the field over the bound. */
 			if (!bc__pk_ray_feed(
 			        r, fc, ln.v[i] * (1.0f / BC_CPU_LIPSCHITZ))) {
 				ln.t[i] = r->q;
+				if (r->state == BC__PK_STEP) {
+					to_lanes(r, &ln, i);
+					march |= 1u << i;
+				} else {
+					march &= ~(1u << i);
+				}
 				continue;
 			}
+			march &= ~(1u << i);
 			active &= ~(1u << i);
 			p = lane_px[i];
 			px->evals[p] += r->evals;
@@ -318,7 +363,7 @@ void bc__trace_tile(struct bc__tile_worker *wk, const struct bc__tile_job *job)
 		} else if (wk->view.empty) {
 			continue; /* no surface can be in this range */
 		}
-		if (k.eval && f.view) {
+		if (k.march && f.view) {
 			trace_range_packets(wk, job, k, &px, z_begin, z_end);
 			continue;
 		}
