@@ -355,6 +355,12 @@ static int render_into(struct bc_rthread *rt, struct replica *rp,
 	if (rc) {
 		return rc;
 	}
+	bc_log(BC_LOG_DEBUG,
+	       "view %u: level %u%s, %u tiles, %llu rays, %.1f ms (lists "
+	       "%.1f ms), %llu field evaluations",
+	       v->id, rg->level, rg->refine ? " refined" : "", st.tiles,
+	       (unsigned long long)st.rays, st.ms_total, st.ms_abuffer,
+	       (unsigned long long)st.field_evals);
 	if (st.rays > 0) {
 		double per_ray = st.ms_trace / (double)st.rays;
 		rp->ms_per_ray = rp->ms_per_ray > 0.0
