@@ -231,6 +231,7 @@ int main(int argc, char **argv)
 	daemon_path = argv[1];
 	signal(SIGPIPE, SIG_IGN);
 	(void)conn_view;
+	(void)daemon_start;
 	if (run("damage", NULL, edits, cameras) ||
 	    run("no-damage", no_damage, edits, 0)) {
 		return 1;
