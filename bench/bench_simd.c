@@ -28,11 +28,14 @@
  * seen here rather than measured as an empty frame.
  *
  * Usage: bench_simd [--size N] [--reps R] [--scenes DIR] [--quick]
+ *                   [--scene FILE]...
  *   --size N      frame edge (default 512)
  *   --reps R      timed rounds per configuration, the fastest kept (3)
  *   --scenes DIR  directory holding lipschitz/{trees,molecule}.json
  *                 (default: the source tree's bench/scenes)
  *   --quick       fig18 256 and the Lipschitz scenes only
+ *   --scene FILE  time this scene file (with its camera) instead of the
+ *                 built-in list; may be repeated (up to 16)
  */
 #include <inttypes.h>
 #include <math.h>
@@ -135,9 +138,9 @@ static int load_scene(const struct scene *s, const char *dir, struct bc_tree *t,
 		}
 		return 0;
 	}
-	if (snprintf(path, sizeof(path), "%s/%s", dir, s->file) >=
-	    (int)sizeof(path)) {
-		fprintf(stderr, "bench_simd: --scenes path too long\n");
+	if (snprintf(path, sizeof(path), "%s%s%s", dir ? dir : "",
+	             dir ? "/" : "", s->file) >= (int)sizeof(path)) {
+		fprintf(stderr, "bench_simd: scene path too long\n");
 		exit(2);
 	}
 	if (bc_scene_load_json(path, t, cam, &ei)) {
@@ -213,6 +216,9 @@ int main(int argc, char **argv)
 	    {"lipschitz molecule", NULL, "lipschitz/molecule.json", {0}, 1},
 	};
 	size_t nscenes = sizeof(scenes) / sizeof(scenes[0]);
+	struct scene files[16];
+	size_t nfiles = 0;
+	const struct scene *list = scenes;
 	const char *dir = BC_BENCH_SCENES_DIR;
 	uint32_t size = 512;
 	int reps = 3, quick = 0;
@@ -225,16 +231,27 @@ int main(int argc, char **argv)
 			dir = argv[++i];
 		} else if (strcmp(argv[i], "--quick") == 0) {
 			quick = 1;
+		} else if (strcmp(argv[i], "--scene") == 0 && i + 1 < argc &&
+		           nfiles < sizeof(files) / sizeof(files[0])) {
+			i++;
+			files[nfiles++] =
+			    (struct scene){argv[i], NULL, argv[i], {0}, 1};
 		} else {
 			fprintf(stderr,
 			        "usage: bench_simd [--size N] [--reps R] "
-			        "[--scenes DIR] [--quick]\n");
+			        "[--scenes DIR] [--quick] "
+			        "[--scene FILE]...\n");
 			return 2;
 		}
 	}
 	if (size < 64 || size > BC_RENDER_MAX_DIM || reps < 1) {
 		fprintf(stderr, "bench_simd: bad --size or --reps\n");
 		return 2;
+	}
+	if (nfiles > 0) {
+		list = files;
+		nscenes = nfiles;
+		dir = NULL;
 	}
 	printf("tiled, frame %ux%u, fastest of %d rounds (configurations "
 	       "interleaved); simd/threads: 1 thread by process CPU time, 2 "
@@ -249,7 +266,7 @@ int main(int argc, char **argv)
 		struct bc_renderer *r[CONF_COUNT] = {0};
 		struct bc_frame f[CONF_COUNT] = {{0}};
 		struct timing tm[CONF_COUNT];
-		if (quick && !scenes[s].quick) {
+		if (quick && !list[s].quick) {
 			continue;
 		}
 		t = bc_tree_create();
@@ -257,7 +274,7 @@ int main(int argc, char **argv)
 			fprintf(stderr, "bench_simd: out of memory\n");
 			return 1;
 		}
-		load_scene(&scenes[s], dir, t, &cam);
+		load_scene(&list[s], dir, t, &cam);
 		for (int c = 0; c < CONF_COUNT; c++) {
 			struct bc_errinfo ei = {0};
 			struct bc_render_opts o = {.threads = confs[c].threads,
@@ -286,7 +303,7 @@ int main(int argc, char **argv)
 		}
 		printf("%-26s %6u | %8.1f %8.1f %8.1f %8.1f | %4.2fx %4.2fx "
 		       "| %6.1f %6.1f | %5.1f | %" PRIu64 "\n",
-		       scenes[s].label, bc_tree_prim_count(t),
+		       list[s].label, bc_tree_prim_count(t),
 		       conf_ms(CONF_OFF1, &tm[CONF_OFF1]),
 		       conf_ms(CONF_AUTO1, &tm[CONF_AUTO1]),
 		       conf_ms(CONF_OFF2, &tm[CONF_OFF2]),
