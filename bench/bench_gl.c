@@ -12,7 +12,9 @@
  * buffer allocation are not counted; both then report the fastest of
  * `reps` frames. The gl split (A-buffer, tracing) comes from GPU timer
  * queries; `disp` is the number of tracing dispatches the frame needed
- * (llvmpipe's loop limit makes dense tiles suspend and resume).
+ * (llvmpipe's loop limit makes dense tiles suspend and resume); `gl L3` is
+ * the coarsest refinement level alone (one ray per 8x8 tile, the first
+ * picture a progressive client gets).
  *
  * Usage: bench_gl [--size N] [--reps R] [--platform P] [--quick]
  *   --size N      frame edge (default 512)
@@ -71,11 +73,13 @@ struct timing {
 	int rc;
 };
 
-/* Fastest of reps frames of r (already synced). */
-static struct timing time_frames(const struct bc_backend_ops *ops,
-				 struct bc_renderer *r,
+/* Fastest of reps frames of r (already synced): whole frames, or the
+ * pixels of region when it is not NULL. */
+static struct timing time_frames(struct bc_renderer *r,
 				 const struct bc_camera *cam,
-				 struct bc_frame *f, int reps)
+				 struct bc_frame *f,
+				 const struct bc_render_region *region,
+				 int reps)
 {
 	struct timing best = {.wall = INFINITY, .cpu = INFINITY};
 	for (int i = 0; i < reps; i++) {
@@ -83,11 +87,13 @@ static struct timing time_frames(const struct bc_backend_ops *ops,
 		struct bc_render_stats st;
 		double w0 = clock_ms(CLOCK_MONOTONIC);
 		double c0 = clock_ms(CLOCK_PROCESS_CPUTIME_ID);
-		int rc = ops->render(r, cam, f, &st, &ei);
+		int rc = bc_renderer_render_region(r, cam, f, region, &st,
+						   &ei);
 		double w1 = clock_ms(CLOCK_MONOTONIC);
 		double c1 = clock_ms(CLOCK_PROCESS_CPUTIME_ID);
 		if (rc) {
-			fprintf(stderr, "%s: %s\n", ops->name, ei.msg);
+			fprintf(stderr, "%s: %s\n",
+				bc_backend_name(bc_renderer_backend(r)), ei.msg);
 			best.rc = rc;
 			return best;
 		}
@@ -100,13 +106,13 @@ static struct timing time_frames(const struct bc_backend_ops *ops,
 	return best;
 }
 
-static struct bc_renderer *open_backend(const struct bc_backend_ops *ops,
+static struct bc_renderer *open_backend(enum bc_backend b,
 					const struct bc_render_opts *o)
 {
 	struct bc_errinfo ei = {0};
 	struct bc_renderer *r = NULL;
-	if (ops->create(&r, o, &ei)) {
-		fprintf(stderr, "%s: %s\n", ops->name, ei.msg);
+	if (bc_renderer_create(&r, b, o, &ei)) {
+		fprintf(stderr, "%s: %s\n", bc_backend_name(b), ei.msg);
 		return NULL;
 	}
 	return r;
@@ -114,67 +120,76 @@ static struct bc_renderer *open_backend(const struct bc_backend_ops *ops,
 
 static int frames(const char *platform, uint32_t size, int reps, bool quick)
 {
-	const struct bc_backend_ops *gl = bc_backend_get(BC_BACKEND_GL);
-	const struct bc_backend_ops *tiled = bc_backend_get(BC_BACKEND_TILED);
+	/* The coarsest refinement level: one ray per tile. */
+	const struct bc_render_region coarse = {NULL, BC_RENDER_MAX_LEVEL,
+						false};
 	struct bc_render_opts go = {.gl_platform = platform};
 	struct bc_render_opts to = {0};
 	struct bc_renderer *rg, *rt;
 	struct bc_frame f;
 	struct bc_gl_info info;
 	size_t n = quick ? 2 : sizeof(scenes) / sizeof(scenes[0]);
-	if (!gl || !tiled) {
+	if (!bc_backend_available(BC_BACKEND_GL) ||
+	    !bc_backend_available(BC_BACKEND_TILED)) {
 		fprintf(stderr, "bench_gl: gl or tiled backend not built in\n");
 		return 1;
 	}
 	if (bc_frame_init(&f, size, size)) {
 		return 1;
 	}
-	rg = open_backend(gl, &go);
-	rt = open_backend(tiled, &to);
+	rg = open_backend(BC_BACKEND_GL, &go);
+	rt = open_backend(BC_BACKEND_TILED, &to);
 	if (!rg || !rt) {
+		bc_renderer_destroy(rg);
+		bc_renderer_destroy(rt);
+		bc_frame_finish(&f);
 		return 1;
 	}
 	bc_render_gl_info(rg, &info);
 	printf("gl: %s platform, %s, %s\n", bc_gl_platform_name(info.platform),
 	       info.renderer, info.version);
-	printf("frame %ux%u, fastest of %d; tiled on every core; ms\n\n", size,
-	       size, reps);
-	printf("%-26s %6s | %8s %8s %7s %7s | %8s %8s %7s %7s %4s | %7s %7s\n",
+	printf("frame %ux%u, fastest of %d; tiled on every core; ms; gl L3: "
+	       "refinement level 3 (one ray per tile)\n\n",
+	       size, size, reps);
+	printf("%-26s %6s | %8s %8s %7s %7s | %8s %8s %7s %7s %4s %7s | %7s "
+	       "%7s\n",
 	       "scene", "prims", "tiled", "cpu", "abuf", "trace", "gl", "cpu",
-	       "abuf", "trace", "disp", "gl/tld", "cpu");
+	       "abuf", "trace", "disp", "gl L3", "gl/tld", "cpu");
 	for (size_t s = 0; s < n; s++) {
 		struct bc_tree *t = bc_tree_create();
 		struct bc_camera cam;
 		struct bc_errinfo ei = {0};
-		struct timing tt, tg;
+		struct timing tt, tg, tc;
 		if (!t || bc_gen(scenes[s].gen, &scenes[s].opts, t, &cam, &ei)) {
 			fprintf(stderr, "%s: %s\n", scenes[s].label, ei.msg);
 			bc_tree_destroy(t);
 			continue;
 		}
-		if (tiled->sync(rt, t, NULL, &ei) || gl->sync(rg, t, NULL, &ei)) {
+		if (bc_renderer_sync(rt, t, NULL, &ei) ||
+		    bc_renderer_sync(rg, t, NULL, &ei)) {
 			fprintf(stderr, "%s: %s\n", scenes[s].label, ei.msg);
 			bc_tree_destroy(t);
 			continue;
 		}
 		/* Warm-up: compilation, allocation, caches. */
-		(void)time_frames(gl, rg, &cam, &f, 1);
-		tg = time_frames(gl, rg, &cam, &f, reps);
-		tt = time_frames(tiled, rt, &cam, &f, reps);
+		(void)time_frames(rg, &cam, &f, NULL, 1);
+		tg = time_frames(rg, &cam, &f, NULL, reps);
 		bc_render_gl_info(rg, &info);
-		if (tg.rc == 0 && tt.rc == 0) {
+		tc = time_frames(rg, &cam, &f, &coarse, reps);
+		tt = time_frames(rt, &cam, &f, NULL, reps);
+		if (tg.rc == 0 && tt.rc == 0 && tc.rc == 0) {
 			printf("%-26s %6u | %8.1f %8.1f %7.1f %7.1f | %8.1f "
-			       "%8.1f %7.1f %7.1f %4u | %6.2fx %6.2fx\n",
+			       "%8.1f %7.1f %7.1f %4u %7.1f | %6.2fx %6.2fx\n",
 			       scenes[s].label, bc_tree_prim_count(t), tt.wall,
 			       tt.cpu, tt.st.ms_abuffer, tt.st.ms_trace,
 			       tg.wall, tg.cpu, tg.st.ms_abuffer,
-			       tg.st.ms_trace, info.dispatches,
+			       tg.st.ms_trace, info.dispatches, tc.wall,
 			       tg.wall / tt.wall, tg.cpu / tt.cpu);
 		}
 		bc_tree_destroy(t);
 	}
-	gl->destroy(rg);
-	tiled->destroy(rt);
+	bc_renderer_destroy(rg);
+	bc_renderer_destroy(rt);
 	bc_frame_finish(&f);
 	return 0;
 }
@@ -183,9 +198,8 @@ static int frames(const char *platform, uint32_t size, int reps, bool quick)
 static int edits(const char *platform, bool quick)
 {
 	static const uint32_t counts[] = {256, 4096, 65536, 262144};
-	const struct bc_backend_ops *gl = bc_backend_get(BC_BACKEND_GL);
 	struct bc_render_opts go = {.gl_platform = platform};
-	struct bc_renderer *r = open_backend(gl, &go);
+	struct bc_renderer *r = open_backend(BC_BACKEND_GL, &go);
 	size_t n = quick ? 2 : sizeof(counts) / sizeof(counts[0]);
 	if (!r) {
 		return 1;
@@ -211,7 +225,7 @@ static int edits(const char *platform, bool quick)
 		}
 		bc_tree_take_dirty(t, &dirty);
 		t0 = clock_ms(CLOCK_MONOTONIC);
-		if (gl->sync(r, t, NULL, &ei)) {
+		if (bc_renderer_sync(r, t, NULL, &ei)) {
 			fprintf(stderr, "sync: %s\n", ei.msg);
 			bc_tree_destroy(t);
 			break;
@@ -235,7 +249,7 @@ static int edits(const char *platform, bool quick)
 				break;
 			}
 			bc_tree_take_dirty(t, &dirty);
-			if (gl->sync(r, t, &dirty, &ei)) {
+			if (bc_renderer_sync(r, t, &dirty, &ei)) {
 				fprintf(stderr, "sync: %s\n", ei.msg);
 				break;
 			}
@@ -249,7 +263,7 @@ static int edits(const char *platform, bool quick)
 		       full_ms / edit_ms);
 		bc_tree_destroy(t);
 	}
-	gl->destroy(r);
+	bc_renderer_destroy(r);
 	return 0;
 }
 

@@ -6,7 +6,8 @@
 // parameters t along unit directions, like the CPU renderers', rather than
 // the paper's NDC. Fragments beyond the buffer's capacity are counted but
 // not stored: the host sees the count, grows the buffer and draws the frame
-// again.
+// again. Tiles a region does not list get no fragments: their lists are not
+// needed, and a listed tile's list does not depend on the others.
 #include "common.glsl"
 #include "abv.glsl"
 
@@ -16,6 +17,10 @@ flat in float g_margin;
 void main()
 {
 	uint tx = uint(gl_FragCoord.x), ty = uint(gl_FragCoord.y);
+	uint tile = ty * u_size.z + tx;
+	if (!bc_region_listed(tile)) {
+		return;
+	}
 	bc_abv_rec a = b_abv[g_prim];
 	// The widened ABV (common.glsl): radii and half extents grow.
 	a.hi.w += g_margin;
@@ -44,7 +49,6 @@ void main()
 	if (idx >= u_counts.y) {
 		return;
 	}
-	uint tile = ty * u_size.z + tx;
 	uint prev = atomicExchange(b_tile[tile].x, idx);
 	b_link[idx] = uvec4(floatBitsToUint(t0), floatBitsToUint(t1), g_prim,
 			    prev);

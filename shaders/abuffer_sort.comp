@@ -1,8 +1,11 @@
 #version 430 core
-// A-buffer pass, sorting: one workgroup per tile moves the tile's linked
-// list into its contiguous range of the sorted buffer, ordered by entry
-// depth (ties by primitive index, as the CPU renderer orders them, so both
-// walk the same depth ranges). Lists of up to BC_SORT_SHARED fragments are
+// A-buffer pass, sorting: one workgroup per tile of the region (every tile,
+// or those the region lists) moves the tile's linked list into its
+// contiguous range of the sorted buffer, ordered by entry depth, ties by
+// primitive index (as the CPU renderer orders them, so both walk the same
+// depth ranges). A primitive has at most one fragment per tile, so the
+// order is total: the list's order does not depend on the order the
+// rasterizer's atomics linked it in. Lists of up to BC_SORT_SHARED fragments are
 // bitonic-sorted in shared memory by the whole workgroup; longer ones are
 // heap-sorted in place by one invocation, which is slow but needs no memory
 // beyond the list itself.
@@ -43,7 +46,10 @@ void heap_sift(uint base, uint root, uint n)
 void main()
 {
 	uint lid = gl_LocalInvocationIndex;
-	uint tile = gl_WorkGroupID.y * u_size.z + gl_WorkGroupID.x;
+	uint tile = bc_region_tile(gl_WorkGroupID);
+	if (tile == BC_NONE) {
+		return;
+	}
 	uvec4 tl = b_tile[tile];
 	uint n = tl.y, off = tl.z;
 	if (n == 0u) {

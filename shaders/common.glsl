@@ -87,9 +87,13 @@
 #define BC_TILE_FRESH 0u
 #define BC_TILE_SUSPENDED 1u
 #define BC_TILE_FINISHED 2u
-// Words of one suspension slot: the tile's walk, then four per ray.
+// Words of one suspension slot: the tile's walk, then eight per ray (its
+// flags and the sphere tracing state a paused ray resumes from).
 #define BC_SLOT_TILE_WORDS 8u
-#define BC_SLOT_WORDS (BC_SLOT_TILE_WORDS + 4u * BC_TILE_RAYS)
+#define BC_SLOT_RAY_WORDS 8u
+#define BC_SLOT_WORDS (BC_SLOT_TILE_WORDS + BC_SLOT_RAY_WORDS * BC_TILE_RAYS)
+// Coarsest refinement level (blobcast/render.h's BC_RENDER_MAX_LEVEL).
+#define BC_MAX_LEVEL 3u
 
 // ---- Per-frame uniforms ----------------------------------------------------
 
@@ -107,6 +111,10 @@ layout(std140, binding = 0) uniform Frame {
 	// and 1 when the frame is out of time: suspended tiles then finish
 	// with what they found.
 	uvec4 u_pool;
+	// The region drawn (blobcast/render.h): refinement level, refine
+	// (1: skip the pixels of the level above), tiles listed in b_region,
+	// and 1 when the list is used (0: every tile, in row-major order).
+	uvec4 u_region;
 };
 
 // ---- Storage buffers -------------------------------------------------------
@@ -150,6 +158,44 @@ layout(std430, binding = 7) buffer Sorted { uvec4 b_frag[]; };
 // beyond BC_VIEW_SHARED. See trace.comp.
 layout(std430, binding = 8) buffer Scratch { uint b_scratch[]; };
 layout(std430, binding = 9) buffer Stats { uint b_stat[]; };
+// The tiles a region lists (u_region.w == 1): their indices, in row-major
+// order (u_region.z of them), then a bit per tile of the frame.
+layout(std430, binding = 10) readonly buffer Region { uint b_region[]; };
+
+// ---- Regions ------------------------------------------------------------------
+
+// The tile of workgroup wg (gl_WorkGroupID) of a per-tile dispatch: (tiles
+// across) x (rows needed) workgroups walk the tile list, or every tile of
+// the frame when no list is used. BC_NONE: a workgroup past the list's end.
+uint bc_region_tile(uvec3 wg)
+{
+	uint i = wg.y * u_size.z + wg.x;
+	if (u_region.w == 0u) {
+		return i;
+	}
+	return i < u_region.z ? b_region[i] : BC_NONE;
+}
+
+// Does the region list tile (every tile without a list)?
+bool bc_region_listed(uint tile)
+{
+	if (u_region.w == 0u) {
+		return true;
+	}
+	return ((b_region[u_region.z + tile / 32u] >> (tile % 32u)) & 1u) != 0u;
+}
+
+// bc_render_level_has: is pixel (x, y) traced at the region's level?
+bool bc_region_has(uint x, uint y)
+{
+	uint level = u_region.x;
+	uint m = (1u << level) - 1u, m2 = (2u << level) - 1u;
+	if ((x & m) != 0u || (y & m) != 0u) {
+		return false;
+	}
+	return !(u_region.y != 0u && level < BC_MAX_LEVEL && (x & m2) == 0u &&
+		 (y & m2) == 0u);
+}
 
 // ---- ABVs as the A-buffer sees them -------------------------------------------
 

@@ -1,6 +1,8 @@
 #version 430 core
 // The tracing pass (Zanni 2024 Sec. 6.2, Algorithm 3): one 8x8 workgroup per
-// tile, one invocation per pixel ray. The tile's sorted A-buffer list is
+// tile of the region (every tile, or the tiles it lists), one invocation
+// per pixel ray; pixels outside the region's refinement level are not
+// traced, and keep what the image held. The tile's sorted A-buffer list is
 // walked in shared depth ranges [z_begin, z_end] (eq. 21-22); for each
 // range the first invocation updates the active set and builds the pruned
 // tree view by the sparse bottom-up traversal (the rule of blobtree/eval.c:
@@ -25,7 +27,8 @@
 // it, all loops together, which a dense tile exceeds. The workgroup counts
 // what it spends (the first invocation's traversal and fetching, and per
 // pass the longest ray's samples times the view's length); rays pause
-// between sphere tracing steps when a pass would go over, and the tile
+// between sphere tracing steps when a pass would go over (and resume with
+// the same step: where a ray pauses never changes its value), and the tile
 // suspends, its walk and rays saved in a scratch slot, when the dispatch's
 // budget is spent. The host dispatches again until no tile is suspended.
 //
@@ -56,7 +59,7 @@ layout(r32ui, binding = 2) uniform writeonly uimage2D img_ids;
 #define TRACE_MISS 1u
 #define TRACE_HIT 2u
 #define TRACE_NEAR_END 3u
-#define TRACE_PAUSED 4u // out of budget between two steps: resume at r_t
+#define TRACE_PAUSED 4u // out of budget between two steps: resume there
 
 // Samples a ray may still take after its step budget runs out (refinement,
 // bisection, closest approach and shading are not cut): 8 + 40 + 8 + 5.
@@ -661,8 +664,8 @@ void ray_step_check()
 		return;
 	}
 	if (r_steps >= s_cap) {
-		// Out of this pass's budget: [.., r_t] is known empty, so the
-		// ray can start again from r_t in the next pass.
+		// Out of this pass's budget: the next pass takes this very
+		// step (trace_pass), from the state kept as it is.
 		r_result = TRACE_PAUSED;
 		r_state = ST_END;
 		return;
@@ -876,8 +879,11 @@ void put_hit(ivec2 px, vec3 d, uint overlaps)
 
 // ---- Suspension ----------------------------------------------------------------
 
-// Each ray's state across passes and dispatches.
-bool p_done, p_pending, p_todo;
+// Each ray's state across passes and dispatches: done, pending (with the
+// provisional hit's t), to trace in the current range, and paused inside
+// it (the sphere tracing state r_t, r_v, r_tp, r_vp, r_omega, r_count is
+// kept, so a paused ray resumes with the very step it would have taken).
+bool p_done, p_pending, p_todo, p_paused;
 float p_pending_t, p_resume_t;
 
 uint slot_base(uint slot)
@@ -888,6 +894,9 @@ uint slot_base(uint slot)
 // Saves the tile's walk (first invocation) and every ray, and marks the
 // tile suspended. Returns false when no slot was free: the tile then goes
 // on over budget and the host, seeing the count, redraws with more slots.
+// A tile suspends between passes, when every ray still to trace in the
+// range is paused, or between ranges, when none is: p_resume_t need not be
+// kept.
 bool suspend(uint lid, uint tid)
 {
 	if (lid == 0u) {
@@ -923,11 +932,17 @@ bool suspend(uint lid, uint tid)
 	if (s_slot == BC_NONE) {
 		return false;
 	}
-	uint b = slot_base(s_slot) + BC_SLOT_TILE_WORDS + 4u * lid;
+	uint b = slot_base(s_slot) + BC_SLOT_TILE_WORDS + BC_SLOT_RAY_WORDS * lid;
 	b_scratch[b] = (p_done ? 1u : 0u) | (p_pending ? 2u : 0u) |
-		       (p_todo ? 4u : 0u) | (g_evals << 3u);
+		       (p_todo ? 4u : 0u) | (p_paused ? 8u : 0u) |
+		       (g_evals << 4u);
 	b_scratch[b + 1u] = floatBitsToUint(p_pending_t);
-	b_scratch[b + 2u] = floatBitsToUint(p_resume_t);
+	b_scratch[b + 2u] = floatBitsToUint(r_t);
+	b_scratch[b + 3u] = floatBitsToUint(r_v);
+	b_scratch[b + 4u] = floatBitsToUint(r_tp);
+	b_scratch[b + 5u] = floatBitsToUint(r_vp);
+	b_scratch[b + 6u] = floatBitsToUint(r_omega);
+	b_scratch[b + 7u] = r_count;
 	return true;
 }
 
@@ -947,33 +962,50 @@ void resume(uint lid, uint slot)
 			s_act_t1[i] = uintBitsToFloat(b_scratch[scratch_t1(i)]);
 		}
 	}
-	uint w = b_scratch[b + BC_SLOT_TILE_WORDS + 4u * lid];
+	b += BC_SLOT_TILE_WORDS + BC_SLOT_RAY_WORDS * lid;
+	uint w = b_scratch[b];
 	p_done = (w & 1u) != 0u;
 	p_pending = (w & 2u) != 0u;
 	p_todo = (w & 4u) != 0u;
-	g_evals = w >> 3u;
-	p_pending_t = uintBitsToFloat(b_scratch[b + BC_SLOT_TILE_WORDS +
-						4u * lid + 1u]);
-	p_resume_t = uintBitsToFloat(b_scratch[b + BC_SLOT_TILE_WORDS +
-					       4u * lid + 2u]);
+	p_paused = (w & 8u) != 0u;
+	g_evals = w >> 4u;
+	p_pending_t = uintBitsToFloat(b_scratch[b + 1u]);
+	r_t = uintBitsToFloat(b_scratch[b + 2u]);
+	r_v = uintBitsToFloat(b_scratch[b + 3u]);
+	r_tp = uintBitsToFloat(b_scratch[b + 4u]);
+	r_vp = uintBitsToFloat(b_scratch[b + 5u]);
+	r_omega = uintBitsToFloat(b_scratch[b + 6u]);
+	r_count = b_scratch[b + 7u];
 }
 
-// Traces this ray inside the current range from p_resume_t, for at most
-// s_cap steps. Returns the samples taken.
+// Traces this ray inside the current range, from p_resume_t or from where
+// it paused, for at most s_cap steps. Returns the samples taken. Where the
+// passes split a ray's steps never changes its samples: a paused ray
+// continues with the step it was about to take, so its value depends on
+// nothing but its own ray and the tile's depth ranges (not on the other
+// rays of the workgroup, whose samples set s_cap).
 uint trace_pass(ivec2 px, vec3 d)
 {
 	uint samples = 0u;
-	r_state = ST_START;
-	r_t = p_resume_t;
 	r_t1 = s_ze;
-	r_tp = r_t;
-	r_vp = 0.0;
-	r_omega = BC_OVERRELAX;
-	r_smp = r_t;
 	r_result = TRACE_MISS;
 	r_steps = 0u;
-	if (!(r_t1 >= r_t)) {
-		r_state = ST_END;
+	if (p_paused) {
+		// ray_step_check's step, past its budget test.
+		p_paused = false;
+		r_count++;
+		r_smp = min(r_t + max(r_omega * r_v, 1.0e-6 * r_t), r_t1);
+		r_state = ST_STEP;
+	} else {
+		r_state = ST_START;
+		r_t = p_resume_t;
+		r_tp = r_t;
+		r_vp = 0.0;
+		r_omega = BC_OVERRELAX;
+		r_smp = r_t;
+		if (!(r_t1 >= r_t)) {
+			r_state = ST_END;
+		}
 	}
 	vec3 hit_p = vec3(0.0);
 	while (r_state != ST_END) {
@@ -992,7 +1024,7 @@ uint trace_pass(ivec2 px, vec3 d)
 		ray_take(x, who);
 	}
 	if (r_result == TRACE_PAUSED) {
-		p_resume_t = r_t;
+		p_paused = true;
 		return samples;
 	}
 	p_todo = false;
@@ -1019,12 +1051,21 @@ uint trace_pass(ivec2 px, vec3 d)
 void main()
 {
 	uint lid = gl_LocalInvocationIndex;
-	uvec2 tile = gl_WorkGroupID.xy;
-	uint tid = tile.y * u_size.z + tile.x;
+	uint tid = bc_region_tile(gl_WorkGroupID);
+	if (tid == BC_NONE) {
+		return;
+	}
+	uvec2 tile = uvec2(tid % u_size.z, tid / u_size.z);
 	uvec4 tl = b_tile[tid];
 	uint status = tl.w & 3u;
 	ivec2 px = ivec2(tile * BC_TILE + gl_LocalInvocationID.xy);
-	bool inside = uint(px.x) < u_size.x && uint(px.y) < u_size.y;
+	// The pixels the region asks for. The others take no part in the
+	// tracing, only in the workgroup's barriers: the depth ranges are the
+	// tile list's alone, and a ray's samples depend on its own ray and
+	// those ranges only (trace_pass), so an asked pixel's value is the
+	// one a whole frame gives it.
+	bool asked = uint(px.x) < u_size.x && uint(px.y) < u_size.y &&
+		     bc_region_has(uint(px.x), uint(px.y));
 	bool suspended = false;
 	vec3 d = bc_ray_dir(float(px.x) + 0.5, float(px.y) + 0.5);
 	uint evals_before;
@@ -1039,15 +1080,14 @@ void main()
 	// (trace.c's NEAR_END), is pending: its provisional hit is written;
 	// the next range decides, and when none follows right there, it
 	// stands.
-	p_done = !inside;
+	p_done = !asked;
 	p_pending = false;
 	p_todo = false;
+	p_paused = false;
 	p_pending_t = 0.0;
 	p_resume_t = 0.0;
 	if (lid == 0u) {
-		uint w = min(u_size.x - tile.x * BC_TILE, BC_TILE);
-		uint h = min(u_size.y - tile.y * BC_TILE, BC_TILE);
-		s_left = w * h;
+		s_left = 0u;
 		s_na = 0u;
 		s_next = 0u;
 		s_ze = 0.0;
@@ -1068,6 +1108,8 @@ void main()
 	barrier();
 	if (status == BC_TILE_SUSPENDED) {
 		resume(lid, tl.w >> 2u);
+	} else if (asked) {
+		atomicAdd(s_left, 1u);
 	}
 	evals_before = g_evals;
 	memoryBarrierShared();
@@ -1110,6 +1152,7 @@ void main()
 					atomicAdd(s_left, 0xffffffffu);
 				} else {
 					p_todo = true;
+					p_paused = false;
 					p_resume_t = s_zb;
 				}
 			}
@@ -1183,7 +1226,7 @@ void main()
 		}
 	}
 	if (!suspended) {
-		if (inside && !p_done && !p_pending) {
+		if (asked && !p_done && !p_pending) {
 			put_miss(px, g_n);
 		}
 		if (lid == 0u) {

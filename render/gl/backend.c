@@ -1,6 +1,7 @@
 /*
- * The gl backend (struct bc_backend_ops "gl"): the renderer object, the
- * blobtree's GPU buffers and their updates, and one frame's passes.
+ * The gl backend (struct bc_backend_ops "gl"): the renderer object (the
+ * front's struct bc_renderer first), the blobtree's GPU buffers and their
+ * updates, one frame's passes, the frame key and damage.
  *
  * Buffers. The linearized tree goes up as storage buffers: node words with
  * parameter offsets and the parameter records exactly as bc_lin holds them,
@@ -24,6 +25,17 @@
  * count keeps running past the capacity), so the buffer is grown to fit and
  * the frame drawn again, at most once more.
  *
+ * Regions. A call draws the tiles of a mask and, in them, the pixels of a
+ * refinement level. A mask becomes a list of tile indices (Region buffer):
+ * the sort and trace passes run one workgroup per listed tile, and the
+ * rasterizer drops fragments of unlisted tiles. Pixels outside the level
+ * take no part in tracing, only in their workgroup's barriers. A pixel's
+ * value depends only on its tile's list (ordered by a total order), the
+ * tree and the frame constants, and its own ray (a ray paused by the loop
+ * budget resumes with the step it was about to take), so a frame assembled
+ * from regions equals a whole render bit for bit (docs/gl.md). Only the
+ * drawn pixels are copied into the caller's frame.
+ *
  * Each entry point makes the context current and releases it before
  * returning, so a renderer may be driven from any one thread at a time.
  */
@@ -32,10 +44,11 @@
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
-#include <time.h>
 
 #include "blobcast/alloc.h"
 #include "blobcast/log.h"
+#include "blobcast/render_backend.h"
+#include "blobcast/render_common.h"
 
 /* The shaders copy these enum values and layouts (shaders/common.glsl,
  * prim.glsl); a change here must be made there too. */
@@ -48,7 +61,9 @@ _Static_assert(BC_PRIM_RECORD_VEC4 == 5 && BC_OP_RECORD_VEC4 == 1,
 	       "shaders/common.glsl record sizes");
 _Static_assert(BC_PRIM_PACKED == 8, "shaders/prim.glsl packed parameters");
 _Static_assert(BC_EVAL_STACK == 130, "shaders/common.glsl BC_EVAL_STACK");
-_Static_assert(sizeof(struct bc__gl_frame_ubo) == 144, "std140 Frame block");
+_Static_assert(sizeof(struct bc__gl_frame_ubo) == 160, "std140 Frame block");
+_Static_assert(BC_RENDER_TILE == BC_GL_TILE, "tiles of the front");
+_Static_assert(BC_RENDER_MAX_LEVEL == 3, "shaders/common.glsl BC_MAX_LEVEL");
 /* Primitive indices share a 32-bit view instruction word with 11 bits of
  * kind and flags (trace.comp). */
 _Static_assert(BC_TREE_MAX_NODES / 2 < (1u << 21), "primitive index bits");
@@ -69,9 +84,9 @@ enum {
 	Q_COUNT
 };
 
-struct bc_renderer {
+struct gl_renderer {
+	struct bc_renderer base; /* first: the front's part */
 	struct bc__gl_ctx ctx;
-	enum bc_debug_mode debug;
 	/* Sticky: a lost context refuses all further work. */
 	int err;
 	char errstr[200];
@@ -82,7 +97,7 @@ struct bc_renderer {
 	GLuint tex[3]; /* rgba (r32ui), depth (r32f), ids (r32ui) */
 	uint32_t tex_w, tex_h;
 	GLuint queries[Q_COUNT];
-	/* The synced tree and the counts its buffers were sized for. */
+	/* The tree last uploaded and the counts its buffers were sized for. */
 	const struct bc_tree *tree;
 	bool synced;
 	uint32_t count, nprims, nparam;
@@ -90,7 +105,9 @@ struct bc_renderer {
 	uint32_t want_cap; /* capacity asked for, 0: none */
 	uint32_t slots;    /* suspension slots after the fragment scratch */
 	uint32_t budget;   /* loop budget per invocation, 0: none */
-	uint32_t budget_ms; /* frame time budget (opts), 0: none */
+	/* The region's tile list and bits, built on the host per frame. */
+	uint32_t *region;
+	size_t region_cap;
 	double upload_ms; /* since the last frame */
 	uint32_t builds;
 	uint64_t upload_bytes;
@@ -98,18 +115,17 @@ struct bc_renderer {
 	uint32_t full_uploads;
 };
 
-static double now_ms(void)
+/* The gl renderer behind the front's base (NULL stays NULL). */
+static struct gl_renderer *gl_of(struct bc_renderer *base)
 {
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+	return (struct gl_renderer *)base;
 }
 
 /* ---- Buffers ------------------------------------------------------------ */
 
 /* (Re)allocates storage buffer b with room for size bytes (never zero:
  * binding an empty buffer is undefined). Contents are not kept. */
-static void buf_alloc(struct bc_renderer *r, int b, size_t size,
+static void buf_alloc(struct gl_renderer *r, int b, size_t size,
 		      const void *data)
 {
 	GladGLContext *gl = &r->ctx.gl;
@@ -125,7 +141,7 @@ static void buf_alloc(struct bc_renderer *r, int b, size_t size,
 	r->upload_bytes += data ? size : 0;
 }
 
-static void buf_update(struct bc_renderer *r, int b, size_t off, size_t size,
+static void buf_update(struct gl_renderer *r, int b, size_t off, size_t size,
 		       const void *data)
 {
 	GladGLContext *gl = &r->ctx.gl;
@@ -190,7 +206,7 @@ static void fill_abvs(const struct bc_lin *l, uint32_t lo, uint32_t hi,
 }
 
 /* Uploads slots [lo, hi) of the traversal indices. */
-static int put_topo(struct bc_renderer *r, const struct bc_lin *l, uint32_t lo,
+static int put_topo(struct gl_renderer *r, const struct bc_lin *l, uint32_t lo,
 		    uint32_t hi, bool whole)
 {
 	size_t n = hi - lo;
@@ -209,7 +225,7 @@ static int put_topo(struct bc_renderer *r, const struct bc_lin *l, uint32_t lo,
 }
 
 /* Uploads primitives [lo, hi) (slot, id, colour, ABV). */
-static int put_prims(struct bc_renderer *r, const struct bc_lin *l,
+static int put_prims(struct gl_renderer *r, const struct bc_lin *l,
 		     uint32_t lo, uint32_t hi, bool whole)
 {
 	size_t n = hi - lo;
@@ -234,7 +250,7 @@ static int put_prims(struct bc_renderer *r, const struct bc_lin *l,
 	return 0;
 }
 
-static int upload_all(struct bc_renderer *r, const struct bc_lin *l)
+static int upload_all(struct gl_renderer *r, const struct bc_lin *l)
 {
 	int rc;
 	buf_alloc(r, BC__GL_BUF_NODES, (size_t)l->count * 8, l->node);
@@ -260,7 +276,7 @@ static bool clamp_range(uint32_t *lo, uint32_t *hi, uint32_t n)
 	return *lo < *hi;
 }
 
-static int upload_dirty(struct bc_renderer *r, const struct bc_lin *l,
+static int upload_dirty(struct gl_renderer *r, const struct bc_lin *l,
 			const struct bc_dirty *d)
 {
 	uint32_t plo = d->param_lo, phi = d->param_hi;
@@ -312,7 +328,7 @@ static int upload_dirty(struct bc_renderer *r, const struct bc_lin *l,
 
 /* ---- Create and destroy ------------------------------------------------- */
 
-static void release_gl(struct bc_renderer *r)
+static void release_gl(struct gl_renderer *r)
 {
 	GladGLContext *gl = &r->ctx.gl;
 	if (!gl->DeleteBuffers) {
@@ -328,8 +344,9 @@ static void release_gl(struct bc_renderer *r)
 	gl->DeleteVertexArrays(1, &r->vao);
 }
 
-static void gl_destroy(struct bc_renderer *r)
+static void gl_destroy(struct bc_renderer *base)
 {
+	struct gl_renderer *r = gl_of(base);
 	struct bc_errinfo ei = {0};
 	if (!r) {
 		return;
@@ -343,23 +360,22 @@ static void gl_destroy(struct bc_renderer *r)
 		}
 		bc__gl_ctx_close(&r->ctx);
 	}
+	bc_free(r->region);
 	bc_free(r);
 }
 
+/* opts comes from the front, checked and never NULL; its gl_platform
+ * string is the caller's and is not kept (the front clears it), so the
+ * platform is decided here, once. */
 static int gl_create(struct bc_renderer **out, const struct bc_render_opts *opts,
 		     struct bc_errinfo *ei)
 {
-	struct bc_renderer *r;
+	struct gl_renderer *r;
 	enum bc_gl_platform platform;
 	GladGLContext *gl;
 	int rc;
 	*out = NULL;
-	if (opts && (unsigned)opts->debug >= BC_DEBUG_COUNT) {
-		return bc_errinfo_set(ei, BC_EENUM,
-				      "render: debug mode %d out of range",
-				      (int)opts->debug);
-	}
-	platform = bc_gl_platform_from_name(opts ? opts->gl_platform : NULL);
+	platform = bc_gl_platform_from_name(opts->gl_platform);
 	if (platform == BC_GL_PLATFORM_COUNT) {
 		return bc_errinfo_set(ei, BC_EINVAL,
 				      "gl: unknown platform '%s' (auto, "
@@ -369,8 +385,6 @@ static int gl_create(struct bc_renderer **out, const struct bc_render_opts *opts
 	if (!(r = bc_calloc(1, sizeof(*r)))) {
 		return bc_errinfo_set(ei, BC_ENOMEM, "gl: out of memory");
 	}
-	r->debug = opts ? opts->debug : BC_DEBUG_NONE;
-	r->budget_ms = opts ? opts->budget_ms : 0;
 	if ((rc = bc__gl_ctx_open(&r->ctx, platform, ei))) {
 		goto fail;
 	}
@@ -400,17 +414,17 @@ static int gl_create(struct bc_renderer **out, const struct bc_render_opts *opts
 		goto fail;
 	}
 	bc__gl_ctx_unbind(&r->ctx);
-	*out = r;
+	*out = &r->base;
 	return 0;
 fail:
-	gl_destroy(r);
+	gl_destroy(&r->base);
 	return rc;
 }
 
 /* ---- Sync ----------------------------------------------------------------- */
 
 /* Makes the context current, refusing work after a loss. */
-static int enter(struct bc_renderer *r, struct bc_errinfo *ei)
+static int enter(struct gl_renderer *r, struct bc_errinfo *ei)
 {
 	GladGLContext *gl = &r->ctx.gl;
 	int rc;
@@ -440,19 +454,17 @@ static int enter(struct bc_renderer *r, struct bc_errinfo *ei)
 	return 0;
 }
 
-static int gl_sync(struct bc_renderer *r, const struct bc_tree *t,
+static int gl_sync(struct bc_renderer *base, const struct bc_tree *t,
 		   const struct bc_dirty *dirty, struct bc_errinfo *ei)
 {
+	struct gl_renderer *r = gl_of(base);
 	const struct bc_lin *l;
 	double t0;
-	int rc;
-	if (!r || !t) {
-		return bc_errinfo_set(ei, BC_EINVAL, "render: no tree to sync");
-	}
+	int rc = 0;
 	if ((rc = enter(r, ei))) {
 		return rc;
 	}
-	t0 = now_ms();
+	t0 = bc_render_now_ms();
 	r->upload_bytes = 0;
 	l = bc_tree_lin(t);
 	if (!l) {
@@ -473,7 +485,7 @@ static int gl_sync(struct bc_renderer *r, const struct bc_tree *t,
 	}
 	r->synced = rc == 0;
 	r->tree = t;
-	r->upload_ms += now_ms() - t0;
+	r->upload_ms += bc_render_now_ms() - t0;
 	bc__gl_ctx_unbind(&r->ctx);
 	return rc;
 }
@@ -490,17 +502,20 @@ static void normalize3(float v[3])
 	}
 }
 
-/* The frame's uniforms: render/cpu/shade.c's frame setup. */
+/* The frame's uniforms: render/cpu/shade.c's frame setup (the region's
+ * part is filled by the caller). */
 static void frame_setup(struct bc__gl_frame_ubo *u, const struct bc_lin *l,
 			const struct bc_camera *cam, uint32_t w, uint32_t h,
 			enum bc_debug_mode debug, uint32_t nprims,
 			uint32_t cap, uint32_t slots, uint32_t budget)
 {
 	struct bc_view_rays vr;
-	float size, light[3];
+	/* The scene's scale, not its size: an edit that moves the bounds a
+	 * little keeps every constant, so a damaged region is drawn with the
+	 * constants of the frame around it. */
+	float size = bc_render_scale(l), light[3];
 	memset(u, 0, sizeof(*u));
 	bc_view_rays_init(&vr, cam, w, h);
-	size = l && l->size > 0.0f && isfinite(l->size) ? l->size : 1.0f;
 	for (int i = 0; i < 3; i++) {
 		u->eye[i] = vr.eye[i];
 		u->forward[i] = vr.forward[i];
@@ -533,7 +548,7 @@ static void frame_setup(struct bc__gl_frame_ubo *u, const struct bc_lin *l,
 
 /* Images, the tile table, the framebuffer and the readback buffer for a
  * w x h frame. */
-static int frame_buffers(struct bc_renderer *r, uint32_t w, uint32_t h)
+static int frame_buffers(struct gl_renderer *r, uint32_t w, uint32_t h)
 {
 	GladGLContext *gl = &r->ctx.gl;
 	static const GLenum fmt[3] = {GL_R32UI, GL_R32F, GL_R32UI};
@@ -570,7 +585,7 @@ static int frame_buffers(struct bc_renderer *r, uint32_t w, uint32_t h)
 
 /* Fragment storage for cap fragments, and scratch with `slots`
  * suspension slots after it. */
-static void frag_buffers(struct bc_renderer *r, uint32_t cap, uint32_t slots)
+static void frag_buffers(struct gl_renderer *r, uint32_t cap, uint32_t slots)
 {
 	buf_alloc(r, BC__GL_BUF_LINKS, (size_t)cap * LINK_BYTES, NULL);
 	buf_alloc(r, BC__GL_BUF_SORTED, (size_t)cap * SORTED_BYTES, NULL);
@@ -584,7 +599,7 @@ static void frag_buffers(struct bc_renderer *r, uint32_t cap, uint32_t slots)
 
 /* Largest fragment capacity: the limit, and the driver's storage block
  * size for the largest per-fragment buffer. */
-static uint32_t frag_limit(struct bc_renderer *r)
+static uint32_t frag_limit(struct gl_renderer *r)
 {
 	GLint64 block = 0;
 	uint64_t most = BC_GL_MAX_FRAGMENTS;
@@ -601,9 +616,166 @@ static uint32_t frag_limit(struct bc_renderer *r)
 	return (uint32_t)most;
 }
 
+/* ---- Regions ----------------------------------------------------------- */
+
+/* How one call's region is drawn: which tiles (all of them in row-major
+ * order, or a list uploaded in the Region buffer) and the workgroups of a
+ * per-tile dispatch. */
+struct plan {
+	uint32_t level;
+	bool refine;
+	bool list;       /* tiles from the Region buffer */
+	uint32_t nlist;  /* tiles listed */
+	uint32_t gx, gy; /* workgroups of a per-tile dispatch */
+	uint32_t tiles;  /* tiles with a pixel to draw */
+	uint64_t rays;   /* pixels to draw */
+};
+
+/* Pixels of a tile spanning [x0, x0 + n) (x0 a multiple of the tile) whose
+ * coordinate is a multiple of 2^level. */
+static uint32_t level_count(uint32_t n, uint32_t level)
+{
+	return (n + (1u << level) - 1u) >> level;
+}
+
+/* Pixels of tile (tx, ty) the region's level asks for: those at level,
+ * less those of level + 1 when refining (both sets are products of
+ * per-axis sets, see bc_render_level_has). */
+static uint32_t tile_rays(uint32_t tx, uint32_t ty, uint32_t w, uint32_t h,
+			  uint32_t level, bool refine)
+{
+	uint32_t tw = w - tx * BC_GL_TILE < BC_GL_TILE ? w - tx * BC_GL_TILE
+							: BC_GL_TILE;
+	uint32_t th = h - ty * BC_GL_TILE < BC_GL_TILE ? h - ty * BC_GL_TILE
+							: BC_GL_TILE;
+	uint32_t n = level_count(tw, level) * level_count(th, level);
+	if (refine && level < BC_RENDER_MAX_LEVEL) {
+		n -= level_count(tw, level + 1) * level_count(th, level + 1);
+	}
+	return n;
+}
+
+/* Plans region for a w x h frame; a list goes into r->region (tile
+ * indices, then one bit per tile). Returns 0 or BC_ENOMEM. */
+static int plan_region(struct gl_renderer *r,
+		       const struct bc_render_region *region, uint32_t w,
+		       uint32_t h, struct plan *p)
+{
+	uint32_t tw = bc_render_tiles_x(w), th = bc_render_tiles_y(h);
+	size_t ntiles = (size_t)tw * th, words = (ntiles + 31) / 32;
+	memset(p, 0, sizeof(*p));
+	p->level = region->level;
+	p->refine = region->refine;
+	p->list = region->tiles != NULL;
+	if (p->list && r->region_cap < ntiles + words) {
+		uint32_t *grown = bc_malloc((ntiles + words) * sizeof(*grown));
+		if (!grown) {
+			return BC_ENOMEM;
+		}
+		bc_free(r->region);
+		r->region = grown;
+		r->region_cap = ntiles + words;
+	}
+	for (uint32_t ty = 0; ty < th; ty++) {
+		for (uint32_t tx = 0; tx < tw; tx++) {
+			uint32_t i = ty * tw + tx;
+			uint32_t n = tile_rays(tx, ty, w, h, p->level,
+					       p->refine);
+			if (p->list && (!region->tiles[i] || n == 0)) {
+				continue;
+			}
+			if (n > 0) {
+				p->tiles++;
+				p->rays += n;
+			}
+			if (p->list) {
+				r->region[p->nlist++] = i;
+			}
+		}
+	}
+	p->gx = tw;
+	p->gy = th;
+	if (p->list) {
+		uint32_t *bits = r->region + p->nlist;
+		memset(bits, 0, words * sizeof(*bits));
+		for (uint32_t j = 0; j < p->nlist; j++) {
+			uint32_t i = r->region[j];
+			bits[i / 32] |= 1u << (i % 32);
+		}
+		p->gy = (p->nlist + tw - 1) / tw;
+	}
+	return 0;
+}
+
+/* Sends a planned list to the Region buffer (not counted as tree
+ * upload). */
+static void upload_region(struct gl_renderer *r, const struct plan *p,
+			  uint32_t w, uint32_t h)
+{
+	GladGLContext *gl = &r->ctx.gl;
+	size_t ntiles = (size_t)bc_render_tiles_x(w) * bc_render_tiles_y(h);
+	size_t bytes = (p->nlist + (ntiles + 31) / 32) * sizeof(uint32_t);
+	if (!p->list) {
+		return;
+	}
+	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->bufs[BC__GL_BUF_REGION]);
+	if (r->buf_size[BC__GL_BUF_REGION] < bytes) {
+		gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)bytes,
+			       r->region, GL_DYNAMIC_DRAW);
+		r->buf_size[BC__GL_BUF_REGION] = bytes;
+	} else {
+		gl->BufferSubData(GL_SHADER_STORAGE_BUFFER, 0, (GLsizeiptr)bytes,
+				  r->region);
+	}
+}
+
+/* Copies the pixels p drew from the mapped planes (rgba, depth, ids, each
+ * w * h words) into out; the others keep their values. */
+static void copy_region(struct gl_renderer *r, const struct plan *p,
+			const char *map, struct bc_frame *out)
+{
+	uint32_t w = out->width, h = out->height, tw = bc_render_tiles_x(w);
+	size_t npix = (size_t)w * h;
+	uint32_t n = p->list ? p->nlist : tw * bc_render_tiles_y(h);
+	uint32_t step = 1u << p->level;
+	if (!p->list && p->level == 0) {
+		memcpy(out->rgba, map, 4 * npix);
+		if (out->depth) {
+			memcpy(out->depth, map + 4 * npix, 4 * npix);
+		}
+		if (out->ids) {
+			memcpy(out->ids, map + 8 * npix, 4 * npix);
+		}
+		return;
+	}
+	for (uint32_t j = 0; j < n; j++) {
+		uint32_t i = p->list ? r->region[j] : j;
+		uint32_t x0 = (i % tw) * BC_GL_TILE, y0 = (i / tw) * BC_GL_TILE;
+		for (uint32_t y = y0; y < y0 + BC_GL_TILE && y < h; y += step) {
+			for (uint32_t x = x0; x < x0 + BC_GL_TILE && x < w;
+			     x += step) {
+				size_t k = (size_t)y * w + x;
+				if (!bc_render_level_has(x, y, p->level,
+							 p->refine)) {
+					continue;
+				}
+				memcpy(out->rgba + 4 * k, map + 4 * k, 4);
+				if (out->depth) {
+					memcpy(out->depth + k,
+					       map + 4 * (npix + k), 4);
+				}
+				if (out->ids) {
+					memcpy(out->ids + k,
+					       map + 4 * (2 * npix + k), 4);
+				}
+			}
+		}
+	}
+}
+
 /* Issues the passes of one frame, up to the first tracing dispatch. */
-static void draw(struct bc_renderer *r, const struct bc__gl_frame_ubo *u,
-		 uint32_t nprims)
+static void draw(struct gl_renderer *r, const struct bc__gl_frame_ubo *u,
+		 const struct plan *p, uint32_t nprims)
 {
 	GladGLContext *gl = &r->ctx.gl;
 	static const uint32_t tile_init[4] = {0xffffffffu, 0u, 0u, 0u};
@@ -643,7 +815,7 @@ static void draw(struct bc_renderer *r, const struct bc__gl_frame_ubo *u,
 	gl->DispatchCompute(1, 1, 1);
 	gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
 	gl->UseProgram(r->progs[BC__GL_PROG_SORT]);
-	gl->DispatchCompute(tw, th, 1);
+	gl->DispatchCompute(p->gx, p->gy, 1);
 	gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
 	gl->QueryCounter(r->queries[Q_ABUFFER], GL_TIMESTAMP);
 
@@ -655,20 +827,21 @@ static void draw(struct bc_renderer *r, const struct bc__gl_frame_ubo *u,
 			     GL_R32F);
 	gl->BindImageTexture(2, r->tex[2], 0, GL_FALSE, 0, GL_WRITE_ONLY,
 			     GL_R32UI);
-	gl->DispatchCompute(tw, th, 1);
+	gl->DispatchCompute(p->gx, p->gy, 1);
 }
 
 /* Dispatches the tracing pass again while tiles are suspended (only with
  * a loop budget). Past the frame's time budget (counted from t_start) the
  * last dispatch tells suspended tiles to finish with what they found, and
  * *incomplete is set. Returns 0, BC_ELIMIT or BC_EGL. */
-static int finish_tracing(struct bc_renderer *r, struct bc__gl_frame_ubo *u,
-			  double t_start, uint32_t *dispatches,
-			  bool *incomplete, struct bc_errinfo *ei)
+static int finish_tracing(struct gl_renderer *r, struct bc__gl_frame_ubo *u,
+			  const struct plan *p, double t_start,
+			  uint32_t *dispatches, bool *incomplete,
+			  struct bc_errinfo *ei)
 {
 	GladGLContext *gl = &r->ctx.gl;
 	static const uint32_t zero = 0;
-	uint32_t tw = u->size[2], th = u->size[3];
+	uint32_t budget_ms = r->base.opts.budget_ms;
 	*dispatches = 1;
 	*incomplete = false;
 	while (r->budget && !*incomplete) {
@@ -690,7 +863,7 @@ static int finish_tracing(struct bc_renderer *r, struct bc__gl_frame_ubo *u,
 		gl->ClearBufferSubData(GL_SHADER_STORAGE_BUFFER, GL_R32UI,
 				       4 * BC_GL_STAT_SUSPENDED, 4,
 				       GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
-		if (r->budget_ms && now_ms() - t_start > (double)r->budget_ms) {
+		if (budget_ms && bc_render_now_ms() - t_start > (double)budget_ms) {
 			/* Out of time: one last dispatch finishes every
 			 * suspended tile with what it has. */
 			u->pool[3] = 1;
@@ -700,7 +873,7 @@ static int finish_tracing(struct bc_renderer *r, struct bc__gl_frame_ubo *u,
 		}
 		gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT |
 				  GL_UNIFORM_BARRIER_BIT);
-		gl->DispatchCompute(tw, th, 1);
+		gl->DispatchCompute(p->gx, p->gy, 1);
 		(*dispatches)++;
 	}
 	return bc__gl_check(&r->ctx, "tracing", ei);
@@ -708,7 +881,7 @@ static int finish_tracing(struct bc_renderer *r, struct bc__gl_frame_ubo *u,
 
 /* Issues the copies of the planes and statistics into the readback
  * buffer. */
-static void read_back(struct bc_renderer *r, size_t npix)
+static void read_back(struct gl_renderer *r, size_t npix)
 {
 	GladGLContext *gl = &r->ctx.gl;
 	gl->MemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT |
@@ -739,11 +912,11 @@ static void read_back(struct bc_renderer *r, size_t npix)
 }
 
 /* Waits for everything issued so far. */
-static int wait_fence(struct bc_renderer *r, struct bc_errinfo *ei)
+static int wait_fence(struct gl_renderer *r, struct bc_errinfo *ei)
 {
 	GladGLContext *gl = &r->ctx.gl;
 	GLsync fence = gl->FenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
-	double start = now_ms();
+	double start = bc_render_now_ms();
 	int rc = 0;
 	if (!fence) {
 		return bc__gl_check(&r->ctx, "glFenceSync", ei)
@@ -773,7 +946,7 @@ static int wait_fence(struct bc_renderer *r, struct bc_errinfo *ei)
 					    "gl: context lost during a frame");
 			break;
 		}
-		if (now_ms() - start > BC_GL_FENCE_TIMEOUT_S * 1e3) {
+		if (bc_render_now_ms() - start > BC_GL_FENCE_TIMEOUT_S * 1e3) {
 			rc = bc_errinfo_set(ei, BC_ETIMEOUT,
 					    "gl: frame not done after %.0f s",
 					    BC_GL_FENCE_TIMEOUT_S);
@@ -784,7 +957,7 @@ static int wait_fence(struct bc_renderer *r, struct bc_errinfo *ei)
 	return rc;
 }
 
-static double query_ms(struct bc_renderer *r, int a, int b)
+static double query_ms(struct gl_renderer *r, int a, int b)
 {
 	GLuint64 ta = 0, tb = 0;
 	r->ctx.gl.GetQueryObjectui64v(r->queries[a], GL_QUERY_RESULT, &ta);
@@ -792,42 +965,44 @@ static double query_ms(struct bc_renderer *r, int a, int b)
 	return tb > ta ? (double)(tb - ta) * 1e-6 : 0.0;
 }
 
-static int gl_render(struct bc_renderer *r, const struct bc_camera *cam,
-		     struct bc_frame *out, struct bc_render_stats *stats,
-		     struct bc_errinfo *ei)
+/* Draws region's pixels of the synced tree (see the file comment). The
+ * front checked the frame, the camera and the level, and zeroed stats. */
+static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
+		     struct bc_frame *out,
+		     const struct bc_render_region *region,
+		     struct bc_render_stats *stats, struct bc_errinfo *ei)
 {
+	struct gl_renderer *r = gl_of(base);
 	GladGLContext *gl;
 	struct bc__gl_frame_ubo u;
+	struct plan plan;
 	const struct bc_lin *l;
-	double t_start = now_ms();
+	double t_start = bc_render_now_ms();
 	uint32_t w, h, nprims, stat[BC_GL_STAT_WORDS], limit;
 	size_t npix;
 	int rc;
-	if (stats) {
-		memset(stats, 0, sizeof(*stats));
-	}
-	if (!r || !cam || !out || !out->rgba || out->width == 0 ||
-	    out->height == 0 || out->width > BC_RENDER_MAX_DIM ||
-	    out->height > BC_RENDER_MAX_DIM) {
-		return bc_errinfo_set(ei, BC_EINVAL, "render: bad frame");
-	}
 	if (!r->tree || !r->synced) {
 		return bc_errinfo_set(ei, BC_ESTATE,
 				      "render: no tree synced yet");
 	}
-	if ((rc = bc_camera_validate(cam, ei))) {
-		return rc;
+	w = out->width;
+	h = out->height;
+	npix = (size_t)w * h;
+	if (plan_region(r, region, w, h, &plan)) {
+		return bc_errinfo_set(ei, BC_ENOMEM,
+				      "gl: out of memory for a region");
+	}
+	if (plan.tiles == 0) {
+		return 0; /* no pixel asked: nothing to draw */
 	}
 	if ((rc = enter(r, ei))) {
 		return rc;
 	}
 	gl = &r->ctx.gl;
-	w = out->width;
-	h = out->height;
-	npix = (size_t)w * h;
 	l = bc_tree_lin(r->tree);
 	nprims = l ? r->nprims : 0;
 	frame_buffers(r, w, h);
+	upload_region(r, &plan, w, h);
 	if (r->want_cap) {
 		limit = frag_limit(r);
 		frag_buffers(r, r->want_cap < limit ? r->want_cap : limit,
@@ -850,12 +1025,16 @@ static int gl_render(struct bc_renderer *r, const struct bc_camera *cam,
 		uint32_t dispatches = 0, tiles;
 		bool fits, incomplete = false;
 		void *map;
-		frame_setup(&u, l, cam, w, h, r->debug, nprims, r->frag_cap,
-			    r->slots, r->budget);
+		frame_setup(&u, l, cam, w, h, base->opts.debug, nprims,
+			    r->frag_cap, r->slots, r->budget);
+		u.region[0] = plan.level;
+		u.region[1] = plan.refine ? 1u : 0u;
+		u.region[2] = plan.nlist;
+		u.region[3] = plan.list ? 1u : 0u;
 		tiles = u.size[2] * u.size[3];
-		draw(r, &u, nprims);
+		draw(r, &u, &plan, nprims);
 		if ((rc = bc__gl_check(&r->ctx, "drawing a frame", ei)) ||
-		    (rc = finish_tracing(r, &u, t_start, &dispatches,
+		    (rc = finish_tracing(r, &u, &plan, t_start, &dispatches,
 					 &incomplete, ei))) {
 			goto done;
 		}
@@ -882,23 +1061,13 @@ static int gl_render(struct bc_renderer *r, const struct bc_camera *cam,
 		fits = stat[BC_GL_STAT_FRAGMENTS] <= r->frag_cap &&
 		       stat[BC_GL_STAT_NO_SLOT] == 0;
 		if (fits) {
-			memcpy(out->rgba, map, 4 * npix);
-			if (out->depth) {
-				memcpy(out->depth, (const char *)map + 4 * npix,
-				       4 * npix);
-			}
-			if (out->ids) {
-				memcpy(out->ids, (const char *)map + 8 * npix,
-				       4 * npix);
-			}
+			copy_region(r, &plan, map, out);
 		}
 		gl->UnmapBuffer(GL_PIXEL_PACK_BUFFER);
 		gl->BindBuffer(GL_PIXEL_PACK_BUFFER, 0);
 		r->ctx.info.dispatches = dispatches;
 		if (fits) {
-			if (stats) {
-				stats->incomplete = incomplete;
-			}
+			stats->incomplete = incomplete;
 			break;
 		}
 		/* Too many fragments or suspended tiles: both counts are
@@ -958,29 +1127,131 @@ static int gl_render(struct bc_renderer *r, const struct bc_camera *cam,
 		bc_log(BC_LOG_DEBUG, "gl: %u depth ranges went over M_overlap",
 		       r->ctx.info.over_m);
 	}
-	if (stats) {
-		stats->ms_abuffer = query_ms(r, Q_START, Q_ABUFFER);
-		stats->ms_trace = query_ms(r, Q_ABUFFER, Q_TRACE);
-		stats->ms_upload = r->upload_ms;
-		stats->max_overlap = stat[BC_GL_STAT_MAX_OVERLAP];
-		for (uint32_t i = 0; i < BC_GL_STAT_EVAL_BUCKETS; i++) {
-			stats->field_evals += stat[BC_GL_STAT_EVALS + i];
-		}
+	stats->ms_abuffer = query_ms(r, Q_START, Q_ABUFFER);
+	stats->ms_trace = query_ms(r, Q_ABUFFER, Q_TRACE);
+	stats->ms_upload = r->upload_ms;
+	stats->max_overlap = stat[BC_GL_STAT_MAX_OVERLAP];
+	stats->tiles = plan.tiles;
+	stats->rays = plan.rays;
+	for (uint32_t i = 0; i < BC_GL_STAT_EVAL_BUCKETS; i++) {
+		stats->field_evals += stat[BC_GL_STAT_EVALS + i];
 	}
 	r->upload_ms = 0.0;
 	rc = bc__gl_check(&r->ctx, "reading a frame back", ei);
 done:
 	bc__gl_ctx_unbind(&r->ctx);
-	if (stats) {
-		stats->ms_total = now_ms() - t_start;
-	}
+	stats->ms_total = bc_render_now_ms() - t_start;
 	return rc;
 }
 
-int bc_render_gl_info(const struct bc_renderer *r, struct bc_gl_info *out)
+/* The backend's own frame constants: the scene scale the minimal step,
+ * the bisection tolerance and the A-buffer's margins derive from. */
+static uint64_t gl_key(struct bc_renderer *base, const struct bc_camera *cam,
+		       uint32_t width, uint32_t height)
 {
+	float scale = bc_render_scale(base->tree ? bc_tree_lin(base->tree)
+						 : NULL);
+	uint32_t bits;
+	(void)cam;
+	(void)width;
+	(void)height;
+	memcpy(&bits, &scale, sizeof(bits));
+	return bits;
+}
+
+/* The tiles abuffer.geom can give a primitive of world ABV abv: its AABB
+ * widened by the hit margin (common.glsl's bc_abv_margin), projected, and
+ * rounded out to tiles, with the shader's pixel of margin and one more
+ * for the difference between this float arithmetic and the driver's. A
+ * corner near or behind the eye plane marks every tile, as the shader
+ * lists every tile for an AABB straddling it; only an AABB wholly behind
+ * the eye, by a margin, marks nothing. Conservative: a tile the shader
+ * may list is always marked. */
+static void gl_damage(struct bc_renderer *base, const struct bc_camera *cam,
+		      uint32_t width, uint32_t height,
+		      const struct bc_abv *abv, uint8_t *tiles)
+{
+	uint32_t tw = bc_render_tiles_x(width), th = bc_render_tiles_y(height);
+	struct bc_view_rays vr;
+	float scale = bc_render_scale(base->tree ? bc_tree_lin(base->tree)
+						 : NULL);
+	float lo[3], hi[3], c[3], e[3], far, m, footprint;
+	double px0 = INFINITY, px1 = -INFINITY, py0 = INFINITY, py1 = -INFINITY;
+	double w = width, h = height;
+	uint32_t front = 0, behind = 0, x0, x1, y0, y1;
+	bc_view_rays_init(&vr, cam, width, height);
+	bc_abv_aabb(abv, lo, hi);
+	for (int i = 0; i < 3; i++) {
+		c[i] = 0.5f * (lo[i] + hi[i]) - vr.eye[i];
+		e[i] = 0.5f * (hi[i] - lo[i]);
+	}
+	far = sqrtf(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) +
+	      sqrtf(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+	footprint = 2.0f * vr.tan_half_y / (float)height;
+	m = 0.5f * footprint * far;
+	if (m < BC_GL_MIN_STEP_REL * scale) {
+		m = BC_GL_MIN_STEP_REL * scale;
+	}
+	/* 1.45 as the shader's BC_LIPSCHITZ, and a little more for
+	 * rounding. */
+	m *= 1.45f * 1.001f;
+	for (uint32_t k = 0; k < 8; k++) {
+		double v[3], z, sx, sy, s = 0.0;
+		for (int i = 0; i < 3; i++) {
+			double p = (k >> i) & 1u ? (double)hi[i] + m
+						 : (double)lo[i] - m;
+			v[i] = p - vr.eye[i];
+			s += fabs(v[i]);
+		}
+		z = v[0] * vr.forward[0] + v[1] * vr.forward[1] +
+		    v[2] * vr.forward[2];
+		if (z < 0.0) {
+			behind++;
+		}
+		if (!(z > 1.0e-5 * s)) {
+			continue;
+		}
+		front++;
+		sx = (v[0] * vr.right[0] + v[1] * vr.right[1] +
+		      v[2] * vr.right[2]) /
+		     (z * vr.tan_half_y * vr.aspect);
+		sy = (v[0] * vr.up[0] + v[1] * vr.up[1] + v[2] * vr.up[2]) /
+		     (z * vr.tan_half_y);
+		px0 = fmin(px0, (sx + 1.0) * 0.5 * w);
+		px1 = fmax(px1, (sx + 1.0) * 0.5 * w);
+		py0 = fmin(py0, (1.0 - sy) * 0.5 * h);
+		py1 = fmax(py1, (1.0 - sy) * 0.5 * h);
+	}
+	if (behind == 8) {
+		return;
+	}
+	if (front < 8 || !isfinite(px0) || !isfinite(px1) || !isfinite(py0) ||
+	    !isfinite(py1)) {
+		memset(tiles, 1, (size_t)tw * th);
+		return;
+	}
+	px0 = fmax(px0 - 2.5, 0.0);
+	py0 = fmax(py0 - 2.5, 0.0);
+	px1 = fmin(px1 + 1.5, w - 1.0);
+	py1 = fmin(py1 + 1.5, h - 1.0);
+	if (!(px0 <= px1 && py0 <= py1)) {
+		return;
+	}
+	x0 = (uint32_t)px0 / BC_GL_TILE;
+	y0 = (uint32_t)py0 / BC_GL_TILE;
+	x1 = (uint32_t)px1 / BC_GL_TILE + 1;
+	y1 = (uint32_t)py1 / BC_GL_TILE + 1;
+	for (uint32_t ty = y0; ty < y1 && ty < th; ty++) {
+		memset(tiles + (size_t)ty * tw + x0, 1,
+		       (x1 < tw ? x1 : tw) - x0);
+	}
+}
+
+int bc_render_gl_info(const struct bc_renderer *base, struct bc_gl_info *out)
+{
+	const struct gl_renderer *r = (const struct gl_renderer *)base;
 	memset(out, 0, sizeof(*out));
-	if (!r) {
+	if (!base || base->ops != &bc_backend_gl_ops) {
 		return BC_EINVAL;
 	}
 	*out = r->ctx.info;
@@ -991,12 +1262,12 @@ int bc_render_gl_info(const struct bc_renderer *r, struct bc_gl_info *out)
 	return 0;
 }
 
-int bc_render_gl_set_capacity(struct bc_renderer *r, uint32_t fragments)
+int bc_render_gl_set_capacity(struct bc_renderer *base, uint32_t fragments)
 {
-	if (!r || fragments == 0) {
+	if (!base || base->ops != &bc_backend_gl_ops || fragments == 0) {
 		return BC_EINVAL;
 	}
-	r->want_cap = fragments;
+	gl_of(base)->want_cap = fragments;
 	return 0;
 }
 
@@ -1006,4 +1277,6 @@ const struct bc_backend_ops bc_backend_gl_ops = {
 	.destroy = gl_destroy,
 	.sync = gl_sync,
 	.render = gl_render,
+	.key = gl_key,
+	.damage = gl_damage,
 };

@@ -1,8 +1,8 @@
 /*
  * What the files of the gl backend share: the context (EGL device or
  * surfaceless display, or OSMesa) with its loaded GL entry points and what
- * the driver granted; the renderer object; the constants, buffer bindings
- * and layouts that shaders/common.glsl mirrors.
+ * the driver granted; the constants, buffer bindings and layouts that
+ * shaders/common.glsl mirrors.
  *
  * GL entry points come from glad, generated at build time in its
  * multi-context form: each context holds its own table (struct
@@ -85,6 +85,7 @@ enum bc__gl_buf {
 	BC__GL_BUF_SORTED,
 	BC__GL_BUF_SCRATCH,
 	BC__GL_BUF_STATS,
+	BC__GL_BUF_REGION, /* a region's tile list and tile bits */
 	BC__GL_BUF_COUNT
 };
 
@@ -103,11 +104,12 @@ struct bc__gl_frame_ubo {
 	uint32_t size[4]; /* width, height, tiles across, tiles down */
 	uint32_t counts[4]; /* primitives, fragment capacity, debug mode */
 	uint32_t pool[4];   /* slot base (scratch words), slots, budget */
+	uint32_t region[4]; /* level, refine, tiles listed, list used */
 };
 
-/* Suspension slots (trace.comp): 8 words for the tile's walk and 4 per
- * ray. */
-#define BC_GL_SLOT_WORDS (8u + 4u * 64u)
+/* Suspension slots (trace.comp): 8 words for the tile's walk and 8 per
+ * ray (flags, the pending hit, a paused ray's sphere tracing state). */
+#define BC_GL_SLOT_WORDS (8u + 8u * 64u)
 
 /* ---- Context ------------------------------------------------------------ */
 

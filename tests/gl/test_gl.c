@@ -5,8 +5,10 @@
  * parameter edit then a frame equals a fresh load of the edited scene bit
  * for bit and sends only the edited bytes, the overflow paths (M_overlap,
  * the node cache, the A-buffer's capacity) still draw the right picture,
- * the three platforms draw the same, and the debug modes and odd frame
- * sizes mean what they mean on the CPU.
+ * the three platforms draw the same, the debug modes and odd frame sizes
+ * mean what they mean on the CPU, and frames assembled from regions
+ * (refinement levels, tile masks, damage after random parameter edits)
+ * equal whole renders bit for bit.
  *
  * Sizes stay small: llvmpipe shares two cores with everything else. Every
  * test is skipped (exit 77) only when no GL context can be created at all.
@@ -19,15 +21,11 @@
 #include "blobcast/gen.h"
 #include "blobcast/render.h"
 #include "blobcast/render_gl.h"
+#include "blobtree/randtree.h"
 #include "test.h"
 
 #define W 64
 #define H 64
-
-static const struct bc_backend_ops *gl_ops(void)
-{
-	return bc_backend_get(BC_BACKEND_GL);
-}
 
 /* A renderer on platform (NULL: auto), or NULL with the reason printed. */
 static struct bc_renderer *open_gl(const char *platform, enum bc_debug_mode dbg)
@@ -35,7 +33,7 @@ static struct bc_renderer *open_gl(const char *platform, enum bc_debug_mode dbg)
 	struct bc_render_opts o = {.gl_platform = platform, .debug = dbg};
 	struct bc_errinfo ei = {0};
 	struct bc_renderer *r = NULL;
-	if (!gl_ops() || gl_ops()->create(&r, &o, &ei)) {
+	if (bc_renderer_create(&r, BC_BACKEND_GL, &o, &ei)) {
 		fprintf(stderr, "  no gl context (%s): %s\n",
 			platform ? platform : "auto", ei.msg);
 		return NULL;
@@ -48,9 +46,9 @@ static int draw(struct bc_renderer *r, const struct bc_tree *t,
 		struct bc_frame *f)
 {
 	struct bc_errinfo ei = {0};
-	int rc = gl_ops()->sync(r, t, dirty, &ei);
+	int rc = bc_renderer_sync(r, t, dirty, &ei);
 	if (rc == 0) {
-		rc = gl_ops()->render(r, cam, f, NULL, &ei);
+		rc = bc_renderer_render(r, cam, f, NULL, &ei);
 	}
 	if (rc) {
 		fprintf(stderr, "  gl: %s\n", ei.msg);
@@ -237,7 +235,7 @@ static void test_families_agree_with_tiled(void)
 	bc_frame_finish(&g);
 	bc_frame_finish(&c);
 	bc_tree_destroy(t);
-	gl_ops()->destroy(r);
+	bc_renderer_destroy(r);
 }
 
 /* ---- Edits --------------------------------------------------------------- */
@@ -254,7 +252,7 @@ static int fresh(const struct bc_tree *t, const struct bc_camera *cam,
 	}
 	bc_tree_destroy(copy);
 	if (r) {
-		gl_ops()->destroy(r);
+		bc_renderer_destroy(r);
 	}
 	return rc;
 }
@@ -351,7 +349,7 @@ static void test_param_edit_equals_fresh_load(void)
 	bc_frame_finish(&a);
 	bc_frame_finish(&b);
 	bc_tree_destroy(t);
-	gl_ops()->destroy(r);
+	bc_renderer_destroy(r);
 }
 
 /* ---- Limits --------------------------------------------------------------- */
@@ -442,9 +440,9 @@ static void test_overflows_degrade_not_fail(void)
 		struct bc_render_stats st;
 		struct bc_errinfo ei = {0};
 		uint32_t bg = 0, wrong = 0;
-		REQUIRE(gl_ops()->create(&rb, &o, &ei) == 0);
-		REQUIRE(gl_ops()->sync(rb, t, NULL, &ei) == 0);
-		REQUIRE(gl_ops()->render(rb, &cam, &again, &st, &ei) == 0);
+		REQUIRE(bc_renderer_create(&rb, BC_BACKEND_GL, &o, &ei) == 0);
+		REQUIRE(bc_renderer_sync(rb, t, NULL, &ei) == 0);
+		REQUIRE(bc_renderer_render(rb, &cam, &again, &st, &ei) == 0);
 		CHECK(st.incomplete);
 		for (size_t i = 0; i < 32 * 32; i++) {
 			if (memcmp(again.rgba + 4 * i, g.rgba + 4 * i, 4) == 0) {
@@ -459,13 +457,13 @@ static void test_overflows_degrade_not_fail(void)
 		}
 		CHECK(bg > 0);
 		CHECK_EQ_INT(wrong, 0);
-		gl_ops()->destroy(rb);
+		bc_renderer_destroy(rb);
 	}
 	bc_frame_finish(&g);
 	bc_frame_finish(&c);
 	bc_frame_finish(&again);
 	bc_tree_destroy(t);
-	gl_ops()->destroy(r);
+	bc_renderer_destroy(r);
 }
 
 /* n small spheres on the view axis, one behind the other: every tile near
@@ -513,8 +511,8 @@ static void test_long_tile_lists(void)
 	REQUIRE(queue(t, 1200) == 0);
 	bc_camera_default(&cam);
 	cam.fov_y_deg = 4.0f;
-	REQUIRE(gl_ops()->sync(r, t, NULL, &ei) == 0);
-	REQUIRE(gl_ops()->render(r, &cam, &g, &st, &ei) == 0);
+	REQUIRE(bc_renderer_sync(r, t, NULL, &ei) == 0);
+	REQUIRE(bc_renderer_render(r, &cam, &g, &st, &ei) == 0);
 	/* Past the 1024 sorted in shared memory: the heap sort's lists. */
 	printf("  longest tile list %u\n", st.max_overlap);
 	CHECK(st.max_overlap > 1024);
@@ -527,7 +525,381 @@ static void test_long_tile_lists(void)
 	bc_frame_finish(&g);
 	bc_frame_finish(&c);
 	bc_tree_destroy(t);
-	gl_ops()->destroy(r);
+	bc_renderer_destroy(r);
+}
+
+/* ---- Regions -------------------------------------------------------------- */
+
+/* Pixels where a and b differ in colour, depth or id (bit for bit). */
+static uint32_t mismatches(const struct bc_frame *a, const struct bc_frame *b)
+{
+	size_t n = (size_t)a->width * a->height;
+	uint32_t bad = 0;
+	for (size_t i = 0; i < n; i++) {
+		bad += memcmp(a->rgba + 4 * i, b->rgba + 4 * i, 4) != 0 ||
+		       memcmp(&a->depth[i], &b->depth[i], 4) != 0 ||
+		       a->ids[i] != b->ids[i];
+	}
+	return bad;
+}
+
+/* Fills every plane with a pattern no render produces. */
+static void scribble(struct bc_frame *f)
+{
+	size_t n = (size_t)f->width * f->height;
+	memset(f->rgba, 0xa5, 4 * n);
+	memset(f->depth, 0xa5, 4 * n);
+	memset(f->ids, 0xa5, 4 * n);
+}
+
+static int draw_region(struct bc_renderer *r, const struct bc_camera *cam,
+		       struct bc_frame *f, const uint8_t *tiles,
+		       uint32_t level, bool refine,
+		       struct bc_render_stats *st)
+{
+	struct bc_render_region reg = {tiles, level, refine};
+	struct bc_errinfo ei = {0};
+	int rc = bc_renderer_render_region(r, cam, f, &reg, st, &ei);
+	if (rc) {
+		fprintf(stderr, "  gl region: %s\n", ei.msg);
+	}
+	return rc;
+}
+
+/* Level 3, then 2, 1, 0 refining: once over every tile, and once more
+ * with each level split between two random halves of the tiles. Both
+ * must give the whole frame bit for bit, and draw nothing twice. Returns
+ * the mismatching pixels. */
+static uint32_t refine_vs_whole(struct bc_renderer *r,
+				const struct bc_camera *cam, uint32_t w,
+				uint32_t h, uint32_t *frames)
+{
+	struct bc_frame ref = {0}, acc = {0};
+	uint32_t tw = bc_render_tiles_x(w), th = bc_render_tiles_y(h);
+	uint8_t *half = calloc((size_t)tw * th, 1);
+	uint32_t bad = 0;
+	if (!half || bc_frame_init(&ref, w, h) || bc_frame_init(&acc, w, h)) {
+		bad = w * h;
+		goto out;
+	}
+	if (bc_renderer_render(r, cam, &ref, NULL, NULL)) {
+		bad = w * h;
+		goto out;
+	}
+	for (int split = 0; split < 2; split++) {
+		uint64_t rays = 0;
+		scribble(&acc);
+		acc.key = 0;
+		for (int level = 3; level >= 0; level--) {
+			struct bc_render_stats st;
+			bool refine = level < 3;
+			if (!split || level == 3) {
+				if (draw_region(r, cam, &acc, NULL,
+						(uint32_t)level, refine, &st)) {
+					bad = w * h;
+					goto out;
+				}
+				CHECK(!st.whole);
+				rays += st.rays;
+				continue;
+			}
+			for (size_t i = 0; i < (size_t)tw * th; i++) {
+				half[i] = (uint8_t)rt_below(2);
+			}
+			for (int pass = 0; pass < 2; pass++) {
+				if (draw_region(r, cam, &acc, half,
+						(uint32_t)level, refine, &st)) {
+					bad = w * h;
+					goto out;
+				}
+				CHECK(!st.whole);
+				rays += st.rays;
+				for (size_t i = 0; i < (size_t)tw * th; i++) {
+					half[i] = !half[i];
+				}
+			}
+		}
+		CHECK_EQ_INT(rays, (uint64_t)w * h); /* each pixel once */
+		bad += mismatches(&acc, &ref);
+		(*frames)++;
+	}
+out:
+	free(half);
+	bc_frame_finish(&ref);
+	bc_frame_finish(&acc);
+	return bad;
+}
+
+static void test_refinement_equals_whole(void)
+{
+	static const uint32_t sizes[][2] = {{64, 48}, {37, 23}, {24, 16}};
+	struct bc_renderer *r = open_gl(NULL, BC_DEBUG_NONE);
+	struct bc_tree *t = bc_tree_create();
+	struct bc_camera cam;
+	struct bc_errinfo ei = {0};
+	uint32_t bad = 0, frames = 0;
+	if (!r) {
+		bc_tree_destroy(t);
+		BC_SKIP("no GL context");
+	}
+	REQUIRE(t);
+	rt_state = 7;
+	for (int scene = 0; scene < 3; scene++) {
+		if (scene == 0) {
+			REQUIRE(bc_gen("fig18",
+				       &(struct bc_gen_opts){.count = 27}, t,
+				       &cam, &ei) == 0);
+		} else if (scene == 1) {
+			REQUIRE(rt_build(t, 11, 14) == 0);
+			bc_camera_default(&cam);
+		} else {
+			/* Dense tiles: on llvmpipe they pause and suspend,
+			 * at other points with fewer rays asked. */
+			REQUIRE(crowd(t, 160) == 0);
+			bc_camera_default(&cam);
+		}
+		REQUIRE(bc_renderer_sync(r, t, NULL, &ei) == 0);
+		{
+			uint32_t w = sizes[scene][0], h = sizes[scene][1];
+			uint32_t b = refine_vs_whole(r, &cam, w, h, &frames);
+			struct bc_gl_info info;
+			REQUIRE(bc_render_gl_info(r, &info) == 0);
+			printf("  scene %d at %ux%u: %u pixels differ; last "
+			       "render %u dispatches, %u suspensions\n",
+			       scene, w, h, b, info.dispatches,
+			       info.suspensions);
+			bad += b;
+		}
+	}
+	printf("  %u refined frames compared with whole ones, %u pixels "
+	       "differ\n", frames, bad);
+	CHECK_EQ_INT(bad, 0);
+	CHECK_EQ_INT(frames, 6);
+
+	/* Pixels a region does not ask for keep what the frame held. */
+	{
+		struct bc_frame ref = {0}, f = {0};
+		uint32_t tw = bc_render_tiles_x(37), th = bc_render_tiles_y(23);
+		uint8_t tiles[5 * 3] = {0};
+		uint32_t kept = 0, drawn = 0, wrong = 0;
+		REQUIRE(tw * th == sizeof(tiles));
+		REQUIRE(bc_frame_init(&ref, 37, 23) == 0 &&
+			bc_frame_init(&f, 37, 23) == 0);
+		REQUIRE(rt_build(t, 11, 14) == 0);
+		REQUIRE(draw(r, t, NULL, &cam, &ref) == 0);
+		REQUIRE(bc_renderer_render(r, &cam, &f, NULL, &ei) == 0);
+		scribble(&f); /* the key stays: the region is drawn as one */
+		tiles[1] = tiles[7] = tiles[14] = 1;
+		REQUIRE(draw_region(r, &cam, &f, tiles, 1, true, NULL) == 0);
+		for (uint32_t y = 0; y < 23; y++) {
+			for (uint32_t x = 0; x < 37; x++) {
+				size_t i = (size_t)y * 37 + x;
+				bool asked = tiles[(y / 8) * tw + x / 8] &&
+					     bc_render_level_has(x, y, 1,
+								 true);
+				if (asked) {
+					drawn++;
+					wrong += memcmp(f.rgba + 4 * i,
+							ref.rgba + 4 * i,
+							4) != 0 ||
+						 f.ids[i] != ref.ids[i];
+				} else {
+					kept++;
+					wrong += f.ids[i] != 0xa5a5a5a5u;
+				}
+			}
+		}
+		CHECK(drawn > 0 && kept > 0);
+		CHECK_EQ_INT(wrong, 0);
+		bc_frame_finish(&ref);
+		bc_frame_finish(&f);
+	}
+	bc_tree_destroy(t);
+	bc_renderer_destroy(r);
+}
+
+/* Marks in tiles the damage of primitives [k0, k1) with ABVs before and
+ * after an edit. */
+static void mark_damage(struct bc_renderer *r, const struct bc_camera *cam,
+			uint32_t w, uint32_t h, const struct bc_abv *before,
+			const struct bc_abv *after, uint32_t k0, uint32_t k1,
+			uint8_t *tiles)
+{
+	for (uint32_t k = k0; k < k1; k++) {
+		bc_renderer_damage(r, cam, w, h, &before[k], tiles);
+		bc_renderer_damage(r, cam, w, h, &after[k], tiles);
+	}
+}
+
+/* One random parameter edit of a random node of t (a primitive three
+ * times in four): a primitive moves (a little, or far: then the tiles it
+ * leaves must be redrawn too), grows or shrinks and may change colour; an
+ * operator changes its blend or its kind. [*k0, *k1) receives the
+ * primitives whose ABVs can change. Returns 0, or non-zero when the tree
+ * refused the edit. */
+static int random_edit(struct bc_tree *t, uint32_t *k0, uint32_t *k1)
+{
+	const struct bc_lin *l = bc_tree_lin(t);
+	uint32_t s = rt_below(4) ? l->prim_slot[rt_below(l->nprims)]
+				 : rt_below(l->count);
+	uint32_t id = l->node_id[s], top;
+	struct bc_prim_data p;
+	struct bc_op_data op;
+	if (!bc_tree_get(t, id, &p, &op)) {
+		return -1;
+	}
+	top = bc_tree_slot(t, id);
+	*k0 = l->prim_of[l->first[top]];
+	*k1 = *k0 + (top - l->first[top]) / 2 + 1;
+	if (p.kind != BC_PRIM_INVALID) {
+		bool far = rt_below(3) == 0;
+		for (int i = 0; i < 3; i++) {
+			p.translate[i] = far ? rt_float(-1.5f, 1.5f)
+					     : p.translate[i] +
+						       rt_float(-0.15f, 0.15f);
+		}
+		float grow = rt_float(0.85f, 1.15f);
+		for (int i = 0; i < BC_PRIM_MAX_PARAMS; i++) {
+			p.params[i] *= grow; /* lengths, for the kinds here */
+		}
+		if (rt_below(3) == 0) {
+			p.has_color = true;
+			p.color[rt_below(3)] = rt_float(0.0f, 1.0f);
+		}
+		return bc_tree_set_prim(t, id, &p, NULL);
+	}
+	if (rt_below(2) == 0) {
+		rt_random_op(&op); /* another kind, perhaps another class */
+	} else if (bc_op_is_smooth(op.kind)) {
+		op.blend *= rt_float(0.7f, 1.4f);
+		op.range = op.blend * rt_float(1.2f, 2.0f);
+	}
+	return bc_tree_set_op(t, id, &op, NULL);
+}
+
+static void test_damage_regions_equal_whole(void)
+{
+	/* Small frames: llvmpipe's cost is per tile, whatever the pixels
+	 * asked (docs/gl.md), and two renders per edit add up. */
+	static const uint32_t sizes[][2] = {{48, 32}, {37, 27}};
+	struct bc_renderer *r = open_gl(NULL, BC_DEBUG_NONE);
+	struct bc_tree *t = bc_tree_create();
+	struct bc_frame acc = {0}, ref = {0};
+	struct bc_camera cam;
+	struct bc_errinfo ei = {0};
+	struct bc_abv *before = NULL;
+	uint8_t *tiles = NULL;
+	uint32_t tried = 0, refused = 0, frames = 0, regions = 0, bad = 0;
+	uint64_t tiles_drawn = 0, tiles_all = 0;
+	double ms_region = 0.0, ms_whole = 0.0;
+	if (!r) {
+		bc_tree_destroy(t);
+		BC_SKIP("no GL context");
+	}
+	REQUIRE(t);
+	rt_state = 3;
+	for (int scene = 0; scene < 4; scene++) {
+		uint32_t w = sizes[scene % 2][0], h = sizes[scene % 2][1];
+		uint32_t ntiles = bc_render_tiles_x(w) * bc_render_tiles_y(h);
+		const struct bc_lin *l;
+		switch (scene) {
+		case 0:
+			REQUIRE(bc_gen("fig18",
+				       &(struct bc_gen_opts){
+					       .count = 8,
+					       .kind = BC_GEN_KIND_SPHERES},
+				       t, &cam, &ei) == 0);
+			break;
+		case 1:
+			REQUIRE(bc_gen("fig18",
+				       &(struct bc_gen_opts){
+					       .count = 8,
+					       .kind = BC_GEN_KIND_SPHERES,
+					       .blend = BC_GEN_BLEND_SHARP},
+				       t, &cam, &ei) == 0);
+			break;
+		default:
+			REQUIRE(rt_build(t, 100 + (uint64_t)scene, 12) == 0);
+			bc_camera_default(&cam);
+			break;
+		}
+		l = bc_tree_lin(t);
+		REQUIRE(l);
+		bc_frame_finish(&acc);
+		bc_frame_finish(&ref);
+		free(before);
+		free(tiles);
+		before = calloc(l->nprims, sizeof(*before));
+		tiles = calloc(ntiles, 1);
+		REQUIRE(before && tiles && bc_frame_init(&acc, w, h) == 0 &&
+			bc_frame_init(&ref, w, h) == 0);
+		{
+			struct bc_dirty clean;
+			bc_tree_take_dirty(t, &clean);
+		}
+		REQUIRE(draw(r, t, NULL, &cam, &acc) == 0);
+		for (int e = 0; e < 50; e++) {
+			struct bc_render_stats st;
+			struct bc_dirty dirty;
+			uint32_t k0, k1, lo, hi, b;
+			memcpy(before, l->abv, l->nprims * sizeof(*before));
+			tried++;
+			if (random_edit(t, &k0, &k1)) {
+				refused++;
+				continue;
+			}
+			bc_tree_take_dirty(t, &dirty);
+			REQUIRE(!dirty.structure);
+			REQUIRE(bc_renderer_sync(r, t, &dirty, &ei) == 0);
+			l = bc_tree_lin(t);
+			lo = dirty.prim_lo < dirty.prim_hi && dirty.prim_lo < k0
+				     ? dirty.prim_lo
+				     : k0;
+			hi = dirty.prim_lo < dirty.prim_hi && dirty.prim_hi > k1
+				     ? dirty.prim_hi
+				     : k1;
+			memset(tiles, 0, ntiles);
+			mark_damage(r, &cam, w, h, before, l->abv, lo, hi,
+				    tiles);
+			REQUIRE(draw_region(r, &cam, &acc, tiles, 0, false,
+					    &st) == 0);
+			ms_region += st.ms_total;
+			if (!st.whole) {
+				regions++;
+				tiles_drawn += st.tiles;
+				tiles_all += ntiles;
+			}
+			REQUIRE(bc_renderer_render(r, &cam, &ref, &st, &ei) ==
+				0);
+			ms_whole += st.ms_total;
+			b = mismatches(&acc, &ref);
+			if (b) {
+				fprintf(stderr,
+					"  scene %d edit %d (node range "
+					"%u..%u): %u pixels differ\n",
+					scene, e, lo, hi, b);
+			}
+			bad += b;
+			frames++;
+		}
+	}
+	printf("  %u edits tried (%u refused), %u frames compared, %u drawn "
+	       "as regions (%.0f %% of the tiles), %u pixels differ; "
+	       "%.1f ms per region, %.1f ms per whole frame\n",
+	       tried, refused, frames, regions,
+	       tiles_all ? 100.0 * (double)tiles_drawn / (double)tiles_all
+			 : 0.0,
+	       bad, frames ? ms_region / frames : 0.0,
+	       frames ? ms_whole / frames : 0.0);
+	CHECK_EQ_INT(bad, 0);
+	CHECK(frames >= tried * 3 / 4);
+	CHECK(regions >= frames / 2);
+	bc_frame_finish(&acc);
+	bc_frame_finish(&ref);
+	free(before);
+	free(tiles);
+	bc_tree_destroy(t);
+	bc_renderer_destroy(r);
 }
 
 /* ---- Platforms -------------------------------------------------------------- */
@@ -546,8 +918,9 @@ static void test_platforms_draw_the_same(void)
 		bc_frame_init(&f, 32, 32) == 0);
 	REQUIRE(bc_gen("fig18", &(struct bc_gen_opts){.count = 27}, t, &cam,
 		       NULL) == 0);
-	if (gl_ops()) {
-		CHECK(gl_ops()->create(&r, &bad, &ei) == BC_EINVAL);
+	if (bc_backend_available(BC_BACKEND_GL)) {
+		CHECK(bc_renderer_create(&r, BC_BACKEND_GL, &bad, &ei) ==
+		      BC_EINVAL);
 		CHECK(r == NULL);
 	}
 	for (size_t i = 0; i < 3; i++) {
@@ -576,7 +949,7 @@ static void test_platforms_draw_the_same(void)
 			CHECK(frames_equal(&ref, &f));
 		}
 		any = true;
-		gl_ops()->destroy(pr);
+		bc_renderer_destroy(pr);
 	}
 	bc_frame_finish(&ref);
 	bc_frame_finish(&f);
@@ -599,10 +972,10 @@ static void test_debug_modes_match_cpu(void)
 	uint32_t ramp_px = 0;
 	if (!ov || !ev) {
 		if (ov) {
-			gl_ops()->destroy(ov);
+			bc_renderer_destroy(ov);
 		}
 		if (ev) {
-			gl_ops()->destroy(ev);
+			bc_renderer_destroy(ev);
 		}
 		bc_tree_destroy(t);
 		BC_SKIP("no GL context");
@@ -630,8 +1003,8 @@ static void test_debug_modes_match_cpu(void)
 	bc_frame_finish(&g);
 	bc_frame_finish(&c);
 	bc_tree_destroy(t);
-	gl_ops()->destroy(ov);
-	gl_ops()->destroy(ev);
+	bc_renderer_destroy(ov);
+	bc_renderer_destroy(ev);
 }
 
 static void test_odd_sizes_and_empty_scene(void)
@@ -661,9 +1034,9 @@ static void test_odd_sizes_and_empty_scene(void)
 	rgba = malloc(4 * 37 * 23);
 	REQUIRE(rgba);
 	{
-		struct bc_frame only = {37, 23, rgba, NULL, NULL};
+		struct bc_frame only = {37, 23, rgba, NULL, NULL, 0};
 		struct bc_errinfo ei = {0};
-		CHECK(gl_ops()->render(r, &cam, &only, NULL, &ei) == 0);
+		CHECK(bc_renderer_render(r, &cam, &only, NULL, &ei) == 0);
 		CHECK(memcmp(rgba, g.rgba, 4 * 37 * 23) == 0);
 	}
 	free(rgba);
@@ -681,7 +1054,7 @@ static void test_odd_sizes_and_empty_scene(void)
 	bc_frame_finish(&g);
 	bc_frame_finish(&c);
 	bc_tree_destroy(t);
-	gl_ops()->destroy(r);
+	bc_renderer_destroy(r);
 }
 
 static void test_bad_calls_are_refused(void)
@@ -697,28 +1070,38 @@ static void test_bad_calls_are_refused(void)
 	}
 	REQUIRE(bc_frame_init(&f, 16, 16) == 0);
 	bc_camera_default(&cam);
-	CHECK(gl_ops()->create(&nr, &bad_dbg, &ei) == BC_EENUM && !nr);
-	CHECK(gl_ops()->render(r, &cam, &f, NULL, &ei) == BC_ESTATE);
-	CHECK(gl_ops()->sync(r, NULL, NULL, &ei) == BC_EINVAL);
+	CHECK(bc_renderer_create(&nr, BC_BACKEND_GL, &bad_dbg, &ei) ==
+		      BC_EENUM &&
+	      !nr);
+	CHECK(bc_renderer_render(r, &cam, &f, NULL, &ei) == BC_ESTATE);
+	CHECK(bc_renderer_sync(r, NULL, NULL, &ei) == BC_EINVAL);
 	{
 		struct bc_tree *t = bc_tree_create();
 		REQUIRE(t);
 		REQUIRE(bc_gen("comb", &(struct bc_gen_opts){.count = 4}, t,
 			       &cam, NULL) == 0);
-		CHECK(gl_ops()->sync(r, t, NULL, &ei) == 0);
-		CHECK(gl_ops()->render(r, &cam, &zero, NULL, &ei) == BC_EINVAL);
+		CHECK(bc_renderer_sync(r, t, NULL, &ei) == 0);
+		CHECK(bc_renderer_render(r, &cam, &zero, NULL, &ei) ==
+		      BC_EINVAL);
 		same = cam;
 		memcpy(same.target, same.eye, sizeof(same.eye));
-		CHECK(gl_ops()->render(r, &same, &f, NULL, &ei) == BC_ERANGE);
-		if (gl_ops()->render(r, &cam, &f, NULL, &ei) != 0) {
+		CHECK(bc_renderer_render(r, &same, &f, NULL, &ei) == BC_ERANGE);
+		if (bc_renderer_render(r, &cam, &f, NULL, &ei) != 0) {
 			fprintf(stderr, "  render: %s\n", ei.msg);
 			CHECK(0);
 		}
 		bc_tree_destroy(t);
 	}
-	gl_ops()->destroy(NULL);
+	bc_renderer_destroy(NULL);
+	/* The gl calls refuse another backend's renderer. */
+	if (bc_renderer_create(&nr, BC_BACKEND_TILED, NULL, &ei) == 0) {
+		struct bc_gl_info info;
+		CHECK(bc_render_gl_info(nr, &info) == BC_EINVAL);
+		CHECK(bc_render_gl_set_capacity(nr, 64) == BC_EINVAL);
+		bc_renderer_destroy(nr);
+	}
 	bc_frame_finish(&f);
-	gl_ops()->destroy(r);
+	bc_renderer_destroy(r);
 }
 
 static const struct bc_test tests[] = {
@@ -729,6 +1112,8 @@ static const struct bc_test tests[] = {
 	{"platforms_draw_the_same", test_platforms_draw_the_same},
 	{"debug_modes_match_cpu", test_debug_modes_match_cpu},
 	{"odd_sizes_and_empty_scene", test_odd_sizes_and_empty_scene},
+	{"refinement_equals_whole", test_refinement_equals_whole},
+	{"damage_regions_equal_whole", test_damage_regions_equal_whole},
 	{"bad_calls_are_refused", test_bad_calls_are_refused},
 };
 

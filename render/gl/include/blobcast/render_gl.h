@@ -2,8 +2,8 @@
  * The OpenGL backend (backend name "gl"): Zanni 2024's synchronized tracing
  * as OpenGL 4.3+ compute work, on a context from the EGL device platform (a
  * real GPU), EGL surfaceless (Mesa llvmpipe on CPU-only hosts) or OSMesa.
- * It sits behind struct bc_backend_ops like every backend; this header adds
- * what only it can say: which platform and driver it got, what the driver
+ * It is created and driven through blobcast/render.h's front like every
+ * backend (BC_BACKEND_GL); this header adds what only it can say: which platform and driver it got, what the driver
  * granted, and the limits the last frame ran into.
  */
 #ifndef BLOBCAST_RENDER_GL_H
@@ -63,14 +63,15 @@ struct bc_gl_info {
 	uint64_t upload_bytes;   /* bytes the last sync sent */
 };
 
-/* Fills *out for r, which must come from bc_backend_gl_ops. Returns 0 or
- * BC_EINVAL. */
+/* Fills *out for r, a renderer of backend BC_BACKEND_GL. Returns 0, or
+ * BC_EINVAL (with *out zeroed) for NULL or another backend's renderer. */
 int bc_render_gl_info(const struct bc_renderer *r, struct bc_gl_info *out);
 
 /* Sets the A-buffer's fragment capacity for the next frame (at least 1,
  * at most the backend's limit). Frames that need more grow it and draw
  * again by themselves, so this only serves tests of that path and callers
- * that know their scenes' needs in advance. Returns 0 or BC_EINVAL. */
+ * that know their scenes' needs in advance. Returns 0, or BC_EINVAL for
+ * fragments == 0, NULL or another backend's renderer. */
 int bc_render_gl_set_capacity(struct bc_renderer *r, uint32_t fragments);
 
 #endif
