@@ -595,7 +595,7 @@ static void track(struct bc_client *c, const struct bc_msg *m)
 			drop_scene(c, "an edit order was skipped");
 			break;
 		}
-		if (bc__client_replay(c->scene, &m->edit_applied, &ei)) {
+		if (bc__client_replay(&c->scene, &m->edit_applied, &ei)) {
 			drop_scene(c, ei.msg);
 			break;
 		}

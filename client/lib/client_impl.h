@@ -31,10 +31,10 @@ struct bc_client {
 /* Milliseconds of a monotonic clock. */
 double bc__client_now_ms(void);
 
-/* Replays the operations of an EDIT_APPLIED on a scene mirror, in order.
- * Returns 0 or the first operation's error with the reason in ei; the tree
- * may then be partly edited (the caller drops it). */
-int bc__client_replay(struct bc_tree *t, const struct bc_msg_edit_applied *ea,
+/* Replays the operations of an EDIT_APPLIED on a scene mirror, atomically
+ * (bc_edit_replay). Returns 0 or the failing operation's error with the
+ * reason in ei; *t is then unchanged (the caller drops it). */
+int bc__client_replay(struct bc_tree **t, const struct bc_msg_edit_applied *ea,
 		      struct bc_errinfo *ei);
 
 #endif

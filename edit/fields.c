@@ -1,0 +1,195 @@
+/*
+ * The meaning of SET fields (PROTOCOL.md section 9) and of one operation on
+ * a tree. The daemon applies edits with these functions and every mirror
+ * replays them with the same ones: one mapping, so mirrors cannot drift.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "blobcast/alloc.h"
+#include "blobcast/edit.h"
+#include "blobcast/scene.h"
+
+/* Where field f of a primitive lands and how many values it takes, or NULL
+ * when it does not apply to p's kind. */
+static float *prim_field(struct bc_prim_data *p, uint8_t f, uint32_t *want)
+{
+	const struct bc_prim_info *info = bc_prim_info(p->kind);
+	switch (f) {
+	case BC_PROTO_FIELD_TRANSLATE:
+		*want = 3;
+		return p->translate;
+	case BC_PROTO_FIELD_ROTATE:
+		*want = 4;
+		return p->rotate;
+	case BC_PROTO_FIELD_COLOR:
+		*want = 3;
+		return p->color;
+	default:
+		break;
+	}
+	if (info && f >= BC_PROTO_FIELD_PARAM0 &&
+	    f < BC_PROTO_FIELD_PARAM0 + info->nparams) {
+		const struct bc_param_desc *d =
+		    &info->params[f - BC_PROTO_FIELD_PARAM0];
+		*want = d->count;
+		return p->params + d->offset;
+	}
+	return NULL;
+}
+
+static int set_op_fields(const struct bc_proto_edit_op *e,
+                         struct bc_op_data *op, struct bc_errinfo *ei)
+{
+	bool smooth_before = bc_op_is_smooth(op->kind);
+	bool gave_blend = false, gave_range = false;
+	for (uint32_t i = 0; i < e->nfields; i++) {
+		const struct bc_proto_field *f = &e->fields[i];
+		float k = f->v[0];
+		if (f->field != BC_PROTO_FIELD_BLEND &&
+		    f->field != BC_PROTO_FIELD_RANGE &&
+		    f->field != BC_PROTO_FIELD_OP_KIND) {
+			return bc_errinfo_set(ei, BC_EINVAL,
+			                      "node %u: field %u does not "
+			                      "apply to an operator",
+			                      e->node, (unsigned)f->field);
+		}
+		if (f->count != 1) {
+			return bc_errinfo_set(
+			    ei, BC_EINVAL,
+			    "node %u: field %u takes 1 value, "
+			    "got %u",
+			    e->node, (unsigned)f->field, (unsigned)f->count);
+		}
+		if (f->field == BC_PROTO_FIELD_BLEND) {
+			op->blend = k;
+			gave_blend = true;
+		} else if (f->field == BC_PROTO_FIELD_RANGE) {
+			op->range = k;
+			gave_range = true;
+		} else if (!(k >= 1.0f) || !(k <= (float)(BC_OP_COUNT - 1)) ||
+		           k != floorf(k)) {
+			return bc_errinfo_set(ei, BC_EENUM,
+			                      "node %u: operator kind %g is "
+			                      "not an integer 1..%d",
+			                      e->node, (double)k,
+			                      BC_OP_COUNT - 1);
+		} else {
+			op->kind = (enum bc_op)(int)k;
+		}
+	}
+	if (!bc_op_is_smooth(op->kind)) {
+		/* A sharp operator has neither blend nor range (the scene
+		 * encoding carries 0 for both): a value for one is refused
+		 * rather than dropped, and a smooth operator turns sharp
+		 * only when the SET says both go to 0. */
+		if (op->blend != 0.0f || op->range != 0.0f) {
+			return bc_errinfo_set(
+			    ei, BC_EINVAL,
+			    "node %u: a sharp operator (%s) has no blend "
+			    "or range%s",
+			    e->node, bc_op_name(op->kind),
+			    smooth_before && !(gave_blend && gave_range)
+			        ? "; give blend 0 and range 0 with "
+			          "the kind"
+			        : ": they must be 0");
+		}
+	}
+	return 0;
+}
+
+int bc_edit_set_fields(const struct bc_proto_edit_op *e, bool is_op,
+                       struct bc_prim_data *p, struct bc_op_data *op,
+                       struct bc_errinfo *ei)
+{
+	if (is_op) {
+		return set_op_fields(e, op, ei);
+	}
+	for (uint32_t i = 0; i < e->nfields; i++) {
+		const struct bc_proto_field *f = &e->fields[i];
+		uint32_t want = 0;
+		float *dst = prim_field(p, f->field, &want);
+		if (!dst) {
+			return bc_errinfo_set(ei, BC_EINVAL,
+			                      "node %u: field %u does not "
+			                      "apply to a primitive of this "
+			                      "kind",
+			                      e->node, (unsigned)f->field);
+		}
+		if (f->count != want) {
+			return bc_errinfo_set(ei, BC_EINVAL,
+			                      "node %u: field %u takes %u "
+			                      "values, got %u",
+			                      e->node, (unsigned)f->field, want,
+			                      (unsigned)f->count);
+		}
+		if (f->field == BC_PROTO_FIELD_COLOR) {
+			p->has_color = true;
+		}
+		memcpy(dst, f->v, want * sizeof(float));
+	}
+	return 0;
+}
+
+static int apply_set(struct bc_tree *t, const struct bc_proto_edit_op *e,
+                     struct bc_errinfo *ei)
+{
+	struct bc_prim_data p;
+	struct bc_op_data op;
+	bool is_op;
+	int rc;
+	if (!bc_tree_get(t, e->node, &p, &op)) {
+		return bc_errinfo_set(ei, BC_ENONODE, "no node with id %u",
+		                      e->node);
+	}
+	is_op = op.kind != BC_OP_INVALID;
+	if ((rc = bc_edit_set_fields(e, is_op, &p, &op, ei))) {
+		return rc;
+	}
+	return is_op ? bc_tree_set_op(t, e->node, &op, ei)
+	             : bc_tree_set_prim(t, e->node, &p, ei);
+}
+
+int bc_edit_apply_op(struct bc_tree *t, const struct bc_proto_edit_op *e,
+                     struct bc_errinfo *ei)
+{
+	struct bc_tree *sub;
+	int rc;
+	switch (e->kind) {
+	case BC_PROTO_EDIT_SET:
+		return apply_set(t, e, ei);
+	case BC_PROTO_EDIT_REMOVE:
+		if (e->node == bc_tree_root(t) &&
+		    bc_tree_get(t, e->node, NULL, NULL)) {
+			return bc_errinfo_set(ei, BC_EINVAL,
+			                      "node %u is the root: a scene is "
+			                      "never empty (REPLACE it "
+			                      "instead)",
+			                      e->node);
+		}
+		return bc_tree_remove(t, e->node, ei);
+	case BC_PROTO_EDIT_INSERT:
+	case BC_PROTO_EDIT_REPLACE:
+		break;
+	default:
+		return bc_errinfo_set(ei, BC_EENUM, "operation kind %d",
+		                      (int)e->kind);
+	}
+	if (!(sub = bc_tree_create())) {
+		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+	}
+	rc = bc_scene_decode(e->subtree.ptr, e->subtree.len, sub, NULL, NULL,
+	                     ei);
+	if (!rc && bc_tree_has_auto_ids(sub)) {
+		rc = bc_errinfo_set(ei, BC_EINVAL,
+		                    "every node of an inserted or replacing "
+		                    "subtree needs an explicit id (not 0)");
+	}
+	if (!rc) {
+		rc = e->kind == BC_PROTO_EDIT_INSERT
+		         ? bc_tree_insert(t, e->node, e->position, sub, ei)
+		         : bc_tree_replace(t, e->node, sub, ei);
+	}
+	bc_tree_destroy(sub);
+	return rc;
+}

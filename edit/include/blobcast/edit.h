@@ -1,0 +1,109 @@
+/*
+ * What an edit means (PROTOCOL.md section 9), in one place for the daemon
+ * and every C client:
+ *  - the SET fields: which field applies to which node and how its values
+ *    land in the node's data (bc_edit_set_fields);
+ *  - the key=value syntax people type (bc_edit_parse_kv);
+ *  - atomic batches: an EDIT applies whole or not at all, and an applied
+ *    batch can be undone (the daemon does when its journal write fails);
+ *  - the replay of EDIT_APPLIED into a mirror, with the very code the
+ *    server applied it with, so that mirrors cannot drift.
+ * Damage (which pixels an edit changes) is not here: the daemon's render
+ * thread computes it from the renderer's view of the scene.
+ */
+#ifndef BLOBCAST_EDIT_H
+#define BLOBCAST_EDIT_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "blobcast/blobtree.h"
+#include "blobcast/error.h"
+#include "blobcast/proto.h"
+
+/* Writes the fields of SET e into the node's data: p when the node is a
+ * primitive, op when it is an operator (is_op). Checks what the decoder
+ * leaves to the server: that each field applies to this kind of node, its
+ * value count, an operator kind that is an integer 1..6 (EENUM), and that
+ * a sharp operator gets no blend or range: a SET that gives a sharp
+ * operator (or makes one) a non-zero blend or range, and a SET that makes
+ * a smooth operator sharp without giving blend 0 and range 0, are refused
+ * (EINVAL), so that no field changes unless the SET names it. Range checks
+ * are blobtree's (bc_tree_set_prim/op). Returns 0 or a BC_E* code with
+ * the reason in ei. */
+int bc_edit_set_fields(const struct bc_proto_edit_op *e, bool is_op,
+                       struct bc_prim_data *p, struct bc_op_data *op,
+                       struct bc_errinfo *ei);
+
+/* Applies one operation to t, not atomically (a failure may leave t
+ * changed for structural operations: use a batch). Refuses, besides what
+ * blobtree refuses: a subtree with a node of id 0 (EINVAL; EDIT_APPLIED
+ * repeats the subtree as sent, so every member must name its nodes alike)
+ * and the removal of the root (EINVAL; a scene is never empty). Returns 0
+ * or a BC_E* code. */
+int bc_edit_apply_op(struct bc_tree *t, const struct bc_proto_edit_op *e,
+                     struct bc_errinfo *ei);
+
+/* Saved data of one node, to undo a parameter batch. */
+struct bc_edit_saved {
+	uint32_t id;
+	struct bc_prim_data p;
+	struct bc_op_data op;
+};
+
+/* What an applied batch needs to be undone. Zero it before use;
+ * bc_edit_batch_finish() frees it. */
+struct bc_edit_batch {
+	bool structural;     /* some operation changed the tree's shape */
+	struct bc_tree *old; /* structural: the tree before the batch */
+	struct bc_edit_saved *saved; /* parameter batch: nodes before it */
+	uint32_t nsaved;
+};
+
+/*
+ * Applies ops[0..n) to *tp whole or not at all. A batch of SETs only is
+ * applied in place (and put back if one fails); a batch with a structural
+ * operation is applied to a copy that replaces *tp when every operation
+ * succeeded (the old tree is kept in b->old). The error's text starts
+ * with "operation i:". Returns 0 or a BC_E* code; on failure *tp is as
+ * before and b holds nothing.
+ */
+int bc_edit_batch_apply(struct bc_edit_batch *b, struct bc_tree **tp,
+                        const struct bc_proto_edit_op *ops, uint32_t n,
+                        struct bc_errinfo *ei);
+
+/* Undoes the batch b applied to *tp (cannot fail: it only puts back states
+ * that were valid). b is then empty. */
+void bc_edit_batch_undo(struct bc_edit_batch *b, struct bc_tree **tp);
+
+/* Frees what b holds (the old tree, the saved nodes); accepts a zeroed b. */
+void bc_edit_batch_finish(struct bc_edit_batch *b);
+
+/* Replays EDIT_APPLIED's operations into a mirror, atomically, with the
+ * rules the server applied them with. Returns 0 or a BC_E* code (then *tp
+ * is unchanged and the mirror should be dropped or reloaded). */
+int bc_edit_replay(struct bc_tree **tp, const struct bc_msg_edit_applied *ea,
+                   struct bc_errinfo *ei);
+
+/* Most key=value arguments of one SET: one per field. */
+#define BC_EDIT_MAX_KV BC_PROTO_MAX_SET_FIELDS
+
+/*
+ * Turns key=value texts (`radius=0.4`, `translate=0.1,0,0`,
+ * `kind=smooth_union`) into the fields of a SET of node, using the node's
+ * kind in scene to know which keys it has. Keys: translate, rotate, color
+ * and the kind's parameter names for primitives; blend, range and kind
+ * (a name or 1..6) for operators. `kind` naming a sharp operator on a
+ * smooth one, with neither blend nor range given, also sets both to 0 (a
+ * sharp operator has neither). fields holds BC_PROTO_MAX_SET_FIELDS;
+ * *nfields is reset on entry. Returns 0, BC_ENONODE, BC_EINVAL (unknown
+ * key, wrong value count, a key twice), BC_EPARSE (not a number),
+ * BC_ENONFINITE, BC_ERANGE or BC_ELIMIT, with a sentence in ei.
+ */
+int bc_edit_parse_kv(const struct bc_tree *scene, uint32_t node,
+                     const char *const *kv, size_t n,
+                     struct bc_proto_field *fields, uint8_t *nfields,
+                     struct bc_errinfo *ei);
+
+#endif
