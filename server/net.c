@@ -24,7 +24,7 @@
 
 struct write_req {
 	uv_write_t req;
-	struct bc_client_ref who;
+	struct bc_conn_ref who;
 	struct bc_srv *srv;
 	struct bc_shared *shared; /* a frame, or NULL */
 	uint8_t *owned;           /* a message's bytes, or NULL */
@@ -53,9 +53,9 @@ uint64_t bc_now_ms(struct bc_srv *srv)
 	return uv_now(srv->loop);
 }
 
-struct bc_client *bc_client_get(struct bc_srv *srv, struct bc_client_ref ref)
+struct bc_conn *bc_conn_get(struct bc_srv *srv, struct bc_conn_ref ref)
 {
-	struct bc_client *c;
+	struct bc_conn *c;
 	if (ref.slot >= BC_SRV_MAX_CONNECTIONS) {
 		return NULL;
 	}
@@ -63,14 +63,14 @@ struct bc_client *bc_client_get(struct bc_srv *srv, struct bc_client_ref ref)
 	return (c && c->gen == ref.gen && !c->closing) ? c : NULL;
 }
 
-struct bc_client_ref bc_client_ref_of(const struct bc_client *c)
+struct bc_conn_ref bc_conn_ref_of(const struct bc_conn *c)
 {
-	return (struct bc_client_ref){c->slot, c->gen};
+	return (struct bc_conn_ref){c->slot, c->gen};
 }
 
 static void handle_closed(uv_handle_t *h)
 {
-	struct bc_client *c = h->data;
+	struct bc_conn *c = h->data;
 	if (--c->handles_open > 0) {
 		return;
 	}
@@ -79,7 +79,7 @@ static void handle_closed(uv_handle_t *h)
 	bc_free(c);
 }
 
-void bc_client_close(struct bc_client *c, const char *why)
+void bc_conn_close(struct bc_conn *c, const char *why)
 {
 	struct bc_srv *srv = c->srv;
 	if (c->closing) {
@@ -100,12 +100,12 @@ void bc_client_close(struct bc_client *c, const char *why)
 
 static void shutdown_done(uv_shutdown_t *req, int status)
 {
-	struct bc_client *c = req->data;
+	struct bc_conn *c = req->data;
 	(void)status;
-	bc_client_close(c, c->drain_why);
+	bc_conn_close(c, c->drain_why);
 }
 
-void bc_client_close_after_flush(struct bc_client *c, const char *why)
+void bc_conn_close_after_flush(struct bc_conn *c, const char *why)
 {
 	if (c->closing || c->draining) {
 		return;
@@ -118,18 +118,18 @@ void bc_client_close_after_flush(struct bc_client *c, const char *why)
 	uv_read_stop(&c->h.stream);
 	c->shutdown.data = c;
 	if (uv_shutdown(&c->shutdown, &c->h.stream, shutdown_done) != 0) {
-		bc_client_close(c, why);
+		bc_conn_close(c, why);
 	}
 }
 
 static void write_done(uv_write_t *req, int status)
 {
 	struct write_req *w = (struct write_req *)req;
-	struct bc_client *c = bc_client_get(w->srv, w->who);
+	struct bc_conn *c = bc_conn_get(w->srv, w->who);
 	if (c) {
 		c->queued -= w->len;
 		if (status < 0) {
-			bc_client_close(c, uv_strerror(status));
+			bc_conn_close(c, uv_strerror(status));
 		} else if (w->shared) {
 			c->frame_writing = false;
 			c->frames_sent++;
@@ -137,7 +137,7 @@ static void write_done(uv_write_t *req, int status)
 			if (c->frame_next) {
 				struct bc_shared *next = c->frame_next;
 				c->frame_next = NULL;
-				bc_client_send_frame(c, next);
+				bc_conn_send_frame(c, next);
 				bc_shared_unref(next);
 			} else {
 				bc_session_client_ready(c);
@@ -152,7 +152,7 @@ static void write_done(uv_write_t *req, int status)
 }
 
 /* Queues bytes (taking owned or a reference to shared). */
-static void queue_bytes(struct bc_client *c, uint8_t *owned,
+static void queue_bytes(struct bc_conn *c, uint8_t *owned,
 			struct bc_shared *shared, const uint8_t *data,
 			size_t len)
 {
@@ -165,17 +165,17 @@ static void queue_bytes(struct bc_client *c, uint8_t *owned,
 		       "dropping client %u (%s): %zu bytes queued, it stopped "
 		       "reading",
 		       c->gen, c->name, c->queued);
-		bc_client_close(c, "output queue over its limit");
+		bc_conn_close(c, "output queue over its limit");
 		return;
 	}
 	w = bc_calloc(1, sizeof(*w));
 	if (!w) {
 		bc_free(owned);
-		bc_client_close(c, "out of memory");
+		bc_conn_close(c, "out of memory");
 		return;
 	}
 	w->srv = c->srv;
-	w->who = bc_client_ref_of(c);
+	w->who = bc_conn_ref_of(c);
 	w->owned = owned;
 	w->len = len;
 	if (shared) {
@@ -190,11 +190,11 @@ static void queue_bytes(struct bc_client *c, uint8_t *owned,
 		bc_shared_unref(w->shared);
 		bc_free(w->owned);
 		bc_free(w);
-		bc_client_close(c, uv_strerror(rc));
+		bc_conn_close(c, uv_strerror(rc));
 	}
 }
 
-void bc_client_send(struct bc_client *c, const struct bc_msg *m)
+void bc_conn_send(struct bc_conn *c, const struct bc_msg *m)
 {
 	struct bc_proto_buf b;
 	struct bc_errinfo ei = {0};
@@ -213,7 +213,7 @@ void bc_client_send(struct bc_client *c, const struct bc_msg *m)
 	queue_bytes(c, b.data, NULL, b.data, b.len);
 }
 
-void bc_client_send_error(struct bc_client *c, uint32_t seq, int code,
+void bc_conn_send_error(struct bc_conn *c, uint32_t seq, int code,
 			  bool fatal, const char *fmt, ...)
 {
 	char text[BC_PROTO_MAX_ERROR_TEXT];
@@ -233,10 +233,10 @@ void bc_client_send_error(struct bc_client *c, uint32_t seq, int code,
 							       : sizeof(text) - 1);
 	bc_log(BC_LOG_INFO, "client %u: error %s: %s", c->gen,
 	       bc_err_name(code), text);
-	bc_client_send(c, &m);
+	bc_conn_send(c, &m);
 }
 
-void bc_client_send_frame(struct bc_client *c, struct bc_shared *frame)
+void bc_conn_send_frame(struct bc_conn *c, struct bc_shared *frame)
 {
 	if (c->closing || c->draining) {
 		return;
@@ -247,7 +247,7 @@ void bc_client_send_frame(struct bc_client *c, struct bc_shared *frame)
 		       "dropping client %u (%s): a frame has waited %u ms, it "
 		       "stopped reading",
 		       c->gen, c->name, BC_SRV_STALL_MS);
-		bc_client_close(c, "stopped reading");
+		bc_conn_close(c, "stopped reading");
 		return;
 	}
 	if (c->frame_writing) {
@@ -270,7 +270,7 @@ void bc_client_send_frame(struct bc_client *c, struct bc_shared *frame)
 
 /* ---- HELLO -------------------------------------------------------------- */
 
-static enum bc_proto_role token_role(struct bc_srv *srv, struct bc_client *c,
+static enum bc_proto_role token_role(struct bc_srv *srv, struct bc_conn *c,
 				     struct bc_proto_str tok)
 {
 	for (uint32_t i = 0; i < srv->cfg.ntokens; i++) {
@@ -288,24 +288,24 @@ static enum bc_proto_role token_role(struct bc_srv *srv, struct bc_client *c,
 	return BC_PROTO_ROLE_INVALID;
 }
 
-static void handle_hello(struct bc_client *c, const struct bc_msg *m)
+static void handle_hello(struct bc_conn *c, const struct bc_msg *m)
 {
 	struct bc_srv *srv = c->srv;
 	const struct bc_msg_hello *h = &m->hello;
 	struct bc_msg w = {.type = BC_MSG_WELCOME, .seq = m->seq};
 	if (h->version_min > BC_PROTO_VERSION ||
 	    h->version_max < BC_PROTO_VERSION) {
-		bc_client_send_error(c, m->seq, BC_EPROTO_VERSION, true,
+		bc_conn_send_error(c, m->seq, BC_EPROTO_VERSION, true,
 				     "this server speaks version %u only",
 				     BC_PROTO_VERSION);
-		bc_client_close_after_flush(c, "version mismatch");
+		bc_conn_close_after_flush(c, "version mismatch");
 		return;
 	}
 	c->max_role = token_role(srv, c, h->token);
 	if (c->max_role == BC_PROTO_ROLE_INVALID) {
-		bc_client_send_error(c, m->seq, BC_EAUTH, true,
+		bc_conn_send_error(c, m->seq, BC_EAUTH, true,
 				     "a valid token is required");
-		bc_client_close_after_flush(c, "authentication failed");
+		bc_conn_close_after_flush(c, "authentication failed");
 		return;
 	}
 	memcpy(c->name, h->client_name.ptr, h->client_name.len);
@@ -326,23 +326,23 @@ static void handle_hello(struct bc_client *c, const struct bc_msg *m)
 	w.welcome.max_edit_ops = BC_PROTO_MAX_EDIT_OPS;
 	w.welcome.server_id.ptr = srv->cfg.server_id;
 	w.welcome.server_id.len = (uint32_t)strlen(srv->cfg.server_id);
-	bc_client_send(c, &w);
+	bc_conn_send(c, &w);
 }
 
-static void dispatch(struct bc_client *c, const struct bc_msg *m)
+static void dispatch(struct bc_conn *c, const struct bc_msg *m)
 {
 	int rc = bc_proto_client_may_send(c->stage, c->role, m->type);
 	if (m->type == BC_MSG_PING) {
 		struct bc_msg pong = {.type = BC_MSG_PONG, .seq = m->seq};
 		pong.ping.stamp = m->ping.stamp;
-		bc_client_send(c, &pong);
+		bc_conn_send(c, &pong);
 		return;
 	}
 	if (m->type == BC_MSG_PONG || m->type == BC_MSG_ERROR) {
 		return;
 	}
 	if (rc) {
-		bc_client_send_error(c, m->seq, rc, false,
+		bc_conn_send_error(c, m->seq, rc, false,
 				     "%s is not allowed %s",
 				     bc_proto_type_name(m->type),
 				     rc == BC_EPERM ? "for a viewer"
@@ -368,7 +368,7 @@ static void on_alloc(uv_handle_t *h, size_t suggested, uv_buf_t *buf)
 
 static void on_read(uv_stream_t *s, ssize_t n, const uv_buf_t *buf)
 {
-	struct bc_client *c = s->data;
+	struct bc_conn *c = s->data;
 	struct bc_msg m;
 	int rc;
 	if (c->closing || c->draining) {
@@ -379,7 +379,7 @@ static void on_read(uv_stream_t *s, ssize_t n, const uv_buf_t *buf)
 			bc_log(BC_LOG_INFO, "client %u: %s", c->gen,
 			       c->reader.errstr);
 		}
-		bc_client_close(c, n == UV_EOF ? "peer closed" : uv_strerror((int)n));
+		bc_conn_close(c, n == UV_EOF ? "peer closed" : uv_strerror((int)n));
 		return;
 	}
 	if (n == 0) {
@@ -397,17 +397,17 @@ static void on_read(uv_stream_t *s, ssize_t n, const uv_buf_t *buf)
 	}
 	if (rc < 0 && !c->closing && !c->draining) {
 		/* The stream cannot be resynchronized: say why, then close. */
-		bc_client_send_error(c, 0, rc, true, "%s", c->reader.errstr);
-		bc_client_close_after_flush(c, "protocol error");
+		bc_conn_send_error(c, 0, rc, true, "%s", c->reader.errstr);
+		bc_conn_close_after_flush(c, "protocol error");
 	}
 }
 
 static void hello_timeout(uv_timer_t *t)
 {
-	struct bc_client *c = t->data;
-	bc_client_send_error(c, 0, BC_ETIMEOUT, true,
+	struct bc_conn *c = t->data;
+	bc_conn_send_error(c, 0, BC_ETIMEOUT, true,
 			     "no HELLO within %u ms", BC_SRV_HELLO_TIMEOUT_MS);
-	bc_client_close_after_flush(c, "HELLO timeout");
+	bc_conn_close_after_flush(c, "HELLO timeout");
 }
 
 static bool is_loopback(uv_tcp_t *tcp)
@@ -433,7 +433,7 @@ static void on_connection(uv_stream_t *server, int status)
 {
 	struct bc_srv *srv = server->data;
 	bool tcp = server == (uv_stream_t *)&srv->tcp_listener;
-	struct bc_client *c;
+	struct bc_conn *c;
 	uint32_t slot = 0;
 	if (status < 0) {
 		bc_log(BC_LOG_WARN, "accept: %s", uv_strerror(status));
@@ -525,7 +525,7 @@ static void check_stalls(uv_timer_t *t)
 	struct bc_srv *srv = t->data;
 	uint64_t now = bc_now_ms(srv);
 	for (uint32_t i = 0; i < BC_SRV_MAX_CONNECTIONS; i++) {
-		struct bc_client *c = srv->clients[i];
+		struct bc_conn *c = srv->clients[i];
 		if (c && c->frame_writing &&
 		    now - c->frame_started_ms > BC_SRV_STALL_MS) {
 			bc_log(BC_LOG_WARN,
@@ -533,7 +533,7 @@ static void check_stalls(uv_timer_t *t)
 			       "%llu ms, it stopped reading",
 			       c->gen, c->name,
 			       (unsigned long long)(now - c->frame_started_ms));
-			bc_client_close(c, "stopped reading");
+			bc_conn_close(c, "stopped reading");
 		}
 	}
 }
@@ -594,7 +594,7 @@ void bc_net_close_all(struct bc_srv *srv)
 {
 	for (uint32_t i = 0; i < BC_SRV_MAX_CONNECTIONS; i++) {
 		if (srv->clients[i]) {
-			bc_client_close(srv->clients[i], "server stopping");
+			bc_conn_close(srv->clients[i], "server stopping");
 		}
 	}
 	if (uv_is_active((uv_handle_t *)&srv->stall_timer) ||

@@ -924,7 +924,7 @@ void bc_rthread_deliver(uv_async_t *async)
 		struct rresult *next = res->next;
 		struct bc_rjob *job = res->job;
 		if (job->pick) {
-			struct bc_client *c = bc_client_get(srv, job->targets[0]);
+			struct bc_conn *c = bc_conn_get(srv, job->targets[0]);
 			struct bc_msg m = {.type = BC_MSG_PICK_RESULT,
 					   .seq = job->pick_seq};
 			m.pick_result.x = job->pick_x;
@@ -936,7 +936,7 @@ void bc_rthread_deliver(uv_async_t *async)
 				m.pick_result.depth = res->depth;
 			}
 			if (c) {
-				bc_client_send(c, &m);
+				bc_conn_send(c, &m);
 			}
 		} else {
 			if (res->render_ms > 0.0) {
@@ -955,27 +955,27 @@ void bc_rthread_deliver(uv_async_t *async)
 			}
 			for (uint32_t i = 0; i < job->ntargets && res->frame;
 			     i++) {
-				struct bc_client *c =
-					bc_client_get(srv, job->targets[i]);
+				struct bc_conn *c =
+					bc_conn_get(srv, job->targets[i]);
 				if (c && !job->snapshot_seq) {
-					bc_client_send_frame(c, res->frame);
+					bc_conn_send_frame(c, res->frame);
 					c->shown = res->shown;
 					c->still_sent = res->shown.still;
 					/* A finer level is owed while nothing
 					 * else changes. */
 					c->dirty = c->dirty || res->shown.refining;
 				} else if (c) {
-					bc_client_send_frame(c, res->frame);
+					bc_conn_send_frame(c, res->frame);
 				}
 			}
 			if (!job->snapshot_seq) {
 				bc_session_frame_done(srv, job->session_id,
 						      job->targets, job->ntargets);
 			} else if (!res->frame) {
-				struct bc_client *c =
-					bc_client_get(srv, job->targets[0]);
+				struct bc_conn *c =
+					bc_conn_get(srv, job->targets[0]);
 				if (c) {
-					bc_client_send_error(
+					bc_conn_send_error(
 						c, job->snapshot_seq, BC_ELIMIT,
 						false,
 						"the snapshot does not fit the "

@@ -1,9 +1,12 @@
 /*
  * Private state of blobcastd, shared by its parts:
- *  - net.c: the libuv loop thread: listeners, connections, the protocol
- *    state machine, output queues with frame spoiling;
- *  - session.c: sessions, members, edits (validation, journal, broadcast),
- *    damage tracking and frame scheduling;
+ *  - net.c: the libuv loop thread: listeners, connections (struct bc_conn,
+ *    the daemon's own; libblobcast's struct bc_client is the client side),
+ *    the protocol state machine, output queues with frame spoiling;
+ *  - session.c: session lifecycle, members, the message -> handler table;
+ *  - edits.c: EDIT and SCENE_LOAD (the edit module applies, the journal
+ *    keeps, EDIT_APPLIED broadcasts);
+ *  - frames.c: frame scheduling and CAMERA, VIEW, PICK, SNAPSHOT;
  *  - rthread.c: the render thread: a replica of each session's scene, the
  *    renderer, encoding; results come back to the loop through a uv_async;
  *  - main.c: options, configuration, start-up, shutdown.
@@ -38,7 +41,7 @@ void bc_shared_unref(struct bc_shared *s);
 
 /* A connection handle that survives the connection: stale ones (another
  * generation) are refused. */
-struct bc_client_ref {
+struct bc_conn_ref {
 	uint32_t slot, gen;
 };
 
@@ -74,7 +77,7 @@ struct bc_shown {
 	bool still;
 };
 
-struct bc_client {
+struct bc_conn {
 	struct bc_srv *srv;
 	uint32_t slot, gen;
 	union {
@@ -131,7 +134,7 @@ struct bc_session {
 	uint64_t order;
 	struct bc_store_session *store;
 	bool store_failed; /* a write failed: edits are refused */
-	struct bc_client_ref members[BC_PROTO_MAX_MEMBERS];
+	struct bc_conn_ref members[BC_PROTO_MAX_MEMBERS];
 	uint32_t nmembers;
 	uint32_t next_member_id;
 	uv_timer_t still_timer;
@@ -152,7 +155,7 @@ struct bc_srv {
 	uv_async_t results;
 	struct bc_rthread *rt;
 
-	struct bc_client *clients[BC_SRV_MAX_CONNECTIONS];
+	struct bc_conn *clients[BC_SRV_MAX_CONNECTIONS];
 	uint32_t gens[BC_SRV_MAX_CONNECTIONS];
 	uint32_t nclients;
 	uint32_t next_conn_id;
@@ -170,18 +173,18 @@ struct bc_srv {
 
 /* ---- net.c -------------------------------------------------------------- */
 int bc_net_listen(struct bc_srv *srv, struct bc_errinfo *ei);
-struct bc_client *bc_client_get(struct bc_srv *srv, struct bc_client_ref ref);
-struct bc_client_ref bc_client_ref_of(const struct bc_client *c);
+struct bc_conn *bc_conn_get(struct bc_srv *srv, struct bc_conn_ref ref);
+struct bc_conn_ref bc_conn_ref_of(const struct bc_conn *c);
 /* Encodes and queues m; on failure the client is closed. */
-void bc_client_send(struct bc_client *c, const struct bc_msg *m);
-void bc_client_send_error(struct bc_client *c, uint32_t seq, int code,
+void bc_conn_send(struct bc_conn *c, const struct bc_msg *m);
+void bc_conn_send_error(struct bc_conn *c, uint32_t seq, int code,
 			  bool fatal, const char *fmt, ...)
 	__attribute__((format(printf, 5, 6)));
 /* Queues a FRAME (spoiling an unsent older one). */
-void bc_client_send_frame(struct bc_client *c, struct bc_shared *frame);
-void bc_client_close(struct bc_client *c, const char *why);
+void bc_conn_send_frame(struct bc_conn *c, struct bc_shared *frame);
+void bc_conn_close(struct bc_conn *c, const char *why);
 /* Stops reading, lets queued bytes (an ERROR) go out, then closes. */
-void bc_client_close_after_flush(struct bc_client *c, const char *why);
+void bc_conn_close_after_flush(struct bc_conn *c, const char *why);
 uint64_t bc_now_ms(struct bc_srv *srv);
 void bc_net_close_all(struct bc_srv *srv);
 
@@ -190,14 +193,34 @@ int bc_sessions_restore(struct bc_srv *srv, struct bc_errinfo *ei);
 void bc_sessions_save_all(struct bc_srv *srv);
 void bc_sessions_free(struct bc_srv *srv);
 /* Dispatches a message from a client in stage READY or SESSION. */
-void bc_session_handle(struct bc_client *c, const struct bc_msg *m);
-void bc_session_leave(struct bc_client *c);
+void bc_session_handle(struct bc_conn *c, const struct bc_msg *m);
+void bc_session_leave(struct bc_conn *c);
 /* c's frame backlog cleared: render for it again if it is owed a frame. */
-void bc_session_client_ready(struct bc_client *c);
+void bc_session_client_ready(struct bc_conn *c);
 /* A render job for these clients finished: schedule what is still owed. */
 void bc_session_frame_done(struct bc_srv *srv, uint32_t session_id,
-			   const struct bc_client_ref *targets, uint32_t n);
+			   const struct bc_conn_ref *targets, uint32_t n);
 struct bc_session *bc_session_by_id(struct bc_srv *srv, uint32_t id);
+void bc_session_send_info(struct bc_session *s);
+/* SCENE_STATE to one member (to) or, with to NULL, to every member. */
+void bc_session_send_state(struct bc_session *s, struct bc_conn *to,
+			   uint32_t author, uint32_t author_seq);
+/* Every member's next frame is whole. */
+void bc_session_mark_all(struct bc_session *s);
+void bc_handle_session(struct bc_conn *c, const struct bc_msg *m);
+void bc_handle_stats(struct bc_conn *c, const struct bc_msg *m);
+
+/* ---- edits.c ------------------------------------------------------------ */
+void bc_handle_scene_load(struct bc_conn *c, const struct bc_msg *m);
+void bc_handle_edit(struct bc_conn *c, const struct bc_msg *m);
+
+/* ---- frames.c ----------------------------------------------------------- */
+/* Starts a render for every member owed a frame (grouping equal ones). */
+void bc_session_schedule(struct bc_session *s);
+void bc_handle_camera(struct bc_conn *c, const struct bc_msg *m);
+void bc_handle_view(struct bc_conn *c, const struct bc_msg *m);
+void bc_handle_pick(struct bc_conn *c, const struct bc_msg *m);
+void bc_handle_snapshot(struct bc_conn *c, const struct bc_msg *m);
 
 /* ---- rthread.c ---------------------------------------------------------- */
 
@@ -219,7 +242,7 @@ struct bc_rjob {
 	uint32_t frame_no;
 	uint32_t max_bytes;
 	uint32_t snapshot_seq; /* != 0: answer to a SNAPSHOT */
-	struct bc_client_ref *targets;
+	struct bc_conn_ref *targets;
 	uint32_t ntargets;
 	/* PICK: answer one ray instead of a frame. */
 	bool pick;
