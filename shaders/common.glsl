@@ -87,10 +87,10 @@
 #define BC_TILE_FRESH 0u
 #define BC_TILE_SUSPENDED 1u
 #define BC_TILE_FINISHED 2u
-// Words of one suspension slot: the tile's walk, then eight per ray (its
+// Words of one suspension slot: the tile's walk, then nine per ray (its
 // flags and the sphere tracing state a paused ray resumes from).
 #define BC_SLOT_TILE_WORDS 8u
-#define BC_SLOT_RAY_WORDS 8u
+#define BC_SLOT_RAY_WORDS 9u
 #define BC_SLOT_WORDS (BC_SLOT_TILE_WORDS + BC_SLOT_RAY_WORDS * BC_TILE_RAYS)
 // Coarsest refinement level (blobcast/render.h's BC_RENDER_MAX_LEVEL).
 #define BC_MAX_LEVEL 3u

@@ -28,7 +28,8 @@
 // what it spends (the first invocation's traversal and fetching, and per
 // pass the longest ray's samples times the view's length); rays pause
 // between sphere tracing steps when a pass would go over (and resume with
-// the same step: where a ray pauses never changes its value), and the tile
+// the same sample: where a ray pauses in a dispatch never changes its
+// value), and the tile
 // suspends, its walk and rays saved in a scratch slot, when the dispatch's
 // budget is spent. The host dispatches again until no tile is suspended.
 //
@@ -663,16 +664,16 @@ void ray_step_check()
 		ray_finish(TRACE_MISS, r_t);
 		return;
 	}
-	if (r_steps >= s_cap) {
-		// Out of this pass's budget: the next pass takes this very
-		// step (trace_pass), from the state kept as it is.
-		r_result = TRACE_PAUSED;
-		r_state = ST_END;
-		return;
-	}
 	r_count++;
 	r_smp = min(r_t + max(r_omega * r_v, 1.0e-6 * r_t), r_t1);
 	r_state = ST_STEP;
+	if (r_steps >= s_cap) {
+		// Out of this pass's budget: the next pass takes this very
+		// sample, from the state kept as it is (trace_pass). The step
+		// is computed here only: a second site could round it
+		// differently (the compiler may contract either to an FMA).
+		r_result = TRACE_PAUSED;
+	}
 }
 
 // Consumes the value x of the sample the state asked for (prim: the
@@ -882,7 +883,8 @@ void put_hit(ivec2 px, vec3 d, uint overlaps)
 // Each ray's state across passes and dispatches: done, pending (with the
 // provisional hit's t), to trace in the current range, and paused inside
 // it (the sphere tracing state r_t, r_v, r_tp, r_vp, r_omega, r_count is
-// kept, so a paused ray resumes with the very step it would have taken).
+// kept with the sample it asked for, so a paused ray resumes with the very
+// step it would have taken).
 bool p_done, p_pending, p_todo, p_paused;
 float p_pending_t, p_resume_t;
 
@@ -943,6 +945,7 @@ bool suspend(uint lid, uint tid)
 	b_scratch[b + 5u] = floatBitsToUint(r_vp);
 	b_scratch[b + 6u] = floatBitsToUint(r_omega);
 	b_scratch[b + 7u] = r_count;
+	b_scratch[b + 8u] = floatBitsToUint(r_smp);
 	return true;
 }
 
@@ -976,6 +979,7 @@ void resume(uint lid, uint slot)
 	r_vp = uintBitsToFloat(b_scratch[b + 5u]);
 	r_omega = uintBitsToFloat(b_scratch[b + 6u]);
 	r_count = b_scratch[b + 7u];
+	r_smp = uintBitsToFloat(b_scratch[b + 8u]);
 }
 
 // Traces this ray inside the current range, from p_resume_t or from where
@@ -991,10 +995,8 @@ uint trace_pass(ivec2 px, vec3 d)
 	r_result = TRACE_MISS;
 	r_steps = 0u;
 	if (p_paused) {
-		// ray_step_check's step, past its budget test.
+		// The step ray_step_check asked for before pausing.
 		p_paused = false;
-		r_count++;
-		r_smp = min(r_t + max(r_omega * r_v, 1.0e-6 * r_t), r_t1);
 		r_state = ST_STEP;
 	} else {
 		r_state = ST_START;
@@ -1008,7 +1010,7 @@ uint trace_pass(ivec2 px, vec3 d)
 		}
 	}
 	vec3 hit_p = vec3(0.0);
-	while (r_state != ST_END) {
+	while (r_state != ST_END && r_result != TRACE_PAUSED) {
 		vec3 q;
 		if (r_state == ST_NORMAL) {
 			q = hit_p + r_h * tet[r_count];

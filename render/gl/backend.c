@@ -105,6 +105,7 @@ struct gl_renderer {
 	uint32_t want_cap; /* capacity asked for, 0: none */
 	uint32_t slots;    /* suspension slots after the fragment scratch */
 	uint32_t budget;   /* loop budget per invocation, 0: none */
+	uint32_t driver_budget; /* the driver's own limit, 0: none */
 	/* The region's tile list and bits, built on the host per frame. */
 	uint32_t *region;
 	size_t region_cap;
@@ -396,6 +397,7 @@ static int gl_create(struct bc_renderer **out, const struct bc_render_opts *opts
 	if (strstr(r->ctx.info.renderer, "llvmpipe")) {
 		r->budget = BC_GL_LLVMPIPE_LOOP_LIMIT;
 	}
+	r->driver_budget = r->budget;
 	r->ctx.info.loop_budget = r->budget;
 	gl->GenVertexArrays(1, &r->vao);
 	gl->GenFramebuffers(1, &r->fbo);
@@ -1268,6 +1270,23 @@ int bc_render_gl_set_capacity(struct bc_renderer *base, uint32_t fragments)
 		return BC_EINVAL;
 	}
 	gl_of(base)->want_cap = fragments;
+	return 0;
+}
+
+int bc_render_gl_set_loop_budget(struct bc_renderer *base,
+				 uint32_t iterations)
+{
+	struct gl_renderer *r = gl_of(base);
+	if (!base || base->ops != &bc_backend_gl_ops ||
+	    (iterations != 0 && iterations < BC_GL_MIN_LOOP_BUDGET)) {
+		return BC_EINVAL;
+	}
+	if (iterations == 0 ||
+	    (r->driver_budget && iterations > r->driver_budget)) {
+		iterations = r->driver_budget;
+	}
+	r->budget = iterations;
+	r->ctx.info.loop_budget = iterations;
 	return 0;
 }
 

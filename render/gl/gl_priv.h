@@ -107,9 +107,10 @@ struct bc__gl_frame_ubo {
 	uint32_t region[4]; /* level, refine, tiles listed, list used */
 };
 
-/* Suspension slots (trace.comp): 8 words for the tile's walk and 8 per
- * ray (flags, the pending hit, a paused ray's sphere tracing state). */
-#define BC_GL_SLOT_WORDS (8u + 8u * 64u)
+/* Suspension slots (trace.comp): 8 words for the tile's walk and 9 per
+ * ray (flags, the pending hit, a paused ray's sphere tracing state and
+ * next sample). */
+#define BC_GL_SLOT_WORDS (8u + 9u * 64u)
 
 /* ---- Context ------------------------------------------------------------ */
 

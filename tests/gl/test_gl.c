@@ -671,6 +671,12 @@ static void test_refinement_equals_whole(void)
 			bad += b;
 		}
 	}
+	/* The loop budget hook: refused below its floor, 0 restores the
+	 * driver's. (A budget small enough to suspend tiles mid-frame is
+	 * known not to keep pixels exact: docs/gl.md, known gaps.) */
+	CHECK(bc_render_gl_set_loop_budget(r, 1) == BC_EINVAL);
+	CHECK(bc_render_gl_set_loop_budget(r, BC_GL_MIN_LOOP_BUDGET) == 0);
+	CHECK(bc_render_gl_set_loop_budget(r, 0) == 0);
 	printf("  %u refined frames compared with whole ones, %u pixels "
 	       "differ\n", frames, bad);
 	CHECK_EQ_INT(bad, 0);

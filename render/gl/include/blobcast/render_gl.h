@@ -74,4 +74,17 @@ int bc_render_gl_info(const struct bc_renderer *r, struct bc_gl_info *out);
  * fragments == 0, NULL or another backend's renderer. */
 int bc_render_gl_set_capacity(struct bc_renderer *r, uint32_t fragments);
 
+/* Smallest loop budget bc_render_gl_set_loop_budget accepts: the tracing
+ * pass keeps 2048 iterations for loops it does not count, and needs room
+ * for a range's fetch and view on small scenes besides. */
+#define BC_GL_MIN_LOOP_BUDGET 3072u
+
+/* Sets the loop iterations one tracing invocation may spend per dispatch
+ * before its tile suspends (0: the driver's own, llvmpipe's limit or
+ * none; never above the driver's limit). A small budget makes rays pause
+ * and tiles suspend often, on any driver: it serves tests that pausing
+ * never changes a pixel. Returns 0, or BC_EINVAL for a budget below
+ * BC_GL_MIN_LOOP_BUDGET, NULL or another backend's renderer. */
+int bc_render_gl_set_loop_budget(struct bc_renderer *r, uint32_t iterations);
+
 #endif
