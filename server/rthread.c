@@ -51,6 +51,7 @@ struct rcmd {
 struct rresult {
 	struct bc_rjob *job;
 	struct bc_shared *frame;
+	bool yielded; /* no frame: a refinement gave way to newer work */
 	bool hit;
 	float position[3], depth;
 	uint32_t node;
@@ -366,6 +367,10 @@ static int render_into(struct bc_rthread *rt, struct replica *rp,
 		rp->ms_per_ray = rp->ms_per_ray > 0.0
 					 ? 0.7 * rp->ms_per_ray + 0.3 * per_ray
 					 : per_ray;
+	}
+	if (!rg->tiles && !rg->refine) {
+		/* The lists of a whole new view: what a coarse start costs
+		 * before its first ray. */
 		rp->ms_abuffer = rp->ms_abuffer > 0.0
 					 ? 0.7 * rp->ms_abuffer +
 						   0.3 * st.ms_abuffer
@@ -381,12 +386,30 @@ static int render_into(struct bc_rthread *rt, struct replica *rp,
 	return 0;
 }
 
+/* Whether an edit of session sid waits in the queue: a refinement then
+ * yields to it (its tiles would be traced again). Other jobs are not
+ * waited for: two members refining different views would yield to each
+ * other forever. */
+static bool newer_work(struct bc_rthread *rt, uint32_t sid)
+{
+	bool found = false;
+	uv_mutex_lock(&rt->lock);
+	for (const struct rcmd *c = rt->head; c && !found; c = c->next) {
+		found = c->session_id == sid && c->kind != RCMD_JOB;
+	}
+	uv_mutex_unlock(&rt->lock);
+	return found;
+}
+
 /* Traces the pixels of the level below v's, in bands of tile rows, and
  * stops between bands when the frame budget is spent (never for a
- * snapshot). *done tells whether the level is complete. The renderer
- * itself has no budget here: a picture is always whole at some level. */
+ * snapshot), or, with *yielded set, before any band while newer work for
+ * the session waits (the refinement is then owed, not failed). *done
+ * tells whether the level is complete. The renderer itself has no budget
+ * here: a picture is always whole at some level. */
 static int refine(struct bc_rthread *rt, struct replica *rp, struct view *v,
-		  bool unbounded, bool *done, struct bc_errinfo *ei)
+		  bool unbounded, bool *done, bool *yielded,
+		  struct bc_errinfo *ei)
 {
 	uint32_t cols = bc_render_tiles_x(v->width);
 	uint32_t rows = bc_render_tiles_y(v->height);
@@ -407,6 +430,10 @@ static int refine(struct bc_rthread *rt, struct replica *rp, struct view *v,
 		struct bc_render_region rg = {rt->band, (uint32_t)v->level - 1u,
 					      true};
 		uint32_t y1 = y0 + band < rows ? y0 + band : rows;
+		if (!unbounded && newer_work(rt, v->session_id)) {
+			*yielded = true;
+			return 0;
+		}
 		if (y0 > 0 && !unbounded &&
 		    now_ms() - start > (double)rt->budget_ms) {
 			return 0;
@@ -426,7 +453,7 @@ static int refine(struct bc_rthread *rt, struct replica *rp, struct view *v,
  * level finer (all the way to 0 for a snapshot or when asked). */
 static int update_view(struct bc_rthread *rt, struct replica *rp,
 		       struct view *v, const struct bc_rjob *job,
-		       bool *incomplete, struct bc_errinfo *ei)
+		       bool *incomplete, bool *yielded, struct bc_errinfo *ei)
 {
 	uint32_t ndamaged = 0;
 	int rc;
@@ -462,8 +489,11 @@ static int update_view(struct bc_rthread *rt, struct replica *rp,
 		do {
 			bool done = false;
 			if ((rc = refine(rt, rp, v, job->snapshot_seq != 0,
-					 &done, ei))) {
+					 &done, yielded, ei))) {
 				return rc;
+			}
+			if (*yielded) {
+				break;
 			}
 			if (!done) {
 				/* The budget ran out: the picture stays
@@ -593,7 +623,7 @@ static void run_job(struct bc_rthread *rt, struct bc_rjob *job)
 	struct view *v;
 	const uint8_t *pix;
 	uint32_t nrects = 1, iw, ih;
-	bool incomplete = false, lossless, patch;
+	bool incomplete = false, yielded = false, lossless, patch;
 	int encoding, quality;
 	double t0, t1;
 	if (!res) {
@@ -636,9 +666,16 @@ static void run_job(struct bc_rthread *rt, struct bc_rjob *job)
 			       job->width, job->height);
 		goto fail;
 	}
-	if (update_view(rt, rp, v, job, &incomplete, &ei)) {
+	if (update_view(rt, rp, v, job, &incomplete, &yielded, &ei)) {
 		v->level = -1;
 		goto fail;
+	}
+	if (yielded) {
+		/* Nothing new to show: the refinement waits behind newer
+		 * work, and the targets stay owed a frame. */
+		res->yielded = true;
+		push_result(rt, res);
+		return;
 	}
 	t1 = now_ms();
 	res->render_ms = t1 - t0;
@@ -953,6 +990,14 @@ void bc_rthread_deliver(uv_async_t *async)
 						: 0.9 * srv->encode_ms_avg +
 							  0.1 * res->encode_ms;
 			}
+			for (uint32_t i = 0; i < job->ntargets && res->yielded;
+			     i++) {
+				struct bc_conn *c =
+					bc_conn_get(srv, job->targets[i]);
+				if (c) {
+					c->dirty = true;
+				}
+			}
 			for (uint32_t i = 0; i < job->ntargets && res->frame;
 			     i++) {
 				struct bc_conn *c =
@@ -962,8 +1007,14 @@ void bc_rthread_deliver(uv_async_t *async)
 					c->shown = res->shown;
 					c->still_sent = res->shown.still;
 					/* A finer level is owed while nothing
-					 * else changes. */
-					c->dirty = c->dirty || res->shown.refining;
+					 * else changes; during an interaction
+					 * it waits for its end (the still
+					 * timer), so the next camera or edit
+					 * never queues behind a refinement. */
+					c->dirty = c->dirty ||
+						   (res->shown.refining &&
+						    bc_now_ms(srv) >=
+							    c->interacting_until);
 				} else if (c) {
 					bc_conn_send_frame(c, res->frame);
 				}
