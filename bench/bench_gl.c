@@ -48,16 +48,19 @@ struct scene {
 };
 
 static const struct scene scenes[] = {
-	{"fig18 smooth spheres 256", "fig18",
-	 {.count = 256, .kind = BC_GEN_KIND_SPHERES}},
-	{"fig16 L2 smooth", "fig16", {.level = 2}},
-	{"fig18 smooth boxes 256", "fig18",
-	 {.count = 256, .kind = BC_GEN_KIND_BOXES}},
-	{"fig18 smooth spheres 1024", "fig18",
-	 {.count = 1024, .kind = BC_GEN_KIND_SPHERES}},
-	{"fig16 L3 smooth", "fig16", {.level = 3}},
-	{"gears (24 teeth)", "gears", {.teeth = 24}},
-	{"many-spheres 2745", "many-spheres", {.count = 2745}},
+    {"fig18 smooth spheres 256",
+     "fig18",
+     {.count = 256, .kind = BC_GEN_KIND_SPHERES}},
+    {"fig16 L2 smooth", "fig16", {.level = 2}},
+    {"fig18 smooth boxes 256",
+     "fig18",
+     {.count = 256, .kind = BC_GEN_KIND_BOXES}},
+    {"fig18 smooth spheres 1024",
+     "fig18",
+     {.count = 1024, .kind = BC_GEN_KIND_SPHERES}},
+    {"fig16 L3 smooth", "fig16", {.level = 3}},
+    {"gears (24 teeth)", "gears", {.teeth = 24}},
+    {"many-spheres 2745", "many-spheres", {.count = 2745}},
 };
 
 static double clock_ms(clockid_t id)
@@ -75,11 +78,9 @@ struct timing {
 
 /* Fastest of reps frames of r (already synced): whole frames, or the
  * pixels of region when it is not NULL. */
-static struct timing time_frames(struct bc_renderer *r,
-				 const struct bc_camera *cam,
-				 struct bc_frame *f,
-				 const struct bc_render_region *region,
-				 int reps)
+static struct timing
+time_frames(struct bc_renderer *r, const struct bc_camera *cam,
+            struct bc_frame *f, const struct bc_render_region *region, int reps)
 {
 	struct timing best = {.wall = INFINITY, .cpu = INFINITY};
 	for (int i = 0; i < reps; i++) {
@@ -87,13 +88,13 @@ static struct timing time_frames(struct bc_renderer *r,
 		struct bc_render_stats st;
 		double w0 = clock_ms(CLOCK_MONOTONIC);
 		double c0 = clock_ms(CLOCK_PROCESS_CPUTIME_ID);
-		int rc = bc_renderer_render_region(r, cam, f, region, &st,
-						   &ei);
+		int rc = bc_renderer_render_region(r, cam, f, region, &st, &ei);
 		double w1 = clock_ms(CLOCK_MONOTONIC);
 		double c1 = clock_ms(CLOCK_PROCESS_CPUTIME_ID);
 		if (rc) {
 			fprintf(stderr, "%s: %s\n",
-				bc_backend_name(bc_renderer_backend(r)), ei.msg);
+			        bc_backend_name(bc_renderer_backend(r)),
+			        ei.msg);
 			best.rc = rc;
 			return best;
 		}
@@ -107,7 +108,7 @@ static struct timing time_frames(struct bc_renderer *r,
 }
 
 static struct bc_renderer *open_backend(enum bc_backend b,
-					const struct bc_render_opts *o)
+                                        const struct bc_render_opts *o)
 {
 	struct bc_errinfo ei = {0};
 	struct bc_renderer *r = NULL;
@@ -122,7 +123,7 @@ static int frames(const char *platform, uint32_t size, int reps, bool quick)
 {
 	/* The coarsest refinement level: one ray per tile. */
 	const struct bc_render_region coarse = {NULL, BC_RENDER_MAX_LEVEL,
-						false};
+	                                        false};
 	struct bc_render_opts go = {.gl_platform = platform};
 	struct bc_render_opts to = {0};
 	struct bc_renderer *rg, *rt;
@@ -160,7 +161,8 @@ static int frames(const char *platform, uint32_t size, int reps, bool quick)
 		struct bc_camera cam;
 		struct bc_errinfo ei = {0};
 		struct timing tt, tg, tc;
-		if (!t || bc_gen(scenes[s].gen, &scenes[s].opts, t, &cam, &ei)) {
+		if (!t ||
+		    bc_gen(scenes[s].gen, &scenes[s].opts, t, &cam, &ei)) {
 			fprintf(stderr, "%s: %s\n", scenes[s].label, ei.msg);
 			bc_tree_destroy(t);
 			continue;
@@ -211,7 +213,7 @@ static int edits(const char *platform, bool quick)
 	for (size_t c = 0; c < n; c++) {
 		struct bc_tree *t = bc_tree_create();
 		struct bc_gen_opts o = {.count = counts[c],
-					.kind = BC_GEN_KIND_SPHERES};
+		                        .kind = BC_GEN_KIND_SPHERES};
 		struct bc_errinfo ei = {0};
 		struct bc_dirty dirty;
 		struct bc_gl_info info;
@@ -238,8 +240,8 @@ static int edits(const char *platform, bool quick)
 		for (int i = 0; i < rounds; i++) {
 			/* A different primitive each time, moved a little. */
 			const struct bc_lin *l = bc_tree_lin(t);
-			uint32_t k = (uint32_t)(((uint64_t)i * 2654435761u) %
-						l->nprims);
+			uint32_t k =
+			    (uint32_t)(((uint64_t)i * 2654435761u) % l->nprims);
 			uint32_t id = l->node_id[l->prim_slot[k]];
 			struct bc_prim_data p;
 			bc_tree_get(t, id, &p, NULL);
@@ -258,9 +260,8 @@ static int edits(const char *platform, bool quick)
 		}
 		edit_ms = (clock_ms(CLOCK_MONOTONIC) - t0) / rounds;
 		printf("%8u | %10.4f %10.0f %9.2f | %10llu %11.0fx\n",
-		       counts[c], edit_ms, (double)edit_bytes / rounds,
-		       full_ms, (unsigned long long)full_bytes,
-		       full_ms / edit_ms);
+		       counts[c], edit_ms, (double)edit_bytes / rounds, full_ms,
+		       (unsigned long long)full_bytes, full_ms / edit_ms);
 		bc_tree_destroy(t);
 	}
 	bc_renderer_destroy(r);
@@ -284,7 +285,7 @@ int main(int argc, char **argv)
 			quick = true;
 		} else {
 			fprintf(stderr, "usage: bench_gl [--size N] [--reps R] "
-				"[--platform P] [--quick]\n");
+			                "[--platform P] [--quick]\n");
 			return 2;
 		}
 	}

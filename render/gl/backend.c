@@ -54,11 +54,11 @@
  * prim.glsl); a change here must be made there too. */
 _Static_assert(BC_OP_SMOOTH_DIFFERENCE == 6, "shaders/common.glsl op kinds");
 _Static_assert(BC_PRIM_TRI_PRISM == 16 && BC_PRIM_COUNT == 17,
-	       "shaders/prim.glsl primitive kinds");
+               "shaders/prim.glsl primitive kinds");
 _Static_assert(BC_ABV_CAPSULE == 3, "shaders/common.glsl ABV shapes");
 _Static_assert(BC_DEBUG_OVERLAPS == 2, "shaders/common.glsl debug modes");
 _Static_assert(BC_PRIM_RECORD_VEC4 == 5 && BC_OP_RECORD_VEC4 == 1,
-	       "shaders/common.glsl record sizes");
+               "shaders/common.glsl record sizes");
 _Static_assert(BC_PRIM_PACKED == 8, "shaders/prim.glsl packed parameters");
 _Static_assert(BC_EVAL_STACK == 130, "shaders/common.glsl BC_EVAL_STACK");
 _Static_assert(sizeof(struct bc__gl_frame_ubo) == 160, "std140 Frame block");
@@ -77,12 +77,7 @@ _Static_assert(BC_TREE_MAX_NODES / 2 < (1u << 21), "primitive index bits");
 #define SORTED_BYTES 16u
 #define SCRATCH_BYTES 24u
 
-enum {
-	Q_START = 0,
-	Q_ABUFFER,
-	Q_TRACE,
-	Q_COUNT
-};
+enum { Q_START = 0, Q_ABUFFER, Q_TRACE, Q_COUNT };
 
 struct gl_renderer {
 	struct bc_renderer base; /* first: the front's part */
@@ -127,23 +122,23 @@ static struct gl_renderer *gl_of(struct bc_renderer *base)
 /* (Re)allocates storage buffer b with room for size bytes (never zero:
  * binding an empty buffer is undefined). Contents are not kept. */
 static void buf_alloc(struct gl_renderer *r, int b, size_t size,
-		      const void *data)
+                      const void *data)
 {
 	GladGLContext *gl = &r->ctx.gl;
 	size_t room = size < 64 ? 64 : size;
 	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->bufs[b]);
 	gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)room,
-		       room == size ? data : NULL, GL_DYNAMIC_DRAW);
+	               room == size ? data : NULL, GL_DYNAMIC_DRAW);
 	if (data && room != size && size > 0) {
 		gl->BufferSubData(GL_SHADER_STORAGE_BUFFER, 0, (GLsizeiptr)size,
-				  data);
+		                  data);
 	}
 	r->buf_size[b] = room;
 	r->upload_bytes += data ? size : 0;
 }
 
 static void buf_update(struct gl_renderer *r, int b, size_t off, size_t size,
-		       const void *data)
+                       const void *data)
 {
 	GladGLContext *gl = &r->ctx.gl;
 	if (size == 0) {
@@ -151,12 +146,12 @@ static void buf_update(struct gl_renderer *r, int b, size_t off, size_t size,
 	}
 	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->bufs[b]);
 	gl->BufferSubData(GL_SHADER_STORAGE_BUFFER, (GLintptr)off,
-			  (GLsizeiptr)size, data);
+	                  (GLsizeiptr)size, data);
 	r->upload_bytes += size;
 }
 
 static void fill_topo(const struct bc_lin *l, uint32_t lo, uint32_t hi,
-		      uint32_t *out)
+                      uint32_t *out)
 {
 	for (uint32_t s = lo; s < hi; s++, out += 4) {
 		out[0] = l->first[s];
@@ -167,11 +162,10 @@ static void fill_topo(const struct bc_lin *l, uint32_t lo, uint32_t hi,
 }
 
 static void fill_prims(const struct bc_lin *l, uint32_t lo, uint32_t hi,
-		       float *out)
+                       float *out)
 {
 	for (uint32_t k = lo; k < hi; k++, out += BC_GL_PRIM_FLOATS) {
-		uint32_t u[2] = {l->prim_slot[k],
-				 l->node_id[l->prim_slot[k]]};
+		uint32_t u[2] = {l->prim_slot[k], l->node_id[l->prim_slot[k]]};
 		memcpy(out, u, sizeof(u));
 		out[2] = 0.0f;
 		out[3] = 0.0f;
@@ -183,7 +177,7 @@ static void fill_prims(const struct bc_lin *l, uint32_t lo, uint32_t hi,
 }
 
 static void fill_abvs(const struct bc_lin *l, uint32_t lo, uint32_t hi,
-		      float *out)
+                      float *out)
 {
 	for (uint32_t k = lo; k < hi; k++, out += BC_GL_ABV_FLOATS) {
 		const struct bc_abv *a = &l->abv[k];
@@ -194,8 +188,8 @@ static void fill_abvs(const struct bc_lin *l, uint32_t lo, uint32_t hi,
 			out[i] = blo[i];
 			out[4 + i] = bhi[i];
 			out[8 + i] = a->center[i];
-			out[12 + i] = a->shape == BC_ABV_BOX ? a->half[i]
-							     : a->end[i];
+			out[12 + i] =
+			    a->shape == BC_ABV_BOX ? a->half[i] : a->end[i];
 			out[16 + i] = a->axis[0][i];
 			out[20 + i] = a->axis[1][i];
 			out[24 + i] = a->axis[2][i];
@@ -208,7 +202,7 @@ static void fill_abvs(const struct bc_lin *l, uint32_t lo, uint32_t hi,
 
 /* Uploads slots [lo, hi) of the traversal indices. */
 static int put_topo(struct gl_renderer *r, const struct bc_lin *l, uint32_t lo,
-		    uint32_t hi, bool whole)
+                    uint32_t hi, bool whole)
 {
 	size_t n = hi - lo;
 	uint32_t *tmp = bc_malloc((n ? n : 1) * 4 * sizeof(uint32_t));
@@ -226,8 +220,8 @@ static int put_topo(struct gl_renderer *r, const struct bc_lin *l, uint32_t lo,
 }
 
 /* Uploads primitives [lo, hi) (slot, id, colour, ABV). */
-static int put_prims(struct gl_renderer *r, const struct bc_lin *l,
-		     uint32_t lo, uint32_t hi, bool whole)
+static int put_prims(struct gl_renderer *r, const struct bc_lin *l, uint32_t lo,
+                     uint32_t hi, bool whole)
 {
 	size_t n = hi - lo;
 	size_t pb = BC_GL_PRIM_FLOATS * sizeof(float);
@@ -241,11 +235,11 @@ static int put_prims(struct gl_renderer *r, const struct bc_lin *l,
 	if (whole) {
 		buf_alloc(r, BC__GL_BUF_PRIMS, n * pb, tmp);
 		buf_alloc(r, BC__GL_BUF_ABVS, n * ab,
-			  tmp + n * BC_GL_PRIM_FLOATS);
+		          tmp + n * BC_GL_PRIM_FLOATS);
 	} else {
 		buf_update(r, BC__GL_BUF_PRIMS, (size_t)lo * pb, n * pb, tmp);
 		buf_update(r, BC__GL_BUF_ABVS, (size_t)lo * ab, n * ab,
-			   tmp + n * BC_GL_PRIM_FLOATS);
+		           tmp + n * BC_GL_PRIM_FLOATS);
 	}
 	bc_free(tmp);
 	return 0;
@@ -278,7 +272,7 @@ static bool clamp_range(uint32_t *lo, uint32_t *hi, uint32_t n)
 }
 
 static int upload_dirty(struct gl_renderer *r, const struct bc_lin *l,
-			const struct bc_dirty *d)
+                        const struct bc_dirty *d)
 {
 	uint32_t plo = d->param_lo, phi = d->param_hi;
 	uint32_t slo = d->slot_lo, shi = d->slot_hi;
@@ -286,7 +280,7 @@ static int upload_dirty(struct gl_renderer *r, const struct bc_lin *l,
 	int rc;
 	if (clamp_range(&plo, &phi, l->nparam)) {
 		buf_update(r, BC__GL_BUF_PARAMS, (size_t)plo * 16,
-			   (size_t)(phi - plo) * 16, l->param + 4u * plo);
+		           (size_t)(phi - plo) * 16, l->param + 4u * plo);
 	}
 	if (clamp_range(&slo, &shi, l->count)) {
 		/* An operator edit changes node words (the kind) and, with
@@ -305,7 +299,7 @@ static int upload_dirty(struct gl_renderer *r, const struct bc_lin *l,
 			k1 = l->nprims;
 		}
 		buf_update(r, BC__GL_BUF_NODES, (size_t)slo * 8,
-			   (size_t)(shi - slo) * 8, l->node + 2u * slo);
+		           (size_t)(shi - slo) * 8, l->node + 2u * slo);
 		if ((rc = put_topo(r, l, slo, shi, false))) {
 			return rc;
 		}
@@ -368,8 +362,8 @@ static void gl_destroy(struct bc_renderer *base)
 /* opts comes from the front, checked and never NULL; its gl_platform
  * string is the caller's and is not kept (the front clears it), so the
  * platform is decided here, once. */
-static int gl_create(struct bc_renderer **out, const struct bc_render_opts *opts,
-		     struct bc_errinfo *ei)
+static int gl_create(struct bc_renderer **out,
+                     const struct bc_render_opts *opts, struct bc_errinfo *ei)
 {
 	struct gl_renderer *r;
 	enum bc_gl_platform platform;
@@ -379,9 +373,9 @@ static int gl_create(struct bc_renderer **out, const struct bc_render_opts *opts
 	platform = bc_gl_platform_from_name(opts->gl_platform);
 	if (platform == BC_GL_PLATFORM_COUNT) {
 		return bc_errinfo_set(ei, BC_EINVAL,
-				      "gl: unknown platform '%s' (auto, "
-				      "device, surfaceless or osmesa)",
-				      opts->gl_platform);
+		                      "gl: unknown platform '%s' (auto, "
+		                      "device, surfaceless or osmesa)",
+		                      opts->gl_platform);
 	}
 	if (!(r = bc_calloc(1, sizeof(*r)))) {
 		return bc_errinfo_set(ei, BC_ENOMEM, "gl: out of memory");
@@ -407,7 +401,7 @@ static int gl_create(struct bc_renderer **out, const struct bc_render_opts *opts
 	gl->GenQueries(Q_COUNT, r->queries);
 	gl->BindBuffer(GL_UNIFORM_BUFFER, r->ubo);
 	gl->BufferData(GL_UNIFORM_BUFFER, sizeof(struct bc__gl_frame_ubo), NULL,
-		       GL_DYNAMIC_DRAW);
+	               GL_DYNAMIC_DRAW);
 	for (int b = 0; b < BC__GL_BUF_COUNT; b++) {
 		buf_alloc(r, b, 64, NULL);
 	}
@@ -423,7 +417,8 @@ fail:
 	return rc;
 }
 
-/* ---- Sync ----------------------------------------------------------------- */
+/* ---- Sync -----------------------------------------------------------------
+ */
 
 /* Makes the context current, refusing work after a loss. */
 static int enter(struct gl_renderer *r, struct bc_errinfo *ei)
@@ -440,14 +435,14 @@ static int enter(struct gl_renderer *r, struct bc_errinfo *ei)
 		GLenum s = gl->GetGraphicsResetStatus();
 		if (s != GL_NO_ERROR) {
 			const char *why = s == GL_GUILTY_CONTEXT_RESET
-						  ? "GL_GUILTY_CONTEXT_RESET"
-					  : s == GL_INNOCENT_CONTEXT_RESET
-						  ? "GL_INNOCENT_CONTEXT_RESET"
-						  : "GL_UNKNOWN_CONTEXT_RESET";
+			                      ? "GL_GUILTY_CONTEXT_RESET"
+			                  : s == GL_INNOCENT_CONTEXT_RESET
+			                      ? "GL_INNOCENT_CONTEXT_RESET"
+			                      : "GL_UNKNOWN_CONTEXT_RESET";
 			r->err = BC_EGL;
 			snprintf(r->errstr, sizeof(r->errstr),
-				 "gl: context lost (%s): create a new renderer",
-				 why);
+			         "gl: context lost (%s): create a new renderer",
+			         why);
 			bc_log(BC_LOG_ERROR, "%s", r->errstr);
 			bc__gl_ctx_unbind(&r->ctx);
 			return bc_errinfo_set(ei, r->err, "%s", r->errstr);
@@ -457,7 +452,7 @@ static int enter(struct gl_renderer *r, struct bc_errinfo *ei)
 }
 
 static int gl_sync(struct bc_renderer *base, const struct bc_tree *t,
-		   const struct bc_dirty *dirty, struct bc_errinfo *ei)
+                   const struct bc_dirty *dirty, struct bc_errinfo *ei)
 {
 	struct gl_renderer *r = gl_of(base);
 	const struct bc_lin *l;
@@ -474,8 +469,8 @@ static int gl_sync(struct bc_renderer *base, const struct bc_tree *t,
 		r->count = r->nprims = r->nparam = 0;
 		r->upload_full = true;
 	} else if (!dirty || dirty->structure || !r->synced || t != r->tree ||
-		   l->count != r->count || l->nprims != r->nprims ||
-		   l->nparam != r->nparam) {
+	           l->count != r->count || l->nprims != r->nprims ||
+	           l->nparam != r->nparam) {
 		rc = upload_all(r, l);
 	} else if (dirty->edits) {
 		rc = upload_dirty(r, l, dirty);
@@ -492,7 +487,8 @@ static int gl_sync(struct bc_renderer *base, const struct bc_tree *t,
 	return rc;
 }
 
-/* ---- One frame ------------------------------------------------------------ */
+/* ---- One frame ------------------------------------------------------------
+ */
 
 static void normalize3(float v[3])
 {
@@ -507,9 +503,9 @@ static void normalize3(float v[3])
 /* The frame's uniforms: render/cpu/shade.c's frame setup (the region's
  * part is filled by the caller). */
 static void frame_setup(struct bc__gl_frame_ubo *u, const struct bc_lin *l,
-			const struct bc_camera *cam, uint32_t w, uint32_t h,
-			enum bc_debug_mode debug, uint32_t nprims,
-			uint32_t cap, uint32_t slots, uint32_t budget)
+                        const struct bc_camera *cam, uint32_t w, uint32_t h,
+                        enum bc_debug_mode debug, uint32_t nprims, uint32_t cap,
+                        uint32_t slots, uint32_t budget)
 {
 	struct bc_view_rays vr;
 	/* The scene's scale, not its size: an edit that moves the bounds a
@@ -524,7 +520,7 @@ static void frame_setup(struct bc__gl_frame_ubo *u, const struct bc_lin *l,
 		u->right[i] = vr.right[i];
 		u->up[i] = vr.up[i];
 		light[i] = -0.5f * vr.right[i] + 0.6f * vr.up[i] -
-			   0.6f * vr.forward[i];
+		           0.6f * vr.forward[i];
 	}
 	normalize3(light);
 	memcpy(u->light, light, sizeof(light));
@@ -565,20 +561,20 @@ static int frame_buffers(struct gl_renderer *r, uint32_t w, uint32_t h)
 	for (int i = 0; i < 3; i++) {
 		gl->BindTexture(GL_TEXTURE_2D, r->tex[i]);
 		gl->TexStorage2D(GL_TEXTURE_2D, 1, fmt[i], (GLsizei)w,
-				 (GLsizei)h);
+		                 (GLsizei)h);
 	}
 	gl->BindTexture(GL_TEXTURE_2D, 0);
 	buf_alloc(r, BC__GL_BUF_TILES, (size_t)tw * th * 16, NULL);
 	gl->BindFramebuffer(GL_FRAMEBUFFER, r->fbo);
 	gl->FramebufferParameteri(GL_FRAMEBUFFER, GL_FRAMEBUFFER_DEFAULT_WIDTH,
-				  (GLint)tw);
+	                          (GLint)tw);
 	gl->FramebufferParameteri(GL_FRAMEBUFFER, GL_FRAMEBUFFER_DEFAULT_HEIGHT,
-				  (GLint)th);
+	                          (GLint)th);
 	gl->BindFramebuffer(GL_FRAMEBUFFER, 0);
 	gl->BindBuffer(GL_PIXEL_PACK_BUFFER, r->pbo);
 	gl->BufferData(GL_PIXEL_PACK_BUFFER,
-		       (GLsizeiptr)(12 * npix + BC_GL_STAT_WORDS * 4), NULL,
-		       GL_STREAM_READ);
+	               (GLsizeiptr)(12 * npix + BC_GL_STAT_WORDS * 4), NULL,
+	               GL_STREAM_READ);
 	gl->BindBuffer(GL_PIXEL_PACK_BUFFER, 0);
 	r->tex_w = w;
 	r->tex_h = h;
@@ -592,9 +588,9 @@ static void frag_buffers(struct gl_renderer *r, uint32_t cap, uint32_t slots)
 	buf_alloc(r, BC__GL_BUF_LINKS, (size_t)cap * LINK_BYTES, NULL);
 	buf_alloc(r, BC__GL_BUF_SORTED, (size_t)cap * SORTED_BYTES, NULL);
 	buf_alloc(r, BC__GL_BUF_SCRATCH,
-		  (size_t)cap * SCRATCH_BYTES +
-			  (size_t)slots * BC_GL_SLOT_WORDS * 4u,
-		  NULL);
+	          (size_t)cap * SCRATCH_BYTES +
+	              (size_t)slots * BC_GL_SLOT_WORDS * 4u,
+	          NULL);
 	r->frag_cap = cap;
 	r->slots = slots;
 }
@@ -609,8 +605,9 @@ static uint32_t frag_limit(struct gl_renderer *r)
 	if (block > 0) {
 		/* The scratch block also holds the suspension slots. */
 		uint64_t room = (uint64_t)block -
-				(uint64_t)r->slots * BC_GL_SLOT_WORDS * 4u;
-		if ((uint64_t)block > (uint64_t)r->slots * BC_GL_SLOT_WORDS * 4u &&
+		                (uint64_t)r->slots * BC_GL_SLOT_WORDS * 4u;
+		if ((uint64_t)block >
+		        (uint64_t)r->slots * BC_GL_SLOT_WORDS * 4u &&
 		    room / SCRATCH_BYTES < most) {
 			most = room / SCRATCH_BYTES;
 		}
@@ -644,12 +641,12 @@ static uint32_t level_count(uint32_t n, uint32_t level)
  * less those of level + 1 when refining (both sets are products of
  * per-axis sets, see bc_render_level_has). */
 static uint32_t tile_rays(uint32_t tx, uint32_t ty, uint32_t w, uint32_t h,
-			  uint32_t level, bool refine)
+                          uint32_t level, bool refine)
 {
-	uint32_t tw = w - tx * BC_GL_TILE < BC_GL_TILE ? w - tx * BC_GL_TILE
-							: BC_GL_TILE;
-	uint32_t th = h - ty * BC_GL_TILE < BC_GL_TILE ? h - ty * BC_GL_TILE
-							: BC_GL_TILE;
+	uint32_t tw =
+	    w - tx * BC_GL_TILE < BC_GL_TILE ? w - tx * BC_GL_TILE : BC_GL_TILE;
+	uint32_t th =
+	    h - ty * BC_GL_TILE < BC_GL_TILE ? h - ty * BC_GL_TILE : BC_GL_TILE;
 	uint32_t n = level_count(tw, level) * level_count(th, level);
 	if (refine && level < BC_RENDER_MAX_LEVEL) {
 		n -= level_count(tw, level + 1) * level_count(th, level + 1);
@@ -660,8 +657,8 @@ static uint32_t tile_rays(uint32_t tx, uint32_t ty, uint32_t w, uint32_t h,
 /* Plans region for a w x h frame; a list goes into r->region (tile
  * indices, then one bit per tile). Returns 0 or BC_ENOMEM. */
 static int plan_region(struct gl_renderer *r,
-		       const struct bc_render_region *region, uint32_t w,
-		       uint32_t h, struct plan *p)
+                       const struct bc_render_region *region, uint32_t w,
+                       uint32_t h, struct plan *p)
 {
 	uint32_t tw = bc_render_tiles_x(w), th = bc_render_tiles_y(h);
 	size_t ntiles = (size_t)tw * th, words = (ntiles + 31) / 32;
@@ -681,8 +678,8 @@ static int plan_region(struct gl_renderer *r,
 	for (uint32_t ty = 0; ty < th; ty++) {
 		for (uint32_t tx = 0; tx < tw; tx++) {
 			uint32_t i = ty * tw + tx;
-			uint32_t n = tile_rays(tx, ty, w, h, p->level,
-					       p->refine);
+			uint32_t n =
+			    tile_rays(tx, ty, w, h, p->level, p->refine);
 			if (p->list && (!region->tiles[i] || n == 0)) {
 				continue;
 			}
@@ -712,7 +709,7 @@ static int plan_region(struct gl_renderer *r,
 /* Sends a planned list to the Region buffer (not counted as tree
  * upload). */
 static void upload_region(struct gl_renderer *r, const struct plan *p,
-			  uint32_t w, uint32_t h)
+                          uint32_t w, uint32_t h)
 {
 	GladGLContext *gl = &r->ctx.gl;
 	size_t ntiles = (size_t)bc_render_tiles_x(w) * bc_render_tiles_y(h);
@@ -723,18 +720,18 @@ static void upload_region(struct gl_renderer *r, const struct plan *p,
 	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->bufs[BC__GL_BUF_REGION]);
 	if (r->buf_size[BC__GL_BUF_REGION] < bytes) {
 		gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)bytes,
-			       r->region, GL_DYNAMIC_DRAW);
+		               r->region, GL_DYNAMIC_DRAW);
 		r->buf_size[BC__GL_BUF_REGION] = bytes;
 	} else {
-		gl->BufferSubData(GL_SHADER_STORAGE_BUFFER, 0, (GLsizeiptr)bytes,
-				  r->region);
+		gl->BufferSubData(GL_SHADER_STORAGE_BUFFER, 0,
+		                  (GLsizeiptr)bytes, r->region);
 	}
 }
 
 /* Copies the pixels p drew from the mapped planes (rgba, depth, ids, each
  * w * h words) into out; the others keep their values. */
 static void copy_region(struct gl_renderer *r, const struct plan *p,
-			const char *map, struct bc_frame *out)
+                        const char *map, struct bc_frame *out)
 {
 	uint32_t w = out->width, h = out->height, tw = bc_render_tiles_x(w);
 	size_t npix = (size_t)w * h;
@@ -758,7 +755,7 @@ static void copy_region(struct gl_renderer *r, const struct plan *p,
 			     x += step) {
 				size_t k = (size_t)y * w + x;
 				if (!bc_render_level_has(x, y, p->level,
-							 p->refine)) {
+				                         p->refine)) {
 					continue;
 				}
 				memcpy(out->rgba + 4 * k, map + 4 * k, 4);
@@ -777,7 +774,7 @@ static void copy_region(struct gl_renderer *r, const struct plan *p,
 
 /* Issues the passes of one frame, up to the first tracing dispatch. */
 static void draw(struct gl_renderer *r, const struct bc__gl_frame_ubo *u,
-		 const struct plan *p, uint32_t nprims)
+                 const struct plan *p, uint32_t nprims)
 {
 	GladGLContext *gl = &r->ctx.gl;
 	static const uint32_t tile_init[4] = {0xffffffffu, 0u, 0u, 0u};
@@ -788,15 +785,15 @@ static void draw(struct gl_renderer *r, const struct bc__gl_frame_ubo *u,
 	gl->BindBufferBase(GL_UNIFORM_BUFFER, 0, r->ubo);
 	for (int b = 0; b < BC__GL_BUF_COUNT; b++) {
 		gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, (GLuint)b,
-				   r->bufs[b]);
+		                   r->bufs[b]);
 	}
 	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->bufs[BC__GL_BUF_TILES]);
 	gl->ClearBufferSubData(GL_SHADER_STORAGE_BUFFER, GL_RGBA32UI, 0,
-			       (GLsizeiptr)((size_t)tw * th * 16),
-			       GL_RGBA_INTEGER, GL_UNSIGNED_INT, tile_init);
+	                       (GLsizeiptr)((size_t)tw * th * 16),
+	                       GL_RGBA_INTEGER, GL_UNSIGNED_INT, tile_init);
 	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->bufs[BC__GL_BUF_STATS]);
 	gl->ClearBufferData(GL_SHADER_STORAGE_BUFFER, GL_R32UI, GL_RED_INTEGER,
-			    GL_UNSIGNED_INT, &zero);
+	                    GL_UNSIGNED_INT, &zero);
 	gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
 	gl->QueryCounter(r->queries[Q_START], GL_TIMESTAMP);
 
@@ -824,11 +821,11 @@ static void draw(struct gl_renderer *r, const struct bc__gl_frame_ubo *u,
 	/* Tracing and shading. */
 	gl->UseProgram(r->progs[BC__GL_PROG_TRACE]);
 	gl->BindImageTexture(0, r->tex[0], 0, GL_FALSE, 0, GL_WRITE_ONLY,
-			     GL_R32UI);
+	                     GL_R32UI);
 	gl->BindImageTexture(1, r->tex[1], 0, GL_FALSE, 0, GL_WRITE_ONLY,
-			     GL_R32F);
+	                     GL_R32F);
 	gl->BindImageTexture(2, r->tex[2], 0, GL_FALSE, 0, GL_WRITE_ONLY,
-			     GL_R32UI);
+	                     GL_R32UI);
 	gl->DispatchCompute(p->gx, p->gy, 1);
 }
 
@@ -837,9 +834,9 @@ static void draw(struct gl_renderer *r, const struct bc__gl_frame_ubo *u,
  * last dispatch tells suspended tiles to finish with what they found, and
  * *incomplete is set. Returns 0, BC_ELIMIT or BC_EGL. */
 static int finish_tracing(struct gl_renderer *r, struct bc__gl_frame_ubo *u,
-			  const struct plan *p, double t_start,
-			  uint32_t *dispatches, bool *incomplete,
-			  struct bc_errinfo *ei)
+                          const struct plan *p, double t_start,
+                          uint32_t *dispatches, bool *incomplete,
+                          struct bc_errinfo *ei)
 {
 	GladGLContext *gl = &r->ctx.gl;
 	static const uint32_t zero = 0;
@@ -850,22 +847,23 @@ static int finish_tracing(struct gl_renderer *r, struct bc__gl_frame_ubo *u,
 		uint32_t suspended = 0;
 		gl->MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
 		gl->BindBuffer(GL_SHADER_STORAGE_BUFFER,
-			       r->bufs[BC__GL_BUF_STATS]);
+		               r->bufs[BC__GL_BUF_STATS]);
 		gl->GetBufferSubData(GL_SHADER_STORAGE_BUFFER,
-				     4 * BC_GL_STAT_SUSPENDED, 4, &suspended);
+		                     4 * BC_GL_STAT_SUSPENDED, 4, &suspended);
 		if (!suspended) {
 			break;
 		}
 		if (*dispatches >= BC_GL_MAX_DISPATCHES) {
 			return bc_errinfo_set(ei, BC_ELIMIT,
-					      "gl: %u tiles still unfinished "
-					      "after %u dispatches",
-					      suspended, *dispatches);
+			                      "gl: %u tiles still unfinished "
+			                      "after %u dispatches",
+			                      suspended, *dispatches);
 		}
 		gl->ClearBufferSubData(GL_SHADER_STORAGE_BUFFER, GL_R32UI,
-				       4 * BC_GL_STAT_SUSPENDED, 4,
-				       GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
-		if (budget_ms && bc_render_now_ms() - t_start > (double)budget_ms) {
+		                       4 * BC_GL_STAT_SUSPENDED, 4,
+		                       GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+		if (budget_ms &&
+		    bc_render_now_ms() - t_start > (double)budget_ms) {
 			/* Out of time: one last dispatch finishes every
 			 * suspended tile with what it has. */
 			u->pool[3] = 1;
@@ -874,7 +872,7 @@ static int finish_tracing(struct gl_renderer *r, struct bc__gl_frame_ubo *u,
 			*incomplete = true;
 		}
 		gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT |
-				  GL_UNIFORM_BARRIER_BIT);
+		                  GL_UNIFORM_BARRIER_BIT);
 		gl->DispatchCompute(p->gx, p->gy, 1);
 		(*dispatches)++;
 	}
@@ -887,8 +885,8 @@ static void read_back(struct gl_renderer *r, size_t npix)
 {
 	GladGLContext *gl = &r->ctx.gl;
 	gl->MemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT |
-			  GL_PIXEL_BUFFER_BARRIER_BIT |
-			  GL_BUFFER_UPDATE_BARRIER_BIT);
+	                  GL_PIXEL_BUFFER_BARRIER_BIT |
+	                  GL_BUFFER_UPDATE_BARRIER_BIT);
 	gl->QueryCounter(r->queries[Q_TRACE], GL_TIMESTAMP);
 
 	/* Readback: every plane and the statistics into one buffer. */
@@ -896,19 +894,19 @@ static void read_back(struct gl_renderer *r, size_t npix)
 	gl->PixelStorei(GL_PACK_ALIGNMENT, 4);
 	gl->BindTexture(GL_TEXTURE_2D, r->tex[0]);
 	gl->GetTexImage(GL_TEXTURE_2D, 0, GL_RED_INTEGER, GL_UNSIGNED_INT,
-			(void *)0);
+	                (void *)0);
 	gl->BindTexture(GL_TEXTURE_2D, r->tex[1]);
 	gl->GetTexImage(GL_TEXTURE_2D, 0, GL_RED, GL_FLOAT,
-			(void *)(uintptr_t)(4 * npix));
+	                (void *)(uintptr_t)(4 * npix));
 	gl->BindTexture(GL_TEXTURE_2D, r->tex[2]);
 	gl->GetTexImage(GL_TEXTURE_2D, 0, GL_RED_INTEGER, GL_UNSIGNED_INT,
-			(void *)(uintptr_t)(8 * npix));
+	                (void *)(uintptr_t)(8 * npix));
 	gl->BindTexture(GL_TEXTURE_2D, 0);
 	gl->BindBuffer(GL_PIXEL_PACK_BUFFER, 0);
 	gl->BindBuffer(GL_COPY_READ_BUFFER, r->bufs[BC__GL_BUF_STATS]);
 	gl->BindBuffer(GL_COPY_WRITE_BUFFER, r->pbo);
 	gl->CopyBufferSubData(GL_COPY_READ_BUFFER, GL_COPY_WRITE_BUFFER, 0,
-			      (GLintptr)(12 * npix), BC_GL_STAT_WORDS * 4);
+	                      (GLintptr)(12 * npix), BC_GL_STAT_WORDS * 4);
 	gl->BindBuffer(GL_COPY_READ_BUFFER, 0);
 	gl->BindBuffer(GL_COPY_WRITE_BUFFER, 0);
 }
@@ -922,14 +920,14 @@ static int wait_fence(struct gl_renderer *r, struct bc_errinfo *ei)
 	int rc = 0;
 	if (!fence) {
 		return bc__gl_check(&r->ctx, "glFenceSync", ei)
-			       ? BC_EGL
-			       : bc_errinfo_set(ei, BC_EGL,
-						"gl: glFenceSync failed");
+		           ? BC_EGL
+		           : bc_errinfo_set(ei, BC_EGL,
+		                            "gl: glFenceSync failed");
 	}
 	for (;;) {
 		/* One second at a time, so a lost context is noticed. */
 		GLenum s = gl->ClientWaitSync(fence, GL_SYNC_FLUSH_COMMANDS_BIT,
-					      1000000000ull);
+		                              1000000000ull);
 		if (s == GL_ALREADY_SIGNALED || s == GL_CONDITION_SATISFIED) {
 			break;
 		}
@@ -937,21 +935,21 @@ static int wait_fence(struct gl_renderer *r, struct bc_errinfo *ei)
 			rc = bc__gl_check(&r->ctx, "glClientWaitSync", ei);
 			if (!rc) {
 				rc = bc_errinfo_set(ei, BC_EGL,
-						    "gl: glClientWaitSync "
-						    "failed");
+				                    "gl: glClientWaitSync "
+				                    "failed");
 			}
 			break;
 		}
 		if (gl->GetGraphicsResetStatus &&
 		    gl->GetGraphicsResetStatus() != GL_NO_ERROR) {
 			rc = bc_errinfo_set(ei, BC_EGL,
-					    "gl: context lost during a frame");
+			                    "gl: context lost during a frame");
 			break;
 		}
 		if (bc_render_now_ms() - start > BC_GL_FENCE_TIMEOUT_S * 1e3) {
 			rc = bc_errinfo_set(ei, BC_ETIMEOUT,
-					    "gl: frame not done after %.0f s",
-					    BC_GL_FENCE_TIMEOUT_S);
+			                    "gl: frame not done after %.0f s",
+			                    BC_GL_FENCE_TIMEOUT_S);
 			break;
 		}
 	}
@@ -970,9 +968,9 @@ static double query_ms(struct gl_renderer *r, int a, int b)
 /* Draws region's pixels of the synced tree (see the file comment). The
  * front checked the frame, the camera and the level, and zeroed stats. */
 static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
-		     struct bc_frame *out,
-		     const struct bc_render_region *region,
-		     struct bc_render_stats *stats, struct bc_errinfo *ei)
+                     struct bc_frame *out,
+                     const struct bc_render_region *region,
+                     struct bc_render_stats *stats, struct bc_errinfo *ei)
 {
 	struct gl_renderer *r = gl_of(base);
 	GladGLContext *gl;
@@ -985,14 +983,14 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 	int rc;
 	if (!r->tree || !r->synced) {
 		return bc_errinfo_set(ei, BC_ESTATE,
-				      "render: no tree synced yet");
+		                      "render: no tree synced yet");
 	}
 	w = out->width;
 	h = out->height;
 	npix = (size_t)w * h;
 	if (plan_region(r, region, w, h, &plan)) {
 		return bc_errinfo_set(ei, BC_ENOMEM,
-				      "gl: out of memory for a region");
+		                      "gl: out of memory for a region");
 	}
 	if (plan.tiles == 0) {
 		return 0; /* no pixel asked: nothing to draw */
@@ -1008,19 +1006,18 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 	if (r->want_cap) {
 		limit = frag_limit(r);
 		frag_buffers(r, r->want_cap < limit ? r->want_cap : limit,
-			     r->slots);
+		             r->slots);
 		r->want_cap = 0;
 	} else if (r->frag_cap == 0) {
 		uint32_t want = 4 * ((w + 7) / 8) * ((h + 7) / 8) + 4 * nprims;
-		frag_buffers(r,
-			     want > BC_GL_MIN_FRAGMENTS ? want
-							: BC_GL_MIN_FRAGMENTS,
-			     r->slots);
+		frag_buffers(
+		    r, want > BC_GL_MIN_FRAGMENTS ? want : BC_GL_MIN_FRAGMENTS,
+		    r->slots);
 	}
 	if (r->budget && r->slots == 0) {
 		uint32_t tiles = ((w + 7) / 8) * ((h + 7) / 8);
 		frag_buffers(r, r->frag_cap,
-			     tiles < BC_GL_MIN_SLOTS ? tiles : BC_GL_MIN_SLOTS);
+		             tiles < BC_GL_MIN_SLOTS ? tiles : BC_GL_MIN_SLOTS);
 	}
 	r->ctx.info.retries = 0;
 	for (;;) {
@@ -1028,7 +1025,7 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 		bool fits, incomplete = false;
 		void *map;
 		frame_setup(&u, l, cam, w, h, base->opts.debug, nprims,
-			    r->frag_cap, r->slots, r->budget);
+		            r->frag_cap, r->slots, r->budget);
 		u.region[0] = plan.level;
 		u.region[1] = plan.refine ? 1u : 0u;
 		u.region[2] = plan.nlist;
@@ -1037,7 +1034,7 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 		draw(r, &u, &plan, nprims);
 		if ((rc = bc__gl_check(&r->ctx, "drawing a frame", ei)) ||
 		    (rc = finish_tracing(r, &u, &plan, t_start, &dispatches,
-					 &incomplete, ei))) {
+		                         &incomplete, ei))) {
 			goto done;
 		}
 		read_back(r, npix);
@@ -1045,17 +1042,17 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 			goto done;
 		}
 		gl->BindBuffer(GL_PIXEL_PACK_BUFFER, r->pbo);
-		map = gl->MapBufferRange(GL_PIXEL_PACK_BUFFER, 0,
-					 (GLsizeiptr)(12 * npix +
-						      BC_GL_STAT_WORDS * 4),
-					 GL_MAP_READ_BIT);
+		map = gl->MapBufferRange(
+		    GL_PIXEL_PACK_BUFFER, 0,
+		    (GLsizeiptr)(12 * npix + BC_GL_STAT_WORDS * 4),
+		    GL_MAP_READ_BIT);
 		if (!map) {
 			gl->BindBuffer(GL_PIXEL_PACK_BUFFER, 0);
 			rc = bc__gl_check(&r->ctx, "glMapBufferRange", ei);
 			if (!rc) {
 				rc = bc_errinfo_set(ei, BC_EGL,
-						    "gl: glMapBufferRange "
-						    "failed");
+				                    "gl: glMapBufferRange "
+				                    "failed");
 			}
 			goto done;
 		}
@@ -1079,16 +1076,17 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 		if (stat[BC_GL_STAT_FRAGMENTS] > limit ||
 		    r->ctx.info.retries >= 2) {
 			rc = bc_errinfo_set(ei, BC_ELIMIT,
-					    "gl: %u A-buffer fragments exceed "
-					    "the limit of %u (fewer or smaller "
-					    "primitives, or a smaller frame)",
-					    stat[BC_GL_STAT_FRAGMENTS], limit);
+			                    "gl: %u A-buffer fragments exceed "
+			                    "the limit of %u (fewer or smaller "
+			                    "primitives, or a smaller frame)",
+			                    stat[BC_GL_STAT_FRAGMENTS], limit);
 			goto done;
 		}
 		{
-			uint64_t want = (uint64_t)stat[BC_GL_STAT_FRAGMENTS] *
-					3 / 2;
-			uint64_t slots = (uint64_t)stat[BC_GL_STAT_SLOTS] * 3 / 2;
+			uint64_t want =
+			    (uint64_t)stat[BC_GL_STAT_FRAGMENTS] * 3 / 2;
+			uint64_t slots =
+			    (uint64_t)stat[BC_GL_STAT_SLOTS] * 3 / 2;
 			uint32_t cap = r->frag_cap;
 			if (stat[BC_GL_STAT_FRAGMENTS] > r->frag_cap) {
 				cap = want < limit ? (uint32_t)want : limit;
@@ -1097,26 +1095,28 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 				slots = r->slots;
 			}
 			frag_buffers(r, cap,
-				     slots < tiles ? (uint32_t)slots : tiles);
+			             slots < tiles ? (uint32_t)slots : tiles);
 		}
 		r->ctx.info.retries++;
 	}
-	if (r->budget && stat[BC_GL_STAT_MAX_OVERLAP] > BC_GL_LLVMPIPE_SORT_MAX) {
+	if (r->budget &&
+	    stat[BC_GL_STAT_MAX_OVERLAP] > BC_GL_LLVMPIPE_SORT_MAX) {
 		rc = bc_errinfo_set(ei, BC_ELIMIT,
-				    "gl: a tile lists %u primitives, more than "
-				    "llvmpipe's loop limit lets one shader "
-				    "sort (%u)",
-				    stat[BC_GL_STAT_MAX_OVERLAP],
-				    BC_GL_LLVMPIPE_SORT_MAX);
+		                    "gl: a tile lists %u primitives, more than "
+		                    "llvmpipe's loop limit lets one shader "
+		                    "sort (%u)",
+		                    stat[BC_GL_STAT_MAX_OVERLAP],
+		                    BC_GL_LLVMPIPE_SORT_MAX);
 		goto done;
 	}
 	if (stat[BC_GL_STAT_OVER_BUDGET]) {
-		rc = bc_errinfo_set(ei, BC_ELIMIT,
-				    "gl: %u depth ranges need more loop "
-				    "iterations than llvmpipe allows one shader "
-				    "invocation (too many primitives meet at "
-				    "one depth in one tile)",
-				    stat[BC_GL_STAT_OVER_BUDGET]);
+		rc =
+		    bc_errinfo_set(ei, BC_ELIMIT,
+		                   "gl: %u depth ranges need more loop "
+		                   "iterations than llvmpipe allows one shader "
+		                   "invocation (too many primitives meet at "
+		                   "one depth in one tile)",
+		                   stat[BC_GL_STAT_OVER_BUDGET]);
 		goto done;
 	}
 	r->ctx.info.fragments = stat[BC_GL_STAT_FRAGMENTS];
@@ -1149,10 +1149,10 @@ done:
 /* The backend's own frame constants: the scene scale the minimal step,
  * the bisection tolerance and the A-buffer's margins derive from. */
 static uint64_t gl_key(struct bc_renderer *base, const struct bc_camera *cam,
-		       uint32_t width, uint32_t height)
+                       uint32_t width, uint32_t height)
 {
-	float scale = bc_render_scale(base->tree ? bc_tree_lin(base->tree)
-						 : NULL);
+	float scale =
+	    bc_render_scale(base->tree ? bc_tree_lin(base->tree) : NULL);
 	uint32_t bits;
 	(void)cam;
 	(void)width;
@@ -1170,13 +1170,13 @@ static uint64_t gl_key(struct bc_renderer *base, const struct bc_camera *cam,
  * the eye, by a margin, marks nothing. Conservative: a tile the shader
  * may list is always marked. */
 static void gl_damage(struct bc_renderer *base, const struct bc_camera *cam,
-		      uint32_t width, uint32_t height,
-		      const struct bc_abv *abv, uint8_t *tiles)
+                      uint32_t width, uint32_t height, const struct bc_abv *abv,
+                      uint8_t *tiles)
 {
 	uint32_t tw = bc_render_tiles_x(width), th = bc_render_tiles_y(height);
 	struct bc_view_rays vr;
-	float scale = bc_render_scale(base->tree ? bc_tree_lin(base->tree)
-						 : NULL);
+	float scale =
+	    bc_render_scale(base->tree ? bc_tree_lin(base->tree) : NULL);
 	float lo[3], hi[3], c[3], e[3], far, m, footprint;
 	double px0 = INFINITY, px1 = -INFINITY, py0 = INFINITY, py1 = -INFINITY;
 	double w = width, h = height;
@@ -1201,7 +1201,7 @@ static void gl_damage(struct bc_renderer *base, const struct bc_camera *cam,
 		double v[3], z, sx, sy, s = 0.0;
 		for (int i = 0; i < 3; i++) {
 			double p = (k >> i) & 1u ? (double)hi[i] + m
-						 : (double)lo[i] - m;
+			                         : (double)lo[i] - m;
 			v[i] = p - vr.eye[i];
 			s += fabs(v[i]);
 		}
@@ -1273,8 +1273,7 @@ int bc_render_gl_set_capacity(struct bc_renderer *base, uint32_t fragments)
 	return 0;
 }
 
-int bc_render_gl_set_loop_budget(struct bc_renderer *base,
-				 uint32_t iterations)
+int bc_render_gl_set_loop_budget(struct bc_renderer *base, uint32_t iterations)
 {
 	struct gl_renderer *r = gl_of(base);
 	if (!base || base->ops != &bc_backend_gl_ops ||
@@ -1291,11 +1290,11 @@ int bc_render_gl_set_loop_budget(struct bc_renderer *base,
 }
 
 const struct bc_backend_ops bc_backend_gl_ops = {
-	.name = "gl",
-	.create = gl_create,
-	.destroy = gl_destroy,
-	.sync = gl_sync,
-	.render = gl_render,
-	.key = gl_key,
-	.damage = gl_damage,
+    .name = "gl",
+    .create = gl_create,
+    .destroy = gl_destroy,
+    .sync = gl_sync,
+    .render = gl_render,
+    .key = gl_key,
+    .damage = gl_damage,
 };

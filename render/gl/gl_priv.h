@@ -95,13 +95,13 @@ enum bc__gl_buf {
 
 /* The Frame uniform block (std140: every member a vec4). */
 struct bc__gl_frame_ubo {
-	float eye[4];     /* w: tan(fov_y / 2) */
-	float forward[4]; /* w: aspect */
-	float right[4];   /* w: minimal step */
-	float up[4];      /* w: pixel footprint per unit of t */
-	float light[4];   /* w: ambient */
-	float misc[4];    /* x: bisection tolerance, y: scene size */
-	uint32_t size[4]; /* width, height, tiles across, tiles down */
+	float eye[4];       /* w: tan(fov_y / 2) */
+	float forward[4];   /* w: aspect */
+	float right[4];     /* w: minimal step */
+	float up[4];        /* w: pixel footprint per unit of t */
+	float light[4];     /* w: ambient */
+	float misc[4];      /* x: bisection tolerance, y: scene size */
+	uint32_t size[4];   /* width, height, tiles across, tiles down */
 	uint32_t counts[4]; /* primitives, fragment capacity, debug mode */
 	uint32_t pool[4];   /* slot base (scratch words), slots, budget */
 	uint32_t region[4]; /* level, refine, tiles listed, list used */
@@ -125,7 +125,7 @@ struct bc__gl_ctx {
  * Returns 0, BC_EGL with the failed call and the error's name in ei,
  * BC_ENOTSUP when the platform is not built in, or BC_ENOMEM. */
 int bc__gl_ctx_open(struct bc__gl_ctx *c, enum bc_gl_platform platform,
-		    struct bc_errinfo *ei);
+                    struct bc_errinfo *ei);
 /* Destroys the context (which need not be current). Accepts a zeroed one. */
 void bc__gl_ctx_close(struct bc__gl_ctx *c);
 /* Makes c current on the calling thread / releases it. */
@@ -137,7 +137,7 @@ const char *bc__gl_error_name(GLenum e);
 /* Checks glGetError (draining it) after `stage`. Returns 0 or BC_EGL with
  * every pending error named in ei. */
 int bc__gl_check(struct bc__gl_ctx *c, const char *stage,
-		 struct bc_errinfo *ei);
+                 struct bc_errinfo *ei);
 
 /* ---- Programs ----------------------------------------------------------- */
 
@@ -153,8 +153,8 @@ enum bc__gl_prog {
  * always logged; a failure names the stage and carries the log's start in
  * ei. Returns 0 or BC_EGL. */
 int bc__gl_programs_build(struct bc__gl_ctx *c, GLuint progs[BC__GL_PROG_COUNT],
-			  struct bc_errinfo *ei);
+                          struct bc_errinfo *ei);
 void bc__gl_programs_free(struct bc__gl_ctx *c,
-			  GLuint progs[BC__GL_PROG_COUNT]);
+                          GLuint progs[BC__GL_PROG_COUNT]);
 
 #endif

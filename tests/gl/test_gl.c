@@ -35,15 +35,15 @@ static struct bc_renderer *open_gl(const char *platform, enum bc_debug_mode dbg)
 	struct bc_renderer *r = NULL;
 	if (bc_renderer_create(&r, BC_BACKEND_GL, &o, &ei)) {
 		fprintf(stderr, "  no gl context (%s): %s\n",
-			platform ? platform : "auto", ei.msg);
+		        platform ? platform : "auto", ei.msg);
 		return NULL;
 	}
 	return r;
 }
 
 static int draw(struct bc_renderer *r, const struct bc_tree *t,
-		const struct bc_dirty *dirty, const struct bc_camera *cam,
-		struct bc_frame *f)
+                const struct bc_dirty *dirty, const struct bc_camera *cam,
+                struct bc_frame *f)
 {
 	struct bc_errinfo ei = {0};
 	int rc = bc_renderer_sync(r, t, dirty, &ei);
@@ -57,7 +57,7 @@ static int draw(struct bc_renderer *r, const struct bc_tree *t,
 }
 
 static int draw_cpu(enum bc_debug_mode dbg, const struct bc_tree *t,
-		    const struct bc_camera *cam, struct bc_frame *f)
+                    const struct bc_camera *cam, struct bc_frame *f)
 {
 	struct bc_render_opts o = {.debug = dbg};
 	struct bc_errinfo ei = {0};
@@ -75,15 +75,15 @@ static int cmp_float(const void *a, const void *b)
 }
 
 struct agreement {
-	uint32_t mask_diff;  /* pixels hit by one and not the other */
-	uint32_t both;       /* pixels hit by both */
-	float median_dz;     /* over `both` */
-	uint32_t id_diff;    /* of `both` */
-	uint32_t rgba_diff;  /* pixels whose colour differs */
+	uint32_t mask_diff; /* pixels hit by one and not the other */
+	uint32_t both;      /* pixels hit by both */
+	float median_dz;    /* over `both` */
+	uint32_t id_diff;   /* of `both` */
+	uint32_t rgba_diff; /* pixels whose colour differs */
 };
 
 static void compare(const struct bc_frame *a, const struct bc_frame *b,
-		    struct agreement *out)
+                    struct agreement *out)
 {
 	size_t n = (size_t)a->width * a->height;
 	float *dz = malloc(n * sizeof(*dz));
@@ -94,12 +94,14 @@ static void compare(const struct bc_frame *a, const struct bc_frame *b,
 			out->mask_diff++;
 		} else if (ha) {
 			if (dz) {
-				dz[out->both] = fabsf(a->depth[i] - b->depth[i]);
+				dz[out->both] =
+				    fabsf(a->depth[i] - b->depth[i]);
 			}
 			out->both++;
 			out->id_diff += a->ids[i] != b->ids[i];
 		}
-		out->rgba_diff += memcmp(a->rgba + 4 * i, b->rgba + 4 * i, 4) != 0;
+		out->rgba_diff +=
+		    memcmp(a->rgba + 4 * i, b->rgba + 4 * i, 4) != 0;
 	}
 	if (dz && out->both) {
 		qsort(dz, out->both, sizeof(*dz), cmp_float);
@@ -125,22 +127,23 @@ struct family {
 };
 
 static const struct family families[] = {
-	{"fig16", {.level = 2}, 400},
-	{"fig16", {.level = 1, .blend = BC_GEN_BLEND_SHARP}, 400},
-	{"fig18", {.count = 64, .kind = BC_GEN_KIND_BOXES}, 400},
-	{"fig18", {.count = 64, .kind = BC_GEN_KIND_SPHERES,
-		   .blend = BC_GEN_BLEND_SHARP}, 400},
-	{"fig18", {.count = 64, .kind = BC_GEN_KIND_LENSES}, 400},
-	{"comb", {.count = 32}, 100},
-	{"comb", {.count = 32, .blend = BC_GEN_BLEND_SMOOTH}, 100},
-	/* Every primitive kind under every operator kind (most seeds
-	 * intersect away to nothing: these two do not). */
-	{"random", {.seed = 0}, 100},
-	{"random", {.seed = 4}, 100},
-	{"random", {.seed = 4, .count = 60, .depth = 40}, 16},
-	{"gears", {.teeth = 12}, 400},
-	{"many-gears", {.count = 6}, 200},
-	{"many-spheres", {.count = 300}, 400},
+    {"fig16", {.level = 2}, 400},
+    {"fig16", {.level = 1, .blend = BC_GEN_BLEND_SHARP}, 400},
+    {"fig18", {.count = 64, .kind = BC_GEN_KIND_BOXES}, 400},
+    {"fig18",
+     {.count = 64, .kind = BC_GEN_KIND_SPHERES, .blend = BC_GEN_BLEND_SHARP},
+     400},
+    {"fig18", {.count = 64, .kind = BC_GEN_KIND_LENSES}, 400},
+    {"comb", {.count = 32}, 100},
+    {"comb", {.count = 32, .blend = BC_GEN_BLEND_SMOOTH}, 100},
+    /* Every primitive kind under every operator kind (most seeds
+     * intersect away to nothing: these two do not). */
+    {"random", {.seed = 0}, 100},
+    {"random", {.seed = 4}, 100},
+    {"random", {.seed = 4, .count = 60, .depth = 40}, 16},
+    {"gears", {.teeth = 12}, 400},
+    {"many-gears", {.count = 6}, 200},
+    {"many-spheres", {.count = 300}, 400},
 };
 
 /* Nested binary operators leaning right, n deep: every view's stack grows
@@ -150,9 +153,8 @@ static int right_comb(struct bc_tree *t, uint32_t n)
 	int rc;
 	bc_tree_begin(t);
 	for (uint32_t i = 0; i < n; i++) {
-		struct bc_op_data op = {i % 3 == 2 ? BC_OP_SMOOTH_UNION
-						   : BC_OP_UNION,
-					0.0f, 0.0f};
+		struct bc_op_data op = {
+		    i % 3 == 2 ? BC_OP_SMOOTH_UNION : BC_OP_UNION, 0.0f, 0.0f};
 		struct bc_prim_data p;
 		if (op.kind == BC_OP_SMOOTH_UNION) {
 			op.blend = 0.15f;
@@ -187,7 +189,8 @@ static void test_families_agree_with_tiled(void)
 		bc_tree_destroy(t);
 		BC_SKIP("no GL context");
 	}
-	REQUIRE(t && bc_frame_init(&g, W, H) == 0 && bc_frame_init(&c, W, H) == 0);
+	REQUIRE(t && bc_frame_init(&g, W, H) == 0 &&
+	        bc_frame_init(&c, W, H) == 0);
 	for (size_t i = 0; i < sizeof(families) / sizeof(families[0]); i++) {
 		const struct family *fam = &families[i];
 		struct bc_errinfo ei = {0};
@@ -203,10 +206,11 @@ static void test_families_agree_with_tiled(void)
 		CHECK(draw(r, t, NULL, &cam, &g) == 0);
 		CHECK(draw_cpu(BC_DEBUG_NONE, t, &cam, &c) == 0);
 		compare(&g, &c, &a);
-		printf("  %-12s %2zu: mask %u/%u, median |dz| %.2g (limit %.2g), "
-		       "ids %u/%u, colours %u\n",
-		       fam->gen, i, a.mask_diff, W * H, (double)a.median_dz,
-		       1e-3 * (double)size, a.id_diff, a.both, a.rgba_diff);
+		printf(
+		    "  %-12s %2zu: mask %u/%u, median |dz| %.2g (limit %.2g), "
+		    "ids %u/%u, colours %u\n",
+		    fam->gen, i, a.mask_diff, W * H, (double)a.median_dz,
+		    1e-3 * (double)size, a.id_diff, a.both, a.rgba_diff);
 		CHECK(a.both >= fam->min_hits); /* the scene is in view */
 		CHECK(a.mask_diff * 200 < W * H);
 		CHECK(a.median_dz < 1e-3f * size);
@@ -220,10 +224,11 @@ static void test_families_agree_with_tiled(void)
 		CHECK(draw(r, t, NULL, &cam, &g) == 0);
 		CHECK(draw_cpu(BC_DEBUG_NONE, t, &cam, &c) == 0);
 		compare(&g, &c, &a);
-		printf("  right comb  : mask %u/%u, median |dz| %.2g, ids %u/%u, "
-		       "colours %u\n",
-		       a.mask_diff, W * H, (double)a.median_dz, a.id_diff,
-		       a.both, a.rgba_diff);
+		printf(
+		    "  right comb  : mask %u/%u, median |dz| %.2g, ids %u/%u, "
+		    "colours %u\n",
+		    a.mask_diff, W * H, (double)a.median_dz, a.id_diff, a.both,
+		    a.rgba_diff);
 		struct bc_gl_info info;
 		REQUIRE(bc_render_gl_info(r, &info) == 0);
 		CHECK(info.ranges_general > 0);
@@ -242,7 +247,7 @@ static void test_families_agree_with_tiled(void)
 
 /* Renders t fresh in a new renderer. */
 static int fresh(const struct bc_tree *t, const struct bc_camera *cam,
-		 struct bc_frame *f)
+                 struct bc_frame *f)
 {
 	struct bc_renderer *r = open_gl(NULL, BC_DEBUG_NONE);
 	struct bc_tree *copy = bc_tree_create();
@@ -288,9 +293,10 @@ static void test_param_edit_equals_fresh_load(void)
 		bc_tree_destroy(t);
 		BC_SKIP("no GL context");
 	}
-	REQUIRE(t && bc_frame_init(&a, W, H) == 0 && bc_frame_init(&b, W, H) == 0);
+	REQUIRE(t && bc_frame_init(&a, W, H) == 0 &&
+	        bc_frame_init(&b, W, H) == 0);
 	REQUIRE(bc_gen("fig16", &(struct bc_gen_opts){.level = 1}, t, &cam,
-		       &ei) == 0);
+	               &ei) == 0);
 	bc_tree_take_dirty(t, &dirty);
 	REQUIRE(draw(r, t, NULL, &cam, &a) == 0);
 	find_nodes(t, &prim_id, &op_id);
@@ -318,7 +324,7 @@ static void test_param_edit_equals_fresh_load(void)
 	 * counts and the subtree's ABVs go up, not the whole tree. */
 	REQUIRE(bc_tree_get(t, op_id, NULL, &op));
 	op.kind = op.kind == BC_OP_SMOOTH_UNION ? BC_OP_SMOOTH_INTERSECTION
-						: BC_OP_INTERSECTION;
+	                                        : BC_OP_INTERSECTION;
 	REQUIRE(bc_tree_set_op(t, op_id, &op, &ei) == 0);
 	op.kind = BC_OP_SMOOTH_UNION;
 	op.blend = 0.2f;
@@ -352,7 +358,8 @@ static void test_param_edit_equals_fresh_load(void)
 	bc_renderer_destroy(r);
 }
 
-/* ---- Limits --------------------------------------------------------------- */
+/* ---- Limits ---------------------------------------------------------------
+ */
 
 /* n spheres of one radius around nearly one centre: every one enters every
  * tile at the same depth, so the active set passes M_overlap at one range
@@ -398,8 +405,8 @@ static void test_overflows_degrade_not_fail(void)
 		BC_SKIP("no GL context");
 	}
 	REQUIRE(t && bc_frame_init(&g, 32, 32) == 0 &&
-		bc_frame_init(&c, 32, 32) == 0 &&
-		bc_frame_init(&again, 32, 32) == 0);
+	        bc_frame_init(&c, 32, 32) == 0 &&
+	        bc_frame_init(&again, 32, 32) == 0);
 	REQUIRE(crowd(t, 160) == 0);
 	bc_camera_default(&cam);
 	REQUIRE(draw(r, t, NULL, &cam, &g) == 0);
@@ -445,13 +452,15 @@ static void test_overflows_degrade_not_fail(void)
 		REQUIRE(bc_renderer_render(rb, &cam, &again, &st, &ei) == 0);
 		CHECK(st.incomplete);
 		for (size_t i = 0; i < 32 * 32; i++) {
-			if (memcmp(again.rgba + 4 * i, g.rgba + 4 * i, 4) == 0) {
+			if (memcmp(again.rgba + 4 * i, g.rgba + 4 * i, 4) ==
+			    0) {
 				continue;
 			}
 			if (isinf(again.depth[i]) && again.ids[i] == 0) {
 				bg++;
 			} else if (!(again.depth[i] <=
-				     g.depth[i] + 1e-3f * bc_tree_lin(t)->size)) {
+			             g.depth[i] +
+			                 1e-3f * bc_tree_lin(t)->size)) {
 				wrong++;
 			}
 		}
@@ -507,7 +516,7 @@ static void test_long_tile_lists(void)
 		BC_SKIP("no GL context");
 	}
 	REQUIRE(t && bc_frame_init(&g, 16, 16) == 0 &&
-		bc_frame_init(&c, 16, 16) == 0);
+	        bc_frame_init(&c, 16, 16) == 0);
 	REQUIRE(queue(t, 1200) == 0);
 	bc_camera_default(&cam);
 	cam.fov_y_deg = 4.0f;
@@ -528,7 +537,8 @@ static void test_long_tile_lists(void)
 	bc_renderer_destroy(r);
 }
 
-/* ---- Regions -------------------------------------------------------------- */
+/* ---- Regions --------------------------------------------------------------
+ */
 
 /* Pixels where a and b differ in colour, depth or id (bit for bit). */
 static uint32_t mismatches(const struct bc_frame *a, const struct bc_frame *b)
@@ -553,9 +563,8 @@ static void scribble(struct bc_frame *f)
 }
 
 static int draw_region(struct bc_renderer *r, const struct bc_camera *cam,
-		       struct bc_frame *f, const uint8_t *tiles,
-		       uint32_t level, bool refine,
-		       struct bc_render_stats *st)
+                       struct bc_frame *f, const uint8_t *tiles, uint32_t level,
+                       bool refine, struct bc_render_stats *st)
 {
 	struct bc_render_region reg = {tiles, level, refine};
 	struct bc_errinfo ei = {0};
@@ -571,8 +580,8 @@ static int draw_region(struct bc_renderer *r, const struct bc_camera *cam,
  * must give the whole frame bit for bit, and draw nothing twice. Returns
  * the mismatching pixels. */
 static uint32_t refine_vs_whole(struct bc_renderer *r,
-				const struct bc_camera *cam, uint32_t w,
-				uint32_t h, uint32_t *frames)
+                                const struct bc_camera *cam, uint32_t w,
+                                uint32_t h, uint32_t *frames)
 {
 	struct bc_frame ref = {0}, acc = {0};
 	uint32_t tw = bc_render_tiles_x(w), th = bc_render_tiles_y(h);
@@ -595,7 +604,7 @@ static uint32_t refine_vs_whole(struct bc_renderer *r,
 			bool refine = level < 3;
 			if (!split || level == 3) {
 				if (draw_region(r, cam, &acc, NULL,
-						(uint32_t)level, refine, &st)) {
+				                (uint32_t)level, refine, &st)) {
 					bad = w * h;
 					goto out;
 				}
@@ -608,7 +617,7 @@ static uint32_t refine_vs_whole(struct bc_renderer *r,
 			}
 			for (int pass = 0; pass < 2; pass++) {
 				if (draw_region(r, cam, &acc, half,
-						(uint32_t)level, refine, &st)) {
+				                (uint32_t)level, refine, &st)) {
 					bad = w * h;
 					goto out;
 				}
@@ -647,8 +656,8 @@ static void test_refinement_equals_whole(void)
 	for (int scene = 0; scene < 3; scene++) {
 		if (scene == 0) {
 			REQUIRE(bc_gen("fig18",
-				       &(struct bc_gen_opts){.count = 27}, t,
-				       &cam, &ei) == 0);
+			               &(struct bc_gen_opts){.count = 27}, t,
+			               &cam, &ei) == 0);
 		} else if (scene == 1) {
 			REQUIRE(rt_build(t, 11, 14) == 0);
 			bc_camera_default(&cam);
@@ -678,7 +687,8 @@ static void test_refinement_equals_whole(void)
 	CHECK(bc_render_gl_set_loop_budget(r, BC_GL_MIN_LOOP_BUDGET) == 0);
 	CHECK(bc_render_gl_set_loop_budget(r, 0) == 0);
 	printf("  %u refined frames compared with whole ones, %u pixels "
-	       "differ\n", frames, bad);
+	       "differ\n",
+	       frames, bad);
 	CHECK_EQ_INT(bad, 0);
 	CHECK_EQ_INT(frames, 6);
 
@@ -690,7 +700,7 @@ static void test_refinement_equals_whole(void)
 		uint32_t kept = 0, drawn = 0, wrong = 0;
 		REQUIRE(tw * th == sizeof(tiles));
 		REQUIRE(bc_frame_init(&ref, 37, 23) == 0 &&
-			bc_frame_init(&f, 37, 23) == 0);
+		        bc_frame_init(&f, 37, 23) == 0);
 		REQUIRE(rt_build(t, 11, 14) == 0);
 		REQUIRE(draw(r, t, NULL, &cam, &ref) == 0);
 		REQUIRE(bc_renderer_render(r, &cam, &f, NULL, &ei) == 0);
@@ -701,14 +711,13 @@ static void test_refinement_equals_whole(void)
 			for (uint32_t x = 0; x < 37; x++) {
 				size_t i = (size_t)y * 37 + x;
 				bool asked = tiles[(y / 8) * tw + x / 8] &&
-					     bc_render_level_has(x, y, 1,
-								 true);
+				             bc_render_level_has(x, y, 1, true);
 				if (asked) {
 					drawn++;
-					wrong += memcmp(f.rgba + 4 * i,
-							ref.rgba + 4 * i,
-							4) != 0 ||
-						 f.ids[i] != ref.ids[i];
+					wrong +=
+					    memcmp(f.rgba + 4 * i,
+					           ref.rgba + 4 * i, 4) != 0 ||
+					    f.ids[i] != ref.ids[i];
 				} else {
 					kept++;
 					wrong += f.ids[i] != 0xa5a5a5a5u;
@@ -727,9 +736,9 @@ static void test_refinement_equals_whole(void)
 /* Marks in tiles the damage of primitives [k0, k1) with ABVs before and
  * after an edit. */
 static void mark_damage(struct bc_renderer *r, const struct bc_camera *cam,
-			uint32_t w, uint32_t h, const struct bc_abv *before,
-			const struct bc_abv *after, uint32_t k0, uint32_t k1,
-			uint8_t *tiles)
+                        uint32_t w, uint32_t h, const struct bc_abv *before,
+                        const struct bc_abv *after, uint32_t k0, uint32_t k1,
+                        uint8_t *tiles)
 {
 	for (uint32_t k = k0; k < k1; k++) {
 		bc_renderer_damage(r, cam, w, h, &before[k], tiles);
@@ -747,7 +756,7 @@ static int random_edit(struct bc_tree *t, uint32_t *k0, uint32_t *k1)
 {
 	const struct bc_lin *l = bc_tree_lin(t);
 	uint32_t s = rt_below(4) ? l->prim_slot[rt_below(l->nprims)]
-				 : rt_below(l->count);
+	                         : rt_below(l->count);
 	uint32_t id = l->node_id[s], top;
 	struct bc_prim_data p;
 	struct bc_op_data op;
@@ -760,9 +769,9 @@ static int random_edit(struct bc_tree *t, uint32_t *k0, uint32_t *k1)
 	if (p.kind != BC_PRIM_INVALID) {
 		bool far = rt_below(3) == 0;
 		for (int i = 0; i < 3; i++) {
-			p.translate[i] = far ? rt_float(-1.5f, 1.5f)
-					     : p.translate[i] +
-						       rt_float(-0.15f, 0.15f);
+			p.translate[i] =
+			    far ? rt_float(-1.5f, 1.5f)
+			        : p.translate[i] + rt_float(-0.15f, 0.15f);
 		}
 		float grow = rt_float(0.85f, 1.15f);
 		for (int i = 0; i < BC_PRIM_MAX_PARAMS; i++) {
@@ -810,19 +819,19 @@ static void test_damage_regions_equal_whole(void)
 		const struct bc_lin *l;
 		switch (scene) {
 		case 0:
-			REQUIRE(bc_gen("fig18",
-				       &(struct bc_gen_opts){
-					       .count = 8,
-					       .kind = BC_GEN_KIND_SPHERES},
-				       t, &cam, &ei) == 0);
+			REQUIRE(
+			    bc_gen("fig18",
+			           &(struct bc_gen_opts){
+			               .count = 8, .kind = BC_GEN_KIND_SPHERES},
+			           t, &cam, &ei) == 0);
 			break;
 		case 1:
 			REQUIRE(bc_gen("fig18",
-				       &(struct bc_gen_opts){
-					       .count = 8,
-					       .kind = BC_GEN_KIND_SPHERES,
-					       .blend = BC_GEN_BLEND_SHARP},
-				       t, &cam, &ei) == 0);
+			               &(struct bc_gen_opts){
+			                   .count = 8,
+			                   .kind = BC_GEN_KIND_SPHERES,
+			                   .blend = BC_GEN_BLEND_SHARP},
+			               t, &cam, &ei) == 0);
 			break;
 		default:
 			REQUIRE(rt_build(t, 100 + (uint64_t)scene, 12) == 0);
@@ -838,7 +847,7 @@ static void test_damage_regions_equal_whole(void)
 		before = calloc(l->nprims, sizeof(*before));
 		tiles = calloc(ntiles, 1);
 		REQUIRE(before && tiles && bc_frame_init(&acc, w, h) == 0 &&
-			bc_frame_init(&ref, w, h) == 0);
+		        bc_frame_init(&ref, w, h) == 0);
 		{
 			struct bc_dirty clean;
 			bc_tree_take_dirty(t, &clean);
@@ -859,16 +868,16 @@ static void test_damage_regions_equal_whole(void)
 			REQUIRE(bc_renderer_sync(r, t, &dirty, &ei) == 0);
 			l = bc_tree_lin(t);
 			lo = dirty.prim_lo < dirty.prim_hi && dirty.prim_lo < k0
-				     ? dirty.prim_lo
-				     : k0;
+			         ? dirty.prim_lo
+			         : k0;
 			hi = dirty.prim_lo < dirty.prim_hi && dirty.prim_hi > k1
-				     ? dirty.prim_hi
-				     : k1;
+			         ? dirty.prim_hi
+			         : k1;
 			memset(tiles, 0, ntiles);
 			mark_damage(r, &cam, w, h, before, l->abv, lo, hi,
-				    tiles);
+			            tiles);
 			REQUIRE(draw_region(r, &cam, &acc, tiles, 0, false,
-					    &st) == 0);
+			                    &st) == 0);
 			ms_region += st.ms_total;
 			if (!st.whole) {
 				regions++;
@@ -876,14 +885,14 @@ static void test_damage_regions_equal_whole(void)
 				tiles_all += ntiles;
 			}
 			REQUIRE(bc_renderer_render(r, &cam, &ref, &st, &ei) ==
-				0);
+			        0);
 			ms_whole += st.ms_total;
 			b = mismatches(&acc, &ref);
 			if (b) {
 				fprintf(stderr,
-					"  scene %d edit %d (node range "
-					"%u..%u): %u pixels differ\n",
-					scene, e, lo, hi, b);
+				        "  scene %d edit %d (node range "
+				        "%u..%u): %u pixels differ\n",
+				        scene, e, lo, hi, b);
 			}
 			bad += b;
 			frames++;
@@ -894,7 +903,7 @@ static void test_damage_regions_equal_whole(void)
 	       "%.1f ms per region, %.1f ms per whole frame\n",
 	       tried, refused, frames, regions,
 	       tiles_all ? 100.0 * (double)tiles_drawn / (double)tiles_all
-			 : 0.0,
+	                 : 0.0,
 	       bad, frames ? ms_region / frames : 0.0,
 	       frames ? ms_whole / frames : 0.0);
 	CHECK_EQ_INT(bad, 0);
@@ -908,7 +917,8 @@ static void test_damage_regions_equal_whole(void)
 	bc_renderer_destroy(r);
 }
 
-/* ---- Platforms -------------------------------------------------------------- */
+/* ---- Platforms --------------------------------------------------------------
+ */
 
 static void test_platforms_draw_the_same(void)
 {
@@ -921,9 +931,9 @@ static void test_platforms_draw_the_same(void)
 	struct bc_errinfo ei = {0};
 	bool any = false;
 	REQUIRE(t && bc_frame_init(&ref, 32, 32) == 0 &&
-		bc_frame_init(&f, 32, 32) == 0);
+	        bc_frame_init(&f, 32, 32) == 0);
 	REQUIRE(bc_gen("fig18", &(struct bc_gen_opts){.count = 27}, t, &cam,
-		       NULL) == 0);
+	               NULL) == 0);
 	if (bc_backend_available(BC_BACKEND_GL)) {
 		CHECK(bc_renderer_create(&r, BC_BACKEND_GL, &bad, &ei) ==
 		      BC_EINVAL);
@@ -944,7 +954,8 @@ static void test_platforms_draw_the_same(void)
 		       names[i], info.renderer, info.version, info.major,
 		       info.minor, info.robust_access ? "yes" : "no",
 		       info.lose_on_reset ? "loses context" : "no");
-		CHECK(strcmp(bc_gl_platform_name(info.platform), names[i]) == 0);
+		CHECK(strcmp(bc_gl_platform_name(info.platform), names[i]) ==
+		      0);
 		CHECK(info.major > 4 || (info.major == 4 && info.minor >= 3));
 		CHECK(info.renderer[0] != '\0');
 		CHECK(info.shared_bytes >= 16384);
@@ -986,9 +997,10 @@ static void test_debug_modes_match_cpu(void)
 		bc_tree_destroy(t);
 		BC_SKIP("no GL context");
 	}
-	REQUIRE(t && bc_frame_init(&g, W, H) == 0 && bc_frame_init(&c, W, H) == 0);
+	REQUIRE(t && bc_frame_init(&g, W, H) == 0 &&
+	        bc_frame_init(&c, W, H) == 0);
 	REQUIRE(bc_gen("fig18", &(struct bc_gen_opts){.count = 64}, t, &cam,
-		       NULL) == 0);
+	               NULL) == 0);
 	/* Overlaps: the tile lists' lengths, so the same colours. */
 	REQUIRE(draw(ov, t, NULL, &cam, &g) == 0);
 	REQUIRE(draw_cpu(BC_DEBUG_OVERLAPS, t, &cam, &c) == 0);
@@ -1026,9 +1038,9 @@ static void test_odd_sizes_and_empty_scene(void)
 		BC_SKIP("no GL context");
 	}
 	REQUIRE(t && bc_frame_init(&g, 37, 23) == 0 &&
-		bc_frame_init(&c, 37, 23) == 0);
+	        bc_frame_init(&c, 37, 23) == 0);
 	REQUIRE(bc_gen("fig16", &(struct bc_gen_opts){.level = 1}, t, &cam,
-		       NULL) == 0);
+	               NULL) == 0);
 	REQUIRE(draw(r, t, NULL, &cam, &g) == 0);
 	REQUIRE(draw_cpu(BC_DEBUG_NONE, t, &cam, &c) == 0);
 	compare(&g, &c, &a);
@@ -1077,7 +1089,7 @@ static void test_bad_calls_are_refused(void)
 	REQUIRE(bc_frame_init(&f, 16, 16) == 0);
 	bc_camera_default(&cam);
 	CHECK(bc_renderer_create(&nr, BC_BACKEND_GL, &bad_dbg, &ei) ==
-		      BC_EENUM &&
+	          BC_EENUM &&
 	      !nr);
 	CHECK(bc_renderer_render(r, &cam, &f, NULL, &ei) == BC_ESTATE);
 	CHECK(bc_renderer_sync(r, NULL, NULL, &ei) == BC_EINVAL);
@@ -1085,7 +1097,7 @@ static void test_bad_calls_are_refused(void)
 		struct bc_tree *t = bc_tree_create();
 		REQUIRE(t);
 		REQUIRE(bc_gen("comb", &(struct bc_gen_opts){.count = 4}, t,
-			       &cam, NULL) == 0);
+		               &cam, NULL) == 0);
 		CHECK(bc_renderer_sync(r, t, NULL, &ei) == 0);
 		CHECK(bc_renderer_render(r, &cam, &zero, NULL, &ei) ==
 		      BC_EINVAL);
@@ -1111,16 +1123,16 @@ static void test_bad_calls_are_refused(void)
 }
 
 static const struct bc_test tests[] = {
-	{"families_agree_with_tiled", test_families_agree_with_tiled},
-	{"param_edit_equals_fresh_load", test_param_edit_equals_fresh_load},
-	{"overflows_degrade_not_fail", test_overflows_degrade_not_fail},
-	{"long_tile_lists", test_long_tile_lists},
-	{"platforms_draw_the_same", test_platforms_draw_the_same},
-	{"debug_modes_match_cpu", test_debug_modes_match_cpu},
-	{"odd_sizes_and_empty_scene", test_odd_sizes_and_empty_scene},
-	{"refinement_equals_whole", test_refinement_equals_whole},
-	{"damage_regions_equal_whole", test_damage_regions_equal_whole},
-	{"bad_calls_are_refused", test_bad_calls_are_refused},
+    {"families_agree_with_tiled", test_families_agree_with_tiled},
+    {"param_edit_equals_fresh_load", test_param_edit_equals_fresh_load},
+    {"overflows_degrade_not_fail", test_overflows_degrade_not_fail},
+    {"long_tile_lists", test_long_tile_lists},
+    {"platforms_draw_the_same", test_platforms_draw_the_same},
+    {"debug_modes_match_cpu", test_debug_modes_match_cpu},
+    {"odd_sizes_and_empty_scene", test_odd_sizes_and_empty_scene},
+    {"refinement_equals_whole", test_refinement_equals_whole},
+    {"damage_regions_equal_whole", test_damage_regions_equal_whole},
+    {"bad_calls_are_refused", test_bad_calls_are_refused},
 };
 
 BC_TEST_MAIN(tests)

@@ -3,8 +3,9 @@
  * as OpenGL 4.3+ compute work, on a context from the EGL device platform (a
  * real GPU), EGL surfaceless (Mesa llvmpipe on CPU-only hosts) or OSMesa.
  * It is created and driven through blobcast/render.h's front like every
- * backend (BC_BACKEND_GL); this header adds what only it can say: which platform and driver it got, what the driver
- * granted, and the limits the last frame ran into.
+ * backend (BC_BACKEND_GL); this header adds what only it can say: which
+ * platform and driver it got, what the driver granted, and the limits the last
+ * frame ran into.
  */
 #ifndef BLOBCAST_RENDER_GL_H
 #define BLOBCAST_RENDER_GL_H
@@ -18,8 +19,8 @@
 extern const struct bc_backend_ops bc_backend_gl_ops;
 
 enum bc_gl_platform {
-	BC_GL_PLATFORM_AUTO = 0, /* device, then surfaceless, then osmesa */
-	BC_GL_PLATFORM_DEVICE,   /* EGL_EXT_platform_device */
+	BC_GL_PLATFORM_AUTO = 0,    /* device, then surfaceless, then osmesa */
+	BC_GL_PLATFORM_DEVICE,      /* EGL_EXT_platform_device */
 	BC_GL_PLATFORM_SURFACELESS, /* EGL_MESA_platform_surfaceless */
 	BC_GL_PLATFORM_OSMESA,
 	BC_GL_PLATFORM_COUNT
@@ -41,21 +42,21 @@ struct bc_gl_info {
 	bool debug_output;     /* GL_KHR_debug messages reach the log */
 	uint32_t shared_bytes; /* GL_MAX_COMPUTE_SHARED_MEMORY_SIZE */
 	/* The last frame. */
-	uint32_t fragments;    /* A-buffer fragments */
-	uint32_t ranges;       /* depth ranges traced, all tiles */
-	uint32_t over_m;       /* ranges whose active set spilled past
-				  M_overlap into global scratch */
-	uint32_t over_cache;   /* ranges whose records did not all fit the
-				  shared node cache */
+	uint32_t fragments;      /* A-buffer fragments */
+	uint32_t ranges;         /* depth ranges traced, all tiles */
+	uint32_t over_m;         /* ranges whose active set spilled past
+	                            M_overlap into global scratch */
+	uint32_t over_cache;     /* ranges whose records did not all fit the
+	                            shared node cache */
 	uint32_t ranges_general; /* ranges whose view needed the general
-				    evaluation (deep stack, records or view
-				    in global memory) */
-	uint32_t retries;      /* times the frame was redrawn after growing
-				  the A-buffer or the suspension slots */
-	uint32_t suspensions;  /* tiles that suspended (loop budget) */
-	uint32_t dispatches;   /* tracing dispatches the frame took */
-	uint32_t loop_budget;  /* loop iterations per shader invocation the
-				  driver allows (llvmpipe), 0: no limit */
+	                            evaluation (deep stack, records or view
+	                            in global memory) */
+	uint32_t retries;        /* times the frame was redrawn after growing
+	                            the A-buffer or the suspension slots */
+	uint32_t suspensions;    /* tiles that suspended (loop budget) */
+	uint32_t dispatches;     /* tracing dispatches the frame took */
+	uint32_t loop_budget;    /* loop iterations per shader invocation the
+	                            driver allows (llvmpipe), 0: no limit */
 	/* Since creation, and the last sync. */
 	uint32_t program_builds; /* shader programs built (once, at create) */
 	uint32_t full_uploads;   /* syncs that uploaded the whole tree */
