@@ -6,10 +6,22 @@
  * tiles; for each such tile whose bounding cone of pixel rays meets the
  * ABV's bounding sphere, the tile's pixel rays are clipped against the ABV
  * itself and the hits aggregate into one fragment: min entry, max exit (no
- * fragment when no ray hits). Fragments are bucketed per tile. Depths are
- * ray parameters t along unit directions rather than the paper's NDC: a
- * primitive's interval on every ray of the tile lies inside its fragment's
- * [entry, exit], which is all the range walk below needs.
+ * fragment when no ray hits). Depths are ray parameters t along unit
+ * directions rather than the paper's NDC: a primitive's interval on every
+ * ray of the tile lies inside its fragment's [entry, exit], which is all
+ * the range walk below needs.
+ *
+ * Lists kept. A tile's list depends only on the view (camera, frame size,
+ * the frame constants of bc__cpu_key) and the ABVs of the primitives whose
+ * rectangles hold the tile, not on the pixels asked of it. So the lists and
+ * the ray directions are kept between renders of one view and each render
+ * computes them only for the tiles of its region that lack them: the
+ * refinement levels and bands of a view compute every list once. A new
+ * view, or a change of the tree's structure, drops them all; a parameter
+ * edit (the sync hook's dirty primitives) drops the lists of the tiles in
+ * its primitives' rectangles before and after the edit, which are the only
+ * lists that can hold them. A list is computed from the tile alone, so it
+ * is the same whichever render computes it.
  *
  * Tracing. Each tile (one work item, on any thread) sorts its list by entry
  * and walks depth ranges as §6.2 does (eq. 21-22): drop active primitives
@@ -20,6 +32,8 @@
  * active exit). The active set is kept sorted by primitive index, a pruned
  * view is built for it (bc_view_build, one struct bc_view per thread) and
  * every ray of the tile without a hit yet is sphere traced inside the range.
+ * The sort orders by (entry, primitive), a total order, so a kept list,
+ * already sorted by an earlier render, sorts to the same order again.
  *
  * Overflow. When M_overlap primitives are active and the next one enters at
  * the range start itself, no smaller range exists that excludes it. The
@@ -37,26 +51,7 @@
 #include "blobcast/alloc.h"
 #include "blobcast/log.h"
 
-struct bc__tiled_bufs {
-	float *dirs; /* 3 per pixel */
-	size_t dirs_cap;
-	/* The view dirs and cones were made for: kept while it stays. */
-	struct bc_camera rays_cam;
-	uint32_t rays_w, rays_h;
-	struct cone *cones;
-	size_t cones_cap;
-	struct rect *rects;     /* per primitive */
-	uint64_t *cand_off;     /* per primitive + 1: candidate tiles */
-	size_t prims_cap;
-	float *cand;            /* 2 per candidate: entry, exit */
-	size_t cand_cap;
-	uint32_t *tile_off;     /* per tile + 1 */
-	uint32_t *tile_cur;
-	size_t tiles_cap;
-	struct bc__frag *frags;
-	size_t frags_cap;
-	struct bc__tile_worker workers[BC_CPU_MAX_THREADS];
-};
+#include "abuffer.h"
 
 /* Tiles [x0, x1) x [y0, y1) a primitive may cover. */
 struct rect {
@@ -70,9 +65,71 @@ struct cone {
 	float cos_h, sin_h;
 };
 
+/* What the A-buffer needs of a primitive in one view: its widened ABV, its
+ * tile rectangle, and its bounding sphere seen from the eye (centre v
+ * relative to the eye, dist2 = |v|^2, radius; root = sqrt(dist2 -
+ * radius^2), the cone tests' term, when the eye is outside). */
+struct ab_prim {
+	struct bc_abv wide;
+	struct rect rect;
+	float v[3], dist2, radius, root;
+	bool inside;
+};
+
+/* Tile states within the kept view. */
+enum {
+	TILE_RAYS = 1u, /* dirs and cones computed */
+	TILE_LIST = 2u, /* list computed */
+};
+
+struct bc__tiled_bufs {
+	/* The view everything below was made for (bc__cpu_key's scale
+	 * through min_step). view_ok false: nothing is kept. */
+	bool view_ok;
+	struct bc_camera cam;
+	uint32_t w, h, nprims;
+	uint64_t generation;
+	const struct bc_lin *lin;
+	float min_step, pix_angle;
+	/* Primitives whose ABVs changed since the lists were made (sync). */
+	uint32_t dirty_lo, dirty_hi;
+
+	float *dirs; /* 3 per pixel, valid in TILE_RAYS tiles */
+	size_t dirs_cap;
+	struct ab_prim *prims;
+	size_t prims_cap;
+	/* Per tile: state, list length, candidates (primitives whose
+	 * rectangle holds it, increasing) at cand[cand_off[t] ..
+	 * cand_off[t + 1]), and the list at frags + cand_off[t]. off_alt and
+	 * cur are scratch of rebuilds. */
+	uint8_t *state;
+	uint32_t *list_n, *cand_off, *off_alt, *cur;
+	struct cone *cones; /* CONES_PER_TILE per tile */
+	size_t tiles_cap;
+	uint32_t *cand;
+	size_t cand_cap;
+	struct bc__frag *frags, *frags_alt;
+	size_t frags_cap, frags_alt_cap;
+	struct bc__tile_worker workers[BC_CPU_MAX_THREADS];
+};
+
 /* Cones per tile: the whole tile, then its four 4x4 quarters. */
 #define CONES_PER_TILE 5u
 #define QUARTER (BC_CPU_TILE / 2u)
+
+static void free_tiles(struct bc__tiled_bufs *b)
+{
+	bc_free(b->state);
+	bc_free(b->list_n);
+	bc_free(b->cand_off);
+	bc_free(b->off_alt);
+	bc_free(b->cur);
+	bc_free(b->cones);
+	b->state = NULL;
+	b->list_n = b->cand_off = b->off_alt = b->cur = NULL;
+	b->cones = NULL;
+	b->tiles_cap = 0;
+}
 
 void bc__tiled_free(struct bc__tiled_bufs *b)
 {
@@ -80,13 +137,11 @@ void bc__tiled_free(struct bc__tiled_bufs *b)
 		return;
 	}
 	bc_free(b->dirs);
-	bc_free(b->cones);
-	bc_free(b->rects);
-	bc_free(b->cand_off);
+	bc_free(b->prims);
+	free_tiles(b);
 	bc_free(b->cand);
-	bc_free(b->tile_off);
-	bc_free(b->tile_cur);
 	bc_free(b->frags);
+	bc_free(b->frags_alt);
 	for (uint32_t i = 0; i < BC_CPU_MAX_THREADS; i++) {
 		bc_view_finish(&b->workers[i].view);
 		bc_free(b->workers[i].act);
@@ -112,26 +167,25 @@ static int grow(void **p, size_t *cap, size_t n, size_t size)
 	return 0;
 }
 
-/* Grows two arrays that share one capacity. */
-static int grow_pair(void **p, void **q, size_t *cap, size_t n, size_t psize,
-		     size_t qsize)
+/* Room for n tiles in every per-tile array (contents not kept). */
+static int grow_tiles(struct bc__tiled_bufs *b, size_t n)
 {
-	void *fp, *fq;
-	if (n <= *cap) {
+	if (n <= b->tiles_cap) {
 		return 0;
 	}
-	fp = bc_calloc(n, psize);
-	fq = bc_calloc(n, qsize);
-	if (!fp || !fq) {
-		bc_free(fp);
-		bc_free(fq);
+	free_tiles(b);
+	b->state = bc_calloc(n, sizeof(*b->state));
+	b->list_n = bc_calloc(n, sizeof(*b->list_n));
+	b->cand_off = bc_calloc(n + 1, sizeof(*b->cand_off));
+	b->off_alt = bc_calloc(n + 1, sizeof(*b->off_alt));
+	b->cur = bc_calloc(n, sizeof(*b->cur));
+	b->cones = bc_calloc(n * CONES_PER_TILE, sizeof(*b->cones));
+	if (!b->state || !b->list_n || !b->cand_off || !b->off_alt ||
+	    !b->cur || !b->cones) {
+		free_tiles(b);
 		return BC_ENOMEM;
 	}
-	bc_free(*p);
-	bc_free(*q);
-	*p = fp;
-	*q = fq;
-	*cap = n;
+	b->tiles_cap = n;
 	return 0;
 }
 
@@ -140,10 +194,10 @@ static int grow_pair(void **p, void **q, size_t *cap, size_t n, size_t psize,
 struct tiled_frame {
 	const struct bc__frame_ctx *fc;
 	struct bc__tiled_bufs *b;
+	struct bc__ab_kernel kern;
 	uint32_t tw, th, ntiles;
 	uint32_t nprims;
 	const struct bc_render_region *region;
-	uint64_t ncand;
 	atomic_uint next;   /* work counter of the running phase */
 	atomic_uint tiles_done;
 	struct bc__progress progress;
@@ -180,54 +234,6 @@ static void make_cone(const struct bc_view_rays *vr, float x0, float y0,
 	half += 1.0e-4f;
 	c->cos_h = cosf(half);
 	c->sin_h = sinf(half);
-}
-
-/* Phase 1, per pixel row: ray directions; per tile row: tile cones. */
-static void phase_rays(void *arg, uint32_t thread)
-{
-	struct tiled_frame *tf = arg;
-	const struct bc__frame_ctx *fc = tf->fc;
-	uint32_t w = fc->out->width, h = fc->out->height;
-	(void)thread;
-	for (;;) {
-		uint32_t y = atomic_fetch_add(&tf->next, 1u);
-		float *row;
-		if (y >= h) {
-			break;
-		}
-		row = tf->b->dirs + 3 * (size_t)y * w;
-		for (uint32_t x = 0; x < w; x++) {
-			bc_view_rays_dir(&fc->vr, (float)x + 0.5f,
-					 (float)y + 0.5f, row + 3 * x);
-		}
-		if (y % BC_CPU_TILE != 0) {
-			continue;
-		}
-		for (uint32_t tx = 0; tx < tf->tw; tx++) {
-			struct cone *c =
-				&tf->b->cones[CONES_PER_TILE *
-					      ((y / BC_CPU_TILE) * tf->tw + tx)];
-			uint32_t x0 = tx * BC_CPU_TILE;
-			uint32_t x1 = x0 + BC_CPU_TILE < w ? x0 + BC_CPU_TILE : w;
-			uint32_t y1 = y + BC_CPU_TILE < h ? y + BC_CPU_TILE : h;
-			make_cone(&fc->vr, (float)x0 + 0.5f, (float)y + 0.5f,
-				  (float)x1 - 0.5f, (float)y1 - 0.5f, &c[0]);
-			for (uint32_t q = 0; q < 4; q++) {
-				uint32_t qx0 = x0 + (q & 1u) * QUARTER;
-				uint32_t qy0 = y + (q >> 1) * QUARTER;
-				uint32_t qx1 = qx0 + QUARTER < x1 ? qx0 + QUARTER
-								  : x1;
-				uint32_t qy1 = qy0 + QUARTER < y1 ? qy0 + QUARTER
-								  : y1;
-				if (qx0 >= qx1 || qy0 >= qy1) {
-					continue; /* off the image's edge */
-				}
-				make_cone(&fc->vr, (float)qx0 + 0.5f,
-					  (float)qy0 + 0.5f, (float)qx1 - 0.5f,
-					  (float)qy1 - 0.5f, &c[1 + q]);
-			}
-		}
-	}
 }
 
 /* The tiles the box [lo, hi] can cover, conservatively. */
@@ -320,38 +326,18 @@ static void widened_abv(const struct bc__frame_ctx *fc,
 	}
 }
 
-/* Phase 2, per primitive: its tile rectangle. */
-static void phase_rects(void *arg, uint32_t thread)
-{
-	struct tiled_frame *tf = arg;
-	(void)thread;
-	for (;;) {
-		uint32_t k0 = atomic_fetch_add(&tf->next, 256u);
-		if (k0 >= tf->nprims) {
-			break;
-		}
-		for (uint32_t k = k0; k < tf->nprims && k < k0 + 256u; k++) {
-			struct bc_abv abv;
-			float lo[3], hi[3];
-			widened_abv(tf->fc, &tf->fc->lin->abv[k], &abv, lo, hi);
-			tf->b->rects[k] = project_box(tf, lo, hi);
-		}
-	}
-}
-
 /* Does the sphere (centre relative to the eye v, radius r) meet the
  * cone? With dist = |v| > r the sphere spans the angle asin(r / dist)
  * around v, so they meet when the angle between v and the axis is at most
  * half + asin(r / dist), i.e. (both angles below pi) when
  * dot(v, axis) >= cos_h sqrt(dist^2 - r^2) - sin_h r. */
-static inline bool cone_meets_sphere(const struct cone *c, const float v[3],
-				     float dist2, float r)
+static inline bool cone_meets_sphere(const struct cone *c,
+				     const struct ab_prim *p)
 {
-	if (dist2 <= r * r) {
+	if (p->inside) {
 		return true;
 	}
-	return dot3(v, c->axis) >=
-	       c->cos_h * sqrtf(dist2 - r * r) - c->sin_h * r;
+	return dot3(p->v, c->axis) >= c->cos_h * p->root - c->sin_h * p->radius;
 }
 
 /* A sphere around the (world) shape: tighter than the AABB's for spheres
@@ -388,142 +374,268 @@ static void bounding_sphere(const struct bc_abv *abv, const float lo[3],
 	}
 }
 
-/* Ray (from the eye, unit d) against a sphere ABV (centre v relative to the
- * eye, radius r): the one shape whose test is inlined here, because sphere
- * ABVs are the most common and a call to bc_abv_ray per pixel ray (double
- * precision, outward rounding) was most of the A-buffer's time at 4096
- * primitives. Computing the squared distance of the centre from the ray
- * directly avoids the cancellation of b^2 - c; the interval is padded
- * outwards. Rays that graze the sphere within rounding may be lost, which
- * is safe because the ABV was widened by the hit epsilon (widened_abv):
- * every ray that meets the unwidened ABV crosses this sphere well inside. */
-static inline bool ray_sphere(const float v[3], float r, const float d[3],
-			      float *t0, float *t1)
-{
-	float b = dot3(v, d);
-	float p[3] = {v[0] - b * d[0], v[1] - b * d[1], v[2] - b * d[2]};
-	float disc = r * r - dot3(p, p), s, pad;
-	if (!(disc >= 0.0f)) {
-		return false;
-	}
-	s = sqrtf(disc);
-	pad = 1.0e-5f * (fabsf(b) + r);
-	*t0 = b - s - pad;
-	*t1 = b + s + pad;
-	return true;
-}
-
-/* The fragment of one ABV in tile (tx, ty): min entry and max exit over
- * the tile's pixel rays that hit it, or (inf, -inf). The tile's cone, then
- * each quarter's, are tested against the ABV's bounding sphere (v: centre
- * relative to the eye) before any ray is. */
-static void fragment(const struct tiled_frame *tf, const struct bc_abv *abv,
-		     const float v[3], float dist2, float radius, uint32_t tx,
-		     uint32_t ty, float out[2])
+/* Primitive k's A-buffer terms in this view. */
+static void prim_setup(const struct tiled_frame *tf, uint32_t k,
+		       struct ab_prim *p)
 {
 	const struct bc__frame_ctx *fc = tf->fc;
-	const struct cone *cones =
-		&tf->b->cones[CONES_PER_TILE * (ty * tf->tw + tx)];
+	float lo[3], hi[3], c[3];
+	widened_abv(fc, &fc->lin->abv[k], &p->wide, lo, hi);
+	p->rect = project_box(tf, lo, hi);
+	bounding_sphere(&p->wide, lo, hi, c, &p->radius);
+	for (int i = 0; i < 3; i++) {
+		p->v[i] = c[i] - fc->vr.eye[i];
+	}
+	p->dist2 = dot3(p->v, p->v);
+	p->inside = p->dist2 <= p->radius * p->radius;
+	p->root = p->inside ? 0.0f
+			    : sqrtf(p->dist2 - p->radius * p->radius);
+}
+
+/* Phase 1 of a new view, per primitive: prim_setup. */
+static void phase_prims(void *arg, uint32_t thread)
+{
+	struct tiled_frame *tf = arg;
+	(void)thread;
+	for (;;) {
+		uint32_t k0 = atomic_fetch_add(&tf->next, 256u);
+		if (k0 >= tf->nprims) {
+			break;
+		}
+		for (uint32_t k = k0; k < tf->nprims && k < k0 + 256u; k++) {
+			prim_setup(tf, k, &tf->b->prims[k]);
+		}
+	}
+}
+
+/* Sets state bits `keep` only in the tiles of rectangle r. */
+static void rect_state_and(struct tiled_frame *tf, const struct rect *r,
+			   uint8_t keep)
+{
+	for (uint32_t ty = r->y0; ty < r->y1; ty++) {
+		for (uint32_t tx = r->x0; tx < r->x1; tx++) {
+			tf->b->state[(size_t)ty * tf->tw + tx] &= keep;
+		}
+	}
+}
+
+/* Builds the candidates of every tile from the primitives' rectangles
+ * (counting sort, primitives increasing). With `relocate`, the lists of
+ * the tiles in state TILE_LIST move to their tiles' new places (their
+ * candidates are the same as before: callers dropped the lists of every
+ * tile whose candidates changed). Returns 0, BC_ELIMIT or BC_ENOMEM. */
+static int build_cand(struct tiled_frame *tf, bool relocate,
+		      struct bc_errinfo *ei)
+{
+	struct bc__tiled_bufs *b = tf->b;
+	uint32_t *off = b->off_alt;
+	uint64_t sum = 0;
+	memset(b->cur, 0, tf->ntiles * sizeof(*b->cur));
+	for (uint32_t k = 0; k < tf->nprims; k++) {
+		const struct rect *r = &b->prims[k].rect;
+		for (uint32_t ty = r->y0; ty < r->y1; ty++) {
+			uint32_t *row = b->cur + (size_t)ty * tf->tw;
+			for (uint32_t tx = r->x0; tx < r->x1; tx++) {
+				row[tx]++;
+			}
+		}
+	}
+	for (uint32_t t = 0; t < tf->ntiles; t++) {
+		off[t] = (uint32_t)sum;
+		sum += b->cur[t];
+		b->cur[t] = off[t];
+		if (sum > BC_CPU_MAX_FRAGMENTS) {
+			return bc_errinfo_set(
+				ei, BC_ELIMIT,
+				"render: over %u primitive-tile pairs exceed "
+				"the A-buffer limit (fewer or smaller "
+				"primitives, or a smaller frame)",
+				BC_CPU_MAX_FRAGMENTS);
+		}
+	}
+	off[tf->ntiles] = (uint32_t)sum;
+	if (grow((void **)&b->cand, &b->cand_cap, sum ? sum : 1,
+		 sizeof(*b->cand))) {
+		return BC_ENOMEM;
+	}
+	for (uint32_t k = 0; k < tf->nprims; k++) {
+		const struct rect *r = &b->prims[k].rect;
+		for (uint32_t ty = r->y0; ty < r->y1; ty++) {
+			uint32_t *row = b->cur + (size_t)ty * tf->tw;
+			for (uint32_t tx = r->x0; tx < r->x1; tx++) {
+				b->cand[row[tx]++] = k;
+			}
+		}
+	}
+	if (relocate) {
+		struct bc__frag *swap;
+		size_t cap;
+		if (grow((void **)&b->frags_alt, &b->frags_alt_cap,
+			 sum ? sum : 1, sizeof(*b->frags_alt))) {
+			return BC_ENOMEM;
+		}
+		for (uint32_t t = 0; t < tf->ntiles; t++) {
+			if (b->state[t] & TILE_LIST) {
+				memcpy(b->frags_alt + off[t],
+				       b->frags + b->cand_off[t],
+				       b->list_n[t] * sizeof(*b->frags));
+			}
+		}
+		swap = b->frags;
+		b->frags = b->frags_alt;
+		b->frags_alt = swap;
+		cap = b->frags_cap;
+		b->frags_cap = b->frags_alt_cap;
+		b->frags_alt_cap = cap;
+	} else if (grow((void **)&b->frags, &b->frags_cap, sum ? sum : 1,
+			sizeof(*b->frags))) {
+		return BC_ENOMEM;
+	}
+	b->off_alt = b->cand_off;
+	b->cand_off = off;
+	return 0;
+}
+
+/* The tile's ray directions into the frame's (for the tracer) and its
+ * cones. */
+static void tile_rays(const struct tiled_frame *tf, uint32_t tx, uint32_t ty,
+		      const struct bc__ab_rays *rays)
+{
+	const struct bc__frame_ctx *fc = tf->fc;
+	struct cone *c = &tf->b->cones[CONES_PER_TILE * (ty * tf->tw + tx)];
 	uint32_t w = fc->out->width, h = fc->out->height;
 	uint32_t x0 = tx * BC_CPU_TILE, y0 = ty * BC_CPU_TILE;
 	uint32_t x1 = x0 + BC_CPU_TILE < w ? x0 + BC_CPU_TILE : w;
 	uint32_t y1 = y0 + BC_CPU_TILE < h ? y0 + BC_CPU_TILE : h;
-	float t0 = INFINITY, t1 = -INFINITY;
-	out[0] = t0;
-	out[1] = t1;
-	if (!cone_meets_sphere(&cones[0], v, dist2, radius)) {
-		return;
+	for (uint32_t q = 0; q < 4; q++) {
+		for (uint32_t l = 0; l < BC__AB_QUARTER_RAYS; l++) {
+			uint32_t x = x0 + (q & 1u) * QUARTER + (l & 3u);
+			uint32_t y = y0 + (q >> 1) * QUARTER + (l >> 2);
+			float *d = tf->b->dirs + 3 * ((size_t)y * w + x);
+			if (x >= x1 || y >= y1) {
+				continue;
+			}
+			d[0] = rays->d[q][0][l];
+			d[1] = rays->d[q][1][l];
+			d[2] = rays->d[q][2][l];
+		}
 	}
+	make_cone(&fc->vr, (float)x0 + 0.5f, (float)y0 + 0.5f,
+		  (float)x1 - 0.5f, (float)y1 - 0.5f, &c[0]);
 	for (uint32_t q = 0; q < 4; q++) {
 		uint32_t qx0 = x0 + (q & 1u) * QUARTER;
 		uint32_t qy0 = y0 + (q >> 1) * QUARTER;
 		uint32_t qx1 = qx0 + QUARTER < x1 ? qx0 + QUARTER : x1;
 		uint32_t qy1 = qy0 + QUARTER < y1 ? qy0 + QUARTER : y1;
-		if (qx0 >= qx1 || qy0 >= qy1 ||
-		    !cone_meets_sphere(&cones[1 + q], v, dist2, radius)) {
-			continue;
+		if (qx0 >= qx1 || qy0 >= qy1) {
+			continue; /* off the image's edge */
 		}
-		for (uint32_t y = qy0; y < qy1; y++) {
-			const float *d = tf->b->dirs + 3 * ((size_t)y * w + qx0);
-			for (uint32_t x = qx0; x < qx1; x++, d += 3) {
-				float a, e;
-				bool hit = abv->shape == BC_ABV_SPHERE
-						   ? ray_sphere(v, abv->radius, d,
-								&a, &e)
-						   : bc_abv_ray(abv, fc->vr.eye, d,
-								&a, &e);
-				if (hit && e > 0.0f) {
-					a = a > 0.0f ? a : 0.0f;
-					t0 = a < t0 ? a : t0;
-					t1 = e > t1 ? e : t1;
-				}
+		make_cone(&fc->vr, (float)qx0 + 0.5f, (float)qy0 + 0.5f,
+			  (float)qx1 - 0.5f, (float)qy1 - 0.5f, &c[1 + q]);
+	}
+}
+
+/* The tile's rays inside the frame, per quarter: bit l of quarter[q] for
+ * ray l (abuffer.h), shifted to bit q * 16 + l. */
+static void tile_quarters(const struct tiled_frame *tf, uint32_t tx,
+			  uint32_t ty, uint64_t quarter[4])
+{
+	uint32_t w = tf->fc->out->width, h = tf->fc->out->height;
+	uint32_t x0 = tx * BC_CPU_TILE, y0 = ty * BC_CPU_TILE;
+	for (uint32_t q = 0; q < 4; q++) {
+		quarter[q] = 0;
+		for (uint32_t l = 0; l < BC__AB_QUARTER_RAYS; l++) {
+			uint32_t x = x0 + (q & 1u) * QUARTER + (l & 3u);
+			uint32_t y = y0 + (q >> 1) * QUARTER + (l >> 2);
+			if (x < w && y < h) {
+				quarter[q] |= 1ull << (q * BC__AB_QUARTER_RAYS +
+						       l);
 			}
 		}
 	}
-	out[0] = t0;
-	out[1] = t1;
 }
 
-/* Phase 3, per chunk of candidates: the fragment of primitive k in each
- * candidate tile. */
-#define CAND_CHUNK 64u
-
-static void phase_intervals(void *arg, uint32_t thread)
+/* The tile's list: for each candidate whose bounding sphere meets the
+ * tile's cone, the rays of the quarters whose cones it meets are clipped
+ * against the ABV; the hits make one fragment, min entry and max exit. */
+static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
+			  const struct bc__ab_rays *rays,
+			  const uint64_t quarter[4])
 {
-	struct tiled_frame *tf = arg;
-	const struct bc__frame_ctx *fc = tf->fc;
-	struct bc__tiled_bufs *b = tf->b;
-	uint32_t nchunks = (uint32_t)((tf->ncand + CAND_CHUNK - 1) / CAND_CHUNK);
-	(void)thread;
-	for (;;) {
-		uint32_t chunk = atomic_fetch_add(&tf->next, 1u);
-		uint64_t c0, c1;
-		uint32_t lo = 0, hi;
-		if (chunk >= nchunks) {
-			break;
+	const struct bc__tiled_bufs *b = tf->b;
+	const struct cone *cones = &b->cones[CONES_PER_TILE * tile];
+	const float *eye = tf->fc->vr.eye;
+	struct bc__frag *out = b->frags + b->cand_off[tile];
+	uint32_t n = 0;
+	for (uint32_t i = b->cand_off[tile]; i < b->cand_off[tile + 1]; i++) {
+		uint32_t k = b->cand[i];
+		const struct ab_prim *p = &b->prims[k];
+		uint64_t lanes = 0;
+		float t[2] = {INFINITY, -INFINITY};
+		if (!cone_meets_sphere(&cones[0], p)) {
+			continue;
 		}
-		c0 = (uint64_t)chunk * CAND_CHUNK;
-		c1 = c0 + CAND_CHUNK < tf->ncand ? c0 + CAND_CHUNK : tf->ncand;
-		/* The primitive owning candidate c0: last k with
-		 * cand_off[k] <= c0. */
-		hi = tf->nprims;
-		while (hi - lo > 1) {
-			uint32_t mid = lo + (hi - lo) / 2;
-			if (b->cand_off[mid] <= c0) {
-				lo = mid;
-			} else {
-				hi = mid;
+		for (uint32_t q = 0; q < 4; q++) {
+			if (quarter[q] && cone_meets_sphere(&cones[1 + q], p)) {
+				lanes |= quarter[q];
 			}
 		}
-		for (uint32_t k = lo; k < tf->nprims && b->cand_off[k] < c1;
-		     k++) {
-			const struct rect *r = &b->rects[k];
-			struct bc_abv abv;
-			uint32_t rw = r->x1 - r->x0;
-			uint64_t from = b->cand_off[k] > c0 ? b->cand_off[k] : c0;
-			uint64_t to = b->cand_off[k + 1] < c1 ? b->cand_off[k + 1]
-							      : c1;
-			float lo3[3], hi3[3], v[3], dist2, radius;
-			widened_abv(fc, &fc->lin->abv[k], &abv, lo3, hi3);
-			bounding_sphere(&abv, lo3, hi3, v, &radius);
-			for (int i = 0; i < 3; i++) {
-				v[i] -= fc->vr.eye[i];
-			}
-			dist2 = dot3(v, v);
-			for (uint64_t c = from; c < to; c++) {
-				uint32_t j = (uint32_t)(c - b->cand_off[k]);
-				uint32_t tx = r->x0 + j % rw, ty = r->y0 + j / rw;
-				if (tf->region->tiles &&
-				    !tf->region->tiles[ty * tf->tw + tx]) {
-					/* Not drawn: no list needed. */
-					b->cand[2 * c] = INFINITY;
-					b->cand[2 * c + 1] = -INFINITY;
+		if (!lanes) {
+			continue;
+		}
+		if (p->wide.shape == BC_ABV_SPHERE) {
+			tf->kern.sphere(rays, lanes, p->v, p->wide.radius, t);
+		} else {
+			for (uint32_t j = 0; j < 64; j++) {
+				uint32_t q = j / BC__AB_QUARTER_RAYS;
+				uint32_t l = j % BC__AB_QUARTER_RAYS;
+				float d[3] = {rays->d[q][0][l], rays->d[q][1][l],
+					      rays->d[q][2][l]};
+				float a, e;
+				if (!((lanes >> j) & 1u) ||
+				    !bc_abv_ray(&p->wide, eye, d, &a, &e) ||
+				    !(e > 0.0f)) {
 					continue;
 				}
-				fragment(tf, &abv, v, dist2, radius, tx, ty,
-					 &b->cand[2 * c]);
+				a = a > 0.0f ? a : 0.0f;
+				t[0] = a < t[0] ? a : t[0];
+				t[1] = e > t[1] ? e : t[1];
 			}
 		}
+		if (t[1] >= t[0]) {
+			out[n++] = (struct bc__frag){t[0], t[1], k};
+		}
+	}
+	return n;
+}
+
+/* Phase 2, per tile of the region not yet complete: its rays and cones
+ * (once per view), its list. */
+static void phase_lists(void *arg, uint32_t thread)
+{
+	struct tiled_frame *tf = arg;
+	struct bc__tiled_bufs *b = tf->b;
+	(void)thread;
+	for (;;) {
+		uint32_t tile = atomic_fetch_add(&tf->next, 1u);
+		uint32_t tx = tile % tf->tw, ty = tile / tf->tw;
+		struct bc__ab_rays rays;
+		uint64_t quarter[4];
+		if (tile >= tf->ntiles) {
+			break;
+		}
+		if (b->state[tile] == (TILE_RAYS | TILE_LIST) ||
+		    (tf->region->tiles && !tf->region->tiles[tile])) {
+			continue;
+		}
+		tf->kern.dirs(&tf->fc->vr, tx * BC_CPU_TILE, ty * BC_CPU_TILE,
+			      &rays);
+		if (!(b->state[tile] & TILE_RAYS)) {
+			tile_rays(tf, tx, ty, &rays);
+		}
+		tile_quarters(tf, tx, ty, quarter);
+		b->list_n[tile] = tile_list(tf, tile, &rays, quarter);
+		b->state[tile] = TILE_RAYS | TILE_LIST;
 	}
 }
 
@@ -544,7 +656,7 @@ static void skip_tile(struct tiled_frame *tf, uint32_t tx, uint32_t ty,
 	atomic_fetch_add(&tf->skipped, 1u);
 }
 
-/* Phase 4, per tile of the region: walk the depth ranges and trace. */
+/* Phase 3, per tile of the region: walk the depth ranges and trace. */
 static void phase_trace(void *arg, uint32_t thread)
 {
 	struct tiled_frame *tf = arg;
@@ -572,8 +684,8 @@ static void phase_trace(void *arg, uint32_t thread)
 		job = (struct bc__tile_job){
 			.fc = fc,
 			.dirs = tf->b->dirs,
-			.list = tf->b->frags + tf->b->tile_off[tile],
-			.n = tf->b->tile_off[tile + 1] - tf->b->tile_off[tile],
+			.list = tf->b->frags + tf->b->cand_off[tile],
+			.n = tf->b->list_n[tile],
 			.x0 = tx * BC_CPU_TILE,
 			.y0 = ty * BC_CPU_TILE,
 			.x1 = (tx + 1) * BC_CPU_TILE < w ? (tx + 1) * BC_CPU_TILE
@@ -589,49 +701,6 @@ static void phase_trace(void *arg, uint32_t thread)
 					  atomic_load(&tf->tiles_done));
 		}
 	}
-}
-
-/* Buckets the candidates that hold a fragment by tile. Returns the longest
- * tile list. */
-static uint32_t bucket(struct tiled_frame *tf)
-{
-	struct bc__tiled_bufs *b = tf->b;
-	uint32_t longest = 0;
-	memset(b->tile_cur, 0, tf->ntiles * sizeof(*b->tile_cur));
-	for (int pass = 0; pass < 2; pass++) {
-		for (uint32_t k = 0; k < tf->nprims; k++) {
-			const struct rect *r = &b->rects[k];
-			uint32_t rw = r->x1 - r->x0;
-			for (uint64_t c = b->cand_off[k]; c < b->cand_off[k + 1];
-			     c++) {
-				uint32_t j = (uint32_t)(c - b->cand_off[k]);
-				uint32_t tile = (r->y0 + j / rw) * tf->tw +
-						r->x0 + j % rw;
-				if (!(b->cand[2 * c + 1] >= b->cand[2 * c])) {
-					continue; /* no ray of the tile hit */
-				}
-				if (pass == 0) {
-					b->tile_cur[tile]++;
-				} else {
-					b->frags[b->tile_cur[tile]++] =
-						(struct bc__frag){b->cand[2 * c],
-							      b->cand[2 * c + 1], k};
-				}
-			}
-		}
-		if (pass == 0) {
-			uint32_t sum = 0;
-			for (uint32_t t = 0; t < tf->ntiles; t++) {
-				uint32_t cnt = b->tile_cur[t];
-				b->tile_off[t] = sum;
-				b->tile_cur[t] = sum;
-				sum += cnt;
-				longest = cnt > longest ? cnt : longest;
-			}
-			b->tile_off[tf->ntiles] = sum;
-		}
-	}
-	return longest;
 }
 
 static int tiled_create(struct bc_renderer **out,
@@ -683,6 +752,76 @@ static int prepare_workers(struct bc__cpu *r, const struct bc_lin *lin,
 	return 0;
 }
 
+/* Whether b's kept lists were made for this frame's view. */
+static bool same_view(const struct bc__tiled_bufs *b, const struct bc__cpu *r,
+		      const struct bc__frame_ctx *fc, const struct bc_camera *cam)
+{
+	return b->view_ok && b->w == fc->out->width && b->h == fc->out->height &&
+	       b->generation == r->base.generation && b->lin == fc->lin &&
+	       b->nprims == (fc->lin ? fc->lin->nprims : 0) &&
+	       memcmp(&b->cam, cam, sizeof(*cam)) == 0 &&
+	       memcmp(&b->min_step, &fc->min_step, sizeof(float)) == 0 &&
+	       memcmp(&b->pix_angle, &fc->pix_angle, sizeof(float)) == 0;
+}
+
+/* Makes b's lists this frame's view's: all dropped for a new view, those
+ * the dirty primitives can reach after parameter edits. Returns 0 or an
+ * error, after which nothing is kept. */
+static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
+		     const struct bc_camera *cam, struct bc_errinfo *ei)
+{
+	struct bc__tiled_bufs *b = tf->b;
+	const struct bc__frame_ctx *fc = tf->fc;
+	size_t npix = (size_t)fc->out->width * fc->out->height;
+	int rc;
+	if (same_view(b, r, fc, cam)) {
+		uint32_t hi = b->dirty_hi < tf->nprims ? b->dirty_hi
+						       : tf->nprims;
+		if (b->dirty_lo >= hi) {
+			return 0;
+		}
+		for (uint32_t k = b->dirty_lo; k < hi; k++) {
+			struct ab_prim *p = &b->prims[k];
+			rect_state_and(tf, &p->rect, TILE_RAYS);
+			prim_setup(tf, k, p);
+			rect_state_and(tf, &p->rect, TILE_RAYS);
+		}
+		b->dirty_lo = b->dirty_hi = 0;
+		b->view_ok = false;
+		if ((rc = build_cand(tf, true, ei))) {
+			return rc;
+		}
+		b->view_ok = true;
+		return 0;
+	}
+	b->view_ok = false;
+	b->dirty_lo = b->dirty_hi = 0;
+	if (grow((void **)&b->dirs, &b->dirs_cap, 3 * npix, sizeof(float)) ||
+	    grow_tiles(b, tf->ntiles) ||
+	    grow((void **)&b->prims, &b->prims_cap,
+		 tf->nprims ? tf->nprims : 1, sizeof(*b->prims))) {
+		return BC_ENOMEM;
+	}
+	memset(b->state, 0, tf->ntiles * sizeof(*b->state));
+	atomic_store(&tf->next, 0u);
+	if (tf->nprims > 0) {
+		bc_pool_run(r->threads, phase_prims, tf);
+	}
+	if ((rc = build_cand(tf, false, ei))) {
+		return rc;
+	}
+	b->cam = *cam;
+	b->w = fc->out->width;
+	b->h = fc->out->height;
+	b->generation = r->base.generation;
+	b->lin = fc->lin;
+	b->nprims = tf->nprims;
+	b->min_step = fc->min_step;
+	b->pix_angle = fc->pix_angle;
+	b->view_ok = true;
+	return 0;
+}
+
 static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 			struct bc_frame *out,
 			const struct bc_render_region *region,
@@ -694,8 +833,7 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 	struct bc__tiled_bufs *b;
 	const struct bc_lin *lin;
 	double t_start = bc_render_now_ms(), t_ab;
-	uint32_t longest = 0, overflows = 0;
-	size_t npix;
+	uint32_t longest = 0, overflows = 0, todo = 0;
 	int rc;
 	if (!r->tiled && !(r->tiled = bc_calloc(1, sizeof(*r->tiled)))) {
 		return bc_errinfo_set(ei, BC_ENOMEM, "render: out of memory");
@@ -706,19 +844,11 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 	tf.fc = &fc;
 	tf.region = region;
 	tf.b = b;
+	tf.kern = bc__ab_kernel_for(base->opts.simd);
 	tf.tw = (out->width + BC_CPU_TILE - 1) / BC_CPU_TILE;
 	tf.th = (out->height + BC_CPU_TILE - 1) / BC_CPU_TILE;
 	tf.ntiles = tf.tw * tf.th;
 	tf.nprims = lin ? lin->nprims : 0;
-	npix = (size_t)out->width * out->height;
-	if (grow((void **)&b->dirs, &b->dirs_cap, 3 * npix, sizeof(float)) ||
-	    grow((void **)&b->cones, &b->cones_cap,
-		 (size_t)CONES_PER_TILE * tf.ntiles, sizeof(*b->cones)) ||
-	    grow_pair((void **)&b->tile_off, (void **)&b->tile_cur,
-		      &b->tiles_cap, (size_t)tf.ntiles + 1, sizeof(uint32_t),
-		      sizeof(uint32_t))) {
-		goto nomem;
-	}
 	atomic_init(&tf.next, 0u);
 	atomic_init(&tf.tiles_done, 0u);
 	atomic_init(&tf.skipped, 0u);
@@ -726,53 +856,26 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 	atomic_init(&tf.rays, 0u);
 	tf.deadline = base->opts.budget_ms ? t_start + base->opts.budget_ms
 					 : 0.0;
-	/* Directions and cones depend on the view only: a region drawn into
-	 * the same view (damage, refinement) reuses them. */
-	if (b->rays_w != out->width || b->rays_h != out->height ||
-	    memcmp(&b->rays_cam, cam, sizeof(*cam)) != 0) {
-		bc_pool_run(r->threads, phase_rays, &tf);
-		b->rays_cam = *cam;
-		b->rays_w = out->width;
-		b->rays_h = out->height;
+	if ((rc = keep_view(r, &tf, cam, ei))) {
+		if (rc == BC_ENOMEM) {
+			goto nomem;
+		}
+		return rc;
 	}
-	if (tf.nprims > 0) {
-		if (grow_pair((void **)&b->rects, (void **)&b->cand_off,
-			      &b->prims_cap, (size_t)tf.nprims + 1,
-			      sizeof(*b->rects), sizeof(uint64_t))) {
-			goto nomem;
+	for (uint32_t t = 0; t < tf.ntiles; t++) {
+		if (!region->tiles || region->tiles[t]) {
+			todo += b->state[t] != (TILE_RAYS | TILE_LIST);
 		}
+	}
+	if (todo > 0) {
 		atomic_store(&tf.next, 0u);
-		bc_pool_run(r->threads, phase_rects, &tf);
-		b->cand_off[0] = 0;
-		for (uint32_t k = 0; k < tf.nprims; k++) {
-			const struct rect *rc_ = &b->rects[k];
-			b->cand_off[k + 1] =
-				b->cand_off[k] + (uint64_t)(rc_->x1 - rc_->x0) *
-							 (rc_->y1 - rc_->y0);
+		bc_pool_run(r->threads, phase_lists, &tf);
+	}
+	for (uint32_t t = 0; t < tf.ntiles; t++) {
+		if ((!region->tiles || region->tiles[t]) &&
+		    b->list_n[t] > longest) {
+			longest = b->list_n[t];
 		}
-		tf.ncand = b->cand_off[tf.nprims];
-		if (tf.ncand > BC_CPU_MAX_FRAGMENTS) {
-			return bc_errinfo_set(
-				ei, BC_ELIMIT,
-				"render: %llu primitive-tile pairs exceed the "
-				"A-buffer limit of %u (fewer or smaller "
-				"primitives, or a smaller frame)",
-				(unsigned long long)tf.ncand,
-				BC_CPU_MAX_FRAGMENTS);
-		}
-		if (grow((void **)&b->cand, &b->cand_cap,
-			 2 * (size_t)(tf.ncand ? tf.ncand : 1), sizeof(float))) {
-			goto nomem;
-		}
-		atomic_store(&tf.next, 0u);
-		bc_pool_run(r->threads, phase_intervals, &tf);
-		if (grow((void **)&b->frags, &b->frags_cap,
-			 (size_t)(tf.ncand ? tf.ncand : 1), sizeof(*b->frags))) {
-			goto nomem;
-		}
-		longest = bucket(&tf);
-	} else {
-		memset(b->tile_off, 0, ((size_t)tf.ntiles + 1) * sizeof(uint32_t));
 	}
 	if ((rc = prepare_workers(r, lin, longest))) {
 		goto nomem;
@@ -808,6 +911,36 @@ nomem:
 			      "%ux%u frame", out->width, out->height);
 }
 
+/* Records the primitives whose ABVs changed, for the next render to drop
+ * the lists they can reach (keep_view). A structural change drops all. */
+static int tiled_sync(struct bc_renderer *base, const struct bc_tree *t,
+		      const struct bc_dirty *dirty, struct bc_errinfo *ei)
+{
+	struct bc__tiled_bufs *b = bc__cpu_of(base)->tiled;
+	(void)t;
+	(void)ei;
+	if (!b) {
+		return 0;
+	}
+	if (!dirty || dirty->structure) {
+		b->view_ok = false;
+		return 0;
+	}
+	if (dirty->prim_lo >= dirty->prim_hi) {
+		return 0;
+	}
+	if (b->dirty_lo >= b->dirty_hi) {
+		b->dirty_lo = dirty->prim_lo;
+		b->dirty_hi = dirty->prim_hi;
+	} else {
+		b->dirty_lo = b->dirty_lo < dirty->prim_lo ? b->dirty_lo
+							   : dirty->prim_lo;
+		b->dirty_hi = b->dirty_hi > dirty->prim_hi ? b->dirty_hi
+							   : dirty->prim_hi;
+	}
+	return 0;
+}
+
 /* The tiles whose lists can hold a primitive of world ABV abv: the same
  * widening and projection the A-buffer applies (phase_rects), so a tile
  * left unmarked never lists it, and its pixels cannot change with it. */
@@ -837,6 +970,7 @@ const struct bc_backend_ops bc_backend_tiled_ops = {
 	.name = "tiled",
 	.create = tiled_create,
 	.destroy = bc__cpu_destroy,
+	.sync = tiled_sync,
 	.render = tiled_render,
 	.key = bc__cpu_key,
 	.damage = tiled_damage,
