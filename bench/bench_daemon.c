@@ -18,21 +18,7 @@
 #include "blobcast/alloc.h"
 #include "blobcast/gen.h"
 #include "blobcast/scene.h"
-
-static int cmp_i64(const void *a, const void *b)
-{
-	int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
-	return (x > y) - (x < y);
-}
-
-static double frame_bytes(const struct bc_msg *m)
-{
-	double n = 0;
-	for (uint32_t i = 0; i < m->frame.nrects; i++) {
-		n += m->frame.rects[i].data.len;
-	}
-	return n;
-}
+#include "latency.h"
 
 static int load_fig18(struct conn *c, uint32_t count, uint32_t *prim_id)
 {
@@ -63,40 +49,17 @@ static int load_fig18(struct conn *c, uint32_t count, uint32_t *prim_id)
 static struct bc_prim_data original;
 
 /* Edits then waits for the frame reflecting each edit. */
-static void latency(struct conn *c, struct daemon *d, uint32_t id, int edits,
-		    const char *label)
+static void latency(struct conn *c, uint32_t id, int edits, const char *label)
 {
-	int64_t *lat = bc_calloc((size_t)edits, sizeof(int64_t));
-	double bytes = 0, rects = 0;
-	int got = 0;
-	(void)d;
-	for (int i = 0; i < edits; i++) {
-		float dx = (i % 2) ? 0.02f : -0.02f;
-		int64_t t0 = t_now_ms();
-		uint64_t order = 0;
-		conn_move(c, id, original.translate[0] + dx,
-			  original.translate[1], original.translate[2], false);
-		while (conn_recv(c, 30000) == 1) {
-			if (c->m.type == BC_MSG_EDIT_APPLIED) {
-				order = c->m.edit_applied.order;
-			} else if (c->m.type == BC_MSG_FRAME && order &&
-				   c->m.frame.order >= order) {
-				lat[got++] = t_now_ms() - t0;
-				bytes += frame_bytes(&c->m);
-				rects += c->m.frame.nrects;
-				break;
-			}
-		}
-	}
-	qsort(lat, (size_t)got, sizeof(int64_t), cmp_i64);
-	if (got) {
+	static const float dx[2] = {-0.02f, 0.02f};
+	struct latency l;
+	latency_edits(c, id, &original, dx, 2, edits, false, &l);
+	if (l.n) {
 		printf("%s edits=%d p50_ms=%lld p99_ms=%lld "
 		       "bytes_per_frame=%.0f rects_per_frame=%.1f\n",
-		       label, got, (long long)lat[got / 2],
-		       (long long)lat[(got * 99) / 100], bytes / got,
-		       rects / got);
+		       label, l.n, (long long)l.p50, (long long)l.p99, l.bytes,
+		       l.rects);
 	}
-	bc_free(lat);
 }
 
 static void fps(struct daemon *d, uint32_t id, int viewers)
@@ -173,9 +136,9 @@ int main(int argc, char **argv)
 	}
 	conn_view(&c, 512, 512, BC_PROTO_ENC_JPEG);
 	conn_expect(&c, BC_MSG_FRAME, 30000);
-	printf("full_still_frame bytes=%.0f\n", frame_bytes(&c.m));
+	printf("full_still_frame bytes=%.0f\n", latency_frame_bytes(&c.m));
 	if (!getenv("BENCH_FPS_ONLY")) {
-		latency(&c, &d, id, edits, "solo");
+		latency(&c, id, edits, "solo");
 	}
 	{
 		/* A second member with the same view that never reads. */
@@ -197,13 +160,13 @@ int main(int argc, char **argv)
 			/* Its one render (its first frame, never taken) is
 			 * warm-up; then the steady state is measured, and solo
 			 * again after it to bound the machine's drift. */
-			latency(&c, &d, id, 5, "warmup_with_stalled_client");
-			latency(&c, &d, id, edits, "with_stalled_client");
+			latency(&c, id, 5, "warmup_with_stalled_client");
+			latency(&c, id, edits, "with_stalled_client");
 		}
 		conn_close(&lazy);
 	}
 	if (!getenv("BENCH_FPS_ONLY")) {
-		latency(&c, &d, id, edits, "solo_again");
+		latency(&c, id, edits, "solo_again");
 	}
 	fps(&d, id, 1);
 	fps(&d, id, 4);

@@ -18,24 +18,10 @@
 #include "blobcast/alloc.h"
 #include "blobcast/gen.h"
 #include "blobcast/scene.h"
+#include "latency.h"
 
 #define W 1024u
 #define H 768u
-
-static int cmp_i64(const void *a, const void *b)
-{
-	int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
-	return (x > y) - (x < y);
-}
-
-static double frame_bytes(const struct bc_msg *m)
-{
-	double n = 0;
-	for (uint32_t i = 0; i < m->frame.nrects; i++) {
-		n += m->frame.rects[i].data.len;
-	}
-	return n;
-}
 
 static struct bc_camera scene_cam;
 static struct bc_prim_data original;
@@ -104,36 +90,18 @@ static int settle(struct conn *c)
 
 static void drag(struct conn *c, uint32_t id, int edits, const char *label)
 {
-	int64_t *lat = bc_calloc((size_t)edits, sizeof(int64_t));
-	double bytes = 0, rects = 0;
-	int got = 0;
-	for (int i = 0; i < edits; i++) {
-		float dx = 0.004f * (float)(i % 25);
-		int64_t t0 = t_now_ms();
-		uint64_t order = 0;
-		conn_move(c, id, original.translate[0] + dx,
-			  original.translate[1], original.translate[2], true);
-		while (conn_recv(c, 30000) == 1) {
-			if (c->m.type == BC_MSG_EDIT_APPLIED) {
-				order = c->m.edit_applied.order;
-			} else if (c->m.type == BC_MSG_FRAME && order &&
-				   c->m.frame.order >= order) {
-				lat[got++] = t_now_ms() - t0;
-				bytes += frame_bytes(&c->m);
-				rects += c->m.frame.nrects;
-				break;
-			}
-		}
+	float dx[25];
+	struct latency l;
+	for (int i = 0; i < 25; i++) {
+		dx[i] = 0.004f * (float)i;
 	}
-	qsort(lat, (size_t)got, sizeof(int64_t), cmp_i64);
-	if (got) {
+	latency_edits(c, id, &original, dx, 25, edits, true, &l);
+	if (l.n) {
 		printf("drag %-10s edits=%d p50_ms=%lld p99_ms=%lld "
 		       "max_ms=%lld bytes_per_frame=%.0f rects_per_frame=%.1f\n",
-		       label, got, (long long)lat[got / 2],
-		       (long long)lat[(got * 99) / 100],
-		       (long long)lat[got - 1], bytes / got, rects / got);
+		       label, l.n, (long long)l.p50, (long long)l.p99,
+		       (long long)l.max, l.bytes, l.rects);
 	}
-	bc_free(lat);
 }
 
 static void orbit(struct conn *c, int cameras)
@@ -163,7 +131,7 @@ static void orbit(struct conn *c, int cameras)
 			}
 		}
 	}
-	qsort(lat, (size_t)got, sizeof(int64_t), cmp_i64);
+	qsort(lat, (size_t)got, sizeof(int64_t), latency_cmp_i64);
 	if (got) {
 		double secs = (double)(t_now_ms() - t_start) / 1000.0;
 		printf("orbit cameras=%d first_frame_p50_ms=%lld p99_ms=%lld "

@@ -281,4 +281,21 @@ static uint32_t conn_move(struct conn *c, uint32_t id, float x, float y,
 	return conn_send(c, &m);
 }
 
+#if defined(BLOBCAST_SCENE_H)
+/* The scene of the SCENE_STATE in c->m, decoded; NULL when it does not
+ * decode. The caller destroys it. (Only where blobcast/scene.h is
+ * included before this header.) */
+static inline struct bc_tree *scene_of(const struct conn *c)
+{
+	struct bc_tree *t = bc_tree_create();
+	if (!t || bc_scene_decode(c->m.scene_state.scene.ptr,
+				  c->m.scene_state.scene.len, t, NULL, NULL,
+				  NULL)) {
+		bc_tree_destroy(t);
+		return NULL;
+	}
+	return t;
+}
+#endif
+
 #endif

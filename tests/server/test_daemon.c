@@ -26,18 +26,6 @@ static void make_dir_name(char *out, size_t n, const char *what)
 }
 
 /* The scene from the last SCENE_STATE received on c. */
-static struct bc_tree *scene_of(struct conn *c)
-{
-	struct bc_tree *t = bc_tree_create();
-	if (!t || bc_scene_decode(c->m.scene_state.scene.ptr,
-				  c->m.scene_state.scene.len, t, NULL, NULL,
-				  NULL)) {
-		bc_tree_destroy(t);
-		return NULL;
-	}
-	return t;
-}
-
 static uint32_t first_prim_id(const struct bc_tree *t)
 {
 	const struct bc_lin *l = bc_tree_lin(t);

@@ -17,18 +17,6 @@
 #define VW 96u
 #define VH 72u
 
-static struct bc_tree *scene_of(struct conn *c)
-{
-	struct bc_tree *t = bc_tree_create();
-	if (!t || bc_scene_decode(c->m.scene_state.scene.ptr,
-				  c->m.scene_state.scene.len, t, NULL, NULL,
-				  NULL)) {
-		bc_tree_destroy(t);
-		return NULL;
-	}
-	return t;
-}
-
 static void test_camera(struct bc_camera *cam)
 {
 	*cam = (struct bc_camera){{0.3f, 1.0f, 7.0f}, {0, 0, 0}, {0, 1, 0},
