@@ -21,6 +21,7 @@
 #include "blobcast/render.h"
 #include "test.h"
 
+#include "compare.h"
 #include "scenes.h"
 
 static const struct {
@@ -32,45 +33,6 @@ static const struct {
     {BC_SIMD_AVX512, "avx512"},
 };
 #define NMODES (sizeof(modes) / sizeof(modes[0]))
-
-struct cmp {
-	double mask_frac; /* pixels hit by one renderer only */
-	double depth_med; /* median |depth delta| where both hit */
-	double id_frac;   /* pixels hit by both with equal ids */
-	uint32_t both;
-};
-
-static int cmp_float(const void *a, const void *b)
-{
-	float x = *(const float *)a, y = *(const float *)b;
-	return (x > y) - (x < y);
-}
-
-static struct cmp compare(const struct bc_frame *a, const struct bc_frame *b)
-{
-	size_t n = (size_t)a->width * a->height, diff = 0, both = 0, same = 0;
-	float *d = bc_calloc(n, sizeof(float));
-	struct cmp c = {1.0, INFINITY, 0.0, 0};
-	if (!d) {
-		return c;
-	}
-	for (size_t i = 0; i < n; i++) {
-		bool ha = isfinite(a->depth[i]), hb = isfinite(b->depth[i]);
-		if (ha != hb) {
-			diff++;
-		} else if (ha) {
-			d[both++] = fabsf(a->depth[i] - b->depth[i]);
-			same += a->ids[i] == b->ids[i];
-		}
-	}
-	qsort(d, both, sizeof(float), cmp_float);
-	c.mask_frac = (double)diff / (double)n;
-	c.depth_med = both ? (double)d[both / 2] : 0.0;
-	c.id_frac = both ? (double)same / (double)both : 1.0;
-	c.both = (uint32_t)both;
-	bc_free(d);
-	return c;
-}
 
 static int render(struct bc_tree *t, enum bc_simd simd, uint32_t threads,
                   const struct bc_camera *cam, struct bc_frame *f)
