@@ -421,15 +421,9 @@ static int dec_field(struct dec *d, uint64_t *seen, struct bc_proto_field *f)
 	for (unsigned k = 0; k < f->count; k++) {
 		TRY(rd_f32_abs(d, "field value", &f->v[k]));
 	}
-	if (f->field == BC_PROTO_FIELD_OP_KIND) {
-		float v = f->v[0];
-		if (!(v >= 1.0f && v <= (float)BC_PROTO_OP_KIND_MAX &&
-		      v == (float)(int)v)) {
-			return fail(d, BC_EENUM,
-			            "operator kind %g is not an integer 1..%u",
-			            (double)v, BC_PROTO_OP_KIND_MAX);
-		}
-	}
+	/* An operator kind's value (an integer 1..6) is meaning, checked by
+	 * the server when it applies the SET (PROTOCOL.md 9): refused there
+	 * with a non-fatal EENUM, not here with a fatal one. */
 	return 0;
 }
 

@@ -543,13 +543,8 @@ function decField(d, seen) {
 	for (let k = 0; k < count; k++) {
 		values.push(d.f32abs('field value'));
 	}
-	if (field === FIELD.OP_KIND) {
-		const v = values[0];
-		if (!(v >= 1 && v <= L.OP_KIND_MAX && Number.isInteger(v))) {
-			d.fail('EENUM', `operator kind ${v} is not an integer ` +
-				`1..${L.OP_KIND_MAX}`);
-		}
-	}
+	// An operator kind's value (an integer 1..6) is meaning, checked by
+	// the server when it applies the SET (PROTOCOL.md 9), not here.
 	return { field, values };
 }
 

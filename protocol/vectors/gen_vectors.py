@@ -640,8 +640,6 @@ def edit_bad_cases(t, prefix):
     t.badp("-inf blend", setop([u8(32) + u8(1) + f32bits(0xff800000)],
                                node=1), "ENONFINITE")
     t.badp("translate over 1e6", setop([fld(1, [0, 2.0e6, 0])]), "ERANGE")
-    t.badp("operator kind 7", setop([fld(34, [7.0])], node=1), "EENUM")
-    t.badp("operator kind 2.5", setop([fld(34, [2.5])], node=1), "EENUM")
     t.badp("insert with empty subtree",
            one(u8(2) + u32(1) + u32(0) + u32(0)), "EPROTO_LENGTH")
     t.badp("replace subtree longer than the bytes left",
@@ -663,6 +661,12 @@ def gen_edit():
          for k in range(8)] + [
         dict(field=32, values=[0.25]), dict(field=33, values=[1e6]),
         dict(field=34, values=[1.0])])]), seq=23)
+    # An operator kind's value is meaning (PROTOCOL.md 9): it decodes, and
+    # the server refuses it with a non-fatal EENUM when it applies the SET.
+    t.ok("operator kind 7 decodes", dict(ops=[dict(kind=1, node=1, fields=[
+        dict(field=34, values=[7.0])])]), seq=25)
+    t.ok("operator kind 4.5 decodes", dict(ops=[dict(kind=1, node=1, fields=[
+        dict(field=34, values=[4.5])])]), seq=26)
     t.ok("largest batch: 1024 removes",
          dict(ops=[dict(kind=3, node=i + 1) for i in range(1024)]), seq=24)
     t.common(p)
