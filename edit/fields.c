@@ -153,6 +153,7 @@ static int apply_set(struct bc_tree *t, const struct bc_proto_edit_op *e,
 int bc_edit_apply_op(struct bc_tree *t, const struct bc_proto_edit_op *e,
                      struct bc_errinfo *ei)
 {
+	struct bc_proto_scene_info info;
 	struct bc_tree *sub;
 	int rc;
 	switch (e->kind) {
@@ -175,16 +176,24 @@ int bc_edit_apply_op(struct bc_tree *t, const struct bc_proto_edit_op *e,
 		return bc_errinfo_set(ei, BC_EENUM, "operation kind %d",
 		                      (int)e->kind);
 	}
+	/* The decoder would name id-0 nodes itself, each member's decoder
+	 * alike or not: refuse them from the bytes. */
+	if ((rc = bc_proto_scene_scan(e->subtree.ptr, e->subtree.len, &info,
+	                              ei))) {
+		return rc;
+	}
+	if (info.zero_ids > 0) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+		                      "every node of an inserted or replacing "
+		                      "subtree needs an explicit id (%u have "
+		                      "id 0)",
+		                      info.zero_ids);
+	}
 	if (!(sub = bc_tree_create())) {
 		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
 	}
 	rc = bc_scene_decode(e->subtree.ptr, e->subtree.len, sub, NULL, NULL,
 	                     ei);
-	if (!rc && bc_tree_has_auto_ids(sub)) {
-		rc = bc_errinfo_set(ei, BC_EINVAL,
-		                    "every node of an inserted or replacing "
-		                    "subtree needs an explicit id (not 0)");
-	}
 	if (!rc) {
 		rc = e->kind == BC_PROTO_EDIT_INSERT
 		         ? bc_tree_insert(t, e->node, e->position, sub, ei)

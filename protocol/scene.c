@@ -10,6 +10,7 @@
  * The scanner is iterative with a fixed stack of BC_PROTO_SCENE_MAX_DEPTH
  * open operators: no recursion, no allocation, one pass.
  */
+#include "blobcast/alloc.h"
 #include "wire.h"
 
 #include <stdarg.h>
@@ -158,14 +159,90 @@ static int scan_prim(struct scan *s, uint8_t tag)
 	return s_floats(s, nfloats, "params", NULL);
 }
 
+/* Children still expected by each open operator, innermost last: on the
+ * heap, grown as the nesting deepens (up to BC_PROTO_SCENE_MAX_DEPTH), so
+ * a deep chain costs memory per level, never C stack. */
+struct open_stack {
+	uint32_t *v;
+	uint32_t n, cap;
+};
+
+static int open_push(struct scan *s, struct open_stack *o, uint32_t children)
+{
+	if (o->n == o->cap) {
+		uint32_t cap = o->cap ? o->cap * 2u : 64u;
+		uint32_t *v;
+		if (cap > BC_PROTO_SCENE_MAX_DEPTH) {
+			cap = BC_PROTO_SCENE_MAX_DEPTH;
+		}
+		if (!(v = bc_realloc(o->v, (size_t)cap * sizeof(*v)))) {
+			return sfail(s, BC_ENOMEM, "out of memory");
+		}
+		o->v = v;
+		o->cap = cap;
+	}
+	o->v[o->n++] = children;
+	return 0;
+}
+
+static int scan_nodes(struct scan *s, uint32_t count, struct open_stack *o,
+                      struct bc_proto_scene_info *out)
+{
+	for (s->node = 0; s->node < count; s->node++) {
+		if (s->node > 0 && o->n == 0) {
+			return sfail(s, BC_EPROTO_COUNT,
+			             "the root's subtree ended after %u of "
+			             "node_count %u nodes",
+			             s->node, count);
+		}
+		/* This node would be number o->n + 1 on its path. */
+		if (o->n >= BC_PROTO_SCENE_MAX_DEPTH) {
+			return sfail(s, BC_EDEPTH, "nested deeper than %u",
+			             BC_PROTO_SCENE_MAX_DEPTH);
+		}
+		uint8_t tag;
+		uint32_t id, children = 0;
+		TRY(s_u8(s, "tag", &tag));
+		TRY(s_u32(s, "id", &id));
+		if (id == 0) {
+			out->zero_ids++;
+		}
+		if (o->n) {
+			o->v[o->n - 1]--;
+		}
+		if (tag & OP_TAG) {
+			TRY(scan_op(s, tag, count - 1 - s->node, &children));
+			TRY(open_push(s, o, children));
+			out->ops++;
+			continue;
+		}
+		TRY(scan_prim(s, tag));
+		out->prims++;
+		if (o->n + 1 > out->depth) {
+			out->depth = o->n + 1;
+		}
+		/* The last child of an operator completes it, which may
+		 * complete its parent, and so on up. */
+		while (o->n && o->v[o->n - 1] == 0) {
+			o->n--;
+		}
+	}
+	if (o->n) {
+		return sfail(s, BC_EPROTO_COUNT,
+		             "%u children of an operator are missing after the "
+		             "last node",
+		             o->v[o->n - 1]);
+	}
+	return 0;
+}
+
 int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
                         struct bc_proto_scene_info *info, struct bc_errinfo *ei)
 {
 	struct scan s = {.c = {.buf = bytes, .len = len}, .ei = ei};
 	struct bc_proto_scene_info out = {0};
-	/* Children still expected by each open operator, innermost last. */
-	uint32_t open[BC_PROTO_SCENE_MAX_DEPTH];
-	uint32_t nopen = 0;
+	struct open_stack o = {0};
+	int rc;
 	if (info) {
 		memset(info, 0, sizeof(*info));
 	}
@@ -192,47 +269,10 @@ int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
 		    "node_count %u needs at least %llu bytes, %zu left", count,
 		    (unsigned long long)count * NODE_MIN, bc__cur_left(&s.c));
 	}
-	for (s.node = 0; s.node < count; s.node++) {
-		if (s.node > 0 && nopen == 0) {
-			return sfail(&s, BC_EPROTO_COUNT,
-			             "the root's subtree ended after %u of "
-			             "node_count %u nodes",
-			             s.node, count);
-		}
-		/* This node would be number 129 on its path from the root. */
-		if (nopen >= BC_PROTO_SCENE_MAX_DEPTH) {
-			return sfail(&s, BC_EDEPTH, "nested deeper than %u",
-			             BC_PROTO_SCENE_MAX_DEPTH);
-		}
-		uint8_t tag;
-		uint32_t id, children = 0;
-		TRY(s_u8(&s, "tag", &tag));
-		TRY(s_u32(&s, "id", &id));
-		if (nopen) {
-			open[nopen - 1]--;
-		}
-		if (tag & OP_TAG) {
-			TRY(scan_op(&s, tag, count - 1 - s.node, &children));
-			open[nopen++] = children;
-			out.ops++;
-			continue;
-		}
-		TRY(scan_prim(&s, tag));
-		out.prims++;
-		if (nopen + 1 > out.depth) {
-			out.depth = nopen + 1;
-		}
-		/* The last child of an operator completes it, which may
-		 * complete its parent, and so on up. */
-		while (nopen && open[nopen - 1] == 0) {
-			nopen--;
-		}
-	}
-	if (nopen) {
-		return sfail(&s, BC_EPROTO_COUNT,
-		             "%u children of an operator are missing after the "
-		             "last node",
-		             open[nopen - 1]);
+	rc = scan_nodes(&s, count, &o, &out);
+	bc_free(o.v);
+	if (rc) {
+		return rc;
 	}
 	if (bc__cur_left(&s.c)) {
 		return sfail(&s, BC_EPROTO_TRAILING,

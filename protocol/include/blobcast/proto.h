@@ -481,6 +481,7 @@ struct bc_proto_scene_info {
 	bool has_camera;
 	uint32_t nodes, prims, ops;
 	uint32_t depth; /* most nodes on a path from the root (root = 1) */
+	uint32_t zero_ids; /* nodes with id 0 (the decoder names them) */
 };
 
 /* Checks scene bytes as PROTOCOL.md describes them, with the checks and the

@@ -1,0 +1,261 @@
+/*
+ * The edit module: what a SET field means (the corner cases PROTOCOL.md
+ * section 9 fixes), subtrees and removals that would make mirrors diverge
+ * or empty a scene, atomic batches and their undo, and the key=value
+ * syntax.
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "blobcast/alloc.h"
+#include "blobcast/edit.h"
+#include "blobcast/scene.h"
+#include "test.h"
+
+static const float T0[3] = {0, 0, 0}, R0[4] = {0, 0, 0, 1};
+
+/* smooth_union 10 (blend 0.5) { sphere 11, union 12 { sphere 13,
+ * sphere 14 } }: ids 1..9 are free. */
+static struct bc_tree *scene(void)
+{
+	struct bc_proto_buf b;
+	struct bc_tree *t = bc_tree_create();
+	float r = 0.5f;
+	bc_proto_buf_init(&b, 0);
+	bc_proto_scene_begin(&b, NULL, 5);
+	bc_proto_scene_op(&b, BC_OP_SMOOTH_UNION, 10, 0.5f, 0.0f, 2);
+	bc_proto_scene_prim(&b, BC_PRIM_SPHERE, 11, T0, R0, NULL, 1, &r);
+	bc_proto_scene_op(&b, BC_OP_UNION, 12, 0.0f, 0.0f, 2);
+	bc_proto_scene_prim(&b, BC_PRIM_SPHERE, 13, T0, R0, NULL, 1, &r);
+	bc_proto_scene_prim(&b, BC_PRIM_SPHERE, 14, T0, R0, NULL, 1, &r);
+	if (!t || bc_scene_decode(b.data, b.len, t, NULL, NULL, NULL)) {
+		abort();
+	}
+	bc_proto_buf_finish(&b);
+	return t;
+}
+
+/* A one-sphere subtree with the given id. */
+static void sphere_bytes(struct bc_proto_buf *b, uint32_t id)
+{
+	float r = 0.25f;
+	bc_proto_buf_init(b, 0);
+	bc_proto_scene_begin(b, NULL, 1);
+	bc_proto_scene_prim(b, BC_PRIM_SPHERE, id, T0, R0, NULL, 1, &r);
+}
+
+static bool same_bytes(const struct bc_tree *a, const struct bc_tree *b)
+{
+	uint8_t *x = NULL, *y = NULL;
+	size_t nx = 0, ny = 0;
+	bool same = bc_tree_encode(a, &x, &nx) == 0 &&
+	            bc_tree_encode(b, &y, &ny) == 0 && nx == ny &&
+	            memcmp(x, y, nx) == 0;
+	bc_free(x);
+	bc_free(y);
+	return same;
+}
+
+static int apply1(struct bc_tree **t, struct bc_proto_edit_op op,
+                  struct bc_errinfo *ei)
+{
+	struct bc_edit_batch b;
+	int rc = bc_edit_batch_apply(&b, t, &op, 1, ei);
+	bc_edit_batch_finish(&b);
+	return rc;
+}
+
+static struct bc_proto_edit_op set_op(uint32_t node,
+                                      const struct bc_proto_field *f, uint8_t n)
+{
+	return (struct bc_proto_edit_op){
+	    .kind = BC_PROTO_EDIT_SET, .node = node, .nfields = n, .fields = f};
+}
+
+/* Issue item 1: a subtree with id 0 is refused, even when id 1 is free. */
+static void subtree_with_id_0_is_einval(void)
+{
+	struct bc_tree *t = scene(), *before = scene();
+	struct bc_errinfo ei = {0};
+	struct bc_proto_buf sub;
+	sphere_bytes(&sub, 0);
+	CHECK_EQ_INT(apply1(&t,
+	                    (struct bc_proto_edit_op){
+	                        .kind = BC_PROTO_EDIT_INSERT,
+	                        .node = 10,
+	                        .position = 0,
+	                        .subtree = {sub.data, (uint32_t)sub.len}},
+	                    &ei),
+	             BC_EINVAL);
+	CHECK_EQ_INT(apply1(&t,
+	                    (struct bc_proto_edit_op){
+	                        .kind = BC_PROTO_EDIT_REPLACE,
+	                        .node = 11,
+	                        .subtree = {sub.data, (uint32_t)sub.len}},
+	                    &ei),
+	             BC_EINVAL);
+	CHECK(same_bytes(t, before));
+	bc_proto_buf_finish(&sub);
+	bc_tree_destroy(t);
+	bc_tree_destroy(before);
+}
+
+/* Issue item 2: removing the root would empty the scene. */
+static void remove_root_is_einval(void)
+{
+	struct bc_tree *t = scene();
+	struct bc_errinfo ei = {0};
+	CHECK_EQ_INT(apply1(&t,
+	                    (struct bc_proto_edit_op){
+	                        .kind = BC_PROTO_EDIT_REMOVE, .node = 10},
+	                    &ei),
+	             BC_EINVAL);
+	CHECK_EQ_INT((int)bc_tree_node_count(t), 5);
+	CHECK_EQ_INT(apply1(&t,
+	                    (struct bc_proto_edit_op){
+	                        .kind = BC_PROTO_EDIT_REMOVE, .node = 13},
+	                    &ei),
+	             0);
+	bc_tree_destroy(t);
+}
+
+/* Issue item 3: an operator kind that is no kind is a (non-fatal) EENUM of
+ * meaning. */
+static void operator_kind_not_1_to_6_is_eenum(void)
+{
+	struct bc_tree *t = scene();
+	struct bc_errinfo ei = {0};
+	const float bad[] = {4.5f, 7.0f, 0.0f, -1.0f};
+	for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); i++) {
+		struct bc_proto_field f = {
+		    BC_PROTO_FIELD_OP_KIND, 1, {bad[i], 0, 0, 0}};
+		CHECK_EQ_INT(apply1(&t, set_op(10, &f, 1), &ei), BC_EENUM);
+	}
+	bc_tree_destroy(t);
+}
+
+/* Issue item 8: turning a smooth operator sharp must not drop its blend
+ * and range silently: only a SET that gives both as 0 does it. */
+static void sharp_kind_keeps_or_refuses_blend(void)
+{
+	struct bc_tree *t = scene(), *before = scene();
+	struct bc_errinfo ei = {0};
+	struct bc_op_data op;
+	struct bc_proto_field f[3] = {
+	    {BC_PROTO_FIELD_OP_KIND, 1, {(float)BC_OP_UNION, 0, 0, 0}},
+	    {BC_PROTO_FIELD_BLEND, 1, {0, 0, 0, 0}},
+	    {BC_PROTO_FIELD_RANGE, 1, {0, 0, 0, 0}}};
+	CHECK_EQ_INT(apply1(&t, set_op(10, f, 1), &ei), BC_EINVAL);
+	CHECK(same_bytes(t, before));
+	bc_tree_get(t, 10, NULL, &op);
+	CHECK(op.kind == BC_OP_SMOOTH_UNION && op.blend == 0.5f);
+	CHECK_EQ_INT(apply1(&t, set_op(10, f, 3), &ei), 0);
+	bc_tree_get(t, 10, NULL, &op);
+	CHECK(op.kind == BC_OP_UNION && op.blend == 0.0f);
+	/* The key=value syntax says it for the user. */
+	{
+		struct bc_tree *u = scene();
+		struct bc_proto_field g[BC_PROTO_MAX_SET_FIELDS];
+		uint8_t n = 0;
+		const char *kv[] = {"kind=union"};
+		CHECK_EQ_INT(bc_edit_parse_kv(u, 10, kv, 1, g, &n, &ei), 0);
+		CHECK_EQ_INT(n, 3);
+		CHECK_EQ_INT(apply1(&u, set_op(10, g, n), &ei), 0);
+		CHECK(same_bytes(t, u));
+		bc_tree_destroy(u);
+	}
+	bc_tree_destroy(t);
+	bc_tree_destroy(before);
+}
+
+/* Issue item 9: blend on a sharp operator is refused, not acknowledged
+ * and lost; with a smooth kind in the same SET it applies. Item 11: a
+ * smooth operator given range 0 gets 1.25 blend. */
+static void blend_on_sharp_is_refused(void)
+{
+	struct bc_tree *t = scene(), *before = scene();
+	struct bc_errinfo ei = {0};
+	struct bc_op_data op;
+	struct bc_proto_field f[2] = {
+	    {BC_PROTO_FIELD_BLEND, 1, {0.3f, 0, 0, 0}},
+	    {BC_PROTO_FIELD_OP_KIND, 1, {(float)BC_OP_SMOOTH_UNION, 0, 0, 0}}};
+	CHECK_EQ_INT(apply1(&t, set_op(12, f, 1), &ei), BC_EINVAL);
+	CHECK(same_bytes(t, before));
+	CHECK_EQ_INT(apply1(&t, set_op(12, f, 2), &ei), 0);
+	bc_tree_get(t, 12, NULL, &op);
+	CHECK(op.kind == BC_OP_SMOOTH_UNION && op.blend == 0.3f);
+	CHECK(op.range == 1.25f * 0.3f);
+	bc_tree_destroy(t);
+	bc_tree_destroy(before);
+}
+
+/* A batch applies whole or not at all; an applied one can be undone. */
+static void batches_are_atomic_and_undo(void)
+{
+	struct bc_tree *t = scene(), *before = scene();
+	struct bc_errinfo ei = {0};
+	struct bc_edit_batch b;
+	struct bc_proto_buf sub;
+	struct bc_proto_field mv = {BC_PROTO_FIELD_TRANSLATE, 3, {1, 2, 3, 0}};
+	struct bc_proto_field bad = {BC_PROTO_FIELD_BLEND, 1, {0.1f, 0, 0, 0}};
+	struct bc_proto_edit_op ops[3];
+	sphere_bytes(&sub, 20);
+	ops[0] = set_op(11, &mv, 1);
+	ops[1] = set_op(13, &mv, 1);
+	ops[2] = set_op(14, &bad, 1); /* blend on a primitive */
+	CHECK_EQ_INT(bc_edit_batch_apply(&b, &t, ops, 3, &ei), BC_EINVAL);
+	CHECK(strncmp(ei.msg, "operation 2:", 12) == 0);
+	CHECK(same_bytes(t, before));
+	ops[2] =
+	    (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_INSERT,
+	                              .node = 12,
+	                              .position = 2,
+	                              .subtree = {sub.data, (uint32_t)sub.len}};
+	ops[1] = (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_REMOVE,
+	                                   .node = 999};
+	CHECK_EQ_INT(bc_edit_batch_apply(&b, &t, ops, 3, &ei), BC_ENONODE);
+	CHECK(same_bytes(t, before));
+	ops[1] = set_op(13, &mv, 1);
+	CHECK_EQ_INT(bc_edit_batch_apply(&b, &t, ops, 3, &ei), 0);
+	CHECK(!same_bytes(t, before) && bc_tree_node_count(t) == 6);
+	bc_edit_batch_undo(&b, &t);
+	CHECK(same_bytes(t, before));
+	CHECK_EQ_INT(bc_edit_batch_apply(&b, &t, ops, 1, &ei), 0);
+	bc_edit_batch_undo(&b, &t);
+	CHECK(same_bytes(t, before));
+	bc_proto_buf_finish(&sub);
+	bc_tree_destroy(t);
+	bc_tree_destroy(before);
+}
+
+static void key_value_syntax(void)
+{
+	struct bc_tree *t = scene();
+	struct bc_errinfo ei = {0};
+	struct bc_proto_field f[BC_PROTO_MAX_SET_FIELDS];
+	uint8_t n = 9;
+	const char *ok[] = {"radius=0.4", "translate=1,2,3"};
+	const char *twice[] = {"radius=1", "radius=2"};
+	const char *nan[] = {"radius=x"};
+	const char *blend[] = {"blend=0.2"};
+	CHECK_EQ_INT(bc_edit_parse_kv(t, 11, ok, 2, f, &n, &ei), 0);
+	CHECK(n == 2 && f[0].field == BC_PROTO_FIELD_PARAM0 &&
+	      f[1].count == 3 && f[1].v[2] == 3.0f);
+	CHECK_EQ_INT(bc_edit_parse_kv(t, 11, twice, 2, f, &n, &ei), BC_EINVAL);
+	CHECK_EQ_INT(bc_edit_parse_kv(t, 11, nan, 1, f, &n, &ei), BC_EPARSE);
+	CHECK_EQ_INT(bc_edit_parse_kv(t, 11, blend, 1, f, &n, &ei), BC_EINVAL);
+	CHECK_EQ_INT(bc_edit_parse_kv(t, 99, ok, 1, f, &n, &ei), BC_ENONODE);
+	bc_tree_destroy(t);
+}
+
+static const struct bc_test tests[] = {
+    {"subtree_with_id_0_is_einval", subtree_with_id_0_is_einval},
+    {"remove_root_is_einval", remove_root_is_einval},
+    {"operator_kind_not_1_to_6_is_eenum", operator_kind_not_1_to_6_is_eenum},
+    {"sharp_kind_keeps_or_refuses_blend", sharp_kind_keeps_or_refuses_blend},
+    {"blend_on_sharp_is_refused", blend_on_sharp_is_refused},
+    {"batches_are_atomic_and_undo", batches_are_atomic_and_undo},
+    {"key_value_syntax", key_value_syntax},
+};
+
+BC_TEST_MAIN(tests)
