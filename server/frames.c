@@ -49,12 +49,12 @@ static uint32_t max_level(uint32_t d)
 	return n;
 }
 
+/* The VIEW's encoding governs every frame, coarse levels and damage
+ * rectangles included (PROTOCOL.md 7.14): a client that asks PNG gets no
+ * JPEG it may not want; one that wants cheap interactive frames asks JPEG. */
 static int frame_encoding(const struct bc_conn *c, bool still)
 {
-	bool jpeg_ok = (c->encodings & (1u << (BC_PROTO_ENC_JPEG - 1))) != 0;
-	if (!still && jpeg_ok) {
-		return BC_PROTO_ENC_JPEG;
-	}
+	(void)still;
 	return (int)c->view.encoding;
 }
 

@@ -22,6 +22,17 @@
 /* Reads land in a buffer of this size before being fed to the reader. */
 #define READ_CHUNK (64u * 1024u)
 
+/* A FRAME's header and frame_no, the part written per client. */
+#define FRAME_PREFIX (BC_PROTO_HEADER_SIZE + 4u)
+
+static void put_le32(uint8_t *p, uint32_t v)
+{
+	p[0] = (uint8_t)v;
+	p[1] = (uint8_t)(v >> 8);
+	p[2] = (uint8_t)(v >> 16);
+	p[3] = (uint8_t)(v >> 24);
+}
+
 struct write_req {
 	uv_write_t req;
 	struct bc_conn_ref who;
@@ -153,11 +164,12 @@ static void write_done(uv_write_t *req, int status)
 
 /* Queues bytes (taking owned or a reference to shared). */
 static void queue_bytes(struct bc_conn *c, uint8_t *owned,
-			struct bc_shared *shared, const uint8_t *data,
-			size_t len)
+                        struct bc_shared *shared, const uint8_t *data,
+                        size_t len)
 {
 	struct write_req *w;
-	uv_buf_t buf;
+	uv_buf_t buf[2];
+	unsigned int nbufs;
 	int rc;
 	if (c->queued + len > BC_SRV_MAX_CLIENT_QUEUE) {
 		bc_free(owned);
@@ -178,13 +190,32 @@ static void queue_bytes(struct bc_conn *c, uint8_t *owned,
 	w->who = bc_conn_ref_of(c);
 	w->owned = owned;
 	w->len = len;
+	nbufs = 1;
+	buf[0] = uv_buf_init((char *)data, (unsigned int)len);
 	if (shared) {
+		/* A FRAME shared by a view group: frame_no counts this
+		 * client's frames (PROTOCOL.md 7.15), so the header and
+		 * frame_no go out from a private copy, the rest shared. */
+		if (!(w->owned = bc_malloc(FRAME_PREFIX))) {
+			bc_free(w);
+			bc_log(BC_LOG_ERROR,
+			       "client %u: out of memory for a "
+			       "frame",
+			       c->gen);
+			bc_conn_close(c, "out of memory");
+			return;
+		}
+		memcpy(w->owned, data, FRAME_PREFIX);
+		put_le32(w->owned + BC_PROTO_HEADER_SIZE, ++c->frame_no);
+		buf[0] = uv_buf_init((char *)w->owned, FRAME_PREFIX);
+		buf[1] = uv_buf_init((char *)data + FRAME_PREFIX,
+		                     (unsigned int)(len - FRAME_PREFIX));
+		nbufs = 2;
 		shared->refs++;
 		w->shared = shared;
 	}
-	buf = uv_buf_init((char *)data, (unsigned int)len);
 	c->queued += len;
-	rc = uv_write(&w->req, &c->h.stream, &buf, 1, write_done);
+	rc = uv_write(&w->req, &c->h.stream, buf, nbufs, write_done);
 	if (rc < 0) {
 		c->queued -= len;
 		bc_shared_unref(w->shared);
@@ -213,8 +244,8 @@ void bc_conn_send(struct bc_conn *c, const struct bc_msg *m)
 	queue_bytes(c, b.data, NULL, b.data, b.len);
 }
 
-void bc_conn_send_error(struct bc_conn *c, uint32_t seq, int code,
-			  bool fatal, const char *fmt, ...)
+void bc_conn_send_error(struct bc_conn *c, uint32_t seq, int code, bool fatal,
+                        const char *fmt, ...)
 {
 	char text[BC_PROTO_MAX_ERROR_TEXT];
 	struct bc_msg m = {.type = BC_MSG_ERROR, .seq = seq};
@@ -229,8 +260,8 @@ void bc_conn_send_error(struct bc_conn *c, uint32_t seq, int code,
 	m.flags = fatal ? BC_PROTO_FLAG_FATAL : 0;
 	m.error.code = (uint16_t)(code < 0 ? -code : code);
 	m.error.text.ptr = text;
-	m.error.text.len = (uint32_t)((size_t)n < sizeof(text) ? (size_t)n
-							       : sizeof(text) - 1);
+	m.error.text.len =
+	    (uint32_t)((size_t)n < sizeof(text) ? (size_t)n : sizeof(text) - 1);
 	bc_log(BC_LOG_INFO, "client %u: error %s: %s", c->gen,
 	       bc_err_name(code), text);
 	bc_conn_send(c, &m);
@@ -271,7 +302,7 @@ void bc_conn_send_frame(struct bc_conn *c, struct bc_shared *frame)
 /* ---- HELLO -------------------------------------------------------------- */
 
 static enum bc_proto_role token_role(struct bc_srv *srv, struct bc_conn *c,
-				     struct bc_proto_str tok)
+                                     struct bc_proto_str tok)
 {
 	for (uint32_t i = 0; i < srv->cfg.ntokens; i++) {
 		const char *t = srv->cfg.tokens[i].token;
@@ -296,23 +327,24 @@ static void handle_hello(struct bc_conn *c, const struct bc_msg *m)
 	if (h->version_min > BC_PROTO_VERSION ||
 	    h->version_max < BC_PROTO_VERSION) {
 		bc_conn_send_error(c, m->seq, BC_EPROTO_VERSION, true,
-				     "this server speaks version %u only",
-				     BC_PROTO_VERSION);
+		                   "this server speaks version %u only",
+		                   BC_PROTO_VERSION);
 		bc_conn_close_after_flush(c, "version mismatch");
 		return;
 	}
 	c->max_role = token_role(srv, c, h->token);
 	if (c->max_role == BC_PROTO_ROLE_INVALID) {
 		bc_conn_send_error(c, m->seq, BC_EAUTH, true,
-				     "a valid token is required");
+		                   "a valid token is required");
 		bc_conn_close_after_flush(c, "authentication failed");
 		return;
 	}
 	memcpy(c->name, h->client_name.ptr, h->client_name.len);
 	c->name[h->client_name.len] = '\0';
-	c->encodings = h->encodings ? h->encodings : BC_PROTO_ENCODINGS_ALL;
-	c->max_frame_bytes = h->max_frame_bytes ? h->max_frame_bytes
-						: BC_PROTO_MAX_PAYLOAD;
+	/* 0: the client wants no frames; its VIEWs are refused (EINVAL). */
+	c->encodings = h->encodings;
+	c->max_frame_bytes =
+	    h->max_frame_bytes ? h->max_frame_bytes : BC_PROTO_MAX_PAYLOAD;
 	c->stage = BC_PROTO_STAGE_READY;
 	uv_timer_stop(&c->hello_timer);
 	bc_proto_reader_hello_done(&c->reader);
@@ -342,11 +374,10 @@ static void dispatch(struct bc_conn *c, const struct bc_msg *m)
 		return;
 	}
 	if (rc) {
-		bc_conn_send_error(c, m->seq, rc, false,
-				     "%s is not allowed %s",
-				     bc_proto_type_name(m->type),
-				     rc == BC_EPERM ? "for a viewer"
-						    : "at this point");
+		bc_conn_send_error(c, m->seq, rc, false, "%s is not allowed %s",
+		                   bc_proto_type_name(m->type),
+		                   rc == BC_EPERM ? "for a viewer"
+		                                  : "at this point");
 		return;
 	}
 	if (m->type == BC_MSG_HELLO) {
@@ -375,11 +406,23 @@ static void on_read(uv_stream_t *s, ssize_t n, const uv_buf_t *buf)
 		return;
 	}
 	if (n < 0) {
-		if (bc_proto_reader_eof(&c->reader) < 0) {
+		int eof = bc_proto_reader_eof(&c->reader);
+		if (eof < 0 && n == UV_EOF) {
+			/* The stream ended inside a message (PROTOCOL.md 3.1):
+			 * a peer that only shut down its sending side still
+			 * hears why. */
+			bc_conn_send_error(c, 0, eof, true, "%s",
+			                   c->reader.errstr);
+			bc_conn_close_after_flush(c, "stream ended inside a "
+			                             "message");
+			return;
+		}
+		if (eof < 0) {
 			bc_log(BC_LOG_INFO, "client %u: %s", c->gen,
 			       c->reader.errstr);
 		}
-		bc_conn_close(c, n == UV_EOF ? "peer closed" : uv_strerror((int)n));
+		bc_conn_close(c, n == UV_EOF ? "peer closed"
+		                             : uv_strerror((int)n));
 		return;
 	}
 	if (n == 0) {
@@ -405,8 +448,8 @@ static void on_read(uv_stream_t *s, ssize_t n, const uv_buf_t *buf)
 static void hello_timeout(uv_timer_t *t)
 {
 	struct bc_conn *c = t->data;
-	bc_conn_send_error(c, 0, BC_ETIMEOUT, true,
-			     "no HELLO within %u ms", BC_SRV_HELLO_TIMEOUT_MS);
+	bc_conn_send_error(c, 0, BC_ETIMEOUT, true, "no HELLO within %u ms",
+	                   BC_SRV_HELLO_TIMEOUT_MS);
 	bc_conn_close_after_flush(c, "HELLO timeout");
 }
 
@@ -422,7 +465,8 @@ static bool is_loopback(uv_tcp_t *tcp)
 		return (ntohl(in->sin_addr.s_addr) >> 24) == 127;
 	}
 	if (sa.ss_family == AF_INET6) {
-		const struct sockaddr_in6 *in6 = (const struct sockaddr_in6 *)&sa;
+		const struct sockaddr_in6 *in6 =
+		    (const struct sockaddr_in6 *)&sa;
 		static const uint8_t lo[16] = {[15] = 1};
 		return memcmp(in6->sin6_addr.s6_addr, lo, 16) == 0;
 	}
@@ -469,8 +513,8 @@ static void on_connection(uv_stream_t *server, int status)
 		bc_log(BC_LOG_WARN, "refusing a connection: %s",
 		       srv->stopping ? "shutting down"
 		       : slot == BC_SRV_MAX_CONNECTIONS
-			       ? "too many connections"
-			       : "not loopback and no token configured");
+		           ? "too many connections"
+		           : "not loopback and no token configured");
 		c->handles_open = 2;
 		c->closing = true;
 		uv_close(&c->h.handle, handle_closed);
@@ -482,16 +526,15 @@ static void on_connection(uv_stream_t *server, int status)
 	srv->clients[slot] = c;
 	srv->nclients++;
 	snprintf(c->name, sizeof(c->name), "?");
-	bc_proto_reader_init(&c->reader,
-			     &(struct bc_proto_reader_opts){
-				     .side = BC_PROTO_SIDE_SERVER,
-				     .await_hello = true,
-			     });
+	bc_proto_reader_init(&c->reader, &(struct bc_proto_reader_opts){
+	                                     .side = BC_PROTO_SIDE_SERVER,
+	                                     .await_hello = true,
+	                                 });
 	if (tcp) {
 		uv_tcp_nodelay(&c->h.tcp, 1);
 	}
 	uv_timer_start(&c->hello_timer, hello_timeout, BC_SRV_HELLO_TIMEOUT_MS,
-		       0);
+	               0);
 	uv_read_start(&c->h.stream, on_alloc, on_read);
 	bc_log(BC_LOG_INFO, "connection %u from %s", c->gen,
 	       tcp ? (c->trusted ? "loopback" : "network") : "unix socket");
@@ -550,24 +593,24 @@ int bc_net_listen(struct bc_srv *srv, struct bc_errinfo *ei)
 		struct sockaddr_storage sa;
 		if (parse_listen(srv->cfg.listen, host, sizeof(host), &port)) {
 			return bc_errinfo_set(ei, BC_EINVAL,
-					      "--listen %s: expected HOST:PORT",
-					      srv->cfg.listen);
+			                      "--listen %s: expected HOST:PORT",
+			                      srv->cfg.listen);
 		}
 		if (uv_ip4_addr(host, port, (struct sockaddr_in *)&sa) != 0 &&
 		    uv_ip6_addr(host, port, (struct sockaddr_in6 *)&sa) != 0) {
 			return bc_errinfo_set(ei, BC_EINVAL,
-					      "--listen %s: not an IP address",
-					      srv->cfg.listen);
+			                      "--listen %s: not an IP address",
+			                      srv->cfg.listen);
 		}
 		uv_tcp_init(srv->loop, &srv->tcp_listener);
 		srv->tcp_listener.data = srv;
 		srv->has_tcp = true;
 		if ((rc = uv_tcp_bind(&srv->tcp_listener,
-				      (const struct sockaddr *)&sa, 0)) ||
+		                      (const struct sockaddr *)&sa, 0)) ||
 		    (rc = uv_listen((uv_stream_t *)&srv->tcp_listener, 64,
-				    on_connection))) {
+		                    on_connection))) {
 			return bc_errinfo_set(ei, BC_EIO, "listen on %s: %s",
-					      srv->cfg.listen, uv_strerror(rc));
+			                      srv->cfg.listen, uv_strerror(rc));
 		}
 		bc_log(BC_LOG_INFO, "listening on %s", srv->cfg.listen);
 	}
@@ -578,12 +621,12 @@ int bc_net_listen(struct bc_srv *srv, struct bc_errinfo *ei)
 		/* A socket file left by a daemon that died is replaced. */
 		unlink(srv->cfg.unix_path);
 		if ((rc = uv_pipe_bind(&srv->unix_listener,
-				       srv->cfg.unix_path)) ||
+		                       srv->cfg.unix_path)) ||
 		    (rc = uv_listen((uv_stream_t *)&srv->unix_listener, 64,
-				    on_connection))) {
+		                    on_connection))) {
 			return bc_errinfo_set(ei, BC_EIO, "listen on %s: %s",
-					      srv->cfg.unix_path,
-					      uv_strerror(rc));
+			                      srv->cfg.unix_path,
+			                      uv_strerror(rc));
 		}
 		bc_log(BC_LOG_INFO, "listening on unix:%s", srv->cfg.unix_path);
 	}

@@ -121,6 +121,7 @@ struct bc_conn {
 	bool frame_writing;
 	uint64_t frame_started_ms;
 	struct bc_shared *frame_next;
+	uint32_t frame_no; /* FRAMEs written to this client */
 	uint64_t frames_sent, bytes_sent, frames_spoiled;
 	uint64_t first_frame_ms;
 };
