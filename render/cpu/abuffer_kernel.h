@@ -24,13 +24,13 @@
 
 /* Pixel offsets within the tile of ray l of quarter q (abuffer.h), as
  * floats: whole numbers, so adding them to the tile's corner is exact. */
-static const float ab_off_x[4][BC__AB_QUARTER_RAYS] = {
+static _Alignas(64) const float ab_off_x[4][BC__AB_QUARTER_RAYS] = {
     {0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3},
     {4, 5, 6, 7, 4, 5, 6, 7, 4, 5, 6, 7, 4, 5, 6, 7},
     {0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3},
     {4, 5, 6, 7, 4, 5, 6, 7, 4, 5, 6, 7, 4, 5, 6, 7},
 };
-static const float ab_off_y[4][BC__AB_QUARTER_RAYS] = {
+static _Alignas(64) const float ab_off_y[4][BC__AB_QUARTER_RAYS] = {
     {0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2, 3, 3, 3, 3},
     {0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2, 3, 3, 3, 3},
     {4, 4, 4, 4, 5, 5, 5, 5, 6, 6, 6, 6, 7, 7, 7, 7},

@@ -78,8 +78,10 @@ struct ab_prim {
 
 /* Tile states within the kept view. */
 enum {
-	TILE_RAYS = 1u, /* dirs and cones computed */
-	TILE_LIST = 2u, /* list computed */
+	TILE_RAYS = 1u,  /* dirs written */
+	TILE_CONES = 2u, /* cones computed (tiles with candidates only) */
+	TILE_LIST = 4u,  /* list computed */
+	TILE_DONE = TILE_RAYS | TILE_LIST,
 };
 
 struct bc__tiled_bufs {
@@ -211,25 +213,22 @@ static inline float dot3(const float a[3], const float b[3])
 	return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
-static float angle_between(const float a[3], const float b[3])
-{
-	float c = dot3(a, b);
-	return acosf(c > 1.0f ? 1.0f : (c < -1.0f ? -1.0f : c));
-}
-
 /* The cone of the pixel rays through pixel centres [x0, x1] x [y0, y1]
- * (inclusive, in pixel coordinates). */
+ * (inclusive, in pixel coordinates), whose corner rays (the pixel rays
+ * there) are corner[4]. The half-angle is the largest angle between the
+ * axis and a corner: acosf of the smallest cosine, since acosf never
+ * increases (glibc's, checked over every float of [-1, 1]), which takes
+ * one acosf instead of four for the same value. */
 static void make_cone(const struct bc_view_rays *vr, float x0, float y0,
-		      float x1, float y1, struct cone *c)
+		      float x1, float y1, const float *const corner[4],
+		      struct cone *c)
 {
-	float cx[4] = {x0, x1, x0, x1}, cy[4] = {y0, y0, y1, y1};
-	float half = 0.0f;
+	float least = 1.0f, half;
 	bc_view_rays_dir(vr, 0.5f * (x0 + x1), 0.5f * (y0 + y1), c->axis);
 	for (int k = 0; k < 4; k++) {
-		float corner[3];
-		bc_view_rays_dir(vr, cx[k], cy[k], corner);
-		half = bc__maxf(half, angle_between(corner, c->axis));
+		least = bc__minf(least, dot3(corner[k], c->axis));
 	}
+	half = acosf(least < -1.0f ? -1.0f : least);
 	/* Margin for rounding in the angle computations. */
 	half += 1.0e-4f;
 	c->cos_h = cosf(half);
@@ -496,23 +495,30 @@ static int build_cand(struct tiled_frame *tf, bool relocate,
 	return 0;
 }
 
-/* The tile's ray directions into the frame's (for the tracer) and its
- * cones. */
-static void tile_rays(const struct tiled_frame *tf, uint32_t tx, uint32_t ty,
+/* The ray of pixel (dx, dy) of the tile, copied into d. */
+static const float *tile_ray(const struct bc__ab_rays *rays, uint32_t dx,
+			     uint32_t dy, float d[3])
+{
+	uint32_t q = (dx >= QUARTER) + 2u * (dy >= QUARTER);
+	uint32_t l = (dy % QUARTER) * QUARTER + dx % QUARTER;
+	for (int i = 0; i < 3; i++) {
+		d[i] = rays->d[q][i][l];
+	}
+	return d;
+}
+
+/* The tile's ray directions into the frame's, for the tracer. */
+static void tile_dirs(const struct tiled_frame *tf, uint32_t tx, uint32_t ty,
 		      const struct bc__ab_rays *rays)
 {
-	const struct bc__frame_ctx *fc = tf->fc;
-	struct cone *c = &tf->b->cones[CONES_PER_TILE * (ty * tf->tw + tx)];
-	uint32_t w = fc->out->width, h = fc->out->height;
+	uint32_t w = tf->fc->out->width, h = tf->fc->out->height;
 	uint32_t x0 = tx * BC_CPU_TILE, y0 = ty * BC_CPU_TILE;
-	uint32_t x1 = x0 + BC_CPU_TILE < w ? x0 + BC_CPU_TILE : w;
-	uint32_t y1 = y0 + BC_CPU_TILE < h ? y0 + BC_CPU_TILE : h;
 	for (uint32_t q = 0; q < 4; q++) {
 		for (uint32_t l = 0; l < BC__AB_QUARTER_RAYS; l++) {
 			uint32_t x = x0 + (q & 1u) * QUARTER + (l & 3u);
 			uint32_t y = y0 + (q >> 1) * QUARTER + (l >> 2);
 			float *d = tf->b->dirs + 3 * ((size_t)y * w + x);
-			if (x >= x1 || y >= y1) {
+			if (x >= w || y >= h) {
 				continue;
 			}
 			d[0] = rays->d[q][0][l];
@@ -520,8 +526,38 @@ static void tile_rays(const struct tiled_frame *tf, uint32_t tx, uint32_t ty,
 			d[2] = rays->d[q][2][l];
 		}
 	}
-	make_cone(&fc->vr, (float)x0 + 0.5f, (float)y0 + 0.5f,
-		  (float)x1 - 0.5f, (float)y1 - 0.5f, &c[0]);
+}
+
+/* The cone of the pixel block [bx0, bx1) x [by0, by1) of the tile whose
+ * top-left pixel is (x0, y0). Its corner rays are pixel rays: taken from
+ * rays, they are what bc_view_rays_dir gives for those pixel centres
+ * (abuffer.h). */
+static void block_cone(const struct bc_view_rays *vr,
+		       const struct bc__ab_rays *rays, uint32_t x0, uint32_t y0,
+		       uint32_t bx0, uint32_t by0, uint32_t bx1, uint32_t by1,
+		       struct cone *c)
+{
+	float d[4][3];
+	const float *corner[4] = {
+		tile_ray(rays, bx0 - x0, by0 - y0, d[0]),
+		tile_ray(rays, bx1 - 1 - x0, by0 - y0, d[1]),
+		tile_ray(rays, bx0 - x0, by1 - 1 - y0, d[2]),
+		tile_ray(rays, bx1 - 1 - x0, by1 - 1 - y0, d[3])};
+	make_cone(vr, (float)bx0 + 0.5f, (float)by0 + 0.5f, (float)bx1 - 0.5f,
+		  (float)by1 - 0.5f, corner, c);
+}
+
+/* The tile's cones: the whole tile's, then its quarters'. */
+static void tile_cones(const struct tiled_frame *tf, uint32_t tx, uint32_t ty,
+		       const struct bc__ab_rays *rays)
+{
+	const struct bc__frame_ctx *fc = tf->fc;
+	struct cone *c = &tf->b->cones[CONES_PER_TILE * (ty * tf->tw + tx)];
+	uint32_t w = fc->out->width, h = fc->out->height;
+	uint32_t x0 = tx * BC_CPU_TILE, y0 = ty * BC_CPU_TILE;
+	uint32_t x1 = x0 + BC_CPU_TILE < w ? x0 + BC_CPU_TILE : w;
+	uint32_t y1 = y0 + BC_CPU_TILE < h ? y0 + BC_CPU_TILE : h;
+	block_cone(&fc->vr, rays, x0, y0, x0, y0, x1, y1, &c[0]);
 	for (uint32_t q = 0; q < 4; q++) {
 		uint32_t qx0 = x0 + (q & 1u) * QUARTER;
 		uint32_t qy0 = y0 + (q >> 1) * QUARTER;
@@ -530,8 +566,8 @@ static void tile_rays(const struct tiled_frame *tf, uint32_t tx, uint32_t ty,
 		if (qx0 >= qx1 || qy0 >= qy1) {
 			continue; /* off the image's edge */
 		}
-		make_cone(&fc->vr, (float)qx0 + 0.5f, (float)qy0 + 0.5f,
-			  (float)qx1 - 0.5f, (float)qy1 - 0.5f, &c[1 + q]);
+		block_cone(&fc->vr, rays, x0, y0, qx0, qy0, qx1, qy1,
+			   &c[1 + q]);
 	}
 }
 
@@ -624,18 +660,28 @@ static void phase_lists(void *arg, uint32_t thread)
 		if (tile >= tf->ntiles) {
 			break;
 		}
-		if (b->state[tile] == (TILE_RAYS | TILE_LIST) ||
+		if ((b->state[tile] & TILE_DONE) == TILE_DONE ||
 		    (tf->region->tiles && !tf->region->tiles[tile])) {
 			continue;
 		}
 		tf->kern.dirs(&tf->fc->vr, tx * BC_CPU_TILE, ty * BC_CPU_TILE,
 			      &rays);
 		if (!(b->state[tile] & TILE_RAYS)) {
-			tile_rays(tf, tx, ty, &rays);
+			tile_dirs(tf, tx, ty, &rays);
+			b->state[tile] |= TILE_RAYS;
 		}
-		tile_quarters(tf, tx, ty, quarter);
-		b->list_n[tile] = tile_list(tf, tile, &rays, quarter);
-		b->state[tile] = TILE_RAYS | TILE_LIST;
+		b->list_n[tile] = 0;
+		if (b->cand_off[tile + 1] > b->cand_off[tile]) {
+			/* Tiles without candidates, often most of a frame's
+			 * background, need no cones. */
+			if (!(b->state[tile] & TILE_CONES)) {
+				tile_cones(tf, tx, ty, &rays);
+				b->state[tile] |= TILE_CONES;
+			}
+			tile_quarters(tf, tx, ty, quarter);
+			b->list_n[tile] = tile_list(tf, tile, &rays, quarter);
+		}
+		b->state[tile] |= TILE_LIST;
 	}
 }
 
@@ -782,9 +828,9 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 		}
 		for (uint32_t k = b->dirty_lo; k < hi; k++) {
 			struct ab_prim *p = &b->prims[k];
-			rect_state_and(tf, &p->rect, TILE_RAYS);
+			rect_state_and(tf, &p->rect, (uint8_t)~TILE_LIST);
 			prim_setup(tf, k, p);
-			rect_state_and(tf, &p->rect, TILE_RAYS);
+			rect_state_and(tf, &p->rect, (uint8_t)~TILE_LIST);
 		}
 		b->dirty_lo = b->dirty_hi = 0;
 		b->view_ok = false;
@@ -864,7 +910,7 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 	}
 	for (uint32_t t = 0; t < tf.ntiles; t++) {
 		if (!region->tiles || region->tiles[t]) {
-			todo += b->state[t] != (TILE_RAYS | TILE_LIST);
+			todo += (b->state[t] & TILE_DONE) != TILE_DONE;
 		}
 	}
 	if (todo > 0) {
