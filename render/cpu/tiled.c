@@ -67,22 +67,22 @@ struct cone {
 
 /* What the A-buffer needs of a primitive in one view: its widened ABV, its
  * tile rectangle, and its bounding sphere seen from the eye (centre v
- * relative to the eye, dist2 = |v|^2, radius; root = sqrt(dist2 -
- * radius^2), the cone tests' term, when the eye is outside). */
+ * relative to the eye, radius; root = sqrt(|v|^2 - radius^2), the cone
+ * tests' term, when the eye is outside). */
 struct ab_prim {
 	struct bc_abv wide;
 	struct rect rect;
-	float v[3], dist2, radius, root;
+	float v[3], radius, root;
 	bool inside;
 };
 
-/* Tile states within the kept view. */
-enum {
-	TILE_RAYS = 1u,  /* dirs written */
-	TILE_CONES = 2u, /* cones computed (tiles with candidates only) */
-	TILE_LIST = 4u,  /* list computed */
-	TILE_DONE = TILE_RAYS | TILE_LIST,
-};
+/* A tile's state bits within the kept view: dirs written, cones computed
+ * (tiles with candidates only), list computed; a tile with dirs and list
+ * needs nothing more. */
+#define TILE_RAYS 1u
+#define TILE_CONES 2u
+#define TILE_LIST 4u
+#define TILE_DONE (TILE_RAYS | TILE_LIST)
 
 struct bc__tiled_bufs {
 	/* The view everything below was made for (bc__cpu_key's scale
@@ -378,17 +378,16 @@ static void prim_setup(const struct tiled_frame *tf, uint32_t k,
 		       struct ab_prim *p)
 {
 	const struct bc__frame_ctx *fc = tf->fc;
-	float lo[3], hi[3], c[3];
+	float lo[3], hi[3], c[3], dist2;
 	widened_abv(fc, &fc->lin->abv[k], &p->wide, lo, hi);
 	p->rect = project_box(tf, lo, hi);
 	bounding_sphere(&p->wide, lo, hi, c, &p->radius);
 	for (int i = 0; i < 3; i++) {
 		p->v[i] = c[i] - fc->vr.eye[i];
 	}
-	p->dist2 = dot3(p->v, p->v);
-	p->inside = p->dist2 <= p->radius * p->radius;
-	p->root = p->inside ? 0.0f
-			    : sqrtf(p->dist2 - p->radius * p->radius);
+	dist2 = dot3(p->v, p->v);
+	p->inside = dist2 <= p->radius * p->radius;
+	p->root = p->inside ? 0.0f : sqrtf(dist2 - p->radius * p->radius);
 }
 
 /* Phase 1 of a new view, per primitive: prim_setup. */
@@ -407,7 +406,7 @@ static void phase_prims(void *arg, uint32_t thread)
 	}
 }
 
-/* Sets state bits `keep` only in the tiles of rectangle r. */
+/* Keeps only the state bits `keep` of the tiles of rectangle r. */
 static void rect_state_and(struct tiled_frame *tf, const struct rect *r,
 			   uint8_t keep)
 {
