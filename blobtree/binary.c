@@ -6,12 +6,12 @@
  *
  * Decoding reads untrusted bytes in two passes. The first checks everything
  * the bytes alone decide -- lengths, counts, tags, flags, finiteness, the
- * shape of the pre-order -- with an explicit stack bounded by
- * BC_TREE_MAX_DEPTH, and allocates nothing but an id array sized from a count
- * already checked against the bytes left. Only then does the second pass
- * build the tree, where the builder validates parameters and ids. A node
- * costs at least BC_SCENE_NODE_MIN_BYTES, so no count can make us loop or
- * allocate beyond what the input's length pays for.
+ * shape of the pre-order -- with an explicit heap stack (any depth up to
+ * BC_TREE_MAX_DEPTH), and allocates nothing but that stack and an id array,
+ * both sized from a count already checked against the bytes left. Only then
+ * does the second pass build the tree, where the builder validates parameters
+ * and ids. A node costs at least BC_SCENE_NODE_MIN_BYTES, so no count can make
+ * us loop or allocate beyond what the input's length pays for.
  */
 #include "blobcast/scene.h"
 
@@ -31,9 +31,13 @@ int bc_scene_walk_init(struct bc_scene_walk *w, const struct bc_tree *t)
 	if (!l || l->count == 0 || bc_tree_root(t) == 0) {
 		return BC_EINVAL;
 	}
-	/* Every node is pushed exactly once. */
+	/* Every node is pushed exactly once; at most every node is open. */
 	w->todo = bc_calloc(bc_tree_node_count(t), sizeof(uint32_t));
-	if (!w->todo) {
+	w->left = bc_calloc(bc_tree_node_count(t), sizeof(uint32_t));
+	if (!w->todo || !w->left) {
+		bc_free(w->todo);
+		bc_free(w->left);
+		memset(w, 0, sizeof(*w));
 		return BC_ENOMEM;
 	}
 	w->t = t;
@@ -91,6 +95,7 @@ bool bc_scene_walk_next(struct bc_scene_walk *w, struct bc_scene_node *out)
 void bc_scene_walk_finish(struct bc_scene_walk *w)
 {
 	bc_free(w->todo);
+	bc_free(w->left);
 	memset(w, 0, sizeof(*w));
 }
 
@@ -468,7 +473,7 @@ static int at_node(struct bc_errinfo *ei, int rc, uint32_t index, uint32_t id)
 static int decode_tree(struct rd *r, struct bc_tree *t, struct bc_errinfo *ei)
 {
 	uint32_t count, nopen = 0, nids = 0, nzero = 0;
-	uint32_t left[BC_TREE_MAX_DEPTH], opener[BC_TREE_MAX_DEPTH];
+	uint32_t *left = NULL, *opener = NULL; /* per open operator */
 	uint32_t *ids = NULL;
 	struct dnode n;
 	struct fresh fr = {0};
@@ -493,8 +498,11 @@ static int decode_tree(struct rd *r, struct bc_tree *t, struct bc_errinfo *ei)
 	}
 	/* Bounded by the input: count <= len / 5. */
 	ids = bc_malloc(sizeof(uint32_t) * (size_t)count);
-	if (!ids) {
-		return bc_errinfo_set(ei, BC_ENOMEM, "scene: out of memory");
+	left = bc_malloc(sizeof(uint32_t) * (size_t)count);
+	opener = bc_malloc(sizeof(uint32_t) * (size_t)count);
+	if (!ids || !left || !opener) {
+		rc = bc_errinfo_set(ei, BC_ENOMEM, "scene: out of memory");
+		goto cleanup;
 	}
 
 	/* Pass 1: the bytes alone. */
@@ -507,9 +515,12 @@ static int decode_tree(struct rd *r, struct bc_tree *t, struct bc_errinfo *ei)
 			                    i, i - 1, count);
 			goto cleanup;
 		}
-		if (nopen >= BC_TREE_MAX_DEPTH) {
+		/* Node i would be number nopen + 1 on its path: the
+		 * builder's own count. */
+		if (nopen + 1u > BC_TREE_MAX_DEPTH) {
 			rc = bc_errinfo_set(ei, BC_EDEPTH,
-			                    "node %u: nesting deeper than %d",
+			                    "node %u: nesting deeper than %u "
+			                    "levels",
 			                    i, BC_TREE_MAX_DEPTH);
 			goto cleanup;
 		}
@@ -586,6 +597,8 @@ static int decode_tree(struct rd *r, struct bc_tree *t, struct bc_errinfo *ei)
 	rc = bc_tree_end(t, ei);
 cleanup:
 	bc_free(ids);
+	bc_free(left);
+	bc_free(opener);
 	return rc;
 }
 

@@ -929,7 +929,7 @@ static void random_prim(struct gen *g, struct bc_prim_data *p, float spread)
 /* Emits a subtree of budget primitives (>= 1) at depth (0 = root). Every
  * operator has 2..budget children; a node whose children would pass the
  * depth limit takes all its primitives as direct children. Recursion is
- * bounded by the depth limit (<= BC_TREE_MAX_DEPTH). */
+ * bounded by the depth limit (<= BC_GEN_RANDOM_MAX_DEPTH). */
 static int random_emit(struct gen *g, uint32_t budget, uint32_t depth,
                        uint32_t max_depth, float spread)
 {
@@ -983,10 +983,10 @@ static int gen_random(struct gen *g, struct bc_camera *cam)
 		                      "random: %u primitives exceed %u", count,
 		                      BC_GEN_MAX_PRIMS);
 	}
-	if (depth < 2 || depth > BC_TREE_MAX_DEPTH) {
+	if (depth < 2 || depth > BC_GEN_RANDOM_MAX_DEPTH) {
 		return bc_errinfo_set(g->ei, BC_ERANGE,
-		                      "random: depth %u outside 2..%d", depth,
-		                      BC_TREE_MAX_DEPTH);
+		                      "random: depth %u outside 2..%u", depth,
+		                      BC_GEN_RANDOM_MAX_DEPTH);
 	}
 	if (cam) {
 		const float c[3] = {0.0f, 0.0f, 0.0f};

@@ -5,11 +5,12 @@
  *
  * Reading is strict so that typos are caught rather than ignored: unknown
  * keys, wrong types, missing keys, non-finite numbers and nesting over
- * BC_TREE_MAX_DEPTH are errors, and every message starts with the JSON path
- * of the offending value ("root.children[2].half_extents[1]: ..."). A first
- * walk over the document only gathers the ids the file names, so that
- * nodes without an id can be given ids no later node claims; the second
- * walk feeds the builder, which validates every parameter.
+ * BC_SCENE_JSON_MAX_DEPTH (what jansson's parser can hold) are errors, and
+ * every message starts with the JSON path of the offending value
+ * ("root.children[2].half_extents[1]: ..."). A first walk over the document
+ * only gathers the ids the file names, so that nodes without an id can be given
+ * ids no later node claims; the second walk feeds the builder, which validates
+ * every parameter.
  *
  * Writing does not go through jansson objects: a 10^6-node scene would
  * need about a gigabyte of them just to print a few hundred megabytes, and
@@ -104,7 +105,7 @@ struct jctx {
 	uint32_t nodes;
 	/* idx[d] is the child index of the node at depth d (d >= 1) on the
 	 * path from the root to the node being read. */
-	uint32_t idx[BC_TREE_MAX_DEPTH + 1];
+	uint32_t idx[BC_SCENE_JSON_MAX_DEPTH + 1];
 	uint32_t depth;
 	bool in_tree; /* paths start at "root", else at a top-level key */
 };
@@ -157,7 +158,10 @@ static int jfail(struct jctx *c, int code, const char *key, long elem,
 static int jfail(struct jctx *c, int code, const char *key, long elem,
                  const char *fmt, ...)
 {
-	char path[24 * (BC_TREE_MAX_DEPTH + 4)];
+	/* Only the path's end fits a message: at most PATH_LEVELS levels are
+	 * printed, after "root...". */
+	enum { PATH_LEVELS = 24 };
+	char path[24 * (PATH_LEVELS + 4)];
 	char reason[MSG_CAP];
 	size_t plen = 0, rlen, budget;
 	va_list ap;
@@ -170,8 +174,13 @@ static int jfail(struct jctx *c, int code, const char *key, long elem,
 		plen = append(path, sizeof(path), plen, "%s", key);
 		key = NULL;
 	} else {
+		uint32_t d = 1;
 		plen = append(path, sizeof(path), plen, "root");
-		for (uint32_t d = 1; d <= c->depth; d++) {
+		if (c->depth > PATH_LEVELS) {
+			d = c->depth - PATH_LEVELS + 1;
+			plen = append(path, sizeof(path), plen, "...");
+		}
+		for (; d <= c->depth; d++) {
 			plen = append(path, sizeof(path), plen, ".children[%u]",
 			              c->idx[d]);
 		}
@@ -475,7 +484,8 @@ static int parse_op(struct jctx *c, json_t *obj, enum bc_op kind)
 	return 0;
 }
 
-/* Recursion is bounded: depth is checked against BC_TREE_MAX_DEPTH first. */
+/* Recursion is bounded: depth is checked against BC_SCENE_JSON_MAX_DEPTH
+ * first (jansson itself holds no deeper document). */
 static int parse_node(struct jctx *c, json_t *obj)
 {
 	const json_t *type;
@@ -484,10 +494,11 @@ static int parse_node(struct jctx *c, json_t *obj)
 	enum bc_prim pk;
 	enum bc_op ok;
 
-	if (c->depth >= BC_TREE_MAX_DEPTH) {
+	if (c->depth >= BC_SCENE_JSON_MAX_DEPTH) {
 		return jfail(c, BC_EDEPTH, NULL, -1,
-		             "nesting deeper than %d levels",
-		             BC_TREE_MAX_DEPTH);
+		             "nesting deeper than %u levels (the most a JSON "
+		             "scene carries; use the binary form)",
+		             BC_SCENE_JSON_MAX_DEPTH);
 	}
 	if (!json_is_object(obj)) {
 		return jfail(c, BC_EPARSE, NULL, -1,
@@ -523,7 +534,7 @@ static int parse_node(struct jctx *c, json_t *obj)
 static int collect_ids(struct jctx *c, const json_t *obj, uint32_t depth)
 {
 	const json_t *v, *children;
-	if (depth >= BC_TREE_MAX_DEPTH || !json_is_object(obj)) {
+	if (depth >= BC_SCENE_JSON_MAX_DEPTH || !json_is_object(obj)) {
 		return 0;
 	}
 	if (++c->nodes > BC_TREE_MAX_NODES) {
@@ -665,6 +676,14 @@ int bc_scene_parse_json(const char *text, size_t len, struct bc_tree *t,
 		default:
 			rc = BC_EPARSE;
 			break;
+		}
+		if (rc == BC_EDEPTH) {
+			return bc_errinfo_set(
+			    ei, rc,
+			    "line %d column %d: %s: a JSON scene nests at "
+			    "most %u levels (use the binary form)",
+			    jerr.line, jerr.column, jerr.text,
+			    BC_SCENE_JSON_MAX_DEPTH);
 		}
 		return bc_errinfo_set(ei, rc, "line %d column %d: %s",
 		                      jerr.line, jerr.column, jerr.text);
@@ -861,6 +880,15 @@ static void sb_puts(struct sbuf *b, const char *s)
 	sb_put(b, s, strlen(s));
 }
 
+/* Indentation shows the first levels only: a 1000-deep chain indented in
+ * full would be quadratic in size. */
+#define INDENT_LEVELS 32u
+
+static uint32_t indent_of(uint32_t depth)
+{
+	return 2u + 2u * (depth < INDENT_LEVELS ? depth : INDENT_LEVELS);
+}
+
 static void sb_indent(struct sbuf *b, uint32_t n)
 {
 	if (sb_room(b, n)) {
@@ -985,9 +1013,10 @@ char *bc_scene_to_json(const struct bc_tree *t, const struct bc_camera *cam)
 	struct bc_scene_walk w;
 	struct bc_scene_node n;
 	struct sbuf b = {0};
-	uint32_t rem[BC_TREE_MAX_DEPTH], nopen = 0;
+	uint32_t rem[BC_SCENE_JSON_MAX_DEPTH], nopen = 0;
 
-	if (bc_scene_walk_init(&w, t)) {
+	if (bc_tree_nesting(t) > BC_SCENE_JSON_MAX_DEPTH ||
+	    bc_scene_walk_init(&w, t)) {
 		return NULL;
 	}
 	/* About 100 bytes per node: start near the final size. */
@@ -1004,7 +1033,7 @@ char *bc_scene_to_json(const struct bc_tree *t, const struct bc_camera *cam)
 	sb_puts(&b, "  \"root\": ");
 	while (!b.failed && bc_scene_walk_next(&w, &n)) {
 		if (n.depth) {
-			sb_indent(&b, 2 + 2 * n.depth);
+			sb_indent(&b, indent_of(n.depth));
 		}
 		if (n.is_op) {
 			write_op(&b, &n);
@@ -1021,7 +1050,7 @@ char *bc_scene_to_json(const struct bc_tree *t, const struct bc_camera *cam)
 			}
 			nopen--;
 			sb_puts(&b, "\n");
-			sb_indent(&b, 2 + 2 * nopen);
+			sb_indent(&b, indent_of(nopen));
 			sb_puts(&b, "]}");
 		}
 	}
@@ -1044,6 +1073,13 @@ int bc_scene_save_json(const char *path, const struct bc_tree *t,
 
 	if (bc_tree_root(t) == 0) {
 		return bc_errinfo_set(ei, BC_EINVAL, "%s: empty scene", path);
+	}
+	if (bc_tree_nesting(t) > BC_SCENE_JSON_MAX_DEPTH) {
+		return bc_errinfo_set(
+		    ei, BC_EDEPTH,
+		    "%s: the scene nests %u levels, more than "
+		    "the %u a JSON scene carries",
+		    path, bc_tree_nesting(t), BC_SCENE_JSON_MAX_DEPTH);
 	}
 	text = bc_scene_to_json(t, cam);
 	tmp = bc_malloc(plen + 48);

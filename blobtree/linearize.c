@@ -193,52 +193,81 @@ struct fill_state {
 	uint32_t slot, prim, param;
 };
 
-/* Emits pool node n's subtree in post-order; returns its top slot. The
- * recursion is bounded by BC_TREE_MAX_DEPTH. */
-static uint32_t emit(struct bc_tree *t, struct fill_state *fs, uint32_t n)
+static void emit_leaf(struct bc_tree *t, struct fill_state *fs, uint32_t n)
 {
 	struct bc__node *nd = &t->pool[n];
 	struct bc_lin *l = fs->l;
-	uint32_t left, c;
-	if (!nd->is_op) {
-		uint32_t s = fs->slot++;
-		nd->slot = s;
-		nd->prim = fs->prim++;
-		nd->param = fs->param;
-		fs->param += BC_PRIM_RECORD_VEC4;
-		set_word(l, s, true, (uint32_t)nd->u.prim.kind);
-		l->node[2 * s + 1] = nd->param;
-		l->first[s] = s;
-		l->node_id[s] = nd->id;
-		l->prim_of[s] = nd->prim;
-		l->prim_slot[nd->prim] = s;
-		write_prim_record(l->param + 4u * (size_t)nd->param,
-				  &nd->u.prim);
-		memcpy(l->color[nd->prim],
-		       nd->u.prim.has_color ? nd->u.prim.color : default_color,
-		       sizeof(l->color[0]));
-		return s;
-	}
+	uint32_t s = fs->slot++;
+	nd->slot = s;
+	nd->prim = fs->prim++;
 	nd->param = fs->param;
-	fs->param += BC_OP_RECORD_VEC4;
-	write_op_record(l->param + 4u * (size_t)nd->param, &nd->u.op);
-	c = nd->first_child;
-	left = emit(t, fs, c);
-	for (c = t->pool[c].next; c != BC_NONE; c = t->pool[c].next) {
-		uint32_t right = emit(t, fs, c);
-		uint32_t o = fs->slot++;
-		set_parent(l, left, o, true);
-		set_parent(l, right, o, false);
-		set_word(l, o, false, op_type_byte(nd->u.op.kind));
-		l->node[2 * o + 1] = nd->param;
-		l->first[o] = l->first[left];
-		l->node_id[o] = nd->id;
-		l->prim_of[o] = BC_NONE;
-		left = o;
+	fs->param += BC_PRIM_RECORD_VEC4;
+	set_word(l, s, true, (uint32_t)nd->u.prim.kind);
+	l->node[2 * s + 1] = nd->param;
+	l->first[s] = s;
+	l->node_id[s] = nd->id;
+	l->prim_of[s] = nd->prim;
+	l->prim_slot[nd->prim] = s;
+	write_prim_record(l->param + 4u * (size_t)nd->param, &nd->u.prim);
+	memcpy(l->color[nd->prim],
+	       nd->u.prim.has_color ? nd->u.prim.color : default_color,
+	       sizeof(l->color[0]));
+}
+
+/* Folds operator p's subtree so far (top slot p->slot) with its next child
+ * c, just emitted: the binary node ((...) op c). */
+static void emit_fold(struct fill_state *fs, struct bc__node *p,
+                      const struct bc__node *c)
+{
+	struct bc_lin *l = fs->l;
+	uint32_t left = p->slot, right = c->slot, o = fs->slot++;
+	set_parent(l, left, o, true);
+	set_parent(l, right, o, false);
+	set_word(l, o, false, op_type_byte(p->u.op.kind));
+	l->node[2 * o + 1] = p->param;
+	l->first[o] = l->first[left];
+	l->node_id[o] = p->id;
+	l->prim_of[o] = BC_NONE;
+	p->slot = o;
+}
+
+/*
+ * Emits the model in post-order without recursion (any depth): down the
+ * first children, a leaf, then up through parent links. An operator's
+ * record is written on the way down (pre-order, as parameter offsets always
+ * were); each child after its first is folded in as soon as it is complete,
+ * so an operator's slot is final when its last child is.
+ */
+static void emit_all(struct bc_tree *t, struct fill_state *fs, uint32_t top)
+{
+	uint32_t n = top;
+	for (;;) {
+		while (t->pool[n].is_op) {
+			struct bc__node *nd = &t->pool[n];
+			nd->param = fs->param;
+			fs->param += BC_OP_RECORD_VEC4;
+			write_op_record(fs->l->param + 4u * (size_t)nd->param,
+			                &nd->u.op);
+			n = nd->first_child;
+		}
+		emit_leaf(t, fs, n);
+		for (;;) {
+			uint32_t p = t->pool[n].parent;
+			if (n == top) {
+				return;
+			}
+			if (t->pool[p].first_child == n) {
+				t->pool[p].slot = t->pool[n].slot;
+			} else {
+				emit_fold(fs, &t->pool[p], &t->pool[n]);
+			}
+			if (t->pool[n].next != BC_NONE) {
+				n = t->pool[n].next;
+				break;
+			}
+			n = p;
+		}
 	}
-	/* nd may have moved? No: the pool is not resized during filling. */
-	nd->slot = left;
-	return left;
 }
 
 /* ROI of slot s from its parent's (eq. 13-16), and its kill count. */
@@ -308,16 +337,23 @@ static void update_size(struct bc_lin *l)
 	l->size = sqrtf(dx * dx + dy * dy + dz * dz);
 }
 
-/* Places the ABVs of pool node n's subtree (ROIs must be known). */
-static void place_subtree(struct bc_tree *t, struct bc_lin *l, uint32_t n)
+/* Places the ABVs of pool node top's subtree (ROIs must be known): its
+ * leaves in order, through parent links (no recursion). */
+static void place_subtree(struct bc_tree *t, struct bc_lin *l, uint32_t top)
 {
-	const struct bc__node *nd = &t->pool[n];
-	if (!nd->is_op) {
-		place_abv(t, l, nd->prim, &nd->u.prim);
-		return;
-	}
-	for (uint32_t c = nd->first_child; c != BC_NONE; c = t->pool[c].next) {
-		place_subtree(t, l, c);
+	uint32_t n = top;
+	for (;;) {
+		while (t->pool[n].is_op) {
+			n = t->pool[n].first_child;
+		}
+		place_abv(t, l, t->pool[n].prim, &t->pool[n].u.prim);
+		while (n != top && t->pool[n].next == BC_NONE) {
+			n = t->pool[n].parent;
+		}
+		if (n == top) {
+			return;
+		}
+		n = t->pool[n].next;
 	}
 }
 
@@ -335,7 +371,9 @@ void bc__lin_fill(struct bc_tree *t, struct bc_lin *l)
 {
 	struct fill_state fs = {.l = l};
 	uint32_t root, depth = 0, most = 0;
-	root = emit(t, &fs, t->root);
+	l->nesting = bc__measure(t, t->root);
+	emit_all(t, &fs, t->root);
+	root = t->pool[t->root].slot;
 	l->node[2 * root] &= ~(BC_WORD_LEFT | BC_WORD_ANCESTOR_MASK);
 	l->node[2 * root] |= BC_WORD_NO_ANCESTOR;
 
@@ -408,8 +446,6 @@ void bc__lin_update_op(struct bc_tree *t, const struct bc__node *n)
 	for (uint32_t s = n->slot; s-- > first;) {
 		propagate(l, s);
 	}
-	for (uint32_t c = n->first_child; c != BC_NONE; c = t->pool[c].next) {
-		place_subtree(t, l, c);
-	}
+	place_subtree(t, l, (uint32_t)(n - t->pool));
 	update_size(l);
 }

@@ -189,6 +189,7 @@ static uint32_t fresh_id(struct bc_tree *t)
 
 static void tree_clear(struct bc_tree *t)
 {
+	bc_free(t->open);
 	bc_free(t->pool);
 	bc_free(t->ids.keys);
 	bc_free(t->ids.vals);
@@ -291,40 +292,164 @@ struct subtree_stats {
 	uint32_t nodes, prims, ops, depth;
 };
 
-static void subtree_stats(const struct bc_tree *t, uint32_t n, uint32_t depth,
-			  struct subtree_stats *st)
+/*
+ * The walks below visit a subtree without recursion or a stack: the model
+ * links every node to its parent and next sibling, so "the next node in
+ * pre-order" and "back up to the parent" are O(1) steps, and a tree
+ * 2^20 levels deep costs no C stack.
+ */
+
+/* The node after n in pre-order within the subtree at top, BC_NONE at the
+ * end; *depth follows the moves (down +1, up -k). */
+static uint32_t preorder_next(const struct bc_tree *t, uint32_t n, uint32_t top,
+                              uint32_t *depth)
 {
-	st->nodes++;
-	if (depth > st->depth) {
-		st->depth = depth;
+	if (t->pool[n].is_op && t->pool[n].first_child != BC_NONE) {
+		(*depth)++;
+		return t->pool[n].first_child;
 	}
-	if (!t->pool[n].is_op) {
-		st->prims++;
-		return;
+	while (n != top) {
+		if (t->pool[n].next != BC_NONE) {
+			return t->pool[n].next;
+		}
+		n = t->pool[n].parent;
+		(*depth)--;
 	}
-	st->ops++;
-	for (uint32_t c = t->pool[n].first_child; c != BC_NONE;
-	     c = t->pool[c].next) {
-		subtree_stats(t, c, depth + 1, st);
+	return BC_NONE;
+}
+
+static void subtree_stats(const struct bc_tree *t, uint32_t top,
+                          struct subtree_stats *st)
+{
+	uint32_t depth = 1;
+	for (uint32_t n = top; n != BC_NONE;
+	     n = preorder_next(t, n, top, &depth)) {
+		st->nodes++;
+		if (depth > st->depth) {
+			st->depth = depth;
+		}
+		if (t->pool[n].is_op) {
+			st->ops++;
+		} else {
+			st->prims++;
+		}
 	}
 }
 
-static void free_subtree(struct bc_tree *t, uint32_t n)
+uint32_t bc__measure(struct bc_tree *t, uint32_t top)
 {
-	uint32_t c = t->pool[n].first_child;
-	while (c != BC_NONE) {
-		uint32_t next = t->pool[c].next;
-		free_subtree(t, c);
-		c = next;
+	uint32_t n = top, depth = 1, most = 0;
+	for (;;) {
+		while (t->pool[n].is_op) {
+			n = t->pool[n].first_child;
+			depth++;
+		}
+		if (depth > most) {
+			most = depth;
+		}
+		t->pool[n].need = 1;
+		/* n is complete: finish every ancestor it completes. */
+		for (;;) {
+			uint32_t p;
+			if (n == top) {
+				return most;
+			}
+			if (t->pool[n].next != BC_NONE) {
+				n = t->pool[n].next;
+				break;
+			}
+			p = t->pool[n].parent;
+			depth--;
+			/* The fold ((c0 op c1) op c2)...: a right operand is
+			 * evaluated above its left one. */
+			{
+				uint32_t c = t->pool[p].first_child;
+				uint32_t need = t->pool[c].need;
+				for (c = t->pool[c].next; c != BC_NONE;
+				     c = t->pool[c].next) {
+					if (t->pool[c].need + 1u > need) {
+						need = t->pool[c].need + 1u;
+					}
+				}
+				t->pool[p].need = need;
+			}
+			n = p;
+		}
 	}
-	map_del(&t->ids, t->pool[n].id);
-	if (t->pool[n].is_op) {
-		t->nops--;
-	} else {
-		t->nprims--;
+}
+
+/* Frees the subtree at n (post-order, so each node's links are read before
+ * it joins the free chain through .next). */
+static void free_subtree(struct bc_tree *t, uint32_t top)
+{
+	uint32_t n = top;
+	for (;;) {
+		while (t->pool[n].is_op && t->pool[n].first_child != BC_NONE) {
+			n = t->pool[n].first_child;
+		}
+		for (;;) {
+			uint32_t next = t->pool[n].next, p = t->pool[n].parent;
+			bool last = n == top;
+			if (!last && p != BC_NONE) {
+				/* Detach n so that its parent looks like a
+				 * leaf once its last child is gone. */
+				t->pool[p].first_child = next;
+			}
+			/* A replacement may already map this id to its
+			 * own node. */
+			if (map_find(&t->ids, t->pool[n].id) == n) {
+				map_del(&t->ids, t->pool[n].id);
+			}
+			if (t->pool[n].is_op) {
+				t->nops--;
+			} else {
+				t->nprims--;
+			}
+			t->nnodes--;
+			pool_release(t, n);
+			if (last) {
+				return;
+			}
+			if (next != BC_NONE) {
+				n = next;
+				break;
+			}
+			n = p;
+		}
 	}
-	t->nnodes--;
-	pool_release(t, n);
+}
+
+/* Maps every id of the subtree at top to its node again (after a
+ * replacement that shared some of them was undone; the map has room, since
+ * it held them before). */
+static void remap_ids(struct bc_tree *t, uint32_t top)
+{
+	uint32_t depth = 0;
+	for (uint32_t n = top; n != BC_NONE;
+	     n = preorder_next(t, n, top, &depth)) {
+		map_put_nogrow(&t->ids, t->pool[n].id, n);
+	}
+}
+
+/* Checks a tree's nesting and evaluation stack against the limits (the one
+ * check shared by the builder and the grafting edits). */
+static int check_shape(struct bc_tree *t, struct bc_errinfo *ei)
+{
+	uint32_t depth = bc__measure(t, t->root);
+	if (depth > BC_TREE_MAX_DEPTH) {
+		return bc_errinfo_set(ei, BC_EDEPTH,
+		                      "tree: nesting deeper than %u levels",
+		                      BC_TREE_MAX_DEPTH);
+	}
+	if (t->pool[t->root].need > BC_EVAL_STACK) {
+		return bc_errinfo_set(ei, BC_EDEPTH,
+		                      "tree: evaluating it needs a stack of "
+		                      "%u entries, more than %u (operators "
+		                      "nested too deep in right operands; "
+		                      "left-nested chains may be any depth)",
+		                      t->pool[t->root].need, BC_EVAL_STACK);
+	}
+	return 0;
 }
 
 /* Replaces t's layout with one built for the model's current counts. The
@@ -368,15 +493,21 @@ static int add_node(struct bc_tree *t, uint32_t id, bool is_op,
 		return bc_errinfo_set(ei, BC_EINVAL,
 				      "tree: a scene has exactly one root");
 	}
-	if (is_op && t->nopen >= BC_TREE_MAX_DEPTH) {
+	/* The new node would be number nopen + 1 on its path. */
+	if (t->nopen + 1u > BC_TREE_MAX_DEPTH) {
 		return bc_errinfo_set(ei, BC_EDEPTH,
-				      "tree: nesting deeper than %d",
-				      BC_TREE_MAX_DEPTH);
+		                      "tree: nesting deeper than %u levels",
+		                      BC_TREE_MAX_DEPTH);
 	}
-	if (!is_op && t->nopen + 1 > BC_TREE_MAX_DEPTH) {
-		return bc_errinfo_set(ei, BC_EDEPTH,
-				      "tree: nesting deeper than %d",
-				      BC_TREE_MAX_DEPTH);
+	if (is_op && t->nopen == t->open_cap) {
+		uint32_t cap = t->open_cap ? 2 * t->open_cap : 64;
+		uint32_t *grown = bc_reallocarray(t->open, cap, sizeof(*grown));
+		if (!grown) {
+			return bc_errinfo_set(ei, BC_ENOMEM, "tree: %s",
+			                      bc_strerror(BC_ENOMEM));
+		}
+		t->open = grown;
+		t->open_cap = cap;
 	}
 	if (t->nnodes >= BC_TREE_MAX_NODES ||
 	    (!is_op && 2u * t->nprims + 1u > BC_TREE_MAX_NODES)) {
@@ -478,6 +609,9 @@ int bc_tree_end(struct bc_tree *t, struct bc_errinfo *ei)
 	if (t->root == BC_NONE) {
 		return bc_errinfo_set(ei, BC_EINVAL, "tree: no root node");
 	}
+	if ((rc = check_shape(t, ei))) {
+		return rc;
+	}
 	if ((rc = bc__lin_alloc(&fresh, t->nprims, t->nops))) {
 		return bc_errinfo_set(ei, rc, "tree: %s", bc_strerror(rc));
 	}
@@ -506,6 +640,11 @@ uint32_t bc_tree_node_count(const struct bc_tree *t)
 uint32_t bc_tree_prim_count(const struct bc_tree *t)
 {
 	return t->nprims;
+}
+
+uint32_t bc_tree_nesting(const struct bc_tree *t)
+{
+	return t->has_lin ? t->lin.nesting : 0;
 }
 
 uint32_t bc_tree_root(const struct bc_tree *t)
@@ -687,11 +826,17 @@ static bool within(const struct bc_tree *t, uint32_t n, uint32_t top)
 /* Checks that every id sub chose is free in t, or (replace) belongs to the
  * subtree `allowed` that is about to go. */
 static int check_ids(const struct bc_tree *t, const struct bc_tree *sub,
-		     uint32_t n, uint32_t allowed, struct bc_errinfo *ei)
+                     uint32_t top, uint32_t allowed, struct bc_errinfo *ei)
 {
-	const struct bc__node *sn = &sub->pool[n];
-	if (!sn->auto_id) {
-		uint32_t m = map_find(&t->ids, sn->id);
+	uint32_t depth = 0;
+	for (uint32_t n = top; n != BC_NONE;
+	     n = preorder_next(sub, n, top, &depth)) {
+		const struct bc__node *sn = &sub->pool[n];
+		uint32_t m;
+		if (sn->auto_id) {
+			continue;
+		}
+		m = map_find(&t->ids, sn->id);
 		if (m != BC_NONE &&
 		    (allowed == BC_NONE || !within(t, m, allowed))) {
 			return bc_errinfo_set(ei, BC_EDUPID,
@@ -699,21 +844,13 @@ static int check_ids(const struct bc_tree *t, const struct bc_tree *sub,
 					      sn->id);
 		}
 	}
-	for (uint32_t c = sn->first_child; c != BC_NONE; c = sub->pool[c].next) {
-		int rc = check_ids(t, sub, c, allowed, ei);
-		if (rc) {
-			return rc;
-		}
-	}
 	return 0;
 }
 
-/* Copies sub's subtree at n into t (room reserved, ids checked). Returns the
- * new pool index. */
-static uint32_t copy_in(struct bc_tree *t, const struct bc_tree *sub,
-			uint32_t n, bool keep_ids)
+/* Copies one node of sub into t (room reserved, ids checked). */
+static uint32_t copy_node(struct bc_tree *t, const struct bc__node *sn,
+                          bool keep_ids)
 {
-	const struct bc__node *sn = &sub->pool[n];
 	uint32_t m = pool_take(t);
 	t->pool[m].is_op = sn->is_op;
 	t->pool[m].u = sn->u;
@@ -726,11 +863,39 @@ static uint32_t copy_in(struct bc_tree *t, const struct bc_tree *sub,
 	} else {
 		t->nprims++;
 	}
-	for (uint32_t c = sn->first_child; c != BC_NONE; c = sub->pool[c].next) {
-		uint32_t cm = copy_in(t, sub, c, keep_ids);
-		link_child(t, m, BC_NONE, cm);
-	}
 	return m;
+}
+
+/* Copies sub's subtree at top into t (room reserved, ids checked), walking
+ * both trees in step without recursion. Returns the new pool index. */
+static uint32_t copy_in(struct bc_tree *t, const struct bc_tree *sub,
+                        uint32_t top, bool keep_ids)
+{
+	uint32_t n = top, m = copy_node(t, &sub->pool[top], keep_ids);
+	uint32_t root = m;
+	for (;;) {
+		if (sub->pool[n].is_op && sub->pool[n].first_child != BC_NONE) {
+			uint32_t c = sub->pool[n].first_child;
+			uint32_t cm = copy_node(t, &sub->pool[c], keep_ids);
+			link_child(t, m, BC_NONE, cm);
+			n = c;
+			m = cm;
+			continue;
+		}
+		while (n != top && sub->pool[n].next == BC_NONE) {
+			n = sub->pool[n].parent;
+			m = t->pool[m].parent;
+		}
+		if (n == top) {
+			return root;
+		}
+		n = sub->pool[n].next;
+		{
+			uint32_t pm = t->pool[m].parent;
+			m = copy_node(t, &sub->pool[n], keep_ids);
+			link_child(t, pm, BC_NONE, m);
+		}
+	}
 }
 
 /* Shared by insert, replace and copy: checks sub against t's limits when
@@ -749,11 +914,14 @@ static int prepare_graft(struct bc_tree *t, const struct bc_tree *sub,
 				      "the subtree to graft is empty or "
 				      "unfinished");
 	}
-	subtree_stats(sub, sub->root, 1, &st);
-	if (at_depth + st.depth > BC_TREE_MAX_DEPTH + 1u) {
+	subtree_stats(sub, sub->root, &st);
+	/* sub's root lands at depth at_depth + 1, so its deepest node at
+	 * at_depth + st.depth: that is the nesting the builder counts. */
+	if ((uint64_t)at_depth + st.depth > BC_TREE_MAX_DEPTH) {
 		return bc_errinfo_set(ei, BC_EDEPTH,
-				      "the result would nest deeper than %d",
-				      BC_TREE_MAX_DEPTH);
+		                      "the result would nest deeper than %u "
+		                      "levels",
+		                      BC_TREE_MAX_DEPTH);
 	}
 	prims = (uint64_t)t->nprims - gone->prims + st.prims;
 	ops = (uint64_t)t->nops - gone->ops + st.ops;
@@ -808,6 +976,15 @@ int bc_tree_insert(struct bc_tree *t, uint32_t parent_id, uint32_t pos,
 	before = child_at(t, p, pos);
 	m = copy_in(t, sub, sub->root, false);
 	link_child(t, p, before, m);
+	/* The evaluation stack depends on the whole tree: measured on the
+	 * result, and undone (which cannot fail) when over the limit. */
+	if ((rc = check_shape(t, ei))) {
+		unlink_child(t, m);
+		free_subtree(t, m);
+		bc__measure(t, t->root);
+		bc__lin_free(&fresh);
+		return rc;
+	}
 	install_lin(t, &fresh);
 	return 0;
 }
@@ -852,7 +1029,7 @@ int bc_tree_remove(struct bc_tree *t, uint32_t id, struct bc_errinfo *ei)
 	if (n == BC_NONE) {
 		return bc_errinfo_set(ei, BC_ENONODE, "no node with id %u", id);
 	}
-	subtree_stats(t, n, 1, &st);
+	subtree_stats(t, n, &st);
 	p = t->pool[n].parent;
 	collapse = (p != BC_NONE && t->pool[p].nchildren == 2) ? 1 : 0;
 	memset(&fresh, 0, sizeof(fresh));
@@ -882,7 +1059,7 @@ int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
 	if ((rc = check_ids(t, sub, sub->root, n, ei))) {
 		return rc;
 	}
-	subtree_stats(t, n, 1, &gone);
+	subtree_stats(t, n, &gone);
 	p = t->pool[n].parent;
 	if ((rc = prepare_graft(t, sub, p == BC_NONE ? 0 : depth_of(t, p),
 				&gone, &fresh, ei))) {
@@ -892,13 +1069,29 @@ int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
 	if (p != BC_NONE) {
 		unlink_child(t, n);
 	}
-	free_subtree(t, n);
+	/* The old subtree stays in the pool until the result is known to be
+	 * within the limits; replacement ids it shares with it are mapped to
+	 * the copy, and back when the edit is undone. */
 	m = copy_in(t, sub, sub->root, false);
 	if (p == BC_NONE) {
 		t->root = m;
 	} else {
 		link_child(t, p, after, m);
 	}
+	if ((rc = check_shape(t, ei))) {
+		if (p == BC_NONE) {
+			t->root = n;
+		} else {
+			unlink_child(t, m);
+			link_child(t, p, after, n);
+		}
+		free_subtree(t, m);
+		remap_ids(t, n);
+		bc__measure(t, t->root);
+		bc__lin_free(&fresh);
+		return rc;
+	}
+	free_subtree(t, n);
 	install_lin(t, &fresh);
 	return 0;
 }

@@ -24,6 +24,7 @@ struct bc__node {
 	uint32_t slot;  /* the node's top slot */
 	uint32_t param; /* parameter record, vec4 units */
 	uint32_t prim;  /* primitive index (primitives only) */
+	uint32_t need;  /* evaluation stack entries of its subtree */
 };
 
 /* Open-addressing map from id (never 0) to pool index. */
@@ -43,15 +44,23 @@ struct bc_tree {
 	uint32_t nnodes, nprims, nops;
 	uint32_t next_id;
 
-	/* Builder state. */
-	uint32_t open[BC_TREE_MAX_DEPTH];
-	uint32_t nopen;
+	/* Builder state: the open operators, innermost last (grown on the heap:
+	 * depth costs no C stack). */
+	uint32_t *open;
+	uint32_t nopen, open_cap;
 	bool building;
 
 	struct bc_lin lin;
 	bool has_lin;
 	struct bc_dirty dirty;
 };
+
+/* tree.c */
+
+/* Measures the subtree at pool node top without recursion: returns its
+ * nesting (nodes on its longest path, top counting 1) and sets each node's
+ * need (evaluation stack entries of the left-folded post-order). */
+uint32_t bc__measure(struct bc_tree *t, uint32_t top);
 
 /* linearize.c */
 

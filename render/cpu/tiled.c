@@ -182,8 +182,8 @@ static int grow_tiles(struct bc__tiled_bufs *b, size_t n)
 	b->off_alt = bc_calloc(n + 1, sizeof(*b->off_alt));
 	b->cur = bc_calloc(n, sizeof(*b->cur));
 	b->cones = bc_calloc(n * CONES_PER_TILE, sizeof(*b->cones));
-	if (!b->state || !b->list_n || !b->cand_off || !b->off_alt ||
-	    !b->cur || !b->cones) {
+	if (!b->state || !b->list_n || !b->cand_off || !b->off_alt || !b->cur ||
+	    !b->cones) {
 		free_tiles(b);
 		return BC_ENOMEM;
 	}
@@ -200,10 +200,11 @@ struct tiled_frame {
 	uint32_t tw, th, ntiles;
 	uint32_t nprims;
 	const struct bc_render_region *region;
-	atomic_uint next;   /* work counter of the running phase */
+	atomic_uint next; /* work counter of the running phase */
 	atomic_uint tiles_done;
 	struct bc__progress progress;
-	double deadline;   /* bc_render_now_ms() past which no tile starts; 0: none */
+	/* bc_render_now_ms() past which no tile starts; 0: none. */
+	double deadline;
 	atomic_uint skipped; /* tiles left as background past the deadline */
 	atomic_uint tiles_asked, rays; /* tiles and pixels the region asks */
 };
@@ -220,8 +221,8 @@ static inline float dot3(const float a[3], const float b[3])
  * increases (glibc's, checked over every float of [-1, 1]), which takes
  * one acosf instead of four for the same value. */
 static void make_cone(const struct bc_view_rays *vr, float x0, float y0,
-		      float x1, float y1, const float *const corner[4],
-		      struct cone *c)
+                      float x1, float y1, const float *const corner[4],
+                      struct cone *c)
 {
 	float least = 1.0f, half;
 	bc_view_rays_dir(vr, 0.5f * (x0 + x1), 0.5f * (y0 + y1), c->axis);
@@ -237,7 +238,7 @@ static void make_cone(const struct bc_view_rays *vr, float x0, float y0,
 
 /* The tiles the box [lo, hi] can cover, conservatively. */
 static struct rect project_box(const struct tiled_frame *tf, const float lo[3],
-			       const float hi[3])
+                               const float hi[3])
 {
 	const struct bc__frame_ctx *fc = tf->fc;
 	const struct bc_view_rays *vr = &fc->vr;
@@ -247,11 +248,12 @@ static struct rect project_box(const struct tiled_frame *tf, const float lo[3],
 	int behind = 0;
 	for (int c = 0; c < 8; c++) {
 		float p[3] = {(c & 1) ? hi[0] : lo[0], (c & 2) ? hi[1] : lo[1],
-			      (c & 4) ? hi[2] : lo[2]};
+		              (c & 4) ? hi[2] : lo[2]};
 		float v[3] = {p[0] - vr->eye[0], p[1] - vr->eye[1],
-			      p[2] - vr->eye[2]};
+		              p[2] - vr->eye[2]};
 		float z = dot3(v, vr->forward), sx, sy;
-		if (!(z > 1.0e-6f * (fabsf(v[0]) + fabsf(v[1]) + fabsf(v[2])))) {
+		if (!(z >
+		      1.0e-6f * (fabsf(v[0]) + fabsf(v[1]) + fabsf(v[2])))) {
 			behind++;
 			continue;
 		}
@@ -293,8 +295,8 @@ static struct rect project_box(const struct tiled_frame *tf, const float lo[3],
  * safe. The epsilon grows with distance: the farthest point of the
  * primitive's bounding sphere sets it. */
 static void widened_abv(const struct bc__frame_ctx *fc,
-			const struct bc_abv *abv, struct bc_abv *out,
-			float lo[3], float hi[3])
+                        const struct bc_abv *abv, struct bc_abv *out,
+                        float lo[3], float hi[3])
 {
 	const float *eye = fc->vr.eye;
 	float far = 0.0f, r2 = 0.0f, m;
@@ -331,7 +333,7 @@ static void widened_abv(const struct bc__frame_ctx *fc,
  * half + asin(r / dist), i.e. (both angles below pi) when
  * dot(v, axis) >= cos_h sqrt(dist^2 - r^2) - sin_h r. */
 static inline bool cone_meets_sphere(const struct cone *c,
-				     const struct ab_prim *p)
+                                     const struct ab_prim *p)
 {
 	if (p->inside) {
 		return true;
@@ -342,7 +344,7 @@ static inline bool cone_meets_sphere(const struct cone *c,
 /* A sphere around the (world) shape: tighter than the AABB's for spheres
  * and capsules, which makes the cone tests sharper. */
 static void bounding_sphere(const struct bc_abv *abv, const float lo[3],
-			    const float hi[3], float c[3], float *r)
+                            const float hi[3], float c[3], float *r)
 {
 	float e2 = 0.0f;
 	switch (abv->shape) {
@@ -375,7 +377,7 @@ static void bounding_sphere(const struct bc_abv *abv, const float lo[3],
 
 /* Primitive k's A-buffer terms in this view. */
 static void prim_setup(const struct tiled_frame *tf, uint32_t k,
-		       struct ab_prim *p)
+                       struct ab_prim *p)
 {
 	const struct bc__frame_ctx *fc = tf->fc;
 	float lo[3], hi[3], c[3], dist2;
@@ -408,7 +410,7 @@ static void phase_prims(void *arg, uint32_t thread)
 
 /* Keeps only the state bits `keep` of the tiles of rectangle r. */
 static void rect_state_and(struct tiled_frame *tf, const struct rect *r,
-			   uint8_t keep)
+                           uint8_t keep)
 {
 	for (uint32_t ty = r->y0; ty < r->y1; ty++) {
 		for (uint32_t tx = r->x0; tx < r->x1; tx++) {
@@ -423,7 +425,7 @@ static void rect_state_and(struct tiled_frame *tf, const struct rect *r,
  * candidates are the same as before: callers dropped the lists of every
  * tile whose candidates changed). Returns 0, BC_ELIMIT or BC_ENOMEM. */
 static int build_cand(struct tiled_frame *tf, bool relocate,
-		      struct bc_errinfo *ei)
+                      struct bc_errinfo *ei)
 {
 	struct bc__tiled_bufs *b = tf->b;
 	uint32_t *off = b->off_alt;
@@ -444,16 +446,16 @@ static int build_cand(struct tiled_frame *tf, bool relocate,
 		b->cur[t] = off[t];
 		if (sum > BC_CPU_MAX_FRAGMENTS) {
 			return bc_errinfo_set(
-				ei, BC_ELIMIT,
-				"render: over %u primitive-tile pairs exceed "
-				"the A-buffer limit (fewer or smaller "
-				"primitives, or a smaller frame)",
-				BC_CPU_MAX_FRAGMENTS);
+			    ei, BC_ELIMIT,
+			    "render: over %u primitive-tile pairs exceed "
+			    "the A-buffer limit (fewer or smaller "
+			    "primitives, or a smaller frame)",
+			    BC_CPU_MAX_FRAGMENTS);
 		}
 	}
 	off[tf->ntiles] = (uint32_t)sum;
 	if (grow((void **)&b->cand, &b->cand_cap, sum ? sum : 1,
-		 sizeof(*b->cand))) {
+	         sizeof(*b->cand))) {
 		return BC_ENOMEM;
 	}
 	for (uint32_t k = 0; k < tf->nprims; k++) {
@@ -469,7 +471,7 @@ static int build_cand(struct tiled_frame *tf, bool relocate,
 		struct bc__frag *swap;
 		size_t cap;
 		if (grow((void **)&b->frags_alt, &b->frags_alt_cap,
-			 sum ? sum : 1, sizeof(*b->frags_alt))) {
+		         sum ? sum : 1, sizeof(*b->frags_alt))) {
 			return BC_ENOMEM;
 		}
 		for (uint32_t t = 0; t < tf->ntiles; t++) {
@@ -486,7 +488,7 @@ static int build_cand(struct tiled_frame *tf, bool relocate,
 		b->frags_cap = b->frags_alt_cap;
 		b->frags_alt_cap = cap;
 	} else if (grow((void **)&b->frags, &b->frags_cap, sum ? sum : 1,
-			sizeof(*b->frags))) {
+	                sizeof(*b->frags))) {
 		return BC_ENOMEM;
 	}
 	b->off_alt = b->cand_off;
@@ -496,7 +498,7 @@ static int build_cand(struct tiled_frame *tf, bool relocate,
 
 /* The ray of pixel (dx, dy) of the tile, copied into d. */
 static const float *tile_ray(const struct bc__ab_rays *rays, uint32_t dx,
-			     uint32_t dy, float d[3])
+                             uint32_t dy, float d[3])
 {
 	uint32_t q = (dx >= QUARTER) + 2u * (dy >= QUARTER);
 	uint32_t l = (dy % QUARTER) * QUARTER + dx % QUARTER;
@@ -508,7 +510,7 @@ static const float *tile_ray(const struct bc__ab_rays *rays, uint32_t dx,
 
 /* The tile's ray directions into the frame's, for the tracer. */
 static void tile_dirs(const struct tiled_frame *tf, uint32_t tx, uint32_t ty,
-		      const struct bc__ab_rays *rays)
+                      const struct bc__ab_rays *rays)
 {
 	uint32_t w = tf->fc->out->width, h = tf->fc->out->height;
 	uint32_t x0 = tx * BC_CPU_TILE, y0 = ty * BC_CPU_TILE;
@@ -532,23 +534,23 @@ static void tile_dirs(const struct tiled_frame *tf, uint32_t tx, uint32_t ty,
  * rays, they are what bc_view_rays_dir gives for those pixel centres
  * (abuffer.h). */
 static void block_cone(const struct bc_view_rays *vr,
-		       const struct bc__ab_rays *rays, uint32_t x0, uint32_t y0,
-		       uint32_t bx0, uint32_t by0, uint32_t bx1, uint32_t by1,
-		       struct cone *c)
+                       const struct bc__ab_rays *rays, uint32_t x0, uint32_t y0,
+                       uint32_t bx0, uint32_t by0, uint32_t bx1, uint32_t by1,
+                       struct cone *c)
 {
 	float d[4][3];
 	const float *corner[4] = {
-		tile_ray(rays, bx0 - x0, by0 - y0, d[0]),
-		tile_ray(rays, bx1 - 1 - x0, by0 - y0, d[1]),
-		tile_ray(rays, bx0 - x0, by1 - 1 - y0, d[2]),
-		tile_ray(rays, bx1 - 1 - x0, by1 - 1 - y0, d[3])};
+	    tile_ray(rays, bx0 - x0, by0 - y0, d[0]),
+	    tile_ray(rays, bx1 - 1 - x0, by0 - y0, d[1]),
+	    tile_ray(rays, bx0 - x0, by1 - 1 - y0, d[2]),
+	    tile_ray(rays, bx1 - 1 - x0, by1 - 1 - y0, d[3])};
 	make_cone(vr, (float)bx0 + 0.5f, (float)by0 + 0.5f, (float)bx1 - 0.5f,
-		  (float)by1 - 0.5f, corner, c);
+	          (float)by1 - 0.5f, corner, c);
 }
 
 /* The tile's cones: the whole tile's, then its quarters'. */
 static void tile_cones(const struct tiled_frame *tf, uint32_t tx, uint32_t ty,
-		       const struct bc__ab_rays *rays)
+                       const struct bc__ab_rays *rays)
 {
 	const struct bc__frame_ctx *fc = tf->fc;
 	struct cone *c = &tf->b->cones[CONES_PER_TILE * (ty * tf->tw + tx)];
@@ -566,14 +568,14 @@ static void tile_cones(const struct tiled_frame *tf, uint32_t tx, uint32_t ty,
 			continue; /* off the image's edge */
 		}
 		block_cone(&fc->vr, rays, x0, y0, qx0, qy0, qx1, qy1,
-			   &c[1 + q]);
+		           &c[1 + q]);
 	}
 }
 
 /* The tile's rays inside the frame, per quarter: bit l of quarter[q] for
  * ray l (abuffer.h), shifted to bit q * 16 + l. */
 static void tile_quarters(const struct tiled_frame *tf, uint32_t tx,
-			  uint32_t ty, uint64_t quarter[4])
+                          uint32_t ty, uint64_t quarter[4])
 {
 	uint32_t w = tf->fc->out->width, h = tf->fc->out->height;
 	uint32_t x0 = tx * BC_CPU_TILE, y0 = ty * BC_CPU_TILE;
@@ -583,8 +585,8 @@ static void tile_quarters(const struct tiled_frame *tf, uint32_t tx,
 			uint32_t x = x0 + (q & 1u) * QUARTER + (l & 3u);
 			uint32_t y = y0 + (q >> 1) * QUARTER + (l >> 2);
 			if (x < w && y < h) {
-				quarter[q] |= 1ull << (q * BC__AB_QUARTER_RAYS +
-						       l);
+				quarter[q] |= 1ull
+				              << (q * BC__AB_QUARTER_RAYS + l);
 			}
 		}
 	}
@@ -594,8 +596,8 @@ static void tile_quarters(const struct tiled_frame *tf, uint32_t tx,
  * tile's cone, the rays of the quarters whose cones it meets are clipped
  * against the ABV; the hits make one fragment, min entry and max exit. */
 static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
-			  const struct bc__ab_rays *rays,
-			  const uint64_t quarter[4])
+                          const struct bc__ab_rays *rays,
+                          const uint64_t quarter[4])
 {
 	const struct bc__tiled_bufs *b = tf->b;
 	const struct cone *cones = &b->cones[CONES_PER_TILE * tile];
@@ -624,8 +626,9 @@ static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
 			for (uint32_t j = 0; j < 64; j++) {
 				uint32_t q = j / BC__AB_QUARTER_RAYS;
 				uint32_t l = j % BC__AB_QUARTER_RAYS;
-				float d[3] = {rays->d[q][0][l], rays->d[q][1][l],
-					      rays->d[q][2][l]};
+				float d[3] = {rays->d[q][0][l],
+				              rays->d[q][1][l],
+				              rays->d[q][2][l]};
 				float a, e;
 				if (!((lanes >> j) & 1u) ||
 				    !bc_abv_ray(&p->wide, eye, d, &a, &e) ||
@@ -664,7 +667,7 @@ static void phase_lists(void *arg, uint32_t thread)
 			continue;
 		}
 		tf->kern.dirs(&tf->fc->vr, tx * BC_CPU_TILE, ty * BC_CPU_TILE,
-			      &rays);
+		              &rays);
 		if (!(b->state[tile] & TILE_RAYS)) {
 			tile_dirs(tf, tx, ty, &rays);
 			b->state[tile] |= TILE_RAYS;
@@ -686,14 +689,15 @@ static void phase_lists(void *arg, uint32_t thread)
 
 /* Past the frame budget: the tile's asked pixels become background. */
 static void skip_tile(struct tiled_frame *tf, uint32_t tx, uint32_t ty,
-		      uint64_t mask)
+                      uint64_t mask)
 {
 	const struct bc__frame_ctx *fc = tf->fc;
 	uint32_t w = fc->out->width, h = fc->out->height;
 	uint32_t x0 = tx * BC_CPU_TILE, y0 = ty * BC_CPU_TILE;
 	for (uint32_t y = y0; y < y0 + BC_CPU_TILE && y < h; y++) {
 		for (uint32_t x = x0; x < x0 + BC_CPU_TILE && x < w; x++) {
-			if ((mask >> ((y - y0) * BC_CPU_TILE + (x - x0))) & 1u) {
+			if ((mask >> ((y - y0) * BC_CPU_TILE + (x - x0))) &
+			    1u) {
 				bc__put_miss(fc, x, y, 0, 0);
 			}
 		}
@@ -727,29 +731,30 @@ static void phase_trace(void *arg, uint32_t thread)
 			continue;
 		}
 		job = (struct bc__tile_job){
-			.fc = fc,
-			.dirs = tf->b->dirs,
-			.list = tf->b->frags + tf->b->cand_off[tile],
-			.n = tf->b->list_n[tile],
-			.x0 = tx * BC_CPU_TILE,
-			.y0 = ty * BC_CPU_TILE,
-			.x1 = (tx + 1) * BC_CPU_TILE < w ? (tx + 1) * BC_CPU_TILE
-							 : w,
-			.y1 = (ty + 1) * BC_CPU_TILE < h ? (ty + 1) * BC_CPU_TILE
-							 : h,
-			.mask = mask,
+		    .fc = fc,
+		    .dirs = tf->b->dirs,
+		    .list = tf->b->frags + tf->b->cand_off[tile],
+		    .n = tf->b->list_n[tile],
+		    .x0 = tx * BC_CPU_TILE,
+		    .y0 = ty * BC_CPU_TILE,
+		    .x1 =
+		        (tx + 1) * BC_CPU_TILE < w ? (tx + 1) * BC_CPU_TILE : w,
+		    .y1 =
+		        (ty + 1) * BC_CPU_TILE < h ? (ty + 1) * BC_CPU_TILE : h,
+		    .mask = mask,
 		};
 		bc__trace_tile(wk, &job);
 		atomic_fetch_add(&tf->tiles_done, 1u);
 		if (thread == 0) {
 			bc__progress_tick(&tf->progress,
-					  atomic_load(&tf->tiles_done));
+			                  atomic_load(&tf->tiles_done));
 		}
 	}
 }
 
 static int tiled_create(struct bc_renderer **out,
-			const struct bc_render_opts *opts, struct bc_errinfo *ei)
+                        const struct bc_render_opts *opts,
+                        struct bc_errinfo *ei)
 {
 	return bc__cpu_create(out, BC__CPU_TILED, opts, ei);
 }
@@ -757,7 +762,7 @@ static int tiled_create(struct bc_renderer **out,
 /* Gives every worker room for `longest` active primitives and a view of
  * them, here on the calling thread, so the workers never allocate. */
 static int prepare_workers(struct bc__cpu *r, const struct bc_lin *lin,
-			   uint32_t longest)
+                           uint32_t longest)
 {
 	struct bc__tiled_bufs *b = r->tiled;
 	uint32_t need = longest > 0 ? longest : 1;
@@ -783,8 +788,8 @@ static int prepare_workers(struct bc__cpu *r, const struct bc_lin *lin,
 		if (longest > 0 && wk->view.cap < 2 * longest) {
 			/* A view of the first `longest` primitives reserves
 			 * what any active set of that size needs. */
-			uint32_t m = longest < lin->nprims ? longest
-							   : lin->nprims;
+			uint32_t m =
+			    longest < lin->nprims ? longest : lin->nprims;
 			int rc;
 			for (uint32_t k = 0; k < m; k++) {
 				wk->act[k] = k;
@@ -799,10 +804,12 @@ static int prepare_workers(struct bc__cpu *r, const struct bc_lin *lin,
 
 /* Whether b's kept lists were made for this frame's view. */
 static bool same_view(const struct bc__tiled_bufs *b, const struct bc__cpu *r,
-		      const struct bc__frame_ctx *fc, const struct bc_camera *cam)
+                      const struct bc__frame_ctx *fc,
+                      const struct bc_camera *cam)
 {
-	return b->view_ok && b->w == fc->out->width && b->h == fc->out->height &&
-	       b->generation == r->base.generation && b->lin == fc->lin &&
+	return b->view_ok && b->w == fc->out->width &&
+	       b->h == fc->out->height && b->generation == r->base.generation &&
+	       b->lin == fc->lin &&
 	       b->nprims == (fc->lin ? fc->lin->nprims : 0) &&
 	       memcmp(&b->cam, cam, sizeof(*cam)) == 0 &&
 	       memcmp(&b->min_step, &fc->min_step, sizeof(float)) == 0 &&
@@ -813,15 +820,15 @@ static bool same_view(const struct bc__tiled_bufs *b, const struct bc__cpu *r,
  * the dirty primitives can reach after parameter edits. Returns 0 or an
  * error, after which nothing is kept. */
 static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
-		     const struct bc_camera *cam, struct bc_errinfo *ei)
+                     const struct bc_camera *cam, struct bc_errinfo *ei)
 {
 	struct bc__tiled_bufs *b = tf->b;
 	const struct bc__frame_ctx *fc = tf->fc;
 	size_t npix = (size_t)fc->out->width * fc->out->height;
 	int rc;
 	if (same_view(b, r, fc, cam)) {
-		uint32_t hi = b->dirty_hi < tf->nprims ? b->dirty_hi
-						       : tf->nprims;
+		uint32_t hi =
+		    b->dirty_hi < tf->nprims ? b->dirty_hi : tf->nprims;
 		if (b->dirty_lo >= hi) {
 			return 0;
 		}
@@ -843,8 +850,8 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 	b->dirty_lo = b->dirty_hi = 0;
 	if (grow((void **)&b->dirs, &b->dirs_cap, 3 * npix, sizeof(float)) ||
 	    grow_tiles(b, tf->ntiles) ||
-	    grow((void **)&b->prims, &b->prims_cap,
-		 tf->nprims ? tf->nprims : 1, sizeof(*b->prims))) {
+	    grow((void **)&b->prims, &b->prims_cap, tf->nprims ? tf->nprims : 1,
+	         sizeof(*b->prims))) {
 		return BC_ENOMEM;
 	}
 	memset(b->state, 0, tf->ntiles * sizeof(*b->state));
@@ -868,9 +875,9 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 }
 
 static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
-			struct bc_frame *out,
-			const struct bc_render_region *region,
-			struct bc_render_stats *stats, struct bc_errinfo *ei)
+                        struct bc_frame *out,
+                        const struct bc_render_region *region,
+                        struct bc_render_stats *stats, struct bc_errinfo *ei)
 {
 	struct bc__cpu *r = bc__cpu_of(base);
 	struct bc__frame_ctx fc;
@@ -899,8 +906,8 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 	atomic_init(&tf.skipped, 0u);
 	atomic_init(&tf.tiles_asked, 0u);
 	atomic_init(&tf.rays, 0u);
-	tf.deadline = base->opts.budget_ms ? t_start + base->opts.budget_ms
-					 : 0.0;
+	tf.deadline =
+	    base->opts.budget_ms ? t_start + base->opts.budget_ms : 0.0;
 	if ((rc = keep_view(r, &tf, cam, ei))) {
 		if (rc == BC_ENOMEM) {
 			goto nomem;
@@ -934,8 +941,8 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 	}
 	if (overflows) {
 		bc_log(BC_LOG_DEBUG,
-		       "render: %u depth ranges went over M_overlap=%u", overflows,
-		       BC_CPU_M_OVERLAP);
+		       "render: %u depth ranges went over M_overlap=%u",
+		       overflows, BC_CPU_M_OVERLAP);
 	}
 	{
 		double now = bc_render_now_ms();
@@ -952,14 +959,16 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 	}
 	return 0;
 nomem:
-	return bc_errinfo_set(ei, BC_ENOMEM, "render: out of memory for a "
-			      "%ux%u frame", out->width, out->height);
+	return bc_errinfo_set(ei, BC_ENOMEM,
+	                      "render: out of memory for a "
+	                      "%ux%u frame",
+	                      out->width, out->height);
 }
 
 /* Records the primitives whose ABVs changed, for the next render to drop
  * the lists they can reach (keep_view). A structural change drops all. */
 static int tiled_sync(struct bc_renderer *base, const struct bc_tree *t,
-		      const struct bc_dirty *dirty, struct bc_errinfo *ei)
+                      const struct bc_dirty *dirty, struct bc_errinfo *ei)
 {
 	struct bc__tiled_bufs *b = bc__cpu_of(base)->tiled;
 	(void)t;
@@ -978,10 +987,10 @@ static int tiled_sync(struct bc_renderer *base, const struct bc_tree *t,
 		b->dirty_lo = dirty->prim_lo;
 		b->dirty_hi = dirty->prim_hi;
 	} else {
-		b->dirty_lo = b->dirty_lo < dirty->prim_lo ? b->dirty_lo
-							   : dirty->prim_lo;
-		b->dirty_hi = b->dirty_hi > dirty->prim_hi ? b->dirty_hi
-							   : dirty->prim_hi;
+		b->dirty_lo =
+		    b->dirty_lo < dirty->prim_lo ? b->dirty_lo : dirty->prim_lo;
+		b->dirty_hi =
+		    b->dirty_hi > dirty->prim_hi ? b->dirty_hi : dirty->prim_hi;
 	}
 	return 0;
 }
@@ -990,8 +999,8 @@ static int tiled_sync(struct bc_renderer *base, const struct bc_tree *t,
  * widening and projection the A-buffer applies (phase_rects), so a tile
  * left unmarked never lists it, and its pixels cannot change with it. */
 static void tiled_damage(struct bc_renderer *base, const struct bc_camera *cam,
-			 uint32_t width, uint32_t height,
-			 const struct bc_abv *abv, uint8_t *tiles)
+                         uint32_t width, uint32_t height,
+                         const struct bc_abv *abv, uint8_t *tiles)
 {
 	struct bc_frame dims = {.width = width, .height = height};
 	struct bc__frame_ctx fc;
@@ -1000,7 +1009,7 @@ static void tiled_damage(struct bc_renderer *base, const struct bc_camera *cam,
 	struct rect rc;
 	float lo[3], hi[3];
 	bc__frame_setup(&fc, base->tree ? bc_tree_lin(base->tree) : NULL, cam,
-			&dims, base->opts.debug);
+	                &dims, base->opts.debug);
 	tf.fc = &fc;
 	tf.tw = bc_render_tiles_x(width);
 	tf.th = bc_render_tiles_y(height);
@@ -1012,11 +1021,11 @@ static void tiled_damage(struct bc_renderer *base, const struct bc_camera *cam,
 }
 
 const struct bc_backend_ops bc_backend_tiled_ops = {
-	.name = "tiled",
-	.create = tiled_create,
-	.destroy = bc__cpu_destroy,
-	.sync = tiled_sync,
-	.render = tiled_render,
-	.key = bc__cpu_key,
-	.damage = tiled_damage,
+    .name = "tiled",
+    .create = tiled_create,
+    .destroy = bc__cpu_destroy,
+    .sync = tiled_sync,
+    .render = tiled_render,
+    .key = bc__cpu_key,
+    .damage = tiled_damage,
 };

@@ -121,7 +121,7 @@ static void builder_rejects_malformed_trees(void)
 	bc_tree_begin(t);
 	{
 		int rc = 0;
-		for (int d = 0; d <= BC_TREE_MAX_DEPTH && !rc; d++) {
+		for (uint32_t d = 0; d <= BC_TREE_MAX_DEPTH && !rc; d++) {
 			rc = bc_tree_push_op(t, 0, &u, &ei);
 		}
 		CHECK(rc == BC_EDEPTH);

@@ -197,7 +197,7 @@ static void random_uses_every_kind_within_the_depth(void)
 
 	/* Deep trees up to the model's limit. */
 	o.count = 400;
-	o.depth = BC_TREE_MAX_DEPTH;
+	o.depth = BC_GEN_RANDOM_MAX_DEPTH;
 	for (uint64_t seed = 0; seed < 8; seed++) {
 		o.seed = seed;
 		CHECK_EQ_INT(bc_gen("random", &o, t, &cam, NULL), 0);
@@ -266,7 +266,7 @@ static void bad_options_are_refused(void)
 	    {"comb", {.seed = 3}, BC_EINVAL},
 	    {"comb", {.blend = BC_GEN_BLEND_COUNT}, BC_ERANGE},
 	    {"random", {.depth = 1}, BC_ERANGE},
-	    {"random", {.depth = BC_TREE_MAX_DEPTH + 1}, BC_ERANGE},
+	    {"random", {.depth = BC_GEN_RANDOM_MAX_DEPTH + 1}, BC_ERANGE},
 	    {"random", {.teeth = 12}, BC_EINVAL},
 	    {"gears", {.teeth = 5}, BC_ERANGE},
 	    {"gears", {.teeth = BC_GEN_MAX_TEETH + 1}, BC_ERANGE},

@@ -30,13 +30,25 @@
 /* Linearized nodes are addressed by a 22-bit ancestor field in the GPU node
  * word (paper §7); the all-ones value marks "no ancestor". */
 #define BC_TREE_MAX_NODES ((1u << 22) - 1u)
-/* Nesting of the n-ary scene tree. Scene files and the binary encoding are
- * parsed recursively and evaluation stacks are sized from it; folded n-ary
- * operators keep long chains (combs) flat, so real scenes stay far below. */
-#define BC_TREE_MAX_DEPTH 128
-/* Evaluation stack entries needed by any tree within the depth limit: each
- * n-ary level adds at most one pending operand. */
-#define BC_EVAL_STACK (BC_TREE_MAX_DEPTH + 2)
+/* Nesting of the n-ary scene tree: nodes on the longest path from the root,
+ * the root counting 1. Every walk over the tree is iterative (explicit heap
+ * stacks or parent links) and every per-level array is allocated per node,
+ * so depth costs memory in proportion to the tree, never C stack. The limit
+ * only keeps one number meaningful for every encoding; a 2^20-deep chain is
+ * far beyond what programs emit (Lipschitz Pruning's Molecule is a 1001-deep
+ * chain of pairwise unions) and far below the node limit. Checked
+ * identically by the builder (and so both decoders) and by the edits that
+ * graft subtrees. JSON scene files carry less: BC_SCENE_JSON_MAX_DEPTH. */
+#define BC_TREE_MAX_DEPTH (1u << 20)
+/* Evaluation stack entries any program over a tree may need: the linearized
+ * post-order is evaluated with a stack (paper Alg. 4), on the GPU in
+ * per-invocation memory of this fixed size (shaders/common.glsl). A binary
+ * node needs max(left, right + 1) entries, so left combs -- the chains
+ * n-ary operators fold into and that programs emit -- need 2 at any depth;
+ * only operands nested on the right side add up. Trees needing more are
+ * refused (BC_EDEPTH) by the builder and by edits, so every evaluator can
+ * keep a fixed stack. Pruned views never need more than their tree. */
+#define BC_EVAL_STACK 130u
 /* Largest primitive size parameter (world units) and largest |coordinate|:
  * keeps squared distances far from float overflow. */
 #define BC_PARAM_MAX_ABS 1.0e6f
@@ -276,6 +288,9 @@ bool bc_tree_has_auto_ids(const struct bc_tree *t);
 /* Counts of the model: scene nodes, primitives, operators. */
 uint32_t bc_tree_node_count(const struct bc_tree *t);
 uint32_t bc_tree_prim_count(const struct bc_tree *t);
+/* Nodes on the longest path from the root (the root counting 1), 0 for an
+ * empty tree. */
+uint32_t bc_tree_nesting(const struct bc_tree *t);
 /* Returns the root's id, 0 for an empty tree. */
 uint32_t bc_tree_root(const struct bc_tree *t);
 
@@ -375,8 +390,10 @@ struct bc_lin {
 	/* AABB of every ABV (the volume rays must cross), and its diagonal. */
 	float lo[3], hi[3];
 	float size;
-	/* Stack entries a full evaluation needs. */
+	/* Stack entries a full evaluation needs (<= BC_EVAL_STACK), and the
+	 * model's nesting (nodes on the longest path, the root counting 1). */
 	uint32_t stack;
+	uint32_t nesting;
 };
 
 /* Returns the tree's linearized form (valid until the next structural edit;

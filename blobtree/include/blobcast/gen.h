@@ -23,6 +23,11 @@
 /* Most teeth on a gear: beyond this the teeth are thinner than the float
  * precision of their rotation makes worthwhile. */
 #define BC_GEN_MAX_TEETH 1000u
+/* Deepest nesting of a random scene. Random operators put subtrees on both
+ * sides, and each level nested in a right operand costs an evaluation stack
+ * entry, so random trees stay within BC_EVAL_STACK (130); the generator
+ * also recurses once per level. */
+#define BC_GEN_RANDOM_MAX_DEPTH 128u
 
 /* fig18's instance shape. */
 enum bc_gen_kind {
@@ -50,7 +55,8 @@ struct bc_gen_opts {
 	enum bc_gen_kind kind;
 	enum bc_gen_blend blend;
 	uint32_t teeth; /* gears: teeth of the largest gear */
-	uint32_t depth; /* random: deepest nesting, 2..BC_TREE_MAX_DEPTH */
+	uint32_t
+	    depth; /* random: deepest nesting, 2..BC_GEN_RANDOM_MAX_DEPTH */
 };
 
 /* Which options a generator reads (struct bc_gen_info.takes). */

@@ -32,6 +32,17 @@
  * which is bounded by the protocol's message limit. */
 #define BC_SCENE_JSON_MAX_BYTES (384u * 1024u * 1024u)
 
+/* Nesting a JSON scene file can carry: nodes on a path, the root counting
+ * 1. jansson's parser stops at JSON_PARSER_MAX_DEPTH = 2048 nested values
+ * (a compile-time constant of the library, 2.14 in Debian; scalars count
+ * as a level), and a scene node at depth d sits at JSON depth 2d (an object
+ * in a "children" array) with its vectors' numbers at 2d + 2. So 1023
+ * levels read back through any jansson build, which holds Lipschitz
+ * Pruning's 1001-deep Molecule as it is. Deeper trees (up to
+ * BC_TREE_MAX_DEPTH) travel in the binary form; the JSON writer refuses
+ * them rather than write a file no reader takes. */
+#define BC_SCENE_JSON_MAX_DEPTH 1023u
+
 /* Smallest encoded node: a u8 tag and a u32 id. Decoders check every count
  * against the bytes left divided by this before looping or allocating. */
 #define BC_SCENE_NODE_MIN_BYTES 5u
@@ -47,7 +58,7 @@
  * Parses a version-1 scene from text[0..len) (need not be NUL-terminated)
  * into t, and its camera into *cam (bc_camera_default() when the file has
  * none; cam may be NULL). Strict: unknown keys, wrong types, missing keys,
- * non-finite numbers, nesting over BC_TREE_MAX_DEPTH and texts over
+ * non-finite numbers, nesting over BC_SCENE_JSON_MAX_DEPTH and texts over
  * BC_SCENE_JSON_MAX_BYTES are errors. Returns 0 or a BC_E* code with the
  * JSON path and reason in ei.
  */
@@ -63,7 +74,8 @@ int bc_scene_load_json(const char *path, struct bc_tree *t,
  * float is written so that parsing it back reproduces the tree and camera
  * bit for bit; optional fields equal to their defaults are left out (see
  * docs/scene-format.md). Returns a NUL-terminated bc_malloc'd string the
- * caller bc_free's, or NULL when t is empty or memory runs out.
+ * caller bc_free's, or NULL when t is empty, nests deeper than
+ * BC_SCENE_JSON_MAX_DEPTH (bc_tree_nesting) or memory runs out.
  */
 char *bc_scene_to_json(const struct bc_tree *t, const struct bc_camera *cam);
 /* Writes bc_scene_to_json()'s text to path atomically: a temporary file in
@@ -139,7 +151,7 @@ struct bc_scene_walk {
 	uint32_t ntodo;
 	uint32_t index;
 	uint32_t nopen;
-	uint32_t left[BC_TREE_MAX_DEPTH]; /* children still to visit */
+	uint32_t *left; /* per open operator: children still to visit */
 };
 
 /* Starts a walk over t (which must stay unchanged during the walk). Returns

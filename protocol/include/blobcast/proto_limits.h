@@ -115,9 +115,11 @@
  * 22-bit ancestor field whose all-ones value means "none"). */
 #define BC_PROTO_SCENE_MAX_NODES ((1u << 22) - 1u)
 
-/* Nodes on any path from the root, the root counting 1 (so at most 127
- * nested operators); equals BC_TREE_MAX_DEPTH (scene parsers and evaluation
- * stacks are sized from it). */
-#define BC_PROTO_SCENE_MAX_DEPTH 128u
+/* Nodes on any path from the root, the root counting 1; equals
+ * BC_TREE_MAX_DEPTH. Decoders keep per-level state on the heap, so deep
+ * chains (programs emit them; Lipschitz Pruning's Molecule is 1001 levels)
+ * cost memory per node, never C stack; evaluation stacks are bounded
+ * separately (docs/scene-format.md). */
+#define BC_PROTO_SCENE_MAX_DEPTH (1u << 20)
 
 #endif
