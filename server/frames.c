@@ -81,7 +81,7 @@ void bc_session_schedule(struct bc_session *s)
 	for (uint32_t i = 0; i < s->nmembers; i++) {
 		struct bc_conn *c = bc_conn_get(srv, s->members[i]);
 		struct bc_rjob *job;
-		uint32_t ng = 0, max_bytes;
+		uint32_t ng = 0;
 		bool still;
 		/* One frame in flight per client: while one is being
 		 * written, changes only accumulate (the next frame shows the
@@ -97,7 +97,6 @@ void bc_session_schedule(struct bc_session *s)
 			next_still = c->interacting_until;
 		}
 		group[ng++] = c;
-		max_bytes = c->max_frame_bytes;
 		for (uint32_t j = i + 1; j < s->nmembers; j++) {
 			struct bc_conn *o = bc_conn_get(srv, s->members[j]);
 			if (o && !done[j] && o->has_view && o->dirty &&
@@ -106,15 +105,19 @@ void bc_session_schedule(struct bc_session *s)
 			               now >= o->interacting_until)) {
 				group[ng++] = o;
 				done[j] = true;
-				if (o->max_frame_bytes < max_bytes) {
-					max_bytes = o->max_frame_bytes;
-				}
 			}
 		}
 		if (!(job = bc_calloc(1, sizeof(*job))) ||
 		    !(job->targets = bc_calloc(ng, sizeof(*job->targets)))) {
+			/* The group stays dirty: owed its frame, retried. */
 			bc_free(job);
-			return;
+			bc_log(BC_LOG_ERROR,
+			       "session %u: out of memory for a frame job; "
+			       "retrying in %u ms",
+			       s->id, BC_SRV_OOM_RETRY_MS);
+			uv_timer_start(&s->kick, kick_due, BC_SRV_OOM_RETRY_MS,
+			               0);
+			break;
 		}
 		job->session_id = s->id;
 		job->camera = c->camera;
@@ -130,7 +133,6 @@ void bc_session_schedule(struct bc_session *s)
 		job->camera_seq = c->camera_seq;
 		job->order = s->order;
 		job->frame_no = ++srv->frame_no;
-		job->max_bytes = max_bytes;
 		for (uint32_t g = 0; g < ng; g++) {
 			struct bc_conn *m = group[g];
 			job->targets[g] = bc_conn_ref_of(m);
@@ -152,6 +154,31 @@ void bc_session_client_ready(struct bc_conn *c)
 	 * shared render. */
 	if (c->session && c->dirty) {
 		uv_timer_start(&c->session->kick, kick_due, 0, 0);
+	}
+}
+
+void bc_session_frame_failed(struct bc_srv *srv, const struct bc_rjob *job)
+{
+	struct bc_session *s = bc_session_by_id(srv, job->session_id);
+	for (uint32_t i = 0; i < job->ntargets; i++) {
+		struct bc_conn *c = bc_conn_get(srv, job->targets[i]);
+		if (!c) {
+			continue;
+		}
+		if (job->pick || job->snapshot_seq) {
+			bc_conn_send_error(
+			    c, job->pick ? job->pick_seq : job->snapshot_seq,
+			    BC_ENOMEM, false, "the server is out of memory");
+			continue;
+		}
+		c->render_pending = false;
+		c->dirty = true;
+	}
+	if (s && !job->pick && !job->snapshot_seq) {
+		bc_log(BC_LOG_ERROR,
+		       "session %u: frame %u failed; retrying in %u ms", s->id,
+		       job->frame_no, BC_SRV_OOM_RETRY_MS);
+		uv_timer_start(&s->kick, kick_due, BC_SRV_OOM_RETRY_MS, 0);
 	}
 }
 
@@ -248,6 +275,9 @@ void bc_handle_pick(struct bc_conn *c, const struct bc_msg *m)
 		return;
 	}
 	if (!(job = single_job(c))) {
+		bc_log(BC_LOG_ERROR, "out of memory for a PICK");
+		bc_conn_send_error(c, m->seq, BC_ENOMEM, false,
+		                   "the server is out of memory");
 		return;
 	}
 	job->pick = true;
@@ -267,6 +297,9 @@ void bc_handle_snapshot(struct bc_conn *c, const struct bc_msg *m)
 		return;
 	}
 	if (!(job = single_job(c))) {
+		bc_log(BC_LOG_ERROR, "out of memory for a SNAPSHOT");
+		bc_conn_send_error(c, m->seq, BC_ENOMEM, false,
+		                   "the server is out of memory");
 		return;
 	}
 	job->encoding = (int)m->snapshot.encoding;
@@ -275,7 +308,6 @@ void bc_handle_snapshot(struct bc_conn *c, const struct bc_msg *m)
 	job->camera_seq = c->camera_seq;
 	job->order = c->session->order;
 	job->frame_no = ++c->srv->frame_no;
-	job->max_bytes = c->max_frame_bytes;
 	job->snapshot_seq = m->seq;
 	bc_rthread_job(c->srv, job);
 }

@@ -45,6 +45,7 @@ struct rcmd {
 	struct bc_prim_data p;
 	struct bc_op_data op;
 	struct bc_rjob *job;
+	struct rresult *res; /* RCMD_JOB: allocated with the command */
 	struct rcmd *next;
 };
 
@@ -57,6 +58,8 @@ struct rresult {
 	uint32_t node;
 	double render_ms, encode_ms;
 	bool incomplete;
+	bool too_big; /* no frame: it is over the protocol's payload limit */
+	bool oom;     /* no frame: out of memory, the targets stay owed */
 	struct bc_shown shown; /* what the targets hold after this frame */
 	struct rresult *next;
 };
@@ -611,10 +614,10 @@ static const uint8_t *picture(struct bc_rthread *rt, const struct view *v,
 	return rt->small;
 }
 
-static void run_job(struct bc_rthread *rt, struct bc_rjob *job)
+static void run_job(struct bc_rthread *rt, struct bc_rjob *job,
+                    struct rresult *res)
 {
 	struct replica *rp = replica_of(rt, job->session_id, false);
-	struct rresult *res = bc_calloc(1, sizeof(*res));
 	struct bc_errinfo ei = {0};
 	struct bc_proto_rect whole, *rects = &whole;
 	struct bc_encoded *enc = NULL;
@@ -624,11 +627,8 @@ static void run_job(struct bc_rthread *rt, struct bc_rjob *job)
 	const uint8_t *pix;
 	uint32_t nrects = 1, iw, ih;
 	bool incomplete = false, yielded = false, lossless, patch;
-	int encoding, quality;
+	int encoding, quality, rc;
 	double t0, t1;
-	if (!res) {
-		return;
-	}
 	res->job = job;
 	if (!rp || !rp->tree || !bc_tree_lin(rp->tree)) {
 		push_result(rt, res);
@@ -709,6 +709,8 @@ static void run_job(struct bc_rthread *rt, struct bc_rjob *job)
 		}
 	}
 	if (!(enc = bc_calloc(nrects, sizeof(*enc)))) {
+		bc_errinfo_set(&ei, BC_ENOMEM, "no memory for %u rectangles",
+		               nrects);
 		goto fail;
 	}
 	for (uint32_t i = 0; i < nrects; i++) {
@@ -747,9 +749,18 @@ static void run_job(struct bc_rthread *rt, struct bc_rjob *job)
 	m.frame.image_height = (uint16_t)ih;
 	m.frame.nrects = (uint16_t)nrects;
 	m.frame.rects = rects;
-	bc_proto_buf_init(&b, (size_t)job->max_bytes + BC_PROTO_HEADER_SIZE);
-	if (bc_proto_encode(&b, &m, &ei) == 0 &&
-	    (res->frame = bc_shared_new(b.len))) {
+	/* Encoded up to the protocol's limit: each target's own
+	 * max_frame_bytes is checked when it is delivered (a frame over it is
+	 * answered ERROR ELIMIT, PROTOCOL.md 7.15). */
+	bc_proto_buf_init(&b,
+	                  (size_t)BC_PROTO_MAX_PAYLOAD + BC_PROTO_HEADER_SIZE);
+	rc = bc_proto_encode(&b, &m, &ei);
+	res->too_big = rc == BC_ELIMIT || rc == BC_EPROTO_LENGTH;
+	if (rc == 0 && !(res->frame = bc_shared_new(b.len))) {
+		bc_errinfo_set(&ei, BC_ENOMEM, "no memory for a frame");
+		res->oom = true;
+	}
+	if (res->frame) {
 		memcpy(res->frame->data, b.data, b.len);
 		res->shown = (struct bc_shown){
 			.view = v->id,
@@ -776,6 +787,7 @@ static void run_job(struct bc_rthread *rt, struct bc_rjob *job)
 fail:
 	bc_log(BC_LOG_ERROR, "session %u: frame failed: %s", job->session_id,
 	       ei.msg);
+	res->oom = ei.code == BC_ENOMEM;
 	if (enc) {
 		for (uint32_t i = 0; i < nrects; i++) {
 			bc_free(enc[i].data);
@@ -824,7 +836,7 @@ static void run(struct bc_rthread *rt, struct rcmd *cmd)
 		}
 		break;
 	case RCMD_JOB:
-		run_job(rt, cmd->job);
+		run_job(rt, cmd->job, cmd->res);
 		break;
 	default:
 		break;
@@ -938,14 +950,45 @@ static void free_job(struct bc_rjob *job)
 void bc_rthread_job(struct bc_srv *srv, struct bc_rjob *job)
 {
 	struct rcmd *cmd = new_cmd(RCMD_JOB, job->session_id);
-	if (!cmd) {
-		bc_session_frame_done(srv, job->session_id, job->targets,
-				      job->ntargets);
+	struct rresult *res = bc_calloc(1, sizeof(*res));
+	if (!cmd || !res) {
+		bc_log(BC_LOG_ERROR, "out of memory queueing a render job");
+		bc_free(cmd);
+		bc_free(res);
+		bc_session_frame_failed(srv, job);
 		free_job(job);
 		return;
 	}
 	cmd->job = job;
+	cmd->res = res;
 	push_cmd(srv, cmd);
+}
+
+/* The frame does not fit what c accepts (its HELLO max_frame_bytes) or
+ * the protocol's payload limit. */
+static bool over_limit(const struct bc_conn *c, const struct rresult *res)
+{
+	return res->too_big ||
+	       (res->frame && res->frame->len - BC_PROTO_HEADER_SIZE >
+	                          (size_t)c->max_frame_bytes);
+}
+
+/* A frame too large for c is not sent: c hears ERROR ELIMIT, non-fatal,
+ * with the SNAPSHOT's seq or 0 (PROTOCOL.md 7.15), and keeps the picture it
+ * has. */
+static void frame_over_limit(struct bc_conn *c, const struct bc_rjob *job,
+                             const struct rresult *res)
+{
+	size_t len = res->frame ? res->frame->len - BC_PROTO_HEADER_SIZE : 0;
+	bc_log(BC_LOG_WARN,
+	       "client %u: frame %u not sent: %zu bytes, over its limit of "
+	       "%u",
+	       c->gen, job->frame_no, len, c->max_frame_bytes);
+	bc_conn_send_error(c, job->snapshot_seq, BC_ELIMIT, false,
+	                   "the %s (%ux%u) does not fit the frame size limit "
+	                   "(%u bytes)",
+	                   job->snapshot_seq ? "snapshot" : "frame", job->width,
+	                   job->height, c->max_frame_bytes);
 }
 
 void bc_rthread_deliver(uv_async_t *async)
@@ -998,11 +1041,14 @@ void bc_rthread_deliver(uv_async_t *async)
 					c->dirty = true;
 				}
 			}
-			for (uint32_t i = 0; i < job->ntargets && res->frame;
+			for (uint32_t i = 0;
+			     i < job->ntargets && (res->frame || res->too_big);
 			     i++) {
 				struct bc_conn *c =
 					bc_conn_get(srv, job->targets[i]);
-				if (c && !job->snapshot_seq) {
+				if (c && over_limit(c, res)) {
+					frame_over_limit(c, job, res);
+				} else if (c && !job->snapshot_seq) {
 					bc_conn_send_frame(c, res->frame);
 					c->shown = res->shown;
 					c->still_sent = res->shown.still;
@@ -1019,18 +1065,19 @@ void bc_rthread_deliver(uv_async_t *async)
 					bc_conn_send_frame(c, res->frame);
 				}
 			}
-			if (!job->snapshot_seq) {
+			if (res->oom) {
+				bc_session_frame_failed(srv, job);
+			} else if (!job->snapshot_seq) {
 				bc_session_frame_done(srv, job->session_id,
 						      job->targets, job->ntargets);
-			} else if (!res->frame) {
+			} else if (!res->frame && !res->too_big) {
 				struct bc_conn *c =
 					bc_conn_get(srv, job->targets[0]);
 				if (c) {
 					bc_conn_send_error(
-						c, job->snapshot_seq, BC_ELIMIT,
-						false,
-						"the snapshot does not fit the "
-						"frame size limit");
+					    c, job->snapshot_seq, BC_EIO, false,
+					    "the snapshot could not be "
+					    "rendered or encoded");
 				}
 			}
 		}
@@ -1096,6 +1143,7 @@ void bc_rthread_stop(struct bc_srv *srv)
 	for (cmd = rt->head; cmd;) {
 		struct rcmd *next = cmd->next;
 		bc_tree_destroy(cmd->tree);
+		bc_free(cmd->res);
 		if (cmd->job) {
 			free_job(cmd->job);
 		}

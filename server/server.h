@@ -198,6 +198,11 @@ void bc_session_handle(struct bc_conn *c, const struct bc_msg *m);
 void bc_session_leave(struct bc_conn *c);
 /* c's frame backlog cleared: render for it again if it is owed a frame. */
 void bc_session_client_ready(struct bc_conn *c);
+/* A render job could not run for lack of memory: its PICK or SNAPSHOT is
+ * answered ERROR ENOMEM; clients owed a frame stay owed, and the session
+ * retries after BC_SRV_OOM_RETRY_MS. */
+struct bc_rjob;
+void bc_session_frame_failed(struct bc_srv *srv, const struct bc_rjob *job);
 /* A render job for these clients finished: schedule what is still owed. */
 void bc_session_frame_done(struct bc_srv *srv, uint32_t session_id,
 			   const struct bc_conn_ref *targets, uint32_t n);
@@ -241,7 +246,6 @@ struct bc_rjob {
 	uint32_t camera_seq;
 	uint64_t order;
 	uint32_t frame_no;
-	uint32_t max_bytes;
 	uint32_t snapshot_seq; /* != 0: answer to a SNAPSHOT */
 	struct bc_conn_ref *targets;
 	uint32_t ntargets;

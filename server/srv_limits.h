@@ -44,6 +44,10 @@
  * to feel immediate when the user lets go. */
 #define BC_SRV_STILL_DELAY_MS 300u
 
+/* Wait before a session retries the frames it could not queue for lack of
+ * memory: the clients stay owed them, and a retry at once would spin. */
+#define BC_SRV_OOM_RETRY_MS 100u
+
 /* A session's scene is written whole (and its journal restarted) after this
  * many journaled edits: replaying at most this many on start stays fast. */
 #define BC_SRV_SNAPSHOT_EVERY 1000u

@@ -126,7 +126,8 @@ export const FIELD = Object.freeze({
 
 /* The project's error list: the same numbers travel in ERROR messages. */
 const ERRORS = [
-	['OK', 'success'],
+	/* NONE, not OK: message type 6 is OK, and one module exports both. */
+	['NONE', 'no error (success)'],
 	['EINVAL', 'invalid argument'],
 	['ENOMEM', 'out of memory'],
 	['ERANGE', 'value out of range'],

@@ -6,6 +6,9 @@
 static void error_table_names_every_code(void)
 {
 	CHECK(strcmp(bc_err_name(BC_ENOMEM), "ENOMEM") == 0);
+	/* Error 0 is NONE, never OK: OK is message type 6 (PROTOCOL.md 10). */
+	CHECK(strcmp(bc_err_name(0), "NONE") == 0);
+	CHECK(BC_NONE == 0);
 	CHECK(strcmp(bc_strerror(BC_ENOMEM), "out of memory") == 0);
 	CHECK(strcmp(bc_err_name(-9999), "UNKNOWN") == 0);
 	for (int i = 0; i < BC_ERR_COUNT; i++) {

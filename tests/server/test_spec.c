@@ -217,6 +217,48 @@ static void a_stream_cut_inside_a_message_is_truncated(void)
 	daemon_stop(&d, SIGTERM);
 }
 
+/* Spec 7.15: a frame over the client's max_frame_bytes is not sent, and the
+ * client hears a non-fatal ERROR ELIMIT (seq 0; a SNAPSHOT's: its seq). */
+static void a_frame_over_the_limit_is_elimit(void)
+{
+	struct daemon d;
+	struct conn a;
+	struct bc_msg m = {.type = BC_MSG_HELLO};
+	uint32_t seq;
+	REQUIRE(start(&d, "limit") == 0);
+	REQUIRE(conn_open(&a, &d) == 0);
+	m.hello.version_min = 1;
+	m.hello.version_max = 1;
+	m.hello.encodings = BC_PROTO_ENCODINGS_ALL;
+	m.hello.max_frame_bytes = BC_PROTO_MIN_FRAME_BYTES;
+	m.hello.client_name.ptr = "small";
+	m.hello.client_name.len = 5;
+	REQUIRE(conn_send(&a, &m));
+	REQUIRE(conn_expect(&a, BC_MSG_WELCOME, 5000) == 1);
+	REQUIRE(conn_join(&a, "default", BC_PROTO_ROLE_EDITOR, false) == 0);
+	REQUIRE(conn_expect(&a, BC_MSG_SCENE_STATE, 5000) == 1);
+	/* Raw 256 x 256 at level 0 only: 262144 bytes of pixels. */
+	m = (struct bc_msg){.type = BC_MSG_VIEW};
+	m.view.width = 256;
+	m.view.height = 256;
+	m.view.encoding = BC_PROTO_ENC_RAW;
+	m.view.quality_interactive = 60;
+	m.view.quality_still = 90;
+	m.view.downscale = 1;
+	REQUIRE(conn_send(&a, &m));
+	CHECK_EQ_INT(expect_error(&a, 0), -BC_ELIMIT);
+	CHECK(!(a.m.flags & BC_PROTO_FLAG_FATAL));
+	CHECK(alive(&a));
+	m = (struct bc_msg){.type = BC_MSG_SNAPSHOT};
+	m.snapshot.encoding = BC_PROTO_ENC_RAW;
+	seq = conn_send(&a, &m);
+	CHECK_EQ_INT(expect_error(&a, seq), -BC_ELIMIT);
+	CHECK(!(a.m.flags & BC_PROTO_FLAG_FATAL));
+	CHECK(alive(&a));
+	conn_close(&a);
+	daemon_stop(&d, SIGTERM);
+}
+
 /* ---- the mirror check ----------------------------------------------------
  */
 
@@ -503,6 +545,7 @@ static const struct bc_test tests[] = {
      frames_follow_the_view_and_count_per_client},
     {"a_stream_cut_inside_a_message_is_truncated",
      a_stream_cut_inside_a_message_is_truncated},
+    {"a_frame_over_the_limit_is_elimit", a_frame_over_the_limit_is_elimit},
     {"mirrors_equal_a_joiners_state", mirrors_equal_a_joiners_state},
 };
 

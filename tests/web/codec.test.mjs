@@ -404,6 +404,11 @@ test('frame levels: what the page shows and how it scales', () => {
 
 test('error names and numbers match error.h', () => {
 	assert.equal(P.ERR.ENOMEM, 2);
+	/* Error 0 is NONE: OK is message type 6 (PROTOCOL.md 10). */
+	assert.equal(P.ERR.NONE, 0);
+	assert.equal(P.errName(0), 'NONE');
+	assert.equal(P.ERR.OK, undefined);
+	assert.equal(P.MSG.OK, 6);
 	assert.equal(P.ERR.EPROTO_MAGIC, 12);
 	assert.equal(P.ERR.ENOSESSION, 24);
 	assert.equal(P.ERR.ECLOSED, 33);

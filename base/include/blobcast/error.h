@@ -8,8 +8,8 @@
 
 /* X(NAME, number, human sentence). Numbers are positive here; the C return
  * value is the negation (BC_ENOMEM == -2). */
-#define BC_ERRNO_MAP(X)                                                       \
-	X(OK, 0, "success")                                                    \
+#define BC_ERRNO_MAP(X)                                                        \
+	X(NONE, 0, "no error (success)")                                       \
 	X(EINVAL, 1, "invalid argument")                                       \
 	X(ENOMEM, 2, "out of memory")                                          \
 	X(ERANGE, 3, "value out of range")                                     \
@@ -29,7 +29,8 @@
 	X(EPROTO_TRAILING, 17, "bytes left after the message's fields")        \
 	X(EPROTO_COUNT, 18, "a count exceeds its limit or the bytes left")     \
 	X(EPROTO_FLAGS, 19, "reserved flag bits set")                          \
-	X(ENONFINITE, 20, "NaN or infinite number where a finite one is required") \
+	X(ENONFINITE, 20,                                                      \
+	  "NaN or infinite number where a finite one is required")             \
 	X(EDEPTH, 21, "nesting deeper than the limit")                         \
 	X(EAUTH, 22, "authentication failed")                                  \
 	X(EPERM, 23, "not permitted for this role")                            \
