@@ -292,6 +292,41 @@ static uint32_t pick_id(const struct bc_tree *t, uint64_t *s)
 	return l->node_id[rnd(s) % n];
 }
 
+/* A leaf (a primitive) of the mirror, or any node when none is found. */
+static uint32_t pick_leaf(const struct bc_tree *t, uint64_t *s)
+{
+	const struct bc_lin *l = bc_tree_lin(t);
+	uint32_t n = bc_tree_node_count(t);
+	for (int tries = 0; tries < 16; tries++) {
+		uint32_t id = l->node_id[rnd(s) % n];
+		if (bc_tree_child_count(t, id) == 0) {
+			return id;
+		}
+	}
+	return pick_id(t, s);
+}
+
+/* A subtree to insert: a sphere, or a union of two or three spheres (one id
+ * 0 in it now and then: EINVAL). */
+static void random_subtree(struct bc_proto_buf *sub, uint32_t *next_id,
+                           uint64_t *s, float rad)
+{
+	const float t0[3] = {0, 0, 0}, r0[4] = {0, 0, 0, 1};
+	uint32_t kids = rnd(s) % 2 ? 0 : 2 + rnd(s) % 2;
+	uint32_t zero = rnd(s) % 25 == 0 ? rnd(s) % (kids + 1) : 99;
+	bc_proto_scene_begin(sub, NULL, 1 + kids);
+	if (kids) {
+		bc_proto_scene_op(sub, BC_OP_UNION,
+		                  zero == 0 ? 0 : (*next_id)++, 0, 0, kids);
+	}
+	for (uint32_t i = 0; i < (kids ? kids : 1); i++) {
+		float t[3] = {t0[0] + 0.3f * (float)i, t0[1], t0[2]};
+		uint32_t id = zero == i + (kids ? 1u : 0u) ? 0 : (*next_id)++;
+		bc_proto_scene_prim(sub, BC_PRIM_SPHERE, id, t, r0, NULL, 1,
+		                    &rad);
+	}
+}
+
 static uint32_t pick_op(const struct bc_tree *t, uint64_t *s)
 {
 	const struct bc_lin *l = bc_tree_lin(t);
@@ -312,7 +347,6 @@ static void random_edit(struct member *m, uint32_t *next_id, uint64_t *s)
 	struct bc_proto_edit_op op = {0};
 	struct bc_proto_buf sub;
 	struct bc_msg msg = {.type = BC_MSG_EDIT};
-	const float t0[3] = {0, 0, 0}, r0[4] = {0, 0, 0, 1};
 	float rad = 0.05f + (float)(rnd(s) % 100) / 400.0f;
 	uint32_t k = rnd(s) % 100;
 	bc_proto_buf_init(&sub, 0);
@@ -368,26 +402,31 @@ static void random_edit(struct member *m, uint32_t *next_id, uint64_t *s)
 			    {rnd(s) % 2 ? 4.5f : 7.0f, 0, 0, 0}};
 			break;
 		}
-	} else if (k < 88) {
-		/* INSERT a sphere (id 0 now and then; ids of other editors
-		 * may collide: EDUPID). */
-		uint32_t id = rnd(s) % 25 == 0 ? 0 : (*next_id)++;
+	} else if (k < 85) {
+		/* INSERT (or, 1 in 10, REPLACE) a subtree (id 0 now and then;
+		 * ids of other editors may collide: EDUPID). A REPLACE hits a
+		 * leaf, and the root 1 time in 40, so that the tree grows to
+		 * a hundred nodes or so and is cut back now and then. */
 		op.kind =
-		    rnd(s) % 12 ? BC_PROTO_EDIT_INSERT : BC_PROTO_EDIT_REPLACE;
-		op.node = op.kind == BC_PROTO_EDIT_INSERT
-		              ? pick_op(m->mirror, s)
-		              : pick_id(m->mirror, s);
+		    rnd(s) % 10 ? BC_PROTO_EDIT_INSERT : BC_PROTO_EDIT_REPLACE;
+		if (op.kind == BC_PROTO_EDIT_INSERT) {
+			op.node = pick_op(m->mirror, s);
+		} else {
+			op.node = rnd(s) % 40 == 0 ? bc_tree_root(m->mirror)
+			                           : pick_leaf(m->mirror, s);
+		}
 		op.position = rnd(s) % 3;
-		bc_proto_scene_begin(&sub, NULL, 1);
-		bc_proto_scene_prim(&sub, BC_PRIM_SPHERE, id, t0, r0, NULL, 1,
-		                    &rad);
+		random_subtree(&sub, next_id, s, rad);
 		op.subtree.ptr = sub.data;
 		op.subtree.len = (uint32_t)sub.len;
 	} else {
-		/* REMOVE: the root now and then. */
+		/* REMOVE: a leaf mostly, any node 1 time in 4, the root
+		 * (refused) 1 time in 15. */
+		uint32_t r = rnd(s) % 120;
 		op.kind = BC_PROTO_EDIT_REMOVE;
-		op.node = rnd(s) % 15 == 0 ? bc_tree_root(m->mirror)
-		                           : pick_id(m->mirror, s);
+		op.node = r < 8    ? bc_tree_root(m->mirror)
+		          : r < 38 ? pick_id(m->mirror, s)
+		                   : pick_leaf(m->mirror, s);
 	}
 	msg.edit.nops = 1;
 	msg.edit.ops = &op;
@@ -437,7 +476,8 @@ static void mirrors_equal_a_joiners_state(void)
 	struct bc_camera cam;
 	uint64_t seed = 12345;
 	uint32_t next_id = 1000, sent = 0;
-	uint32_t applied = 0, refused = 0;
+	uint32_t applied = 0, refused = 0, nmin = UINT32_MAX, nmax = 0;
+	uint64_t nsum = 0;
 	int64_t t0 = t_now_ms();
 	REQUIRE(start(&d, "mirror") == 0);
 	for (int i = 0; i < EDITORS; i++) {
@@ -462,6 +502,10 @@ static void mirrors_equal_a_joiners_state(void)
 	while (sent < EDITS) {
 		for (int i = 0; i < EDITORS && sent < EDITS; i++) {
 			if (m[i].inflight < WINDOW) {
+				uint32_t n = bc_tree_node_count(m[i].mirror);
+				nmin = n < nmin ? n : nmin;
+				nmax = n > nmax ? n : nmax;
+				nsum += n;
 				random_edit(&m[i], &next_id, &seed);
 				sent++;
 			}
@@ -529,10 +573,14 @@ static void mirrors_equal_a_joiners_state(void)
 	}
 	applied = (uint32_t)late.m.scene_state.order;
 	printf("  %u edits from %d editors: %u applied (order), %u refused, "
-	       "%u nodes, %lld ms\n",
+	       "%u nodes at the end (%u..%u, %.0f on average when an edit "
+	       "was made), %lld ms\n",
 	       sent, EDITORS, applied, refused, bc_tree_node_count(joined),
+	       nmin, nmax, (double)nsum / (double)sent,
 	       (long long)(t_now_ms() - t0));
 	CHECK(applied > 1000 && refused > 1000);
+	/* Most edits work on a real tree, not a lone node. */
+	CHECK((double)nsum / (double)sent >= 20.0);
 	bc_tree_destroy(joined);
 	conn_close(&late);
 	daemon_stop(&d, SIGTERM);
