@@ -49,7 +49,12 @@ void bc_handle_scene_load(struct bc_conn *c, const struct bc_msg *m)
 	}
 	/* On disk first: the load is acknowledged only once it is safe. */
 	if ((rc = bc_store_snapshot(s->store, t, &cam, s->order + 1, &ei))) {
-		s->store_failed = true;
+		/* Only a failed write locks the session: a scene the store
+		 * refuses up front (too big or too deep to restore) left
+		 * nothing on disk. */
+		if (rc == BC_EIO) {
+			s->store_failed = true;
+		}
 		goto fail;
 	}
 	bc_tree_destroy(s->tree);
@@ -166,10 +171,9 @@ void bc_handle_edit(struct bc_conn *c, const struct bc_msg *m)
 			o->shown.view = 0;
 		}
 	}
-	if (bc_store_journal_records(s->store) >= BC_SRV_SNAPSHOT_EVERY &&
-	    bc_store_snapshot(s->store, s->tree, &s->camera, s->order, &ei)) {
-		bc_log(BC_LOG_ERROR, "session %s: %s", s->name, ei.msg);
-	}
+	/* Logs its own failures and backs off after one (a full disk). */
+	bc_store_snapshot_due(s->store, BC_SRV_SNAPSHOT_EVERY, s->tree,
+	                      &s->camera, s->order, &ei);
 	bc_edit_batch_finish(&batch);
 	bc_proto_buf_finish(&rec);
 	bc_session_schedule(s);

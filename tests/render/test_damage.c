@@ -528,7 +528,10 @@ static void damage_scene(enum bc_backend b, const struct scene *s, uint32_t n,
                          struct tally *ty)
 {
 	struct bc_tree *t = bc_tree_create();
-	struct bc_renderer *r = NULL;
+	/* ref draws the reference from scratch each time (a structural
+	 * sync drops whatever it kept), so state r keeps between renders
+	 * (the tiled backend's tile lists) is checked too. */
+	struct bc_renderer *r = NULL, *ref = NULL;
 	struct bc_frame f = {0}, g = {0}, stale = {0}, sub = {0};
 	struct bc_render_stats st;
 	struct bc_camera cam;
@@ -573,6 +576,7 @@ static void damage_scene(enum bc_backend b, const struct scene *s, uint32_t n,
 		goto done;
 	}
 	if (bc_renderer_create(&r, b, NULL, &ei) ||
+	    bc_renderer_create(&ref, b, NULL, &ei) ||
 	    bc_renderer_sync(r, t, NULL, &ei) ||
 	    bc_renderer_render(r, &cam, &f, &st, &ei)) {
 		fprintf(stderr, "  %s: %s\n", s->label, ei.msg);
@@ -608,7 +612,8 @@ static void damage_scene(enum bc_backend b, const struct scene *s, uint32_t n,
 			/* By design: every pixel sees every primitive. */
 			CHECK_EQ_INT(marked, nt);
 		}
-		if (bc_renderer_render(r, &cam, &g, &st, &ei)) {
+		if (bc_renderer_sync(ref, t, NULL, &ei) ||
+		    bc_renderer_render(ref, &cam, &g, &st, &ei)) {
 			fprintf(stderr, "  render: %s\n", ei.msg);
 			CHECK(!"whole render");
 			break;
@@ -699,6 +704,7 @@ static void damage_scene(enum bc_backend b, const struct scene *s, uint32_t n,
 		}
 	}
 done:
+	bc_renderer_destroy(ref);
 	bc_renderer_destroy(r);
 	bc_frame_finish(&f);
 	bc_frame_finish(&g);
