@@ -19,6 +19,7 @@
 #include <stdbool.h>
 #include <stdlib.h>
 
+#include "blobcast/alloc.h"
 #include "packet.h"
 
 static int frag_cmp(const void *pa, const void *pb)
@@ -45,15 +46,61 @@ static void activate(struct bc__tile_worker *wk, uint32_t *na,
 	(*na)++;
 }
 
-/* A near hit that no following range took over: shade it in the full
- * tree, since the range whose view held there is gone (a few pixels per
- * frame, on silhouettes). */
-static void settle(const struct bc__frame_ctx *fc, struct bc__tile_worker *wk,
-                   uint32_t x, uint32_t y, const float d[3], float t,
-                   uint32_t *evals, uint32_t overlaps)
+static int cmp_u32(const void *a, const void *b)
 {
-	struct bc__field f = {fc->lin, NULL, *evals};
-	bc__put_hit(fc, &f, x, y, d, t, overlaps);
+	uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+	return (x > y) - (x < y);
+}
+
+/* The view of every primitive in the tile's list, built on first need in
+ * a tile (bc__trace_tile forgets it at its start). NULL when it cannot be
+ * built or prunes everything: the caller then takes the full tree. */
+static const struct bc_view *tile_view(struct bc__tile_worker *wk,
+                                       const struct bc__tile_job *job)
+{
+	uint32_t m = 0;
+	if (wk->tile_view_state != 0) {
+		return wk->tile_view_state > 0 ? &wk->tile_view : NULL;
+	}
+	wk->tile_view_state = -1;
+	if (job->n > wk->tile_cap) {
+		uint32_t *act = bc_calloc(job->n, sizeof(*act));
+		if (!act) {
+			return NULL;
+		}
+		bc_free(wk->tile_act);
+		wk->tile_act = act;
+		wk->tile_cap = job->n;
+	}
+	for (uint32_t i = 0; i < job->n; i++) {
+		wk->tile_act[i] = job->list[i].prim;
+	}
+	qsort(wk->tile_act, job->n, sizeof(*wk->tile_act), cmp_u32);
+	for (uint32_t i = 0; i < job->n; i++) {
+		if (m == 0 || wk->tile_act[i] != wk->tile_act[m - 1]) {
+			wk->tile_act[m++] = wk->tile_act[i];
+		}
+	}
+	if (bc_view_build(&wk->tile_view, job->fc->lin, wk->tile_act, m) != 0 ||
+	    wk->tile_view.empty) {
+		return NULL;
+	}
+	wk->tile_view_state = 1;
+	return &wk->tile_view;
+}
+
+/* A near hit that no following range took over: shade it in the view of
+ * the tile's whole list, since the range whose view held there is gone (a
+ * few pixels per frame, on silhouettes). Not in the full tree: that would
+ * let a primitive the tile does not list (an edit far away) change the
+ * pixel, and damage renders could not be exact. */
+static void settle(const struct bc__tile_job *job, struct bc__tile_worker *wk,
+                   uint32_t x, uint32_t y, const float d[3], float t,
+                   uint32_t *evals)
+{
+	const struct bc__frame_ctx *fc = job->fc;
+	struct bc__field f = {fc->lin, tile_view(wk, job), *evals};
+	bc__put_hit(fc, &f, x, y, d, t, job->n);
 	wk->evals += f.evals - *evals;
 	*evals = f.evals;
 }
@@ -200,9 +247,9 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 				continue;
 			}
 			if (px->has_pending[p] && z_begin > px->pending[p]) {
-				settle(fc, wk, x, y,
+				settle(job, wk, x, y,
 				       job->dirs + 3 * ((size_t)y * w + x),
-				       px->pending[p], &px->evals[p], job->n);
+				       px->pending[p], &px->evals[p]);
 				px->done[p] = true;
 				px->left--;
 				continue;
@@ -296,6 +343,7 @@ void bc__trace_tile(struct bc__tile_worker *wk, const struct bc__tile_job *job)
 	struct tile_px px;
 	uint32_t na = 0, next = 0;
 	float z_end = 0.0f;
+	wk->tile_view_state = 0; /* built again for this tile's list */
 	px.left = 0;
 	for (uint32_t p = 0; p < BC_CPU_TILE * BC_CPU_TILE; p++) {
 		px.evals[p] = 0;
@@ -379,8 +427,8 @@ void bc__trace_tile(struct bc__tile_worker *wk, const struct bc__tile_job *job)
 				}
 				if (px.has_pending[p] &&
 				    z_begin > px.pending[p]) {
-					settle(fc, wk, x, y, d, px.pending[p],
-					       &px.evals[p], n);
+					settle(job, wk, x, y, d, px.pending[p],
+					       &px.evals[p]);
 					px.done[p] = true;
 					px.left--;
 					continue;
@@ -407,9 +455,9 @@ void bc__trace_tile(struct bc__tile_worker *wk, const struct bc__tile_job *job)
 				continue;
 			}
 			if (px.has_pending[p]) {
-				settle(fc, wk, x, y,
+				settle(job, wk, x, y,
 				       job->dirs + 3 * ((size_t)y * w + x),
-				       px.pending[p], &px.evals[p], n);
+				       px.pending[p], &px.evals[p]);
 			} else {
 				bc__put_miss(fc, x, y, px.evals[p], n);
 			}

@@ -146,6 +146,8 @@ void bc__tiled_free(struct bc__tiled_bufs *b)
 	bc_free(b->frags_alt);
 	for (uint32_t i = 0; i < BC_CPU_MAX_THREADS; i++) {
 		bc_view_finish(&b->workers[i].view);
+		bc_view_finish(&b->workers[i].tile_view);
+		bc_free(b->workers[i].tile_act);
 		bc_free(b->workers[i].act);
 		bc_free(b->workers[i].act_t1);
 	}

@@ -28,6 +28,13 @@ struct bc__tile_worker {
 	uint32_t overflows;
 	/* The renderer's opts.simd, set before each frame (0: AUTO). */
 	enum bc_simd simd;
+	/* The view of a tile's whole list, for near hits settled after
+	 * their range (tile_trace.c): 0 not built for this tile yet, 1
+	 * built, -1 unusable. */
+	struct bc_view tile_view;
+	uint32_t *tile_act;
+	uint32_t tile_cap;
+	int tile_view_state;
 };
 
 /* One tile's work. */
