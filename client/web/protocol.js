@@ -49,7 +49,7 @@ export const LIMITS = Object.freeze({
 	MAX_PRIM_PARAMS: 8,
 	MAX_ABS: 1.0e6,
 	SCENE_MAX_NODES: (1 << 22) - 1,
-	SCENE_MAX_DEPTH: 128,
+	SCENE_MAX_DEPTH: 1 << 20,
 	OP_KIND_MAX: 6,
 	PRIM_KIND_MAX: 16,
 });
