@@ -1,6 +1,9 @@
-/* Tests of the shared base: error table and allocation hook. */
+/* Tests of the shared base: error table, allocation hook, logger. */
+#include <stdarg.h>
+
 #include "blobcast/alloc.h"
 #include "blobcast/error.h"
+#include "blobcast/log.h"
 #include "test.h"
 
 static void error_table_names_every_code(void)
@@ -29,8 +32,90 @@ static void alloc_hook_fails_the_nth_call(void)
 	CHECK(bc_calloc((size_t)-1, 16) == NULL);
 }
 
+/* The last message a sink received, as it would be written, and how many
+ * messages came. */
+static char logged[16384];
+static int nlogged;
+
+static void capture(enum bc_log_level level, const char *file, int line,
+                    const char *fmt, va_list args) BC__PRINTF(4, 0);
+
+static void capture(enum bc_log_level level, const char *file, int line,
+                    const char *fmt, va_list args)
+{
+	(void)level;
+	(void)file;
+	(void)line;
+	vsnprintf(logged, sizeof(logged), fmt, args);
+	nlogged++;
+}
+
+/* A client name with a newline cannot start a log line of its own: every
+ * control character reaches the sink escaped, other bytes (UTF-8) as they
+ * are. */
+static void log_escapes_control_characters(void)
+{
+	bc_log_init(BC_LOG_INFO);
+	bc_log_set_callback(capture);
+	nlogged = 0;
+	bc_log(BC_LOG_INFO, "client %u (%s) joined", 7u,
+	       "eve\n[warn] [net.c:1] forged");
+	CHECK_EQ_INT(nlogged, 1);
+	CHECK(strcmp(logged,
+	             "client 7 (eve\\n[warn] [net.c:1] forged) joined") == 0);
+	bc_log(BC_LOG_WARN, "%s", "a\tb\rc\001d\177e\x1b[2J\xc3\xa9\x1f");
+	CHECK(strcmp(logged, "a\\tb\\x0dc\\x01d\\x7fe\\x1b[2J\xc3\xa9\\x1f") ==
+	      0);
+	/* The format string's own text is escaped too. */
+	bc_log(BC_LOG_WARN, "two\nlines");
+	CHECK(strcmp(logged, "two\\nlines") == 0);
+	/* Dropped below the threshold: the sink sees nothing. */
+	nlogged = 0;
+	bc_log(BC_LOG_DEBUG, "x\n");
+	CHECK_EQ_INT(nlogged, 0);
+	bc_log_set_callback(NULL);
+}
+
+/* Messages longer than the logger's stack buffer arrive whole, escaped. */
+static void log_escapes_long_messages_whole(void)
+{
+	char big[3001];
+	memset(big, '\n', 3000);
+	big[3000] = '\0';
+	bc_log_init(BC_LOG_INFO);
+	bc_log_set_callback(capture);
+	bc_log(BC_LOG_ERROR, "<%s>", big);
+	bc_log_set_callback(NULL);
+	REQUIRE(strlen(logged) == 6002);
+	CHECK(logged[0] == '<' && logged[6001] == '>');
+	CHECK(strchr(logged, '\n') == NULL);
+	CHECK(memcmp(logged + 5999, "\\n>", 3) == 0);
+}
+
+/* bc_log_escape never cuts an escape in half and always ends the string. */
+static void log_escape_stops_before_a_partial_escape(void)
+{
+	char out[8];
+	memset(out, 'z', sizeof(out));
+	CHECK_EQ_INT(bc_log_escape(out, 5, "ab\001cd", 5), 2);
+	CHECK(strcmp(out, "ab") == 0);
+	CHECK_EQ_INT(bc_log_escape(out, sizeof(out), "ab\001cd", 5), 7);
+	CHECK(strcmp(out, "ab\\x01c") == 0);
+	CHECK_EQ_INT(bc_log_escape(out, sizeof(out), "ab\ncd", 5), 6);
+	CHECK(strcmp(out, "ab\\ncd") == 0);
+	CHECK_EQ_INT(bc_log_escape(out, 1, "abc", 3), 0);
+	CHECK(out[0] == '\0');
+	/* A NUL byte inside the span is escaped as well. */
+	CHECK_EQ_INT(bc_log_escape(out, sizeof(out), "a\0b", 3), 6);
+	CHECK(strcmp(out, "a\\x00b") == 0);
+}
+
 static const struct bc_test tests[] = {
-	{"error_table_names_every_code", error_table_names_every_code},
-	{"alloc_hook_fails_the_nth_call", alloc_hook_fails_the_nth_call},
+    {"error_table_names_every_code", error_table_names_every_code},
+    {"alloc_hook_fails_the_nth_call", alloc_hook_fails_the_nth_call},
+    {"log_escapes_control_characters", log_escapes_control_characters},
+    {"log_escapes_long_messages_whole", log_escapes_long_messages_whole},
+    {"log_escape_stops_before_a_partial_escape",
+     log_escape_stops_before_a_partial_escape},
 };
 BC_TEST_MAIN(tests)

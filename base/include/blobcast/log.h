@@ -7,6 +7,7 @@
 #define BLOBCAST_LOG_H
 
 #include <stdarg.h>
+#include <stddef.h>
 
 enum bc_log_level {
 	BC_LOG_SILENT = 0,
@@ -24,11 +25,19 @@ typedef void (*bc_log_fn)(enum bc_log_level level, const char *file, int line,
  * the environment variable BLOBCAST_LOG (error|warn|info|debug) when set. */
 void bc_log_init(enum bc_log_level level);
 
-/* Replaces the sink (NULL restores stderr). */
+/* Replaces the sink (NULL restores stderr). A sink receives the message
+ * already escaped (see bc_log_escape), as fmt "%s" and one argument. */
 void bc_log_set_callback(bc_log_fn fn);
 
 /* Returns the current threshold. */
 enum bc_log_level bc_log_level(void);
+
+/* Copies the len bytes of src to dst (cap bytes, NUL included) with each
+ * control character (below 0x20, and 0x7f) written as \n, \t or \xNN, so
+ * that text from the network cannot start a log line of its own. Stops
+ * before an escape that would not fit whole. Returns the length written,
+ * without the NUL. */
+size_t bc_log_escape(char *dst, size_t cap, const char *src, size_t len);
 
 #if defined(__GNUC__)
 #define BC__PRINTF(a, b) __attribute__((format(printf, a, b)))
