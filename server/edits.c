@@ -90,6 +90,8 @@ void bc_handle_edit(struct bc_conn *c, const struct bc_msg *m)
 	struct bc_proto_buf rec;
 	struct bc_msg applied = {.type = BC_MSG_EDIT_APPLIED};
 	struct bc_msg as_edit = {.type = BC_MSG_EDIT};
+	struct bc_conn_ref refs[BC_PROTO_MAX_MEMBERS];
+	uint32_t nrefs;
 	bool structural;
 	uint64_t t0 = uv_hrtime();
 	int rc;
@@ -154,8 +156,9 @@ void bc_handle_edit(struct bc_conn *c, const struct bc_msg *m)
 	applied.edit_applied.author_seq = m->seq;
 	applied.edit_applied.nops = m->edit.nops;
 	applied.edit_applied.ops = m->edit.ops;
-	for (uint32_t i = 0; i < s->nmembers; i++) {
-		struct bc_conn *o = bc_conn_get(srv, s->members[i]);
+	nrefs = bc_session_members(s, refs);
+	for (uint32_t i = 0; i < nrefs; i++) {
+		struct bc_conn *o = bc_conn_get(srv, refs[i]);
 		if (!o) {
 			continue;
 		}

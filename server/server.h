@@ -196,6 +196,13 @@ void bc_sessions_free(struct bc_srv *srv);
 /* Dispatches a message from a client in stage READY or SESSION. */
 void bc_session_handle(struct bc_conn *c, const struct bc_msg *m);
 void bc_session_leave(struct bc_conn *c);
+/* Copies the session's member handles into out (BC_PROTO_MAX_MEMBERS
+ * entries) and returns their count. Loops that send iterate the copy: a
+ * send can drop a member (its queue overflowed), which reorders
+ * s->members under the loop and would skip the member moved into its
+ * place. */
+uint32_t bc_session_members(const struct bc_session *s,
+                            struct bc_conn_ref *out);
 /* c's frame backlog cleared: render for it again if it is owed a frame. */
 void bc_session_client_ready(struct bc_conn *c);
 /* A render job could not run for lack of memory: its PICK or SNAPSHOT is

@@ -201,10 +201,18 @@ void bc_sessions_free(struct bc_srv *srv)
 
 /* ---- members ------------------------------------------------------------- */
 
+uint32_t bc_session_members(const struct bc_session *s,
+                            struct bc_conn_ref *out)
+{
+	memcpy(out, s->members, s->nmembers * sizeof(*out));
+	return s->nmembers;
+}
+
 void bc_session_send_info(struct bc_session *s)
 {
 	struct bc_proto_member members[BC_PROTO_MAX_MEMBERS];
-	uint32_t n = 0;
+	struct bc_conn_ref refs[BC_PROTO_MAX_MEMBERS];
+	uint32_t n = 0, nrefs;
 	for (uint32_t i = 0; i < s->nmembers; i++) {
 		struct bc_conn *m = bc_conn_get(s->srv, s->members[i]);
 		if (m) {
@@ -215,8 +223,9 @@ void bc_session_send_info(struct bc_session *s)
 			n++;
 		}
 	}
-	for (uint32_t i = 0; i < s->nmembers; i++) {
-		struct bc_conn *m = bc_conn_get(s->srv, s->members[i]);
+	nrefs = bc_session_members(s, refs);
+	for (uint32_t i = 0; i < nrefs; i++) {
+		struct bc_conn *m = bc_conn_get(s->srv, refs[i]);
 		struct bc_msg info = {.type = BC_MSG_SESSION_INFO};
 		if (!m || n == 0) {
 			continue;
@@ -251,8 +260,10 @@ void bc_session_send_state(struct bc_session *s, struct bc_conn *to,
 	if (to) {
 		bc_conn_send(to, &st);
 	} else {
-		for (uint32_t i = 0; i < s->nmembers; i++) {
-			struct bc_conn *m = bc_conn_get(s->srv, s->members[i]);
+		struct bc_conn_ref refs[BC_PROTO_MAX_MEMBERS];
+		uint32_t n = bc_session_members(s, refs);
+		for (uint32_t i = 0; i < n; i++) {
+			struct bc_conn *m = bc_conn_get(s->srv, refs[i]);
 			if (m) {
 				bc_conn_send(m, &st);
 			}
