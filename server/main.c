@@ -3,7 +3,8 @@
  *
  * With no arguments it serves the embedded default scene in session
  * "default" on 127.0.0.1:7878 with ./blobcast-data as its data directory.
- * SIGTERM or SIGINT saves every session and stops.
+ * SIGTERM or SIGINT saves every session and stops; SIGHUP re-reads the
+ * access tokens of the --config file.
  */
 #include <signal.h>
 #include <stdio.h>
@@ -14,6 +15,7 @@
 
 #include "blobcast/alloc.h"
 #include "blobcast/log.h"
+#include "addr.h"
 #include "server.h"
 
 static void usage(FILE *out)
@@ -48,7 +50,8 @@ static void usage(FILE *out)
 		"  --help              this text\n"
 		"\n"
 		"Without tokens in the configuration only loopback and Unix\n"
-		"socket clients are accepted. SIGTERM saves and stops.\n");
+		"socket clients are accepted. SIGTERM saves and stops;\n"
+		"SIGHUP reloads the tokens of the --config file.\n");
 }
 
 static enum bc_backend parse_backend(const char *name)
@@ -187,6 +190,75 @@ static void config_free(struct bc_srv_config *cfg)
 	memset(cfg, 0, sizeof(*cfg));
 }
 
+/* SIGHUP's handle and the file it re-reads (NULL: no --config). They live
+ * here rather than in struct bc_srv because only this file uses them. */
+static uv_signal_t sighup;
+static const char *config_path;
+
+/* Without tokens only loopback and Unix-socket clients get in: say so when
+ * the TCP listener is reachable from other hosts, where an operator would
+ * otherwise see connections refused with no hint at start. */
+static void warn_if_exposed(struct bc_srv *srv)
+{
+	struct sockaddr_storage sa;
+	int len = sizeof(sa);
+	if (!srv->has_tcp || srv->cfg.ntokens > 0 ||
+	    uv_tcp_getsockname(&srv->tcp_listener, (struct sockaddr *)&sa,
+	                       &len) != 0 ||
+	    bc_addr_is_loopback((const struct sockaddr *)&sa)) {
+		return;
+	}
+	bc_log(BC_LOG_WARN,
+	       "listening on %s with no tokens configured: only loopback "
+	       "and Unix-socket clients will be accepted (docs/operations.md, "
+	       "Access)",
+	       srv->cfg.listen);
+}
+
+/* Re-reads the configuration file and replaces the access tokens, and only
+ * them: the listeners, data directory and renderer are set up once. This
+ * runs on the loop thread, the only one that reads the tokens (net.c, when
+ * a HELLO arrives), so the swap needs no lock. Connections that already
+ * said HELLO keep the role they were given. On any error the tokens in use
+ * stay. */
+static void on_sighup(uv_signal_t *sig, int signum)
+{
+	struct bc_srv *srv = sig->data;
+	struct bc_srv_config fresh = {0};
+	struct bc_errinfo ei = {0};
+	struct bc_token *old_tokens;
+	uint32_t old_ntokens;
+	int rc;
+	(void)signum;
+	if (srv->stopping) {
+		return;
+	}
+	if (!config_path) {
+		bc_log(BC_LOG_INFO,
+		       "SIGHUP: no --config file, nothing to reload");
+		return;
+	}
+	rc = load_config(&fresh, config_path, &ei);
+	if (rc) {
+		bc_log(BC_LOG_ERROR, "SIGHUP: %s; keeping the %u tokens in use",
+		       ei.msg[0] ? ei.msg : bc_strerror(rc), srv->cfg.ntokens);
+		config_free(&fresh);
+		return;
+	}
+	old_tokens = srv->cfg.tokens;
+	old_ntokens = srv->cfg.ntokens;
+	srv->cfg.tokens = fresh.tokens;
+	srv->cfg.ntokens = fresh.ntokens;
+	fresh.tokens = old_tokens;
+	fresh.ntokens = old_ntokens;
+	config_free(&fresh);
+	bc_log(BC_LOG_INFO,
+	       "SIGHUP: reloaded %u tokens from %s (only tokens are reloaded: "
+	       "other settings take effect on restart)",
+	       srv->cfg.ntokens, config_path);
+	warn_if_exposed(srv);
+}
+
 static void on_signal(uv_signal_t *sig, int signum)
 {
 	struct bc_srv *srv = sig->data;
@@ -201,6 +273,10 @@ static void on_signal(uv_signal_t *sig, int signum)
 	bc_rthread_stop(srv);
 	uv_close((uv_handle_t *)&srv->sigterm, NULL);
 	uv_close((uv_handle_t *)&srv->sigint, NULL);
+	uv_close((uv_handle_t *)&sighup, NULL);
+	/* Closing the handle restored SIGHUP's default action, which would
+	 * kill the daemon before the loop has finished closing. */
+	signal(SIGHUP, SIG_IGN);
 }
 
 static void print_endpoints(struct bc_srv *srv)
@@ -372,7 +448,12 @@ int main(int argc, char **argv)
 			BC_PROTO_MAX_NAME);
 		goto out;
 	}
+	/* A write to a closed connection returns EPIPE instead of killing
+	 * the daemon. A SIGHUP during start-up is ignored rather than fatal;
+	 * its handler is installed once the listeners are up. */
 	signal(SIGPIPE, SIG_IGN);
+	signal(SIGHUP, SIG_IGN);
+	config_path = config;
 	srv.loop = uv_default_loop();
 	srv.started_ms = uv_now(srv.loop);
 	if (bc_store_open(&srv.store, srv.cfg.data_dir, &ei) ||
@@ -392,7 +473,11 @@ int main(int argc, char **argv)
 	srv.sigterm.data = srv.sigint.data = &srv;
 	uv_signal_start(&srv.sigterm, on_signal, SIGTERM);
 	uv_signal_start(&srv.sigint, on_signal, SIGINT);
+	uv_signal_init(srv.loop, &sighup);
+	sighup.data = &srv;
+	uv_signal_start(&sighup, on_sighup, SIGHUP);
 	print_endpoints(&srv);
+	warn_if_exposed(&srv);
 	fprintf(stderr, "blobcastd: backend %s, data in %s\n",
 		bc_backend_name(srv.cfg.backend), srv.cfg.data_dir);
 	uv_run(srv.loop, UV_RUN_DEFAULT);
