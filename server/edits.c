@@ -8,6 +8,7 @@
  * edited copy. The render thread's replica follows either way; which tiles
  * an edit damages is decided there (rthread.c), not here.
  */
+#include <inttypes.h>
 #include <string.h>
 
 #include "blobcast/alloc.h"
@@ -15,6 +16,54 @@
 #include "blobcast/log.h"
 #include "blobcast/scene.h"
 #include "server.h"
+
+/* Bytes of the scene encoding (PROTOCOL.md section 8) of one node. */
+#define OP_BYTES 17u
+#define PRIM_BYTES 35u /* without its colour and parameters */
+#define COLOR_BYTES 12u
+/* The most a node takes: a primitive with colour and 8 parameters. */
+#define NODE_MAX_BYTES (PRIM_BYTES + COLOR_BYTES + 4u * 8u)
+/* SCENE_STATE's fields before the scene, the scene's flags, camera and
+ * node count. */
+#define STATE_FIXED_BYTES (16u + 1u + 40u + 4u)
+
+/* Whether t's SCENE_STATE (the session's camera always included) would pass
+ * BC_SRV_MAX_SCENE_BYTES: such a scene could be sent to no member. Counted
+ * by a walk over the nodes when the node count alone does not settle it.
+ * Returns 0, BC_ELIMIT (with the sizes in ei) or BC_ENOMEM. */
+static int check_scene_bytes(const struct bc_tree *t, struct bc_errinfo *ei)
+{
+	struct bc_scene_walk w;
+	struct bc_scene_node n;
+	uint64_t bytes = STATE_FIXED_BYTES;
+	uint32_t nodes = bc_tree_node_count(t);
+	int rc;
+	if (bytes + (uint64_t)nodes * NODE_MAX_BYTES <=
+	    BC_SRV_MAX_SCENE_BYTES) {
+		return 0;
+	}
+	if ((rc = bc_scene_walk_init(&w, t))) {
+		return bc_errinfo_set(ei, rc, "cannot measure the scene");
+	}
+	while (bc_scene_walk_next(&w, &n)) {
+		if (n.is_op) {
+			bytes += OP_BYTES;
+		} else {
+			bytes += PRIM_BYTES +
+			         (n.prim.has_color ? COLOR_BYTES : 0) +
+			         4u * bc_scene_prim_nfloats(n.prim.kind);
+		}
+	}
+	bc_scene_walk_finish(&w);
+	if (bytes > BC_SRV_MAX_SCENE_BYTES) {
+		return bc_errinfo_set(
+		    ei, BC_ELIMIT,
+		    "the scene (%u nodes) would take %" PRIu64
+		    " bytes to send, over the %u a client's queue holds",
+		    nodes, bytes, BC_SRV_MAX_SCENE_BYTES);
+	}
+	return 0;
+}
 
 void bc_handle_scene_load(struct bc_conn *c, const struct bc_msg *m)
 {
@@ -42,6 +91,9 @@ void bc_handle_scene_load(struct bc_conn *c, const struct bc_msg *m)
 	if (bc_tree_node_count(t) > BC_SRV_MAX_NODES) {
 		rc = bc_errinfo_set(&ei, BC_ELIMIT, "more than %u nodes",
 		                    BC_SRV_MAX_NODES);
+		goto fail;
+	}
+	if ((rc = check_scene_bytes(t, &ei))) {
 		goto fail;
 	}
 	if ((rc = bc_tree_copy(copy, t, &ei))) {
@@ -107,6 +159,12 @@ void bc_handle_edit(struct bc_conn *c, const struct bc_msg *m)
 		goto fail;
 	}
 	structural = batch.structural;
+	/* A structural edit can grow the scene past what a member's queue
+	 * holds: undone like an edit that could not be journaled. */
+	if (structural && (rc = check_scene_bytes(s->tree, &ei))) {
+		bc_edit_batch_undo(&batch, &s->tree);
+		goto fail;
+	}
 	/* The journal record is the EDIT payload: sync it before anyone
 	 * hears of the edit. */
 	as_edit.edit = m->edit;

@@ -9,11 +9,16 @@
  * still uses them.
  */
 #include <arpa/inet.h>
+#include <inttypes.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include "blobcast/alloc.h"
 #include "blobcast/log.h"
@@ -85,9 +90,20 @@ static void handle_closed(uv_handle_t *h)
 	if (--c->handles_open > 0) {
 		return;
 	}
+	bool trim = c->queued >= BC_SRV_TRIM_AFTER_BYTES;
 	bc_proto_reader_finish(&c->reader);
 	bc_shared_unref(c->frame_next);
 	bc_free(c);
+	/* The pending writes were cancelled (their buffers freed) before this
+	 * last close callback; glibc keeps freed memory in its arenas unless
+	 * asked to give it back. */
+#if defined(__GLIBC__)
+	if (trim) {
+		malloc_trim(0);
+	}
+#else
+	(void)trim;
+#endif
 }
 
 void bc_conn_close(struct bc_conn *c, const char *why)
@@ -428,15 +444,24 @@ static void on_read(uv_stream_t *s, ssize_t n, const uv_buf_t *buf)
 	if (n == 0) {
 		return;
 	}
+	c->last_read_ms = bc_now_ms(c->srv);
 	rc = bc_proto_reader_feed(&c->reader, buf->base, (size_t)n);
 	while (rc == 0 && !c->closing && !c->draining) {
 		rc = bc_proto_reader_next(&c->reader, &m);
 		if (rc == 1) {
+			c->msg_started_ms = 0;
 			dispatch(c, &m);
 			rc = 0;
 		} else {
 			break;
 		}
+	}
+	/* Bytes left over start a message that must complete within the
+	 * message timeout (check_timeouts), counted from its first byte. */
+	if (bc_proto_reader_pending(&c->reader) == 0) {
+		c->msg_started_ms = 0;
+	} else if (c->msg_started_ms == 0) {
+		c->msg_started_ms = c->last_read_ms;
 	}
 	if (rc < 0 && !c->closing && !c->draining) {
 		/* The stream cannot be resynchronized: say why, then close. */
@@ -471,6 +496,82 @@ static bool is_loopback(uv_tcp_t *tcp)
 		return memcmp(in6->sin6_addr.s6_addr, lo, 16) == 0;
 	}
 	return false;
+}
+
+/* The peer address of a TCP connection as 16 bytes (IPv4 in its v4-mapped
+ * IPv6 form, so both spellings of one host compare equal); false when it
+ * cannot be read. */
+static bool peer_addr16(uv_tcp_t *tcp, uint8_t out[16])
+{
+	struct sockaddr_storage sa;
+	int len = sizeof(sa);
+	if (uv_tcp_getpeername(tcp, (struct sockaddr *)&sa, &len) != 0) {
+		return false;
+	}
+	if (sa.ss_family == AF_INET) {
+		const struct sockaddr_in *in = (const struct sockaddr_in *)&sa;
+		memset(out, 0, 10);
+		out[10] = out[11] = 0xff;
+		memcpy(out + 12, &in->sin_addr.s_addr, 4);
+		return true;
+	}
+	if (sa.ss_family == AF_INET6) {
+		const struct sockaddr_in6 *in6 =
+		    (const struct sockaddr_in6 *)&sa;
+		memcpy(out, in6->sin6_addr.s6_addr, 16);
+		return true;
+	}
+	return false;
+}
+
+/* Whether c's peer already holds BC_SRV_MAX_PREHELLO_PER_ADDR connections
+ * that have not completed HELLO (c, not yet in the table, not counted). */
+static bool prehello_cap_reached(struct bc_srv *srv, struct bc_conn *c)
+{
+	uint8_t mine[16], theirs[16];
+	uint32_t n = 0;
+	if (c->is_tcp && !peer_addr16(&c->h.tcp, mine)) {
+		return false;
+	}
+	for (uint32_t i = 0; i < BC_SRV_MAX_CONNECTIONS; i++) {
+		struct bc_conn *o = srv->clients[i];
+		if (!o || o->closing || o->draining ||
+		    o->stage != BC_PROTO_STAGE_HELLO ||
+		    o->is_tcp != c->is_tcp) {
+			continue;
+		}
+		if (c->is_tcp && (!peer_addr16(&o->h.tcp, theirs) ||
+		                  memcmp(mine, theirs, 16) != 0)) {
+			continue;
+		}
+		if (++n >= BC_SRV_MAX_PREHELLO_PER_ADDR) {
+			return true;
+		}
+	}
+	return false;
+}
+
+/* A warning for refused connections at most once a second: a flood must
+ * not flood the log too. */
+static void warn_refused(struct bc_srv *srv, const char *why)
+{
+	static uint64_t last_ms;
+	static uint32_t suppressed;
+	uint64_t now = bc_now_ms(srv);
+	if (last_ms && now - last_ms < 1000) {
+		suppressed++;
+		return;
+	}
+	if (suppressed) {
+		bc_log(BC_LOG_WARN,
+		       "refusing a connection: %s (and %u more refused in "
+		       "the last second)",
+		       why, suppressed);
+	} else {
+		bc_log(BC_LOG_WARN, "refusing a connection: %s", why);
+	}
+	last_ms = now;
+	suppressed = 0;
 }
 
 static void on_connection(uv_stream_t *server, int status)
@@ -509,12 +610,16 @@ static void on_connection(uv_stream_t *server, int status)
 		slot++;
 	}
 	if (srv->stopping || slot == BC_SRV_MAX_CONNECTIONS ||
-	    (tcp && !c->trusted && srv->cfg.ntokens == 0)) {
-		bc_log(BC_LOG_WARN, "refusing a connection: %s",
-		       srv->stopping ? "shutting down"
-		       : slot == BC_SRV_MAX_CONNECTIONS
-		           ? "too many connections"
-		           : "not loopback and no token configured");
+	    (tcp && !c->trusted && srv->cfg.ntokens == 0) ||
+	    prehello_cap_reached(srv, c)) {
+		warn_refused(srv,
+		             srv->stopping ? "shutting down"
+		             : slot == BC_SRV_MAX_CONNECTIONS
+		                 ? "too many connections"
+		             : (tcp && !c->trusted && srv->cfg.ntokens == 0)
+		                 ? "not loopback and no token configured"
+		                 : "too many connections from one address "
+		                   "without HELLO");
 		c->handles_open = 2;
 		c->closing = true;
 		uv_close(&c->h.handle, handle_closed);
@@ -563,13 +668,43 @@ static int parse_listen(const char *spec, char *host, size_t hostlen, int *port)
 	return 0;
 }
 
+/* After HELLO: a message must complete within the message timeout of its
+ * first byte, and a client in no session may not stay silent past the idle
+ * timeout. (Before HELLO the HELLO timeout covers both.) */
+static void check_timeouts(struct bc_srv *srv, struct bc_conn *c, uint64_t now)
+{
+	uint64_t msg_ms = srv->cfg.message_timeout_ms
+	                      ? srv->cfg.message_timeout_ms
+	                      : BC_SRV_MESSAGE_TIMEOUT_MS;
+	uint64_t idle_ms = srv->cfg.idle_timeout_ms ? srv->cfg.idle_timeout_ms
+	                                            : BC_SRV_IDLE_TIMEOUT_MS;
+	if (c->closing || c->draining || c->stage == BC_PROTO_STAGE_HELLO) {
+		return;
+	}
+	if (c->msg_started_ms && now - c->msg_started_ms > msg_ms) {
+		bc_conn_send_error(c, 0, BC_ETIMEOUT, true,
+		                   "a message did not complete within %" PRIu64
+		                   " ms of its first byte",
+		                   msg_ms);
+		bc_conn_close_after_flush(c, "message timeout");
+	} else if (!c->session && now - c->last_read_ms > idle_ms) {
+		bc_conn_send_error(c, 0, BC_ETIMEOUT, true,
+		                   "idle for %" PRIu64 " ms in no session",
+		                   idle_ms);
+		bc_conn_close_after_flush(c, "idle timeout");
+	}
+}
+
 static void check_stalls(uv_timer_t *t)
 {
 	struct bc_srv *srv = t->data;
 	uint64_t now = bc_now_ms(srv);
 	for (uint32_t i = 0; i < BC_SRV_MAX_CONNECTIONS; i++) {
 		struct bc_conn *c = srv->clients[i];
-		if (c && c->frame_writing &&
+		if (c) {
+			check_timeouts(srv, c, now);
+		}
+		if (c && !c->closing && c->frame_writing &&
 		    now - c->frame_started_ms > BC_SRV_STALL_MS) {
 			bc_log(BC_LOG_WARN,
 			       "dropping client %u (%s): a frame has waited "

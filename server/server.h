@@ -62,6 +62,8 @@ struct bc_srv_config {
 	enum bc_simd simd;
 	bool no_damage; /* edits re-render whole views (for comparison) */
 	uint32_t frame_budget_ms; /* 0: BC_SRV_FRAME_BUDGET_MS */
+	uint32_t message_timeout_ms; /* 0: BC_SRV_MESSAGE_TIMEOUT_MS */
+	uint32_t idle_timeout_ms;    /* 0: BC_SRV_IDLE_TIMEOUT_MS */
 };
 
 /* What a client holds of a view after a frame (set by the render thread,
@@ -122,6 +124,9 @@ struct bc_conn {
 	uint64_t frame_started_ms;
 	struct bc_shared *frame_next;
 	uint32_t frame_no; /* FRAMEs written to this client */
+	/* Timeouts (loop clock, ms): when the first byte of a message still
+	 * incomplete arrived (0: none pending), and when the last bytes did. */
+	uint64_t msg_started_ms, last_read_ms;
 	uint64_t frames_sent, bytes_sent, frames_spoiled;
 	uint64_t first_frame_ms;
 };

@@ -28,11 +28,48 @@
  * finishes one holds a slot only this long. */
 #define BC_SRV_HELLO_TIMEOUT_MS 5000u
 
+/* Time a message may take to arrive once its first byte has (after HELLO):
+ * a client that trickles a message holds its reader buffer (up to a 64 MiB
+ * payload) and its slot. 64 MiB over a 56 kbit/s link would take longer,
+ * but a review client on such a link is not a use case; a slow network
+ * still moves a full SCENE_LOAD well within it. Over it: ERROR ETIMEOUT,
+ * then the connection is closed. Default of the config key
+ * "message_timeout_ms". */
+#define BC_SRV_MESSAGE_TIMEOUT_MS 10000u
+
+/* Time a client that is in no session may stay silent after its HELLO (or
+ * its last message): such a client holds a slot and does nothing with it.
+ * Members of a session are never dropped for idling -- a viewer watches
+ * quietly. Five minutes leave a person time to pick a session by hand.
+ * Default of the config key "idle_timeout_ms". */
+#define BC_SRV_IDLE_TIMEOUT_MS (5u * 60u * 1000u)
+
+/* Connections from one peer address that have not completed HELLO (Unix
+ * socket peers count as one address). Honest clients send HELLO at once,
+ * so a handful suffices even behind a NAT; a flood of silent connections
+ * then fills 16 slots, not all BC_SRV_MAX_CONNECTIONS, and other clients
+ * still get in. Over it a new connection is closed at once. */
+#define BC_SRV_MAX_PREHELLO_PER_ADDR 16u
+
 /* Bytes queued for one client (frames and messages not yet taken by the
  * kernel). Frames are spoiled, so only a client that stopped reading fills
  * this; 32 MiB holds several full-size PNG stills. Over it the client is
  * dropped, with the reason in the log. */
 #define BC_SRV_MAX_CLIENT_QUEUE (32u * 1024u * 1024u)
+
+/* Largest scene, as its SCENE_STATE payload (the scene encoding plus the
+ * 16 bytes before it): every member and joiner is sent the whole scene in
+ * one message, so a scene must fit in a client's output queue, with 1 MiB
+ * left for the messages and the frame queued beside it. A SCENE_LOAD or a
+ * structural EDIT that would pass it is refused (ELIMIT) before anything
+ * is applied or saved. */
+#define BC_SRV_MAX_SCENE_BYTES (BC_SRV_MAX_CLIENT_QUEUE - 1024u * 1024u)
+
+/* A client closed with at least this many bytes still queued had large
+ * frames or scenes in flight: once they are freed the daemon returns its
+ * free heap to the system (malloc_trim), so RSS falls after stalled
+ * members are dropped instead of staying at its peak. */
+#define BC_SRV_TRIM_AFTER_BYTES (4u * 1024u * 1024u)
 
 /* A client whose FRAME has been in the kernel's hands this long without
  * being taken has stopped reading: it is dropped (with the reason in the

@@ -1,0 +1,351 @@
+/*
+ * blobcastd's limits against clients that misbehave: a message trickled a
+ * byte a second times out, a client idle in no session is dropped (session
+ * members are not), a flood of connections that never say HELLO leaves
+ * room for others, a scene too big to send to a member is refused before
+ * anything is applied or saved, and memory held for dropped clients goes
+ * back to the system.
+ */
+#include <arpa/inet.h>
+#include <netinet/in.h>
+
+#include "blobcast/blobtree.h"
+#include "blobcast/scene.h"
+#include "daemon.h"
+#include "srv_limits.h"
+#include "test.h"
+
+static char base_dir[48];
+
+static void make_dir_name(char *out, size_t n, const char *what)
+{
+	snprintf(out, n, "%s/%s", base_dir, what);
+}
+
+static int ping(struct conn *c)
+{
+	struct bc_msg m = {.type = BC_MSG_PING};
+	m.ping.stamp = 7;
+	if (!conn_send(c, &m)) {
+		return -1;
+	}
+	return conn_expect(c, BC_MSG_PONG, 5000) == 1 ? 0 : -1;
+}
+
+/* Waits up to ms for an ERROR on c; returns its code, or 0. */
+static int expect_error(struct conn *c, int ms)
+{
+	if (conn_expect(c, BC_MSG_ERROR, ms) != 1) {
+		return 0;
+	}
+	return c->m.error.code;
+}
+
+static void a_trickled_message_times_out(void)
+{
+	struct daemon d;
+	struct conn slow, member;
+	struct bc_proto_buf b;
+	struct bc_msg m = {.type = BC_MSG_PING};
+	char dir[64];
+	int64_t t0;
+	int code = 0;
+	make_dir_name(dir, sizeof(dir), "trickle");
+	REQUIRE(daemon_start(&d, dir) == 0);
+	REQUIRE(conn_open(&member, &d) == 0);
+	REQUIRE(conn_hello(&member, "member") == 0);
+	REQUIRE(conn_join(&member, "s", BC_PROTO_ROLE_VIEWER, true) == 0);
+	REQUIRE(conn_open(&slow, &d) == 0);
+	REQUIRE(conn_hello(&slow, "slow") == 0);
+	/* A PING (24 bytes) at a byte a second would take 24 s. */
+	m.seq = 1;
+	m.ping.stamp = 1;
+	bc_proto_buf_init(&b, 0);
+	REQUIRE(bc_proto_encode(&b, &m, NULL) == 0);
+	t0 = t_now_ms();
+	for (size_t i = 0; i < b.len && code == 0; i++) {
+		if (send_raw(&slow, b.data + i, 1) != 0) {
+			break;
+		}
+		code = expect_error(&slow, 1000);
+	}
+	bc_proto_buf_finish(&b);
+	CHECK_EQ_INT(code, -BC_ETIMEOUT);
+	CHECK(slow.m.flags & BC_PROTO_FLAG_FATAL);
+	CHECK(t_now_ms() - t0 >= (int64_t)BC_SRV_MESSAGE_TIMEOUT_MS - 1000);
+	printf("  timed out after %lld ms\n", (long long)(t_now_ms() - t0));
+	/* The connection is then closed. */
+	CHECK(conn_recv(&slow, 3000) == -1);
+	/* A member of a session that said nothing meanwhile is still served. */
+	CHECK(ping(&member) == 0);
+	conn_close(&slow);
+	conn_close(&member);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
+static void an_idle_client_in_no_session_is_dropped(void)
+{
+	struct daemon d;
+	struct conn idle, member;
+	char dir[64], cfg[80];
+	const char *extra[] = {"--config", cfg, NULL};
+	FILE *f;
+	int64_t t0;
+	make_dir_name(dir, sizeof(dir), "idle");
+	make_dir_name(cfg, sizeof(cfg), "idle.json");
+	f = fopen(cfg, "w");
+	REQUIRE(f);
+	fprintf(f, "{\"idle_timeout_ms\": 2000}\n");
+	fclose(f);
+	if (daemon_start_with(&d, dir, extra) != 0) {
+		daemon_stop(&d, SIGKILL);
+		BC_SKIP("this blobcastd does not read idle_timeout_ms");
+	}
+	REQUIRE(conn_open(&member, &d) == 0);
+	REQUIRE(conn_hello(&member, "member") == 0);
+	REQUIRE(conn_join(&member, "s", BC_PROTO_ROLE_VIEWER, true) == 0);
+	REQUIRE(conn_open(&idle, &d) == 0);
+	REQUIRE(conn_hello(&idle, "idle") == 0);
+	t0 = t_now_ms();
+	CHECK_EQ_INT(expect_error(&idle, 6000), -BC_ETIMEOUT);
+	CHECK(t_now_ms() - t0 >= 1500);
+	CHECK(conn_recv(&idle, 3000) == -1);
+	/* The member was as silent for as long, and stays. */
+	CHECK(ping(&member) == 0);
+	conn_close(&idle);
+	conn_close(&member);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
+/* Starts the daemon listening on 127.0.0.1 at a free port too, and returns
+ * that port (0 on failure): its stderr goes to a file for the address. */
+static int daemon_start_tcp(struct daemon *d, const char *dir)
+{
+	const char *extra[] = {"--listen", "127.0.0.1:0", NULL};
+	char log[80], line[256];
+	int saved = dup(2), fd, port = 0;
+	const char *verbose = getenv("BLOBCAST_TEST_VERBOSE");
+	FILE *f;
+	snprintf(log, sizeof(log), "%s.stderr", dir);
+	fd = open(log, O_WRONLY | O_CREAT | O_TRUNC, 0600);
+	if (fd < 0 || saved < 0) {
+		return 0;
+	}
+	fflush(stderr);
+	dup2(fd, 2);
+	close(fd);
+	if (!verbose) {
+		setenv("BLOBCAST_TEST_VERBOSE", "1", 1);
+	}
+	fd = daemon_start_with(d, dir, extra);
+	if (!verbose) {
+		unsetenv("BLOBCAST_TEST_VERBOSE");
+	}
+	dup2(saved, 2);
+	close(saved);
+	if (fd != 0 || !(f = fopen(log, "r"))) {
+		return 0;
+	}
+	while (fgets(line, sizeof(line), f)) {
+		const char *p =
+		    strstr(line, "blobcastd: listening on 127.0.0.1:");
+		if (p) {
+			port = atoi(p + strlen("blobcastd: listening on "
+			                       "127.0.0.1:"));
+			break;
+		}
+	}
+	fclose(f);
+	return port;
+}
+
+/* A TCP connection from source address from (127.x.y.z) to port. */
+static int tcp_connect(const char *from, int port)
+{
+	struct sockaddr_in src = {.sin_family = AF_INET};
+	struct sockaddr_in dst = {.sin_family = AF_INET};
+	int fd = socket(AF_INET, SOCK_STREAM, 0);
+	inet_pton(AF_INET, from, &src.sin_addr);
+	inet_pton(AF_INET, "127.0.0.1", &dst.sin_addr);
+	dst.sin_port = htons((uint16_t)port);
+	if (fd < 0 || bind(fd, (struct sockaddr *)&src, sizeof(src)) != 0 ||
+	    connect(fd, (struct sockaddr *)&dst, sizeof(dst)) != 0) {
+		if (fd >= 0) {
+			close(fd);
+		}
+		return -1;
+	}
+	return fd;
+}
+
+static void a_connection_flood_leaves_room_for_others(void)
+{
+	enum { FLOOD = 300 };
+	static int fds[FLOOD];
+	struct daemon d;
+	struct conn good;
+	char dir[64];
+	int port, opened = 0, still_open = 0;
+	int64_t t0;
+	make_dir_name(dir, sizeof(dir), "flood");
+	port = daemon_start_tcp(&d, dir);
+	REQUIRE(port > 0);
+	/* More silent connections than the daemon has slots, from one
+	 * address. */
+	for (int i = 0; i < FLOOD; i++) {
+		fds[i] = tcp_connect("127.0.0.1", port);
+		opened += fds[i] >= 0;
+	}
+	CHECK(opened > 0);
+	t_sleep_ms(500);
+	/* Those over the per-address cap were closed at once. */
+	for (int i = 0; i < FLOOD; i++) {
+		struct pollfd pfd = {.fd = fds[i], .events = POLLIN};
+		if (fds[i] >= 0 &&
+		    !(poll(&pfd, 1, 0) == 1 &&
+		      (pfd.revents & (POLLIN | POLLHUP | POLLERR)))) {
+			still_open++;
+		}
+	}
+	printf("  %d of %d silent connections held\n", still_open, opened);
+	CHECK(still_open <= 16);
+	/* A client from another address gets in and through HELLO at once. */
+	memset(&good, 0, sizeof(good));
+	t0 = t_now_ms();
+	good.fd = tcp_connect("127.0.0.2", port);
+	REQUIRE(good.fd >= 0);
+	bc_proto_reader_init(&good.r, &(struct bc_proto_reader_opts){
+	                                  .side = BC_PROTO_SIDE_CLIENT});
+	CHECK(conn_hello(&good, "good") == 0);
+	CHECK(t_now_ms() - t0 < 2000);
+	conn_close(&good);
+	/* So does one over the Unix socket. */
+	REQUIRE(conn_open(&good, &d) == 0);
+	CHECK(conn_hello(&good, "local") == 0);
+	conn_close(&good);
+	for (int i = 0; i < FLOOD; i++) {
+		if (fds[i] >= 0) {
+			close(fds[i]);
+		}
+	}
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
+/* A flat union of n spheres, as a scene encoding; ids from first, or all 0
+ * (the server assigns them) when first is 0. */
+static struct bc_proto_buf big_scene(uint32_t n, bool camera, uint32_t first)
+{
+	static const float cam[10] = {0, 0, 5, 0, 0, 0, 0, 1, 0, 45};
+	static const float t[3] = {0, 0, 0}, q[4] = {0, 0, 0, 1};
+	struct bc_proto_buf b;
+	bc_proto_buf_init(&b, 0);
+	bc_proto_scene_begin(&b, camera ? cam : NULL, n + 1);
+	bc_proto_scene_op(&b, BC_OP_UNION, first, 0, 0, n);
+	for (uint32_t i = 0; i < n; i++) {
+		float r = 0.5f + (float)(i % 100) * 0.001f;
+		bc_proto_scene_prim(&b, BC_PRIM_SPHERE,
+		                    first ? first + 1 + i : 0, t, q, NULL, 1,
+		                    &r);
+	}
+	return b;
+}
+
+static void a_scene_too_big_to_send_is_refused(void)
+{
+	struct daemon d;
+	struct conn a, joiner;
+	struct bc_proto_buf b;
+	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
+	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_REPLACE};
+	struct bc_tree *t;
+	char dir[64];
+	uint64_t order;
+	/* 39 bytes a sphere: just over the limit, under the wire's 64 MiB. */
+	uint32_t n = BC_SRV_MAX_SCENE_BYTES / 39u + 1000u;
+	make_dir_name(dir, sizeof(dir), "bigscene");
+	REQUIRE(daemon_start(&d, dir) == 0);
+	REQUIRE(conn_open(&a, &d) == 0);
+	REQUIRE(conn_hello(&a, "author") == 0);
+	REQUIRE(conn_join(&a, "s", BC_PROTO_ROLE_EDITOR, true) == 0);
+	REQUIRE(conn_expect(&a, BC_MSG_SCENE_STATE, 5000) == 1);
+	order = a.m.scene_state.order;
+	t = scene_of(&a);
+	REQUIRE(t);
+	op.node = bc_tree_lin(t)->node_id[0];
+	bc_tree_destroy(t);
+
+	b = big_scene(n, true, 0);
+	REQUIRE(b.len > BC_SRV_MAX_SCENE_BYTES && b.len < BC_PROTO_MAX_PAYLOAD);
+	m.scene_load.scene.ptr = b.data;
+	m.scene_load.scene.len = (uint32_t)b.len;
+	REQUIRE(conn_send(&a, &m));
+	CHECK_EQ_INT(expect_error(&a, 60000), -BC_ELIMIT);
+	printf("  %.*s\n", (int)a.m.error.text.len, a.m.error.text.ptr);
+	bc_proto_buf_finish(&b);
+
+	/* A structural edit that would grow the scene as far. */
+	b = big_scene(n, false, 1u << 24);
+	op.subtree.ptr = b.data;
+	op.subtree.len = (uint32_t)b.len;
+	memset(&m, 0, sizeof(m));
+	m.type = BC_MSG_EDIT;
+	m.edit.nops = 1;
+	m.edit.ops = &op;
+	REQUIRE(conn_send(&a, &m));
+	CHECK_EQ_INT(expect_error(&a, 60000), -BC_ELIMIT);
+	bc_proto_buf_finish(&b);
+
+	/* The author is still served; a joiner gets the unchanged scene, also
+	 * after a restart. */
+	CHECK(ping(&a) == 0);
+	for (int round = 0; round < 2; round++) {
+		REQUIRE(conn_open(&joiner, &d) == 0);
+		REQUIRE(conn_hello(&joiner, "joiner") == 0);
+		REQUIRE(conn_join(&joiner, "s", BC_PROTO_ROLE_VIEWER, false) ==
+		        0);
+		REQUIRE(conn_expect(&joiner, BC_MSG_SCENE_STATE, 5000) == 1);
+		CHECK_EQ_INT(joiner.m.scene_state.order, order);
+		CHECK(ping(&joiner) == 0);
+		conn_close(&joiner);
+		if (round == 0) {
+			conn_close(&a);
+			CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+			REQUIRE(daemon_start(&d, dir) == 0);
+		}
+	}
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
+static void setup(void)
+{
+	(void)conn_view;
+	(void)conn_move;
+	snprintf(base_dir, sizeof(base_dir), "/tmp/bc-limits-test-%d",
+	         (int)getpid());
+	mkdir(base_dir, 0700);
+}
+
+static const struct bc_test tests[] = {
+    {"a_trickled_message_times_out", a_trickled_message_times_out},
+    {"an_idle_client_in_no_session_is_dropped",
+     an_idle_client_in_no_session_is_dropped},
+    {"a_connection_flood_leaves_room_for_others",
+     a_connection_flood_leaves_room_for_others},
+    {"a_scene_too_big_to_send_is_refused", a_scene_too_big_to_send_is_refused},
+};
+
+int main(int argc, char **argv)
+{
+	int rc;
+	signal(SIGPIPE, SIG_IGN);
+	setup();
+	rc = bc_test_run(tests, sizeof(tests) / sizeof(tests[0]), argc, argv);
+	if (rc == 0) {
+		char cmd[256];
+		snprintf(cmd, sizeof(cmd), "rm -rf %s", base_dir);
+		if (system(cmd) != 0) {
+			fprintf(stderr, "could not remove %s\n", base_dir);
+		}
+	}
+	return rc;
+}
