@@ -139,6 +139,25 @@ static int load_config(struct bc_srv_config *cfg, const char *path,
 			}
 			continue;
 		}
+		if (strcmp(key, "message_timeout_ms") == 0 ||
+		    strcmp(key, "idle_timeout_ms") == 0) {
+			json_int_t ms = json_is_integer(val)
+						? json_integer_value(val)
+						: -1;
+			if (ms < 0 || ms > 86400000) {
+				rc = bc_errinfo_set(ei, BC_EPARSE,
+						    "%s: %s: expected "
+						    "milliseconds (0..86400000)",
+						    path, key);
+				goto out;
+			}
+			if (key[0] == 'm') {
+				cfg->message_timeout_ms = (uint32_t)ms;
+			} else {
+				cfg->idle_timeout_ms = (uint32_t)ms;
+			}
+			continue;
+		}
 		if (!json_is_string(val)) {
 			rc = bc_errinfo_set(ei, BC_EPARSE,
 					    "%s: %s: expected a string", path,

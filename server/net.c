@@ -22,6 +22,7 @@
 
 #include "blobcast/alloc.h"
 #include "blobcast/log.h"
+#include "addr.h"
 #include "server.h"
 
 /* Reads land in a buffer of this size before being fed to the reader. */
@@ -485,17 +486,9 @@ static bool is_loopback(uv_tcp_t *tcp)
 	if (uv_tcp_getpeername(tcp, (struct sockaddr *)&sa, &len) != 0) {
 		return false;
 	}
-	if (sa.ss_family == AF_INET) {
-		const struct sockaddr_in *in = (const struct sockaddr_in *)&sa;
-		return (ntohl(in->sin_addr.s_addr) >> 24) == 127;
-	}
-	if (sa.ss_family == AF_INET6) {
-		const struct sockaddr_in6 *in6 =
-		    (const struct sockaddr_in6 *)&sa;
-		static const uint8_t lo[16] = {[15] = 1};
-		return memcmp(in6->sin6_addr.s6_addr, lo, 16) == 0;
-	}
-	return false;
+	/* 127/8, ::1 and v4-mapped ::ffff:127/104 (a [::] listener sees
+	 * IPv4 loopback clients in that form). */
+	return bc_addr_is_loopback((const struct sockaddr *)&sa);
 }
 
 /* The peer address of a TCP connection as 16 bytes (IPv4 in its v4-mapped
@@ -655,6 +648,11 @@ static int parse_listen(const char *spec, char *host, size_t hostlen, int *port)
 		return BC_EINVAL;
 	}
 	n = (size_t)(colon - spec);
+	if (n >= 2 && spec[0] == '[' && spec[n - 1] == ']') {
+		/* [::]:7878, the usual spelling of an IPv6 host with a port */
+		spec++;
+		n -= 2;
+	}
 	if (n == 0 || n >= hostlen) {
 		return BC_EINVAL;
 	}
