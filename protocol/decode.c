@@ -556,6 +556,9 @@ static int dec_frame(struct dec *d, struct bc_msg_frame *f)
 	/* A snapshot and a refinement frame are one rectangle that is the
 	 * whole image. */
 	bool whole = snap || level > 0;
+	/* A snapshot's colour rectangle is followed by one per plane asked
+	 * (the header rule keeps DEPTH and IDS on snapshots). */
+	unsigned nwhole = 1u + bc_proto_flags_nplanes(d->m->flags);
 	TRY(rd_u32(d, "frame_no", &f->frame_no));
 	TRY(rd_u64(d, "order", &f->order));
 	TRY(rd_u32(d, "camera_seq", &f->camera_seq));
@@ -574,8 +577,8 @@ static int dec_frame(struct dec *d, struct bc_msg_frame *f)
 	TRY(rd_u16_range(d, "image_height", full || level > 0 ? ih : 1, ih,
 	                 &f->image_height));
 	TRY(rd_u16(d, "rect_count", &f->nrects));
-	TRY(check_count(d, "rect_count", f->nrects, 1,
-	                whole ? 1u : BC_PROTO_MAX_RECTS, RECT_MIN));
+	TRY(check_count(d, "rect_count", f->nrects, snap ? nwhole : 1u,
+	                whole ? nwhole : BC_PROTO_MAX_RECTS, RECT_MIN));
 	struct bc_proto_rect *out = NULL;
 	if (d->store) {
 		TRY(reserve(d, (void **)&d->store->rects, &d->store->rects_cap,
@@ -607,9 +610,14 @@ static int dec_frame(struct dec *d, struct bc_msg_frame *f)
 		uint32_t n;
 		TRY(rd_u32(d, "rect.length", &n));
 		uint64_t raw = (uint64_t)r.w * r.h * 4u;
-		if (n == 0 || (f->encoding == BC_PROTO_ENC_RAW && n != raw)) {
+		/* A plane (every rectangle after a snapshot's first) is 4
+		 * bytes a pixel whatever the colour's encoding. */
+		bool plane = snap && i > 0;
+		bool exact = f->encoding == BC_PROTO_ENC_RAW || plane;
+		if (n == 0 || (exact && n != raw)) {
 			return fail(d, BC_EPROTO_LENGTH,
-			            "rect %u: length %u (raw needs %llu)", i, n,
+			            "rect %u: length %u (%s needs %llu)", i, n,
+			            plane ? "a plane" : "raw",
 			            (unsigned long long)raw);
 		}
 		if (n > bc__cur_left(&d->c)) {
@@ -719,6 +727,22 @@ static int dec_body(struct dec *d, struct bc_msg *m)
 		TRY(rd_encoding(d, "encoding", &m->snapshot.encoding));
 		if (m->snapshot.encoding == BC_PROTO_ENC_JPEG) {
 			return fail(d, BC_EENUM, "a snapshot cannot be JPEG");
+		}
+		/* planes is optional: a colour-only SNAPSHOT may stop here. */
+		m->snapshot.planes = 0;
+		if (bc__cur_left(&d->c) == 0) {
+			return 0;
+		}
+		TRY(rd_u8(d, "planes", &m->snapshot.planes));
+		if (m->snapshot.planes & ~BC_PROTO_PLANES_ALL) {
+			return fail(d, BC_EPROTO_FLAGS,
+			            "planes 0x%02x has undefined bits",
+			            (unsigned)m->snapshot.planes);
+		}
+		/* Colour only leaves the byte out: one encoding per
+		 * SNAPSHOT. */
+		if (m->snapshot.planes == 0) {
+			return fail(d, BC_ERANGE, "planes 0 (leave it out)");
 		}
 		return 0;
 	}

@@ -274,6 +274,10 @@ static void w_body(struct bc__w *w, const struct bc_msg *m)
 	case BC_MSG_SNAPSHOT:
 		w_enum(w, "encoding", (int)m->snapshot.encoding,
 		       BC_PROTO_ENC_COUNT);
+		/* Left out when 0: the one-byte SNAPSHOT of colour only. */
+		if (m->snapshot.planes != 0) {
+			bc__put_u8(w, m->snapshot.planes);
+		}
 		break;
 	case BC_MSG_STATS: {
 		const struct bc_msg_stats *s = &m->stats;

@@ -47,11 +47,12 @@ static const struct bc__type_info types[BC_MSG_COUNT] = {
     [BC_MSG_VIEW] = {"VIEW", BC__FROM_CLIENT, 0, 8},
     [BC_MSG_FRAME] = {"FRAME", BC__FROM_SERVER,
                       BC_PROTO_FLAG_STILL | BC_PROTO_FLAG_SNAPSHOT |
-                          BC_PROTO_FLAG_INCOMPLETE | BC_PROTO_FLAG_LEVEL_MASK,
+                          BC_PROTO_FLAG_INCOMPLETE | BC_PROTO_FLAG_LEVEL_MASK |
+                          BC_PROTO_FLAG_DEPTH | BC_PROTO_FLAG_IDS,
                       BULK},
     [BC_MSG_PICK] = {"PICK", BC__FROM_CLIENT, 0, 4},
     [BC_MSG_PICK_RESULT] = {"PICK_RESULT", BC__FROM_SERVER, 0, 24},
-    [BC_MSG_SNAPSHOT] = {"SNAPSHOT", BC__FROM_CLIENT, 0, 1},
+    [BC_MSG_SNAPSHOT] = {"SNAPSHOT", BC__FROM_CLIENT, 0, 2},
     [BC_MSG_GET_STATS] = {"GET_STATS", BC__FROM_CLIENT, 0, 0},
     [BC_MSG_STATS] = {"STATS", BC__FROM_SERVER, 0, 64},
 };
@@ -82,6 +83,14 @@ int bc__check_flags(const struct bc__type_info *t, uint16_t flags,
 		    ei, BC_EPROTO_FLAGS, "%s at level %u with %s", t->name,
 		    level,
 		    (flags & BC_PROTO_FLAG_SNAPSHOT) ? "SNAPSHOT" : "STILL");
+	}
+	/* The depth and id planes answer a SNAPSHOT only. Only FRAME
+	 * defines them. */
+	if ((flags & (BC_PROTO_FLAG_DEPTH | BC_PROTO_FLAG_IDS)) &&
+	    !(flags & BC_PROTO_FLAG_SNAPSHOT)) {
+		return bc_errinfo_set(
+		    ei, BC_EPROTO_FLAGS, "%s with %s but not SNAPSHOT", t->name,
+		    (flags & BC_PROTO_FLAG_DEPTH) ? "DEPTH" : "IDS");
 	}
 	return 0;
 }

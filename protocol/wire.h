@@ -182,7 +182,8 @@ struct bc__type_info {
 const struct bc__type_info *bc__type_info(unsigned type);
 
 /* The header flag rule (PROTOCOL.md 3.1 step 5) for t's row: bits the type
- * does not define, and on FRAME a level above 0 with STILL or SNAPSHOT.
+ * does not define, on FRAME a level above 0 with STILL or SNAPSHOT, and
+ * DEPTH or IDS without SNAPSHOT.
  * Returns 0 or BC_EPROTO_FLAGS with the reason in ei. */
 int bc__check_flags(const struct bc__type_info *t, uint16_t flags,
                     struct bc_errinfo *ei);

@@ -309,5 +309,6 @@ void bc_handle_snapshot(struct bc_conn *c, const struct bc_msg *m)
 	job->order = c->session->order;
 	job->frame_no = ++c->srv->frame_no;
 	job->snapshot_seq = m->seq;
+	job->snapshot_planes = m->snapshot.planes;
 	bc_rthread_job(c->srv, job);
 }

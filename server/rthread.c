@@ -113,12 +113,42 @@ static void pick(struct replica *rp, struct bc_rjob *job, struct rresult *res)
 	}
 }
 
+/* A snapshot's depth (f32, +inf on a miss) or id (u32, 0 on a miss) plane
+ * of v's level-0 frame as the wire carries it: 4 bytes a pixel,
+ * little-endian whatever the host's order (PROTOCOL.md 7.17). Returns a
+ * bc_malloc'ed buffer of width * height * 4 bytes, or NULL. */
+static uint8_t *plane_bytes(const struct view *v, bool depth)
+{
+	size_t n = (size_t)v->width * v->height;
+	uint8_t *out = bc_malloc(n * 4u);
+	if (!out) {
+		return NULL;
+	}
+	for (size_t i = 0; i < n; i++) {
+		uint32_t u;
+		if (depth) {
+			memcpy(&u, &v->frame.depth[i], sizeof(u));
+		} else {
+			u = v->frame.ids[i];
+		}
+		out[4u * i] = (uint8_t)u;
+		out[4u * i + 1u] = (uint8_t)(u >> 8);
+		out[4u * i + 2u] = (uint8_t)(u >> 16);
+		out[4u * i + 3u] = (uint8_t)(u >> 24);
+	}
+	return out;
+}
+
 static void run_job(struct bc_rthread *rt, struct bc_rjob *job,
                     struct rresult *res)
 {
 	struct replica *rp = replica_of(rt, job->session_id, false);
 	struct bc_errinfo ei = {0};
 	struct bc_proto_rect whole, *rects = &whole;
+	/* A snapshot's colour rectangle and its planes (PROTOCOL.md 7.17). */
+	struct bc_proto_rect snap[3];
+	uint8_t *planes[2] = {NULL, NULL};
+	uint32_t nplanes = 0;
 	struct bc_encoded *enc = NULL;
 	struct bc_msg m = {.type = BC_MSG_FRAME};
 	struct bc_proto_buf b;
@@ -223,6 +253,39 @@ static void run_job(struct bc_rthread *rt, struct bc_rjob *job,
 		rects[i].data.len = (uint32_t)enc[i].len;
 	}
 	m.flags = bc_proto_flags_with_level(0, (unsigned)v->level);
+	m.frame.nrects = (uint16_t)nrects;
+	m.frame.rects = rects;
+	if (job->snapshot_seq && v->level == 0) {
+		/* The planes of the whole view at level 0, as its colour:
+		 * depth first, then ids. */
+		static const struct {
+			uint8_t plane;
+			uint16_t flag;
+		} kinds[2] = {{BC_PROTO_PLANE_DEPTH, BC_PROTO_FLAG_DEPTH},
+		              {BC_PROTO_PLANE_IDS, BC_PROTO_FLAG_IDS}};
+		snap[0] = rects[0];
+		for (uint32_t k = 0; k < 2; k++) {
+			if (!(job->snapshot_planes & kinds[k].plane)) {
+				continue;
+			}
+			if (!(planes[nplanes] = plane_bytes(v, k == 0))) {
+				bc_errinfo_set(&ei, BC_ENOMEM,
+				               "no memory for a %ux%u plane",
+				               v->width, v->height);
+				goto fail;
+			}
+			snap[1 + nplanes] = (struct bc_proto_rect){
+			    0,
+			    0,
+			    (uint16_t)iw,
+			    (uint16_t)ih,
+			    {planes[nplanes], (uint32_t)iw * ih * 4u}};
+			m.flags |= kinds[k].flag;
+			nplanes++;
+		}
+		m.frame.nrects = (uint16_t)(1u + nplanes);
+		m.frame.rects = snap;
+	}
 	if (job->snapshot_seq) {
 		m.flags |= BC_PROTO_FLAG_SNAPSHOT | BC_PROTO_FLAG_STILL;
 	} else if (lossless) {
@@ -246,8 +309,6 @@ static void run_job(struct bc_rthread *rt, struct bc_rjob *job,
 	m.frame.height = (uint16_t)job->height;
 	m.frame.image_width = (uint16_t)iw;
 	m.frame.image_height = (uint16_t)ih;
-	m.frame.nrects = (uint16_t)nrects;
-	m.frame.rects = rects;
 	/* Encoded up to the protocol's limit: each target's own
 	 * max_frame_bytes is checked when it is delivered (a frame over it is
 	 * answered ERROR ELIMIT, PROTOCOL.md 7.15). */
@@ -281,6 +342,8 @@ static void run_job(struct bc_rthread *rt, struct bc_rjob *job,
 		rects[i].data.ptr = NULL;
 	}
 	bc_free(enc);
+	bc_free(planes[0]);
+	bc_free(planes[1]);
 	push_result(rt, res);
 	return;
 fail:
@@ -294,6 +357,8 @@ fail:
 		}
 		bc_free(enc);
 	}
+	bc_free(planes[0]);
+	bc_free(planes[1]);
 	push_result(rt, res);
 }
 

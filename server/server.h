@@ -259,6 +259,7 @@ struct bc_rjob {
 	uint64_t order;
 	uint32_t frame_no;
 	uint32_t snapshot_seq; /* != 0: answer to a SNAPSHOT */
+	uint8_t snapshot_planes; /* its BC_PROTO_PLANE_* bits */
 	struct bc_conn_ref *targets;
 	uint32_t ntargets;
 	/* PICK: answer one ray instead of a frame. */

@@ -61,12 +61,13 @@ enum {
 	O_ENCODING = 1u << 11,
 	O_INTERACTING = 1u << 12,
 	O_DOWNSCALE = 1u << 13,
+	O_IDS = 1u << 14,
 };
 #define O_CAMERA (O_EYE | O_TARGET | O_UP | O_FOV)
 
 struct args {
 	const char *cmd;
-	const char *server, *token, *name, *session, *out, *depth;
+	const char *server, *token, *name, *session, *out, *depth, *ids;
 	int timeout_ms;
 	uint16_t width, height;
 	bool has_size;
@@ -472,15 +473,26 @@ static int run_snapshot(struct args *a)
 	struct bc_camera cam;
 	uint32_t seq;
 	int status;
-	if (a->depth) {
-		fprintf(stderr,
-		        "blobcast snapshot: --depth is not supported by the "
-		        "server protocol yet (FRAME carries colour only)\n");
-		return EXIT_USAGE;
-	}
+	unsigned planes = (a->depth ? BC_PROTO_PLANE_DEPTH : 0u) |
+	                  (a->ids ? BC_PROTO_PLANE_IDS : 0u);
 	if (!a->has_size || !a->out) {
 		fprintf(stderr, "blobcast snapshot: --size and --out are "
 		                "required (see blobcast snapshot --help)\n");
+		return EXIT_USAGE;
+	}
+	if (a->depth && !bc_image_ext_supports(a->depth, BC_IMAGE_F32)) {
+		fprintf(
+		    stderr,
+		    "blobcast snapshot: --depth \"%s\": depth needs a float "
+		    "format: .exr, .tif or .pfm\n",
+		    a->depth);
+		return EXIT_USAGE;
+	}
+	if (a->ids && !bc_image_ext_supports(a->ids, BC_IMAGE_U32)) {
+		fprintf(stderr,
+		        "blobcast snapshot: --ids \"%s\": ids need a uint32 "
+		        "format: .tif or .exr\n",
+		        a->ids);
 		return EXIT_USAGE;
 	}
 	if (!bc_image_ext_supports(a->out, BC_IMAGE_U8)) {
@@ -519,7 +531,7 @@ static int run_snapshot(struct args *a)
 	                                         .quality_interactive = 30,
 	                                         .quality_still = 30},
 	                   &seq, &ei) ||
-	    bc_client_snapshot(c, BC_PROTO_ENC_PNG, &img, &ei)) {
+	    bc_client_snapshot_planes(c, BC_PROTO_ENC_PNG, planes, &img, &ei)) {
 		status = failed(a, "snapshot", &ei);
 		goto out;
 	}
@@ -542,7 +554,11 @@ static int run_snapshot(struct args *a)
 		goto out;
 	}
 	if (bc_image_write_rgba8(a->out, img.width, img.height, img.rgba,
-	                         &ei)) {
+	                         &ei) ||
+	    (a->depth && bc_image_write_float(a->depth, img.width, img.height,
+	                                      img.depth, &ei)) ||
+	    (a->ids &&
+	     bc_image_write_u32(a->ids, img.width, img.height, img.ids, &ei))) {
 		fprintf(stderr, "blobcast snapshot: %s\n", ei.msg);
 		status = EXIT_FAIL;
 		goto out;
@@ -990,15 +1006,21 @@ static const struct cmd cmds[] = {
      "replaced (a warning says so). --up and --fov default to the\n"
      "session's current values.\n",
      run_camera},
-    {"snapshot", O_SESSION | O_SIZE | O_OUT | O_DEPTH | O_CAMERA, 0, 0,
-     "--session NAME --size WxH --out IMG [--depth IMG]",
+    {"snapshot", O_SESSION | O_SIZE | O_OUT | O_DEPTH | O_IDS | O_CAMERA, 0, 0,
+     "--session NAME --size WxH --out IMG [--depth IMG] [--ids IMG]",
      "save a lossless still of a session to an image file",
      "Asks the server for a lossless (PNG) still of session NAME at WxH\n"
      "and writes it to IMG (any format OpenImageIO writes, by extension;\n"
      ".jpg is lossy). The camera is the session's, or the one given by\n"
      "--eye/--target/--up/--fov (for this picture only).\n"
-     "  --depth IMG     not supported by the server protocol yet: FRAME\n"
-     "                  carries colour only (exits with status 2)\n",
+     "  --depth IMG     also write the ray distance per pixel as one\n"
+     "                  float channel (+inf where nothing is hit; .exr,\n"
+     "                  .tif or .pfm)\n"
+     "  --ids IMG       also write the node id of the primitive seen per\n"
+     "                  pixel as one uint32 channel (0 where nothing is\n"
+     "                  hit; .tif or .exr)\n"
+     "Depth and ids come from the same render as the colour, sent\n"
+     "losslessly by the server.\n",
      run_snapshot},
     {"watch", O_SESSION | O_SIZE | O_FRAMES | O_ENCODING | O_DOWNSCALE, 0, 0,
      "--session NAME [--frames N] [--size WxH]",
@@ -1113,6 +1135,10 @@ static int parse_option(const struct cmd *k, int argc, char **argv, int *i,
 		need = O_DEPTH;
 		ok = v && *v;
 		a->depth = v;
+	} else if (take_value(argc, argv, i, "--ids", &v)) {
+		need = O_IDS;
+		ok = v && *v;
+		a->ids = v;
 	} else if (take_value(argc, argv, i, "--eye", &v)) {
 		need = O_EYE;
 		ok = v && parse_vec3(v, a->cam.eye);

@@ -990,6 +990,14 @@ int bc_client_wait_applied(struct bc_client *c, uint32_t seq, uint64_t *order,
 int bc_client_snapshot(struct bc_client *c, enum bc_proto_encoding encoding,
 		       struct bc_client_image *out, struct bc_errinfo *ei)
 {
+	return bc_client_snapshot_planes(c, encoding, 0, out, ei);
+}
+
+int bc_client_snapshot_planes(struct bc_client *c,
+                              enum bc_proto_encoding encoding, unsigned planes,
+                              struct bc_client_image *out,
+                              struct bc_errinfo *ei)
+{
 	struct bc_msg m = {.type = BC_MSG_SNAPSHOT};
 	uint32_t seq;
 	int rc;
@@ -1000,7 +1008,11 @@ int bc_client_snapshot(struct bc_client *c, enum bc_proto_encoding encoding,
 		return bc_errinfo_set(ei, BC_EINVAL,
 				      "snapshots are PNG or raw");
 	}
+	if (planes & ~BC_PROTO_PLANES_ALL) {
+		return bc_errinfo_set(ei, BC_EINVAL, "planes 0x%x", planes);
+	}
 	m.snapshot.encoding = encoding;
+	m.snapshot.planes = (uint8_t)planes;
 	if ((rc = send_or_say(c, &m, &seq, ei))) {
 		return rc;
 	}
@@ -1016,5 +1028,13 @@ int bc_client_snapshot(struct bc_client *c, enum bc_proto_encoding encoding,
 	 * the image held. */
 	bc_client_image_finish(out);
 	bc_client_image_init(out);
-	return bc_client_image_apply(out, &m, ei);
+	if ((rc = bc_client_image_apply(out, &m, ei))) {
+		return rc;
+	}
+	if (((planes & BC_PROTO_PLANE_DEPTH) && !out->depth) ||
+	    ((planes & BC_PROTO_PLANE_IDS) && !out->ids)) {
+		return bc_errinfo_set(ei, BC_EIO,
+		                      "the snapshot lacks a plane asked for");
+	}
+	return 0;
 }

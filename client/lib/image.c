@@ -30,6 +30,8 @@ void bc_client_image_finish(struct bc_client_image *img)
 	}
 	bc_free(img->rgba);
 	bc_free(img->seen);
+	bc_free(img->depth);
+	bc_free(img->ids);
 	memset(img, 0, sizeof(*img));
 }
 
@@ -247,6 +249,29 @@ out:
 /* ---- frames ----------------------------------------------------------------
  */
 
+/* Reads the plane rectangle r (4 little-endian bytes a pixel covering the
+ * w x h image) into a new array: f32 when depth, else u32. */
+static void *read_plane(const struct bc_proto_rect *r, uint32_t w, uint32_t h,
+                        bool depth)
+{
+	size_t n = (size_t)w * h;
+	uint32_t *out = bc_malloc(n * 4u);
+	if (!out) {
+		return NULL;
+	}
+	for (size_t k = 0; k < n; k++) {
+		const uint8_t *p = r->data.ptr + 4u * k;
+		uint32_t u = (uint32_t)p[0] | (uint32_t)p[1] << 8 |
+		             (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+		if (depth) {
+			memcpy((float *)(void *)out + k, &u, sizeof(u));
+		} else {
+			out[k] = u;
+		}
+	}
+	return out;
+}
+
 /* Gives img the size of frame f: a new size is a new, empty picture. */
 static int fit(struct bc_client_image *img, const struct bc_msg_frame *f,
                struct bc_errinfo *ei)
@@ -280,10 +305,23 @@ int bc_client_image_apply(struct bc_client_image *img, const struct bc_msg *m,
                           struct bc_errinfo *ei)
 {
 	const struct bc_msg_frame *f = &m->frame;
+	/* A snapshot's planes follow its colour rectangle (PROTOCOL.md
+	 * 7.15); the colour is the rectangles before them. */
+	uint32_t nplanes, ncolour;
+	void *plane[2] = {NULL, NULL};
 	int rc;
 	if (m->type != BC_MSG_FRAME) {
 		return bc_errinfo_set(ei, BC_EINVAL, "not a FRAME");
 	}
+	nplanes = (m->flags & BC_PROTO_FLAG_SNAPSHOT)
+	              ? bc_proto_flags_nplanes(m->flags)
+	              : 0u;
+	if (f->nrects <= nplanes) {
+		return bc_errinfo_set(ei, BC_ERANGE,
+		                      "%u rectangles for %u planes", f->nrects,
+		                      nplanes);
+	}
+	ncolour = f->nrects - nplanes;
 	if ((rc = fit(img, f, ei))) {
 		return rc;
 	}
@@ -300,11 +338,42 @@ int bc_client_image_apply(struct bc_client_image *img, const struct bc_msg *m,
 			                      i, r->x, r->y, r->w, r->h,
 			                      img->width, img->height);
 		}
+		if (i >= ncolour &&
+		    (r->x != 0 || r->y != 0 || r->w != img->width ||
+		     r->h != img->height ||
+		     r->data.len != (uint64_t)r->w * r->h * 4u)) {
+			return bc_errinfo_set(ei, BC_ERANGE,
+			                      "plane rectangle %u is not the "
+			                      "whole %ux%u image at 4 bytes a "
+			                      "pixel",
+			                      i, img->width, img->height);
+		}
 	}
 	if (f->encoding <= BC_PROTO_ENC_INVALID ||
 	    f->encoding >= BC_PROTO_ENC_COUNT) {
 		return bc_errinfo_set(ei, BC_EENUM, "frame encoding %d",
 		                      (int)f->encoding);
+	}
+	for (uint32_t k = 0; k < nplanes; k++) {
+		bool depth = k == 0 && (m->flags & BC_PROTO_FLAG_DEPTH);
+		if (!(plane[k] = read_plane(&f->rects[ncolour + k], img->width,
+		                            img->height, depth))) {
+			bc_free(plane[0]);
+			return bc_errinfo_set(ei, BC_ENOMEM,
+			                      "no memory for a plane");
+		}
+	}
+	/* The planes belong to the frame that carried them. */
+	bc_free(img->depth);
+	bc_free(img->ids);
+	img->depth = NULL;
+	img->ids = NULL;
+	for (uint32_t k = 0; k < nplanes; k++) {
+		if (k == 0 && (m->flags & BC_PROTO_FLAG_DEPTH)) {
+			img->depth = plane[k];
+		} else {
+			img->ids = plane[k];
+		}
 	}
 	img->view_width = f->width;
 	img->view_height = f->height;
@@ -316,8 +385,8 @@ int bc_client_image_apply(struct bc_client_image *img, const struct bc_msg *m,
 	img->level = (uint8_t)bc_proto_flags_level(m->flags);
 	img->refining = img->level > 0 || (m->flags & BC_PROTO_FLAG_INCOMPLETE);
 	img->encoding = f->encoding;
-	img->nrects = f->nrects;
-	for (uint32_t i = 0; i < f->nrects; i++) {
+	img->nrects = ncolour;
+	for (uint32_t i = 0; i < ncolour; i++) {
 		const struct bc_proto_rect *r = &f->rects[i];
 		switch (f->encoding) {
 		case BC_PROTO_ENC_JPEG:

@@ -71,7 +71,22 @@ export const FLAG = Object.freeze({
 	SNAPSHOT: 0x0002,    /* FRAME */
 	INCOMPLETE: 0x0004,  /* FRAME: refinement stopped by the time budget */
 	LEVEL_MASK: 0x0018,  /* FRAME: the refinement level, bits 3..4 */
+	DEPTH: 0x0020,       /* FRAME, with SNAPSHOT only: a depth plane */
+	IDS: 0x0040,         /* FRAME, with SNAPSHOT only: an id plane */
 });
+
+/* SNAPSHOT's optional planes byte: the planes the answering FRAME carries
+ * after its colour rectangle, each covering the image at 4 bytes a pixel:
+ * depth as little-endian f32 (+inf on a miss), then ids as little-endian
+ * u32 (0 on a miss). Other bits are EPROTO_FLAGS; 0 or absent is colour
+ * only. */
+export const PLANE = Object.freeze({ DEPTH: 0x01, IDS: 0x02, ALL: 0x03 });
+
+/* The number of plane rectangles (0..2) a FRAME with these flags carries
+ * after its colour rectangle. */
+export function framePlanes(flags) {
+	return ((flags & FLAG.DEPTH) ? 1 : 0) + ((flags & FLAG.IDS) ? 1 : 0);
+}
 /* FRAME's refinement level n (0..MAX_LEVEL) is flags bits 3..4. A level
  * n > 0 frame is one whole picture with one ray per 2^n x 2^n block of the
  * view: its image is exactly ceil(width / 2^n) x ceil(height / 2^n) in one
@@ -221,11 +236,11 @@ T(14, 'EDIT_APPLIED', FROM_SERVER, FLAG.INTERACTING, BULK);
 T(15, 'CAMERA', FROM_CLIENT, FLAG.INTERACTING, 40);
 T(16, 'VIEW', FROM_CLIENT, 0, 8);
 T(17, 'FRAME', FROM_SERVER, FLAG.STILL | FLAG.SNAPSHOT | FLAG.INCOMPLETE |
-	FLAG.LEVEL_MASK,
+	FLAG.LEVEL_MASK | FLAG.DEPTH | FLAG.IDS,
   BULK);
 T(18, 'PICK', FROM_CLIENT, 0, 4);
 T(19, 'PICK_RESULT', FROM_SERVER, 0, 24);
-T(20, 'SNAPSHOT', FROM_CLIENT, 0, 1);
+T(20, 'SNAPSHOT', FROM_CLIENT, 0, 2);
 T(21, 'GET_STATS', FROM_CLIENT, 0, 0);
 T(22, 'STATS', FROM_SERVER, 0, 64);
 
@@ -599,6 +614,9 @@ function decFrame(d, flags, m) {
 	/* A snapshot and a refinement frame are one rectangle that is the
 	 * whole image. */
 	const whole = snap || level > 0;
+	/* A snapshot's colour rectangle is followed by one per plane asked
+	 * (checkFlags keeps DEPTH and IDS on snapshots). */
+	const nwhole = 1 + framePlanes(flags);
 	m.frame_no = d.u32('frame_no');
 	m.order = d.u64('order');
 	m.camera_seq = d.u32('camera_seq');
@@ -615,7 +633,8 @@ function decFrame(d, flags, m) {
 	m.image_width = d.u16range('image_width', exact ? iw : 1, iw);
 	m.image_height = d.u16range('image_height', exact ? ih : 1, ih);
 	const nrects = d.u16('rect_count');
-	d.count('rect_count', nrects, 1, whole ? 1 : L.MAX_RECTS, RECT_MIN);
+	d.count('rect_count', nrects, snap ? nwhole : 1,
+		whole ? nwhole : L.MAX_RECTS, RECT_MIN);
 	m.rects = [];
 	for (let i = 0; i < nrects; i++) {
 		const x = d.u16('rect.x');
@@ -634,9 +653,13 @@ function decFrame(d, flags, m) {
 		}
 		const n = d.u32('rect.length');
 		const raw = w * h * 4;
-		if (n === 0 || (m.encoding === ENC.RAW && n !== raw)) {
-			d.fail('EPROTO_LENGTH',
-				`rect ${i}: length ${n} (raw needs ${raw})`);
+		/* A plane (every rectangle after a snapshot's first) is 4
+		 * bytes a pixel whatever the colour's encoding. */
+		const plane = snap && i > 0;
+		const exact = m.encoding === ENC.RAW || plane;
+		if (n === 0 || (exact && n !== raw)) {
+			d.fail('EPROTO_LENGTH', `rect ${i}: length ${n} ` +
+				`(${plane ? 'a plane' : 'raw'} needs ${raw})`);
 		}
 		d.need('rect.data', n);
 		const data = d.b.slice(d.pos, d.pos + n);
@@ -790,6 +813,20 @@ function decBody(d, m) {
 		if (m.encoding === ENC.JPEG) {
 			d.fail('EENUM', 'a snapshot cannot be JPEG');
 		}
+		/* planes is optional: a colour-only SNAPSHOT stops here, and
+		 * leaves the byte out rather than send 0 (one encoding per
+		 * SNAPSHOT). */
+		m.planes = 0;
+		if (d.left()) {
+			m.planes = d.u8('planes');
+			if (m.planes & ~PLANE.ALL) {
+				d.fail('EPROTO_FLAGS',
+					`planes ${m.planes} has undefined bits`);
+			}
+			if (m.planes === 0) {
+				d.fail('ERANGE', 'planes 0 (leave it out)');
+			}
+		}
 		break;
 	case MSG.STATS:
 		for (const k of ['uptime_ms', 'frames', 'bytes', 'order']) {
@@ -823,6 +860,12 @@ function checkFlags(t, flags, prefix = '') {
 		throw new ProtoError('EPROTO_FLAGS', `${prefix}${t.name} at ` +
 			`level ${level} with ` +
 			((flags & FLAG.SNAPSHOT) ? 'SNAPSHOT' : 'STILL'));
+	}
+	/* The depth and id planes answer a SNAPSHOT only. */
+	if ((flags & (FLAG.DEPTH | FLAG.IDS)) && !(flags & FLAG.SNAPSHOT)) {
+		throw new ProtoError('EPROTO_FLAGS', `${prefix}${t.name} with ` +
+			((flags & FLAG.DEPTH) ? 'DEPTH' : 'IDS') +
+			' but not SNAPSHOT');
 	}
 }
 
@@ -1321,6 +1364,10 @@ function encBody(w, m) {
 		break;
 	case MSG.SNAPSHOT:
 		w.u8('encoding', m.encoding, 'EENUM');
+		/* Left out when 0: the one-byte SNAPSHOT of colour only. */
+		if (m.planes) {
+			w.u8('planes', m.planes);
+		}
 		break;
 	case MSG.STATS:
 		for (const k of ['uptime_ms', 'frames', 'bytes', 'order']) {

@@ -33,9 +33,12 @@ MAX_NAME, MAX_TOKEN, MAX_ERROR_TEXT = 64, 1024, 1024
 MAX_MEMBERS, MAX_DIM, MAX_RECTS = 64, 8192, 4096
 MAX_EDIT_OPS, MAX_SET_FIELDS = 1024, 14
 MIN_FRAME_BYTES = 65536
-# FRAME header flags (section 2): STILL, SNAPSHOT, INCOMPLETE, and the
-# refinement level in bits 3..4.
+# FRAME header flags (section 2): STILL, SNAPSHOT, INCOMPLETE, the
+# refinement level in bits 3..4, and the planes of a snapshot, DEPTH and IDS.
 STILL, SNAPSHOT, INCOMPLETE = 1, 2, 4
+DEPTH, IDS = 0x20, 0x40
+# SNAPSHOT's planes byte.
+PLANE_DEPTH, PLANE_IDS = 1, 2
 LEVEL_SHIFT = 3
 
 
@@ -68,7 +71,7 @@ TYPE_MAX = {
     "SCENE_LOAD": MAX_PAYLOAD, "SCENE_STATE": MAX_PAYLOAD,
     "EDIT": MAX_PAYLOAD, "EDIT_APPLIED": MAX_PAYLOAD,
     "CAMERA": 40, "VIEW": 8, "FRAME": MAX_PAYLOAD, "PICK": 4,
-    "PICK_RESULT": 24, "SNAPSHOT": 1, "GET_STATS": 0, "STATS": 64,
+    "PICK_RESULT": 24, "SNAPSHOT": 2, "GET_STATS": 0, "STATS": 64,
 }
 
 # ---- Byte helpers --------------------------------------------------------------
@@ -288,7 +291,8 @@ def w_pick_result(f):
 
 
 def w_snapshot(f):
-    return u8(f["encoding"])
+    # planes is optional and left out when 0 (colour only).
+    return u8(f["encoding"]) + (u8(f["planes"]) if f["planes"] else b"")
 
 
 STATS_F = ["render_ms_last", "render_ms_avg", "encode_ms_last",
@@ -854,7 +858,7 @@ def gen_frame():
         dict(x=0, y=0, w=4, h=4, data="00")] * 2)), "EPROTO_COUNT", flags=2)
     t.badp("snapshot rect not the whole image", w_frame(dict(snap, rects=[
         dict(x=0, y=0, w=4, h=3, data="00")])), "ERANGE", flags=2)
-    t.badp("undefined flag bit 5", p, "EPROTO_FLAGS", flags=0x20)
+    t.badp("undefined flag bit 7", p, "EPROTO_FLAGS", flags=0x80)
     t.badp("undefined flag bit 15", p, "EPROTO_FLAGS", flags=0x8000)
 
     # Refinement levels. A level above 0 is never STILL or SNAPSHOT, and
@@ -909,6 +913,64 @@ def gen_frame():
                         image_width=2, image_height=2,
                         rects=[dict(x=0, y=0, w=2, h=2, data="00" * 15)])),
            "EPROTO_LENGTH", flags=level(1))
+    # Snapshot planes: after the colour rectangle, depth (f32) then ids
+    # (u32), each covering the image at exactly 4 bytes a pixel.
+    depth_px = f32(1.5) + f32bits(0x7f800000)  # a hit at 1.5, a miss
+    ids_px = u32(7) + u32(0)
+    colour_raw = "ff000080" "00ff00ff"
+    snap2 = dict(frame_no=90, order="12", camera_seq=4, width=2, height=1,
+                 image_width=2, image_height=1)
+
+    def rect2(data):
+        return dict(x=0, y=0, w=2, h=1, data=data)
+    t.ok("snapshot with depth, raw 2x1",
+         dict(snap2, encoding=3, rects=[rect2(colour_raw),
+                                        rect2(depth_px.hex())]),
+         flags=SNAPSHOT | STILL | DEPTH, seq=57)
+    t.ok("snapshot with ids, png 2x1",
+         dict(snap2, frame_no=91, encoding=2,
+              rects=[rect2("89504e47"), rect2(ids_px.hex())]),
+         flags=SNAPSHOT | STILL | IDS, seq=58)
+    t.ok("snapshot with depth and ids, raw 2x1",
+         dict(snap2, frame_no=92, encoding=3,
+              rects=[rect2(colour_raw), rect2(depth_px.hex()),
+                     rect2(ids_px.hex())]),
+         flags=SNAPSHOT | STILL | DEPTH | IDS, seq=59)
+    both = dict(snap2, encoding=2, rects=[
+        rect2("89504e47"), rect2(depth_px.hex()), rect2(ids_px.hex())])
+    t.badp("DEPTH without SNAPSHOT", w_frame(dict(both, rects=[
+        rect2("89504e47"), rect2(depth_px.hex())])), "EPROTO_FLAGS",
+        flags=STILL | DEPTH)
+    t.badp("IDS without SNAPSHOT", w_frame(dict(both, rects=[
+        rect2("89504e47")])), "EPROTO_FLAGS", flags=IDS)
+    t.badp("DEPTH at level 1 without SNAPSHOT", lv1, "EPROTO_FLAGS",
+           flags=level(1) | DEPTH)
+    t.bad("IDS without SNAPSHOT, refused before the length",
+          header("FRAME", 2 ** 32 - 1, flags=IDS, seq=0)[:8],
+          "EPROTO_FLAGS")
+    t.badp("DEPTH and IDS but two rects", w_frame(dict(both, rects=[
+        rect2("89504e47"), rect2(depth_px.hex())])), "EPROTO_COUNT",
+        flags=SNAPSHOT | DEPTH | IDS)
+    t.badp("DEPTH but one rect", w_frame(dict(both, rects=[
+        rect2("89504e47")])), "EPROTO_COUNT", flags=SNAPSHOT | DEPTH)
+    t.badp("DEPTH but three rects", w_frame(both), "EPROTO_COUNT",
+           flags=SNAPSHOT | DEPTH)
+    t.badp("SNAPSHOT without planes but three rects", w_frame(both),
+           "EPROTO_COUNT", flags=SNAPSHOT)
+    t.badp("depth plane one byte short", w_frame(dict(both, rects=[
+        rect2("89504e47"), rect2(depth_px.hex()[:-2]),
+        rect2(ids_px.hex())])), "EPROTO_LENGTH",
+        flags=SNAPSHOT | DEPTH | IDS)
+    t.badp("ids plane one byte long", w_frame(dict(both, rects=[
+        rect2("89504e47"), rect2(depth_px.hex()),
+        rect2(ids_px.hex() + "00")])), "EPROTO_LENGTH",
+        flags=SNAPSHOT | DEPTH | IDS)
+    t.badp("ids plane of a png's length", w_frame(dict(both, rects=[
+        rect2("89504e47"), rect2("89504e47")])), "EPROTO_LENGTH",
+        flags=SNAPSHOT | IDS)
+    t.badp("depth plane not the whole image", w_frame(dict(both, rects=[
+        rect2("89504e47"), dict(x=0, y=0, w=1, h=1, data="0000c03f")])),
+        "ERANGE", flags=SNAPSHOT | DEPTH)
     t.bad("over the client's 64 KiB frame limit",
           header("FRAME", 65537), "EPROTO_LENGTH",
           reader={"side": "client", "max_payload": 65536})
@@ -948,9 +1010,30 @@ def gen_pick_result():
 
 def gen_snapshot():
     t = Table("SNAPSHOT")
-    p = t.ok("png", dict(encoding=2), seq=55)
-    t.ok("raw", dict(encoding=3), seq=56)
-    t.common(p)
+    # planes is an optional second byte, so the cases of Table.common
+    # that shorten or lengthen a payload are written out here.
+    t.ok("png", dict(encoding=2, planes=0), seq=55)
+    t.ok("raw", dict(encoding=3, planes=0), seq=56)
+    t.ok("raw with depth", dict(encoding=3, planes=PLANE_DEPTH), seq=57)
+    t.ok("png with ids", dict(encoding=2, planes=PLANE_IDS), seq=58)
+    p = t.ok("raw with depth and ids",
+             dict(encoding=3, planes=PLANE_DEPTH | PLANE_IDS), seq=59)
+    # Colour only leaves the byte out, so each SNAPSHOT has one encoding.
+    t.badp("planes byte 0", u8(2) + u8(0), "ERANGE")
+    t.badp("empty payload", b"", "EPROTO_TRUNCATED")
+    t.badp("one trailing byte", p + b"\x00", "EPROTO_LENGTH")
+    t.bad("length = type maximum + 1", header("SNAPSHOT", 3),
+          "EPROTO_LENGTH")
+    t.bad("length 2^31", header("SNAPSHOT", 2 ** 31), "EPROTO_LENGTH")
+    t.bad("length 2^32-1", header("SNAPSHOT", 2 ** 32 - 1),
+          "EPROTO_LENGTH")
+    t.bad("stream ends inside the header", frame("SNAPSHOT", p)[:9],
+          "EPROTO_TRUNCATED")
+    t.bad("stream ends inside the payload", frame("SNAPSHOT", p)[:-1],
+          "EPROTO_TRUNCATED")
+    t.badp("planes bit 2", u8(3) + u8(4), "EPROTO_FLAGS")
+    t.badp("planes 0xff", u8(2) + u8(0xff), "EPROTO_FLAGS")
+    t.badp("jpeg with planes", u8(1) + u8(3), "EENUM")
     t.badp("jpeg", u8(1), "EENUM")
     t.badp("encoding 0", u8(0), "EENUM")
     t.badp("encoding 200", u8(200), "EENUM")

@@ -40,7 +40,7 @@ for cmd in load edit camera snapshot watch bench-latency; do
   expect 0 "usage: blobcast $cmd" "$cmd" --help
 done
 expect 0 "--server ADDR" load --help
-expect 0 "not supported by the server protocol yet" snapshot --help
+expect 0 "+inf where nothing is hit" snapshot --help
 expect 0 "latency_ms" watch --help
 
 # Missing or malformed arguments.
@@ -65,8 +65,10 @@ expect 2 "needs a valid value" snapshot --session s --size 10x99999 \
 expect 2 "needs a valid value" snapshot --session s --size 10 --out a.png
 expect 2 "no image format" snapshot --session s --size 8x8 \
   --out "$tmp/a.nosuchformat"
-expect 2 "not supported by the server protocol yet" snapshot --session s \
-  --size 8x8 --out "$tmp/a.png" --depth "$tmp/d.exr"
+expect 2 "depth needs a float format" snapshot --session s \
+  --size 8x8 --out "$tmp/a.png" --depth "$tmp/d.png"
+expect 2 "ids need a uint32 format" snapshot --session s \
+  --size 8x8 --out "$tmp/a.png" --ids "$tmp/i.png"
 expect 2 "needs a valid value" watch --session s --frames 0
 expect 2 "needs a valid value" watch --session s --encoding gif
 expect 2 "needs a valid value" watch --session s --downscale 9

@@ -107,10 +107,28 @@ run 1 "no session named nosuch" $S edit --session nosuch 2 radius=0.5
 
 # --- snapshot before and after an edit -----------------------------------------
 run 0 "wrote $tmp/a.png (96x64" \
-  $S snapshot --session review --size 96x64 --out "$tmp/a.png"
+  $S snapshot --session review --size 96x64 --out "$tmp/a.png" \
+  --depth "$tmp/a.exr" --ids "$tmp/a.tif"
 if [ "$(png_size "$tmp/a.png" 2>/dev/null)" != "96 64" ]; then
   fail "a.png is not a 96x64 PNG: $(png_size "$tmp/a.png" 2>&1)"
 fi
+# The snapshot's colour, depth and ids are those of a local whole render of
+# the same scene and camera (the daemon's cpu backend is the tiled one).
+if command -v oiiotool > /dev/null 2>&1; then
+  run 0 "" render "$tmp/scene.json" --size 96x64 --backend tiled \
+    --out "$tmp/r.png" --depth "$tmp/r.exr" --ids "$tmp/r.tif"
+  if ! oiiotool --info "$tmp/a.exr" | grep -q "96 x  *64, 1 channel, float"
+  then
+    fail "a.exr: $(oiiotool --info "$tmp/a.exr" 2>&1)"
+  fi
+  for p in png exr tif; do
+    if ! oiiotool "$tmp/a.$p" "$tmp/r.$p" --diff > "$tmp/diff" 2>&1; then
+      fail "snapshot a.$p and local render r.$p differ: $(cat "$tmp/diff")"
+    fi
+  done
+fi
+run 2 "depth needs a float format" $S snapshot --session review \
+  --size 96x64 --out "$tmp/x.png" --depth "$tmp/x.png"
 
 run 0 "node 2: edit applied, edit order 2" \
   $S edit --session review 2 radius=0.5 translate=-0.3,0,0
@@ -135,9 +153,6 @@ if command -v oiiotool > /dev/null 2>&1; then
     fail "b.png and b.tif differ: $(cat "$tmp/diff")"
   fi
 fi
-run 2 "not supported by the server protocol yet" \
-  $S snapshot --session review --size 96x64 --out "$tmp/c.png" \
-  --depth "$tmp/c.exr"
 
 # A camera for one snapshot only, then the session's camera for good.
 run 0 "wrote" $S snapshot --session review --size 96x64 --out "$tmp/c.png" \

@@ -276,6 +276,7 @@ static void build(enum bc_msg_type type, const json_t *f, struct bc_msg *m)
 	case BC_MSG_SNAPSHOT:
 		m->snapshot.encoding =
 		    (enum bc_proto_encoding)jint(f, "encoding");
+		m->snapshot.planes = (uint8_t)jint(f, "planes");
 		break;
 	case BC_MSG_STATS: {
 		struct bc_msg_stats *s = &m->stats;
@@ -451,7 +452,8 @@ static int msg_eq(const struct bc_msg *a, const struct bc_msg *b)
 		            3) &&
 		       f_eq(&a->pick_result.depth, &b->pick_result.depth, 1);
 	case BC_MSG_SNAPSHOT:
-		return a->snapshot.encoding == b->snapshot.encoding;
+		return a->snapshot.encoding == b->snapshot.encoding &&
+		       a->snapshot.planes == b->snapshot.planes;
 	case BC_MSG_STATS:
 		return memcmp(&a->stats, &b->stats, sizeof(a->stats)) == 0;
 	default: /* no payload */

@@ -4,7 +4,9 @@
  * render of that level gives; a parameter edit sends only the tiles it
  * changed, and those patched onto the still give exactly a whole render of
  * the edited scene; a refinement cut by the frame budget leaves a complete
- * coarse picture (no band of background), flagged INCOMPLETE.
+ * coarse picture (no band of background), flagged INCOMPLETE; a SNAPSHOT
+ * with the depth and id planes carries exactly a whole render's colour,
+ * depth and ids.
  */
 #include <math.h>
 
@@ -224,18 +226,105 @@ static void a_budget_cut_frame_is_a_complete_coarse_picture(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
+/* 4-byte little-endian words as the host's u32 (floats: their bits). */
+static bool plane_is(const struct bc_proto_rect *r, const void *want)
+{
+	const uint32_t *w = want;
+	if (r->x != 0 || r->y != 0 || r->w != VW || r->h != VH ||
+	    r->data.len != VW * VH * 4u) {
+		return false;
+	}
+	for (uint32_t i = 0; i < VW * VH; i++) {
+		const uint8_t *p = r->data.ptr + 4u * i;
+		uint32_t u = (uint32_t)p[0] | (uint32_t)p[1] << 8 |
+		             (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+		if (u != w[i]) {
+			return false;
+		}
+	}
+	return true;
+}
+
+static void a_snapshot_carries_depth_and_ids_of_a_whole_render(void)
+{
+	struct daemon d;
+	struct conn a;
+	struct bc_tree *t = NULL;
+	struct bc_camera cam;
+	struct bc_renderer *r = NULL;
+	struct bc_frame f = {0};
+	struct bc_render_region all = {NULL, 0, false};
+	struct bc_msg m = {.type = BC_MSG_SNAPSHOT};
+	uint32_t seq, misses = 0, hits = 0;
+	test_camera(&cam);
+	REQUIRE(daemon_start(&d, "/tmp/bc-test-frames-c") == 0);
+	join_with_view(&d, &a, &t, &cam);
+	REQUIRE(bc_frame_init(&f, VW, VH) == 0 &&
+	        bc_renderer_create(&r, BC_BACKEND_TILED, NULL, NULL) == 0 &&
+	        bc_renderer_sync(r, t, NULL, NULL) == 0 &&
+	        bc_renderer_render_region(r, &cam, &f, &all, NULL, NULL) == 0);
+	for (uint32_t i = 0; i < VW * VH; i++) {
+		misses += f.ids[i] == 0 && isinf(f.depth[i]) ? 1u : 0u;
+		hits += f.ids[i] != 0 && isfinite(f.depth[i]) ? 1u : 0u;
+	}
+	CHECK(misses > 0 && hits > 0 && misses + hits == VW * VH);
+	/* Both planes, then each alone: the planes follow the colour in
+	 * the order depth, ids. */
+	static const uint8_t asks[] = {
+	    BC_PROTO_PLANE_DEPTH | BC_PROTO_PLANE_IDS, BC_PROTO_PLANE_IDS,
+	    BC_PROTO_PLANE_DEPTH};
+	for (size_t k = 0; k < sizeof(asks); k++) {
+		uint16_t want_flags = 0;
+		const struct bc_proto_rect *rc;
+		m.snapshot.encoding = BC_PROTO_ENC_RAW;
+		m.snapshot.planes = asks[k];
+		REQUIRE((seq = conn_send(&a, &m)) != 0);
+		do {
+			REQUIRE(conn_expect(&a, BC_MSG_FRAME, 30000) == 1);
+		} while (a.m.seq != seq);
+		want_flags =
+		    BC_PROTO_FLAG_SNAPSHOT | BC_PROTO_FLAG_STILL |
+		    ((asks[k] & BC_PROTO_PLANE_DEPTH) ? BC_PROTO_FLAG_DEPTH
+		                                      : 0u) |
+		    ((asks[k] & BC_PROTO_PLANE_IDS) ? BC_PROTO_FLAG_IDS : 0u);
+		CHECK(a.m.flags == want_flags);
+		REQUIRE(a.m.frame.nrects ==
+		        1u + bc_proto_flags_nplanes(a.m.flags));
+		rc = &a.m.frame.rects[0];
+		CHECK(rc->w == VW && rc->h == VH &&
+		      rc->data.len == VW * VH * 4u &&
+		      memcmp(rc->data.ptr, f.rgba, VW * VH * 4u) == 0);
+		rc++;
+		if (asks[k] & BC_PROTO_PLANE_DEPTH) {
+			CHECK(plane_is(rc, f.depth));
+			rc++;
+		}
+		if (asks[k] & BC_PROTO_PLANE_IDS) {
+			CHECK(plane_is(rc, f.ids));
+		}
+	}
+	bc_renderer_destroy(r);
+	bc_frame_finish(&f);
+	bc_tree_destroy(t);
+	conn_close(&a);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
 static const struct bc_test tests[] = {
-	{"pictures_refine_to_the_still_and_edits_patch_exactly",
-	 pictures_refine_to_the_still_and_edits_patch_exactly},
-	{"a_budget_cut_frame_is_a_complete_coarse_picture",
-	 a_budget_cut_frame_is_a_complete_coarse_picture},
+    {"pictures_refine_to_the_still_and_edits_patch_exactly",
+     pictures_refine_to_the_still_and_edits_patch_exactly},
+    {"a_budget_cut_frame_is_a_complete_coarse_picture",
+     a_budget_cut_frame_is_a_complete_coarse_picture},
+    {"a_snapshot_carries_depth_and_ids_of_a_whole_render",
+     a_snapshot_carries_depth_and_ids_of_a_whole_render},
 };
 
 int main(int argc, char **argv)
 {
 	signal(SIGPIPE, SIG_IGN);
 	(void)conn_hello; /* daemon.h's all-encodings HELLO: not used here */
-	if (system("rm -rf /tmp/bc-test-frames-a /tmp/bc-test-frames-b") != 0) {
+	if (system("rm -rf /tmp/bc-test-frames-a /tmp/bc-test-frames-b "
+	           "/tmp/bc-test-frames-c") != 0) {
 		return 1;
 	}
 	return bc_test_run(tests, sizeof(tests) / sizeof(tests[0]), argc,

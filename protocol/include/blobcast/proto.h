@@ -94,6 +94,31 @@ enum bc_msg_type {
 /* The coarsest level: 2^3 = 8 = BC_PROTO_MAX_DOWNSCALE, the coarsest block
  * a client may accept (VIEW downscale). */
 #define BC_PROTO_MAX_LEVEL 3u
+/* FRAME, only with SNAPSHOT (else BC_EPROTO_FLAGS, a header rule): the
+ * answer carries the depth plane, a rectangle after the colour one covering
+ * the image, w * h little-endian f32 (distance along the ray, +inf on a
+ * miss). Asked by SNAPSHOT's BC_PROTO_PLANE_DEPTH. */
+#define BC_PROTO_FLAG_DEPTH 0x0020u
+/* FRAME, only with SNAPSHOT: the answer carries the id plane, a rectangle
+ * after the colour one (and the depth one, when there is one), w * h
+ * little-endian u32 (node id of the primitive seen, 0 on a miss). Asked by
+ * SNAPSHOT's BC_PROTO_PLANE_IDS. */
+#define BC_PROTO_FLAG_IDS 0x0040u
+
+/* SNAPSHOT's optional planes byte: the planes the answer carries besides
+ * colour. Other bits: BC_EPROTO_FLAGS. Colour only leaves the byte out (a
+ * present 0 is BC_ERANGE), so each SNAPSHOT has one encoding. */
+#define BC_PROTO_PLANE_DEPTH 0x01u
+#define BC_PROTO_PLANE_IDS 0x02u
+#define BC_PROTO_PLANES_ALL 0x03u
+
+/* The number of plane rectangles (0..2) a FRAME with these flags carries
+ * after its colour rectangle. */
+static inline unsigned bc_proto_flags_nplanes(uint16_t flags)
+{
+	return ((flags & BC_PROTO_FLAG_DEPTH) ? 1u : 0u) +
+	       ((flags & BC_PROTO_FLAG_IDS) ? 1u : 0u);
+}
 
 /* The level of a FRAME's flags, 0..BC_PROTO_MAX_LEVEL. */
 static inline unsigned bc_proto_flags_level(uint16_t flags)
@@ -320,6 +345,10 @@ struct bc_msg_pick_result {
 
 struct bc_msg_snapshot {
 	enum bc_proto_encoding encoding; /* PNG or RAW */
+	/* BC_PROTO_PLANE_* bits; 0: colour only. Encoded as an optional
+	 * second byte, left out when 0, so a colour-only SNAPSHOT is the
+	 * same one byte it always was (a present 0 does not decode). */
+	uint8_t planes;
 };
 
 struct bc_msg_stats {

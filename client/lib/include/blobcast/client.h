@@ -312,6 +312,13 @@ struct bc_client_image {
 	bool refining;
 	enum bc_proto_encoding encoding;
 	uint32_t nrects;
+	/* The depth and id planes of the last frame applied, when it carried
+	 * them (the answer to bc_client_snapshot_planes()), else NULL: width *
+	 * height values each, row 0 on top, freed by the next frame applied
+	 * and by finish. depth: distance along the ray, +inf on a miss; ids:
+	 * node id of the primitive seen, 0 on a miss. */
+	float *depth;
+	uint32_t *ids;
 	/* Private. */
 	uint8_t *seen; /* one bit per pixel while !complete, or NULL */
 	uint64_t nseen;
@@ -334,8 +341,20 @@ int bc_client_image_apply(struct bc_client_image *img, const struct bc_msg *m,
 
 /* Sends SNAPSHOT (encoding PNG or RAW; 0 means PNG) and waits for its FRAME,
  * decoded into *out (which must be initialized; its previous contents are
- * replaced). A VIEW must have been sent: it gives the size. */
+ * replaced). A VIEW must have been sent: it gives the size. Returns 0 or a
+ * BC_E* code with the reason in ei. */
 int bc_client_snapshot(struct bc_client *c, enum bc_proto_encoding encoding,
                        struct bc_client_image *out, struct bc_errinfo *ei);
+
+/* bc_client_snapshot() that also asks for the planes given by planes
+ * (BC_PROTO_PLANE_DEPTH, BC_PROTO_PLANE_IDS; 0 is colour only): on success
+ * out->depth and out->ids hold those asked (owned by out, freed by
+ * bc_client_image_finish), at the colour's size. Returns 0, BC_EINVAL
+ * (other plane bits, or an encoding other than PNG and raw), BC_EIO (the
+ * answer lacks a plane asked) or another BC_E* code, with ei. */
+int bc_client_snapshot_planes(struct bc_client *c,
+                              enum bc_proto_encoding encoding, unsigned planes,
+                              struct bc_client_image *out,
+                              struct bc_errinfo *ei);
 
 #endif
