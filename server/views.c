@@ -295,8 +295,9 @@ int bc__update_view(struct bc_rthread *rt, struct replica *rp, struct view *v,
 			return rc;
 		}
 		v->stuck = false;
-	} else if (v->level > 0 && !v->stuck) {
-		/* One level finer; a snapshot waits for all. */
+	} else if (v->level > 0 && (!v->stuck || job->snapshot_seq)) {
+		/* One level finer; a snapshot waits for all, even of a
+		 * picture the budget stopped. */
 		do {
 			bool done = false;
 			if ((rc = refine(rt, rp, v, job->snapshot_seq != 0,
@@ -316,6 +317,9 @@ int bc__update_view(struct bc_rthread *rt, struct replica *rp, struct view *v,
 			}
 			v->level--;
 		} while (v->level > 0 && job->snapshot_seq);
+		if (v->level == 0) {
+			v->stuck = false;
+		}
 	}
 	v->damaged = false;
 	memset(v->damage, 0, v->ntiles);

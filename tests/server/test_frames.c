@@ -221,6 +221,26 @@ static void a_budget_cut_frame_is_a_complete_coarse_picture(void)
 		}
 	}
 	CHECK(cut);
+	/* A SNAPSHOT is whole at level 0 even of a picture the budget
+	 * stopped. */
+	{
+		struct bc_msg sn = {.type = BC_MSG_SNAPSHOT};
+		uint32_t w, h, seq;
+		uint8_t *want;
+		sn.snapshot.encoding = BC_PROTO_ENC_RAW;
+		seq = conn_send(&a, &sn);
+		do {
+			REQUIRE(conn_expect(&a, BC_MSG_FRAME, 30000) == 1);
+		} while (a.m.seq != seq);
+		CHECK((a.m.flags & BC_PROTO_FLAG_SNAPSHOT) != 0);
+		CHECK(bc_proto_flags_level(a.m.flags) == 0);
+		REQUIRE((want = local_picture(t, &cam, 0, &w, &h)) != NULL);
+		CHECK(a.m.frame.image_width == VW && a.m.frame.image_height == VH);
+		CHECK(a.m.frame.nrects == 1 &&
+		      memcmp(a.m.frame.rects[0].data.ptr, want,
+			     (size_t)VW * VH * 4u) == 0);
+		free(want);
+	}
 	bc_tree_destroy(t);
 	conn_close(&a);
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
