@@ -443,7 +443,7 @@ static int replay(struct bc_store_session *ss, bc_store_replay_fn fn,
 	while (off < size) {
 		uint32_t len;
 		uint64_t ord;
-		off_t next;
+		off_t next = size; /* resync sets it; GCC cannot tell */
 		int r = record_at(fd, off, size, &rec, &cap, &len, &ord);
 		if (r < 0) {
 			rc = bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
