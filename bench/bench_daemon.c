@@ -135,7 +135,13 @@ int main(int argc, char **argv)
 		bc_tree_destroy(t);
 	}
 	conn_view(&c, 512, 512, BC_PROTO_ENC_JPEG);
-	conn_expect(&c, BC_MSG_FRAME, 30000);
+	/* Coarse pictures first, then the still: the edits start from it. */
+	do {
+		if (conn_expect(&c, BC_MSG_FRAME, 30000) != 1) {
+			fprintf(stderr, "no still frame\n");
+			return 1;
+		}
+	} while (!(c.m.flags & BC_PROTO_FLAG_STILL));
 	printf("full_still_frame bytes=%.0f\n", latency_frame_bytes(&c.m));
 	if (!getenv("BENCH_FPS_ONLY")) {
 		latency(&c, id, edits, "solo");
