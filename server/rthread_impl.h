@@ -1,7 +1,8 @@
 /*
  * The render thread's private types, shared by rthread.c (the thread, its
- * command and result queues, picks, frame encoding) and views.c (the kept
- * views: damage, progressive refinement, the cost model, pictures).
+ * replicas, command and result queues), render_job.c (what a job renders:
+ * picks, frames and their encoding) and views.c (the kept views: damage,
+ * progressive refinement, the cost model, pictures).
  */
 #ifndef BLOBCAST_SERVER_RTHREAD_IMPL_H
 #define BLOBCAST_SERVER_RTHREAD_IMPL_H
@@ -102,6 +103,21 @@ struct edit_abvs {
 	uint32_t k0, n;
 	struct bc_abv *old;
 };
+
+/* ---- rthread.c ---- */
+
+/* The replica of session id, or NULL; with create, a free slot is taken
+ * for it when it has none. */
+struct replica *bc__replica_of(struct bc_rthread *rt, uint32_t id, bool create);
+
+/* Hands res back to the loop thread (the result queue and its async). */
+void bc__push_result(struct bc_rthread *rt, struct rresult *res);
+
+/* ---- render_job.c ---- */
+
+/* Runs job (a pick or a frame) and pushes res, filled, as its result. */
+void bc__run_job(struct bc_rthread *rt, struct bc_rjob *job,
+                 struct rresult *res);
 
 /* ---- views.c ---- */
 

@@ -8,7 +8,8 @@
  *    keeps, EDIT_APPLIED broadcasts);
  *  - frames.c: frame scheduling and CAMERA, VIEW, PICK, SNAPSHOT;
  *  - rthread.c: the render thread: a replica of each session's scene, the
- *    renderer, encoding; results come back to the loop through a uv_async;
+ *    renderer, encoding (render_job.c, views.c); results come back to the
+ *    loop through a uv_async;
  *  - main.c: options, configuration, start-up, shutdown.
  * Everything except rthread.c runs on the loop thread.
  */
