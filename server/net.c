@@ -1,14 +1,14 @@
 /*
- * Connections (loop thread): TCP and Unix listeners, the per-connection
- * protocol reader and state machine up to the session layer, and output
- * queues. Messages are written as they come; FRAMEs are written one at a
- * time per client and a newer frame replaces one not yet started (frame
- * spoiling), so a slow client gets fewer frames, never a growing backlog.
+ * Connections (loop thread): the per-connection protocol reader and state
+ * machine up to the session layer, timeouts, and output queues (listen.c
+ * accepts them). Messages are written as they come; FRAMEs are written one
+ * at a time per client and a newer frame replaces one not yet started
+ * (frame spoiling), so a slow client gets fewer frames, never a growing
+ * backlog.
  * A client whose queue still passes BC_SRV_MAX_CLIENT_QUEUE is dropped.
  * Clients are freed from their close callback, never inside a callback that
  * still uses them.
  */
-#include <arpa/inet.h>
 #include <inttypes.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -22,8 +22,7 @@
 
 #include "blobcast/alloc.h"
 #include "blobcast/log.h"
-#include "addr.h"
-#include "server.h"
+#include "net_impl.h"
 
 /* Reads land in a buffer of this size before being fed to the reader. */
 #define READ_CHUNK (64u * 1024u)
@@ -85,7 +84,7 @@ struct bc_conn_ref bc_conn_ref_of(const struct bc_conn *c)
 	return (struct bc_conn_ref){c->slot, c->gen};
 }
 
-static void handle_closed(uv_handle_t *h)
+void bc__net_handle_closed(uv_handle_t *h)
 {
 	struct bc_conn *c = h->data;
 	if (--c->handles_open > 0) {
@@ -122,8 +121,8 @@ void bc_conn_close(struct bc_conn *c, const char *why)
 	srv->clients[c->slot] = NULL;
 	srv->nclients--;
 	c->handles_open = 2;
-	uv_close(&c->h.handle, handle_closed);
-	uv_close((uv_handle_t *)&c->hello_timer, handle_closed);
+	uv_close(&c->h.handle, bc__net_handle_closed);
+	uv_close((uv_handle_t *)&c->hello_timer, bc__net_handle_closed);
 }
 
 static void shutdown_done(uv_shutdown_t *req, int status)
@@ -404,7 +403,7 @@ static void dispatch(struct bc_conn *c, const struct bc_msg *m)
 	bc_session_handle(c, m);
 }
 
-static void on_alloc(uv_handle_t *h, size_t suggested, uv_buf_t *buf)
+void bc__net_on_alloc(uv_handle_t *h, size_t suggested, uv_buf_t *buf)
 {
 	static char chunk[READ_CHUNK];
 	(void)h;
@@ -414,7 +413,7 @@ static void on_alloc(uv_handle_t *h, size_t suggested, uv_buf_t *buf)
 	*buf = uv_buf_init(chunk, sizeof(chunk));
 }
 
-static void on_read(uv_stream_t *s, ssize_t n, const uv_buf_t *buf)
+void bc__net_on_read(uv_stream_t *s, ssize_t n, const uv_buf_t *buf)
 {
 	struct bc_conn *c = s->data;
 	struct bc_msg m;
@@ -471,199 +470,12 @@ static void on_read(uv_stream_t *s, ssize_t n, const uv_buf_t *buf)
 	}
 }
 
-static void hello_timeout(uv_timer_t *t)
+void bc__net_hello_timeout(uv_timer_t *t)
 {
 	struct bc_conn *c = t->data;
 	bc_conn_send_error(c, 0, BC_ETIMEOUT, true, "no HELLO within %u ms",
 	                   BC_SRV_HELLO_TIMEOUT_MS);
 	bc_conn_close_after_flush(c, "HELLO timeout");
-}
-
-static bool is_loopback(uv_tcp_t *tcp)
-{
-	struct sockaddr_storage sa;
-	int len = sizeof(sa);
-	if (uv_tcp_getpeername(tcp, (struct sockaddr *)&sa, &len) != 0) {
-		return false;
-	}
-	/* 127/8, ::1 and v4-mapped ::ffff:127/104 (a [::] listener sees
-	 * IPv4 loopback clients in that form). */
-	return bc_addr_is_loopback((const struct sockaddr *)&sa);
-}
-
-/* The peer address of a TCP connection as 16 bytes (IPv4 in its v4-mapped
- * IPv6 form, so both spellings of one host compare equal); false when it
- * cannot be read. */
-static bool peer_addr16(uv_tcp_t *tcp, uint8_t out[16])
-{
-	struct sockaddr_storage sa;
-	int len = sizeof(sa);
-	if (uv_tcp_getpeername(tcp, (struct sockaddr *)&sa, &len) != 0) {
-		return false;
-	}
-	if (sa.ss_family == AF_INET) {
-		const struct sockaddr_in *in = (const struct sockaddr_in *)&sa;
-		memset(out, 0, 10);
-		out[10] = out[11] = 0xff;
-		memcpy(out + 12, &in->sin_addr.s_addr, 4);
-		return true;
-	}
-	if (sa.ss_family == AF_INET6) {
-		const struct sockaddr_in6 *in6 =
-		    (const struct sockaddr_in6 *)&sa;
-		memcpy(out, in6->sin6_addr.s6_addr, 16);
-		return true;
-	}
-	return false;
-}
-
-/* Whether c's peer already holds BC_SRV_MAX_PREHELLO_PER_ADDR connections
- * that have not completed HELLO (c, not yet in the table, not counted). */
-static bool prehello_cap_reached(struct bc_srv *srv, struct bc_conn *c)
-{
-	uint8_t mine[16], theirs[16];
-	uint32_t n = 0;
-	if (c->is_tcp && !peer_addr16(&c->h.tcp, mine)) {
-		return false;
-	}
-	for (uint32_t i = 0; i < BC_SRV_MAX_CONNECTIONS; i++) {
-		struct bc_conn *o = srv->clients[i];
-		if (!o || o->closing || o->draining ||
-		    o->stage != BC_PROTO_STAGE_HELLO ||
-		    o->is_tcp != c->is_tcp) {
-			continue;
-		}
-		if (c->is_tcp && (!peer_addr16(&o->h.tcp, theirs) ||
-		                  memcmp(mine, theirs, 16) != 0)) {
-			continue;
-		}
-		if (++n >= BC_SRV_MAX_PREHELLO_PER_ADDR) {
-			return true;
-		}
-	}
-	return false;
-}
-
-/* A warning for refused connections at most once a second: a flood must
- * not flood the log too. */
-static void warn_refused(struct bc_srv *srv, const char *why)
-{
-	static uint64_t last_ms;
-	static uint32_t suppressed;
-	uint64_t now = bc_now_ms(srv);
-	if (last_ms && now - last_ms < 1000) {
-		suppressed++;
-		return;
-	}
-	if (suppressed) {
-		bc_log(BC_LOG_WARN,
-		       "refusing a connection: %s (and %u more refused in "
-		       "the last second)",
-		       why, suppressed);
-	} else {
-		bc_log(BC_LOG_WARN, "refusing a connection: %s", why);
-	}
-	last_ms = now;
-	suppressed = 0;
-}
-
-static void on_connection(uv_stream_t *server, int status)
-{
-	struct bc_srv *srv = server->data;
-	bool tcp = server == (uv_stream_t *)&srv->tcp_listener;
-	struct bc_conn *c;
-	uint32_t slot = 0;
-	if (status < 0) {
-		bc_log(BC_LOG_WARN, "accept: %s", uv_strerror(status));
-		return;
-	}
-	c = bc_calloc(1, sizeof(*c));
-	if (!c) {
-		return;
-	}
-	c->srv = srv;
-	if (tcp) {
-		uv_tcp_init(srv->loop, &c->h.tcp);
-	} else {
-		uv_pipe_init(srv->loop, &c->h.pipe, 0);
-	}
-	c->h.handle.data = c;
-	uv_timer_init(srv->loop, &c->hello_timer);
-	c->hello_timer.data = c;
-	c->is_tcp = tcp;
-	if (uv_accept(server, &c->h.stream) != 0) {
-		c->handles_open = 2;
-		c->closing = true;
-		uv_close(&c->h.handle, handle_closed);
-		uv_close((uv_handle_t *)&c->hello_timer, handle_closed);
-		return;
-	}
-	c->trusted = !tcp || is_loopback(&c->h.tcp);
-	while (slot < BC_SRV_MAX_CONNECTIONS && srv->clients[slot]) {
-		slot++;
-	}
-	if (srv->stopping || slot == BC_SRV_MAX_CONNECTIONS ||
-	    (tcp && !c->trusted && srv->cfg.ntokens == 0) ||
-	    prehello_cap_reached(srv, c)) {
-		warn_refused(srv,
-		             srv->stopping ? "shutting down"
-		             : slot == BC_SRV_MAX_CONNECTIONS
-		                 ? "too many connections"
-		             : (tcp && !c->trusted && srv->cfg.ntokens == 0)
-		                 ? "not loopback and no token configured"
-		                 : "too many connections from one address "
-		                   "without HELLO");
-		c->handles_open = 2;
-		c->closing = true;
-		uv_close(&c->h.handle, handle_closed);
-		uv_close((uv_handle_t *)&c->hello_timer, handle_closed);
-		return;
-	}
-	c->slot = slot;
-	c->gen = ++srv->gens[slot] * BC_SRV_MAX_CONNECTIONS + slot;
-	srv->clients[slot] = c;
-	srv->nclients++;
-	snprintf(c->name, sizeof(c->name), "?");
-	bc_proto_reader_init(&c->reader, &(struct bc_proto_reader_opts){
-	                                     .side = BC_PROTO_SIDE_SERVER,
-	                                     .await_hello = true,
-	                                 });
-	if (tcp) {
-		uv_tcp_nodelay(&c->h.tcp, 1);
-	}
-	uv_timer_start(&c->hello_timer, hello_timeout, BC_SRV_HELLO_TIMEOUT_MS,
-	               0);
-	uv_read_start(&c->h.stream, on_alloc, on_read);
-	bc_log(BC_LOG_INFO, "connection %u from %s", c->gen,
-	       tcp ? (c->trusted ? "loopback" : "network") : "unix socket");
-}
-
-static int parse_listen(const char *spec, char *host, size_t hostlen, int *port)
-{
-	const char *colon = strrchr(spec, ':');
-	char *end;
-	long p;
-	size_t n;
-	if (!colon) {
-		return BC_EINVAL;
-	}
-	n = (size_t)(colon - spec);
-	if (n >= 2 && spec[0] == '[' && spec[n - 1] == ']') {
-		/* [::]:7878, the usual spelling of an IPv6 host with a port */
-		spec++;
-		n -= 2;
-	}
-	if (n == 0 || n >= hostlen) {
-		return BC_EINVAL;
-	}
-	memcpy(host, spec, n);
-	host[n] = '\0';
-	p = strtol(colon + 1, &end, 10);
-	if (*end || p < 0 || p > 65535) {
-		return BC_EINVAL;
-	}
-	*port = (int)p;
-	return 0;
 }
 
 /* After HELLO: a message must complete within the message timeout of its
@@ -693,7 +505,7 @@ static void check_timeouts(struct bc_srv *srv, struct bc_conn *c, uint64_t now)
 	}
 }
 
-static void check_stalls(uv_timer_t *t)
+void bc__net_check_stalls(uv_timer_t *t)
 {
 	struct bc_srv *srv = t->data;
 	uint64_t now = bc_now_ms(srv);
@@ -712,58 +524,6 @@ static void check_stalls(uv_timer_t *t)
 			bc_conn_close(c, "stopped reading");
 		}
 	}
-}
-
-int bc_net_listen(struct bc_srv *srv, struct bc_errinfo *ei)
-{
-	int rc;
-	uv_timer_init(srv->loop, &srv->stall_timer);
-	srv->stall_timer.data = srv;
-	uv_timer_start(&srv->stall_timer, check_stalls, 1000, 1000);
-	if (srv->cfg.listen) {
-		char host[256];
-		int port;
-		struct sockaddr_storage sa;
-		if (parse_listen(srv->cfg.listen, host, sizeof(host), &port)) {
-			return bc_errinfo_set(ei, BC_EINVAL,
-			                      "--listen %s: expected HOST:PORT",
-			                      srv->cfg.listen);
-		}
-		if (uv_ip4_addr(host, port, (struct sockaddr_in *)&sa) != 0 &&
-		    uv_ip6_addr(host, port, (struct sockaddr_in6 *)&sa) != 0) {
-			return bc_errinfo_set(ei, BC_EINVAL,
-			                      "--listen %s: not an IP address",
-			                      srv->cfg.listen);
-		}
-		uv_tcp_init(srv->loop, &srv->tcp_listener);
-		srv->tcp_listener.data = srv;
-		srv->has_tcp = true;
-		if ((rc = uv_tcp_bind(&srv->tcp_listener,
-		                      (const struct sockaddr *)&sa, 0)) ||
-		    (rc = uv_listen((uv_stream_t *)&srv->tcp_listener, 64,
-		                    on_connection))) {
-			return bc_errinfo_set(ei, BC_EIO, "listen on %s: %s",
-			                      srv->cfg.listen, uv_strerror(rc));
-		}
-		bc_log(BC_LOG_INFO, "listening on %s", srv->cfg.listen);
-	}
-	if (srv->cfg.unix_path) {
-		uv_pipe_init(srv->loop, &srv->unix_listener, 0);
-		srv->unix_listener.data = srv;
-		srv->has_unix = true;
-		/* A socket file left by a daemon that died is replaced. */
-		unlink(srv->cfg.unix_path);
-		if ((rc = uv_pipe_bind(&srv->unix_listener,
-		                       srv->cfg.unix_path)) ||
-		    (rc = uv_listen((uv_stream_t *)&srv->unix_listener, 64,
-		                    on_connection))) {
-			return bc_errinfo_set(ei, BC_EIO, "listen on %s: %s",
-			                      srv->cfg.unix_path,
-			                      uv_strerror(rc));
-		}
-		bc_log(BC_LOG_INFO, "listening on unix:%s", srv->cfg.unix_path);
-	}
-	return 0;
 }
 
 void bc_net_close_all(struct bc_srv *srv)

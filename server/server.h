@@ -1,8 +1,9 @@
 /*
  * Private state of blobcastd, shared by its parts:
- *  - net.c: the libuv loop thread: listeners, connections (struct bc_conn,
- *    the daemon's own; libblobcast's struct bc_client is the client side),
- *    the protocol state machine, output queues with frame spoiling;
+ *  - net.c: the libuv loop thread: connections (struct bc_conn, the
+ *    daemon's own; libblobcast's struct bc_client is the client side), the
+ *    protocol state machine, output queues with frame spoiling;
+ *  - listen.c: the listeners, accepting connections;
  *  - session.c: session lifecycle, members, the message -> handler table;
  *  - edits.c: EDIT and SCENE_LOAD (the edit module applies, the journal
  *    keeps, EDIT_APPLIED broadcasts);
@@ -178,8 +179,10 @@ struct bc_srv {
 	double render_ms_last, render_ms_avg, encode_ms_last, encode_ms_avg;
 };
 
-/* ---- net.c -------------------------------------------------------------- */
+/* ---- listen.c ----------------------------------------------------------- */
 int bc_net_listen(struct bc_srv *srv, struct bc_errinfo *ei);
+
+/* ---- net.c -------------------------------------------------------------- */
 struct bc_conn *bc_conn_get(struct bc_srv *srv, struct bc_conn_ref ref);
 struct bc_conn_ref bc_conn_ref_of(const struct bc_conn *c);
 /* Encodes and queues m; on failure the client is closed. */
