@@ -1,10 +1,11 @@
 /*
- * The data directory's recovery (server/store.c): damaged journal records
- * are skipped and every other record restored, with the damaged file kept;
- * a snapshot that does not load is set aside for an older one, or the
- * session's files are, and other sessions carry on; a snapshot that failed
- * at any step (injected) leaves nothing on disk; periodic snapshots back
- * off after a failure; journal write failures are logged as errors.
+ * The data directory's recovery (server/store.c, snapshot.c, journal.c):
+ * damaged journal records are skipped and every other record restored,
+ * with the damaged file kept; a snapshot that does not load is set aside
+ * for an older one, or the session's files are, and other sessions carry
+ * on; a snapshot that failed at any step (injected) leaves nothing on
+ * disk; periodic snapshots back off after a failure; journal write
+ * failures are logged as errors.
  */
 #include <dirent.h>
 #include <fcntl.h>

@@ -1,0 +1,388 @@
+/*
+ * The edit journals of the data directory (see store.h for the layout):
+ * appending a record (framed by a magic, length, order and CRC32, synced
+ * before the edit is acknowledged), and replaying journal-N.bin on
+ * restore -- resynchronising past damaged records, cutting a torn tail,
+ * and replacing a damaged file by a clean one of the records that applied
+ * while the damaged one is kept. Snapshots and session files are store.c's.
+ */
+#include <errno.h>
+#include <fcntl.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include "blobcast/alloc.h"
+#include "blobcast/log.h"
+#include "store_impl.h"
+
+/* 'BCJ1' little-endian: the first bytes of every journal record. */
+#define JOURNAL_MAGIC 0x314a4342u
+#define RECORD_HEADER 20u
+/* A journal record carries one EDIT's operations: at most one protocol
+ * payload. */
+#define MAX_RECORD (64u * 1024u * 1024u)
+
+static void put32(uint8_t *p, uint32_t v)
+{
+	for (int i = 0; i < 4; i++) {
+		p[i] = (uint8_t)(v >> (8 * i));
+	}
+}
+
+static uint32_t get32(const uint8_t *p)
+{
+	return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 |
+	       (uint32_t)p[3] << 24;
+}
+
+/* Reads exactly n bytes at off; false on a short read. */
+static bool read_at(int fd, void *buf, size_t n, off_t off)
+{
+	size_t done = 0;
+	while (done < n) {
+		ssize_t r = pread(fd, (uint8_t *)buf + done, n - done,
+		                  off + (off_t)done);
+		if (r < 0 && errno == EINTR) {
+			continue;
+		}
+		if (r <= 0) {
+			return false;
+		}
+		done += (size_t)r;
+	}
+	return true;
+}
+
+/* A whole, checksummed record at off (header fields in *len, *ord); its
+ * payload is read into *buf (grown). 0: yes; 1: no; < 0: out of memory. */
+static int record_at(int fd, off_t off, off_t size, uint8_t **buf, size_t *cap,
+                     uint32_t *len, uint64_t *ord)
+{
+	uint8_t hdr[RECORD_HEADER];
+	uint32_t crc;
+	if (size - off < (off_t)RECORD_HEADER ||
+	    !read_at(fd, hdr, sizeof(hdr), off) ||
+	    get32(hdr) != JOURNAL_MAGIC) {
+		return 1;
+	}
+	*len = get32(hdr + 4);
+	*ord = (uint64_t)get32(hdr + 8) | (uint64_t)get32(hdr + 12) << 32;
+	crc = get32(hdr + 16);
+	if (*len > MAX_RECORD ||
+	    (off_t)*len > size - off - (off_t)RECORD_HEADER) {
+		return 1;
+	}
+	if (*len > *cap) {
+		uint8_t *grown = bc_realloc(*buf, *len);
+		if (!grown) {
+			return -1;
+		}
+		*buf = grown;
+		*cap = *len;
+	}
+	if (!read_at(fd, *buf, *len, off + (off_t)RECORD_HEADER) ||
+	    (uint32_t)crc32(0L, *buf, *len) != crc) {
+		return 1;
+	}
+	return 0;
+}
+
+/* The next offset after off where a whole record with an order above
+ * after starts, or size. A damaged length cannot be trusted, so the
+ * search goes byte by byte for the magic; a false match must also pass
+ * the length bound and the CRC32 of its payload. */
+static int resync(int fd, off_t off, off_t size, uint64_t after, uint8_t **buf,
+                  size_t *cap, off_t *next)
+{
+	uint8_t win[4096];
+	for (off_t at = off; at + (off_t)RECORD_HEADER <= size;) {
+		size_t n = (size_t)(size - at < (off_t)sizeof(win)
+		                        ? size - at
+		                        : (off_t)sizeof(win));
+		if (!read_at(fd, win, n, at)) {
+			break;
+		}
+		for (size_t i = 0; i + 4 <= n; i++) {
+			uint32_t len;
+			uint64_t ord;
+			int rc;
+			if (get32(win + i) != JOURNAL_MAGIC) {
+				continue;
+			}
+			rc = record_at(fd, at + (off_t)i, size, buf, cap, &len,
+			               &ord);
+			if (rc < 0) {
+				return rc;
+			}
+			if (rc == 0 && ord > after) {
+				*next = at + (off_t)i;
+				return 0;
+			}
+		}
+		/* Overlap by 3 so a magic across windows is seen. */
+		at += (off_t)(n > 3 ? n - 3 : n);
+	}
+	*next = size;
+	return 0;
+}
+
+/* One record of the rebuilt journal: where it lies in the old file. */
+struct kept {
+	off_t off;
+	uint32_t len;
+};
+
+/*
+ * Replays journal-<base>.bin. Records are applied in file order while
+ * their order numbers rise. A record that fails its checks is skipped and
+ * the reader resynchronises on the next whole record; a record that does
+ * not apply is skipped; both are logged with the file, the byte offsets
+ * and the orders, since later edits then apply to a state that lacks them
+ * (the best the journal still knows). Damage with nothing valid after it is
+ * a torn tail (a crash mid-write) and is cut. When anything in the middle
+ * was skipped, the file is kept as evidence (renamed *.damaged-TIME) and a
+ * clean journal of the records that applied takes its place.
+ */
+int bc__store_replay(struct bc_store_session *ss, bc_store_replay_fn fn,
+                     void *ud, uint64_t *order, struct bc_errinfo *ei)
+{
+	char file[PATH_LEN], tmp[PATH_LEN], aside[PATH_LEN];
+	uint8_t *rec = NULL;
+	size_t cap = 0;
+	struct kept *kept = NULL;
+	size_t nkept = 0, kcap = 0;
+	off_t off = 0, size, good = 0;
+	uint64_t skipped = 0;
+	struct stat st;
+	int fd, rc = 0;
+	bc__store_fmt_path(file, "%s/journal-%llu.bin", ss->path,
+	                   (unsigned long long)ss->base);
+	fd = open(file, O_RDWR | O_CLOEXEC);
+	if (fd < 0) {
+		return errno == ENOENT
+		           ? 0
+		           : bc__store_sys_error(ei, "cannot open", file);
+	}
+	if (fstat(fd, &st) != 0) {
+		rc = bc__store_sys_error(ei, "cannot stat", file);
+		goto out;
+	}
+	size = st.st_size;
+	while (off < size) {
+		uint32_t len;
+		uint64_t ord;
+		off_t next = size; /* resync sets it; GCC cannot tell */
+		int r = record_at(fd, off, size, &rec, &cap, &len, &ord);
+		if (r < 0) {
+			rc = bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+			goto out;
+		}
+		if (r == 0 && ord > *order) {
+			if ((r = fn(ud, ord, rec, len))) {
+				bc_log(
+				    BC_LOG_ERROR,
+				    "session %s: journal %s: record at bytes "
+				    "%lld..%lld (edit %llu) does not apply "
+				    "(%s): skipped",
+				    ss->name, file, (long long)off,
+				    (long long)(off + RECORD_HEADER + len),
+				    (unsigned long long)ord, bc_strerror(r));
+				skipped++;
+			} else {
+				if (ord != *order + 1 && *order >= ss->base) {
+					bc_log(BC_LOG_ERROR,
+					       "session %s: journal %s: edits "
+					       "%llu..%llu are missing before "
+					       "byte %lld",
+					       ss->name, file,
+					       (unsigned long long)(*order + 1),
+					       (unsigned long long)(ord - 1),
+					       (long long)off);
+				}
+				*order = ord;
+				ss->records++;
+				if (nkept == kcap) {
+					size_t c = kcap ? 2 * kcap : 64;
+					struct kept *g = bc_reallocarray(
+					    kept, c, sizeof(*kept));
+					if (!g) {
+						rc = bc_errinfo_set(
+						    ei, BC_ENOMEM,
+						    "out of memory");
+						goto out;
+					}
+					kept = g;
+					kcap = c;
+				}
+				kept[nkept].off = off;
+				kept[nkept++].len = len;
+			}
+			off += (off_t)RECORD_HEADER + len;
+			good = off;
+			continue;
+		}
+		/* Damaged, or an order already restored: find the next whole
+		 * record after it. */
+		if ((r = resync(fd, off + 1, size, *order, &rec, &cap, &next)) <
+		    0) {
+			rc = bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+			goto out;
+		}
+		if (next == size) {
+			break; /* nothing valid follows: a torn tail */
+		}
+		bc_log(BC_LOG_ERROR,
+		       "session %s: journal %s: bytes %lld..%lld are damaged "
+		       "or out of order: skipped",
+		       ss->name, file, (long long)off, (long long)next);
+		skipped++;
+		off = next;
+	}
+	if (skipped) {
+		/* Keep the evidence; install the records that applied. */
+		int out_fd;
+		bc__store_fmt_path(tmp, "%s/journal-%llu.bin.tmp", ss->path,
+		                   (unsigned long long)ss->base);
+		out_fd =
+		    open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+		if (out_fd < 0) {
+			rc = bc__store_sys_error(ei, "cannot create", tmp);
+			goto out;
+		}
+		good = 0;
+		for (size_t i = 0; i < nkept && !rc; i++) {
+			size_t n = RECORD_HEADER + kept[i].len;
+			if (n > cap) {
+				uint8_t *g = bc_realloc(rec, n);
+				if (!g) {
+					rc = bc_errinfo_set(ei, BC_ENOMEM,
+					                    "out of memory");
+					break;
+				}
+				rec = g;
+				cap = n;
+			}
+			if (!read_at(fd, rec, n, kept[i].off) ||
+			    write(out_fd, rec, n) != (ssize_t)n) {
+				rc = bc__store_sys_error(ei, "cannot write",
+				                         tmp);
+			}
+			good += (off_t)n;
+		}
+		if (!rc && fsync(out_fd) != 0) {
+			rc = bc__store_sys_error(ei, "cannot sync", tmp);
+		}
+		close(out_fd);
+		if (!rc && bc__store_set_aside(file, aside) != 0) {
+			rc = bc__store_sys_error(ei, "cannot set aside", file);
+		}
+		if (!rc && rename(tmp, file) != 0) {
+			rc = bc__store_sys_error(ei, "cannot rename", tmp);
+		}
+		if (rc) {
+			unlink(tmp);
+			goto out;
+		}
+		bc__store_sync_dir(ss->path);
+		bc_log(BC_LOG_ERROR,
+		       "session %s: journal %s: %llu damaged part(s) skipped, "
+		       "%llu records restored; the damaged file is kept as %s",
+		       ss->name, file, (unsigned long long)skipped,
+		       (unsigned long long)ss->records, aside);
+	} else if (good != size) {
+		bc_log(BC_LOG_WARN,
+		       "session %s: journal %s: cutting a torn tail at byte "
+		       "%lld (%lld bytes)",
+		       ss->name, file, (long long)good,
+		       (long long)(size - good));
+		if (ftruncate(fd, good) != 0 || fsync(fd) != 0) {
+			rc = bc__store_sys_error(ei, "cannot truncate", file);
+		}
+	}
+out:
+	bc_free(rec);
+	bc_free(kept);
+	close(fd);
+	return rc;
+}
+
+int bc__store_open_journal(struct bc_store_session *ss, struct bc_errinfo *ei)
+{
+	char file[PATH_LEN];
+	bc__store_fmt_path(file, "%s/journal-%llu.bin", ss->path,
+	                   (unsigned long long)ss->base);
+	ss->journal_fd =
+	    open(file, O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+	if (ss->journal_fd < 0) {
+		return bc__store_sys_error(ei, "cannot open", file);
+	}
+	ss->size = lseek(ss->journal_fd, 0, SEEK_END);
+	if (ss->size < 0 || bc__store_sync_dir(ss->path) != 0) {
+		return bc__store_sys_error(ei, "cannot sync", ss->path);
+	}
+	return 0;
+}
+
+int bc_store_append(struct bc_store_session *ss, uint64_t order,
+                    const uint8_t *rec, size_t len, struct bc_errinfo *ei)
+{
+	uint8_t hdr[RECORD_HEADER];
+	const uint8_t *parts[2] = {hdr, rec};
+	size_t sizes[2] = {sizeof(hdr), len};
+	if (ss->journal_fd < 0) {
+		return bc_errinfo_set(ei, BC_ESTATE,
+		                      "the session's journal is not open");
+	}
+	if (len > MAX_RECORD) {
+		return bc_errinfo_set(ei, BC_ELIMIT,
+		                      "journal record too large");
+	}
+	put32(hdr, JOURNAL_MAGIC);
+	put32(hdr + 4, (uint32_t)len);
+	put32(hdr + 8, (uint32_t)order);
+	put32(hdr + 12, (uint32_t)(order >> 32));
+	put32(hdr + 16, (uint32_t)crc32(0L, rec, (uInt)len));
+	if (bc__store_injected("journal-write", ss->path)) {
+		goto fail;
+	}
+	for (int i = 0; i < 2; i++) {
+		size_t done = 0;
+		while (done < sizes[i]) {
+			ssize_t n = write(ss->journal_fd, parts[i] + done,
+			                  sizes[i] - done);
+			if (n < 0 && errno == EINTR) {
+				continue;
+			}
+			if (n <= 0) {
+				goto fail;
+			}
+			done += (size_t)n;
+		}
+	}
+	if (fdatasync(ss->journal_fd) != 0) {
+		goto fail;
+	}
+	ss->records++;
+	ss->size += (off_t)(sizeof(hdr) + len);
+	return 0;
+fail : {
+	int rc = bc__store_sys_error(ei, "cannot append to the journal of",
+	                             ss->path);
+	bc_log(BC_LOG_ERROR, "session %s: journal write failed: %s", ss->name,
+	       strerror(errno));
+	/* Never leave half a record in front of the next one. */
+	if (ftruncate(ss->journal_fd, ss->size) != 0) {
+		bc_log(BC_LOG_ERROR, "cannot cut the journal of %s", ss->path);
+	}
+	return rc;
+}
+}
+
+uint64_t bc_store_journal_records(const struct bc_store_session *ss)
+{
+	return ss->records;
+}

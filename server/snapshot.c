@@ -1,0 +1,190 @@
+/*
+ * Writing a session's snapshot (see store.h for the layout): the scene as
+ * JSON, written to a temporary file, fsynced and renamed into place with
+ * the journal that follows it created first, so a failure at any step
+ * leaves the previous snapshot and journal as the state; and the periodic
+ * snapshot, which backs off after a failure (a full disk).
+ */
+#include <errno.h>
+#include <fcntl.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "blobcast/alloc.h"
+#include "blobcast/log.h"
+#include "blobcast/scene.h"
+#include "store_impl.h"
+
+static uint64_t mono_ms(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (uint64_t)ts.tv_sec * 1000u + (uint64_t)ts.tv_nsec / 1000000u;
+}
+
+/* Writes len bytes to fd; false on failure (errno set). */
+static bool write_all(int fd, const char *p, size_t len)
+{
+	size_t off = 0;
+	while (off < len) {
+		ssize_t n = write(fd, p + off, len - off);
+		if (n < 0 && errno == EINTR) {
+			continue;
+		}
+		if (n <= 0) {
+			if (n == 0) {
+				errno = EIO;
+			}
+			return false;
+		}
+		off += (size_t)n;
+	}
+	return true;
+}
+
+/*
+ * Writes snap-ORDER.json and starts journal-ORDER.bin, or changes nothing
+ * on disk: the text is made and its size checked against the reader's
+ * limit first; then the temporary file is written and fsynced and the new
+ * journal created, and only then is the snapshot renamed into place (the
+ * step that makes it the session's state) and the directory fsynced. A
+ * failure before the rename removes the temporary file and the new
+ * journal; the old snapshot and journal stay the session's state.
+ */
+int bc_store_snapshot(struct bc_store_session *ss, const struct bc_tree *t,
+                      const struct bc_camera *cam, uint64_t order,
+                      struct bc_errinfo *ei)
+{
+	char file[PATH_LEN], tmp[PATH_LEN], jfile[PATH_LEN];
+	char *text = NULL;
+	size_t len;
+	int fd = -1, jfd = -1, rc = 0;
+	bool new_journal = false, renamed = false;
+	uint64_t previous = ss->base;
+	struct stat jst;
+	bc__store_fmt_path(file, "%s/snap-%llu.json", ss->path,
+	                   (unsigned long long)order);
+	bc__store_fmt_path(tmp, "%s/snap-%llu.json.tmp", ss->path,
+	                   (unsigned long long)order);
+	bc__store_fmt_path(jfile, "%s/journal-%llu.bin", ss->path,
+	                   (unsigned long long)order);
+	if (bc_tree_nesting(t) > BC_SCENE_JSON_MAX_DEPTH) {
+		return bc_errinfo_set(ei, BC_EDEPTH,
+		                      "the scene nests %u levels; a snapshot "
+		                      "holds at most %u",
+		                      bc_tree_nesting(t),
+		                      BC_SCENE_JSON_MAX_DEPTH);
+	}
+	if (!(text = bc_scene_to_json(t, cam))) {
+		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+	}
+	len = strlen(text);
+	/* What the daemon cannot read back is refused before anything is
+	 * replaced. */
+	if (len > BC_SCENE_JSON_MAX_BYTES ||
+	    bc__store_injected("snapshot-size", file)) {
+		rc = bc_errinfo_set(ei, BC_ELIMIT,
+		                    "the scene's snapshot would be %zu bytes, "
+		                    "over the %u a restore reads",
+		                    len, BC_SCENE_JSON_MAX_BYTES);
+		goto out;
+	}
+	fd = bc__store_injected("snapshot-create", tmp)
+	         ? -1
+	         : open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+	if (fd < 0) {
+		rc = bc__store_sys_error(ei, "cannot create", tmp);
+		goto out;
+	}
+	if (bc__store_injected("snapshot-write", tmp) ||
+	    !write_all(fd, text, len)) {
+		rc = bc__store_sys_error(ei, "cannot write", tmp);
+		goto out;
+	}
+	if (bc__store_injected("snapshot-fsync", tmp) || fsync(fd) != 0) {
+		rc = bc__store_sys_error(ei, "cannot sync", tmp);
+		goto out;
+	}
+	/* The journal that will follow the snapshot exists before the
+	 * snapshot does (no inode left fails here, not after the rename). */
+	new_journal = stat(jfile, &jst) != 0;
+	jfd =
+	    bc__store_injected("journal-create", jfile)
+	        ? -1
+	        : open(jfile, O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+	if (jfd < 0) {
+		new_journal = false;
+		rc = bc__store_sys_error(ei, "cannot create", jfile);
+		goto out;
+	}
+	if (bc__store_injected("snapshot-rename", file) ||
+	    rename(tmp, file) != 0) {
+		rc = bc__store_sys_error(ei, "cannot rename to", file);
+		goto out;
+	}
+	renamed = true;
+	/* From here the snapshot is the state; a failing directory sync
+	 * cannot be undone, so it is an error the session must not ignore. */
+	if (bc__store_injected("dir-fsync", ss->path) ||
+	    bc__store_sync_dir(ss->path) != 0) {
+		rc = bc__store_sys_error(ei, "cannot sync", ss->path);
+	}
+	if (ss->journal_fd >= 0) {
+		close(ss->journal_fd);
+	}
+	ss->journal_fd = jfd;
+	jfd = -1;
+	ss->base = order;
+	ss->records = 0;
+	ss->size = lseek(ss->journal_fd, 0, SEEK_END);
+	ss->retry_at_ms = 0;
+	ss->backoff_ms = 0;
+	/* The previous generation stays: a snapshot found damaged later is
+	 * recovered from it and its journal. */
+	bc__store_tidy(ss->path, previous < order ? previous : order);
+out:
+	if (fd >= 0) {
+		close(fd);
+	}
+	if (jfd >= 0) {
+		close(jfd);
+	}
+	if (rc && !renamed) {
+		unlink(tmp);
+		if (new_journal) {
+			unlink(jfile);
+		}
+	}
+	bc_free(text);
+	return rc;
+}
+
+int bc_store_snapshot_due(struct bc_store_session *ss, uint64_t every,
+                          const struct bc_tree *t, const struct bc_camera *cam,
+                          uint64_t order, struct bc_errinfo *ei)
+{
+	uint64_t now = mono_ms();
+	int rc;
+	if (ss->records < every || now < ss->retry_at_ms) {
+		return 0;
+	}
+	if ((rc = bc_store_snapshot(ss, t, cam, order, ei))) {
+		ss->backoff_ms = ss->backoff_ms
+		                     ? ss->backoff_ms * 2u
+		                     : BC_STORE_SNAPSHOT_RETRY_MIN_MS;
+		if (ss->backoff_ms > BC_STORE_SNAPSHOT_RETRY_MAX_MS) {
+			ss->backoff_ms = BC_STORE_SNAPSHOT_RETRY_MAX_MS;
+		}
+		ss->retry_at_ms = now + ss->backoff_ms;
+		bc_log(BC_LOG_ERROR,
+		       "session %s: snapshot failed (%s); next try in %llu ms, "
+		       "edits stay journaled meanwhile",
+		       ss->name, ei ? ei->msg : bc_strerror(rc),
+		       (unsigned long long)ss->backoff_ms);
+	}
+	return rc;
+}

@@ -1,0 +1,68 @@
+/*
+ * The data directory's private types and file helpers, shared by store.c
+ * (the directory, session files, restoring and recovery from damaged
+ * ones), snapshot.c (writing snapshots) and journal.c (appending and
+ * replaying the edit journals).
+ */
+#ifndef BLOBCAST_SERVER_STORE_IMPL_H
+#define BLOBCAST_SERVER_STORE_IMPL_H
+
+#include <sys/types.h>
+
+#include "store.h"
+
+#define PATH_LEN 4096
+
+struct bc_store {
+	char *dir;
+	int lock_fd;
+};
+
+struct bc_store_session {
+	struct bc_store *st;
+	char *path; /* DIR/sessions/NAME */
+	int journal_fd;
+	uint64_t base; /* order of the snapshot the journal follows */
+	uint64_t records;
+	off_t size; /* journal bytes known good */
+	/* Periodic snapshots after a failure wait backoff_ms (doubling). */
+	uint64_t retry_at_ms, backoff_ms;
+	char name[72];
+};
+
+/* ---- store.c ---- */
+
+/* True (errno set to EIO) when the test hook fails this step. */
+bool bc__store_injected(const char *step, const char *path);
+
+/* Renames path to path.damaged-TIME, keeping it as evidence; writes the
+ * new name into aside (PATH_LEN). 0, or -1 with errno set. */
+int bc__store_set_aside(const char *path, char *aside);
+
+/* snprintf into a PATH_LEN buffer; false (and an empty path) when the
+ * result would not fit. */
+bool __attribute__((format(printf, 2, 3)))
+bc__store_fmt_path(char *buf, const char *fmt, ...);
+
+/* Sets ei to BC_EIO "what path: strerror(errno)" and returns BC_EIO. */
+int bc__store_sys_error(struct bc_errinfo *ei, const char *what,
+                        const char *path);
+
+/* fsyncs the directory path: 0, or -1 with errno set. */
+int bc__store_sync_dir(const char *path);
+
+/* Removes temporary files and every snapshot or journal older than keep. */
+void bc__store_tidy(const char *path, uint64_t keep);
+
+/* ---- journal.c ---- */
+
+/* Replays journal-<ss->base>.bin through fn after *order (raised to the
+ * last order applied), recovering from damage (see journal.c). */
+int bc__store_replay(struct bc_store_session *ss, bc_store_replay_fn fn,
+                     void *ud, uint64_t *order, struct bc_errinfo *ei);
+
+/* Opens journal-<ss->base>.bin for appending (creating it) and syncs the
+ * session's directory. */
+int bc__store_open_journal(struct bc_store_session *ss, struct bc_errinfo *ei);
+
+#endif
