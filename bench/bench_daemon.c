@@ -20,32 +20,6 @@
 #include "blobcast/scene.h"
 #include "latency.h"
 
-static int load_fig18(struct conn *c, uint32_t count, uint32_t *prim_id)
-{
-	struct bc_tree *t = bc_tree_create();
-	struct bc_camera cam;
-	struct bc_gen_opts o = {.count = count,
-				.kind = BC_GEN_KIND_SPHERES,
-				.blend = BC_GEN_BLEND_SMOOTH};
-	uint8_t *bytes = NULL;
-	size_t len = 0;
-	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
-	const struct bc_lin *l;
-	if (!t || bc_gen("fig18", &o, t, &cam, NULL) ||
-	    bc_scene_encode(t, &cam, &bytes, &len)) {
-		return -1;
-	}
-	l = bc_tree_lin(t);
-	/* A primitive in the middle of the comb. */
-	*prim_id = l->node_id[l->prim_slot[l->nprims / 2]];
-	m.scene_load.scene.ptr = bytes;
-	m.scene_load.scene.len = (uint32_t)len;
-	conn_send(c, &m);
-	bc_free(bytes);
-	bc_tree_destroy(t);
-	return conn_expect(c, BC_MSG_SCENE_STATE, 30000) == 1 ? 0 : -1;
-}
-
 static struct bc_prim_data original;
 
 /* Edits then waits for the frame reflecting each edit. */
@@ -123,16 +97,9 @@ int main(int argc, char **argv)
 	conn_open(&c, &d);
 	conn_hello(&c, "bench");
 	conn_join(&c, "bench", BC_PROTO_ROLE_EDITOR, true);
-	if (load_fig18(&c, 1024, &id)) {
+	if (latency_load_fig18(&c, 1024, &id, &original, NULL)) {
 		fprintf(stderr, "scene load failed\n");
 		return 1;
-	}
-	{
-		struct bc_tree *t = bc_tree_create();
-		bc_scene_decode(c.m.scene_state.scene.ptr,
-				c.m.scene_state.scene.len, t, NULL, NULL, NULL);
-		bc_tree_get(t, id, &original, NULL);
-		bc_tree_destroy(t);
 	}
 	conn_view(&c, 512, 512, BC_PROTO_ENC_JPEG);
 	/* Coarse pictures first, then the still: the edits start from it. */

@@ -26,32 +26,6 @@
 static struct bc_camera scene_cam;
 static struct bc_prim_data original;
 
-static int load_scene(struct conn *c, uint32_t *prim_id)
-{
-	struct bc_tree *t = bc_tree_create();
-	struct bc_gen_opts o = {.count = 1024,
-				.kind = BC_GEN_KIND_SPHERES,
-				.blend = BC_GEN_BLEND_SMOOTH};
-	uint8_t *bytes = NULL;
-	size_t len = 0;
-	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
-	const struct bc_lin *l;
-	if (!t || bc_gen("fig18", &o, t, &scene_cam, NULL) ||
-	    bc_scene_encode(t, &scene_cam, &bytes, &len)) {
-		return -1;
-	}
-	l = bc_tree_lin(t);
-	/* A sphere in the middle of the grid. */
-	*prim_id = l->node_id[l->prim_slot[l->nprims / 2]];
-	bc_tree_get(t, *prim_id, &original, NULL);
-	m.scene_load.scene.ptr = bytes;
-	m.scene_load.scene.len = (uint32_t)len;
-	conn_send(c, &m);
-	bc_free(bytes);
-	bc_tree_destroy(t);
-	return conn_expect(c, BC_MSG_SCENE_STATE, 30000) == 1 ? 0 : -1;
-}
-
 static void send_view(struct conn *c)
 {
 	struct bc_msg v = {.type = BC_MSG_VIEW};
@@ -159,7 +133,7 @@ static int run(const char *label, const char *const *opts, int edits,
 	}
 	if (conn_open(&c, &d) || conn_hello(&c, "bench") ||
 	    conn_join(&c, "bench", BC_PROTO_ROLE_EDITOR, true) ||
-	    load_scene(&c, &id)) {
+	    latency_load_fig18(&c, 1024, &id, &original, &scene_cam)) {
 		fprintf(stderr, "scene load failed\n");
 		daemon_stop(&d, SIGTERM);
 		return 1;

@@ -11,6 +11,8 @@
 #include <stdlib.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/gen.h"
+#include "blobcast/scene.h"
 
 struct latency {
 	int n;                  /* frames received */
@@ -70,6 +72,42 @@ static inline void latency_edits(struct conn *c, uint32_t id,
 		out->rects /= out->n;
 	}
 	bc_free(lat);
+}
+
+/* Loads fig18 (count smooth spheres) into c's session with SCENE_LOAD and
+ * waits for its SCENE_STATE. *prim_id: a sphere in the middle of the grid,
+ * *prim its data; *cam (may be NULL) the scene's camera. */
+static inline int latency_load_fig18(struct conn *c, uint32_t count,
+				     uint32_t *prim_id,
+				     struct bc_prim_data *prim,
+				     struct bc_camera *cam)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_camera scene_cam;
+	struct bc_gen_opts o = {.count = count,
+				.kind = BC_GEN_KIND_SPHERES,
+				.blend = BC_GEN_BLEND_SMOOTH};
+	uint8_t *bytes = NULL;
+	size_t len = 0;
+	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
+	const struct bc_lin *l;
+	if (!t || bc_gen("fig18", &o, t, &scene_cam, NULL) ||
+	    bc_scene_encode(t, &scene_cam, &bytes, &len)) {
+		bc_tree_destroy(t);
+		return -1;
+	}
+	l = bc_tree_lin(t);
+	*prim_id = l->node_id[l->prim_slot[l->nprims / 2]];
+	bc_tree_get(t, *prim_id, prim, NULL);
+	if (cam) {
+		*cam = scene_cam;
+	}
+	m.scene_load.scene.ptr = bytes;
+	m.scene_load.scene.len = (uint32_t)len;
+	conn_send(c, &m);
+	bc_free(bytes);
+	bc_tree_destroy(t);
+	return conn_expect(c, BC_MSG_SCENE_STATE, 30000) == 1 ? 0 : -1;
 }
 
 #endif
