@@ -32,8 +32,22 @@ int main(int argc, char **argv)
 	    bc_client_join(c, argv[2], BC_PROTO_ROLE_EDITOR,
 			   BC_CLIENT_JOIN_EXISTING, &ei) ||
 	    bc_client_view(c, &(struct bc_msg_view){.width = 320, .height = 240},
-			   NULL, &ei) ||
-	    bc_client_edit_kv(c, (uint32_t)strtoul(argv[3], NULL, 10),
+			   NULL, &ei)) {
+		fprintf(stderr, "nudge: %s (%s)\n", ei.msg, bc_err_name(ei.code));
+		goto out;
+	}
+	/* The view's picture first: coarse levels, then the still. Waiting
+	 * for other messages consumes frames, so the edit starts only once
+	 * the picture is whole and final; its frames then come after its
+	 * EDIT_APPLIED. */
+	do {
+		if (bc_client_wait(c, BC_MSG_FRAME, 0, &m, 0, &ei) ||
+		    bc_client_image_apply(&img, &m, &ei)) {
+			fprintf(stderr, "nudge: %s\n", ei.msg);
+			goto out;
+		}
+	} while (!(m.flags & BC_PROTO_FLAG_STILL));
+	if (bc_client_edit_kv(c, (uint32_t)strtoul(argv[3], NULL, 10),
 			      (const char *const *)argv + 4, (size_t)(argc - 4),
 			      false, &seq, &ei) ||
 	    bc_client_wait_applied(c, seq, &order, &ei)) {
