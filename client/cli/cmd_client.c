@@ -1,6 +1,6 @@
 /*
- * `blobcast load|edit|camera|snapshot|watch|bench-latency`: the command-line
- * client of blobcastd. It owns option parsing for these subcommands (strict:
+ * `blobcast load|edit|camera|snapshot|watch|bench-latency|nodes|scene`: the
+ * command-line client of blobcastd. It owns option parsing for these subcommands (strict:
  * every value is checked, options a subcommand does not take are refused),
  * their output formats, and the measurements of watch and bench-latency.
  * All protocol work goes through libblobcast (blobcast/client.h); image
@@ -26,6 +26,7 @@
 #include "blobcast/client.h"
 #include "blobcast/image.h"
 #include "blobcast/scene.h"
+#include "cmd_inspect.h"
 
 #define EXIT_FAIL 1
 #define EXIT_USAGE 2
@@ -44,6 +45,11 @@
 /* watch: edit orders whose arrival time is remembered for the latency of
  * the frame that shows them (frames lag edits by a few at most). */
 #define WATCH_ORDERS 256u
+/* watch: the first and the longest delay between attempts to reconnect. A
+ * restarting daemon is back in well under a second; a longer outage is
+ * tried every few seconds, which costs the server nothing noticeable. */
+#define WATCH_BACKOFF_MIN_MS 250
+#define WATCH_BACKOFF_MAX_MS 4000
 
 /* Options; each subcommand accepts the common ones and those in its mask. */
 enum {
@@ -62,6 +68,7 @@ enum {
 	O_INTERACTING = 1u << 12,
 	O_DOWNSCALE = 1u << 13,
 	O_IDS = 1u << 14,
+	O_JSON = 1u << 15,
 };
 #define O_CAMERA (O_EYE | O_TARGET | O_UP | O_FOV)
 
@@ -76,7 +83,7 @@ struct args {
 	uint64_t frames;
 	uint32_t edits, node;
 	enum bc_proto_encoding encoding;
-	bool interacting;
+	bool interacting, json;
 	uint8_t downscale;
 	const char *pos[MAX_POSITIONAL];
 	int npos;
@@ -626,14 +633,134 @@ static const char *frame_kind(uint16_t flags)
 	return (flags & BC_PROTO_FLAG_STILL) ? "still" : "interactive";
 }
 
+/* The session's members as the last SESSION_INFO listed them, to name
+ * the authors of edits. */
+struct roster {
+	uint16_t n;
+	uint32_t self;
+	struct {
+		uint32_t id;
+		enum bc_proto_role role;
+		char name[BC_PROTO_MAX_NAME + 1];
+	} m[BC_PROTO_MAX_MEMBERS];
+};
+
+static void roster_update(struct roster *r, const struct bc_msg_session_info *si)
+{
+	r->n = 0;
+	r->self = si->member_id;
+	for (uint16_t i = 0; i < si->nmembers && i < BC_PROTO_MAX_MEMBERS; i++) {
+		const struct bc_proto_member *pm = &si->members[i];
+		r->m[i].id = pm->id;
+		r->m[i].role = pm->role;
+		snprintf(r->m[i].name, sizeof(r->m[i].name), "%.*s",
+		         (int)pm->name.len, pm->name.ptr);
+		r->n++;
+	}
+}
+
+static const char *roster_name(const struct roster *r, uint32_t id)
+{
+	for (uint16_t i = 0; i < r->n; i++) {
+		if (r->m[i].id == id) {
+			return r->m[i].name;
+		}
+	}
+	return NULL;
+}
+
+/* "members 3: alice (editor, 4), blobcast-cli (viewer, 7, this client)" */
+static void print_members(const struct roster *r)
+{
+	printf("members %u:", r->n);
+	for (uint16_t i = 0; i < r->n; i++) {
+		printf("%s \"%s\" (%s, %u%s)", i ? "," : "", r->m[i].name,
+		       r->m[i].role == BC_PROTO_ROLE_EDITOR ? "editor"
+		                                            : "viewer",
+		       r->m[i].id, r->m[i].id == r->self ? ", this client" : "");
+	}
+	printf("\n");
+}
+
+/* `edit order=5 by="carol" member=20 ops=1`: the author's name comes from
+ * the member list (an author who already left prints as ""). */
+static void print_change(const struct roster *r, const char *what,
+                         uint64_t order, uint32_t author, const char *tail)
+{
+	const char *name = roster_name(r, author);
+	printf("%s order=%llu by=\"%s\" member=%u%s\n", what,
+	       (unsigned long long)order, name ? name : "", author, tail);
+}
+
+/* The errors after which connecting again would be refused the same way:
+ * watch reports them and stops instead of retrying. */
+static bool watch_gives_up(int code)
+{
+	return code == BC_EAUTH || code == BC_EPERM ||
+	       code == BC_EPROTO_VERSION || code == BC_ENOSESSION ||
+	       code == BC_EINVAL || code == BC_ELIMIT;
+}
+
+/* Connects, joins a->session as a viewer and asks for frames. The join is
+ * done here rather than with bc_client_join() to keep SESSION_INFO's
+ * member list (the scene state that follows is read by the frame loop).
+ * Returns 0 or a BC_E* code with the reason in ei; *c is set either way
+ * (NULL when the connection failed). */
+static int watch_open(const struct args *a, struct bc_client **c,
+                      struct roster *roster, double *view_at,
+                      struct bc_errinfo *ei)
+{
+	const char *token = a->token ? a->token : getenv("BLOBCAST_TOKEN");
+	const char *addr = a->server ? a->server : getenv("BLOBCAST_SERVER");
+	struct bc_msg m = {.type = BC_MSG_SESSION_JOIN};
+	int rc;
+	*c = NULL;
+	if ((rc = bc_client_connect(c,
+	                            &(struct bc_client_opts){
+	                                .addr = addr,
+	                                .name = a->name ? a->name
+	                                                : "blobcast-cli",
+	                                .token = token,
+	                                .timeout_ms = a->timeout_ms},
+	                            ei))) {
+		return rc;
+	}
+	m.session.role = BC_PROTO_ROLE_VIEWER;
+	m.session.name.ptr = a->session;
+	m.session.name.len = (uint32_t)strlen(a->session);
+	if ((rc = bc_client_send(*c, &m, NULL)) ||
+	    (rc = bc_client_wait(*c, BC_MSG_SESSION_INFO, 0, &m, 0, ei))) {
+		if (!ei->code) {
+			bc_client_error(*c, ei);
+			ei->code = rc;
+		}
+		return rc;
+	}
+	roster_update(roster, &m.session_info);
+	print_members(roster);
+	*view_at = now_ms();
+	return bc_client_view(*c,
+	                      &(struct bc_msg_view){.width = a->width,
+	                                            .height = a->height,
+	                                            .encoding = a->encoding,
+	                                            .downscale = a->downscale},
+	                      NULL, ei);
+}
+
 /*
  * Latency of a frame, as this client can measure it without a shared
  * clock: from the moment this client learned of the newest change the
  * frame shows to the moment the frame arrived. The change is an edit
  * (EDIT_APPLIED, or SCENE_STATE for a load) when the frame's edit order is
- * new; for the first frame it is our VIEW request. Frames that show
- * nothing new (a finer level or the still refining an earlier frame) get
- * "-".
+ * new; for the first frame after joining it is our VIEW request. Frames
+ * that show nothing new (a finer level or the still refining an earlier
+ * frame) get "-".
+ *
+ * A lost connection (the daemon restarted, the network dropped) is
+ * retried with a doubling delay and the session joined again; errors that
+ * a retry would meet again (a refused token, a missing session) end the
+ * run. With --frames N the run also ends when no frame has come for the
+ * --timeout (end=timeout, status 1).
  */
 static int run_watch(struct args *a)
 {
@@ -641,13 +768,21 @@ static int run_watch(struct args *a)
 	struct bc_errinfo ei = {0};
 	struct bc_client_image img;
 	struct order_times *times = NULL;
+	struct roster *roster = NULL;
 	struct sigaction sa, old_int, old_term;
 	struct bc_msg m;
 	struct bc_msg_stats st;
 	uint64_t nframes = 0, last_order = 0, total_bytes = 0;
-	double view_at;
-	uint32_t seq;
-	int status;
+	uint64_t joined_at_frame = 0;
+	double view_at = 0.0, last_frame_at, retry_at = 0.0;
+	int backoff_ms = WATCH_BACKOFF_MIN_MS, rc, status = 0;
+	/* --timeout bounds the wait for each frame when --frames asks for a
+	 * count; without it watch runs until stopped. */
+	double idle_limit = a->timeout_ms < 0 ? -1.0
+	                    : a->timeout_ms == 0
+	                        ? (double)BC_CLIENT_DEFAULT_TIMEOUT_MS
+	                        : (double)a->timeout_ms;
+	const char *end = "stopped";
 	bc_client_image_init(&img);
 	memset(&sa, 0, sizeof(sa));
 	sa.sa_handler = on_interrupt;
@@ -655,45 +790,117 @@ static int run_watch(struct args *a)
 	interrupted = 0;
 	sigaction(SIGINT, &sa, &old_int);
 	sigaction(SIGTERM, &sa, &old_term);
-	if (!(times = bc_calloc(1, sizeof(*times)))) {
+	if (!(times = bc_calloc(1, sizeof(*times))) ||
+	    !(roster = bc_calloc(1, sizeof(*roster)))) {
 		fprintf(stderr, "blobcast watch: out of memory\n");
 		status = EXIT_FAIL;
 		goto out;
 	}
-	if ((status = open_session(a, BC_PROTO_ROLE_VIEWER,
-	                           BC_CLIENT_JOIN_EXISTING, &c))) {
-		goto out;
-	}
-	order_seen(times, bc_client_info(c)->order, now_ms());
-	view_at = now_ms();
-	if (bc_client_view(c,
-	                   &(struct bc_msg_view){.width = a->width,
-	                                         .height = a->height,
-	                                         .encoding = a->encoding,
-	                                         .downscale = a->downscale},
-	                   &seq, &ei)) {
+	/* The first connection must work: a wrong address or session is a
+	 * mistake to report, not to retry. */
+	if ((rc = watch_open(a, &c, roster, &view_at, &ei))) {
 		status = failed(a, NULL, &ei);
 		goto out;
 	}
+	last_frame_at = now_ms();
 	while (!interrupted && (a->frames == 0 || nframes < a->frames)) {
 		double at, since;
 		const char *after = "-";
-		int rc = bc_client_recv(c, &m, WATCH_SLICE_MS);
+		if (a->frames && idle_limit >= 0.0 &&
+		    now_ms() - last_frame_at > idle_limit) {
+			end = "timeout";
+			break;
+		}
+		if (!c) {
+			/* Reconnecting: wait out the back-off in slices so
+			 * that Ctrl-C and the timeout are noticed. */
+			if (now_ms() < retry_at) {
+				struct timespec ts = {0, WATCH_SLICE_MS * 1000000L};
+				nanosleep(&ts, NULL);
+				continue;
+			}
+			memset(&ei, 0, sizeof(ei));
+			rc = watch_open(a, &c, roster, &view_at, &ei);
+			if (rc && watch_gives_up(rc)) {
+				status = failed(a, "reconnecting", &ei);
+				goto out;
+			}
+			if (rc) {
+				bc_client_destroy(c);
+				c = NULL;
+				retry_at = now_ms() + backoff_ms;
+				fprintf(stderr,
+				        "blobcast watch: reconnecting failed: %s "
+				        "(%s); next try in %d ms\n",
+				        ei.msg, bc_err_name(rc), backoff_ms);
+				backoff_ms = backoff_ms * 2 > WATCH_BACKOFF_MAX_MS
+				                 ? WATCH_BACKOFF_MAX_MS
+				                 : backoff_ms * 2;
+				continue;
+			}
+			fprintf(stderr, "blobcast watch: rejoined session %s\n",
+			        a->session);
+			printf("rejoined session=%s\n", a->session);
+			backoff_ms = WATCH_BACKOFF_MIN_MS;
+			joined_at_frame = nframes;
+			last_order = 0;
+		}
+		rc = bc_client_recv(c, &m, WATCH_SLICE_MS);
 		if (rc == 0) {
 			continue;
 		}
-		if (rc < 0) {
-			bc_client_error(c, &ei);
-			status = failed(a, NULL, &ei);
-			goto out;
+		if (rc < 0 || (m.type == BC_MSG_ERROR &&
+		               (m.flags & BC_PROTO_FLAG_FATAL))) {
+			if (rc > 0) {
+				ei.code = -(int)m.error.code;
+				snprintf(ei.msg, sizeof(ei.msg), "server: %.*s",
+				         (int)m.error.text.len, m.error.text.ptr);
+			} else {
+				bc_client_error(c, &ei);
+			}
+			if (watch_gives_up(ei.code)) {
+				status = failed(a, NULL, &ei);
+				goto out;
+			}
+			fprintf(stderr,
+			        "blobcast watch: connection lost: %s (%s); "
+			        "reconnecting\n",
+			        ei.msg[0] ? ei.msg : bc_strerror(ei.code),
+			        bc_err_name(ei.code));
+			printf("lost reason=%s\n", bc_err_name(ei.code));
+			fflush(stdout);
+			bc_client_destroy(c);
+			c = NULL;
+			retry_at = now_ms() + backoff_ms;
+			continue;
 		}
 		at = now_ms();
 		switch (m.type) {
-		case BC_MSG_EDIT_APPLIED:
-			order_seen(times, m.edit_applied.order, at);
+		case BC_MSG_SESSION_INFO:
+			roster_update(roster, &m.session_info);
+			print_members(roster);
+			fflush(stdout);
 			break;
+		case BC_MSG_EDIT_APPLIED: {
+			char tail[32];
+			order_seen(times, m.edit_applied.order, at);
+			snprintf(tail, sizeof(tail), " ops=%u%s",
+			         m.edit_applied.nops,
+			         (m.flags & BC_PROTO_FLAG_INTERACTING)
+			             ? " interacting"
+			             : "");
+			print_change(roster, "edit", m.edit_applied.order,
+			             m.edit_applied.author, tail);
+			fflush(stdout);
+			break;
+		}
 		case BC_MSG_SCENE_STATE:
 			order_seen(times, m.scene_state.order, at);
+			if (m.scene_state.author) {
+				print_change(roster, "load", m.scene_state.order,
+				             m.scene_state.author, "");
+				fflush(stdout);
+			}
 			break;
 		case BC_MSG_ERROR:
 			ei.code = -(int)m.error.code;
@@ -703,6 +910,7 @@ static int run_watch(struct args *a)
 			goto out;
 		case BC_MSG_FRAME:
 			nframes++;
+			last_frame_at = at;
 			total_bytes += bc_client_info(c)->last_msg_bytes;
 			if (bc_client_image_apply(&img, &m, &ei)) {
 				fprintf(stderr,
@@ -711,7 +919,7 @@ static int run_watch(struct args *a)
 				        m.frame.frame_no, ei.msg);
 			}
 			since = -1.0;
-			if (nframes == 1) {
+			if (nframes == joined_at_frame + 1) {
 				since = at - view_at;
 				after = "view";
 			} else if (m.frame.order > last_order &&
@@ -739,22 +947,119 @@ static int run_watch(struct args *a)
 			break;
 		}
 	}
-	if (bc_client_stats(c, &st, &ei)) {
+	if (a->frames && nframes >= a->frames) {
+		end = "frames";
+	}
+	/* Server averages when the connection is up; a run that ends while
+	 * reconnecting reports its own counts only. */
+	memset(&st, 0, sizeof(st));
+	if (c && bc_client_stats(c, &st, &ei)) {
 		status = failed(a, "stats", &ei);
 		goto out;
 	}
 	printf("stats frames=%llu bytes=%llu server_frames=%llu "
 	       "server_fps=%.1f render_ms_avg=%.2f encode_ms_avg=%.2f "
-	       "edit_ms_avg=%.3f\n",
+	       "edit_ms_avg=%.3f end=%s\n",
 	       (unsigned long long)nframes, (unsigned long long)total_bytes,
 	       (unsigned long long)st.frames, (double)st.fps,
 	       (double)st.render_ms_avg, (double)st.encode_ms_avg,
-	       (double)st.edit_ms_avg);
+	       (double)st.edit_ms_avg, end);
+	if (strcmp(end, "timeout") == 0) {
+		fprintf(stderr,
+		        "blobcast watch: timed out: %llu of %llu frames, none "
+		        "for %.0f ms (--timeout)\n",
+		        (unsigned long long)nframes,
+		        (unsigned long long)a->frames, idle_limit);
+		status = EXIT_FAIL;
+	}
 out:
 	sigaction(SIGINT, &old_int, NULL);
 	sigaction(SIGTERM, &old_term, NULL);
 	bc_free(times);
+	bc_free(roster);
 	bc_client_image_finish(&img);
+	bc_client_destroy(c);
+	return status;
+}
+
+/* ---- nodes, scene
+ * ----------------------------------------------------------------------------
+ */
+
+/* Both read the scene mirror that joining as a viewer fills from the
+ * session's SCENE_STATE: nothing is changed on the server, and the other
+ * members see a viewer come and go. */
+static int run_nodes(struct args *a)
+{
+	struct bc_client *c = NULL;
+	const struct bc_tree *t;
+	int status, rc;
+	if ((status = open_session(a, BC_PROTO_ROLE_VIEWER,
+	                           BC_CLIENT_JOIN_EXISTING, &c))) {
+		goto out;
+	}
+	if (!(t = bc_client_scene(c, NULL))) {
+		fprintf(stderr, "blobcast nodes: the session's scene did not "
+		                "decode (see the log above)\n");
+		status = EXIT_FAIL;
+		goto out;
+	}
+	if ((rc = bc_cli_print_nodes(stdout, t, a->json))) {
+		fprintf(stderr, "blobcast nodes: %s\n", bc_strerror(rc));
+		status = EXIT_FAIL;
+	}
+out:
+	bc_client_destroy(c);
+	return status;
+}
+
+static int run_scene(struct args *a)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	const struct bc_tree *t;
+	struct bc_camera cam;
+	char *text = NULL;
+	int status;
+	if ((status = open_session(a, BC_PROTO_ROLE_VIEWER,
+	                           BC_CLIENT_JOIN_EXISTING, &c))) {
+		goto out;
+	}
+	if (!(t = bc_client_scene(c, &cam))) {
+		fprintf(stderr, "blobcast scene: the session's scene did not "
+		                "decode (see the log above)\n");
+		status = EXIT_FAIL;
+		goto out;
+	}
+	if (a->out && strcmp(a->out, "-") != 0) {
+		if (bc_scene_save_json(a->out, t, &cam, &ei)) {
+			fprintf(stderr, "blobcast scene: %s\n", ei.msg);
+			status = EXIT_FAIL;
+			goto out;
+		}
+		printf("session %s: wrote %s (%u nodes, edit order %llu)\n",
+		       a->session, a->out, bc_tree_node_count(t),
+		       (unsigned long long)bc_client_info(c)->order);
+		goto out;
+	}
+	if (!(text = bc_scene_to_json(t, &cam))) {
+		/* The binary form carries trees the JSON writer refuses. */
+		fprintf(stderr,
+		        "blobcast scene: the scene (%u nodes, nesting %u) cannot "
+		        "be written as JSON (nesting limit %u, or out of "
+		        "memory)\n",
+		        bc_tree_node_count(t), bc_tree_nesting(t),
+		        BC_SCENE_JSON_MAX_DEPTH);
+		status = EXIT_FAIL;
+		goto out;
+	}
+	if (fputs(text, stdout) == EOF || fflush(stdout) != 0) {
+		fprintf(stderr, "blobcast scene: writing to stdout: %s\n",
+		        strerror(errno));
+		status = EXIT_FAIL;
+	}
+out:
+	bc_free(text);
 	bc_client_destroy(c);
 	return status;
 }
@@ -1035,9 +1340,19 @@ static const struct cmd cmds[] = {
      "first frame, our VIEW request) to the arrival of the frame. It\n"
      "covers the server's render, encode and send, not the editor's\n"
      "upload; frames that show nothing new (a finer level, a still after\n"
-     "interactive frames) print '-'. At the end (after N frames, or\n"
-     "Ctrl-C) one 'stats' line gives the server's averages.\n"
-     "  --frames N      stop after N frames (default: run until stopped)\n"
+     "interactive frames) print '-'. Other lines name the members and\n"
+     "who changed the scene:\n"
+     "  members 2: \"alice\" (editor, 4), \"blobcast-cli\" (viewer, 7, this client)\n"
+     "  edit order=5 by=\"alice\" member=4 ops=1 [interacting]\n"
+     "  load order=6 by=\"alice\" member=4\n"
+     "A lost connection prints 'lost reason=CODE' and is retried every\n"
+     "0.25 s, doubling up to 4 s, then 'rejoined session=NAME'; a refused\n"
+     "token or a missing session ends the run instead. At the end one\n"
+     "'stats' line gives the server's averages and end=frames (N frames\n"
+     "came), end=timeout or end=stopped (Ctrl-C, SIGTERM).\n"
+     "  --frames N      stop after N frames (default: run until stopped);\n"
+     "                  give up when no frame came for --timeout MS\n"
+     "                  (default 10000; 0: never), exit status 1\n"
      "  --size WxH      view size (default 640x480)\n"
      "  --encoding E    jpeg (default), png or raw for still frames\n"
      "  --downscale D   coarsest block accepted (1..8): refinement frames at\n"
@@ -1062,6 +1377,26 @@ static const struct cmd cmds[] = {
      "  --downscale D   coarsest block accepted (1..8): refinement frames at\n"
      "                  1/2^n resolution with 2^n <= D (default 1)\n",
      run_bench},
+    {"nodes", O_SESSION | O_JSON, 0, 0, "--session NAME [--json]",
+     "list a session's nodes: id, type, parent, parameters",
+     "Joins session NAME as a viewer and lists its scene's nodes in\n"
+     "pre-order, one line each: id, type, parent id ('-' for the root),\n"
+     "then the parameters with the keys 'blobcast edit' takes (operators:\n"
+     "children=N and, when smooth, blend and range; primitives: their\n"
+     "kind's parameters, translate and rotate unless at rest, color when\n"
+     "set). Floats are printed so that they read back exactly.\n"
+     "  --json          one JSON array instead: objects with id, type,\n"
+     "                  parent (0 for the root), children (operators) and\n"
+     "                  every parameter, translate and rotate included\n",
+     run_nodes},
+    {"scene", O_SESSION | O_OUT, 0, 0, "--session NAME [--out FILE]",
+     "write a session's scene as a JSON scene file",
+     "Joins session NAME as a viewer and writes its scene, with the\n"
+     "session's camera, as a JSON scene file (docs/scene-format.md) that\n"
+     "'blobcast load' takes back unchanged: every id and float is kept.\n"
+     "  --out FILE      write to FILE (atomically) instead of stdout\n"
+     "                  (\"-\": stdout)\n",
+     run_scene},
 };
 
 static const struct cmd *find_cmd(const char *name)
@@ -1174,6 +1509,10 @@ static int parse_option(const struct cmd *k, int argc, char **argv, int *i,
 		need = O_DOWNSCALE;
 		ok = v && parse_u64(v, 1, BC_PROTO_MAX_DOWNSCALE, &x);
 		a->downscale = ok ? (uint8_t)x : 0;
+	} else if (strcmp(arg, "--json") == 0) {
+		need = O_JSON;
+		a->json = true;
+		v = "";
 	} else if (strcmp(arg, "--interacting") == 0) {
 		need = O_INTERACTING;
 		a->interacting = true;

@@ -1,6 +1,6 @@
 /*
  * The `blobcast` subcommands that talk to a blobcastd through libblobcast:
- * load, edit, camera, snapshot, watch and bench-latency.
+ * load, edit, camera, snapshot, watch, bench-latency, nodes and scene.
  */
 #ifndef BLOBCAST_CLI_CMD_CLIENT_H
 #define BLOBCAST_CLI_CMD_CLIENT_H

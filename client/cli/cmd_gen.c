@@ -36,6 +36,8 @@ static void usage(FILE *f)
 		fprintf(f, "  %s %s\n      %s\n", g[i].name, g[i].usage,
 		        g[i].summary);
 	}
+	fprintf(f, "  default\n      the built-in scene blobcastd's new "
+	           "sessions start with\n");
 	fprintf(
 	    f,
 	    "\n"
@@ -201,6 +203,27 @@ int bc_cli_gen(int argc, char **argv)
 		usage(stderr);
 		return EXIT_USAGE;
 	}
+	if (strcmp(name, "default") == 0) {
+		const char *json = bc_scene_default_json();
+		/* blobcastd's built-in scene, which new sessions start with;
+		 * it takes no generator options. */
+		if (o.level || o.count || o.seed || o.teeth || o.depth ||
+		    o.kind || o.blend) {
+			fprintf(stderr, "blobcast gen: default takes no options "
+			                "but --out\n");
+			return EXIT_USAGE;
+		}
+		if (!(t = bc_tree_create())) {
+			fprintf(stderr, "blobcast gen: out of memory\n");
+			return 1;
+		}
+		if (bc_scene_parse_json(json, strlen(json), t, &cam, &ei)) {
+			fprintf(stderr, "blobcast gen: %s\n", ei.msg);
+			status = 1;
+			goto cleanup;
+		}
+		goto write;
+	}
 	if (!(info = bc_gen_find(name))) {
 		fprintf(stderr,
 		        "blobcast gen: no generator called \"%s\" (see "
@@ -221,6 +244,7 @@ int bc_cli_gen(int argc, char **argv)
 		             : 1;
 		goto cleanup;
 	}
+write:
 	if (out && strcmp(out, "-") != 0) {
 		if ((rc = bc_scene_save_json(out, t, &cam, &ei))) {
 			fprintf(stderr, "blobcast gen: %s\n", ei.msg);

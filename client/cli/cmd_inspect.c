@@ -1,0 +1,234 @@
+/*
+ * The node listing of `blobcast nodes`: every node of a scene in pre-order
+ * with its id, type, parent and parameters, as aligned text for people or
+ * as a JSON array for scripts. Parameter keys are those `blobcast edit`
+ * takes (docs/client.md), so a line says how to change what it shows.
+ */
+#include "cmd_inspect.h"
+
+#include <jansson.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "blobcast/alloc.h"
+#include "blobcast/error.h"
+
+/* Floats keep 9 significant digits: the fewest that always give the same
+ * IEEE single back. */
+#define FLOAT_DIGITS 9
+
+/* The double nearest to the shortest decimal that gives v back as a float:
+ * 0.3f prints as 0.3, not 0.300000012. */
+static double shortest(float v)
+{
+	char buf[32];
+	for (int p = 1; p < FLOAT_DIGITS; p++) {
+		snprintf(buf, sizeof(buf), "%.*g", p, (double)v);
+		if (strtof(buf, NULL) == v) {
+			return strtod(buf, NULL);
+		}
+	}
+	return (double)v;
+}
+
+static bool is_identity_rotation(const float q[4])
+{
+	return q[0] == 0.0f && q[1] == 0.0f && q[2] == 0.0f && q[3] == 1.0f;
+}
+
+static bool is_zero3(const float v[3])
+{
+	return v[0] == 0.0f && v[1] == 0.0f && v[2] == 0.0f;
+}
+
+/* ---- text ---------------------------------------------------------------- */
+
+static void put_floats(FILE *out, const char *key, const float *v, int n)
+{
+	fprintf(out, " %s=", key);
+	for (int i = 0; i < n; i++) {
+		fprintf(out, "%s%.*g", i ? "," : "", FLOAT_DIGITS,
+		        shortest(v[i]));
+	}
+}
+
+static void text_node(FILE *out, const struct bc_tree *t, uint32_t id)
+{
+	struct bc_prim_data p;
+	struct bc_op_data op;
+	uint32_t parent = bc_tree_parent(t, id);
+	char pbuf[16];
+	snprintf(pbuf, sizeof(pbuf), "%u", parent);
+	bc_tree_get(t, id, &p, &op);
+	if (p.kind != BC_PRIM_INVALID) {
+		const struct bc_prim_info *info = bc_prim_info(p.kind);
+		fprintf(out, "%-8u %-19s %-8s", id, info ? info->name : "?",
+		        parent ? pbuf : "-");
+		for (uint8_t k = 0; info && k < info->nparams; k++) {
+			const struct bc_param_desc *d = &info->params[k];
+			put_floats(out, d->name, &p.params[d->offset],
+			           d->count);
+		}
+		if (!is_zero3(p.translate)) {
+			put_floats(out, "translate", p.translate, 3);
+		}
+		if (!is_identity_rotation(p.rotate)) {
+			put_floats(out, "rotate", p.rotate, 4);
+		}
+		if (p.has_color) {
+			put_floats(out, "color", p.color, 3);
+		}
+	} else {
+		const char *name = bc_op_name(op.kind);
+		fprintf(out, "%-8u %-19s %-8s children=%u", id,
+		        name ? name : "?", parent ? pbuf : "-",
+		        bc_tree_child_count(t, id));
+		if (bc_op_is_smooth(op.kind)) {
+			put_floats(out, "blend", &op.blend, 1);
+			put_floats(out, "range", &op.range, 1);
+		}
+	}
+	fputc('\n', out);
+}
+
+/* ---- JSON ---------------------------------------------------------------- */
+
+static json_t *json_floats(const float *v, int n)
+{
+	json_t *a;
+	if (n == 1) {
+		return json_real(shortest(v[0]));
+	}
+	if (!(a = json_array())) {
+		return NULL;
+	}
+	for (int i = 0; i < n; i++) {
+		if (json_array_append_new(a, json_real(shortest(v[i])))) {
+			json_decref(a);
+			return NULL;
+		}
+	}
+	return a;
+}
+
+/* Returns the node's object, NULL when memory runs out. */
+static json_t *json_node(const struct bc_tree *t, uint32_t id)
+{
+	struct bc_prim_data p;
+	struct bc_op_data op;
+	json_t *o = json_object();
+	bool ok = o != NULL;
+	bc_tree_get(t, id, &p, &op);
+	ok = ok && !json_object_set_new(o, "id", json_integer(id));
+	if (p.kind != BC_PRIM_INVALID) {
+		const struct bc_prim_info *info = bc_prim_info(p.kind);
+		ok = ok && info &&
+		     !json_object_set_new(o, "type", json_string(info->name)) &&
+		     !json_object_set_new(o, "parent",
+		                          json_integer(bc_tree_parent(t, id)));
+		for (uint8_t k = 0; ok && k < info->nparams; k++) {
+			const struct bc_param_desc *d = &info->params[k];
+			ok = !json_object_set_new(
+			    o, d->name,
+			    json_floats(&p.params[d->offset], d->count));
+		}
+		ok = ok && !json_object_set_new(o, "translate",
+		                                json_floats(p.translate, 3));
+		ok = ok && !json_object_set_new(o, "rotate",
+		                                json_floats(p.rotate, 4));
+		if (ok && p.has_color) {
+			ok = !json_object_set_new(o, "color",
+			                          json_floats(p.color, 3));
+		}
+	} else {
+		const char *name = bc_op_name(op.kind);
+		json_t *kids = json_array();
+		uint32_t n = bc_tree_child_count(t, id);
+		ok = ok && name && kids &&
+		     !json_object_set_new(o, "type", json_string(name)) &&
+		     !json_object_set_new(o, "parent",
+		                          json_integer(bc_tree_parent(t, id)));
+		for (uint32_t k = 0; ok && k < n; k++) {
+			ok = !json_array_append_new(
+			    kids, json_integer(bc_tree_child(t, id, k)));
+		}
+		ok = ok && !json_object_set(o, "children", kids);
+		json_decref(kids);
+		if (ok && bc_op_is_smooth(op.kind)) {
+			ok = !json_object_set_new(
+			         o, "blend", json_real(shortest(op.blend))) &&
+			     !json_object_set_new(
+			         o, "range", json_real(shortest(op.range)));
+		}
+	}
+	if (!ok) {
+		json_decref(o);
+		return NULL;
+	}
+	return o;
+}
+
+/* ---- the walk --------------------------------------------------------------
+ */
+
+int bc_cli_print_nodes(FILE *out, const struct bc_tree *t, bool json)
+{
+	uint32_t n = bc_tree_node_count(t), top = 0;
+	/* Pre-order with an explicit stack: trees may nest far deeper than a
+	 * thread's stack would allow recursion (BC_TREE_MAX_DEPTH). Every node
+	 * is pushed once, so n entries suffice. */
+	uint32_t *stack = bc_calloc(n ? n : 1, sizeof(*stack));
+	bool first = true;
+	int rc = 0;
+	if (!stack) {
+		return BC_ENOMEM;
+	}
+	if (json) {
+		fputs("[", out);
+	} else {
+		fprintf(out, "%-8s %-19s %-8s %s\n", "id", "type", "parent",
+		        "parameters");
+	}
+	if (n) {
+		stack[top++] = bc_tree_root(t);
+	}
+	while (top > 0) {
+		uint32_t id = stack[--top];
+		uint32_t kids = bc_tree_child_count(t, id);
+		if (json) {
+			/* One compact object per line: easy to grep, and
+			 * still one JSON document. */
+			json_t *o = json_node(t, id);
+			fputs(first ? "\n" : ",\n", out);
+			if (!o) {
+				rc = BC_ENOMEM;
+				goto out;
+			}
+			rc = json_dumpf(o, out,
+			                JSON_COMPACT | JSON_PRESERVE_ORDER |
+			                    JSON_REAL_PRECISION(FLOAT_DIGITS));
+			json_decref(o);
+			if (rc) {
+				rc = BC_EIO;
+				goto out;
+			}
+		} else {
+			text_node(out, t, id);
+		}
+		first = false;
+		/* Children go on in reverse so the first is listed first. */
+		for (uint32_t k = kids; k > 0 && top < n; k--) {
+			stack[top++] = bc_tree_child(t, id, k - 1);
+		}
+	}
+	if (json) {
+		fputs("\n]\n", out);
+	}
+	if (fflush(out) != 0 || ferror(out)) {
+		rc = BC_EIO;
+	}
+out:
+	bc_free(stack);
+	return rc;
+}

@@ -1,0 +1,207 @@
+#!/bin/sh
+# What a session holds and how watch behaves over time, against a private
+# blobcastd (free loopback port, temporary data directory):
+#  - `gen default` is the daemon's built-in scene: `scene` of a fresh
+#    session prints the same file;
+#  - round trip: load -> scene -> load into another session -> scene and
+#    `nodes --json` are identical (every id and float survives), for the
+#    default scene and a random one with every primitive and operator kind;
+#  - `nodes` lists ids, types, parents and parameters as edit keys;
+#  - watch names the author of an edit made with --name;
+#  - `watch --frames N` on a still session ends after --timeout with
+#    end=timeout and status 1;
+#  - watch survives a daemon restart on the same port: it reports the loss,
+#    rejoins, and counts the frames of the restarted daemon.
+#
+# usage: test_cli_inspect.sh BLOBCAST BLOBCASTD
+# Exits 77 (skipped) when either program has not been built.
+set -u
+BLOBCAST=${1:-}
+BLOBCASTD=${2:-}
+for prog in "$BLOBCAST" "$BLOBCASTD"; do
+  if [ -z "$prog" ] || [ ! -x "$prog" ]; then
+    echo "skip: blobcast and blobcastd must both be built"
+    exit 77
+  fi
+done
+
+tmp=$(mktemp -d /tmp/bc-cli-inspect.XXXXXX) || exit 1
+daemon=
+watcher=
+stop_daemon() {
+  if [ -n "$daemon" ]; then
+    kill -TERM "$daemon" 2>/dev/null
+    wait "$daemon" 2>/dev/null
+    daemon=
+  fi
+}
+trap 'stop_daemon; [ -n "$watcher" ] && kill "$watcher" 2>/dev/null; rm -rf "$tmp"' EXIT
+trap 'exit 1' INT TERM
+failures=0
+fail() {
+  echo "FAIL: $*"
+  failures=$((failures + 1))
+}
+
+# start_daemon ADDR: starts blobcastd on ADDR and sets $port.
+start_daemon() {
+  "$BLOBCASTD" --listen "$1" --data "$tmp/data" --backend cpu --log warn \
+    >> "$tmp/daemon.log" 2>&1 &
+  daemon=$!
+  port=
+  i=0
+  while [ $i -lt 100 ]; do
+    port=$(sed -n 's/^blobcastd: listening on 127\.0\.0\.1:\([0-9][0-9]*\)$/\1/p' \
+      "$tmp/daemon.log" | tail -n 1)
+    [ -n "$port" ] && break
+    kill -0 "$daemon" 2>/dev/null || break
+    sleep 0.1
+    i=$((i + 1))
+  done
+  if [ -z "$port" ]; then
+    echo "FAIL: blobcastd did not start"
+    sed 's/^/    /' "$tmp/daemon.log"
+    exit 1
+  fi
+}
+
+# wait_for PATTERN FILE [TENTHS]: waits until FILE has a line matching
+# PATTERN (grep -E); returns 1 after TENTHS/10 seconds (default 10 s).
+wait_for() {
+  j=0
+  while [ $j -lt "${3:-100}" ]; do
+    grep -qE "$1" "$2" && return 0
+    sleep 0.1
+    j=$((j + 1))
+  done
+  return 1
+}
+
+start_daemon 127.0.0.1:0
+S="--server 127.0.0.1:$port"
+echo "blobcastd on 127.0.0.1:$port"
+
+# --- gen default is the daemon's built-in scene ------------------------------
+"$BLOBCAST" gen default > "$tmp/default.json" || fail "gen default"
+"$BLOBCAST" $S scene --session default > "$tmp/s-default.json" ||
+  fail "scene --session default"
+if ! cmp -s "$tmp/default.json" "$tmp/s-default.json"; then
+  fail "scene of a fresh session differs from gen default"
+  diff "$tmp/default.json" "$tmp/s-default.json" | head -n 10
+fi
+"$BLOBCAST" gen default --count 3 > /dev/null 2>&1
+[ $? -eq 2 ] || fail "gen default --count 3 was not refused"
+
+# --- round trips ----------------------------------------------------------------
+"$BLOBCAST" gen random --count 60 --seed 7 > "$tmp/random.json" ||
+  fail "gen random"
+for scene in default random; do
+  "$BLOBCAST" $S load --session "$scene-a" "$tmp/$scene.json" > /dev/null ||
+    fail "load $scene-a"
+  "$BLOBCAST" $S scene --session "$scene-a" --out "$tmp/$scene-a.json" \
+    > "$tmp/out" || fail "scene --out for $scene-a"
+  grep -q "^session $scene-a: wrote $tmp/$scene-a.json (" "$tmp/out" ||
+    fail "scene --out said: $(cat "$tmp/out")"
+  "$BLOBCAST" $S load --session "$scene-b" "$tmp/$scene-a.json" > /dev/null ||
+    fail "load $scene-b"
+  "$BLOBCAST" $S scene --session "$scene-b" > "$tmp/$scene-b.json" ||
+    fail "scene $scene-b"
+  if ! cmp -s "$tmp/$scene-a.json" "$tmp/$scene-b.json"; then
+    fail "$scene: the scene changed through scene -> load"
+  fi
+  # The file given to load comes back as it was written by gen.
+  if ! cmp -s "$tmp/$scene.json" "$tmp/$scene-a.json"; then
+    fail "$scene: load -> scene changed the scene"
+  fi
+  "$BLOBCAST" $S nodes --session "$scene-a" --json > "$tmp/$scene-a.nodes"
+  "$BLOBCAST" $S nodes --session "$scene-b" --json > "$tmp/$scene-b.nodes"
+  if ! cmp -s "$tmp/$scene-a.nodes" "$tmp/$scene-b.nodes"; then
+    fail "$scene: nodes --json differ between the two sessions"
+  fi
+done
+if command -v python3 > /dev/null 2>&1; then
+  python3 - "$tmp/random-a.nodes" "$tmp/random.json" <<'EOF' ||
+import json, sys
+nodes = json.load(open(sys.argv[1]))
+scene = json.load(open(sys.argv[2]))
+# Every node of the file, in pre-order, with its parent and type.
+want = []
+def walk(n, parent):
+    want.append((n["id"], n["type"], parent))
+    for c in n.get("children", []):
+        walk(c, n["id"])
+walk(scene["root"], 0)
+got = [(n["id"], n["type"], n["parent"]) for n in nodes]
+assert got == want, (got[:5], want[:5])
+assert len(nodes) == 60 + sum(1 for n in nodes if "children" in n)
+EOF
+    fail "nodes --json does not list the random scene's nodes in pre-order"
+fi
+
+# The text listing: the default scene's sphere 23 under operator 21.
+"$BLOBCAST" $S nodes --session default > "$tmp/nodes.txt" || fail "nodes"
+grep -qE '^23 +sphere +21 +radius=0\.75 translate=-1\.15,-0\.33,0\.1 color=0\.86,0\.25,0\.22$' \
+  "$tmp/nodes.txt" || fail "nodes: no line for sphere 23: $(sed -n 1,8p "$tmp/nodes.txt")"
+grep -qE '^1 +union +- +children=7$' "$tmp/nodes.txt" ||
+  fail "nodes: the root line is wrong"
+"$BLOBCAST" $S nodes --session nosuch > "$tmp/out" 2>&1
+[ $? -eq 1 ] && grep -q ENOSESSION "$tmp/out" ||
+  fail "nodes of a missing session: $(cat "$tmp/out")"
+
+# --- watch names an edit's author; --frames ends on a timeout ---------------
+"$BLOBCAST" $S watch --session default --frames 5 --size 48x32 \
+  --timeout 1500 > "$tmp/watch1" 2> "$tmp/watch1.err" &
+watcher=$!
+wait_for '^frame 1 ' "$tmp/watch1" || fail "watch: no first frame"
+"$BLOBCAST" $S edit --name carol --session default 50 radius=0.15 \
+  > /dev/null || fail "edit as carol"
+wait "$watcher"
+status=$?
+watcher=
+sed 's/^/    /' "$tmp/watch1" "$tmp/watch1.err"
+grep -qE '^members 1: "blobcast-cli" \(viewer, [0-9]+, this client\)$' \
+  "$tmp/watch1" || fail "watch: no member line"
+grep -qE '^members 2: .*"carol" \(editor, [0-9]+\)' "$tmp/watch1" ||
+  fail "watch: carol not listed when she joined"
+grep -qE '^edit order=[0-9]+ by="carol" member=[0-9]+ ops=1$' \
+  "$tmp/watch1" || fail "watch: the edit does not name carol"
+[ "$status" -eq 1 ] || fail "watch that timed out exited $status, not 1"
+grep -qE '^stats frames=[234] .* end=timeout$' "$tmp/watch1" ||
+  fail "watch: no end=timeout"
+grep -qE 'timed out: [234] of 5 frames, none for 1500 ms' "$tmp/watch1.err" ||
+  fail "watch: the timeout is not reported"
+
+# --- watch across a daemon restart -------------------------------------------
+"$BLOBCAST" $S watch --session default --frames 3 --size 48x32 \
+  --timeout 20000 > "$tmp/watch2" 2> "$tmp/watch2.err" &
+watcher=$!
+wait_for '^frame 1 ' "$tmp/watch2" || fail "watch: no first frame"
+stop_daemon
+start_daemon "127.0.0.1:$port"
+wait_for '^rejoined session=default$' "$tmp/watch2" 100 ||
+  fail "watch did not rejoin the restarted daemon"
+wait_for '^frame 2 ' "$tmp/watch2" || fail "watch: no frame after rejoining"
+"$BLOBCAST" $S edit --session default 50 radius=0.12 > /dev/null ||
+  fail "edit after the restart"
+i=0
+while [ $i -lt 100 ] && kill -0 "$watcher" 2>/dev/null; do
+  sleep 0.1
+  i=$((i + 1))
+done
+kill "$watcher" 2>/dev/null && fail "watch did not finish"
+wait "$watcher"
+status=$?
+watcher=
+sed 's/^/    /' "$tmp/watch2" "$tmp/watch2.err"
+[ "$status" -eq 0 ] || fail "watch across the restart exited $status"
+grep -q '^lost reason=' "$tmp/watch2" || fail "watch: the loss is not shown"
+grep -qE '^frame 2 .*after=view$' "$tmp/watch2" ||
+  fail "watch: the first frame after rejoining is not measured from the view"
+grep -qE '^stats frames=3 .* end=frames$' "$tmp/watch2" ||
+  fail "watch: no end=frames"
+
+if [ "$failures" -ne 0 ]; then
+  echo "$failures check(s) failed"
+  exit 1
+fi
+echo "all checks passed"
