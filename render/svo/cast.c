@@ -13,8 +13,10 @@
  * wide as the pixel footprint: then either its ends straddle the band and
  * the Illinois variant of regula falsi refines the crossing (superlinear,
  * unlike the thesis's plain bisection), or the dip is smaller than a pixel
- * and is dropped. As the sphere tracer does, a real crossing of zero just
- * behind a near miss is refined to, so depths compare.
+ * and is dropped. The band's entry is where the ray hit, not the depth:
+ * settle() refines it to the field's zero crossing, or on a silhouette to
+ * the ray's closest approach, as the sphere tracer does, so that depths
+ * agree to the refinement tolerance and not to the band's thickness.
  */
 #include "svo_impl.h"
 
@@ -29,6 +31,12 @@
 /* Iterations of the refinement at most; Illinois converges superlinearly,
  * so this only bounds degenerate brackets. */
 #define CAST_MAX_REFINE 40
+/* settle(): a probe goes at most this many bands past the last sample, and
+ * the march takes at most this many probes (enough for its depth limit of
+ * 64 bands at a band per step, with room for the short steps of a descent
+ * onto a crossing). */
+#define SETTLE_MAX_REACH 4.0f
+#define SETTLE_MAX_STEPS 96
 
 struct bc_svo_caster {
 	const struct bc_svo *s;
@@ -206,6 +214,131 @@ static bool leaf_root(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
 	return false;
 }
 
+/* The ray passes a surface by without crossing it: the field along it has
+ * a minimum in [a, b] (the value at a, va > 0, and at b are above the
+ * samples inside). Golden section search narrows the bracket to the
+ * refinement tolerance, so a silhouette's depth is the closest approach;
+ * a negative sample on the way is a crossing after all and is refined.
+ * Inside the hit band the octree's field is the exact field (a variant
+ * keeps the sign of f - c for every level c of the band, hence the value
+ * of f wherever it lies in the band), so the minimum found is the true
+ * field's. */
+static float closest(const struct ray_field *rf, float a, float va, float b)
+{
+	const float g = 0.618034f;
+	float c = b - g * (b - a), e = a + g * (b - a);
+	float vc = field_at(rf, c), ve;
+	if (vc <= 0.0f) {
+		return refine(rf, a, va, c, vc);
+	}
+	ve = field_at(rf, e);
+	if (ve <= 0.0f) {
+		return refine(rf, a, va, e, ve);
+	}
+	for (int i = 0; i < CAST_MAX_REFINE && b - a > rf->cp->refine_tol;
+	     i++) {
+		if (vc < ve) {
+			b = e;
+			e = c;
+			ve = vc;
+			c = b - g * (b - a);
+			vc = field_at(rf, c);
+			if (vc <= 0.0f) {
+				return refine(rf, a, va, c, vc);
+			}
+		} else {
+			a = c;
+			va = vc;
+			c = e;
+			vc = ve;
+			e = a + g * (b - a);
+			ve = field_at(rf, e);
+			if (ve <= 0.0f) {
+				return refine(rf, a, va, e, ve);
+			}
+		}
+	}
+	return vc < ve ? c : e;
+}
+
+/* The ray entered the hit band at th (the caster's bracketing finds the
+ * band's entry). The surface it hit is where the field first crosses zero
+ * while it stays in the band, or, where the ray only grazes the surface,
+ * its closest approach: the smallest field along the stretch of the ray
+ * inside the band. The march follows the field's slope (a secant
+ * prediction of its zero, overshot by half, as the sphere tracer's
+ * refinement in render/cpu/trace.c does) while it descends, and walks a
+ * band at a time where it does not; a sample below zero is a crossing and
+ * is refined to it; a sample above the band ends the stretch, and golden
+ * section search then narrows the smallest sample's bracket. Probes go at
+ * most SETTLE_MAX_REACH bands ahead (a ray nearly parallel to a surface
+ * predicts its zero far away, and a long probe could jump a dip and the
+ * bump after it), the march at most 64 bands deep (beyond that the ray is
+ * so oblique that any point of it is as good a depth) and never past tb,
+ * the ray's exit from the octree. */
+static float settle(const struct ray_field *rf, float th, float ta, float tb)
+{
+	const struct bc_svo_cast_params *cp = rf->cp;
+	float band = bc_svo_hit_band(cp, th);
+	float limit = fminf(th + 64.0f * band, tb);
+	float t = th, v = field_at(rf, th), tp = th - 0.5f * band, vp = 0.0f;
+	float best_t = th, best_v, before, before_v, after = th;
+	bool slope = false, after_set = false;
+	if (!(v > 0.0f)) {
+		return th; /* at or inside the surface already */
+	}
+	if (tp >= ta) {
+		vp = field_at(rf, tp);
+		slope = vp > v;
+	}
+	best_v = v;
+	before = slope ? tp : th;
+	before_v = slope ? vp : v;
+	for (int i = 0; i < SETTLE_MAX_STEPS; i++) {
+		float bt = bc_svo_hit_band(cp, t), reach, probe, vq;
+		if (slope && t > tp && vp > v) {
+			reach = 1.5f * v * (t - tp) / (vp - v);
+		} else {
+			reach = bt; /* level or rising: walk on */
+		}
+		reach = fminf(fmaxf(reach, cp->min_step), SETTLE_MAX_REACH * bt);
+		probe = fminf(t + reach, limit);
+		if (!(probe > t)) {
+			break; /* the march's end */
+		}
+		vq = field_at(rf, probe);
+		if (vq <= 0.0f) {
+			return refine(rf, t, v, probe, vq);
+		}
+		if (!after_set && t == best_t) {
+			after = probe;
+			after_set = true;
+		}
+		if (vq < best_v) {
+			before = t;
+			before_v = v;
+			best_t = probe;
+			best_v = vq;
+			after_set = false;
+		}
+		tp = t;
+		vp = v;
+		t = probe;
+		v = vq;
+		slope = true;
+		if (vq > bc_svo_hit_band(cp, probe)) {
+			break; /* out of the band: the ray grazed */
+		}
+	}
+	if (!after_set) {
+		after = fminf(best_t + bc_svo_hit_band(cp, best_t), tb);
+	}
+	if (!(after > before)) {
+		return best_t;
+	}
+	return closest(rf, before, before_v, after);
+}
+
 /* The ray's parameter interval inside the box, clipped to [t0, t1]. */
 static bool clip(const float lo[3], const float hi[3], const float o[3],
                  const float d[3], float *t0, float *t1)
@@ -323,16 +456,7 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
 	hit->leaf_terms = terms;
 	{
 		struct ray_field rf = {s, NULL, o, d, cp, false, &hit->evals};
-		float f = field_at(&rf, th);
-		float probe = fminf(th + 2.0f * bc_svo_hit_band(cp, th), tb);
-		/* A near miss with a real crossing just behind it: the
-		 * surface is the crossing. */
-		if (f >= 0.0f && probe > th) {
-			float fp = field_at(&rf, probe);
-			if (fp < 0.0f) {
-				th = refine(&rf, th, f, probe, fp);
-			}
-		}
+		th = settle(&rf, th, ta, tb);
 	}
 	hit->t = th;
 	hit->mask = mask;

@@ -334,8 +334,9 @@ float bc_svo_hit_band(const struct bc_svo_cast_params *cp, float t);
  * leaves of the octree front to back. In a leaf holding surface, interval
  * bisection in the octree's arithmetic brackets the first point where the
  * field drops below the hit band, and the Illinois variant of the secant
- * method refines it; a real crossing just behind a near miss is refined to
- * the crossing as the sphere tracer does. Returns true and fills *hit on a
+ * method refines it; the depth is then refined to the field's zero
+ * crossing behind the band's entry, or on a ray that only grazes the
+ * surface to its closest approach (docs/svo.md). Returns true and fills *hit on a
  * hit; hit->evals and range_evals are filled either way. */
 bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
                  float t0, float t1, const struct bc_svo_cast_params *cp,
