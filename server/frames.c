@@ -247,15 +247,29 @@ void bc_handle_view(struct bc_conn *c, const struct bc_msg *m)
 	}
 }
 
-/* A render job for c alone at its full view size, or NULL (out of
- * memory). */
-static struct bc_rjob *single_job(struct bc_conn *c)
+/* A render job for c alone at its full view size, answering request seq
+ * (a PICK or a SNAPSHOT), or NULL: c already has BC_SRV_MAX_CLIENT_REQUESTS
+ * of them queued (answered EBUSY), or out of memory (ENOMEM). */
+static struct bc_rjob *single_job(struct bc_conn *c, uint32_t seq)
 {
-	struct bc_rjob *job = bc_calloc(1, sizeof(*job));
-	if (!job || !(job->targets = bc_calloc(1, sizeof(*job->targets)))) {
-		bc_free(job);
+	struct bc_rjob *job;
+	if (c->requests >= BC_SRV_MAX_CLIENT_REQUESTS) {
+		bc_conn_send_error(c, seq, BC_EBUSY, false,
+		                   "%u picks and snapshots are already being "
+		                   "rendered for this client; wait for their "
+		                   "answers",
+		                   c->requests);
 		return NULL;
 	}
+	job = bc_calloc(1, sizeof(*job));
+	if (!job || !(job->targets = bc_calloc(1, sizeof(*job->targets)))) {
+		bc_free(job);
+		bc_log(BC_LOG_ERROR, "out of memory for a render request");
+		bc_conn_send_error(c, seq, BC_ENOMEM, false,
+		                   "the server is out of memory");
+		return NULL;
+	}
+	c->requests++;
 	job->session_id = c->session->id;
 	job->camera = c->camera;
 	job->width = c->view.width;
@@ -274,10 +288,7 @@ void bc_handle_pick(struct bc_conn *c, const struct bc_msg *m)
 		                   "pick outside the view (send VIEW first)");
 		return;
 	}
-	if (!(job = single_job(c))) {
-		bc_log(BC_LOG_ERROR, "out of memory for a PICK");
-		bc_conn_send_error(c, m->seq, BC_ENOMEM, false,
-		                   "the server is out of memory");
+	if (!(job = single_job(c, m->seq))) {
 		return;
 	}
 	job->pick = true;
@@ -296,10 +307,7 @@ void bc_handle_snapshot(struct bc_conn *c, const struct bc_msg *m)
 		                   "SNAPSHOT");
 		return;
 	}
-	if (!(job = single_job(c))) {
-		bc_log(BC_LOG_ERROR, "out of memory for a SNAPSHOT");
-		bc_conn_send_error(c, m->seq, BC_ENOMEM, false,
-		                   "the server is out of memory");
+	if (!(job = single_job(c, m->seq))) {
 		return;
 	}
 	job->encoding = (int)m->snapshot.encoding;

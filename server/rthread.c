@@ -20,6 +20,15 @@
  * picture at the view's level. The views are kept in views.c and what a
  * job renders (a pick, a frame and its encoding) in render_job.c; this file
  * holds the thread, its replicas, its command and result queues.
+ *
+ * Fairness. Commands of one session run in the order they were sent, but
+ * sessions are independent (each has its own replica), so the thread takes
+ * them in turns: the oldest command of the next session, round robin on
+ * session ids. A session with a backlog of large frames then delays
+ * another session's next frame by one job, not by its whole backlog. Jobs
+ * of clients that have all disconnected are removed from the queue
+ * (bc_rthread_sweep_soon), and each client has at most
+ * BC_SRV_MAX_CLIENT_REQUESTS PICKs and SNAPSHOTs queued (frames.c).
  */
 #include <string.h>
 
@@ -112,6 +121,51 @@ static void run(struct bc_rthread *rt, struct rcmd *cmd)
 	}
 }
 
+/* Unlinks cmd, whose predecessor in the queue is prev (NULL: the head).
+ * Called with the lock held. */
+static void unlink_cmd(struct bc_rthread *rt, struct rcmd *prev,
+                       struct rcmd *cmd)
+{
+	if (prev) {
+		prev->next = cmd->next;
+	} else {
+		rt->head = cmd->next;
+	}
+	if (rt->tail == cmd) {
+		rt->tail = prev;
+	}
+	cmd->next = NULL;
+}
+
+/* The command to run next (see Fairness in the file comment): the oldest
+ * of the session whose id follows the last served one, cyclically. Called
+ * with the lock held and the queue not empty. */
+static struct rcmd *take_cmd(struct bc_rthread *rt)
+{
+	struct rcmd *next = NULL, *next_prev = NULL;
+	struct rcmd *low = NULL, *low_prev = NULL, *prev = NULL;
+	for (struct rcmd *c = rt->head; c; prev = c, c = c->next) {
+		uint32_t id = c->session_id;
+		/* Strict comparisons keep each session's oldest command. */
+		if (id > rt->last_session &&
+		    (!next || id < next->session_id)) {
+			next = c;
+			next_prev = prev;
+		}
+		if (!low || id < low->session_id) {
+			low = c;
+			low_prev = prev;
+		}
+	}
+	if (!next) {
+		next = low;
+		next_prev = low_prev;
+	}
+	unlink_cmd(rt, next_prev, next);
+	rt->last_session = next->session_id;
+	return next;
+}
+
 static void thread_main(void *arg)
 {
 	struct bc_rthread *rt = arg;
@@ -125,11 +179,7 @@ static void thread_main(void *arg)
 			uv_mutex_unlock(&rt->lock);
 			break;
 		}
-		cmd = rt->head;
-		rt->head = cmd->next;
-		if (!rt->head) {
-			rt->tail = NULL;
-		}
+		cmd = take_cmd(rt);
 		uv_mutex_unlock(&rt->lock);
 		run(rt, cmd);
 		bc_free(cmd);
@@ -216,14 +266,69 @@ static void free_job(struct bc_rjob *job)
 	bc_free(job);
 }
 
+static bool has_client(struct bc_srv *srv, const struct bc_rjob *job)
+{
+	for (uint32_t i = 0; i < job->ntargets; i++) {
+		if (bc_conn_get(srv, job->targets[i])) {
+			return true;
+		}
+	}
+	return false;
+}
+
+static void sweep(uv_timer_t *t)
+{
+	struct bc_srv *srv = t->data;
+	struct bc_rthread *rt = srv->rt;
+	struct rcmd *gone = NULL, *prev = NULL, *cmd;
+	uint32_t n = 0;
+	uv_mutex_lock(&rt->lock);
+	for (cmd = rt->head; cmd;) {
+		struct rcmd *next = cmd->next;
+		if (cmd->kind == RCMD_JOB && !has_client(srv, cmd->job)) {
+			unlink_cmd(rt, prev, cmd);
+			cmd->next = gone;
+			gone = cmd;
+			n++;
+		} else {
+			prev = cmd;
+		}
+		cmd = next;
+	}
+	uv_mutex_unlock(&rt->lock);
+	while (gone) {
+		cmd = gone->next;
+		free_job(gone->job);
+		bc_free(gone->res);
+		bc_free(gone);
+		gone = cmd;
+	}
+	if (n > 0) {
+		bc_log(BC_LOG_INFO,
+		       "dropped %u queued render job%s of clients that left", n,
+		       n == 1 ? "" : "s");
+	}
+}
+
+void bc_rthread_sweep_soon(struct bc_srv *srv)
+{
+	if (srv->rt) {
+		uv_timer_start(&srv->job_sweep, sweep, 0, 0);
+	}
+}
+
 void bc_rthread_job(struct bc_srv *srv, struct bc_rjob *job)
 {
 	struct rcmd *cmd = new_cmd(RCMD_JOB, job->session_id);
 	struct rresult *res = bc_calloc(1, sizeof(*res));
 	if (!cmd || !res) {
+		struct bc_conn *c = bc_conn_get(srv, job->targets[0]);
 		bc_log(BC_LOG_ERROR, "out of memory queueing a render job");
 		bc_free(cmd);
 		bc_free(res);
+		if (c && (job->pick || job->snapshot_seq) && c->requests > 0) {
+			c->requests--;
+		}
 		bc_session_frame_failed(srv, job);
 		free_job(job);
 		return;
@@ -272,6 +377,12 @@ void bc_rthread_deliver(uv_async_t *async)
 	while (res) {
 		struct rresult *next = res->next;
 		struct bc_rjob *job = res->job;
+		if (job->pick || job->snapshot_seq) {
+			struct bc_conn *c = bc_conn_get(srv, job->targets[0]);
+			if (c && c->requests > 0) {
+				c->requests--;
+			}
+		}
 		if (job->pick) {
 			struct bc_conn *c = bc_conn_get(srv, job->targets[0]);
 			struct bc_msg m = {.type = BC_MSG_PICK_RESULT,
@@ -391,6 +502,8 @@ int bc_rthread_start(struct bc_srv *srv, struct bc_errinfo *ei)
 	srv->rt = rt;
 	uv_async_init(srv->loop, &srv->results, bc_rthread_deliver);
 	srv->results.data = srv;
+	uv_timer_init(srv->loop, &srv->job_sweep);
+	srv->job_sweep.data = srv;
 	if (uv_thread_create(&rt->thread, thread_main, rt) != 0) {
 		return bc_errinfo_set(ei, BC_EIO, "cannot start render thread");
 	}
@@ -435,6 +548,7 @@ void bc_rthread_stop(struct bc_srv *srv)
 	uv_mutex_destroy(&rt->lock);
 	uv_cond_destroy(&rt->cond);
 	uv_close((uv_handle_t *)&srv->results, NULL);
+	uv_close((uv_handle_t *)&srv->job_sweep, NULL);
 	bc_free(rt);
 	srv->rt = NULL;
 }

@@ -78,6 +78,7 @@ struct bc_rthread {
 	uv_mutex_t lock;
 	uv_cond_t cond;
 	struct rcmd *head, *tail;
+	uint32_t last_session; /* served last: the turns go on from it */
 	struct rresult *rhead, *rtail;
 	bool quit;
 	enum bc_backend backend;

@@ -120,6 +120,7 @@ struct bc_conn {
 	bool still_sent;     /* the last frame sent was the still of now */
 	struct bc_shown shown; /* what its last frame left it holding */
 
+	uint32_t requests;   /* PICKs and SNAPSHOTs queued, unanswered */
 	/* Output: messages go out at once; frames one at a time. */
 	size_t queued;
 	bool frame_writing;
@@ -165,6 +166,7 @@ struct bc_srv {
 
 	struct bc_conn *clients[BC_SRV_MAX_CONNECTIONS];
 	uint32_t gens[BC_SRV_MAX_CONNECTIONS];
+	uv_timer_t job_sweep; /* drops queued jobs of clients that left */
 	uint32_t nclients;
 	uint32_t next_conn_id;
 
@@ -287,3 +289,6 @@ void bc_rthread_job(struct bc_srv *srv, struct bc_rjob *job);
 void bc_rthread_deliver(uv_async_t *async);
 
 #endif
+/* Soon (next loop turn, once a closing connection is gone): removes from
+ * the render queue every job none of whose clients is still connected. */
+void bc_rthread_sweep_soon(struct bc_srv *srv);

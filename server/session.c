@@ -290,6 +290,10 @@ void bc_session_leave(struct bc_conn *c)
 	c->stage = BC_PROTO_STAGE_READY;
 	c->role = BC_PROTO_ROLE_INVALID;
 	c->render_pending = false;
+	/* When c is closing, its queued renders serve nobody once it is
+	 * gone (a client still connected keeps its PICK and SNAPSHOT
+	 * answers). */
+	bc_rthread_sweep_soon(s->srv);
 	bc_session_send_info(s);
 }
 

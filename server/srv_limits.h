@@ -81,6 +81,15 @@
  * to feel immediate when the user lets go. */
 #define BC_SRV_STILL_DELAY_MS 300u
 
+/* PICK and SNAPSHOT requests of one client queued for the render thread
+ * and not yet answered. Frames need no such cap (a client has at most one
+ * frame in flight); requests are answered in order, so a client that wants
+ * more than this waits for answers first. Over it: ERROR EBUSY, not fatal.
+ * Eight keep a picking or snapshotting client busy without letting it queue
+ * minutes of full-size renders ahead of everyone (100 queued 4096^2
+ * snapshots once held another session's client for 178 s). */
+#define BC_SRV_MAX_CLIENT_REQUESTS 8u
+
 /* Wait before a session retries the frames it could not queue for lack of
  * memory: the clients stay owed them, and a retry at once would spin. */
 #define BC_SRV_OOM_RETRY_MS 100u

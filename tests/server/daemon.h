@@ -27,6 +27,9 @@
 #endif
 /* The daemon executable (benchmarks point it at a Release build). */
 static const char *daemon_path = BLOBCASTD_PATH;
+/* When set, the next daemons started write their log (stderr) to this
+ * file, truncated at each start, for tests that check what was logged. */
+static const char *daemon_log_path;
 
 struct daemon {
 	pid_t pid;
@@ -68,7 +71,13 @@ static int daemon_start_with(struct daemon *d, const char *dir,
 	}
 	if (d->pid == 0) {
 		int devnull = open("/dev/null", O_WRONLY);
-		if (devnull >= 0 && !getenv("BLOBCAST_TEST_VERBOSE")) {
+		if (daemon_log_path) {
+			int log = open(daemon_log_path,
+				       O_WRONLY | O_CREAT | O_TRUNC, 0600);
+			if (log >= 0) {
+				dup2(log, 2);
+			}
+		} else if (devnull >= 0 && !getenv("BLOBCAST_TEST_VERBOSE")) {
 			dup2(devnull, 2);
 		}
 		execl(daemon_path, "blobcastd", "--listen", "none", "--unix",

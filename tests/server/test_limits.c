@@ -316,6 +316,166 @@ static void a_scene_too_big_to_send_is_refused(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
+/* Sends n SNAPSHOTs in one write (so the daemon reads them in one turn). */
+static void send_snapshots(struct conn *c, uint32_t n)
+{
+	struct bc_proto_buf b;
+	bc_proto_buf_init(&b, 0);
+	for (uint32_t i = 0; i < n; i++) {
+		struct bc_msg m = {.type = BC_MSG_SNAPSHOT};
+		m.seq = ++c->seq;
+		m.snapshot.encoding = BC_PROTO_ENC_PNG;
+		REQUIRE(bc_proto_encode(&b, &m, NULL) == 0);
+	}
+	REQUIRE(send_raw(c, b.data, b.len) == 0);
+	bc_proto_buf_finish(&b);
+}
+
+/* A member of session name (created when create) with a size x size
+ * view. */
+static void member(struct conn *c, const struct daemon *d, const char *name,
+                   bool create, uint16_t size)
+{
+	REQUIRE(conn_open(c, d) == 0);
+	REQUIRE(conn_hello(c, name) == 0);
+	REQUIRE(conn_join(c, name, BC_PROTO_ROLE_EDITOR, create) == 0);
+	REQUIRE(conn_view(c, size, size, BC_PROTO_ENC_PNG));
+}
+
+/* Takes what c has received so far (without waiting): counts snapshot
+ * answers and EBUSY errors. */
+static void drain(struct conn *c, int wait_ms, uint32_t *snaps,
+                  uint32_t *busy)
+{
+	while (conn_recv(c, wait_ms) == 1) {
+		if (c->m.type == BC_MSG_FRAME &&
+		    (c->m.flags & BC_PROTO_FLAG_SNAPSHOT)) {
+			(*snaps)++;
+		} else if (c->m.type == BC_MSG_ERROR &&
+		           c->m.error.code == -BC_EBUSY) {
+			(*busy)++;
+		}
+	}
+}
+
+static void a_client_queues_a_bounded_number_of_requests(void)
+{
+	struct daemon d;
+	struct conn c;
+	char dir[64];
+	uint32_t snaps = 0, busy = 0, sent = BC_SRV_MAX_CLIENT_REQUESTS + 12u;
+	int64_t end;
+	make_dir_name(dir, sizeof(dir), "requests");
+	REQUIRE(daemon_start(&d, dir) == 0);
+	member(&c, &d, "s", true, 512);
+	send_snapshots(&c, sent);
+	end = t_now_ms() + 120000;
+	while (snaps + busy < sent && t_now_ms() < end) {
+		drain(&c, 1000, &snaps, &busy);
+	}
+	/* All arrive in one read: the first BC_SRV_MAX_CLIENT_REQUESTS are
+	 * queued, the rest refused at once. */
+	CHECK_EQ_INT(snaps, BC_SRV_MAX_CLIENT_REQUESTS);
+	CHECK_EQ_INT(busy, sent - BC_SRV_MAX_CLIENT_REQUESTS);
+	/* Once answered, the client may ask again. */
+	send_snapshots(&c, 1);
+	snaps = busy = 0;
+	end = t_now_ms() + 60000;
+	while (snaps + busy < 1 && t_now_ms() < end) {
+		drain(&c, 1000, &snaps, &busy);
+	}
+	CHECK_EQ_INT(snaps, 1);
+	CHECK_EQ_INT(busy, 0);
+	conn_close(&c);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
+/* Whether file holds the text. */
+static bool log_has(const char *file, const char *text)
+{
+	char buf[1 << 16];
+	FILE *f = fopen(file, "r");
+	size_t n;
+	if (!f) {
+		return false;
+	}
+	n = fread(buf, 1, sizeof(buf) - 1, f);
+	fclose(f);
+	buf[n] = '\0';
+	return strstr(buf, text) != NULL;
+}
+
+static void the_jobs_of_a_client_that_left_are_dropped(void)
+{
+	struct daemon d;
+	struct conn a, b;
+	char dir[64], log[80];
+	uint32_t snaps = 0, busy = 0;
+	int64_t end;
+	make_dir_name(dir, sizeof(dir), "gone");
+	snprintf(log, sizeof(log), "%s.log", dir);
+	daemon_log_path = log;
+	REQUIRE(daemon_start(&d, dir) == 0);
+	daemon_log_path = NULL;
+	member(&a, &d, "s", true, 2048);
+	send_snapshots(&a, BC_SRV_MAX_CLIENT_REQUESTS);
+	t_sleep_ms(50);
+	conn_close(&a);
+	/* The first snapshot is rendering; the others are dropped, and a
+	 * member of the same session (whose commands run in order) is
+	 * answered after that one render, not after all of them. */
+	member(&b, &d, "s", false, 64);
+	send_snapshots(&b, 1);
+	end = t_now_ms() + 120000;
+	while (snaps < 1 && t_now_ms() < end) {
+		drain(&b, 1000, &snaps, &busy);
+	}
+	CHECK_EQ_INT(snaps, 1);
+	CHECK(log_has(log, "queued render jobs of clients that left"));
+	conn_close(&b);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
+static void sessions_take_turns_on_the_render_thread(void)
+{
+	struct daemon d;
+	struct conn big, small;
+	char dir[64];
+	uint32_t big_snaps = 0, small_snaps = 0, busy = 0;
+	int64_t end;
+	make_dir_name(dir, sizeof(dir), "turns");
+	REQUIRE(daemon_start(&d, dir) == 0);
+	member(&big, &d, "big", true, 2048);
+	member(&small, &d, "small", true, 64);
+	/* Both views' first frames are out of the way. */
+	REQUIRE(conn_expect(&big, BC_MSG_FRAME, 60000) == 1);
+	REQUIRE(conn_expect(&small, BC_MSG_FRAME, 60000) == 1);
+	send_snapshots(&big, BC_SRV_MAX_CLIENT_REQUESTS);
+	t_sleep_ms(20);
+	send_snapshots(&small, 1);
+	end = t_now_ms() + 120000;
+	while (small_snaps < 1 && t_now_ms() < end) {
+		drain(&small, 100, &small_snaps, &busy);
+	}
+	REQUIRE(small_snaps == 1);
+	drain(&big, 0, &big_snaps, &busy);
+	/* In one queue the small session would wait for all eight large
+	 * snapshots; in turns, for the one running (and at most the one
+	 * after it when it came in between two). */
+	CHECK(big_snaps <= 2);
+	printf("  large snapshots answered before the small one: %u of %u\n",
+	       big_snaps, BC_SRV_MAX_CLIENT_REQUESTS);
+	end = t_now_ms() + 120000;
+	while (big_snaps < BC_SRV_MAX_CLIENT_REQUESTS && t_now_ms() < end) {
+		drain(&big, 1000, &big_snaps, &busy);
+	}
+	CHECK_EQ_INT(big_snaps, BC_SRV_MAX_CLIENT_REQUESTS);
+	CHECK_EQ_INT(busy, 0);
+	conn_close(&big);
+	conn_close(&small);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
 static void setup(void)
 {
 	(void)conn_view;
@@ -332,6 +492,12 @@ static const struct bc_test tests[] = {
     {"a_connection_flood_leaves_room_for_others",
      a_connection_flood_leaves_room_for_others},
     {"a_scene_too_big_to_send_is_refused", a_scene_too_big_to_send_is_refused},
+    {"a_client_queues_a_bounded_number_of_requests",
+     a_client_queues_a_bounded_number_of_requests},
+    {"the_jobs_of_a_client_that_left_are_dropped",
+     the_jobs_of_a_client_that_left_are_dropped},
+    {"sessions_take_turns_on_the_render_thread",
+     sessions_take_turns_on_the_render_thread},
 };
 
 int main(int argc, char **argv)
