@@ -1,26 +1,36 @@
 #!/usr/bin/env bash
-# Runs the browser demo on this machine: blobcastd (session "default" with
-# the built-in scene), websockify in front of it, and a static file server
-# for client/web/, all on 127.0.0.1. Prints the page's URL and stops all
-# three on Ctrl-C (or when one of them dies).
+# Runs the browser page on this machine: websockify in front of a
+# blobcastd, and a static file server for client/web/, all on 127.0.0.1.
+# Prints the page's URL and stops what it started on Ctrl-C (or when one
+# of them dies).
 #
-#   deploy/web-demo.sh [--port P] [--data DIR]
+#   deploy/web-demo.sh [--daemon HOST:PORT] [--session NAME] [--port P]
+#                      [--data DIR]
 #
-# The page is served on P (default 8080), websockify listens on P+1 (where
-# the page looks by default) and blobcastd on P+2. Without --data the
-# session lives in a temporary directory removed at exit. blobcastd is
+# --daemon HOST:PORT fronts a blobcastd that is already running (the one of
+# README "Using it", 127.0.0.1:7878): the page shows its sessions. Without
+# it the script starts its own blobcastd on P+2 (session "default", the
+# built-in scene; --data DIR keeps its sessions, else a temporary
+# directory removed at exit). The page is served on P (default 8080),
+# websockify listens on P+1 (where the page looks by default). --session
+# names the session in the printed URL (default "default"). blobcastd is
 # $BLOBCASTD or the first build*/server/blobcastd; websockify and python3
-# come from Debian (deploy/install-web-deps.sh).
+# come from Debian (deploy/install-web-deps.sh). docs/web.md says how to
+# put the page behind TLS and tokens.
 set -euo pipefail
 
 root=$(cd "$(dirname "$0")/.." && pwd)
 port=8080
 data=
+target=
+session=default
 while [ $# -gt 0 ]; do
 	case "$1" in
 	--port) port=${2:?--port needs a number}; shift 2 ;;
 	--data) data=${2:?--data needs a directory}; shift 2 ;;
-	-h|--help) sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+	--daemon) target=${2:?--daemon needs HOST:PORT}; shift 2 ;;
+	--session) session=${2:?--session needs a name}; shift 2 ;;
+	-h|--help) sed -n '2,19p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
 	*) echo "web-demo: unknown argument $1 (try --help)" >&2; exit 2 ;;
 	esac
 done
@@ -31,11 +41,38 @@ if [ "$port" -lt 1024 ] || [ "$port" -gt 65533 ]; then
 	echo "web-demo: --port must be 1024..65533" >&2
 	exit 2
 fi
+case "$session" in
+''|.*|*[!A-Za-z0-9._-]*)
+	echo "web-demo: --session wants letters, digits, '-', '_', '.'" >&2
+	exit 2 ;;
+esac
+if [ -n "$data" ] && [ -n "$target" ]; then
+	echo "web-demo: --data is for the daemon this script starts, not" \
+		"with --daemon" >&2
+	exit 2
+fi
 ws_port=$((port + 1))
 daemon_port=$((port + 2))
 
+if [ -n "$target" ]; then
+	# HOST:PORT or [IPV6]:PORT, as websockify takes its target.
+	thost=${target%:*}
+	tport=${target##*:}
+	case "$tport" in
+	''|*[!0-9]*) echo "web-demo: --daemon wants HOST:PORT" >&2; exit 2 ;;
+	esac
+	[ -n "$thost" ] || { echo "web-demo: --daemon wants HOST:PORT" >&2; exit 2; }
+	thost=${thost#[}
+	thost=${thost%]}
+	if ! timeout 3 bash -c "exec 3<>/dev/tcp/$thost/$tport" 2>/dev/null; then
+		echo "web-demo: nothing accepts connections at $target (start" \
+			"blobcastd first, or leave out --daemon)" >&2
+		exit 1
+	fi
+fi
+
 daemon=${BLOBCASTD:-}
-if [ -z "$daemon" ]; then
+if [ -z "$daemon" ] && [ -z "$target" ]; then
 	for d in "$root"/build*/server/blobcastd; do
 		if [ -x "$d" ]; then
 			daemon=$d
@@ -43,7 +80,7 @@ if [ -z "$daemon" ]; then
 		fi
 	done
 fi
-if [ -z "$daemon" ] || [ ! -x "$daemon" ]; then
+if [ -z "$target" ] && { [ -z "$daemon" ] || [ ! -x "$daemon" ]; }; then
 	echo "web-demo: blobcastd is not built; build it with" >&2
 	echo "  cmake -S $root -B $root/build -G Ninja && cmake --build $root/build --target blobcastd" >&2
 	exit 1
@@ -59,7 +96,7 @@ python=/usr/bin/python3
 [ -x "$python" ] || python=$(command -v python3)
 
 tmp=
-if [ -z "$data" ]; then
+if [ -z "$data" ] && [ -z "$target" ]; then
 	tmp=$(mktemp -d /tmp/blobcast-demo.XXXXXX)
 	data=$tmp
 fi
@@ -77,27 +114,40 @@ stop() {
 }
 trap stop INT TERM EXIT
 
-log=$(mktemp /tmp/blobcast-demo-log.XXXXXX)
-"$daemon" --listen "127.0.0.1:$daemon_port" --data "$data" 2>"$log" &
-pids+=($!)
-for _ in $(seq 100); do
-	grep -q 'listening on' "$log" && break
-	if ! kill -0 "${pids[0]}" 2>/dev/null; then
-		cat "$log" >&2
-		rm -f "$log"
-		exit 1
-	fi
-	sleep 0.1
-done
-rm -f "$log"
-websockify "127.0.0.1:$ws_port" "127.0.0.1:$daemon_port" >/dev/null 2>&1 &
+if [ -z "$target" ]; then
+	log=$(mktemp /tmp/blobcast-demo-log.XXXXXX)
+	"$daemon" --listen "127.0.0.1:$daemon_port" --data "$data" 2>"$log" &
+	pids+=($!)
+	for _ in $(seq 100); do
+		grep -q 'listening on' "$log" && break
+		if ! kill -0 "${pids[0]}" 2>/dev/null; then
+			cat "$log" >&2
+			rm -f "$log"
+			exit 1
+		fi
+		sleep 0.1
+	done
+	rm -f "$log"
+	target=127.0.0.1:$daemon_port
+	started="blobcastd on :$daemon_port"
+else
+	started="blobcastd at $target"
+fi
+websockify "127.0.0.1:$ws_port" "$target" >/dev/null 2>&1 &
 pids+=($!)
 "$python" -m http.server "$port" --bind 127.0.0.1 \
 	--directory "$root/client/web" >/dev/null 2>&1 &
 pids+=($!)
 
-sleep 0.5
-echo "blobcast web demo: http://127.0.0.1:$port/?session=default&name=${USER:-guest}"
-echo "  (blobcastd on :$daemon_port, websockify on :$ws_port; Ctrl-C stops all)"
+# Ready when both listen (websockify takes a moment to start).
+for _ in $(seq 50); do
+	if timeout 1 bash -c "exec 3<>/dev/tcp/127.0.0.1/$ws_port" 2>/dev/null &&
+		timeout 1 bash -c "exec 3<>/dev/tcp/127.0.0.1/$port" 2>/dev/null; then
+		break
+	fi
+	sleep 0.1
+done
+echo "blobcast web demo: http://127.0.0.1:$port/?session=$session&name=${USER:-guest}"
+echo "  ($started, websockify on :$ws_port; Ctrl-C stops what this started)"
 # Whichever exits first ends the demo.
 wait -n "${pids[@]}" || true

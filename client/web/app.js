@@ -24,6 +24,17 @@
  *    sending an EDIT to drawing the first frame whose order reflects it)
  *    and kilobytes per frame.
  *
+ *  - Access: a token typed into the page or given as `#token=` (never in
+ *    the query, which servers and proxies log) is kept in sessionStorage
+ *    and the fragment scrubbed from the address bar. A refused token
+ *    (EAUTH), a refused role (EPERM) or a missing session (ENOSESSION,
+ *    unless `create=1` or the user asks to create it) stop the page with
+ *    a notice instead of retrying; a lost connection is retried with a
+ *    doubling delay and the session joined again.
+ *  - Honest frames: the "refining" mark says when the picture on screen
+ *    is not final, and "render pending" when this page sent a camera,
+ *    view or edit that no frame has answered yet.
+ *
  * window.blobcast exposes the state read-only for the end-to-end test and
  * for anyone curious in the developer console.
  */
@@ -401,7 +412,10 @@ const $ = (id) => document.getElementById(id);
 class App {
 	constructor() {
 		const q = new URLSearchParams(location.search);
+		this.tokenInQuery = q.has('token');
 		this.cfg = {
+			token: takeToken(),
+			create: q.get('create') === '1',
 			ws: wsUrl(q.get('ws')),
 			session: q.get('session') || 'default',
 			name: (q.get('name') || 'browser').slice(0, 32),
@@ -423,7 +437,9 @@ class App {
 		this.framesDrawn = 0;
 		this.framesSkipped = 0;
 		this.retryMs = 500;
+		this.halted = null; /* { code, text }: stopped, not retrying */
 		this.installInput();
+		this.installAccess();
 		new ResizeObserver(() => this.resize()).observe($('stage'));
 		setInterval(() => this.tick(), 250);
 		this.conn.open();
@@ -447,6 +463,10 @@ class App {
 		this.picks = new Map(); /* PICK seq -> resolve */
 		this.drag = null;
 		this.cameraDirty = false;
+		this.cameraSeq = 0; /* my last CAMERA, and when it left */
+		this.cameraSentAt = 0;
+		this.viewSentAt = 0; /* my last VIEW, until a frame comes */
+		this.lastFrame = null;
 	}
 
 	/* ---- connection and messages ---- */
@@ -456,25 +476,104 @@ class App {
 		if (s === 'open') {
 			el.textContent = 'connected';
 			el.className = 'conn up';
-			this.retryMs = 500;
 			this.conn.send(P.MSG.HELLO, { version_min: 1, version_max: 1,
 				encodings: P.ENCODINGS_ALL, max_frame_bytes: 0,
-				client_name: this.cfg.name, token: '' });
+				client_name: this.cfg.name, token: this.cfg.token });
 			return;
 		}
 		if (s === 'error') {
 			this.say(why);
 			return;
 		}
-		el.textContent = `disconnected (${why}) – retrying`;
-		el.className = 'conn down';
 		for (const resolve of this.picks.values()) {
 			resolve(null);
 		}
 		this.reset();
 		this.renderPanel();
-		setTimeout(() => this.conn.open(), this.retryMs);
+		this.showPending();
+		this.showRefining();
+		if (this.halted) {
+			el.textContent = `stopped (${P.errName(this.halted.code)})`;
+			el.className = 'conn down';
+			return;
+		}
+		el.textContent = `disconnected (${why}) – retrying in ` +
+			`${(this.retryMs / 1000).toFixed(1)} s`;
+		el.className = 'conn down';
+		clearTimeout(this.retryTimer);
+		this.retryTimer = setTimeout(() => this.conn.open(), this.retryMs);
 		this.retryMs = Math.min(this.retryMs * 2, 8000);
+	}
+
+	/* Stops the page on an error that retrying would meet again: shows
+	 * why, and what the user can do about it. */
+	halt(code, text) {
+		this.halted = { code, text };
+		clearTimeout(this.retryTimer);
+		const box = $('alert');
+		box.hidden = false;
+		box.dataset.code = P.errName(code);
+		$('alerttext').textContent = text;
+		$('tokenform').hidden = code !== P.ERR.EAUTH;
+		$('create').hidden = code !== P.ERR.ENOSESSION ||
+			this.cfg.role !== P.ROLE.EDITOR;
+		$('create').textContent = `create session “${this.cfg.session}”`;
+		$('conn').textContent = `stopped (${P.errName(code)})`;
+		$('conn').className = 'conn down';
+		if (code === P.ERR.EAUTH) {
+			$('token').focus();
+		}
+	}
+
+	/* Starts over after a halt, with what the user gave. */
+	resume() {
+		this.halted = null;
+		$('alert').hidden = true;
+		this.retryMs = 500;
+		clearTimeout(this.retryTimer);
+		if (this.conn.ws) {
+			this.conn.close(); /* its close event schedules the retry */
+			clearTimeout(this.retryTimer);
+		}
+		this.conn.open();
+	}
+
+	installAccess() {
+		$('tokenform').addEventListener('submit', (e) => {
+			e.preventDefault();
+			this.cfg.token = $('token').value;
+			$('token').value = '';
+			storeToken(this.cfg.token);
+			this.resume();
+		});
+		$('tokenbtn').addEventListener('click', () => {
+			const box = $('alert');
+			if (!box.hidden && !$('tokenform').hidden && !this.halted) {
+				box.hidden = true;
+				return;
+			}
+			box.hidden = false;
+			$('tokenform').hidden = false;
+			$('create').hidden = !!this.halted ? $('create').hidden : true;
+			if (!this.halted) {
+				$('alerttext').textContent = this.cfg.token
+					? 'a token is set for this tab; enter another to ' +
+						'reconnect with it'
+					: 'enter the token the daemon was given (kept in ' +
+						'this tab only)';
+			}
+			$('token').focus();
+		});
+		$('create').addEventListener('click', () => {
+			this.halted = null;
+			$('alert').hidden = true;
+			this.conn.send(P.MSG.SESSION_CREATE, { role: this.cfg.role,
+				name: this.cfg.session });
+		});
+		if (this.tokenInQuery) {
+			this.say('a token in the query (?token=) is ignored: proxies ' +
+				'and servers log it; use #token= or the token button');
+		}
 	}
 
 	say(text) {
@@ -494,7 +593,12 @@ class App {
 			break;
 		case P.MSG.SESSION_INFO:
 			this.info = m;
-			$('session').textContent = `session ${m.name}`;
+			$('session').textContent = `session ${m.name}` +
+				(m.role === P.ROLE.VIEWER ? ' · view only' : '');
+			if (this.viewOnly) {
+				$('session').title = this.viewOnly;
+				this.say(this.viewOnly);
+			}
 			if (!this.view) {
 				this.resize(true);
 				if (this.cameraMoved) {
@@ -535,6 +639,17 @@ class App {
 
 	serverError(m) {
 		this.say(`${P.errName(m.code)}: ${m.text}`);
+		if (m.code === P.ERR.EAUTH) {
+			this.halt(m.code, `The daemon refused ${this.cfg.token
+				? 'the token' : 'to let this page in without a token'} ` +
+				`(EAUTH: ${m.text}). Enter a token to try again.`);
+			return;
+		}
+		if (m.code === P.ERR.EPROTO_VERSION) {
+			this.halt(m.code, `The daemon speaks another protocol ` +
+				`version (${m.text}).`);
+			return;
+		}
 		if (m.seq === this.inflight) {
 			/* The server refused my interacting edit: let the next one go. */
 			this.inflight = 0;
@@ -545,19 +660,41 @@ class App {
 			this.picks.delete(m.seq);
 			resolve(null);
 		}
-		if (m.code === P.ERR.EPERM && !this.info &&
-			this.cfg.role === P.ROLE.EDITOR) {
-			/* The token grants viewing only: look, do not touch. */
-			this.cfg.role = P.ROLE.VIEWER;
-			this.conn.send(P.MSG.SESSION_JOIN, { role: this.cfg.role,
-				name: this.cfg.session });
+		if (m.code === P.ERR.EPERM && !this.info) {
+			if (this.cfg.role === P.ROLE.EDITOR) {
+				/* The token grants viewing only: look, do not touch,
+				 * and say so where it stays visible. */
+				this.cfg.role = P.ROLE.VIEWER;
+				this.viewOnly = `view only: this token does not allow ` +
+					`editing (EPERM: ${m.text})`;
+				this.conn.send(P.MSG.SESSION_JOIN, { role: this.cfg.role,
+					name: this.cfg.session });
+			} else {
+				this.halt(m.code, `The daemon refused to let this page ` +
+					`into session “${this.cfg.session}” (EPERM: ${m.text}).`);
+			}
+			return;
+		}
+		if (m.code === P.ERR.EPERM) {
+			/* An edit from a viewer: the page offers none, but say it
+			 * plainly if one slipped through. */
+			this.say(`not allowed: viewers cannot edit (EPERM: ${m.text})`);
+			return;
 		}
 		if (m.code === P.ERR.ENOSESSION && !this.info) {
-			/* The session does not exist yet: an editor creates it. */
-			if (this.cfg.role === P.ROLE.EDITOR) {
+			if (this.cfg.create && this.cfg.role === P.ROLE.EDITOR) {
+				/* Asked for with create=1. */
 				this.conn.send(P.MSG.SESSION_CREATE, { role: this.cfg.role,
 					name: this.cfg.session });
+				return;
 			}
+			/* Joining a session that is not there is a mistake to show,
+			 * not a reason to invent one with the built-in scene. */
+			this.halt(m.code, `There is no session “${this.cfg.session}” ` +
+				`on this daemon (ENOSESSION).` + (this.cfg.role ===
+				P.ROLE.EDITOR ? ' Create it with the built-in scene, or ' +
+				'check the name (?session=).' : ' Check the name ' +
+				'(?session=); a viewer cannot create one.'));
 		}
 	}
 
@@ -630,7 +767,9 @@ class App {
 		this.lastFrame = { frame_no: m.frame_no, order: m.order,
 			still: (m.flags & P.FLAG.STILL) !== 0,
 			level: P.frameLevel(m.flags),
-			refining: P.frameRefining(m.flags), width: m.width,
+			refining: P.frameRefining(m.flags),
+			incomplete: (m.flags & P.FLAG.INCOMPLETE) !== 0,
+			camera_seq: m.camera_seq, width: m.width,
 			height: m.height, image_width: m.image_width,
 			image_height: m.image_height, rects: m.rects.length,
 			encoding: m.encoding, at: now };
@@ -646,8 +785,39 @@ class App {
 				rec.frameAt = now;
 			}
 		}
+		this.viewSentAt = 0;
 		this.showRefining();
+		this.showPending();
 		this.drawOverlay();
+	}
+
+	/* When the oldest request of this page that no frame answers yet
+	 * left, or 0: an edit not applied or applied but not drawn, a CAMERA
+	 * newer than the last frame's camera_seq, a VIEW before any frame. */
+	pendingSince() {
+		let t = Infinity;
+		for (const e of this.editSent.values()) {
+			t = Math.min(t, e.sentAt);
+		}
+		if (this.awaitFrame.length) {
+			t = Math.min(t, this.awaitFrame[0].sentAt);
+		}
+		if (this.cameraSeq && this.cameraSeq > (this.lastFrame?.camera_seq ??
+			0)) {
+			t = Math.min(t, this.cameraSentAt);
+		}
+		if (this.viewSentAt) {
+			t = Math.min(t, this.viewSentAt);
+		}
+		return t === Infinity ? 0 : t;
+	}
+
+	showPending() {
+		const since = this.info ? this.pendingSince() : 0;
+		const el = $('pending');
+		el.hidden = !since;
+		el.textContent = since ? `render pending · ${((performance.now() -
+			since) / 1000).toFixed(1)} s` : '';
 	}
 
 	/* The "refining" mark follows the last frame drawn: shown while it
@@ -657,7 +827,8 @@ class App {
 		const f = this.lastFrame;
 		const el = $('refining');
 		el.hidden = !f?.refining;
-		el.textContent = f?.refining ? `refining · level ${f.level}` : '';
+		el.textContent = f?.refining ? `refining · level ${f.level}` +
+			(f.incomplete ? ' · cut by time budget' : '') : '';
 	}
 
 	/* ---- view, camera, edits ---- */
@@ -683,17 +854,26 @@ class App {
 		this.view = { width: w, height: h };
 		/* Resizing sends many sizes in a row: the last one counts. */
 		clearTimeout(this.viewTimer);
-		this.viewTimer = setTimeout(() => this.conn.send(P.MSG.VIEW, {
-			width: w, height: h, encoding: this.cfg.encoding,
-			quality_interactive: Math.min(this.cfg.quality, 70),
-			quality_still: this.cfg.quality, downscale: this.cfg.downscale,
-		}), force ? 0 : 120);
+		this.viewTimer = setTimeout(() => {
+			if (this.conn.send(P.MSG.VIEW, {
+				width: w, height: h, encoding: this.cfg.encoding,
+				quality_interactive: Math.min(this.cfg.quality, 70),
+				quality_still: this.cfg.quality,
+				downscale: this.cfg.downscale,
+			})) {
+				this.viewSentAt = performance.now();
+			}
+		}, force ? 0 : 120);
 	}
 
 	sendCamera(interacting) {
 		this.cameraMoved = true;
-		this.conn.send(P.MSG.CAMERA, this.camera.msg(),
+		const seq = this.conn.send(P.MSG.CAMERA, this.camera.msg(),
 			interacting ? P.FLAG.INTERACTING : 0);
+		if (seq) {
+			this.cameraSeq = seq;
+			this.cameraSentAt = performance.now();
+		}
 		this.drawOverlay();
 	}
 
@@ -1177,6 +1357,7 @@ class App {
 				(f.still ? ' · still' : '') + ` · order ${f.order}`;
 		}
 		this.renderLastEdit();
+		this.showPending();
 	}
 
 	/* ---- for tests and the console ---- */
@@ -1197,7 +1378,48 @@ class App {
 				order: String(this.lastRemoteEdit.order) } : null,
 			latencies: this.meter.latencies.slice(),
 			view: this.view,
+			role: this.info?.role ?? 0,
+			halted: this.halted ? { code: P.errName(this.halted.code),
+				text: this.halted.text } : null,
+			tokenSet: !!this.cfg.token,
+			pending: !!(this.info && this.pendingSince()),
 		};
+	}
+}
+
+/* The token lives in this tab's sessionStorage: it survives a reload,
+ * not the tab, and never travels in a URL the server or a proxy logs. A
+ * `#token=` fragment (which browsers do not send) is taken once and
+ * scrubbed from the address bar and the history entry. */
+const TOKEN_KEY = 'blobcast.token';
+
+function storeToken(t) {
+	try {
+		if (t) {
+			sessionStorage.setItem(TOKEN_KEY, t);
+		} else {
+			sessionStorage.removeItem(TOKEN_KEY);
+		}
+	} catch {
+		/* Storage disabled: the token lasts until the page reloads. */
+	}
+}
+
+function takeToken() {
+	const h = new URLSearchParams(location.hash.slice(1));
+	if (h.has('token')) {
+		const t = h.get('token').slice(0, P.LIMITS.MAX_TOKEN);
+		storeToken(t);
+		h.delete('token');
+		const rest = h.toString();
+		history.replaceState(null, '', location.pathname + location.search +
+			(rest ? `#${rest}` : ''));
+		return t;
+	}
+	try {
+		return sessionStorage.getItem(TOKEN_KEY) || '';
+	} catch {
+		return '';
 	}
 }
 

@@ -146,16 +146,32 @@ export async function waitPort(port, ms = 10000) {
 	}
 }
 
-/* blobcastd with the default session, on a free port. */
-export async function startDaemon(path, extra = []) {
-	const port = await freePort();
-	const data = mkdtempSync(join(tmpdir(), 'blobcast-web-'));
-	cleanups.push(() => rmSync(data, { recursive: true, force: true }));
+/* blobcastd with the default session, on a free port and a throw-away data
+ * directory, or on opts.port and opts.data (a restart of an earlier one). */
+export async function startDaemon(path, extra = [], opts = {}) {
+	const port = opts.port ?? await freePort();
+	let data = opts.data;
+	if (!data) {
+		data = mkdtempSync(join(tmpdir(), 'blobcast-web-'));
+		cleanups.push(() => rmSync(data, { recursive: true, force: true }));
+	}
 	const child = started(spawn(path, ['--listen', `127.0.0.1:${port}`,
 		'--data', data, ...extra], { stdio: ['ignore', 'pipe', 'pipe'] }),
 	'blobcastd');
 	await waitOutput(child, 'listening on', 30000);
-	return { port, child };
+	return { port, child, data };
+}
+
+/* Stops one child this module started (SIGTERM: blobcastd saves its
+ * sessions) and waits for it to exit. */
+export async function stopChild(c) {
+	if (c.exitCode === null && c.signalCode === null) {
+		const gone = new Promise((r) => c.once('exit', r));
+		c.kill('SIGTERM');
+		const t = setTimeout(() => c.kill('SIGKILL'), 3000);
+		await gone;
+		clearTimeout(t);
+	}
 }
 
 /* websockify from a free port to the daemon's. */

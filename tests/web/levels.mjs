@@ -6,7 +6,10 @@
  *  - a level-2 frame (a quarter-size image, left half red, right half
  *    blue) is drawn over the whole view, each image pixel a 4 x 4 block
  *    from the top-left, and the "refining · level 2" mark shows;
- *  - a level-0 INCOMPLETE frame keeps the mark, now at level 0;
+ *  - before any frame, the VIEW the page sent shows "render pending";
+ *    the first frame hides it;
+ *  - a level-0 INCOMPLETE frame keeps the mark, now at level 0 and
+ *    "cut by time budget";
  *  - a level-0 still (green) hides it.
  * Exit status: 0 passed, 1 failed, 77 skipped (the message names what is
  * missing). Usage: node tests/web/levels.mjs
@@ -133,6 +136,12 @@ try {
 	const view = state.view;
 	const mark0 = await page.evaluate(probe, { x: 0, y: 0 });
 	assert.equal(mark0.hidden, true, 'no mark before a frame');
+	/* The VIEW is not answered yet: the page says a render is pending. */
+	const pend = await until(page, 'the pending mark', () => {
+		const el = document.getElementById('pending');
+		return !el.hidden && el.offsetParent !== null && el.textContent;
+	});
+	assert.match(pend, /^render pending · [0-9.]+ s$/);
 
 	/* Level 2: left half of the image red, right half blue. The colour
 	 * edge in the view is at 4 * (iw / 2), whatever the view's width. */
@@ -157,6 +166,9 @@ try {
 	assert.equal(left.text, 'refining · level 2');
 	assert.equal(left.last.level, 2);
 	assert.equal(left.last.image_width, P.levelDim(view.width, 2));
+	assert.equal(await page.evaluate(() =>
+		document.getElementById('pending').hidden), true,
+	'the first frame answers the VIEW: nothing pending');
 	console.log(`level 2: ${view.width}x${view.height} as ` +
 		`${left.last.image_width}x${left.last.image_height}, edge at ` +
 		`${edge}, mark "${left.text}"`);
@@ -167,7 +179,7 @@ try {
 		window.blobcast.state().lastFrame.frame_no === 2);
 	s = await page.evaluate(probe, { x: 4, y: 4 });
 	assert.equal(s.hidden, false, 'INCOMPLETE keeps the mark');
-	assert.equal(s.text, 'refining · level 0');
+	assert.equal(s.text, 'refining · level 0 · cut by time budget');
 
 	/* The still: the mark goes. */
 	state.send(frame(view, 0, P.FLAG.STILL, 3, () => GREEN));
