@@ -40,6 +40,14 @@
 /* Messages handled per loop turn before input and drawing get their turn:
  * a burst of frames must not freeze the window. */
 #define BC_VIEWER_MSGS_PER_TURN 64
+/* A lost connection is tried again after this delay (ms), doubled after
+ * each failed attempt up to the maximum: a restarting daemon is back within
+ * a second, a longer outage costs one attempt every few seconds. */
+#define BC_VIEWER_RETRY_MIN_MS 250.0
+#define BC_VIEWER_RETRY_MAX_MS 4000.0
+/* One attempt waits at most this long (ms) for the daemon's answers; the
+ * window does not redraw meanwhile, so keep it short. */
+#define BC_VIEWER_RETRY_TIMEOUT_MS 2000
 /* Largest number of vertices of overlay text. */
 #define BC_VIEWER_TEXT_FLOATS (64u * 1024u)
 
@@ -87,6 +95,10 @@ struct bc_viewer_app {
 	struct bc_camera cam, scene_cam;
 	bool cam_dirty, cam_interacting;
 	double cam_sent_at, cam_final_at; /* final_at: end of a wheel zoom */
+	/* The last CAMERA sent that no frame reflects yet (0: none), and the
+	 * VIEW sent that no frame answered yet (0: none): "render pending". */
+	uint32_t cam_seq;
+	double cam_seq_at, view_sent_at;
 
 	/* The VIEW sent (0 before), and a resize waiting to be sent. */
 	uint32_t view_w, view_h;
@@ -144,6 +156,9 @@ struct bc_viewer_app {
 	atomic_int fired; /* it woke the loop and waits to be re-armed */
 
 	bool offline; /* the connection failed; the status says why */
+	bool gave_up; /* ... for a reason a retry would meet again */
+	double retry_at, retry_ms;
+	unsigned attempts; /* failed attempts since the connection was lost */
 	bool quit;
 	int exit_code;
 };
@@ -176,6 +191,10 @@ void bc_viewer_edit(struct bc_viewer_app *a, const struct bc_viewer_edit *e);
 uint32_t bc_viewer_pick(struct bc_viewer_app *a, double x, double y);
 /* Sends SNAPSHOT (PNG) unless one is on its way. */
 void bc_viewer_request_snapshot(struct bc_viewer_app *a);
+/* When the oldest request of ours that no frame answers yet was sent (ms),
+ * 0 when none: a VIEW before its first frame, a CAMERA newer than the last
+ * frame's camera_seq, an EDIT not applied or applied but not shown. */
+double bc_viewer_pending_since(const struct bc_viewer_app *a);
 
 /* input.c */
 void bc_viewer_input_install(struct bc_viewer_app *a);

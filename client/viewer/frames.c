@@ -135,7 +135,10 @@ static bool covers_all(const struct bc_msg_frame *fr)
 const char *bc_viewer_refining_text(uint16_t flags, char *out, size_t n)
 {
 	unsigned level = bc_proto_flags_level(flags);
-	if (level > 0 || (flags & BC_PROTO_FLAG_INCOMPLETE)) {
+	if (flags & BC_PROTO_FLAG_INCOMPLETE) {
+		/* The server's time budget cut this picture short. */
+		snprintf(out, n, "refining (level %u, cut by budget)", level);
+	} else if (level > 0) {
 		snprintf(out, n, "refining (level %u)", level);
 	} else if (n > 0) {
 		out[0] = '\0';

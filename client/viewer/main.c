@@ -11,6 +11,12 @@
  * arrive; the main thread then drains them with zero-timeout receives. The
  * watcher touches nothing but the socket's readiness, so libblobcast stays
  * single-threaded as it requires.
+ *
+ * A lost connection (the daemon restarted, the network dropped) keeps the
+ * last picture on screen and is tried again after a doubling delay; the
+ * new connection joins the session again, sends our view and camera, and
+ * replaces the old one. Errors a retry would meet again (a refused token
+ * or role, a missing session) stop the retries and stay on the overlay.
  */
 #include <errno.h>
 #include <math.h>
@@ -405,10 +411,56 @@ static void fmt_selection(struct bc_viewer_app *a, char *out, size_t n)
 	}
 }
 
+/* The top-right tag: whether the picture on screen is final, and whether
+ * a render we asked for has not come yet. Amber, apart from the numbers,
+ * so that a coarse or budget-cut picture never passes for the real one. */
+static void draw_tag(struct bc_viewer_app *a, uint32_t fw, float scale,
+                     const char *refining, double now)
+{
+	const float pad = 6.0f;
+	const float panel_rgba[4] = {0.0f, 0.0f, 0.0f, 0.6f};
+	const float tag_rgba[4] = {0.95f, 0.72f, 0.29f, 1.0f};
+	double since = a->offline ? 0.0 : bc_viewer_pending_since(a);
+	char tag[96];
+	float w, h, x;
+	size_t nf;
+	int lines = 0;
+	tag[0] = '\0';
+	if (refining[0]) {
+		snprintf(tag, sizeof(tag), "%s", refining);
+		lines++;
+	}
+	if (since > 0.0) {
+		size_t len = strlen(tag);
+		snprintf(tag + len, sizeof(tag) - len,
+		         "%srender pending %.1f s", lines ? "\n" : "",
+		         (now - since) / 1e3);
+		lines++;
+	}
+	if (!lines) {
+		return;
+	}
+	w = bc_viewer_text_width(tag, scale) + 2.0f * pad;
+	h = (float)lines * BC_VIEWER_LINE_ADVANCE * scale + 2.0f * pad -
+	    2.0f * scale;
+	x = (float)fw - w;
+	{
+		const float q[12] = {x, 0.0f, x + w, 0.0f, x + w, h,
+		                     x, 0.0f, x + w, h,    x,     h};
+		bc_viewer_gl_draw(&a->gl, GL_TRIANGLES, q, 6, panel_rgba);
+	}
+	nf = bc_viewer_text_tris(tag, x + pad, pad, scale, a->text,
+	                         BC_VIEWER_TEXT_FLOATS);
+	if (nf > BC_VIEWER_TEXT_FLOATS) {
+		nf = BC_VIEWER_TEXT_FLOATS;
+	}
+	bc_viewer_gl_draw(&a->gl, GL_TRIANGLES, a->text, nf / 2u, tag_rgba);
+}
+
 static void draw_overlay(struct bc_viewer_app *a, uint32_t fw, uint32_t fh,
                          double now)
 {
-	char text[800], lat[64], sel[200], refining[32];
+	char text[800], lat[64], sel[200], refining[48];
 	const float pad = 6.0f;
 	const float panel_rgba[4] = {0.0f, 0.0f, 0.0f, 0.6f};
 	const float text_rgba[4] = {0.95f, 0.95f, 0.9f, 1.0f};
@@ -453,6 +505,7 @@ static void draw_overlay(struct bc_viewer_app *a, uint32_t fw, uint32_t fh,
 		nf = BC_VIEWER_TEXT_FLOATS;
 	}
 	bc_viewer_gl_draw(&a->gl, GL_TRIANGLES, a->text, nf / 2u, text_rgba);
+	draw_tag(a, fw, scale, refining, now);
 }
 
 /* Outlines the selected primitive's bounding box, projected with our
@@ -636,33 +689,149 @@ static void maybe_turn(struct bc_viewer_app *a)
 	a->turn_pending = true;
 }
 
+/* Connects and joins the session of the options: an editor creates it
+ * when missing, a viewer needs it to exist. Returns 0 or the error with its
+ * reason in ei; *c is set either way (NULL when connecting failed). */
+static int open_session(const struct bc_viewer_app *a, struct bc_client **c,
+                        int timeout_ms, struct bc_errinfo *ei)
+{
+	int rc = bc_client_connect(c,
+	                           &(struct bc_client_opts){
+	                               .addr = a->o.server,
+	                               .name = a->o.name,
+	                               .token = a->o.token,
+	                               .timeout_ms = timeout_ms,
+	                           },
+	                           ei);
+	if (rc) {
+		return rc;
+	}
+	return bc_client_join(*c, a->o.session, a->o.role,
+	                      a->o.role == BC_PROTO_ROLE_EDITOR
+	                          ? BC_CLIENT_JOIN_ANY
+	                          : BC_CLIENT_JOIN_EXISTING,
+	                      ei);
+}
+
+/* Errors that connecting again would meet again. */
+static bool retry_useless(int code)
+{
+	return code == BC_EAUTH || code == BC_EPERM || code == BC_ENOSESSION ||
+	       code == BC_EPROTO_VERSION || code == BC_EINVAL;
+}
+
+/* The connection failed with code: keep the picture, stop watching the
+ * socket and schedule the first attempt to reconnect. */
+static void lost(struct bc_viewer_app *a, int code, double now)
+{
+	char why[sizeof(a->status)];
+	snprintf(why, sizeof(why), "%s", a->status);
+	watch_stop(a);
+	a->offline = true;
+	a->attempts = 0;
+	a->retry_ms = BC_VIEWER_RETRY_MIN_MS;
+	a->gave_up = retry_useless(code);
+	if (a->o.verbose) {
+		printf("lost %s\n", bc_err_name(code));
+		fflush(stdout);
+	}
+	if (!a->gave_up) {
+		a->retry_at = now + a->retry_ms;
+		bc_viewer_status(a, "%s - reconnecting", why);
+	}
+}
+
+/* One attempt to reconnect. On success the new connection replaces the
+ * dead one (whose scene mirror the overlay read meanwhile) and everything
+ * tied to the old one's sequence numbers starts afresh. */
+static void reconnect(struct bc_viewer_app *a, double now)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	struct bc_camera scene_cam;
+	int rc = open_session(a, &c, BC_VIEWER_RETRY_TIMEOUT_MS, &ei);
+	if (rc) {
+		bc_client_destroy(c);
+		a->attempts++;
+		if (retry_useless(rc)) {
+			a->gave_up = true;
+			bc_viewer_status(a, "reconnecting refused: %s (%s)",
+			                 ei.msg, bc_err_name(rc));
+			return;
+		}
+		a->retry_ms = a->retry_ms * 2.0 > BC_VIEWER_RETRY_MAX_MS
+		                  ? BC_VIEWER_RETRY_MAX_MS
+		                  : a->retry_ms * 2.0;
+		a->retry_at = bc_viewer_now_ms() + a->retry_ms;
+		bc_viewer_status(
+		    a,
+		    "connection lost; attempt %u failed (%s), next "
+		    "in %.1f s",
+		    a->attempts, bc_err_name(rc), a->retry_ms / 1e3);
+		return;
+	}
+	bc_client_destroy(a->c);
+	a->c = c;
+	bc_viewer_edits_init(&a->edits);
+	a->drag.mode = BC_VIEWER_DRAG_NONE;
+	a->wheel.what = BC_VIEWER_WHEEL_NONE;
+	a->snapshot_seq = 0;
+	a->turn_pending = false;
+	a->cam_seq = 0;
+	a->view_sent_at = 0.0;
+	if (bc_client_scene(a->c, &scene_cam)) {
+		a->scene_cam = scene_cam;
+	}
+	a->offline = false;
+	a->gave_up = false;
+	/* The daemon starts a member on the scene's camera: ours goes along
+	 * with the view. */
+	if (bc_viewer_send_view(a) || watch_start(a)) {
+		bc_client_error(a->c, &ei);
+		lost(a, ei.code ? ei.code : BC_EIO, now);
+		return;
+	}
+	bc_viewer_camera_changed(a, false);
+	bc_viewer_status(a, "rejoined session %s after %u failed attempt%s",
+	                 a->o.session, a->attempts,
+	                 a->attempts == 1 ? "" : "s");
+	if (a->o.verbose) {
+		printf("rejoined %s attempts=%u\n", a->o.session, a->attempts);
+		fflush(stdout);
+	}
+}
+
 static void run(struct bc_viewer_app *a)
 {
-	bool offline = false;
 	while (!a->quit && !glfwWindowShouldClose(a->win)) {
 		double now, due, wait;
 		int more = 0;
-		if (!offline) {
+		if (!a->offline) {
 			more = bc_viewer_pump(a);
 			if (more < 0) {
 				fprintf(stderr, "blobcast-view: %s\n",
 				        a->status);
-				offline = a->offline = true;
-				more = 0;
 				if (a->o.screenshot) {
+					a->offline = true;
 					a->exit_code = EXIT_FAIL;
 					break;
 				}
-				/* Keep the last picture and say why it stopped;
-				 * the socket is no longer watched. */
-				watch_stop(a);
+				lost(a, more, bc_viewer_now_ms());
+				more = 0;
 			}
 		}
 		now = bc_viewer_now_ms();
-		if (!offline) {
+		if (a->offline && !a->gave_up && now >= a->retry_at) {
+			reconnect(a, now);
+			now = bc_viewer_now_ms();
+			a->redraw = true;
+		}
+		if (!a->offline) {
 			bc_viewer_drag_step(a, false);
 			maybe_turn(a);
 			due = bc_viewer_send_due(a, now);
+		} else if (!a->gave_up) {
+			due = a->retry_at > now ? a->retry_at - now : 0.0;
 		} else {
 			due = -1.0;
 		}
@@ -676,7 +845,7 @@ static void run(struct bc_viewer_app *a)
 		if (a->quit) {
 			break;
 		}
-		if (!offline) {
+		if (!a->offline) {
 			watch_rearm(a);
 		}
 		if (more) {
@@ -752,18 +921,7 @@ int main(int argc, char **argv)
 		goto cleanup;
 	}
 
-	if ((rc = bc_client_connect(&a->c,
-	                            &(struct bc_client_opts){
-	                                .addr = a->o.server,
-	                                .name = a->o.name,
-	                                .token = a->o.token,
-	                            },
-	                            &ei)) ||
-	    (rc = bc_client_join(a->c, a->o.session, a->o.role,
-	                         a->o.role == BC_PROTO_ROLE_EDITOR
-	                             ? BC_CLIENT_JOIN_ANY
-	                             : BC_CLIENT_JOIN_EXISTING,
-	                         &ei))) {
+	if ((rc = open_session(a, &a->c, 0, &ei))) {
 		fprintf(stderr, "blobcast-view: %s: %s\n",
 		        a->o.server ? a->o.server : "127.0.0.1:7878", ei.msg);
 		goto cleanup;

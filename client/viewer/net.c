@@ -52,6 +52,7 @@ int bc_viewer_send_view(struct bc_viewer_app *a)
 	}
 	a->view_w = w;
 	a->view_h = h;
+	a->view_sent_at = bc_viewer_now_ms();
 	if (a->o.verbose) {
 		printf("view %ux%u\n", w, h);
 		fflush(stdout);
@@ -69,9 +70,16 @@ void bc_viewer_camera_changed(struct bc_viewer_app *a, bool interacting)
 static void send_camera(struct bc_viewer_app *a, double now)
 {
 	struct bc_errinfo ei = {0};
+	uint32_t seq = 0;
 	bc_viewer_cam_clamp(&a->cam);
-	if (bc_client_camera(a->c, &a->cam, a->cam_interacting, NULL, &ei)) {
+	if (bc_client_camera(a->c, &a->cam, a->cam_interacting, &seq, &ei)) {
 		bc_viewer_status(a, "CAMERA not sent: %s", ei.msg);
+	} else {
+		/* Pending since the oldest camera no frame reflects. */
+		if (!a->cam_seq) {
+			a->cam_seq_at = now;
+		}
+		a->cam_seq = seq;
 	}
 	a->cam_dirty = false;
 	a->cam_sent_at = now;
@@ -179,6 +187,30 @@ double bc_viewer_send_due(struct bc_viewer_app *a, double now)
 	flush_edits(a);
 #undef DUE
 	return next;
+}
+
+double bc_viewer_pending_since(const struct bc_viewer_app *a)
+{
+	double t = 0.0;
+#define OLDEST(x)                                                              \
+	do {                                                                   \
+		double x_ = (x);                                               \
+		if (x_ > 0.0 && (t == 0.0 || x_ < t)) {                        \
+			t = x_;                                                \
+		}                                                              \
+	} while (0)
+	OLDEST(a->view_sent_at);
+	if (a->cam_seq) {
+		OLDEST(a->cam_seq_at);
+	}
+	if (a->edits.nsent) {
+		OLDEST(a->edits.sent[0].at);
+	}
+	if (a->edits.nshown) {
+		OLDEST(a->edits.shown[0].at);
+	}
+#undef OLDEST
+	return t;
 }
 
 /* ---- receiving ----------------------------------------------------------- */
@@ -292,6 +324,10 @@ static void got_frame(struct bc_viewer_app *a, const struct bc_msg *m)
 	a->settle = true;
 	a->redraw = true;
 	a->turn_pending = false;
+	a->view_sent_at = 0.0;
+	if (a->cam_seq && fr->camera_seq >= a->cam_seq) {
+		a->cam_seq = 0;
+	}
 	if (a->o.verbose) {
 		printf("frame %llu no=%u order=%llu %s %s image=%ux%u level=%u "
 		       "rects=%u bytes=%u%s%s\n",

@@ -236,7 +236,8 @@ void bc_viewer_upscale_part(const uint8_t *src, uint32_t sw, uint32_t sh,
                             float su, float sv, uint8_t *dst, uint32_t dw,
                             uint32_t dh);
 /* The overlay's words for a frame's flags: "refining (level N)" while it is
- * not final (a level above 0 or INCOMPLETE), else "". Returns out. */
+ * not final (a level above 0), "refining (level N, cut by budget)" for
+ * INCOMPLETE, else "". Returns out. */
 const char *bc_viewer_refining_text(uint16_t flags, char *out, size_t n);
 
 /* ---- font.c -------------------------------------------------------------- */

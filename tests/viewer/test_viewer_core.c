@@ -620,7 +620,7 @@ static void test_frames_levels(void)
 	struct bc_viewer_update up;
 	struct bc_proto_rect r[1];
 	struct bc_msg m;
-	char text[32];
+	char text[48];
 	bc_viewer_frames_init(&f);
 	fill(c, 2, 2, 40);
 	fill(a, W, H, 90);
@@ -668,7 +668,7 @@ static void test_frames_levels(void)
 	CHECK(f.refining);
 	CHECK_EQ_INT(f.level, 0);
 	CHECK(strcmp(bc_viewer_refining_text(m.flags, text, sizeof(text)),
-	             "refining (level 0)") == 0);
+	             "refining (level 0, cut by budget)") == 0);
 	/* A level-1 frame after a downscaled level-0 one: the same small
 	 * texture, new extents. */
 	r[0] = (struct bc_proto_rect){0, 0, 4, 3, {NULL, 0}};
