@@ -742,9 +742,16 @@ static int table2_scene(struct bc_renderer *r, const struct opts *op,
 			why = ei.msg;
 		}
 	}
-	for (; !why && frames < op->reps; frames++) {
+	for (double s0 = now_ms(); !why && frames < op->reps; frames++) {
 		struct bc_render_stats st;
 		double w0 = now_ms();
+		/* Slow scenes (fig16 L6 on a small GPU) keep the step within
+		 * its time: at least 5 frames, then at most ~20 s. */
+		if (frames >= 5 && w0 - s0 > 20000.0) {
+			fail(o, "%s: %d of %d frames (over 20 s)", s->label,
+			     frames, op->reps);
+			break;
+		}
 		if (bc_renderer_render(r, &cam, &f, &st, &ei)) {
 			why = ei.msg;
 			break;
@@ -769,9 +776,13 @@ static int table2_scene(struct bc_renderer *r, const struct opts *op,
 	}
 	pm = paper_ms(s->gen, s->o.kind, s->n, smooth);
 	printf("table2 %-28s %8u prims: median %8.2f ms (abuf %7.2f, trace "
-	       "%7.2f) of %d, paper %.1f\n",
-	       s->label, t ? bc_tree_prim_count(t) : 0, mw, ma, mt, frames,
-	       pm);
+	       "%7.2f) of %d frames; paper ",
+	       s->label, t ? bc_tree_prim_count(t) : 0, mw, ma, mt, frames);
+	if (isnan(pm)) {
+		printf("-\n");
+	} else {
+		printf("%.1f ms\n", pm);
+	}
 	fprintf(o->json, "%s{\"scene\":", first ? "" : ",");
 	jstr(o->json, s->label);
 	fputs(",\"gen\":", o->json);
