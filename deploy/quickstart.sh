@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Quick start: installs the Debian dependencies, builds blobcast (Release),
-# starts blobcastd on its embedded default scene (session "default",
+# Quick start: installs the Debian dependencies, builds blobcast (Release:
+# the daemon, the `blobcast` CLI and the desktop viewer), starts blobcastd on its embedded default scene (session "default",
 # 127.0.0.1:7878, data in ./blobcast-data) and fetches a lossless snapshot
 # of it through the `blobcast` client into out.png. The daemon is stopped
 # afterwards unless --keep is given.
@@ -19,7 +19,9 @@ addr=127.0.0.1:7878
 
 bash deploy/install-deps.sh
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build -j "$(nproc)" --target blobcastd blobcast_cli
+# The viewer too: README "Using it" runs it from build/client/viewer/.
+cmake --build build -j "$(nproc)" --target blobcastd blobcast_cli \
+	blobcast_view
 
 log=$(mktemp)
 ./build/server/blobcastd --listen "$addr" --data blobcast-data 2>"$log" &

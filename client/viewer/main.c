@@ -69,14 +69,16 @@ static void usage(FILE *out)
 	    "mouse.\n"
 	    "\n"
 	    "  --server ADDR      HOST:PORT, [IPV6]:PORT or unix:PATH "
-	    "(default 127.0.0.1:7878)\n"
+	    "(default\n"
+	    "                     $BLOBCAST_SERVER, else 127.0.0.1:7878)\n"
 	    "  --session NAME     session to join (default \"default\"; an "
 	    "editor\n"
 	    "                     creates it when it does not exist)\n"
 	    "  --role ROLE        editor (default) or viewer\n"
 	    "  --name NAME        the name other members see "
 	    "(default blobcast-view)\n"
-	    "  --token TOKEN      authentication token\n"
+	    "  --token TOKEN      authentication token (default "
+	    "$BLOBCAST_TOKEN)\n"
 	    "  --size WxH         window size (default 960x600)\n"
 	    "  --encoding ENC     still frames as jpeg (default) or png\n"
 	    "  --quality Q        JPEG quality of still frames, 1..100 "
@@ -110,7 +112,12 @@ static void usage(FILE *out)
 	    "selected\n"
 	    "shape, Ctrl+wheel changes its operator's blend. Keys: S "
 	    "snapshot,\n"
-	    "P screenshot, O overlay, R scene camera, Q or Escape quit.\n");
+	    "P screenshot, O overlay, R scene camera, Q or Escape quit.\n"
+	    "\n"
+	    "A lost connection is retried (after 0.25 s, doubling up to 4 s)\n"
+	    "and the session joined again; a refused token or role or a\n"
+	    "missing session stop the retries. With --screenshot a lost\n"
+	    "connection exits 1 instead.\n");
 }
 
 static bool parse_u32(const char *s, uint32_t lo, uint32_t hi, uint32_t *out)
@@ -162,6 +169,9 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o)
 	    .frames = 1,
 	    .turn_deg = 15.0f,
 	    .snapshot_dir = ".",
+	    /* As the blobcast CLI: the environment names the daemon. */
+	    .server = getenv("BLOBCAST_SERVER"),
+	    .token = getenv("BLOBCAST_TOKEN"),
 	};
 	for (int i = 1; i < argc; i++) {
 		const char *k = argv[i];
