@@ -53,6 +53,8 @@
 
 struct bc_viewer_opts {
 	const char *server, *session, *name, *token;
+	const char *ca; /* --ca: TLS trust anchors; NULL: the system's */
+	bool insecure;  /* --insecure: no TLS certificate checks */
 	enum bc_proto_role role;
 	uint32_t width, height;          /* window size asked for */
 	enum bc_proto_encoding encoding; /* still frames: JPEG or PNG */
@@ -90,6 +92,7 @@ struct bc_viewer_app {
 	struct bc_viewer_frames frames;
 	struct bc_viewer_meter meter;
 	struct bc_viewer_edits edits;
+	struct bc_viewer_roster roster;
 
 	/* Our camera; the scene's, for R. */
 	struct bc_camera cam, scene_cam;

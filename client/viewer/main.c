@@ -70,7 +70,11 @@ static void usage(FILE *out)
 	    "\n"
 	    "  --server ADDR      HOST:PORT, [IPV6]:PORT or unix:PATH "
 	    "(default\n"
-	    "                     $BLOBCAST_SERVER, else 127.0.0.1:7878)\n"
+	    "                     $BLOBCAST_SERVER, else 127.0.0.1:7878);\n"
+	    "                     tls://HOST:PORT for TLS\n"
+	    "  --ca FILE          TLS: trust the CA certificates in FILE\n"
+	    "  --insecure         TLS: do not check the server's "
+	    "certificate\n"
 	    "  --session NAME     session to join (default \"default\"; an "
 	    "editor\n"
 	    "                     creates it when it does not exist)\n"
@@ -189,11 +193,16 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o)
 		} else if (strcmp(k, "--verbose") == 0) {
 			o->verbose = true;
 			takes = false;
+		} else if (strcmp(k, "--insecure") == 0) {
+			o->insecure = true;
+			takes = false;
 		} else if (!val) {
 			fprintf(stderr, "blobcast-view: %s needs a value\n", k);
 			return EXIT_USAGE;
 		} else if (strcmp(k, "--server") == 0) {
 			o->server = val;
+		} else if (strcmp(k, "--ca") == 0) {
+			o->ca = val;
 		} else if (strcmp(k, "--session") == 0) {
 			o->session = val;
 		} else if (strcmp(k, "--name") == 0) {
@@ -470,13 +479,13 @@ static void draw_tag(struct bc_viewer_app *a, uint32_t fw, float scale,
 static void draw_overlay(struct bc_viewer_app *a, uint32_t fw, uint32_t fh,
                          double now)
 {
-	char text[800], lat[64], sel[200], refining[48];
+	char text[1000], lat[64], sel[200], refining[48], who[160];
 	const float pad = 6.0f;
 	const float panel_rgba[4] = {0.0f, 0.0f, 0.0f, 0.6f};
 	const float text_rgba[4] = {0.95f, 0.95f, 0.9f, 1.0f};
 	float scale = fw >= 900 ? 2.0f : 1.0f, w, h, panel[12];
 	size_t nf;
-	int lines = 3;
+	int lines = 4;
 	(void)fh;
 	fmt_latency(&a->meter, lat, sizeof(lat));
 	fmt_selection(a, sel, sizeof(sel));
@@ -484,7 +493,7 @@ static void draw_overlay(struct bc_viewer_app *a, uint32_t fw, uint32_t fh,
 	snprintf(
 	    text, sizeof(text),
 	    "%.0f fps  edit>frame %s  %.1f kB/frame\n"
-	    "frame %u %s %s %ux%u %u rect%s order %llu%s%s\n%s",
+	    "frame %u %s %s %ux%u %u rect%s order %llu%s%s\n%s\n%s",
 	    bc_viewer_meter_fps(&a->meter, now), lat,
 	    bc_viewer_meter_kb(&a->meter), a->last.frame_no,
 	    (a->last.flags & BC_PROTO_FLAG_STILL) ? "still" : "interactive",
@@ -493,7 +502,8 @@ static void draw_overlay(struct bc_viewer_app *a, uint32_t fw, uint32_t fh,
 	                                           : "jpeg",
 	    a->last.image_width, a->last.image_height, a->last.nrects,
 	    a->last.nrects == 1 ? "" : "s", (unsigned long long)a->last.order,
-	    refining[0] ? "  " : "", refining, sel);
+	    refining[0] ? "  " : "", refining, sel,
+	    bc_viewer_roster_text(&a->roster, who, sizeof(who)));
 	if (a->status[0] &&
 	    (a->offline || now - a->status_at < BC_VIEWER_STATUS_MS)) {
 		size_t len = strlen(text);
@@ -699,11 +709,38 @@ static void maybe_turn(struct bc_viewer_app *a)
 	a->turn_pending = true;
 }
 
+/* One SESSION_JOIN or SESSION_CREATE, keeping the member list of its
+ * SESSION_INFO (bc_client_join() would consume it), then the SCENE_STATE
+ * that fills the scene mirror. */
+static int join_once(struct bc_client *c, enum bc_msg_type type,
+                     const struct bc_viewer_opts *o,
+                     struct bc_viewer_roster *roster, struct bc_errinfo *ei)
+{
+	struct bc_msg m = {.type = type};
+	int rc;
+	m.session.role = o->role;
+	m.session.name.ptr = o->session;
+	m.session.name.len = (uint32_t)strlen(o->session);
+	if ((rc = bc_client_send(c, &m, NULL))) {
+		if (!bc_client_error(c, ei)) {
+			bc_errinfo_set(ei, rc, "session %s: %s", o->session,
+			               bc_strerror(rc));
+		}
+		return rc;
+	}
+	if ((rc = bc_client_wait(c, BC_MSG_SESSION_INFO, 0, &m, 0, ei))) {
+		return rc;
+	}
+	bc_viewer_roster_update(roster, &m.session_info);
+	return bc_client_wait(c, BC_MSG_SCENE_STATE, 0, &m, 0, ei);
+}
+
 /* Connects and joins the session of the options: an editor creates it
  * when missing, a viewer needs it to exist. Returns 0 or the error with its
  * reason in ei; *c is set either way (NULL when connecting failed). */
 static int open_session(const struct bc_viewer_app *a, struct bc_client **c,
-                        int timeout_ms, struct bc_errinfo *ei)
+                        struct bc_viewer_roster *roster, int timeout_ms,
+                        struct bc_errinfo *ei)
 {
 	int rc = bc_client_connect(c,
 	                           &(struct bc_client_opts){
@@ -711,16 +748,31 @@ static int open_session(const struct bc_viewer_app *a, struct bc_client **c,
 	                               .name = a->o.name,
 	                               .token = a->o.token,
 	                               .timeout_ms = timeout_ms,
+	                               .ca_file = a->o.ca,
+	                               .insecure = a->o.insecure,
 	                           },
 	                           ei);
 	if (rc) {
 		return rc;
 	}
-	return bc_client_join(*c, a->o.session, a->o.role,
-	                      a->o.role == BC_PROTO_ROLE_EDITOR
-	                          ? BC_CLIENT_JOIN_ANY
-	                          : BC_CLIENT_JOIN_EXISTING,
-	                      ei);
+	if (!*a->o.session || strlen(a->o.session) > BC_PROTO_MAX_NAME) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+		                      "session names have 1..%u bytes",
+		                      BC_PROTO_MAX_NAME);
+	}
+	rc = join_once(*c, BC_MSG_SESSION_JOIN, &a->o, roster, ei);
+	if (rc == BC_ENOSESSION && a->o.role == BC_PROTO_ROLE_EDITOR) {
+		/* An editor creates a session that is missing; someone may
+		 * create it between our two requests. */
+		memset(ei, 0, sizeof(*ei));
+		rc = join_once(*c, BC_MSG_SESSION_CREATE, &a->o, roster, ei);
+		if (rc == BC_EEXIST) {
+			memset(ei, 0, sizeof(*ei));
+			rc = join_once(*c, BC_MSG_SESSION_JOIN, &a->o, roster,
+			               ei);
+		}
+	}
+	return rc;
 }
 
 /* Errors that connecting again would meet again. */
@@ -759,7 +811,8 @@ static void reconnect(struct bc_viewer_app *a, double now)
 	struct bc_client *c = NULL;
 	struct bc_errinfo ei = {0};
 	struct bc_camera scene_cam;
-	int rc = open_session(a, &c, BC_VIEWER_RETRY_TIMEOUT_MS, &ei);
+	struct bc_viewer_roster roster;
+	int rc = open_session(a, &c, &roster, BC_VIEWER_RETRY_TIMEOUT_MS, &ei);
 	if (rc) {
 		bc_client_destroy(c);
 		a->attempts++;
@@ -782,6 +835,7 @@ static void reconnect(struct bc_viewer_app *a, double now)
 	}
 	bc_client_destroy(a->c);
 	a->c = c;
+	a->roster = roster;
 	bc_viewer_edits_init(&a->edits);
 	a->drag.mode = BC_VIEWER_DRAG_NONE;
 	a->wheel.what = BC_VIEWER_WHEEL_NONE;
@@ -931,7 +985,7 @@ int main(int argc, char **argv)
 		goto cleanup;
 	}
 
-	if ((rc = open_session(a, &a->c, 0, &ei))) {
+	if ((rc = open_session(a, &a->c, &a->roster, 0, &ei))) {
 		fprintf(stderr, "blobcast-view: %s: %s\n",
 		        a->o.server ? a->o.server : "127.0.0.1:7878", ei.msg);
 		goto cleanup;

@@ -361,6 +361,10 @@ static void got_scene(struct bc_viewer_app *a, const struct bc_msg *m)
 	if (a->selected && (!t || !bc_tree_get(t, a->selected, NULL, NULL))) {
 		a->selected = 0;
 	}
+	if (m->scene_state.author) {
+		bc_viewer_roster_edit(&a->roster, m->scene_state.author,
+		                      m->scene_state.order);
+	}
 	a->redraw = true;
 }
 
@@ -377,6 +381,7 @@ static void got_applied(struct bc_viewer_app *a, const struct bc_msg *m)
 	if (a->selected && t && !bc_tree_get(t, a->selected, NULL, NULL)) {
 		a->selected = 0;
 	}
+	bc_viewer_roster_edit(&a->roster, e->author, e->order);
 	if (a->o.verbose) {
 		printf("applied order=%llu author=%u seq=%u ops=%u\n",
 		       (unsigned long long)e->order, e->author, e->author_seq,
@@ -438,7 +443,16 @@ int bc_viewer_pump(struct bc_viewer_app *a)
 			got_scene(a, &m);
 			break;
 		case BC_MSG_SESSION_INFO:
+			bc_viewer_roster_update(&a->roster, &m.session_info);
 			a->stats_at = 0.0;
+			a->redraw = true;
+			if (a->o.verbose) {
+				char line[400];
+				printf("members %s\n",
+				       bc_viewer_roster_text(&a->roster, line,
+				                             sizeof(line)));
+				fflush(stdout);
+			}
 			break;
 		case BC_MSG_ERROR:
 			got_error(a, &m);

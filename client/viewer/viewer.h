@@ -240,6 +240,40 @@ void bc_viewer_upscale_part(const uint8_t *src, uint32_t sw, uint32_t sh,
  * INCOMPLETE, else "". Returns out. */
 const char *bc_viewer_refining_text(uint16_t flags, char *out, size_t n);
 
+/* ---- roster.c ------------------------------------------------------------ */
+
+/* Who is in the session (the member list of the last SESSION_INFO) and who
+ * changed the scene last, for the overlay. */
+struct bc_viewer_member {
+	uint32_t id;
+	enum bc_proto_role role;
+	char name[BC_PROTO_MAX_NAME + 1];
+};
+
+struct bc_viewer_roster {
+	uint16_t n;
+	uint32_t self; /* our member id */
+	struct bc_viewer_member m[BC_PROTO_MAX_MEMBERS];
+	/* The last edit or load: its author (0: none yet), the author's name
+	 * then (kept when the author leaves) and its order. */
+	uint32_t last_author;
+	char last_name[BC_PROTO_MAX_NAME + 1];
+	uint64_t last_order;
+};
+
+/* Replaces the member list with si's (at most BC_PROTO_MAX_MEMBERS, as the
+ * decoder guarantees). */
+void bc_viewer_roster_update(struct bc_viewer_roster *r,
+                             const struct bc_msg_session_info *si);
+/* Notes an edit or load by member author with order. */
+void bc_viewer_roster_edit(struct bc_viewer_roster *r, uint32_t author,
+                           uint64_t order);
+/* The overlay's line: `3 members: alice (editor), bob (viewer), you
+ * (editor) - last edit: alice, order 12`, cut to fit n bytes with "...".
+ * A member without a name shows as "member ID". Returns out. */
+const char *bc_viewer_roster_text(const struct bc_viewer_roster *r, char *out,
+                                  size_t n);
+
 /* ---- font.c -------------------------------------------------------------- */
 
 #define BC_VIEWER_GLYPH_W 5

@@ -836,6 +836,46 @@ static void test_font_triangles(void)
 	CHECK_NEAR(bc_viewer_text_width("", 1.0f), 0.0, 0.0);
 }
 
+/* The member line: names and roles from SESSION_INFO, "you" for this
+ * client, unnamed members by id, the last editor kept after leaving, and
+ * a line too long for its buffer cut with "...". */
+static void test_roster_names_members_and_last_editor(void)
+{
+	struct bc_proto_member mem[3] = {
+	    {.id = 4, .role = BC_PROTO_ROLE_EDITOR, .name = {"alice", 5}},
+	    {.id = 7, .role = BC_PROTO_ROLE_VIEWER, .name = {"", 0}},
+	    {.id = 9, .role = BC_PROTO_ROLE_EDITOR, .name = {"carol", 5}},
+	};
+	struct bc_msg_session_info si = {.session_id = 1, .member_id = 7,
+	                                 .role = BC_PROTO_ROLE_VIEWER,
+	                                 .name = {"s", 1}, .nmembers = 3,
+	                                 .members = mem};
+	struct bc_viewer_roster r;
+	char line[200], small[24];
+	memset(&r, 0, sizeof(r));
+	bc_viewer_roster_update(&r, &si);
+	CHECK(r.n == 3 && r.self == 7);
+	CHECK(strcmp(bc_viewer_roster_text(&r, line, sizeof(line)),
+	             "3 members: alice (editor), you (viewer), carol "
+	             "(editor)") == 0);
+	bc_viewer_roster_edit(&r, 9, 12);
+	/* carol leaves: the list shrinks, her edit keeps her name. */
+	si.nmembers = 2;
+	bc_viewer_roster_update(&r, &si);
+	CHECK(strcmp(bc_viewer_roster_text(&r, line, sizeof(line)),
+	             "2 members: alice (editor), you (viewer) - last edit: "
+	             "carol, order 12") == 0);
+	bc_viewer_roster_edit(&r, 7, 13);
+	CHECK(strstr(bc_viewer_roster_text(&r, line, sizeof(line)),
+	             "last edit: you, order 13") != NULL);
+	bc_viewer_roster_edit(&r, 30, 14);
+	CHECK(strstr(bc_viewer_roster_text(&r, line, sizeof(line)),
+	             "last edit: member 30, order 14") != NULL);
+	bc_viewer_roster_text(&r, small, sizeof(small));
+	CHECK(strlen(small) < sizeof(small));
+	CHECK(strcmp(small + strlen(small) - 3, "...") == 0);
+}
+
 static const struct bc_test tests[] = {
     {"project_inverts_view_rays", test_project_inverts_view_rays},
     {"project_refuses_points_behind_the_eye",
@@ -859,6 +899,8 @@ static const struct bc_test tests[] = {
     {"upscale_samples_pixel_centres", test_upscale_samples_pixel_centres},
     {"font_glyphs", test_font_glyphs},
     {"font_triangles", test_font_triangles},
+    {"roster_names_members_and_last_editor",
+     test_roster_names_members_and_last_editor},
 };
 
 BC_TEST_MAIN(tests)

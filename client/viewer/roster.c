@@ -1,0 +1,109 @@
+/*
+ * The viewer's picture of who is in the session: the member list of the
+ * last SESSION_INFO (names as the members gave them in HELLO) and the
+ * author of the last change, formatted as one overlay line.
+ */
+#include <stdio.h>
+#include <string.h>
+
+#include "viewer.h"
+
+void bc_viewer_roster_update(struct bc_viewer_roster *r,
+                             const struct bc_msg_session_info *si)
+{
+	r->n = 0;
+	r->self = si->member_id;
+	for (uint16_t i = 0; i < si->nmembers && i < BC_PROTO_MAX_MEMBERS;
+	     i++) {
+		const struct bc_proto_member *pm = &si->members[i];
+		struct bc_viewer_member *m = &r->m[r->n++];
+		size_t len = pm->name.len < BC_PROTO_MAX_NAME
+		                 ? pm->name.len
+		                 : BC_PROTO_MAX_NAME;
+		m->id = pm->id;
+		m->role = pm->role;
+		memcpy(m->name, pm->name.ptr, len);
+		m->name[len] = '\0';
+	}
+}
+
+static const struct bc_viewer_member *find(const struct bc_viewer_roster *r,
+                                           uint32_t id)
+{
+	for (uint16_t i = 0; i < r->n; i++) {
+		if (r->m[i].id == id) {
+			return &r->m[i];
+		}
+	}
+	return NULL;
+}
+
+void bc_viewer_roster_edit(struct bc_viewer_roster *r, uint32_t author,
+                           uint64_t order)
+{
+	const struct bc_viewer_member *m = find(r, author);
+	r->last_author = author;
+	r->last_order = order;
+	if (author == r->self) {
+		snprintf(r->last_name, sizeof(r->last_name), "you");
+	} else if (m && m->name[0]) {
+		snprintf(r->last_name, sizeof(r->last_name), "%s", m->name);
+	} else {
+		snprintf(r->last_name, sizeof(r->last_name), "member %u",
+		         author);
+	}
+}
+
+/* Appends to out[*len..n), keeping a NUL; returns false once full. */
+static bool put(char *out, size_t n, size_t *len, const char *s)
+{
+	size_t k = strlen(s);
+	if (*len + k + 1 > n) {
+		return false;
+	}
+	memcpy(out + *len, s, k + 1);
+	*len += k;
+	return true;
+}
+
+const char *bc_viewer_roster_text(const struct bc_viewer_roster *r, char *out,
+                                  size_t n)
+{
+	char item[BC_PROTO_MAX_NAME + 48];
+	size_t len = 0;
+	bool ok = true;
+	if (n == 0) {
+		return out;
+	}
+	out[0] = '\0';
+	snprintf(item, sizeof(item), "%u member%s:", r->n,
+	         r->n == 1 ? "" : "s");
+	ok = put(out, n, &len, item);
+	for (uint16_t i = 0; ok && i < r->n; i++) {
+		const struct bc_viewer_member *m = &r->m[i];
+		const char *role =
+		    m->role == BC_PROTO_ROLE_VIEWER ? "viewer" : "editor";
+		if (m->id == r->self) {
+			snprintf(item, sizeof(item), "%s you (%s)",
+			         i ? "," : "", role);
+		} else if (m->name[0]) {
+			snprintf(item, sizeof(item), "%s %s (%s)", i ? "," : "",
+			         m->name, role);
+		} else {
+			snprintf(item, sizeof(item), "%s member %u (%s)",
+			         i ? "," : "", m->id, role);
+		}
+		ok = put(out, n, &len, item);
+	}
+	if (ok && r->last_author) {
+		snprintf(item, sizeof(item), " - last edit: %s, order %llu",
+		         r->last_name, (unsigned long long)r->last_order);
+		ok = put(out, n, &len, item);
+	}
+	if (!ok && n > 4) {
+		/* Cut: say so rather than end mid-name silently. */
+		size_t at = len < n - 4 ? len : n - 4;
+		memcpy(out + at, "...", 4);
+	}
+	return out;
+}
