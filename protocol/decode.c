@@ -748,6 +748,9 @@ static int dec_body(struct dec *d, struct bc_msg *m)
 	}
 	case BC_MSG_STATS:
 		return dec_stats(d, &m->stats);
+	case BC_MSG_SESSION_DELETE:
+		return rd_str(d, "name", 1, BC_PROTO_MAX_NAME,
+		              &m->session_delete.name);
 	default:
 		return fail(d, BC_EPROTO_TYPE, "type %d is unknown",
 		            (int)m->type);

@@ -295,6 +295,9 @@ static void w_body(struct bc__w *w, const struct bc_msg *m)
 		bc__put_f32(w, s->fps);
 		break;
 	}
+	case BC_MSG_SESSION_DELETE:
+		w_str(w, "name", m->session_delete.name, BC_PROTO_MAX_NAME);
+		break;
 	default: /* OK, SESSION_LEAVE, GET_STATS: no payload */
 		break;
 	}

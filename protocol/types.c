@@ -55,6 +55,8 @@ static const struct bc__type_info types[BC_MSG_COUNT] = {
     [BC_MSG_SNAPSHOT] = {"SNAPSHOT", BC__FROM_CLIENT, 0, 2},
     [BC_MSG_GET_STATS] = {"GET_STATS", BC__FROM_CLIENT, 0, 0},
     [BC_MSG_STATS] = {"STATS", BC__FROM_SERVER, 0, 64},
+    [BC_MSG_SESSION_DELETE] = {"SESSION_DELETE", BC__FROM_CLIENT, 0,
+                               STR_MAX(BC_PROTO_MAX_NAME)},
 };
 
 const struct bc__type_info *bc__type_info(unsigned type)
@@ -128,6 +130,7 @@ int bc_proto_client_may_send(enum bc_proto_stage stage, enum bc_proto_role role,
 	case BC_MSG_CAMERA:
 	case BC_MSG_VIEW:
 	case BC_MSG_GET_STATS:
+	case BC_MSG_SESSION_DELETE:
 		return stage == BC_PROTO_STAGE_HELLO ? BC_ESTATE : 0;
 	case BC_MSG_SESSION_CREATE:
 	case BC_MSG_SESSION_JOIN:

@@ -148,6 +148,7 @@ struct bc_session {
 	uint32_t next_member_id;
 	uv_timer_t still_timer;
 	uv_timer_t kick; /* schedules frames once a loop turn's writes end */
+	uint64_t empty_since_ms; /* loop clock; when the last member left */
 	uint32_t handles_open;
 	double edit_ms_avg;
 };
@@ -172,6 +173,7 @@ struct bc_srv {
 
 	struct bc_session *sessions[BC_SRV_MAX_SESSIONS];
 	uint32_t nsessions;
+	uv_timer_t session_sweep; /* unloads sessions idle without members */
 	uint32_t next_session_id;
 
 	uint64_t started_ms;
@@ -233,6 +235,7 @@ void bc_session_send_state(struct bc_session *s, struct bc_conn *to,
 void bc_session_mark_all(struct bc_session *s);
 void bc_handle_session(struct bc_conn *c, const struct bc_msg *m);
 void bc_handle_stats(struct bc_conn *c, const struct bc_msg *m);
+void bc_handle_session_delete(struct bc_conn *c, const struct bc_msg *m);
 
 /* ---- edits.c ------------------------------------------------------------ */
 void bc_handle_scene_load(struct bc_conn *c, const struct bc_msg *m);

@@ -1,6 +1,7 @@
 /*
  * Sessions (loop thread): their lifecycle (open, restore from the store,
- * save, free), their members (join, leave, SESSION_INFO, SCENE_STATE) and
+ * save, unload when idle, delete, free), their members (join, leave,
+ * SESSION_INFO, SCENE_STATE) and
  * the table that routes a client's requests to their handlers: edits.c
  * (EDIT, SCENE_LOAD), frames.c (CAMERA, VIEW, PICK, SNAPSHOT and frame
  * scheduling) and the session and STATS handlers here.
@@ -83,6 +84,77 @@ static void still_closed(uv_handle_t *h)
 	}
 }
 
+/* Takes s out of the server (it has no members left): its replica goes,
+ * and it is freed once its timers have closed. */
+static void session_remove(struct bc_session *s)
+{
+	struct bc_srv *srv = s->srv;
+	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
+		if (srv->sessions[i] == s) {
+			srv->sessions[i] = NULL;
+			srv->nsessions--;
+		}
+	}
+	bc_rthread_drop(srv, s->id);
+	uv_close((uv_handle_t *)&s->still_timer, still_closed);
+	uv_close((uv_handle_t *)&s->kick, still_closed);
+}
+
+/* Unloads s when it has no members: every applied edit is already in its
+ * journal (and a session whose storage failed stays, holding what it could
+ * not write), so a JOIN restores it as it was. */
+static bool session_unload(struct bc_session *s, const char *why)
+{
+	if (s->nmembers > 0 || s->store_failed) {
+		return false;
+	}
+	bc_log(BC_LOG_INFO,
+	       "session %s unloaded (%s); it loads again when joined", s->name,
+	       why);
+	session_remove(s);
+	return true;
+}
+
+/* A free slot in the session table, unloading the session that has been
+ * without members longest when there is none; BC_SRV_MAX_SESSIONS when
+ * every session has members. */
+static uint32_t free_slot(struct bc_srv *srv)
+{
+	struct bc_session *oldest = NULL;
+	uint32_t slot = 0;
+	while (slot < BC_SRV_MAX_SESSIONS && srv->sessions[slot]) {
+		slot++;
+	}
+	if (slot < BC_SRV_MAX_SESSIONS) {
+		return slot;
+	}
+	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
+		struct bc_session *s = srv->sessions[i];
+		if (s->nmembers == 0 && !s->store_failed &&
+		    (!oldest || s->empty_since_ms < oldest->empty_since_ms)) {
+			oldest = s;
+			slot = i;
+		}
+	}
+	if (!oldest || !session_unload(oldest, "its place is needed")) {
+		return BC_SRV_MAX_SESSIONS;
+	}
+	return slot;
+}
+
+static void sweep_idle(uv_timer_t *t)
+{
+	struct bc_srv *srv = t->data;
+	uint64_t now = bc_now_ms(srv);
+	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
+		struct bc_session *s = srv->sessions[i];
+		if (s && s->nmembers == 0 &&
+		    now - s->empty_since_ms >= BC_SRV_SESSION_IDLE_MS) {
+			session_unload(s, "no members for 15 minutes");
+		}
+	}
+}
+
 /* Opens (or creates, with the default scene) session name. */
 static int session_open(struct bc_srv *srv, const char *name,
                         struct bc_session **out, struct bc_errinfo *ei)
@@ -94,11 +166,9 @@ static int session_open(struct bc_srv *srv, const char *name,
 	struct bc_tree *copy;
 	int rc;
 	*out = NULL;
-	while (slot < BC_SRV_MAX_SESSIONS && srv->sessions[slot]) {
-		slot++;
-	}
-	if (slot == BC_SRV_MAX_SESSIONS) {
-		return bc_errinfo_set(ei, BC_ELIMIT, "at most %u sessions",
+	if ((slot = free_slot(srv)) == BC_SRV_MAX_SESSIONS) {
+		return bc_errinfo_set(ei, BC_ELIMIT,
+		                      "at most %u sessions with members",
 		                      BC_SRV_MAX_SESSIONS);
 	}
 	if (!(s = bc_calloc(1, sizeof(*s))) || !(s->tree = bc_tree_create())) {
@@ -134,6 +204,7 @@ static int session_open(struct bc_srv *srv, const char *name,
 	}
 	s->id = ++srv->next_session_id;
 	s->next_member_id = 1;
+	s->empty_since_ms = bc_now_ms(srv);
 	uv_timer_init(srv->loop, &s->still_timer);
 	s->still_timer.data = s;
 	uv_timer_init(srv->loop, &s->kick);
@@ -163,6 +234,10 @@ static void restore_one(void *ud, const char *name)
 int bc_sessions_restore(struct bc_srv *srv, struct bc_errinfo *ei)
 {
 	struct bc_session *s;
+	uv_timer_init(srv->loop, &srv->session_sweep);
+	srv->session_sweep.data = srv;
+	uv_timer_start(&srv->session_sweep, sweep_idle, BC_SRV_SESSION_SWEEP_MS,
+	               BC_SRV_SESSION_SWEEP_MS);
 	bc_store_list(srv->store, restore_one, srv);
 	if (!session_by_name(srv, "default", 7)) {
 		return session_open(srv, "default", &s, ei);
@@ -188,6 +263,10 @@ void bc_sessions_save_all(struct bc_srv *srv)
 
 void bc_sessions_free(struct bc_srv *srv)
 {
+	if (srv->session_sweep.data) {
+		uv_close((uv_handle_t *)&srv->session_sweep, NULL);
+		srv->session_sweep.data = NULL;
+	}
 	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
 		if (srv->sessions[i]) {
 			uv_close((uv_handle_t *)&srv->sessions[i]->still_timer,
@@ -294,6 +373,9 @@ void bc_session_leave(struct bc_conn *c)
 	 * gone (a client still connected keeps its PICK and SNAPSHOT
 	 * answers). */
 	bc_rthread_sweep_soon(s->srv);
+	if (s->nmembers == 0) {
+		s->empty_since_ms = bc_now_ms(s->srv);
+	}
 	bc_session_send_info(s);
 }
 
@@ -346,10 +428,14 @@ void bc_handle_session(struct bc_conn *c, const struct bc_msg *m)
 	    session_by_name(srv, req->name.ptr, req->name.len);
 	struct bc_errinfo ei = {0};
 	char name[BC_PROTO_MAX_NAME + 1];
-	if (req->role == BC_PROTO_ROLE_EDITOR &&
+	if ((req->role == BC_PROTO_ROLE_EDITOR ||
+	     m->type == BC_MSG_SESSION_CREATE) &&
 	    c->max_role != BC_PROTO_ROLE_EDITOR) {
 		bc_conn_send_error(c, m->seq, BC_EPERM, false,
-		                   "your token grants the viewer role only");
+		                   "your token grants the viewer role only%s",
+		                   m->type == BC_MSG_SESSION_CREATE
+		                       ? ", which cannot create sessions"
+		                       : "");
 		return;
 	}
 	if (!bc_store_name_ok(req->name.ptr, req->name.len)) {
@@ -360,23 +446,79 @@ void bc_handle_session(struct bc_conn *c, const struct bc_msg *m)
 	}
 	memcpy(name, req->name.ptr, req->name.len);
 	name[req->name.len] = '\0';
-	if (m->type == BC_MSG_SESSION_CREATE) {
-		if (s) {
-			bc_conn_send_error(c, m->seq, BC_EEXIST, false,
-			                   "session %s exists", name);
-			return;
-		}
-		if (session_open(srv, name, &s, &ei)) {
-			bc_conn_send_error(c, m->seq, ei.code, false, "%s",
-			                   ei.msg);
-			return;
-		}
-	} else if (!s) {
+	if (m->type == BC_MSG_SESSION_CREATE &&
+	    (s || bc_store_session_exists(srv->store, name))) {
+		bc_conn_send_error(c, m->seq, BC_EEXIST, false,
+		                   "session %s exists", name);
+		return;
+	}
+	if (!s && m->type == BC_MSG_SESSION_JOIN &&
+	    !bc_store_session_exists(srv->store, name)) {
 		bc_conn_send_error(c, m->seq, BC_ENOSESSION, false,
 		                   "no session named %s", name);
 		return;
 	}
+	/* A new session, or one unloaded while it had no members. */
+	if (!s && session_open(srv, name, &s, &ei)) {
+		bc_conn_send_error(c, m->seq, ei.code, false, "%s", ei.msg);
+		return;
+	}
 	join(c, s, req->role, m->seq);
+}
+
+void bc_handle_session_delete(struct bc_conn *c, const struct bc_msg *m)
+{
+	struct bc_srv *srv = c->srv;
+	const struct bc_proto_str *n = &m->session_delete.name;
+	struct bc_session *s = session_by_name(srv, n->ptr, n->len);
+	struct bc_msg ok = {.type = BC_MSG_OK, .seq = m->seq};
+	struct bc_conn_ref refs[BC_PROTO_MAX_MEMBERS];
+	struct bc_errinfo ei = {0};
+	char name[BC_PROTO_MAX_NAME + 1];
+	uint32_t nrefs;
+	if (c->max_role != BC_PROTO_ROLE_EDITOR) {
+		bc_conn_send_error(c, m->seq, BC_EPERM, false,
+		                   "your token grants the viewer role only, "
+		                   "which cannot delete sessions");
+		return;
+	}
+	if (!bc_store_name_ok(n->ptr, n->len)) {
+		bc_conn_send_error(c, m->seq, BC_ENOSESSION, false,
+		                   "no session has that name");
+		return;
+	}
+	memcpy(name, n->ptr, n->len);
+	name[n->len] = '\0';
+	if (!s && !bc_store_session_exists(srv->store, name)) {
+		bc_conn_send_error(c, m->seq, BC_ENOSESSION, false,
+		                   "no session named %s", name);
+		return;
+	}
+	if (s) {
+		/* Members first hear why they are back in READY. */
+		nrefs = bc_session_members(s, refs);
+		for (uint32_t i = 0; i < nrefs; i++) {
+			struct bc_conn *mc = bc_conn_get(srv, refs[i]);
+			if (!mc) {
+				continue;
+			}
+			bc_conn_send_error(mc, 0, BC_ENOSESSION, false,
+			                   "session %s was deleted by %s", name,
+			                   c->name[0] ? c->name : "a client");
+			bc_session_leave(mc);
+		}
+		s->nmembers = 0;
+		s->store_failed = false;
+		session_remove(s);
+	}
+	if (bc_store_session_delete(srv->store, name, &ei)) {
+		bc_log(BC_LOG_ERROR, "session %s: %s", name, ei.msg);
+		bc_conn_send_error(c, m->seq, ei.code, false, "%s", ei.msg);
+		return;
+	}
+	bc_log(BC_LOG_INFO, "session %s deleted by connection %u (%s)", name,
+	       c->gen, c->name);
+	bc_conn_send(c, &ok);
 }
 
 void bc_handle_stats(struct bc_conn *c, const struct bc_msg *m)
@@ -425,6 +567,7 @@ static const handler_fn handlers[BC_MSG_COUNT] = {
     [BC_MSG_PICK] = bc_handle_pick,
     [BC_MSG_SNAPSHOT] = bc_handle_snapshot,
     [BC_MSG_GET_STATS] = bc_handle_stats,
+    [BC_MSG_SESSION_DELETE] = bc_handle_session_delete,
 };
 
 void bc_session_handle(struct bc_conn *c, const struct bc_msg *m)

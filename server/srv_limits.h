@@ -11,9 +11,19 @@
  * change; 256 is far beyond a review meeting while bounding memory. */
 #define BC_SRV_MAX_CONNECTIONS 256u
 
-/* Live sessions. Each keeps a scene (up to BC_SRV_MAX_NODES nodes, about
- * 200 bytes a primitive in the model and its layout) and a renderer. */
+/* Live (loaded) sessions. Each keeps a scene (up to BC_SRV_MAX_NODES
+ * nodes, about 200 bytes a primitive in the model and its layout) and a
+ * renderer. Sessions on disk are not limited: one with no members is
+ * unloaded after BC_SRV_SESSION_IDLE_MS, or at once, least recently used
+ * first, when a CREATE or a JOIN needs its place; a JOIN loads it again. */
 #define BC_SRV_MAX_SESSIONS 64u
+
+/* A session with no members stays loaded this long (a member who drops and
+ * reconnects finds it warm), then its memory goes back: everything it holds
+ * is already on disk (journal and snapshots). Checked every
+ * BC_SRV_SESSION_SWEEP_MS. */
+#define BC_SRV_SESSION_IDLE_MS (15u * 60u * 1000u)
+#define BC_SRV_SESSION_SWEEP_MS (60u * 1000u)
 
 /* Nodes of a session's scene: the layout's own limit (22-bit ancestor
  * indices, BC_TREE_MAX_NODES), which a SCENE_LOAD under the payload limit

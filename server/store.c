@@ -45,10 +45,10 @@ bool bc__store_injected(const char *step, const char *path)
 	return false;
 }
 
-/* Renames path to base.damaged-YYYYMMDDTHHMMSSZ(-k) (base NULL: path
- * itself), keeping it as evidence; writes the new name into aside
- * (PATH_LEN). */
-static int set_aside_as(const char *path, const char *base, char *aside)
+/* Renames path to base.WHY-YYYYMMDDTHHMMSSZ(-k) (base NULL: path itself),
+ * keeping it as evidence; writes the new name into aside (PATH_LEN). */
+static int set_aside_why(const char *path, const char *base, const char *why,
+                         char *aside)
 {
 	char stamp[32];
 	time_t now = time(NULL);
@@ -61,9 +61,9 @@ static int set_aside_as(const char *path, const char *base, char *aside)
 	strftime(stamp, sizeof(stamp), "%Y%m%dT%H%M%SZ", &tm);
 	for (unsigned k = 0; k < 100; k++) {
 		int n =
-		    k ? snprintf(aside, PATH_LEN, "%s.damaged-%s-%u", base,
+		    k ? snprintf(aside, PATH_LEN, "%s.%s-%s-%u", base, why,
 		                 stamp, k)
-		      : snprintf(aside, PATH_LEN, "%s.damaged-%s", base, stamp);
+		      : snprintf(aside, PATH_LEN, "%s.%s-%s", base, why, stamp);
 		if (n < 0 || n >= PATH_LEN) {
 			return -1;
 		}
@@ -72,6 +72,11 @@ static int set_aside_as(const char *path, const char *base, char *aside)
 		}
 	}
 	return -1;
+}
+
+static int set_aside_as(const char *path, const char *base, char *aside)
+{
+	return set_aside_why(path, base, "damaged", aside);
 }
 
 int bc__store_set_aside(const char *path, char *aside)
@@ -215,6 +220,38 @@ int bc_store_list(struct bc_store *st, void (*fn)(void *ud, const char *name),
 		}
 	}
 	closedir(d);
+	return 0;
+}
+
+bool bc_store_session_exists(struct bc_store *st, const char *name)
+{
+	char path[PATH_LEN];
+	struct stat sb;
+	return bc_store_name_ok(name, strlen(name)) &&
+	       bc__store_fmt_path(path, "%s/sessions/%s", st->dir, name) &&
+	       stat(path, &sb) == 0 && S_ISDIR(sb.st_mode);
+}
+
+int bc_store_session_delete(struct bc_store *st, const char *name,
+                            struct bc_errinfo *ei)
+{
+	char path[PATH_LEN], parent[PATH_LEN], base[PATH_LEN], aside[PATH_LEN];
+	bc__store_fmt_path(path, "%s/sessions/%s", st->dir, name);
+	bc__store_fmt_path(parent, "%s/sessions/.deleted", st->dir);
+	if (mkdir(parent, 0755) != 0 && errno != EEXIST) {
+		return bc__store_sys_error(ei, "cannot create", parent);
+	}
+	bc__store_fmt_path(base, "%s/%s", parent, name);
+	if (set_aside_why(path, base, "deleted", aside) != 0) {
+		return bc__store_sys_error(ei, "cannot move aside", path);
+	}
+	bc__store_fmt_path(path, "%s/sessions", st->dir);
+	if (bc__store_sync_dir(path) != 0 || bc__store_sync_dir(parent) != 0) {
+		bc_log(BC_LOG_WARN, "session %s: moved to %s, not yet synced",
+		       name, aside);
+	}
+	bc_log(BC_LOG_INFO, "session %s deleted: its files are kept in %s",
+	       name, aside);
 	return 0;
 }
 

@@ -97,6 +97,16 @@ uint64_t bc_store_journal_records(const struct bc_store_session *ss);
 typedef bool (*bc_store_fail_fn)(void *ud, const char *step, const char *path);
 void bc_store_set_fail_hook(bc_store_fail_fn fn, void *ud);
 
+/* Whether session name has a directory in the store (loaded or not). */
+bool bc_store_session_exists(struct bc_store *st, const char *name);
+
+/* Deletes session name (closed first by the caller): its directory moves
+ * to DIR/sessions/.deleted/NAME.deleted-TIME, which bc_store_list never
+ * lists, so a session of that name starts anew; the files stay until an
+ * operator removes them. */
+int bc_store_session_delete(struct bc_store *st, const char *name,
+                            struct bc_errinfo *ei);
+
 /* Is name usable as a session name (and directory name)? */
 bool bc_store_name_ok(const char *name, size_t len);
 

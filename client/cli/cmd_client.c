@@ -1013,6 +1013,23 @@ out:
 	return status;
 }
 
+static int run_delete(struct args *a)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	char what[128];
+	int status = connect_to(a, &c);
+	if (status == 0 && bc_client_delete_session(c, a->session, &ei)) {
+		snprintf(what, sizeof(what), "session %s", a->session);
+		status = failed(a, what, &ei);
+	}
+	if (status == 0) {
+		printf("deleted session %s\n", a->session);
+	}
+	bc_client_destroy(c);
+	return status;
+}
+
 static int run_scene(struct args *a)
 {
 	struct bc_client *c = NULL;
@@ -1397,6 +1414,14 @@ static const struct cmd cmds[] = {
      "  --out FILE      write to FILE (atomically) instead of stdout\n"
      "                  (\"-\": stdout)\n",
      run_scene},
+    {"delete", O_SESSION, 0, 0, "--session NAME",
+     "delete a session and its saved scene",
+     "Deletes session NAME on the server: its members are sent back out\n"
+     "of it (they stay connected), its scene and edits are no longer\n"
+     "served, and a later 'load' or join of that name starts anew. The\n"
+     "server keeps the files aside (docs/operations.md). Needs a token\n"
+     "granting the editor role when the server has tokens.\n",
+     run_delete},
 };
 
 static const struct cmd *find_cmd(const char *name)

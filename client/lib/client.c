@@ -558,7 +558,7 @@ static void track(struct bc_client *c, const struct bc_msg *m)
 			 m->session_info.name);
 		break;
 	case BC_MSG_OK:
-		/* The only request answered with a bare OK is SESSION_LEAVE. */
+		/* SESSION_LEAVE and SESSION_DELETE are answered with OK. */
 		break;
 	case BC_MSG_SCENE_STATE: {
 		struct bc_tree *t = c->scene ? c->scene : bc_tree_create();
@@ -607,6 +607,12 @@ static void track(struct bc_client *c, const struct bc_msg *m)
 						 : BC_ECLOSED;
 			fail(c, code, "server: %.*s", (int)m->error.text.len,
 			     m->error.text.ptr);
+		} else if (m->seq == 0 &&
+			   -(int)m->error.code == BC_ENOSESSION) {
+			/* Our session was deleted: back in READY. */
+			c->info.session_id = 0;
+			c->info.nmembers = 0;
+			drop_scene(c, "the session was deleted");
 		}
 		break;
 	default:
@@ -1037,4 +1043,28 @@ int bc_client_snapshot_planes(struct bc_client *c,
 		                      "the snapshot lacks a plane asked for");
 	}
 	return 0;
+}
+
+int bc_client_delete_session(struct bc_client *c, const char *name,
+			     struct bc_errinfo *ei)
+{
+	struct bc_msg m = {.type = BC_MSG_SESSION_DELETE};
+	uint32_t seq;
+	int rc;
+	if (!name || !*name || strlen(name) > BC_PROTO_MAX_NAME) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+				      "session names have 1..%u bytes",
+				      BC_PROTO_MAX_NAME);
+	}
+	m.session_delete.name.ptr = name;
+	m.session_delete.name.len = (uint32_t)strlen(name);
+	if ((rc = send_or_say(c, &m, &seq, ei))) {
+		return rc;
+	}
+	/* A member deleting its own session hears ENOSESSION (seq 0)
+	 * first, like every member. */
+	while ((rc = bc_client_wait(c, BC_MSG_OK, seq, &m, 0, ei)) &&
+	       m.type == BC_MSG_ERROR && m.seq == 0 && rc == BC_ENOSESSION) {
+	}
+	return rc;
 }

@@ -61,6 +61,7 @@ export const MSG = Object.freeze({
 	SESSION_INFO: 10, SCENE_LOAD: 11, SCENE_STATE: 12, EDIT: 13,
 	EDIT_APPLIED: 14, CAMERA: 15, VIEW: 16, FRAME: 17, PICK: 18,
 	PICK_RESULT: 19, SNAPSHOT: 20, GET_STATS: 21, STATS: 22,
+	SESSION_DELETE: 23,
 });
 
 /* Header flag bits; each is defined for some types only. */
@@ -243,6 +244,7 @@ T(19, 'PICK_RESULT', FROM_SERVER, 0, 24);
 T(20, 'SNAPSHOT', FROM_CLIENT, 0, 2);
 T(21, 'GET_STATS', FROM_CLIENT, 0, 0);
 T(22, 'STATS', FROM_SERVER, 0, 64);
+T(23, 'SESSION_DELETE', FROM_CLIENT, 0, strMax(L.MAX_NAME));
 
 function typeInfo(type) {
 	return Number.isInteger(type) ? TYPES[type] ?? null : null;
@@ -726,6 +728,9 @@ function decBody(d, m) {
 	case MSG.SESSION_CREATE:
 	case MSG.SESSION_JOIN:
 		m.role = d.role('role');
+		m.name = d.str('name', 1, L.MAX_NAME);
+		break;
+	case MSG.SESSION_DELETE:
 		m.name = d.str('name', 1, L.MAX_NAME);
 		break;
 	case MSG.SESSION_INFO: {
@@ -1285,6 +1290,9 @@ function encBody(w, m) {
 	case MSG.SESSION_CREATE:
 	case MSG.SESSION_JOIN:
 		w.u8('role', m.role, 'EENUM');
+		w.str('name', m.name);
+		break;
+	case MSG.SESSION_DELETE:
 		w.str('name', m.name);
 		break;
 	case MSG.SESSION_INFO:

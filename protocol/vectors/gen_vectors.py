@@ -26,6 +26,7 @@ TYPES = {
     "SESSION_INFO": 10, "SCENE_LOAD": 11, "SCENE_STATE": 12, "EDIT": 13,
     "EDIT_APPLIED": 14, "CAMERA": 15, "VIEW": 16, "FRAME": 17, "PICK": 18,
     "PICK_RESULT": 19, "SNAPSHOT": 20, "GET_STATS": 21, "STATS": 22,
+    "SESSION_DELETE": 23,
 }
 MAX_PAYLOAD = 64 * 1024 * 1024
 HELLO_MAX_PAYLOAD = 4096
@@ -72,6 +73,7 @@ TYPE_MAX = {
     "EDIT": MAX_PAYLOAD, "EDIT_APPLIED": MAX_PAYLOAD,
     "CAMERA": 40, "VIEW": 8, "FRAME": MAX_PAYLOAD, "PICK": 4,
     "PICK_RESULT": 24, "SNAPSHOT": 2, "GET_STATS": 0, "STATS": 64,
+    "SESSION_DELETE": strmax(MAX_NAME),
 }
 
 # ---- Byte helpers --------------------------------------------------------------
@@ -209,6 +211,10 @@ def w_session(f):
     return u8(f["role"]) + sstr(f["name"])
 
 
+def w_session_delete(f):
+    return sstr(f["name"])
+
+
 def w_session_info(f):
     b = (u32(f["session_id"]) + u32(f["member_id"]) + u8(f["role"])
          + sstr(f["name"]) + u16(len(f["members"])))
@@ -316,6 +322,7 @@ WRITERS = {
     "VIEW": w_view, "FRAME": w_frame, "PICK": w_pick,
     "PICK_RESULT": w_pick_result, "SNAPSHOT": w_snapshot,
     "GET_STATS": w_empty, "STATS": w_stats,
+    "SESSION_DELETE": w_session_delete,
 }
 
 # ---- Vector tables -----------------------------------------------------------
@@ -530,6 +537,19 @@ def gen_session(name):
     t.bad("refused by a server before HELLO", frame(name, p), "ESTATE",
           reader=PRE_HELLO)
     t.dump(name.lower() + ".json")
+
+
+def gen_session_delete():
+    t = Table("SESSION_DELETE")
+    p = t.ok("a name", dict(name="design-review"), seq=9)
+    t.ok("64-byte name", dict(name="d" * 64), seq=10)
+    t.common(p)
+    t.badp("empty name", sstr(""), "EPROTO_LENGTH")
+    t.badp("name of 65 bytes", sstr("s" * 65), "EPROTO_LENGTH")
+    t.badp("name with NUL", sstr(b"a\x00"), "ESTRING")
+    t.bad("refused by a server before HELLO", frame("SESSION_DELETE", p),
+          "ESTATE", reader=PRE_HELLO)
+    t.dump("session_delete.json")
 
 
 def gen_session_info():
@@ -1090,7 +1110,7 @@ def gen_framing():
     bad("version 255, header cut after it", MAGIC + u8(255),
         "EPROTO_VERSION")
     bad("type 0", header(0, 0), "EPROTO_TYPE")
-    bad("type 23", header(23, 0), "EPROTO_TYPE")
+    bad("type 24", header(24, 0), "EPROTO_TYPE")
     bad("type 255", header(255, 0), "EPROTO_TYPE")
     bad("unknown type is reported before the rest of the header",
         MAGIC + u8(1) + u8(99), "EPROTO_TYPE")
@@ -1221,6 +1241,7 @@ def main():
     gen_snapshot()
     gen_empty("GET_STATS", "client")
     gen_stats()
+    gen_session_delete()
     gen_framing()
     gen_scene()
 

@@ -437,6 +437,9 @@ static void sample(enum bc_msg_type t, struct bc_msg *m)
 		m->stats = (struct bc_msg_stats){
 		    1, 2, 3, 4, 5, 6, 7.0f, 8.0f, 9.0f, 10.0f, 11.0f, 12.0f};
 		break;
+	case BC_MSG_SESSION_DELETE:
+		m->session_delete.name = S("old-review");
+		break;
 	default:
 		break;
 	}

@@ -187,6 +187,9 @@ static void build(enum bc_msg_type type, const json_t *f, struct bc_msg *m)
 		m->session.role = (enum bc_proto_role)jint(f, "role");
 		m->session.name = jstr(f, "name");
 		break;
+	case BC_MSG_SESSION_DELETE:
+		m->session_delete.name = jstr(f, "name");
+		break;
 	case BC_MSG_SESSION_INFO: {
 		struct bc_msg_session_info *s = &m->session_info;
 		s->session_id = (uint32_t)jint(f, "session_id");
@@ -456,6 +459,8 @@ static int msg_eq(const struct bc_msg *a, const struct bc_msg *b)
 		       a->snapshot.planes == b->snapshot.planes;
 	case BC_MSG_STATS:
 		return memcmp(&a->stats, &b->stats, sizeof(a->stats)) == 0;
+	case BC_MSG_SESSION_DELETE:
+		return str_eq(a->session_delete.name, b->session_delete.name);
 	default: /* no payload */
 		return 1;
 	}

@@ -119,9 +119,11 @@ static void an_idle_client_in_no_session_is_dropped(void)
 
 /* Starts the daemon listening on 127.0.0.1 at a free port too, and returns
  * that port (0 on failure): its stderr goes to a file for the address. */
-static int daemon_start_tcp(struct daemon *d, const char *dir)
+static int daemon_start_tcp_config(struct daemon *d, const char *dir,
+                                   const char *config)
 {
-	const char *extra[] = {"--listen", "127.0.0.1:0", NULL};
+	const char *extra[] = {"--listen", "127.0.0.1:0", config ? "--config" : NULL,
+	                       config, NULL};
 	char log[80], line[256];
 	int saved = dup(2), fd, port = 0;
 	const char *verbose = getenv("BLOBCAST_TEST_VERBOSE");
@@ -157,6 +159,11 @@ static int daemon_start_tcp(struct daemon *d, const char *dir)
 	}
 	fclose(f);
 	return port;
+}
+
+static int daemon_start_tcp(struct daemon *d, const char *dir)
+{
+	return daemon_start_tcp_config(d, dir, NULL);
 }
 
 /* A TCP connection from source address from (127.x.y.z) to port. */
@@ -476,6 +483,197 @@ static void sessions_take_turns_on_the_render_thread(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
+/* HELLO over TCP to port with a token. */
+static void tcp_hello(struct conn *c, int port, const char *token)
+{
+	struct bc_msg m = {.type = BC_MSG_HELLO};
+	memset(c, 0, sizeof(*c));
+	c->fd = tcp_connect("127.0.0.1", port);
+	REQUIRE(c->fd >= 0);
+	bc_proto_reader_init(&c->r, &(struct bc_proto_reader_opts){
+	                                .side = BC_PROTO_SIDE_CLIENT});
+	m.hello.version_min = m.hello.version_max = 1;
+	m.hello.encodings = BC_PROTO_ENCODINGS_ALL;
+	m.hello.client_name.ptr = token;
+	m.hello.client_name.len = (uint32_t)strlen(token);
+	m.hello.token.ptr = token;
+	m.hello.token.len = (uint32_t)strlen(token);
+	REQUIRE(conn_send(c, &m));
+	REQUIRE(conn_expect(c, BC_MSG_WELCOME, 5000) == 1);
+}
+
+/* Sends a session request of type t and returns the answer: 0 for
+ * SESSION_INFO or OK, else the ERROR's code (-1: none). */
+static int session_request(struct conn *c, enum bc_msg_type t,
+                           const char *name, enum bc_proto_role role)
+{
+	struct bc_msg m = {.type = t};
+	uint32_t seq;
+	if (t == BC_MSG_SESSION_DELETE) {
+		m.session_delete.name.ptr = name;
+		m.session_delete.name.len = (uint32_t)strlen(name);
+	} else {
+		m.session.role = role;
+		m.session.name.ptr = name;
+		m.session.name.len = (uint32_t)strlen(name);
+	}
+	seq = conn_send(c, &m);
+	while (conn_recv(c, 10000) == 1) {
+		if (c->m.type == BC_MSG_ERROR && c->m.seq == seq) {
+			return c->m.error.code;
+		}
+		if (c->m.type == BC_MSG_SESSION_INFO ||
+		    (c->m.type == BC_MSG_OK && c->m.seq == seq)) {
+			return 0;
+		}
+	}
+	return -1;
+}
+
+static void leave(struct conn *c)
+{
+	struct bc_msg m = {.type = BC_MSG_SESSION_LEAVE};
+	uint32_t seq = conn_send(c, &m);
+	while (conn_recv(c, 10000) == 1) {
+		if (c->m.type == BC_MSG_OK && c->m.seq == seq) {
+			return;
+		}
+	}
+	CHECK(!"no OK for SESSION_LEAVE");
+}
+
+static void a_viewer_token_cannot_create_or_delete_sessions(void)
+{
+	struct daemon d;
+	struct conn viewer, editor;
+	char dir[64], cfg[80];
+	FILE *f;
+	int port;
+	make_dir_name(dir, sizeof(dir), "tokens");
+	snprintf(cfg, sizeof(cfg), "%s.json", dir);
+	REQUIRE((f = fopen(cfg, "w")));
+	fputs("{\"tokens\": [{\"token\": \"ed\", \"role\": \"editor\"}, "
+	      "{\"token\": \"vw\", \"role\": \"viewer\"}]}",
+	      f);
+	fclose(f);
+	port = daemon_start_tcp_config(&d, dir, cfg);
+	REQUIRE(port > 0);
+	tcp_hello(&viewer, port, "vw");
+	CHECK_EQ_INT(session_request(&viewer, BC_MSG_SESSION_CREATE, "mine",
+	                             BC_PROTO_ROLE_VIEWER),
+	             -BC_EPERM);
+	CHECK_EQ_INT(session_request(&viewer, BC_MSG_SESSION_DELETE, "default",
+	                             0),
+	             -BC_EPERM);
+	CHECK_EQ_INT(session_request(&viewer, BC_MSG_SESSION_JOIN, "mine",
+	                             BC_PROTO_ROLE_VIEWER),
+	             -BC_ENOSESSION);
+	CHECK_EQ_INT(session_request(&viewer, BC_MSG_SESSION_JOIN, "default",
+	                             BC_PROTO_ROLE_VIEWER),
+	             0);
+	tcp_hello(&editor, port, "ed");
+	CHECK_EQ_INT(session_request(&editor, BC_MSG_SESSION_CREATE, "mine",
+	                             BC_PROTO_ROLE_VIEWER),
+	             0);
+	conn_close(&viewer);
+	conn_close(&editor);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
+static void idle_sessions_make_room_and_load_again(void)
+{
+	struct daemon d;
+	struct conn a;
+	struct bc_tree *t;
+	char dir[64], name[16];
+	uint64_t order;
+	make_dir_name(dir, sizeof(dir), "unload");
+	REQUIRE(daemon_start(&d, dir) == 0);
+	REQUIRE(conn_open(&a, &d) == 0);
+	REQUIRE(conn_hello(&a, "a") == 0);
+	REQUIRE(conn_join(&a, "s1", BC_PROTO_ROLE_EDITOR, true) == 0);
+	REQUIRE(conn_expect(&a, BC_MSG_SCENE_STATE, 5000) == 1);
+	REQUIRE((t = scene_of(&a)));
+	REQUIRE(conn_move(&a, bc_tree_lin(t)->node_id[bc_tree_lin(t)->prim_slot[0]],
+	                  0.25f, 0, 0, false));
+	bc_tree_destroy(t);
+	REQUIRE(conn_expect(&a, BC_MSG_EDIT_APPLIED, 10000) == 1);
+	order = a.m.edit_applied.order;
+	leave(&a);
+	/* default and s1, then sessions enough to fill the table twice
+	 * over: each creation past the limit unloads the session without
+	 * members for longest (default, then s1). */
+	for (uint32_t i = 2; i <= 2 * BC_SRV_MAX_SESSIONS; i++) {
+		snprintf(name, sizeof(name), "s%u", i);
+		REQUIRE(session_request(&a, BC_MSG_SESSION_CREATE, name,
+		                        BC_PROTO_ROLE_EDITOR) == 0);
+		leave(&a);
+	}
+	/* s1 loads again as it was left. */
+	REQUIRE(conn_join(&a, "s1", BC_PROTO_ROLE_VIEWER, false) == 0);
+	REQUIRE(conn_expect(&a, BC_MSG_SCENE_STATE, 5000) == 1);
+	CHECK_EQ_INT(a.m.scene_state.order, order);
+	leave(&a);
+	CHECK_EQ_INT(session_request(&a, BC_MSG_SESSION_CREATE, "s1",
+	                             BC_PROTO_ROLE_EDITOR),
+	             -BC_EEXIST);
+	CHECK_EQ_INT(session_request(&a, BC_MSG_SESSION_JOIN, "default",
+	                             BC_PROTO_ROLE_VIEWER),
+	             0);
+	conn_close(&a);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
+static void a_deleted_session_is_gone_for_good(void)
+{
+	struct daemon d;
+	struct conn a, b, c;
+	char dir[64], path[128];
+	struct stat sb;
+	make_dir_name(dir, sizeof(dir), "delete");
+	REQUIRE(daemon_start(&d, dir) == 0);
+	REQUIRE(conn_open(&a, &d) == 0 && conn_hello(&a, "alice") == 0);
+	REQUIRE(conn_open(&b, &d) == 0 && conn_hello(&b, "bob") == 0);
+	REQUIRE(conn_open(&c, &d) == 0 && conn_hello(&c, "carol") == 0);
+	REQUIRE(conn_join(&a, "doomed", BC_PROTO_ROLE_EDITOR, true) == 0);
+	REQUIRE(conn_join(&b, "doomed", BC_PROTO_ROLE_VIEWER, false) == 0);
+	CHECK_EQ_INT(session_request(&c, BC_MSG_SESSION_DELETE, "doomed", 0), 0);
+	/* Both members hear it (seq 0) and are back in READY. */
+	REQUIRE(conn_expect(&b, BC_MSG_ERROR, 5000) == 1);
+	CHECK_EQ_INT(b.m.error.code, -BC_ENOSESSION);
+	CHECK_EQ_INT(b.m.seq, 0);
+	printf("  %.*s\n", (int)b.m.error.text.len, b.m.error.text.ptr);
+	REQUIRE(conn_expect(&a, BC_MSG_ERROR, 5000) == 1);
+	CHECK_EQ_INT(a.m.seq, 0);
+	CHECK_EQ_INT(session_request(&b, BC_MSG_SESSION_JOIN, "doomed",
+	                             BC_PROTO_ROLE_VIEWER),
+	             -BC_ENOSESSION);
+	CHECK_EQ_INT(session_request(&c, BC_MSG_SESSION_DELETE, "doomed", 0),
+	             -BC_ENOSESSION);
+	/* The files are kept aside, out of the sessions the daemon loads. */
+	snprintf(path, sizeof(path), "%s/sessions/doomed", dir);
+	CHECK(stat(path, &sb) != 0);
+	snprintf(path, sizeof(path), "%s/sessions/.deleted", dir);
+	CHECK(stat(path, &sb) == 0 && S_ISDIR(sb.st_mode));
+	/* The name starts anew, also after a restart. */
+	CHECK_EQ_INT(session_request(&a, BC_MSG_SESSION_CREATE, "doomed",
+	                             BC_PROTO_ROLE_EDITOR),
+	             0);
+	REQUIRE(conn_expect(&a, BC_MSG_SCENE_STATE, 5000) == 1);
+	CHECK_EQ_INT(a.m.scene_state.order, 0);
+	conn_close(&a);
+	conn_close(&b);
+	conn_close(&c);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+	REQUIRE(daemon_start(&d, dir) == 0);
+	REQUIRE(conn_open(&a, &d) == 0 && conn_hello(&a, "alice") == 0);
+	REQUIRE(conn_join(&a, "doomed", BC_PROTO_ROLE_VIEWER, false) == 0);
+	REQUIRE(conn_expect(&a, BC_MSG_SCENE_STATE, 5000) == 1);
+	CHECK_EQ_INT(a.m.scene_state.order, 0);
+	conn_close(&a);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
 static void setup(void)
 {
 	(void)conn_view;
@@ -498,6 +696,11 @@ static const struct bc_test tests[] = {
      the_jobs_of_a_client_that_left_are_dropped},
     {"sessions_take_turns_on_the_render_thread",
      sessions_take_turns_on_the_render_thread},
+    {"a_viewer_token_cannot_create_or_delete_sessions",
+     a_viewer_token_cannot_create_or_delete_sessions},
+    {"idle_sessions_make_room_and_load_again",
+     idle_sessions_make_room_and_load_again},
+    {"a_deleted_session_is_gone_for_good", a_deleted_session_is_gone_for_good},
 };
 
 int main(int argc, char **argv)

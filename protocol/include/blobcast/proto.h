@@ -64,6 +64,7 @@ enum bc_msg_type {
 	BC_MSG_SNAPSHOT = 20,      /* client -> server */
 	BC_MSG_GET_STATS = 21,     /* client -> server */
 	BC_MSG_STATS = 22,         /* server -> client */
+	BC_MSG_SESSION_DELETE = 23, /* client -> server */
 	BC_MSG_COUNT
 };
 
@@ -245,6 +246,10 @@ struct bc_msg_session {
 	struct bc_proto_str name; /* 1..BC_PROTO_MAX_NAME bytes */
 };
 
+struct bc_msg_session_delete {
+	struct bc_proto_str name; /* 1..BC_PROTO_MAX_NAME bytes */
+};
+
 struct bc_proto_member {
 	uint32_t id; /* != 0, unique in the session */
 	enum bc_proto_role role;
@@ -391,6 +396,7 @@ struct bc_msg {
 		struct bc_msg_pick_result pick_result;
 		struct bc_msg_snapshot snapshot;
 		struct bc_msg_stats stats;
+		struct bc_msg_session_delete session_delete;
 	};
 };
 

@@ -205,6 +205,13 @@ int bc_client_join(struct bc_client *c, const char *name,
                    enum bc_proto_role role, enum bc_client_join_mode mode,
                    struct bc_errinfo *ei);
 
+/* Deletes session name on the server (SESSION_DELETE): its members, this
+ * client too when it is one, are sent back to READY with ERROR ENOSESSION.
+ * Needs a token granting the editor role (BC_EPERM otherwise);
+ * BC_ENOSESSION when there is no such session. */
+int bc_client_delete_session(struct bc_client *c, const char *name,
+                             struct bc_errinfo *ei);
+
 /* The scene mirror: the session's scene as of bc_client_info()->order, or
  * NULL before the first SCENE_STATE (or if an edit could not be replayed on
  * it, which is logged). Owned by c; valid until the next call on c. cam
