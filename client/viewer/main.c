@@ -433,15 +433,15 @@ static void fmt_selection(struct bc_viewer_app *a, char *out, size_t n)
 /* The top-right tag: whether the picture on screen is final, and whether
  * a render we asked for has not come yet. Amber, apart from the numbers,
  * so that a coarse or budget-cut picture never passes for the real one. */
-static void draw_tag(struct bc_viewer_app *a, uint32_t fw, float scale,
-                     const char *refining, double now)
+static void draw_tag(struct bc_viewer_app *a, uint32_t fw, uint32_t fh,
+                     float scale, const char *refining, double now)
 {
 	const float pad = 6.0f;
 	const float panel_rgba[4] = {0.0f, 0.0f, 0.0f, 0.6f};
 	const float tag_rgba[4] = {0.95f, 0.72f, 0.29f, 1.0f};
 	double since = a->offline ? 0.0 : bc_viewer_pending_since(a);
 	char tag[96];
-	float w, h, x;
+	float w, h, x, y;
 	size_t nf;
 	int lines = 0;
 	tag[0] = '\0';
@@ -462,13 +462,15 @@ static void draw_tag(struct bc_viewer_app *a, uint32_t fw, float scale,
 	w = bc_viewer_text_width(tag, scale) + 2.0f * pad;
 	h = (float)lines * BC_VIEWER_LINE_ADVANCE * scale + 2.0f * pad -
 	    2.0f * scale;
+	/* Bottom right: the overlay's text runs along the top. */
 	x = (float)fw - w;
+	y = (float)fh - h;
 	{
-		const float q[12] = {x, 0.0f, x + w, 0.0f, x + w, h,
-		                     x, 0.0f, x + w, h,    x,     h};
+		const float q[12] = {x, y, x + w, y,     x + w, y + h,
+		                     x, y, x + w, y + h, x,     y + h};
 		bc_viewer_gl_draw(&a->gl, GL_TRIANGLES, q, 6, panel_rgba);
 	}
-	nf = bc_viewer_text_tris(tag, x + pad, pad, scale, a->text,
+	nf = bc_viewer_text_tris(tag, x + pad, y + pad, scale, a->text,
 	                         BC_VIEWER_TEXT_FLOATS);
 	if (nf > BC_VIEWER_TEXT_FLOATS) {
 		nf = BC_VIEWER_TEXT_FLOATS;
@@ -485,8 +487,7 @@ static void draw_overlay(struct bc_viewer_app *a, uint32_t fw, uint32_t fh,
 	const float text_rgba[4] = {0.95f, 0.95f, 0.9f, 1.0f};
 	float scale = fw >= 900 ? 2.0f : 1.0f, w, h, panel[12];
 	size_t nf;
-	int lines = 4;
-	(void)fh;
+	int lines = 1;
 	fmt_latency(&a->meter, lat, sizeof(lat));
 	fmt_selection(a, sel, sizeof(sel));
 	bc_viewer_refining_text(a->last.flags, refining, sizeof(refining));
@@ -508,7 +509,9 @@ static void draw_overlay(struct bc_viewer_app *a, uint32_t fw, uint32_t fh,
 	    (a->offline || now - a->status_at < BC_VIEWER_STATUS_MS)) {
 		size_t len = strlen(text);
 		snprintf(text + len, sizeof(text) - len, "\n%s", a->status);
-		lines++;
+	}
+	for (const char *p = text; *p; p++) {
+		lines += *p == '\n';
 	}
 	w = bc_viewer_text_width(text, scale) + 2.0f * pad;
 	h = (float)lines * BC_VIEWER_LINE_ADVANCE * scale + 2.0f * pad -
@@ -525,7 +528,7 @@ static void draw_overlay(struct bc_viewer_app *a, uint32_t fw, uint32_t fh,
 		nf = BC_VIEWER_TEXT_FLOATS;
 	}
 	bc_viewer_gl_draw(&a->gl, GL_TRIANGLES, a->text, nf / 2u, text_rgba);
-	draw_tag(a, fw, scale, refining, now);
+	draw_tag(a, fw, fh, scale, refining, now);
 }
 
 /* Outlines the selected primitive's bounding box, projected with our

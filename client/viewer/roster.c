@@ -96,7 +96,7 @@ const char *bc_viewer_roster_text(const struct bc_viewer_roster *r, char *out,
 		ok = put(out, n, &len, item);
 	}
 	if (ok && r->last_author) {
-		snprintf(item, sizeof(item), " - last edit: %s, order %llu",
+		snprintf(item, sizeof(item), "\nlast edit: %s, order %llu",
 		         r->last_name, (unsigned long long)r->last_order);
 		ok = put(out, n, &len, item);
 	}

@@ -268,9 +268,10 @@ void bc_viewer_roster_update(struct bc_viewer_roster *r,
 /* Notes an edit or load by member author with order. */
 void bc_viewer_roster_edit(struct bc_viewer_roster *r, uint32_t author,
                            uint64_t order);
-/* The overlay's line: `3 members: alice (editor), bob (viewer), you
- * (editor) - last edit: alice, order 12`, cut to fit n bytes with "...".
- * A member without a name shows as "member ID". Returns out. */
+/* The overlay's lines: `3 members: alice (editor), bob (viewer), you
+ * (editor)`, then, after an edit, `last edit: alice, order 12` on a line
+ * of its own; cut to fit n bytes with "...". A member without a name
+ * shows as "member ID". Returns out. */
 const char *bc_viewer_roster_text(const struct bc_viewer_roster *r, char *out,
                                   size_t n);
 

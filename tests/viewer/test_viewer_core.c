@@ -863,7 +863,7 @@ static void test_roster_names_members_and_last_editor(void)
 	si.nmembers = 2;
 	bc_viewer_roster_update(&r, &si);
 	CHECK(strcmp(bc_viewer_roster_text(&r, line, sizeof(line)),
-	             "2 members: alice (editor), you (viewer) - last edit: "
+	             "2 members: alice (editor), you (viewer)\nlast edit: "
 	             "carol, order 12") == 0);
 	bc_viewer_roster_edit(&r, 7, 13);
 	CHECK(strstr(bc_viewer_roster_text(&r, line, sizeof(line)),

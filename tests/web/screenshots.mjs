@@ -1,0 +1,140 @@
+/*
+ * Makes docs/web.png and docs/viewer.png: one session, three members. A
+ * blobcastd with websockify in front, the page as "alice" (editor) and
+ * "bob" (viewer) in headless chromium, and blobcast-view as "carol" under
+ * Xvfb. Alice drags the red marble (an edit every member sees, "last edit"),
+ * then starts an orbit and holds the button: the page's picture is a
+ * coarse refinement level ("refining · level 1" and "render pending" show)
+ * when web.png is taken. Carol's window is then orbited the same way with
+ * synthetic X events and saved with P while the button is held.
+ * Not a test: run it by hand when the pictures should change.
+ *
+ * usage: xvfb-run -a -s "-screen 0 1280x800x24" node tests/web/screenshots.mjs
+ *            --blobcastd PATH --viewer PATH --xpoke PATH [--out DIR]
+ */
+import { spawn } from 'node:child_process';
+import { copyFileSync, existsSync, mkdtempSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join, resolve } from 'node:path';
+
+import * as H from './harness.mjs';
+
+const arg = (name, def) => {
+	const i = process.argv.indexOf(name);
+	return i >= 0 ? process.argv[i + 1] : def;
+};
+const daemon = arg('--blobcastd', H.findDaemon(process.argv));
+const viewer = resolve(arg('--viewer', 'build/client/viewer/blobcast-view'));
+const xpoke = resolve(arg('--xpoke', 'build/tests/viewer/viewer_xpoke'));
+const out = arg('--out', join(H.ROOT, 'docs'));
+process.env.PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD = '1';
+const { chromium } = await import(join(H.HERE, 'node_modules',
+	'playwright-core', 'index.mjs'));
+
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+async function until(page, fn, arg1, ms = 30000) {
+	const end = Date.now() + ms;
+	for (;;) {
+		const v = await page.evaluate(fn, arg1);
+		if (v) {
+			return v;
+		}
+		if (Date.now() > end) {
+			throw new Error(`timed out: ${fn}`);
+		}
+		await page.waitForTimeout(40);
+	}
+}
+function run(cmd, args) {
+	return new Promise((res, rej) => {
+		const c = spawn(cmd, args, { stdio: 'inherit' });
+		c.on('exit', (code) => (code === 0 ? res() : rej(new Error(
+			`${cmd} ${args.join(' ')}: exit ${code}`))));
+	});
+}
+
+let browser = null;
+let view = null;
+const work = mkdtempSync(join(tmpdir(), 'blobcast-shots-'));
+try {
+	const d = await H.startDaemon(daemon, ['--backend', 'cpu']);
+	const proxy = await H.startProxy(d.port);
+	const web = await H.startStatic();
+	browser = await chromium.launch({ executablePath: H.CHROMIUM,
+		args: H.CHROMIUM_ARGS });
+	const open = async (name, role) => {
+		const p = await browser.newPage({ viewport: { width: 1100,
+			height: 640 } });
+		await p.goto(`http://127.0.0.1:${web.port}/?ws=${proxy.port}` +
+			`&session=default&name=${name}&role=${role}`);
+		await until(p, () => window.blobcast.state().framesDrawn >= 1);
+		return p;
+	};
+	const alice = await open('alice', 'editor');
+	const bob = await open('bob', 'viewer');
+	view = spawn(viewer, ['--server', `127.0.0.1:${d.port}`, '--name',
+		'carol', '--size', '960x600', '--snapshot-dir', work], {
+		cwd: work, stdio: 'inherit' });
+	await until(alice, () => window.blobcast.state().members.length === 3);
+
+	/* Alice moves the red marble (node 50 of the built-in scene). */
+	const s = { at: await alice.evaluate(() => window.blobcast.project(50)) };
+	const hit = await alice.evaluate(({ x, y }) => window.blobcast.pick(
+		Math.round(x), Math.round(y)), s.at);
+	if (!hit || hit.node !== 50) {
+		throw new Error(`the marble is not under its centre: ${
+			JSON.stringify(hit)}`);
+	}
+	const box = await alice.evaluate(() => {
+		const r = document.getElementById('view').getBoundingClientRect();
+		const v = window.blobcast.state().view;
+		return { x: r.left, y: r.top, sx: r.width / v.width,
+			sy: r.height / v.height };
+	});
+	const px = box.x + s.at.x * box.sx, py = box.y + s.at.y * box.sy;
+	await alice.mouse.move(px, py);
+	await alice.mouse.down();
+	for (let i = 1; i <= 10; i++) {
+		await alice.mouse.move(px + 4 * i, py - i);
+		await alice.waitForTimeout(30);
+	}
+	await alice.mouse.up();
+	await sleep(1500);
+
+	/* An orbit held down: coarse frames, then the screenshot. */
+	const ex = box.x + 40, ey = box.y + 80;
+	await alice.mouse.move(ex, ey);
+	await alice.mouse.down();
+	for (let i = 1; i <= 8; i++) {
+		await alice.mouse.move(ex + 6 * i, ey + i);
+		await alice.waitForTimeout(25);
+	}
+	await until(alice, () => window.blobcast.state().lastFrame?.refining);
+	await alice.screenshot({ path: join(out, 'web.png') });
+	await alice.mouse.up();
+	console.log(`wrote ${join(out, 'web.png')}`);
+
+	/* Carol's window: orbit held, P saves it. */
+	await run(xpoke, ['blobcast-view', 'wait', '5000', 'move', '120', '500',
+		'down', '1', 'sleep', '200', 'drag', '180', '490', '6', 'sleep',
+		'120', 'key', 'p', 'sleep', '500', 'up', '1', 'sleep', '300',
+		'keydown', 'q']);
+	await new Promise((r) => view.on('exit', r));
+	view = null;
+	const shot = join(work, 'blobcast-view-001.png');
+	if (!existsSync(shot)) {
+		throw new Error('the viewer saved no screenshot');
+	}
+	copyFileSync(shot, join(out, 'viewer.png'));
+	console.log(`wrote ${join(out, 'viewer.png')}`);
+	await bob.close();
+} catch (e) {
+	console.error(`FAIL: ${e.stack || e}\n${H.logs()}`);
+	process.exitCode = 1;
+} finally {
+	view?.kill();
+	if (browser) {
+		await browser.close().catch(() => {});
+	}
+	await H.stopAll();
+}
