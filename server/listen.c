@@ -16,6 +16,7 @@
 #include "blobcast/log.h"
 #include "addr.h"
 #include "net_impl.h"
+#include "tls.h"
 
 static bool is_loopback(uv_tcp_t *tcp)
 {
@@ -169,11 +170,16 @@ static void on_connection(uv_stream_t *server, int status)
 	if (tcp) {
 		uv_tcp_nodelay(&c->h.tcp, 1);
 	}
+	if (tcp && srv->tls && !(c->tls = bc_tls_new(srv->tls))) {
+		bc_conn_close(c, "out of memory for TLS");
+		return;
+	}
 	uv_timer_start(&c->hello_timer, bc__net_hello_timeout,
 	               BC_SRV_HELLO_TIMEOUT_MS, 0);
 	uv_read_start(&c->h.stream, bc__net_on_alloc, bc__net_on_read);
-	bc_log(BC_LOG_INFO, "connection %u from %s", c->gen,
-	       tcp ? (c->trusted ? "loopback" : "network") : "unix socket");
+	bc_log(BC_LOG_INFO, "connection %u from %s%s", c->gen,
+	       tcp ? (c->trusted ? "loopback" : "network") : "unix socket",
+	       c->tls ? " (TLS)" : "");
 }
 
 static int parse_listen(const char *spec, char *host, size_t hostlen, int *port)
@@ -204,9 +210,55 @@ static int parse_listen(const char *spec, char *host, size_t hostlen, int *port)
 	return 0;
 }
 
+bool bc_net_tokens_in_clear(struct bc_srv *srv)
+{
+	struct sockaddr_storage sa;
+	int len = sizeof(sa);
+	if (!srv->has_tcp || srv->tls || srv->cfg.ntokens == 0) {
+		return false;
+	}
+	if (uv_tcp_getsockname(&srv->tcp_listener, (struct sockaddr *)&sa,
+	                       &len) != 0) {
+		return true;
+	}
+	return !bc_addr_is_loopback((const struct sockaddr *)&sa);
+}
+
+/* Tokens would cross the network readable by anyone on the path: refused
+ * unless the operator said --allow-plaintext (a network of its own, a
+ * proxy in front on the same host), and then warned about. */
+static int check_plaintext(struct bc_srv *srv, struct bc_errinfo *ei)
+{
+	if (!bc_net_tokens_in_clear(srv)) {
+		return 0;
+	}
+	if (!srv->cfg.allow_plaintext) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+		                      "--listen %s is reachable from other "
+		                      "hosts and tokens are configured: give "
+		                      "--tls-cert and --tls-key so that tokens "
+		                      "are not sent in clear, or "
+		                      "--allow-plaintext (docs/operations.md, "
+		                      "TLS)",
+		                      srv->cfg.listen);
+	}
+	bc_log(BC_LOG_WARN,
+	       "listening on %s without TLS (--allow-plaintext): tokens and "
+	       "scenes cross the network in clear",
+	       srv->cfg.listen);
+	return 0;
+}
+
 int bc_net_listen(struct bc_srv *srv, struct bc_errinfo *ei)
 {
 	int rc;
+	if (srv->cfg.listen && srv->cfg.tls_cert && !srv->tls &&
+	    (rc = bc_tls_ctx_new(&srv->tls, srv->cfg.tls_cert,
+	                         srv->cfg.tls_key ? srv->cfg.tls_key
+	                                          : srv->cfg.tls_cert,
+	                         ei))) {
+		return rc;
+	}
 	uv_timer_init(srv->loop, &srv->stall_timer);
 	srv->stall_timer.data = srv;
 	uv_timer_start(&srv->stall_timer, bc__net_check_stalls, 1000, 1000);
@@ -235,7 +287,11 @@ int bc_net_listen(struct bc_srv *srv, struct bc_errinfo *ei)
 			return bc_errinfo_set(ei, BC_EIO, "listen on %s: %s",
 			                      srv->cfg.listen, uv_strerror(rc));
 		}
-		bc_log(BC_LOG_INFO, "listening on %s", srv->cfg.listen);
+		if ((rc = check_plaintext(srv, ei))) {
+			return rc;
+		}
+		bc_log(BC_LOG_INFO, "listening on %s%s", srv->cfg.listen,
+		       srv->tls ? " (TLS)" : "");
 	}
 	if (srv->cfg.unix_path) {
 		uv_pipe_init(srv->loop, &srv->unix_listener, 0);

@@ -16,7 +16,9 @@
 #include "blobcast/alloc.h"
 #include "blobcast/log.h"
 #include "addr.h"
+#include "net_impl.h"
 #include "server.h"
+#include "tls.h"
 
 static void usage(FILE *out)
 {
@@ -30,6 +32,13 @@ static void usage(FILE *out)
 		"  --listen HOST:PORT  TCP address (default 127.0.0.1:7878;\n"
 		"                      \"none\" for no TCP listener)\n"
 		"  --unix PATH         also listen on a Unix socket\n"
+		"  --tls-cert FILE     TLS on the TCP listener: certificate\n"
+		"                      chain (PEM); clients use tls://HOST:PORT\n"
+		"  --tls-key FILE      its private key (PEM; default: the\n"
+		"                      --tls-cert file)\n"
+		"  --allow-plaintext   start with tokens on a plain TCP\n"
+		"                      listener reachable from other hosts\n"
+		"                      (refused otherwise)\n"
 		"  --data DIR          data directory: sessions, journals\n"
 		"                      (default ./blobcast-data)\n"
 		"  --backend NAME      auto | cpu | tiled | naive | gl | svo\n"
@@ -51,7 +60,8 @@ static void usage(FILE *out)
 		"\n"
 		"Without tokens in the configuration only loopback and Unix\n"
 		"socket clients are accepted. SIGTERM saves and stops;\n"
-		"SIGHUP reloads the tokens of the --config file.\n");
+		"SIGHUP reloads the tokens of the --config file and the TLS\n"
+		"certificate and key. Unix sockets never use TLS.\n");
 }
 
 static enum bc_backend parse_backend(const char *name)
@@ -158,6 +168,17 @@ static int load_config(struct bc_srv_config *cfg, const char *path,
 			}
 			continue;
 		}
+		if (strcmp(key, "allow_plaintext") == 0) {
+			if (!json_is_boolean(val)) {
+				rc = bc_errinfo_set(ei, BC_EPARSE,
+						    "%s: %s: expected true or "
+						    "false",
+						    path, key);
+				goto out;
+			}
+			cfg->allow_plaintext = json_is_true(val);
+			continue;
+		}
 		if (!json_is_string(val)) {
 			rc = bc_errinfo_set(ei, BC_EPARSE,
 					    "%s: %s: expected a string", path,
@@ -172,6 +193,10 @@ static int load_config(struct bc_srv_config *cfg, const char *path,
 			rc = set_str(&cfg->data_dir, json_string_value(val));
 		} else if (strcmp(key, "server_id") == 0) {
 			rc = set_str(&cfg->server_id, json_string_value(val));
+		} else if (strcmp(key, "tls_cert") == 0) {
+			rc = set_str(&cfg->tls_cert, json_string_value(val));
+		} else if (strcmp(key, "tls_key") == 0) {
+			rc = set_str(&cfg->tls_key, json_string_value(val));
 		} else if (strcmp(key, "gl_platform") == 0) {
 			rc = set_str(&cfg->gl_platform, json_string_value(val));
 		} else if (strcmp(key, "backend") == 0) {
@@ -206,6 +231,8 @@ static void config_free(struct bc_srv_config *cfg)
 	bc_free(cfg->data_dir);
 	bc_free(cfg->gl_platform);
 	bc_free(cfg->server_id);
+	bc_free(cfg->tls_cert);
+	bc_free(cfg->tls_key);
 	memset(cfg, 0, sizeof(*cfg));
 }
 
@@ -234,6 +261,31 @@ static void warn_if_exposed(struct bc_srv *srv)
 	       srv->cfg.listen);
 }
 
+/* SIGHUP also re-reads the certificate and key (a renewed certificate
+ * takes effect without a restart): new connections get the new ones,
+ * established ones keep theirs. A pair that does not load leaves the
+ * one in use. */
+static void reload_tls(struct bc_srv *srv)
+{
+	struct bc_tls_ctx *fresh = NULL;
+	struct bc_errinfo ei = {0};
+	if (!srv->tls) {
+		return;
+	}
+	if (bc_tls_ctx_new(&fresh, srv->cfg.tls_cert,
+			   srv->cfg.tls_key ? srv->cfg.tls_key
+					    : srv->cfg.tls_cert,
+			   &ei)) {
+		bc_log(BC_LOG_ERROR,
+		       "SIGHUP: %s; keeping the certificate in use", ei.msg);
+		return;
+	}
+	bc_tls_ctx_free(srv->tls);
+	srv->tls = fresh;
+	bc_log(BC_LOG_INFO, "SIGHUP: reloaded the TLS certificate %s",
+	       srv->cfg.tls_cert);
+}
+
 /* Re-reads the configuration file and replaces the access tokens, and only
  * them: the listeners, data directory and renderer are set up once. This
  * runs on the loop thread, the only one that reads the tokens (net.c, when
@@ -254,7 +306,9 @@ static void on_sighup(uv_signal_t *sig, int signum)
 	}
 	if (!config_path) {
 		bc_log(BC_LOG_INFO,
-		       "SIGHUP: no --config file, nothing to reload");
+		       "SIGHUP: no --config file, nothing to reload%s",
+		       srv->tls ? " but the TLS certificate" : "");
+		reload_tls(srv);
 		return;
 	}
 	rc = load_config(&fresh, config_path, &ei);
@@ -268,9 +322,22 @@ static void on_sighup(uv_signal_t *sig, int signum)
 	old_ntokens = srv->cfg.ntokens;
 	srv->cfg.tokens = fresh.tokens;
 	srv->cfg.ntokens = fresh.ntokens;
+	if (bc_net_tokens_in_clear(srv) && !srv->cfg.allow_plaintext) {
+		/* The same rule as at start: no tokens in clear. */
+		srv->cfg.tokens = old_tokens;
+		srv->cfg.ntokens = old_ntokens;
+		bc_log(BC_LOG_ERROR,
+		       "SIGHUP: %s has tokens but %s is plain TCP reachable "
+		       "from other hosts (no TLS, no --allow-plaintext); "
+		       "keeping the %u tokens in use",
+		       config_path, srv->cfg.listen, old_ntokens);
+		config_free(&fresh);
+		return;
+	}
 	fresh.tokens = old_tokens;
 	fresh.ntokens = old_ntokens;
 	config_free(&fresh);
+	reload_tls(srv);
 	bc_log(BC_LOG_INFO,
 	       "SIGHUP: reloaded %u tokens from %s (only tokens are reloaded: "
 	       "other settings take effect on restart)",
@@ -394,6 +461,12 @@ int main(int argc, char **argv)
 			cli.frame_budget_ms = (uint32_t)ms;
 		} else if (strcmp(a, "--config") == 0) {
 			config = need_arg(argc, argv, &i);
+		} else if (strcmp(a, "--tls-cert") == 0) {
+			set_str(&cli.tls_cert, need_arg(argc, argv, &i));
+		} else if (strcmp(a, "--tls-key") == 0) {
+			set_str(&cli.tls_key, need_arg(argc, argv, &i));
+		} else if (strcmp(a, "--allow-plaintext") == 0) {
+			cli.allow_plaintext = true;
 		} else if (strcmp(a, "--server-id") == 0) {
 			set_str(&cli.server_id, need_arg(argc, argv, &i));
 		} else if (strcmp(a, "--log") == 0) {
@@ -443,6 +516,13 @@ int main(int argc, char **argv)
 	if (cli.backend) {
 		srv.cfg.backend = cli.backend;
 	}
+	if (cli.tls_cert) {
+		set_str(&srv.cfg.tls_cert, cli.tls_cert);
+	}
+	if (cli.tls_key) {
+		set_str(&srv.cfg.tls_key, cli.tls_key);
+	}
+	srv.cfg.allow_plaintext = srv.cfg.allow_plaintext || cli.allow_plaintext;
 	srv.cfg.simd = cli.simd;
 	srv.cfg.no_damage = cli.no_damage;
 	srv.cfg.frame_budget_ms = cli.frame_budget_ms;
@@ -461,6 +541,15 @@ int main(int argc, char **argv)
 	}
 	if (!srv.cfg.backend) {
 		srv.cfg.backend = BC_BACKEND_TILED;
+	}
+	if (srv.cfg.tls_key && !srv.cfg.tls_cert) {
+		fprintf(stderr, "blobcastd: --tls-key needs --tls-cert\n");
+		goto out;
+	}
+	if (srv.cfg.tls_cert && !srv.cfg.listen) {
+		fprintf(stderr, "blobcastd: --tls-cert needs a TCP listener "
+				"(--listen); Unix sockets never use TLS\n");
+		goto out;
 	}
 	if (strlen(srv.cfg.server_id) > BC_PROTO_MAX_NAME) {
 		fprintf(stderr, "blobcastd: --server-id longer than %u bytes\n",
@@ -506,6 +595,7 @@ out:
 		uv_loop_close(srv.loop);
 	}
 	bc_store_close(srv.store);
+	bc_tls_ctx_free(srv.tls);
 	config_free(&srv.cfg);
 	config_free(&cli);
 	return rc;

@@ -23,6 +23,7 @@
 #include "blobcast/alloc.h"
 #include "blobcast/log.h"
 #include "net_impl.h"
+#include "tls.h"
 
 /* Reads land in a buffer of this size before being fed to the reader. */
 #define READ_CHUNK (64u * 1024u)
@@ -44,6 +45,7 @@ struct write_req {
 	struct bc_srv *srv;
 	struct bc_shared *shared; /* a frame, or NULL */
 	uint8_t *owned;           /* a message's bytes, or NULL */
+	uint8_t *cipher;          /* what goes out on a TLS connection */
 	size_t len;
 };
 
@@ -93,6 +95,7 @@ void bc__net_handle_closed(uv_handle_t *h)
 	bool trim = c->queued >= BC_SRV_TRIM_AFTER_BYTES;
 	bc_proto_reader_finish(&c->reader);
 	bc_shared_unref(c->frame_next);
+	bc_tls_free(c->tls);
 	bc_free(c);
 	/* The pending writes were cancelled (their buffers freed) before this
 	 * last close callback; glibc keeps freed memory in its arenas unless
@@ -143,6 +146,14 @@ void bc_conn_close_after_flush(struct bc_conn *c, const char *why)
 	c->draining = true;
 	c->drain_why = why;
 	uv_read_stop(&c->h.stream);
+	if (c->tls) {
+		/* close_notify goes out after the queued records. */
+		bc_tls_close_notify(c->tls);
+		bc__net_tls_flush(c);
+		if (c->closing) {
+			return;
+		}
+	}
 	c->shutdown.data = c;
 	if (uv_shutdown(&c->shutdown, &c->h.stream, shutdown_done) != 0) {
 		bc_conn_close(c, why);
@@ -175,7 +186,60 @@ static void write_done(uv_write_t *req, int status)
 	}
 	bc_shared_unref(w->shared);
 	bc_free(w->owned);
+	bc_free(w->cipher);
 	bc_free(w);
+}
+
+/* Writes the ciphertext c's TLS state holds (handshake records, alerts,
+ * close_notify). Those bytes count for no message. */
+void bc__net_tls_flush(struct bc_conn *c)
+{
+	struct write_req *w;
+	uint8_t *bytes;
+	size_t n;
+	uv_buf_t buf;
+	if (bc_tls_take_output(c->tls, &bytes, &n)) {
+		bc_conn_close(c, "out of memory");
+		return;
+	}
+	if (n == 0) {
+		return;
+	}
+	if (!(w = bc_calloc(1, sizeof(*w)))) {
+		bc_free(bytes);
+		bc_conn_close(c, "out of memory");
+		return;
+	}
+	w->srv = c->srv;
+	w->who = bc_conn_ref_of(c);
+	w->cipher = bytes;
+	buf = uv_buf_init((char *)bytes, (unsigned int)n);
+	if (uv_write(&w->req, &c->h.stream, &buf, 1, write_done) < 0) {
+		bc_free(bytes);
+		bc_free(w);
+		bc_conn_close(c, "write failed");
+	}
+}
+
+/* On a TLS connection the plaintext buffers are encrypted into one
+ * ciphertext buffer that is written instead (w keeps the plaintext
+ * references for write_done's bookkeeping). Returns 0 or a BC_E* code. */
+static int tls_seal(struct bc_conn *c, struct write_req *w, uv_buf_t *buf,
+                    unsigned int *nbufs)
+{
+	size_t n;
+	int rc;
+	for (unsigned int i = 0; i < *nbufs; i++) {
+		if ((rc = bc_tls_write(c->tls, buf[i].base, buf[i].len))) {
+			return rc;
+		}
+	}
+	if ((rc = bc_tls_take_output(c->tls, &w->cipher, &n))) {
+		return rc;
+	}
+	buf[0] = uv_buf_init((char *)w->cipher, (unsigned int)n);
+	*nbufs = 1;
+	return 0;
 }
 
 /* Queues bytes (taking owned or a reference to shared). */
@@ -187,6 +251,12 @@ static void queue_bytes(struct bc_conn *c, uint8_t *owned,
 	uv_buf_t buf[2];
 	unsigned int nbufs;
 	int rc;
+	if (c->tls && !bc_tls_ready(c->tls)) {
+		/* Nothing can be said before the handshake (an ERROR for a
+		 * HELLO timeout): the connection is closed without it. */
+		bc_free(owned);
+		return;
+	}
 	if (c->queued + len > BC_SRV_MAX_CLIENT_QUEUE) {
 		bc_free(owned);
 		bc_log(BC_LOG_WARN,
@@ -230,12 +300,21 @@ static void queue_bytes(struct bc_conn *c, uint8_t *owned,
 		shared->refs++;
 		w->shared = shared;
 	}
+	if (c->tls && tls_seal(c, w, buf, &nbufs)) {
+		bc_shared_unref(w->shared);
+		bc_free(w->owned);
+		bc_free(w->cipher);
+		bc_free(w);
+		bc_conn_close(c, "TLS encryption failed");
+		return;
+	}
 	c->queued += len;
 	rc = uv_write(&w->req, &c->h.stream, buf, nbufs, write_done);
 	if (rc < 0) {
 		c->queued -= len;
 		bc_shared_unref(w->shared);
 		bc_free(w->owned);
+		bc_free(w->cipher);
 		bc_free(w);
 		bc_conn_close(c, uv_strerror(rc));
 	}
@@ -413,11 +492,97 @@ void bc__net_on_alloc(uv_handle_t *h, size_t suggested, uv_buf_t *buf)
 	*buf = uv_buf_init(chunk, sizeof(chunk));
 }
 
+/* Plaintext bytes from the peer: fed to the protocol reader, and every
+ * whole message dispatched. */
+static void on_bytes(struct bc_conn *c, const char *bytes, size_t n)
+{
+	struct bc_msg m;
+	int rc;
+	c->last_read_ms = bc_now_ms(c->srv);
+	rc = bc_proto_reader_feed(&c->reader, bytes, n);
+	while (rc == 0 && !c->closing && !c->draining) {
+		rc = bc_proto_reader_next(&c->reader, &m);
+		if (rc == 1) {
+			c->msg_started_ms = 0;
+			dispatch(c, &m);
+			rc = 0;
+		} else {
+			break;
+		}
+	}
+	/* Bytes left over start a message that must complete within the
+	 * message timeout (check_timeouts), counted from its first byte. */
+	if (bc_proto_reader_pending(&c->reader) == 0) {
+		c->msg_started_ms = 0;
+	} else if (c->msg_started_ms == 0) {
+		c->msg_started_ms = c->last_read_ms;
+	}
+	if (rc < 0 && !c->closing && !c->draining) {
+		/* The stream cannot be resynchronized: say why, then close. */
+		bc_conn_send_error(c, 0, rc, true, "%s", c->reader.errstr);
+		bc_conn_close_after_flush(c, "protocol error");
+	}
+}
+
+/* Ciphertext from the peer of a TLS connection: the handshake advanced,
+ * records decrypted and their bytes handled, whatever TLS has to say
+ * written. A peer that speaks the plain protocol to this port hears why
+ * it is refused, in the plain protocol. */
+static void on_tls_bytes(struct bc_conn *c, const char *bytes, size_t n)
+{
+	static char plain[READ_CHUNK];
+	char why[256];
+	long got = 0;
+	if (!bc_tls_started(c->tls) &&
+	    (uint8_t)bytes[0] != 0x16 /* TLS handshake record */) {
+		bc_tls_free(c->tls);
+		c->tls = NULL;
+		bc_log(BC_LOG_INFO,
+		       "connection %u: plain protocol on the TLS port, refused",
+		       c->gen);
+		bc_conn_send_error(c, 0, BC_ENOTSUP, true,
+		                   "this port speaks TLS: connect with "
+		                   "tls://HOST:PORT");
+		bc_conn_close_after_flush(c, "not TLS");
+		return;
+	}
+	if (bc_tls_feed(c->tls, bytes, n)) {
+		bc_conn_close(c, "out of memory");
+		return;
+	}
+	while (!c->closing && !c->draining) {
+		bool was_ready = bc_tls_ready(c->tls);
+		got = bc_tls_read(c->tls, plain, sizeof(plain), why, sizeof(why));
+		if (!was_ready && bc_tls_ready(c->tls)) {
+			char desc[128];
+			bc_log(BC_LOG_INFO, "connection %u: TLS (%s)", c->gen,
+			       bc_tls_describe(c->tls, desc, sizeof(desc)));
+		}
+		if (got <= 0) {
+			break;
+		}
+		on_bytes(c, plain, (size_t)got);
+	}
+	if (c->closing) {
+		return;
+	}
+	bc__net_tls_flush(c);
+	if (got < 0 && !c->closing && !c->draining) {
+		if (got == BC_ECLOSED) {
+			bc_conn_close(c, "peer closed");
+		} else {
+			bc_log(BC_LOG_INFO, "connection %u: TLS: %s", c->gen,
+			       why);
+			bc_conn_close(c, bc_tls_ready(c->tls)
+			                     ? "TLS error"
+			                     : "TLS handshake failed");
+		}
+	}
+}
+
 void bc__net_on_read(uv_stream_t *s, ssize_t n, const uv_buf_t *buf)
 {
 	struct bc_conn *c = s->data;
-	struct bc_msg m;
-	int rc;
 	if (c->closing || c->draining) {
 		return;
 	}
@@ -444,29 +609,10 @@ void bc__net_on_read(uv_stream_t *s, ssize_t n, const uv_buf_t *buf)
 	if (n == 0) {
 		return;
 	}
-	c->last_read_ms = bc_now_ms(c->srv);
-	rc = bc_proto_reader_feed(&c->reader, buf->base, (size_t)n);
-	while (rc == 0 && !c->closing && !c->draining) {
-		rc = bc_proto_reader_next(&c->reader, &m);
-		if (rc == 1) {
-			c->msg_started_ms = 0;
-			dispatch(c, &m);
-			rc = 0;
-		} else {
-			break;
-		}
-	}
-	/* Bytes left over start a message that must complete within the
-	 * message timeout (check_timeouts), counted from its first byte. */
-	if (bc_proto_reader_pending(&c->reader) == 0) {
-		c->msg_started_ms = 0;
-	} else if (c->msg_started_ms == 0) {
-		c->msg_started_ms = c->last_read_ms;
-	}
-	if (rc < 0 && !c->closing && !c->draining) {
-		/* The stream cannot be resynchronized: say why, then close. */
-		bc_conn_send_error(c, 0, rc, true, "%s", c->reader.errstr);
-		bc_conn_close_after_flush(c, "protocol error");
+	if (c->tls) {
+		on_tls_bytes(c, buf->base, (size_t)n);
+	} else {
+		on_bytes(c, buf->base, (size_t)n);
 	}
 }
 

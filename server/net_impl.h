@@ -15,6 +15,14 @@ void bc__net_handle_closed(uv_handle_t *h);
 void bc__net_on_alloc(uv_handle_t *h, size_t suggested, uv_buf_t *buf);
 void bc__net_on_read(uv_stream_t *s, ssize_t n, const uv_buf_t *buf);
 
+/* Writes what a TLS connection's state has to send (handshake records,
+ * alerts); closes the connection when that fails. */
+void bc__net_tls_flush(struct bc_conn *c);
+
+/* Whether tokens are configured and the TCP listener is plain and
+ * reachable from other hosts (listen.c). */
+bool bc_net_tokens_in_clear(struct bc_srv *srv);
+
 /* A connection said no HELLO in time: ERROR ETIMEOUT, then closed. */
 void bc__net_hello_timeout(uv_timer_t *t);
 

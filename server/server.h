@@ -66,6 +66,8 @@ struct bc_srv_config {
 	uint32_t frame_budget_ms; /* 0: BC_SRV_FRAME_BUDGET_MS */
 	uint32_t message_timeout_ms; /* 0: BC_SRV_MESSAGE_TIMEOUT_MS */
 	uint32_t idle_timeout_ms;    /* 0: BC_SRV_IDLE_TIMEOUT_MS */
+	char *tls_cert, *tls_key;    /* PEM files: TLS on the TCP listener */
+	bool allow_plaintext; /* tokens may cross a non-loopback plain TCP */
 };
 
 /* What a client holds of a view after a frame (set by the render thread,
@@ -91,6 +93,7 @@ struct bc_conn {
 		uv_handle_t handle;
 	} h;
 	uv_timer_t hello_timer;
+	struct bc_tls *tls; /* TLS state (tls.h) on a TLS listener, or NULL */
 	bool is_tcp, trusted; /* trusted: loopback TCP or Unix socket */
 	bool closing;
 	bool draining; /* shut down after the queued bytes are written */
@@ -160,6 +163,7 @@ struct bc_srv {
 	uv_tcp_t tcp_listener;
 	uv_pipe_t unix_listener;
 	bool has_tcp, has_unix;
+	struct bc_tls_ctx *tls; /* certificate and key, or NULL: plain TCP */
 	uv_signal_t sigterm, sigint;
 	uv_timer_t stall_timer; /* drops clients that stopped reading */
 	uv_async_t results;

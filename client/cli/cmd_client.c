@@ -75,6 +75,8 @@ enum {
 struct args {
 	const char *cmd;
 	const char *server, *token, *name, *session, *out, *depth, *ids;
+	const char *ca; /* --ca: TLS trust anchors */
+	bool insecure;  /* --insecure: no TLS certificate checks */
 	int timeout_ms;
 	uint16_t width, height;
 	bool has_size;
@@ -101,7 +103,11 @@ struct cmd {
 
 static const char common_help[] =
     "  --server ADDR   HOST:PORT, [IPV6]:PORT or unix:PATH (default\n"
-    "                  $BLOBCAST_SERVER, else 127.0.0.1:7878)\n"
+    "                  $BLOBCAST_SERVER, else 127.0.0.1:7878);\n"
+    "                  tls://HOST:PORT for TLS\n"
+    "  --ca FILE       TLS: trust the CA certificates in FILE (PEM)\n"
+    "                  instead of the system's\n"
+    "  --insecure      TLS: do not check the server's certificate\n"
     "  --token TOKEN   authentication token (default $BLOBCAST_TOKEN;\n"
     "                  not needed over loopback or a Unix socket unless\n"
     "                  the server requires one)\n"
@@ -262,7 +268,9 @@ static int connect_to(const struct args *a, struct bc_client **c)
 	                          .addr = addr,
 	                          .name = a->name ? a->name : "blobcast-cli",
 	                          .token = token,
-	                          .timeout_ms = a->timeout_ms},
+	                          .timeout_ms = a->timeout_ms,
+	                          .ca_file = a->ca,
+	                          .insecure = a->insecure},
 	                      &ei)) {
 		return failed(a, NULL, &ei);
 	}
@@ -721,7 +729,9 @@ static int watch_open(const struct args *a, struct bc_client **c,
 	                                .name = a->name ? a->name
 	                                                : "blobcast-cli",
 	                                .token = token,
-	                                .timeout_ms = a->timeout_ms},
+	                                .timeout_ms = a->timeout_ms,
+	                                .ca_file = a->ca,
+	                                .insecure = a->insecure},
 	                            ei))) {
 		return rc;
 	}
@@ -1473,6 +1483,12 @@ static int parse_option(const struct cmd *k, int argc, char **argv, int *i,
 		a->server = v;
 	} else if (take_value(argc, argv, i, "--token", &v)) {
 		a->token = v;
+	} else if (take_value(argc, argv, i, "--ca", &v)) {
+		ok = v && *v;
+		a->ca = v;
+	} else if (strcmp(arg, "--insecure") == 0) {
+		a->insecure = true;
+		v = "";
 	} else if (take_value(argc, argv, i, "--name", &v)) {
 		ok = v && strlen(v) <= BC_PROTO_MAX_NAME;
 		a->name = v;

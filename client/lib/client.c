@@ -72,6 +72,19 @@ static int fail(struct bc_client *c, int code, const char *fmt, ...)
 	return code;
 }
 
+int bc__client_fail(struct bc_client *c, int code, const char *fmt, ...)
+{
+	va_list ap;
+	if (c->err) {
+		return c->err;
+	}
+	c->err = code;
+	va_start(ap, fmt);
+	vsnprintf(c->errstr, sizeof(c->errstr), fmt, ap);
+	va_end(ap);
+	return code;
+}
+
 static int send_or_say(struct bc_client *c, struct bc_msg *m, uint32_t *seq,
 		       struct bc_errinfo *ei);
 
@@ -129,6 +142,62 @@ static bool host_ok(const char *s, size_t n)
 	return true;
 }
 
+/* ws://HOST[:PORT][/PATH] and wss://...: the host part as a TCP address,
+ * the path (default "/") printable ASCII without blanks. */
+static int parse_ws(const char *s, struct bc_client_addr *out,
+		    struct bc_errinfo *ei)
+{
+	bool tls = s[2] == 's';
+	const char *hp = s + (tls ? 6 : 5);
+	const char *slash = strchr(hp, '/');
+	size_t hlen = slash ? (size_t)(slash - hp) : strlen(hp);
+	const char *path = slash ? slash : "/";
+	char host[BC_CLIENT_MAX_HOST + 16];
+	const char *colon;
+	bool has_port;
+	int rc;
+	if (hlen == 0 || hlen >= sizeof(host)) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+				      "\"%.64s\": expected ws[s]://HOST[:PORT]"
+				      "/PATH",
+				      s);
+	}
+	memcpy(host, hp, hlen);
+	host[hlen] = '\0';
+	colon = strrchr(host, ':');
+	has_port = colon && (host[0] != '[' || colon > strchr(host, ']'));
+	if ((rc = bc_client_addr_parse(host, out, ei))) {
+		return rc;
+	}
+	if (out->kind != BC_CLIENT_ADDR_TCP) {
+		memset(out, 0, sizeof(*out));
+		return bc_errinfo_set(ei, BC_EINVAL, "\"%.64s\": bad host", s);
+	}
+	if (strlen(path) > BC_CLIENT_MAX_WS_PATH) {
+		memset(out, 0, sizeof(*out));
+		return bc_errinfo_set(ei, BC_EINVAL,
+				      "\"%.64s\": path over %u bytes", s,
+				      BC_CLIENT_MAX_WS_PATH);
+	}
+	for (const char *p = path; *p; p++) {
+		if ((unsigned char)*p <= ' ' || (unsigned char)*p >= 0x7f) {
+			memset(out, 0, sizeof(*out));
+			return bc_errinfo_set(ei, BC_EINVAL,
+					      "\"%.64s\": the path must be "
+					      "printable ASCII without blanks "
+					      "(percent-encode the rest)",
+					      s);
+		}
+	}
+	if (!has_port) {
+		out->port = tls ? 443 : 80;
+	}
+	out->ws = true;
+	out->tls = tls;
+	memcpy(out->resource, path, strlen(path) + 1);
+	return 0;
+}
+
 int bc_client_addr_parse(const char *s, struct bc_client_addr *out,
 			 struct bc_errinfo *ei)
 {
@@ -137,6 +206,21 @@ int bc_client_addr_parse(const char *s, struct bc_client_addr *out,
 	memset(out, 0, sizeof(*out));
 	if (!s || !*s) {
 		s = BC_CLIENT_DEFAULT_HOST;
+	}
+	if (strncmp(s, "ws://", 5) == 0 || strncmp(s, "wss://", 6) == 0) {
+		return parse_ws(s, out, ei);
+	}
+	if (strncmp(s, "tls://", 6) == 0) {
+		int rc = bc_client_addr_parse(s + 6, out, ei);
+		if (rc == 0 && out->kind != BC_CLIENT_ADDR_TCP) {
+			memset(out, 0, sizeof(*out));
+			return bc_errinfo_set(ei, BC_EINVAL,
+					      "\"%.64s\": TLS is for TCP "
+					      "addresses, not Unix sockets",
+					      s);
+		}
+		out->tls = rc == 0;
+		return rc;
 	}
 	len = strlen(s);
 	if (strncmp(s, "unix:", 5) == 0) {
@@ -413,6 +497,15 @@ int bc_client_connect(struct bc_client **out, const struct bc_client_opts *opts,
 	rc = addr.kind == BC_CLIENT_ADDR_UNIX
 		     ? open_unix(&addr, deadline, &c->fd, ei)
 		     : open_tcp(&addr, deadline, &c->fd, ei);
+	/* The token goes out in HELLO: only after the handshake succeeded. */
+	if (!rc && addr.tls &&
+	    bc__client_tls_start(c, addr.host, o->ca_file, o->insecure,
+				 deadline)) {
+		rc = sticky(c, ei);
+	}
+	if (!rc && addr.ws && bc__client_ws_start(c, &addr, deadline)) {
+		rc = sticky(c, ei);
+	}
 	if (rc || (rc = hello(c, o, ei))) {
 		goto fail;
 	}
@@ -428,6 +521,8 @@ void bc_client_destroy(struct bc_client *c)
 	if (!c) {
 		return;
 	}
+	bc__client_transport_free(c);
+	bc__client_ws_free(c);
 	if (c->fd >= 0) {
 		close(c->fd);
 	}
@@ -468,7 +563,6 @@ static int send_msg(struct bc_client *c, struct bc_msg *m, uint32_t *seq_out,
 {
 	struct bc_errinfo why = {0};
 	double deadline;
-	size_t done = 0;
 	int rc;
 	if (seq_out) {
 		*seq_out = 0;
@@ -485,39 +579,9 @@ static int send_msg(struct bc_client *c, struct bc_msg *m, uint32_t *seq_out,
 	/* Seq 0 means "no request" in answers: skip it when wrapping. */
 	c->next_seq = c->next_seq == UINT32_MAX ? 1 : c->next_seq + 1;
 	deadline = deadline_after(c->timeout_ms);
-	while (done < c->out.len) {
-		ssize_t n = send(c->fd, c->out.data + done, c->out.len - done,
-				 MSG_NOSIGNAL);
-		if (n > 0) {
-			done += (size_t)n;
-			continue;
-		}
-		if (n < 0 && errno == EINTR) {
-			continue;
-		}
-		if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
-			struct pollfd p = {.fd = c->fd, .events = POLLOUT};
-			int left = ms_left(deadline), k;
-			if (left == 0) {
-				return fail(c, BC_ETIMEOUT,
-					    "%s: %zu of %zu bytes sent when the "
-					    "%d ms timeout passed",
-					    bc_proto_type_name(m->type), done,
-					    c->out.len, c->timeout_ms);
-			}
-			k = poll(&p, 1, left);
-			if (k < 0 && errno != EINTR) {
-				return fail(c, BC_EIO, "poll: %s",
-					    strerror(errno));
-			}
-			continue;
-		}
-		if (n < 0 && (errno == EPIPE || errno == ECONNRESET)) {
-			return fail(c, BC_ECLOSED,
-				    "the server closed the connection");
-		}
-		return fail(c, BC_EIO, "send: %s",
-			    n < 0 ? strerror(errno) : "wrote nothing");
+	if ((rc = bc__client_io_write(c, c->out.data, c->out.len, deadline,
+				      bc_proto_type_name(m->type)))) {
+		return rc;
 	}
 	c->info.msgs_out++;
 	c->info.bytes_out += c->out.len;
@@ -631,9 +695,7 @@ int bc_client_recv(struct bc_client *c, struct bc_msg *out, int timeout_ms)
 	}
 	for (;;) {
 		size_t before = bc_proto_reader_pending(&c->reader);
-		struct pollfd p = {.fd = c->fd, .events = POLLIN};
-		ssize_t n;
-		int k;
+		long n;
 		rc = bc_proto_reader_next(&c->reader, out);
 		if (rc == 1) {
 			size_t size = before - bc_proto_reader_pending(&c->reader);
@@ -647,28 +709,15 @@ int bc_client_recv(struct bc_client *c, struct bc_msg *out, int timeout_ms)
 			return fail(c, rc, "bad bytes from the server: %s",
 				    c->reader.errstr);
 		}
-		do {
-			k = poll(&p, 1, ms_left(deadline));
-		} while (k < 0 && errno == EINTR);
-		if (k < 0) {
-			return fail(c, BC_EIO, "poll: %s", strerror(errno));
-		}
-		if (k == 0) {
+		n = bc__client_io_read(c, c->chunk, BC_CLIENT_READ_CHUNK,
+				       deadline);
+		if (n == 0) {
 			return 0;
 		}
-		n = read(c->fd, c->chunk, BC_CLIENT_READ_CHUNK);
-		if (n < 0) {
-			if (errno == EINTR || errno == EAGAIN ||
-			    errno == EWOULDBLOCK) {
-				continue;
-			}
-			if (errno == ECONNRESET) {
-				return fail(c, BC_ECLOSED,
-					    "the server reset the connection");
-			}
-			return fail(c, BC_EIO, "read: %s", strerror(errno));
+		if (n < 0 && n != BC__CLIENT_EOF) {
+			return (int)n;
 		}
-		if (n == 0) {
+		if (n == BC__CLIENT_EOF) {
 			if (bc_proto_reader_eof(&c->reader) < 0) {
 				return fail(c, c->reader.err,
 					    "the server closed the connection "

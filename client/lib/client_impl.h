@@ -10,8 +10,16 @@
 
 #include "blobcast/client.h"
 
+struct ssl_st;
+struct ssl_ctx_st;
+
 struct bc_client {
 	int fd;
+	/* TLS (transport.c) over fd, or NULL: the socket as it is. */
+	struct ssl_st *ssl;
+	struct ssl_ctx_st *ssl_ctx;
+	/* WebSocket framing over the stream (ws:// and wss://), or NULL. */
+	struct bc__ws *ws;
 	int err;           /* 0 or the sticky BC_E* code */
 	char errstr[256];  /* its reason */
 	int timeout_ms;    /* < 0: none */
@@ -30,6 +38,49 @@ struct bc_client {
 
 /* Milliseconds of a monotonic clock. */
 double bc__client_now_ms(void);
+
+/* Milliseconds left until deadline (a bc__client_now_ms() value), rounded
+ * up, for poll(); -1 when there is no deadline (deadline < 0). */
+int bc__client_ms_left(double deadline);
+
+/* Records a sticky error on c (the first one wins) and returns it. */
+int bc__client_fail(struct bc_client *c, int code, const char *fmt, ...)
+	BC__ERRINFO_PRINTF;
+
+/* ---- transport.c: the byte stream ---------------------------------------- */
+
+/* What bc__client_stream_read() returns at the end of the stream. */
+#define BC__CLIENT_EOF (-1000)
+
+/* TLS over c->fd: the handshake, the certificate verified against ca_file
+ * (NULL: the system's store) and host unless insecure. Returns 0 or the
+ * sticky error it recorded. */
+int bc__client_tls_start(struct bc_client *c, const char *host,
+			 const char *ca_file, bool insecure, double deadline);
+/* Frees the TLS state (after a close_notify, best effort). */
+void bc__client_transport_free(struct bc_client *c);
+/* Up to cap bytes from the stream: > 0 bytes, 0 at the deadline,
+ * BC__CLIENT_EOF, or the sticky error it recorded. */
+long bc__client_stream_read(struct bc_client *c, void *buf, size_t cap,
+			    double deadline);
+/* All len bytes to the stream by deadline (what: the message, for the
+ * error). Returns 0 or the sticky error it recorded. */
+int bc__client_stream_write(struct bc_client *c, const void *data, size_t len,
+			    double deadline, const char *what);
+
+/* The WebSocket opening handshake on the stream (GET a->resource with
+ * Upgrade: websocket, subprotocol "binary"); 0 or the sticky error. */
+int bc__client_ws_start(struct bc_client *c, const struct bc_client_addr *a,
+			double deadline);
+/* The protocol's bytes: as bc__client_stream_read() and _write(), inside
+ * WebSocket binary messages when c->ws (answering pings, a close frame
+ * read as the end of the stream). */
+long bc__client_io_read(struct bc_client *c, void *buf, size_t cap,
+			double deadline);
+int bc__client_io_write(struct bc_client *c, const void *data, size_t len,
+			double deadline, const char *what);
+/* Frees the WebSocket state. */
+void bc__client_ws_free(struct bc_client *c);
 
 /* Replays the operations of an EDIT_APPLIED on a scene mirror, atomically
  * (bc_edit_replay). Returns 0 or the failing operation's error with the

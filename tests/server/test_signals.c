@@ -297,8 +297,11 @@ static void listening_beyond_loopback_without_tokens_warns(void)
 	    warned("lo4", (const char *[]){"--listen", "127.0.0.1:0", NULL}),
 	    0);
 	make_dir_name(cfg, sizeof(cfg), "tokens.json");
-	REQUIRE(write_file(cfg, "{\"tokens\": [{\"token\": \"t\", "
-	                        "\"role\": \"viewer\"}]}") == 0);
+	/* (Tokens on a plain listener beyond loopback need allow_plaintext:
+	 * test_tls.) */
+	REQUIRE(write_file(cfg, "{\"allow_plaintext\": true, \"tokens\": "
+	                        "[{\"token\": \"t\", \"role\": \"viewer\"}]}") ==
+	        0);
 	CHECK_EQ_INT(warned("anytok", (const char *[]){"--listen", "0.0.0.0:0",
 	                                               "--config", cfg, NULL}),
 	             0);

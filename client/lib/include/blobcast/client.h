@@ -52,6 +52,8 @@
 #define BC_CLIENT_MAX_HOST 255u
 /* Longest Unix socket path: Linux's sun_path holds 108 bytes with the NUL. */
 #define BC_CLIENT_MAX_UNIX_PATH 107u
+/* Longest path (with its query) of a ws:// or wss:// address. */
+#define BC_CLIENT_MAX_WS_PATH 1023u
 
 /* Bytes taken from the socket per read: big enough that a 1 MB frame costs
  * a handful of system calls, small enough to live in every client. */
@@ -75,6 +77,9 @@ struct bc_client_addr {
 	uint16_t port;                          /* TCP */
 	char host[BC_CLIENT_MAX_HOST + 1];      /* TCP, without brackets */
 	char path[BC_CLIENT_MAX_UNIX_PATH + 1]; /* UNIX */
+	bool tls;                               /* TCP: tls:// or wss:// */
+	bool ws;                                /* TCP: ws:// or wss:// */
+	char resource[BC_CLIENT_MAX_WS_PATH + 1]; /* ws: "/PATH?QUERY" */
 };
 
 /*
@@ -85,6 +90,11 @@ struct bc_client_addr {
  *   :PORT             the default host
  *   [IPV6]:PORT, [IPV6]
  *   unix:PATH         a Unix socket (PATH up to BC_CLIENT_MAX_UNIX_PATH bytes)
+ *   tls://ADDRESS     any TCP form above, over TLS (out->tls)
+ *   ws://ADDRESS/PATH the protocol inside WebSocket binary messages, as
+ *                     the browser page speaks it (a proxy in front of
+ *                     websockify: docs/deploy.md); the port defaults to 80
+ *   wss://ADDRESS/PATH the same over TLS; the port defaults to 443
  * Returns 0 or BC_EINVAL with the reason in ei (which may be NULL).
  */
 int bc_client_addr_parse(const char *s, struct bc_client_addr *out,
@@ -103,6 +113,12 @@ struct bc_client_opts {
 	/* Milliseconds for connecting, for completing one send, and for each
 	 * helper's wait; 0: BC_CLIENT_DEFAULT_TIMEOUT_MS; negative: none. */
 	int timeout_ms;
+	/* TLS (a tls:// address): the server's certificate must chain to a
+	 * certificate in ca_file (PEM; NULL: the system's trust store) and
+	 * name the host of the address. insecure skips both checks (the
+	 * traffic is still encrypted, but to whoever answers). */
+	const char *ca_file;
+	bool insecure;
 };
 
 struct bc_client;
@@ -131,9 +147,11 @@ struct bc_client_info {
 };
 
 /*
- * Connects to opts->addr (TCP with TCP_NODELAY, or a Unix socket), sends
- * HELLO and waits for WELCOME. On success *out (reset on entry) is a client
- * to free with bc_client_destroy(). Returns 0, BC_EINVAL (bad options),
+ * Connects to opts->addr (TCP with TCP_NODELAY, or a Unix socket), completes
+ * the TLS handshake for tls:// and wss:// (BC_EAUTH: the certificate is not
+ * trusted; BC_EIO: no TLS there) and the WebSocket one for ws:// and wss://,
+ * sends HELLO and waits for WELCOME. On success *out (reset on entry) is a
+ * client to free with bc_client_destroy(). Returns 0, BC_EINVAL (bad options),
  * BC_EIO (no connection), BC_ETIMEOUT, BC_ENOMEM, a protocol error, or the
  * code of the server's ERROR (BC_EAUTH, BC_EPROTO_VERSION...) with its text;
  * the reason is in ei (which may be NULL).
@@ -144,7 +162,9 @@ int bc_client_connect(struct bc_client **out, const struct bc_client_opts *opts,
 void bc_client_destroy(struct bc_client *c);
 
 /* The socket, for poll(): readable means bc_client_recv() has bytes to work
- * on. The client owns it; do not read, write or close it. */
+ * on. The client owns it; do not read, write or close it. Over TLS, poll
+ * only after bc_client_recv(timeout 0) returned 0: it drains what TLS has
+ * buffered. */
 int bc_client_fd(const struct bc_client *c);
 /* WELCOME, session and traffic details (owned by c, updated by every call). */
 const struct bc_client_info *bc_client_info(const struct bc_client *c);

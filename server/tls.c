@@ -1,0 +1,250 @@
+/*
+ * TLS for the daemon's TCP connections (see tls.h). OpenSSL reads from and
+ * writes to two memory BIOs per connection; net.c moves the bytes between
+ * them and the libuv stream, so the loop never blocks on TLS and the
+ * connection limits and timeouts stay those of plain connections (the
+ * handshake counts as time before HELLO).
+ */
+#include <stdio.h>
+#include <string.h>
+
+#include <openssl/bio.h>
+#include <openssl/err.h>
+#include <openssl/ssl.h>
+
+#include "blobcast/alloc.h"
+#include "tls.h"
+
+struct bc_tls_ctx {
+	SSL_CTX *ssl;
+};
+
+struct bc_tls {
+	SSL *ssl;
+	BIO *in;  /* ciphertext from the peer (SSL reads it) */
+	BIO *out; /* ciphertext for the peer (SSL writes it) */
+	bool ready;
+	bool started; /* bytes have come from the peer */
+};
+
+/* OpenSSL's most recent error on this thread as text, queue cleared. */
+static void ssl_reason(char *buf, size_t len)
+{
+	unsigned long e = ERR_peek_last_error();
+	if (e) {
+		ERR_error_string_n(e, buf, len);
+	} else {
+		snprintf(buf, len, "unknown TLS error");
+	}
+	ERR_clear_error();
+}
+
+int bc_tls_ctx_new(struct bc_tls_ctx **out, const char *cert_file,
+                   const char *key_file, struct bc_errinfo *ei)
+{
+	struct bc_tls_ctx *ctx;
+	char why[256];
+	*out = NULL;
+	ERR_clear_error();
+	if (!(ctx = bc_calloc(1, sizeof(*ctx)))) {
+		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+	}
+	ctx->ssl = SSL_CTX_new(TLS_server_method());
+	if (!ctx->ssl) {
+		ssl_reason(why, sizeof(why));
+		bc_free(ctx);
+		return bc_errinfo_set(ei, BC_EIO, "TLS: %s", why);
+	}
+	SSL_CTX_set_min_proto_version(ctx->ssl, TLS1_2_VERSION);
+	/* No resumption state to keep per daemon, and no tickets to write
+	 * after the handshake: every connection does a full handshake. */
+	SSL_CTX_set_session_cache_mode(ctx->ssl, SSL_SESS_CACHE_OFF);
+	SSL_CTX_set_num_tickets(ctx->ssl, 0);
+	SSL_CTX_set_options(ctx->ssl, SSL_OP_NO_RENEGOTIATION |
+	                                  SSL_OP_CIPHER_SERVER_PREFERENCE);
+	if (SSL_CTX_use_certificate_chain_file(ctx->ssl, cert_file) != 1) {
+		ssl_reason(why, sizeof(why));
+		bc_tls_ctx_free(ctx);
+		return bc_errinfo_set(ei, BC_EINVAL,
+		                      "--tls-cert %s: cannot load the "
+		                      "certificate chain (PEM): %s",
+		                      cert_file, why);
+	}
+	if (SSL_CTX_use_PrivateKey_file(ctx->ssl, key_file, SSL_FILETYPE_PEM) !=
+	    1) {
+		ssl_reason(why, sizeof(why));
+		bc_tls_ctx_free(ctx);
+		return bc_errinfo_set(ei, BC_EINVAL,
+		                      "--tls-key %s: cannot load the private "
+		                      "key (PEM): %s",
+		                      key_file, why);
+	}
+	if (SSL_CTX_check_private_key(ctx->ssl) != 1) {
+		ssl_reason(why, sizeof(why));
+		bc_tls_ctx_free(ctx);
+		return bc_errinfo_set(ei, BC_EINVAL,
+		                      "--tls-key %s does not belong to the "
+		                      "certificate in %s: %s",
+		                      key_file, cert_file, why);
+	}
+	*out = ctx;
+	return 0;
+}
+
+void bc_tls_ctx_free(struct bc_tls_ctx *ctx)
+{
+	if (ctx) {
+		SSL_CTX_free(ctx->ssl);
+		bc_free(ctx);
+	}
+}
+
+struct bc_tls *bc_tls_new(struct bc_tls_ctx *ctx)
+{
+	struct bc_tls *t = bc_calloc(1, sizeof(*t));
+	if (!t) {
+		return NULL;
+	}
+	t->ssl = SSL_new(ctx->ssl);
+	t->in = BIO_new(BIO_s_mem());
+	t->out = BIO_new(BIO_s_mem());
+	if (!t->ssl || !t->in || !t->out) {
+		SSL_free(t->ssl);
+		BIO_free(t->in);
+		BIO_free(t->out);
+		bc_free(t);
+		ERR_clear_error();
+		return NULL;
+	}
+	/* An empty memory BIO reads as "retry later", not as the end. */
+	BIO_set_mem_eof_return(t->in, -1);
+	BIO_set_mem_eof_return(t->out, -1);
+	SSL_set_bio(t->ssl, t->in, t->out); /* the SSL owns both now */
+	SSL_set_accept_state(t->ssl);
+	return t;
+}
+
+void bc_tls_free(struct bc_tls *t)
+{
+	if (t) {
+		SSL_free(t->ssl);
+		bc_free(t);
+	}
+}
+
+bool bc_tls_ready(const struct bc_tls *t)
+{
+	return t->ready;
+}
+
+bool bc_tls_started(const struct bc_tls *t)
+{
+	return t->started;
+}
+
+int bc_tls_feed(struct bc_tls *t, const void *data, size_t len)
+{
+	t->started = t->started || len > 0;
+	while (len > 0) {
+		int chunk = len > (1u << 30) ? (1 << 30) : (int)len;
+		int n = BIO_write(t->in, data, chunk);
+		if (n <= 0) {
+			ERR_clear_error();
+			return BC_ENOMEM;
+		}
+		data = (const uint8_t *)data + n;
+		len -= (size_t)n;
+	}
+	return 0;
+}
+
+long bc_tls_read(struct bc_tls *t, void *buf, size_t cap, char *why,
+                 size_t whylen)
+{
+	int n, err;
+	ERR_clear_error();
+	if (!t->ready) {
+		n = SSL_do_handshake(t->ssl);
+		if (n != 1) {
+			err = SSL_get_error(t->ssl, n);
+			if (err == SSL_ERROR_WANT_READ ||
+			    err == SSL_ERROR_WANT_WRITE) {
+				return 0;
+			}
+			ssl_reason(why, whylen);
+			return BC_EIO;
+		}
+		t->ready = true;
+	}
+	n = SSL_read(t->ssl, buf, cap > INT32_MAX ? INT32_MAX : (int)cap);
+	if (n > 0) {
+		return n;
+	}
+	err = SSL_get_error(t->ssl, n);
+	if (err == SSL_ERROR_WANT_READ || err == SSL_ERROR_WANT_WRITE) {
+		return 0;
+	}
+	if (err == SSL_ERROR_ZERO_RETURN) {
+		snprintf(why, whylen, "the peer closed the TLS session");
+		ERR_clear_error();
+		return BC_ECLOSED;
+	}
+	ssl_reason(why, whylen);
+	return BC_EIO;
+}
+
+int bc_tls_write(struct bc_tls *t, const void *data, size_t len)
+{
+	ERR_clear_error();
+	if (!t->ready) {
+		return BC_EIO;
+	}
+	while (len > 0) {
+		int chunk = len > (1u << 30) ? (1 << 30) : (int)len;
+		/* Memory BIOs take everything: a write never waits. */
+		int n = SSL_write(t->ssl, data, chunk);
+		if (n <= 0) {
+			ERR_clear_error();
+			return BC_EIO;
+		}
+		data = (const uint8_t *)data + n;
+		len -= (size_t)n;
+	}
+	return 0;
+}
+
+void bc_tls_close_notify(struct bc_tls *t)
+{
+	if (t->ready) {
+		(void)SSL_shutdown(t->ssl);
+		ERR_clear_error();
+	}
+}
+
+int bc_tls_take_output(struct bc_tls *t, uint8_t **out, size_t *len)
+{
+	size_t n = BIO_ctrl_pending(t->out);
+	*out = NULL;
+	*len = 0;
+	if (n == 0) {
+		return 0;
+	}
+	if (!(*out = bc_malloc(n))) {
+		return BC_ENOMEM;
+	}
+	if (BIO_read(t->out, *out, (int)n) != (int)n) {
+		bc_free(*out);
+		*out = NULL;
+		ERR_clear_error();
+		return BC_EIO;
+	}
+	*len = n;
+	return 0;
+}
+
+const char *bc_tls_describe(const struct bc_tls *t, char *buf, size_t len)
+{
+	snprintf(buf, len, "%s %s", SSL_get_version(t->ssl),
+	         SSL_get_cipher_name(t->ssl));
+	return buf;
+}

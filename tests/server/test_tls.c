@@ -1,0 +1,639 @@
+/*
+ * TLS on blobcastd's TCP listener, end to end: certificates made here with
+ * the openssl command; a real daemon; libblobcast as the client. A full
+ * request over TLS (join, edit, snapshot) with a token, the certificate
+ * checks (wrong CA, no CA given, a name that does not match after a
+ * SIGHUP reloaded the certificate, --insecure), a plain client on the TLS
+ * port and a TLS client on a plain port both refused cleanly with the
+ * daemon still serving, the token never leaving before the handshake
+ * (a recorder and a man in the middle with an untrusted certificate), and
+ * the start-up refusal of tokens on a plain listener reachable from other
+ * hosts.
+ */
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <openssl/err.h>
+#include <openssl/ssl.h>
+#include <sys/socket.h>
+#include <sys/time.h>
+
+#include "blobcast/client.h"
+#include "blobcast/log.h"
+/* Not every helper of daemon.h is used here. */
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wunused-function"
+#include "daemon.h"
+#pragma GCC diagnostic pop
+#include "test.h"
+
+#define TOKEN "tls-test-token-7d41c9e2"
+
+static char base_dir[64];
+
+static void path_of(char *out, size_t cap, const char *name)
+{
+	snprintf(out, cap, "%s/%s", base_dir, name);
+}
+
+static int sh(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+static int sh(const char *fmt, ...)
+{
+	char cmd[2048];
+	va_list ap;
+	va_start(ap, fmt);
+	vsnprintf(cmd, sizeof(cmd), fmt, ap);
+	va_end(ap);
+	return system(cmd);
+}
+
+/* A CA, a server certificate it signed for localhost and 127.0.0.1 (with
+ * its key in the same file, the daemon's default), a second unrelated CA,
+ * and a certificate from the first CA for another name. */
+static bool make_certs(void)
+{
+	const char *d = base_dir;
+	const char *ec = "-newkey ec -pkeyopt ec_paramgen_curve:P-256 -nodes";
+	return sh("cd %s && "
+		  "openssl req -x509 %s -keyout ca.key -out ca.pem -days 2 "
+		  "-subj /CN=blobcast-test-ca 2>/dev/null && "
+		  "openssl req -x509 %s -keyout other-ca.key -out other-ca.pem "
+		  "-days 2 -subj /CN=another-ca 2>/dev/null && "
+		  "printf 'subjectAltName=DNS:localhost,IP:127.0.0.1\\n' "
+		  "> good.ext && "
+		  "printf 'subjectAltName=DNS:elsewhere.example\\n' > bad.ext && "
+		  "for n in good bad; do "
+		  "openssl req %s -keyout $n.key -out $n.csr "
+		  "-subj /CN=blobcastd 2>/dev/null && "
+		  "openssl x509 -req -in $n.csr -CA ca.pem -CAkey ca.key "
+		  "-CAcreateserial -days 2 -extfile $n.ext -out $n.crt "
+		  "2>/dev/null && cat $n.crt $n.key > $n.pem || exit 1; done && "
+		  "cp good.pem server.pem",
+		  d, ec, ec, ec) == 0;
+}
+
+/* The port a daemon whose stderr went to log printed. */
+static int port_from_log(const char *log)
+{
+	for (int tries = 0; tries < 200; tries++) {
+		char buf[8192];
+		FILE *f = fopen(log, "r");
+		size_t n = f ? fread(buf, 1, sizeof(buf) - 1, f) : 0;
+		const char *p;
+		if (f) {
+			fclose(f);
+		}
+		buf[n] = '\0';
+		if ((p = strstr(buf, "blobcastd: listening on 127.0.0.1:"))) {
+			return atoi(p + strlen("blobcastd: listening on 127.0.0.1:"));
+		}
+		t_sleep_ms(25);
+	}
+	return -1;
+}
+
+static bool file_has(const char *path, const char *needle)
+{
+	char buf[16384];
+	FILE *f = fopen(path, "r");
+	size_t n = f ? fread(buf, 1, sizeof(buf) - 1, f) : 0;
+	if (f) {
+		fclose(f);
+	}
+	buf[n] = '\0';
+	return strstr(buf, needle) != NULL;
+}
+
+static struct daemon tls_d, plain_d;
+static int tls_port, plain_port;
+static char tls_log[128], plain_log[128];
+
+static int connect_to(struct bc_client **c, const char *addr, const char *ca,
+		      bool insecure, const char *token, struct bc_errinfo *ei)
+{
+	return bc_client_connect(c,
+				 &(struct bc_client_opts){
+					 .addr = addr,
+					 .name = "test-tls",
+					 .token = token,
+					 .timeout_ms = 3000,
+					 .ca_file = ca,
+					 .insecure = insecure,
+				 },
+				 ei);
+}
+
+/* A primitive of the mirrored scene (a leaf under the root). */
+static uint32_t some_prim(struct bc_client *c)
+{
+	const struct bc_tree *t = bc_client_scene(c, NULL);
+	uint32_t id = t ? bc_tree_root(t) : 0;
+	while (t && id && bc_tree_child_count(t, id) > 0) {
+		id = bc_tree_child(t, id, 0);
+	}
+	return id;
+}
+
+static void join_edit_snapshot_over_tls(void)
+{
+	char addr[64], ca[128];
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	struct bc_client_image img;
+	uint32_t seq = 0, node;
+	uint64_t order = 0;
+	const char *kv[] = {"translate=0.125,0,0"};
+	struct bc_msg_view v = {.width = 64, .height = 48};
+	path_of(ca, sizeof(ca), "ca.pem");
+	snprintf(addr, sizeof(addr), "tls://127.0.0.1:%d", tls_port);
+	CHECK_EQ_INT(connect_to(&c, addr, ca, false, TOKEN, &ei), 0);
+	if (!c) {
+		fprintf(stderr, "  %s\n", ei.msg);
+		return;
+	}
+	CHECK_EQ_INT(bc_client_join(c, "default", BC_PROTO_ROLE_EDITOR,
+				    BC_CLIENT_JOIN_ANY, &ei),
+		     0);
+	node = some_prim(c);
+	CHECK(node != 0);
+	CHECK_EQ_INT(bc_client_edit_kv(c, node, kv, 1, false, &seq, &ei), 0);
+	CHECK_EQ_INT(bc_client_wait_applied(c, seq, &order, &ei), 0);
+	CHECK(order >= 1);
+	CHECK_EQ_INT(bc_client_view(c, &v, NULL, &ei), 0);
+	bc_client_image_init(&img);
+	CHECK_EQ_INT(bc_client_snapshot(c, BC_PROTO_ENC_PNG, &img, &ei), 0);
+	CHECK_EQ_INT(img.width, 64);
+	CHECK_EQ_INT(img.height, 48);
+	if (ei.msg[0]) {
+		fprintf(stderr, "  %s\n", ei.msg);
+	}
+	bc_client_image_finish(&img);
+	bc_client_destroy(c);
+	CHECK(file_has(tls_log, "TLS (TLSv1.3"));
+
+	/* By name: the certificate names localhost too. */
+	c = NULL;
+	snprintf(addr, sizeof(addr), "tls://localhost:%d", tls_port);
+	CHECK_EQ_INT(connect_to(&c, addr, ca, false, TOKEN, &ei), 0);
+	bc_client_destroy(c);
+}
+
+static void untrusted_certificates_are_refused(void)
+{
+	char addr[64], ca[128], other[128];
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	path_of(ca, sizeof(ca), "ca.pem");
+	path_of(other, sizeof(other), "other-ca.pem");
+	snprintf(addr, sizeof(addr), "tls://127.0.0.1:%d", tls_port);
+
+	/* Another CA. */
+	CHECK_EQ_INT(connect_to(&c, addr, other, false, TOKEN, &ei), BC_EAUTH);
+	CHECK(c == NULL);
+	CHECK(strstr(ei.msg, "not trusted") != NULL);
+	fprintf(stderr, "  wrong CA: %s\n", ei.msg);
+
+	/* No CA given: the system's store does not know ours. */
+	CHECK_EQ_INT(connect_to(&c, addr, NULL, false, TOKEN, &ei), BC_EAUTH);
+	CHECK(strstr(ei.msg, "--ca") != NULL);
+
+	/* Insecure by name: encrypted, unchecked, works. */
+	CHECK_EQ_INT(connect_to(&c, addr, NULL, true, TOKEN, &ei), 0);
+	bc_client_destroy(c);
+	c = NULL;
+
+	/* A CA file that does not exist is the caller's mistake. */
+	CHECK_EQ_INT(connect_to(&c, addr, "/nonexistent/ca.pem", false, TOKEN,
+				&ei),
+		     BC_EINVAL);
+
+	/* SIGHUP reloads the certificate: one from the right CA for
+	 * another name is refused for its name, and the good one again
+	 * after the next SIGHUP. */
+	CHECK_EQ_INT(sh("cp %s/bad.pem %s/server.pem", base_dir, base_dir), 0);
+	kill(tls_d.pid, SIGHUP);
+	t_sleep_ms(300);
+	CHECK_EQ_INT(connect_to(&c, addr, ca, false, TOKEN, &ei), BC_EAUTH);
+	CHECK(strstr(ei.msg, "mismatch") != NULL);
+	fprintf(stderr, "  wrong name: %s\n", ei.msg);
+	CHECK_EQ_INT(sh("cp %s/good.pem %s/server.pem", base_dir, base_dir),
+		     0);
+	kill(tls_d.pid, SIGHUP);
+	t_sleep_ms(300);
+	CHECK_EQ_INT(connect_to(&c, addr, ca, false, TOKEN, &ei), 0);
+	bc_client_destroy(c);
+	CHECK(file_has(tls_log, "reloaded the TLS certificate"));
+}
+
+static int tcp_connect(int port)
+{
+	struct sockaddr_in sa = {.sin_family = AF_INET,
+				 .sin_port = htons((uint16_t)port)};
+	int fd = socket(AF_INET, SOCK_STREAM, 0);
+	sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+	if (connect(fd, (struct sockaddr *)&sa, sizeof(sa)) != 0) {
+		close(fd);
+		return -1;
+	}
+	return fd;
+}
+
+static void wrong_protocol_on_either_port_is_refused_cleanly(void)
+{
+	char addr[64], ca[128];
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	struct conn raw;
+	path_of(ca, sizeof(ca), "ca.pem");
+
+	/* A plain client on the TLS port hears why, in plain, and is
+	 * closed. */
+	memset(&raw, 0, sizeof(raw));
+	raw.fd = tcp_connect(tls_port);
+	CHECK(raw.fd >= 0);
+	bc_proto_reader_init(&raw.r, &(struct bc_proto_reader_opts){
+					     .side = BC_PROTO_SIDE_CLIENT});
+	{
+		struct bc_msg m = {.type = BC_MSG_HELLO};
+		m.hello.version_min = m.hello.version_max = 1;
+		m.hello.encodings = BC_PROTO_ENCODINGS_ALL;
+		m.hello.client_name.ptr = "plain";
+		m.hello.client_name.len = 5;
+		CHECK(conn_send(&raw, &m) != 0);
+	}
+	CHECK_EQ_INT(conn_recv(&raw, 3000), 1);
+	CHECK_EQ_INT(raw.m.type, BC_MSG_ERROR);
+	CHECK(raw.m.flags & BC_PROTO_FLAG_FATAL);
+	CHECK_EQ_INT(raw.m.error.code, -BC_ENOTSUP);
+	CHECK_EQ_INT(conn_recv(&raw, 3000), -1); /* then closed */
+	conn_close(&raw);
+
+	/* libblobcast without tls:// on the TLS port: the same, as its
+	 * error. */
+	snprintf(addr, sizeof(addr), "127.0.0.1:%d", tls_port);
+	CHECK(connect_to(&c, addr, NULL, false, TOKEN, &ei) != 0);
+	CHECK(strstr(ei.msg, "tls://") != NULL);
+	fprintf(stderr, "  plain on TLS: %s\n", ei.msg);
+
+	/* Garbage that starts like a TLS record: handshake failure, closed. */
+	raw.fd = tcp_connect(tls_port);
+	CHECK(raw.fd >= 0);
+	CHECK_EQ_INT(send_raw(&raw, "\x16\x03\x01\x00\x05hello", 10), 0);
+	{
+		char b[64];
+		struct pollfd p = {.fd = raw.fd, .events = POLLIN};
+		CHECK_EQ_INT(poll(&p, 1, 3000), 1);
+		/* An alert or nothing, then the end. */
+		ssize_t n;
+		while ((n = recv(raw.fd, b, sizeof(b), 0)) > 0) {
+		}
+		CHECK_EQ_INT(n, 0);
+	}
+	close(raw.fd);
+
+	/* A TLS client on a plain port fails with a TLS error. */
+	snprintf(addr, sizeof(addr), "tls://127.0.0.1:%d", plain_port);
+	CHECK_EQ_INT(connect_to(&c, addr, ca, false, NULL, &ei), BC_EIO);
+	CHECK(strstr(ei.msg, "TLS handshake") != NULL);
+	fprintf(stderr, "  TLS on plain: %s\n", ei.msg);
+
+	/* Both daemons still serve. */
+	snprintf(addr, sizeof(addr), "tls://127.0.0.1:%d", tls_port);
+	CHECK_EQ_INT(connect_to(&c, addr, ca, false, TOKEN, &ei), 0);
+	bc_client_destroy(c);
+	c = NULL;
+	snprintf(addr, sizeof(addr), "127.0.0.1:%d", plain_port);
+	CHECK_EQ_INT(connect_to(&c, addr, NULL, false, NULL, &ei), 0);
+	bc_client_destroy(c);
+	CHECK(kill(tls_d.pid, 0) == 0 && kill(plain_d.pid, 0) == 0);
+}
+
+/* ---- peers that are not blobcastd ---------------------------------------- */
+
+/* A listener on an ephemeral loopback port; *port receives it. */
+static int listen_any(int *port)
+{
+	struct sockaddr_in sa = {.sin_family = AF_INET};
+	socklen_t len = sizeof(sa);
+	int fd = socket(AF_INET, SOCK_STREAM, 0);
+	sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+	if (bind(fd, (struct sockaddr *)&sa, sizeof(sa)) != 0 ||
+	    listen(fd, 4) != 0 ||
+	    getsockname(fd, (struct sockaddr *)&sa, &len) != 0) {
+		close(fd);
+		return -1;
+	}
+	*port = ntohs(sa.sin_port);
+	return fd;
+}
+
+static bool has_bytes(const uint8_t *hay, size_t n, const char *needle)
+{
+	size_t k = strlen(needle);
+	for (size_t i = 0; i + k <= n; i++) {
+		if (memcmp(hay + i, needle, k) == 0) {
+			return true;
+		}
+	}
+	return false;
+}
+
+/* In a child: accepts one connection and writes to out everything that
+ * arrives within 2 s -- the raw bytes, or (with a certificate) what a TLS
+ * server presenting it decrypts. */
+static pid_t record_one(int lfd, const char *cert, const char *out)
+{
+	pid_t pid = fork();
+	if (pid != 0) {
+		return pid;
+	}
+	{
+		int fd = accept(lfd, NULL, NULL);
+		FILE *f = fopen(out, "wb");
+		uint8_t buf[4096];
+		int64_t end = t_now_ms() + 2000;
+		if (fd < 0 || !f) {
+			_exit(1);
+		}
+		if (cert) {
+			SSL_CTX *ctx = SSL_CTX_new(TLS_server_method());
+			SSL *ssl;
+			struct timeval tv = {2, 0};
+			setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof(tv));
+			SSL_CTX_use_certificate_chain_file(ctx, cert);
+			SSL_CTX_use_PrivateKey_file(ctx, cert, SSL_FILETYPE_PEM);
+			ssl = SSL_new(ctx);
+			SSL_set_fd(ssl, fd);
+			if (SSL_accept(ssl) == 1) {
+				int n;
+				while ((n = SSL_read(ssl, buf, sizeof(buf))) >
+				       0) {
+					fwrite(buf, 1, (size_t)n, f);
+				}
+			}
+			fclose(f);
+			_exit(0);
+		}
+		while (t_now_ms() < end) {
+			struct pollfd p = {.fd = fd, .events = POLLIN};
+			ssize_t n;
+			if (poll(&p, 1, 100) <= 0) {
+				continue;
+			}
+			if ((n = recv(fd, buf, sizeof(buf), 0)) <= 0) {
+				break;
+			}
+			fwrite(buf, 1, (size_t)n, f);
+		}
+		fclose(f);
+		_exit(0);
+	}
+}
+
+static size_t slurp(const char *path, uint8_t *buf, size_t cap)
+{
+	FILE *f = fopen(path, "rb");
+	size_t n = f ? fread(buf, 1, cap, f) : 0;
+	if (f) {
+		fclose(f);
+	}
+	return n;
+}
+
+static void token_never_sent_before_the_handshake(void)
+{
+	char addr[64], ca[128], rec[128], bad[128];
+	static uint8_t got[1 << 16];
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	int port, lfd, status;
+	pid_t pid;
+	size_t n;
+	path_of(ca, sizeof(ca), "ca.pem");
+	path_of(rec, sizeof(rec), "recorded.bin");
+	path_of(bad, sizeof(bad), "other-ca.pem");
+
+	/* A recorder that never answers: only a ClientHello, no token. */
+	lfd = listen_any(&port);
+	CHECK(lfd >= 0);
+	pid = record_one(lfd, NULL, rec);
+	snprintf(addr, sizeof(addr), "tls://127.0.0.1:%d", port);
+	CHECK(bc_client_connect(&c,
+				&(struct bc_client_opts){
+					.addr = addr,
+					.token = TOKEN,
+					.timeout_ms = 800,
+					.insecure = true,
+				},
+				&ei) == BC_ETIMEOUT);
+	waitpid(pid, &status, 0);
+	close(lfd);
+	n = slurp(rec, got, sizeof(got));
+	CHECK(n > 5 && got[0] == 0x16); /* a TLS handshake record */
+	CHECK(!has_bytes(got, n, TOKEN));
+
+	/* A man in the middle with a certificate of its own (made by
+	 * another CA): the client refuses it before HELLO, so it decrypts
+	 * nothing. */
+	{
+		char mitm[128];
+		path_of(mitm, sizeof(mitm), "mitm.pem");
+		CHECK_EQ_INT(sh("cd %s && openssl req -x509 -newkey ec -pkeyopt "
+				"ec_paramgen_curve:P-256 -nodes -keyout m.key "
+				"-out m.crt -days 2 -subj /CN=localhost "
+				"-addext subjectAltName=IP:127.0.0.1 "
+				"2>/dev/null && cat m.crt m.key > mitm.pem",
+				base_dir),
+			     0);
+		lfd = listen_any(&port);
+		pid = record_one(lfd, mitm, rec);
+		snprintf(addr, sizeof(addr), "tls://127.0.0.1:%d", port);
+		CHECK_EQ_INT(connect_to(&c, addr, ca, false, TOKEN, &ei),
+			     BC_EAUTH);
+		waitpid(pid, &status, 0);
+		n = slurp(rec, got, sizeof(got));
+		CHECK_EQ_INT(n, 0);
+		CHECK(!has_bytes(got, n, TOKEN));
+
+		/* The control: told --insecure, the client trusts the man
+		 * in the middle, and he reads the token. So the recorder
+		 * does see a token when one is sent. */
+		pid = record_one(lfd, mitm, rec);
+		(void)bc_client_connect(&c,
+					&(struct bc_client_opts){
+						.addr = addr,
+						.token = TOKEN,
+						.timeout_ms = 800,
+						.insecure = true,
+					},
+					&ei);
+		waitpid(pid, &status, 0);
+		close(lfd);
+		n = slurp(rec, got, sizeof(got));
+		CHECK(has_bytes(got, n, TOKEN));
+	}
+	(void)bad;
+}
+
+/* ---- start-up rules ------------------------------------------------------ */
+
+/* Runs blobcastd with args until it exits or 1.5 s pass (then SIGTERM);
+ * its stderr goes to log. Returns the exit status, or -1 when it was
+ * still running. */
+static int run_daemon(const char *log, const char *const *args)
+{
+	const char *argv[16] = {"blobcastd"};
+	int status = 0, i = 1;
+	pid_t pid;
+	for (; args[i - 1] && i < 15; i++) {
+		argv[i] = args[i - 1];
+	}
+	argv[i] = NULL;
+	pid = fork();
+	if (pid == 0) {
+		int fd = open(log, O_WRONLY | O_CREAT | O_TRUNC, 0600);
+		dup2(fd, 2);
+		execv(daemon_path, (char *const *)argv);
+		_exit(127);
+	}
+	for (int k = 0; k < 60; k++) {
+		if (waitpid(pid, &status, WNOHANG) == pid) {
+			return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+		}
+		t_sleep_ms(25);
+	}
+	kill(pid, SIGTERM);
+	waitpid(pid, &status, 0);
+	return -1;
+}
+
+static void tokens_in_clear_need_allow_plaintext(void)
+{
+	char log[128], cfg[128], data[128];
+	FILE *f;
+	path_of(log, sizeof(log), "startup.log");
+	path_of(cfg, sizeof(cfg), "tokens-only.json");
+	path_of(data, sizeof(data), "data-startup");
+	f = fopen(cfg, "w");
+	CHECK(f != NULL);
+	if (!f) {
+		return;
+	}
+	fprintf(f, "{\"tokens\": [{\"token\": \"%s\", \"role\": \"editor\"}]}",
+		TOKEN);
+	fclose(f);
+	{
+		const char *args[] = {"--listen", "0.0.0.0:0", "--data", data,
+				      "--config", cfg, NULL};
+		CHECK_EQ_INT(run_daemon(log, args), 1);
+		CHECK(file_has(log, "--allow-plaintext"));
+	}
+	{
+		const char *args[] = {"--listen", "0.0.0.0:0", "--data", data,
+				      "--config", cfg, "--allow-plaintext",
+				      NULL};
+		CHECK_EQ_INT(run_daemon(log, args), -1);
+		CHECK(file_has(log, "without TLS (--allow-plaintext)"));
+	}
+	{
+		/* Loopback needs no TLS: nobody else is on that path. */
+		const char *args[] = {"--listen", "127.0.0.1:0", "--data", data,
+				      "--config", cfg, NULL};
+		CHECK_EQ_INT(run_daemon(log, args), -1);
+	}
+	{
+		char cert[128];
+		path_of(cert, sizeof(cert), "ca.pem"); /* no key in it */
+		const char *args[] = {"--listen", "127.0.0.1:0", "--data", data,
+				      "--tls-cert", cert, NULL};
+		CHECK_EQ_INT(run_daemon(log, args), 1);
+		CHECK(file_has(log, "private key"));
+	}
+}
+
+static const struct bc_test tests[] = {
+	{"join_edit_snapshot_over_tls", join_edit_snapshot_over_tls},
+	{"untrusted_certificates_are_refused",
+	 untrusted_certificates_are_refused},
+	{"wrong_protocol_on_either_port_is_refused_cleanly",
+	 wrong_protocol_on_either_port_is_refused_cleanly},
+	{"token_never_sent_before_the_handshake",
+	 token_never_sent_before_the_handshake},
+	{"tokens_in_clear_need_allow_plaintext",
+	 tokens_in_clear_need_allow_plaintext},
+};
+
+int main(int argc, char **argv)
+{
+	char dir[128], cfg[128], cert[128];
+	const char *extra[5] = {NULL};
+	FILE *f;
+	int rc;
+	signal(SIGPIPE, SIG_IGN);
+	bc_log_init(BC_LOG_ERROR);
+	snprintf(base_dir, sizeof(base_dir), "/tmp/bc-tls-test-%d",
+		 (int)getpid());
+	mkdir(base_dir, 0700);
+	if (system("openssl version >/dev/null 2>&1") != 0) {
+		fprintf(stderr, "the openssl command is missing "
+				"(deploy/install-deps.sh)\n");
+		return 1;
+	}
+	if (!make_certs()) {
+		fprintf(stderr, "could not make test certificates\n");
+		return 1;
+	}
+	/* The TLS daemon: loopback, a token, certificate from the config. */
+	path_of(cfg, sizeof(cfg), "tls.json");
+	path_of(cert, sizeof(cert), "server.pem");
+	f = fopen(cfg, "w");
+	if (!f) {
+		return 1;
+	}
+	fprintf(f,
+		"{\"tls_cert\": \"%s\", \"tls_key\": \"%s\", \"tokens\": "
+		"[{\"token\": \"%s\", \"role\": \"editor\"}]}",
+		cert, cert, TOKEN);
+	fclose(f);
+	path_of(tls_log, sizeof(tls_log), "tls-daemon.log");
+	path_of(dir, sizeof(dir), "d-tls");
+	daemon_log_path = tls_log;
+	extra[0] = "--listen";
+	extra[1] = "127.0.0.1:0";
+	extra[2] = "--config";
+	extra[3] = cfg;
+	if (daemon_start_with(&tls_d, dir, extra) ||
+	    (tls_port = port_from_log(tls_log)) <= 0) {
+		fprintf(stderr, "the TLS daemon did not start (%s)\n",
+			tls_log);
+		if (tls_d.pid > 0) {
+			daemon_stop(&tls_d, SIGKILL);
+		}
+		return 1;
+	}
+	path_of(plain_log, sizeof(plain_log), "plain-daemon.log");
+	path_of(dir, sizeof(dir), "d-plain");
+	daemon_log_path = plain_log;
+	extra[2] = NULL;
+	if (daemon_start_with(&plain_d, dir, extra) ||
+	    (plain_port = port_from_log(plain_log)) <= 0) {
+		fprintf(stderr, "the plain daemon did not start (%s)\n",
+			plain_log);
+		daemon_stop(&tls_d, SIGTERM);
+		if (plain_d.pid > 0) {
+			daemon_stop(&plain_d, SIGKILL);
+		}
+		return 1;
+	}
+	rc = bc_test_run(tests, sizeof(tests) / sizeof(tests[0]), argc, argv);
+	CHECK_EQ_INT(daemon_stop(&tls_d, SIGTERM), 0);
+	CHECK_EQ_INT(daemon_stop(&plain_d, SIGTERM), 0);
+	if (bc_test_failures) {
+		rc = 1;
+	}
+	if (rc == 0) {
+		sh("rm -rf %s", base_dir);
+	} else {
+		fprintf(stderr, "kept %s\n", base_dir);
+	}
+	return rc;
+}
