@@ -12,6 +12,8 @@ pkgs=(
 	libegl-dev libgl-dev libgles-dev libegl1-mesa-dev libgl1-mesa-dev
 	libgl1-mesa-dri libosmesa6-dev python3-glad glslang-tools
 	libglfw3-dev xvfb
+	libssl-dev openssl
+	systemd nginx
 )
 
 missing=()
