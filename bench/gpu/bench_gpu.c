@@ -206,6 +206,16 @@ static double median(double *v, int n)
 	return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
+static bool is_software(const struct bc_gl_info *info)
+{
+	return info->software_device || strstr(info->renderer, "llvmpipe") ||
+	       strstr(info->renderer, "softpipe") ||
+	       info->platform == BC_GL_PLATFORM_SURFACELESS ||
+	       info->platform == BC_GL_PLATFORM_OSMESA;
+}
+
+/* A gl renderer on op's platform, its info in *info; NULL (reported) when
+ * none can be created, or when op asks for hardware and it is software. */
 static struct bc_renderer *open_gl(const struct opts *op, struct out *o,
 				   struct bc_gl_info *info)
 {
@@ -222,15 +232,18 @@ static struct bc_renderer *open_gl(const struct opts *op, struct out *o,
 	       bc_gl_platform_name(info->platform),
 	       info->software_device ? " (software device)" : "",
 	       info->renderer, info->version);
+	/* On a GPU host a software context would spend the run's minutes
+	 * measuring the wrong thing: refuse it. */
+	if (op->expect_hardware && is_software(info)) {
+		fail(o,
+		     "a GPU was expected, the context is %s on the %s "
+		     "platform%s",
+		     info->renderer, bc_gl_platform_name(info->platform),
+		     info->software_device ? " (software device)" : "");
+		bc_renderer_destroy(r);
+		return NULL;
+	}
 	return r;
-}
-
-static bool is_software(const struct bc_gl_info *info)
-{
-	return info->software_device || strstr(info->renderer, "llvmpipe") ||
-	       strstr(info->renderer, "softpipe") ||
-	       info->platform == BC_GL_PLATFORM_SURFACELESS ||
-	       info->platform == BC_GL_PLATFORM_OSMESA;
 }
 
 /* ---- Correctness scenes and references -------------------------------- */
@@ -402,7 +415,12 @@ static int cmd_info(const struct opts *op)
 	if (out_open(&o, op)) {
 		return 1;
 	}
-	r = open_gl(op, &o, &info);
+	{
+		/* The context is reported whatever it is; then judged. */
+		struct opts any = *op;
+		any.expect_hardware = false;
+		r = open_gl(&any, &o, &info);
+	}
 	if (r && op->expect_hardware && is_software(&info)) {
 		fail(&o,
 		     "a GPU was expected, the context is %s on the %s "
@@ -1227,10 +1245,10 @@ static int cmd_daemon(const struct opts *op)
 			drag[i] = 0.004f * (float)i;
 		}
 		send_view(&c, w, h);
-		if (settle(&c, 120000)) {
-			fail(&o, "%ux%u: no still frame from the daemon "
+		if (settle(&c, 30000)) {
+			fail(&o, "%ux%u: no still frame from the daemon in 30 s "
 				 "(its log says why)", w, h);
-			continue;
+			break;
 		}
 		/* Warm-up edits, not counted. */
 		latency_edits(&c, id, &original, dx, 2, 3, false, &l);
@@ -1349,8 +1367,7 @@ static const char usage[] =
     "  refs    --dir DIR [--size N]   write the correctness scenes and "
     "their\n"
     "          tiled CPU references (NAME.json, NAME.ref) into DIR\n"
-    "  info    [--expect-hardware]    the gl context: GL_RENDERER, "
-    "platform\n"
+    "  info    the gl context: GL_RENDERER, platform\n"
     "  check   --dir DIR [--min-scenes N]  gl against the references\n"
     "  table2  [--size N] [--reps R] [--warmup W] [--counts LIST]\n"
     "          [--lens-counts LIST] [--levels LIST] [--budget-s S]\n"
@@ -1367,6 +1384,9 @@ static const char usage[] =
     "\n"
     "common options:\n"
     "  --platform P   gl platform: auto | device | surfaceless | osmesa\n"
+    "  --expect-hardware  fail at once (info: after reporting it) when the\n"
+    "                 gl context is software (llvmpipe, surfaceless, "
+    "OSMesa)\n"
     "  --json FILE    the step's results as one JSON object\n"
     "  --md FILE      the step's results as Markdown\n"
     "LIST: comma-separated numbers (table2 --counts 16,64,256,1024,4096;\n"

@@ -70,14 +70,15 @@ if $local_run; then
 		--levels "1,2")
 	edit_args=(--size 64 --counts 256 --edits 4)
 	daemon_args=(--counts 64 --sizes "128x96,96x64" --edits 4)
-	info_args=()
+	hw_args=()
 else
 	mode=gpu
 	platform=${platform:-device}
 	t2_args=(--size 1024 --reps 20 --warmup 5 --budget-s 170)
 	edit_args=(--size 1024 --counts "1024,65536,1048576" --edits 50)
 	daemon_args=(--counts 1024 --sizes "1920x1080,1024x768" --edits 100)
-	info_args=(--expect-hardware)
+	# Every gl step refuses a software context at once.
+	hw_args=(--expect-hardware)
 fi
 
 # ---- Helpers ----------------------------------------------------------------
@@ -145,9 +146,14 @@ run_step() {
 		0) err="no results written" ;;
 		*) err="exit status $rc" ;;
 		esac
-		# The lines that say what went wrong.
+		# The lines that say what went wrong: the first ones (often
+		# the cause) and the last ones.
 		err="$err; $(grep -E 'bench_gpu:|error|Error|ERROR|not found' \
-			"$work/$name.log" | tail -n 8 || true)"
+			"$work/$name.log" | awk '{ l[NR] = $0 } END {
+				for (i = 1; i <= NR; i++)
+					if (i <= 3 || i > NR - 5) print l[i];
+					else if (i == 4) print "..."
+			}' || true)"
 		step_err[$name]=$err
 		say "== $name FAILED: $err"
 	fi
@@ -276,21 +282,31 @@ shell_step libs libs
 # ---- The driver's steps -----------------------------------------------------
 drv="$kit/bin/bench_gpu"
 S="$work/steps"
-run_step info 60 "$drv" info --platform "$platform" "${info_args[@]}" \
+run_step info 60 "$drv" info --platform "$platform" "${hw_args[@]}" \
 	--json "$S/info.json" --md "$S/info.md"
 gl_renderer=$(sed -n 's/^GL_RENDERER: //p' "$work/info.log" | head -1)
 say "GL_RENDERER: ${gl_renderer:-(no context)}"
-run_step check 90 "$drv" check --platform "$platform" --dir "$kit/scenes" \
+run_step check 90 "$drv" check --platform "$platform" "${hw_args[@]}" \
+	--dir "$kit/scenes" \
 	--min-scenes 10 --json "$S/check.json" --md "$S/check.md"
-run_step table2 210 "$drv" table2 --platform "$platform" "${t2_args[@]}" \
+run_step table2 210 "$drv" table2 --platform "$platform" "${hw_args[@]}" \
+	"${t2_args[@]}" \
 	--json "$S/table2.json" --md "$S/table2.md"
-run_step edit 60 "$drv" edit --platform "$platform" "${edit_args[@]}" \
+run_step edit 60 "$drv" edit --platform "$platform" "${hw_args[@]}" \
+	"${edit_args[@]}" \
 	--json "$S/edit.json" --md "$S/edit.md"
-run_step daemon 90 "$drv" daemon --platform "$platform" \
-	--blobcastd "$kit/bin/blobcastd" "${daemon_args[@]}" \
-	--json "$S/daemon.json" --md "$S/daemon.md"
+# The daemon makes its own context: on a GPU host, only once the info step
+# has found a hardware one (else it would render in software or not at all
+# and spend its minutes waiting for frames).
+if [ "$mode" = gpu ] && [ "${step_ok[info]}" != true ]; then
+	not_run daemon "no hardware gl context (see the info step)"
+else
+	run_step daemon 90 "$drv" daemon --platform "$platform" \
+		--blobcastd "$kit/bin/blobcastd" "${daemon_args[@]}" \
+		--json "$S/daemon.json" --md "$S/daemon.md"
+fi
 # The daemon's renderer, from its log: on a GPU host it must not be software.
-daemon_gl=$(grep -m1 -o 'gl: [a-z]* platform.*; robust access' "$work/daemon.log" || true)
+daemon_gl=$(grep -m1 -o 'gl: [a-z]* platform.*; robust access' "$work/daemon.log" 2>/dev/null || true)
 if [ "${step_ran[daemon]:-false}" = true ]; then
 	if [ -z "$daemon_gl" ]; then
 		step_ok[daemon]=false all_ok=false
