@@ -1255,10 +1255,10 @@ static int cmd_daemon(const struct opts *op)
 		latency_edits(&c, id, &original, dx, 2, op->edits, false, &l);
 		daemon_row(&o, "still", w, h, &l, op->edits, first);
 		first = false;
-		drain(&c, 1000, 60000);
+		drain(&c, 500, 60000);
 		latency_edits(&c, id, &original, drag, 25, op->edits, true, &l);
 		daemon_row(&o, "drag", w, h, &l, op->edits, false);
-		drain(&c, 1000, 60000);
+		drain(&c, 500, 60000);
 	}
 	fputc(']', o.json);
 	json_errors(o.json);

@@ -52,6 +52,10 @@ if [ ! -d "$kit" ]; then
 	exit 1
 fi
 kit=$(cd "$kit" && pwd)
+# A copy that lost its modes (carried as plain files) still runs.
+for f in "$kit"/bin/*; do
+	[ -x "$f" ] || chmod u+x "$f" 2>/dev/null || true
+done
 
 t_start=$(date +%s)
 # The whole run must end within 8 minutes; steps get what is left.
@@ -66,7 +70,7 @@ md="$out/results.md"
 if $local_run; then
 	mode=local
 	platform=${platform:-auto}
-	t2_args=(--size 64 --reps 3 --warmup 1 --counts "16,64" --lens-counts 12
+	t2_args=(--size 64 --reps 3 --warmup 1 --counts 16 --lens-counts 12
 		--levels "1,2")
 	edit_args=(--size 64 --counts 256 --edits 4)
 	daemon_args=(--counts 64 --sizes "128x96,96x64" --edits 4)
