@@ -12,6 +12,8 @@
 #   edit     parameter edits on the GPU: bytes, ms, damaged regions
 #   daemon   edit -> frame through blobcastd --backend gl, 1920x1080 and
 #            1024x768 JPEG, p50/p99
+#   bench_gl gl against the tiled CPU renderer side by side, and GPU
+#            tree updates against full uploads (bench/bench_gl.c)
 # and writes results.json, results.md and run.log into the output folder.
 # Programs run under `env -i` with the kit's library path only.
 #
@@ -74,6 +76,7 @@ if $local_run; then
 		--levels "1,2")
 	edit_args=(--size 64 --counts 256 --edits 4)
 	daemon_args=(--counts 64 --sizes "128x96,96x64" --edits 4)
+	bench_gl_args=(--quick --size 64 --reps 1)
 	hw_args=()
 else
 	mode=gpu
@@ -81,6 +84,7 @@ else
 	t2_args=(--size 1024 --reps 20 --warmup 5 --budget-s 170)
 	edit_args=(--size 1024 --counts "1024,65536,1048576" --edits 50)
 	daemon_args=(--counts 1024 --sizes "1920x1080,1024x768" --edits 100)
+	bench_gl_args=(--size 1024 --reps 5)
 	# Every gl step refuses a software context at once.
 	hw_args=(--expect-hardware)
 fi
@@ -139,6 +143,16 @@ run_step() {
 	step_ran[$name]=true
 	step_rc[$name]=$rc
 	step_secs[$name]=$(($(date +%s) - t0))
+	# A program that prints text only (bench_gl): its output is the data.
+	if [ "$rc" = 0 ] && [ -n "${text_step:-}" ]; then
+		printf '{"text":%s}\n' "$(jstr "$(cat "$work/$name.log")")" \
+			>"$work/steps/$name.json"
+		{
+			echo '```'
+			cat "$work/$name.log"
+			echo '```'
+		} >"$work/steps/$name.md"
+	fi
 	if [ "$rc" = 0 ] && [ -s "$work/steps/$name.json" ]; then
 		step_ok[$name]=true
 		step_err[$name]=
@@ -309,6 +323,15 @@ else
 		--blobcastd "$kit/bin/blobcastd" "${daemon_args[@]}" \
 		--json "$S/daemon.json" --md "$S/daemon.md"
 fi
+# gl against the tiled CPU renderer side by side (bench_gl: 7 scenes, and
+# edits against full uploads as the tree grows to 262144 primitives).
+if [ "$mode" = gpu ] && [ "${step_ok[info]}" != true ]; then
+	not_run bench_gl "no hardware gl context (see the info step)"
+else
+	text_step=1 run_step bench_gl 90 "$kit/bin/bench_gl" --platform "$platform" \
+		"${bench_gl_args[@]}"
+fi
+
 # The daemon's renderer, from its log: on a GPU host it must not be software.
 daemon_gl=$(grep -m1 -o 'gl: [a-z]* platform.*; robust access' "$work/daemon.log" 2>/dev/null || true)
 if [ "${step_ran[daemon]:-false}" = true ]; then

@@ -54,7 +54,7 @@ env -i LD_LIBRARY_PATH="$lp" "$drv" verify "$res" --min-scenes 10 ||
 correct=$(grep -o '"correct":true' "$res" | wc -l)
 [ "$correct" -ge 10 ] || fail "$correct scenes correct, 10 expected"
 ! grep -q '"correct":false' "$res" || fail "a scene is not correct"
-for step in loaders libs info check table2 edit daemon; do
+for step in loaders libs info check table2 edit daemon bench_gl; do
 	grep -q "\"$step\":{\"ran\":true,\"ok\":true" "$res" ||
 		fail "step $step did not run and succeed"
 done
