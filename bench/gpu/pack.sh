@@ -16,6 +16,7 @@
 # carry). bench/gpu/run.sh runs it; docs/gpu-run.md says how.
 #
 # Usage: bench/gpu/pack.sh [--build-dir DIR] [--kit DIR] [--ref-size N]
+#                          [--jobs N]
 #   --build-dir DIR  reuse a configured Release build (e.g. the `build`
 #                    folder tests/run.sh makes) instead of configuring
 #                    build-gpu-kit; its tools are rebuilt if stale. A build
@@ -36,7 +37,13 @@ jobs=$(nproc 2>/dev/null || echo 2)
 max_bytes=$((64 * 1024 * 1024))
 debs=(libegl1 libglvnd0 libopengl0 libgles2)
 
+# The Usage block above; to stdout and status 0 for --help, else to
+# stderr and status 2.
 usage() {
+	if [ "${1:-2}" = 0 ]; then
+		sed -n '/^# Usage:/,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'
+		exit 0
+	fi
 	sed -n '/^# Usage:/,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//' >&2
 	exit 2
 }
@@ -47,7 +54,7 @@ while [ $# -gt 0 ]; do
 	--kit) kit=${2:?}; shift 2 ;;
 	--ref-size) ref_size=${2:?}; shift 2 ;;
 	--jobs) jobs=${2:?}; shift 2 ;;
-	-h | --help) usage ;;
+	-h | --help) usage 0 ;;
 	*) echo "pack.sh: unknown option $1" >&2; usage ;;
 	esac
 done

@@ -32,7 +32,13 @@ out=
 local_run=false
 platform=
 
+# The Usage block above; to stdout and status 0 for --help, else to
+# stderr and status 2.
 usage() {
+	if [ "${1:-2}" = 0 ]; then
+		sed -n '/^# Usage:/,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'
+		exit 0
+	fi
 	sed -n '/^# Usage:/,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//' >&2
 	exit 2
 }
@@ -42,7 +48,7 @@ while [ $# -gt 0 ]; do
 	--kit) kit=${2:?}; shift 2 ;;
 	--local) local_run=true; shift ;;
 	--platform) platform=${2:?}; shift 2 ;;
-	-h | --help) usage ;;
+	-h | --help) usage 0 ;;
 	*) echo "run.sh: unknown option $1" >&2; usage ;;
 	esac
 done
