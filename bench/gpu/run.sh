@@ -252,8 +252,14 @@ loaders() {
 			rc=1
 		fi
 		if [ -z "$nvidia_lib" ]; then
-			echo "error: libEGL_nvidia.so.0 not found (/usr/local/nvidia/lib64, ...)"
-			rc=1
+			# Elsewhere, but known to the loader's cache: found too.
+			f=$(ldconfig -p 2>/dev/null | awk '$1 == "libEGL_nvidia.so.0" { print $NF; exit }')
+			if [ -n "$f" ]; then
+				echo "libEGL_nvidia.so.0 from the loader's cache: $f"
+			else
+				echo "error: libEGL_nvidia.so.0 not found (/usr/local/nvidia/lib64, /usr/local/nvidia/lib, the loader's cache)"
+				rc=1
+			fi
 		fi
 		echo "NVIDIA EGL vendor file: ${egl_vendor:-none}; library folder: ${nvidia_lib:-none}"
 		if compgen -G '/dev/nvidia*' >/dev/null; then
