@@ -529,12 +529,12 @@ class App {
 	resume() {
 		this.halted = null;
 		$('alert').hidden = true;
-		this.retryMs = 500;
-		clearTimeout(this.retryTimer);
 		if (this.conn.ws) {
-			this.conn.close(); /* its close event schedules the retry */
-			clearTimeout(this.retryTimer);
+			/* Its close event schedules a retry: this one replaces it. */
+			this.conn.close();
 		}
+		clearTimeout(this.retryTimer);
+		this.retryMs = 500;
 		this.conn.open();
 	}
 
