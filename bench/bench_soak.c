@@ -679,11 +679,15 @@ static int calm_connect(struct conn *c)
 
 /* Edits of the calm primitive, each timed to its frame, until max
  * samples (0: until stopping). */
+/* Under load: from the calm client's link breaking (a kill) to its
+ * next still picture (restart, restore, reconnect, render). */
+static struct samples calm_back;
+
 static void calm_run(struct samples *s, size_t max)
 {
 	static const float dx[2] = {-0.02f, 0.02f};
 	int k = 0;
-	int64_t give_up = t_now_ms() + 120000;
+	int64_t give_up = t_now_ms() + 120000, lost_at = 0;
 	while (max ? s->n < max && t_now_ms() < give_up
 	           : !atomic_load(&stopping)) {
 		struct conn c;
@@ -691,6 +695,10 @@ static void calm_run(struct samples *s, size_t max)
 			t_sleep_ms(50);
 			continue;
 		}
+		if (lost_at && !max) {
+			sample_add(&calm_back, t_now_ms() - lost_at);
+		}
+		lost_at = 0;
 		while (max ? s->n < max : !atomic_load(&stopping)) {
 			struct latency l;
 			struct bc_msg ping = {.type = BC_MSG_PING};
@@ -706,6 +714,7 @@ static void calm_run(struct samples *s, size_t max)
 				s->lost++;
 				continue;
 			}
+			lost_at = t_now_ms();
 			break;
 		}
 		conn_close(&c);
@@ -1119,6 +1128,10 @@ int main(int argc, char **argv)
 	print_latency("edit->frame alone", &alone);
 	print_latency("edit->frame under load", &calm_load);
 	print_latency("edit->frame alone again", &alone_after);
+	printf("calm client back to a still after a kill: n=%zu p50_ms=%lld "
+	       "max_ms=%lld\n",
+	       calm_back.n, (long long)pct(&calm_back, 50),
+	       (long long)pct(&calm_back, 100));
 	if (pct(&alone, 99) > 0 && pct(&calm_load, 99) >= 0) {
 		printf("p99 under load / alone = %.1f, p50 = %.1f\n",
 		       (double)pct(&calm_load, 99) / (double)pct(&alone, 99),
@@ -1160,6 +1173,7 @@ int main(int argc, char **argv)
 	bc_free(alone.v);
 	bc_free(alone_after.v);
 	bc_free(calm_load.v);
+	bc_free(calm_back.v);
 	if (lost == 0) {
 		snprintf(cmd, sizeof(cmd), "rm -rf %s %s.sock %s.log", data_dir,
 		         data_dir, data_dir);
