@@ -100,7 +100,7 @@ struct bc_viewer_app {
 	double cam_sent_at, cam_final_at; /* final_at: end of a wheel zoom */
 	/* The last CAMERA sent that no frame reflects yet (0: none), and the
 	 * VIEW sent that no frame answered yet (0: none): "render pending". */
-	uint32_t cam_seq;
+	uint32_t cam_seq, view_seq;
 	double cam_seq_at, view_sent_at;
 
 	/* The VIEW sent (0 before), and a resize waiting to be sent. */

@@ -45,7 +45,7 @@ int bc_viewer_send_view(struct bc_viewer_app *a)
 	        .quality_still = a->o.quality,
 	        .downscale = a->o.downscale,
 	    },
-	    NULL, &ei);
+	    &a->view_seq, &ei);
 	if (rc) {
 		bc_viewer_status(a, "VIEW not sent: %s", ei.msg);
 		return rc;
@@ -411,6 +411,13 @@ static void got_error(struct bc_viewer_app *a, const struct bc_msg *m)
 	if (a->turn_pending) {
 		/* A refused camera makes no frame; do not wait for one. */
 		a->turn_pending = false;
+	}
+	/* Nor is a refused camera or view pending. */
+	if (m->seq == a->cam_seq) {
+		a->cam_seq = 0;
+	}
+	if (m->seq == a->view_seq) {
+		a->view_sent_at = 0.0;
 	}
 }
 

@@ -639,6 +639,14 @@ class App {
 
 	serverError(m) {
 		this.say(`${P.errName(m.code)}: ${m.text}`);
+		/* A refused edit, camera or view gets no frame: not pending. */
+		this.editSent.delete(m.seq);
+		if (m.seq && m.seq === this.cameraSeq) {
+			this.cameraSeq = 0;
+		}
+		if (m.seq && m.seq === this.viewSeq) {
+			this.viewSentAt = 0;
+		}
 		if (m.code === P.ERR.EAUTH) {
 			this.halt(m.code, `The daemon refused ${this.cfg.token
 				? 'the token' : 'to let this page in without a token'} ` +
@@ -855,12 +863,12 @@ class App {
 		/* Resizing sends many sizes in a row: the last one counts. */
 		clearTimeout(this.viewTimer);
 		this.viewTimer = setTimeout(() => {
-			if (this.conn.send(P.MSG.VIEW, {
+			if ((this.viewSeq = this.conn.send(P.MSG.VIEW, {
 				width: w, height: h, encoding: this.cfg.encoding,
 				quality_interactive: Math.min(this.cfg.quality, 70),
 				quality_still: this.cfg.quality,
 				downscale: this.cfg.downscale,
-			})) {
+			}))) {
 				this.viewSentAt = performance.now();
 			}
 		}, force ? 0 : 120);
