@@ -1,10 +1,10 @@
 /*
  * `blobcast load|edit|camera|snapshot|watch|bench-latency|nodes|scene`: the
- * command-line client of blobcastd. It owns option parsing for these subcommands (strict:
- * every value is checked, options a subcommand does not take are refused),
- * their output formats, and the measurements of watch and bench-latency.
- * All protocol work goes through libblobcast (blobcast/client.h); image
- * files through bc_image (OpenImageIO).
+ * command-line client of blobcastd. It owns option parsing for these
+ * subcommands (strict: every value is checked, options a subcommand does not
+ * take are refused), their output formats, and the measurements of watch and
+ * bench-latency. All protocol work goes through libblobcast
+ * (blobcast/client.h); image files through bc_image (OpenImageIO).
  *
  * Exit status: 0 success, 1 the server or the connection failed (the
  * server's ERROR text is printed), 2 usage error.
@@ -104,7 +104,8 @@ struct cmd {
 static const char common_help[] =
     "  --server ADDR   HOST:PORT, [IPV6]:PORT or unix:PATH (default\n"
     "                  $BLOBCAST_SERVER, else 127.0.0.1:7878);\n"
-    "                  tls://HOST:PORT for TLS\n"
+    "                  tls://HOST:PORT for TLS; wss://HOST/PATH through\n"
+    "                  a WebSocket proxy (docs/deploy.md)\n"
     "  --ca FILE       TLS: trust the CA certificates in FILE (PEM)\n"
     "                  instead of the system's\n"
     "  --insecure      TLS: do not check the server's certificate\n"
@@ -653,11 +654,13 @@ struct roster {
 	} m[BC_PROTO_MAX_MEMBERS];
 };
 
-static void roster_update(struct roster *r, const struct bc_msg_session_info *si)
+static void roster_update(struct roster *r,
+                          const struct bc_msg_session_info *si)
 {
 	r->n = 0;
 	r->self = si->member_id;
-	for (uint16_t i = 0; i < si->nmembers && i < BC_PROTO_MAX_MEMBERS; i++) {
+	for (uint16_t i = 0; i < si->nmembers && i < BC_PROTO_MAX_MEMBERS;
+	     i++) {
 		const struct bc_proto_member *pm = &si->members[i];
 		r->m[i].id = pm->id;
 		r->m[i].role = pm->role;
@@ -682,10 +685,10 @@ static void print_members(const struct roster *r)
 {
 	printf("members %u:", r->n);
 	for (uint16_t i = 0; i < r->n; i++) {
-		printf("%s \"%s\" (%s, %u%s)", i ? "," : "", r->m[i].name,
-		       r->m[i].role == BC_PROTO_ROLE_EDITOR ? "editor"
-		                                            : "viewer",
-		       r->m[i].id, r->m[i].id == r->self ? ", this client" : "");
+		printf(
+		    "%s \"%s\" (%s, %u%s)", i ? "," : "", r->m[i].name,
+		    r->m[i].role == BC_PROTO_ROLE_EDITOR ? "editor" : "viewer",
+		    r->m[i].id, r->m[i].id == r->self ? ", this client" : "");
 	}
 	printf("\n");
 }
@@ -723,16 +726,16 @@ static int watch_open(const struct args *a, struct bc_client **c,
 	struct bc_msg m = {.type = BC_MSG_SESSION_JOIN};
 	int rc;
 	*c = NULL;
-	if ((rc = bc_client_connect(c,
-	                            &(struct bc_client_opts){
-	                                .addr = addr,
-	                                .name = a->name ? a->name
-	                                                : "blobcast-cli",
-	                                .token = token,
-	                                .timeout_ms = a->timeout_ms,
-	                                .ca_file = a->ca,
-	                                .insecure = a->insecure},
-	                            ei))) {
+	if ((rc = bc_client_connect(
+	         c,
+	         &(struct bc_client_opts){.addr = addr,
+	                                  .name = a->name ? a->name
+	                                                  : "blobcast-cli",
+	                                  .token = token,
+	                                  .timeout_ms = a->timeout_ms,
+	                                  .ca_file = a->ca,
+	                                  .insecure = a->insecure},
+	         ei))) {
 		return rc;
 	}
 	m.session.role = BC_PROTO_ROLE_VIEWER;
@@ -825,7 +828,8 @@ static int run_watch(struct args *a)
 			/* Reconnecting: wait out the back-off in slices so
 			 * that Ctrl-C and the timeout are noticed. */
 			if (now_ms() < retry_at) {
-				struct timespec ts = {0, WATCH_SLICE_MS * 1000000L};
+				struct timespec ts = {0, WATCH_SLICE_MS *
+				                             1000000L};
 				nanosleep(&ts, NULL);
 				continue;
 			}
@@ -839,13 +843,15 @@ static int run_watch(struct args *a)
 				bc_client_destroy(c);
 				c = NULL;
 				retry_at = now_ms() + backoff_ms;
-				fprintf(stderr,
-				        "blobcast watch: reconnecting failed: %s "
-				        "(%s); next try in %d ms\n",
-				        ei.msg, bc_err_name(rc), backoff_ms);
-				backoff_ms = backoff_ms * 2 > WATCH_BACKOFF_MAX_MS
-				                 ? WATCH_BACKOFF_MAX_MS
-				                 : backoff_ms * 2;
+				fprintf(
+				    stderr,
+				    "blobcast watch: reconnecting failed: %s "
+				    "(%s); next try in %d ms\n",
+				    ei.msg, bc_err_name(rc), backoff_ms);
+				backoff_ms =
+				    backoff_ms * 2 > WATCH_BACKOFF_MAX_MS
+				        ? WATCH_BACKOFF_MAX_MS
+				        : backoff_ms * 2;
 				continue;
 			}
 			fprintf(stderr, "blobcast watch: rejoined session %s\n",
@@ -864,7 +870,8 @@ static int run_watch(struct args *a)
 			if (rc > 0) {
 				ei.code = -(int)m.error.code;
 				snprintf(ei.msg, sizeof(ei.msg), "server: %.*s",
-				         (int)m.error.text.len, m.error.text.ptr);
+				         (int)m.error.text.len,
+				         m.error.text.ptr);
 			} else {
 				bc_client_error(c, &ei);
 			}
@@ -907,7 +914,8 @@ static int run_watch(struct args *a)
 		case BC_MSG_SCENE_STATE:
 			order_seen(times, m.scene_state.order, at);
 			if (m.scene_state.author) {
-				print_change(roster, "load", m.scene_state.order,
+				print_change(roster, "load",
+				             m.scene_state.order,
 				             m.scene_state.author, "");
 				fflush(stdout);
 			}
@@ -1071,12 +1079,13 @@ static int run_scene(struct args *a)
 	}
 	if (!(text = bc_scene_to_json(t, &cam))) {
 		/* The binary form carries trees the JSON writer refuses. */
-		fprintf(stderr,
-		        "blobcast scene: the scene (%u nodes, nesting %u) cannot "
-		        "be written as JSON (nesting limit %u, or out of "
-		        "memory)\n",
-		        bc_tree_node_count(t), bc_tree_nesting(t),
-		        BC_SCENE_JSON_MAX_DEPTH);
+		fprintf(
+		    stderr,
+		    "blobcast scene: the scene (%u nodes, nesting %u) cannot "
+		    "be written as JSON (nesting limit %u, or out of "
+		    "memory)\n",
+		    bc_tree_node_count(t), bc_tree_nesting(t),
+		    BC_SCENE_JSON_MAX_DEPTH);
 		status = EXIT_FAIL;
 		goto out;
 	}
@@ -1369,7 +1378,8 @@ static const struct cmd cmds[] = {
      "upload; frames that show nothing new (a finer level, a still after\n"
      "interactive frames) print '-'. Other lines name the members and\n"
      "who changed the scene:\n"
-     "  members 2: \"alice\" (editor, 4), \"blobcast-cli\" (viewer, 7, this client)\n"
+     "  members 2: \"alice\" (editor, 4), \"blobcast-cli\" (viewer, 7, this "
+     "client)\n"
      "  edit order=5 by=\"alice\" member=4 ops=1 [interacting]\n"
      "  load order=6 by=\"alice\" member=4\n"
      "A lost connection prints 'lost reason=CODE' and is retried every\n"

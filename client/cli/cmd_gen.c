@@ -209,8 +209,9 @@ int bc_cli_gen(int argc, char **argv)
 		 * it takes no generator options. */
 		if (o.level || o.count || o.seed || o.teeth || o.depth ||
 		    o.kind || o.blend) {
-			fprintf(stderr, "blobcast gen: default takes no options "
-			                "but --out\n");
+			fprintf(stderr,
+			        "blobcast gen: default takes no options "
+			        "but --out\n");
 			return EXIT_USAGE;
 		}
 		if (!(t = bc_tree_create())) {
