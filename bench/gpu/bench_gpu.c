@@ -78,7 +78,8 @@ static int parse_list(const char *s, uint32_t *v, uint32_t *n)
 	while (s && *s) {
 		char *end;
 		unsigned long x = strtoul(s, &end, 10);
-		if (end == s || x == 0 || x > (1ul << 24) || *n >= GPU_MAX_LIST) {
+		if (end == s || x == 0 || x > (1ul << 24) ||
+		    *n >= GPU_MAX_LIST) {
 			return -1;
 		}
 		v[(*n)++] = (uint32_t)x;
@@ -116,11 +117,8 @@ static int parse_sizes(const char *s, struct gpu_opts *op)
 
 int main(int argc, char **argv)
 {
-	struct gpu_opts op = {.size = 512,
-			  .reps = 20,
-			  .warmup = 3,
-			  .edits = 50,
-			  .min_scenes = 1};
+	struct gpu_opts op = {
+	    .size = 512, .reps = 20, .warmup = 3, .edits = 50, .min_scenes = 1};
 	const char *cmd;
 	if (argc < 2 || strcmp(argv[1], "--help") == 0 ||
 	    strcmp(argv[1], "-h") == 0) {
@@ -147,7 +145,7 @@ int main(int argc, char **argv)
 		}
 		if (!v) {
 			fprintf(stderr, "bench_gpu: %s needs a value\n%s", a,
-				usage);
+			        usage);
 			return 2;
 		}
 		i++;
@@ -190,12 +188,12 @@ int main(int argc, char **argv)
 			bad = parse_sizes(v, &op) != 0;
 		} else {
 			fprintf(stderr, "bench_gpu: unknown option %s\n%s", a,
-				usage);
+			        usage);
 			return 2;
 		}
 		if (bad) {
 			fprintf(stderr, "bench_gpu: bad value for %s: %s\n", a,
-				v);
+			        v);
 			return 2;
 		}
 	}

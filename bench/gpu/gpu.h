@@ -23,11 +23,11 @@
 struct gpu_opts {
 	const char *platform; /* gl platform name, NULL: auto */
 	const char *json, *md;
-	const char *dir;        /* refs: output; check: scenes and refs */
-	const char *blobcastd;  /* daemon */
-	uint32_t size;          /* frame edge */
+	const char *dir;       /* refs: output; check: scenes and refs */
+	const char *blobcastd; /* daemon */
+	uint32_t size;         /* frame edge */
 	int reps, warmup, edits;
-	double budget_s;        /* table2: start no scene after this */
+	double budget_s; /* table2: start no scene after this */
 	uint32_t counts[GPU_MAX_LIST], ncounts;    /* fig18 counts */
 	uint32_t lens_counts[GPU_MAX_LIST], nlens; /* fig18 lenses counts */
 	uint32_t levels[GPU_MAX_LIST], nlevels;    /* fig16 levels */
@@ -69,7 +69,7 @@ bool gpu_is_software(const struct bc_gl_info *info);
  * none can be created, or when op asks for hardware and it is software.
  * The caller destroys it. */
 struct bc_renderer *gpu_open_gl(const struct gpu_opts *op, struct gpu_out *o,
-				struct bc_gl_info *info);
+                                struct bc_gl_info *info);
 
 int gpu_cmd_refs(const struct gpu_opts *op);
 int gpu_cmd_info(const struct gpu_opts *op);

@@ -31,19 +31,20 @@ struct ref_scene {
 
 static const struct ref_scene ref_scenes[] = {
     {"default", NULL, {0}},
-    {"fig18-boxes-64-sharp", "fig18",
+    {"fig18-boxes-64-sharp",
+     "fig18",
      {.count = 64, .kind = BC_GEN_KIND_BOXES, .blend = BC_GEN_BLEND_SHARP}},
-    {"fig18-boxes-256-smooth", "fig18",
+    {"fig18-boxes-256-smooth",
+     "fig18",
      {.count = 256, .kind = BC_GEN_KIND_BOXES, .blend = BC_GEN_BLEND_SMOOTH}},
-    {"fig18-spheres-256-smooth", "fig18",
-     {.count = 256,
-      .kind = BC_GEN_KIND_SPHERES,
-      .blend = BC_GEN_BLEND_SMOOTH}},
-    {"fig18-spheres-1024-sharp", "fig18",
-     {.count = 1024,
-      .kind = BC_GEN_KIND_SPHERES,
-      .blend = BC_GEN_BLEND_SHARP}},
-    {"fig18-lenses-96-smooth", "fig18",
+    {"fig18-spheres-256-smooth",
+     "fig18",
+     {.count = 256, .kind = BC_GEN_KIND_SPHERES, .blend = BC_GEN_BLEND_SMOOTH}},
+    {"fig18-spheres-1024-sharp",
+     "fig18",
+     {.count = 1024, .kind = BC_GEN_KIND_SPHERES, .blend = BC_GEN_BLEND_SHARP}},
+    {"fig18-lenses-96-smooth",
+     "fig18",
      {.count = 96, .kind = BC_GEN_KIND_LENSES, .blend = BC_GEN_BLEND_SMOOTH}},
     {"fig16-L2-smooth", "fig16", {.level = 2, .blend = BC_GEN_BLEND_SMOOTH}},
     {"fig16-L3-sharp", "fig16", {.level = 3, .blend = BC_GEN_BLEND_SHARP}},
@@ -60,7 +61,7 @@ static const struct ref_scene ref_scenes[] = {
 /* A reference: header (magic, width, height, scene size as float bits,
  * hits) then depth (float) and ids (uint32), row 0 on top, gzip'd. */
 static int ref_write(const char *path, const struct bc_frame *f, float size,
-		     uint32_t hits)
+                     uint32_t hits)
 {
 	gzFile g = gzopen(path, "wb6");
 	uint32_t hdr[5] = {REF_MAGIC, f->width, f->height, 0, hits};
@@ -78,7 +79,7 @@ static int ref_write(const char *path, const struct bc_frame *f, float size,
 
 /* Reads path into *f (initialized here at the stored size). */
 static int ref_read(const char *path, struct bc_frame *f, float *size,
-		    uint32_t *hits)
+                    uint32_t *hits)
 {
 	gzFile g = gzopen(path, "rb");
 	uint32_t hdr[5];
@@ -89,9 +90,8 @@ static int ref_read(const char *path, struct bc_frame *f, float *size,
 		return -1;
 	}
 	if (gzread(g, hdr, sizeof(hdr)) == (int)sizeof(hdr) &&
-	    hdr[0] == REF_MAGIC && hdr[1] > 0 && hdr[2] > 0 &&
-	    hdr[1] <= 4096 && hdr[2] <= 4096 &&
-	    bc_frame_init(f, hdr[1], hdr[2]) == 0) {
+	    hdr[0] == REF_MAGIC && hdr[1] > 0 && hdr[2] > 0 && hdr[1] <= 4096 &&
+	    hdr[2] <= 4096 && bc_frame_init(f, hdr[1], hdr[2]) == 0) {
 		n = (size_t)hdr[1] * hdr[2];
 		memcpy(size, &hdr[3], sizeof(*size));
 		*hits = hdr[4];
@@ -137,7 +137,8 @@ int gpu_cmd_refs(const struct gpu_opts *op)
 			rc = bc_gen(s->gen, &s->o, t, &cam, &ei);
 		} else {
 			const char *txt = bc_scene_default_json();
-			rc = bc_scene_parse_json(txt, strlen(txt), t, &cam, &ei);
+			rc =
+			    bc_scene_parse_json(txt, strlen(txt), t, &cam, &ei);
 		}
 		snprintf(path, sizeof(path), "%s/%s.json", op->dir, s->name);
 		if (rc == 0) {
@@ -145,7 +146,7 @@ int gpu_cmd_refs(const struct gpu_opts *op)
 		}
 		if (rc == 0) {
 			rc = bc_render_once(BC_BACKEND_TILED, NULL, t, &cam, &f,
-					    &st, &ei);
+			                    &st, &ei);
 		}
 		if (rc) {
 			gpu_fail(&o, "%s: %s", s->name, ei.msg);
@@ -157,8 +158,8 @@ int gpu_cmd_refs(const struct gpu_opts *op)
 		}
 		/* A reference with (almost) nothing in view proves nothing. */
 		if (hits * 100 < f.width * f.height) {
-			gpu_fail(&o, "%s: only %u of %u pixels hit", s->name, hits,
-			     f.width * f.height);
+			gpu_fail(&o, "%s: only %u of %u pixels hit", s->name,
+			         hits, f.width * f.height);
 		}
 		snprintf(path, sizeof(path), "%s/%s.ref", op->dir, s->name);
 		if (ref_write(path, &f, bc_tree_lin(t)->size, hits)) {
@@ -170,7 +171,7 @@ int gpu_cmd_refs(const struct gpu_opts *op)
 		fprintf(o.json, "%s{\"name\":", i ? "," : "");
 		gpu_jstr(o.json, s->name);
 		fprintf(o.json, ",\"prims\":%u,\"hits\":%u}",
-			bc_tree_prim_count(t), hits);
+		        bc_tree_prim_count(t), hits);
 		bc_tree_destroy(t);
 	}
 	fputc(']', o.json);
@@ -198,38 +199,38 @@ int gpu_cmd_info(const struct gpu_opts *op)
 	}
 	if (r && op->expect_hardware && gpu_is_software(&info)) {
 		gpu_fail(&o,
-		     "a GPU was expected, the context is %s on the %s "
-		     "platform%s",
-		     info.renderer, bc_gl_platform_name(info.platform),
-		     info.software_device ? " (software device)" : "");
+		         "a GPU was expected, the context is %s on the %s "
+		         "platform%s",
+		         info.renderer, bc_gl_platform_name(info.platform),
+		         info.software_device ? " (software device)" : "");
 	}
 	fprintf(o.json, "{\"ok\":%s", r ? "true" : "false");
 	if (r) {
 		fputs(",\"platform\":", o.json);
 		gpu_jstr(o.json, bc_gl_platform_name(info.platform));
 		fprintf(o.json, ",\"software\":%s,\"renderer\":",
-			gpu_is_software(&info) ? "true" : "false");
+		        gpu_is_software(&info) ? "true" : "false");
 		gpu_jstr(o.json, info.renderer);
 		fputs(",\"version\":", o.json);
 		gpu_jstr(o.json, info.version);
 		fprintf(o.json,
-			",\"context\":\"%d.%d\",\"robust_access\":%s,"
-			"\"lose_on_reset\":%s,\"shared_bytes\":%u,"
-			"\"loop_budget\":%u,\"program_builds\":%u",
-			info.major, info.minor,
-			info.robust_access ? "true" : "false",
-			info.lose_on_reset ? "true" : "false",
-			info.shared_bytes, info.loop_budget,
-			info.program_builds);
+		        ",\"context\":\"%d.%d\",\"robust_access\":%s,"
+		        "\"lose_on_reset\":%s,\"shared_bytes\":%u,"
+		        "\"loop_budget\":%u,\"program_builds\":%u",
+		        info.major, info.minor,
+		        info.robust_access ? "true" : "false",
+		        info.lose_on_reset ? "true" : "false",
+		        info.shared_bytes, info.loop_budget,
+		        info.program_builds);
 		fprintf(o.md,
-			"GL_RENDERER: `%s`; GL_VERSION: `%s`; %s platform%s; "
-			"robust access %s; %u bytes of shared memory per "
-			"workgroup.\n",
-			info.renderer, info.version,
-			bc_gl_platform_name(info.platform),
-			info.software_device ? " (software device)" : "",
-			info.robust_access ? "granted" : "not granted",
-			info.shared_bytes);
+		        "GL_RENDERER: `%s`; GL_VERSION: `%s`; %s platform%s; "
+		        "robust access %s; %u bytes of shared memory per "
+		        "workgroup.\n",
+		        info.renderer, info.version,
+		        bc_gl_platform_name(info.platform),
+		        info.software_device ? " (software device)" : "",
+		        info.robust_access ? "granted" : "not granted",
+		        info.shared_bytes);
 		printf("GL_RENDERER: %s\n", info.renderer);
 	}
 	gpu_json_errors(o.json);
@@ -252,7 +253,7 @@ struct agreement {
 };
 
 static void compare(const struct bc_frame *a, const struct bc_frame *b,
-		    struct agreement *out)
+                    struct agreement *out)
 {
 	size_t n = (size_t)a->width * a->height;
 	float *dz = bc_calloc(n ? n : 1, sizeof(*dz));
@@ -263,7 +264,8 @@ static void compare(const struct bc_frame *a, const struct bc_frame *b,
 			out->mask_diff++;
 		} else if (ha) {
 			if (dz) {
-				dz[out->both] = fabsf(a->depth[i] - b->depth[i]);
+				dz[out->both] =
+				    fabsf(a->depth[i] - b->depth[i]);
 			}
 			out->both++;
 			out->id_diff += a->ids[i] != b->ids[i];
@@ -340,10 +342,9 @@ int gpu_cmd_check(const struct gpu_opts *op)
 	}
 	r = gpu_open_gl(op, &o, &info);
 	fputs("{\"scenes\":[", o.json);
-	fprintf(o.md,
-		"| scene | prims | size | hits | silhouette px | median "
-		"\\|dz\\| (limit) | ids differ | gl ms | correct |\n"
-		"|---|---:|---|---:|---:|---:|---:|---:|---|\n");
+	fprintf(o.md, "| scene | prims | size | hits | silhouette px | median "
+	              "\\|dz\\| (limit) | ids differ | gl ms | correct |\n"
+	              "|---|---:|---|---:|---:|---:|---:|---:|---|\n");
 	for (size_t i = 0; i < n; i++) {
 		char path[4096];
 		struct bc_tree *t = bc_tree_create();
@@ -363,13 +364,13 @@ int gpu_cmd_check(const struct gpu_opts *op)
 			why = ei.msg[0] ? ei.msg : "out of memory";
 		} else {
 			snprintf(path, sizeof(path), "%s/%s.ref", op->dir,
-				 names[i]);
+			         names[i]);
 			if (ref_read(path, &ref, &size, &hits)) {
 				why = "missing or corrupt reference";
 			} else if (!r) {
 				why = "no gl renderer";
 			} else if (bc_frame_init(&g, ref.width, ref.height) ||
-				   bc_renderer_sync(r, t, NULL, &ei)) {
+			           bc_renderer_sync(r, t, NULL, &ei)) {
 				why = ei.msg[0] ? ei.msg : "out of memory";
 			} else {
 				double t0 = gpu_now_ms();
@@ -390,13 +391,14 @@ int gpu_cmd_check(const struct gpu_opts *op)
 			     a.id_diff * 20 <= a.both && a.both > 0 &&
 			     hits > 0 && !st.incomplete;
 			if (!ok) {
-				gpu_fail(&o,
-				     "%s: differs from the tiled reference "
-				     "(silhouette %u px, median dz %.3g, ids "
-				     "%u/%u%s)",
-				     names[i], a.mask_diff,
-				     (double)a.median_dz, a.id_diff, a.both,
-				     st.incomplete ? ", incomplete" : "");
+				gpu_fail(
+				    &o,
+				    "%s: differs from the tiled reference "
+				    "(silhouette %u px, median dz %.3g, ids "
+				    "%u/%u%s)",
+				    names[i], a.mask_diff, (double)a.median_dz,
+				    a.id_diff, a.both,
+				    st.incomplete ? ", incomplete" : "");
 			}
 		} else {
 			gpu_fail(&o, "%s: %s", names[i], why);
@@ -411,11 +413,11 @@ int gpu_cmd_check(const struct gpu_opts *op)
 		fprintf(o.json, "%s{\"name\":", i ? "," : "");
 		gpu_jstr(o.json, names[i]);
 		fprintf(o.json,
-			",\"prims\":%u,\"width\":%u,\"height\":%u,"
-			"\"ref_hits\":%u,\"silhouette_px\":%u,\"both\":%u,"
-			"\"ids_differ\":%u,\"median_dz\":",
-			t ? bc_tree_prim_count(t) : 0, ref.width, ref.height,
-			hits, a.mask_diff, a.both, a.id_diff);
+		        ",\"prims\":%u,\"width\":%u,\"height\":%u,"
+		        "\"ref_hits\":%u,\"silhouette_px\":%u,\"both\":%u,"
+		        "\"ids_differ\":%u,\"median_dz\":",
+		        t ? bc_tree_prim_count(t) : 0, ref.width, ref.height,
+		        hits, a.mask_diff, a.both, a.id_diff);
 		gpu_jnum(o.json, (double)a.median_dz);
 		fputs(",\"dz_limit\":", o.json);
 		gpu_jnum(o.json, 1e-3 * (double)size);
@@ -428,12 +430,12 @@ int gpu_cmd_check(const struct gpu_opts *op)
 		}
 		fputc('}', o.json);
 		fprintf(o.md,
-			"| %s | %u | %ux%u | %u | %u | %.3g (%.3g) | %u/%u | "
-			"%.1f | %s |\n",
-			names[i], t ? bc_tree_prim_count(t) : 0, ref.width,
-			ref.height, hits, a.mask_diff, (double)a.median_dz,
-			1e-3 * (double)size, a.id_diff, a.both, ms,
-			ok ? "yes" : "**no**");
+		        "| %s | %u | %ux%u | %u | %u | %.3g (%.3g) | %u/%u | "
+		        "%.1f | %s |\n",
+		        names[i], t ? bc_tree_prim_count(t) : 0, ref.width,
+		        ref.height, hits, a.mask_diff, (double)a.median_dz,
+		        1e-3 * (double)size, a.id_diff, a.both, ms,
+		        ok ? "yes" : "**no**");
 		bc_frame_finish(&ref);
 		bc_frame_finish(&g);
 		bc_tree_destroy(t);
@@ -442,7 +444,7 @@ int gpu_cmd_check(const struct gpu_opts *op)
 	bc_free(names);
 	if (ran < op->min_scenes) {
 		gpu_fail(&o, "%d scenes checked, at least %d asked for", ran,
-		     op->min_scenes);
+		         op->min_scenes);
 	}
 	fprintf(o.json, "],\"checked\":%d,\"correct\":%d", ran, correct);
 	gpu_json_errors(o.json);
@@ -468,7 +470,7 @@ int gpu_cmd_verify(const struct gpu_opts *op)
 	root = json_load_file(op->file, 0, &je);
 	if (!root) {
 		fprintf(stderr, "verify: %s: %s (line %d)\n", op->file, je.text,
-			je.line);
+		        je.line);
 		return 1;
 	}
 	steps = json_object_get(root, "steps");
@@ -480,13 +482,13 @@ int gpu_cmd_verify(const struct gpu_opts *op)
 	{
 		if (!json_is_true(json_object_get(step, "ok")) ||
 		    !json_is_true(json_object_get(step, "ran"))) {
-			fprintf(stderr, "verify: step %s did not succeed: %s\n",
-				key,
-				json_string_value(
-				    json_object_get(step, "error"))
-				    ? json_string_value(
-					  json_object_get(step, "error"))
-				    : "(no error given)");
+			fprintf(
+			    stderr, "verify: step %s did not succeed: %s\n",
+			    key,
+			    json_string_value(json_object_get(step, "error"))
+			        ? json_string_value(
+			              json_object_get(step, "error"))
+			        : "(no error given)");
 			bad++;
 		}
 	}
@@ -502,16 +504,17 @@ int gpu_cmd_verify(const struct gpu_opts *op)
 		{
 			nscenes++;
 			if (!json_is_true(json_object_get(s, "correct"))) {
-				fprintf(stderr, "verify: scene %s not correct\n",
-					json_string_value(
-					    json_object_get(s, "name")));
+				fprintf(stderr,
+				        "verify: scene %s not correct\n",
+				        json_string_value(
+				            json_object_get(s, "name")));
 				bad++;
 			}
 		}
 	}
 	if (nscenes < op->min_scenes) {
 		fprintf(stderr, "verify: %d scenes, at least %d expected\n",
-			nscenes, op->min_scenes);
+		        nscenes, op->min_scenes);
 		bad++;
 	}
 	if (!json_is_true(json_object_get(root, "ok"))) {

@@ -54,25 +54,25 @@ static void drain(struct conn *c, int quiet_ms, int max_ms)
 }
 
 static void daemon_row(struct gpu_out *o, const char *mode, uint32_t w,
-		       uint32_t h, const struct latency *l, int asked,
-		       bool first)
+                       uint32_t h, const struct latency *l, int asked,
+                       bool first)
 {
 	printf("daemon %ux%u %-5s: %d of %d edits, p50 %lld ms, p99 %lld ms, "
 	       "max %lld ms, %.0f bytes per frame\n",
 	       w, h, mode, l->n, asked, (long long)l->p50, (long long)l->p99,
 	       (long long)l->max, l->bytes);
 	fprintf(o->json,
-		"%s{\"size\":\"%ux%u\",\"mode\":\"%s\",\"encoding\":\"jpeg\","
-		"\"edits\":%d,\"frames\":%d,\"p50_ms\":%lld,\"p99_ms\":%lld,"
-		"\"max_ms\":%lld,\"bytes_per_frame\":%.0f}",
-		first ? "" : ",", w, h, mode, asked, l->n, (long long)l->p50,
-		(long long)l->p99, (long long)l->max, l->bytes);
+	        "%s{\"size\":\"%ux%u\",\"mode\":\"%s\",\"encoding\":\"jpeg\","
+	        "\"edits\":%d,\"frames\":%d,\"p50_ms\":%lld,\"p99_ms\":%lld,"
+	        "\"max_ms\":%lld,\"bytes_per_frame\":%.0f}",
+	        first ? "" : ",", w, h, mode, asked, l->n, (long long)l->p50,
+	        (long long)l->p99, (long long)l->max, l->bytes);
 	fprintf(o->md, "| %ux%u | %s | %d / %d | %lld | %lld | %lld | %.0f |\n",
-		w, h, mode, l->n, asked, (long long)l->p50, (long long)l->p99,
-		(long long)l->max, l->bytes);
+	        w, h, mode, l->n, asked, (long long)l->p50, (long long)l->p99,
+	        (long long)l->max, l->bytes);
 	if (l->n < asked) {
-		gpu_fail(o, "%ux%u %s: %d of %d edits got their frame", w, h, mode,
-		     l->n, asked);
+		gpu_fail(o, "%ux%u %s: %d of %d edits got their frame", w, h,
+		         mode, l->n, asked);
 	}
 }
 
@@ -87,7 +87,7 @@ int gpu_cmd_daemon(const struct gpu_opts *op)
 	bool first = true, up = false;
 	if (!op->blobcastd) {
 		fprintf(stderr, "bench_gpu daemon: --blobcastd PATH is "
-				"required\n");
+		                "required\n");
 		return 2;
 	}
 	if (gpu_out_open(&o, op)) {
@@ -103,19 +103,19 @@ int gpu_cmd_daemon(const struct gpu_opts *op)
 	setenv("BLOBCAST_TEST_VERBOSE", "1", 1);
 	snprintf(dir, sizeof(dir), "/tmp/bc-gpu-%d", (int)getpid());
 	fprintf(o.json, "{\"scene\":\"fig18 smooth spheres %u\",\"rows\":[",
-		count);
+	        count);
 	fprintf(o.md,
-		"blobcastd --backend gl, fig18 smooth spheres %u, JPEG; each "
-		"edit moves one sphere and waits for the first FRAME that "
-		"reflects it (bench/latency.h). still: plain edits; drag: "
-		"INTERACTING edits. ms.\n\n"
-		"| view | mode | frames / edits | p50 | p99 | max | bytes / "
-		"frame |\n|---|---|---:|---:|---:|---:|---:|\n",
-		count);
+	        "blobcastd --backend gl, fig18 smooth spheres %u, JPEG; each "
+	        "edit moves one sphere and waits for the first FRAME that "
+	        "reflects it (bench/latency.h). still: plain edits; drag: "
+	        "INTERACTING edits. ms.\n\n"
+	        "| view | mode | frames / edits | p50 | p99 | max | bytes / "
+	        "frame |\n|---|---|---:|---:|---:|---:|---:|\n",
+	        count);
 	if (daemon_start_with(&d, dir, extra) != 0) {
 		gpu_fail(&o, "cannot start %s", op->blobcastd);
 	} else if (conn_open(&c, &d) || conn_hello(&c, "bench_gpu") ||
-		   conn_join(&c, "gpu", BC_PROTO_ROLE_EDITOR, true)) {
+	           conn_join(&c, "gpu", BC_PROTO_ROLE_EDITOR, true)) {
 		gpu_fail(&o, "cannot join a session of %s", op->blobcastd);
 	} else if (latency_load_fig18(&c, count, &id, &original, NULL)) {
 		gpu_fail(&o, "loading fig18 %u into the daemon failed", count);
@@ -132,8 +132,11 @@ int gpu_cmd_daemon(const struct gpu_opts *op)
 		}
 		send_view(&c, w, h);
 		if (settle(&c, 30000)) {
-			gpu_fail(&o, "%ux%u: no still frame from the daemon in 30 s "
-				 "(its log says why)", w, h);
+			gpu_fail(
+			    &o,
+			    "%ux%u: no still frame from the daemon in 30 s "
+			    "(its log says why)",
+			    w, h);
 			break;
 		}
 		/* Warm-up edits, not counted. */
@@ -153,8 +156,9 @@ int gpu_cmd_daemon(const struct gpu_opts *op)
 	if (d.pid > 0) {
 		int status = daemon_stop(&d, SIGTERM);
 		if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-			gpu_fail(&o, "blobcastd did not exit cleanly (status %d)",
-			     status);
+			gpu_fail(&o,
+			         "blobcastd did not exit cleanly (status %d)",
+			         status);
 		}
 	}
 	{

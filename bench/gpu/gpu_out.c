@@ -56,7 +56,7 @@ int gpu_out_open(struct gpu_out *o, const struct gpu_opts *op)
 	o->md = fopen(op->md ? op->md : "/dev/null", "w");
 	if (!o->json || !o->md) {
 		fprintf(stderr, "bench_gpu: cannot write %s / %s\n",
-			op->json ? op->json : "-", op->md ? op->md : "-");
+		        op->json ? op->json : "-", op->md ? op->md : "-");
 		return -1;
 	}
 	return 0;
@@ -69,9 +69,9 @@ int gpu_out_close(struct gpu_out *o)
 		if (fclose(o->json) != 0) {
 			rc = 1;
 		} else if (o->json_path &&
-			   rename(o->json_tmp, o->json_path) != 0) {
+		           rename(o->json_tmp, o->json_path) != 0) {
 			fprintf(stderr, "bench_gpu: cannot write %s\n",
-				o->json_path);
+			        o->json_path);
 			rc = 1;
 		}
 	}
@@ -136,14 +136,14 @@ bool gpu_is_software(const struct bc_gl_info *info)
 }
 
 struct bc_renderer *gpu_open_gl(const struct gpu_opts *op, struct gpu_out *o,
-				   struct bc_gl_info *info)
+                                struct bc_gl_info *info)
 {
 	struct bc_render_opts ro = {.gl_platform = op->platform};
 	struct bc_errinfo ei = {0};
 	struct bc_renderer *r = NULL;
 	if (bc_renderer_create(&r, BC_BACKEND_GL, &ro, &ei)) {
 		gpu_fail(o, "gl renderer (platform %s): %s",
-		     op->platform ? op->platform : "auto", ei.msg);
+		         op->platform ? op->platform : "auto", ei.msg);
 		return NULL;
 	}
 	bc_render_gl_info(r, info);
@@ -155,10 +155,10 @@ struct bc_renderer *gpu_open_gl(const struct gpu_opts *op, struct gpu_out *o,
 	 * measuring the wrong thing: refuse it. */
 	if (op->expect_hardware && gpu_is_software(info)) {
 		gpu_fail(o,
-		     "a GPU was expected, the context is %s on the %s "
-		     "platform%s",
-		     info->renderer, bc_gl_platform_name(info->platform),
-		     info->software_device ? " (software device)" : "");
+		         "a GPU was expected, the context is %s on the %s "
+		         "platform%s",
+		         info->renderer, bc_gl_platform_name(info->platform),
+		         info->software_device ? " (software device)" : "");
 		bc_renderer_destroy(r);
 		return NULL;
 	}

@@ -46,7 +46,7 @@ static const struct paper_row paper[] = {
 };
 
 static double paper_ms(const char *gen, enum bc_gen_kind kind, uint32_t n,
-		       bool smooth)
+                       bool smooth)
 {
 	for (size_t i = 0; i < sizeof(paper) / sizeof(paper[0]); i++) {
 		if (strcmp(paper[i].gen, gen) == 0 && paper[i].n == n &&
@@ -65,7 +65,7 @@ struct t2_scene {
 };
 
 static int table2_scene(struct bc_renderer *r, const struct gpu_opts *op,
-			struct gpu_out *o, const struct t2_scene *s, bool first)
+                        struct gpu_out *o, const struct t2_scene *s, bool first)
 {
 	struct bc_tree *t = bc_tree_create();
 	struct bc_camera cam;
@@ -109,7 +109,7 @@ static int table2_scene(struct bc_renderer *r, const struct gpu_opts *op,
 		 * its time: at least 5 frames, then at most ~20 s. */
 		if (frames >= 5 && w0 - s0 > 20000.0) {
 			gpu_fail(o, "%s: %d of %d frames (over 20 s)", s->label,
-			     frames, op->reps);
+			         frames, op->reps);
 			break;
 		}
 		if (bc_renderer_render(r, &cam, &f, &st, &ei)) {
@@ -148,9 +148,9 @@ static int table2_scene(struct bc_renderer *r, const struct gpu_opts *op,
 	fputs(",\"gen\":", o->json);
 	gpu_jstr(o->json, s->gen);
 	fprintf(o->json, ",\"n\":%u,\"blend\":\"%s\",\"prims\":%u,", s->n,
-		smooth ? "smooth" : "sharp", t ? bc_tree_prim_count(t) : 0);
+	        smooth ? "smooth" : "sharp", t ? bc_tree_prim_count(t) : 0);
 	fprintf(o->json, "\"frames\":%d,\"warmup\":%d,\"median_ms\":", frames,
-		warm);
+	        warm);
 	gpu_jnum(o->json, mw);
 	fputs(",\"min_ms\":", o->json);
 	gpu_jnum(o->json, best);
@@ -165,10 +165,10 @@ static int table2_scene(struct bc_renderer *r, const struct gpu_opts *op,
 	fputs(",\"paper_ms\":", o->json);
 	gpu_jnum(o->json, pm);
 	fprintf(o->json,
-		",\"fragments\":%u,\"dispatches\":%u,\"over_m\":%u,"
-		"\"incomplete\":%s",
-		info.fragments, info.dispatches, info.over_m,
-		incomplete ? "true" : "false");
+	        ",\"fragments\":%u,\"dispatches\":%u,\"over_m\":%u,"
+	        "\"incomplete\":%s",
+	        info.fragments, info.dispatches, info.over_m,
+	        incomplete ? "true" : "false");
 	if (why) {
 		fputs(",\"error\":", o->json);
 		gpu_jstr(o->json, why);
@@ -177,9 +177,9 @@ static int table2_scene(struct bc_renderer *r, const struct gpu_opts *op,
 	if (frames > 0) {
 		double share = ma + mt > 0 ? 100.0 * ma / (ma + mt) : NAN;
 		fprintf(o->md,
-			"| %s | %u | %.2f | %.2f | %.2f | %.0f %% | %.2f | ",
-			s->label, bc_tree_prim_count(t), mw, ma, mt, share,
-			sync_ms);
+		        "| %s | %u | %.2f | %.2f | %.2f | %.0f %% | %.2f | ",
+		        s->label, bc_tree_prim_count(t), mw, ma, mt, share,
+		        sync_ms);
 		if (isnan(pm)) {
 			fputs("– | – |\n", o->md);
 		} else {
@@ -187,8 +187,8 @@ static int table2_scene(struct bc_renderer *r, const struct gpu_opts *op,
 		}
 	} else {
 		fprintf(o->md, "| %s | %u | failed: %s | | | | | | |\n",
-			s->label, t ? bc_tree_prim_count(t) : 0,
-			why ? why : "no frame");
+		        s->label, t ? bc_tree_prim_count(t) : 0,
+		        why ? why : "no frame");
 	}
 	bc_free(wall);
 	bc_free(abuf);
@@ -201,10 +201,10 @@ static int table2_scene(struct bc_renderer *r, const struct gpu_opts *op,
 int gpu_cmd_table2(const struct gpu_opts *op)
 {
 	static const enum bc_gen_kind kinds[] = {BC_GEN_KIND_BOXES,
-						 BC_GEN_KIND_SPHERES};
+	                                         BC_GEN_KIND_SPHERES};
 	static const char *const kind_names[] = {"boxes", "spheres"};
 	static const enum bc_gen_blend blends[] = {BC_GEN_BLEND_SHARP,
-						   BC_GEN_BLEND_SMOOTH};
+	                                           BC_GEN_BLEND_SMOOTH};
 	struct t2_scene *list;
 	size_t n = 0, cap;
 	struct gpu_out o;
@@ -224,8 +224,8 @@ int gpu_cmd_table2(const struct gpu_opts *op)
 			for (uint32_t c = 0; c < op->ncounts; c++) {
 				struct t2_scene *s = &list[n++];
 				snprintf(s->label, sizeof(s->label),
-					 "fig18 %s %s %u", kind_names[k], bn,
-					 op->counts[c]);
+				         "fig18 %s %s %u", kind_names[k], bn,
+				         op->counts[c]);
 				s->gen = "fig18";
 				s->o.kind = kinds[k];
 				s->o.blend = blends[b];
@@ -236,7 +236,7 @@ int gpu_cmd_table2(const struct gpu_opts *op)
 		for (uint32_t c = 0; c < op->nlens; c++) {
 			struct t2_scene *s = &list[n++];
 			snprintf(s->label, sizeof(s->label),
-				 "fig18 lenses %s %u", bn, op->lens_counts[c]);
+			         "fig18 lenses %s %u", bn, op->lens_counts[c]);
 			s->gen = "fig18";
 			s->o.kind = BC_GEN_KIND_LENSES;
 			s->o.blend = blends[b];
@@ -247,7 +247,7 @@ int gpu_cmd_table2(const struct gpu_opts *op)
 		for (uint32_t c = 0; c < op->nlevels; c++) {
 			struct t2_scene *s = &list[n++];
 			snprintf(s->label, sizeof(s->label), "fig16 L%u %s",
-				 op->levels[c], bn);
+			         op->levels[c], bn);
 			s->gen = "fig16";
 			s->o.level = op->levels[c];
 			s->o.blend = blends[b];
@@ -256,20 +256,21 @@ int gpu_cmd_table2(const struct gpu_opts *op)
 	}
 	r = gpu_open_gl(op, &o, &info);
 	fprintf(o.json, "{\"size\":%u,\"reps\":%d,\"warmup\":%d,\"rows\":[",
-		op->size, op->reps, op->warmup);
+	        op->size, op->reps, op->warmup);
 	fprintf(o.md,
-		"%ux%u, median of %d frames after %d warm-up frames; "
-		"A-buffer and tracing from GPU timer queries (medians); "
-		"sync: tree upload after generation; paper: Zanni 2024 "
-		"Table 2 (RTX 4080, 1024x1024).\n\n"
-		"| scene | prims | ms | A-buffer | tracing | A-buffer share | "
-		"sync ms | paper ms | ours / paper |\n"
-		"|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
-		op->size, op->size, op->reps, op->warmup);
+	        "%ux%u, median of %d frames after %d warm-up frames; "
+	        "A-buffer and tracing from GPU timer queries (medians); "
+	        "sync: tree upload after generation; paper: Zanni 2024 "
+	        "Table 2 (RTX 4080, 1024x1024).\n\n"
+	        "| scene | prims | ms | A-buffer | tracing | A-buffer share | "
+	        "sync ms | paper ms | ours / paper |\n"
+	        "|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+	        op->size, op->size, op->reps, op->warmup);
 	for (size_t i = 0; r && i < n; i++) {
-		if (op->budget_s > 0 && gpu_now_ms() - start > op->budget_s * 1e3) {
+		if (op->budget_s > 0 &&
+		    gpu_now_ms() - start > op->budget_s * 1e3) {
 			gpu_fail(&o, "%s: not run, the step's %.0f s are spent",
-			     list[i].label, op->budget_s);
+			         list[i].label, op->budget_s);
 			skipped++;
 			continue;
 		}
@@ -286,19 +287,19 @@ int gpu_cmd_table2(const struct gpu_opts *op)
 /* ---- edit --------------------------------------------------------------- */
 
 static int edit_scene(struct bc_renderer *r, const struct gpu_opts *op,
-		      struct gpu_out *o, uint32_t count, bool first)
+                      struct gpu_out *o, uint32_t count, bool first)
 {
 	struct bc_tree *t = bc_tree_create();
 	struct bc_gen_opts go = {.count = count,
-				 .kind = BC_GEN_KIND_SPHERES,
-				 .blend = BC_GEN_BLEND_SMOOTH};
+	                         .kind = BC_GEN_KIND_SPHERES,
+	                         .blend = BC_GEN_BLEND_SMOOTH};
 	struct bc_camera cam;
 	struct bc_errinfo ei = {0};
 	struct bc_frame acc = {0}, whole = {0};
 	struct bc_gl_info info = {0};
 	struct bc_dirty dirty;
 	uint32_t tw = bc_render_tiles_x(op->size),
-		 th = bc_render_tiles_y(op->size);
+	         th = bc_render_tiles_y(op->size);
 	uint8_t *tiles = bc_calloc((size_t)tw * th, 1);
 	int n = op->edits > 0 ? op->edits : 1, done = 0;
 	double *sync_ms = bc_calloc((size_t)n, sizeof(double));
@@ -331,7 +332,8 @@ static int edit_scene(struct bc_renderer *r, const struct gpu_opts *op,
 	}
 	for (int i = 0; !why && i < n; i++) {
 		const struct bc_lin *l = bc_tree_lin(t);
-		uint32_t k = (uint32_t)(((uint64_t)i * 2654435761u) % l->nprims);
+		uint32_t k =
+		    (uint32_t)(((uint64_t)i * 2654435761u) % l->nprims);
 		uint32_t id = l->node_id[l->prim_slot[k]];
 		struct bc_abv before = l->abv[k];
 		struct bc_prim_data p;
@@ -356,7 +358,7 @@ static int edit_scene(struct bc_renderer *r, const struct gpu_opts *op,
 		memset(tiles, 0, (size_t)tw * th);
 		bc_renderer_damage(r, &cam, op->size, op->size, &before, tiles);
 		bc_renderer_damage(r, &cam, op->size, op->size,
-				   &bc_tree_lin(t)->abv[k], tiles);
+		                   &bc_tree_lin(t)->abv[k], tiles);
 		for (size_t j = 0; j < (size_t)tw * th; j++) {
 			marked += tiles[j] ? 1u : 0u;
 		}
@@ -378,13 +380,13 @@ static int edit_scene(struct bc_renderer *r, const struct gpu_opts *op,
 	if (!why && done > 0) {
 		size_t px = (size_t)op->size * op->size;
 		exact = memcmp(acc.rgba, whole.rgba, 4 * px) == 0 &&
-			memcmp(acc.depth, whole.depth, 4 * px) == 0 &&
-			memcmp(acc.ids, whole.ids, 4 * px) == 0;
+		        memcmp(acc.depth, whole.depth, 4 * px) == 0 &&
+		        memcmp(acc.ids, whole.ids, 4 * px) == 0;
 		if (!exact) {
 			gpu_fail(o,
-			     "fig18 %u: the frame assembled from damaged "
-			     "regions differs from a whole render",
-			     count);
+			         "fig18 %u: the frame assembled from damaged "
+			         "regions differs from a whole render",
+			         count);
 		}
 		bytes /= done;
 	}
@@ -392,16 +394,18 @@ static int edit_scene(struct bc_renderer *r, const struct gpu_opts *op,
 		gpu_fail(o, "edit fig18 %u: %s", count, why);
 	}
 	{
-		double ms = gpu_median(sync_ms, done), rm = gpu_median(region_ms, done);
-		double wm = gpu_median(whole_ms, done), tm = gpu_median(ntiles, done);
+		double ms = gpu_median(sync_ms, done),
+		       rm = gpu_median(region_ms, done);
+		double wm = gpu_median(whole_ms, done),
+		       tm = gpu_median(ntiles, done);
 		printf("edit fig18 spheres smooth %7u: %d edits, %.0f bytes, "
 		       "sync %.3f ms, region %.2f ms (%.0f tiles), whole %.2f "
 		       "ms; full upload %llu bytes, %.2f ms; exact %s\n",
 		       count, done, bytes, ms, rm, tm, wm,
 		       (unsigned long long)full_bytes, full_sync,
 		       exact ? "yes" : "no");
-		fprintf(o->json, "%s{\"prims\":%u,\"edits\":%d,", first ? "" : ",",
-			count, done);
+		fprintf(o->json, "%s{\"prims\":%u,\"edits\":%d,",
+		        first ? "" : ",", count, done);
 		fputs("\"upload_bytes\":", o->json);
 		gpu_jnum(o->json, bytes);
 		fputs(",\"sync_ms\":", o->json);
@@ -412,8 +416,9 @@ static int edit_scene(struct bc_renderer *r, const struct gpu_opts *op,
 		gpu_jnum(o->json, tm);
 		fputs(",\"whole_ms\":", o->json);
 		gpu_jnum(o->json, wm);
-		fprintf(o->json, ",\"full_upload_bytes\":%llu,\"full_sync_ms\":",
-			(unsigned long long)full_bytes);
+		fprintf(o->json,
+		        ",\"full_upload_bytes\":%llu,\"full_sync_ms\":",
+		        (unsigned long long)full_bytes);
 		gpu_jnum(o->json, full_sync);
 		fprintf(o->json, ",\"exact\":%s", exact ? "true" : "false");
 		if (why) {
@@ -422,11 +427,11 @@ static int edit_scene(struct bc_renderer *r, const struct gpu_opts *op,
 		}
 		fputc('}', o->json);
 		fprintf(o->md,
-			"| %u | %d | %.0f | %.3f | %.2f (%.0f of %u tiles) | "
-			"%.2f | %llu / %.2f | %s |\n",
-			count, done, bytes, ms, rm, tm, tw * th, wm,
-			(unsigned long long)full_bytes, full_sync,
-			exact ? "yes" : "**no**");
+		        "| %u | %d | %.0f | %.3f | %.2f (%.0f of %u tiles) | "
+		        "%.2f | %llu / %.2f | %s |\n",
+		        count, done, bytes, ms, rm, tm, tw * th, wm,
+		        (unsigned long long)full_bytes, full_sync,
+		        exact ? "yes" : "**no**");
 	}
 	bc_free(tiles);
 	bc_free(sync_ms);
@@ -450,14 +455,14 @@ int gpu_cmd_edit(const struct gpu_opts *op)
 	r = gpu_open_gl(op, &o, &info);
 	fprintf(o.json, "{\"size\":%u,\"rows\":[", op->size);
 	fprintf(o.md,
-		"fig18 smooth spheres, %ux%u; one sphere moved per edit "
-		"(medians): bytes sent to the GPU and sync ms; the damaged "
-		"tiles re-rendered against a whole frame; the frame "
-		"assembled from regions compared with a whole render.\n\n"
-		"| prims | edits | bytes / edit | sync ms | region ms | whole "
-		"ms | full upload bytes / ms | exact |\n"
-		"|---:|---:|---:|---:|---:|---:|---:|---|\n",
-		op->size, op->size);
+	        "fig18 smooth spheres, %ux%u; one sphere moved per edit "
+	        "(medians): bytes sent to the GPU and sync ms; the damaged "
+	        "tiles re-rendered against a whole frame; the frame "
+	        "assembled from regions compared with a whole render.\n\n"
+	        "| prims | edits | bytes / edit | sync ms | region ms | whole "
+	        "ms | full upload bytes / ms | exact |\n"
+	        "|---:|---:|---:|---:|---:|---:|---:|---|\n",
+	        op->size, op->size);
 	for (uint32_t c = 0; r && c < op->ncounts; c++) {
 		(void)edit_scene(r, op, &o, op->counts[c], c == 0);
 	}
