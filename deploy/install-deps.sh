@@ -13,7 +13,7 @@ pkgs=(
 	libgl1-mesa-dri libosmesa6-dev python3-glad glslang-tools
 	libglfw3-dev xvfb
 	libssl-dev openssl
-	systemd nginx
+	systemd nginx python3-yaml
 )
 
 missing=()
