@@ -74,7 +74,7 @@ static int open_session(struct bc_client **c, const struct sess *s,
 	char addr[128];
 	int rc;
 	*c = NULL;
-	snprintf(addr, sizeof(addr), "wss://127.0.0.1:%d/blobcast?session=%s",
+	snprintf(addr, sizeof(addr), "wss://127.0.0.1:%d/blobcast?session=%.15s",
 		 front_port, s->name);
 	rc = bc_client_connect(c,
 			       &(struct bc_client_opts){
