@@ -33,20 +33,23 @@
 /* Primitives of the scene, and so SET operations per edit (the protocol's
  * BC_PROTO_MAX_EDIT_OPS): an EDIT_APPLIED of about 58 KiB. */
 #define NPRIMS 1024u
-/* The stalled members' big message: a raw SNAPSHOT with its depth and id
- * planes, 12 bytes a pixel, of a BIG x BIG view is 30.0 MiB, which leaves
- * room for about 34 EDIT_APPLIED in a 32 MiB queue. */
-#define BIG 1620u
-/* Rows taken off the view per stagger wave: 8 rows are 152 KiB, more than
- * two EDIT_APPLIED, so each wave overflows on a later broadcast. */
+/* Rows taken off the stalled members' view per stagger wave: 8 rows of
+ * 12-byte pixels are 152 KiB, more than two EDIT_APPLIED, so each wave
+ * overflows on a later broadcast. */
 #define WAVE_ROWS 8u
 /* Edits an editor has sent and not yet seen acknowledged. */
 #define WINDOW 3u
-/* Edits per round at most: the drops come near edit 45. */
-#define MAX_EDITS 140u
+/* Edits per round at most (the drops come after about 35). */
+#define MAX_EDITS 400u
 #define MAX_SLOTS 24
 
 static char base_dir[48];
+/* The stalled members' big message: a raw SNAPSHOT with its depth and id
+ * planes, 12 bytes a pixel, of a big x big view fills a queue to 2 MiB
+ * below BC_SRV_MAX_CLIENT_QUEUE (1619^2: 30.0 MiB of 32), room for about
+ * 35 EDIT_APPLIED of applied_bytes; the first_drop-th overflows it. */
+static uint16_t big;
+static uint32_t applied_bytes, first_drop;
 
 /* daemon.h's helpers this file does not need. */
 static void unused(void)
@@ -106,12 +109,12 @@ out:
 }
 
 /* Edit k of editor e: a SET of every primitive (translate, rotate, colour
- * and radius), valid, different from the edits before it. */
-static uint32_t send_edit(struct member *m, uint32_t e, uint32_t k)
+ * and radius), valid, different from the edits before it. The operations
+ * live until the next call. */
+static const struct bc_proto_edit_op *edit_ops(uint32_t e, uint32_t k)
 {
 	static struct bc_proto_edit_op ops[NPRIMS];
 	static struct bc_proto_field f[NPRIMS][4];
-	struct bc_msg msg = {.type = BC_MSG_EDIT};
 	float dx = 0.002f * (float)((k * 7u + e) % 11u);
 	for (uint32_t i = 0; i < NPRIMS; i++) {
 		const struct bc_prim_data *p = &prim[i];
@@ -134,9 +137,45 @@ static uint32_t send_edit(struct member *m, uint32_t e, uint32_t k)
 		                                   .nfields = 4,
 		                                   .fields = f[i]};
 	}
+	return ops;
+}
+
+static uint32_t send_edit(struct member *m, uint32_t e, uint32_t k)
+{
+	struct bc_msg msg = {.type = BC_MSG_EDIT};
 	msg.edit.nops = NPRIMS;
-	msg.edit.ops = ops;
+	msg.edit.ops = edit_ops(e, k);
 	return conn_send(&m->c, &msg);
+}
+
+/* The sizes the rounds rely on, from the daemon's queue limit and the
+ * edits' encoding. */
+static int measure(void)
+{
+	struct bc_msg ea = {.type = BC_MSG_EDIT_APPLIED};
+	struct bc_proto_buf b;
+	double room = (double)BC_SRV_MAX_CLIENT_QUEUE - (double)(2u << 20);
+	uint64_t snap;
+	int rc;
+	big = (uint16_t)sqrt(room / 12.0);
+	ea.edit_applied.order = 1;
+	ea.edit_applied.author = 1;
+	ea.edit_applied.author_seq = 1;
+	ea.edit_applied.nops = NPRIMS;
+	ea.edit_applied.ops = edit_ops(0, 0);
+	bc_proto_buf_init(&b, 0);
+	rc = bc_proto_encode(&b, &ea, NULL);
+	applied_bytes = (uint32_t)b.len;
+	bc_proto_buf_finish(&b);
+	/* The snapshot's FRAME: its planes and about 100 bytes of fields. */
+	snap = 12u * (uint64_t)big * big + 100u;
+	if (rc || applied_bytes == 0 || big > BC_SRV_MAX_DIM ||
+	    snap >= BC_SRV_MAX_CLIENT_QUEUE) {
+		return -1;
+	}
+	first_drop =
+	    (uint32_t)((BC_SRV_MAX_CLIENT_QUEUE - snap) / applied_bytes) + 1u;
+	return first_drop + 60u < MAX_EDITS ? 0 : -1;
 }
 
 /* Handles one message a live member received: replays EDIT_APPLIED into
@@ -262,7 +301,7 @@ static int join(struct member *m, const struct daemon *d, const char *session,
 	return 0;
 }
 
-/* A stalled member's setup: a view of BIG x h looking away from the scene
+/* A stalled member's setup: a view of big x h looking away from the scene
  * (nothing in view, a cheap render; members of one wave share it) and a
  * raw SNAPSHOT of it with depth and ids. The member reads up to its first
  * frame, the still, and never again. */
@@ -278,7 +317,7 @@ static int stall(struct member *m, uint16_t h)
 		cam.camera.up[a] = scene_cam.up[a];
 	}
 	cam.camera.fov_y_deg = scene_cam.fov_y_deg;
-	v.view.width = BIG;
+	v.view.width = big;
 	v.view.height = h;
 	v.view.encoding = BC_PROTO_ENC_JPEG;
 	v.view.quality_interactive = 50;
@@ -377,7 +416,7 @@ static void round_of(const struct daemon *d, int round, const char *layout,
 		if (ms[i].kind == 'S') {
 			uint32_t wave = stalled++ % waves;
 			REQUIRE(stall(&ms[i],
-			              (uint16_t)(BIG - WAVE_ROWS * wave)) == 0);
+			              (uint16_t)(big - WAVE_ROWS * wave)) == 0);
 		}
 	}
 	for (size_t i = 1; i < n; i++) {
@@ -400,7 +439,7 @@ static void round_of(const struct daemon *d, int round, const char *layout,
 	for (size_t i = 0; i < n; i++) {
 		editors += ms[i].kind == 'E';
 	}
-	while (edits < MAX_EDITS && after < 2 * editors) {
+	while (edits < first_drop + 60u && after < 2 * editors) {
 		for (size_t i = 0; i < n; i++) {
 			struct member *m = &ms[i];
 			if (m->kind == 'E' && m->sent - m->acked < WINDOW &&
@@ -412,9 +451,7 @@ static void round_of(const struct daemon *d, int round, const char *layout,
 				after += dropped == stalled;
 			}
 		}
-		/* The first drops come with the 35th EDIT_APPLIED after
-		 * the snapshots (their room over 59 KiB each). */
-		if (!closed && edits >= 34) {
+		if (!closed && edits + 1 >= first_drop) {
 			for (size_t i = 0; i < n; i++) {
 				if (ms[i].kind == 'C') {
 					close_now(&ms[i],
@@ -532,6 +569,16 @@ static void every_author_is_acknowledged_while_members_drop(void)
 	char dir[80], layout[MAX_SLOTS];
 	uint64_t seed = 20261201;
 	snprintf(dir, sizeof(dir), "%s/members", base_dir);
+	{
+		uint8_t *bytes = NULL;
+		size_t len = 0;
+		REQUIRE(make_scene(&bytes, &len) == 0);
+		bc_free(bytes);
+		REQUIRE(measure() == 0);
+	}
+	printf("  snapshots of %ux%u, EDIT_APPLIED of %u bytes: the %uth "
+	       "after a snapshot overflows its queue\n",
+	       big, big, applied_bytes, first_drop);
 	REQUIRE(daemon_start(&d, dir) == 0);
 	/* Stalled in front, live members behind them: each drop moves a
 	 * live member into the dropped slot. All drop on one broadcast. */
