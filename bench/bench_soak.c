@@ -55,7 +55,7 @@
 
 struct opts {
 	double duration_s, kill_every_s;
-	int editors, viewers, stalled, flood_addrs, flood_per_s;
+	int editors, viewers, flooders, stalled, flood_addrs, flood_per_s;
 	int edit_hz, alone_edits;
 };
 
@@ -63,6 +63,7 @@ static struct opts opt = {.duration_s = 180,
                           .kill_every_s = 15,
                           .editors = 4,
                           .viewers = 4,
+                          .flooders = 1,
                           .stalled = 3,
                           .flood_addrs = 8,
                           .flood_per_s = 64,
@@ -879,6 +880,7 @@ static void usage(FILE *f)
 	    "  --kill-every S    seconds between kills (default %.0f)\n"
 	    "  --editors N       editing clients (default %d)\n"
 	    "  --viewers N       watching clients (default %d)\n"
+	    "  --flooders N      snapshot flooders (default %d)\n"
 	    "  --stalled N       clients that never read (default %d)\n"
 	    "  --edit-hz N       edits per second per editor (default %d)\n"
 	    "  --flood-addrs N   source addresses of the connection flood\n"
@@ -888,8 +890,8 @@ static void usage(FILE *f)
 	    "  --alone-edits N   edits timed alone before and after the\n"
 	    "                    load (default %d)\n",
 	    opt.duration_s, opt.kill_every_s, opt.editors, opt.viewers,
-	    opt.stalled, opt.edit_hz, opt.flood_addrs, opt.flood_per_s,
-	    opt.alone_edits);
+	    opt.flooders, opt.stalled, opt.edit_hz, opt.flood_addrs,
+	    opt.flood_per_s, opt.alone_edits);
 }
 
 static int parse_args(int argc, char **argv)
@@ -913,6 +915,8 @@ static int parse_args(int argc, char **argv)
 			opt.editors = (int)v;
 		} else if (!strcmp(a, "--viewers") && v <= 16) {
 			opt.viewers = (int)v;
+		} else if (!strcmp(a, "--flooders") && v <= 8) {
+			opt.flooders = (int)v;
 		} else if (!strcmp(a, "--stalled") && v <= 16) {
 			opt.stalled = (int)v;
 		} else if (!strcmp(a, "--edit-hz") && v >= 1 && v <= 1000) {
@@ -990,11 +994,11 @@ int main(int argc, char **argv)
 	printf("bench_soak: %s, data %s, log %s.log, port %d\n", argv[1],
 	       data_dir, data_dir, tcp_port);
 	printf("load: %.0f s, kill -9 every %.0f s, %d editors at %d Hz, "
-	       "%d viewers, 1 snapshot flooder, %d stalled readers, "
+	       "%d viewers, %d snapshot flooders, %d stalled readers, "
 	       "flood of %d connections/s from %d addresses\n",
 	       opt.duration_s, opt.kill_every_s, opt.editors, opt.edit_hz,
-	       opt.viewers, opt.stalled, opt.flood_addrs ? opt.flood_per_s : 0,
-	       opt.flood_addrs);
+	       opt.viewers, opt.flooders, opt.stalled,
+	       opt.flood_addrs ? opt.flood_per_s : 0, opt.flood_addrs);
 	if (start_daemon() != 0) {
 		printf("cannot start %s\n", argv[1]);
 		return 2;
@@ -1035,10 +1039,11 @@ int main(int argc, char **argv)
 		pthread_create(&workers[nworkers].th, NULL, viewer_main,
 		               &workers[nworkers]);
 	}
-	workers[nworkers].index = 0;
-	pthread_create(&workers[nworkers].th, NULL, flooder_main,
-	               &workers[nworkers]);
-	nworkers++;
+	for (int i = 0; i < opt.flooders; i++, nworkers++) {
+		workers[nworkers].index = i;
+		pthread_create(&workers[nworkers].th, NULL, flooder_main,
+		               &workers[nworkers]);
+	}
 	for (int i = 0; i < opt.stalled; i++, nworkers++) {
 		workers[nworkers].index = i;
 		pthread_create(&workers[nworkers].th, NULL, stalled_main,
