@@ -65,72 +65,188 @@ static int check_scene_bytes(const struct bc_tree *t, struct bc_errinfo *ei)
 	return 0;
 }
 
-void bc_handle_scene_load(struct bc_conn *c, const struct bc_msg *m)
-{
-	struct bc_session *s = c->session;
-	struct bc_tree *t = bc_tree_create(), *copy = bc_tree_create();
-	struct bc_camera cam = s->camera;
-	struct bc_errinfo ei = {0};
-	bool has_cam = false;
+/* A SCENE_LOAD on its way. prepare() makes everything the load needs --
+ * the decoded and checked tree, the render thread's copy, the members'
+ * SCENE_STATE bytes and the snapshot on disk -- on the loop, or on a
+ * worker thread for a large one (BC_SRV_ASYNC_LOAD_BYTES; the session is
+ * `loading` meanwhile, its store used by that thread alone); commit()
+ * then applies it on the loop. */
+struct load {
+	uv_work_t work;
+	struct bc_session *s;
+	struct bc_conn_ref author;
+	uint32_t author_id, seq;
+	uint8_t *owned; /* the payload's copy, for a worker */
+	struct bc_proto_bytes scene;
+	uint64_t order;
+	struct bc_tree *t, *copy;
+	struct bc_camera cam;
+	bool has_cam;
+	uint8_t *state;
+	size_t state_len;
 	int rc;
-	if (!t || !copy) {
-		rc = bc_errinfo_set(&ei, BC_ENOMEM, "out of memory");
-		goto fail;
+	struct bc_errinfo ei;
+};
+
+static void prepare(struct load *l)
+{
+	struct bc_errinfo *ei = &l->ei;
+	if (!(l->t = bc_tree_create()) || !(l->copy = bc_tree_create())) {
+		l->rc = bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+		return;
 	}
-	if (s->store_failed) {
-		rc = bc_errinfo_set(&ei, BC_EIO,
-		                    "the session cannot be saved: changes are "
-		                    "refused");
-		goto fail;
+	if ((l->rc = bc_scene_decode(l->scene.ptr, l->scene.len, l->t,
+	                             &l->cam, &l->has_cam, ei))) {
+		return;
 	}
-	if ((rc = bc_scene_decode(m->scene_load.scene.ptr,
-	                          m->scene_load.scene.len, t, &cam, &has_cam,
-	                          &ei))) {
-		goto fail;
+	if (bc_tree_node_count(l->t) > BC_SRV_MAX_NODES) {
+		l->rc = bc_errinfo_set(ei, BC_ELIMIT, "more than %u nodes",
+		                       BC_SRV_MAX_NODES);
+		return;
 	}
-	if (bc_tree_node_count(t) > BC_SRV_MAX_NODES) {
-		rc = bc_errinfo_set(&ei, BC_ELIMIT, "more than %u nodes",
-		                    BC_SRV_MAX_NODES);
-		goto fail;
+	if ((l->rc = check_scene_bytes(l->t, ei)) ||
+	    (l->rc = bc_tree_copy(l->copy, l->t, ei))) {
+		return;
 	}
-	if ((rc = check_scene_bytes(t, &ei))) {
-		goto fail;
+	if ((l->rc = bc_scene_encode(l->t, &l->cam, &l->state,
+	                             &l->state_len))) {
+		bc_errinfo_set(ei, l->rc, "cannot encode the scene");
+		return;
 	}
-	if ((rc = bc_tree_copy(copy, t, &ei))) {
-		goto fail;
-	}
-	/* On disk first: the load is acknowledged only once it is safe. */
-	if ((rc = bc_store_snapshot(s->store, t, &cam, s->order + 1, &ei))) {
+	/* On disk before anyone hears of it: the load is acknowledged only
+	 * once it is safe. */
+	l->rc = bc_store_snapshot(l->s->store, l->t, &l->cam, l->order, ei);
+}
+
+static void load_free(struct load *l)
+{
+	bc_tree_destroy(l->t);
+	bc_tree_destroy(l->copy);
+	bc_free(l->state);
+	bc_free(l->owned);
+	bc_free(l);
+}
+
+static void commit(struct load *l)
+{
+	struct bc_session *s = l->s;
+	struct bc_srv *srv = s->srv;
+	struct bc_conn *author = bc_conn_get(srv, l->author);
+	if (l->rc) {
 		/* Only a failed write locks the session: a scene the store
 		 * refuses up front (too big or too deep to restore) left
 		 * nothing on disk. */
-		if (rc == BC_EIO) {
+		if (l->rc == BC_EIO) {
 			s->store_failed = true;
 		}
-		goto fail;
+		if (author) {
+			bc_conn_send_error(author, l->seq, l->rc, false,
+			                   "scene not loaded: %s", l->ei.msg);
+		}
+		return;
 	}
 	bc_tree_destroy(s->tree);
-	s->tree = t;
-	s->camera = cam;
-	s->order++;
-	bc_rthread_scene(c->srv, s->id, copy);
-	bc_session_send_state(s, NULL, c->member_id, m->seq);
-	if (has_cam) {
+	s->tree = l->t;
+	l->t = NULL;
+	s->camera = l->cam;
+	s->order = l->order;
+	bc_rthread_scene(srv, s->id, l->copy);
+	l->copy = NULL;
+	bc_session_send_state_bytes(s, NULL, l->author_id, l->seq, l->state,
+	                            l->state_len);
+	if (l->has_cam) {
 		for (uint32_t i = 0; i < s->nmembers; i++) {
-			struct bc_conn *o = bc_conn_get(c->srv, s->members[i]);
+			struct bc_conn *o = bc_conn_get(srv, s->members[i]);
 			if (o) {
-				o->camera = cam;
+				o->camera = l->cam;
 			}
 		}
 	}
 	bc_session_mark_all(s);
 	bc_session_schedule(s);
-	return;
-fail:
-	bc_tree_destroy(t);
-	bc_tree_destroy(copy);
-	bc_conn_send_error(c, m->seq, rc, false, "scene not loaded: %s",
-	                   ei.msg);
+}
+
+static void prepare_work(uv_work_t *w)
+{
+	prepare(w->data);
+}
+
+static void prepared(uv_work_t *w, int status)
+{
+	struct load *l = w->data;
+	struct bc_session *s = l->s;
+	s->loading = false;
+	if (status != 0 && l->rc == 0) {
+		l->rc = bc_errinfo_set(&l->ei, BC_EIO, "the load was cancelled");
+	}
+	if (!s->removed) {
+		commit(l);
+	}
+	load_free(l);
+	bc_session_unref(s);
+}
+
+/* A session whose scene is being replaced by a large load takes no change
+ * until it is: refused with EBUSY (the client retries after the load's
+ * SCENE_STATE). */
+static bool busy(struct bc_conn *c, const struct bc_msg *m)
+{
+	if (!c->session->loading) {
+		return false;
+	}
+	bc_conn_send_error(c, m->seq, BC_EBUSY, false,
+	                   "the session's scene is being replaced by a "
+	                   "SCENE_LOAD; retry after its SCENE_STATE");
+	return true;
+}
+
+void bc_handle_scene_load(struct bc_conn *c, const struct bc_msg *m)
+{
+	struct bc_session *s = c->session;
+	struct load *l;
+	if (busy(c, m)) {
+		return;
+	}
+	if (s->store_failed) {
+		bc_conn_send_error(c, m->seq, BC_EIO, false,
+		                   "scene not loaded: the session cannot be "
+		                   "saved: changes are refused");
+		return;
+	}
+	if (!(l = bc_calloc(1, sizeof(*l)))) {
+		bc_conn_send_error(c, m->seq, BC_ENOMEM, false,
+		                   "scene not loaded: out of memory");
+		return;
+	}
+	l->s = s;
+	l->author = bc_conn_ref_of(c);
+	l->author_id = c->member_id;
+	l->seq = m->seq;
+	l->scene = m->scene_load.scene;
+	l->cam = s->camera;
+	l->order = s->order + 1;
+	l->work.data = l;
+	if (m->scene_load.scene.len >= BC_SRV_ASYNC_LOAD_BYTES) {
+		/* The payload lives in the reader's buffer only until the
+		 * next message. */
+		if (!(l->owned = bc_malloc(l->scene.len))) {
+			bc_free(l);
+			bc_conn_send_error(c, m->seq, BC_ENOMEM, false,
+			                   "scene not loaded: out of memory");
+			return;
+		}
+		memcpy(l->owned, l->scene.ptr, l->scene.len);
+		l->scene.ptr = l->owned;
+		if (uv_queue_work(c->srv->loop, &l->work, prepare_work,
+		                  prepared) == 0) {
+			s->loading = true;
+			s->handles_open++;
+			return;
+		}
+	}
+	prepare(l);
+	commit(l);
+	load_free(l);
 }
 
 void bc_handle_edit(struct bc_conn *c, const struct bc_msg *m)
@@ -147,6 +263,9 @@ void bc_handle_edit(struct bc_conn *c, const struct bc_msg *m)
 	bool structural;
 	uint64_t t0 = uv_hrtime();
 	int rc;
+	if (busy(c, m)) {
+		return;
+	}
 	bc_proto_buf_init(&rec, 0);
 	if (s->store_failed) {
 		rc = bc_errinfo_set(&ei, BC_EIO,

@@ -120,10 +120,10 @@ struct bc_conn {
 	uint64_t interacting_until; /* ms, loop clock */
 	bool dirty;          /* owed a frame: a change, or a finer level */
 	bool render_pending; /* a job for this client is queued */
+	uint32_t requests;   /* PICKs and SNAPSHOTs queued, unanswered */
 	bool still_sent;     /* the last frame sent was the still of now */
 	struct bc_shown shown; /* what its last frame left it holding */
 
-	uint32_t requests;   /* PICKs and SNAPSHOTs queued, unanswered */
 	/* Output: messages go out at once; frames one at a time. */
 	size_t queued;
 	bool frame_writing;
@@ -152,7 +152,9 @@ struct bc_session {
 	uv_timer_t still_timer;
 	uv_timer_t kick; /* schedules frames once a loop turn's writes end */
 	uint64_t empty_since_ms; /* loop clock; when the last member left */
-	uint32_t handles_open;
+	bool loading; /* a SCENE_LOAD runs on a worker: changes wait */
+	bool removed; /* out of the server, freed once its handles close */
+	uint32_t handles_open; /* timers and a load's work request */
 	double edit_ms_avg;
 };
 
@@ -167,11 +169,11 @@ struct bc_srv {
 	uv_signal_t sigterm, sigint;
 	uv_timer_t stall_timer; /* drops clients that stopped reading */
 	uv_async_t results;
+	uv_timer_t job_sweep; /* drops queued jobs of clients that left */
 	struct bc_rthread *rt;
 
 	struct bc_conn *clients[BC_SRV_MAX_CONNECTIONS];
 	uint32_t gens[BC_SRV_MAX_CONNECTIONS];
-	uv_timer_t job_sweep; /* drops queued jobs of clients that left */
 	uint32_t nclients;
 	uint32_t next_conn_id;
 
@@ -235,6 +237,12 @@ void bc_session_send_info(struct bc_session *s);
 /* SCENE_STATE to one member (to) or, with to NULL, to every member. */
 void bc_session_send_state(struct bc_session *s, struct bc_conn *to,
 			   uint32_t author, uint32_t author_seq);
+/* The same with the scene already encoded (bc_scene_encode of s->tree). */
+void bc_session_send_state_bytes(struct bc_session *s, struct bc_conn *to,
+				 uint32_t author, uint32_t author_seq,
+				 const uint8_t *bytes, size_t len);
+/* Frees s once nothing refers to it (its timers and a load in flight). */
+void bc_session_unref(struct bc_session *s);
 /* Every member's next frame is whole. */
 void bc_session_mark_all(struct bc_session *s);
 void bc_handle_session(struct bc_conn *c, const struct bc_msg *m);
@@ -292,10 +300,10 @@ void bc_rthread_set_op(struct bc_srv *srv, uint32_t session_id, uint32_t id,
 		       const struct bc_op_data *op);
 void bc_rthread_drop(struct bc_srv *srv, uint32_t session_id);
 void bc_rthread_job(struct bc_srv *srv, struct bc_rjob *job);
+/* Soon (next loop turn, once a closing connection is gone): removes from
+ * the render queue every job none of whose clients is still connected. */
+void bc_rthread_sweep_soon(struct bc_srv *srv);
 /* Called on the loop thread by the results async. */
 void bc_rthread_deliver(uv_async_t *async);
 
 #endif
-/* Soon (next loop turn, once a closing connection is gone): removes from
- * the render queue every job none of whose clients is still connected. */
-void bc_rthread_sweep_soon(struct bc_srv *srv);

@@ -76,12 +76,16 @@ static void free_session(struct bc_session *s)
 	bc_free(s);
 }
 
-static void still_closed(uv_handle_t *h)
+void bc_session_unref(struct bc_session *s)
 {
-	struct bc_session *s = h->data;
 	if (--s->handles_open == 0) {
 		free_session(s);
 	}
+}
+
+static void still_closed(uv_handle_t *h)
+{
+	bc_session_unref(h->data);
 }
 
 /* Takes s out of the server (it has no members left): its replica goes,
@@ -95,6 +99,7 @@ static void session_remove(struct bc_session *s)
 			srv->nsessions--;
 		}
 	}
+	s->removed = true;
 	bc_rthread_drop(srv, s->id);
 	uv_close((uv_handle_t *)&s->still_timer, still_closed);
 	uv_close((uv_handle_t *)&s->kick, still_closed);
@@ -105,7 +110,7 @@ static void session_remove(struct bc_session *s)
  * not write), so a JOIN restores it as it was. */
 static bool session_unload(struct bc_session *s, const char *why)
 {
-	if (s->nmembers > 0 || s->store_failed) {
+	if (s->nmembers > 0 || s->store_failed || s->loading) {
 		return false;
 	}
 	bc_log(BC_LOG_INFO,
@@ -130,7 +135,7 @@ static uint32_t free_slot(struct bc_srv *srv)
 	}
 	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
 		struct bc_session *s = srv->sessions[i];
-		if (s->nmembers == 0 && !s->store_failed &&
+		if (s->nmembers == 0 && !s->store_failed && !s->loading &&
 		    (!oldest || s->empty_since_ms < oldest->empty_since_ms)) {
 			oldest = s;
 			slot = i;
@@ -250,7 +255,8 @@ void bc_sessions_save_all(struct bc_srv *srv)
 	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
 		struct bc_session *s = srv->sessions[i];
 		struct bc_errinfo ei = {0};
-		if (!s || s->store_failed ||
+		/* A load in flight writes its own snapshot. */
+		if (!s || s->store_failed || s->loading ||
 		    bc_store_journal_records(s->store) == 0) {
 			continue;
 		}
@@ -269,6 +275,7 @@ void bc_sessions_free(struct bc_srv *srv)
 	}
 	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
 		if (srv->sessions[i]) {
+			srv->sessions[i]->removed = true;
 			uv_close((uv_handle_t *)&srv->sessions[i]->still_timer,
 			         still_closed);
 			uv_close((uv_handle_t *)&srv->sessions[i]->kick,
@@ -323,7 +330,6 @@ void bc_session_send_info(struct bc_session *s)
 void bc_session_send_state(struct bc_session *s, struct bc_conn *to,
                            uint32_t author, uint32_t author_seq)
 {
-	struct bc_msg st = {.type = BC_MSG_SCENE_STATE};
 	uint8_t *bytes = NULL;
 	size_t len = 0;
 	if (bc_scene_encode(s->tree, &s->camera, &bytes, &len)) {
@@ -331,6 +337,15 @@ void bc_session_send_state(struct bc_session *s, struct bc_conn *to,
 		       s->name);
 		return;
 	}
+	bc_session_send_state_bytes(s, to, author, author_seq, bytes, len);
+	bc_free(bytes);
+}
+
+void bc_session_send_state_bytes(struct bc_session *s, struct bc_conn *to,
+                                 uint32_t author, uint32_t author_seq,
+                                 const uint8_t *bytes, size_t len)
+{
+	struct bc_msg st = {.type = BC_MSG_SCENE_STATE};
 	st.scene_state.order = s->order;
 	st.scene_state.author = author;
 	st.scene_state.author_seq = author_seq;
@@ -348,7 +363,6 @@ void bc_session_send_state(struct bc_session *s, struct bc_conn *to,
 			}
 		}
 	}
-	bc_free(bytes);
 }
 
 void bc_session_leave(struct bc_conn *c)
@@ -492,6 +506,13 @@ void bc_handle_session_delete(struct bc_conn *c, const struct bc_msg *m)
 	if (!s && !bc_store_session_exists(srv->store, name)) {
 		bc_conn_send_error(c, m->seq, BC_ENOSESSION, false,
 		                   "no session named %s", name);
+		return;
+	}
+	if (s && s->loading) {
+		bc_conn_send_error(c, m->seq, BC_EBUSY, false,
+		                   "session %s is loading a scene; retry after "
+		                   "its SCENE_STATE",
+		                   name);
 		return;
 	}
 	if (s) {

@@ -100,6 +100,14 @@
  * snapshots once held another session's client for 178 s). */
 #define BC_SRV_MAX_CLIENT_REQUESTS 8u
 
+/* A SCENE_LOAD of at least this many bytes is decoded, checked, copied for
+ * the render thread, encoded for the members and written to disk on a
+ * worker thread, not the loop: an 800 000-node load took the loop for
+ * 5.6 s, delaying every other session's messages. Meanwhile its session
+ * refuses edits and loads (EBUSY); smaller loads take a few milliseconds
+ * and stay on the loop. */
+#define BC_SRV_ASYNC_LOAD_BYTES (1024u * 1024u)
+
 /* Wait before a session retries the frames it could not queue for lack of
  * memory: the clients stay owed them, and a retry at once would spin. */
 #define BC_SRV_OOM_RETRY_MS 100u

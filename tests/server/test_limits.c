@@ -674,6 +674,56 @@ static void a_deleted_session_is_gone_for_good(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
+static void a_large_load_does_not_hold_other_sessions(void)
+{
+	struct daemon d;
+	struct conn a, b;
+	struct bc_proto_buf buf;
+	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
+	char dir[64];
+	int64_t t0, worst = 0, took;
+	uint32_t seq, pings = 0;
+	bool loaded = false;
+	make_dir_name(dir, sizeof(dir), "bigload");
+	REQUIRE(daemon_start(&d, dir) == 0);
+	REQUIRE(conn_open(&a, &d) == 0 && conn_hello(&a, "loader") == 0);
+	REQUIRE(conn_join(&a, "big", BC_PROTO_ROLE_EDITOR, true) == 0);
+	REQUIRE(conn_open(&b, &d) == 0 && conn_hello(&b, "other") == 0);
+	REQUIRE(conn_join(&b, "default", BC_PROTO_ROLE_VIEWER, false) == 0);
+	buf = big_scene(400000, true, 0);
+	m.scene_load.scene.ptr = buf.data;
+	m.scene_load.scene.len = (uint32_t)buf.len;
+	t0 = t_now_ms();
+	REQUIRE((seq = conn_send(&a, &m)));
+	bc_proto_buf_finish(&buf);
+	/* The other session's client is answered at once all along. */
+	while (!loaded && t_now_ms() - t0 < 300000) {
+		int64_t p0 = t_now_ms();
+		REQUIRE(ping(&b) == 0);
+		if (t_now_ms() - p0 > worst) {
+			worst = t_now_ms() - p0;
+		}
+		pings++;
+		while (conn_recv(&a, 0) == 1) {
+			if (a.m.type == BC_MSG_SCENE_STATE &&
+			    a.m.scene_state.author_seq == seq) {
+				loaded = true;
+			}
+			CHECK(a.m.type != BC_MSG_ERROR);
+		}
+		t_sleep_ms(10);
+	}
+	took = t_now_ms() - t0;
+	printf("  400000-node load: %lld ms; %u pings meanwhile, slowest "
+	       "%lld ms\n",
+	       (long long)took, pings, (long long)worst);
+	CHECK(loaded);
+	CHECK(worst < 1000);
+	conn_close(&a);
+	conn_close(&b);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
 static void setup(void)
 {
 	(void)conn_view;
@@ -701,6 +751,8 @@ static const struct bc_test tests[] = {
     {"idle_sessions_make_room_and_load_again",
      idle_sessions_make_room_and_load_again},
     {"a_deleted_session_is_gone_for_good", a_deleted_session_is_gone_for_good},
+    {"a_large_load_does_not_hold_other_sessions",
+     a_large_load_does_not_hold_other_sessions},
 };
 
 int main(int argc, char **argv)
