@@ -102,6 +102,87 @@ static const struct bc_param_desc p_tri_prism[] = {
 	{"radius", 0, 1, POS, 0.5f},
 	{"half_depth", 1, 1, POS, 0.5f},
 };
+static const struct bc_param_desc p_cut_sphere[] = {
+	{"radius", 0, 1, POS, 1.0f},
+	{"cut_height", 1, 1, 0, 0.5f},
+};
+static const struct bc_param_desc p_cut_hollow_sphere[] = {
+	{"radius", 0, 1, POS, 1.0f},
+	{"cut_height", 1, 1, 0, 0.5f},
+	{"thickness", 2, 1, POS, 0.1f},
+};
+static const struct bc_param_desc p_death_star[] = {
+	{"ra", 0, 1, POS, 1.0f},
+	{"rb", 1, 1, POS, 0.8f},
+	{"d", 2, 1, POS, 1.0f},
+};
+static const struct bc_param_desc p_rounded_cylinder[] = {
+	{"radius", 0, 1, POS, 0.5f},
+	{"round", 1, 1, NONNEG, 0.1f},
+	{"half_height", 2, 1, POS, 1.0f},
+};
+static const struct bc_param_desc p_capped_cylinder[] = {
+	{"a", 0, 3, 0, -0.5f},
+	{"b", 3, 3, 0, 0.5f},
+	{"radius", 6, 1, POS, 0.5f},
+};
+static const struct bc_param_desc p_capped_cone[] = {
+	{"a", 0, 3, 0, -0.5f},
+	{"b", 3, 3, 0, 0.5f},
+	{"ra", 6, 1, NONNEG, 0.5f},
+	{"rb", 7, 1, NONNEG, 0.25f},
+};
+static const struct bc_param_desc p_rhombus[] = {
+	{"la", 0, 1, POS, 1.0f},
+	{"lb", 1, 1, POS, 0.5f},
+	{"half_height", 2, 1, POS, 0.2f},
+	{"round", 3, 1, OPT | NONNEG, 0.0f},
+};
+static const struct bc_param_desc p_vesica_segment[] = {
+	{"a", 0, 3, 0, -0.5f},
+	{"b", 3, 3, 0, 0.5f},
+	{"w", 6, 1, POS, 0.3f},
+};
+static const struct bc_param_desc p_extrude_circle[] = {
+	{"radius", 0, 1, POS, 0.5f},
+	{"half_depth", 1, 1, POS, 0.5f},
+};
+static const struct bc_param_desc p_extrude_rect[] = {
+	{"half_width", 0, 1, POS, 0.5f},
+	{"half_height", 1, 1, POS, 0.25f},
+	{"half_depth", 2, 1, POS, 0.5f},
+};
+static const struct bc_param_desc p_extrude_polygon[] = {
+	{"radius", 0, 1, POS, 0.5f},
+	{"sides", 1, 1, POS, 5.0f},
+	{"half_depth", 2, 1, POS, 0.5f},
+};
+static const struct bc_param_desc p_extrude_star[] = {
+	{"radius", 0, 1, POS, 0.5f},
+	{"points", 1, 1, POS, 5.0f},
+	{"inner_ratio", 2, 1, POS, 0.5f},
+	{"half_depth", 3, 1, POS, 0.25f},
+};
+static const struct bc_param_desc p_revolve_circle[] = {
+	{"radius", 0, 1, POS, 0.25f},
+	{"offset", 1, 1, NONNEG, 0.75f},
+};
+static const struct bc_param_desc p_revolve_rect[] = {
+	{"half_width", 0, 1, POS, 0.25f},
+	{"half_height", 1, 1, POS, 0.5f},
+	{"offset", 2, 1, NONNEG, 0.75f},
+};
+static const struct bc_param_desc p_revolve_polygon[] = {
+	{"radius", 0, 1, POS, 0.3f},
+	{"sides", 1, 1, POS, 6.0f},
+	{"offset", 2, 1, NONNEG, 0.75f},
+};
+static const struct bc_param_desc p_revolve_star[] = {
+	{"radius", 0, 1, POS, 0.35f},
+	{"points", 1, 1, POS, 5.0f},
+	{"inner_ratio", 2, 1, POS, 0.5f},
+	{"offset", 3, 1, NONNEG, 0.75f},
+};
 
 #undef POS
 #undef NONNEG
@@ -133,6 +214,30 @@ static const struct bc_prim_info prim_table[BC_PRIM_COUNT] = {
 	[BC_PRIM_SOLID_ANGLE] = DESC("solid_angle", p_solid_angle, true),
 	[BC_PRIM_PYRAMID] = DESC("pyramid", p_pyramid, true),
 	[BC_PRIM_TRI_PRISM] = DESC("tri_prism", p_tri_prism, true),
+	[BC_PRIM_CUT_SPHERE] = DESC("cut_sphere", p_cut_sphere, true),
+	[BC_PRIM_CUT_HOLLOW_SPHERE] =
+		DESC("cut_hollow_sphere", p_cut_hollow_sphere, true),
+	[BC_PRIM_DEATH_STAR] = DESC("death_star", p_death_star, true),
+	[BC_PRIM_ROUNDED_CYLINDER] =
+		DESC("rounded_cylinder", p_rounded_cylinder, true),
+	[BC_PRIM_CAPPED_CYLINDER] =
+		DESC("capped_cylinder", p_capped_cylinder, true),
+	[BC_PRIM_CAPPED_CONE] = DESC("capped_cone", p_capped_cone, true),
+	[BC_PRIM_RHOMBUS] = DESC("rhombus", p_rhombus, true),
+	[BC_PRIM_VESICA_SEGMENT] =
+		DESC("vesica_segment", p_vesica_segment, true),
+	[BC_PRIM_EXTRUDE_CIRCLE] =
+		DESC("extrude_circle", p_extrude_circle, true),
+	[BC_PRIM_EXTRUDE_RECT] = DESC("extrude_rect", p_extrude_rect, true),
+	[BC_PRIM_EXTRUDE_POLYGON] =
+		DESC("extrude_polygon", p_extrude_polygon, true),
+	[BC_PRIM_EXTRUDE_STAR] = DESC("extrude_star", p_extrude_star, true),
+	[BC_PRIM_REVOLVE_CIRCLE] =
+		DESC("revolve_circle", p_revolve_circle, true),
+	[BC_PRIM_REVOLVE_RECT] = DESC("revolve_rect", p_revolve_rect, true),
+	[BC_PRIM_REVOLVE_POLYGON] =
+		DESC("revolve_polygon", p_revolve_polygon, true),
+	[BC_PRIM_REVOLVE_STAR] = DESC("revolve_star", p_revolve_star, true),
 };
 
 #undef DESC
@@ -184,6 +289,9 @@ void bc_prim_data_init(struct bc_prim_data *p, enum bc_prim kind)
  * shape this small is still above float resolution at coordinates near 1.
  */
 #define PRIM_MIN_SIZE 1e-6f
+/* Most sides of a regular polygon profile, points of a star: past this a
+ * polygon is a circle to within 1e-4 of its radius. */
+#define PRIM_MAX_SIDES 256.0f
 
 /* Writes "name" or "name[i]" for messages about one component. */
 static const char *comp_name(char *buf, size_t cap, const char *name,
@@ -279,6 +387,88 @@ static int check_shape(const struct bc_prim_data *p, const char *name,
 					      name, (double)v[1]);
 		}
 		break;
+	case BC_PRIM_CUT_SPHERE:
+	case BC_PRIM_CUT_HOLLOW_SPHERE:
+		if (!(fabsf(v[1]) < v[0])) {
+			return bc_errinfo_set(ei, BC_ERANGE,
+					      "%s: cut_height %g is outside "
+					      "(-radius, radius)",
+					      name, (double)v[1]);
+		}
+		break;
+	case BC_PRIM_DEATH_STAR:
+		/* The surfaces must cut each other: otherwise the solid is
+		 * a plain ball, empty, or a ball with a hidden cavity. */
+		if (!(v[2] > fabsf(v[0] - v[1]) && v[2] < v[0] + v[1])) {
+			return bc_errinfo_set(ei, BC_ERANGE,
+					      "%s: d %g must lie between |ra - "
+					      "rb| and ra + rb (the spheres "
+					      "must intersect)",
+					      name, (double)v[2]);
+		}
+		break;
+	case BC_PRIM_ROUNDED_CYLINDER:
+		if (v[1] > v[0] || v[1] > v[2]) {
+			return bc_errinfo_set(ei, BC_ERANGE,
+					      "%s: round %g exceeds the radius "
+					      "or the half height",
+					      name, (double)v[1]);
+		}
+		break;
+	case BC_PRIM_CAPPED_CYLINDER:
+	case BC_PRIM_CAPPED_CONE:
+	case BC_PRIM_VESICA_SEGMENT: {
+		double l2 = 0.0;
+		for (int i = 0; i < 3; i++) {
+			double e = (double)v[3 + i] - (double)v[i];
+			l2 += e * e;
+		}
+		if (!(l2 >= (double)PRIM_MIN_SIZE * PRIM_MIN_SIZE)) {
+			return bc_errinfo_set(ei, BC_ERANGE,
+					      "%s: a and b coincide (the axis "
+					      "needs a length)",
+					      name);
+		}
+		if (p->kind == BC_PRIM_CAPPED_CONE && v[6] == 0.0f &&
+		    v[7] == 0.0f) {
+			return bc_errinfo_set(ei, BC_ERANGE,
+					      "%s: ra and rb are both 0 (a "
+					      "cone needs one)",
+					      name);
+		}
+		if (p->kind == BC_PRIM_VESICA_SEGMENT &&
+		    !((double)v[6] <= 0.5 * sqrt(l2))) {
+			return bc_errinfo_set(ei, BC_ERANGE,
+					      "%s: w %g exceeds half the length "
+					      "of a-b (%g)",
+					      name, (double)v[6], 0.5 * sqrt(l2));
+		}
+		break;
+	}
+	case BC_PRIM_EXTRUDE_POLYGON:
+	case BC_PRIM_REVOLVE_POLYGON:
+	case BC_PRIM_EXTRUDE_STAR:
+	case BC_PRIM_REVOLVE_STAR: {
+		bool star = p->kind == BC_PRIM_EXTRUDE_STAR ||
+			    p->kind == BC_PRIM_REVOLVE_STAR;
+		float lo = star ? 2.0f : 3.0f;
+		if (!(v[1] >= lo && v[1] <= PRIM_MAX_SIDES &&
+		      v[1] == floorf(v[1]))) {
+			return bc_errinfo_set(ei, BC_ERANGE,
+					      "%s: %s %g is not a whole number "
+					      "in [%g, %g]",
+					      name, star ? "points" : "sides",
+					      (double)v[1], (double)lo,
+					      (double)PRIM_MAX_SIDES);
+		}
+		if (star && !(v[2] < 1.0f)) {
+			return bc_errinfo_set(ei, BC_ERANGE,
+					      "%s: inner_ratio %g is outside "
+					      "(0, 1)",
+					      name, (double)v[2]);
+		}
+		break;
+	}
 	default:
 		break;
 	}
@@ -398,6 +588,7 @@ int bc_prim_validate(struct bc_prim_data *p, struct bc_errinfo *ei)
 
 #define DEG2RAD 0.017453292519943295
 #define SQRT3 1.7320508075688772
+#define PI 3.141592653589793
 
 /* Below this squared length a segment is a point: its reciprocal would
  * overflow float, and the shape differs from a sphere by < 1e-15. */
@@ -536,6 +727,94 @@ void bc_prim_pack(const struct bc_prim_data *p, float packed[BC_PRIM_PACKED])
 		packed[1] = v[1];
 		packed[2] = (float)(SQRT3 * r);
 		packed[3] = (float)(1.0 / (12.0 * r * r));
+		break;
+	}
+	case BC_PRIM_CUT_SPHERE:
+	case BC_PRIM_CUT_HOLLOW_SPHERE: {
+		double r = v[0], h = v[1];
+		packed[0] = v[0];
+		packed[1] = v[1];
+		/* The rim of the cut: radius w at height h. */
+		packed[2] = (float)sqrt(fmax(r * r - h * h, 0.0));
+		packed[3] = v[2]; /* hollow: the shell's thickness */
+		break;
+	}
+	case BC_PRIM_DEATH_STAR: {
+		double ra = v[0], rb = v[1], d = v[2];
+		double a = (ra * ra - rb * rb + d * d) / (2.0 * d);
+		packed[0] = v[0];
+		packed[1] = v[1];
+		packed[2] = v[2];
+		/* The circle where the spheres meet: at x = a, radius b. */
+		packed[3] = (float)a;
+		packed[4] = (float)sqrt(fmax(ra * ra - a * a, 0.0));
+		break;
+	}
+	case BC_PRIM_ROUNDED_CYLINDER:
+		/* A cylinder shrunk by the rounding, then offset by it. */
+		packed[0] = v[0] - v[1];
+		packed[1] = v[2] - v[1];
+		packed[2] = v[1];
+		break;
+	case BC_PRIM_CAPPED_CYLINDER:
+	case BC_PRIM_CAPPED_CONE:
+	case BC_PRIM_VESICA_SEGMENT: {
+		/* Midpoint, then the half axis (b - a) / 2. */
+		for (int i = 0; i < 3; i++) {
+			packed[i] = (float)(0.5 * ((double)v[i] +
+						   (double)v[3 + i]));
+			packed[3 + i] = (float)(0.5 * ((double)v[3 + i] -
+						       (double)v[i]));
+		}
+		packed[6] = v[6];
+		packed[7] = v[7]; /* the cone's rb */
+		break;
+	}
+	case BC_PRIM_RHOMBUS: {
+		double la = v[0], lb = v[1];
+		/* The core rhombus keeps its size; round grows it. */
+		packed[0] = v[0];
+		packed[1] = v[1];
+		packed[2] = v[2];
+		packed[3] = v[3];
+		packed[4] = (float)(1.0 / (la * la + lb * lb));
+		break;
+	}
+	case BC_PRIM_EXTRUDE_CIRCLE:
+	case BC_PRIM_REVOLVE_CIRCLE:
+		packed[0] = v[0];
+		packed[7] = v[1];
+		break;
+	case BC_PRIM_EXTRUDE_RECT:
+	case BC_PRIM_REVOLVE_RECT:
+		packed[0] = v[0];
+		packed[1] = v[1];
+		packed[7] = v[2];
+		break;
+	case BC_PRIM_EXTRUDE_POLYGON:
+	case BC_PRIM_REVOLVE_POLYGON: {
+		double an = PI / (double)v[1];
+		/* Apothem, half an edge, the sector's half and whole angle. */
+		packed[0] = (float)((double)v[0] * cos(an));
+		packed[1] = (float)((double)v[0] * sin(an));
+		packed[2] = (float)an;
+		packed[3] = (float)(2.0 * an);
+		packed[7] = v[2];
+		break;
+	}
+	case BC_PRIM_EXTRUDE_STAR:
+	case BC_PRIM_REVOLVE_STAR: {
+		double an = PI / (double)v[1], r = v[0], ri = r * v[2];
+		/* In a folded sector the edge runs from the tip (0, r) to
+		 * the inner corner ri (sin an, cos an). */
+		double ex = ri * sin(an), ey = ri * cos(an) - r;
+		packed[0] = v[0];
+		packed[1] = (float)an;
+		packed[2] = (float)(2.0 * an);
+		packed[3] = (float)ex;
+		packed[4] = (float)ey;
+		packed[5] = (float)(1.0 / (ex * ex + ey * ey));
+		packed[7] = v[3];
 		break;
 	}
 	default:
@@ -854,6 +1133,214 @@ static inline float sdf_tri_prism(const float *k, float x, float y, float z)
 	return extrude(inside ? -d : d, fabsf(z) - k[1]);
 }
 
+/* ---- The new kinds: cut and carved spheres, axis-between-points solids,
+ * 2D profiles extruded and revolved. Each is written as the distance to
+ * the pieces of its boundary (arcs, segments, discs), signed by a
+ * membership test, so it is exact by construction. */
+
+/*
+ * The ball of radius r below the plane y = h, in its profile (q = distance
+ * from the y axis, y). Its boundary is the arc of the circle below the rim
+ * (w, h) and the disc of the cut. A point sees the arc's nearest point when
+ * its direction from the centre is below the rim's (w y <= h q), else the
+ * rim.
+ */
+static inline float sdf_cut_sphere(const float *k, float x, float y, float z)
+{
+	float r = k[0], h = k[1], w = k[2];
+	float q = len2f(x, z), l = len2f(q, y);
+	float arc = w * y <= h * q ? fabsf(l - r) : len2f(q - w, y - h);
+	float disc = len2f(mxf(q - w, 0.0f), y - h);
+	float d = mnf(arc, disc);
+	return (l < r && y < h) ? -d : d;
+}
+
+/* The spherical shell's arc below the rim, thickened by t on both sides. */
+static inline float sdf_cut_hollow_sphere(const float *k, float x, float y,
+					  float z)
+{
+	float r = k[0], h = k[1], w = k[2];
+	float q = len2f(x, z);
+	float arc = w * y <= h * q ? fabsf(len2f(q, y) - r)
+				   : len2f(q - w, y - h);
+	return arc - k[3];
+}
+
+/*
+ * The ball A (radius ra, centre 0) less the ball B (radius rb, centre
+ * (d, 0, 0)), in the profile (x, distance from the x axis). The two arcs of
+ * the boundary meet on the circle (a, b): A's arc where a point's direction
+ * from A's centre is beyond the rim's, B's arc where its direction from B's
+ * centre is; otherwise the rim is nearest.
+ */
+static inline float sdf_death_star(const float *k, float x, float y, float z)
+{
+	float ra = k[0], rb = k[1], d = k[2], a = k[3], b = k[4];
+	float q = len2f(y, z);
+	float la = len2f(x, q), lb = len2f(x - d, q);
+	float rim = len2f(x - a, q - b);
+	float da = a * q - b * x >= 0.0f ? fabsf(la - ra) : rim;
+	float db = (a - d) * q - b * (x - d) >= 0.0f ? fabsf(lb - rb) : rim;
+	float dist = mnf(da, db);
+	return (la < ra && lb > rb) ? -dist : dist;
+}
+
+/* Axial coordinate and distance from the axis of a point about the segment
+ * with midpoint k[0..2] and half axis k[3..5]; *hl gets the half length. */
+static inline void seg_frame(const float *k, float x, float y, float z,
+			     float *along, float *radial, float *hl)
+{
+	float px = x - k[0], py = y - k[1], pz = z - k[2];
+	float l = len3f(k[3], k[4], k[5]), inv = 1.0f / l;
+	float t = (px * k[3] + py * k[4] + pz * k[5]) * inv;
+	float r2 = px * px + py * py + pz * pz - t * t;
+	*along = t;
+	*radial = sqrtf(mxf(r2, 0.0f));
+	*hl = l;
+}
+
+/* The capped cone of the profile: radius r1 at y = -h, r2 at y = h (as
+ * sdf_cone, with its derived values computed here). */
+static inline float cone2(float rho, float y, float h, float r1, float r2)
+{
+	float ex = r2 - r1, ey = 2.0f * h;
+	float k[6] = {h, r1, r2, ex, ey, 1.0f / (ex * ex + ey * ey)};
+	return sdf_cone(k, rho, y, 0.0f);
+}
+
+/*
+ * Vesica: the lens swept about the axis, in the profile (distance from the
+ * axis, |axial|): the arc of the circle centred at (-c, 0) through (w, 0)
+ * and the tip (0, hl), c = (hl^2 - w^2) / (2 w). Points beyond the line
+ * from that centre through the tip are nearest to the tip.
+ */
+static inline float vesica2(float q, float y, float hl, float w)
+{
+	float c = 0.5f * (hl * hl - w * w) / w;
+	y = fabsf(y);
+	if (hl * q < c * (y - hl)) {
+		return len2f(q, y - hl);
+	}
+	return len2f(q + c, y) - (c + w);
+}
+
+/* Rhombus of half diagonals la (x) and lb (z), grown by round, extruded by
+ * the half height along y. In the folded quadrant the boundary is the edge
+ * from (la, 0) to (0, lb). */
+static inline float sdf_rhombus(const float *k, float x, float y, float z)
+{
+	float la = k[0], lb = k[1];
+	float px = fabsf(x), pz = fabsf(z);
+	float d2 = sqrtf(seg2(px, pz, la, 0.0f, -la, lb, k[4]));
+	float side = px * lb + pz * la - la * lb;
+	return extrude((side < 0.0f ? -d2 : d2) - k[3], fabsf(y) - k[2]);
+}
+
+/* x mod m into [0, m) (GLSL's mod). */
+static inline float modp(float x, float m)
+{
+	return x - m * floorf(x / m);
+}
+
+/* Regular polygon of n sides, one vertex on +y: folded into half a sector,
+ * whose boundary is half an edge at the apothem. */
+static inline float polygon2(const float *k, float x, float y)
+{
+	float apo = k[0], half = k[1];
+	float b = modp(atan2f(x, y), k[3]) - k[2];
+	float l = len2f(x, y);
+	float px = l * cosf(b) - apo, py = l * fabsf(sinf(b)) - half;
+	py += clampf(-py, 0.0f, half);
+	float d = len2f(px, py);
+	return px < 0.0f ? -d : d;
+}
+
+/* Star of n points (tips at radius r, one on +y) whose inner corners are at
+ * inner_ratio r: folded into half a sector, the boundary is the edge from
+ * the tip (0, r) to the inner corner. */
+static inline float star2(const float *k, float x, float y)
+{
+	float r = k[0], ex = k[3], ey = k[4];
+	float b = fabsf(modp(atan2f(x, y) + k[1], k[2]) - k[1]);
+	float l = len2f(x, y);
+	float px = l * sinf(b), py = l * cosf(b);
+	float d = sqrtf(seg2(px, py, 0.0f, r, ex, ey, k[5]));
+	return ex * (py - r) - ey * px < 0.0f ? -d : d;
+}
+
+/* The 2D profile of an extruded or revolved kind at (x, y). */
+static inline float profile2(enum bc_prim kind, const float *k, float x,
+			     float y)
+{
+	switch (kind) {
+	case BC_PRIM_EXTRUDE_CIRCLE:
+	case BC_PRIM_REVOLVE_CIRCLE:
+		return len2f(x, y) - k[0];
+	case BC_PRIM_EXTRUDE_RECT:
+	case BC_PRIM_REVOLVE_RECT: {
+		float dx = fabsf(x) - k[0], dy = fabsf(y) - k[1];
+		return len2f(mxf(dx, 0.0f), mxf(dy, 0.0f)) +
+		       mnf(mxf(dx, dy), 0.0f);
+	}
+	case BC_PRIM_EXTRUDE_POLYGON:
+	case BC_PRIM_REVOLVE_POLYGON:
+		return polygon2(k, x, y);
+	default:
+		return star2(k, x, y);
+	}
+}
+
+/* Revolution about y: the profile meets the meridian plane on both sides
+ * of the axis, so a profile wider than its offset is the union of the two
+ * (exact outside, a bound inside where they overlap). */
+static inline float revolve(enum bc_prim kind, const float *k, float x,
+			    float y, float z)
+{
+	float q = len2f(x, z);
+	float d = profile2(kind, k, q - k[7], y);
+	return mnf(d, profile2(kind, k, -q - k[7], y));
+}
+
+static float sdf_new(enum bc_prim kind, const float *k, float x, float y,
+		     float z)
+{
+	float t, q, hl;
+	switch (kind) {
+	case BC_PRIM_CUT_SPHERE:
+		return sdf_cut_sphere(k, x, y, z);
+	case BC_PRIM_CUT_HOLLOW_SPHERE:
+		return sdf_cut_hollow_sphere(k, x, y, z);
+	case BC_PRIM_DEATH_STAR:
+		return sdf_death_star(k, x, y, z);
+	case BC_PRIM_ROUNDED_CYLINDER:
+		return extrude(len2f(x, z) - k[0], fabsf(y) - k[1]) - k[2];
+	case BC_PRIM_CAPPED_CYLINDER:
+		seg_frame(k, x, y, z, &t, &q, &hl);
+		return extrude(q - k[6], fabsf(t) - hl);
+	case BC_PRIM_CAPPED_CONE:
+		seg_frame(k, x, y, z, &t, &q, &hl);
+		return cone2(q, t, hl, k[6], k[7]);
+	case BC_PRIM_VESICA_SEGMENT:
+		seg_frame(k, x, y, z, &t, &q, &hl);
+		return vesica2(q, t, hl, k[6]);
+	case BC_PRIM_RHOMBUS:
+		return sdf_rhombus(k, x, y, z);
+	case BC_PRIM_EXTRUDE_CIRCLE:
+	case BC_PRIM_EXTRUDE_RECT:
+	case BC_PRIM_EXTRUDE_POLYGON:
+	case BC_PRIM_EXTRUDE_STAR:
+		return extrude(profile2(kind, k, x, y), fabsf(z) - k[7]);
+	case BC_PRIM_REVOLVE_CIRCLE:
+	case BC_PRIM_REVOLVE_RECT:
+	case BC_PRIM_REVOLVE_POLYGON:
+	case BC_PRIM_REVOLVE_STAR:
+		return revolve(kind, k, x, y, z);
+	default:
+		/* Not a primitive: absent everywhere. */
+		return INFINITY;
+	}
+}
+
 float bc_prim_sdf(enum bc_prim kind, const float k[BC_PRIM_PACKED], float x,
 		  float y, float z)
 {
@@ -900,8 +1387,7 @@ float bc_prim_sdf(enum bc_prim kind, const float k[BC_PRIM_PACKED], float x,
 	case BC_PRIM_TRI_PRISM:
 		return sdf_tri_prism(k, x, y, z);
 	default:
-		/* Not a primitive: absent everywhere. */
-		return INFINITY;
+		return sdf_new(kind, k, x, y, z);
 	}
 }
 
@@ -954,6 +1440,48 @@ static void bound_solid_angle(struct bc_abv *out, float ra, float deg)
 			     (float)((double)ra * sin(t)));
 	} else {
 		bound_sphere(out, 0.0f, ra);
+	}
+}
+
+/* The box of a 2D profile: e = x0, x1, y0, y1. A polygon's or a star's
+ * extreme points are among its corners (tips at radius r, a star's inner
+ * corners at inner_ratio r between them, one tip on +y). */
+static void profile_extent(enum bc_prim kind, const float *v, double e[4])
+{
+	int n, corners;
+	bool star = kind == BC_PRIM_EXTRUDE_STAR || kind == BC_PRIM_REVOLVE_STAR;
+	switch (kind) {
+	case BC_PRIM_EXTRUDE_CIRCLE:
+	case BC_PRIM_REVOLVE_CIRCLE:
+		e[0] = e[2] = -(double)v[0];
+		e[1] = e[3] = v[0];
+		return;
+	case BC_PRIM_EXTRUDE_RECT:
+	case BC_PRIM_REVOLVE_RECT:
+		e[0] = -(double)v[0];
+		e[1] = v[0];
+		e[2] = -(double)v[1];
+		e[3] = v[1];
+		return;
+	default:
+		break;
+	}
+	n = (int)v[1];
+	corners = star ? 2 * n : n;
+	e[0] = e[2] = INFINITY;
+	e[1] = e[3] = -INFINITY;
+	for (int i = 0; i < corners; i++) {
+		double a = 2.0 * PI * i / corners;
+		double r = star && i % 2 ? (double)v[0] * v[2] : v[0];
+		double x = r * sin(a), y = r * cos(a);
+		e[0] = fmin(e[0], x);
+		e[1] = fmax(e[1], x);
+		e[2] = fmin(e[2], y);
+		e[3] = fmax(e[3], y);
+	}
+	/* Rounding of sin and cos: a hair more, never less. */
+	for (int i = 0; i < 4; i++) {
+		e[i] += (i % 2 ? 1e-6 : -1e-6) * v[0];
 	}
 }
 
@@ -1023,6 +1551,63 @@ void bc_prim_bound(const struct bc_prim_data *p, struct bc_abv *out)
 		bound_box(out, 0.0f, 0.5f * v[0], 0.0f,
 			  (float)(SQRT3 * (double)v[0]), 1.5f * v[0], v[1]);
 		break;
+	case BC_PRIM_CUT_SPHERE:
+	case BC_PRIM_CUT_HOLLOW_SPHERE: {
+		/* Below the equator the cut is the widest part. */
+		double r = v[0], h = v[1];
+		double t = p->kind == BC_PRIM_CUT_HOLLOW_SPHERE ? v[2] : 0.0;
+		double wide = (h >= 0.0 ? r : sqrt(fmax(r * r - h * h, 0.0))) +
+			      t;
+		double y0 = -r - t, y1 = h + t;
+		bound_box(out, 0.0f, (float)(0.5 * (y0 + y1)), 0.0f,
+			  (float)wide, (float)(0.5 * (y1 - y0)), (float)wide);
+		break;
+	}
+	case BC_PRIM_DEATH_STAR:
+		bound_sphere(out, 0.0f, v[0]);
+		break;
+	case BC_PRIM_ROUNDED_CYLINDER:
+		bound_box(out, 0.0f, 0.0f, 0.0f, v[0], v[2], v[0]);
+		break;
+	case BC_PRIM_CAPPED_CYLINDER:
+	case BC_PRIM_VESICA_SEGMENT:
+		bound_capsule(out, v, v + 3, v[6]);
+		break;
+	case BC_PRIM_CAPPED_CONE:
+		bound_capsule(out, v, v + 3, mxf(v[6], v[7]));
+		break;
+	case BC_PRIM_RHOMBUS:
+		bound_box(out, 0.0f, 0.0f, 0.0f, v[0] + v[3], v[2],
+			  v[1] + v[3]);
+		break;
+	case BC_PRIM_EXTRUDE_CIRCLE:
+	case BC_PRIM_EXTRUDE_RECT:
+	case BC_PRIM_EXTRUDE_POLYGON:
+	case BC_PRIM_EXTRUDE_STAR: {
+		double e[4];
+		float depth = v[bc_prim_info(p->kind)->nparams - 1];
+		profile_extent(p->kind, v, e);
+		bound_box(out, (float)(0.5 * (e[0] + e[1])),
+			  (float)(0.5 * (e[2] + e[3])), 0.0f,
+			  (float)(0.5 * (e[1] - e[0])),
+			  (float)(0.5 * (e[3] - e[2])), depth);
+		break;
+	}
+	case BC_PRIM_REVOLVE_CIRCLE:
+	case BC_PRIM_REVOLVE_RECT:
+	case BC_PRIM_REVOLVE_POLYGON:
+	case BC_PRIM_REVOLVE_STAR: {
+		/* The profile at offset from the axis reaches out to the
+		 * farther of its sides. */
+		double e[4], off = v[bc_prim_info(p->kind)->nparams - 1];
+		double reach;
+		profile_extent(p->kind, v, e);
+		reach = fmax(fabs(off + e[1]), fabs(off + e[0]));
+		bound_box(out, 0.0f, (float)(0.5 * (e[2] + e[3])), 0.0f,
+			  (float)reach, (float)(0.5 * (e[3] - e[2])),
+			  (float)reach);
+		break;
+	}
 	default:
 		break;
 	}

@@ -22,6 +22,22 @@
 #define BC_PRIM_SOLID_ANGLE 14u
 #define BC_PRIM_PYRAMID 15u
 #define BC_PRIM_TRI_PRISM 16u
+#define BC_PRIM_CUT_SPHERE 17u
+#define BC_PRIM_CUT_HOLLOW_SPHERE 18u
+#define BC_PRIM_DEATH_STAR 19u
+#define BC_PRIM_ROUNDED_CYLINDER 20u
+#define BC_PRIM_CAPPED_CYLINDER 21u
+#define BC_PRIM_CAPPED_CONE 22u
+#define BC_PRIM_RHOMBUS 23u
+#define BC_PRIM_VESICA_SEGMENT 24u
+#define BC_PRIM_EXTRUDE_CIRCLE 25u
+#define BC_PRIM_EXTRUDE_RECT 26u
+#define BC_PRIM_EXTRUDE_POLYGON 27u
+#define BC_PRIM_EXTRUDE_STAR 28u
+#define BC_PRIM_REVOLVE_CIRCLE 29u
+#define BC_PRIM_REVOLVE_RECT 30u
+#define BC_PRIM_REVOLVE_POLYGON 31u
+#define BC_PRIM_REVOLVE_STAR 32u
 
 // Signed distance to the box [-h, h] given d = |p| - h per axis.
 float bc_box_d(vec3 d)
@@ -203,6 +219,160 @@ float bc_sdf_tri_prism(vec4 k0, vec3 p)
 	return bc_extrude(inside ? -d : d, abs(p.z) - k0.y);
 }
 
+// ---- The later kinds (prim.c: sdf_new and its helpers).
+
+float bc_sdf_cut_sphere(vec4 k0, vec3 p)
+{
+	float r = k0.x, h = k0.y, w = k0.z;
+	float q = length(p.xz), l = length(vec2(q, p.y));
+	float arc = w * p.y <= h * q ? abs(l - r) : length(vec2(q - w, p.y - h));
+	float disc = length(vec2(max(q - w, 0.0), p.y - h));
+	float d = min(arc, disc);
+	return (l < r && p.y < h) ? -d : d;
+}
+
+float bc_sdf_cut_hollow_sphere(vec4 k0, vec3 p)
+{
+	float r = k0.x, h = k0.y, w = k0.z;
+	float q = length(p.xz);
+	float arc = w * p.y <= h * q ? abs(length(vec2(q, p.y)) - r)
+				     : length(vec2(q - w, p.y - h));
+	return arc - k0.w;
+}
+
+float bc_sdf_death_star(vec4 k0, vec4 k1, vec3 p)
+{
+	float ra = k0.x, rb = k0.y, d = k0.z, a = k0.w, b = k1.x;
+	float q = length(p.yz), x = p.x;
+	float la = length(vec2(x, q)), lb = length(vec2(x - d, q));
+	float rim = length(vec2(x - a, q - b));
+	float da = a * q - b * x >= 0.0 ? abs(la - ra) : rim;
+	float db = (a - d) * q - b * (x - d) >= 0.0 ? abs(lb - rb) : rim;
+	float dist = min(da, db);
+	return (la < ra && lb > rb) ? -dist : dist;
+}
+
+// Axial coordinate, distance from the axis and half length about the
+// segment with midpoint k0.xyz and half axis (k0.w, k1.x, k1.y).
+vec3 bc_seg_frame(vec4 k0, vec4 k1, vec3 p)
+{
+	vec3 q = p - k0.xyz, e = vec3(k0.w, k1.x, k1.y);
+	float l = length(e);
+	float t = dot(q, e) / l;
+	return vec3(t, sqrt(max(dot(q, q) - t * t, 0.0)), l);
+}
+
+float bc_cone2(float rho, float y, float h, float r1, float r2)
+{
+	float ex = r2 - r1, ey = 2.0 * h;
+	return bc_sdf_cone(vec4(h, r1, r2, ex),
+			   vec4(ey, 1.0 / (ex * ex + ey * ey), 0.0, 0.0),
+			   vec3(rho, y, 0.0));
+}
+
+float bc_vesica2(float q, float y, float hl, float w)
+{
+	float c = 0.5 * (hl * hl - w * w) / w;
+	y = abs(y);
+	if (hl * q < c * (y - hl)) {
+		return length(vec2(q, y - hl));
+	}
+	return length(vec2(q + c, y)) - (c + w);
+}
+
+float bc_sdf_rhombus(vec4 k0, vec4 k1, vec3 p)
+{
+	float la = k0.x, lb = k0.y;
+	vec2 a = abs(p.xz);
+	float d2 = sqrt(bc_seg2(a, vec2(la, 0.0), vec2(-la, lb), k1.x));
+	float side = a.x * lb + a.y * la - la * lb;
+	return bc_extrude((side < 0.0 ? -d2 : d2) - k0.w, abs(p.y) - k0.z);
+}
+
+float bc_polygon2(vec4 k0, vec2 p)
+{
+	float apo = k0.x, half_edge = k0.y;
+	float b = mod(atan(p.x, p.y), k0.w) - k0.z;
+	float l = length(p);
+	float px = l * cos(b) - apo, py = l * abs(sin(b)) - half_edge;
+	py += clamp(-py, 0.0, half_edge);
+	float d = length(vec2(px, py));
+	return px < 0.0 ? -d : d;
+}
+
+float bc_star2(vec4 k0, vec4 k1, vec2 p)
+{
+	float r = k0.x, ex = k0.w, ey = k1.x;
+	float b = abs(mod(atan(p.x, p.y) + k0.y, k0.z) - k0.y);
+	float l = length(p);
+	float px = l * sin(b), py = l * cos(b);
+	float d = sqrt(bc_seg2(vec2(px, py), vec2(0.0, r), vec2(ex, ey), k1.y));
+	return ex * (py - r) - ey * px < 0.0 ? -d : d;
+}
+
+float bc_profile2(uint kind, vec4 k0, vec4 k1, vec2 p)
+{
+	switch (kind) {
+	case BC_PRIM_EXTRUDE_CIRCLE:
+	case BC_PRIM_REVOLVE_CIRCLE:
+		return length(p) - k0.x;
+	case BC_PRIM_EXTRUDE_RECT:
+	case BC_PRIM_REVOLVE_RECT: {
+		vec2 d = abs(p) - k0.xy;
+		return length(max(d, vec2(0.0))) + min(max(d.x, d.y), 0.0);
+	}
+	case BC_PRIM_EXTRUDE_POLYGON:
+	case BC_PRIM_REVOLVE_POLYGON:
+		return bc_polygon2(k0, p);
+	default:
+		return bc_star2(k0, k1, p);
+	}
+}
+
+float bc_sdf_new(uint kind, vec4 k0, vec4 k1, vec3 p)
+{
+	switch (kind) {
+	case BC_PRIM_CUT_SPHERE:
+		return bc_sdf_cut_sphere(k0, p);
+	case BC_PRIM_CUT_HOLLOW_SPHERE:
+		return bc_sdf_cut_hollow_sphere(k0, p);
+	case BC_PRIM_DEATH_STAR:
+		return bc_sdf_death_star(k0, k1, p);
+	case BC_PRIM_ROUNDED_CYLINDER:
+		return bc_extrude(length(p.xz) - k0.x, abs(p.y) - k0.y) - k0.z;
+	case BC_PRIM_CAPPED_CYLINDER: {
+		vec3 f = bc_seg_frame(k0, k1, p);
+		return bc_extrude(f.y - k1.z, abs(f.x) - f.z);
+	}
+	case BC_PRIM_CAPPED_CONE: {
+		vec3 f = bc_seg_frame(k0, k1, p);
+		return bc_cone2(f.y, f.x, f.z, k1.z, k1.w);
+	}
+	case BC_PRIM_VESICA_SEGMENT: {
+		vec3 f = bc_seg_frame(k0, k1, p);
+		return bc_vesica2(f.y, f.x, f.z, k1.z);
+	}
+	case BC_PRIM_RHOMBUS:
+		return bc_sdf_rhombus(k0, k1, p);
+	case BC_PRIM_EXTRUDE_CIRCLE:
+	case BC_PRIM_EXTRUDE_RECT:
+	case BC_PRIM_EXTRUDE_POLYGON:
+	case BC_PRIM_EXTRUDE_STAR:
+		return bc_extrude(bc_profile2(kind, k0, k1, p.xy),
+				  abs(p.z) - k1.w);
+	case BC_PRIM_REVOLVE_CIRCLE:
+	case BC_PRIM_REVOLVE_RECT:
+	case BC_PRIM_REVOLVE_POLYGON:
+	case BC_PRIM_REVOLVE_STAR: {
+		float q = length(p.xz);
+		return min(bc_profile2(kind, k0, k1, vec2(q - k1.w, p.y)),
+			   bc_profile2(kind, k0, k1, vec2(-q - k1.w, p.y)));
+	}
+	default:
+		return BC_INF;
+	}
+}
+
 // bc_prim_sdf: field of primitive kind at the local point p.
 float bc_prim_sdf(uint kind, vec4 k0, vec4 k1, vec3 p)
 {
@@ -246,7 +416,7 @@ float bc_prim_sdf(uint kind, vec4 k0, vec4 k1, vec3 p)
 	case BC_PRIM_TRI_PRISM:
 		return bc_sdf_tri_prism(k0, p);
 	default:
-		return BC_INF;
+		return bc_sdf_new(kind, k0, k1, p);
 	}
 }
 

@@ -45,9 +45,11 @@ layout(r32ui, binding = 0) uniform writeonly uimage2D img_rgba;
 layout(r32f, binding = 1) uniform writeonly image2D img_depth;
 layout(r32ui, binding = 2) uniform writeonly uimage2D img_ids;
 
-// View instruction: x = kind (5 bits) | leaf flag | primitive index << 11
-// (leaves), y = offset of the parameter record in vec4 units.
-#define VI_LEAF 0x20u
+// View instruction: x = kind (6 bits: primitive kinds reach 32) | leaf
+// flag | primitive index << 11 (leaves), y = offset of the parameter record
+// in vec4 units.
+#define VI_KIND_MASK 63u
+#define VI_LEAF 0x40u
 #define VI_PRIM_SHIFT 11u
 
 // Pending values the fast evaluation keeps in registers (besides the top):
@@ -424,7 +426,7 @@ float field_fast(vec3 p, out uint prim)
 	for (uint i = 0u; i < n; i++) {
 		uvec2 in_ = s_view[i];
 		uint c = s_vcache[i];
-		uint kind = in_.x & 31u;
+		uint kind = in_.x & VI_KIND_MASK;
 		if ((in_.x & VI_LEAF) != 0u) {
 			float v = bc_prim_record(kind, s_cache[c],
 						 s_cache[c + 1u], s_cache[c + 2u],
@@ -483,7 +485,7 @@ float field_general(vec3 p, out uint prim)
 	uint depth = 0u, n = s_nview;
 	for (uint i = 0u; i < n; i++) {
 		uvec2 in_ = view_get(i);
-		uint kind = in_.x & 31u;
+		uint kind = in_.x & VI_KIND_MASK;
 		if ((in_.x & VI_LEAF) != 0u) {
 			float v = bc_prim_record(kind, record(i, in_, 0u),
 						 record(i, in_, 1u),

@@ -51,7 +51,7 @@ export const LIMITS = Object.freeze({
 	SCENE_MAX_NODES: (1 << 22) - 1,
 	SCENE_MAX_DEPTH: 1 << 20,
 	OP_KIND_MAX: 6,
-	PRIM_KIND_MAX: 16,
+	PRIM_KIND_MAX: 32,
 });
 const L = LIMITS;
 

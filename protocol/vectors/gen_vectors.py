@@ -1170,6 +1170,8 @@ def gen_scene():
        deep_scene(1000), 2001, 1001, 1000, 1001, False)
     ok("primitive with 8 floats", scene([scene_prim(7, 4, [0.5] * 8)]),
        1, 1, 0, 1, False)
+    ok("the last kind, 32 (revolve_star)",
+       scene([scene_prim(32, 4, [0.35, 5.0, 0.5, 0.75])]), 1, 1, 0, 1, False)
     bad("empty", b"", "EPROTO_TRUNCATED")
     bad("flags bit 1", u8(2) + u32(1) + SPHERE, "EPROTO_FLAGS")
     bad("camera with NaN", u8(1) + f32bits(0x7fc00000) + f32(0) * 9
@@ -1179,7 +1181,7 @@ def gen_scene():
     bad("node_count larger than the bytes left / 5",
         u8(0) + u32(100) + SPHERE, "EPROTO_COUNT")
     bad("tag 0", u8(0) + u32(1) + u8(0) + SPHERE[1:], "EENUM")
-    bad("tag 17", u8(0) + u32(1) + u8(17) + SPHERE[1:], "EENUM")
+    bad("tag 33", u8(0) + u32(1) + u8(33) + SPHERE[1:], "EENUM")
     bad("operator tag 0x87", u8(0) + u32(3) + u8(0x87) + scene_op(
         1, 0, 0, 0, 2)[1:] + SPHERE * 2, "EENUM")
     bad("operator with one child", scene([scene_op(1, 0, 0, 0, 1),

@@ -53,7 +53,7 @@
 /* The shaders copy these enum values and layouts (shaders/common.glsl,
  * prim.glsl); a change here must be made there too. */
 _Static_assert(BC_OP_SMOOTH_DIFFERENCE == 6, "shaders/common.glsl op kinds");
-_Static_assert(BC_PRIM_TRI_PRISM == 16 && BC_PRIM_COUNT == 17,
+_Static_assert(BC_PRIM_REVOLVE_STAR == 32 && BC_PRIM_COUNT == 33,
                "shaders/prim.glsl primitive kinds");
 _Static_assert(BC_ABV_CAPSULE == 3, "shaders/common.glsl ABV shapes");
 _Static_assert(BC_DEBUG_OVERLAPS == 2, "shaders/common.glsl debug modes");

@@ -144,6 +144,9 @@ static const struct family families[] = {
     {"gears", {.teeth = 12}, 400},
     {"many-gears", {.count = 6}, 200},
     {"many-spheres", {.count = 300}, 400},
+    /* Every primitive kind, sharp and blended. */
+    {"catalogue", {0}, 400},
+    {"catalogue", {.blend = BC_GEN_BLEND_SMOOTH, .seed = 3}, 400},
 };
 
 /* Nested binary operators leaning right, n deep: every view's stack grows

@@ -52,8 +52,8 @@
 /* Largest primitive size parameter (world units) and largest |coordinate|:
  * keeps squared distances far from float overflow. */
 #define BC_PARAM_MAX_ABS 1.0e6f
-/* Floats of shape parameters a primitive may have (round cone: a, b, two
- * radii). */
+/* Floats of shape parameters a primitive may have (round cone and capped
+ * cone: a, b, two radii). */
 #define BC_PRIM_MAX_PARAMS 8
 /* Floats of packed shape data in a primitive's parameter record. */
 #define BC_PRIM_PACKED 8
@@ -61,6 +61,10 @@
 #define BC_NONE UINT32_MAX
 
 /* ---- Node kinds -------------------------------------------------------- */
+
+/* Primitive kinds (docs/primitives.md). The EXTRUDE_ and REVOLVE_ kinds are
+ * 2D profiles in the xy plane extruded along z by half_depth, or revolved
+ * about the y axis with the profile's origin offset from the axis. */
 
 enum bc_prim {
 	BC_PRIM_INVALID = 0,
@@ -80,6 +84,22 @@ enum bc_prim {
 	BC_PRIM_SOLID_ANGLE,
 	BC_PRIM_PYRAMID,
 	BC_PRIM_TRI_PRISM,
+	BC_PRIM_CUT_SPHERE,
+	BC_PRIM_CUT_HOLLOW_SPHERE,
+	BC_PRIM_DEATH_STAR,
+	BC_PRIM_ROUNDED_CYLINDER,
+	BC_PRIM_CAPPED_CYLINDER,
+	BC_PRIM_CAPPED_CONE,
+	BC_PRIM_RHOMBUS,
+	BC_PRIM_VESICA_SEGMENT,
+	BC_PRIM_EXTRUDE_CIRCLE,
+	BC_PRIM_EXTRUDE_RECT,
+	BC_PRIM_EXTRUDE_POLYGON,
+	BC_PRIM_EXTRUDE_STAR,
+	BC_PRIM_REVOLVE_CIRCLE,
+	BC_PRIM_REVOLVE_RECT,
+	BC_PRIM_REVOLVE_POLYGON,
+	BC_PRIM_REVOLVE_STAR,
 	BC_PRIM_COUNT
 };
 

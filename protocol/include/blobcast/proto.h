@@ -192,8 +192,8 @@ enum bc_proto_edit_kind {
 /* Operator kinds as the scene encoding and the OP_KIND field number them
  * (the same numbers as blobtree's enum bc_op). */
 #define BC_PROTO_OP_KIND_MAX 6u
-/* Primitive kinds run 1..16 (blobtree's enum bc_prim). */
-#define BC_PROTO_PRIM_KIND_MAX 16u
+/* Primitive kinds run 1..32 (blobtree's enum bc_prim). */
+#define BC_PROTO_PRIM_KIND_MAX 32u
 
 /* ---- Message fields ------------------------------------------------------ */
 
