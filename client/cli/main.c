@@ -11,6 +11,7 @@
 
 #include "blobcast/alloc.h"
 #include "blobcast/log.h"
+#include "cmd_mesh.h"
 #include "cmd_render.h"
 #if defined(BLOBCAST_CLI_HAVE_GEN)
 #include "cmd_gen.h"
@@ -50,6 +51,7 @@ static void usage(FILE *out)
 		"\n"
 		"Local commands:\n"
 		"  render      render a scene file to images on this machine\n"
+		"  mesh        write a triangle mesh (.obj, .ply, .stl) of a scene\n"
 #if defined(BLOBCAST_CLI_HAVE_GEN)
 		"  gen         print a generated scene (the paper's synthetic\n"
 		"              families and more) as JSON\n"
@@ -76,6 +78,9 @@ static int dispatch(int argc, char **argv)
 	const char *cmd = argv[0];
 	if (strcmp(cmd, "render") == 0) {
 		return bc_cli_render(argc, argv);
+	}
+	if (strcmp(cmd, "mesh") == 0) {
+		return bc_cli_mesh(argc, argv);
 	}
 	if (strcmp(cmd, "gen") == 0) {
 #if defined(BLOBCAST_CLI_HAVE_GEN)

@@ -1,0 +1,71 @@
+/*
+ * Triangle meshes of a blobtree's surface: surface nets on a uniform grid
+ * over a box, visited through an octree of regions so that only the cells
+ * near the surface are evaluated, each region through the pruned view of
+ * the primitives whose ABVs meet it (blobtree's sparse evaluation); and
+ * writers for OBJ, PLY and STL. docs/mesh.md explains the method and what
+ * the output guarantees.
+ */
+#ifndef BLOBCAST_MESH_H
+#define BLOBCAST_MESH_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "blobcast/blobtree.h"
+#include "blobcast/error.h"
+
+/* Largest grid: cells along the box's longest side. 4096^2 surface cells
+ * already make a mesh of tens of millions of triangles. */
+#define BC_MESH_MAX_RESOLUTION 4096u
+#define BC_MESH_DEFAULT_RESOLUTION 128u
+
+struct bc_mesh_opts {
+	/* Cells along the longest side of the box (0: default). */
+	uint32_t resolution;
+	/* The box to mesh; all zero: the tree's box grown by two cells. The
+	 * solid is clipped to it (closed by the box's faces). */
+	float lo[3], hi[3];
+	/* Called now and then with the fraction done (may be NULL). */
+	void (*progress)(void *ctx, double done);
+	void *ctx;
+};
+
+struct bc_mesh {
+	float (*pos)[3];     /* vertices */
+	uint8_t (*rgb)[3];   /* per-vertex colour (the primitive's) */
+	uint32_t (*tri)[3];  /* triangles, counter-clockwise seen from outside */
+	uint32_t nverts, ntris;
+	uint32_t cap_verts, cap_tris;
+	float cell;          /* grid cell size (world units) */
+	uint64_t evals;      /* field evaluations spent */
+	uint64_t cells_visited; /* grid cells in regions that were evaluated */
+};
+
+/* Meshes the surface of t into *m (init/finish on caller memory;
+ * bc_mesh_finish frees). Returns 0, BC_EINVAL (empty tree, or a box with
+ * no volume), BC_ERANGE (resolution above BC_MESH_MAX_RESOLUTION) or
+ * BC_ENOMEM, with the reason in ei. */
+int bc_mesh_build(struct bc_mesh *m, const struct bc_tree *t,
+                  const struct bc_mesh_opts *opts, struct bc_errinfo *ei);
+void bc_mesh_finish(struct bc_mesh *m);
+
+enum bc_mesh_format {
+	BC_MESH_FORMAT_INVALID = 0,
+	BC_MESH_FORMAT_OBJ, /* text, v x y z r g b (colours in [0, 1]) */
+	BC_MESH_FORMAT_PLY, /* binary little endian, uchar colours */
+	BC_MESH_FORMAT_STL, /* binary, facet normals */
+	BC_MESH_FORMAT_COUNT
+};
+
+/* The format a file name's extension names (.obj, .ply, .stl, any case),
+ * BC_MESH_FORMAT_INVALID otherwise. */
+enum bc_mesh_format bc_mesh_format_of(const char *path);
+
+/* Writes m to path in format, atomically (a temporary file renamed over
+ * path). Returns 0, BC_EINVAL (format) or BC_EIO with the reason in ei. */
+int bc_mesh_write(const struct bc_mesh *m, const char *path,
+                  enum bc_mesh_format format, struct bc_errinfo *ei);
+
+#endif
