@@ -18,26 +18,19 @@
 
 #include "blobcast/alloc.h"
 #include "client_impl.h"
+#include "ws_frames.h"
 
 /* The handshake's answer must fit in this many bytes. */
 #define WS_MAX_RESPONSE 8192u
 /* Bytes taken from the stream at a time. */
 #define WS_RAW 65536u
 
-enum { OP_CONT = 0, OP_TEXT = 1, OP_BIN = 2, OP_CLOSE = 8, OP_PING = 9,
-       OP_PONG = 10 };
+enum { OP_BIN = 2, OP_PONG = 10 };
 
 struct bc__ws {
 	uint8_t raw[WS_RAW];
-	size_t rpos, rlen;  /* unparsed bytes: raw[rpos, rlen) */
-	uint8_t hdr[14];    /* the frame header being read */
-	size_t hhave;
-	bool in_payload;
-	uint8_t op;
-	uint64_t left;      /* payload bytes still to come */
-	uint8_t ctl[125];   /* a control frame's payload */
-	size_t ctl_have;
-	bool closed;
+	size_t rpos, rlen; /* unparsed bytes: raw[rpos, rlen) */
+	struct bc_ws_rx rx;
 };
 
 static const char ws_guid[] = "258EAFA5-E914-47DA-95CA-C5AB0DC85B11";
@@ -241,113 +234,36 @@ int bc__client_io_write(struct bc_client *c, const void *data, size_t len,
 	return send_frame(c, OP_BIN, data, len, deadline, what);
 }
 
-/* Bytes of a frame header needed once hdr[0..1] are known. */
-static size_t header_size(const uint8_t *hdr)
-{
-	size_t n = 2;
-	uint8_t l = hdr[1] & 0x7fu;
-	if (l == 126) {
-		n += 2;
-	} else if (l == 127) {
-		n += 8;
-	}
-	return n;
-}
-
 /* Parses what raw holds: payload bytes of data frames into buf (up to
- * cap). Returns the bytes given, or BC__CLIENT_EOF after a close frame,
- * or the sticky error. */
+ * cap), pings answered. Returns the bytes given, or BC__CLIENT_EOF after a
+ * close frame, or the sticky error. */
 static long parse(struct bc_client *c, uint8_t *buf, size_t cap,
 		  double deadline)
 {
 	struct bc__ws *w = c->ws;
 	size_t out = 0;
-	while (w->rpos < w->rlen && out < cap && !w->closed) {
-		if (!w->in_payload) {
-			w->hdr[w->hhave++] = w->raw[w->rpos++];
-			if (w->hhave < 2 || w->hhave < header_size(w->hdr)) {
-				continue;
-			}
-			w->op = w->hdr[0] & 0x0fu;
-			if (w->hdr[0] & 0x70u) {
-				return bc__client_fail(c, BC_EPARSE,
-						       "WebSocket: reserved "
-						       "bits set");
-			}
-			if (w->hdr[1] & 0x80u) {
-				return bc__client_fail(c, BC_EPARSE,
-						       "WebSocket: a masked "
-						       "frame from the server");
-			}
-			if ((w->hdr[1] & 0x7fu) < 126) {
-				w->left = w->hdr[1] & 0x7fu;
-			} else if ((w->hdr[1] & 0x7fu) == 126) {
-				w->left = (uint64_t)w->hdr[2] << 8 | w->hdr[3];
-			} else {
-				w->left = 0;
-				for (int i = 0; i < 8; i++) {
-					w->left = w->left << 8 | w->hdr[2 + i];
-				}
-				if (w->left >> 63) {
-					return bc__client_fail(
-						c, BC_EPARSE,
-						"WebSocket: a length over "
-						"2^63");
-				}
-			}
-			if (w->op >= OP_CLOSE &&
-			    (w->left > sizeof(w->ctl) || !(w->hdr[0] & 0x80u))) {
-				return bc__client_fail(c, BC_EPARSE,
-						       "WebSocket: a control "
-						       "frame over 125 bytes "
-						       "or fragmented");
-			}
-			if (w->op == OP_TEXT ||
-			    (w->op > OP_BIN && w->op < OP_CLOSE) ||
-			    w->op > OP_PONG) {
-				return bc__client_fail(c, BC_EPARSE,
-						       "WebSocket: opcode %u "
-						       "where binary frames "
-						       "were expected",
-						       (unsigned)w->op);
-			}
-			w->hhave = 0;
-			w->ctl_have = 0;
-			w->in_payload = true;
+	while (w->rpos < w->rlen && out < cap && !w->rx.closed) {
+		size_t used, produced;
+		enum bc_ws_event ev;
+		int rc = bc_ws_rx_feed(&w->rx, w->raw + w->rpos,
+				       w->rlen - w->rpos, &used, buf + out,
+				       cap - out, &produced, &ev);
+		w->rpos += used;
+		out += produced;
+		if (rc) {
+			return bc__client_fail(c, BC_EPARSE, "WebSocket: %s",
+					       w->rx.err);
 		}
-		if (w->in_payload) {
-			size_t avail = w->rlen - w->rpos;
-			size_t take = avail < w->left ? avail : (size_t)w->left;
-			if (w->op < OP_CLOSE) {
-				if (take > cap - out) {
-					take = cap - out;
-				}
-				memcpy(buf + out, w->raw + w->rpos, take);
-				out += take;
-			} else {
-				memcpy(w->ctl + w->ctl_have, w->raw + w->rpos,
-				       take);
-				w->ctl_have += take;
-			}
-			w->rpos += take;
-			w->left -= take;
-			if (w->left > 0) {
-				continue;
-			}
-			w->in_payload = false;
-			if (w->op == OP_PING) {
-				int rc = send_frame(c, OP_PONG, w->ctl,
-						    w->ctl_have, deadline,
-						    "WebSocket pong");
-				if (rc) {
-					return rc;
-				}
-			} else if (w->op == OP_CLOSE) {
-				w->closed = true;
-			}
+		if (ev == BC_WS_PING &&
+		    (rc = send_frame(c, OP_PONG, w->rx.ctl, w->rx.ctl_len,
+				     deadline, "WebSocket pong"))) {
+			return rc;
+		}
+		if (used == 0 && produced == 0 && ev == BC_WS_NONE) {
+			break;
 		}
 	}
-	if (out == 0 && w->closed) {
+	if (out == 0 && w->rx.closed) {
 		return BC__CLIENT_EOF;
 	}
 	return (long)out;
