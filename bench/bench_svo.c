@@ -13,7 +13,8 @@
  *   arith   the octree built with each arithmetic at one threshold: what
  *           better ranges buy in construction time and leaf size.
  *   render  `svo` against the CPU `tiled` renderer on the same scenes,
- *           cameras and thread count, side by side in one run.
+ *           cameras and thread count, side by side in one run, the svo
+ *           octree pruned with RevAA and with IA (build and trace each).
  *
  * Scenes: Gears is `gen gears --teeth 100` (RPN length 482; the thesis's
  * has 506-571), Many Spheres `gen many-spheres` (5489, as the thesis's),
@@ -392,9 +393,10 @@ static int bench_render(bool quick)
 	uint32_t side = quick ? 128 : 256;
 	printf("## svo against tiled, %ux%u, 1 thread\n\n", side, side);
 	printf("| Scene | prims | tiled (ms) | svo RevAA build (ms) | "
-	       "svo RevAA trace (ms) | svo IA trace (ms) | tiled / svo trace "
+	       "svo IA build (ms) | svo RevAA trace (ms) | svo IA trace (ms) "
+	       "| RevAA / IA build | RevAA / IA trace | tiled / svo IA trace "
 	       "|\n");
-	printf("|---|---|---|---|---|---|---|\n");
+	printf("|---|---|---|---|---|---|---|---|---|---|\n");
 	for (size_t s = 0; s < sizeof(scenes) / sizeof(scenes[0]); s++) {
 		struct bc_camera cam;
 		struct bc_tree *t = make(&scenes[s], &cam);
@@ -413,9 +415,10 @@ static int bench_render(bool quick)
 		tt *= (double)side * side / 1e3;
 		tr *= (double)side * side / 1e3;
 		ti *= (double)side * side / 1e3;
-		printf("| %s | %u | %.1f | %.1f | %.1f | %.1f | %.2f |\n",
-		       scenes[s].label, bc_tree_prim_count(t), tt, build, tr,
-		       ti, tt / tr);
+		printf("| %s | %u | %.1f | %.1f | %.1f | %.1f | %.1f | %.2f "
+		       "| %.2f | %.2f |\n",
+		       scenes[s].label, bc_tree_prim_count(t), tt, build, b2,
+		       tr, ti, build / b2, tr / ti, tt / ti);
 		fflush(stdout);
 		bc_tree_destroy(t);
 	}

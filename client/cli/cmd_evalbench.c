@@ -49,7 +49,7 @@ static void usage(FILE *f)
 	    "stdin, or 'default' -- and prints the results as JSON.\n"
 	    "\n"
 	    "  --range A        ia | aa | revaa: the range arithmetic that\n"
-	    "                   prunes (default revaa)\n"
+	    "                   prunes (default ia)\n"
 	    "  --grid N         prune a uniform N^3 grid over the scene's "
 	    "box,\n"
 	    "                   each voxel from the whole tree, 1..%u\n"
@@ -101,7 +101,7 @@ static int parse(int argc, char **argv, struct args *a)
 {
 	bool thr = false;
 	memset(a, 0, sizeof(*a));
-	a->arith = BC_RANGE_REVAA;
+	a->arith = BC_SVO_DEFAULT_ARITH;
 	a->points = EB_DEFAULT_POINTS;
 	a->seed = 1;
 	for (int i = 1; i < argc; i++) {

@@ -75,7 +75,7 @@ void bc_cli_render_usage(FILE *out)
 		"  --gl-platform P    gl backend only: auto | device | surfaceless\n"
 		"                     | osmesa (default auto)\n"
 		"  --range A          svo backend only: interval arithmetic ia |\n"
-		"                     aa | revaa (default: the backend's, revaa)\n"
+		"                     aa | revaa (default: the backend's, ia)\n"
 		"  --threshold T      svo backend only: node-count threshold that\n"
 		"                     stops subdivision (default: the backend's)\n"
 		"  --max-depth D      svo backend only: octree depth limit\n"

@@ -320,7 +320,7 @@ int bc_svo_build(struct bc_svo **out, const struct bc_svo_rpn *rpn,
 	s->opts.max_bytes =
 	    opts->max_bytes ? opts->max_bytes : BC_SVO_DEFAULT_MAX_BYTES;
 	if (s->opts.arith == BC_RANGE_DEFAULT) {
-		s->opts.arith = BC_RANGE_REVAA;
+		s->opts.arith = BC_SVO_DEFAULT_ARITH;
 	}
 	/* A cube about the tree's box, grown so the band around the surface
 	 * fits and by a little more so surface points on the box are inside.

@@ -172,7 +172,7 @@ int bc_svo_ranger_create(struct bc_svo_ranger **out, const struct bc_svo_rpn *r,
 	struct bc_svo_ranger *g;
 	*out = NULL;
 	if (arith == BC_RANGE_DEFAULT) {
-		arith = BC_RANGE_REVAA;
+		arith = BC_SVO_DEFAULT_ARITH;
 	}
 	if ((int)arith <= BC_RANGE_DEFAULT || arith >= BC_RANGE_COUNT) {
 		return BC_EENUM;

@@ -62,7 +62,7 @@ enum bc_backend {
 };
 
 enum bc_range_arith {
-	BC_RANGE_DEFAULT = 0, /* the backend's choice (RevAA) */
+	BC_RANGE_DEFAULT = 0, /* the backend's choice (IA: svo.h) */
 	BC_RANGE_IA,
 	BC_RANGE_AA,
 	BC_RANGE_REVAA,
