@@ -7,15 +7,17 @@
  * applied, saved edit and every mirror built from EDIT_APPLIED diverged.
  *
  * Each round opens a session and fills it in a layout of member slots:
- * stalled members (they ask for one big raw frame and never read again, so
- * the frame fills their queue to a little below the limit and a few
- * EDIT_APPLIED later they overflow; all at once, or in three waves), editors
- * sending large parameter batches, readers, and closers that go away at
- * the moment of the drops (a close, a close in the middle of a message, a
- * SESSION_LEAVE). Every editor must receive the acknowledgement of every
- * edit it sent, in order, every live member must see every order number,
- * and a joiner's SCENE_STATE must equal the mirror each live member built
- * from its EDIT_APPLIED messages, byte for byte.
+ * stalled members (they read up to their first frame, ask one raw
+ * snapshot with depth and ids and never read again, so the snapshot fills
+ * their queue to a little below the limit and a few EDIT_APPLIED later
+ * they overflow; all at once, or in two waves), editors sending large
+ * parameter batches, readers, and closers that go away at the moment of
+ * the drops (a close, a close in the middle of a message, a
+ * SESSION_LEAVE). The layouts put live members behind stalled ones,
+ * between them and before them. Every editor must receive the acknowledgement
+ * of every edit it sent, in order, every live member must see every order
+ * number, and a joiner's SCENE_STATE must equal the mirror each live member
+ * built from its EDIT_APPLIED messages, byte for byte.
  *
  * BLOBCASTD in the environment names another daemon to test (a bisect).
  */
