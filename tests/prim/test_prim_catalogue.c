@@ -237,7 +237,7 @@ static double boundary_upper(const struct prim *p, const double q[3],
 {
 	bool in0 = inside(p, q);
 	double best = INFINITY;
-	for (int i = 0; i < 200; i++) {
+	for (int i = 0; i < 120; i++) {
 		double d[3], n, a = 0, b = reach;
 		double e[3];
 		do {

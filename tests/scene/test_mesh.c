@@ -138,9 +138,9 @@ static void scenes_mesh_closed_near_the_surface(void)
 		uint32_t res;
 		double vox, visited;
 	} scenes[] = {
-	    {"catalogue", {.seed = 1}, 160, 0.05, 0.25},
+	    {"catalogue", {.seed = 1}, 160, 0.06, 0.25},
 	    {"gears", {.teeth = 12}, 128, 0.02, 0.25},
-	    {"fig18", {.count = 24, .kind = BC_GEN_KIND_SPHERES}, 96, 0.02, 0.9},
+	    {"fig18", {.count = 24, .kind = BC_GEN_KIND_SPHERES}, 80, 0.03, 0.9},
 	};
 	for (size_t s = 0; s < sizeof(scenes) / sizeof(scenes[0]); s++) {
 		struct bc_tree *t = bc_tree_create();
