@@ -110,6 +110,10 @@ static void svo_matches_tiled_on_generated_scenes(void)
 	    {"fig18", {.count = 32}, BC_RANGE_REVAA},
 	    {"fig16", {.level = 2}, BC_RANGE_REVAA},
 	    {"random", {.count = 60, .seed = 18}, BC_RANGE_REVAA},
+	    /* Every primitive kind (the later ones through the Lipschitz
+	     * enclosure). */
+	    {"catalogue", {0}, BC_RANGE_IA},
+	    {"catalogue", {.blend = BC_GEN_BLEND_SMOOTH}, BC_RANGE_REVAA},
 	};
 	for (size_t i = 0; i < sizeof(scenes) / sizeof(scenes[0]); i++) {
 		struct bc_tree *t = bc_tree_create();
