@@ -72,7 +72,7 @@ static int node(struct ref *r, uint32_t depth)
 		}
 		return 0;
 	}
-	if (tag < 1 || tag > 16 || floats(r, 7, NULL) || rd(r, 1, &v) ||
+	if (tag < 1 || tag > 32 || floats(r, 7, NULL) || rd(r, 1, &v) ||
 	    v > 1 || floats(r, 3 * v, NULL) || rd(r, 1, &v) ||
 	    v > BC_PROTO_MAX_PRIM_PARAMS || floats(r, v, NULL)) {
 		return -1;
