@@ -4,7 +4,9 @@
  * that one port (libblobcast over wss://, the path the page takes too):
  * 30 sessions are created and spread over all three daemons, each stored
  * on the daemon that WELCOMEd its client; every session reaches the same
- * daemon again; after kill -9 of one daemon only its sessions fail and the
+ * daemon again, and the page's WebSocket and codec (browser_route.mjs, in
+ * node) reach the same daemon as libblobcast; after kill -9 of one daemon
+ * only its sessions fail and the
  * others keep serving; restarted on its data directory, its sessions come
  * back with every acknowledged edit. Skipped (77) without nginx,
  * websockify or openssl.
@@ -244,6 +246,41 @@ static void cluster(void)
 		bc_client_destroy(c);
 	}
 
+	/* 2b. The browser's path: the page's WebSocket and codec land on
+	 *     the daemon libblobcast reached, for every session. */
+	{
+		char cmd[4096], line[128];
+		size_t at;
+		int seen = 0;
+		FILE *p;
+		at = (size_t)snprintf(cmd, sizeof(cmd),
+				      "NODE_EXTRA_CA_CERTS=%s node "
+				      "--experimental-websocket "
+				      "%s/tests/deploy/browser_route.mjs %d",
+				      ca, SOURCE_DIR, front_port);
+		for (int i = 0; i < NSESS && at < sizeof(cmd) - 32; i++) {
+			at += (size_t)snprintf(cmd + at, sizeof(cmd) - at,
+					       " %s", sessions[i].name);
+		}
+		p = popen(cmd, "r");
+		REQUIRE(p != NULL);
+		while (fgets(line, sizeof(line), p)) {
+			char name[32];
+			int k = -1;
+			if (sscanf(line, "%31s node-%d", name, &k) != 2) {
+				continue;
+			}
+			for (int i = 0; i < NSESS; i++) {
+				if (strcmp(sessions[i].name, name) == 0) {
+					CHECK_EQ_INT(k, sessions[i].node);
+					seen++;
+				}
+			}
+		}
+		CHECK_EQ_INT(pclose(p), 0);
+		CHECK_EQ_INT(seen, NSESS);
+	}
+
 	/* 3. kill -9 one daemon: its sessions fail, the others serve. */
 	CHECK(read_pid(victim) > 0);
 	kill(read_pid(victim), SIGKILL);
@@ -301,9 +338,10 @@ int main(int argc, char **argv)
 	int rc, status;
 	signal(SIGPIPE, SIG_IGN);
 	bc_log_init(BC_LOG_ERROR);
-	if (!have("nginx") || !have("websockify") || !have("openssl")) {
-		fprintf(stderr, "skipped: nginx, websockify or openssl is "
-				"missing (deploy/install-deps.sh)\n");
+	if (!have("nginx") || !have("websockify") || !have("openssl") ||
+	    !have("node")) {
+		fprintf(stderr, "skipped: nginx, websockify, openssl or node "
+				"is missing (deploy/install-deps.sh)\n");
 		return 77;
 	}
 	snprintf(dir, sizeof(dir), "/tmp/bc-cluster-test-%d", (int)getpid());
