@@ -5,7 +5,8 @@
  * checks (wrong CA, no CA given, a name that does not match after a
  * SIGHUP reloaded the certificate, --insecure), a plain client on the TLS
  * port and a TLS client on a plain port both refused cleanly with the
- * daemon still serving, the token never leaving before the handshake
+ * daemon still serving, a stalled handshake held to the HELLO timeout,
+ * the token never leaving before the handshake
  * (a recorder and a man in the middle with an untrusted certificate), and
  * the start-up refusal of tokens on a plain listener reachable from other
  * hosts.
@@ -307,6 +308,33 @@ static void wrong_protocol_on_either_port_is_refused_cleanly(void)
 	CHECK(kill(tls_d.pid, 0) == 0 && kill(plain_d.pid, 0) == 0);
 }
 
+/* A handshake that never completes is held to the HELLO timeout (5 s):
+ * the time before HELLO includes the handshake. */
+static void a_stalled_handshake_meets_the_hello_timeout(void)
+{
+	struct conn raw;
+	int64_t t0;
+	char b[64];
+	ssize_t n;
+	memset(&raw, 0, sizeof(raw));
+	raw.fd = tcp_connect(tls_port);
+	REQUIRE(raw.fd >= 0);
+	t0 = t_now_ms();
+	/* The start of a ClientHello record, and then nothing. */
+	CHECK_EQ_INT(send_raw(&raw, "\x16\x03\x01\x02\x00\x01", 6), 0);
+	{
+		struct pollfd p = {.fd = raw.fd, .events = POLLIN};
+		CHECK_EQ_INT(poll(&p, 1, 9000), 1);
+	}
+	while ((n = recv(raw.fd, b, sizeof(b), 0)) > 0) {
+	}
+	CHECK_EQ_INT(n, 0);
+	CHECK(t_now_ms() - t0 >= 4500);
+	CHECK(t_now_ms() - t0 < 9000);
+	close(raw.fd);
+	CHECK(kill(tls_d.pid, 0) == 0);
+}
+
 /* ---- peers that are not blobcastd ---------------------------------------- */
 
 /* A listener on an ephemeral loopback port; *port receives it. */
@@ -556,6 +584,8 @@ static const struct bc_test tests[] = {
 	 untrusted_certificates_are_refused},
 	{"wrong_protocol_on_either_port_is_refused_cleanly",
 	 wrong_protocol_on_either_port_is_refused_cleanly},
+	{"a_stalled_handshake_meets_the_hello_timeout",
+	 a_stalled_handshake_meets_the_hello_timeout},
 	{"token_never_sent_before_the_handshake",
 	 token_never_sent_before_the_handshake},
 	{"tokens_in_clear_need_allow_plaintext",
