@@ -7,9 +7,13 @@
  * access tokens of the --config file.
  */
 #include <signal.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
 
 #include <jansson.h>
 
@@ -261,6 +265,42 @@ static void warn_if_exposed(struct bc_srv *srv)
 	       srv->cfg.listen);
 }
 
+/* systemd's readiness protocol (sd_notify(3), Type=notify): one datagram
+ * to the socket $NOTIFY_SOCKET names (a path, or @ for the abstract
+ * namespace). Without that variable, nothing. Failures are logged and
+ * otherwise ignored: the service manager then sees a timeout. */
+static void notify_systemd(const char *state)
+{
+	const char *path = getenv("NOTIFY_SOCKET");
+	struct sockaddr_un sa = {.sun_family = AF_UNIX};
+	size_t n;
+	socklen_t len;
+	int fd;
+	if (!path || !*path) {
+		return;
+	}
+	n = strlen(path);
+	if ((path[0] != '/' && path[0] != '@') || n >= sizeof(sa.sun_path)) {
+		bc_log(BC_LOG_WARN, "NOTIFY_SOCKET %s: not a socket path", path);
+		return;
+	}
+	memcpy(sa.sun_path, path, n);
+	if (path[0] == '@') {
+		sa.sun_path[0] = '\0';
+	}
+	len = (socklen_t)(offsetof(struct sockaddr_un, sun_path) + n +
+			  (path[0] == '/'));
+	fd = socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+	if (fd < 0 ||
+	    sendto(fd, state, strlen(state), MSG_NOSIGNAL,
+		   (const struct sockaddr *)&sa, len) < 0) {
+		bc_log(BC_LOG_WARN, "NOTIFY_SOCKET %s: cannot notify", path);
+	}
+	if (fd >= 0) {
+		close(fd);
+	}
+}
+
 /* SIGHUP also re-reads the certificate and key (a renewed certificate
  * takes effect without a restart): new connections get the new ones,
  * established ones keep theirs. A pair that does not load leaves the
@@ -352,6 +392,7 @@ static void on_signal(uv_signal_t *sig, int signum)
 		return;
 	}
 	bc_log(BC_LOG_INFO, "signal %d: saving sessions and stopping", signum);
+	notify_systemd("STOPPING=1");
 	srv->stopping = true;
 	bc_sessions_save_all(srv);
 	bc_net_close_all(srv);
@@ -588,6 +629,8 @@ int main(int argc, char **argv)
 	warn_if_exposed(&srv);
 	fprintf(stderr, "blobcastd: backend %s, data in %s\n",
 		bc_backend_name(srv.cfg.backend), srv.cfg.data_dir);
+	/* Sessions restored and listeners up: clients may come. */
+	notify_systemd("READY=1");
 	uv_run(srv.loop, UV_RUN_DEFAULT);
 	rc = 0;
 out:

@@ -2,7 +2,8 @@
 # deploy/systemd: the unit passes `systemd-analyze verify` (with ExecStart
 # pointed at the blobcastd just built, since the unit names its installed
 # path), keeps the hardening docs/deploy.md promises, and the example
-# configuration starts a daemon (its TLS files replaced by ones made here).
+# configuration starts a daemon (its TLS files replaced by ones made here)
+# that tells systemd when it is ready and when it stops (sd_notify).
 #
 #   test_systemd_unit.sh BLOBCASTD
 set -euo pipefail
@@ -24,8 +25,10 @@ if ! command -v systemd-analyze >/dev/null 2>&1; then
 fi
 tmp=$(mktemp -d /tmp/bc-unit-test.XXXXXX)
 pid=
+listener=
 cleanup() {
 	if [ -n "$pid" ]; then kill "$pid" 2>/dev/null || true; fi
+	if [ -n "$listener" ]; then kill "$listener" 2>/dev/null || true; fi
 	rm -rf "$tmp"
 }
 trap cleanup EXIT
@@ -46,7 +49,7 @@ else
 fi
 
 # 2. The hardening the documentation promises.
-for want in '^DynamicUser=yes' '^StateDirectory=blobcast' \
+for want in '^DynamicUser=yes' '^StateDirectory=blobcast' '^Type=notify' \
 	'^ProtectSystem=strict' '^NoNewPrivileges=yes' \
 	'^ExecReload=/bin/kill -HUP \$MAINPID' '^CapabilityBoundingSet=$' \
 	'^ProtectHome=yes' '^PrivateTmp=yes' '--data \${STATE_DIRECTORY}'; do
@@ -66,8 +69,27 @@ sed -e "s|/run/credentials/blobcastd.service/|$tmp/|" \
 	-e "s|\"0.0.0.0:7878\"|\"127.0.0.1:0\"|" \
 	-e "s|/run/blobcast/blobcastd.sock|$tmp/sock|" "$example" \
 	> "$tmp/blobcastd.json"
-"$daemon" --config "$tmp/blobcastd.json" --data "$tmp/data" \
-	2> "$tmp/log" &
+# A notification socket as systemd gives one (Type=notify).
+/usr/bin/python3 - "$tmp/notify" "$tmp/notified" <<'PY' &
+import socket, sys
+s = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
+s.bind(sys.argv[1])
+s.settimeout(20)
+with open(sys.argv[2], "w") as out:
+    try:
+        while True:
+            msg = s.recv(4096).decode()
+            out.write(msg + "\n")
+            out.flush()
+            if "STOPPING=1" in msg:
+                break
+    except socket.timeout:
+        pass
+PY
+listener=$!
+for _ in $(seq 1 100); do [ -S "$tmp/notify" ] && break; sleep 0.05; done
+NOTIFY_SOCKET=$tmp/notify "$daemon" --config "$tmp/blobcastd.json" \
+	--data "$tmp/data" 2> "$tmp/log" &
 pid=$!
 for _ in $(seq 1 100); do
 	grep -q 'blobcastd: backend' "$tmp/log" 2>/dev/null && break
@@ -99,4 +121,13 @@ fi
 kill "$pid"
 wait "$pid" || true
 pid=
+wait "$listener" || true
+if grep -qx 'READY=1' "$tmp/notified" && grep -qx 'STOPPING=1' "$tmp/notified" &&
+	[ "$(head -1 "$tmp/notified")" = READY=1 ]; then
+	echo "ok   sd_notify: READY=1 after start, STOPPING=1 at SIGTERM"
+else
+	echo "FAIL sd_notify: the daemon told systemd:" >&2
+	cat "$tmp/notified" >&2
+	fail=1
+fi
 exit $fail
