@@ -18,7 +18,13 @@ out=${2:-out.png}
 addr=127.0.0.1:7878
 
 bash deploy/install-deps.sh
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+# build/ uses CMake's default generator, as tests/run.sh does; one made by
+# another generator is reconfigured from scratch.
+if [ -f build/CMakeCache.txt ] &&
+	! grep -q '^CMAKE_GENERATOR:INTERNAL=Unix Makefiles$' build/CMakeCache.txt; then
+	rm -rf build/CMakeCache.txt build/CMakeFiles
+fi
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
 # The viewer too: README "Using it" runs it from build/client/viewer/.
 cmake --build build -j "$(nproc)" --target blobcastd blobcast_cli \
 	blobcast_view

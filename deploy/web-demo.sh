@@ -82,7 +82,7 @@ if [ -z "$daemon" ] && [ -z "$target" ]; then
 fi
 if [ -z "$target" ] && { [ -z "$daemon" ] || [ ! -x "$daemon" ]; }; then
 	echo "web-demo: blobcastd is not built; build it with" >&2
-	echo "  cmake -S $root -B $root/build -G Ninja && cmake --build $root/build --target blobcastd" >&2
+	echo "  cmake -S $root -B $root/build && cmake --build $root/build --target blobcastd" >&2
 	exit 1
 fi
 for tool in websockify python3; do

@@ -27,8 +27,16 @@ cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
 	-DBLOBCAST_SANITIZE=ON -DBLOBCAST_WERROR=ON >/dev/null
 cmake --build build-asan -j "$jobs"
 
-echo "== optimized build (-Werror)"
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release \
+# The optimized build uses CMake's default generator (Unix Makefiles), the
+# sanitizer build Ninja, so that both keep working. A build/ configured by
+# another generator (older scripts used Ninja) is reconfigured from scratch,
+# as CMake refuses to switch generators in place.
+echo "== optimized build (-Werror, default generator)"
+if [ -f build/CMakeCache.txt ] &&
+	! grep -q '^CMAKE_GENERATOR:INTERNAL=Unix Makefiles$' build/CMakeCache.txt; then
+	rm -rf build/CMakeCache.txt build/CMakeFiles
+fi
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release \
 	-DBLOBCAST_WERROR=ON >/dev/null
 cmake --build build -j "$jobs"
 
