@@ -1,26 +1,41 @@
 /*
  * The allocation hook behind bc_malloc and friends (see blobcast/alloc.h).
+ * The counter and the failure point are C11 atomics: the daemon's worker
+ * threads and a client's reader allocate concurrently, and a test arming
+ * the hook must not race with them.
  */
 #include "blobcast/alloc.h"
 
+#include <stdatomic.h>
+#include <stdbool.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
-static unsigned long count;
-static unsigned long fail_at;
+/* Set by the first bc_alloc_fail_after(); until then nothing is counted. */
+static atomic_bool hooked;
+static atomic_ulong count;
+static atomic_ulong fail_at;
 
 static int should_fail(void)
 {
-	count++;
-	return fail_at != 0 && count >= fail_at;
+	if (!atomic_load_explicit(&hooked, memory_order_relaxed)) {
+		return 0;
+	}
+	unsigned long n =
+	    atomic_fetch_add_explicit(&count, 1, memory_order_relaxed) + 1;
+	unsigned long at = atomic_load_explicit(&fail_at, memory_order_relaxed);
+	return at != 0 && n >= at;
 }
 
 unsigned long bc_alloc_fail_after(unsigned long n)
 {
-	unsigned long made = count;
-	count = 0;
-	fail_at = n;
+	/* Disarm first so that the reset of the counter cannot make a
+	 * concurrent allocation fail against the old failure point. */
+	atomic_store(&fail_at, 0);
+	unsigned long made = atomic_exchange(&count, 0);
+	atomic_store(&fail_at, n);
+	atomic_store(&hooked, true);
 	return made;
 }
 

@@ -2,7 +2,9 @@
 # libblobcast as its users get it: installs the "client" component of a
 # build into a temporary prefix, then builds the example client/lib/
 # examples/nudge.c from the installed headers with the flags blobcast.pc
-# gives, against libblobcast.so and against libblobcast.a, and runs it:
+# gives, against libblobcast.so and against libblobcast.a, and as a CMake
+# project that finds the package (find_package(blobcast), target
+# blobcast::blobcast), and runs each:
 # without arguments (usage, exit 2) and, when blobcastd is built, against a
 # private daemon, where its edit must show up in a frame.
 #
@@ -40,7 +42,7 @@ libs=$(pkg-config --libs blobcast) || fail "pkg-config --libs"
 static_libs=$(pkg-config --static --libs-only-l blobcast | sed 's/-lblobcast//')
 libdir=$(pkg-config --variable=libdir blobcast)
 [ -f "$libdir/libblobcast.a" ] || fail "no libblobcast.a in $libdir"
-for h in client.h proto.h proto_limits.h blobtree.h scene.h error.h; do
+for h in client.h proto.h proto_limits.h blobtree.h scene.h error.h export.h; do
   [ -f "$(pkg-config --variable=includedir blobcast)/blobcast/$h" ] ||
     fail "header blobcast/$h not installed"
 done
@@ -60,8 +62,27 @@ fi
 if ldd "$tmp/nudge-static" | grep -q libblobcast; then
   fail "the static build links libblobcast.so"
 fi
+# The CMake package, found through CMAKE_PREFIX_PATH as a user would.
+mkdir -p "$tmp/consumer"
+cp "$src/client/lib/examples/nudge.c" "$tmp/consumer/"
+cat > "$tmp/consumer/CMakeLists.txt" << 'CMAKE'
+cmake_minimum_required(VERSION 3.18)
+project(nudge_consumer C)
+find_package(blobcast 0.1 REQUIRED)
+add_executable(nudge nudge.c)
+target_link_libraries(nudge PRIVATE blobcast::blobcast)
+CMAKE
+cmake -S "$tmp/consumer" -B "$tmp/consumer/build" \
+  -DCMAKE_PREFIX_PATH="$tmp/prefix" -DCMAKE_C_COMPILER="$cc" \
+  -DCMAKE_C_FLAGS="-std=c11 -Wall -Wextra -Werror $extra" \
+  > "$tmp/cmake.log" 2>&1 &&
+  cmake --build "$tmp/consumer/build" >> "$tmp/cmake.log" 2>&1 ||
+  fail "find_package build: $(cat "$tmp/cmake.log")"
+cp "$tmp/consumer/build/nudge" "$tmp/nudge-cmake"
+ldd "$tmp/nudge-cmake" | grep -q "libblobcast.so" ||
+  fail "the find_package build does not link libblobcast.so"
 export LD_LIBRARY_PATH="$libdir"
-for prog in nudge nudge-static; do
+for prog in nudge nudge-static nudge-cmake; do
   "$tmp/$prog" > "$tmp/out" 2>&1
   [ $? -eq 2 ] && grep -q "usage: nudge" "$tmp/out" ||
     fail "$prog without arguments: $(cat "$tmp/out")"
@@ -85,7 +106,7 @@ while [ $i -lt 100 ] && [ -z "$port" ] && kill -0 "$daemon" 2>/dev/null; do
 done
 [ -n "$port" ] || fail "blobcastd did not start: $(cat "$tmp/daemon.log")"
 # Node 32 of the default scene is a sphere.
-for prog in nudge nudge-static; do
+for prog in nudge nudge-static nudge-cmake; do
   "$tmp/$prog" "127.0.0.1:$port" default 32 translate=1.2,-0.4,0.2 \
     > "$tmp/out" 2>&1 || fail "$prog: $(cat "$tmp/out")"
   grep -q "^edit order [0-9]* shown in frame [0-9]* (320x240, complete)$" \

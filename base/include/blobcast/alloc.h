@@ -8,20 +8,29 @@
 
 #include <stddef.h>
 
+#include "blobcast/export.h"
+
 /* Each returns NULL on failure (or when the failure hook says so); sizes that
  * overflow (n * size) fail instead of wrapping. bc_free(NULL) is a no-op. */
-void *bc_malloc(size_t size);
-void *bc_calloc(size_t n, size_t size);
-void *bc_realloc(void *ptr, size_t size);
+BC_API void *bc_malloc(size_t size);
+BC_API void *bc_calloc(size_t n, size_t size);
+BC_API void *bc_realloc(void *ptr, size_t size);
 /* Grows ptr to n elements of size bytes, failing on overflow. */
-void *bc_reallocarray(void *ptr, size_t n, size_t size);
-void bc_free(void *ptr);
+BC_API void *bc_reallocarray(void *ptr, size_t n, size_t size);
+BC_API void bc_free(void *ptr);
 /* Returns a bc_malloc'd copy of the NUL-terminated s, or NULL. */
-char *bc_strdup(const char *s);
+BC_API char *bc_strdup(const char *s);
 
-/* Test hook: the allocation numbered fail_at (1-based, counted from this
+#ifdef BLOBCAST_ALLOC_HOOK
+/* Test hook, declared only inside the project's build (bc_base defines
+ * BLOBCAST_ALLOC_HOOK for the code that links it) and not exported by
+ * libblobcast. The allocation numbered fail_at (1-based, counted from this
  * call) and every later one fail; 0 disables. Returns how many allocations
- * were made since the previous call. Not thread-safe; tests only. */
+ * were made since the previous call. Counting starts with the first call,
+ * so programs that never call it pay one relaxed load per allocation. Safe
+ * to call while other threads allocate, though what they count then depends
+ * on timing: torture loops call it from one thread around one operation. */
 unsigned long bc_alloc_fail_after(unsigned long fail_at);
+#endif
 
 #endif

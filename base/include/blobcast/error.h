@@ -6,6 +6,8 @@
 #ifndef BLOBCAST_ERROR_H
 #define BLOBCAST_ERROR_H
 
+#include "blobcast/export.h"
+
 /* X(NAME, number, human sentence). Numbers are positive here; the C return
  * value is the negation (BC_ENOMEM == -2). */
 #define BC_ERRNO_MAP(X)                                                        \
@@ -56,10 +58,10 @@ enum bc_err {
 
 /* Returns a static human sentence for code (negative or positive); unknown
  * codes get "unknown error". Never NULL, never to be freed. */
-const char *bc_strerror(int code);
+BC_API const char *bc_strerror(int code);
 
 /* Returns the static symbolic name ("ENOMEM") of code, "UNKNOWN" if none. */
-const char *bc_err_name(int code);
+BC_API const char *bc_err_name(int code);
 
 /* An error with a reason, for APIs whose failures need a sentence (scene
  * files, edits). code is 0 or a BC_E* value; msg is NUL-terminated. */
@@ -76,7 +78,7 @@ struct bc_errinfo {
 
 /* Records code and a printf-formatted reason in ei (which may be NULL) and
  * returns code, so callers can write `return bc_errinfo_set(ei, ...)`. */
-int bc_errinfo_set(struct bc_errinfo *ei, int code, const char *fmt, ...)
-	BC__ERRINFO_PRINTF;
+BC_API int bc_errinfo_set(struct bc_errinfo *ei, int code, const char *fmt,
+                          ...) BC__ERRINFO_PRINTF;
 
 #endif

@@ -22,6 +22,7 @@
 #include <stdint.h>
 
 #include "blobcast/error.h"
+#include "blobcast/export.h"
 #include "blobcast/proto_limits.h"
 
 /* ---- Framing ------------------------------------------------------------ */
@@ -437,50 +438,51 @@ struct bc_proto_reader {
 
 /* Sets up r with opts (which may be NULL). Allocates nothing; returns 0, or
  * BC_EINVAL for an out-of-range side. */
-int bc_proto_reader_init(struct bc_proto_reader *r,
-                         const struct bc_proto_reader_opts *opts);
+BC_API int bc_proto_reader_init(struct bc_proto_reader *r,
+                                const struct bc_proto_reader_opts *opts);
 /* Frees everything r holds; accepts NULL and a zeroed reader. */
-void bc_proto_reader_finish(struct bc_proto_reader *r);
+BC_API void bc_proto_reader_finish(struct bc_proto_reader *r);
 
 /* Appends n bytes (copied) to r. Returns 0, the sticky error if there is
  * one, BC_ENOMEM, or BC_ELIMIT when more than one whole message plus
  * BC_PROTO_READ_SLACK bytes would be waiting unparsed (drain with
  * bc_proto_reader_next() before feeding more). ENOMEM and ELIMIT are
  * sticky. */
-int bc_proto_reader_feed(struct bc_proto_reader *r, const void *bytes,
-                         size_t n);
+BC_API int bc_proto_reader_feed(struct bc_proto_reader *r, const void *bytes,
+                                size_t n);
 
 /* Parses the next message into *out (reset on entry). Returns 1 (a
  * message), 0 (more bytes needed) or a negative BC_E* code, which is also
  * stored in r->err with a reason in r->errstr; after an error every call
  * returns it again. Header errors are reported as soon as the offending
  * header byte has arrived. See struct bc_msg for how long *out is valid. */
-int bc_proto_reader_next(struct bc_proto_reader *r, struct bc_msg *out);
+BC_API int bc_proto_reader_next(struct bc_proto_reader *r, struct bc_msg *out);
 
 /* The stream has ended. Returns 0 if it ended between messages, otherwise
  * (a partial message is buffered) sets the sticky BC_EPROTO_TRUNCATED. */
-int bc_proto_reader_eof(struct bc_proto_reader *r);
+BC_API int bc_proto_reader_eof(struct bc_proto_reader *r);
 
 /* Ends the pre-HELLO stage (call once the peer's HELLO was accepted). */
-void bc_proto_reader_hello_done(struct bc_proto_reader *r);
+BC_API void bc_proto_reader_hello_done(struct bc_proto_reader *r);
 
 /* Changes the payload limit for messages whose header has not been parsed
  * yet (same rules as opts.max_payload). */
-void bc_proto_reader_set_max_payload(struct bc_proto_reader *r,
-                                     uint32_t max_payload);
+BC_API void bc_proto_reader_set_max_payload(struct bc_proto_reader *r,
+                                            uint32_t max_payload);
 
 /* Bytes buffered and not yet returned as messages. */
-size_t bc_proto_reader_pending(const struct bc_proto_reader *r);
+BC_API size_t bc_proto_reader_pending(const struct bc_proto_reader *r);
 
 /* Decodes one payload of the given type, outside any stream: no header,
  * no side or stage rules, only the type's own payload checks (including its
  * maximum size). Arrays go to r's storage and byte ranges point into
  * payload; r's stream and sticky error are untouched. Returns 0 or a
  * negative BC_E* code with the reason in ei (which may be NULL). */
-int bc_proto_decode_payload(struct bc_proto_reader *r, enum bc_msg_type type,
-                            uint16_t flags, uint32_t seq,
-                            const uint8_t *payload, size_t len,
-                            struct bc_msg *out, struct bc_errinfo *ei);
+BC_API int bc_proto_decode_payload(struct bc_proto_reader *r,
+                                   enum bc_msg_type type, uint16_t flags,
+                                   uint32_t seq, const uint8_t *payload,
+                                   size_t len, struct bc_msg *out,
+                                   struct bc_errinfo *ei);
 
 /* ---- Writing ------------------------------------------------------------- */
 
@@ -492,13 +494,13 @@ struct bc_proto_buf {
 
 /* max is the ceiling in bytes; 0 means one largest message
  * (BC_PROTO_HEADER_SIZE + BC_PROTO_MAX_PAYLOAD). Allocates nothing. */
-void bc_proto_buf_init(struct bc_proto_buf *b, size_t max);
+BC_API void bc_proto_buf_init(struct bc_proto_buf *b, size_t max);
 /* Frees the buffer; accepts NULL and a zeroed buffer. */
-void bc_proto_buf_finish(struct bc_proto_buf *b);
+BC_API void bc_proto_buf_finish(struct bc_proto_buf *b);
 /* Forgets the contents, keeps the memory. */
-void bc_proto_buf_reset(struct bc_proto_buf *b);
+BC_API void bc_proto_buf_reset(struct bc_proto_buf *b);
 /* Drops the first n bytes (those sent), keeping the rest in order. */
-void bc_proto_buf_consume(struct bc_proto_buf *b, size_t n);
+BC_API void bc_proto_buf_consume(struct bc_proto_buf *b, size_t n);
 
 /* Appends m, header included, to b. Returns 0 or a negative code, and then
  * b is exactly as before: BC_EPROTO_TYPE (type out of range),
@@ -506,8 +508,8 @@ void bc_proto_buf_consume(struct bc_proto_buf *b, size_t n);
  * BC_ELIMIT (b's ceiling), BC_ENOMEM, or the code the decoder would give
  * for an invalid field (ESTRING, ENONFINITE, ERANGE, EENUM, EPROTO_COUNT,
  * ...), with the reason in ei (which may be NULL). */
-int bc_proto_encode(struct bc_proto_buf *b, const struct bc_msg *m,
-                    struct bc_errinfo *ei);
+BC_API int bc_proto_encode(struct bc_proto_buf *b, const struct bc_msg *m,
+                           struct bc_errinfo *ei);
 
 /* ---- The scene encoding (owned by blobtree; see PROTOCOL.md) --------------
  */
@@ -527,31 +529,31 @@ struct bc_proto_scene_info {
  * tree (each kind's exact float count, parameter ranges, camera geometry,
  * unique ids) is left to blobtree. Returns 0 with *info filled (it may be
  * NULL), or a negative code with the reason in ei. */
-int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
-                        struct bc_proto_scene_info *info,
-                        struct bc_errinfo *ei);
+BC_API int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
+                               struct bc_proto_scene_info *info,
+                               struct bc_errinfo *ei);
 
 /* Writers for the scene encoding, for clients and tests that build scene
  * bytes without blobtree: begin, then every node in pre-order. camera is
  * NULL or the 10 floats eye[3] target[3] up[3] fov_y_deg. color is NULL or
  * 3 floats. Each returns 0, BC_ELIMIT or BC_ENOMEM (and then b is as
  * before); the scanner, not the writers, checks the result. */
-int bc_proto_scene_begin(struct bc_proto_buf *b, const float *camera,
-                         uint32_t node_count);
-int bc_proto_scene_prim(struct bc_proto_buf *b, uint8_t kind, uint32_t id,
-                        const float translate[3], const float rotate[4],
-                        const float *color, uint8_t nparams,
-                        const float *params);
-int bc_proto_scene_op(struct bc_proto_buf *b, uint8_t kind, uint32_t id,
-                      float blend, float range, uint32_t child_count);
+BC_API int bc_proto_scene_begin(struct bc_proto_buf *b, const float *camera,
+                                uint32_t node_count);
+BC_API int bc_proto_scene_prim(struct bc_proto_buf *b, uint8_t kind,
+                               uint32_t id, const float translate[3],
+                               const float rotate[4], const float *color,
+                               uint8_t nparams, const float *params);
+BC_API int bc_proto_scene_op(struct bc_proto_buf *b, uint8_t kind, uint32_t id,
+                             float blend, float range, uint32_t child_count);
 
 /* ---- Names and rules ------------------------------------------------------
  */
 
 /* "HELLO", "FRAME", ...; NULL when type is out of range. Static. */
-const char *bc_proto_type_name(enum bc_msg_type type);
+BC_API const char *bc_proto_type_name(enum bc_msg_type type);
 /* Type named name (as above), or BC_MSG_INVALID. */
-enum bc_msg_type bc_proto_type_from_name(const char *name);
+BC_API enum bc_msg_type bc_proto_type_from_name(const char *name);
 
 /* Where a client connection stands (PROTOCOL.md, "State machine"). */
 enum bc_proto_stage {
@@ -564,7 +566,8 @@ enum bc_proto_stage {
 /* Whether a client in stage (and, in a session, role) may send type.
  * Returns 0, BC_EPROTO_TYPE (not a client message), BC_ESTATE (not in this
  * stage) or BC_EPERM (not for this role). The server answers accordingly. */
-int bc_proto_client_may_send(enum bc_proto_stage stage, enum bc_proto_role role,
-                             enum bc_msg_type type);
+BC_API int bc_proto_client_may_send(enum bc_proto_stage stage,
+                                    enum bc_proto_role role,
+                                    enum bc_msg_type type);
 
 #endif

@@ -33,6 +33,7 @@
 
 #include "blobcast/blobtree.h"
 #include "blobcast/error.h"
+#include "blobcast/export.h"
 #include "blobcast/proto.h"
 
 /* ---- Defaults and limits --------------------------------------------------
@@ -97,8 +98,8 @@ struct bc_client_addr {
  *   wss://ADDRESS/PATH the same over TLS; the port defaults to 443
  * Returns 0 or BC_EINVAL with the reason in ei (which may be NULL).
  */
-int bc_client_addr_parse(const char *s, struct bc_client_addr *out,
-                         struct bc_errinfo *ei);
+BC_API int bc_client_addr_parse(const char *s, struct bc_client_addr *out,
+                                struct bc_errinfo *ei);
 
 /* ---- The connection ---------------------------------------------------------
  */
@@ -156,20 +157,21 @@ struct bc_client_info {
  * code of the server's ERROR (BC_EAUTH, BC_EPROTO_VERSION...) with its text;
  * the reason is in ei (which may be NULL).
  */
-int bc_client_connect(struct bc_client **out, const struct bc_client_opts *opts,
-                      struct bc_errinfo *ei);
+BC_API int bc_client_connect(struct bc_client **out,
+                             const struct bc_client_opts *opts,
+                             struct bc_errinfo *ei);
 /* Closes the connection and frees everything; accepts NULL. */
-void bc_client_destroy(struct bc_client *c);
+BC_API void bc_client_destroy(struct bc_client *c);
 
 /* The socket, for poll(): readable means bc_client_recv() has bytes to work
  * on. The client owns it; do not read, write or close it. Over TLS, poll
  * only after bc_client_recv(timeout 0) returned 0: it drains what TLS has
  * buffered. */
-int bc_client_fd(const struct bc_client *c);
+BC_API int bc_client_fd(const struct bc_client *c);
 /* WELCOME, session and traffic details (owned by c, updated by every call). */
-const struct bc_client_info *bc_client_info(const struct bc_client *c);
+BC_API const struct bc_client_info *bc_client_info(const struct bc_client *c);
 /* Returns the sticky error (0 if none) and copies its reason into ei. */
-int bc_client_error(const struct bc_client *c, struct bc_errinfo *ei);
+BC_API int bc_client_error(const struct bc_client *c, struct bc_errinfo *ei);
 
 /*
  * Gives m the next sequence number (written to *seq_out, which may be NULL,
@@ -178,7 +180,8 @@ int bc_client_error(const struct bc_client *c, struct bc_errinfo *ei);
  * error for an invalid message (nothing was sent, not sticky); or a sticky
  * BC_ECLOSED, BC_EIO or BC_ETIMEOUT (the stream is unusable).
  */
-int bc_client_send(struct bc_client *c, struct bc_msg *m, uint32_t *seq_out);
+BC_API int bc_client_send(struct bc_client *c, struct bc_msg *m,
+                          uint32_t *seq_out);
 
 /*
  * Waits at most timeout_ms (0: only what is already buffered or readable
@@ -190,7 +193,8 @@ int bc_client_send(struct bc_client *c, struct bc_msg *m, uint32_t *seq_out);
  * SCENE_STATE and EDIT_APPLIED also update bc_client_info() and the scene
  * mirror before they are returned.
  */
-int bc_client_recv(struct bc_client *c, struct bc_msg *out, int timeout_ms);
+BC_API int bc_client_recv(struct bc_client *c, struct bc_msg *out,
+                          int timeout_ms);
 
 /*
  * Receives until the answer to request seq arrives, consuming other
@@ -202,8 +206,9 @@ int bc_client_recv(struct bc_client *c, struct bc_msg *out, int timeout_ms);
  * request it answers), with its text in ei; BC_ETIMEOUT (not sticky) after
  * timeout_ms (0: the client's timeout, negative: none); or the sticky error.
  */
-int bc_client_wait(struct bc_client *c, enum bc_msg_type type, uint32_t seq,
-                   struct bc_msg *out, int timeout_ms, struct bc_errinfo *ei);
+BC_API int bc_client_wait(struct bc_client *c, enum bc_msg_type type,
+                          uint32_t seq, struct bc_msg *out, int timeout_ms,
+                          struct bc_errinfo *ei);
 
 /* ---- Sessions and scenes
  * ------------------------------------------------------ */
@@ -221,51 +226,52 @@ enum bc_client_join_mode {
  * scene mirror. bc_client_info() then holds the member id and role. Returns
  * 0 or an error (the server's ENOSESSION, EEXIST, EPERM...) with the reason.
  */
-int bc_client_join(struct bc_client *c, const char *name,
-                   enum bc_proto_role role, enum bc_client_join_mode mode,
-                   struct bc_errinfo *ei);
+BC_API int bc_client_join(struct bc_client *c, const char *name,
+                          enum bc_proto_role role,
+                          enum bc_client_join_mode mode, struct bc_errinfo *ei);
 
 /* Deletes session name on the server (SESSION_DELETE): its members, this
  * client too when it is one, are sent back to READY with ERROR ENOSESSION.
  * Needs a token granting the editor role (BC_EPERM otherwise);
  * BC_ENOSESSION when there is no such session. */
-int bc_client_delete_session(struct bc_client *c, const char *name,
-                             struct bc_errinfo *ei);
+BC_API int bc_client_delete_session(struct bc_client *c, const char *name,
+                                    struct bc_errinfo *ei);
 
 /* The scene mirror: the session's scene as of bc_client_info()->order, or
  * NULL before the first SCENE_STATE (or if an edit could not be replayed on
  * it, which is logged). Owned by c; valid until the next call on c. cam
  * (may be NULL) receives the scene's camera. */
-const struct bc_tree *bc_client_scene(const struct bc_client *c,
-                                      struct bc_camera *cam);
+BC_API const struct bc_tree *bc_client_scene(const struct bc_client *c,
+                                             struct bc_camera *cam);
 
 /* Sends SCENE_LOAD with scene bytes (the binary encoding) and waits for the
  * SCENE_STATE that acknowledges it; *order (may be NULL, reset on entry)
  * receives the new edit order. */
-int bc_client_load_scene(struct bc_client *c, const uint8_t *bytes, size_t len,
-                         uint64_t *order, struct bc_errinfo *ei);
+BC_API int bc_client_load_scene(struct bc_client *c, const uint8_t *bytes,
+                                size_t len, uint64_t *order,
+                                struct bc_errinfo *ei);
 /* Reads a JSON scene file (blobtree's format), encodes it with its camera
  * and loads it as bc_client_load_scene() does. *nodes (may be NULL) receives
  * its node count. */
-int bc_client_load_scene_file(struct bc_client *c, const char *path,
-                              uint64_t *order, uint32_t *nodes,
-                              struct bc_errinfo *ei);
+BC_API int bc_client_load_scene_file(struct bc_client *c, const char *path,
+                                     uint64_t *order, uint32_t *nodes,
+                                     struct bc_errinfo *ei);
 
 /* Sends VIEW. Zero fields take defaults: encoding JPEG when this client
  * decodes it (else PNG), interactive quality 75, still quality 90,
  * downscale 1. width and height are required. */
-int bc_client_view(struct bc_client *c, const struct bc_msg_view *view,
-                   uint32_t *seq_out, struct bc_errinfo *ei);
+BC_API int bc_client_view(struct bc_client *c, const struct bc_msg_view *view,
+                          uint32_t *seq_out, struct bc_errinfo *ei);
 
 /* Sends CAMERA (this connection's camera; the server answers with a frame
  * when a VIEW is set, or with ERROR for an invalid camera). */
-int bc_client_camera(struct bc_client *c, const struct bc_camera *cam,
-                     bool interacting, uint32_t *seq_out,
-                     struct bc_errinfo *ei);
+BC_API int bc_client_camera(struct bc_client *c, const struct bc_camera *cam,
+                            bool interacting, uint32_t *seq_out,
+                            struct bc_errinfo *ei);
 
 /* Sends GET_STATS and waits for STATS, copied into *out (reset on entry). */
-int bc_client_stats(struct bc_client *c, struct bc_msg_stats *out,
-                    struct bc_errinfo *ei);
+BC_API int bc_client_stats(struct bc_client *c, struct bc_msg_stats *out,
+                           struct bc_errinfo *ei);
 
 /* ---- Edits
  * ----------------------------------------------------------------------- */
@@ -283,27 +289,27 @@ int bc_client_stats(struct bc_client *c, struct bc_msg_stats *out,
  * number of values, no arguments), BC_EPARSE (not a number), BC_ENONFINITE,
  * BC_ERANGE or BC_ELIMIT (too many arguments), with the reason in ei.
  */
-int bc_client_edit_parse(const struct bc_tree *scene, uint32_t node,
-                         const char *const *kv, size_t n,
-                         struct bc_proto_field *fields, uint8_t *nfields,
-                         struct bc_errinfo *ei);
+BC_API int bc_client_edit_parse(const struct bc_tree *scene, uint32_t node,
+                                const char *const *kv, size_t n,
+                                struct bc_proto_field *fields, uint8_t *nfields,
+                                struct bc_errinfo *ei);
 
 /* Sends EDIT with one SET operation on node. */
-int bc_client_edit_set(struct bc_client *c, uint32_t node,
-                       const struct bc_proto_field *fields, uint8_t nfields,
-                       bool interacting, uint32_t *seq_out,
-                       struct bc_errinfo *ei);
+BC_API int bc_client_edit_set(struct bc_client *c, uint32_t node,
+                              const struct bc_proto_field *fields,
+                              uint8_t nfields, bool interacting,
+                              uint32_t *seq_out, struct bc_errinfo *ei);
 
 /* bc_client_edit_parse() against the scene mirror, then
  * bc_client_edit_set(). BC_ESTATE when there is no mirror (not joined). */
-int bc_client_edit_kv(struct bc_client *c, uint32_t node, const char *const *kv,
-                      size_t n, bool interacting, uint32_t *seq_out,
-                      struct bc_errinfo *ei);
+BC_API int bc_client_edit_kv(struct bc_client *c, uint32_t node,
+                             const char *const *kv, size_t n, bool interacting,
+                             uint32_t *seq_out, struct bc_errinfo *ei);
 
 /* Waits for the EDIT_APPLIED of this client's EDIT seq; *order (may be NULL,
  * reset on entry) receives the order number the server gave it. */
-int bc_client_wait_applied(struct bc_client *c, uint32_t seq, uint64_t *order,
-                           struct bc_errinfo *ei);
+BC_API int bc_client_wait_applied(struct bc_client *c, uint32_t seq,
+                                  uint64_t *order, struct bc_errinfo *ei);
 
 /* ---- Frames
  * ------------------------------------------------------------------------ */
@@ -353,8 +359,8 @@ struct bc_client_image {
 };
 
 /* init/finish on caller memory; finish accepts a zeroed image. */
-void bc_client_image_init(struct bc_client_image *img);
-void bc_client_image_finish(struct bc_client_image *img);
+BC_API void bc_client_image_init(struct bc_client_image *img);
+BC_API void bc_client_image_finish(struct bc_client_image *img);
 
 /*
  * Decodes the rectangles of FRAME m into img. Every rectangle must lie in
@@ -363,15 +369,17 @@ void bc_client_image_finish(struct bc_client_image *img);
  * do not decode, or decode to another size; the pixels already written stay
  * and img->complete becomes false) or BC_ENOMEM, with the reason in ei.
  */
-int bc_client_image_apply(struct bc_client_image *img, const struct bc_msg *m,
-                          struct bc_errinfo *ei);
+BC_API int bc_client_image_apply(struct bc_client_image *img,
+                                 const struct bc_msg *m, struct bc_errinfo *ei);
 
 /* Sends SNAPSHOT (encoding PNG or RAW; 0 means PNG) and waits for its FRAME,
  * decoded into *out (which must be initialized; its previous contents are
  * replaced). A VIEW must have been sent: it gives the size. Returns 0 or a
  * BC_E* code with the reason in ei. */
-int bc_client_snapshot(struct bc_client *c, enum bc_proto_encoding encoding,
-                       struct bc_client_image *out, struct bc_errinfo *ei);
+BC_API int bc_client_snapshot(struct bc_client *c,
+                              enum bc_proto_encoding encoding,
+                              struct bc_client_image *out,
+                              struct bc_errinfo *ei);
 
 /* bc_client_snapshot() that also asks for the planes given by planes
  * (BC_PROTO_PLANE_DEPTH, BC_PROTO_PLANE_IDS; 0 is colour only): on success
@@ -379,9 +387,10 @@ int bc_client_snapshot(struct bc_client *c, enum bc_proto_encoding encoding,
  * bc_client_image_finish), at the colour's size. Returns 0, BC_EINVAL
  * (other plane bits, or an encoding other than PNG and raw), BC_EIO (the
  * answer lacks a plane asked) or another BC_E* code, with ei. */
-int bc_client_snapshot_planes(struct bc_client *c,
-                              enum bc_proto_encoding encoding, unsigned planes,
-                              struct bc_client_image *out,
-                              struct bc_errinfo *ei);
+BC_API int bc_client_snapshot_planes(struct bc_client *c,
+                                     enum bc_proto_encoding encoding,
+                                     unsigned planes,
+                                     struct bc_client_image *out,
+                                     struct bc_errinfo *ei);
 
 #endif
