@@ -62,6 +62,98 @@ static int bc_test_skipped;
 		}                                                              \
 	} while (0)
 
+/* Prints label and s on stderr, quoted, control and non-ASCII bytes as \xNN,
+ * cut after BC_TEST_SHOW bytes (with the full length then), NULL as NULL. */
+#define BC_TEST_SHOW 160
+static inline void bc_test_show_str(const char *label, const char *s)
+{
+	if (!s) {
+		fprintf(stderr, "    %s: NULL\n", label);
+		return;
+	}
+	size_t len = strlen(s);
+	fprintf(stderr, "    %s: \"", label);
+	for (size_t i = 0; i < len && i < BC_TEST_SHOW; i++) {
+		unsigned char c = (unsigned char)s[i];
+		if (c == '"' || c == '\\') {
+			fprintf(stderr, "\\%c", c);
+		} else if (c < 0x20 || c >= 0x7f) {
+			fprintf(stderr, "\\x%02x", c);
+		} else {
+			fputc(c, stderr);
+		}
+	}
+	if (len > BC_TEST_SHOW) {
+		fprintf(stderr, "\"... (%zu bytes)\n", len);
+	} else {
+		fprintf(stderr, "\"\n");
+	}
+}
+
+/* Returns 1 when a and b are equal strings (both NULL counts as equal);
+ * otherwise prints both with the check's text and returns 0. */
+static inline int bc_test_streq(const char *a, const char *b, const char *ea,
+				const char *eb, const char *file, int line)
+{
+	if ((!a && !b) || (a && b && strcmp(a, b) == 0)) {
+		return 1;
+	}
+	fprintf(stderr, "  %s:%d: %s == %s failed:\n", file, line, ea, eb);
+	bc_test_show_str(ea, a);
+	bc_test_show_str(eb, b);
+	return 0;
+}
+
+/* Returns 1 when the n bytes at a and b are equal; otherwise prints the
+ * first differing offset and up to 16 bytes of each from 8 before it. */
+static inline int bc_test_memeq(const void *a, const void *b, size_t n,
+				const char *ea, const char *eb, const char *file,
+				int line)
+{
+	const unsigned char *pa = a, *pb = b;
+	if (n == 0 || memcmp(pa, pb, n) == 0) {
+		return 1;
+	}
+	size_t at = 0;
+	while (pa[at] == pb[at]) {
+		at++;
+	}
+	size_t from = at > 8 ? at - 8 : 0;
+	size_t to = from + 16 < n ? from + 16 : n;
+	fprintf(stderr,
+		"  %s:%d: %s == %s (%zu bytes) failed: first difference at "
+		"byte %zu\n",
+		file, line, ea, eb, n, at);
+	const unsigned char *sides[2] = {pa, pb};
+	const char *names[2] = {ea, eb};
+	for (int s = 0; s < 2; s++) {
+		fprintf(stderr, "    %s [%zu..%zu):", names[s], from, to);
+		for (size_t i = from; i < to; i++) {
+			fprintf(stderr, i == at ? " [%02x]" : " %02x",
+				sides[s][i]);
+		}
+		fprintf(stderr, "\n");
+	}
+	return 0;
+}
+
+/* String equality (strcmp) that prints both strings on failure. */
+#define CHECK_STREQ(a, b)                                                      \
+	do {                                                                   \
+		if (!bc_test_streq((a), (b), #a, #b, __FILE__, __LINE__)) {    \
+			bc_test_failures++;                                    \
+		}                                                              \
+	} while (0)
+
+/* Equality of n bytes (memcmp) that prints where they first differ. */
+#define CHECK_MEMEQ(a, b, n)                                                   \
+	do {                                                                   \
+		if (!bc_test_memeq((a), (b), (n), #a, #b, __FILE__,            \
+				   __LINE__)) {                                \
+			bc_test_failures++;                                    \
+		}                                                              \
+	} while (0)
+
 #define BC_SKIP(why)                                                           \
 	do {                                                                   \
 		fprintf(stderr, "  skipped: %s\n", why);                       \

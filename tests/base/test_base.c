@@ -8,16 +8,16 @@
 
 static void error_table_names_every_code(void)
 {
-	CHECK(strcmp(bc_err_name(BC_ENOMEM), "ENOMEM") == 0);
+	CHECK_STREQ(bc_err_name(BC_ENOMEM), "ENOMEM");
 	/* Error 0 is NONE, never OK: OK is message type 6 (PROTOCOL.md 10). */
-	CHECK(strcmp(bc_err_name(0), "NONE") == 0);
+	CHECK_STREQ(bc_err_name(0), "NONE");
 	CHECK(BC_NONE == 0);
-	CHECK(strcmp(bc_strerror(BC_ENOMEM), "out of memory") == 0);
-	CHECK(strcmp(bc_err_name(-9999), "UNKNOWN") == 0);
+	CHECK_STREQ(bc_strerror(BC_ENOMEM), "out of memory");
+	CHECK_STREQ(bc_err_name(-9999), "UNKNOWN");
 	for (int i = 0; i < BC_ERR_COUNT; i++) {
 		CHECK(strcmp(bc_err_name(-i), "UNKNOWN") != 0);
 	}
-	CHECK(strcmp(bc_err_name(-BC_ERR_COUNT), "UNKNOWN") == 0);
+	CHECK_STREQ(bc_err_name(-BC_ERR_COUNT), "UNKNOWN");
 }
 
 static void alloc_hook_fails_the_nth_call(void)
@@ -61,14 +61,12 @@ static void log_escapes_control_characters(void)
 	bc_log(BC_LOG_INFO, "client %u (%s) joined", 7u,
 	       "eve\n[warn] [net.c:1] forged");
 	CHECK_EQ_INT(nlogged, 1);
-	CHECK(strcmp(logged,
-	             "client 7 (eve\\n[warn] [net.c:1] forged) joined") == 0);
+	CHECK_STREQ(logged, "client 7 (eve\\n[warn] [net.c:1] forged) joined");
 	bc_log(BC_LOG_WARN, "%s", "a\tb\rc\001d\177e\x1b[2J\xc3\xa9\x1f");
-	CHECK(strcmp(logged, "a\\tb\\x0dc\\x01d\\x7fe\\x1b[2J\xc3\xa9\\x1f") ==
-	      0);
+	CHECK_STREQ(logged, "a\\tb\\x0dc\\x01d\\x7fe\\x1b[2J\xc3\xa9\\x1f");
 	/* The format string's own text is escaped too. */
 	bc_log(BC_LOG_WARN, "two\nlines");
-	CHECK(strcmp(logged, "two\\nlines") == 0);
+	CHECK_STREQ(logged, "two\\nlines");
 	/* Dropped below the threshold: the sink sees nothing. */
 	nlogged = 0;
 	bc_log(BC_LOG_DEBUG, "x\n");
@@ -89,7 +87,7 @@ static void log_escapes_long_messages_whole(void)
 	REQUIRE(strlen(logged) == 6002);
 	CHECK(logged[0] == '<' && logged[6001] == '>');
 	CHECK(strchr(logged, '\n') == NULL);
-	CHECK(memcmp(logged + 5999, "\\n>", 3) == 0);
+	CHECK_MEMEQ(logged + 5999, "\\n>", 3);
 }
 
 /* bc_log_escape never cuts an escape in half and always ends the string. */
@@ -98,16 +96,16 @@ static void log_escape_stops_before_a_partial_escape(void)
 	char out[8];
 	memset(out, 'z', sizeof(out));
 	CHECK_EQ_INT(bc_log_escape(out, 5, "ab\001cd", 5), 2);
-	CHECK(strcmp(out, "ab") == 0);
+	CHECK_STREQ(out, "ab");
 	CHECK_EQ_INT(bc_log_escape(out, sizeof(out), "ab\001cd", 5), 7);
-	CHECK(strcmp(out, "ab\\x01c") == 0);
+	CHECK_STREQ(out, "ab\\x01c");
 	CHECK_EQ_INT(bc_log_escape(out, sizeof(out), "ab\ncd", 5), 6);
-	CHECK(strcmp(out, "ab\\ncd") == 0);
+	CHECK_STREQ(out, "ab\\ncd");
 	CHECK_EQ_INT(bc_log_escape(out, 1, "abc", 3), 0);
 	CHECK(out[0] == '\0');
 	/* A NUL byte inside the span is escaped as well. */
 	CHECK_EQ_INT(bc_log_escape(out, sizeof(out), "a\0b", 3), 6);
-	CHECK(strcmp(out, "a\\x00b") == 0);
+	CHECK_STREQ(out, "a\\x00b");
 }
 
 static const struct bc_test tests[] = {

@@ -20,10 +20,10 @@ static void parses(const char *s, enum bc_client_addr_kind kind,
 	CHECK_EQ_INT(rc, 0);
 	CHECK_EQ_INT(a.kind, kind);
 	if (kind == BC_CLIENT_ADDR_TCP) {
-		CHECK(strcmp(a.host, host_or_path) == 0);
+		CHECK_STREQ(a.host, host_or_path);
 		CHECK_EQ_INT(a.port, port);
 	} else {
-		CHECK(strcmp(a.path, host_or_path) == 0);
+		CHECK_STREQ(a.path, host_or_path);
 	}
 }
 

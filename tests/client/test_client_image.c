@@ -165,7 +165,7 @@ static void test_raw_full_frame_fills_image(void)
 	CHECK_EQ_INT(img.width, 6);
 	CHECK_EQ_INT(img.height, 4);
 	CHECK(img.complete);
-	CHECK(memcmp(img.rgba, src, sizeof(src)) == 0);
+	CHECK_MEMEQ(img.rgba, src, sizeof(src));
 	CHECK_EQ_INT(img.frame_no, 9);
 	CHECK_EQ_INT(img.order, 4);
 	CHECK_EQ_INT(img.camera_seq, 2);
@@ -260,7 +260,7 @@ static void test_new_size_starts_new_picture(void)
 	CHECK_EQ_INT(img.width, 4);
 	CHECK_EQ_INT(img.view_width, 8);
 	CHECK(img.complete);
-	CHECK(memcmp(img.rgba, small, sizeof(small)) == 0);
+	CHECK_MEMEQ(img.rgba, small, sizeof(small));
 	/* Back to full size with only part of it: the rest is unknown. */
 	m = frame_msg(8, 8, BC_PROTO_ENC_RAW, &r_part, 1);
 	REQUIRE(bc_client_image_apply(&img, &m, &ei) == 0);
@@ -296,7 +296,7 @@ static void test_levels_are_reported(void)
 	CHECK(img.complete);
 	CHECK_EQ_INT(img.width, 2);
 	CHECK_EQ_INT(img.view_width, 7);
-	CHECK(memcmp(img.rgba, coarse, sizeof(coarse)) == 0);
+	CHECK_MEMEQ(img.rgba, coarse, sizeof(coarse));
 	/* Level 1, cut by the budget: still refining. */
 	m.flags = bc_proto_flags_with_level(BC_PROTO_FLAG_INCOMPLETE, 1);
 	REQUIRE(bc_client_image_apply(&img, &m, &ei) == 0);
@@ -313,7 +313,7 @@ static void test_levels_are_reported(void)
 	REQUIRE(bc_client_image_apply(&img, &m, &ei) == 0);
 	CHECK_EQ_INT(img.level, 0);
 	CHECK(!img.refining);
-	CHECK(memcmp(img.rgba, fine, sizeof(fine)) == 0);
+	CHECK_MEMEQ(img.rgba, fine, sizeof(fine));
 	bc_client_image_finish(&img);
 	CHECK_EQ_INT(img.level, 0);
 	CHECK(!img.refining);
@@ -390,7 +390,7 @@ static void test_png_rects_decode_exactly(void)
 				CHECK(a[0] == b[0] && a[1] == b[0] &&
 				      a[2] == b[0]);
 			} else {
-				CHECK(memcmp(a, b, 3) == 0);
+				CHECK_MEMEQ(a, b, 3);
 			}
 			CHECK_EQ_INT(a[3], 255);
 		}
@@ -423,7 +423,7 @@ static void test_rect_outside_image_is_refused_untouched(void)
 		    {0, 0, 2, 2, {patch, sizeof(patch)}}, bad[i]};
 		m = frame_msg(4, 4, BC_PROTO_ENC_RAW, two, 2);
 		CHECK_EQ_INT(bc_client_image_apply(&img, &m, &ei), BC_ERANGE);
-		CHECK(memcmp(img.rgba, base, sizeof(base)) == 0);
+		CHECK_MEMEQ(img.rgba, base, sizeof(base));
 		CHECK(img.complete);
 	}
 	bc_client_image_finish(&img);

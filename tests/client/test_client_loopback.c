@@ -441,7 +441,7 @@ static void test_handshake_join_or_create_and_stats(void)
 		info = bc_client_info(c);
 		CHECK_EQ_INT(info->connection_id, 7);
 		CHECK_EQ_INT(info->max_frame_bytes, 1u << 20);
-		CHECK(strcmp(info->server_id, "fake") == 0);
+		CHECK_STREQ(info->server_id, "fake");
 		CHECK(bc_client_fd(c) >= 0);
 		CHECK(bc_client_scene(c, NULL) == NULL);
 		CHECK_EQ_INT(bc_client_join(c, "s1", 0, BC_CLIENT_JOIN_ANY, &ei),
@@ -449,7 +449,7 @@ static void test_handshake_join_or_create_and_stats(void)
 		CHECK_EQ_INT(info->member_id, 3);
 		CHECK_EQ_INT(info->session_id, 11);
 		CHECK_EQ_INT(info->role, BC_PROTO_ROLE_EDITOR);
-		CHECK(strcmp(info->session, "s1") == 0);
+		CHECK_STREQ(info->session, "s1");
 		CHECK_EQ_INT(info->order, 5);
 		t = bc_client_scene(c, &cam);
 		REQUIRE(t != NULL);
@@ -754,13 +754,15 @@ static void test_frames_and_snapshot(void)
 		      BC_PROTO_HEADER_SIZE + 8 * 4 * 4);
 		REQUIRE(bc_client_image_apply(&img, &m, &ei) == 0);
 		want = pixels(8, 4, 10);
-		CHECK(img.complete && memcmp(img.rgba, want, 8 * 4 * 4) == 0);
+		CHECK(img.complete);
+		CHECK_MEMEQ(img.rgba, want, 8 * 4 * 4);
 		free(want);
 		REQUIRE(bc_client_camera(c, &cam, false, &seq, &ei) == 0);
 		REQUIRE(bc_client_snapshot(c, BC_PROTO_ENC_RAW, &snap, &ei) ==
 			0);
 		want = pixels(8, 4, 30);
-		CHECK(snap.complete && memcmp(snap.rgba, want, 8 * 4 * 4) == 0);
+		CHECK(snap.complete);
+		CHECK_MEMEQ(snap.rgba, want, 8 * 4 * 4);
 		CHECK(snap.flags & BC_PROTO_FLAG_SNAPSHOT);
 		free(want);
 		CHECK_EQ_INT(bc_client_snapshot(c, BC_PROTO_ENC_JPEG, &snap,
@@ -817,7 +819,7 @@ static void test_messages_larger_than_a_read(void)
 		REQUIRE(bc_client_recv(c, &m, 5000) == 1);
 		REQUIRE(bc_client_image_apply(&img, &m, &ei) == 0);
 		want = pixels(320, 240, 3);
-		CHECK(memcmp(img.rgba, want, 320 * 240 * 4) == 0);
+		CHECK_MEMEQ(img.rgba, want, 320 * 240 * 4);
 		free(want);
 		/* Then the server closes between messages. */
 		CHECK_EQ_INT(bc_client_recv(c, &m, 5000), BC_ECLOSED);

@@ -212,8 +212,8 @@ static void test_million_node_scene_load(void)
 			msgs++;
 			CHECK(got.type == BC_MSG_SCENE_LOAD && got.seq == 4);
 			CHECK(got.scene_load.scene.len == scene.len);
-			CHECK(memcmp(got.scene_load.scene.ptr, scene.data,
-			             scene.len) == 0);
+			CHECK_MEMEQ(got.scene_load.scene.ptr, scene.data,
+			            scene.len);
 			struct bc_proto_scene_info info;
 			CHECK(bc_proto_scene_scan(got.scene_load.scene.ptr,
 			                          got.scene_load.scene.len,

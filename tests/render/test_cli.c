@@ -326,7 +326,7 @@ static void test_help_tells_every_option(void)
 		CHECK(strstr(out, options[i]) != NULL);
 	}
 	CHECK_EQ_INT(run(NULL, h2), 0);
-	CHECK(strcmp(first, out) == 0);
+	CHECK_STREQ(first, out);
 	CHECK_EQ_INT(run(NULL, h3), 0);
 	CHECK(strstr(out, "render") != NULL);
 }

@@ -49,7 +49,7 @@ static void test_rgba8_round_trip_png_and_tif(void)
 		CHECK_EQ_INT(back.height, H);
 		CHECK_EQ_INT(back.channels, 4);
 		if (back.channels == 4) {
-			CHECK(memcmp(back.pixels, px, sizeof(px)) == 0);
+			CHECK_MEMEQ(back.pixels, px, sizeof(px));
 		}
 		bc_image_finish(&back);
 		unlink(path);
@@ -114,7 +114,7 @@ static void test_u32_round_trip_tif_exr(void)
 		CHECK_EQ_INT(back.height, H);
 		CHECK_EQ_INT(back.channels, 1);
 		if (back.channels == 1) {
-			CHECK(memcmp(back.pixels, v, sizeof(v)) == 0);
+			CHECK_MEMEQ(back.pixels, v, sizeof(v));
 		}
 		bc_image_finish(&back);
 		unlink(path);

@@ -366,8 +366,8 @@ static void test_debug_modes(void)
 			     &(struct bc_render_opts){.debug = BC_DEBUG_OVERLAPS},
 			     t, &cam, &ov, &st, &ei) == 0);
 	/* Debug modes change colours only. */
-	CHECK(memcmp(plain.depth, ev.depth, n * sizeof(float)) == 0);
-	CHECK(memcmp(plain.ids, ov.ids, n * sizeof(uint32_t)) == 0);
+	CHECK_MEMEQ(plain.depth, ev.depth, n * sizeof(float));
+	CHECK_MEMEQ(plain.ids, ov.ids, n * sizeof(uint32_t));
 	for (size_t i = 0; i < n; i++) {
 		changed += memcmp(plain.rgba + 4 * i, ev.rgba + 4 * i, 3) != 0;
 	}
@@ -382,7 +382,7 @@ static void test_debug_modes(void)
 					const uint8_t *c =
 						ov.rgba + 4 * ((ty * 8 + y) * 64 +
 							       tx * 8 + x);
-					CHECK(memcmp(c, c0, 4) == 0);
+					CHECK_MEMEQ(c, c0, 4);
 				}
 			}
 			distinct_tiles += memcmp(c0, ov.rgba, 4) != 0;
@@ -410,11 +410,11 @@ static void test_dispatcher_and_frames(void)
 	}
 	CHECK_EQ_INT(bc_backend_from_name("cpu"), BC_BACKEND_INVALID);
 	CHECK_EQ_INT(bc_backend_from_name(NULL), BC_BACKEND_INVALID);
-	CHECK(strcmp(bc_backend_name(BC_BACKEND_COUNT), "invalid") == 0);
+	CHECK_STREQ(bc_backend_name(BC_BACKEND_COUNT), "invalid");
 	CHECK(!bc_backend_available(BC_BACKEND_INVALID));
 	CHECK(bc_backend_available(BC_BACKEND_NAIVE));
 	CHECK(bc_backend_available(BC_BACKEND_TILED));
-	CHECK(strcmp(bc_backend_name(BC_BACKEND_TILED), "tiled") == 0);
+	CHECK_STREQ(bc_backend_name(BC_BACKEND_TILED), "tiled");
 	CHECK_EQ_INT(bc_frame_init(&f, 0, 10), BC_ERANGE);
 	CHECK_EQ_INT(bc_frame_init(&f, 10, BC_RENDER_MAX_DIM + 1), BC_ERANGE);
 	CHECK(f.rgba == NULL);
