@@ -1,4 +1,5 @@
 /* Tests of the shared base: error table, allocation hook, logger. */
+#include <pthread.h>
 #include <stdarg.h>
 
 #include "blobcast/alloc.h"
@@ -30,6 +31,32 @@ static void alloc_hook_fails_the_nth_call(void)
 	CHECK(bc_alloc_fail_after(0) == 2);
 	bc_free(a);
 	CHECK(bc_calloc((size_t)-1, 16) == NULL);
+}
+
+enum { ALLOC_THREADS = 4, ALLOC_EACH = 50000 };
+
+static void *allocate_many(void *arg)
+{
+	(void)arg;
+	for (int i = 0; i < ALLOC_EACH; i++) {
+		bc_free(bc_malloc(16));
+	}
+	return NULL;
+}
+
+/* The hook's counter is shared by every thread (the daemon's workers, a
+ * client's reader): concurrent allocations are all counted, none lost. */
+static void alloc_hook_counts_every_thread(void)
+{
+	pthread_t t[ALLOC_THREADS];
+	bc_alloc_fail_after(0);
+	for (int i = 0; i < ALLOC_THREADS; i++) {
+		REQUIRE(pthread_create(&t[i], NULL, allocate_many, NULL) == 0);
+	}
+	for (int i = 0; i < ALLOC_THREADS; i++) {
+		pthread_join(t[i], NULL);
+	}
+	CHECK_EQ_INT(bc_alloc_fail_after(0), ALLOC_THREADS * ALLOC_EACH);
 }
 
 /* The last message a sink received, as it would be written, and how many
@@ -111,6 +138,7 @@ static void log_escape_stops_before_a_partial_escape(void)
 static const struct bc_test tests[] = {
     {"error_table_names_every_code", error_table_names_every_code},
     {"alloc_hook_fails_the_nth_call", alloc_hook_fails_the_nth_call},
+    {"alloc_hook_counts_every_thread", alloc_hook_counts_every_thread},
     {"log_escapes_control_characters", log_escapes_control_characters},
     {"log_escapes_long_messages_whole", log_escapes_long_messages_whole},
     {"log_escape_stops_before_a_partial_escape",
