@@ -2,12 +2,14 @@
  * The OpenImageIO shim behind blobcast/image.h: the only C++ in the project.
  * It owns the mapping from our sample types to OpenImageIO's, the choice of
  * format from the file extension, and turning OpenImageIO's errors (and any
- * exception) into BC_E* codes with a reason. Nothing here keeps state.
+ * exception) into BC_E* codes with a reason. It is built as a module of its
+ * own (bc_image_oiio) that image.c loads on first use (image_module.h); the
+ * only thing it keeps is the allocator the program lends it.
  */
 extern "C" {
-#include "blobcast/alloc.h"
 #include "blobcast/error.h"
 #include "blobcast/image.h"
+#include "image_module.h"
 }
 
 #include <OpenImageIO/imageio.h>
@@ -20,6 +22,8 @@ extern "C" {
 #include <string>
 
 namespace {
+
+const struct bc_image_host *host;
 
 OIIO::TypeDesc oiio_type(enum bc_image_type type)
 {
@@ -116,7 +120,7 @@ int write_image(const char *path, const struct bc_image *img,
 {
 	size_t ss = sample_size(img->type);
 	std::string ext = extension(path);
-	if (!bc_image_ext_supports(path, img->type)) {
+	if (!host->ext_supports(path, img->type)) {
 		if (img->type == BC_IMAGE_U8) {
 			return bc_errinfo_set(ei, BC_ENOTSUP,
 					      "%s: no image format for "
@@ -205,14 +209,14 @@ int read_image(const char *path, enum bc_image_type type,
 				      static_cast<unsigned long long>(h),
 				      static_cast<unsigned long long>(c));
 	}
-	void *pixels = bc_calloc(static_cast<size_t>(w * h * c),
+	void *pixels = host->calloc(static_cast<size_t>(w * h * c),
 				 sample_size(type));
 	if (!pixels) {
 		return bc_errinfo_set(ei, BC_ENOMEM, "%s: out of memory", path);
 	}
 	if (!in->read_image(0, 0, 0, spec.nchannels, oiio_type(type),
 			    pixels)) {
-		bc_free(pixels);
+		host->free(pixels);
 		return bc_errinfo_set(ei, BC_EIO, "%s: read failed: %s", path,
 				      first_line(in->geterror()).c_str());
 	}
@@ -225,41 +229,26 @@ int read_image(const char *path, enum bc_image_type type,
 	return 0;
 }
 
-} // namespace
 
-extern "C" bool bc_image_ext_supports(const char *path,
-				      enum bc_image_type type)
+/* Whether OpenImageIO has a writer for the extension of path (image.c
+ * answers for float and uint32 samples itself). */
+bool module_ext_supports_u8(const char *path)
 {
-	if (!path) {
-		return false;
-	}
-	std::string ext = extension(path);
-	bool tiff = ext == "tif" || ext == "tiff";
-	switch (type) {
-	case BC_IMAGE_F32:
-		return tiff || ext == "exr" || ext == "pfm";
-	case BC_IMAGE_U32:
-		return tiff || ext == "exr";
-	case BC_IMAGE_U8:
-		try {
-			bool ok = !ext.empty() &&
-				  static_cast<bool>(
-					  OIIO::ImageOutput::create(path));
-			/* A failed lookup leaves a message in OpenImageIO's
-			 * global error; clear it so it does not leak into a
-			 * later, unrelated reason. */
-			(void)OIIO::geterror();
-			return ok;
-		} catch (const std::exception &) {
-			return false;
-		}
-	default:
+	try {
+		bool ok = !extension(path).empty() &&
+			  static_cast<bool>(OIIO::ImageOutput::create(path));
+		/* A failed lookup leaves a message in OpenImageIO's global
+		 * error; clear it so it does not leak into a later, unrelated
+		 * reason. */
+		(void)OIIO::geterror();
+		return ok;
+	} catch (const std::exception &) {
 		return false;
 	}
 }
 
-extern "C" int bc_image_write(const char *path, const struct bc_image *img,
-			      struct bc_errinfo *ei)
+int module_write(const char *path, const struct bc_image *img,
+		 struct bc_errinfo *ei)
 {
 	if (!path || !img || !img->pixels || img->width == 0 ||
 	    img->height == 0 || img->width > BC_IMAGE_MAX_DIM ||
@@ -275,35 +264,8 @@ extern "C" int bc_image_write(const char *path, const struct bc_image *img,
 	}
 }
 
-extern "C" int bc_image_write_rgba8(const char *path, uint32_t width,
-				    uint32_t height, const uint8_t *rgba,
-				    struct bc_errinfo *ei)
-{
-	struct bc_image img = {width, height, 4, BC_IMAGE_U8,
-			       const_cast<uint8_t *>(rgba)};
-	return bc_image_write(path, &img, ei);
-}
-
-extern "C" int bc_image_write_float(const char *path, uint32_t width,
-				    uint32_t height, const float *values,
-				    struct bc_errinfo *ei)
-{
-	struct bc_image img = {width, height, 1, BC_IMAGE_F32,
-			       const_cast<float *>(values)};
-	return bc_image_write(path, &img, ei);
-}
-
-extern "C" int bc_image_write_u32(const char *path, uint32_t width,
-				  uint32_t height, const uint32_t *values,
-				  struct bc_errinfo *ei)
-{
-	struct bc_image img = {width, height, 1, BC_IMAGE_U32,
-			       const_cast<uint32_t *>(values)};
-	return bc_image_write(path, &img, ei);
-}
-
-extern "C" int bc_image_read(const char *path, enum bc_image_type type,
-			     struct bc_image *out, struct bc_errinfo *ei)
+int module_read(const char *path, enum bc_image_type type,
+		struct bc_image *out, struct bc_errinfo *ei)
 {
 	if (!out) {
 		return bc_errinfo_set(ei, BC_EINVAL, "image read: no output");
@@ -320,10 +282,21 @@ extern "C" int bc_image_read(const char *path, enum bc_image_type type,
 	}
 }
 
-extern "C" void bc_image_finish(struct bc_image *img)
+const struct bc_image_ops ops = {
+	BC_IMAGE_MODULE_ABI,
+	module_ext_supports_u8,
+	module_write,
+	module_read,
+};
+
+} // namespace
+
+extern "C" __attribute__((visibility("default"))) const struct bc_image_ops *
+bc_image_module_open(const struct bc_image_host *h)
 {
-	if (img) {
-		bc_free(img->pixels);
-		std::memset(img, 0, sizeof(*img));
+	if (!h || !h->calloc || !h->free || !h->ext_supports) {
+		return nullptr;
 	}
+	host = h;
+	return &ops;
 }

@@ -1,0 +1,39 @@
+#!/bin/sh
+# The CLI starts without OpenImageIO: `blobcast --help` (and every command
+# that reads or writes no image file) must not load libOpenImageIO, which
+# render/image loads on first use (docs/benchmarks.md, CLI start-up). A
+# render to a PNG file must still load it and write the file.
+#
+# usage: test_cli_startup.sh BLOBCAST
+# Exits 77 when the CLI was not built.
+set -u
+cli=${1:-}
+if [ -z "$cli" ] || [ ! -x "$cli" ]; then
+  echo "skip: blobcast not built"
+  exit 77
+fi
+tmp=$(mktemp -d /tmp/bc-cli-startup.XXXXXX) || exit 1
+trap 'rm -rf "$tmp"' EXIT
+trap 'exit 1' INT TERM
+
+fail() {
+  echo "FAIL: $*"
+  exit 1
+}
+
+LD_DEBUG=libs "$cli" --help > /dev/null 2> "$tmp/libs" ||
+  fail "blobcast --help failed: $(tail -n 5 "$tmp/libs")"
+grep -q 'calling init:' "$tmp/libs" ||
+  fail "LD_DEBUG=libs printed nothing to check"
+if grep -q 'calling init:.*libOpenImageIO' "$tmp/libs"; then
+  fail "blobcast --help loads OpenImageIO"
+fi
+echo "ok   --help loads $(grep -c 'calling init:' "$tmp/libs") shared objects, OpenImageIO not among them"
+
+LD_DEBUG=libs "$cli" render default --size 32x24 --backend tiled \
+  --out "$tmp/out.png" > "$tmp/render.out" 2> "$tmp/render.libs" ||
+  fail "render: $(grep -v '^ *[0-9]*:' "$tmp/render.libs" | tail -n 5)"
+grep -q 'calling init:.*libOpenImageIO' "$tmp/render.libs" ||
+  fail "render to a PNG did not load OpenImageIO"
+[ -s "$tmp/out.png" ] || fail "render wrote no PNG"
+echo "ok   render loads OpenImageIO on first use and writes the PNG"
