@@ -98,6 +98,46 @@ static int set_op_fields(const struct bc_proto_edit_op *e,
 	return 0;
 }
 
+static void put_field(struct bc_proto_edit_op *e, struct bc_proto_field *f,
+                      uint8_t field, const float *v, uint32_t n)
+{
+	struct bc_proto_field *out = &f[e->nfields++];
+	out->field = field;
+	out->count = (uint8_t)n;
+	memcpy(out->v, v, n * sizeof(float));
+}
+
+void bc_edit_state_set(const struct bc_edit_saved *s, bool is_op,
+                       struct bc_proto_edit_op *e,
+                       struct bc_proto_field *fields)
+{
+	memset(e, 0, sizeof(*e));
+	e->kind = BC_PROTO_EDIT_SET;
+	e->node = s->id;
+	e->fields = fields;
+	if (is_op) {
+		float kind = (float)s->op.kind;
+		put_field(e, fields, BC_PROTO_FIELD_OP_KIND, &kind, 1);
+		put_field(e, fields, BC_PROTO_FIELD_BLEND, &s->op.blend, 1);
+		put_field(e, fields, BC_PROTO_FIELD_RANGE, &s->op.range, 1);
+	} else {
+		const struct bc_prim_info *info = bc_prim_info(s->p.kind);
+		put_field(e, fields, BC_PROTO_FIELD_TRANSLATE, s->p.translate,
+		          3);
+		put_field(e, fields, BC_PROTO_FIELD_ROTATE, s->p.rotate, 4);
+		for (uint32_t k = 0; info && k < info->nparams; k++) {
+			put_field(e, fields,
+			          (uint8_t)(BC_PROTO_FIELD_PARAM0 + k),
+			          s->p.params + info->params[k].offset,
+			          info->params[k].count);
+		}
+		if (s->p.has_color) {
+			put_field(e, fields, BC_PROTO_FIELD_COLOR, s->p.color,
+			          3);
+		}
+	}
+}
+
 int bc_edit_set_fields(const struct bc_proto_edit_op *e, bool is_op,
                        struct bc_prim_data *p, struct bc_op_data *op,
                        struct bc_errinfo *ei)

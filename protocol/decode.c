@@ -687,6 +687,8 @@ static int dec_body(struct dec *d, struct bc_msg *m)
 	case BC_MSG_OK:
 	case BC_MSG_SESSION_LEAVE:
 	case BC_MSG_GET_STATS:
+	case BC_MSG_UNDO:
+	case BC_MSG_REDO:
 		return 0;
 	case BC_MSG_SESSION_CREATE:
 	case BC_MSG_SESSION_JOIN:
@@ -710,7 +712,23 @@ static int dec_body(struct dec *d, struct bc_msg *m)
 		}
 		TRY(rd_id(d, "author", &a->author));
 		TRY(rd_u32(d, "author_seq", &a->author_seq));
-		return dec_ops(d, &a->nops, &a->ops);
+		TRY(dec_ops(d, &a->nops, &a->ops));
+		a->target_order = 0;
+		a->target_author = (struct bc_proto_str){NULL, 0};
+		if (!(d->m->flags & (BC_PROTO_FLAG_UNDO | BC_PROTO_FLAG_REDO))) {
+			return 0;
+		}
+		if ((d->m->flags & BC_PROTO_FLAG_UNDO) &&
+		    (d->m->flags & BC_PROTO_FLAG_REDO)) {
+			return fail(d, BC_EPROTO_FLAGS,
+			            "EDIT_APPLIED with both UNDO and REDO");
+		}
+		TRY(rd_u64(d, "target_order", &a->target_order));
+		if (a->target_order == 0) {
+			return fail(d, BC_ERANGE, "target_order is 0");
+		}
+		return rd_str(d, "target_author", 0, BC_PROTO_MAX_NAME,
+		              &a->target_author);
 	}
 	case BC_MSG_CAMERA:
 		return dec_camera(d, &m->camera);

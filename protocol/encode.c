@@ -241,6 +241,11 @@ static void w_body(struct bc__w *w, const struct bc_msg *m)
 		bc__put_u32(w, m->edit_applied.author);
 		bc__put_u32(w, m->edit_applied.author_seq);
 		w_ops(w, m->edit_applied.nops, m->edit_applied.ops);
+		if (m->flags & (BC_PROTO_FLAG_UNDO | BC_PROTO_FLAG_REDO)) {
+			bc__put_u64(w, m->edit_applied.target_order);
+			w_str(w, "target_author", m->edit_applied.target_author,
+			      BC_PROTO_MAX_NAME);
+		}
 		break;
 	case BC_MSG_CAMERA:
 		w_f32v(w, m->camera.eye, 3);
@@ -298,7 +303,7 @@ static void w_body(struct bc__w *w, const struct bc_msg *m)
 	case BC_MSG_SESSION_DELETE:
 		w_str(w, "name", m->session_delete.name, BC_PROTO_MAX_NAME);
 		break;
-	default: /* OK, SESSION_LEAVE, GET_STATS: no payload */
+	default: /* OK, SESSION_LEAVE, GET_STATS, UNDO, REDO: no payload */
 		break;
 	}
 }

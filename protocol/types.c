@@ -41,7 +41,9 @@ static const struct bc__type_info types[BC_MSG_COUNT] = {
     [BC_MSG_SCENE_STATE] = {"SCENE_STATE", BC__FROM_SERVER, 0, BULK},
     [BC_MSG_EDIT] = {"EDIT", BC__FROM_CLIENT, BC_PROTO_FLAG_INTERACTING, BULK},
     [BC_MSG_EDIT_APPLIED] = {"EDIT_APPLIED", BC__FROM_SERVER,
-                             BC_PROTO_FLAG_INTERACTING, BULK},
+                             BC_PROTO_FLAG_INTERACTING | BC_PROTO_FLAG_UNDO |
+                                 BC_PROTO_FLAG_REDO,
+                             BULK},
     [BC_MSG_CAMERA] = {"CAMERA", BC__FROM_CLIENT, BC_PROTO_FLAG_INTERACTING,
                        40},
     [BC_MSG_VIEW] = {"VIEW", BC__FROM_CLIENT, 0, 8},
@@ -57,6 +59,8 @@ static const struct bc__type_info types[BC_MSG_COUNT] = {
     [BC_MSG_STATS] = {"STATS", BC__FROM_SERVER, 0, 64},
     [BC_MSG_SESSION_DELETE] = {"SESSION_DELETE", BC__FROM_CLIENT, 0,
                                STR_MAX(BC_PROTO_MAX_NAME)},
+    [BC_MSG_UNDO] = {"UNDO", BC__FROM_CLIENT, 0, 0},
+    [BC_MSG_REDO] = {"REDO", BC__FROM_CLIENT, 0, 0},
 };
 
 const struct bc__type_info *bc__type_info(unsigned type)
@@ -141,6 +145,8 @@ int bc_proto_client_may_send(enum bc_proto_stage stage, enum bc_proto_role role,
 		return stage == BC_PROTO_STAGE_SESSION ? 0 : BC_ESTATE;
 	case BC_MSG_SCENE_LOAD:
 	case BC_MSG_EDIT:
+	case BC_MSG_UNDO:
+	case BC_MSG_REDO:
 		if (stage != BC_PROTO_STAGE_SESSION) {
 			return BC_ESTATE;
 		}

@@ -162,6 +162,8 @@ static void commit(struct load *l)
 			}
 		}
 	}
+	/* A new scene: nothing before it can be undone. */
+	bc_undo_clear(s);
 	bc_session_mark_all(s);
 	bc_session_schedule(s);
 }
@@ -249,56 +251,55 @@ void bc_handle_scene_load(struct bc_conn *c, const struct bc_msg *m)
 	load_free(l);
 }
 
-void bc_handle_edit(struct bc_conn *c, const struct bc_msg *m)
+int bc_session_apply(struct bc_conn *c, const struct bc_proto_edit_op *ops,
+                     uint16_t nops, uint32_t seq,
+                     const struct bc_change *how, struct bc_edit_batch *b,
+                     struct bc_errinfo *ei)
 {
 	struct bc_session *s = c->session;
 	struct bc_srv *srv = c->srv;
-	struct bc_errinfo ei = {0};
-	struct bc_edit_batch batch = {0};
 	struct bc_proto_buf rec;
 	struct bc_msg applied = {.type = BC_MSG_EDIT_APPLIED};
 	struct bc_msg as_edit = {.type = BC_MSG_EDIT};
 	struct bc_conn_ref refs[BC_PROTO_MAX_MEMBERS];
+	bool interacting = (how->flags & BC_PROTO_FLAG_INTERACTING) != 0;
 	uint32_t nrefs;
-	bool structural;
 	uint64_t t0 = uv_hrtime();
 	int rc;
-	if (busy(c, m)) {
-		return;
-	}
-	bc_proto_buf_init(&rec, 0);
+	memset(b, 0, sizeof(*b));
 	if (s->store_failed) {
-		rc = bc_errinfo_set(&ei, BC_EIO,
-		                    "the session cannot be saved: edits are "
-		                    "refused");
-		goto fail;
+		return bc_errinfo_set(ei, BC_EIO,
+		                      "the session cannot be saved: edits are "
+		                      "refused");
 	}
-	if ((rc = bc_edit_batch_apply(&batch, &s->tree, m->edit.ops,
-	                              m->edit.nops, &ei))) {
-		goto fail;
+	if ((rc = bc_edit_batch_apply(b, &s->tree, ops, nops, ei))) {
+		return rc;
 	}
-	structural = batch.structural;
 	/* A structural edit can grow the scene past what a member's queue
 	 * holds: undone like an edit that could not be journaled. */
-	if (structural && (rc = check_scene_bytes(s->tree, &ei))) {
-		bc_edit_batch_undo(&batch, &s->tree);
-		goto fail;
+	if (b->structural && (rc = check_scene_bytes(s->tree, ei))) {
+		bc_edit_batch_undo(b, &s->tree);
+		return rc;
 	}
 	/* The journal record is the EDIT payload: sync it before anyone
 	 * hears of the edit. */
-	as_edit.edit = m->edit;
-	if ((rc = bc_proto_encode(&rec, &as_edit, &ei)) ||
+	bc_proto_buf_init(&rec, 0);
+	as_edit.edit.nops = nops;
+	as_edit.edit.ops = ops;
+	if ((rc = bc_proto_encode(&rec, &as_edit, ei)) ||
 	    (rc = bc_store_append(s->store, s->order + 1,
 	                          rec.data + BC_PROTO_HEADER_SIZE,
-	                          rec.len - BC_PROTO_HEADER_SIZE, &ei))) {
+	                          rec.len - BC_PROTO_HEADER_SIZE, ei))) {
 		if (rc == BC_EIO) {
 			s->store_failed = true;
 		}
 		/* Not on disk, so not applied: the structural copy goes, or
 		 * the parameters are put back. */
-		bc_edit_batch_undo(&batch, &s->tree);
-		goto fail;
+		bc_edit_batch_undo(b, &s->tree);
+		bc_proto_buf_finish(&rec);
+		return rc;
 	}
+	bc_proto_buf_finish(&rec);
 	s->order++;
 	{
 		double ms = (double)(uv_hrtime() - t0) / 1e6;
@@ -307,7 +308,7 @@ void bc_handle_edit(struct bc_conn *c, const struct bc_msg *m)
 		                     : 0.9 * s->edit_ms_avg + 0.1 * ms;
 	}
 	/* The render thread's replica follows. */
-	if (structural) {
+	if (b->structural) {
 		struct bc_tree *copy = bc_tree_create();
 		if (copy && bc_tree_copy(copy, s->tree, NULL) == 0) {
 			bc_rthread_scene(srv, s->id, copy);
@@ -315,10 +316,10 @@ void bc_handle_edit(struct bc_conn *c, const struct bc_msg *m)
 			bc_tree_destroy(copy);
 		}
 	} else {
-		for (uint32_t i = 0; i < m->edit.nops; i++) {
+		for (uint32_t i = 0; i < nops; i++) {
 			struct bc_prim_data p;
 			struct bc_op_data op;
-			uint32_t id = m->edit.ops[i].node;
+			uint32_t id = ops[i].node;
 			bc_tree_get(s->tree, id, &p, &op);
 			if (op.kind != BC_OP_INVALID) {
 				bc_rthread_set_op(srv, s->id, id, &op);
@@ -327,12 +328,18 @@ void bc_handle_edit(struct bc_conn *c, const struct bc_msg *m)
 			}
 		}
 	}
-	applied.flags = m->flags & BC_PROTO_FLAG_INTERACTING;
+	applied.flags = how->flags;
 	applied.edit_applied.order = s->order;
 	applied.edit_applied.author = c->member_id;
-	applied.edit_applied.author_seq = m->seq;
-	applied.edit_applied.nops = m->edit.nops;
-	applied.edit_applied.ops = m->edit.ops;
+	applied.edit_applied.author_seq = seq;
+	applied.edit_applied.nops = nops;
+	applied.edit_applied.ops = ops;
+	applied.edit_applied.target_order = how->target_order;
+	if (how->target_author) {
+		applied.edit_applied.target_author.ptr = how->target_author;
+		applied.edit_applied.target_author.len =
+		    (uint32_t)strlen(how->target_author);
+	}
 	nrefs = bc_session_members(s, refs);
 	for (uint32_t i = 0; i < nrefs; i++) {
 		struct bc_conn *o = bc_conn_get(srv, refs[i]);
@@ -341,25 +348,44 @@ void bc_handle_edit(struct bc_conn *c, const struct bc_msg *m)
 		}
 		bc_conn_send(o, &applied);
 		o->dirty = true;
-		if (m->flags & BC_PROTO_FLAG_INTERACTING) {
-			o->interacting_until =
-			    bc_now_ms(srv) + BC_SRV_STILL_DELAY_MS;
-		} else {
-			o->interacting_until = 0;
-		}
-		if (structural) {
+		o->interacting_until =
+		    interacting ? bc_now_ms(srv) + BC_SRV_STILL_DELAY_MS : 0;
+		if (b->structural) {
 			o->shown.view = 0;
 		}
 	}
 	/* Logs its own failures and backs off after one (a full disk). */
 	bc_store_snapshot_due(s->store, BC_SRV_SNAPSHOT_EVERY, s->tree,
-	                      &s->camera, s->order, &ei);
-	bc_edit_batch_finish(&batch);
-	bc_proto_buf_finish(&rec);
+	                      &s->camera, s->order, ei);
 	bc_session_schedule(s);
-	return;
-fail:
+	return 0;
+}
+
+void bc_handle_edit(struct bc_conn *c, const struct bc_msg *m)
+{
+	struct bc_errinfo ei = {0};
+	struct bc_edit_batch batch;
+	struct bc_change how = {.flags = m->flags & BC_PROTO_FLAG_INTERACTING};
+	int rc;
+	if (busy(c, m)) {
+		return;
+	}
+	rc = bc_session_apply(c, m->edit.ops, m->edit.nops, m->seq, &how,
+	                      &batch, &ei);
+	if (rc) {
+		bc_conn_send_error(c, m->seq, rc, false, "edit refused: %s",
+		                   ei.msg);
+		return;
+	}
+	/* The history takes what undoes the batch. */
+	bc_undo_record(c, &batch, (how.flags & BC_PROTO_FLAG_INTERACTING) != 0);
 	bc_edit_batch_finish(&batch);
-	bc_proto_buf_finish(&rec);
-	bc_conn_send_error(c, m->seq, rc, false, "edit refused: %s", ei.msg);
+}
+
+void bc_handle_undo(struct bc_conn *c, const struct bc_msg *m)
+{
+	if (busy(c, m)) {
+		return;
+	}
+	bc_undo_step(c, m->type == BC_MSG_REDO, m->seq);
 }

@@ -153,6 +153,7 @@ struct bc_session {
 	uv_timer_t kick; /* schedules frames once a loop turn's writes end */
 	uint64_t empty_since_ms; /* loop clock; when the last member left */
 	bool loading; /* a SCENE_LOAD runs on a worker: changes wait */
+	struct bc_undo *undo; /* undo/redo history (undo.c), or NULL */
 	bool removed; /* out of the server, freed once its handles close */
 	uint32_t handles_open; /* timers and a load's work request */
 	double edit_ms_avg;
@@ -252,6 +253,35 @@ void bc_handle_session_delete(struct bc_conn *c, const struct bc_msg *m);
 /* ---- edits.c ------------------------------------------------------------ */
 void bc_handle_scene_load(struct bc_conn *c, const struct bc_msg *m);
 void bc_handle_edit(struct bc_conn *c, const struct bc_msg *m);
+/* UNDO and REDO. */
+void bc_handle_undo(struct bc_conn *c, const struct bc_msg *m);
+
+/* How an applied change presents itself in its EDIT_APPLIED. */
+struct bc_change {
+	uint16_t flags; /* BC_PROTO_FLAG_INTERACTING, _UNDO or _REDO */
+	uint64_t target_order;     /* UNDO, REDO: the edit undone or redone */
+	const char *target_author; /* and its author's name */
+};
+struct bc_edit_batch;
+/* Applies ops from member c (its request seq) to c's session as one batch:
+ * checked, journaled and synced, then broadcast as EDIT_APPLIED and passed
+ * to the render thread. Returns 0 with b holding what undoes the batch
+ * (the caller finishes it), or an error in ei with nothing changed. */
+int bc_session_apply(struct bc_conn *c, const struct bc_proto_edit_op *ops,
+		     uint16_t nops, uint32_t seq, const struct bc_change *how,
+		     struct bc_edit_batch *b, struct bc_errinfo *ei);
+
+/* ---- undo.c ------------------------------------------------------------- */
+/* Records what undoes batch b, just applied by c (takes b's old tree);
+ * clears the redo steps. Edits of one drag (interacting, up to the first
+ * edit without it) make one step. */
+void bc_undo_record(struct bc_conn *c, struct bc_edit_batch *b,
+		    bool interacting);
+/* UNDO (or REDO) from c, request seq: applies the newest step back as an
+ * edit, or answers ERROR ESTATE when there is none. */
+void bc_undo_step(struct bc_conn *c, bool redo, uint32_t seq);
+/* Forgets s's history (a new scene, or s going away). */
+void bc_undo_clear(struct bc_session *s);
 
 /* ---- frames.c ----------------------------------------------------------- */
 /* Starts a render for every member owed a frame (grouping equal ones). */

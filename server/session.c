@@ -71,6 +71,7 @@ static int replay_record(void *ud, uint64_t order, const uint8_t *rec,
 
 static void free_session(struct bc_session *s)
 {
+	bc_undo_clear(s);
 	bc_store_session_close(s->store);
 	bc_tree_destroy(s->tree);
 	bc_free(s);
@@ -589,6 +590,8 @@ static const handler_fn handlers[BC_MSG_COUNT] = {
     [BC_MSG_SNAPSHOT] = bc_handle_snapshot,
     [BC_MSG_GET_STATS] = bc_handle_stats,
     [BC_MSG_SESSION_DELETE] = bc_handle_session_delete,
+    [BC_MSG_UNDO] = bc_handle_undo,
+    [BC_MSG_REDO] = bc_handle_undo,
 };
 
 void bc_session_handle(struct bc_conn *c, const struct bc_msg *m)

@@ -108,6 +108,14 @@
  * and stay on the loop. */
 #define BC_SRV_ASYNC_LOAD_BYTES (1024u * 1024u)
 
+/* Undo history of a session: steps kept (a drag is one step) and the
+ * memory they may hold (a structural step keeps the whole tree before it,
+ * about 256 bytes a node). The oldest steps go first. A hundred steps
+ * reach back further than a reviewer wants to click; 64 MiB keep a dozen
+ * structural steps of a 20 000-node scene. */
+#define BC_SRV_UNDO_STEPS 100u
+#define BC_SRV_UNDO_BYTES (64u * 1024u * 1024u)
+
 /* Wait before a session retries the frames it could not queue for lack of
  * memory: the clients stay owed them, and a retry at once would spin. */
 #define BC_SRV_OOM_RETRY_MS 100u

@@ -1048,6 +1048,29 @@ static int run_delete(struct args *a)
 	return status;
 }
 
+static int run_undo(struct args *a)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	struct bc_client_undone u;
+	bool redo = strcmp(a->cmd, "redo") == 0;
+	int status;
+	if ((status = open_session(a, BC_PROTO_ROLE_EDITOR,
+	                           BC_CLIENT_JOIN_EXISTING, &c))) {
+		goto out;
+	}
+	if (bc_client_undo(c, redo, &u, &ei)) {
+		status = failed(a, NULL, &ei);
+		goto out;
+	}
+	printf("%s edit %llu by \"%s\": edit order %llu\n",
+	       redo ? "redid" : "undid", (unsigned long long)u.target_order,
+	       u.target_author, (unsigned long long)u.order);
+out:
+	bc_client_destroy(c);
+	return status;
+}
+
 static int run_scene(struct args *a)
 {
 	struct bc_client *c = NULL;
@@ -1442,6 +1465,20 @@ static const struct cmd cmds[] = {
      "server keeps the files aside (docs/operations.md). Needs a token\n"
      "granting the editor role when the server has tokens.\n",
      run_delete},
+    {"undo", O_SESSION, 0, 0, "--session NAME",
+     "take back the session's newest change, whoever made it",
+     "Undoes the newest change of session NAME that is not undone yet:\n"
+     "a parameter edit, a structural edit, or a whole drag. It is applied\n"
+     "as an edit of its own, seen by every member, and prints\n"
+     "  undid edit ORDER by \"AUTHOR\": edit order NEW\n"
+     "Exit status 1 with ESTATE when there is nothing to undo (the\n"
+     "history starts at the last load or restart, 100 steps deep).\n",
+     run_undo},
+    {"redo", O_SESSION, 0, 0, "--session NAME",
+     "apply again the change undone last",
+     "Redoes the change undone last in session NAME, as 'undo' takes it\n"
+     "back; a new edit in between leaves nothing to redo.\n",
+     run_undo},
 };
 
 static const struct cmd *find_cmd(const char *name)

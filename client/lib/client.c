@@ -1117,3 +1117,26 @@ int bc_client_delete_session(struct bc_client *c, const char *name,
 	}
 	return rc;
 }
+
+int bc_client_undo(struct bc_client *c, bool redo,
+		   struct bc_client_undone *out, struct bc_errinfo *ei)
+{
+	struct bc_msg m = {.type = redo ? BC_MSG_REDO : BC_MSG_UNDO};
+	const struct bc_msg_edit_applied *a = &m.edit_applied;
+	uint32_t seq;
+	int rc;
+	if (out) {
+		memset(out, 0, sizeof(*out));
+	}
+	if ((rc = send_or_say(c, &m, &seq, ei)) ||
+	    (rc = bc_client_wait(c, BC_MSG_EDIT_APPLIED, seq, &m, 0, ei))) {
+		return rc;
+	}
+	if (out) {
+		out->order = a->order;
+		out->target_order = a->target_order;
+		copy_str(out->target_author, sizeof(out->target_author),
+			 a->target_author);
+	}
+	return 0;
+}

@@ -61,13 +61,15 @@ export const MSG = Object.freeze({
 	SESSION_INFO: 10, SCENE_LOAD: 11, SCENE_STATE: 12, EDIT: 13,
 	EDIT_APPLIED: 14, CAMERA: 15, VIEW: 16, FRAME: 17, PICK: 18,
 	PICK_RESULT: 19, SNAPSHOT: 20, GET_STATS: 21, STATS: 22,
-	SESSION_DELETE: 23,
+	SESSION_DELETE: 23, UNDO: 24, REDO: 25,
 });
 
 /* Header flag bits; each is defined for some types only. */
 export const FLAG = Object.freeze({
 	FATAL: 0x0001,       /* ERROR */
 	INTERACTING: 0x0001, /* CAMERA, EDIT, EDIT_APPLIED */
+	UNDO: 0x0002,        /* EDIT_APPLIED: undoes target_order */
+	REDO: 0x0004,        /* EDIT_APPLIED: redoes target_order */
 	STILL: 0x0001,       /* FRAME */
 	SNAPSHOT: 0x0002,    /* FRAME */
 	INCOMPLETE: 0x0004,  /* FRAME: refinement stopped by the time budget */
@@ -233,7 +235,8 @@ T(10, 'SESSION_INFO', FROM_SERVER, 0, 4 + 4 + 1 + strMax(L.MAX_NAME) + 2 +
 T(11, 'SCENE_LOAD', FROM_CLIENT, 0, BULK);
 T(12, 'SCENE_STATE', FROM_SERVER, 0, BULK);
 T(13, 'EDIT', FROM_CLIENT, FLAG.INTERACTING, BULK);
-T(14, 'EDIT_APPLIED', FROM_SERVER, FLAG.INTERACTING, BULK);
+T(14, 'EDIT_APPLIED', FROM_SERVER, FLAG.INTERACTING | FLAG.UNDO | FLAG.REDO,
+	BULK);
 T(15, 'CAMERA', FROM_CLIENT, FLAG.INTERACTING, 40);
 T(16, 'VIEW', FROM_CLIENT, 0, 8);
 T(17, 'FRAME', FROM_SERVER, FLAG.STILL | FLAG.SNAPSHOT | FLAG.INCOMPLETE |
@@ -245,6 +248,8 @@ T(20, 'SNAPSHOT', FROM_CLIENT, 0, 2);
 T(21, 'GET_STATS', FROM_CLIENT, 0, 0);
 T(22, 'STATS', FROM_SERVER, 0, 64);
 T(23, 'SESSION_DELETE', FROM_CLIENT, 0, strMax(L.MAX_NAME));
+T(24, 'UNDO', FROM_CLIENT, 0, 0);
+T(25, 'REDO', FROM_CLIENT, 0, 0);
 
 function typeInfo(type) {
 	return Number.isInteger(type) ? TYPES[type] ?? null : null;
@@ -724,6 +729,8 @@ function decBody(d, m) {
 	case MSG.OK:
 	case MSG.SESSION_LEAVE:
 	case MSG.GET_STATS:
+	case MSG.UNDO:
+	case MSG.REDO:
 		break;
 	case MSG.SESSION_CREATE:
 	case MSG.SESSION_JOIN:
@@ -769,6 +776,17 @@ function decBody(d, m) {
 		m.author = d.id('author');
 		m.author_seq = d.u32('author_seq');
 		m.ops = decOps(d);
+		if (m.flags & (FLAG.UNDO | FLAG.REDO)) {
+			if ((m.flags & FLAG.UNDO) && (m.flags & FLAG.REDO)) {
+				d.fail('EPROTO_FLAGS',
+					'EDIT_APPLIED with both UNDO and REDO');
+			}
+			m.target_order = d.u64('target_order');
+			if (m.target_order === 0n) {
+				d.fail('ERANGE', 'target_order is 0');
+			}
+			m.target_author = d.str('target_author', 0, L.MAX_NAME);
+		}
 		break;
 	case MSG.CAMERA:
 		for (const v of ['eye', 'target', 'up']) {
@@ -1286,6 +1304,8 @@ function encBody(w, m) {
 	case MSG.OK:
 	case MSG.SESSION_LEAVE:
 	case MSG.GET_STATS:
+	case MSG.UNDO:
+	case MSG.REDO:
 		break;
 	case MSG.SESSION_CREATE:
 	case MSG.SESSION_JOIN:
@@ -1325,6 +1345,10 @@ function encBody(w, m) {
 		w.u32('author', m.author);
 		w.u32('author_seq', m.author_seq);
 		encOps(w, m.ops);
+		if ((m.flags ?? 0) & (FLAG.UNDO | FLAG.REDO)) {
+			w.u64('target_order', m.target_order);
+			w.str('target_author', m.target_author);
+		}
 		break;
 	case MSG.CAMERA:
 		w.f32v('eye', m.eye, 3);

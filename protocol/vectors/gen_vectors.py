@@ -26,7 +26,7 @@ TYPES = {
     "SESSION_INFO": 10, "SCENE_LOAD": 11, "SCENE_STATE": 12, "EDIT": 13,
     "EDIT_APPLIED": 14, "CAMERA": 15, "VIEW": 16, "FRAME": 17, "PICK": 18,
     "PICK_RESULT": 19, "SNAPSHOT": 20, "GET_STATS": 21, "STATS": 22,
-    "SESSION_DELETE": 23,
+    "SESSION_DELETE": 23, "UNDO": 24, "REDO": 25,
 }
 MAX_PAYLOAD = 64 * 1024 * 1024
 HELLO_MAX_PAYLOAD = 4096
@@ -37,6 +37,8 @@ MIN_FRAME_BYTES = 65536
 # FRAME header flags (section 2): STILL, SNAPSHOT, INCOMPLETE, the
 # refinement level in bits 3..4, and the planes of a snapshot, DEPTH and IDS.
 STILL, SNAPSHOT, INCOMPLETE = 1, 2, 4
+# EDIT_APPLIED: UNDO and REDO (the payload ends with the target edit).
+UNDO, REDO = 2, 4
 DEPTH, IDS = 0x20, 0x40
 # SNAPSHOT's planes byte.
 PLANE_DEPTH, PLANE_IDS = 1, 2
@@ -73,7 +75,7 @@ TYPE_MAX = {
     "EDIT": MAX_PAYLOAD, "EDIT_APPLIED": MAX_PAYLOAD,
     "CAMERA": 40, "VIEW": 8, "FRAME": MAX_PAYLOAD, "PICK": 4,
     "PICK_RESULT": 24, "SNAPSHOT": 2, "GET_STATS": 0, "STATS": 64,
-    "SESSION_DELETE": strmax(MAX_NAME),
+    "SESSION_DELETE": strmax(MAX_NAME), "UNDO": 0, "REDO": 0,
 }
 
 # ---- Byte helpers --------------------------------------------------------------
@@ -257,8 +259,11 @@ def w_edit(f):
 
 
 def w_edit_applied(f):
-    return (u64(int(f["order"])) + u32(f["author"]) + u32(f["author_seq"])
-            + w_ops(f["ops"]))
+    b = (u64(int(f["order"])) + u32(f["author"]) + u32(f["author_seq"])
+         + w_ops(f["ops"]))
+    if "target_order" in f:  # with the UNDO or REDO flag only
+        b += u64(int(f["target_order"])) + sstr(f["target_author"])
+    return b
 
 
 def w_camera(f):
@@ -322,7 +327,7 @@ WRITERS = {
     "VIEW": w_view, "FRAME": w_frame, "PICK": w_pick,
     "PICK_RESULT": w_pick_result, "SNAPSHOT": w_snapshot,
     "GET_STATS": w_empty, "STATS": w_stats,
-    "SESSION_DELETE": w_session_delete,
+    "SESSION_DELETE": w_session_delete, "UNDO": w_empty, "REDO": w_empty,
 }
 
 # ---- Vector tables -----------------------------------------------------------
@@ -711,9 +716,29 @@ def gen_edit_applied():
         dict(kind=1, node=7, fields=[dict(field=1,
                                           values=[fl(0.1), 0.0, 0.0])])]),
          flags=1, seq=0)
+    undo_ops = [dict(kind=1, node=7, fields=[dict(field=1,
+                                                  values=[0.0, 0.0, 0.0])])]
+    t.ok("an undo of carol's edit 1002",
+             dict(order="1003", author=6, author_seq=3, ops=undo_ops,
+                  target_order="1002", target_author="carol"),
+             flags=UNDO, seq=0)
+    t.ok("a redo, author name empty",
+         dict(order="1004", author=6, author_seq=4, ops=undo_ops,
+              target_order="1002", target_author=""),
+         flags=REDO, seq=0)
     t.common(p)
     t.badp("order 0", u64(0) + u32(5) + u32(1) + u16(1) + u8(3) + u32(1),
            "ERANGE")
+    body = u64(1003) + u32(6) + u32(3) + w_ops(undo_ops)
+    t.badp("UNDO without its target", body, "EPROTO_TRUNCATED", flags=UNDO)
+    t.badp("UNDO and REDO", body + u64(1002) + sstr("carol"),
+           "EPROTO_FLAGS", flags=UNDO | REDO)
+    t.badp("target_order 0", body + u64(0) + sstr("carol"), "ERANGE",
+           flags=UNDO)
+    t.badp("target after an edit without UNDO", body + u64(1002)
+           + sstr("carol"), "EPROTO_TRAILING")
+    t.bad("a target_author of 65 bytes", frame("EDIT_APPLIED",
+          body + u64(1002) + sstr("c" * 65), flags=UNDO), "EPROTO_LENGTH")
     t.badp("author 0", u64(1) + u32(0) + u32(1) + u16(1) + u8(3) + u32(1),
            "ERANGE")
     edit_bad_cases(t, u64(1) + u32(5) + u32(1))
@@ -1110,7 +1135,7 @@ def gen_framing():
     bad("version 255, header cut after it", MAGIC + u8(255),
         "EPROTO_VERSION")
     bad("type 0", header(0, 0), "EPROTO_TYPE")
-    bad("type 24", header(24, 0), "EPROTO_TYPE")
+    bad("type 26", header(26, 0), "EPROTO_TYPE")
     bad("type 255", header(255, 0), "EPROTO_TYPE")
     bad("unknown type is reported before the rest of the header",
         MAGIC + u8(1) + u8(99), "EPROTO_TYPE")
@@ -1244,6 +1269,8 @@ def main():
     gen_empty("GET_STATS", "client")
     gen_stats()
     gen_session_delete()
+    gen_empty("UNDO", "client")
+    gen_empty("REDO", "client")
     gen_framing()
     gen_scene()
 

@@ -408,8 +408,9 @@ static void sample(enum bc_msg_type t, struct bc_msg *m)
 		m->edit = (struct bc_msg_edit){4, ops};
 		break;
 	case BC_MSG_EDIT_APPLIED:
-		m->edit_applied =
-		    (struct bc_msg_edit_applied){9, 5, 12, 4, ops};
+		m->flags = BC_PROTO_FLAG_UNDO;
+		m->edit_applied = (struct bc_msg_edit_applied){
+		    9, 5, 12, 4, ops, 7, S("carol")};
 		break;
 	case BC_MSG_CAMERA:
 		m->camera = (struct bc_msg_camera){
@@ -439,6 +440,9 @@ static void sample(enum bc_msg_type t, struct bc_msg *m)
 		break;
 	case BC_MSG_SESSION_DELETE:
 		m->session_delete.name = S("old-review");
+		break;
+	case BC_MSG_UNDO:
+	case BC_MSG_REDO:
 		break;
 	default:
 		break;

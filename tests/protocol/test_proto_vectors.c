@@ -225,6 +225,12 @@ static void build(enum bc_msg_type type, const json_t *f, struct bc_msg *m)
 		m->edit_applied.author = (uint32_t)jint(f, "author");
 		m->edit_applied.author_seq = (uint32_t)jint(f, "author_seq");
 		m->edit_applied.ops = jops(f, &m->edit_applied.nops);
+		if (json_object_get(f, "target_order")) {
+			m->edit_applied.target_order =
+			    jint(f, "target_order");
+			m->edit_applied.target_author =
+			    jstr(f, "target_author");
+		}
 		break;
 	case BC_MSG_CAMERA:
 		jvec(f, "eye", m->camera.eye, 3);
@@ -416,7 +422,11 @@ static int msg_eq(const struct bc_msg *a, const struct bc_msg *b)
 		           b->edit_applied.author_seq &&
 		       a->edit_applied.nops == b->edit_applied.nops &&
 		       ops_eq(a->edit_applied.ops, b->edit_applied.ops,
-		              a->edit_applied.nops);
+		              a->edit_applied.nops) &&
+		       a->edit_applied.target_order ==
+		           b->edit_applied.target_order &&
+		       str_eq(a->edit_applied.target_author,
+		              b->edit_applied.target_author);
 	case BC_MSG_CAMERA:
 		return f_eq(a->camera.eye, b->camera.eye, 3) &&
 		       f_eq(a->camera.target, b->camera.target, 3) &&

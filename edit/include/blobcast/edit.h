@@ -52,6 +52,16 @@ struct bc_edit_saved {
 	struct bc_op_data op;
 };
 
+/* A SET of node s->id that gives it back the saved state: every field of
+ * the primitive (translate, rotate, each parameter, the colour when it has
+ * one) or of the operator (kind, blend, range), written into *e and
+ * fields (BC_PROTO_MAX_SET_FIELDS entries, which e points to). is_op: the
+ * node is an operator. A SET cannot take a colour away: when s->p has none
+ * and the node now has one, the caller needs a structural undo. */
+void bc_edit_state_set(const struct bc_edit_saved *s, bool is_op,
+                       struct bc_proto_edit_op *e,
+                       struct bc_proto_field *fields);
+
 /* What an applied batch needs to be undone. Zero it before use;
  * bc_edit_batch_finish() frees it. */
 struct bc_edit_batch {

@@ -1,0 +1,327 @@
+/*
+ * Undo and redo (loop thread). Each session keeps a bounded history of the
+ * changes applied to its scene since it was loaded: for each, what puts the
+ * scene back -- the earlier states of the nodes a parameter edit changed,
+ * or the whole tree before a structural edit. UNDO applies the newest
+ * step's reverse as an ordinary edit (SETs of the saved states, or a
+ * REPLACE of the root by the saved tree), so it is journaled and broadcast
+ * as EDIT_APPLIED (flag UNDO, naming the edit undone and its author) and
+ * every mirror, and a restart, sees a plain edit. What that edit's own
+ * batch saved is the REDO step, and the other way round.
+ *
+ * The history is linear and the session's, not a member's: undo takes back
+ * the newest change whoever made it. A new edit clears the redo steps; the
+ * edits of one member's drag (INTERACTING, up to the release) make one
+ * step; a SCENE_LOAD clears the history. It lives in memory: after a
+ * restart, undo starts from the restored scene.
+ */
+#include <string.h>
+
+#include "blobcast/alloc.h"
+#include "blobcast/edit.h"
+#include "blobcast/log.h"
+#include "blobcast/scene.h"
+#include "server.h"
+
+/* Memory a structural step holds per node of its saved tree (the model and
+ * its layout), for the history's byte bound. */
+#define TREE_BYTES_PER_NODE 256u
+
+struct step {
+	uint64_t order; /* the edit this step undoes (or, redo, redoes) */
+	char author[BC_PROTO_MAX_NAME + 1];
+	uint32_t member; /* who made it: a drag's edits join its step */
+	bool open;       /* that drag still adds to it */
+	struct bc_edit_saved *nodes; /* parameter step: states to restore */
+	uint32_t n, cap;
+	struct bc_tree *old; /* structural step: the tree to restore */
+	size_t bytes;
+};
+
+struct bc_undo {
+	struct step undo[BC_SRV_UNDO_STEPS], redo[BC_SRV_UNDO_STEPS];
+	uint32_t nundo, nredo;
+	size_t bytes;
+};
+
+static void step_free(struct bc_undo *u, struct step *st)
+{
+	u->bytes -= st->bytes;
+	bc_free(st->nodes);
+	bc_tree_destroy(st->old);
+	memset(st, 0, sizeof(*st));
+}
+
+/* Drops the i-th of n steps in a stack, oldest first. */
+static void drop(struct bc_undo *u, struct step *stack, uint32_t *n,
+                 uint32_t i)
+{
+	step_free(u, &stack[i]);
+	memmove(&stack[i], &stack[i + 1], (*n - i - 1) * sizeof(*stack));
+	(*n)--;
+	memset(&stack[*n], 0, sizeof(*stack));
+}
+
+void bc_undo_clear(struct bc_session *s)
+{
+	struct bc_undo *u = s->undo;
+	if (!u) {
+		return;
+	}
+	while (u->nundo) {
+		drop(u, u->undo, &u->nundo, u->nundo - 1);
+	}
+	while (u->nredo) {
+		drop(u, u->redo, &u->nredo, u->nredo - 1);
+	}
+	bc_free(u);
+	s->undo = NULL;
+}
+
+static bool has_node(const struct step *st, uint32_t id)
+{
+	for (uint32_t i = 0; i < st->n; i++) {
+		if (st->nodes[i].id == id) {
+			return true;
+		}
+	}
+	return false;
+}
+
+/* A SET cannot take a colour away: a step that must restore a primitive
+ * without colour over one with colour becomes structural -- a copy of t
+ * (the scene now) with the saved states written back. Returns false when
+ * out of memory. */
+static bool settle_colours(struct bc_undo *u, struct step *st,
+                           const struct bc_tree *t)
+{
+	struct bc_tree *copy;
+	bool needed = false;
+	for (uint32_t i = 0; i < st->n && !needed; i++) {
+		struct bc_prim_data p;
+		struct bc_op_data op;
+		bc_tree_get(t, st->nodes[i].id, &p, &op);
+		needed = op.kind == BC_OP_INVALID &&
+		         !st->nodes[i].p.has_color && p.has_color;
+	}
+	if (!needed) {
+		return true;
+	}
+	if (!(copy = bc_tree_create()) || bc_tree_copy(copy, t, NULL)) {
+		bc_tree_destroy(copy);
+		return false;
+	}
+	for (uint32_t i = 0; i < st->n; i++) {
+		const struct bc_edit_saved *sv = &st->nodes[i];
+		if (sv->op.kind != BC_OP_INVALID) {
+			bc_tree_set_op(copy, sv->id, &sv->op, NULL);
+		} else {
+			bc_tree_set_prim(copy, sv->id, &sv->p, NULL);
+		}
+	}
+	u->bytes -= st->bytes;
+	bc_free(st->nodes);
+	st->nodes = NULL;
+	st->n = st->cap = 0;
+	st->old = copy;
+	st->bytes = (size_t)bc_tree_node_count(copy) * TREE_BYTES_PER_NODE;
+	u->bytes += st->bytes;
+	return true;
+}
+
+/* Adds to st what undoes batch b, applied to make t: b's old tree, or the
+ * saved states of the nodes st does not hold yet (a node's first saved
+ * state is its state before). Takes b's old tree. Returns false when out
+ * of memory. */
+static bool step_add(struct bc_undo *u, struct step *st,
+                     struct bc_edit_batch *b, const struct bc_tree *t)
+{
+	if (b->structural) {
+		st->old = b->old;
+		b->old = NULL;
+		st->bytes = (size_t)bc_tree_node_count(st->old) *
+		            TREE_BYTES_PER_NODE;
+		u->bytes += st->bytes;
+		return true;
+	}
+	for (uint32_t i = 0; i < b->nsaved; i++) {
+		if (has_node(st, b->saved[i].id)) {
+			continue;
+		}
+		if (st->n == st->cap) {
+			uint32_t cap = st->cap ? 2u * st->cap : 8u;
+			struct bc_edit_saved *more =
+			    bc_realloc(st->nodes, cap * sizeof(*more));
+			if (!more) {
+				return false;
+			}
+			st->nodes = more;
+			st->cap = cap;
+		}
+		st->nodes[st->n++] = b->saved[i];
+		st->bytes += sizeof(*st->nodes);
+		u->bytes += sizeof(*st->nodes);
+	}
+	return settle_colours(u, st, t);
+}
+
+/* Keeps the history within its bounds, dropping the oldest steps. */
+static void trim(struct bc_undo *u)
+{
+	while (u->nundo > 0 &&
+	       (u->bytes > BC_SRV_UNDO_BYTES || u->nundo > BC_SRV_UNDO_STEPS)) {
+		drop(u, u->undo, &u->nundo, 0);
+	}
+	while (u->nredo > 0 && u->bytes > BC_SRV_UNDO_BYTES) {
+		drop(u, u->redo, &u->nredo, 0);
+	}
+}
+
+/* A new step on top of stack (oldest dropped when full), or NULL. */
+static struct step *push(struct bc_undo *u, struct step *stack, uint32_t *n)
+{
+	if (*n == BC_SRV_UNDO_STEPS) {
+		drop(u, stack, n, 0);
+	}
+	return &stack[(*n)++];
+}
+
+static struct bc_undo *history(struct bc_session *s)
+{
+	if (!s->undo) {
+		s->undo = bc_calloc(1, sizeof(*s->undo));
+	}
+	return s->undo;
+}
+
+void bc_undo_record(struct bc_conn *c, struct bc_edit_batch *b,
+                    bool interacting)
+{
+	struct bc_session *s = c->session;
+	struct bc_undo *u = history(s);
+	struct step *top;
+	bool ok;
+	if (!u) {
+		bc_log(BC_LOG_WARN, "session %s: no memory for the undo history",
+		       s->name);
+		return;
+	}
+	while (u->nredo) {
+		drop(u, u->redo, &u->nredo, u->nredo - 1);
+	}
+	top = u->nundo ? &u->undo[u->nundo - 1] : NULL;
+	if (top && top->open && top->member == c->member_id && !top->old &&
+	    !b->structural && top->n + b->nsaved <= BC_PROTO_MAX_EDIT_OPS) {
+		/* The drag goes on (or ends with this edit): one step. */
+		ok = step_add(u, top, b, s->tree);
+	} else {
+		if (top) {
+			top->open = false;
+		}
+		top = push(u, u->undo, &u->nundo);
+		top->member = c->member_id;
+		snprintf(top->author, sizeof(top->author), "%s", c->name);
+		ok = step_add(u, top, b, s->tree);
+	}
+	top->order = s->order;
+	top->open = interacting;
+	if (!ok) {
+		bc_log(BC_LOG_WARN,
+		       "session %s: no memory for the undo history; it "
+		       "restarts here",
+		       s->name);
+		bc_undo_clear(s);
+		return;
+	}
+	trim(u);
+}
+
+void bc_undo_step(struct bc_conn *c, bool redo, uint32_t seq)
+{
+	struct bc_session *s = c->session;
+	struct bc_undo *u = s->undo;
+	struct bc_errinfo ei = {0};
+	struct bc_proto_edit_op *ops = NULL;
+	struct bc_proto_field *fields = NULL;
+	struct bc_edit_batch batch;
+	struct bc_change how = {0};
+	struct step *st, *back;
+	uint8_t *subtree = NULL;
+	size_t len = 0;
+	uint32_t nops;
+	int rc;
+	if (!u || (redo ? u->nredo : u->nundo) == 0) {
+		bc_conn_send_error(c, seq, BC_ESTATE, false, "nothing to %s",
+		                   redo ? "redo" : "undo");
+		return;
+	}
+	st = redo ? &u->redo[u->nredo - 1] : &u->undo[u->nundo - 1];
+	if (st->old) {
+		/* The whole tree back, as a REPLACE of the root. */
+		if (bc_scene_encode(st->old, NULL, &subtree, &len) ||
+		    !(ops = bc_calloc(1, sizeof(*ops)))) {
+			rc = bc_errinfo_set(&ei, BC_ENOMEM, "out of memory");
+			goto fail;
+		}
+		ops->kind = BC_PROTO_EDIT_REPLACE;
+		ops->node = bc_tree_root(s->tree);
+		ops->subtree.ptr = subtree;
+		ops->subtree.len = (uint32_t)len;
+		nops = 1;
+	} else {
+		if (!(ops = bc_calloc(st->n, sizeof(*ops))) ||
+		    !(fields = bc_calloc((size_t)st->n * BC_PROTO_MAX_SET_FIELDS,
+		                         sizeof(*fields)))) {
+			rc = bc_errinfo_set(&ei, BC_ENOMEM, "out of memory");
+			goto fail;
+		}
+		for (uint32_t i = 0; i < st->n; i++) {
+			bc_edit_state_set(&st->nodes[i],
+			                  st->nodes[i].op.kind != BC_OP_INVALID,
+			                  &ops[i],
+			                  &fields[(size_t)i *
+			                          BC_PROTO_MAX_SET_FIELDS]);
+		}
+		nops = st->n;
+	}
+	how.flags = redo ? BC_PROTO_FLAG_REDO : BC_PROTO_FLAG_UNDO;
+	how.target_order = st->order;
+	how.target_author = st->author;
+	if ((rc = bc_session_apply(c, ops, (uint16_t)nops, seq, &how, &batch,
+	                           &ei))) {
+		goto fail;
+	}
+	/* What this change saved goes the other way: undone, it can be
+	 * redone, and redone, undone again. */
+	back = redo ? push(u, u->undo, &u->nundo) : push(u, u->redo, &u->nredo);
+	back->order = st->order;
+	back->member = st->member;
+	memcpy(back->author, st->author, sizeof(back->author));
+	if (!step_add(u, back, &batch, s->tree)) {
+		bc_log(BC_LOG_WARN, "session %s: no memory to keep the %s",
+		       s->name, redo ? "undo" : "redo");
+		if (redo) {
+			drop(u, u->undo, &u->nundo, u->nundo - 1);
+		} else {
+			drop(u, u->redo, &u->nredo, u->nredo - 1);
+		}
+	}
+	bc_edit_batch_finish(&batch);
+	/* The step applied leaves its stack. */
+	if (redo) {
+		drop(u, u->redo, &u->nredo, u->nredo - 1);
+	} else {
+		drop(u, u->undo, &u->nundo, u->nundo - 1);
+	}
+	trim(u);
+	bc_free(ops);
+	bc_free(fields);
+	bc_free(subtree);
+	return;
+fail:
+	bc_free(ops);
+	bc_free(fields);
+	bc_free(subtree);
+	bc_conn_send_error(c, seq, rc, false, "%s refused: %s",
+	                   redo ? "redo" : "undo", ei.msg);
+}

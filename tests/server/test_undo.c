@@ -1,0 +1,331 @@
+/*
+ * Undo and redo in blobcastd: two editors change a session (a move, a
+ * drag, an insertion, a new colour), undo and redo each other's changes in
+ * turn, and at every step each editor's mirror -- built only by replaying
+ * EDIT_APPLIED with the edit module -- equals a late joiner's SCENE_STATE,
+ * and the scene equals what it was before (after) the changes undone
+ * (redone). Undos name the edit and author they take back; a new edit
+ * leaves nothing to redo; a restart replays the undos from the journal.
+ */
+#include "blobcast/alloc.h"
+#include "blobcast/blobtree.h"
+#include "blobcast/edit.h"
+#include "blobcast/scene.h"
+#include "daemon.h"
+#include "test.h"
+
+static char base_dir[48];
+
+struct editor {
+	struct conn c;
+	uint32_t member; /* its member id in the session */
+	struct bc_tree *mirror;
+};
+
+/* Replays every EDIT_APPLIED in what e has received, until (ms) one
+ * answering seq arrives; returns that message's flags, -1 on an ERROR
+ * for seq (its code in e->c.m) or a timeout. */
+static int await_applied(struct editor *e, uint32_t seq, int ms)
+{
+	int64_t end = t_now_ms() + ms;
+	while (t_now_ms() < end) {
+		struct bc_errinfo ei = {0};
+		if (conn_recv(&e->c, 100) != 1) {
+			continue;
+		}
+		if (e->c.m.type == BC_MSG_ERROR && e->c.m.seq == seq) {
+			return -1;
+		}
+		if (e->c.m.type != BC_MSG_EDIT_APPLIED) {
+			continue;
+		}
+		if (bc_edit_replay(&e->mirror, &e->c.m.edit_applied, &ei)) {
+			CHECK(!"an EDIT_APPLIED does not replay");
+			return -1;
+		}
+		if (e->c.m.edit_applied.author == e->member &&
+		    e->c.m.edit_applied.author_seq == seq) {
+			return e->c.m.flags;
+		}
+	}
+	return -1;
+}
+
+/* Takes every EDIT_APPLIED e has been sent so far into its mirror. */
+static void catch_up(struct editor *e)
+{
+	struct bc_errinfo ei = {0};
+	while (conn_recv(&e->c, 300) == 1) {
+		if (e->c.m.type == BC_MSG_EDIT_APPLIED) {
+			CHECK(bc_edit_replay(&e->mirror, &e->c.m.edit_applied,
+			                     &ei) == 0);
+		}
+	}
+}
+
+static void join(struct editor *e, const struct daemon *d, const char *name,
+                 bool create)
+{
+	REQUIRE(conn_open(&e->c, d) == 0);
+	REQUIRE(conn_hello(&e->c, name) == 0);
+	REQUIRE(conn_join(&e->c, "u", BC_PROTO_ROLE_EDITOR, create) == 0);
+	e->member = e->c.m.session_info.member_id;
+	REQUIRE(conn_expect(&e->c, BC_MSG_SCENE_STATE, 5000) == 1);
+	REQUIRE((e->mirror = scene_of(&e->c)));
+}
+
+static bool same_tree(const struct bc_tree *a, const struct bc_tree *b)
+{
+	uint8_t *x = NULL, *y = NULL;
+	size_t nx = 0, ny = 0;
+	bool same = bc_tree_encode(a, &x, &nx) == 0 &&
+	            bc_tree_encode(b, &y, &ny) == 0 && nx == ny &&
+	            memcmp(x, y, nx) == 0;
+	bc_free(x);
+	bc_free(y);
+	return same;
+}
+
+/* The session's scene as a joiner gets it, or NULL. */
+static struct bc_tree *joiner_scene(const struct daemon *d)
+{
+	struct conn j;
+	struct bc_tree *t = NULL;
+	if (conn_open(&j, d) != 0) {
+		return NULL;
+	}
+	if (conn_hello(&j, "joiner") == 0 &&
+	    conn_join(&j, "u", BC_PROTO_ROLE_VIEWER, false) == 0 &&
+	    conn_expect(&j, BC_MSG_SCENE_STATE, 5000) == 1) {
+		t = scene_of(&j);
+	}
+	conn_close(&j);
+	return t;
+}
+
+/* Both mirrors equal the joiner's scene, and want when it is given. */
+static void check_state(const struct daemon *d, struct editor *a,
+                        struct editor *b, const struct bc_tree *want)
+{
+	struct bc_tree *j = joiner_scene(d);
+	REQUIRE(j);
+	catch_up(a);
+	catch_up(b);
+	CHECK(same_tree(a->mirror, j));
+	CHECK(same_tree(b->mirror, j));
+	if (want) {
+		CHECK(same_tree(want, j));
+	}
+	bc_tree_destroy(j);
+}
+
+static struct bc_tree *copy_of(const struct bc_tree *t)
+{
+	struct bc_tree *c = bc_tree_create();
+	if (c && bc_tree_copy(c, t, NULL) != 0) {
+		bc_tree_destroy(c);
+		c = NULL;
+	}
+	return c;
+}
+
+static uint32_t send_set(struct editor *e, uint32_t id, uint8_t field,
+                         const float *v, uint8_t n, bool interacting)
+{
+	struct bc_proto_field f = {.field = field, .count = n};
+	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_SET,
+	                              .node = id,
+	                              .nfields = 1,
+	                              .fields = &f};
+	struct bc_msg m = {.type = BC_MSG_EDIT};
+	memcpy(f.v, v, n * sizeof(float));
+	m.flags = interacting ? BC_PROTO_FLAG_INTERACTING : 0;
+	m.edit.nops = 1;
+	m.edit.ops = &op;
+	return conn_send(&e->c, &m);
+}
+
+static uint32_t send_insert(struct editor *e, uint32_t parent, uint32_t id)
+{
+	static const float t[3] = {0.3f, 0.2f, 0.1f}, q[4] = {0, 0, 0, 1};
+	float r = 0.25f;
+	struct bc_proto_buf b;
+	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_INSERT,
+	                              .node = parent};
+	struct bc_msg m = {.type = BC_MSG_EDIT};
+	uint32_t seq;
+	bc_proto_buf_init(&b, 0);
+	bc_proto_scene_begin(&b, NULL, 1);
+	bc_proto_scene_prim(&b, BC_PRIM_SPHERE, id, t, q, NULL, 1, &r);
+	op.subtree.ptr = b.data;
+	op.subtree.len = (uint32_t)b.len;
+	m.edit.nops = 1;
+	m.edit.ops = &op;
+	seq = conn_send(&e->c, &m);
+	bc_proto_buf_finish(&b);
+	return seq;
+}
+
+static uint32_t send_undo(struct editor *e, bool redo)
+{
+	struct bc_msg m = {.type = redo ? BC_MSG_REDO : BC_MSG_UNDO};
+	return conn_send(&e->c, &m);
+}
+
+/* Sends UNDO (REDO) from e; checks the answer names target_order and
+ * author. */
+static void undo(struct editor *e, bool redo, uint64_t target_order,
+                 const char *author)
+{
+	uint32_t seq = send_undo(e, redo);
+	const struct bc_msg_edit_applied *a = &e->c.m.edit_applied;
+	int flags = await_applied(e, seq, 10000);
+	REQUIRE(flags >= 0);
+	CHECK_EQ_INT(flags, redo ? BC_PROTO_FLAG_REDO : BC_PROTO_FLAG_UNDO);
+	CHECK_EQ_INT(a->target_order, target_order);
+	CHECK(a->target_author.len == strlen(author) &&
+	      memcmp(a->target_author.ptr, author, a->target_author.len) ==
+	          0);
+}
+
+static uint64_t last_order(const struct editor *e)
+{
+	return e->c.m.edit_applied.order;
+}
+
+static void two_editors_undo_and_redo_each_other(void)
+{
+	struct daemon d;
+	struct editor alice = {0}, bob = {0};
+	struct bc_tree *before, *after;
+	struct bc_prim_data p;
+	struct bc_op_data op;
+	char dir[64];
+	const struct bc_lin *l;
+	uint32_t prim0, prim1, root, seq;
+	uint64_t o_move, o_drag, o_insert, o_colour;
+	float v[3];
+	snprintf(dir, sizeof(dir), "%s/two", base_dir);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	join(&alice, &d, "alice", true);
+	join(&bob, &d, "bob", false);
+	l = bc_tree_lin(alice.mirror);
+	REQUIRE(l && l->nprims >= 2);
+	prim0 = l->node_id[l->prim_slot[0]];
+	prim1 = l->node_id[l->prim_slot[1]];
+	root = bc_tree_root(alice.mirror);
+	REQUIRE((before = copy_of(alice.mirror)));
+
+	/* Nothing to undo yet. */
+	seq = send_undo(&alice, false);
+	CHECK(await_applied(&alice, seq, 5000) == -1);
+	CHECK_EQ_INT(alice.c.m.error.code, -BC_ESTATE);
+
+	/* alice moves one primitive; bob drags another (four edits, the
+	 * last one the release); alice inserts a sphere. */
+	v[0] = 0.4f, v[1] = 0.0f, v[2] = -0.2f;
+	REQUIRE(await_applied(&alice, send_set(&alice, prim0,
+	                                       BC_PROTO_FIELD_TRANSLATE, v, 3,
+	                                       false),
+	                      10000) >= 0);
+	o_move = last_order(&alice);
+	for (int i = 1; i <= 4; i++) {
+		v[0] = 0.1f * (float)i, v[1] = 0.05f * (float)i, v[2] = 0.0f;
+		REQUIRE(await_applied(&bob, send_set(&bob, prim1,
+		                                     BC_PROTO_FIELD_TRANSLATE,
+		                                     v, 3, i < 4),
+		                      10000) >= 0);
+	}
+	o_drag = last_order(&bob);
+	REQUIRE(await_applied(&alice, send_insert(&alice, root, 9001), 10000) >=
+	        0);
+	o_insert = last_order(&alice);
+	REQUIRE((after = copy_of(alice.mirror)));
+	check_state(&d, &alice, &bob, after);
+
+	/* bob undoes alice's insertion, alice undoes bob's whole drag, bob
+	 * undoes alice's move: the scene is as it started. */
+	undo(&bob, false, o_insert, "alice");
+	check_state(&d, &alice, &bob, NULL);
+	undo(&alice, false, o_drag, "bob");
+	check_state(&d, &alice, &bob, NULL);
+	undo(&bob, false, o_move, "alice");
+	check_state(&d, &alice, &bob, before);
+	seq = send_undo(&bob, false);
+	CHECK(await_applied(&bob, seq, 5000) == -1);
+	CHECK_EQ_INT(bob.c.m.error.code, -BC_ESTATE);
+
+	/* Three redos bring every change back, in order. */
+	undo(&alice, true, o_move, "alice");
+	undo(&bob, true, o_drag, "bob");
+	undo(&alice, true, o_insert, "alice");
+	check_state(&d, &alice, &bob, after);
+
+	/* A colour on a primitive that had none (the inserted sphere) is
+	 * taken away again. */
+	REQUIRE(bc_tree_get(alice.mirror, 9001, &p, &op));
+	REQUIRE(!p.has_color);
+	v[0] = 1.0f, v[1] = 0.0f, v[2] = 0.0f;
+	REQUIRE(await_applied(&alice, send_set(&alice, 9001,
+	                                       BC_PROTO_FIELD_COLOR, v, 3,
+	                                       false),
+	                      10000) >= 0);
+	o_colour = last_order(&alice);
+	undo(&bob, false, o_colour, "alice");
+	check_state(&d, &alice, &bob, after);
+	REQUIRE(bc_tree_get(alice.mirror, 9001, &p, &op));
+	CHECK(!p.has_color);
+
+	/* A new edit leaves nothing to redo. */
+	v[0] = -0.3f, v[1] = 0.1f, v[2] = 0.0f;
+	REQUIRE(await_applied(&bob, send_set(&bob, prim1,
+	                                     BC_PROTO_FIELD_TRANSLATE, v, 3,
+	                                     false),
+	                      10000) >= 0);
+	seq = send_undo(&alice, true);
+	CHECK(await_applied(&alice, seq, 5000) == -1);
+	CHECK_EQ_INT(alice.c.m.error.code, -BC_ESTATE);
+	check_state(&d, &alice, &bob, NULL);
+
+	/* After a restart the journal, undos included, gives the same
+	 * scene. */
+	conn_close(&alice.c);
+	conn_close(&bob.c);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGKILL)) == 0);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	{
+		struct bc_tree *j = joiner_scene(&d);
+		CHECK(j && same_tree(alice.mirror, j));
+		bc_tree_destroy(j);
+	}
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+	bc_tree_destroy(alice.mirror);
+	bc_tree_destroy(bob.mirror);
+	bc_tree_destroy(before);
+	bc_tree_destroy(after);
+}
+
+static const struct bc_test tests[] = {
+    {"two_editors_undo_and_redo_each_other",
+     two_editors_undo_and_redo_each_other},
+};
+
+int main(int argc, char **argv)
+{
+	int rc;
+	signal(SIGPIPE, SIG_IGN);
+	(void)conn_view;
+	(void)conn_move;
+	snprintf(base_dir, sizeof(base_dir), "/tmp/bc-undo-test-%d",
+	         (int)getpid());
+	mkdir(base_dir, 0700);
+	rc = bc_test_run(tests, sizeof(tests) / sizeof(tests[0]), argc, argv);
+	if (rc == 0) {
+		char cmd[96];
+		snprintf(cmd, sizeof(cmd), "rm -rf %s", base_dir);
+		if (system(cmd) != 0) {
+			fprintf(stderr, "could not remove %s\n", base_dir);
+		}
+	}
+	return rc;
+}
