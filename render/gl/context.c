@@ -111,9 +111,13 @@ static void GLAD_API_PTR debug_cb(GLenum source, GLenum type, GLuint id,
 static GLADapiproc load_proc(void *user, const char *name)
 {
 	const struct bc__gl_plat *p = user;
+#if defined(BLOBCAST_GL_OSMESA)
 	if (p->platform == BC_GL_PLATFORM_OSMESA) {
 		return (GLADapiproc)bc__osmesa_proc(name);
 	}
+#else
+	(void)p; /* no OSMesa context is ever opened */
+#endif
 	return (GLADapiproc)bc__egl_proc(name);
 }
 
