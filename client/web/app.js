@@ -31,6 +31,12 @@
  *    unless `create=1` or the user asks to create it) stop the page with
  *    a notice instead of retrying; a lost connection is retried with a
  *    doubling delay and the session joined again.
+ *  - Undo and redo: Ctrl-Z sends UNDO, Ctrl-Shift-Z or Ctrl-Y REDO (as do
+ *    the two header buttons; editors only, and not while typing in a
+ *    field). The server answers every member with an EDIT_APPLIED
+ *    flagged UNDO or REDO whose operations the mirror applies like any
+ *    edit, and the page says who took back whose edit; ESTATE means
+ *    there was nothing to undo (redo).
  *  - Honest frames: the "refining" mark says when the picture on screen
  *    is not final, and "render pending" when this page sent a camera,
  *    view or edit that no frame has answered yet.
@@ -440,6 +446,7 @@ class App {
 		this.halted = null; /* { code, text }: stopped, not retrying */
 		this.installInput();
 		this.installAccess();
+		this.installUndo();
 		new ResizeObserver(() => this.resize()).observe($('stage'));
 		setInterval(() => this.tick(), 250);
 		this.conn.open();
@@ -457,6 +464,8 @@ class App {
 		this.lastEdit = null;
 		this.lastRemoteEdit = null;
 		this.editSent = new Map(); /* my EDIT seq -> { sentAt, done } */
+		this.undoSent = new Map(); /* my UNDO/REDO seq -> 'undo' | 'redo' */
+		this.notice = ''; /* the last undo/redo notice */
 		this.awaitFrame = []; /* { order, sentAt, done } of my applied edits */
 		this.inflight = 0; /* seq of my interacting EDIT not yet applied */
 		this.pendingEdit = null; /* the newest edit waiting for it */
@@ -595,6 +604,9 @@ class App {
 			this.info = m;
 			$('session').textContent = `session ${m.name}` +
 				(m.role === P.ROLE.VIEWER ? ' · view only' : '');
+			for (const id of ['undobtn', 'redobtn']) {
+				$(id).disabled = m.role !== P.ROLE.EDITOR;
+			}
 			if (this.viewOnly) {
 				$('session').title = this.viewOnly;
 				this.say(this.viewOnly);
@@ -638,6 +650,13 @@ class App {
 	}
 
 	serverError(m) {
+		const undo = this.undoSent.get(m.seq);
+		this.undoSent.delete(m.seq);
+		if (undo && m.code === P.ERR.ESTATE) {
+			this.editSent.delete(m.seq);
+			this.showNotice(`nothing to ${undo}`);
+			return;
+		}
 		this.say(`${P.errName(m.code)}: ${m.text}`);
 		/* A refused edit, camera or view gets no frame: not pending. */
 		this.editSent.delete(m.seq);
@@ -740,6 +759,16 @@ class App {
 			}
 		}
 		const mine = this.info && m.author === this.info.member_id;
+		if (m.flags & (P.FLAG.UNDO | P.FLAG.REDO)) {
+			if (mine) {
+				this.undoSent.delete(m.author_seq);
+			}
+			const redo = (m.flags & P.FLAG.REDO) !== 0;
+			this.showNotice(`${this.memberName(m.author)} ` +
+				`${redo ? 'redid' : 'undid'} ` +
+				`${m.target_author || 'an unnamed member'}'s edit ` +
+				`${m.target_order}`);
+		}
 		const rec = { order: m.order, author: m.author, node: nodes[0],
 			at: now, frameAt: 0, interacting: !!(m.flags &
 				P.FLAG.INTERACTING) };
@@ -932,6 +961,45 @@ class App {
 				return;
 			}
 			this.picks.set(seq, resolve);
+		});
+	}
+
+	/* Sends UNDO (redo false) or REDO without waiting: the answer is
+	 * the EDIT_APPLIED every member gets, or ERROR ESTATE. */
+	undo(redo) {
+		if (!this.info || this.info.role !== P.ROLE.EDITOR) {
+			this.say('viewers cannot undo');
+			return;
+		}
+		const seq = this.conn.send(redo ? P.MSG.REDO : P.MSG.UNDO, {});
+		if (seq) {
+			this.undoSent.set(seq, redo ? 'redo' : 'undo');
+			this.editSent.set(seq, { sentAt: performance.now() });
+		}
+	}
+
+	showNotice(text) {
+		this.notice = text;
+		this.say(text);
+	}
+
+	installUndo() {
+		$('undobtn').addEventListener('click', () => this.undo(false));
+		$('redobtn').addEventListener('click', () => this.undo(true));
+		document.addEventListener('keydown', (e) => {
+			if (!(e.ctrlKey || e.metaKey) || e.altKey) {
+				return;
+			}
+			const t = e.target;
+			if (t && (t.isContentEditable || ['INPUT', 'TEXTAREA',
+				'SELECT'].includes(t.tagName))) {
+				return; /* the field's own undo */
+			}
+			const k = e.key.toLowerCase();
+			if (k === 'z' || (k === 'y' && !e.shiftKey)) {
+				e.preventDefault();
+				this.undo(k === 'y' || e.shiftKey);
+			}
 		});
 	}
 
@@ -1387,6 +1455,7 @@ class App {
 			latencies: this.meter.latencies.slice(),
 			view: this.view,
 			role: this.info?.role ?? 0,
+			notice: this.notice,
 			halted: this.halted ? { code: P.errName(this.halted.code),
 				text: this.halted.text } : null,
 			tokenSet: !!this.cfg.token,
