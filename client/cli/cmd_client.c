@@ -703,6 +703,22 @@ static void print_change(const struct roster *r, const char *what,
 	       (unsigned long long)order, name ? name : "", author, tail);
 }
 
+/* `undo order=6 of=5 by="bob" author="alice" member=20 ops=3` (or redo):
+ * edit 6, sent by bob (member 20), takes back (applies again) edit 5, whose
+ * author the server names. */
+static void print_undo(const struct roster *r, const struct bc_msg *m)
+{
+	const struct bc_msg_edit_applied *e = &m->edit_applied;
+	const char *name = roster_name(r, e->author);
+	printf("%s order=%llu of=%llu by=\"%s\" author=\"%.*s\" member=%u "
+	       "ops=%u\n",
+	       (m->flags & BC_PROTO_FLAG_REDO) ? "redo" : "undo",
+	       (unsigned long long)e->order,
+	       (unsigned long long)e->target_order, name ? name : "",
+	       (int)e->target_author.len, e->target_author.ptr, e->author,
+	       e->nops);
+}
+
 /* The errors after which connecting again would be refused the same way:
  * watch reports them and stops instead of retrying. */
 static bool watch_gives_up(int code)
@@ -899,15 +915,19 @@ static int run_watch(struct args *a)
 			fflush(stdout);
 			break;
 		case BC_MSG_EDIT_APPLIED: {
-			char tail[32];
-			order_seen(times, m.edit_applied.order, at);
-			snprintf(tail, sizeof(tail), " ops=%u%s",
-			         m.edit_applied.nops,
-			         (m.flags & BC_PROTO_FLAG_INTERACTING)
-			             ? " interacting"
-			             : "");
-			print_change(roster, "edit", m.edit_applied.order,
-			             m.edit_applied.author, tail);
+			const struct bc_msg_edit_applied *e = &m.edit_applied;
+			order_seen(times, e->order, at);
+			if (m.flags & (BC_PROTO_FLAG_UNDO | BC_PROTO_FLAG_REDO)) {
+				print_undo(roster, &m);
+			} else {
+				char tail[32];
+				snprintf(tail, sizeof(tail), " ops=%u%s", e->nops,
+				         (m.flags & BC_PROTO_FLAG_INTERACTING)
+				             ? " interacting"
+				             : "");
+				print_change(roster, "edit", e->order, e->author,
+				             tail);
+			}
 			fflush(stdout);
 			break;
 		}
@@ -1067,6 +1087,80 @@ static int run_undo(struct args *a)
 	       redo ? "redid" : "undid", (unsigned long long)u.target_order,
 	       u.target_author, (unsigned long long)u.order);
 out:
+	bc_client_destroy(c);
+	return status;
+}
+
+/* Unix milliseconds as UTC "YYYY-MM-DDTHH:MM:SSZ", or "-" for 0. */
+static void put_time(char *buf, size_t n, uint64_t ms)
+{
+	time_t t = (time_t)(ms / 1000u);
+	struct tm tm;
+	if (ms == 0 || !gmtime_r(&t, &tm) ||
+	    strftime(buf, n, "%Y-%m-%dT%H:%M:%SZ", &tm) == 0) {
+		snprintf(buf, n, "-");
+	}
+}
+
+static int run_sessions(struct args *a)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	struct bc_client_session *list = NULL;
+	size_t n = 0;
+	int status = connect_to(a, &c);
+	if (status == 0 && bc_client_sessions(c, &list, &n, &ei)) {
+		status = failed(a, NULL, &ei);
+	}
+	if (status == 0 && a->json) {
+		json_t *arr = json_array();
+		char *text;
+		for (size_t i = 0; arr && i < n; i++) {
+			const struct bc_client_session *s = &list[i];
+			json_t *o = json_pack("{s:s, s:I, s:b}", "name", s->name,
+			                      "members", (json_int_t)s->members,
+			                      "loaded", s->loaded);
+			if (o && s->known) {
+				json_object_set_new(
+				    o, "primitives",
+				    json_integer((json_int_t)s->prims));
+				json_object_set_new(
+				    o, "order",
+				    json_integer((json_int_t)s->order));
+				json_object_set_new(
+				    o, "last_edit_ms",
+				    json_integer((json_int_t)s->last_edit_ms));
+			}
+			json_array_append_new(arr, o);
+		}
+		if (!arr || !(text = json_dumps(arr, JSON_INDENT(2)))) {
+			fprintf(stderr, "blobcast sessions: out of memory\n");
+			status = EXIT_FAIL;
+		} else {
+			printf("%s\n", text);
+			free(text);
+		}
+		json_decref(arr);
+	} else if (status == 0) {
+		printf("%-24s %7s %10s %8s  %-20s %s\n", "NAME", "MEMBERS",
+		       "PRIMITIVES", "ORDER", "LAST EDIT (UTC)", "STATE");
+		for (size_t i = 0; i < n; i++) {
+			const struct bc_client_session *s = &list[i];
+			char when[32], prims[16], order[24];
+			put_time(when, sizeof(when), s->known ? s->last_edit_ms : 0);
+			snprintf(prims, sizeof(prims), "%s", "-");
+			snprintf(order, sizeof(order), "%s", "-");
+			if (s->known) {
+				snprintf(prims, sizeof(prims), "%u", s->prims);
+				snprintf(order, sizeof(order), "%llu",
+				         (unsigned long long)s->order);
+			}
+			printf("%-24s %7u %10s %8s  %-20s %s\n", s->name,
+			       s->members, prims, order, when,
+			       s->loaded ? "loaded" : "on disk");
+		}
+	}
+	bc_free(list);
 	bc_client_destroy(c);
 	return status;
 }
@@ -1404,7 +1498,11 @@ static const struct cmd cmds[] = {
      "  members 2: \"alice\" (editor, 4), \"blobcast-cli\" (viewer, 7, this "
      "client)\n"
      "  edit order=5 by=\"alice\" member=4 ops=1 [interacting]\n"
-     "  load order=6 by=\"alice\" member=4\n"
+     "  undo order=6 of=5 by=\"bob\" author=\"alice\" member=9 ops=1\n"
+     "  redo order=7 of=5 by=\"alice\" author=\"alice\" member=4 ops=1\n"
+     "  load order=8 by=\"alice\" member=4\n"
+     "(undo and redo: edit ORDER by member BY takes back, or applies\n"
+     "again, edit OF whose author was AUTHOR).\n"
      "A lost connection prints 'lost reason=CODE' and is retried every\n"
      "0.25 s, doubling up to 4 s, then 'rejoined session=NAME'; a refused\n"
      "token or a missing session ends the run instead. At the end one\n"
@@ -1465,6 +1563,16 @@ static const struct cmd cmds[] = {
      "server keeps the files aside (docs/operations.md). Needs a token\n"
      "granting the editor role when the server has tokens.\n",
      run_delete},
+    {"sessions", O_JSON, 0, 0, "[--json]",
+     "list the server's sessions",
+     "Lists every session of the server by name: connected members,\n"
+     "primitives, last edit order, when it last changed (UTC) and whether\n"
+     "it is loaded or only on disk. For a session on disk that the server\n"
+     "has not loaded since it started, '-' stands for what it does not\n"
+     "know without loading it. At most 1024 sessions are listed.\n"
+     "  --json          one JSON array of objects: name, members, loaded\n"
+     "                  and, when known, primitives, order, last_edit_ms\n",
+     run_sessions},
     {"undo", O_SESSION, 0, 0, "--session NAME",
      "take back the session's newest change, whoever made it",
      "Undoes the newest change of session NAME that is not undone yet:\n"

@@ -11,6 +11,8 @@
 #  - watch names the author of an edit made with --name;
 #  - `watch --frames N` on a still session ends after --timeout with
 #    end=timeout and status 1;
+#  - watch prints an undo and a redo with who sent it, the edit taken back
+#    (the order `blobcast undo` names) and that edit's author;
 #  - watch survives a daemon restart on the same port: it reports the loss,
 #    rejoins, and counts the frames of the restarted daemon.
 #
@@ -170,6 +172,42 @@ grep -qE '^stats frames=[234] .* end=timeout$' "$tmp/watch1" ||
   fail "watch: no end=timeout"
 grep -qE 'timed out: [234] of 5 frames, none for 4000 ms' "$tmp/watch1.err" ||
   fail "watch: the timeout is not reported"
+
+# --- watch prints undo and redo lines ----------------------------------------
+"$BLOBCAST" $S watch --session default --size 48x32 > "$tmp/watch3" \
+  2> "$tmp/watch3.err" &
+watcher=$!
+wait_for '^frame 1 ' "$tmp/watch3" || fail "watch: no first frame"
+"$BLOBCAST" $S edit --name carol --session default 50 radius=0.2 \
+  > /dev/null || fail "edit as carol"
+"$BLOBCAST" $S undo --name dave --session default > "$tmp/undo" 2>&1 ||
+  fail "undo as dave: $(cat "$tmp/undo")"
+"$BLOBCAST" $S redo --name carol --session default > "$tmp/redo" 2>&1 ||
+  fail "redo as carol: $(cat "$tmp/redo")"
+wait_for '^redo ' "$tmp/watch3" || fail "watch: no redo line"
+kill -TERM "$watcher" 2>/dev/null
+wait "$watcher"
+watcher=
+sed 's/^/    /' "$tmp/undo" "$tmp/redo" "$tmp/watch3" "$tmp/watch3.err"
+# "undid edit E by "carol": edit order U"
+e=$(sed -n 's/^undid edit \([0-9]*\) by "carol": edit order [0-9]*$/\1/p' \
+  "$tmp/undo")
+u=$(sed -n 's/^undid edit [0-9]* by "carol": edit order \([0-9]*\)$/\1/p' \
+  "$tmp/undo")
+r=$(sed -n 's/^redid edit [0-9]* by "carol": edit order \([0-9]*\)$/\1/p' \
+  "$tmp/redo")
+if [ -z "$e" ] || [ -z "$u" ] || [ -z "$r" ]; then
+  fail "undo/redo output not understood"
+else
+  grep -qE "^edit order=$e by=\"carol\" member=[0-9]+ ops=1\$" \
+    "$tmp/watch3" || fail "watch: no line for carol's edit $e"
+  grep -qE "^undo order=$u of=$e by=\"dave\" author=\"carol\" member=[0-9]+ ops=[0-9]+\$" \
+    "$tmp/watch3" || fail "watch: no undo line naming dave, carol and edit $e"
+  grep -qE "^redo order=$r of=$e by=\"carol\" author=\"carol\" member=[0-9]+ ops=[0-9]+\$" \
+    "$tmp/watch3" || fail "watch: no redo line naming carol and edit $e"
+  grep -qE '^edit order=('"$u|$r"') ' "$tmp/watch3" &&
+    fail "watch: an undo or redo printed as a plain edit"
+fi
 
 # --- watch across a daemon restart -------------------------------------------
 "$BLOBCAST" $S watch --session default --frames 3 --size 48x32 \
