@@ -37,6 +37,7 @@ struct dec {
 /* Smallest encodings of repeated elements, for the count-versus-bytes-left
  * checks (PROTOCOL.md gives the same numbers). */
 #define MEMBER_MIN 7u /* u32 id, u8 role, empty name */
+#define SESSION_ENTRY_MIN 26u /* a 1-byte name and the fixed fields */
 #define OP_MIN 5u     /* REMOVE: u8 kind, u32 node */
 #define FIELD_MIN 6u  /* u8 field, u8 count, one f32 */
 #define RECT_MIN 13u  /* 4 x u16, u32 length, one byte */
@@ -361,6 +362,38 @@ static int dec_session_info(struct dec *d, struct bc_msg_session_info *s)
 		}
 	}
 	s->members = out;
+	return 0;
+}
+
+static int dec_sessions(struct dec *d, struct bc_msg_sessions *l)
+{
+	struct bc_proto_session_entry *out = NULL;
+	TRY(rd_u16(d, "session_count", &l->nsessions));
+	TRY(check_count(d, "session_count", l->nsessions, 0,
+	                BC_PROTO_MAX_SESSIONS_LISTED, SESSION_ENTRY_MIN));
+	if (d->store && l->nsessions) {
+		TRY(reserve(d, (void **)&d->store->sessions,
+		            &d->store->sessions_cap, l->nsessions, sizeof(*out)));
+		out = d->store->sessions;
+	}
+	for (unsigned i = 0; i < l->nsessions; i++) {
+		struct bc_proto_session_entry e = {0};
+		TRY(rd_str(d, "session.name", 1, BC_PROTO_MAX_NAME, &e.name));
+		TRY(rd_u16(d, "session.members", &e.members));
+		TRY(rd_u32(d, "session.prims", &e.prims));
+		TRY(rd_u64(d, "session.order", &e.order));
+		TRY(rd_u64(d, "session.last_edit_ms", &e.last_edit_ms));
+		TRY(rd_u8(d, "session.flags", &e.flags));
+		if (e.flags & ~BC_PROTO_SESSION_FLAGS_ALL) {
+			return fail(d, BC_EPROTO_FLAGS,
+			            "session flags 0x%02x has undefined bits",
+			            (unsigned)e.flags);
+		}
+		if (out) {
+			out[i] = e;
+		}
+	}
+	l->sessions = out;
 	return 0;
 }
 
@@ -689,7 +722,10 @@ static int dec_body(struct dec *d, struct bc_msg *m)
 	case BC_MSG_GET_STATS:
 	case BC_MSG_UNDO:
 	case BC_MSG_REDO:
+	case BC_MSG_SESSION_LIST:
 		return 0;
+	case BC_MSG_SESSIONS:
+		return dec_sessions(d, &m->sessions);
 	case BC_MSG_SESSION_CREATE:
 	case BC_MSG_SESSION_JOIN:
 		return dec_session(d, &m->session);
@@ -800,5 +836,6 @@ void bc__store_free(struct bc_proto_store *s)
 	bc_free(s->ops);
 	bc_free(s->fields);
 	bc_free(s->rects);
+	bc_free(s->sessions);
 	memset(s, 0, sizeof(*s));
 }

@@ -303,7 +303,26 @@ static void w_body(struct bc__w *w, const struct bc_msg *m)
 	case BC_MSG_SESSION_DELETE:
 		w_str(w, "name", m->session_delete.name, BC_PROTO_MAX_NAME);
 		break;
-	default: /* OK, SESSION_LEAVE, GET_STATS, UNDO, REDO: no payload */
+	case BC_MSG_SESSIONS: {
+		const struct bc_msg_sessions *l = &m->sessions;
+		if (!w_count(w, "session_count", l->nsessions,
+		             BC_PROTO_MAX_SESSIONS_LISTED, l->sessions)) {
+			break;
+		}
+		bc__put_u16(w, l->nsessions);
+		for (unsigned i = 0; i < l->nsessions; i++) {
+			const struct bc_proto_session_entry *s = &l->sessions[i];
+			w_str(w, "session.name", s->name, BC_PROTO_MAX_NAME);
+			bc__put_u16(w, s->members);
+			bc__put_u32(w, s->prims);
+			bc__put_u64(w, s->order);
+			bc__put_u64(w, s->last_edit_ms);
+			bc__put_u8(w, s->flags);
+		}
+		break;
+	}
+	default: /* OK, SESSION_LEAVE, GET_STATS, UNDO, REDO, SESSION_LIST:
+	          * no payload */
 		break;
 	}
 }

@@ -22,6 +22,9 @@
 #define SESSION_INFO_MAX                                                       \
 	(4u + 4u + 1u + STR_MAX(BC_PROTO_MAX_NAME) + 2u +                      \
 	 BC_PROTO_MAX_MEMBERS * (4u + 1u + STR_MAX(BC_PROTO_MAX_NAME)))
+/* A SESSIONS entry: name, members, prims, order, last edit, flags. */
+#define SESSION_ENTRY_MAX (STR_MAX(BC_PROTO_MAX_NAME) + 2u + 4u + 8u + 8u + 1u)
+#define SESSIONS_MAX (2u + BC_PROTO_MAX_SESSIONS_LISTED * SESSION_ENTRY_MAX)
 #define BULK BC_PROTO_MAX_PAYLOAD
 
 static const struct bc__type_info types[BC_MSG_COUNT] = {
@@ -61,6 +64,8 @@ static const struct bc__type_info types[BC_MSG_COUNT] = {
                                STR_MAX(BC_PROTO_MAX_NAME)},
     [BC_MSG_UNDO] = {"UNDO", BC__FROM_CLIENT, 0, 0},
     [BC_MSG_REDO] = {"REDO", BC__FROM_CLIENT, 0, 0},
+    [BC_MSG_SESSION_LIST] = {"SESSION_LIST", BC__FROM_CLIENT, 0, 0},
+    [BC_MSG_SESSIONS] = {"SESSIONS", BC__FROM_SERVER, 0, SESSIONS_MAX},
 };
 
 const struct bc__type_info *bc__type_info(unsigned type)
@@ -135,6 +140,7 @@ int bc_proto_client_may_send(enum bc_proto_stage stage, enum bc_proto_role role,
 	case BC_MSG_VIEW:
 	case BC_MSG_GET_STATS:
 	case BC_MSG_SESSION_DELETE:
+	case BC_MSG_SESSION_LIST:
 		return stage == BC_PROTO_STAGE_HELLO ? BC_ESTATE : 0;
 	case BC_MSG_SESSION_CREATE:
 	case BC_MSG_SESSION_JOIN:

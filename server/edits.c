@@ -150,6 +150,7 @@ static void commit(struct load *l)
 	l->t = NULL;
 	s->camera = l->cam;
 	s->order = l->order;
+	s->last_edit_ms = bc_unix_ms();
 	bc_rthread_scene(srv, s->id, l->copy);
 	l->copy = NULL;
 	bc_session_send_state_bytes(s, NULL, l->author_id, l->seq, l->state,
@@ -301,6 +302,7 @@ int bc_session_apply(struct bc_conn *c, const struct bc_proto_edit_op *ops,
 	}
 	bc_proto_buf_finish(&rec);
 	s->order++;
+	s->last_edit_ms = bc_unix_ms();
 	{
 		double ms = (double)(uv_hrtime() - t0) / 1e6;
 		s->edit_ms_avg = s->edit_ms_avg == 0.0

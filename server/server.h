@@ -153,10 +153,18 @@ struct bc_session {
 	uv_timer_t kick; /* schedules frames once a loop turn's writes end */
 	uint64_t empty_since_ms; /* loop clock; when the last member left */
 	bool loading; /* a SCENE_LOAD runs on a worker: changes wait */
+	uint64_t last_edit_ms; /* Unix ms of its last change (0: unknown) */
 	struct bc_undo *undo; /* undo/redo history (undo.c), or NULL */
 	bool removed; /* out of the server, freed once its handles close */
 	uint32_t handles_open; /* timers and a load's work request */
 	double edit_ms_avg;
+};
+
+/* A session not in memory, as SESSIONS lists it. */
+struct bc_session_summary {
+	char name[BC_PROTO_MAX_NAME + 1];
+	uint32_t prims;
+	uint64_t order, last_edit_ms;
 };
 
 struct bc_srv {
@@ -181,6 +189,9 @@ struct bc_srv {
 	struct bc_session *sessions[BC_SRV_MAX_SESSIONS];
 	uint32_t nsessions;
 	uv_timer_t session_sweep; /* unloads sessions idle without members */
+	/* What SESSIONS says of sessions unloaded since the start. */
+	struct bc_session_summary *unloaded;
+	uint32_t nunloaded, unloaded_cap;
 	uint32_t next_session_id;
 
 	uint64_t started_ms;
@@ -249,6 +260,9 @@ void bc_session_mark_all(struct bc_session *s);
 void bc_handle_session(struct bc_conn *c, const struct bc_msg *m);
 void bc_handle_stats(struct bc_conn *c, const struct bc_msg *m);
 void bc_handle_session_delete(struct bc_conn *c, const struct bc_msg *m);
+void bc_handle_session_list(struct bc_conn *c, const struct bc_msg *m);
+/* Unix time now, milliseconds. */
+uint64_t bc_unix_ms(void);
 
 /* ---- edits.c ------------------------------------------------------------ */
 void bc_handle_scene_load(struct bc_conn *c, const struct bc_msg *m);

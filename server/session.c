@@ -7,7 +7,9 @@
  * scheduling) and the session and STATS handlers here.
  */
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "blobcast/alloc.h"
 #include "blobcast/edit.h"
@@ -36,6 +38,60 @@ static struct bc_session *session_by_name(struct bc_srv *srv, const char *name,
 		}
 	}
 	return NULL;
+}
+
+uint64_t bc_unix_ms(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_REALTIME, &ts);
+	return (uint64_t)ts.tv_sec * 1000u + (uint64_t)ts.tv_nsec / 1000000u;
+}
+
+/* ---- what is known of unloaded sessions ---------------------------------- */
+
+static struct bc_session_summary *summary_of(struct bc_srv *srv,
+                                             const char *name)
+{
+	for (uint32_t i = 0; i < srv->nunloaded; i++) {
+		if (strcmp(srv->unloaded[i].name, name) == 0) {
+			return &srv->unloaded[i];
+		}
+	}
+	return NULL;
+}
+
+static void summary_forget(struct bc_srv *srv, const char *name)
+{
+	struct bc_session_summary *s = summary_of(srv, name);
+	if (s) {
+		*s = srv->unloaded[--srv->nunloaded];
+	}
+}
+
+/* Remembers what SESSIONS says of s once it is unloaded (best effort: out
+ * of memory, it is listed without details). */
+static void summary_keep(struct bc_session *s)
+{
+	struct bc_srv *srv = s->srv;
+	struct bc_session_summary *sum = summary_of(srv, s->name);
+	if (!sum) {
+		if (srv->nunloaded == srv->unloaded_cap) {
+			uint32_t cap = srv->unloaded_cap ? 2u * srv->unloaded_cap
+			                                 : 16u;
+			struct bc_session_summary *more =
+			    bc_realloc(srv->unloaded, cap * sizeof(*more));
+			if (!more) {
+				return;
+			}
+			srv->unloaded = more;
+			srv->unloaded_cap = cap;
+		}
+		sum = &srv->unloaded[srv->nunloaded++];
+	}
+	snprintf(sum->name, sizeof(sum->name), "%s", s->name);
+	sum->prims = bc_tree_prim_count(s->tree);
+	sum->order = s->order;
+	sum->last_edit_ms = s->last_edit_ms;
 }
 
 /* ---- sessions ------------------------------------------------------------ */
@@ -117,6 +173,7 @@ static bool session_unload(struct bc_session *s, const char *why)
 	bc_log(BC_LOG_INFO,
 	       "session %s unloaded (%s); it loads again when joined", s->name,
 	       why);
+	summary_keep(s);
 	session_remove(s);
 	return true;
 }
@@ -210,6 +267,8 @@ static int session_open(struct bc_srv *srv, const char *name,
 	}
 	s->id = ++srv->next_session_id;
 	s->next_member_id = 1;
+	s->last_edit_ms = bc_store_session_mtime_ms(s->store);
+	summary_forget(srv, name);
 	s->empty_since_ms = bc_now_ms(srv);
 	uv_timer_init(srv->loop, &s->still_timer);
 	s->still_timer.data = s;
@@ -274,6 +333,9 @@ void bc_sessions_free(struct bc_srv *srv)
 		uv_close((uv_handle_t *)&srv->session_sweep, NULL);
 		srv->session_sweep.data = NULL;
 	}
+	bc_free(srv->unloaded);
+	srv->unloaded = NULL;
+	srv->nunloaded = srv->unloaded_cap = 0;
 	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
 		if (srv->sessions[i]) {
 			srv->sessions[i]->removed = true;
@@ -538,6 +600,7 @@ void bc_handle_session_delete(struct bc_conn *c, const struct bc_msg *m)
 		bc_conn_send_error(c, m->seq, ei.code, false, "%s", ei.msg);
 		return;
 	}
+	summary_forget(srv, name);
 	bc_log(BC_LOG_INFO, "session %s deleted by connection %u (%s)", name,
 	       c->gen, c->name);
 	bc_conn_send(c, &ok);
@@ -567,6 +630,108 @@ void bc_handle_stats(struct bc_conn *c, const struct bc_msg *m)
 	bc_conn_send(c, &st);
 }
 
+/* SESSION_LIST: the sessions loaded, then those on disk, by name. */
+struct listing {
+	struct bc_srv *srv;
+	struct bc_proto_session_entry *e;
+	char (*names)[BC_PROTO_MAX_NAME + 1];
+	uint32_t n, cap;
+	bool oom;
+};
+
+static struct bc_proto_session_entry *listing_add(struct listing *l,
+                                                  const char *name)
+{
+	struct bc_proto_session_entry *e;
+	if (l->n == l->cap) {
+		uint32_t cap = l->cap ? 2u * l->cap : 64u;
+		struct bc_proto_session_entry *more =
+		    bc_realloc(l->e, cap * sizeof(*more));
+		char(*names)[BC_PROTO_MAX_NAME + 1];
+		if (!more) {
+			l->oom = true;
+			return NULL;
+		}
+		l->e = more;
+		names = bc_realloc(l->names, cap * sizeof(*names));
+		if (!names) {
+			l->oom = true;
+			return NULL;
+		}
+		l->names = names;
+		l->cap = cap;
+	}
+	e = &l->e[l->n];
+	memset(e, 0, sizeof(*e));
+	snprintf(l->names[l->n], sizeof(l->names[l->n]), "%s", name);
+	l->n++;
+	return e;
+}
+
+static void list_stored(void *ud, const char *name)
+{
+	struct listing *l = ud;
+	struct bc_session_summary *sum;
+	struct bc_proto_session_entry *e;
+	if (session_by_name(l->srv, name, strlen(name)) ||
+	    !(e = listing_add(l, name))) {
+		return;
+	}
+	if ((sum = summary_of(l->srv, name))) {
+		e->prims = sum->prims;
+		e->order = sum->order;
+		e->last_edit_ms = sum->last_edit_ms;
+		e->flags = BC_PROTO_SESSION_KNOWN;
+	}
+}
+
+static int by_name(const void *a, const void *b)
+{
+	return strcmp(((const struct bc_proto_session_entry *)a)->name.ptr,
+	              ((const struct bc_proto_session_entry *)b)->name.ptr);
+}
+
+void bc_handle_session_list(struct bc_conn *c, const struct bc_msg *m)
+{
+	struct bc_srv *srv = c->srv;
+	struct listing l = {.srv = srv};
+	struct bc_msg out = {.type = BC_MSG_SESSIONS, .seq = m->seq};
+	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
+		struct bc_session *s = srv->sessions[i];
+		struct bc_proto_session_entry *e;
+		if (!s || !(e = listing_add(&l, s->name))) {
+			continue;
+		}
+		e->members = (uint16_t)s->nmembers;
+		e->prims = bc_tree_prim_count(s->tree);
+		e->order = s->order;
+		e->last_edit_ms = s->last_edit_ms;
+		e->flags = BC_PROTO_SESSION_LOADED | BC_PROTO_SESSION_KNOWN;
+	}
+	bc_store_list(srv->store, list_stored, &l);
+	if (l.oom) {
+		bc_conn_send_error(c, m->seq, BC_ENOMEM, false,
+		                   "the server is out of memory");
+		goto out;
+	}
+	/* The names move with the entries only once the arrays stop
+	 * growing. */
+	for (uint32_t i = 0; i < l.n; i++) {
+		l.e[i].name.ptr = l.names[i];
+		l.e[i].name.len = (uint32_t)strlen(l.names[i]);
+	}
+	qsort(l.e, l.n, sizeof(*l.e), by_name);
+	out.sessions.nsessions =
+	    (uint16_t)(l.n < BC_PROTO_MAX_SESSIONS_LISTED
+	                   ? l.n
+	                   : BC_PROTO_MAX_SESSIONS_LISTED);
+	out.sessions.sessions = l.e;
+	bc_conn_send(c, &out);
+out:
+	bc_free(l.e);
+	bc_free(l.names);
+}
+
 static void handle_leave(struct bc_conn *c, const struct bc_msg *m)
 {
 	struct bc_msg ok = {.type = BC_MSG_OK, .seq = m->seq};
@@ -592,6 +757,7 @@ static const handler_fn handlers[BC_MSG_COUNT] = {
     [BC_MSG_SESSION_DELETE] = bc_handle_session_delete,
     [BC_MSG_UNDO] = bc_handle_undo,
     [BC_MSG_REDO] = bc_handle_undo,
+    [BC_MSG_SESSION_LIST] = bc_handle_session_list,
 };
 
 void bc_session_handle(struct bc_conn *c, const struct bc_msg *m)

@@ -223,6 +223,33 @@ int bc_store_list(struct bc_store *st, void (*fn)(void *ud, const char *name),
 	return 0;
 }
 
+uint64_t bc_store_session_mtime_ms(const struct bc_store_session *ss)
+{
+	char file[PATH_LEN];
+	uint64_t newest = 0;
+	struct dirent *e;
+	struct stat sb;
+	DIR *d = opendir(ss->path);
+	if (!d) {
+		return 0;
+	}
+	while ((e = readdir(d))) {
+		uint64_t ms;
+		if (e->d_name[0] == '.' ||
+		    !bc__store_fmt_path(file, "%s/%s", ss->path, e->d_name) ||
+		    stat(file, &sb) != 0) {
+			continue;
+		}
+		ms = (uint64_t)sb.st_mtim.tv_sec * 1000u +
+		     (uint64_t)sb.st_mtim.tv_nsec / 1000000u;
+		if (ms > newest) {
+			newest = ms;
+		}
+	}
+	closedir(d);
+	return newest;
+}
+
 bool bc_store_session_exists(struct bc_store *st, const char *name)
 {
 	char path[PATH_LEN];

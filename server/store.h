@@ -97,6 +97,10 @@ uint64_t bc_store_journal_records(const struct bc_store_session *ss);
 typedef bool (*bc_store_fail_fn)(void *ud, const char *step, const char *path);
 void bc_store_set_fail_hook(bc_store_fail_fn fn, void *ud);
 
+/* When session ss last changed on disk: the newest modification time of
+ * its files, Unix milliseconds (0 when none can be read). */
+uint64_t bc_store_session_mtime_ms(const struct bc_store_session *ss);
+
 /* Whether session name has a directory in the store (loaded or not). */
 bool bc_store_session_exists(struct bc_store *st, const char *name);
 

@@ -1091,6 +1091,80 @@ out:
 	return status;
 }
 
+/* Unix milliseconds as UTC "YYYY-MM-DDTHH:MM:SSZ", or "-" for 0. */
+static void put_time(char *buf, size_t n, uint64_t ms)
+{
+	time_t t = (time_t)(ms / 1000u);
+	struct tm tm;
+	if (ms == 0 || !gmtime_r(&t, &tm) ||
+	    strftime(buf, n, "%Y-%m-%dT%H:%M:%SZ", &tm) == 0) {
+		snprintf(buf, n, "-");
+	}
+}
+
+static int run_sessions(struct args *a)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	struct bc_client_session *list = NULL;
+	size_t n = 0;
+	int status = connect_to(a, &c);
+	if (status == 0 && bc_client_sessions(c, &list, &n, &ei)) {
+		status = failed(a, NULL, &ei);
+	}
+	if (status == 0 && a->json) {
+		json_t *arr = json_array();
+		char *text;
+		for (size_t i = 0; arr && i < n; i++) {
+			const struct bc_client_session *s = &list[i];
+			json_t *o = json_pack("{s:s, s:I, s:b}", "name", s->name,
+			                      "members", (json_int_t)s->members,
+			                      "loaded", s->loaded);
+			if (o && s->known) {
+				json_object_set_new(
+				    o, "primitives",
+				    json_integer((json_int_t)s->prims));
+				json_object_set_new(
+				    o, "order",
+				    json_integer((json_int_t)s->order));
+				json_object_set_new(
+				    o, "last_edit_ms",
+				    json_integer((json_int_t)s->last_edit_ms));
+			}
+			json_array_append_new(arr, o);
+		}
+		if (!arr || !(text = json_dumps(arr, JSON_INDENT(2)))) {
+			fprintf(stderr, "blobcast sessions: out of memory\n");
+			status = EXIT_FAIL;
+		} else {
+			printf("%s\n", text);
+			free(text);
+		}
+		json_decref(arr);
+	} else if (status == 0) {
+		printf("%-24s %7s %10s %8s  %-20s %s\n", "NAME", "MEMBERS",
+		       "PRIMITIVES", "ORDER", "LAST EDIT (UTC)", "STATE");
+		for (size_t i = 0; i < n; i++) {
+			const struct bc_client_session *s = &list[i];
+			char when[32], prims[16], order[24];
+			put_time(when, sizeof(when), s->known ? s->last_edit_ms : 0);
+			snprintf(prims, sizeof(prims), "%s", "-");
+			snprintf(order, sizeof(order), "%s", "-");
+			if (s->known) {
+				snprintf(prims, sizeof(prims), "%u", s->prims);
+				snprintf(order, sizeof(order), "%llu",
+				         (unsigned long long)s->order);
+			}
+			printf("%-24s %7u %10s %8s  %-20s %s\n", s->name,
+			       s->members, prims, order, when,
+			       s->loaded ? "loaded" : "on disk");
+		}
+	}
+	bc_free(list);
+	bc_client_destroy(c);
+	return status;
+}
+
 static int run_scene(struct args *a)
 {
 	struct bc_client *c = NULL;
@@ -1489,6 +1563,16 @@ static const struct cmd cmds[] = {
      "server keeps the files aside (docs/operations.md). Needs a token\n"
      "granting the editor role when the server has tokens.\n",
      run_delete},
+    {"sessions", O_JSON, 0, 0, "[--json]",
+     "list the server's sessions",
+     "Lists every session of the server by name: connected members,\n"
+     "primitives, last edit order, when it last changed (UTC) and whether\n"
+     "it is loaded or only on disk. For a session on disk that the server\n"
+     "has not loaded since it started, '-' stands for what it does not\n"
+     "know without loading it. At most 1024 sessions are listed.\n"
+     "  --json          one JSON array of objects: name, members, loaded\n"
+     "                  and, when known, primitives, order, last_edit_ms\n",
+     run_sessions},
     {"undo", O_SESSION, 0, 0, "--session NAME",
      "take back the session's newest change, whoever made it",
      "Undoes the newest change of session NAME that is not undone yet:\n"

@@ -30,7 +30,7 @@
 /* The subcommands that talk to a blobcastd (cmd_client.c). */
 static const char *const client_cmds[] = {
 	"load", "edit", "camera", "snapshot", "watch", "bench-latency",
-	"nodes", "scene", "delete", "undo", "redo",
+	"nodes", "scene", "delete", "undo", "redo", "sessions",
 };
 
 static bool is_client_cmd(const char *s)

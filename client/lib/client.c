@@ -1140,3 +1140,36 @@ int bc_client_undo(struct bc_client *c, bool redo,
 	}
 	return 0;
 }
+
+int bc_client_sessions(struct bc_client *c, struct bc_client_session **out,
+		       size_t *n, struct bc_errinfo *ei)
+{
+	struct bc_msg m = {.type = BC_MSG_SESSION_LIST};
+	struct bc_client_session *list = NULL;
+	uint32_t seq;
+	int rc;
+	*out = NULL;
+	*n = 0;
+	if ((rc = send_or_say(c, &m, &seq, ei)) ||
+	    (rc = bc_client_wait(c, BC_MSG_SESSIONS, seq, &m, 0, ei))) {
+		return rc;
+	}
+	if (m.sessions.nsessions &&
+	    !(list = bc_calloc(m.sessions.nsessions, sizeof(*list)))) {
+		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+	}
+	for (uint32_t i = 0; i < m.sessions.nsessions; i++) {
+		const struct bc_proto_session_entry *e =
+		    &m.sessions.sessions[i];
+		copy_str(list[i].name, sizeof(list[i].name), e->name);
+		list[i].members = e->members;
+		list[i].prims = e->prims;
+		list[i].order = e->order;
+		list[i].last_edit_ms = e->last_edit_ms;
+		list[i].loaded = (e->flags & BC_PROTO_SESSION_LOADED) != 0;
+		list[i].known = (e->flags & BC_PROTO_SESSION_KNOWN) != 0;
+	}
+	*out = list;
+	*n = m.sessions.nsessions;
+	return 0;
+}

@@ -38,6 +38,7 @@ export const LIMITS = Object.freeze({
 	MAX_TOKEN: 1024,
 	MAX_ERROR_TEXT: 1024,
 	MAX_MEMBERS: 64,
+	MAX_SESSIONS_LISTED: 1024,
 	MAX_DIM: 8192,
 	MIN_FRAME_BYTES: 64 * 1024,
 	MAX_RECTS: 4096,
@@ -61,7 +62,7 @@ export const MSG = Object.freeze({
 	SESSION_INFO: 10, SCENE_LOAD: 11, SCENE_STATE: 12, EDIT: 13,
 	EDIT_APPLIED: 14, CAMERA: 15, VIEW: 16, FRAME: 17, PICK: 18,
 	PICK_RESULT: 19, SNAPSHOT: 20, GET_STATS: 21, STATS: 22,
-	SESSION_DELETE: 23, UNDO: 24, REDO: 25,
+	SESSION_DELETE: 23, UNDO: 24, REDO: 25, SESSION_LIST: 26, SESSIONS: 27,
 });
 
 /* Header flag bits; each is defined for some types only. */
@@ -250,6 +251,9 @@ T(22, 'STATS', FROM_SERVER, 0, 64);
 T(23, 'SESSION_DELETE', FROM_CLIENT, 0, strMax(L.MAX_NAME));
 T(24, 'UNDO', FROM_CLIENT, 0, 0);
 T(25, 'REDO', FROM_CLIENT, 0, 0);
+T(26, 'SESSION_LIST', FROM_CLIENT, 0, 0);
+T(27, 'SESSIONS', FROM_SERVER, 0, 2 + L.MAX_SESSIONS_LISTED *
+	(strMax(L.MAX_NAME) + 2 + 4 + 8 + 8 + 1));
 
 function typeInfo(type) {
 	return Number.isInteger(type) ? TYPES[type] ?? null : null;
@@ -342,6 +346,10 @@ const bitsFinite = (u) => (u & 0x7f800000) !== 0x7f800000;
 /* Smallest encodings of repeated elements, for the count-versus-bytes-left
  * checks (the same numbers as protocol/decode.c). */
 const MEMBER_MIN = 7; /* u32 id, u8 role, empty name */
+const SESSION_ENTRY_MIN = 26; /* a 1-byte name and the fixed fields */
+/* SESSIONS entry flags: loaded in the server's memory; details known. */
+export const SESSION_FLAG = Object.freeze({ LOADED: 0x01, KNOWN: 0x02,
+	ALL: 0x03 });
 const OP_MIN = 5;     /* REMOVE: u8 kind, u32 node */
 const FIELD_MIN = 6;  /* u8 field, u8 count, one f32 */
 const RECT_MIN = 13;  /* 4 x u16, u32 length, one byte */
@@ -731,6 +739,7 @@ function decBody(d, m) {
 	case MSG.GET_STATS:
 	case MSG.UNDO:
 	case MSG.REDO:
+	case MSG.SESSION_LIST:
 		break;
 	case MSG.SESSION_CREATE:
 	case MSG.SESSION_JOIN:
@@ -753,6 +762,27 @@ function decBody(d, m) {
 			const role = d.role('member.role');
 			const name = d.str('member.name', 0, L.MAX_NAME);
 			m.members.push({ id, role, name });
+		}
+		break;
+	}
+	case MSG.SESSIONS: {
+		const n = d.u16('session_count');
+		d.count('session_count', n, 0, L.MAX_SESSIONS_LISTED,
+			SESSION_ENTRY_MIN);
+		m.sessions = [];
+		for (let i = 0; i < n; i++) {
+			const e = {};
+			e.name = d.str('session.name', 1, L.MAX_NAME);
+			e.members = d.u16('session.members');
+			e.prims = d.u32('session.prims');
+			e.order = d.u64('session.order');
+			e.last_edit_ms = d.u64('session.last_edit_ms');
+			e.flags = d.u8('session.flags');
+			if (e.flags & ~SESSION_FLAG.ALL) {
+				d.fail('EPROTO_FLAGS', 'session flags ' +
+					e.flags + ' has undefined bits');
+			}
+			m.sessions.push(e);
 		}
 		break;
 	}
@@ -1306,6 +1336,7 @@ function encBody(w, m) {
 	case MSG.GET_STATS:
 	case MSG.UNDO:
 	case MSG.REDO:
+	case MSG.SESSION_LIST:
 		break;
 	case MSG.SESSION_CREATE:
 	case MSG.SESSION_JOIN:
@@ -1326,6 +1357,18 @@ function encBody(w, m) {
 			w.u32('member.id', mb.id);
 			w.u8('member.role', mb.role, 'EENUM');
 			w.str('member.name', mb.name);
+		}
+		break;
+	case MSG.SESSIONS:
+		w.u16('session_count', w.count('sessions', m.sessions,
+			L.MAX_SESSIONS_LISTED));
+		for (const e of m.sessions) {
+			w.str('session.name', e.name);
+			w.u16('session.members', e.members);
+			w.u32('session.prims', e.prims);
+			w.u64('session.order', e.order);
+			w.u64('session.last_edit_ms', e.last_edit_ms);
+			w.u8('session.flags', e.flags);
 		}
 		break;
 	case MSG.SCENE_LOAD:

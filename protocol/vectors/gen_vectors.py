@@ -26,12 +26,14 @@ TYPES = {
     "SESSION_INFO": 10, "SCENE_LOAD": 11, "SCENE_STATE": 12, "EDIT": 13,
     "EDIT_APPLIED": 14, "CAMERA": 15, "VIEW": 16, "FRAME": 17, "PICK": 18,
     "PICK_RESULT": 19, "SNAPSHOT": 20, "GET_STATS": 21, "STATS": 22,
-    "SESSION_DELETE": 23, "UNDO": 24, "REDO": 25,
+    "SESSION_DELETE": 23, "UNDO": 24, "REDO": 25, "SESSION_LIST": 26,
+    "SESSIONS": 27,
 }
 MAX_PAYLOAD = 64 * 1024 * 1024
 HELLO_MAX_PAYLOAD = 4096
 MAX_NAME, MAX_TOKEN, MAX_ERROR_TEXT = 64, 1024, 1024
 MAX_MEMBERS, MAX_DIM, MAX_RECTS = 64, 8192, 4096
+MAX_SESSIONS_LISTED = 1024
 MAX_EDIT_OPS, MAX_SET_FIELDS = 1024, 14
 MIN_FRAME_BYTES = 65536
 # FRAME header flags (section 2): STILL, SNAPSHOT, INCOMPLETE, the
@@ -76,6 +78,8 @@ TYPE_MAX = {
     "CAMERA": 40, "VIEW": 8, "FRAME": MAX_PAYLOAD, "PICK": 4,
     "PICK_RESULT": 24, "SNAPSHOT": 2, "GET_STATS": 0, "STATS": 64,
     "SESSION_DELETE": strmax(MAX_NAME), "UNDO": 0, "REDO": 0,
+    "SESSION_LIST": 0,
+    "SESSIONS": 2 + MAX_SESSIONS_LISTED * (strmax(MAX_NAME) + 2 + 4 + 8 + 8 + 1),
 }
 
 # ---- Byte helpers --------------------------------------------------------------
@@ -217,6 +221,17 @@ def w_session_delete(f):
     return sstr(f["name"])
 
 
+def w_session_entry(e):
+    return (sstr(e["name"]) + u16(e["members"]) + u32(e["prims"])
+            + u64(int(e["order"])) + u64(int(e["last_edit_ms"]))
+            + u8(e["flags"]))
+
+
+def w_sessions(f):
+    return u16(len(f["sessions"])) + b"".join(
+        w_session_entry(e) for e in f["sessions"])
+
+
 def w_session_info(f):
     b = (u32(f["session_id"]) + u32(f["member_id"]) + u8(f["role"])
          + sstr(f["name"]) + u16(len(f["members"])))
@@ -328,6 +343,7 @@ WRITERS = {
     "PICK_RESULT": w_pick_result, "SNAPSHOT": w_snapshot,
     "GET_STATS": w_empty, "STATS": w_stats,
     "SESSION_DELETE": w_session_delete, "UNDO": w_empty, "REDO": w_empty,
+    "SESSION_LIST": w_empty, "SESSIONS": w_sessions,
 }
 
 # ---- Vector tables -----------------------------------------------------------
@@ -555,6 +571,29 @@ def gen_session_delete():
     t.bad("refused by a server before HELLO", frame("SESSION_DELETE", p),
           "ESTATE", reader=PRE_HELLO)
     t.dump("session_delete.json")
+
+
+def gen_sessions():
+    t = Table("SESSIONS")
+    review = dict(name="review", members=3, prims=1024, order="77",
+                  last_edit_ms="1764547200000", flags=3)
+    stored = dict(name="old", members=0, prims=0, order="0",
+                  last_edit_ms="0", flags=0)
+    p = t.ok("a loaded and a stored session", dict(sessions=[review, stored]),
+             seq=14)
+    t.ok("no sessions", dict(sessions=[]), seq=15)
+    t.ok("largest: 1024 sessions with 64-byte names",
+         dict(sessions=[dict(review, name="%064d" % i)
+                        for i in range(MAX_SESSIONS_LISTED)]), seq=16)
+    t.common(p)
+    t.badp("session_count 1025", u16(1025), "EPROTO_COUNT")
+    t.badp("session_count larger than the bytes left",
+           u16(2) + w_session_entry(review), "EPROTO_COUNT")
+    t.badp("empty name", u16(1) + w_session_entry(dict(review, name=""))
+           + b"\x00", "EPROTO_LENGTH")
+    t.badp("flags with bit 2", u16(1) + w_session_entry(dict(review, flags=4)),
+           "EPROTO_FLAGS")
+    t.dump("sessions.json")
 
 
 def gen_session_info():
@@ -1135,7 +1174,7 @@ def gen_framing():
     bad("version 255, header cut after it", MAGIC + u8(255),
         "EPROTO_VERSION")
     bad("type 0", header(0, 0), "EPROTO_TYPE")
-    bad("type 26", header(26, 0), "EPROTO_TYPE")
+    bad("type 28", header(28, 0), "EPROTO_TYPE")
     bad("type 255", header(255, 0), "EPROTO_TYPE")
     bad("unknown type is reported before the rest of the header",
         MAGIC + u8(1) + u8(99), "EPROTO_TYPE")
@@ -1271,6 +1310,8 @@ def main():
     gen_session_delete()
     gen_empty("UNDO", "client")
     gen_empty("REDO", "client")
+    gen_empty("SESSION_LIST", "client")
+    gen_sessions()
     gen_framing()
     gen_scene()
 

@@ -443,7 +443,15 @@ static void sample(enum bc_msg_type t, struct bc_msg *m)
 		break;
 	case BC_MSG_UNDO:
 	case BC_MSG_REDO:
+	case BC_MSG_SESSION_LIST:
 		break;
+	case BC_MSG_SESSIONS: {
+		static const struct bc_proto_session_entry list[2] = {
+		    {{"review", 6}, 3, 1024, 77, 1764547200000u, 3},
+		    {{"old", 3}, 0, 0, 0, 0, 0}};
+		m->sessions = (struct bc_msg_sessions){2, list};
+		break;
+	}
 	default:
 		break;
 	}

@@ -190,6 +190,26 @@ static void build(enum bc_msg_type type, const json_t *f, struct bc_msg *m)
 	case BC_MSG_SESSION_DELETE:
 		m->session_delete.name = jstr(f, "name");
 		break;
+	case BC_MSG_SESSIONS: {
+		static struct bc_proto_session_entry list[BC_PROTO_MAX_SESSIONS_LISTED];
+		json_t *arr = json_object_get(f, "sessions");
+		size_t i;
+		json_t *e;
+		json_array_foreach(arr, i, e) {
+			if (i >= BC_PROTO_MAX_SESSIONS_LISTED) {
+				break;
+			}
+			list[i].name = jstr(e, "name");
+			list[i].members = (uint16_t)jint(e, "members");
+			list[i].prims = (uint32_t)jint(e, "prims");
+			list[i].order = jint(e, "order");
+			list[i].last_edit_ms = jint(e, "last_edit_ms");
+			list[i].flags = (uint8_t)jint(e, "flags");
+		}
+		m->sessions.nsessions = (uint16_t)json_array_size(arr);
+		m->sessions.sessions = list;
+		break;
+	}
 	case BC_MSG_SESSION_INFO: {
 		struct bc_msg_session_info *s = &m->session_info;
 		s->session_id = (uint32_t)jint(f, "session_id");
@@ -471,6 +491,24 @@ static int msg_eq(const struct bc_msg *a, const struct bc_msg *b)
 		return memcmp(&a->stats, &b->stats, sizeof(a->stats)) == 0;
 	case BC_MSG_SESSION_DELETE:
 		return str_eq(a->session_delete.name, b->session_delete.name);
+	case BC_MSG_SESSIONS:
+		if (a->sessions.nsessions != b->sessions.nsessions) {
+			return 0;
+		}
+		for (unsigned i = 0; i < a->sessions.nsessions; i++) {
+			const struct bc_proto_session_entry *x =
+			    &a->sessions.sessions[i];
+			const struct bc_proto_session_entry *y =
+			    &b->sessions.sessions[i];
+			if (!str_eq(x->name, y->name) ||
+			    x->members != y->members || x->prims != y->prims ||
+			    x->order != y->order ||
+			    x->last_edit_ms != y->last_edit_ms ||
+			    x->flags != y->flags) {
+				return 0;
+			}
+		}
+		return 1;
 	default: /* no payload */
 		return 1;
 	}

@@ -609,6 +609,41 @@ static void idle_sessions_make_room_and_load_again(void)
 		                        BC_PROTO_ROLE_EDITOR) == 0);
 		leave(&a);
 	}
+	/* SESSION_LIST names all of them, by name: 64 loaded, the others on
+	 * disk with what was known when they unloaded. */
+	{
+		struct bc_msg m = {.type = BC_MSG_SESSION_LIST};
+		const struct bc_msg_sessions *l = &a.m.sessions;
+		uint32_t loaded = 0, known = 0;
+		bool s1_seen = false;
+		REQUIRE(conn_send(&a, &m));
+		REQUIRE(conn_expect(&a, BC_MSG_SESSIONS, 5000) == 1);
+		CHECK_EQ_INT(l->nsessions, 2 * BC_SRV_MAX_SESSIONS + 1);
+		for (uint32_t i = 0; i < l->nsessions; i++) {
+			const struct bc_proto_session_entry *e = &l->sessions[i];
+			loaded += (e->flags & BC_PROTO_SESSION_LOADED) != 0;
+			known += (e->flags & BC_PROTO_SESSION_KNOWN) != 0;
+			if (i > 0) {
+				const struct bc_proto_session_entry *p = e - 1;
+				size_t n = p->name.len < e->name.len
+				               ? p->name.len
+				               : e->name.len;
+				int cmp = memcmp(p->name.ptr, e->name.ptr, n);
+				CHECK(cmp < 0 ||
+				      (cmp == 0 && p->name.len < e->name.len));
+			}
+			if (e->name.len == 2 && memcmp(e->name.ptr, "s1", 2) == 0) {
+				s1_seen = true;
+				CHECK(!(e->flags & BC_PROTO_SESSION_LOADED));
+				CHECK(e->flags & BC_PROTO_SESSION_KNOWN);
+				CHECK_EQ_INT(e->order, order);
+				CHECK(e->prims > 0 && e->last_edit_ms > 0);
+			}
+		}
+		CHECK_EQ_INT(loaded, BC_SRV_MAX_SESSIONS);
+		CHECK_EQ_INT(known, 2 * BC_SRV_MAX_SESSIONS + 1);
+		CHECK(s1_seen);
+	}
 	/* s1 loads again as it was left. */
 	REQUIRE(conn_join(&a, "s1", BC_PROTO_ROLE_VIEWER, false) == 0);
 	REQUIRE(conn_expect(&a, BC_MSG_SCENE_STATE, 5000) == 1);

@@ -66,6 +66,10 @@ enum bc_msg_type {
 	BC_MSG_GET_STATS = 21,     /* client -> server */
 	BC_MSG_STATS = 22,         /* server -> client */
 	BC_MSG_SESSION_DELETE = 23, /* client -> server */
+	BC_MSG_UNDO = 24,           /* client -> server */
+	BC_MSG_REDO = 25,           /* client -> server */
+	BC_MSG_SESSION_LIST = 26,   /* client -> server */
+	BC_MSG_SESSIONS = 27,       /* server -> client */
 	BC_MSG_COUNT
 };
 
@@ -76,6 +80,11 @@ enum bc_msg_type {
 /* CAMERA, EDIT: part of a continuous interaction (a drag); the server renders
  * at interactive quality until a message without it arrives. */
 #define BC_PROTO_FLAG_INTERACTING 0x0001u
+/* EDIT_APPLIED: the operations undo (UNDO) or redo (REDO) an earlier edit
+ * of the session; the payload then ends with that edit's order and its
+ * author's name. Never both. */
+#define BC_PROTO_FLAG_UNDO 0x0002u
+#define BC_PROTO_FLAG_REDO 0x0004u
 /* FRAME: rendered at full size and still quality. */
 #define BC_PROTO_FLAG_STILL 0x0001u
 /* FRAME: the lossless answer to a SNAPSHOT (seq = that request's seq). */
@@ -251,6 +260,27 @@ struct bc_msg_session_delete {
 	struct bc_proto_str name; /* 1..BC_PROTO_MAX_NAME bytes */
 };
 
+/* One session of a SESSIONS answer. */
+struct bc_proto_session_entry {
+	struct bc_proto_str name; /* 1..BC_PROTO_MAX_NAME bytes */
+	uint16_t members;         /* connected members */
+	uint32_t prims;           /* primitives of its scene */
+	uint64_t order;           /* its last edit order number */
+	uint64_t last_edit_ms;    /* when it changed, Unix ms; 0: unknown */
+	uint8_t flags;            /* BC_PROTO_SESSION_* */
+};
+/* SESSIONS entry flags: the session is loaded in the server's memory; its
+ * prims, order and last_edit_ms are known (else 0: a session on disk the
+ * server has not loaded since it started). Other bits: EPROTO_FLAGS. */
+#define BC_PROTO_SESSION_LOADED 0x01u
+#define BC_PROTO_SESSION_KNOWN 0x02u
+#define BC_PROTO_SESSION_FLAGS_ALL 0x03u
+
+struct bc_msg_sessions {
+	uint16_t nsessions; /* 0..BC_PROTO_MAX_SESSIONS_LISTED */
+	const struct bc_proto_session_entry *sessions;
+};
+
 struct bc_proto_member {
 	uint32_t id; /* != 0, unique in the session */
 	enum bc_proto_role role;
@@ -303,6 +333,10 @@ struct bc_msg_edit_applied {
 	uint32_t author_seq; /* the EDIT's seq */
 	uint16_t nops;
 	const struct bc_proto_edit_op *ops;
+	/* With BC_PROTO_FLAG_UNDO or _REDO only: the edit undone or redone
+	 * (its order number, >= 1) and its author's client name. */
+	uint64_t target_order;
+	struct bc_proto_str target_author;
 };
 
 struct bc_msg_camera {
@@ -398,6 +432,7 @@ struct bc_msg {
 		struct bc_msg_snapshot snapshot;
 		struct bc_msg_stats stats;
 		struct bc_msg_session_delete session_delete;
+		struct bc_msg_sessions sessions;
 	};
 };
 
@@ -422,6 +457,8 @@ struct bc_proto_store {
 	struct bc_proto_field *fields;
 	struct bc_proto_rect *rects;
 	size_t members_cap, ops_cap, fields_cap, rects_cap;
+	struct bc_proto_session_entry *sessions;
+	size_t sessions_cap;
 };
 
 struct bc_proto_reader {

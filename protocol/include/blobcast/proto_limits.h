@@ -58,6 +58,11 @@
  * member costs the server one render per camera change. */
 #define BC_PROTO_MAX_MEMBERS 64u
 
+/* Sessions one SESSIONS answer lists: a server with more lists the first
+ * this many by name. A listing is for people choosing a session; 1024
+ * entries of at most 89 bytes keep the answer under 92 KB. */
+#define BC_PROTO_MAX_SESSIONS_LISTED 1024u
+
 /* ---- Frames and views ------------------------------------------------------
  */
 

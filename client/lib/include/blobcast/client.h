@@ -237,6 +237,38 @@ BC_API int bc_client_join(struct bc_client *c, const char *name,
 BC_API int bc_client_delete_session(struct bc_client *c, const char *name,
                                     struct bc_errinfo *ei);
 
+/* What an UNDO or REDO did (bc_client_undo). */
+struct bc_client_undone {
+	uint64_t order;        /* the order number of the undo's own edit */
+	uint64_t target_order; /* the edit undone or redone */
+	char target_author[BC_PROTO_MAX_NAME + 1]; /* that edit's author */
+};
+
+/* Undoes (redo false) or redoes the session's newest change, whoever made
+ * it, and waits until it is applied; *out (may be NULL) says what it was.
+ * Needs the editor role. BC_ESTATE when there is nothing to undo (redo). */
+BC_API int bc_client_undo(struct bc_client *c, bool redo,
+                          struct bc_client_undone *out,
+                          struct bc_errinfo *ei);
+
+/* One session of the server (bc_client_sessions). */
+struct bc_client_session {
+	char name[BC_PROTO_MAX_NAME + 1];
+	uint32_t members;      /* connected members */
+	uint32_t prims;        /* primitives (known only) */
+	uint64_t order;        /* last edit order number (known only) */
+	uint64_t last_edit_ms; /* Unix ms of its last change; 0: unknown */
+	bool loaded;           /* in the server's memory */
+	bool known;            /* prims, order and last_edit_ms are given */
+};
+
+/* Lists the server's sessions by name (SESSION_LIST), up to 1024: *out
+ * receives a bc_malloc'ed array of *n entries (NULL when none) the caller
+ * bc_free's. Allowed in or out of a session. */
+BC_API int bc_client_sessions(struct bc_client *c,
+                              struct bc_client_session **out, size_t *n,
+                              struct bc_errinfo *ei);
+
 /* The scene mirror: the session's scene as of bc_client_info()->order, or
  * NULL before the first SCENE_STATE (or if an edit could not be replayed on
  * it, which is logged). Owned by c; valid until the next call on c. cam
