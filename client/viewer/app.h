@@ -143,6 +143,11 @@ struct bc_viewer_app {
 	bool redraw;
 	bool turn_pending; /* --frames: a camera turn asked for a frame */
 
+	/* The last UNDO or REDO sent (Ctrl-Z, Ctrl-Shift-Z, Ctrl-Y) that the
+	 * server has not answered yet (0: none), and which of the two. */
+	uint32_t undo_seq;
+	bool undo_redo;
+
 	/* S (lossless snapshot) and P (window screenshot). */
 	uint32_t snapshot_seq;
 	bool screenshot_now;
@@ -192,6 +197,9 @@ void bc_viewer_camera_changed(struct bc_viewer_app *a, bool interacting);
 void bc_viewer_edit(struct bc_viewer_app *a, const struct bc_viewer_edit *e);
 /* Sends PICK for window pixel (x, y); returns its seq or 0. */
 uint32_t bc_viewer_pick(struct bc_viewer_app *a, double x, double y);
+/* Sends UNDO (redo false) or REDO without waiting for the answer: the
+ * EDIT_APPLIED every member gets, or ERROR ESTATE ("nothing to undo"). */
+void bc_viewer_undo(struct bc_viewer_app *a, bool redo);
 /* Sends SNAPSHOT (PNG) unless one is on its way. */
 void bc_viewer_request_snapshot(struct bc_viewer_app *a);
 /* When the oldest request of ours that no frame answers yet was sent (ms),

@@ -8,7 +8,8 @@
  *  - the wheel zooms; with Shift it scales the selected primitive's size
  *    parameter, with Ctrl the blend of the operator above it;
  *  - keys: S lossless snapshot, P window screenshot, O overlay, R the
- *    scene's camera, Escape or Q quit.
+ *    scene's camera, Escape or Q quit; Ctrl-Z undo, Ctrl-Shift-Z or
+ *    Ctrl-Y redo (sent without waiting; the answer shows on the overlay).
  * Callbacks only record what happened; bc_viewer_drag_step() turns the
  * motion of a whole loop turn into one message. Gestures send their
  * messages with INTERACTING and end with one without it.
@@ -294,7 +295,15 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
 {
 	struct bc_viewer_app *a = glfwGetWindowUserPointer(w);
 	(void)scancode;
-	(void)mods;
+	if (action != GLFW_PRESS && action != GLFW_REPEAT) {
+		return;
+	}
+	/* Ctrl-Z undo, Ctrl-Shift-Z or Ctrl-Y redo (held: repeated). */
+	if ((mods & GLFW_MOD_CONTROL) && !(mods & GLFW_MOD_ALT) &&
+	    (key == GLFW_KEY_Z || key == GLFW_KEY_Y)) {
+		bc_viewer_undo(a, key == GLFW_KEY_Y || (mods & GLFW_MOD_SHIFT));
+		return;
+	}
 	if (action != GLFW_PRESS) {
 		return;
 	}

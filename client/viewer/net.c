@@ -124,6 +124,22 @@ uint32_t bc_viewer_pick(struct bc_viewer_app *a, double x, double y)
 	return seq;
 }
 
+void bc_viewer_undo(struct bc_viewer_app *a, bool redo)
+{
+	struct bc_msg m = {.type = redo ? BC_MSG_REDO : BC_MSG_UNDO};
+	uint32_t seq = 0;
+	if (bc_client_info(a->c)->role != BC_PROTO_ROLE_EDITOR) {
+		bc_viewer_status(a, "viewers cannot %s", redo ? "redo" : "undo");
+		return;
+	}
+	if (bc_client_send(a->c, &m, &seq)) {
+		bc_viewer_status(a, "%s not sent", redo ? "REDO" : "UNDO");
+		return;
+	}
+	a->undo_seq = seq;
+	a->undo_redo = redo;
+}
+
 void bc_viewer_request_snapshot(struct bc_viewer_app *a)
 {
 	struct bc_msg m = {.type = BC_MSG_SNAPSHOT};
@@ -382,6 +398,21 @@ static void got_applied(struct bc_viewer_app *a, const struct bc_msg *m)
 		a->selected = 0;
 	}
 	bc_viewer_roster_edit(&a->roster, e->author, e->order);
+	if (m->flags & (BC_PROTO_FLAG_UNDO | BC_PROTO_FLAG_REDO)) {
+		char text[200];
+		if (e->author == bc_client_info(a->c)->member_id &&
+		    e->author_seq == a->undo_seq) {
+			a->undo_seq = 0;
+		}
+		bc_viewer_status(a, "%s", bc_viewer_undo_text(&a->roster, m, text,
+		                                               sizeof(text)));
+		if (a->o.verbose) {
+			printf("%s order=%llu of=%llu by=%u\n",
+			       (m->flags & BC_PROTO_FLAG_REDO) ? "redo" : "undo",
+			       (unsigned long long)e->order,
+			       (unsigned long long)e->target_order, e->author);
+		}
+	}
 	if (a->o.verbose) {
 		printf("applied order=%llu author=%u seq=%u ops=%u\n",
 		       (unsigned long long)e->order, e->author, e->author_seq,
@@ -393,6 +424,14 @@ static void got_applied(struct bc_viewer_app *a, const struct bc_msg *m)
 
 static void got_error(struct bc_viewer_app *a, const struct bc_msg *m)
 {
+	if (m->seq && m->seq == a->undo_seq) {
+		a->undo_seq = 0;
+		if (-(int)m->error.code == BC_ESTATE) {
+			bc_viewer_status(a, "nothing to %s",
+			                 a->undo_redo ? "redo" : "undo");
+			return;
+		}
+	}
 	bc_viewer_status(a, "server: %.*s (%s)", (int)m->error.text.len,
 	                 m->error.text.ptr, bc_err_name(-(int)m->error.code));
 	if (m->seq == 0) {

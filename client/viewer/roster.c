@@ -54,6 +54,30 @@ void bc_viewer_roster_edit(struct bc_viewer_roster *r, uint32_t author,
 	}
 }
 
+const char *bc_viewer_undo_text(const struct bc_viewer_roster *r,
+                                const struct bc_msg *m, char *out, size_t n)
+{
+	const struct bc_msg_edit_applied *e = &m->edit_applied;
+	const struct bc_viewer_member *who = find(r, e->author);
+	char by[BC_PROTO_MAX_NAME + 16];
+	if (who && who->name[0]) {
+		snprintf(by, sizeof(by), "%s", who->name);
+	} else {
+		snprintf(by, sizeof(by), "member %u", e->author);
+	}
+	if (e->target_author.len) {
+		snprintf(out, n, "%s %s %.*s's edit %llu", by,
+		         (m->flags & BC_PROTO_FLAG_REDO) ? "redid" : "undid",
+		         (int)e->target_author.len, e->target_author.ptr,
+		         (unsigned long long)e->target_order);
+	} else {
+		snprintf(out, n, "%s %s an unnamed member's edit %llu", by,
+		         (m->flags & BC_PROTO_FLAG_REDO) ? "redid" : "undid",
+		         (unsigned long long)e->target_order);
+	}
+	return out;
+}
+
 /* Appends to out[*len..n), keeping a NUL; returns false once full. */
 static bool put(char *out, size_t n, size_t *len, const char *s)
 {

@@ -275,6 +275,14 @@ void bc_viewer_roster_edit(struct bc_viewer_roster *r, uint32_t author,
 const char *bc_viewer_roster_text(const struct bc_viewer_roster *r, char *out,
                                   size_t n);
 
+/* The notice for an EDIT_APPLIED flagged UNDO or REDO: `bob undid alice's
+ * edit 12` (`redid` for REDO): the sender by its member name ("member ID"
+ * without one), the edit taken back by its order
+ * and its author's name as the server gives it ("an unnamed member's" when
+ * empty). Returns out. */
+const char *bc_viewer_undo_text(const struct bc_viewer_roster *r,
+                                const struct bc_msg *m, char *out, size_t n);
+
 /* ---- font.c -------------------------------------------------------------- */
 
 #define BC_VIEWER_GLYPH_W 5

@@ -8,7 +8,9 @@
 #  3. with synthetic X events (viewer_xpoke): a press on a sphere picks it,
 #     a drag moves it, Shift+wheel grows it, Ctrl+wheel changes its
 #     operator's blend, S saves a lossless snapshot, P a screenshot showing
-#     the selection's outline, Q quits; the daemon's saved scene then holds
+#     the selection's outline, Ctrl-Z / Ctrl-Shift-Z / Ctrl-Y undo and
+#     redo the last step (the verbose undo/redo lines name the same edit),
+#     Q quits; the daemon's saved scene then holds
 #     the new position, radius and blend.
 #
 # usage: test_viewer.sh BLOBCAST-VIEW BLOBCASTD IMGCHECK [XPOKE]
@@ -73,6 +75,38 @@ if [ -n "$inner" ]; then
   # settle, then P.
   [ -n "$ok" ] && sleep 1 && poke key p
   [ -n "$ok" ] && wait_for '^screenshot ' "$tmp/drag.log" 200 || ok=
+  # Ctrl-Z takes back the blend (the last step), Ctrl-Shift-Z applies it
+  # again; Ctrl-Z and Ctrl-Y once more: the blend checked below stays.
+  [ -n "$ok" ] && poke keydown Control_L key z keyup Control_L
+  [ -n "$ok" ] && wait_for '^undo order=[0-9]* of=' "$tmp/drag.log" 200 || ok=
+  [ -n "$ok" ] && poke keydown Control_L keydown Shift_L key z \
+    keyup Shift_L keyup Control_L
+  [ -n "$ok" ] && wait_for '^redo order=[0-9]* of=' "$tmp/drag.log" 200 || ok=
+  [ -n "$ok" ] && poke keydown Control_L key z keyup Control_L sleep 300 \
+    keydown Control_L key y keyup Control_L
+  if [ -n "$ok" ]; then
+    n=0
+    while [ "$(grep -c '^redo order=' "$tmp/drag.log")" -lt 2 ] &&
+      [ $n -lt 200 ]; do
+      sleep 0.1
+      n=$((n + 1))
+    done
+    [ "$(grep -c '^undo order=' "$tmp/drag.log")" -eq 2 ] &&
+      [ "$(grep -c '^redo order=' "$tmp/drag.log")" -eq 2 ] || {
+      echo "FAIL: Ctrl-Z, Ctrl-Shift-Z, Ctrl-Z, Ctrl-Y: not 2 undos and 2 redos"
+      sed 's/^/    /' "$tmp/drag.log"
+      ok=
+    }
+    # Each redo takes again the edit its undo took back.
+    u=$(sed -n 's/^undo order=[0-9]* of=\([0-9]*\) .*/\1/p' "$tmp/drag.log" |
+      sort -u)
+    r=$(sed -n 's/^redo order=[0-9]* of=\([0-9]*\) .*/\1/p' "$tmp/drag.log" |
+      sort -u)
+    [ -n "$u" ] && [ "$u" = "$r" ] || {
+      echo "FAIL: undo of=$u but redo of=$r"
+      ok=
+    }
+  fi
   # Q closes the window on its press: no release to send to a window
   # that is gone.
   poke keydown q

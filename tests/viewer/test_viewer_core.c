@@ -876,6 +876,46 @@ static void test_roster_names_members_and_last_editor(void)
 	CHECK(strcmp(small + strlen(small) - 3, "...") == 0);
 }
 
+/* The undo/redo notice: the sender by its member name (by id without
+ * one), the edit taken back by order and its author as the server names
+ * it; REDO says "redid"; an empty author reads "an unnamed member's". */
+static void test_undo_text_names_both_members(void)
+{
+	struct bc_proto_member mem[2] = {
+	    {.id = 4, .role = BC_PROTO_ROLE_EDITOR, .name = {"alice", 5}},
+	    {.id = 9, .role = BC_PROTO_ROLE_EDITOR, .name = {"bob", 3}},
+	};
+	struct bc_msg_session_info si = {.session_id = 1, .member_id = 4,
+	                                 .role = BC_PROTO_ROLE_EDITOR,
+	                                 .name = {"s", 1}, .nmembers = 2,
+	                                 .members = mem};
+	struct bc_viewer_roster r;
+	struct bc_msg m = {.type = BC_MSG_EDIT_APPLIED,
+	                   .flags = BC_PROTO_FLAG_UNDO};
+	char line[200], small[12];
+	memset(&r, 0, sizeof(r));
+	bc_viewer_roster_update(&r, &si);
+	m.edit_applied.order = 13;
+	m.edit_applied.author = 9;
+	m.edit_applied.target_order = 12;
+	m.edit_applied.target_author.ptr = "alice";
+	m.edit_applied.target_author.len = 5;
+	CHECK_STREQ(bc_viewer_undo_text(&r, &m, line, sizeof(line)),
+	            "bob undid alice's edit 12");
+	m.flags = BC_PROTO_FLAG_REDO;
+	m.edit_applied.author = 4;
+	CHECK_STREQ(bc_viewer_undo_text(&r, &m, line, sizeof(line)),
+	            "alice redid alice's edit 12");
+	m.flags = BC_PROTO_FLAG_UNDO;
+	m.edit_applied.author = 30;
+	m.edit_applied.target_author.len = 0;
+	CHECK_STREQ(bc_viewer_undo_text(&r, &m, line, sizeof(line)),
+	            "member 30 undid an unnamed member's edit 12");
+	/* A short buffer is cut, never overrun. */
+	CHECK(strlen(bc_viewer_undo_text(&r, &m, small, sizeof(small))) ==
+	      sizeof(small) - 1);
+}
+
 static const struct bc_test tests[] = {
     {"project_inverts_view_rays", test_project_inverts_view_rays},
     {"project_refuses_points_behind_the_eye",
@@ -901,6 +941,7 @@ static const struct bc_test tests[] = {
     {"font_triangles", test_font_triangles},
     {"roster_names_members_and_last_editor",
      test_roster_names_members_and_last_editor},
+    {"undo_text_names_both_members", test_undo_text_names_both_members},
 };
 
 BC_TEST_MAIN(tests)
