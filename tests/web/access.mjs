@@ -35,35 +35,17 @@ if (lacking.length) {
 	console.log(`SKIP: web access test needs ${lacking.join(', ')}`);
 	process.exit(77);
 }
-process.env.PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD = '1';
-const { chromium } = await import(join(H.HERE, 'node_modules',
-	'playwright-core', 'index.mjs'));
+const chromium = await H.playwright();
 
 let browser = null;
 let failed = false;
 const t0 = Date.now();
 const step = (s) => console.log(`[${((Date.now() - t0) / 1000).toFixed(1)} s]` +
 	` ${s}`);
-const watchdog = setTimeout(() => {
-	console.error(`FAIL: over ${DEADLINE_MS} ms\n${H.logs()}`);
-	process.exit(1);
-}, DEADLINE_MS);
+const watchdog = H.watchdog(DEADLINE_MS);
 
-async function until(page, what, fn, arg, ms = 30000) {
-	const end = Date.now() + ms;
-	for (;;) {
-		const v = await page.evaluate(fn, arg);
-		if (v) {
-			return v;
-		}
-		if (Date.now() > end) {
-			const st = await page.evaluate(() => window.blobcast?.state());
-			throw new Error(`timed out waiting for ${what}; page state: ` +
-				JSON.stringify(st));
-		}
-		await page.waitForTimeout(50);
-	}
-}
+const until = (page, what, fn, arg, ms = 30000) =>
+	H.until(page, what, fn, arg, ms, 50);
 
 /* A page that records every URL it asks for and counts its WebSockets. */
 async function openPage(url) {

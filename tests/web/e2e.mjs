@@ -17,7 +17,6 @@
  * BC_WEB_SCREENSHOT=FILE saves page A after the drag (docs/web.png).
  */
 import assert from 'node:assert/strict';
-import { join } from 'node:path';
 
 import * as H from './harness.mjs';
 
@@ -29,9 +28,7 @@ if (lacking.length) {
 	console.log(`SKIP: web e2e needs ${lacking.join(', ')}`);
 	process.exit(77);
 }
-process.env.PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD = '1';
-const { chromium } = await import(join(H.HERE, 'node_modules',
-	'playwright-core', 'index.mjs'));
+const chromium = await H.playwright();
 
 let browser = null;
 let failed = false;
@@ -39,27 +36,10 @@ const t0 = Date.now();
 const step = (s) => console.log(`[${((Date.now() - t0) / 1000).toFixed(1)} s]` +
 	` ${s}`);
 
-const watchdog = setTimeout(() => {
-	console.error(`FAIL: over ${DEADLINE_MS} ms\n${H.logs()}`);
-	process.exit(1);
-}, DEADLINE_MS);
+const watchdog = H.watchdog(DEADLINE_MS);
 
-/* Polls fn (evaluated in page) until it returns a truthy value. */
-async function until(page, what, fn, arg, ms = 20000) {
-	const end = Date.now() + ms;
-	for (;;) {
-		const v = await page.evaluate(fn, arg);
-		if (v) {
-			return v;
-		}
-		if (Date.now() > end) {
-			const st = await page.evaluate(() => window.blobcast?.state());
-			throw new Error(`timed out waiting for ${what}; page state: ` +
-				JSON.stringify(st));
-		}
-		await page.waitForTimeout(50);
-	}
-}
+const until = (page, what, fn, arg, ms = 20000) =>
+	H.until(page, what, fn, arg, ms, 50);
 
 /* Counts canvas pixels that differ from the corner colour, and the
  * distinct colours among a sample: a rendered scene has many of both. */

@@ -4,7 +4,9 @@
  * port with a throw-away data directory, websockify in front of it, and a
  * static file server for client/web/ (in this process: node's http module,
  * serving only the page's own files). Also the prerequisite check that
- * turns a missing tool into a skip with a message naming it.
+ * turns a missing tool into a skip with a message naming it, and what every
+ * browser test does alike: loading playwright-core (never a downloaded
+ * browser), a watchdog, and polling the page until a condition holds.
  */
 import { spawn, spawnSync } from 'node:child_process';
 import { existsSync, mkdtempSync, readFileSync, rmSync, statSync } from 'node:fs';
@@ -227,4 +229,40 @@ export async function stopAll() {
 /* The log tail of every child, for a failure report. */
 export function logs() {
 	return children.map((c) => `--- ${c.name}\n${c.log}`).join('\n');
+}
+
+/* playwright-core's chromium, driving Debian's chromium (CHROMIUM). */
+export async function playwright() {
+	process.env.PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD = '1';
+	const { chromium } = await import(join(HERE, 'node_modules',
+		'playwright-core', 'index.mjs'));
+	return chromium;
+}
+
+/* Fails the whole test (exit 1, with the children's logs when withLogs)
+ * if it runs past ms; clearTimeout() the result at the end. */
+export function watchdog(ms, withLogs = true) {
+	return setTimeout(() => {
+		console.error(`FAIL: over ${ms} ms` + (withLogs ? `\n${logs()}` : ''));
+		process.exit(1);
+	}, ms);
+}
+
+/* Polls fn (evaluated in page, with arg) every pollMs until it returns a
+ * truthy value, which it returns; after ms, throws naming what and the
+ * page's state. */
+export async function until(page, what, fn, arg, ms, pollMs) {
+	const end = Date.now() + ms;
+	for (;;) {
+		const v = await page.evaluate(fn, arg);
+		if (v) {
+			return v;
+		}
+		if (Date.now() > end) {
+			const st = await page.evaluate(() => window.blobcast?.state());
+			throw new Error(`timed out waiting for ${what}; page state: ` +
+				JSON.stringify(st));
+		}
+		await page.waitForTimeout(pollMs);
+	}
 }

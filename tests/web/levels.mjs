@@ -15,7 +15,6 @@
  * missing). Usage: node tests/web/levels.mjs
  */
 import assert from 'node:assert/strict';
-import { join } from 'node:path';
 
 import * as P from '../../client/web/protocol.js';
 import * as H from './harness.mjs';
@@ -30,14 +29,9 @@ if (lacking.length) {
 	console.log(`SKIP: web levels test needs ${lacking.join(', ')}`);
 	process.exit(77);
 }
-process.env.PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD = '1';
-const { chromium } = await import(join(H.HERE, 'node_modules',
-	'playwright-core', 'index.mjs'));
+const chromium = await H.playwright();
 
-const watchdog = setTimeout(() => {
-	console.error(`FAIL: over ${DEADLINE_MS} ms`);
-	process.exit(1);
-}, DEADLINE_MS);
+const watchdog = H.watchdog(DEADLINE_MS, false);
 
 const RED = [255, 0, 0, 255], BLUE = [0, 0, 255, 255];
 const GREEN = [0, 255, 0, 255];
@@ -96,19 +90,8 @@ function probe({ x, y }) {
 		last: window.blobcast.state().lastFrame };
 }
 
-async function until(page, what, fn, arg, ms = 15000) {
-	const end = Date.now() + ms;
-	for (;;) {
-		const v = await page.evaluate(fn, arg);
-		if (v) {
-			return v;
-		}
-		if (Date.now() > end) {
-			throw new Error(`timed out waiting for ${what}`);
-		}
-		await page.waitForTimeout(30);
-	}
-}
+const until = (page, what, fn, arg, ms = 15000) =>
+	H.until(page, what, fn, arg, ms, 30);
 
 const near = (a, b) => a.every((v, i) => Math.abs(v - b[i]) <= 8);
 

@@ -27,24 +27,11 @@ const daemon = arg('--blobcastd', H.findDaemon(process.argv));
 const viewer = resolve(arg('--viewer', 'build/client/viewer/blobcast-view'));
 const xpoke = resolve(arg('--xpoke', 'build/tests/viewer/viewer_xpoke'));
 const out = arg('--out', join(H.ROOT, 'docs'));
-process.env.PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD = '1';
-const { chromium } = await import(join(H.HERE, 'node_modules',
-	'playwright-core', 'index.mjs'));
+const chromium = await H.playwright();
 
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
-async function until(page, fn, arg1, ms = 30000) {
-	const end = Date.now() + ms;
-	for (;;) {
-		const v = await page.evaluate(fn, arg1);
-		if (v) {
-			return v;
-		}
-		if (Date.now() > end) {
-			throw new Error(`timed out: ${fn}`);
-		}
-		await page.waitForTimeout(40);
-	}
-}
+const until = (page, fn, arg1, ms = 30000) =>
+	H.until(page, String(fn), fn, arg1, ms, 40);
 function run(cmd, args) {
 	return new Promise((res, rej) => {
 		const c = spawn(cmd, args, { stdio: 'inherit' });

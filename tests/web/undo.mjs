@@ -16,7 +16,6 @@
 import assert from 'node:assert/strict';
 import { execFile } from 'node:child_process';
 import { existsSync } from 'node:fs';
-import { join } from 'node:path';
 
 import * as H from './harness.mjs';
 
@@ -33,9 +32,7 @@ if (lacking.length) {
 	console.log(`SKIP: web undo needs ${lacking.join(', ')}`);
 	process.exit(77);
 }
-process.env.PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD = '1';
-const { chromium } = await import(join(H.HERE, 'node_modules',
-	'playwright-core', 'index.mjs'));
+const chromium = await H.playwright();
 
 let browser = null;
 let failed = false;
@@ -43,26 +40,10 @@ const t0 = Date.now();
 const step = (s) => console.log(`[${((Date.now() - t0) / 1000).toFixed(1)} s]` +
 	` ${s}`);
 
-const watchdog = setTimeout(() => {
-	console.error(`FAIL: over ${DEADLINE_MS} ms\n${H.logs()}`);
-	process.exit(1);
-}, DEADLINE_MS);
+const watchdog = H.watchdog(DEADLINE_MS);
 
-async function until(page, what, fn, arg, ms = 15000) {
-	const end = Date.now() + ms;
-	for (;;) {
-		const v = await page.evaluate(fn, arg);
-		if (v) {
-			return v;
-		}
-		if (Date.now() > end) {
-			const st = await page.evaluate(() => window.blobcast?.state());
-			throw new Error(`timed out waiting for ${what}; page state: ` +
-				JSON.stringify(st));
-		}
-		await page.waitForTimeout(30);
-	}
-}
+const until = (page, what, fn, arg, ms = 15000) =>
+	H.until(page, what, fn, arg, ms, 30);
 
 function run(args) {
 	return new Promise((resolve) => execFile(cli, args, { timeout: 15000 },
