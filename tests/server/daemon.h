@@ -290,6 +290,30 @@ static uint32_t conn_move(struct conn *c, uint32_t id, float x, float y,
 	return conn_send(c, &m);
 }
 
+#if defined(BLOBCAST_TESTS_TEST_H)
+/* Runs tests with SIGPIPE ignored (a daemon may close first) in a fresh
+ * directory /tmp/bc-NAME-test-PID, written into dir (n bytes): removed
+ * when every test passed, kept for inspection when one failed. */
+static inline int daemon_tests_run(const char *name, char *dir, size_t n,
+				   const struct bc_test *tests, size_t ntests,
+				   int argc, char **argv)
+{
+	char cmd[128];
+	int rc;
+	signal(SIGPIPE, SIG_IGN);
+	snprintf(dir, n, "/tmp/bc-%s-test-%d", name, (int)getpid());
+	mkdir(dir, 0700);
+	rc = bc_test_run(tests, ntests, argc, argv);
+	if (rc == 0) {
+		snprintf(cmd, sizeof(cmd), "rm -rf %s", dir);
+		if (system(cmd) != 0) {
+			fprintf(stderr, "could not remove %s\n", dir);
+		}
+	}
+	return rc;
+}
+#endif
+
 #if defined(BLOBCAST_SCENE_H)
 /* The scene of the SCENE_STATE in c->m, decoded; NULL when it does not
  * decode. The caller destroys it. (Only where blobcast/scene.h is

@@ -8,8 +8,8 @@
 
 #include "blobcast/blobtree.h"
 #include "blobcast/scene.h"
+#include "test.h" /* before daemon.h: its test runner needs it */
 #include "daemon.h"
-#include "test.h"
 
 static char base_dir[48];
 
@@ -402,13 +402,6 @@ static void a_client_that_stops_reading_is_dropped(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
-static void setup(void)
-{
-	snprintf(base_dir, sizeof(base_dir), "/tmp/bc-daemon-test-%d",
-		 (int)getpid());
-	mkdir(base_dir, 0700);
-}
-
 static const struct bc_test tests[] = {
 	{"members_see_the_same_edits_in_order",
 	 members_see_the_same_edits_in_order},
@@ -423,16 +416,6 @@ static const struct bc_test tests[] = {
 
 int main(int argc, char **argv)
 {
-	int rc;
-	signal(SIGPIPE, SIG_IGN);
-	setup();
-	rc = bc_test_run(tests, sizeof(tests) / sizeof(tests[0]), argc, argv);
-	if (rc == 0) {
-		char cmd[256];
-		snprintf(cmd, sizeof(cmd), "rm -rf %s", base_dir);
-		if (system(cmd) != 0) {
-			fprintf(stderr, "could not remove %s\n", base_dir);
-		}
-	}
-	return rc;
+	return daemon_tests_run("daemon", base_dir, sizeof(base_dir), tests,
+	                        sizeof(tests) / sizeof(tests[0]), argc, argv);
 }

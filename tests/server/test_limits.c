@@ -11,9 +11,9 @@
 
 #include "blobcast/blobtree.h"
 #include "blobcast/scene.h"
+#include "test.h" /* before daemon.h: its test runner needs it */
 #include "daemon.h"
 #include "srv_limits.h"
-#include "test.h"
 
 static char base_dir[48];
 
@@ -759,15 +759,6 @@ static void a_large_load_does_not_hold_other_sessions(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
-static void setup(void)
-{
-	(void)conn_view;
-	(void)conn_move;
-	snprintf(base_dir, sizeof(base_dir), "/tmp/bc-limits-test-%d",
-	         (int)getpid());
-	mkdir(base_dir, 0700);
-}
-
 static const struct bc_test tests[] = {
     {"a_trickled_message_times_out", a_trickled_message_times_out},
     {"an_idle_client_in_no_session_is_dropped",
@@ -792,16 +783,8 @@ static const struct bc_test tests[] = {
 
 int main(int argc, char **argv)
 {
-	int rc;
-	signal(SIGPIPE, SIG_IGN);
-	setup();
-	rc = bc_test_run(tests, sizeof(tests) / sizeof(tests[0]), argc, argv);
-	if (rc == 0) {
-		char cmd[256];
-		snprintf(cmd, sizeof(cmd), "rm -rf %s", base_dir);
-		if (system(cmd) != 0) {
-			fprintf(stderr, "could not remove %s\n", base_dir);
-		}
-	}
-	return rc;
+	(void)conn_view;
+	(void)conn_move;
+	return daemon_tests_run("limits", base_dir, sizeof(base_dir), tests,
+	                        sizeof(tests) / sizeof(tests[0]), argc, argv);
 }

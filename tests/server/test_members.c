@@ -28,9 +28,9 @@
 #include "blobcast/edit.h"
 #include "blobcast/gen.h"
 #include "blobcast/scene.h"
+#include "test.h" /* before daemon.h: its test runner needs it */
 #include "daemon.h"
 #include "srv_limits.h"
-#include "test.h"
 
 /* Primitives of the scene, and so SET operations per edit (the protocol's
  * BC_PROTO_MAX_EDIT_OPS): an EDIT_APPLIED of about 58 KiB. */
@@ -606,22 +606,10 @@ static const struct bc_test tests[] = {
 
 int main(int argc, char **argv)
 {
-	int rc;
 	(void)unused;
-	signal(SIGPIPE, SIG_IGN);
 	if (getenv("BLOBCASTD")) {
 		daemon_path = getenv("BLOBCASTD");
 	}
-	snprintf(base_dir, sizeof(base_dir), "/tmp/bc-members-test-%d",
-	         (int)getpid());
-	mkdir(base_dir, 0700);
-	rc = bc_test_run(tests, sizeof(tests) / sizeof(tests[0]), argc, argv);
-	if (rc == 0) {
-		char cmd[96];
-		snprintf(cmd, sizeof(cmd), "rm -rf %s", base_dir);
-		if (system(cmd) != 0) {
-			fprintf(stderr, "could not remove %s\n", base_dir);
-		}
-	}
-	return rc;
+	return daemon_tests_run("members", base_dir, sizeof(base_dir), tests,
+	                        sizeof(tests) / sizeof(tests[0]), argc, argv);
 }

@@ -15,8 +15,8 @@
  * sanitizer build (BLOBCASTD_RELEASE, default build/server/blobcastd in
  * the source tree). Without one it says so and is skipped.
  */
+#include "test.h" /* before daemon.h: its test runner needs it */
 #include "daemon.h"
-#include "test.h"
 
 #ifndef BLOBCASTD_RELEASE_PATH
 #define BLOBCASTD_RELEASE_PATH "build/server/blobcastd"
@@ -142,8 +142,6 @@ static const struct bc_test tests[] = {
 
 int main(int argc, char **argv)
 {
-	int rc;
-	signal(SIGPIPE, SIG_IGN);
 	(void)conn_move;
 	daemon_path = getenv("BLOBCASTD_RELEASE") ? getenv("BLOBCASTD_RELEASE")
 	                                          : BLOBCASTD_RELEASE_PATH;
@@ -153,16 +151,6 @@ int main(int argc, char **argv)
 		       daemon_path);
 		return 77;
 	}
-	snprintf(base_dir, sizeof(base_dir), "/tmp/bc-rss-test-%d",
-	         (int)getpid());
-	mkdir(base_dir, 0700);
-	rc = bc_test_run(tests, sizeof(tests) / sizeof(tests[0]), argc, argv);
-	if (rc == 0) {
-		char cmd[96];
-		snprintf(cmd, sizeof(cmd), "rm -rf %s", base_dir);
-		if (system(cmd) != 0) {
-			fprintf(stderr, "could not remove %s\n", base_dir);
-		}
-	}
-	return rc;
+	return daemon_tests_run("rss", base_dir, sizeof(base_dir), tests,
+	                        sizeof(tests) / sizeof(tests[0]), argc, argv);
 }

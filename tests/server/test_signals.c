@@ -8,8 +8,8 @@
 #include <netinet/in.h>
 #include <arpa/inet.h>
 
+#include "test.h" /* before daemon.h: its test runner needs it */
 #include "daemon.h"
-#include "test.h"
 
 static char base_dir[48];
 
@@ -340,22 +340,10 @@ static const struct bc_test tests[] = {
 
 int main(int argc, char **argv)
 {
-	int rc;
 	/* daemon.h's helpers this file has no use for. */
 	(void)daemon_start;
 	(void)conn_view;
 	(void)conn_move;
-	signal(SIGPIPE, SIG_IGN);
-	snprintf(base_dir, sizeof(base_dir), "/tmp/bc-signals-test-%d",
-	         (int)getpid());
-	mkdir(base_dir, 0700);
-	rc = bc_test_run(tests, sizeof(tests) / sizeof(tests[0]), argc, argv);
-	if (rc == 0) {
-		char cmd[256];
-		snprintf(cmd, sizeof(cmd), "rm -rf %s", base_dir);
-		if (system(cmd) != 0) {
-			fprintf(stderr, "could not remove %s\n", base_dir);
-		}
-	}
-	return rc;
+	return daemon_tests_run("signals", base_dir, sizeof(base_dir), tests,
+	                        sizeof(tests) / sizeof(tests[0]), argc, argv);
 }

@@ -11,8 +11,8 @@
 #include "blobcast/blobtree.h"
 #include "blobcast/edit.h"
 #include "blobcast/scene.h"
+#include "test.h" /* before daemon.h: its test runner needs it */
 #include "daemon.h"
-#include "test.h"
 
 static char base_dir[48];
 
@@ -312,20 +312,8 @@ static const struct bc_test tests[] = {
 
 int main(int argc, char **argv)
 {
-	int rc;
-	signal(SIGPIPE, SIG_IGN);
 	(void)conn_view;
 	(void)conn_move;
-	snprintf(base_dir, sizeof(base_dir), "/tmp/bc-undo-test-%d",
-	         (int)getpid());
-	mkdir(base_dir, 0700);
-	rc = bc_test_run(tests, sizeof(tests) / sizeof(tests[0]), argc, argv);
-	if (rc == 0) {
-		char cmd[96];
-		snprintf(cmd, sizeof(cmd), "rm -rf %s", base_dir);
-		if (system(cmd) != 0) {
-			fprintf(stderr, "could not remove %s\n", base_dir);
-		}
-	}
-	return rc;
+	return daemon_tests_run("undo", base_dir, sizeof(base_dir), tests,
+	                        sizeof(tests) / sizeof(tests[0]), argc, argv);
 }
