@@ -162,12 +162,18 @@ static void session_remove(struct bc_session *s)
 	uv_close((uv_handle_t *)&s->kick, still_closed);
 }
 
-/* Unloads s when it has no members: every applied edit is already in its
- * journal (and a session whose storage failed stays, holding what it could
- * not write), so a JOIN restores it as it was. */
+/* Whether s may be unloaded: it has no members, and every applied edit
+ * is in its journal (a session whose storage failed stays, holding what it
+ * could not write; one being loaded waits for its load). */
+static bool unloadable(const struct bc_session *s)
+{
+	return s->nmembers == 0 && !s->store_failed && !s->loading;
+}
+
+/* Unloads s when unloadable(): a JOIN restores it as it was. */
 static bool session_unload(struct bc_session *s, const char *why)
 {
-	if (s->nmembers > 0 || s->store_failed || s->loading) {
+	if (!unloadable(s)) {
 		return false;
 	}
 	bc_log(BC_LOG_INFO,
@@ -193,7 +199,7 @@ static uint32_t free_slot(struct bc_srv *srv)
 	}
 	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
 		struct bc_session *s = srv->sessions[i];
-		if (s->nmembers == 0 && !s->store_failed && !s->loading &&
+		if (unloadable(s) &&
 		    (!oldest || s->empty_since_ms < oldest->empty_since_ms)) {
 			oldest = s;
 			slot = i;
@@ -211,7 +217,7 @@ static void sweep_idle(uv_timer_t *t)
 	uint64_t now = bc_now_ms(srv);
 	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
 		struct bc_session *s = srv->sessions[i];
-		if (s && s->nmembers == 0 &&
+		if (s && unloadable(s) &&
 		    now - s->empty_since_ms >= BC_SRV_SESSION_IDLE_MS) {
 			session_unload(s, "no members for 15 minutes");
 		}
@@ -591,8 +597,7 @@ void bc_handle_session_delete(struct bc_conn *c, const struct bc_msg *m)
 			                   c->name[0] ? c->name : "a client");
 			bc_session_leave(mc);
 		}
-		s->nmembers = 0;
-		s->store_failed = false;
+		s->nmembers = 0; /* members already closing are gone too */
 		session_remove(s);
 	}
 	if (bc_store_session_delete(srv->store, name, &ei)) {
