@@ -15,12 +15,19 @@
  *   render  `svo` against the CPU `tiled` renderer on the same scenes,
  *           cameras and thread count, side by side in one run, the svo
  *           octree pruned with RevAA and with IA (build and trace each).
+ *   files   `svo` frames of scene files with their own cameras: a fresh
+ *           renderer per repetition (compiling the RPN untimed, as
+ *           libfive's tape), the frame's octree build and trace timed in
+ *           process CPU time; one line per repetition, then the median.
+ *           bench/libfive/svo_vs_libfive.sh interleaves it with libfive.
  *
  * Scenes: Gears is `gen gears --teeth 100` (RPN length 482; the thesis's
  * has 506-571), Many Spheres `gen many-spheres` (5489, as the thesis's),
  * Many Gears `gen many-gears --count 625` (28 234; the thesis's 30 377).
  *
  * Usage: bench_svo [grid|sweep|arith|render|all] [--quick]
+ *        bench_svo files [--size N] [--reps R] [--threads T] [--range A]
+ *                  SCENE.json...
  * Every time is measured in this process, one thread unless stated; ratios
  * compare numbers taken side by side in the same run. The machine is shared,
  * so every time is the smallest of several repetitions (REPEATS, or as many
@@ -34,6 +41,7 @@
 
 #include "blobcast/gen.h"
 #include "blobcast/render.h"
+#include "blobcast/scene.h"
 #include "blobcast/svo.h"
 
 #define REPEATS 3
@@ -426,12 +434,146 @@ static int bench_render(bool quick)
 	return 0;
 }
 
+/* ---- scene files, for the libfive comparison ------------------------------
+ */
+
+static double cpu_ms(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+	double x = *(const double *)a, y = *(const double *)b;
+	return x < y ? -1 : (x > y ? 1 : 0);
+}
+
+static int bench_files(int argc, char **argv)
+{
+	uint32_t side = 512, reps = 5, threads = 1;
+	enum bc_range_arith arith = BC_RANGE_DEFAULT;
+	int nfiles = 0;
+	for (int i = 2; i < argc; i++) {
+		bool more = i + 1 < argc;
+		if (strcmp(argv[i], "--size") == 0 && more) {
+			side = (uint32_t)strtoul(argv[++i], NULL, 10);
+		} else if (strcmp(argv[i], "--reps") == 0 && more) {
+			reps = (uint32_t)strtoul(argv[++i], NULL, 10);
+		} else if (strcmp(argv[i], "--threads") == 0 && more) {
+			threads = (uint32_t)strtoul(argv[++i], NULL, 10);
+		} else if (strcmp(argv[i], "--range") == 0 && more) {
+			i++;
+			arith = strcmp(argv[i], "ia") == 0      ? BC_RANGE_IA
+			        : strcmp(argv[i], "aa") == 0    ? BC_RANGE_AA
+			        : strcmp(argv[i], "revaa") == 0 ? BC_RANGE_REVAA
+			                                        : BC_RANGE_COUNT;
+		} else if (argv[i][0] == '-') {
+			fprintf(stderr, "bench_svo files: unknown option %s\n",
+			        argv[i]);
+			return 2;
+		} else {
+			nfiles++;
+		}
+	}
+	if (side == 0 || side > 8192 || reps == 0 || reps > 1000 ||
+	    arith == BC_RANGE_COUNT || nfiles == 0) {
+		fprintf(stderr, "bench_svo files: needs scene files, a size in "
+		                "1..8192, 1..1000 reps and a range ia|aa|revaa\n");
+		return 2;
+	}
+	for (int i = 2; i < argc; i++) {
+		struct bc_errinfo ei = {0};
+		struct bc_camera cam;
+		struct bc_tree *t;
+		struct bc_frame f;
+		double *ms;
+		uint64_t hits = 0;
+		if (argv[i][0] == '-') {
+			i += strcmp(argv[i], "--size") == 0 ||
+			     strcmp(argv[i], "--reps") == 0 ||
+			     strcmp(argv[i], "--threads") == 0 ||
+			     strcmp(argv[i], "--range") == 0;
+			continue;
+		}
+		t = bc_tree_create();
+		ms = calloc(reps, sizeof(*ms));
+		if (!t || !ms || bc_frame_init(&f, side, side)) {
+			fprintf(stderr, "bench_svo: out of memory\n");
+			bc_tree_destroy(t);
+			free(ms);
+			return 1;
+		}
+		if (bc_scene_load_json(argv[i], t, &cam, &ei)) {
+			fprintf(stderr, "bench_svo: %s: %s\n", argv[i], ei.msg);
+			bc_tree_destroy(t);
+			bc_frame_finish(&f);
+			free(ms);
+			return 1;
+		}
+		for (uint32_t k = 0; k < reps; k++) {
+			struct bc_render_opts o = {.threads = threads,
+			                           .svo_range = arith};
+			struct bc_renderer *r = NULL;
+			struct bc_render_stats st;
+			double c0, c1;
+			if (bc_renderer_create(&r, BC_BACKEND_SVO, &o, &ei) ||
+			    bc_renderer_sync(r, t, NULL, &ei)) {
+				fprintf(stderr, "bench_svo: %s\n", ei.msg);
+				bc_renderer_destroy(r);
+				bc_tree_destroy(t);
+				bc_frame_finish(&f);
+				free(ms);
+				return 1;
+			}
+			c0 = cpu_ms();
+			if (bc_renderer_render(r, &cam, &f, &st, &ei)) {
+				fprintf(stderr, "bench_svo: %s\n", ei.msg);
+				bc_renderer_destroy(r);
+				bc_tree_destroy(t);
+				bc_frame_finish(&f);
+				free(ms);
+				return 1;
+			}
+			c1 = cpu_ms();
+			ms[k] = c1 - c0;
+			hits = 0;
+			for (size_t p = 0; p < (size_t)side * side; p++) {
+				hits += isfinite(f.depth[p]);
+			}
+			printf("svo %s: rep %u: %.1f ms CPU (octree %.1f ms, "
+			       "trace %.1f ms wall), %llu evaluations, hit "
+			       "%.1f%%\n",
+			       argv[i], k, ms[k], st.ms_abuffer, st.ms_trace,
+			       (unsigned long long)st.field_evals,
+			       100.0 * (double)hits / ((double)side * side));
+			fflush(stdout);
+			bc_renderer_destroy(r);
+		}
+		qsort(ms, reps, sizeof(*ms), cmp_double);
+		printf("svo %s: %ux%u, %u thread(s): median of %u %.1f ms CPU, "
+		       "fastest %.1f ms\n",
+		       argv[i], side, side, threads, reps,
+		       reps % 2 ? ms[reps / 2]
+		                : 0.5 * (ms[reps / 2 - 1] + ms[reps / 2]),
+		       ms[0]);
+		bc_tree_destroy(t);
+		bc_frame_finish(&f);
+		free(ms);
+	}
+	return 0;
+}
+
 int main(int argc, char **argv)
 {
 	const char *what = "all";
 	bool quick = false;
 	double t0 = now_ms();
 	int rc = 0;
+	if (argc > 1 && strcmp(argv[1], "files") == 0) {
+		return bench_files(argc, argv);
+	}
 	for (int i = 1; i < argc; i++) {
 		if (strcmp(argv[i], "--quick") == 0) {
 			quick = true;

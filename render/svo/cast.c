@@ -37,6 +37,13 @@
  * onto a crossing). */
 #define SETTLE_MAX_REACH 4.0f
 #define SETTLE_MAX_STEPS 96
+/* Steps through a 1-Lipschitz leaf before interval bisection takes over
+ * the rest of its segment: a ray that passes a surface just outside the
+ * band converges slowly, and bisection settles it in a few halvings. */
+#define STEP_MAX 12
+/* A step goes this fraction of the distance the Lipschitz bound allows:
+ * the float field may be a few ulps below the exact one. */
+#define STEP_SAFE 0.999f
 
 struct bc_svo_caster {
 	const struct bc_svo *s;
@@ -83,7 +90,10 @@ float bc_svo_hit_band(const struct bc_svo_cast_params *cp, float t)
 	       fmaxf(BC_SVO_HIT_FOOTPRINT * cp->pix_angle * t, cp->min_step);
 }
 
-/* A field along the ray: a leaf's variant, or the octree (mask NULL). */
+/* A field along the ray: a leaf's variant, or the octree (mask NULL).
+ * Through the octree, the last leaf found is kept: the samples of a
+ * refinement lie close together, mostly in one leaf, and the walk from
+ * the root would otherwise cost as much as the evaluation. */
 struct ray_field {
 	const struct bc_svo *s;
 	const struct bc_svo_cmask *mask;
@@ -91,30 +101,65 @@ struct ray_field {
 	const struct bc_svo_cast_params *cp;
 	bool banded; /* subtract the hit band */
 	uint32_t *evals;
+	bool cached;
+	struct bc_svo_leaf_ref leaf;
 };
 
-static float field_at(const struct ray_field *rf, float t)
+static inline bool in_box(const float lo[3], const float hi[3],
+                          const float p[3])
+{
+	/* The octree sends a point on a mid plane to the upper child
+	 * (bc_svo_locate), so a box holds its lower faces only. */
+	return p[0] >= lo[0] && p[0] < hi[0] && p[1] >= lo[1] &&
+	       p[1] < hi[1] && p[2] >= lo[2] && p[2] < hi[2];
+}
+
+static float field_at(struct ray_field *rf, float t)
 {
 	float p[3] = {rf->o[0] + t * rf->d[0], rf->o[1] + t * rf->d[1],
 	              rf->o[2] + t * rf->d[2]};
-	float v = rf->mask ? bc_svo_cmask_eval(rf->s->rpn, *rf->mask, p)
-	                   : bc_svo_eval(rf->s, p);
+	float v;
+	if (rf->mask) {
+		v = bc_svo_cmask_eval(rf->s->rpn, *rf->mask, p);
+	} else {
+		if (!(rf->cached && in_box(rf->leaf.lo, rf->leaf.hi, p))) {
+			rf->cached = bc_svo_locate(rf->s, p, &rf->leaf);
+		}
+		if (!rf->cached) {
+			v = bc_svo_eval(rf->s, p); /* outside the root */
+		} else if (rf->leaf.state != BC_SVO_STATE_ACTIVE) {
+			v = rf->leaf.value;
+		} else {
+			v = bc_svo_cmask_eval(rf->s->rpn, rf->leaf.mask, p);
+		}
+	}
 	(*rf->evals)++;
 	return rf->banded ? v - bc_svo_hit_band(rf->cp, t) : v;
 }
 
 /* Illinois refinement of a root of rf in [a, b] with fa > 0 >= fb, to the
  * refinement tolerance; returns the root interpolated in the last bracket
- * (as the sphere tracer does). */
-static float refine(const struct ray_field *rf, float a, float fa, float b,
+ * (as the sphere tracer does). On a field that is nearly linear across
+ * the bracket (a surface at pixel scale) the first secant sample lands
+ * within the tolerance of the root, but the bracket's far end stays where
+ * it was and Illinois would take several halvings to bring it in; so when
+ * the next sample would fall within half the tolerance of the last one, it
+ * goes half the tolerance past it instead, and the bracket closes at once
+ * if the root is there. */
+static float refine(struct ray_field *rf, float a, float fa, float b,
                     float fb)
 {
+	const float tol = rf->cp->refine_tol;
 	int side = 0;
-	for (int i = 0; i < CAST_MAX_REFINE && b - a > rf->cp->refine_tol;
-	     i++) {
+	for (int i = 0; i < CAST_MAX_REFINE && b - a > tol; i++) {
 		float m = fa - fb > 0.0f ? a + (b - a) * fa / (fa - fb)
 		                         : 0.5f * (a + b);
 		float fm;
+		if (side == 1 && m - a < 0.5f * tol) {
+			m = a + 0.5f * tol;
+		} else if (side == -1 && b - m < 0.5f * tol) {
+			m = b - 0.5f * tol;
+		}
 		if (!(m > a && m < b)) {
 			m = 0.5f * (a + b);
 			if (!(m > a && m < b)) {
@@ -155,7 +200,8 @@ static bool leaf_root(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
 	struct {
 		float a, b;
 	} st[CAST_MAX_LEVELS + 2];
-	struct ray_field rf = {c->s, m, o, d, cp, true, &hit->evals};
+	struct ray_field rf = {c->s, m,    o,     d, cp,
+	                       true, &hit->evals, false, {0}};
 	struct bc_svo_region rg;
 	uint32_t n = 0, sp = 0;
 	for (uint32_t w = 0; w < m->nwords; w++) {
@@ -214,6 +260,79 @@ static bool leaf_root(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
 	return false;
 }
 
+/*
+ * A leaf whose variant is 1-Lipschitz (no inexact primitive, no blend: svo.h,
+ * rpn->steep) is searched by stepping, the same test as bisection made once
+ * per sample: the variant at t' >= t is at least f(t) - (t' - t), so no
+ * point of [t, t + s], s = f(t) - c(tb), drops below the band c <= c(tb).
+ * For such a variant the interval of a segment in IA is that Lipschitz
+ * enclosure anyway (range_tmpl.h), so each bisection level cost a range
+ * evaluation of every term to learn what one point evaluation tells.
+ *
+ * Once s is shorter than a pixel footprint w, the next sample goes w
+ * ahead, or a little past t + f(t) where that is nearer (the crossing of a
+ * surface that faces the ray). That sample either lies below the band,
+ * and the bracket it closes is refined as bisection refines its last one
+ * (at once to the field's zero when the field is already negative there:
+ * the band's entry and the crossing settle() would march to then lie in
+ * one pixel-wide bracket), or above it, and the stretch between the two
+ * samples is at most a pixel wide with both ends above the band:
+ * bisection drops such a bracket too. After STEP_MAX samples interval
+ * bisection takes over the rest of the segment.
+ */
+static bool leaf_step(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
+                      const float o[3], const float d[3], float ta, float tb,
+                      const struct bc_svo_cast_params *cp,
+                      struct bc_svo_hit *hit, float *t_out, bool *settled)
+{
+	struct ray_field rf = {c->s, m,    o,     d, cp,
+	                       true, &hit->evals, false, {0}};
+	float cmax = bc_svo_hit_band(cp, tb), t = ta, g = field_at(&rf, ta);
+	if (g <= 0.0f) {
+		*t_out = ta;
+		return true;
+	}
+	for (int i = 0; i < STEP_MAX; i++) {
+		/* g = f - c(t), so f - c(tb) = g + c(t) - c(tb). */
+		float safe = STEP_SAFE * (g + bc_svo_hit_band(cp, t) - cmax);
+		float w = fmaxf(cp->pix_angle * t, cp->min_step);
+		float q = t + safe, gq;
+		if (!(safe > 0.0f)) {
+			safe = 0.0f; /* the band widens ahead: w decides */
+		}
+		if (safe < w) {
+			/* Close to the band: where a surface faces the
+			 * ray, the field's own value is the distance to
+			 * it, and a sample a little past that lands beyond
+			 * the crossing and brackets it tightly. */
+			q = t + fminf(w, 1.125f * (g + bc_svo_hit_band(cp, t)));
+		}
+		if (!(q > t)) {
+			break; /* float resolution: bisection decides */
+		}
+		q = fminf(q, tb);
+		gq = field_at(&rf, q);
+		if (gq <= 0.0f) {
+			float fq = gq + bc_svo_hit_band(cp, q);
+			if (fq <= 0.0f) {
+				float ft = g + bc_svo_hit_band(cp, t);
+				rf.banded = false;
+				*t_out = refine(&rf, t, ft, q, fq);
+				*settled = true;
+				return true;
+			}
+			*t_out = refine(&rf, t, g, q, gq);
+			return true;
+		}
+		if (!(q < tb)) {
+			return false;
+		}
+		t = q;
+		g = gq;
+	}
+	return leaf_root(c, m, o, d, t, tb, cp, hit, t_out);
+}
+
 /* The ray passes a surface by without crossing it: the field along it has
  * a minimum in [a, b] (the value at a, va > 0, and at b are above the
  * samples inside). Golden section search narrows the bracket to the
@@ -223,7 +342,7 @@ static bool leaf_root(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
  * keeps the sign of f - c for every level c of the band, hence the value
  * of f wherever it lies in the band), so the minimum found is the true
  * field's. */
-static float closest(const struct ray_field *rf, float a, float va, float b)
+static float closest(struct ray_field *rf, float a, float va, float b)
 {
 	const float g = 0.618034f;
 	float c = b - g * (b - a), e = a + g * (b - a);
@@ -276,7 +395,7 @@ static float closest(const struct ray_field *rf, float a, float va, float b)
  * bump after it), the march at most 64 bands deep (beyond that the ray is
  * so oblique that any point of it is as good a depth) and never past tb,
  * the ray's exit from the octree. */
-static float settle(const struct ray_field *rf, float th, float ta, float tb)
+static float settle(struct ray_field *rf, float th, float ta, float tb)
 {
 	const struct bc_svo_cast_params *cp = rf->cp;
 	float band = bc_svo_hit_band(cp, th);
@@ -382,7 +501,7 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
 	struct bc_svo_cmask mask;
 	uint32_t sp = 0, terms = 0;
 	float th = 0.0f, ta = t0, tb = t1;
-	bool found = false;
+	bool found = false, settled = false;
 	memset(hit, 0, sizeof(*hit));
 	hit->prim = BC_NONE;
 	if (!clip(s->lo, s->hi, o, d, &ta, &tb)) {
@@ -409,8 +528,12 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
 				mask.pairs = s->pool.v + 2u * (size_t)lf->off;
 				mask.nwords = lf->npairs;
 				terms = lf->nterms;
-				found = leaf_root(c, &mask, o, d, e.ta, e.tb,
-				                  cp, hit, &th);
+				found = lf->flags & BC__SVO_LEAF_LIP1
+				            ? leaf_step(c, &mask, o, d, e.ta,
+				                        e.tb, cp, hit, &th,
+				                        &settled)
+				            : leaf_root(c, &mask, o, d, e.ta,
+				                        e.tb, cp, hit, &th);
 			}
 			continue;
 		}
@@ -455,8 +578,11 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
 	}
 	hit->leaf_terms = terms;
 	{
-		struct ray_field rf = {s, NULL, o, d, cp, false, &hit->evals};
-		th = settle(&rf, th, ta, tb);
+		struct ray_field rf = {s,     NULL,        o,     d, cp,
+		                       false, &hit->evals, false, {0}};
+		if (!settled) {
+			th = settle(&rf, th, ta, tb);
+		}
 	}
 	hit->t = th;
 	hit->mask = mask;

@@ -51,8 +51,9 @@ int bc_svo_rpn_init(struct bc_svo_rpn *out, const struct bc_lin *l)
 	out->prim_id = bc_calloc(l->nprims, sizeof(*out->prim_id));
 	out->prim_size = bc_calloc(l->nprims, sizeof(*out->prim_size));
 	out->color = bc_calloc(l->nprims, sizeof(*out->color));
+	out->steep = bc_calloc((n + 31u) / 32u, sizeof(*out->steep));
 	if (!out->terms || !out->rec || !out->prim_id || !out->prim_size ||
-	    !out->color) {
+	    !out->color || !out->steep) {
 		bc_svo_rpn_finish(out);
 		return BC_ENOMEM;
 	}
@@ -73,6 +74,13 @@ int bc_svo_rpn_init(struct bc_svo_rpn *out, const struct bc_lin *l)
 			tm->rec = prec;
 			memcpy(out->rec + prec, src,
 			       BC_SVO_PRIM_REC * sizeof(float));
+			{
+				const struct bc_prim_info *info =
+				    bc_prim_info((enum bc_prim)tm->kind);
+				if (!info || !info->exact) {
+					out->steep[t >> 5] |= 1u << (t & 31u);
+				}
+			}
 			prec += BC_SVO_PRIM_REC;
 			fst[sp++] = t++;
 			most = sp > most ? sp : most;
@@ -101,6 +109,9 @@ int bc_svo_rpn_init(struct bc_svo_rpn *out, const struct bc_lin *l)
 			/* Sharp records hold zeros: bc_op_eval ignores them. */
 			out->rec[orec] = bc_op_is_smooth(k) ? src[0] : 0.0f;
 			out->rec[orec + 1] = bc_op_is_smooth(k) ? src[1] : 0.0f;
+			if (bc_op_is_smooth(k)) {
+				out->steep[t >> 5] |= 1u << (t & 31u);
+			}
 			orec += 2;
 			t++;
 			sp--;
@@ -140,6 +151,7 @@ void bc_svo_rpn_finish(struct bc_svo_rpn *r)
 	bc_free(r->prim_id);
 	bc_free(r->prim_size);
 	bc_free(r->color);
+	bc_free(r->steep);
 	memset(r, 0, sizeof(*r));
 }
 
@@ -252,8 +264,16 @@ static inline void step(const struct bc_svo_rpn *r, uint32_t i, float *st,
 	default: {
 		const float *rec = r->rec + t->rec;
 		float f1 = st[s - 1], f0 = st[s - 2];
-		st[s - 2] =
-		    bc_op_eval((enum bc_op)t->kind, rec[0], rec[1], f0, f1);
+		/* Sharp operators inline, as fminf and fmaxf answer (a NaN
+		 * operand yields the other); blends through ops.c. */
+		if (t->kind == BC_OP_UNION) {
+			st[s - 2] = f1 < f0 || f0 != f0 ? f1 : f0;
+		} else if (t->kind == BC_OP_INTERSECTION) {
+			st[s - 2] = f1 > f0 || f0 != f0 ? f1 : f0;
+		} else {
+			st[s - 2] = bc_op_eval((enum bc_op)t->kind, rec[0],
+			                       rec[1], f0, f1);
+		}
 		if (ids) {
 			/* The operand the value follows, as eval.c decides. */
 			bool right = t->kind == BC_OP_UNION ||

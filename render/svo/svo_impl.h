@@ -77,6 +77,11 @@ static inline float bc__svo_prim_eval(const struct bc_svo_rpn *r,
 	float x = rec[0] * p[0] + rec[1] * p[1] + rec[2] * p[2] + rec[3];
 	float y = rec[4] * p[0] + rec[5] * p[1] + rec[6] * p[2] + rec[7];
 	float z = rec[8] * p[0] + rec[9] * p[1] + rec[10] * p[2] + rec[11];
+	if (t->kind == BC_PRIM_SPHERE) {
+		/* The commonest kind without the call and the switch:
+		 * prim.c's formula, operation for operation. */
+		return sqrtf(x * x + y * y + z * z) - rec[12];
+	}
 	return bc_prim_sdf((enum bc_prim)t->kind, rec + 12, x, y, z);
 }
 
@@ -197,13 +202,19 @@ struct bc__svo_node {
 	uint32_t leaf;  /* leaf record of a leaf */
 };
 
+enum {
+	/* The leaf's variant is 1-Lipschitz (no term of rpn->steep): the
+	 * caster may step through it by its value. */
+	BC__SVO_LEAF_LIP1 = 1u,
+};
+
 struct bc__svo_leaf {
 	uint32_t off;    /* first pair in the pool */
 	uint32_t npairs; /* non-zero mask words */
 	uint32_t nterms;
 	uint8_t state;
 	uint8_t depth;
-	uint16_t pad;
+	uint16_t flags; /* BC__SVO_LEAF_* */
 	float value;
 };
 

@@ -103,6 +103,12 @@ struct bc_svo_rpn {
 	float *prim_size;   /* half diagonal of primitive k's ABV box: the
 	                       length scale of its field (rounding margins) */
 	float (*color)[3];  /* colour of primitive k */
+	uint32_t *steep;    /* dense mask of the terms that may make a
+	                       variant steeper than 1-Lipschitz: primitives
+	                       whose field is not an exact distance, smooth
+	                       operators. A variant without any is
+	                       1-Lipschitz (min, max and negation keep the
+	                       bound), and the caster steps through it. */
 	float lo[3], hi[3]; /* the tree's AABB (bc_lin lo/hi) */
 	float size;         /* its diagonal */
 };
@@ -241,6 +247,9 @@ struct bc_svo_opts {
 	uint32_t max_depth;        /* <= BC_SVO_MAX_DEPTH */
 	float band;                /* hit thickness preserved (0: sign only) */
 	uint64_t max_bytes;        /* memory budget */
+	bool no_step; /* the caster searches every leaf by interval bisection
+	                 (thesis Alg. 5.7), 1-Lipschitz ones included: what
+	                 the tests and benchmarks compare stepping with */
 };
 
 struct bc_svo_stats {
@@ -258,6 +267,8 @@ struct bc_svo_stats {
 	double build_ms;
 	uint32_t stalled; /* leaves kept over tau because splitting
 	                     stopped removing terms (octree.c) */
+	uint32_t stepped; /* active leaves whose variant is 1-Lipschitz: the
+	                     caster steps through them (cast.c) */
 	bool truncated;   /* the memory budget stopped subdivision */
 };
 
@@ -339,9 +350,10 @@ float bc_svo_hit_band(const struct bc_svo_cast_params *cp, float t);
 
 /* Thesis Alg. 5.7-5.8: casts o + t d (d unit), t in [t0, t1], through the
  * leaves of the octree front to back. In a leaf holding surface, interval
- * bisection in the octree's arithmetic brackets the first point where the
- * field drops below the hit band, and the Illinois variant of the secant
- * method refines it; the depth is then refined to the field's zero
+ * bisection in the octree's arithmetic (or, where the leaf's variant is
+ * 1-Lipschitz, steps by its value: docs/svo.md) brackets the first point
+ * where the field drops below the hit band, and the Illinois variant of
+ * the secant method refines it; the depth is then refined to the field's zero
  * crossing behind the band's entry, or on a ray that only grazes the
  * surface to its closest approach (docs/svo.md). Returns true and fills *hit on a
  * hit; hit->evals and range_evals are filled either way. */
