@@ -37,3 +37,35 @@ grep -q 'calling init:.*libOpenImageIO' "$tmp/render.libs" ||
   fail "render to a PNG did not load OpenImageIO"
 [ -s "$tmp/out.png" ] || fail "render wrote no PNG"
 echo "ok   render loads OpenImageIO on first use and writes the PNG"
+
+# libOSMesa (and the libLLVM it brings) is the gl backend's last resort,
+# opened with dlopen when a context is asked of it (render/gl/osmesa.c).
+# Sanitizer builds link it on purpose (render/gl/CMakeLists.txt says why):
+# there the start-up check does not apply.
+if ldd "$cli" 2> /dev/null | grep -q 'libOSMesa'; then
+  echo "ok   (this build links libOSMesa: the sanitizer configuration)"
+  exit 0
+fi
+if grep -qE 'calling init:.*lib(OSMesa|LLVM)' "$tmp/libs"; then
+  fail "blobcast --help loads libOSMesa or libLLVM"
+fi
+echo "ok   --help loads neither libOSMesa nor libLLVM"
+LD_DEBUG=libs "$cli" render default --size 16x16 --backend gl \
+  --gl-platform osmesa --quiet --out "$tmp/gl.png" > /dev/null \
+  2> "$tmp/gl.libs"
+rc=$?
+if grep -q 'is not built into this blobcast' "$tmp/gl.libs"; then
+  echo "ok   (no gl backend in this build)"
+  exit 0
+fi
+if [ "$rc" -ne 0 ]; then
+  # A machine without libOSMesa: the failure must say why.
+  grep -q 'OSMesa: cannot load' "$tmp/gl.libs" ||
+    fail "render --gl-platform osmesa: $(grep -v '^ *[0-9]*:' "$tmp/gl.libs" | tail -n 3)"
+  echo "ok   no libOSMesa here, and the error says so"
+  exit 0
+fi
+grep -q 'calling init:.*libOSMesa' "$tmp/gl.libs" ||
+  fail "render --gl-platform osmesa did not load libOSMesa"
+[ -s "$tmp/gl.png" ] || fail "the OSMesa render wrote no PNG"
+echo "ok   render --gl-platform osmesa opens libOSMesa on first use"
