@@ -313,6 +313,43 @@ bool bc_args_given(const struct bc_args *a, const char *name)
 	return false;
 }
 
+/* Writes the value the option's destination holds now (the command's
+ * default when help is printed before parsing) into buf. */
+static void default_text(const struct bc_opt *o, char *buf, size_t cap)
+{
+	snprintf(buf, cap, "none");
+	if (!o->dst) {
+		return;
+	}
+	switch (o->kind) {
+	case BC_OPT_U32:
+		snprintf(buf, cap, "%u", (unsigned)*(const uint32_t *)o->dst);
+		break;
+	case BC_OPT_U64:
+		snprintf(buf, cap, "%llu",
+			 (unsigned long long)*(const uint64_t *)o->dst);
+		break;
+	case BC_OPT_F32:
+		snprintf(buf, cap, "%g", (double)*(const float *)o->dst);
+		break;
+	case BC_OPT_STRING:
+		if (*(const char *const *)o->dst) {
+			snprintf(buf, cap, "%s", *(const char *const *)o->dst);
+		}
+		break;
+	case BC_OPT_ENUM:
+		for (const struct bc_opt_name *n = o->names; n && n->name; n++) {
+			if (n->value == *(const int *)o->dst) {
+				snprintf(buf, cap, "%s", n->name);
+				break;
+			}
+		}
+		break;
+	default:
+		break;
+	}
+}
+
 /* Prints text, each line after the first indented to indent columns, with
  * "{range}" and "{choices}" replaced for option o (NULL: no
  * replacement). */
@@ -325,6 +362,10 @@ static void print_text(FILE *out, const char *text, int indent,
 			range_text(o, buf, sizeof(buf));
 			fputs(buf, out);
 			p += 6;
+		} else if (o && strncmp(p, "{default}", 9) == 0) {
+			default_text(o, buf, sizeof(buf));
+			fputs(buf, out);
+			p += 8;
 		} else if (o && strncmp(p, "{choices}", 9) == 0) {
 			choices_text(o, " | ", buf, sizeof(buf));
 			fputs(buf, out);

@@ -162,15 +162,15 @@ int bc_num_size(const char *s, uint32_t lo, uint32_t hi, uint32_t *w,
 	return 0;
 }
 
-int bc_num_vec3(const char *s, float out[3])
+int bc_num_f32s(const char *s, float *out, int n)
 {
 	char part[64];
-	float v[3];
-	if (!s) {
+	float v[BC_NUM_MAX_FLOATS];
+	if (!s || n < 1 || n > BC_NUM_MAX_FLOATS) {
 		return BC_EINVAL;
 	}
-	for (int i = 0; i < 3; i++) {
-		const char *comma = i < 2 ? strchr(s, ',') : s + strlen(s);
+	for (int i = 0; i < n; i++) {
+		const char *comma = i < n - 1 ? strchr(s, ',') : s + strlen(s);
 		int rc;
 		if (!comma ||
 		    !copy_part(part, sizeof(part), s, (size_t)(comma - s))) {
@@ -181,8 +181,11 @@ int bc_num_vec3(const char *s, float out[3])
 		}
 		s = comma + 1;
 	}
-	out[0] = v[0];
-	out[1] = v[1];
-	out[2] = v[2];
+	memcpy(out, v, (size_t)n * sizeof(v[0]));
 	return 0;
+}
+
+int bc_num_vec3(const char *s, float out[3])
+{
+	return bc_num_f32s(s, out, 3);
 }

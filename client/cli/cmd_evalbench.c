@@ -11,7 +11,6 @@
 #include "cmd_evalbench.h"
 #include "cmd_render.h"
 
-#include <errno.h>
 #include <jansson.h>
 #include <stdbool.h>
 #include <stdint.h>
@@ -20,11 +19,11 @@
 #include <string.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/args.h"
 #include "blobcast/blobtree.h"
 #include "blobcast/scene.h"
 #include "blobcast/svo.h"
 
-#define EXIT_USAGE 2
 /* Default and largest number of timed points: a million points take a
  * fraction of a second through pruned variants; 10^8 bounds the points'
  * memory (1.2 GB) and any run's length. */
@@ -38,139 +37,82 @@ struct args {
 	uint64_t seed;
 };
 
-static void usage(FILE *f)
-{
-	fprintf(
-	    f,
-	    "usage: blobcast eval-bench SCENE [options]\n"
-	    "\n"
-	    "Measures interval pruning and pruned evaluation (render/svo,\n"
-	    "after Chulkov 2025) on SCENE -- a JSON scene file, '-' for\n"
-	    "stdin, or 'default' -- and prints the results as JSON.\n"
-	    "\n"
-	    "  --range A        ia | aa | revaa: the range arithmetic that\n"
-	    "                   prunes (default ia)\n"
-	    "  --grid N         prune a uniform N^3 grid over the scene's "
-	    "box,\n"
-	    "                   each voxel from the whole tree, 1..%u\n"
-	    "  --threshold T    build the adaptive octree with node-count\n"
-	    "                   threshold T (default %u; the default mode)\n"
-	    "  --max-depth D    octree depth limit, 1..%u (default %u)\n"
-	    "  --points N       random points timed, 1..%u (default %u)\n"
-	    "  --seed S         seed of the points (default 1)\n"
-	    "  --help           this text\n"
-	    "\n"
-	    "Times are on one thread. Output fields: terms (RPN length),\n"
-	    "prune_ms_per_voxel / prune_ms_per_node, eval_ns_pruned (finding\n"
-	    "the variant and evaluating it), eval_ns_locate, eval_ns_full\n"
-	    "(the whole tree), speedup = full / pruned, avg_depth and\n"
-	    "avg_terms (over volume: a random point's leaf), max_terms,\n"
-	    "build_ms, bytes, sign_mismatches (always 0).\n",
-	    BC_SVO_MAX_GRID, BC_SVO_DEFAULT_THRESHOLD, BC_SVO_MAX_DEPTH,
-	    BC_SVO_DEFAULT_MAX_DEPTH, EB_MAX_POINTS, EB_DEFAULT_POINTS);
-}
+static const struct bc_opt_name range_names[] = {
+	{"ia", BC_RANGE_IA}, {"aa", BC_RANGE_AA}, {"revaa", BC_RANGE_REVAA},
+	{NULL, 0}};
 
-static bool parse_u64(const char *s, uint64_t lo, uint64_t hi, uint64_t *out)
+/* Returns 0 to go on, or the exit status (0 after --help, 2 on a bad
+ * argument) with *done set. */
+static int parse(int argc, char **argv, struct args *a, bool *done)
 {
-	char *end = NULL;
-	unsigned long long v;
-	if (!s || *s < '0' || *s > '9') {
-		return false;
-	}
-	errno = 0;
-	v = strtoull(s, &end, 10);
-	if (errno || *end != '\0' || v < lo || v > hi) {
-		return false;
-	}
-	*out = (uint64_t)v;
-	return true;
-}
-
-static bool parse_u32(const char *s, uint32_t lo, uint32_t hi, uint32_t *out)
-{
-	uint64_t v;
-	if (!parse_u64(s, lo, hi, &v)) {
-		return false;
-	}
-	*out = (uint32_t)v;
-	return true;
-}
-
-/* Returns 0 to go on, -1 after --help, EXIT_USAGE on a bad argument. */
-static int parse(int argc, char **argv, struct args *a)
-{
-	bool thr = false;
+	int arith = BC_SVO_DEFAULT_ARITH;
+	/* Defaults first: the help prints them from the table. */
 	memset(a, 0, sizeof(*a));
-	a->arith = BC_SVO_DEFAULT_ARITH;
 	a->points = EB_DEFAULT_POINTS;
 	a->seed = 1;
-	for (int i = 1; i < argc; i++) {
-		const char *o = argv[i];
-		const char *v = i + 1 < argc ? argv[i + 1] : NULL;
-		bool ok = true, takes = true;
-		if (strcmp(o, "--help") == 0 || strcmp(o, "-h") == 0) {
-			usage(stdout);
-			return -1;
-		}
-		if (strcmp(o, "--range") == 0) {
-			if (v && strcmp(v, "ia") == 0) {
-				a->arith = BC_RANGE_IA;
-			} else if (v && strcmp(v, "aa") == 0) {
-				a->arith = BC_RANGE_AA;
-			} else if (v && strcmp(v, "revaa") == 0) {
-				a->arith = BC_RANGE_REVAA;
-			} else {
-				ok = false;
-			}
-		} else if (strcmp(o, "--grid") == 0) {
-			ok = parse_u32(v, 1, BC_SVO_MAX_GRID, &a->grid);
-		} else if (strcmp(o, "--threshold") == 0) {
-			ok = parse_u32(v, 1, UINT32_MAX, &a->threshold);
-			thr = true;
-		} else if (strcmp(o, "--max-depth") == 0) {
-			ok = parse_u32(v, 1, BC_SVO_MAX_DEPTH, &a->max_depth);
-		} else if (strcmp(o, "--points") == 0) {
-			ok = parse_u32(v, 1, EB_MAX_POINTS, &a->points);
-		} else if (strcmp(o, "--seed") == 0) {
-			ok = parse_u64(v, 0, UINT64_MAX, &a->seed);
-		} else if (o[0] == '-' && o[1] != '\0') {
-			fprintf(stderr,
-			        "blobcast eval-bench: unknown option \"%s\" "
-			        "(see --help)\n",
-			        o);
-			return EXIT_USAGE;
-		} else {
-			takes = false;
-			if (a->scene) {
-				fprintf(stderr,
-				        "blobcast eval-bench: one scene "
-				        "only (\"%s\" and \"%s\")\n",
-				        a->scene, o);
-				return EXIT_USAGE;
-			}
-			a->scene = o;
-		}
-		if (!ok) {
-			fprintf(stderr,
-			        "blobcast eval-bench: %s needs a valid value, "
-			        "got \"%s\" (see --help)\n",
-			        o, v ? v : "nothing");
-			return EXIT_USAGE;
-		}
-		i += takes;
+	a->threshold = BC_SVO_DEFAULT_THRESHOLD;
+	a->max_depth = BC_SVO_DEFAULT_MAX_DEPTH;
+	const struct bc_opt opts[] = {
+		{.name = "range", .kind = BC_OPT_ENUM, .dst = &arith,
+		 .arg = "A",
+		 .help = "{choices}: the range arithmetic that\n"
+			 "prunes (default {default})",
+		 .names = range_names},
+		{.name = "grid", .kind = BC_OPT_U32, .dst = &a->grid, .lo = 1,
+		 .hi = BC_SVO_MAX_GRID, .arg = "N",
+		 .help = "prune a uniform N^3 grid over the scene's box,\n"
+			 "each voxel from the whole tree, {range}"},
+		{.name = "threshold", .kind = BC_OPT_U32, .dst = &a->threshold,
+		 .lo = 1, .hi = UINT32_MAX, .arg = "T",
+		 .help = "build the adaptive octree with node-count\n"
+			 "threshold T, {range} (default {default};\n"
+			 "the default mode)"},
+		{.name = "max-depth", .kind = BC_OPT_U32, .dst = &a->max_depth,
+		 .lo = 1, .hi = BC_SVO_MAX_DEPTH, .arg = "D",
+		 .help = "octree depth limit, {range} (default {default})"},
+		{.name = "points", .kind = BC_OPT_U32, .dst = &a->points,
+		 .lo = 1, .hi = EB_MAX_POINTS, .arg = "N",
+		 .help = "random points timed, {range}\n(default {default})"},
+		{.name = "seed", .kind = BC_OPT_U64, .dst = &a->seed,
+		 .arg = "S", .help = "seed of the points (default {default})"},
+		{.kind = BC_OPT_INVALID},
+	};
+	struct bc_args p = {
+		.prog = "blobcast eval-bench",
+		.usage = "blobcast eval-bench SCENE [options]",
+		.about = "Measures interval pruning and pruned evaluation "
+			 "(render/svo,\nafter Chulkov 2025) on SCENE -- a JSON "
+			 "scene file, '-' for\nstdin, or 'default' -- and "
+			 "prints the results as JSON.",
+		.footer = "Times are on one thread. Output fields: terms (RPN "
+			  "length),\nprune_ms_per_voxel / prune_ms_per_node, "
+			  "eval_ns_pruned (finding\nthe variant and evaluating "
+			  "it), eval_ns_locate, eval_ns_full\n(the whole tree), "
+			  "speedup = full / pruned, avg_depth and\navg_terms "
+			  "(over volume: a random point's leaf), max_terms,\n"
+			  "build_ms, bytes, sign_mismatches (always 0).",
+		.opts = opts};
+	*done = true;
+	if (bc_args_parse(&p, argc, argv)) {
+		return p.status;
 	}
-	if (!a->scene) {
-		fprintf(stderr, "blobcast eval-bench: which scene? (see "
-		                "--help)\n");
-		return EXIT_USAGE;
+	a->arith = (enum bc_range_arith)arith;
+	if (p.npos == 0) {
+		return bc_args_error(&p, "which scene?");
 	}
-	if (a->grid && (thr || a->max_depth)) {
-		fprintf(stderr,
-		        "blobcast eval-bench: --grid measures a uniform "
-		        "grid; --threshold and --max-depth are for the "
-		        "octree\n");
-		return EXIT_USAGE;
+	if (p.npos > 1) {
+		return bc_args_error(&p, "one scene only ('%s' and '%s')",
+				     p.pos[0], p.pos[1]);
 	}
+	a->scene = p.pos[0];
+	if (a->grid &&
+	    (bc_args_given(&p, "threshold") ||
+	     bc_args_given(&p, "max-depth"))) {
+		return bc_args_error(&p, "--grid measures a uniform grid; "
+					 "--threshold and --max-depth are for "
+					 "the octree");
+	}
+	*done = false;
 	return 0;
 }
 
@@ -299,10 +241,12 @@ int bc_cli_eval_bench(int argc, char **argv)
 	const struct bc_lin *l;
 	json_t *o = NULL;
 	char *text = NULL;
-	int rc, status = 1;
-	if ((rc = parse(argc, argv, &a))) {
-		return rc < 0 ? 0 : rc;
+	int status = 1;
+	bool done;
+	if ((status = parse(argc, argv, &a, &done)) || done) {
+		return status;
 	}
+	status = 1;
 	if (!(t = bc_tree_create()) || !(o = json_object())) {
 		fprintf(stderr, "blobcast eval-bench: out of memory\n");
 		goto cleanup;

@@ -14,86 +14,91 @@
 #include <string.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/args.h"
 #include "blobcast/blobtree.h"
 #include "blobcast/gen.h"
 #include "blobcast/scene.h"
 
 #define EXIT_USAGE 2
 
-static void usage(FILE *f)
+static const struct bc_opt_name kind_names[] = {
+	{"boxes", BC_GEN_KIND_BOXES},
+	{"spheres", BC_GEN_KIND_SPHERES},
+	{"lenses", BC_GEN_KIND_LENSES},
+	{NULL, 0}};
+static const struct bc_opt_name blend_names[] = {
+	{"sharp", BC_GEN_BLEND_SHARP}, {"smooth", BC_GEN_BLEND_SMOOTH},
+	{NULL, 0}};
+
+struct gen_args {
+	struct bc_gen_opts o;
+	int kind, blend;
+	const char *out;
+};
+
+/* The option table over a; --help is generated from it. */
+#define GEN_OPTS(a)                                                            \
+	{                                                                      \
+		{.name = "level", .kind = BC_OPT_U32, .dst = &(a)->o.level,    \
+		 .lo = 1, .hi = BC_GEN_MAX_LEVEL, .arg = "L",                  \
+		 .help = "fig16 recursion level, {range}"},                    \
+		{.name = "count", .kind = BC_OPT_U32, .dst = &(a)->o.count,    \
+		 .lo = 1, .hi = BC_GEN_MAX_PRIMS, .arg = "N",                  \
+		 .help = "number of instances, primitives or gears,\n"         \
+			 "{range}"},                                           \
+		{.name = "seed", .kind = BC_OPT_U64, .dst = &(a)->o.seed,      \
+		 .arg = "S", .help = "random seed, {range} (default 0)"},      \
+		{.name = "kind", .kind = BC_OPT_ENUM, .dst = &(a)->kind,       \
+		 .arg = "K", .help = "fig18 instance shape: {choices}",        \
+		 .names = kind_names},                                         \
+		{.name = "blend", .kind = BC_OPT_ENUM, .dst = &(a)->blend,     \
+		 .arg = "B", .help = "{choices} operators",                    \
+		 .names = blend_names},                                        \
+		{.name = "teeth", .kind = BC_OPT_U32, .dst = &(a)->o.teeth,    \
+		 .lo = 6, .hi = BC_GEN_MAX_TEETH, .arg = "T",                  \
+		 .help = "teeth of the largest gear, {range}"},                \
+		{.name = "depth", .kind = BC_OPT_U32, .dst = &(a)->o.depth,    \
+		 .lo = 2, .hi = BC_GEN_RANDOM_MAX_DEPTH, .arg = "D",           \
+		 .help = "random: deepest nesting, {range}"},                  \
+		{.name = "out", .kind = BC_OPT_STRING, .dst = &(a)->out,       \
+		 .arg = "FILE",                                                \
+		 .help = "write to FILE instead of stdout (\"-\": stdout)"},   \
+		{.kind = BC_OPT_INVALID},                                      \
+	}
+
+/* The generators and what each takes, between the usage line and the
+ * options; built from bc_gen_list() so it lists every one built in. */
+static const char *gen_about(char *buf, size_t cap)
 {
-	size_t n;
+	size_t n, len;
 	const struct bc_gen_info *g = bc_gen_list(&n);
-	fprintf(f,
-	        "usage: blobcast gen NAME [options] [--out FILE]\n"
-	        "\n"
-	        "Builds a scene and prints it as a JSON scene file (or writes "
-	        "it to FILE,\natomically). The same options always give the "
-	        "same scene.\n"
-	        "\n"
-	        "generators:\n");
-	for (size_t i = 0; i < n; i++) {
-		fprintf(f, "  %s %s\n      %s\n", g[i].name, g[i].usage,
-		        g[i].summary);
+	len = (size_t)snprintf(buf, cap,
+			       "Builds a scene and prints it as a JSON scene "
+			       "file (or writes it to FILE,\natomically). The "
+			       "same options always give the same scene.\n\n"
+			       "generators:\n");
+	for (size_t i = 0; i < n && len < cap; i++) {
+		len += (size_t)snprintf(buf + len, cap - len,
+					"  %s %s\n      %s\n", g[i].name,
+					g[i].usage, g[i].summary);
 	}
-	fprintf(f, "  default\n      the built-in scene blobcastd's new "
-	           "sessions start with\n");
-	fprintf(
-	    f,
-	    "\n"
-	    "options (each generator takes only those listed with it):\n"
-	    "  --level L   fig16 recursion level, 1..%d\n"
-	    "  --count N   number of instances, primitives or gears\n"
-	    "  --seed S    random seed, 0..2^64-1 (default 0)\n"
-	    "  --kind K    fig18 instance shape: boxes, spheres or lenses\n"
-	    "  --blend B   sharp or smooth operators\n"
-	    "  --teeth T   teeth of the largest gear, 6..%u\n"
-	    "  --depth D   random: deepest nesting, 2..%d\n"
-	    "  --out FILE  write to FILE instead of stdout (\"-\": stdout)\n"
-	    "  --help      this text\n",
-	    BC_GEN_MAX_LEVEL, BC_GEN_MAX_TEETH, BC_TREE_MAX_DEPTH);
+	if (len < cap) {
+		snprintf(buf + len, cap - len,
+			 "  default\n      the built-in scene blobcastd's new "
+			 "sessions start with\n\noptions (each generator "
+			 "takes only those listed with it):");
+	}
+	return buf;
 }
 
-/* Parses a decimal unsigned number in [lo, hi]. */
-static bool parse_u64(const char *s, uint64_t lo, uint64_t hi, uint64_t *out)
+static struct bc_args gen_args(const struct bc_opt *opts, char *about,
+			       size_t cap)
 {
-	char *end = NULL;
-	unsigned long long v;
-	if (!s || !*s || *s == '-' || *s == '+') {
-		return false;
-	}
-	errno = 0;
-	v = strtoull(s, &end, 10);
-	if (errno || *end != '\0' || v < lo || v > hi) {
-		return false;
-	}
-	*out = (uint64_t)v;
-	return true;
-}
-
-/* Matches "--name VALUE" and "--name=VALUE"; advances *i past the value. */
-static bool take_value(int argc, char **argv, int *i, const char *name,
-                       const char **value, bool *missing)
-{
-	const char *a = argv[*i];
-	size_t n = strlen(name);
-	if (strncmp(a, name, n) != 0) {
-		return false;
-	}
-	if (a[n] == '=') {
-		*value = a + n + 1;
-		return true;
-	}
-	if (a[n] != '\0') {
-		return false;
-	}
-	if (*i + 1 >= argc) {
-		*missing = true;
-		*value = NULL;
-		return true;
-	}
-	*value = argv[++*i];
-	return true;
+	return (struct bc_args){
+		.prog = "blobcast gen",
+		.usage = "blobcast gen NAME [options] [--out FILE]",
+		.about = gen_about(about, cap),
+		.opts = opts};
 }
 
 static int write_stdout(const char *text)
@@ -109,110 +114,43 @@ static int write_stdout(const char *text)
 
 int bc_cli_gen(int argc, char **argv)
 {
+	struct gen_args a = {.out = NULL};
+	const struct bc_opt opts[] = GEN_OPTS(&a);
+	char about[4096];
+	struct bc_args p = gen_args(opts, about, sizeof(about));
 	struct bc_gen_opts o;
 	struct bc_errinfo ei = {0};
 	struct bc_camera cam;
 	struct bc_tree *t = NULL;
 	const struct bc_gen_info *info;
-	const char *name = NULL, *out = NULL;
+	const char *name, *out;
 	char *text = NULL;
 	int rc, status = 0;
 
-	memset(&o, 0, sizeof(o));
-	for (int i = 1; i < argc; i++) {
-		const char *a = argv[i], *v = NULL;
-		bool missing = false;
-		uint64_t x = 0;
-		if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
-			usage(stdout);
-			return 0;
-		}
-		if (a[0] != '-') {
-			if (name) {
-				fprintf(stderr,
-				        "blobcast gen: one generator only "
-				        "(got \"%s\" and \"%s\")\n",
-				        name, a);
-				return EXIT_USAGE;
-			}
-			name = a;
-			continue;
-		}
-		if (take_value(argc, argv, &i, "--level", &v, &missing)) {
-			if (missing || !parse_u64(v, 1, BC_GEN_MAX_LEVEL, &x)) {
-				goto bad_value;
-			}
-			o.level = (uint32_t)x;
-		} else if (take_value(argc, argv, &i, "--count", &v,
-		                      &missing)) {
-			if (missing || !parse_u64(v, 1, BC_GEN_MAX_PRIMS, &x)) {
-				goto bad_value;
-			}
-			o.count = (uint32_t)x;
-		} else if (take_value(argc, argv, &i, "--seed", &v, &missing)) {
-			if (missing || !parse_u64(v, 0, UINT64_MAX, &x)) {
-				goto bad_value;
-			}
-			o.seed = x;
-		} else if (take_value(argc, argv, &i, "--teeth", &v,
-		                      &missing)) {
-			if (missing || !parse_u64(v, 6, BC_GEN_MAX_TEETH, &x)) {
-				goto bad_value;
-			}
-			o.teeth = (uint32_t)x;
-		} else if (take_value(argc, argv, &i, "--depth", &v,
-		                      &missing)) {
-			if (missing ||
-			    !parse_u64(v, 2, BC_TREE_MAX_DEPTH, &x)) {
-				goto bad_value;
-			}
-			o.depth = (uint32_t)x;
-		} else if (take_value(argc, argv, &i, "--kind", &v, &missing)) {
-			if (missing || (o.kind = bc_gen_kind_from_name(v)) ==
-			                   BC_GEN_KIND_DEFAULT) {
-				goto bad_value;
-			}
-		} else if (take_value(argc, argv, &i, "--blend", &v,
-		                      &missing)) {
-			if (missing || (o.blend = bc_gen_blend_from_name(v)) ==
-			                   BC_GEN_BLEND_DEFAULT) {
-				goto bad_value;
-			}
-		} else if (take_value(argc, argv, &i, "--out", &v, &missing)) {
-			if (missing || !*v) {
-				goto bad_value;
-			}
-			out = v;
-		} else {
-			fprintf(stderr,
-			        "blobcast gen: unknown option \"%s\" (see "
-			        "blobcast gen --help)\n",
-			        a);
-			return EXIT_USAGE;
-		}
-		continue;
-	bad_value:
-		fprintf(stderr,
-		        "blobcast gen: %s needs a valid value%s%s%s (see "
-		        "blobcast gen --help)\n",
-		        a, v ? ", not \"" : "", v ? v : "", v ? "\"" : "");
-		return EXIT_USAGE;
+	if (bc_args_parse(&p, argc, argv)) {
+		return p.status;
 	}
-	if (!name) {
-		fprintf(stderr, "blobcast gen: which generator?\n");
-		usage(stderr);
-		return EXIT_USAGE;
+	if (p.npos == 0) {
+		return bc_args_error(&p, "which generator?");
 	}
+	if (p.npos > 1) {
+		return bc_args_error(&p, "one generator only (got '%s' and "
+					 "'%s')",
+				     p.pos[0], p.pos[1]);
+	}
+	name = p.pos[0];
+	out = a.out;
+	o = a.o;
+	o.kind = (enum bc_gen_kind)a.kind;
+	o.blend = (enum bc_gen_blend)a.blend;
 	if (strcmp(name, "default") == 0) {
 		const char *json = bc_scene_default_json();
 		/* blobcastd's built-in scene, which new sessions start with;
 		 * it takes no generator options. */
 		if (o.level || o.count || o.seed || o.teeth || o.depth ||
 		    o.kind || o.blend) {
-			fprintf(stderr,
-			        "blobcast gen: default takes no options "
-			        "but --out\n");
-			return EXIT_USAGE;
+			return bc_args_error(&p, "default takes no options "
+						 "but --out");
 		}
 		if (!(t = bc_tree_create())) {
 			fprintf(stderr, "blobcast gen: out of memory\n");
@@ -226,11 +164,7 @@ int bc_cli_gen(int argc, char **argv)
 		goto write;
 	}
 	if (!(info = bc_gen_find(name))) {
-		fprintf(stderr,
-		        "blobcast gen: no generator called \"%s\" (see "
-		        "blobcast gen --help)\n",
-		        name);
-		return EXIT_USAGE;
+		return bc_args_error(&p, "no generator called '%s'", name);
 	}
 	if (!(t = bc_tree_create())) {
 		fprintf(stderr, "blobcast gen: out of memory\n");

@@ -6,13 +6,14 @@
  */
 #include "cmd_mesh.h"
 
-#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
+#include "blobcast/args.h"
 #include "blobcast/blobtree.h"
+#include "blobcast/clock.h"
+#include "blobcast/num.h"
 #include "blobcast/mesh.h"
 #include "cmd_render.h"
 
@@ -23,114 +24,78 @@ struct mesh_args {
 	bool bounds, quiet;
 };
 
-static void usage(FILE *f)
+/* Returns 0 to go on, or the exit status (0 after --help, 2 on a bad
+ * argument) with *done set. */
+static int parse(int argc, char **argv, struct mesh_args *a, bool *done)
 {
-	fprintf(f,
-	        "usage: blobcast mesh SCENE --out FILE [options]\n"
-	        "\n"
-	        "Writes a closed triangle mesh of SCENE's surface. SCENE is a\n"
-	        "JSON scene file, '-' to read one from stdin, or 'default'.\n"
-	        "The surface is sampled on a uniform grid (surface nets: one\n"
-	        "vertex per grid cell the surface crosses, placed on the\n"
-	        "surface within its cell); only cells near the surface are\n"
-	        "evaluated. Triangles are wound counter-clockwise seen from\n"
-	        "outside; vertices carry their primitive's colour (OBJ, PLY).\n"
-	        "\n"
-	        "  --out FILE          .obj (text), .ply (binary) or .stl\n"
-	        "                      (binary), by extension (required)\n"
-	        "  --resolution N      grid cells along the box's longest side,\n"
-	        "                      2..%u (default %u)\n"
-	        "  --bounds X0,Y0,Z0,X1,Y1,Z1\n"
-	        "                      the box to mesh (default: the scene's\n"
-	        "                      box and two cells of margin); a solid\n"
-	        "                      cut by it is closed by its faces\n"
-	        "  --quiet             no progress and no summary line\n"
-	        "  -h, --help          this help\n",
-	        BC_MESH_MAX_RESOLUTION, BC_MESH_DEFAULT_RESOLUTION);
-}
-
-static int parse(int argc, char **argv, struct mesh_args *a)
-{
+	const char *bounds = NULL;
+	const struct bc_opt opts[] = {
+		{.name = "out", .kind = BC_OPT_STRING, .dst = &a->out,
+		 .arg = "FILE",
+		 .help = ".obj (text), .ply (binary) or .stl\n"
+			 "(binary), by extension (required)",
+		 .flags = BC_OPT_REQUIRED},
+		{.name = "resolution", .kind = BC_OPT_U32, .dst = &a->resolution,
+		 .lo = 2, .hi = BC_MESH_MAX_RESOLUTION, .arg = "N",
+		 .help = "grid cells along the box's longest side,\n"
+			 "{range} (default {default})"},
+		{.name = "bounds", .kind = BC_OPT_STRING, .dst = &bounds,
+		 .arg = "X0,Y0,Z0,X1,Y1,Z1",
+		 .help = "the box to mesh (default: the scene's\n"
+			 "box and two cells of margin); a solid\n"
+			 "cut by it is closed by its faces"},
+		{.name = "quiet", .kind = BC_OPT_FLAG, .dst = &a->quiet,
+		 .help = "no progress and no summary line"},
+		{.kind = BC_OPT_INVALID},
+	};
+	struct bc_args p = {
+		.prog = "blobcast mesh",
+		.usage = "blobcast mesh SCENE --out FILE [options]",
+		.about = "Writes a closed triangle mesh of SCENE's surface. "
+			 "SCENE is a\nJSON scene file, '-' to read one from "
+			 "stdin, or 'default'.\nThe surface is sampled on a "
+			 "uniform grid (surface nets: one\nvertex per grid "
+			 "cell the surface crosses, placed on the\nsurface "
+			 "within its cell); only cells near the surface are\n"
+			 "evaluated. Triangles are wound counter-clockwise "
+			 "seen from\noutside; vertices carry their primitive's "
+			 "colour (OBJ, PLY).",
+		.opts = opts};
+	float b[6];
 	memset(a, 0, sizeof(*a));
-	for (int i = 1; i < argc; i++) {
-		const char *s = argv[i];
-		const char *v = i + 1 < argc ? argv[i + 1] : NULL;
-		if (strcmp(s, "-h") == 0 || strcmp(s, "--help") == 0) {
-			usage(stdout);
-			return -1;
-		}
-		if (strcmp(s, "--quiet") == 0) {
-			a->quiet = true;
-		} else if (strcmp(s, "--out") == 0 && v) {
-			a->out = v;
-			i++;
-		} else if (strcmp(s, "--resolution") == 0 && v) {
-			char *end;
-			unsigned long n;
-			errno = 0;
-			n = strtoul(v, &end, 10);
-			if (errno || *end || end == v || n < 2 ||
-			    n > BC_MESH_MAX_RESOLUTION) {
-				fprintf(stderr,
-				        "blobcast mesh: --resolution '%s' is "
-				        "not a whole number in 2..%u\n",
-				        v, BC_MESH_MAX_RESOLUTION);
-				return 2;
-			}
-			a->resolution = (uint32_t)n;
-			i++;
-		} else if (strcmp(s, "--bounds") == 0 && v) {
-			float b[6];
-			char tail;
-			if (sscanf(v, "%f,%f,%f,%f,%f,%f%c", &b[0], &b[1], &b[2],
-			           &b[3], &b[4], &b[5], &tail) != 6 ||
-			    !(b[3] > b[0] && b[4] > b[1] && b[5] > b[2])) {
-				fprintf(stderr,
-				        "blobcast mesh: --bounds '%s' is not "
-				        "X0,Y0,Z0,X1,Y1,Z1 with each 1 above "
-				        "its 0\n",
-				        v);
-				return 2;
-			}
-			memcpy(a->lo, b, sizeof(a->lo));
-			memcpy(a->hi, b + 3, sizeof(a->hi));
-			a->bounds = true;
-			i++;
-		} else if (s[0] == '-' && s[1] != '\0') {
-			fprintf(stderr,
-			        "blobcast mesh: unknown option or missing value "
-			        "'%s' (see 'blobcast mesh --help')\n",
-			        s);
-			return 2;
-		} else if (!a->scene) {
-			a->scene = s;
-		} else {
-			fprintf(stderr, "blobcast mesh: a second scene '%s'\n",
-			        s);
-			return 2;
-		}
+	a->resolution = BC_MESH_DEFAULT_RESOLUTION;
+	*done = true;
+	if (bc_args_parse(&p, argc, argv)) {
+		return p.status;
 	}
-	if (!a->scene || !a->out) {
-		fprintf(stderr, "blobcast mesh: %s is required (see 'blobcast "
-		                "mesh --help')\n",
-		        a->scene ? "--out" : "SCENE");
-		return 2;
+	if (p.npos == 0) {
+		return bc_args_error(&p, "SCENE is required");
+	}
+	if (p.npos > 1) {
+		return bc_args_error(&p, "a second scene '%s'", p.pos[1]);
+	}
+	a->scene = p.pos[0];
+	if (bounds) {
+		if (bc_num_f32s(bounds, b, 6) ||
+		    !(b[3] > b[0] && b[4] > b[1] && b[5] > b[2])) {
+			return bc_args_error(&p,
+					     "--bounds '%s' is not "
+					     "X0,Y0,Z0,X1,Y1,Z1 with each 1 "
+					     "above its 0",
+					     bounds);
+		}
+		memcpy(a->lo, b, sizeof(a->lo));
+		memcpy(a->hi, b + 3, sizeof(a->hi));
+		a->bounds = true;
 	}
 	if (bc_mesh_format_of(a->out) == BC_MESH_FORMAT_INVALID) {
-		fprintf(stderr,
-		        "blobcast mesh: %s: the extension must be .obj, .ply "
-		        "or .stl\n",
-		        a->out);
-		return 2;
+		return bc_args_error(&p,
+				     "%s: the extension must be .obj, .ply "
+				     "or .stl",
+				     a->out);
 	}
+	*done = false;
 	return 0;
-}
-
-static double now_ms(void)
-{
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
 }
 
 struct prog {
@@ -141,7 +106,7 @@ struct prog {
 static void on_progress(void *ctx, double done)
 {
 	struct prog *p = ctx;
-	double t = now_ms();
+	double t = bc_clock_ms();
 	if (p->on && t - p->last > 500.0) {
 		fprintf(stderr, "\rmeshing: %3.0f%%", 100.0 * done);
 		p->last = t;
@@ -158,10 +123,12 @@ int bc_cli_mesh(int argc, char **argv)
 	struct prog pg = {0};
 	struct bc_mesh_opts o = {0};
 	double t0;
-	int rc = parse(argc, argv, &a), status = 1;
-	if (rc) {
-		return rc < 0 ? 0 : rc;
+	bool stop;
+	int status = parse(argc, argv, &a, &stop);
+	if (stop) {
+		return status;
 	}
+	status = 1;
 	memset(&m, 0, sizeof(m));
 	t = bc_tree_create();
 	if (!t) {
@@ -178,10 +145,10 @@ int bc_cli_mesh(int argc, char **argv)
 		memcpy(o.hi, a.hi, sizeof(o.hi));
 	}
 	pg.on = !a.quiet;
-	pg.last = now_ms();
+	pg.last = bc_clock_ms();
 	o.progress = on_progress;
 	o.ctx = &pg;
-	t0 = now_ms();
+	t0 = bc_clock_ms();
 	if (bc_mesh_build(&m, t, &o, &ei)) {
 		fprintf(stderr, "%sblobcast mesh: %s\n", pg.on ? "\n" : "",
 		        ei.msg);
@@ -197,7 +164,7 @@ int bc_cli_mesh(int argc, char **argv)
 		        "\rmeshing: done. %s: %u vertices, %u triangles, cell "
 		        "%.4g, %.1f ms, %llu field evaluations\n",
 		        a.out, m.nverts, m.ntris, (double)m.cell,
-		        now_ms() - t0, (unsigned long long)m.evals);
+		        bc_clock_ms() - t0, (unsigned long long)m.evals);
 	}
 	status = 0;
 done:

@@ -7,8 +7,6 @@
  */
 #include "cmd_render.h"
 
-#include <errno.h>
-#include <stdarg.h>
 #include <stdbool.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -16,6 +14,7 @@
 #include <unistd.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/args.h"
 #include "blobcast/blobtree.h"
 #include "blobcast/image.h"
 #include "blobcast/render.h"
@@ -34,275 +33,185 @@
 
 struct args {
 	const char *scene;
-	uint32_t width, height;
+	uint32_t size[2];
 	enum bc_backend backend;
+	/* Filled by the parser, then moved into backend and opts. */
+	int backend_opt, debug, simd, gl_platform, range;
 	const char *out, *depth, *ids;
 	bool stats, quiet;
 	struct bc_render_opts opts;
 };
 
+static const struct bc_opt_name backend_names[] = {
+	{"naive", BC_BACKEND_NAIVE}, {"tiled", BC_BACKEND_TILED},
+	{"gl", BC_BACKEND_GL},       {"svo", BC_BACKEND_SVO},
+	{NULL, 0}};
+static const struct bc_opt_name debug_names[] = {
+	{"evals", BC_DEBUG_EVALS}, {"overlaps", BC_DEBUG_OVERLAPS}, {NULL, 0}};
+static const struct bc_opt_name simd_names[] = {
+	{"auto", BC_SIMD_AUTO}, {"off", BC_SIMD_OFF},
+	{"avx2", BC_SIMD_AVX2}, {"avx512", BC_SIMD_AVX512},
+	{NULL, 0}};
+/* The renderer takes the platform by name: the index into this table. */
+static const struct bc_opt_name platform_names[] = {
+	{"auto", 0}, {"device", 1}, {"surfaceless", 2}, {"osmesa", 3},
+	{NULL, 0}};
+static const struct bc_opt_name range_names[] = {
+	{"ia", BC_RANGE_IA}, {"aa", BC_RANGE_AA}, {"revaa", BC_RANGE_REVAA},
+	{NULL, 0}};
+
+/* The option table over a; --help is generated from it. */
+#define RENDER_OPTS(a)                                                         \
+	{                                                                      \
+		{.name = "size", .kind = BC_OPT_SIZE, .dst = (a)->size,        \
+		 .lo = 1, .hi = BC_RENDER_MAX_DIM, .arg = "WxH",               \
+		 .help = "frame size in pixels, each {range} (required)",      \
+		 .flags = BC_OPT_REQUIRED},                                    \
+		{.name = "out", .kind = BC_OPT_STRING, .dst = &(a)->out,       \
+		 .arg = "IMAGE",                                               \
+		 .help = "colour image; the format follows the\n"              \
+			 "extension (png, tif, exr, jpg, ...) (required)",     \
+		 .flags = BC_OPT_REQUIRED},                                    \
+		{.name = "depth", .kind = BC_OPT_STRING, .dst = &(a)->depth,   \
+		 .arg = "IMAGE",                                               \
+		 .help = "ray distance per pixel as one float channel,\n"      \
+			 "+inf where nothing is hit: .exr, .tif, .pfm"},       \
+		{.name = "ids", .kind = BC_OPT_STRING, .dst = &(a)->ids,       \
+		 .arg = "IMAGE",                                               \
+		 .help = "node id of the primitive seen per pixel as\n"        \
+			 "uint32, 0 where nothing is hit: .tif, .exr"},        \
+		{.name = "backend", .kind = BC_OPT_ENUM,                       \
+		 .dst = &(a)->backend_opt, .arg = "NAME",                          \
+		 .help = "{choices} (default tiled);\n"                        \
+			 "backends not built into this binary are\n"           \
+			 "refused",                                            \
+		 .names = backend_names},                                      \
+		{.name = "debug", .kind = BC_OPT_ENUM, .dst = &(a)->debug,     \
+		 .arg = "MODE",                                                \
+		 .help = "colour by work instead of shading:\n"                \
+			 "evals    = field evaluations per ray (ramp\n"        \
+			 "           saturates at 128)\n"                      \
+			 "overlaps = primitives listed in the pixel's\n"       \
+			 "           8x8 tile (saturates at 32; naive\n"       \
+			 "           lists every primitive)",                  \
+		 .names = debug_names},                                        \
+		{.name = "threads", .kind = BC_OPT_U32,                        \
+		 .dst = &(a)->opts.threads, .hi = MAX_THREADS, .arg = "N",     \
+		 .help = "CPU threads {range}, 0 = one per core\n"             \
+			 "(default 0); the naive and tiled backends\n"         \
+			 "use at most 64"},                                    \
+		{.name = "simd", .kind = BC_OPT_ENUM, .dst = &(a)->simd,       \
+		 .arg = "MODE",                                                \
+		 .help = "tiled backend only: vector instructions of\n"        \
+			 "the tracer, auto (the widest the CPU has) |\n"       \
+			 "off (one ray at a time) | avx2 | avx512\n"           \
+			 "(default auto)",                                     \
+		 .names = simd_names},                                         \
+		{.name = "gl-platform", .kind = BC_OPT_ENUM,                   \
+		 .dst = &(a)->gl_platform, .arg = "P",                         \
+		 .help = "gl backend only: {choices}\n(default auto)",         \
+		 .names = platform_names},                                     \
+		{.name = "range", .kind = BC_OPT_ENUM, .dst = &(a)->range,     \
+		 .arg = "A",                                                   \
+		 .help = "svo backend only: interval arithmetic\n"             \
+			 "{choices} (default: the backend's, ia)",             \
+		 .names = range_names},                                        \
+		{.name = "threshold", .kind = BC_OPT_U32,                      \
+		 .dst = &(a)->opts.svo_threshold, .lo = 1, .hi = UINT32_MAX,   \
+		 .arg = "T",                                                   \
+		 .help = "svo backend only: node-count threshold that\n"       \
+			 "stops subdivision, {range} (default: the\n"          \
+			 "backend's)"},                                        \
+		{.name = "max-depth", .kind = BC_OPT_U32,                      \
+		 .dst = &(a)->opts.svo_max_depth, .lo = 1, .hi = UINT32_MAX,   \
+		 .arg = "D",                                                   \
+		 .help = "svo backend only: octree depth limit\n"              \
+			 "(default: the backend's)"},                          \
+		{.name = "stats", .kind = BC_OPT_FLAG, .dst = &(a)->stats,     \
+		 .help = "print the frame's timings and counters to\n"         \
+			 "stderr"},                                            \
+		{.name = "quiet", .kind = BC_OPT_FLAG, .dst = &(a)->quiet,     \
+		 .help = "no progress and no summary line"},                   \
+		{.kind = BC_OPT_INVALID},                                      \
+	}
+
+static const char render_about[] =
+	"Renders SCENE on this machine and writes the image files.\n"
+	"SCENE is a JSON scene file, '-' to read one from stdin, or\n"
+	"'default' for the built-in scene. The scene's camera is used.";
+static const char render_footer[] =
+	"Backend-only options are accepted with any backend and ignored by\n"
+	"the others. Exit status: 0 done, 1 the scene could not be loaded\n"
+	"or rendered or an image written, 2 bad arguments.";
+
+static struct bc_args render_args(const struct bc_opt *opts)
+{
+	return (struct bc_args){
+		.prog = "blobcast render",
+		.usage = "blobcast render SCENE --size WxH --out IMAGE "
+			 "[options]",
+		.about = render_about,
+		.footer = render_footer,
+		.opts = opts};
+}
+
 void bc_cli_render_usage(FILE *out)
 {
-	fprintf(out,
-		"usage: blobcast render SCENE --size WxH --out IMAGE [options]\n"
-		"\n"
-		"Renders SCENE on this machine and writes the image files.\n"
-		"SCENE is a JSON scene file, '-' to read one from stdin, or\n"
-		"'default' for the built-in scene. The scene's camera is used.\n"
-		"\n"
-		"  --size WxH         frame size in pixels, each 1..%u (required)\n"
-		"  --out IMAGE        colour image; the format follows the\n"
-		"                     extension (png, tif, exr, jpg, ...) (required)\n"
-		"  --depth IMAGE      ray distance per pixel as one float channel,\n"
-		"                     +inf where nothing is hit: .exr, .tif, .pfm\n"
-		"  --ids IMAGE        node id of the primitive seen per pixel as\n"
-		"                     uint32, 0 where nothing is hit: .tif, .exr\n"
-		"  --backend NAME     naive | tiled | gl | svo (default tiled);\n"
-		"                     backends not built into this binary are\n"
-		"                     refused\n"
-		"  --debug MODE       colour by work instead of shading:\n"
-		"                     evals    = field evaluations per ray (ramp\n"
-		"                                saturates at 128)\n"
-		"                     overlaps = primitives listed in the pixel's\n"
-		"                                8x8 tile (saturates at 32; naive\n"
-		"                                lists every primitive)\n"
-		"  --threads N        CPU threads, 0 = one per core (default 0);\n"
-		"                     the naive and tiled backends use at most 64\n"
-		"  --simd MODE        tiled backend only: vector instructions of\n"
-		"                     the tracer, auto (the widest the CPU has) |\n"
-		"                     off (one ray at a time) | avx2 | avx512\n"
-		"                     (default auto)\n"
-		"  --gl-platform P    gl backend only: auto | device | surfaceless\n"
-		"                     | osmesa (default auto)\n"
-		"  --range A          svo backend only: interval arithmetic ia |\n"
-		"                     aa | revaa (default: the backend's, ia)\n"
-		"  --threshold T      svo backend only: node-count threshold that\n"
-		"                     stops subdivision (default: the backend's)\n"
-		"  --max-depth D      svo backend only: octree depth limit\n"
-		"                     (default: the backend's)\n"
-		"  --stats            print the frame's timings and counters to\n"
-		"                     stderr\n"
-		"  --quiet            no progress and no summary line\n"
-		"  -h, --help         this help\n"
-		"\n"
-		"Backend-only options are accepted with any backend and ignored by\n"
-		"the others. Exit status: 0 done, 1 the scene could not be loaded\n"
-		"or rendered or an image written, 2 bad arguments.\n",
-		BC_RENDER_MAX_DIM);
+	struct args a;
+	const struct bc_opt opts[] = RENDER_OPTS(&a);
+	struct bc_args p = render_args(opts);
+	bc_args_help(&p, out);
 }
 
-#if defined(__GNUC__)
-__attribute__((format(printf, 1, 2)))
-#endif
-static int usage_error(const char *fmt, ...)
-{
-	va_list ap;
-	fprintf(stderr, "blobcast render: ");
-	va_start(ap, fmt);
-	vfprintf(stderr, fmt, ap);
-	va_end(ap);
-	fprintf(stderr, "\n(see 'blobcast render --help')\n");
-	return 2;
-}
-
-/* Parses a decimal uint32 in [lo, hi], the whole string. */
-static bool parse_u32(const char *s, uint32_t lo, uint32_t hi, uint32_t *out)
-{
-	char *end;
-	unsigned long v;
-	if (!s || *s < '0' || *s > '9') {
-		return false;
-	}
-	errno = 0;
-	v = strtoul(s, &end, 10);
-	if (errno || *end != '\0' || v < lo || v > hi) {
-		return false;
-	}
-	*out = (uint32_t)v;
-	return true;
-}
-
-static bool parse_size(const char *s, uint32_t *w, uint32_t *h)
-{
-	const char *x = strchr(s, 'x');
-	char wbuf[16];
-	size_t n;
-	if (!x) {
-		return false;
-	}
-	n = (size_t)(x - s);
-	if (n == 0 || n >= sizeof(wbuf)) {
-		return false;
-	}
-	memcpy(wbuf, s, n);
-	wbuf[n] = '\0';
-	return parse_u32(wbuf, 1, BC_RENDER_MAX_DIM, w) &&
-	       parse_u32(x + 1, 1, BC_RENDER_MAX_DIM, h);
-}
-
-/* Options that take a value, as --name VALUE or --name=VALUE. */
-static const char *const valued[] = {
-	"--size",    "--out",   "--depth",       "--ids",
-	"--backend", "--debug", "--threads",     "--gl-platform",
-	"--range",   "--threshold", "--max-depth", "--simd",
-};
-
+/* Returns 0 to go on, -1 after --help, 2 on a bad argument. */
 static int parse(int argc, char **argv, struct args *a)
 {
-	*a = (struct args){.backend = BC_BACKEND_TILED};
-	for (int i = 1; i < argc; i++) {
-		const char *arg = argv[i], *val = NULL, *eq;
-		char name[32];
-		bool takes = false;
-		if (strcmp(arg, "-h") == 0 || strcmp(arg, "--help") == 0) {
-			bc_cli_render_usage(stdout);
-			return -1;
-		}
-		if (strncmp(arg, "--", 2) != 0 || strcmp(arg, "-") == 0) {
-			if (arg[0] == '-' && strcmp(arg, "-") != 0) {
-				return usage_error("unknown option '%s'", arg);
-			}
-			if (a->scene) {
-				return usage_error("more than one scene given "
-						   "('%s')", arg);
-			}
-			a->scene = arg;
-			continue;
-		}
-		eq = strchr(arg, '=');
-		if (strlen(arg) >= sizeof(name) ||
-		    (eq && (size_t)(eq - arg) >= sizeof(name))) {
-			return usage_error("unknown option '%s'", arg);
-		}
-		if (eq) {
-			memcpy(name, arg, (size_t)(eq - arg));
-			name[eq - arg] = '\0';
-			val = eq + 1;
-		} else {
-			strcpy(name, arg);
-		}
-		for (size_t k = 0; k < sizeof(valued) / sizeof(valued[0]); k++) {
-			takes = takes || strcmp(name, valued[k]) == 0;
-		}
-		if (!takes) {
-			if (strcmp(name, "--stats") == 0 && !eq) {
-				a->stats = true;
-			} else if (strcmp(name, "--quiet") == 0 && !eq) {
-				a->quiet = true;
-			} else {
-				return usage_error("unknown option '%s'", arg);
-			}
-			continue;
-		}
-		if (!val) {
-			if (i + 1 >= argc) {
-				return usage_error("%s needs a value", name);
-			}
-			val = argv[++i];
-		}
-		if (strcmp(name, "--size") == 0) {
-			if (!parse_size(val, &a->width, &a->height)) {
-				fprintf(stderr,
-					"blobcast render: --size '%s' is not "
-					"WxH with 1 <= W, H <= %u\n",
-					val, BC_RENDER_MAX_DIM);
-				return 2;
-			}
-		} else if (strcmp(name, "--out") == 0) {
-			a->out = val;
-		} else if (strcmp(name, "--depth") == 0) {
-			a->depth = val;
-		} else if (strcmp(name, "--ids") == 0) {
-			a->ids = val;
-		} else if (strcmp(name, "--backend") == 0) {
-			a->backend = bc_backend_from_name(val);
-			if (a->backend == BC_BACKEND_INVALID) {
-				return usage_error("unknown backend '%s' (naive, "
-						   "tiled, gl, svo)", val);
-			}
-			if (!bc_backend_available(a->backend)) {
-				return usage_error("backend '%s' is not built "
-						   "into this blobcast", val);
-			}
-		} else if (strcmp(name, "--debug") == 0) {
-			if (strcmp(val, "evals") == 0) {
-				a->opts.debug = BC_DEBUG_EVALS;
-			} else if (strcmp(val, "overlaps") == 0) {
-				a->opts.debug = BC_DEBUG_OVERLAPS;
-			} else {
-				return usage_error("unknown debug mode '%s' "
-						   "(evals, overlaps)", val);
-			}
-		} else if (strcmp(name, "--threads") == 0) {
-			if (!parse_u32(val, 0, MAX_THREADS, &a->opts.threads)) {
-				return usage_error("--threads '%s' is not a "
-						   "number in 0..1024", val);
-			}
-		} else if (strcmp(name, "--simd") == 0) {
-			if (strcmp(val, "auto") == 0) {
-				a->opts.simd = BC_SIMD_AUTO;
-			} else if (strcmp(val, "off") == 0) {
-				a->opts.simd = BC_SIMD_OFF;
-			} else if (strcmp(val, "avx2") == 0) {
-				a->opts.simd = BC_SIMD_AVX2;
-			} else if (strcmp(val, "avx512") == 0) {
-				a->opts.simd = BC_SIMD_AVX512;
-			} else {
-				return usage_error("unknown --simd '%s' (auto, "
-						   "off, avx2, avx512)", val);
-			}
-		} else if (strcmp(name, "--gl-platform") == 0) {
-			if (strcmp(val, "auto") && strcmp(val, "device") &&
-			    strcmp(val, "surfaceless") && strcmp(val, "osmesa")) {
-				return usage_error("unknown GL platform '%s' "
-						   "(auto, device, surfaceless, "
-						   "osmesa)", val);
-			}
-			a->opts.gl_platform = val;
-		} else if (strcmp(name, "--range") == 0) {
-			if (strcmp(val, "ia") == 0) {
-				a->opts.svo_range = BC_RANGE_IA;
-			} else if (strcmp(val, "aa") == 0) {
-				a->opts.svo_range = BC_RANGE_AA;
-			} else if (strcmp(val, "revaa") == 0) {
-				a->opts.svo_range = BC_RANGE_REVAA;
-			} else {
-				return usage_error("unknown range arithmetic "
-						   "'%s' (ia, aa, revaa)", val);
-			}
-		} else if (strcmp(name, "--threshold") == 0) {
-			if (!parse_u32(val, 1, UINT32_MAX, &a->opts.svo_threshold)) {
-				return usage_error("--threshold '%s' is not a "
-						   "positive number", val);
-			}
-		} else if (strcmp(name, "--max-depth") == 0) {
-			if (!parse_u32(val, 1, UINT32_MAX, &a->opts.svo_max_depth)) {
-				return usage_error("--max-depth '%s' is not a "
-						   "positive number", val);
-			}
-		}
+	const struct bc_opt opts[] = RENDER_OPTS(a);
+	struct bc_args p = render_args(opts);
+	*a = (struct args){.backend_opt = BC_BACKEND_TILED};
+	if (bc_args_parse(&p, argc, argv)) {
+		return p.status == 0 ? -1 : p.status;
 	}
-	if (!a->scene) {
-		return usage_error("%s", "no scene given (a file, '-' or "
-					 "'default')");
+	if (p.npos == 0) {
+		return bc_args_error(&p, "%s",
+				     "no scene given (a file, '-' or "
+				     "'default')");
 	}
-	if (!a->width) {
-		return usage_error("%s", "--size WxH is required");
+	if (p.npos > 1) {
+		return bc_args_error(&p, "more than one scene given ('%s')",
+				     p.pos[1]);
 	}
-	if (!a->out) {
-		return usage_error("%s", "--out IMAGE is required");
+	a->scene = p.pos[0];
+	a->backend = (enum bc_backend)a->backend_opt;
+	if (!bc_backend_available(a->backend)) {
+		return bc_args_error(&p,
+				     "backend '%s' is not built into this "
+				     "blobcast",
+				     bc_backend_name(a->backend));
 	}
+	a->opts.debug = (enum bc_debug_mode)a->debug;
+	a->opts.simd = (enum bc_simd)a->simd;
+	a->opts.svo_range = (enum bc_range_arith)a->range;
+	a->opts.gl_platform = a->gl_platform
+				      ? platform_names[a->gl_platform].name
+				      : NULL;
 	if (!bc_image_ext_supports(a->out, BC_IMAGE_U8)) {
-		return usage_error("--out '%s': no image format for that "
-				   "extension (png, tif, exr, jpg, ...)", a->out);
+		return bc_args_error(&p,
+				     "--out '%s': no image format for that "
+				     "extension (png, tif, exr, jpg, ...)",
+				     a->out);
 	}
 	if (a->depth && !bc_image_ext_supports(a->depth, BC_IMAGE_F32)) {
-		return usage_error("--depth '%s': depth needs a float format: "
-				   ".exr, .tif or .pfm", a->depth);
+		return bc_args_error(&p,
+				     "--depth '%s': depth needs a float "
+				     "format: .exr, .tif or .pfm",
+				     a->depth);
 	}
 	if (a->ids && !bc_image_ext_supports(a->ids, BC_IMAGE_U32)) {
-		return usage_error("--ids '%s': ids need a uint32 format: .tif "
-				   "or .exr", a->ids);
+		return bc_args_error(&p,
+				     "--ids '%s': ids need a uint32 format: "
+				     ".tif or .exr",
+				     a->ids);
 	}
 	return 0;
 }
@@ -447,9 +356,9 @@ int bc_cli_render(int argc, char **argv)
 			ei.msg[0] ? ei.msg : bc_strerror(rc));
 		goto cleanup;
 	}
-	if ((rc = bc_frame_init(&frame, a.width, a.height))) {
-		fprintf(stderr, "blobcast render: %ux%u frame: %s\n", a.width,
-			a.height, bc_strerror(rc));
+	if ((rc = bc_frame_init(&frame, a.size[0], a.size[1]))) {
+		fprintf(stderr, "blobcast render: %ux%u frame: %s\n",
+			a.size[0], a.size[1], bc_strerror(rc));
 		goto cleanup;
 	}
 	if ((rc = render(&a, t, &cam, &frame, &stats, &ei))) {
@@ -457,11 +366,11 @@ int bc_cli_render(int argc, char **argv)
 			ei.msg[0] ? ei.msg : bc_strerror(rc));
 		goto cleanup;
 	}
-	if ((rc = bc_image_write_rgba8(a.out, a.width, a.height, frame.rgba,
+	if ((rc = bc_image_write_rgba8(a.out, a.size[0], a.size[1], frame.rgba,
 				       &ei)) ||
-	    (a.depth && (rc = bc_image_write_float(a.depth, a.width, a.height,
+	    (a.depth && (rc = bc_image_write_float(a.depth, a.size[0], a.size[1],
 						   frame.depth, &ei))) ||
-	    (a.ids && (rc = bc_image_write_u32(a.ids, a.width, a.height,
+	    (a.ids && (rc = bc_image_write_u32(a.ids, a.size[0], a.size[1],
 					       frame.ids, &ei)))) {
 		fprintf(stderr, "blobcast render: %s\n", ei.msg);
 		goto cleanup;
@@ -471,14 +380,14 @@ int bc_cli_render(int argc, char **argv)
 			"render: backend %s, %ux%u, %u primitives: total %.2f "
 			"ms, a-buffer %.2f ms, trace %.2f ms, upload %.2f ms, "
 			"%llu field evaluations, max overlap %u%s\n",
-			bc_backend_name(a.backend), a.width, a.height,
+			bc_backend_name(a.backend), a.size[0], a.size[1],
 			bc_tree_prim_count(t), stats.ms_total, stats.ms_abuffer,
 			stats.ms_trace, stats.ms_upload,
 			(unsigned long long)stats.field_evals, stats.max_overlap,
 			stats.incomplete ? ", incomplete" : "");
 	} else if (!a.quiet) {
 		fprintf(stderr, "render: %s %ux%u in %.1f ms -> %s\n",
-			bc_backend_name(a.backend), a.width, a.height,
+			bc_backend_name(a.backend), a.size[0], a.size[1],
 			stats.ms_total, a.out);
 	}
 	status = 0;

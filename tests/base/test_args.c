@@ -82,6 +82,13 @@ static void num_sizes_and_vectors(void)
 		CHECK(bc_num_vec3(badv[i], v) != 0);
 	}
 	CHECK(v[0] == 1.0f && v[2] == 30.0f);
+	float six[6];
+	CHECK_EQ_INT(bc_num_f32s("0,1,2,3,4,5.5", six, 6), 0);
+	CHECK(six[0] == 0.0f && six[5] == 5.5f);
+	CHECK_EQ_INT(bc_num_f32s("0,1,2,3,4", six, 6), BC_EINVAL);
+	CHECK_EQ_INT(bc_num_f32s("0,1,2,3,4,5,6", six, 6), BC_EINVAL);
+	CHECK_EQ_INT(bc_num_f32s("1", six, 0), BC_EINVAL);
+	CHECK_EQ_INT(bc_num_f32s("1", six, BC_NUM_MAX_FLOATS + 1), BC_EINVAL);
 }
 
 /* A command with one option of every kind. */

@@ -218,7 +218,7 @@ static void test_bad_arguments_exit_2_with_a_reason(void)
 		 "9000x8"},
 		{{"render", "default", "--size", "8x8", "--out", "@o.png",
 		  "--backend", "cpu", NULL},
-		 "unknown backend 'cpu'"},
+		 "--backend 'cpu' is not one of naive, tiled, gl, svo"},
 		{{"render", "default", "--size", "8x8", "--out", "@o.png",
 		  "--depth", "@d.png", NULL},
 		 ".exr, .tif or .pfm"},

@@ -49,8 +49,9 @@ struct bc_opt_name {
  * lo and hi bound numbers (both 0: the type's whole range; for U64 a hi of
  * 2^64 or more means UINT64_MAX). arg names the value in the help ("N",
  * "WxH"). help is the description, lines split by '\n'; in it "{range}" is
- * replaced by "lo..hi" and "{choices}" by the ENUM names joined by " | ",
- * so the help says what the parser checks. */
+ * replaced by "lo..hi", "{choices}" by the ENUM names joined by " | " and
+ * "{default}" by the value dst holds when the help is printed (commands set
+ * their defaults before parsing), so the help says what the parser does. */
 struct bc_opt {
 	const char *name;
 	char short_name;

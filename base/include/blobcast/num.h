@@ -27,5 +27,8 @@ int bc_num_size(const char *s, uint32_t lo, uint32_t hi, uint32_t *w,
 		uint32_t *h);
 /* "x,y,z", each part a finite float (no range). */
 int bc_num_vec3(const char *s, float out[3]);
+/* n (1..BC_NUM_MAX_FLOATS) comma-separated finite floats, as for vec3. */
+#define BC_NUM_MAX_FLOATS 16
+int bc_num_f32s(const char *s, float *out, int n);
 
 #endif
