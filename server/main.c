@@ -18,64 +18,129 @@
 #include <jansson.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/args.h"
 #include "blobcast/log.h"
 #include "addr.h"
 #include "net_impl.h"
 #include "server.h"
 #include "tls.h"
 
-static void usage(FILE *out)
+/* auto and cpu: on hosts without a GPU the CPU tile tracer beats llvmpipe
+ * (docs/benchmarks.md); a GPU host asks for gl. */
+static const struct bc_opt_name backend_names[] = {
+	{"auto", BC_BACKEND_TILED}, {"cpu", BC_BACKEND_TILED},
+	{"tiled", BC_BACKEND_TILED}, {"naive", BC_BACKEND_NAIVE},
+	{"gl", BC_BACKEND_GL},       {"svo", BC_BACKEND_SVO},
+	{NULL, 0}};
+static const struct bc_opt_name platform_names[] = {
+	{"auto", 0}, {"device", 1}, {"surfaceless", 2}, {"osmesa", 3},
+	{NULL, 0}};
+static const struct bc_opt_name simd_names[] = {
+	{"auto", BC_SIMD_AUTO}, {"off", BC_SIMD_OFF}, {NULL, 0}};
+static const struct bc_opt_name log_names[] = {
+	{"silent", BC_LOG_SILENT}, {"error", BC_LOG_ERROR},
+	{"warn", BC_LOG_WARN},     {"info", BC_LOG_INFO},
+	{"debug", BC_LOG_DEBUG},   {NULL, 0}};
+
+/* The command line, before it is merged over the configuration file.
+ * Strings point into argv; 0 and NULL mean "not given". */
+struct cli {
+	const char *listen, *unix_path, *data_dir, *config;
+	const char *tls_cert, *tls_key, *server_id;
+	int backend, gl_platform, simd, log;
+	bool allow_plaintext, no_damage;
+	uint32_t frame_budget_ms;
+};
+
+/* The option table over c; --help is printed from it. */
+#define DAEMON_OPTS(c)                                                         \
+	{                                                                      \
+		{.name = "listen", .kind = BC_OPT_STRING, .dst = &(c)->listen, \
+		 .arg = "HOST:PORT",                                           \
+		 .help = "TCP address (default 127.0.0.1:7878;\n"              \
+			 "\"none\" for no TCP listener)"},                     \
+		{.name = "unix", .kind = BC_OPT_STRING,                        \
+		 .dst = &(c)->unix_path, .arg = "PATH",                        \
+		 .help = "also listen on a Unix socket"},                      \
+		{.name = "tls-cert", .kind = BC_OPT_STRING,                    \
+		 .dst = &(c)->tls_cert, .arg = "FILE",                         \
+		 .help = "TLS on the TCP listener: certificate\n"              \
+			 "chain (PEM); clients use tls://HOST:PORT"},          \
+		{.name = "tls-key", .kind = BC_OPT_STRING,                     \
+		 .dst = &(c)->tls_key, .arg = "FILE",                          \
+		 .help = "its private key (PEM; default: the\n"                \
+			 "--tls-cert file)"},                                  \
+		{.name = "allow-plaintext", .kind = BC_OPT_FLAG,               \
+		 .dst = &(c)->allow_plaintext,                                 \
+		 .help = "start with tokens on a plain TCP\n"                  \
+			 "listener reachable from other hosts\n"               \
+			 "(refused otherwise)"},                               \
+		{.name = "data", .kind = BC_OPT_STRING, .dst = &(c)->data_dir, \
+		 .arg = "DIR",                                                 \
+		 .help = "data directory: sessions, journals\n"                \
+			 "(default ./blobcast-data)"},                         \
+		{.name = "backend", .kind = BC_OPT_ENUM, .dst = &(c)->backend, \
+		 .arg = "NAME",                                                \
+		 .help = "{choices}\n(auto and cpu: the CPU tile tracer)",     \
+		 .names = backend_names},                                      \
+		{.name = "gl-platform", .kind = BC_OPT_ENUM,                   \
+		 .dst = &(c)->gl_platform, .arg = "P",                         \
+		 .help = "{choices}", .names = platform_names},                \
+		{.name = "simd", .kind = BC_OPT_ENUM, .dst = &(c)->simd,       \
+		 .arg = "MODE",                                                \
+		 .help = "{choices}: vector instructions of the\n"             \
+			 "CPU tracers (default auto)",                         \
+		 .names = simd_names},                                         \
+		{.name = "no-damage", .kind = BC_OPT_FLAG,                     \
+		 .dst = &(c)->no_damage,                                       \
+		 .help = "edits re-render whole views instead of\n"            \
+			 "the tiles they change (to compare)"},                \
+		{.name = "frame-budget", .kind = BC_OPT_U32,                   \
+		 .dst = &(c)->frame_budget_ms, .lo = 1, .hi = 600000,          \
+		 .arg = "MS",                                                  \
+		 .help = "time one refinement step may take,\n"                \
+			 "{range} (default 2000); past it the\n"               \
+			 "picture stays at its coarser level"},                \
+		{.name = "config", .kind = BC_OPT_STRING, .dst = &(c)->config, \
+		 .arg = "FILE",                                                \
+		 .help = "JSON configuration (docs/operations.md);\n"          \
+			 "options given here override it"},                    \
+		{.name = "server-id", .kind = BC_OPT_STRING,                   \
+		 .dst = &(c)->server_id, .arg = "NAME",                        \
+		 .help = "name sent to clients (default blobcastd)"},          \
+		{.name = "log", .kind = BC_OPT_ENUM, .dst = &(c)->log,         \
+		 .arg = "LEVEL", .help = "{choices} (default {default})",      \
+		 .names = log_names},                                          \
+		{.kind = BC_OPT_INVALID},                                      \
+	}
+
+static struct bc_args daemon_args(const struct bc_opt *opts)
 {
-	fprintf(out,
-		"usage: blobcastd [options]\n"
-		"\n"
-		"Serves blobtree review sessions over the blobcast protocol.\n"
-		"With no options: session \"default\" with the embedded scene,\n"
-		"on 127.0.0.1:7878, data in ./blobcast-data.\n"
-		"\n"
-		"  --listen HOST:PORT  TCP address (default 127.0.0.1:7878;\n"
-		"                      \"none\" for no TCP listener)\n"
-		"  --unix PATH         also listen on a Unix socket\n"
-		"  --tls-cert FILE     TLS on the TCP listener: certificate\n"
-		"                      chain (PEM); clients use tls://HOST:PORT\n"
-		"  --tls-key FILE      its private key (PEM; default: the\n"
-		"                      --tls-cert file)\n"
-		"  --allow-plaintext   start with tokens on a plain TCP\n"
-		"                      listener reachable from other hosts\n"
-		"                      (refused otherwise)\n"
-		"  --data DIR          data directory: sessions, journals\n"
-		"                      (default ./blobcast-data)\n"
-		"  --backend NAME      auto | cpu | tiled | naive | gl | svo\n"
-		"                      (auto and cpu: the CPU tile tracer)\n"
-		"  --gl-platform P     auto | device | surfaceless | osmesa\n"
-		"  --simd MODE         auto | off: vector instructions of the\n"
-		"                      CPU tracers (default auto)\n"
-		"  --no-damage         edits re-render whole views instead of\n"
-		"                      the tiles they change (to compare)\n"
-		"  --frame-budget MS   time one refinement step may take\n"
-		"                      (default 2000); past it the picture\n"
-		"                      stays at its coarser level\n"
-		"  --config FILE       JSON configuration (docs/operations.md);\n"
-		"                      options given here override it\n"
-		"  --server-id NAME    name sent to clients (default blobcastd)\n"
-		"  --log LEVEL         error | warn | info | debug (default "
-		"info)\n"
-		"  --help              this text\n"
-		"\n"
-		"Without tokens in the configuration only loopback and Unix\n"
-		"socket clients are accepted. SIGTERM saves and stops;\n"
-		"SIGHUP reloads the tokens of the --config file and the TLS\n"
-		"certificate and key. Unix sockets never use TLS.\n");
+	return (struct bc_args){
+		.prog = "blobcastd",
+		.usage = "blobcastd [options]",
+		.about = "Serves blobtree review sessions over the blobcast "
+			 "protocol.\nWith no options: session \"default\" with "
+			 "the embedded scene,\non 127.0.0.1:7878, data in "
+			 "./blobcast-data.",
+		.footer = "Without tokens in the configuration only loopback "
+			  "and Unix\nsocket clients are accepted. SIGTERM saves "
+			  "and stops;\nSIGHUP reloads the tokens of the --config "
+			  "file and the TLS\ncertificate and key. Unix sockets "
+			  "never use TLS.",
+		.opts = opts};
 }
 
+/* A backend's name as the configuration file and --backend take it, or
+ * BC_BACKEND_INVALID. */
 static enum bc_backend parse_backend(const char *name)
 {
-	if (strcmp(name, "auto") == 0 || strcmp(name, "cpu") == 0) {
-		/* On hosts without a GPU the CPU tile tracer beats llvmpipe
-		 * (docs/benchmarks.md); a GPU host asks for gl. */
-		return BC_BACKEND_TILED;
+	for (const struct bc_opt_name *n = backend_names; n->name; n++) {
+		if (strcmp(n->name, name) == 0) {
+			return (enum bc_backend)n->value;
+		}
 	}
-	return bc_backend_from_name(name);
+	return BC_BACKEND_INVALID;
 }
 
 static int set_str(char **dst, const char *v)
@@ -432,108 +497,26 @@ static void print_endpoints(struct bc_srv *srv)
 	}
 }
 
-static const char *need_arg(int argc, char **argv, int *i)
-{
-	if (*i + 1 >= argc) {
-		fprintf(stderr, "blobcastd: %s needs a value (see --help)\n",
-			argv[*i]);
-		exit(2);
-	}
-	return argv[++*i];
-}
-
 int main(int argc, char **argv)
 {
 	struct bc_srv srv;
 	struct bc_errinfo ei = {0};
 	const char *config = NULL;
-	struct bc_srv_config cli = {0};
-	enum bc_log_level level = BC_LOG_INFO;
+	struct cli cli = {.log = BC_LOG_INFO};
+	const struct bc_opt opts[] = DAEMON_OPTS(&cli);
+	struct bc_args args = daemon_args(opts);
 	int rc = 1;
 
 	memset(&srv, 0, sizeof(srv));
-	for (int i = 1; i < argc; i++) {
-		const char *a = argv[i];
-		if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
-			usage(stdout);
-			return 0;
-		} else if (strcmp(a, "--listen") == 0) {
-			set_str(&cli.listen, need_arg(argc, argv, &i));
-		} else if (strcmp(a, "--unix") == 0) {
-			set_str(&cli.unix_path, need_arg(argc, argv, &i));
-		} else if (strcmp(a, "--data") == 0) {
-			set_str(&cli.data_dir, need_arg(argc, argv, &i));
-		} else if (strcmp(a, "--backend") == 0) {
-			const char *b = need_arg(argc, argv, &i);
-			cli.backend = parse_backend(b);
-			if (cli.backend == BC_BACKEND_INVALID) {
-				fprintf(stderr,
-					"blobcastd: unknown backend %s (auto, "
-					"cpu, tiled, naive, gl, svo)\n",
-					b);
-				return 2;
-			}
-		} else if (strcmp(a, "--gl-platform") == 0) {
-			set_str(&cli.gl_platform, need_arg(argc, argv, &i));
-		} else if (strcmp(a, "--simd") == 0) {
-			const char *m = need_arg(argc, argv, &i);
-			if (strcmp(m, "auto") == 0) {
-				cli.simd = BC_SIMD_AUTO;
-			} else if (strcmp(m, "off") == 0) {
-				cli.simd = BC_SIMD_OFF;
-			} else {
-				fprintf(stderr, "blobcastd: --simd is auto or "
-						"off, not %s\n",
-					m);
-				return 2;
-			}
-		} else if (strcmp(a, "--no-damage") == 0) {
-			cli.no_damage = true;
-		} else if (strcmp(a, "--frame-budget") == 0) {
-			const char *v = need_arg(argc, argv, &i);
-			char *end = NULL;
-			unsigned long ms = strtoul(v, &end, 10);
-			if (!end || *end || end == v || ms < 1 || ms > 600000) {
-				fprintf(stderr, "blobcastd: --frame-budget is "
-						"1..600000 ms, not %s\n",
-					v);
-				return 2;
-			}
-			cli.frame_budget_ms = (uint32_t)ms;
-		} else if (strcmp(a, "--config") == 0) {
-			config = need_arg(argc, argv, &i);
-		} else if (strcmp(a, "--tls-cert") == 0) {
-			set_str(&cli.tls_cert, need_arg(argc, argv, &i));
-		} else if (strcmp(a, "--tls-key") == 0) {
-			set_str(&cli.tls_key, need_arg(argc, argv, &i));
-		} else if (strcmp(a, "--allow-plaintext") == 0) {
-			cli.allow_plaintext = true;
-		} else if (strcmp(a, "--server-id") == 0) {
-			set_str(&cli.server_id, need_arg(argc, argv, &i));
-		} else if (strcmp(a, "--log") == 0) {
-			const char *l = need_arg(argc, argv, &i);
-			static const char *names[] = {"silent", "error", "warn",
-						      "info", "debug"};
-			level = BC_LOG_LEVEL_COUNT;
-			for (int k = 0; k < BC_LOG_LEVEL_COUNT; k++) {
-				if (strcmp(l, names[k]) == 0) {
-					level = (enum bc_log_level)k;
-				}
-			}
-			if (level == BC_LOG_LEVEL_COUNT) {
-				fprintf(stderr, "blobcastd: unknown log level "
-						"%s\n",
-					l);
-				return 2;
-			}
-		} else {
-			fprintf(stderr, "blobcastd: unknown option %s (see "
-					"--help)\n",
-				a);
-			return 2;
-		}
+	if (bc_args_parse(&args, argc, argv)) {
+		return args.status;
 	}
-	bc_log_init(level);
+	if (args.npos) {
+		return bc_args_error(&args, "unexpected argument '%s'",
+				     args.pos[0]);
+	}
+	bc_log_init((enum bc_log_level)cli.log);
+	config = cli.config;
 	if (config && load_config(&srv.cfg, config, &ei)) {
 		fprintf(stderr, "blobcastd: %s\n", ei.msg);
 		goto out;
@@ -548,14 +531,15 @@ int main(int argc, char **argv)
 	if (cli.data_dir) {
 		set_str(&srv.cfg.data_dir, cli.data_dir);
 	}
-	if (cli.gl_platform) {
-		set_str(&srv.cfg.gl_platform, cli.gl_platform);
+	if (bc_args_given(&args, "gl-platform")) {
+		set_str(&srv.cfg.gl_platform,
+			platform_names[cli.gl_platform].name);
 	}
 	if (cli.server_id) {
 		set_str(&srv.cfg.server_id, cli.server_id);
 	}
 	if (cli.backend) {
-		srv.cfg.backend = cli.backend;
+		srv.cfg.backend = (enum bc_backend)cli.backend;
 	}
 	if (cli.tls_cert) {
 		set_str(&srv.cfg.tls_cert, cli.tls_cert);
@@ -564,7 +548,7 @@ int main(int argc, char **argv)
 		set_str(&srv.cfg.tls_key, cli.tls_key);
 	}
 	srv.cfg.allow_plaintext = srv.cfg.allow_plaintext || cli.allow_plaintext;
-	srv.cfg.simd = cli.simd;
+	srv.cfg.simd = (enum bc_simd)cli.simd;
 	srv.cfg.no_damage = cli.no_damage;
 	srv.cfg.frame_budget_ms = cli.frame_budget_ms;
 	if (!srv.cfg.listen) {
@@ -640,6 +624,5 @@ out:
 	bc_store_close(srv.store);
 	bc_tls_ctx_free(srv.tls);
 	config_free(&srv.cfg);
-	config_free(&cli);
 	return rc;
 }

@@ -1,0 +1,128 @@
+#!/bin/sh
+# The options of blobcastd and of the local blobcast commands, all parsed by
+# base/args.c from one table per program: every option --help lists is one
+# the parser takes, unknown options and bad numbers exit 2 with the same
+# wording everywhere ("PROG: SENTENCE" and "(see 'PROG --help')"), and
+# nothing starts or is written on a bad command line.
+#
+# usage: test_options.sh BLOBCAST BLOBCASTD   (exit 77 when not built)
+set -u
+cli=${1:-}
+daemon=${2:-}
+if [ -z "$cli" ] || [ ! -x "$cli" ] || [ -z "$daemon" ] ||
+  [ ! -x "$daemon" ]; then
+  echo "skip: blobcast or blobcastd not built"
+  exit 77
+fi
+# The commands run from a scratch folder: make the paths absolute.
+case $cli in /*) ;; *) cli=$PWD/$cli ;; esac
+case $daemon in /*) ;; *) daemon=$PWD/$daemon ;; esac
+tmp=$(mktemp -d /tmp/bc-options.XXXXXX) || exit 1
+trap 'rm -rf "$tmp"' EXIT
+trap 'exit 1' INT TERM
+failures=0
+
+fail() {
+  echo "FAIL: $*"
+  sed 's/^/    /' "$tmp/out"
+  failures=$((failures + 1))
+}
+
+# expect STATUS TEXT PROG ARGS...: runs PROG ARGS (from the scratch folder,
+# so that nothing it might write lands elsewhere) and checks the exit status
+# and that the output holds TEXT (fixed string).
+expect() {
+  want=$1 text=$2
+  shift 2
+  (cd "$tmp" && "$@") > "$tmp/out" 2>&1
+  got=$?
+  if [ "$got" -ne "$want" ]; then
+    fail "$*: exit $got, wanted $want"
+  elif ! grep -qF -- "$text" "$tmp/out"; then
+    fail "$*: output lacks \"$text\""
+  else
+    echo "ok   $*"
+  fi
+}
+
+# Every option named in PROG's help is known to its parser: given with a
+# value and followed by an unknown option, the parser gets past it and
+# stops at the unknown one (or at the value) -- never at the option itself.
+# $1 is the program as the messages name it, the rest its command line.
+help_options_are_parsed() {
+  name=$1
+  shift
+  "$@" --help > "$tmp/help" 2>&1 || {
+    cp "$tmp/help" "$tmp/out"
+    fail "$* --help exits non-zero"
+    return
+  }
+  opts=$(sed -n 's/^  \(-[a-zA-Z0-9], \)\{0,1\}\(--[a-z0-9-]*\).*/\2/p' \
+    "$tmp/help")
+  [ -n "$opts" ] || {
+    cp "$tmp/help" "$tmp/out"
+    fail "$* --help lists no options"
+    return
+  }
+  n=0
+  for opt in $opts; do
+    [ "$opt" = "--help" ] && continue
+    n=$((n + 1))
+    (cd "$tmp" && "$@" "$opt" 1 --no-such-option) > "$tmp/out" 2>&1
+    got=$?
+    if grep -qF -- "unknown option '$opt'" "$tmp/out"; then
+      fail "$name: --help lists $opt but the parser refuses it"
+    elif [ "$got" -ne 2 ]; then
+      fail "$name $opt 1 --no-such-option: exit $got, wanted 2"
+    fi
+  done
+  echo "ok   $name: the $n options --help lists are all parsed"
+}
+
+help_options_are_parsed blobcastd "$daemon"
+for cmd in render mesh gen eval-bench; do
+  help_options_are_parsed "blobcast $cmd" "$cli" "$cmd"
+done
+
+# The same mistakes get the same sentences in every program.
+expect 2 "blobcastd: unknown option '--bogus'" "$daemon" --bogus
+expect 2 "(see 'blobcastd --help')" "$daemon" --bogus=1
+expect 2 "blobcastd: --frame-budget 'x' is not a whole decimal number" \
+  "$daemon" --frame-budget x
+expect 2 "blobcastd: --frame-budget '0' is out of range (1..600000)" \
+  "$daemon" --frame-budget=0
+expect 2 "blobcastd: --frame-budget needs a value (MS)" \
+  "$daemon" --frame-budget
+expect 2 "blobcastd: --backend 'cuda' is not one of auto, cpu, tiled" \
+  "$daemon" --backend cuda
+expect 2 "blobcastd: --no-damage takes no value" "$daemon" --no-damage=1
+expect 2 "blobcastd: unexpected argument 'serve'" "$daemon" serve
+expect 2 "blobcast render: unknown option '--bogus'" \
+  "$cli" render default --bogus
+expect 2 "(see 'blobcast render --help')" "$cli" render default --bogus
+expect 2 "blobcast render: --threads '-2' is not a whole decimal number" \
+  "$cli" render default --size 8x8 --out o.png --threads -2
+expect 2 "blobcast render: --threads '1025' is out of range (0..1024)" \
+  "$cli" render default --size 8x8 --out o.png --threads=1025
+expect 2 "blobcast mesh: unknown option '--bogus'" "$cli" mesh default --bogus
+expect 2 "blobcast mesh: --resolution '1' is out of range (2..4096)" \
+  "$cli" mesh default --out m.obj --resolution 1
+expect 2 "blobcast gen: unknown option '--bogus'" "$cli" gen comb --bogus
+expect 2 "blobcast gen: --count '1e3' is not a whole decimal number" \
+  "$cli" gen comb --count 1e3
+expect 2 "blobcast eval-bench: unknown option '--bogus'" \
+  "$cli" eval-bench default --bogus
+expect 2 "blobcast eval-bench: --points '0' is out of range" \
+  "$cli" eval-bench default --points 0
+expect 2 "blobcast: unknown option '--bogus'" "$cli" --bogus
+# '--' ends the options: what follows is a scene name, not an option.
+expect 1 "--size" "$cli" render --size 8x8 --out o.png -- --size
+[ -e "$tmp/o.png" ] && fail "a refused command line wrote o.png"
+ls "$tmp" | grep -qv '^out$\|^help$' &&
+  fail "a refused command line left files: $(ls "$tmp")"
+
+if [ "$failures" -ne 0 ]; then
+  echo "$failures check(s) failed"
+  exit 1
+fi
+echo "all checks passed"
