@@ -194,12 +194,18 @@ static void put_hit(const struct frame *fr, uint32_t x, uint32_t y,
 	 * resolved at (as the CPU backends take them). */
 	float h =
 	    fmaxf(BC_SVO_HIT_FOOTPRINT * fr->cp.pix_angle * t, fr->cp.min_step);
-	for (int k = 0; k < 4; k++) {
-		float q[3] = {p[0] + h * tet[k][0], p[1] + h * tet[k][1],
-		              p[2] + h * tet[k][2]};
-		float v = bc_svo_cmask_eval(rpn, hit->mask, q);
-		for (int c = 0; c < 3; c++) {
-			n[c] += tet[k][c] * v;
+	{
+		float q[4][3], v[4];
+		for (int k = 0; k < 4; k++) {
+			for (int c = 0; c < 3; c++) {
+				q[k][c] = p[c] + h * tet[k][c];
+			}
+		}
+		bc_svo_cmask_eval4(rpn, hit->mask, q, v);
+		for (int k = 0; k < 4; k++) {
+			for (int c = 0; c < 3; c++) {
+				n[c] += tet[k][c] * v[k];
+			}
 		}
 	}
 	if (fr->r->base.opts.debug != BC_DEBUG_NONE) {

@@ -349,3 +349,83 @@ float bc_svo_cmask_eval_id(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
 {
 	return eval_cmask(r, m, p, prim);
 }
+
+void bc_svo_cmask_eval4(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
+                        const float p[4][3], float out[4])
+{
+	/* Terms outside, points inside: each term's record is read and
+	 * dispatched once for the four points, and the inner loops over
+	 * four lanes are what the compiler vectorizes. */
+	float st[BC_EVAL_STACK][4];
+	uint32_t sp = 0;
+	for (uint32_t w = 0; w < m.nwords; w++) {
+		uint32_t base = m.pairs[2 * w] << 5, b = m.pairs[2 * w + 1];
+		while (b) {
+			const struct bc_svo_term *t =
+			    &r->terms[base + bc__svo_lowest(b)];
+			const float *rec = r->rec + t->rec;
+			b &= b - 1u;
+			if (t->type == BC_SVO_TERM_PRIM) {
+				float x[4], y[4], z[4];
+				for (int j = 0; j < 4; j++) {
+					x[j] = rec[0] * p[j][0] +
+					       rec[1] * p[j][1] +
+					       rec[2] * p[j][2] + rec[3];
+					y[j] = rec[4] * p[j][0] +
+					       rec[5] * p[j][1] +
+					       rec[6] * p[j][2] + rec[7];
+					z[j] = rec[8] * p[j][0] +
+					       rec[9] * p[j][1] +
+					       rec[10] * p[j][2] + rec[11];
+				}
+				if (t->kind == BC_PRIM_SPHERE) {
+					for (int j = 0; j < 4; j++) {
+						st[sp][j] =
+						    sqrtf(x[j] * x[j] +
+						          y[j] * y[j] +
+						          z[j] * z[j]) -
+						    rec[12];
+					}
+				} else {
+					for (int j = 0; j < 4; j++) {
+						st[sp][j] = bc_prim_sdf(
+						    (enum bc_prim)t->kind,
+						    rec + 12, x[j], y[j], z[j]);
+					}
+				}
+				sp++;
+			} else if (t->type == BC_SVO_TERM_NEG) {
+				for (int j = 0; j < 4; j++) {
+					st[sp - 1][j] = -st[sp - 1][j];
+				}
+			} else {
+				float *f0 = st[sp - 2], *f1 = st[sp - 1];
+				if (t->kind == BC_OP_UNION) {
+					for (int j = 0; j < 4; j++) {
+						f0[j] = f1[j] < f0[j] ||
+						                f0[j] != f0[j]
+						            ? f1[j]
+						            : f0[j];
+					}
+				} else if (t->kind == BC_OP_INTERSECTION) {
+					for (int j = 0; j < 4; j++) {
+						f0[j] = f1[j] > f0[j] ||
+						                f0[j] != f0[j]
+						            ? f1[j]
+						            : f0[j];
+					}
+				} else {
+					for (int j = 0; j < 4; j++) {
+						f0[j] = bc_op_eval(
+						    (enum bc_op)t->kind, rec[0],
+						    rec[1], f0[j], f1[j]);
+					}
+				}
+				sp--;
+			}
+		}
+	}
+	for (int j = 0; j < 4; j++) {
+		out[j] = sp ? st[0][j] : INFINITY;
+	}
+}

@@ -93,14 +93,17 @@ static void mask_fill_sets_exactly_the_terms(void)
 static void full_variant_equals_reference_evaluator(void)
 {
 	static const char *const names[] = {"random", "random", "gears",
-	                                    "fig16",  "fig18",  "comb"};
+	                                    "fig16",  "fig18",  "comb",
+	                                    "catalogue"};
 	struct rng r = {7};
 	for (size_t s = 0; s < sizeof(names) / sizeof(names[0]); s++) {
 		struct bc_gen_opts o = {0};
 		struct bc_tree *t;
 		const struct bc_lin *l;
 		struct bc_svo_rpn rpn;
-		uint32_t *m, bad = 0, badid = 0;
+		struct bc_svo_cmask cm;
+		float q4[4][3], f4ref[4];
+		uint32_t *m, *pairs, bad = 0, badid = 0, bad4 = 0;
 		if (s < 2) {
 			o.count = 60;
 			o.seed = 11 + s;
@@ -116,18 +119,38 @@ static void full_variant_equals_reference_evaluator(void)
 		m = calloc(rpn.nwords, sizeof(*m));
 		REQUIRE(m);
 		bc_svo_mask_fill(&rpn, m);
+		pairs = calloc(2u * rpn.nwords, sizeof(*pairs));
+		REQUIRE(pairs);
+		for (uint32_t w = 0; w < rpn.nwords; w++) {
+			pairs[2 * w] = w;
+			pairs[2 * w + 1] = m[w];
+		}
+		cm.pairs = pairs;
+		cm.nwords = rpn.nwords;
 		for (int i = 0; i < 3000; i++) {
-			float p[3];
+			float p[3], f4[4];
 			uint32_t a = 0, b = 0;
 			rng_point(&r, l, 0.1f * l->size, p);
 			float fa = bc_eval_full_id(l, p, &a);
 			float fb = bc_svo_rpn_eval_id(&rpn, m, p, &b);
 			bad += !(fa == fb);
 			badid += a != b;
+			/* The four-point batch of the normals, on the
+			 * compressed form of the same variant. */
+			memcpy(q4[i % 4], p, sizeof(p));
+			f4ref[i % 4] = fa;
+			if (i % 4 == 3) {
+				bc_svo_cmask_eval4(&rpn, cm, q4, f4);
+				for (int j = 0; j < 4; j++) {
+					bad4 += !(f4[j] == f4ref[j]);
+				}
+			}
 		}
 		CHECK_EQ_INT(bad, 0);
 		CHECK_EQ_INT(badid, 0);
+		CHECK_EQ_INT(bad4, 0);
 		free(m);
+		free(pairs);
 		bc_svo_rpn_finish(&rpn);
 		bc_tree_destroy(t);
 	}

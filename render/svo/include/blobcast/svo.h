@@ -164,6 +164,10 @@ float bc_svo_cmask_eval(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
                         const float p[3]);
 float bc_svo_cmask_eval_id(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
                            const float p[3], uint32_t *prim);
+/* The same at four points at once (the tetrahedral normal's samples):
+ * out[j] equals bc_svo_cmask_eval at p[j], bit for bit. */
+void bc_svo_cmask_eval4(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
+                        const float p[4][3], float out[4]);
 
 /* ---- Range arithmetic (ia.c, aa.c, revaa.c) ----------------------------- */
 
