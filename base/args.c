@@ -252,6 +252,9 @@ int bc_args_parse(struct bc_args *a, int argc, char **argv)
 		if (only_pos || arg[0] != '-' || arg[1] == '\0') {
 			/* Slots 1..i are consumed: reorder in place. */
 			argv[1 + a->npos++] = arg;
+			if (a->stop_at_positional) {
+				only_pos = true;
+			}
 			continue;
 		}
 		if (strcmp(arg, "--") == 0) {
@@ -416,5 +419,8 @@ void bc_args_help(const struct bc_args *a, FILE *out)
 	if (a->footer) {
 		fputc('\n', out);
 		print_text(out, a->footer, 0, NULL);
+	}
+	if (a->more_help) {
+		a->more_help(out);
 	}
 }

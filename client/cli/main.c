@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/args.h"
 #include "blobcast/log.h"
 #include "cmd_mesh.h"
 #include "cmd_render.h"
@@ -44,24 +45,25 @@ static bool is_client_cmd(const char *s)
 	return false;
 }
 
-static void usage(FILE *out)
-{
-	fprintf(out,
-		"usage: blobcast [--server ADDR] COMMAND [options]\n"
-		"\n"
-		"Local commands:\n"
-		"  render      render a scene file to images on this machine\n"
-		"  mesh        write a triangle mesh (.obj, .ply, .stl) of a scene\n"
+static const char main_about[] =
+	"Local commands:\n"
+	"  render      render a scene file to images on this machine\n"
+	"  mesh        write a triangle mesh (.obj, .ply, .stl) of a scene\n"
 #if defined(BLOBCAST_CLI_HAVE_GEN)
-		"  gen         print a generated scene (the paper's synthetic\n"
-		"              families and more) as JSON\n"
+	"  gen         print a generated scene (the paper's synthetic\n"
+	"              families and more) as JSON\n"
 #endif
 #if defined(BLOBCAST_CLI_HAVE_EVALBENCH)
-		"  eval-bench  measure interval pruning and pruned evaluation\n"
-		"              on a scene (prints JSON)\n"
+	"  eval-bench  measure interval pruning and pruned evaluation\n"
+	"              on a scene (prints JSON)\n"
 #endif
-		"  help [COMMAND]  this overview, or a command's full help\n"
-		"  --version   print the version\n");
+	"  help [COMMAND]  this overview, or a command's full help\n"
+	"\n"
+	"Options (before the command):";
+
+/* After the option table: the server commands, then where to read more. */
+static void more_help(FILE *out)
+{
 #if defined(BLOBCAST_CLI_HAVE_CLIENT)
 	fprintf(out,
 		"\nCommands for a blobcastd server (--server HOST:PORT or\n"
@@ -70,6 +72,38 @@ static void usage(FILE *out)
 #endif
 	fprintf(out, "\n'blobcast COMMAND --help' describes each command's "
 		     "options.\n");
+}
+
+/* The options before the command word, over server and version. */
+#define MAIN_OPTS(server, version)                                             \
+	{                                                                      \
+		{.name = "server", .kind = BC_OPT_STRING, .dst = (server),     \
+		 .arg = "ADDR",                                                \
+		 .help = "the blobcastd of the server commands\n"              \
+			 "(HOST:PORT, tls://HOST:PORT or unix:PATH)"},         \
+		{.name = "version", .kind = BC_OPT_FLAG, .dst = (version),     \
+		 .help = "print the version"},                                 \
+		{.kind = BC_OPT_INVALID},                                      \
+	}
+
+static struct bc_args main_args(const struct bc_opt *opts)
+{
+	return (struct bc_args){
+		.prog = "blobcast",
+		.usage = "blobcast [--server ADDR] COMMAND [options]",
+		.about = main_about,
+		.opts = opts,
+		.stop_at_positional = true,
+		.more_help = more_help};
+}
+
+static void usage(FILE *out)
+{
+	const char *server = NULL;
+	bool version = false;
+	const struct bc_opt opts[] = MAIN_OPTS(&server, &version);
+	struct bc_args a = main_args(opts);
+	bc_args_help(&a, out);
 }
 
 /* Runs one subcommand. argv[0] is its name. */
@@ -118,65 +152,56 @@ static int help(const char *cmd)
 int main(int argc, char **argv)
 {
 	const char *server = NULL;
-	int first = 1, status;
+	bool version = false;
+	const struct bc_opt opts[] = MAIN_OPTS(&server, &version);
+	struct bc_args a = main_args(opts);
+	int status;
 	char **sub;
 	bc_log_init(BC_LOG_WARN);
-	/* Global options before the command. */
-	while (first < argc && argv[first][0] == '-') {
-		const char *a = argv[first];
-		if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
-			usage(stdout);
-			return 0;
-		}
-		if (strcmp(a, "--version") == 0) {
-			printf("blobcast %s\n", BLOBCAST_VERSION);
-			return 0;
-		}
-		if (strcmp(a, "--server") == 0 && first + 1 < argc) {
-			server = argv[first + 1];
-			first += 2;
-		} else if (strncmp(a, "--server=", 9) == 0) {
-			server = a + 9;
-			first++;
-		} else {
-			fprintf(stderr, "blobcast: unknown option '%s' (see "
-					"'blobcast --help')\n", a);
-			return 2;
-		}
+	/* Global options before the command; the command's own follow it
+	 * in a.pos and are the command's to parse. */
+	if (bc_args_parse(&a, argc, argv)) {
+		return a.status;
 	}
-	if (first >= argc) {
+	if (version) {
+		printf("blobcast %s\n", BLOBCAST_VERSION);
+		return 0;
+	}
+	if (a.npos == 0) {
 		usage(stderr);
 		return 2;
 	}
-	if (strcmp(argv[first], "help") == 0) {
-		if (server || first + 2 < argc) {
-			fprintf(stderr, "usage: blobcast help [COMMAND]\n");
-			return 2;
+	if (strcmp(a.pos[0], "help") == 0) {
+		if (server || a.npos > 2) {
+			return bc_args_error(&a, "%s",
+					     "help takes at most one command "
+					     "and no --server");
 		}
-		return help(first + 1 < argc ? argv[first + 1] : NULL);
+		return help(a.npos > 1 ? a.pos[1] : NULL);
 	}
 	if (!server) {
-		return dispatch(argc - first, argv + first);
+		return dispatch(a.npos, a.pos);
 	}
-	if (!is_client_cmd(argv[first])) {
-		fprintf(stderr, "blobcast: --server applies to the server "
-				"commands only, not '%s'\n", argv[first]);
-		return 2;
+	if (!is_client_cmd(a.pos[0])) {
+		return bc_args_error(&a,
+				     "--server applies to the server commands "
+				     "only, not '%s'",
+				     a.pos[0]);
 	}
 	/* The client commands parse --server themselves: pass it after the
 	 * command word. */
-	sub = bc_calloc((size_t)(argc - first) + 3, sizeof(*sub));
+	sub = bc_calloc((size_t)a.npos + 3, sizeof(*sub));
 	if (!sub) {
 		fprintf(stderr, "blobcast: out of memory\n");
 		return 1;
 	}
-	sub[0] = argv[first];
+	sub[0] = a.pos[0];
 	sub[1] = "--server";
 	sub[2] = (char *)server;
-	for (int i = first + 1; i < argc; i++) {
-		sub[i - first + 2] = argv[i];
+	for (int i = 1; i < a.npos; i++) {
+		sub[i + 2] = a.pos[i];
 	}
-	status = dispatch(argc - first + 2, sub);
+	status = dispatch(a.npos + 2, sub);
 	bc_free(sub);
 	return status;
 }

@@ -204,6 +204,31 @@ static void args_parse_every_kind_both_spellings(void)
 	CHECK_EQ_INT(a.npos, 0);
 }
 
+/* A program whose options precede a command word: parsing stops at the
+ * first positional, and the command's own options stay unparsed. */
+static void args_stop_at_the_command_word(void)
+{
+	struct cmd c;
+	struct bc_args a;
+	struct bc_opt opts[10];
+	char *argv[] = {"cmd", "-v", "-o", "x", "render", "--verbose",
+			"--bogus", "--", "y", NULL};
+	int argc = 9;
+	c = (struct cmd){0};
+	table(&c, opts);
+	a = (struct bc_args){.prog = "bc test", .opts = opts,
+			     .stop_at_positional = true};
+	CHECK_EQ_INT(bc_args_parse(&a, argc, argv), 0);
+	CHECK(c.verbose);
+	CHECK_STREQ(c.out, "x");
+	REQUIRE(a.npos == 5);
+	CHECK_STREQ(a.pos[0], "render");
+	CHECK_STREQ(a.pos[1], "--verbose");
+	CHECK_STREQ(a.pos[2], "--bogus");
+	CHECK_STREQ(a.pos[3], "--");
+	CHECK_STREQ(a.pos[4], "y");
+}
+
 static void args_double_dash_ends_options(void)
 {
 	struct cmd c;
@@ -319,6 +344,45 @@ static void args_help_comes_from_the_table(void)
 	}
 }
 
+/* "{default}" prints what the destination holds when the help is shown,
+ * so a command that sets its defaults first documents them truly. */
+static void args_help_shows_defaults(void)
+{
+	uint32_t n = 12;
+	uint64_t big = 18446744073709551615ull;
+	float f = 0.25f;
+	int mode = 2;
+	const char *name = NULL;
+	char text[2048];
+	size_t len;
+	const struct bc_opt opts[] = {
+		{.name = "n", .kind = BC_OPT_U32, .dst = &n, .arg = "N",
+		 .help = "default {default}"},
+		{.name = "big", .kind = BC_OPT_U64, .dst = &big, .arg = "B",
+		 .help = "default {default}"},
+		{.name = "f", .kind = BC_OPT_F32, .dst = &f, .arg = "F",
+		 .help = "default {default}"},
+		{.name = "mode", .kind = BC_OPT_ENUM, .dst = &mode, .arg = "M",
+		 .help = "default {default}", .names = modes},
+		{.name = "name", .kind = BC_OPT_STRING, .dst = &name,
+		 .arg = "S", .help = "default {default}"},
+		{.kind = BC_OPT_INVALID},
+	};
+	struct bc_args a = {.prog = "p", .opts = opts};
+	FILE *tmp = tmpfile();
+	REQUIRE(tmp);
+	bc_args_help(&a, tmp);
+	rewind(tmp);
+	len = fread(text, 1, sizeof(text) - 1, tmp);
+	text[len] = '\0';
+	fclose(tmp);
+	CHECK(strstr(text, "  --n N              default 12\n") != NULL);
+	CHECK(strstr(text, "default 18446744073709551615\n") != NULL);
+	CHECK(strstr(text, "  --f F              default 0.25\n") != NULL);
+	CHECK(strstr(text, "  --mode M           default exact\n") != NULL);
+	CHECK(strstr(text, "  --name S           default none\n") != NULL);
+}
+
 static const struct bc_test tests[] = {
     {"num_integers_are_plain_decimal", num_integers_are_plain_decimal},
     {"num_floats_are_finite_decimal", num_floats_are_finite_decimal},
@@ -326,6 +390,8 @@ static const struct bc_test tests[] = {
     {"args_parse_every_kind_both_spellings",
      args_parse_every_kind_both_spellings},
     {"args_double_dash_ends_options", args_double_dash_ends_options},
+    {"args_stop_at_the_command_word", args_stop_at_the_command_word},
+    {"args_help_shows_defaults", args_help_shows_defaults},
     {"args_errors_are_named", args_errors_are_named},
     {"args_help_comes_from_the_table", args_help_comes_from_the_table},
 };

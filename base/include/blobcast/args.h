@@ -79,6 +79,13 @@ struct bc_args {
 	const char *about;
 	const char *footer;
 	const struct bc_opt *opts;
+	/* Parse options only up to the first positional argument, which
+	 * with everything after it lands in pos unparsed: for a program
+	 * whose options precede a command word with options of its own. */
+	bool stop_at_positional;
+	/* Called at the end of the help, for text only the program can
+	 * produce (another table's commands); may be NULL. */
+	void (*more_help)(FILE *out);
 	/* Out. pos[0..npos) are the positional arguments in order (they
 	 * point into argv, which bc_args_parse reorders). seen has bit i set
 	 * when opts[i] was given. status is the exit status to return when
