@@ -6,6 +6,8 @@
 #ifndef BLOBCAST_SERVER_LIMITS_H
 #define BLOBCAST_SERVER_LIMITS_H
 
+#include "blobcast/limits.h"
+
 /* Open client connections. Each holds a reader buffer of up to one message
  * plus an output queue, and each member of a session may cost a render per
  * change; 256 is far beyond a review meeting while bounding memory. */
@@ -28,7 +30,7 @@
 /* Nodes of a session's scene: the layout's own limit (22-bit ancestor
  * indices, BC_TREE_MAX_NODES), which a SCENE_LOAD under the payload limit
  * can reach. */
-#define BC_SRV_MAX_NODES ((1u << 22) - 1u)
+#define BC_SRV_MAX_NODES BC_LIMIT_NODES
 
 /* Largest view width or height. 4096^2 RGBA is 64 MiB per rendered frame;
  * the protocol allows 8192 for future GPUs with more memory. */

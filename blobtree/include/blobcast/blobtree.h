@@ -24,12 +24,13 @@
 #include <stdint.h>
 
 #include "blobcast/error.h"
+#include "blobcast/limits.h"
 
 /* ---- Limits ------------------------------------------------------------ */
 
 /* Linearized nodes are addressed by a 22-bit ancestor field in the GPU node
  * word (paper §7); the all-ones value marks "no ancestor". */
-#define BC_TREE_MAX_NODES ((1u << 22) - 1u)
+#define BC_TREE_MAX_NODES BC_LIMIT_NODES
 /* Nesting of the n-ary scene tree: nodes on the longest path from the root,
  * the root counting 1. Every walk over the tree is iterative (explicit heap
  * stacks or parent links) and every per-level array is allocated per node,

@@ -11,6 +11,8 @@
 #ifndef BLOBCAST_PROTO_LIMITS_H
 #define BLOBCAST_PROTO_LIMITS_H
 
+#include "blobcast/limits.h"
+
 /* ---- Framing ------------------------------------------------------------ */
 
 /* Largest payload of any message after HELLO. It holds the SCENE_LOAD of a
@@ -118,7 +120,7 @@
 
 /* Nodes of a scene; equals BC_TREE_MAX_NODES (the GPU node word has a
  * 22-bit ancestor field whose all-ones value means "none"). */
-#define BC_PROTO_SCENE_MAX_NODES ((1u << 22) - 1u)
+#define BC_PROTO_SCENE_MAX_NODES BC_LIMIT_NODES
 
 /* Nodes on any path from the root, the root counting 1; equals
  * BC_TREE_MAX_DEPTH. Decoders keep per-level state on the heap, so deep
