@@ -10,16 +10,14 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "blobcast/alloc.h"
 #include "blobcast/blobtree.h"
+#include "blobcast/clock.h"
 
 static double now_s(void)
 {
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+	return (double)bc_clock_ns() * 1e-9;
 }
 
 static int cmp_double(const void *a, const void *b)

@@ -12,18 +12,16 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "blobcast/alloc.h"
 #include "blobcast/blobtree.h"
+#include "blobcast/clock.h"
 #include "blobcast/gen.h"
 #include "blobcast/scene.h"
 
 static double now_s(void)
 {
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+	return (double)bc_clock_ns() * 1e-9;
 }
 
 static void die(const char *what, const struct bc_errinfo *ei)

@@ -13,6 +13,7 @@
 #include <turbojpeg.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/bytes.h"
 #include "client_impl.h"
 
 void bc_client_image_init(struct bc_client_image *img)
@@ -261,12 +262,10 @@ static void *read_plane(const struct bc_proto_rect *r, uint32_t w, uint32_t h,
 	}
 	for (size_t k = 0; k < n; k++) {
 		const uint8_t *p = r->data.ptr + 4u * k;
-		uint32_t u = (uint32_t)p[0] | (uint32_t)p[1] << 8 |
-		             (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
 		if (depth) {
-			memcpy((float *)(void *)out + k, &u, sizeof(u));
+			((float *)(void *)out)[k] = bc_get_f32(p);
 		} else {
-			out[k] = u;
+			out[k] = bc_get_le32(p);
 		}
 	}
 	return out;
