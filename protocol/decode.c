@@ -768,6 +768,32 @@ static int dec_body(struct dec *d, struct bc_msg *m)
 	}
 	case BC_MSG_CAMERA:
 		return dec_camera(d, &m->camera);
+	case BC_MSG_PRESENT:
+	case BC_MSG_FOLLOW:
+		return rd_u8_range(d, "on", 0, 1, &m->toggle.on);
+	case BC_MSG_PRESENTER:
+		TRY(rd_u32(d, "presenter", &m->presenter.presenter));
+		TRY(rd_u8_range(d, "following", 0, 1, &m->presenter.following));
+		if (m->presenter.following && m->presenter.presenter == 0) {
+			return fail(d, BC_ERANGE,
+			            "following 1 while nobody presents");
+		}
+		return 0;
+	case BC_MSG_FOLLOW_CAMERA:
+		TRY(rd_id(d, "presenter", &m->follow_camera.presenter));
+		return dec_camera(d, &m->follow_camera.camera);
+	case BC_MSG_SESSION_CAMERA:
+		return dec_camera(d, &m->session_camera);
+	case BC_MSG_SESSION_CAMERA_SET: {
+		struct bc_msg_session_camera_set *c = &m->session_camera_set;
+		TRY(rd_u64(d, "order", &c->order));
+		if (c->order == 0) {
+			return fail(d, BC_ERANGE, "order is 0");
+		}
+		TRY(rd_id(d, "author", &c->author));
+		TRY(rd_u32(d, "author_seq", &c->author_seq));
+		return dec_camera(d, &c->camera);
+	}
 	case BC_MSG_VIEW:
 		return dec_view(d, &m->view);
 	case BC_MSG_FRAME:

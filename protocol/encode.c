@@ -165,6 +165,14 @@ static void w_frame(struct bc__w *w, const struct bc_msg_frame *f)
 	}
 }
 
+static void w_camera(struct bc__w *w, const struct bc_msg_camera *c)
+{
+	w_f32v(w, c->eye, 3);
+	w_f32v(w, c->target, 3);
+	w_f32v(w, c->up, 3);
+	bc__put_f32(w, c->fov_y_deg);
+}
+
 static void w_body(struct bc__w *w, const struct bc_msg *m)
 {
 	switch (m->type) {
@@ -248,10 +256,28 @@ static void w_body(struct bc__w *w, const struct bc_msg *m)
 		}
 		break;
 	case BC_MSG_CAMERA:
-		w_f32v(w, m->camera.eye, 3);
-		w_f32v(w, m->camera.target, 3);
-		w_f32v(w, m->camera.up, 3);
-		bc__put_f32(w, m->camera.fov_y_deg);
+		w_camera(w, &m->camera);
+		break;
+	case BC_MSG_PRESENT:
+	case BC_MSG_FOLLOW:
+		bc__put_u8(w, m->toggle.on);
+		break;
+	case BC_MSG_PRESENTER:
+		bc__put_u32(w, m->presenter.presenter);
+		bc__put_u8(w, m->presenter.following);
+		break;
+	case BC_MSG_FOLLOW_CAMERA:
+		bc__put_u32(w, m->follow_camera.presenter);
+		w_camera(w, &m->follow_camera.camera);
+		break;
+	case BC_MSG_SESSION_CAMERA:
+		w_camera(w, &m->session_camera);
+		break;
+	case BC_MSG_SESSION_CAMERA_SET:
+		bc__put_u64(w, m->session_camera_set.order);
+		bc__put_u32(w, m->session_camera_set.author);
+		bc__put_u32(w, m->session_camera_set.author_seq);
+		w_camera(w, &m->session_camera_set.camera);
 		break;
 	case BC_MSG_VIEW:
 		bc__put_u16(w, m->view.width);

@@ -26,6 +26,8 @@
 #define SESSION_ENTRY_MAX (STR_MAX(BC_PROTO_MAX_NAME) + 2u + 4u + 8u + 8u + 1u)
 #define SESSIONS_MAX (2u + BC_PROTO_MAX_SESSIONS_LISTED * SESSION_ENTRY_MAX)
 #define BULK BC_PROTO_MAX_PAYLOAD
+/* A camera: eye, target, up (3 f32 each) and fov_y_deg. */
+#define CAMERA_SIZE 40u
 
 static const struct bc__type_info types[BC_MSG_COUNT] = {
     [BC_MSG_HELLO] = {"HELLO", BC__FROM_CLIENT, 0, HELLO_MAX},
@@ -48,7 +50,7 @@ static const struct bc__type_info types[BC_MSG_COUNT] = {
                                  BC_PROTO_FLAG_REDO,
                              BULK},
     [BC_MSG_CAMERA] = {"CAMERA", BC__FROM_CLIENT, BC_PROTO_FLAG_INTERACTING,
-                       40},
+                       CAMERA_SIZE},
     [BC_MSG_VIEW] = {"VIEW", BC__FROM_CLIENT, 0, 8},
     [BC_MSG_FRAME] = {"FRAME", BC__FROM_SERVER,
                       BC_PROTO_FLAG_STILL | BC_PROTO_FLAG_SNAPSHOT |
@@ -66,6 +68,15 @@ static const struct bc__type_info types[BC_MSG_COUNT] = {
     [BC_MSG_REDO] = {"REDO", BC__FROM_CLIENT, 0, 0},
     [BC_MSG_SESSION_LIST] = {"SESSION_LIST", BC__FROM_CLIENT, 0, 0},
     [BC_MSG_SESSIONS] = {"SESSIONS", BC__FROM_SERVER, 0, SESSIONS_MAX},
+    [BC_MSG_PRESENT] = {"PRESENT", BC__FROM_CLIENT, 0, 1},
+    [BC_MSG_FOLLOW] = {"FOLLOW", BC__FROM_CLIENT, 0, 1},
+    [BC_MSG_PRESENTER] = {"PRESENTER", BC__FROM_SERVER, 0, 5},
+    [BC_MSG_FOLLOW_CAMERA] = {"FOLLOW_CAMERA", BC__FROM_SERVER,
+                              BC_PROTO_FLAG_INTERACTING, 4u + CAMERA_SIZE},
+    [BC_MSG_SESSION_CAMERA] = {"SESSION_CAMERA", BC__FROM_CLIENT, 0,
+                               CAMERA_SIZE},
+    [BC_MSG_SESSION_CAMERA_SET] = {"SESSION_CAMERA_SET", BC__FROM_SERVER, 0,
+                                   8u + 4u + 4u + CAMERA_SIZE},
 };
 
 const struct bc__type_info *bc__type_info(unsigned type)
@@ -148,11 +159,14 @@ int bc_proto_client_may_send(enum bc_proto_stage stage, enum bc_proto_role role,
 	case BC_MSG_SESSION_LEAVE:
 	case BC_MSG_PICK:
 	case BC_MSG_SNAPSHOT:
+	case BC_MSG_PRESENT:
+	case BC_MSG_FOLLOW:
 		return stage == BC_PROTO_STAGE_SESSION ? 0 : BC_ESTATE;
 	case BC_MSG_SCENE_LOAD:
 	case BC_MSG_EDIT:
 	case BC_MSG_UNDO:
 	case BC_MSG_REDO:
+	case BC_MSG_SESSION_CAMERA:
 		if (stage != BC_PROTO_STAGE_SESSION) {
 			return BC_ESTATE;
 		}

@@ -216,6 +216,8 @@ void bc_handle_camera(struct bc_conn *c, const struct bc_msg *m)
 	c->interacting_until = (m->flags & BC_PROTO_FLAG_INTERACTING)
 	                           ? bc_now_ms(c->srv) + BC_SRV_STILL_DELAY_MS
 	                           : 0;
+	/* A follower leaves the follow; a presenter's followers track. */
+	bc_present_camera_moved(c, m->flags);
 	/* Before joining, the camera waits for the session. */
 	if (c->session) {
 		bc_session_schedule(c->session);

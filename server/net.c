@@ -468,6 +468,11 @@ static void dispatch(struct bc_conn *c, const struct bc_msg *m)
 	if (m->type == BC_MSG_PONG || m->type == BC_MSG_ERROR) {
 		return;
 	}
+	/* A client that sends a type of the presentation messages knows
+	 * those the server sends (PROTOCOL.md 4), refused or not. */
+	if (m->type >= BC_MSG_PRESENT) {
+		c->knows_present = true;
+	}
 	if (rc) {
 		bc_conn_send_error(c, m->seq, rc, false, "%s is not allowed %s",
 		                   bc_proto_type_name(m->type),

@@ -110,6 +110,11 @@ struct bc_conn {
 
 	struct bc_session *session;
 	uint32_t member_id;
+	/* Presentation (present.c): the client has sent a type of 28 or more
+	 * (PRESENT, FOLLOW, SESSION_CAMERA), so it is sent PRESENTER,
+	 * FOLLOW_CAMERA and SESSION_CAMERA_SET; it follows the presenter. */
+	bool knows_present;
+	bool follows;
 
 	/* View and frames. */
 	bool has_view;
@@ -155,6 +160,9 @@ struct bc_session {
 	bool loading; /* a SCENE_LOAD runs on a worker: changes wait */
 	uint64_t last_edit_ms; /* Unix ms of its last change (0: unknown) */
 	struct bc_undo *undo; /* undo/redo history (undo.c), or NULL */
+	/* The member presenting (present.c): its id, 0 when nobody does. */
+	uint32_t presenter_id;
+	struct bc_conn_ref presenter;
 	bool removed; /* out of the server, freed once its handles close */
 	uint32_t handles_open; /* timers and a load's work request */
 	double edit_ms_avg;
@@ -296,6 +304,24 @@ void bc_undo_record(struct bc_conn *c, struct bc_edit_batch *b,
 void bc_undo_step(struct bc_conn *c, bool redo, uint32_t seq);
 /* Forgets s's history (a new scene, or s going away). */
 void bc_undo_clear(struct bc_session *s);
+
+/* ---- present.c ---------------------------------------------------------- */
+void bc_handle_present(struct bc_conn *c, const struct bc_msg *m);
+void bc_handle_follow(struct bc_conn *c, const struct bc_msg *m);
+void bc_handle_session_camera(struct bc_conn *c, const struct bc_msg *m);
+/* c's own CAMERA was applied (flags: the CAMERA's): a follower stops
+ * following; the presenter's followers take its camera. */
+void bc_present_camera_moved(struct bc_conn *c, uint16_t flags);
+/* c leaves its session: a presenter's presentation ends for everyone. */
+void bc_present_leave(struct bc_conn *c);
+/* c joined its session: tells it who presents (when it knows the types). */
+void bc_present_joined(struct bc_conn *c);
+/* A journal record that sets the session camera: two zero bytes (an
+ * op_count no EDIT has) and the SESSION_CAMERA payload. Returns 1 and
+ * fills *cam when rec is one (0 when it is an EDIT, an error code when it
+ * is a damaged camera record). */
+int bc_present_camera_record(const uint8_t *rec, size_t len,
+                             struct bc_camera *cam);
 
 /* ---- frames.c ----------------------------------------------------------- */
 /* Starts a render for every member owed a frame (grouping equal ones). */

@@ -99,6 +99,7 @@ static void summary_keep(struct bc_session *s)
 struct replay_ctx {
 	struct bc_srv *srv;
 	struct bc_tree **tree;
+	struct bc_camera *camera;
 };
 
 static int replay_record(void *ud, uint64_t order, const uint8_t *rec,
@@ -111,6 +112,10 @@ static int replay_record(void *ud, uint64_t order, const uint8_t *rec,
 	struct bc_edit_batch b;
 	int rc;
 	(void)order;
+	/* A SESSION_CAMERA record (present.c) or an EDIT. */
+	if ((rc = bc_present_camera_record(rec, len, ctx->camera)) != 0) {
+		return rc < 0 ? rc : 0;
+	}
 	bc_proto_reader_init(&r, NULL);
 	rc = bc_proto_decode_payload(&r, BC_MSG_EDIT, 0, 0, rec, len, &m, &ei);
 	if (!rc) {
@@ -249,6 +254,7 @@ static int session_open(struct bc_srv *srv, const char *name,
 	bc_camera_default(&s->camera);
 	ctx.srv = srv;
 	ctx.tree = &s->tree;
+	ctx.camera = &s->camera;
 	rc = bc_store_session_open(srv->store, name, &s->store, s->tree,
 	                           &s->camera, &s->order, &created,
 	                           replay_record, &ctx, ei);
@@ -441,6 +447,7 @@ void bc_session_leave(struct bc_conn *c)
 	if (!s) {
 		return;
 	}
+	bc_present_leave(c);
 	for (uint32_t i = 0; i < s->nmembers; i++) {
 		if (s->members[i].slot == me.slot &&
 		    s->members[i].gen == me.gen) {
@@ -500,6 +507,7 @@ static void join(struct bc_conn *c, struct bc_session *s,
 	c->dirty = true;
 	bc_session_send_info(s);
 	bc_session_send_state(s, c, 0, 0);
+	bc_present_joined(c);
 	bc_session_schedule(s);
 }
 
@@ -585,6 +593,8 @@ void bc_handle_session_delete(struct bc_conn *c, const struct bc_msg *m)
 		return;
 	}
 	if (s) {
+		/* The presentation goes with the session, untold. */
+		s->presenter_id = 0;
 		/* Members first hear why they are back in READY. */
 		nrefs = bc_session_members(s, refs);
 		for (uint32_t i = 0; i < nrefs; i++) {
@@ -763,6 +773,9 @@ static const handler_fn handlers[BC_MSG_COUNT] = {
     [BC_MSG_UNDO] = bc_handle_undo,
     [BC_MSG_REDO] = bc_handle_undo,
     [BC_MSG_SESSION_LIST] = bc_handle_session_list,
+    [BC_MSG_PRESENT] = bc_handle_present,
+    [BC_MSG_FOLLOW] = bc_handle_follow,
+    [BC_MSG_SESSION_CAMERA] = bc_handle_session_camera,
 };
 
 void bc_session_handle(struct bc_conn *c, const struct bc_msg *m)

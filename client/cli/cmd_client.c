@@ -1,6 +1,6 @@
 /*
- * `blobcast load|edit|camera|snapshot|watch|bench-latency|nodes|scene`: the
- * command-line client of blobcastd. It owns option parsing for these
+ * `blobcast load|edit|camera|present|follow|snapshot|watch|bench-latency|
+ * nodes|scene|...`: the command-line client of blobcastd. It owns option parsing for these
  * subcommands (strict: every value is checked, options a subcommand does not
  * take are refused), their output formats, and the measurements of watch and
  * bench-latency. All protocol work goes through libblobcast
@@ -69,6 +69,7 @@ enum {
 	O_DOWNSCALE = 1u << 13,
 	O_IDS = 1u << 14,
 	O_JSON = 1u << 15,
+	O_FOR = 1u << 16,
 };
 #define O_CAMERA (O_EYE | O_TARGET | O_UP | O_FOV)
 
@@ -83,6 +84,7 @@ struct args {
 	struct bc_camera cam;
 	bool has_eye, has_target, has_up, has_fov;
 	uint64_t frames;
+	uint64_t for_s; /* present --for SECONDS; 0: until stopped */
 	uint32_t edits, node;
 	enum bc_proto_encoding encoding;
 	bool interacting, json;
@@ -409,20 +411,17 @@ static void apply_camera_opts(const struct args *a, struct bc_camera *cam)
 /*
  * The server keeps a camera per connection (CAMERA changes only the
  * sender's view) and one per session: the scene's, which members start
- * with and which is saved with the scene. The only message that sets the
- * latter is SCENE_LOAD, so this re-sends the session's scene (the mirror)
- * with the new camera.
+ * with and which is saved with the scene. SESSION_CAMERA sets the latter
+ * alone: the scene's nodes are not sent, so edits other members make at
+ * the same moment stand.
  */
 static int run_camera(struct args *a)
 {
 	struct bc_client *c = NULL;
 	struct bc_errinfo ei = {0};
 	struct bc_camera cam;
-	const struct bc_tree *t;
-	uint8_t *bytes = NULL;
-	size_t len = 0;
-	uint64_t before, order;
-	int status, rc;
+	uint64_t order;
+	int status;
 	if (!a->has_eye || !a->has_target) {
 		fprintf(stderr, "blobcast camera: --eye and --target are "
 		                "required (see blobcast camera --help)\n");
@@ -432,11 +431,8 @@ static int run_camera(struct args *a)
 	                           BC_CLIENT_JOIN_EXISTING, &c))) {
 		goto out;
 	}
-	if (!(t = bc_client_scene(c, &cam))) {
-		fprintf(stderr, "blobcast camera: the session's scene did not "
-		                "arrive intact\n");
-		status = EXIT_FAIL;
-		goto out;
+	if (!bc_client_scene(c, &cam)) {
+		bc_camera_default(&cam);
 	}
 	apply_camera_opts(a, &cam);
 	if (bc_camera_validate(&cam, &ei)) {
@@ -444,25 +440,9 @@ static int run_camera(struct args *a)
 		status = EXIT_USAGE;
 		goto out;
 	}
-	if ((rc = bc_scene_encode(t, &cam, &bytes, &len))) {
-		fprintf(stderr,
-		        "blobcast camera: cannot encode the scene: %s\n",
-		        bc_strerror(rc));
-		status = EXIT_FAIL;
-		goto out;
-	}
-	before = bc_client_info(c)->order;
-	if (bc_client_load_scene(c, bytes, len, &order, &ei)) {
+	if (bc_client_session_camera(c, &cam, &order, &ei)) {
 		status = failed(a, "camera not set", &ei);
 		goto out;
-	}
-	if (order != before + 1) {
-		/* Edits by others landed between our copy and our load; the
-		 * load replaced them (there is no compare-and-swap). */
-		fprintf(stderr,
-		        "blobcast camera: warning: %llu edit(s) by other "
-		        "members arrived meanwhile and were replaced\n",
-		        (unsigned long long)(order - before - 1));
 	}
 	printf("session %s: camera eye %g,%g,%g target %g,%g,%g up %g,%g,%g "
 	       "fov %g, edit order %llu\n",
@@ -472,7 +452,6 @@ static int run_camera(struct args *a)
 	       (double)cam.up[2], (double)cam.fov_y_deg,
 	       (unsigned long long)order);
 out:
-	bc_free(bytes);
 	bc_client_destroy(c);
 	return status;
 }
@@ -719,6 +698,20 @@ static void print_undo(const struct roster *r, const struct bc_msg *m)
 	       e->nops);
 }
 
+/* `presenter member=4 name="alice"` or `presenter none`, with
+ * ` following` when this client follows. */
+static void print_presenter(const struct roster *r, uint32_t id,
+                            bool following)
+{
+	const char *name = roster_name(r, id);
+	if (!id) {
+		printf("presenter none\n");
+		return;
+	}
+	printf("presenter member=%u name=\"%s\"%s\n", id, name ? name : "",
+	       following ? " following" : "");
+}
+
 /* The errors after which connecting again would be refused the same way:
  * watch reports them and stops instead of retrying. */
 static bool watch_gives_up(int code)
@@ -767,6 +760,12 @@ static int watch_open(const struct args *a, struct bc_client **c,
 	}
 	roster_update(roster, &m.session_info);
 	print_members(roster);
+	/* FOLLOW 0 follows nobody; it asks the server to say who presents
+	 * (PRESENTER), now and whenever that changes. */
+	if ((rc = bc_client_follow(*c, false, ei))) {
+		return rc;
+	}
+	print_presenter(roster, bc_client_info(*c)->presenter, false);
 	*view_at = now_ms();
 	return bc_client_view(*c,
 	                      &(struct bc_msg_view){.width = a->width,
@@ -931,6 +930,18 @@ static int run_watch(struct args *a)
 			fflush(stdout);
 			break;
 		}
+		case BC_MSG_PRESENTER:
+			print_presenter(roster, m.presenter.presenter,
+			                m.presenter.following != 0);
+			fflush(stdout);
+			break;
+		case BC_MSG_SESSION_CAMERA_SET:
+			order_seen(times, m.session_camera_set.order, at);
+			print_change(roster, "camera",
+			             m.session_camera_set.order,
+			             m.session_camera_set.author, "");
+			fflush(stdout);
+			break;
 		case BC_MSG_SCENE_STATE:
 			order_seen(times, m.scene_state.order, at);
 			if (m.scene_state.author) {
@@ -1015,6 +1026,281 @@ out:
 	sigaction(SIGTERM, &old_term, NULL);
 	bc_free(times);
 	bc_free(roster);
+	bc_client_image_finish(&img);
+	bc_client_destroy(c);
+	return status;
+}
+
+/* ---- present, follow
+ * ------------------------------------------------------------------------ */
+
+/*
+ * A one-shot presenter: it sets this connection's camera (the session's,
+ * changed by the camera options), presents, and stays until Ctrl-C,
+ * SIGTERM, --for SECONDS or another member taking over; then it stops
+ * presenting (unless replaced), which ends every follow. Any role may
+ * present, so it joins as a viewer.
+ */
+static int run_present(struct args *a)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	struct bc_camera cam;
+	struct bc_msg m;
+	struct sigaction sa, old_int, old_term;
+	double until = 0.0;
+	const char *end = "stopped";
+	uint32_t me;
+	int status, rc;
+	memset(&sa, 0, sizeof(sa));
+	sa.sa_handler = on_interrupt;
+	sigemptyset(&sa.sa_mask);
+	interrupted = 0;
+	sigaction(SIGINT, &sa, &old_int);
+	sigaction(SIGTERM, &sa, &old_term);
+	if ((status = open_session(a, BC_PROTO_ROLE_VIEWER,
+	                           BC_CLIENT_JOIN_EXISTING, &c))) {
+		goto out;
+	}
+	if (!bc_client_scene(c, &cam)) {
+		bc_camera_default(&cam);
+	}
+	apply_camera_opts(a, &cam);
+	if (bc_camera_validate(&cam, &ei)) {
+		fprintf(stderr, "blobcast present: %s\n", ei.msg);
+		status = EXIT_USAGE;
+		goto out;
+	}
+	if (bc_client_camera(c, &cam, false, NULL, &ei) ||
+	    bc_client_present(c, true, &ei)) {
+		status = failed(a, "present", &ei);
+		goto out;
+	}
+	me = bc_client_info(c)->member_id;
+	printf("presenting session=%s member=%u eye=%g,%g,%g "
+	       "target=%g,%g,%g fov=%g\n",
+	       a->session, me, (double)cam.eye[0], (double)cam.eye[1],
+	       (double)cam.eye[2], (double)cam.target[0],
+	       (double)cam.target[1], (double)cam.target[2],
+	       (double)cam.fov_y_deg);
+	fflush(stdout);
+	if (a->for_s) {
+		until = now_ms() + 1000.0 * (double)a->for_s;
+	}
+	while (!interrupted) {
+		if (until > 0.0 && now_ms() >= until) {
+			end = "time";
+			break;
+		}
+		rc = bc_client_recv(c, &m, WATCH_SLICE_MS);
+		if (rc < 0) {
+			bc_client_error(c, &ei);
+			status = failed(a, NULL, &ei);
+			goto out;
+		}
+		if (rc == 0) {
+			continue;
+		}
+		if (m.type == BC_MSG_PRESENTER && m.presenter.presenter != me) {
+			printf("replaced by member=%u\n",
+			       m.presenter.presenter);
+			end = "replaced";
+			break;
+		}
+		if (m.type == BC_MSG_ERROR) {
+			ei.code = -(int)m.error.code;
+			snprintf(ei.msg, sizeof(ei.msg), "%.*s",
+			         (int)m.error.text.len, m.error.text.ptr);
+			status = failed(a, NULL, &ei);
+			goto out;
+		}
+	}
+	if (strcmp(end, "replaced") != 0 && bc_client_present(c, false, &ei)) {
+		status = failed(a, "stop presenting", &ei);
+		goto out;
+	}
+	printf("end=%s\n", end);
+out:
+	sigaction(SIGINT, &old_int, NULL);
+	sigaction(SIGTERM, &old_term, NULL);
+	bc_client_destroy(c);
+	return status;
+}
+
+/*
+ * Follows the session's presenter: whoever presents now or starts later
+ * (a presentation that ends is waited out). Prints who presents, each
+ * camera the presenter moves to and each frame, rendered at --size.
+ */
+static int run_follow(struct args *a)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	struct bc_client_image img;
+	struct bc_msg m;
+	struct sigaction sa, old_int, old_term;
+	uint64_t nframes = 0;
+	double last_frame_at;
+	double idle_limit = a->timeout_ms < 0 ? -1.0
+	                    : a->timeout_ms == 0
+	                        ? (double)BC_CLIENT_DEFAULT_TIMEOUT_MS
+	                        : (double)a->timeout_ms;
+	const char *end = "stopped";
+	int status, rc;
+	bc_client_image_init(&img);
+	memset(&sa, 0, sizeof(sa));
+	sa.sa_handler = on_interrupt;
+	sigemptyset(&sa.sa_mask);
+	interrupted = 0;
+	sigaction(SIGINT, &sa, &old_int);
+	sigaction(SIGTERM, &sa, &old_term);
+	if (a->out && !bc_image_ext_supports(a->out, BC_IMAGE_U8)) {
+		fprintf(stderr,
+		        "blobcast follow: \"%s\": no image format for this "
+		        "extension (use .png, .tif, .exr, .jpg, ...)\n",
+		        a->out);
+		status = EXIT_USAGE;
+		goto out;
+	}
+	if ((status = open_session(a, BC_PROTO_ROLE_VIEWER,
+	                           BC_CLIENT_JOIN_EXISTING, &c))) {
+		goto out;
+	}
+	/* FOLLOW 0 first: the server then says who presents (PRESENTER). */
+	if (bc_client_follow(c, false, &ei)) {
+		status = failed(a, "follow", &ei);
+		goto out;
+	}
+	if (bc_client_view(c,
+	                   &(struct bc_msg_view){.width = a->width,
+	                                         .height = a->height,
+	                                         .encoding = a->encoding,
+	                                         .downscale = a->downscale},
+	                   NULL, &ei)) {
+		status = failed(a, "view", &ei);
+		goto out;
+	}
+	/* Behave as if PRESENTER had just said who presents. */
+	memset(&m, 0, sizeof(m));
+	m.type = BC_MSG_PRESENTER;
+	m.presenter.presenter = bc_client_info(c)->presenter;
+	rc = 1;
+	last_frame_at = now_ms();
+	while (!interrupted && (a->frames == 0 || nframes < a->frames)) {
+		if (rc == 0) {
+			if (a->frames && idle_limit >= 0.0 &&
+			    now_ms() - last_frame_at > idle_limit) {
+				end = "timeout";
+				break;
+			}
+			rc = bc_client_recv(c, &m, WATCH_SLICE_MS);
+			if (rc < 0) {
+				bc_client_error(c, &ei);
+				status = failed(a, NULL, &ei);
+				goto out;
+			}
+			continue;
+		}
+		rc = 0;
+		switch (m.type) {
+		case BC_MSG_PRESENTER: {
+			struct bc_msg f = {.type = BC_MSG_FOLLOW};
+			if (!m.presenter.presenter) {
+				printf("presenter none: waiting\n");
+			} else if (m.presenter.following) {
+				printf("following member=%u\n",
+				       m.presenter.presenter);
+			} else {
+				/* Someone presents and we do not follow
+				 * yet: ask (the answer comes as PRESENTER;
+				 * a presentation that ends first makes it
+				 * ESTATE, ignored below). */
+				printf("presenter member=%u\n",
+				       m.presenter.presenter);
+				f.toggle.on = 1;
+				if (bc_client_send(c, &f, NULL)) {
+					bc_client_error(c, &ei);
+					status = failed(a, "follow", &ei);
+					goto out;
+				}
+			}
+			fflush(stdout);
+			break;
+		}
+		case BC_MSG_FOLLOW_CAMERA: {
+			const struct bc_msg_camera *k = &m.follow_camera.camera;
+			printf("camera member=%u eye=%g,%g,%g target=%g,%g,%g "
+			       "up=%g,%g,%g fov=%g%s\n",
+			       m.follow_camera.presenter, (double)k->eye[0],
+			       (double)k->eye[1], (double)k->eye[2],
+			       (double)k->target[0], (double)k->target[1],
+			       (double)k->target[2], (double)k->up[0],
+			       (double)k->up[1], (double)k->up[2],
+			       (double)k->fov_y_deg,
+			       (m.flags & BC_PROTO_FLAG_INTERACTING)
+			           ? " interacting"
+			           : "");
+			fflush(stdout);
+			break;
+		}
+		case BC_MSG_FRAME:
+			nframes++;
+			last_frame_at = now_ms();
+			if (bc_client_image_apply(&img, &m, &ei)) {
+				fprintf(stderr,
+				        "blobcast follow: frame %u does not "
+				        "decode: %s\n",
+				        m.frame.frame_no, ei.msg);
+			}
+			printf("frame %llu no=%u view=%ux%u image=%ux%u "
+			       "level=%u %s\n",
+			       (unsigned long long)nframes, m.frame.frame_no,
+			       m.frame.width, m.frame.height,
+			       m.frame.image_width, m.frame.image_height,
+			       bc_proto_flags_level(m.flags),
+			       frame_kind(m.flags));
+			fflush(stdout);
+			break;
+		case BC_MSG_ERROR:
+			/* A FOLLOW that met no presenter: the next
+			 * PRESENTER says when one starts. */
+			if (-(int)m.error.code == BC_ESTATE && m.seq != 0) {
+				break;
+			}
+			ei.code = -(int)m.error.code;
+			snprintf(ei.msg, sizeof(ei.msg), "%.*s",
+			         (int)m.error.text.len, m.error.text.ptr);
+			status = failed(a, NULL, &ei);
+			goto out;
+		default:
+			break;
+		}
+	}
+	if (a->frames && nframes >= a->frames) {
+		end = "frames";
+	}
+	if (a->out && img.complete &&
+	    bc_image_write_rgba8(a->out, img.width, img.height, img.rgba,
+	                         &ei)) {
+		fprintf(stderr, "blobcast follow: %s\n", ei.msg);
+		status = EXIT_FAIL;
+		goto out;
+	}
+	if (a->out && img.complete) {
+		printf("wrote %s (%ux%u)\n", a->out, img.width, img.height);
+	}
+	printf("end=%s frames=%llu\n", end, (unsigned long long)nframes);
+	if (strcmp(end, "timeout") == 0) {
+		fprintf(stderr,
+		        "blobcast follow: timed out: %llu of %llu frames, none "
+		        "for %.0f ms (--timeout)\n",
+		        (unsigned long long)nframes,
+		        (unsigned long long)a->frames, idle_limit);
+		status = EXIT_FAIL;
+	}
+out:
+	sigaction(SIGINT, &old_int, NULL);
+	sigaction(SIGTERM, &old_term, NULL);
 	bc_client_image_finish(&img);
 	bc_client_destroy(c);
 	return status;
@@ -1457,13 +1743,51 @@ static const struct cmd cmds[] = {
     {"camera", O_SESSION | O_CAMERA, 0, 0,
      "--session NAME --eye x,y,z --target x,y,z [--up x,y,z] [--fov DEG]",
      "set the session's camera",
-     "Sets the session's saved camera: the view members start with and\n"
-     "the one every member is moved to now. The protocol sets it only\n"
-     "with a scene load, so the session's scene is loaded again with the\n"
-     "new camera; edits other members make at that very moment are\n"
-     "replaced (a warning says so). --up and --fov default to the\n"
-     "session's current values.\n",
+     "Sets the session's saved camera: the view members who join from\n"
+     "now on start with, saved with the scene (and given back by\n"
+     "'blobcast scene'). Members already in the session keep their own\n"
+     "cameras (to take viewers along, use 'present'). Only the camera is\n"
+     "sent, so edits other members make meanwhile stand. Needs the\n"
+     "editor role. --up and --fov default to the session's current\n"
+     "values.\n",
      run_camera},
+    {"present", O_SESSION | O_CAMERA | O_FOR, 0, 0,
+     "--session NAME [--eye x,y,z --target x,y,z ...] [--for SECONDS]",
+     "present: members who follow see this client's camera",
+     "Joins session NAME (as a viewer: any role may present), sets this\n"
+     "client's camera to the session's changed by --eye/--target/--up/\n"
+     "--fov, and presents: members who follow (viewer F key, page\n"
+     "button, 'blobcast follow') see the session from this camera, each\n"
+     "at its own view size. A presenter that another member replaces\n"
+     "stops. Prints\n"
+     "  presenting session=NAME member=ID eye=... target=... fov=...\n"
+     "  replaced by member=ID             (another member presents)\n"
+     "  end=stopped|time|replaced\n"
+     "and stops presenting when it ends, which ends every follow.\n"
+     "  --for SECONDS   present for SECONDS (1..86400; default: until\n"
+     "                  Ctrl-C or SIGTERM)\n",
+     run_present},
+    {"follow", O_SESSION | O_SIZE | O_FRAMES | O_ENCODING | O_DOWNSCALE |
+         O_OUT,
+     0, 0, "--session NAME [--frames N] [--size WxH] [--out IMG]",
+     "follow the presenter and print its camera and frames",
+     "Joins session NAME as a viewer and follows whoever presents (now,\n"
+     "or when someone starts; a presentation that ends is waited out):\n"
+     "the server renders this client's frames from the presenter's\n"
+     "camera at --size. Prints\n"
+     "  presenter member=ID | presenter none: waiting\n"
+     "  following member=ID\n"
+     "  camera member=ID eye=x,y,z target=x,y,z up=x,y,z fov=F "
+     "[interacting]\n"
+     "  frame K no=N view=WxH image=WxH level=L still|interactive\n"
+     "  end=frames|timeout|stopped frames=K\n"
+     "  --frames N      stop after N frames; give up when no frame came\n"
+     "                  for --timeout MS (default 10000), exit status 1\n"
+     "  --size WxH      view size (default 640x480)\n"
+     "  --encoding E    jpeg (default), png or raw\n"
+     "  --downscale D   coarsest block accepted (1..8, default 1)\n"
+     "  --out IMG       at the end, write the last picture to IMG\n",
+     run_follow},
     {"snapshot", O_SESSION | O_SIZE | O_OUT | O_DEPTH | O_IDS | O_CAMERA, 0, 0,
      "--session NAME --size WxH --out IMG [--depth IMG] [--ids IMG]",
      "save a lossless still of a session to an image file",
@@ -1501,6 +1825,8 @@ static const struct cmd cmds[] = {
      "  undo order=6 of=5 by=\"bob\" author=\"alice\" member=9 ops=1\n"
      "  redo order=7 of=5 by=\"alice\" author=\"alice\" member=4 ops=1\n"
      "  load order=8 by=\"alice\" member=4\n"
+     "  camera order=9 by=\"alice\" member=4   (the session camera)\n"
+     "  presenter member=4 name=\"alice\" | presenter none\n"
      "(undo and redo: edit ORDER by member BY takes back, or applies\n"
      "again, edit OF whose author was AUTHOR).\n"
      "A lost connection prints 'lost reason=CODE' and is retried every\n"
@@ -1689,6 +2015,9 @@ static int parse_option(const struct cmd *k, int argc, char **argv, int *i,
 	} else if (take_value(argc, argv, i, "--frames", &v)) {
 		need = O_FRAMES;
 		ok = v && parse_u64(v, 1, UINT64_MAX, &a->frames);
+	} else if (take_value(argc, argv, i, "--for", &v)) {
+		need = O_FOR;
+		ok = v && parse_u64(v, 1, 86400, &a->for_s);
 	} else if (take_value(argc, argv, i, "--edits", &v)) {
 		need = O_EDITS;
 		ok = v && parse_u64(v, 1, MAX_BENCH_EDITS, &x);

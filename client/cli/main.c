@@ -32,6 +32,7 @@
 static const char *const client_cmds[] = {
 	"load", "edit", "camera", "snapshot", "watch", "bench-latency",
 	"nodes", "scene", "delete", "undo", "redo", "sessions",
+	"present", "follow",
 };
 
 static bool is_client_cmd(const char *s)

@@ -614,6 +614,12 @@ static void track(struct bc_client *c, const struct bc_msg *m)
 	struct bc_errinfo ei = {0};
 	switch (m->type) {
 	case BC_MSG_SESSION_INFO:
+		/* A new membership: PRESENTER follows if someone presents. */
+		if (m->session_info.member_id != c->info.member_id ||
+		    m->session_info.session_id != c->info.session_id) {
+			c->info.presenter = 0;
+			c->info.following = false;
+		}
 		c->info.session_id = m->session_info.session_id;
 		c->info.member_id = m->session_info.member_id;
 		c->info.role = m->session_info.role;
@@ -665,6 +671,31 @@ static void track(struct bc_client *c, const struct bc_msg *m)
 		}
 		c->scene_order = m->edit_applied.order;
 		break;
+	case BC_MSG_PRESENTER:
+		c->info.presenter = m->presenter.presenter;
+		c->info.following = m->presenter.following != 0;
+		break;
+	case BC_MSG_SESSION_CAMERA_SET: {
+		const struct bc_msg_session_camera_set *cs =
+		    &m->session_camera_set;
+		if (cs->order > c->info.order) {
+			c->info.order = cs->order;
+		}
+		if (!c->has_scene) {
+			break;
+		}
+		if (cs->order != c->scene_order + 1) {
+			drop_scene(c, "an edit order was skipped");
+			break;
+		}
+		memcpy(c->camera.eye, cs->camera.eye, sizeof(c->camera.eye));
+		memcpy(c->camera.target, cs->camera.target,
+		       sizeof(c->camera.target));
+		memcpy(c->camera.up, cs->camera.up, sizeof(c->camera.up));
+		c->camera.fov_y_deg = cs->camera.fov_y_deg;
+		c->scene_order = cs->order;
+		break;
+	}
 	case BC_MSG_ERROR:
 		if (m->flags & BC_PROTO_FLAG_FATAL) {
 			int code = m->error.code ? -(int)m->error.code
@@ -750,6 +781,12 @@ static bool matches(const struct bc_client *c, const struct bc_msg *m,
 		return seq == 0 ||
 		       (m->scene_state.author == c->info.member_id &&
 			m->scene_state.author_seq == seq);
+	case BC_MSG_SESSION_CAMERA_SET:
+		return m->session_camera_set.author == c->info.member_id &&
+		       (seq == 0 || m->session_camera_set.author_seq == seq);
+	case BC_MSG_PRESENTER:
+	case BC_MSG_FOLLOW_CAMERA:
+		return true; /* always seq 0 */
 	default:
 		return seq == 0 || m->seq == seq;
 	}
@@ -1171,5 +1208,53 @@ int bc_client_sessions(struct bc_client *c, struct bc_client_session **out,
 	}
 	*out = list;
 	*n = m.sessions.nsessions;
+	return 0;
+}
+
+int bc_client_present(struct bc_client *c, bool on, struct bc_errinfo *ei)
+{
+	struct bc_msg m = {.type = BC_MSG_PRESENT};
+	uint32_t seq;
+	int rc;
+	m.toggle.on = on ? 1 : 0;
+	if ((rc = send_or_say(c, &m, &seq, ei))) {
+		return rc;
+	}
+	return bc_client_wait(c, BC_MSG_OK, seq, &m, 0, ei);
+}
+
+int bc_client_follow(struct bc_client *c, bool on, struct bc_errinfo *ei)
+{
+	struct bc_msg m = {.type = BC_MSG_FOLLOW};
+	uint32_t seq;
+	int rc;
+	m.toggle.on = on ? 1 : 0;
+	if ((rc = send_or_say(c, &m, &seq, ei))) {
+		return rc;
+	}
+	return bc_client_wait(c, BC_MSG_OK, seq, &m, 0, ei);
+}
+
+int bc_client_session_camera(struct bc_client *c, const struct bc_camera *cam,
+			     uint64_t *order, struct bc_errinfo *ei)
+{
+	struct bc_msg m = {.type = BC_MSG_SESSION_CAMERA};
+	uint32_t seq;
+	int rc;
+	if (order) {
+		*order = 0;
+	}
+	memcpy(m.session_camera.eye, cam->eye, sizeof(cam->eye));
+	memcpy(m.session_camera.target, cam->target, sizeof(cam->target));
+	memcpy(m.session_camera.up, cam->up, sizeof(cam->up));
+	m.session_camera.fov_y_deg = cam->fov_y_deg;
+	if ((rc = send_or_say(c, &m, &seq, ei)) ||
+	    (rc = bc_client_wait(c, BC_MSG_SESSION_CAMERA_SET, seq, &m, 0,
+				 ei))) {
+		return rc;
+	}
+	if (order) {
+		*order = m.session_camera_set.order;
+	}
 	return 0;
 }

@@ -63,6 +63,8 @@ export const MSG = Object.freeze({
 	EDIT_APPLIED: 14, CAMERA: 15, VIEW: 16, FRAME: 17, PICK: 18,
 	PICK_RESULT: 19, SNAPSHOT: 20, GET_STATS: 21, STATS: 22,
 	SESSION_DELETE: 23, UNDO: 24, REDO: 25, SESSION_LIST: 26, SESSIONS: 27,
+	PRESENT: 28, FOLLOW: 29, PRESENTER: 30, FOLLOW_CAMERA: 31,
+	SESSION_CAMERA: 32, SESSION_CAMERA_SET: 33,
 });
 
 /* Header flag bits; each is defined for some types only. */
@@ -214,6 +216,8 @@ export class ProtoError extends Error {
 const FROM_CLIENT = 1, FROM_SERVER = 2, FROM_BOTH = 3;
 const strMax = (n) => 2 + n;
 const BULK = L.MAX_PAYLOAD;
+/* A camera: eye, target, up (3 f32 each) and fov_y_deg. */
+const CAMERA_SIZE = 40;
 
 /* name, who sends it, the flag bits it defines, its largest valid payload
  * (so a header announcing more is refused before its payload arrives). */
@@ -238,7 +242,7 @@ T(12, 'SCENE_STATE', FROM_SERVER, 0, BULK);
 T(13, 'EDIT', FROM_CLIENT, FLAG.INTERACTING, BULK);
 T(14, 'EDIT_APPLIED', FROM_SERVER, FLAG.INTERACTING | FLAG.UNDO | FLAG.REDO,
 	BULK);
-T(15, 'CAMERA', FROM_CLIENT, FLAG.INTERACTING, 40);
+T(15, 'CAMERA', FROM_CLIENT, FLAG.INTERACTING, CAMERA_SIZE);
 T(16, 'VIEW', FROM_CLIENT, 0, 8);
 T(17, 'FRAME', FROM_SERVER, FLAG.STILL | FLAG.SNAPSHOT | FLAG.INCOMPLETE |
 	FLAG.LEVEL_MASK | FLAG.DEPTH | FLAG.IDS,
@@ -254,6 +258,13 @@ T(25, 'REDO', FROM_CLIENT, 0, 0);
 T(26, 'SESSION_LIST', FROM_CLIENT, 0, 0);
 T(27, 'SESSIONS', FROM_SERVER, 0, 2 + L.MAX_SESSIONS_LISTED *
 	(strMax(L.MAX_NAME) + 2 + 4 + 8 + 8 + 1));
+
+T(28, 'PRESENT', FROM_CLIENT, 0, 1);
+T(29, 'FOLLOW', FROM_CLIENT, 0, 1);
+T(30, 'PRESENTER', FROM_SERVER, 0, 5);
+T(31, 'FOLLOW_CAMERA', FROM_SERVER, FLAG.INTERACTING, 4 + CAMERA_SIZE);
+T(32, 'SESSION_CAMERA', FROM_CLIENT, 0, CAMERA_SIZE);
+T(33, 'SESSION_CAMERA_SET', FROM_SERVER, 0, 8 + 4 + 4 + CAMERA_SIZE);
 
 function typeInfo(type) {
 	return Number.isInteger(type) ? TYPES[type] ?? null : null;
@@ -686,6 +697,18 @@ function decFrame(d, flags, m) {
 const STATS_FLOATS = ['render_ms_last', 'render_ms_avg', 'encode_ms_last',
 	'encode_ms_avg', 'edit_ms_avg', 'fps'];
 
+/* A camera's fields, as CAMERA, SESSION_CAMERA, FOLLOW_CAMERA and
+ * SESSION_CAMERA_SET carry them, into m. */
+function decCamera(d, m) {
+	for (const v of ['eye', 'target', 'up']) {
+		m[v] = ['x', 'y', 'z'].map((c) => d.f32abs(`${v}.${c}`));
+	}
+	m.fov_y_deg = d.f32('fov_y_deg');
+	if (!(m.fov_y_deg > 0 && m.fov_y_deg < 180)) {
+		d.fail('ERANGE', `fov_y_deg ${m.fov_y_deg} is outside (0, 180)`);
+	}
+}
+
 function decBody(d, m) {
 	switch (m.type) {
 	case MSG.HELLO: {
@@ -819,14 +842,32 @@ function decBody(d, m) {
 		}
 		break;
 	case MSG.CAMERA:
-		for (const v of ['eye', 'target', 'up']) {
-			m[v] = ['x', 'y', 'z'].map((c) => d.f32abs(`${v}.${c}`));
+	case MSG.SESSION_CAMERA:
+		decCamera(d, m);
+		break;
+	case MSG.PRESENT:
+	case MSG.FOLLOW:
+		m.on = d.u8range('on', 0, 1);
+		break;
+	case MSG.PRESENTER:
+		m.presenter = d.u32('presenter');
+		m.following = d.u8range('following', 0, 1);
+		if (m.following && m.presenter === 0) {
+			d.fail('ERANGE', 'following 1 while nobody presents');
 		}
-		m.fov_y_deg = d.f32('fov_y_deg');
-		if (!(m.fov_y_deg > 0 && m.fov_y_deg < 180)) {
-			d.fail('ERANGE',
-				`fov_y_deg ${m.fov_y_deg} is outside (0, 180)`);
+		break;
+	case MSG.FOLLOW_CAMERA:
+		m.presenter = d.id('presenter');
+		decCamera(d, m);
+		break;
+	case MSG.SESSION_CAMERA_SET:
+		m.order = d.u64('order');
+		if (m.order === 0n) {
+			d.fail('ERANGE', 'order is 0');
 		}
+		m.author = d.id('author');
+		m.author_seq = d.u32('author_seq');
+		decCamera(d, m);
 		break;
 	case MSG.VIEW:
 		m.width = d.u16range('width', 1, L.MAX_DIM);
@@ -1302,6 +1343,13 @@ function encOps(w, ops) {
 	}
 }
 
+function encCamera(w, m) {
+	w.f32v('eye', m.eye, 3);
+	w.f32v('target', m.target, 3);
+	w.f32v('up', m.up, 3);
+	w.f32('fov_y_deg', m.fov_y_deg);
+}
+
 function encBody(w, m) {
 	switch (m.type) {
 	case MSG.HELLO:
@@ -1394,10 +1442,26 @@ function encBody(w, m) {
 		}
 		break;
 	case MSG.CAMERA:
-		w.f32v('eye', m.eye, 3);
-		w.f32v('target', m.target, 3);
-		w.f32v('up', m.up, 3);
-		w.f32('fov_y_deg', m.fov_y_deg);
+	case MSG.SESSION_CAMERA:
+		encCamera(w, m);
+		break;
+	case MSG.PRESENT:
+	case MSG.FOLLOW:
+		w.u8('on', m.on);
+		break;
+	case MSG.PRESENTER:
+		w.u32('presenter', m.presenter);
+		w.u8('following', m.following);
+		break;
+	case MSG.FOLLOW_CAMERA:
+		w.u32('presenter', m.presenter);
+		encCamera(w, m);
+		break;
+	case MSG.SESSION_CAMERA_SET:
+		w.u64('order', m.order);
+		w.u32('author', m.author);
+		w.u32('author_seq', m.author_seq);
+		encCamera(w, m);
 		break;
 	case MSG.VIEW:
 		w.u16('width', m.width);

@@ -27,7 +27,8 @@ TYPES = {
     "EDIT_APPLIED": 14, "CAMERA": 15, "VIEW": 16, "FRAME": 17, "PICK": 18,
     "PICK_RESULT": 19, "SNAPSHOT": 20, "GET_STATS": 21, "STATS": 22,
     "SESSION_DELETE": 23, "UNDO": 24, "REDO": 25, "SESSION_LIST": 26,
-    "SESSIONS": 27,
+    "SESSIONS": 27, "PRESENT": 28, "FOLLOW": 29, "PRESENTER": 30,
+    "FOLLOW_CAMERA": 31, "SESSION_CAMERA": 32, "SESSION_CAMERA_SET": 33,
 }
 MAX_PAYLOAD = 64 * 1024 * 1024
 HELLO_MAX_PAYLOAD = 4096
@@ -80,6 +81,8 @@ TYPE_MAX = {
     "SESSION_DELETE": strmax(MAX_NAME), "UNDO": 0, "REDO": 0,
     "SESSION_LIST": 0,
     "SESSIONS": 2 + MAX_SESSIONS_LISTED * (strmax(MAX_NAME) + 2 + 4 + 8 + 8 + 1),
+    "PRESENT": 1, "FOLLOW": 1, "PRESENTER": 5, "FOLLOW_CAMERA": 44,
+    "SESSION_CAMERA": 40, "SESSION_CAMERA_SET": 56,
 }
 
 # ---- Byte helpers --------------------------------------------------------------
@@ -286,6 +289,23 @@ def w_camera(f):
                     + [f["fov_y_deg"]])
 
 
+def w_toggle(f):
+    return u8(f["on"])
+
+
+def w_presenter(f):
+    return u32(f["presenter"]) + u8(f["following"])
+
+
+def w_follow_camera(f):
+    return u32(f["presenter"]) + w_camera(f)
+
+
+def w_session_camera_set(f):
+    return (u64(int(f["order"])) + u32(f["author"]) + u32(f["author_seq"])
+            + w_camera(f))
+
+
 def w_view(f):
     return (u16(f["width"]) + u16(f["height"]) + u8(f["encoding"])
             + u8(f["quality_interactive"]) + u8(f["quality_still"])
@@ -344,6 +364,9 @@ WRITERS = {
     "GET_STATS": w_empty, "STATS": w_stats,
     "SESSION_DELETE": w_session_delete, "UNDO": w_empty, "REDO": w_empty,
     "SESSION_LIST": w_empty, "SESSIONS": w_sessions,
+    "PRESENT": w_toggle, "FOLLOW": w_toggle, "PRESENTER": w_presenter,
+    "FOLLOW_CAMERA": w_follow_camera, "SESSION_CAMERA": w_camera,
+    "SESSION_CAMERA_SET": w_session_camera_set,
 }
 
 # ---- Vector tables -----------------------------------------------------------
@@ -821,6 +844,92 @@ def gen_camera():
     t.dump("camera.json")
 
 
+def gen_toggle(name):
+    """PRESENT and FOLLOW: one byte, 0 or 1; in a session only."""
+    t = Table(name)
+    p = t.ok("on", dict(on=1), seq=40)
+    t.ok("off", dict(on=0), seq=41)
+    t.common(p)
+    t.badp("on = 2", u8(2), "ERANGE")
+    t.badp("on = 255", u8(255), "ERANGE")
+    t.bad("sent by the wrong side", frame(name, p), "EPROTO_TYPE",
+          reader=CLIENT)
+    t.bad("refused by a server before HELLO", frame(name, p), "ESTATE",
+          reader=PRE_HELLO)
+    t.badp("INTERACTING is not defined for it", p, "EPROTO_FLAGS", flags=1)
+    t.dump(name.lower() + ".json")
+
+
+CAM_A = dict(eye=[0.0, 1.0, 6.0], target=[0.0, 0.0, 0.0],
+             up=[0.0, 1.0, 0.0], fov_y_deg=45.0)
+
+
+def gen_presenter():
+    t = Table("PRESENTER")
+    p = t.ok("member 4 presents, the receiver follows",
+             dict(presenter=4, following=1), seq=0)
+    t.ok("member 4 presents, the receiver does not follow",
+         dict(presenter=4, following=0), seq=0)
+    t.ok("nobody presents", dict(presenter=0, following=0), seq=0)
+    t.common(p)
+    t.badp("following 2", u32(4) + u8(2), "ERANGE")
+    t.badp("following while nobody presents", u32(0) + u8(1), "ERANGE")
+    t.bad("sent by the wrong side", frame("PRESENTER", p), "EPROTO_TYPE",
+          reader=SERVER)
+    t.dump("presenter.json")
+
+
+def gen_follow_camera():
+    t = Table("FOLLOW_CAMERA")
+    p = t.ok("the presenter's camera", dict(presenter=4, **CAM_A), seq=0)
+    t.ok("during the presenter's drag",
+         dict(presenter=9, eye=[1e6, -2.5, fl(0.1)], target=[-0.0, 0.0, 0.0],
+              up=[0.0, 0.0, 1.0], fov_y_deg=fl(179.9)), flags=1, seq=0)
+    t.common(p)
+    t.badp("presenter 0", u32(0) + w_camera(CAM_A), "ERANGE")
+    t.badp("NaN eye.y", u32(4) + f32(0.0) + f32bits(0x7fc00000)
+           + w_camera(CAM_A)[8:], "ENONFINITE")
+    t.badp("fov 180", u32(4) + w_camera(dict(CAM_A, fov_y_deg=180.0)),
+           "ERANGE")
+    t.badp("flag 2 is not defined for it", p, "EPROTO_FLAGS", flags=2)
+    t.bad("sent by the wrong side", frame("FOLLOW_CAMERA", p), "EPROTO_TYPE",
+          reader=SERVER)
+    t.dump("follow_camera.json")
+
+
+def gen_session_camera():
+    t = Table("SESSION_CAMERA")
+    p = t.ok("a camera for the session", CAM_A, seq=42)
+    t.common(p)
+    t.badp("eye.z over 1e6", w_camera(dict(CAM_A, eye=[0.0, 1.0, 2e6])),
+           "ERANGE")
+    t.badp("+inf fov", w_camera(CAM_A)[:36] + f32bits(0x7f800000),
+           "ENONFINITE")
+    t.badp("INTERACTING is not defined for it", p, "EPROTO_FLAGS", flags=1)
+    t.bad("sent by the wrong side", frame("SESSION_CAMERA", p),
+          "EPROTO_TYPE", reader=CLIENT)
+    t.bad("refused by a server before HELLO", frame("SESSION_CAMERA", p),
+          "ESTATE", reader=PRE_HELLO)
+    t.dump("session_camera.json")
+
+
+def gen_session_camera_set():
+    t = Table("SESSION_CAMERA_SET")
+    p = t.ok("member 3's camera at order 12",
+             dict(order="12", author=3, author_seq=42, **CAM_A), seq=0)
+    t.ok("largest order", dict(order=str(2 ** 64 - 1), author=0xffffffff,
+                               author_seq=0, **CAM_A), seq=0)
+    t.common(p)
+    t.badp("order 0", u64(0) + u32(3) + u32(42) + w_camera(CAM_A), "ERANGE")
+    t.badp("author 0", u64(12) + u32(0) + u32(42) + w_camera(CAM_A),
+           "ERANGE")
+    t.badp("fov 0", u64(12) + u32(3) + u32(42)
+           + w_camera(dict(CAM_A, fov_y_deg=0.0)), "ERANGE")
+    t.bad("sent by the wrong side", frame("SESSION_CAMERA_SET", p),
+          "EPROTO_TYPE", reader=SERVER)
+    t.dump("session_camera_set.json")
+
+
 def gen_view():
     t = Table("VIEW")
     base = dict(width=1280, height=720, encoding=1, quality_interactive=60,
@@ -1174,7 +1283,7 @@ def gen_framing():
     bad("version 255, header cut after it", MAGIC + u8(255),
         "EPROTO_VERSION")
     bad("type 0", header(0, 0), "EPROTO_TYPE")
-    bad("type 28", header(28, 0), "EPROTO_TYPE")
+    bad("type 34", header(34, 0), "EPROTO_TYPE")
     bad("type 255", header(255, 0), "EPROTO_TYPE")
     bad("unknown type is reported before the rest of the header",
         MAGIC + u8(1) + u8(99), "EPROTO_TYPE")
@@ -1312,6 +1421,12 @@ def main():
     gen_empty("REDO", "client")
     gen_empty("SESSION_LIST", "client")
     gen_sessions()
+    gen_toggle("PRESENT")
+    gen_toggle("FOLLOW")
+    gen_presenter()
+    gen_follow_camera()
+    gen_session_camera()
+    gen_session_camera_set()
     gen_framing()
     gen_scene()
 

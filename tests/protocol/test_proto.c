@@ -413,8 +413,24 @@ static void sample(enum bc_msg_type t, struct bc_msg *m)
 		    9, 5, 12, 4, ops, 7, S("carol")};
 		break;
 	case BC_MSG_CAMERA:
+	case BC_MSG_SESSION_CAMERA:
 		m->camera = (struct bc_msg_camera){
 		    {1, 2, 3}, {0, 0, 0}, {0, 1, 0}, 50.0f};
+		break;
+	case BC_MSG_PRESENT:
+	case BC_MSG_FOLLOW:
+		m->toggle.on = 1;
+		break;
+	case BC_MSG_PRESENTER:
+		m->presenter = (struct bc_msg_presenter){7, 1};
+		break;
+	case BC_MSG_FOLLOW_CAMERA:
+		m->follow_camera = (struct bc_msg_follow_camera){
+		    7, {{1, 2, 3}, {0, 0, 0}, {0, 1, 0}, 50.0f}};
+		break;
+	case BC_MSG_SESSION_CAMERA_SET:
+		m->session_camera_set = (struct bc_msg_session_camera_set){
+		    12, 3, 42, {{1, 2, 3}, {0, 0, 0}, {0, 1, 0}, 50.0f}};
 		break;
 	case BC_MSG_VIEW:
 		m->view = (struct bc_msg_view){640, 480, BC_PROTO_ENC_JPEG,

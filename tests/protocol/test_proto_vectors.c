@@ -147,6 +147,16 @@ static const struct bc_proto_edit_op *jops(const json_t *f, uint16_t *n)
 	return ops;
 }
 
+/* A camera's fields (CAMERA, SESSION_CAMERA and the camera of
+ * FOLLOW_CAMERA and SESSION_CAMERA_SET). */
+static void jcam(const json_t *f, struct bc_msg_camera *c)
+{
+	jvec(f, "eye", c->eye, 3);
+	jvec(f, "target", c->target, 3);
+	jvec(f, "up", c->up, 3);
+	c->fov_y_deg = jflt(json_object_get(f, "fov_y_deg"));
+}
+
 static void build(enum bc_msg_type type, const json_t *f, struct bc_msg *m)
 {
 	memset(m, 0, sizeof(*m));
@@ -253,10 +263,29 @@ static void build(enum bc_msg_type type, const json_t *f, struct bc_msg *m)
 		}
 		break;
 	case BC_MSG_CAMERA:
-		jvec(f, "eye", m->camera.eye, 3);
-		jvec(f, "target", m->camera.target, 3);
-		jvec(f, "up", m->camera.up, 3);
-		m->camera.fov_y_deg = jflt(json_object_get(f, "fov_y_deg"));
+		jcam(f, &m->camera);
+		break;
+	case BC_MSG_SESSION_CAMERA:
+		jcam(f, &m->session_camera);
+		break;
+	case BC_MSG_FOLLOW_CAMERA:
+		m->follow_camera.presenter = (uint32_t)jint(f, "presenter");
+		jcam(f, &m->follow_camera.camera);
+		break;
+	case BC_MSG_SESSION_CAMERA_SET:
+		m->session_camera_set.order = jint(f, "order");
+		m->session_camera_set.author = (uint32_t)jint(f, "author");
+		m->session_camera_set.author_seq =
+		    (uint32_t)jint(f, "author_seq");
+		jcam(f, &m->session_camera_set.camera);
+		break;
+	case BC_MSG_PRESENT:
+	case BC_MSG_FOLLOW:
+		m->toggle.on = (uint8_t)jint(f, "on");
+		break;
+	case BC_MSG_PRESENTER:
+		m->presenter.presenter = (uint32_t)jint(f, "presenter");
+		m->presenter.following = (uint8_t)jint(f, "following");
 		break;
 	case BC_MSG_VIEW:
 		m->view.width = (uint16_t)jint(f, "width");
@@ -374,6 +403,12 @@ static int ops_eq(const struct bc_proto_edit_op *a,
 	return 1;
 }
 
+static int cam_eq(const struct bc_msg_camera *a, const struct bc_msg_camera *b)
+{
+	return f_eq(a->eye, b->eye, 3) && f_eq(a->target, b->target, 3) &&
+	       f_eq(a->up, b->up, 3) && f_eq(&a->fov_y_deg, &b->fov_y_deg, 1);
+}
+
 static int msg_eq(const struct bc_msg *a, const struct bc_msg *b)
 {
 	if (a->type != b->type || a->seq != b->seq || a->flags != b->flags) {
@@ -448,10 +483,28 @@ static int msg_eq(const struct bc_msg *a, const struct bc_msg *b)
 		       str_eq(a->edit_applied.target_author,
 		              b->edit_applied.target_author);
 	case BC_MSG_CAMERA:
-		return f_eq(a->camera.eye, b->camera.eye, 3) &&
-		       f_eq(a->camera.target, b->camera.target, 3) &&
-		       f_eq(a->camera.up, b->camera.up, 3) &&
-		       f_eq(&a->camera.fov_y_deg, &b->camera.fov_y_deg, 1);
+		return cam_eq(&a->camera, &b->camera);
+	case BC_MSG_SESSION_CAMERA:
+		return cam_eq(&a->session_camera, &b->session_camera);
+	case BC_MSG_FOLLOW_CAMERA:
+		return a->follow_camera.presenter ==
+		           b->follow_camera.presenter &&
+		       cam_eq(&a->follow_camera.camera, &b->follow_camera.camera);
+	case BC_MSG_SESSION_CAMERA_SET:
+		return a->session_camera_set.order ==
+		           b->session_camera_set.order &&
+		       a->session_camera_set.author ==
+		           b->session_camera_set.author &&
+		       a->session_camera_set.author_seq ==
+		           b->session_camera_set.author_seq &&
+		       cam_eq(&a->session_camera_set.camera,
+		              &b->session_camera_set.camera);
+	case BC_MSG_PRESENT:
+	case BC_MSG_FOLLOW:
+		return a->toggle.on == b->toggle.on;
+	case BC_MSG_PRESENTER:
+		return a->presenter.presenter == b->presenter.presenter &&
+		       a->presenter.following == b->presenter.following;
 	case BC_MSG_VIEW:
 		return memcmp(&a->view, &b->view, sizeof(a->view)) == 0;
 	case BC_MSG_FRAME: {

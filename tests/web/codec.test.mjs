@@ -169,7 +169,7 @@ test('vectors: no unknown files, every type covered', () => {
 		assert.ok(known.has(f), `unknown vector file ${f}`);
 	}
 	assert.equal(files.length, typeNames.length + 2);
-	assert.equal(typeNames.length, 27);
+	assert.equal(typeNames.length, 33);
 });
 
 /* ---- Properties the page relies on -------------------------------------- */
@@ -293,7 +293,7 @@ test('encoder refuses what the decoder refuses', () => {
 		[{ ...cam, fov_y_deg: 180 }, 'ERANGE'],
 		[{ ...cam, eye: [0, 5] }, 'EPROTO_COUNT'],
 		[{ ...cam, flags: 2 }, 'EPROTO_FLAGS'],
-		[{ ...cam, type: 28 }, 'EPROTO_TYPE'],
+		[{ ...cam, type: 34 }, 'EPROTO_TYPE'],
 		[{ ...cam, type: 0 }, 'EPROTO_TYPE'],
 		[{ ...cam, seq: -1 }, 'ERANGE'],
 		[{ type: P.MSG.SESSION_JOIN, role: 3, name: 'x' }, 'EENUM'],
@@ -418,7 +418,7 @@ test('error names and numbers match error.h', () => {
 	assert.equal(P.errText(31), 'string not valid UTF-8 or contains NUL');
 	assert.equal(new P.ProtoError('EDEPTH', 'x').errno, 21);
 	assert.equal(P.typeName(17), 'FRAME');
-	assert.equal(P.typeName(28), null);
+	assert.equal(P.typeName(34), null);
 });
 
 test('utf8Check: the strict rules of the C codec', () => {

@@ -70,6 +70,12 @@ enum bc_msg_type {
 	BC_MSG_REDO = 25,           /* client -> server */
 	BC_MSG_SESSION_LIST = 26,   /* client -> server */
 	BC_MSG_SESSIONS = 27,       /* server -> client */
+	BC_MSG_PRESENT = 28,        /* client -> server */
+	BC_MSG_FOLLOW = 29,         /* client -> server */
+	BC_MSG_PRESENTER = 30,      /* server -> client */
+	BC_MSG_FOLLOW_CAMERA = 31,  /* server -> client */
+	BC_MSG_SESSION_CAMERA = 32, /* client -> server */
+	BC_MSG_SESSION_CAMERA_SET = 33, /* server -> client */
 	BC_MSG_COUNT
 };
 
@@ -78,7 +84,8 @@ enum bc_msg_type {
 /* ERROR: the sender closes the connection after this message. */
 #define BC_PROTO_FLAG_FATAL 0x0001u
 /* CAMERA, EDIT: part of a continuous interaction (a drag); the server renders
- * at interactive quality until a message without it arrives. */
+ * at interactive quality until a message without it arrives. FOLLOW_CAMERA
+ * copies it from the presenter's CAMERA. */
 #define BC_PROTO_FLAG_INTERACTING 0x0001u
 /* EDIT_APPLIED: the operations undo (UNDO) or redo (REDO) an earlier edit
  * of the session; the payload then ends with that edit's order and its
@@ -403,6 +410,35 @@ struct bc_msg_stats {
 	float fps;         /* frames per second sent to this client */
 };
 
+/* PRESENT and FOLLOW: on 1 starts presenting (following), 0 stops; other
+ * values: BC_ERANGE. */
+struct bc_msg_toggle {
+	uint8_t on;
+};
+
+/* PRESENTER: who presents in the receiver's session (0: nobody) and
+ * whether the receiver follows (1 only with a presenter, else BC_ERANGE). */
+struct bc_msg_presenter {
+	uint32_t presenter;
+	uint8_t following;
+};
+
+/* FOLLOW_CAMERA: the presenter's camera, which the receiver (a follower)
+ * now renders from. */
+struct bc_msg_follow_camera {
+	uint32_t presenter; /* != 0 */
+	struct bc_msg_camera camera;
+};
+
+/* SESSION_CAMERA_SET: the session's stored camera changed (the answer to
+ * a SESSION_CAMERA, sent to every member). */
+struct bc_msg_session_camera_set {
+	uint64_t order;      /* the change's order number, >= 1 */
+	uint32_t author;     /* member id, != 0 */
+	uint32_t author_seq; /* that SESSION_CAMERA's seq */
+	struct bc_msg_camera camera;
+};
+
 /* One message. Variable parts (strings, byte ranges, arrays) of a decoded
  * message point into the reader: strings and byte ranges into its input
  * buffer (zero copy), arrays (members, ops, fields, rects) into storage the
@@ -433,6 +469,11 @@ struct bc_msg {
 		struct bc_msg_stats stats;
 		struct bc_msg_session_delete session_delete;
 		struct bc_msg_sessions sessions;
+		struct bc_msg_toggle toggle; /* PRESENT and FOLLOW */
+		struct bc_msg_presenter presenter;
+		struct bc_msg_follow_camera follow_camera;
+		struct bc_msg_camera session_camera; /* SESSION_CAMERA */
+		struct bc_msg_session_camera_set session_camera_set;
 	};
 };
 

@@ -145,6 +145,11 @@ struct bc_client_info {
 	uint64_t msgs_in, msgs_out, bytes_in, bytes_out;
 	/* Size on the wire of the message bc_client_recv() returned last. */
 	uint32_t last_msg_bytes;
+	/* Presentation (PRESENTER, once this client has called
+	 * bc_client_present or bc_client_follow): the member id of the
+	 * session's presenter (0: nobody) and whether this client follows. */
+	uint32_t presenter;
+	bool following;
 };
 
 /*
@@ -300,6 +305,29 @@ BC_API int bc_client_view(struct bc_client *c, const struct bc_msg_view *view,
 BC_API int bc_client_camera(struct bc_client *c, const struct bc_camera *cam,
                             bool interacting, uint32_t *seq_out,
                             struct bc_errinfo *ei);
+
+/* Presents (on) or stops presenting in the session: PRESENT, then waits
+ * for its OK (the PRESENTER that precedes it updates bc_client_info()).
+ * A new presenter replaces the old; the members following follow it.
+ * Stopping when not presenting changes nothing. Any role may present. */
+BC_API int bc_client_present(struct bc_client *c, bool on,
+                             struct bc_errinfo *ei);
+
+/* Follows the presenter (on: this client's camera tracks the presenter's,
+ * rendered at this client's VIEW, each change arriving as FOLLOW_CAMERA)
+ * or stops. Waits for the OK. BC_ESTATE when nobody presents or this
+ * client presents. Sending CAMERA ends a follow (PRESENTER says so).
+ * bc_client_follow(c, false, ...) also just asks to hear PRESENTER. */
+BC_API int bc_client_follow(struct bc_client *c, bool on,
+                            struct bc_errinfo *ei);
+
+/* Sets the session's stored camera (SESSION_CAMERA: what joiners start
+ * from, what SCENE_STATE and the mirror carry; no member's own camera
+ * moves) and waits for its SESSION_CAMERA_SET; *order (may be NULL, reset
+ * on entry) receives the change's order number. Needs the editor role. */
+BC_API int bc_client_session_camera(struct bc_client *c,
+                                    const struct bc_camera *cam,
+                                    uint64_t *order, struct bc_errinfo *ei);
 
 /* Sends GET_STATS and waits for STATS, copied into *out (reset on entry). */
 BC_API int bc_client_stats(struct bc_client *c, struct bc_msg_stats *out,
