@@ -148,6 +148,10 @@ struct bc_viewer_app {
 	uint32_t undo_seq;
 	bool undo_redo;
 
+	/* F: follow whoever presents (kept across reconnects; moving our
+	 * camera turns it off). */
+	bool follow_wanted;
+
 	/* S (lossless snapshot) and P (window screenshot). */
 	uint32_t snapshot_seq;
 	bool screenshot_now;
@@ -200,6 +204,10 @@ uint32_t bc_viewer_pick(struct bc_viewer_app *a, double x, double y);
 /* Sends UNDO (redo false) or REDO without waiting for the answer: the
  * EDIT_APPLIED every member gets, or ERROR ESTATE ("nothing to undo"). */
 void bc_viewer_undo(struct bc_viewer_app *a, bool redo);
+/* F: follow the presenter, or stop following (FOLLOW, not waiting). */
+void bc_viewer_follow_toggle(struct bc_viewer_app *a);
+/* Shift-F: present, or stop presenting (PRESENT, not waiting). */
+void bc_viewer_present_toggle(struct bc_viewer_app *a);
 /* Sends SNAPSHOT (PNG) unless one is on its way. */
 void bc_viewer_request_snapshot(struct bc_viewer_app *a);
 /* When the oldest request of ours that no frame answers yet was sent (ms),

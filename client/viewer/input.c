@@ -9,7 +9,8 @@
  *    parameter, with Ctrl the blend of the operator above it;
  *  - keys: S lossless snapshot, P window screenshot, O overlay, R the
  *    scene's camera, Escape or Q quit; Ctrl-Z undo, Ctrl-Shift-Z or
- *    Ctrl-Y redo (sent without waiting; the answer shows on the overlay).
+ *    Ctrl-Y redo (sent without waiting; the answer shows on the overlay);
+ *    F follow the presenter (again: stop), Shift-F present (again: stop).
  * Callbacks only record what happened; bc_viewer_drag_step() turns the
  * motion of a whole loop turn into one message. Gestures send their
  * messages with INTERACTING and end with one without it.
@@ -326,6 +327,13 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
 	case GLFW_KEY_R:
 		a->cam = a->scene_cam;
 		bc_viewer_camera_changed(a, false);
+		break;
+	case GLFW_KEY_F:
+		if (mods & GLFW_MOD_SHIFT) {
+			bc_viewer_present_toggle(a);
+		} else {
+			bc_viewer_follow_toggle(a);
+		}
 		break;
 	default:
 		break;

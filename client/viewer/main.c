@@ -117,7 +117,16 @@ static void usage(FILE *out)
 	    "selected\n"
 	    "shape, Ctrl+wheel changes its operator's blend. Keys: S "
 	    "snapshot,\n"
-	    "P screenshot, O overlay, R scene camera, Q or Escape quit.\n"
+	    "P screenshot, O overlay, R scene camera, Q or Escape quit;\n"
+	    "Ctrl-Z undo, Ctrl-Shift-Z or Ctrl-Y redo; F follow the "
+	    "presenter\n"
+	    "(this window shows what the presenter's camera sees, at its "
+	    "own size;\n"
+	    "moving the camera or F again stops), Shift-F present (members "
+	    "who\n"
+	    "follow see this window's camera; Shift-F again stops). The "
+	    "overlay\n"
+	    "names who presents and whether this window follows.\n"
 	    "\n"
 	    "A lost connection is retried (after 0.25 s, doubling up to 4 s)\n"
 	    "and the session joined again; a refused token or role or a\n"
@@ -735,8 +744,18 @@ static int join_once(struct bc_client *c, enum bc_msg_type type,
 	if ((rc = bc_client_wait(c, BC_MSG_SESSION_INFO, 0, &m, 0, ei))) {
 		return rc;
 	}
+	memset(roster, 0, sizeof(*roster));
 	bc_viewer_roster_update(roster, &m.session_info);
-	return bc_client_wait(c, BC_MSG_SCENE_STATE, 0, &m, 0, ei);
+	if ((rc = bc_client_wait(c, BC_MSG_SCENE_STATE, 0, &m, 0, ei))) {
+		return rc;
+	}
+	/* FOLLOW 0 asks the server to say who presents (PRESENTER, handled
+	 * by bc_viewer_pump, which follows again when F is on). */
+	m = (struct bc_msg){.type = BC_MSG_FOLLOW};
+	if ((rc = bc_client_send(c, &m, NULL))) {
+		bc_client_error(c, ei);
+	}
+	return rc;
 }
 
 /* Connects and joins the session of the options: an editor creates it

@@ -71,6 +71,11 @@ static void send_camera(struct bc_viewer_app *a, double now)
 {
 	struct bc_errinfo ei = {0};
 	uint32_t seq = 0;
+	/* Our own camera ends a follow (the server says so with PRESENTER):
+	 * F must be pressed again to follow. */
+	if (a->roster.following) {
+		a->follow_wanted = false;
+	}
 	bc_viewer_cam_clamp(&a->cam);
 	if (bc_client_camera(a->c, &a->cam, a->cam_interacting, &seq, &ei)) {
 		bc_viewer_status(a, "CAMERA not sent: %s", ei.msg);
@@ -105,6 +110,79 @@ void bc_viewer_edit(struct bc_viewer_app *a, const struct bc_viewer_edit *e)
 {
 	bc_viewer_edits_queue(&a->edits, e);
 	flush_edits(a);
+}
+
+/* FOLLOW or PRESENT with on, not waiting: the answer is a PRESENTER (and
+ * an OK), or ERROR ESTATE when nobody presents. */
+static int send_toggle(struct bc_viewer_app *a, enum bc_msg_type type,
+                       bool on)
+{
+	struct bc_msg m = {.type = type};
+	m.toggle.on = on ? 1 : 0;
+	return bc_client_send(a->c, &m, NULL);
+}
+
+static const char *member_name(const struct bc_viewer_roster *r, uint32_t id,
+                               char *buf, size_t n)
+{
+	for (uint16_t i = 0; i < r->n; i++) {
+		if (r->m[i].id == id && r->m[i].name[0]) {
+			snprintf(buf, n, "%s", r->m[i].name);
+			return buf;
+		}
+	}
+	snprintf(buf, n, "member %u", id);
+	return buf;
+}
+
+void bc_viewer_follow_toggle(struct bc_viewer_app *a)
+{
+	const struct bc_viewer_roster *r = &a->roster;
+	if (a->offline) {
+		return;
+	}
+	if (r->following || a->follow_wanted) {
+		a->follow_wanted = false;
+		if (r->following && send_toggle(a, BC_MSG_FOLLOW, false)) {
+			bc_viewer_status(a, "FOLLOW not sent");
+		}
+		bc_viewer_status(a, "not following");
+		return;
+	}
+	if (r->presenter && r->presenter == r->self) {
+		bc_viewer_status(a, "you present; Shift-F stops presenting");
+		return;
+	}
+	a->follow_wanted = true;
+	if (!r->presenter) {
+		bc_viewer_status(a, "nobody presents; following whoever "
+		                    "starts (F again: not)");
+		return;
+	}
+	/* The presenter's camera takes over: ours is not sent. */
+	a->cam_dirty = false;
+	if (send_toggle(a, BC_MSG_FOLLOW, true)) {
+		bc_viewer_status(a, "FOLLOW not sent");
+	}
+}
+
+void bc_viewer_present_toggle(struct bc_viewer_app *a)
+{
+	const struct bc_viewer_roster *r = &a->roster;
+	bool on = !(r->presenter && r->presenter == r->self);
+	if (a->offline) {
+		return;
+	}
+	if (on) {
+		a->follow_wanted = false;
+		/* Followers start from the camera we show. */
+		if (a->cam_dirty) {
+			send_camera(a, bc_viewer_now_ms());
+		}
+	}
+	if (send_toggle(a, BC_MSG_PRESENT, on)) {
+		bc_viewer_status(a, "PRESENT not sent");
+	}
 }
 
 uint32_t bc_viewer_pick(struct bc_viewer_app *a, double x, double y)
@@ -422,6 +500,62 @@ static void got_applied(struct bc_viewer_app *a, const struct bc_msg *m)
 	a->redraw = true;
 }
 
+static void got_presenter(struct bc_viewer_app *a, const struct bc_msg *m)
+{
+	struct bc_viewer_roster *r = &a->roster;
+	uint32_t was = r->presenter;
+	bool followed = r->following;
+	char name[BC_PROTO_MAX_NAME + 16];
+	r->presenter = m->presenter.presenter;
+	r->following = m->presenter.following != 0;
+	a->redraw = true;
+	if (a->o.verbose) {
+		printf("presenter %u following=%d\n", r->presenter,
+		       r->following ? 1 : 0);
+		fflush(stdout);
+	}
+	if (r->presenter && r->presenter != r->self && !r->following &&
+	    a->follow_wanted) {
+		/* F is on: follow whoever presents now. */
+		a->cam_dirty = false;
+		if (send_toggle(a, BC_MSG_FOLLOW, true)) {
+			bc_viewer_status(a, "FOLLOW not sent");
+		}
+		return;
+	}
+	if (r->following && !followed) {
+		bc_viewer_status(a, "following %s",
+		                 member_name(r, r->presenter, name,
+		                             sizeof(name)));
+	} else if (!r->presenter && was) {
+		bc_viewer_status(a, "%s stopped presenting",
+		                 was == r->self ? "you"
+		                                : member_name(r, was, name,
+		                                              sizeof(name)));
+	} else if (r->presenter != was && r->presenter == r->self) {
+		bc_viewer_status(a, "you present: followers see your camera");
+	} else if (r->presenter != was) {
+		bc_viewer_status(a, "%s presents: F follows",
+		                 member_name(r, r->presenter, name,
+		                             sizeof(name)));
+	} else if (followed && !r->following) {
+		bc_viewer_status(a, "not following");
+	}
+}
+
+/* The presenter's camera, which the server now renders us from: ours
+ * becomes it, so that a drag starts from what is shown. */
+static void got_follow_camera(struct bc_viewer_app *a, const struct bc_msg *m)
+{
+	const struct bc_msg_camera *k = &m->follow_camera.camera;
+	memcpy(a->cam.eye, k->eye, sizeof(a->cam.eye));
+	memcpy(a->cam.target, k->target, sizeof(a->cam.target));
+	memcpy(a->cam.up, k->up, sizeof(a->cam.up));
+	a->cam.fov_y_deg = k->fov_y_deg;
+	a->cam_dirty = false;
+	a->redraw = true;
+}
+
 static void got_error(struct bc_viewer_app *a, const struct bc_msg *m)
 {
 	if (m->seq && m->seq == a->undo_seq) {
@@ -503,6 +637,27 @@ int bc_viewer_pump(struct bc_viewer_app *a)
 		case BC_MSG_ERROR:
 			got_error(a, &m);
 			break;
+		case BC_MSG_PRESENTER:
+			got_presenter(a, &m);
+			break;
+		case BC_MSG_FOLLOW_CAMERA:
+			got_follow_camera(a, &m);
+			break;
+		case BC_MSG_SESSION_CAMERA_SET: {
+			/* R goes to the session's new camera. */
+			const struct bc_msg_camera *k =
+			    &m.session_camera_set.camera;
+			memcpy(a->scene_cam.eye, k->eye, sizeof(k->eye));
+			memcpy(a->scene_cam.target, k->target,
+			       sizeof(k->target));
+			memcpy(a->scene_cam.up, k->up, sizeof(k->up));
+			a->scene_cam.fov_y_deg = k->fov_y_deg;
+			bc_viewer_roster_edit(&a->roster,
+			                      m.session_camera_set.author,
+			                      m.session_camera_set.order);
+			a->redraw = true;
+			break;
+		}
 		default:
 			break;
 		}

@@ -107,15 +107,37 @@ const char *bc_viewer_roster_text(const struct bc_viewer_roster *r, char *out,
 		const struct bc_viewer_member *m = &r->m[i];
 		const char *role =
 		    m->role == BC_PROTO_ROLE_VIEWER ? "viewer" : "editor";
+		const char *pres =
+		    r->presenter && m->id == r->presenter ? ", presenting" : "";
 		if (m->id == r->self) {
-			snprintf(item, sizeof(item), "%s you (%s)",
-			         i ? "," : "", role);
+			snprintf(item, sizeof(item), "%s you (%s%s)",
+			         i ? "," : "", role, pres);
 		} else if (m->name[0]) {
-			snprintf(item, sizeof(item), "%s %s (%s)", i ? "," : "",
-			         m->name, role);
+			snprintf(item, sizeof(item), "%s %s (%s%s)",
+			         i ? "," : "", m->name, role, pres);
 		} else {
-			snprintf(item, sizeof(item), "%s member %u (%s)",
-			         i ? "," : "", m->id, role);
+			snprintf(item, sizeof(item), "%s member %u (%s%s)",
+			         i ? "," : "", m->id, role, pres);
+		}
+		ok = put(out, n, &len, item);
+	}
+	if (ok && r->presenter) {
+		const struct bc_viewer_member *p = find(r, r->presenter);
+		char who[BC_PROTO_MAX_NAME + 16];
+		if (p && p->name[0]) {
+			snprintf(who, sizeof(who), "%s", p->name);
+		} else {
+			snprintf(who, sizeof(who), "member %u", r->presenter);
+		}
+		if (r->presenter == r->self) {
+			snprintf(item, sizeof(item),
+			         "\nyou present (Shift-F stops)");
+		} else if (r->following) {
+			snprintf(item, sizeof(item), "\nfollowing %s (F stops)",
+			         who);
+		} else {
+			snprintf(item, sizeof(item), "\n%s presents (F follows)",
+			         who);
 		}
 		ok = put(out, n, &len, item);
 	}

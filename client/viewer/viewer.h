@@ -259,6 +259,10 @@ struct bc_viewer_roster {
 	uint32_t last_author;
 	char last_name[BC_PROTO_MAX_NAME + 1];
 	uint64_t last_order;
+	/* Presentation, from the last PRESENTER: who presents (0: nobody)
+	 * and whether we follow. */
+	uint32_t presenter;
+	bool following;
 };
 
 /* Replaces the member list with si's (at most BC_PROTO_MAX_MEMBERS, as the
@@ -268,10 +272,12 @@ void bc_viewer_roster_update(struct bc_viewer_roster *r,
 /* Notes an edit or load by member author with order. */
 void bc_viewer_roster_edit(struct bc_viewer_roster *r, uint32_t author,
                            uint64_t order);
-/* The overlay's lines: `3 members: alice (editor), bob (viewer), you
- * (editor)`, then, after an edit, `last edit: alice, order 12` on a line
- * of its own; cut to fit n bytes with "...". A member without a name
- * shows as "member ID". Returns out. */
+/* The overlay's lines: `3 members: alice (editor, presenting), bob
+ * (viewer), you (editor)`, then, while someone presents, `following
+ * alice (F stops)` or `alice presents (F follows)` (`you present
+ * (Shift-F stops)`), then, after an edit, `last edit: alice, order 12`,
+ * each on a line of its own; cut to fit n bytes with "...". A member
+ * without a name shows as "member ID". Returns out. */
 const char *bc_viewer_roster_text(const struct bc_viewer_roster *r, char *out,
                                   size_t n);
 

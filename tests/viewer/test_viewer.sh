@@ -10,7 +10,8 @@
 #     operator's blend, S saves a lossless snapshot, P a screenshot showing
 #     the selection's outline, Ctrl-Z / Ctrl-Shift-Z / Ctrl-Y undo and
 #     redo the last step (the verbose undo/redo lines name the same edit),
-#     Q quits; the daemon's saved scene then holds
+#     Shift-F presents and Shift-F again stops (the verbose presenter
+#     lines), Q quits; the daemon's saved scene then holds
 #     the new position, radius and blend.
 #
 # usage: test_viewer.sh BLOBCAST-VIEW BLOBCASTD IMGCHECK [XPOKE]
@@ -104,6 +105,26 @@ if [ -n "$inner" ]; then
       sort -u)
     [ -n "$u" ] && [ "$u" = "$r" ] || {
       echo "FAIL: undo of=$u but redo of=$r"
+      ok=
+    }
+  fi
+  # Shift-F presents (the verbose line names this member as presenter),
+  # Shift-F again stops; F with nobody presenting sends nothing.
+  [ -n "$ok" ] && poke keydown Shift_L key f keyup Shift_L
+  [ -n "$ok" ] && wait_for '^presenter [1-9][0-9]* following=0' \
+    "$tmp/drag.log" 200 || ok=
+  # (The first "presenter 0" line answered the join: nobody presented.)
+  [ -n "$ok" ] && poke keydown Shift_L key f keyup Shift_L
+  if [ -n "$ok" ]; then
+    n=0
+    while [ "$(grep -c '^presenter 0 following=0' "$tmp/drag.log")" -lt 2 ] &&
+      [ $n -lt 200 ]; do
+      sleep 0.1
+      n=$((n + 1))
+    done
+    [ "$(grep -c '^presenter 0 following=0' "$tmp/drag.log")" -eq 2 ] || {
+      echo "FAIL: Shift-F did not stop the presentation"
+      sed 's/^/    /' "$tmp/drag.log"
       ok=
     }
   fi
@@ -280,7 +301,7 @@ if [ -z "$XPOKE" ] || [ ! -x "$XPOKE" ]; then
 else
   if xvfb-run -a -s "-screen 0 640x480x24" sh "$0" --inner "$VIEW" \
      "$DAEMON" "$CHECK" "$XPOKE" "$tmp" "$port"; then
-    echo "ok   pick, drag, Shift+wheel, Ctrl+wheel, S, P and Q"
+    echo "ok   pick, drag, Shift+wheel, Ctrl+wheel, S, P, Ctrl-Z/Y, Shift-F and Q"
   else
     fail "direct manipulation"
   fi

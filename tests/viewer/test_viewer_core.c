@@ -876,6 +876,42 @@ static void test_roster_names_members_and_last_editor(void)
 	CHECK(strcmp(small + strlen(small) - 3, "...") == 0);
 }
 
+/* Who presents, on the member list and a line of its own: followed or
+ * not, or presented by this client. */
+static void test_roster_names_the_presenter(void)
+{
+	struct bc_proto_member mem[2] = {
+	    {.id = 4, .role = BC_PROTO_ROLE_EDITOR, .name = {"alice", 5}},
+	    {.id = 7, .role = BC_PROTO_ROLE_VIEWER, .name = {"bob", 3}},
+	};
+	struct bc_msg_session_info si = {.session_id = 1, .member_id = 7,
+	                                 .role = BC_PROTO_ROLE_VIEWER,
+	                                 .name = {"s", 1}, .nmembers = 2,
+	                                 .members = mem};
+	struct bc_viewer_roster r;
+	char line[200];
+	memset(&r, 0, sizeof(r));
+	bc_viewer_roster_update(&r, &si);
+	r.presenter = 4;
+	CHECK_STREQ(bc_viewer_roster_text(&r, line, sizeof(line)),
+	            "2 members: alice (editor, presenting), you (viewer)\n"
+	            "alice presents (F follows)");
+	r.following = true;
+	CHECK_STREQ(bc_viewer_roster_text(&r, line, sizeof(line)),
+	            "2 members: alice (editor, presenting), you (viewer)\n"
+	            "following alice (F stops)");
+	/* A new member list keeps the presenter. */
+	bc_viewer_roster_update(&r, &si);
+	r.presenter = 7;
+	r.following = false;
+	CHECK_STREQ(bc_viewer_roster_text(&r, line, sizeof(line)),
+	            "2 members: alice (editor), you (viewer, presenting)\n"
+	            "you present (Shift-F stops)");
+	r.presenter = 0;
+	CHECK_STREQ(bc_viewer_roster_text(&r, line, sizeof(line)),
+	            "2 members: alice (editor), you (viewer)");
+}
+
 /* The undo/redo notice: the sender by its member name (by id without
  * one), the edit taken back by order and its author as the server names
  * it; REDO says "redid"; an empty author reads "an unnamed member's". */
@@ -942,6 +978,7 @@ static const struct bc_test tests[] = {
     {"roster_names_members_and_last_editor",
      test_roster_names_members_and_last_editor},
     {"undo_text_names_both_members", test_undo_text_names_both_members},
+    {"roster_names_the_presenter", test_roster_names_the_presenter},
 };
 
 BC_TEST_MAIN(tests)
