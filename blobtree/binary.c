@@ -34,17 +34,26 @@ int bc_scene_walk_init(struct bc_scene_walk *w, const struct bc_tree *t)
 	/* Every node is pushed exactly once; at most every node is open. */
 	w->todo = bc_calloc(bc_tree_node_count(t), sizeof(uint32_t));
 	w->left = bc_calloc(bc_tree_node_count(t), sizeof(uint32_t));
-	if (!w->todo || !w->left) {
+	w->todo_wrap = bc_calloc(bc_tree_node_count(t), sizeof(uint32_t));
+	if (!w->todo || !w->left || !w->todo_wrap) {
 		bc_free(w->todo);
 		bc_free(w->left);
+		bc_free(w->todo_wrap);
 		memset(w, 0, sizeof(*w));
 		return BC_ENOMEM;
 	}
 	w->t = t;
 	w->l = l;
 	w->todo[0] = l->count - 1;
+	w->todo_wrap[0] = l->nunary ? l->wrap_top[l->count - 1] : BC_NONE;
 	w->ntodo = 1;
 	return 0;
+}
+
+static void push_todo(struct bc_scene_walk *w, uint32_t s)
+{
+	w->todo_wrap[w->ntodo] = w->l->nunary ? w->l->wrap_top[s] : BC_NONE;
+	w->todo[w->ntodo++] = s;
 }
 
 bool bc_scene_walk_next(struct bc_scene_walk *w, struct bc_scene_node *out)
@@ -55,14 +64,27 @@ bool bc_scene_walk_next(struct bc_scene_walk *w, struct bc_scene_node *out)
 	if (!w->ntodo) {
 		return false;
 	}
-	s = w->todo[--w->ntodo];
-	id = l->node_id[s];
-	out->id = id;
 	out->index = w->index++;
 	out->depth = w->nopen;
 	if (w->nopen) {
 		w->left[w->nopen - 1]--;
 	}
+	if (w->todo_wrap[w->ntodo - 1] != BC_NONE) {
+		/* A unary node around the slot: it comes first, with the
+		 * slot's next inner wrapper (or the slot) as its child. */
+		uint32_t u = w->todo_wrap[w->ntodo - 1];
+		w->todo_wrap[w->ntodo - 1] = l->unary_inner[u];
+		out->id = l->unary_id[u];
+		bc_tree_get(w->t, out->id, NULL, &out->op);
+		bc_tree_get_unary(w->t, out->id, &out->unary);
+		out->is_op = true;
+		out->nchildren = 1;
+		w->left[w->nopen++] = 1;
+		return true;
+	}
+	s = w->todo[--w->ntodo];
+	id = l->node_id[s];
+	out->id = id;
 	bc_tree_get(w->t, id, &out->prim, &out->op);
 	if (!bc_lin_is_leaf(l, s)) {
 		/*
@@ -74,11 +96,11 @@ bool bc_scene_walk_next(struct bc_scene_walk *w, struct bc_scene_node *out)
 		 * in that order, c0 ends on top of the stack.
 		 */
 		while (!bc_lin_is_leaf(l, s) && l->node_id[s] == id) {
-			w->todo[w->ntodo++] = s - 1;
+			push_todo(w, s - 1);
 			s = l->first[s - 1] - 1;
 			k++;
 		}
-		w->todo[w->ntodo++] = s;
+		push_todo(w, s);
 		k++;
 		out->is_op = true;
 		out->nchildren = k;
@@ -96,6 +118,7 @@ void bc_scene_walk_finish(struct bc_scene_walk *w)
 {
 	bc_free(w->todo);
 	bc_free(w->left);
+	bc_free(w->todo_wrap);
 	memset(w, 0, sizeof(*w));
 }
 
@@ -185,6 +208,15 @@ static void put_f32s(struct wbuf *b, const float *f, uint32_t n)
 
 static void put_node(struct wbuf *b, const struct bc_scene_node *n)
 {
+	if (n->is_op && bc_op_is_unary(n->op.kind)) {
+		/* Unary: tag, id, nfloats, floats; its one child follows. */
+		uint32_t nf = bc_unary_info(n->op.kind)->nparams;
+		put_u8(b, (uint8_t)(BC_SCENE_TAG_OP | (uint32_t)n->op.kind));
+		put_u32(b, n->id);
+		put_u8(b, (uint8_t)nf);
+		put_f32s(b, n->unary.u, nf);
+		return;
+	}
 	if (n->is_op) {
 		put_u8(b, (uint8_t)(BC_SCENE_TAG_OP | (uint32_t)n->op.kind));
 		put_u32(b, n->id);
@@ -349,6 +381,7 @@ struct dnode {
 	uint32_t nchildren;
 	struct bc_prim_data prim;
 	struct bc_op_data op;
+	struct bc_unary unary;
 };
 
 /* Reads node number index of count, checking everything the bytes decide. */
@@ -373,6 +406,34 @@ static int read_node(struct rd *r, uint32_t index, uint32_t count,
 		}
 		memset(&n->op, 0, sizeof(n->op));
 		n->op.kind = (enum bc_op)kind;
+		if (bc_op_is_unary(n->op.kind)) {
+			const struct bc_unary_info *info =
+			    bc_unary_info(n->op.kind);
+			memset(&n->unary, 0, sizeof(n->unary));
+			n->unary.kind = n->op.kind;
+			if ((rc = get_u8(r, &nf, index, "nfloats", ei))) {
+				return rc;
+			}
+			if (nf != info->nparams) {
+				return bc_errinfo_set(ei, BC_EPROTO_COUNT,
+				                      "node %u: nfloats is %u but "
+				                      "a %s has %u",
+				                      index, nf, info->name,
+				                      info->nparams);
+			}
+			if ((rc = get_f32s(r, n->unary.u, nf, index, "params",
+			                   ei))) {
+				return rc;
+			}
+			if (after < 1) {
+				return bc_errinfo_set(ei, BC_EPROTO_COUNT,
+				                      "node %u: a %s needs its "
+				                      "child after it",
+				                      index, info->name);
+			}
+			n->nchildren = 1;
+			return 0;
+		}
 		if ((rc = get_f32s(r, &n->op.blend, 1, index, "blend", ei)) ||
 		    (rc = get_f32s(r, &n->op.range, 1, index, "range", ei)) ||
 		    (rc =
@@ -576,7 +637,9 @@ static int decode_tree(struct rd *r, struct bc_tree *t, struct bc_errinfo *ei)
 			left[nopen - 1]--;
 		}
 		if (n.is_op) {
-			if ((rc = bc_tree_push_op(t, id, &n.op, ei))) {
+			if ((rc = bc_op_is_unary(n.op.kind)
+			              ? bc_tree_push_unary(t, id, &n.unary, ei)
+			              : bc_tree_push_op(t, id, &n.op, ei))) {
 				rc = at_node(ei, rc, i, id);
 				goto cleanup;
 			}

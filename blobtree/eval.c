@@ -34,10 +34,151 @@ static inline float eval_record(uint32_t kind, const float *rec, const float p[3
 	return bc_prim_sdf((enum bc_prim)kind, rec + 12, x, y, z);
 }
 
+/* ---- unary and domain nodes ---------------------------------------------- */
+
+/* Maps p through domain node u (its input frame to its child's). */
+static void domain_apply(uint32_t kind, const float *rec, float p[3])
+{
+	switch (kind) {
+	case BC_OP_ELONGATE:
+		for (int i = 0; i < 3; i++) {
+			p[i] -= fminf(fmaxf(p[i], -rec[i]), rec[i]);
+		}
+		break;
+	case BC_OP_TWIST: {
+		/* Rotation about y by rate * y. */
+		float a = rec[0] * p[1], c = cosf(a), s = sinf(a);
+		float x = c * p[0] + s * p[2], z = -s * p[0] + c * p[2];
+		p[0] = x;
+		p[2] = z;
+		break;
+	}
+	case BC_OP_BEND: {
+		/* opCheapBend: the xy plane rotated by rate * x. */
+		float a = rec[0] * p[0], c = cosf(a), s = sinf(a);
+		float x = c * p[0] + s * p[1], y = -s * p[0] + c * p[1];
+		p[0] = x;
+		p[1] = y;
+		break;
+	}
+	case BC_OP_MIRROR: {
+		uint32_t mask = (uint32_t)rec[0];
+		for (int i = 0; i < 3; i++) {
+			if (mask & (1u << i)) {
+				p[i] = fabsf(p[i]);
+			}
+		}
+		break;
+	}
+	case BC_OP_REPEAT:
+		/* opRepLim with count copies centred on the origin: the
+		 * nearest copy's index, clamped to the grid. */
+		for (int i = 0; i < 3; i++) {
+			float n = rec[3 + i], o, id;
+			if (!(n > 1.0f)) {
+				continue;
+			}
+			o = 0.5f * (n - 1.0f);
+			id = floorf(p[i] / rec[i] + o + 0.5f);
+			id = fminf(fmaxf(id, 0.0f), n - 1.0f);
+			p[i] -= rec[i] * (id - o);
+		}
+		break;
+	case BC_OP_SCALE:
+		for (int i = 0; i < 3; i++) {
+			p[i] *= rec[1];
+		}
+		break;
+	default:
+		break;
+	}
+}
+
+void bc_domain_map(const struct bc_lin *l, uint32_t d, const float p[3],
+		   float out[3])
+{
+	uint32_t chain[BC_DOMAIN_MAX_CHAIN];
+	uint32_t n = 0;
+	out[0] = p[0];
+	out[1] = p[1];
+	out[2] = p[2];
+	for (; d != BC_NONE && n < BC_DOMAIN_MAX_CHAIN; d = l->unary_dom[d]) {
+		chain[n++] = d;
+	}
+	/* Outermost first. */
+	while (n-- > 0) {
+		uint32_t u = chain[n];
+		domain_apply(l->unary_kind[u],
+			     l->param + 4u * (size_t)l->unary_param[u], out);
+	}
+}
+
+float bc_unary_value(const struct bc_lin *l, uint32_t u, float f,
+		     const float p[3])
+{
+	const float *rec = l->param + 4u * (size_t)l->unary_param[u];
+	switch (l->unary_kind[u]) {
+	case BC_OP_OFFSET:
+		return f - rec[0];
+	case BC_OP_ONION:
+		return fabsf(f) - rec[0];
+	case BC_OP_SCALE:
+		return f * rec[0];
+	case BC_OP_TWIST:
+	case BC_OP_BEND: {
+		/* Beyond the radius R of its child's ABVs the value is scaled
+		 * by L(R) / L(r) (continuous at R): the map's own bound grows
+		 * with the distance r from the axis, so a step of value / L
+		 * stays safe out there; the value stays above the ROI bound
+		 * (docs/scene-format.md). */
+		float q[3], r;
+		bc_domain_map(l, l->unary_dom[u], p, q);
+		r = l->unary_kind[u] == BC_OP_TWIST
+			    ? sqrtf(q[0] * q[0] + q[2] * q[2])
+			    : sqrtf(q[0] * q[0] + q[1] * q[1]);
+		if (r > rec[1] && f > 0.0f) {
+			return f * bc_unary_own_lip(l->unary_kind[u], rec[0],
+						    rec[1]) /
+			       bc_unary_own_lip(l->unary_kind[u], rec[0], r);
+		}
+		return f;
+	}
+	default:
+		return f;
+	}
+}
+
+/* Field of the leaf at slot s: its point mapped through the domain nodes
+ * around it, then its own record. */
+static inline float eval_leaf(const struct bc_lin *l, uint32_t s,
+			      uint32_t kind, const float *rec,
+			      const float p[3])
+{
+	if (l->nunary && l->dom[s] != BC_NONE) {
+		float q[3];
+		bc_domain_map(l, l->dom[s], p, q);
+		return eval_record(kind, rec, q);
+	}
+	return eval_record(kind, rec, p);
+}
+
+/* Slot s's value through its wrappers, innermost first. */
+static inline float wrap_value(const struct bc_lin *l, uint32_t s, float f,
+			       const float p[3])
+{
+	if (!l->nunary) {
+		return f;
+	}
+	for (uint32_t u = l->wrap[s]; u != BC_NONE; u = l->unary_outer[u]) {
+		f = bc_unary_value(l, u, f, p);
+	}
+	return f;
+}
+
 float bc_eval_prim(const struct bc_lin *l, uint32_t k, const float p[3])
 {
 	uint32_t s = l->prim_slot[k];
-	return eval_record(bc_lin_kind(l, s), bc_lin_param(l, s), p);
+	return eval_leaf(l, s, bc_lin_kind(l, s), bc_lin_param(l, s), p);
 }
 
 /* Which operand an operator's value follows, for colours and ids: the one
@@ -65,7 +206,7 @@ static float full(const struct bc_lin *l, const float p[3], uint32_t *prim)
 		uint32_t kind = bc_lin_kind(l, s);
 		const float *rec = bc_lin_param(l, s);
 		if (bc_lin_is_leaf(l, s)) {
-			val[sp] = eval_record(kind, rec, p);
+			val[sp] = eval_leaf(l, s, kind, rec, p);
 			who[sp++] = l->prim_of[s];
 		} else {
 			float f1 = val[--sp];
@@ -76,6 +217,7 @@ static float full(const struct bc_lin *l, const float p[3], uint32_t *prim)
 				who[sp - 1] = who[sp];
 			}
 		}
+		val[sp - 1] = wrap_value(l, s, val[sp - 1], p);
 	}
 	if (prim) {
 		*prim = sp ? who[0] : BC_NONE;
@@ -143,6 +285,33 @@ static void emit(struct bc_view *v, const struct bc_lin *l, uint32_t s)
 	in->pad = 0;
 }
 
+/* Emits the value-changing wrappers of slot s, innermost first. */
+static void emit_wraps(struct bc_view *v, const struct bc_lin *l, uint32_t s)
+{
+	if (!l->nunary) {
+		return;
+	}
+	for (uint32_t u = l->wrap[s]; u != BC_NONE; u = l->unary_outer[u]) {
+		struct bc_view_instr *in;
+		if (!bc_op_has_value((enum bc_op)l->unary_kind[u])) {
+			continue;
+		}
+		in = &v->instr[v->n++];
+		in->slot = u;
+		in->param = l->unary_param[u];
+		in->kind = (uint16_t)l->unary_kind[u];
+		in->leaf = BC_VIEW_UNARY;
+		in->pad = 0;
+	}
+}
+
+/* Does slot a carry a value-changing wrapper (a climb must stop there)? */
+static inline bool value_wrapped(const struct bc_lin *l, uint32_t x,
+				 uint32_t a)
+{
+	return l->nunary && l->ucount[x] != l->ucount[a];
+}
+
 /* Can the entry climb to ancestor a? a must be complete (before the next
  * active slot q) and hold nothing of the entry below (first >= lo). */
 static inline bool may_climb(const struct bc_lin *l, uint32_t a, uint32_t q,
@@ -171,9 +340,24 @@ static void combine(struct bc_view *v, const struct bc_lin *l,
 	}
 	if (missing) {
 		v->n = left->start;
+	} else {
+		emit_wraps(v, l, a);
 	}
 	left->slot = a;
 	left->missing = missing;
+}
+
+/* The entry has climbed to slot x: it becomes missing when an edge on the
+ * way kills its operand. */
+static void settle(struct bc_view *v, const struct bc_lin *l, struct entry *top,
+		   uint32_t x)
+{
+	if (x != top->slot && l->kills[top->slot] != l->kills[x] &&
+	    !top->missing) {
+		top->missing = true;
+		v->n = top->start;
+	}
+	top->slot = x;
 }
 
 int bc_view_build(struct bc_view *v, const struct bc_lin *l,
@@ -189,8 +373,9 @@ int bc_view_build(struct bc_view *v, const struct bc_lin *l,
 	if (!l || n == 0) {
 		return 0;
 	}
-	/* At most 2n - 1 instructions: n leaves and n - 1 operators. */
-	if ((rc = reserve(v, 2 * n))) {
+	/* At most 2n - 1 instructions: n leaves and n - 1 operators, and the
+	 * unary nodes' instructions (each at most once). */
+	if ((rc = reserve(v, 2 * n + l->nunary))) {
 		return rc;
 	}
 	for (uint32_t i = 0; i < n; i++) {
@@ -215,37 +400,44 @@ int bc_view_build(struct bc_view *v, const struct bc_lin *l,
 		st[sp].missing = false;
 		sp++;
 		emit(v, l, l->prim_slot[k]);
+		emit_wraps(v, l, l->prim_slot[k]);
 		for (;;) {
 			struct entry *top = &st[sp - 1];
 			uint32_t lo = sp >= 2 ? st[sp - 2].slot + 1 : 0;
 			uint32_t x = top->slot, a;
 			/* Climb through ancestors that hold no other operand:
 			 * the fast index first (whole same-side runs), then
-			 * the jump pointer, then the parent. */
+			 * the jump pointer, then the parent. No shortcut
+			 * passes a slot with a value-changing wrapper: the
+			 * climb stops there to emit it. */
 			for (;;) {
 				uint32_t j = l->fast[x];
-				if (j != BC_NONE && may_climb(l, j, q, lo)) {
+				if (j != BC_NONE && may_climb(l, j, q, lo) &&
+				    !value_wrapped(l, x, j)) {
 					x = j;
 					continue;
 				}
 				j = l->jump[x];
-				if (j != BC_NONE && may_climb(l, j, q, lo)) {
+				if (j != BC_NONE && may_climb(l, j, q, lo) &&
+				    !value_wrapped(l, x, j)) {
 					x = j;
 					continue;
 				}
 				a = bc_lin_parent(l, x);
 				if (a != BC_NONE && may_climb(l, a, q, lo)) {
+					bool wrapped = value_wrapped(l, x, a);
 					x = a;
+					if (wrapped) {
+						settle(v, l, top, x);
+						if (!top->missing) {
+							emit_wraps(v, l, x);
+						}
+					}
 					continue;
 				}
 				break;
 			}
-			if (x != top->slot && l->kills[top->slot] != l->kills[x] &&
-			    !top->missing) {
-				top->missing = true;
-				v->n = top->start;
-			}
-			top->slot = x;
+			settle(v, l, top, x);
 			a = bc_lin_parent(l, x);
 			if (a == BC_NONE || a >= q) {
 				break;
@@ -262,6 +454,9 @@ int bc_view_build(struct bc_view *v, const struct bc_lin *l,
 	}
 	/* The evaluation stack the program needs. */
 	for (uint32_t i = 0; i < v->n; i++) {
+		if (v->instr[i].leaf == BC_VIEW_UNARY) {
+			continue;
+		}
 		depth = v->instr[i].leaf ? depth + 1 : depth - 1;
 		if (depth > v->stack) {
 			v->stack = depth;
@@ -285,8 +480,10 @@ static float run(const struct bc_view *v, const struct bc_lin *l,
 	for (uint32_t i = 0; i < v->n; i++) {
 		const struct bc_view_instr *in = &v->instr[i];
 		const float *rec = l->param + 4u * (size_t)in->param;
-		if (in->leaf) {
-			val[sp] = eval_record(in->kind, rec, p);
+		if (in->leaf == BC_VIEW_UNARY) {
+			val[sp - 1] = bc_unary_value(l, in->slot, val[sp - 1], p);
+		} else if (in->leaf) {
+			val[sp] = eval_leaf(l, in->slot, in->kind, rec, p);
 			who[sp++] = l->prim_of[in->slot];
 		} else {
 			float f1 = val[--sp];

@@ -947,7 +947,9 @@ static int random_emit(struct gen *g, uint32_t budget, uint32_t depth,
 		random_prim(g, &p, spread);
 		return put(g, &p);
 	}
-	op.kind = (enum bc_op)(1 + rng_below(&g->rng, BC_OP_COUNT - 1));
+	/* Binary operators only (unary kinds came later: seeds keep naming
+	 * the same scenes). */
+	op.kind = (enum bc_op)(1 + rng_below(&g->rng, BC_OP_FIRST_UNARY - 1));
 	op.blend = 0.0f;
 	op.range = 0.0f;
 	if (bc_op_is_smooth(op.kind)) {

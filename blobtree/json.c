@@ -484,6 +484,87 @@ static int parse_op(struct jctx *c, json_t *obj, enum bc_op kind)
 	return 0;
 }
 
+/* A unary node: {"type": "offset", "id": 3, "amount": 0.1, "children":
+ * [one node]}; every parameter key is required (docs/scene-format.md). */
+static int parse_unary(struct jctx *c, json_t *obj, enum bc_op kind)
+{
+	const struct bc_unary_info *info = bc_unary_info(kind);
+	bool repeat = kind == BC_OP_REPEAT;
+	const char *allowed[] = {"type", "id", "children", info->param,
+	                         "count"};
+	struct bc_unary un;
+	json_t *children, *v;
+	uint32_t id;
+	int rc;
+
+	memset(&un, 0, sizeof(un));
+	un.kind = kind;
+	if ((rc = check_keys(c, obj, allowed, repeat ? 5 : 4, info->name))) {
+		return rc;
+	}
+	if (!(v = json_object_get(obj, info->param))) {
+		return jfail(c, BC_EPARSE, NULL, -1,
+		             "missing key \"%s\" (a %s needs it)", info->param,
+		             info->name);
+	}
+	if (kind == BC_OP_MIRROR) {
+		uint32_t mask;
+		if (!json_is_string(v)) {
+			return jfail(c, BC_EPARSE, "axes", -1,
+			             "expected a string such as \"xz\", got %s",
+			             json_kind(v));
+		}
+		mask = bc_mirror_axes_parse(json_string_value(v));
+		if (!mask) {
+			return jfail(c, BC_ERANGE, "axes", -1,
+			             "expected 1 to 3 distinct letters of x, "
+			             "y, z");
+		}
+		un.u[0] = (float)mask;
+	} else if ((rc = get_floats(c, v, info->param, repeat ? 3 : info->nparams,
+	                            un.u))) {
+		return rc;
+	}
+	if (repeat) {
+		if (!(v = json_object_get(obj, "count"))) {
+			return jfail(c, BC_EPARSE, NULL, -1,
+			             "missing key \"count\" (a repeat needs "
+			             "it)");
+		}
+		if ((rc = get_floats(c, v, "count", 3, un.u + 3))) {
+			return rc;
+		}
+	}
+	children = json_object_get(obj, "children");
+	if (!children) {
+		return jfail(c, BC_EPARSE, NULL, -1,
+		             "missing key \"children\" (a %s needs it)",
+		             info->name);
+	}
+	if (!json_is_array(children) || json_array_size(children) != 1) {
+		return jfail(c, BC_EINVAL, "children", -1,
+		             "a %s takes an array of exactly one child",
+		             info->name);
+	}
+	if ((rc = get_id(c, obj, &id))) {
+		return rc;
+	}
+	if ((rc = bc_tree_push_unary(c->t, id ? id : fresh_next(&c->fr), &un,
+	                             c->ei))) {
+		return builder_fail(c, rc);
+	}
+	c->depth++;
+	c->idx[c->depth] = 0;
+	if ((rc = parse_node(c, json_array_get(children, 0)))) {
+		return rc;
+	}
+	c->depth--;
+	if ((rc = bc_tree_pop_op(c->t, c->ei))) {
+		return builder_fail(c, rc);
+	}
+	return 0;
+}
+
 /* Recursion is bounded: depth is checked against BC_SCENE_JSON_MAX_DEPTH
  * first (jansson itself holds no deeper document). */
 static int parse_node(struct jctx *c, json_t *obj)
@@ -521,7 +602,8 @@ static int parse_node(struct jctx *c, json_t *obj)
 		return parse_prim(c, obj, pk);
 	}
 	if ((ok = bc_op_from_name(name)) != BC_OP_INVALID) {
-		return parse_op(c, obj, ok);
+		return bc_op_is_unary(ok) ? parse_unary(c, obj, ok)
+		                          : parse_op(c, obj, ok);
 	}
 	quote_untrusted(q, sizeof(q), name);
 	return jfail(
@@ -1001,6 +1083,21 @@ static void write_op(struct sbuf *b, const struct bc_scene_node *n)
 	sb_puts(b, bc_op_name(n->op.kind));
 	sb_puts(b, "\", \"id\": ");
 	sb_uint(b, n->id);
+	if (bc_op_is_unary(n->op.kind)) {
+		const struct bc_unary_info *info = bc_unary_info(n->op.kind);
+		if (n->op.kind == BC_OP_MIRROR) {
+			char axes[4];
+			bc_mirror_axes_name((uint32_t)n->unary.u[0], axes);
+			sb_puts(b, ", \"axes\": \"");
+			sb_puts(b, axes);
+			sb_puts(b, "\"");
+		} else if (n->op.kind == BC_OP_REPEAT) {
+			sb_member(b, "spacing", n->unary.u, 3);
+			sb_member(b, "count", n->unary.u + 3, 3);
+		} else {
+			sb_member(b, info->param, n->unary.u, info->nparams);
+		}
+	}
 	if (bc_op_is_smooth(n->op.kind)) {
 		sb_member(b, "blend", &n->op.blend, 1);
 		sb_member(b, "range", &n->op.range, 1);

@@ -33,14 +33,28 @@ void bc__lin_free(struct bc_lin *l)
 	bc_free(l->abv);
 	bc_free(l->color);
 	bc_free(l->param);
+	bc_free(l->wrap);
+	bc_free(l->wrap_top);
+	bc_free(l->dom);
+	bc_free(l->ucount);
+	bc_free(l->unary_slot);
+	bc_free(l->unary_outer);
+	bc_free(l->unary_inner);
+	bc_free(l->unary_dom);
+	bc_free(l->unary_param);
+	bc_free(l->unary_kind);
+	bc_free(l->unary_id);
 	memset(l, 0, sizeof(*l));
 }
 
 int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nops)
 {
 	size_t count = nprims ? 2u * (size_t)nprims - 1u : 0u;
+	/* Room for every operator to be unary (the larger record); nparam
+	 * becomes what the fill uses. */
 	size_t nparam = (size_t)BC_PRIM_RECORD_VEC4 * nprims +
-			(size_t)BC_OP_RECORD_VEC4 * nops;
+			(size_t)BC_UNARY_RECORD_VEC4 * nops;
+	size_t nun = nops ? nops : 1u;
 	memset(l, 0, sizeof(*l));
 	if (nprims == 0) {
 		return 0;
@@ -61,6 +75,24 @@ int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nops)
 	l->abv = bc_calloc(nprims, sizeof(struct bc_abv));
 	l->color = bc_malloc(nprims * sizeof(*l->color));
 	l->param = bc_calloc(4 * nparam, sizeof(float));
+	l->wrap = bc_malloc(count * sizeof(uint32_t));
+	l->wrap_top = bc_malloc(count * sizeof(uint32_t));
+	l->dom = bc_malloc(count * sizeof(uint32_t));
+	l->ucount = bc_malloc(count * sizeof(uint32_t));
+	l->unary_slot = bc_malloc(nun * sizeof(uint32_t));
+	l->unary_outer = bc_malloc(nun * sizeof(uint32_t));
+	l->unary_inner = bc_malloc(nun * sizeof(uint32_t));
+	l->unary_dom = bc_malloc(nun * sizeof(uint32_t));
+	l->unary_param = bc_malloc(nun * sizeof(uint32_t));
+	l->unary_kind = bc_malloc(nun * sizeof(uint32_t));
+	l->unary_id = bc_malloc(nun * sizeof(uint32_t));
+	if (!l->wrap || !l->wrap_top || !l->dom || !l->ucount ||
+	    !l->unary_slot || !l->unary_outer || !l->unary_inner ||
+	    !l->unary_dom || !l->unary_param || !l->unary_kind ||
+	    !l->unary_id) {
+		bc__lin_free(l);
+		return BC_ENOMEM;
+	}
 	if (!l->node || !l->first || !l->fast || !l->jump || !l->kills ||
 	    !l->depth ||
 	    !l->node_id || !l->prim_of || !l->roi || !l->prim_slot ||
@@ -152,6 +184,26 @@ static void write_prim_record(float *rec, const struct bc_prim_data *p)
 	bc_prim_pack(p, rec + 12);
 }
 
+/* A unary node's record: its parameters; the derived values of twist and
+ * bend (R, L, r+) are written by the bounds pass. */
+static void write_unary_record(float *rec, const struct bc__node *n)
+{
+	memset(rec, 0, 4 * BC_UNARY_RECORD_VEC4 * sizeof(float));
+	memcpy(rec, n->uparam, sizeof(n->uparam));
+	switch (n->u.op.kind) {
+	case BC_OP_TWIST:
+	case BC_OP_BEND:
+		rec[1] = 0.0f;
+		rec[2] = 1.0f;
+		break;
+	case BC_OP_SCALE:
+		rec[1] = 1.0f / n->uparam[0];
+		break;
+	default:
+		break;
+	}
+}
+
 static void write_op_record(float *rec, const struct bc_op_data *op)
 {
 	rec[0] = op->blend;
@@ -190,8 +242,32 @@ static const float default_color[3] = {0.78f, 0.78f, 0.80f};
 
 struct fill_state {
 	struct bc_lin *l;
-	uint32_t slot, prim, param;
+	uint32_t slot, prim, param, unary;
 };
+
+static void slot_init(struct bc_lin *l, uint32_t s)
+{
+	l->wrap[s] = BC_NONE;
+	l->wrap_top[s] = BC_NONE;
+	l->dom[s] = BC_NONE;
+	l->ucount[s] = 0;
+}
+
+/* Unary node u (just completed) wraps slot s, outside its earlier
+ * wrappers. */
+static void add_wrapper(struct bc_lin *l, uint32_t u, uint32_t s)
+{
+	l->unary_slot[u] = s;
+	l->unary_outer[u] = BC_NONE;
+	l->unary_inner[u] = l->wrap_top[s];
+	l->unary_dom[u] = BC_NONE;
+	if (l->wrap_top[s] != BC_NONE) {
+		l->unary_outer[l->wrap_top[s]] = u;
+	} else {
+		l->wrap[s] = u;
+	}
+	l->wrap_top[s] = u;
+}
 
 static void emit_leaf(struct bc_tree *t, struct fill_state *fs, uint32_t n)
 {
@@ -208,6 +284,7 @@ static void emit_leaf(struct bc_tree *t, struct fill_state *fs, uint32_t n)
 	l->node_id[s] = nd->id;
 	l->prim_of[s] = nd->prim;
 	l->prim_slot[nd->prim] = s;
+	slot_init(l, s);
 	write_prim_record(l->param + 4u * (size_t)nd->param, &nd->u.prim);
 	memcpy(l->color[nd->prim],
 	       nd->u.prim.has_color ? nd->u.prim.color : default_color,
@@ -228,6 +305,7 @@ static void emit_fold(struct fill_state *fs, struct bc__node *p,
 	l->first[o] = l->first[left];
 	l->node_id[o] = p->id;
 	l->prim_of[o] = BC_NONE;
+	slot_init(l, o);
 	p->slot = o;
 }
 
@@ -245,9 +323,22 @@ static void emit_all(struct bc_tree *t, struct fill_state *fs, uint32_t top)
 		while (t->pool[n].is_op) {
 			struct bc__node *nd = &t->pool[n];
 			nd->param = fs->param;
-			fs->param += BC_OP_RECORD_VEC4;
-			write_op_record(fs->l->param + 4u * (size_t)nd->param,
-			                &nd->u.op);
+			if (bc__node_unary(nd)) {
+				struct bc_lin *l = fs->l;
+				nd->unary = fs->unary++;
+				fs->param += BC_UNARY_RECORD_VEC4;
+				write_unary_record(
+					l->param + 4u * (size_t)nd->param, nd);
+				l->unary_param[nd->unary] = nd->param;
+				l->unary_kind[nd->unary] =
+					(uint32_t)nd->u.op.kind;
+				l->unary_id[nd->unary] = nd->id;
+			} else {
+				fs->param += BC_OP_RECORD_VEC4;
+				write_op_record(
+					fs->l->param + 4u * (size_t)nd->param,
+					&nd->u.op);
+			}
 			n = nd->first_child;
 		}
 		emit_leaf(t, fs, n);
@@ -258,6 +349,10 @@ static void emit_all(struct bc_tree *t, struct fill_state *fs, uint32_t top)
 			}
 			if (t->pool[p].first_child == n) {
 				t->pool[p].slot = t->pool[n].slot;
+				if (bc__node_unary(&t->pool[p])) {
+					add_wrapper(fs->l, t->pool[p].unary,
+						    t->pool[p].slot);
+				}
 			} else {
 				emit_fold(fs, &t->pool[p], &t->pool[n]);
 			}
@@ -270,8 +365,9 @@ static void emit_all(struct bc_tree *t, struct fill_state *fs, uint32_t top)
 	}
 }
 
-/* ROI of slot s from its parent's (eq. 13-16), and its kill count. */
-static void propagate(struct bc_lin *l, uint32_t s)
+/* ROI of slot s's value (outside its wrappers) from its parent's (eq.
+ * 13-16), and its kill count. */
+static void propagate_base(struct bc_lin *l, uint32_t s)
 {
 	uint32_t a = bc_lin_parent(l, s);
 	bool left = (l->node[2 * s] & BC_WORD_LEFT) != 0;
@@ -317,11 +413,178 @@ static void propagate(struct bc_lin *l, uint32_t s)
 	}
 }
 
+/*
+ * Slot s's wrappers, outermost first: the ROI each one's child sees (a
+ * unary node's child matters where the node's value does), the domain
+ * node around each, and then the slot's own. ROI rules (docs): offset a
+ * shifts by a (r+ kept >= 0: a larger r+ only grows ABVs); onion t makes
+ * [-(r+ + t), r+ + t]; scale s divides by s; the domain nodes keep it.
+ */
+static void propagate(struct bc_lin *l, uint32_t s)
+{
+	uint32_t a = bc_lin_parent(l, s);
+	uint32_t d = a == BC_NONE ? BC_NONE : l->dom[a];
+	float lo, hi;
+	propagate_base(l, s);
+	l->ucount[s] = 0;
+	if (a != BC_NONE) {
+		uint32_t w = l->wrap[a];
+		l->ucount[s] = l->ucount[a];
+		for (; w != BC_NONE; w = l->unary_outer[w]) {
+			if (bc_op_has_value((enum bc_op)l->unary_kind[w])) {
+				l->ucount[s]++;
+				break;
+			}
+		}
+	}
+	lo = l->roi[2 * s];
+	hi = l->roi[2 * s + 1];
+	for (uint32_t u = l->wrap_top[s]; u != BC_NONE;
+	     u = l->unary_inner[u]) {
+		float *rec = l->param + 4u * (size_t)l->unary_param[u];
+		enum bc_op kind = (enum bc_op)l->unary_kind[u];
+		l->unary_dom[u] = d;
+		switch (kind) {
+		case BC_OP_OFFSET:
+			lo = fminf(lo, lo + rec[0]);
+			hi = fmaxf(hi + rec[0], 0.0f);
+			break;
+		case BC_OP_ONION:
+			hi = hi + rec[0];
+			lo = fminf(lo, -hi);
+			break;
+		case BC_OP_SCALE:
+			lo *= rec[1];
+			hi *= rec[1];
+			break;
+		case BC_OP_TWIST:
+		case BC_OP_BEND:
+			rec[3] = hi;
+			break;
+		default:
+			break;
+		}
+		if (bc_op_is_domain(kind)) {
+			d = u;
+		}
+	}
+	l->roi[2 * s] = lo;
+	l->roi[2 * s + 1] = hi;
+	l->dom[s] = d;
+}
+
+/* ---- domain nodes: bounds and Lipschitz -------------------------------- */
+
+/* The Lipschitz bound of twist (rate k) and bend within radius r of their
+ * axis. Twist q = R_y(k y) p has Jacobian R (I + k J(x,z) e_y^T) whose
+ * largest singular value is (m + sqrt(m^2 + 4)) / 2, m = |k| r; bend's
+ * R_z(k x) (I + k J(x,y) e_x^T) is bounded by 1 + |k| r (the triangle
+ * inequality; attained at y = -r). */
+float bc_unary_own_lip(uint32_t kind, float rate, float r)
+{
+	float m = fabsf(rate) * r;
+	if (kind == BC_OP_TWIST) {
+		return 0.5f * (m + sqrtf(m * m + 4.0f));
+	}
+	return 1.0f + m;
+}
+
+static void abv_set_box(struct bc_abv *abv, const float lo[3],
+			const float hi[3])
+{
+	memset(abv, 0, sizeof(*abv));
+	abv->shape = BC_ABV_BOX;
+	for (int i = 0; i < 3; i++) {
+		abv->center[i] = 0.5f * (lo[i] + hi[i]);
+		abv->half[i] = 0.5f * (hi[i] - lo[i]);
+		abv->axis[i][i] = 1.0f;
+	}
+}
+
+/*
+ * Maps a bounding shape from domain node u's child frame to its own input
+ * frame: a shape containing every point p whose mapped point lies in the
+ * given one (the preimage). Scale is exact (the shape scaled); the others
+ * take the shape's AABB: elongate grows each side by h (away from 0);
+ * mirror spans [-hi, hi] on its axes; repeat is the union of the copies'
+ * boxes; twist and bend preserve the distance to their axis (y, z), so the
+ * preimage lies in the cylinder of the box's largest radius, whose height
+ * is the box's. Returns that radius for twist and bend (0 otherwise).
+ */
+static float abv_preimage(const struct bc_lin *l, uint32_t u, struct bc_abv *abv)
+{
+	const float *rec = l->param + 4u * (size_t)l->unary_param[u];
+	enum bc_op kind = (enum bc_op)l->unary_kind[u];
+	float lo[3], hi[3], r = 0.0f;
+	if (kind == BC_OP_SCALE) {
+		float f = rec[0];
+		for (int i = 0; i < 3; i++) {
+			abv->center[i] *= f;
+			abv->end[i] *= f;
+			abv->half[i] *= f;
+		}
+		abv->radius *= f;
+		return 0.0f;
+	}
+	bc_abv_aabb(abv, lo, hi);
+	switch (kind) {
+	case BC_OP_ELONGATE:
+		for (int i = 0; i < 3; i++) {
+			lo[i] = lo[i] > 0.0f ? lo[i] + rec[i] : lo[i] - rec[i];
+			hi[i] = hi[i] < 0.0f ? hi[i] - rec[i] : hi[i] + rec[i];
+		}
+		break;
+	case BC_OP_MIRROR: {
+		uint32_t mask = (uint32_t)rec[0];
+		for (int i = 0; i < 3; i++) {
+			if (mask & (1u << i)) {
+				float m = fmaxf(hi[i], 0.0f);
+				lo[i] = -m;
+				hi[i] = m;
+			}
+		}
+		break;
+	}
+	case BC_OP_REPEAT:
+		for (int i = 0; i < 3; i++) {
+			float half = 0.5f * (rec[3 + i] - 1.0f) * rec[i];
+			lo[i] -= half;
+			hi[i] += half;
+		}
+		break;
+	case BC_OP_TWIST:
+	case BC_OP_BEND: {
+		/* Axes of the rotation plane: x and z (twist), x and y. */
+		int a = 0, b = kind == BC_OP_TWIST ? 2 : 1;
+		float ma = fmaxf(fabsf(lo[a]), fabsf(hi[a]));
+		float mb = fmaxf(fabsf(lo[b]), fabsf(hi[b]));
+		r = sqrtf(ma * ma + mb * mb);
+		lo[a] = lo[b] = -r;
+		hi[a] = hi[b] = r;
+		break;
+	}
+	default:
+		break;
+	}
+	abv_set_box(abv, lo, hi);
+	return r;
+}
+
 static void place_abv(struct bc_tree *t, struct bc_lin *l, uint32_t k,
 		      const struct bc_prim_data *p)
 {
 	float lo[3], hi[3];
-	bc__abv_place(p, l->roi[2 * l->prim_slot[k] + 1], &l->abv[k]);
+	uint32_t s = l->prim_slot[k];
+	bc__abv_place(p, l->roi[2 * s + 1], &l->abv[k]);
+	for (uint32_t d = l->dom[s]; d != BC_NONE; d = l->unary_dom[d]) {
+		float r = abv_preimage(l, d, &l->abv[k]);
+		float *rec = l->param + 4u * (size_t)l->unary_param[d];
+		if ((l->unary_kind[d] == BC_OP_TWIST ||
+		     l->unary_kind[d] == BC_OP_BEND) &&
+		    r > rec[1]) {
+			rec[1] = r;
+		}
+	}
 	bc_abv_aabb(&l->abv[k], lo, hi);
 	for (int i = 0; i < 3; i++) {
 		l->lo[i] = fminf(l->lo[i], lo[i]);
@@ -357,14 +620,62 @@ static void place_subtree(struct bc_tree *t, struct bc_lin *l, uint32_t top)
 	}
 }
 
+static bool is_bend(const struct bc_lin *l, uint32_t u)
+{
+	return l->unary_kind[u] == BC_OP_TWIST || l->unary_kind[u] == BC_OP_BEND;
+}
+
+/* The Lipschitz bounds of twist and bend (their radii R known): each
+ * node's L is the largest product of the own bounds from a primitive up to
+ * and including it; the tree's is the largest product over whole paths. */
+static void compute_lips(struct bc_lin *l)
+{
+	l->lip = 1.0f;
+	for (uint32_t u = 0; u < l->nunary; u++) {
+		if (is_bend(l, u)) {
+			l->param[4u * (size_t)l->unary_param[u] + 2] = 1.0f;
+		}
+	}
+	for (uint32_t k = 0; k < l->nprims; k++) {
+		float prod = 1.0f;
+		for (uint32_t d = l->dom[l->prim_slot[k]]; d != BC_NONE;
+		     d = l->unary_dom[d]) {
+			float *rec = l->param + 4u * (size_t)l->unary_param[d];
+			if (!is_bend(l, d)) {
+				continue;
+			}
+			prod *= bc_unary_own_lip(l->unary_kind[d], rec[0],
+					rec[1]);
+			rec[2] = fmaxf(rec[2], prod);
+		}
+		l->lip = fmaxf(l->lip, prod);
+	}
+}
+
 static void place_all_abvs(struct bc_tree *t, struct bc_lin *l)
 {
 	for (int i = 0; i < 3; i++) {
 		l->lo[i] = INFINITY;
 		l->hi[i] = -INFINITY;
 	}
+	for (uint32_t u = 0; u < l->nunary; u++) {
+		if (is_bend(l, u)) {
+			l->param[4u * (size_t)l->unary_param[u] + 1] = 0.0f;
+		}
+	}
 	place_subtree(t, l, t->root);
 	update_size(l);
+	compute_lips(l);
+}
+
+bool bc__lin_prim_bends(const struct bc_lin *l, const struct bc__node *n)
+{
+	for (uint32_t d = l->dom[n->slot]; d != BC_NONE; d = l->unary_dom[d]) {
+		if (is_bend(l, d)) {
+			return true;
+		}
+	}
+	return false;
 }
 
 void bc__lin_fill(struct bc_tree *t, struct bc_lin *l)
@@ -373,6 +684,9 @@ void bc__lin_fill(struct bc_tree *t, struct bc_lin *l)
 	uint32_t root, depth = 0, most = 0;
 	l->nesting = bc__measure(t, t->root);
 	emit_all(t, &fs, t->root);
+	l->nunary = fs.unary;
+	l->nparam = fs.param;
+	l->lip = 1.0f;
 	root = t->pool[t->root].slot;
 	l->node[2 * root] &= ~(BC_WORD_LEFT | BC_WORD_ANCESTOR_MASK);
 	l->node[2 * root] |= BC_WORD_NO_ANCESTOR;
@@ -428,6 +742,12 @@ void bc__lin_update_prim(struct bc_tree *t, const struct bc__node *n)
 	memcpy(l->color[n->prim],
 	       n->u.prim.has_color ? n->u.prim.color : default_color,
 	       sizeof(l->color[0]));
+	if (bc__lin_prim_bends(l, n)) {
+		/* Its twist and bend ancestors' radii (and so bounds) may
+		 * shrink as well as grow: recomputed over the tree. */
+		place_all_abvs(t, l);
+		return;
+	}
 	place_abv(t, l, n->prim, &n->u.prim);
 	update_size(l);
 }
@@ -448,4 +768,23 @@ void bc__lin_update_op(struct bc_tree *t, const struct bc__node *n)
 	}
 	place_subtree(t, l, (uint32_t)(n - t->pool));
 	update_size(l);
+	if (l->nunary) {
+		/* Twist and bend radii only grew (conservative): their
+		 * bounds follow. */
+		compute_lips(l);
+	}
+}
+
+void bc__lin_update_unary(struct bc_tree *t, const struct bc__node *n)
+{
+	struct bc_lin *l = &t->lin;
+	uint32_t first = l->first[n->slot];
+	l->unary_kind[n->unary] = (uint32_t)n->u.op.kind;
+	write_unary_record(l->param + 4u * (size_t)n->param, n);
+	for (uint32_t s = n->slot + 1; s-- > first;) {
+		propagate(l, s);
+	}
+	/* Radii and Lipschitz bounds of twist and bend depend on ABVs
+	 * anywhere below them: recomputed with every ABV (O(n)). */
+	place_all_abvs(t, l);
 }

@@ -436,7 +436,7 @@ static int region(struct build *b, const uint32_t c0[3], const uint32_t c1[3],
 		return rc;
 	}
 	f = eval_view(b, c);
-	if (fabsf(f) > LIPSCHITZ * r * 1.001f + 1e-6f * b->cell) {
+	if (fabsf(f) > LIPSCHITZ * b->l->lip * r * 1.001f + 1e-6f * b->cell) {
 		progress(b, cells);
 		return 0; /* no sign change in the region */
 	}

@@ -20,7 +20,204 @@ static const char *const op_names[BC_OP_COUNT] = {
 	[BC_OP_SMOOTH_UNION] = "smooth_union",
 	[BC_OP_SMOOTH_INTERSECTION] = "smooth_intersection",
 	[BC_OP_SMOOTH_DIFFERENCE] = "smooth_difference",
+	[BC_OP_OFFSET] = "offset",
+	[BC_OP_ONION] = "onion",
+	[BC_OP_ELONGATE] = "elongate",
+	[BC_OP_TWIST] = "twist",
+	[BC_OP_BEND] = "bend",
+	[BC_OP_MIRROR] = "mirror",
+	[BC_OP_REPEAT] = "repeat",
+	[BC_OP_SCALE] = "scale",
 };
+
+/* Scene-file keys of the unary nodes' parameters: repeat's six floats are
+ * two keys of three (json.c splits them); mirror's one float is the axes
+ * mask, written as a string of axis letters. */
+static const struct bc_unary_info unary_infos[BC_OP_COUNT] = {
+	[BC_OP_OFFSET] = {"offset", 1, "amount"},
+	[BC_OP_ONION] = {"onion", 1, "thickness"},
+	[BC_OP_ELONGATE] = {"elongate", 3, "half_extents"},
+	[BC_OP_TWIST] = {"twist", 1, "rate"},
+	[BC_OP_BEND] = {"bend", 1, "rate"},
+	[BC_OP_MIRROR] = {"mirror", 1, "axes"},
+	[BC_OP_REPEAT] = {"repeat", 6, "spacing"},
+	[BC_OP_SCALE] = {"scale", 1, "factor"},
+};
+
+uint32_t bc_mirror_axes_parse(const char *s)
+{
+	uint32_t mask = 0;
+	if (!s || !*s) {
+		return 0;
+	}
+	for (; *s; s++) {
+		uint32_t bit;
+		if (*s < 'x' || *s > 'z') {
+			return 0;
+		}
+		bit = 1u << (uint32_t)(*s - 'x');
+		if (mask & bit) {
+			return 0;
+		}
+		mask |= bit;
+	}
+	return mask;
+}
+
+void bc_mirror_axes_name(uint32_t mask, char out[4])
+{
+	uint32_t n = 0;
+	for (uint32_t i = 0; i < 3; i++) {
+		if (mask & (1u << i)) {
+			out[n++] = (char)('x' + i);
+		}
+	}
+	out[n] = '\0';
+}
+
+bool bc_op_is_unary(enum bc_op kind)
+{
+	return kind >= BC_OP_FIRST_UNARY && kind < BC_OP_COUNT;
+}
+
+bool bc_op_is_domain(enum bc_op kind)
+{
+	return bc_op_is_unary(kind) && kind != BC_OP_OFFSET &&
+	       kind != BC_OP_ONION;
+}
+
+bool bc_op_has_value(enum bc_op kind)
+{
+	return kind == BC_OP_OFFSET || kind == BC_OP_ONION ||
+	       kind == BC_OP_TWIST || kind == BC_OP_BEND ||
+	       kind == BC_OP_SCALE;
+}
+
+const struct bc_unary_info *bc_unary_info(enum bc_op kind)
+{
+	return bc_op_is_unary(kind) ? &unary_infos[kind] : NULL;
+}
+
+void bc_unary_init(struct bc_unary *u, enum bc_op kind)
+{
+	memset(u, 0, sizeof(*u));
+	u->kind = kind;
+	switch (kind) {
+	case BC_OP_OFFSET:
+		u->u[0] = 0.1f;
+		break;
+	case BC_OP_ONION:
+		u->u[0] = 0.05f;
+		break;
+	case BC_OP_ELONGATE:
+		u->u[0] = 0.5f;
+		break;
+	case BC_OP_TWIST:
+		u->u[0] = 1.0f;
+		break;
+	case BC_OP_BEND:
+		u->u[0] = 0.5f;
+		break;
+	case BC_OP_MIRROR:
+		u->u[0] = 1.0f;
+		break;
+	case BC_OP_REPEAT:
+		u->u[0] = u->u[1] = u->u[2] = 2.0f;
+		u->u[3] = 3.0f;
+		u->u[4] = u->u[5] = 1.0f;
+		break;
+	case BC_OP_SCALE:
+		u->u[0] = 1.0f;
+		break;
+	default:
+		break;
+	}
+}
+
+int bc_unary_validate(const struct bc_unary *u, struct bc_errinfo *ei)
+{
+	const struct bc_unary_info *info = bc_unary_info(u->kind);
+	if (!info) {
+		return bc_errinfo_set(ei, BC_EENUM, "unknown unary node kind %d",
+				      (int)u->kind);
+	}
+	for (int i = 0; i < BC_UNARY_MAX_PARAMS; i++) {
+		if (!isfinite(u->u[i])) {
+			return bc_errinfo_set(ei, BC_ENONFINITE,
+					      "%s: parameters must be finite",
+					      info->name);
+		}
+		if (fabsf(u->u[i]) > BC_PARAM_MAX_ABS) {
+			return bc_errinfo_set(ei, BC_ERANGE,
+					      "%s: |parameter| %g above %g",
+					      info->name, (double)u->u[i],
+					      (double)BC_PARAM_MAX_ABS);
+		}
+		if (i >= info->nparams && u->u[i] != 0.0f) {
+			return bc_errinfo_set(ei, BC_ERANGE,
+					      "%s takes %u parameters",
+					      info->name, info->nparams);
+		}
+	}
+	switch (u->kind) {
+	case BC_OP_ONION:
+		if (!(u->u[0] >= 0.0f)) {
+			return bc_errinfo_set(ei, BC_ERANGE,
+					      "onion: thickness %g must be "
+					      ">= 0",
+					      (double)u->u[0]);
+		}
+		break;
+	case BC_OP_ELONGATE:
+		for (int i = 0; i < 3; i++) {
+			if (!(u->u[i] >= 0.0f)) {
+				return bc_errinfo_set(ei, BC_ERANGE,
+						      "elongate: half_extents "
+						      "must be >= 0");
+			}
+		}
+		break;
+	case BC_OP_MIRROR:
+		if (!(u->u[0] >= 1.0f && u->u[0] <= 7.0f &&
+		      u->u[0] == floorf(u->u[0]))) {
+			return bc_errinfo_set(ei, BC_ERANGE,
+					      "mirror: axes must name 1 to 3 "
+					      "of x, y, z");
+		}
+		break;
+	case BC_OP_REPEAT:
+		for (int i = 0; i < 3; i++) {
+			float c = u->u[3 + i], sp = u->u[i];
+			if (!(c >= 1.0f && c <= (float)BC_REPEAT_MAX_COUNT &&
+			      c == floorf(c))) {
+				return bc_errinfo_set(ei, BC_ERANGE,
+						      "repeat: count %g must "
+						      "be an integer in 1..%u",
+						      (double)c,
+						      BC_REPEAT_MAX_COUNT);
+			}
+			if (c > 1.0f ? !(sp > 0.0f) : !(sp >= 0.0f)) {
+				return bc_errinfo_set(ei, BC_ERANGE,
+						      "repeat: spacing %g must "
+						      "be > 0 where count > 1 "
+						      "(>= 0 elsewhere)",
+						      (double)sp);
+			}
+		}
+		break;
+	case BC_OP_SCALE:
+		if (!(u->u[0] >= 1.0e-3f)) {
+			return bc_errinfo_set(ei, BC_ERANGE,
+					      "scale: factor %g must be >= "
+					      "0.001",
+					      (double)u->u[0]);
+		}
+		break;
+	default:
+		break;
+	}
+	return 0;
+}
 
 const char *bc_op_name(enum bc_op kind)
 {
@@ -77,6 +274,12 @@ int bc_op_validate(const struct bc_op_data *op, struct bc_errinfo *ei)
 	if (!name) {
 		return bc_errinfo_set(ei, BC_EENUM, "unknown operator kind %d",
 				      (int)op->kind);
+	}
+	if (bc_op_is_unary(op->kind)) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+				      "%s is a unary node, not a binary "
+				      "operator",
+				      name);
 	}
 	if (!isfinite(op->blend) || !isfinite(op->range)) {
 		return bc_errinfo_set(ei, BC_ENONFINITE,

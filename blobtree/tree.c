@@ -433,9 +433,40 @@ static void remap_ids(struct bc_tree *t, uint32_t top)
 
 /* Checks a tree's nesting and evaluation stack against the limits (the one
  * check shared by the builder and the grafting edits). */
+/* Most domain nodes on one path from the root to a primitive. Pre-order:
+ * a node's count is its parent's plus one when the parent is a domain
+ * node (held in .dchain). */
+static uint32_t domain_chain(struct bc_tree *t)
+{
+	uint32_t depth = 0, most = 0;
+	for (uint32_t n = t->root; n != BC_NONE;
+	     n = preorder_next(t, n, t->root, &depth)) {
+		uint32_t p = t->pool[n].parent, c = 0;
+		if (p != BC_NONE) {
+			c = t->pool[p].dchain +
+			    (bc__node_unary(&t->pool[p]) &&
+					     bc_op_is_domain(t->pool[p].u.op.kind)
+				     ? 1u
+				     : 0u);
+		}
+		t->pool[n].dchain = c;
+		if (c > most) {
+			most = c;
+		}
+	}
+	return most;
+}
+
 static int check_shape(struct bc_tree *t, struct bc_errinfo *ei)
 {
 	uint32_t depth = bc__measure(t, t->root);
+	if (domain_chain(t) > BC_DOMAIN_MAX_CHAIN) {
+		return bc_errinfo_set(ei, BC_EDEPTH,
+		                      "tree: more than %u domain nodes "
+		                      "(elongate, twist, bend, mirror, repeat, "
+		                      "scale) on one path",
+		                      BC_DOMAIN_MAX_CHAIN);
+	}
 	if (depth > BC_TREE_MAX_DEPTH) {
 		return bc_errinfo_set(ei, BC_EDEPTH,
 		                      "tree: nesting deeper than %u levels",
@@ -492,6 +523,15 @@ static int add_node(struct bc_tree *t, uint32_t id, bool is_op,
 	if (t->nopen == 0 && t->root != BC_NONE) {
 		return bc_errinfo_set(ei, BC_EINVAL,
 				      "tree: a scene has exactly one root");
+	}
+	if (t->nopen && bc__node_unary(&t->pool[t->open[t->nopen - 1]]) &&
+	    t->pool[t->open[t->nopen - 1]].nchildren >= 1) {
+		uint32_t u = t->open[t->nopen - 1];
+		return bc_errinfo_set(ei, BC_EINVAL,
+				      "tree: %s node %u takes exactly one "
+				      "child",
+				      bc_op_name(t->pool[u].u.op.kind),
+				      t->pool[u].id);
 	}
 	/* The new node would be number nopen + 1 on its path. */
 	if (t->nopen + 1u > BC_TREE_MAX_DEPTH) {
@@ -559,6 +599,23 @@ int bc_tree_push_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
 	return 0;
 }
 
+int bc_tree_push_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
+		       struct bc_errinfo *ei)
+{
+	uint32_t n;
+	int rc;
+	if ((rc = bc_unary_validate(u, ei)) ||
+	    (rc = add_node(t, id, true, ei, &n))) {
+		return rc;
+	}
+	memset(&t->pool[n].u.op, 0, sizeof(t->pool[n].u.op));
+	t->pool[n].u.op.kind = u->kind;
+	memcpy(t->pool[n].uparam, u->u, sizeof(u->u));
+	t->nops++;
+	t->open[t->nopen++] = n;
+	return 0;
+}
+
 int bc_tree_pop_op(struct bc_tree *t, struct bc_errinfo *ei)
 {
 	uint32_t n;
@@ -566,7 +623,15 @@ int bc_tree_pop_op(struct bc_tree *t, struct bc_errinfo *ei)
 		return bc_errinfo_set(ei, BC_ESTATE, "tree: no open operator");
 	}
 	n = t->open[t->nopen - 1];
-	if (t->pool[n].nchildren < 2) {
+	if (bc__node_unary(&t->pool[n])) {
+		if (t->pool[n].nchildren != 1) {
+			return bc_errinfo_set(ei, BC_EINVAL,
+					      "tree: %s node %u needs exactly "
+					      "one child",
+					      bc_op_name(t->pool[n].u.op.kind),
+					      t->pool[n].id);
+		}
+	} else if (t->pool[n].nchildren < 2) {
 		return bc_errinfo_set(ei, BC_EINVAL,
 				      "tree: operator %u (%s) needs two or "
 				      "more children, has %u",
@@ -759,6 +824,11 @@ int bc_tree_set_prim(struct bc_tree *t, uint32_t id,
 	bc__lin_update_prim(t, &t->pool[n]);
 	dirty_range(&t->dirty.param_lo, &t->dirty.param_hi, t->pool[n].param,
 		    t->pool[n].param + BC_PRIM_RECORD_VEC4);
+	if (bc__lin_prim_bends(&t->lin, &t->pool[n])) {
+		/* The bounds of its twist and bend ancestors changed. */
+		dirty_range(&t->dirty.param_lo, &t->dirty.param_hi, 0,
+			    t->lin.nparam);
+	}
 	dirty_range(&t->dirty.prim_lo, &t->dirty.prim_hi, t->pool[n].prim,
 		    t->pool[n].prim + 1);
 	t->dirty.edits++;
@@ -781,6 +851,12 @@ int bc_tree_set_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
 				      "node %u is a primitive, not an "
 				      "operator",
 				      id);
+	}
+	if (bc__node_unary(&t->pool[n])) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+				      "node %u is a %s node: set its own "
+				      "parameters",
+				      id, bc_op_name(t->pool[n].u.op.kind));
 	}
 	if (bc_op_is_smooth(o.kind) && o.range == 0.0f) {
 		o.range = bc_op_default_range(o.blend);
@@ -808,6 +884,50 @@ int bc_tree_set_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
 	dirty_range(&t->dirty.prim_lo, &t->dirty.prim_hi, k_lo, k_hi);
 	t->dirty.edits++;
 	return 0;
+}
+
+int bc_tree_set_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
+		      struct bc_errinfo *ei)
+{
+	uint32_t n = live_node(t, id);
+	const struct bc_lin *l = &t->lin;
+	uint32_t first_slot, k_lo, k_hi;
+	int rc;
+	if (n == BC_NONE) {
+		return bc_errinfo_set(ei, BC_ENONODE, "no node with id %u", id);
+	}
+	if (!bc__node_unary(&t->pool[n])) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+				      "node %u is not a unary node", id);
+	}
+	if ((rc = bc_unary_validate(u, ei))) {
+		return rc;
+	}
+	t->pool[n].u.op.kind = u->kind;
+	memcpy(t->pool[n].uparam, u->u, sizeof(u->u));
+	bc__lin_update_unary(t, &t->pool[n]);
+	first_slot = l->first[t->pool[n].slot];
+	k_lo = l->prim_of[first_slot];
+	k_hi = k_lo + (t->pool[n].slot - first_slot) / 2 + 1;
+	/* Its record, and the bounds of every twist and bend (conservatively
+	 * the whole parameter range: these trees are small). */
+	dirty_range(&t->dirty.param_lo, &t->dirty.param_hi, 0, l->nparam);
+	dirty_range(&t->dirty.prim_lo, &t->dirty.prim_hi, k_lo, k_hi);
+	t->dirty.edits++;
+	return 0;
+}
+
+bool bc_tree_get_unary(const struct bc_tree *t, uint32_t id,
+		       struct bc_unary *out)
+{
+	uint32_t n = map_find(&t->ids, id);
+	memset(out, 0, sizeof(*out));
+	if (n == BC_NONE || !bc__node_unary(&t->pool[n])) {
+		return false;
+	}
+	out->kind = t->pool[n].u.op.kind;
+	memcpy(out->u, t->pool[n].uparam, sizeof(out->u));
+	return true;
 }
 
 /* ---- structural edits --------------------------------------------------- */
@@ -854,6 +974,7 @@ static uint32_t copy_node(struct bc_tree *t, const struct bc__node *sn,
 	uint32_t m = pool_take(t);
 	t->pool[m].is_op = sn->is_op;
 	t->pool[m].u = sn->u;
+	memcpy(t->pool[m].uparam, sn->uparam, sizeof(sn->uparam));
 	t->pool[m].auto_id = sn->auto_id;
 	t->pool[m].id = (sn->auto_id && !keep_ids) ? fresh_id(t) : sn->id;
 	map_put_nogrow(&t->ids, t->pool[m].id, m);
@@ -958,6 +1079,13 @@ int bc_tree_insert(struct bc_tree *t, uint32_t parent_id, uint32_t pos,
 				      "under operators",
 				      parent_id);
 	}
+	if (bc__node_unary(&t->pool[p])) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+				      "node %u is a %s node with its one "
+				      "child: replace the child instead",
+				      parent_id,
+				      bc_op_name(t->pool[p].u.op.kind));
+	}
 	if (pos > t->pool[p].nchildren) {
 		return bc_errinfo_set(ei, BC_ERANGE,
 				      "position %u beyond the %u children of "
@@ -1028,6 +1156,12 @@ int bc_tree_remove(struct bc_tree *t, uint32_t id, struct bc_errinfo *ei)
 	int rc;
 	if (n == BC_NONE) {
 		return bc_errinfo_set(ei, BC_ENONODE, "no node with id %u", id);
+	}
+	/* A unary node cannot lose its only child: the node goes with it
+	 * (and so on up a chain of unary nodes). */
+	while (t->pool[n].parent != BC_NONE &&
+	       bc__node_unary(&t->pool[t->pool[n].parent])) {
+		n = t->pool[n].parent;
 	}
 	subtree_stats(t, n, &st);
 	p = t->pool[n].parent;

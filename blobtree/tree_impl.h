@@ -20,12 +20,21 @@ struct bc__node {
 		struct bc_prim_data prim;
 		struct bc_op_data op;
 	} u;
+	/* A unary node's parameters (u.op.kind says it is one). */
+	float uparam[BC_UNARY_MAX_PARAMS];
 	/* Set by linearization. */
 	uint32_t slot;  /* the node's top slot */
 	uint32_t param; /* parameter record, vec4 units */
 	uint32_t prim;  /* primitive index (primitives only) */
 	uint32_t need;  /* evaluation stack entries of its subtree */
+	uint32_t unary; /* unary index (unary nodes only) */
+	uint32_t dchain; /* domain nodes above it (check_shape's scratch) */
 };
+
+static inline bool bc__node_unary(const struct bc__node *n)
+{
+	return n->is_op && bc_op_is_unary(n->u.op.kind);
+}
 
 /* Open-addressing map from id (never 0) to pool index. */
 struct bc__idmap {
@@ -64,7 +73,8 @@ uint32_t bc__measure(struct bc_tree *t, uint32_t top);
 
 /* linearize.c */
 
-/* Allocates the arrays of l for nprims primitives and nops operators.
+/* Allocates the arrays of l for nprims primitives and nops operators
+ * (binary and unary: room for each to be either).
  * Returns 0 or BC_ENOMEM (l is then zeroed). */
 int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nops);
 void bc__lin_free(struct bc_lin *l);
@@ -75,6 +85,11 @@ void bc__lin_update_prim(struct bc_tree *t, const struct bc__node *n);
 /* Rewrites operator n's node words and record, then the ROIs, kill counts
  * and ABVs of its subtree. */
 void bc__lin_update_op(struct bc_tree *t, const struct bc__node *n);
+/* Rewrites unary node n's record, then the ROIs and ABVs of its subtree and
+ * the domain nodes' Lipschitz bounds. */
+void bc__lin_update_unary(struct bc_tree *t, const struct bc__node *n);
+/* Is primitive n under a twist or bend (whose bounds its ABV feeds)? */
+bool bc__lin_prim_bends(const struct bc_lin *l, const struct bc__node *n);
 /* Transforms a local bounding shape by p's rigid transform and offsets it. */
 void bc__abv_place(const struct bc_prim_data *p, float offset,
 		   struct bc_abv *abv);

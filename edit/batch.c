@@ -16,11 +16,7 @@ static void restore(struct bc_tree *t, const struct bc_edit_saved *s,
                     uint32_t n)
 {
 	while (n-- > 0) {
-		if (s[n].op.kind != BC_OP_INVALID) {
-			bc_tree_set_op(t, s[n].id, &s[n].op, NULL);
-		} else {
-			bc_tree_set_prim(t, s[n].id, &s[n].p, NULL);
-		}
+		bc_edit_saved_restore(t, &s[n]);
 	}
 }
 
@@ -60,6 +56,7 @@ int bc_edit_batch_apply(struct bc_edit_batch *b, struct bc_tree **tp,
 			struct bc_edit_saved *s = &b->saved[b->nsaved];
 			s->id = ops[i].node;
 			if (bc_tree_get(work, ops[i].node, &s->p, &s->op)) {
+				bc_tree_get_unary(work, ops[i].node, &s->un);
 				b->nsaved++;
 			}
 		}

@@ -67,13 +67,14 @@ static int set_op_fields(const struct bc_proto_edit_op *e,
 		} else if (f->field == BC_PROTO_FIELD_RANGE) {
 			op->range = k;
 			gave_range = true;
-		} else if (!(k >= 1.0f) || !(k <= (float)(BC_OP_COUNT - 1)) ||
+		} else if (!(k >= 1.0f) ||
+		           !(k <= (float)(BC_OP_FIRST_UNARY - 1)) ||
 		           k != floorf(k)) {
 			return bc_errinfo_set(ei, BC_EENUM,
 			                      "node %u: operator kind %g is "
 			                      "not an integer 1..%d",
 			                      e->node, (double)k,
-			                      BC_OP_COUNT - 1);
+			                      BC_OP_FIRST_UNARY - 1);
 		} else {
 			op->kind = (enum bc_op)(int)k;
 		}
@@ -98,6 +99,82 @@ static int set_op_fields(const struct bc_proto_edit_op *e,
 	return 0;
 }
 
+/* Where field f of a unary node lands and how many values it takes: its
+ * parameter keys in order (repeat: spacing, then count), NULL otherwise. */
+static float *unary_field(struct bc_unary *u, uint8_t f, uint32_t *want)
+{
+	const struct bc_unary_info *info = bc_unary_info(u->kind);
+	uint32_t k = (uint32_t)f - BC_PROTO_FIELD_PARAM0;
+	if (!info || f < BC_PROTO_FIELD_PARAM0) {
+		return NULL;
+	}
+	if (u->kind == BC_OP_REPEAT) {
+		*want = 3;
+		return k < 2 ? u->u + 3 * k : NULL;
+	}
+	*want = info->nparams;
+	return k == 0 ? u->u : NULL;
+}
+
+int bc_edit_set_unary_fields(const struct bc_proto_edit_op *e,
+                             struct bc_unary *u, struct bc_errinfo *ei)
+{
+	/* The kind first: a new kind starts from its defaults. */
+	for (uint32_t i = 0; i < e->nfields; i++) {
+		const struct bc_proto_field *f = &e->fields[i];
+		float k = f->v[0];
+		if (f->field != BC_PROTO_FIELD_OP_KIND) {
+			continue;
+		}
+		if (f->count != 1 || !(k >= (float)BC_OP_FIRST_UNARY) ||
+		    !(k <= (float)(BC_OP_COUNT - 1)) || k != floorf(k)) {
+			return bc_errinfo_set(ei, BC_EENUM,
+			                      "node %u: a unary node's kind "
+			                      "must be one integer %d..%d",
+			                      e->node, BC_OP_FIRST_UNARY,
+			                      BC_OP_COUNT - 1);
+		}
+		if ((enum bc_op)(int)k != u->kind) {
+			bc_unary_init(u, (enum bc_op)(int)k);
+		}
+	}
+	for (uint32_t i = 0; i < e->nfields; i++) {
+		const struct bc_proto_field *f = &e->fields[i];
+		uint32_t want = 0;
+		float *dst;
+		if (f->field == BC_PROTO_FIELD_OP_KIND) {
+			continue;
+		}
+		if (!(dst = unary_field(u, f->field, &want))) {
+			return bc_errinfo_set(ei, BC_EINVAL,
+			                      "node %u: field %u does not "
+			                      "apply to a %s node",
+			                      e->node, (unsigned)f->field,
+			                      bc_op_name(u->kind));
+		}
+		if (f->count != want) {
+			return bc_errinfo_set(ei, BC_EINVAL,
+			                      "node %u: field %u takes %u "
+			                      "values, got %u",
+			                      e->node, (unsigned)f->field, want,
+			                      (unsigned)f->count);
+		}
+		memcpy(dst, f->v, want * sizeof(float));
+	}
+	return 0;
+}
+
+void bc_edit_saved_restore(struct bc_tree *t, const struct bc_edit_saved *s)
+{
+	if (bc_op_is_unary(s->op.kind)) {
+		bc_tree_set_unary(t, s->id, &s->un, NULL);
+	} else if (s->op.kind != BC_OP_INVALID) {
+		bc_tree_set_op(t, s->id, &s->op, NULL);
+	} else {
+		bc_tree_set_prim(t, s->id, &s->p, NULL);
+	}
+}
+
 static void put_field(struct bc_proto_edit_op *e, struct bc_proto_field *f,
                       uint8_t field, const float *v, uint32_t n)
 {
@@ -115,7 +192,19 @@ void bc_edit_state_set(const struct bc_edit_saved *s, bool is_op,
 	e->kind = BC_PROTO_EDIT_SET;
 	e->node = s->id;
 	e->fields = fields;
-	if (is_op) {
+	if (is_op && bc_op_is_unary(s->op.kind)) {
+		float kind = (float)s->op.kind;
+		const struct bc_unary_info *info = bc_unary_info(s->op.kind);
+		put_field(e, fields, BC_PROTO_FIELD_OP_KIND, &kind, 1);
+		if (s->op.kind == BC_OP_REPEAT) {
+			put_field(e, fields, BC_PROTO_FIELD_PARAM0, s->un.u, 3);
+			put_field(e, fields, BC_PROTO_FIELD_PARAM0 + 1,
+			          s->un.u + 3, 3);
+		} else {
+			put_field(e, fields, BC_PROTO_FIELD_PARAM0, s->un.u,
+			          info->nparams);
+		}
+	} else if (is_op) {
 		float kind = (float)s->op.kind;
 		put_field(e, fields, BC_PROTO_FIELD_OP_KIND, &kind, 1);
 		put_field(e, fields, BC_PROTO_FIELD_BLEND, &s->op.blend, 1);
@@ -183,6 +272,14 @@ static int apply_set(struct bc_tree *t, const struct bc_proto_edit_op *e,
 		                      e->node);
 	}
 	is_op = op.kind != BC_OP_INVALID;
+	if (bc_op_is_unary(op.kind)) {
+		struct bc_unary u;
+		bc_tree_get_unary(t, e->node, &u);
+		if ((rc = bc_edit_set_unary_fields(e, &u, ei))) {
+			return rc;
+		}
+		return bc_tree_set_unary(t, e->node, &u, ei);
+	}
 	if ((rc = bc_edit_set_fields(e, is_op, &p, &op, ei))) {
 		return rc;
 	}

@@ -19,12 +19,27 @@ struct key {
 	uint8_t count;
 };
 
-/* Fills keys[] with what a node accepts (prim or op), returns how many. */
+/* Fills keys[] with what a node accepts (prim, op or unary node: op's
+ * kind), returns how many. */
 static uint32_t node_keys(const struct bc_prim_data *p, bool is_op,
-                          struct key *keys)
+                          enum bc_op op, struct key *keys)
 {
 	const struct bc_prim_info *info;
 	uint32_t n = 0;
+	if (is_op && bc_op_is_unary(op)) {
+		const struct bc_unary_info *u = bc_unary_info(op);
+		keys[n++] = (struct key){"kind", BC_PROTO_FIELD_OP_KIND, 1};
+		if (op == BC_OP_REPEAT) {
+			keys[n++] = (struct key){"spacing",
+			                         BC_PROTO_FIELD_PARAM0, 3};
+			keys[n++] = (struct key){"count",
+			                         BC_PROTO_FIELD_PARAM0 + 1, 3};
+		} else {
+			keys[n++] = (struct key){u->param, BC_PROTO_FIELD_PARAM0,
+			                         u->nparams};
+		}
+		return n;
+	}
 	if (is_op) {
 		keys[n++] = (struct key){"blend", BC_PROTO_FIELD_BLEND, 1};
 		keys[n++] = (struct key){"range", BC_PROTO_FIELD_RANGE, 1};
@@ -130,7 +145,9 @@ static int parse_op_kind(const char *value, float *v, struct bc_errinfo *ei)
 	return bc_errinfo_set(ei, BC_EINVAL,
 	                      "kind: \"%s\" is not an operator (union, "
 	                      "intersection, difference, smooth_union, "
-	                      "smooth_intersection, smooth_difference)",
+	                      "smooth_intersection, smooth_difference) or a "
+	                      "unary node (offset, onion, elongate, twist, "
+	                      "bend, mirror, repeat, scale)",
 	                      value);
 }
 
@@ -188,7 +205,7 @@ int bc_edit_parse_kv(const struct bc_tree *scene, uint32_t node,
 		what = info ? info->name : NULL;
 	}
 	what = what ? what : "node";
-	nkeys = node_keys(&p, is_op, keys);
+	nkeys = node_keys(&p, is_op, op.kind, keys);
 	if (n == 0) {
 		char list[256];
 		key_list(keys, nkeys, list, sizeof(list));
@@ -242,9 +259,17 @@ int bc_edit_parse_kv(const struct bc_tree *scene, uint32_t node,
 		memset(f, 0, sizeof(*f));
 		f->field = k->field;
 		f->count = k->count;
-		rc = k->field == BC_PROTO_FIELD_OP_KIND
-		         ? parse_op_kind(eq + 1, &f->v[0], ei)
-		         : parse_values(k->name, eq + 1, k->count, f->v, ei);
+		if (k->field == BC_PROTO_FIELD_OP_KIND) {
+			rc = parse_op_kind(eq + 1, &f->v[0], ei);
+		} else if (is_op && op.kind == BC_OP_MIRROR) {
+			/* axes=xz, or the mask as a number. */
+			uint32_t mask = bc_mirror_axes_parse(eq + 1);
+			f->v[0] = (float)mask;
+			rc = mask ? 0
+			          : parse_values(k->name, eq + 1, 1, f->v, ei);
+		} else {
+			rc = parse_values(k->name, eq + 1, k->count, f->v, ei);
+		}
 		if (rc) {
 			return rc;
 		}

@@ -115,6 +115,24 @@ static int scan_op(struct scan *s, uint8_t tag, uint32_t after,
 		return sfail(s, BC_EENUM, "operator tag 0x%02x is unknown",
 		             (unsigned)tag);
 	}
+	if (kind >= BC_PROTO_OP_KIND_FIRST_UNARY) {
+		/* A unary node: nfloats, its floats, and one child. blobtree
+		 * requires exactly the kind's count. */
+		uint8_t nfloats;
+		TRY(s_u8(s, "nfloats", &nfloats));
+		if (nfloats > BC_PROTO_MAX_UNARY_PARAMS) {
+			return sfail(s, BC_EPROTO_COUNT,
+			             "nfloats %u is over %u", (unsigned)nfloats,
+			             BC_PROTO_MAX_UNARY_PARAMS);
+		}
+		TRY(s_floats(s, nfloats, "params", NULL));
+		*children = 1;
+		if (after < 1) {
+			return sfail(s, BC_EPROTO_COUNT,
+			             "a unary node needs its child after it");
+		}
+		return 0;
+	}
 	TRY(s_floats(s, 1, "blend", &br[0]));
 	TRY(s_floats(s, 1, "range", &br[1]));
 	TRY(s_u32(s, "child_count", children));
@@ -350,5 +368,22 @@ int bc_proto_scene_op(struct bc_proto_buf *b, uint8_t kind, uint32_t id,
 	bc__put_f32(&w, blend);
 	bc__put_f32(&w, range);
 	bc__put_u32(&w, child_count);
+	return commit(b, &w);
+}
+
+int bc_proto_scene_unary(struct bc_proto_buf *b, uint8_t kind, uint32_t id,
+                         uint8_t nparams, const float *params)
+{
+	uint8_t tmp[1 + 4 + 1 + 4 * BC_PROTO_MAX_UNARY_PARAMS];
+	struct bc__w w = {.p = tmp, .cap = sizeof(tmp)};
+	if (nparams > BC_PROTO_MAX_UNARY_PARAMS) {
+		return BC_ELIMIT;
+	}
+	bc__put_u8(&w, (uint8_t)(OP_TAG | kind));
+	bc__put_u32(&w, id);
+	bc__put_u8(&w, nparams);
+	for (uint8_t i = 0; i < nparams; i++) {
+		bc__put_f32(&w, params[i]);
+	}
 	return commit(b, &w);
 }

@@ -157,6 +157,12 @@ def scene_op(kind, nid, blend, rng, children):
     return u8(0x80 | kind) + u32(nid) + f32(blend) + f32(rng) + u32(children)
 
 
+def scene_unary(kind, nid, params):
+    """A unary or domain node (kinds 7..14): its one child follows."""
+    return u8(0x80 | kind) + u32(nid) + u8(len(params)) + b"".join(
+        f32(v) for v in params)
+
+
 def scene(nodes, camera=None):
     b = u8(1 if camera else 0)
     if camera:
@@ -1343,6 +1349,13 @@ def gen_scene():
        deep_scene(1000), 2001, 1001, 1000, 1001, False)
     ok("primitive with 8 floats", scene([scene_prim(7, 4, [0.5] * 8)]),
        1, 1, 0, 1, False)
+    ok("offset over a twist over a sphere",
+       scene([scene_unary(7, 5, [0.1]), scene_unary(10, 6, [1.5]), SPHERE]),
+       3, 1, 2, 3, False)
+    ok("repeat of a union, mirrored",
+       scene([scene_unary(12, 0, [5.0]),
+              scene_unary(13, 0, [1.0, 0.0, 1.5, 3.0, 1.0, 2.0]),
+              scene_op(1, 0, 0, 0, 2), SPHERE, SPHERE]), 5, 2, 3, 4, False)
     ok("the last kind, 32 (revolve_star)",
        scene([scene_prim(32, 4, [0.35, 5.0, 0.5, 0.75])]), 1, 1, 0, 1, False)
     bad("empty", b"", "EPROTO_TRUNCATED")
@@ -1355,8 +1368,15 @@ def gen_scene():
         u8(0) + u32(100) + SPHERE, "EPROTO_COUNT")
     bad("tag 0", u8(0) + u32(1) + u8(0) + SPHERE[1:], "EENUM")
     bad("tag 33", u8(0) + u32(1) + u8(33) + SPHERE[1:], "EENUM")
-    bad("operator tag 0x87", u8(0) + u32(3) + u8(0x87) + scene_op(
+    bad("operator tag 0x8f", u8(0) + u32(3) + u8(0x8f) + scene_op(
         1, 0, 0, 0, 2)[1:] + SPHERE * 2, "EENUM")
+    bad("unary node without its child",
+        u8(0) + u32(1) + scene_unary(7, 0, [0.1]), "EPROTO_COUNT")
+    bad("unary node with nfloats 7",
+        scene([scene_unary(13, 0, [1.0] * 7), SPHERE]), "EPROTO_COUNT")
+    bad("unary node with a NaN parameter",
+        scene([u8(0x87) + u32(0) + u8(1) + f32bits(0x7fc00000), SPHERE]),
+        "ENONFINITE")
     bad("operator with one child", scene([scene_op(1, 0, 0, 0, 1),
                                           SPHERE, SPHERE]), "EPROTO_COUNT")
     bad("children beyond node_count", u8(0) + u32(3) + scene_op(
@@ -1369,7 +1389,7 @@ def gen_scene():
                                            SPHERE, SPHERE]), "ERANGE")
     # The tag and the id are read before the tag is judged.
     bad("unknown tag, then the bytes end inside its id",
-        u8(0) + u32(3) + scene_op(1, 0, 0, 0, 2) + SPHERE + u8(0x87)
+        u8(0) + u32(3) + scene_op(1, 0, 0, 0, 2) + SPHERE + u8(0x8f)
         + u16(0), "EPROTO_TRUNCATED")
     bad("nfloats 9", scene([scene_prim(1, 0, [1.0] * 9)]), "EPROTO_COUNT")
     # A box has 4 parameter floats; one is there.

@@ -411,7 +411,9 @@ void bc__trace_tile(struct bc__tile_worker *wk, const struct bc__tile_job *job)
 		} else if (wk->view.empty) {
 			continue; /* no surface can be in this range */
 		}
-		if (k.march && f.view) {
+		/* The vector kernels evaluate leaves and binary operators
+		 * only: trees with unary nodes take the scalar path. */
+		if (k.march && f.view && lin->nunary == 0) {
 			trace_range_packets(wk, job, k, &px, z_begin, z_end);
 			continue;
 		}

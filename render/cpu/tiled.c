@@ -311,7 +311,7 @@ static void widened_abv(const struct bc__frame_ctx *fc,
 		r2 += e * e;
 	}
 	far = sqrtf(far) + sqrtf(r2);
-	m = BC_CPU_LIPSCHITZ *
+	m = BC_CPU_LIPSCHITZ * fc->lin->lip *
 	    bc__maxf(BC_CPU_HIT_FOOTPRINT * fc->pix_angle * far, fc->min_step);
 	switch (out->shape) {
 	case BC_ABV_BOX:

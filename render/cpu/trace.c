@@ -18,7 +18,9 @@ static inline float eval_at(struct bc__field *f, const float o[3],
 			    const float d[3], float t)
 {
 	float p[3] = {o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]};
-	return bc__field_eval(f, p) * (1.0f / BC_CPU_LIPSCHITZ);
+	/* The tree's own bound (above 1 under twist and bend) multiplies
+	 * the operators'. */
+	return bc__field_eval(f, p) * (1.0f / BC_CPU_LIPSCHITZ) / f->lin->lip;
 }
 
 /* Bisects [a, b] with f(a) > 0 > f(b) down to the refinement tolerance, then
@@ -112,7 +114,7 @@ static enum bc__trace_result refine(struct bc__field *f,
 {
 	/* Beyond this the ray is so oblique that the silhouette is as good
 	 * an answer as any. */
-	float cap = t + 64.0f * BC_CPU_LIPSCHITZ * eps;
+	float cap = t + 64.0f * BC_CPU_LIPSCHITZ * f->lin->lip * eps;
 	float limit = bc__minf(cap, t1);
 	for (int i = 0; i < 8; i++) {
 		float reach, probe, vp;

@@ -464,6 +464,16 @@ static int gl_sync(struct bc_renderer *base, const struct bc_tree *t,
 	t0 = bc_render_now_ms();
 	r->upload_bytes = 0;
 	l = bc_tree_lin(t);
+	if (l && l->nunary) {
+		/* The shaders do not evaluate them yet: refuse rather than
+		 * draw the tree without them. */
+		bc__gl_ctx_unbind(&r->ctx);
+		r->synced = false;
+		return bc_errinfo_set(ei, BC_ENOTSUP,
+		                      "gl: unary and domain nodes (offset, "
+		                      "twist, ...) are not supported yet; use "
+		                      "--backend tiled");
+	}
 	if (!l) {
 		/* An empty tree: nothing to upload, every ray misses. */
 		r->count = r->nprims = r->nparam = 0;

@@ -116,6 +116,14 @@ static int svo_sync(struct bc_renderer *base, const struct bc_tree *t,
 	r->synced = false;
 	l = t ? bc_tree_lin(t) : NULL;
 	r->empty = l == NULL;
+	if (l && l->nunary) {
+		/* Interval rules for them are not written yet: refuse
+		 * rather than draw the tree without them. */
+		return bc_errinfo_set(ei, BC_ENOTSUP,
+		                      "svo: unary and domain nodes (offset, "
+		                      "twist, ...) are not supported yet; use "
+		                      "--backend tiled");
+	}
 	if (l && (rc = bc_svo_rpn_init(&r->rpn, l))) {
 		return bc_errinfo_set(ei, rc, "svo: compiling the tree: %s",
 		                      bc_strerror(rc));

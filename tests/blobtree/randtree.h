@@ -90,15 +90,81 @@ static void rt_random_prim(struct bc_prim_data *p)
 
 static void rt_random_op(struct bc_op_data *op)
 {
-	op->kind = (enum bc_op)(1 + rt_below(BC_OP_COUNT - 1));
+	op->kind = (enum bc_op)(1 + rt_below(BC_OP_FIRST_UNARY - 1));
 	op->blend = bc_op_is_smooth(op->kind) ? rt_float(0.05f, 0.4f) : 0.0f;
 	op->range = bc_op_is_smooth(op->kind)
 			    ? op->blend * rt_float(1.2f, 2.0f)
 			    : 0.0f;
 }
 
-/* Emits a subtree with `budget` primitives (>= 1). Returns 0 or an error. */
+/* Probability that a subtree is wrapped in a random unary node (0: the
+ * random stream, and so every tree, is the one without unary nodes). */
+static float rt_unary_rate;
+/* Unary kinds drawn: bit (kind - BC_OP_FIRST_UNARY); 0 means all. */
+static uint32_t rt_unary_kinds;
+
+static void rt_random_unary(struct bc_unary *u)
+{
+	enum bc_op kind;
+	do {
+		kind = (enum bc_op)(BC_OP_FIRST_UNARY +
+				    rt_below(BC_OP_COUNT - BC_OP_FIRST_UNARY));
+	} while (rt_unary_kinds &&
+		 !(rt_unary_kinds & (1u << (kind - BC_OP_FIRST_UNARY))));
+	bc_unary_init(u, kind);
+	switch (kind) {
+	case BC_OP_OFFSET:
+		u->u[0] = rt_float(-0.05f, 0.2f);
+		break;
+	case BC_OP_ONION:
+		u->u[0] = rt_float(0.02f, 0.1f);
+		break;
+	case BC_OP_ELONGATE:
+		for (int i = 0; i < 3; i++) {
+			u->u[i] = rt_below(2) ? rt_float(0.0f, 0.4f) : 0.0f;
+		}
+		break;
+	case BC_OP_TWIST:
+		u->u[0] = rt_float(-1.5f, 1.5f);
+		break;
+	case BC_OP_BEND:
+		u->u[0] = rt_float(-0.8f, 0.8f);
+		break;
+	case BC_OP_MIRROR:
+		u->u[0] = (float)(1 + rt_below(7));
+		break;
+	case BC_OP_REPEAT:
+		for (int i = 0; i < 3; i++) {
+			u->u[i] = rt_float(1.0f, 2.0f);
+			u->u[3 + i] = (float)(1 + rt_below(3));
+		}
+		break;
+	default:
+		u->u[0] = rt_float(0.5f, 1.5f);
+		break;
+	}
+}
+
+static int rt_emit_node(struct bc_tree *t, uint32_t budget, uint32_t depth);
+
+/* Emits a subtree with `budget` primitives (>= 1), wrapped in a random
+ * unary node at rate rt_unary_rate. Returns 0 or an error. */
 static int rt_emit(struct bc_tree *t, uint32_t budget, uint32_t depth)
+{
+	struct bc_unary u;
+	int rc;
+	if (rt_unary_rate > 0.0f && rt_float(0.0f, 1.0f) < rt_unary_rate) {
+		rt_random_unary(&u);
+		if ((rc = bc_tree_push_unary(t, 0, &u, NULL)) ||
+		    (rc = rt_emit_node(t, budget, depth))) {
+			return rc;
+		}
+		return bc_tree_pop_op(t, NULL);
+	}
+	return rt_emit_node(t, budget, depth);
+}
+
+static int rt_emit_node(struct bc_tree *t, uint32_t budget, uint32_t depth)
 {
 	int rc;
 	if (budget == 1 || depth >= 6) {

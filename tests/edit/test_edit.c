@@ -248,6 +248,110 @@ static void key_value_syntax(void)
 	bc_tree_destroy(t);
 }
 
+/* offset(12: twist(13: repeat(14: sphere 15))). */
+static struct bc_tree *unary_scene(void)
+{
+	struct bc_proto_buf b;
+	struct bc_tree *t = bc_tree_create();
+	float r = 0.3f, amount = 0.1f, rate = 1.0f;
+	float rep[6] = {1.0f, 0.0f, 0.0f, 3.0f, 1.0f, 1.0f};
+	bc_proto_buf_init(&b, 0);
+	bc_proto_scene_begin(&b, NULL, 4);
+	bc_proto_scene_unary(&b, BC_OP_OFFSET, 12, 1, &amount);
+	bc_proto_scene_unary(&b, BC_OP_TWIST, 13, 1, &rate);
+	bc_proto_scene_unary(&b, BC_OP_REPEAT, 14, 6, rep);
+	bc_proto_scene_prim(&b, BC_PRIM_SPHERE, 15, T0, R0, NULL, 1, &r);
+	if (!t || bc_scene_decode(b.data, b.len, t, NULL, NULL, NULL)) {
+		bc_tree_destroy(t);
+		t = NULL;
+	}
+	bc_proto_buf_finish(&b);
+	return t;
+}
+
+/* SET on unary nodes: parameters by PARAM0 (repeat: spacing and count),
+ * a kind change starting from the new kind's defaults, wrong counts and
+ * kinds refused, and a batch undone back to the exact state. */
+static void unary_nodes_take_set_fields_and_undo(void)
+{
+	struct bc_tree *t = unary_scene();
+	struct bc_errinfo ei = {0};
+	struct bc_unary u;
+	struct bc_edit_batch b;
+	struct bc_proto_field amount = {BC_PROTO_FIELD_PARAM0, 1, {0.25f}};
+	struct bc_proto_field count = {BC_PROTO_FIELD_PARAM0 + 1, 3,
+	                               {5.0f, 1.0f, 1.0f}};
+	struct bc_proto_field to_onion = {BC_PROTO_FIELD_OP_KIND, 1,
+	                                  {(float)BC_OP_ONION}};
+	struct bc_proto_field to_union = {BC_PROTO_FIELD_OP_KIND, 1, {1.0f}};
+	struct bc_proto_field blend = {BC_PROTO_FIELD_BLEND, 1, {0.1f}};
+	struct bc_proto_field three = {BC_PROTO_FIELD_PARAM0, 3, {1, 2, 3}};
+	struct bc_proto_edit_op ops[2];
+	char *before, *after;
+	REQUIRE(t);
+	CHECK_EQ_INT(apply1(&t, set_op(12, &amount, 1), &ei), 0);
+	REQUIRE(bc_tree_get_unary(t, 12, &u));
+	CHECK(u.kind == BC_OP_OFFSET && u.u[0] == 0.25f);
+	CHECK_EQ_INT(apply1(&t, set_op(14, &count, 1), &ei), 0);
+	REQUIRE(bc_tree_get_unary(t, 14, &u));
+	CHECK(u.u[0] == 1.0f && u.u[3] == 5.0f);
+	CHECK_EQ_INT(apply1(&t, set_op(12, &to_onion, 1), &ei), 0);
+	REQUIRE(bc_tree_get_unary(t, 12, &u));
+	CHECK(u.kind == BC_OP_ONION && u.u[0] == 0.05f);
+	CHECK_EQ_INT(apply1(&t, set_op(12, &to_union, 1), &ei), BC_EENUM);
+	CHECK_EQ_INT(apply1(&t, set_op(12, &blend, 1), &ei), BC_EINVAL);
+	CHECK_EQ_INT(apply1(&t, set_op(13, &three, 1), &ei), BC_EINVAL);
+	/* Undo of a two-node batch restores the exact scene. */
+	REQUIRE((before = bc_scene_to_json(t, NULL)));
+	ops[0] = set_op(12, &amount, 1);
+	ops[1] = set_op(14, &count, 1);
+	count.v[0] = 2.0f;
+	REQUIRE(bc_edit_batch_apply(&b, &t, ops, 2, &ei) == 0);
+	REQUIRE(bc_tree_get_unary(t, 14, &u));
+	CHECK(u.u[3] == 2.0f);
+	bc_edit_batch_undo(&b, &t);
+	bc_edit_batch_finish(&b);
+	REQUIRE((after = bc_scene_to_json(t, NULL)));
+	CHECK_STREQ(before, after);
+	bc_free(before);
+	bc_free(after);
+	bc_tree_destroy(t);
+}
+
+/* key=value on unary nodes: amount=, spacing= count=, axes=xz, kind=. */
+static void unary_key_values(void)
+{
+	struct bc_tree *t = unary_scene();
+	struct bc_errinfo ei = {0};
+	struct bc_proto_field f[BC_EDIT_MAX_KV];
+	uint8_t n = 0;
+	const char *off[] = {"amount=0.2"};
+	const char *rep[] = {"spacing=1,1,1", "count=2,1,3"};
+	const char *bad[] = {"radius=1"};
+	const char *kind[] = {"kind=mirror"};
+	REQUIRE(t);
+	CHECK_EQ_INT(bc_edit_parse_kv(t, 12, off, 1, f, &n, &ei), 0);
+	CHECK(n == 1 && f[0].field == BC_PROTO_FIELD_PARAM0 &&
+	      f[0].v[0] == 0.2f);
+	CHECK_EQ_INT(bc_edit_parse_kv(t, 14, rep, 2, f, &n, &ei), 0);
+	CHECK(n == 2 && f[1].field == BC_PROTO_FIELD_PARAM0 + 1 &&
+	      f[1].count == 3 && f[1].v[2] == 3.0f);
+	CHECK_EQ_INT(bc_edit_parse_kv(t, 12, bad, 1, f, &n, &ei), BC_EINVAL);
+	CHECK(strstr(ei.msg, "amount") != NULL);
+	CHECK_EQ_INT(bc_edit_parse_kv(t, 13, kind, 1, f, &n, &ei), 0);
+	CHECK_EQ_INT(apply1(&t, set_op(13, f, n), &ei), 0);
+	{
+		const char *axes[] = {"axes=xz"};
+		struct bc_unary u;
+		CHECK_EQ_INT(bc_edit_parse_kv(t, 13, axes, 1, f, &n, &ei), 0);
+		CHECK(n == 1 && f[0].v[0] == 5.0f);
+		CHECK_EQ_INT(apply1(&t, set_op(13, f, n), &ei), 0);
+		REQUIRE(bc_tree_get_unary(t, 13, &u));
+		CHECK(u.kind == BC_OP_MIRROR && u.u[0] == 5.0f);
+	}
+	bc_tree_destroy(t);
+}
+
 static const struct bc_test tests[] = {
     {"subtree_with_id_0_is_einval", subtree_with_id_0_is_einval},
     {"remove_root_is_einval", remove_root_is_einval},
@@ -256,6 +360,9 @@ static const struct bc_test tests[] = {
     {"blend_on_sharp_is_refused", blend_on_sharp_is_refused},
     {"batches_are_atomic_and_undo", batches_are_atomic_and_undo},
     {"key_value_syntax", key_value_syntax},
+    {"unary_nodes_take_set_fields_and_undo",
+     unary_nodes_take_set_fields_and_undo},
+    {"unary_key_values", unary_key_values},
 };
 
 BC_TEST_MAIN(tests)

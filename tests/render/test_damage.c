@@ -487,7 +487,7 @@ static int random_edit(struct bc_tree *t, const uint32_t *ids, uint32_t n,
 		} else {
 			do {
 				o.kind = (enum bc_op)(
-				    1 + dmg_below(BC_OP_COUNT - 1));
+				    1 + dmg_below(BC_OP_FIRST_UNARY - 1));
 			} while (o.kind == was);
 		}
 		if (bc_op_is_smooth(o.kind) && !bc_op_is_smooth(was)) {

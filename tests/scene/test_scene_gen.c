@@ -192,7 +192,7 @@ static void random_uses_every_kind_within_the_depth(void)
 		}
 		CHECK(kinds[k] == (k <= BC_PRIM_TRI_PRISM));
 	}
-	for (int k = 1; k < BC_OP_COUNT; k++) {
+	for (int k = 1; k < BC_OP_FIRST_UNARY; k++) {
 		CHECK(ops[k]);
 	}
 	CHECK(deepest < 9);

@@ -112,8 +112,29 @@ enum bc_op {
 	BC_OP_SMOOTH_UNION,
 	BC_OP_SMOOTH_INTERSECTION,
 	BC_OP_SMOOTH_DIFFERENCE,
+	/* Unary and domain nodes: exactly one child (docs/scene-format.md,
+	 * "Unary and domain nodes"). Parameters in bc_op_data.u. */
+	BC_OP_OFFSET,   /* u[0] amount: f - amount */
+	BC_OP_ONION,    /* u[0] thickness: |f| - thickness */
+	BC_OP_ELONGATE, /* u[0..2] half extents h: child(p - clamp(p,-h,h)) */
+	BC_OP_TWIST,    /* u[0] rate: child(rot_y(rate y) p) */
+	BC_OP_BEND,     /* u[0] rate: child(rot_z(rate x) p) (opCheapBend) */
+	BC_OP_MIRROR,   /* u[0] axes bit mask 1..7 (x 1, y 2, z 4): child(|p|) */
+	BC_OP_REPEAT,   /* u[0..2] spacing, u[3..5] count: opRepLim */
+	BC_OP_SCALE,    /* u[0] factor: factor child(p / factor) */
 	BC_OP_COUNT
 };
+
+#define BC_OP_FIRST_UNARY BC_OP_OFFSET
+/* Floats of a unary node's parameters (repeat: spacing[3], count[3]). */
+#define BC_UNARY_MAX_PARAMS 6
+/* Copies per axis a repeat node may make: a count is an integer in
+ * 1..BC_REPEAT_MAX_COUNT, so the copies' union box stays meaningful. */
+#define BC_REPEAT_MAX_COUNT 4096
+/* Domain nodes (elongate, twist, bend, mirror, repeat, scale) on any path
+ * from the root to a primitive: every evaluator maps a primitive's point
+ * through them with a fixed array of this size (also in the shaders). */
+#define BC_DOMAIN_MAX_CHAIN 32u
 
 /* How an operator selects an operand when the other is missing (outside all
  * its ABVs, i.e. treated as +inf): the paper's ignoreMod. */
@@ -159,6 +180,24 @@ const char *bc_op_name(enum bc_op kind);
 enum bc_op bc_op_from_name(const char *name);
 enum bc_op_class bc_op_class(enum bc_op kind);
 bool bc_op_is_smooth(enum bc_op kind);
+/* Unary nodes (one child): offset .. scale. */
+bool bc_op_is_unary(enum bc_op kind);
+/* Unary nodes that map the point their subtree sees (all but offset and
+ * onion). */
+bool bc_op_is_domain(enum bc_op kind);
+/* Unary nodes that change the value their child returns (offset, onion,
+ * twist, bend, scale); the others pass it through. */
+bool bc_op_has_value(enum bc_op kind);
+
+/* One named parameter of a unary node: `count` floats at u[offset]. */
+struct bc_unary_info {
+	const char *name;  /* "offset" */
+	uint8_t nparams;   /* floats */
+	const char *param; /* scene-file key of u[0..nparams) ("spacing" and
+			      "count" for repeat: two keys of 3) */
+};
+/* Returns the description of a unary kind, NULL for any other kind. */
+const struct bc_unary_info *bc_unary_info(enum bc_op kind);
 
 /* Evaluates operator kind on operands f0 (left) and f1 (right). blend = β
  * and range = r_o (paper eq. 8-18) are ignored by the sharp operators.
@@ -183,6 +222,31 @@ struct bc_op_data {
 	float blend; /* β > 0 for smooth operators, 0 otherwise */
 	float range; /* r_o > blend / 6; continuous for r_o >= 7/6 blend */
 };
+
+/* A unary or domain node: its kind (BC_OP_OFFSET .. BC_OP_SCALE) and its
+ * parameters (enum bc_op's comments; unused floats 0). bc_tree_get reports
+ * such a node as an operator of that kind with blend and range 0. */
+struct bc_unary {
+	enum bc_op kind;
+	float u[BC_UNARY_MAX_PARAMS];
+};
+
+/* Mirror axes: "x", "yz", "xyz"... (each letter at most once, any order)
+ * to the mask 1..7, 0 when s is not such a string; and back ("x", "xy",
+ * in x, y, z order; out holds 4 bytes). */
+uint32_t bc_mirror_axes_parse(const char *s);
+void bc_mirror_axes_name(uint32_t mask, char out[4]);
+
+/* Sets *u to kind's defaults (offset 0.1, onion 0.05, elongate 0.5 0 0,
+ * twist 1, bend 0.5, mirror x, repeat spacing 2 and count 3 1 1, scale 1;
+ * docs/scene-format.md). kind must be unary. */
+void bc_unary_init(struct bc_unary *u, enum bc_op kind);
+/* Checks a unary node's parameters: finite, |values| <= BC_PARAM_MAX_ABS,
+ * onion thickness >= 0, elongate half extents >= 0, mirror axes an integer
+ * 1..7, repeat counts integers 1..BC_REPEAT_MAX_COUNT with spacing > 0 on
+ * each axis whose count exceeds 1 (and >= 0 elsewhere), scale factor > 0
+ * and >= 1e-3. Returns 0, BC_EENUM, BC_ERANGE or BC_ENONFINITE. */
+int bc_unary_validate(const struct bc_unary *u, struct bc_errinfo *ei);
 
 /* Sets *p to a primitive of kind with every parameter at its default (a
  * valid unit-sized shape, docs/primitives.md), identity transform and no
@@ -299,6 +363,10 @@ int bc_tree_begin(struct bc_tree *t);
 int bc_tree_push_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
 		    struct bc_errinfo *ei);
 int bc_tree_pop_op(struct bc_tree *t, struct bc_errinfo *ei);
+/* Opens a unary node (closed with bc_tree_pop_op, which then requires
+ * exactly one child: a primitive or any subtree). */
+int bc_tree_push_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
+		       struct bc_errinfo *ei);
 int bc_tree_put_prim(struct bc_tree *t, uint32_t id,
 		     const struct bc_prim_data *p, struct bc_errinfo *ei);
 int bc_tree_end(struct bc_tree *t, struct bc_errinfo *ei);
@@ -341,6 +409,16 @@ int bc_tree_set_prim(struct bc_tree *t, uint32_t id,
  * operators (the subtree's ROIs and ABVs are recomputed, the layout stays). */
 int bc_tree_set_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
 		   struct bc_errinfo *ei);
+/* Replaces the parameters of unary node id; the kind may change among the
+ * unary kinds. Rewrites its record, then the ROIs and ABVs of its subtree
+ * and the Lipschitz bounds of its domain ancestors (the layout stays). */
+int bc_tree_set_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
+		      struct bc_errinfo *ei);
+/* Reads unary node id into *out. Returns false (out zeroed) when id is not
+ * a unary node. */
+bool bc_tree_get_unary(const struct bc_tree *t, uint32_t id,
+		       struct bc_unary *out);
+
 /* Inserts a copy of the whole of sub as child number pos of operator
  * parent_id (pos may equal the child count: append). Ids of sub must not
  * exist in t (BC_EDUPID); sub's ids are kept. Re-linearizes. */
@@ -415,7 +493,39 @@ struct bc_lin {
 	 * model's nesting (nodes on the longest path, the root counting 1). */
 	uint32_t stack;
 	uint32_t nesting;
+
+	/*
+	 * Unary and domain nodes (docs/scene-format.md). They take no slot:
+	 * unary node u wraps the value of slot unary_slot[u] (the top slot of
+	 * its child); the wrappers of one slot chain innermost first through
+	 * unary_outer. Domain nodes map the point every slot below them sees:
+	 * a slot's point is the world point mapped through dom[slot], then
+	 * unary_dom[...] outward, applied outermost first. Records are
+	 * BC_UNARY_RECORD_VEC4 vec4s (bc_unary_record_* below).
+	 */
+	uint32_t nunary;
+	uint32_t *wrap;     /* per slot: innermost wrapper, BC_NONE */
+	uint32_t *wrap_top; /* per slot: outermost wrapper, BC_NONE */
+	uint32_t *dom;      /* per slot: innermost domain node around it */
+	uint32_t *ucount;   /* per slot: ancestors whose wrappers change the
+			       value (offset, onion, twist, bend, scale); a
+			       sparse climb may not jump over them */
+	uint32_t *unary_slot, *unary_outer, *unary_inner, *unary_dom;
+	uint32_t *unary_param; /* record offset, vec4 units */
+	uint32_t *unary_kind;  /* enum bc_op */
+	uint32_t *unary_id;    /* stable id */
+	/* Lipschitz bound of the whole field relative to its primitives' own
+	 * (1 without twist or bend; docs/scene-format.md): the tracers divide
+	 * every step by it. */
+	float lip;
 };
+
+/* Unary record (2 vec4): the parameters u[0..5], except twist and bend:
+ * (rate, R, L, r+, 0...) with R the radius about the axis of the child's
+ * ABVs in the node's frame, L the Lipschitz bound of the node's value
+ * (its own map's within R times its subtree's) and r+ the child's ROI
+ * bound; scale: (factor, 1 / factor). */
+#define BC_UNARY_RECORD_VEC4 2
 
 /* Returns the tree's linearized form (valid until the next structural edit;
  * parameter edits update it in place). NULL for an empty tree. */
@@ -447,6 +557,19 @@ static inline const float *bc_lin_param(const struct bc_lin *l, uint32_t slot)
 
 /* ---- Field evaluation (blobtree/eval.c) --------------------------------- */
 
+/* Maps world point p through the domain nodes from d (a unary index, or
+ * BC_NONE: no map) outward: the point the slots below d see. */
+void bc_domain_map(const struct bc_lin *l, uint32_t d, const float p[3],
+		   float out[3]);
+/* Applies unary node u's value map to its child's value f at world point
+ * p (identity for the pure domain nodes). */
+float bc_unary_value(const struct bc_lin *l, uint32_t u, float f,
+		     const float p[3]);
+
+/* The Lipschitz bound of a twist or bend map (kind) of the given rate
+ * within distance r of its axis. */
+float bc_unary_own_lip(uint32_t kind, float rate, float r);
+
 /* Field of primitive k (world point p), and of the whole tree. The _id
  * variants also return the primitive index that decides the value (the
  * operand each operator selects or weights most). */
@@ -459,12 +582,15 @@ float bc_eval_full_id(const struct bc_lin *l, const float p[3], uint32_t *prim);
  * the given primitives are active. Operators with a missing operand act as
  * selectors at build time and cost nothing at evaluation time. */
 struct bc_view_instr {
-	uint32_t slot;  /* slot of the leaf or operator */
+	uint32_t slot;  /* slot of the leaf or operator; unary index */
 	uint32_t param; /* parameter offset, vec4 units */
 	uint16_t kind;  /* bc_prim or bc_op */
-	uint8_t leaf;
+	uint8_t leaf;   /* 1 leaf, 0 binary operator, BC_VIEW_UNARY */
 	uint8_t pad;
 };
+/* A view instruction that maps the top of the stack through a unary node
+ * (offset, onion, twist, bend, scale; the others change no value). */
+#define BC_VIEW_UNARY 2
 
 struct bc_view {
 	struct bc_view_instr *instr;
@@ -477,8 +603,10 @@ struct bc_view {
 void bc_view_init(struct bc_view *v);
 void bc_view_finish(struct bc_view *v);
 /* Builds the view for the active primitive indices active[0..n) (strictly
- * increasing). Cost is O(n log depth) -- independent of tree size -- using
- * the jump pointers. Returns 0, BC_EINVAL (unsorted or out of range) or
+ * increasing). A missing subtree under a unary node leaves the node
+ * missing; a present one is followed by the node's instruction. Cost is
+ * O(n log depth) -- independent of tree size -- using the jump pointers,
+ * plus one step per value-changing unary node on the way. Returns 0, BC_EINVAL (unsorted or out of range) or
  * BC_ENOMEM. */
 int bc_view_build(struct bc_view *v, const struct bc_lin *l,
 		  const uint32_t *active, uint32_t n);

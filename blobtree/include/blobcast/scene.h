@@ -142,12 +142,15 @@ struct bc_scene_node {
 	bool is_op;
 	struct bc_prim_data prim; /* when !is_op */
 	struct bc_op_data op;     /* when is_op */
+	/* When is_op and op.kind is unary (nchildren 1): its parameters. */
+	struct bc_unary unary;
 };
 
 struct bc_scene_walk {
 	const struct bc_tree *t;
 	const struct bc_lin *l;
 	uint32_t *todo; /* top slots still to visit, next on top */
+	uint32_t *todo_wrap; /* per entry: its next unary wrapper to visit */
 	uint32_t ntodo;
 	uint32_t index;
 	uint32_t nopen;

@@ -36,6 +36,15 @@ int bc_edit_set_fields(const struct bc_proto_edit_op *e, bool is_op,
                        struct bc_prim_data *p, struct bc_op_data *op,
                        struct bc_errinfo *ei);
 
+/* The same for a unary node (u holds its current kind and parameters):
+ * OP_KIND is an integer 7..14 (EENUM otherwise) and a new kind starts from
+ * its defaults (bc_unary_init); PARAM0 is the kind's parameter (repeat:
+ * PARAM0 spacing and PARAM0 + 1 count, 3 values each; elongate 3 values;
+ * mirror the axes mask 1..7; the others 1 value). Range checks are
+ * blobtree's (bc_tree_set_unary). */
+int bc_edit_set_unary_fields(const struct bc_proto_edit_op *e,
+                             struct bc_unary *u, struct bc_errinfo *ei);
+
 /* Applies one operation to t, not atomically (a failure may leave t
  * changed for structural operations: use a batch). Refuses, besides what
  * blobtree refuses: a subtree with a node of id 0 (EINVAL; EDIT_APPLIED
@@ -50,7 +59,12 @@ struct bc_edit_saved {
 	uint32_t id;
 	struct bc_prim_data p;
 	struct bc_op_data op;
+	struct bc_unary un; /* when op.kind is a unary kind */
 };
+
+/* Puts a saved node's state back into t (a state that was valid: cannot
+ * fail). */
+void bc_edit_saved_restore(struct bc_tree *t, const struct bc_edit_saved *s);
 
 /* A SET of node s->id that gives it back the saved state: every field of
  * the primitive (translate, rotate, each parameter, the colour when it has

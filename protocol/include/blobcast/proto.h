@@ -204,11 +204,15 @@ enum bc_proto_edit_kind {
 #define BC_PROTO_FIELD_PARAM0 16u   /* 16..23: 1..4 values each */
 #define BC_PROTO_FIELD_BLEND 32u    /* 1 value */
 #define BC_PROTO_FIELD_RANGE 33u    /* 1 value */
-#define BC_PROTO_FIELD_OP_KIND 34u  /* 1 value: an integer 1..6 */
+#define BC_PROTO_FIELD_OP_KIND 34u  /* 1 value: an integer 1..14 */
 
 /* Operator kinds as the scene encoding and the OP_KIND field number them
- * (the same numbers as blobtree's enum bc_op). */
-#define BC_PROTO_OP_KIND_MAX 6u
+ * (the same numbers as blobtree's enum bc_op): 1..6 binary, 7..14 unary
+ * and domain nodes (offset .. scale), which carry nfloats parameters (at
+ * most BC_PROTO_MAX_UNARY_PARAMS) and exactly one child. */
+#define BC_PROTO_OP_KIND_MAX 14u
+#define BC_PROTO_OP_KIND_FIRST_UNARY 7u
+#define BC_PROTO_MAX_UNARY_PARAMS 6u
 /* Primitive kinds run 1..32 (blobtree's enum bc_prim). */
 #define BC_PROTO_PRIM_KIND_MAX 32u
 
@@ -624,6 +628,11 @@ BC_API int bc_proto_scene_prim(struct bc_proto_buf *b, uint8_t kind,
                                uint8_t nparams, const float *params);
 BC_API int bc_proto_scene_op(struct bc_proto_buf *b, uint8_t kind, uint32_t id,
                              float blend, float range, uint32_t child_count);
+/* A unary or domain node (kind 7..14) and its nparams floats (at most
+ * BC_PROTO_MAX_UNARY_PARAMS); its one child is the next node written. */
+BC_API int bc_proto_scene_unary(struct bc_proto_buf *b, uint8_t kind,
+                                uint32_t id, uint8_t nparams,
+                                const float *params);
 
 /* ---- Names and rules ------------------------------------------------------
  */
