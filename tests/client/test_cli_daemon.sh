@@ -1,8 +1,9 @@
 #!/bin/sh
 # The blobcast CLI against a real blobcastd: a private daemon on a free
 # loopback port (and a Unix socket) with a temporary data directory; load,
-# edit, camera, snapshot, watch and bench-latency are run against it and
-# their outputs checked; then the daemon is stopped with SIGTERM.
+# edit, camera, present, follow, snapshot, watch and bench-latency are run
+# against it and their outputs checked; then the daemon is stopped with
+# SIGTERM.
 #
 # usage: test_cli_daemon.sh BLOBCAST BLOBCASTD
 # Exits 77 (skipped) when either program has not been built.
@@ -172,6 +173,30 @@ if ! cmp -s "$tmp/c.png" "$tmp/e.png"; then
 fi
 run 2 "blobcast camera:" $S camera --session review --eye 0,0,0 \
   --target 0,0,0 --fov 30
+
+# --- present and follow: the follower gets the presenter's camera at its own
+# size; the presentation ends when the presenter's --for runs out.
+"$BLOBCAST" $S follow --session review --frames 2 --size 48x32 \
+  > "$tmp/follow" 2>&1 &
+follower=$!
+i=0
+while [ $i -lt 100 ] && ! grep -q "^presenter none" "$tmp/follow"; do
+  sleep 0.1
+  i=$((i + 1))
+done
+run 0 "end=time" $S present --session review --name presenter \
+  --eye 0,4,4 --target 0,0,0 --for 1
+wait $follower
+st=$?
+if [ $st -ne 0 ] || ! grep -q "^following member=" "$tmp/follow" ||
+  ! grep -q "^camera member=[0-9]* eye=0,4,4 target=0,0,0" "$tmp/follow" ||
+  ! grep -q "^frame 2 .* view=48x32 " "$tmp/follow"; then
+  fail "follow: exit $st, no follow of the presenter's camera at 48x32"
+  sed 's/^/    /' "$tmp/follow"
+else
+  echo "ok   blobcast follow sees blobcast present's camera at its size"
+fi
+run 1 "ENOSESSION" $S present --session nosuch --for 1
 
 # --- watch: sees the first frame, then a frame per edit ---------------------------
 "$BLOBCAST" $S watch --session review --frames 3 --size 64x48 \
