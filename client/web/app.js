@@ -37,6 +37,15 @@
  *    flagged UNDO or REDO whose operations the mirror applies like any
  *    edit, and the page says who took back whose edit; ESTATE means
  *    there was nothing to undo (redo).
+ *  - Presenting and following: the "present" button (or Shift-F) makes
+ *    this page the session's presenter (PRESENT); "follow" (or F) makes
+ *    its camera track the presenter's (FOLLOW; the server sends each of
+ *    the presenter's cameras as FOLLOW_CAMERA and renders this page at its
+ *    own size). Moving the camera leaves the follow. The page joins with
+ *    FOLLOW 0 so the server says who presents (PRESENTER); the members
+ *    list marks the presenter and the follow button says whom it follows.
+ *    A page set to follow follows again after a reconnect or when a new
+ *    presentation starts.
  *  - Honest frames: the "refining" mark says when the picture on screen
  *    is not final, and "render pending" when this page sent a camera,
  *    view or edit that no frame has answered yet.
@@ -447,6 +456,8 @@ class App {
 		this.installInput();
 		this.installAccess();
 		this.installUndo();
+		this.followWanted = false; /* F: kept across reconnects */
+		this.installPresent();
 		new ResizeObserver(() => this.resize()).observe($('stage'));
 		setInterval(() => this.tick(), 250);
 		this.conn.open();
@@ -476,6 +487,10 @@ class App {
 		this.cameraSentAt = 0;
 		this.viewSentAt = 0; /* my last VIEW, until a frame comes */
 		this.lastFrame = null;
+		this.presenter = 0; /* PRESENTER: who presents, 0 nobody */
+		this.following = false;
+		this.presenceAsked = false;
+		this.renderPresent();
 	}
 
 	/* ---- connection and messages ---- */
@@ -619,10 +634,31 @@ class App {
 					this.sendCamera(false);
 				}
 			}
+			if (!this.presenceAsked) {
+				/* FOLLOW 0: the server tells us who presents. */
+				this.presenceAsked = true;
+				this.conn.send(P.MSG.FOLLOW, { on: 0 });
+			}
+			this.renderPresent();
 			this.renderMembers();
 			break;
 		case P.MSG.SCENE_STATE:
 			this.sceneState(m);
+			break;
+		case P.MSG.PRESENTER:
+			this.presenterChanged(m);
+			break;
+		case P.MSG.FOLLOW_CAMERA:
+			/* The server renders us from the presenter's camera; ours
+			 * becomes it, so that a drag starts from what is shown. */
+			this.camera.set(m);
+			this.cameraMoved = true;
+			this.drawOverlay();
+			break;
+		case P.MSG.SESSION_CAMERA_SET:
+			this.order = m.order;
+			this.say(`${this.memberName(m.author)} set the session's ` +
+				`camera`);
 			break;
 		case P.MSG.EDIT_APPLIED:
 			this.editApplied(m);
@@ -905,6 +941,10 @@ class App {
 
 	sendCamera(interacting) {
 		this.cameraMoved = true;
+		if (this.following) {
+			/* Our own camera ends the follow (PRESENTER says so). */
+			this.followWanted = false;
+		}
 		const seq = this.conn.send(P.MSG.CAMERA, this.camera.msg(),
 			interacting ? P.FLAG.INTERACTING : 0);
 		if (seq) {
@@ -976,6 +1016,105 @@ class App {
 			this.undoSent.set(seq, redo ? 'redo' : 'undo');
 			this.editSent.set(seq, { sentAt: performance.now() });
 		}
+	}
+
+	/* PRESENTER: who presents now, and whether we follow. */
+	presenterChanged(m) {
+		const was = this.presenter;
+		const followed = this.following;
+		const me = this.info?.member_id ?? 0;
+		this.presenter = m.presenter;
+		this.following = !!m.following;
+		if (m.presenter && m.presenter !== me && !m.following &&
+			this.followWanted) {
+			this.conn.send(P.MSG.FOLLOW, { on: 1 });
+		} else if (this.following && !followed) {
+			this.say(`following ${this.memberName(m.presenter)}`);
+		} else if (!m.presenter && was) {
+			this.say(`${was === me ? 'you' : this.memberName(was)} ` +
+				'stopped presenting');
+		} else if (m.presenter !== was && m.presenter === me) {
+			this.say('you present: followers see your camera');
+		} else if (m.presenter !== was) {
+			this.say(`${this.memberName(m.presenter)} presents: ` +
+				'follow (F) to see the camera');
+		} else if (followed && !this.following) {
+			this.say('not following');
+		}
+		this.renderPresent();
+		this.renderMembers();
+	}
+
+	/* The follow button (F): on follows the presenter (or whoever
+	 * presents next); off stops. */
+	toggleFollow() {
+		const me = this.info?.member_id ?? 0;
+		if (this.following || this.followWanted) {
+			this.followWanted = false;
+			if (this.following) {
+				this.conn.send(P.MSG.FOLLOW, { on: 0 });
+			} else {
+				this.say('not following');
+			}
+			this.renderPresent();
+			return;
+		}
+		if (this.presenter && this.presenter === me) {
+			this.say('you present; stop presenting to follow');
+			return;
+		}
+		this.followWanted = true;
+		if (this.presenter) {
+			this.conn.send(P.MSG.FOLLOW, { on: 1 });
+		} else {
+			this.say('nobody presents; following whoever starts');
+		}
+		this.renderPresent();
+	}
+
+	/* The present button (Shift-F). */
+	togglePresent() {
+		const me = this.info?.member_id ?? 0;
+		const on = !(this.presenter && this.presenter === me);
+		if (on) {
+			this.followWanted = false;
+		}
+		this.conn.send(P.MSG.PRESENT, { on: on ? 1 : 0 });
+	}
+
+	renderPresent() {
+		const me = this.info?.member_id ?? 0;
+		const fb = $('followbtn');
+		const pb = $('presentbtn');
+		const presenting = !!this.presenter && this.presenter === me;
+		fb.setAttribute('aria-pressed', String(this.following ||
+			this.followWanted));
+		fb.textContent = this.following
+			? `following ${this.memberName(this.presenter)}`
+			: this.followWanted ? 'follow: waiting' : 'follow';
+		fb.disabled = !this.info || presenting;
+		pb.setAttribute('aria-pressed', String(presenting));
+		pb.textContent = presenting ? 'presenting' : 'present';
+		pb.disabled = !this.info;
+	}
+
+	installPresent() {
+		$('followbtn').addEventListener('click', () => this.toggleFollow());
+		$('presentbtn').addEventListener('click', () => this.togglePresent());
+		document.addEventListener('keydown', (e) => {
+			const t = e.target;
+			if (e.ctrlKey || e.metaKey || e.altKey || e.key.toLowerCase() !==
+				'f' || (t && (t.isContentEditable || ['INPUT', 'TEXTAREA',
+				'SELECT'].includes(t.tagName)))) {
+				return;
+			}
+			e.preventDefault();
+			if (e.shiftKey) {
+				this.togglePresent();
+			} else {
+				this.toggleFollow();
+			}
+		});
 	}
 
 	showNotice(text) {
@@ -1262,6 +1401,13 @@ class App {
 			role.className = 'role';
 			role.textContent = m.role === P.ROLE.EDITOR ? 'editor' : 'viewer';
 			li.append(name, role);
+			if (m.id === this.presenter) {
+				const mark = document.createElement('span');
+				mark.className = 'presenting';
+				mark.textContent = this.following ? '▶ presenting · followed'
+					: '▶ presenting';
+				li.append(mark);
+			}
 			if (m.id === last) {
 				const mark = document.createElement('span');
 				mark.className = 'last';
@@ -1455,6 +1601,11 @@ class App {
 			latencies: this.meter.latencies.slice(),
 			view: this.view,
 			role: this.info?.role ?? 0,
+			presenter: this.presenter,
+			following: this.following,
+			followWanted: this.followWanted,
+			camera: { eye: this.camera.eye.slice(),
+				target: this.camera.target.slice(), fov: this.camera.fov },
 			notice: this.notice,
 			halted: this.halted ? { code: P.errName(this.halted.code),
 				text: this.halted.text } : null,
@@ -1538,4 +1689,10 @@ window.blobcast = {
 	 * overlay's edit -> frame number, for the latency benchmark). */
 	moveTo: (id, translate) => new Promise((resolve) => app.edit(id,
 		[{ field: P.FIELD.TRANSLATE, values: translate }], false, resolve)),
+	/* Turns the camera as a drag of (dx, dy) view pixels would, with one
+	 * final CAMERA. */
+	orbit: (dx, dy) => {
+		app.camera.orbit(dx, dy);
+		app.sendCamera(false);
+	},
 };
