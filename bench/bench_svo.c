@@ -27,7 +27,7 @@
  *
  * Usage: bench_svo [grid|sweep|arith|render|all] [--quick]
  *        bench_svo files [--size N] [--reps R] [--threads T] [--range A]
- *                  SCENE.json...
+ *                  [--threshold TAU] SCENE.json...
  * Every time is measured in this process, one thread unless stated; ratios
  * compare numbers taken side by side in the same run. The machine is shared,
  * so every time is the smallest of several repetitions (REPEATS, or as many
@@ -452,7 +452,7 @@ static int cmp_double(const void *a, const void *b)
 
 static int bench_files(int argc, char **argv)
 {
-	uint32_t side = 512, reps = 5, threads = 1;
+	uint32_t side = 512, reps = 5, threads = 1, tau = 0;
 	enum bc_range_arith arith = BC_RANGE_DEFAULT;
 	int nfiles = 0;
 	for (int i = 2; i < argc; i++) {
@@ -463,6 +463,8 @@ static int bench_files(int argc, char **argv)
 			reps = (uint32_t)strtoul(argv[++i], NULL, 10);
 		} else if (strcmp(argv[i], "--threads") == 0 && more) {
 			threads = (uint32_t)strtoul(argv[++i], NULL, 10);
+		} else if (strcmp(argv[i], "--threshold") == 0 && more) {
+			tau = (uint32_t)strtoul(argv[++i], NULL, 10);
 		} else if (strcmp(argv[i], "--range") == 0 && more) {
 			i++;
 			arith = strcmp(argv[i], "ia") == 0      ? BC_RANGE_IA
@@ -494,6 +496,7 @@ static int bench_files(int argc, char **argv)
 			i += strcmp(argv[i], "--size") == 0 ||
 			     strcmp(argv[i], "--reps") == 0 ||
 			     strcmp(argv[i], "--threads") == 0 ||
+			     strcmp(argv[i], "--threshold") == 0 ||
 			     strcmp(argv[i], "--range") == 0;
 			continue;
 		}
@@ -514,7 +517,8 @@ static int bench_files(int argc, char **argv)
 		}
 		for (uint32_t k = 0; k < reps; k++) {
 			struct bc_render_opts o = {.threads = threads,
-			                           .svo_range = arith};
+			                           .svo_range = arith,
+			                           .svo_threshold = tau};
 			struct bc_renderer *r = NULL;
 			struct bc_render_stats st;
 			double c0, c1;

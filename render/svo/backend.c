@@ -116,14 +116,6 @@ static int svo_sync(struct bc_renderer *base, const struct bc_tree *t,
 	r->synced = false;
 	l = t ? bc_tree_lin(t) : NULL;
 	r->empty = l == NULL;
-	if (l && l->nunary) {
-		/* Interval rules for them are not written yet: refuse
-		 * rather than draw the tree without them. */
-		return bc_errinfo_set(ei, BC_ENOTSUP,
-		                      "svo: unary and domain nodes (offset, "
-		                      "twist, ...) are not supported yet; use "
-		                      "--backend tiled");
-	}
 	if (l && (rc = bc_svo_rpn_init(&r->rpn, l))) {
 		return bc_errinfo_set(ei, rc, "svo: compiling the tree: %s",
 		                      bc_strerror(rc));
@@ -354,6 +346,7 @@ static int svo_render(struct bc_renderer *base, const struct bc_camera *cam,
 	fr.cp.pix_angle = 2.0f * fr.vr.tan_half_y / (float)fr.vr.height;
 	fr.cp.min_step = BC_SVO_MIN_STEP_REL * size;
 	fr.cp.refine_tol = BC_SVO_REFINE_REL * size;
+	fr.cp.lip = r->empty ? 1.0f : r->rpn.lip;
 	bc_shade_init(&fr.shade, &fr.vr);
 	if (!r->empty) {
 		float need = frame_band(&r->rpn, fr.vr.eye, &fr.cp);

@@ -84,10 +84,27 @@ void bc_svo_caster_destroy(struct bc_svo_caster *c)
 	bc_free(c);
 }
 
+/* fmaxf and fminf are library calls (they must handle NaN); the caster's
+ * operands are finite, and these run several times per sample. */
+static inline float maxf(float a, float b)
+{
+	return a > b ? a : b;
+}
+static inline float minf(float a, float b)
+{
+	return a < b ? a : b;
+}
+
+static inline float band_at(const struct bc_svo_cast_params *cp, float t)
+{
+	return BC_SVO_HIT_LIPSCHITZ * (cp->lip > 0.0f ? cp->lip : 1.0f) *
+	       maxf(BC_SVO_HIT_FOOTPRINT * cp->pix_angle * t, cp->min_step);
+}
+
 float bc_svo_hit_band(const struct bc_svo_cast_params *cp, float t)
 {
-	return BC_SVO_HIT_LIPSCHITZ *
-	       fmaxf(BC_SVO_HIT_FOOTPRINT * cp->pix_angle * t, cp->min_step);
+	/* The sphere tracer scales its values by the tree's bound too. */
+	return band_at(cp, t);
 }
 
 /* A field along the ray: a leaf's variant, or the octree (mask NULL).
@@ -134,7 +151,7 @@ static float field_at(struct ray_field *rf, float t)
 		}
 	}
 	(*rf->evals)++;
-	return rf->banded ? v - bc_svo_hit_band(rf->cp, t) : v;
+	return rf->banded ? v - band_at(rf->cp, t) : v;
 }
 
 /* Illinois refinement of a root of rf in [a, b] with fa > 0 >= fb, to the
@@ -223,8 +240,8 @@ static bool leaf_root(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
 		sp--;
 		u0 = st[sp].a;
 		u1 = st[sp].b;
-		c0 = bc_svo_hit_band(cp, u0);
-		c1 = bc_svo_hit_band(cp, u1);
+		c0 = band_at(cp, u0);
+		c1 = band_at(cp, u1);
 		rg.t0 = u0;
 		rg.t1 = u1;
 		r = bc_svo_range(c->g, c->idx, n, &rg);
@@ -238,7 +255,7 @@ static bool leaf_root(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
 			return true;
 		}
 		um = 0.5f * (u0 + u1);
-		if (u1 - u0 <= fmaxf(cp->pix_angle * u1, cp->min_step) ||
+		if (u1 - u0 <= maxf(cp->pix_angle * u1, cp->min_step) ||
 		    sp >= CAST_MAX_LEVELS || !(um > u0 && um < u1)) {
 			float g0 = field_at(&rf, u0), g1;
 			if (g0 <= 0.0f) {
@@ -287,15 +304,15 @@ static bool leaf_step(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
 {
 	struct ray_field rf = {c->s, m,    o,     d, cp,
 	                       true, &hit->evals, false, {0}};
-	float cmax = bc_svo_hit_band(cp, tb), t = ta, g = field_at(&rf, ta);
+	float cmax = band_at(cp, tb), t = ta, g = field_at(&rf, ta);
 	if (g <= 0.0f) {
 		*t_out = ta;
 		return true;
 	}
 	for (int i = 0; i < STEP_MAX; i++) {
 		/* g = f - c(t), so f - c(tb) = g + c(t) - c(tb). */
-		float safe = STEP_SAFE * (g + bc_svo_hit_band(cp, t) - cmax);
-		float w = fmaxf(cp->pix_angle * t, cp->min_step);
+		float safe = STEP_SAFE * (g + band_at(cp, t) - cmax);
+		float w = maxf(cp->pix_angle * t, cp->min_step);
 		float q = t + safe, gq;
 		if (!(safe > 0.0f)) {
 			safe = 0.0f; /* the band widens ahead: w decides */
@@ -305,17 +322,17 @@ static bool leaf_step(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
 			 * ray, the field's own value is the distance to
 			 * it, and a sample a little past that lands beyond
 			 * the crossing and brackets it tightly. */
-			q = t + fminf(w, 1.125f * (g + bc_svo_hit_band(cp, t)));
+			q = t + minf(w, 1.125f * (g + band_at(cp, t)));
 		}
 		if (!(q > t)) {
 			break; /* float resolution: bisection decides */
 		}
-		q = fminf(q, tb);
+		q = minf(q, tb);
 		gq = field_at(&rf, q);
 		if (gq <= 0.0f) {
-			float fq = gq + bc_svo_hit_band(cp, q);
+			float fq = gq + band_at(cp, q);
 			if (fq <= 0.0f) {
-				float ft = g + bc_svo_hit_band(cp, t);
+				float ft = g + band_at(cp, t);
 				rf.banded = false;
 				*t_out = refine(&rf, t, ft, q, fq);
 				*settled = true;
@@ -398,8 +415,8 @@ static float closest(struct ray_field *rf, float a, float va, float b)
 static float settle(struct ray_field *rf, float th, float ta, float tb)
 {
 	const struct bc_svo_cast_params *cp = rf->cp;
-	float band = bc_svo_hit_band(cp, th);
-	float limit = fminf(th + 64.0f * band, tb);
+	float band = band_at(cp, th);
+	float limit = minf(th + 64.0f * band, tb);
 	float t = th, v = field_at(rf, th), tp = th - 0.5f * band, vp = 0.0f;
 	float best_t = th, best_v, before, before_v, after = th;
 	bool slope = false, after_set = false;
@@ -414,14 +431,14 @@ static float settle(struct ray_field *rf, float th, float ta, float tb)
 	before = slope ? tp : th;
 	before_v = slope ? vp : v;
 	for (int i = 0; i < SETTLE_MAX_STEPS; i++) {
-		float bt = bc_svo_hit_band(cp, t), reach, probe, vq;
+		float bt = band_at(cp, t), reach, probe, vq;
 		if (slope && t > tp && vp > v) {
 			reach = 1.5f * v * (t - tp) / (vp - v);
 		} else {
 			reach = bt; /* level or rising: walk on */
 		}
-		reach = fminf(fmaxf(reach, cp->min_step), SETTLE_MAX_REACH * bt);
-		probe = fminf(t + reach, limit);
+		reach = minf(maxf(reach, cp->min_step), SETTLE_MAX_REACH * bt);
+		probe = minf(t + reach, limit);
 		if (!(probe > t)) {
 			break; /* the march's end */
 		}
@@ -445,12 +462,12 @@ static float settle(struct ray_field *rf, float th, float ta, float tb)
 		t = probe;
 		v = vq;
 		slope = true;
-		if (vq > bc_svo_hit_band(cp, probe)) {
+		if (vq > band_at(cp, probe)) {
 			break; /* out of the band: the ray grazed */
 		}
 	}
 	if (!after_set) {
-		after = fminf(best_t + bc_svo_hit_band(cp, best_t), tb);
+		after = minf(best_t + band_at(cp, best_t), tb);
 	}
 	if (!(after > before)) {
 		return best_t;
@@ -473,8 +490,8 @@ static bool clip(const float lo[3], const float hi[3], const float o[3],
 				ta = tb;
 				tb = s;
 			}
-			a = fmaxf(a, ta);
-			b = fminf(b, tb);
+			a = maxf(a, ta);
+			b = minf(b, tb);
 		} else if (o[i] < lo[i] || o[i] > hi[i]) {
 			return false;
 		}

@@ -102,6 +102,17 @@ int bc_svo_prune(struct bc_svo_ranger *g, const uint32_t *mask_in,
 			mode[sp++] = (uint8_t)(m ^ MODE_FLIP);
 			continue;
 		}
+		if (t->type == BC_SVO_TERM_UNARY) {
+			/* A value map (offset, onion, scale, twist, bend)
+			 * moves the levels its child's sign is taken against
+			 * (or folds them, onion): the child keeps its value,
+			 * which every pruning decision below still allows
+			 * when one operand is wholly on the selected side. */
+			count++;
+			stk[sp] = g->kid0[i];
+			mode[sp++] = (uint8_t)(m | MODE_VALUE);
+			continue;
+		}
 		a = g->kid0[i];
 		b = g->kid1[i];
 		A = g->ivl[a];

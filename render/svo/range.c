@@ -164,6 +164,274 @@ void bc__svo_geo_init(struct bc__svo_geo *geo, const struct bc_svo_region *rg)
 	geo->radius = sqrt(r2);
 }
 
+/* ---- Unary and domain nodes -------------------------------------------- */
+
+/* cos over [a, b] (radians), widened by eps and clamped to [-1, 1]: the
+ * ends, and +1 / -1 where the interval holds a multiple of 2 pi / an odd
+ * multiple of pi. */
+static struct bc_svo_ivl ivl_cos(double a, double b, double eps)
+{
+	const double pi = 3.14159265358979323846;
+	struct bc_svo_ivl r = {-1.0, 1.0};
+	double ca, cb;
+	if (!(b - a < 2.0 * pi) || !isfinite(a) || !isfinite(b)) {
+		return r;
+	}
+	ca = cos(a);
+	cb = cos(b);
+	r.lo = bc__dmin(ca, cb);
+	r.hi = bc__dmax(ca, cb);
+	if (floor(a / (2.0 * pi)) != floor(b / (2.0 * pi))) {
+		r.hi = 1.0;
+	}
+	if (floor(a / (2.0 * pi) - 0.5) != floor(b / (2.0 * pi) - 0.5)) {
+		r.lo = -1.0;
+	}
+	r.lo = bc__dmax(r.lo - eps, -1.0);
+	r.hi = bc__dmin(r.hi + eps, 1.0);
+	return r;
+}
+
+static struct bc_svo_ivl ivl_mul(struct bc_svo_ivl a, struct bc_svo_ivl b)
+{
+	double p0 = a.lo * b.lo, p1 = a.lo * b.hi, p2 = a.hi * b.lo,
+	       p3 = a.hi * b.hi;
+	struct bc_svo_ivl r = {bc__dmin(bc__dmin(p0, p1), bc__dmin(p2, p3)),
+	                       bc__dmax(bc__dmax(p0, p1), bc__dmax(p2, p3))};
+	return r;
+}
+
+/* Rotation of (u, v) by an angle in [a0, a1]: (c u + s v, -s u + c v),
+ * each also within the largest radius of the box. */
+static void rotate_box(double *ulo, double *uhi, double *vlo, double *vhi,
+                       double a0, double a1, double eps)
+{
+	const double half_pi = 1.57079632679489661923;
+	struct bc_svo_ivl c = ivl_cos(a0, a1, eps);
+	struct bc_svo_ivl s = ivl_cos(a0 - half_pi, a1 - half_pi, eps);
+	struct bc_svo_ivl ns = {-s.hi, -s.lo};
+	struct bc_svo_ivl u = {*ulo, *uhi}, v = {*vlo, *vhi};
+	struct bc_svo_ivl cu = ivl_mul(c, u), sv = ivl_mul(s, v);
+	struct bc_svo_ivl nsu = ivl_mul(ns, u), cv = ivl_mul(c, v);
+	double um = bc__dmax(fabs(u.lo), fabs(u.hi));
+	double vm = bc__dmax(fabs(v.lo), fabs(v.hi));
+	double rad = sqrt(um * um + vm * vm);
+	*ulo = bc__dmax(cu.lo + sv.lo, -rad);
+	*uhi = bc__dmin(cu.hi + sv.hi, rad);
+	*vlo = bc__dmax(nsu.lo + cv.lo, -rad);
+	*vhi = bc__dmin(nsu.hi + cv.hi, rad);
+}
+
+/* x - clamp(x, -h, h): non-decreasing. */
+static double elongate1(double x, double h)
+{
+	return x - bc__dmin(bc__dmax(x, -h), h);
+}
+
+/* One domain node's map of the box [lo, hi] (docs/svo.md, "Unary and
+ * domain nodes"). */
+static void domain_box(uint32_t kind, const float *rec, double lo[3],
+                       double hi[3])
+{
+	double m = 0.0, amax = 0.0, mg;
+	for (int i = 0; i < 3; i++) {
+		m = bc__dmax(m, bc__dmax(fabs(lo[i]), fabs(hi[i])));
+	}
+	switch (kind) {
+	case BC_OP_ELONGATE:
+		for (int i = 0; i < 3; i++) {
+			lo[i] = elongate1(lo[i], rec[i]);
+			hi[i] = elongate1(hi[i], rec[i]);
+		}
+		break;
+	case BC_OP_MIRROR: {
+		uint32_t mask = (uint32_t)rec[0];
+		for (int i = 0; i < 3; i++) {
+			if (!(mask & (1u << i))) {
+				continue;
+			}
+			if (lo[i] >= 0.0) {
+				continue;
+			}
+			if (hi[i] <= 0.0) {
+				double t = -hi[i];
+				hi[i] = -lo[i];
+				lo[i] = t;
+			} else {
+				hi[i] = bc__dmax(-lo[i], hi[i]);
+				lo[i] = 0.0;
+			}
+		}
+		break;
+	}
+	case BC_OP_SCALE:
+		for (int i = 0; i < 3; i++) {
+			lo[i] *= rec[1];
+			hi[i] *= rec[1];
+		}
+		break;
+	case BC_OP_REPEAT:
+		for (int i = 0; i < 3; i++) {
+			double n = rec[3 + i], sp = rec[i], o, a, b, ka, kb;
+			if (!(n > 1.0)) {
+				continue;
+			}
+			o = 0.5 * (n - 1.0);
+			/* The copy index of each end, taken a little wider:
+			 * the float evaluation may round a point near a cell
+			 * boundary into the neighbouring copy. */
+			mg = BC__SVO_ROUND_REL * (m + sp);
+			a = lo[i] - mg;
+			b = hi[i] + mg;
+			ka = bc__dmin(bc__dmax(floor(a / sp + o + 0.5), 0.0),
+			              n - 1.0);
+			kb = bc__dmin(bc__dmax(floor(b / sp + o + 0.5), 0.0),
+			              n - 1.0);
+			if (ka == kb) {
+				lo[i] -= sp * (ka - o);
+				hi[i] -= sp * (ka - o);
+			} else {
+				/* The lowest copy's piece runs up to its cell's
+				 * top, the highest's from its cell's bottom,
+				 * middle ones fill a cell. */
+				lo[i] = bc__dmin(lo[i] - sp * (ka - o),
+				                 -0.5 * sp);
+				hi[i] = bc__dmax(hi[i] - sp * (kb - o),
+				                 0.5 * sp);
+			}
+		}
+		break;
+	case BC_OP_TWIST: {
+		/* About y by rate * y. */
+		double a0 = rec[0] * lo[1], a1 = rec[0] * hi[1];
+		amax = bc__dmax(fabs(a0), fabs(a1));
+		rotate_box(&lo[0], &hi[0], &lo[2], &hi[2], bc__dmin(a0, a1),
+		           bc__dmax(a0, a1), 1.0e-6 * (1.0 + amax));
+		break;
+	}
+	case BC_OP_BEND: {
+		/* In the xy plane by rate * x. */
+		double a0 = rec[0] * lo[0], a1 = rec[0] * hi[0];
+		amax = bc__dmax(fabs(a0), fabs(a1));
+		rotate_box(&lo[0], &hi[0], &lo[1], &hi[1], bc__dmin(a0, a1),
+		           bc__dmax(a0, a1), 1.0e-6 * (1.0 + amax));
+		break;
+	}
+	default:
+		break;
+	}
+	/* The float map rounds at the scale of its input (a rotation's
+	 * angle too); 2^-17 of it is 64 float ulps. */
+	mg = BC__SVO_ROUND_REL * m * (1.0 + amax) + BC__SVO_ROUND_ABS;
+	for (int i = 0; i < 3; i++) {
+		lo[i] -= mg;
+		hi[i] += mg;
+	}
+}
+
+void bc__svo_domain_region(const struct bc_svo_rpn *r, uint32_t d,
+                           const struct bc_svo_region *rg,
+                           struct bc_svo_region *out)
+{
+	uint32_t chain[BC_DOMAIN_MAX_CHAIN];
+	uint32_t n = 0;
+	double lo[3], hi[3];
+	for (int i = 0; i < 3; i++) {
+		if (rg->segment) {
+			double a = (double)rg->o[i] + (double)rg->t0 * rg->d[i];
+			double b = (double)rg->o[i] + (double)rg->t1 * rg->d[i];
+			lo[i] = bc__dmin(a, b);
+			hi[i] = bc__dmax(a, b);
+		} else {
+			lo[i] = rg->lo[i];
+			hi[i] = rg->hi[i];
+		}
+	}
+	for (; d != BC_NONE && n < BC_DOMAIN_MAX_CHAIN; d = r->udom[d]) {
+		chain[n++] = d;
+	}
+	while (n-- > 0) {
+		domain_box(r->ukind[chain[n]],
+		           r->urec + (size_t)chain[n] * BC_SVO_UNARY_REC, lo, hi);
+	}
+	memset(out, 0, sizeof(*out));
+	for (int i = 0; i < 3; i++) {
+		/* Outward to float. */
+		out->lo[i] = (float)lo[i];
+		out->hi[i] = (float)hi[i];
+		if ((double)out->lo[i] > lo[i]) {
+			out->lo[i] = nextafterf(out->lo[i], -INFINITY);
+		}
+		if ((double)out->hi[i] < hi[i]) {
+			out->hi[i] = nextafterf(out->hi[i], INFINITY);
+		}
+	}
+}
+
+/* Twist's and bend's own Lipschitz bound at distance r from the axis, in
+ * double (blobtree's bc_unary_own_lip). */
+static double own_lip(uint32_t kind, double rate, double r)
+{
+	double m = fabs(rate) * r;
+	return kind == BC_OP_TWIST ? 0.5 * (m + sqrt(m * m + 4.0)) : 1.0 + m;
+}
+
+struct bc_svo_ivl bc__svo_unary_range(const struct bc_svo_rpn *r, uint32_t u,
+                                      struct bc_svo_ivl a,
+                                      const struct bc_svo_region *rg)
+{
+	const float *rec = r->urec + (size_t)u * BC_SVO_UNARY_REC;
+	double m = bc__dmax(fabs(a.lo), fabs(a.hi)), mg;
+	struct bc_svo_ivl v = a;
+	if (!isfinite(m)) {
+		m = 0.0; /* an infinite bound needs no widening */
+	}
+	mg = BC__SVO_ROUND_REL * (m + fabs((double)rec[0])) +
+	     BC__SVO_ROUND_ABS;
+	switch (r->ukind[u]) {
+	case BC_OP_OFFSET:
+		v.lo = a.lo - rec[0] - mg;
+		v.hi = a.hi - rec[0] + mg;
+		break;
+	case BC_OP_ONION: {
+		double alo = a.lo >= 0.0 ? a.lo : (a.hi <= 0.0 ? -a.hi : 0.0);
+		double ahi = bc__dmax(fabs(a.lo), fabs(a.hi));
+		v.lo = alo - rec[0] - mg;
+		v.hi = ahi - rec[0] + mg;
+		break;
+	}
+	case BC_OP_SCALE:
+		mg = BC__SVO_ROUND_REL * m * rec[0] + BC__SVO_ROUND_ABS;
+		v.lo = a.lo * rec[0] - mg;
+		v.hi = a.hi * rec[0] + mg;
+		break;
+	case BC_OP_TWIST:
+	case BC_OP_BEND: {
+		/* f L(R) / L(r) beyond the radius R where f > 0, else f: a
+		 * factor in [L(R) / L(r_max), 1], r_max the farthest the
+		 * region's points (in the node's input frame) are from its
+		 * axis. */
+		struct bc_svo_region q;
+		double rx, ry, rmax, ratio;
+		bc__svo_domain_region(r, r->udom[u], rg, &q);
+		rx = bc__dmax(fabs((double)q.lo[0]), fabs((double)q.hi[0]));
+		ry = r->ukind[u] == BC_OP_TWIST
+		         ? bc__dmax(fabs((double)q.lo[2]), fabs((double)q.hi[2]))
+		         : bc__dmax(fabs((double)q.lo[1]), fabs((double)q.hi[1]));
+		rmax = bc__dmax(sqrt(rx * rx + ry * ry), (double)rec[1]);
+		ratio = own_lip(r->ukind[u], rec[0], rec[1]) /
+		        own_lip(r->ukind[u], rec[0], rmax) * (1.0 - 1.0e-5);
+		mg = 4.0 * BC__SVO_ROUND_REL * m + BC__SVO_ROUND_ABS;
+		v.lo = (a.lo > 0.0 ? a.lo * ratio : a.lo) - mg;
+		v.hi = a.hi + mg;
+		break;
+	}
+	default:
+		break;
+	}
+	return v;
+}
+
 /* ---- The range evaluator ------------------------------------------------ */
 
 int bc_svo_ranger_create(struct bc_svo_ranger **out, const struct bc_svo_rpn *r,

@@ -53,6 +53,19 @@ static RT t_prim(struct bc_svo_ranger *g, const struct bc_svo_term *t,
 	RT loc[3], f = f_const(g, 0.0);
 	double scale = 0.0, margin;
 	bool natural;
+	if (r->prim_dom && r->prim_dom[t->prim] != BC_NONE && !g->in_domain) {
+		/* Under domain nodes the primitive sees the region mapped
+		 * through them: its interval range over a box holding that
+		 * image (range.c), as a fresh form (the maps are not affine:
+		 * folds, clamps, rotations by a varying angle). */
+		struct bc_svo_region q;
+		struct bc_svo_ivl v;
+		bc__svo_domain_region(r, r->prim_dom[t->prim], rg, &q);
+		g->in_domain = true;
+		v = bc__svo_ia_prim(g, (uint32_t)(t - r->terms), &q);
+		g->in_domain = false;
+		return f_from(g, v.lo, v.hi);
+	}
 	for (int k = 0; k < 3; k++) {
 		loc[k] = t_local(g, rec, k, p);
 		scale = bc__dmax(scale, t_mag(f_range(g, loc[k])));
@@ -90,7 +103,9 @@ static RT t_prim(struct bc_svo_ranger *g, const struct bc_svo_term *t,
 		/* An exact SDF is 1-Lipschitz: f(region) lies within the
 		 * radius of its value at the centre. Rigid transforms keep
 		 * distances, so the world radius holds in local space. */
-		float v = bc__svo_prim_eval(r, t, geo->c);
+		/* The centre of the region in the primitive's own frame
+		 * (of the mapped box under domain nodes). */
+		float v = bc__svo_prim_eval_at(r, t, geo->c);
 		double rad = geo->radius + margin;
 		if (!isfinite(v)) {
 			return f_from(g, -INFINITY, INFINITY);
@@ -170,6 +185,46 @@ static struct bc_svo_ivl t_run(struct bc_svo_ranger *g, const uint32_t *idx,
 			g->ivl[i].lo = -v.hi;
 			g->ivl[i].hi = -v.lo;
 			g->kid0[i] = si[sp - 1];
+			si[sp - 1] = i;
+			break;
+		}
+		case BC_SVO_TERM_UNARY: {
+			/* Offset, onion and scale keep the child's form
+			 * (affine maps of it, |.| for onion); twist's and
+			 * bend's factor depends on the point: an interval. */
+			uint32_t a = si[sp - 1];
+			struct bc_svo_ivl v =
+			    bc__svo_unary_range(r, t->rec, g->ivl[a], rg);
+			RT f;
+			const float *ur = r->urec + (size_t)t->rec * BC_SVO_UNARY_REC;
+			if (t->kind == BC_OP_OFFSET) {
+				f = f_addc(g, st[sp - 1], -(double)ur[0]);
+			} else if (t->kind == BC_OP_ONION) {
+				f = f_addc(g, f_abs(g, st[sp - 1]),
+				           -(double)ur[0]);
+			} else if (t->kind == BC_OP_SCALE) {
+				f = f_scale(g, st[sp - 1], (double)ur[0]);
+			} else {
+				f = f_from(g, v.lo, v.hi);
+			}
+			if (t->kind != BC_OP_TWIST && t->kind != BC_OP_BEND) {
+				/* The float evaluation's rounding, as the
+				 * interval rule widens (range.c). */
+				double m = t_mag(g->ivl[a]), mg;
+				if (!isfinite(m)) {
+					m = 0.0;
+				}
+				mg = BC__SVO_ROUND_REL *
+				         (m + fabs((double)ur[0])) *
+				         (t->kind == BC_OP_SCALE
+				              ? (double)ur[0] + 1.0
+				              : 1.0) +
+				     BC__SVO_ROUND_ABS;
+				f = f_add_ivl(g, f, -mg, mg);
+			}
+			st[sp - 1] = f_keep(g, mk[sp - 1], f);
+			g->ivl[i] = bc__svo_ivl_meet(f_range(g, st[sp - 1]), v);
+			g->kid0[i] = a;
 			si[sp - 1] = i;
 			break;
 		}

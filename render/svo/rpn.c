@@ -28,10 +28,126 @@ const uint8_t bc__svo_debruijn_hi[32] = {
     0, 9,  1,  10, 13, 21, 2,  29, 11, 14, 16, 18, 22, 25, 3, 30,
     8, 12, 20, 28, 15, 17, 24, 7,  19, 27, 23, 6,  26, 5,  4, 31};
 
+/* Is the domain chain from d outward 1-Lipschitz? Elongate, mirror and
+ * scale (with its value factor) are; twist and bend stretch space away
+ * from their axis, and the nearest copy of a repeat jumps where the
+ * copies' cells meet. */
+static bool chain_lip1(const struct bc_svo_rpn *r, uint32_t d)
+{
+	for (uint32_t n = 0; d != BC_NONE && n < BC_DOMAIN_MAX_CHAIN;
+	     d = r->udom[d], n++) {
+		enum bc_op k = (enum bc_op)r->ukind[d];
+		if (k == BC_OP_TWIST || k == BC_OP_BEND || k == BC_OP_REPEAT) {
+			return false;
+		}
+	}
+	return true;
+}
+
+/* One domain node's map, operation for operation as blobtree's eval.c
+ * (so the RPN's field is the reference evaluator's, bit for bit). */
+static void domain_apply(uint32_t kind, const float *rec, float p[3])
+{
+	switch (kind) {
+	case BC_OP_ELONGATE:
+		for (int i = 0; i < 3; i++) {
+			p[i] -= fminf(fmaxf(p[i], -rec[i]), rec[i]);
+		}
+		break;
+	case BC_OP_TWIST: {
+		float a = rec[0] * p[1], c = cosf(a), s = sinf(a);
+		float x = c * p[0] + s * p[2], z = -s * p[0] + c * p[2];
+		p[0] = x;
+		p[2] = z;
+		break;
+	}
+	case BC_OP_BEND: {
+		float a = rec[0] * p[0], c = cosf(a), s = sinf(a);
+		float x = c * p[0] + s * p[1], y = -s * p[0] + c * p[1];
+		p[0] = x;
+		p[1] = y;
+		break;
+	}
+	case BC_OP_MIRROR: {
+		uint32_t mask = (uint32_t)rec[0];
+		for (int i = 0; i < 3; i++) {
+			if (mask & (1u << i)) {
+				p[i] = fabsf(p[i]);
+			}
+		}
+		break;
+	}
+	case BC_OP_REPEAT:
+		for (int i = 0; i < 3; i++) {
+			float n = rec[3 + i], o, id;
+			if (!(n > 1.0f)) {
+				continue;
+			}
+			o = 0.5f * (n - 1.0f);
+			id = floorf(p[i] / rec[i] + o + 0.5f);
+			id = fminf(fmaxf(id, 0.0f), n - 1.0f);
+			p[i] -= rec[i] * (id - o);
+		}
+		break;
+	case BC_OP_SCALE:
+		for (int i = 0; i < 3; i++) {
+			p[i] *= rec[1];
+		}
+		break;
+	default:
+		break;
+	}
+}
+
+void bc__svo_domain_map(const struct bc_svo_rpn *r, uint32_t d,
+                        const float p[3], float out[3])
+{
+	uint32_t chain[BC_DOMAIN_MAX_CHAIN];
+	uint32_t n = 0;
+	memcpy(out, p, 3 * sizeof(float));
+	for (; d != BC_NONE && n < BC_DOMAIN_MAX_CHAIN; d = r->udom[d]) {
+		chain[n++] = d;
+	}
+	while (n-- > 0) {
+		domain_apply(r->ukind[chain[n]],
+		             r->urec + (size_t)chain[n] * BC_SVO_UNARY_REC, out);
+	}
+}
+
+float bc__svo_unary_value(const struct bc_svo_rpn *r, uint32_t u, float f,
+                          const float p[3])
+{
+	const float *rec = r->urec + (size_t)u * BC_SVO_UNARY_REC;
+	switch (r->ukind[u]) {
+	case BC_OP_OFFSET:
+		return f - rec[0];
+	case BC_OP_ONION:
+		return fabsf(f) - rec[0];
+	case BC_OP_SCALE:
+		return f * rec[0];
+	case BC_OP_TWIST:
+	case BC_OP_BEND: {
+		float q[3], rad;
+		bc__svo_domain_map(r, r->udom[u], p, q);
+		rad = r->ukind[u] == BC_OP_TWIST
+		          ? sqrtf(q[0] * q[0] + q[2] * q[2])
+		          : sqrtf(q[0] * q[0] + q[1] * q[1]);
+		if (rad > rec[1] && f > 0.0f) {
+			return f * bc_unary_own_lip(r->ukind[u], rec[0],
+			                            rec[1]) /
+			       bc_unary_own_lip(r->ukind[u], rec[0], rad);
+		}
+		return f;
+	}
+	default:
+		return f;
+	}
+}
+
 int bc_svo_rpn_init(struct bc_svo_rpn *out, const struct bc_lin *l)
 {
 	uint32_t fst[BC_EVAL_STACK];
-	uint32_t n = 0, ndiff = 0, nops = 0, sp = 0, most = 0, t = 0;
+	uint32_t n = 0, ndiff = 0, nops = 0, nval = 0, sp = 0, most = 0, t = 0;
 	uint32_t prec = 0, orec;
 	memset(out, 0, sizeof(*out));
 	if (!l || l->count == 0 || l->nprims == 0) {
@@ -43,8 +159,12 @@ int bc_svo_rpn_init(struct bc_svo_rpn *out, const struct bc_lin *l)
 			nops++;
 			ndiff += bc_op_class(k) == BC_OPCLASS_DIFFERENCE;
 		}
+		for (uint32_t u = l->nunary ? l->wrap[s] : BC_NONE;
+		     u != BC_NONE; u = l->unary_outer[u]) {
+			nval += bc_op_has_value((enum bc_op)l->unary_kind[u]);
+		}
 	}
-	n = l->count + ndiff;
+	n = l->count + ndiff + nval;
 	out->terms = bc_calloc(n, sizeof(*out->terms));
 	out->rec = bc_calloc((size_t)l->nprims * BC_SVO_PRIM_REC + 2u * nops,
 	                     sizeof(float));
@@ -56,6 +176,26 @@ int bc_svo_rpn_init(struct bc_svo_rpn *out, const struct bc_lin *l)
 	    !out->color || !out->steep) {
 		bc_svo_rpn_finish(out);
 		return BC_ENOMEM;
+	}
+	if (l->nunary) {
+		out->nunary = l->nunary;
+		out->ukind = bc_calloc(l->nunary, sizeof(*out->ukind));
+		out->urec = bc_calloc((size_t)l->nunary * BC_SVO_UNARY_REC,
+		                      sizeof(*out->urec));
+		out->udom = bc_calloc(l->nunary, sizeof(*out->udom));
+		out->prim_dom = bc_calloc(l->nprims, sizeof(*out->prim_dom));
+		if (!out->ukind || !out->urec || !out->udom ||
+		    !out->prim_dom) {
+			bc_svo_rpn_finish(out);
+			return BC_ENOMEM;
+		}
+		for (uint32_t u = 0; u < l->nunary; u++) {
+			out->ukind[u] = (uint8_t)l->unary_kind[u];
+			memcpy(out->urec + (size_t)u * BC_SVO_UNARY_REC,
+			       l->param + 4u * (size_t)l->unary_param[u],
+			       BC_SVO_UNARY_REC * sizeof(float));
+			out->udom[u] = l->unary_dom[u];
+		}
 	}
 	orec = l->nprims * BC_SVO_PRIM_REC;
 	for (uint32_t s = 0; s < l->count; s++) {
@@ -77,7 +217,11 @@ int bc_svo_rpn_init(struct bc_svo_rpn *out, const struct bc_lin *l)
 			{
 				const struct bc_prim_info *info =
 				    bc_prim_info((enum bc_prim)tm->kind);
-				if (!info || !info->exact) {
+				uint32_t d = l->nunary ? l->dom[s] : BC_NONE;
+				if (out->prim_dom) {
+					out->prim_dom[tm->prim] = d;
+				}
+				if (!info || !info->exact || !chain_lip1(out, d)) {
 					out->steep[t >> 5] |= 1u << (t & 31u);
 				}
 			}
@@ -116,6 +260,27 @@ int bc_svo_rpn_init(struct bc_svo_rpn *out, const struct bc_lin *l)
 			t++;
 			sp--;
 		}
+		/* The value-changing wrappers of slot s, innermost first; the
+		 * pure domain nodes act on the primitives' points instead. */
+		for (uint32_t u = l->nunary ? l->wrap[s] : BC_NONE;
+		     u != BC_NONE; u = l->unary_outer[u]) {
+			enum bc_op k = (enum bc_op)l->unary_kind[u];
+			if (!bc_op_has_value(k)) {
+				continue;
+			}
+			tm = &out->terms[t];
+			tm->type = BC_SVO_TERM_UNARY;
+			tm->kind = (uint8_t)k;
+			tm->first = fst[sp - 1];
+			tm->prim = BC_NONE;
+			tm->rec = u;
+			if (k == BC_OP_TWIST || k == BC_OP_BEND) {
+				/* Its value map is L(R)/L(r) <= 1 times the
+				 * child's, r the distance from the axis. */
+				out->steep[t >> 5] |= 1u << (t & 31u);
+			}
+			t++;
+		}
 	}
 	if (sp != 1 || t != n) {
 		bc_svo_rpn_finish(out);
@@ -135,6 +300,7 @@ int bc_svo_rpn_init(struct bc_svo_rpn *out, const struct bc_lin *l)
 	out->nwords = (n + 31u) / 32u;
 	out->nprims = l->nprims;
 	out->stack = most;
+	out->lip = l->lip > 0.0f ? l->lip : 1.0f;
 	memcpy(out->lo, l->lo, sizeof(out->lo));
 	memcpy(out->hi, l->hi, sizeof(out->hi));
 	out->size = l->size;
@@ -152,6 +318,10 @@ void bc_svo_rpn_finish(struct bc_svo_rpn *r)
 	bc_free(r->prim_size);
 	bc_free(r->color);
 	bc_free(r->steep);
+	bc_free(r->ukind);
+	bc_free(r->urec);
+	bc_free(r->udom);
+	bc_free(r->prim_dom);
 	memset(r, 0, sizeof(*r));
 }
 
@@ -220,7 +390,7 @@ static inline uint32_t arity(const struct bc_svo_term *t)
 {
 	return t->type == BC_SVO_TERM_OP
 	           ? 2u
-	           : (t->type == BC_SVO_TERM_NEG ? 1u : 0u);
+	           : (t->type == BC_SVO_TERM_PRIM ? 0u : 1u);
 }
 
 void bc_svo_rpn_clear_subtree(const struct bc_svo_rpn *r, uint32_t *mask,
@@ -244,15 +414,19 @@ void bc_svo_rpn_clear_subtree(const struct bc_svo_rpn *r, uint32_t *mask,
 
 /* ---- Evaluation --------------------------------------------------------- */
 
-/* One step of the stack machine. */
+/* One step of the stack machine. `unary` is false for an RPN without unary
+ * and domain nodes: the loops are compiled twice, and the common one skips
+ * their checks. */
 static inline void step(const struct bc_svo_rpn *r, uint32_t i, float *st,
-                        uint32_t *who, uint32_t *sp, const float p[3], bool ids)
+                        uint32_t *who, uint32_t *sp, const float p[3], bool ids,
+                        bool unary)
 {
 	const struct bc_svo_term *t = &r->terms[i];
 	uint32_t s = *sp;
 	switch (t->type) {
 	case BC_SVO_TERM_PRIM:
-		st[s] = bc__svo_prim_eval(r, t, p);
+		st[s] = unary ? bc__svo_prim_eval(r, t, p)
+		              : bc__svo_prim_eval_at(r, t, p);
 		if (ids) {
 			who[s] = t->prim;
 		}
@@ -260,6 +434,9 @@ static inline void step(const struct bc_svo_rpn *r, uint32_t i, float *st,
 		break;
 	case BC_SVO_TERM_NEG:
 		st[s - 1] = -st[s - 1];
+		break;
+	case BC_SVO_TERM_UNARY:
+		st[s - 1] = bc__svo_unary_value(r, t->rec, st[s - 1], p);
 		break;
 	default: {
 		const float *rec = r->rec + t->rec;
@@ -298,7 +475,7 @@ static float eval_dense(const struct bc_svo_rpn *r, const uint32_t *mask,
 	uint32_t sp = 0;
 	for (uint32_t i = bc_svo_bits_next(mask, r->nwords, 0); i != UINT32_MAX;
 	     i = bc_svo_bits_next(mask, r->nwords, i + 1u)) {
-		step(r, i, st, who, &sp, p, prim != NULL);
+		step(r, i, st, who, &sp, p, prim != NULL, r->nunary != 0);
 	}
 	if (prim) {
 		*prim = sp ? who[0] : BC_NONE;
@@ -318,8 +495,9 @@ float bc_svo_rpn_eval_id(const struct bc_svo_rpn *r, const uint32_t *mask,
 	return eval_dense(r, mask, p, prim);
 }
 
-static float eval_cmask(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
-                        const float p[3], uint32_t *prim)
+static inline float eval_cmask_k(const struct bc_svo_rpn *r,
+                                 struct bc_svo_cmask m, const float p[3],
+                                 uint32_t *prim, bool unary)
 {
 	float st[BC_EVAL_STACK];
 	uint32_t who[BC_EVAL_STACK];
@@ -328,7 +506,7 @@ static float eval_cmask(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
 		uint32_t base = m.pairs[2 * w] << 5, b = m.pairs[2 * w + 1];
 		while (b) {
 			step(r, base + bc__svo_lowest(b), st, who, &sp, p,
-			     prim != NULL);
+			     prim != NULL, unary);
 			b &= b - 1u;
 		}
 	}
@@ -338,10 +516,18 @@ static float eval_cmask(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
 	return sp ? st[0] : INFINITY;
 }
 
+static float eval_cmask(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
+                        const float p[3], uint32_t *prim)
+{
+	return r->nunary ? eval_cmask_k(r, m, p, prim, true)
+	                 : eval_cmask_k(r, m, p, prim, false);
+}
+
 float bc_svo_cmask_eval(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
                         const float p[3])
 {
-	return eval_cmask(r, m, p, NULL);
+	return r->nunary ? eval_cmask_k(r, m, p, NULL, true)
+	                 : eval_cmask_k(r, m, p, NULL, false);
 }
 
 float bc_svo_cmask_eval_id(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
@@ -365,7 +551,18 @@ void bc_svo_cmask_eval4(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
 			    &r->terms[base + bc__svo_lowest(b)];
 			const float *rec = r->rec + t->rec;
 			b &= b - 1u;
-			if (t->type == BC_SVO_TERM_PRIM) {
+			if (t->type == BC_SVO_TERM_PRIM && r->prim_dom &&
+			    r->prim_dom[t->prim] != BC_NONE) {
+				for (int j = 0; j < 4; j++) {
+					st[sp][j] = bc__svo_prim_eval(r, t, p[j]);
+				}
+				sp++;
+			} else if (t->type == BC_SVO_TERM_UNARY) {
+				for (int j = 0; j < 4; j++) {
+					st[sp - 1][j] = bc__svo_unary_value(
+					    r, t->rec, st[sp - 1][j], p[j]);
+				}
+			} else if (t->type == BC_SVO_TERM_PRIM) {
 				float x[4], y[4], z[4];
 				for (int j = 0; j < 4; j++) {
 					x[j] = rec[0] * p[j][0] +

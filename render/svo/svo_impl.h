@@ -67,11 +67,20 @@ static inline uint32_t bc__svo_highest(uint32_t b)
 	return bc__svo_debruijn_hi[(b * 0x07C4ACDDu) >> 27];
 }
 
-/* A primitive term's field at world point p, exactly as eval.c computes it
- * (same operation order, so the same float). */
-static inline float bc__svo_prim_eval(const struct bc_svo_rpn *r,
-                                      const struct bc_svo_term *t,
-                                      const float p[3])
+/* World point p mapped through the domain chain from d (rpn->udom, applied
+ * outermost first) and unary node u's value map of its child's value f at
+ * p: blobtree's bc_domain_map and bc_unary_value on the RPN's copies. */
+void bc__svo_domain_map(const struct bc_svo_rpn *r, uint32_t d,
+                        const float p[3], float out[3]);
+float bc__svo_unary_value(const struct bc_svo_rpn *r, uint32_t u, float f,
+                          const float p[3]);
+
+/* A primitive term's field at point p of its own input frame (the world
+ * mapped through its domain nodes), exactly as eval.c computes it (same
+ * operation order, so the same float). */
+static inline float bc__svo_prim_eval_at(const struct bc_svo_rpn *r,
+                                         const struct bc_svo_term *t,
+                                         const float p[3])
 {
 	const float *rec = r->rec + t->rec;
 	float x = rec[0] * p[0] + rec[1] * p[1] + rec[2] * p[2] + rec[3];
@@ -83,6 +92,19 @@ static inline float bc__svo_prim_eval(const struct bc_svo_rpn *r,
 		return sqrtf(x * x + y * y + z * z) - rec[12];
 	}
 	return bc_prim_sdf((enum bc_prim)t->kind, rec + 12, x, y, z);
+}
+
+/* A primitive term's field at world point p. */
+static inline float bc__svo_prim_eval(const struct bc_svo_rpn *r,
+                                      const struct bc_svo_term *t,
+                                      const float p[3])
+{
+	if (r->prim_dom && r->prim_dom[t->prim] != BC_NONE) {
+		float q[3];
+		bc__svo_domain_map(r, r->prim_dom[t->prim], p, q);
+		return bc__svo_prim_eval_at(r, t, q);
+	}
+	return bc__svo_prim_eval_at(r, t, p);
 }
 
 /* ---- Range evaluator ---------------------------------------------------- */
@@ -112,6 +134,9 @@ struct bc_svo_ranger {
 	uint32_t *idx;  /* scratch list of active terms */
 	uint32_t *mark; /* scratch for the top-down pass */
 	uint8_t *mode;
+	/* Set while a domain-mapped primitive's range is computed over its
+	 * mapped box (range_tmpl.h): that box is the primitive's own input. */
+	bool in_domain;
 	/* AA arena, used as a stack. */
 	uint32_t *aa_sym;
 	double *aa_coef;
@@ -145,6 +170,20 @@ struct bc_svo_ivl bc__svo_rev_prim(struct bc_svo_ranger *g, uint32_t term,
 struct bc_svo_ivl bc__svo_ia_natural(struct bc_svo_ranger *g,
                                      const struct bc_svo_term *t,
                                      const struct bc_svo_region *rg);
+
+/* ---- Unary and domain nodes (range.c) ----------------------------------- */
+
+/* A box holding every point of region rg mapped through the domain chain
+ * from d (outermost first), widened for the float evaluation of the maps;
+ * out is a box region. */
+void bc__svo_domain_region(const struct bc_svo_rpn *r, uint32_t d,
+                           const struct bc_svo_region *rg,
+                           struct bc_svo_region *out);
+/* Range of unary node u's value map (a value-changing kind) over region rg
+ * given its child's range a. */
+struct bc_svo_ivl bc__svo_unary_range(const struct bc_svo_rpn *r, uint32_t u,
+                                      struct bc_svo_ivl a,
+                                      const struct bc_svo_region *rg);
 
 /* ---- Operator rules (ia.c) ---------------------------------------------- */
 

@@ -406,7 +406,7 @@ static void stepping_matches_bisection(void)
 		struct bc_svo *sa = NULL, *sb = NULL;
 		struct bc_svo_stats st;
 		struct bc_view_rays vr;
-		struct bc_svo_cast_params cp;
+		struct bc_svo_cast_params cp = {0};
 		float *da = calloc(2 * W * H, sizeof(*da)), *db = da + W * H;
 		float *err = calloc(W * H, sizeof(*err)), far = 0.0f;
 		uint32_t diff = 0, both = 0;
@@ -419,6 +419,7 @@ static void stepping_matches_bisection(void)
 		cp.pix_angle = 2.0f * vr.tan_half_y / (float)H;
 		cp.min_step = BC_SVO_MIN_STEP_REL * rpn.size;
 		cp.refine_tol = BC_SVO_REFINE_REL * rpn.size;
+		cp.lip = rpn.lip;
 		for (uint32_t k = 0; k < 8; k++) {
 			float s2 = 0.0f;
 			for (int a = 0; a < 3; a++) {

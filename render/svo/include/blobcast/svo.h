@@ -70,6 +70,9 @@ enum bc_svo_term_type {
 	BC_SVO_TERM_PRIM, /* a primitive: pushes its field */
 	BC_SVO_TERM_NEG,  /* negates the top of the stack */
 	BC_SVO_TERM_OP,   /* a binary operator: pops two, pushes one */
+	BC_SVO_TERM_UNARY, /* a unary node that changes its child's value
+	                      (offset, onion, twist, bend, scale): maps the
+	                      top of the stack */
 	BC_SVO_TERM_TYPE_COUNT
 };
 
@@ -86,8 +89,12 @@ struct bc_svo_term {
 	uint32_t prim;  /* primitive index for PRIM, BC_NONE otherwise */
 	uint32_t rec;   /* PRIM: offset of its record in rpn->rec (12 affine
 	                   floats then BC_PRIM_PACKED shape floats); OP: offset
-	                   of (blend, range) */
+	                   of (blend, range); UNARY: the unary node's index
+	                   (rpn->ukind, urec, udom) */
 };
+
+/* Floats of a unary node's record (blobtree's BC_UNARY_RECORD_VEC4). */
+#define BC_SVO_UNARY_REC (4u * BC_UNARY_RECORD_VEC4)
 
 /* Floats of a primitive record: world-to-local rows then packed shape. */
 #define BC_SVO_PRIM_REC (12u + BC_PRIM_PACKED)
@@ -111,6 +118,19 @@ struct bc_svo_rpn {
 	                       bound), and the caster steps through it. */
 	float lo[3], hi[3]; /* the tree's AABB (bc_lin lo/hi) */
 	float size;         /* its diagonal */
+	/* Unary and domain nodes (blobtree's bc_lin, copied): every unary
+	 * node's kind, record and the domain node around it (the map of its
+	 * input frame, BC_NONE); per primitive the innermost domain node
+	 * around it (BC_NONE: the world point). A primitive's point is mapped
+	 * through its chain, outermost first, as bc_domain_map does. */
+	uint32_t nunary;
+	uint8_t *ukind;     /* enum bc_op */
+	float *urec;        /* BC_SVO_UNARY_REC floats each */
+	uint32_t *udom;
+	uint32_t *prim_dom; /* NULL when nunary is 0 */
+	float lip;          /* the tree's Lipschitz bound over its
+	                       primitives' (bc_lin lip, 1 without twist or
+	                       bend): scales the hit band */
 };
 
 /* Compiles the linearized tree l into *out (bc_svo_rpn_finish frees it).
@@ -330,6 +350,9 @@ struct bc_svo_cast_params {
 	float pix_angle;  /* pixel footprint per unit of t */
 	float min_step;   /* world units */
 	float refine_tol; /* world units */
+	float lip;        /* the tree's Lipschitz bound (rpn->lip): the band
+	                     grows with it as the sphere tracer's criterion
+	                     does; 0 means 1 */
 };
 
 struct bc_svo_hit {
