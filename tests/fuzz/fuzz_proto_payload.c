@@ -1,8 +1,9 @@
 /*
  * libFuzzer harness for the per-type payload decoders, called directly
  * (bc_proto_decode_payload) so that every input reaches a decoder instead of
- * the header checks: byte 0 picks the type (0 and 23+ included, to test the
- * refusal), byte 1 the header flags, the rest is the payload. Oracle: an
+ * the header checks: byte 0 picks the type (modulo BC_MSG_COUNT + 1, so 0
+ * and the first unknown type test the refusal), byte 1 the header flags,
+ * the rest is the payload. Oracle: an
  * accepted payload encodes back to the same bytes under a correct header,
  * and a refused one has a reason.
  */
@@ -25,7 +26,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	if (size < 2) {
 		return 0;
 	}
-	enum bc_msg_type type = (enum bc_msg_type)(data[0] % 24);
+	enum bc_msg_type type =
+	    (enum bc_msg_type)(data[0] % ((unsigned)BC_MSG_COUNT + 1u));
 	uint16_t flags = (uint16_t)(data[1] & 0x7u);
 	const uint8_t *payload = data + 2;
 	size_t n = size - 2;
