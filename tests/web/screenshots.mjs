@@ -2,11 +2,12 @@
  * Makes docs/web.png and docs/viewer.png: one session, three members. A
  * blobcastd with websockify in front, the page as "alice" (editor) and
  * "bob" (viewer) in headless chromium, and blobcast-view as "carol" under
- * Xvfb. Alice drags the red marble (an edit every member sees, "last edit"),
- * then starts an orbit and holds the button: the page's picture is a
- * coarse refinement level ("refining · level 1" and "render pending" show)
- * when web.png is taken. Carol's window is then orbited the same way with
- * synthetic X events and saved with P while the button is held.
+ * Xvfb. Alice drags the red marble (an edit every member sees, "last edit").
+ * Bob presents (his "present" button); carol follows with F and alice with
+ * her "follow" button. Bob then orbits and holds the button: alice's and
+ * carol's pictures follow his camera at their own sizes, at a coarse
+ * refinement level ("refining · level 1") when web.png is taken and when
+ * carol's window is saved with P.
  * Not a test: run it by hand when the pictures should change.
  *
  * usage: xvfb-run -a -s "-screen 0 1280x800x24" node tests/web/screenshots.mjs
@@ -88,24 +89,39 @@ try {
 	await alice.mouse.up();
 	await sleep(1500);
 
-	/* An orbit held down: coarse frames, then the screenshot. */
-	const ex = box.x + 40, ey = box.y + 80;
-	await alice.mouse.move(ex, ey);
-	await alice.mouse.down();
+	/* Bob presents; carol (F) and alice (the button) follow him. */
+	const bobId = (await bob.evaluate(() => window.blobcast.state())).memberId;
+	await bob.click('#presentbtn');
+	await until(alice, (id) => window.blobcast.state().presenter === id,
+		bobId);
+	await run(xpoke, ['blobcast-view', 'wait', '5000', 'key', 'f']);
+	await alice.click('#followbtn');
+	await until(alice, () => window.blobcast.state().following);
+	await sleep(1500);
+
+	/* Bob's orbit, held down: his followers get coarse frames of his
+	 * camera; then the screenshots. */
+	const bb = await bob.evaluate(() => {
+		const r = document.getElementById('view').getBoundingClientRect();
+		return { x: r.left, y: r.top };
+	});
+	const ex = bb.x + 40, ey = bb.y + 80;
+	await bob.mouse.move(ex, ey);
+	await bob.mouse.down();
 	for (let i = 1; i <= 8; i++) {
-		await alice.mouse.move(ex + 6 * i, ey + i);
-		await alice.waitForTimeout(25);
+		await bob.mouse.move(ex + 6 * i, ey + i);
+		await bob.waitForTimeout(25);
 	}
 	await until(alice, () => window.blobcast.state().lastFrame?.refining);
 	await alice.screenshot({ path: join(out, 'web.png') });
-	await alice.mouse.up();
 	console.log(`wrote ${join(out, 'web.png')}`);
-
-	/* Carol's window: orbit held, P saves it. */
-	await run(xpoke, ['blobcast-view', 'wait', '5000', 'move', '120', '500',
-		'down', '1', 'sleep', '200', 'drag', '180', '490', '6', 'sleep',
-		'120', 'key', 'p', 'sleep', '500', 'up', '1', 'sleep', '300',
-		'keydown', 'q']);
+	for (let i = 9; i <= 12; i++) {
+		await bob.mouse.move(ex + 6 * i, ey + i);
+		await bob.waitForTimeout(25);
+	}
+	await run(xpoke, ['blobcast-view', 'key', 'p', 'sleep', '500']);
+	await bob.mouse.up();
+	await run(xpoke, ['blobcast-view', 'sleep', '300', 'keydown', 'q']);
 	await new Promise((r) => view.on('exit', r));
 	view = null;
 	const shot = join(work, 'blobcast-view-001.png');
