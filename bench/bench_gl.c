@@ -28,6 +28,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "blobcast/args.h"
 #include "blobcast/blobtree.h"
 #include "blobcast/gen.h"
 #include "blobcast/render.h"
@@ -270,30 +271,37 @@ static int edits(const char *platform, bool quick)
 
 int main(int argc, char **argv)
 {
-	uint32_t size = 512;
-	int reps = 3;
+	uint32_t size = 512, reps = 3;
 	bool quick = false;
 	const char *platform = NULL;
-	for (int i = 1; i < argc; i++) {
-		if (strcmp(argv[i], "--size") == 0 && i + 1 < argc) {
-			size = (uint32_t)atoi(argv[++i]);
-		} else if (strcmp(argv[i], "--reps") == 0 && i + 1 < argc) {
-			reps = atoi(argv[++i]);
-		} else if (strcmp(argv[i], "--platform") == 0 && i + 1 < argc) {
-			platform = argv[++i];
-		} else if (strcmp(argv[i], "--quick") == 0) {
-			quick = true;
-		} else {
-			fprintf(stderr, "usage: bench_gl [--size N] [--reps R] "
-			                "[--platform P] [--quick]\n");
-			return 2;
-		}
+	const struct bc_opt opts[] = {
+		{.name = "size", .kind = BC_OPT_U32, .dst = &size, .lo = 1,
+		 .hi = BC_RENDER_MAX_DIM, .arg = "N",
+		 .help = "square frame side, {range} (default {default})"},
+		{.name = "reps", .kind = BC_OPT_U32, .dst = &reps, .lo = 1,
+		 .hi = 1000, .arg = "R",
+		 .help = "runs per measurement, the best kept (default "
+			 "{default})"},
+		{.name = "platform", .kind = BC_OPT_STRING, .dst = &platform,
+		 .arg = "P",
+		 .help = "GL platform: auto | device | surfaceless | osmesa\n"
+			 "(default auto)"},
+		{.name = "quick", .kind = BC_OPT_FLAG, .dst = &quick,
+		 .help = "the first two scenes and the smallest edit\n"
+			 "sizes only"},
+		{.kind = BC_OPT_INVALID},
+	};
+	struct bc_args args = {.prog = "bench_gl",
+			       .usage = "bench_gl [options]",
+			       .opts = opts};
+	if (bc_args_parse(&args, argc, argv)) {
+		return args.status;
 	}
-	if (size == 0 || size > BC_RENDER_MAX_DIM || reps < 1) {
-		fprintf(stderr, "bench_gl: bad --size or --reps\n");
-		return 2;
+	if (args.npos) {
+		return bc_args_error(&args, "unexpected argument '%s'",
+				     args.pos[0]);
 	}
-	if (frames(platform, size, reps, quick)) {
+	if (frames(platform, size, (int)reps, quick)) {
 		return 1;
 	}
 	return edits(platform, quick);

@@ -29,6 +29,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "blobcast/args.h"
 #include "blobcast/blobtree.h"
 #include "blobcast/gen.h"
 #include "blobcast/render.h"
@@ -131,24 +132,36 @@ int main(int argc, char **argv)
 	int reps = 3;
 	struct bc_render_opts opts = {.threads = 1};
 	double tiled256 = 0.0, tiled4096 = 0.0;
-	for (int i = 1; i < argc; i++) {
-		if (strcmp(argv[i], "--size") == 0 && i + 1 < argc) {
-			size = (uint32_t)atoi(argv[++i]);
-		} else if (strcmp(argv[i], "--threads") == 0 && i + 1 < argc) {
-			opts.threads = (uint32_t)atoi(argv[++i]);
-		} else if (strcmp(argv[i], "--reps") == 0 && i + 1 < argc) {
-			reps = atoi(argv[++i]);
-		} else if (strcmp(argv[i], "--quick") == 0) {
-			nscenes = 3;
-		} else {
-			fprintf(stderr, "usage: bench_render [--size N] "
-					"[--threads T] [--reps R] [--quick]\n");
-			return 2;
-		}
+	uint32_t nreps = 3;
+	bool quick = false;
+	const struct bc_opt opts_table[] = {
+		{.name = "size", .kind = BC_OPT_U32, .dst = &size, .lo = 64,
+		 .hi = BC_RENDER_MAX_DIM, .arg = "N",
+		 .help = "square frame side, {range} (default {default})"},
+		{.name = "threads", .kind = BC_OPT_U32, .dst = &opts.threads,
+		 .hi = 1024, .arg = "T",
+		 .help = "CPU threads, 0 = one per core (default {default})"},
+		{.name = "reps", .kind = BC_OPT_U32, .dst = &nreps, .lo = 1,
+		 .hi = 1000, .arg = "R",
+		 .help = "tiled runs per scene, the best kept (default "
+			 "{default})"},
+		{.name = "quick", .kind = BC_OPT_FLAG, .dst = &quick,
+		 .help = "the first three scenes only"},
+		{.kind = BC_OPT_INVALID},
+	};
+	struct bc_args args = {.prog = "bench_render",
+			       .usage = "bench_render [options]",
+			       .opts = opts_table};
+	if (bc_args_parse(&args, argc, argv)) {
+		return args.status;
 	}
-	if (size < 64 || size > BC_RENDER_MAX_DIM || reps < 1) {
-		fprintf(stderr, "bench_render: bad --size or --reps\n");
-		return 2;
+	if (args.npos) {
+		return bc_args_error(&args, "unexpected argument '%s'",
+				     args.pos[0]);
+	}
+	reps = (int)nreps;
+	if (quick) {
+		nscenes = 3;
 	}
 	printf("frame %ux%u, %u thread(s), best of %d tiled / 1 naive run by "
 	       "process CPU time (ms); naive and the speedup on the central "
