@@ -174,6 +174,9 @@ enum bc__trace_result bc__trace(struct bc__field *f,
 		 * step (which therefore bounds the steps per ray). */
 		float eps = bc__maxf(BC_CPU_HIT_FOOTPRINT * fc->pix_angle * t,
 				  fc->min_step);
+		/* Steps are divided by the tree's Lipschitz bound, the hit
+		 * band is not: a hit stays a field below 1.45 eps. */
+		eps /= f->lin->lip;
 		float step, tn, vn;
 		if (v < eps) {
 			return refine(f, fc, o, d, t, v, t_prev, v_prev, eps,

@@ -16,10 +16,13 @@
 #include "blobcast/alloc.h"
 #include "blobcast/render.h"
 #include "blobcast/render_cpu.h"
+#include "blobcast/scene.h"
 #include "test.h"
 
 #include "compare.h"
 #include "scenes.h"
+
+#include "blobtree/randtree.h"
 
 /* Renders t with naive and tiled at w x h and checks they agree; at least
  * 1/cover of the pixels must show the scene. */
@@ -141,6 +144,110 @@ static void test_tiled_matches_naive_comb_and_random(void)
 		tested++;
 	}
 	CHECK_EQ_INT(tested, 6);
+	bc_tree_destroy(t);
+}
+
+/* Trees with unary and domain nodes (every kind, random, over every
+ * operator): tiled (culling by the nodes' world ABVs, the sparse view's
+ * unary instructions, steps divided by the tree's Lipschitz bound) agrees
+ * with naive (the full tree). */
+static void test_tiled_matches_naive_unary_nodes(void)
+{
+	static const char scene[] =
+	    "{\"blobcast\": 1, \"root\": {\"type\": \"union\", "
+	    "\"children\": ["
+	    "{\"type\": \"twist\", \"rate\": 1.2, \"children\": "
+	    "[{\"type\": \"box\", \"half_extents\": [0.4, 1.2, 0.4], "
+	    "\"translate\": [-1.5, 0, 0]}]},"
+	    "{\"type\": \"onion\", \"thickness\": 0.05, \"children\": "
+	    "[{\"type\": \"difference\", \"children\": [{\"type\": "
+	    "\"sphere\", \"radius\": 0.6}, {\"type\": \"box\", "
+	    "\"half_extents\": [1, 1, 1], \"translate\": [0, 0, 1]}]}]},"
+	    "{\"type\": \"repeat\", \"spacing\": [0.6, 1, 0.6], \"count\": "
+	    "[3, 1, 2], \"children\": [{\"type\": \"scale\", \"factor\": "
+	    "0.5, \"children\": [{\"type\": \"sphere\", \"radius\": 0.4, "
+	    "\"translate\": [3.2, -1.6, 0]}]}]},"
+	    "{\"type\": \"offset\", \"amount\": 0.1, \"children\": "
+	    "[{\"type\": \"bend\", \"rate\": 0.6, \"children\": "
+	    "[{\"type\": \"mirror\", \"axes\": \"x\", \"children\": "
+	    "[{\"type\": \"elongate\", \"half_extents\": [0.3, 0, 0], "
+	    "\"children\": [{\"type\": \"capsule\", \"a\": [0.5, 0, 0], "
+	    "\"b\": [0.9, 0, 0], \"radius\": 0.1, \"translate\": [0, 1.2, "
+	    "0]}]}]}]}]}"
+	    "]}}";
+	struct bc_tree *t = bc_tree_create();
+	struct bc_errinfo ei = {0};
+	int tested = 0;
+	REQUIRE(t);
+	REQUIRE(bc_scene_parse_json(scene, sizeof(scene) - 1, t, NULL, &ei) ==
+	        0);
+	CHECK(bc_tree_lin(t)->lip > 1.0f);
+	check_agree("every unary kind", t, 96, 80);
+	rt_unary_rate = 0.4f;
+	for (uint64_t seed = 1; seed <= 100 && tested < 6; seed++) {
+		char what[32];
+		struct bc_frame f = {0};
+		struct bc_camera cam;
+		uint32_t hit = 0;
+		REQUIRE(rt_build(t, 500 + seed, 6 + (uint32_t)(seed % 10)) ==
+		        0);
+		if (bc_tree_lin(t)->nunary == 0) {
+			continue;
+		}
+		sc_frame(bc_tree_lin(t), &cam);
+		REQUIRE(bc_frame_init(&f, 24, 24) == 0);
+		REQUIRE(bc_render_once(BC_BACKEND_NAIVE, NULL, t, &cam, &f, NULL,
+		                       &ei) == 0);
+		for (uint32_t i = 0; i < 24 * 24; i++) {
+			hit += f.ids[i] != 0;
+		}
+		bc_frame_finish(&f);
+		if (hit < 24 * 24 / 8) {
+			continue;
+		}
+		snprintf(what, sizeof(what), "unary random %u", (unsigned)seed);
+		check_agree(what, t, 48, 48);
+		tested++;
+	}
+	rt_unary_rate = 0.0f;
+	CHECK_EQ_INT(tested, 6);
+	bc_tree_destroy(t);
+}
+
+/* offset and scale of a sphere are spheres: analytic depth at the centre
+ * pixel, from both CPU tracers. */
+static void test_depth_through_offset_and_scale_is_analytic(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_prim_data p;
+	struct bc_unary off, sc;
+	struct bc_camera cam;
+	REQUIRE(t);
+	bc_unary_init(&off, BC_OP_OFFSET);
+	off.u[0] = 0.25f;
+	bc_unary_init(&sc, BC_OP_SCALE);
+	sc.u[0] = 1.5f;
+	bc_prim_data_init(&p, BC_PRIM_SPHERE);
+	p.params[0] = 0.5f;
+	bc_tree_begin(t);
+	REQUIRE(bc_tree_push_unary(t, 0, &off, NULL) == 0);
+	REQUIRE(bc_tree_push_unary(t, 0, &sc, NULL) == 0);
+	REQUIRE(bc_tree_put_prim(t, 9, &p, NULL) == 0);
+	REQUIRE(bc_tree_pop_op(t, NULL) == 0);
+	REQUIRE(bc_tree_pop_op(t, NULL) == 0);
+	REQUIRE(bc_tree_end(t, NULL) == 0);
+	bc_camera_default(&cam);
+	for (int b = BC_BACKEND_NAIVE; b <= BC_BACKEND_TILED; b++) {
+		struct bc_frame f = {0};
+		struct bc_errinfo ei = {0};
+		REQUIRE(bc_frame_init(&f, 33, 33) == 0);
+		REQUIRE(bc_render_once((enum bc_backend)b, NULL, t, &cam, &f,
+		                       NULL, &ei) == 0);
+		/* Radius 1.5 * 0.5 + 0.25 = 1, seen from 6 away. */
+		CHECK_NEAR(f.depth[16 * 33 + 16], 5.0, 1e-3);
+		CHECK_EQ_INT(f.ids[16 * 33 + 16], 9);
+		bc_frame_finish(&f);
+	}
 	bc_tree_destroy(t);
 }
 
@@ -473,6 +580,10 @@ static void test_tiled_allocation_failures(void)
 }
 
 static const struct bc_test tests[] = {
+	{"tiled_matches_naive_unary_nodes",
+	 test_tiled_matches_naive_unary_nodes},
+	{"depth_through_offset_and_scale_is_analytic",
+	 test_depth_through_offset_and_scale_is_analytic},
 	{"tiled_matches_naive_fig16", test_tiled_matches_naive_fig16},
 	{"tiled_matches_naive_fig18", test_tiled_matches_naive_fig18},
 	{"tiled_matches_naive_comb_and_random",
