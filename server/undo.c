@@ -112,12 +112,7 @@ static bool settle_colours(struct bc_undo *u, struct step *st,
 		return false;
 	}
 	for (uint32_t i = 0; i < st->n; i++) {
-		const struct bc_edit_saved *sv = &st->nodes[i];
-		if (sv->op.kind != BC_OP_INVALID) {
-			bc_tree_set_op(copy, sv->id, &sv->op, NULL);
-		} else {
-			bc_tree_set_prim(copy, sv->id, &sv->p, NULL);
-		}
+		bc_edit_saved_restore(copy, &st->nodes[i]);
 	}
 	u->bytes -= st->bytes;
 	bc_free(st->nodes);
