@@ -8,6 +8,7 @@
  */
 #include "blobcast/alloc.h"
 #include "blobcast/blobtree.h"
+#include "blobcast/mesh.h"
 #include "blobcast/scene.h"
 #include "test.h"
 
@@ -663,7 +664,62 @@ static void primitive_edit_under_twist_updates_its_bound(void)
 	bc_tree_destroy(t);
 }
 
+static int cmp_edge(const void *a, const void *b)
+{
+	const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+	return (x > y) - (x < y);
+}
+
+/* blobcast mesh through every kind: the mesh of all_kinds() is closed and
+ * consistently oriented (each directed edge once, its reverse once), and
+ * every vertex lies within a cell of the zero set (|f| <= L cell). The
+ * onion's shell is 0.1 thick: 96 cells across make it two or more cells
+ * (at 48, thinner than two cells, a few edges go non-manifold). */
+static void mesh_through_unary_nodes_is_closed(void)
+{
+	struct bc_tree *t = all_kinds();
+	struct bc_mesh m;
+	struct bc_errinfo ei = {0};
+	uint64_t *dir, *rev;
+	uint32_t n, unmatched = 0, far = 0;
+	REQUIRE(t);
+	memset(&m, 0, sizeof(m));
+	REQUIRE(bc_mesh_build(&m, t, &(struct bc_mesh_opts){.resolution = 96},
+			      &ei) == 0);
+	CHECK(m.ntris > 1000);
+	n = 3 * m.ntris;
+	dir = bc_calloc(n, sizeof(uint64_t));
+	rev = bc_calloc(n, sizeof(uint64_t));
+	REQUIRE(dir && rev);
+	for (uint32_t i = 0; i < m.ntris; i++) {
+		for (int e = 0; e < 3; e++) {
+			uint64_t a = m.tri[i][e], b = m.tri[i][(e + 1) % 3];
+			dir[3 * i + (uint32_t)e] = a << 32 | b;
+			rev[3 * i + (uint32_t)e] = b << 32 | a;
+		}
+	}
+	qsort(dir, n, sizeof(uint64_t), cmp_edge);
+	qsort(rev, n, sizeof(uint64_t), cmp_edge);
+	for (uint32_t i = 0; i < n; i++) {
+		unmatched += dir[i] != rev[i] || (i && dir[i] == dir[i - 1]);
+	}
+	for (uint32_t v = 0; v < m.nverts; v++) {
+		float f = bc_eval_full(bc_tree_lin(t), m.pos[v]);
+		far += fabsf(f) > 1.45f * bc_tree_lin(t)->lip * m.cell;
+	}
+	printf("  %u triangles, %u unmatched edges, %u far vertices\n",
+	       m.ntris, unmatched, far);
+	CHECK_EQ_INT(unmatched, 0);
+	CHECK_EQ_INT(far, 0);
+	bc_free(dir);
+	bc_free(rev);
+	bc_mesh_finish(&m);
+	bc_tree_destroy(t);
+}
+
 static const struct bc_test tests[] = {
+	{"mesh_through_unary_nodes_is_closed",
+	 mesh_through_unary_nodes_is_closed},
 	{"fields_match_closed_forms", fields_match_closed_forms},
 	{"twist_and_bend_rotate_the_child", twist_and_bend_rotate_the_child},
 	{"lipschitz_bound_holds_on_random_pairs",
