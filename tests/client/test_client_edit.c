@@ -154,7 +154,7 @@ static void test_operator_fields(void)
 	encodes(1, f, n);
 	REQUIRE(parse(t, 1, "kind=2", NULL, f, &n, &ei) == 0);
 	CHECK(f[0].v[0] == 2.0f);
-	CHECK_EQ_INT(parse(t, 1, "kind=7", NULL, f, &n, &ei), BC_EINVAL);
+	CHECK_EQ_INT(parse(t, 1, "kind=15", NULL, f, &n, &ei), BC_EINVAL);
 	CHECK_EQ_INT(parse(t, 1, "kind=blob", NULL, f, &n, &ei), BC_EINVAL);
 	/* Primitive keys do not apply to operators, nor the reverse. */
 	CHECK_EQ_INT(parse(t, 1, "radius=1", NULL, f, &n, &ei), BC_EINVAL);
