@@ -54,7 +54,8 @@
  * for anyone curious in the developer console.
  */
 import * as P from './protocol.js';
-import { OPS, PRIMS, layout } from './prims.js';
+import { OPS, PRIMS, layout, unaryLayout, unaryRange, unaryValue }
+	from './prims.js';
 
 function kindName(n) {
 	return n.isOp ? OPS[n.kind] ?? `op ${n.kind}`
@@ -1496,7 +1497,7 @@ class App {
 				this.edit(n.id, [{ field: P.FIELD.COLOR, values: rgb }], live);
 			}));
 		const op = n.parent;
-		if (op && op.kind >= 4) {
+		if (op && op.kind >= 4 && op.kind <= 6) {
 			group(`${kindName(op)} #${op.id}`);
 			this.slider(box, 'blend', () => op.blend, 0.005,
 				Math.max(1, 3 * op.blend), (v, live) => {
@@ -1508,6 +1509,29 @@ class App {
 					}
 					this.edit(op.id, fields, live);
 				});
+		}
+		/* The unary and domain nodes above the shape, their parameters. */
+		for (let u = n.parent; u; u = u.parent) {
+			const ul = u.unary ? unaryLayout(u.kind) : null;
+			if (!ul || ul.reduce((a, d) => a + d.count, 0) !==
+				u.params.length) {
+				continue;
+			}
+			group(`${kindName(u)} #${u.id}`);
+			ul.forEach((d, k) => {
+				for (let i = 0; i < d.count; i++) {
+					const at = d.offset + i;
+					const [lo, hi] = unaryRange(d.rule, u.params[at]);
+					this.slider(box, d.count > 1 ? `${d.name}.${'xyz'[i]}`
+						: d.name, () => u.params[at], lo, hi, (v, live) => {
+						const vals = u.params.slice(d.offset,
+							d.offset + d.count);
+						vals[i] = unaryValue(d.rule, v);
+						this.edit(u.id, [{ field: P.FIELD.PARAM0 + k,
+							values: vals }], live);
+					});
+				}
+			});
 		}
 	}
 

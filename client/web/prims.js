@@ -60,9 +60,62 @@ export const PRIMS = Object.freeze({
 		['inner_ratio', 1, 'pos'], ['offset', 1, 'nonneg']]],
 });
 
-/* Operator kinds 1..6 (the OP_KIND field's values). */
+/* Operator kinds 1..6 and unary node kinds 7..14 (the OP_KIND field's
+ * values). */
 export const OPS = Object.freeze(['', 'union', 'intersection', 'difference',
-	'smooth_union', 'smooth_intersection', 'smooth_difference']);
+	'smooth_union', 'smooth_intersection', 'smooth_difference', 'offset',
+	'onion', 'elongate', 'twist', 'bend', 'mirror', 'repeat', 'scale']);
+
+/* Unary and domain nodes (docs/scene-format.md): kind -> [name,
+ * [[parameter, component count, rule], ...]], field 16 + k setting
+ * parameter k as for primitives (blobtree's bc_unary_info and edit/fields.c).
+ * Rules as PRIMS', plus 'mask' (mirror's axes, an integer 1..7: x 1, y 2,
+ * z 4) and 'count' (repeat's copies per axis, integers >= 1). */
+export const UNARY = Object.freeze({
+	7: ['offset', [['amount', 1, 'free']]],
+	8: ['onion', [['thickness', 1, 'nonneg']]],
+	9: ['elongate', [['half_extents', 3, 'nonneg']]],
+	10: ['twist', [['rate', 1, 'free']]],
+	11: ['bend', [['rate', 1, 'free']]],
+	12: ['mirror', [['axes', 1, 'mask']]],
+	13: ['repeat', [['spacing', 3, 'nonneg'], ['count', 3, 'count']]],
+	14: ['scale', [['factor', 1, 'pos']]],
+});
+
+/* [{ name, offset, count, rule }] for a unary kind, or null. */
+export function unaryLayout(kind) {
+	const u = UNARY[kind];
+	if (!u) {
+		return null;
+	}
+	let offset = 0;
+	return u[1].map(([name, count, rule]) => {
+		const d = { name, offset, count, rule };
+		offset += count;
+		return d;
+	});
+}
+
+/* A slider's [lo, hi] for a unary parameter now at v, and the value a
+ * slider position v sends (whole numbers for masks and counts). */
+export function unaryRange(rule, v) {
+	switch (rule) {
+	case 'mask':
+		return [1, 7];
+	case 'count':
+		return [1, Math.max(8, 2 * v)];
+	case 'pos':
+		return [0.01, Math.max(2, 3 * v)];
+	case 'nonneg':
+		return [0, Math.max(1, 3 * v)];
+	default:
+		return [v - 2 * Math.abs(v) - 1, v + 2 * Math.abs(v) + 1];
+	}
+}
+
+export function unaryValue(rule, v) {
+	return rule === 'mask' || rule === 'count' ? Math.round(v) : v;
+}
 
 /* [{ name, offset, count, rule }] for a primitive kind, or null if it is
  * unknown. */

@@ -51,7 +51,9 @@ export const LIMITS = Object.freeze({
 	MAX_ABS: 1.0e6,
 	SCENE_MAX_NODES: (1 << 22) - 1,
 	SCENE_MAX_DEPTH: 1 << 20,
-	OP_KIND_MAX: 6,
+	OP_KIND_MAX: 14,
+	OP_KIND_FIRST_UNARY: 7,
+	MAX_UNARY_PARAMS: 6,
 	PRIM_KIND_MAX: 32,
 });
 const L = LIMITS;
@@ -1567,6 +1569,9 @@ export function encode(m) {
  *              u8 nfloats (the kind's count, at most 8), nfloats f32
  *   operator:  u8 0x80 | kind (1..6), u32 id, f32 blend, f32 range,
  *              u32 child_count (>= 2)
+ *   unary:     u8 0x80 | kind (7..14: offset, onion, elongate, twist,
+ *              bend, mirror, repeat, scale), u32 id, u8 nfloats (at most
+ *              6), nfloats f32; exactly one child follows
  * The checks and their order are those of bc_proto_scene_scan: what the
  * bytes alone decide. Each kind's exact float count, parameter ranges,
  * camera geometry and unique ids are the server's to check.
@@ -1632,6 +1637,20 @@ function scanOp(s, tag, id, after) {
 	const kind = tag & ~OP_TAG;
 	if (kind === 0 || kind > L.OP_KIND_MAX) {
 		s.fail('EENUM', `operator tag 0x${tag.toString(16)} is unknown`);
+	}
+	if (kind >= L.OP_KIND_FIRST_UNARY) {
+		const nfloats = s.u8('nfloats');
+		if (nfloats > L.MAX_UNARY_PARAMS) {
+			s.fail('EPROTO_COUNT', `nfloats ${nfloats} is over ` +
+				`${L.MAX_UNARY_PARAMS}`);
+		}
+		const params = s.floats(nfloats, 'params');
+		if (after < 1) {
+			s.fail('EPROTO_COUNT',
+				'a unary node needs its child after it');
+		}
+		return { isOp: true, unary: true, kind, id, params,
+			nchildren: 1 };
 	}
 	const [blend] = s.floats(1, 'blend');
 	const [range] = s.floats(1, 'range');
@@ -1802,6 +1821,14 @@ export function encodeScene({ camera = null, root }) {
 	while (todo.length) {
 		const n = todo.pop();
 		count++;
+		if (n.isOp && n.kind >= L.OP_KIND_FIRST_UNARY) {
+			w.u8('tag', OP_TAG | n.kind, 'EENUM');
+			w.u32('id', n.id);
+			w.u8('nfloats', n.params.length, 'EPROTO_COUNT');
+			w.f32v('params', n.params, n.params.length);
+			todo.push(n.children[0]);
+			continue;
+		}
 		if (n.isOp) {
 			w.u8('tag', OP_TAG | n.kind, 'EENUM');
 			w.u32('id', n.id);
@@ -1890,7 +1917,12 @@ export function applyOps(scene, ops, layout = () => null) {
 			break;
 		}
 		case EDIT.REMOVE: {
-			const n = get(op.node);
+			let n = get(op.node);
+			/* A unary node goes with its only child (and a chain
+			 * of unary nodes above it). */
+			while (n.parent && n.parent.unary) {
+				n = n.parent;
+			}
 			if (n.parent) {
 				n.parent.children.splice(
 					n.parent.children.indexOf(n), 1);
@@ -1921,6 +1953,12 @@ export function applyOps(scene, ops, layout = () => null) {
 	return touched;
 }
 
+/* Parameters a unary kind starts from (blobtree's bc_unary_init). */
+const UNARY_DEFAULTS = Object.freeze({
+	7: [0.1], 8: [0.05], 9: [0.5, 0, 0], 10: [1], 11: [0.5], 12: [1],
+	13: [2, 2, 2, 3, 1, 1], 14: [1],
+});
+
 function setField(n, f, layout) {
 	const v = f.values;
 	switch (f.field) {
@@ -1940,9 +1978,28 @@ function setField(n, f, layout) {
 		n.range = v[0];
 		return;
 	case FIELD.OP_KIND:
+		if (n.unary && v[0] !== n.kind) {
+			/* A new unary kind starts from its defaults. */
+			n.params = (UNARY_DEFAULTS[v[0]] || []).slice();
+		}
 		n.kind = v[0];
 		return;
 	default: {
+		if (n.unary) {
+			/* PARAM0 the kind's parameter (repeat: spacing, then
+			 * PARAM0 + 1 count, 3 each). */
+			const k = f.field - FIELD.PARAM0;
+			const at = n.kind === 13 ? 3 * k : 0;
+			if ((n.kind === 13 ? k > 1 : k !== 0) ||
+				at + v.length > n.params.length) {
+				n.stale = true;
+				return;
+			}
+			for (let i = 0; i < v.length; i++) {
+				n.params[at + i] = v[i];
+			}
+			return;
+		}
 		const params = n.isOp ? null : layout(n.kind);
 		const p = params ? params[f.field - FIELD.PARAM0] : null;
 		if (!p || p.count !== v.length) {

@@ -13,10 +13,12 @@ import { readFileSync } from 'node:fs';
 import { dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
 
-import { OPS, PRIMS, layout } from '../../client/web/prims.js';
+import { OPS, PRIMS, UNARY, layout, unaryLayout }
+	from '../../client/web/prims.js';
 
 const ROOT = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
 const prim = readFileSync(join(ROOT, 'blobtree', 'prim.c'), 'utf8');
+const ops = readFileSync(join(ROOT, 'blobtree', 'ops.c'), 'utf8');
 const header = readFileSync(join(ROOT, 'blobtree', 'include', 'blobcast',
 	'blobtree.h'), 'utf8');
 
@@ -72,3 +74,23 @@ test('operator kinds: numbers and names as in blobtree', () => {
 	kinds.slice(1, -1).forEach((k, i) =>
 		assert.equal(`BC_OP_${OPS[i + 1].toUpperCase()}`, k));
 });
+
+test('unary node kinds: names, parameter keys and float counts as in blobtree',
+	() => {
+		const table = {};
+		for (const m of ops.matchAll(
+			/\[BC_OP_(\w+)\]\s*=\s*\{"(\w+)",\s*(\d+),\s*"(\w+)"\}/g)) {
+			table[m[2]] = { floats: Number(m[3]), key: m[4] };
+		}
+		assert.equal(Object.keys(table).length, 8);
+		for (const [kind, [name, params]] of Object.entries(UNARY)) {
+			const c = table[name];
+			assert.ok(c, `${name} is not a unary kind in ops.c`);
+			assert.equal(OPS[kind], name);
+			assert.equal(params[0][0], c.key, `${name}: first key`);
+			const lay = unaryLayout(Number(kind));
+			assert.equal(lay.reduce((a, d) => a + d.count, 0), c.floats,
+				`${name}: float count`);
+		}
+		assert.equal(unaryLayout(6), null);
+	});

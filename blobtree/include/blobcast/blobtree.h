@@ -104,6 +104,9 @@ enum bc_prim {
 	BC_PRIM_COUNT
 };
 
+/* Binary operators 1..6, then the unary and domain nodes 7..14: exactly
+ * one child each (docs/scene-format.md, "Unary and domain nodes"), their
+ * parameters in struct bc_unary's u[]. */
 enum bc_op {
 	BC_OP_INVALID = 0,
 	BC_OP_UNION,
@@ -112,15 +115,13 @@ enum bc_op {
 	BC_OP_SMOOTH_UNION,
 	BC_OP_SMOOTH_INTERSECTION,
 	BC_OP_SMOOTH_DIFFERENCE,
-	/* Unary and domain nodes: exactly one child (docs/scene-format.md,
-	 * "Unary and domain nodes"). Parameters in bc_op_data.u. */
 	BC_OP_OFFSET,   /* u[0] amount: f - amount */
 	BC_OP_ONION,    /* u[0] thickness: |f| - thickness */
-	BC_OP_ELONGATE, /* u[0..2] half extents h: child(p - clamp(p,-h,h)) */
-	BC_OP_TWIST,    /* u[0] rate: child(rot_y(rate y) p) */
-	BC_OP_BEND,     /* u[0] rate: child(rot_z(rate x) p) (opCheapBend) */
-	BC_OP_MIRROR,   /* u[0] axes bit mask 1..7 (x 1, y 2, z 4): child(|p|) */
-	BC_OP_REPEAT,   /* u[0..2] spacing, u[3..5] count: opRepLim */
+	BC_OP_ELONGATE, /* u[0..2] half extents h: child at p - clamp(p to h) */
+	BC_OP_TWIST,    /* u[0] rate: child at rot_y(rate y) p */
+	BC_OP_BEND,     /* u[0] rate: child at rot_z(rate x) p (opCheapBend) */
+	BC_OP_MIRROR,   /* u[0] axes mask 1..7 (x 1 y 2 z 4): child at |p| */
+	BC_OP_REPEAT,   /* u[0..2] spacing and u[3..5] count (opRepLim) */
 	BC_OP_SCALE,    /* u[0] factor: factor child(p / factor) */
 	BC_OP_COUNT
 };
