@@ -57,6 +57,16 @@ static int node(struct ref *r, uint32_t depth)
 		return -1;
 	}
 	r->left--;
+	if ((tag & 0x80u) && (tag & 0x7fu) >= BC_PROTO_OP_KIND_FIRST_UNARY &&
+	    (tag & 0x7fu) <= BC_PROTO_OP_KIND_MAX) {
+		/* A unary node: nfloats, floats, exactly one child. */
+		if (rd(r, 1, &v) || v > BC_PROTO_MAX_UNARY_PARAMS ||
+		    floats(r, v, NULL)) {
+			return -1;
+		}
+		r->ops++;
+		return node(r, depth + 1);
+	}
 	if (tag & 0x80u) {
 		uint32_t kind = tag & 0x7fu;
 		if (kind < 1 || kind > 6 || floats(r, 1, &blend) ||
