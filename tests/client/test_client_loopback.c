@@ -5,7 +5,8 @@
  * as blobcastd would -- or as a broken or hostile peer would. Covers the
  * handshake, sessions, the scene mirror (parameter and structural edits,
  * a skipped order), edit acknowledgements among other members' edits,
- * frames and snapshots, messages larger than one read, and every way a
+ * presenting, following and the session camera (which moves the mirror's
+ * camera and order), frames and snapshots, messages larger than one read, and every way a
  * connection can fail (refused, wrong protocol, silence, ERROR, a close
  * between or inside messages).
  */
@@ -693,6 +694,101 @@ static void test_mirror_follows_structural_edits(void)
 	fake_stop(&f);
 }
 
+/* ---- presenting and the session camera ------------------------------------ */
+
+static const struct bc_msg_camera loop_cam = {
+    {2.0f, 1.0f, 5.0f}, {0.0f, 0.5f, 0.0f}, {0.0f, 1.0f, 0.0f}, 33.0f};
+
+static void script_present(struct fake *f, int fd)
+{
+	struct bc_msg m, out;
+	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_REMOVE, .node = 4};
+	if (!srv_hello(f, fd) ||
+	    !srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
+		return;
+	}
+	srv_session(f, fd, m.seq, 5);
+	/* FOLLOW 1: the camera, then who presents, then OK. */
+	if (!srv_expect(f, fd, BC_MSG_FOLLOW, &m)) {
+		return;
+	}
+	SCHECK(f, m.toggle.on == 1);
+	out = (struct bc_msg){.type = BC_MSG_FOLLOW_CAMERA};
+	out.follow_camera.presenter = 9;
+	out.follow_camera.camera = loop_cam;
+	srv_send(f, fd, &out);
+	out = (struct bc_msg){.type = BC_MSG_PRESENTER};
+	out.presenter.presenter = 9;
+	out.presenter.following = 1;
+	srv_send(f, fd, &out);
+	srv_send(f, fd, &(struct bc_msg){.type = BC_MSG_OK, .seq = m.seq});
+	/* PRESENT 1: this client presents, so it follows nobody. */
+	if (!srv_expect(f, fd, BC_MSG_PRESENT, &m)) {
+		return;
+	}
+	SCHECK(f, m.toggle.on == 1);
+	out = (struct bc_msg){.type = BC_MSG_PRESENTER};
+	out.presenter.presenter = 3;
+	srv_send(f, fd, &out);
+	srv_send(f, fd, &(struct bc_msg){.type = BC_MSG_OK, .seq = m.seq});
+	/* SESSION_CAMERA: order 6; then another member's edit, order 7. */
+	if (!srv_expect(f, fd, BC_MSG_SESSION_CAMERA, &m)) {
+		return;
+	}
+	out = (struct bc_msg){.type = BC_MSG_SESSION_CAMERA_SET};
+	out.session_camera_set.order = 6;
+	out.session_camera_set.author = 3;
+	out.session_camera_set.author_seq = m.seq;
+	out.session_camera_set.camera = m.session_camera;
+	srv_send(f, fd, &out);
+	out = (struct bc_msg){.type = BC_MSG_EDIT_APPLIED};
+	out.edit_applied.order = 7;
+	out.edit_applied.author = 8;
+	out.edit_applied.author_seq = 1;
+	out.edit_applied.nops = 1;
+	out.edit_applied.ops = &op;
+	srv_send(f, fd, &out);
+	SCHECK(f, !srv_next(f, fd, &m));
+}
+
+/* bc_client_follow and _present keep bc_client_info()'s presenter and
+ * following; bc_client_session_camera waits for its SESSION_CAMERA_SET,
+ * which moves the mirror's camera and order, so the next edit still
+ * replays. */
+static void test_presenting_and_session_camera(void)
+{
+	struct fake f;
+	struct bc_client *c;
+	struct bc_errinfo ei = {0};
+	struct bc_camera cam = {{2.0f, 1.0f, 5.0f}, {0.0f, 0.5f, 0.0f},
+	                        {0.0f, 1.0f, 0.0f}, 33.0f};
+	struct bc_camera got;
+	struct bc_msg m;
+	uint64_t order = 0;
+	REQUIRE(fake_start(&f, script_present, false) == 0);
+	c = connect_to(&f, 5000);
+	if (c) {
+		REQUIRE(bc_client_join(c, "s1", 0, 0, &ei) == 0);
+		CHECK_EQ_INT(bc_client_info(c)->presenter, 0);
+		CHECK_EQ_INT(bc_client_follow(c, true, &ei), 0);
+		CHECK_EQ_INT(bc_client_info(c)->presenter, 9);
+		CHECK(bc_client_info(c)->following);
+		CHECK_EQ_INT(bc_client_present(c, true, &ei), 0);
+		CHECK_EQ_INT(bc_client_info(c)->presenter, 3);
+		CHECK(!bc_client_info(c)->following);
+		CHECK_EQ_INT(bc_client_session_camera(c, &cam, &order, &ei), 0);
+		CHECK_EQ_INT(order, 6);
+		REQUIRE(bc_client_scene(c, &got) != NULL);
+		CHECK(memcmp(&got, &cam, sizeof(got)) == 0);
+		REQUIRE(bc_client_recv(c, &m, 5000) == 1);
+		CHECK_EQ_INT(m.edit_applied.order, 7);
+		REQUIRE(bc_client_scene(c, NULL) != NULL);
+		CHECK(!bc_tree_get(bc_client_scene(c, NULL), 4, NULL, NULL));
+	}
+	bc_client_destroy(c);
+	fake_stop(&f);
+}
+
 /* ---- frames and snapshots ---------------------------------------------------------- */
 
 static void script_frames(struct fake *f, int fd)
@@ -1194,6 +1290,7 @@ static const struct bc_test tests[] = {
 	{"refused_and_bad_options", test_refused_and_bad_options},
 	{"allocation_failures_are_reported",
 	 test_allocation_failures_are_reported},
+    {"presenting_and_session_camera", test_presenting_and_session_camera},
 };
 
 BC_TEST_MAIN(tests)
