@@ -20,7 +20,7 @@
 #include "blobcast/alloc.h"
 
 struct dec {
-	struct bc__cur c;
+	struct bc_rd c; /* err is set only by the read that fails */
 	struct bc_proto_store *store; /* NULL: check only */
 	struct bc_errinfo *ei;
 	struct bc_msg *m;
@@ -61,30 +61,38 @@ static int fail(struct dec *d, int code, const char *fmt, ...)
 	                      name ? name : "?", reason, d->c.pos);
 }
 
+/* A read came short: what is left is measured from pos, which the cursor
+ * leaves where the failed read began (bc_rd_left reads 0 once it failed). */
 static int truncated(struct dec *d, const char *what, size_t need)
 {
 	return fail(d, BC_EPROTO_TRUNCATED, "%s needs %zu bytes, %zu left",
-	            what, need, bc__cur_left(&d->c));
+	            what, need, d->c.len - d->c.pos);
 }
 
+/* The fixed-size fields: bytes.h's cursor checks the bytes left and
+ * assembles the value; a short read gets the decoder's own sentence. */
 static int rd_u8(struct dec *d, const char *what, uint8_t *v)
 {
-	return bc__get_u8(&d->c, v) ? 0 : truncated(d, what, 1);
+	*v = bc_rd_u8(&d->c);
+	return d->c.err ? truncated(d, what, 1) : 0;
 }
 
 static int rd_u16(struct dec *d, const char *what, uint16_t *v)
 {
-	return bc__get_u16(&d->c, v) ? 0 : truncated(d, what, 2);
+	*v = bc_rd_u16(&d->c);
+	return d->c.err ? truncated(d, what, 2) : 0;
 }
 
 static int rd_u32(struct dec *d, const char *what, uint32_t *v)
 {
-	return bc__get_u32(&d->c, v) ? 0 : truncated(d, what, 4);
+	*v = bc_rd_u32(&d->c);
+	return d->c.err ? truncated(d, what, 4) : 0;
 }
 
 static int rd_u64(struct dec *d, const char *what, uint64_t *v)
 {
-	return bc__get_u64(&d->c, v) ? 0 : truncated(d, what, 8);
+	*v = bc_rd_u64(&d->c);
+	return d->c.err ? truncated(d, what, 8) : 0;
 }
 
 /* A u32 id that must not be 0. */
@@ -190,10 +198,10 @@ static int rd_str(struct dec *d, const char *what, unsigned min, unsigned max,
 		            "%s length %u is outside %u..%u", what, (unsigned)n,
 		            min, max);
 	}
-	if (n > bc__cur_left(&d->c)) {
+	if (n > bc_rd_left(&d->c)) {
 		return truncated(d, what, n);
 	}
-	const uint8_t *p = d->c.buf + d->c.pos;
+	const uint8_t *p = d->c.p + d->c.pos;
 	size_t bad = bc__utf8_check(p, n);
 	if (bad < n) {
 		d->c.pos += bad;
@@ -215,10 +223,10 @@ static int rd_blob(struct dec *d, const char *what, struct bc_proto_bytes *b)
 	if (n == 0) {
 		return fail(d, BC_EPROTO_LENGTH, "%s is empty", what);
 	}
-	if (n > bc__cur_left(&d->c)) {
+	if (n > bc_rd_left(&d->c)) {
 		return truncated(d, what, n);
 	}
-	b->ptr = d->c.buf + d->c.pos;
+	b->ptr = d->c.p + d->c.pos;
 	b->len = n;
 	d->c.pos += n;
 	return 0;
@@ -233,10 +241,10 @@ static int check_count(struct dec *d, const char *what, unsigned n,
 		return fail(d, BC_EPROTO_COUNT, "%s %u is outside %u..%u", what,
 		            n, min, max);
 	}
-	if ((size_t)n * elem > bc__cur_left(&d->c)) {
+	if ((size_t)n * elem > bc_rd_left(&d->c)) {
 		return fail(d, BC_EPROTO_COUNT,
 		            "%s %u needs at least %zu bytes, %zu left", what, n,
-		            (size_t)n * elem, bc__cur_left(&d->c));
+		            (size_t)n * elem, bc_rd_left(&d->c));
 	}
 	return 0;
 }
@@ -445,11 +453,11 @@ static int dec_field(struct dec *d, uint64_t *seen, struct bc_proto_field *f)
 		            want > 0 ? "" : "1..",
 		            want > 0 ? want : (int)BC_PROTO_MAX_FIELD_VALUES);
 	}
-	if ((size_t)f->count * 4u > bc__cur_left(&d->c)) {
+	if ((size_t)f->count * 4u > bc_rd_left(&d->c)) {
 		return fail(d, BC_EPROTO_COUNT,
 		            "field %u: %u values need %u bytes, %zu left",
 		            (unsigned)f->field, (unsigned)f->count,
-		            4u * f->count, bc__cur_left(&d->c));
+		            4u * f->count, bc_rd_left(&d->c));
 	}
 	for (unsigned k = 0; k < f->count; k++) {
 		TRY(rd_f32_abs(d, "field value", &f->v[k]));
@@ -653,10 +661,10 @@ static int dec_frame(struct dec *d, struct bc_msg_frame *f)
 			            plane ? "a plane" : "raw",
 			            (unsigned long long)raw);
 		}
-		if (n > bc__cur_left(&d->c)) {
+		if (n > bc_rd_left(&d->c)) {
 			return truncated(d, "rect.data", n);
 		}
-		r.data.ptr = d->c.buf + d->c.pos;
+		r.data.ptr = d->c.p + d->c.pos;
 		r.data.len = n;
 		d->c.pos += n;
 		if (out) {
@@ -810,7 +818,7 @@ static int dec_body(struct dec *d, struct bc_msg *m)
 		}
 		/* planes is optional: a colour-only SNAPSHOT may stop here. */
 		m->snapshot.planes = 0;
-		if (bc__cur_left(&d->c) == 0) {
+		if (bc_rd_left(&d->c) == 0) {
 			return 0;
 		}
 		TRY(rd_u8(d, "planes", &m->snapshot.planes));
@@ -842,16 +850,16 @@ int bc__decode_payload(struct bc_proto_store *store, struct bc_msg *out,
                        struct bc_errinfo *ei)
 {
 	struct dec d = {
-	    .c = {.buf = payload, .len = len, .pos = 0},
+	    .c = bc_rd_init(payload, len),
 	    .store = store,
 	    .ei = ei,
 	    .m = out,
 	};
 	TRY(dec_body(&d, out));
-	if (bc__cur_left(&d.c)) {
+	if (bc_rd_left(&d.c)) {
 		return fail(&d, BC_EPROTO_TRAILING,
 		            "%zu bytes after the last field",
-		            bc__cur_left(&d.c));
+		            bc_rd_left(&d.c));
 	}
 	return 0;
 }

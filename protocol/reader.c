@@ -176,7 +176,7 @@ static int check_header(struct bc_proto_reader *r, const uint8_t *h,
 	if (avail < 8) {
 		return 0;
 	}
-	uint16_t flags = (uint16_t)(h[6] | (uint16_t)(h[7] << 8));
+	uint16_t flags = bc_get_le16(h + 6);
 	struct bc_errinfo ei = {0};
 	int rc = bc__check_flags(t, flags, &ei);
 	if (rc < 0) {
@@ -185,7 +185,7 @@ static int check_header(struct bc_proto_reader *r, const uint8_t *h,
 	if (avail < 12) {
 		return 0;
 	}
-	uint32_t len = bc__le32(h + 8);
+	uint32_t len = bc_get_le32(h + 8);
 	if (len > t->max_payload) {
 		return set_err(r, BC_EPROTO_LENGTH,
 		               "%s payload length %u is over its maximum %u",
@@ -217,13 +217,13 @@ int bc_proto_reader_next(struct bc_proto_reader *r, struct bc_msg *out)
 	if (rc < 0 || hbytes < BC_PROTO_HEADER_SIZE) {
 		return rc;
 	}
-	uint32_t len = bc__le32(h + 8);
+	uint32_t len = bc_get_le32(h + 8);
 	if (avail - BC_PROTO_HEADER_SIZE < len) {
 		return 0;
 	}
 	out->type = (enum bc_msg_type)h[5];
-	out->flags = (uint16_t)(h[6] | (uint16_t)(h[7] << 8));
-	out->seq = bc__le32(h + 12);
+	out->flags = bc_get_le16(h + 6);
+	out->seq = bc_get_le32(h + 12);
 	struct bc_errinfo ei = {0};
 	rc = bc__decode_payload(&r->store, out, h + BC_PROTO_HEADER_SIZE, len,
 	                        &ei);

@@ -14,10 +14,15 @@
 #include <stdint.h>
 #include <string.h>
 
+#include "blobcast/bytes.h"
 #include "blobcast/proto.h"
 
 /* ---- Reading ------------------------------------------------------------ */
 
+/* The payload decoder (decode.c) reads through base's struct bc_rd
+ * (blobcast/bytes.h). This cursor is what the scene scanner (scene.c) still
+ * reads with; its getters take the bytes through bytes.h, so the byte order
+ * is written once. */
 struct bc__cur {
 	const uint8_t *buf;
 	size_t len, pos;
@@ -33,30 +38,12 @@ static inline size_t bc__cur_left(const struct bc__cur *c)
 static inline bool bc__get_u8(struct bc__cur *c, uint8_t *v)
 {
 	*v = 0;
-	if (c->pos + 1 > c->len) {
+	if (bc__cur_left(c) < 1) {
 		return false;
 	}
 	*v = c->buf[c->pos];
 	c->pos += 1;
 	return true;
-}
-
-static inline bool bc__get_u16(struct bc__cur *c, uint16_t *v)
-{
-	*v = 0;
-	if (bc__cur_left(c) < 2) {
-		return false;
-	}
-	const uint8_t *p = c->buf + c->pos;
-	*v = (uint16_t)(p[0] | (uint16_t)(p[1] << 8));
-	c->pos += 2;
-	return true;
-}
-
-static inline uint32_t bc__le32(const uint8_t *p)
-{
-	return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 |
-	       (uint32_t)p[3] << 24;
 }
 
 static inline bool bc__get_u32(struct bc__cur *c, uint32_t *v)
@@ -65,20 +52,8 @@ static inline bool bc__get_u32(struct bc__cur *c, uint32_t *v)
 	if (bc__cur_left(c) < 4) {
 		return false;
 	}
-	*v = bc__le32(c->buf + c->pos);
+	*v = bc_get_le32(c->buf + c->pos);
 	c->pos += 4;
-	return true;
-}
-
-static inline bool bc__get_u64(struct bc__cur *c, uint64_t *v)
-{
-	*v = 0;
-	if (bc__cur_left(c) < 8) {
-		return false;
-	}
-	const uint8_t *p = c->buf + c->pos;
-	*v = (uint64_t)bc__le32(p) | (uint64_t)bc__le32(p + 4) << 32;
-	c->pos += 8;
 	return true;
 }
 
@@ -137,14 +112,15 @@ static inline void bc__put_u8(struct bc__w *w, uint8_t v)
 
 static inline void bc__put_u16(struct bc__w *w, uint16_t v)
 {
-	uint8_t b[2] = {(uint8_t)v, (uint8_t)(v >> 8)};
+	uint8_t b[2];
+	bc_put_le16(b, v);
 	bc__put_raw(w, b, 2);
 }
 
 static inline void bc__put_u32(struct bc__w *w, uint32_t v)
 {
-	uint8_t b[4] = {(uint8_t)v, (uint8_t)(v >> 8), (uint8_t)(v >> 16),
-	                (uint8_t)(v >> 24)};
+	uint8_t b[4];
+	bc_put_le32(b, v);
 	bc__put_raw(w, b, 4);
 }
 
