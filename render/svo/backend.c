@@ -346,7 +346,6 @@ static int svo_render(struct bc_renderer *base, const struct bc_camera *cam,
 	fr.cp.pix_angle = 2.0f * fr.vr.tan_half_y / (float)fr.vr.height;
 	fr.cp.min_step = BC_SVO_MIN_STEP_REL * size;
 	fr.cp.refine_tol = BC_SVO_REFINE_REL * size;
-	fr.cp.lip = r->empty ? 1.0f : r->rpn.lip;
 	bc_shade_init(&fr.shade, &fr.vr);
 	if (!r->empty) {
 		float need = frame_band(&r->rpn, fr.vr.eye, &fr.cp);

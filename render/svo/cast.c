@@ -97,13 +97,14 @@ static inline float minf(float a, float b)
 
 static inline float band_at(const struct bc_svo_cast_params *cp, float t)
 {
-	return BC_SVO_HIT_LIPSCHITZ * (cp->lip > 0.0f ? cp->lip : 1.0f) *
+	return BC_SVO_HIT_LIPSCHITZ *
 	       maxf(BC_SVO_HIT_FOOTPRINT * cp->pix_angle * t, cp->min_step);
 }
 
 float bc_svo_hit_band(const struct bc_svo_cast_params *cp, float t)
 {
-	/* The sphere tracer scales its values by the tree's bound too. */
+	/* In field units, whatever the tree's Lipschitz bound: the sphere
+	 * tracer divides its steps by that bound, not its hit band. */
 	return band_at(cp, t);
 }
 
@@ -114,6 +115,10 @@ float bc_svo_hit_band(const struct bc_svo_cast_params *cp, float t)
 struct ray_field {
 	const struct bc_svo *s;
 	const struct bc_svo_cmask *mask;
+	const uint32_t *list; /* the mask's terms decoded, or NULL */
+	uint32_t nlist;
+	uint32_t *buf; /* through the octree: where the terms of the leaf
+	                  found last are decoded (NULL: not decoded) */
 	const float *o, *d;
 	const struct bc_svo_cast_params *cp;
 	bool banded; /* subtract the hit band */
@@ -136,16 +141,34 @@ static float field_at(struct ray_field *rf, float t)
 	float p[3] = {rf->o[0] + t * rf->d[0], rf->o[1] + t * rf->d[1],
 	              rf->o[2] + t * rf->d[2]};
 	float v;
-	if (rf->mask) {
+	if (rf->list) {
+		v = bc__svo_list_eval(rf->s->rpn, rf->list, rf->nlist, p);
+	} else if (rf->mask) {
 		v = bc_svo_cmask_eval(rf->s->rpn, *rf->mask, p);
 	} else {
 		if (!(rf->cached && in_box(rf->leaf.lo, rf->leaf.hi, p))) {
 			rf->cached = bc_svo_locate(rf->s, p, &rf->leaf);
+			rf->nlist = 0;
+			if (rf->cached && rf->buf &&
+			    rf->leaf.state == BC_SVO_STATE_ACTIVE) {
+				const struct bc_svo_cmask *m = &rf->leaf.mask;
+				for (uint32_t w = 0; w < m->nwords; w++) {
+					uint32_t base = m->pairs[2 * w] << 5;
+					uint32_t b = m->pairs[2 * w + 1];
+					while (b) {
+						rf->buf[rf->nlist++] =
+						    base + bc__svo_lowest(b);
+						b &= b - 1u;
+					}
+				}
+			}
 		}
 		if (!rf->cached) {
 			v = bc_svo_eval(rf->s, p); /* outside the root */
 		} else if (rf->leaf.state != BC_SVO_STATE_ACTIVE) {
 			v = rf->leaf.value;
+		} else if (rf->buf) {
+			v = bc__svo_list_eval(rf->s->rpn, rf->buf, rf->nlist, p);
 		} else {
 			v = bc_svo_cmask_eval(rf->s->rpn, rf->leaf.mask, p);
 		}
@@ -217,8 +240,8 @@ static bool leaf_root(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
 	struct {
 		float a, b;
 	} st[CAST_MAX_LEVELS + 2];
-	struct ray_field rf = {c->s, m,    o,     d, cp,
-	                       true, &hit->evals, false, {0}};
+	struct ray_field rf = {c->s, m,    NULL,  0,     NULL, o,
+	                       d,    cp,   true, &hit->evals, false, {0}};
 	struct bc_svo_region rg;
 	uint32_t n = 0, sp = 0;
 	for (uint32_t w = 0; w < m->nwords; w++) {
@@ -302,9 +325,18 @@ static bool leaf_step(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
                       const struct bc_svo_cast_params *cp,
                       struct bc_svo_hit *hit, float *t_out, bool *settled)
 {
-	struct ray_field rf = {c->s, m,    o,     d, cp,
-	                       true, &hit->evals, false, {0}};
-	float cmax = band_at(cp, tb), t = ta, g = field_at(&rf, ta);
+	struct ray_field rf = {c->s, m,    c->idx, 0,     NULL, o,
+	                       d,    cp,   true,   &hit->evals, false, {0}};
+	float cmax, t = ta, g;
+	for (uint32_t w = 0; w < m->nwords; w++) {
+		uint32_t base = m->pairs[2 * w] << 5, b = m->pairs[2 * w + 1];
+		while (b) {
+			c->idx[rf.nlist++] = base + bc__svo_lowest(b);
+			b &= b - 1u;
+		}
+	}
+	cmax = band_at(cp, tb);
+	g = field_at(&rf, ta);
 	if (g <= 0.0f) {
 		*t_out = ta;
 		return true;
@@ -519,6 +551,12 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
 	uint32_t sp = 0, terms = 0;
 	float th = 0.0f, ta = t0, tb = t1;
 	bool found = false, settled = false;
+	/* Where the segment crosses a mid plane only splits it (the piece's
+	 * own midpoint picks the octant), so a product by the reciprocal
+	 * serves instead of a division per plane per node. */
+	float inv[3] = {d[0] != 0.0f ? 1.0f / d[0] : 0.0f,
+	                d[1] != 0.0f ? 1.0f / d[1] : 0.0f,
+	                d[2] != 0.0f ? 1.0f / d[2] : 0.0f};
 	memset(hit, 0, sizeof(*hit));
 	hit->prim = BC_NONE;
 	if (!clip(s->lo, s->hi, o, d, &ta, &tb)) {
@@ -560,7 +598,7 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
 		for (int i = 0; i < 3; i++) {
 			mid[i] = 0.5f * (e.lo[i] + e.hi[i]);
 			if (d[i] != 0.0f) {
-				float tc = (mid[i] - o[i]) / d[i];
+				float tc = (mid[i] - o[i]) * inv[i];
 				if (tc > e.ta && tc < e.tb) {
 					uint32_t k = ncut++;
 					while (k > 1 && cut[k - 1] > tc) {
@@ -595,8 +633,9 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
 	}
 	hit->leaf_terms = terms;
 	{
-		struct ray_field rf = {s,     NULL,        o,     d, cp,
-		                       false, &hit->evals, false, {0}};
+		/* The leaf phase is over: its scratch list is free. */
+		struct ray_field rf = {s, NULL,  NULL,        0,     c->idx, o,
+		                       d, cp,    false, &hit->evals, false, {0}};
 		if (!settled) {
 			th = settle(&rf, th, ta, tb);
 		}

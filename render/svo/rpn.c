@@ -523,6 +523,25 @@ static float eval_cmask(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
 	                 : eval_cmask_k(r, m, p, prim, false);
 }
 
+static inline float eval_list_k(const struct bc_svo_rpn *r,
+                                const uint32_t *idx, uint32_t n,
+                                const float p[3], bool unary)
+{
+	float st[BC_EVAL_STACK];
+	uint32_t sp = 0;
+	for (uint32_t k = 0; k < n; k++) {
+		step(r, idx[k], st, NULL, &sp, p, false, unary);
+	}
+	return sp ? st[0] : INFINITY;
+}
+
+float bc__svo_list_eval(const struct bc_svo_rpn *r, const uint32_t *idx,
+                        uint32_t n, const float p[3])
+{
+	return r->nunary ? eval_list_k(r, idx, n, p, true)
+	                 : eval_list_k(r, idx, n, p, false);
+}
+
 float bc_svo_cmask_eval(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
                         const float p[3])
 {

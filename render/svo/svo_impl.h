@@ -75,6 +75,12 @@ void bc__svo_domain_map(const struct bc_svo_rpn *r, uint32_t d,
 float bc__svo_unary_value(const struct bc_svo_rpn *r, uint32_t u, float f,
                           const float p[3]);
 
+/* The variant whose active terms are idx[0..n) (increasing) at p: what
+ * bc_svo_cmask_eval computes, without decoding the mask at every point
+ * (the caster decodes a leaf's once and samples it several times). */
+float bc__svo_list_eval(const struct bc_svo_rpn *r, const uint32_t *idx,
+                        uint32_t n, const float p[3]);
+
 /* A primitive term's field at point p of its own input frame (the world
  * mapped through its domain nodes), exactly as eval.c computes it (same
  * operation order, so the same float). */

@@ -419,7 +419,6 @@ static void stepping_matches_bisection(void)
 		cp.pix_angle = 2.0f * vr.tan_half_y / (float)H;
 		cp.min_step = BC_SVO_MIN_STEP_REL * rpn.size;
 		cp.refine_tol = BC_SVO_REFINE_REL * rpn.size;
-		cp.lip = rpn.lip;
 		for (uint32_t k = 0; k < 8; k++) {
 			float s2 = 0.0f;
 			for (int a = 0; a < 3; a++) {

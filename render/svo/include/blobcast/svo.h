@@ -130,7 +130,7 @@ struct bc_svo_rpn {
 	uint32_t *prim_dom; /* NULL when nunary is 0 */
 	float lip;          /* the tree's Lipschitz bound over its
 	                       primitives' (bc_lin lip, 1 without twist or
-	                       bend): scales the hit band */
+	                       bend) */
 };
 
 /* Compiles the linearized tree l into *out (bc_svo_rpn_finish frees it).
@@ -350,9 +350,6 @@ struct bc_svo_cast_params {
 	float pix_angle;  /* pixel footprint per unit of t */
 	float min_step;   /* world units */
 	float refine_tol; /* world units */
-	float lip;        /* the tree's Lipschitz bound (rpn->lip): the band
-	                     grows with it as the sphere tracer's criterion
-	                     does; 0 means 1 */
 };
 
 struct bc_svo_hit {
