@@ -16,6 +16,7 @@
 #include <zlib.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/bytes.h"
 #include "blobcast/log.h"
 #include "store_impl.h"
 
@@ -25,19 +26,6 @@
 /* A journal record carries one EDIT's operations: at most one protocol
  * payload. */
 #define MAX_RECORD (64u * 1024u * 1024u)
-
-static void put32(uint8_t *p, uint32_t v)
-{
-	for (int i = 0; i < 4; i++) {
-		p[i] = (uint8_t)(v >> (8 * i));
-	}
-}
-
-static uint32_t get32(const uint8_t *p)
-{
-	return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 |
-	       (uint32_t)p[3] << 24;
-}
 
 /* Reads exactly n bytes at off; false on a short read. */
 static bool read_at(int fd, void *buf, size_t n, off_t off)
@@ -66,12 +54,12 @@ static int record_at(int fd, off_t off, off_t size, uint8_t **buf, size_t *cap,
 	uint32_t crc;
 	if (size - off < (off_t)RECORD_HEADER ||
 	    !read_at(fd, hdr, sizeof(hdr), off) ||
-	    get32(hdr) != JOURNAL_MAGIC) {
+	    bc_get_le32(hdr) != JOURNAL_MAGIC) {
 		return 1;
 	}
-	*len = get32(hdr + 4);
-	*ord = (uint64_t)get32(hdr + 8) | (uint64_t)get32(hdr + 12) << 32;
-	crc = get32(hdr + 16);
+	*len = bc_get_le32(hdr + 4);
+	*ord = bc_get_le64(hdr + 8);
+	crc = bc_get_le32(hdr + 16);
 	if (*len > MAX_RECORD ||
 	    (off_t)*len > size - off - (off_t)RECORD_HEADER) {
 		return 1;
@@ -110,7 +98,7 @@ static int resync(int fd, off_t off, off_t size, uint64_t after, uint8_t **buf,
 			uint32_t len;
 			uint64_t ord;
 			int rc;
-			if (get32(win + i) != JOURNAL_MAGIC) {
+			if (bc_get_le32(win + i) != JOURNAL_MAGIC) {
 				continue;
 			}
 			rc = record_at(fd, at + (off_t)i, size, buf, cap, &len,
@@ -341,11 +329,10 @@ int bc_store_append(struct bc_store_session *ss, uint64_t order,
 		return bc_errinfo_set(ei, BC_ELIMIT,
 		                      "journal record too large");
 	}
-	put32(hdr, JOURNAL_MAGIC);
-	put32(hdr + 4, (uint32_t)len);
-	put32(hdr + 8, (uint32_t)order);
-	put32(hdr + 12, (uint32_t)(order >> 32));
-	put32(hdr + 16, (uint32_t)crc32(0L, rec, (uInt)len));
+	bc_put_le32(hdr, JOURNAL_MAGIC);
+	bc_put_le32(hdr + 4, (uint32_t)len);
+	bc_put_le64(hdr + 8, order);
+	bc_put_le32(hdr + 16, (uint32_t)crc32(0L, rec, (uInt)len));
 	if (bc__store_injected("journal-write", ss->path)) {
 		goto fail;
 	}

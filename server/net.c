@@ -66,6 +66,12 @@ void bc_shared_unref(struct bc_shared *s)
 	}
 }
 
+/* The loop's cached time, not base's bc_clock: libuv arms every timer
+ * (the still timer, the stall check, the sweeps) against uv_now, which it
+ * caches as the loop turns, from CLOCK_MONOTONIC_COARSE where that is fine
+ * enough. Deadlines compared in a timer's callback must come from the
+ * same reading, or a timer can fire while a second clock still says
+ * "not yet". */
 uint64_t bc_now_ms(struct bc_srv *srv)
 {
 	return uv_now(srv->loop);

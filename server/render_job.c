@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/clock.h"
 #include "blobcast/log.h"
 #include "encode.h"
 #include "rthread_impl.h"
@@ -118,7 +119,7 @@ void bc__run_job(struct bc_rthread *rt, struct bc_rjob *job,
 		bc__push_result(rt, res);
 		return;
 	}
-	t0 = bc__now_ms();
+	t0 = bc_clock_ms();
 	if (rp->fresh) {
 		struct bc_dirty ignored;
 		bc_tree_take_dirty(rp->tree, &ignored);
@@ -150,7 +151,7 @@ void bc__run_job(struct bc_rthread *rt, struct bc_rjob *job,
 		bc__push_result(rt, res);
 		return;
 	}
-	t1 = bc__now_ms();
+	t1 = bc_clock_ms();
 	res->render_ms = t1 - t0;
 	/* What to send: the tiles changed since the picture the targets
 	 * hold, when they hold this view at level 0 and the frame keeps its
@@ -280,7 +281,7 @@ void bc__run_job(struct bc_rthread *rt, struct bc_rjob *job,
 		       ei.msg);
 	}
 	bc_proto_buf_finish(&b);
-	res->encode_ms = bc__now_ms() - t1;
+	res->encode_ms = bc_clock_ms() - t1;
 	for (uint32_t i = 0; i < nrects; i++) {
 		bc_free(enc[i].data);
 		rects[i].data.ptr = NULL;

@@ -133,8 +133,6 @@ void bc__edit_begin(const struct replica *rp, uint32_t id, struct edit_abvs *e);
 void bc__edit_end(struct bc_rthread *rt, const struct replica *rp,
                   struct edit_abvs *e);
 
-double bc__now_ms(void);
-
 int bc__update_view(struct bc_rthread *rt, struct replica *rp, struct view *v,
                     const struct bc_rjob *job, bool *incomplete, bool *yielded,
                     struct bc_errinfo *ei);

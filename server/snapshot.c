@@ -11,20 +11,13 @@
 #include <stdio.h>
 #include <string.h>
 #include <sys/stat.h>
-#include <time.h>
 #include <unistd.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/clock.h"
 #include "blobcast/log.h"
 #include "blobcast/scene.h"
 #include "store_impl.h"
-
-static uint64_t mono_ms(void)
-{
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (uint64_t)ts.tv_sec * 1000u + (uint64_t)ts.tv_nsec / 1000000u;
-}
 
 /* Writes len bytes to fd; false on failure (errno set). */
 static bool write_all(int fd, const char *p, size_t len)
@@ -167,7 +160,7 @@ int bc_store_snapshot_due(struct bc_store_session *ss, uint64_t every,
                           const struct bc_tree *t, const struct bc_camera *cam,
                           uint64_t order, struct bc_errinfo *ei)
 {
-	uint64_t now = mono_ms();
+	uint64_t now = bc_clock_ns() / 1000000u;
 	int rc;
 	if (ss->records < every || now < ss->retry_at_ms) {
 		return 0;

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/clock.h"
 #include "blobcast/log.h"
 #include "rthread_impl.h"
 
@@ -129,11 +130,6 @@ void bc__edit_end(struct bc_rthread *rt, const struct replica *rp,
 	e->old = NULL;
 }
 
-double bc__now_ms(void)
-{
-	return (double)uv_hrtime() / 1e6;
-}
-
 /* The level a new view starts at: the finest whose estimated cost fits
  * BC_SRV_COARSE_MS, never coarser than the client accepts. */
 static int start_level(const struct replica *rp, const struct bc_rjob *job)
@@ -222,7 +218,7 @@ static int refine(struct bc_rthread *rt, struct replica *rp, struct view *v,
 	uint32_t cols = bc_render_tiles_x(v->width);
 	uint32_t rows = bc_render_tiles_y(v->height);
 	uint32_t band = (rows + BC_SRV_REFINE_BANDS - 1) / BC_SRV_REFINE_BANDS;
-	double start = bc__now_ms();
+	double start = bc_clock_ms();
 	bool ignored = false;
 	int rc;
 	*done = false;
@@ -243,7 +239,7 @@ static int refine(struct bc_rthread *rt, struct replica *rp, struct view *v,
 			return 0;
 		}
 		if (y0 > 0 && !unbounded &&
-		    bc__now_ms() - start > (double)rt->budget_ms) {
+		    bc_clock_ms() - start > (double)rt->budget_ms) {
 			return 0;
 		}
 		memset(rt->band, 0, v->ntiles);
