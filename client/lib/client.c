@@ -16,43 +16,19 @@
 #include <string.h>
 #include <sys/socket.h>
 #include <sys/un.h>
-#include <time.h>
 #include <unistd.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/clock.h"
 #include "blobcast/log.h"
 #include "blobcast/scene.h"
 #include "client_impl.h"
 
 /* ---- small things ------------------------------------------------------ */
 
-double bc__client_now_ms(void)
-{
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
-}
-
-/* Milliseconds left until deadline (a bc__client_now_ms() value), for
- * poll(); -1 when there is no deadline (deadline < 0). */
-static int ms_left(double deadline)
-{
-	double left;
-	if (deadline < 0.0) {
-		return -1;
-	}
-	left = deadline - bc__client_now_ms();
-	if (left <= 0.0) {
-		return 0;
-	}
-	/* Round up so that poll never wakes just before the deadline and
-	 * spins on a zero timeout. */
-	return left > 2e9 ? 2000000000 : (int)left + 1;
-}
-
 static double deadline_after(int timeout_ms)
 {
-	return timeout_ms < 0 ? -1.0 : bc__client_now_ms() + (double)timeout_ms;
+	return timeout_ms < 0 ? -1.0 : bc_clock_ms() + (double)timeout_ms;
 }
 
 /* Records a sticky error on c and returns it. */
@@ -322,7 +298,7 @@ static int connect_wait(int fd, const struct sockaddr *sa, socklen_t len,
 		return errno;
 	}
 	do {
-		n = poll(&p, 1, ms_left(deadline));
+		n = poll(&p, 1, bc__client_ms_left(deadline));
 	} while (n < 0 && errno == EINTR);
 	if (n == 0) {
 		return ETIMEDOUT;
@@ -798,7 +774,7 @@ int bc_client_wait(struct bc_client *c, enum bc_msg_type type, uint32_t seq,
 	double deadline = deadline_after(timeout_ms == 0 ? c->timeout_ms
 							 : timeout_ms);
 	for (;;) {
-		int rc = bc_client_recv(c, out, ms_left(deadline));
+		int rc = bc_client_recv(c, out, bc__client_ms_left(deadline));
 		if (rc < 0) {
 			return sticky(c, ei);
 		}

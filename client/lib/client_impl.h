@@ -36,10 +36,7 @@ struct bc_client {
 	uint64_t scene_order;
 };
 
-/* Milliseconds of a monotonic clock. */
-double bc__client_now_ms(void);
-
-/* Milliseconds left until deadline (a bc__client_now_ms() value), rounded
+/* Milliseconds left until deadline (a bc_clock_ms() value), rounded
  * up, for poll(); -1 when there is no deadline (deadline < 0). */
 int bc__client_ms_left(double deadline);
 

@@ -21,6 +21,7 @@
 #include <openssl/ssl.h>
 #include <openssl/x509v3.h>
 
+#include "blobcast/clock.h"
 #include "client_impl.h"
 
 int bc__client_ms_left(double deadline)
@@ -29,10 +30,12 @@ int bc__client_ms_left(double deadline)
 	if (deadline < 0.0) {
 		return -1;
 	}
-	left = deadline - bc__client_now_ms();
+	left = deadline - bc_clock_ms();
 	if (left <= 0.0) {
 		return 0;
 	}
+	/* Round up so that poll never wakes just before the deadline and
+	 * spins on a zero timeout. */
 	return left > 2e9 ? 2000000000 : (int)left + 1;
 }
 
