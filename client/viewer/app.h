@@ -175,7 +175,8 @@ struct bc_viewer_app {
 	int exit_code;
 };
 
-/* Milliseconds on a monotonic clock. */
+/* Milliseconds on base's monotonic clock (bc_clock_ms), the viewer's one
+ * time base for deadlines and rates. */
 double bc_viewer_now_ms(void);
 /* Shows a sentence on the overlay (and on stderr when verbose). */
 void bc_viewer_status(struct bc_viewer_app *a, const char *fmt, ...)

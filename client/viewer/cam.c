@@ -9,79 +9,41 @@
 #include <string.h>
 
 #include "blobcast/proto_limits.h"
+#include "blobcast/vec.h"
 #include "viewer.h"
-
-static void sub3(const float a[3], const float b[3], float out[3])
-{
-	for (int i = 0; i < 3; i++) {
-		out[i] = a[i] - b[i];
-	}
-}
-
-static float dot3(const float a[3], const float b[3])
-{
-	return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void cross3(const float a[3], const float b[3], float out[3])
-{
-	float r[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-	              a[0] * b[1] - a[1] * b[0]};
-	memcpy(out, r, sizeof(r));
-}
-
-static float len3(const float a[3])
-{
-	return sqrtf(dot3(a, a));
-}
 
 /* Rotates v about the unit axis k by angle a (Rodrigues' formula). */
 static void rotate3(const float v[3], const float k[3], float a, float out[3])
 {
-	float c = cosf(a), s = sinf(a), kv[3], d = dot3(k, v);
-	cross3(k, v, kv);
+	float c = cosf(a), s = sinf(a), kv[3], d = bc_v3_dot(k, v);
+	bc_v3_cross(k, v, kv);
 	for (int i = 0; i < 3; i++) {
 		out[i] = v[i] * c + kv[i] * s + k[i] * d * (1.0f - c);
-	}
-}
-
-/* Rotates v by the unit quaternion q = (x, y, z, w): v + 2w(u x v) +
- * 2 u x (u x v), with u the vector part. */
-static void quat_rotate(const float q[4], const float v[3], float out[3])
-{
-	float t[3], ut[3];
-	cross3(q, v, t);
-	for (int i = 0; i < 3; i++) {
-		t[i] *= 2.0f;
-	}
-	cross3(q, t, ut);
-	for (int i = 0; i < 3; i++) {
-		out[i] = v[i] + q[3] * t[i] + ut[i];
 	}
 }
 
 void bc_viewer_orbit(struct bc_camera *cam, float dx, float dy)
 {
 	float off[3], up[3], right[3], turned[3], n;
-	sub3(cam->eye, cam->target, off);
+	bc_v3_sub(cam->eye, cam->target, off);
 	memcpy(up, cam->up, sizeof(up));
-	if ((n = len3(up)) <= 0.0f) {
+	if ((n = bc_v3_len(up)) <= 0.0f) {
 		return;
 	}
 	for (int i = 0; i < 3; i++) {
 		up[i] /= n;
 	}
 	rotate3(off, up, -dx * BC_VIEWER_ORBIT_PER_PX, off);
-	cross3(off, up, right);
-	if ((n = len3(right)) > 0.0f) {
+	bc_v3_cross(off, up, right);
+	if ((n = bc_v3_len(right)) > 0.0f) {
 		for (int i = 0; i < 3; i++) {
 			right[i] /= n;
 		}
 		rotate3(off, right, dy * BC_VIEWER_ORBIT_PER_PX, turned);
 		/* Past the pole the view would flip (and at it the server
 		 * refuses the camera): keep the last good elevation. */
-		if (fabsf(dot3(turned, up)) <
-		    BC_VIEWER_ORBIT_MAX_COS * len3(turned)) {
+		if (fabsf(bc_v3_dot(turned, up)) <
+		    BC_VIEWER_ORBIT_MAX_COS * bc_v3_len(turned)) {
 			memcpy(off, turned, sizeof(off));
 		}
 	}
@@ -103,8 +65,8 @@ void bc_viewer_pan(struct bc_camera *cam, float dx, float dy, uint32_t height)
 	struct bc_view_rays vr;
 	float off[3], s;
 	bc_view_rays_init(&vr, cam, 1, height);
-	sub3(cam->target, cam->eye, off);
-	s = bc_viewer_pixel_size(cam, len3(off), height);
+	bc_v3_sub(cam->target, cam->eye, off);
+	s = bc_viewer_pixel_size(cam, bc_v3_len(off), height);
 	/* The scene follows the mouse: dragging right moves the camera
 	 * left. */
 	for (int i = 0; i < 3; i++) {
@@ -117,8 +79,8 @@ void bc_viewer_pan(struct bc_camera *cam, float dx, float dy, uint32_t height)
 void bc_viewer_zoom(struct bc_camera *cam, float steps)
 {
 	float off[3], d, nd;
-	sub3(cam->eye, cam->target, off);
-	if ((d = len3(off)) <= 0.0f) {
+	bc_v3_sub(cam->eye, cam->target, off);
+	if ((d = bc_v3_len(off)) <= 0.0f) {
 		return;
 	}
 	nd = d * expf(steps * 0.1f);
@@ -143,15 +105,15 @@ bool bc_viewer_project(const struct bc_camera *cam, uint32_t width,
 	struct bc_view_rays vr;
 	float d[3], z, x, y;
 	bc_view_rays_init(&vr, cam, width, height);
-	sub3(p, vr.eye, d);
-	z = dot3(d, vr.forward);
+	bc_v3_sub(p, vr.eye, d);
+	z = bc_v3_dot(d, vr.forward);
 	if (!(z > 1e-6f)) {
 		return false;
 	}
 	/* The inverse of bc_view_rays_dir(): normalized screen coordinates
 	 * in [-1, 1], then pixels. */
-	x = dot3(d, vr.right) / (z * vr.tan_half_y * vr.aspect);
-	y = dot3(d, vr.up) / (z * vr.tan_half_y);
+	x = bc_v3_dot(d, vr.right) / (z * vr.tan_half_y * vr.aspect);
+	y = bc_v3_dot(d, vr.up) / (z * vr.tan_half_y);
 	out[0] = (x + 1.0f) * 0.5f * (float)vr.width;
 	out[1] = (1.0f - y) * 0.5f * (float)vr.height;
 	out[2] = z;
@@ -217,7 +179,7 @@ void bc_viewer_box_corners(const struct bc_prim_data *p, float corners[8][3])
 				local[i] += s * axis[a][i];
 			}
 		}
-		quat_rotate(p->rotate, local, corners[k]);
+		bc_quat_rotate(p->rotate, local, corners[k]);
 		for (int i = 0; i < 3; i++) {
 			corners[k][i] += p->translate[i];
 		}

@@ -30,6 +30,7 @@
 
 #include "app.h"
 #include "blobcast/alloc.h"
+#include "blobcast/clock.h"
 #include "blobcast/image.h"
 #include "blobcast/log.h"
 
@@ -38,9 +39,7 @@
 
 double bc_viewer_now_ms(void)
 {
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
+	return bc_clock_ms();
 }
 
 void bc_viewer_status(struct bc_viewer_app *a, const char *fmt, ...)
