@@ -23,6 +23,7 @@
 #include <time.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/clock.h"
 #include "blobcast/client.h"
 #include "blobcast/image.h"
 #include "blobcast/scene.h"
@@ -121,13 +122,6 @@ static const char common_help[] =
 
 /* ---- small helpers ----------------------------------------------------------
  */
-
-static double now_ms(void)
-{
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
-}
 
 static bool parse_u64(const char *s, uint64_t lo, uint64_t hi, uint64_t *out)
 {
@@ -766,7 +760,7 @@ static int watch_open(const struct args *a, struct bc_client **c,
 		return rc;
 	}
 	print_presenter(roster, bc_client_info(*c)->presenter, false);
-	*view_at = now_ms();
+	*view_at = bc_clock_ms();
 	return bc_client_view(*c,
 	                      &(struct bc_msg_view){.width = a->width,
 	                                            .height = a->height,
@@ -830,19 +824,19 @@ static int run_watch(struct args *a)
 		status = failed(a, NULL, &ei);
 		goto out;
 	}
-	last_frame_at = now_ms();
+	last_frame_at = bc_clock_ms();
 	while (!interrupted && (a->frames == 0 || nframes < a->frames)) {
 		double at, since;
 		const char *after = "-";
 		if (a->frames && idle_limit >= 0.0 &&
-		    now_ms() - last_frame_at > idle_limit) {
+		    bc_clock_ms() - last_frame_at > idle_limit) {
 			end = "timeout";
 			break;
 		}
 		if (!c) {
 			/* Reconnecting: wait out the back-off in slices so
 			 * that Ctrl-C and the timeout are noticed. */
-			if (now_ms() < retry_at) {
+			if (bc_clock_ms() < retry_at) {
 				struct timespec ts = {0, WATCH_SLICE_MS *
 				                             1000000L};
 				nanosleep(&ts, NULL);
@@ -857,7 +851,7 @@ static int run_watch(struct args *a)
 			if (rc) {
 				bc_client_destroy(c);
 				c = NULL;
-				retry_at = now_ms() + backoff_ms;
+				retry_at = bc_clock_ms() + backoff_ms;
 				fprintf(
 				    stderr,
 				    "blobcast watch: reconnecting failed: %s "
@@ -903,10 +897,10 @@ static int run_watch(struct args *a)
 			fflush(stdout);
 			bc_client_destroy(c);
 			c = NULL;
-			retry_at = now_ms() + backoff_ms;
+			retry_at = bc_clock_ms() + backoff_ms;
 			continue;
 		}
-		at = now_ms();
+		at = bc_clock_ms();
 		switch (m.type) {
 		case BC_MSG_SESSION_INFO:
 			roster_update(roster, &m.session_info);
@@ -1085,10 +1079,10 @@ static int run_present(struct args *a)
 	       (double)cam.fov_y_deg);
 	fflush(stdout);
 	if (a->for_s) {
-		until = now_ms() + 1000.0 * (double)a->for_s;
+		until = bc_clock_ms() + 1000.0 * (double)a->for_s;
 	}
 	while (!interrupted) {
-		if (until > 0.0 && now_ms() >= until) {
+		if (until > 0.0 && bc_clock_ms() >= until) {
 			end = "time";
 			break;
 		}
@@ -1185,11 +1179,11 @@ static int run_follow(struct args *a)
 	m.type = BC_MSG_PRESENTER;
 	m.presenter.presenter = bc_client_info(c)->presenter;
 	rc = 1;
-	last_frame_at = now_ms();
+	last_frame_at = bc_clock_ms();
 	while (!interrupted && (a->frames == 0 || nframes < a->frames)) {
 		if (rc == 0) {
 			if (a->frames && idle_limit >= 0.0 &&
-			    now_ms() - last_frame_at > idle_limit) {
+			    bc_clock_ms() - last_frame_at > idle_limit) {
 				end = "timeout";
 				break;
 			}
@@ -1245,7 +1239,7 @@ static int run_follow(struct args *a)
 		}
 		case BC_MSG_FRAME:
 			nframes++;
-			last_frame_at = now_ms();
+			last_frame_at = bc_clock_ms();
 			if (bc_client_image_apply(&img, &m, &ei)) {
 				fprintf(stderr,
 				        "blobcast follow: frame %u does not "
@@ -1556,13 +1550,13 @@ static int one_edit(const struct args *a, struct bc_client *c, uint32_t node,
 	uint32_t seq;
 	int timeout =
 	    a->timeout_ms == 0 ? BC_CLIENT_DEFAULT_TIMEOUT_MS : a->timeout_ms;
-	double deadline = now_ms() + (double)timeout;
+	double deadline = bc_clock_ms() + (double)timeout;
 	memcpy(f.v, pos, 3 * sizeof(float));
 	if (bc_client_edit_set(c, node, &f, 1, a->interacting, &seq, &ei)) {
 		return failed(a, NULL, &ei);
 	}
 	for (;;) {
-		double left = deadline - now_ms();
+		double left = deadline - bc_clock_ms();
 		int rc = bc_client_recv(
 		    c, &m, timeout < 0 ? -1 : (left > 0.0 ? (int)left + 1 : 0));
 		if (rc < 0) {
@@ -1662,12 +1656,12 @@ static int run_bench(struct args *a)
 		if (i % 2 == 0) {
 			pos[0] += BENCH_STEP;
 		}
-		t0 = now_ms();
+		t0 = bc_clock_ms();
 		if ((status = one_edit(a, c, node, pos, &frames, &bytes,
 		                       &incomplete))) {
 			goto out;
 		}
-		lat[i] = now_ms() - t0;
+		lat[i] = bc_clock_ms() - t0;
 		sum += lat[i];
 	}
 	if (a->edits % 2 == 1) {
