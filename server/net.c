@@ -21,6 +21,7 @@
 #endif
 
 #include "blobcast/alloc.h"
+#include "blobcast/bytes.h"
 #include "blobcast/log.h"
 #include "net_impl.h"
 #include "tls.h"
@@ -30,14 +31,6 @@
 
 /* A FRAME's header and frame_no, the part written per client. */
 #define FRAME_PREFIX (BC_PROTO_HEADER_SIZE + 4u)
-
-static void put_le32(uint8_t *p, uint32_t v)
-{
-	p[0] = (uint8_t)v;
-	p[1] = (uint8_t)(v >> 8);
-	p[2] = (uint8_t)(v >> 16);
-	p[3] = (uint8_t)(v >> 24);
-}
 
 struct write_req {
 	uv_write_t req;
@@ -298,7 +291,7 @@ static void queue_bytes(struct bc_conn *c, uint8_t *owned,
 			return;
 		}
 		memcpy(w->owned, data, FRAME_PREFIX);
-		put_le32(w->owned + BC_PROTO_HEADER_SIZE, ++c->frame_no);
+		bc_put_le32(w->owned + BC_PROTO_HEADER_SIZE, ++c->frame_no);
 		buf[0] = uv_buf_init((char *)w->owned, FRAME_PREFIX);
 		buf[1] = uv_buf_init((char *)data + FRAME_PREFIX,
 		                     (unsigned int)(len - FRAME_PREFIX));

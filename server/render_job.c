@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/bytes.h"
 #include "blobcast/clock.h"
 #include "blobcast/log.h"
 #include "encode.h"
@@ -77,10 +78,7 @@ static uint8_t *plane_bytes(const struct view *v, bool depth)
 		} else {
 			u = v->frame.ids[i];
 		}
-		out[4u * i] = (uint8_t)u;
-		out[4u * i + 1u] = (uint8_t)(u >> 8);
-		out[4u * i + 2u] = (uint8_t)(u >> 16);
-		out[4u * i + 3u] = (uint8_t)(u >> 24);
+		bc_put_le32(out + 4u * i, u);
 	}
 	return out;
 }
