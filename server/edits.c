@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/clock.h"
 #include "blobcast/edit.h"
 #include "blobcast/log.h"
 #include "blobcast/scene.h"
@@ -265,7 +266,7 @@ int bc_session_apply(struct bc_conn *c, const struct bc_proto_edit_op *ops,
 	struct bc_conn_ref refs[BC_PROTO_MAX_MEMBERS];
 	bool interacting = (how->flags & BC_PROTO_FLAG_INTERACTING) != 0;
 	uint32_t nrefs;
-	uint64_t t0 = uv_hrtime();
+	uint64_t t0 = bc_clock_ns();
 	int rc;
 	memset(b, 0, sizeof(*b));
 	if (s->store_failed) {
@@ -304,7 +305,7 @@ int bc_session_apply(struct bc_conn *c, const struct bc_proto_edit_op *ops,
 	s->order++;
 	s->last_edit_ms = bc_unix_ms();
 	{
-		double ms = (double)(uv_hrtime() - t0) / 1e6;
+		double ms = (double)(bc_clock_ns() - t0) / 1e6;
 		s->edit_ms_avg = s->edit_ms_avg == 0.0
 		                     ? ms
 		                     : 0.9 * s->edit_ms_avg + 0.1 * ms;
