@@ -12,7 +12,8 @@
  * the root carrying a mode:
  *   SIGN   the node's sign against every level c of a band must be kept
  *          (the band is [0, b] at the root: b is the caster's hit
- *          thickness; a negation flips it to [-b, 0]);
+ *          thickness; a negation flips it to [-b, 0], a unary value map
+ *          moves it);
  *   VALUE  the node's value must be kept.
  * At a sharp operator (or a smooth one that provably acts sharp over the
  * region, range.c) an operand is dropped, together with the operator, when
@@ -33,8 +34,7 @@
 #include <string.h>
 
 enum {
-	MODE_VALUE = 1u, /* else SIGN */
-	MODE_FLIP = 2u,  /* the band is [-b, 0] */
+	MODE_VALUE = 1u, /* else SIGN, against the levels in g->lev */
 };
 
 static inline bool is_union(uint8_t kind)
@@ -49,6 +49,7 @@ int bc_svo_prune(struct bc_svo_ranger *g, const uint32_t *mask_in,
 	const struct bc_svo_rpn *r = g->rpn;
 	uint32_t *stk = g->mark;
 	uint8_t *mode = g->mode;
+	struct bc_svo_ivl *lev = g->lev;
 	uint32_t n = 0, sp = 0, count = 0;
 	memset(res, 0, sizeof(*res));
 	if (!(band >= 0.0f) || !isfinite(band)) {
@@ -82,10 +83,13 @@ int bc_svo_prune(struct bc_svo_ranger *g, const uint32_t *mask_in,
 		return 0;
 	}
 	stk[sp] = g->idx[n - 1];
+	lev[sp].lo = 0.0;
+	lev[sp].hi = (double)band;
 	mode[sp++] = 0;
 	while (sp) {
 		uint32_t i = stk[--sp];
 		uint8_t m = mode[sp];
+		struct bc_svo_ivl L = lev[sp];
 		const struct bc_svo_term *t = &r->terms[i];
 		uint32_t a, b, keep = UINT32_MAX;
 		struct bc_svo_ivl A, B;
@@ -99,18 +103,56 @@ int bc_svo_prune(struct bc_svo_ranger *g, const uint32_t *mask_in,
 		if (t->type == BC_SVO_TERM_NEG) {
 			count++;
 			stk[sp] = g->kid0[i];
-			mode[sp++] = (uint8_t)(m ^ MODE_FLIP);
+			lev[sp].lo = -L.hi;
+			lev[sp].hi = -L.lo;
+			mode[sp++] = m;
 			continue;
 		}
 		if (t->type == BC_SVO_TERM_UNARY) {
-			/* A value map (offset, onion, scale, twist, bend)
-			 * moves the levels its child's sign is taken against
-			 * (or folds them, onion): the child keeps its value,
-			 * which every pruning decision below still allows
-			 * when one operand is wholly on the selected side. */
+			/* A value map moves the levels its child's sign is
+			 * taken against: f - a against c is f against c + a
+			 * (offset), k f against c is f against c / k (scale),
+			 * |f| - t against c is f against +-(t + c), all
+			 * within [-(t + max |c|), t + max |c|] (onion).
+			 * Twist's and bend's factor varies over the region:
+			 * there the child keeps its value, which every
+			 * decision below still allows when one operand is
+			 * wholly on the selected side. */
+			const float *ur =
+			    r->urec + (size_t)t->rec * BC_SVO_UNARY_REC;
+			struct bc_svo_ivl cl = L;
+			uint8_t cm = m;
+			switch (t->kind) {
+			case BC_OP_OFFSET:
+				cl.lo = L.lo + ur[0];
+				cl.hi = L.hi + ur[0];
+				break;
+			case BC_OP_SCALE:
+				cl.lo = L.lo / ur[0];
+				cl.hi = L.hi / ur[0];
+				break;
+			case BC_OP_ONION:
+				cl.hi = ur[0] + bc__dmax(fabs(L.lo), fabs(L.hi));
+				cl.lo = -cl.hi;
+				break;
+			default:
+				cm = (uint8_t)(m | MODE_VALUE);
+				break;
+			}
+			/* The float map rounds: a level may move by its
+			 * margin (range.c uses the same). */
+			{
+				double mg = BC__SVO_ROUND_REL *
+				                (bc__dmax(fabs(cl.lo), fabs(cl.hi)) +
+				                 fabs((double)ur[0])) +
+				            BC__SVO_ROUND_ABS;
+				cl.lo -= mg;
+				cl.hi += mg;
+			}
 			count++;
 			stk[sp] = g->kid0[i];
-			mode[sp++] = (uint8_t)(m | MODE_VALUE);
+			lev[sp] = cl;
+			mode[sp++] = cm;
 			continue;
 		}
 		a = g->kid0[i];
@@ -118,8 +160,8 @@ int bc_svo_prune(struct bc_svo_ranger *g, const uint32_t *mask_in,
 		A = g->ivl[a];
 		B = g->ivl[b];
 		rec = r->rec + t->rec;
-		lo = (m & MODE_FLIP) ? -(double)band : 0.0;
-		hi = (m & MODE_FLIP) ? 0.0 : (double)band;
+		lo = L.lo;
+		hi = L.hi;
 		sharp = bc__svo_op_sharp_in((enum bc_op)t->kind, rec[0], rec[1],
 		                            A, B);
 		if (sharp) {
@@ -146,6 +188,7 @@ int bc_svo_prune(struct bc_svo_ranger *g, const uint32_t *mask_in,
 			bc_svo_rpn_clear_subtree(r, mask_out,
 			                         keep == a ? b : a);
 			stk[sp] = keep;
+			lev[sp] = L;
 			mode[sp++] = m;
 			continue;
 		}
@@ -154,8 +197,10 @@ int bc_svo_prune(struct bc_svo_ranger *g, const uint32_t *mask_in,
 			m |= MODE_VALUE;
 		}
 		stk[sp] = a;
+		lev[sp] = L;
 		mode[sp++] = m;
 		stk[sp] = b;
+		lev[sp] = L;
 		mode[sp++] = m;
 	}
 	res->state = BC_SVO_STATE_ACTIVE;

@@ -460,8 +460,9 @@ int bc_svo_ranger_create(struct bc_svo_ranger **out, const struct bc_svo_rpn *r,
 	g->idx = bc_calloc(r->n, sizeof(*g->idx));
 	g->mark = bc_calloc(r->n, sizeof(*g->mark));
 	g->mode = bc_calloc(r->n, sizeof(*g->mode));
+	g->lev = bc_calloc(r->n, sizeof(*g->lev));
 	if (!g->ivl || !g->kid0 || !g->kid1 || !g->idx || !g->mark ||
-	    !g->mode) {
+	    !g->mode || !g->lev) {
 		bc_svo_ranger_destroy(g);
 		return BC_ENOMEM;
 	}
@@ -493,6 +494,7 @@ void bc_svo_ranger_destroy(struct bc_svo_ranger *g)
 	bc_free(g->idx);
 	bc_free(g->mark);
 	bc_free(g->mode);
+	bc_free(g->lev);
 	bc_free(g->aa_sym);
 	bc_free(g->aa_coef);
 	bc_free(g);

@@ -140,6 +140,8 @@ struct bc_svo_ranger {
 	uint32_t *idx;  /* scratch list of active terms */
 	uint32_t *mark; /* scratch for the top-down pass */
 	uint8_t *mode;
+	struct bc_svo_ivl *lev; /* per stack entry of that pass: the levels
+	                           whose sign must be kept */
 	/* Set while a domain-mapped primitive's range is computed over its
 	 * mapped box (range_tmpl.h): that box is the primitive's own input. */
 	bool in_domain;
