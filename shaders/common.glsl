@@ -79,6 +79,7 @@
 #define BC_STAT_OVER_BUDGET 8u // loop budget exceeded where no split exists
 #define BC_STAT_DISPATCHES 9u  // tracing dispatches that did work
 #define BC_STAT_GENERAL 10u    // ranges evaluated by the general path
+#define BC_STAT_OVER_VIEW 11u  // views longer than the tile's room
 #define BC_STAT_EVALS 16u      // 256 buckets of field evaluation counts
 #define BC_STAT_EVAL_BUCKETS 256u
 
@@ -103,9 +104,13 @@ layout(std140, binding = 0) uniform Frame {
 	vec4 u_right;   // xyz: unit right; w: minimal step (world units)
 	vec4 u_up;      // xyz: unit up; w: pixel footprint per unit of t
 	vec4 u_light;   // xyz: unit vector toward the light; w: ambient
-	vec4 u_misc;    // x: bisection tolerance (world units)
+	vec4 u_misc;    // x: bisection tolerance (world units), y: scene size,
+			// z: the tree's Lipschitz bound (blobtree's lin->lip),
+			// w: 1 / z (a product, exact for 1: no division,
+			// which drivers may approximate)
 	uvec4 u_size;   // width, height, tiles across, tiles down
-	uvec4 u_counts; // primitives, fragment capacity, debug mode, 0
+	uvec4 u_counts; // primitives, fragment capacity, debug mode, and the
+			// slot count when the tree has unary nodes (else 0)
 	// Suspension (trace.comp): scratch word where the slots begin, slots,
 	// loop iterations one invocation may spend per dispatch (0: no limit),
 	// and 1 when the frame is out of time: suspended tiles then finish
@@ -207,7 +212,8 @@ float bc_abv_margin(vec3 lo, vec3 hi)
 {
 	vec3 c = 0.5 * (lo + hi) - u_eye.xyz, e = 0.5 * (hi - lo);
 	float far = length(c) + length(e);
-	return BC_LIPSCHITZ * max(BC_HIT_FOOTPRINT * u_up.w * far, u_right.w);
+	return BC_LIPSCHITZ * u_misc.z *
+	       max(BC_HIT_FOOTPRINT * u_up.w * far, u_right.w);
 }
 
 // ---- Camera rays ------------------------------------------------------------

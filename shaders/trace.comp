@@ -38,6 +38,7 @@
 #include "common.glsl"
 #include "ops.glsl"
 #include "prim.glsl"
+#include "unary.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -50,6 +51,8 @@ layout(r32ui, binding = 2) uniform writeonly uimage2D img_ids;
 // in vec4 units.
 #define VI_KIND_MASK 63u
 #define VI_LEAF 0x40u
+// A unary node's value map (its index above VI_PRIM_SHIFT).
+#define VI_UNARY 0x80u
 #define VI_PRIM_SHIFT 11u
 
 // Pending values the fast evaluation keeps in registers (besides the top):
@@ -205,11 +208,48 @@ bool may_climb(uint a, uint q, uint lo)
 	return a < q && b_topo[a].x >= lo;
 }
 
+// View instructions a tile may hold: shared memory, then two per list
+// entry in scratch. Only unary instructions can go past 2 na - 1.
+bool view_room(uint nview)
+{
+	return nview < max(BC_VIEW_SHARED, 2u * g_n);
+}
+
+// Appends slot s's value-changing wrappers (blobtree/eval.c's emit_wraps);
+// false when the view has no room left.
+bool emit_wraps(inout uint nview, uint s)
+{
+	if (!bc_has_unary()) {
+		return true;
+	}
+	for (uint u = bc_slot_unary(s).x; u != BC_NONE;) {
+		uvec4 un = bc_unary_node(u);
+		g_work++;
+		if (bc_unary_has_value(un.x)) {
+			if (!view_room(nview)) {
+				return false;
+			}
+			view_set(nview++, uvec2(un.x | VI_UNARY |
+						(u << VI_PRIM_SHIFT), un.y));
+		}
+		u = un.z;
+	}
+	return true;
+}
+
+// Does the climb from x to its ancestor a pass a slot with a
+// value-changing wrapper (a is one, or one lies between)?
+bool value_wrapped(uint x, uint a)
+{
+	return bc_has_unary() && bc_slot_unary(x).z != bc_slot_unary(a).z;
+}
+
 // Builds the view of the na active primitives. Returns false when the view
 // is empty (every active primitive was pruned: the field is +inf).
 bool build_view(uint na)
 {
 	uint nview = 0u, sp = 0u;
+	bool room = true;
 	for (uint i = 0u; i < na; i++) {
 		uint k = act_get(i);
 		uint s = b_prim[k].info.x;
@@ -222,28 +262,52 @@ bool build_view(uint na)
 		s_st_start[sp] = nview;
 		s_st_miss[sp] = false;
 		sp++;
+		if (!view_room(nview)) {
+			room = false;
+			break;
+		}
 		view_set(nview++, uvec2(kind_of(s) | VI_LEAF |
 						(k << VI_PRIM_SHIFT),
 					b_node[s].y));
+		room = room && emit_wraps(nview, s);
 		for (;;) {
 			uint top = sp - 1u;
 			uint lo = sp >= 2u ? s_st_slot[sp - 2u] + 1u : 0u;
 			uint x = s_st_slot[top], a;
 			g_work++;
+			// No shortcut passes a value-changing wrapper: the
+			// climb stops there to emit it.
 			for (;;) {
 				uvec4 tp = b_topo[x];
 				g_work++;
-				if (tp.y != BC_NONE && may_climb(tp.y, q, lo)) {
+				if (tp.y != BC_NONE && may_climb(tp.y, q, lo) &&
+				    !value_wrapped(x, tp.y)) {
 					x = tp.y;
 					continue;
 				}
-				if (tp.z != BC_NONE && may_climb(tp.z, q, lo)) {
+				if (tp.z != BC_NONE && may_climb(tp.z, q, lo) &&
+				    !value_wrapped(x, tp.z)) {
 					x = tp.z;
 					continue;
 				}
 				a = parent_of(x);
 				if (a != BC_NONE && may_climb(a, q, lo)) {
+					bool wrapped = value_wrapped(x, a);
 					x = a;
+					if (wrapped) {
+						if (x != s_st_slot[top] &&
+						    b_topo[s_st_slot[top]].w !=
+							    b_topo[x].w &&
+						    !s_st_miss[top]) {
+							s_st_miss[top] = true;
+							nview = s_st_start[top];
+						}
+						s_st_slot[top] = x;
+						if (!s_st_miss[top]) {
+							room = room &&
+							       emit_wraps(nview, x);
+						}
+					}
 					continue;
 				}
 				break;
@@ -276,11 +340,20 @@ bool build_view(uint na)
 			}
 			if (missing) {
 				nview = s_st_start[left];
+			} else {
+				room = room && emit_wraps(nview, a);
 			}
 			s_st_slot[left] = a;
 			s_st_miss[left] = missing;
 			sp--;
 		}
+	}
+	if (!room) {
+		// More unary instructions than the tile's scratch holds: the
+		// host reports the frame as failed (never a wrong picture).
+		atomicAdd(b_stat[BC_STAT_OVER_VIEW], 1u);
+		s_nview = 0u;
+		return false;
 	}
 	if (sp == 0u || s_st_miss[0]) {
 		s_nview = 0u;
@@ -293,7 +366,7 @@ bool build_view(uint na)
 	g_work += 2u * min(nview, BC_VIEW_SHARED);
 	for (uint i = 0u; i < min(nview, BC_VIEW_SHARED); i++) {
 		uint size = (s_view[i].x & VI_LEAF) != 0u ? BC_PRIM_RECORD_VEC4
-							  : 1u;
+			  : (s_view[i].x & VI_UNARY) != 0u ? 2u : 1u;
 		if (used + size <= BC_CACHE_VEC4) {
 			s_vcache[i] = used;
 			used += size;
@@ -307,10 +380,15 @@ bool build_view(uint na)
 	}
 	uint depth = 0u, most = 0u;
 	for (uint i = 0u; i < min(nview, BC_VIEW_SHARED); i++) {
+		if ((s_view[i].x & VI_UNARY) != 0u) {
+			continue;
+		}
 		depth = (s_view[i].x & VI_LEAF) != 0u ? depth + 1u : depth - 1u;
 		most = max(most, depth);
 	}
-	s_fast = !over && nview <= BC_VIEW_SHARED && most <= FAST_STACK + 1u;
+	// Trees with unary nodes take the general evaluator.
+	s_fast = !over && nview <= BC_VIEW_SHARED && most <= FAST_STACK + 1u &&
+		 !bc_has_unary();
 	return true;
 }
 
@@ -486,12 +564,22 @@ float field_general(vec3 p, out uint prim)
 	for (uint i = 0u; i < n; i++) {
 		uvec2 in_ = view_get(i);
 		uint kind = in_.x & VI_KIND_MASK;
+		if ((in_.x & VI_UNARY) != 0u) {
+			top = bc_unary_value(in_.x >> VI_PRIM_SHIFT, top, p);
+			continue;
+		}
 		if ((in_.x & VI_LEAF) != 0u) {
+			// The point through the domain nodes around the leaf.
+			vec3 q = p;
+			if (bc_has_unary()) {
+				uint s = b_prim[in_.x >> VI_PRIM_SHIFT].info.x;
+				q = bc_domain_map(bc_slot_unary(s).y, p);
+			}
 			float v = bc_prim_record(kind, record(i, in_, 0u),
 						 record(i, in_, 1u),
 						 record(i, in_, 2u),
 						 record(i, in_, 3u),
-						 record(i, in_, 4u), p);
+						 record(i, in_, 4u), q);
 			if (depth > 0u) {
 				uint s = min(depth - 1u, BC_EVAL_STACK - 1u);
 				st[s] = top;
@@ -655,8 +743,11 @@ void ray_refine_next()
 void ray_step_check()
 {
 	float eps = max(BC_HIT_FOOTPRINT * u_up.w * r_t, u_right.w);
+	// Steps are divided by the tree's Lipschitz bound (u_misc.z), the hit
+	// band is not (render/cpu/trace.c).
+	eps *= u_misc.w;
 	if (r_v < eps) {
-		r_cap = r_t + 64.0 * BC_LIPSCHITZ * eps;
+		r_cap = r_t + 64.0 * BC_LIPSCHITZ * u_misc.z * eps;
 		r_limit = min(r_cap, r_t1);
 		r_count = 0u;
 		ray_refine_next();
@@ -684,6 +775,7 @@ void ray_take(float x, uint prim)
 {
 	if (r_state < ST_ID) {
 		x *= 1.0 / BC_LIPSCHITZ;
+		x *= u_misc.w;
 	}
 	switch (r_state) {
 	case ST_START:

@@ -200,16 +200,44 @@ static void fill_abvs(const struct bc_lin *l, uint32_t lo, uint32_t hi,
 	}
 }
 
-/* Uploads slots [lo, hi) of the traversal indices. */
+/* The unary tables shaders/unary.glsl reads after the slots' entries: per
+ * slot (innermost wrapper, innermost domain node, value-changing wrappers
+ * above, 0), then per unary node (kind, record, next wrapper out, next
+ * domain node out). */
+static void fill_unary(const struct bc_lin *l, uint32_t *out)
+{
+	for (uint32_t s = 0; s < l->count; s++, out += 4) {
+		out[0] = l->wrap[s];
+		out[1] = l->dom[s];
+		out[2] = l->ucount[s];
+		out[3] = 0;
+	}
+	for (uint32_t u = 0; u < l->nunary; u++, out += 4) {
+		out[0] = l->unary_kind[u];
+		out[1] = l->unary_param[u];
+		out[2] = l->unary_outer[u];
+		out[3] = l->unary_dom[u];
+	}
+}
+
+/* Uploads slots [lo, hi) of the traversal indices (whole: all of them and,
+ * when the tree has unary nodes, their tables; those change only with the
+ * structure). */
 static int put_topo(struct gl_renderer *r, const struct bc_lin *l, uint32_t lo,
                     uint32_t hi, bool whole)
 {
 	size_t n = hi - lo;
-	uint32_t *tmp = bc_malloc((n ? n : 1) * 4 * sizeof(uint32_t));
+	size_t extra = whole && l->nunary ? (size_t)l->count + l->nunary : 0;
+	uint32_t *tmp = bc_malloc((n + extra ? n + extra : 1) * 4 *
+	                          sizeof(uint32_t));
 	if (!tmp) {
 		return BC_ENOMEM;
 	}
 	fill_topo(l, lo, hi, tmp);
+	if (extra) {
+		fill_unary(l, tmp + 4 * n);
+		n += extra;
+	}
 	if (whole) {
 		buf_alloc(r, BC__GL_BUF_TOPO, n * 16, tmp);
 	} else {
@@ -464,15 +492,15 @@ static int gl_sync(struct bc_renderer *base, const struct bc_tree *t,
 	t0 = bc_render_now_ms();
 	r->upload_bytes = 0;
 	l = bc_tree_lin(t);
-	if (l && l->nunary) {
-		/* The shaders do not evaluate them yet: refuse rather than
-		 * draw the tree without them. */
-		bc__gl_ctx_unbind(&r->ctx);
-		r->synced = false;
-		return bc_errinfo_set(ei, BC_ENOTSUP,
-		                      "gl: unary and domain nodes (offset, "
-		                      "twist, ...) are not supported yet; use "
-		                      "--backend tiled");
+	if (l && l->nunary && !r->progs[BC__GL_PROG_TRACE_UNARY]) {
+		/* Built on the first tree with unary nodes. */
+		if ((rc = bc__gl_program_trace_unary(
+		         &r->ctx, &r->progs[BC__GL_PROG_TRACE_UNARY], ei))) {
+			bc__gl_ctx_unbind(&r->ctx);
+			r->synced = false;
+			return rc;
+		}
+		r->builds++;
 	}
 	if (!l) {
 		/* An empty tree: nothing to upload, every ray misses. */
@@ -546,6 +574,10 @@ static void frame_setup(struct bc__gl_frame_ubo *u, const struct bc_lin *l,
 	u->size[2] = (w + BC_GL_TILE - 1) / BC_GL_TILE;
 	u->size[3] = (h + BC_GL_TILE - 1) / BC_GL_TILE;
 	u->counts[0] = nprims;
+	/* Where the unary tables start in Topo, 0 without unary nodes. */
+	u->counts[3] = l && l->nunary ? l->count : 0;
+	u->misc[2] = l ? l->lip : 1.0f;
+	u->misc[3] = 1.0f / u->misc[2];
 	u->counts[1] = cap;
 	u->counts[2] = (uint32_t)debug;
 	/* Slots follow the fragment scratch: 6 words per fragment. */
@@ -829,7 +861,8 @@ static void draw(struct gl_renderer *r, const struct bc__gl_frame_ubo *u,
 	gl->QueryCounter(r->queries[Q_ABUFFER], GL_TIMESTAMP);
 
 	/* Tracing and shading. */
-	gl->UseProgram(r->progs[BC__GL_PROG_TRACE]);
+	gl->UseProgram(r->progs[u->counts[3] ? BC__GL_PROG_TRACE_UNARY
+	                                      : BC__GL_PROG_TRACE]);
 	gl->BindImageTexture(0, r->tex[0], 0, GL_FALSE, 0, GL_WRITE_ONLY,
 	                     GL_R32UI);
 	gl->BindImageTexture(1, r->tex[1], 0, GL_FALSE, 0, GL_WRITE_ONLY,
@@ -1119,6 +1152,14 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 		                    BC_GL_LLVMPIPE_SORT_MAX);
 		goto done;
 	}
+	if (stat[BC_GL_STAT_OVER_VIEW]) {
+		rc = bc_errinfo_set(ei, BC_ELIMIT,
+		                    "gl: %u depth ranges need more view "
+		                    "instructions (unary nodes) than a tile "
+		                    "holds",
+		                    stat[BC_GL_STAT_OVER_VIEW]);
+		goto done;
+	}
 	if (stat[BC_GL_STAT_OVER_BUDGET]) {
 		rc =
 		    bc_errinfo_set(ei, BC_ELIMIT,
@@ -1161,14 +1202,17 @@ done:
 static uint64_t gl_key(struct bc_renderer *base, const struct bc_camera *cam,
                        uint32_t width, uint32_t height)
 {
-	float scale =
-	    bc_render_scale(base->tree ? bc_tree_lin(base->tree) : NULL);
-	uint32_t bits;
+	const struct bc_lin *l = base->tree ? bc_tree_lin(base->tree) : NULL;
+	float scale = bc_render_scale(l);
+	/* The tree's Lipschitz bound divides every step (render/cpu's key). */
+	float lip = l ? l->lip : 1.0f;
+	uint32_t bits, lbits;
 	(void)cam;
 	(void)width;
 	(void)height;
 	memcpy(&bits, &scale, sizeof(bits));
-	return bits;
+	memcpy(&lbits, &lip, sizeof(lbits));
+	return (uint64_t)bits | ((uint64_t)lbits << 32);
 }
 
 /* The tiles abuffer.geom can give a primitive of world ABV abv: its AABB
@@ -1204,9 +1248,12 @@ static void gl_damage(struct bc_renderer *base, const struct bc_camera *cam,
 	if (m < BC_GL_MIN_STEP_REL * scale) {
 		m = BC_GL_MIN_STEP_REL * scale;
 	}
-	/* 1.45 as the shader's BC_LIPSCHITZ, and a little more for
-	 * rounding. */
+	/* 1.45 as the shader's BC_LIPSCHITZ times the tree's bound (its
+	 * u_misc.z), and a little more for rounding. */
 	m *= 1.45f * 1.001f;
+	if (base->tree && bc_tree_lin(base->tree)) {
+		m *= bc_tree_lin(base->tree)->lip;
+	}
 	for (uint32_t k = 0; k < 8; k++) {
 		double v[3], z, sx, sy, s = 0.0;
 		for (int i = 0; i < 3; i++) {

@@ -51,6 +51,7 @@
 #define BC_GL_STAT_OVER_BUDGET 8u
 #define BC_GL_STAT_DISPATCHES 9u
 #define BC_GL_STAT_GENERAL 10u
+#define BC_GL_STAT_OVER_VIEW 11u
 #define BC_GL_STAT_EVALS 16u
 #define BC_GL_STAT_EVAL_BUCKETS 256u
 #define BC_GL_STAT_WORDS (BC_GL_STAT_EVALS + BC_GL_STAT_EVAL_BUCKETS)
@@ -100,7 +101,7 @@ struct bc__gl_frame_ubo {
 	float right[4];     /* w: minimal step */
 	float up[4];        /* w: pixel footprint per unit of t */
 	float light[4];     /* w: ambient */
-	float misc[4];      /* x: bisection tolerance, y: scene size */
+	float misc[4];      /* bisection tolerance, scene size, lip, 1/lip */
 	uint32_t size[4];   /* width, height, tiles across, tiles down */
 	uint32_t counts[4]; /* primitives, fragment capacity, debug mode */
 	uint32_t pool[4];   /* slot base (scratch words), slots, budget */
@@ -146,6 +147,7 @@ enum bc__gl_prog {
 	BC__GL_PROG_SCAN,
 	BC__GL_PROG_SORT,
 	BC__GL_PROG_TRACE,
+	BC__GL_PROG_TRACE_UNARY, /* trace.comp with BC_UNARY: built on demand */
 	BC__GL_PROG_COUNT
 };
 
@@ -154,6 +156,10 @@ enum bc__gl_prog {
  * ei. Returns 0 or BC_EGL. */
 int bc__gl_programs_build(struct bc__gl_ctx *c, GLuint progs[BC__GL_PROG_COUNT],
                           struct bc_errinfo *ei);
+/* Builds the tracer for trees with unary nodes (trace.comp compiled with
+ * BC_UNARY defined) into *prog. Returns 0 or BC_EGL with the log in ei. */
+int bc__gl_program_trace_unary(struct bc__gl_ctx *c, GLuint *prog,
+                               struct bc_errinfo *ei);
 void bc__gl_programs_free(struct bc__gl_ctx *c,
                           GLuint progs[BC__GL_PROG_COUNT]);
 

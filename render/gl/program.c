@@ -20,6 +20,7 @@ struct stage {
 	GLenum type;
 	const char *name;
 	const char *src;
+	const char *define; /* a line put after #version, or NULL */
 };
 
 /* Logs the info log of a shader or program and copies its start into ei
@@ -68,7 +69,18 @@ static GLuint compile(struct bc__gl_ctx *c, const struct stage *st,
 		bc__gl_check(c, "glCreateShader", ei);
 		return 0;
 	}
-	gl->ShaderSource(sh, 1, &st->src, NULL);
+	if (st->define) {
+		/* #version must stay the first line: the define follows it. */
+		const char *nl = strchr(st->src, '\n');
+		const char *parts[3] = {st->src, st->define, nl ? nl + 1 : ""};
+		GLint lens[3] = {nl ? (GLint)(nl + 1 - st->src) : 0, -1, -1};
+		if (!nl) {
+			parts[0] = "";
+		}
+		gl->ShaderSource(sh, 3, parts, lens);
+	} else {
+		gl->ShaderSource(sh, 1, &st->src, NULL);
+	}
 	gl->CompileShader(sh);
 	gl->GetShaderiv(sh, GL_COMPILE_STATUS, &ok);
 	snprintf(what, sizeof(what), "compiling %s", st->name);
@@ -120,16 +132,16 @@ int bc__gl_programs_build(struct bc__gl_ctx *c, GLuint progs[BC__GL_PROG_COUNT],
 			  struct bc_errinfo *ei)
 {
 	const struct stage abuffer[] = {
-		{GL_VERTEX_SHADER, "abuffer.vert", bc_shader_abuffer_vert},
-		{GL_GEOMETRY_SHADER, "abuffer.geom", bc_shader_abuffer_geom},
-		{GL_FRAGMENT_SHADER, "abuffer.frag", bc_shader_abuffer_frag},
+		{GL_VERTEX_SHADER, "abuffer.vert", bc_shader_abuffer_vert, NULL},
+		{GL_GEOMETRY_SHADER, "abuffer.geom", bc_shader_abuffer_geom, NULL},
+		{GL_FRAGMENT_SHADER, "abuffer.frag", bc_shader_abuffer_frag, NULL},
 	};
 	const struct stage scan = {GL_COMPUTE_SHADER, "abuffer_scan.comp",
-				   bc_shader_abuffer_scan_comp};
+				   bc_shader_abuffer_scan_comp, NULL};
 	const struct stage sort = {GL_COMPUTE_SHADER, "abuffer_sort.comp",
-				   bc_shader_abuffer_sort_comp};
+				   bc_shader_abuffer_sort_comp, NULL};
 	const struct stage trace = {GL_COMPUTE_SHADER, "trace.comp",
-				    bc_shader_trace_comp};
+				    bc_shader_trace_comp, NULL};
 	memset(progs, 0, BC__GL_PROG_COUNT * sizeof(progs[0]));
 	if (!(progs[BC__GL_PROG_ABUFFER] = link(c, "abuffer", abuffer, 3, ei)) ||
 	    !(progs[BC__GL_PROG_SCAN] = link(c, "abuffer_scan", &scan, 1, ei)) ||
@@ -139,6 +151,16 @@ int bc__gl_programs_build(struct bc__gl_ctx *c, GLuint progs[BC__GL_PROG_COUNT],
 		return ei && ei->code ? ei->code : BC_EGL;
 	}
 	return 0;
+}
+
+int bc__gl_program_trace_unary(struct bc__gl_ctx *c, GLuint *prog,
+                               struct bc_errinfo *ei)
+{
+	const struct stage trace = {GL_COMPUTE_SHADER, "trace.comp",
+				    bc_shader_trace_comp,
+				    "#define BC_UNARY 1\n"};
+	*prog = link(c, "trace (unary nodes)", &trace, 1, ei);
+	return *prog ? 0 : (ei && ei->code ? ei->code : BC_EGL);
 }
 
 void bc__gl_programs_free(struct bc__gl_ctx *c, GLuint progs[BC__GL_PROG_COUNT])

@@ -21,6 +21,7 @@
 #include "blobcast/gen.h"
 #include "blobcast/render.h"
 #include "blobcast/render_gl.h"
+#include "blobcast/scene.h"
 #include "blobtree/randtree.h"
 #include "test.h"
 
@@ -240,6 +241,110 @@ static void test_families_agree_with_tiled(void)
 		CHECK(a.median_dz < 1e-3f * bc_tree_lin(t)->size);
 		CHECK(a.id_diff * 20 <= a.both);
 	}
+	bc_frame_finish(&g);
+	bc_frame_finish(&c);
+	bc_tree_destroy(t);
+	bc_renderer_destroy(r);
+}
+
+/* GLSL vs C images of trees with unary and domain nodes: a scene of every
+ * kind (twist, bend and a stack of them make the Lipschitz bound > 1),
+ * then after a parameter edit under the twist (its radius and bound move)
+ * and a unary edit, and random trees with them over every operator. */
+static void test_unary_nodes_agree_with_tiled(void)
+{
+	static const char scene[] =
+	    "{\"blobcast\": 1, \"root\": {\"type\": \"union\", "
+	    "\"children\": ["
+	    "{\"type\": \"twist\", \"id\": 2, \"rate\": 1.2, \"children\": "
+	    "[{\"type\": \"box\", \"id\": 3, \"half_extents\": [0.4, 1.2, "
+	    "0.4], \"translate\": [-1.5, 0, 0]}]},"
+	    "{\"type\": \"onion\", \"id\": 4, \"thickness\": 0.05, "
+	    "\"children\": [{\"type\": \"difference\", \"children\": "
+	    "[{\"type\": \"sphere\", \"radius\": 0.6}, {\"type\": \"box\", "
+	    "\"half_extents\": [1, 1, 1], \"translate\": [0, 0, 1]}]}]},"
+	    "{\"type\": \"repeat\", \"spacing\": [0.6, 1, 0.6], \"count\": "
+	    "[3, 1, 2], \"children\": [{\"type\": \"scale\", \"factor\": "
+	    "0.5, \"children\": [{\"type\": \"sphere\", \"radius\": 0.4, "
+	    "\"translate\": [3.2, -1.6, 0]}]}]},"
+	    "{\"type\": \"offset\", \"amount\": 0.1, \"children\": "
+	    "[{\"type\": \"bend\", \"rate\": 0.6, \"children\": "
+	    "[{\"type\": \"mirror\", \"axes\": \"x\", \"children\": "
+	    "[{\"type\": \"elongate\", \"half_extents\": [0.3, 0, 0], "
+	    "\"children\": [{\"type\": \"capsule\", \"a\": [0.5, 0, 0], "
+	    "\"b\": [0.9, 0, 0], \"radius\": 0.1, \"translate\": [0, 1.2, "
+	    "0]}]}]}]}]}]}}";
+	struct bc_renderer *r = open_gl(NULL, BC_DEBUG_NONE);
+	struct bc_tree *t = bc_tree_create();
+	struct bc_frame g = {0}, c = {0};
+	struct bc_errinfo ei = {0};
+	struct bc_camera cam;
+	int tested = 0;
+	if (!r) {
+		bc_tree_destroy(t);
+		BC_SKIP("no GL context");
+	}
+	REQUIRE(t && bc_frame_init(&g, W, H) == 0 &&
+	        bc_frame_init(&c, W, H) == 0);
+	REQUIRE(bc_scene_parse_json(scene, sizeof(scene) - 1, t, NULL, &ei) ==
+	        0);
+	bc_camera_default(&cam);
+	for (int step = 0; step < 3 + 2; step++) {
+		struct agreement a;
+		struct bc_dirty d;
+		if (step == 1) {
+			struct bc_prim_data b;
+			REQUIRE(bc_tree_get(t, 3, &b, NULL));
+			b.params[0] = 0.6f; /* the twist's radius grows */
+			REQUIRE(bc_tree_set_prim(t, 3, &b, &ei) == 0);
+		} else if (step == 2) {
+			struct bc_unary u;
+			REQUIRE(bc_tree_get_unary(t, 4, &u));
+			u.u[0] = 0.12f;
+			REQUIRE(bc_tree_set_unary(t, 4, &u, &ei) == 0);
+		} else if (step >= 3) {
+			/* Random trees with unary nodes that fill the view. */
+			uint64_t seed = 40 + (uint64_t)step;
+			rt_unary_rate = 0.4f;
+			do {
+				REQUIRE(rt_build(t, seed, 6 + (uint32_t)(seed %
+				                                          6)) ==
+				        0);
+				seed += 7;
+			} while (bc_tree_lin(t)->nunary == 0);
+			rt_unary_rate = 0.0f;
+		}
+		bc_tree_take_dirty(t, &d);
+		if (step >= 3) {
+			const struct bc_lin *l = bc_tree_lin(t);
+			float dist = 1.6f * l->size;
+			bc_camera_default(&cam);
+			for (int i = 0; i < 3; i++) {
+				cam.target[i] = 0.5f * (l->lo[i] + l->hi[i]);
+				cam.eye[i] = cam.target[i];
+			}
+			cam.eye[2] += dist;
+			cam.eye[1] += 0.4f * dist;
+		}
+		CHECK(draw(r, t, step >= 1 && step <= 2 ? &d : NULL, &cam,
+		           &g) == 0);
+		CHECK(draw_cpu(BC_DEBUG_NONE, t, &cam, &c) == 0);
+		compare(&g, &c, &a);
+		printf("  unary %d: lip %.2f, mask %u/%u, median |dz| %.2g, "
+		       "ids %u/%u, colours %u\n",
+		       step, (double)bc_tree_lin(t)->lip, a.mask_diff, W * H,
+		       (double)a.median_dz, a.id_diff, a.both, a.rgba_diff);
+		if (step < 3) {
+			CHECK(a.both >= 400);
+		} else if (a.both < 40) {
+			continue; /* mostly out of view: nothing to compare */
+		}
+		tested++;
+		CHECK(a.mask_diff * 200 < W * H);
+		CHECK(a.median_dz < 1e-3f * bc_tree_lin(t)->size);
+		CHECK(a.id_diff * 20 <= a.both);
+	}
+	CHECK_EQ_INT(tested, 5);
 	bc_frame_finish(&g);
 	bc_frame_finish(&c);
 	bc_tree_destroy(t);
@@ -1126,6 +1231,7 @@ static void test_bad_calls_are_refused(void)
 }
 
 static const struct bc_test tests[] = {
+    {"unary_nodes_agree_with_tiled", test_unary_nodes_agree_with_tiled},
     {"families_agree_with_tiled", test_families_agree_with_tiled},
     {"param_edit_equals_fresh_load", test_param_edit_equals_fresh_load},
     {"overflows_degrade_not_fail", test_overflows_degrade_not_fail},
