@@ -28,6 +28,8 @@ static int count_opts(const struct bc_opt *opts)
 	return n;
 }
 
+/* fmt is the caller's format, checked at bc_args_error's own attribute. */
+__attribute__((format(printf, 2, 0)))
 static void verror(const struct bc_args *a, const char *fmt, va_list ap)
 {
 	fprintf(stderr, "%s: ", a->prog);
