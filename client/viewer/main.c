@@ -30,12 +30,12 @@
 
 #include "app.h"
 #include "blobcast/alloc.h"
+#include "blobcast/args.h"
 #include "blobcast/clock.h"
 #include "blobcast/image.h"
 #include "blobcast/log.h"
 
 #define EXIT_FAIL 1
-#define EXIT_USAGE 2
 
 double bc_viewer_now_ms(void)
 {
@@ -58,126 +58,130 @@ void bc_viewer_status(struct bc_viewer_app *a, const char *fmt, ...)
 
 /* ---- options ------------------------------------------------------------- */
 
-static void usage(FILE *out)
-{
-	fprintf(
-	    out,
-	    "usage: blobcast-view [options]\n"
-	    "\n"
-	    "Shows a blobcast session in a window and edits it with the "
-	    "mouse.\n"
-	    "\n"
-	    "  --server ADDR      HOST:PORT, [IPV6]:PORT or unix:PATH "
-	    "(default\n"
-	    "                     $BLOBCAST_SERVER, else 127.0.0.1:7878);\n"
-	    "                     tls://HOST:PORT for TLS; wss://HOST/PATH\n"
-	    "                     through a WebSocket proxy (docs/deploy.md)\n"
-	    "  --ca FILE          TLS: trust the CA certificates in FILE\n"
-	    "  --insecure         TLS: do not check the server's "
-	    "certificate\n"
-	    "  --session NAME     session to join (default \"default\"; an "
-	    "editor\n"
-	    "                     creates it when it does not exist)\n"
-	    "  --role ROLE        editor (default) or viewer\n"
-	    "  --name NAME        the name other members see "
-	    "(default blobcast-view)\n"
-	    "  --token TOKEN      authentication token (default "
-	    "$BLOBCAST_TOKEN)\n"
-	    "  --size WxH         window size (default 960x600)\n"
-	    "  --encoding ENC     still frames as jpeg (default) or png\n"
-	    "  --quality Q        JPEG quality of still frames, 1..100 "
-	    "(default 85;\n"
-	    "                     interactive frames use at most 70)\n"
-	    "  --downscale N      coarsest block accepted, 1..8 (default 2):\n"
-	    "                     refinement frames at 1/2^n size, 2^n <= N\n"
-	    "  --gles             use an OpenGL ES 2.0 context\n"
-	    "  --no-overlay       start with the overlay hidden (O toggles)\n"
-	    "  --snapshot-dir DIR where S saves lossless snapshots "
-	    "(default .)\n"
-	    "  --screenshot FILE  save the window to FILE once --frames "
-	    "pictures\n"
-	    "                     were shown, then exit\n"
-	    "  --frames N         finished pictures before the screenshot "
-	    "(the\n"
-	    "                     last frame of each refinement; default 1)\n"
-	    "  --turn DEG         with --frames > 1: turn the camera by DEG "
-	    "after\n"
-	    "                     each picture (the daemon renders on change "
-	    "only;\n"
-	    "                     default 15)\n"
-	    "  --dump-frame FILE  with --screenshot: also save the picture "
-	    "received\n"
-	    "  --verbose          print frames, picks and edits on stdout\n"
-	    "  --help             this text\n"
-	    "\n"
-	    "Mouse: drag orbits, or moves the shape under the pointer; "
-	    "right drag\n"
-	    "or Shift-drag pans; the wheel zooms, Shift+wheel sizes the "
-	    "selected\n"
-	    "shape, Ctrl+wheel changes its operator's blend. Keys: S "
-	    "snapshot,\n"
-	    "P screenshot, O overlay, R scene camera, Q or Escape quit;\n"
-	    "Ctrl-Z undo, Ctrl-Shift-Z or Ctrl-Y redo; F follow the "
-	    "presenter\n"
-	    "(this window shows what the presenter's camera sees, at its "
-	    "own size;\n"
-	    "moving the camera or F again stops), Shift-F present (members "
-	    "who\n"
-	    "follow see this window's camera; Shift-F again stops). The "
-	    "overlay\n"
-	    "names who presents and whether this window follows.\n"
-	    "\n"
-	    "A lost connection is retried (after 0.25 s, doubling up to 4 s)\n"
-	    "and the session joined again; a refused token or role or a\n"
-	    "missing session stop the retries. With --screenshot a lost\n"
-	    "connection exits 1 instead.\n");
-}
+static const struct bc_opt_name role_names[] = {
+	{"editor", BC_PROTO_ROLE_EDITOR},
+	{"viewer", BC_PROTO_ROLE_VIEWER},
+	{NULL, 0}};
+static const struct bc_opt_name encoding_names[] = {
+	{"jpeg", BC_PROTO_ENC_JPEG}, {"png", BC_PROTO_ENC_PNG}, {NULL, 0}};
 
-static bool parse_u32(const char *s, uint32_t lo, uint32_t hi, uint32_t *out)
-{
-	char *end;
-	unsigned long v;
-	if (!s || !*s || *s == '-' || *s == '+') {
-		return false;
-	}
-	errno = 0;
-	v = strtoul(s, &end, 10);
-	if (errno || *end || v < lo || v > hi) {
-		return false;
-	}
-	*out = (uint32_t)v;
-	return true;
-}
+/* What the table parses into before it is moved into the options. */
+struct cli {
+	int role, encoding;
+	uint32_t size[2], quality, downscale;
+	bool no_overlay;
+};
 
-static bool parse_size(const char *s, uint32_t *w, uint32_t *h)
+/* Returns 0 to go on, or the exit status (0 after --help, 2 on a bad
+ * argument) with *done set. */
+static int parse_args(int argc, char **argv, struct bc_viewer_opts *o,
+		      bool *done)
 {
-	char buf[32];
-	char *x;
-	if (!s || strlen(s) >= sizeof(buf)) {
-		return false;
-	}
-	strcpy(buf, s);
-	if (!(x = strchr(buf, 'x'))) {
-		return false;
-	}
-	*x = '\0';
-	return parse_u32(buf, 1, BC_PROTO_MAX_DIM, w) &&
-	       parse_u32(x + 1, 1, BC_PROTO_MAX_DIM, h);
-}
-
-/* Returns 0, or EXIT_USAGE after printing why (or the help: -1). */
-static int parse_args(int argc, char **argv, struct bc_viewer_opts *o)
-{
-	uint32_t v;
+	struct cli c = {
+		.role = BC_PROTO_ROLE_EDITOR,
+		.encoding = BC_PROTO_ENC_JPEG,
+		.size = {960, 600},
+		.quality = 85,
+		.downscale = 2,
+	};
+	const struct bc_opt opts[] = {
+		{.name = "server", .kind = BC_OPT_STRING, .dst = &o->server,
+		 .arg = "ADDR",
+		 .help = "HOST:PORT, [IPV6]:PORT or unix:PATH (default\n"
+			 "$BLOBCAST_SERVER, else 127.0.0.1:7878);\n"
+			 "tls://HOST:PORT for TLS; wss://HOST/PATH\n"
+			 "through a WebSocket proxy (docs/deploy.md)"},
+		{.name = "ca", .kind = BC_OPT_STRING, .dst = &o->ca,
+		 .arg = "FILE",
+		 .help = "TLS: trust the CA certificates in FILE"},
+		{.name = "insecure", .kind = BC_OPT_FLAG, .dst = &o->insecure,
+		 .help = "TLS: do not check the server's certificate"},
+		{.name = "session", .kind = BC_OPT_STRING, .dst = &o->session,
+		 .arg = "NAME",
+		 .help = "session to join (default \"default\"; an editor\n"
+			 "creates it when it does not exist)"},
+		{.name = "role", .kind = BC_OPT_ENUM, .dst = &c.role,
+		 .arg = "ROLE", .help = "{choices} (default {default})",
+		 .names = role_names},
+		{.name = "name", .kind = BC_OPT_STRING, .dst = &o->name,
+		 .arg = "NAME",
+		 .help = "the name other members see (default\n{default})"},
+		{.name = "token", .kind = BC_OPT_STRING, .dst = &o->token,
+		 .arg = "TOKEN",
+		 .help = "authentication token (default $BLOBCAST_TOKEN)"},
+		{.name = "size", .kind = BC_OPT_SIZE, .dst = c.size, .lo = 1,
+		 .hi = BC_PROTO_MAX_DIM, .arg = "WxH",
+		 .help = "window size, each {range} (default 960x600)"},
+		{.name = "encoding", .kind = BC_OPT_ENUM, .dst = &c.encoding,
+		 .arg = "ENC",
+		 .help = "still frames as {choices} (default {default})",
+		 .names = encoding_names},
+		{.name = "quality", .kind = BC_OPT_U32, .dst = &c.quality,
+		 .lo = 1, .hi = BC_PROTO_MAX_QUALITY, .arg = "Q",
+		 .help = "JPEG quality of still frames, {range}\n"
+			 "(default {default}; interactive frames use at\n"
+			 "most 70)"},
+		{.name = "downscale", .kind = BC_OPT_U32, .dst = &c.downscale,
+		 .lo = 1, .hi = BC_PROTO_MAX_DOWNSCALE, .arg = "N",
+		 .help = "coarsest block accepted, {range} (default\n"
+			 "{default}): refinement frames at 1/2^n size,\n"
+			 "2^n <= N"},
+		{.name = "gles", .kind = BC_OPT_FLAG, .dst = &o->gles,
+		 .help = "use an OpenGL ES 2.0 context"},
+		{.name = "no-overlay", .kind = BC_OPT_FLAG, .dst = &c.no_overlay,
+		 .help = "start with the overlay hidden (O toggles)"},
+		{.name = "snapshot-dir", .kind = BC_OPT_STRING,
+		 .dst = &o->snapshot_dir, .arg = "DIR",
+		 .help = "where S saves lossless snapshots\n"
+			 "(default {default})"},
+		{.name = "screenshot", .kind = BC_OPT_STRING,
+		 .dst = &o->screenshot, .arg = "FILE",
+		 .help = "save the window to FILE once --frames\n"
+			 "pictures were shown, then exit"},
+		{.name = "frames", .kind = BC_OPT_U32, .dst = &o->frames,
+		 .lo = 1, .hi = 1000000, .arg = "N",
+		 .help = "finished pictures before the screenshot,\n"
+			 "{range} (the last frame of each refinement;\n"
+			 "default {default})"},
+		{.name = "turn", .kind = BC_OPT_F32, .dst = &o->turn_deg,
+		 .lo = -90, .hi = 90, .arg = "DEG",
+		 .help = "with --frames > 1: turn the camera by DEG\n"
+			 "({range}) after each picture (the daemon\n"
+			 "renders on change only; default {default})"},
+		{.name = "dump-frame", .kind = BC_OPT_STRING,
+		 .dst = &o->dump_frame, .arg = "FILE",
+		 .help = "with --screenshot: also save the picture\n"
+			 "received"},
+		{.name = "verbose", .kind = BC_OPT_FLAG, .dst = &o->verbose,
+		 .help = "print frames, picks and edits on stdout"},
+		{.kind = BC_OPT_INVALID},
+	};
+	struct bc_args p = {
+		.prog = "blobcast-view",
+		.usage = "blobcast-view [options]",
+		.about = "Shows a blobcast session in a window and edits it "
+			 "with the mouse.",
+		.footer =
+			"Mouse: drag orbits, or moves the shape under the "
+			"pointer; right drag\nor Shift-drag pans; the wheel "
+			"zooms, Shift+wheel sizes the selected\nshape, "
+			"Ctrl+wheel changes its operator's blend. Keys: S "
+			"snapshot,\nP screenshot, O overlay, R scene camera, Q "
+			"or Escape quit;\nCtrl-Z undo, Ctrl-Shift-Z or Ctrl-Y "
+			"redo; F follow the presenter\n(this window shows what "
+			"the presenter's camera sees, at its own size;\nmoving "
+			"the camera or F again stops), Shift-F present "
+			"(members who\nfollow see this window's camera; "
+			"Shift-F again stops). The overlay\nnames who presents "
+			"and whether this window follows.\n\nA lost connection "
+			"is retried (after 0.25 s, doubling up to 4 s)\nand the "
+			"session joined again; a refused token or role or a\n"
+			"missing session stop the retries. With --screenshot a "
+			"lost\nconnection exits 1 instead.",
+		.opts = opts};
 	*o = (struct bc_viewer_opts){
 	    .session = "default",
 	    .name = "blobcast-view",
-	    .role = BC_PROTO_ROLE_EDITOR,
-	    .width = 960,
-	    .height = 600,
-	    .encoding = BC_PROTO_ENC_JPEG,
-	    .quality = 85,
-	    .downscale = 2,
 	    .overlay = true,
 	    .frames = 1,
 	    .turn_deg = 15.0f,
@@ -186,131 +190,30 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o)
 	    .server = getenv("BLOBCAST_SERVER"),
 	    .token = getenv("BLOBCAST_TOKEN"),
 	};
-	for (int i = 1; i < argc; i++) {
-		const char *k = argv[i];
-		const char *val = i + 1 < argc ? argv[i + 1] : NULL;
-		bool takes = true;
-		if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
-			usage(stdout);
-			return -1;
-		} else if (strcmp(k, "--gles") == 0) {
-			o->gles = true;
-			takes = false;
-		} else if (strcmp(k, "--no-overlay") == 0) {
-			o->overlay = false;
-			takes = false;
-		} else if (strcmp(k, "--verbose") == 0) {
-			o->verbose = true;
-			takes = false;
-		} else if (strcmp(k, "--insecure") == 0) {
-			o->insecure = true;
-			takes = false;
-		} else if (!val) {
-			fprintf(stderr, "blobcast-view: %s needs a value\n", k);
-			return EXIT_USAGE;
-		} else if (strcmp(k, "--server") == 0) {
-			o->server = val;
-		} else if (strcmp(k, "--ca") == 0) {
-			o->ca = val;
-		} else if (strcmp(k, "--session") == 0) {
-			o->session = val;
-		} else if (strcmp(k, "--name") == 0) {
-			o->name = val;
-		} else if (strcmp(k, "--token") == 0) {
-			o->token = val;
-		} else if (strcmp(k, "--snapshot-dir") == 0) {
-			o->snapshot_dir = val;
-		} else if (strcmp(k, "--screenshot") == 0) {
-			o->screenshot = val;
-		} else if (strcmp(k, "--dump-frame") == 0) {
-			o->dump_frame = val;
-		} else if (strcmp(k, "--role") == 0) {
-			if (strcmp(val, "editor") == 0) {
-				o->role = BC_PROTO_ROLE_EDITOR;
-			} else if (strcmp(val, "viewer") == 0) {
-				o->role = BC_PROTO_ROLE_VIEWER;
-			} else {
-				fprintf(stderr,
-				        "blobcast-view: --role is editor "
-				        "or viewer, not \"%s\"\n",
-				        val);
-				return EXIT_USAGE;
-			}
-		} else if (strcmp(k, "--encoding") == 0) {
-			if (strcmp(val, "jpeg") == 0) {
-				o->encoding = BC_PROTO_ENC_JPEG;
-			} else if (strcmp(val, "png") == 0) {
-				o->encoding = BC_PROTO_ENC_PNG;
-			} else {
-				fprintf(stderr,
-				        "blobcast-view: --encoding is jpeg "
-				        "or png, not \"%s\"\n",
-				        val);
-				return EXIT_USAGE;
-			}
-		} else if (strcmp(k, "--size") == 0) {
-			if (!parse_size(val, &o->width, &o->height)) {
-				fprintf(stderr,
-				        "blobcast-view: --size takes WxH, "
-				        "each 1..%u, not \"%s\"\n",
-				        BC_PROTO_MAX_DIM, val);
-				return EXIT_USAGE;
-			}
-		} else if (strcmp(k, "--quality") == 0) {
-			if (!parse_u32(val, 1, BC_PROTO_MAX_QUALITY, &v)) {
-				fprintf(stderr,
-				        "blobcast-view: --quality is 1..%u\n",
-				        BC_PROTO_MAX_QUALITY);
-				return EXIT_USAGE;
-			}
-			o->quality = (uint8_t)v;
-		} else if (strcmp(k, "--downscale") == 0) {
-			if (!parse_u32(val, 1, BC_PROTO_MAX_DOWNSCALE, &v)) {
-				fprintf(stderr,
-				        "blobcast-view: --downscale is "
-				        "1..%u\n",
-				        BC_PROTO_MAX_DOWNSCALE);
-				return EXIT_USAGE;
-			}
-			o->downscale = (uint8_t)v;
-		} else if (strcmp(k, "--frames") == 0) {
-			if (!parse_u32(val, 1, 1000000, &o->frames)) {
-				fprintf(stderr, "blobcast-view: --frames is "
-				                "1..1000000\n");
-				return EXIT_USAGE;
-			}
-		} else if (strcmp(k, "--turn") == 0) {
-			char *end;
-			double d = strtod(val, &end);
-			if (*end || !(fabs(d) <= 90.0)) {
-				fprintf(stderr,
-				        "blobcast-view: --turn is -90..90 "
-				        "degrees\n");
-				return EXIT_USAGE;
-			}
-			o->turn_deg = (float)d;
-		} else {
-			fprintf(stderr,
-			        "blobcast-view: unknown option %s (see "
-			        "--help)\n",
-			        k);
-			return EXIT_USAGE;
-		}
-		if (takes) {
-			i++;
-		}
+	*done = true;
+	if (bc_args_parse(&p, argc, argv)) {
+		return p.status;
 	}
+	if (p.npos) {
+		return bc_args_error(&p, "unexpected argument '%s'",
+				     p.pos[0]);
+	}
+	o->role = (enum bc_proto_role)c.role;
+	o->encoding = (enum bc_proto_encoding)c.encoding;
+	o->width = c.size[0];
+	o->height = c.size[1];
+	o->quality = (uint8_t)c.quality;
+	o->downscale = (uint8_t)c.downscale;
+	o->overlay = !c.no_overlay;
 	if (o->dump_frame && !o->screenshot) {
-		fprintf(stderr, "blobcast-view: --dump-frame needs "
-		                "--screenshot\n");
-		return EXIT_USAGE;
+		return bc_args_error(&p, "--dump-frame needs --screenshot");
 	}
 	if (o->screenshot &&
 	    !bc_image_ext_supports(o->screenshot, BC_IMAGE_U8)) {
-		fprintf(stderr, "blobcast-view: cannot write images named %s\n",
-		        o->screenshot);
-		return EXIT_USAGE;
+		return bc_args_error(&p, "cannot write images named %s",
+				     o->screenshot);
 	}
+	*done = false;
 	return 0;
 }
 
@@ -992,10 +895,10 @@ int main(int argc, char **argv)
 	struct bc_errinfo ei = {0};
 	const struct bc_tree *scene;
 	char title[128];
-	bool glfw_up = false;
+	bool glfw_up = false, stop;
 	int rc;
-	if ((rc = parse_args(argc, argv, &a->o))) {
-		return rc < 0 ? 0 : rc;
+	if ((rc = parse_args(argc, argv, &a->o, &stop)) || stop) {
+		return rc;
 	}
 	bc_log_init(a->o.verbose ? BC_LOG_INFO : BC_LOG_WARN);
 	bc_viewer_frames_init(&a->frames);

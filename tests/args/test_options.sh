@@ -5,10 +5,13 @@
 # wording everywhere ("PROG: SENTENCE" and "(see 'PROG --help')"), and
 # nothing starts or is written on a bad command line.
 #
-# usage: test_options.sh BLOBCAST BLOBCASTD   (exit 77 when not built)
+# usage: test_options.sh BLOBCAST BLOBCASTD [BLOBCAST_VIEW]
+# (exit 77 when the first two are not built; the viewer is checked when
+# given)
 set -u
 cli=${1:-}
 daemon=${2:-}
+viewer=${3:-}
 if [ -z "$cli" ] || [ ! -x "$cli" ] || [ -z "$daemon" ] ||
   [ ! -x "$daemon" ]; then
   echo "skip: blobcast or blobcastd not built"
@@ -17,6 +20,7 @@ fi
 # The commands run from a scratch folder: make the paths absolute.
 case $cli in /*) ;; *) cli=$PWD/$cli ;; esac
 case $daemon in /*) ;; *) daemon=$PWD/$daemon ;; esac
+case $viewer in /* | '') ;; *) viewer=$PWD/$viewer ;; esac
 tmp=$(mktemp -d /tmp/bc-options.XXXXXX) || exit 1
 trap 'rm -rf "$tmp"' EXIT
 trap 'exit 1' INT TERM
@@ -83,6 +87,21 @@ help_options_are_parsed blobcastd "$daemon"
 for cmd in render mesh gen eval-bench; do
   help_options_are_parsed "blobcast $cmd" "$cli" "$cmd"
 done
+
+# blobcast-view parses its options before it opens a window, so this
+# needs no display.
+if [ -n "$viewer" ]; then
+  help_options_are_parsed blobcast-view "$viewer"
+  expect 2 "blobcast-view: unknown option '--bogus'" "$viewer" --bogus
+  expect 2 "blobcast-view: --quality '101' is out of range (1..100)" \
+    "$viewer" --quality 101
+  expect 2 "blobcast-view: --turn 'x' is not a finite decimal number" \
+    "$viewer" --turn x
+  expect 2 "blobcast-view: --role 'owner' is not one of editor, viewer" \
+    "$viewer" --role owner
+  expect 2 "blobcast-view: --dump-frame needs --screenshot" \
+    "$viewer" --dump-frame f.png
+fi
 
 # The same mistakes get the same sentences in every program.
 expect 2 "blobcastd: unknown option '--bogus'" "$daemon" --bogus
