@@ -23,9 +23,10 @@
 #include <time.h>
 
 #include "blobcast/alloc.h"
-#include "blobcast/clock.h"
 #include "blobcast/client.h"
+#include "blobcast/clock.h"
 #include "blobcast/image.h"
+#include "blobcast/num.h"
 #include "blobcast/scene.h"
 #include "cmd_inspect.h"
 
@@ -123,53 +124,33 @@ static const char common_help[] =
 /* ---- small helpers ----------------------------------------------------------
  */
 
+/* The shared number rules (blobcast/num.h), with the protocol's bounds. */
 static bool parse_u64(const char *s, uint64_t lo, uint64_t hi, uint64_t *out)
 {
-	char *end = NULL;
-	unsigned long long v;
-	if (!s || !*s || *s == '-' || *s == '+' || *s == ' ') {
-		return false;
-	}
-	errno = 0;
-	v = strtoull(s, &end, 10);
-	if (errno || *end != '\0' || v < lo || v > hi) {
-		return false;
-	}
-	*out = (uint64_t)v;
-	return true;
+	return bc_num_u64(s, lo, hi, out) == 0;
 }
 
 /* "x,y,z": exactly three finite floats within the protocol's range. */
 static bool parse_vec3(const char *s, float v[3])
 {
-	const char *p = s;
-	for (int i = 0; i < 3; i++) {
-		char *end;
-		if (!*p || *p == ' ' || *p == ',') {
-			return false;
-		}
-		errno = 0;
-		v[i] = strtof(p, &end);
-		if (end == p || !isfinite(v[i]) ||
-		    fabsf(v[i]) > BC_PROTO_MAX_ABS ||
-		    *end != (i < 2 ? ',' : '\0')) {
-			return false;
-		}
-		p = end + 1;
+	float t[3];
+	if (bc_num_vec3(s, t) != 0) {
+		return false;
 	}
+	for (int i = 0; i < 3; i++) {
+		if (fabsf(t[i]) > BC_PROTO_MAX_ABS) {
+			return false;
+		}
+	}
+	memcpy(v, t, sizeof(t));
 	return true;
 }
 
+/* A finite float strictly between lo and hi. */
 static bool parse_float(const char *s, float lo, float hi, float *out)
 {
-	char *end;
 	float v;
-	if (!s || !*s || *s == ' ') {
-		return false;
-	}
-	v = strtof(s, &end);
-	if (end == s || *end != '\0' || !isfinite(v) || !(v > lo) ||
-	    !(v < hi)) {
+	if (bc_num_f32(s, lo, hi, &v) != 0 || v == lo || v == hi) {
 		return false;
 	}
 	*out = v;
@@ -179,17 +160,8 @@ static bool parse_float(const char *s, float lo, float hi, float *out)
 /* "WxH", each 1..BC_PROTO_MAX_DIM. */
 static bool parse_size(const char *s, uint16_t *w, uint16_t *h)
 {
-	const char *x = strchr(s, 'x');
-	char buf[16];
-	uint64_t a, b;
-	size_t n;
-	if (!x || (n = (size_t)(x - s)) == 0 || n >= sizeof(buf)) {
-		return false;
-	}
-	memcpy(buf, s, n);
-	buf[n] = '\0';
-	if (!parse_u64(buf, 1, BC_PROTO_MAX_DIM, &a) ||
-	    !parse_u64(x + 1, 1, BC_PROTO_MAX_DIM, &b)) {
+	uint32_t a, b;
+	if (bc_num_size(s, 1, BC_PROTO_MAX_DIM, &a, &b) != 0) {
 		return false;
 	}
 	*w = (uint16_t)a;

@@ -78,6 +78,19 @@ expect 2 "needs a valid value" bench-latency --session s --edits 10 --node 0
 expect 2 "needs a valid value" load --session "" a.json
 expect 2 "needs a valid value" load --session s --timeout -5 a.json
 expect 2 "needs a valid value" load --session
+# Numbers follow the shared rules (base/num.h): decimal, the whole
+# string, no sign on counts, finite floats.
+expect 2 "needs a valid value" watch --session s --frames +5
+expect 2 "needs a valid value" watch --session s --frames 1e3
+expect 2 "needs a valid value" watch --session s --frames " 5"
+expect 2 "needs a valid value" snapshot --session s --size 0x10 --out a.png
+expect 2 "needs a valid value" snapshot --session s --size 8x8x8 --out a.png
+expect 2 "needs a valid value" camera --session s --eye 1,2,inf \
+  --target 0,0,0
+expect 2 "needs a valid value" camera --session s --eye 0x1p3,0,0 \
+  --target 0,0,0
+expect 2 "needs a valid value" camera --session s --eye 1,2,3 \
+  --target 0,0,0 --fov 0
 # Options of other commands are refused, not ignored.
 expect 2 "does not apply" load --session s --eye 1,2,3 a.json
 expect 2 "does not apply" edit --session s --size 8x8 1 radius=1
