@@ -1,6 +1,6 @@
 /*
- * The worker threads of the CPU backends, the frame clock and the scene
- * scale.
+ * The worker threads of the CPU backends and the scene scale (frame
+ * timings use base's bc_clock_ms).
  *
  * The pool is process-wide and persistent: worker i (1 <= i < 64) is
  * started the first time a run asks for i + 1 shares and then kept,
@@ -19,7 +19,6 @@
 #include <math.h>
 #include <pthread.h>
 #include <stdbool.h>
-#include <time.h>
 #include <unistd.h>
 
 #include "blobcast/log.h"
@@ -148,13 +147,6 @@ uint32_t bc_pool_default_threads(void)
 	}
 	return n > (long)BC_POOL_MAX_THREADS ? BC_POOL_MAX_THREADS
 	                                     : (uint32_t)n;
-}
-
-double bc_render_now_ms(void)
-{
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
 }
 
 float bc_render_scale(const struct bc_lin *lin)

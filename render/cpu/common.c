@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/clock.h"
 #include "blobcast/log.h"
 
 int bc__cpu_create(struct bc_renderer **out, enum bc__cpu_kind kind,
@@ -95,7 +96,7 @@ void bc__progress_init(struct bc__progress *p, const struct bc__cpu *r,
 	p->fn = r->progress;
 	p->user = r->progress_user;
 	p->total = total;
-	p->start = bc_render_now_ms();
+	p->start = bc_clock_ms();
 	p->last = p->start;
 }
 
@@ -105,7 +106,7 @@ void bc__progress_tick(struct bc__progress *p, uint32_t done)
 	if (!p->fn) {
 		return;
 	}
-	now = bc_render_now_ms();
+	now = bc_clock_ms();
 	/* Short frames stay quiet; long ones report four times a second. */
 	if (now - p->start < 1000.0 || now - p->last < 250.0) {
 		return;

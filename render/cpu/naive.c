@@ -13,6 +13,7 @@
 #include <stdatomic.h>
 
 #include "blobcast/blobtree.h"
+#include "blobcast/clock.h"
 
 struct naive_frame {
 	const struct bc__frame_ctx *fc;
@@ -85,7 +86,7 @@ static int naive_render(struct bc_renderer *base, const struct bc_camera *cam,
 	struct bc__cpu *r = bc__cpu_of(base);
 	struct bc__frame_ctx fc;
 	struct naive_frame nf = {0};
-	double t0 = bc_render_now_ms();
+	double t0 = bc_clock_ms();
 	(void)ei;
 	bc__frame_setup(&fc, bc_tree_lin(base->tree), cam, out,
 			base->opts.debug);
@@ -101,7 +102,7 @@ static int naive_render(struct bc_renderer *base, const struct bc_camera *cam,
 	stats->tiles = bc_render_tiles_x(out->width) *
 		       bc_render_tiles_y(out->height);
 	stats->max_overlap = fc.lin ? fc.lin->nprims : 0;
-	stats->ms_trace = bc_render_now_ms() - t0;
+	stats->ms_trace = bc_clock_ms() - t0;
 	stats->ms_total = stats->ms_trace;
 	return 0;
 }

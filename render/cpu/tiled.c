@@ -49,6 +49,7 @@
 #include <string.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/clock.h"
 #include "blobcast/log.h"
 
 #include "abuffer.h"
@@ -205,7 +206,7 @@ struct tiled_frame {
 	atomic_uint next; /* work counter of the running phase */
 	atomic_uint tiles_done;
 	struct bc__progress progress;
-	/* bc_render_now_ms() past which no tile starts; 0: none. */
+	/* bc_clock_ms() past which no tile starts; 0: none. */
 	double deadline;
 	atomic_uint skipped; /* tiles left as background past the deadline */
 	atomic_uint tiles_asked, rays; /* tiles and pixels the region asks */
@@ -728,7 +729,7 @@ static void phase_trace(void *arg, uint32_t thread)
 		}
 		atomic_fetch_add(&tf->tiles_asked, 1u);
 		atomic_fetch_add(&tf->rays, bc__popcount64(mask));
-		if (tf->deadline > 0.0 && bc_render_now_ms() > tf->deadline) {
+		if (tf->deadline > 0.0 && bc_clock_ms() > tf->deadline) {
 			skip_tile(tf, tx, ty, mask);
 			continue;
 		}
@@ -886,7 +887,7 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 	struct tiled_frame tf = {0};
 	struct bc__tiled_bufs *b;
 	const struct bc_lin *lin;
-	double t_start = bc_render_now_ms(), t_ab;
+	double t_start = bc_clock_ms(), t_ab;
 	uint32_t longest = 0, overflows = 0, todo = 0;
 	int rc;
 	if (!r->tiled && !(r->tiled = bc_calloc(1, sizeof(*r->tiled)))) {
@@ -934,7 +935,7 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 	if ((rc = prepare_workers(r, lin, longest))) {
 		goto nomem;
 	}
-	t_ab = bc_render_now_ms();
+	t_ab = bc_clock_ms();
 	bc__progress_init(&tf.progress, r, tf.ntiles);
 	atomic_store(&tf.next, 0u);
 	bc_pool_run(r->threads, phase_trace, &tf);
@@ -947,7 +948,7 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 		       overflows, BC_CPU_M_OVERLAP);
 	}
 	{
-		double now = bc_render_now_ms();
+		double now = bc_clock_ms();
 		stats->ms_abuffer = t_ab - t_start;
 		stats->ms_trace = now - t_ab;
 		stats->ms_total = now - t_start;

@@ -46,6 +46,7 @@
 #include <string.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/clock.h"
 #include "blobcast/log.h"
 #include "blobcast/render_backend.h"
 #include "blobcast/render_common.h"
@@ -489,7 +490,7 @@ static int gl_sync(struct bc_renderer *base, const struct bc_tree *t,
 	if ((rc = enter(r, ei))) {
 		return rc;
 	}
-	t0 = bc_render_now_ms();
+	t0 = bc_clock_ms();
 	r->upload_bytes = 0;
 	l = bc_tree_lin(t);
 	if (l && l->nunary && !r->progs[BC__GL_PROG_TRACE_UNARY]) {
@@ -520,7 +521,7 @@ static int gl_sync(struct bc_renderer *base, const struct bc_tree *t,
 	}
 	r->synced = rc == 0;
 	r->tree = t;
-	r->upload_ms += bc_render_now_ms() - t0;
+	r->upload_ms += bc_clock_ms() - t0;
 	bc__gl_ctx_unbind(&r->ctx);
 	return rc;
 }
@@ -906,7 +907,7 @@ static int finish_tracing(struct gl_renderer *r, struct bc__gl_frame_ubo *u,
 		                       4 * BC_GL_STAT_SUSPENDED, 4,
 		                       GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
 		if (budget_ms &&
-		    bc_render_now_ms() - t_start > (double)budget_ms) {
+		    bc_clock_ms() - t_start > (double)budget_ms) {
 			/* Out of time: one last dispatch finishes every
 			 * suspended tile with what it has. */
 			u->pool[3] = 1;
@@ -959,7 +960,7 @@ static int wait_fence(struct gl_renderer *r, struct bc_errinfo *ei)
 {
 	GladGLContext *gl = &r->ctx.gl;
 	GLsync fence = gl->FenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
-	double start = bc_render_now_ms();
+	double start = bc_clock_ms();
 	int rc = 0;
 	if (!fence) {
 		return bc__gl_check(&r->ctx, "glFenceSync", ei)
@@ -989,7 +990,7 @@ static int wait_fence(struct gl_renderer *r, struct bc_errinfo *ei)
 			                    "gl: context lost during a frame");
 			break;
 		}
-		if (bc_render_now_ms() - start > BC_GL_FENCE_TIMEOUT_S * 1e3) {
+		if (bc_clock_ms() - start > BC_GL_FENCE_TIMEOUT_S * 1e3) {
 			rc = bc_errinfo_set(ei, BC_ETIMEOUT,
 			                    "gl: frame not done after %.0f s",
 			                    BC_GL_FENCE_TIMEOUT_S);
@@ -1020,7 +1021,7 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 	struct bc__gl_frame_ubo u;
 	struct plan plan;
 	const struct bc_lin *l;
-	double t_start = bc_render_now_ms();
+	double t_start = bc_clock_ms();
 	uint32_t w, h, nprims, stat[BC_GL_STAT_WORDS], limit;
 	size_t npix;
 	int rc;
@@ -1193,7 +1194,7 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 	rc = bc__gl_check(&r->ctx, "reading a frame back", ei);
 done:
 	bc__gl_ctx_unbind(&r->ctx);
-	stats->ms_total = bc_render_now_ms() - t_start;
+	stats->ms_total = bc_clock_ms() - t_start;
 	return rc;
 }
 

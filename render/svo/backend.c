@@ -20,6 +20,7 @@
 #include <string.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/clock.h"
 #include "blobcast/render_backend.h"
 #include "blobcast/render_common.h"
 #include "blobcast/shade.h"
@@ -255,7 +256,7 @@ static void worker(void *arg, uint32_t thread)
 		y0 = (tile / fr->tiles_x) * SVO_TILE;
 		if (fr->budget_ms > 0.0 &&
 		    (atomic_load(&fr->late) ||
-		     bc__svo_now_ms() - fr->start > fr->budget_ms)) {
+		     bc_clock_ms() - fr->start > fr->budget_ms)) {
 			/* Past the frame's budget no tile is started: the rest
 			 * is background, and the frame says so. */
 			atomic_store(&fr->late, true);
@@ -327,7 +328,7 @@ static int svo_render(struct bc_renderer *base, const struct bc_camera *cam,
 {
 	struct svo_renderer *r = svo_of(base);
 	struct frame fr;
-	double t0 = bc__svo_now_ms(), t1;
+	double t0 = bc_clock_ms(), t1;
 	float size;
 	int rc;
 	if (!r->synced) {
@@ -364,7 +365,7 @@ static int svo_render(struct bc_renderer *base, const struct bc_camera *cam,
 			r->band = so.band;
 		}
 	}
-	t1 = bc__svo_now_ms();
+	t1 = bc_clock_ms();
 	fr.tiles_x = (out->width + SVO_TILE - 1) / SVO_TILE;
 	fr.ntiles = fr.tiles_x * ((out->height + SVO_TILE - 1) / SVO_TILE);
 	atomic_init(&fr.next, 0u);
@@ -381,7 +382,7 @@ static int svo_render(struct bc_renderer *base, const struct bc_camera *cam,
 		                      "svo: no memory for the casters");
 	}
 	{
-		double t2 = bc__svo_now_ms();
+		double t2 = bc_clock_ms();
 		stats->ms_total = t2 - t0;
 		stats->ms_abuffer = t1 - t0;
 		stats->ms_trace = t2 - t1;

@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/clock.h"
 
 struct voxel {
 	uint32_t off, npairs, nterms;
@@ -82,10 +83,10 @@ int bc_svo_grid_build(struct bc_svo_grid **out, const struct bc_svo_rpn *rpn,
 					    gr->lo[a] +
 					    (float)(ijk[a] + 1) * gr->step[a];
 				}
-				t0 = bc__svo_now_ms();
+				t0 = bc_clock_ms();
 				rc = bc_svo_prune(g, gr->full, mask, &rg, 0.0f,
 				                  &res);
-				ms += bc__svo_now_ms() - t0;
+				ms += bc_clock_ms() - t0;
 				if (rc) {
 					goto cleanup;
 				}

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/clock.h"
 
 /* The cheapest generator that spreads points well (splitmix64). */
 static uint64_t mix(uint64_t *s)
@@ -70,25 +71,25 @@ static int time_any(const struct target *t, const struct bc_lin *l, uint32_t n,
 	for (uint32_t i = 0; i < n && i < 1000u; i++) {
 		acc += eval_t(t, p + 3u * i);
 	}
-	t0 = bc__svo_now_ms();
+	t0 = bc_clock_ms();
 	for (uint32_t i = 0; i < n; i++) {
 		v[i] = eval_t(t, p + 3u * i);
 	}
-	t1 = bc__svo_now_ms();
+	t1 = bc_clock_ms();
 	out->points = n;
 	out->pruned_ns = (t1 - t0) * 1e6 / n;
 	if (t->s) {
 		struct bc_svo_leaf_ref ref;
-		t0 = bc__svo_now_ms();
+		t0 = bc_clock_ms();
 		for (uint32_t i = 0; i < n; i++) {
 			acc += bc_svo_locate(t->s, p + 3u * i, &ref)
 			           ? (float)ref.depth
 			           : 0.0f;
 		}
-		t1 = bc__svo_now_ms();
+		t1 = bc_clock_ms();
 		out->locate_ns = (t1 - t0) * 1e6 / n;
 	}
-	t0 = bc__svo_now_ms();
+	t0 = bc_clock_ms();
 	for (k = 0; k < n; k++) {
 		float f = bc_eval_full(l, p + 3u * k);
 		out->mismatches += (f < 0.0f) != (v[k] < 0.0f);
@@ -96,12 +97,12 @@ static int time_any(const struct target *t, const struct bc_lin *l, uint32_t n,
 		/* Check the clock every 64 points: it costs more than a
 		 * small tree's evaluation. */
 		if ((k & 63u) == 63u &&
-		    bc__svo_now_ms() - t0 > BC_SVO_FULL_TIME_MS) {
+		    bc_clock_ms() - t0 > BC_SVO_FULL_TIME_MS) {
 			k++;
 			break;
 		}
 	}
-	t1 = bc__svo_now_ms();
+	t1 = bc_clock_ms();
 	out->full_points = k;
 	out->full_ns = (t1 - t0) * 1e6 / k;
 	sink = acc;

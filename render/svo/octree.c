@@ -15,9 +15,9 @@
 #include <float.h>
 #include <math.h>
 #include <string.h>
-#include <time.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/clock.h"
 
 /* Levels a region may be split without losing a single term before it is
  * kept as a leaf anyway. The terms a blend needs where several primitives
@@ -29,13 +29,6 @@
  * removes terms again once they tighten. */
 #define SVO_STALL_LEVELS 3u
 #define SVO_STALL_MIN_DEPTH 5u
-
-double bc__svo_now_ms(void)
-{
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
-}
 
 int bc__svo_pool_put(struct bc__svo_pool *pool, const uint32_t *mask,
                      uint32_t nwords, uint32_t *off, uint32_t *npairs)
@@ -299,7 +292,7 @@ int bc_svo_build(struct bc_svo **out, const struct bc_svo_rpn *rpn,
 {
 	struct bc_svo *s;
 	struct build b;
-	double t0 = bc__svo_now_ms();
+	double t0 = bc_clock_ms();
 	int rc;
 	*out = NULL;
 	memset(&b, 0, sizeof(b));
@@ -407,7 +400,7 @@ int bc_svo_build(struct bc_svo **out, const struct bc_svo_rpn *rpn,
 	                 (uint64_t)s->nnodes * sizeof(struct bc__svo_node) +
 	                 (uint64_t)s->nleaves * sizeof(struct bc__svo_leaf) +
 	                 (uint64_t)s->pool.n * sizeof(uint32_t);
-	s->stats.build_ms = bc__svo_now_ms() - t0;
+	s->stats.build_ms = bc_clock_ms() - t0;
 cleanup:
 	bc_svo_ranger_destroy(b.g);
 	bc_free(b.masks);

@@ -283,7 +283,4 @@ struct bc_svo {
 /* A stand-in value of an empty or full region's sign. */
 float bc__svo_state_value(enum bc_svo_state st, struct bc_svo_ivl root);
 
-/* Milliseconds on a monotonic clock. */
-double bc__svo_now_ms(void);
-
 #endif

@@ -30,9 +30,6 @@ void bc_pool_run(uint32_t n, bc_pool_fn fn, void *ctx);
  * core, at least 1, at most BC_POOL_MAX_THREADS. */
 uint32_t bc_pool_default_threads(void);
 
-/* Milliseconds on a monotonic clock. */
-double bc_render_now_ms(void);
-
 /* The scene scale that frame constants (minimal steps, tolerances) derive
  * from: the scene's AABB diagonal rounded up to a power of two, so that
  * parameter edits that move the scene's bounds a little keep every pixel's
