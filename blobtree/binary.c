@@ -21,6 +21,8 @@
 #include <string.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/buf.h"
+#include "blobcast/bytes.h"
 
 /* ---- pre-order walk ------------------------------------------------------ */
 
@@ -141,72 +143,33 @@ uint32_t bc_scene_prim_nfloats(enum bc_prim kind)
 
 /* ---- writing ------------------------------------------------------------- */
 
-struct wbuf {
-	uint8_t *p;
-	size_t len, cap;
-	bool failed;
-};
-
-static bool wb_room(struct wbuf *b, size_t n)
+static void put_u8(struct bc_buf *b, uint8_t v)
 {
-	size_t cap;
-	uint8_t *grown;
-	if (b->failed) {
-		return false;
-	}
-	if (n <= b->cap - b->len) {
-		return true;
-	}
-	cap = b->cap ? b->cap : 256;
-	while (cap - b->len < n) {
-		if (cap > SIZE_MAX / 2) {
-			b->failed = true;
-			return false;
-		}
-		cap *= 2;
-	}
-	grown = bc_realloc(b->p, cap);
-	if (!grown) {
-		b->failed = true;
-		return false;
-	}
-	b->p = grown;
-	b->cap = cap;
-	return true;
+	bc_buf_append(b, &v, 1);
 }
 
-static void put_u8(struct wbuf *b, uint8_t v)
+static void put_u32(struct bc_buf *b, uint32_t v)
 {
-	if (wb_room(b, 1)) {
-		b->p[b->len++] = v;
-	}
+	uint8_t w[4];
+	bc_put_le32(w, v);
+	bc_buf_append(b, w, sizeof(w));
 }
 
-static void put_u32(struct wbuf *b, uint32_t v)
+static void put_f32(struct bc_buf *b, float f)
 {
-	if (wb_room(b, 4)) {
-		b->p[b->len++] = (uint8_t)v;
-		b->p[b->len++] = (uint8_t)(v >> 8);
-		b->p[b->len++] = (uint8_t)(v >> 16);
-		b->p[b->len++] = (uint8_t)(v >> 24);
-	}
+	uint8_t w[4];
+	bc_put_f32(w, f);
+	bc_buf_append(b, w, sizeof(w));
 }
 
-static void put_f32(struct wbuf *b, float f)
-{
-	uint32_t v;
-	memcpy(&v, &f, sizeof(v));
-	put_u32(b, v);
-}
-
-static void put_f32s(struct wbuf *b, const float *f, uint32_t n)
+static void put_f32s(struct bc_buf *b, const float *f, uint32_t n)
 {
 	for (uint32_t i = 0; i < n; i++) {
 		put_f32(b, f[i]);
 	}
 }
 
-static void put_node(struct wbuf *b, const struct bc_scene_node *n)
+static void put_node(struct bc_buf *b, const struct bc_scene_node *n)
 {
 	if (n->is_op && bc_op_is_unary(n->op.kind)) {
 		/* Unary: tag, id, nfloats, floats; its one child follows. */
@@ -245,15 +208,16 @@ static int encode(const struct bc_tree *t, const struct bc_camera *cam,
 {
 	struct bc_scene_walk w;
 	struct bc_scene_node n;
-	struct wbuf b = {0};
+	struct bc_buf b;
 	int rc;
 	*out = NULL;
 	*len = 0;
 	if ((rc = bc_scene_walk_init(&w, t))) {
 		return rc;
 	}
+	bc_buf_init(&b, SIZE_MAX);
 	/* A sphere node is 51 bytes; start near the final size. */
-	wb_room(&b, 16 + 48 * (size_t)bc_tree_node_count(t));
+	bc_buf_reserve(&b, 16 + 48 * (size_t)bc_tree_node_count(t));
 	if (scene) {
 		put_u8(&b, cam ? BC_SCENE_FLAG_CAMERA : 0);
 		if (cam) {
@@ -264,17 +228,12 @@ static int encode(const struct bc_tree *t, const struct bc_camera *cam,
 		}
 	}
 	put_u32(&b, bc_tree_node_count(t));
-	while (!b.failed && bc_scene_walk_next(&w, &n)) {
+	while (!b.err && bc_scene_walk_next(&w, &n)) {
 		put_node(&b, &n);
 	}
 	bc_scene_walk_finish(&w);
-	if (b.failed) {
-		bc_free(b.p);
-		return BC_ENOMEM;
-	}
-	*out = b.p;
-	*len = b.len;
-	return 0;
+	/* No ceiling of its own: BC_ENOMEM is the failure left. */
+	return bc_buf_take(&b, out, len);
 }
 
 int bc_scene_encode(const struct bc_tree *t, const struct bc_camera *cam,
@@ -290,73 +249,41 @@ int bc_tree_encode(const struct bc_tree *t, uint8_t **out, size_t *len)
 
 /* ---- reading ------------------------------------------------------------- */
 
-struct rd {
-	const uint8_t *p;
-	size_t len, pos;
-};
-
-static size_t rd_left(const struct rd *r)
-{
-	return r->len - r->pos;
-}
-
 /* Each get_* checks the bytes left first and fails with
  * BC_EPROTO_TRUNCATED naming the node and field. */
-static int need(const struct rd *r, size_t n, uint32_t node, const char *what,
-                struct bc_errinfo *ei)
+static int need(const struct bc_rd *r, size_t n, uint32_t node,
+                const char *what, struct bc_errinfo *ei)
 {
-	if (n > rd_left(r)) {
+	if (n > bc_rd_left(r)) {
 		return bc_errinfo_set(ei, BC_EPROTO_TRUNCATED,
 		                      "node %u: %s needs %zu bytes, %zu left",
-		                      node, what, n, rd_left(r));
+		                      node, what, n, bc_rd_left(r));
 	}
 	return 0;
 }
 
-static uint8_t take_u8(struct rd *r)
-{
-	return r->p[r->pos++];
-}
-
-static uint32_t take_u32(struct rd *r)
-{
-	uint32_t v = (uint32_t)r->p[r->pos] | (uint32_t)r->p[r->pos + 1] << 8 |
-	             (uint32_t)r->p[r->pos + 2] << 16 |
-	             (uint32_t)r->p[r->pos + 3] << 24;
-	r->pos += 4;
-	return v;
-}
-
-static float take_f32(struct rd *r)
-{
-	uint32_t v = take_u32(r);
-	float f;
-	memcpy(&f, &v, sizeof(f));
-	return f;
-}
-
-static int get_u8(struct rd *r, uint8_t *v, uint32_t node, const char *what,
+static int get_u8(struct bc_rd *r, uint8_t *v, uint32_t node, const char *what,
                   struct bc_errinfo *ei)
 {
 	int rc = need(r, 1, node, what, ei);
 	if (!rc) {
-		*v = take_u8(r);
+		*v = bc_rd_u8(r);
 	}
 	return rc;
 }
 
-static int get_u32(struct rd *r, uint32_t *v, uint32_t node, const char *what,
-                   struct bc_errinfo *ei)
+static int get_u32(struct bc_rd *r, uint32_t *v, uint32_t node,
+                   const char *what, struct bc_errinfo *ei)
 {
 	int rc = need(r, 4, node, what, ei);
 	if (!rc) {
-		*v = take_u32(r);
+		*v = bc_rd_u32(r);
 	}
 	return rc;
 }
 
 /* Reads n finite floats. */
-static int get_f32s(struct rd *r, float *f, uint32_t n, uint32_t node,
+static int get_f32s(struct bc_rd *r, float *f, uint32_t n, uint32_t node,
                     const char *what, struct bc_errinfo *ei)
 {
 	int rc = need(r, 4 * (size_t)n, node, what, ei);
@@ -364,7 +291,7 @@ static int get_f32s(struct rd *r, float *f, uint32_t n, uint32_t node,
 		return rc;
 	}
 	for (uint32_t i = 0; i < n; i++) {
-		f[i] = take_f32(r);
+		f[i] = bc_rd_f32(r);
 		if (!isfinite(f[i])) {
 			return bc_errinfo_set(ei, BC_ENONFINITE,
 			                      "node %u: %s[%u] is not finite",
@@ -385,7 +312,7 @@ struct dnode {
 };
 
 /* Reads node number index of count, checking everything the bytes decide. */
-static int read_node(struct rd *r, uint32_t index, uint32_t count,
+static int read_node(struct bc_rd *r, uint32_t index, uint32_t count,
                      struct dnode *n, struct bc_errinfo *ei)
 {
 	uint8_t tag, flag, nf;
@@ -531,7 +458,8 @@ static int at_node(struct bc_errinfo *ei, int rc, uint32_t index, uint32_t id)
 	return bc_errinfo_set(ei, rc, "node %u (id %u): %s", index, id, reason);
 }
 
-static int decode_tree(struct rd *r, struct bc_tree *t, struct bc_errinfo *ei)
+static int decode_tree(struct bc_rd *r, struct bc_tree *t,
+                       struct bc_errinfo *ei)
 {
 	uint32_t count, nopen = 0, nids = 0, nzero = 0;
 	uint32_t *left = NULL, *opener = NULL; /* per open operator */
@@ -544,18 +472,19 @@ static int decode_tree(struct rd *r, struct bc_tree *t, struct bc_errinfo *ei)
 	if ((rc = need(r, 4, 0, "node_count", ei))) {
 		return rc;
 	}
-	count = take_u32(r);
+	count = bc_rd_u32(r);
 	if (count == 0 || count > BC_TREE_MAX_NODES) {
 		return bc_errinfo_set(ei, BC_EPROTO_COUNT,
 		                      "node_count %u outside 1..%u", count,
 		                      BC_TREE_MAX_NODES);
 	}
-	if (count > rd_left(r) / BC_SCENE_NODE_MIN_BYTES) {
+	if (count > bc_rd_left(r) / BC_SCENE_NODE_MIN_BYTES) {
 		return bc_errinfo_set(
 		    ei, BC_EPROTO_COUNT,
 		    "node_count %u needs at least %zu bytes, "
 		    "%zu left",
-		    count, (size_t)count * BC_SCENE_NODE_MIN_BYTES, rd_left(r));
+		    count, (size_t)count * BC_SCENE_NODE_MIN_BYTES,
+		    bc_rd_left(r));
 	}
 	/* Bounded by the input: count <= len / 5. */
 	ids = bc_malloc(sizeof(uint32_t) * (size_t)count);
@@ -612,10 +541,10 @@ static int decode_tree(struct rd *r, struct bc_tree *t, struct bc_errinfo *ei)
 		                    opener[nopen - 1], left[nopen - 1]);
 		goto cleanup;
 	}
-	if (rd_left(r)) {
-		rc =
-		    bc_errinfo_set(ei, BC_EPROTO_TRAILING,
-		                   "%zu bytes after the last node", rd_left(r));
+	if (bc_rd_left(r)) {
+		rc = bc_errinfo_set(ei, BC_EPROTO_TRAILING,
+		                    "%zu bytes after the last node",
+		                    bc_rd_left(r));
 		goto cleanup;
 	}
 	if (nzero) {
@@ -669,7 +598,7 @@ static int decode(const uint8_t *buf, size_t len, bool scene, struct bc_tree *t,
                   struct bc_camera *cam, bool *has_camera,
                   struct bc_errinfo *ei)
 {
-	struct rd r = {buf, len, 0};
+	struct bc_rd r = bc_rd_init(buf, buf ? len : 0);
 	struct bc_camera c;
 	bool with_cam = false;
 	int rc;
@@ -685,16 +614,13 @@ static int decode(const uint8_t *buf, size_t len, bool scene, struct bc_tree *t,
 		ei->msg[0] = '\0';
 	}
 	bc_tree_begin(t);
-	if (!buf) {
-		r.len = 0;
-	}
 	if (scene) {
 		uint8_t flags;
 		if (r.len < 1) {
 			return bc_errinfo_set(ei, BC_EPROTO_TRUNCATED,
 			                      "scene: empty (no flags byte)");
 		}
-		flags = take_u8(&r);
+		flags = bc_rd_u8(&r);
 		if (flags & ~BC_SCENE_FLAG_CAMERA) {
 			return bc_errinfo_set(
 			    ei, BC_EPROTO_FLAGS,
@@ -705,14 +631,14 @@ static int decode(const uint8_t *buf, size_t len, bool scene, struct bc_tree *t,
 		with_cam = (flags & BC_SCENE_FLAG_CAMERA) != 0;
 		if (with_cam) {
 			float f[10];
-			if (rd_left(&r) < sizeof(f)) {
+			if (bc_rd_left(&r) < sizeof(f)) {
 				return bc_errinfo_set(
 				    ei, BC_EPROTO_TRUNCATED,
 				    "camera: needs %zu bytes, %zu left",
-				    sizeof(f), rd_left(&r));
+				    sizeof(f), bc_rd_left(&r));
 			}
 			for (int i = 0; i < 10; i++) {
-				f[i] = take_f32(&r);
+				f[i] = bc_rd_f32(&r);
 				if (!isfinite(f[i])) {
 					return bc_errinfo_set(
 					    ei, BC_ENONFINITE,

@@ -37,6 +37,7 @@
 #include <jansson.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/buf.h"
 
 #if defined(__GNUC__)
 #define JSON_PRINTF(a, b) __attribute__((format(printf, a, b)))
@@ -914,50 +915,12 @@ cleanup:
 
 /* ---- writing ------------------------------------------------------------- */
 
-struct sbuf {
-	char *p;
-	size_t len, cap;
-	bool failed;
-};
-
-static bool sb_room(struct sbuf *b, size_t n)
+static void sb_put(struct bc_buf *b, const char *s, size_t n)
 {
-	size_t cap;
-	char *grown;
-	if (b->failed) {
-		return false;
-	}
-	if (n < b->cap - b->len) {
-		return true;
-	}
-	cap = b->cap ? b->cap : 1024;
-	while (cap - b->len <= n) {
-		if (cap > SIZE_MAX / 2) {
-			b->failed = true;
-			return false;
-		}
-		cap *= 2;
-	}
-	grown = bc_realloc(b->p, cap);
-	if (!grown) {
-		b->failed = true;
-		return false;
-	}
-	b->p = grown;
-	b->cap = cap;
-	return true;
+	bc_buf_append(b, s, n);
 }
 
-static void sb_put(struct sbuf *b, const char *s, size_t n)
-{
-	if (sb_room(b, n)) {
-		memcpy(b->p + b->len, s, n);
-		b->len += n;
-		b->p[b->len] = '\0';
-	}
-}
-
-static void sb_puts(struct sbuf *b, const char *s)
+static void sb_puts(struct bc_buf *b, const char *s)
 {
 	sb_put(b, s, strlen(s));
 }
@@ -971,16 +934,15 @@ static uint32_t indent_of(uint32_t depth)
 	return 2u + 2u * (depth < INDENT_LEVELS ? depth : INDENT_LEVELS);
 }
 
-static void sb_indent(struct sbuf *b, uint32_t n)
+static void sb_indent(struct bc_buf *b, uint32_t n)
 {
-	if (sb_room(b, n)) {
-		memset(b->p + b->len, ' ', n);
+	if (!bc_buf_reserve(b, n)) {
+		memset(b->data + b->len, ' ', n);
 		b->len += n;
-		b->p[b->len] = '\0';
 	}
 }
 
-static void sb_uint(struct sbuf *b, uint32_t v)
+static void sb_uint(struct bc_buf *b, uint32_t v)
 {
 	char tmp[16];
 	int n = snprintf(tmp, sizeof(tmp), "%u", v);
@@ -991,7 +953,7 @@ static void sb_uint(struct sbuf *b, uint32_t v)
  * then a float conversion) to the same bits: six significant digits when
  * they suffice (values typed by hand stay as typed), nine otherwise, which
  * always suffice for binary32. */
-static void sb_float(struct sbuf *b, float f)
+static void sb_float(struct bc_buf *b, float f)
 {
 	char tmp[40];
 	int n;
@@ -1013,7 +975,7 @@ static void sb_float(struct sbuf *b, float f)
 	sb_put(b, tmp, (size_t)n);
 }
 
-static void sb_floats(struct sbuf *b, const float *f, uint32_t n)
+static void sb_floats(struct bc_buf *b, const float *f, uint32_t n)
 {
 	if (n == 1) {
 		sb_float(b, f[0]);
@@ -1030,7 +992,7 @@ static void sb_floats(struct sbuf *b, const float *f, uint32_t n)
 }
 
 /* `, "key": value`; key is one of our own identifiers. */
-static void sb_member(struct sbuf *b, const char *key, const float *f,
+static void sb_member(struct bc_buf *b, const char *key, const float *f,
                       uint32_t n)
 {
 	sb_puts(b, ", \"");
@@ -1045,7 +1007,7 @@ static bool same_bits(const float *a, const float *b, uint32_t n)
 	return memcmp(a, b, n * sizeof(float)) == 0;
 }
 
-static void write_prim(struct sbuf *b, const struct bc_scene_node *n)
+static void write_prim(struct bc_buf *b, const struct bc_scene_node *n)
 {
 	static const float zero[3] = {0.0f, 0.0f, 0.0f};
 	static const float identity[4] = {0.0f, 0.0f, 0.0f, 1.0f};
@@ -1077,7 +1039,7 @@ static void write_prim(struct sbuf *b, const struct bc_scene_node *n)
 	sb_puts(b, "}");
 }
 
-static void write_op(struct sbuf *b, const struct bc_scene_node *n)
+static void write_op(struct bc_buf *b, const struct bc_scene_node *n)
 {
 	sb_puts(b, "{\"type\": \"");
 	sb_puts(b, bc_op_name(n->op.kind));
@@ -1109,7 +1071,9 @@ char *bc_scene_to_json(const struct bc_tree *t, const struct bc_camera *cam)
 {
 	struct bc_scene_walk w;
 	struct bc_scene_node n;
-	struct sbuf b = {0};
+	struct bc_buf b;
+	uint8_t *text;
+	size_t len;
 	uint32_t rem[BC_SCENE_JSON_MAX_DEPTH], nopen = 0;
 
 	if (bc_tree_nesting(t) > BC_SCENE_JSON_MAX_DEPTH ||
@@ -1117,7 +1081,8 @@ char *bc_scene_to_json(const struct bc_tree *t, const struct bc_camera *cam)
 		return NULL;
 	}
 	/* About 100 bytes per node: start near the final size. */
-	sb_room(&b, 256 + 100 * (size_t)bc_tree_node_count(t));
+	bc_buf_init(&b, SIZE_MAX);
+	bc_buf_reserve(&b, 256 + 100 * (size_t)bc_tree_node_count(t));
 	sb_puts(&b, "{\n  \"blobcast\": 1,\n");
 	if (cam) {
 		sb_puts(&b, "  \"camera\": {\"eye\": ");
@@ -1128,7 +1093,7 @@ char *bc_scene_to_json(const struct bc_tree *t, const struct bc_camera *cam)
 		sb_puts(&b, "},\n");
 	}
 	sb_puts(&b, "  \"root\": ");
-	while (!b.failed && bc_scene_walk_next(&w, &n)) {
+	while (!b.err && bc_scene_walk_next(&w, &n)) {
 		if (n.depth) {
 			sb_indent(&b, indent_of(n.depth));
 		}
@@ -1153,11 +1118,10 @@ char *bc_scene_to_json(const struct bc_tree *t, const struct bc_camera *cam)
 	}
 	sb_puts(&b, "\n}\n");
 	bc_scene_walk_finish(&w);
-	if (b.failed) {
-		bc_free(b.p);
+	if (bc_buf_take(&b, &text, &len)) {
 		return NULL;
 	}
-	return b.p;
+	return (char *)text;
 }
 
 int bc_scene_save_json(const char *path, const struct bc_tree *t,
