@@ -21,7 +21,7 @@
 #define OP_TAG 0x80u
 
 struct scan {
-	struct bc__cur c;
+	struct bc_rd c;
 	struct bc_errinfo *ei;
 	uint32_t node; /* index of the node being read */
 };
@@ -45,10 +45,10 @@ static int sfail(struct scan *s, int code, const char *fmt, ...)
 
 static int s_need(struct scan *s, size_t n, const char *what)
 {
-	if (n > bc__cur_left(&s->c)) {
+	if (n > bc_rd_left(&s->c)) {
 		return sfail(s, BC_EPROTO_TRUNCATED,
 		             "%s needs %zu bytes, %zu left", what, n,
-		             bc__cur_left(&s->c));
+		             bc_rd_left(&s->c));
 	}
 	return 0;
 }
@@ -58,7 +58,7 @@ static int s_u8(struct scan *s, const char *what, uint8_t *v)
 	*v = 0;
 	int rc = s_need(s, 1, what);
 	if (rc == 0) {
-		bc__get_u8(&s->c, v);
+		*v = bc_rd_u8(&s->c);
 	}
 	return rc;
 }
@@ -68,7 +68,7 @@ static int s_u32(struct scan *s, const char *what, uint32_t *v)
 	*v = 0;
 	int rc = s_need(s, 4, what);
 	if (rc == 0) {
-		bc__get_u32(&s->c, v);
+		*v = bc_rd_u32(&s->c);
 	}
 	return rc;
 }
@@ -79,8 +79,7 @@ static int s_floats(struct scan *s, unsigned n, const char *what, float *out)
 {
 	int rc = s_need(s, 4u * (size_t)n, what);
 	for (unsigned i = 0; rc == 0 && i < n; i++) {
-		uint32_t u;
-		bc__get_u32(&s->c, &u);
+		uint32_t u = bc_rd_u32(&s->c);
 		if (!bc__bits_finite(u)) {
 			return sfail(s, BC_ENONFINITE, "%s[%u] is not finite",
 			             what, i);
@@ -257,7 +256,7 @@ static int scan_nodes(struct scan *s, uint32_t count, struct open_stack *o,
 int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
                         struct bc_proto_scene_info *info, struct bc_errinfo *ei)
 {
-	struct scan s = {.c = {.buf = bytes, .len = len}, .ei = ei};
+	struct scan s = {.c = bc_rd_init(bytes, len), .ei = ei};
 	struct bc_proto_scene_info out = {0};
 	struct open_stack o = {0};
 	int rc;
@@ -281,21 +280,21 @@ int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
 		             "node_count %u is outside 1..%u", count,
 		             BC_PROTO_SCENE_MAX_NODES);
 	}
-	if (count > bc__cur_left(&s.c) / NODE_MIN) {
+	if (count > bc_rd_left(&s.c) / NODE_MIN) {
 		return sfail(
 		    &s, BC_EPROTO_COUNT,
 		    "node_count %u needs at least %llu bytes, %zu left", count,
-		    (unsigned long long)count * NODE_MIN, bc__cur_left(&s.c));
+		    (unsigned long long)count * NODE_MIN, bc_rd_left(&s.c));
 	}
 	rc = scan_nodes(&s, count, &o, &out);
 	bc_free(o.v);
 	if (rc) {
 		return rc;
 	}
-	if (bc__cur_left(&s.c)) {
+	if (bc_rd_left(&s.c)) {
 		return sfail(&s, BC_EPROTO_TRAILING,
 		             "%zu bytes after the last node",
-		             bc__cur_left(&s.c));
+		             bc_rd_left(&s.c));
 	}
 	out.nodes = count;
 	if (info) {

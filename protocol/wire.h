@@ -1,6 +1,6 @@
 /*
- * Byte-level helpers shared inside protocol/: a read cursor over untrusted
- * bytes whose every read checks the bytes left first, a writer that either
+ * Byte-level helpers shared inside protocol/ (reads go through base's
+ * bounded cursor, blobcast/bytes.h): a writer that either
  * measures or writes (so an encoder runs once to size a message and once to
  * fill it), strict UTF-8 and float checks, and the per-type table. Nothing
  * here casts a struct onto a buffer: every integer is assembled byte by
@@ -19,43 +19,8 @@
 
 /* ---- Reading ------------------------------------------------------------ */
 
-/* The payload decoder (decode.c) reads through base's struct bc_rd
- * (blobcast/bytes.h). This cursor is what the scene scanner (scene.c) still
- * reads with; its getters take the bytes through bytes.h, so the byte order
- * is written once. */
-struct bc__cur {
-	const uint8_t *buf;
-	size_t len, pos;
-};
-
-static inline size_t bc__cur_left(const struct bc__cur *c)
-{
-	return c->len - c->pos;
-}
-
-/* Each getter resets *v, then returns false, reading nothing, when fewer
- * than its size bytes are left. */
-static inline bool bc__get_u8(struct bc__cur *c, uint8_t *v)
-{
-	*v = 0;
-	if (bc__cur_left(c) < 1) {
-		return false;
-	}
-	*v = c->buf[c->pos];
-	c->pos += 1;
-	return true;
-}
-
-static inline bool bc__get_u32(struct bc__cur *c, uint32_t *v)
-{
-	*v = 0;
-	if (bc__cur_left(c) < 4) {
-		return false;
-	}
-	*v = bc_get_le32(c->buf + c->pos);
-	c->pos += 4;
-	return true;
-}
+/* The payload decoder (decode.c) and the scene scanner (scene.c) read
+ * through base's struct bc_rd (blobcast/bytes.h). */
 
 /* An IEEE 754 binary32 is its bit pattern as a u32; memcpy is the one
  * portable way to reinterpret it. */
