@@ -8,28 +8,13 @@
 
 #include <math.h>
 
-static void sub3(const float a[3], const float b[3], float out[3])
-{
-	out[0] = a[0] - b[0];
-	out[1] = a[1] - b[1];
-	out[2] = a[2] - b[2];
-}
+#include "blobcast/vec.h"
 
-static void cross3(const float a[3], const float b[3], float out[3])
-{
-	out[0] = a[1] * b[2] - a[2] * b[1];
-	out[1] = a[2] * b[0] - a[0] * b[2];
-	out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-static float norm3(const float a[3])
-{
-	return sqrtf(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-}
-
+/* Divides by the length (vec.h's bc_v3_normalize multiplies by its
+ * reciprocal, which rounds differently: rays stay as they were). */
 static void normalize3(float a[3])
 {
-	float n = norm3(a);
+	float n = bc_v3_len(a);
 	if (n > 0.0f) {
 		a[0] /= n;
 		a[1] /= n;
@@ -69,15 +54,15 @@ int bc_camera_validate(const struct bc_camera *cam, struct bc_errinfo *ei)
 				      "camera: fov_y_deg %g outside (0, 180)",
 				      (double)cam->fov_y_deg);
 	}
-	sub3(cam->target, cam->eye, fwd);
-	if (!(norm3(fwd) > 1e-6f)) {
+	bc_v3_sub(cam->target, cam->eye, fwd);
+	if (!(bc_v3_len(fwd) > 1e-6f)) {
 		return bc_errinfo_set(ei, BC_ERANGE,
 				      "camera: eye and target coincide");
 	}
 	normalize3(fwd);
-	cross3(fwd, cam->up, side);
-	if (!(norm3(side) > 1e-6f * (norm3(cam->up) + 1e-30f)) ||
-	    !(norm3(cam->up) > 0.0f)) {
+	bc_v3_cross(fwd, cam->up, side);
+	if (!(bc_v3_len(side) > 1e-6f * (bc_v3_len(cam->up) + 1e-30f)) ||
+	    !(bc_v3_len(cam->up) > 0.0f)) {
 		return bc_errinfo_set(ei, BC_ERANGE,
 				      "camera: up is zero or parallel to the "
 				      "view direction");
@@ -92,11 +77,11 @@ void bc_view_rays_init(struct bc_view_rays *vr, const struct bc_camera *cam,
 	vr->eye[0] = cam->eye[0];
 	vr->eye[1] = cam->eye[1];
 	vr->eye[2] = cam->eye[2];
-	sub3(cam->target, cam->eye, vr->forward);
+	bc_v3_sub(cam->target, cam->eye, vr->forward);
 	normalize3(vr->forward);
-	cross3(vr->forward, cam->up, vr->right);
+	bc_v3_cross(vr->forward, cam->up, vr->right);
 	normalize3(vr->right);
-	cross3(vr->right, vr->forward, vr->up);
+	bc_v3_cross(vr->right, vr->forward, vr->up);
 	vr->tan_half_y = tanf(cam->fov_y_deg * pi / 360.0f);
 	vr->width = width ? width : 1;
 	vr->height = height ? height : 1;

@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/vec.h"
 
 #define PI_F 3.14159265358979f
 
@@ -72,40 +73,7 @@ static uint32_t rng_below(struct rng *r, uint32_t n)
 	return (uint32_t)(rng_next(r) % n);
 }
 
-/* ---- small vector and quaternion helpers --------------------------------- */
-
-static void quat_identity(float q[4])
-{
-	q[0] = q[1] = q[2] = 0.0f;
-	q[3] = 1.0f;
-}
-
-/* Rotation by angle about the unit axis (x, y, z). */
-static void quat_axis(float q[4], float x, float y, float z, float angle)
-{
-	float s = sinf(0.5f * angle);
-	q[0] = x * s;
-	q[1] = y * s;
-	q[2] = z * s;
-	q[3] = cosf(0.5f * angle);
-}
-
-/* out = a * b (apply b, then a). out may alias neither. */
-static void quat_mul(const float a[4], const float b[4], float out[4])
-{
-	out[0] = a[3] * b[0] + a[0] * b[3] + a[1] * b[2] - a[2] * b[1];
-	out[1] = a[3] * b[1] - a[0] * b[2] + a[1] * b[3] + a[2] * b[0];
-	out[2] = a[3] * b[2] + a[0] * b[1] - a[1] * b[0] + a[2] * b[3];
-	out[3] = a[3] * b[3] - a[0] * b[0] - a[1] * b[1] - a[2] * b[2];
-}
-
-static void quat_normalize(float q[4])
-{
-	float n = sqrtf(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-	for (int i = 0; i < 4; i++) {
-		q[i] /= n;
-	}
-}
+/* ---- random rotations (the rest of the quaternion helpers: vec.h) ------- */
 
 /* Uniformly random unit quaternion (Shoemake's subgroup algorithm). */
 static void quat_random(struct rng *r, float q[4])
@@ -118,19 +86,7 @@ static void quat_random(struct rng *r, float q[4])
 	q[1] = s1 * cosf(a);
 	q[2] = s2 * sinf(b);
 	q[3] = s2 * cosf(b);
-	quat_normalize(q);
-}
-
-/* out = q v q^-1 for a unit q. */
-static void quat_rotate(const float q[4], const float v[3], float out[3])
-{
-	/* v + 2 w (u x v) + 2 u x (u x v), u = q.xyz */
-	float tx = 2.0f * (q[1] * v[2] - q[2] * v[1]);
-	float ty = 2.0f * (q[2] * v[0] - q[0] * v[2]);
-	float tz = 2.0f * (q[0] * v[1] - q[1] * v[0]);
-	out[0] = v[0] + q[3] * tx + (q[1] * tz - q[2] * ty);
-	out[1] = v[1] + q[3] * ty + (q[2] * tx - q[0] * tz);
-	out[2] = v[2] + q[3] * tz + (q[0] * ty - q[1] * tx);
+	bc_quat_normalize(q);
 }
 
 /* ---- building context ---------------------------------------------------- */
@@ -153,7 +109,7 @@ struct frame {
 static void frame_init(struct frame *f)
 {
 	memset(f, 0, sizeof(*f));
-	quat_identity(f->q);
+	bc_quat_identity(f->q);
 	f->s = 1.0f;
 }
 
@@ -198,12 +154,12 @@ static void place(struct bc_prim_data *p, const struct frame *f,
 	float v[3] = {local_pos[0] * f->s, local_pos[1] * f->s,
 	              local_pos[2] * f->s};
 	float w[3];
-	quat_rotate(f->q, v, w);
+	bc_quat_rotate(f->q, v, w);
 	for (int i = 0; i < 3; i++) {
 		p->translate[i] = f->t[i] + w[i];
 	}
-	quat_mul(f->q, local_q, p->rotate);
-	quat_normalize(p->rotate);
+	bc_quat_mul(f->q, local_q, p->rotate);
+	bc_quat_normalize(p->rotate);
 }
 
 static void set_color(struct bc_prim_data *p, float r, float g, float b)
@@ -309,7 +265,7 @@ static int fig16_aggregate(struct gen *g, const struct agg *a, bool smooth)
 	               0.12f * s))) {
 		return rc;
 	}
-	quat_identity(q);
+	bc_quat_identity(q);
 	bc_prim_data_init(&p, BC_PRIM_SPHERE);
 	if ((rc = set1(g, &p, "radius", 0.5f * s))) {
 		return rc;
@@ -325,14 +281,14 @@ static int fig16_aggregate(struct gen *g, const struct agg *a, bool smooth)
 	    (rc = set1(g, &p, "minor", 0.07f * s))) {
 		return rc;
 	}
-	quat_axis(q, 1.0f, 0.0f, 0.0f, 0.35f);
+	bc_quat_axis_angle(q, 1.0f, 0.0f, 0.0f, 0.35f);
 	place(&p, &a->f, zero, q);
 	set_color(&p, 0.9f * base[1], 0.9f * base[2], 0.9f * base[0]);
 	if ((rc = put(g, &p))) {
 		return rc;
 	}
 
-	quat_identity(q);
+	bc_quat_identity(q);
 	for (int k = 0; k < 4; k++) {
 		bc_prim_data_init(&p, BC_PRIM_SPHERE);
 		if ((rc = set1(g, &p, "radius", 0.16f * s))) {
@@ -356,7 +312,7 @@ static int fig16_aggregate(struct gen *g, const struct agg *a, bool smooth)
 		pos[0] = k ? -0.55f : 0.55f;
 		pos[1] = 0.0f;
 		pos[2] = 0.0f;
-		quat_axis(q, 0.0f, 0.0f, 1.0f, 0.6f);
+		bc_quat_axis_angle(q, 0.0f, 0.0f, 1.0f, 0.6f);
 		place(&p, &a->f, pos, q);
 		set_color(&p, base[2], base[0], base[1]);
 		if ((rc = put(g, &p))) {
@@ -364,7 +320,7 @@ static int fig16_aggregate(struct gen *g, const struct agg *a, bool smooth)
 		}
 	}
 
-	quat_identity(q);
+	bc_quat_identity(q);
 	for (int k = 0; k < 2; k++) {
 		float sign = k ? -1.0f : 1.0f;
 		bc_prim_data_init(&p, BC_PRIM_CAPSULE);
@@ -427,7 +383,7 @@ static int gen_fig16(struct gen *g, struct bc_camera *cam)
 				          c];
 				float d[3], w[3];
 				fib_dir(c, 10, d);
-				quat_rotate(pa->f.q, d, w);
+				bc_quat_rotate(pa->f.q, d, w);
 				for (int j = 0; j < 3; j++) {
 					ch->f.t[j] =
 					    pa->f.t[j] +
@@ -497,7 +453,7 @@ static int fig18_instance(struct gen *g, enum bc_gen_kind kind, bool smooth,
 		 * apart along a random axis, intersected. */
 		float q[4], axis[3], z[3] = {0.0f, 0.0f, 1.0f};
 		quat_random(&g->rng, q);
-		quat_rotate(q, z, axis);
+		bc_quat_rotate(q, z, axis);
 		if ((rc = push(g,
 		               smooth ? BC_OP_SMOOTH_INTERSECTION
 		                      : BC_OP_INTERSECTION,
@@ -687,7 +643,7 @@ static int gear(struct gen *g, const float c[3], uint32_t teeth, float m,
 	struct bc_prim_data p;
 	int rc;
 
-	quat_axis(to_z, 1.0f, 0.0f, 0.0f, 0.5f * PI_F);
+	bc_quat_axis_angle(to_z, 1.0f, 0.0f, 0.0f, 0.5f * PI_F);
 	if ((rc = push(g, BC_OP_DIFFERENCE, 0.0f)) ||
 	    (rc = push(g, BC_OP_UNION, 0.0f))) {
 		return rc;
@@ -717,7 +673,7 @@ static int gear(struct gen *g, const float c[3], uint32_t teeth, float m,
 		p.translate[0] = c[0] + (rp - 0.03f * m) * cosf(a);
 		p.translate[1] = c[1] + (rp - 0.03f * m) * sinf(a);
 		p.translate[2] = c[2];
-		quat_axis(p.rotate, 0.0f, 0.0f, 1.0f, a);
+		bc_quat_axis_angle(p.rotate, 0.0f, 0.0f, 1.0f, a);
 		set_color(&p, col[0], col[1], col[2]);
 		if ((rc = put(g, &p))) {
 			return rc;
