@@ -412,7 +412,9 @@ void bc_args_help(const struct bc_args *a, FILE *out)
 	}
 	fputc('\n', out);
 	for (int i = 0; a->opts && a->opts[i].kind != BC_OPT_INVALID; i++) {
-		print_opt(out, &a->opts[i]);
+		if (!(a->opts[i].flags & BC_OPT_HIDDEN)) {
+			print_opt(out, &a->opts[i]);
+		}
 	}
 	print_opt(out, &(const struct bc_opt){.name = "help",
 					      .short_name = 'h',

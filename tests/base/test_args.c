@@ -383,6 +383,39 @@ static void args_help_shows_defaults(void)
 	CHECK(strstr(text, "  --name S           default none\n") != NULL);
 }
 
+/* A hidden option is parsed (and marked seen) but left out of the help:
+ * one table shared by commands that each take part of it. */
+static void args_hidden_options_parse_but_stay_out_of_help(void)
+{
+	bool quiet = false;
+	uint32_t n = 0;
+	char text[1024];
+	size_t len;
+	char arg0[] = "p", arg1[] = "--quiet", arg2[] = "--n=3";
+	char *argv[] = {arg0, arg1, arg2, NULL};
+	struct bc_opt opts[] = {
+		{.name = "quiet", .kind = BC_OPT_FLAG, .dst = &quiet,
+		 .help = "say less", .flags = BC_OPT_HIDDEN},
+		{.name = "n", .kind = BC_OPT_U32, .dst = &n, .arg = "N",
+		 .help = "count"},
+		{.kind = BC_OPT_INVALID},
+	};
+	struct bc_args a = {.prog = "p", .opts = opts};
+	FILE *tmp = tmpfile();
+	REQUIRE(tmp);
+	bc_args_help(&a, tmp);
+	rewind(tmp);
+	len = fread(text, 1, sizeof(text) - 1, tmp);
+	text[len] = '\0';
+	fclose(tmp);
+	CHECK(strstr(text, "--quiet") == NULL);
+	CHECK(strstr(text, "  --n N              count\n") != NULL);
+	CHECK_EQ_INT(bc_args_parse(&a, 3, argv), 0);
+	CHECK(quiet);
+	CHECK_EQ_INT((int)n, 3);
+	CHECK(bc_args_given(&a, "quiet"));
+}
+
 static const struct bc_test tests[] = {
     {"num_integers_are_plain_decimal", num_integers_are_plain_decimal},
     {"num_floats_are_finite_decimal", num_floats_are_finite_decimal},
@@ -394,5 +427,7 @@ static const struct bc_test tests[] = {
     {"args_help_shows_defaults", args_help_shows_defaults},
     {"args_errors_are_named", args_errors_are_named},
     {"args_help_comes_from_the_table", args_help_comes_from_the_table},
+    {"args_hidden_options_parse_but_stay_out_of_help",
+     args_hidden_options_parse_but_stay_out_of_help},
 };
 BC_TEST_MAIN(tests)

@@ -44,6 +44,9 @@ struct bc_opt_name {
 /* Flags of an option. */
 #define BC_OPT_REQUIRED 1u /* bc_args_parse fails when it is missing */
 #define BC_OPT_EMPTY 2u    /* a STRING may be "" */
+/* Left out of the help: an option of a shared table that this command does
+ * not take (the caller refuses it from seen). */
+#define BC_OPT_HIDDEN 4u
 
 /* One option. name is the long name without "--"; short_name 0 for none.
  * lo and hi bound numbers (both 0: the type's whole range; for U64 a hi of
