@@ -9,9 +9,12 @@
 #include <math.h>
 #include <string.h>
 
+#include "blobcast/vec.h"
+/* Divides by the length, as blobtree's camera does (vec.h's
+ * bc_v3_normalize multiplies by the reciprocal, which rounds differently). */
 static void normalize3(float v[3])
 {
-	float n = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+	float n = bc_v3_len(v);
 	if (n > 0.0f) {
 		v[0] /= n;
 		v[1] /= n;
@@ -22,11 +25,6 @@ static void normalize3(float v[3])
 static inline float maxf(float a, float b)
 {
 	return a > b ? a : b;
-}
-
-static inline float dot3(const float a[3], const float b[3])
-{
-	return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
 void bc_shade_init(struct bc_shade *s, const struct bc_view_rays *vr)
@@ -93,7 +91,7 @@ void bc_shade_hit(const struct bc_shade *s, const float grad[3],
 		       s->light[2] - d[2]};
 	float diff, spec;
 	if (!(isfinite(n[0]) && isfinite(n[1]) && isfinite(n[2])) ||
-	    dot3(n, n) == 0.0f) {
+	    bc_v3_dot(n, n) == 0.0f) {
 		/* No usable gradient (a sample fell outside every active
 		 * primitive): face the viewer. */
 		n[0] = -d[0];
@@ -101,16 +99,16 @@ void bc_shade_hit(const struct bc_shade *s, const float grad[3],
 		n[2] = -d[2];
 	}
 	normalize3(n);
-	if (dot3(n, d) > 0.0f) {
+	if (bc_v3_dot(n, d) > 0.0f) {
 		/* Seen from inside (the eye is in the solid): light the side
 		 * that faces us. */
 		n[0] = -n[0];
 		n[1] = -n[1];
 		n[2] = -n[2];
 	}
-	diff = maxf(dot3(n, s->light), 0.0f);
+	diff = maxf(bc_v3_dot(n, s->light), 0.0f);
 	normalize3(hv);
-	spec = diff > 0.0f ? powf(maxf(dot3(n, hv), 0.0f), 48.0f) : 0.0f;
+	spec = diff > 0.0f ? powf(maxf(bc_v3_dot(n, hv), 0.0f), 48.0f) : 0.0f;
 	for (int c = 0; c < 3; c++) {
 		float lit = albedo[c] * (s->ambient + (1.0f - s->ambient) * diff) +
 			    0.25f * spec;

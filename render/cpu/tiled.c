@@ -51,6 +51,7 @@
 #include "blobcast/alloc.h"
 #include "blobcast/clock.h"
 #include "blobcast/log.h"
+#include "blobcast/vec.h"
 
 #include "abuffer.h"
 
@@ -212,11 +213,6 @@ struct tiled_frame {
 	atomic_uint tiles_asked, rays; /* tiles and pixels the region asks */
 };
 
-static inline float dot3(const float a[3], const float b[3])
-{
-	return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
 /* The cone of the pixel rays through pixel centres [x0, x1] x [y0, y1]
  * (inclusive, in pixel coordinates), whose corner rays (the pixel rays
  * there) are corner[4]. The half-angle is the largest angle between the
@@ -230,7 +226,7 @@ static void make_cone(const struct bc_view_rays *vr, float x0, float y0,
 	float least = 1.0f, half;
 	bc_view_rays_dir(vr, 0.5f * (x0 + x1), 0.5f * (y0 + y1), c->axis);
 	for (int k = 0; k < 4; k++) {
-		least = bc__minf(least, dot3(corner[k], c->axis));
+		least = bc__minf(least, bc_v3_dot(corner[k], c->axis));
 	}
 	half = acosf(least < -1.0f ? -1.0f : least);
 	/* Margin for rounding in the angle computations. */
@@ -254,14 +250,15 @@ static struct rect project_box(const struct tiled_frame *tf, const float lo[3],
 		              (c & 4) ? hi[2] : lo[2]};
 		float v[3] = {p[0] - vr->eye[0], p[1] - vr->eye[1],
 		              p[2] - vr->eye[2]};
-		float z = dot3(v, vr->forward), sx, sy;
+		float z = bc_v3_dot(v, vr->forward), sx, sy;
 		if (!(z >
 		      1.0e-6f * (fabsf(v[0]) + fabsf(v[1]) + fabsf(v[2])))) {
 			behind++;
 			continue;
 		}
-		sx = dot3(v, vr->right) / (z * vr->tan_half_y * vr->aspect);
-		sy = dot3(v, vr->up) / (z * vr->tan_half_y);
+		sx = bc_v3_dot(v, vr->right) /
+		     (z * vr->tan_half_y * vr->aspect);
+		sy = bc_v3_dot(v, vr->up) / (z * vr->tan_half_y);
 		px0 = bc__minf(px0, (sx + 1.0f) * 0.5f * w);
 		px1 = bc__maxf(px1, (sx + 1.0f) * 0.5f * w);
 		py0 = bc__minf(py0, (1.0f - sy) * 0.5f * h);
@@ -341,7 +338,8 @@ static inline bool cone_meets_sphere(const struct cone *c,
 	if (p->inside) {
 		return true;
 	}
-	return dot3(p->v, c->axis) >= c->cos_h * p->root - c->sin_h * p->radius;
+	return bc_v3_dot(p->v, c->axis) >=
+	       c->cos_h * p->root - c->sin_h * p->radius;
 }
 
 /* A sphere around the (world) shape: tighter than the AABB's for spheres
@@ -365,7 +363,7 @@ static void bounding_sphere(const struct bc_abv *abv, const float lo[3],
 		return;
 	case BC_ABV_BOX:
 		memcpy(c, abv->center, sizeof(abv->center));
-		*r = sqrtf(dot3(abv->half, abv->half));
+		*r = sqrtf(bc_v3_dot(abv->half, abv->half));
 		return;
 	default:
 		for (int i = 0; i < 3; i++) {
@@ -390,7 +388,7 @@ static void prim_setup(const struct tiled_frame *tf, uint32_t k,
 	for (int i = 0; i < 3; i++) {
 		p->v[i] = c[i] - fc->vr.eye[i];
 	}
-	dist2 = dot3(p->v, p->v);
+	dist2 = bc_v3_dot(p->v, p->v);
 	p->inside = dist2 <= p->radius * p->radius;
 	p->root = p->inside ? 0.0f : sqrtf(dist2 - p->radius * p->radius);
 }

@@ -50,6 +50,7 @@
 #include "blobcast/log.h"
 #include "blobcast/render_backend.h"
 #include "blobcast/render_common.h"
+#include "blobcast/vec.h"
 
 /* The shaders copy these enum values and layouts (shaders/common.glsl,
  * prim.glsl); a change here must be made there too. */
@@ -529,9 +530,11 @@ static int gl_sync(struct bc_renderer *base, const struct bc_tree *t,
 /* ---- One frame ------------------------------------------------------------
  */
 
+/* Divides by the length, as blobtree's camera does (vec.h's
+ * bc_v3_normalize multiplies by the reciprocal, which rounds differently). */
 static void normalize3(float v[3])
 {
-	float n = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+	float n = bc_v3_len(v);
 	if (n > 0.0f) {
 		v[0] /= n;
 		v[1] /= n;

@@ -144,11 +144,6 @@ struct frame {
 	atomic_int err;
 };
 
-static inline float dot3(const float a[3], const float b[3])
-{
-	return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
 static void debug_px(const struct frame *fr, uint32_t evals, uint32_t terms,
                      uint8_t px[4])
 {
