@@ -10,18 +10,6 @@
 
 #include "blobcast/vec.h"
 
-/* Divides by the length (vec.h's bc_v3_normalize multiplies by its
- * reciprocal, which rounds differently: rays stay as they were). */
-static void normalize3(float a[3])
-{
-	float n = bc_v3_len(a);
-	if (n > 0.0f) {
-		a[0] /= n;
-		a[1] /= n;
-		a[2] /= n;
-	}
-}
-
 void bc_camera_default(struct bc_camera *cam)
 {
 	*cam = (struct bc_camera){
@@ -59,7 +47,7 @@ int bc_camera_validate(const struct bc_camera *cam, struct bc_errinfo *ei)
 		return bc_errinfo_set(ei, BC_ERANGE,
 				      "camera: eye and target coincide");
 	}
-	normalize3(fwd);
+	bc_v3_normalize_div(fwd);
 	bc_v3_cross(fwd, cam->up, side);
 	if (!(bc_v3_len(side) > 1e-6f * (bc_v3_len(cam->up) + 1e-30f)) ||
 	    !(bc_v3_len(cam->up) > 0.0f)) {
@@ -78,9 +66,9 @@ void bc_view_rays_init(struct bc_view_rays *vr, const struct bc_camera *cam,
 	vr->eye[1] = cam->eye[1];
 	vr->eye[2] = cam->eye[2];
 	bc_v3_sub(cam->target, cam->eye, vr->forward);
-	normalize3(vr->forward);
+	bc_v3_normalize_div(vr->forward);
 	bc_v3_cross(vr->forward, cam->up, vr->right);
-	normalize3(vr->right);
+	bc_v3_normalize_div(vr->right);
 	bc_v3_cross(vr->right, vr->forward, vr->up);
 	vr->tan_half_y = tanf(cam->fov_y_deg * pi / 360.0f);
 	vr->width = width ? width : 1;
@@ -97,5 +85,5 @@ void bc_view_rays_dir(const struct bc_view_rays *vr, float x, float y,
 	for (int i = 0; i < 3; i++) {
 		dir[i] = vr->forward[i] + sx * vr->right[i] + sy * vr->up[i];
 	}
-	normalize3(dir);
+	bc_v3_normalize_div(dir);
 }

@@ -62,6 +62,18 @@ static inline float bc_v3_normalize(float a[3])
 	return n;
 }
 
+/* Divides a by its length when that is above zero: the camera's rays and
+ * the light direction, whose images are compared bit for bit, were made
+ * this way (a division rounds differently from bc_v3_normalize's product
+ * with the reciprocal). */
+static inline void bc_v3_normalize_div(float a[3])
+{
+	float n = bc_v3_len(a);
+	if (n > 0.0f) {
+		bc_v3_set(a, a[0] / n, a[1] / n, a[2] / n);
+	}
+}
+
 static inline void bc_quat_identity(float q[4])
 {
 	q[0] = q[1] = q[2] = 0.0f;
