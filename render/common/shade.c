@@ -10,18 +10,6 @@
 #include <string.h>
 
 #include "blobcast/vec.h"
-/* Divides by the length, as blobtree's camera does (vec.h's
- * bc_v3_normalize multiplies by the reciprocal, which rounds differently). */
-static void normalize3(float v[3])
-{
-	float n = bc_v3_len(v);
-	if (n > 0.0f) {
-		v[0] /= n;
-		v[1] /= n;
-		v[2] /= n;
-	}
-}
-
 static inline float maxf(float a, float b)
 {
 	return a > b ? a : b;
@@ -34,7 +22,7 @@ void bc_shade_init(struct bc_shade *s, const struct bc_view_rays *vr)
 		s->light[i] = -0.5f * vr->right[i] + 0.6f * vr->up[i] -
 			      0.6f * vr->forward[i];
 	}
-	normalize3(s->light);
+	bc_v3_normalize_div(s->light);
 	s->ambient = 0.18f;
 }
 
@@ -98,7 +86,7 @@ void bc_shade_hit(const struct bc_shade *s, const float grad[3],
 		n[1] = -d[1];
 		n[2] = -d[2];
 	}
-	normalize3(n);
+	bc_v3_normalize_div(n);
 	if (bc_v3_dot(n, d) > 0.0f) {
 		/* Seen from inside (the eye is in the solid): light the side
 		 * that faces us. */
@@ -107,7 +95,7 @@ void bc_shade_hit(const struct bc_shade *s, const float grad[3],
 		n[2] = -n[2];
 	}
 	diff = maxf(bc_v3_dot(n, s->light), 0.0f);
-	normalize3(hv);
+	bc_v3_normalize_div(hv);
 	spec = diff > 0.0f ? powf(maxf(bc_v3_dot(n, hv), 0.0f), 48.0f) : 0.0f;
 	for (int c = 0; c < 3; c++) {
 		float lit = albedo[c] * (s->ambient + (1.0f - s->ambient) * diff) +

@@ -530,18 +530,6 @@ static int gl_sync(struct bc_renderer *base, const struct bc_tree *t,
 /* ---- One frame ------------------------------------------------------------
  */
 
-/* Divides by the length, as blobtree's camera does (vec.h's
- * bc_v3_normalize multiplies by the reciprocal, which rounds differently). */
-static void normalize3(float v[3])
-{
-	float n = bc_v3_len(v);
-	if (n > 0.0f) {
-		v[0] /= n;
-		v[1] /= n;
-		v[2] /= n;
-	}
-}
-
 /* The frame's uniforms: render/cpu/shade.c's frame setup (the region's
  * part is filled by the caller). */
 static void frame_setup(struct bc__gl_frame_ubo *u, const struct bc_lin *l,
@@ -564,7 +552,7 @@ static void frame_setup(struct bc__gl_frame_ubo *u, const struct bc_lin *l,
 		light[i] = -0.5f * vr.right[i] + 0.6f * vr.up[i] -
 		           0.6f * vr.forward[i];
 	}
-	normalize3(light);
+	bc_v3_normalize_div(light);
 	memcpy(u->light, light, sizeof(light));
 	u->eye[3] = vr.tan_half_y;
 	u->forward[3] = vr.aspect;
