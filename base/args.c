@@ -29,8 +29,8 @@ static int count_opts(const struct bc_opt *opts)
 }
 
 /* fmt is the caller's format, checked at bc_args_error's own attribute. */
-__attribute__((format(printf, 2, 0)))
-static void verror(const struct bc_args *a, const char *fmt, va_list ap)
+__attribute__((format(printf, 2, 0))) static void
+verror(const struct bc_args *a, const char *fmt, va_list ap)
 {
 	fprintf(stderr, "%s: ", a->prog);
 	vfprintf(stderr, fmt, ap);
@@ -62,7 +62,7 @@ fail(struct bc_args *a, const char *fmt, ...)
 
 /* The bounds of a numeric option, the type's own when lo == hi == 0. */
 static void bounds_u64(const struct bc_opt *o, uint64_t max, uint64_t *lo,
-		       uint64_t *hi)
+                       uint64_t *hi)
 {
 	if (o->lo == 0.0 && o->hi == 0.0) {
 		*lo = 0;
@@ -72,8 +72,8 @@ static void bounds_u64(const struct bc_opt *o, uint64_t max, uint64_t *lo,
 	*lo = o->lo <= 0.0 ? 0 : (uint64_t)o->lo;
 	/* 2^64 and up do not convert: they mean the type's maximum. */
 	*hi = o->hi >= 18446744073709551615.0 || (uint64_t)o->hi > max
-		      ? max
-		      : (uint64_t)o->hi;
+	          ? max
+	          : (uint64_t)o->hi;
 }
 
 static void bounds_f32(const struct bc_opt *o, float *lo, float *hi)
@@ -97,12 +97,12 @@ static void range_text(const struct bc_opt *o, char *buf, size_t cap)
 	case BC_OPT_SIZE:
 		bounds_u64(o, UINT32_MAX, &lo, &hi);
 		snprintf(buf, cap, "%llu..%llu", (unsigned long long)lo,
-			 (unsigned long long)hi);
+		         (unsigned long long)hi);
 		break;
 	case BC_OPT_U64:
 		bounds_u64(o, UINT64_MAX, &lo, &hi);
 		snprintf(buf, cap, "%llu..%llu", (unsigned long long)lo,
-			 (unsigned long long)hi);
+		         (unsigned long long)hi);
 		break;
 	case BC_OPT_F32:
 		bounds_f32(o, &flo, &fhi);
@@ -116,13 +116,13 @@ static void range_text(const struct bc_opt *o, char *buf, size_t cap)
 
 /* Writes the ENUM's names joined by sep into buf. */
 static void choices_text(const struct bc_opt *o, const char *sep, char *buf,
-			 size_t cap)
+                         size_t cap)
 {
 	size_t len = 0;
 	buf[0] = '\0';
 	for (const struct bc_opt_name *n = o->names; n && n->name; n++) {
 		int w = snprintf(buf + len, cap - len, "%s%s",
-				 n == o->names ? "" : sep, n->name);
+		                 n == o->names ? "" : sep, n->name);
 		if (w < 0 || (size_t)w >= cap - len) {
 			break;
 		}
@@ -130,8 +130,7 @@ static void choices_text(const struct bc_opt *o, const char *sep, char *buf,
 	}
 }
 
-static int set_value(struct bc_args *a, const struct bc_opt *o,
-		     const char *val)
+static int set_value(struct bc_args *a, const struct bc_opt *o, const char *val)
 {
 	char range[96], choices[256];
 	uint64_t lo, hi, u64;
@@ -162,21 +161,27 @@ static int set_value(struct bc_args *a, const struct bc_opt *o,
 	case BC_OPT_SIZE:
 		bounds_u64(o, UINT32_MAX, &lo, &hi);
 		rc = bc_num_size(val, (uint32_t)lo, (uint32_t)hi, &wh[0],
-				 &wh[1]);
+		                 &wh[1]);
 		if (rc == 0) {
 			memcpy(o->dst, wh, sizeof(wh));
 		} else if (rc == BC_EINVAL) {
-			return fail(a, "--%s '%s' is not WxH (two whole "
-				       "numbers)", o->name, val);
+			return fail(a,
+			            "--%s '%s' is not WxH (two whole "
+			            "numbers)",
+			            o->name, val);
 		} else {
-			return fail(a, "--%s '%s' is out of range (width and "
-				       "height %s)", o->name, val, range);
+			return fail(a,
+			            "--%s '%s' is out of range (width and "
+			            "height %s)",
+			            o->name, val, range);
 		}
 		return 0;
 	case BC_OPT_VEC3:
 		if (bc_num_vec3(val, v)) {
-			return fail(a, "--%s '%s' is not x,y,z (three finite "
-				       "numbers)", o->name, val);
+			return fail(a,
+			            "--%s '%s' is not x,y,z (three finite "
+			            "numbers)",
+			            o->name, val);
 		}
 		memcpy(o->dst, v, sizeof(v));
 		return 0;
@@ -187,7 +192,8 @@ static int set_value(struct bc_args *a, const struct bc_opt *o,
 		*(const char **)o->dst = val;
 		return 0;
 	case BC_OPT_ENUM:
-		for (const struct bc_opt_name *n = o->names; n && n->name; n++) {
+		for (const struct bc_opt_name *n = o->names; n && n->name;
+		     n++) {
 			if (strcmp(n->name, val) == 0) {
 				*(int *)o->dst = n->value;
 				return 0;
@@ -195,19 +201,19 @@ static int set_value(struct bc_args *a, const struct bc_opt *o,
 		}
 		choices_text(o, ", ", choices, sizeof(choices));
 		return fail(a, "--%s '%s' is not one of %s", o->name, val,
-			    choices);
+		            choices);
 	default:
 		assert(!"option kind without a value");
 		return fail(a, "--%s: bad option table", o->name);
 	}
 	if (rc == BC_EINVAL) {
 		return fail(a, "--%s '%s' is not %s", o->name, val,
-			    o->kind == BC_OPT_F32 ? "a finite decimal number"
-						  : "a whole decimal number");
+		            o->kind == BC_OPT_F32 ? "a finite decimal number"
+		                                  : "a whole decimal number");
 	}
 	if (rc) {
 		return fail(a, "--%s '%s' is out of range (%s)", o->name, val,
-			    range);
+		            range);
 	}
 	return 0;
 }
@@ -215,7 +221,7 @@ static int set_value(struct bc_args *a, const struct bc_opt *o,
 /* The option named by arg ("--name", "--name=v", "-n", "-nv"), with *val
  * set to the attached value or NULL; NULL when there is none. */
 static const struct bc_opt *find(const struct bc_opt *opts, const char *arg,
-				 const char **val, int *index)
+                                 const char **val, int *index)
 {
 	*val = NULL;
 	for (int i = 0; opts && opts[i].kind != BC_OPT_INVALID; i++) {
@@ -286,7 +292,7 @@ int bc_args_parse(struct bc_args *a, int argc, char **argv)
 		if (!val) {
 			if (i + 1 >= argc) {
 				return fail(a, "--%s needs a value (%s)",
-					    o->name, o->arg ? o->arg : "VALUE");
+				            o->name, o->arg ? o->arg : "VALUE");
 			}
 			val = argv[++i];
 		}
@@ -300,7 +306,7 @@ int bc_args_parse(struct bc_args *a, int argc, char **argv)
 		    !(a->seen & ((uint64_t)1 << i))) {
 			if (o->arg) {
 				return fail(a, "--%s %s is required", o->name,
-					    o->arg);
+				            o->arg);
 			}
 			return fail(a, "--%s is required", o->name);
 		}
@@ -332,7 +338,7 @@ static void default_text(const struct bc_opt *o, char *buf, size_t cap)
 		break;
 	case BC_OPT_U64:
 		snprintf(buf, cap, "%llu",
-			 (unsigned long long)*(const uint64_t *)o->dst);
+		         (unsigned long long)*(const uint64_t *)o->dst);
 		break;
 	case BC_OPT_F32:
 		snprintf(buf, cap, "%g", (double)*(const float *)o->dst);
@@ -343,7 +349,8 @@ static void default_text(const struct bc_opt *o, char *buf, size_t cap)
 		}
 		break;
 	case BC_OPT_ENUM:
-		for (const struct bc_opt_name *n = o->names; n && n->name; n++) {
+		for (const struct bc_opt_name *n = o->names; n && n->name;
+		     n++) {
 			if (n->value == *(const int *)o->dst) {
 				snprintf(buf, cap, "%s", n->name);
 				break;
@@ -359,7 +366,7 @@ static void default_text(const struct bc_opt *o, char *buf, size_t cap)
  * "{range}" and "{choices}" replaced for option o (NULL: no
  * replacement). */
 static void print_text(FILE *out, const char *text, int indent,
-		       const struct bc_opt *o)
+                       const struct bc_opt *o)
 {
 	char buf[256];
 	for (const char *p = text; *p; p++) {
@@ -393,7 +400,7 @@ static void print_opt(FILE *out, const struct bc_opt *o)
 		snprintf(shrt, sizeof(shrt), "-%c, ", o->short_name);
 	}
 	n = snprintf(left, sizeof(left), "  %s--%s%s%s", shrt, o->name,
-		     arg ? " " : "", arg ? o->arg : "");
+	             arg ? " " : "", arg ? o->arg : "");
 	if (n >= HELP_COL - 1) {
 		fprintf(out, "%s\n%*s", left, HELP_COL, "");
 	} else {
@@ -417,9 +424,9 @@ void bc_args_help(const struct bc_args *a, FILE *out)
 		}
 	}
 	print_opt(out, &(const struct bc_opt){.name = "help",
-					      .short_name = 'h',
-					      .kind = BC_OPT_FLAG,
-					      .help = "this help"});
+	                                      .short_name = 'h',
+	                                      .kind = BC_OPT_FLAG,
+	                                      .help = "this help"});
 	if (a->footer) {
 		fputc('\n', out);
 		print_text(out, a->footer, 0, NULL);

@@ -138,7 +138,7 @@ static bool copy_part(char *buf, size_t cap, const char *s, size_t n)
 }
 
 int bc_num_size(const char *s, uint32_t lo, uint32_t hi, uint32_t *w,
-		uint32_t *h)
+                uint32_t *h)
 {
 	char part[32];
 	const char *x;

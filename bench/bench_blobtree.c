@@ -102,8 +102,8 @@ static void bench_relinearize(uint32_t n)
 			best = dt;
 		}
 	}
-	printf("relinearize prims=%-8u ms=%.3f ms_per_1k=%.4f\n", n,
-	       1e3 * best, 1e3 * best / ((double)n / 1000.0));
+	printf("relinearize prims=%-8u ms=%.3f ms_per_1k=%.4f\n", n, 1e3 * best,
+	       1e3 * best / ((double)n / 1000.0));
 	bc_tree_destroy(sub);
 	bc_tree_destroy(t);
 }

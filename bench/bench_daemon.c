@@ -56,8 +56,9 @@ static void fps(struct daemon *d, uint32_t id, int viewers)
 	}
 	t0 = t_now_ms();
 	for (int i = 0; t_now_ms() - t0 < seconds * 1000; i++) {
-		conn_move(&ed, id, original.translate[0] + 0.001f * (float)(i % 50),
-			  original.translate[1], original.translate[2], true);
+		conn_move(&ed, id,
+		          original.translate[0] + 0.001f * (float)(i % 50),
+		          original.translate[1], original.translate[2], true);
 		t_sleep_ms(16);
 		while (conn_recv(&ed, 0) == 1) {
 		}
@@ -84,7 +85,8 @@ int main(int argc, char **argv)
 	int edits = argc > 2 ? atoi(argv[2]) : 100;
 	char dir[64];
 	if (argc < 2) {
-		fprintf(stderr, "usage: bench_daemon PATH/TO/blobcastd [edits]\n");
+		fprintf(stderr,
+		        "usage: bench_daemon PATH/TO/blobcastd [edits]\n");
 		return 2;
 	}
 	daemon_path = argv[1];

@@ -275,31 +275,42 @@ int main(int argc, char **argv)
 	bool quick = false;
 	const char *platform = NULL;
 	const struct bc_opt opts[] = {
-		{.name = "size", .kind = BC_OPT_U32, .dst = &size, .lo = 1,
-		 .hi = BC_RENDER_MAX_DIM, .arg = "N",
-		 .help = "square frame side, {range} (default {default})"},
-		{.name = "reps", .kind = BC_OPT_U32, .dst = &reps, .lo = 1,
-		 .hi = 1000, .arg = "R",
-		 .help = "runs per measurement, the best kept (default "
-			 "{default})"},
-		{.name = "platform", .kind = BC_OPT_STRING, .dst = &platform,
-		 .arg = "P",
-		 .help = "GL platform: auto | device | surfaceless | osmesa\n"
-			 "(default auto)"},
-		{.name = "quick", .kind = BC_OPT_FLAG, .dst = &quick,
-		 .help = "the first two scenes and the smallest edit\n"
-			 "sizes only"},
-		{.kind = BC_OPT_INVALID},
+	    {.name = "size",
+	     .kind = BC_OPT_U32,
+	     .dst = &size,
+	     .lo = 1,
+	     .hi = BC_RENDER_MAX_DIM,
+	     .arg = "N",
+	     .help = "square frame side, {range} (default {default})"},
+	    {.name = "reps",
+	     .kind = BC_OPT_U32,
+	     .dst = &reps,
+	     .lo = 1,
+	     .hi = 1000,
+	     .arg = "R",
+	     .help = "runs per measurement, the best kept (default "
+	             "{default})"},
+	    {.name = "platform",
+	     .kind = BC_OPT_STRING,
+	     .dst = &platform,
+	     .arg = "P",
+	     .help = "GL platform: auto | device | surfaceless | osmesa\n"
+	             "(default auto)"},
+	    {.name = "quick",
+	     .kind = BC_OPT_FLAG,
+	     .dst = &quick,
+	     .help = "the first two scenes and the smallest edit\n"
+	             "sizes only"},
+	    {.kind = BC_OPT_INVALID},
 	};
-	struct bc_args args = {.prog = "bench_gl",
-			       .usage = "bench_gl [options]",
-			       .opts = opts};
+	struct bc_args args = {
+	    .prog = "bench_gl", .usage = "bench_gl [options]", .opts = opts};
 	if (bc_args_parse(&args, argc, argv)) {
 		return args.status;
 	}
 	if (args.npos) {
 		return bc_args_error(&args, "unexpected argument '%s'",
-				     args.pos[0]);
+		                     args.pos[0]);
 	}
 	if (frames(platform, size, (int)reps, quick)) {
 		return 1;

@@ -39,7 +39,7 @@ static void send_view(struct conn *c)
 }
 
 static void send_camera(struct conn *c, const struct bc_camera *cam,
-			bool interacting)
+                        bool interacting)
 {
 	struct bc_msg m = {.type = BC_MSG_CAMERA};
 	m.flags = interacting ? BC_PROTO_FLAG_INTERACTING : 0;
@@ -71,10 +71,11 @@ static void drag(struct conn *c, uint32_t id, int edits, const char *label)
 	}
 	latency_edits(c, id, &original, dx, 25, edits, true, &l);
 	if (l.n) {
-		printf("drag %-10s edits=%d p50_ms=%lld p99_ms=%lld "
-		       "max_ms=%lld bytes_per_frame=%.0f rects_per_frame=%.1f\n",
-		       label, l.n, (long long)l.p50, (long long)l.p99,
-		       (long long)l.max, l.bytes, l.rects);
+		printf(
+		    "drag %-10s edits=%d p50_ms=%lld p99_ms=%lld "
+		    "max_ms=%lld bytes_per_frame=%.0f rects_per_frame=%.1f\n",
+		    label, l.n, (long long)l.p50, (long long)l.p99,
+		    (long long)l.max, l.bytes, l.rects);
 	}
 }
 
@@ -119,14 +120,14 @@ static void orbit(struct conn *c, int cameras)
 }
 
 static int run(const char *label, const char *const *opts, int edits,
-	       int cameras)
+               int cameras)
 {
 	struct daemon d;
 	struct conn c;
 	uint32_t id;
 	char dir[64];
 	snprintf(dir, sizeof(dir), "/tmp/bc-bench-i-%d-%s", (int)getpid(),
-		 label);
+	         label);
 	if (daemon_start_with(&d, dir, opts) != 0) {
 		fprintf(stderr, "cannot start %s\n", daemon_path);
 		return 1;
@@ -167,7 +168,7 @@ int main(int argc, char **argv)
 	int cameras = argc > 3 ? atoi(argv[3]) : 60;
 	if (argc < 2) {
 		fprintf(stderr, "usage: bench_interactive PATH/TO/blobcastd "
-				"[edits] [cameras]\n");
+		                "[edits] [cameras]\n");
 		return 2;
 	}
 	daemon_path = argv[1];

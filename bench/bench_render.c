@@ -57,10 +57,10 @@ struct timing {
  * other work, wall time mostly measures the neighbours, while CPU time of
  * this process (all its threads) measures the renderer. */
 static struct timing time_render(enum bc_backend b,
-				 const struct bc_render_opts *o,
-				 const struct bc_tree *t,
-				 const struct bc_camera *cam, struct bc_frame *f,
-				 int reps)
+                                 const struct bc_render_opts *o,
+                                 const struct bc_tree *t,
+                                 const struct bc_camera *cam,
+                                 struct bc_frame *f, int reps)
 {
 	struct timing best = {.cpu = INFINITY, .wall = INFINITY};
 	for (int i = 0; i < reps; i++) {
@@ -85,7 +85,7 @@ static struct timing time_render(enum bc_backend b,
 /* The camera whose w x rows frame holds exactly the central rows of the
  * w x h frame of cam: same eye and axes, vertical extent cut. */
 static struct bc_camera band_camera(const struct bc_camera *cam, uint32_t h,
-				    uint32_t rows)
+                                    uint32_t rows)
 {
 	struct bc_camera c = *cam;
 	double half = (double)cam->fov_y_deg * 3.14159265358979 / 360.0;
@@ -106,26 +106,40 @@ static uint32_t hits(const struct bc_frame *f)
 int main(int argc, char **argv)
 {
 	struct scene scenes[] = {
-		{"fig18 smooth spheres 256", "fig18",
-		 {.count = 256, .kind = BC_GEN_KIND_SPHERES,
-		  .blend = BC_GEN_BLEND_SMOOTH},
-		 32},
-		{"fig18 smooth spheres 1024", "fig18",
-		 {.count = 1024, .kind = BC_GEN_KIND_SPHERES,
-		  .blend = BC_GEN_BLEND_SMOOTH},
-		 16},
-		{"fig18 smooth spheres 4096", "fig18",
-		 {.count = 4096, .kind = BC_GEN_KIND_SPHERES,
-		  .blend = BC_GEN_BLEND_SMOOTH},
-		 8},
-		{"fig16 L1 smooth", "fig16",
-		 {.level = 1, .blend = BC_GEN_BLEND_SMOOTH}, 32},
-		{"fig16 L2 smooth", "fig16",
-		 {.level = 2, .blend = BC_GEN_BLEND_SMOOTH}, 16},
-		{"fig16 L3 smooth", "fig16",
-		 {.level = 3, .blend = BC_GEN_BLEND_SMOOTH}, 8},
-		{"fig16 L4 smooth", "fig16",
-		 {.level = 4, .blend = BC_GEN_BLEND_SMOOTH}, 4},
+	    {"fig18 smooth spheres 256",
+	     "fig18",
+	     {.count = 256,
+	      .kind = BC_GEN_KIND_SPHERES,
+	      .blend = BC_GEN_BLEND_SMOOTH},
+	     32},
+	    {"fig18 smooth spheres 1024",
+	     "fig18",
+	     {.count = 1024,
+	      .kind = BC_GEN_KIND_SPHERES,
+	      .blend = BC_GEN_BLEND_SMOOTH},
+	     16},
+	    {"fig18 smooth spheres 4096",
+	     "fig18",
+	     {.count = 4096,
+	      .kind = BC_GEN_KIND_SPHERES,
+	      .blend = BC_GEN_BLEND_SMOOTH},
+	     8},
+	    {"fig16 L1 smooth",
+	     "fig16",
+	     {.level = 1, .blend = BC_GEN_BLEND_SMOOTH},
+	     32},
+	    {"fig16 L2 smooth",
+	     "fig16",
+	     {.level = 2, .blend = BC_GEN_BLEND_SMOOTH},
+	     16},
+	    {"fig16 L3 smooth",
+	     "fig16",
+	     {.level = 3, .blend = BC_GEN_BLEND_SMOOTH},
+	     8},
+	    {"fig16 L4 smooth",
+	     "fig16",
+	     {.level = 4, .blend = BC_GEN_BLEND_SMOOTH},
+	     4},
 	};
 	size_t nscenes = sizeof(scenes) / sizeof(scenes[0]);
 	uint32_t size = 512;
@@ -135,29 +149,42 @@ int main(int argc, char **argv)
 	uint32_t nreps = 3;
 	bool quick = false;
 	const struct bc_opt opts_table[] = {
-		{.name = "size", .kind = BC_OPT_U32, .dst = &size, .lo = 64,
-		 .hi = BC_RENDER_MAX_DIM, .arg = "N",
-		 .help = "square frame side, {range} (default {default})"},
-		{.name = "threads", .kind = BC_OPT_U32, .dst = &opts.threads,
-		 .hi = 1024, .arg = "T",
-		 .help = "CPU threads, 0 = one per core (default {default})"},
-		{.name = "reps", .kind = BC_OPT_U32, .dst = &nreps, .lo = 1,
-		 .hi = 1000, .arg = "R",
-		 .help = "tiled runs per scene, the best kept (default "
-			 "{default})"},
-		{.name = "quick", .kind = BC_OPT_FLAG, .dst = &quick,
-		 .help = "the first three scenes only"},
-		{.kind = BC_OPT_INVALID},
+	    {.name = "size",
+	     .kind = BC_OPT_U32,
+	     .dst = &size,
+	     .lo = 64,
+	     .hi = BC_RENDER_MAX_DIM,
+	     .arg = "N",
+	     .help = "square frame side, {range} (default {default})"},
+	    {.name = "threads",
+	     .kind = BC_OPT_U32,
+	     .dst = &opts.threads,
+	     .hi = 1024,
+	     .arg = "T",
+	     .help = "CPU threads, 0 = one per core (default {default})"},
+	    {.name = "reps",
+	     .kind = BC_OPT_U32,
+	     .dst = &nreps,
+	     .lo = 1,
+	     .hi = 1000,
+	     .arg = "R",
+	     .help = "tiled runs per scene, the best kept (default "
+	             "{default})"},
+	    {.name = "quick",
+	     .kind = BC_OPT_FLAG,
+	     .dst = &quick,
+	     .help = "the first three scenes only"},
+	    {.kind = BC_OPT_INVALID},
 	};
 	struct bc_args args = {.prog = "bench_render",
-			       .usage = "bench_render [options]",
-			       .opts = opts_table};
+	                       .usage = "bench_render [options]",
+	                       .opts = opts_table};
 	if (bc_args_parse(&args, argc, argv)) {
 		return args.status;
 	}
 	if (args.npos) {
 		return bc_args_error(&args, "unexpected argument '%s'",
-				     args.pos[0]);
+		                     args.pos[0]);
 	}
 	reps = (int)nreps;
 	if (quick) {
@@ -179,7 +206,8 @@ int main(int argc, char **argv)
 		struct timing tiled, tiled_band, naive_band;
 		uint32_t rows = scenes[s].band * size / 512;
 		rows = rows < 2 ? 2 : rows;
-		if (!t || bc_gen(scenes[s].gen, &scenes[s].opts, t, &cam, &ei)) {
+		if (!t ||
+		    bc_gen(scenes[s].gen, &scenes[s].opts, t, &cam, &ei)) {
 			fprintf(stderr, "%s: %s\n", scenes[s].label, ei.msg);
 			return 1;
 		}
@@ -189,11 +217,12 @@ int main(int argc, char **argv)
 			return 1;
 		}
 		bcam = band_camera(&cam, size, rows);
-		tiled = time_render(BC_BACKEND_TILED, &opts, t, &cam, &full, reps);
-		tiled_band = time_render(BC_BACKEND_TILED, &opts, t, &bcam, &band,
-					 reps);
-		naive_band = time_render(BC_BACKEND_NAIVE, &opts, t, &bcam, &band,
-					 1);
+		tiled =
+		    time_render(BC_BACKEND_TILED, &opts, t, &cam, &full, reps);
+		tiled_band =
+		    time_render(BC_BACKEND_TILED, &opts, t, &bcam, &band, reps);
+		naive_band =
+		    time_render(BC_BACKEND_NAIVE, &opts, t, &bcam, &band, 1);
 		printf("%-26s %6u %4.1f%% | %8.1f %8.1f %7.1f %7.1f %6u | %4u "
 		       "%8.1f %9.1f %7.1fx\n",
 		       scenes[s].label, bc_tree_prim_count(t),
@@ -201,17 +230,18 @@ int main(int argc, char **argv)
 		       tiled.wall, tiled.st.ms_abuffer, tiled.st.ms_trace,
 		       tiled.st.max_overlap, rows, tiled_band.cpu,
 		       naive_band.cpu, naive_band.cpu / tiled_band.cpu);
-		printf("%-26s   naive full frame estimated %.0f ms (band x "
-		       "%u/%u); field evaluations per pixel: naive %.1f (band), "
-		       "tiled %.1f\n",
-		       "", naive_band.cpu * size / rows, size, rows,
-		       (double)naive_band.st.field_evals / ((double)size * rows),
-		       (double)tiled.st.field_evals / ((double)size * size));
+		printf(
+		    "%-26s   naive full frame estimated %.0f ms (band x "
+		    "%u/%u); field evaluations per pixel: naive %.1f (band), "
+		    "tiled %.1f\n",
+		    "", naive_band.cpu * size / rows, size, rows,
+		    (double)naive_band.st.field_evals / ((double)size * rows),
+		    (double)tiled.st.field_evals / ((double)size * size));
 		if (bc_tree_prim_count(t) <= 16) {
 			/* Small enough to check the band estimate against a
 			 * whole naive frame, and the speedup with it. */
-			struct timing nf = time_render(BC_BACKEND_NAIVE, &opts, t,
-						       &cam, &full, 1);
+			struct timing nf = time_render(BC_BACKEND_NAIVE, &opts,
+			                               t, &cam, &full, 1);
 			printf("%-26s   naive full frame measured %.0f ms: "
 			       "full-frame speedup %.1fx\n",
 			       "", nf.cpu, nf.cpu / tiled.cpu);
@@ -228,9 +258,10 @@ int main(int argc, char **argv)
 		bc_tree_destroy(t);
 	}
 	if (tiled256 > 0.0 && tiled4096 > 0.0) {
-		printf("\ntiled growth, fig18 smooth spheres 256 -> 4096: %.2fx "
-		       "(%.1f -> %.1f ms CPU)\n",
-		       tiled4096 / tiled256, tiled256, tiled4096);
+		printf(
+		    "\ntiled growth, fig18 smooth spheres 256 -> 4096: %.2fx "
+		    "(%.1f -> %.1f ms CPU)\n",
+		    tiled4096 / tiled256, tiled256, tiled4096);
 	}
 	return 0;
 }

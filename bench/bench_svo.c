@@ -467,10 +467,11 @@ static int bench_files(int argc, char **argv)
 			tau = (uint32_t)strtoul(argv[++i], NULL, 10);
 		} else if (strcmp(argv[i], "--range") == 0 && more) {
 			i++;
-			arith = strcmp(argv[i], "ia") == 0      ? BC_RANGE_IA
-			        : strcmp(argv[i], "aa") == 0    ? BC_RANGE_AA
-			        : strcmp(argv[i], "revaa") == 0 ? BC_RANGE_REVAA
-			                                        : BC_RANGE_COUNT;
+			arith = strcmp(argv[i], "ia") == 0   ? BC_RANGE_IA
+			        : strcmp(argv[i], "aa") == 0 ? BC_RANGE_AA
+			        : strcmp(argv[i], "revaa") == 0
+			            ? BC_RANGE_REVAA
+			            : BC_RANGE_COUNT;
 		} else if (argv[i][0] == '-') {
 			fprintf(stderr, "bench_svo files: unknown option %s\n",
 			        argv[i]);
@@ -481,8 +482,9 @@ static int bench_files(int argc, char **argv)
 	}
 	if (side == 0 || side > 8192 || reps == 0 || reps > 1000 ||
 	    arith == BC_RANGE_COUNT || nfiles == 0) {
-		fprintf(stderr, "bench_svo files: needs scene files, a size in "
-		                "1..8192, 1..1000 reps and a range ia|aa|revaa\n");
+		fprintf(stderr,
+		        "bench_svo files: needs scene files, a size in "
+		        "1..8192, 1..1000 reps and a range ia|aa|revaa\n");
 		return 2;
 	}
 	for (int i = 2; i < argc; i++) {

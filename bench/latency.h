@@ -15,9 +15,9 @@
 #include "blobcast/scene.h"
 
 struct latency {
-	int n;                  /* frames received */
-	int64_t p50, p99, max;  /* milliseconds */
-	double bytes, rects;    /* per frame */
+	int n;                 /* frames received */
+	int64_t p50, p99, max; /* milliseconds */
+	double bytes, rects;   /* per frame */
 };
 
 static inline int latency_cmp_i64(const void *a, const void *b)
@@ -39,23 +39,23 @@ static inline double latency_frame_bytes(const struct bc_msg *m)
  * (INTERACTING when asked), waiting each time for the FRAME whose order
  * reflects the edit. */
 static inline void latency_edits(struct conn *c, uint32_t id,
-				 const struct bc_prim_data *from,
-				 const float *dx, int ndx, int edits,
-				 bool interacting, struct latency *out)
+                                 const struct bc_prim_data *from,
+                                 const float *dx, int ndx, int edits,
+                                 bool interacting, struct latency *out)
 {
-	int64_t *lat = bc_calloc((size_t)(edits > 0 ? edits : 1),
-				 sizeof(int64_t));
+	int64_t *lat =
+	    bc_calloc((size_t)(edits > 0 ? edits : 1), sizeof(int64_t));
 	memset(out, 0, sizeof(*out));
 	for (int i = 0; lat && i < edits; i++) {
 		int64_t t0 = t_now_ms();
 		uint64_t order = 0;
 		conn_move(c, id, from->translate[0] + dx[i % ndx],
-			  from->translate[1], from->translate[2], interacting);
+		          from->translate[1], from->translate[2], interacting);
 		while (conn_recv(c, 30000) == 1) {
 			if (c->m.type == BC_MSG_EDIT_APPLIED) {
 				order = c->m.edit_applied.order;
 			} else if (c->m.type == BC_MSG_FRAME && order &&
-				   c->m.frame.order >= order) {
+			           c->m.frame.order >= order) {
 				lat[out->n++] = t_now_ms() - t0;
 				out->bytes += latency_frame_bytes(&c->m);
 				out->rects += c->m.frame.nrects;
@@ -78,15 +78,15 @@ static inline void latency_edits(struct conn *c, uint32_t id,
  * waits for its SCENE_STATE. *prim_id: a sphere in the middle of the grid,
  * *prim its data; *cam (may be NULL) the scene's camera. */
 static inline int latency_load_fig18(struct conn *c, uint32_t count,
-				     uint32_t *prim_id,
-				     struct bc_prim_data *prim,
-				     struct bc_camera *cam)
+                                     uint32_t *prim_id,
+                                     struct bc_prim_data *prim,
+                                     struct bc_camera *cam)
 {
 	struct bc_tree *t = bc_tree_create();
 	struct bc_camera scene_cam;
 	struct bc_gen_opts o = {.count = count,
-				.kind = BC_GEN_KIND_SPHERES,
-				.blend = BC_GEN_BLEND_SMOOTH};
+	                        .kind = BC_GEN_KIND_SPHERES,
+	                        .blend = BC_GEN_BLEND_SMOOTH};
 	uint8_t *bytes = NULL;
 	size_t len = 0;
 	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};

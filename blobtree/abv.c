@@ -118,7 +118,7 @@ static struct span quad_span(double a, double b, double c)
 
 /* The line o + t d (d != 0) inside the ball (c, r). */
 static struct span ball_span(const double c[3], double r, const double o[3],
-			     const double d[3], double dd)
+                             const double d[3], double dd)
 {
 	double oc[3] = {o[0] - c[0], o[1] - c[1], o[2] - c[2]};
 	double b = dot3d(oc, d) / dd;
@@ -152,11 +152,11 @@ static struct span slab_span(double s0, double ds, double lo, double hi)
 }
 
 static struct span box_span(const struct bc_abv *abv, const double o[3],
-			    const double d[3])
+                            const double d[3])
 {
 	struct span s = {-INFINITY, INFINITY};
 	double oc[3] = {o[0] - abv->center[0], o[1] - abv->center[1],
-			o[2] - abv->center[2]};
+	                o[2] - abv->center[2]};
 	for (int i = 0; i < 3 && !span_empty(s); i++) {
 		double ax[3];
 		load3(ax, abv->axis[i]);
@@ -172,14 +172,14 @@ static struct span box_span(const struct bc_abv *abv, const double o[3],
  * them (the infinite cylinder cut by the slab of the segment).
  */
 static struct span capsule_span(const struct bc_abv *abv, const double o[3],
-				const double d[3], double dd)
+                                const double d[3], double dd)
 {
 	double a[3], b[3];
 	double r = abv->radius;
 	load3(a, abv->center);
 	load3(b, abv->end);
-	struct span s = span_hull(ball_span(a, r, o, d, dd),
-				  ball_span(b, r, o, d, dd));
+	struct span s =
+	    span_hull(ball_span(a, r, o, d, dd), ball_span(b, r, o, d, dd));
 	double w[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
 	double l = sqrt(dot3d(w, w));
 	if (l == 0.0) {
@@ -195,7 +195,8 @@ static struct span capsule_span(const struct bc_abv *abv, const double o[3],
 		dp[k] = d[k] - dw * w[k];
 		op[k] = oc[k] - ow * w[k];
 	}
-	double qa = dot3d(dp, dp), qb = dot3d(op, dp), qc = dot3d(op, op) - r * r;
+	double qa = dot3d(dp, dp), qb = dot3d(op, dp),
+	       qc = dot3d(op, op) - r * r;
 	struct span cyl;
 	if (qa == 0.0) {
 		/* Parallel to the axis: inside the tube everywhere or
@@ -212,7 +213,7 @@ static struct span capsule_span(const struct bc_abv *abv, const double o[3],
 }
 
 bool bc_abv_ray(const struct bc_abv *abv, const float of[3], const float df[3],
-		float *t0, float *t1)
+                float *t0, float *t1)
 {
 	double o[3], d[3], dd;
 	struct span s;
@@ -253,7 +254,7 @@ bool bc_abv_ray(const struct bc_abv *abv, const float of[3], const float df[3],
 /* ---- Boxes -------------------------------------------------------------- */
 
 static bool aabbs_meet(const float alo[3], const float ahi[3],
-		       const float blo[3], const float bhi[3])
+                       const float blo[3], const float bhi[3])
 {
 	for (int k = 0; k < 3; k++) {
 		if (ahi[k] < blo[k] || alo[k] > bhi[k]) {
@@ -267,7 +268,7 @@ static bool aabbs_meet(const float alo[3], const float ahi[3],
  * caller's AABB test). Skipping the nine edge-cross axes keeps it
  * conservative. */
 static bool obb_axes_meet(const struct bc_abv *abv, const float lo[3],
-			  const float hi[3])
+                          const float hi[3])
 {
 	double c[3], e[3];
 	for (int k = 0; k < 3; k++) {
@@ -278,7 +279,7 @@ static bool obb_axes_meet(const struct bc_abv *abv, const float lo[3],
 		double ax[3];
 		load3(ax, abv->axis[i]);
 		double reach = fabs(ax[0]) * e[0] + fabs(ax[1]) * e[1] +
-			       fabs(ax[2]) * e[2];
+		               fabs(ax[2]) * e[2];
 		if (fabs(dot3d(c, ax)) > (double)abv->half[i] + reach) {
 			return false;
 		}
@@ -287,7 +288,7 @@ static bool obb_axes_meet(const struct bc_abv *abv, const float lo[3],
 }
 
 bool bc_abv_meets_box(const struct bc_abv *abv, const float lo[3],
-		      const float hi[3])
+                      const float hi[3])
 {
 	float alo[3], ahi[3];
 	bc_abv_aabb(abv, alo, ahi);
@@ -321,7 +322,7 @@ bool bc_abv_meets_box(const struct bc_abv *abv, const float lo[3],
 			double a = abv->center[k];
 			double d = (double)abv->end[k] - a;
 			s = span_cut(s, slab_span(a, d, (double)lo[k] - r,
-						  (double)hi[k] + r));
+			                          (double)hi[k] + r));
 		}
 		return !span_empty(s);
 	}

@@ -342,11 +342,11 @@ static int read_node(struct bc_rd *r, uint32_t index, uint32_t count,
 				return rc;
 			}
 			if (nf != info->nparams) {
-				return bc_errinfo_set(ei, BC_EPROTO_COUNT,
-				                      "node %u: nfloats is %u but "
-				                      "a %s has %u",
-				                      index, nf, info->name,
-				                      info->nparams);
+				return bc_errinfo_set(
+				    ei, BC_EPROTO_COUNT,
+				    "node %u: nfloats is %u but "
+				    "a %s has %u",
+				    index, nf, info->name, info->nparams);
 			}
 			if ((rc = get_f32s(r, n->unary.u, nf, index, "params",
 			                   ei))) {
@@ -479,12 +479,12 @@ static int decode_tree(struct bc_rd *r, struct bc_tree *t,
 		                      BC_TREE_MAX_NODES);
 	}
 	if (count > bc_rd_left(r) / BC_SCENE_NODE_MIN_BYTES) {
-		return bc_errinfo_set(
-		    ei, BC_EPROTO_COUNT,
-		    "node_count %u needs at least %zu bytes, "
-		    "%zu left",
-		    count, (size_t)count * BC_SCENE_NODE_MIN_BYTES,
-		    bc_rd_left(r));
+		return bc_errinfo_set(ei, BC_EPROTO_COUNT,
+		                      "node_count %u needs at least %zu bytes, "
+		                      "%zu left",
+		                      count,
+		                      (size_t)count * BC_SCENE_NODE_MIN_BYTES,
+		                      bc_rd_left(r));
 	}
 	/* Bounded by the input: count <= len / 5. */
 	ids = bc_malloc(sizeof(uint32_t) * (size_t)count);

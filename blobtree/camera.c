@@ -13,10 +13,10 @@
 void bc_camera_default(struct bc_camera *cam)
 {
 	*cam = (struct bc_camera){
-		.eye = {0.0f, 0.0f, 6.0f},
-		.target = {0.0f, 0.0f, 0.0f},
-		.up = {0.0f, 1.0f, 0.0f},
-		.fov_y_deg = 45.0f,
+	    .eye = {0.0f, 0.0f, 6.0f},
+	    .target = {0.0f, 0.0f, 0.0f},
+	    .up = {0.0f, 1.0f, 0.0f},
+	    .fov_y_deg = 45.0f,
 	};
 }
 
@@ -27,39 +27,39 @@ int bc_camera_validate(const struct bc_camera *cam, struct bc_errinfo *ei)
 		if (!isfinite(cam->eye[i]) || !isfinite(cam->target[i]) ||
 		    !isfinite(cam->up[i])) {
 			return bc_errinfo_set(ei, BC_ENONFINITE,
-					      "camera: coordinates must be "
-					      "finite");
+			                      "camera: coordinates must be "
+			                      "finite");
 		}
 		if (fabsf(cam->eye[i]) > BC_PARAM_MAX_ABS ||
 		    fabsf(cam->target[i]) > BC_PARAM_MAX_ABS) {
 			return bc_errinfo_set(ei, BC_ERANGE,
-					      "camera: coordinates beyond %g",
-					      (double)BC_PARAM_MAX_ABS);
+			                      "camera: coordinates beyond %g",
+			                      (double)BC_PARAM_MAX_ABS);
 		}
 	}
 	if (!(cam->fov_y_deg > 0.0f && cam->fov_y_deg < 180.0f)) {
 		return bc_errinfo_set(ei, BC_ERANGE,
-				      "camera: fov_y_deg %g outside (0, 180)",
-				      (double)cam->fov_y_deg);
+		                      "camera: fov_y_deg %g outside (0, 180)",
+		                      (double)cam->fov_y_deg);
 	}
 	bc_v3_sub(cam->target, cam->eye, fwd);
 	if (!(bc_v3_len(fwd) > 1e-6f)) {
 		return bc_errinfo_set(ei, BC_ERANGE,
-				      "camera: eye and target coincide");
+		                      "camera: eye and target coincide");
 	}
 	bc_v3_normalize_div(fwd);
 	bc_v3_cross(fwd, cam->up, side);
 	if (!(bc_v3_len(side) > 1e-6f * (bc_v3_len(cam->up) + 1e-30f)) ||
 	    !(bc_v3_len(cam->up) > 0.0f)) {
 		return bc_errinfo_set(ei, BC_ERANGE,
-				      "camera: up is zero or parallel to the "
-				      "view direction");
+		                      "camera: up is zero or parallel to the "
+		                      "view direction");
 	}
 	return 0;
 }
 
 void bc_view_rays_init(struct bc_view_rays *vr, const struct bc_camera *cam,
-		       uint32_t width, uint32_t height)
+                       uint32_t width, uint32_t height)
 {
 	const float pi = 3.14159265358979f;
 	vr->eye[0] = cam->eye[0];
@@ -77,10 +77,10 @@ void bc_view_rays_init(struct bc_view_rays *vr, const struct bc_camera *cam,
 }
 
 void bc_view_rays_dir(const struct bc_view_rays *vr, float x, float y,
-		      float dir[3])
+                      float dir[3])
 {
-	float sx = (2.0f * x / (float)vr->width - 1.0f) * vr->tan_half_y *
-		   vr->aspect;
+	float sx =
+	    (2.0f * x / (float)vr->width - 1.0f) * vr->tan_half_y * vr->aspect;
 	float sy = (1.0f - 2.0f * y / (float)vr->height) * vr->tan_half_y;
 	for (int i = 0; i < 3; i++) {
 		dir[i] = vr->forward[i] + sx * vr->right[i] + sy * vr->up[i];

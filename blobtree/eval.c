@@ -26,7 +26,8 @@
 
 #include "blobcast/alloc.h"
 
-static inline float eval_record(uint32_t kind, const float *rec, const float p[3])
+static inline float eval_record(uint32_t kind, const float *rec,
+                                const float p[3])
 {
 	float x = rec[0] * p[0] + rec[1] * p[1] + rec[2] * p[2] + rec[3];
 	float y = rec[4] * p[0] + rec[5] * p[1] + rec[6] * p[2] + rec[7];
@@ -95,7 +96,7 @@ static void domain_apply(uint32_t kind, const float *rec, float p[3])
 }
 
 void bc_domain_map(const struct bc_lin *l, uint32_t d, const float p[3],
-		   float out[3])
+                   float out[3])
 {
 	uint32_t chain[BC_DOMAIN_MAX_CHAIN];
 	uint32_t n = 0;
@@ -109,12 +110,12 @@ void bc_domain_map(const struct bc_lin *l, uint32_t d, const float p[3],
 	while (n-- > 0) {
 		uint32_t u = chain[n];
 		domain_apply(l->unary_kind[u],
-			     l->param + 4u * (size_t)l->unary_param[u], out);
+		             l->param + 4u * (size_t)l->unary_param[u], out);
 	}
 }
 
 float bc_unary_value(const struct bc_lin *l, uint32_t u, float f,
-		     const float p[3])
+                     const float p[3])
 {
 	const float *rec = l->param + 4u * (size_t)l->unary_param[u];
 	switch (l->unary_kind[u]) {
@@ -134,11 +135,12 @@ float bc_unary_value(const struct bc_lin *l, uint32_t u, float f,
 		float q[3], r;
 		bc_domain_map(l, l->unary_dom[u], p, q);
 		r = l->unary_kind[u] == BC_OP_TWIST
-			    ? sqrtf(q[0] * q[0] + q[2] * q[2])
-			    : sqrtf(q[0] * q[0] + q[1] * q[1]);
+		        ? sqrtf(q[0] * q[0] + q[2] * q[2])
+		        : sqrtf(q[0] * q[0] + q[1] * q[1]);
 		if (r > rec[1] && f > 0.0f) {
-			return f * bc_unary_own_lip(l->unary_kind[u], rec[0],
-						    rec[1]) /
+			return f *
+			       bc_unary_own_lip(l->unary_kind[u], rec[0],
+			                        rec[1]) /
 			       bc_unary_own_lip(l->unary_kind[u], rec[0], r);
 		}
 		return f;
@@ -150,9 +152,8 @@ float bc_unary_value(const struct bc_lin *l, uint32_t u, float f,
 
 /* Field of the leaf at slot s: its point mapped through the domain nodes
  * around it, then its own record. */
-static inline float eval_leaf(const struct bc_lin *l, uint32_t s,
-			      uint32_t kind, const float *rec,
-			      const float p[3])
+static inline float eval_leaf(const struct bc_lin *l, uint32_t s, uint32_t kind,
+                              const float *rec, const float p[3])
 {
 	if (l->nunary && l->dom[s] != BC_NONE) {
 		float q[3];
@@ -164,7 +165,7 @@ static inline float eval_leaf(const struct bc_lin *l, uint32_t s,
 
 /* Slot s's value through its wrappers, innermost first. */
 static inline float wrap_value(const struct bc_lin *l, uint32_t s, float f,
-			       const float p[3])
+                               const float p[3])
 {
 	if (!l->nunary) {
 		return f;
@@ -212,7 +213,7 @@ static float full(const struct bc_lin *l, const float p[3], uint32_t *prim)
 			float f1 = val[--sp];
 			float f0 = val[sp - 1];
 			val[sp - 1] = bc_op_eval((enum bc_op)kind, rec[0],
-						 rec[1], f0, f1);
+			                         rec[1], f0, f1);
 			if (prim && follows_right((enum bc_op)kind, f0, f1)) {
 				who[sp - 1] = who[sp];
 			}
@@ -306,8 +307,7 @@ static void emit_wraps(struct bc_view *v, const struct bc_lin *l, uint32_t s)
 }
 
 /* Does slot a carry a value-changing wrapper (a climb must stop there)? */
-static inline bool value_wrapped(const struct bc_lin *l, uint32_t x,
-				 uint32_t a)
+static inline bool value_wrapped(const struct bc_lin *l, uint32_t x, uint32_t a)
 {
 	return l->nunary && l->ucount[x] != l->ucount[a];
 }
@@ -315,14 +315,14 @@ static inline bool value_wrapped(const struct bc_lin *l, uint32_t x,
 /* Can the entry climb to ancestor a? a must be complete (before the next
  * active slot q) and hold nothing of the entry below (first >= lo). */
 static inline bool may_climb(const struct bc_lin *l, uint32_t a, uint32_t q,
-			     uint32_t lo)
+                             uint32_t lo)
 {
 	return a < q && l->first[a] >= lo;
 }
 
 /* Combines the two top entries as the operands of slot a (both complete). */
 static void combine(struct bc_view *v, const struct bc_lin *l,
-		    struct entry *left, const struct entry *right, uint32_t a)
+                    struct entry *left, const struct entry *right, uint32_t a)
 {
 	enum bc_op_class cls = bc_op_class((enum bc_op)bc_lin_kind(l, a));
 	bool missing;
@@ -350,7 +350,7 @@ static void combine(struct bc_view *v, const struct bc_lin *l,
 /* The entry has climbed to slot x: it becomes missing when an edge on the
  * way kills its operand. */
 static void settle(struct bc_view *v, const struct bc_lin *l, struct entry *top,
-		   uint32_t x)
+                   uint32_t x)
 {
 	if (x != top->slot && l->kills[top->slot] != l->kills[x] &&
 	    !top->missing) {
@@ -361,7 +361,7 @@ static void settle(struct bc_view *v, const struct bc_lin *l, struct entry *top,
 }
 
 int bc_view_build(struct bc_view *v, const struct bc_lin *l,
-		  const uint32_t *active, uint32_t n)
+                  const uint32_t *active, uint32_t n)
 {
 	struct entry st[BC_EVAL_STACK];
 	uint32_t sp = 0, depth = 0;
@@ -466,7 +466,7 @@ int bc_view_build(struct bc_view *v, const struct bc_lin *l,
 }
 
 static float run(const struct bc_view *v, const struct bc_lin *l,
-		 const float p[3], uint32_t *prim)
+                 const float p[3], uint32_t *prim)
 {
 	float val[BC_EVAL_STACK];
 	uint32_t who[BC_EVAL_STACK];
@@ -481,7 +481,8 @@ static float run(const struct bc_view *v, const struct bc_lin *l,
 		const struct bc_view_instr *in = &v->instr[i];
 		const float *rec = l->param + 4u * (size_t)in->param;
 		if (in->leaf == BC_VIEW_UNARY) {
-			val[sp - 1] = bc_unary_value(l, in->slot, val[sp - 1], p);
+			val[sp - 1] =
+			    bc_unary_value(l, in->slot, val[sp - 1], p);
 		} else if (in->leaf) {
 			val[sp] = eval_leaf(l, in->slot, in->kind, rec, p);
 			who[sp++] = l->prim_of[in->slot];
@@ -489,8 +490,9 @@ static float run(const struct bc_view *v, const struct bc_lin *l,
 			float f1 = val[--sp];
 			float f0 = val[sp - 1];
 			val[sp - 1] = bc_op_eval((enum bc_op)in->kind, rec[0],
-						 rec[1], f0, f1);
-			if (prim && follows_right((enum bc_op)in->kind, f0, f1)) {
+			                         rec[1], f0, f1);
+			if (prim &&
+			    follows_right((enum bc_op)in->kind, f0, f1)) {
 				who[sp - 1] = who[sp];
 			}
 		}
@@ -502,19 +504,19 @@ static float run(const struct bc_view *v, const struct bc_lin *l,
 }
 
 float bc_view_eval(const struct bc_view *v, const struct bc_lin *l,
-		   const float p[3])
+                   const float p[3])
 {
 	return run(v, l, p, NULL);
 }
 
 float bc_view_eval_id(const struct bc_view *v, const struct bc_lin *l,
-		      const float p[3], uint32_t *prim)
+                      const float p[3], uint32_t *prim)
 {
 	return run(v, l, p, prim);
 }
 
 float bc_eval_sparse(const struct bc_lin *l, const uint32_t *active, uint32_t n,
-		     struct bc_view *scratch, const float p[3])
+                     struct bc_view *scratch, const float p[3])
 {
 	if (bc_view_build(scratch, l, active, n)) {
 		return NAN;

@@ -522,8 +522,8 @@ static int parse_unary(struct jctx *c, json_t *obj, enum bc_op kind)
 			             "y, z");
 		}
 		un.u[0] = (float)mask;
-	} else if ((rc = get_floats(c, v, info->param, repeat ? 3 : info->nparams,
-	                            un.u))) {
+	} else if ((rc = get_floats(c, v, info->param,
+	                            repeat ? 3 : info->nparams, un.u))) {
 		return rc;
 	}
 	if (repeat) {

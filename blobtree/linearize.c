@@ -53,7 +53,7 @@ int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nops)
 	/* Room for every operator to be unary (the larger record); nparam
 	 * becomes what the fill uses. */
 	size_t nparam = (size_t)BC_PRIM_RECORD_VEC4 * nprims +
-			(size_t)BC_UNARY_RECORD_VEC4 * nops;
+	                (size_t)BC_UNARY_RECORD_VEC4 * nops;
 	size_t nun = nops ? nops : 1u;
 	memset(l, 0, sizeof(*l));
 	if (nprims == 0) {
@@ -94,9 +94,8 @@ int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nops)
 		return BC_ENOMEM;
 	}
 	if (!l->node || !l->first || !l->fast || !l->jump || !l->kills ||
-	    !l->depth ||
-	    !l->node_id || !l->prim_of || !l->roi || !l->prim_slot ||
-	    !l->abv || !l->color || !l->param) {
+	    !l->depth || !l->node_id || !l->prim_of || !l->roi ||
+	    !l->prim_slot || !l->abv || !l->color || !l->param) {
 		bc__lin_free(l);
 		return BC_ENOMEM;
 	}
@@ -121,16 +120,16 @@ static void quat_matrix(const float q[4], float m[3][3])
 }
 
 static void to_world(const float m[3][3], const float t[3], const float in[3],
-		     float out[3])
+                     float out[3])
 {
 	for (int r = 0; r < 3; r++) {
-		out[r] = m[r][0] * in[0] + m[r][1] * in[1] + m[r][2] * in[2] +
-			 t[r];
+		out[r] =
+		    m[r][0] * in[0] + m[r][1] * in[1] + m[r][2] * in[2] + t[r];
 	}
 }
 
 void bc__abv_place(const struct bc_prim_data *p, float offset,
-		   struct bc_abv *abv)
+                   struct bc_abv *abv)
 {
 	struct bc_abv local;
 	float m[3][3];
@@ -152,14 +151,14 @@ void bc__abv_place(const struct bc_prim_data *p, float offset,
 		 * offset box contains the rounded offset of the box. */
 		for (int i = 0; i < 3; i++) {
 			float a[3] = {m[0][0] * local.axis[i][0] +
-					      m[0][1] * local.axis[i][1] +
-					      m[0][2] * local.axis[i][2],
-				      m[1][0] * local.axis[i][0] +
-					      m[1][1] * local.axis[i][1] +
-					      m[1][2] * local.axis[i][2],
-				      m[2][0] * local.axis[i][0] +
-					      m[2][1] * local.axis[i][1] +
-					      m[2][2] * local.axis[i][2]};
+			                  m[0][1] * local.axis[i][1] +
+			                  m[0][2] * local.axis[i][2],
+			              m[1][0] * local.axis[i][0] +
+			                  m[1][1] * local.axis[i][1] +
+			                  m[1][2] * local.axis[i][2],
+			              m[2][0] * local.axis[i][0] +
+			                  m[2][1] * local.axis[i][1] +
+			                  m[2][2] * local.axis[i][2]};
 			memcpy(abv->axis[i], a, sizeof(a));
 			abv->half[i] = local.half[i] + offset;
 		}
@@ -177,9 +176,9 @@ static void write_prim_record(float *rec, const struct bc_prim_data *p)
 		rec[4 * i + 0] = m[0][i];
 		rec[4 * i + 1] = m[1][i];
 		rec[4 * i + 2] = m[2][i];
-		rec[4 * i + 3] = -(m[0][i] * p->translate[0] +
-				   m[1][i] * p->translate[1] +
-				   m[2][i] * p->translate[2]);
+		rec[4 * i + 3] =
+		    -(m[0][i] * p->translate[0] + m[1][i] * p->translate[1] +
+		      m[2][i] * p->translate[2]);
 	}
 	bc_prim_pack(p, rec + 12);
 }
@@ -228,10 +227,10 @@ static void set_word(struct bc_lin *l, uint32_t slot, bool leaf, uint32_t type)
 }
 
 static void set_parent(struct bc_lin *l, uint32_t child, uint32_t parent,
-		       bool left)
+                       bool left)
 {
-	uint32_t w = l->node[2 * child] &
-		     ~(BC_WORD_LEFT | BC_WORD_ANCESTOR_MASK);
+	uint32_t w =
+	    l->node[2 * child] & ~(BC_WORD_LEFT | BC_WORD_ANCESTOR_MASK);
 	w |= (left ? BC_WORD_LEFT : 0u) | (parent & BC_WORD_ANCESTOR_MASK);
 	l->node[2 * child] = w;
 }
@@ -328,16 +327,16 @@ static void emit_all(struct bc_tree *t, struct fill_state *fs, uint32_t top)
 				nd->unary = fs->unary++;
 				fs->param += BC_UNARY_RECORD_VEC4;
 				write_unary_record(
-					l->param + 4u * (size_t)nd->param, nd);
+				    l->param + 4u * (size_t)nd->param, nd);
 				l->unary_param[nd->unary] = nd->param;
 				l->unary_kind[nd->unary] =
-					(uint32_t)nd->u.op.kind;
+				    (uint32_t)nd->u.op.kind;
 				l->unary_id[nd->unary] = nd->id;
 			} else {
 				fs->param += BC_OP_RECORD_VEC4;
-				write_op_record(
-					fs->l->param + 4u * (size_t)nd->param,
-					&nd->u.op);
+				write_op_record(fs->l->param +
+				                    4u * (size_t)nd->param,
+				                &nd->u.op);
 			}
 			n = nd->first_child;
 		}
@@ -351,7 +350,7 @@ static void emit_all(struct bc_tree *t, struct fill_state *fs, uint32_t top)
 				t->pool[p].slot = t->pool[n].slot;
 				if (bc__node_unary(&t->pool[p])) {
 					add_wrapper(fs->l, t->pool[p].unary,
-						    t->pool[p].slot);
+					            t->pool[p].slot);
 				}
 			} else {
 				emit_fold(fs, &t->pool[p], &t->pool[n]);
@@ -439,8 +438,7 @@ static void propagate(struct bc_lin *l, uint32_t s)
 	}
 	lo = l->roi[2 * s];
 	hi = l->roi[2 * s + 1];
-	for (uint32_t u = l->wrap_top[s]; u != BC_NONE;
-	     u = l->unary_inner[u]) {
+	for (uint32_t u = l->wrap_top[s]; u != BC_NONE; u = l->unary_inner[u]) {
 		float *rec = l->param + 4u * (size_t)l->unary_param[u];
 		enum bc_op kind = (enum bc_op)l->unary_kind[u];
 		l->unary_dom[u] = d;
@@ -490,7 +488,7 @@ float bc_unary_own_lip(uint32_t kind, float rate, float r)
 }
 
 static void abv_set_box(struct bc_abv *abv, const float lo[3],
-			const float hi[3])
+                        const float hi[3])
 {
 	memset(abv, 0, sizeof(*abv));
 	abv->shape = BC_ABV_BOX;
@@ -511,7 +509,8 @@ static void abv_set_box(struct bc_abv *abv, const float lo[3],
  * preimage lies in the cylinder of the box's largest radius, whose height
  * is the box's. Returns that radius for twist and bend (0 otherwise).
  */
-static float abv_preimage(const struct bc_lin *l, uint32_t u, struct bc_abv *abv)
+static float abv_preimage(const struct bc_lin *l, uint32_t u,
+                          struct bc_abv *abv)
 {
 	const float *rec = l->param + 4u * (size_t)l->unary_param[u];
 	enum bc_op kind = (enum bc_op)l->unary_kind[u];
@@ -571,7 +570,7 @@ static float abv_preimage(const struct bc_lin *l, uint32_t u, struct bc_abv *abv
 }
 
 static void place_abv(struct bc_tree *t, struct bc_lin *l, uint32_t k,
-		      const struct bc_prim_data *p)
+                      const struct bc_prim_data *p)
 {
 	float lo[3], hi[3];
 	uint32_t s = l->prim_slot[k];
@@ -622,7 +621,8 @@ static void place_subtree(struct bc_tree *t, struct bc_lin *l, uint32_t top)
 
 static bool is_bend(const struct bc_lin *l, uint32_t u)
 {
-	return l->unary_kind[u] == BC_OP_TWIST || l->unary_kind[u] == BC_OP_BEND;
+	return l->unary_kind[u] == BC_OP_TWIST ||
+	       l->unary_kind[u] == BC_OP_BEND;
 }
 
 /* The Lipschitz bounds of twist and bend (their radii R known): each
@@ -644,8 +644,8 @@ static void compute_lips(struct bc_lin *l)
 			if (!is_bend(l, d)) {
 				continue;
 			}
-			prod *= bc_unary_own_lip(l->unary_kind[d], rec[0],
-					rec[1]);
+			prod *=
+			    bc_unary_own_lip(l->unary_kind[d], rec[0], rec[1]);
 			rec[2] = fmaxf(rec[2], prod);
 		}
 		l->lip = fmaxf(l->lip, prod);
@@ -715,9 +715,8 @@ void bc__lin_fill(struct bc_tree *t, struct bc_lin *l)
 		if (l->jump[a] != BC_NONE) {
 			uint32_t j1 = l->jump[a];
 			uint32_t j2 = l->jump[j1];
-			if (j2 != BC_NONE &&
-			    l->depth[a] - l->depth[j1] ==
-				    l->depth[j1] - l->depth[j2]) {
+			if (j2 != BC_NONE && l->depth[a] - l->depth[j1] ==
+			                         l->depth[j1] - l->depth[j2]) {
 				l->jump[s] = j2;
 			}
 		}

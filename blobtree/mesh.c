@@ -192,9 +192,9 @@ static float cval(const struct build *b, int64_t i, int64_t j, int64_t k)
 static int cell_vertex(struct build *b, int64_t i, int64_t j, int64_t k,
                        uint32_t *id)
 {
-	uint64_t c = (uint64_t)i + (uint64_t)b->n[0] *
-	                               ((uint64_t)j + (uint64_t)b->n[1] *
-	                                                  (uint64_t)k);
+	uint64_t c =
+	    (uint64_t)i +
+	    (uint64_t)b->n[0] * ((uint64_t)j + (uint64_t)b->n[1] * (uint64_t)k);
 	bool found;
 	size_t slot;
 	float v[8], acc[3] = {0, 0, 0}, p[3], g[3], f, gg;
@@ -222,10 +222,12 @@ static int cell_vertex(struct build *b, int64_t i, int64_t j, int64_t k,
 				continue;
 			}
 			t = v[q] / (v[q] - v[r]);
-			acc[0] += (float)(q & 1) + t * (float)((r & 1) - (q & 1));
+			acc[0] +=
+			    (float)(q & 1) + t * (float)((r & 1) - (q & 1));
 			acc[1] += (float)((q >> 1) & 1) +
 			          t * (float)(((r >> 1) & 1) - ((q >> 1) & 1));
-			acc[2] += (float)(q >> 2) + t * (float)((r >> 2) - (q >> 2));
+			acc[2] +=
+			    (float)(q >> 2) + t * (float)((r >> 2) - (q >> 2));
 			cross++;
 		}
 	}
@@ -240,10 +242,12 @@ static int cell_vertex(struct build *b, int64_t i, int64_t j, int64_t k,
 	{
 		float h = 0.25f * b->cell;
 		for (int a = 0; a < 3; a++) {
-			float q1[3] = {p[0], p[1], p[2]}, q2[3] = {p[0], p[1], p[2]};
+			float q1[3] = {p[0], p[1], p[2]},
+			      q2[3] = {p[0], p[1], p[2]};
 			q1[a] += h;
 			q2[a] -= h;
-			g[a] = (eval_view(b, q1) - eval_view(b, q2)) / (2.0f * h);
+			g[a] =
+			    (eval_view(b, q1) - eval_view(b, q2)) / (2.0f * h);
 		}
 	}
 	gg = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
@@ -261,7 +265,8 @@ static int cell_vertex(struct build *b, int64_t i, int64_t j, int64_t k,
 	if (prim != BC_NONE && prim < b->l->nprims) {
 		for (int a = 0; a < 3; a++) {
 			float cc = b->l->color[prim][a];
-			rgb[a] = (uint8_t)lrintf(255.0f * fminf(fmaxf(cc, 0.0f), 1.0f));
+			rgb[a] = (uint8_t)lrintf(255.0f *
+			                         fminf(fmaxf(cc, 0.0f), 1.0f));
 		}
 	}
 	if ((rc = push_vertex(b->m, p, rgb, id))) {
@@ -330,8 +335,9 @@ static int leaf(struct build *b, const uint32_t c0[3])
 					float v0, v1;
 					uint32_t id[4];
 					e[a]++;
-					if (e[a] > (int64_t)b->n[a] || at[u] < 1 ||
-					    at[w] < 1 || at[u] >= b->n[u] ||
+					if (e[a] > (int64_t)b->n[a] ||
+					    at[u] < 1 || at[w] < 1 ||
+					    at[u] >= b->n[u] ||
 					    at[w] >= b->n[w]) {
 						continue;
 					}
@@ -346,8 +352,9 @@ static int leaf(struct build *b, const uint32_t c0[3])
 						int64_t cc[3] = {i, j, k};
 						cc[u] -= (q == 0 || q == 3);
 						cc[w] -= (q == 0 || q == 1);
-						if ((rc = cell_vertex(b, cc[0], cc[1],
-						                      cc[2], &id[q]))) {
+						if ((rc = cell_vertex(
+						         b, cc[0], cc[1], cc[2],
+						         &id[q]))) {
 							return rc;
 						}
 					}
@@ -358,10 +365,11 @@ static int leaf(struct build *b, const uint32_t c0[3])
 						id[3] = s;
 					}
 					{
-						const float *p0 = b->m->pos[id[0]],
-						            *p1 = b->m->pos[id[1]],
-						            *p2 = b->m->pos[id[2]],
-						            *p3 = b->m->pos[id[3]];
+						const float
+						    *p0 = b->m->pos[id[0]],
+						    *p1 = b->m->pos[id[1]],
+						    *p2 = b->m->pos[id[2]],
+						    *p3 = b->m->pos[id[3]];
 						float d02 = 0, d13 = 0;
 						for (int x = 0; x < 3; x++) {
 							d02 += (p0[x] - p2[x]) *
@@ -370,14 +378,24 @@ static int leaf(struct build *b, const uint32_t c0[3])
 							       (p1[x] - p3[x]);
 						}
 						if (d02 <= d13) {
-							rc = push_tri(b->m, id[0], id[1], id[2]);
+							rc = push_tri(
+							    b->m, id[0], id[1],
+							    id[2]);
 							if (!rc) {
-								rc = push_tri(b->m, id[0], id[2], id[3]);
+								rc = push_tri(
+								    b->m, id[0],
+								    id[2],
+								    id[3]);
 							}
 						} else {
-							rc = push_tri(b->m, id[0], id[1], id[3]);
+							rc = push_tri(
+							    b->m, id[0], id[1],
+							    id[3]);
 							if (!rc) {
-								rc = push_tri(b->m, id[1], id[2], id[3]);
+								rc = push_tri(
+								    b->m, id[1],
+								    id[2],
+								    id[3]);
 							}
 						}
 						if (rc) {
@@ -419,8 +437,8 @@ static int region(struct build *b, const uint32_t c0[3], const uint32_t c1[3],
 	const uint32_t *act = b->act[depth];
 	uint32_t side = 0;
 	int rc;
-	uint64_t cells = (uint64_t)(c1[0] - c0[0]) * (c1[1] - c0[1]) *
-	                 (c1[2] - c0[2]);
+	uint64_t cells =
+	    (uint64_t)(c1[0] - c0[0]) * (c1[1] - c0[1]) * (c1[2] - c0[2]);
 	if (n == 0) {
 		progress(b, cells);
 		return 0; /* nothing reaches here: +inf, outside */
@@ -455,7 +473,8 @@ static int region(struct build *b, const uint32_t c0[3], const uint32_t c1[3],
 		for (int a = 0; a < 3; a++) {
 			uint32_t len = c1[a] - c0[a];
 			uint32_t half = (len / 2 + BLOCK - 1) / BLOCK * BLOCK;
-			mid[a] = len > BLOCK && half < len ? c0[a] + half : c1[a];
+			mid[a] =
+			    len > BLOCK && half < len ? c0[a] + half : c1[a];
 		}
 		for (int q = 0; q < 8; q++) {
 			uint32_t d0[3], d1[3], m2 = 0;
@@ -499,7 +518,8 @@ int bc_mesh_build(struct bc_mesh *m, const struct bc_tree *t,
 	memset(m, 0, sizeof(*m));
 	memset(&b, 0, sizeof(b));
 	if (!l || l->nprims == 0) {
-		return bc_errinfo_set(ei, BC_EINVAL, "mesh: the scene is empty");
+		return bc_errinfo_set(ei, BC_EINVAL,
+		                      "mesh: the scene is empty");
 	}
 	if (res > BC_MESH_MAX_RESOLUTION || res < 2) {
 		return bc_errinfo_set(ei, BC_ERANGE,
@@ -513,10 +533,11 @@ int bc_mesh_build(struct bc_mesh *m, const struct bc_tree *t,
 		lo[a] = given ? opts->lo[a] : l->lo[a];
 		hi[a] = given ? opts->hi[a] : l->hi[a];
 		if (!(hi[a] > lo[a]) || !isfinite(lo[a]) || !isfinite(hi[a])) {
-			return bc_errinfo_set(ei, BC_EINVAL,
-			                      "mesh: the box has no volume along "
-			                      "axis %d",
-			                      a);
+			return bc_errinfo_set(
+			    ei, BC_EINVAL,
+			    "mesh: the box has no volume along "
+			    "axis %d",
+			    a);
 		}
 		longest = fmaxf(longest, hi[a] - lo[a]);
 	}
@@ -638,15 +659,16 @@ static void write_body(const struct bc_mesh *m, FILE *f,
 		}
 		break;
 	case BC_MESH_FORMAT_PLY:
-		fprintf(f,
-		        "ply\nformat binary_little_endian 1.0\n"
-		        "comment blobcast mesh\n"
-		        "element vertex %u\nproperty float x\nproperty float y\n"
-		        "property float z\nproperty uchar red\n"
-		        "property uchar green\nproperty uchar blue\n"
-		        "element face %u\nproperty list uchar uint "
-		        "vertex_indices\nend_header\n",
-		        m->nverts, m->ntris);
+		fprintf(
+		    f,
+		    "ply\nformat binary_little_endian 1.0\n"
+		    "comment blobcast mesh\n"
+		    "element vertex %u\nproperty float x\nproperty float y\n"
+		    "property float z\nproperty uchar red\n"
+		    "property uchar green\nproperty uchar blue\n"
+		    "element face %u\nproperty list uchar uint "
+		    "vertex_indices\nend_header\n",
+		    m->nverts, m->ntris);
 		for (uint32_t i = 0; i < m->nverts; i++) {
 			for (int a = 0; a < 3; a++) {
 				put_f32(f, m->pos[i][a]);
@@ -706,7 +728,8 @@ int bc_mesh_write(const struct bc_mesh *m, const char *path,
 	char *tmp;
 	FILE *f;
 	int rc = 0;
-	if (format <= BC_MESH_FORMAT_INVALID || format >= BC_MESH_FORMAT_COUNT) {
+	if (format <= BC_MESH_FORMAT_INVALID ||
+	    format >= BC_MESH_FORMAT_COUNT) {
 		return bc_errinfo_set(ei, BC_EINVAL, "mesh: unknown format");
 	}
 	if (!path || !plen) {
@@ -732,7 +755,8 @@ int bc_mesh_write(const struct bc_mesh *m, const char *path,
 		rc = bc_errinfo_set(ei, BC_EIO, "%s: %s", tmp, strerror(errno));
 	}
 	if (rc == 0 && rename(tmp, path) != 0) {
-		rc = bc_errinfo_set(ei, BC_EIO, "%s: %s", path, strerror(errno));
+		rc =
+		    bc_errinfo_set(ei, BC_EIO, "%s: %s", path, strerror(errno));
 	}
 	if (rc) {
 		(void)remove(tmp);

@@ -14,34 +14,34 @@
 #include <string.h>
 
 static const char *const op_names[BC_OP_COUNT] = {
-	[BC_OP_UNION] = "union",
-	[BC_OP_INTERSECTION] = "intersection",
-	[BC_OP_DIFFERENCE] = "difference",
-	[BC_OP_SMOOTH_UNION] = "smooth_union",
-	[BC_OP_SMOOTH_INTERSECTION] = "smooth_intersection",
-	[BC_OP_SMOOTH_DIFFERENCE] = "smooth_difference",
-	[BC_OP_OFFSET] = "offset",
-	[BC_OP_ONION] = "onion",
-	[BC_OP_ELONGATE] = "elongate",
-	[BC_OP_TWIST] = "twist",
-	[BC_OP_BEND] = "bend",
-	[BC_OP_MIRROR] = "mirror",
-	[BC_OP_REPEAT] = "repeat",
-	[BC_OP_SCALE] = "scale",
+    [BC_OP_UNION] = "union",
+    [BC_OP_INTERSECTION] = "intersection",
+    [BC_OP_DIFFERENCE] = "difference",
+    [BC_OP_SMOOTH_UNION] = "smooth_union",
+    [BC_OP_SMOOTH_INTERSECTION] = "smooth_intersection",
+    [BC_OP_SMOOTH_DIFFERENCE] = "smooth_difference",
+    [BC_OP_OFFSET] = "offset",
+    [BC_OP_ONION] = "onion",
+    [BC_OP_ELONGATE] = "elongate",
+    [BC_OP_TWIST] = "twist",
+    [BC_OP_BEND] = "bend",
+    [BC_OP_MIRROR] = "mirror",
+    [BC_OP_REPEAT] = "repeat",
+    [BC_OP_SCALE] = "scale",
 };
 
 /* Scene-file keys of the unary nodes' parameters: repeat's six floats are
  * two keys of three (json.c splits them); mirror's one float is the axes
  * mask, written as a string of axis letters. */
 static const struct bc_unary_info unary_infos[BC_OP_COUNT] = {
-	[BC_OP_OFFSET] = {"offset", 1, "amount"},
-	[BC_OP_ONION] = {"onion", 1, "thickness"},
-	[BC_OP_ELONGATE] = {"elongate", 3, "half_extents"},
-	[BC_OP_TWIST] = {"twist", 1, "rate"},
-	[BC_OP_BEND] = {"bend", 1, "rate"},
-	[BC_OP_MIRROR] = {"mirror", 1, "axes"},
-	[BC_OP_REPEAT] = {"repeat", 6, "spacing"},
-	[BC_OP_SCALE] = {"scale", 1, "factor"},
+    [BC_OP_OFFSET] = {"offset", 1, "amount"},
+    [BC_OP_ONION] = {"onion", 1, "thickness"},
+    [BC_OP_ELONGATE] = {"elongate", 3, "half_extents"},
+    [BC_OP_TWIST] = {"twist", 1, "rate"},
+    [BC_OP_BEND] = {"bend", 1, "rate"},
+    [BC_OP_MIRROR] = {"mirror", 1, "axes"},
+    [BC_OP_REPEAT] = {"repeat", 6, "spacing"},
+    [BC_OP_SCALE] = {"scale", 1, "factor"},
 };
 
 uint32_t bc_mirror_axes_parse(const char *s)
@@ -89,8 +89,7 @@ bool bc_op_is_domain(enum bc_op kind)
 bool bc_op_has_value(enum bc_op kind)
 {
 	return kind == BC_OP_OFFSET || kind == BC_OP_ONION ||
-	       kind == BC_OP_TWIST || kind == BC_OP_BEND ||
-	       kind == BC_OP_SCALE;
+	       kind == BC_OP_TWIST || kind == BC_OP_BEND || kind == BC_OP_SCALE;
 }
 
 const struct bc_unary_info *bc_unary_info(enum bc_op kind)
@@ -138,42 +137,42 @@ int bc_unary_validate(const struct bc_unary *u, struct bc_errinfo *ei)
 {
 	const struct bc_unary_info *info = bc_unary_info(u->kind);
 	if (!info) {
-		return bc_errinfo_set(ei, BC_EENUM, "unknown unary node kind %d",
-				      (int)u->kind);
+		return bc_errinfo_set(
+		    ei, BC_EENUM, "unknown unary node kind %d", (int)u->kind);
 	}
 	for (int i = 0; i < BC_UNARY_MAX_PARAMS; i++) {
 		if (!isfinite(u->u[i])) {
 			return bc_errinfo_set(ei, BC_ENONFINITE,
-					      "%s: parameters must be finite",
-					      info->name);
+			                      "%s: parameters must be finite",
+			                      info->name);
 		}
 		if (fabsf(u->u[i]) > BC_PARAM_MAX_ABS) {
 			return bc_errinfo_set(ei, BC_ERANGE,
-					      "%s: |parameter| %g above %g",
-					      info->name, (double)u->u[i],
-					      (double)BC_PARAM_MAX_ABS);
+			                      "%s: |parameter| %g above %g",
+			                      info->name, (double)u->u[i],
+			                      (double)BC_PARAM_MAX_ABS);
 		}
 		if (i >= info->nparams && u->u[i] != 0.0f) {
 			return bc_errinfo_set(ei, BC_ERANGE,
-					      "%s takes %u parameters",
-					      info->name, info->nparams);
+			                      "%s takes %u parameters",
+			                      info->name, info->nparams);
 		}
 	}
 	switch (u->kind) {
 	case BC_OP_ONION:
 		if (!(u->u[0] >= 0.0f)) {
 			return bc_errinfo_set(ei, BC_ERANGE,
-					      "onion: thickness %g must be "
-					      ">= 0",
-					      (double)u->u[0]);
+			                      "onion: thickness %g must be "
+			                      ">= 0",
+			                      (double)u->u[0]);
 		}
 		break;
 	case BC_OP_ELONGATE:
 		for (int i = 0; i < 3; i++) {
 			if (!(u->u[i] >= 0.0f)) {
 				return bc_errinfo_set(ei, BC_ERANGE,
-						      "elongate: half_extents "
-						      "must be >= 0");
+				                      "elongate: half_extents "
+				                      "must be >= 0");
 			}
 		}
 		break;
@@ -181,8 +180,8 @@ int bc_unary_validate(const struct bc_unary *u, struct bc_errinfo *ei)
 		if (!(u->u[0] >= 1.0f && u->u[0] <= 7.0f &&
 		      u->u[0] == floorf(u->u[0]))) {
 			return bc_errinfo_set(ei, BC_ERANGE,
-					      "mirror: axes must name 1 to 3 "
-					      "of x, y, z");
+			                      "mirror: axes must name 1 to 3 "
+			                      "of x, y, z");
 		}
 		break;
 	case BC_OP_REPEAT:
@@ -191,26 +190,26 @@ int bc_unary_validate(const struct bc_unary *u, struct bc_errinfo *ei)
 			if (!(c >= 1.0f && c <= (float)BC_REPEAT_MAX_COUNT &&
 			      c == floorf(c))) {
 				return bc_errinfo_set(ei, BC_ERANGE,
-						      "repeat: count %g must "
-						      "be an integer in 1..%u",
-						      (double)c,
-						      BC_REPEAT_MAX_COUNT);
+				                      "repeat: count %g must "
+				                      "be an integer in 1..%u",
+				                      (double)c,
+				                      BC_REPEAT_MAX_COUNT);
 			}
 			if (c > 1.0f ? !(sp > 0.0f) : !(sp >= 0.0f)) {
 				return bc_errinfo_set(ei, BC_ERANGE,
-						      "repeat: spacing %g must "
-						      "be > 0 where count > 1 "
-						      "(>= 0 elsewhere)",
-						      (double)sp);
+				                      "repeat: spacing %g must "
+				                      "be > 0 where count > 1 "
+				                      "(>= 0 elsewhere)",
+				                      (double)sp);
 			}
 		}
 		break;
 	case BC_OP_SCALE:
 		if (!(u->u[0] >= 1.0e-3f)) {
 			return bc_errinfo_set(ei, BC_ERANGE,
-					      "scale: factor %g must be >= "
-					      "0.001",
-					      (double)u->u[0]);
+			                      "scale: factor %g must be >= "
+			                      "0.001",
+			                      (double)u->u[0]);
 		}
 		break;
 	default:
@@ -253,7 +252,8 @@ enum bc_op_class bc_op_class(enum bc_op kind)
 
 bool bc_op_is_smooth(enum bc_op kind)
 {
-	return kind == BC_OP_SMOOTH_UNION || kind == BC_OP_SMOOTH_INTERSECTION ||
+	return kind == BC_OP_SMOOTH_UNION ||
+	       kind == BC_OP_SMOOTH_INTERSECTION ||
 	       kind == BC_OP_SMOOTH_DIFFERENCE;
 }
 
@@ -273,35 +273,33 @@ int bc_op_validate(const struct bc_op_data *op, struct bc_errinfo *ei)
 	const char *name = bc_op_name(op->kind);
 	if (!name) {
 		return bc_errinfo_set(ei, BC_EENUM, "unknown operator kind %d",
-				      (int)op->kind);
+		                      (int)op->kind);
 	}
 	if (bc_op_is_unary(op->kind)) {
 		return bc_errinfo_set(ei, BC_EINVAL,
-				      "%s is a unary node, not a binary "
-				      "operator",
-				      name);
+		                      "%s is a unary node, not a binary "
+		                      "operator",
+		                      name);
 	}
 	if (!isfinite(op->blend) || !isfinite(op->range)) {
 		return bc_errinfo_set(ei, BC_ENONFINITE,
-				      "%s: blend and range must be finite",
-				      name);
+		                      "%s: blend and range must be finite",
+		                      name);
 	}
 	if (!bc_op_is_smooth(op->kind)) {
 		return 0;
 	}
 	if (!(op->blend > 0.0f) || op->blend > BC_PARAM_MAX_ABS) {
-		return bc_errinfo_set(ei, BC_ERANGE,
-				      "%s: blend %g must be in (0, %g]", name,
-				      (double)op->blend,
-				      (double)BC_PARAM_MAX_ABS);
+		return bc_errinfo_set(
+		    ei, BC_ERANGE, "%s: blend %g must be in (0, %g]", name,
+		    (double)op->blend, (double)BC_PARAM_MAX_ABS);
 	}
 	/* b_r divides by 6 r_o - beta: the range must exceed beta / 6. */
 	if (!(6.0f * op->range - op->blend > 0.0f) ||
 	    op->range > BC_PARAM_MAX_ABS) {
-		return bc_errinfo_set(ei, BC_ERANGE,
-				      "%s: range %g must exceed blend / 6 = %g",
-				      name, (double)op->range,
-				      (double)(op->blend / 6.0f));
+		return bc_errinfo_set(
+		    ei, BC_ERANGE, "%s: range %g must exceed blend / 6 = %g",
+		    name, (double)op->range, (double)(op->blend / 6.0f));
 	}
 	return 0;
 }
@@ -360,8 +358,8 @@ float bc_op_eval(enum bc_op kind, float blend, float range, float f0, float f1)
 	case BC_OP_SMOOTH_UNION:
 		/* R_o = (-inf, r_o]: eq. 12 and 17. */
 		if (f0 <= range && f1 <= range) {
-			float b = transition(g_union(f0, f1, blend), blend,
-					     range);
+			float b =
+			    transition(g_union(f0, f1, blend), blend, range);
 			return g_union(f0, f1, b);
 		}
 		return fminf(f0, f1);
@@ -369,14 +367,14 @@ float bc_op_eval(enum bc_op kind, float blend, float range, float f0, float f1)
 		/* R_o = [-r_o, r_o]; b_r takes |g| (§4). */
 		if (fabsf(f0) <= range && fabsf(f1) <= range) {
 			float b = transition(fabsf(g_inter(f0, f1, blend)),
-					     blend, range);
+			                     blend, range);
 			return g_inter(f0, f1, b);
 		}
 		return fmaxf(f0, f1);
 	case BC_OP_SMOOTH_DIFFERENCE:
 		if (fabsf(f0) <= range && fabsf(f1) <= range) {
 			float b = transition(fabsf(g_diff(f0, f1, blend)),
-					     blend, range);
+			                     blend, range);
 			return g_diff(f0, f1, b);
 		}
 		return fmaxf(f0, -f1);

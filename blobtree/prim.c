@@ -36,152 +36,152 @@
  * that is not BC_PARAM_OPTIONAL.
  */
 static const struct bc_param_desc p_sphere[] = {
-	{"radius", 0, 1, POS, 1.0f},
+    {"radius", 0, 1, POS, 1.0f},
 };
 static const struct bc_param_desc p_box[] = {
-	{"half_extents", 0, 3, POS, 1.0f},
-	{"round", 3, 1, OPT | NONNEG, 0.0f},
+    {"half_extents", 0, 3, POS, 1.0f},
+    {"round", 3, 1, OPT | NONNEG, 0.0f},
 };
 static const struct bc_param_desc p_capsule[] = {
-	{"a", 0, 3, 0, -0.5f},
-	{"b", 3, 3, 0, 0.5f},
-	{"radius", 6, 1, POS, 0.5f},
+    {"a", 0, 3, 0, -0.5f},
+    {"b", 3, 3, 0, 0.5f},
+    {"radius", 6, 1, POS, 0.5f},
 };
 static const struct bc_param_desc p_cylinder[] = {
-	{"radius", 0, 1, POS, 0.5f},
-	{"half_height", 1, 1, POS, 1.0f},
+    {"radius", 0, 1, POS, 0.5f},
+    {"half_height", 1, 1, POS, 1.0f},
 };
 static const struct bc_param_desc p_torus[] = {
-	{"major", 0, 1, POS, 1.0f},
-	{"minor", 1, 1, POS, 0.25f},
+    {"major", 0, 1, POS, 1.0f},
+    {"minor", 1, 1, POS, 0.25f},
 };
 static const struct bc_param_desc p_cone[] = {
-	{"half_height", 0, 1, POS, 1.0f},
-	{"radius_bottom", 1, 1, NONNEG, 1.0f},
-	{"radius_top", 2, 1, NONNEG, 0.0f},
+    {"half_height", 0, 1, POS, 1.0f},
+    {"radius_bottom", 1, 1, NONNEG, 1.0f},
+    {"radius_top", 2, 1, NONNEG, 0.0f},
 };
 static const struct bc_param_desc p_round_cone[] = {
-	{"a", 0, 3, 0, -0.5f},
-	{"b", 3, 3, 0, 0.5f},
-	{"radius_a", 6, 1, NONNEG, 0.5f},
-	{"radius_b", 7, 1, NONNEG, 0.25f},
+    {"a", 0, 3, 0, -0.5f},
+    {"b", 3, 3, 0, 0.5f},
+    {"radius_a", 6, 1, NONNEG, 0.5f},
+    {"radius_b", 7, 1, NONNEG, 0.25f},
 };
 static const struct bc_param_desc p_ellipsoid[] = {
-	{"radii", 0, 3, POS, 1.0f},
+    {"radii", 0, 3, POS, 1.0f},
 };
 static const struct bc_param_desc p_hex_prism[] = {
-	{"radius", 0, 1, POS, 1.0f},
-	{"half_depth", 1, 1, POS, 0.5f},
+    {"radius", 0, 1, POS, 1.0f},
+    {"half_depth", 1, 1, POS, 0.5f},
 };
 static const struct bc_param_desc p_octahedron[] = {
-	{"size", 0, 1, POS, 1.0f},
+    {"size", 0, 1, POS, 1.0f},
 };
 static const struct bc_param_desc p_box_frame[] = {
-	{"half_extents", 0, 3, POS, 1.0f},
-	{"thickness", 3, 1, POS, 0.1f},
+    {"half_extents", 0, 3, POS, 1.0f},
+    {"thickness", 3, 1, POS, 0.1f},
 };
 static const struct bc_param_desc p_capped_torus[] = {
-	{"major", 0, 1, POS, 1.0f},
-	{"minor", 1, 1, POS, 0.25f},
-	{"angle_deg", 2, 1, 0, 90.0f},
+    {"major", 0, 1, POS, 1.0f},
+    {"minor", 1, 1, POS, 0.25f},
+    {"angle_deg", 2, 1, 0, 90.0f},
 };
 static const struct bc_param_desc p_link[] = {
-	{"half_length", 0, 1, NONNEG, 0.5f},
-	{"major", 1, 1, POS, 0.5f},
-	{"minor", 2, 1, POS, 0.15f},
+    {"half_length", 0, 1, NONNEG, 0.5f},
+    {"major", 1, 1, POS, 0.5f},
+    {"minor", 2, 1, POS, 0.15f},
 };
 static const struct bc_param_desc p_solid_angle[] = {
-	{"radius", 0, 1, POS, 1.0f},
-	{"angle_deg", 1, 1, 0, 30.0f},
+    {"radius", 0, 1, POS, 1.0f},
+    {"angle_deg", 1, 1, 0, 30.0f},
 };
 static const struct bc_param_desc p_pyramid[] = {
-	{"half_base", 0, 1, POS, 1.0f},
-	{"height", 1, 1, POS, 1.0f},
+    {"half_base", 0, 1, POS, 1.0f},
+    {"height", 1, 1, POS, 1.0f},
 };
 static const struct bc_param_desc p_tri_prism[] = {
-	{"radius", 0, 1, POS, 0.5f},
-	{"half_depth", 1, 1, POS, 0.5f},
+    {"radius", 0, 1, POS, 0.5f},
+    {"half_depth", 1, 1, POS, 0.5f},
 };
 static const struct bc_param_desc p_cut_sphere[] = {
-	{"radius", 0, 1, POS, 1.0f},
-	{"cut_height", 1, 1, 0, 0.5f},
+    {"radius", 0, 1, POS, 1.0f},
+    {"cut_height", 1, 1, 0, 0.5f},
 };
 static const struct bc_param_desc p_cut_hollow_sphere[] = {
-	{"radius", 0, 1, POS, 1.0f},
-	{"cut_height", 1, 1, 0, 0.5f},
-	{"thickness", 2, 1, POS, 0.1f},
+    {"radius", 0, 1, POS, 1.0f},
+    {"cut_height", 1, 1, 0, 0.5f},
+    {"thickness", 2, 1, POS, 0.1f},
 };
 static const struct bc_param_desc p_death_star[] = {
-	{"ra", 0, 1, POS, 1.0f},
-	{"rb", 1, 1, POS, 0.8f},
-	{"d", 2, 1, POS, 1.0f},
+    {"ra", 0, 1, POS, 1.0f},
+    {"rb", 1, 1, POS, 0.8f},
+    {"d", 2, 1, POS, 1.0f},
 };
 static const struct bc_param_desc p_rounded_cylinder[] = {
-	{"radius", 0, 1, POS, 0.5f},
-	{"round", 1, 1, NONNEG, 0.1f},
-	{"half_height", 2, 1, POS, 1.0f},
+    {"radius", 0, 1, POS, 0.5f},
+    {"round", 1, 1, NONNEG, 0.1f},
+    {"half_height", 2, 1, POS, 1.0f},
 };
 static const struct bc_param_desc p_capped_cylinder[] = {
-	{"a", 0, 3, 0, -0.5f},
-	{"b", 3, 3, 0, 0.5f},
-	{"radius", 6, 1, POS, 0.5f},
+    {"a", 0, 3, 0, -0.5f},
+    {"b", 3, 3, 0, 0.5f},
+    {"radius", 6, 1, POS, 0.5f},
 };
 static const struct bc_param_desc p_capped_cone[] = {
-	{"a", 0, 3, 0, -0.5f},
-	{"b", 3, 3, 0, 0.5f},
-	{"ra", 6, 1, NONNEG, 0.5f},
-	{"rb", 7, 1, NONNEG, 0.25f},
+    {"a", 0, 3, 0, -0.5f},
+    {"b", 3, 3, 0, 0.5f},
+    {"ra", 6, 1, NONNEG, 0.5f},
+    {"rb", 7, 1, NONNEG, 0.25f},
 };
 static const struct bc_param_desc p_rhombus[] = {
-	{"la", 0, 1, POS, 1.0f},
-	{"lb", 1, 1, POS, 0.5f},
-	{"half_height", 2, 1, POS, 0.2f},
-	{"round", 3, 1, OPT | NONNEG, 0.0f},
+    {"la", 0, 1, POS, 1.0f},
+    {"lb", 1, 1, POS, 0.5f},
+    {"half_height", 2, 1, POS, 0.2f},
+    {"round", 3, 1, OPT | NONNEG, 0.0f},
 };
 static const struct bc_param_desc p_vesica_segment[] = {
-	{"a", 0, 3, 0, -0.5f},
-	{"b", 3, 3, 0, 0.5f},
-	{"w", 6, 1, POS, 0.3f},
+    {"a", 0, 3, 0, -0.5f},
+    {"b", 3, 3, 0, 0.5f},
+    {"w", 6, 1, POS, 0.3f},
 };
 static const struct bc_param_desc p_extrude_circle[] = {
-	{"radius", 0, 1, POS, 0.5f},
-	{"half_depth", 1, 1, POS, 0.5f},
+    {"radius", 0, 1, POS, 0.5f},
+    {"half_depth", 1, 1, POS, 0.5f},
 };
 static const struct bc_param_desc p_extrude_rect[] = {
-	{"half_width", 0, 1, POS, 0.5f},
-	{"half_height", 1, 1, POS, 0.25f},
-	{"half_depth", 2, 1, POS, 0.5f},
+    {"half_width", 0, 1, POS, 0.5f},
+    {"half_height", 1, 1, POS, 0.25f},
+    {"half_depth", 2, 1, POS, 0.5f},
 };
 static const struct bc_param_desc p_extrude_polygon[] = {
-	{"radius", 0, 1, POS, 0.5f},
-	{"sides", 1, 1, POS, 5.0f},
-	{"half_depth", 2, 1, POS, 0.5f},
+    {"radius", 0, 1, POS, 0.5f},
+    {"sides", 1, 1, POS, 5.0f},
+    {"half_depth", 2, 1, POS, 0.5f},
 };
 static const struct bc_param_desc p_extrude_star[] = {
-	{"radius", 0, 1, POS, 0.5f},
-	{"points", 1, 1, POS, 5.0f},
-	{"inner_ratio", 2, 1, POS, 0.5f},
-	{"half_depth", 3, 1, POS, 0.25f},
+    {"radius", 0, 1, POS, 0.5f},
+    {"points", 1, 1, POS, 5.0f},
+    {"inner_ratio", 2, 1, POS, 0.5f},
+    {"half_depth", 3, 1, POS, 0.25f},
 };
 static const struct bc_param_desc p_revolve_circle[] = {
-	{"radius", 0, 1, POS, 0.25f},
-	{"offset", 1, 1, NONNEG, 0.75f},
+    {"radius", 0, 1, POS, 0.25f},
+    {"offset", 1, 1, NONNEG, 0.75f},
 };
 static const struct bc_param_desc p_revolve_rect[] = {
-	{"half_width", 0, 1, POS, 0.25f},
-	{"half_height", 1, 1, POS, 0.5f},
-	{"offset", 2, 1, NONNEG, 0.75f},
+    {"half_width", 0, 1, POS, 0.25f},
+    {"half_height", 1, 1, POS, 0.5f},
+    {"offset", 2, 1, NONNEG, 0.75f},
 };
 static const struct bc_param_desc p_revolve_polygon[] = {
-	{"radius", 0, 1, POS, 0.3f},
-	{"sides", 1, 1, POS, 6.0f},
-	{"offset", 2, 1, NONNEG, 0.75f},
+    {"radius", 0, 1, POS, 0.3f},
+    {"sides", 1, 1, POS, 6.0f},
+    {"offset", 2, 1, NONNEG, 0.75f},
 };
 static const struct bc_param_desc p_revolve_star[] = {
-	{"radius", 0, 1, POS, 0.35f},
-	{"points", 1, 1, POS, 5.0f},
-	{"inner_ratio", 2, 1, POS, 0.5f},
-	{"offset", 3, 1, NONNEG, 0.75f},
+    {"radius", 0, 1, POS, 0.35f},
+    {"points", 1, 1, POS, 5.0f},
+    {"inner_ratio", 2, 1, POS, 0.5f},
+    {"offset", 3, 1, NONNEG, 0.75f},
 };
 
 #undef POS
@@ -189,7 +189,9 @@ static const struct bc_param_desc p_revolve_star[] = {
 #undef OPT
 
 #define DESC(name, tab, exact)                                                 \
-	{name, (uint8_t)(sizeof(tab) / sizeof(tab[0])), tab, exact}
+	{                                                                      \
+		name, (uint8_t)(sizeof(tab) / sizeof(tab[0])), tab, exact      \
+	}
 
 /*
  * exact: the field is the Euclidean signed distance outside the solid, and
@@ -198,46 +200,43 @@ static const struct bc_param_desc p_revolve_star[] = {
  * with the right sign). The ellipsoid is a bound everywhere.
  */
 static const struct bc_prim_info prim_table[BC_PRIM_COUNT] = {
-	[BC_PRIM_SPHERE] = DESC("sphere", p_sphere, true),
-	[BC_PRIM_BOX] = DESC("box", p_box, true),
-	[BC_PRIM_CAPSULE] = DESC("capsule", p_capsule, true),
-	[BC_PRIM_CYLINDER] = DESC("cylinder", p_cylinder, true),
-	[BC_PRIM_TORUS] = DESC("torus", p_torus, true),
-	[BC_PRIM_CONE] = DESC("cone", p_cone, true),
-	[BC_PRIM_ROUND_CONE] = DESC("round_cone", p_round_cone, true),
-	[BC_PRIM_ELLIPSOID] = DESC("ellipsoid", p_ellipsoid, false),
-	[BC_PRIM_HEX_PRISM] = DESC("hex_prism", p_hex_prism, true),
-	[BC_PRIM_OCTAHEDRON] = DESC("octahedron", p_octahedron, true),
-	[BC_PRIM_BOX_FRAME] = DESC("box_frame", p_box_frame, true),
-	[BC_PRIM_CAPPED_TORUS] = DESC("capped_torus", p_capped_torus, true),
-	[BC_PRIM_LINK] = DESC("link", p_link, true),
-	[BC_PRIM_SOLID_ANGLE] = DESC("solid_angle", p_solid_angle, true),
-	[BC_PRIM_PYRAMID] = DESC("pyramid", p_pyramid, true),
-	[BC_PRIM_TRI_PRISM] = DESC("tri_prism", p_tri_prism, true),
-	[BC_PRIM_CUT_SPHERE] = DESC("cut_sphere", p_cut_sphere, true),
-	[BC_PRIM_CUT_HOLLOW_SPHERE] =
-		DESC("cut_hollow_sphere", p_cut_hollow_sphere, true),
-	[BC_PRIM_DEATH_STAR] = DESC("death_star", p_death_star, true),
-	[BC_PRIM_ROUNDED_CYLINDER] =
-		DESC("rounded_cylinder", p_rounded_cylinder, true),
-	[BC_PRIM_CAPPED_CYLINDER] =
-		DESC("capped_cylinder", p_capped_cylinder, true),
-	[BC_PRIM_CAPPED_CONE] = DESC("capped_cone", p_capped_cone, true),
-	[BC_PRIM_RHOMBUS] = DESC("rhombus", p_rhombus, true),
-	[BC_PRIM_VESICA_SEGMENT] =
-		DESC("vesica_segment", p_vesica_segment, true),
-	[BC_PRIM_EXTRUDE_CIRCLE] =
-		DESC("extrude_circle", p_extrude_circle, true),
-	[BC_PRIM_EXTRUDE_RECT] = DESC("extrude_rect", p_extrude_rect, true),
-	[BC_PRIM_EXTRUDE_POLYGON] =
-		DESC("extrude_polygon", p_extrude_polygon, true),
-	[BC_PRIM_EXTRUDE_STAR] = DESC("extrude_star", p_extrude_star, true),
-	[BC_PRIM_REVOLVE_CIRCLE] =
-		DESC("revolve_circle", p_revolve_circle, true),
-	[BC_PRIM_REVOLVE_RECT] = DESC("revolve_rect", p_revolve_rect, true),
-	[BC_PRIM_REVOLVE_POLYGON] =
-		DESC("revolve_polygon", p_revolve_polygon, true),
-	[BC_PRIM_REVOLVE_STAR] = DESC("revolve_star", p_revolve_star, true),
+    [BC_PRIM_SPHERE] = DESC("sphere", p_sphere, true),
+    [BC_PRIM_BOX] = DESC("box", p_box, true),
+    [BC_PRIM_CAPSULE] = DESC("capsule", p_capsule, true),
+    [BC_PRIM_CYLINDER] = DESC("cylinder", p_cylinder, true),
+    [BC_PRIM_TORUS] = DESC("torus", p_torus, true),
+    [BC_PRIM_CONE] = DESC("cone", p_cone, true),
+    [BC_PRIM_ROUND_CONE] = DESC("round_cone", p_round_cone, true),
+    [BC_PRIM_ELLIPSOID] = DESC("ellipsoid", p_ellipsoid, false),
+    [BC_PRIM_HEX_PRISM] = DESC("hex_prism", p_hex_prism, true),
+    [BC_PRIM_OCTAHEDRON] = DESC("octahedron", p_octahedron, true),
+    [BC_PRIM_BOX_FRAME] = DESC("box_frame", p_box_frame, true),
+    [BC_PRIM_CAPPED_TORUS] = DESC("capped_torus", p_capped_torus, true),
+    [BC_PRIM_LINK] = DESC("link", p_link, true),
+    [BC_PRIM_SOLID_ANGLE] = DESC("solid_angle", p_solid_angle, true),
+    [BC_PRIM_PYRAMID] = DESC("pyramid", p_pyramid, true),
+    [BC_PRIM_TRI_PRISM] = DESC("tri_prism", p_tri_prism, true),
+    [BC_PRIM_CUT_SPHERE] = DESC("cut_sphere", p_cut_sphere, true),
+    [BC_PRIM_CUT_HOLLOW_SPHERE] =
+        DESC("cut_hollow_sphere", p_cut_hollow_sphere, true),
+    [BC_PRIM_DEATH_STAR] = DESC("death_star", p_death_star, true),
+    [BC_PRIM_ROUNDED_CYLINDER] =
+        DESC("rounded_cylinder", p_rounded_cylinder, true),
+    [BC_PRIM_CAPPED_CYLINDER] =
+        DESC("capped_cylinder", p_capped_cylinder, true),
+    [BC_PRIM_CAPPED_CONE] = DESC("capped_cone", p_capped_cone, true),
+    [BC_PRIM_RHOMBUS] = DESC("rhombus", p_rhombus, true),
+    [BC_PRIM_VESICA_SEGMENT] = DESC("vesica_segment", p_vesica_segment, true),
+    [BC_PRIM_EXTRUDE_CIRCLE] = DESC("extrude_circle", p_extrude_circle, true),
+    [BC_PRIM_EXTRUDE_RECT] = DESC("extrude_rect", p_extrude_rect, true),
+    [BC_PRIM_EXTRUDE_POLYGON] =
+        DESC("extrude_polygon", p_extrude_polygon, true),
+    [BC_PRIM_EXTRUDE_STAR] = DESC("extrude_star", p_extrude_star, true),
+    [BC_PRIM_REVOLVE_CIRCLE] = DESC("revolve_circle", p_revolve_circle, true),
+    [BC_PRIM_REVOLVE_RECT] = DESC("revolve_rect", p_revolve_rect, true),
+    [BC_PRIM_REVOLVE_POLYGON] =
+        DESC("revolve_polygon", p_revolve_polygon, true),
+    [BC_PRIM_REVOLVE_STAR] = DESC("revolve_star", p_revolve_star, true),
 };
 
 #undef DESC
@@ -295,7 +294,7 @@ void bc_prim_data_init(struct bc_prim_data *p, enum bc_prim kind)
 
 /* Writes "name" or "name[i]" for messages about one component. */
 static const char *comp_name(char *buf, size_t cap, const char *name,
-			     uint32_t count, uint32_t i)
+                             uint32_t count, uint32_t i)
 {
 	if (count == 1) {
 		return name;
@@ -311,17 +310,16 @@ static const char *nonfinite_word(float v)
 
 /* Checks one float against the finiteness and magnitude limits. */
 static int check_float(struct bc_errinfo *ei, const char *prim,
-		       const char *what, float v)
+                       const char *what, float v)
 {
 	if (!isfinite(v)) {
 		return bc_errinfo_set(ei, BC_ENONFINITE, "%s: %s is %s", prim,
-				      what, nonfinite_word(v));
+		                      what, nonfinite_word(v));
 	}
 	if (fabsf(v) > BC_PARAM_MAX_ABS) {
-		return bc_errinfo_set(ei, BC_ERANGE,
-				      "%s: %s %g exceeds the limit %g", prim,
-				      what, (double)v,
-				      (double)BC_PARAM_MAX_ABS);
+		return bc_errinfo_set(
+		    ei, BC_ERANGE, "%s: %s %g exceeds the limit %g", prim, what,
+		    (double)v, (double)BC_PARAM_MAX_ABS);
 	}
 	return 0;
 }
@@ -334,66 +332,67 @@ static float min3(const float *v)
 
 /* Rules that tie several parameters of one kind together. */
 static int check_shape(const struct bc_prim_data *p, const char *name,
-		       struct bc_errinfo *ei)
+                       struct bc_errinfo *ei)
 {
 	const float *v = p->params;
 	switch (p->kind) {
 	case BC_PRIM_BOX:
 		if (v[3] > min3(v)) {
 			return bc_errinfo_set(
-				ei, BC_ERANGE,
-				"%s: round %g exceeds the smallest half extent %g",
-				name, (double)v[3], (double)min3(v));
+			    ei, BC_ERANGE,
+			    "%s: round %g exceeds the smallest half extent %g",
+			    name, (double)v[3], (double)min3(v));
 		}
 		break;
 	case BC_PRIM_BOX_FRAME:
 		if (v[3] > min3(v)) {
 			return bc_errinfo_set(
-				ei, BC_ERANGE,
-				"%s: thickness %g exceeds the smallest half "
-				"extent %g",
-				name, (double)v[3], (double)min3(v));
+			    ei, BC_ERANGE,
+			    "%s: thickness %g exceeds the smallest half "
+			    "extent %g",
+			    name, (double)v[3], (double)min3(v));
 		}
 		break;
 	case BC_PRIM_CONE:
 		if (v[1] == 0.0f && v[2] == 0.0f) {
-			return bc_errinfo_set(ei, BC_ERANGE,
-					      "%s: radius_bottom and radius_top "
-					      "are both 0 (a cone needs one)",
-					      name);
+			return bc_errinfo_set(
+			    ei, BC_ERANGE,
+			    "%s: radius_bottom and radius_top "
+			    "are both 0 (a cone needs one)",
+			    name);
 		}
 		break;
 	case BC_PRIM_ROUND_CONE:
 		if (v[6] == 0.0f && v[7] == 0.0f) {
 			return bc_errinfo_set(ei, BC_ERANGE,
-					      "%s: radius_a and radius_b are "
-					      "both 0 (a round cone needs one)",
-					      name);
+			                      "%s: radius_a and radius_b are "
+			                      "both 0 (a round cone needs one)",
+			                      name);
 		}
 		break;
 	case BC_PRIM_CAPPED_TORUS:
 		if (!(v[2] > 0.0f && v[2] <= 180.0f)) {
 			return bc_errinfo_set(ei, BC_ERANGE,
-					      "%s: angle_deg %g is outside "
-					      "(0, 180]",
-					      name, (double)v[2]);
+			                      "%s: angle_deg %g is outside "
+			                      "(0, 180]",
+			                      name, (double)v[2]);
 		}
 		break;
 	case BC_PRIM_SOLID_ANGLE:
 		if (!(v[1] > 0.0f && v[1] < 180.0f)) {
 			return bc_errinfo_set(ei, BC_ERANGE,
-					      "%s: angle_deg %g is outside "
-					      "(0, 180)",
-					      name, (double)v[1]);
+			                      "%s: angle_deg %g is outside "
+			                      "(0, 180)",
+			                      name, (double)v[1]);
 		}
 		break;
 	case BC_PRIM_CUT_SPHERE:
 	case BC_PRIM_CUT_HOLLOW_SPHERE:
 		if (!(fabsf(v[1]) < v[0])) {
 			return bc_errinfo_set(ei, BC_ERANGE,
-					      "%s: cut_height %g is outside "
-					      "(-radius, radius)",
-					      name, (double)v[1]);
+			                      "%s: cut_height %g is outside "
+			                      "(-radius, radius)",
+			                      name, (double)v[1]);
 		}
 		break;
 	case BC_PRIM_DEATH_STAR:
@@ -401,18 +400,18 @@ static int check_shape(const struct bc_prim_data *p, const char *name,
 		 * a plain ball, empty, or a ball with a hidden cavity. */
 		if (!(v[2] > fabsf(v[0] - v[1]) && v[2] < v[0] + v[1])) {
 			return bc_errinfo_set(ei, BC_ERANGE,
-					      "%s: d %g must lie between |ra - "
-					      "rb| and ra + rb (the spheres "
-					      "must intersect)",
-					      name, (double)v[2]);
+			                      "%s: d %g must lie between |ra - "
+			                      "rb| and ra + rb (the spheres "
+			                      "must intersect)",
+			                      name, (double)v[2]);
 		}
 		break;
 	case BC_PRIM_ROUNDED_CYLINDER:
 		if (v[1] > v[0] || v[1] > v[2]) {
 			return bc_errinfo_set(ei, BC_ERANGE,
-					      "%s: round %g exceeds the radius "
-					      "or the half height",
-					      name, (double)v[1]);
+			                      "%s: round %g exceeds the radius "
+			                      "or the half height",
+			                      name, (double)v[1]);
 		}
 		break;
 	case BC_PRIM_CAPPED_CYLINDER:
@@ -425,23 +424,24 @@ static int check_shape(const struct bc_prim_data *p, const char *name,
 		}
 		if (!(l2 >= (double)PRIM_MIN_SIZE * PRIM_MIN_SIZE)) {
 			return bc_errinfo_set(ei, BC_ERANGE,
-					      "%s: a and b coincide (the axis "
-					      "needs a length)",
-					      name);
+			                      "%s: a and b coincide (the axis "
+			                      "needs a length)",
+			                      name);
 		}
 		if (p->kind == BC_PRIM_CAPPED_CONE && v[6] == 0.0f &&
 		    v[7] == 0.0f) {
 			return bc_errinfo_set(ei, BC_ERANGE,
-					      "%s: ra and rb are both 0 (a "
-					      "cone needs one)",
-					      name);
+			                      "%s: ra and rb are both 0 (a "
+			                      "cone needs one)",
+			                      name);
 		}
 		if (p->kind == BC_PRIM_VESICA_SEGMENT &&
 		    !((double)v[6] <= 0.5 * sqrt(l2))) {
-			return bc_errinfo_set(ei, BC_ERANGE,
-					      "%s: w %g exceeds half the length "
-					      "of a-b (%g)",
-					      name, (double)v[6], 0.5 * sqrt(l2));
+			return bc_errinfo_set(
+			    ei, BC_ERANGE,
+			    "%s: w %g exceeds half the length "
+			    "of a-b (%g)",
+			    name, (double)v[6], 0.5 * sqrt(l2));
 		}
 		break;
 	}
@@ -450,22 +450,22 @@ static int check_shape(const struct bc_prim_data *p, const char *name,
 	case BC_PRIM_EXTRUDE_STAR:
 	case BC_PRIM_REVOLVE_STAR: {
 		bool star = p->kind == BC_PRIM_EXTRUDE_STAR ||
-			    p->kind == BC_PRIM_REVOLVE_STAR;
+		            p->kind == BC_PRIM_REVOLVE_STAR;
 		float lo = star ? 2.0f : 3.0f;
 		if (!(v[1] >= lo && v[1] <= PRIM_MAX_SIDES &&
 		      v[1] == floorf(v[1]))) {
 			return bc_errinfo_set(ei, BC_ERANGE,
-					      "%s: %s %g is not a whole number "
-					      "in [%g, %g]",
-					      name, star ? "points" : "sides",
-					      (double)v[1], (double)lo,
-					      (double)PRIM_MAX_SIDES);
+			                      "%s: %s %g is not a whole number "
+			                      "in [%g, %g]",
+			                      name, star ? "points" : "sides",
+			                      (double)v[1], (double)lo,
+			                      (double)PRIM_MAX_SIDES);
 		}
 		if (star && !(v[2] < 1.0f)) {
 			return bc_errinfo_set(ei, BC_ERANGE,
-					      "%s: inner_ratio %g is outside "
-					      "(0, 1)",
-					      name, (double)v[2]);
+			                      "%s: inner_ratio %g is outside "
+			                      "(0, 1)",
+			                      name, (double)v[2]);
 		}
 		break;
 	}
@@ -484,7 +484,7 @@ int bc_prim_validate(struct bc_prim_data *p, struct bc_errinfo *ei)
 
 	if (!info) {
 		return bc_errinfo_set(ei, BC_EENUM, "unknown primitive kind %d",
-				      (int)p->kind);
+		                      (int)p->kind);
 	}
 	for (uint32_t i = 0; i < info->nparams; i++) {
 		const struct bc_param_desc *d = &info->params[i];
@@ -500,29 +500,28 @@ int bc_prim_validate(struct bc_prim_data *p, struct bc_errinfo *ei)
 			    (!nonneg || v >= 0.0f)) {
 				continue;
 			}
-			what = comp_name(buf, sizeof(buf), d->name, d->count, c);
+			what =
+			    comp_name(buf, sizeof(buf), d->name, d->count, c);
 			if ((rc = check_float(ei, info->name, what, v))) {
 				return rc;
 			}
 			if ((d->flags & BC_PARAM_POSITIVE) && !(v > 0.0f)) {
-				return bc_errinfo_set(ei, BC_ERANGE,
-						      "%s: %s %g must be > 0",
-						      info->name, what,
-						      (double)v);
+				return bc_errinfo_set(
+				    ei, BC_ERANGE, "%s: %s %g must be > 0",
+				    info->name, what, (double)v);
 			}
 			if ((d->flags & BC_PARAM_POSITIVE) &&
 			    v < PRIM_MIN_SIZE) {
 				return bc_errinfo_set(
-					ei, BC_ERANGE,
-					"%s: %s %g is below the smallest size %g",
-					info->name, what, (double)v,
-					(double)PRIM_MIN_SIZE);
+				    ei, BC_ERANGE,
+				    "%s: %s %g is below the smallest size %g",
+				    info->name, what, (double)v,
+				    (double)PRIM_MIN_SIZE);
 			}
 			if ((d->flags & BC_PARAM_NONNEG) && !(v >= 0.0f)) {
-				return bc_errinfo_set(ei, BC_ERANGE,
-						      "%s: %s %g must be >= 0",
-						      info->name, what,
-						      (double)v);
+				return bc_errinfo_set(
+				    ei, BC_ERANGE, "%s: %s %g must be >= 0",
+				    info->name, what, (double)v);
 			}
 		}
 	}
@@ -542,9 +541,9 @@ int bc_prim_validate(struct bc_prim_data *p, struct bc_errinfo *ei)
 	}
 	for (int i = 0; i < 4; i++) {
 		if (!isfinite(p->rotate[i])) {
-			return bc_errinfo_set(ei, BC_ENONFINITE,
-					      "%s: rotate[%d] is %s", info->name,
-					      i, nonfinite_word(p->rotate[i]));
+			return bc_errinfo_set(
+			    ei, BC_ENONFINITE, "%s: rotate[%d] is %s",
+			    info->name, i, nonfinite_word(p->rotate[i]));
 		}
 		n2 += (double)p->rotate[i] * (double)p->rotate[i];
 	}
@@ -553,9 +552,9 @@ int bc_prim_validate(struct bc_prim_data *p, struct bc_errinfo *ei)
 	 * further from unit length is a mistake, not rounding. */
 	if (!(fabs(n - 1.0) <= 1e-3)) {
 		return bc_errinfo_set(ei, BC_ERANGE,
-				      "%s: rotate has norm %g, not within 1e-3 "
-				      "of 1 (a unit quaternion)",
-				      info->name, n);
+		                      "%s: rotate has norm %g, not within 1e-3 "
+		                      "of 1 (a unit quaternion)",
+		                      info->name, n);
 	}
 	/* Renormalize only what is not unit to float precision already, so
 	 * that validating a validated quaternion changes no bit (scenes
@@ -570,14 +569,14 @@ int bc_prim_validate(struct bc_prim_data *p, struct bc_errinfo *ei)
 			float c = p->color[i];
 			if (!isfinite(c)) {
 				return bc_errinfo_set(
-					ei, BC_ENONFINITE, "%s: color[%d] is %s",
-					info->name, i, nonfinite_word(c));
+				    ei, BC_ENONFINITE, "%s: color[%d] is %s",
+				    info->name, i, nonfinite_word(c));
 			}
 			if (c < 0.0f || c > 1.0f) {
 				return bc_errinfo_set(ei, BC_ERANGE,
-						      "%s: color[%d] %g is "
-						      "outside [0, 1]",
-						      info->name, i, (double)c);
+				                      "%s: color[%d] %g is "
+				                      "outside [0, 1]",
+				                      info->name, i, (double)c);
 			}
 		}
 	}
@@ -659,8 +658,8 @@ void bc_prim_pack(const struct bc_prim_data *p, float packed[BC_PRIM_PACKED])
 		} else {
 			for (int i = 0; i < 3; i++) {
 				packed[i] = v[i];
-				packed[3 + i] = (float)((double)v[3 + i] -
-							(double)v[i]);
+				packed[3 + i] =
+				    (float)((double)v[3 + i] - (double)v[i]);
 			}
 			packed[6] = v[6];
 			packed[7] = v[7];
@@ -761,10 +760,10 @@ void bc_prim_pack(const struct bc_prim_data *p, float packed[BC_PRIM_PACKED])
 	case BC_PRIM_VESICA_SEGMENT: {
 		/* Midpoint, then the half axis (b - a) / 2. */
 		for (int i = 0; i < 3; i++) {
-			packed[i] = (float)(0.5 * ((double)v[i] +
-						   (double)v[3 + i]));
-			packed[3 + i] = (float)(0.5 * ((double)v[3 + i] -
-						       (double)v[i]));
+			packed[i] =
+			    (float)(0.5 * ((double)v[i] + (double)v[3 + i]));
+			packed[3 + i] =
+			    (float)(0.5 * ((double)v[3 + i] - (double)v[i]));
 		}
 		packed[6] = v[6];
 		packed[7] = v[7]; /* the cone's rb */
@@ -866,7 +865,7 @@ static inline float extrude(float d2, float dz)
 /* Squared distance from (x, y) to the segment from (ax, ay) along (ex, ey),
  * with inv_e2 = 1 / |e|^2. */
 static inline float seg2(float x, float y, float ax, float ay, float ex,
-			 float ey, float inv_e2)
+                         float ey, float inv_e2)
 {
 	float wx = x - ax, wy = y - ay;
 	float t = clampf((wx * ex + wy * ey) * inv_e2, 0.0f, 1.0f);
@@ -916,7 +915,8 @@ static inline float sdf_round_cone(const float *k, float x, float y, float z)
 	float yl = px * ex + py * ey + pz * ez;
 	/* |pa x ba| rather than sqrt(p2 l2 - yl^2), which cancels to noise
 	 * of sqrt(float eps) near the axis. */
-	float xl = len3f(py * ez - pz * ey, pz * ex - px * ez, px * ey - py * ex);
+	float xl =
+	    len3f(py * ez - pz * ey, pz * ex - px * ez, px * ey - py * ex);
 	float rr = ra - rb;
 	float c = sqrtf(mxf(l2 - rr * rr, 0.0f));
 	float s = yl * c - xl * rr;
@@ -968,9 +968,9 @@ static inline float sdf_ellipsoid(const float *k, float x, float y, float z)
 				fv += u * u;
 				dv += u * u * inv;
 			}
-			/* Newton on F^(-1/2) - 1: dt = (sqrt F - 1) F / (-F'/2).
-			 * The root is > 0, so t >= 0 loses nothing and keeps
-			 * every r_i^2 + t positive. */
+			/* Newton on F^(-1/2) - 1: dt = (sqrt F - 1) F /
+			 * (-F'/2). The root is > 0, so t >= 0 loses nothing and
+			 * keeps every r_i^2 + t positive. */
 			t = mxf(t + (sqrtf(fv) - 1.0f) * fv / dv, 0.0f);
 		}
 		for (int i = 0; i < 3; i++) {
@@ -1157,12 +1157,12 @@ static inline float sdf_cut_sphere(const float *k, float x, float y, float z)
 
 /* The spherical shell's arc below the rim, thickened by t on both sides. */
 static inline float sdf_cut_hollow_sphere(const float *k, float x, float y,
-					  float z)
+                                          float z)
 {
 	float r = k[0], h = k[1], w = k[2];
 	float q = len2f(x, z);
-	float arc = w * y <= h * q ? fabsf(len2f(q, y) - r)
-				   : len2f(q - w, y - h);
+	float arc =
+	    w * y <= h * q ? fabsf(len2f(q, y) - r) : len2f(q - w, y - h);
 	return arc - k[3];
 }
 
@@ -1188,7 +1188,7 @@ static inline float sdf_death_star(const float *k, float x, float y, float z)
 /* Axial coordinate and distance from the axis of a point about the segment
  * with midpoint k[0..2] and half axis k[3..5]; *hl gets the half length. */
 static inline void seg_frame(const float *k, float x, float y, float z,
-			     float *along, float *radial, float *hl)
+                             float *along, float *radial, float *hl)
 {
 	float px = x - k[0], py = y - k[1], pz = z - k[2];
 	float l = len3f(k[3], k[4], k[5]), inv = 1.0f / l;
@@ -1270,7 +1270,7 @@ static inline float star2(const float *k, float x, float y)
 
 /* The 2D profile of an extruded or revolved kind at (x, y). */
 static inline float profile2(enum bc_prim kind, const float *k, float x,
-			     float y)
+                             float y)
 {
 	switch (kind) {
 	case BC_PRIM_EXTRUDE_CIRCLE:
@@ -1293,8 +1293,8 @@ static inline float profile2(enum bc_prim kind, const float *k, float x,
 /* Revolution about y: the profile meets the meridian plane on both sides
  * of the axis, so a profile wider than its offset is the union of the two
  * (exact outside, a bound inside where they overlap). */
-static inline float revolve(enum bc_prim kind, const float *k, float x,
-			    float y, float z)
+static inline float revolve(enum bc_prim kind, const float *k, float x, float y,
+                            float z)
 {
 	float q = len2f(x, z);
 	float d = profile2(kind, k, q - k[7], y);
@@ -1302,7 +1302,7 @@ static inline float revolve(enum bc_prim kind, const float *k, float x,
 }
 
 static float sdf_new(enum bc_prim kind, const float *k, float x, float y,
-		     float z)
+                     float z)
 {
 	float t, q, hl;
 	switch (kind) {
@@ -1342,19 +1342,19 @@ static float sdf_new(enum bc_prim kind, const float *k, float x, float y,
 }
 
 float bc_prim_sdf(enum bc_prim kind, const float k[BC_PRIM_PACKED], float x,
-		  float y, float z)
+                  float y, float z)
 {
 	switch (kind) {
 	case BC_PRIM_SPHERE:
 		return len3f(x, y, z) - k[0];
 	case BC_PRIM_BOX:
 		return box_d(fabsf(x) - k[0], fabsf(y) - k[1],
-			     fabsf(z) - k[2]) -
+		             fabsf(z) - k[2]) -
 		       k[3];
 	case BC_PRIM_CAPSULE: {
 		float px = x - k[0], py = y - k[1], pz = z - k[2];
 		float t = clampf((px * k[3] + py * k[4] + pz * k[5]) * k[7],
-				 0.0f, 1.0f);
+		                 0.0f, 1.0f);
 		return len3f(px - k[3] * t, py - k[4] * t, pz - k[5] * t) -
 		       k[6];
 	}
@@ -1394,7 +1394,7 @@ float bc_prim_sdf(enum bc_prim kind, const float k[BC_PRIM_PACKED], float x,
 /* ---- Bounding shapes ---------------------------------------------------- */
 
 static void bound_box(struct bc_abv *out, float cx, float cy, float cz,
-		      float hx, float hy, float hz)
+                      float hx, float hy, float hz)
 {
 	out->shape = BC_ABV_BOX;
 	out->center[0] = cx;
@@ -1416,7 +1416,7 @@ static void bound_sphere(struct bc_abv *out, float cy, float r)
 }
 
 static void bound_capsule(struct bc_abv *out, const float *a, const float *b,
-			  float r)
+                          float r)
 {
 	out->shape = BC_ABV_CAPSULE;
 	memcpy(out->center, a, 3 * sizeof(float));
@@ -1437,7 +1437,7 @@ static void bound_solid_angle(struct bc_abv *out, float ra, float deg)
 		bound_sphere(out, (float)c, (float)c);
 	} else if (deg <= 90.0f) {
 		bound_sphere(out, (float)((double)ra * cos(t)),
-			     (float)((double)ra * sin(t)));
+		             (float)((double)ra * sin(t)));
 	} else {
 		bound_sphere(out, 0.0f, ra);
 	}
@@ -1449,7 +1449,8 @@ static void bound_solid_angle(struct bc_abv *out, float ra, float deg)
 static void profile_extent(enum bc_prim kind, const float *v, double e[4])
 {
 	int n, corners;
-	bool star = kind == BC_PRIM_EXTRUDE_STAR || kind == BC_PRIM_REVOLVE_STAR;
+	bool star =
+	    kind == BC_PRIM_EXTRUDE_STAR || kind == BC_PRIM_REVOLVE_STAR;
 	switch (kind) {
 	case BC_PRIM_EXTRUDE_CIRCLE:
 	case BC_PRIM_REVOLVE_CIRCLE:
@@ -1523,7 +1524,7 @@ void bc_prim_bound(const struct bc_prim_data *p, struct bc_abv *out)
 	}
 	case BC_PRIM_HEX_PRISM:
 		bound_box(out, 0.0f, 0.0f, 0.0f,
-			  (float)(2.0 * (double)v[0] / SQRT3), v[0], v[1]);
+		          (float)(2.0 * (double)v[0] / SQRT3), v[0], v[1]);
 		break;
 	case BC_PRIM_CAPPED_TORUS: {
 		/* The arc spans x in [-R sin t, R sin t] (all of [-R, R] past
@@ -1532,7 +1533,7 @@ void bc_prim_bound(const struct bc_prim_data *p, struct bc_abv *out)
 		double hx = (v[2] >= 90.0f ? big : big * sin(t)) + r;
 		double z0 = big * cos(t) - r, z1 = big + r;
 		bound_box(out, 0.0f, 0.0f, (float)(0.5 * (z0 + z1)), (float)hx,
-			  v[1], (float)(0.5 * (z1 - z0)));
+		          v[1], (float)(0.5 * (z1 - z0)));
 		break;
 	}
 	case BC_PRIM_LINK: {
@@ -1545,22 +1546,22 @@ void bc_prim_bound(const struct bc_prim_data *p, struct bc_abv *out)
 		break;
 	case BC_PRIM_PYRAMID:
 		bound_box(out, 0.0f, 0.5f * v[1], 0.0f, v[0], 0.5f * v[1],
-			  v[0]);
+		          v[0]);
 		break;
 	case BC_PRIM_TRI_PRISM:
 		bound_box(out, 0.0f, 0.5f * v[0], 0.0f,
-			  (float)(SQRT3 * (double)v[0]), 1.5f * v[0], v[1]);
+		          (float)(SQRT3 * (double)v[0]), 1.5f * v[0], v[1]);
 		break;
 	case BC_PRIM_CUT_SPHERE:
 	case BC_PRIM_CUT_HOLLOW_SPHERE: {
 		/* Below the equator the cut is the widest part. */
 		double r = v[0], h = v[1];
 		double t = p->kind == BC_PRIM_CUT_HOLLOW_SPHERE ? v[2] : 0.0;
-		double wide = (h >= 0.0 ? r : sqrt(fmax(r * r - h * h, 0.0))) +
-			      t;
+		double wide =
+		    (h >= 0.0 ? r : sqrt(fmax(r * r - h * h, 0.0))) + t;
 		double y0 = -r - t, y1 = h + t;
 		bound_box(out, 0.0f, (float)(0.5 * (y0 + y1)), 0.0f,
-			  (float)wide, (float)(0.5 * (y1 - y0)), (float)wide);
+		          (float)wide, (float)(0.5 * (y1 - y0)), (float)wide);
 		break;
 	}
 	case BC_PRIM_DEATH_STAR:
@@ -1578,7 +1579,7 @@ void bc_prim_bound(const struct bc_prim_data *p, struct bc_abv *out)
 		break;
 	case BC_PRIM_RHOMBUS:
 		bound_box(out, 0.0f, 0.0f, 0.0f, v[0] + v[3], v[2],
-			  v[1] + v[3]);
+		          v[1] + v[3]);
 		break;
 	case BC_PRIM_EXTRUDE_CIRCLE:
 	case BC_PRIM_EXTRUDE_RECT:
@@ -1588,9 +1589,9 @@ void bc_prim_bound(const struct bc_prim_data *p, struct bc_abv *out)
 		float depth = v[bc_prim_info(p->kind)->nparams - 1];
 		profile_extent(p->kind, v, e);
 		bound_box(out, (float)(0.5 * (e[0] + e[1])),
-			  (float)(0.5 * (e[2] + e[3])), 0.0f,
-			  (float)(0.5 * (e[1] - e[0])),
-			  (float)(0.5 * (e[3] - e[2])), depth);
+		          (float)(0.5 * (e[2] + e[3])), 0.0f,
+		          (float)(0.5 * (e[1] - e[0])),
+		          (float)(0.5 * (e[3] - e[2])), depth);
 		break;
 	}
 	case BC_PRIM_REVOLVE_CIRCLE:
@@ -1604,8 +1605,8 @@ void bc_prim_bound(const struct bc_prim_data *p, struct bc_abv *out)
 		profile_extent(p->kind, v, e);
 		reach = fmax(fabs(off + e[1]), fabs(off + e[0]));
 		bound_box(out, 0.0f, (float)(0.5 * (e[2] + e[3])), 0.0f,
-			  (float)reach, (float)(0.5 * (e[3] - e[2])),
-			  (float)reach);
+		          (float)reach, (float)(0.5 * (e[3] - e[2])),
+		          (float)reach);
 		break;
 	}
 	default:

@@ -31,7 +31,8 @@ static uint32_t map_find(const struct bc__idmap *m, uint32_t id)
 	if (!m->cap || id == 0) {
 		return BC_NONE;
 	}
-	for (uint32_t i = hash_id(id) & (m->cap - 1);; i = (i + 1) & (m->cap - 1)) {
+	for (uint32_t i = hash_id(id) & (m->cap - 1);;
+	     i = (i + 1) & (m->cap - 1)) {
 		if (m->keys[i] == id) {
 			return m->vals[i];
 		}
@@ -104,9 +105,10 @@ static void map_del(struct bc__idmap *m, uint32_t id)
 	m->count--;
 	for (j = (i + 1) & mask; m->keys[j] != 0; j = (j + 1) & mask) {
 		uint32_t home = hash_id(m->keys[j]) & mask;
-		/* Move j back to i unless its home lies cyclically in (i, j]. */
+		/* Move j back to i unless its home lies cyclically in (i, j].
+		 */
 		bool stays = (i <= j) ? (i < home && home <= j)
-				      : (i < home || home <= j);
+		                      : (i < home || home <= j);
 		if (!stays) {
 			m->keys[i] = m->keys[j];
 			m->vals[i] = m->vals[j];
@@ -223,7 +225,7 @@ void bc_tree_destroy(struct bc_tree *t)
 /* ---- model helpers ------------------------------------------------------ */
 
 static void link_child(struct bc_tree *t, uint32_t parent, uint32_t before,
-		       uint32_t child)
+                       uint32_t child)
 {
 	struct bc__node *p = &t->pool[parent], *c = &t->pool[child];
 	c->parent = parent;
@@ -445,9 +447,9 @@ static uint32_t domain_chain(struct bc_tree *t)
 		if (p != BC_NONE) {
 			c = t->pool[p].dchain +
 			    (bc__node_unary(&t->pool[p]) &&
-					     bc_op_is_domain(t->pool[p].u.op.kind)
-				     ? 1u
-				     : 0u);
+			             bc_op_is_domain(t->pool[p].u.op.kind)
+			         ? 1u
+			         : 0u);
 		}
 		t->pool[n].dchain = c;
 		if (c > most) {
@@ -512,26 +514,26 @@ int bc_tree_begin(struct bc_tree *t)
 
 /* Creates a node with id (0 = fresh) under the innermost open operator. */
 static int add_node(struct bc_tree *t, uint32_t id, bool is_op,
-		    struct bc_errinfo *ei, uint32_t *out)
+                    struct bc_errinfo *ei, uint32_t *out)
 {
 	uint32_t n;
 	int rc;
 	if (!t->building) {
 		return bc_errinfo_set(ei, BC_ESTATE,
-				      "tree: bc_tree_begin() not called");
+		                      "tree: bc_tree_begin() not called");
 	}
 	if (t->nopen == 0 && t->root != BC_NONE) {
 		return bc_errinfo_set(ei, BC_EINVAL,
-				      "tree: a scene has exactly one root");
+		                      "tree: a scene has exactly one root");
 	}
 	if (t->nopen && bc__node_unary(&t->pool[t->open[t->nopen - 1]]) &&
 	    t->pool[t->open[t->nopen - 1]].nchildren >= 1) {
 		uint32_t u = t->open[t->nopen - 1];
 		return bc_errinfo_set(ei, BC_EINVAL,
-				      "tree: %s node %u takes exactly one "
-				      "child",
-				      bc_op_name(t->pool[u].u.op.kind),
-				      t->pool[u].id);
+		                      "tree: %s node %u takes exactly one "
+		                      "child",
+		                      bc_op_name(t->pool[u].u.op.kind),
+		                      t->pool[u].id);
 	}
 	/* The new node would be number nopen + 1 on its path. */
 	if (t->nopen + 1u > BC_TREE_MAX_DEPTH) {
@@ -551,13 +553,12 @@ static int add_node(struct bc_tree *t, uint32_t id, bool is_op,
 	}
 	if (t->nnodes >= BC_TREE_MAX_NODES ||
 	    (!is_op && 2u * t->nprims + 1u > BC_TREE_MAX_NODES)) {
-		return bc_errinfo_set(ei, BC_ELIMIT,
-				      "tree: more than %u nodes",
-				      BC_TREE_MAX_NODES);
+		return bc_errinfo_set(ei, BC_ELIMIT, "tree: more than %u nodes",
+		                      BC_TREE_MAX_NODES);
 	}
 	if (id != 0 && map_find(&t->ids, id) != BC_NONE) {
 		return bc_errinfo_set(ei, BC_EDUPID, "tree: duplicate id %u",
-				      id);
+		                      id);
 	}
 	if ((rc = pool_reserve(t, 1)) || (rc = map_reserve(&t->ids, 1))) {
 		return bc_errinfo_set(ei, rc, "tree: %s", bc_strerror(rc));
@@ -578,7 +579,7 @@ static int add_node(struct bc_tree *t, uint32_t id, bool is_op,
 }
 
 int bc_tree_push_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
-		    struct bc_errinfo *ei)
+                    struct bc_errinfo *ei)
 {
 	uint32_t n;
 	struct bc_op_data o = *op;
@@ -590,7 +591,8 @@ int bc_tree_push_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
 		o.blend = 0.0f;
 		o.range = 0.0f;
 	}
-	if ((rc = bc_op_validate(&o, ei)) || (rc = add_node(t, id, true, ei, &n))) {
+	if ((rc = bc_op_validate(&o, ei)) ||
+	    (rc = add_node(t, id, true, ei, &n))) {
 		return rc;
 	}
 	t->pool[n].u.op = o;
@@ -600,7 +602,7 @@ int bc_tree_push_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
 }
 
 int bc_tree_push_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
-		       struct bc_errinfo *ei)
+                       struct bc_errinfo *ei)
 {
 	uint32_t n;
 	int rc;
@@ -626,25 +628,25 @@ int bc_tree_pop_op(struct bc_tree *t, struct bc_errinfo *ei)
 	if (bc__node_unary(&t->pool[n])) {
 		if (t->pool[n].nchildren != 1) {
 			return bc_errinfo_set(ei, BC_EINVAL,
-					      "tree: %s node %u needs exactly "
-					      "one child",
-					      bc_op_name(t->pool[n].u.op.kind),
-					      t->pool[n].id);
+			                      "tree: %s node %u needs exactly "
+			                      "one child",
+			                      bc_op_name(t->pool[n].u.op.kind),
+			                      t->pool[n].id);
 		}
 	} else if (t->pool[n].nchildren < 2) {
 		return bc_errinfo_set(ei, BC_EINVAL,
-				      "tree: operator %u (%s) needs two or "
-				      "more children, has %u",
-				      t->pool[n].id,
-				      bc_op_name(t->pool[n].u.op.kind),
-				      t->pool[n].nchildren);
+		                      "tree: operator %u (%s) needs two or "
+		                      "more children, has %u",
+		                      t->pool[n].id,
+		                      bc_op_name(t->pool[n].u.op.kind),
+		                      t->pool[n].nchildren);
 	}
 	t->nopen--;
 	return 0;
 }
 
 int bc_tree_put_prim(struct bc_tree *t, uint32_t id,
-		     const struct bc_prim_data *p, struct bc_errinfo *ei)
+                     const struct bc_prim_data *p, struct bc_errinfo *ei)
 {
 	struct bc_prim_data copy = *p;
 	uint32_t n;
@@ -664,12 +666,12 @@ int bc_tree_end(struct bc_tree *t, struct bc_errinfo *ei)
 	int rc;
 	if (!t->building) {
 		return bc_errinfo_set(ei, BC_ESTATE,
-				      "tree: bc_tree_begin() not called");
+		                      "tree: bc_tree_begin() not called");
 	}
 	if (t->nopen) {
 		return bc_errinfo_set(ei, BC_EINVAL,
-				      "tree: operator %u not closed",
-				      t->pool[t->open[t->nopen - 1]].id);
+		                      "tree: operator %u not closed",
+		                      t->pool[t->open[t->nopen - 1]].id);
 	}
 	if (t->root == BC_NONE) {
 		return bc_errinfo_set(ei, BC_EINVAL, "tree: no root node");
@@ -717,8 +719,8 @@ uint32_t bc_tree_root(const struct bc_tree *t)
 	return (t->root == BC_NONE || t->building) ? 0 : t->pool[t->root].id;
 }
 
-bool bc_tree_get(const struct bc_tree *t, uint32_t id, struct bc_prim_data *prim,
-		 struct bc_op_data *op)
+bool bc_tree_get(const struct bc_tree *t, uint32_t id,
+                 struct bc_prim_data *prim, struct bc_op_data *op)
 {
 	uint32_t n = map_find(&t->ids, id);
 	if (prim) {
@@ -803,7 +805,7 @@ static uint32_t live_node(const struct bc_tree *t, uint32_t id)
 }
 
 int bc_tree_set_prim(struct bc_tree *t, uint32_t id,
-		     const struct bc_prim_data *p, struct bc_errinfo *ei)
+                     const struct bc_prim_data *p, struct bc_errinfo *ei)
 {
 	uint32_t n = live_node(t, id);
 	struct bc_prim_data copy = *p;
@@ -813,9 +815,9 @@ int bc_tree_set_prim(struct bc_tree *t, uint32_t id,
 	}
 	if (t->pool[n].is_op || t->pool[n].u.prim.kind != p->kind) {
 		return bc_errinfo_set(ei, BC_EINVAL,
-				      "node %u is not a primitive of that "
-				      "kind: replace it instead",
-				      id);
+		                      "node %u is not a primitive of that "
+		                      "kind: replace it instead",
+		                      id);
 	}
 	if ((rc = bc_prim_validate(&copy, ei))) {
 		return rc;
@@ -823,20 +825,20 @@ int bc_tree_set_prim(struct bc_tree *t, uint32_t id,
 	t->pool[n].u.prim = copy;
 	bc__lin_update_prim(t, &t->pool[n]);
 	dirty_range(&t->dirty.param_lo, &t->dirty.param_hi, t->pool[n].param,
-		    t->pool[n].param + BC_PRIM_RECORD_VEC4);
+	            t->pool[n].param + BC_PRIM_RECORD_VEC4);
 	if (bc__lin_prim_bends(&t->lin, &t->pool[n])) {
 		/* The bounds of its twist and bend ancestors changed. */
 		dirty_range(&t->dirty.param_lo, &t->dirty.param_hi, 0,
-			    t->lin.nparam);
+		            t->lin.nparam);
 	}
 	dirty_range(&t->dirty.prim_lo, &t->dirty.prim_hi, t->pool[n].prim,
-		    t->pool[n].prim + 1);
+	            t->pool[n].prim + 1);
 	t->dirty.edits++;
 	return 0;
 }
 
 int bc_tree_set_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
-		   struct bc_errinfo *ei)
+                   struct bc_errinfo *ei)
 {
 	uint32_t n = live_node(t, id);
 	struct bc_op_data o = *op;
@@ -848,15 +850,15 @@ int bc_tree_set_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
 	}
 	if (!t->pool[n].is_op) {
 		return bc_errinfo_set(ei, BC_EINVAL,
-				      "node %u is a primitive, not an "
-				      "operator",
-				      id);
+		                      "node %u is a primitive, not an "
+		                      "operator",
+		                      id);
 	}
 	if (bc__node_unary(&t->pool[n])) {
 		return bc_errinfo_set(ei, BC_EINVAL,
-				      "node %u is a %s node: set its own "
-				      "parameters",
-				      id, bc_op_name(t->pool[n].u.op.kind));
+		                      "node %u is a %s node: set its own "
+		                      "parameters",
+		                      id, bc_op_name(t->pool[n].u.op.kind));
 	}
 	if (bc_op_is_smooth(o.kind) && o.range == 0.0f) {
 		o.range = bc_op_default_range(o.blend);
@@ -878,16 +880,16 @@ int bc_tree_set_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
 	k_lo = l->prim_of[first_slot];
 	k_hi = k_lo + (t->pool[n].slot - first_slot) / 2 + 1;
 	dirty_range(&t->dirty.slot_lo, &t->dirty.slot_hi, first_slot,
-		    t->pool[n].slot + 1);
+	            t->pool[n].slot + 1);
 	dirty_range(&t->dirty.param_lo, &t->dirty.param_hi, t->pool[n].param,
-		    t->pool[n].param + BC_OP_RECORD_VEC4);
+	            t->pool[n].param + BC_OP_RECORD_VEC4);
 	dirty_range(&t->dirty.prim_lo, &t->dirty.prim_hi, k_lo, k_hi);
 	t->dirty.edits++;
 	return 0;
 }
 
 int bc_tree_set_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
-		      struct bc_errinfo *ei)
+                      struct bc_errinfo *ei)
 {
 	uint32_t n = live_node(t, id);
 	const struct bc_lin *l = &t->lin;
@@ -898,7 +900,7 @@ int bc_tree_set_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
 	}
 	if (!bc__node_unary(&t->pool[n])) {
 		return bc_errinfo_set(ei, BC_EINVAL,
-				      "node %u is not a unary node", id);
+		                      "node %u is not a unary node", id);
 	}
 	if ((rc = bc_unary_validate(u, ei))) {
 		return rc;
@@ -918,7 +920,7 @@ int bc_tree_set_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
 }
 
 bool bc_tree_get_unary(const struct bc_tree *t, uint32_t id,
-		       struct bc_unary *out)
+                       struct bc_unary *out)
 {
 	uint32_t n = map_find(&t->ids, id);
 	memset(out, 0, sizeof(*out));
@@ -960,8 +962,8 @@ static int check_ids(const struct bc_tree *t, const struct bc_tree *sub,
 		if (m != BC_NONE &&
 		    (allowed == BC_NONE || !within(t, m, allowed))) {
 			return bc_errinfo_set(ei, BC_EDUPID,
-					      "id %u is already in the scene",
-					      sn->id);
+			                      "id %u is already in the scene",
+			                      sn->id);
 		}
 	}
 	return 0;
@@ -1023,17 +1025,16 @@ static uint32_t copy_in(struct bc_tree *t, const struct bc_tree *sub,
  * `gone` (statistics of what leaves t) is removed and sub is placed at depth
  * `at_depth`, then reserves every resource. */
 static int prepare_graft(struct bc_tree *t, const struct bc_tree *sub,
-			 uint32_t at_depth, const struct subtree_stats *gone,
-			 struct bc_lin *fresh,
-			 struct bc_errinfo *ei)
+                         uint32_t at_depth, const struct subtree_stats *gone,
+                         struct bc_lin *fresh, struct bc_errinfo *ei)
 {
 	struct subtree_stats st = {0};
 	uint64_t prims, ops;
 	int rc;
 	if (sub->building || sub->root == BC_NONE) {
 		return bc_errinfo_set(ei, BC_EINVAL,
-				      "the subtree to graft is empty or "
-				      "unfinished");
+		                      "the subtree to graft is empty or "
+		                      "unfinished");
 	}
 	subtree_stats(sub, sub->root, &st);
 	/* sub's root lands at depth at_depth + 1, so its deepest node at
@@ -1048,8 +1049,8 @@ static int prepare_graft(struct bc_tree *t, const struct bc_tree *sub,
 	ops = (uint64_t)t->nops - gone->ops + st.ops;
 	if (2u * prims - 1u > BC_TREE_MAX_NODES) {
 		return bc_errinfo_set(ei, BC_ELIMIT,
-				      "the result would exceed %u nodes",
-				      BC_TREE_MAX_NODES);
+		                      "the result would exceed %u nodes",
+		                      BC_TREE_MAX_NODES);
 	}
 	if ((rc = bc__lin_alloc(fresh, (uint32_t)prims, (uint32_t)ops))) {
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
@@ -1063,7 +1064,7 @@ static int prepare_graft(struct bc_tree *t, const struct bc_tree *sub,
 }
 
 int bc_tree_insert(struct bc_tree *t, uint32_t parent_id, uint32_t pos,
-		   const struct bc_tree *sub, struct bc_errinfo *ei)
+                   const struct bc_tree *sub, struct bc_errinfo *ei)
 {
 	uint32_t p = live_node(t, parent_id), before, m;
 	struct subtree_stats none = {0};
@@ -1071,26 +1072,26 @@ int bc_tree_insert(struct bc_tree *t, uint32_t parent_id, uint32_t pos,
 	int rc;
 	if (p == BC_NONE) {
 		return bc_errinfo_set(ei, BC_ENONODE, "no node with id %u",
-				      parent_id);
+		                      parent_id);
 	}
 	if (!t->pool[p].is_op) {
 		return bc_errinfo_set(ei, BC_EINVAL,
-				      "node %u is a primitive: children go "
-				      "under operators",
-				      parent_id);
+		                      "node %u is a primitive: children go "
+		                      "under operators",
+		                      parent_id);
 	}
 	if (bc__node_unary(&t->pool[p])) {
 		return bc_errinfo_set(ei, BC_EINVAL,
-				      "node %u is a %s node with its one "
-				      "child: replace the child instead",
-				      parent_id,
-				      bc_op_name(t->pool[p].u.op.kind));
+		                      "node %u is a %s node with its one "
+		                      "child: replace the child instead",
+		                      parent_id,
+		                      bc_op_name(t->pool[p].u.op.kind));
 	}
 	if (pos > t->pool[p].nchildren) {
 		return bc_errinfo_set(ei, BC_ERANGE,
-				      "position %u beyond the %u children of "
-				      "node %u",
-				      pos, t->pool[p].nchildren, parent_id);
+		                      "position %u beyond the %u children of "
+		                      "node %u",
+		                      pos, t->pool[p].nchildren, parent_id);
 	}
 	if (sub->building || sub->root == BC_NONE) {
 		return bc_errinfo_set(ei, BC_EINVAL, "the subtree is empty");
@@ -1167,9 +1168,8 @@ int bc_tree_remove(struct bc_tree *t, uint32_t id, struct bc_errinfo *ei)
 	p = t->pool[n].parent;
 	collapse = (p != BC_NONE && t->pool[p].nchildren == 2) ? 1 : 0;
 	memset(&fresh, 0, sizeof(fresh));
-	if (p != BC_NONE &&
-	    (rc = bc__lin_alloc(&fresh, t->nprims - st.prims,
-				t->nops - st.ops - collapse))) {
+	if (p != BC_NONE && (rc = bc__lin_alloc(&fresh, t->nprims - st.prims,
+	                                        t->nops - st.ops - collapse))) {
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
 	}
 	cut(t, n);
@@ -1178,7 +1178,7 @@ int bc_tree_remove(struct bc_tree *t, uint32_t id, struct bc_errinfo *ei)
 }
 
 int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
-		    struct bc_errinfo *ei)
+                    struct bc_errinfo *ei)
 {
 	uint32_t n = live_node(t, id), p, after, m;
 	struct subtree_stats gone = {0};
@@ -1188,7 +1188,8 @@ int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
 		return bc_errinfo_set(ei, BC_ENONODE, "no node with id %u", id);
 	}
 	if (sub->building || sub->root == BC_NONE) {
-		return bc_errinfo_set(ei, BC_EINVAL, "the replacement is empty");
+		return bc_errinfo_set(ei, BC_EINVAL,
+		                      "the replacement is empty");
 	}
 	if ((rc = check_ids(t, sub, sub->root, n, ei))) {
 		return rc;
@@ -1196,7 +1197,7 @@ int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
 	subtree_stats(t, n, &gone);
 	p = t->pool[n].parent;
 	if ((rc = prepare_graft(t, sub, p == BC_NONE ? 0 : depth_of(t, p),
-				&gone, &fresh, ei))) {
+	                        &gone, &fresh, ei))) {
 		return rc;
 	}
 	after = t->pool[n].next;
@@ -1231,7 +1232,7 @@ int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
 }
 
 int bc_tree_copy(struct bc_tree *dst, const struct bc_tree *src,
-		 struct bc_errinfo *ei)
+                 struct bc_errinfo *ei)
 {
 	struct subtree_stats none = {0};
 	struct bc_lin fresh;

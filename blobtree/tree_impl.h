@@ -23,11 +23,11 @@ struct bc__node {
 	/* A unary node's parameters (u.op.kind says it is one). */
 	float uparam[BC_UNARY_MAX_PARAMS];
 	/* Set by linearization. */
-	uint32_t slot;  /* the node's top slot */
-	uint32_t param; /* parameter record, vec4 units */
-	uint32_t prim;  /* primitive index (primitives only) */
-	uint32_t need;  /* evaluation stack entries of its subtree */
-	uint32_t unary; /* unary index (unary nodes only) */
+	uint32_t slot;   /* the node's top slot */
+	uint32_t param;  /* parameter record, vec4 units */
+	uint32_t prim;   /* primitive index (primitives only) */
+	uint32_t need;   /* evaluation stack entries of its subtree */
+	uint32_t unary;  /* unary index (unary nodes only) */
 	uint32_t dchain; /* domain nodes above it (check_shape's scratch) */
 };
 
@@ -40,7 +40,7 @@ static inline bool bc__node_unary(const struct bc__node *n)
 struct bc__idmap {
 	uint32_t *keys; /* 0 = empty */
 	uint32_t *vals;
-	uint32_t cap;   /* power of two */
+	uint32_t cap; /* power of two */
 	uint32_t count;
 };
 
@@ -92,6 +92,6 @@ void bc__lin_update_unary(struct bc_tree *t, const struct bc__node *n);
 bool bc__lin_prim_bends(const struct bc_lin *l, const struct bc__node *n);
 /* Transforms a local bounding shape by p's rigid transform and offsets it. */
 void bc__abv_place(const struct bc_prim_data *p, float offset,
-		   struct bc_abv *abv);
+                   struct bc_abv *abv);
 
 #endif

@@ -30,13 +30,13 @@ static uint32_t node_keys(const struct bc_prim_data *p, bool is_op,
 		const struct bc_unary_info *u = bc_unary_info(op);
 		keys[n++] = (struct key){"kind", BC_PROTO_FIELD_OP_KIND, 1};
 		if (op == BC_OP_REPEAT) {
-			keys[n++] = (struct key){"spacing",
-			                         BC_PROTO_FIELD_PARAM0, 3};
-			keys[n++] = (struct key){"count",
-			                         BC_PROTO_FIELD_PARAM0 + 1, 3};
+			keys[n++] =
+			    (struct key){"spacing", BC_PROTO_FIELD_PARAM0, 3};
+			keys[n++] =
+			    (struct key){"count", BC_PROTO_FIELD_PARAM0 + 1, 3};
 		} else {
-			keys[n++] = (struct key){u->param, BC_PROTO_FIELD_PARAM0,
-			                         u->nparams};
+			keys[n++] = (struct key){
+			    u->param, BC_PROTO_FIELD_PARAM0, u->nparams};
 		}
 		return n;
 	}

@@ -36,11 +36,11 @@ struct dec {
 
 /* Smallest encodings of repeated elements, for the count-versus-bytes-left
  * checks (PROTOCOL.md gives the same numbers). */
-#define MEMBER_MIN 7u /* u32 id, u8 role, empty name */
+#define MEMBER_MIN 7u         /* u32 id, u8 role, empty name */
 #define SESSION_ENTRY_MIN 26u /* a 1-byte name and the fixed fields */
-#define OP_MIN 5u     /* REMOVE: u8 kind, u32 node */
-#define FIELD_MIN 6u  /* u8 field, u8 count, one f32 */
-#define RECT_MIN 13u  /* 4 x u16, u32 length, one byte */
+#define OP_MIN 5u             /* REMOVE: u8 kind, u32 node */
+#define FIELD_MIN 6u          /* u8 field, u8 count, one f32 */
+#define RECT_MIN 13u          /* 4 x u16, u32 length, one byte */
 
 /* Records code with "TYPE: reason (payload byte N)" in d->ei. */
 static int fail(struct dec *d, int code, const char *fmt,
@@ -381,7 +381,8 @@ static int dec_sessions(struct dec *d, struct bc_msg_sessions *l)
 	                BC_PROTO_MAX_SESSIONS_LISTED, SESSION_ENTRY_MIN));
 	if (d->store && l->nsessions) {
 		TRY(reserve(d, (void **)&d->store->sessions,
-		            &d->store->sessions_cap, l->nsessions, sizeof(*out)));
+		            &d->store->sessions_cap, l->nsessions,
+		            sizeof(*out)));
 		out = d->store->sessions;
 	}
 	for (unsigned i = 0; i < l->nsessions; i++) {
@@ -759,7 +760,8 @@ static int dec_body(struct dec *d, struct bc_msg *m)
 		TRY(dec_ops(d, &a->nops, &a->ops));
 		a->target_order = 0;
 		a->target_author = (struct bc_proto_str){NULL, 0};
-		if (!(d->m->flags & (BC_PROTO_FLAG_UNDO | BC_PROTO_FLAG_REDO))) {
+		if (!(d->m->flags &
+		      (BC_PROTO_FLAG_UNDO | BC_PROTO_FLAG_REDO))) {
 			return 0;
 		}
 		if ((d->m->flags & BC_PROTO_FLAG_UNDO) &&
@@ -858,8 +860,7 @@ int bc__decode_payload(struct bc_proto_store *store, struct bc_msg *out,
 	TRY(dec_body(&d, out));
 	if (bc_rd_left(&d.c)) {
 		return fail(&d, BC_EPROTO_TRAILING,
-		            "%zu bytes after the last field",
-		            bc_rd_left(&d.c));
+		            "%zu bytes after the last field", bc_rd_left(&d.c));
 	}
 	return 0;
 }

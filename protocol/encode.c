@@ -337,7 +337,8 @@ static void w_body(struct bc__w *w, const struct bc_msg *m)
 		}
 		bc__put_u16(w, l->nsessions);
 		for (unsigned i = 0; i < l->nsessions; i++) {
-			const struct bc_proto_session_entry *s = &l->sessions[i];
+			const struct bc_proto_session_entry *s =
+			    &l->sessions[i];
 			w_str(w, "session.name", s->name, BC_PROTO_MAX_NAME);
 			bc__put_u16(w, s->members);
 			bc__put_u32(w, s->prims);

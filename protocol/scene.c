@@ -293,8 +293,7 @@ int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
 	}
 	if (bc_rd_left(&s.c)) {
 		return sfail(&s, BC_EPROTO_TRAILING,
-		             "%zu bytes after the last node",
-		             bc_rd_left(&s.c));
+		             "%zu bytes after the last node", bc_rd_left(&s.c));
 	}
 	out.nodes = count;
 	if (info) {

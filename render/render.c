@@ -27,10 +27,10 @@ extern const struct bc_backend_ops bc_backend_svo_ops;
 #endif
 
 static const char *const names[BC_BACKEND_COUNT] = {
-	[BC_BACKEND_NAIVE] = "naive",
-	[BC_BACKEND_TILED] = "tiled",
-	[BC_BACKEND_GL] = "gl",
-	[BC_BACKEND_SVO] = "svo",
+    [BC_BACKEND_NAIVE] = "naive",
+    [BC_BACKEND_TILED] = "tiled",
+    [BC_BACKEND_GL] = "gl",
+    [BC_BACKEND_SVO] = "svo",
 };
 
 static const struct bc_backend_ops *backend_ops(enum bc_backend b)
@@ -117,8 +117,7 @@ void bc_frame_finish(struct bc_frame *f)
 /* ---- The front ---------------------------------------------------------- */
 
 int bc_renderer_create(struct bc_renderer **out, enum bc_backend b,
-		       const struct bc_render_opts *opts,
-		       struct bc_errinfo *ei)
+                       const struct bc_render_opts *opts, struct bc_errinfo *ei)
 {
 	const struct bc_backend_ops *ops = backend_ops(b);
 	struct bc_render_opts o = {0};
@@ -126,21 +125,21 @@ int bc_renderer_create(struct bc_renderer **out, enum bc_backend b,
 	*out = NULL;
 	if (!ops) {
 		return bc_errinfo_set(ei, BC_ENOTSUP,
-				      "render: backend '%s' is not built in",
-				      bc_backend_name(b));
+		                      "render: backend '%s' is not built in",
+		                      bc_backend_name(b));
 	}
 	if (opts) {
 		o = *opts;
 	}
 	if ((unsigned)o.debug >= BC_DEBUG_COUNT) {
 		return bc_errinfo_set(ei, BC_EENUM,
-				      "render: debug mode %d out of range",
-				      (int)o.debug);
+		                      "render: debug mode %d out of range",
+		                      (int)o.debug);
 	}
 	if ((unsigned)o.simd >= BC_SIMD_COUNT) {
 		return bc_errinfo_set(ei, BC_EENUM,
-				      "render: simd mode %d out of range",
-				      (int)o.simd);
+		                      "render: simd mode %d out of range",
+		                      (int)o.simd);
 	}
 	if ((rc = ops->create(out, &o, ei))) {
 		*out = NULL;
@@ -169,7 +168,7 @@ enum bc_backend bc_renderer_backend(const struct bc_renderer *r)
 }
 
 int bc_renderer_sync(struct bc_renderer *r, const struct bc_tree *t,
-		     const struct bc_dirty *dirty, struct bc_errinfo *ei)
+                     const struct bc_dirty *dirty, struct bc_errinfo *ei)
 {
 	if (!r || !t) {
 		return bc_errinfo_set(ei, BC_EINVAL, "render: no tree to sync");
@@ -192,7 +191,7 @@ static uint64_t hash_bytes(uint64_t h, const void *p, size_t n)
 }
 
 static uint64_t frame_key(struct bc_renderer *r, const struct bc_camera *cam,
-			  uint32_t w, uint32_t h)
+                          uint32_t w, uint32_t h)
 {
 	uint64_t k = 0xcbf29ce484222325ull, backend = 0;
 	uint32_t dims[3] = {w, h, (uint32_t)r->opts.debug};
@@ -207,11 +206,10 @@ static uint64_t frame_key(struct bc_renderer *r, const struct bc_camera *cam,
 }
 
 int bc_renderer_render_region(struct bc_renderer *r,
-			      const struct bc_camera *cam,
-			      struct bc_frame *out,
-			      const struct bc_render_region *region,
-			      struct bc_render_stats *stats,
-			      struct bc_errinfo *ei)
+                              const struct bc_camera *cam, struct bc_frame *out,
+                              const struct bc_render_region *region,
+                              struct bc_render_stats *stats,
+                              struct bc_errinfo *ei)
 {
 	struct bc_render_stats local;
 	struct bc_render_region whole = {NULL, 0, false};
@@ -227,13 +225,12 @@ int bc_renderer_render_region(struct bc_renderer *r,
 		return bc_errinfo_set(ei, BC_EINVAL, "render: bad frame");
 	}
 	if (region && region->level > BC_RENDER_MAX_LEVEL) {
-		return bc_errinfo_set(ei, BC_ERANGE,
-				      "render: level %u over %u", region->level,
-				      BC_RENDER_MAX_LEVEL);
+		return bc_errinfo_set(ei, BC_ERANGE, "render: level %u over %u",
+		                      region->level, BC_RENDER_MAX_LEVEL);
 	}
 	if (!r->tree) {
 		return bc_errinfo_set(ei, BC_ESTATE,
-				      "render: no tree synced yet");
+		                      "render: no tree synced yet");
 	}
 	if ((rc = bc_camera_validate(cam, ei))) {
 		return rc;
@@ -259,15 +256,15 @@ int bc_renderer_render_region(struct bc_renderer *r,
 }
 
 int bc_renderer_render(struct bc_renderer *r, const struct bc_camera *cam,
-		       struct bc_frame *out, struct bc_render_stats *stats,
-		       struct bc_errinfo *ei)
+                       struct bc_frame *out, struct bc_render_stats *stats,
+                       struct bc_errinfo *ei)
 {
 	return bc_renderer_render_region(r, cam, out, NULL, stats, ei);
 }
 
 void bc_renderer_damage(struct bc_renderer *r, const struct bc_camera *cam,
-			uint32_t width, uint32_t height,
-			const struct bc_abv *abv, uint8_t *tiles)
+                        uint32_t width, uint32_t height,
+                        const struct bc_abv *abv, uint8_t *tiles)
 {
 	size_t n = (size_t)bc_render_tiles_x(width) * bc_render_tiles_y(height);
 	if (!r || !tiles || width == 0 || height == 0) {
@@ -282,9 +279,9 @@ void bc_renderer_damage(struct bc_renderer *r, const struct bc_camera *cam,
 }
 
 int bc_render_once(enum bc_backend b, const struct bc_render_opts *opts,
-		   const struct bc_tree *t, const struct bc_camera *cam,
-		   struct bc_frame *out, struct bc_render_stats *stats,
-		   struct bc_errinfo *ei)
+                   const struct bc_tree *t, const struct bc_camera *cam,
+                   struct bc_frame *out, struct bc_render_stats *stats,
+                   struct bc_errinfo *ei)
 {
 	struct bc_renderer *r = NULL;
 	int rc;

@@ -96,8 +96,8 @@ static void prepare(struct load *l)
 		l->rc = bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
 		return;
 	}
-	if ((l->rc = bc_scene_decode(l->scene.ptr, l->scene.len, l->t,
-	                             &l->cam, &l->has_cam, ei))) {
+	if ((l->rc = bc_scene_decode(l->scene.ptr, l->scene.len, l->t, &l->cam,
+	                             &l->has_cam, ei))) {
 		return;
 	}
 	if (bc_tree_node_count(l->t) > BC_SRV_MAX_NODES) {
@@ -109,8 +109,8 @@ static void prepare(struct load *l)
 	    (l->rc = bc_tree_copy(l->copy, l->t, ei))) {
 		return;
 	}
-	if ((l->rc = bc_scene_encode(l->t, &l->cam, &l->state,
-	                             &l->state_len))) {
+	if ((l->rc =
+	         bc_scene_encode(l->t, &l->cam, &l->state, &l->state_len))) {
 		bc_errinfo_set(ei, l->rc, "cannot encode the scene");
 		return;
 	}
@@ -181,7 +181,8 @@ static void prepared(uv_work_t *w, int status)
 	struct bc_session *s = l->s;
 	s->loading = false;
 	if (status != 0 && l->rc == 0) {
-		l->rc = bc_errinfo_set(&l->ei, BC_EIO, "the load was cancelled");
+		l->rc =
+		    bc_errinfo_set(&l->ei, BC_EIO, "the load was cancelled");
 	}
 	if (!s->removed) {
 		commit(l);
@@ -254,9 +255,8 @@ void bc_handle_scene_load(struct bc_conn *c, const struct bc_msg *m)
 }
 
 int bc_session_apply(struct bc_conn *c, const struct bc_proto_edit_op *ops,
-                     uint16_t nops, uint32_t seq,
-                     const struct bc_change *how, struct bc_edit_batch *b,
-                     struct bc_errinfo *ei)
+                     uint16_t nops, uint32_t seq, const struct bc_change *how,
+                     struct bc_edit_batch *b, struct bc_errinfo *ei)
 {
 	struct bc_session *s = c->session;
 	struct bc_srv *srv = c->srv;

@@ -42,8 +42,8 @@ void bc_encoder_destroy(struct bc_encoder *enc)
 }
 
 static int encode_jpeg(struct bc_encoder *enc, const uint8_t *rgba,
-		       uint32_t width, uint32_t x, uint32_t y, uint32_t w,
-		       uint32_t h, int quality, struct bc_encoded *out)
+                       uint32_t width, uint32_t x, uint32_t y, uint32_t w,
+                       uint32_t h, int quality, struct bc_encoded *out)
 {
 	unsigned char *jpeg = NULL;
 	unsigned long size = 0;
@@ -52,8 +52,8 @@ static int encode_jpeg(struct bc_encoder *enc, const uint8_t *rgba,
 	 * where colour fringes on thin features would show. */
 	int samp = quality >= 90 ? TJSAMP_444 : TJSAMP_420;
 	if (tjCompress2(enc->tj, origin, (int)w, (int)(width * 4u), (int)h,
-			TJPF_RGBA, &jpeg, &size, samp, quality,
-			TJFLAG_FASTDCT) != 0) {
+	                TJPF_RGBA, &jpeg, &size, samp, quality,
+	                TJFLAG_FASTDCT) != 0) {
 		bc_log(BC_LOG_ERROR, "jpeg: %s", tjGetErrorStr2(enc->tj));
 		tjFree(jpeg);
 		return BC_ECODEC;
@@ -105,8 +105,8 @@ static void png_flush(png_structp png)
 }
 
 static int encode_png(const uint8_t *rgba, uint32_t width, uint32_t x,
-		      uint32_t y, uint32_t w, uint32_t h,
-		      struct bc_encoded *out)
+                      uint32_t y, uint32_t w, uint32_t h,
+                      struct bc_encoded *out)
 {
 	struct png_sink sink = {0};
 	png_structp png;
@@ -128,12 +128,13 @@ static int encode_png(const uint8_t *rgba, uint32_t width, uint32_t x,
 		goto out;
 	}
 	for (uint32_t r = 0; r < h; r++) {
-		rows[r] = (png_bytep)(rgba + ((size_t)(y + r) * width + x) * 4u);
+		rows[r] =
+		    (png_bytep)(rgba + ((size_t)(y + r) * width + x) * 4u);
 	}
 	png_set_write_fn(png, &sink, png_write, png_flush);
 	png_set_IHDR(png, info, w, h, 8, PNG_COLOR_TYPE_RGB_ALPHA,
-		     PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
-		     PNG_FILTER_TYPE_DEFAULT);
+	             PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+	             PNG_FILTER_TYPE_DEFAULT);
 	/* Level 3: most of the size win of zlib's default at a third of its
 	 * time (lossless stills are already ~30x a JPEG frame's cost). */
 	png_set_compression_level(png, 3);
@@ -151,8 +152,8 @@ out:
 }
 
 static int encode_raw(const uint8_t *rgba, uint32_t width, uint32_t x,
-		      uint32_t y, uint32_t w, uint32_t h,
-		      struct bc_encoded *out)
+                      uint32_t y, uint32_t w, uint32_t h,
+                      struct bc_encoded *out)
 {
 	size_t row = (size_t)w * 4u;
 	out->data = bc_malloc(row * h);
@@ -168,8 +169,8 @@ static int encode_raw(const uint8_t *rgba, uint32_t width, uint32_t x,
 }
 
 int bc_encode_rect(struct bc_encoder *enc, const uint8_t *rgba, uint32_t width,
-		   uint32_t x, uint32_t y, uint32_t w, uint32_t h, int encoding,
-		   int quality, struct bc_encoded *out)
+                   uint32_t x, uint32_t y, uint32_t w, uint32_t h, int encoding,
+                   int quality, struct bc_encoded *out)
 {
 	out->data = NULL;
 	out->len = 0;

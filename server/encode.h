@@ -25,7 +25,7 @@ struct bc_encoded {
  * width * 4). encoding is 1 jpeg, 2 png, 3 raw (the protocol's numbers);
  * quality 1..100 applies to JPEG. Returns 0, BC_ECODEC or BC_ENOMEM. */
 int bc_encode_rect(struct bc_encoder *enc, const uint8_t *rgba, uint32_t width,
-		   uint32_t x, uint32_t y, uint32_t w, uint32_t h, int encoding,
-		   int quality, struct bc_encoded *out);
+                   uint32_t x, uint32_t y, uint32_t w, uint32_t h, int encoding,
+                   int quality, struct bc_encoded *out);
 
 #endif

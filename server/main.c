@@ -27,20 +27,20 @@
 
 /* auto and cpu: on hosts without a GPU the CPU tile tracer beats llvmpipe
  * (docs/benchmarks.md); a GPU host asks for gl. */
-static const struct bc_opt_name backend_names[] = {
-	{"auto", BC_BACKEND_TILED}, {"cpu", BC_BACKEND_TILED},
-	{"tiled", BC_BACKEND_TILED}, {"naive", BC_BACKEND_NAIVE},
-	{"gl", BC_BACKEND_GL},       {"svo", BC_BACKEND_SVO},
-	{NULL, 0}};
+static const struct bc_opt_name backend_names[] = {{"auto", BC_BACKEND_TILED},
+                                                   {"cpu", BC_BACKEND_TILED},
+                                                   {"tiled", BC_BACKEND_TILED},
+                                                   {"naive", BC_BACKEND_NAIVE},
+                                                   {"gl", BC_BACKEND_GL},
+                                                   {"svo", BC_BACKEND_SVO},
+                                                   {NULL, 0}};
 static const struct bc_opt_name platform_names[] = {
-	{"auto", 0}, {"device", 1}, {"surfaceless", 2}, {"osmesa", 3},
-	{NULL, 0}};
+    {"auto", 0}, {"device", 1}, {"surfaceless", 2}, {"osmesa", 3}, {NULL, 0}};
 static const struct bc_opt_name simd_names[] = {
-	{"auto", BC_SIMD_AUTO}, {"off", BC_SIMD_OFF}, {NULL, 0}};
+    {"auto", BC_SIMD_AUTO}, {"off", BC_SIMD_OFF}, {NULL, 0}};
 static const struct bc_opt_name log_names[] = {
-	{"silent", BC_LOG_SILENT}, {"error", BC_LOG_ERROR},
-	{"warn", BC_LOG_WARN},     {"info", BC_LOG_INFO},
-	{"debug", BC_LOG_DEBUG},   {NULL, 0}};
+    {"silent", BC_LOG_SILENT}, {"error", BC_LOG_ERROR}, {"warn", BC_LOG_WARN},
+    {"info", BC_LOG_INFO},     {"debug", BC_LOG_DEBUG}, {NULL, 0}};
 
 /* The command line, before it is merged over the configuration file.
  * Strings point into argv; 0 and NULL mean "not given". */
@@ -55,80 +55,109 @@ struct cli {
 /* The option table over c; --help is printed from it. */
 #define DAEMON_OPTS(c)                                                         \
 	{                                                                      \
-		{.name = "listen", .kind = BC_OPT_STRING, .dst = &(c)->listen, \
+		{.name = "listen",                                             \
+		 .kind = BC_OPT_STRING,                                        \
+		 .dst = &(c)->listen,                                          \
 		 .arg = "HOST:PORT",                                           \
 		 .help = "TCP address (default 127.0.0.1:7878;\n"              \
-			 "\"none\" for no TCP listener)"},                     \
-		{.name = "unix", .kind = BC_OPT_STRING,                        \
-		 .dst = &(c)->unix_path, .arg = "PATH",                        \
-		 .help = "also listen on a Unix socket"},                      \
-		{.name = "tls-cert", .kind = BC_OPT_STRING,                    \
-		 .dst = &(c)->tls_cert, .arg = "FILE",                         \
-		 .help = "TLS on the TCP listener: certificate\n"              \
-			 "chain (PEM); clients use tls://HOST:PORT"},          \
-		{.name = "tls-key", .kind = BC_OPT_STRING,                     \
-		 .dst = &(c)->tls_key, .arg = "FILE",                          \
-		 .help = "its private key (PEM; default: the\n"                \
-			 "--tls-cert file)"},                                  \
-		{.name = "allow-plaintext", .kind = BC_OPT_FLAG,               \
-		 .dst = &(c)->allow_plaintext,                                 \
-		 .help = "start with tokens on a plain TCP\n"                  \
-			 "listener reachable from other hosts\n"               \
-			 "(refused otherwise)"},                               \
-		{.name = "data", .kind = BC_OPT_STRING, .dst = &(c)->data_dir, \
-		 .arg = "DIR",                                                 \
-		 .help = "data directory: sessions, journals\n"                \
-			 "(default ./blobcast-data)"},                         \
-		{.name = "backend", .kind = BC_OPT_ENUM, .dst = &(c)->backend, \
-		 .arg = "NAME",                                                \
-		 .help = "{choices}\n(auto and cpu: the CPU tile tracer)",     \
-		 .names = backend_names},                                      \
-		{.name = "gl-platform", .kind = BC_OPT_ENUM,                   \
-		 .dst = &(c)->gl_platform, .arg = "P",                         \
-		 .help = "{choices}", .names = platform_names},                \
-		{.name = "simd", .kind = BC_OPT_ENUM, .dst = &(c)->simd,       \
-		 .arg = "MODE",                                                \
-		 .help = "{choices}: vector instructions of the\n"             \
-			 "CPU tracers (default auto)",                         \
-		 .names = simd_names},                                         \
-		{.name = "no-damage", .kind = BC_OPT_FLAG,                     \
-		 .dst = &(c)->no_damage,                                       \
-		 .help = "edits re-render whole views instead of\n"            \
-			 "the tiles they change (to compare)"},                \
-		{.name = "frame-budget", .kind = BC_OPT_U32,                   \
-		 .dst = &(c)->frame_budget_ms, .lo = 1, .hi = 600000,          \
-		 .arg = "MS",                                                  \
-		 .help = "time one refinement step may take,\n"                \
-			 "{range} (default 2000); past it the\n"               \
-			 "picture stays at its coarser level"},                \
-		{.name = "config", .kind = BC_OPT_STRING, .dst = &(c)->config, \
-		 .arg = "FILE",                                                \
-		 .help = "JSON configuration (docs/operations.md);\n"          \
-			 "options given here override it"},                    \
-		{.name = "server-id", .kind = BC_OPT_STRING,                   \
-		 .dst = &(c)->server_id, .arg = "NAME",                        \
-		 .help = "name sent to clients (default blobcastd)"},          \
-		{.name = "log", .kind = BC_OPT_ENUM, .dst = &(c)->log,         \
-		 .arg = "LEVEL", .help = "{choices} (default {default})",      \
-		 .names = log_names},                                          \
-		{.kind = BC_OPT_INVALID},                                      \
+		         "\"none\" for no TCP listener)"},                     \
+		    {.name = "unix",                                           \
+		     .kind = BC_OPT_STRING,                                    \
+		     .dst = &(c)->unix_path,                                   \
+		     .arg = "PATH",                                            \
+		     .help = "also listen on a Unix socket"},                  \
+		    {.name = "tls-cert",                                       \
+		     .kind = BC_OPT_STRING,                                    \
+		     .dst = &(c)->tls_cert,                                    \
+		     .arg = "FILE",                                            \
+		     .help = "TLS on the TCP listener: certificate\n"          \
+		             "chain (PEM); clients use tls://HOST:PORT"},      \
+		    {.name = "tls-key",                                        \
+		     .kind = BC_OPT_STRING,                                    \
+		     .dst = &(c)->tls_key,                                     \
+		     .arg = "FILE",                                            \
+		     .help = "its private key (PEM; default: the\n"            \
+		             "--tls-cert file)"},                              \
+		    {.name = "allow-plaintext",                                \
+		     .kind = BC_OPT_FLAG,                                      \
+		     .dst = &(c)->allow_plaintext,                             \
+		     .help = "start with tokens on a plain TCP\n"              \
+		             "listener reachable from other hosts\n"           \
+		             "(refused otherwise)"},                           \
+		    {.name = "data",                                           \
+		     .kind = BC_OPT_STRING,                                    \
+		     .dst = &(c)->data_dir,                                    \
+		     .arg = "DIR",                                             \
+		     .help = "data directory: sessions, journals\n"            \
+		             "(default ./blobcast-data)"},                     \
+		    {.name = "backend",                                        \
+		     .kind = BC_OPT_ENUM,                                      \
+		     .dst = &(c)->backend,                                     \
+		     .arg = "NAME",                                            \
+		     .help = "{choices}\n(auto and cpu: the CPU tile tracer)", \
+		     .names = backend_names},                                  \
+		    {.name = "gl-platform",                                    \
+		     .kind = BC_OPT_ENUM,                                      \
+		     .dst = &(c)->gl_platform,                                 \
+		     .arg = "P",                                               \
+		     .help = "{choices}",                                      \
+		     .names = platform_names},                                 \
+		    {.name = "simd",                                           \
+		     .kind = BC_OPT_ENUM,                                      \
+		     .dst = &(c)->simd,                                        \
+		     .arg = "MODE",                                            \
+		     .help = "{choices}: vector instructions of the\n"         \
+		             "CPU tracers (default auto)",                     \
+		     .names = simd_names},                                     \
+		    {.name = "no-damage",                                      \
+		     .kind = BC_OPT_FLAG,                                      \
+		     .dst = &(c)->no_damage,                                   \
+		     .help = "edits re-render whole views instead of\n"        \
+		             "the tiles they change (to compare)"},            \
+		    {.name = "frame-budget",                                   \
+		     .kind = BC_OPT_U32,                                       \
+		     .dst = &(c)->frame_budget_ms,                             \
+		     .lo = 1,                                                  \
+		     .hi = 600000,                                             \
+		     .arg = "MS",                                              \
+		     .help = "time one refinement step may take,\n"            \
+		             "{range} (default 2000); past it the\n"           \
+		             "picture stays at its coarser level"},            \
+		    {.name = "config",                                         \
+		     .kind = BC_OPT_STRING,                                    \
+		     .dst = &(c)->config,                                      \
+		     .arg = "FILE",                                            \
+		     .help = "JSON configuration (docs/operations.md);\n"      \
+		             "options given here override it"},                \
+		    {.name = "server-id",                                      \
+		     .kind = BC_OPT_STRING,                                    \
+		     .dst = &(c)->server_id,                                   \
+		     .arg = "NAME",                                            \
+		     .help = "name sent to clients (default blobcastd)"},      \
+		    {.name = "log",                                            \
+		     .kind = BC_OPT_ENUM,                                      \
+		     .dst = &(c)->log,                                         \
+		     .arg = "LEVEL",                                           \
+		     .help = "{choices} (default {default})",                  \
+		     .names = log_names},                                      \
+		    {.kind = BC_OPT_INVALID},                                  \
 	}
 
 static struct bc_args daemon_args(const struct bc_opt *opts)
 {
 	return (struct bc_args){
-		.prog = "blobcastd",
-		.usage = "blobcastd [options]",
-		.about = "Serves blobtree review sessions over the blobcast "
-			 "protocol.\nWith no options: session \"default\" with "
-			 "the embedded scene,\non 127.0.0.1:7878, data in "
-			 "./blobcast-data.",
-		.footer = "Without tokens in the configuration only loopback "
-			  "and Unix\nsocket clients are accepted. SIGTERM saves "
-			  "and stops;\nSIGHUP reloads the tokens of the --config "
-			  "file and the TLS\ncertificate and key. Unix sockets "
-			  "never use TLS.",
-		.opts = opts};
+	    .prog = "blobcastd",
+	    .usage = "blobcastd [options]",
+	    .about = "Serves blobtree review sessions over the blobcast "
+	             "protocol.\nWith no options: session \"default\" with "
+	             "the embedded scene,\non 127.0.0.1:7878, data in "
+	             "./blobcast-data.",
+	    .footer = "Without tokens in the configuration only loopback "
+	              "and Unix\nsocket clients are accepted. SIGTERM saves "
+	              "and stops;\nSIGHUP reloads the tokens of the --config "
+	              "file and the TLS\ncertificate and key. Unix sockets "
+	              "never use TLS.",
+	    .opts = opts};
 }
 
 /* A backend's name as the configuration file and --backend take it, or
@@ -155,7 +184,7 @@ static int set_str(char **dst, const char *v)
 }
 
 static int load_config(struct bc_srv_config *cfg, const char *path,
-		       struct bc_errinfo *ei)
+                       struct bc_errinfo *ei)
 {
 	json_error_t jerr;
 	json_t *root = json_load_file(path, JSON_REJECT_DUPLICATES, &jerr);
@@ -163,12 +192,12 @@ static int load_config(struct bc_srv_config *cfg, const char *path,
 	json_t *val;
 	int rc = 0;
 	if (!root) {
-		return bc_errinfo_set(ei, BC_EPARSE, "%s:%d: %s", path, jerr.line,
-				      jerr.text);
+		return bc_errinfo_set(ei, BC_EPARSE, "%s:%d: %s", path,
+		                      jerr.line, jerr.text);
 	}
 	if (!json_is_object(root)) {
 		rc = bc_errinfo_set(ei, BC_EPARSE, "%s: expected an object",
-				    path);
+		                    path);
 		goto out;
 	}
 	json_object_foreach(root, key, val)
@@ -176,15 +205,16 @@ static int load_config(struct bc_srv_config *cfg, const char *path,
 		if (strcmp(key, "tokens") == 0) {
 			size_t i;
 			json_t *tok;
-			if (!json_is_array(val) || json_array_size(val) > 1024) {
+			if (!json_is_array(val) ||
+			    json_array_size(val) > 1024) {
 				rc = bc_errinfo_set(ei, BC_EPARSE,
-						    "%s: tokens: expected an "
-						    "array of at most 1024",
-						    path);
+				                    "%s: tokens: expected an "
+				                    "array of at most 1024",
+				                    path);
 				goto out;
 			}
 			cfg->tokens = bc_calloc(json_array_size(val) + 1,
-						sizeof(*cfg->tokens));
+			                        sizeof(*cfg->tokens));
 			if (!cfg->tokens) {
 				rc = BC_ENOMEM;
 				goto out;
@@ -192,18 +222,19 @@ static int load_config(struct bc_srv_config *cfg, const char *path,
 			json_array_foreach(val, i, tok)
 			{
 				const char *t = json_string_value(
-					json_object_get(tok, "token"));
+				    json_object_get(tok, "token"));
 				const char *r = json_string_value(
-					json_object_get(tok, "role"));
-				if (!t || !*t || strlen(t) > BC_PROTO_MAX_TOKEN ||
-				    !r ||
-				    (strcmp(r, "editor") && strcmp(r, "viewer"))) {
+				    json_object_get(tok, "role"));
+				if (!t || !*t ||
+				    strlen(t) > BC_PROTO_MAX_TOKEN || !r ||
+				    (strcmp(r, "editor") &&
+				     strcmp(r, "viewer"))) {
 					rc = bc_errinfo_set(
-						ei, BC_EPARSE,
-						"%s: tokens[%zu]: needs "
-						"\"token\" (1..%u bytes) and "
-						"\"role\" (editor|viewer)",
-						path, i, BC_PROTO_MAX_TOKEN);
+					    ei, BC_EPARSE,
+					    "%s: tokens[%zu]: needs "
+					    "\"token\" (1..%u bytes) and "
+					    "\"role\" (editor|viewer)",
+					    path, i, BC_PROTO_MAX_TOKEN);
 					goto out;
 				}
 				if (!(cfg->tokens[i].token = bc_strdup(t))) {
@@ -211,23 +242,23 @@ static int load_config(struct bc_srv_config *cfg, const char *path,
 					goto out;
 				}
 				cfg->tokens[i].role =
-					strcmp(r, "editor") == 0
-						? BC_PROTO_ROLE_EDITOR
-						: BC_PROTO_ROLE_VIEWER;
+				    strcmp(r, "editor") == 0
+				        ? BC_PROTO_ROLE_EDITOR
+				        : BC_PROTO_ROLE_VIEWER;
 				cfg->ntokens++;
 			}
 			continue;
 		}
 		if (strcmp(key, "message_timeout_ms") == 0 ||
 		    strcmp(key, "idle_timeout_ms") == 0) {
-			json_int_t ms = json_is_integer(val)
-						? json_integer_value(val)
-						: -1;
+			json_int_t ms =
+			    json_is_integer(val) ? json_integer_value(val) : -1;
 			if (ms < 0 || ms > 86400000) {
-				rc = bc_errinfo_set(ei, BC_EPARSE,
-						    "%s: %s: expected "
-						    "milliseconds (0..86400000)",
-						    path, key);
+				rc =
+				    bc_errinfo_set(ei, BC_EPARSE,
+				                   "%s: %s: expected "
+				                   "milliseconds (0..86400000)",
+				                   path, key);
 				goto out;
 			}
 			if (key[0] == 'm') {
@@ -240,9 +271,9 @@ static int load_config(struct bc_srv_config *cfg, const char *path,
 		if (strcmp(key, "allow_plaintext") == 0) {
 			if (!json_is_boolean(val)) {
 				rc = bc_errinfo_set(ei, BC_EPARSE,
-						    "%s: %s: expected true or "
-						    "false",
-						    path, key);
+				                    "%s: %s: expected true or "
+				                    "false",
+				                    path, key);
 				goto out;
 			}
 			cfg->allow_plaintext = json_is_true(val);
@@ -250,8 +281,8 @@ static int load_config(struct bc_srv_config *cfg, const char *path,
 		}
 		if (!json_is_string(val)) {
 			rc = bc_errinfo_set(ei, BC_EPARSE,
-					    "%s: %s: expected a string", path,
-					    key);
+			                    "%s: %s: expected a string", path,
+			                    key);
 			goto out;
 		}
 		if (strcmp(key, "listen") == 0) {
@@ -271,14 +302,13 @@ static int load_config(struct bc_srv_config *cfg, const char *path,
 		} else if (strcmp(key, "backend") == 0) {
 			cfg->backend = parse_backend(json_string_value(val));
 			if (cfg->backend == BC_BACKEND_INVALID) {
-				rc = bc_errinfo_set(ei, BC_EPARSE,
-						    "%s: unknown backend %s",
-						    path,
-						    json_string_value(val));
+				rc = bc_errinfo_set(
+				    ei, BC_EPARSE, "%s: unknown backend %s",
+				    path, json_string_value(val));
 			}
 		} else {
 			rc = bc_errinfo_set(ei, BC_EPARSE, "%s: unknown key %s",
-					    path, key);
+			                    path, key);
 		}
 		if (rc) {
 			goto out;
@@ -346,7 +376,8 @@ static void notify_systemd(const char *state)
 	}
 	n = strlen(path);
 	if ((path[0] != '/' && path[0] != '@') || n >= sizeof(sa.sun_path)) {
-		bc_log(BC_LOG_WARN, "NOTIFY_SOCKET %s: not a socket path", path);
+		bc_log(BC_LOG_WARN, "NOTIFY_SOCKET %s: not a socket path",
+		       path);
 		return;
 	}
 	memcpy(sa.sun_path, path, n);
@@ -354,11 +385,10 @@ static void notify_systemd(const char *state)
 		sa.sun_path[0] = '\0';
 	}
 	len = (socklen_t)(offsetof(struct sockaddr_un, sun_path) + n +
-			  (path[0] == '/'));
+	                  (path[0] == '/'));
 	fd = socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-	if (fd < 0 ||
-	    sendto(fd, state, strlen(state), MSG_NOSIGNAL,
-		   (const struct sockaddr *)&sa, len) < 0) {
+	if (fd < 0 || sendto(fd, state, strlen(state), MSG_NOSIGNAL,
+	                     (const struct sockaddr *)&sa, len) < 0) {
 		bc_log(BC_LOG_WARN, "NOTIFY_SOCKET %s: cannot notify", path);
 	}
 	if (fd >= 0) {
@@ -377,10 +407,9 @@ static void reload_tls(struct bc_srv *srv)
 	if (!srv->tls) {
 		return;
 	}
-	if (bc_tls_ctx_new(&fresh, srv->cfg.tls_cert,
-			   srv->cfg.tls_key ? srv->cfg.tls_key
-					    : srv->cfg.tls_cert,
-			   &ei)) {
+	if (bc_tls_ctx_new(
+	        &fresh, srv->cfg.tls_cert,
+	        srv->cfg.tls_key ? srv->cfg.tls_key : srv->cfg.tls_cert, &ei)) {
 		bc_log(BC_LOG_ERROR,
 		       "SIGHUP: %s; keeping the certificate in use", ei.msg);
 		return;
@@ -479,7 +508,7 @@ static void print_endpoints(struct bc_srv *srv)
 		char host[64] = "?";
 		int port = 0;
 		uv_tcp_getsockname(&srv->tcp_listener, (struct sockaddr *)&sa,
-				   &len);
+		                   &len);
 		if (sa.ss_family == AF_INET) {
 			struct sockaddr_in *in = (struct sockaddr_in *)&sa;
 			uv_ip4_name(in, host, sizeof(host));
@@ -493,7 +522,7 @@ static void print_endpoints(struct bc_srv *srv)
 	}
 	if (srv->has_unix) {
 		fprintf(stderr, "blobcastd: listening on unix:%s\n",
-			srv->cfg.unix_path);
+		        srv->cfg.unix_path);
 	}
 }
 
@@ -513,7 +542,7 @@ int main(int argc, char **argv)
 	}
 	if (args.npos) {
 		return bc_args_error(&args, "unexpected argument '%s'",
-				     args.pos[0]);
+		                     args.pos[0]);
 	}
 	bc_log_init((enum bc_log_level)cli.log);
 	config = cli.config;
@@ -533,7 +562,7 @@ int main(int argc, char **argv)
 	}
 	if (bc_args_given(&args, "gl-platform")) {
 		set_str(&srv.cfg.gl_platform,
-			platform_names[cli.gl_platform].name);
+		        platform_names[cli.gl_platform].name);
 	}
 	if (cli.server_id) {
 		set_str(&srv.cfg.server_id, cli.server_id);
@@ -547,7 +576,8 @@ int main(int argc, char **argv)
 	if (cli.tls_key) {
 		set_str(&srv.cfg.tls_key, cli.tls_key);
 	}
-	srv.cfg.allow_plaintext = srv.cfg.allow_plaintext || cli.allow_plaintext;
+	srv.cfg.allow_plaintext =
+	    srv.cfg.allow_plaintext || cli.allow_plaintext;
 	srv.cfg.simd = (enum bc_simd)cli.simd;
 	srv.cfg.no_damage = cli.no_damage;
 	srv.cfg.frame_budget_ms = cli.frame_budget_ms;
@@ -573,12 +603,12 @@ int main(int argc, char **argv)
 	}
 	if (srv.cfg.tls_cert && !srv.cfg.listen) {
 		fprintf(stderr, "blobcastd: --tls-cert needs a TCP listener "
-				"(--listen); Unix sockets never use TLS\n");
+		                "(--listen); Unix sockets never use TLS\n");
 		goto out;
 	}
 	if (strlen(srv.cfg.server_id) > BC_PROTO_MAX_NAME) {
 		fprintf(stderr, "blobcastd: --server-id longer than %u bytes\n",
-			BC_PROTO_MAX_NAME);
+		        BC_PROTO_MAX_NAME);
 		goto out;
 	}
 	/* A write to a closed connection returns EPIPE instead of killing
@@ -612,7 +642,7 @@ int main(int argc, char **argv)
 	print_endpoints(&srv);
 	warn_if_exposed(&srv);
 	fprintf(stderr, "blobcastd: backend %s, data in %s\n",
-		bc_backend_name(srv.cfg.backend), srv.cfg.data_dir);
+	        bc_backend_name(srv.cfg.backend), srv.cfg.data_dir);
 	/* Sessions restored and listeners up: clients may come. */
 	notify_systemd("READY=1");
 	uv_run(srv.loop, UV_RUN_DEFAULT);

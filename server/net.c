@@ -556,7 +556,8 @@ static void on_tls_bytes(struct bc_conn *c, const char *bytes, size_t n)
 	}
 	while (!c->closing && !c->draining) {
 		bool was_ready = bc_tls_ready(c->tls);
-		got = bc_tls_read(c->tls, plain, sizeof(plain), why, sizeof(why));
+		got =
+		    bc_tls_read(c->tls, plain, sizeof(plain), why, sizeof(why));
 		if (!was_ready && bc_tls_ready(c->tls)) {
 			char desc[128];
 			bc_log(BC_LOG_INFO, "connection %u: TLS (%s)", c->gen,

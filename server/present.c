@@ -21,7 +21,7 @@ static struct bc_conn *presenter_of(struct bc_session *s)
 	}
 	p = bc_conn_get(s->srv, s->presenter);
 	return p && p->session == s && p->member_id == s->presenter_id ? p
-	                                                                 : NULL;
+	                                                               : NULL;
 }
 
 /* PRESENTER to one member that knows the type. */
@@ -115,8 +115,9 @@ void bc_handle_present(struct bc_conn *c, const struct bc_msg *m)
 		s->presenter = bc_conn_ref_of(c);
 		c->follows = false; /* nobody follows themselves */
 		if (p != c) {
-			bc_log(BC_LOG_INFO, "session %s: member %u (%s) presents%s",
-			       s->name, c->member_id, c->name,
+			bc_log(BC_LOG_INFO,
+			       "session %s: member %u (%s) presents%s", s->name,
+			       c->member_id, c->name,
 			       p ? " in place of another member" : "");
 		}
 		/* Followers of a replaced presenter follow the new one. */

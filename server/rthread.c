@@ -147,8 +147,7 @@ static struct rcmd *take_cmd(struct bc_rthread *rt)
 	for (struct rcmd *c = rt->head; c; prev = c, c = c->next) {
 		uint32_t id = c->session_id;
 		/* Strict comparisons keep each session's oldest command. */
-		if (id > rt->last_session &&
-		    (!next || id < next->session_id)) {
+		if (id > rt->last_session && (!next || id < next->session_id)) {
 			next = c;
 			next_prev = prev;
 		}

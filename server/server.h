@@ -63,7 +63,7 @@ struct bc_srv_config {
 	uint32_t ntokens;
 	enum bc_simd simd;
 	bool no_damage; /* edits re-render whole views (for comparison) */
-	uint32_t frame_budget_ms; /* 0: BC_SRV_FRAME_BUDGET_MS */
+	uint32_t frame_budget_ms;    /* 0: BC_SRV_FRAME_BUDGET_MS */
 	uint32_t message_timeout_ms; /* 0: BC_SRV_MESSAGE_TIMEOUT_MS */
 	uint32_t idle_timeout_ms;    /* 0: BC_SRV_IDLE_TIMEOUT_MS */
 	char *tls_cert, *tls_key;    /* PEM files: TLS on the TCP listener */
@@ -93,7 +93,7 @@ struct bc_conn {
 		uv_handle_t handle;
 	} h;
 	uv_timer_t hello_timer;
-	struct bc_tls *tls; /* TLS state (tls.h) on a TLS listener, or NULL */
+	struct bc_tls *tls;   /* TLS state (tls.h) on a TLS listener, or NULL */
 	bool is_tcp, trusted; /* trusted: loopback TCP or Unix socket */
 	bool closing;
 	bool draining; /* shut down after the queued bytes are written */
@@ -123,10 +123,10 @@ struct bc_conn {
 	struct bc_camera camera;
 	uint32_t camera_seq;
 	uint64_t interacting_until; /* ms, loop clock */
-	bool dirty;          /* owed a frame: a change, or a finer level */
-	bool render_pending; /* a job for this client is queued */
-	uint32_t requests;   /* PICKs and SNAPSHOTs queued, unanswered */
-	bool still_sent;     /* the last frame sent was the still of now */
+	bool dirty;            /* owed a frame: a change, or a finer level */
+	bool render_pending;   /* a job for this client is queued */
+	uint32_t requests;     /* PICKs and SNAPSHOTs queued, unanswered */
+	bool still_sent;       /* the last frame sent was the still of now */
 	struct bc_shown shown; /* what its last frame left it holding */
 
 	/* Output: messages go out at once; frames one at a time. */
@@ -147,7 +147,8 @@ struct bc_session {
 	uint32_t id;
 	char name[BC_PROTO_MAX_NAME + 1];
 	struct bc_tree *tree;
-	struct bc_camera camera; /* the scene's camera: new members start here */
+	struct bc_camera
+	    camera; /* the scene's camera: new members start here */
 	uint64_t order;
 	struct bc_store_session *store;
 	bool store_failed; /* a write failed: edits are refused */
@@ -157,9 +158,9 @@ struct bc_session {
 	uv_timer_t still_timer;
 	uv_timer_t kick; /* schedules frames once a loop turn's writes end */
 	uint64_t empty_since_ms; /* loop clock; when the last member left */
-	bool loading; /* a SCENE_LOAD runs on a worker: changes wait */
+	bool loading;          /* a SCENE_LOAD runs on a worker: changes wait */
 	uint64_t last_edit_ms; /* Unix ms of its last change (0: unknown) */
-	struct bc_undo *undo; /* undo/redo history (undo.c), or NULL */
+	struct bc_undo *undo;  /* undo/redo history (undo.c), or NULL */
 	/* The member presenting (present.c): its id, 0 when nobody does. */
 	uint32_t presenter_id;
 	struct bc_conn_ref presenter;
@@ -217,9 +218,9 @@ struct bc_conn *bc_conn_get(struct bc_srv *srv, struct bc_conn_ref ref);
 struct bc_conn_ref bc_conn_ref_of(const struct bc_conn *c);
 /* Encodes and queues m; on failure the client is closed. */
 void bc_conn_send(struct bc_conn *c, const struct bc_msg *m);
-void bc_conn_send_error(struct bc_conn *c, uint32_t seq, int code,
-			  bool fatal, const char *fmt, ...)
-	__attribute__((format(printf, 5, 6)));
+void bc_conn_send_error(struct bc_conn *c, uint32_t seq, int code, bool fatal,
+                        const char *fmt, ...)
+    __attribute__((format(printf, 5, 6)));
 /* Queues a FRAME (spoiling an unsent older one). */
 void bc_conn_send_frame(struct bc_conn *c, struct bc_shared *frame);
 void bc_conn_close(struct bc_conn *c, const char *why);
@@ -251,16 +252,16 @@ struct bc_rjob;
 void bc_session_frame_failed(struct bc_srv *srv, const struct bc_rjob *job);
 /* A render job for these clients finished: schedule what is still owed. */
 void bc_session_frame_done(struct bc_srv *srv, uint32_t session_id,
-			   const struct bc_conn_ref *targets, uint32_t n);
+                           const struct bc_conn_ref *targets, uint32_t n);
 struct bc_session *bc_session_by_id(struct bc_srv *srv, uint32_t id);
 void bc_session_send_info(struct bc_session *s);
 /* SCENE_STATE to one member (to) or, with to NULL, to every member. */
 void bc_session_send_state(struct bc_session *s, struct bc_conn *to,
-			   uint32_t author, uint32_t author_seq);
+                           uint32_t author, uint32_t author_seq);
 /* The same with the scene already encoded (bc_scene_encode of s->tree). */
 void bc_session_send_state_bytes(struct bc_session *s, struct bc_conn *to,
-				 uint32_t author, uint32_t author_seq,
-				 const uint8_t *bytes, size_t len);
+                                 uint32_t author, uint32_t author_seq,
+                                 const uint8_t *bytes, size_t len);
 /* Frees s once nothing refers to it (its timers and a load in flight). */
 void bc_session_unref(struct bc_session *s);
 /* Every member's next frame is whole. */
@@ -280,8 +281,8 @@ void bc_handle_undo(struct bc_conn *c, const struct bc_msg *m);
 
 /* How an applied change presents itself in its EDIT_APPLIED. */
 struct bc_change {
-	uint16_t flags; /* BC_PROTO_FLAG_INTERACTING, _UNDO or _REDO */
-	uint64_t target_order;     /* UNDO, REDO: the edit undone or redone */
+	uint16_t flags;        /* BC_PROTO_FLAG_INTERACTING, _UNDO or _REDO */
+	uint64_t target_order; /* UNDO, REDO: the edit undone or redone */
 	const char *target_author; /* and its author's name */
 };
 struct bc_edit_batch;
@@ -290,15 +291,15 @@ struct bc_edit_batch;
  * to the render thread. Returns 0 with b holding what undoes the batch
  * (the caller finishes it), or an error in ei with nothing changed. */
 int bc_session_apply(struct bc_conn *c, const struct bc_proto_edit_op *ops,
-		     uint16_t nops, uint32_t seq, const struct bc_change *how,
-		     struct bc_edit_batch *b, struct bc_errinfo *ei);
+                     uint16_t nops, uint32_t seq, const struct bc_change *how,
+                     struct bc_edit_batch *b, struct bc_errinfo *ei);
 
 /* ---- undo.c ------------------------------------------------------------- */
 /* Records what undoes batch b, just applied by c (takes b's old tree);
  * clears the redo steps. Edits of one drag (interacting, up to the first
  * edit without it) make one step. */
 void bc_undo_record(struct bc_conn *c, struct bc_edit_batch *b,
-		    bool interacting);
+                    bool interacting);
 /* UNDO (or REDO) from c, request seq: applies the newest step back as an
  * edit, or answers ERROR ESTATE when there is none. */
 void bc_undo_step(struct bc_conn *c, bool redo, uint32_t seq);
@@ -349,7 +350,7 @@ struct bc_rjob {
 	uint32_t camera_seq;
 	uint64_t order;
 	uint32_t frame_no;
-	uint32_t snapshot_seq; /* != 0: answer to a SNAPSHOT */
+	uint32_t snapshot_seq;   /* != 0: answer to a SNAPSHOT */
 	uint8_t snapshot_planes; /* its BC_PROTO_PLANE_* bits */
 	struct bc_conn_ref *targets;
 	uint32_t ntargets;
@@ -363,11 +364,11 @@ int bc_rthread_start(struct bc_srv *srv, struct bc_errinfo *ei);
 void bc_rthread_stop(struct bc_srv *srv);
 /* Each takes ownership of its argument. */
 void bc_rthread_scene(struct bc_srv *srv, uint32_t session_id,
-		      struct bc_tree *copy);
+                      struct bc_tree *copy);
 void bc_rthread_set_prim(struct bc_srv *srv, uint32_t session_id, uint32_t id,
-			 const struct bc_prim_data *p);
+                         const struct bc_prim_data *p);
 void bc_rthread_set_op(struct bc_srv *srv, uint32_t session_id, uint32_t id,
-		       const struct bc_op_data *op);
+                       const struct bc_op_data *op);
 void bc_rthread_drop(struct bc_srv *srv, uint32_t session_id);
 void bc_rthread_job(struct bc_srv *srv, struct bc_rjob *job);
 /* Soon (next loop turn, once a closing connection is gone): removes from

@@ -76,8 +76,8 @@ static void summary_keep(struct bc_session *s)
 	struct bc_session_summary *sum = summary_of(srv, s->name);
 	if (!sum) {
 		if (srv->nunloaded == srv->unloaded_cap) {
-			uint32_t cap = srv->unloaded_cap ? 2u * srv->unloaded_cap
-			                                 : 16u;
+			uint32_t cap =
+			    srv->unloaded_cap ? 2u * srv->unloaded_cap : 16u;
 			struct bc_session_summary *more =
 			    bc_realloc(srv->unloaded, cap * sizeof(*more));
 			if (!more) {
@@ -362,8 +362,7 @@ void bc_sessions_free(struct bc_srv *srv)
 
 /* ---- members ------------------------------------------------------------- */
 
-uint32_t bc_session_members(const struct bc_session *s,
-                            struct bc_conn_ref *out)
+uint32_t bc_session_members(const struct bc_session *s, struct bc_conn_ref *out)
 {
 	memcpy(out, s->members, s->nmembers * sizeof(*out));
 	return s->nmembers;
@@ -736,10 +735,9 @@ void bc_handle_session_list(struct bc_conn *c, const struct bc_msg *m)
 		l.e[i].name.len = (uint32_t)strlen(l.names[i]);
 	}
 	qsort(l.e, l.n, sizeof(*l.e), by_name);
-	out.sessions.nsessions =
-	    (uint16_t)(l.n < BC_PROTO_MAX_SESSIONS_LISTED
-	                   ? l.n
-	                   : BC_PROTO_MAX_SESSIONS_LISTED);
+	out.sessions.nsessions = (uint16_t)(l.n < BC_PROTO_MAX_SESSIONS_LISTED
+	                                        ? l.n
+	                                        : BC_PROTO_MAX_SESSIONS_LISTED);
 	out.sessions.sessions = l.e;
 	bc_conn_send(c, &out);
 out:

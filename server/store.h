@@ -45,25 +45,27 @@ struct bc_store_session;
 
 /* Opens (creating) the data directory and takes its lock file, so that two
  * daemons never share one. Leftover temporary files are removed. */
-int bc_store_open(struct bc_store **out, const char *dir, struct bc_errinfo *ei);
+int bc_store_open(struct bc_store **out, const char *dir,
+                  struct bc_errinfo *ei);
 void bc_store_close(struct bc_store *st);
 
 /* Calls fn for each stored session name. */
-int bc_store_list(struct bc_store *st,
-		  void (*fn)(void *ud, const char *name), void *ud);
+int bc_store_list(struct bc_store *st, void (*fn)(void *ud, const char *name),
+                  void *ud);
 
 /* Called for each journal record on restore, in order. */
 typedef int (*bc_store_replay_fn)(void *ud, uint64_t order, const uint8_t *rec,
-				  size_t len);
+                                  size_t len);
 
 /* Opens session name: loads its newest snapshot into t and cam and replays
  * its journal through fn; *order is the last order restored. A session that
  * does not exist yet is created empty (*order = 0, t untouched) and
  * *created set. */
 int bc_store_session_open(struct bc_store *st, const char *name,
-			  struct bc_store_session **out, struct bc_tree *t,
-			  struct bc_camera *cam, uint64_t *order, bool *created,
-			  bc_store_replay_fn fn, void *ud, struct bc_errinfo *ei);
+                          struct bc_store_session **out, struct bc_tree *t,
+                          struct bc_camera *cam, uint64_t *order, bool *created,
+                          bc_store_replay_fn fn, void *ud,
+                          struct bc_errinfo *ei);
 void bc_store_session_close(struct bc_store_session *ss);
 
 /* Writes the whole scene as of order (atomic) and starts a new journal.
@@ -72,8 +74,8 @@ void bc_store_session_close(struct bc_store_session *ss);
  * BC_SCENE_JSON_MAX_BYTES, which restoring reads) or BC_EDEPTH (deeper
  * than a JSON snapshot holds). */
 int bc_store_snapshot(struct bc_store_session *ss, const struct bc_tree *t,
-		      const struct bc_camera *cam, uint64_t order,
-		      struct bc_errinfo *ei);
+                      const struct bc_camera *cam, uint64_t order,
+                      struct bc_errinfo *ei);
 /* The periodic snapshot: taken when every or more records were journaled
  * since the last one, unless a failed attempt is still backing off
  * (BC_STORE_SNAPSHOT_RETRY_*). Returns 0 when nothing was due or it
@@ -84,7 +86,7 @@ int bc_store_snapshot_due(struct bc_store_session *ss, uint64_t every,
 
 /* Appends one record and syncs it to disk before returning 0. */
 int bc_store_append(struct bc_store_session *ss, uint64_t order,
-		    const uint8_t *rec, size_t len, struct bc_errinfo *ei);
+                    const uint8_t *rec, size_t len, struct bc_errinfo *ei);
 
 /* Records appended since the last snapshot. */
 uint64_t bc_store_journal_records(const struct bc_store_session *ss);

@@ -53,8 +53,7 @@ static void step_free(struct bc_undo *u, struct step *st)
 }
 
 /* Drops the i-th of n steps in a stack, oldest first. */
-static void drop(struct bc_undo *u, struct step *stack, uint32_t *n,
-                 uint32_t i)
+static void drop(struct bc_undo *u, struct step *stack, uint32_t *n, uint32_t i)
 {
 	step_free(u, &stack[i]);
 	memmove(&stack[i], &stack[i + 1], (*n - i - 1) * sizeof(*stack));
@@ -134,8 +133,8 @@ static bool step_add(struct bc_undo *u, struct step *st,
 	if (b->structural) {
 		st->old = b->old;
 		b->old = NULL;
-		st->bytes = (size_t)bc_tree_node_count(st->old) *
-		            TREE_BYTES_PER_NODE;
+		st->bytes =
+		    (size_t)bc_tree_node_count(st->old) * TREE_BYTES_PER_NODE;
 		u->bytes += st->bytes;
 		return true;
 	}
@@ -197,8 +196,8 @@ void bc_undo_record(struct bc_conn *c, struct bc_edit_batch *b,
 	struct step *top;
 	bool ok;
 	if (!u) {
-		bc_log(BC_LOG_WARN, "session %s: no memory for the undo history",
-		       s->name);
+		bc_log(BC_LOG_WARN,
+		       "session %s: no memory for the undo history", s->name);
 		return;
 	}
 	while (u->nredo) {
@@ -265,17 +264,17 @@ void bc_undo_step(struct bc_conn *c, bool redo, uint32_t seq)
 		nops = 1;
 	} else {
 		if (!(ops = bc_calloc(st->n, sizeof(*ops))) ||
-		    !(fields = bc_calloc((size_t)st->n * BC_PROTO_MAX_SET_FIELDS,
-		                         sizeof(*fields)))) {
+		    !(fields =
+		          bc_calloc((size_t)st->n * BC_PROTO_MAX_SET_FIELDS,
+		                    sizeof(*fields)))) {
 			rc = bc_errinfo_set(&ei, BC_ENOMEM, "out of memory");
 			goto fail;
 		}
 		for (uint32_t i = 0; i < st->n; i++) {
-			bc_edit_state_set(&st->nodes[i],
-			                  st->nodes[i].op.kind != BC_OP_INVALID,
-			                  &ops[i],
-			                  &fields[(size_t)i *
-			                          BC_PROTO_MAX_SET_FIELDS]);
+			bc_edit_state_set(
+			    &st->nodes[i],
+			    st->nodes[i].op.kind != BC_OP_INVALID, &ops[i],
+			    &fields[(size_t)i * BC_PROTO_MAX_SET_FIELDS]);
 		}
 		nops = st->n;
 	}

@@ -25,7 +25,7 @@ static int bc_test_skipped;
 	do {                                                                   \
 		if (!(cond)) {                                                 \
 			fprintf(stderr, "  %s:%d: CHECK failed: %s\n",         \
-				__FILE__, __LINE__, #cond);                    \
+			        __FILE__, __LINE__, #cond);                    \
 			bc_test_failures++;                                    \
 		}                                                              \
 	} while (0)
@@ -35,7 +35,7 @@ static int bc_test_skipped;
 	do {                                                                   \
 		if (!(cond)) {                                                 \
 			fprintf(stderr, "  %s:%d: REQUIRE failed: %s\n",       \
-				__FILE__, __LINE__, #cond);                    \
+			        __FILE__, __LINE__, #cond);                    \
 			bc_test_failures++;                                    \
 			return;                                                \
 		}                                                              \
@@ -45,8 +45,9 @@ static int bc_test_skipped;
 	do {                                                                   \
 		long long va_ = (long long)(a), vb_ = (long long)(b);          \
 		if (va_ != vb_) {                                              \
-			fprintf(stderr, "  %s:%d: %s == %s failed: %lld vs %lld\n", \
-				__FILE__, __LINE__, #a, #b, va_, vb_);         \
+			fprintf(stderr,                                        \
+			        "  %s:%d: %s == %s failed: %lld vs %lld\n",    \
+			        __FILE__, __LINE__, #a, #b, va_, vb_);         \
 			bc_test_failures++;                                    \
 		}                                                              \
 	} while (0)
@@ -55,9 +56,10 @@ static int bc_test_skipped;
 	do {                                                                   \
 		double va_ = (double)(a), vb_ = (double)(b);                   \
 		if (!(fabs(va_ - vb_) <= (double)(tol))) {                     \
-			fprintf(stderr,                                        \
-				"  %s:%d: |%s - %s| <= %s failed: %.9g vs %.9g\n", \
-				__FILE__, __LINE__, #a, #b, #tol, va_, vb_);   \
+			fprintf(                                               \
+			    stderr,                                            \
+			    "  %s:%d: |%s - %s| <= %s failed: %.9g vs %.9g\n", \
+			    __FILE__, __LINE__, #a, #b, #tol, va_, vb_);       \
 			bc_test_failures++;                                    \
 		}                                                              \
 	} while (0)
@@ -93,7 +95,7 @@ static inline void bc_test_show_str(const char *label, const char *s)
 /* Returns 1 when a and b are equal strings (both NULL counts as equal);
  * otherwise prints both with the check's text and returns 0. */
 static inline int bc_test_streq(const char *a, const char *b, const char *ea,
-				const char *eb, const char *file, int line)
+                                const char *eb, const char *file, int line)
 {
 	if ((!a && !b) || (a && b && strcmp(a, b) == 0)) {
 		return 1;
@@ -107,8 +109,8 @@ static inline int bc_test_streq(const char *a, const char *b, const char *ea,
 /* Returns 1 when the n bytes at a and b are equal; otherwise prints the
  * first differing offset and up to 16 bytes of each from 8 before it. */
 static inline int bc_test_memeq(const void *a, const void *b, size_t n,
-				const char *ea, const char *eb, const char *file,
-				int line)
+                                const char *ea, const char *eb,
+                                const char *file, int line)
 {
 	const unsigned char *pa = a, *pb = b;
 	if (n == 0 || memcmp(pa, pb, n) == 0) {
@@ -121,16 +123,16 @@ static inline int bc_test_memeq(const void *a, const void *b, size_t n,
 	size_t from = at > 8 ? at - 8 : 0;
 	size_t to = from + 16 < n ? from + 16 : n;
 	fprintf(stderr,
-		"  %s:%d: %s == %s (%zu bytes) failed: first difference at "
-		"byte %zu\n",
-		file, line, ea, eb, n, at);
+	        "  %s:%d: %s == %s (%zu bytes) failed: first difference at "
+	        "byte %zu\n",
+	        file, line, ea, eb, n, at);
 	const unsigned char *sides[2] = {pa, pb};
 	const char *names[2] = {ea, eb};
 	for (int s = 0; s < 2; s++) {
 		fprintf(stderr, "    %s [%zu..%zu):", names[s], from, to);
 		for (size_t i = from; i < to; i++) {
 			fprintf(stderr, i == at ? " [%02x]" : " %02x",
-				sides[s][i]);
+			        sides[s][i]);
 		}
 		fprintf(stderr, "\n");
 	}
@@ -149,7 +151,7 @@ static inline int bc_test_memeq(const void *a, const void *b, size_t n,
 #define CHECK_MEMEQ(a, b, n)                                                   \
 	do {                                                                   \
 		if (!bc_test_memeq((a), (b), (n), #a, #b, __FILE__,            \
-				   __LINE__)) {                                \
+		                   __LINE__)) {                                \
 			bc_test_failures++;                                    \
 		}                                                              \
 	} while (0)
@@ -175,7 +177,7 @@ static int bc_test_selected(int argc, char **argv, const char *name)
 }
 
 static int bc_test_run(const struct bc_test *tests, size_t n, int argc,
-		       char **argv)
+                       char **argv)
 {
 	int failed = 0, skipped = 0, ran = 0;
 	for (size_t i = 0; i < n; i++) {
@@ -208,7 +210,7 @@ static int bc_test_run(const struct bc_test *tests, size_t n, int argc,
 	int main(int argc, char **argv)                                        \
 	{                                                                      \
 		return bc_test_run(table, sizeof(table) / sizeof(table[0]),    \
-				   argc, argv);                                \
+		                   argc, argv);                                \
 	}
 
 #endif

@@ -1,6 +1,7 @@
 /*
  * The `blobcast` subcommands that talk to a blobcastd through libblobcast:
- * load, edit, camera, snapshot, watch, bench-latency, nodes and scene.
+ * load, edit, camera, present, follow, snapshot, watch, bench-latency,
+ * nodes, scene, delete, sessions, undo and redo.
  */
 #ifndef BLOBCAST_CLI_CMD_CLIENT_H
 #define BLOBCAST_CLI_CMD_CLIENT_H
@@ -13,7 +14,7 @@
  * way; a later one wins). Output goes to stdout, messages to stderr.
  * Returns the process exit status: 0 on success (and for --help), 1 when
  * the server or the connection fails (the server's ERROR text is printed),
- * 2 for a usage error. */
+ * 2 for a usage error (worded like every command's, blobcast/args.h). */
 int bc_cli_client(const char *subcommand, int argc, char **argv);
 
 /* Prints one help line per client subcommand, for the overview. */

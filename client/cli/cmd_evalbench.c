@@ -37,9 +37,10 @@ struct args {
 	uint64_t seed;
 };
 
-static const struct bc_opt_name range_names[] = {
-	{"ia", BC_RANGE_IA}, {"aa", BC_RANGE_AA}, {"revaa", BC_RANGE_REVAA},
-	{NULL, 0}};
+static const struct bc_opt_name range_names[] = {{"ia", BC_RANGE_IA},
+                                                 {"aa", BC_RANGE_AA},
+                                                 {"revaa", BC_RANGE_REVAA},
+                                                 {NULL, 0}};
 
 /* Returns 0 to go on, or the exit status (0 after --help, 2 on a bad
  * argument) with *done set. */
@@ -53,45 +54,66 @@ static int parse(int argc, char **argv, struct args *a, bool *done)
 	a->threshold = BC_SVO_DEFAULT_THRESHOLD;
 	a->max_depth = BC_SVO_DEFAULT_MAX_DEPTH;
 	const struct bc_opt opts[] = {
-		{.name = "range", .kind = BC_OPT_ENUM, .dst = &arith,
-		 .arg = "A",
-		 .help = "{choices}: the range arithmetic that\n"
-			 "prunes (default {default})",
-		 .names = range_names},
-		{.name = "grid", .kind = BC_OPT_U32, .dst = &a->grid, .lo = 1,
-		 .hi = BC_SVO_MAX_GRID, .arg = "N",
-		 .help = "prune a uniform N^3 grid over the scene's box,\n"
-			 "each voxel from the whole tree, {range}"},
-		{.name = "threshold", .kind = BC_OPT_U32, .dst = &a->threshold,
-		 .lo = 1, .hi = UINT32_MAX, .arg = "T",
-		 .help = "build the adaptive octree with node-count\n"
-			 "threshold T, {range} (default {default};\n"
-			 "the default mode)"},
-		{.name = "max-depth", .kind = BC_OPT_U32, .dst = &a->max_depth,
-		 .lo = 1, .hi = BC_SVO_MAX_DEPTH, .arg = "D",
-		 .help = "octree depth limit, {range} (default {default})"},
-		{.name = "points", .kind = BC_OPT_U32, .dst = &a->points,
-		 .lo = 1, .hi = EB_MAX_POINTS, .arg = "N",
-		 .help = "random points timed, {range}\n(default {default})"},
-		{.name = "seed", .kind = BC_OPT_U64, .dst = &a->seed,
-		 .arg = "S", .help = "seed of the points (default {default})"},
-		{.kind = BC_OPT_INVALID},
+	    {.name = "range",
+	     .kind = BC_OPT_ENUM,
+	     .dst = &arith,
+	     .arg = "A",
+	     .help = "{choices}: the range arithmetic that\n"
+	             "prunes (default {default})",
+	     .names = range_names},
+	    {.name = "grid",
+	     .kind = BC_OPT_U32,
+	     .dst = &a->grid,
+	     .lo = 1,
+	     .hi = BC_SVO_MAX_GRID,
+	     .arg = "N",
+	     .help = "prune a uniform N^3 grid over the scene's box,\n"
+	             "each voxel from the whole tree, {range}"},
+	    {.name = "threshold",
+	     .kind = BC_OPT_U32,
+	     .dst = &a->threshold,
+	     .lo = 1,
+	     .hi = UINT32_MAX,
+	     .arg = "T",
+	     .help = "build the adaptive octree with node-count\n"
+	             "threshold T, {range} (default {default};\n"
+	             "the default mode)"},
+	    {.name = "max-depth",
+	     .kind = BC_OPT_U32,
+	     .dst = &a->max_depth,
+	     .lo = 1,
+	     .hi = BC_SVO_MAX_DEPTH,
+	     .arg = "D",
+	     .help = "octree depth limit, {range} (default {default})"},
+	    {.name = "points",
+	     .kind = BC_OPT_U32,
+	     .dst = &a->points,
+	     .lo = 1,
+	     .hi = EB_MAX_POINTS,
+	     .arg = "N",
+	     .help = "random points timed, {range}\n(default {default})"},
+	    {.name = "seed",
+	     .kind = BC_OPT_U64,
+	     .dst = &a->seed,
+	     .arg = "S",
+	     .help = "seed of the points (default {default})"},
+	    {.kind = BC_OPT_INVALID},
 	};
 	struct bc_args p = {
-		.prog = "blobcast eval-bench",
-		.usage = "blobcast eval-bench SCENE [options]",
-		.about = "Measures interval pruning and pruned evaluation "
-			 "(render/svo,\nafter Chulkov 2025) on SCENE -- a JSON "
-			 "scene file, '-' for\nstdin, or 'default' -- and "
-			 "prints the results as JSON.",
-		.footer = "Times are on one thread. Output fields: terms (RPN "
-			  "length),\nprune_ms_per_voxel / prune_ms_per_node, "
-			  "eval_ns_pruned (finding\nthe variant and evaluating "
-			  "it), eval_ns_locate, eval_ns_full\n(the whole tree), "
-			  "speedup = full / pruned, avg_depth and\navg_terms "
-			  "(over volume: a random point's leaf), max_terms,\n"
-			  "build_ms, bytes, sign_mismatches (always 0).",
-		.opts = opts};
+	    .prog = "blobcast eval-bench",
+	    .usage = "blobcast eval-bench SCENE [options]",
+	    .about = "Measures interval pruning and pruned evaluation "
+	             "(render/svo,\nafter Chulkov 2025) on SCENE -- a JSON "
+	             "scene file, '-' for\nstdin, or 'default' -- and "
+	             "prints the results as JSON.",
+	    .footer = "Times are on one thread. Output fields: terms (RPN "
+	              "length),\nprune_ms_per_voxel / prune_ms_per_node, "
+	              "eval_ns_pruned (finding\nthe variant and evaluating "
+	              "it), eval_ns_locate, eval_ns_full\n(the whole tree), "
+	              "speedup = full / pruned, avg_depth and\navg_terms "
+	              "(over volume: a random point's leaf), max_terms,\n"
+	              "build_ms, bytes, sign_mismatches (always 0).",
+	    .opts = opts};
 	*done = true;
 	if (bc_args_parse(&p, argc, argv)) {
 		return p.status;
@@ -102,15 +124,14 @@ static int parse(int argc, char **argv, struct args *a, bool *done)
 	}
 	if (p.npos > 1) {
 		return bc_args_error(&p, "one scene only ('%s' and '%s')",
-				     p.pos[0], p.pos[1]);
+		                     p.pos[0], p.pos[1]);
 	}
 	a->scene = p.pos[0];
-	if (a->grid &&
-	    (bc_args_given(&p, "threshold") ||
-	     bc_args_given(&p, "max-depth"))) {
+	if (a->grid && (bc_args_given(&p, "threshold") ||
+	                bc_args_given(&p, "max-depth"))) {
 		return bc_args_error(&p, "--grid measures a uniform grid; "
-					 "--threshold and --max-depth are for "
-					 "the octree");
+		                         "--threshold and --max-depth are for "
+		                         "the octree");
 	}
 	*done = false;
 	return 0;

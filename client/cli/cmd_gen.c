@@ -22,13 +22,12 @@
 #define EXIT_USAGE 2
 
 static const struct bc_opt_name kind_names[] = {
-	{"boxes", BC_GEN_KIND_BOXES},
-	{"spheres", BC_GEN_KIND_SPHERES},
-	{"lenses", BC_GEN_KIND_LENSES},
-	{NULL, 0}};
+    {"boxes", BC_GEN_KIND_BOXES},
+    {"spheres", BC_GEN_KIND_SPHERES},
+    {"lenses", BC_GEN_KIND_LENSES},
+    {NULL, 0}};
 static const struct bc_opt_name blend_names[] = {
-	{"sharp", BC_GEN_BLEND_SHARP}, {"smooth", BC_GEN_BLEND_SMOOTH},
-	{NULL, 0}};
+    {"sharp", BC_GEN_BLEND_SHARP}, {"smooth", BC_GEN_BLEND_SMOOTH}, {NULL, 0}};
 
 struct gen_args {
 	struct bc_gen_opts o;
@@ -39,31 +38,59 @@ struct gen_args {
 /* The option table over a; --help is generated from it. */
 #define GEN_OPTS(a)                                                            \
 	{                                                                      \
-		{.name = "level", .kind = BC_OPT_U32, .dst = &(a)->o.level,    \
-		 .lo = 1, .hi = BC_GEN_MAX_LEVEL, .arg = "L",                  \
+		{.name = "level",                                              \
+		 .kind = BC_OPT_U32,                                           \
+		 .dst = &(a)->o.level,                                         \
+		 .lo = 1,                                                      \
+		 .hi = BC_GEN_MAX_LEVEL,                                       \
+		 .arg = "L",                                                   \
 		 .help = "fig16 recursion level, {range}"},                    \
-		{.name = "count", .kind = BC_OPT_U32, .dst = &(a)->o.count,    \
-		 .lo = 1, .hi = BC_GEN_MAX_PRIMS, .arg = "N",                  \
-		 .help = "number of instances, primitives or gears,\n"         \
-			 "{range}"},                                           \
-		{.name = "seed", .kind = BC_OPT_U64, .dst = &(a)->o.seed,      \
-		 .arg = "S", .help = "random seed, {range} (default 0)"},      \
-		{.name = "kind", .kind = BC_OPT_ENUM, .dst = &(a)->kind,       \
-		 .arg = "K", .help = "fig18 instance shape: {choices}",        \
-		 .names = kind_names},                                         \
-		{.name = "blend", .kind = BC_OPT_ENUM, .dst = &(a)->blend,     \
-		 .arg = "B", .help = "{choices} operators",                    \
-		 .names = blend_names},                                        \
-		{.name = "teeth", .kind = BC_OPT_U32, .dst = &(a)->o.teeth,    \
-		 .lo = 6, .hi = BC_GEN_MAX_TEETH, .arg = "T",                  \
-		 .help = "teeth of the largest gear, {range}"},                \
-		{.name = "depth", .kind = BC_OPT_U32, .dst = &(a)->o.depth,    \
-		 .lo = 2, .hi = BC_GEN_RANDOM_MAX_DEPTH, .arg = "D",           \
-		 .help = "random: deepest nesting, {range}"},                  \
-		{.name = "out", .kind = BC_OPT_STRING, .dst = &(a)->out,       \
-		 .arg = "FILE",                                                \
-		 .help = "write to FILE instead of stdout (\"-\": stdout)"},   \
-		{.kind = BC_OPT_INVALID},                                      \
+		    {.name = "count",                                          \
+		     .kind = BC_OPT_U32,                                       \
+		     .dst = &(a)->o.count,                                     \
+		     .lo = 1,                                                  \
+		     .hi = BC_GEN_MAX_PRIMS,                                   \
+		     .arg = "N",                                               \
+		     .help = "number of instances, primitives or gears,\n"     \
+		             "{range}"},                                       \
+		    {.name = "seed",                                           \
+		     .kind = BC_OPT_U64,                                       \
+		     .dst = &(a)->o.seed,                                      \
+		     .arg = "S",                                               \
+		     .help = "random seed, {range} (default 0)"},              \
+		    {.name = "kind",                                           \
+		     .kind = BC_OPT_ENUM,                                      \
+		     .dst = &(a)->kind,                                        \
+		     .arg = "K",                                               \
+		     .help = "fig18 instance shape: {choices}",                \
+		     .names = kind_names},                                     \
+		    {.name = "blend",                                          \
+		     .kind = BC_OPT_ENUM,                                      \
+		     .dst = &(a)->blend,                                       \
+		     .arg = "B",                                               \
+		     .help = "{choices} operators",                            \
+		     .names = blend_names},                                    \
+		    {.name = "teeth",                                          \
+		     .kind = BC_OPT_U32,                                       \
+		     .dst = &(a)->o.teeth,                                     \
+		     .lo = 6,                                                  \
+		     .hi = BC_GEN_MAX_TEETH,                                   \
+		     .arg = "T",                                               \
+		     .help = "teeth of the largest gear, {range}"},            \
+		    {.name = "depth",                                          \
+		     .kind = BC_OPT_U32,                                       \
+		     .dst = &(a)->o.depth,                                     \
+		     .lo = 2,                                                  \
+		     .hi = BC_GEN_RANDOM_MAX_DEPTH,                            \
+		     .arg = "D",                                               \
+		     .help = "random: deepest nesting, {range}"},              \
+		    {.name = "out",                                            \
+		     .kind = BC_OPT_STRING,                                    \
+		     .dst = &(a)->out,                                         \
+		     .arg = "FILE",                                            \
+		     .help =                                                   \
+		         "write to FILE instead of stdout (\"-\": stdout)"},   \
+		    {.kind = BC_OPT_INVALID},                                  \
 	}
 
 /* The generators and what each takes, between the usage line and the
@@ -73,32 +100,32 @@ static const char *gen_about(char *buf, size_t cap)
 	size_t n, len;
 	const struct bc_gen_info *g = bc_gen_list(&n);
 	len = (size_t)snprintf(buf, cap,
-			       "Builds a scene and prints it as a JSON scene "
-			       "file (or writes it to FILE,\natomically). The "
-			       "same options always give the same scene.\n\n"
-			       "generators:\n");
+	                       "Builds a scene and prints it as a JSON scene "
+	                       "file (or writes it to FILE,\natomically). The "
+	                       "same options always give the same scene.\n\n"
+	                       "generators:\n");
 	for (size_t i = 0; i < n && len < cap; i++) {
 		len += (size_t)snprintf(buf + len, cap - len,
-					"  %s %s\n      %s\n", g[i].name,
-					g[i].usage, g[i].summary);
+		                        "  %s %s\n      %s\n", g[i].name,
+		                        g[i].usage, g[i].summary);
 	}
 	if (len < cap) {
 		snprintf(buf + len, cap - len,
-			 "  default\n      the built-in scene blobcastd's new "
-			 "sessions start with\n\noptions (each generator "
-			 "takes only those listed with it):");
+		         "  default\n      the built-in scene blobcastd's new "
+		         "sessions start with\n\noptions (each generator "
+		         "takes only those listed with it):");
 	}
 	return buf;
 }
 
 static struct bc_args gen_args(const struct bc_opt *opts, char *about,
-			       size_t cap)
+                               size_t cap)
 {
-	return (struct bc_args){
-		.prog = "blobcast gen",
-		.usage = "blobcast gen NAME [options] [--out FILE]",
-		.about = gen_about(about, cap),
-		.opts = opts};
+	return (struct bc_args){.prog = "blobcast gen",
+	                        .usage =
+	                            "blobcast gen NAME [options] [--out FILE]",
+	                        .about = gen_about(about, cap),
+	                        .opts = opts};
 }
 
 static int write_stdout(const char *text)
@@ -134,9 +161,10 @@ int bc_cli_gen(int argc, char **argv)
 		return bc_args_error(&p, "which generator?");
 	}
 	if (p.npos > 1) {
-		return bc_args_error(&p, "one generator only (got '%s' and "
-					 "'%s')",
-				     p.pos[0], p.pos[1]);
+		return bc_args_error(&p,
+		                     "one generator only (got '%s' and "
+		                     "'%s')",
+		                     p.pos[0], p.pos[1]);
 	}
 	name = p.pos[0];
 	out = a.out;
@@ -150,7 +178,7 @@ int bc_cli_gen(int argc, char **argv)
 		if (o.level || o.count || o.seed || o.teeth || o.depth ||
 		    o.kind || o.blend) {
 			return bc_args_error(&p, "default takes no options "
-						 "but --out");
+			                         "but --out");
 		}
 		if (!(t = bc_tree_create())) {
 			fprintf(stderr, "blobcast gen: out of memory\n");

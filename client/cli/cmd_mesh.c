@@ -30,37 +30,47 @@ static int parse(int argc, char **argv, struct mesh_args *a, bool *done)
 {
 	const char *bounds = NULL;
 	const struct bc_opt opts[] = {
-		{.name = "out", .kind = BC_OPT_STRING, .dst = &a->out,
-		 .arg = "FILE",
-		 .help = ".obj (text), .ply (binary) or .stl\n"
-			 "(binary), by extension (required)",
-		 .flags = BC_OPT_REQUIRED},
-		{.name = "resolution", .kind = BC_OPT_U32, .dst = &a->resolution,
-		 .lo = 2, .hi = BC_MESH_MAX_RESOLUTION, .arg = "N",
-		 .help = "grid cells along the box's longest side,\n"
-			 "{range} (default {default})"},
-		{.name = "bounds", .kind = BC_OPT_STRING, .dst = &bounds,
-		 .arg = "X0,Y0,Z0,X1,Y1,Z1",
-		 .help = "the box to mesh (default: the scene's\n"
-			 "box and two cells of margin); a solid\n"
-			 "cut by it is closed by its faces"},
-		{.name = "quiet", .kind = BC_OPT_FLAG, .dst = &a->quiet,
-		 .help = "no progress and no summary line"},
-		{.kind = BC_OPT_INVALID},
+	    {.name = "out",
+	     .kind = BC_OPT_STRING,
+	     .dst = &a->out,
+	     .arg = "FILE",
+	     .help = ".obj (text), .ply (binary) or .stl\n"
+	             "(binary), by extension (required)",
+	     .flags = BC_OPT_REQUIRED},
+	    {.name = "resolution",
+	     .kind = BC_OPT_U32,
+	     .dst = &a->resolution,
+	     .lo = 2,
+	     .hi = BC_MESH_MAX_RESOLUTION,
+	     .arg = "N",
+	     .help = "grid cells along the box's longest side,\n"
+	             "{range} (default {default})"},
+	    {.name = "bounds",
+	     .kind = BC_OPT_STRING,
+	     .dst = &bounds,
+	     .arg = "X0,Y0,Z0,X1,Y1,Z1",
+	     .help = "the box to mesh (default: the scene's\n"
+	             "box and two cells of margin); a solid\n"
+	             "cut by it is closed by its faces"},
+	    {.name = "quiet",
+	     .kind = BC_OPT_FLAG,
+	     .dst = &a->quiet,
+	     .help = "no progress and no summary line"},
+	    {.kind = BC_OPT_INVALID},
 	};
 	struct bc_args p = {
-		.prog = "blobcast mesh",
-		.usage = "blobcast mesh SCENE --out FILE [options]",
-		.about = "Writes a closed triangle mesh of SCENE's surface. "
-			 "SCENE is a\nJSON scene file, '-' to read one from "
-			 "stdin, or 'default'.\nThe surface is sampled on a "
-			 "uniform grid (surface nets: one\nvertex per grid "
-			 "cell the surface crosses, placed on the\nsurface "
-			 "within its cell); only cells near the surface are\n"
-			 "evaluated. Triangles are wound counter-clockwise "
-			 "seen from\noutside; vertices carry their primitive's "
-			 "colour (OBJ, PLY).",
-		.opts = opts};
+	    .prog = "blobcast mesh",
+	    .usage = "blobcast mesh SCENE --out FILE [options]",
+	    .about = "Writes a closed triangle mesh of SCENE's surface. "
+	             "SCENE is a\nJSON scene file, '-' to read one from "
+	             "stdin, or 'default'.\nThe surface is sampled on a "
+	             "uniform grid (surface nets: one\nvertex per grid "
+	             "cell the surface crosses, placed on the\nsurface "
+	             "within its cell); only cells near the surface are\n"
+	             "evaluated. Triangles are wound counter-clockwise "
+	             "seen from\noutside; vertices carry their primitive's "
+	             "colour (OBJ, PLY).",
+	    .opts = opts};
 	float b[6];
 	memset(a, 0, sizeof(*a));
 	a->resolution = BC_MESH_DEFAULT_RESOLUTION;
@@ -79,10 +89,10 @@ static int parse(int argc, char **argv, struct mesh_args *a, bool *done)
 		if (bc_num_f32s(bounds, b, 6) ||
 		    !(b[3] > b[0] && b[4] > b[1] && b[5] > b[2])) {
 			return bc_args_error(&p,
-					     "--bounds '%s' is not "
-					     "X0,Y0,Z0,X1,Y1,Z1 with each 1 "
-					     "above its 0",
-					     bounds);
+			                     "--bounds '%s' is not "
+			                     "X0,Y0,Z0,X1,Y1,Z1 with each 1 "
+			                     "above its 0",
+			                     bounds);
 		}
 		memcpy(a->lo, b, sizeof(a->lo));
 		memcpy(a->hi, b + 3, sizeof(a->hi));
@@ -90,9 +100,9 @@ static int parse(int argc, char **argv, struct mesh_args *a, bool *done)
 	}
 	if (bc_mesh_format_of(a->out) == BC_MESH_FORMAT_INVALID) {
 		return bc_args_error(&p,
-				     "%s: the extension must be .obj, .ply "
-				     "or .stl",
-				     a->out);
+		                     "%s: the extension must be .obj, .ply "
+		                     "or .stl",
+		                     a->out);
 	}
 	*done = false;
 	return 0;

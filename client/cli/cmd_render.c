@@ -42,117 +42,152 @@ struct args {
 	struct bc_render_opts opts;
 };
 
-static const struct bc_opt_name backend_names[] = {
-	{"naive", BC_BACKEND_NAIVE}, {"tiled", BC_BACKEND_TILED},
-	{"gl", BC_BACKEND_GL},       {"svo", BC_BACKEND_SVO},
-	{NULL, 0}};
+static const struct bc_opt_name backend_names[] = {{"naive", BC_BACKEND_NAIVE},
+                                                   {"tiled", BC_BACKEND_TILED},
+                                                   {"gl", BC_BACKEND_GL},
+                                                   {"svo", BC_BACKEND_SVO},
+                                                   {NULL, 0}};
 static const struct bc_opt_name debug_names[] = {
-	{"evals", BC_DEBUG_EVALS}, {"overlaps", BC_DEBUG_OVERLAPS}, {NULL, 0}};
-static const struct bc_opt_name simd_names[] = {
-	{"auto", BC_SIMD_AUTO}, {"off", BC_SIMD_OFF},
-	{"avx2", BC_SIMD_AVX2}, {"avx512", BC_SIMD_AVX512},
-	{NULL, 0}};
+    {"evals", BC_DEBUG_EVALS}, {"overlaps", BC_DEBUG_OVERLAPS}, {NULL, 0}};
+static const struct bc_opt_name simd_names[] = {{"auto", BC_SIMD_AUTO},
+                                                {"off", BC_SIMD_OFF},
+                                                {"avx2", BC_SIMD_AVX2},
+                                                {"avx512", BC_SIMD_AVX512},
+                                                {NULL, 0}};
 /* The renderer takes the platform by name: the index into this table. */
 static const struct bc_opt_name platform_names[] = {
-	{"auto", 0}, {"device", 1}, {"surfaceless", 2}, {"osmesa", 3},
-	{NULL, 0}};
-static const struct bc_opt_name range_names[] = {
-	{"ia", BC_RANGE_IA}, {"aa", BC_RANGE_AA}, {"revaa", BC_RANGE_REVAA},
-	{NULL, 0}};
+    {"auto", 0}, {"device", 1}, {"surfaceless", 2}, {"osmesa", 3}, {NULL, 0}};
+static const struct bc_opt_name range_names[] = {{"ia", BC_RANGE_IA},
+                                                 {"aa", BC_RANGE_AA},
+                                                 {"revaa", BC_RANGE_REVAA},
+                                                 {NULL, 0}};
 
 /* The option table over a; --help is generated from it. */
 #define RENDER_OPTS(a)                                                         \
 	{                                                                      \
-		{.name = "size", .kind = BC_OPT_SIZE, .dst = (a)->size,        \
-		 .lo = 1, .hi = BC_RENDER_MAX_DIM, .arg = "WxH",               \
+		{.name = "size",                                               \
+		 .kind = BC_OPT_SIZE,                                          \
+		 .dst = (a)->size,                                             \
+		 .lo = 1,                                                      \
+		 .hi = BC_RENDER_MAX_DIM,                                      \
+		 .arg = "WxH",                                                 \
 		 .help = "frame size in pixels, each {range} (required)",      \
 		 .flags = BC_OPT_REQUIRED},                                    \
-		{.name = "out", .kind = BC_OPT_STRING, .dst = &(a)->out,       \
-		 .arg = "IMAGE",                                               \
-		 .help = "colour image; the format follows the\n"              \
-			 "extension (png, tif, exr, jpg, ...) (required)",     \
-		 .flags = BC_OPT_REQUIRED},                                    \
-		{.name = "depth", .kind = BC_OPT_STRING, .dst = &(a)->depth,   \
-		 .arg = "IMAGE",                                               \
-		 .help = "ray distance per pixel as one float channel,\n"      \
-			 "+inf where nothing is hit: .exr, .tif, .pfm"},       \
-		{.name = "ids", .kind = BC_OPT_STRING, .dst = &(a)->ids,       \
-		 .arg = "IMAGE",                                               \
-		 .help = "node id of the primitive seen per pixel as\n"        \
-			 "uint32, 0 where nothing is hit: .tif, .exr"},        \
-		{.name = "backend", .kind = BC_OPT_ENUM,                       \
-		 .dst = &(a)->backend_opt, .arg = "NAME",                          \
-		 .help = "{choices} (default tiled);\n"                        \
-			 "backends not built into this binary are\n"           \
-			 "refused",                                            \
-		 .names = backend_names},                                      \
-		{.name = "debug", .kind = BC_OPT_ENUM, .dst = &(a)->debug,     \
-		 .arg = "MODE",                                                \
-		 .help = "colour by work instead of shading:\n"                \
-			 "evals    = field evaluations per ray (ramp\n"        \
-			 "           saturates at 128)\n"                      \
-			 "overlaps = primitives listed in the pixel's\n"       \
-			 "           8x8 tile (saturates at 32; naive\n"       \
-			 "           lists every primitive)",                  \
-		 .names = debug_names},                                        \
-		{.name = "threads", .kind = BC_OPT_U32,                        \
-		 .dst = &(a)->opts.threads, .hi = MAX_THREADS, .arg = "N",     \
-		 .help = "CPU threads {range}, 0 = one per core\n"             \
-			 "(default 0); the naive and tiled backends\n"         \
-			 "use at most 64"},                                    \
-		{.name = "simd", .kind = BC_OPT_ENUM, .dst = &(a)->simd,       \
-		 .arg = "MODE",                                                \
-		 .help = "tiled backend only: vector instructions of\n"        \
-			 "the tracer, auto (the widest the CPU has) |\n"       \
-			 "off (one ray at a time) | avx2 | avx512\n"           \
-			 "(default auto)",                                     \
-		 .names = simd_names},                                         \
-		{.name = "gl-platform", .kind = BC_OPT_ENUM,                   \
-		 .dst = &(a)->gl_platform, .arg = "P",                         \
-		 .help = "gl backend only: {choices}\n(default auto)",         \
-		 .names = platform_names},                                     \
-		{.name = "range", .kind = BC_OPT_ENUM, .dst = &(a)->range,     \
-		 .arg = "A",                                                   \
-		 .help = "svo backend only: interval arithmetic\n"             \
-			 "{choices} (default: the backend's, ia)",             \
-		 .names = range_names},                                        \
-		{.name = "threshold", .kind = BC_OPT_U32,                      \
-		 .dst = &(a)->opts.svo_threshold, .lo = 1, .hi = UINT32_MAX,   \
-		 .arg = "T",                                                   \
-		 .help = "svo backend only: node-count threshold that\n"       \
-			 "stops subdivision, {range} (default: the\n"          \
-			 "backend's)"},                                        \
-		{.name = "max-depth", .kind = BC_OPT_U32,                      \
-		 .dst = &(a)->opts.svo_max_depth, .lo = 1, .hi = UINT32_MAX,   \
-		 .arg = "D",                                                   \
-		 .help = "svo backend only: octree depth limit\n"              \
-			 "(default: the backend's)"},                          \
-		{.name = "stats", .kind = BC_OPT_FLAG, .dst = &(a)->stats,     \
-		 .help = "print the frame's timings and counters to\n"         \
-			 "stderr"},                                            \
-		{.name = "quiet", .kind = BC_OPT_FLAG, .dst = &(a)->quiet,     \
-		 .help = "no progress and no summary line"},                   \
-		{.kind = BC_OPT_INVALID},                                      \
+		    {.name = "out",                                            \
+		     .kind = BC_OPT_STRING,                                    \
+		     .dst = &(a)->out,                                         \
+		     .arg = "IMAGE",                                           \
+		     .help = "colour image; the format follows the\n"          \
+		             "extension (png, tif, exr, jpg, ...) (required)", \
+		     .flags = BC_OPT_REQUIRED},                                \
+		    {.name = "depth",                                          \
+		     .kind = BC_OPT_STRING,                                    \
+		     .dst = &(a)->depth,                                       \
+		     .arg = "IMAGE",                                           \
+		     .help = "ray distance per pixel as one float channel,\n"  \
+		             "+inf where nothing is hit: .exr, .tif, .pfm"},   \
+		    {.name = "ids",                                            \
+		     .kind = BC_OPT_STRING,                                    \
+		     .dst = &(a)->ids,                                         \
+		     .arg = "IMAGE",                                           \
+		     .help = "node id of the primitive seen per pixel as\n"    \
+		             "uint32, 0 where nothing is hit: .tif, .exr"},    \
+		    {.name = "backend",                                        \
+		     .kind = BC_OPT_ENUM,                                      \
+		     .dst = &(a)->backend_opt,                                 \
+		     .arg = "NAME",                                            \
+		     .help = "{choices} (default tiled);\n"                    \
+		             "backends not built into this binary are\n"       \
+		             "refused",                                        \
+		     .names = backend_names},                                  \
+		    {.name = "debug",                                          \
+		     .kind = BC_OPT_ENUM,                                      \
+		     .dst = &(a)->debug,                                       \
+		     .arg = "MODE",                                            \
+		     .help = "colour by work instead of shading:\n"            \
+		             "evals    = field evaluations per ray (ramp\n"    \
+		             "           saturates at 128)\n"                  \
+		             "overlaps = primitives listed in the pixel's\n"   \
+		             "           8x8 tile (saturates at 32; naive\n"   \
+		             "           lists every primitive)",              \
+		     .names = debug_names},                                    \
+		    {.name = "threads",                                        \
+		     .kind = BC_OPT_U32,                                       \
+		     .dst = &(a)->opts.threads,                                \
+		     .hi = MAX_THREADS,                                        \
+		     .arg = "N",                                               \
+		     .help = "CPU threads {range}, 0 = one per core\n"         \
+		             "(default 0); the naive and tiled backends\n"     \
+		             "use at most 64"},                                \
+		    {.name = "simd",                                           \
+		     .kind = BC_OPT_ENUM,                                      \
+		     .dst = &(a)->simd,                                        \
+		     .arg = "MODE",                                            \
+		     .help = "tiled backend only: vector instructions of\n"    \
+		             "the tracer, auto (the widest the CPU has) |\n"   \
+		             "off (one ray at a time) | avx2 | avx512\n"       \
+		             "(default auto)",                                 \
+		     .names = simd_names},                                     \
+		    {.name = "gl-platform",                                    \
+		     .kind = BC_OPT_ENUM,                                      \
+		     .dst = &(a)->gl_platform,                                 \
+		     .arg = "P",                                               \
+		     .help = "gl backend only: {choices}\n(default auto)",     \
+		     .names = platform_names},                                 \
+		    {.name = "range",                                          \
+		     .kind = BC_OPT_ENUM,                                      \
+		     .dst = &(a)->range,                                       \
+		     .arg = "A",                                               \
+		     .help = "svo backend only: interval arithmetic\n"         \
+		             "{choices} (default: the backend's, ia)",         \
+		     .names = range_names},                                    \
+		    {.name = "threshold",                                      \
+		     .kind = BC_OPT_U32,                                       \
+		     .dst = &(a)->opts.svo_threshold,                          \
+		     .lo = 1,                                                  \
+		     .hi = UINT32_MAX,                                         \
+		     .arg = "T",                                               \
+		     .help = "svo backend only: node-count threshold that\n"   \
+		             "stops subdivision, {range} (default: the\n"      \
+		             "backend's)"},                                    \
+		    {.name = "max-depth",                                      \
+		     .kind = BC_OPT_U32,                                       \
+		     .dst = &(a)->opts.svo_max_depth,                          \
+		     .lo = 1,                                                  \
+		     .hi = UINT32_MAX,                                         \
+		     .arg = "D",                                               \
+		     .help = "svo backend only: octree depth limit\n"          \
+		             "(default: the backend's)"},                      \
+		    {.name = "stats",                                          \
+		     .kind = BC_OPT_FLAG,                                      \
+		     .dst = &(a)->stats,                                       \
+		     .help = "print the frame's timings and counters to\n"     \
+		             "stderr"},                                        \
+		    {.name = "quiet",                                          \
+		     .kind = BC_OPT_FLAG,                                      \
+		     .dst = &(a)->quiet,                                       \
+		     .help = "no progress and no summary line"},               \
+		    {.kind = BC_OPT_INVALID},                                  \
 	}
 
 static const char render_about[] =
-	"Renders SCENE on this machine and writes the image files.\n"
-	"SCENE is a JSON scene file, '-' to read one from stdin, or\n"
-	"'default' for the built-in scene. The scene's camera is used.";
+    "Renders SCENE on this machine and writes the image files.\n"
+    "SCENE is a JSON scene file, '-' to read one from stdin, or\n"
+    "'default' for the built-in scene. The scene's camera is used.";
 static const char render_footer[] =
-	"Backend-only options are accepted with any backend and ignored by\n"
-	"the others. Exit status: 0 done, 1 the scene could not be loaded\n"
-	"or rendered or an image written, 2 bad arguments.";
+    "Backend-only options are accepted with any backend and ignored by\n"
+    "the others. Exit status: 0 done, 1 the scene could not be loaded\n"
+    "or rendered or an image written, 2 bad arguments.";
 
 static struct bc_args render_args(const struct bc_opt *opts)
 {
 	return (struct bc_args){
-		.prog = "blobcast render",
-		.usage = "blobcast render SCENE --size WxH --out IMAGE "
-			 "[options]",
-		.about = render_about,
-		.footer = render_footer,
-		.opts = opts};
+	    .prog = "blobcast render",
+	    .usage = "blobcast render SCENE --size WxH --out IMAGE "
+	             "[options]",
+	    .about = render_about,
+	    .footer = render_footer,
+	    .opts = opts};
 }
 
 void bc_cli_render_usage(FILE *out)
@@ -174,44 +209,43 @@ static int parse(int argc, char **argv, struct args *a)
 	}
 	if (p.npos == 0) {
 		return bc_args_error(&p, "%s",
-				     "no scene given (a file, '-' or "
-				     "'default')");
+		                     "no scene given (a file, '-' or "
+		                     "'default')");
 	}
 	if (p.npos > 1) {
 		return bc_args_error(&p, "more than one scene given ('%s')",
-				     p.pos[1]);
+		                     p.pos[1]);
 	}
 	a->scene = p.pos[0];
 	a->backend = (enum bc_backend)a->backend_opt;
 	if (!bc_backend_available(a->backend)) {
 		return bc_args_error(&p,
-				     "backend '%s' is not built into this "
-				     "blobcast",
-				     bc_backend_name(a->backend));
+		                     "backend '%s' is not built into this "
+		                     "blobcast",
+		                     bc_backend_name(a->backend));
 	}
 	a->opts.debug = (enum bc_debug_mode)a->debug;
 	a->opts.simd = (enum bc_simd)a->simd;
 	a->opts.svo_range = (enum bc_range_arith)a->range;
-	a->opts.gl_platform = a->gl_platform
-				      ? platform_names[a->gl_platform].name
-				      : NULL;
+	a->opts.gl_platform =
+	    a->gl_platform ? platform_names[a->gl_platform].name : NULL;
 	if (!bc_image_ext_supports(a->out, BC_IMAGE_U8)) {
 		return bc_args_error(&p,
-				     "--out '%s': no image format for that "
-				     "extension (png, tif, exr, jpg, ...)",
-				     a->out);
+		                     "--out '%s': no image format for that "
+		                     "extension (png, tif, exr, jpg, ...)",
+		                     a->out);
 	}
 	if (a->depth && !bc_image_ext_supports(a->depth, BC_IMAGE_F32)) {
 		return bc_args_error(&p,
-				     "--depth '%s': depth needs a float "
-				     "format: .exr, .tif or .pfm",
-				     a->depth);
+		                     "--depth '%s': depth needs a float "
+		                     "format: .exr, .tif or .pfm",
+		                     a->depth);
 	}
 	if (a->ids && !bc_image_ext_supports(a->ids, BC_IMAGE_U32)) {
 		return bc_args_error(&p,
-				     "--ids '%s': ids need a uint32 format: "
-				     ".tif or .exr",
-				     a->ids);
+		                     "--ids '%s': ids need a uint32 format: "
+		                     ".tif or .exr",
+		                     a->ids);
 	}
 	return 0;
 }
@@ -232,17 +266,17 @@ static int read_stdin(char **text, size_t *len, struct bc_errinfo *ei)
 			if (cap >= BC_SCENE_JSON_MAX_BYTES) {
 				bc_free(buf);
 				return bc_errinfo_set(ei, BC_ELIMIT,
-						      "stdin: scene over %u "
-						      "bytes",
-						      BC_SCENE_JSON_MAX_BYTES);
+				                      "stdin: scene over %u "
+				                      "bytes",
+				                      BC_SCENE_JSON_MAX_BYTES);
 			}
 			cap = cap * 2 > BC_SCENE_JSON_MAX_BYTES
-				      ? BC_SCENE_JSON_MAX_BYTES + 1
-				      : cap * 2;
+			          ? BC_SCENE_JSON_MAX_BYTES + 1
+			          : cap * 2;
 			if (!(grown = bc_realloc(buf, cap))) {
 				bc_free(buf);
 				return bc_errinfo_set(ei, BC_ENOMEM,
-						      "stdin: out of memory");
+				                      "stdin: out of memory");
 			}
 			buf = grown;
 		}
@@ -263,7 +297,7 @@ static int read_stdin(char **text, size_t *len, struct bc_errinfo *ei)
 #endif
 
 int bc_cli_load_scene(const char *scene, struct bc_tree *t,
-		      struct bc_camera *cam, struct bc_errinfo *ei)
+                      struct bc_camera *cam, struct bc_errinfo *ei)
 {
 	bc_camera_default(cam);
 #if defined(HAVE_SCENE)
@@ -285,7 +319,7 @@ int bc_cli_load_scene(const char *scene, struct bc_tree *t,
 #else
 	(void)t;
 	return bc_errinfo_set(ei, BC_ENOTSUP,
-			      "%s: this build cannot read scene files", scene);
+	                      "%s: this build cannot read scene files", scene);
 #endif
 }
 
@@ -310,8 +344,8 @@ static void on_progress(void *user, uint32_t done, uint32_t total)
 #endif
 
 static int render(const struct args *a, const struct bc_tree *t,
-		  const struct bc_camera *cam, struct bc_frame *frame,
-		  struct bc_render_stats *stats, struct bc_errinfo *ei)
+                  const struct bc_camera *cam, struct bc_frame *frame,
+                  struct bc_render_stats *stats, struct bc_errinfo *ei)
 {
 	struct bc_renderer *r = NULL;
 	struct progress prog = {isatty(STDERR_FILENO) == 1, 0};
@@ -321,7 +355,7 @@ static int render(const struct args *a, const struct bc_tree *t,
 	}
 #if defined(BLOBCAST_HAVE_CPU)
 	if (!a->quiet && (a->backend == BC_BACKEND_NAIVE ||
-			  a->backend == BC_BACKEND_TILED)) {
+	                  a->backend == BC_BACKEND_TILED)) {
 		bc_render_cpu_set_progress(r, on_progress, &prog);
 	}
 #endif
@@ -353,42 +387,44 @@ int bc_cli_render(int argc, char **argv)
 	}
 	if ((rc = bc_cli_load_scene(a.scene, t, &cam, &ei))) {
 		fprintf(stderr, "blobcast render: %s\n",
-			ei.msg[0] ? ei.msg : bc_strerror(rc));
+		        ei.msg[0] ? ei.msg : bc_strerror(rc));
 		goto cleanup;
 	}
 	if ((rc = bc_frame_init(&frame, a.size[0], a.size[1]))) {
-		fprintf(stderr, "blobcast render: %ux%u frame: %s\n",
-			a.size[0], a.size[1], bc_strerror(rc));
+		fprintf(stderr, "blobcast render: %ux%u frame: %s\n", a.size[0],
+		        a.size[1], bc_strerror(rc));
 		goto cleanup;
 	}
 	if ((rc = render(&a, t, &cam, &frame, &stats, &ei))) {
 		fprintf(stderr, "blobcast render: %s\n",
-			ei.msg[0] ? ei.msg : bc_strerror(rc));
+		        ei.msg[0] ? ei.msg : bc_strerror(rc));
 		goto cleanup;
 	}
 	if ((rc = bc_image_write_rgba8(a.out, a.size[0], a.size[1], frame.rgba,
-				       &ei)) ||
-	    (a.depth && (rc = bc_image_write_float(a.depth, a.size[0], a.size[1],
-						   frame.depth, &ei))) ||
+	                               &ei)) ||
+	    (a.depth &&
+	     (rc = bc_image_write_float(a.depth, a.size[0], a.size[1],
+	                                frame.depth, &ei))) ||
 	    (a.ids && (rc = bc_image_write_u32(a.ids, a.size[0], a.size[1],
-					       frame.ids, &ei)))) {
+	                                       frame.ids, &ei)))) {
 		fprintf(stderr, "blobcast render: %s\n", ei.msg);
 		goto cleanup;
 	}
 	if (a.stats) {
 		fprintf(stderr,
-			"render: backend %s, %ux%u, %u primitives: total %.2f "
-			"ms, a-buffer %.2f ms, trace %.2f ms, upload %.2f ms, "
-			"%llu field evaluations, max overlap %u%s\n",
-			bc_backend_name(a.backend), a.size[0], a.size[1],
-			bc_tree_prim_count(t), stats.ms_total, stats.ms_abuffer,
-			stats.ms_trace, stats.ms_upload,
-			(unsigned long long)stats.field_evals, stats.max_overlap,
-			stats.incomplete ? ", incomplete" : "");
+		        "render: backend %s, %ux%u, %u primitives: total %.2f "
+		        "ms, a-buffer %.2f ms, trace %.2f ms, upload %.2f ms, "
+		        "%llu field evaluations, max overlap %u%s\n",
+		        bc_backend_name(a.backend), a.size[0], a.size[1],
+		        bc_tree_prim_count(t), stats.ms_total, stats.ms_abuffer,
+		        stats.ms_trace, stats.ms_upload,
+		        (unsigned long long)stats.field_evals,
+		        stats.max_overlap,
+		        stats.incomplete ? ", incomplete" : "");
 	} else if (!a.quiet) {
 		fprintf(stderr, "render: %s %ux%u in %.1f ms -> %s\n",
-			bc_backend_name(a.backend), a.size[0], a.size[1],
-			stats.ms_total, a.out);
+		        bc_backend_name(a.backend), a.size[0], a.size[1],
+		        stats.ms_total, a.out);
 	}
 	status = 0;
 cleanup:

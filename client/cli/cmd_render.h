@@ -25,6 +25,6 @@ struct bc_errinfo;
  * Returns 0 or an error with the reason in ei. Shared by the commands that
  * read scenes. */
 int bc_cli_load_scene(const char *scene, struct bc_tree *t,
-		      struct bc_camera *cam, struct bc_errinfo *ei);
+                      struct bc_camera *cam, struct bc_errinfo *ei);
 
 #endif

@@ -30,9 +30,9 @@
 
 /* The subcommands that talk to a blobcastd (cmd_client.c). */
 static const char *const client_cmds[] = {
-	"load", "edit", "camera", "snapshot", "watch", "bench-latency",
-	"nodes", "scene", "delete", "undo", "redo", "sessions",
-	"present", "follow",
+    "load",          "edit",     "camera",  "snapshot", "watch",
+    "bench-latency", "nodes",    "scene",   "delete",   "undo",
+    "redo",          "sessions", "present", "follow",
 };
 
 static bool is_client_cmd(const char *s)
@@ -47,55 +47,59 @@ static bool is_client_cmd(const char *s)
 }
 
 static const char main_about[] =
-	"Local commands:\n"
-	"  render      render a scene file to images on this machine\n"
-	"  mesh        write a triangle mesh (.obj, .ply, .stl) of a scene\n"
+    "Local commands:\n"
+    "  render      render a scene file to images on this machine\n"
+    "  mesh        write a triangle mesh (.obj, .ply, .stl) of a scene\n"
 #if defined(BLOBCAST_CLI_HAVE_GEN)
-	"  gen         print a generated scene (the paper's synthetic\n"
-	"              families and more) as JSON\n"
+    "  gen         print a generated scene (the paper's synthetic\n"
+    "              families and more) as JSON\n"
 #endif
 #if defined(BLOBCAST_CLI_HAVE_EVALBENCH)
-	"  eval-bench  measure interval pruning and pruned evaluation\n"
-	"              on a scene (prints JSON)\n"
+    "  eval-bench  measure interval pruning and pruned evaluation\n"
+    "              on a scene (prints JSON)\n"
 #endif
-	"  help [COMMAND]  this overview, or a command's full help\n"
-	"\n"
-	"Options (before the command):";
+    "  help [COMMAND]  this overview, or a command's full help\n"
+    "\n"
+    "Options (before the command):";
 
 /* After the option table: the server commands, then where to read more. */
 static void more_help(FILE *out)
 {
 #if defined(BLOBCAST_CLI_HAVE_CLIENT)
 	fprintf(out,
-		"\nCommands for a blobcastd server (--server HOST:PORT or\n"
-		"unix:PATH, before or after the command):\n");
+	        "\nCommands for a blobcastd server (--server HOST:PORT or\n"
+	        "unix:PATH, before or after the command):\n");
 	bc_cli_client_usage(out);
 #endif
 	fprintf(out, "\n'blobcast COMMAND --help' describes each command's "
-		     "options.\n");
+	             "options.\n");
 }
 
 /* The options before the command word, over server and version. */
 #define MAIN_OPTS(server, version)                                             \
 	{                                                                      \
-		{.name = "server", .kind = BC_OPT_STRING, .dst = (server),     \
+		{.name = "server",                                             \
+		 .kind = BC_OPT_STRING,                                        \
+		 .dst = (server),                                              \
 		 .arg = "ADDR",                                                \
 		 .help = "the blobcastd of the server commands\n"              \
-			 "(HOST:PORT, tls://HOST:PORT or unix:PATH)"},         \
-		{.name = "version", .kind = BC_OPT_FLAG, .dst = (version),     \
-		 .help = "print the version"},                                 \
-		{.kind = BC_OPT_INVALID},                                      \
+		         "(HOST:PORT, tls://HOST:PORT or unix:PATH)"},         \
+		    {.name = "version",                                        \
+		     .kind = BC_OPT_FLAG,                                      \
+		     .dst = (version),                                         \
+		     .help = "print the version"},                             \
+		    {.kind = BC_OPT_INVALID},                                  \
 	}
 
 static struct bc_args main_args(const struct bc_opt *opts)
 {
 	return (struct bc_args){
-		.prog = "blobcast",
-		.usage = "blobcast [--server ADDR] COMMAND [options]",
-		.about = main_about,
-		.opts = opts,
-		.stop_at_positional = true,
-		.more_help = more_help};
+	    .prog = "blobcast",
+	    .usage = "blobcast [--server ADDR] COMMAND [options]",
+	    .about = main_about,
+	    .opts = opts,
+	    .stop_at_positional = true,
+	    .more_help = more_help};
 }
 
 static void usage(FILE *out)
@@ -130,12 +134,16 @@ static int dispatch(int argc, char **argv)
 		return bc_cli_client(cmd, argc, argv);
 #endif
 	} else {
-		fprintf(stderr, "blobcast: unknown command '%s' (see "
-				"'blobcast --help')\n", cmd);
+		fprintf(stderr,
+		        "blobcast: unknown command '%s' (see "
+		        "'blobcast --help')\n",
+		        cmd);
 		return 2;
 	}
-	fprintf(stderr, "blobcast: command '%s' is not built into this "
-			"blobcast\n", cmd);
+	fprintf(stderr,
+	        "blobcast: command '%s' is not built into this "
+	        "blobcast\n",
+	        cmd);
 	return 2;
 }
 
@@ -175,8 +183,8 @@ int main(int argc, char **argv)
 	if (strcmp(a.pos[0], "help") == 0) {
 		if (server || a.npos > 2) {
 			return bc_args_error(&a, "%s",
-					     "help takes at most one command "
-					     "and no --server");
+			                     "help takes at most one command "
+			                     "and no --server");
 		}
 		return help(a.npos > 1 ? a.pos[1] : NULL);
 	}
@@ -185,9 +193,9 @@ int main(int argc, char **argv)
 	}
 	if (!is_client_cmd(a.pos[0])) {
 		return bc_args_error(&a,
-				     "--server applies to the server commands "
-				     "only, not '%s'",
-				     a.pos[0]);
+		                     "--server applies to the server commands "
+		                     "only, not '%s'",
+		                     a.pos[0]);
 	}
 	/* The client commands parse --server themselves: pass it after the
 	 * command word. */

@@ -32,8 +32,8 @@ static double deadline_after(int timeout_ms)
 }
 
 /* Records a sticky error on c and returns it. */
-static int fail(struct bc_client *c, int code, const char *fmt, ...)
-	BC__ERRINFO_PRINTF;
+static int fail(struct bc_client *c, int code, const char *fmt,
+                ...) BC__ERRINFO_PRINTF;
 
 static int fail(struct bc_client *c, int code, const char *fmt, ...)
 {
@@ -62,7 +62,7 @@ int bc__client_fail(struct bc_client *c, int code, const char *fmt, ...)
 }
 
 static int send_or_say(struct bc_client *c, struct bc_msg *m, uint32_t *seq,
-		       struct bc_errinfo *ei);
+                       struct bc_errinfo *ei);
 
 /* Copies the sticky error into ei and returns it. */
 static int sticky(const struct bc_client *c, struct bc_errinfo *ei)
@@ -121,7 +121,7 @@ static bool host_ok(const char *s, size_t n)
 /* ws://HOST[:PORT][/PATH] and wss://...: the host part as a TCP address,
  * the path (default "/") printable ASCII without blanks. */
 static int parse_ws(const char *s, struct bc_client_addr *out,
-		    struct bc_errinfo *ei)
+                    struct bc_errinfo *ei)
 {
 	bool tls = s[2] == 's';
 	const char *hp = s + (tls ? 6 : 5);
@@ -134,9 +134,9 @@ static int parse_ws(const char *s, struct bc_client_addr *out,
 	int rc;
 	if (hlen == 0 || hlen >= sizeof(host)) {
 		return bc_errinfo_set(ei, BC_EINVAL,
-				      "\"%.64s\": expected ws[s]://HOST[:PORT]"
-				      "/PATH",
-				      s);
+		                      "\"%.64s\": expected ws[s]://HOST[:PORT]"
+		                      "/PATH",
+		                      s);
 	}
 	memcpy(host, hp, hlen);
 	host[hlen] = '\0';
@@ -152,17 +152,17 @@ static int parse_ws(const char *s, struct bc_client_addr *out,
 	if (strlen(path) > BC_CLIENT_MAX_WS_PATH) {
 		memset(out, 0, sizeof(*out));
 		return bc_errinfo_set(ei, BC_EINVAL,
-				      "\"%.64s\": path over %u bytes", s,
-				      BC_CLIENT_MAX_WS_PATH);
+		                      "\"%.64s\": path over %u bytes", s,
+		                      BC_CLIENT_MAX_WS_PATH);
 	}
 	for (const char *p = path; *p; p++) {
 		if ((unsigned char)*p <= ' ' || (unsigned char)*p >= 0x7f) {
 			memset(out, 0, sizeof(*out));
 			return bc_errinfo_set(ei, BC_EINVAL,
-					      "\"%.64s\": the path must be "
-					      "printable ASCII without blanks "
-					      "(percent-encode the rest)",
-					      s);
+			                      "\"%.64s\": the path must be "
+			                      "printable ASCII without blanks "
+			                      "(percent-encode the rest)",
+			                      s);
 		}
 	}
 	if (!has_port) {
@@ -175,7 +175,7 @@ static int parse_ws(const char *s, struct bc_client_addr *out,
 }
 
 int bc_client_addr_parse(const char *s, struct bc_client_addr *out,
-			 struct bc_errinfo *ei)
+                         struct bc_errinfo *ei)
 {
 	const char *host, *port = NULL, *colon;
 	size_t hlen, plen = 0, len;
@@ -191,9 +191,9 @@ int bc_client_addr_parse(const char *s, struct bc_client_addr *out,
 		if (rc == 0 && out->kind != BC_CLIENT_ADDR_TCP) {
 			memset(out, 0, sizeof(*out));
 			return bc_errinfo_set(ei, BC_EINVAL,
-					      "\"%.64s\": TLS is for TCP "
-					      "addresses, not Unix sockets",
-					      s);
+			                      "\"%.64s\": TLS is for TCP "
+			                      "addresses, not Unix sockets",
+			                      s);
 		}
 		out->tls = rc == 0;
 		return rc;
@@ -203,13 +203,14 @@ int bc_client_addr_parse(const char *s, struct bc_client_addr *out,
 		size_t n = len - 5;
 		if (n == 0) {
 			return bc_errinfo_set(ei, BC_EINVAL,
-					      "\"unix:\" needs a socket path");
+			                      "\"unix:\" needs a socket path");
 		}
 		if (n > BC_CLIENT_MAX_UNIX_PATH) {
-			return bc_errinfo_set(ei, BC_EINVAL,
-					      "socket path of %zu bytes is over "
-					      "%u",
-					      n, BC_CLIENT_MAX_UNIX_PATH);
+			return bc_errinfo_set(
+			    ei, BC_EINVAL,
+			    "socket path of %zu bytes is over "
+			    "%u",
+			    n, BC_CLIENT_MAX_UNIX_PATH);
 		}
 		out->kind = BC_CLIENT_ADDR_UNIX;
 		memcpy(out->path, s + 5, n + 1);
@@ -219,7 +220,7 @@ int bc_client_addr_parse(const char *s, struct bc_client_addr *out,
 		const char *close = strchr(s, ']');
 		if (!close) {
 			return bc_errinfo_set(ei, BC_EINVAL,
-					      "\"%.64s\": '[' without ']'", s);
+			                      "\"%.64s\": '[' without ']'", s);
 		}
 		host = s + 1;
 		hlen = (size_t)(close - host);
@@ -227,18 +228,20 @@ int bc_client_addr_parse(const char *s, struct bc_client_addr *out,
 			port = close + 2;
 			plen = strlen(port);
 		} else if (close[1] != '\0') {
-			return bc_errinfo_set(ei, BC_EINVAL,
-					      "\"%.64s\": expected ':PORT' after "
-					      "']'",
-					      s);
+			return bc_errinfo_set(
+			    ei, BC_EINVAL,
+			    "\"%.64s\": expected ':PORT' after "
+			    "']'",
+			    s);
 		}
 	} else {
 		colon = strchr(s, ':');
 		if (colon && strchr(colon + 1, ':')) {
-			return bc_errinfo_set(ei, BC_EINVAL,
-					      "\"%.64s\": write an IPv6 address "
-					      "as [ADDRESS]:PORT",
-					      s);
+			return bc_errinfo_set(
+			    ei, BC_EINVAL,
+			    "\"%.64s\": write an IPv6 address "
+			    "as [ADDRESS]:PORT",
+			    s);
 		}
 		host = s;
 		hlen = colon ? (size_t)(colon - s) : len;
@@ -253,17 +256,17 @@ int bc_client_addr_parse(const char *s, struct bc_client_addr *out,
 	}
 	if (!host_ok(host, hlen)) {
 		return bc_errinfo_set(ei, BC_EINVAL,
-				      "\"%.64s\": bad host name (1..%u "
-				      "printable characters)",
-				      s, BC_CLIENT_MAX_HOST);
+		                      "\"%.64s\": bad host name (1..%u "
+		                      "printable characters)",
+		                      s, BC_CLIENT_MAX_HOST);
 	}
 	out->port = (uint16_t)BC_CLIENT_DEFAULT_PORT;
 	if (port && !parse_port(port, plen, &out->port)) {
 		memset(out, 0, sizeof(*out));
 		return bc_errinfo_set(ei, BC_EINVAL,
-				      "\"%.64s\": port must be a number "
-				      "1..65535",
-				      s);
+		                      "\"%.64s\": port must be a number "
+		                      "1..65535",
+		                      s);
 	}
 	out->kind = BC_CLIENT_ADDR_TCP;
 	memcpy(out->host, host, hlen);
@@ -286,7 +289,7 @@ static int set_nonblock(int fd)
 /* Connects a non-blocking socket, waiting until deadline. Returns 0 or an
  * errno value (ETIMEDOUT for the deadline). */
 static int connect_wait(int fd, const struct sockaddr *sa, socklen_t len,
-			double deadline)
+                        double deadline)
 {
 	struct pollfd p = {.fd = fd, .events = POLLOUT};
 	int soerr = 0, n;
@@ -313,7 +316,7 @@ static int connect_wait(int fd, const struct sockaddr *sa, socklen_t len,
 }
 
 static int open_unix(const struct bc_client_addr *a, double deadline,
-		     int *fd_out, struct bc_errinfo *ei)
+                     int *fd_out, struct bc_errinfo *ei)
 {
 	struct sockaddr_un sun;
 	int fd, e;
@@ -329,19 +332,19 @@ static int open_unix(const struct bc_client_addr *a, double deadline,
 		return bc_errinfo_set(ei, BC_EIO, "socket: %s", strerror(e));
 	}
 	e = connect_wait(fd, (const struct sockaddr *)&sun, sizeof(sun),
-			 deadline);
+	                 deadline);
 	if (e) {
 		close(fd);
 		return bc_errinfo_set(ei, e == ETIMEDOUT ? BC_ETIMEOUT : BC_EIO,
-				      "cannot connect to unix:%s: %s", a->path,
-				      strerror(e));
+		                      "cannot connect to unix:%s: %s", a->path,
+		                      strerror(e));
 	}
 	*fd_out = fd;
 	return 0;
 }
 
 static int open_tcp(const struct bc_client_addr *a, double deadline,
-		    int *fd_out, struct bc_errinfo *ei)
+                    int *fd_out, struct bc_errinfo *ei)
 {
 	struct addrinfo hints, *res = NULL, *ai;
 	char port[8];
@@ -354,7 +357,7 @@ static int open_tcp(const struct bc_client_addr *a, double deadline,
 	rc = getaddrinfo(a->host, port, &hints, &res);
 	if (rc != 0) {
 		return bc_errinfo_set(ei, BC_EIO, "cannot resolve %s: %s",
-				      a->host, gai_strerror(rc));
+		                      a->host, gai_strerror(rc));
 	}
 	for (ai = res; ai; ai = ai->ai_next) {
 		fd = socket(ai->ai_family, ai->ai_socktype, ai->ai_protocol);
@@ -366,7 +369,7 @@ static int open_tcp(const struct bc_client_addr *a, double deadline,
 			e = errno;
 		} else {
 			e = connect_wait(fd, ai->ai_addr, ai->ai_addrlen,
-					 deadline);
+			                 deadline);
 		}
 		if (e == 0) {
 			break;
@@ -380,9 +383,9 @@ static int open_tcp(const struct bc_client_addr *a, double deadline,
 	freeaddrinfo(res);
 	if (fd < 0) {
 		return bc_errinfo_set(ei, e == ETIMEDOUT ? BC_ETIMEOUT : BC_EIO,
-				      "cannot connect to %s:%u: %s", a->host,
-				      (unsigned)a->port,
-				      e ? strerror(e) : "no address");
+		                      "cannot connect to %s:%u: %s", a->host,
+		                      (unsigned)a->port,
+		                      e ? strerror(e) : "no address");
 	}
 	/* Requests are small and latency-bound: do not let Nagle hold an EDIT
 	 * back waiting for the ACK of the previous one. */
@@ -394,7 +397,7 @@ static int open_tcp(const struct bc_client_addr *a, double deadline,
 }
 
 static int hello(struct bc_client *c, const struct bc_client_opts *o,
-		 struct bc_errinfo *ei)
+                 struct bc_errinfo *ei)
 {
 	struct bc_msg m = {.type = BC_MSG_HELLO};
 	const char *name = o->name ? o->name : "libblobcast";
@@ -402,12 +405,12 @@ static int hello(struct bc_client *c, const struct bc_client_opts *o,
 	int rc;
 	if (strlen(name) > BC_PROTO_MAX_NAME) {
 		return bc_errinfo_set(ei, BC_EINVAL,
-				      "client name over %u bytes",
-				      BC_PROTO_MAX_NAME);
+		                      "client name over %u bytes",
+		                      BC_PROTO_MAX_NAME);
 	}
 	if (strlen(token) > BC_PROTO_MAX_TOKEN) {
 		return bc_errinfo_set(ei, BC_EINVAL, "token over %u bytes",
-				      BC_PROTO_MAX_TOKEN);
+		                      BC_PROTO_MAX_TOKEN);
 	}
 	m.hello.version_min = BC_PROTO_VERSION;
 	m.hello.version_max = BC_PROTO_VERSION;
@@ -432,12 +435,12 @@ static int hello(struct bc_client *c, const struct bc_client_opts *o,
 	c->info.max_members = m.welcome.max_members;
 	c->info.max_edit_ops = m.welcome.max_edit_ops;
 	copy_str(c->info.server_id, sizeof(c->info.server_id),
-		 m.welcome.server_id);
+	         m.welcome.server_id);
 	return 0;
 }
 
 int bc_client_connect(struct bc_client **out, const struct bc_client_opts *opts,
-		      struct bc_errinfo *ei)
+                      struct bc_errinfo *ei)
 {
 	static const struct bc_client_opts none = {0};
 	const struct bc_client_opts *o = opts ? opts : &none;
@@ -452,8 +455,8 @@ int bc_client_connect(struct bc_client **out, const struct bc_client_opts *opts,
 	}
 	if (o->encodings & ~BC_PROTO_ENCODINGS_ALL) {
 		return bc_errinfo_set(ei, BC_EINVAL,
-				      "encodings 0x%02x has unknown bits",
-				      (unsigned)o->encodings);
+		                      "encodings 0x%02x has unknown bits",
+		                      (unsigned)o->encodings);
 	}
 	if (!(c = bc_calloc(1, sizeof(*c))) ||
 	    !(c->chunk = bc_malloc(BC_CLIENT_READ_CHUNK))) {
@@ -462,8 +465,8 @@ int bc_client_connect(struct bc_client **out, const struct bc_client_opts *opts,
 	}
 	c->fd = -1;
 	c->next_seq = 1;
-	c->timeout_ms = o->timeout_ms == 0 ? BC_CLIENT_DEFAULT_TIMEOUT_MS
-					   : o->timeout_ms;
+	c->timeout_ms =
+	    o->timeout_ms == 0 ? BC_CLIENT_DEFAULT_TIMEOUT_MS : o->timeout_ms;
 	c->encodings = o->encodings ? o->encodings : BC_PROTO_ENCODINGS_ALL;
 	/* SCENE_STATE may be as large as any message, so the reader keeps the
 	 * protocol's limit; the server holds FRAMEs to max_frame_bytes. */
@@ -471,12 +474,12 @@ int bc_client_connect(struct bc_client **out, const struct bc_client_opts *opts,
 	bc_proto_buf_init(&c->out, 0);
 	deadline = deadline_after(c->timeout_ms);
 	rc = addr.kind == BC_CLIENT_ADDR_UNIX
-		     ? open_unix(&addr, deadline, &c->fd, ei)
-		     : open_tcp(&addr, deadline, &c->fd, ei);
+	         ? open_unix(&addr, deadline, &c->fd, ei)
+	         : open_tcp(&addr, deadline, &c->fd, ei);
 	/* The token goes out in HELLO: only after the handshake succeeded. */
 	if (!rc && addr.tls &&
 	    bc__client_tls_start(c, addr.host, o->ca_file, o->insecure,
-				 deadline)) {
+	                         deadline)) {
 		rc = sticky(c, ei);
 	}
 	if (!rc && addr.ws && bc__client_ws_start(c, &addr, deadline)) {
@@ -535,7 +538,7 @@ int bc_client_error(const struct bc_client *c, struct bc_errinfo *ei)
 
 /* bc_client_send(), with the reason of any failure in ei. */
 static int send_msg(struct bc_client *c, struct bc_msg *m, uint32_t *seq_out,
-		    struct bc_errinfo *ei)
+                    struct bc_errinfo *ei)
 {
 	struct bc_errinfo why = {0};
 	double deadline;
@@ -550,13 +553,13 @@ static int send_msg(struct bc_client *c, struct bc_msg *m, uint32_t *seq_out,
 	bc_proto_buf_reset(&c->out);
 	if ((rc = bc_proto_encode(&c->out, m, &why))) {
 		return bc_errinfo_set(ei, rc, "%s not sent: %s",
-				      bc_proto_type_name(m->type), why.msg);
+		                      bc_proto_type_name(m->type), why.msg);
 	}
 	/* Seq 0 means "no request" in answers: skip it when wrapping. */
 	c->next_seq = c->next_seq == UINT32_MAX ? 1 : c->next_seq + 1;
 	deadline = deadline_after(c->timeout_ms);
 	if ((rc = bc__client_io_write(c, c->out.data, c->out.len, deadline,
-				      bc_proto_type_name(m->type)))) {
+	                              bc_proto_type_name(m->type)))) {
 		return rc;
 	}
 	c->info.msgs_out++;
@@ -601,7 +604,7 @@ static void track(struct bc_client *c, const struct bc_msg *m)
 		c->info.role = m->session_info.role;
 		c->info.nmembers = m->session_info.nmembers;
 		copy_str(c->info.session, sizeof(c->info.session),
-			 m->session_info.name);
+		         m->session_info.name);
 		break;
 	case BC_MSG_OK:
 		/* SESSION_LEAVE and SESSION_DELETE are answered with OK. */
@@ -616,8 +619,8 @@ static void track(struct bc_client *c, const struct bc_msg *m)
 			break;
 		}
 		if (bc_scene_decode(m->scene_state.scene.ptr,
-				    m->scene_state.scene.len, t, &c->camera,
-				    &has_cam, &ei)) {
+		                    m->scene_state.scene.len, t, &c->camera,
+		                    &has_cam, &ei)) {
 			drop_scene(c, ei.msg);
 			bc_log(BC_LOG_WARN, "SCENE_STATE does not decode: %s",
 			       ei.msg);
@@ -674,12 +677,12 @@ static void track(struct bc_client *c, const struct bc_msg *m)
 	}
 	case BC_MSG_ERROR:
 		if (m->flags & BC_PROTO_FLAG_FATAL) {
-			int code = m->error.code ? -(int)m->error.code
-						 : BC_ECLOSED;
+			int code =
+			    m->error.code ? -(int)m->error.code : BC_ECLOSED;
 			fail(c, code, "server: %.*s", (int)m->error.text.len,
 			     m->error.text.ptr);
 		} else if (m->seq == 0 &&
-			   -(int)m->error.code == BC_ENOSESSION) {
+		           -(int)m->error.code == BC_ENOSESSION) {
 			/* Our session was deleted: back in READY. */
 			c->info.session_id = 0;
 			c->info.nmembers = 0;
@@ -705,7 +708,8 @@ int bc_client_recv(struct bc_client *c, struct bc_msg *out, int timeout_ms)
 		long n;
 		rc = bc_proto_reader_next(&c->reader, out);
 		if (rc == 1) {
-			size_t size = before - bc_proto_reader_pending(&c->reader);
+			size_t size =
+			    before - bc_proto_reader_pending(&c->reader);
 			c->info.msgs_in++;
 			c->info.bytes_in += size;
 			c->info.last_msg_bytes = (uint32_t)size;
@@ -714,10 +718,10 @@ int bc_client_recv(struct bc_client *c, struct bc_msg *out, int timeout_ms)
 		}
 		if (rc < 0) {
 			return fail(c, rc, "bad bytes from the server: %s",
-				    c->reader.errstr);
+			            c->reader.errstr);
 		}
 		n = bc__client_io_read(c, c->chunk, BC_CLIENT_READ_CHUNK,
-				       deadline);
+		                       deadline);
 		if (n == 0) {
 			return 0;
 		}
@@ -727,15 +731,15 @@ int bc_client_recv(struct bc_client *c, struct bc_msg *out, int timeout_ms)
 		if (n == BC__CLIENT_EOF) {
 			if (bc_proto_reader_eof(&c->reader) < 0) {
 				return fail(c, c->reader.err,
-					    "the server closed the connection "
-					    "mid-message: %s",
-					    c->reader.errstr);
+				            "the server closed the connection "
+				            "mid-message: %s",
+				            c->reader.errstr);
 			}
 			return fail(c, BC_ECLOSED,
-				    "the server closed the connection");
+			            "the server closed the connection");
 		}
 		if ((rc = bc_proto_reader_feed(&c->reader, c->chunk,
-					       (size_t)n))) {
+		                               (size_t)n))) {
 			return fail(c, rc, "reader: %s", c->reader.errstr);
 		}
 	}
@@ -744,7 +748,7 @@ int bc_client_recv(struct bc_client *c, struct bc_msg *out, int timeout_ms)
 /* ---- waiting for answers ------------------------------------------------------ */
 
 static bool matches(const struct bc_client *c, const struct bc_msg *m,
-		    enum bc_msg_type type, uint32_t seq)
+                    enum bc_msg_type type, uint32_t seq)
 {
 	if (m->type != type) {
 		return false;
@@ -756,7 +760,7 @@ static bool matches(const struct bc_client *c, const struct bc_msg *m,
 	case BC_MSG_SCENE_STATE:
 		return seq == 0 ||
 		       (m->scene_state.author == c->info.member_id &&
-			m->scene_state.author_seq == seq);
+		        m->scene_state.author_seq == seq);
 	case BC_MSG_SESSION_CAMERA_SET:
 		return m->session_camera_set.author == c->info.member_id &&
 		       (seq == 0 || m->session_camera_set.author_seq == seq);
@@ -769,10 +773,10 @@ static bool matches(const struct bc_client *c, const struct bc_msg *m,
 }
 
 int bc_client_wait(struct bc_client *c, enum bc_msg_type type, uint32_t seq,
-		   struct bc_msg *out, int timeout_ms, struct bc_errinfo *ei)
+                   struct bc_msg *out, int timeout_ms, struct bc_errinfo *ei)
 {
-	double deadline = deadline_after(timeout_ms == 0 ? c->timeout_ms
-							 : timeout_ms);
+	double deadline =
+	    deadline_after(timeout_ms == 0 ? c->timeout_ms : timeout_ms);
 	for (;;) {
 		int rc = bc_client_recv(c, out, bc__client_ms_left(deadline));
 		if (rc < 0) {
@@ -780,15 +784,15 @@ int bc_client_wait(struct bc_client *c, enum bc_msg_type type, uint32_t seq,
 		}
 		if (rc == 0) {
 			return bc_errinfo_set(ei, BC_ETIMEOUT,
-					      "no %s from the server in time",
-					      bc_proto_type_name(type));
+			                      "no %s from the server in time",
+			                      bc_proto_type_name(type));
 		}
 		if (out->type == BC_MSG_ERROR) {
-			int code = out->error.code ? -(int)out->error.code
-						   : BC_EINVAL;
+			int code =
+			    out->error.code ? -(int)out->error.code : BC_EINVAL;
 			return bc_errinfo_set(ei, code, "%.*s",
-					      (int)out->error.text.len,
-					      out->error.text.ptr);
+			                      (int)out->error.text.len,
+			                      out->error.text.ptr);
 		}
 		if (matches(c, out, type, seq)) {
 			return 0;
@@ -800,7 +804,7 @@ int bc_client_wait(struct bc_client *c, enum bc_msg_type type, uint32_t seq,
 
 /* Sends m; a failure, sticky or not, comes back with its reason in ei. */
 static int send_or_say(struct bc_client *c, struct bc_msg *m, uint32_t *seq,
-		       struct bc_errinfo *ei)
+                       struct bc_errinfo *ei)
 {
 	int rc = send_msg(c, m, seq, ei);
 	if (rc && c->err) {
@@ -810,8 +814,8 @@ static int send_or_say(struct bc_client *c, struct bc_msg *m, uint32_t *seq,
 }
 
 static int join_once(struct bc_client *c, enum bc_msg_type type,
-		     const char *name, enum bc_proto_role role,
-		     struct bc_errinfo *ei)
+                     const char *name, enum bc_proto_role role,
+                     struct bc_errinfo *ei)
 {
 	struct bc_msg m = {.type = type};
 	uint32_t seq;
@@ -828,14 +832,14 @@ static int join_once(struct bc_client *c, enum bc_msg_type type,
 }
 
 int bc_client_join(struct bc_client *c, const char *name,
-		   enum bc_proto_role role, enum bc_client_join_mode mode,
-		   struct bc_errinfo *ei)
+                   enum bc_proto_role role, enum bc_client_join_mode mode,
+                   struct bc_errinfo *ei)
 {
 	int rc;
 	if (!name || !*name || strlen(name) > BC_PROTO_MAX_NAME) {
 		return bc_errinfo_set(ei, BC_EINVAL,
-				      "session names have 1..%u bytes",
-				      BC_PROTO_MAX_NAME);
+		                      "session names have 1..%u bytes",
+		                      BC_PROTO_MAX_NAME);
 	}
 	if ((unsigned)mode >= BC_CLIENT_JOIN_MODE_COUNT ||
 	    (unsigned)role >= BC_PROTO_ROLE_COUNT) {
@@ -859,7 +863,7 @@ int bc_client_join(struct bc_client *c, const char *name,
 }
 
 const struct bc_tree *bc_client_scene(const struct bc_client *c,
-				      struct bc_camera *cam)
+                                      struct bc_camera *cam)
 {
 	if (!c->has_scene) {
 		return NULL;
@@ -871,7 +875,7 @@ const struct bc_tree *bc_client_scene(const struct bc_client *c,
 }
 
 int bc_client_load_scene(struct bc_client *c, const uint8_t *bytes, size_t len,
-			 uint64_t *order, struct bc_errinfo *ei)
+                         uint64_t *order, struct bc_errinfo *ei)
 {
 	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
 	uint32_t seq;
@@ -881,9 +885,9 @@ int bc_client_load_scene(struct bc_client *c, const uint8_t *bytes, size_t len,
 	}
 	if (len == 0 || len > BC_PROTO_MAX_PAYLOAD - 4u) {
 		return bc_errinfo_set(ei, BC_ELIMIT,
-				      "a scene of %zu bytes does not fit one "
-				      "message (1..%u)",
-				      len, BC_PROTO_MAX_PAYLOAD - 4u);
+		                      "a scene of %zu bytes does not fit one "
+		                      "message (1..%u)",
+		                      len, BC_PROTO_MAX_PAYLOAD - 4u);
 	}
 	m.scene_load.scene.ptr = bytes;
 	m.scene_load.scene.len = (uint32_t)len;
@@ -898,8 +902,8 @@ int bc_client_load_scene(struct bc_client *c, const uint8_t *bytes, size_t len,
 }
 
 int bc_client_load_scene_file(struct bc_client *c, const char *path,
-			      uint64_t *order, uint32_t *nodes,
-			      struct bc_errinfo *ei)
+                              uint64_t *order, uint32_t *nodes,
+                              struct bc_errinfo *ei)
 {
 	struct bc_tree *t = bc_tree_create();
 	struct bc_camera cam;
@@ -920,7 +924,7 @@ int bc_client_load_scene_file(struct bc_client *c, const char *path,
 	}
 	if ((rc = bc_scene_encode(t, &cam, &bytes, &len))) {
 		rc = bc_errinfo_set(ei, rc, "%s: cannot encode the scene: %s",
-				    path, bc_strerror(rc));
+		                    path, bc_strerror(rc));
 		goto out;
 	}
 	if ((rc = bc_client_load_scene(c, bytes, len, order, ei))) {
@@ -936,7 +940,7 @@ out:
 }
 
 int bc_client_view(struct bc_client *c, const struct bc_msg_view *view,
-		   uint32_t *seq_out, struct bc_errinfo *ei)
+                   uint32_t *seq_out, struct bc_errinfo *ei)
 {
 	struct bc_msg m = {.type = BC_MSG_VIEW};
 	if (seq_out) {
@@ -960,8 +964,7 @@ int bc_client_view(struct bc_client *c, const struct bc_msg_view *view,
 }
 
 int bc_client_camera(struct bc_client *c, const struct bc_camera *cam,
-		     bool interacting, uint32_t *seq_out,
-		     struct bc_errinfo *ei)
+                     bool interacting, uint32_t *seq_out, struct bc_errinfo *ei)
 {
 	struct bc_msg m = {.type = BC_MSG_CAMERA};
 	if (seq_out) {
@@ -976,7 +979,7 @@ int bc_client_camera(struct bc_client *c, const struct bc_camera *cam,
 }
 
 int bc_client_stats(struct bc_client *c, struct bc_msg_stats *out,
-		    struct bc_errinfo *ei)
+                    struct bc_errinfo *ei)
 {
 	struct bc_msg m = {.type = BC_MSG_GET_STATS};
 	uint32_t seq;
@@ -993,9 +996,9 @@ int bc_client_stats(struct bc_client *c, struct bc_msg_stats *out,
 /* ---- edits ---------------------------------------------------------------------- */
 
 int bc_client_edit_set(struct bc_client *c, uint32_t node,
-		       const struct bc_proto_field *fields, uint8_t nfields,
-		       bool interacting, uint32_t *seq_out,
-		       struct bc_errinfo *ei)
+                       const struct bc_proto_field *fields, uint8_t nfields,
+                       bool interacting, uint32_t *seq_out,
+                       struct bc_errinfo *ei)
 {
 	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_SET};
 	struct bc_msg m = {.type = BC_MSG_EDIT};
@@ -1011,9 +1014,9 @@ int bc_client_edit_set(struct bc_client *c, uint32_t node,
 	return send_or_say(c, &m, seq_out, ei);
 }
 
-int bc_client_edit_kv(struct bc_client *c, uint32_t node,
-		      const char *const *kv, size_t n, bool interacting,
-		      uint32_t *seq_out, struct bc_errinfo *ei)
+int bc_client_edit_kv(struct bc_client *c, uint32_t node, const char *const *kv,
+                      size_t n, bool interacting, uint32_t *seq_out,
+                      struct bc_errinfo *ei)
 {
 	struct bc_proto_field fields[BC_PROTO_MAX_SET_FIELDS];
 	uint8_t nfields;
@@ -1026,18 +1029,18 @@ int bc_client_edit_kv(struct bc_client *c, uint32_t node,
 	}
 	if (!c->has_scene) {
 		return bc_errinfo_set(ei, BC_ESTATE,
-				      "no scene yet: join a session first");
+		                      "no scene yet: join a session first");
 	}
-	if ((rc = bc_client_edit_parse(c->scene, node, kv, n, fields,
-				       &nfields, ei))) {
+	if ((rc = bc_client_edit_parse(c->scene, node, kv, n, fields, &nfields,
+	                               ei))) {
 		return rc;
 	}
 	return bc_client_edit_set(c, node, fields, nfields, interacting,
-				  seq_out, ei);
+	                          seq_out, ei);
 }
 
 int bc_client_wait_applied(struct bc_client *c, uint32_t seq, uint64_t *order,
-			   struct bc_errinfo *ei)
+                           struct bc_errinfo *ei)
 {
 	struct bc_msg m;
 	int rc;
@@ -1056,7 +1059,7 @@ int bc_client_wait_applied(struct bc_client *c, uint32_t seq, uint64_t *order,
 /* ---- snapshots --------------------------------------------------------------------- */
 
 int bc_client_snapshot(struct bc_client *c, enum bc_proto_encoding encoding,
-		       struct bc_client_image *out, struct bc_errinfo *ei)
+                       struct bc_client_image *out, struct bc_errinfo *ei)
 {
 	return bc_client_snapshot_planes(c, encoding, 0, out, ei);
 }
@@ -1074,7 +1077,7 @@ int bc_client_snapshot_planes(struct bc_client *c,
 	}
 	if (encoding != BC_PROTO_ENC_PNG && encoding != BC_PROTO_ENC_RAW) {
 		return bc_errinfo_set(ei, BC_EINVAL,
-				      "snapshots are PNG or raw");
+		                      "snapshots are PNG or raw");
 	}
 	if (planes & ~BC_PROTO_PLANES_ALL) {
 		return bc_errinfo_set(ei, BC_EINVAL, "planes 0x%x", planes);
@@ -1108,15 +1111,15 @@ int bc_client_snapshot_planes(struct bc_client *c,
 }
 
 int bc_client_delete_session(struct bc_client *c, const char *name,
-			     struct bc_errinfo *ei)
+                             struct bc_errinfo *ei)
 {
 	struct bc_msg m = {.type = BC_MSG_SESSION_DELETE};
 	uint32_t seq;
 	int rc;
 	if (!name || !*name || strlen(name) > BC_PROTO_MAX_NAME) {
 		return bc_errinfo_set(ei, BC_EINVAL,
-				      "session names have 1..%u bytes",
-				      BC_PROTO_MAX_NAME);
+		                      "session names have 1..%u bytes",
+		                      BC_PROTO_MAX_NAME);
 	}
 	m.session_delete.name.ptr = name;
 	m.session_delete.name.len = (uint32_t)strlen(name);
@@ -1131,8 +1134,8 @@ int bc_client_delete_session(struct bc_client *c, const char *name,
 	return rc;
 }
 
-int bc_client_undo(struct bc_client *c, bool redo,
-		   struct bc_client_undone *out, struct bc_errinfo *ei)
+int bc_client_undo(struct bc_client *c, bool redo, struct bc_client_undone *out,
+                   struct bc_errinfo *ei)
 {
 	struct bc_msg m = {.type = redo ? BC_MSG_REDO : BC_MSG_UNDO};
 	const struct bc_msg_edit_applied *a = &m.edit_applied;
@@ -1149,13 +1152,13 @@ int bc_client_undo(struct bc_client *c, bool redo,
 		out->order = a->order;
 		out->target_order = a->target_order;
 		copy_str(out->target_author, sizeof(out->target_author),
-			 a->target_author);
+		         a->target_author);
 	}
 	return 0;
 }
 
 int bc_client_sessions(struct bc_client *c, struct bc_client_session **out,
-		       size_t *n, struct bc_errinfo *ei)
+                       size_t *n, struct bc_errinfo *ei)
 {
 	struct bc_msg m = {.type = BC_MSG_SESSION_LIST};
 	struct bc_client_session *list = NULL;
@@ -1212,7 +1215,7 @@ int bc_client_follow(struct bc_client *c, bool on, struct bc_errinfo *ei)
 }
 
 int bc_client_session_camera(struct bc_client *c, const struct bc_camera *cam,
-			     uint64_t *order, struct bc_errinfo *ei)
+                             uint64_t *order, struct bc_errinfo *ei)
 {
 	struct bc_msg m = {.type = BC_MSG_SESSION_CAMERA};
 	uint32_t seq;
@@ -1226,7 +1229,7 @@ int bc_client_session_camera(struct bc_client *c, const struct bc_camera *cam,
 	m.session_camera.fov_y_deg = cam->fov_y_deg;
 	if ((rc = send_or_say(c, &m, &seq, ei)) ||
 	    (rc = bc_client_wait(c, BC_MSG_SESSION_CAMERA_SET, seq, &m, 0,
-				 ei))) {
+	                         ei))) {
 		return rc;
 	}
 	if (order) {

@@ -41,8 +41,8 @@ struct bc_client {
 int bc__client_ms_left(double deadline);
 
 /* Records a sticky error on c (the first one wins) and returns it. */
-int bc__client_fail(struct bc_client *c, int code, const char *fmt, ...)
-	BC__ERRINFO_PRINTF;
+int bc__client_fail(struct bc_client *c, int code, const char *fmt,
+                    ...) BC__ERRINFO_PRINTF;
 
 /* ---- transport.c: the byte stream ---------------------------------------- */
 
@@ -53,29 +53,29 @@ int bc__client_fail(struct bc_client *c, int code, const char *fmt, ...)
  * (NULL: the system's store) and host unless insecure. Returns 0 or the
  * sticky error it recorded. */
 int bc__client_tls_start(struct bc_client *c, const char *host,
-			 const char *ca_file, bool insecure, double deadline);
+                         const char *ca_file, bool insecure, double deadline);
 /* Frees the TLS state (after a close_notify, best effort). */
 void bc__client_transport_free(struct bc_client *c);
 /* Up to cap bytes from the stream: > 0 bytes, 0 at the deadline,
  * BC__CLIENT_EOF, or the sticky error it recorded. */
 long bc__client_stream_read(struct bc_client *c, void *buf, size_t cap,
-			    double deadline);
+                            double deadline);
 /* All len bytes to the stream by deadline (what: the message, for the
  * error). Returns 0 or the sticky error it recorded. */
 int bc__client_stream_write(struct bc_client *c, const void *data, size_t len,
-			    double deadline, const char *what);
+                            double deadline, const char *what);
 
 /* The WebSocket opening handshake on the stream (GET a->resource with
  * Upgrade: websocket, subprotocol "binary"); 0 or the sticky error. */
 int bc__client_ws_start(struct bc_client *c, const struct bc_client_addr *a,
-			double deadline);
+                        double deadline);
 /* The protocol's bytes: as bc__client_stream_read() and _write(), inside
  * WebSocket binary messages when c->ws (answering pings, a close frame
  * read as the end of the stream). */
 long bc__client_io_read(struct bc_client *c, void *buf, size_t cap,
-			double deadline);
+                        double deadline);
 int bc__client_io_write(struct bc_client *c, const void *data, size_t len,
-			double deadline, const char *what);
+                        double deadline, const char *what);
 /* Frees the WebSocket state. */
 void bc__client_ws_free(struct bc_client *c);
 
@@ -83,6 +83,6 @@ void bc__client_ws_free(struct bc_client *c);
  * (bc_edit_replay). Returns 0 or the failing operation's error with the
  * reason in ei; *t is then unchanged (the caller drops it). */
 int bc__client_replay(struct bc_tree **t, const struct bc_msg_edit_applied *ea,
-		      struct bc_errinfo *ei);
+                      struct bc_errinfo *ei);
 
 #endif

@@ -93,19 +93,20 @@ static void ssl_reason(char *buf, size_t len)
 	} else if (errno) {
 		snprintf(buf, len, "%s", strerror(errno));
 	} else {
-		snprintf(buf, len, "the connection closed during the handshake");
+		snprintf(buf, len,
+		         "the connection closed during the handshake");
 	}
 	ERR_clear_error();
 }
 
 int bc__client_tls_start(struct bc_client *c, const char *host,
-			 const char *ca_file, bool insecure, double deadline)
+                         const char *ca_file, bool insecure, double deadline)
 {
 	SSL_CTX *ctx;
 	SSL *ssl;
 	unsigned char ip[16];
 	bool is_ip = inet_pton(AF_INET, host, ip) == 1 ||
-		     inet_pton(AF_INET6, host, ip) == 1;
+	             inet_pton(AF_INET6, host, ip) == 1;
 	char why[256];
 	ERR_clear_error();
 	if (!(ctx = SSL_CTX_new(TLS_client_method()))) {
@@ -115,7 +116,7 @@ int bc__client_tls_start(struct bc_client *c, const char *host,
 	c->ssl_ctx = ctx;
 	SSL_CTX_set_min_proto_version(ctx, TLS1_2_VERSION);
 	SSL_CTX_set_mode(ctx, SSL_MODE_ACCEPT_MOVING_WRITE_BUFFER |
-				      SSL_MODE_ENABLE_PARTIAL_WRITE);
+	                          SSL_MODE_ENABLE_PARTIAL_WRITE);
 	/* A server that closes without close_notify (it dropped us, or
 	 * died) ends the stream like a plain close: the protocol's framing
 	 * tells a cut message from a whole one. */
@@ -124,19 +125,19 @@ int bc__client_tls_start(struct bc_client *c, const char *host,
 		if (SSL_CTX_load_verify_locations(ctx, ca_file, NULL) != 1) {
 			ssl_reason(why, sizeof(why));
 			return bc__client_fail(c, BC_EINVAL,
-					       "TLS: cannot load CA file %s: "
-					       "%s",
-					       ca_file, why);
+			                       "TLS: cannot load CA file %s: "
+			                       "%s",
+			                       ca_file, why);
 		}
 	} else if (SSL_CTX_set_default_verify_paths(ctx) != 1) {
 		ssl_reason(why, sizeof(why));
 		return bc__client_fail(c, BC_EIO,
-				       "TLS: cannot load the system's trusted "
-				       "certificates: %s",
-				       why);
+		                       "TLS: cannot load the system's trusted "
+		                       "certificates: %s",
+		                       why);
 	}
 	SSL_CTX_set_verify(ctx, insecure ? SSL_VERIFY_NONE : SSL_VERIFY_PEER,
-			   NULL);
+	                   NULL);
 	if (!(ssl = SSL_new(ctx))) {
 		ssl_reason(why, sizeof(why));
 		return bc__client_fail(c, BC_ENOMEM, "TLS: %s", why);
@@ -145,13 +146,12 @@ int bc__client_tls_start(struct bc_client *c, const char *host,
 	if (!insecure) {
 		X509_VERIFY_PARAM *vp = SSL_get0_param(ssl);
 		X509_VERIFY_PARAM_set_hostflags(
-			vp, X509_CHECK_FLAG_NO_PARTIAL_WILDCARDS);
+		    vp, X509_CHECK_FLAG_NO_PARTIAL_WILDCARDS);
 		if (is_ip ? X509_VERIFY_PARAM_set1_ip_asc(vp, host) != 1
-			  : X509_VERIFY_PARAM_set1_host(vp, host, 0) != 1) {
+		          : X509_VERIFY_PARAM_set1_host(vp, host, 0) != 1) {
 			ssl_reason(why, sizeof(why));
-			return bc__client_fail(c, BC_EINVAL,
-					       "TLS: bad host %s: %s", host,
-					       why);
+			return bc__client_fail(
+			    c, BC_EINVAL, "TLS: bad host %s: %s", host, why);
 		}
 	}
 	/* Server Name Indication: a name, never an address (RFC 6066). */
@@ -175,19 +175,19 @@ int bc__client_tls_start(struct bc_client *c, const char *host,
 		err = SSL_get_error(ssl, n);
 		if (err == SSL_ERROR_WANT_READ || err == SSL_ERROR_WANT_WRITE) {
 			k = wait_fd(c->fd,
-				    err == SSL_ERROR_WANT_READ ? POLLIN
-							       : POLLOUT,
-				    deadline);
+			            err == SSL_ERROR_WANT_READ ? POLLIN
+			                                       : POLLOUT,
+			            deadline);
 			if (k == 0) {
 				return bc__client_fail(
-					c, BC_ETIMEOUT,
-					"TLS handshake with %s: no answer "
-					"within %d ms",
-					host, c->timeout_ms);
+				    c, BC_ETIMEOUT,
+				    "TLS handshake with %s: no answer "
+				    "within %d ms",
+				    host, c->timeout_ms);
 			}
 			if (k < 0) {
 				return bc__client_fail(c, BC_EIO, "poll: %s",
-						       strerror(errno));
+				                       strerror(errno));
 			}
 			continue;
 		}
@@ -195,18 +195,17 @@ int bc__client_tls_start(struct bc_client *c, const char *host,
 			long v = SSL_get_verify_result(ssl);
 			ERR_clear_error();
 			return bc__client_fail(
-				c, BC_EAUTH,
-				"TLS: the certificate of %s is not trusted: "
-				"%s%s",
-				host, X509_verify_cert_error_string(v),
-				ca_file ? ""
-					: " (a private CA: --ca FILE)");
+			    c, BC_EAUTH,
+			    "TLS: the certificate of %s is not trusted: "
+			    "%s%s",
+			    host, X509_verify_cert_error_string(v),
+			    ca_file ? "" : " (a private CA: --ca FILE)");
 		}
 		ssl_reason(why, sizeof(why));
 		return bc__client_fail(c, BC_EIO,
-				       "TLS handshake with %s failed: %s (does "
-				       "that port speak TLS?)",
-				       host, why);
+		                       "TLS handshake with %s failed: %s (does "
+		                       "that port speak TLS?)",
+		                       host, why);
 	}
 	return 0;
 }
@@ -228,7 +227,7 @@ void bc__client_transport_free(struct bc_client *c)
 }
 
 long bc__client_stream_read(struct bc_client *c, void *buf, size_t cap,
-			    double deadline)
+                            double deadline)
 {
 	for (;;) {
 		ssize_t n;
@@ -240,7 +239,7 @@ long bc__client_stream_read(struct bc_client *c, void *buf, size_t cap,
 			/* A read may write (a TLS 1.3 key update answer). */
 			pipe_block(&g);
 			r = SSL_read(c->ssl, buf,
-				     cap > INT32_MAX ? INT32_MAX : (int)cap);
+			             cap > INT32_MAX ? INT32_MAX : (int)cap);
 			pipe_unblock(&g);
 			if (r > 0) {
 				return r;
@@ -249,43 +248,44 @@ long bc__client_stream_read(struct bc_client *c, void *buf, size_t cap,
 			if (err == SSL_ERROR_ZERO_RETURN ||
 			    (err == SSL_ERROR_SSL &&
 			     ERR_GET_REASON(ERR_peek_last_error()) ==
-				     SSL_R_UNEXPECTED_EOF_WHILE_READING)) {
+			         SSL_R_UNEXPECTED_EOF_WHILE_READING)) {
 				ERR_clear_error();
 				return BC__CLIENT_EOF;
 			}
 			if (err == SSL_ERROR_WANT_READ ||
 			    err == SSL_ERROR_WANT_WRITE) {
 				k = wait_fd(c->fd,
-					    err == SSL_ERROR_WANT_READ ? POLLIN
-								       : POLLOUT,
-					    deadline);
+				            err == SSL_ERROR_WANT_READ
+				                ? POLLIN
+				                : POLLOUT,
+				            deadline);
 				if (k == 0) {
 					return 0;
 				}
 				if (k < 0) {
 					return bc__client_fail(c, BC_EIO,
-							       "poll: %s",
-							       strerror(errno));
+					                       "poll: %s",
+					                       strerror(errno));
 				}
 				continue;
 			}
 			if (err == SSL_ERROR_SYSCALL && errno == ECONNRESET) {
 				ERR_clear_error();
 				return bc__client_fail(
-					c, BC_ECLOSED,
-					"the server reset the connection");
+				    c, BC_ECLOSED,
+				    "the server reset the connection");
 			}
 			{
 				char why[256];
 				ssl_reason(why, sizeof(why));
 				return bc__client_fail(c, BC_EIO, "TLS: %s",
-						       why);
+				                       why);
 			}
 		}
 		k = wait_fd(c->fd, POLLIN, deadline);
 		if (k < 0) {
 			return bc__client_fail(c, BC_EIO, "poll: %s",
-					       strerror(errno));
+			                       strerror(errno));
 		}
 		if (k == 0) {
 			return 0;
@@ -301,15 +301,15 @@ long bc__client_stream_read(struct bc_client *c, void *buf, size_t cap,
 			continue;
 		}
 		if (errno == ECONNRESET) {
-			return bc__client_fail(c, BC_ECLOSED,
-					       "the server reset the connection");
+			return bc__client_fail(
+			    c, BC_ECLOSED, "the server reset the connection");
 		}
 		return bc__client_fail(c, BC_EIO, "read: %s", strerror(errno));
 	}
 }
 
 int bc__client_stream_write(struct bc_client *c, const void *data, size_t len,
-			    double deadline, const char *what)
+                            double deadline, const char *what)
 {
 	size_t done = 0;
 	while (done < len) {
@@ -322,7 +322,7 @@ int bc__client_stream_write(struct bc_client *c, const void *data, size_t len,
 			errno = 0;
 			pipe_block(&g);
 			r = SSL_write(c->ssl, (const uint8_t *)data + done,
-				      left > INT32_MAX ? INT32_MAX : (int)left);
+			              left > INT32_MAX ? INT32_MAX : (int)left);
 			pipe_unblock(&g);
 			if (r > 0) {
 				done += (size_t)r;
@@ -337,17 +337,17 @@ int bc__client_stream_write(struct bc_client *c, const void *data, size_t len,
 				    (errno == EPIPE || errno == ECONNRESET)) {
 					ERR_clear_error();
 					return bc__client_fail(
-						c, BC_ECLOSED,
-						"the server closed the "
-						"connection");
+					    c, BC_ECLOSED,
+					    "the server closed the "
+					    "connection");
 				}
 				ssl_reason(why, sizeof(why));
 				return bc__client_fail(c, BC_EIO, "TLS: %s",
-						       why);
+				                       why);
 			}
 		} else {
 			ssize_t n = send(c->fd, (const uint8_t *)data + done,
-					 len - done, MSG_NOSIGNAL);
+			                 len - done, MSG_NOSIGNAL);
 			if (n > 0) {
 				done += (size_t)n;
 				continue;
@@ -357,27 +357,26 @@ int bc__client_stream_write(struct bc_client *c, const void *data, size_t len,
 			}
 			if (n < 0 && (errno == EPIPE || errno == ECONNRESET)) {
 				return bc__client_fail(c, BC_ECLOSED,
-						       "the server closed the "
-						       "connection");
+				                       "the server closed the "
+				                       "connection");
 			}
 			if (!(n < 0 &&
 			      (errno == EAGAIN || errno == EWOULDBLOCK))) {
-				return bc__client_fail(
-					c, BC_EIO, "send: %s",
-					n < 0 ? strerror(errno)
-					      : "wrote nothing");
+				return bc__client_fail(c, BC_EIO, "send: %s",
+				                       n < 0 ? strerror(errno)
+				                             : "wrote nothing");
 			}
 		}
 		if (bc__client_ms_left(deadline) == 0) {
 			return bc__client_fail(c, BC_ETIMEOUT,
-					       "%s: %zu of %zu bytes sent when "
-					       "the %d ms timeout passed",
-					       what, done, len, c->timeout_ms);
+			                       "%s: %zu of %zu bytes sent when "
+			                       "the %d ms timeout passed",
+			                       what, done, len, c->timeout_ms);
 		}
 		k = wait_fd(c->fd, want, deadline);
 		if (k < 0 && errno != EINTR) {
 			return bc__client_fail(c, BC_EIO, "poll: %s",
-					       strerror(errno));
+			                       strerror(errno));
 		}
 	}
 	return 0;

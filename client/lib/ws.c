@@ -81,7 +81,7 @@ static bool header(const char *head, const char *name, char *out, size_t cap)
 }
 
 int bc__client_ws_start(struct bc_client *c, const struct bc_client_addr *a,
-			double deadline)
+                        double deadline)
 {
 	uint8_t nonce[16];
 	char key[32], want[64], got[128], req[BC_CLIENT_MAX_WS_PATH + 640];
@@ -95,30 +95,32 @@ int bc__client_ws_start(struct bc_client *c, const struct bc_client_addr *a,
 		return bc__client_fail(c, BC_ENOMEM, "out of memory");
 	}
 	if (RAND_bytes(nonce, sizeof(nonce)) != 1) {
-		return bc__client_fail(c, BC_EIO, "no random bytes for the "
-						  "WebSocket key");
+		return bc__client_fail(c, BC_EIO,
+		                       "no random bytes for the "
+		                       "WebSocket key");
 	}
 	EVP_EncodeBlock((uint8_t *)key, nonce, sizeof(nonce));
 	accept_of(key, want);
 	n = snprintf(req, sizeof(req),
-		     "GET %s HTTP/1.1\r\n"
-		     "Host: %s%s%s%s%.0u\r\n"
-		     "Upgrade: websocket\r\n"
-		     "Connection: Upgrade\r\n"
-		     "Sec-WebSocket-Key: %s\r\n"
-		     "Sec-WebSocket-Version: 13\r\n"
-		     "Sec-WebSocket-Protocol: binary\r\n"
-		     "User-Agent: libblobcast\r\n"
-		     "\r\n",
-		     a->resource, bracket ? "[" : "", a->host,
-		     bracket ? "]" : "", default_port ? "" : ":",
-		     default_port ? 0u : (unsigned)a->port, key);
+	             "GET %s HTTP/1.1\r\n"
+	             "Host: %s%s%s%s%.0u\r\n"
+	             "Upgrade: websocket\r\n"
+	             "Connection: Upgrade\r\n"
+	             "Sec-WebSocket-Key: %s\r\n"
+	             "Sec-WebSocket-Version: 13\r\n"
+	             "Sec-WebSocket-Protocol: binary\r\n"
+	             "User-Agent: libblobcast\r\n"
+	             "\r\n",
+	             a->resource, bracket ? "[" : "", a->host,
+	             bracket ? "]" : "", default_port ? "" : ":",
+	             default_port ? 0u : (unsigned)a->port, key);
 	if (n < 0 || (size_t)n >= sizeof(req)) {
-		return bc__client_fail(c, BC_EINVAL, "WebSocket request too "
-						     "long");
+		return bc__client_fail(c, BC_EINVAL,
+		                       "WebSocket request too "
+		                       "long");
 	}
 	if ((rc = bc__client_stream_write(c, req, (size_t)n, deadline,
-					  "WebSocket handshake"))) {
+	                                  "WebSocket handshake"))) {
 		return rc;
 	}
 	/* The answer's head, up to its blank line; bytes after it are the
@@ -127,23 +129,25 @@ int bc__client_ws_start(struct bc_client *c, const struct bc_client_addr *a,
 		long k;
 		if (have == WS_MAX_RESPONSE) {
 			return bc__client_fail(c, BC_EPARSE,
-					       "WebSocket handshake: an answer "
-					       "over %u bytes",
-					       WS_MAX_RESPONSE);
+			                       "WebSocket handshake: an answer "
+			                       "over %u bytes",
+			                       WS_MAX_RESPONSE);
 		}
 		k = bc__client_stream_read(c, head + have,
-					   WS_MAX_RESPONSE - have, deadline);
+		                           WS_MAX_RESPONSE - have, deadline);
 		if (k == 0) {
-			return bc__client_fail(c, BC_ETIMEOUT,
-					       "WebSocket handshake with %s: no "
-					       "answer within %d ms",
-					       a->host, c->timeout_ms);
+			return bc__client_fail(
+			    c, BC_ETIMEOUT,
+			    "WebSocket handshake with %s: no "
+			    "answer within %d ms",
+			    a->host, c->timeout_ms);
 		}
 		if (k == BC__CLIENT_EOF) {
-			return bc__client_fail(c, BC_ECLOSED,
-					       "WebSocket handshake with %s: the "
-					       "server closed the connection",
-					       a->host);
+			return bc__client_fail(
+			    c, BC_ECLOSED,
+			    "WebSocket handshake with %s: the "
+			    "server closed the connection",
+			    a->host);
 		}
 		if (k < 0) {
 			return (int)k;
@@ -152,8 +156,8 @@ int bc__client_ws_start(struct bc_client *c, const struct bc_client_addr *a,
 		head[have] = '\0';
 		if (memchr(head, '\0', have)) {
 			return bc__client_fail(c, BC_EPARSE,
-					       "WebSocket handshake: a NUL in "
-					       "the answer");
+			                       "WebSocket handshake: a NUL in "
+			                       "the answer");
 		}
 		end = strstr(head, "\r\n\r\n");
 	}
@@ -164,19 +168,19 @@ int bc__client_ws_start(struct bc_client *c, const struct bc_client_addr *a,
 		if (sscanf(head, "HTTP/1.1 %d", &status) != 1 ||
 		    status != 101) {
 			return bc__client_fail(
-				c, status == 401 || status == 403 ? BC_EAUTH
-								  : BC_EIO,
-				"WebSocket handshake with %s%s: the server "
-				"answered \"%.*s\"",
-				a->host, a->resource,
-				(int)(eol ? eol - head : 0), head);
+			    c,
+			    status == 401 || status == 403 ? BC_EAUTH : BC_EIO,
+			    "WebSocket handshake with %s%s: the server "
+			    "answered \"%.*s\"",
+			    a->host, a->resource, (int)(eol ? eol - head : 0),
+			    head);
 		}
 		head[used - 2] = '\0'; /* keep the last header's CRLF */
 		if (!header(head, "Sec-WebSocket-Accept", got, sizeof(got)) ||
 		    strcmp(got, want) != 0) {
 			return bc__client_fail(c, BC_EPARSE,
-					       "WebSocket handshake: a wrong "
-					       "Sec-WebSocket-Accept");
+			                       "WebSocket handshake: a wrong "
+			                       "Sec-WebSocket-Accept");
 		}
 		memcpy(c->ws->raw, head + used, have - used);
 		c->ws->rlen = have - used;
@@ -186,7 +190,7 @@ int bc__client_ws_start(struct bc_client *c, const struct bc_client_addr *a,
 
 /* A frame of op with payload (masked, as a client must). */
 static int send_frame(struct bc_client *c, uint8_t op, const void *data,
-		      size_t len, double deadline, const char *what)
+                      size_t len, double deadline, const char *what)
 {
 	uint8_t hdr[14], mask[4];
 	size_t h = 2;
@@ -208,8 +212,9 @@ static int send_frame(struct bc_client *c, uint8_t op, const void *data,
 		h = 10;
 	}
 	if (RAND_bytes(mask, 4) != 1) {
-		return bc__client_fail(c, BC_EIO, "no random bytes for a "
-						  "WebSocket mask");
+		return bc__client_fail(c, BC_EIO,
+		                       "no random bytes for a "
+		                       "WebSocket mask");
 	}
 	memcpy(hdr + h, mask, 4);
 	h += 4;
@@ -226,7 +231,7 @@ static int send_frame(struct bc_client *c, uint8_t op, const void *data,
 }
 
 int bc__client_io_write(struct bc_client *c, const void *data, size_t len,
-			double deadline, const char *what)
+                        double deadline, const char *what)
 {
 	if (!c->ws) {
 		return bc__client_stream_write(c, data, len, deadline, what);
@@ -238,25 +243,25 @@ int bc__client_io_write(struct bc_client *c, const void *data, size_t len,
  * cap), pings answered. Returns the bytes given, or BC__CLIENT_EOF after a
  * close frame, or the sticky error. */
 static long parse(struct bc_client *c, uint8_t *buf, size_t cap,
-		  double deadline)
+                  double deadline)
 {
 	struct bc__ws *w = c->ws;
 	size_t out = 0;
 	while (w->rpos < w->rlen && out < cap && !w->rx.closed) {
 		size_t used, produced;
 		enum bc_ws_event ev;
-		int rc = bc_ws_rx_feed(&w->rx, w->raw + w->rpos,
-				       w->rlen - w->rpos, &used, buf + out,
-				       cap - out, &produced, &ev);
+		int rc =
+		    bc_ws_rx_feed(&w->rx, w->raw + w->rpos, w->rlen - w->rpos,
+		                  &used, buf + out, cap - out, &produced, &ev);
 		w->rpos += used;
 		out += produced;
 		if (rc) {
 			return bc__client_fail(c, BC_EPARSE, "WebSocket: %s",
-					       w->rx.err);
+			                       w->rx.err);
 		}
 		if (ev == BC_WS_PING &&
 		    (rc = send_frame(c, OP_PONG, w->rx.ctl, w->rx.ctl_len,
-				     deadline, "WebSocket pong"))) {
+		                     deadline, "WebSocket pong"))) {
 			return rc;
 		}
 		if (used == 0 && produced == 0 && ev == BC_WS_NONE) {
@@ -270,7 +275,7 @@ static long parse(struct bc_client *c, uint8_t *buf, size_t cap,
 }
 
 long bc__client_io_read(struct bc_client *c, void *buf, size_t cap,
-			double deadline)
+                        double deadline)
 {
 	struct bc__ws *w = c->ws;
 	if (!w) {

@@ -3,8 +3,14 @@
 
 #include "ws_frames.h"
 
-enum { OP_CONT = 0, OP_TEXT = 1, OP_BIN = 2, OP_CLOSE = 8, OP_PING = 9,
-       OP_PONG = 10 };
+enum {
+	OP_CONT = 0,
+	OP_TEXT = 1,
+	OP_BIN = 2,
+	OP_CLOSE = 8,
+	OP_PING = 9,
+	OP_PONG = 10
+};
 
 /* Header bytes once hdr[1] is known: 2, plus 2 or 8 of extended length. */
 static size_t header_size(const uint8_t *hdr)
@@ -45,15 +51,14 @@ static int start_frame(struct bc_ws_rx *r)
 	}
 	if (r->op == OP_TEXT) {
 		return refuse(r, "a text frame (the binary subprotocol was "
-				 "asked for)");
+		                 "asked for)");
 	}
 	if ((r->op > OP_BIN && r->op < OP_CLOSE) || r->op > OP_PONG) {
 		return refuse(r, "an unknown opcode");
 	}
-	if (r->op >= OP_CLOSE &&
-	    (r->left > sizeof(r->ctl) || !(b0 & 0x80u))) {
+	if (r->op >= OP_CLOSE && (r->left > sizeof(r->ctl) || !(b0 & 0x80u))) {
 		return refuse(r, "a control frame over 125 bytes or "
-				 "fragmented");
+		                 "fragmented");
 	}
 	r->hhave = 0;
 	r->ctl_len = 0;
@@ -61,9 +66,9 @@ static int start_frame(struct bc_ws_rx *r)
 	return 0;
 }
 
-int bc_ws_rx_feed(struct bc_ws_rx *r, const uint8_t *in, size_t n,
-		  size_t *used, uint8_t *out, size_t cap, size_t *produced,
-		  enum bc_ws_event *event)
+int bc_ws_rx_feed(struct bc_ws_rx *r, const uint8_t *in, size_t n, size_t *used,
+                  uint8_t *out, size_t cap, size_t *produced,
+                  enum bc_ws_event *event)
 {
 	size_t i = 0, o = 0;
 	*event = BC_WS_NONE;
@@ -108,8 +113,8 @@ int bc_ws_rx_feed(struct bc_ws_rx *r, const uint8_t *in, size_t n,
 			r->in_payload = false;
 			if (r->op >= OP_CLOSE) {
 				*event = r->op == OP_PING   ? BC_WS_PING
-					 : r->op == OP_PONG ? BC_WS_PONG
-							    : BC_WS_CLOSE;
+				         : r->op == OP_PONG ? BC_WS_PONG
+				                            : BC_WS_CLOSE;
 				r->closed = r->op == OP_CLOSE;
 				break;
 			}

@@ -27,8 +27,8 @@ struct bc_ws_rx {
 	uint64_t left;    /* payload bytes of this frame still to come */
 	uint8_t ctl[125]; /* a control frame's payload */
 	size_t ctl_len;
-	bool closed;      /* a close frame was read: nothing more is parsed */
-	const char *err;  /* why the stream was refused, or NULL */
+	bool closed;     /* a close frame was read: nothing more is parsed */
+	const char *err; /* why the stream was refused, or NULL */
 };
 
 /*
@@ -41,8 +41,8 @@ struct bc_ws_rx {
  * frame over 125 bytes or fragmented, a length over 2^63); r->err says
  * why and every later call fails the same way.
  */
-int bc_ws_rx_feed(struct bc_ws_rx *r, const uint8_t *in, size_t n,
-		  size_t *used, uint8_t *out, size_t cap, size_t *produced,
-		  enum bc_ws_event *event);
+int bc_ws_rx_feed(struct bc_ws_rx *r, const uint8_t *in, size_t n, size_t *used,
+                  uint8_t *out, size_t cap, size_t *produced,
+                  enum bc_ws_event *event);
 
 #endif

@@ -59,11 +59,11 @@ void bc_viewer_status(struct bc_viewer_app *a, const char *fmt, ...)
 /* ---- options ------------------------------------------------------------- */
 
 static const struct bc_opt_name role_names[] = {
-	{"editor", BC_PROTO_ROLE_EDITOR},
-	{"viewer", BC_PROTO_ROLE_VIEWER},
-	{NULL, 0}};
+    {"editor", BC_PROTO_ROLE_EDITOR},
+    {"viewer", BC_PROTO_ROLE_VIEWER},
+    {NULL, 0}};
 static const struct bc_opt_name encoding_names[] = {
-	{"jpeg", BC_PROTO_ENC_JPEG}, {"png", BC_PROTO_ENC_PNG}, {NULL, 0}};
+    {"jpeg", BC_PROTO_ENC_JPEG}, {"png", BC_PROTO_ENC_PNG}, {NULL, 0}};
 
 /* What the table parses into before it is moved into the options. */
 struct cli {
@@ -75,110 +75,158 @@ struct cli {
 /* Returns 0 to go on, or the exit status (0 after --help, 2 on a bad
  * argument) with *done set. */
 static int parse_args(int argc, char **argv, struct bc_viewer_opts *o,
-		      bool *done)
+                      bool *done)
 {
 	struct cli c = {
-		.role = BC_PROTO_ROLE_EDITOR,
-		.encoding = BC_PROTO_ENC_JPEG,
-		.size = {960, 600},
-		.quality = 85,
-		.downscale = 2,
+	    .role = BC_PROTO_ROLE_EDITOR,
+	    .encoding = BC_PROTO_ENC_JPEG,
+	    .size = {960, 600},
+	    .quality = 85,
+	    .downscale = 2,
 	};
 	const struct bc_opt opts[] = {
-		{.name = "server", .kind = BC_OPT_STRING, .dst = &o->server,
-		 .arg = "ADDR",
-		 .help = "HOST:PORT, [IPV6]:PORT or unix:PATH (default\n"
-			 "$BLOBCAST_SERVER, else 127.0.0.1:7878);\n"
-			 "tls://HOST:PORT for TLS; wss://HOST/PATH\n"
-			 "through a WebSocket proxy (docs/deploy.md)"},
-		{.name = "ca", .kind = BC_OPT_STRING, .dst = &o->ca,
-		 .arg = "FILE",
-		 .help = "TLS: trust the CA certificates in FILE"},
-		{.name = "insecure", .kind = BC_OPT_FLAG, .dst = &o->insecure,
-		 .help = "TLS: do not check the server's certificate"},
-		{.name = "session", .kind = BC_OPT_STRING, .dst = &o->session,
-		 .arg = "NAME",
-		 .help = "session to join (default \"default\"; an editor\n"
-			 "creates it when it does not exist)"},
-		{.name = "role", .kind = BC_OPT_ENUM, .dst = &c.role,
-		 .arg = "ROLE", .help = "{choices} (default {default})",
-		 .names = role_names},
-		{.name = "name", .kind = BC_OPT_STRING, .dst = &o->name,
-		 .arg = "NAME",
-		 .help = "the name other members see (default\n{default})"},
-		{.name = "token", .kind = BC_OPT_STRING, .dst = &o->token,
-		 .arg = "TOKEN",
-		 .help = "authentication token (default $BLOBCAST_TOKEN)"},
-		{.name = "size", .kind = BC_OPT_SIZE, .dst = c.size, .lo = 1,
-		 .hi = BC_PROTO_MAX_DIM, .arg = "WxH",
-		 .help = "window size, each {range} (default 960x600)"},
-		{.name = "encoding", .kind = BC_OPT_ENUM, .dst = &c.encoding,
-		 .arg = "ENC",
-		 .help = "still frames as {choices} (default {default})",
-		 .names = encoding_names},
-		{.name = "quality", .kind = BC_OPT_U32, .dst = &c.quality,
-		 .lo = 1, .hi = BC_PROTO_MAX_QUALITY, .arg = "Q",
-		 .help = "JPEG quality of still frames, {range}\n"
-			 "(default {default}; interactive frames use at\n"
-			 "most 70)"},
-		{.name = "downscale", .kind = BC_OPT_U32, .dst = &c.downscale,
-		 .lo = 1, .hi = BC_PROTO_MAX_DOWNSCALE, .arg = "N",
-		 .help = "coarsest block accepted, {range} (default\n"
-			 "{default}): refinement frames at 1/2^n size,\n"
-			 "2^n <= N"},
-		{.name = "gles", .kind = BC_OPT_FLAG, .dst = &o->gles,
-		 .help = "use an OpenGL ES 2.0 context"},
-		{.name = "no-overlay", .kind = BC_OPT_FLAG, .dst = &c.no_overlay,
-		 .help = "start with the overlay hidden (O toggles)"},
-		{.name = "snapshot-dir", .kind = BC_OPT_STRING,
-		 .dst = &o->snapshot_dir, .arg = "DIR",
-		 .help = "where S saves lossless snapshots\n"
-			 "(default {default})"},
-		{.name = "screenshot", .kind = BC_OPT_STRING,
-		 .dst = &o->screenshot, .arg = "FILE",
-		 .help = "save the window to FILE once --frames\n"
-			 "pictures were shown, then exit"},
-		{.name = "frames", .kind = BC_OPT_U32, .dst = &o->frames,
-		 .lo = 1, .hi = 1000000, .arg = "N",
-		 .help = "finished pictures before the screenshot,\n"
-			 "{range} (the last frame of each refinement;\n"
-			 "default {default})"},
-		{.name = "turn", .kind = BC_OPT_F32, .dst = &o->turn_deg,
-		 .lo = -90, .hi = 90, .arg = "DEG",
-		 .help = "with --frames > 1: turn the camera by DEG\n"
-			 "({range}) after each picture (the daemon\n"
-			 "renders on change only; default {default})"},
-		{.name = "dump-frame", .kind = BC_OPT_STRING,
-		 .dst = &o->dump_frame, .arg = "FILE",
-		 .help = "with --screenshot: also save the picture\n"
-			 "received"},
-		{.name = "verbose", .kind = BC_OPT_FLAG, .dst = &o->verbose,
-		 .help = "print frames, picks and edits on stdout"},
-		{.kind = BC_OPT_INVALID},
+	    {.name = "server",
+	     .kind = BC_OPT_STRING,
+	     .dst = &o->server,
+	     .arg = "ADDR",
+	     .help = "HOST:PORT, [IPV6]:PORT or unix:PATH (default\n"
+	             "$BLOBCAST_SERVER, else 127.0.0.1:7878);\n"
+	             "tls://HOST:PORT for TLS; wss://HOST/PATH\n"
+	             "through a WebSocket proxy (docs/deploy.md)"},
+	    {.name = "ca",
+	     .kind = BC_OPT_STRING,
+	     .dst = &o->ca,
+	     .arg = "FILE",
+	     .help = "TLS: trust the CA certificates in FILE"},
+	    {.name = "insecure",
+	     .kind = BC_OPT_FLAG,
+	     .dst = &o->insecure,
+	     .help = "TLS: do not check the server's certificate"},
+	    {.name = "session",
+	     .kind = BC_OPT_STRING,
+	     .dst = &o->session,
+	     .arg = "NAME",
+	     .help = "session to join (default \"default\"; an editor\n"
+	             "creates it when it does not exist)"},
+	    {.name = "role",
+	     .kind = BC_OPT_ENUM,
+	     .dst = &c.role,
+	     .arg = "ROLE",
+	     .help = "{choices} (default {default})",
+	     .names = role_names},
+	    {.name = "name",
+	     .kind = BC_OPT_STRING,
+	     .dst = &o->name,
+	     .arg = "NAME",
+	     .help = "the name other members see (default\n{default})"},
+	    {.name = "token",
+	     .kind = BC_OPT_STRING,
+	     .dst = &o->token,
+	     .arg = "TOKEN",
+	     .help = "authentication token (default $BLOBCAST_TOKEN)"},
+	    {.name = "size",
+	     .kind = BC_OPT_SIZE,
+	     .dst = c.size,
+	     .lo = 1,
+	     .hi = BC_PROTO_MAX_DIM,
+	     .arg = "WxH",
+	     .help = "window size, each {range} (default 960x600)"},
+	    {.name = "encoding",
+	     .kind = BC_OPT_ENUM,
+	     .dst = &c.encoding,
+	     .arg = "ENC",
+	     .help = "still frames as {choices} (default {default})",
+	     .names = encoding_names},
+	    {.name = "quality",
+	     .kind = BC_OPT_U32,
+	     .dst = &c.quality,
+	     .lo = 1,
+	     .hi = BC_PROTO_MAX_QUALITY,
+	     .arg = "Q",
+	     .help = "JPEG quality of still frames, {range}\n"
+	             "(default {default}; interactive frames use at\n"
+	             "most 70)"},
+	    {.name = "downscale",
+	     .kind = BC_OPT_U32,
+	     .dst = &c.downscale,
+	     .lo = 1,
+	     .hi = BC_PROTO_MAX_DOWNSCALE,
+	     .arg = "N",
+	     .help = "coarsest block accepted, {range} (default\n"
+	             "{default}): refinement frames at 1/2^n size,\n"
+	             "2^n <= N"},
+	    {.name = "gles",
+	     .kind = BC_OPT_FLAG,
+	     .dst = &o->gles,
+	     .help = "use an OpenGL ES 2.0 context"},
+	    {.name = "no-overlay",
+	     .kind = BC_OPT_FLAG,
+	     .dst = &c.no_overlay,
+	     .help = "start with the overlay hidden (O toggles)"},
+	    {.name = "snapshot-dir",
+	     .kind = BC_OPT_STRING,
+	     .dst = &o->snapshot_dir,
+	     .arg = "DIR",
+	     .help = "where S saves lossless snapshots\n"
+	             "(default {default})"},
+	    {.name = "screenshot",
+	     .kind = BC_OPT_STRING,
+	     .dst = &o->screenshot,
+	     .arg = "FILE",
+	     .help = "save the window to FILE once --frames\n"
+	             "pictures were shown, then exit"},
+	    {.name = "frames",
+	     .kind = BC_OPT_U32,
+	     .dst = &o->frames,
+	     .lo = 1,
+	     .hi = 1000000,
+	     .arg = "N",
+	     .help = "finished pictures before the screenshot,\n"
+	             "{range} (the last frame of each refinement;\n"
+	             "default {default})"},
+	    {.name = "turn",
+	     .kind = BC_OPT_F32,
+	     .dst = &o->turn_deg,
+	     .lo = -90,
+	     .hi = 90,
+	     .arg = "DEG",
+	     .help = "with --frames > 1: turn the camera by DEG\n"
+	             "({range}) after each picture (the daemon\n"
+	             "renders on change only; default {default})"},
+	    {.name = "dump-frame",
+	     .kind = BC_OPT_STRING,
+	     .dst = &o->dump_frame,
+	     .arg = "FILE",
+	     .help = "with --screenshot: also save the picture\n"
+	             "received"},
+	    {.name = "verbose",
+	     .kind = BC_OPT_FLAG,
+	     .dst = &o->verbose,
+	     .help = "print frames, picks and edits on stdout"},
+	    {.kind = BC_OPT_INVALID},
 	};
 	struct bc_args p = {
-		.prog = "blobcast-view",
-		.usage = "blobcast-view [options]",
-		.about = "Shows a blobcast session in a window and edits it "
-			 "with the mouse.",
-		.footer =
-			"Mouse: drag orbits, or moves the shape under the "
-			"pointer; right drag\nor Shift-drag pans; the wheel "
-			"zooms, Shift+wheel sizes the selected\nshape, "
-			"Ctrl+wheel changes its operator's blend. Keys: S "
-			"snapshot,\nP screenshot, O overlay, R scene camera, Q "
-			"or Escape quit;\nCtrl-Z undo, Ctrl-Shift-Z or Ctrl-Y "
-			"redo; F follow the presenter\n(this window shows what "
-			"the presenter's camera sees, at its own size;\nmoving "
-			"the camera or F again stops), Shift-F present "
-			"(members who\nfollow see this window's camera; "
-			"Shift-F again stops). The overlay\nnames who presents "
-			"and whether this window follows.\n\nA lost connection "
-			"is retried (after 0.25 s, doubling up to 4 s)\nand the "
-			"session joined again; a refused token or role or a\n"
-			"missing session stop the retries. With --screenshot a "
-			"lost\nconnection exits 1 instead.",
-		.opts = opts};
+	    .prog = "blobcast-view",
+	    .usage = "blobcast-view [options]",
+	    .about = "Shows a blobcast session in a window and edits it "
+	             "with the mouse.",
+	    .footer = "Mouse: drag orbits, or moves the shape under the "
+	              "pointer; right drag\nor Shift-drag pans; the wheel "
+	              "zooms, Shift+wheel sizes the selected\nshape, "
+	              "Ctrl+wheel changes its operator's blend. Keys: S "
+	              "snapshot,\nP screenshot, O overlay, R scene camera, Q "
+	              "or Escape quit;\nCtrl-Z undo, Ctrl-Shift-Z or Ctrl-Y "
+	              "redo; F follow the presenter\n(this window shows what "
+	              "the presenter's camera sees, at its own size;\nmoving "
+	              "the camera or F again stops), Shift-F present "
+	              "(members who\nfollow see this window's camera; "
+	              "Shift-F again stops). The overlay\nnames who presents "
+	              "and whether this window follows.\n\nA lost connection "
+	              "is retried (after 0.25 s, doubling up to 4 s)\nand the "
+	              "session joined again; a refused token or role or a\n"
+	              "missing session stop the retries. With --screenshot a "
+	              "lost\nconnection exits 1 instead.",
+	    .opts = opts};
 	*o = (struct bc_viewer_opts){
 	    .session = "default",
 	    .name = "blobcast-view",
@@ -195,8 +243,7 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o,
 		return p.status;
 	}
 	if (p.npos) {
-		return bc_args_error(&p, "unexpected argument '%s'",
-				     p.pos[0]);
+		return bc_args_error(&p, "unexpected argument '%s'", p.pos[0]);
 	}
 	o->role = (enum bc_proto_role)c.role;
 	o->encoding = (enum bc_proto_encoding)c.encoding;
@@ -211,7 +258,7 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o,
 	if (o->screenshot &&
 	    !bc_image_ext_supports(o->screenshot, BC_IMAGE_U8)) {
 		return bc_args_error(&p, "cannot write images named %s",
-				     o->screenshot);
+		                     o->screenshot);
 	}
 	*done = false;
 	return 0;

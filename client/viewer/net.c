@@ -114,8 +114,7 @@ void bc_viewer_edit(struct bc_viewer_app *a, const struct bc_viewer_edit *e)
 
 /* FOLLOW or PRESENT with on, not waiting: the answer is a PRESENTER (and
  * an OK), or ERROR ESTATE when nobody presents. */
-static int send_toggle(struct bc_viewer_app *a, enum bc_msg_type type,
-                       bool on)
+static int send_toggle(struct bc_viewer_app *a, enum bc_msg_type type, bool on)
 {
 	struct bc_msg m = {.type = type};
 	m.toggle.on = on ? 1 : 0;
@@ -207,7 +206,8 @@ void bc_viewer_undo(struct bc_viewer_app *a, bool redo)
 	struct bc_msg m = {.type = redo ? BC_MSG_REDO : BC_MSG_UNDO};
 	uint32_t seq = 0;
 	if (bc_client_info(a->c)->role != BC_PROTO_ROLE_EDITOR) {
-		bc_viewer_status(a, "viewers cannot %s", redo ? "redo" : "undo");
+		bc_viewer_status(a, "viewers cannot %s",
+		                 redo ? "redo" : "undo");
 		return;
 	}
 	if (bc_client_send(a->c, &m, &seq)) {
@@ -482,11 +482,13 @@ static void got_applied(struct bc_viewer_app *a, const struct bc_msg *m)
 		    e->author_seq == a->undo_seq) {
 			a->undo_seq = 0;
 		}
-		bc_viewer_status(a, "%s", bc_viewer_undo_text(&a->roster, m, text,
-		                                               sizeof(text)));
+		bc_viewer_status(
+		    a, "%s",
+		    bc_viewer_undo_text(&a->roster, m, text, sizeof(text)));
 		if (a->o.verbose) {
 			printf("%s order=%llu of=%llu by=%u\n",
-			       (m->flags & BC_PROTO_FLAG_REDO) ? "redo" : "undo",
+			       (m->flags & BC_PROTO_FLAG_REDO) ? "redo"
+			                                       : "undo",
 			       (unsigned long long)e->order,
 			       (unsigned long long)e->target_order, e->author);
 		}
@@ -524,20 +526,20 @@ static void got_presenter(struct bc_viewer_app *a, const struct bc_msg *m)
 		return;
 	}
 	if (r->following && !followed) {
-		bc_viewer_status(a, "following %s",
-		                 member_name(r, r->presenter, name,
-		                             sizeof(name)));
+		bc_viewer_status(
+		    a, "following %s",
+		    member_name(r, r->presenter, name, sizeof(name)));
 	} else if (!r->presenter && was) {
 		bc_viewer_status(a, "%s stopped presenting",
-		                 was == r->self ? "you"
-		                                : member_name(r, was, name,
-		                                              sizeof(name)));
+		                 was == r->self
+		                     ? "you"
+		                     : member_name(r, was, name, sizeof(name)));
 	} else if (r->presenter != was && r->presenter == r->self) {
 		bc_viewer_status(a, "you present: followers see your camera");
 	} else if (r->presenter != was) {
-		bc_viewer_status(a, "%s presents: F follows",
-		                 member_name(r, r->presenter, name,
-		                             sizeof(name)));
+		bc_viewer_status(
+		    a, "%s presents: F follows",
+		    member_name(r, r->presenter, name, sizeof(name)));
 	} else if (followed && !r->following) {
 		bc_viewer_status(a, "not following");
 	}

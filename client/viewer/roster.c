@@ -136,8 +136,8 @@ const char *bc_viewer_roster_text(const struct bc_viewer_roster *r, char *out,
 			snprintf(item, sizeof(item), "\nfollowing %s (F stops)",
 			         who);
 		} else {
-			snprintf(item, sizeof(item), "\n%s presents (F follows)",
-			         who);
+			snprintf(item, sizeof(item),
+			         "\n%s presents (F follows)", who);
 		}
 		ok = put(out, n, &len, item);
 	}

@@ -20,7 +20,7 @@ void bc_shade_init(struct bc_shade *s, const struct bc_view_rays *vr)
 	/* Light from the camera's upper left, slightly from the front. */
 	for (int i = 0; i < 3; i++) {
 		s->light[i] = -0.5f * vr->right[i] + 0.6f * vr->up[i] -
-			      0.6f * vr->forward[i];
+		              0.6f * vr->forward[i];
 	}
 	bc_v3_normalize_div(s->light);
 	s->ambient = 0.18f;
@@ -35,7 +35,8 @@ static uint8_t to_srgb8(float c)
 	if (c >= 1.0f) {
 		return 255;
 	}
-	s = c <= 0.0031308f ? 12.92f * c : 1.055f * powf(c, 1.0f / 2.4f) - 0.055f;
+	s = c <= 0.0031308f ? 12.92f * c
+	                    : 1.055f * powf(c, 1.0f / 2.4f) - 0.055f;
 	return (uint8_t)(s * 255.0f + 0.5f);
 }
 
@@ -44,9 +45,9 @@ static uint8_t to_srgb8(float c)
 void bc_shade_ramp(float x, uint8_t rgb[4])
 {
 	static const float stops[5][3] = {
-		{0.267f, 0.005f, 0.329f}, {0.229f, 0.322f, 0.545f},
-		{0.128f, 0.567f, 0.551f}, {0.369f, 0.789f, 0.383f},
-		{0.993f, 0.906f, 0.144f},
+	    {0.267f, 0.005f, 0.329f}, {0.229f, 0.322f, 0.545f},
+	    {0.128f, 0.567f, 0.551f}, {0.369f, 0.789f, 0.383f},
+	    {0.993f, 0.906f, 0.144f},
 	};
 	float s;
 	int i;
@@ -72,11 +73,11 @@ void bc_shade_miss(uint32_t y, uint32_t height, uint8_t px[4])
 }
 
 void bc_shade_hit(const struct bc_shade *s, const float grad[3],
-		  const float d[3], const float albedo[3], uint8_t px[4])
+                  const float d[3], const float albedo[3], uint8_t px[4])
 {
 	float n[3] = {grad[0], grad[1], grad[2]};
 	float hv[3] = {s->light[0] - d[0], s->light[1] - d[1],
-		       s->light[2] - d[2]};
+	               s->light[2] - d[2]};
 	float diff, spec;
 	if (!(isfinite(n[0]) && isfinite(n[1]) && isfinite(n[2])) ||
 	    bc_v3_dot(n, n) == 0.0f) {
@@ -98,10 +99,10 @@ void bc_shade_hit(const struct bc_shade *s, const float grad[3],
 	bc_v3_normalize_div(hv);
 	spec = diff > 0.0f ? powf(maxf(bc_v3_dot(n, hv), 0.0f), 48.0f) : 0.0f;
 	for (int c = 0; c < 3; c++) {
-		float lit = albedo[c] * (s->ambient + (1.0f - s->ambient) * diff) +
-			    0.25f * spec;
+		float lit =
+		    albedo[c] * (s->ambient + (1.0f - s->ambient) * diff) +
+		    0.25f * spec;
 		px[c] = to_srgb8(lit);
 	}
 	px[3] = 255;
 }
-

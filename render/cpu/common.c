@@ -12,7 +12,7 @@
 #include "blobcast/log.h"
 
 int bc__cpu_create(struct bc_renderer **out, enum bc__cpu_kind kind,
-		   const struct bc_render_opts *opts, struct bc_errinfo *ei)
+                   const struct bc_render_opts *opts, struct bc_errinfo *ei)
 {
 	struct bc__cpu *r;
 	uint32_t threads;
@@ -23,8 +23,8 @@ int bc__cpu_create(struct bc_renderer **out, enum bc__cpu_kind kind,
 	}
 	r->kind = kind;
 	threads = opts->threads ? opts->threads : bc_pool_default_threads();
-	r->threads = threads > BC_CPU_MAX_THREADS ? BC_CPU_MAX_THREADS
-						  : threads;
+	r->threads =
+	    threads > BC_CPU_MAX_THREADS ? BC_CPU_MAX_THREADS : threads;
 	*out = &r->base;
 	return 0;
 }
@@ -40,7 +40,7 @@ void bc__cpu_destroy(struct bc_renderer *base)
 }
 
 uint64_t bc__cpu_key(struct bc_renderer *r, const struct bc_camera *cam,
-		     uint32_t width, uint32_t height)
+                     uint32_t width, uint32_t height)
 {
 	const struct bc_lin *l = r->tree ? bc_tree_lin(r->tree) : NULL;
 	float scale = bc_render_scale(l);
@@ -56,9 +56,8 @@ uint64_t bc__cpu_key(struct bc_renderer *r, const struct bc_camera *cam,
 	return (uint64_t)bits | ((uint64_t)lbits << 32);
 }
 
-uint64_t bc__region_mask(const struct bc_render_region *region,
-			 uint32_t tx, uint32_t ty, uint32_t width,
-			 uint32_t height)
+uint64_t bc__region_mask(const struct bc_render_region *region, uint32_t tx,
+                         uint32_t ty, uint32_t width, uint32_t height)
 {
 	uint64_t mask = 0;
 	uint32_t x0 = tx * BC_CPU_TILE, y0 = ty * BC_CPU_TILE;
@@ -69,9 +68,9 @@ uint64_t bc__region_mask(const struct bc_render_region *region,
 	for (uint32_t y = y0; y < y0 + BC_CPU_TILE && y < height; y++) {
 		for (uint32_t x = x0; x < x0 + BC_CPU_TILE && x < width; x++) {
 			if (bc_render_level_has(x, y, region->level,
-						region->refine)) {
-				mask |= 1ull << ((y - y0) * BC_CPU_TILE +
-						 (x - x0));
+			                        region->refine)) {
+				mask |= 1ull
+				        << ((y - y0) * BC_CPU_TILE + (x - x0));
 			}
 		}
 	}
@@ -79,7 +78,7 @@ uint64_t bc__region_mask(const struct bc_render_region *region,
 }
 
 void bc_render_cpu_set_progress(struct bc_renderer *base,
-				bc_render_progress_fn fn, void *user)
+                                bc_render_progress_fn fn, void *user)
 {
 	struct bc__cpu *r = bc__cpu_of(base);
 	if (r) {
@@ -91,7 +90,7 @@ void bc_render_cpu_set_progress(struct bc_renderer *base,
 /* ---- progress ----------------------------------------------------------- */
 
 void bc__progress_init(struct bc__progress *p, const struct bc__cpu *r,
-		       uint32_t total)
+                       uint32_t total)
 {
 	p->fn = r->progress;
 	p->user = r->progress_user;

@@ -82,18 +82,17 @@ static inline struct bc__cpu *bc__cpu_of(struct bc_renderer *r)
 }
 
 int bc__cpu_create(struct bc_renderer **out, enum bc__cpu_kind kind,
-		   const struct bc_render_opts *opts, struct bc_errinfo *ei);
+                   const struct bc_render_opts *opts, struct bc_errinfo *ei);
 void bc__cpu_destroy(struct bc_renderer *r);
 /* The backends' key hook: the frame constants derive from the scene's
  * scale (blobcast/render_common.h). */
 uint64_t bc__cpu_key(struct bc_renderer *r, const struct bc_camera *cam,
-		     uint32_t width, uint32_t height);
+                     uint32_t width, uint32_t height);
 /* Reads the region's tile byte for tile t (NULL tiles: all). Returns the
  * mask of the tile's 64 pixels (bit (y % 8) * 8 + x % 8) the region
  * traces, 0 for none; bits of pixels beyond the frame's edge are clear. */
-uint64_t bc__region_mask(const struct bc_render_region *region,
-			 uint32_t tx, uint32_t ty, uint32_t width,
-			 uint32_t height);
+uint64_t bc__region_mask(const struct bc_render_region *region, uint32_t tx,
+                         uint32_t ty, uint32_t width, uint32_t height);
 /* tiled.c frees its buffers through this. */
 void bc__tiled_free(struct bc__tiled_bufs *b);
 
@@ -133,15 +132,15 @@ static inline float bc__field_eval(struct bc__field *f, const float p[3])
 {
 	f->evals++;
 	return f->view ? bc_view_eval(f->view, f->lin, p)
-		       : bc_eval_full(f->lin, p);
+	               : bc_eval_full(f->lin, p);
 }
 
 static inline float bc__field_eval_id(struct bc__field *f, const float p[3],
-				      uint32_t *prim)
+                                      uint32_t *prim)
 {
 	f->evals++;
 	return f->view ? bc_view_eval_id(f->view, f->lin, p, prim)
-		       : bc_eval_full_id(f->lin, p, prim);
+	               : bc_eval_full_id(f->lin, p, prim);
 }
 
 /* ---- One frame ---------------------------------------------------------- */
@@ -160,13 +159,13 @@ struct bc__frame_ctx {
 
 /* Fills fc for a frame. lin may be NULL (empty tree). */
 void bc__frame_setup(struct bc__frame_ctx *fc, const struct bc_lin *lin,
-		     const struct bc_camera *cam, struct bc_frame *out,
-		     enum bc_debug_mode debug);
+                     const struct bc_camera *cam, struct bc_frame *out,
+                     enum bc_debug_mode debug);
 
 enum bc__trace_result {
 	BC__TRACE_INVALID = 0,
 	BC__TRACE_MISS,
-	BC__TRACE_HIT,      /* *t_hit is on the surface (or its silhouette) */
+	BC__TRACE_HIT, /* *t_hit is on the surface (or its silhouette) */
 	/* The ray is within the hit epsilon at the interval's end and still
 	 * approaching the surface: the crossing, if any, is beyond t1, where
 	 * the field traced may no longer hold. *t_hit is the closest point;
@@ -177,30 +176,30 @@ enum bc__trace_result {
 
 /* Sphere traces o + t d (d unit) over [t0, t1] in field f. */
 enum bc__trace_result bc__trace(struct bc__field *f,
-				const struct bc__frame_ctx *fc,
-				const float o[3], const float d[3], float t0,
-				float t1, float *t_hit);
+                                const struct bc__frame_ctx *fc,
+                                const float o[3], const float d[3], float t0,
+                                float t1, float *t_hit);
 
 /* Writes pixel (x, y) of the frame for a ray d that hit at t in field f:
  * identity of the primitive, shaded colour (or the debug colour from the
  * evaluations counted in f, or from `overlaps`), depth and id. */
 void bc__put_hit(const struct bc__frame_ctx *fc, struct bc__field *f,
-		 uint32_t x, uint32_t y, const float d[3], float t,
-		 uint32_t overlaps);
+                 uint32_t x, uint32_t y, const float d[3], float t,
+                 uint32_t overlaps);
 /* The second half of bc__put_hit, for tracers that took the gradient
  * samples (bc__put_hit's tetrahedral differences, summed in its order) and
  * the primitive themselves: writes pixel (x, y) from normal n (not
  * necessarily unit), primitive index prim and the ray's evaluations. */
 void bc__put_shaded(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
-		    const float d[3], float t, const float n[3], uint32_t prim,
-		    uint32_t evals, uint32_t overlaps);
+                    const float d[3], float t, const float n[3], uint32_t prim,
+                    uint32_t evals, uint32_t overlaps);
 /* Writes pixel (x, y) for a ray that missed after `evals` evaluations. */
 void bc__put_miss(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
-		  uint32_t evals, uint32_t overlaps);
+                  uint32_t evals, uint32_t overlaps);
 
 /* Clips o + t d against the box [lo, hi]; t0 is clamped to >= 0. */
 bool bc__ray_box(const float lo[3], const float hi[3], const float o[3],
-		 const float d[3], float *t0, float *t1);
+                 const float d[3], float *t0, float *t1);
 
 /* ---- Threads, time, progress -------------------------------------------- */
 
@@ -211,7 +210,7 @@ struct bc__progress {
 	double start, last;
 };
 void bc__progress_init(struct bc__progress *p, const struct bc__cpu *r,
-		       uint32_t total);
+                       uint32_t total);
 /* Called by thread 0 only; reports at most every 250 ms after the first
  * second. */
 void bc__progress_tick(struct bc__progress *p, uint32_t done);

@@ -43,19 +43,18 @@ static void naive_rows(void *arg, uint32_t thread)
 			struct bc__field f = {lin, NULL, 0};
 			float d[3], t0, t1, t;
 			if ((rg->tiles && !rg->tiles[(y / BC_CPU_TILE) * tw +
-						     x / BC_CPU_TILE]) ||
-			    !bc_render_level_has(x, y, rg->level,
-						 rg->refine)) {
+			                             x / BC_CPU_TILE]) ||
+			    !bc_render_level_has(x, y, rg->level, rg->refine)) {
 				continue;
 			}
 			rays++;
 			bc_view_rays_dir(&fc->vr, (float)x + 0.5f,
-					 (float)y + 0.5f, d);
+			                 (float)y + 0.5f, d);
 			if (lin &&
 			    bc__ray_box(lin->lo, lin->hi, fc->vr.eye, d, &t0,
-					&t1) &&
+			                &t1) &&
 			    bc__trace(&f, fc, fc->vr.eye, d, t0, t1, &t) !=
-				    BC__TRACE_MISS) {
+			        BC__TRACE_MISS) {
 				/* Near the end of the scene's box counts: no
 				 * surface lies beyond it. */
 				bc__put_hit(fc, &f, x, y, d, t, overlaps);
@@ -65,7 +64,8 @@ static void naive_rows(void *arg, uint32_t thread)
 			evals += f.evals;
 		}
 		if (thread == 0) {
-			bc__progress_tick(&nf->progress, atomic_load(&nf->next_row));
+			bc__progress_tick(&nf->progress,
+			                  atomic_load(&nf->next_row));
 		}
 	}
 	nf->evals[thread] = evals;
@@ -73,15 +73,16 @@ static void naive_rows(void *arg, uint32_t thread)
 }
 
 static int naive_create(struct bc_renderer **out,
-			const struct bc_render_opts *opts, struct bc_errinfo *ei)
+                        const struct bc_render_opts *opts,
+                        struct bc_errinfo *ei)
 {
 	return bc__cpu_create(out, BC__CPU_NAIVE, opts, ei);
 }
 
 static int naive_render(struct bc_renderer *base, const struct bc_camera *cam,
-			struct bc_frame *out,
-			const struct bc_render_region *region,
-			struct bc_render_stats *stats, struct bc_errinfo *ei)
+                        struct bc_frame *out,
+                        const struct bc_render_region *region,
+                        struct bc_render_stats *stats, struct bc_errinfo *ei)
 {
 	struct bc__cpu *r = bc__cpu_of(base);
 	struct bc__frame_ctx fc;
@@ -89,7 +90,7 @@ static int naive_render(struct bc_renderer *base, const struct bc_camera *cam,
 	double t0 = bc_clock_ms();
 	(void)ei;
 	bc__frame_setup(&fc, bc_tree_lin(base->tree), cam, out,
-			base->opts.debug);
+	                base->opts.debug);
 	nf.fc = &fc;
 	nf.region = region;
 	atomic_init(&nf.next_row, 0u);
@@ -99,8 +100,8 @@ static int naive_render(struct bc_renderer *base, const struct bc_camera *cam,
 		stats->field_evals += nf.evals[i];
 		stats->rays += nf.rays[i];
 	}
-	stats->tiles = bc_render_tiles_x(out->width) *
-		       bc_render_tiles_y(out->height);
+	stats->tiles =
+	    bc_render_tiles_x(out->width) * bc_render_tiles_y(out->height);
 	stats->max_overlap = fc.lin ? fc.lin->nprims : 0;
 	stats->ms_trace = bc_clock_ms() - t0;
 	stats->ms_total = stats->ms_trace;
@@ -108,12 +109,12 @@ static int naive_render(struct bc_renderer *base, const struct bc_camera *cam,
 }
 
 const struct bc_backend_ops bc_backend_naive_ops = {
-	.name = "naive",
-	.create = naive_create,
-	.destroy = bc__cpu_destroy,
-	.render = naive_render,
-	.key = bc__cpu_key,
-	/* No damage hook: a step of the full tree's sphere tracing is the
-	 * distance to the nearest surface, wherever it is, so every pixel
-	 * can depend on every primitive. */
+    .name = "naive",
+    .create = naive_create,
+    .destroy = bc__cpu_destroy,
+    .render = naive_render,
+    .key = bc__cpu_key,
+    /* No damage hook: a step of the full tree's sphere tracing is the
+     * distance to the nearest surface, wherever it is, so every pixel
+     * can depend on every primitive. */
 };

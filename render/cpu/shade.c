@@ -11,8 +11,8 @@
 #include <string.h>
 
 void bc__frame_setup(struct bc__frame_ctx *fc, const struct bc_lin *lin,
-		     const struct bc_camera *cam, struct bc_frame *out,
-		     enum bc_debug_mode debug)
+                     const struct bc_camera *cam, struct bc_frame *out,
+                     enum bc_debug_mode debug)
 {
 	float size;
 	memset(fc, 0, sizeof(*fc));
@@ -30,19 +30,18 @@ void bc__frame_setup(struct bc__frame_ctx *fc, const struct bc_lin *lin,
 }
 
 static void debug_colour(const struct bc__frame_ctx *fc, uint32_t evals,
-			 uint32_t overlaps, uint8_t *px)
+                         uint32_t overlaps, uint8_t *px)
 {
 	if (fc->debug == BC_DEBUG_EVALS) {
 		bc_shade_ramp((float)evals / (float)BC_CPU_DEBUG_EVALS_MAX, px);
 	} else {
-		bc_shade_ramp((float)overlaps /
-				      (float)BC_CPU_DEBUG_OVERLAPS_MAX,
-			      px);
+		bc_shade_ramp(
+		    (float)overlaps / (float)BC_CPU_DEBUG_OVERLAPS_MAX, px);
 	}
 }
 
 void bc__put_miss(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
-		  uint32_t evals, uint32_t overlaps)
+                  uint32_t evals, uint32_t overlaps)
 {
 	struct bc_frame *out = fc->out;
 	size_t i = (size_t)y * out->width + x;
@@ -61,12 +60,12 @@ void bc__put_miss(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
 }
 
 void bc__put_hit(const struct bc__frame_ctx *fc, struct bc__field *f,
-		 uint32_t x, uint32_t y, const float d[3], float t,
-		 uint32_t overlaps)
+                 uint32_t x, uint32_t y, const float d[3], float t,
+                 uint32_t overlaps)
 {
 	/* Tetrahedral differences: four samples give the gradient. */
 	static const float tet[4][3] = {
-		{1, -1, -1}, {-1, -1, 1}, {-1, 1, -1}, {1, 1, 1}};
+	    {1, -1, -1}, {-1, -1, 1}, {-1, 1, -1}, {1, 1, 1}};
 	const float *eye = fc->vr.eye;
 	float p[3] = {eye[0] + t * d[0], eye[1] + t * d[1], eye[2] + t * d[2]};
 	float n[3] = {0.0f, 0.0f, 0.0f}, h;
@@ -77,7 +76,7 @@ void bc__put_hit(const struct bc__frame_ctx *fc, struct bc__field *f,
 	h = bc__maxf(BC_CPU_HIT_FOOTPRINT * fc->pix_angle * t, fc->min_step);
 	for (int k = 0; k < 4; k++) {
 		float q[3] = {p[0] + h * tet[k][0], p[1] + h * tet[k][1],
-			      p[2] + h * tet[k][2]};
+		              p[2] + h * tet[k][2]};
 		float v = bc__field_eval(f, q);
 		for (int c = 0; c < 3; c++) {
 			n[c] += tet[k][c] * v;
@@ -87,8 +86,8 @@ void bc__put_hit(const struct bc__frame_ctx *fc, struct bc__field *f,
 }
 
 void bc__put_shaded(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
-		    const float d[3], float t, const float n[3], uint32_t prim,
-		    uint32_t evals, uint32_t overlaps)
+                    const float d[3], float t, const float n[3], uint32_t prim,
+                    uint32_t evals, uint32_t overlaps)
 {
 	const struct bc_lin *lin = fc->lin;
 	struct bc_frame *out = fc->out;
@@ -99,14 +98,13 @@ void bc__put_shaded(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
 	} else {
 		static const float grey[3] = {0.7f, 0.7f, 0.7f};
 		bc_shade_hit(&fc->shade, n, d,
-			     prim < lin->nprims ? lin->color[prim] : grey, px);
+		             prim < lin->nprims ? lin->color[prim] : grey, px);
 	}
 	if (out->depth) {
 		out->depth[i] = t;
 	}
 	if (out->ids) {
-		out->ids[i] = prim < lin->nprims
-				      ? lin->node_id[lin->prim_slot[prim]]
-				      : 0;
+		out->ids[i] =
+		    prim < lin->nprims ? lin->node_id[lin->prim_slot[prim]] : 0;
 	}
 }

@@ -256,8 +256,8 @@ static struct rect project_box(const struct tiled_frame *tf, const float lo[3],
 			behind++;
 			continue;
 		}
-		sx = bc_v3_dot(v, vr->right) /
-		     (z * vr->tan_half_y * vr->aspect);
+		sx =
+		    bc_v3_dot(v, vr->right) / (z * vr->tan_half_y * vr->aspect);
 		sy = bc_v3_dot(v, vr->up) / (z * vr->tan_half_y);
 		px0 = bc__minf(px0, (sx + 1.0f) * 0.5f * w);
 		px1 = bc__maxf(px1, (sx + 1.0f) * 0.5f * w);

@@ -15,7 +15,7 @@
 #include <math.h>
 
 static inline float eval_at(struct bc__field *f, const float o[3],
-			    const float d[3], float t)
+                            const float d[3], float t)
 {
 	float p[3] = {o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]};
 	/* The tree's own bound (above 1 under twist and bend) multiplies
@@ -26,8 +26,8 @@ static inline float eval_at(struct bc__field *f, const float o[3],
 /* Bisects [a, b] with f(a) > 0 > f(b) down to the refinement tolerance, then
  * interpolates linearly inside the last bracket. */
 static float bisect(struct bc__field *f, const struct bc__frame_ctx *fc,
-		    const float o[3], const float d[3], float a, float fa,
-		    float b, float fb)
+                    const float o[3], const float d[3], float a, float fa,
+                    float b, float fb)
 {
 	/* The bracket halves per step: 40 steps reach float resolution from
 	 * any interval a scene can produce. */
@@ -58,8 +58,8 @@ static float bisect(struct bc__field *f, const struct bc__frame_ctx *fc,
  * approach, wherever the steps landed; a negative sample on the way is a
  * crossing after all and is bisected. */
 static float closest(struct bc__field *f, const struct bc__frame_ctx *fc,
-		     const float o[3], const float d[3], float a, float va,
-		     float b)
+                     const float o[3], const float d[3], float a, float va,
+                     float b)
 {
 	const float g = 0.618034f;
 	float c = b - g * (b - a), e = a + g * (b - a);
@@ -107,10 +107,10 @@ static float closest(struct bc__field *f, const struct bc__frame_ctx *fc,
  * field rises again the ray only grazes the surface, and its hit is the
  * closest approach, within the hit epsilon of the silhouette. */
 static enum bc__trace_result refine(struct bc__field *f,
-				    const struct bc__frame_ctx *fc,
-				    const float o[3], const float d[3], float t,
-				    float v, float t_prev, float v_prev,
-				    float eps, float t1, float *t_hit)
+                                    const struct bc__frame_ctx *fc,
+                                    const float o[3], const float d[3], float t,
+                                    float v, float t_prev, float v_prev,
+                                    float eps, float t1, float *t_hit)
 {
 	/* Beyond this the ray is so oblique that the silhouette is as good
 	 * an answer as any. */
@@ -141,7 +141,7 @@ static enum bc__trace_result refine(struct bc__field *f,
 			/* Rising: the ray passes the surface by, closest
 			 * somewhere between the previous sample and here. */
 			*t_hit = closest(f, fc, o, d, t_prev < t ? t_prev : t,
-					 t_prev < t ? v_prev : v, probe);
+			                 t_prev < t ? v_prev : v, probe);
 			return BC__TRACE_HIT;
 		}
 		t_prev = t;
@@ -154,9 +154,9 @@ static enum bc__trace_result refine(struct bc__field *f,
 }
 
 enum bc__trace_result bc__trace(struct bc__field *f,
-				const struct bc__frame_ctx *fc,
-				const float o[3], const float d[3], float t0,
-				float t1, float *t_hit)
+                                const struct bc__frame_ctx *fc,
+                                const float o[3], const float d[3], float t0,
+                                float t1, float *t_hit)
 {
 	float omega = BC_CPU_OVERRELAX;
 	float t = t0, v, t_prev = t0, v_prev = 0.0f;
@@ -173,14 +173,14 @@ enum bc__trace_result bc__trace(struct bc__field *f,
 		/* Hit epsilon: half a pixel at t, never below the minimal
 		 * step (which therefore bounds the steps per ray). */
 		float eps = bc__maxf(BC_CPU_HIT_FOOTPRINT * fc->pix_angle * t,
-				  fc->min_step);
+		                     fc->min_step);
 		/* Steps are divided by the tree's Lipschitz bound, the hit
 		 * band is not: a hit stays a field below 1.45 eps. */
 		eps /= f->lin->lip;
 		float step, tn, vn;
 		if (v < eps) {
 			return refine(f, fc, o, d, t, v, t_prev, v_prev, eps,
-				      t1, t_hit);
+			              t1, t_hit);
 		}
 		if (t >= t1) {
 			return BC__TRACE_MISS;
@@ -213,13 +213,14 @@ enum bc__trace_result bc__trace(struct bc__field *f,
 }
 
 bool bc__ray_box(const float lo[3], const float hi[3], const float o[3],
-		 const float d[3], float *t0, float *t1)
+                 const float d[3], float *t0, float *t1)
 {
 	float a = 0.0f, b = INFINITY;
 	for (int i = 0; i < 3; i++) {
 		if (d[i] != 0.0f) {
 			float inv = 1.0f / d[i];
-			float ta = (lo[i] - o[i]) * inv, tb = (hi[i] - o[i]) * inv;
+			float ta = (lo[i] - o[i]) * inv,
+			      tb = (hi[i] - o[i]) * inv;
 			if (ta > tb) {
 				float s = ta;
 				ta = tb;

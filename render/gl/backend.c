@@ -230,8 +230,8 @@ static int put_topo(struct gl_renderer *r, const struct bc_lin *l, uint32_t lo,
 {
 	size_t n = hi - lo;
 	size_t extra = whole && l->nunary ? (size_t)l->count + l->nunary : 0;
-	uint32_t *tmp = bc_malloc((n + extra ? n + extra : 1) * 4 *
-	                          sizeof(uint32_t));
+	uint32_t *tmp =
+	    bc_malloc((n + extra ? n + extra : 1) * 4 * sizeof(uint32_t));
 	if (!tmp) {
 		return BC_ENOMEM;
 	}
@@ -854,7 +854,7 @@ static void draw(struct gl_renderer *r, const struct bc__gl_frame_ubo *u,
 
 	/* Tracing and shading. */
 	gl->UseProgram(r->progs[u->counts[3] ? BC__GL_PROG_TRACE_UNARY
-	                                      : BC__GL_PROG_TRACE]);
+	                                     : BC__GL_PROG_TRACE]);
 	gl->BindImageTexture(0, r->tex[0], 0, GL_FALSE, 0, GL_WRITE_ONLY,
 	                     GL_R32UI);
 	gl->BindImageTexture(1, r->tex[1], 0, GL_FALSE, 0, GL_WRITE_ONLY,
@@ -897,8 +897,7 @@ static int finish_tracing(struct gl_renderer *r, struct bc__gl_frame_ubo *u,
 		gl->ClearBufferSubData(GL_SHADER_STORAGE_BUFFER, GL_R32UI,
 		                       4 * BC_GL_STAT_SUSPENDED, 4,
 		                       GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
-		if (budget_ms &&
-		    bc_clock_ms() - t_start > (double)budget_ms) {
+		if (budget_ms && bc_clock_ms() - t_start > (double)budget_ms) {
 			/* Out of time: one last dispatch finishes every
 			 * suspended tile with what it has. */
 			u->pool[3] = 1;

@@ -14,10 +14,10 @@
 #include "blobcast/log.h"
 
 static const char *const platform_names[BC_GL_PLATFORM_COUNT] = {
-	[BC_GL_PLATFORM_AUTO] = "auto",
-	[BC_GL_PLATFORM_DEVICE] = "device",
-	[BC_GL_PLATFORM_SURFACELESS] = "surfaceless",
-	[BC_GL_PLATFORM_OSMESA] = "osmesa",
+    [BC_GL_PLATFORM_AUTO] = "auto",
+    [BC_GL_PLATFORM_DEVICE] = "device",
+    [BC_GL_PLATFORM_SURFACELESS] = "surfaceless",
+    [BC_GL_PLATFORM_OSMESA] = "osmesa",
 };
 
 enum bc_gl_platform bc_gl_platform_from_name(const char *name)
@@ -67,8 +67,7 @@ const char *bc__gl_error_name(GLenum e)
 	}
 }
 
-int bc__gl_check(struct bc__gl_ctx *c, const char *stage,
-		 struct bc_errinfo *ei)
+int bc__gl_check(struct bc__gl_ctx *c, const char *stage, struct bc_errinfo *ei)
 {
 	char names[160] = "";
 	size_t len = 0;
@@ -78,7 +77,7 @@ int bc__gl_check(struct bc__gl_ctx *c, const char *stage,
 	 * context keeps reporting. */
 	while (count < 8 && (e = c->gl.GetError()) != GL_NO_ERROR) {
 		int n = snprintf(names + len, sizeof(names) - len, "%s%s",
-				 count ? ", " : "", bc__gl_error_name(e));
+		                 count ? ", " : "", bc__gl_error_name(e));
 		if (n > 0 && (size_t)n < sizeof(names) - len) {
 			len += (size_t)n;
 		}
@@ -91,15 +90,14 @@ int bc__gl_check(struct bc__gl_ctx *c, const char *stage,
 }
 
 static void GLAD_API_PTR debug_cb(GLenum source, GLenum type, GLuint id,
-				  GLenum severity, GLsizei length,
-				  const GLchar *message, const void *user)
+                                  GLenum severity, GLsizei length,
+                                  const GLchar *message, const void *user)
 {
 	enum bc_log_level level = BC_LOG_DEBUG;
 	(void)source;
 	(void)length;
 	(void)user;
-	if (severity == GL_DEBUG_SEVERITY_HIGH ||
-	    type == GL_DEBUG_TYPE_ERROR) {
+	if (severity == GL_DEBUG_SEVERITY_HIGH || type == GL_DEBUG_TYPE_ERROR) {
 		level = BC_LOG_WARN;
 	} else if (severity == GL_DEBUG_SEVERITY_MEDIUM) {
 		level = BC_LOG_INFO;
@@ -129,23 +127,23 @@ static int check_limits(struct bc__gl_ctx *c, struct bc_errinfo *ei)
 	gl->GetIntegerv(GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS, &v);
 	if (v < BC__GL_BUF_COUNT) {
 		return bc_errinfo_set(ei, BC_ENOTSUP,
-				      "gl: %d storage buffer bindings, the "
-				      "pipeline needs %d",
-				      (int)v, BC__GL_BUF_COUNT);
+		                      "gl: %d storage buffer bindings, the "
+		                      "pipeline needs %d",
+		                      (int)v, BC__GL_BUF_COUNT);
 	}
 	gl->GetIntegerv(GL_MAX_COMPUTE_SHADER_STORAGE_BLOCKS, &v);
 	if (v < 8) {
 		return bc_errinfo_set(ei, BC_ENOTSUP,
-				      "gl: %d storage blocks per compute "
-				      "shader, the tracer needs 8",
-				      (int)v);
+		                      "gl: %d storage blocks per compute "
+		                      "shader, the tracer needs 8",
+		                      (int)v);
 	}
 	gl->GetIntegerv(GL_MAX_FRAGMENT_SHADER_STORAGE_BLOCKS, &v);
 	if (v < 4) {
 		return bc_errinfo_set(ei, BC_ENOTSUP,
-				      "gl: %d storage blocks per fragment "
-				      "shader, the A-buffer needs 4",
-				      (int)v);
+		                      "gl: %d storage blocks per fragment "
+		                      "shader, the A-buffer needs 4",
+		                      (int)v);
 	}
 	gl->GetIntegerv(GL_MAX_COMPUTE_SHARED_MEMORY_SIZE, &v);
 	c->info.shared_bytes = v > 0 ? (uint32_t)v : 0;
@@ -161,8 +159,8 @@ static int finish_open(struct bc__gl_ctx *c, struct bc_errinfo *ei)
 	int version = gladLoadGLContextUserPtr(gl, load_proc, &c->plat);
 	if (!version) {
 		return bc_errinfo_set(ei, BC_EGL,
-				      "gl: loading the entry points failed "
-				      "(no glGetString?)");
+		                      "gl: loading the entry points failed "
+		                      "(no glGetString?)");
 	}
 	c->info.platform = c->plat.platform;
 	c->info.software_device = c->plat.software_device;
@@ -171,20 +169,21 @@ static int finish_open(struct bc__gl_ctx *c, struct bc_errinfo *ei)
 	if (c->info.major < 4 || (c->info.major == 4 && c->info.minor < 3) ||
 	    !gl->DispatchCompute) {
 		return bc_errinfo_set(ei, BC_ENOTSUP,
-				      "gl: OpenGL %d.%d has no compute shaders "
-				      "(4.3 needed)",
-				      c->info.major, c->info.minor);
+		                      "gl: OpenGL %d.%d has no compute shaders "
+		                      "(4.3 needed)",
+		                      c->info.major, c->info.minor);
 	}
 	if ((s = gl->GetString(GL_RENDERER)) != NULL) {
 		snprintf(c->info.renderer, sizeof(c->info.renderer), "%s",
-			 (const char *)s);
+		         (const char *)s);
 	}
 	if ((s = gl->GetString(GL_VERSION)) != NULL) {
 		snprintf(c->info.version, sizeof(c->info.version), "%s",
-			 (const char *)s);
+		         (const char *)s);
 	}
 	gl->GetIntegerv(GL_CONTEXT_FLAGS, &flags);
-	c->info.robust_access = (flags & GL_CONTEXT_FLAG_ROBUST_ACCESS_BIT) != 0;
+	c->info.robust_access =
+	    (flags & GL_CONTEXT_FLAG_ROBUST_ACCESS_BIT) != 0;
 	gl->GetIntegerv(GL_RESET_NOTIFICATION_STRATEGY, &strategy);
 	c->info.lose_on_reset = strategy == GL_LOSE_CONTEXT_ON_RESET;
 	if (gl->DebugMessageCallback) {
@@ -195,7 +194,7 @@ static int finish_open(struct bc__gl_ctx *c, struct bc_errinfo *ei)
 			gl->Enable(GL_DEBUG_OUTPUT);
 		}
 		c->info.debug_output = bc_log_level() >= BC_LOG_DEBUG ||
-				       (flags & GL_CONTEXT_FLAG_DEBUG_BIT) != 0;
+		                       (flags & GL_CONTEXT_FLAG_DEBUG_BIT) != 0;
 	}
 	/* glGetIntegerv of the reset strategy is 4.5 or KHR_robustness;
 	 * older contexts report an error here that means "not granted". */
@@ -216,7 +215,7 @@ static int finish_open(struct bc__gl_ctx *c, struct bc_errinfo *ei)
 
 /* Opens one platform; BC_ENOTSUP means "not here, try the next". */
 static int open_one(struct bc__gl_ctx *c, enum bc_gl_platform p, bool any,
-		    struct bc_errinfo *ei)
+                    struct bc_errinfo *ei)
 {
 	bool debug = bc_log_level() >= BC_LOG_DEBUG;
 	int rc;
@@ -229,21 +228,19 @@ static int open_one(struct bc__gl_ctx *c, enum bc_gl_platform p, bool any,
 #else
 		(void)any;
 		(void)debug;
-		rc = bc_errinfo_set(ei, BC_ENOTSUP,
-				    "gl: built without EGL");
+		rc = bc_errinfo_set(ei, BC_ENOTSUP, "gl: built without EGL");
 #endif
 		break;
 	case BC_GL_PLATFORM_OSMESA:
 #if defined(BLOBCAST_GL_OSMESA)
 		rc = bc__osmesa_open(&c->plat, ei);
 #else
-		rc = bc_errinfo_set(ei, BC_ENOTSUP,
-				    "gl: built without OSMesa");
+		rc = bc_errinfo_set(ei, BC_ENOTSUP, "gl: built without OSMesa");
 #endif
 		break;
 	default:
-		rc = bc_errinfo_set(ei, BC_EINVAL, "gl: no platform %d",
-				    (int)p);
+		rc =
+		    bc_errinfo_set(ei, BC_EINVAL, "gl: no platform %d", (int)p);
 		break;
 	}
 	if (rc) {
@@ -256,11 +253,11 @@ static int open_one(struct bc__gl_ctx *c, enum bc_gl_platform p, bool any,
 }
 
 int bc__gl_ctx_open(struct bc__gl_ctx *c, enum bc_gl_platform platform,
-		    struct bc_errinfo *ei)
+                    struct bc_errinfo *ei)
 {
-	static const enum bc_gl_platform order[] = {
-		BC_GL_PLATFORM_DEVICE, BC_GL_PLATFORM_SURFACELESS,
-		BC_GL_PLATFORM_OSMESA};
+	static const enum bc_gl_platform order[] = {BC_GL_PLATFORM_DEVICE,
+	                                            BC_GL_PLATFORM_SURFACELESS,
+	                                            BC_GL_PLATFORM_OSMESA};
 	char why[3][96];
 	int rc = BC_ENOTSUP;
 	memset(c, 0, sizeof(*c));
@@ -279,9 +276,9 @@ int bc__gl_ctx_open(struct bc__gl_ctx *c, enum bc_gl_platform platform,
 		       bc_gl_platform_name(order[i]), mine.msg);
 	}
 	return bc_errinfo_set(ei, rc,
-			      "gl: no context on any platform (device: %s; "
-			      "surfaceless: %s; osmesa: %s)",
-			      why[0], why[1], why[2]);
+	                      "gl: no context on any platform (device: %s; "
+	                      "surfaceless: %s; osmesa: %s)",
+	                      why[0], why[1], why[2]);
 }
 
 void bc__gl_ctx_close(struct bc__gl_ctx *c)

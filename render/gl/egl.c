@@ -85,7 +85,7 @@ static int fail(struct bc_errinfo *ei, const char *call)
 {
 	EGLint e = eglGetError();
 	return bc_errinfo_set(ei, BC_EGL, "%s failed: %s (0x%04x)", call,
-			      egl_error_name(e), (unsigned)e);
+	                      egl_error_name(e), (unsigned)e);
 }
 
 /* Exact token match in a space-separated extension list. */
@@ -108,8 +108,8 @@ static bool has_ext(const char *list, const char *name)
 }
 
 static void EGLAPIENTRY debug_cb(EGLenum error, const char *command,
-				 EGLint type, EGLLabelKHR thread,
-				 EGLLabelKHR object, const char *message)
+                                 EGLint type, EGLLabelKHR thread,
+                                 EGLLabelKHR object, const char *message)
 {
 	enum bc_log_level level = BC_LOG_DEBUG;
 	(void)thread;
@@ -130,17 +130,20 @@ static void EGLAPIENTRY debug_cb(EGLenum error, const char *command,
 static void install_debug(const char *client_exts)
 {
 	PFNEGLDEBUGMESSAGECONTROLKHRPROC control;
-	static const EGLAttrib attribs[] = {
-		EGL_DEBUG_MSG_CRITICAL_KHR, EGL_TRUE,
-		EGL_DEBUG_MSG_ERROR_KHR,    EGL_TRUE,
-		EGL_DEBUG_MSG_WARN_KHR,     EGL_TRUE,
-		EGL_DEBUG_MSG_INFO_KHR,     EGL_FALSE,
-		EGL_NONE};
+	static const EGLAttrib attribs[] = {EGL_DEBUG_MSG_CRITICAL_KHR,
+	                                    EGL_TRUE,
+	                                    EGL_DEBUG_MSG_ERROR_KHR,
+	                                    EGL_TRUE,
+	                                    EGL_DEBUG_MSG_WARN_KHR,
+	                                    EGL_TRUE,
+	                                    EGL_DEBUG_MSG_INFO_KHR,
+	                                    EGL_FALSE,
+	                                    EGL_NONE};
 	if (debug_installed || !has_ext(client_exts, "EGL_KHR_debug")) {
 		return;
 	}
 	control = (PFNEGLDEBUGMESSAGECONTROLKHRPROC)eglGetProcAddress(
-		"eglDebugMessageControlKHR");
+	    "eglDebugMessageControlKHR");
 	if (control && control(debug_cb, attribs) == EGL_SUCCESS) {
 		debug_installed = true;
 	}
@@ -168,7 +171,7 @@ static int display_init(EGLDisplay d, struct bc_errinfo *ei)
 		}
 	}
 	return bc_errinfo_set(ei, BC_ELIMIT, "EGL: more than %d displays",
-			      MAX_DISPLAYS);
+	                      MAX_DISPLAYS);
 }
 
 /* Is the EGL version of d at least 1.5 (whose core has the robustness
@@ -194,7 +197,7 @@ static bool egl15(EGLDisplay d)
 /* Creates a core context on the initialized display d, newest version
  * first, each with robustness first. */
 static int create_context(struct bc__gl_plat *p, EGLDisplay d, bool debug,
-			  struct bc_errinfo *ei)
+                          struct bc_errinfo *ei)
 {
 	static const int versions[BC_GL_NVERSIONS][2] = BC_GL_VERSIONS;
 	const char *exts = eglQueryString(d, EGL_EXTENSIONS);
@@ -203,26 +206,27 @@ static int create_context(struct bc__gl_plat *p, EGLDisplay d, bool debug,
 	EGLConfig config = EGL_NO_CONFIG_KHR;
 	if (!has_ext(exts, "EGL_KHR_surfaceless_context")) {
 		return bc_errinfo_set(ei, BC_ENOTSUP,
-				      "EGL display lacks "
-				      "EGL_KHR_surfaceless_context");
+		                      "EGL display lacks "
+		                      "EGL_KHR_surfaceless_context");
 	}
 	if (!core15 && !has_ext(exts, "EGL_KHR_create_context")) {
-		return bc_errinfo_set(ei, BC_ENOTSUP,
-				      "EGL display lacks EGL_KHR_create_context "
-				      "(needed for a core profile)");
+		return bc_errinfo_set(
+		    ei, BC_ENOTSUP,
+		    "EGL display lacks EGL_KHR_create_context "
+		    "(needed for a core profile)");
 	}
 	if (!has_ext(exts, "EGL_KHR_no_config_context") &&
 	    !has_ext(exts, "EGL_MESA_configless_context")) {
 		static const EGLint want[] = {EGL_RENDERABLE_TYPE,
-					      EGL_OPENGL_BIT, EGL_NONE};
+		                              EGL_OPENGL_BIT, EGL_NONE};
 		EGLint n = 0;
 		if (!eglChooseConfig(d, want, &config, 1, &n)) {
 			return fail(ei, "eglChooseConfig");
 		}
 		if (n < 1) {
 			return bc_errinfo_set(ei, BC_EGL,
-					      "eglChooseConfig: no config "
-					      "renders desktop OpenGL");
+			                      "eglChooseConfig: no config "
+			                      "renders desktop OpenGL");
 		}
 	}
 	if (!eglBindAPI(EGL_OPENGL_API)) {
@@ -245,12 +249,14 @@ static int create_context(struct bc__gl_plat *p, EGLDisplay d, bool debug,
 			if (robust && core15) {
 				at[n++] = EGL_CONTEXT_OPENGL_ROBUST_ACCESS;
 				at[n++] = EGL_TRUE;
-				at[n++] = EGL_CONTEXT_OPENGL_RESET_NOTIFICATION_STRATEGY;
+				at[n++] =
+				    EGL_CONTEXT_OPENGL_RESET_NOTIFICATION_STRATEGY;
 				at[n++] = EGL_LOSE_CONTEXT_ON_RESET;
 			} else if (robust) {
 				at[n++] = EGL_CONTEXT_OPENGL_ROBUST_ACCESS_EXT;
 				at[n++] = EGL_TRUE;
-				at[n++] = EGL_CONTEXT_OPENGL_RESET_NOTIFICATION_STRATEGY_EXT;
+				at[n++] =
+				    EGL_CONTEXT_OPENGL_RESET_NOTIFICATION_STRATEGY_EXT;
 				at[n++] = EGL_LOSE_CONTEXT_ON_RESET_EXT;
 			}
 			if (debug && core15) {
@@ -269,7 +275,7 @@ static int create_context(struct bc__gl_plat *p, EGLDisplay d, bool debug,
 				continue;
 			}
 			if (!eglMakeCurrent(d, EGL_NO_SURFACE, EGL_NO_SURFACE,
-					    ctx)) {
+			                    ctx)) {
 				int rc = fail(ei, "eglMakeCurrent");
 				eglDestroyContext(d, ctx);
 				return rc;
@@ -282,14 +288,14 @@ static int create_context(struct bc__gl_plat *p, EGLDisplay d, bool debug,
 		}
 	}
 	return bc_errinfo_set(ei, BC_EGL,
-			      "eglCreateContext failed for OpenGL 4.3 to 4.5 "
-			      "core: %s",
-			      egl_error_name(eglGetError()));
+	                      "eglCreateContext failed for OpenGL 4.3 to 4.5 "
+	                      "core: %s",
+	                      egl_error_name(eglGetError()));
 }
 
 /* Tries d as the display. */
 static int open_display(struct bc__gl_plat *p, EGLDisplay d, bool debug,
-			struct bc_errinfo *ei)
+                        struct bc_errinfo *ei)
 {
 	int rc;
 	pthread_mutex_lock(&lock);
@@ -303,7 +309,7 @@ static int open_display(struct bc__gl_plat *p, EGLDisplay d, bool debug,
 }
 
 static int open_device(struct bc__gl_plat *p, const char *client, bool any,
-		       bool debug, struct bc_errinfo *ei)
+                       bool debug, struct bc_errinfo *ei)
 {
 	PFNEGLQUERYDEVICESEXTPROC query_devices;
 	PFNEGLQUERYDEVICESTRINGEXTPROC query_string;
@@ -316,17 +322,17 @@ static int open_device(struct bc__gl_plat *p, const char *client, bool any,
 	    !(has_ext(client, "EGL_EXT_device_enumeration") ||
 	      has_ext(client, "EGL_EXT_device_base"))) {
 		return bc_errinfo_set(ei, BC_ENOTSUP,
-				      "EGL lacks EGL_EXT_platform_device");
+		                      "EGL lacks EGL_EXT_platform_device");
 	}
-	query_devices = (PFNEGLQUERYDEVICESEXTPROC)eglGetProcAddress(
-		"eglQueryDevicesEXT");
+	query_devices =
+	    (PFNEGLQUERYDEVICESEXTPROC)eglGetProcAddress("eglQueryDevicesEXT");
 	query_string = (PFNEGLQUERYDEVICESTRINGEXTPROC)eglGetProcAddress(
-		"eglQueryDeviceStringEXT");
+	    "eglQueryDeviceStringEXT");
 	get_display = (PFNEGLGETPLATFORMDISPLAYEXTPROC)eglGetProcAddress(
-		"eglGetPlatformDisplayEXT");
+	    "eglGetPlatformDisplayEXT");
 	if (!query_devices || !query_string || !get_display) {
 		return bc_errinfo_set(ei, BC_ENOTSUP,
-				      "EGL device entry points missing");
+		                      "EGL device entry points missing");
 	}
 	if (!query_devices(MAX_DEVICES, devs, &n)) {
 		return fail(ei, "eglQueryDevicesEXT");
@@ -336,7 +342,8 @@ static int open_device(struct bc__gl_plat *p, const char *client, bool any,
 	 * which is the same renderer). */
 	for (int pass = 0; pass < (any ? 2 : 1); pass++) {
 		for (EGLint i = 0; i < n; i++) {
-			const char *dext = query_string(devs[i], EGL_EXTENSIONS);
+			const char *dext =
+			    query_string(devs[i], EGL_EXTENSIONS);
 			bool soft = has_ext(dext, "EGL_MESA_device_software");
 			EGLDisplay d;
 			if (soft != (pass == 1)) {
@@ -345,7 +352,8 @@ static int open_device(struct bc__gl_plat *p, const char *client, bool any,
 			tried = true;
 			d = get_display(EGL_PLATFORM_DEVICE_EXT, devs[i], NULL);
 			if (d == EGL_NO_DISPLAY) {
-				rc = fail(ei, "eglGetPlatformDisplayEXT(device)");
+				rc = fail(ei,
+				          "eglGetPlatformDisplayEXT(device)");
 				continue;
 			}
 			if ((rc = open_display(p, d, debug, ei)) == 0) {
@@ -358,22 +366,22 @@ static int open_device(struct bc__gl_plat *p, const char *client, bool any,
 	}
 	if (!tried) {
 		return bc_errinfo_set(ei, BC_ENOTSUP,
-				      "EGL: no %sdevice to render on (%d "
-				      "found)",
-				      any ? "" : "hardware ", (int)n);
+		                      "EGL: no %sdevice to render on (%d "
+		                      "found)",
+		                      any ? "" : "hardware ", (int)n);
 	}
 	return rc;
 }
 
 int bc__egl_open(struct bc__gl_plat *p, enum bc_gl_platform which,
-		 bool any_device, bool debug, struct bc_errinfo *ei)
+                 bool any_device, bool debug, struct bc_errinfo *ei)
 {
 	const char *client = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
 	int rc;
 	if (!client) {
 		/* EGL 1.4 without client extensions has neither platform. */
 		return bc_errinfo_set(ei, BC_ENOTSUP,
-				      "EGL has no client extensions");
+		                      "EGL has no client extensions");
 	}
 	pthread_mutex_lock(&lock);
 	install_debug(client);
@@ -385,19 +393,21 @@ int bc__egl_open(struct bc__gl_plat *p, enum bc_gl_platform which,
 		EGLDisplay d;
 		if (!has_ext(client, "EGL_MESA_platform_surfaceless")) {
 			return bc_errinfo_set(ei, BC_ENOTSUP,
-					      "EGL lacks "
-					      "EGL_MESA_platform_surfaceless");
+			                      "EGL lacks "
+			                      "EGL_MESA_platform_surfaceless");
 		}
-		get_display = (PFNEGLGETPLATFORMDISPLAYEXTPROC)eglGetProcAddress(
-			"eglGetPlatformDisplayEXT");
+		get_display =
+		    (PFNEGLGETPLATFORMDISPLAYEXTPROC)eglGetProcAddress(
+		        "eglGetPlatformDisplayEXT");
 		if (!get_display) {
-			return bc_errinfo_set(ei, BC_ENOTSUP,
-					      "eglGetPlatformDisplayEXT missing");
+			return bc_errinfo_set(
+			    ei, BC_ENOTSUP, "eglGetPlatformDisplayEXT missing");
 		}
 		d = get_display(EGL_PLATFORM_SURFACELESS_MESA,
-				EGL_DEFAULT_DISPLAY, NULL);
+		                EGL_DEFAULT_DISPLAY, NULL);
 		if (d == EGL_NO_DISPLAY) {
-			return fail(ei, "eglGetPlatformDisplayEXT(surfaceless)");
+			return fail(ei,
+			            "eglGetPlatformDisplayEXT(surfaceless)");
 		}
 		rc = open_display(p, d, debug, ei);
 	}
@@ -415,7 +425,7 @@ void bc__egl_close(struct bc__gl_plat *p)
 	if (p->context) {
 		if (eglGetCurrentContext() == p->context) {
 			eglMakeCurrent(p->display, EGL_NO_SURFACE,
-				       EGL_NO_SURFACE, EGL_NO_CONTEXT);
+			               EGL_NO_SURFACE, EGL_NO_CONTEXT);
 		}
 		if (!eglDestroyContext(p->display, p->context)) {
 			bc_log(BC_LOG_WARN, "eglDestroyContext failed: %s",
@@ -433,14 +443,14 @@ int bc__egl_bind(struct bc__gl_plat *p, bool bind, struct bc_errinfo *ei)
 			return 0;
 		}
 		if (!eglMakeCurrent(p->display, EGL_NO_SURFACE, EGL_NO_SURFACE,
-				    p->context)) {
+		                    p->context)) {
 			return fail(ei, "eglMakeCurrent");
 		}
 		return 0;
 	}
 	if (eglGetCurrentContext() == p->context &&
 	    !eglMakeCurrent(p->display, EGL_NO_SURFACE, EGL_NO_SURFACE,
-			    EGL_NO_CONTEXT)) {
+	                    EGL_NO_CONTEXT)) {
 		return fail(ei, "eglMakeCurrent(release)");
 	}
 	return 0;

@@ -18,15 +18,21 @@ typedef void (*bc__gl_fn)(void);
 /* The context versions asked for, newest first: 4.5 core (drivers that have
  * more hand out their newest compatible version anyway); 4.3 is the least
  * with compute shaders. */
-#define BC_GL_VERSIONS {{4, 5}, {4, 4}, {4, 3}}
+#define BC_GL_VERSIONS                                                         \
+	{                                                                      \
+		{4, 5}, {4, 4},                                                \
+		{                                                              \
+			4, 3                                                   \
+		}                                                              \
+	}
 #define BC_GL_NVERSIONS 3
 
 struct bc__gl_plat {
 	enum bc_gl_platform platform; /* INVALID (AUTO) while closed */
-	void *display;     /* EGLDisplay */
-	void *context;     /* EGLContext */
-	void *osmesa;      /* OSMesaContext */
-	uint32_t pixel;    /* the 1x1 colour buffer OSMesa binds */
+	void *display;                /* EGLDisplay */
+	void *context;                /* EGLContext */
+	void *osmesa;                 /* OSMesaContext */
+	uint32_t pixel;               /* the 1x1 colour buffer OSMesa binds */
 	bool software_device;
 	bool asked_robust; /* the context was created with robustness asked */
 	int major, minor;  /* the version asked for that was granted */
@@ -38,7 +44,7 @@ struct bc__gl_plat {
  * BC_ENOTSUP (the platform's extension is missing: try the next) or BC_EGL,
  * naming the failed call and its error in ei. */
 int bc__egl_open(struct bc__gl_plat *p, enum bc_gl_platform which,
-		 bool any_device, bool debug, struct bc_errinfo *ei);
+                 bool any_device, bool debug, struct bc_errinfo *ei);
 void bc__egl_close(struct bc__gl_plat *p);
 int bc__egl_bind(struct bc__gl_plat *p, bool bind, struct bc_errinfo *ei);
 bc__gl_fn bc__egl_proc(const char *name);

@@ -35,8 +35,8 @@
 /* The five entry points the backend uses. */
 static struct {
 	OSMesaContext (*create)(const int *attribs, OSMesaContext share);
-	GLboolean (*make_current)(OSMesaContext ctx, void *buffer,
-				  GLenum type, GLsizei width, GLsizei height);
+	GLboolean (*make_current)(OSMesaContext ctx, void *buffer, GLenum type,
+	                          GLsizei width, GLsizei height);
 	void (*destroy)(OSMesaContext ctx);
 	OSMesaContext (*get_current)(void);
 	OSMESAproc (*get_proc)(const char *name);
@@ -52,7 +52,7 @@ static bool sym(void *lib, const char *name, void *fn, size_t size)
 	void *p = dlsym(lib, name);
 	if (!p) {
 		snprintf(load_error, sizeof(load_error), "%s: no symbol %s",
-			 BLOBCAST_OSMESA_LIB, name);
+		         BLOBCAST_OSMESA_LIB, name);
 		return false;
 	}
 	memcpy(fn, &p, size);
@@ -64,7 +64,7 @@ static void load(void)
 	/* The runtime package's name first (no -dev package on a server),
 	 * then the file the build found. */
 	static const char *const names[] = {"libOSMesa.so.8",
-					    BLOBCAST_OSMESA_LIB};
+	                                    BLOBCAST_OSMESA_LIB};
 	void *lib = NULL;
 	for (size_t i = 0; i < sizeof(names) / sizeof(names[0]) && !lib; i++) {
 		lib = dlopen(names[i], RTLD_NOW | RTLD_LOCAL);
@@ -72,19 +72,19 @@ static void load(void)
 	if (!lib) {
 		const char *why = dlerror();
 		snprintf(load_error, sizeof(load_error), "cannot load %s: %s",
-			 names[0], why ? why : "unknown reason");
+		         names[0], why ? why : "unknown reason");
 		return;
 	}
 	if (!sym(lib, "OSMesaCreateContextAttribs", &api.create,
-		 sizeof(api.create)) ||
+	         sizeof(api.create)) ||
 	    !sym(lib, "OSMesaMakeCurrent", &api.make_current,
-		 sizeof(api.make_current)) ||
+	         sizeof(api.make_current)) ||
 	    !sym(lib, "OSMesaDestroyContext", &api.destroy,
-		 sizeof(api.destroy)) ||
+	         sizeof(api.destroy)) ||
 	    !sym(lib, "OSMesaGetCurrentContext", &api.get_current,
-		 sizeof(api.get_current)) ||
+	         sizeof(api.get_current)) ||
 	    !sym(lib, "OSMesaGetProcAddress", &api.get_proc,
-		 sizeof(api.get_proc))) {
+	         sizeof(api.get_proc))) {
 		/* Never dlclose (see the top of this file). */
 		memset(&api, 0, sizeof(api));
 		return;
@@ -101,18 +101,18 @@ int bc__osmesa_open(struct bc__gl_plat *p, struct bc_errinfo *ei)
 	}
 	for (int v = 0; v < BC_GL_NVERSIONS; v++) {
 		const int attribs[] = {OSMESA_FORMAT,
-				       OSMESA_RGBA,
-				       OSMESA_DEPTH_BITS,
-				       0,
-				       OSMESA_STENCIL_BITS,
-				       0,
-				       OSMESA_PROFILE,
-				       OSMESA_CORE_PROFILE,
-				       OSMESA_CONTEXT_MAJOR_VERSION,
-				       versions[v][0],
-				       OSMESA_CONTEXT_MINOR_VERSION,
-				       versions[v][1],
-				       0};
+		                       OSMESA_RGBA,
+		                       OSMESA_DEPTH_BITS,
+		                       0,
+		                       OSMESA_STENCIL_BITS,
+		                       0,
+		                       OSMESA_PROFILE,
+		                       OSMESA_CORE_PROFILE,
+		                       OSMESA_CONTEXT_MAJOR_VERSION,
+		                       versions[v][0],
+		                       OSMESA_CONTEXT_MINOR_VERSION,
+		                       versions[v][1],
+		                       0};
 		OSMesaContext ctx = api.create(attribs, NULL);
 		if (!ctx) {
 			bc_log(BC_LOG_DEBUG,
@@ -123,7 +123,7 @@ int bc__osmesa_open(struct bc__gl_plat *p, struct bc_errinfo *ei)
 		if (!api.make_current(ctx, &p->pixel, GL_UNSIGNED_BYTE, 1, 1)) {
 			api.destroy(ctx);
 			return bc_errinfo_set(ei, BC_EGL,
-					      "OSMesaMakeCurrent failed");
+			                      "OSMesaMakeCurrent failed");
 		}
 		p->osmesa = ctx;
 		p->platform = BC_GL_PLATFORM_OSMESA;
@@ -132,8 +132,8 @@ int bc__osmesa_open(struct bc__gl_plat *p, struct bc_errinfo *ei)
 		return 0;
 	}
 	return bc_errinfo_set(ei, BC_EGL,
-			      "OSMesaCreateContextAttribs failed for OpenGL "
-			      "4.3 to 4.5 core");
+	                      "OSMesaCreateContextAttribs failed for OpenGL "
+	                      "4.3 to 4.5 core");
 }
 
 /* close, bind and proc run only on a context open succeeded for, so the
@@ -156,10 +156,10 @@ int bc__osmesa_bind(struct bc__gl_plat *p, bool bind, struct bc_errinfo *ei)
 		if (api.get_current() == p->osmesa) {
 			return 0;
 		}
-		if (!api.make_current(p->osmesa, &p->pixel, GL_UNSIGNED_BYTE,
-				      1, 1)) {
+		if (!api.make_current(p->osmesa, &p->pixel, GL_UNSIGNED_BYTE, 1,
+		                      1)) {
 			return bc_errinfo_set(ei, BC_EGL,
-					      "OSMesaMakeCurrent failed");
+			                      "OSMesaMakeCurrent failed");
 		}
 		return 0;
 	}

@@ -26,7 +26,7 @@ struct stage {
 /* Logs the info log of a shader or program and copies its start into ei
  * (when failed). */
 static int report(struct bc__gl_ctx *c, GLuint obj, bool program,
-		  const char *what, bool failed, struct bc_errinfo *ei)
+                  const char *what, bool failed, struct bc_errinfo *ei)
 {
 	GladGLContext *gl = &c->gl;
 	GLint len = 0;
@@ -52,14 +52,14 @@ static int report(struct bc__gl_ctx *c, GLuint obj, bool program,
 			       bc_shader_parts[i]);
 		}
 		bc_errinfo_set(ei, BC_EGL, "gl: %s failed: %.200s", what,
-			       log ? log : "(no info log)");
+		               log ? log : "(no info log)");
 	}
 	bc_free(log);
 	return failed ? BC_EGL : 0;
 }
 
 static GLuint compile(struct bc__gl_ctx *c, const struct stage *st,
-		      struct bc_errinfo *ei)
+                      struct bc_errinfo *ei)
 {
 	GladGLContext *gl = &c->gl;
 	GLint ok = 0;
@@ -92,7 +92,7 @@ static GLuint compile(struct bc__gl_ctx *c, const struct stage *st,
 }
 
 static GLuint link(struct bc__gl_ctx *c, const char *name,
-		   const struct stage *stages, int n, struct bc_errinfo *ei)
+                   const struct stage *stages, int n, struct bc_errinfo *ei)
 {
 	GladGLContext *gl = &c->gl;
 	GLuint shaders[3] = {0, 0, 0};
@@ -129,23 +129,26 @@ cleanup:
 }
 
 int bc__gl_programs_build(struct bc__gl_ctx *c, GLuint progs[BC__GL_PROG_COUNT],
-			  struct bc_errinfo *ei)
+                          struct bc_errinfo *ei)
 {
 	const struct stage abuffer[] = {
-		{GL_VERTEX_SHADER, "abuffer.vert", bc_shader_abuffer_vert, NULL},
-		{GL_GEOMETRY_SHADER, "abuffer.geom", bc_shader_abuffer_geom, NULL},
-		{GL_FRAGMENT_SHADER, "abuffer.frag", bc_shader_abuffer_frag, NULL},
+	    {GL_VERTEX_SHADER, "abuffer.vert", bc_shader_abuffer_vert, NULL},
+	    {GL_GEOMETRY_SHADER, "abuffer.geom", bc_shader_abuffer_geom, NULL},
+	    {GL_FRAGMENT_SHADER, "abuffer.frag", bc_shader_abuffer_frag, NULL},
 	};
 	const struct stage scan = {GL_COMPUTE_SHADER, "abuffer_scan.comp",
-				   bc_shader_abuffer_scan_comp, NULL};
+	                           bc_shader_abuffer_scan_comp, NULL};
 	const struct stage sort = {GL_COMPUTE_SHADER, "abuffer_sort.comp",
-				   bc_shader_abuffer_sort_comp, NULL};
+	                           bc_shader_abuffer_sort_comp, NULL};
 	const struct stage trace = {GL_COMPUTE_SHADER, "trace.comp",
-				    bc_shader_trace_comp, NULL};
+	                            bc_shader_trace_comp, NULL};
 	memset(progs, 0, BC__GL_PROG_COUNT * sizeof(progs[0]));
-	if (!(progs[BC__GL_PROG_ABUFFER] = link(c, "abuffer", abuffer, 3, ei)) ||
-	    !(progs[BC__GL_PROG_SCAN] = link(c, "abuffer_scan", &scan, 1, ei)) ||
-	    !(progs[BC__GL_PROG_SORT] = link(c, "abuffer_sort", &sort, 1, ei)) ||
+	if (!(progs[BC__GL_PROG_ABUFFER] =
+	          link(c, "abuffer", abuffer, 3, ei)) ||
+	    !(progs[BC__GL_PROG_SCAN] =
+	          link(c, "abuffer_scan", &scan, 1, ei)) ||
+	    !(progs[BC__GL_PROG_SORT] =
+	          link(c, "abuffer_sort", &sort, 1, ei)) ||
 	    !(progs[BC__GL_PROG_TRACE] = link(c, "trace", &trace, 1, ei))) {
 		bc__gl_programs_free(c, progs);
 		return ei && ei->code ? ei->code : BC_EGL;
@@ -157,8 +160,8 @@ int bc__gl_program_trace_unary(struct bc__gl_ctx *c, GLuint *prog,
                                struct bc_errinfo *ei)
 {
 	const struct stage trace = {GL_COMPUTE_SHADER, "trace.comp",
-				    bc_shader_trace_comp,
-				    "#define BC_UNARY 1\n"};
+	                            bc_shader_trace_comp,
+	                            "#define BC_UNARY 1\n"};
 	*prog = link(c, "trace (unary nodes)", &trace, 1, ei);
 	return *prog ? 0 : (ei && ei->code ? ei->code : BC_EGL);
 }

@@ -209,10 +209,9 @@ static void put_hit(const struct frame *fr, uint32_t x, uint32_t y,
 		         hit->leaf_terms, px);
 	} else {
 		static const float grey[3] = {0.7f, 0.7f, 0.7f};
-		bc_shade_hit(&fr->shade, n, d,
-		             hit->prim < rpn->nprims ? rpn->color[hit->prim]
-		                                     : grey,
-		             px);
+		bc_shade_hit(
+		    &fr->shade, n, d,
+		    hit->prim < rpn->nprims ? rpn->color[hit->prim] : grey, px);
 	}
 	if (out->depth) {
 		out->depth[i] = t;

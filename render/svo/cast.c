@@ -132,8 +132,8 @@ static inline bool in_box(const float lo[3], const float hi[3],
 {
 	/* The octree sends a point on a mid plane to the upper child
 	 * (bc_svo_locate), so a box holds its lower faces only. */
-	return p[0] >= lo[0] && p[0] < hi[0] && p[1] >= lo[1] &&
-	       p[1] < hi[1] && p[2] >= lo[2] && p[2] < hi[2];
+	return p[0] >= lo[0] && p[0] < hi[0] && p[1] >= lo[1] && p[1] < hi[1] &&
+	       p[2] >= lo[2] && p[2] < hi[2];
 }
 
 static float field_at(struct ray_field *rf, float t)
@@ -168,7 +168,8 @@ static float field_at(struct ray_field *rf, float t)
 		} else if (rf->leaf.state != BC_SVO_STATE_ACTIVE) {
 			v = rf->leaf.value;
 		} else if (rf->buf) {
-			v = bc__svo_list_eval(rf->s->rpn, rf->buf, rf->nlist, p);
+			v = bc__svo_list_eval(rf->s->rpn, rf->buf, rf->nlist,
+			                      p);
 		} else {
 			v = bc_svo_cmask_eval(rf->s->rpn, rf->leaf.mask, p);
 		}
@@ -186,8 +187,7 @@ static float field_at(struct ray_field *rf, float t)
  * the next sample would fall within half the tolerance of the last one, it
  * goes half the tolerance past it instead, and the bracket closes at once
  * if the root is there. */
-static float refine(struct ray_field *rf, float a, float fa, float b,
-                    float fb)
+static float refine(struct ray_field *rf, float a, float fa, float b, float fb)
 {
 	const float tol = rf->cp->refine_tol;
 	int side = 0;
@@ -240,8 +240,8 @@ static bool leaf_root(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
 	struct {
 		float a, b;
 	} st[CAST_MAX_LEVELS + 2];
-	struct ray_field rf = {c->s, m,    NULL,  0,     NULL, o,
-	                       d,    cp,   true, &hit->evals, false, {0}};
+	struct ray_field rf = {c->s, m,  NULL, 0,           NULL,  o,
+	                       d,    cp, true, &hit->evals, false, {0}};
 	struct bc_svo_region rg;
 	uint32_t n = 0, sp = 0;
 	for (uint32_t w = 0; w < m->nwords; w++) {
@@ -325,8 +325,8 @@ static bool leaf_step(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
                       const struct bc_svo_cast_params *cp,
                       struct bc_svo_hit *hit, float *t_out, bool *settled)
 {
-	struct ray_field rf = {c->s, m,    c->idx, 0,     NULL, o,
-	                       d,    cp,   true,   &hit->evals, false, {0}};
+	struct ray_field rf = {c->s, m,  c->idx, 0,           NULL,  o,
+	                       d,    cp, true,   &hit->evals, false, {0}};
 	float cmax, t = ta, g;
 	for (uint32_t w = 0; w < m->nwords; w++) {
 		uint32_t base = m->pairs[2 * w] << 5, b = m->pairs[2 * w + 1];
@@ -583,12 +583,12 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
 				mask.pairs = s->pool.v + 2u * (size_t)lf->off;
 				mask.nwords = lf->npairs;
 				terms = lf->nterms;
-				found = lf->flags & BC__SVO_LEAF_LIP1
-				            ? leaf_step(c, &mask, o, d, e.ta,
-				                        e.tb, cp, hit, &th,
-				                        &settled)
-				            : leaf_root(c, &mask, o, d, e.ta,
-				                        e.tb, cp, hit, &th);
+				found =
+				    lf->flags & BC__SVO_LEAF_LIP1
+				        ? leaf_step(c, &mask, o, d, e.ta, e.tb,
+				                    cp, hit, &th, &settled)
+				        : leaf_root(c, &mask, o, d, e.ta, e.tb,
+				                    cp, hit, &th);
 			}
 			continue;
 		}
@@ -634,8 +634,9 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
 	hit->leaf_terms = terms;
 	{
 		/* The leaf phase is over: its scratch list is free. */
-		struct ray_field rf = {s, NULL,  NULL,        0,     c->idx, o,
-		                       d, cp,    false, &hit->evals, false, {0}};
+		struct ray_field rf = {s,      NULL,        NULL,  0,
+		                       c->idx, o,           d,     cp,
+		                       false,  &hit->evals, false, {0}};
 		if (!settled) {
 			th = settle(&rf, th, ta, tb);
 		}

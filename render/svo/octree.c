@@ -145,9 +145,9 @@ static int make_leaf(struct build *b, uint32_t node, uint32_t depth,
 		for (uint32_t k = 0; k < s->rpn->nwords; k++) {
 			steep |= mask[k] & s->rpn->steep[k];
 		}
-		lf->flags = (uint16_t)(steep || s->opts.no_step
-		                           ? 0u
-		                           : BC__SVO_LEAF_LIP1);
+		lf->flags =
+		    (uint16_t)(steep || s->opts.no_step ? 0u
+		                                        : BC__SVO_LEAF_LIP1);
 		s->stats.stepped += lf->flags != 0;
 	} else {
 		lf->value = bc__svo_state_value(res->state, res->root);

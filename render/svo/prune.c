@@ -132,7 +132,8 @@ int bc_svo_prune(struct bc_svo_ranger *g, const uint32_t *mask_in,
 				cl.hi = L.hi / ur[0];
 				break;
 			case BC_OP_ONION:
-				cl.hi = ur[0] + bc__dmax(fabs(L.lo), fabs(L.hi));
+				cl.hi =
+				    ur[0] + bc__dmax(fabs(L.lo), fabs(L.hi));
 				cl.lo = -cl.hi;
 				break;
 			default:
@@ -142,10 +143,11 @@ int bc_svo_prune(struct bc_svo_ranger *g, const uint32_t *mask_in,
 			/* The float map rounds: a level may move by its
 			 * margin (range.c uses the same). */
 			{
-				double mg = BC__SVO_ROUND_REL *
-				                (bc__dmax(fabs(cl.lo), fabs(cl.hi)) +
-				                 fabs((double)ur[0])) +
-				            BC__SVO_ROUND_ABS;
+				double mg =
+				    BC__SVO_ROUND_REL *
+				        (bc__dmax(fabs(cl.lo), fabs(cl.hi)) +
+				         fabs((double)ur[0])) +
+				    BC__SVO_ROUND_ABS;
 				cl.lo -= mg;
 				cl.hi += mg;
 			}

@@ -294,10 +294,10 @@ static void domain_box(uint32_t kind, const float *rec, double lo[3],
 				/* The lowest copy's piece runs up to its cell's
 				 * top, the highest's from its cell's bottom,
 				 * middle ones fill a cell. */
-				lo[i] = bc__dmin(lo[i] - sp * (ka - o),
-				                 -0.5 * sp);
-				hi[i] = bc__dmax(hi[i] - sp * (kb - o),
-				                 0.5 * sp);
+				lo[i] =
+				    bc__dmin(lo[i] - sp * (ka - o), -0.5 * sp);
+				hi[i] =
+				    bc__dmax(hi[i] - sp * (kb - o), 0.5 * sp);
 			}
 		}
 		break;
@@ -352,7 +352,8 @@ void bc__svo_domain_region(const struct bc_svo_rpn *r, uint32_t d,
 	}
 	while (n-- > 0) {
 		domain_box(r->ukind[chain[n]],
-		           r->urec + (size_t)chain[n] * BC_SVO_UNARY_REC, lo, hi);
+		           r->urec + (size_t)chain[n] * BC_SVO_UNARY_REC, lo,
+		           hi);
 	}
 	memset(out, 0, sizeof(*out));
 	for (int i = 0; i < 3; i++) {
@@ -386,8 +387,7 @@ struct bc_svo_ivl bc__svo_unary_range(const struct bc_svo_rpn *r, uint32_t u,
 	if (!isfinite(m)) {
 		m = 0.0; /* an infinite bound needs no widening */
 	}
-	mg = BC__SVO_ROUND_REL * (m + fabs((double)rec[0])) +
-	     BC__SVO_ROUND_ABS;
+	mg = BC__SVO_ROUND_REL * (m + fabs((double)rec[0])) + BC__SVO_ROUND_ABS;
 	switch (r->ukind[u]) {
 	case BC_OP_OFFSET:
 		v.lo = a.lo - rec[0] - mg;
@@ -415,9 +415,11 @@ struct bc_svo_ivl bc__svo_unary_range(const struct bc_svo_rpn *r, uint32_t u,
 		double rx, ry, rmax, ratio;
 		bc__svo_domain_region(r, r->udom[u], rg, &q);
 		rx = bc__dmax(fabs((double)q.lo[0]), fabs((double)q.hi[0]));
-		ry = r->ukind[u] == BC_OP_TWIST
-		         ? bc__dmax(fabs((double)q.lo[2]), fabs((double)q.hi[2]))
-		         : bc__dmax(fabs((double)q.lo[1]), fabs((double)q.hi[1]));
+		ry =
+		    r->ukind[u] == BC_OP_TWIST
+		        ? bc__dmax(fabs((double)q.lo[2]), fabs((double)q.hi[2]))
+		        : bc__dmax(fabs((double)q.lo[1]),
+		                   fabs((double)q.hi[1]));
 		rmax = bc__dmax(sqrt(rx * rx + ry * ry), (double)rec[1]);
 		ratio = own_lip(r->ukind[u], rec[0], rec[1]) /
 		        own_lip(r->ukind[u], rec[0], rmax) * (1.0 - 1.0e-5);

@@ -196,7 +196,8 @@ static struct bc_svo_ivl t_run(struct bc_svo_ranger *g, const uint32_t *idx,
 			struct bc_svo_ivl v =
 			    bc__svo_unary_range(r, t->rec, g->ivl[a], rg);
 			RT f;
-			const float *ur = r->urec + (size_t)t->rec * BC_SVO_UNARY_REC;
+			const float *ur =
+			    r->urec + (size_t)t->rec * BC_SVO_UNARY_REC;
 			if (t->kind == BC_OP_OFFSET) {
 				f = f_addc(g, st[sp - 1], -(double)ur[0]);
 			} else if (t->kind == BC_OP_ONION) {

@@ -110,7 +110,8 @@ void bc__svo_domain_map(const struct bc_svo_rpn *r, uint32_t d,
 	}
 	while (n-- > 0) {
 		domain_apply(r->ukind[chain[n]],
-		             r->urec + (size_t)chain[n] * BC_SVO_UNARY_REC, out);
+		             r->urec + (size_t)chain[n] * BC_SVO_UNARY_REC,
+		             out);
 	}
 }
 
@@ -133,8 +134,8 @@ float bc__svo_unary_value(const struct bc_svo_rpn *r, uint32_t u, float f,
 		          ? sqrtf(q[0] * q[0] + q[2] * q[2])
 		          : sqrtf(q[0] * q[0] + q[1] * q[1]);
 		if (rad > rec[1] && f > 0.0f) {
-			return f * bc_unary_own_lip(r->ukind[u], rec[0],
-			                            rec[1]) /
+			return f *
+			       bc_unary_own_lip(r->ukind[u], rec[0], rec[1]) /
 			       bc_unary_own_lip(r->ukind[u], rec[0], rad);
 		}
 		return f;
@@ -184,8 +185,7 @@ int bc_svo_rpn_init(struct bc_svo_rpn *out, const struct bc_lin *l)
 		                      sizeof(*out->urec));
 		out->udom = bc_calloc(l->nunary, sizeof(*out->udom));
 		out->prim_dom = bc_calloc(l->nprims, sizeof(*out->prim_dom));
-		if (!out->ukind || !out->urec || !out->udom ||
-		    !out->prim_dom) {
+		if (!out->ukind || !out->urec || !out->udom || !out->prim_dom) {
 			bc_svo_rpn_finish(out);
 			return BC_ENOMEM;
 		}
@@ -221,7 +221,8 @@ int bc_svo_rpn_init(struct bc_svo_rpn *out, const struct bc_lin *l)
 				if (out->prim_dom) {
 					out->prim_dom[tm->prim] = d;
 				}
-				if (!info || !info->exact || !chain_lip1(out, d)) {
+				if (!info || !info->exact ||
+				    !chain_lip1(out, d)) {
 					out->steep[t >> 5] |= 1u << (t & 31u);
 				}
 			}
@@ -523,9 +524,8 @@ static float eval_cmask(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
 	                 : eval_cmask_k(r, m, p, prim, false);
 }
 
-static inline float eval_list_k(const struct bc_svo_rpn *r,
-                                const uint32_t *idx, uint32_t n,
-                                const float p[3], bool unary)
+static inline float eval_list_k(const struct bc_svo_rpn *r, const uint32_t *idx,
+                                uint32_t n, const float p[3], bool unary)
 {
 	float st[BC_EVAL_STACK];
 	uint32_t sp = 0;
@@ -573,7 +573,8 @@ void bc_svo_cmask_eval4(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
 			if (t->type == BC_SVO_TERM_PRIM && r->prim_dom &&
 			    r->prim_dom[t->prim] != BC_NONE) {
 				for (int j = 0; j < 4; j++) {
-					st[sp][j] = bc__svo_prim_eval(r, t, p[j]);
+					st[sp][j] =
+					    bc__svo_prim_eval(r, t, p[j]);
 				}
 				sp++;
 			} else if (t->type == BC_SVO_TERM_UNARY) {
@@ -596,11 +597,10 @@ void bc_svo_cmask_eval4(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
 				}
 				if (t->kind == BC_PRIM_SPHERE) {
 					for (int j = 0; j < 4; j++) {
-						st[sp][j] =
-						    sqrtf(x[j] * x[j] +
-						          y[j] * y[j] +
-						          z[j] * z[j]) -
-						    rec[12];
+						st[sp][j] = sqrtf(x[j] * x[j] +
+						                  y[j] * y[j] +
+						                  z[j] * z[j]) -
+						            rec[12];
 					}
 				} else {
 					for (int j = 0; j < 4; j++) {

@@ -20,16 +20,15 @@ static void num_integers_are_plain_decimal(void)
 	CHECK_EQ_INT(bc_num_u32("4294967295", 0, UINT32_MAX, &u), 0);
 	CHECK(u == UINT32_MAX);
 	CHECK_EQ_INT(bc_num_u32("4294967296", 0, UINT32_MAX, &u), BC_ERANGE);
-	CHECK_EQ_INT(bc_num_u64("18446744073709551615", 0, UINT64_MAX, &v),
-		     0);
+	CHECK_EQ_INT(bc_num_u64("18446744073709551615", 0, UINT64_MAX, &v), 0);
 	CHECK(v == UINT64_MAX);
 	CHECK_EQ_INT(bc_num_u64("18446744073709551616", 0, UINT64_MAX, &v),
-		     BC_ERANGE);
+	             BC_ERANGE);
 	CHECK_EQ_INT(bc_num_u32("11", 1, 10, &u), BC_ERANGE);
 	CHECK_EQ_INT(bc_num_u32("0", 1, 10, &u), BC_ERANGE);
 	/* What strtoul would take but a person does not mean. */
-	const char *bad[] = {"", " 1", "1 ", "+1", "-1", "0x10", "1e3", "1.0",
-			     "١", "12a"};
+	const char *bad[] = {"",     " 1",  "1 ",  "+1", "-1",
+	                     "0x10", "1e3", "1.0", "١",  "12a"};
 	for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); i++) {
 		u = 99;
 		CHECK_EQ_INT(bc_num_u32(bad[i], 0, UINT32_MAX, &u), BC_EINVAL);
@@ -52,11 +51,11 @@ static void num_floats_are_finite_decimal(void)
 	/* Finite as a double but not as a float. */
 	CHECK_EQ_INT(bc_num_f32("1e39", -INFINITY, INFINITY, &f), BC_ERANGE);
 	CHECK_EQ_INT(bc_num_f64("1e400", -INFINITY, INFINITY, &d), BC_ERANGE);
-	const char *bad[] = {"", "nan", "inf", "-inf", "0x1p3", " 1", "1 ",
-			     ".", "e5", "1e", "1e+", "--1", "1,5"};
+	const char *bad[] = {"",  "nan", "inf", "-inf", "0x1p3", " 1", "1 ",
+	                     ".", "e5",  "1e",  "1e+",  "--1",   "1,5"};
 	for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); i++) {
 		CHECK_EQ_INT(bc_num_f32(bad[i], -INFINITY, INFINITY, &f),
-			     BC_EINVAL);
+		             BC_EINVAL);
 	}
 }
 
@@ -69,15 +68,15 @@ static void num_sizes_and_vectors(void)
 	CHECK_EQ_INT(bc_num_size("0x10", 1, 8192, &w, &h), BC_ERANGE);
 	CHECK_EQ_INT(bc_num_size("10x99999", 1, 8192, &w, &h), BC_ERANGE);
 	CHECK(w == 640 && h == 480);
-	const char *bad[] = {"10", "x10", "10x", "10x10x10", "-1x5", "ax5",
-			     "10X10", "1 x1"};
+	const char *bad[] = {"10",   "x10", "10x",   "10x10x10",
+	                     "-1x5", "ax5", "10X10", "1 x1"};
 	for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); i++) {
 		CHECK_EQ_INT(bc_num_size(bad[i], 1, 8192, &w, &h), BC_EINVAL);
 	}
 	CHECK_EQ_INT(bc_num_vec3("1,-2.5,3e1", v), 0);
 	CHECK(v[0] == 1.0f && v[1] == -2.5f && v[2] == 30.0f);
-	const char *badv[] = {"1,2", "1,2,3,4", "nan,0,0", ",1,2", "1,,2",
-			      "1,2,", "", "1;2;3"};
+	const char *badv[] = {"1,2",  "1,2,3,4", "nan,0,0", ",1,2",
+	                      "1,,2", "1,2,",    "",        "1;2;3"};
 	for (size_t i = 0; i < sizeof(badv) / sizeof(badv[0]); i++) {
 		CHECK(bc_num_vec3(badv[i], v) != 0);
 	}
@@ -104,50 +103,81 @@ struct cmd {
 };
 
 static const struct bc_opt_name modes[] = {
-	{"fast", 1}, {"exact", 2}, {NULL, 0}};
+    {"fast", 1}, {"exact", 2}, {NULL, 0}};
 
 static void table(struct cmd *c, struct bc_opt opts[10])
 {
 	const struct bc_opt t[] = {
-		{.name = "verbose", .short_name = 'v', .kind = BC_OPT_FLAG,
-		 .dst = &c->verbose, .help = "say more"},
-		{.name = "threads", .short_name = 'j', .kind = BC_OPT_U32,
-		 .dst = &c->threads, .hi = 64, .arg = "N",
-		 .help = "threads, {range}"},
-		{.name = "seed", .kind = BC_OPT_U64, .dst = &c->seed,
-		 .arg = "S", .help = "random seed"},
-		{.name = "fov", .kind = BC_OPT_F32, .dst = &c->fov, .lo = 1,
-		 .hi = 179, .arg = "DEG",
-		 .help = "field of view,\ndegrees {range}"},
-		{.name = "out", .short_name = 'o', .kind = BC_OPT_STRING,
-		 .dst = &c->out, .arg = "FILE", .help = "where to write",
-		 .flags = BC_OPT_REQUIRED},
-		{.name = "size", .kind = BC_OPT_SIZE, .dst = c->size, .lo = 1,
-		 .hi = 8192, .arg = "WxH", .help = "frame size, each {range}"},
-		{.name = "eye", .kind = BC_OPT_VEC3, .dst = c->eye,
-		 .arg = "X,Y,Z", .help = "camera position"},
-		{.name = "mode", .short_name = 'm', .kind = BC_OPT_ENUM,
-		 .dst = &c->mode, .arg = "MODE", .help = "{choices}",
-		 .names = modes},
-		{.name = "a-rather-long-option-name", .kind = BC_OPT_FLAG,
-		 .help = "no dst: only seen"},
-		{.kind = BC_OPT_INVALID},
+	    {.name = "verbose",
+	     .short_name = 'v',
+	     .kind = BC_OPT_FLAG,
+	     .dst = &c->verbose,
+	     .help = "say more"},
+	    {.name = "threads",
+	     .short_name = 'j',
+	     .kind = BC_OPT_U32,
+	     .dst = &c->threads,
+	     .hi = 64,
+	     .arg = "N",
+	     .help = "threads, {range}"},
+	    {.name = "seed",
+	     .kind = BC_OPT_U64,
+	     .dst = &c->seed,
+	     .arg = "S",
+	     .help = "random seed"},
+	    {.name = "fov",
+	     .kind = BC_OPT_F32,
+	     .dst = &c->fov,
+	     .lo = 1,
+	     .hi = 179,
+	     .arg = "DEG",
+	     .help = "field of view,\ndegrees {range}"},
+	    {.name = "out",
+	     .short_name = 'o',
+	     .kind = BC_OPT_STRING,
+	     .dst = &c->out,
+	     .arg = "FILE",
+	     .help = "where to write",
+	     .flags = BC_OPT_REQUIRED},
+	    {.name = "size",
+	     .kind = BC_OPT_SIZE,
+	     .dst = c->size,
+	     .lo = 1,
+	     .hi = 8192,
+	     .arg = "WxH",
+	     .help = "frame size, each {range}"},
+	    {.name = "eye",
+	     .kind = BC_OPT_VEC3,
+	     .dst = c->eye,
+	     .arg = "X,Y,Z",
+	     .help = "camera position"},
+	    {.name = "mode",
+	     .short_name = 'm',
+	     .kind = BC_OPT_ENUM,
+	     .dst = &c->mode,
+	     .arg = "MODE",
+	     .help = "{choices}",
+	     .names = modes},
+	    {.name = "a-rather-long-option-name",
+	     .kind = BC_OPT_FLAG,
+	     .help = "no dst: only seen"},
+	    {.kind = BC_OPT_INVALID},
 	};
 	memcpy(opts, t, sizeof(t));
 }
 
 /* Runs the parser on a NULL-terminated argument list (argv[0] "cmd") with
  * stderr captured into err; returns bc_args_parse's result. */
-static int run(struct cmd *c, struct bc_args *a, struct bc_opt *opts,
-	       char *err, size_t cap, char **argv)
+static int run(struct cmd *c, struct bc_args *a, struct bc_opt *opts, char *err,
+               size_t cap, char **argv)
 {
 	int argc = 0, rc, saved;
 	FILE *tmp = tmpfile();
 	size_t n;
 	*c = (struct cmd){.threads = 4};
 	table(c, opts);
-	*a = (struct bc_args){.prog = "bc test", .usage = "bc test [options] X",
-			      .opts = opts};
+	*a = (struct bc_args){
+	    .prog = "bc test", .usage = "bc test [options] X", .opts = opts};
 	while (argv[argc]) {
 		argc++;
 	}
@@ -174,10 +204,10 @@ static void args_parse_every_kind_both_spellings(void)
 	struct bc_opt opts[10];
 	char err[1024];
 	int rc = run(&c, &a, opts, err, sizeof(err),
-		     ARGV("-v", "--threads", "8", "--seed=18446744073709551615",
-			  "pos1", "--fov=45.5", "-o", "a.png", "--size",
-			  "64x32", "--eye=1,2,3", "-mexact", "pos2", "-",
-			  "--a-rather-long-option-name"));
+	             ARGV("-v", "--threads", "8", "--seed=18446744073709551615",
+	                  "pos1", "--fov=45.5", "-o", "a.png", "--size",
+	                  "64x32", "--eye=1,2,3", "-mexact", "pos2", "-",
+	                  "--a-rather-long-option-name"));
 	CHECK_EQ_INT(rc, 0);
 	CHECK_STREQ(err, "");
 	CHECK(c.verbose);
@@ -197,7 +227,7 @@ static void args_parse_every_kind_both_spellings(void)
 	/* A repeated option keeps its last value; -j with the value
 	 * attached. */
 	rc = run(&c, &a, opts, err, sizeof(err),
-		 ARGV("-o", "x", "-j3", "--threads=5"));
+	         ARGV("-o", "x", "-j3", "--threads=5"));
 	CHECK_EQ_INT(rc, 0);
 	CHECK_EQ_INT(c.threads, 5);
 	CHECK(!bc_args_given(&a, "eye"));
@@ -211,13 +241,13 @@ static void args_stop_at_the_command_word(void)
 	struct cmd c;
 	struct bc_args a;
 	struct bc_opt opts[10];
-	char *argv[] = {"cmd", "-v", "-o", "x", "render", "--verbose",
-			"--bogus", "--", "y", NULL};
+	char *argv[] = {"cmd",       "-v",      "-o", "x", "render",
+	                "--verbose", "--bogus", "--", "y", NULL};
 	int argc = 9;
 	c = (struct cmd){0};
 	table(&c, opts);
-	a = (struct bc_args){.prog = "bc test", .opts = opts,
-			     .stop_at_positional = true};
+	a = (struct bc_args){
+	    .prog = "bc test", .opts = opts, .stop_at_positional = true};
 	CHECK_EQ_INT(bc_args_parse(&a, argc, argv), 0);
 	CHECK(c.verbose);
 	CHECK_STREQ(c.out, "x");
@@ -236,7 +266,7 @@ static void args_double_dash_ends_options(void)
 	struct bc_opt opts[10];
 	char err[1024];
 	int rc = run(&c, &a, opts, err, sizeof(err),
-		     ARGV("-o", "x", "--", "--verbose", "-j", "--"));
+	             ARGV("-o", "x", "--", "--verbose", "-j", "--"));
 	CHECK_EQ_INT(rc, 0);
 	CHECK(!c.verbose);
 	REQUIRE(a.npos == 3);
@@ -253,32 +283,34 @@ static void args_errors_are_named(void)
 		const char *args[4];
 		const char *msg;
 	} cases[] = {
-		{{"--bogus"}, "bc test: unknown option '--bogus'\n"},
-		{{"--bogus=3"}, "bc test: unknown option '--bogus'\n"},
-		{{"-x"}, "bc test: unknown option '-x'\n"},
-		{{"--threads"}, "bc test: --threads needs a value (N)\n"},
-		{{"-o"}, "bc test: --out needs a value (FILE)\n"},
-		{{"--verbose=1"}, "bc test: --verbose takes no value\n"},
-		{{"--threads", "-1"},
-		 "bc test: --threads '-1' is not a whole decimal number\n"},
-		{{"--threads", "65"},
-		 "bc test: --threads '65' is out of range (0..64)\n"},
-		{{"--seed", "1.5"},
-		 "bc test: --seed '1.5' is not a whole decimal number\n"},
-		{{"--fov", "nan"},
-		 "bc test: --fov 'nan' is not a finite decimal number\n"},
-		{{"--fov", "180"},
-		 "bc test: --fov '180' is out of range (1..179)\n"},
-		{{"--size", "10"},
-		 "bc test: --size '10' is not WxH (two whole numbers)\n"},
-		{{"--size", "0x10"}, "bc test: --size '0x10' is out of range "
-				     "(width and height 1..8192)\n"},
-		{{"--eye", "1,2"}, "bc test: --eye '1,2' is not x,y,z (three "
-				   "finite numbers)\n"},
-		{{"--mode", "slow"},
-		 "bc test: --mode 'slow' is not one of fast, exact\n"},
-		{{"--out="}, "bc test: --out needs a non-empty value\n"},
-		{{"-v"}, "bc test: --out FILE is required\n"},
+	    {{"--bogus"}, "bc test: unknown option '--bogus'\n"},
+	    {{"--bogus=3"}, "bc test: unknown option '--bogus'\n"},
+	    {{"-x"}, "bc test: unknown option '-x'\n"},
+	    {{"--threads"}, "bc test: --threads needs a value (N)\n"},
+	    {{"-o"}, "bc test: --out needs a value (FILE)\n"},
+	    {{"--verbose=1"}, "bc test: --verbose takes no value\n"},
+	    {{"--threads", "-1"},
+	     "bc test: --threads '-1' is not a whole decimal number\n"},
+	    {{"--threads", "65"},
+	     "bc test: --threads '65' is out of range (0..64)\n"},
+	    {{"--seed", "1.5"},
+	     "bc test: --seed '1.5' is not a whole decimal number\n"},
+	    {{"--fov", "nan"},
+	     "bc test: --fov 'nan' is not a finite decimal number\n"},
+	    {{"--fov", "180"},
+	     "bc test: --fov '180' is out of range (1..179)\n"},
+	    {{"--size", "10"},
+	     "bc test: --size '10' is not WxH (two whole numbers)\n"},
+	    {{"--size", "0x10"},
+	     "bc test: --size '0x10' is out of range "
+	     "(width and height 1..8192)\n"},
+	    {{"--eye", "1,2"},
+	     "bc test: --eye '1,2' is not x,y,z (three "
+	     "finite numbers)\n"},
+	    {{"--mode", "slow"},
+	     "bc test: --mode 'slow' is not one of fast, exact\n"},
+	    {{"--out="}, "bc test: --out needs a non-empty value\n"},
+	    {{"-v"}, "bc test: --out FILE is required\n"},
 	};
 	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
 		struct cmd c;
@@ -291,8 +323,8 @@ static void args_errors_are_named(void)
 		}
 		CHECK_EQ_INT(run(&c, &a, opts, err, sizeof(err), argv), 1);
 		CHECK_EQ_INT(a.status, 2);
-		snprintf(want, sizeof(want),
-			 "%s(see 'bc test --help')\n", cases[i].msg);
+		snprintf(want, sizeof(want), "%s(see 'bc test --help')\n",
+		         cases[i].msg);
 		CHECK_STREQ(err, want);
 	}
 }
@@ -307,35 +339,36 @@ static void args_help_comes_from_the_table(void)
 	size_t n;
 	FILE *f = tmpfile();
 	table(&c, opts);
-	struct bc_args a = {.prog = "bc test", .usage = "bc test X\nbc test Y",
-			    .about = "Does things.", .footer = "Exit 0.",
-			    .opts = opts};
+	struct bc_args a = {.prog = "bc test",
+	                    .usage = "bc test X\nbc test Y",
+	                    .about = "Does things.",
+	                    .footer = "Exit 0.",
+	                    .opts = opts};
 	REQUIRE(f);
 	bc_args_help(&a, f);
 	rewind(f);
 	n = fread(text, 1, sizeof(text) - 1, f);
 	text[n] = '\0';
 	fclose(f);
-	CHECK_STREQ(text,
-		    "usage: bc test X\n"
-		    "       bc test Y\n"
-		    "\n"
-		    "Does things.\n"
-		    "\n"
-		    "  -v, --verbose      say more\n"
-		    "  -j, --threads N    threads, 0..64\n"
-		    "  --seed S           random seed\n"
-		    "  --fov DEG          field of view,\n"
-		    "                     degrees 1..179\n"
-		    "  -o, --out FILE     where to write\n"
-		    "  --size WxH         frame size, each 1..8192\n"
-		    "  --eye X,Y,Z        camera position\n"
-		    "  -m, --mode MODE    fast | exact\n"
-		    "  --a-rather-long-option-name\n"
-		    "                     no dst: only seen\n"
-		    "  -h, --help         this help\n"
-		    "\n"
-		    "Exit 0.\n");
+	CHECK_STREQ(text, "usage: bc test X\n"
+	                  "       bc test Y\n"
+	                  "\n"
+	                  "Does things.\n"
+	                  "\n"
+	                  "  -v, --verbose      say more\n"
+	                  "  -j, --threads N    threads, 0..64\n"
+	                  "  --seed S           random seed\n"
+	                  "  --fov DEG          field of view,\n"
+	                  "                     degrees 1..179\n"
+	                  "  -o, --out FILE     where to write\n"
+	                  "  --size WxH         frame size, each 1..8192\n"
+	                  "  --eye X,Y,Z        camera position\n"
+	                  "  -m, --mode MODE    fast | exact\n"
+	                  "  --a-rather-long-option-name\n"
+	                  "                     no dst: only seen\n"
+	                  "  -h, --help         this help\n"
+	                  "\n"
+	                  "Exit 0.\n");
 	/* Every option the help names is one the parser takes. */
 	for (int i = 0; opts[i].kind != BC_OPT_INVALID; i++) {
 		char needle[64];
@@ -356,17 +389,33 @@ static void args_help_shows_defaults(void)
 	char text[2048];
 	size_t len;
 	const struct bc_opt opts[] = {
-		{.name = "n", .kind = BC_OPT_U32, .dst = &n, .arg = "N",
-		 .help = "default {default}"},
-		{.name = "big", .kind = BC_OPT_U64, .dst = &big, .arg = "B",
-		 .help = "default {default}"},
-		{.name = "f", .kind = BC_OPT_F32, .dst = &f, .arg = "F",
-		 .help = "default {default}"},
-		{.name = "mode", .kind = BC_OPT_ENUM, .dst = &mode, .arg = "M",
-		 .help = "default {default}", .names = modes},
-		{.name = "name", .kind = BC_OPT_STRING, .dst = &name,
-		 .arg = "S", .help = "default {default}"},
-		{.kind = BC_OPT_INVALID},
+	    {.name = "n",
+	     .kind = BC_OPT_U32,
+	     .dst = &n,
+	     .arg = "N",
+	     .help = "default {default}"},
+	    {.name = "big",
+	     .kind = BC_OPT_U64,
+	     .dst = &big,
+	     .arg = "B",
+	     .help = "default {default}"},
+	    {.name = "f",
+	     .kind = BC_OPT_F32,
+	     .dst = &f,
+	     .arg = "F",
+	     .help = "default {default}"},
+	    {.name = "mode",
+	     .kind = BC_OPT_ENUM,
+	     .dst = &mode,
+	     .arg = "M",
+	     .help = "default {default}",
+	     .names = modes},
+	    {.name = "name",
+	     .kind = BC_OPT_STRING,
+	     .dst = &name,
+	     .arg = "S",
+	     .help = "default {default}"},
+	    {.kind = BC_OPT_INVALID},
 	};
 	struct bc_args a = {.prog = "p", .opts = opts};
 	FILE *tmp = tmpfile();
@@ -394,11 +443,17 @@ static void args_hidden_options_parse_but_stay_out_of_help(void)
 	char arg0[] = "p", arg1[] = "--quiet", arg2[] = "--n=3";
 	char *argv[] = {arg0, arg1, arg2, NULL};
 	struct bc_opt opts[] = {
-		{.name = "quiet", .kind = BC_OPT_FLAG, .dst = &quiet,
-		 .help = "say less", .flags = BC_OPT_HIDDEN},
-		{.name = "n", .kind = BC_OPT_U32, .dst = &n, .arg = "N",
-		 .help = "count"},
-		{.kind = BC_OPT_INVALID},
+	    {.name = "quiet",
+	     .kind = BC_OPT_FLAG,
+	     .dst = &quiet,
+	     .help = "say less",
+	     .flags = BC_OPT_HIDDEN},
+	    {.name = "n",
+	     .kind = BC_OPT_U32,
+	     .dst = &n,
+	     .arg = "N",
+	     .help = "count"},
+	    {.kind = BC_OPT_INVALID},
 	};
 	struct bc_args a = {.prog = "p", .opts = opts};
 	FILE *tmp = tmpfile();

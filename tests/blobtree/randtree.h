@@ -50,7 +50,7 @@ static void rt_random_quat(float q[4])
 static void rt_random_prim(struct bc_prim_data *p)
 {
 	static const enum bc_prim kinds[] = {BC_PRIM_SPHERE, BC_PRIM_BOX,
-					     BC_PRIM_CAPSULE, BC_PRIM_TORUS};
+	                                     BC_PRIM_CAPSULE, BC_PRIM_TORUS};
 	enum bc_prim kind = kinds[rt_below(4)];
 	memset(p, 0, sizeof(*p));
 	p->kind = kind;
@@ -92,9 +92,8 @@ static void rt_random_op(struct bc_op_data *op)
 {
 	op->kind = (enum bc_op)(1 + rt_below(BC_OP_FIRST_UNARY - 1));
 	op->blend = bc_op_is_smooth(op->kind) ? rt_float(0.05f, 0.4f) : 0.0f;
-	op->range = bc_op_is_smooth(op->kind)
-			    ? op->blend * rt_float(1.2f, 2.0f)
-			    : 0.0f;
+	op->range =
+	    bc_op_is_smooth(op->kind) ? op->blend * rt_float(1.2f, 2.0f) : 0.0f;
 }
 
 /* Probability that a subtree is wrapped in a random unary node (0: the
@@ -108,9 +107,9 @@ static void rt_random_unary(struct bc_unary *u)
 	enum bc_op kind;
 	do {
 		kind = (enum bc_op)(BC_OP_FIRST_UNARY +
-				    rt_below(BC_OP_COUNT - BC_OP_FIRST_UNARY));
+		                    rt_below(BC_OP_COUNT - BC_OP_FIRST_UNARY));
 	} while (rt_unary_kinds &&
-		 !(rt_unary_kinds & (1u << (kind - BC_OP_FIRST_UNARY))));
+	         !(rt_unary_kinds & (1u << (kind - BC_OP_FIRST_UNARY))));
 	bc_unary_init(u, kind);
 	switch (kind) {
 	case BC_OP_OFFSET:
@@ -195,9 +194,10 @@ static int rt_emit_node(struct bc_tree *t, uint32_t budget, uint32_t depth)
 			return rc;
 		}
 		for (uint32_t c = 0; c < nchild; c++) {
-			uint32_t share = (c + 1 == nchild)
-						 ? left
-						 : 1 + rt_below(left - (nchild - c - 1));
+			uint32_t share =
+			    (c + 1 == nchild)
+			        ? left
+			        : 1 + rt_below(left - (nchild - c - 1));
 			if ((rc = rt_emit(t, share, depth + 1))) {
 				return rc;
 			}

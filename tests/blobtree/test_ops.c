@@ -4,8 +4,8 @@
 #include "test.h"
 
 static const enum bc_op all_ops[] = {
-	BC_OP_UNION,	    BC_OP_INTERSECTION,		BC_OP_DIFFERENCE,
-	BC_OP_SMOOTH_UNION, BC_OP_SMOOTH_INTERSECTION, BC_OP_SMOOTH_DIFFERENCE,
+    BC_OP_UNION,        BC_OP_INTERSECTION,        BC_OP_DIFFERENCE,
+    BC_OP_SMOOTH_UNION, BC_OP_SMOOTH_INTERSECTION, BC_OP_SMOOTH_DIFFERENCE,
 };
 #define NOPS (sizeof(all_ops) / sizeof(all_ops[0]))
 
@@ -46,8 +46,8 @@ static void smooth_union_keeps_the_classic_blend_on_the_surface(void)
 	float beta = 0.6f;
 	/* a = b = beta/6 gives min - d = beta/6 - beta/6 = 0. */
 	float a = beta / 6.0f;
-	CHECK_NEAR(bc_op_eval(BC_OP_SMOOTH_UNION, beta, 2.0f * beta, a, a), 0.0f,
-		   1e-6f);
+	CHECK_NEAR(bc_op_eval(BC_OP_SMOOTH_UNION, beta, 2.0f * beta, a, a),
+	           0.0f, 1e-6f);
 	/* Far outside the range the operators are the sharp ones. */
 	CHECK(bc_op_eval(BC_OP_SMOOTH_UNION, beta, beta, 5.0f, 4.0f) == 4.0f);
 	CHECK(bc_op_eval(BC_OP_SMOOTH_INTERSECTION, beta, beta, 5.0f, 4.0f) ==
@@ -70,11 +70,12 @@ static float worst_jump(enum bc_op op, float beta, float ro)
 		float t = -4.0f * ro + 8.0f * ro * (float)i / 4000.0f;
 		float edges[2] = {ro, -ro};
 		for (int e = 0; e < 2; e++) {
-			float in = edges[e] * (1.0f - h), out = edges[e] * (1.0f + h);
+			float in = edges[e] * (1.0f - h),
+			      out = edges[e] * (1.0f + h);
 			float j0 = fabsf(bc_op_eval(op, beta, ro, in, t) -
-					 bc_op_eval(op, beta, ro, out, t));
+			                 bc_op_eval(op, beta, ro, out, t));
 			float j1 = fabsf(bc_op_eval(op, beta, ro, t, in) -
-					 bc_op_eval(op, beta, ro, t, out));
+			                 bc_op_eval(op, beta, ro, t, out));
 			worst = fmaxf(worst, fmaxf(j0, j1));
 		}
 	}
@@ -110,12 +111,12 @@ static void validation_rejects_bad_parameters(void)
 }
 
 static const struct bc_test tests[] = {
-	{"sharp_operators_select", sharp_operators_select},
-	{"missing_operand_is_selected_away", missing_operand_is_selected_away},
-	{"smooth_union_keeps_the_classic_blend_on_the_surface",
-	 smooth_union_keeps_the_classic_blend_on_the_surface},
-	{"smooth_operators_are_continuous_across_the_range",
-	 smooth_operators_are_continuous_across_the_range},
-	{"validation_rejects_bad_parameters", validation_rejects_bad_parameters},
+    {"sharp_operators_select", sharp_operators_select},
+    {"missing_operand_is_selected_away", missing_operand_is_selected_away},
+    {"smooth_union_keeps_the_classic_blend_on_the_surface",
+     smooth_union_keeps_the_classic_blend_on_the_surface},
+    {"smooth_operators_are_continuous_across_the_range",
+     smooth_operators_are_continuous_across_the_range},
+    {"validation_rejects_bad_parameters", validation_rejects_bad_parameters},
 };
 BC_TEST_MAIN(tests)

@@ -66,7 +66,7 @@ static void sign_props(int ntrees, float rate)
 	for (int tree = 0; tree < ntrees; tree++) {
 		const struct bc_lin *l;
 		REQUIRE(rt_build(t, 1000u + (uint64_t)tree,
-				 1 + (uint32_t)(tree % 64)) == 0);
+		                 1 + (uint32_t)(tree % 64)) == 0);
 		l = bc_tree_lin(t);
 		REQUIRE(l != NULL);
 		for (int q = 0; q < 6; q++) {
@@ -94,11 +94,12 @@ static void sign_props(int ntrees, float rate)
 					mismatches++;
 					if (mismatches < 5) {
 						fprintf(stderr,
-							"  tree %d: full %g sparse %g "
-							"(%u of %u active)\n",
-							tree, (double)full,
-							(double)sparse, n,
-							l->nprims);
+						        "  tree %d: full %g "
+						        "sparse %g "
+						        "(%u of %u active)\n",
+						        tree, (double)full,
+						        (double)sparse, n,
+						        l->nprims);
 					}
 				}
 			}
@@ -142,7 +143,7 @@ static void drop_props(int ntrees, float rate)
 		const struct bc_lin *l;
 		uint32_t drop, n = 0;
 		REQUIRE(rt_build(t, 5000u + (uint64_t)tree,
-				 2 + (uint32_t)(tree % 63)) == 0);
+		                 2 + (uint32_t)(tree % 63)) == 0);
 		l = bc_tree_lin(t);
 		drop = rt_below(l->nprims);
 		for (uint32_t k = 0; k < l->nprims; k++) {
@@ -209,7 +210,7 @@ static void all_active_props(float rate)
 	for (int tree = 0; tree < 200; tree++) {
 		const struct bc_lin *l;
 		REQUIRE(rt_build(t, 9000u + (uint64_t)tree,
-				 1 + (uint32_t)(tree % 64)) == 0);
+		                 1 + (uint32_t)(tree % 64)) == 0);
 		l = bc_tree_lin(t);
 		for (uint32_t k = 0; k < l->nprims; k++) {
 			active[k] = k;
@@ -336,7 +337,7 @@ static void comb_under_unary_nodes_keeps_their_values(void)
 	CHECK_EQ_INT(v.n, 5);
 	for (int i = 0; i < 200; i++) {
 		float p[3] = {rt_float(899.0f, 901.0f), rt_float(-1.0f, 1.0f),
-			      rt_float(-1.0f, 1.0f)};
+		              rt_float(-1.0f, 1.0f)};
 		if (i & 1) {
 			p[0] += 4200.0f;
 		}
@@ -380,24 +381,24 @@ static void intersection_and_difference_prune_to_missing(void)
 }
 
 static const struct bc_test tests[] = {
-	{"sparse_sign_matches_full_inside_query_boxes",
-	 sparse_sign_matches_full_inside_query_boxes},
-	{"dropping_a_primitive_changes_nothing_outside_its_abv",
-	 dropping_a_primitive_changes_nothing_outside_its_abv},
-	{"all_active_view_equals_full_evaluation",
-	 all_active_view_equals_full_evaluation},
-	{"views_reject_unsorted_or_out_of_range_sets",
-	 views_reject_unsorted_or_out_of_range_sets},
-	{"comb_views_are_short_whatever_the_comb_length",
-	 comb_views_are_short_whatever_the_comb_length},
-	{"intersection_and_difference_prune_to_missing",
-	 intersection_and_difference_prune_to_missing},
-	{"sparse_sign_with_unary_nodes", sparse_sign_with_unary_nodes},
-	{"dropping_under_unary_nodes_changes_nothing_outside_abv",
-	 dropping_under_unary_nodes_changes_nothing_outside_abv},
-	{"all_active_view_with_unary_nodes_equals_full",
-	 all_active_view_with_unary_nodes_equals_full},
-	{"comb_under_unary_nodes_keeps_their_values",
-	 comb_under_unary_nodes_keeps_their_values},
+    {"sparse_sign_matches_full_inside_query_boxes",
+     sparse_sign_matches_full_inside_query_boxes},
+    {"dropping_a_primitive_changes_nothing_outside_its_abv",
+     dropping_a_primitive_changes_nothing_outside_its_abv},
+    {"all_active_view_equals_full_evaluation",
+     all_active_view_equals_full_evaluation},
+    {"views_reject_unsorted_or_out_of_range_sets",
+     views_reject_unsorted_or_out_of_range_sets},
+    {"comb_views_are_short_whatever_the_comb_length",
+     comb_views_are_short_whatever_the_comb_length},
+    {"intersection_and_difference_prune_to_missing",
+     intersection_and_difference_prune_to_missing},
+    {"sparse_sign_with_unary_nodes", sparse_sign_with_unary_nodes},
+    {"dropping_under_unary_nodes_changes_nothing_outside_abv",
+     dropping_under_unary_nodes_changes_nothing_outside_abv},
+    {"all_active_view_with_unary_nodes_equals_full",
+     all_active_view_with_unary_nodes_equals_full},
+    {"comb_under_unary_nodes_keeps_their_values",
+     comb_under_unary_nodes_keeps_their_values},
 };
 BC_TEST_MAIN(tests)

@@ -76,7 +76,8 @@ static void layout_follows_the_paper(void)
 	CHECK_EQ_INT(l->node[2 * 2 + 1], l->node[2 * 6 + 1]);
 	CHECK_EQ_INT(l->first[6], 0);
 	CHECK_EQ_INT(l->first[5], 3);
-	CHECK_EQ_INT(l->nparam, 4 * BC_PRIM_RECORD_VEC4 + 2 * BC_OP_RECORD_VEC4);
+	CHECK_EQ_INT(l->nparam,
+	             4 * BC_PRIM_RECORD_VEC4 + 2 * BC_OP_RECORD_VEC4);
 	/* ROIs (eq. 13-16): root [0,0]; under the sharp union [0,0]; the
 	 * difference's left child [min(0,-ro), 0], right [-0, max(0, ro)]. */
 	CHECK(l->roi[2 * 6] == 0.0f && l->roi[2 * 6 + 1] == 0.0f);
@@ -128,8 +129,9 @@ static void builder_rejects_malformed_trees(void)
 	}
 	/* Bad parameters: a smooth operator with no blend. */
 	bc_tree_begin(t);
-	CHECK(bc_tree_push_op(t, 0, &(struct bc_op_data){BC_OP_SMOOTH_UNION, 0, 0},
-			      &ei) == BC_ERANGE);
+	CHECK(bc_tree_push_op(t, 0,
+	                      &(struct bc_op_data){BC_OP_SMOOTH_UNION, 0, 0},
+	                      &ei) == BC_ERANGE);
 	/* A single primitive is a valid tree. */
 	bc_tree_begin(t);
 	CHECK(bc_tree_put_prim(t, 9, &p, NULL) == 0);
@@ -211,13 +213,13 @@ static void parameter_edit_rewrites_only_its_own_record(void)
 		CHECK_EQ_INT(dirty.prim_lo, k);
 		CHECK_EQ_INT(dirty.prim_hi, k + 1);
 		CHECK_EQ_INT(dirty.param_hi - dirty.param_lo,
-			     BC_PRIM_RECORD_VEC4);
+		             BC_PRIM_RECORD_VEC4);
 		CHECK_EQ_INT(dirty.param_lo, l->node[2 * s + 1]);
 		for (uint32_t v = 0; v < l->nparam; v++) {
 			bool inside = v >= dirty.param_lo && v < dirty.param_hi;
 			if (!inside) {
 				CHECK(memcmp(params + 4 * v, l->param + 4 * v,
-					     16) == 0);
+				             16) == 0);
 			}
 		}
 		/* And the result is what a fresh build gives. */
@@ -238,7 +240,7 @@ static void operator_edit_equals_a_fresh_build(void)
 		struct bc_dirty dirty;
 		uint32_t id;
 		REQUIRE(rt_build(t, 700u + (uint64_t)i, 3 + (uint32_t)i % 60) ==
-			0);
+		        0);
 		bc_tree_take_dirty(t, &dirty);
 		id = pick(t, true);
 		REQUIRE(bc_tree_get(t, id, NULL, &op));
@@ -299,7 +301,7 @@ static void structural_edits_keep_ids_and_order(void)
 	/* Replace B by a subtree reusing its id. */
 	bc_tree_begin(sub);
 	bc_tree_push_op(sub, 3, &(struct bc_op_data){BC_OP_INTERSECTION, 0, 0},
-			NULL);
+	                NULL);
 	sphere(&p, 0.4f, 0.0f);
 	bc_tree_put_prim(sub, 40, &p, NULL);
 	sphere(&p, 0.4f, 0.2f);
@@ -330,9 +332,9 @@ static void structural_edits_equal_a_fresh_build(void)
 	for (int i = 0; i < 100; i++) {
 		uint32_t target, op;
 		REQUIRE(rt_build(t, 40u + (uint64_t)i, 4 + (uint32_t)i % 40) ==
-			0);
+		        0);
 		REQUIRE(rt_build(sub, 90000u + (uint64_t)i,
-				 1 + (uint32_t)i % 5) == 0);
+		                 1 + (uint32_t)i % 5) == 0);
 		target = pick(t, false);
 		op = pick(t, true);
 		switch (i % 3) {
@@ -349,7 +351,7 @@ static void structural_edits_equal_a_fresh_build(void)
 		REQUIRE(bc_tree_copy(fresh, t, NULL) == 0);
 		CHECK(lin_diff(bc_tree_lin(fresh), bc_tree_lin(t)) == 0);
 		CHECK_EQ_INT(bc_tree_lin(t)->count,
-			     2 * bc_tree_prim_count(t) - 1);
+		             2 * bc_tree_prim_count(t) - 1);
 	}
 	bc_tree_destroy(sub);
 	bc_tree_destroy(fresh);
@@ -373,14 +375,14 @@ static void allocation_failures_are_clean(void)
 			rc = bc_tree_insert(t, op, 0, sub, NULL);
 			if (rc == 0) {
 				rc = bc_tree_remove(t, bc_tree_child(t, op, 0),
-						    NULL);
+				                    NULL);
 			}
 			if (rc) {
 				/* A failed edit leaves a usable tree. */
 				bc_alloc_fail_after(0);
 				CHECK(bc_tree_lin(t) != NULL);
 				CHECK_EQ_INT(bc_tree_lin(t)->count,
-					     2 * bc_tree_prim_count(t) - 1);
+				             2 * bc_tree_prim_count(t) - 1);
 			}
 		}
 		bc_alloc_fail_after(0);
@@ -396,16 +398,15 @@ static void allocation_failures_are_clean(void)
 }
 
 static const struct bc_test tests[] = {
-	{"layout_follows_the_paper", layout_follows_the_paper},
-	{"builder_rejects_malformed_trees", builder_rejects_malformed_trees},
-	{"parameter_edit_rewrites_only_its_own_record",
-	 parameter_edit_rewrites_only_its_own_record},
-	{"operator_edit_equals_a_fresh_build",
-	 operator_edit_equals_a_fresh_build},
-	{"structural_edits_keep_ids_and_order",
-	 structural_edits_keep_ids_and_order},
-	{"structural_edits_equal_a_fresh_build",
-	 structural_edits_equal_a_fresh_build},
-	{"allocation_failures_are_clean", allocation_failures_are_clean},
+    {"layout_follows_the_paper", layout_follows_the_paper},
+    {"builder_rejects_malformed_trees", builder_rejects_malformed_trees},
+    {"parameter_edit_rewrites_only_its_own_record",
+     parameter_edit_rewrites_only_its_own_record},
+    {"operator_edit_equals_a_fresh_build", operator_edit_equals_a_fresh_build},
+    {"structural_edits_keep_ids_and_order",
+     structural_edits_keep_ids_and_order},
+    {"structural_edits_equal_a_fresh_build",
+     structural_edits_equal_a_fresh_build},
+    {"allocation_failures_are_clean", allocation_failures_are_clean},
 };
 BC_TEST_MAIN(tests)

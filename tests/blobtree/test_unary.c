@@ -16,7 +16,7 @@
 
 /* A tree of one unary node over one primitive (translated by t). */
 static struct bc_tree *wrap1(const struct bc_unary *u,
-			     const struct bc_prim_data *p)
+                             const struct bc_prim_data *p)
 {
 	struct bc_tree *t = bc_tree_create();
 	struct bc_errinfo ei = {0};
@@ -24,8 +24,9 @@ static struct bc_tree *wrap1(const struct bc_unary *u,
 		return NULL;
 	}
 	bc_tree_begin(t);
-	if (bc_tree_push_unary(t, 1, u, &ei) || bc_tree_put_prim(t, 2, p, &ei) ||
-	    bc_tree_pop_op(t, &ei) || bc_tree_end(t, &ei)) {
+	if (bc_tree_push_unary(t, 1, u, &ei) ||
+	    bc_tree_put_prim(t, 2, p, &ei) || bc_tree_pop_op(t, &ei) ||
+	    bc_tree_end(t, &ei)) {
 		fprintf(stderr, "  build: %s\n", ei.msg);
 		bc_tree_destroy(t);
 		return NULL;
@@ -71,7 +72,7 @@ static void fields_match_closed_forms(void)
 	for (int i = 0; i < 2000; i++) {
 		rnd(p, 3.0f);
 		CHECK_NEAR(bc_eval_full(l, p), len3(p[0], p[1], p[2]) - 0.8f,
-			   2e-6f);
+		           2e-6f);
 	}
 	bc_tree_destroy(t);
 
@@ -83,7 +84,7 @@ static void fields_match_closed_forms(void)
 	for (int i = 0; i < 2000; i++) {
 		rnd(p, 3.0f);
 		CHECK_NEAR(bc_eval_full(l, p),
-			   fabsf(len3(p[0], p[1], p[2]) - 0.5f) - 0.1f, 2e-6f);
+		           fabsf(len3(p[0], p[1], p[2]) - 0.5f) - 0.1f, 2e-6f);
 	}
 	bc_tree_destroy(t);
 
@@ -108,7 +109,7 @@ static void fields_match_closed_forms(void)
 			continue;
 		}
 		CHECK_NEAR(bc_eval_full(l, p), len3(q[0], q[1], q[2]) - 0.5f,
-			   2e-6f);
+		           2e-6f);
 	}
 	bc_tree_destroy(t);
 
@@ -121,10 +122,10 @@ static void fields_match_closed_forms(void)
 	for (int i = 0; i < 2000; i++) {
 		rnd(p, 3.0f);
 		CHECK_NEAR(bc_eval_full(l, p),
-			   fminf(len3(p[0] - 1.0f, p[1], p[2]),
-				 len3(p[0] + 1.0f, p[1], p[2])) -
-				   0.5f,
-			   2e-6f);
+		           fminf(len3(p[0] - 1.0f, p[1], p[2]),
+		                 len3(p[0] + 1.0f, p[1], p[2])) -
+		               0.5f,
+		           2e-6f);
 	}
 	bc_tree_destroy(t);
 
@@ -147,8 +148,8 @@ static void fields_match_closed_forms(void)
 			for (int c = 0; c < 3; c++) {
 				float cx = 1.5f * ((float)a - 1.5f);
 				float cz = 1.5f * ((float)c - 1.0f);
-				best = fminf(best, len3(p[0] - cx, p[1],
-							p[2] - cz));
+				best = fminf(best,
+				             len3(p[0] - cx, p[1], p[2] - cz));
 			}
 		}
 		CHECK_NEAR(bc_eval_full(l, p), best - 0.4f, 4e-6f);
@@ -164,7 +165,7 @@ static void fields_match_closed_forms(void)
 	for (int i = 0; i < 2000; i++) {
 		rnd(p, 5.0f);
 		CHECK_NEAR(bc_eval_full(l, p), len3(p[0], p[1], p[2]) - 1.25f,
-			   4e-6f);
+		           4e-6f);
 	}
 	bc_tree_destroy(t);
 }
@@ -211,10 +212,11 @@ static void twist_and_bend_rotate_the_child(void)
 				d[j] = fabsf(q[j]) - b.params[j];
 			}
 			box = len3(fmaxf(d[0], 0.0f), fmaxf(d[1], 0.0f),
-				   fmaxf(d[2], 0.0f)) +
+			           fmaxf(d[2], 0.0f)) +
 			      fminf(fmaxf(d[0], fmaxf(d[1], d[2])), 0.0f);
 			if (fabsf(box) > 1e-4f) {
-				CHECK((bc_eval_full(l, p) < 0.0f) == (box < 0.0f));
+				CHECK((bc_eval_full(l, p) < 0.0f) ==
+				      (box < 0.0f));
 			}
 		}
 		/* Twist and bend make the field steeper than 1. */
@@ -223,7 +225,7 @@ static void twist_and_bend_rotate_the_child(void)
 	}
 }
 
-#define KIND_BIT(k) (1u << ((k) - BC_OP_FIRST_UNARY))
+#define KIND_BIT(k) (1u << ((k)-BC_OP_FIRST_UNARY))
 
 /* |f(a) - f(b)| <= L |a - b| over random pairs of nearby points, for random
  * trees of every operator and the nodes that keep the child's bound
@@ -237,18 +239,19 @@ static void lipschitz_bound_holds_on_random_pairs(void)
 	REQUIRE(t);
 	rt_unary_rate = 0.4f;
 	rt_unary_kinds = KIND_BIT(BC_OP_OFFSET) | KIND_BIT(BC_OP_ONION) |
-			 KIND_BIT(BC_OP_ELONGATE) | KIND_BIT(BC_OP_MIRROR) |
-			 KIND_BIT(BC_OP_SCALE);
+	                 KIND_BIT(BC_OP_ELONGATE) | KIND_BIT(BC_OP_MIRROR) |
+	                 KIND_BIT(BC_OP_SCALE);
 	for (int tree = 0; tree < 300; tree++) {
 		const struct bc_lin *l;
 		bool smooth = false;
 		REQUIRE(rt_build(t, 77000u + (uint64_t)tree,
-				 1 + (uint32_t)(tree % 12)) == 0);
+		                 1 + (uint32_t)(tree % 12)) == 0);
 		l = bc_tree_lin(t);
 		CHECK(l->lip == 1.0f);
 		for (uint32_t s = 0; s < l->count; s++) {
-			smooth |= !bc_lin_is_leaf(l, s) &&
-				  bc_op_is_smooth((enum bc_op)bc_lin_kind(l, s));
+			smooth |=
+			    !bc_lin_is_leaf(l, s) &&
+			    bc_op_is_smooth((enum bc_op)bc_lin_kind(l, s));
 		}
 		for (int i = 0; i < 200; i++) {
 			float a[3], b[3], fa, fb, dist = 0.0f;
@@ -300,7 +303,7 @@ static void twist_and_bend_bound_holds_within_their_radius(void)
 		b.translate[0] = rt_float(-0.3f, 0.3f);
 		bc_tree_begin(t);
 		REQUIRE(bc_tree_push_unary(t, 0, trial % 3 ? &tw : &bd, NULL) ==
-			0);
+		        0);
 		if (trial % 3 == 2) {
 			REQUIRE(bc_tree_push_unary(t, 0, &bd, NULL) == 0);
 		}
@@ -323,9 +326,9 @@ static void twist_and_bend_bound_holds_within_their_radius(void)
 				dist += (a[j] - c[j]) * (a[j] - c[j]);
 			}
 			if (len3(a[0], ax == 1 ? a[1] : 0.0f,
-				 ax == 2 ? a[2] : 0.0f) > rmax ||
+			         ax == 2 ? a[2] : 0.0f) > rmax ||
 			    len3(c[0], ax == 1 ? c[1] : 0.0f,
-				 ax == 2 ? c[2] : 0.0f) > rmax) {
+			         ax == 2 ? c[2] : 0.0f) > rmax) {
 				continue;
 			}
 			dist = sqrtf(dist);
@@ -380,9 +383,10 @@ static void tracer_step_never_overshoots_twist_or_bend(void)
 						continue;
 					}
 					for (int c = 0; c < 3; c++) {
-						q[c] = p[c] + d[c] / n * step *
-								      rt_float(0.0f,
-									       0.999f);
+						q[c] =
+						    p[c] +
+						    d[c] / n * step *
+						        rt_float(0.0f, 0.999f);
 					}
 					checked++;
 					over += bc_eval_full(l, q) < -1e-5f;
@@ -409,7 +413,7 @@ static void abvs_contain_every_point_within_the_roi(void)
 	for (int tree = 0; tree < 400; tree++) {
 		const struct bc_lin *l;
 		REQUIRE(rt_build(t, 31000u + (uint64_t)tree,
-				 1 + (uint32_t)(tree % 16)) == 0);
+		                 1 + (uint32_t)(tree % 16)) == 0);
 		l = bc_tree_lin(t);
 		for (int i = 0; i < 200; i++) {
 			float p[3];
@@ -418,20 +422,20 @@ static void abvs_contain_every_point_within_the_roi(void)
 			for (int j = 0; j < 3; j++) {
 				float ext = l->hi[j] - l->lo[j];
 				p[j] = rt_float(l->lo[j] - 0.2f * ext,
-						l->hi[j] + 0.2f * ext);
+				                l->hi[j] + 0.2f * ext);
 			}
 			if (bc_abv_meets_box(&l->abv[k], p, p)) {
 				continue;
 			}
 			checked++;
-			if (!(bc_eval_prim(l, k, p) > l->roi[2 * s + 1] - 1e-5f)) {
+			if (!(bc_eval_prim(l, k, p) >
+			      l->roi[2 * s + 1] - 1e-5f)) {
 				bad++;
 			}
 		}
 	}
 	rt_unary_rate = 0.0f;
-	printf("  %ld points outside ABVs, %ld within the ROI\n", checked,
-	       bad);
+	printf("  %ld points outside ABVs, %ld within the ROI\n", checked, bad);
 	CHECK(checked > 30000);
 	CHECK(bad == 0);
 	bc_tree_destroy(t);
@@ -452,14 +456,18 @@ static struct bc_tree *all_kinds(void)
 	    "{\"type\": \"elongate\", \"id\": 6, \"half_extents\": [0.2, 0, "
 	    "0.1], \"children\": [{\"type\": \"twist\", \"id\": 7, \"rate\": "
 	    "1.5, \"children\": [{\"type\": \"bend\", \"id\": 8, \"rate\": "
-	    "-0.4, \"children\": [{\"type\": \"torus\", \"id\": 9, \"major\": 0.5, \"minor\": 0.15, "
+	    "-0.4, \"children\": [{\"type\": \"torus\", \"id\": 9, \"major\": "
+	    "0.5, \"minor\": 0.15, "
 	    "\"translate\": [0, 1, 0]}]}]}]},"
-	    "{\"type\": \"mirror\", \"id\": 10, \"axes\": \"zx\", \"children\": "
+	    "{\"type\": \"mirror\", \"id\": 10, \"axes\": \"zx\", "
+	    "\"children\": "
 	    "[{\"type\": \"repeat\", \"id\": 11, \"spacing\": [0.5, 0, 0.5], "
-	    "\"count\": [2, 1, 3], \"children\": [{\"type\": \"scale\", \"id\": "
+	    "\"count\": [2, 1, 3], \"children\": [{\"type\": \"scale\", "
+	    "\"id\": "
 	    "12, \"factor\": 0.5, \"children\": [{\"type\": \"union\", \"id\": "
 	    "13, \"children\": [{\"type\": \"sphere\", \"id\": 14, \"radius\": "
-	    "0.3}, {\"type\": \"capsule\", \"id\": 15, \"a\": [0, 0, 0], \"b\": [0, 0.5, 0], \"radius\": 0.1, \"translate\": [0, "
+	    "0.3}, {\"type\": \"capsule\", \"id\": 15, \"a\": [0, 0, 0], "
+	    "\"b\": [0, 0.5, 0], \"radius\": 0.1, \"translate\": [0, "
 	    "-1, 0]}]}]}]}]}]}}";
 	struct bc_tree *t = bc_tree_create();
 	struct bc_errinfo ei = {0};
@@ -477,7 +485,7 @@ static struct bc_tree *all_kinds(void)
 static void every_kind_round_trips_through_json_and_binary(void)
 {
 	struct bc_tree *t = all_kinds(), *u = bc_tree_create(),
-		       *w = bc_tree_create();
+	               *w = bc_tree_create();
 	struct bc_errinfo ei = {0};
 	struct bc_unary un;
 	char *j1 = NULL, *j2 = NULL;
@@ -569,8 +577,8 @@ static void bad_parameters_and_shapes_are_refused(void)
 	struct bc_op_data op = {BC_OP_OFFSET, 0, 0};
 	REQUIRE(t);
 	for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); i++) {
-		int rc = bc_scene_parse_json(bad[i], strlen(bad[i]), t, NULL,
-					     &ei);
+		int rc =
+		    bc_scene_parse_json(bad[i], strlen(bad[i]), t, NULL, &ei);
 		if (rc == 0) {
 			fprintf(stderr, "  accepted: %s\n", bad[i]);
 		}
@@ -611,7 +619,7 @@ static void edits_keep_one_child(void)
 	CHECK_NEAR(bc_eval_full(bc_tree_lin(t), p), 0.45f - 0.3f, 1e-6f);
 	/* An operator edit is refused on a unary node and vice versa. */
 	CHECK(bc_tree_set_op(t, 2, &(struct bc_op_data){BC_OP_UNION, 0, 0},
-			     &ei) == BC_EINVAL);
+	                     &ei) == BC_EINVAL);
 	CHECK(bc_tree_set_unary(t, 1, &u, &ei) == BC_EINVAL);
 	/* Removing the torus removes bend 8, twist 7 and elongate 6. */
 	REQUIRE(bc_tree_remove(t, 9, &ei) == 0);
@@ -685,7 +693,7 @@ static void mesh_through_unary_nodes_is_closed(void)
 	REQUIRE(t);
 	memset(&m, 0, sizeof(m));
 	REQUIRE(bc_mesh_build(&m, t, &(struct bc_mesh_opts){.resolution = 96},
-			      &ei) == 0);
+	                      &ei) == 0);
 	CHECK(m.ntris > 1000);
 	n = 3 * m.ntris;
 	dir = bc_calloc(n, sizeof(uint64_t));
@@ -707,8 +715,8 @@ static void mesh_through_unary_nodes_is_closed(void)
 		float f = bc_eval_full(bc_tree_lin(t), m.pos[v]);
 		far += fabsf(f) > 1.45f * bc_tree_lin(t)->lip * m.cell;
 	}
-	printf("  %u triangles, %u unmatched edges, %u far vertices\n",
-	       m.ntris, unmatched, far);
+	printf("  %u triangles, %u unmatched edges, %u far vertices\n", m.ntris,
+	       unmatched, far);
 	CHECK_EQ_INT(unmatched, 0);
 	CHECK_EQ_INT(far, 0);
 	bc_free(dir);
@@ -718,24 +726,23 @@ static void mesh_through_unary_nodes_is_closed(void)
 }
 
 static const struct bc_test tests[] = {
-	{"mesh_through_unary_nodes_is_closed",
-	 mesh_through_unary_nodes_is_closed},
-	{"fields_match_closed_forms", fields_match_closed_forms},
-	{"twist_and_bend_rotate_the_child", twist_and_bend_rotate_the_child},
-	{"lipschitz_bound_holds_on_random_pairs",
-	 lipschitz_bound_holds_on_random_pairs},
-	{"twist_and_bend_bound_holds_within_their_radius",
-	 twist_and_bend_bound_holds_within_their_radius},
-	{"tracer_step_never_overshoots_twist_or_bend",
-	 tracer_step_never_overshoots_twist_or_bend},
-	{"abvs_contain_every_point_within_the_roi",
-	 abvs_contain_every_point_within_the_roi},
-	{"every_kind_round_trips_through_json_and_binary",
-	 every_kind_round_trips_through_json_and_binary},
-	{"bad_parameters_and_shapes_are_refused",
-	 bad_parameters_and_shapes_are_refused},
-	{"edits_keep_one_child", edits_keep_one_child},
-	{"primitive_edit_under_twist_updates_its_bound",
-	 primitive_edit_under_twist_updates_its_bound},
+    {"mesh_through_unary_nodes_is_closed", mesh_through_unary_nodes_is_closed},
+    {"fields_match_closed_forms", fields_match_closed_forms},
+    {"twist_and_bend_rotate_the_child", twist_and_bend_rotate_the_child},
+    {"lipschitz_bound_holds_on_random_pairs",
+     lipschitz_bound_holds_on_random_pairs},
+    {"twist_and_bend_bound_holds_within_their_radius",
+     twist_and_bend_bound_holds_within_their_radius},
+    {"tracer_step_never_overshoots_twist_or_bend",
+     tracer_step_never_overshoots_twist_or_bend},
+    {"abvs_contain_every_point_within_the_roi",
+     abvs_contain_every_point_within_the_roi},
+    {"every_kind_round_trips_through_json_and_binary",
+     every_kind_round_trips_through_json_and_binary},
+    {"bad_parameters_and_shapes_are_refused",
+     bad_parameters_and_shapes_are_refused},
+    {"edits_keep_one_child", edits_keep_one_child},
+    {"primitive_edit_under_twist_updates_its_bound",
+     primitive_edit_under_twist_updates_its_bound},
 };
 BC_TEST_MAIN(tests)

@@ -9,7 +9,7 @@
 #include "test.h"
 
 static void parses(const char *s, enum bc_client_addr_kind kind,
-		   const char *host_or_path, unsigned port)
+                   const char *host_or_path, unsigned port)
 {
 	struct bc_client_addr a;
 	struct bc_errinfo ei = {0};
@@ -84,14 +84,14 @@ static void test_bad_ports_are_refused(void)
 static void test_bad_hosts_are_refused(void)
 {
 	char big[BC_CLIENT_MAX_HOST + 8];
-	refuses("::1");          /* bare IPv6: ambiguous with a port */
+	refuses("::1"); /* bare IPv6: ambiguous with a port */
 	refuses("a:b:c");
-	refuses("[::1");         /* unclosed bracket */
+	refuses("[::1"); /* unclosed bracket */
 	refuses("[::1]x");
 	refuses("[]:80");
 	refuses("ho st:80");
 	refuses("host/x:80");
-	refuses("unix:");        /* no path */
+	refuses("unix:"); /* no path */
 	memset(big, 'h', sizeof(big) - 1);
 	big[sizeof(big) - 1] = '\0';
 	refuses(big);
@@ -107,13 +107,13 @@ static void test_unix_path_over_sun_path_is_refused(void)
 }
 
 static const struct bc_test tests[] = {
-	{"defaults_fill_missing_parts", test_defaults_fill_missing_parts},
-	{"host_and_port_forms", test_host_and_port_forms},
-	{"unix_paths", test_unix_paths},
-	{"bad_ports_are_refused", test_bad_ports_are_refused},
-	{"bad_hosts_are_refused", test_bad_hosts_are_refused},
-	{"unix_path_over_sun_path_is_refused",
-	 test_unix_path_over_sun_path_is_refused},
+    {"defaults_fill_missing_parts", test_defaults_fill_missing_parts},
+    {"host_and_port_forms", test_host_and_port_forms},
+    {"unix_paths", test_unix_paths},
+    {"bad_ports_are_refused", test_bad_ports_are_refused},
+    {"bad_hosts_are_refused", test_bad_hosts_are_refused},
+    {"unix_path_over_sun_path_is_refused",
+     test_unix_path_over_sun_path_is_refused},
 };
 
 BC_TEST_MAIN(tests)

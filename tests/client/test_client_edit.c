@@ -11,20 +11,20 @@
 #include "test.h"
 
 static const char scene_json[] =
-	"{\"blobcast\": 1, \"root\": {\"type\": \"smooth_union\", \"id\": 1, "
-	"\"blend\": 0.2, \"children\": ["
-	"{\"type\": \"sphere\", \"id\": 2, \"radius\": 0.5},"
-	"{\"type\": \"box\", \"id\": 3, \"half_extents\": [0.3, 0.3, 0.3],"
-	" \"translate\": [1, 0, 0]},"
-	"{\"type\": \"capsule\", \"id\": 4, \"a\": [0, 0, 0],"
-	" \"b\": [0, 1, 0], \"radius\": 0.1}]}}";
+    "{\"blobcast\": 1, \"root\": {\"type\": \"smooth_union\", \"id\": 1, "
+    "\"blend\": 0.2, \"children\": ["
+    "{\"type\": \"sphere\", \"id\": 2, \"radius\": 0.5},"
+    "{\"type\": \"box\", \"id\": 3, \"half_extents\": [0.3, 0.3, 0.3],"
+    " \"translate\": [1, 0, 0]},"
+    "{\"type\": \"capsule\", \"id\": 4, \"a\": [0, 0, 0],"
+    " \"b\": [0, 1, 0], \"radius\": 0.1}]}}";
 
 static struct bc_tree *scene(void)
 {
 	struct bc_tree *t = bc_tree_create();
 	struct bc_errinfo ei = {0};
 	if (t && bc_scene_parse_json(scene_json, strlen(scene_json), t, NULL,
-				     &ei) != 0) {
+	                             &ei) != 0) {
 		fprintf(stderr, "  scene: %s\n", ei.msg);
 		bc_tree_destroy(t);
 		t = NULL;
@@ -47,8 +47,8 @@ static int param_field(enum bc_prim kind, const char *name, int *count)
 }
 
 static int parse(const struct bc_tree *t, uint32_t node, const char *a,
-		 const char *b, struct bc_proto_field *f, uint8_t *n,
-		 struct bc_errinfo *ei)
+                 const char *b, struct bc_proto_field *f, uint8_t *n,
+                 struct bc_errinfo *ei)
 {
 	const char *kv[2] = {a, b};
 	return bc_client_edit_parse(t, node, kv, b ? 2u : 1u, f, n, ei);
@@ -105,8 +105,8 @@ static void test_primitive_parameters_map_by_kind(void)
 
 	field = param_field(BC_PRIM_BOX, "half_extents", &count);
 	REQUIRE(field >= 0 && count == 3);
-	REQUIRE(parse(t, 3, "half_extents=0.5,0.25,1e-1", NULL, f, &n,
-		      &ei) == 0);
+	REQUIRE(parse(t, 3, "half_extents=0.5,0.25,1e-1", NULL, f, &n, &ei) ==
+	        0);
 	CHECK_EQ_INT(f[0].field, field);
 	CHECK(f[0].v[0] == 0.5f && f[0].v[1] == 0.25f && f[0].v[2] == 0.1f);
 	encodes(3, f, n);
@@ -117,7 +117,7 @@ static void test_transform_and_colour_fields(void)
 {
 	struct bc_tree *t = scene();
 	const char *kv[3] = {"translate=0.1,0,-2", "rotate=0,0,0.6,0.8",
-			     "color=1,0.5,0"};
+	                     "color=1,0.5,0"};
 	struct bc_proto_field f[BC_PROTO_MAX_SET_FIELDS];
 	struct bc_errinfo ei = {0};
 	uint8_t n;
@@ -165,7 +165,7 @@ static void test_operator_fields(void)
 }
 
 static void refused(const struct bc_tree *t, uint32_t node, const char *a,
-		    const char *b, int code)
+                    const char *b, int code)
 {
 	struct bc_proto_field f[BC_PROTO_MAX_SET_FIELDS];
 	struct bc_errinfo ei = {0};
@@ -173,8 +173,8 @@ static void refused(const struct bc_tree *t, uint32_t node, const char *a,
 	int rc = parse(t, node, a, b, f, &n, &ei);
 	if (rc != code) {
 		fprintf(stderr, "  \"%s\" \"%s\": got %s (%s), wanted %s\n",
-			a ? a : "", b ? b : "", bc_err_name(rc), ei.msg,
-			bc_err_name(code));
+		        a ? a : "", b ? b : "", bc_err_name(rc), ei.msg,
+		        bc_err_name(code));
 	}
 	CHECK_EQ_INT(rc, code);
 	CHECK(ei.msg[0] != '\0');
@@ -227,8 +227,8 @@ static void test_argument_counts_are_bounded(void)
 		kv[i] = "radius=1";
 	}
 	CHECK_EQ_INT(bc_client_edit_parse(t, 2, kv, BC_CLIENT_MAX_EDIT_ARGS + 1,
-					  f, &n, &ei),
-		     BC_ELIMIT);
+	                                  f, &n, &ei),
+	             BC_ELIMIT);
 	bc_tree_destroy(t);
 }
 
@@ -238,7 +238,8 @@ static void test_every_kind_every_parameter(void)
 {
 	int built = 0;
 	for (int kind = 1; kind < BC_PRIM_COUNT; kind++) {
-		const struct bc_prim_info *info = bc_prim_info((enum bc_prim)kind);
+		const struct bc_prim_info *info =
+		    bc_prim_info((enum bc_prim)kind);
 		struct bc_tree *t = bc_tree_create();
 		struct bc_prim_data p;
 		struct bc_errinfo ei = {0};
@@ -271,11 +272,11 @@ static void test_every_kind_every_parameter(void)
 			const char *kv[1] = {arg};
 			uint8_t n;
 			snprintf(arg, sizeof(arg), "%s=%s", d->name,
-				 d->count == 1 ? "0.5" : "0.5,0.25,0.125");
+			         d->count == 1 ? "0.5" : "0.5,0.25,0.125");
 			if (bc_client_edit_parse(t, 5, kv, 1, f, &n, &ei) !=
 			    0) {
 				fprintf(stderr, "  %s.%s: %s\n", info->name,
-					d->name, ei.msg);
+				        d->name, ei.msg);
 				CHECK(0);
 				continue;
 			}
@@ -289,14 +290,12 @@ static void test_every_kind_every_parameter(void)
 }
 
 static const struct bc_test tests[] = {
-	{"primitive_parameters_map_by_kind",
-	 test_primitive_parameters_map_by_kind},
-	{"transform_and_colour_fields", test_transform_and_colour_fields},
-	{"operator_fields", test_operator_fields},
-	{"malformed_arguments_are_refused",
-	 test_malformed_arguments_are_refused},
-	{"argument_counts_are_bounded", test_argument_counts_are_bounded},
-	{"every_kind_every_parameter", test_every_kind_every_parameter},
+    {"primitive_parameters_map_by_kind", test_primitive_parameters_map_by_kind},
+    {"transform_and_colour_fields", test_transform_and_colour_fields},
+    {"operator_fields", test_operator_fields},
+    {"malformed_arguments_are_refused", test_malformed_arguments_are_refused},
+    {"argument_counts_are_bounded", test_argument_counts_are_bounded},
+    {"every_kind_every_parameter", test_every_kind_every_parameter},
 };
 
 BC_TEST_MAIN(tests)

@@ -6,9 +6,9 @@
  * handshake, sessions, the scene mirror (parameter and structural edits,
  * a skipped order), edit acknowledgements among other members' edits,
  * presenting, following and the session camera (which moves the mirror's
- * camera and order), frames and snapshots, messages larger than one read, and every way a
- * connection can fail (refused, wrong protocol, silence, ERROR, a close
- * between or inside messages).
+ * camera and order), frames and snapshots, messages larger than one read, and
+ * every way a connection can fail (refused, wrong protocol, silence, ERROR, a
+ * close between or inside messages).
  */
 #include <arpa/inet.h>
 #include <netinet/in.h>
@@ -48,7 +48,7 @@ struct fake {
 	do {                                                                   \
 		if (!(cond)) {                                                 \
 			fprintf(stderr, "  %s:%d: server CHECK failed: %s\n",  \
-				__FILE__, __LINE__, #cond);                    \
+			        __FILE__, __LINE__, #cond);                    \
 			(f)->failures++;                                       \
 		}                                                              \
 	} while (0)
@@ -73,7 +73,7 @@ static void srv_send(struct fake *f, int fd, const struct bc_msg *m)
 	bc_proto_buf_init(&b, 0);
 	if (bc_proto_encode(&b, m, &ei) != 0) {
 		fprintf(stderr, "  fake server cannot encode %s: %s\n",
-			bc_proto_type_name(m->type), ei.msg);
+		        bc_proto_type_name(m->type), ei.msg);
 		f->failures++;
 	}
 	write_all(fd, b.data, b.len);
@@ -99,17 +99,17 @@ static int srv_next(struct fake *f, int fd, struct bc_msg *m)
 
 /* Waits for one message of type, failing the test on anything else. */
 static int srv_expect(struct fake *f, int fd, enum bc_msg_type type,
-		      struct bc_msg *m)
+                      struct bc_msg *m)
 {
 	if (!srv_next(f, fd, m)) {
 		fprintf(stderr, "  fake server: no %s\n",
-			bc_proto_type_name(type));
+		        bc_proto_type_name(type));
 		f->failures++;
 		return 0;
 	}
 	if (m->type != type) {
 		fprintf(stderr, "  fake server: %s instead of %s\n",
-			bc_proto_type_name(m->type), bc_proto_type_name(type));
+		        bc_proto_type_name(m->type), bc_proto_type_name(type));
 		f->failures++;
 		return 0;
 	}
@@ -117,7 +117,7 @@ static int srv_expect(struct fake *f, int fd, enum bc_msg_type type,
 }
 
 static void srv_error(struct fake *f, int fd, uint32_t seq, int code,
-		      bool fatal, const char *text)
+                      bool fatal, const char *text)
 {
 	struct bc_msg e = {.type = BC_MSG_ERROR, .seq = seq};
 	e.flags = fatal ? BC_PROTO_FLAG_FATAL : 0;
@@ -135,7 +135,7 @@ static int srv_hello(struct fake *f, int fd)
 		return 0;
 	}
 	SCHECK(f, m.hello.version_min <= BC_PROTO_VERSION &&
-			  m.hello.version_max >= BC_PROTO_VERSION);
+	              m.hello.version_max >= BC_PROTO_VERSION);
 	bc_proto_reader_hello_done(&f->r);
 	w.seq = m.seq;
 	w.welcome.version = BC_PROTO_VERSION;
@@ -156,7 +156,7 @@ static void *fake_main(void *arg)
 {
 	struct fake *f = arg;
 	struct bc_proto_reader_opts ro = {.side = BC_PROTO_SIDE_SERVER,
-					  .await_hello = true};
+	                                  .await_hello = true};
 	int fd = accept(f->lfd, NULL, NULL);
 	if (fd < 0) {
 		f->failures++;
@@ -180,7 +180,7 @@ static int fake_start(struct fake *f, script_fn script, bool unix_socket)
 			return -1;
 		}
 		snprintf(sun.sun_path, sizeof(sun.sun_path), "%s/s.sock",
-			 f->dir);
+		         f->dir);
 		snprintf(f->addr, sizeof(f->addr), "unix:%s", sun.sun_path);
 		f->lfd = socket(AF_UNIX, SOCK_STREAM, 0);
 		if (f->lfd < 0 ||
@@ -198,7 +198,7 @@ static int fake_start(struct fake *f, script_fn script, bool unix_socket)
 			return -1;
 		}
 		snprintf(f->addr, sizeof(f->addr), "127.0.0.1:%u",
-			 (unsigned)ntohs(in.sin_port));
+		         (unsigned)ntohs(in.sin_port));
 	}
 	if (listen(f->lfd, 1) < 0 ||
 	    pthread_create(&f->thread, NULL, fake_main, f) != 0) {
@@ -218,13 +218,14 @@ static int fake_fork(struct fake *f, script_fn script)
 	f->script = script;
 	in.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
 	f->lfd = socket(AF_INET, SOCK_STREAM, 0);
-	if (f->lfd < 0 || bind(f->lfd, (struct sockaddr *)&in, sizeof(in)) < 0 ||
+	if (f->lfd < 0 ||
+	    bind(f->lfd, (struct sockaddr *)&in, sizeof(in)) < 0 ||
 	    getsockname(f->lfd, (struct sockaddr *)&in, &len) < 0 ||
 	    listen(f->lfd, 1) < 0) {
 		return -1;
 	}
 	snprintf(f->addr, sizeof(f->addr), "127.0.0.1:%u",
-		 (unsigned)ntohs(in.sin_port));
+	         (unsigned)ntohs(in.sin_port));
 	fflush(NULL);
 	f->child = fork();
 	if (f->child < 0) {
@@ -260,7 +261,7 @@ static void fake_stop(struct fake *f)
 		waitpid(f->child, &st, 0);
 		if (!WIFEXITED(st) || WEXITSTATUS(st) != 0) {
 			fprintf(stderr, "  fake server process failed (%d)\n",
-				st);
+			        st);
 			bc_test_failures++;
 		}
 		return;
@@ -279,12 +280,12 @@ static void fake_stop(struct fake *f)
 /* ---- scenes ------------------------------------------------------------------ */
 
 static const char scene_json[] =
-	"{\"blobcast\": 1, \"camera\": {\"eye\": [0, 0, 5], \"target\": "
-	"[0, 0, 0], \"up\": [0, 1, 0], \"fov_y_deg\": 40}, \"root\": "
-	"{\"type\": \"union\", \"id\": 1, \"children\": ["
-	"{\"type\": \"sphere\", \"id\": 2, \"radius\": 0.5},"
-	"{\"type\": \"box\", \"id\": 3, \"half_extents\": [0.3, 0.3, 0.3]},"
-	"{\"type\": \"sphere\", \"id\": 4, \"radius\": 0.2}]}}";
+    "{\"blobcast\": 1, \"camera\": {\"eye\": [0, 0, 5], \"target\": "
+    "[0, 0, 0], \"up\": [0, 1, 0], \"fov_y_deg\": 40}, \"root\": "
+    "{\"type\": \"union\", \"id\": 1, \"children\": ["
+    "{\"type\": \"sphere\", \"id\": 2, \"radius\": 0.5},"
+    "{\"type\": \"box\", \"id\": 3, \"half_extents\": [0.3, 0.3, 0.3]},"
+    "{\"type\": \"sphere\", \"id\": 4, \"radius\": 0.2}]}}";
 
 /* Encodes a JSON scene, or a union of n spheres when json is NULL. */
 static uint8_t *scene_bytes(const char *json, uint32_t n, size_t *len)
@@ -364,7 +365,7 @@ static uint8_t *pixels(uint32_t w, uint32_t h, uint8_t seed)
 }
 
 static void srv_frame(struct fake *f, int fd, uint32_t seq, uint16_t flags,
-		      uint16_t w, uint16_t h, uint8_t seed, uint64_t order)
+                      uint16_t w, uint16_t h, uint8_t seed, uint64_t order)
 {
 	struct bc_msg m = {.type = BC_MSG_FRAME, .seq = seq, .flags = flags};
 	uint8_t *p = pixels(w, h, seed);
@@ -384,12 +385,12 @@ static struct bc_client *connect_to(struct fake *f, int timeout_ms)
 {
 	struct bc_client *c = NULL;
 	struct bc_errinfo ei = {0};
-	if (bc_client_connect(&c,
-			      &(struct bc_client_opts){
-				      .addr = f->addr,
-				      .name = "loopback-test",
-				      .timeout_ms = timeout_ms},
-			      &ei) != 0) {
+	if (bc_client_connect(
+	        &c,
+	        &(struct bc_client_opts){.addr = f->addr,
+	                                 .name = "loopback-test",
+	                                 .timeout_ms = timeout_ms},
+	        &ei) != 0) {
 		fprintf(stderr, "  connect: %s\n", ei.msg);
 	}
 	return c;
@@ -400,12 +401,11 @@ static struct bc_client *connect_to(struct fake *f, int timeout_ms)
 static void script_session(struct fake *f, int fd)
 {
 	struct bc_msg m;
-	if (!srv_hello(f, fd) ||
-	    !srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
+	if (!srv_hello(f, fd) || !srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
 		return;
 	}
 	SCHECK(f, m.session.name.len == 2 &&
-			  memcmp(m.session.name.ptr, "s1", 2) == 0);
+	              memcmp(m.session.name.ptr, "s1", 2) == 0);
 	SCHECK(f, m.session.role == BC_PROTO_ROLE_EDITOR);
 	srv_error(f, fd, m.seq, BC_ENOSESSION, false, "no session named s1");
 	if (!srv_expect(f, fd, BC_MSG_SESSION_CREATE, &m)) {
@@ -445,8 +445,8 @@ static void test_handshake_join_or_create_and_stats(void)
 		CHECK_STREQ(info->server_id, "fake");
 		CHECK(bc_client_fd(c) >= 0);
 		CHECK(bc_client_scene(c, NULL) == NULL);
-		CHECK_EQ_INT(bc_client_join(c, "s1", 0, BC_CLIENT_JOIN_ANY, &ei),
-			     0);
+		CHECK_EQ_INT(
+		    bc_client_join(c, "s1", 0, BC_CLIENT_JOIN_ANY, &ei), 0);
 		CHECK_EQ_INT(info->member_id, 3);
 		CHECK_EQ_INT(info->session_id, 11);
 		CHECK_EQ_INT(info->role, BC_PROTO_ROLE_EDITOR);
@@ -469,8 +469,7 @@ static void test_handshake_join_or_create_and_stats(void)
 static void script_join_refused(struct fake *f, int fd)
 {
 	struct bc_msg m;
-	if (!srv_hello(f, fd) ||
-	    !srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
+	if (!srv_hello(f, fd) || !srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
 		return;
 	}
 	srv_error(f, fd, m.seq, BC_ENOSESSION, false, "no session named zz");
@@ -478,7 +477,7 @@ static void script_join_refused(struct fake *f, int fd)
 		return;
 	}
 	srv_error(f, fd, m.seq, BC_EPERM, false,
-		  "your token grants the viewer role only");
+	          "your token grants the viewer role only");
 	SCHECK(f, !srv_next(f, fd, &m));
 }
 
@@ -490,18 +489,18 @@ static void test_session_errors_carry_server_text(void)
 	REQUIRE(fake_start(&f, script_join_refused, false) == 0);
 	c = connect_to(&f, 5000);
 	if (c) {
-		CHECK_EQ_INT(bc_client_join(c, "zz", 0, BC_CLIENT_JOIN_EXISTING,
-					    &ei),
-			     BC_ENOSESSION);
+		CHECK_EQ_INT(
+		    bc_client_join(c, "zz", 0, BC_CLIENT_JOIN_EXISTING, &ei),
+		    BC_ENOSESSION);
 		CHECK(strstr(ei.msg, "no session named zz") != NULL);
 		/* Not sticky: the connection goes on. */
 		CHECK_EQ_INT(bc_client_error(c, NULL), 0);
 		CHECK_EQ_INT(bc_client_join(c, "zz", BC_PROTO_ROLE_EDITOR,
-					    BC_CLIENT_JOIN_CREATE, &ei),
-			     BC_EPERM);
+		                            BC_CLIENT_JOIN_CREATE, &ei),
+		             BC_EPERM);
 		CHECK(strstr(ei.msg, "viewer role only") != NULL);
 		CHECK_EQ_INT(bc_client_join(c, "", 0, BC_CLIENT_JOIN_ANY, &ei),
-			     BC_EINVAL);
+		             BC_EINVAL);
 	}
 	bc_client_destroy(c);
 	fake_stop(&f);
@@ -513,15 +512,14 @@ static void script_edit(struct fake *f, int fd)
 {
 	struct bc_msg m;
 	struct bc_proto_field other_f = {.field = BC_PROTO_FIELD_TRANSLATE,
-					 .count = 3,
-					 .v = {2.0f, 0.0f, 0.0f}};
+	                                 .count = 3,
+	                                 .v = {2.0f, 0.0f, 0.0f}};
 	struct bc_proto_edit_op other = {.kind = BC_PROTO_EDIT_SET,
-					 .node = 3,
-					 .nfields = 1,
-					 .fields = &other_f};
+	                                 .node = 3,
+	                                 .nfields = 1,
+	                                 .fields = &other_f};
 	struct bc_msg ea = {.type = BC_MSG_EDIT_APPLIED};
-	if (!srv_hello(f, fd) ||
-	    !srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
+	if (!srv_hello(f, fd) || !srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
 		return;
 	}
 	srv_session(f, fd, m.seq, 5);
@@ -554,7 +552,7 @@ static void script_edit(struct fake *f, int fd)
 		return;
 	}
 	srv_error(f, fd, m.seq, BC_ERANGE, false,
-		  "edit refused: operation 0: radius must be > 0");
+	          "edit refused: operation 0: radius must be > 0");
 	SCHECK(f, !srv_next(f, fd, &m));
 }
 
@@ -572,11 +570,11 @@ static void test_edit_is_acknowledged_among_other_edits(void)
 	c = connect_to(&f, 5000);
 	if (c) {
 		CHECK_EQ_INT(bc_client_edit_kv(c, 2, kv, 1, false, &seq, &ei),
-			     BC_ESTATE);
+		             BC_ESTATE);
 		REQUIRE(bc_client_join(c, "s1", 0, 0, &ei) == 0);
 		/* A typo never reaches the server. */
 		CHECK_EQ_INT(bc_client_edit_kv(c, 2, typo, 1, true, &seq, &ei),
-			     BC_EINVAL);
+		             BC_EINVAL);
 		CHECK_EQ_INT(seq, 0);
 		REQUIRE(bc_client_edit_kv(c, 2, kv, 1, true, &seq, &ei) == 0);
 		CHECK(seq != 0);
@@ -591,7 +589,7 @@ static void test_edit_is_acknowledged_among_other_edits(void)
 		CHECK(p.translate[0] == 2.0f);
 		REQUIRE(bc_client_edit_kv(c, 2, bad, 1, false, &seq, &ei) == 0);
 		CHECK_EQ_INT(bc_client_wait_applied(c, seq, &order, &ei),
-			     BC_ERANGE);
+		             BC_ERANGE);
 		CHECK(strstr(ei.msg, "radius must be > 0") != NULL);
 		CHECK_EQ_INT(order, 0);
 	}
@@ -605,8 +603,7 @@ static void script_structural(struct fake *f, int fd)
 	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_REMOVE, .node = 4};
 	struct bc_proto_buf sub;
 	float one = 1.0f;
-	if (!srv_hello(f, fd) ||
-	    !srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
+	if (!srv_hello(f, fd) || !srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
 		return;
 	}
 	srv_session(f, fd, m.seq, 5);
@@ -620,18 +617,16 @@ static void script_structural(struct fake *f, int fd)
 	bc_proto_buf_init(&sub, 0);
 	bc_proto_scene_begin(&sub, NULL, 1);
 	bc_proto_scene_prim(&sub, BC_PRIM_SPHERE, 40, (float[3]){0, 1, 0},
-			    (float[4]){0, 0, 0, 1}, NULL, 1, &one);
-	op = (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_INSERT,
-				       .node = 1,
-				       .position = 0};
+	                    (float[4]){0, 0, 0, 1}, NULL, 1, &one);
+	op = (struct bc_proto_edit_op){
+	    .kind = BC_PROTO_EDIT_INSERT, .node = 1, .position = 0};
 	op.subtree.ptr = sub.data;
 	op.subtree.len = (uint32_t)sub.len;
 	ea.edit_applied.order = 7;
 	srv_send(f, fd, &ea);
 	bc_proto_buf_finish(&sub);
 	/* Order 8 is never sent: the mirror cannot follow order 9. */
-	op = (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_REMOVE,
-				       .node = 3};
+	op = (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_REMOVE, .node = 3};
 	ea.edit_applied.order = 9;
 	srv_send(f, fd, &ea);
 	/* A fresh SCENE_STATE brings it back; then a subtree whose node has
@@ -641,10 +636,9 @@ static void script_structural(struct fake *f, int fd)
 	bc_proto_buf_init(&sub, 0);
 	bc_proto_scene_begin(&sub, NULL, 1);
 	bc_proto_scene_prim(&sub, BC_PRIM_SPHERE, 0, (float[3]){0, 1, 0},
-			    (float[4]){0, 0, 0, 1}, NULL, 1, &one);
-	op = (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_INSERT,
-				       .node = 1,
-				       .position = 1};
+	                    (float[4]){0, 0, 0, 1}, NULL, 1, &one);
+	op = (struct bc_proto_edit_op){
+	    .kind = BC_PROTO_EDIT_INSERT, .node = 1, .position = 1};
 	op.subtree.ptr = sub.data;
 	op.subtree.len = (uint32_t)sub.len;
 	ea.edit_applied.order = 11;
@@ -683,7 +677,7 @@ static void test_mirror_follows_structural_edits(void)
 		CHECK_EQ_INT(bc_client_info(c)->order, 9);
 		/* SESSION_INFO, then SCENE_STATE: the mirror is back. */
 		REQUIRE(bc_client_wait(c, BC_MSG_SCENE_STATE, 0, &m, 0, &ei) ==
-			0);
+		        0);
 		REQUIRE(bc_client_scene(c, NULL) != NULL);
 		CHECK_EQ_INT(bc_tree_node_count(bc_client_scene(c, NULL)), 4);
 		REQUIRE(bc_client_recv(c, &m, 5000) == 1);
@@ -703,8 +697,7 @@ static void script_present(struct fake *f, int fd)
 {
 	struct bc_msg m, out;
 	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_REMOVE, .node = 4};
-	if (!srv_hello(f, fd) ||
-	    !srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
+	if (!srv_hello(f, fd) || !srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
 		return;
 	}
 	srv_session(f, fd, m.seq, 5);
@@ -760,8 +753,8 @@ static void test_presenting_and_session_camera(void)
 	struct fake f;
 	struct bc_client *c;
 	struct bc_errinfo ei = {0};
-	struct bc_camera cam = {{2.0f, 1.0f, 5.0f}, {0.0f, 0.5f, 0.0f},
-	                        {0.0f, 1.0f, 0.0f}, 33.0f};
+	struct bc_camera cam = {
+	    {2.0f, 1.0f, 5.0f}, {0.0f, 0.5f, 0.0f}, {0.0f, 1.0f, 0.0f}, 33.0f};
 	struct bc_camera got;
 	struct bc_msg m;
 	uint64_t order = 0;
@@ -794,8 +787,7 @@ static void test_presenting_and_session_camera(void)
 static void script_frames(struct fake *f, int fd)
 {
 	struct bc_msg m;
-	if (!srv_hello(f, fd) ||
-	    !srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
+	if (!srv_hello(f, fd) || !srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
 		return;
 	}
 	srv_session(f, fd, m.seq, 5);
@@ -805,7 +797,7 @@ static void script_frames(struct fake *f, int fd)
 	SCHECK(f, m.view.width == 8 && m.view.height == 4);
 	SCHECK(f, m.view.encoding == BC_PROTO_ENC_RAW);
 	SCHECK(f, m.view.quality_interactive == 75 &&
-			  m.view.quality_still == 90 && m.view.downscale == 1);
+	              m.view.quality_still == 90 && m.view.downscale == 1);
 	srv_frame(f, fd, 0, BC_PROTO_FLAG_STILL, 8, 4, 10, 5);
 	if (!srv_expect(f, fd, BC_MSG_CAMERA, &m)) {
 		return;
@@ -818,8 +810,8 @@ static void script_frames(struct fake *f, int fd)
 	SCHECK(f, m.snapshot.encoding == BC_PROTO_ENC_RAW);
 	/* A stream frame comes first; the snapshot is the one with its seq. */
 	srv_frame(f, fd, 0, BC_PROTO_FLAG_STILL, 8, 4, 20, 5);
-	srv_frame(f, fd, m.seq, BC_PROTO_FLAG_STILL | BC_PROTO_FLAG_SNAPSHOT,
-		  8, 4, 30, 5);
+	srv_frame(f, fd, m.seq, BC_PROTO_FLAG_STILL | BC_PROTO_FLAG_SNAPSHOT, 8,
+	          4, 30, 5);
 	SCHECK(f, !srv_next(f, fd, &m));
 }
 
@@ -839,12 +831,12 @@ static void test_frames_and_snapshot(void)
 	c = connect_to(&f, 5000);
 	if (c) {
 		REQUIRE(bc_client_join(c, "s1", 0, 0, &ei) == 0);
-		REQUIRE(bc_client_view(c,
-				       &(struct bc_msg_view){
-					       .width = 8,
-					       .height = 4,
-					       .encoding = BC_PROTO_ENC_RAW},
-				       &seq, &ei) == 0);
+		REQUIRE(bc_client_view(
+		            c,
+		            &(struct bc_msg_view){.width = 8,
+		                                  .height = 4,
+		                                  .encoding = BC_PROTO_ENC_RAW},
+		            &seq, &ei) == 0);
 		REQUIRE(bc_client_wait(c, BC_MSG_FRAME, 0, &m, 0, &ei) == 0);
 		CHECK(bc_client_info(c)->last_msg_bytes >
 		      BC_PROTO_HEADER_SIZE + 8 * 4 * 4);
@@ -855,15 +847,15 @@ static void test_frames_and_snapshot(void)
 		free(want);
 		REQUIRE(bc_client_camera(c, &cam, false, &seq, &ei) == 0);
 		REQUIRE(bc_client_snapshot(c, BC_PROTO_ENC_RAW, &snap, &ei) ==
-			0);
+		        0);
 		want = pixels(8, 4, 30);
 		CHECK(snap.complete);
 		CHECK_MEMEQ(snap.rgba, want, 8 * 4 * 4);
 		CHECK(snap.flags & BC_PROTO_FLAG_SNAPSHOT);
 		free(want);
-		CHECK_EQ_INT(bc_client_snapshot(c, BC_PROTO_ENC_JPEG, &snap,
-						&ei),
-			     BC_EINVAL);
+		CHECK_EQ_INT(
+		    bc_client_snapshot(c, BC_PROTO_ENC_JPEG, &snap, &ei),
+		    BC_EINVAL);
 	}
 	bc_client_destroy(c);
 	fake_stop(&f);
@@ -878,8 +870,7 @@ static void script_large(struct fake *f, int fd)
 	struct bc_msg m, st = {.type = BC_MSG_SCENE_STATE};
 	size_t len;
 	uint8_t *bytes;
-	if (!srv_hello(f, fd) ||
-	    !srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
+	if (!srv_hello(f, fd) || !srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
 		return;
 	}
 	srv_session(f, fd, m.seq, 5);
@@ -911,7 +902,7 @@ static void test_messages_larger_than_a_read(void)
 		CHECK_EQ_INT(m.type, BC_MSG_SCENE_STATE);
 		REQUIRE(bc_client_scene(c, NULL) != NULL);
 		CHECK_EQ_INT(bc_tree_node_count(bc_client_scene(c, NULL)),
-			     8001);
+		             8001);
 		REQUIRE(bc_client_recv(c, &m, 5000) == 1);
 		REQUIRE(bc_client_image_apply(&img, &m, &ei) == 0);
 		want = pixels(320, 240, 3);
@@ -937,7 +928,7 @@ static void script_auth(struct fake *f, int fd)
 		return;
 	}
 	SCHECK(f, m.hello.token.len == 6 &&
-			  memcmp(m.hello.token.ptr, "wrong!", 6) == 0);
+	              memcmp(m.hello.token.ptr, "wrong!", 6) == 0);
 	srv_error(f, fd, m.seq, BC_EAUTH, true, "a valid token is required");
 }
 
@@ -947,12 +938,11 @@ static void test_auth_error_is_reported(void)
 	struct bc_client *c = (struct bc_client *)&f; /* must be reset */
 	struct bc_errinfo ei = {0};
 	REQUIRE(fake_start(&f, script_auth, false) == 0);
-	CHECK_EQ_INT(bc_client_connect(&c,
-				       &(struct bc_client_opts){
-					       .addr = f.addr,
-					       .token = "wrong!"},
-				       &ei),
-		     BC_EAUTH);
+	CHECK_EQ_INT(
+	    bc_client_connect(
+	        &c, &(struct bc_client_opts){.addr = f.addr, .token = "wrong!"},
+	        &ei),
+	    BC_EAUTH);
 	CHECK(c == NULL);
 	CHECK(strstr(ei.msg, "a valid token is required") != NULL);
 	fake_stop(&f);
@@ -972,9 +962,9 @@ static void test_not_a_blobcast_server(void)
 	struct bc_client *c = NULL;
 	struct bc_errinfo ei = {0};
 	REQUIRE(fake_start(&f, script_http, false) == 0);
-	CHECK_EQ_INT(bc_client_connect(&c, &(struct bc_client_opts){.addr = f.addr},
-				       &ei),
-		     BC_EPROTO_MAGIC);
+	CHECK_EQ_INT(bc_client_connect(
+	                 &c, &(struct bc_client_opts){.addr = f.addr}, &ei),
+	             BC_EPROTO_MAGIC);
 	CHECK(c == NULL);
 	fake_stop(&f);
 }
@@ -993,12 +983,11 @@ static void test_silent_server_times_out(void)
 	struct bc_client *c = NULL;
 	struct bc_errinfo ei = {0};
 	REQUIRE(fake_start(&f, script_silent, false) == 0);
-	CHECK_EQ_INT(bc_client_connect(&c,
-				       &(struct bc_client_opts){
-					       .addr = f.addr,
-					       .timeout_ms = 150},
-				       &ei),
-		     BC_ETIMEOUT);
+	CHECK_EQ_INT(
+	    bc_client_connect(
+	        &c, &(struct bc_client_opts){.addr = f.addr, .timeout_ms = 150},
+	        &ei),
+	    BC_ETIMEOUT);
 	CHECK(strstr(ei.msg, "WELCOME") != NULL);
 	fake_stop(&f);
 }
@@ -1029,10 +1018,8 @@ static void test_close_inside_a_message_is_sticky(void)
 	REQUIRE(fake_start(&f, script_truncated, false) == 0);
 	c = connect_to(&f, 5000);
 	if (c) {
-		CHECK_EQ_INT(bc_client_recv(c, &m, 5000),
-			     BC_EPROTO_TRUNCATED);
-		CHECK_EQ_INT(bc_client_recv(c, &m, 5000),
-			     BC_EPROTO_TRUNCATED);
+		CHECK_EQ_INT(bc_client_recv(c, &m, 5000), BC_EPROTO_TRUNCATED);
+		CHECK_EQ_INT(bc_client_recv(c, &m, 5000), BC_EPROTO_TRUNCATED);
 		m = (struct bc_msg){.type = BC_MSG_PING};
 		CHECK_EQ_INT(bc_client_send(c, &m, NULL), BC_EPROTO_TRUNCATED);
 		CHECK_EQ_INT(bc_client_error(c, &ei), BC_EPROTO_TRUNCATED);
@@ -1099,7 +1086,7 @@ static void test_unix_socket_ping(void)
 		/* Nothing more: a zero timeout returns at once. */
 		CHECK_EQ_INT(bc_client_recv(c, &m, 0), 0);
 		CHECK_EQ_INT(bc_client_wait(c, BC_MSG_PONG, 0, &m, 50, &ei),
-			     BC_ETIMEOUT);
+		             BC_ETIMEOUT);
 		CHECK_EQ_INT(bc_client_error(c, NULL), 0);
 	}
 	bc_client_destroy(c);
@@ -1120,25 +1107,24 @@ static void test_refused_and_bad_options(void)
 	REQUIRE(getsockname(fd, (struct sockaddr *)&in, &len) == 0);
 	close(fd);
 	snprintf(addr, sizeof(addr), "127.0.0.1:%u",
-		 (unsigned)ntohs(in.sin_port));
-	CHECK_EQ_INT(bc_client_connect(&c, &(struct bc_client_opts){.addr = addr},
-				       &ei),
-		     BC_EIO);
+	         (unsigned)ntohs(in.sin_port));
+	CHECK_EQ_INT(
+	    bc_client_connect(&c, &(struct bc_client_opts){.addr = addr}, &ei),
+	    BC_EIO);
 	CHECK(strstr(ei.msg, "cannot connect") != NULL);
-	CHECK_EQ_INT(bc_client_connect(&c,
-				       &(struct bc_client_opts){
-					       .addr = "unix:/nonexistent/x"},
-				       &ei),
-		     BC_EIO);
-	CHECK_EQ_INT(bc_client_connect(&c,
-				       &(struct bc_client_opts){.addr = "h:0"},
-				       &ei),
-		     BC_EINVAL);
-	CHECK_EQ_INT(bc_client_connect(&c,
-				       &(struct bc_client_opts){
-					       .addr = addr, .encodings = 0x80},
-				       &ei),
-		     BC_EINVAL);
+	CHECK_EQ_INT(
+	    bc_client_connect(
+	        &c, &(struct bc_client_opts){.addr = "unix:/nonexistent/x"},
+	        &ei),
+	    BC_EIO);
+	CHECK_EQ_INT(
+	    bc_client_connect(&c, &(struct bc_client_opts){.addr = "h:0"}, &ei),
+	    BC_EINVAL);
+	CHECK_EQ_INT(
+	    bc_client_connect(
+	        &c, &(struct bc_client_opts){.addr = addr, .encodings = 0x80},
+	        &ei),
+	    BC_EINVAL);
 	CHECK(c == NULL);
 	bc_client_destroy(NULL);
 }
@@ -1189,7 +1175,7 @@ static void script_serve(struct fake *f, int fd)
 static unsigned long quiet_count;
 
 static void quiet(enum bc_log_level level, const char *file, int line,
-		  const char *fmt, va_list args)
+                  const char *fmt, va_list args)
 {
 	(void)level;
 	(void)file;
@@ -1221,9 +1207,9 @@ static void test_allocation_failures_are_reported(void)
 		bc_client_image_init(&img);
 		bc_alloc_fail_after(n);
 		rc = bc_client_connect(&c,
-				       &(struct bc_client_opts){
-					       .addr = f.addr, .timeout_ms = 5000},
-				       &ei);
+		                       &(struct bc_client_opts){
+		                           .addr = f.addr, .timeout_ms = 5000},
+		                       &ei);
 		if (!rc) {
 			rc = bc_client_join(c, "s1", 0, 0, &ei);
 		}
@@ -1234,10 +1220,9 @@ static void test_allocation_failures_are_reported(void)
 			rc = bc_client_wait_applied(c, seq, NULL, &ei);
 		}
 		if (!rc) {
-			rc = bc_client_view(c,
-					    &(struct bc_msg_view){.width = 16,
-								  .height = 8},
-					    NULL, &ei);
+			rc = bc_client_view(
+			    c, &(struct bc_msg_view){.width = 16, .height = 8},
+			    NULL, &ei);
 		}
 		if (!rc) {
 			rc = bc_client_wait(c, BC_MSG_FRAME, 0, &m, 0, &ei);
@@ -1259,7 +1244,7 @@ static void test_allocation_failures_are_reported(void)
 		 * scene to edit against. */
 		if (rc != BC_ENOMEM && rc != BC_ESTATE) {
 			fprintf(stderr, "  allocation %lu: %s (%s)\n", n,
-				bc_err_name(rc), ei.msg);
+			        bc_err_name(rc), ei.msg);
 			CHECK(0);
 		}
 	}
@@ -1270,26 +1255,22 @@ static void test_allocation_failures_are_reported(void)
 }
 
 static const struct bc_test tests[] = {
-	{"handshake_join_or_create_and_stats",
-	 test_handshake_join_or_create_and_stats},
-	{"session_errors_carry_server_text",
-	 test_session_errors_carry_server_text},
-	{"edit_is_acknowledged_among_other_edits",
-	 test_edit_is_acknowledged_among_other_edits},
-	{"mirror_follows_structural_edits",
-	 test_mirror_follows_structural_edits},
-	{"frames_and_snapshot", test_frames_and_snapshot},
-	{"messages_larger_than_a_read", test_messages_larger_than_a_read},
-	{"auth_error_is_reported", test_auth_error_is_reported},
-	{"not_a_blobcast_server", test_not_a_blobcast_server},
-	{"silent_server_times_out", test_silent_server_times_out},
-	{"close_inside_a_message_is_sticky",
-	 test_close_inside_a_message_is_sticky},
-	{"fatal_error_becomes_sticky", test_fatal_error_becomes_sticky},
-	{"unix_socket_ping", test_unix_socket_ping},
-	{"refused_and_bad_options", test_refused_and_bad_options},
-	{"allocation_failures_are_reported",
-	 test_allocation_failures_are_reported},
+    {"handshake_join_or_create_and_stats",
+     test_handshake_join_or_create_and_stats},
+    {"session_errors_carry_server_text", test_session_errors_carry_server_text},
+    {"edit_is_acknowledged_among_other_edits",
+     test_edit_is_acknowledged_among_other_edits},
+    {"mirror_follows_structural_edits", test_mirror_follows_structural_edits},
+    {"frames_and_snapshot", test_frames_and_snapshot},
+    {"messages_larger_than_a_read", test_messages_larger_than_a_read},
+    {"auth_error_is_reported", test_auth_error_is_reported},
+    {"not_a_blobcast_server", test_not_a_blobcast_server},
+    {"silent_server_times_out", test_silent_server_times_out},
+    {"close_inside_a_message_is_sticky", test_close_inside_a_message_is_sticky},
+    {"fatal_error_becomes_sticky", test_fatal_error_becomes_sticky},
+    {"unix_socket_ping", test_unix_socket_ping},
+    {"refused_and_bad_options", test_refused_and_bad_options},
+    {"allocation_failures_are_reported", test_allocation_failures_are_reported},
     {"presenting_and_session_camera", test_presenting_and_session_camera},
 };
 

@@ -54,52 +54,53 @@ static bool file_has(const char *path, const char *needle)
 static bool have(const char *tool)
 {
 	char cmd[256];
-	snprintf(cmd, sizeof(cmd), "command -v %s >/dev/null 2>&1 || "
-				   "test -x /usr/sbin/%s",
-		 tool, tool);
+	snprintf(cmd, sizeof(cmd),
+	         "command -v %s >/dev/null 2>&1 || "
+	         "test -x /usr/sbin/%s",
+	         tool, tool);
 	return system(cmd) == 0;
 }
 
 struct sess {
 	char name[16];
-	int node;        /* the daemon that holds it */
-	uint64_t order;  /* the last acknowledged edit */
-	float radius;    /* what that edit set */
+	int node;       /* the daemon that holds it */
+	uint64_t order; /* the last acknowledged edit */
+	float radius;   /* what that edit set */
 };
 static struct sess sessions[NSESS];
 
 /* Connects through the front door to session s (joining it, creating it
  * when create). Returns 0 or the error, with the daemon's index. */
-static int open_session(struct bc_client **c, const struct sess *s,
-			bool create, int *node, struct bc_errinfo *ei)
+static int open_session(struct bc_client **c, const struct sess *s, bool create,
+                        int *node, struct bc_errinfo *ei)
 {
 	char addr[128];
 	int rc;
 	*c = NULL;
-	snprintf(addr, sizeof(addr), "wss://127.0.0.1:%d/blobcast?session=%.15s",
-		 front_port, s->name);
+	snprintf(addr, sizeof(addr),
+	         "wss://127.0.0.1:%d/blobcast?session=%.15s", front_port,
+	         s->name);
 	rc = bc_client_connect(c,
-			       &(struct bc_client_opts){
-				       .addr = addr,
-				       .name = "test-cluster",
-				       .timeout_ms = 10000,
-				       .ca_file = ca,
-			       },
-			       ei);
+	                       &(struct bc_client_opts){
+	                           .addr = addr,
+	                           .name = "test-cluster",
+	                           .timeout_ms = 10000,
+	                           .ca_file = ca,
+	                       },
+	                       ei);
 	if (rc) {
 		return rc;
 	}
 	*node = -1;
 	sscanf(bc_client_info(*c)->server_id, "node-%d", node);
-	return bc_client_join(*c, s->name, BC_PROTO_ROLE_EDITOR,
-			      create ? BC_CLIENT_JOIN_ANY
-				     : BC_CLIENT_JOIN_EXISTING,
-			      ei);
+	return bc_client_join(
+	    *c, s->name, BC_PROTO_ROLE_EDITOR,
+	    create ? BC_CLIENT_JOIN_ANY : BC_CLIENT_JOIN_EXISTING, ei);
 }
 
 /* Sets the sphere's radius (node 2) and waits for the acknowledgement. */
 static int edit_radius(struct bc_client *c, struct sess *s, float r,
-		       struct bc_errinfo *ei)
+                       struct bc_errinfo *ei)
 {
 	char kv[64];
 	const char *args[1] = {kv};
@@ -131,7 +132,7 @@ static bool stored_on(const struct sess *s, int node)
 	char p[256];
 	struct stat st;
 	snprintf(p, sizeof(p), "%.95s/node-%d/sessions/%.15s", dir, node,
-		 s->name);
+	         s->name);
 	return stat(p, &st) == 0 && S_ISDIR(st.st_mode);
 }
 
@@ -158,7 +159,7 @@ static void restart_node(int node)
 	pid_t pid;
 	FILE *f;
 	snprintf(listen, sizeof(listen), "127.0.0.1:%d",
-		 front_port + 10 + node);
+	         front_port + 10 + node);
 	snprintf(data, sizeof(data), "%s/node-%d", dir, node);
 	snprintf(id, sizeof(id), "node-%d", node);
 	snprintf(log, sizeof(log), "%s/node-%d.restart.log", dir, node);
@@ -217,7 +218,7 @@ static void cluster(void)
 		CHECK(node >= 0 && node < NODES);
 		s->node = node;
 		fprintf(stderr, "  %s on node-%d (edit order %llu)\n", s->name,
-			node, (unsigned long long)s->order);
+		        node, (unsigned long long)s->order);
 		if (node >= 0 && node < NODES) {
 			per_node[node]++;
 		}
@@ -226,7 +227,7 @@ static void cluster(void)
 		}
 	}
 	fprintf(stderr, "  sessions per daemon: %d %d %d\n", per_node[0],
-		per_node[1], per_node[2]);
+	        per_node[1], per_node[2]);
 	for (int k = 0; k < NODES; k++) {
 		CHECK(per_node[k] > 0);
 	}
@@ -239,9 +240,8 @@ static void cluster(void)
 		CHECK_EQ_INT(rc, 0);
 		CHECK_EQ_INT(node, s->node);
 		if (rc == 0) {
-			CHECK_EQ_INT(edit_radius(c, s,
-						 0.6f + 0.01f * (float)i, &ei),
-				     0);
+			CHECK_EQ_INT(
+			    edit_radius(c, s, 0.6f + 0.01f * (float)i, &ei), 0);
 		}
 		bc_client_destroy(c);
 	}
@@ -254,13 +254,13 @@ static void cluster(void)
 		int seen = 0;
 		FILE *p;
 		at = (size_t)snprintf(cmd, sizeof(cmd),
-				      "NODE_EXTRA_CA_CERTS=%s node "
-				      "--experimental-websocket "
-				      "%s/tests/deploy/browser_route.mjs %d",
-				      ca, SOURCE_DIR, front_port);
+		                      "NODE_EXTRA_CA_CERTS=%s node "
+		                      "--experimental-websocket "
+		                      "%s/tests/deploy/browser_route.mjs %d",
+		                      ca, SOURCE_DIR, front_port);
 		for (int i = 0; i < NSESS && at < sizeof(cmd) - 32; i++) {
 			at += (size_t)snprintf(cmd + at, sizeof(cmd) - at,
-					       " %s", sessions[i].name);
+			                       " %s", sessions[i].name);
 		}
 		p = popen(cmd, "r");
 		REQUIRE(p != NULL);
@@ -294,10 +294,10 @@ static void cluster(void)
 			CHECK_EQ_INT(rc, 0);
 			CHECK_EQ_INT(node, s->node);
 			if (rc == 0) {
-				CHECK_EQ_INT(edit_radius(c, s,
-							 0.7f + 0.01f * (float)i,
-							 &ei),
-					     0);
+				CHECK_EQ_INT(
+				    edit_radius(c, s, 0.7f + 0.01f * (float)i,
+				                &ei),
+				    0);
 			}
 		}
 		bc_client_destroy(c);
@@ -329,7 +329,7 @@ static void cluster(void)
 }
 
 static const struct bc_test tests[] = {
-	{"cluster", cluster},
+    {"cluster", cluster},
 };
 
 int main(int argc, char **argv)
@@ -341,7 +341,7 @@ int main(int argc, char **argv)
 	if (!have("nginx") || !have("websockify") || !have("openssl") ||
 	    !have("node")) {
 		fprintf(stderr, "skipped: nginx, websockify, openssl or node "
-				"is missing (deploy/install-deps.sh)\n");
+		                "is missing (deploy/install-deps.sh)\n");
 		return 77;
 	}
 	snprintf(dir, sizeof(dir), "/tmp/bc-cluster-test-%d", (int)getpid());
@@ -364,7 +364,8 @@ int main(int argc, char **argv)
 		      "--port", port, "--data", dir, (char *)NULL);
 		_exit(127);
 	}
-	for (int i = 0; i < 1200 && !file_has(out, "cluster-demo: ready"); i++) {
+	for (int i = 0; i < 1200 && !file_has(out, "cluster-demo: ready");
+	     i++) {
 		if (waitpid(demo_pid, &status, WNOHANG) == demo_pid) {
 			demo_pid = 0;
 			break;
@@ -380,7 +381,7 @@ int main(int argc, char **argv)
 		rc = 1;
 	} else {
 		rc = bc_test_run(tests, sizeof(tests) / sizeof(tests[0]), argc,
-				 argv);
+		                 argv);
 	}
 	if (demo_pid > 0) {
 		kill(demo_pid, SIGTERM);

@@ -279,10 +279,10 @@ static void unary_nodes_take_set_fields_and_undo(void)
 	struct bc_unary u;
 	struct bc_edit_batch b;
 	struct bc_proto_field amount = {BC_PROTO_FIELD_PARAM0, 1, {0.25f}};
-	struct bc_proto_field count = {BC_PROTO_FIELD_PARAM0 + 1, 3,
-	                               {5.0f, 1.0f, 1.0f}};
-	struct bc_proto_field to_onion = {BC_PROTO_FIELD_OP_KIND, 1,
-	                                  {(float)BC_OP_ONION}};
+	struct bc_proto_field count = {
+	    BC_PROTO_FIELD_PARAM0 + 1, 3, {5.0f, 1.0f, 1.0f}};
+	struct bc_proto_field to_onion = {
+	    BC_PROTO_FIELD_OP_KIND, 1, {(float)BC_OP_ONION}};
 	struct bc_proto_field to_union = {BC_PROTO_FIELD_OP_KIND, 1, {1.0f}};
 	struct bc_proto_field blend = {BC_PROTO_FIELD_BLEND, 1, {0.1f}};
 	struct bc_proto_field three = {BC_PROTO_FIELD_PARAM0, 3, {1, 2, 3}};

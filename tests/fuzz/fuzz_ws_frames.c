@@ -30,7 +30,7 @@ static void die(const char *why)
 }
 
 static void run(const uint8_t *d, size_t n, size_t chunk, size_t cap,
-		struct result *res)
+                struct result *res)
 {
 	struct bc_ws_rx r;
 	size_t pos = 0;
@@ -45,8 +45,8 @@ static void run(const uint8_t *d, size_t n, size_t chunk, size_t cap,
 			size_t room = n - res->len < cap ? n - res->len : cap;
 			enum bc_ws_event ev;
 			int rc = bc_ws_rx_feed(&r, d + pos + off, len - off,
-					       &used, res->out + res->len, room,
-					       &prod, &ev);
+			                       &used, res->out + res->len, room,
+			                       &prod, &ev);
 			if (used > len - off || prod > room ||
 			    r.ctl_len > sizeof(r.ctl)) {
 				die("counts out of range");
@@ -69,7 +69,8 @@ static void run(const uint8_t *d, size_t n, size_t chunk, size_t cap,
 			}
 			if (used == 0 && prod == 0 && ev == BC_WS_NONE) {
 				if (room == 0) {
-					die("no room although payload <= input");
+					die("no room although payload <= "
+					    "input");
 				}
 				die("no progress");
 			}
@@ -99,7 +100,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	if (whole.len != cut.len || memcmp(whole.out, cut.out, whole.len) ||
 	    whole.nev != cut.nev ||
 	    memcmp(whole.events, cut.events,
-		   whole.nev * sizeof(whole.events[0])) ||
+	           whole.nev * sizeof(whole.events[0])) ||
 	    memcmp(whole.at, cut.at, whole.nev * sizeof(whole.at[0])) ||
 	    (whole.err == NULL) != (cut.err == NULL) ||
 	    (whole.err && strcmp(whole.err, cut.err) != 0)) {

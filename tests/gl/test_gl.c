@@ -307,8 +307,8 @@ static void test_unary_nodes_agree_with_tiled(void)
 			uint64_t seed = 40 + (uint64_t)step;
 			rt_unary_rate = 0.4f;
 			do {
-				REQUIRE(rt_build(t, seed, 6 + (uint32_t)(seed %
-				                                          6)) ==
+				REQUIRE(rt_build(t, seed,
+				                 6 + (uint32_t)(seed % 6)) ==
 				        0);
 				seed += 7;
 			} while (bc_tree_lin(t)->nunary == 0);

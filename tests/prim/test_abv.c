@@ -40,12 +40,9 @@ static void random_axes(float axis[3][3])
 	n = sqrt(n);
 	double x = q[0] / n, y = q[1] / n, z = q[2] / n, w = q[3] / n;
 	double m[3][3] = {
-		{1 - 2 * (y * y + z * z), 2 * (x * y - z * w),
-		 2 * (x * z + y * w)},
-		{2 * (x * y + z * w), 1 - 2 * (x * x + z * z),
-		 2 * (y * z - x * w)},
-		{2 * (x * z - y * w), 2 * (y * z + x * w),
-		 1 - 2 * (x * x + y * y)},
+	    {1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)},
+	    {2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)},
+	    {2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)},
 	};
 	for (int i = 0; i < 3; i++) {
 		for (int j = 0; j < 3; j++) {
@@ -109,7 +106,7 @@ static double shape_sdf(const struct bc_abv *b, const double p[3])
 		double out = 0, in = -INFINITY;
 		for (int i = 0; i < 3; i++) {
 			double l = q[0] * b->axis[i][0] + q[1] * b->axis[i][1] +
-				   q[2] * b->axis[i][2];
+			           q[2] * b->axis[i][2];
 			double e = fabs(l) - b->half[i];
 			out += e > 0 ? e * e : 0;
 			in = e > in ? e : in;
@@ -175,7 +172,7 @@ static void random_inside(const struct bc_abv *b, double p[3])
 }
 
 static const enum bc_abv_shape shapes[] = {BC_ABV_SPHERE, BC_ABV_BOX,
-					   BC_ABV_CAPSULE};
+                                           BC_ABV_CAPSULE};
 
 /* ---- AABBs -------------------------------------------------------------- */
 
@@ -190,7 +187,8 @@ static void aabb_holds_the_shape_and_touches_it(void)
 			double p[3];
 			random_inside(&b, p);
 			for (int k = 0; k < 3; k++) {
-				CHECK(p[k] >= lo[k] - 1e-5 && p[k] <= hi[k] + 1e-5);
+				CHECK(p[k] >= lo[k] - 1e-5 &&
+				      p[k] <= hi[k] + 1e-5);
 			}
 		}
 		/* Extreme points of the shape reach each face. */
@@ -200,16 +198,18 @@ static void aabb_holds_the_shape_and_touches_it(void)
 				for (int c = 0; c < 8; c++) {
 					double v = b.center[k];
 					for (int j = 0; j < 3; j++) {
-						double sg = (c >> j) & 1 ? 1 : -1;
-						v += sg * b.axis[j][k] * b.half[j];
+						double sg =
+						    (c >> j) & 1 ? 1 : -1;
+						v += sg * b.axis[j][k] *
+						     b.half[j];
 					}
 					top = fmax(top, v);
 					bot = fmin(bot, v);
 				}
 			} else {
 				double e = b.shape == BC_ABV_CAPSULE
-						   ? b.end[k]
-						   : b.center[k];
+				               ? b.end[k]
+				               : b.center[k];
 				top = fmax(b.center[k], e) + b.radius;
 				bot = fmin(b.center[k], e) - b.radius;
 			}
@@ -257,7 +257,7 @@ static void random_dir(float d[3])
 
 /* Checks one ray against sampling along it; returns whether it hit. */
 static bool check_ray(const struct bc_abv *b, const float o[3],
-		      const float d[3])
+                      const float d[3])
 {
 	float t0 = NAN, t1 = NAN;
 	bool hit = bc_abv_ray(b, o, d, &t0, &t1);
@@ -284,9 +284,9 @@ static bool check_ray(const struct bc_abv *b, const float o[3],
 		if (shape_sdf(b, p) < -1e-5) {
 			if (!hit || t < t0 - 1e-5 || t > t1 + 1e-5) {
 				fprintf(stderr,
-					"  shape %d: inside at t=%g, ray says "
-					"%d [%g, %g]\n",
-					b->shape, t, hit, t0, t1);
+				        "  shape %d: inside at t=%g, ray says "
+				        "%d [%g, %g]\n",
+				        b->shape, t, hit, t0, t1);
 				bc_test_failures++;
 				break;
 			}
@@ -346,14 +346,14 @@ static void axis_parallel_and_grazing_rays(void)
 	}
 	/* Along z, on the plane x = 1 of a face: still touching. */
 	REQUIRE(bc_abv_ray(&box, (float[]){1, 0, -5}, (float[]){0, 0, 1}, &t0,
-			   &t1));
+	                   &t1));
 	CHECK_NEAR(t0, 4.0, 1e-5);
 	CHECK_NEAR(t1, 6.0, 1e-5);
 	CHECK(!bc_abv_ray(&box, (float[]){1.0001f, 0, -5}, (float[]){0, 0, 1},
-			  &t0, &t1));
+	                  &t0, &t1));
 	/* Along an edge, and backwards. */
 	REQUIRE(bc_abv_ray(&box, (float[]){-1, 1, 5}, (float[]){0, 0, -1}, &t0,
-			   &t1));
+	                   &t1));
 	CHECK_NEAR(t0, 4.0, 1e-5);
 	CHECK_NEAR(t1, 6.0, 1e-5);
 	/* Every axis-parallel ray from a grid that includes the planes. */
@@ -372,22 +372,22 @@ static void axis_parallel_and_grazing_rays(void)
 
 	/* A capsule along y, rays parallel to its axis. */
 	struct bc_abv cap = {.shape = BC_ABV_CAPSULE,
-			     .center = {0, -1, 0},
-			     .end = {0, 1, 0},
-			     .radius = 0.5f};
+	                     .center = {0, -1, 0},
+	                     .end = {0, 1, 0},
+	                     .radius = 0.5f};
 	double h = sqrt(0.25 - 0.04);
 	REQUIRE(bc_abv_ray(&cap, (float[]){0.2f, -5, 0}, (float[]){0, 1, 0},
-			   &t0, &t1));
+	                   &t0, &t1));
 	CHECK_NEAR(t0, 4.0 - h, 1e-5);
 	CHECK_NEAR(t1, 6.0 + h, 1e-5);
 	REQUIRE(bc_abv_ray(&cap, (float[]){0.5f, -5, 0}, (float[]){0, 1, 0},
-			   &t0, &t1));
+	                   &t0, &t1));
 	CHECK_NEAR(t0, 4.0, 1e-5);
 	CHECK_NEAR(t1, 6.0, 1e-5);
 	CHECK(!bc_abv_ray(&cap, (float[]){0.5001f, -5, 0}, (float[]){0, 1, 0},
-			  &t0, &t1));
+	                  &t0, &t1));
 	REQUIRE(bc_abv_ray(&cap, (float[]){-5, 0, 0}, (float[]){1, 0, 0}, &t0,
-			   &t1));
+	                   &t1));
 	CHECK_NEAR(t0, 4.5, 1e-5);
 	CHECK_NEAR(t1, 5.5, 1e-5);
 	for (int i = 0; i < 9; i++) {
@@ -397,44 +397,43 @@ static void axis_parallel_and_grazing_rays(void)
 	}
 	/* A point capsule is a ball. */
 	struct bc_abv dot = {.shape = BC_ABV_CAPSULE,
-			     .center = {1, 1, 1},
-			     .end = {1, 1, 1},
-			     .radius = 0.5f};
+	                     .center = {1, 1, 1},
+	                     .end = {1, 1, 1},
+	                     .radius = 0.5f};
 	REQUIRE(bc_abv_ray(&dot, (float[]){1, 1, -5}, (float[]){0, 0, 1}, &t0,
-			   &t1));
+	                   &t1));
 	CHECK_NEAR(t0, 5.5, 1e-5);
 	CHECK_NEAR(t1, 6.5, 1e-5);
 
 	/* No direction: no ray. */
 	struct bc_abv ball = {.shape = BC_ABV_SPHERE, .radius = 1.0f};
 	CHECK(!bc_abv_ray(&ball, (float[]){0, 0, 0}, (float[]){0, 0, 0}, &t0,
-			  &t1));
+	                  &t1));
 	/* Not a shape. */
 	struct bc_abv none = {0};
 	CHECK(!bc_abv_ray(&none, (float[]){0, 0, -5}, (float[]){0, 0, 1}, &t0,
-			  &t1));
+	                  &t1));
 }
 
 static void shapes_behind_the_origin_are_missed(void)
 {
-	struct bc_abv ball = {.shape = BC_ABV_SPHERE,
-			      .center = {0, 0, -5},
-			      .radius = 1.0f};
+	struct bc_abv ball = {
+	    .shape = BC_ABV_SPHERE, .center = {0, 0, -5}, .radius = 1.0f};
 	float t0, t1;
 	CHECK(!bc_abv_ray(&ball, (float[]){0, 0, 0}, (float[]){0, 0, 1}, &t0,
-			  &t1));
+	                  &t1));
 	REQUIRE(bc_abv_ray(&ball, (float[]){0, 0, 0}, (float[]){0, 0, -1}, &t0,
-			   &t1));
+	                   &t1));
 	CHECK_NEAR(t0, 4.0, 1e-5);
 	CHECK_NEAR(t1, 6.0, 1e-5);
 	/* From inside: entry behind, exit ahead. */
 	REQUIRE(bc_abv_ray(&ball, (float[]){0, 0, -5}, (float[]){1, 0, 0}, &t0,
-			   &t1));
+	                   &t1));
 	CHECK_NEAR(t0, -1.0, 1e-5);
 	CHECK_NEAR(t1, 1.0, 1e-5);
 	/* A far origin does not lose the hit to cancellation. */
-	REQUIRE(bc_abv_ray(&ball, (float[]){0, 0.999f, 1e5f}, (float[]){0, 0, -1},
-			   &t0, &t1));
+	REQUIRE(bc_abv_ray(&ball, (float[]){0, 0.999f, 1e5f},
+	                   (float[]){0, 0, -1}, &t0, &t1));
 	CHECK(t0 < 1e5f + 5.0f && t1 > 1e5f + 5.0f);
 }
 
@@ -443,7 +442,8 @@ static void shapes_behind_the_origin_are_missed(void)
 static void random_box(float lo[3], float hi[3])
 {
 	for (int i = 0; i < 3; i++) {
-		float a = rnd(-2.5f, 1.5f), e = rng_u32() % 8 ? rnd(0, 2) : 0.0f;
+		float a = rnd(-2.5f, 1.5f),
+		      e = rng_u32() % 8 ? rnd(0, 2) : 0.0f;
 		lo[i] = a;
 		hi[i] = a + e;
 	}
@@ -460,7 +460,8 @@ static void sphere_box_test_is_exact(void)
 		double d2 = 0;
 		for (int k = 0; k < 3; k++) {
 			double c = b.center[k];
-			double e = c < lo[k] ? lo[k] - c : (c > hi[k] ? c - hi[k] : 0);
+			double e =
+			    c < lo[k] ? lo[k] - c : (c > hi[k] ? c - hi[k] : 0);
 			d2 += e * e;
 		}
 		double d = sqrt(d2);
@@ -529,40 +530,39 @@ static void separated_boxes_are_refused(void)
 	slab.axis[1][0] = -c, slab.axis[1][1] = c;
 	slab.axis[2][2] = 1;
 	CHECK(!bc_abv_meets_box(&slab, (float[]){0.6f, -0.75f, -0.1f},
-				(float[]){0.75f, -0.6f, 0.1f}));
+	                        (float[]){0.75f, -0.6f, 0.1f}));
 	CHECK(bc_abv_meets_box(&slab, (float[]){0.5f, 0.5f, -0.1f},
-			       (float[]){0.6f, 0.6f, 0.1f}));
+	                       (float[]){0.6f, 0.6f, 0.1f}));
 	/* A diagonal capsule and a box in a far corner of its AABB. */
 	struct bc_abv cap = {.shape = BC_ABV_CAPSULE,
-			     .center = {-1, -1, -1},
-			     .end = {1, 1, 1},
-			     .radius = 0.1f};
+	                     .center = {-1, -1, -1},
+	                     .end = {1, 1, 1},
+	                     .radius = 0.1f};
 	CHECK(!bc_abv_meets_box(&cap, (float[]){0.6f, -1, -0.2f},
-				(float[]){1, -0.6f, 0.2f}));
+	                        (float[]){1, -0.6f, 0.2f}));
 	CHECK(bc_abv_meets_box(&cap, (float[]){0.45f, 0.45f, 0.45f},
-			       (float[]){0.5f, 0.5f, 0.5f}));
+	                       (float[]){0.5f, 0.5f, 0.5f}));
 	/* A ball and a box in the corner of its AABB. */
 	struct bc_abv ball = {.shape = BC_ABV_SPHERE, .radius = 1};
 	CHECK(!bc_abv_meets_box(&ball, (float[]){0.8f, 0.8f, 0.8f},
-				(float[]){1, 1, 1}));
+	                        (float[]){1, 1, 1}));
 	/* Far away, and not a shape. */
 	CHECK(!bc_abv_meets_box(&ball, (float[]){5, 5, 5}, (float[]){6, 6, 6}));
 	struct bc_abv none = {0};
 	CHECK(!bc_abv_meets_box(&none, (float[]){-1, -1, -1},
-				(float[]){1, 1, 1}));
+	                        (float[]){1, 1, 1}));
 }
 
 static const struct bc_test tests[] = {
-	{"aabb_holds_the_shape_and_touches_it",
-	 aabb_holds_the_shape_and_touches_it},
-	{"rays_agree_with_sampling", rays_agree_with_sampling},
-	{"axis_parallel_and_grazing_rays", axis_parallel_and_grazing_rays},
-	{"shapes_behind_the_origin_are_missed",
-	 shapes_behind_the_origin_are_missed},
-	{"sphere_box_test_is_exact", sphere_box_test_is_exact},
-	{"boxes_sharing_a_point_always_meet",
-	 boxes_sharing_a_point_always_meet},
-	{"separated_boxes_are_refused", separated_boxes_are_refused},
+    {"aabb_holds_the_shape_and_touches_it",
+     aabb_holds_the_shape_and_touches_it},
+    {"rays_agree_with_sampling", rays_agree_with_sampling},
+    {"axis_parallel_and_grazing_rays", axis_parallel_and_grazing_rays},
+    {"shapes_behind_the_origin_are_missed",
+     shapes_behind_the_origin_are_missed},
+    {"sphere_box_test_is_exact", sphere_box_test_is_exact},
+    {"boxes_sharing_a_point_always_meet", boxes_sharing_a_point_always_meet},
+    {"separated_boxes_are_refused", separated_boxes_are_refused},
 };
 
 BC_TEST_MAIN(tests)

@@ -45,8 +45,7 @@ struct shape {
 
 /* Sets s to kind with params v[0..n) (the rest at defaults); returns the
  * validation result. */
-static int shape_make(struct shape *s, enum bc_prim kind, const float *v,
-		      int n)
+static int shape_make(struct shape *s, enum bc_prim kind, const float *v, int n)
 {
 	struct bc_errinfo ei = {0};
 	bc_prim_data_init(&s->d, kind);
@@ -158,7 +157,7 @@ static void shape_random(struct shape *s, enum bc_prim kind)
 		v[n++] = rnd(0.6f, 1.2f);
 		v[n++] = v[0] * rnd(0.4f, 1.2f);
 		v[n++] = fabsf(v[0] - v[1]) +
-			 rnd(0.1f, 0.9f) * (v[0] + v[1] - fabsf(v[0] - v[1]));
+		         rnd(0.1f, 0.9f) * (v[0] + v[1] - fabsf(v[0] - v[1]));
 		break;
 	case BC_PRIM_ROUNDED_CYLINDER:
 		v[n++] = rnd(0.3f, 1.0f);
@@ -243,7 +242,7 @@ static double bound_sdf(const struct bc_abv *b, const double p[3])
 		double out = 0.0, in = -INFINITY;
 		for (int i = 0; i < 3; i++) {
 			double l = q[0] * b->axis[i][0] + q[1] * b->axis[i][1] +
-				   q[2] * b->axis[i][2];
+			           q[2] * b->axis[i][2];
 			double e = fabs(l) - b->half[i];
 			out += e > 0.0 ? e * e : 0.0;
 			in = e > in ? e : in;
@@ -282,7 +281,7 @@ static void random_near(const struct shape *s, double margin, double p[3])
 
 /* Central-difference gradient. */
 static void grad(const struct shape *s, const double p[3], double h,
-		 double g[3])
+                 double g[3])
 {
 	for (int i = 0; i < 3; i++) {
 		double a[3] = {p[0], p[1], p[2]}, b[3] = {p[0], p[1], p[2]};
@@ -303,8 +302,8 @@ static uint32_t layout_end(const struct bc_prim_info *info)
 {
 	uint32_t n = 0;
 	for (uint32_t i = 0; i < info->nparams; i++) {
-		uint32_t e = (uint32_t)info->params[i].offset +
-			     info->params[i].count;
+		uint32_t e =
+		    (uint32_t)info->params[i].offset + info->params[i].count;
 		n = e > n ? e : n;
 	}
 	return n;
@@ -325,7 +324,7 @@ static void table_covers_every_kind_contiguously(void)
 	const char *seen[BC_PRIM_COUNT] = {0};
 	CHECK(bc_prim_info(BC_PRIM_INVALID) == NULL);
 	CHECK(bc_prim_info(BC_PRIM_COUNT) == NULL);
-	CHECK(bc_prim_info((enum bc_prim)-1) == NULL);
+	CHECK(bc_prim_info((enum bc_prim) - 1) == NULL);
 	for (int k = 1; k < BC_PRIM_COUNT; k++) {
 		const struct bc_prim_info *info = bc_prim_info((enum bc_prim)k);
 		REQUIRE(info != NULL);
@@ -339,7 +338,7 @@ static void table_covers_every_kind_contiguously(void)
 			CHECK(d->name != NULL && d->name[0] != '\0');
 			/* Not both sign rules. */
 			CHECK(!((d->flags & BC_PARAM_POSITIVE) &&
-				(d->flags & BC_PARAM_NONNEG)));
+			        (d->flags & BC_PARAM_NONNEG)));
 			off += d->count;
 		}
 		CHECK(off <= BC_PRIM_MAX_PARAMS);
@@ -361,7 +360,7 @@ static void table_covers_every_kind_contiguously(void)
 
 /* Checks that param i of kind is called name with count floats at off. */
 static void check_param(enum bc_prim kind, uint32_t i, const char *name,
-			uint32_t off, uint32_t count)
+                        uint32_t off, uint32_t count)
 {
 	const struct bc_prim_info *info = bc_prim_info(kind);
 	if (i >= info->nparams) {
@@ -372,9 +371,10 @@ static void check_param(enum bc_prim kind, uint32_t i, const char *name,
 	const struct bc_param_desc *d = &info->params[i];
 	if (strcmp(d->name, name) != 0 || d->offset != off ||
 	    d->count != count) {
-		fprintf(stderr, "  %s parameter %u: %s@%u x%u, want %s@%u x%u\n",
-			info->name, i, d->name, d->offset, d->count, name, off,
-			count);
+		fprintf(stderr,
+		        "  %s parameter %u: %s@%u x%u, want %s@%u x%u\n",
+		        info->name, i, d->name, d->offset, d->count, name, off,
+		        count);
 		bc_test_failures++;
 	}
 }
@@ -418,7 +418,7 @@ static void scene_format_names_are_fixed(void)
 		for (uint32_t i = 0; i < info->nparams; i++) {
 			bool opt = info->params[i].flags & BC_PARAM_OPTIONAL;
 			CHECK(opt == ((k == BC_PRIM_BOX && i == 1) ||
-				      (k == BC_PRIM_RHOMBUS && i == 3)));
+			              (k == BC_PRIM_RHOMBUS && i == 3)));
 		}
 	}
 }
@@ -444,8 +444,8 @@ static void init_gives_valid_unit_shapes(void)
 			}
 		}
 		/* Floats past the layout are zero, not garbage. */
-		for (uint32_t i = layout_end(info);
-		     i < BC_PRIM_MAX_PARAMS; i++) {
+		for (uint32_t i = layout_end(info); i < BC_PRIM_MAX_PARAMS;
+		     i++) {
 			CHECK(p.params[i] == 0.0f);
 		}
 		int rc = bc_prim_validate(&p, &ei);
@@ -504,8 +504,8 @@ static void box_values(void)
 static void capsule_values(void)
 {
 	struct shape s;
-	REQUIRE(shape_make(&s, BC_PRIM_CAPSULE, (float[]){0, -1, 0, 0, 1, 0, 0.5f},
-			   7) == 0);
+	REQUIRE(shape_make(&s, BC_PRIM_CAPSULE,
+	                   (float[]){0, -1, 0, 0, 1, 0, 0.5f}, 7) == 0);
 	NEAR(sdf(&s, 0, 0, 0), -0.5);
 	NEAR(sdf(&s, 2, 0, 0), 1.5);
 	NEAR(sdf(&s, 0, 3, 0), 1.5);
@@ -513,8 +513,8 @@ static void capsule_values(void)
 	NEAR(sdf(&s, 1, 2, 0), sqrt(2.0) - 0.5);
 	NEAR(sdf(&s, 0, 0.7, 0.3), -0.2);
 	/* a == b is allowed: a sphere. */
-	REQUIRE(shape_make(&s, BC_PRIM_CAPSULE, (float[]){1, 1, 1, 1, 1, 1, 0.5f},
-			   7) == 0);
+	REQUIRE(shape_make(&s, BC_PRIM_CAPSULE,
+	                   (float[]){1, 1, 1, 1, 1, 1, 0.5f}, 7) == 0);
 	NEAR(sdf(&s, 1, 1, 1), -0.5);
 	NEAR(sdf(&s, 1, 3, 1), 1.5);
 	NEAR(sdf(&s, 1, 1, 0), 0.5);
@@ -578,7 +578,7 @@ static void round_cone_values(void)
 	struct shape s;
 	double sa = 0.25, ca = sqrt(15.0) / 4.0;
 	REQUIRE(shape_make(&s, BC_PRIM_ROUND_CONE,
-			   (float[]){0, 0, 0, 0, 2, 0, 1, 0.5f}, 8) == 0);
+	                   (float[]){0, 0, 0, 0, 2, 0, 1, 0.5f}, 8) == 0);
 	NEAR(sdf(&s, 0, 0, 0), -1.0);
 	NEAR(sdf(&s, 0, -2, 0), 1.0);
 	NEAR(sdf(&s, 0, 3, 0), 0.5);
@@ -589,17 +589,17 @@ static void round_cone_values(void)
 	NEAR(sdf(&s, 0, 2 + 0.5 * sa, -0.5 * ca), 0.0);
 	/* One sphere inside the other: the larger sphere. */
 	REQUIRE(shape_make(&s, BC_PRIM_ROUND_CONE,
-			   (float[]){0, 0, 0, 0, 0.5f, 0, 1, 0.25f}, 8) == 0);
+	                   (float[]){0, 0, 0, 0, 0.5f, 0, 1, 0.25f}, 8) == 0);
 	NEAR(sdf(&s, 0, 0, 2), 1.0);
 	NEAR(sdf(&s, 0, 2, 0), 1.0);
 	NEAR(sdf(&s, 0, 0, 0), -1.0);
 	REQUIRE(shape_make(&s, BC_PRIM_ROUND_CONE,
-			   (float[]){0, 0, 0, 0, 0.5f, 0, 0.25f, 1}, 8) == 0);
+	                   (float[]){0, 0, 0, 0, 0.5f, 0, 0.25f, 1}, 8) == 0);
 	NEAR(sdf(&s, 0, 0.5, 2), 1.0);
 	NEAR(sdf(&s, 0, -2, 0), 1.5);
 	/* A sharp end: radius_a 0. */
 	REQUIRE(shape_make(&s, BC_PRIM_ROUND_CONE,
-			   (float[]){0, 0, 0, 0, 2, 0, 0, 1}, 8) == 0);
+	                   (float[]){0, 0, 0, 0, 2, 0, 0, 1}, 8) == 0);
 	NEAR(sdf(&s, 0, 0, 0), 0.0);
 	NEAR(sdf(&s, 0, -1, 0), 1.0);
 	NEAR(sdf(&s, 0, 3, 0), 0.0);
@@ -657,7 +657,7 @@ static void box_frame_values(void)
 {
 	struct shape s;
 	REQUIRE(shape_make(&s, BC_PRIM_BOX_FRAME, (float[]){1, 1, 1, 0.2f},
-			   4) == 0);
+	                   4) == 0);
 	NEAR(sdf(&s, 0, 0, 0), sqrt(1.28));
 	NEAR(sdf(&s, 1, 1, 1), 0.0);
 	NEAR(sdf(&s, 0, 1, -1), 0.0);
@@ -668,7 +668,8 @@ static void box_frame_values(void)
 	NEAR(sdf(&s, 0, 0.7, 1), 0.1);
 	NEAR(sdf(&s, 0.9, 0.9, 0), -0.1);
 	/* A frame as thick as the box is wide fills its faces' rims. */
-	REQUIRE(shape_make(&s, BC_PRIM_BOX_FRAME, (float[]){1, 2, 3, 1}, 4) == 0);
+	REQUIRE(shape_make(&s, BC_PRIM_BOX_FRAME, (float[]){1, 2, 3, 1}, 4) ==
+	        0);
 	NEAR(sdf(&s, 0, 2.5, 3), 0.5);
 	NEAR(sdf(&s, 0, 0, 0), 1.0); /* the z bars reach x = 0 */
 }
@@ -677,8 +678,8 @@ static void capped_torus_values(void)
 {
 	struct shape s;
 	double h = sqrt(0.5);
-	REQUIRE(shape_make(&s, BC_PRIM_CAPPED_TORUS, (float[]){1, 0.2f, 90}, 3) ==
-		0);
+	REQUIRE(shape_make(&s, BC_PRIM_CAPPED_TORUS, (float[]){1, 0.2f, 90},
+	                   3) == 0);
 	NEAR(sdf(&s, 0, 0, 1), -0.2);
 	NEAR(sdf(&s, 0, 0, -1), sqrt(2.0) - 0.2);
 	NEAR(sdf(&s, 0, 0, 0), 0.8);
@@ -687,8 +688,8 @@ static void capped_torus_values(void)
 	NEAR(sdf(&s, 0, 0, 1.2), 0.0);
 	NEAR(sdf(&s, 0, 0.2, 1), 0.0);
 	NEAR(sdf(&s, h, 0, h), -0.2);
-	REQUIRE(shape_make(&s, BC_PRIM_CAPPED_TORUS, (float[]){1, 0.2f, 45}, 3) ==
-		0);
+	REQUIRE(shape_make(&s, BC_PRIM_CAPPED_TORUS, (float[]){1, 0.2f, 45},
+	                   3) == 0);
 	NEAR(sdf(&s, 1, 0, 0), sqrt((1 - h) * (1 - h) + 0.5) - 0.2);
 	NEAR(sdf(&s, 0, 0, -1), sqrt(0.5 + (1 + h) * (1 + h)) - 0.2);
 	NEAR(sdf(&s, -h, 0, h), -0.2);
@@ -774,7 +775,7 @@ static void tri_prism_values(void)
 /* Independent oracles, in double: convex polygons and polyhedra given by
  * their vertices, distances as the minimum over edges or triangles. */
 static double seg_dist2d(double px, double py, double ax, double ay, double bx,
-			 double by)
+                         double by)
 {
 	double ex = bx - ax, ey = by - ay, wx = px - ax, wy = py - ay;
 	double t = (wx * ex + wy * ey) / (ex * ex + ey * ey);
@@ -827,7 +828,7 @@ static double seg_dist3(const double p[3], const double a[3], const double b[3])
 /* Unsigned distance to a triangle; *side gets the signed plane distance
  * along the normal (b - a) x (c - a). */
 static double tri_dist(const double p[3], const double a[3], const double b[3],
-		       const double c[3], double *side)
+                       const double c[3], double *side)
 {
 	double e1[3], e2[3], w[3], n[3];
 	for (int i = 0; i < 3; i++) {
@@ -861,7 +862,7 @@ static double tri_dist(const double p[3], const double a[3], const double b[3],
 /* Signed distance to a convex polyhedron given as triangles, with a point
  * known to be inside to tell the sides apart. */
 static double polyhedron_sdf(const double (*tri)[3][3], int n,
-			     const double in[3], const double p[3])
+                             const double in[3], const double p[3])
 {
 	double d = INFINITY;
 	bool inside = true;
@@ -888,48 +889,48 @@ static void fields_match_independent_formulas(void)
 		float p1[3] = {rnd(-1, 1), rnd(-1, 1), rnd(-1, 1)};
 		float r2 = rnd(0.0f, 1.0f);
 		struct shape cone, cone_flip, cyl, rc, cap, ct, tor, lnk, ell,
-			sph, cap0, hex, tri, pyr, oct, frame;
-		REQUIRE(shape_make(&cone, BC_PRIM_CONE, (float[]){h, r, r}, 3) ==
-			0);
-		REQUIRE(shape_make(&cyl, BC_PRIM_CYLINDER, (float[]){r, h}, 2) ==
-			0);
+		    sph, cap0, hex, tri, pyr, oct, frame;
+		REQUIRE(shape_make(&cone, BC_PRIM_CONE, (float[]){h, r, r},
+		                   3) == 0);
+		REQUIRE(shape_make(&cyl, BC_PRIM_CYLINDER, (float[]){r, h},
+		                   2) == 0);
 		REQUIRE(shape_make(&a, BC_PRIM_CONE, (float[]){h, r, r2}, 3) ==
-			0);
+		        0);
 		REQUIRE(shape_make(&cone_flip, BC_PRIM_CONE,
-				   (float[]){h, r2, r}, 3) == 0);
+		                   (float[]){h, r2, r}, 3) == 0);
 		REQUIRE(shape_make(&rc, BC_PRIM_ROUND_CONE,
-				   (float[]){p0[0], p0[1], p0[2], p1[0], p1[1],
-					     p1[2], r, r},
-				   8) == 0);
+		                   (float[]){p0[0], p0[1], p0[2], p1[0], p1[1],
+		                             p1[2], r, r},
+		                   8) == 0);
 		REQUIRE(shape_make(&cap, BC_PRIM_CAPSULE,
-				   (float[]){p0[0], p0[1], p0[2], p1[0], p1[1],
-					     p1[2], r},
-				   7) == 0);
+		                   (float[]){p0[0], p0[1], p0[2], p1[0], p1[1],
+		                             p1[2], r},
+		                   7) == 0);
 		REQUIRE(shape_make(&cap0, BC_PRIM_CAPSULE,
-				   (float[]){p0[0], p0[1], p0[2], p0[0], p0[1],
-					     p0[2], r},
-				   7) == 0);
+		                   (float[]){p0[0], p0[1], p0[2], p0[0], p0[1],
+		                             p0[2], r},
+		                   7) == 0);
 		REQUIRE(shape_make(&ct, BC_PRIM_CAPPED_TORUS,
-				   (float[]){big, small, 180}, 3) == 0);
+		                   (float[]){big, small, 180}, 3) == 0);
 		REQUIRE(shape_make(&tor, BC_PRIM_TORUS, (float[]){big, small},
-				   2) == 0);
+		                   2) == 0);
 		REQUIRE(shape_make(&lnk, BC_PRIM_LINK, (float[]){0, big, small},
-				   3) == 0);
+		                   3) == 0);
 		REQUIRE(shape_make(&ell, BC_PRIM_ELLIPSOID, (float[]){r, r, r},
-				   3) == 0);
+		                   3) == 0);
 		REQUIRE(shape_make(&sph, BC_PRIM_SPHERE, (float[]){r}, 1) == 0);
-		REQUIRE(shape_make(&hex, BC_PRIM_HEX_PRISM, (float[]){r, h}, 2) ==
-			0);
-		REQUIRE(shape_make(&tri, BC_PRIM_TRI_PRISM, (float[]){r, h}, 2) ==
-			0);
+		REQUIRE(shape_make(&hex, BC_PRIM_HEX_PRISM, (float[]){r, h},
+		                   2) == 0);
+		REQUIRE(shape_make(&tri, BC_PRIM_TRI_PRISM, (float[]){r, h},
+		                   2) == 0);
 		REQUIRE(shape_make(&pyr, BC_PRIM_PYRAMID, (float[]){r, h}, 2) ==
-			0);
+		        0);
 		REQUIRE(shape_make(&oct, BC_PRIM_OCTAHEDRON, (float[]){r}, 1) ==
-			0);
+		        0);
 		float fb[3] = {rnd(0.3f, 1), rnd(0.3f, 1), rnd(0.3f, 1)};
 		float th = rnd(0.02f, 0.3f);
 		REQUIRE(shape_make(&frame, BC_PRIM_BOX_FRAME,
-				   (float[]){fb[0], fb[1], fb[2], th}, 4) == 0);
+		                   (float[]){fb[0], fb[1], fb[2], th}, 4) == 0);
 
 		/* Polygons and polyhedra for the oracles. */
 		double hx[6][2], tr[3][2];
@@ -943,7 +944,8 @@ static void fields_match_independent_formulas(void)
 		tr[1][0] = -R3 * r, tr[1][1] = -r;
 		tr[2][0] = R3 * r, tr[2][1] = -r;
 		double apex[3] = {0, h, 0};
-		double bc[4][3] = {{r, 0, r}, {-r, 0, r}, {-r, 0, -r}, {r, 0, -r}};
+		double bc[4][3] = {
+		    {r, 0, r}, {-r, 0, r}, {-r, 0, -r}, {r, 0, -r}};
 		double pt[6][3][3];
 		for (int i = 0; i < 4; i++) {
 			/* Outward: base edge i -> i+1 seen from outside. */
@@ -992,7 +994,7 @@ static void fields_match_independent_formulas(void)
 			for (int ax = 0; ax < 3; ax++) {
 				for (int sg = 0; sg < 4; sg++) {
 					double c[3], hh[3], q[3], o = 0,
-									in = -1e9;
+					                          in = -1e9;
 					for (int k = 0; k < 3; k++) {
 						hh[k] = 0.5 * th;
 						c[k] = fb[k] - 0.5 * th;
@@ -1002,7 +1004,8 @@ static void fields_match_independent_formulas(void)
 					c[(ax + 1) % 3] *= sg & 1 ? -1 : 1;
 					c[(ax + 2) % 3] *= sg & 2 ? -1 : 1;
 					for (int k = 0; k < 3; k++) {
-						q[k] = fabs(p[k] - c[k]) - hh[k];
+						q[k] =
+						    fabs(p[k] - c[k]) - hh[k];
 						o += q[k] > 0 ? q[k] * q[k] : 0;
 						in = q[k] > in ? q[k] : in;
 					}
@@ -1039,8 +1042,8 @@ static int surface_samples(const struct shape *s, double (*out)[3], int n)
 			}
 			for (int it = 0; it < 60; it++) {
 				double c[3] = {0.5 * (a[0] + b[0]),
-					       0.5 * (a[1] + b[1]),
-					       0.5 * (a[2] + b[2])};
+				               0.5 * (a[1] + b[1]),
+				               0.5 * (a[2] + b[2])};
 				if (sdfv(s, c) < 0.0f) {
 					memcpy(a, c, sizeof(c));
 				} else {
@@ -1081,7 +1084,7 @@ static double nearest(const double (*pts)[3], int n, const double q[3])
 
 /* Keeps p as the best sample when it is nearer to q. */
 static void keep(double *best, double s0[3], const double p[3],
-		 const double q[3])
+                 const double q[3])
 {
 	double d = dist3(p, q);
 	if (d < *best) {
@@ -1094,7 +1097,7 @@ static void keep(double *best, double s0[3], const double p[3],
  * projections, which land exactly on edges and corners that bisection only
  * grazes. */
 static void refine(const struct shape *s, const double q[3], double rad,
-		   double *best, double s0[3])
+                   double *best, double s0[3])
 {
 	double c0[3];
 	memcpy(c0, s0, sizeof(c0));
@@ -1109,7 +1112,7 @@ static void refine(const struct shape *s, const double q[3], double rad,
 		}
 		for (int it = 0; it < 30; it++) {
 			double c[3] = {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]),
-				       0.5 * (a[2] + b[2])};
+			               0.5 * (a[2] + b[2])};
 			if (sdfv(s, c) < 0.0f) {
 				memcpy(a, c, sizeof(c));
 			} else {
@@ -1147,7 +1150,7 @@ static void refine(const struct shape *s, const double q[3], double rad,
  * radii, so that the sampling gap no longer dominates the comparison.
  */
 static double brute_distance(const struct shape *s, const double (*pts)[3],
-			     int n, const double q[3])
+                             int n, const double q[3])
 {
 	/* Seeds: the nearest samples that lie apart, since q may be almost
 	 * as near to another part of the surface as to the nearest sample. */
@@ -1156,7 +1159,7 @@ static double brute_distance(const struct shape *s, const double (*pts)[3],
 		double d = dist3(pts[i], q);
 		int j = 0;
 		while (j < 3 && !(d < sd[j] &&
-				  (j == 0 || dist3(pts[i], seed[0]) > 0.1))) {
+		                  (j == 0 || dist3(pts[i], seed[0]) > 0.1))) {
 			j++;
 		}
 		if (j < 3) {
@@ -1202,23 +1205,23 @@ static void fields_agree_with_brute_force_distance(void)
 				/* Never beyond the surface: a bound. */
 				if (fabs(f) > bf + 1e-5 * (1.0 + bf)) {
 					fprintf(stderr,
-						"  %s: |f| %g > brute %g at "
-						"(%g %g %g)\n",
-						bc_prim_info(s.d.kind)->name,
-						f, bf, q[0], q[1], q[2]);
+					        "  %s: |f| %g > brute %g at "
+					        "(%g %g %g)\n",
+					        bc_prim_info(s.d.kind)->name, f,
+					        bf, q[0], q[1], q[2]);
 					bc_test_failures++;
 				}
 				worst_over = fmax(worst_over, fabs(f) - bf);
 				bool exact = bc_prim_info(s.d.kind)->exact &&
-					     (f > 0 || exact_inside(s.d.kind));
+				             (f > 0 || exact_inside(s.d.kind));
 				/* Exact: a surface point as near as the
 				 * field says, up to the local sampling gap. */
 				if (exact && bf > fabs(f) + 5e-4) {
 					fprintf(stderr,
-						"  %s: brute %g > |f| %g at "
-						"(%g %g %g)\n",
-						bc_prim_info(s.d.kind)->name,
-						bf, f, q[0], q[1], q[2]);
+					        "  %s: brute %g > |f| %g at "
+					        "(%g %g %g)\n",
+					        bc_prim_info(s.d.kind)->name,
+					        bf, f, q[0], q[1], q[2]);
 					bc_test_failures++;
 				}
 				if (exact && bf - fabs(f) > worst_under) {
@@ -1260,7 +1263,8 @@ static void exact_fields_project_onto_their_surface(void)
 				}
 				tried++;
 				grad(&s, q, 1e-3, g);
-				gl = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+				gl = sqrt(g[0] * g[0] + g[1] * g[1] +
+				          g[2] * g[2]);
 				if (fabs(gl - 1.0) > 2e-4) {
 					kinks++;
 					continue;
@@ -1270,8 +1274,9 @@ static void exact_fields_project_onto_their_surface(void)
 					 * steps see different gradients. */
 					double g2[3];
 					grad(&s, q, 3e-4, g2);
-					if (fabs(g2[0] - g[0]) + fabs(g2[1] - g[1]) +
-						    fabs(g2[2] - g[2]) >
+					if (fabs(g2[0] - g[0]) +
+					        fabs(g2[1] - g[1]) +
+					        fabs(g2[2] - g[2]) >
 					    5e-3) {
 						kinks++;
 						continue;
@@ -1283,19 +1288,20 @@ static void exact_fields_project_onto_their_surface(void)
 				}
 				if (fabs(sdfv(&s, p)) > 1e-4 + 2e-3 * fabs(f)) {
 					fprintf(stderr,
-						"  %s: f(%g %g %g) = %g, "
-						"projected f = %g\n",
-						bc_prim_info(s.d.kind)->name,
-						q[0], q[1], q[2], f, sdfv(&s, p));
+					        "  %s: f(%g %g %g) = %g, "
+					        "projected f = %g\n",
+					        bc_prim_info(s.d.kind)->name,
+					        q[0], q[1], q[2], f,
+					        sdfv(&s, p));
 					bc_test_failures++;
 				}
 			}
 		}
 		/* Exact fields have |grad| = 1 almost everywhere. */
 		if (kinks * 20 > tried) {
-			fprintf(stderr, "  %s: %d of %d points off |grad| = 1\n",
-				bc_prim_info((enum bc_prim)k)->name, kinks,
-				tried);
+			fprintf(
+			    stderr, "  %s: %d of %d points off |grad| = 1\n",
+			    bc_prim_info((enum bc_prim)k)->name, kinks, tried);
 			bc_test_failures++;
 		}
 	}
@@ -1315,16 +1321,16 @@ static void fields_are_1_lipschitz(void)
 				random_near(&s, 0.8, p);
 				double len = rnd(0.02f, 0.5f);
 				double dir[3] = {rnd(-1, 1), rnd(-1, 1),
-						 rnd(-1, 1)};
-				double dl = sqrt(dir[0] * dir[0] +
-						 dir[1] * dir[1] +
-						 dir[2] * dir[2]);
+				                 rnd(-1, 1)};
+				double dl =
+				    sqrt(dir[0] * dir[0] + dir[1] * dir[1] +
+				         dir[2] * dir[2]);
 				for (int j = 0; j < 3; j++) {
 					q[j] = p[j] + len * dir[j] / dl;
 				}
 				double d = dist3(p, q);
 				double df = fabs((double)sdfv(&s, p) -
-						 (double)sdfv(&s, q));
+				                 (double)sdfv(&s, q));
 				worst = fmax(worst, (df - 4e-6) / d);
 			}
 		}
@@ -1332,7 +1338,7 @@ static void fields_are_1_lipschitz(void)
 		 * aspect ratios here it is within 1%. */
 		if (worst > (exact ? 1.0001 : 1.01)) {
 			fprintf(stderr, "  %s: Lipschitz constant %g\n",
-				bc_prim_info((enum bc_prim)k)->name, worst);
+			        bc_prim_info((enum bc_prim)k)->name, worst);
 			bc_test_failures++;
 		}
 	}
@@ -1381,18 +1387,19 @@ static void ellipsoid_is_a_tight_lower_bound(void)
 		/* On the surface. */
 		for (int i = 0; i < 200; i++) {
 			double u[3] = {rnd(-1, 1), rnd(-1, 1), rnd(-1, 1)};
-			double l = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+			double l =
+			    sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
 			CHECK(fabs(sdf(&s, r[0] * u[0] / l, r[1] * u[1] / l,
-				       r[2] * u[2] / l)) < 1e-5);
+			               r[2] * u[2] / l)) < 1e-5);
 		}
 		/* Outside: below the distance, and close to it. */
 		for (int i = 0; i < 500; i++) {
 			double q[3];
 			random_near(&s, 2.0, q);
 			double f = sdfv(&s, q);
-			double k0 = sqrt(pow(q[0] / r[0], 2) +
-					 pow(q[1] / r[1], 2) +
-					 pow(q[2] / r[2], 2));
+			double k0 =
+			    sqrt(pow(q[0] / r[0], 2) + pow(q[1] / r[1], 2) +
+			         pow(q[2] / r[2], 2));
 			if (k0 <= 1.0) {
 				CHECK(f <= 1e-6);
 				continue;
@@ -1439,10 +1446,10 @@ static void fields_never_drop_below_their_bound(void)
 				double tol = 2e-6 * (1.0 + fabs(b));
 				if (f < b - tol) {
 					fprintf(stderr,
-						"  %s: f %g < bound %g at "
-						"(%g %g %g)\n",
-						bc_prim_info(s.d.kind)->name,
-						f, b, q[0], q[1], q[2]);
+					        "  %s: f %g < bound %g at "
+					        "(%g %g %g)\n",
+					        bc_prim_info(s.d.kind)->name, f,
+					        b, q[0], q[1], q[2]);
 					bc_test_failures++;
 					break;
 				}
@@ -1466,7 +1473,7 @@ static double min_on_bound(const struct shape *s, int face)
 			for (int j = 0; j <= 100; j++) {
 				double p[3];
 				p[ax] = b->center[ax] +
-					(face % 2 ? -1.0 : 1.0) * b->half[ax];
+				        (face % 2 ? -1.0 : 1.0) * b->half[ax];
 				p[u] = b->center[u] +
 				       b->half[u] * (i / 50.0 - 1.0);
 				p[v] = b->center[v] +
@@ -1479,8 +1486,9 @@ static double min_on_bound(const struct shape *s, int face)
 	for (int i = 0; i < 40000; i++) {
 		double p[3], c[3], w[3], l;
 		if (b->shape == BC_ABV_SPHERE) {
-			memcpy(c, (double[]){b->center[0], b->center[1],
-					     b->center[2]},
+			memcpy(c,
+			       (double[]){b->center[0], b->center[1],
+			                  b->center[2]},
 			       sizeof(c));
 		} else {
 			double t = rnd(0, 1);
@@ -1517,20 +1525,19 @@ static void bounds_touch_the_solid(void)
 			shape_random(&s, (enum bc_prim)k);
 			const struct bc_abv *b = &s.bound;
 			REQUIRE(b->shape > BC_ABV_INVALID &&
-				b->shape < BC_ABV_SHAPE_COUNT);
+			        b->shape < BC_ABV_SHAPE_COUNT);
 			if (b->shape == BC_ABV_BOX) {
-				double size = fmax(b->half[0],
-						   fmax(b->half[1], b->half[2]));
+				double size = fmax(
+				    b->half[0], fmax(b->half[1], b->half[2]));
 				for (int face = 0; face < 6; face++) {
 					double m = min_on_bound(&s, face);
 					if (m > 0.02 * size) {
 						fprintf(stderr,
-							"  %s: face %d is %g "
-							"from the solid\n",
-							bc_prim_info(
-								s.d.kind)
-								->name,
-							face, m);
+						        "  %s: face %d is %g "
+						        "from the solid\n",
+						        bc_prim_info(s.d.kind)
+						            ->name,
+						        face, m);
 						bc_test_failures++;
 					}
 				}
@@ -1538,10 +1545,10 @@ static void bounds_touch_the_solid(void)
 				double m = min_on_bound(&s, -1);
 				if (m > 0.05 * b->radius) {
 					fprintf(stderr,
-						"  %s: bound is %g from the "
-						"solid\n",
-						bc_prim_info(s.d.kind)->name,
-						m);
+					        "  %s: bound is %g from the "
+					        "solid\n",
+					        bc_prim_info(s.d.kind)->name,
+					        m);
 					bc_test_failures++;
 				}
 			}
@@ -1552,38 +1559,38 @@ static void bounds_touch_the_solid(void)
 static void bounds_have_the_documented_shapes(void)
 {
 	static const enum bc_abv_shape want[BC_PRIM_COUNT] = {
-		[BC_PRIM_SPHERE] = BC_ABV_SPHERE,
-		[BC_PRIM_OCTAHEDRON] = BC_ABV_SPHERE,
-		[BC_PRIM_SOLID_ANGLE] = BC_ABV_SPHERE,
-		[BC_PRIM_CAPSULE] = BC_ABV_CAPSULE,
-		[BC_PRIM_ROUND_CONE] = BC_ABV_CAPSULE,
-		[BC_PRIM_BOX] = BC_ABV_BOX,
-		[BC_PRIM_BOX_FRAME] = BC_ABV_BOX,
-		[BC_PRIM_CYLINDER] = BC_ABV_BOX,
-		[BC_PRIM_CONE] = BC_ABV_BOX,
-		[BC_PRIM_ELLIPSOID] = BC_ABV_BOX,
-		[BC_PRIM_HEX_PRISM] = BC_ABV_BOX,
-		[BC_PRIM_PYRAMID] = BC_ABV_BOX,
-		[BC_PRIM_TRI_PRISM] = BC_ABV_BOX,
-		[BC_PRIM_TORUS] = BC_ABV_BOX,
-		[BC_PRIM_CAPPED_TORUS] = BC_ABV_BOX,
-		[BC_PRIM_LINK] = BC_ABV_BOX,
-		[BC_PRIM_CUT_SPHERE] = BC_ABV_BOX,
-		[BC_PRIM_CUT_HOLLOW_SPHERE] = BC_ABV_BOX,
-		[BC_PRIM_DEATH_STAR] = BC_ABV_SPHERE,
-		[BC_PRIM_ROUNDED_CYLINDER] = BC_ABV_BOX,
-		[BC_PRIM_CAPPED_CYLINDER] = BC_ABV_CAPSULE,
-		[BC_PRIM_CAPPED_CONE] = BC_ABV_CAPSULE,
-		[BC_PRIM_RHOMBUS] = BC_ABV_BOX,
-		[BC_PRIM_VESICA_SEGMENT] = BC_ABV_CAPSULE,
-		[BC_PRIM_EXTRUDE_CIRCLE] = BC_ABV_BOX,
-		[BC_PRIM_EXTRUDE_RECT] = BC_ABV_BOX,
-		[BC_PRIM_EXTRUDE_POLYGON] = BC_ABV_BOX,
-		[BC_PRIM_EXTRUDE_STAR] = BC_ABV_BOX,
-		[BC_PRIM_REVOLVE_CIRCLE] = BC_ABV_BOX,
-		[BC_PRIM_REVOLVE_RECT] = BC_ABV_BOX,
-		[BC_PRIM_REVOLVE_POLYGON] = BC_ABV_BOX,
-		[BC_PRIM_REVOLVE_STAR] = BC_ABV_BOX,
+	    [BC_PRIM_SPHERE] = BC_ABV_SPHERE,
+	    [BC_PRIM_OCTAHEDRON] = BC_ABV_SPHERE,
+	    [BC_PRIM_SOLID_ANGLE] = BC_ABV_SPHERE,
+	    [BC_PRIM_CAPSULE] = BC_ABV_CAPSULE,
+	    [BC_PRIM_ROUND_CONE] = BC_ABV_CAPSULE,
+	    [BC_PRIM_BOX] = BC_ABV_BOX,
+	    [BC_PRIM_BOX_FRAME] = BC_ABV_BOX,
+	    [BC_PRIM_CYLINDER] = BC_ABV_BOX,
+	    [BC_PRIM_CONE] = BC_ABV_BOX,
+	    [BC_PRIM_ELLIPSOID] = BC_ABV_BOX,
+	    [BC_PRIM_HEX_PRISM] = BC_ABV_BOX,
+	    [BC_PRIM_PYRAMID] = BC_ABV_BOX,
+	    [BC_PRIM_TRI_PRISM] = BC_ABV_BOX,
+	    [BC_PRIM_TORUS] = BC_ABV_BOX,
+	    [BC_PRIM_CAPPED_TORUS] = BC_ABV_BOX,
+	    [BC_PRIM_LINK] = BC_ABV_BOX,
+	    [BC_PRIM_CUT_SPHERE] = BC_ABV_BOX,
+	    [BC_PRIM_CUT_HOLLOW_SPHERE] = BC_ABV_BOX,
+	    [BC_PRIM_DEATH_STAR] = BC_ABV_SPHERE,
+	    [BC_PRIM_ROUNDED_CYLINDER] = BC_ABV_BOX,
+	    [BC_PRIM_CAPPED_CYLINDER] = BC_ABV_CAPSULE,
+	    [BC_PRIM_CAPPED_CONE] = BC_ABV_CAPSULE,
+	    [BC_PRIM_RHOMBUS] = BC_ABV_BOX,
+	    [BC_PRIM_VESICA_SEGMENT] = BC_ABV_CAPSULE,
+	    [BC_PRIM_EXTRUDE_CIRCLE] = BC_ABV_BOX,
+	    [BC_PRIM_EXTRUDE_RECT] = BC_ABV_BOX,
+	    [BC_PRIM_EXTRUDE_POLYGON] = BC_ABV_BOX,
+	    [BC_PRIM_EXTRUDE_STAR] = BC_ABV_BOX,
+	    [BC_PRIM_REVOLVE_CIRCLE] = BC_ABV_BOX,
+	    [BC_PRIM_REVOLVE_RECT] = BC_ABV_BOX,
+	    [BC_PRIM_REVOLVE_POLYGON] = BC_ABV_BOX,
+	    [BC_PRIM_REVOLVE_STAR] = BC_ABV_BOX,
 	};
 	for (int k = 1; k < BC_PRIM_COUNT; k++) {
 		struct bc_prim_data p;
@@ -1622,10 +1629,10 @@ static void expect_reject(struct bc_prim_data p, int code, const char *what)
 	struct bc_errinfo ei = {0};
 	int rc = bc_prim_validate(&p, &ei);
 	if (rc != code || !strstr(ei.msg, what) ||
-	    !strstr(ei.msg, bc_prim_info(p.kind) ? bc_prim_info(p.kind)->name
-						 : "")) {
+	    !strstr(ei.msg,
+	            bc_prim_info(p.kind) ? bc_prim_info(p.kind)->name : "")) {
 		fprintf(stderr, "  got %d \"%s\", want %d naming \"%s\"\n", rc,
-			ei.msg, code, what);
+		        ei.msg, code, what);
 		bc_test_failures++;
 	}
 	CHECK_EQ_INT(ei.code, code);
@@ -1799,7 +1806,7 @@ static void validation_checks_transform_and_colour(void)
 	p.params[3] = 0.7f;
 	REQUIRE(bc_prim_validate(&p, &ei) == BC_ERANGE);
 	CHECK(strcmp(ei.msg, "box: round 0.7 exceeds the smallest half "
-			     "extent 0.5") == 0);
+	                     "extent 0.5") == 0);
 }
 
 static void unknown_kinds_are_refused(void)
@@ -1830,17 +1837,18 @@ static void fields_stay_finite_at_the_limits(void)
 			shape_random(&s, (enum bc_prim)k);
 			float scale = trial % 2 ? 1e-6f : 1e5f;
 			const struct bc_prim_info *info =
-				bc_prim_info((enum bc_prim)k);
+			    bc_prim_info((enum bc_prim)k);
 			for (uint32_t i = 0; i < info->nparams; i++) {
-				const struct bc_param_desc *d = &info->params[i];
+				const struct bc_param_desc *d =
+				    &info->params[i];
 				if (strcmp(d->name, "angle_deg") == 0) {
 					continue;
 				}
 				for (uint32_t c = 0; c < d->count; c++) {
 					float *v = &s.d.params[d->offset + c];
 					*v = (d->flags & BC_PARAM_POSITIVE)
-						     ? fmaxf(*v * scale, 1e-6f)
-						     : *v * scale;
+					         ? fmaxf(*v * scale, 1e-6f)
+					         : *v * scale;
 				}
 			}
 			struct bc_errinfo ei = {0};
@@ -1850,16 +1858,20 @@ static void fields_stay_finite_at_the_limits(void)
 			checked++;
 			bc_prim_pack(&s.d, s.k);
 			for (int i = 0; i < 200; i++) {
-				double far = i % 3 == 0 ? 1e7 : (i % 3 == 1 ? 1.0 : 1e-6);
-				double q[3] = {rnd(-1, 1) * far, rnd(-1, 1) * far,
-					       rnd(-1, 1) * far};
+				double far = i % 3 == 0
+				                 ? 1e7
+				                 : (i % 3 == 1 ? 1.0 : 1e-6);
+				double q[3] = {rnd(-1, 1) * far,
+				               rnd(-1, 1) * far,
+				               rnd(-1, 1) * far};
 				if (i == 0) {
 					q[0] = q[1] = q[2] = 0.0;
 				}
 				float f = sdfv(&s, q);
 				if (isnan(f)) {
-					fprintf(stderr, "  %s: NaN at (%g %g %g)\n",
-						info->name, q[0], q[1], q[2]);
+					fprintf(stderr,
+					        "  %s: NaN at (%g %g %g)\n",
+					        info->name, q[0], q[1], q[2]);
 					bc_test_failures++;
 					break;
 				}
@@ -1872,46 +1884,44 @@ static void fields_stay_finite_at_the_limits(void)
 }
 
 static const struct bc_test tests[] = {
-	{"table_covers_every_kind_contiguously",
-	 table_covers_every_kind_contiguously},
-	{"scene_format_names_are_fixed", scene_format_names_are_fixed},
-	{"init_gives_valid_unit_shapes", init_gives_valid_unit_shapes},
-	{"sphere_values", sphere_values},
-	{"box_values", box_values},
-	{"capsule_values", capsule_values},
-	{"cylinder_values", cylinder_values},
-	{"torus_values", torus_values},
-	{"cone_values", cone_values},
-	{"round_cone_values", round_cone_values},
-	{"ellipsoid_values", ellipsoid_values},
-	{"hex_prism_values", hex_prism_values},
-	{"octahedron_values", octahedron_values},
-	{"box_frame_values", box_frame_values},
-	{"capped_torus_values", capped_torus_values},
-	{"link_values", link_values},
-	{"solid_angle_values", solid_angle_values},
-	{"pyramid_values", pyramid_values},
-	{"tri_prism_values", tri_prism_values},
-	{"fields_match_independent_formulas",
-	 fields_match_independent_formulas},
-	{"fields_agree_with_brute_force_distance",
-	 fields_agree_with_brute_force_distance},
-	{"exact_fields_project_onto_their_surface",
-	 exact_fields_project_onto_their_surface},
-	{"fields_are_1_lipschitz", fields_are_1_lipschitz},
-	{"ellipsoid_is_a_tight_lower_bound", ellipsoid_is_a_tight_lower_bound},
-	{"fields_never_drop_below_their_bound",
-	 fields_never_drop_below_their_bound},
-	{"bounds_touch_the_solid", bounds_touch_the_solid},
-	{"bounds_have_the_documented_shapes",
-	 bounds_have_the_documented_shapes},
-	{"validation_rejects_nonfinite_and_bad_sizes",
-	 validation_rejects_nonfinite_and_bad_sizes},
-	{"validation_applies_shape_rules", validation_applies_shape_rules},
-	{"validation_checks_transform_and_colour",
-	 validation_checks_transform_and_colour},
-	{"unknown_kinds_are_refused", unknown_kinds_are_refused},
-	{"fields_stay_finite_at_the_limits", fields_stay_finite_at_the_limits},
+    {"table_covers_every_kind_contiguously",
+     table_covers_every_kind_contiguously},
+    {"scene_format_names_are_fixed", scene_format_names_are_fixed},
+    {"init_gives_valid_unit_shapes", init_gives_valid_unit_shapes},
+    {"sphere_values", sphere_values},
+    {"box_values", box_values},
+    {"capsule_values", capsule_values},
+    {"cylinder_values", cylinder_values},
+    {"torus_values", torus_values},
+    {"cone_values", cone_values},
+    {"round_cone_values", round_cone_values},
+    {"ellipsoid_values", ellipsoid_values},
+    {"hex_prism_values", hex_prism_values},
+    {"octahedron_values", octahedron_values},
+    {"box_frame_values", box_frame_values},
+    {"capped_torus_values", capped_torus_values},
+    {"link_values", link_values},
+    {"solid_angle_values", solid_angle_values},
+    {"pyramid_values", pyramid_values},
+    {"tri_prism_values", tri_prism_values},
+    {"fields_match_independent_formulas", fields_match_independent_formulas},
+    {"fields_agree_with_brute_force_distance",
+     fields_agree_with_brute_force_distance},
+    {"exact_fields_project_onto_their_surface",
+     exact_fields_project_onto_their_surface},
+    {"fields_are_1_lipschitz", fields_are_1_lipschitz},
+    {"ellipsoid_is_a_tight_lower_bound", ellipsoid_is_a_tight_lower_bound},
+    {"fields_never_drop_below_their_bound",
+     fields_never_drop_below_their_bound},
+    {"bounds_touch_the_solid", bounds_touch_the_solid},
+    {"bounds_have_the_documented_shapes", bounds_have_the_documented_shapes},
+    {"validation_rejects_nonfinite_and_bad_sizes",
+     validation_rejects_nonfinite_and_bad_sizes},
+    {"validation_applies_shape_rules", validation_applies_shape_rules},
+    {"validation_checks_transform_and_colour",
+     validation_checks_transform_and_colour},
+    {"unknown_kinds_are_refused", unknown_kinds_are_refused},
+    {"fields_stay_finite_at_the_limits", fields_stay_finite_at_the_limits},
 };
 
 BC_TEST_MAIN(tests)

@@ -36,8 +36,7 @@ struct prim {
 	float lo[3], hi[3]; /* local AABB of the bound */
 };
 
-static void prim_make(struct prim *p, enum bc_prim kind, const float *v,
-                      int n)
+static void prim_make(struct prim *p, enum bc_prim kind, const float *v, int n)
 {
 	struct bc_errinfo ei = {0};
 	struct bc_abv b;
@@ -66,8 +65,7 @@ static double len3(double x, double y, double z)
 
 /* Polygon vertices of a profile (a vertex or tip on +y, angles clockwise
  * from +y towards +x); returns the count. */
-static int profile_vertices(enum bc_prim kind, const float *v,
-                            double (*out)[2])
+static int profile_vertices(enum bc_prim kind, const float *v, double (*out)[2])
 {
 	int n = 0;
 	switch (kind) {
@@ -107,7 +105,8 @@ static double poly_sd(const double (*vt)[2], int n, double x, double y)
 	for (int i = 0, j = n - 1; i < n; j = i++) {
 		double ax = vt[j][0], ay = vt[j][1], ex = vt[i][0] - ax,
 		       ey = vt[i][1] - ay;
-		double t = ((x - ax) * ex + (y - ay) * ey) / (ex * ex + ey * ey);
+		double t =
+		    ((x - ax) * ex + (y - ay) * ey) / (ex * ex + ey * ey);
 		t = t < 0 ? 0 : (t > 1 ? 1 : t);
 		double dx = x - ax - t * ex, dy = y - ay - t * ey;
 		best = fmin(best, sqrt(dx * dx + dy * dy));
@@ -283,16 +282,16 @@ static const struct kind_case cases[] = {
     {BC_PRIM_DEATH_STAR, {1.0f, 0.8f, 1.1f}, 3},
     {BC_PRIM_DEATH_STAR, {1.0f, 1.3f, 0.9f}, 3},
     {BC_PRIM_ROUNDED_CYLINDER, {0.6f, 0.2f, 0.9f}, 3},
-    {BC_PRIM_CAPPED_CYLINDER, {-0.3f, -0.5f, 0.1f, 0.4f, 0.6f, -0.2f, 0.3f},
-     7},
-    {BC_PRIM_CAPPED_CONE, {-0.3f, -0.5f, 0.1f, 0.4f, 0.6f, -0.2f, 0.5f, 0.1f},
+    {BC_PRIM_CAPPED_CYLINDER, {-0.3f, -0.5f, 0.1f, 0.4f, 0.6f, -0.2f, 0.3f}, 7},
+    {BC_PRIM_CAPPED_CONE,
+     {-0.3f, -0.5f, 0.1f, 0.4f, 0.6f, -0.2f, 0.5f, 0.1f},
      8},
-    {BC_PRIM_CAPPED_CONE, {0.2f, 0.7f, 0.0f, -0.1f, -0.6f, 0.3f, 0.0f, 0.4f},
+    {BC_PRIM_CAPPED_CONE,
+     {0.2f, 0.7f, 0.0f, -0.1f, -0.6f, 0.3f, 0.0f, 0.4f},
      8},
     {BC_PRIM_RHOMBUS, {1.0f, 0.5f, 0.2f, 0.1f}, 4},
     {BC_PRIM_RHOMBUS, {0.4f, 0.9f, 0.5f, 0.0f}, 4},
-    {BC_PRIM_VESICA_SEGMENT, {-0.5f, 0.2f, 0.1f, 0.6f, -0.3f, 0.2f, 0.25f},
-     7},
+    {BC_PRIM_VESICA_SEGMENT, {-0.5f, 0.2f, 0.1f, 0.6f, -0.3f, 0.2f, 0.25f}, 7},
     {BC_PRIM_EXTRUDE_CIRCLE, {0.5f, 0.3f}, 2},
     {BC_PRIM_EXTRUDE_RECT, {0.6f, 0.3f, 0.4f}, 3},
     {BC_PRIM_EXTRUDE_POLYGON, {0.6f, 5.0f, 0.3f}, 3},

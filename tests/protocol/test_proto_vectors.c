@@ -201,11 +201,13 @@ static void build(enum bc_msg_type type, const json_t *f, struct bc_msg *m)
 		m->session_delete.name = jstr(f, "name");
 		break;
 	case BC_MSG_SESSIONS: {
-		static struct bc_proto_session_entry list[BC_PROTO_MAX_SESSIONS_LISTED];
+		static struct bc_proto_session_entry
+		    list[BC_PROTO_MAX_SESSIONS_LISTED];
 		json_t *arr = json_object_get(f, "sessions");
 		size_t i;
 		json_t *e;
-		json_array_foreach(arr, i, e) {
+		json_array_foreach(arr, i, e)
+		{
 			if (i >= BC_PROTO_MAX_SESSIONS_LISTED) {
 				break;
 			}
@@ -256,8 +258,7 @@ static void build(enum bc_msg_type type, const json_t *f, struct bc_msg *m)
 		m->edit_applied.author_seq = (uint32_t)jint(f, "author_seq");
 		m->edit_applied.ops = jops(f, &m->edit_applied.nops);
 		if (json_object_get(f, "target_order")) {
-			m->edit_applied.target_order =
-			    jint(f, "target_order");
+			m->edit_applied.target_order = jint(f, "target_order");
 			m->edit_applied.target_author =
 			    jstr(f, "target_author");
 		}
@@ -489,7 +490,8 @@ static int msg_eq(const struct bc_msg *a, const struct bc_msg *b)
 	case BC_MSG_FOLLOW_CAMERA:
 		return a->follow_camera.presenter ==
 		           b->follow_camera.presenter &&
-		       cam_eq(&a->follow_camera.camera, &b->follow_camera.camera);
+		       cam_eq(&a->follow_camera.camera,
+		              &b->follow_camera.camera);
 	case BC_MSG_SESSION_CAMERA_SET:
 		return a->session_camera_set.order ==
 		           b->session_camera_set.order &&

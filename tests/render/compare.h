@@ -28,7 +28,8 @@ static inline int cmp_float(const void *a, const void *b)
 	return (x > y) - (x < y);
 }
 
-static inline struct cmp compare(const struct bc_frame *a, const struct bc_frame *b)
+static inline struct cmp compare(const struct bc_frame *a,
+                                 const struct bc_frame *b)
 {
 	size_t n = (size_t)a->width * a->height, diff = 0, both = 0, same = 0;
 	float *d = bc_calloc(n, sizeof(float));

@@ -19,7 +19,7 @@
 #include "blobcast/gen.h"
 
 static void sc_sphere(struct bc_prim_data *p, float x, float y, float z,
-		      float r)
+                      float r)
 {
 	bc_prim_data_init(p, BC_PRIM_SPHERE);
 	p->params[0] = r;
@@ -44,8 +44,7 @@ static struct bc_op_data sc_op(bool smooth, float blend)
 }
 
 /* A generated scene (blobcast/gen.h). Returns 0 or the generator's error. */
-static int sc_gen(struct bc_tree *t, const char *name,
-		  struct bc_gen_opts opts)
+static int sc_gen(struct bc_tree *t, const char *name, struct bc_gen_opts opts)
 {
 	struct bc_errinfo ei = {0};
 	int rc = bc_gen(name, &opts, t, NULL, &ei);
@@ -59,41 +58,40 @@ static int sc_gen(struct bc_tree *t, const char *name,
 static int sc_fig16(struct bc_tree *t, uint32_t level, bool smooth)
 {
 	return sc_gen(t, "fig16",
-		      (struct bc_gen_opts){
-			      .level = level,
-			      .blend = smooth ? BC_GEN_BLEND_SMOOTH
-					      : BC_GEN_BLEND_SHARP});
+	              (struct bc_gen_opts){.level = level,
+	                                   .blend = smooth
+	                                                ? BC_GEN_BLEND_SMOOTH
+	                                                : BC_GEN_BLEND_SHARP});
 }
 
 /* Fig. 18: n instances in a cube under one n-ary (left comb) union. */
 static int sc_fig18(struct bc_tree *t, uint32_t n, bool boxes, bool smooth,
-		    uint64_t seed)
+                    uint64_t seed)
 {
-	return sc_gen(t, "fig18",
-		      (struct bc_gen_opts){
-			      .count = n,
-			      .seed = seed,
-			      .kind = boxes ? BC_GEN_KIND_BOXES
-					    : BC_GEN_KIND_SPHERES,
-			      .blend = smooth ? BC_GEN_BLEND_SMOOTH
-					      : BC_GEN_BLEND_SHARP});
+	return sc_gen(
+	    t, "fig18",
+	    (struct bc_gen_opts){
+	        .count = n,
+	        .seed = seed,
+	        .kind = boxes ? BC_GEN_KIND_BOXES : BC_GEN_KIND_SPHERES,
+	        .blend = smooth ? BC_GEN_BLEND_SMOOTH : BC_GEN_BLEND_SHARP});
 }
 
 /* A left comb of n spheres. */
 static int sc_comb(struct bc_tree *t, uint32_t n, bool smooth)
 {
 	return sc_gen(t, "comb",
-		      (struct bc_gen_opts){
-			      .count = n,
-			      .blend = smooth ? BC_GEN_BLEND_SMOOTH
-					      : BC_GEN_BLEND_SHARP});
+	              (struct bc_gen_opts){.count = n,
+	                                   .blend = smooth
+	                                                ? BC_GEN_BLEND_SMOOTH
+	                                                : BC_GEN_BLEND_SHARP});
 }
 
 /* A random tree with every operator kind. */
 static int sc_random(struct bc_tree *t, uint32_t n, uint64_t seed)
 {
 	return sc_gen(t, "random",
-		      (struct bc_gen_opts){.count = n, .seed = seed});
+	              (struct bc_gen_opts){.count = n, .seed = seed});
 }
 
 /* A camera looking at the scene's AABB from the front, a little from above

@@ -54,8 +54,8 @@ static int run(const char *in_path, const char *const *args)
 	pid = fork();
 	if (pid == 0) {
 		int fd = open(log, O_WRONLY | O_CREAT | O_TRUNC, 0644);
-		int in = in_path ? open(in_path, O_RDONLY) : open("/dev/null",
-								  O_RDONLY);
+		int in = in_path ? open(in_path, O_RDONLY)
+		                 : open("/dev/null", O_RDONLY);
 		if (fd < 0 || in < 0) {
 			_exit(127);
 		}
@@ -97,7 +97,7 @@ static void setup(void)
 
 /* Checks the three planes written for a w x h frame of a visible scene. */
 static void check_planes(const char *png, const char *depth, const char *ids,
-			 uint32_t w, uint32_t h)
+                         uint32_t w, uint32_t h)
 {
 	struct bc_image c, d, i;
 	struct bc_errinfo ei = {0};
@@ -115,7 +115,7 @@ static void check_planes(const char *png, const char *depth, const char *ids,
 	CHECK(d.width == w && d.height == h && d.channels == 1);
 	CHECK(i.width == w && i.height == h && i.channels == 1);
 	for (size_t k = 0; k < (size_t)w * h && d.channels == 1 &&
-			   i.channels == 1 && d.width == w && i.width == w;
+	                   i.channels == 1 && d.width == w && i.width == w;
 	     k++) {
 		float z = ((float *)d.pixels)[k];
 		uint32_t id = ((uint32_t *)i.pixels)[k];
@@ -132,10 +132,10 @@ static void check_planes(const char *png, const char *depth, const char *ids,
 static void test_render_default_scene_writes_three_planes(void)
 {
 	const char *png = path_in("d.png"), *exr = path_in("d.exr"),
-		   *tif = path_in("d.tif");
-	const char *args[] = {"render", "default", "--size", "48x32", "--out",
-			      png,      "--depth", exr,     "--ids", tif,
-			      "--quiet", NULL};
+	           *tif = path_in("d.tif");
+	const char *args[] = {"render", "default", "--size",  "48x32",
+	                      "--out",  png,       "--depth", exr,
+	                      "--ids",  tif,       "--quiet", NULL};
 	setup();
 	REQUIRE(dir[0]);
 	CHECK_EQ_INT(run(NULL, args), 0);
@@ -179,12 +179,22 @@ static void test_render_scene_file_and_stdin(void)
 	bc_free(json);
 	for (int b = 0; b < 3; b++) {
 		const char *png = path_in("f.png"), *exr = path_in("f.pfm"),
-			   *tif = path_in("f.tiff");
+		           *tif = path_in("f.tiff");
 		const char *backend = b == 1 ? "naive" : "tiled";
-		const char *args[] = {"render", b == 2 ? "-" : json_path,
-				      "--size=40x24", "--backend", backend,
-				      "--out", png, "--depth", exr, "--ids",
-				      tif, "--threads", "2", NULL};
+		const char *args[] = {"render",
+		                      b == 2 ? "-" : json_path,
+		                      "--size=40x24",
+		                      "--backend",
+		                      backend,
+		                      "--out",
+		                      png,
+		                      "--depth",
+		                      exr,
+		                      "--ids",
+		                      tif,
+		                      "--threads",
+		                      "2",
+		                      NULL};
 		unlink(png);
 		CHECK_EQ_INT(run(b == 2 ? json_path : NULL, args), 0);
 		/* Not --quiet: one summary line names the output. */
@@ -203,51 +213,49 @@ struct bad {
 static void test_bad_arguments_exit_2_with_a_reason(void)
 {
 	static const struct bad cases[] = {
-		{{"render", "default", "--out", "@o.png", NULL}, "--size"},
-		{{"render", "default", "--size", "8x8", NULL}, "--out"},
-		{{"render", "--size", "8x8", "--out", "@o.png", NULL}, "scene"},
-		{{"render", "default", "x", "--size", "8x8", "--out", "@o.png",
-		  NULL},
-		 "more than one scene"},
-		{{"render", "default", "--size", "0x8", "--out", "@o.png", NULL},
-		 "'0x8'"},
-		{{"render", "default", "--size", "8x", "--out", "@o.png", NULL},
-		 "'8x'"},
-		{{"render", "default", "--size", "9000x8", "--out", "@o.png",
-		  NULL},
-		 "9000x8"},
-		{{"render", "default", "--size", "8x8", "--out", "@o.png",
-		  "--backend", "cpu", NULL},
-		 "--backend 'cpu' is not one of naive, tiled, gl, svo"},
-		{{"render", "default", "--size", "8x8", "--out", "@o.png",
-		  "--depth", "@d.png", NULL},
-		 ".exr, .tif or .pfm"},
-		{{"render", "default", "--size", "8x8", "--out", "@o.png", "--ids",
-		  "@i.pfm", NULL},
-		 ".tif or .exr"},
-		{{"render", "default", "--size", "8x8", "--out", "@o.nosuch",
-		  NULL},
-		 "o.nosuch"},
-		{{"render", "default", "--size", "8x8", "--out", "@o.png",
-		  "--debug", "steps", NULL},
-		 "'steps'"},
-		{{"render", "default", "--size", "8x8", "--out", "@o.png",
-		  "--threads", "-1", NULL},
-		 "--threads"},
-		{{"render", "default", "--size", "8x8", "--out", "@o.png",
-		  "--range", "xx", NULL},
-		 "'xx'"},
-		{{"render", "default", "--size", "8x8", "--out", "@o.png",
-		  "--gl-platform", "x11", NULL},
-		 "'x11'"},
-		{{"render", "default", "--size", "8x8", "--out", "@o.png",
-		  "--frobnicate", NULL},
-		 "--frobnicate"},
-		{{"render", "default", "--size", "8x8", "--out", NULL},
-		 "needs a value"},
-		{{"nosuchcommand", NULL}, "nosuchcommand"},
-		{{"--nosuchoption", "render", NULL}, "--nosuchoption"},
-		{{NULL}, "usage"},
+	    {{"render", "default", "--out", "@o.png", NULL}, "--size"},
+	    {{"render", "default", "--size", "8x8", NULL}, "--out"},
+	    {{"render", "--size", "8x8", "--out", "@o.png", NULL}, "scene"},
+	    {{"render", "default", "x", "--size", "8x8", "--out", "@o.png",
+	      NULL},
+	     "more than one scene"},
+	    {{"render", "default", "--size", "0x8", "--out", "@o.png", NULL},
+	     "'0x8'"},
+	    {{"render", "default", "--size", "8x", "--out", "@o.png", NULL},
+	     "'8x'"},
+	    {{"render", "default", "--size", "9000x8", "--out", "@o.png", NULL},
+	     "9000x8"},
+	    {{"render", "default", "--size", "8x8", "--out", "@o.png",
+	      "--backend", "cpu", NULL},
+	     "--backend 'cpu' is not one of naive, tiled, gl, svo"},
+	    {{"render", "default", "--size", "8x8", "--out", "@o.png",
+	      "--depth", "@d.png", NULL},
+	     ".exr, .tif or .pfm"},
+	    {{"render", "default", "--size", "8x8", "--out", "@o.png", "--ids",
+	      "@i.pfm", NULL},
+	     ".tif or .exr"},
+	    {{"render", "default", "--size", "8x8", "--out", "@o.nosuch", NULL},
+	     "o.nosuch"},
+	    {{"render", "default", "--size", "8x8", "--out", "@o.png",
+	      "--debug", "steps", NULL},
+	     "'steps'"},
+	    {{"render", "default", "--size", "8x8", "--out", "@o.png",
+	      "--threads", "-1", NULL},
+	     "--threads"},
+	    {{"render", "default", "--size", "8x8", "--out", "@o.png",
+	      "--range", "xx", NULL},
+	     "'xx'"},
+	    {{"render", "default", "--size", "8x8", "--out", "@o.png",
+	      "--gl-platform", "x11", NULL},
+	     "'x11'"},
+	    {{"render", "default", "--size", "8x8", "--out", "@o.png",
+	      "--frobnicate", NULL},
+	     "--frobnicate"},
+	    {{"render", "default", "--size", "8x8", "--out", NULL},
+	     "needs a value"},
+	    {{"nosuchcommand", NULL}, "nosuchcommand"},
+	    {{"--nosuchoption", "render", NULL}, "--nosuchoption"},
+	    {{NULL}, "usage"},
 	};
 	setup();
 	REQUIRE(dir[0]);
@@ -265,8 +273,8 @@ static void test_bad_arguments_exit_2_with_a_reason(void)
 		unlink(path_in("o.png"));
 		rc = run(NULL, args);
 		if (rc != 2 || !strstr(out, cases[c].says)) {
-			fprintf(stderr, "  case %zu: exit %d, output: %s", c, rc,
-				out);
+			fprintf(stderr, "  case %zu: exit %d, output: %s", c,
+			        rc, out);
 		}
 		CHECK_EQ_INT(rc, 2);
 		CHECK(strstr(out, cases[c].says) != NULL);
@@ -276,10 +284,13 @@ static void test_bad_arguments_exit_2_with_a_reason(void)
 
 static void test_runtime_failures_exit_1(void)
 {
-	const char *missing[] = {"render", "/nonexistent/scene.json", "--size",
-				 "8x8", "--out", NULL, NULL};
-	const char *unwritable[] = {"render", "default", "--size", "8x8",
-				    "--out", "/nonexistent/dir/o.png", NULL};
+	const char *missing[] = {
+	    "render", "/nonexistent/scene.json", "--size", "8x8", "--out", NULL,
+	    NULL};
+	const char *unwritable[] = {"render", "default",
+	                            "--size", "8x8",
+	                            "--out",  "/nonexistent/dir/o.png",
+	                            NULL};
 	setup();
 	REQUIRE(dir[0]);
 	missing[5] = path_in("o.png");
@@ -291,8 +302,9 @@ static void test_runtime_failures_exit_1(void)
 	/* Not JSON at all, on stdin. */
 	{
 		const char *bad = path_in("bad.json");
-		const char *args[] = {"render", "-", "--size", "8x8", "--out",
-				      path_in("o.png"), NULL};
+		const char *args[] = {"render", "-",     "--size",
+		                      "8x8",    "--out", path_in("o.png"),
+		                      NULL};
 		FILE *f = fopen(bad, "wb");
 		REQUIRE(f);
 		fputs("{ this is not json", f);
@@ -305,11 +317,11 @@ static void test_runtime_failures_exit_1(void)
 static void test_help_tells_every_option(void)
 {
 	static const char *const options[] = {
-		"--size",  "--out",         "--depth", "--ids",
-		"--backend", "--debug",     "--threads", "--gl-platform",
-		"--range", "--threshold",   "--max-depth", "--stats",
-		"--quiet", "evals",         "overlaps", "naive",
-		"tiled",   "default",
+	    "--size",    "--out",       "--depth",     "--ids",
+	    "--backend", "--debug",     "--threads",   "--gl-platform",
+	    "--range",   "--threshold", "--max-depth", "--stats",
+	    "--quiet",   "evals",       "overlaps",    "naive",
+	    "tiled",     "default",
 	};
 	const char *h1[] = {"render", "--help", NULL};
 	const char *h2[] = {"help", "render", NULL};
@@ -333,8 +345,8 @@ static void test_help_tells_every_option(void)
 
 static void test_cleanup(void)
 {
-	const char *names[] = {"d.png", "d.exr", "d.tif", "f.png", "f.pfm",
-			       "f.tiff", "bad.json", "run.log"};
+	const char *names[] = {"d.png", "d.exr",  "d.tif",    "f.png",
+	                       "f.pfm", "f.tiff", "bad.json", "run.log"};
 	for (size_t i = 0; i < sizeof(names) / sizeof(names[0]); i++) {
 		unlink(path_in(names[i]));
 	}
@@ -342,14 +354,14 @@ static void test_cleanup(void)
 }
 
 static const struct bc_test tests[] = {
-	{"render_default_scene_writes_three_planes",
-	 test_render_default_scene_writes_three_planes},
-	{"render_scene_file_and_stdin", test_render_scene_file_and_stdin},
-	{"bad_arguments_exit_2_with_a_reason",
-	 test_bad_arguments_exit_2_with_a_reason},
-	{"runtime_failures_exit_1", test_runtime_failures_exit_1},
-	{"help_tells_every_option", test_help_tells_every_option},
-	{"cleanup", test_cleanup},
+    {"render_default_scene_writes_three_planes",
+     test_render_default_scene_writes_three_planes},
+    {"render_scene_file_and_stdin", test_render_scene_file_and_stdin},
+    {"bad_arguments_exit_2_with_a_reason",
+     test_bad_arguments_exit_2_with_a_reason},
+    {"runtime_failures_exit_1", test_runtime_failures_exit_1},
+    {"help_tells_every_option", test_help_tells_every_option},
+    {"cleanup", test_cleanup},
 };
 
 BC_TEST_MAIN(tests)

@@ -81,11 +81,11 @@ static void test_float_round_trip_exr_tif_pfm(void)
 		for (int i = 0; i < W * H && back.channels == 1; i++) {
 			/* Bit-exact: depth files must not be quantized. */
 			bad += memcmp(&((float *)back.pixels)[i], &v[i],
-				      sizeof(float)) != 0;
+			              sizeof(float)) != 0;
 		}
 		if (bad) {
 			fprintf(stderr, "  %s: %d samples differ\n", names[n],
-				bad);
+			        bad);
 		}
 		CHECK_EQ_INT(bad, 0);
 		bc_image_finish(&back);
@@ -150,9 +150,9 @@ static void test_unknown_extension_and_missing_file(void)
 	REQUIRE(path);
 	CHECK_EQ_INT(bc_image_write_rgba8(path, 2, 2, px, &ei), BC_ENOTSUP);
 	CHECK(strstr(ei.msg, "nosuchformat") != NULL);
-	CHECK_EQ_INT(bc_image_read(tmp_path("missing.png"), BC_IMAGE_U8, &back,
-				   &ei),
-		     BC_EIO);
+	CHECK_EQ_INT(
+	    bc_image_read(tmp_path("missing.png"), BC_IMAGE_U8, &back, &ei),
+	    BC_EIO);
 	/* The out-parameter is reset even on failure. */
 	CHECK(back.pixels == NULL && back.width == 0);
 	CHECK_EQ_INT(bc_image_write_rgba8(path, 0, 2, px, &ei), BC_EINVAL);
@@ -204,16 +204,15 @@ static void test_reader_refuses_oversized_header(void)
 }
 
 static const struct bc_test tests[] = {
-	{"rgba8_round_trip_png_and_tif", test_rgba8_round_trip_png_and_tif},
-	{"float_round_trip_exr_tif_pfm", test_float_round_trip_exr_tif_pfm},
-	{"u32_round_trip_tif_exr", test_u32_round_trip_tif_exr},
-	{"lossy_formats_are_refused_by_type",
-	 test_lossy_formats_are_refused_by_type},
-	{"unknown_extension_and_missing_file",
-	 test_unknown_extension_and_missing_file},
-	{"jpeg_keeps_colour_drops_alpha", test_jpeg_keeps_colour_drops_alpha},
-	{"reader_refuses_oversized_header",
-	 test_reader_refuses_oversized_header},
+    {"rgba8_round_trip_png_and_tif", test_rgba8_round_trip_png_and_tif},
+    {"float_round_trip_exr_tif_pfm", test_float_round_trip_exr_tif_pfm},
+    {"u32_round_trip_tif_exr", test_u32_round_trip_tif_exr},
+    {"lossy_formats_are_refused_by_type",
+     test_lossy_formats_are_refused_by_type},
+    {"unknown_extension_and_missing_file",
+     test_unknown_extension_and_missing_file},
+    {"jpeg_keeps_colour_drops_alpha", test_jpeg_keeps_colour_drops_alpha},
+    {"reader_refuses_oversized_header", test_reader_refuses_oversized_header},
 };
 
 BC_TEST_MAIN(tests)

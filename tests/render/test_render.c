@@ -4,9 +4,10 @@
  * families: hit masks equal on all but 0.5 % of pixels, median depth
  * difference under 1e-3 of the scene size, the same primitive ids on at
  * least 90 % of the pixels both hit (ids flip along seams and silhouettes,
- * which small test frames are full of). Plus the camera's geometry against analytic values, the
- * M_overlap degradation, thread-count independence, debug modes, the
- * dispatcher, and allocation failures at every step of a tiled frame.
+ * which small test frames are full of). Plus the camera's geometry against
+ * analytic values, the M_overlap degradation, thread-count independence, debug
+ * modes, the dispatcher, and allocation failures at every step of a tiled
+ * frame.
  */
 #include <math.h>
 #include <stdio.h>
@@ -27,7 +28,7 @@
 /* Renders t with naive and tiled at w x h and checks they agree; at least
  * 1/cover of the pixels must show the scene. */
 static void check_agree_cover(const char *what, struct bc_tree *t, uint32_t w,
-			      uint32_t h, uint32_t cover)
+                              uint32_t h, uint32_t cover)
 {
 	struct bc_frame fn = {0}, ft = {0};
 	struct bc_render_stats sn, st;
@@ -39,12 +40,10 @@ static void check_agree_cover(const char *what, struct bc_tree *t, uint32_t w,
 	sc_frame(l, &cam);
 	REQUIRE(bc_frame_init(&fn, w, h) == 0);
 	REQUIRE(bc_frame_init(&ft, w, h) == 0);
-	CHECK_EQ_INT(bc_render_once(BC_BACKEND_NAIVE, NULL, t, &cam, &fn, &sn,
-				    &ei),
-		     0);
-	CHECK_EQ_INT(bc_render_once(BC_BACKEND_TILED, NULL, t, &cam, &ft, &st,
-				    &ei),
-		     0);
+	CHECK_EQ_INT(
+	    bc_render_once(BC_BACKEND_NAIVE, NULL, t, &cam, &fn, &sn, &ei), 0);
+	CHECK_EQ_INT(
+	    bc_render_once(BC_BACKEND_TILED, NULL, t, &cam, &ft, &st, &ei), 0);
 	c = compare(&fn, &ft);
 	printf("  %-22s prims %5u: mask %.4f%%, depth median %.2e (size %.2f),"
 	       " ids %.2f%%, hit %u px, evals naive %llu tiled %llu, "
@@ -64,7 +63,7 @@ static void check_agree_cover(const char *what, struct bc_tree *t, uint32_t w,
 }
 
 static void check_agree(const char *what, struct bc_tree *t, uint32_t w,
-			uint32_t h)
+                        uint32_t h)
 {
 	check_agree_cover(what, t, w, h, 20);
 }
@@ -77,10 +76,10 @@ static void test_tiled_matches_naive_fig16(void)
 		for (int smooth = 0; smooth <= 1; smooth++) {
 			char what[32];
 			snprintf(what, sizeof(what), "fig16 L%u %s", level,
-				 smooth ? "smooth" : "sharp");
+			         smooth ? "smooth" : "sharp");
 			REQUIRE(sc_fig16(t, level, smooth) == 0);
 			check_agree(what, t, 96 + 32 * (level - 1),
-				    80 + 32 * (level - 1));
+			            80 + 32 * (level - 1));
 		}
 	}
 	bc_tree_destroy(t);
@@ -96,12 +95,12 @@ static void test_tiled_matches_naive_fig18(void)
 			bool boxes = kind & 1, smooth = kind & 2;
 			char what[48];
 			snprintf(what, sizeof(what), "fig18 %s %s %u",
-				 boxes ? "boxes" : "spheres",
-				 smooth ? "smooth" : "sharp", counts[i]);
-			REQUIRE(sc_fig18(t, counts[i], boxes, smooth,
-					 18 + i) == 0);
+			         boxes ? "boxes" : "spheres",
+			         smooth ? "smooth" : "sharp", counts[i]);
+			REQUIRE(sc_fig18(t, counts[i], boxes, smooth, 18 + i) ==
+			        0);
 			check_agree(what, t, 64 + 12 * (uint32_t)i,
-				    64 + 12 * (uint32_t)i);
+			            64 + 12 * (uint32_t)i);
 		}
 	}
 	bc_tree_destroy(t);
@@ -130,8 +129,8 @@ static void test_tiled_matches_naive_comb_and_random(void)
 		REQUIRE(sc_random(t, 8 + 3 * (uint32_t)seed, seed) == 0);
 		sc_frame(bc_tree_lin(t), &cam);
 		REQUIRE(bc_frame_init(&f, 24, 24) == 0);
-		REQUIRE(bc_render_once(BC_BACKEND_NAIVE, NULL, t, &cam, &f, NULL,
-				       &ei) == 0);
+		REQUIRE(bc_render_once(BC_BACKEND_NAIVE, NULL, t, &cam, &f,
+		                       NULL, &ei) == 0);
 		for (uint32_t i = 0; i < 24 * 24; i++) {
 			hit += f.ids[i] != 0;
 		}
@@ -196,8 +195,8 @@ static void test_tiled_matches_naive_unary_nodes(void)
 		}
 		sc_frame(bc_tree_lin(t), &cam);
 		REQUIRE(bc_frame_init(&f, 24, 24) == 0);
-		REQUIRE(bc_render_once(BC_BACKEND_NAIVE, NULL, t, &cam, &f, NULL,
-		                       &ei) == 0);
+		REQUIRE(bc_render_once(BC_BACKEND_NAIVE, NULL, t, &cam, &f,
+		                       NULL, &ei) == 0);
 		for (uint32_t i = 0; i < 24 * 24; i++) {
 			hit += f.ids[i] != 0;
 		}
@@ -273,7 +272,7 @@ static void test_over_m_overlap_degrades_exactly(void)
 			u[k] = (float)(x >> 40) / 16777216.0f;
 		}
 		sc_sphere(&p, 0.2f * u[0] - 0.1f, 0.2f * u[1] - 0.1f,
-			  0.2f * u[2] - 0.1f, 0.5f + 0.3f * u[3]);
+		          0.2f * u[2] - 0.1f, 0.5f + 0.3f * u[3]);
 		REQUIRE(bc_tree_put_prim(t, 0, &p, NULL) == 0);
 	}
 	REQUIRE(bc_tree_pop_op(t, NULL) == 0);
@@ -307,7 +306,7 @@ static void test_depth_of_sphere_is_analytic(void)
 		uint32_t hits = 0, bad = 0;
 		REQUIRE(bc_frame_init(&f, w, h) == 0);
 		REQUIRE(bc_render_once((enum bc_backend)b, NULL, t, &cam, &f,
-				       NULL, &ei) == 0);
+		                       NULL, &ei) == 0);
 		/* The centre pixel looks straight at the sphere. */
 		CHECK_NEAR(f.depth[(h / 2) * w + w / 2], 5.0, 1e-3);
 		CHECK_EQ_INT(f.ids[(h / 2) * w + w / 2], 77);
@@ -316,7 +315,7 @@ static void test_depth_of_sphere_is_analytic(void)
 				float d[3], bq, disc, miss, expect;
 				size_t i = (size_t)y * w + x;
 				bc_view_rays_dir(&vr, (float)x + 0.5f,
-						 (float)y + 0.5f, d);
+				                 (float)y + 0.5f, d);
 				bq = cam.eye[0] * d[0] + cam.eye[1] * d[1] +
 				     cam.eye[2] * d[2];
 				disc = bq * bq - 35.0f;
@@ -341,7 +340,7 @@ static void test_depth_of_sphere_is_analytic(void)
 		}
 		if (bad) {
 			fprintf(stderr, "  %s: %u of %u pixels off\n",
-				bc_backend_name((enum bc_backend)b), bad, hits);
+			        bc_backend_name((enum bc_backend)b), bad, hits);
 		}
 		CHECK(hits > 1000);
 		CHECK_EQ_INT(bad, 0);
@@ -353,10 +352,10 @@ static void test_depth_of_sphere_is_analytic(void)
 static void test_centre_ray_points_at_target(void)
 {
 	struct bc_camera cam = {
-		.eye = {1.0f, 2.0f, 3.0f},
-		.target = {-2.0f, 0.5f, -1.0f},
-		.up = {0.0f, 1.0f, 0.0f},
-		.fov_y_deg = 50.0f,
+	    .eye = {1.0f, 2.0f, 3.0f},
+	    .target = {-2.0f, 0.5f, -1.0f},
+	    .up = {0.0f, 1.0f, 0.0f},
+	    .fov_y_deg = 50.0f,
 	};
 	struct bc_view_rays vr;
 	float d[3], f[3], n = 0.0f;
@@ -365,7 +364,8 @@ static void test_centre_ray_points_at_target(void)
 		n += f[i] * f[i];
 	}
 	n = sqrtf(n);
-	/* 101 x 61: the middle pixel (50, 30) has its centre at (50.5, 30.5). */
+	/* 101 x 61: the middle pixel (50, 30) has its centre at (50.5, 30.5).
+	 */
 	bc_view_rays_init(&vr, &cam, 101, 61);
 	bc_view_rays_dir(&vr, 50.5f, 30.5f, d);
 	CHECK_NEAR(d[0], f[0] / n, 1e-5);
@@ -392,13 +392,15 @@ static void test_threads_do_not_change_pixels(void)
 	struct bc_errinfo ei = {0};
 	REQUIRE(t && sc_fig18(t, 64, false, true, 5) == 0);
 	sc_frame(bc_tree_lin(t), &cam);
-	REQUIRE(bc_frame_init(&a, 77, 45) == 0 && bc_frame_init(&b, 77, 45) == 0);
+	REQUIRE(bc_frame_init(&a, 77, 45) == 0 &&
+	        bc_frame_init(&b, 77, 45) == 0);
 	for (int be = BC_BACKEND_NAIVE; be <= BC_BACKEND_TILED; be++) {
-		struct bc_render_opts one = {.threads = 1}, three = {.threads = 3};
-		CHECK(bc_render_once((enum bc_backend)be, &one, t, &cam, &a, NULL,
-				     &ei) == 0);
+		struct bc_render_opts one = {.threads = 1},
+		                      three = {.threads = 3};
+		CHECK(bc_render_once((enum bc_backend)be, &one, t, &cam, &a,
+		                     NULL, &ei) == 0);
 		CHECK(bc_render_once((enum bc_backend)be, &three, t, &cam, &b,
-				     NULL, &ei) == 0);
+		                     NULL, &ei) == 0);
 		CHECK(frames_equal(&a, &b));
 	}
 	bc_frame_finish(&a);
@@ -419,9 +421,10 @@ static void test_renderer_reuse_follows_edits(void)
 	uint32_t id;
 	REQUIRE(t && sc_fig18(t, 16, false, false, 3) == 0);
 	sc_frame(bc_tree_lin(t), &cam);
-	REQUIRE(bc_frame_init(&a, 40, 40) == 0 && bc_frame_init(&b, 64, 48) == 0);
+	REQUIRE(bc_frame_init(&a, 40, 40) == 0 &&
+	        bc_frame_init(&b, 64, 48) == 0);
 	REQUIRE(bc_renderer_create(&r, BC_BACKEND_TILED,
-				   &(struct bc_render_opts){0}, &ei) == 0);
+	                           &(struct bc_render_opts){0}, &ei) == 0);
 	CHECK(bc_renderer_render(r, &cam, &a, NULL, &ei) == BC_ESTATE);
 	REQUIRE(bc_renderer_sync(r, t, NULL, &ei) == 0);
 	CHECK(bc_renderer_render(r, &cam, &b, NULL, &ei) == 0);
@@ -438,7 +441,7 @@ static void test_renderer_reuse_follows_edits(void)
 		bool gone = true;
 		REQUIRE(bc_frame_init(&fresh, 64, 48) == 0);
 		CHECK(bc_render_once(BC_BACKEND_TILED, NULL, t, &cam, &fresh,
-				     NULL, &ei) == 0);
+		                     NULL, &ei) == 0);
 		CHECK(frames_equal(&b, &fresh));
 		for (size_t i = 0; i < 64u * 48u; i++) {
 			gone = gone && b.ids[i] != id;
@@ -463,15 +466,17 @@ static void test_debug_modes(void)
 	REQUIRE(t && sc_fig18(t, 64, true, true, 8) == 0);
 	sc_frame(bc_tree_lin(t), &cam);
 	REQUIRE(bc_frame_init(&plain, 64, 64) == 0 &&
-		bc_frame_init(&ev, 64, 64) == 0 && bc_frame_init(&ov, 64, 64) == 0);
+	        bc_frame_init(&ev, 64, 64) == 0 &&
+	        bc_frame_init(&ov, 64, 64) == 0);
 	CHECK(bc_render_once(BC_BACKEND_TILED, NULL, t, &cam, &plain, NULL,
-			     &ei) == 0);
+	                     &ei) == 0);
 	CHECK(bc_render_once(BC_BACKEND_TILED,
-			     &(struct bc_render_opts){.debug = BC_DEBUG_EVALS},
-			     t, &cam, &ev, NULL, &ei) == 0);
-	CHECK(bc_render_once(BC_BACKEND_TILED,
-			     &(struct bc_render_opts){.debug = BC_DEBUG_OVERLAPS},
-			     t, &cam, &ov, &st, &ei) == 0);
+	                     &(struct bc_render_opts){.debug = BC_DEBUG_EVALS},
+	                     t, &cam, &ev, NULL, &ei) == 0);
+	CHECK(
+	    bc_render_once(BC_BACKEND_TILED,
+	                   &(struct bc_render_opts){.debug = BC_DEBUG_OVERLAPS},
+	                   t, &cam, &ov, &st, &ei) == 0);
 	/* Debug modes change colours only. */
 	CHECK_MEMEQ(plain.depth, ev.depth, n * sizeof(float));
 	CHECK_MEMEQ(plain.ids, ov.ids, n * sizeof(uint32_t));
@@ -483,12 +488,13 @@ static void test_debug_modes(void)
 	 * tiles differ. */
 	for (uint32_t ty = 0; ty < 8; ty++) {
 		for (uint32_t tx = 0; tx < 8; tx++) {
-			const uint8_t *c0 = ov.rgba + 4 * (ty * 8 * 64 + tx * 8);
+			const uint8_t *c0 =
+			    ov.rgba + 4 * (ty * 8 * 64 + tx * 8);
 			for (uint32_t y = 0; y < 8; y++) {
 				for (uint32_t x = 0; x < 8; x++) {
 					const uint8_t *c =
-						ov.rgba + 4 * ((ty * 8 + y) * 64 +
-							       tx * 8 + x);
+					    ov.rgba + 4 * ((ty * 8 + y) * 64 +
+					                   tx * 8 + x);
 					CHECK_MEMEQ(c, c0, 4);
 				}
 			}
@@ -511,9 +517,9 @@ static void test_dispatcher_and_frames(void)
 	struct bc_tree *t = bc_tree_create();
 	REQUIRE(t);
 	for (int b = BC_BACKEND_INVALID + 1; b < BC_BACKEND_COUNT; b++) {
-		CHECK_EQ_INT(bc_backend_from_name(bc_backend_name(
-				     (enum bc_backend)b)),
-			     b);
+		CHECK_EQ_INT(
+		    bc_backend_from_name(bc_backend_name((enum bc_backend)b)),
+		    b);
 	}
 	CHECK_EQ_INT(bc_backend_from_name("cpu"), BC_BACKEND_INVALID);
 	CHECK_EQ_INT(bc_backend_from_name(NULL), BC_BACKEND_INVALID);
@@ -529,23 +535,23 @@ static void test_dispatcher_and_frames(void)
 	bc_frame_finish(NULL);
 	REQUIRE(bc_frame_init(&f, 16, 16) == 0);
 	bc_camera_default(&cam);
-	CHECK_EQ_INT(bc_render_once(BC_BACKEND_INVALID, NULL, t, &cam, &f,
-				    NULL, &ei),
-		     BC_ENOTSUP);
+	CHECK_EQ_INT(
+	    bc_render_once(BC_BACKEND_INVALID, NULL, t, &cam, &f, NULL, &ei),
+	    BC_ENOTSUP);
 	/* A bad camera is refused with a reason. */
 	memcpy(cam.target, cam.eye, sizeof(cam.eye));
 	REQUIRE(sc_comb(t, 4, false) == 0);
-	CHECK_EQ_INT(bc_render_once(BC_BACKEND_TILED, NULL, t, &cam, &f, NULL,
-				    &ei),
-		     BC_ERANGE);
+	CHECK_EQ_INT(
+	    bc_render_once(BC_BACKEND_TILED, NULL, t, &cam, &f, NULL, &ei),
+	    BC_ERANGE);
 	CHECK(ei.msg[0] != '\0');
 	/* An empty tree renders background. */
 	bc_camera_default(&cam);
 	bc_tree_begin(t);
 	for (int b = BC_BACKEND_NAIVE; b <= BC_BACKEND_TILED; b++) {
-		CHECK_EQ_INT(bc_render_once((enum bc_backend)b, NULL, t, &cam, &f,
-					    NULL, &ei),
-			     0);
+		CHECK_EQ_INT(bc_render_once((enum bc_backend)b, NULL, t, &cam,
+		                            &f, NULL, &ei),
+		             0);
 		CHECK(isinf(f.depth[0]) && f.ids[255] == 0);
 	}
 	bc_frame_finish(&f);
@@ -568,8 +574,8 @@ static void test_tiled_allocation_failures(void)
 	for (n = 1; n < 200 && rc != 0; n++) {
 		bc_alloc_fail_after(n);
 		rc = bc_render_once(BC_BACKEND_TILED,
-				    &(struct bc_render_opts){.threads = 2}, t,
-				    &cam, &f, NULL, &ei);
+		                    &(struct bc_render_opts){.threads = 2}, t,
+		                    &cam, &f, NULL, &ei);
 		bc_alloc_fail_after(0);
 		CHECK(rc == 0 || rc == BC_ENOMEM);
 	}
@@ -580,22 +586,21 @@ static void test_tiled_allocation_failures(void)
 }
 
 static const struct bc_test tests[] = {
-	{"tiled_matches_naive_unary_nodes",
-	 test_tiled_matches_naive_unary_nodes},
-	{"depth_through_offset_and_scale_is_analytic",
-	 test_depth_through_offset_and_scale_is_analytic},
-	{"tiled_matches_naive_fig16", test_tiled_matches_naive_fig16},
-	{"tiled_matches_naive_fig18", test_tiled_matches_naive_fig18},
-	{"tiled_matches_naive_comb_and_random",
-	 test_tiled_matches_naive_comb_and_random},
-	{"over_m_overlap_degrades_exactly", test_over_m_overlap_degrades_exactly},
-	{"depth_of_sphere_is_analytic", test_depth_of_sphere_is_analytic},
-	{"centre_ray_points_at_target", test_centre_ray_points_at_target},
-	{"threads_do_not_change_pixels", test_threads_do_not_change_pixels},
-	{"renderer_reuse_follows_edits", test_renderer_reuse_follows_edits},
-	{"debug_modes", test_debug_modes},
-	{"dispatcher_and_frames", test_dispatcher_and_frames},
-	{"tiled_allocation_failures", test_tiled_allocation_failures},
+    {"tiled_matches_naive_unary_nodes", test_tiled_matches_naive_unary_nodes},
+    {"depth_through_offset_and_scale_is_analytic",
+     test_depth_through_offset_and_scale_is_analytic},
+    {"tiled_matches_naive_fig16", test_tiled_matches_naive_fig16},
+    {"tiled_matches_naive_fig18", test_tiled_matches_naive_fig18},
+    {"tiled_matches_naive_comb_and_random",
+     test_tiled_matches_naive_comb_and_random},
+    {"over_m_overlap_degrades_exactly", test_over_m_overlap_degrades_exactly},
+    {"depth_of_sphere_is_analytic", test_depth_of_sphere_is_analytic},
+    {"centre_ray_points_at_target", test_centre_ray_points_at_target},
+    {"threads_do_not_change_pixels", test_threads_do_not_change_pixels},
+    {"renderer_reuse_follows_edits", test_renderer_reuse_follows_edits},
+    {"debug_modes", test_debug_modes},
+    {"dispatcher_and_frames", test_dispatcher_and_frames},
+    {"tiled_allocation_failures", test_tiled_allocation_failures},
 };
 
 BC_TEST_MAIN(tests)

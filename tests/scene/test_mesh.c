@@ -44,9 +44,9 @@ static int cmp_u64(const void *a, const void *b)
 }
 
 struct topo {
-	uint64_t edges;     /* undirected */
-	uint64_t open;      /* directed edges without their reverse */
-	uint64_t shared;    /* directed edges used more than once */
+	uint64_t edges;  /* undirected */
+	uint64_t open;   /* directed edges without their reverse */
+	uint64_t shared; /* directed edges used more than once */
 	double volume;
 };
 
@@ -58,16 +58,20 @@ static void topology(const struct bc_mesh *m, struct topo *o)
 	memset(o, 0, sizeof(*o));
 	REQUIRE(dir);
 	for (uint32_t i = 0; i < m->ntris; i++) {
-		const float *a = m->pos[m->tri[i][0]], *b = m->pos[m->tri[i][1]],
+		const float *a = m->pos[m->tri[i][0]],
+		            *b = m->pos[m->tri[i][1]],
 		            *c = m->pos[m->tri[i][2]];
 		for (int e = 0; e < 3; e++) {
 			uint64_t u = m->tri[i][e], v = m->tri[i][(e + 1) % 3];
 			dir[3 * i + e] = u << 32 | v;
 		}
 		/* Divergence theorem: sum of signed tetrahedra. */
-		vol += ((double)a[0] * ((double)b[1] * c[2] - (double)b[2] * c[1]) -
-		        (double)a[1] * ((double)b[0] * c[2] - (double)b[2] * c[0]) +
-		        (double)a[2] * ((double)b[0] * c[1] - (double)b[1] * c[0])) /
+		vol += ((double)a[0] *
+		            ((double)b[1] * c[2] - (double)b[2] * c[1]) -
+		        (double)a[1] *
+		            ((double)b[0] * c[2] - (double)b[2] * c[0]) +
+		        (double)a[2] *
+		            ((double)b[0] * c[1] - (double)b[1] * c[0])) /
 		       6.0;
 	}
 	qsort(dir, n, sizeof(*dir), cmp_u64);
@@ -121,7 +125,8 @@ static double voxel_volume(const struct bc_lin *l, double h)
 	double v = 0.0;
 	for (double z = l->lo[2] + 0.5 * h; z < l->hi[2]; z += h) {
 		for (double y = l->lo[1] + 0.5 * h; y < l->hi[1]; y += h) {
-			for (double x = l->lo[0] + 0.5 * h; x < l->hi[0]; x += h) {
+			for (double x = l->lo[0] + 0.5 * h; x < l->hi[0];
+			     x += h) {
 				float p[3] = {(float)x, (float)y, (float)z};
 				v += bc_eval_full(l, p) < 0.0f;
 			}
@@ -140,7 +145,11 @@ static void scenes_mesh_closed_near_the_surface(void)
 	} scenes[] = {
 	    {"catalogue", {.seed = 1}, 160, 0.06, 0.25},
 	    {"gears", {.teeth = 12}, 128, 0.02, 0.25},
-	    {"fig18", {.count = 24, .kind = BC_GEN_KIND_SPHERES}, 80, 0.03, 0.9},
+	    {"fig18",
+	     {.count = 24, .kind = BC_GEN_KIND_SPHERES},
+	     80,
+	     0.03,
+	     0.9},
 	};
 	for (size_t s = 0; s < sizeof(scenes) / sizeof(scenes[0]); s++) {
 		struct bc_tree *t = bc_tree_create();
@@ -153,10 +162,10 @@ static void scenes_mesh_closed_near_the_surface(void)
 		REQUIRE(t);
 		REQUIRE(bc_gen(scenes[s].gen, &scenes[s].o, t, NULL, &ei) == 0);
 		l = bc_tree_lin(t);
-		REQUIRE(bc_mesh_build(&m, t,
-		                      &(struct bc_mesh_opts){
-		                          .resolution = scenes[s].res},
-		                      &ei) == 0);
+		REQUIRE(bc_mesh_build(
+		            &m, t,
+		            &(struct bc_mesh_opts){.resolution = scenes[s].res},
+		            &ei) == 0);
 		for (uint32_t i = 0; i < m.nverts; i++) {
 			/* A vertex stays in its cell, which the surface
 			 * crosses: within a cell diagonal of the zero set,
@@ -263,13 +272,15 @@ static void files_parse_back(void)
 			float x, y, z, r, g, bl;
 			unsigned i, j, k;
 			if (line[0] == 'v') {
-				badv += sscanf(line, "v %f %f %f %f %f %f", &x, &y,
-				               &z, &r, &g, &bl) != 6 ||
+				badv += sscanf(line, "v %f %f %f %f %f %f", &x,
+				               &y, &z, &r, &g, &bl) != 6 ||
 				        fabsf(x - m.pos[nv][0]) > 1e-6f;
 				nv++;
 			} else if (line[0] == 'f') {
-				badf += sscanf(line, "f %u %u %u", &i, &j, &k) != 3 ||
-				        i != m.tri[nf][0] + 1 || k != m.tri[nf][2] + 1;
+				badf += sscanf(line, "f %u %u %u", &i, &j,
+				               &k) != 3 ||
+				        i != m.tri[nf][0] + 1 ||
+				        k != m.tri[nf][2] + 1;
 				nf++;
 			}
 		}
@@ -289,7 +300,8 @@ static void files_parse_back(void)
 		unsigned nv = 0, nf = 0;
 		const char *end = strstr((const char *)b, "end_header\n");
 		REQUIRE(end);
-		CHECK(strncmp((const char *)b, "ply\nformat binary_little_endian 1.0\n",
+		CHECK(strncmp((const char *)b,
+		              "ply\nformat binary_little_endian 1.0\n",
 		              36) == 0);
 		CHECK(sscanf(strstr((const char *)b, "element vertex"),
 		             "element vertex %u", &nv) == 1);
@@ -301,10 +313,12 @@ static void files_parse_back(void)
 			const uint8_t *p = (const uint8_t *)end + 11;
 			size_t body = n - (size_t)(p - b);
 			CHECK_EQ_INT(body, (size_t)nv * 15 + (size_t)nf * 13);
-			CHECK(rd_f32(p + 15 * (nv - 1) + 4) == m.pos[nv - 1][1]);
+			CHECK(rd_f32(p + 15 * (nv - 1) + 4) ==
+			      m.pos[nv - 1][1]);
 			p += 15 * (size_t)nv;
 			CHECK(p[13 * (nf - 1)] == 3);
-			CHECK(rd_u32(p + 13 * (nf - 1) + 5) == m.tri[nf - 1][1]);
+			CHECK(rd_u32(p + 13 * (nf - 1) + 5) ==
+			      m.tri[nf - 1][1]);
 		}
 	}
 	free(b);
@@ -323,7 +337,8 @@ static void files_parse_back(void)
 			float d = 0.0f;
 			for (int a = 0; a < 3; a++) {
 				/* The sphere's centre is (0.1, 0, 0). */
-				float c = rd_f32(f + 12 + 4 * a) - (a ? 0.0f : 0.1f);
+				float c =
+				    rd_f32(f + 12 + 4 * a) - (a ? 0.0f : 0.1f);
 				d += rd_f32(f + 4 * a) * c;
 			}
 			inward += d <= 0.0f;
@@ -351,10 +366,10 @@ static void bad_arguments_are_refused(void)
 	                    &(struct bc_mesh_opts){
 	                        .resolution = BC_MESH_MAX_RESOLUTION + 1},
 	                    &ei) == BC_ERANGE);
-	CHECK(bc_mesh_build(&m, t,
-	                    &(struct bc_mesh_opts){.lo = {0, 0, 0},
-	                                           .hi = {1, 0, 1}},
-	                    &ei) == BC_EINVAL);
+	CHECK(bc_mesh_build(
+	          &m, t,
+	          &(struct bc_mesh_opts){.lo = {0, 0, 0}, .hi = {1, 0, 1}},
+	          &ei) == BC_EINVAL);
 	/* A box cutting the sphere: the mesh is closed by its face. */
 	REQUIRE(bc_mesh_build(&m, t,
 	                      &(struct bc_mesh_opts){.resolution = 40,

@@ -95,7 +95,8 @@ static void one_prim_json(enum bc_prim kind, int skip, char *buf, size_t cap)
 		}
 		o += (size_t)snprintf(buf + o, cap - o, ", \"%s\": ", d->name);
 		if (d->count == 3) {
-			o += (size_t)snprintf(buf + o, cap - o, "[%.9g, %.9g, %.9g]",
+			o += (size_t)snprintf(buf + o, cap - o,
+			                      "[%.9g, %.9g, %.9g]",
 			                      (double)p.params[d->offset],
 			                      (double)p.params[d->offset + 1],
 			                      (double)p.params[d->offset + 2]);

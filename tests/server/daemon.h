@@ -53,7 +53,7 @@ static int64_t t_now_ms(void)
 /* Starts blobcastd on dir (created by the caller or here), with up to four
  * extra options (NULL-terminated; extra may be NULL). */
 static int daemon_start_with(struct daemon *d, const char *dir,
-			     const char *const *extra)
+                             const char *const *extra)
 {
 	const char *more[5] = {NULL};
 	for (int i = 0; extra && i < 4 && extra[i]; i++) {
@@ -73,7 +73,7 @@ static int daemon_start_with(struct daemon *d, const char *dir,
 		int devnull = open("/dev/null", O_WRONLY);
 		if (daemon_log_path) {
 			int log = open(daemon_log_path,
-				       O_WRONLY | O_CREAT | O_TRUNC, 0600);
+			               O_WRONLY | O_CREAT | O_TRUNC, 0600);
 			if (log >= 0) {
 				dup2(log, 2);
 			}
@@ -135,7 +135,7 @@ static int conn_open(struct conn *c, const struct daemon *d)
 		return -1;
 	}
 	bc_proto_reader_init(&c->r, &(struct bc_proto_reader_opts){
-					    .side = BC_PROTO_SIDE_CLIENT});
+	                                .side = BC_PROTO_SIDE_CLIENT});
 	return 0;
 }
 
@@ -246,10 +246,10 @@ static int conn_hello(struct conn *c, const char *name)
 }
 
 static int conn_join(struct conn *c, const char *session,
-		     enum bc_proto_role role, bool create)
+                     enum bc_proto_role role, bool create)
 {
 	struct bc_msg m = {.type = create ? BC_MSG_SESSION_CREATE
-					  : BC_MSG_SESSION_JOIN};
+	                                  : BC_MSG_SESSION_JOIN};
 	m.session.role = role;
 	m.session.name.ptr = session;
 	m.session.name.len = (uint32_t)strlen(session);
@@ -260,7 +260,7 @@ static int conn_join(struct conn *c, const char *session,
 }
 
 static uint32_t conn_view(struct conn *c, uint16_t w, uint16_t h,
-			  enum bc_proto_encoding enc)
+                          enum bc_proto_encoding enc)
 {
 	struct bc_msg m = {.type = BC_MSG_VIEW};
 	m.view.width = w;
@@ -274,15 +274,12 @@ static uint32_t conn_view(struct conn *c, uint16_t w, uint16_t h,
 
 /* A SET edit of one translate field on node id. */
 static uint32_t conn_move(struct conn *c, uint32_t id, float x, float y,
-			  float z, bool interacting)
+                          float z, bool interacting)
 {
-	struct bc_proto_field f = {.field = BC_PROTO_FIELD_TRANSLATE,
-				   .count = 3,
-				   .v = {x, y, z}};
-	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_SET,
-				      .node = id,
-				      .nfields = 1,
-				      .fields = &f};
+	struct bc_proto_field f = {
+	    .field = BC_PROTO_FIELD_TRANSLATE, .count = 3, .v = {x, y, z}};
+	struct bc_proto_edit_op op = {
+	    .kind = BC_PROTO_EDIT_SET, .node = id, .nfields = 1, .fields = &f};
 	struct bc_msg m = {.type = BC_MSG_EDIT};
 	m.flags = interacting ? BC_PROTO_FLAG_INTERACTING : 0;
 	m.edit.nops = 1;
@@ -295,8 +292,8 @@ static uint32_t conn_move(struct conn *c, uint32_t id, float x, float y,
  * directory /tmp/bc-NAME-test-PID, written into dir (n bytes): removed
  * when every test passed, kept for inspection when one failed. */
 static inline int daemon_tests_run(const char *name, char *dir, size_t n,
-				   const struct bc_test *tests, size_t ntests,
-				   int argc, char **argv)
+                                   const struct bc_test *tests, size_t ntests,
+                                   int argc, char **argv)
 {
 	char cmd[128];
 	int rc;
@@ -321,9 +318,9 @@ static inline int daemon_tests_run(const char *name, char *dir, size_t n,
 static inline struct bc_tree *scene_of(const struct conn *c)
 {
 	struct bc_tree *t = bc_tree_create();
-	if (!t || bc_scene_decode(c->m.scene_state.scene.ptr,
-				  c->m.scene_state.scene.len, t, NULL, NULL,
-				  NULL)) {
+	if (!t ||
+	    bc_scene_decode(c->m.scene_state.scene.ptr,
+	                    c->m.scene_state.scene.len, t, NULL, NULL, NULL)) {
 		bc_tree_destroy(t);
 		return NULL;
 	}

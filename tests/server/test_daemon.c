@@ -165,7 +165,7 @@ static void frames_follow_views_and_edits_send_damage_only(void)
 		uint64_t area = 0;
 		for (uint32_t i = 0; i < a.m.frame.nrects; i++) {
 			area += (uint64_t)a.m.frame.rects[i].w *
-				a.m.frame.rects[i].h;
+			        a.m.frame.rects[i].h;
 			CHECK(a.m.frame.rects[i].data.len ==
 			      4u * a.m.frame.rects[i].w * a.m.frame.rects[i].h);
 		}
@@ -220,8 +220,9 @@ static void bad_input_never_disturbs_other_clients(void)
 	conn_close(&bad);
 	/* A header claiming 2^32-1 bytes of payload. */
 	{
-		uint8_t hdr[16] = {'B', 'C', 'S', 'T', 1, BC_MSG_HELLO, 0, 0,
-				   0xff, 0xff, 0xff, 0xff, 1, 0, 0, 0};
+		uint8_t hdr[16] = {'B', 'C', 'S',  'T',  1,    BC_MSG_HELLO,
+		                   0,   0,   0xff, 0xff, 0xff, 0xff,
+		                   1,   0,   0,    0};
 		REQUIRE(conn_open(&bad, &d) == 0);
 		send_raw(&bad, hdr, sizeof(hdr));
 		REQUIRE(conn_expect(&bad, BC_MSG_ERROR, 5000) == 1);
@@ -233,7 +234,7 @@ static void bad_input_never_disturbs_other_clients(void)
 		struct bc_msg cam = {.type = BC_MSG_CAMERA};
 		REQUIRE(conn_open(&bad, &d) == 0 && conn_hello(&bad, "b") == 0);
 		REQUIRE(conn_join(&bad, "default", BC_PROTO_ROLE_EDITOR,
-				  false) == 0);
+		                  false) == 0);
 		REQUIRE(conn_view(&bad, 8000, 8000, BC_PROTO_ENC_JPEG));
 		REQUIRE(conn_expect(&bad, BC_MSG_ERROR, 5000) == 1);
 		CHECK(bad.m.error.code == (uint16_t)-BC_ERANGE);
@@ -403,15 +404,15 @@ static void a_client_that_stops_reading_is_dropped(void)
 }
 
 static const struct bc_test tests[] = {
-	{"members_see_the_same_edits_in_order",
-	 members_see_the_same_edits_in_order},
-	{"frames_follow_views_and_edits_send_damage_only",
-	 frames_follow_views_and_edits_send_damage_only},
-	{"bad_input_never_disturbs_other_clients",
-	 bad_input_never_disturbs_other_clients},
-	{"kill_9_loses_no_acknowledged_edit", kill_9_loses_no_acknowledged_edit},
-	{"a_client_that_stops_reading_is_dropped",
-	 a_client_that_stops_reading_is_dropped},
+    {"members_see_the_same_edits_in_order",
+     members_see_the_same_edits_in_order},
+    {"frames_follow_views_and_edits_send_damage_only",
+     frames_follow_views_and_edits_send_damage_only},
+    {"bad_input_never_disturbs_other_clients",
+     bad_input_never_disturbs_other_clients},
+    {"kill_9_loses_no_acknowledged_edit", kill_9_loses_no_acknowledged_edit},
+    {"a_client_that_stops_reading_is_dropped",
+     a_client_that_stops_reading_is_dropped},
 };
 
 int main(int argc, char **argv)

@@ -109,8 +109,7 @@ static uint8_t *snapshot(struct conn *c, size_t *n, uint16_t *w, uint16_t *h)
 		if (conn_expect(c, BC_MSG_FRAME, 20000) != 1) {
 			return NULL;
 		}
-		if (c->m.seq == seq &&
-		    (c->m.flags & BC_PROTO_FLAG_SNAPSHOT)) {
+		if (c->m.seq == seq && (c->m.flags & BC_PROTO_FLAG_SNAPSHOT)) {
 			break;
 		}
 	}
@@ -317,9 +316,8 @@ static void refusals_and_old_clients(void)
 	struct bc_msg m = {.type = BC_MSG_SESSION_CAMERA};
 	uint32_t seq;
 	/* PRESENT with on = 2: a decoding error (ERANGE), fatal. */
-	static const uint8_t bad_present[] = {0x42, 0x43, 0x53, 0x54, 1, 28,
-	                                      0,    0,    1,    0,    0, 0,
-	                                      9,    0,    0,    0,    2};
+	static const uint8_t bad_present[] = {
+	    0x42, 0x43, 0x53, 0x54, 1, 28, 0, 0, 1, 0, 0, 0, 9, 0, 0, 0, 2};
 	char dir[96];
 	snprintf(dir, sizeof(dir), "%s/refuse", base_dir);
 	REQUIRE(daemon_start(&d, dir) == 0);
@@ -387,9 +385,10 @@ static bool joiner_camera(const struct daemon *d, const char *s,
 	bool has = false, ok;
 	member(&j, d, "joiner", s, BC_PROTO_ROLE_VIEWER, false);
 	*order = j.m.scene_state.order;
-	ok = t && bc_scene_decode(j.m.scene_state.scene.ptr,
-	                          j.m.scene_state.scene.len, t, cam, &has,
-	                          NULL) == 0 &&
+	ok = t &&
+	     bc_scene_decode(j.m.scene_state.scene.ptr,
+	                     j.m.scene_state.scene.len, t, cam, &has,
+	                     NULL) == 0 &&
 	     has;
 	bc_tree_destroy(t);
 	conn_close(&j);

@@ -21,8 +21,8 @@
 
 static void test_camera(struct bc_camera *cam)
 {
-	*cam = (struct bc_camera){{0.3f, 1.0f, 7.0f}, {0, 0, 0}, {0, 1, 0},
-				  40.0f};
+	*cam =
+	    (struct bc_camera){{0.3f, 1.0f, 7.0f}, {0, 0, 0}, {0, 1, 0}, 40.0f};
 }
 
 static uint32_t send_camera(struct conn *c, const struct bc_camera *cam)
@@ -52,8 +52,8 @@ static uint32_t view8(struct conn *c)
 /* A local render of t at `level` (whole), as the picture a FRAME of that
  * level carries: every 2^level-th pixel. Returns a malloc'ed RGBA image. */
 static uint8_t *local_picture(const struct bc_tree *t,
-			      const struct bc_camera *cam, uint32_t level,
-			      uint32_t *w, uint32_t *h)
+                              const struct bc_camera *cam, uint32_t level,
+                              uint32_t *w, uint32_t *h)
 {
 	struct bc_renderer *r = NULL;
 	struct bc_frame f = {0};
@@ -71,8 +71,9 @@ static uint8_t *local_picture(const struct bc_tree *t,
 	for (uint32_t y = 0; y < *h; y++) {
 		for (uint32_t x = 0; x < *w; x++) {
 			memcpy(out + ((size_t)y * *w + x) * 4u,
-			       f.rgba + ((size_t)(y << level) * VW +
-					 (x << level)) * 4u,
+			       f.rgba +
+			           ((size_t)(y << level) * VW + (x << level)) *
+			               4u,
 			       4);
 		}
 	}
@@ -95,13 +96,12 @@ static void paste(const struct conn *c, uint8_t *img, uint32_t iw)
 	}
 }
 
-static void join_with_view(struct daemon *d, struct conn *a,
-			   struct bc_tree **t, const struct bc_camera *cam)
+static void join_with_view(struct daemon *d, struct conn *a, struct bc_tree **t,
+                           const struct bc_camera *cam)
 {
 	/* Raw only, so every picture compares bit for bit. */
 	REQUIRE(conn_open(a, d) == 0 &&
-		conn_hello_enc(a, "frames",
-			       1u << (BC_PROTO_ENC_RAW - 1)) == 0);
+	        conn_hello_enc(a, "frames", 1u << (BC_PROTO_ENC_RAW - 1)) == 0);
 	REQUIRE(view8(a));
 	REQUIRE(send_camera(a, cam));
 	REQUIRE(conn_join(a, "default", BC_PROTO_ROLE_EDITOR, false) == 0);
@@ -132,11 +132,12 @@ static void pictures_refine_to_the_still_and_edits_patch_exactly(void)
 		last_level = (int)level;
 		CHECK(a.m.frame.nrects == 1);
 		REQUIRE((want = local_picture(t, &cam, level, &w, &h)) != NULL);
-		CHECK(a.m.frame.image_width == w && a.m.frame.image_height == h);
+		CHECK(a.m.frame.image_width == w &&
+		      a.m.frame.image_height == h);
 		CHECK(a.m.frame.rects[0].w == w && a.m.frame.rects[0].h == h);
 		CHECK(a.m.frame.rects[0].data.len == (size_t)w * h * 4u &&
 		      memcmp(a.m.frame.rects[0].data.ptr, want,
-			     (size_t)w * h * 4u) == 0);
+		             (size_t)w * h * 4u) == 0);
 		CHECK(!(a.m.flags & BC_PROTO_FLAG_INCOMPLETE));
 		if (level > 0) {
 			CHECK(!(a.m.flags & BC_PROTO_FLAG_STILL));
@@ -164,7 +165,7 @@ static void pictures_refine_to_the_still_and_edits_patch_exactly(void)
 		p.translate[1] -= 0.03f;
 		REQUIRE(bc_tree_set_prim(t, id, &p, NULL) == 0);
 		REQUIRE(conn_move(&a, id, p.translate[0], p.translate[1],
-				  p.translate[2], false));
+		                  p.translate[2], false));
 		REQUIRE(conn_expect(&a, BC_MSG_EDIT_APPLIED, 5000) == 1);
 		order = (uint32_t)a.m.edit_applied.order;
 		do {
@@ -174,7 +175,7 @@ static void pictures_refine_to_the_still_and_edits_patch_exactly(void)
 		CHECK((a.m.flags & BC_PROTO_FLAG_STILL) != 0);
 		for (uint32_t i = 0; i < a.m.frame.nrects; i++) {
 			area += (uint64_t)a.m.frame.rects[i].w *
-				a.m.frame.rects[i].h;
+			        a.m.frame.rects[i].h;
 		}
 		CHECK(area < (uint64_t)VW * VH);
 		paste(&a, still, VW);
@@ -213,7 +214,7 @@ static void a_budget_cut_frame_is_a_complete_coarse_picture(void)
 		CHECK(a.m.frame.nrects == 1 && a.m.frame.image_width == w &&
 		      a.m.frame.image_height == h);
 		CHECK(memcmp(a.m.frame.rects[0].data.ptr, want,
-			     (size_t)w * h * 4u) == 0);
+		             (size_t)w * h * 4u) == 0);
 		free(want);
 		if (a.m.flags & BC_PROTO_FLAG_INCOMPLETE) {
 			CHECK(level > 0);
@@ -235,10 +236,11 @@ static void a_budget_cut_frame_is_a_complete_coarse_picture(void)
 		CHECK((a.m.flags & BC_PROTO_FLAG_SNAPSHOT) != 0);
 		CHECK(bc_proto_flags_level(a.m.flags) == 0);
 		REQUIRE((want = local_picture(t, &cam, 0, &w, &h)) != NULL);
-		CHECK(a.m.frame.image_width == VW && a.m.frame.image_height == VH);
+		CHECK(a.m.frame.image_width == VW &&
+		      a.m.frame.image_height == VH);
 		CHECK(a.m.frame.nrects == 1 &&
 		      memcmp(a.m.frame.rects[0].data.ptr, want,
-			     (size_t)VW * VH * 4u) == 0);
+		             (size_t)VW * VH * 4u) == 0);
 		free(want);
 	}
 	bc_tree_destroy(t);
@@ -347,6 +349,5 @@ int main(int argc, char **argv)
 	           "/tmp/bc-test-frames-c") != 0) {
 		return 1;
 	}
-	return bc_test_run(tests, sizeof(tests) / sizeof(tests[0]), argc,
-			   argv);
+	return bc_test_run(tests, sizeof(tests) / sizeof(tests[0]), argc, argv);
 }

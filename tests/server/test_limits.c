@@ -122,8 +122,8 @@ static void an_idle_client_in_no_session_is_dropped(void)
 static int daemon_start_tcp_config(struct daemon *d, const char *dir,
                                    const char *config)
 {
-	const char *extra[] = {"--listen", "127.0.0.1:0", config ? "--config" : NULL,
-	                       config, NULL};
+	const char *extra[] = {"--listen", "127.0.0.1:0",
+	                       config ? "--config" : NULL, config, NULL};
 	char log[80], line[256];
 	int saved = dup(2), fd, port = 0;
 	const char *verbose = getenv("BLOBCAST_TEST_VERBOSE");
@@ -351,8 +351,7 @@ static void member(struct conn *c, const struct daemon *d, const char *name,
 
 /* Takes what c has received so far (without waiting): counts snapshot
  * answers and EBUSY errors. */
-static void drain(struct conn *c, int wait_ms, uint32_t *snaps,
-                  uint32_t *busy)
+static void drain(struct conn *c, int wait_ms, uint32_t *snaps, uint32_t *busy)
 {
 	while (conn_recv(c, wait_ms) == 1) {
 		if (c->m.type == BC_MSG_FRAME &&
@@ -504,8 +503,8 @@ static void tcp_hello(struct conn *c, int port, const char *token)
 
 /* Sends a session request of type t and returns the answer: 0 for
  * SESSION_INFO or OK, else the ERROR's code (-1: none). */
-static int session_request(struct conn *c, enum bc_msg_type t,
-                           const char *name, enum bc_proto_role role)
+static int session_request(struct conn *c, enum bc_msg_type t, const char *name,
+                           enum bc_proto_role role)
 {
 	struct bc_msg m = {.type = t};
 	uint32_t seq;
@@ -562,9 +561,9 @@ static void a_viewer_token_cannot_create_or_delete_sessions(void)
 	CHECK_EQ_INT(session_request(&viewer, BC_MSG_SESSION_CREATE, "mine",
 	                             BC_PROTO_ROLE_VIEWER),
 	             -BC_EPERM);
-	CHECK_EQ_INT(session_request(&viewer, BC_MSG_SESSION_DELETE, "default",
-	                             0),
-	             -BC_EPERM);
+	CHECK_EQ_INT(
+	    session_request(&viewer, BC_MSG_SESSION_DELETE, "default", 0),
+	    -BC_EPERM);
 	CHECK_EQ_INT(session_request(&viewer, BC_MSG_SESSION_JOIN, "mine",
 	                             BC_PROTO_ROLE_VIEWER),
 	             -BC_ENOSESSION);
@@ -594,7 +593,8 @@ static void idle_sessions_make_room_and_load_again(void)
 	REQUIRE(conn_join(&a, "s1", BC_PROTO_ROLE_EDITOR, true) == 0);
 	REQUIRE(conn_expect(&a, BC_MSG_SCENE_STATE, 5000) == 1);
 	REQUIRE((t = scene_of(&a)));
-	REQUIRE(conn_move(&a, bc_tree_lin(t)->node_id[bc_tree_lin(t)->prim_slot[0]],
+	REQUIRE(conn_move(&a,
+	                  bc_tree_lin(t)->node_id[bc_tree_lin(t)->prim_slot[0]],
 	                  0.25f, 0, 0, false));
 	bc_tree_destroy(t);
 	REQUIRE(conn_expect(&a, BC_MSG_EDIT_APPLIED, 10000) == 1);
@@ -620,7 +620,8 @@ static void idle_sessions_make_room_and_load_again(void)
 		REQUIRE(conn_expect(&a, BC_MSG_SESSIONS, 5000) == 1);
 		CHECK_EQ_INT(l->nsessions, 2 * BC_SRV_MAX_SESSIONS + 1);
 		for (uint32_t i = 0; i < l->nsessions; i++) {
-			const struct bc_proto_session_entry *e = &l->sessions[i];
+			const struct bc_proto_session_entry *e =
+			    &l->sessions[i];
 			loaded += (e->flags & BC_PROTO_SESSION_LOADED) != 0;
 			known += (e->flags & BC_PROTO_SESSION_KNOWN) != 0;
 			if (i > 0) {
@@ -632,7 +633,8 @@ static void idle_sessions_make_room_and_load_again(void)
 				CHECK(cmp < 0 ||
 				      (cmp == 0 && p->name.len < e->name.len));
 			}
-			if (e->name.len == 2 && memcmp(e->name.ptr, "s1", 2) == 0) {
+			if (e->name.len == 2 &&
+			    memcmp(e->name.ptr, "s1", 2) == 0) {
 				s1_seen = true;
 				CHECK(!(e->flags & BC_PROTO_SESSION_LOADED));
 				CHECK(e->flags & BC_PROTO_SESSION_KNOWN);
@@ -672,7 +674,8 @@ static void a_deleted_session_is_gone_for_good(void)
 	REQUIRE(conn_open(&c, &d) == 0 && conn_hello(&c, "carol") == 0);
 	REQUIRE(conn_join(&a, "doomed", BC_PROTO_ROLE_EDITOR, true) == 0);
 	REQUIRE(conn_join(&b, "doomed", BC_PROTO_ROLE_VIEWER, false) == 0);
-	CHECK_EQ_INT(session_request(&c, BC_MSG_SESSION_DELETE, "doomed", 0), 0);
+	CHECK_EQ_INT(session_request(&c, BC_MSG_SESSION_DELETE, "doomed", 0),
+	             0);
 	/* Both members hear it (seq 0) and are back in READY. */
 	REQUIRE(conn_expect(&b, BC_MSG_ERROR, 5000) == 1);
 	CHECK_EQ_INT(b.m.error.code, -BC_ENOSESSION);

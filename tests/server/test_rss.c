@@ -88,8 +88,7 @@ static long stall(const struct daemon *d, struct conn *members, long base)
 
 /* Closes the members and waits (up to 20 s) for RSS to fall under limit;
  * returns the last RSS read. */
-static long leave_all(const struct daemon *d, struct conn *members,
-                      long limit)
+static long leave_all(const struct daemon *d, struct conn *members, long limit)
 {
 	long after = -1;
 	int64_t end = t_now_ms() + 20000;

@@ -299,9 +299,9 @@ static void listening_beyond_loopback_without_tokens_warns(void)
 	make_dir_name(cfg, sizeof(cfg), "tokens.json");
 	/* (Tokens on a plain listener beyond loopback need allow_plaintext:
 	 * test_tls.) */
-	REQUIRE(write_file(cfg, "{\"allow_plaintext\": true, \"tokens\": "
-	                        "[{\"token\": \"t\", \"role\": \"viewer\"}]}") ==
-	        0);
+	REQUIRE(write_file(cfg,
+	                   "{\"allow_plaintext\": true, \"tokens\": "
+	                   "[{\"token\": \"t\", \"role\": \"viewer\"}]}") == 0);
 	CHECK_EQ_INT(warned("anytok", (const char *[]){"--listen", "0.0.0.0:0",
 	                                               "--config", cfg, NULL}),
 	             0);

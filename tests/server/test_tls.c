@@ -55,21 +55,23 @@ static bool make_certs(void)
 	const char *d = base_dir;
 	const char *ec = "-newkey ec -pkeyopt ec_paramgen_curve:P-256 -nodes";
 	return sh("cd %s && "
-		  "openssl req -x509 %s -keyout ca.key -out ca.pem -days 2 "
-		  "-subj /CN=blobcast-test-ca 2>/dev/null && "
-		  "openssl req -x509 %s -keyout other-ca.key -out other-ca.pem "
-		  "-days 2 -subj /CN=another-ca 2>/dev/null && "
-		  "printf 'subjectAltName=DNS:localhost,IP:127.0.0.1\\n' "
-		  "> good.ext && "
-		  "printf 'subjectAltName=DNS:elsewhere.example\\n' > bad.ext && "
-		  "for n in good bad; do "
-		  "openssl req %s -keyout $n.key -out $n.csr "
-		  "-subj /CN=blobcastd 2>/dev/null && "
-		  "openssl x509 -req -in $n.csr -CA ca.pem -CAkey ca.key "
-		  "-CAcreateserial -days 2 -extfile $n.ext -out $n.crt "
-		  "2>/dev/null && cat $n.crt $n.key > $n.pem || exit 1; done && "
-		  "cp good.pem server.pem",
-		  d, ec, ec, ec) == 0;
+	          "openssl req -x509 %s -keyout ca.key -out ca.pem -days 2 "
+	          "-subj /CN=blobcast-test-ca 2>/dev/null && "
+	          "openssl req -x509 %s -keyout other-ca.key -out other-ca.pem "
+	          "-days 2 -subj /CN=another-ca 2>/dev/null && "
+	          "printf 'subjectAltName=DNS:localhost,IP:127.0.0.1\\n' "
+	          "> good.ext && "
+	          "printf 'subjectAltName=DNS:elsewhere.example\\n' > bad.ext "
+	          "&& "
+	          "for n in good bad; do "
+	          "openssl req %s -keyout $n.key -out $n.csr "
+	          "-subj /CN=blobcastd 2>/dev/null && "
+	          "openssl x509 -req -in $n.csr -CA ca.pem -CAkey ca.key "
+	          "-CAcreateserial -days 2 -extfile $n.ext -out $n.crt "
+	          "2>/dev/null && cat $n.crt $n.key > $n.pem || exit 1; done "
+	          "&& "
+	          "cp good.pem server.pem",
+	          d, ec, ec, ec) == 0;
 }
 
 /* The port a daemon whose stderr went to log printed. */
@@ -85,7 +87,8 @@ static int port_from_log(const char *log)
 		}
 		buf[n] = '\0';
 		if ((p = strstr(buf, "blobcastd: listening on 127.0.0.1:"))) {
-			return atoi(p + strlen("blobcastd: listening on 127.0.0.1:"));
+			return atoi(
+			    p + strlen("blobcastd: listening on 127.0.0.1:"));
 		}
 		t_sleep_ms(25);
 	}
@@ -109,18 +112,18 @@ static int tls_port, plain_port;
 static char tls_log[128], plain_log[128];
 
 static int connect_to(struct bc_client **c, const char *addr, const char *ca,
-		      bool insecure, const char *token, struct bc_errinfo *ei)
+                      bool insecure, const char *token, struct bc_errinfo *ei)
 {
 	return bc_client_connect(c,
-				 &(struct bc_client_opts){
-					 .addr = addr,
-					 .name = "test-tls",
-					 .token = token,
-					 .timeout_ms = 3000,
-					 .ca_file = ca,
-					 .insecure = insecure,
-				 },
-				 ei);
+	                         &(struct bc_client_opts){
+	                             .addr = addr,
+	                             .name = "test-tls",
+	                             .token = token,
+	                             .timeout_ms = 3000,
+	                             .ca_file = ca,
+	                             .insecure = insecure,
+	                         },
+	                         ei);
 }
 
 /* A primitive of the mirrored scene (a leaf under the root). */
@@ -152,8 +155,8 @@ static void join_edit_snapshot_over_tls(void)
 		return;
 	}
 	CHECK_EQ_INT(bc_client_join(c, "default", BC_PROTO_ROLE_EDITOR,
-				    BC_CLIENT_JOIN_ANY, &ei),
-		     0);
+	                            BC_CLIENT_JOIN_ANY, &ei),
+	             0);
 	node = some_prim(c);
 	CHECK(node != 0);
 	CHECK_EQ_INT(bc_client_edit_kv(c, node, kv, 1, false, &seq, &ei), 0);
@@ -203,9 +206,9 @@ static void untrusted_certificates_are_refused(void)
 	c = NULL;
 
 	/* A CA file that does not exist is the caller's mistake. */
-	CHECK_EQ_INT(connect_to(&c, addr, "/nonexistent/ca.pem", false, TOKEN,
-				&ei),
-		     BC_EINVAL);
+	CHECK_EQ_INT(
+	    connect_to(&c, addr, "/nonexistent/ca.pem", false, TOKEN, &ei),
+	    BC_EINVAL);
 
 	/* SIGHUP reloads the certificate: one from the right CA for
 	 * another name is refused for its name, and the good one again
@@ -216,8 +219,7 @@ static void untrusted_certificates_are_refused(void)
 	CHECK_EQ_INT(connect_to(&c, addr, ca, false, TOKEN, &ei), BC_EAUTH);
 	CHECK(strstr(ei.msg, "mismatch") != NULL);
 	fprintf(stderr, "  wrong name: %s\n", ei.msg);
-	CHECK_EQ_INT(sh("cp %s/good.pem %s/server.pem", base_dir, base_dir),
-		     0);
+	CHECK_EQ_INT(sh("cp %s/good.pem %s/server.pem", base_dir, base_dir), 0);
 	kill(tls_d.pid, SIGHUP);
 	t_sleep_ms(300);
 	CHECK_EQ_INT(connect_to(&c, addr, ca, false, TOKEN, &ei), 0);
@@ -228,7 +230,7 @@ static void untrusted_certificates_are_refused(void)
 static int tcp_connect(int port)
 {
 	struct sockaddr_in sa = {.sin_family = AF_INET,
-				 .sin_port = htons((uint16_t)port)};
+	                         .sin_port = htons((uint16_t)port)};
 	int fd = socket(AF_INET, SOCK_STREAM, 0);
 	sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
 	if (connect(fd, (struct sockaddr *)&sa, sizeof(sa)) != 0) {
@@ -252,7 +254,7 @@ static void wrong_protocol_on_either_port_is_refused_cleanly(void)
 	raw.fd = tcp_connect(tls_port);
 	CHECK(raw.fd >= 0);
 	bc_proto_reader_init(&raw.r, &(struct bc_proto_reader_opts){
-					     .side = BC_PROTO_SIDE_CLIENT});
+	                                 .side = BC_PROTO_SIDE_CLIENT});
 	{
 		struct bc_msg m = {.type = BC_MSG_HELLO};
 		m.hello.version_min = m.hello.version_max = 1;
@@ -386,9 +388,11 @@ static pid_t record_one(int lfd, const char *cert, const char *out)
 			SSL_CTX *ctx = SSL_CTX_new(TLS_server_method());
 			SSL *ssl;
 			struct timeval tv = {2, 0};
-			setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof(tv));
+			setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv,
+			           sizeof(tv));
 			SSL_CTX_use_certificate_chain_file(ctx, cert);
-			SSL_CTX_use_PrivateKey_file(ctx, cert, SSL_FILETYPE_PEM);
+			SSL_CTX_use_PrivateKey_file(ctx, cert,
+			                            SSL_FILETYPE_PEM);
 			ssl = SSL_new(ctx);
 			SSL_set_fd(ssl, fd);
 			if (SSL_accept(ssl) == 1) {
@@ -446,13 +450,13 @@ static void token_never_sent_before_the_handshake(void)
 	pid = record_one(lfd, NULL, rec);
 	snprintf(addr, sizeof(addr), "tls://127.0.0.1:%d", port);
 	CHECK(bc_client_connect(&c,
-				&(struct bc_client_opts){
-					.addr = addr,
-					.token = TOKEN,
-					.timeout_ms = 800,
-					.insecure = true,
-				},
-				&ei) == BC_ETIMEOUT);
+	                        &(struct bc_client_opts){
+	                            .addr = addr,
+	                            .token = TOKEN,
+	                            .timeout_ms = 800,
+	                            .insecure = true,
+	                        },
+	                        &ei) == BC_ETIMEOUT);
 	waitpid(pid, &status, 0);
 	close(lfd);
 	n = slurp(rec, got, sizeof(got));
@@ -465,18 +469,19 @@ static void token_never_sent_before_the_handshake(void)
 	{
 		char mitm[128];
 		path_of(mitm, sizeof(mitm), "mitm.pem");
-		CHECK_EQ_INT(sh("cd %s && openssl req -x509 -newkey ec -pkeyopt "
-				"ec_paramgen_curve:P-256 -nodes -keyout m.key "
-				"-out m.crt -days 2 -subj /CN=localhost "
-				"-addext subjectAltName=IP:127.0.0.1 "
-				"2>/dev/null && cat m.crt m.key > mitm.pem",
-				base_dir),
-			     0);
+		CHECK_EQ_INT(
+		    sh("cd %s && openssl req -x509 -newkey ec -pkeyopt "
+		       "ec_paramgen_curve:P-256 -nodes -keyout m.key "
+		       "-out m.crt -days 2 -subj /CN=localhost "
+		       "-addext subjectAltName=IP:127.0.0.1 "
+		       "2>/dev/null && cat m.crt m.key > mitm.pem",
+		       base_dir),
+		    0);
 		lfd = listen_any(&port);
 		pid = record_one(lfd, mitm, rec);
 		snprintf(addr, sizeof(addr), "tls://127.0.0.1:%d", port);
 		CHECK_EQ_INT(connect_to(&c, addr, ca, false, TOKEN, &ei),
-			     BC_EAUTH);
+		             BC_EAUTH);
 		waitpid(pid, &status, 0);
 		n = slurp(rec, got, sizeof(got));
 		CHECK_EQ_INT(n, 0);
@@ -487,13 +492,13 @@ static void token_never_sent_before_the_handshake(void)
 		 * does see a token when one is sent. */
 		pid = record_one(lfd, mitm, rec);
 		(void)bc_client_connect(&c,
-					&(struct bc_client_opts){
-						.addr = addr,
-						.token = TOKEN,
-						.timeout_ms = 800,
-						.insecure = true,
-					},
-					&ei);
+		                        &(struct bc_client_opts){
+		                            .addr = addr,
+		                            .token = TOKEN,
+		                            .timeout_ms = 800,
+		                            .insecure = true,
+		                        },
+		                        &ei);
 		waitpid(pid, &status, 0);
 		close(lfd);
 		n = slurp(rec, got, sizeof(got));
@@ -547,49 +552,49 @@ static void tokens_in_clear_need_allow_plaintext(void)
 		return;
 	}
 	fprintf(f, "{\"tokens\": [{\"token\": \"%s\", \"role\": \"editor\"}]}",
-		TOKEN);
+	        TOKEN);
 	fclose(f);
 	{
 		const char *args[] = {"--listen", "0.0.0.0:0", "--data", data,
-				      "--config", cfg, NULL};
+		                      "--config", cfg,         NULL};
 		CHECK_EQ_INT(run_daemon(log, args), 1);
 		CHECK(file_has(log, "--allow-plaintext"));
 	}
 	{
-		const char *args[] = {"--listen", "0.0.0.0:0", "--data", data,
-				      "--config", cfg, "--allow-plaintext",
-				      NULL};
+		const char *args[] = {
+		    "--listen", "0.0.0.0:0",         "--data", data, "--config",
+		    cfg,        "--allow-plaintext", NULL};
 		CHECK_EQ_INT(run_daemon(log, args), -1);
 		CHECK(file_has(log, "without TLS (--allow-plaintext)"));
 	}
 	{
 		/* Loopback needs no TLS: nobody else is on that path. */
 		const char *args[] = {"--listen", "127.0.0.1:0", "--data", data,
-				      "--config", cfg, NULL};
+		                      "--config", cfg,           NULL};
 		CHECK_EQ_INT(run_daemon(log, args), -1);
 	}
 	{
 		char cert[128];
 		path_of(cert, sizeof(cert), "ca.pem"); /* no key in it */
-		const char *args[] = {"--listen", "127.0.0.1:0", "--data", data,
-				      "--tls-cert", cert, NULL};
+		const char *args[] = {"--listen", "127.0.0.1:0", "--data",
+		                      data,       "--tls-cert",  cert,
+		                      NULL};
 		CHECK_EQ_INT(run_daemon(log, args), 1);
 		CHECK(file_has(log, "private key"));
 	}
 }
 
 static const struct bc_test tests[] = {
-	{"join_edit_snapshot_over_tls", join_edit_snapshot_over_tls},
-	{"untrusted_certificates_are_refused",
-	 untrusted_certificates_are_refused},
-	{"wrong_protocol_on_either_port_is_refused_cleanly",
-	 wrong_protocol_on_either_port_is_refused_cleanly},
-	{"a_stalled_handshake_meets_the_hello_timeout",
-	 a_stalled_handshake_meets_the_hello_timeout},
-	{"token_never_sent_before_the_handshake",
-	 token_never_sent_before_the_handshake},
-	{"tokens_in_clear_need_allow_plaintext",
-	 tokens_in_clear_need_allow_plaintext},
+    {"join_edit_snapshot_over_tls", join_edit_snapshot_over_tls},
+    {"untrusted_certificates_are_refused", untrusted_certificates_are_refused},
+    {"wrong_protocol_on_either_port_is_refused_cleanly",
+     wrong_protocol_on_either_port_is_refused_cleanly},
+    {"a_stalled_handshake_meets_the_hello_timeout",
+     a_stalled_handshake_meets_the_hello_timeout},
+    {"token_never_sent_before_the_handshake",
+     token_never_sent_before_the_handshake},
+    {"tokens_in_clear_need_allow_plaintext",
+     tokens_in_clear_need_allow_plaintext},
 };
 
 int main(int argc, char **argv)
@@ -601,11 +606,11 @@ int main(int argc, char **argv)
 	signal(SIGPIPE, SIG_IGN);
 	bc_log_init(BC_LOG_ERROR);
 	snprintf(base_dir, sizeof(base_dir), "/tmp/bc-tls-test-%d",
-		 (int)getpid());
+	         (int)getpid());
 	mkdir(base_dir, 0700);
 	if (system("openssl version >/dev/null 2>&1") != 0) {
 		fprintf(stderr, "the openssl command is missing "
-				"(deploy/install-deps.sh)\n");
+		                "(deploy/install-deps.sh)\n");
 		return 1;
 	}
 	if (!make_certs()) {
@@ -620,9 +625,9 @@ int main(int argc, char **argv)
 		return 1;
 	}
 	fprintf(f,
-		"{\"tls_cert\": \"%s\", \"tls_key\": \"%s\", \"tokens\": "
-		"[{\"token\": \"%s\", \"role\": \"editor\"}]}",
-		cert, cert, TOKEN);
+	        "{\"tls_cert\": \"%s\", \"tls_key\": \"%s\", \"tokens\": "
+	        "[{\"token\": \"%s\", \"role\": \"editor\"}]}",
+	        cert, cert, TOKEN);
 	fclose(f);
 	path_of(tls_log, sizeof(tls_log), "tls-daemon.log");
 	path_of(dir, sizeof(dir), "d-tls");
@@ -633,8 +638,7 @@ int main(int argc, char **argv)
 	extra[3] = cfg;
 	if (daemon_start_with(&tls_d, dir, extra) ||
 	    (tls_port = port_from_log(tls_log)) <= 0) {
-		fprintf(stderr, "the TLS daemon did not start (%s)\n",
-			tls_log);
+		fprintf(stderr, "the TLS daemon did not start (%s)\n", tls_log);
 		if (tls_d.pid > 0) {
 			daemon_stop(&tls_d, SIGKILL);
 		}
@@ -647,7 +651,7 @@ int main(int argc, char **argv)
 	if (daemon_start_with(&plain_d, dir, extra) ||
 	    (plain_port = port_from_log(plain_log)) <= 0) {
 		fprintf(stderr, "the plain daemon did not start (%s)\n",
-			plain_log);
+		        plain_log);
 		daemon_stop(&tls_d, SIGTERM);
 		if (plain_d.pid > 0) {
 			daemon_stop(&plain_d, SIGKILL);

@@ -133,10 +133,8 @@ static uint32_t send_set(struct editor *e, uint32_t id, uint8_t field,
                          const float *v, uint8_t n, bool interacting)
 {
 	struct bc_proto_field f = {.field = field, .count = n};
-	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_SET,
-	                              .node = id,
-	                              .nfields = 1,
-	                              .fields = &f};
+	struct bc_proto_edit_op op = {
+	    .kind = BC_PROTO_EDIT_SET, .node = id, .nfields = 1, .fields = &f};
 	struct bc_msg m = {.type = BC_MSG_EDIT};
 	memcpy(f.v, v, n * sizeof(float));
 	m.flags = interacting ? BC_PROTO_FLAG_INTERACTING : 0;
@@ -184,8 +182,7 @@ static void undo(struct editor *e, bool redo, uint64_t target_order,
 	CHECK_EQ_INT(flags, redo ? BC_PROTO_FLAG_REDO : BC_PROTO_FLAG_UNDO);
 	CHECK_EQ_INT(a->target_order, target_order);
 	CHECK(a->target_author.len == strlen(author) &&
-	      memcmp(a->target_author.ptr, author, a->target_author.len) ==
-	          0);
+	      memcmp(a->target_author.ptr, author, a->target_author.len) == 0);
 }
 
 static uint64_t last_order(const struct editor *e)
@@ -224,16 +221,17 @@ static void two_editors_undo_and_redo_each_other(void)
 	/* alice moves one primitive; bob drags another (four edits, the
 	 * last one the release); alice inserts a sphere. */
 	v[0] = 0.4f, v[1] = 0.0f, v[2] = -0.2f;
-	REQUIRE(await_applied(&alice, send_set(&alice, prim0,
-	                                       BC_PROTO_FIELD_TRANSLATE, v, 3,
-	                                       false),
+	REQUIRE(await_applied(&alice,
+	                      send_set(&alice, prim0, BC_PROTO_FIELD_TRANSLATE,
+	                               v, 3, false),
 	                      10000) >= 0);
 	o_move = last_order(&alice);
 	for (int i = 1; i <= 4; i++) {
 		v[0] = 0.1f * (float)i, v[1] = 0.05f * (float)i, v[2] = 0.0f;
-		REQUIRE(await_applied(&bob, send_set(&bob, prim1,
-		                                     BC_PROTO_FIELD_TRANSLATE,
-		                                     v, 3, i < 4),
+		REQUIRE(await_applied(&bob,
+		                      send_set(&bob, prim1,
+		                               BC_PROTO_FIELD_TRANSLATE, v, 3,
+		                               i < 4),
 		                      10000) >= 0);
 	}
 	o_drag = last_order(&bob);
@@ -266,10 +264,10 @@ static void two_editors_undo_and_redo_each_other(void)
 	REQUIRE(bc_tree_get(alice.mirror, 9001, &p, &op));
 	REQUIRE(!p.has_color);
 	v[0] = 1.0f, v[1] = 0.0f, v[2] = 0.0f;
-	REQUIRE(await_applied(&alice, send_set(&alice, 9001,
-	                                       BC_PROTO_FIELD_COLOR, v, 3,
-	                                       false),
-	                      10000) >= 0);
+	REQUIRE(await_applied(
+	            &alice,
+	            send_set(&alice, 9001, BC_PROTO_FIELD_COLOR, v, 3, false),
+	            10000) >= 0);
 	o_colour = last_order(&alice);
 	undo(&bob, false, o_colour, "alice");
 	check_state(&d, &alice, &bob, after);
@@ -278,9 +276,9 @@ static void two_editors_undo_and_redo_each_other(void)
 
 	/* A new edit leaves nothing to redo. */
 	v[0] = -0.3f, v[1] = 0.1f, v[2] = 0.0f;
-	REQUIRE(await_applied(&bob, send_set(&bob, prim1,
-	                                     BC_PROTO_FIELD_TRANSLATE, v, 3,
-	                                     false),
+	REQUIRE(await_applied(&bob,
+	                      send_set(&bob, prim1, BC_PROTO_FIELD_TRANSLATE, v,
+	                               3, false),
 	                      10000) >= 0);
 	seq = send_undo(&alice, true);
 	CHECK(await_applied(&alice, seq, 5000) == -1);

@@ -92,9 +92,8 @@ static void mask_fill_sets_exactly_the_terms(void)
  * primitive. */
 static void full_variant_equals_reference_evaluator(void)
 {
-	static const char *const names[] = {"random", "random", "gears",
-	                                    "fig16",  "fig18",  "comb",
-	                                    "catalogue"};
+	static const char *const names[] = {
+	    "random", "random", "gears", "fig16", "fig18", "comb", "catalogue"};
 	struct rng r = {7};
 	for (size_t s = 0; s < sizeof(names) / sizeof(names[0]); s++) {
 		struct bc_gen_opts o = {0};

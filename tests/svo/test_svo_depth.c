@@ -93,8 +93,8 @@ static float oracle_depth(const struct oracle *q, bool *crossing)
 			float tn = tp + h, fn = of(q, tn);
 			if (fn < 0.0f) {
 				float a = tp, b = tn;
-				for (int it = 0; it < 60 && b - a > 0.1f * q->tol;
-				     it++) {
+				for (int it = 0;
+				     it < 60 && b - a > 0.1f * q->tol; it++) {
 					float m = 0.5f * (a + b);
 					if (of(q, m) < 0.0f) {
 						b = m;
@@ -193,9 +193,12 @@ static int depth_compare(const struct bc_tree *t, const struct bc_camera *cam,
 		bool ha = isfinite(a.depth[i]), hb = isfinite(b.depth[i]);
 		bool cross;
 		float d[3], z;
-		struct oracle q = {l, 2.0f * vr.tan_half_y / (float)H,
+		struct oracle q = {l,
+		                   2.0f * vr.tan_half_y / (float)H,
 		                   BC_SVO_MIN_STEP_REL * l->size,
-		                   BC_SVO_REFINE_REL * l->size, vr.eye, d};
+		                   BC_SVO_REFINE_REL * l->size,
+		                   vr.eye,
+		                   d};
 		bc_view_rays_dir(&vr, (float)(i % W) + 0.5f,
 		                 (float)(i / W) + 0.5f, d);
 		z = oracle_depth(&q, &cross);
@@ -342,8 +345,7 @@ static void svo_depth_matches_tiled_on_the_default_scene(void)
 	for (int axis = 0; axis < 3; axis++) {
 		char what[32];
 		grazing(&cam, axis, 3.0f, &gz);
-		snprintf(what, sizeof(what), "default grazing %c",
-		         "xyz"[axis]);
+		snprintf(what, sizeof(what), "default grazing %c", "xyz"[axis]);
 		check(what, t, &gz, BC_RANGE_DEFAULT, false, &worst);
 	}
 	printf("  worst p95 against the oracle %.2e\n", (double)worst);

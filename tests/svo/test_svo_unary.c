@@ -22,22 +22,22 @@
 
 /* A subtree with a sharp and a smooth operator, a cut and three kinds of
  * primitive: what every unary node below wraps. */
-#define INNER                                                                \
-	"{\"type\": \"smooth_union\", \"blend\": 0.15, \"range\": 0.2, "     \
-	"\"children\": [{\"type\": \"difference\", \"children\": ["          \
-	"{\"type\": \"box\", \"half_extents\": [0.45, 0.3, 0.35], "          \
-	"\"translate\": [0.35, 0.1, 0.05]}, {\"type\": \"sphere\", "          \
-	"\"radius\": 0.3, \"translate\": [0.6, 0.3, 0.2]}]}, "               \
-	"{\"type\": \"torus\", \"major\": 0.35, \"minor\": "   \
+#define INNER                                                                  \
+	"{\"type\": \"smooth_union\", \"blend\": 0.15, \"range\": 0.2, "       \
+	"\"children\": [{\"type\": \"difference\", \"children\": ["            \
+	"{\"type\": \"box\", \"half_extents\": [0.45, 0.3, 0.35], "            \
+	"\"translate\": [0.35, 0.1, 0.05]}, {\"type\": \"sphere\", "           \
+	"\"radius\": 0.3, \"translate\": [0.6, 0.3, 0.2]}]}, "                 \
+	"{\"type\": \"torus\", \"major\": 0.35, \"minor\": "                   \
 	"0.1, \"translate\": [-0.1, 0.4, 0.1]}]}"
 
 /* The unary node(s) opened by OPEN and closed by CLOSE wrap INNER, beside
  * a capsule. */
-#define SCENE2(OPEN, CLOSE)                                                  \
-	"{\"blobcast\": 1, \"camera\": {\"eye\": [1.9, 1.6, 2.5], "           \
-	"\"target\": [0, 0.1, 0], \"up\": [0, 1, 0], \"fov_y_deg\": 45}, "   \
-	"\"root\": {\"type\": \"union\", \"children\": [" OPEN INNER CLOSE   \
-	", {\"type\": \"capsule\", \"a\": [-1.1, -0.3, -0.4], \"b\": "      \
+#define SCENE2(OPEN, CLOSE)                                                    \
+	"{\"blobcast\": 1, \"camera\": {\"eye\": [1.9, 1.6, 2.5], "            \
+	"\"target\": [0, 0.1, 0], \"up\": [0, 1, 0], \"fov_y_deg\": 45}, "     \
+	"\"root\": {\"type\": \"union\", \"children\": [" OPEN INNER CLOSE     \
+	", {\"type\": \"capsule\", \"a\": [-1.1, -0.3, -0.4], \"b\": "         \
 	"[-0.6, 0.5, -0.2], \"radius\": 0.2}]}}"
 #define SCENE(OPEN) SCENE2(OPEN, "]}")
 
@@ -136,8 +136,8 @@ static void rpn_equals_reference_evaluator(void)
 
 static void ranges_enclose_the_field(void)
 {
-	static const enum bc_range_arith ariths[] = {
-	    BC_RANGE_IA, BC_RANGE_AA, BC_RANGE_REVAA};
+	static const enum bc_range_arith ariths[] = {BC_RANGE_IA, BC_RANGE_AA,
+	                                             BC_RANGE_REVAA};
 	struct rng r = {9};
 	for (size_t i = 0; i < NSCENES; i++) {
 		struct bc_camera cam;
@@ -179,8 +179,8 @@ static void ranges_enclose_the_field(void)
 						        "  %s arith %d: %.9g "
 						        "not in [%.9g, %.9g]\n",
 						        scenes[i].name,
-						        (int)ariths[a], (double)f,
-						        v.lo, v.hi);
+						        (int)ariths[a],
+						        (double)f, v.lo, v.hi);
 					}
 				}
 			}
@@ -238,11 +238,12 @@ static void octree_keeps_the_sign(void)
 				if (k & 1) {
 					/* Pull half the points next to the
 					 * surface. */
-					for (int j = 0; j < 3 && fabsf(f) >
-					                        0.02f * l->size;
+					for (int j = 0;
+					     j < 3 &&
+					     fabsf(f) > 0.02f * l->size;
 					     j++) {
-						rng_point(&r, l, 0.05f * l->size,
-						          p);
+						rng_point(&r, l,
+						          0.05f * l->size, p);
 						f = bc_eval_full(l, p);
 					}
 				}
@@ -291,7 +292,8 @@ static void svo_draws_what_tiled_draws(void)
 			CHECK(false);
 		}
 		for (uint32_t k = 0; k < W * H; k++) {
-			bool ha = isfinite(a.depth[k]), hb = isfinite(b.depth[k]);
+			bool ha = isfinite(a.depth[k]),
+			     hb = isfinite(b.depth[k]);
 			diff += ha != hb;
 			if (ha && hb) {
 				both++;

@@ -846,9 +846,11 @@ static void test_roster_names_members_and_last_editor(void)
 	    {.id = 7, .role = BC_PROTO_ROLE_VIEWER, .name = {"", 0}},
 	    {.id = 9, .role = BC_PROTO_ROLE_EDITOR, .name = {"carol", 5}},
 	};
-	struct bc_msg_session_info si = {.session_id = 1, .member_id = 7,
+	struct bc_msg_session_info si = {.session_id = 1,
+	                                 .member_id = 7,
 	                                 .role = BC_PROTO_ROLE_VIEWER,
-	                                 .name = {"s", 1}, .nmembers = 3,
+	                                 .name = {"s", 1},
+	                                 .nmembers = 3,
 	                                 .members = mem};
 	struct bc_viewer_roster r;
 	char line[200], small[24];
@@ -884,9 +886,11 @@ static void test_roster_names_the_presenter(void)
 	    {.id = 4, .role = BC_PROTO_ROLE_EDITOR, .name = {"alice", 5}},
 	    {.id = 7, .role = BC_PROTO_ROLE_VIEWER, .name = {"bob", 3}},
 	};
-	struct bc_msg_session_info si = {.session_id = 1, .member_id = 7,
+	struct bc_msg_session_info si = {.session_id = 1,
+	                                 .member_id = 7,
 	                                 .role = BC_PROTO_ROLE_VIEWER,
-	                                 .name = {"s", 1}, .nmembers = 2,
+	                                 .name = {"s", 1},
+	                                 .nmembers = 2,
 	                                 .members = mem};
 	struct bc_viewer_roster r;
 	char line[200];
@@ -921,9 +925,11 @@ static void test_undo_text_names_both_members(void)
 	    {.id = 4, .role = BC_PROTO_ROLE_EDITOR, .name = {"alice", 5}},
 	    {.id = 9, .role = BC_PROTO_ROLE_EDITOR, .name = {"bob", 3}},
 	};
-	struct bc_msg_session_info si = {.session_id = 1, .member_id = 4,
+	struct bc_msg_session_info si = {.session_id = 1,
+	                                 .member_id = 4,
 	                                 .role = BC_PROTO_ROLE_EDITOR,
-	                                 .name = {"s", 1}, .nmembers = 2,
+	                                 .name = {"s", 1},
+	                                 .nmembers = 2,
 	                                 .members = mem};
 	struct bc_viewer_roster r;
 	struct bc_msg m = {.type = BC_MSG_EDIT_APPLIED,

@@ -118,8 +118,8 @@ void bc_args_help(const struct bc_args *a, FILE *out);
  * values that depend on each other), so they read like the parser's. */
 int bc_args_error(const struct bc_args *a, const char *fmt, ...)
 #if defined(__GNUC__)
-	__attribute__((format(printf, 2, 3)))
+    __attribute__((format(printf, 2, 3)))
 #endif
-	;
+    ;
 
 #endif

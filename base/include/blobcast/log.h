@@ -21,7 +21,7 @@ enum bc_log_level {
 };
 
 typedef void (*bc_log_fn)(enum bc_log_level level, const char *file, int line,
-			  const char *fmt, va_list args);
+                          const char *fmt, va_list args);
 
 /* Messages above level are dropped. Default: BC_LOG_WARN, or the value of
  * the environment variable BLOBCAST_LOG (error|warn|info|debug) when set. */

@@ -24,7 +24,7 @@ int bc_num_f32(const char *s, float lo, float hi, float *out);
 int bc_num_f64(const char *s, double lo, double hi, double *out);
 /* "WxH", each part a u32 in [lo, hi]. */
 int bc_num_size(const char *s, uint32_t lo, uint32_t hi, uint32_t *w,
-		uint32_t *h);
+                uint32_t *h);
 /* "x,y,z", each part a finite float (no range). */
 int bc_num_vec3(const char *s, float out[3]);
 /* n (1..BC_NUM_MAX_FLOATS) comma-separated finite floats, as for vec3. */

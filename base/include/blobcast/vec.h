@@ -39,11 +39,10 @@ static inline float bc_v3_dot(const float a[3], const float b[3])
 }
 
 /* out = a x b (right-handed). */
-static inline void bc_v3_cross(const float a[3], const float b[3],
-			       float out[3])
+static inline void bc_v3_cross(const float a[3], const float b[3], float out[3])
 {
 	bc_v3_set(out, a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-		  a[0] * b[1] - a[1] * b[0]);
+	          a[0] * b[1] - a[1] * b[0]);
 }
 
 static inline float bc_v3_len(const float a[3])
@@ -82,7 +81,7 @@ static inline void bc_quat_identity(float q[4])
 
 /* Rotation by angle radians about the unit axis (x, y, z). */
 static inline void bc_quat_axis_angle(float q[4], float x, float y, float z,
-				      float angle)
+                                      float angle)
 {
 	float s = sinf(0.5f * angle);
 	q[0] = x * s;
@@ -92,8 +91,7 @@ static inline void bc_quat_axis_angle(float q[4], float x, float y, float z,
 }
 
 /* out = a * b: the rotation b, then a. */
-static inline void bc_quat_mul(const float a[4], const float b[4],
-			       float out[4])
+static inline void bc_quat_mul(const float a[4], const float b[4], float out[4])
 {
 	float r[4];
 	r[0] = a[3] * b[0] + a[0] * b[3] + a[1] * b[2] - a[2] * b[1];
@@ -121,7 +119,7 @@ static inline void bc_quat_normalize(float q[4])
 /* out = q v q^-1 for a unit q, as v + 2w (u x v) + 2 u x (u x v) with
  * u = q.xyz. */
 static inline void bc_quat_rotate(const float q[4], const float v[3],
-				  float out[3])
+                                  float out[3])
 {
 	float t[3], r[3];
 	t[0] = 2.0f * (q[1] * v[2] - q[2] * v[1]);

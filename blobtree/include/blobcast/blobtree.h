@@ -195,7 +195,7 @@ struct bc_unary_info {
 	const char *name;  /* "offset" */
 	uint8_t nparams;   /* floats */
 	const char *param; /* scene-file key of u[0..nparams) ("spacing" and
-			      "count" for repeat: two keys of 3) */
+	                      "count" for repeat: two keys of 3) */
 };
 /* Returns the description of a unary kind, NULL for any other kind. */
 const struct bc_unary_info *bc_unary_info(enum bc_op kind);
@@ -295,11 +295,11 @@ void bc_abv_aabb(const struct bc_abv *abv, float lo[3], float hi[3]);
  * entry/exit parameters (t0 may be negative when o is inside) on a hit; a
  * shape wholly behind the origin is a miss. */
 bool bc_abv_ray(const struct bc_abv *abv, const float o[3], const float d[3],
-		float *t0, float *t1);
+                float *t0, float *t1);
 /* Returns true when the shape may meet the axis-aligned box [lo, hi]
  * (conservative: never false when they meet). */
 bool bc_abv_meets_box(const struct bc_abv *abv, const float lo[3],
-		      const float hi[3]);
+                      const float hi[3]);
 
 /* ---- Primitive fields (blobtree/prim.c) -------------------------------- */
 
@@ -310,7 +310,7 @@ void bc_prim_pack(const struct bc_prim_data *p, float packed[BC_PRIM_PACKED]);
  * SDF where bc_prim_info says so; otherwise a bound that is never below the
  * exact distance to the shape's bounding volume (so ABVs stay valid). */
 float bc_prim_sdf(enum bc_prim kind, const float packed[BC_PRIM_PACKED],
-		  float x, float y, float z);
+                  float x, float y, float z);
 
 /* ---- Camera ------------------------------------------------------------ */
 
@@ -336,11 +336,11 @@ struct bc_view_rays {
 	uint32_t width, height;
 };
 void bc_view_rays_init(struct bc_view_rays *vr, const struct bc_camera *cam,
-		       uint32_t width, uint32_t height);
+                       uint32_t width, uint32_t height);
 /* Direction for the (fractional) pixel coordinate (x, y): pixel centres are
  * at (i + 0.5, j + 0.5). */
 void bc_view_rays_dir(const struct bc_view_rays *vr, float x, float y,
-		      float dir[3]);
+                      float dir[3]);
 
 /* ---- The tree ---------------------------------------------------------- */
 
@@ -362,14 +362,14 @@ void bc_tree_destroy(struct bc_tree *t);
  */
 int bc_tree_begin(struct bc_tree *t);
 int bc_tree_push_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
-		    struct bc_errinfo *ei);
+                    struct bc_errinfo *ei);
 int bc_tree_pop_op(struct bc_tree *t, struct bc_errinfo *ei);
 /* Opens a unary node (closed with bc_tree_pop_op, which then requires
  * exactly one child: a primitive or any subtree). */
 int bc_tree_push_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
-		       struct bc_errinfo *ei);
+                       struct bc_errinfo *ei);
 int bc_tree_put_prim(struct bc_tree *t, uint32_t id,
-		     const struct bc_prim_data *p, struct bc_errinfo *ei);
+                     const struct bc_prim_data *p, struct bc_errinfo *ei);
 int bc_tree_end(struct bc_tree *t, struct bc_errinfo *ei);
 
 /* Does any node carry an id the tree assigned (the scene gave 0)? */
@@ -387,8 +387,8 @@ uint32_t bc_tree_root(const struct bc_tree *t);
 /* Reading the model (for writers and encoders). Returns false if id is
  * unknown. Exactly one of prim/op is filled (the other's kind set to
  * INVALID); out-parameters may be NULL. */
-bool bc_tree_get(const struct bc_tree *t, uint32_t id, struct bc_prim_data *prim,
-		 struct bc_op_data *op);
+bool bc_tree_get(const struct bc_tree *t, uint32_t id,
+                 struct bc_prim_data *prim, struct bc_op_data *op);
 /* Number of children of id (0 for primitives and unknown ids) and the id of
  * child k (0 when out of range). */
 uint32_t bc_tree_child_count(const struct bc_tree *t, uint32_t id);
@@ -405,26 +405,26 @@ uint32_t bc_tree_slot(const struct bc_tree *t, uint32_t id);
 /* Replaces the parameters of primitive id (kind must be unchanged). Only its
  * parameter record and ABV are rewritten. */
 int bc_tree_set_prim(struct bc_tree *t, uint32_t id,
-		     const struct bc_prim_data *p, struct bc_errinfo *ei);
+                     const struct bc_prim_data *p, struct bc_errinfo *ei);
 /* Replaces the parameters of operator id; the kind may change among
  * operators (the subtree's ROIs and ABVs are recomputed, the layout stays). */
 int bc_tree_set_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
-		   struct bc_errinfo *ei);
+                   struct bc_errinfo *ei);
 /* Replaces the parameters of unary node id; the kind may change among the
  * unary kinds. Rewrites its record, then the ROIs and ABVs of its subtree
  * and the Lipschitz bounds of its domain ancestors (the layout stays). */
 int bc_tree_set_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
-		      struct bc_errinfo *ei);
+                      struct bc_errinfo *ei);
 /* Reads unary node id into *out. Returns false (out zeroed) when id is not
  * a unary node. */
 bool bc_tree_get_unary(const struct bc_tree *t, uint32_t id,
-		       struct bc_unary *out);
+                       struct bc_unary *out);
 
 /* Inserts a copy of the whole of sub as child number pos of operator
  * parent_id (pos may equal the child count: append). Ids of sub must not
  * exist in t (BC_EDUPID); sub's ids are kept. Re-linearizes. */
 int bc_tree_insert(struct bc_tree *t, uint32_t parent_id, uint32_t pos,
-		   const struct bc_tree *sub, struct bc_errinfo *ei);
+                   const struct bc_tree *sub, struct bc_errinfo *ei);
 /* Removes node id and its subtree. An operator left with one child is
  * replaced by that child (operators always have two or more). Removing the
  * root empties the tree. Re-linearizes. */
@@ -432,19 +432,19 @@ int bc_tree_remove(struct bc_tree *t, uint32_t id, struct bc_errinfo *ei);
 /* Replaces node id (and its subtree) with a copy of sub at the same place.
  * sub's ids must be new to t, except that sub's root may reuse id. */
 int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
-		    struct bc_errinfo *ei);
+                    struct bc_errinfo *ei);
 /* Copies the whole tree src into dst (dst is cleared first). */
 int bc_tree_copy(struct bc_tree *dst, const struct bc_tree *src,
-		 struct bc_errinfo *ei);
+                 struct bc_errinfo *ei);
 
 /* What changed since the last bc_tree_take_dirty(): ranges are half-open,
  * [lo, hi) with lo == hi meaning nothing; structure means everything. */
 struct bc_dirty {
-	bool structure;           /* re-linearized: upload everything */
+	bool structure;              /* re-linearized: upload everything */
 	uint32_t slot_lo, slot_hi;   /* node words (an operator kind changed) */
 	uint32_t param_lo, param_hi; /* parameter records, in vec4 units */
 	uint32_t prim_lo, prim_hi;   /* primitives whose ABV changed */
-	uint32_t edits;           /* edits applied since the last take */
+	uint32_t edits;              /* edits applied since the last take */
 };
 void bc_tree_take_dirty(struct bc_tree *t, struct bc_dirty *out);
 
@@ -470,20 +470,20 @@ struct bc_lin {
 	uint32_t count;  /* linearized (binary) nodes, post-order slots */
 	uint32_t nprims; /* primitives, in post-order */
 	/* Per slot. */
-	uint32_t *node;   /* 2 per slot: GPU node word, parameter offset */
-	uint32_t *first;  /* leftmost slot of the subtree */
-	uint32_t *fast;   /* paper's fast ancestor: top of the run of same-side
-			     edges above the slot, BC_NONE at the root */
-	uint32_t *jump;   /* skew-binary jump pointer, BC_NONE at the root */
-	uint32_t *kills;  /* number of operand-killing edges up to the root */
-	uint32_t *depth;  /* binary depth, 0 at the root */
+	uint32_t *node;    /* 2 per slot: GPU node word, parameter offset */
+	uint32_t *first;   /* leftmost slot of the subtree */
+	uint32_t *fast;    /* paper's fast ancestor: top of the run of same-side
+	                      edges above the slot, BC_NONE at the root */
+	uint32_t *jump;    /* skew-binary jump pointer, BC_NONE at the root */
+	uint32_t *kills;   /* number of operand-killing edges up to the root */
+	uint32_t *depth;   /* binary depth, 0 at the root */
 	uint32_t *node_id; /* stable id of the scene node it comes from */
 	uint32_t *prim_of; /* primitive index of a leaf, BC_NONE for ops */
 	float *roi;        /* 2 per slot: r-, r+ (paper eq. 13-16) */
 	/* Per primitive. */
-	uint32_t *prim_slot;   /* slot of primitive k */
-	struct bc_abv *abv;    /* world ABV of primitive k */
-	float (*color)[3];     /* colour of primitive k */
+	uint32_t *prim_slot; /* slot of primitive k */
+	struct bc_abv *abv;  /* world ABV of primitive k */
+	float (*color)[3];   /* colour of primitive k */
 	/* Parameter records: vec4 stride, nparam vec4s. */
 	float *param;
 	uint32_t nparam;
@@ -509,8 +509,8 @@ struct bc_lin {
 	uint32_t *wrap_top; /* per slot: outermost wrapper, BC_NONE */
 	uint32_t *dom;      /* per slot: innermost domain node around it */
 	uint32_t *ucount;   /* per slot: ancestors whose wrappers change the
-			       value (offset, onion, twist, bend, scale); a
-			       sparse climb may not jump over them */
+	                       value (offset, onion, twist, bend, scale); a
+	                       sparse climb may not jump over them */
 	uint32_t *unary_slot, *unary_outer, *unary_inner, *unary_dom;
 	uint32_t *unary_param; /* record offset, vec4 units */
 	uint32_t *unary_kind;  /* enum bc_op */
@@ -561,11 +561,11 @@ static inline const float *bc_lin_param(const struct bc_lin *l, uint32_t slot)
 /* Maps world point p through the domain nodes from d (a unary index, or
  * BC_NONE: no map) outward: the point the slots below d see. */
 void bc_domain_map(const struct bc_lin *l, uint32_t d, const float p[3],
-		   float out[3]);
+                   float out[3]);
 /* Applies unary node u's value map to its child's value f at world point
  * p (identity for the pure domain nodes). */
 float bc_unary_value(const struct bc_lin *l, uint32_t u, float f,
-		     const float p[3]);
+                     const float p[3]);
 
 /* The Lipschitz bound of a twist or bend map (kind) of the given rate
  * within distance r of its axis. */
@@ -607,19 +607,19 @@ void bc_view_finish(struct bc_view *v);
  * increasing). A missing subtree under a unary node leaves the node
  * missing; a present one is followed by the node's instruction. Cost is
  * O(n log depth) -- independent of tree size -- using the jump pointers,
- * plus one step per value-changing unary node on the way. Returns 0, BC_EINVAL (unsorted or out of range) or
- * BC_ENOMEM. */
+ * plus one step per value-changing unary node on the way. Returns 0, BC_EINVAL
+ * (unsorted or out of range) or BC_ENOMEM. */
 int bc_view_build(struct bc_view *v, const struct bc_lin *l,
-		  const uint32_t *active, uint32_t n);
+                  const uint32_t *active, uint32_t n);
 /* Evaluates a view at p; +INFINITY for an empty view. */
 float bc_view_eval(const struct bc_view *v, const struct bc_lin *l,
-		   const float p[3]);
+                   const float p[3]);
 float bc_view_eval_id(const struct bc_view *v, const struct bc_lin *l,
-		      const float p[3], uint32_t *prim);
+                      const float p[3], uint32_t *prim);
 
 /* Sparse evaluation in one call: builds a view of active[0..n) into scratch
  * (a bc_view reused by the caller) and evaluates it at p. */
 float bc_eval_sparse(const struct bc_lin *l, const uint32_t *active, uint32_t n,
-		     struct bc_view *scratch, const float p[3]);
+                     struct bc_view *scratch, const float p[3]);
 
 #endif

@@ -33,13 +33,13 @@ struct bc_mesh_opts {
 };
 
 struct bc_mesh {
-	float (*pos)[3];     /* vertices */
-	uint8_t (*rgb)[3];   /* per-vertex colour (the primitive's) */
-	uint32_t (*tri)[3];  /* triangles, counter-clockwise seen from outside */
+	float (*pos)[3];    /* vertices */
+	uint8_t (*rgb)[3];  /* per-vertex colour (the primitive's) */
+	uint32_t (*tri)[3]; /* triangles, counter-clockwise seen from outside */
 	uint32_t nverts, ntris;
 	uint32_t cap_verts, cap_tris;
-	float cell;          /* grid cell size (world units) */
-	uint64_t evals;      /* field evaluations spent */
+	float cell;             /* grid cell size (world units) */
+	uint64_t evals;         /* field evaluations spent */
 	uint64_t cells_visited; /* grid cells in regions that were evaluated */
 };
 

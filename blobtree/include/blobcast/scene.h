@@ -149,7 +149,7 @@ struct bc_scene_node {
 struct bc_scene_walk {
 	const struct bc_tree *t;
 	const struct bc_lin *l;
-	uint32_t *todo; /* top slots still to visit, next on top */
+	uint32_t *todo;      /* top slots still to visit, next on top */
 	uint32_t *todo_wrap; /* per entry: its next unary wrapper to visit */
 	uint32_t ntodo;
 	uint32_t index;

@@ -21,19 +21,21 @@ int main(int argc, char **argv)
 	uint64_t order;
 	int status = 1;
 	if (argc < 5) {
-		fprintf(stderr, "usage: nudge ADDR SESSION NODE KEY=VALUE...\n");
+		fprintf(stderr,
+		        "usage: nudge ADDR SESSION NODE KEY=VALUE...\n");
 		return 2;
 	}
 	bc_client_image_init(&img);
-	if (bc_client_connect(&c,
-			      &(struct bc_client_opts){.addr = argv[1],
-						       .name = "nudge"},
-			      &ei) ||
+	if (bc_client_connect(
+	        &c, &(struct bc_client_opts){.addr = argv[1], .name = "nudge"},
+	        &ei) ||
 	    bc_client_join(c, argv[2], BC_PROTO_ROLE_EDITOR,
-			   BC_CLIENT_JOIN_EXISTING, &ei) ||
-	    bc_client_view(c, &(struct bc_msg_view){.width = 320, .height = 240},
-			   NULL, &ei)) {
-		fprintf(stderr, "nudge: %s (%s)\n", ei.msg, bc_err_name(ei.code));
+	                   BC_CLIENT_JOIN_EXISTING, &ei) ||
+	    bc_client_view(c,
+	                   &(struct bc_msg_view){.width = 320, .height = 240},
+	                   NULL, &ei)) {
+		fprintf(stderr, "nudge: %s (%s)\n", ei.msg,
+		        bc_err_name(ei.code));
 		goto out;
 	}
 	/* The view's picture first: coarse levels, then the still. Waiting
@@ -48,10 +50,11 @@ int main(int argc, char **argv)
 		}
 	} while (!(m.flags & BC_PROTO_FLAG_STILL));
 	if (bc_client_edit_kv(c, (uint32_t)strtoul(argv[3], NULL, 10),
-			      (const char *const *)argv + 4, (size_t)(argc - 4),
-			      false, &seq, &ei) ||
+	                      (const char *const *)argv + 4, (size_t)(argc - 4),
+	                      false, &seq, &ei) ||
 	    bc_client_wait_applied(c, seq, &order, &ei)) {
-		fprintf(stderr, "nudge: %s (%s)\n", ei.msg, bc_err_name(ei.code));
+		fprintf(stderr, "nudge: %s (%s)\n", ei.msg,
+		        bc_err_name(ei.code));
 		goto out;
 	}
 	/* Frames arrive in order; the first whose order reaches the edit's

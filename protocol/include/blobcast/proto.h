@@ -43,38 +43,38 @@
 /* Message types; the numbers are the wire values and are never reused. */
 enum bc_msg_type {
 	BC_MSG_INVALID = 0,
-	BC_MSG_HELLO = 1,          /* client -> server */
-	BC_MSG_WELCOME = 2,        /* server -> client */
-	BC_MSG_ERROR = 3,          /* both */
-	BC_MSG_PING = 4,           /* both */
-	BC_MSG_PONG = 5,           /* both */
-	BC_MSG_OK = 6,             /* server -> client */
-	BC_MSG_SESSION_CREATE = 7, /* client -> server */
-	BC_MSG_SESSION_JOIN = 8,   /* client -> server */
-	BC_MSG_SESSION_LEAVE = 9,  /* client -> server */
-	BC_MSG_SESSION_INFO = 10,  /* server -> client */
-	BC_MSG_SCENE_LOAD = 11,    /* client -> server */
-	BC_MSG_SCENE_STATE = 12,   /* server -> client */
-	BC_MSG_EDIT = 13,          /* client -> server */
-	BC_MSG_EDIT_APPLIED = 14,  /* server -> client */
-	BC_MSG_CAMERA = 15,        /* client -> server */
-	BC_MSG_VIEW = 16,          /* client -> server */
-	BC_MSG_FRAME = 17,         /* server -> client */
-	BC_MSG_PICK = 18,          /* client -> server */
-	BC_MSG_PICK_RESULT = 19,   /* server -> client */
-	BC_MSG_SNAPSHOT = 20,      /* client -> server */
-	BC_MSG_GET_STATS = 21,     /* client -> server */
-	BC_MSG_STATS = 22,         /* server -> client */
-	BC_MSG_SESSION_DELETE = 23, /* client -> server */
-	BC_MSG_UNDO = 24,           /* client -> server */
-	BC_MSG_REDO = 25,           /* client -> server */
-	BC_MSG_SESSION_LIST = 26,   /* client -> server */
-	BC_MSG_SESSIONS = 27,       /* server -> client */
-	BC_MSG_PRESENT = 28,        /* client -> server */
-	BC_MSG_FOLLOW = 29,         /* client -> server */
-	BC_MSG_PRESENTER = 30,      /* server -> client */
-	BC_MSG_FOLLOW_CAMERA = 31,  /* server -> client */
-	BC_MSG_SESSION_CAMERA = 32, /* client -> server */
+	BC_MSG_HELLO = 1,               /* client -> server */
+	BC_MSG_WELCOME = 2,             /* server -> client */
+	BC_MSG_ERROR = 3,               /* both */
+	BC_MSG_PING = 4,                /* both */
+	BC_MSG_PONG = 5,                /* both */
+	BC_MSG_OK = 6,                  /* server -> client */
+	BC_MSG_SESSION_CREATE = 7,      /* client -> server */
+	BC_MSG_SESSION_JOIN = 8,        /* client -> server */
+	BC_MSG_SESSION_LEAVE = 9,       /* client -> server */
+	BC_MSG_SESSION_INFO = 10,       /* server -> client */
+	BC_MSG_SCENE_LOAD = 11,         /* client -> server */
+	BC_MSG_SCENE_STATE = 12,        /* server -> client */
+	BC_MSG_EDIT = 13,               /* client -> server */
+	BC_MSG_EDIT_APPLIED = 14,       /* server -> client */
+	BC_MSG_CAMERA = 15,             /* client -> server */
+	BC_MSG_VIEW = 16,               /* client -> server */
+	BC_MSG_FRAME = 17,              /* server -> client */
+	BC_MSG_PICK = 18,               /* client -> server */
+	BC_MSG_PICK_RESULT = 19,        /* server -> client */
+	BC_MSG_SNAPSHOT = 20,           /* client -> server */
+	BC_MSG_GET_STATS = 21,          /* client -> server */
+	BC_MSG_STATS = 22,              /* server -> client */
+	BC_MSG_SESSION_DELETE = 23,     /* client -> server */
+	BC_MSG_UNDO = 24,               /* client -> server */
+	BC_MSG_REDO = 25,               /* client -> server */
+	BC_MSG_SESSION_LIST = 26,       /* client -> server */
+	BC_MSG_SESSIONS = 27,           /* server -> client */
+	BC_MSG_PRESENT = 28,            /* client -> server */
+	BC_MSG_FOLLOW = 29,             /* client -> server */
+	BC_MSG_PRESENTER = 30,          /* server -> client */
+	BC_MSG_FOLLOW_CAMERA = 31,      /* server -> client */
+	BC_MSG_SESSION_CAMERA = 32,     /* client -> server */
 	BC_MSG_SESSION_CAMERA_SET = 33, /* server -> client */
 	BC_MSG_COUNT
 };
@@ -599,7 +599,7 @@ BC_API int bc_proto_encode(struct bc_proto_buf *b, const struct bc_msg *m,
 struct bc_proto_scene_info {
 	bool has_camera;
 	uint32_t nodes, prims, ops;
-	uint32_t depth; /* most nodes on a path from the root (root = 1) */
+	uint32_t depth;    /* most nodes on a path from the root (root = 1) */
 	uint32_t zero_ids; /* nodes with id 0 (the decoder names them) */
 };
 

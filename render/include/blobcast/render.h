@@ -34,9 +34,9 @@
  * renderings. 0: nothing rendered yet. */
 struct bc_frame {
 	uint32_t width, height;
-	uint8_t *rgba;   /* width * height * 4 */
-	float *depth;    /* width * height */
-	uint32_t *ids;   /* width * height */
+	uint8_t *rgba; /* width * height * 4 */
+	float *depth;  /* width * height */
+	uint32_t *ids; /* width * height */
 	uint64_t key;
 };
 
@@ -54,7 +54,8 @@ enum bc_debug_mode {
 
 enum bc_backend {
 	BC_BACKEND_INVALID = 0,
-	BC_BACKEND_NAIVE, /* CPU sphere tracing of the full tree: the baseline */
+	BC_BACKEND_NAIVE, /* CPU sphere tracing of the full tree: the baseline
+	                   */
 	BC_BACKEND_TILED, /* CPU synchronized tile tracing (paper §6) */
 	BC_BACKEND_GL,    /* OpenGL compute through EGL or OSMesa */
 	BC_BACKEND_SVO,   /* CPU adaptive octree + interval ray casting */
@@ -81,11 +82,12 @@ enum bc_simd {
 /* Zero means default for every field. */
 struct bc_render_opts {
 	enum bc_debug_mode debug;
-	uint32_t threads;        /* CPU threads, 0 = one per core */
-	const char *gl_platform; /* "auto" | "device" | "surfaceless" | "osmesa" */
+	uint32_t threads; /* CPU threads, 0 = one per core */
+	const char
+	    *gl_platform; /* "auto" | "device" | "surfaceless" | "osmesa" */
 	enum bc_range_arith svo_range;
-	uint32_t svo_threshold;  /* node-count threshold tau, 0 = default */
-	uint32_t svo_max_depth;  /* 0 = default */
+	uint32_t svo_threshold; /* node-count threshold tau, 0 = default */
+	uint32_t svo_max_depth; /* 0 = default */
 	/* Milliseconds a frame may take, 0 = no limit. Past it the tiled
 	 * tracer starts no new tile: the rest is background and the stats
 	 * say incomplete (one pathological scene cannot stall a server). */
@@ -98,7 +100,7 @@ struct bc_render_stats {
 	double ms_total;
 	double ms_abuffer; /* building per-tile lists (tiled, gl) */
 	double ms_trace;
-	double ms_upload;  /* gl: data sent to the GPU for this frame */
+	double ms_upload; /* gl: data sent to the GPU for this frame */
 	uint64_t field_evals;
 	uint64_t rays;        /* pixels traced by this call */
 	uint32_t max_overlap; /* most primitives listed in one tile */
@@ -137,8 +139,8 @@ bool bc_backend_available(enum bc_backend b);
  * BC_ENOTSUP when b is not built in, or the backend's error; *out is NULL
  * on failure. bc_renderer_destroy accepts NULL. */
 int bc_renderer_create(struct bc_renderer **out, enum bc_backend b,
-		       const struct bc_render_opts *opts,
-		       struct bc_errinfo *ei);
+                       const struct bc_render_opts *opts,
+                       struct bc_errinfo *ei);
 void bc_renderer_destroy(struct bc_renderer *r);
 enum bc_backend bc_renderer_backend(const struct bc_renderer *r);
 
@@ -146,24 +148,23 @@ enum bc_backend bc_renderer_backend(const struct bc_renderer *r);
  * (dirty == NULL or dirty->structure: everything, and every frame's key
  * changes). The tree must outlive its use by r. */
 int bc_renderer_sync(struct bc_renderer *r, const struct bc_tree *t,
-		     const struct bc_dirty *dirty, struct bc_errinfo *ei);
+                     const struct bc_dirty *dirty, struct bc_errinfo *ei);
 
 /* Draws the whole frame (every pixel) of the last synced tree. Returns 0,
  * BC_EINVAL (bad frame), BC_ERANGE (bad camera), BC_ESTATE (nothing synced)
  * or the backend's error. */
 int bc_renderer_render(struct bc_renderer *r, const struct bc_camera *cam,
-		       struct bc_frame *out, struct bc_render_stats *stats,
-		       struct bc_errinfo *ei);
+                       struct bc_frame *out, struct bc_render_stats *stats,
+                       struct bc_errinfo *ei);
 
 /* Draws only region's pixels into out, leaving the others as they are.
  * When out->key differs from this rendering's, draws every tile at the
  * region's level without `refine` instead and sets stats->whole. */
 int bc_renderer_render_region(struct bc_renderer *r,
-			      const struct bc_camera *cam,
-			      struct bc_frame *out,
-			      const struct bc_render_region *region,
-			      struct bc_render_stats *stats,
-			      struct bc_errinfo *ei);
+                              const struct bc_camera *cam, struct bc_frame *out,
+                              const struct bc_render_region *region,
+                              struct bc_render_stats *stats,
+                              struct bc_errinfo *ei);
 
 /* Marks (sets to 1) in tiles, ceil(width / 8) x ceil(height / 8) bytes,
  * every tile of a width x height frame through cam whose pixels can depend
@@ -174,8 +175,8 @@ int bc_renderer_render_region(struct bc_renderer *r,
  * svo: a sphere tracing step or an octree cell depends on all of them)
  * mark every tile. */
 void bc_renderer_damage(struct bc_renderer *r, const struct bc_camera *cam,
-			uint32_t width, uint32_t height,
-			const struct bc_abv *abv, uint8_t *tiles);
+                        uint32_t width, uint32_t height,
+                        const struct bc_abv *abv, uint8_t *tiles);
 
 /* Tiles across and down a width x height frame. */
 static inline uint32_t bc_render_tiles_x(uint32_t width)
@@ -188,21 +189,21 @@ static inline uint32_t bc_render_tiles_y(uint32_t height)
 }
 
 /* Whether pixel (x, y) is traced by a call at `level` (with `refine`). */
-static inline bool bc_render_level_has(uint32_t x, uint32_t y,
-				       uint32_t level, bool refine)
+static inline bool bc_render_level_has(uint32_t x, uint32_t y, uint32_t level,
+                                       bool refine)
 {
 	uint32_t m = (1u << level) - 1u, m2 = (2u << level) - 1u;
 	if ((x & m) || (y & m)) {
 		return false;
 	}
 	return !(refine && level < BC_RENDER_MAX_LEVEL && !(x & m2) &&
-		 !(y & m2));
+	         !(y & m2));
 }
 
 /* Convenience: create, sync, render once, destroy. */
 int bc_render_once(enum bc_backend b, const struct bc_render_opts *opts,
-		   const struct bc_tree *t, const struct bc_camera *cam,
-		   struct bc_frame *out, struct bc_render_stats *stats,
-		   struct bc_errinfo *ei);
+                   const struct bc_tree *t, const struct bc_camera *cam,
+                   struct bc_frame *out, struct bc_render_stats *stats,
+                   struct bc_errinfo *ei);
 
 #endif

@@ -32,29 +32,29 @@ struct bc_backend_ops {
 	const char *name;
 	/* Allocates the backend's renderer; the front fills the base after. */
 	int (*create)(struct bc_renderer **out,
-		      const struct bc_render_opts *opts, struct bc_errinfo *ei);
+	              const struct bc_render_opts *opts, struct bc_errinfo *ei);
 	void (*destroy)(struct bc_renderer *r);
 	/* Optional (NULL: nothing to do beyond the base's tree). Called
 	 * after the front stored t in r->tree. */
 	int (*sync)(struct bc_renderer *r, const struct bc_tree *t,
-		    const struct bc_dirty *dirty, struct bc_errinfo *ei);
+	            const struct bc_dirty *dirty, struct bc_errinfo *ei);
 	/* Draws region's pixels (region is never NULL; the front checked
 	 * the frame, the camera, the level, and that a tree is synced).
 	 * stats is never NULL and zeroed. */
 	int (*render)(struct bc_renderer *r, const struct bc_camera *cam,
-		      struct bc_frame *out,
-		      const struct bc_render_region *region,
-		      struct bc_render_stats *stats, struct bc_errinfo *ei);
+	              struct bc_frame *out,
+	              const struct bc_render_region *region,
+	              struct bc_render_stats *stats, struct bc_errinfo *ei);
 	/* Optional: a hash of the backend's own constants that shape every
 	 * pixel of the next frame (e.g. a step length derived from the
 	 * scene's size). NULL: none. */
 	uint64_t (*key)(struct bc_renderer *r, const struct bc_camera *cam,
-			uint32_t width, uint32_t height);
+	                uint32_t width, uint32_t height);
 	/* Optional: the tiles an ABV can reach (see bc_renderer_damage).
 	 * NULL: pixels depend on every primitive, the front marks all. */
 	void (*damage)(struct bc_renderer *r, const struct bc_camera *cam,
-		       uint32_t width, uint32_t height,
-		       const struct bc_abv *abv, uint8_t *tiles);
+	               uint32_t width, uint32_t height,
+	               const struct bc_abv *abv, uint8_t *tiles);
 };
 
 #endif

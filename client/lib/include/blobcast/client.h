@@ -75,11 +75,11 @@ enum bc_client_addr_kind {
 
 struct bc_client_addr {
 	enum bc_client_addr_kind kind;
-	uint16_t port;                          /* TCP */
-	char host[BC_CLIENT_MAX_HOST + 1];      /* TCP, without brackets */
-	char path[BC_CLIENT_MAX_UNIX_PATH + 1]; /* UNIX */
-	bool tls;                               /* TCP: tls:// or wss:// */
-	bool ws;                                /* TCP: ws:// or wss:// */
+	uint16_t port;                            /* TCP */
+	char host[BC_CLIENT_MAX_HOST + 1];        /* TCP, without brackets */
+	char path[BC_CLIENT_MAX_UNIX_PATH + 1];   /* UNIX */
+	bool tls;                                 /* TCP: tls:// or wss:// */
+	bool ws;                                  /* TCP: ws:// or wss:// */
 	char resource[BC_CLIENT_MAX_WS_PATH + 1]; /* ws: "/PATH?QUERY" */
 };
 
@@ -253,8 +253,7 @@ struct bc_client_undone {
  * it, and waits until it is applied; *out (may be NULL) says what it was.
  * Needs the editor role. BC_ESTATE when there is nothing to undo (redo). */
 BC_API int bc_client_undo(struct bc_client *c, bool redo,
-                          struct bc_client_undone *out,
-                          struct bc_errinfo *ei);
+                          struct bc_client_undone *out, struct bc_errinfo *ei);
 
 /* One session of the server (bc_client_sessions). */
 struct bc_client_session {

@@ -25,7 +25,7 @@ void bc_shade_init(struct bc_shade *s, const struct bc_view_rays *vr);
  * viewer; seen from inside: the side facing the viewer is lit) and linear
  * albedo. */
 void bc_shade_hit(const struct bc_shade *s, const float grad[3],
-		  const float d[3], const float albedo[3], uint8_t px[4]);
+                  const float d[3], const float albedo[3], uint8_t px[4]);
 
 /* Writes the background of row y of an image height rows tall. */
 void bc_shade_miss(uint32_t y, uint32_t height, uint8_t px[4]);

@@ -18,11 +18,11 @@
  * are at least a quarter of a second apart, and there is none for frames
  * that take less. */
 typedef void (*bc_render_progress_fn)(void *user, uint32_t done,
-				      uint32_t total);
+                                      uint32_t total);
 
 /* Installs (or, with fn NULL, removes) the progress callback of r, which
  * must come from bc_backend_naive_ops or bc_backend_tiled_ops. */
 void bc_render_cpu_set_progress(struct bc_renderer *r, bc_render_progress_fn fn,
-				void *user);
+                                void *user);
 
 #endif

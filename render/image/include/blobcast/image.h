@@ -53,15 +53,15 @@ bool bc_image_ext_supports(const char *path, enum bc_image_type type);
  * (unknown extension) or BC_EIO (the file could not be written); the reason,
  * including OpenImageIO's message, is in ei. */
 int bc_image_write(const char *path, const struct bc_image *img,
-		   struct bc_errinfo *ei);
+                   struct bc_errinfo *ei);
 
 /* Shorthands for the three planes of a rendered frame. */
 int bc_image_write_rgba8(const char *path, uint32_t width, uint32_t height,
-			 const uint8_t *rgba, struct bc_errinfo *ei);
+                         const uint8_t *rgba, struct bc_errinfo *ei);
 int bc_image_write_float(const char *path, uint32_t width, uint32_t height,
-			 const float *values, struct bc_errinfo *ei);
+                         const float *values, struct bc_errinfo *ei);
 int bc_image_write_u32(const char *path, uint32_t width, uint32_t height,
-		       const uint32_t *values, struct bc_errinfo *ei);
+                       const uint32_t *values, struct bc_errinfo *ei);
 
 /* Reads the first subimage of path with all its channels, converted to
  * type, into *out (reset on entry; pixels allocated with bc_malloc, freed by
@@ -69,7 +69,7 @@ int bc_image_write_u32(const char *path, uint32_t width, uint32_t height,
  * BC_ELIMIT (over BC_IMAGE_MAX_DIM / _SAMPLES / _CHANNELS), BC_EINVAL (bad
  * type) or BC_ENOMEM. */
 int bc_image_read(const char *path, enum bc_image_type type,
-		  struct bc_image *out, struct bc_errinfo *ei);
+                  struct bc_image *out, struct bc_errinfo *ei);
 
 /* Frees the pixels of an image filled by bc_image_read; accepts NULL and a
  * zeroed image. */

@@ -67,9 +67,9 @@
 
 enum bc_svo_term_type {
 	BC_SVO_TERM_INVALID = 0,
-	BC_SVO_TERM_PRIM, /* a primitive: pushes its field */
-	BC_SVO_TERM_NEG,  /* negates the top of the stack */
-	BC_SVO_TERM_OP,   /* a binary operator: pops two, pushes one */
+	BC_SVO_TERM_PRIM,  /* a primitive: pushes its field */
+	BC_SVO_TERM_NEG,   /* negates the top of the stack */
+	BC_SVO_TERM_OP,    /* a binary operator: pops two, pushes one */
 	BC_SVO_TERM_UNARY, /* a unary node that changes its child's value
 	                      (offset, onion, twist, bend, scale): maps the
 	                      top of the stack */
@@ -124,8 +124,8 @@ struct bc_svo_rpn {
 	 * around it (BC_NONE: the world point). A primitive's point is mapped
 	 * through its chain, outermost first, as bc_domain_map does. */
 	uint32_t nunary;
-	uint8_t *ukind;     /* enum bc_op */
-	float *urec;        /* BC_SVO_UNARY_REC floats each */
+	uint8_t *ukind; /* enum bc_op */
+	float *urec;    /* BC_SVO_UNARY_REC floats each */
 	uint32_t *udom;
 	uint32_t *prim_dom; /* NULL when nunary is 0 */
 	float lip;          /* the tree's Lipschitz bound over its
@@ -266,11 +266,12 @@ int bc_svo_prune(struct bc_svo_ranger *g, const uint32_t *mask_in,
 
 /* Zero means default for every field. */
 struct bc_svo_opts {
-	enum bc_range_arith arith; /* pruning arithmetic (BC_SVO_DEFAULT_ARITH) */
-	uint32_t threshold;        /* tau */
-	uint32_t max_depth;        /* <= BC_SVO_MAX_DEPTH */
-	float band;                /* hit thickness preserved (0: sign only) */
-	uint64_t max_bytes;        /* memory budget */
+	enum bc_range_arith
+	    arith;          /* pruning arithmetic (BC_SVO_DEFAULT_ARITH) */
+	uint32_t threshold; /* tau */
+	uint32_t max_depth; /* <= BC_SVO_MAX_DEPTH */
+	float band;         /* hit thickness preserved (0: sign only) */
+	uint64_t max_bytes; /* memory budget */
 	bool no_step; /* the caster searches every leaf by interval bisection
 	                 (thesis Alg. 5.7), 1-Lipschitz ones included: what
 	                 the tests and benchmarks compare stepping with */
@@ -379,8 +380,8 @@ float bc_svo_hit_band(const struct bc_svo_cast_params *cp, float t);
  * where the field drops below the hit band, and the Illinois variant of
  * the secant method refines it; the depth is then refined to the field's zero
  * crossing behind the band's entry, or on a ray that only grazes the
- * surface to its closest approach (docs/svo.md). Returns true and fills *hit on a
- * hit; hit->evals and range_evals are filled either way. */
+ * surface to its closest approach (docs/svo.md). Returns true and fills *hit on
+ * a hit; hit->evals and range_evals are filled either way. */
 bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
                  float t0, float t1, const struct bc_svo_cast_params *cp,
                  struct bc_svo_hit *hit);
