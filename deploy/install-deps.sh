@@ -4,7 +4,7 @@
 set -euo pipefail
 
 pkgs=(
-	build-essential cmake ninja-build pkg-config clang
+	build-essential cmake ninja-build pkg-config clang clang-format
 	libjansson-dev
 	libopenimageio-dev openimageio-tools
 	libturbojpeg0-dev libpng-dev zlib1g-dev
