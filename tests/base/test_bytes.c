@@ -192,6 +192,30 @@ static void vec_helpers_follow_the_right_hand(void)
 	r[0] = 2.0f;
 	bc_quat_normalize(r);
 	CHECK_NEAR(r[0] * r[0] + r[3] * r[3], 1.0, 1e-6);
+	/* normalize_div is the division itself, bit for bit (the renderers'
+	 * images depend on it), over vectors where a product with the
+	 * reciprocal rounds differently; zero is left alone. */
+	uint32_t seed = 12345u, differs = 0;
+	for (int i = 0; i < 1000; i++) {
+		float a[3], b[3], c[3];
+		for (int k = 0; k < 3; k++) {
+			seed = seed * 1664525u + 1013904223u;
+			c[k] = (float)(seed >> 8) / 65536.0f - 128.0f;
+		}
+		memcpy(a, c, sizeof a);
+		memcpy(b, c, sizeof b);
+		float n = bc_v3_len(c);
+		bc_v3_normalize_div(a);
+		bc_v3_normalize(b);
+		for (int k = 0; k < 3; k++) {
+			CHECK(a[k] == c[k] / n);
+			differs += a[k] != b[k];
+		}
+	}
+	CHECK(differs > 0); /* the two rules are not the same */
+	float z0[3] = {0, 0, 0};
+	bc_v3_normalize_div(z0);
+	CHECK(z0[0] == 0.0f && z0[1] == 0.0f && z0[2] == 0.0f);
 }
 
 /* The node limit is the 22-bit field's "none" value. */
