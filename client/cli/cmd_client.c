@@ -1,10 +1,11 @@
 /*
  * `blobcast load|edit|camera|present|follow|snapshot|watch|bench-latency|
- * nodes|scene|...`: the command-line client of blobcastd. It owns option parsing for these
- * subcommands (strict: every value is checked, options a subcommand does not
- * take are refused), their output formats, and the measurements of watch and
- * bench-latency. All protocol work goes through libblobcast
- * (blobcast/client.h); image files through bc_image (OpenImageIO).
+ * nodes|scene|...`: the command-line client of blobcastd. Its commands
+ * share one option table (blobcast/args.h): every value is checked, an
+ * option a command does not take is refused as not applying and left out
+ * of that command's help. It also owns their output formats and the
+ * measurements of watch and bench-latency. All protocol work goes through
+ * libblobcast (blobcast/client.h); image files through bc_image (OpenImageIO).
  *
  * Exit status: 0 success, 1 the server or the connection failed (the
  * server's ERROR text is printed), 2 usage error.
@@ -23,6 +24,7 @@
 #include <time.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/args.h"
 #include "blobcast/client.h"
 #include "blobcast/clock.h"
 #include "blobcast/image.h"
@@ -53,7 +55,8 @@
 #define WATCH_BACKOFF_MIN_MS 250
 #define WATCH_BACKOFF_MAX_MS 4000
 
-/* Options; each subcommand accepts the common ones and those in its mask. */
+/* Options; each subcommand accepts the common ones (need 0 in the table)
+ * and those in its mask. */
 enum {
 	O_SESSION = 1u << 0,
 	O_SIZE = 1u << 1,
@@ -95,31 +98,22 @@ struct args {
 	int npos;
 };
 
+/* A command's own wording of a shared option ("--out" is an image for
+ * snapshot, a scene file for scene); NULL arg keeps the table's. */
+struct opt_text {
+	const char *name, *arg, *help;
+};
+
 struct cmd {
 	const char *name;
 	unsigned opts;
 	int min_pos, max_pos;
 	const char *synopsis;
 	const char *summary;
-	const char *help; /* the subcommand's own options */
+	const char *help;             /* what the subcommand does */
+	const struct opt_text *texts; /* ends with a NULL name; may be NULL */
 	int (*run)(struct args *a);
 };
-
-static const char common_help[] =
-    "  --server ADDR   HOST:PORT, [IPV6]:PORT or unix:PATH (default\n"
-    "                  $BLOBCAST_SERVER, else 127.0.0.1:7878);\n"
-    "                  tls://HOST:PORT for TLS; wss://HOST/PATH through\n"
-    "                  a WebSocket proxy (docs/deploy.md)\n"
-    "  --ca FILE       TLS: trust the CA certificates in FILE (PEM)\n"
-    "                  instead of the system's\n"
-    "  --insecure      TLS: do not check the server's certificate\n"
-    "  --token TOKEN   authentication token (default $BLOBCAST_TOKEN;\n"
-    "                  not needed over loopback or a Unix socket unless\n"
-    "                  the server requires one)\n"
-    "  --name NAME     client name shown to other members\n"
-    "  --timeout MS    limit for connecting and for each answer (default\n"
-    "                  10000; 0 waits forever)\n"
-    "  --help          this text\n";
 
 /* ---- small helpers ----------------------------------------------------------
  */
@@ -128,59 +122,6 @@ static const char common_help[] =
 static bool parse_u64(const char *s, uint64_t lo, uint64_t hi, uint64_t *out)
 {
 	return bc_num_u64(s, lo, hi, out) == 0;
-}
-
-/* "x,y,z": exactly three finite floats within the protocol's range. */
-static bool parse_vec3(const char *s, float v[3])
-{
-	float t[3];
-	if (bc_num_vec3(s, t) != 0) {
-		return false;
-	}
-	for (int i = 0; i < 3; i++) {
-		if (fabsf(t[i]) > BC_PROTO_MAX_ABS) {
-			return false;
-		}
-	}
-	memcpy(v, t, sizeof(t));
-	return true;
-}
-
-/* A finite float strictly between lo and hi. */
-static bool parse_float(const char *s, float lo, float hi, float *out)
-{
-	float v;
-	if (bc_num_f32(s, lo, hi, &v) != 0 || v == lo || v == hi) {
-		return false;
-	}
-	*out = v;
-	return true;
-}
-
-/* "WxH", each 1..BC_PROTO_MAX_DIM. */
-static bool parse_size(const char *s, uint16_t *w, uint16_t *h)
-{
-	uint32_t a, b;
-	if (bc_num_size(s, 1, BC_PROTO_MAX_DIM, &a, &b) != 0) {
-		return false;
-	}
-	*w = (uint16_t)a;
-	*h = (uint16_t)b;
-	return true;
-}
-
-static enum bc_proto_encoding encoding_from_name(const char *s)
-{
-	if (strcmp(s, "jpeg") == 0) {
-		return BC_PROTO_ENC_JPEG;
-	}
-	if (strcmp(s, "png") == 0) {
-		return BC_PROTO_ENC_PNG;
-	}
-	if (strcmp(s, "raw") == 0) {
-		return BC_PROTO_ENC_RAW;
-	}
-	return BC_PROTO_ENC_INVALID;
 }
 
 static const char *encoding_name(enum bc_proto_encoding e)
@@ -195,26 +136,6 @@ static const char *encoding_name(enum bc_proto_encoding e)
 	default:
 		return "?";
 	}
-}
-
-/* Matches "--name VALUE" and "--name=VALUE"; advances *i past the value. */
-static bool take_value(int argc, char **argv, int *i, const char *name,
-                       const char **value)
-{
-	const char *a = argv[*i];
-	size_t n = strlen(name);
-	if (strncmp(a, name, n) != 0) {
-		return false;
-	}
-	if (a[n] == '=') {
-		*value = a + n + 1;
-		return true;
-	}
-	if (a[n] != '\0') {
-		return false;
-	}
-	*value = *i + 1 < argc ? argv[++*i] : NULL;
-	return true;
 }
 
 /* Prints a failure of the server or the connection; returns EXIT_FAIL. */
@@ -666,8 +587,7 @@ static void print_undo(const struct roster *r, const struct bc_msg *m)
 
 /* `presenter member=4 name="alice"` or `presenter none`, with
  * ` following` when this client follows. */
-static void print_presenter(const struct roster *r, uint32_t id,
-                            bool following)
+static void print_presenter(const struct roster *r, uint32_t id, bool following)
 {
 	const char *name = roster_name(r, id);
 	if (!id) {
@@ -882,16 +802,18 @@ static int run_watch(struct args *a)
 		case BC_MSG_EDIT_APPLIED: {
 			const struct bc_msg_edit_applied *e = &m.edit_applied;
 			order_seen(times, e->order, at);
-			if (m.flags & (BC_PROTO_FLAG_UNDO | BC_PROTO_FLAG_REDO)) {
+			if (m.flags &
+			    (BC_PROTO_FLAG_UNDO | BC_PROTO_FLAG_REDO)) {
 				print_undo(roster, &m);
 			} else {
 				char tail[32];
-				snprintf(tail, sizeof(tail), " ops=%u%s", e->nops,
+				snprintf(tail, sizeof(tail), " ops=%u%s",
+				         e->nops,
 				         (m.flags & BC_PROTO_FLAG_INTERACTING)
 				             ? " interacting"
 				             : "");
-				print_change(roster, "edit", e->order, e->author,
-				             tail);
+				print_change(roster, "edit", e->order,
+				             e->author, tail);
 			}
 			fflush(stdout);
 			break;
@@ -1046,9 +968,8 @@ static int run_present(struct args *a)
 	printf("presenting session=%s member=%u eye=%g,%g,%g "
 	       "target=%g,%g,%g fov=%g\n",
 	       a->session, me, (double)cam.eye[0], (double)cam.eye[1],
-	       (double)cam.eye[2], (double)cam.target[0],
-	       (double)cam.target[1], (double)cam.target[2],
-	       (double)cam.fov_y_deg);
+	       (double)cam.eye[2], (double)cam.target[0], (double)cam.target[1],
+	       (double)cam.target[2], (double)cam.fov_y_deg);
 	fflush(stdout);
 	if (a->for_s) {
 		until = bc_clock_ms() + 1000.0 * (double)a->for_s;
@@ -1369,9 +1290,9 @@ static int run_sessions(struct args *a)
 		char *text;
 		for (size_t i = 0; arr && i < n; i++) {
 			const struct bc_client_session *s = &list[i];
-			json_t *o = json_pack("{s:s, s:I, s:b}", "name", s->name,
-			                      "members", (json_int_t)s->members,
-			                      "loaded", s->loaded);
+			json_t *o = json_pack(
+			    "{s:s, s:I, s:b}", "name", s->name, "members",
+			    (json_int_t)s->members, "loaded", s->loaded);
 			if (o && s->known) {
 				json_object_set_new(
 				    o, "primitives",
@@ -1399,7 +1320,8 @@ static int run_sessions(struct args *a)
 		for (size_t i = 0; i < n; i++) {
 			const struct bc_client_session *s = &list[i];
 			char when[32], prims[16], order[24];
-			put_time(when, sizeof(when), s->known ? s->last_edit_ms : 0);
+			put_time(when, sizeof(when),
+			         s->known ? s->last_edit_ms : 0);
 			snprintf(prims, sizeof(prims), "%s", "-");
 			snprintf(order, sizeof(order), "%s", "-");
 			if (s->known) {
@@ -1694,17 +1616,20 @@ static const struct cmd cmds[] = {
      "load a JSON scene into a session (created if missing)",
      "Loads SCENE.json (blobtree's JSON scene format, with its camera)\n"
      "into session NAME, replacing its scene; every member sees it at\n"
-     "once. Creates the session when it does not exist.\n",
-     run_load},
+     "once. Creates the session when it does not exist.",
+     NULL, run_load},
     {"edit", O_SESSION | O_INTERACTING, 2, MAX_POSITIONAL,
      "--session NAME ID key=value...", "set parameters of one node",
      "Sets fields of node ID and waits until the server has applied the\n"
      "edit. Primitives: translate=x,y,z rotate=x,y,z,w (unit quaternion)\n"
      "color=r,g,b and their kind's parameters (radius=0.4,\n"
      "half_extents=0.5,0.5,0.5, ...; see docs/primitives.md). Operators:\n"
-     "blend=B range=R kind=NAME (union, smooth_union, ...).\n"
-     "  --interacting   mark the edit as part of a drag (the server\n"
-     "                  answers with fast interactive frames)\n",
+     "blend=B range=R kind=NAME (union, smooth_union, ...).",
+     (const struct opt_text[]){{"interacting", NULL,
+                                "mark the edit as part of a drag (the "
+                                "server\nanswers with fast interactive "
+                                "frames)"},
+                               {NULL, NULL, NULL}},
      run_edit},
     {"camera", O_SESSION | O_CAMERA, 0, 0,
      "--session NAME --eye x,y,z --target x,y,z [--up x,y,z] [--fov DEG]",
@@ -1715,8 +1640,8 @@ static const struct cmd cmds[] = {
      "cameras (to take viewers along, use 'present'). Only the camera is\n"
      "sent, so edits other members make meanwhile stand. Needs the\n"
      "editor role. --up and --fov default to the session's current\n"
-     "values.\n",
-     run_camera},
+     "values.",
+     NULL, run_camera},
     {"present", O_SESSION | O_CAMERA | O_FOR, 0, 0,
      "--session NAME [--eye x,y,z --target x,y,z ...] [--for SECONDS]",
      "present: members who follow see this client's camera",
@@ -1729,12 +1654,9 @@ static const struct cmd cmds[] = {
      "  presenting session=NAME member=ID eye=... target=... fov=...\n"
      "  replaced by member=ID             (another member presents)\n"
      "  end=stopped|time|replaced\n"
-     "and stops presenting when it ends, which ends every follow.\n"
-     "  --for SECONDS   present for SECONDS (1..86400; default: until\n"
-     "                  Ctrl-C or SIGTERM)\n",
-     run_present},
-    {"follow", O_SESSION | O_SIZE | O_FRAMES | O_ENCODING | O_DOWNSCALE |
-         O_OUT,
+     "and stops presenting when it ends, which ends every follow.",
+     NULL, run_present},
+    {"follow", O_SESSION | O_SIZE | O_FRAMES | O_ENCODING | O_DOWNSCALE | O_OUT,
      0, 0, "--session NAME [--frames N] [--size WxH] [--out IMG]",
      "follow the presenter and print its camera and frames",
      "Joins session NAME as a viewer and follows whoever presents (now,\n"
@@ -1746,13 +1668,16 @@ static const struct cmd cmds[] = {
      "  camera member=ID eye=x,y,z target=x,y,z up=x,y,z fov=F "
      "[interacting]\n"
      "  frame K no=N view=WxH image=WxH level=L still|interactive\n"
-     "  end=frames|timeout|stopped frames=K\n"
-     "  --frames N      stop after N frames; give up when no frame came\n"
-     "                  for --timeout MS (default 10000), exit status 1\n"
-     "  --size WxH      view size (default 640x480)\n"
-     "  --encoding E    jpeg (default), png or raw\n"
-     "  --downscale D   coarsest block accepted (1..8, default 1)\n"
-     "  --out IMG       at the end, write the last picture to IMG\n",
+     "  end=frames|timeout|stopped frames=K",
+     (const struct opt_text[]){{"frames", NULL,
+                                "stop after N frames ({range}); give up "
+                                "when no\nframe came for --timeout MS "
+                                "(default 10000),\nexit status 1"},
+                               {"encoding", NULL, "{choices} (default jpeg)"},
+                               {"out", NULL,
+                                "at the end, write the last picture to "
+                                "IMG"},
+                               {NULL, NULL, NULL}},
      run_follow},
     {"snapshot", O_SESSION | O_SIZE | O_OUT | O_DEPTH | O_IDS | O_CAMERA, 0, 0,
      "--session NAME --size WxH --out IMG [--depth IMG] [--ids IMG]",
@@ -1760,15 +1685,13 @@ static const struct cmd cmds[] = {
      "Asks the server for a lossless (PNG) still of session NAME at WxH\n"
      "and writes it to IMG (any format OpenImageIO writes, by extension;\n"
      ".jpg is lossy). The camera is the session's, or the one given by\n"
-     "--eye/--target/--up/--fov (for this picture only).\n"
-     "  --depth IMG     also write the ray distance per pixel as one\n"
-     "                  float channel (+inf where nothing is hit; .exr,\n"
-     "                  .tif or .pfm)\n"
-     "  --ids IMG       also write the node id of the primitive seen per\n"
-     "                  pixel as one uint32 channel (0 where nothing is\n"
-     "                  hit; .tif or .exr)\n"
-     "Depth and ids come from the same render as the colour, sent\n"
-     "losslessly by the server.\n",
+     "--eye/--target/--up/--fov (for this picture only). Depth and ids\n"
+     "come from the same render as the colour, sent losslessly by the\n"
+     "server.",
+     (const struct opt_text[]){
+         {"size", NULL, "picture size, each {range} (required)"},
+         {"out", NULL, "write the picture to IMG (required)"},
+         {NULL, NULL, NULL}},
      run_snapshot},
     {"watch", O_SESSION | O_SIZE | O_FRAMES | O_ENCODING | O_DOWNSCALE, 0, 0,
      "--session NAME [--frames N] [--size WxH]",
@@ -1799,15 +1722,8 @@ static const struct cmd cmds[] = {
      "0.25 s, doubling up to 4 s, then 'rejoined session=NAME'; a refused\n"
      "token or a missing session ends the run instead. At the end one\n"
      "'stats' line gives the server's averages and end=frames (N frames\n"
-     "came), end=timeout or end=stopped (Ctrl-C, SIGTERM).\n"
-     "  --frames N      stop after N frames (default: run until stopped);\n"
-     "                  give up when no frame came for --timeout MS\n"
-     "                  (default 10000; 0: never), exit status 1\n"
-     "  --size WxH      view size (default 640x480)\n"
-     "  --encoding E    jpeg (default), png or raw for still frames\n"
-     "  --downscale D   coarsest block accepted (1..8): refinement frames at\n"
-     "                  1/2^n resolution with 2^n <= D (default 1)\n",
-     run_watch},
+     "came), end=timeout or end=stopped (Ctrl-C, SIGTERM).",
+     NULL, run_watch},
     {"bench-latency",
      O_SESSION | O_SIZE | O_EDITS | O_NODE | O_ENCODING | O_INTERACTING |
          O_DOWNSCALE,
@@ -1818,15 +1734,8 @@ static const struct cmd cmds[] = {
      "and prints one JSON line: p50_ms, p99_ms, mean_ms, min_ms, max_ms\n"
      "of edit sent -> frame received, frames and bytes_per_frame (mean\n"
      "over every frame received during the run), and the server's render,\n"
-     "encode and edit averages. The primitive is put back at the end.\n"
-     "  --edits N       number of edits (1..1000000)\n"
-     "  --size WxH      view size (default 640x480)\n"
-     "  --node ID       primitive to move (default: the first one)\n"
-     "  --encoding E    jpeg (default), png or raw for still frames\n"
-     "  --interacting   send the edits as a drag (interactive frames)\n"
-     "  --downscale D   coarsest block accepted (1..8): refinement frames at\n"
-     "                  1/2^n resolution with 2^n <= D (default 1)\n",
-     run_bench},
+     "encode and edit averages. The primitive is put back at the end.",
+     NULL, run_bench},
     {"nodes", O_SESSION | O_JSON, 0, 0, "--session NAME [--json]",
      "list a session's nodes: id, type, parent, parameters",
      "Joins session NAME as a viewer and lists its scene's nodes in\n"
@@ -1834,18 +1743,23 @@ static const struct cmd cmds[] = {
      "then the parameters with the keys 'blobcast edit' takes (operators:\n"
      "children=N and, when smooth, blend and range; primitives: their\n"
      "kind's parameters, translate and rotate unless at rest, color when\n"
-     "set). Floats are printed so that they read back exactly.\n"
-     "  --json          one JSON array instead: objects with id, type,\n"
-     "                  parent (0 for the root), children (operators) and\n"
-     "                  every parameter, translate and rotate included\n",
+     "set). Floats are printed so that they read back exactly.",
+     (const struct opt_text[]){{"json", NULL,
+                                "one JSON array instead: objects with id, "
+                                "type,\nparent (0 for the root), children "
+                                "(operators) and\nevery parameter, "
+                                "translate and rotate included"},
+                               {NULL, NULL, NULL}},
      run_nodes},
     {"scene", O_SESSION | O_OUT, 0, 0, "--session NAME [--out FILE]",
      "write a session's scene as a JSON scene file",
      "Joins session NAME as a viewer and writes its scene, with the\n"
      "session's camera, as a JSON scene file (docs/scene-format.md) that\n"
-     "'blobcast load' takes back unchanged: every id and float is kept.\n"
-     "  --out FILE      write to FILE (atomically) instead of stdout\n"
-     "                  (\"-\": stdout)\n",
+     "'blobcast load' takes back unchanged: every id and float is kept.",
+     (const struct opt_text[]){{"out", "FILE",
+                                "write to FILE (atomically) instead of "
+                                "stdout\n(\"-\": stdout)"},
+                               {NULL, NULL, NULL}},
      run_scene},
     {"delete", O_SESSION, 0, 0, "--session NAME",
      "delete a session and its saved scene",
@@ -1853,17 +1767,19 @@ static const struct cmd cmds[] = {
      "of it (they stay connected), its scene and edits are no longer\n"
      "served, and a later 'load' or join of that name starts anew. The\n"
      "server keeps the files aside (docs/operations.md). Needs a token\n"
-     "granting the editor role when the server has tokens.\n",
-     run_delete},
-    {"sessions", O_JSON, 0, 0, "[--json]",
-     "list the server's sessions",
+     "granting the editor role when the server has tokens.",
+     NULL, run_delete},
+    {"sessions", O_JSON, 0, 0, "[--json]", "list the server's sessions",
      "Lists every session of the server by name: connected members,\n"
      "primitives, last edit order, when it last changed (UTC) and whether\n"
      "it is loaded or only on disk. For a session on disk that the server\n"
      "has not loaded since it started, '-' stands for what it does not\n"
-     "know without loading it. At most 1024 sessions are listed.\n"
-     "  --json          one JSON array of objects: name, members, loaded\n"
-     "                  and, when known, primitives, order, last_edit_ms\n",
+     "know without loading it. At most 1024 sessions are listed.",
+     (const struct opt_text[]){{"json", NULL,
+                                "one JSON array of objects: name, "
+                                "members, loaded\nand, when known, "
+                                "primitives, order, last_edit_ms"},
+                               {NULL, NULL, NULL}},
      run_sessions},
     {"undo", O_SESSION, 0, 0, "--session NAME",
      "take back the session's newest change, whoever made it",
@@ -1872,13 +1788,13 @@ static const struct cmd cmds[] = {
      "as an edit of its own, seen by every member, and prints\n"
      "  undid edit ORDER by \"AUTHOR\": edit order NEW\n"
      "Exit status 1 with ESTATE when there is nothing to undo (the\n"
-     "history starts at the last load or restart, 100 steps deep).\n",
-     run_undo},
+     "history starts at the last load or restart, 100 steps deep).",
+     NULL, run_undo},
     {"redo", O_SESSION, 0, 0, "--session NAME",
      "apply again the change undone last",
      "Redoes the change undone last in session NAME, as 'undo' takes it\n"
-     "back; a new edit in between leaves nothing to redo.\n",
-     run_undo},
+     "back; a new edit in between leaves nothing to redo.",
+     NULL, run_undo},
 };
 
 static const struct cmd *find_cmd(const char *name)
@@ -1891,18 +1807,6 @@ static const struct cmd *find_cmd(const char *name)
 	return NULL;
 }
 
-static void cmd_usage(const struct cmd *k, FILE *out)
-{
-	fprintf(out, "usage: blobcast %s %s [options]\n\n%s\n%s%s", k->name,
-	        k->synopsis, k->summary, k->help,
-	        k->opts & O_CAMERA ? "  --eye x,y,z --target x,y,z --up x,y,z "
-	                             "--fov DEG\n                  camera\n"
-	                           : "");
-	fprintf(out, "\ncommon options:\n%s", common_help);
-	fprintf(out, "\nexit status: 0 done, 1 the server or the connection "
-	             "failed, 2 usage error\n");
-}
-
 void bc_cli_client_usage(FILE *out)
 {
 	for (size_t i = 0; i < sizeof(cmds) / sizeof(cmds[0]); i++) {
@@ -1910,133 +1814,317 @@ void bc_cli_client_usage(FILE *out)
 	}
 }
 
-/* Parses one option at argv[*i] into a. Returns 0, or EXIT_USAGE after
- * printing why. */
-static int parse_option(const struct cmd *k, int argc, char **argv, int *i,
-                        struct args *a)
+static const struct bc_opt_name encoding_names[] = {
+    {"jpeg", BC_PROTO_ENC_JPEG},
+    {"png", BC_PROTO_ENC_PNG},
+    {"raw", BC_PROTO_ENC_RAW},
+    {NULL, 0},
+};
+
+/* Where the table parses to; copied into struct args after the checks
+ * that the table cannot make. */
+struct parsed {
+	uint32_t size[2];
+	uint32_t timeout_ms, edits, node, downscale;
+	float eye[3], target[3], up[3], fov;
+	int encoding;
+};
+
+/* Most options of the table below. */
+#define MAX_OPTS 24
+
+/*
+ * One table of every client command's options: the command-specific ones,
+ * then the common ones (need 0). need[i] is the O_ bit a command's mask
+ * must hold for opts[i]; options of other commands stay in the table, so
+ * that giving one is refused as not applying (not as unknown), but are
+ * hidden from this command's help. Returns the number of options.
+ */
+static int client_opts(const struct cmd *k, struct args *a, struct parsed *p,
+                       struct bc_opt opts[MAX_OPTS + 1],
+                       unsigned need[MAX_OPTS])
 {
-	const char *arg = argv[*i], *v = NULL;
-	uint64_t x;
-	unsigned need = 0;
-	bool ok = true;
-	if (take_value(argc, argv, i, "--server", &v)) {
+	const struct {
+		unsigned need;
+		struct bc_opt opt;
+	} all[] = {
+	    {O_SESSION,
+	     {.name = "session",
+	      .kind = BC_OPT_STRING,
+	      .dst = &a->session,
+	      .arg = "NAME",
+	      .help = "the session (1..64 bytes; required)"}},
+	    {O_SIZE,
+	     {.name = "size",
+	      .kind = BC_OPT_SIZE,
+	      .dst = p->size,
+	      .lo = 1,
+	      .hi = BC_PROTO_MAX_DIM,
+	      .arg = "WxH",
+	      .help = "view size, each {range} (default 640x480)"}},
+	    {O_FRAMES,
+	     {.name = "frames",
+	      .kind = BC_OPT_U64,
+	      .dst = &a->frames,
+	      .lo = 1,
+	      .hi = 18446744073709551616.0,
+	      .arg = "N",
+	      .help = "stop after N frames ({range}; default: run until\n"
+	              "stopped); give up when no frame came for --timeout\n"
+	              "MS (default 10000; 0: never), exit status 1"}},
+	    {O_FOR,
+	     {.name = "for",
+	      .kind = BC_OPT_U64,
+	      .dst = &a->for_s,
+	      .lo = 1,
+	      .hi = 86400,
+	      .arg = "SECONDS",
+	      .help = "present for SECONDS ({range}; default: until\n"
+	              "Ctrl-C or SIGTERM)"}},
+	    {O_EDITS,
+	     {.name = "edits",
+	      .kind = BC_OPT_U32,
+	      .dst = &p->edits,
+	      .lo = 1,
+	      .hi = MAX_BENCH_EDITS,
+	      .arg = "N",
+	      .help = "number of edits ({range}; required)"}},
+	    {O_NODE,
+	     {.name = "node",
+	      .kind = BC_OPT_U32,
+	      .dst = &p->node,
+	      .lo = 1,
+	      .hi = UINT32_MAX,
+	      .arg = "ID",
+	      .help = "primitive to move (default: the first one)"}},
+	    {O_ENCODING,
+	     {.name = "encoding",
+	      .kind = BC_OPT_ENUM,
+	      .dst = &p->encoding,
+	      .arg = "E",
+	      .names = encoding_names,
+	      .help = "{choices} for still frames (default jpeg)"}},
+	    {O_DOWNSCALE,
+	     {.name = "downscale",
+	      .kind = BC_OPT_U32,
+	      .dst = &p->downscale,
+	      .lo = 1,
+	      .hi = BC_PROTO_MAX_DOWNSCALE,
+	      .arg = "D",
+	      .help = "coarsest block accepted ({range}): refinement\n"
+	              "frames at 1/2^n resolution with 2^n <= D\n"
+	              "(default 1)"}},
+	    {O_INTERACTING,
+	     {.name = "interacting",
+	      .kind = BC_OPT_FLAG,
+	      .dst = &a->interacting,
+	      .help = "send the edits as a drag (interactive frames)"}},
+	    {O_OUT,
+	     {.name = "out",
+	      .kind = BC_OPT_STRING,
+	      .dst = &a->out,
+	      .arg = "IMG",
+	      .help = "write the picture to IMG"}},
+	    {O_DEPTH,
+	     {.name = "depth",
+	      .kind = BC_OPT_STRING,
+	      .dst = &a->depth,
+	      .arg = "IMG",
+	      .help = "also write the ray distance per pixel as one\n"
+	              "float channel (+inf where nothing is hit; .exr,\n"
+	              ".tif or .pfm)"}},
+	    {O_IDS,
+	     {.name = "ids",
+	      .kind = BC_OPT_STRING,
+	      .dst = &a->ids,
+	      .arg = "IMG",
+	      .help = "also write the node id of the primitive seen per\n"
+	              "pixel as one uint32 channel (0 where nothing is\n"
+	              "hit; .tif or .exr)"}},
+	    {O_EYE,
+	     {.name = "eye",
+	      .kind = BC_OPT_VEC3,
+	      .dst = p->eye,
+	      .arg = "x,y,z",
+	      .help = "camera position"}},
+	    {O_TARGET,
+	     {.name = "target",
+	      .kind = BC_OPT_VEC3,
+	      .dst = p->target,
+	      .arg = "x,y,z",
+	      .help = "the point the camera looks at"}},
+	    {O_UP,
+	     {.name = "up",
+	      .kind = BC_OPT_VEC3,
+	      .dst = p->up,
+	      .arg = "x,y,z",
+	      .help = "camera up direction"}},
+	    {O_FOV,
+	     {.name = "fov",
+	      .kind = BC_OPT_F32,
+	      .dst = &p->fov,
+	      .lo = 0,
+	      .hi = 180,
+	      .arg = "DEG",
+	      .help = "vertical field of view in degrees (between 0\n"
+	              "and 180)"}},
+	    {O_JSON,
+	     {.name = "json",
+	      .kind = BC_OPT_FLAG,
+	      .dst = &a->json,
+	      .help = "print JSON"}},
+	    {0,
+	     {.name = "server",
+	      .kind = BC_OPT_STRING,
+	      .dst = &a->server,
+	      .arg = "ADDR",
+	      .help = "HOST:PORT, [IPV6]:PORT or unix:PATH (default\n"
+	              "$BLOBCAST_SERVER, else 127.0.0.1:7878);\n"
+	              "tls://HOST:PORT for TLS; wss://HOST/PATH through\n"
+	              "a WebSocket proxy (docs/deploy.md)"}},
+	    {0,
+	     {.name = "ca",
+	      .kind = BC_OPT_STRING,
+	      .dst = &a->ca,
+	      .arg = "FILE",
+	      .help = "TLS: trust the CA certificates in FILE (PEM)\n"
+	              "instead of the system's"}},
+	    {0,
+	     {.name = "insecure",
+	      .kind = BC_OPT_FLAG,
+	      .dst = &a->insecure,
+	      .help = "TLS: do not check the server's certificate"}},
+	    {0,
+	     {.name = "token",
+	      .kind = BC_OPT_STRING,
+	      .dst = &a->token,
+	      .arg = "TOKEN",
+	      .flags = BC_OPT_EMPTY,
+	      .help = "authentication token (default $BLOBCAST_TOKEN;\n"
+	              "not needed over loopback or a Unix socket unless\n"
+	              "the server requires one)"}},
+	    {0,
+	     {.name = "name",
+	      .kind = BC_OPT_STRING,
+	      .dst = &a->name,
+	      .arg = "NAME",
+	      .flags = BC_OPT_EMPTY,
+	      .help = "client name shown to other members (0..64 bytes)"}},
+	    {0,
+	     {.name = "timeout",
+	      .kind = BC_OPT_U32,
+	      .dst = &p->timeout_ms,
+	      .lo = 0,
+	      .hi = 86400000,
+	      .arg = "MS",
+	      .help = "limit for connecting and for each answer\n"
+	              "({range}; default 10000; 0 waits forever)"}},
+	};
+	int n = (int)(sizeof(all) / sizeof(all[0]));
+	_Static_assert(sizeof(all) / sizeof(all[0]) <= MAX_OPTS,
+	               "MAX_OPTS is too small");
+	for (int i = 0; i < n; i++) {
+		opts[i] = all[i].opt;
+		need[i] = all[i].need;
+		if (need[i] && !(k->opts & need[i])) {
+			opts[i].flags |= BC_OPT_HIDDEN;
+		}
+		for (const struct opt_text *t = k->texts; t && t->name; t++) {
+			if (strcmp(t->name, opts[i].name) == 0) {
+				opts[i].help = t->help;
+				if (t->arg) {
+					opts[i].arg = t->arg;
+				}
+			}
+		}
+	}
+	opts[n] = (struct bc_opt){.kind = BC_OPT_INVALID};
+	return n;
+}
+
+/* Checks what the table cannot and copies p into a; 0 or EXIT_USAGE after
+ * printing why. */
+static int check_opts(const struct bc_args *pa, struct args *a,
+                      const struct parsed *p)
+{
+	struct {
+		const char *name;
+		const float *v;
+		float *dst;
+		bool *has;
+	} vecs[] = {{"eye", p->eye, a->cam.eye, &a->has_eye},
+	            {"target", p->target, a->cam.target, &a->has_target},
+	            {"up", p->up, a->cam.up, &a->has_up}};
+	if (a->server) {
 		struct bc_client_addr addr;
 		struct bc_errinfo ei = {0};
-		if (v && bc_client_addr_parse(v, &addr, &ei)) {
-			fprintf(stderr, "blobcast %s: --server: %s\n", k->name,
-			        ei.msg);
-			return EXIT_USAGE;
+		if (bc_client_addr_parse(a->server, &addr, &ei)) {
+			return bc_args_error(pa, "--server: %s", ei.msg);
 		}
-		a->server = v;
-	} else if (take_value(argc, argv, i, "--token", &v)) {
-		a->token = v;
-	} else if (take_value(argc, argv, i, "--ca", &v)) {
-		ok = v && *v;
-		a->ca = v;
-	} else if (strcmp(arg, "--insecure") == 0) {
-		a->insecure = true;
-		v = "";
-	} else if (take_value(argc, argv, i, "--name", &v)) {
-		ok = v && strlen(v) <= BC_PROTO_MAX_NAME;
-		a->name = v;
-	} else if (take_value(argc, argv, i, "--timeout", &v)) {
-		ok = v && parse_u64(v, 0, 86400000, &x);
-		a->timeout_ms = ok ? (x == 0 ? -1 : (int)x) : 0;
-	} else if (take_value(argc, argv, i, "--session", &v)) {
-		need = O_SESSION;
-		ok = v && *v && strlen(v) <= BC_PROTO_MAX_NAME;
-		a->session = v;
-	} else if (take_value(argc, argv, i, "--size", &v)) {
-		need = O_SIZE;
-		ok = v && parse_size(v, &a->width, &a->height);
-		a->has_size = true;
-	} else if (take_value(argc, argv, i, "--out", &v)) {
-		need = O_OUT;
-		ok = v && *v;
-		a->out = v;
-	} else if (take_value(argc, argv, i, "--depth", &v)) {
-		need = O_DEPTH;
-		ok = v && *v;
-		a->depth = v;
-	} else if (take_value(argc, argv, i, "--ids", &v)) {
-		need = O_IDS;
-		ok = v && *v;
-		a->ids = v;
-	} else if (take_value(argc, argv, i, "--eye", &v)) {
-		need = O_EYE;
-		ok = v && parse_vec3(v, a->cam.eye);
-		a->has_eye = true;
-	} else if (take_value(argc, argv, i, "--target", &v)) {
-		need = O_TARGET;
-		ok = v && parse_vec3(v, a->cam.target);
-		a->has_target = true;
-	} else if (take_value(argc, argv, i, "--up", &v)) {
-		need = O_UP;
-		ok = v && parse_vec3(v, a->cam.up);
-		a->has_up = true;
-	} else if (take_value(argc, argv, i, "--fov", &v)) {
-		need = O_FOV;
-		ok = v && parse_float(v, 0.0f, 180.0f, &a->cam.fov_y_deg);
+	}
+	if (a->session && strlen(a->session) > BC_PROTO_MAX_NAME) {
+		return bc_args_error(pa, "--session is longer than %u bytes",
+		                     BC_PROTO_MAX_NAME);
+	}
+	if (a->name && strlen(a->name) > BC_PROTO_MAX_NAME) {
+		return bc_args_error(pa, "--name is longer than %u bytes",
+		                     BC_PROTO_MAX_NAME);
+	}
+	for (size_t i = 0; i < sizeof(vecs) / sizeof(vecs[0]); i++) {
+		if (!bc_args_given(pa, vecs[i].name)) {
+			continue;
+		}
+		for (int j = 0; j < 3; j++) {
+			if (fabsf(vecs[i].v[j]) > BC_PROTO_MAX_ABS) {
+				return bc_args_error(
+				    pa, "--%s is out of range (each |x| <= %g)",
+				    vecs[i].name, (double)BC_PROTO_MAX_ABS);
+			}
+		}
+		memcpy(vecs[i].dst, vecs[i].v, 3 * sizeof(float));
+		*vecs[i].has = true;
+	}
+	if (bc_args_given(pa, "fov")) {
+		/* The table's range includes its ends; a camera's does not. */
+		if (p->fov <= 0.0f || p->fov >= 180.0f) {
+			return bc_args_error(pa,
+			                     "--fov '%g' is out of range (more "
+			                     "than 0, less than 180)",
+			                     (double)p->fov);
+		}
+		a->cam.fov_y_deg = p->fov;
 		a->has_fov = true;
-	} else if (take_value(argc, argv, i, "--frames", &v)) {
-		need = O_FRAMES;
-		ok = v && parse_u64(v, 1, UINT64_MAX, &a->frames);
-	} else if (take_value(argc, argv, i, "--for", &v)) {
-		need = O_FOR;
-		ok = v && parse_u64(v, 1, 86400, &a->for_s);
-	} else if (take_value(argc, argv, i, "--edits", &v)) {
-		need = O_EDITS;
-		ok = v && parse_u64(v, 1, MAX_BENCH_EDITS, &x);
-		a->edits = ok ? (uint32_t)x : 0;
-	} else if (take_value(argc, argv, i, "--node", &v)) {
-		need = O_NODE;
-		ok = v && parse_u64(v, 1, UINT32_MAX, &x);
-		a->node = ok ? (uint32_t)x : 0;
-	} else if (take_value(argc, argv, i, "--encoding", &v)) {
-		need = O_ENCODING;
-		ok = v && (a->encoding = encoding_from_name(v)) !=
-		              BC_PROTO_ENC_INVALID;
-	} else if (take_value(argc, argv, i, "--downscale", &v)) {
-		need = O_DOWNSCALE;
-		ok = v && parse_u64(v, 1, BC_PROTO_MAX_DOWNSCALE, &x);
-		a->downscale = ok ? (uint8_t)x : 0;
-	} else if (strcmp(arg, "--json") == 0) {
-		need = O_JSON;
-		a->json = true;
-		v = "";
-	} else if (strcmp(arg, "--interacting") == 0) {
-		need = O_INTERACTING;
-		a->interacting = true;
-		v = "";
-	} else {
-		fprintf(stderr,
-		        "blobcast %s: unknown option \"%s\" (see blobcast %s "
-		        "--help)\n",
-		        k->name, arg, k->name);
-		return EXIT_USAGE;
 	}
-	if (need && !(k->opts & need)) {
-		fprintf(stderr,
-		        "blobcast %s: %s does not apply to this command (see "
-		        "blobcast %s --help)\n",
-		        k->name, arg, k->name);
-		return EXIT_USAGE;
+	if (bc_args_given(pa, "timeout")) {
+		a->timeout_ms = p->timeout_ms == 0 ? -1 : (int)p->timeout_ms;
 	}
-	if (!v || !ok) {
-		fprintf(stderr,
-		        "blobcast %s: %s needs a valid value%s%s%s (see "
-		        "blobcast %s --help)\n",
-		        k->name, arg, v ? ", not \"" : "", v ? v : "",
-		        v ? "\"" : "", k->name);
-		return EXIT_USAGE;
-	}
+	a->has_size = bc_args_given(pa, "size");
+	a->width = a->has_size ? (uint16_t)p->size[0] : 640;
+	a->height = a->has_size ? (uint16_t)p->size[1] : 480;
+	a->edits = bc_args_given(pa, "edits") ? p->edits : 0;
+	a->node = bc_args_given(pa, "node") ? p->node : 0;
+	a->downscale =
+	    bc_args_given(pa, "downscale") ? (uint8_t)p->downscale : 0;
+	a->encoding = bc_args_given(pa, "encoding")
+	                  ? (enum bc_proto_encoding)p->encoding
+	                  : BC_PROTO_ENC_INVALID;
 	return 0;
 }
 
 int bc_cli_client(const char *subcommand, int argc, char **argv)
 {
 	const struct cmd *k = find_cmd(subcommand);
+	struct bc_opt opts[MAX_OPTS + 1];
+	unsigned need[MAX_OPTS];
+	char prog[64], usage[256], about[4096];
+	struct parsed p = {.size = {640, 480},
+	                   .timeout_ms = 10000,
+	                   .edits = 0,
+	                   .downscale = 1,
+	                   .encoding = BC_PROTO_ENC_JPEG};
+	struct bc_args pa = {0};
 	struct args a;
+	int nopts, status;
 	if (!k) {
 		fprintf(stderr, "blobcast: '%s' is not a client command\n",
 		        subcommand);
@@ -2045,43 +2133,43 @@ int bc_cli_client(const char *subcommand, int argc, char **argv)
 	memset(&a, 0, sizeof(a));
 	a.cmd = k->name;
 	bc_camera_default(&a.cam);
-	for (int i = 1; i < argc; i++) {
-		const char *arg = argv[i];
-		int status;
-		if (strcmp(arg, "--help") == 0 || strcmp(arg, "-h") == 0) {
-			cmd_usage(k, stdout);
-			return 0;
-		}
-		if (arg[0] == '-' && arg[1] == '-') {
-			if ((status = parse_option(k, argc, argv, &i, &a))) {
-				return status;
-			}
-			continue;
-		}
-		if (a.npos == k->max_pos) {
-			fprintf(stderr,
-			        "blobcast %s: unexpected argument \"%s\" (see "
-			        "blobcast %s --help)\n",
-			        k->name, arg, k->name);
-			return EXIT_USAGE;
-		}
-		a.pos[a.npos++] = arg;
+	nopts = client_opts(k, &a, &p, opts, need);
+	snprintf(prog, sizeof(prog), "blobcast %s", k->name);
+	snprintf(usage, sizeof(usage), "blobcast %s %s [options]", k->name,
+	         k->synopsis);
+	snprintf(about, sizeof(about), "%s\n\n%s", k->summary, k->help);
+	pa.prog = prog;
+	pa.usage = usage;
+	pa.about = about;
+	pa.footer = "exit status: 0 done, 1 the server or the connection "
+	            "failed, 2 usage error";
+	pa.opts = opts;
+	if (bc_args_parse(&pa, argc, argv)) {
+		return pa.status;
 	}
-	if (a.npos < k->min_pos) {
-		fprintf(stderr, "usage: blobcast %s %s\n", k->name,
-		        k->synopsis);
-		return EXIT_USAGE;
+	for (int i = 0; i < nopts; i++) {
+		if (((pa.seen >> i) & 1u) && need[i] && !(k->opts & need[i])) {
+			return bc_args_error(&pa, "--%s does not apply to %s",
+			                     opts[i].name, k->name);
+		}
+	}
+	if (pa.npos > k->max_pos) {
+		return bc_args_error(&pa, "unexpected argument '%s'",
+		                     pa.pos[k->max_pos]);
+	}
+	if (pa.npos < k->min_pos) {
+		return bc_args_error(&pa, "missing arguments (usage: %s %s)",
+		                     prog, k->synopsis);
 	}
 	if ((k->opts & O_SESSION) && !a.session) {
-		fprintf(stderr,
-		        "blobcast %s: --session NAME is required (see "
-		        "blobcast %s --help)\n",
-		        k->name, k->name);
-		return EXIT_USAGE;
+		return bc_args_error(&pa, "--session NAME is required");
 	}
-	if (!a.has_size) {
-		a.width = 640;
-		a.height = 480;
+	if ((status = check_opts(&pa, &a, &p))) {
+		return status;
 	}
+	for (int i = 0; i < pa.npos; i++) {
+		a.pos[i] = pa.pos[i];
+	}
+	a.npos = pa.npos;
 	return k->run(&a);
 }

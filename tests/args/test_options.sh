@@ -74,7 +74,8 @@ help_options_are_parsed() {
     n=$((n + 1))
     (cd "$tmp" && "$@" "$opt" 1 --no-such-option) > "$tmp/out" 2>&1
     got=$?
-    if grep -qF -- "unknown option '$opt'" "$tmp/out"; then
+    if grep -qF -- "unknown option '$opt'" "$tmp/out" ||
+      grep -qF -- "$opt does not apply" "$tmp/out"; then
       fail "$name: --help lists $opt but the parser refuses it"
     elif [ "$got" -ne 2 ]; then
       fail "$name $opt 1 --no-such-option: exit $got, wanted 2"
@@ -87,6 +88,15 @@ help_options_are_parsed blobcastd "$daemon"
 for cmd in render mesh gen eval-bench; do
   help_options_are_parsed "blobcast $cmd" "$cli" "$cmd"
 done
+# The client commands share one table; each --help lists only the part
+# its command takes (the rest is refused as not applying).
+for cmd in load edit camera present follow snapshot watch bench-latency \
+  nodes scene delete sessions undo redo; do
+  help_options_are_parsed "blobcast $cmd" "$cli" "$cmd"
+done
+expect 2 "blobcast watch: --edits does not apply to watch" \
+  "$cli" watch --session s --edits 3
+expect 2 "(see 'blobcast watch --help')" "$cli" watch --session s --bogus
 
 # blobcast-view parses its options before it opens a window, so this
 # needs no display.
