@@ -22,6 +22,11 @@ jobs=$(nproc)
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=0}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 
+# Layout first: it takes a second and says which file to run clang-format
+# on (the formatting commit is listed in .git-blame-ignore-revs).
+echo "== format (.clang-format)"
+sh tests/check_format.sh
+
 echo "== sanitizer build (ASan + UBSan, -Werror)"
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
 	-DBLOBCAST_SANITIZE=ON -DBLOBCAST_WERROR=ON >/dev/null
