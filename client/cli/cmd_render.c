@@ -18,15 +18,8 @@
 #include "blobcast/blobtree.h"
 #include "blobcast/image.h"
 #include "blobcast/render.h"
-#if defined(BLOBCAST_HAVE_CPU)
 #include "blobcast/render_cpu.h"
-#endif
-#if defined(__has_include)
-#if __has_include("blobcast/scene.h")
 #include "blobcast/scene.h"
-#define HAVE_SCENE 1
-#endif
-#endif
 
 /* Most worker threads --threads accepts; the CPU backends cap lower. */
 #define MAX_THREADS 1024u
@@ -250,7 +243,6 @@ static int parse(int argc, char **argv, struct args *a)
 	return 0;
 }
 
-#if defined(HAVE_SCENE)
 /* Reads all of stdin, at most BC_SCENE_JSON_MAX_BYTES. */
 static int read_stdin(char **text, size_t *len, struct bc_errinfo *ei)
 {
@@ -294,13 +286,11 @@ static int read_stdin(char **text, size_t *len, struct bc_errinfo *ei)
 	*len = n;
 	return 0;
 }
-#endif
 
 int bc_cli_load_scene(const char *scene, struct bc_tree *t,
                       struct bc_camera *cam, struct bc_errinfo *ei)
 {
 	bc_camera_default(cam);
-#if defined(HAVE_SCENE)
 	if (strcmp(scene, "default") == 0) {
 		const char *json = bc_scene_default_json();
 		return bc_scene_parse_json(json, strlen(json), t, cam, ei);
@@ -316,11 +306,6 @@ int bc_cli_load_scene(const char *scene, struct bc_tree *t,
 		return rc;
 	}
 	return bc_scene_load_json(scene, t, cam, ei);
-#else
-	(void)t;
-	return bc_errinfo_set(ei, BC_ENOTSUP,
-	                      "%s: this build cannot read scene files", scene);
-#endif
 }
 
 struct progress {
@@ -328,7 +313,6 @@ struct progress {
 	int last;
 };
 
-#if defined(BLOBCAST_HAVE_CPU)
 static void on_progress(void *user, uint32_t done, uint32_t total)
 {
 	struct progress *p = user;
@@ -341,7 +325,6 @@ static void on_progress(void *user, uint32_t done, uint32_t total)
 	}
 	p->last = pct;
 }
-#endif
 
 static int render(const struct args *a, const struct bc_tree *t,
                   const struct bc_camera *cam, struct bc_frame *frame,
@@ -353,12 +336,10 @@ static int render(const struct args *a, const struct bc_tree *t,
 	if ((rc = bc_renderer_create(&r, a->backend, &a->opts, ei))) {
 		return rc;
 	}
-#if defined(BLOBCAST_HAVE_CPU)
 	if (!a->quiet && (a->backend == BC_BACKEND_NAIVE ||
 	                  a->backend == BC_BACKEND_TILED)) {
 		bc_render_cpu_set_progress(r, on_progress, &prog);
 	}
-#endif
 	if ((rc = bc_renderer_sync(r, t, NULL, ei)) == 0) {
 		rc = bc_renderer_render(r, cam, frame, stats, ei);
 	}

@@ -1,8 +1,6 @@
 /*
  * The `blobcast` command: dispatches the subcommands to their files in
- * client/cli/ and prints the overview help. Subcommands whose source is not
- * part of this build (CMake defines BLOBCAST_CLI_HAVE_* for those compiled
- * in) are reported as unavailable rather than unknown.
+ * client/cli/ and prints the overview help.
  */
 #include <stdbool.h>
 #include <stdio.h>
@@ -14,15 +12,9 @@
 #include "blobcast/log.h"
 #include "cmd_mesh.h"
 #include "cmd_render.h"
-#if defined(BLOBCAST_CLI_HAVE_GEN)
 #include "cmd_gen.h"
-#endif
-#if defined(BLOBCAST_CLI_HAVE_EVALBENCH)
 #include "cmd_evalbench.h"
-#endif
-#if defined(BLOBCAST_CLI_HAVE_CLIENT)
 #include "cmd_client.h"
-#endif
 
 #ifndef BLOBCAST_VERSION
 #define BLOBCAST_VERSION "unknown"
@@ -50,14 +42,10 @@ static const char main_about[] =
     "Local commands:\n"
     "  render      render a scene file to images on this machine\n"
     "  mesh        write a triangle mesh (.obj, .ply, .stl) of a scene\n"
-#if defined(BLOBCAST_CLI_HAVE_GEN)
     "  gen         print a generated scene (the paper's synthetic\n"
     "              families and more) as JSON\n"
-#endif
-#if defined(BLOBCAST_CLI_HAVE_EVALBENCH)
     "  eval-bench  measure interval pruning and pruned evaluation\n"
     "              on a scene (prints JSON)\n"
-#endif
     "  help [COMMAND]  this overview, or a command's full help\n"
     "\n"
     "Options (before the command):";
@@ -65,12 +53,10 @@ static const char main_about[] =
 /* After the option table: the server commands, then where to read more. */
 static void more_help(FILE *out)
 {
-#if defined(BLOBCAST_CLI_HAVE_CLIENT)
 	fprintf(out,
 	        "\nCommands for a blobcastd server (--server HOST:PORT or\n"
 	        "unix:PATH, before or after the command):\n");
 	bc_cli_client_usage(out);
-#endif
 	fprintf(out, "\n'blobcast COMMAND --help' describes each command's "
 	             "options.\n");
 }
@@ -122,27 +108,16 @@ static int dispatch(int argc, char **argv)
 		return bc_cli_mesh(argc, argv);
 	}
 	if (strcmp(cmd, "gen") == 0) {
-#if defined(BLOBCAST_CLI_HAVE_GEN)
 		return bc_cli_gen(argc, argv);
-#endif
-	} else if (strcmp(cmd, "eval-bench") == 0) {
-#if defined(BLOBCAST_CLI_HAVE_EVALBENCH)
+	}
+	if (strcmp(cmd, "eval-bench") == 0) {
 		return bc_cli_eval_bench(argc, argv);
-#endif
-	} else if (is_client_cmd(cmd)) {
-#if defined(BLOBCAST_CLI_HAVE_CLIENT)
+	}
+	if (is_client_cmd(cmd)) {
 		return bc_cli_client(cmd, argc, argv);
-#endif
-	} else {
-		fprintf(stderr,
-		        "blobcast: unknown command '%s' (see "
-		        "'blobcast --help')\n",
-		        cmd);
-		return 2;
 	}
 	fprintf(stderr,
-	        "blobcast: command '%s' is not built into this "
-	        "blobcast\n",
+	        "blobcast: unknown command '%s' (see 'blobcast --help')\n",
 	        cmd);
 	return 2;
 }
