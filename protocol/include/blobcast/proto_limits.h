@@ -68,9 +68,9 @@
 /* ---- Frames and views ------------------------------------------------------
  */
 
-/* Largest frame width or height; equals BC_RENDER_MAX_DIM (the largest
- * texture GL drivers guarantee, and w*h*16 bytes stays far below 2^32). */
-#define BC_PROTO_MAX_DIM 8192u
+/* Largest frame width or height: the renderers' BC_RENDER_MAX_DIM, both
+ * BC_LIMIT_DIM (blobcast/limits.h says why). */
+#define BC_PROTO_MAX_DIM BC_LIMIT_DIM
 
 /* Smallest FRAME payload limit a client may announce in HELLO (other than 0,
  * "the server's limit"): below 64 KiB even a modest JPEG does not fit, and

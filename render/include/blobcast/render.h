@@ -13,10 +13,12 @@
 
 #include "blobcast/blobtree.h"
 #include "blobcast/error.h"
+#include "blobcast/limits.h"
 
-/* Largest width or height of a frame: keeps w*h*16 bytes far below 2^32 and
- * matches the largest texture GL drivers guarantee. */
-#define BC_RENDER_MAX_DIM 8192u
+/* Largest width or height of a frame: BC_LIMIT_DIM (blobcast/limits.h:
+ * w*h*16 bytes stays far below 2^32, the largest texture GL drivers
+ * guarantee), the same as the protocol's BC_PROTO_MAX_DIM. */
+#define BC_RENDER_MAX_DIM BC_LIMIT_DIM
 
 /* Tile edge in pixels (paper §6: 8x8 rays share one workgroup and one
  * A-buffer list). Every backend renders in these tiles, so regions, damage
