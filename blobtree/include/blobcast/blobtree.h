@@ -24,6 +24,7 @@
 #include <stdint.h>
 
 #include "blobcast/error.h"
+#include "blobcast/export.h"
 #include "blobcast/limits.h"
 
 /* ---- Limits ------------------------------------------------------------ */
@@ -170,25 +171,25 @@ struct bc_prim_info {
 };
 
 /* Returns the description of kind, or NULL when kind is out of range. */
-const struct bc_prim_info *bc_prim_info(enum bc_prim kind);
+BC_API const struct bc_prim_info *bc_prim_info(enum bc_prim kind);
 /* Returns the kind named name ("sphere"), or BC_PRIM_INVALID. */
-enum bc_prim bc_prim_from_name(const char *name);
+BC_API enum bc_prim bc_prim_from_name(const char *name);
 
 /* ---- Operators (blobtree/ops.c) ----------------------------------------- */
 
 /* Returns "union", "smooth_union", ... or NULL when out of range. */
-const char *bc_op_name(enum bc_op kind);
-enum bc_op bc_op_from_name(const char *name);
-enum bc_op_class bc_op_class(enum bc_op kind);
-bool bc_op_is_smooth(enum bc_op kind);
+BC_API const char *bc_op_name(enum bc_op kind);
+BC_API enum bc_op bc_op_from_name(const char *name);
+BC_API enum bc_op_class bc_op_class(enum bc_op kind);
+BC_API bool bc_op_is_smooth(enum bc_op kind);
 /* Unary nodes (one child): offset .. scale. */
-bool bc_op_is_unary(enum bc_op kind);
+BC_API bool bc_op_is_unary(enum bc_op kind);
 /* Unary nodes that map the point their subtree sees (all but offset and
  * onion). */
-bool bc_op_is_domain(enum bc_op kind);
+BC_API bool bc_op_is_domain(enum bc_op kind);
 /* Unary nodes that change the value their child returns (offset, onion,
  * twist, bend, scale); the others pass it through. */
-bool bc_op_has_value(enum bc_op kind);
+BC_API bool bc_op_has_value(enum bc_op kind);
 
 /* One named parameter of a unary node: `count` floats at u[offset]. */
 struct bc_unary_info {
@@ -198,14 +199,15 @@ struct bc_unary_info {
 	                      "count" for repeat: two keys of 3) */
 };
 /* Returns the description of a unary kind, NULL for any other kind. */
-const struct bc_unary_info *bc_unary_info(enum bc_op kind);
+BC_API const struct bc_unary_info *bc_unary_info(enum bc_op kind);
 
 /* Evaluates operator kind on operands f0 (left) and f1 (right). blend = β
  * and range = r_o (paper eq. 8-18) are ignored by the sharp operators.
  * Either operand may be +INFINITY (a missing operand): the result is then
  * the operand selection of enum bc_op_class. Never returns NaN for non-NaN
  * inputs. */
-float bc_op_eval(enum bc_op kind, float blend, float range, float f0, float f1);
+BC_API float bc_op_eval(enum bc_op kind, float blend, float range, float f0,
+                        float f1);
 
 /* ---- Model data -------------------------------------------------------- */
 
@@ -235,36 +237,36 @@ struct bc_unary {
 /* Mirror axes: "x", "yz", "xyz"... (each letter at most once, any order)
  * to the mask 1..7, 0 when s is not such a string; and back ("x", "xy",
  * in x, y, z order; out holds 4 bytes). */
-uint32_t bc_mirror_axes_parse(const char *s);
-void bc_mirror_axes_name(uint32_t mask, char out[4]);
+BC_API uint32_t bc_mirror_axes_parse(const char *s);
+BC_API void bc_mirror_axes_name(uint32_t mask, char out[4]);
 
 /* Sets *u to kind's defaults (offset 0.1, onion 0.05, elongate 0.5 0 0,
  * twist 1, bend 0.5, mirror x, repeat spacing 2 and count 3 1 1, scale 1;
  * docs/scene-format.md). kind must be unary. */
-void bc_unary_init(struct bc_unary *u, enum bc_op kind);
+BC_API void bc_unary_init(struct bc_unary *u, enum bc_op kind);
 /* Checks a unary node's parameters: finite, |values| <= BC_PARAM_MAX_ABS,
  * onion thickness >= 0, elongate half extents >= 0, mirror axes an integer
  * 1..7, repeat counts integers 1..BC_REPEAT_MAX_COUNT with spacing > 0 on
  * each axis whose count exceeds 1 (and >= 0 elsewhere), scale factor > 0
  * and >= 1e-3. Returns 0, BC_EENUM, BC_ERANGE or BC_ENONFINITE. */
-int bc_unary_validate(const struct bc_unary *u, struct bc_errinfo *ei);
+BC_API int bc_unary_validate(const struct bc_unary *u, struct bc_errinfo *ei);
 
 /* Sets *p to a primitive of kind with every parameter at its default (a
  * valid unit-sized shape, docs/primitives.md), identity transform and no
  * colour. */
-void bc_prim_data_init(struct bc_prim_data *p, enum bc_prim kind);
+BC_API void bc_prim_data_init(struct bc_prim_data *p, enum bc_prim kind);
 
 /* The default r_o of a smooth operator with blend β when the scene gives
  * none: r_o = β, the smallest range for which G is continuous (docs). */
-float bc_op_default_range(float blend);
+BC_API float bc_op_default_range(float blend);
 
 /* Checks a primitive's or operator's parameters against the limits (finite,
  * positive sizes, |values| <= BC_PARAM_MAX_ABS, unit quaternion within 1e-3
  * -- which is then renormalized --, shape-specific rules). Returns 0,
  * BC_EENUM (unknown kind), BC_ERANGE or BC_ENONFINITE with the reason in
  * ei. */
-int bc_prim_validate(struct bc_prim_data *p, struct bc_errinfo *ei);
-int bc_op_validate(const struct bc_op_data *op, struct bc_errinfo *ei);
+BC_API int bc_prim_validate(struct bc_prim_data *p, struct bc_errinfo *ei);
+BC_API int bc_op_validate(const struct bc_op_data *op, struct bc_errinfo *ei);
 
 /* ---- Augmented bounding volumes ---------------------------------------- */
 
@@ -288,29 +290,30 @@ struct bc_abv {
 };
 
 /* Writes the local-frame bounding shape of primitive p (untransformed). */
-void bc_prim_bound(const struct bc_prim_data *p, struct bc_abv *out);
+BC_API void bc_prim_bound(const struct bc_prim_data *p, struct bc_abv *out);
 /* Writes the world AABB of a world-space bounding shape. */
-void bc_abv_aabb(const struct bc_abv *abv, float lo[3], float hi[3]);
+BC_API void bc_abv_aabb(const struct bc_abv *abv, float lo[3], float hi[3]);
 /* Clips the ray o + t d (d unit) against the shape. Returns true and the
  * entry/exit parameters (t0 may be negative when o is inside) on a hit; a
  * shape wholly behind the origin is a miss. */
-bool bc_abv_ray(const struct bc_abv *abv, const float o[3], const float d[3],
-                float *t0, float *t1);
+BC_API bool bc_abv_ray(const struct bc_abv *abv, const float o[3],
+                       const float d[3], float *t0, float *t1);
 /* Returns true when the shape may meet the axis-aligned box [lo, hi]
  * (conservative: never false when they meet). */
-bool bc_abv_meets_box(const struct bc_abv *abv, const float lo[3],
-                      const float hi[3]);
+BC_API bool bc_abv_meets_box(const struct bc_abv *abv, const float lo[3],
+                             const float hi[3]);
 
 /* ---- Primitive fields (blobtree/prim.c) -------------------------------- */
 
 /* Packs p's shape parameters into the BC_PRIM_PACKED floats the evaluator
  * reads (derived values such as sines are precomputed here). */
-void bc_prim_pack(const struct bc_prim_data *p, float packed[BC_PRIM_PACKED]);
+BC_API void bc_prim_pack(const struct bc_prim_data *p,
+                         float packed[BC_PRIM_PACKED]);
 /* Field of primitive kind at local point (x, y, z), from packed data. Exact
  * SDF where bc_prim_info says so; otherwise a bound that is never below the
  * exact distance to the shape's bounding volume (so ABVs stay valid). */
-float bc_prim_sdf(enum bc_prim kind, const float packed[BC_PRIM_PACKED],
-                  float x, float y, float z);
+BC_API float bc_prim_sdf(enum bc_prim kind, const float packed[BC_PRIM_PACKED],
+                         float x, float y, float z);
 
 /* ---- Camera ------------------------------------------------------------ */
 
@@ -322,10 +325,11 @@ struct bc_camera {
 };
 
 /* The default camera (eye (0,0,6) looking at the origin, up +y, 45 deg). */
-void bc_camera_default(struct bc_camera *cam);
+BC_API void bc_camera_default(struct bc_camera *cam);
 /* Returns 0 or BC_ERANGE when eye == target, up is parallel to the view
  * direction, or the fov is outside (0, 180). */
-int bc_camera_validate(const struct bc_camera *cam, struct bc_errinfo *ei);
+BC_API int bc_camera_validate(const struct bc_camera *cam,
+                              struct bc_errinfo *ei);
 
 /* A camera prepared for an image size: ray for pixel (i, j), j counted from
  * the top row, passes through the pixel centre; directions are unit. */
@@ -335,12 +339,13 @@ struct bc_view_rays {
 	float tan_half_y, aspect;
 	uint32_t width, height;
 };
-void bc_view_rays_init(struct bc_view_rays *vr, const struct bc_camera *cam,
-                       uint32_t width, uint32_t height);
+BC_API void bc_view_rays_init(struct bc_view_rays *vr,
+                              const struct bc_camera *cam, uint32_t width,
+                              uint32_t height);
 /* Direction for the (fractional) pixel coordinate (x, y): pixel centres are
  * at (i + 0.5, j + 0.5). */
-void bc_view_rays_dir(const struct bc_view_rays *vr, float x, float y,
-                      float dir[3]);
+BC_API void bc_view_rays_dir(const struct bc_view_rays *vr, float x, float y,
+                             float dir[3]);
 
 /* ---- The tree ---------------------------------------------------------- */
 
@@ -348,8 +353,8 @@ struct bc_tree;
 
 /* Returns a new empty tree, or NULL on allocation failure. Free with
  * bc_tree_destroy (which accepts NULL). */
-struct bc_tree *bc_tree_create(void);
-void bc_tree_destroy(struct bc_tree *t);
+BC_API struct bc_tree *bc_tree_create(void);
+BC_API void bc_tree_destroy(struct bc_tree *t);
 
 /*
  * Building, in pre-order: bc_tree_begin() clears the tree; then operators are
@@ -360,82 +365,85 @@ void bc_tree_destroy(struct bc_tree *t);
  * Each returns 0 or an error with the reason in ei; after an error the
  * builder must be restarted with bc_tree_begin().
  */
-int bc_tree_begin(struct bc_tree *t);
-int bc_tree_push_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
-                    struct bc_errinfo *ei);
-int bc_tree_pop_op(struct bc_tree *t, struct bc_errinfo *ei);
+BC_API int bc_tree_begin(struct bc_tree *t);
+BC_API int bc_tree_push_op(struct bc_tree *t, uint32_t id,
+                           const struct bc_op_data *op, struct bc_errinfo *ei);
+BC_API int bc_tree_pop_op(struct bc_tree *t, struct bc_errinfo *ei);
 /* Opens a unary node (closed with bc_tree_pop_op, which then requires
  * exactly one child: a primitive or any subtree). */
-int bc_tree_push_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
-                       struct bc_errinfo *ei);
-int bc_tree_put_prim(struct bc_tree *t, uint32_t id,
-                     const struct bc_prim_data *p, struct bc_errinfo *ei);
-int bc_tree_end(struct bc_tree *t, struct bc_errinfo *ei);
+BC_API int bc_tree_push_unary(struct bc_tree *t, uint32_t id,
+                              const struct bc_unary *u, struct bc_errinfo *ei);
+BC_API int bc_tree_put_prim(struct bc_tree *t, uint32_t id,
+                            const struct bc_prim_data *p,
+                            struct bc_errinfo *ei);
+BC_API int bc_tree_end(struct bc_tree *t, struct bc_errinfo *ei);
 
 /* Does any node carry an id the tree assigned (the scene gave 0)? */
-bool bc_tree_has_auto_ids(const struct bc_tree *t);
+BC_API bool bc_tree_has_auto_ids(const struct bc_tree *t);
 
 /* Counts of the model: scene nodes, primitives, operators. */
-uint32_t bc_tree_node_count(const struct bc_tree *t);
-uint32_t bc_tree_prim_count(const struct bc_tree *t);
+BC_API uint32_t bc_tree_node_count(const struct bc_tree *t);
+BC_API uint32_t bc_tree_prim_count(const struct bc_tree *t);
 /* Nodes on the longest path from the root (the root counting 1), 0 for an
  * empty tree. */
-uint32_t bc_tree_nesting(const struct bc_tree *t);
+BC_API uint32_t bc_tree_nesting(const struct bc_tree *t);
 /* Returns the root's id, 0 for an empty tree. */
-uint32_t bc_tree_root(const struct bc_tree *t);
+BC_API uint32_t bc_tree_root(const struct bc_tree *t);
 
 /* Reading the model (for writers and encoders). Returns false if id is
  * unknown. Exactly one of prim/op is filled (the other's kind set to
  * INVALID); out-parameters may be NULL. */
-bool bc_tree_get(const struct bc_tree *t, uint32_t id,
-                 struct bc_prim_data *prim, struct bc_op_data *op);
+BC_API bool bc_tree_get(const struct bc_tree *t, uint32_t id,
+                        struct bc_prim_data *prim, struct bc_op_data *op);
 /* Number of children of id (0 for primitives and unknown ids) and the id of
  * child k (0 when out of range). */
-uint32_t bc_tree_child_count(const struct bc_tree *t, uint32_t id);
-uint32_t bc_tree_child(const struct bc_tree *t, uint32_t id, uint32_t k);
+BC_API uint32_t bc_tree_child_count(const struct bc_tree *t, uint32_t id);
+BC_API uint32_t bc_tree_child(const struct bc_tree *t, uint32_t id, uint32_t k);
 /* Returns the parent's id, 0 for the root or an unknown id. */
-uint32_t bc_tree_parent(const struct bc_tree *t, uint32_t id);
+BC_API uint32_t bc_tree_parent(const struct bc_tree *t, uint32_t id);
 /* Returns node id's top slot in the linearized form (an n-ary operator's
  * last fold slot), BC_NONE for an unknown id. Its primitives are the
  * indices prim_of[first[slot]] .. + (slot - first[slot]) / 2. */
-uint32_t bc_tree_slot(const struct bc_tree *t, uint32_t id);
+BC_API uint32_t bc_tree_slot(const struct bc_tree *t, uint32_t id);
 
 /* ---- Edits -------------------------------------------------------------- */
 
 /* Replaces the parameters of primitive id (kind must be unchanged). Only its
  * parameter record and ABV are rewritten. */
-int bc_tree_set_prim(struct bc_tree *t, uint32_t id,
-                     const struct bc_prim_data *p, struct bc_errinfo *ei);
+BC_API int bc_tree_set_prim(struct bc_tree *t, uint32_t id,
+                            const struct bc_prim_data *p,
+                            struct bc_errinfo *ei);
 /* Replaces the parameters of operator id; the kind may change among
  * operators (the subtree's ROIs and ABVs are recomputed, the layout stays). */
-int bc_tree_set_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
-                   struct bc_errinfo *ei);
+BC_API int bc_tree_set_op(struct bc_tree *t, uint32_t id,
+                          const struct bc_op_data *op, struct bc_errinfo *ei);
 /* Replaces the parameters of unary node id; the kind may change among the
  * unary kinds. Rewrites its record, then the ROIs and ABVs of its subtree
  * and the Lipschitz bounds of its domain ancestors (the layout stays). */
-int bc_tree_set_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
-                      struct bc_errinfo *ei);
+BC_API int bc_tree_set_unary(struct bc_tree *t, uint32_t id,
+                             const struct bc_unary *u, struct bc_errinfo *ei);
 /* Reads unary node id into *out. Returns false (out zeroed) when id is not
  * a unary node. */
-bool bc_tree_get_unary(const struct bc_tree *t, uint32_t id,
-                       struct bc_unary *out);
+BC_API bool bc_tree_get_unary(const struct bc_tree *t, uint32_t id,
+                              struct bc_unary *out);
 
 /* Inserts a copy of the whole of sub as child number pos of operator
  * parent_id (pos may equal the child count: append). Ids of sub must not
  * exist in t (BC_EDUPID); sub's ids are kept. Re-linearizes. */
-int bc_tree_insert(struct bc_tree *t, uint32_t parent_id, uint32_t pos,
-                   const struct bc_tree *sub, struct bc_errinfo *ei);
+BC_API int bc_tree_insert(struct bc_tree *t, uint32_t parent_id, uint32_t pos,
+                          const struct bc_tree *sub, struct bc_errinfo *ei);
 /* Removes node id and its subtree. An operator left with one child is
  * replaced by that child (operators always have two or more). Removing the
  * root empties the tree. Re-linearizes. */
-int bc_tree_remove(struct bc_tree *t, uint32_t id, struct bc_errinfo *ei);
+BC_API int bc_tree_remove(struct bc_tree *t, uint32_t id,
+                          struct bc_errinfo *ei);
 /* Replaces node id (and its subtree) with a copy of sub at the same place.
  * sub's ids must be new to t, except that sub's root may reuse id. */
-int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
-                    struct bc_errinfo *ei);
+BC_API int bc_tree_replace(struct bc_tree *t, uint32_t id,
+                           const struct bc_tree *sub, struct bc_errinfo *ei);
 /* Copies the whole tree src into dst (dst is cleared first). */
-int bc_tree_copy(struct bc_tree *dst, const struct bc_tree *src,
-                 struct bc_errinfo *ei);
+BC_API int bc_tree_copy(struct bc_tree *dst, const struct bc_tree *src,
+                        struct bc_errinfo *ei);
 
 /* What changed since the last bc_tree_take_dirty(): ranges are half-open,
  * [lo, hi) with lo == hi meaning nothing; structure means everything. */
@@ -446,7 +454,7 @@ struct bc_dirty {
 	uint32_t prim_lo, prim_hi;   /* primitives whose ABV changed */
 	uint32_t edits;              /* edits applied since the last take */
 };
-void bc_tree_take_dirty(struct bc_tree *t, struct bc_dirty *out);
+BC_API void bc_tree_take_dirty(struct bc_tree *t, struct bc_dirty *out);
 
 /* ---- The linearized form (read-only for renderers) --------------------- */
 
@@ -530,7 +538,7 @@ struct bc_lin {
 
 /* Returns the tree's linearized form (valid until the next structural edit;
  * parameter edits update it in place). NULL for an empty tree. */
-const struct bc_lin *bc_tree_lin(const struct bc_tree *t);
+BC_API const struct bc_lin *bc_tree_lin(const struct bc_tree *t);
 
 static inline uint32_t bc_lin_parent(const struct bc_lin *l, uint32_t slot)
 {
@@ -560,23 +568,24 @@ static inline const float *bc_lin_param(const struct bc_lin *l, uint32_t slot)
 
 /* Maps world point p through the domain nodes from d (a unary index, or
  * BC_NONE: no map) outward: the point the slots below d see. */
-void bc_domain_map(const struct bc_lin *l, uint32_t d, const float p[3],
-                   float out[3]);
+BC_API void bc_domain_map(const struct bc_lin *l, uint32_t d, const float p[3],
+                          float out[3]);
 /* Applies unary node u's value map to its child's value f at world point
  * p (identity for the pure domain nodes). */
-float bc_unary_value(const struct bc_lin *l, uint32_t u, float f,
-                     const float p[3]);
+BC_API float bc_unary_value(const struct bc_lin *l, uint32_t u, float f,
+                            const float p[3]);
 
 /* The Lipschitz bound of a twist or bend map (kind) of the given rate
  * within distance r of its axis. */
-float bc_unary_own_lip(uint32_t kind, float rate, float r);
+BC_API float bc_unary_own_lip(uint32_t kind, float rate, float r);
 
 /* Field of primitive k (world point p), and of the whole tree. The _id
  * variants also return the primitive index that decides the value (the
  * operand each operator selects or weights most). */
-float bc_eval_prim(const struct bc_lin *l, uint32_t k, const float p[3]);
-float bc_eval_full(const struct bc_lin *l, const float p[3]);
-float bc_eval_full_id(const struct bc_lin *l, const float p[3], uint32_t *prim);
+BC_API float bc_eval_prim(const struct bc_lin *l, uint32_t k, const float p[3]);
+BC_API float bc_eval_full(const struct bc_lin *l, const float p[3]);
+BC_API float bc_eval_full_id(const struct bc_lin *l, const float p[3],
+                             uint32_t *prim);
 
 /* A pruned tree view (paper §6.2, Fig. 11): the straight-line program that
  * evaluates the field equivalent to the tree's inside the volume where only
@@ -601,25 +610,26 @@ struct bc_view {
 };
 
 /* init/finish work on caller memory; finish accepts a zeroed view. */
-void bc_view_init(struct bc_view *v);
-void bc_view_finish(struct bc_view *v);
+BC_API void bc_view_init(struct bc_view *v);
+BC_API void bc_view_finish(struct bc_view *v);
 /* Builds the view for the active primitive indices active[0..n) (strictly
  * increasing). A missing subtree under a unary node leaves the node
  * missing; a present one is followed by the node's instruction. Cost is
  * O(n log depth) -- independent of tree size -- using the jump pointers,
  * plus one step per value-changing unary node on the way. Returns 0, BC_EINVAL
  * (unsorted or out of range) or BC_ENOMEM. */
-int bc_view_build(struct bc_view *v, const struct bc_lin *l,
-                  const uint32_t *active, uint32_t n);
+BC_API int bc_view_build(struct bc_view *v, const struct bc_lin *l,
+                         const uint32_t *active, uint32_t n);
 /* Evaluates a view at p; +INFINITY for an empty view. */
-float bc_view_eval(const struct bc_view *v, const struct bc_lin *l,
-                   const float p[3]);
-float bc_view_eval_id(const struct bc_view *v, const struct bc_lin *l,
-                      const float p[3], uint32_t *prim);
+BC_API float bc_view_eval(const struct bc_view *v, const struct bc_lin *l,
+                          const float p[3]);
+BC_API float bc_view_eval_id(const struct bc_view *v, const struct bc_lin *l,
+                             const float p[3], uint32_t *prim);
 
 /* Sparse evaluation in one call: builds a view of active[0..n) into scratch
  * (a bc_view reused by the caller) and evaluates it at p. */
-float bc_eval_sparse(const struct bc_lin *l, const uint32_t *active, uint32_t n,
-                     struct bc_view *scratch, const float p[3]);
+BC_API float bc_eval_sparse(const struct bc_lin *l, const uint32_t *active,
+                            uint32_t n, struct bc_view *scratch,
+                            const float p[3]);
 
 #endif

@@ -20,6 +20,7 @@
 
 #include "blobcast/blobtree.h"
 #include "blobcast/error.h"
+#include "blobcast/export.h"
 
 /* The JSON format version this build reads and writes ("blobcast": 1). */
 #define BC_SCENE_JSON_VERSION 1
@@ -62,12 +63,12 @@
  * BC_SCENE_JSON_MAX_BYTES are errors. Returns 0 or a BC_E* code with the
  * JSON path and reason in ei.
  */
-int bc_scene_parse_json(const char *text, size_t len, struct bc_tree *t,
-                        struct bc_camera *cam, struct bc_errinfo *ei);
+BC_API int bc_scene_parse_json(const char *text, size_t len, struct bc_tree *t,
+                               struct bc_camera *cam, struct bc_errinfo *ei);
 /* Reads the file at path (refusing files over BC_SCENE_JSON_MAX_BYTES before
  * reading them) and parses it as bc_scene_parse_json() does. */
-int bc_scene_load_json(const char *path, struct bc_tree *t,
-                       struct bc_camera *cam, struct bc_errinfo *ei);
+BC_API int bc_scene_load_json(const char *path, struct bc_tree *t,
+                              struct bc_camera *cam, struct bc_errinfo *ei);
 
 /*
  * Writes t (and cam, when not NULL) as a version-1 scene. Every id and every
@@ -77,17 +78,19 @@ int bc_scene_load_json(const char *path, struct bc_tree *t,
  * caller bc_free's, or NULL when t is empty, nests deeper than
  * BC_SCENE_JSON_MAX_DEPTH (bc_tree_nesting) or memory runs out.
  */
-char *bc_scene_to_json(const struct bc_tree *t, const struct bc_camera *cam);
+BC_API char *bc_scene_to_json(const struct bc_tree *t,
+                              const struct bc_camera *cam);
 /* Writes bc_scene_to_json()'s text to path atomically: a temporary file in
  * the same directory, fsync, rename over path, fsync of the directory.
  * Returns 0, BC_EINVAL (empty tree), BC_ENOMEM or BC_EIO with the reason. */
-int bc_scene_save_json(const char *path, const struct bc_tree *t,
-                       const struct bc_camera *cam, struct bc_errinfo *ei);
+BC_API int bc_scene_save_json(const char *path, const struct bc_tree *t,
+                              const struct bc_camera *cam,
+                              struct bc_errinfo *ei);
 
 /* The built-in scene: a small colourful composition that shows primitives of
  * several kinds and sharp and smooth operators, framed by its camera. A
  * static NUL-terminated string, never to be freed. */
-const char *bc_scene_default_json(void);
+BC_API const char *bc_scene_default_json(void);
 
 /* ---- Binary ------------------------------------------------------------- */
 
@@ -100,9 +103,9 @@ const char *bc_scene_default_json(void);
  * a bc_malloc'd buffer of *len bytes the caller bc_free's. *out and *len are
  * reset on entry.
  */
-int bc_scene_encode(const struct bc_tree *t, const struct bc_camera *cam,
-                    uint8_t **out, size_t *len);
-int bc_tree_encode(const struct bc_tree *t, uint8_t **out, size_t *len);
+BC_API int bc_scene_encode(const struct bc_tree *t, const struct bc_camera *cam,
+                           uint8_t **out, size_t *len);
+BC_API int bc_tree_encode(const struct bc_tree *t, uint8_t **out, size_t *len);
 
 /*
  * Decodes exactly buf[0..len) (trailing bytes are an error). bc_scene_decode
@@ -113,15 +116,15 @@ int bc_tree_encode(const struct bc_tree *t, uint8_t **out, size_t *len);
  * BC_EPROTO_FLAGS, BC_EENUM, BC_ENONFINITE, BC_EDEPTH, BC_EDUPID, BC_ERANGE,
  * BC_ELIMIT, BC_ENOMEM) with the node index and reason in ei.
  */
-int bc_scene_decode(const uint8_t *buf, size_t len, struct bc_tree *t,
-                    struct bc_camera *cam, bool *has_camera,
-                    struct bc_errinfo *ei);
-int bc_tree_decode(const uint8_t *buf, size_t len, struct bc_tree *t,
-                   struct bc_errinfo *ei);
+BC_API int bc_scene_decode(const uint8_t *buf, size_t len, struct bc_tree *t,
+                           struct bc_camera *cam, bool *has_camera,
+                           struct bc_errinfo *ei);
+BC_API int bc_tree_decode(const uint8_t *buf, size_t len, struct bc_tree *t,
+                          struct bc_errinfo *ei);
 
 /* Number of floats a primitive of kind carries in its binary node (the
  * extent of its bc_prim_info parameter layout); 0 for an invalid kind. */
-uint32_t bc_scene_prim_nfloats(enum bc_prim kind);
+BC_API uint32_t bc_scene_prim_nfloats(enum bc_prim kind);
 
 /* ---- Pre-order walk ------------------------------------------------------ */
 
@@ -159,10 +162,11 @@ struct bc_scene_walk {
 
 /* Starts a walk over t (which must stay unchanged during the walk). Returns
  * 0, BC_EINVAL (empty or unfinished tree) or BC_ENOMEM. */
-int bc_scene_walk_init(struct bc_scene_walk *w, const struct bc_tree *t);
+BC_API int bc_scene_walk_init(struct bc_scene_walk *w, const struct bc_tree *t);
 /* Fills *out with the next node; returns false after the last one. */
-bool bc_scene_walk_next(struct bc_scene_walk *w, struct bc_scene_node *out);
+BC_API bool bc_scene_walk_next(struct bc_scene_walk *w,
+                               struct bc_scene_node *out);
 /* Frees the walk's memory; accepts a zeroed walk. */
-void bc_scene_walk_finish(struct bc_scene_walk *w);
+BC_API void bc_scene_walk_finish(struct bc_scene_walk *w);
 
 #endif
