@@ -148,20 +148,24 @@ static int failed(const struct args *a, const char *what,
 	return EXIT_FAIL;
 }
 
+/* The connection the options ask for: --server, --token (or their
+ * environment variables), --name, --timeout, --ca, --insecure. */
+static struct bc_client_opts connect_opts(const struct args *a)
+{
+	return (struct bc_client_opts){
+	    .addr = a->server ? a->server : getenv("BLOBCAST_SERVER"),
+	    .name = a->name ? a->name : "blobcast-cli",
+	    .token = a->token ? a->token : getenv("BLOBCAST_TOKEN"),
+	    .timeout_ms = a->timeout_ms,
+	    .ca_file = a->ca,
+	    .insecure = a->insecure};
+}
+
 static int connect_to(const struct args *a, struct bc_client **c)
 {
 	struct bc_errinfo ei = {0};
-	const char *token = a->token ? a->token : getenv("BLOBCAST_TOKEN");
-	const char *addr = a->server ? a->server : getenv("BLOBCAST_SERVER");
-	if (bc_client_connect(c,
-	                      &(struct bc_client_opts){
-	                          .addr = addr,
-	                          .name = a->name ? a->name : "blobcast-cli",
-	                          .token = token,
-	                          .timeout_ms = a->timeout_ms,
-	                          .ca_file = a->ca,
-	                          .insecure = a->insecure},
-	                      &ei)) {
+	struct bc_client_opts opts = connect_opts(a);
+	if (bc_client_connect(c, &opts, &ei)) {
 		return failed(a, NULL, &ei);
 	}
 	return 0;
@@ -295,6 +299,24 @@ static void apply_camera_opts(const struct args *a, struct bc_camera *cam)
 	}
 }
 
+/* Sets cam to the session's camera (the default one when the scene has
+ * none) changed by the options. Returns 0, or EXIT_USAGE after saying why
+ * the result is not a camera. */
+static int camera_from_opts(const struct args *a, const struct bc_client *c,
+                            struct bc_camera *cam)
+{
+	struct bc_errinfo ei = {0};
+	if (!bc_client_scene(c, cam)) {
+		bc_camera_default(cam);
+	}
+	apply_camera_opts(a, cam);
+	if (bc_camera_validate(cam, &ei)) {
+		fprintf(stderr, "blobcast %s: %s\n", a->cmd, ei.msg);
+		return EXIT_USAGE;
+	}
+	return 0;
+}
+
 /*
  * The server keeps a camera per connection (CAMERA changes only the
  * sender's view) and one per session: the scene's, which members start
@@ -318,13 +340,7 @@ static int run_camera(struct args *a)
 	                           BC_CLIENT_JOIN_EXISTING, &c))) {
 		goto out;
 	}
-	if (!bc_client_scene(c, &cam)) {
-		bc_camera_default(&cam);
-	}
-	apply_camera_opts(a, &cam);
-	if (bc_camera_validate(&cam, &ei)) {
-		fprintf(stderr, "blobcast camera: %s\n", ei.msg);
-		status = EXIT_USAGE;
+	if ((status = camera_from_opts(a, c, &cam))) {
 		goto out;
 	}
 	if (bc_client_session_camera(c, &cam, &order, &ei)) {
@@ -466,6 +482,63 @@ static void on_interrupt(int sig)
 {
 	(void)sig;
 	interrupted = 1;
+}
+
+/* A long-running command (watch, present, follow) routes SIGINT and
+ * SIGTERM to on_interrupt, to end its loop cleanly, and puts back the
+ * handlers it found when it ends. */
+struct stop_signals {
+	struct sigaction old_int, old_term;
+};
+
+static void stop_signals_install(struct stop_signals *s)
+{
+	struct sigaction sa;
+	memset(&sa, 0, sizeof(sa));
+	sa.sa_handler = on_interrupt;
+	sigemptyset(&sa.sa_mask);
+	interrupted = 0;
+	sigaction(SIGINT, &sa, &s->old_int);
+	sigaction(SIGTERM, &sa, &s->old_term);
+}
+
+static void stop_signals_restore(const struct stop_signals *s)
+{
+	sigaction(SIGINT, &s->old_int, NULL);
+	sigaction(SIGTERM, &s->old_term, NULL);
+}
+
+/* How long watch and follow wait for each frame when --frames asks for a
+ * count, in ms; negative waits forever (--timeout -1). */
+static double frame_idle_limit(const struct args *a)
+{
+	return a->timeout_ms < 0    ? -1.0
+	       : a->timeout_ms == 0 ? (double)BC_CLIENT_DEFAULT_TIMEOUT_MS
+	                            : (double)a->timeout_ms;
+}
+
+/* Reports a run of --frames N that ended because no frame came within
+ * idle_limit ms; returns the exit status for it. */
+static int frames_timed_out(const struct args *a, uint64_t nframes,
+                            double idle_limit)
+{
+	fprintf(stderr,
+	        "blobcast %s: timed out: %llu of %llu frames, none "
+	        "for %.0f ms (--timeout)\n",
+	        a->cmd, (unsigned long long)nframes,
+	        (unsigned long long)a->frames, idle_limit);
+	return EXIT_FAIL;
+}
+
+/* Reports the server's ERROR message m the way failed() reports our own
+ * errors; returns the exit status for it. */
+static int server_failed(const struct args *a, const struct bc_msg *m)
+{
+	struct bc_errinfo ei = {0};
+	ei.code = -(int)m->error.code;
+	snprintf(ei.msg, sizeof(ei.msg), "%.*s", (int)m->error.text.len,
+	         m->error.text.ptr);
+	return failed(a, NULL, &ei);
 }
 
 /* Arrival times of edit orders, to measure frames against. */
@@ -616,21 +689,11 @@ static int watch_open(const struct args *a, struct bc_client **c,
                       struct roster *roster, double *view_at,
                       struct bc_errinfo *ei)
 {
-	const char *token = a->token ? a->token : getenv("BLOBCAST_TOKEN");
-	const char *addr = a->server ? a->server : getenv("BLOBCAST_SERVER");
+	struct bc_client_opts opts = connect_opts(a);
 	struct bc_msg m = {.type = BC_MSG_SESSION_JOIN};
 	int rc;
 	*c = NULL;
-	if ((rc = bc_client_connect(
-	         c,
-	         &(struct bc_client_opts){.addr = addr,
-	                                  .name = a->name ? a->name
-	                                                  : "blobcast-cli",
-	                                  .token = token,
-	                                  .timeout_ms = a->timeout_ms,
-	                                  .ca_file = a->ca,
-	                                  .insecure = a->insecure},
-	         ei))) {
+	if ((rc = bc_client_connect(c, &opts, ei))) {
 		return rc;
 	}
 	m.session.role = BC_PROTO_ROLE_VIEWER;
@@ -683,7 +746,7 @@ static int run_watch(struct args *a)
 	struct bc_client_image img;
 	struct order_times *times = NULL;
 	struct roster *roster = NULL;
-	struct sigaction sa, old_int, old_term;
+	struct stop_signals sig;
 	struct bc_msg m;
 	struct bc_msg_stats st;
 	uint64_t nframes = 0, last_order = 0, total_bytes = 0;
@@ -692,18 +755,10 @@ static int run_watch(struct args *a)
 	int backoff_ms = WATCH_BACKOFF_MIN_MS, rc, status = 0;
 	/* --timeout bounds the wait for each frame when --frames asks for a
 	 * count; without it watch runs until stopped. */
-	double idle_limit = a->timeout_ms < 0 ? -1.0
-	                    : a->timeout_ms == 0
-	                        ? (double)BC_CLIENT_DEFAULT_TIMEOUT_MS
-	                        : (double)a->timeout_ms;
+	double idle_limit = frame_idle_limit(a);
 	const char *end = "stopped";
 	bc_client_image_init(&img);
-	memset(&sa, 0, sizeof(sa));
-	sa.sa_handler = on_interrupt;
-	sigemptyset(&sa.sa_mask);
-	interrupted = 0;
-	sigaction(SIGINT, &sa, &old_int);
-	sigaction(SIGTERM, &sa, &old_term);
+	stop_signals_install(&sig);
 	if (!(times = bc_calloc(1, sizeof(*times))) ||
 	    !(roster = bc_calloc(1, sizeof(*roster)))) {
 		fprintf(stderr, "blobcast watch: out of memory\n");
@@ -840,10 +895,7 @@ static int run_watch(struct args *a)
 			}
 			break;
 		case BC_MSG_ERROR:
-			ei.code = -(int)m.error.code;
-			snprintf(ei.msg, sizeof(ei.msg), "%.*s",
-			         (int)m.error.text.len, m.error.text.ptr);
-			status = failed(a, NULL, &ei);
+			status = server_failed(a, &m);
 			goto out;
 		case BC_MSG_FRAME:
 			nframes++;
@@ -902,16 +954,10 @@ static int run_watch(struct args *a)
 	       (double)st.render_ms_avg, (double)st.encode_ms_avg,
 	       (double)st.edit_ms_avg, end);
 	if (strcmp(end, "timeout") == 0) {
-		fprintf(stderr,
-		        "blobcast watch: timed out: %llu of %llu frames, none "
-		        "for %.0f ms (--timeout)\n",
-		        (unsigned long long)nframes,
-		        (unsigned long long)a->frames, idle_limit);
-		status = EXIT_FAIL;
+		status = frames_timed_out(a, nframes, idle_limit);
 	}
 out:
-	sigaction(SIGINT, &old_int, NULL);
-	sigaction(SIGTERM, &old_term, NULL);
+	stop_signals_restore(&sig);
 	bc_free(times);
 	bc_free(roster);
 	bc_client_image_finish(&img);
@@ -935,28 +981,17 @@ static int run_present(struct args *a)
 	struct bc_errinfo ei = {0};
 	struct bc_camera cam;
 	struct bc_msg m;
-	struct sigaction sa, old_int, old_term;
+	struct stop_signals sig;
 	double until = 0.0;
 	const char *end = "stopped";
 	uint32_t me;
 	int status, rc;
-	memset(&sa, 0, sizeof(sa));
-	sa.sa_handler = on_interrupt;
-	sigemptyset(&sa.sa_mask);
-	interrupted = 0;
-	sigaction(SIGINT, &sa, &old_int);
-	sigaction(SIGTERM, &sa, &old_term);
+	stop_signals_install(&sig);
 	if ((status = open_session(a, BC_PROTO_ROLE_VIEWER,
 	                           BC_CLIENT_JOIN_EXISTING, &c))) {
 		goto out;
 	}
-	if (!bc_client_scene(c, &cam)) {
-		bc_camera_default(&cam);
-	}
-	apply_camera_opts(a, &cam);
-	if (bc_camera_validate(&cam, &ei)) {
-		fprintf(stderr, "blobcast present: %s\n", ei.msg);
-		status = EXIT_USAGE;
+	if ((status = camera_from_opts(a, c, &cam))) {
 		goto out;
 	}
 	if (bc_client_camera(c, &cam, false, NULL, &ei) ||
@@ -995,10 +1030,7 @@ static int run_present(struct args *a)
 			break;
 		}
 		if (m.type == BC_MSG_ERROR) {
-			ei.code = -(int)m.error.code;
-			snprintf(ei.msg, sizeof(ei.msg), "%.*s",
-			         (int)m.error.text.len, m.error.text.ptr);
-			status = failed(a, NULL, &ei);
+			status = server_failed(a, &m);
 			goto out;
 		}
 	}
@@ -1008,8 +1040,7 @@ static int run_present(struct args *a)
 	}
 	printf("end=%s\n", end);
 out:
-	sigaction(SIGINT, &old_int, NULL);
-	sigaction(SIGTERM, &old_term, NULL);
+	stop_signals_restore(&sig);
 	bc_client_destroy(c);
 	return status;
 }
@@ -1025,22 +1056,14 @@ static int run_follow(struct args *a)
 	struct bc_errinfo ei = {0};
 	struct bc_client_image img;
 	struct bc_msg m;
-	struct sigaction sa, old_int, old_term;
+	struct stop_signals sig;
 	uint64_t nframes = 0;
 	double last_frame_at;
-	double idle_limit = a->timeout_ms < 0 ? -1.0
-	                    : a->timeout_ms == 0
-	                        ? (double)BC_CLIENT_DEFAULT_TIMEOUT_MS
-	                        : (double)a->timeout_ms;
+	double idle_limit = frame_idle_limit(a);
 	const char *end = "stopped";
 	int status, rc;
 	bc_client_image_init(&img);
-	memset(&sa, 0, sizeof(sa));
-	sa.sa_handler = on_interrupt;
-	sigemptyset(&sa.sa_mask);
-	interrupted = 0;
-	sigaction(SIGINT, &sa, &old_int);
-	sigaction(SIGTERM, &sa, &old_term);
+	stop_signals_install(&sig);
 	if (a->out && !bc_image_ext_supports(a->out, BC_IMAGE_U8)) {
 		fprintf(stderr,
 		        "blobcast follow: \"%s\": no image format for this "
@@ -1154,10 +1177,7 @@ static int run_follow(struct args *a)
 			if (-(int)m.error.code == BC_ESTATE && m.seq != 0) {
 				break;
 			}
-			ei.code = -(int)m.error.code;
-			snprintf(ei.msg, sizeof(ei.msg), "%.*s",
-			         (int)m.error.text.len, m.error.text.ptr);
-			status = failed(a, NULL, &ei);
+			status = server_failed(a, &m);
 			goto out;
 		default:
 			break;
@@ -1178,16 +1198,10 @@ static int run_follow(struct args *a)
 	}
 	printf("end=%s frames=%llu\n", end, (unsigned long long)nframes);
 	if (strcmp(end, "timeout") == 0) {
-		fprintf(stderr,
-		        "blobcast follow: timed out: %llu of %llu frames, none "
-		        "for %.0f ms (--timeout)\n",
-		        (unsigned long long)nframes,
-		        (unsigned long long)a->frames, idle_limit);
-		status = EXIT_FAIL;
+		status = frames_timed_out(a, nframes, idle_limit);
 	}
 out:
-	sigaction(SIGINT, &old_int, NULL);
-	sigaction(SIGTERM, &old_term, NULL);
+	stop_signals_restore(&sig);
 	bc_client_image_finish(&img);
 	bc_client_destroy(c);
 	return status;
@@ -1465,10 +1479,7 @@ static int one_edit(const struct args *a, struct bc_client *c, uint32_t node,
 			return EXIT_FAIL;
 		}
 		if (m.type == BC_MSG_ERROR) {
-			ei.code = -(int)m.error.code;
-			snprintf(ei.msg, sizeof(ei.msg), "%.*s",
-			         (int)m.error.text.len, m.error.text.ptr);
-			return failed(a, NULL, &ei);
+			return server_failed(a, &m);
 		}
 		if (m.type == BC_MSG_EDIT_APPLIED &&
 		    m.edit_applied.author == bc_client_info(c)->member_id &&
