@@ -37,8 +37,7 @@ static inline float eval_record(uint32_t kind, const float *rec,
 
 /* ---- unary and domain nodes ---------------------------------------------- */
 
-/* Maps p through domain node u (its input frame to its child's). */
-static void domain_apply(uint32_t kind, const float *rec, float p[3])
+void bc_domain_apply(uint32_t kind, const float *rec, float p[3])
 {
 	switch (kind) {
 	case BC_OP_ELONGATE:
@@ -109,8 +108,8 @@ void bc_domain_map(const struct bc_lin *l, uint32_t d, const float p[3],
 	/* Outermost first. */
 	while (n-- > 0) {
 		uint32_t u = chain[n];
-		domain_apply(l->unary_kind[u],
-		             l->param + 4u * (size_t)l->unary_param[u], out);
+		bc_domain_apply(l->unary_kind[u],
+		                l->param + 4u * (size_t)l->unary_param[u], out);
 	}
 }
 

@@ -44,61 +44,6 @@ static bool chain_lip1(const struct bc_svo_rpn *r, uint32_t d)
 	return true;
 }
 
-/* One domain node's map, operation for operation as blobtree's eval.c
- * (so the RPN's field is the reference evaluator's, bit for bit). */
-static void domain_apply(uint32_t kind, const float *rec, float p[3])
-{
-	switch (kind) {
-	case BC_OP_ELONGATE:
-		for (int i = 0; i < 3; i++) {
-			p[i] -= fminf(fmaxf(p[i], -rec[i]), rec[i]);
-		}
-		break;
-	case BC_OP_TWIST: {
-		float a = rec[0] * p[1], c = cosf(a), s = sinf(a);
-		float x = c * p[0] + s * p[2], z = -s * p[0] + c * p[2];
-		p[0] = x;
-		p[2] = z;
-		break;
-	}
-	case BC_OP_BEND: {
-		float a = rec[0] * p[0], c = cosf(a), s = sinf(a);
-		float x = c * p[0] + s * p[1], y = -s * p[0] + c * p[1];
-		p[0] = x;
-		p[1] = y;
-		break;
-	}
-	case BC_OP_MIRROR: {
-		uint32_t mask = (uint32_t)rec[0];
-		for (int i = 0; i < 3; i++) {
-			if (mask & (1u << i)) {
-				p[i] = fabsf(p[i]);
-			}
-		}
-		break;
-	}
-	case BC_OP_REPEAT:
-		for (int i = 0; i < 3; i++) {
-			float n = rec[3 + i], o, id;
-			if (!(n > 1.0f)) {
-				continue;
-			}
-			o = 0.5f * (n - 1.0f);
-			id = floorf(p[i] / rec[i] + o + 0.5f);
-			id = fminf(fmaxf(id, 0.0f), n - 1.0f);
-			p[i] -= rec[i] * (id - o);
-		}
-		break;
-	case BC_OP_SCALE:
-		for (int i = 0; i < 3; i++) {
-			p[i] *= rec[1];
-		}
-		break;
-	default:
-		break;
-	}
-}
-
 void bc__svo_domain_map(const struct bc_svo_rpn *r, uint32_t d,
                         const float p[3], float out[3])
 {
@@ -109,9 +54,9 @@ void bc__svo_domain_map(const struct bc_svo_rpn *r, uint32_t d,
 		chain[n++] = d;
 	}
 	while (n-- > 0) {
-		domain_apply(r->ukind[chain[n]],
-		             r->urec + (size_t)chain[n] * BC_SVO_UNARY_REC,
-		             out);
+		bc_domain_apply(r->ukind[chain[n]],
+		                r->urec + (size_t)chain[n] * BC_SVO_UNARY_REC,
+		                out);
 	}
 }
 

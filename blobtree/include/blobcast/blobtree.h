@@ -566,6 +566,11 @@ static inline const float *bc_lin_param(const struct bc_lin *l, uint32_t slot)
 
 /* ---- Field evaluation (blobtree/eval.c) --------------------------------- */
 
+/* Maps p, in place, through one domain node of kind `kind` (enum bc_op)
+ * whose record is rec: from the node's frame to its child's. The one
+ * implementation of these maps; the svo tape calls it too, so both
+ * evaluators see the same point bit for bit. Other kinds leave p. */
+BC_API void bc_domain_apply(uint32_t kind, const float *rec, float p[3]);
 /* Maps world point p through the domain nodes from d (a unary index, or
  * BC_NONE: no map) outward: the point the slots below d see. */
 BC_API void bc_domain_map(const struct bc_lin *l, uint32_t d, const float p[3],
