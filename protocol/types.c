@@ -123,6 +123,20 @@ const char *bc_proto_type_name(enum bc_msg_type type)
 	return t ? t->name : NULL;
 }
 
+const char *bc_proto_encoding_name(enum bc_proto_encoding e)
+{
+	switch (e) {
+	case BC_PROTO_ENC_JPEG:
+		return "jpeg";
+	case BC_PROTO_ENC_PNG:
+		return "png";
+	case BC_PROTO_ENC_RAW:
+		return "raw";
+	default:
+		return "?";
+	}
+}
+
 enum bc_msg_type bc_proto_type_from_name(const char *name)
 {
 	for (unsigned i = 1; name && i < BC_MSG_COUNT; i++) {

@@ -124,20 +124,6 @@ static bool parse_u64(const char *s, uint64_t lo, uint64_t hi, uint64_t *out)
 	return bc_num_u64(s, lo, hi, out) == 0;
 }
 
-static const char *encoding_name(enum bc_proto_encoding e)
-{
-	switch (e) {
-	case BC_PROTO_ENC_JPEG:
-		return "jpeg";
-	case BC_PROTO_ENC_PNG:
-		return "png";
-	case BC_PROTO_ENC_RAW:
-		return "raw";
-	default:
-		return "?";
-	}
-}
-
 /* Prints a failure of the server or the connection; returns EXIT_FAIL. */
 static int failed(const struct args *a, const char *what,
                   const struct bc_errinfo *ei)
@@ -1581,22 +1567,23 @@ static int run_bench(struct args *a)
 		goto out;
 	}
 	qsort(lat, a->edits, sizeof(*lat), cmp_double);
-	j = json_pack(
-	    "{s:s, s:s, s:i, s:s, s:I, s:I, s:b, s:f, s:f, s:f, "
-	    "s:f, s:f, s:I, s:f, s:f, s:f, s:f}",
-	    "bench", "edit_to_frame_latency", "session", a->session, "edits",
-	    (int)a->edits, "encoding",
-	    encoding_name(a->encoding ? a->encoding : BC_PROTO_ENC_JPEG),
-	    "width", (json_int_t)a->width, "height", (json_int_t)a->height,
-	    "interacting", a->interacting, "p50_ms",
-	    percentile(lat, a->edits, 50.0), "p99_ms",
-	    percentile(lat, a->edits, 99.0), "mean_ms", sum / (double)a->edits,
-	    "min_ms", lat[0], "max_ms", lat[a->edits - 1], "frames",
-	    (json_int_t)frames, "bytes_per_frame",
-	    frames ? (double)bytes / (double)frames : 0.0,
-	    "server_render_ms_avg", (double)st.render_ms_avg,
-	    "server_encode_ms_avg", (double)st.encode_ms_avg,
-	    "server_edit_ms_avg", (double)st.edit_ms_avg);
+	j = json_pack("{s:s, s:s, s:i, s:s, s:I, s:I, s:b, s:f, s:f, s:f, "
+	              "s:f, s:f, s:I, s:f, s:f, s:f, s:f}",
+	              "bench", "edit_to_frame_latency", "session", a->session,
+	              "edits", (int)a->edits, "encoding",
+	              bc_proto_encoding_name(a->encoding ? a->encoding
+	                                                 : BC_PROTO_ENC_JPEG),
+	              "width", (json_int_t)a->width, "height",
+	              (json_int_t)a->height, "interacting", a->interacting,
+	              "p50_ms", percentile(lat, a->edits, 50.0), "p99_ms",
+	              percentile(lat, a->edits, 99.0), "mean_ms",
+	              sum / (double)a->edits, "min_ms", lat[0], "max_ms",
+	              lat[a->edits - 1], "frames", (json_int_t)frames,
+	              "bytes_per_frame",
+	              frames ? (double)bytes / (double)frames : 0.0,
+	              "server_render_ms_avg", (double)st.render_ms_avg,
+	              "server_encode_ms_avg", (double)st.encode_ms_avg,
+	              "server_edit_ms_avg", (double)st.edit_ms_avg);
 	if (j) {
 		json_object_set_new(j, "node", json_integer(node));
 		/* Frames cut short by the server's frame time budget. */

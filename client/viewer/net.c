@@ -350,20 +350,6 @@ cleanup:
 	bc_client_image_finish(&img);
 }
 
-static const char *enc_name(enum bc_proto_encoding e)
-{
-	switch (e) {
-	case BC_PROTO_ENC_JPEG:
-		return "jpeg";
-	case BC_PROTO_ENC_PNG:
-		return "png";
-	case BC_PROTO_ENC_RAW:
-		return "raw";
-	default:
-		return "?";
-	}
-}
-
 static void got_frame(struct bc_viewer_app *a, const struct bc_msg *m)
 {
 	const struct bc_msg_frame *fr = &m->frame;
@@ -429,7 +415,7 @@ static void got_frame(struct bc_viewer_app *a, const struct bc_msg *m)
 		       (unsigned long long)fr->order,
 		       (m->flags & BC_PROTO_FLAG_STILL) ? "still"
 		                                        : "interactive",
-		       enc_name(fr->encoding), fr->image_width,
+		       bc_proto_encoding_name(fr->encoding), fr->image_width,
 		       fr->image_height, (unsigned)a->frames.level, fr->nrects,
 		       bc_client_info(a->c)->last_msg_bytes,
 		       a->frames.refining ? " refining" : "",

@@ -641,6 +641,8 @@ BC_API int bc_proto_scene_unary(struct bc_proto_buf *b, uint8_t kind,
 BC_API const char *bc_proto_type_name(enum bc_msg_type type);
 /* Type named name (as above), or BC_MSG_INVALID. */
 BC_API enum bc_msg_type bc_proto_type_from_name(const char *name);
+/* "jpeg", "png", "raw"; "?" for any other value. Static. */
+BC_API const char *bc_proto_encoding_name(enum bc_proto_encoding e);
 
 /* Where a client connection stands (PROTOCOL.md, "State machine"). */
 enum bc_proto_stage {
