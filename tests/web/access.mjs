@@ -31,17 +31,12 @@ const VIEWER = 'vw-82d4e650';
 
 const daemon = H.findDaemon(process.argv);
 const lacking = H.missing({ daemon, browser: true });
-if (lacking.length) {
-	console.log(`SKIP: web access test needs ${lacking.join(', ')}`);
-	process.exit(77);
-}
+H.skipIfMissing('web access test', lacking);
 const chromium = await H.playwright();
 
 let browser = null;
 let failed = false;
-const t0 = Date.now();
-const step = (s) => console.log(`[${((Date.now() - t0) / 1000).toFixed(1)} s]` +
-	` ${s}`);
+const step = H.stepper();
 const watchdog = H.watchdog(DEADLINE_MS);
 
 const until = (page, what, fn, arg, ms = 30000) =>

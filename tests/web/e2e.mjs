@@ -24,17 +24,12 @@ const DEADLINE_MS = 110000;
 
 const daemon = H.findDaemon(process.argv);
 const lacking = H.missing({ daemon, browser: true });
-if (lacking.length) {
-	console.log(`SKIP: web e2e needs ${lacking.join(', ')}`);
-	process.exit(77);
-}
+H.skipIfMissing('web e2e', lacking);
 const chromium = await H.playwright();
 
 let browser = null;
 let failed = false;
-const t0 = Date.now();
-const step = (s) => console.log(`[${((Date.now() - t0) / 1000).toFixed(1)} s]` +
-	` ${s}`);
+const step = H.stepper();
 
 const watchdog = H.watchdog(DEADLINE_MS);
 

@@ -231,6 +231,22 @@ export function logs() {
 	return children.map((c) => `--- ${c.name}\n${c.log}`).join('\n');
 }
 
+/* Ends the test as skipped (exit 77), saying "SKIP: WHAT needs ...",
+ * when lacking (from missing()) names anything. */
+export function skipIfMissing(what, lacking) {
+	if (lacking.length) {
+		console.log(`SKIP: ${what} needs ${lacking.join(', ')}`);
+		process.exit(77);
+	}
+}
+
+/* A progress logger: each line starts with the seconds since it was made. */
+export function stepper() {
+	const t0 = Date.now();
+	return (s) => console.log(`[${((Date.now() - t0) / 1000).toFixed(1)} s]` +
+		` ${s}`);
+}
+
 /* playwright-core's chromium, driving Debian's chromium (CHROMIUM). */
 export async function playwright() {
 	process.env.PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD = '1';

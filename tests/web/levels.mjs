@@ -25,10 +25,7 @@ const DEADLINE_MS = 60000;
  * the browser parts are checked. */
 const lacking = H.missing({ daemon: process.argv[1], browser: true,
 	proxy: false });
-if (lacking.length) {
-	console.log(`SKIP: web levels test needs ${lacking.join(', ')}`);
-	process.exit(77);
-}
+H.skipIfMissing('web levels test', lacking);
 const chromium = await H.playwright();
 
 const watchdog = H.watchdog(DEADLINE_MS, false);

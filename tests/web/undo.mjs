@@ -28,17 +28,12 @@ const lacking = H.missing({ daemon, browser: true });
 if (!cli || !existsSync(cli)) {
 	lacking.push(`the blobcast CLI (${cli ?? 'give --blobcast PATH'})`);
 }
-if (lacking.length) {
-	console.log(`SKIP: web undo needs ${lacking.join(', ')}`);
-	process.exit(77);
-}
+H.skipIfMissing('web undo', lacking);
 const chromium = await H.playwright();
 
 let browser = null;
 let failed = false;
-const t0 = Date.now();
-const step = (s) => console.log(`[${((Date.now() - t0) / 1000).toFixed(1)} s]` +
-	` ${s}`);
+const step = H.stepper();
 
 const watchdog = H.watchdog(DEADLINE_MS);
 
