@@ -548,6 +548,19 @@ static int dec_ops(struct dec *d, uint16_t *nops,
 	return 0;
 }
 
+/* The origin of an applied change, as EDIT_APPLIED and SESSION_CAMERA_SET
+ * carry it: its order (from 1), its author's id and the author's seq. */
+static int dec_origin(struct dec *d, uint64_t *order, uint32_t *author,
+                      uint32_t *author_seq)
+{
+	TRY(rd_u64(d, "order", order));
+	if (*order == 0) {
+		return fail(d, BC_ERANGE, "order is 0");
+	}
+	TRY(rd_id(d, "author", author));
+	return rd_u32(d, "author_seq", author_seq);
+}
+
 static int dec_camera(struct dec *d, struct bc_msg_camera *c)
 {
 	static const char *const names[3][3] = {
@@ -751,12 +764,7 @@ static int dec_body(struct dec *d, struct bc_msg *m)
 		return dec_ops(d, &m->edit.nops, &m->edit.ops);
 	case BC_MSG_EDIT_APPLIED: {
 		struct bc_msg_edit_applied *a = &m->edit_applied;
-		TRY(rd_u64(d, "order", &a->order));
-		if (a->order == 0) {
-			return fail(d, BC_ERANGE, "order is 0");
-		}
-		TRY(rd_id(d, "author", &a->author));
-		TRY(rd_u32(d, "author_seq", &a->author_seq));
+		TRY(dec_origin(d, &a->order, &a->author, &a->author_seq));
 		TRY(dec_ops(d, &a->nops, &a->ops));
 		a->target_order = 0;
 		a->target_author = (struct bc_proto_str){NULL, 0};
@@ -796,12 +804,7 @@ static int dec_body(struct dec *d, struct bc_msg *m)
 		return dec_camera(d, &m->session_camera);
 	case BC_MSG_SESSION_CAMERA_SET: {
 		struct bc_msg_session_camera_set *c = &m->session_camera_set;
-		TRY(rd_u64(d, "order", &c->order));
-		if (c->order == 0) {
-			return fail(d, BC_ERANGE, "order is 0");
-		}
-		TRY(rd_id(d, "author", &c->author));
-		TRY(rd_u32(d, "author_seq", &c->author_seq));
+		TRY(dec_origin(d, &c->order, &c->author, &c->author_seq));
 		return dec_camera(d, &c->camera);
 	}
 	case BC_MSG_VIEW:

@@ -699,6 +699,17 @@ function decFrame(d, flags, m) {
 const STATS_FLOATS = ['render_ms_last', 'render_ms_avg', 'encode_ms_last',
 	'encode_ms_avg', 'edit_ms_avg', 'fps'];
 
+/* The origin of an applied change, as EDIT_APPLIED and SESSION_CAMERA_SET
+ * carry it: its order (from 1), its author's id and the author's seq. */
+function decOrigin(d, m) {
+	m.order = d.u64('order');
+	if (m.order === 0n) {
+		d.fail('ERANGE', 'order is 0');
+	}
+	m.author = d.id('author');
+	m.author_seq = d.u32('author_seq');
+}
+
 /* A camera's fields, as CAMERA, SESSION_CAMERA, FOLLOW_CAMERA and
  * SESSION_CAMERA_SET carry them, into m. */
 function decCamera(d, m) {
@@ -824,12 +835,7 @@ function decBody(d, m) {
 		m.ops = decOps(d);
 		break;
 	case MSG.EDIT_APPLIED:
-		m.order = d.u64('order');
-		if (m.order === 0n) {
-			d.fail('ERANGE', 'order is 0');
-		}
-		m.author = d.id('author');
-		m.author_seq = d.u32('author_seq');
+		decOrigin(d, m);
 		m.ops = decOps(d);
 		if (m.flags & (FLAG.UNDO | FLAG.REDO)) {
 			if ((m.flags & FLAG.UNDO) && (m.flags & FLAG.REDO)) {
@@ -863,12 +869,7 @@ function decBody(d, m) {
 		decCamera(d, m);
 		break;
 	case MSG.SESSION_CAMERA_SET:
-		m.order = d.u64('order');
-		if (m.order === 0n) {
-			d.fail('ERANGE', 'order is 0');
-		}
-		m.author = d.id('author');
-		m.author_seq = d.u32('author_seq');
+		decOrigin(d, m);
 		decCamera(d, m);
 		break;
 	case MSG.VIEW:
