@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/edit.h"
 #include "blobcast/log.h"
 #include "server.h"
 
@@ -201,10 +202,7 @@ void bc_handle_camera(struct bc_conn *c, const struct bc_msg *m)
 {
 	struct bc_camera cam;
 	struct bc_errinfo ei = {0};
-	memcpy(cam.eye, m->camera.eye, sizeof(cam.eye));
-	memcpy(cam.target, m->camera.target, sizeof(cam.target));
-	memcpy(cam.up, m->camera.up, sizeof(cam.up));
-	cam.fov_y_deg = m->camera.fov_y_deg;
+	bc_edit_camera_from_msg(&m->camera, &cam);
 	if (bc_camera_validate(&cam, &ei)) {
 		bc_conn_send_error(c, m->seq, ei.code, false, "%s", ei.msg);
 		return;

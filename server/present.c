@@ -10,6 +10,7 @@
  */
 #include <string.h>
 
+#include "blobcast/edit.h"
 #include "blobcast/log.h"
 #include "server.h"
 
@@ -49,22 +50,6 @@ static void tell_all(struct bc_session *s, const struct bc_conn *except)
 	}
 }
 
-static void to_msg_camera(const struct bc_camera *c, struct bc_msg_camera *m)
-{
-	memcpy(m->eye, c->eye, sizeof(m->eye));
-	memcpy(m->target, c->target, sizeof(m->target));
-	memcpy(m->up, c->up, sizeof(m->up));
-	m->fov_y_deg = c->fov_y_deg;
-}
-
-static void from_msg_camera(const struct bc_msg_camera *m, struct bc_camera *c)
-{
-	memcpy(c->eye, m->eye, sizeof(c->eye));
-	memcpy(c->target, m->target, sizeof(c->target));
-	memcpy(c->up, m->up, sizeof(c->up));
-	c->fov_y_deg = m->fov_y_deg;
-}
-
 /* Follower f takes presenter p's camera (and its interaction state), is
  * told so and is owed a frame at its own view. */
 static void track(struct bc_conn *f, const struct bc_conn *p, uint16_t flags)
@@ -76,7 +61,7 @@ static void track(struct bc_conn *f, const struct bc_conn *p, uint16_t flags)
 	f->dirty = true;
 	fc.flags = flags & BC_PROTO_FLAG_INTERACTING;
 	fc.follow_camera.presenter = p->member_id;
-	to_msg_camera(&p->camera, &fc.follow_camera.camera);
+	bc_edit_camera_to_msg(&p->camera, &fc.follow_camera.camera);
 	if (f->knows_present) {
 		bc_conn_send(f, &fc);
 	}
@@ -239,7 +224,7 @@ int bc_present_camera_record(const uint8_t *rec, size_t len,
 	bc_proto_reader_finish(&r);
 	if (!rc) {
 		struct bc_camera c;
-		from_msg_camera(&m.session_camera, &c);
+		bc_edit_camera_from_msg(&m.session_camera, &c);
 		if (!(rc = bc_camera_validate(&c, &ei))) {
 			*cam = c;
 			return 1;
@@ -262,7 +247,7 @@ void bc_handle_session_camera(struct bc_conn *c, const struct bc_msg *m)
 	struct bc_conn_ref refs[BC_PROTO_MAX_MEMBERS];
 	uint32_t n;
 	int rc;
-	from_msg_camera(&m->session_camera, &cam);
+	bc_edit_camera_from_msg(&m->session_camera, &cam);
 	if (bc_camera_validate(&cam, &ei)) {
 		bc_conn_send_error(c, m->seq, ei.code, false, "%s", ei.msg);
 		return;

@@ -20,6 +20,7 @@
 
 #include "blobcast/alloc.h"
 #include "blobcast/clock.h"
+#include "blobcast/edit.h"
 #include "blobcast/log.h"
 #include "blobcast/scene.h"
 #include "client_impl.h"
@@ -667,11 +668,7 @@ static void track(struct bc_client *c, const struct bc_msg *m)
 			drop_scene(c, "an edit order was skipped");
 			break;
 		}
-		memcpy(c->camera.eye, cs->camera.eye, sizeof(c->camera.eye));
-		memcpy(c->camera.target, cs->camera.target,
-		       sizeof(c->camera.target));
-		memcpy(c->camera.up, cs->camera.up, sizeof(c->camera.up));
-		c->camera.fov_y_deg = cs->camera.fov_y_deg;
+		bc_edit_camera_from_msg(&cs->camera, &c->camera);
 		c->scene_order = cs->order;
 		break;
 	}
@@ -971,10 +968,7 @@ int bc_client_camera(struct bc_client *c, const struct bc_camera *cam,
 		*seq_out = 0;
 	}
 	m.flags = interacting ? BC_PROTO_FLAG_INTERACTING : 0;
-	memcpy(m.camera.eye, cam->eye, sizeof(m.camera.eye));
-	memcpy(m.camera.target, cam->target, sizeof(m.camera.target));
-	memcpy(m.camera.up, cam->up, sizeof(m.camera.up));
-	m.camera.fov_y_deg = cam->fov_y_deg;
+	bc_edit_camera_to_msg(cam, &m.camera);
 	return send_or_say(c, &m, seq_out, ei);
 }
 
@@ -1223,10 +1217,7 @@ int bc_client_session_camera(struct bc_client *c, const struct bc_camera *cam,
 	if (order) {
 		*order = 0;
 	}
-	memcpy(m.session_camera.eye, cam->eye, sizeof(cam->eye));
-	memcpy(m.session_camera.target, cam->target, sizeof(cam->target));
-	memcpy(m.session_camera.up, cam->up, sizeof(cam->up));
-	m.session_camera.fov_y_deg = cam->fov_y_deg;
+	bc_edit_camera_to_msg(cam, &m.session_camera);
 	if ((rc = send_or_say(c, &m, &seq, ei)) ||
 	    (rc = bc_client_wait(c, BC_MSG_SESSION_CAMERA_SET, seq, &m, 0,
 	                         ei))) {

@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "app.h"
+#include "blobcast/edit.h"
 #include "blobcast/image.h"
 #include "blobcast/log.h"
 
@@ -535,11 +536,7 @@ static void got_presenter(struct bc_viewer_app *a, const struct bc_msg *m)
  * becomes it, so that a drag starts from what is shown. */
 static void got_follow_camera(struct bc_viewer_app *a, const struct bc_msg *m)
 {
-	const struct bc_msg_camera *k = &m->follow_camera.camera;
-	memcpy(a->cam.eye, k->eye, sizeof(a->cam.eye));
-	memcpy(a->cam.target, k->target, sizeof(a->cam.target));
-	memcpy(a->cam.up, k->up, sizeof(a->cam.up));
-	a->cam.fov_y_deg = k->fov_y_deg;
+	bc_edit_camera_from_msg(&m->follow_camera.camera, &a->cam);
 	a->cam_dirty = false;
 	a->redraw = true;
 }
@@ -633,13 +630,8 @@ int bc_viewer_pump(struct bc_viewer_app *a)
 			break;
 		case BC_MSG_SESSION_CAMERA_SET: {
 			/* R goes to the session's new camera. */
-			const struct bc_msg_camera *k =
-			    &m.session_camera_set.camera;
-			memcpy(a->scene_cam.eye, k->eye, sizeof(k->eye));
-			memcpy(a->scene_cam.target, k->target,
-			       sizeof(k->target));
-			memcpy(a->scene_cam.up, k->up, sizeof(k->up));
-			a->scene_cam.fov_y_deg = k->fov_y_deg;
+			bc_edit_camera_from_msg(&m.session_camera_set.camera,
+			                        &a->scene_cam);
 			bc_viewer_roster_edit(&a->roster,
 			                      m.session_camera_set.author,
 			                      m.session_camera_set.order);

@@ -17,6 +17,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 
 #include "blobcast/blobtree.h"
 #include "blobcast/error.h"
@@ -129,5 +130,25 @@ int bc_edit_parse_kv(const struct bc_tree *scene, uint32_t node,
                      const char *const *kv, size_t n,
                      struct bc_proto_field *fields, uint8_t *nfields,
                      struct bc_errinfo *ei);
+
+/* A camera between its message form (CAMERA, FOLLOW_CAMERA, SESSION_CAMERA
+ * and SESSION_CAMERA_SET carry it) and blobtree's: the same four fields. */
+static inline void bc_edit_camera_from_msg(const struct bc_msg_camera *m,
+                                           struct bc_camera *c)
+{
+	memcpy(c->eye, m->eye, sizeof(c->eye));
+	memcpy(c->target, m->target, sizeof(c->target));
+	memcpy(c->up, m->up, sizeof(c->up));
+	c->fov_y_deg = m->fov_y_deg;
+}
+
+static inline void bc_edit_camera_to_msg(const struct bc_camera *c,
+                                         struct bc_msg_camera *m)
+{
+	memcpy(m->eye, c->eye, sizeof(m->eye));
+	memcpy(m->target, c->target, sizeof(m->target));
+	memcpy(m->up, c->up, sizeof(m->up));
+	m->fov_y_deg = c->fov_y_deg;
+}
 
 #endif
