@@ -30,6 +30,9 @@
 /* Tile edge in pixels: rays of a tile share leaves, so handing out tiles
  * rather than rows keeps a thread's octree walk in cache. */
 #define SVO_TILE 8u
+/* A ray packet's block of pixels (BC_SVO_PACKET of them). */
+#define PACKET_W 4u
+#define PACKET_H 2u
 /* The octree is built with this much more band than the frame needs, so a
  * camera that moves a little does not force a rebuild every frame. */
 #define SVO_BAND_SLACK 1.5f
@@ -222,6 +225,48 @@ static void put_hit(const struct frame *fr, uint32_t x, uint32_t y,
 	}
 }
 
+/* Casts the pixels of the block at (x0, y0) that this pass renders, as
+ * one packet, and writes them; returns how many. */
+static uint32_t cast_block(const struct frame *fr, struct bc_svo_caster *c,
+                           uint32_t x0, uint32_t y0, uint64_t *evals)
+{
+	const struct bc_render_region *rg = fr->region;
+	const struct bc_frame *out = fr->out;
+	float d[BC_SVO_PACKET][3];
+	uint32_t px[BC_SVO_PACKET], py[BC_SVO_PACKET], n = 0, hit = 0;
+	struct bc_svo_hit hits[BC_SVO_PACKET];
+	for (uint32_t y = y0; y < y0 + PACKET_H && y < out->height; y++) {
+		for (uint32_t x = x0; x < x0 + PACKET_W && x < out->width;
+		     x++) {
+			if (bc_render_level_has(x, y, rg->level, rg->refine)) {
+				bc_view_rays_dir(&fr->vr, (float)x + 0.5f,
+				                 (float)y + 0.5f, d[n]);
+				px[n] = x;
+				py[n++] = y;
+			}
+		}
+	}
+	if (!n) {
+		return 0;
+	}
+	if (c) {
+		hit = bc_svo_cast_packet(c, fr->vr.eye, (const float(*)[3])d, n,
+		                         0.0f, INFINITY, &fr->cp, hits);
+	} else {
+		memset(hits, 0, sizeof(hits));
+	}
+	for (uint32_t l = 0; l < n; l++) {
+		if ((hit >> l) & 1u) {
+			put_hit(fr, px[l], py[l], d[l], &hits[l]);
+		} else {
+			put_miss(fr, px[l], py[l],
+			         hits[l].evals + hits[l].range_evals);
+		}
+		*evals += hits[l].evals + hits[l].range_evals;
+	}
+	return n;
+}
+
 static void worker(void *arg, uint32_t thread)
 {
 	struct frame *fr = arg;
@@ -266,30 +311,14 @@ static void worker(void *arg, uint32_t thread)
 			}
 			continue;
 		}
-		for (uint32_t y = y0; y < y0 + SVO_TILE && y < out->height;
-		     y++) {
-			for (uint32_t x = x0;
-			     x < x0 + SVO_TILE && x < out->width; x++) {
-				float d[3];
-				struct bc_svo_hit hit;
-				if (!bc_render_level_has(x, y, rg->level,
-				                         rg->refine)) {
-					continue;
-				}
-				rays++;
-				bc_view_rays_dir(&fr->vr, (float)x + 0.5f,
-				                 (float)y + 0.5f, d);
-				if (c && bc_svo_cast(c, fr->vr.eye, d, 0.0f,
-				                     INFINITY, &fr->cp, &hit)) {
-					put_hit(fr, x, y, d, &hit);
-				} else {
-					if (!c) {
-						memset(&hit, 0, sizeof(hit));
-					}
-					put_miss(fr, x, y,
-					         hit.evals + hit.range_evals);
-				}
-				evals += hit.evals + hit.range_evals;
+		/* Blocks of PACKET_W x PACKET_H pixels, cast as one packet:
+		 * neighbouring rays cross the same nodes and leaves. */
+		for (uint32_t by = y0; by < y0 + SVO_TILE && by < out->height;
+		     by += PACKET_H) {
+			for (uint32_t bx = x0;
+			     bx < x0 + SVO_TILE && bx < out->width;
+			     bx += PACKET_W) {
+				rays += cast_block(fr, c, bx, by, &evals);
 			}
 		}
 	}

@@ -49,6 +49,7 @@ struct bc_svo_caster {
 	const struct bc_svo *s;
 	struct bc_svo_ranger *g;
 	uint32_t *idx;
+	uint32_t *pidx; /* a packet's leaf terms (leaf_root uses idx) */
 };
 
 int bc_svo_caster_create(struct bc_svo_caster **out, const struct bc_svo *s)
@@ -62,7 +63,8 @@ int bc_svo_caster_create(struct bc_svo_caster **out, const struct bc_svo *s)
 	}
 	c->s = s;
 	c->idx = bc_calloc(s->rpn->n, sizeof(*c->idx));
-	if (!c->idx) {
+	c->pidx = bc_calloc(s->rpn->n, sizeof(*c->pidx));
+	if (!c->idx || !c->pidx) {
 		bc_svo_caster_destroy(c);
 		return BC_ENOMEM;
 	}
@@ -81,6 +83,7 @@ void bc_svo_caster_destroy(struct bc_svo_caster *c)
 	}
 	bc_svo_ranger_destroy(c->g);
 	bc_free(c->idx);
+	bc_free(c->pidx);
 	bc_free(c);
 }
 
@@ -136,6 +139,20 @@ static inline bool in_box(const float lo[3], const float hi[3],
 	       p[2] >= lo[2] && p[2] < hi[2];
 }
 
+/* Decodes a stored mask into its increasing list of terms; returns n. */
+static uint32_t decode(const struct bc_svo_cmask *m, uint32_t *list)
+{
+	uint32_t n = 0;
+	for (uint32_t w = 0; w < m->nwords; w++) {
+		uint32_t base = m->pairs[2 * w] << 5, b = m->pairs[2 * w + 1];
+		while (b) {
+			list[n++] = base + bc__svo_lowest(b);
+			b &= b - 1u;
+		}
+	}
+	return n;
+}
+
 static float field_at(struct ray_field *rf, float t)
 {
 	float p[3] = {rf->o[0] + t * rf->d[0], rf->o[1] + t * rf->d[1],
@@ -151,16 +168,7 @@ static float field_at(struct ray_field *rf, float t)
 			rf->nlist = 0;
 			if (rf->cached && rf->buf &&
 			    rf->leaf.state == BC_SVO_STATE_ACTIVE) {
-				const struct bc_svo_cmask *m = &rf->leaf.mask;
-				for (uint32_t w = 0; w < m->nwords; w++) {
-					uint32_t base = m->pairs[2 * w] << 5;
-					uint32_t b = m->pairs[2 * w + 1];
-					while (b) {
-						rf->buf[rf->nlist++] =
-						    base + bc__svo_lowest(b);
-						b &= b - 1u;
-					}
-				}
+				rf->nlist = decode(&rf->leaf.mask, rf->buf);
 			}
 		}
 		if (!rf->cached) {
@@ -243,14 +251,7 @@ static bool leaf_root(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
 	struct ray_field rf = {c->s, m,  NULL, 0,           NULL,  o,
 	                       d,    cp, true, &hit->evals, false, {0}};
 	struct bc_svo_region rg;
-	uint32_t n = 0, sp = 0;
-	for (uint32_t w = 0; w < m->nwords; w++) {
-		uint32_t base = m->pairs[2 * w] << 5, b = m->pairs[2 * w + 1];
-		while (b) {
-			c->idx[n++] = base + bc__svo_lowest(b);
-			b &= b - 1u;
-		}
-	}
+	uint32_t n = decode(m, c->idx), sp = 0;
 	memset(&rg, 0, sizeof(rg));
 	rg.segment = true;
 	memcpy(rg.o, o, sizeof(rg.o));
@@ -320,6 +321,71 @@ static bool leaf_root(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
  * bisection drops such a bracket too. After STEP_MAX samples interval
  * bisection takes over the rest of the segment.
  */
+struct lane_step {
+	float t, g; /* the last sample and its field minus the band */
+	float tb;   /* the leaf's exit */
+	float cmax; /* the band at the exit */
+	int i;      /* samples taken after the entry */
+};
+
+/* Where a stepping ray samples next; false where bisection must take the
+ * rest of the segment (STEP_MAX samples taken, or float resolution). */
+static inline bool step_next(const struct bc_svo_cast_params *cp,
+                             const struct lane_step *ls, float *q_out)
+{
+	/* g = f - c(t), so f - c(tb) = g + c(t) - c(tb). */
+	float t = ls->t, g = ls->g;
+	float safe = STEP_SAFE * (g + band_at(cp, t) - ls->cmax);
+	float w = maxf(cp->pix_angle * t, cp->min_step);
+	float q = t + safe;
+	if (ls->i >= STEP_MAX) {
+		return false;
+	}
+	if (!(safe > 0.0f)) {
+		safe = 0.0f; /* the band widens ahead: w decides */
+	}
+	if (safe < w) {
+		/* Close to the band: where a surface faces the ray, the
+		 * field's own value is the distance to it, and a sample a
+		 * little past that lands beyond the crossing and brackets it
+		 * tightly. */
+		q = t + minf(w, 1.125f * (g + band_at(cp, t)));
+	}
+	if (!(q > t)) {
+		return false; /* float resolution: bisection decides */
+	}
+	*q_out = minf(q, ls->tb);
+	return true;
+}
+
+/* The sample at q = step_next's fell below the band (gq = field minus
+ * band <= 0): the hit, refined in rf. */
+static float step_hit(struct ray_field *rf, const struct lane_step *ls, float q,
+                      float gq, bool *settled)
+{
+	const struct bc_svo_cast_params *cp = rf->cp;
+	float fq = gq + band_at(cp, q);
+	if (fq <= 0.0f) {
+		float ft = ls->g + band_at(cp, ls->t);
+		rf->banded = false;
+		*settled = true;
+		return refine(rf, ls->t, ft, q, fq);
+	}
+	return refine(rf, ls->t, ls->g, q, gq);
+}
+
+/* The sample gq > 0 at q: the next step, or false at the leaf's exit. */
+static inline bool step_on(struct lane_step *ls, float q, float gq)
+{
+	if (!(q < ls->tb)) {
+		return false;
+	}
+	ls->t = q;
+	ls->g = gq;
+	ls->i++;
+	return true;
+}
+
 static bool leaf_step(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
                       const float o[3], const float d[3], float ta, float tb,
                       const struct bc_svo_cast_params *cp,
@@ -327,59 +393,27 @@ static bool leaf_step(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
 {
 	struct ray_field rf = {c->s, m,  c->idx, 0,           NULL,  o,
 	                       d,    cp, true,   &hit->evals, false, {0}};
-	float cmax, t = ta, g;
-	for (uint32_t w = 0; w < m->nwords; w++) {
-		uint32_t base = m->pairs[2 * w] << 5, b = m->pairs[2 * w + 1];
-		while (b) {
-			c->idx[rf.nlist++] = base + bc__svo_lowest(b);
-			b &= b - 1u;
-		}
-	}
-	cmax = band_at(cp, tb);
-	g = field_at(&rf, ta);
-	if (g <= 0.0f) {
+	struct lane_step ls = {ta, 0.0f, tb, band_at(cp, tb), 0};
+	rf.nlist = decode(m, c->idx);
+	ls.g = field_at(&rf, ta);
+	if (ls.g <= 0.0f) {
 		*t_out = ta;
 		return true;
 	}
-	for (int i = 0; i < STEP_MAX; i++) {
-		/* g = f - c(t), so f - c(tb) = g + c(t) - c(tb). */
-		float safe = STEP_SAFE * (g + band_at(cp, t) - cmax);
-		float w = maxf(cp->pix_angle * t, cp->min_step);
-		float q = t + safe, gq;
-		if (!(safe > 0.0f)) {
-			safe = 0.0f; /* the band widens ahead: w decides */
+	for (;;) {
+		float q;
+		if (!step_next(cp, &ls, &q)) {
+			return leaf_root(c, m, o, d, ls.t, tb, cp, hit, t_out);
 		}
-		if (safe < w) {
-			/* Close to the band: where a surface faces the
-			 * ray, the field's own value is the distance to
-			 * it, and a sample a little past that lands beyond
-			 * the crossing and brackets it tightly. */
-			q = t + minf(w, 1.125f * (g + band_at(cp, t)));
-		}
-		if (!(q > t)) {
-			break; /* float resolution: bisection decides */
-		}
-		q = minf(q, tb);
-		gq = field_at(&rf, q);
+		float gq = field_at(&rf, q);
 		if (gq <= 0.0f) {
-			float fq = gq + band_at(cp, q);
-			if (fq <= 0.0f) {
-				float ft = g + band_at(cp, t);
-				rf.banded = false;
-				*t_out = refine(&rf, t, ft, q, fq);
-				*settled = true;
-				return true;
-			}
-			*t_out = refine(&rf, t, g, q, gq);
+			*t_out = step_hit(&rf, &ls, q, gq, settled);
 			return true;
 		}
-		if (!(q < tb)) {
+		if (!step_on(&ls, q, gq)) {
 			return false;
 		}
-		t = q;
-		g = gq;
 	}
-	return leaf_root(c, m, o, d, t, tb, cp, hit, t_out);
 }
 
 /* The ray passes a surface by without crossing it: the field along it has
@@ -533,104 +567,74 @@ static bool clip(const float lo[3], const float hi[3], const float o[3],
 	return a <= b;
 }
 
-struct ent {
-	uint32_t node;
-	float lo[3], hi[3];
-	float ta, tb;
-};
+/* The node's box halves: octant oct (bit i set: the upper half on axis
+ * i) of the box lo..hi whose mid planes are mid. */
+static inline void child_box(const float lo[3], const float hi[3],
+                             const float mid[3], uint32_t oct, float clo[3],
+                             float chi[3])
+{
+	for (int i = 0; i < 3; i++) {
+		bool upper = (oct >> i) & 1u;
+		clo[i] = upper ? mid[i] : lo[i];
+		chi[i] = upper ? hi[i] : mid[i];
+	}
+}
 
-bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
-                 float t0, float t1, const struct bc_svo_cast_params *cp,
-                 struct bc_svo_hit *hit)
+/* The pieces of a ray's segment [ta, tb] in a node, front to back: the
+ * segment split where it crosses the node's three mid planes (mid), each
+ * piece [cut[k], cut[k + 1]] in the octant oct[k] of its own midpoint.
+ * Returns the number of pieces (at most four). Where the segment crosses a
+ * mid plane only splits it, so a product by the reciprocal inv serves
+ * instead of a division per plane per node. */
+static uint32_t split(const float mid[3], const float o[3], const float d[3],
+                      const float inv[3], float ta, float tb, float cut[5],
+                      uint32_t oct[4])
+{
+	uint32_t ncut = 0;
+	cut[ncut++] = ta;
+	for (int i = 0; i < 3; i++) {
+		if (d[i] != 0.0f) {
+			float tc = (mid[i] - o[i]) * inv[i];
+			if (tc > ta && tc < tb) {
+				uint32_t k = ncut++;
+				while (k > 1 && cut[k - 1] > tc) {
+					cut[k] = cut[k - 1];
+					k--;
+				}
+				cut[k] = tc;
+			}
+		}
+	}
+	cut[ncut++] = tb;
+	for (uint32_t k = 1; k < ncut; k++) {
+		float um = 0.5f * (cut[k - 1] + cut[k]);
+		uint32_t b = 0;
+		for (int i = 0; i < 3; i++) {
+			b |= o[i] + um * d[i] >= mid[i] ? 1u << i : 0u;
+		}
+		oct[k - 1] = b;
+	}
+	return ncut - 1;
+}
+
+static inline void reciprocal(const float d[3], float inv[3])
+{
+	for (int i = 0; i < 3; i++) {
+		inv[i] = d[i] != 0.0f ? 1.0f / d[i] : 0.0f;
+	}
+}
+
+/* The ray entered the hit band at th in a leaf whose variant is mask (the
+ * full tree's for a full leaf), after leaves of terms active terms at
+ * most; [ta, tb] is its segment in the octree. Settles the depth and takes
+ * the id and the normals' variant. */
+static void finish_hit(struct bc_svo_caster *c, const float o[3],
+                       const float d[3], float ta, float tb, float th,
+                       bool settled, uint32_t terms, struct bc_svo_cmask mask,
+                       const struct bc_svo_cast_params *cp,
+                       struct bc_svo_hit *hit)
 {
 	const struct bc_svo *s = c->s;
-	/* Each level pushes at most four children (a ray crosses at most four
-	 * octants of a node) and pops one. */
-	struct ent st[4 * (BC_SVO_MAX_DEPTH + 1) + 4];
-	struct bc_svo_cmask mask;
-	uint32_t sp = 0, terms = 0;
-	float th = 0.0f, ta = t0, tb = t1;
-	bool found = false, settled = false;
-	/* Where the segment crosses a mid plane only splits it (the piece's
-	 * own midpoint picks the octant), so a product by the reciprocal
-	 * serves instead of a division per plane per node. */
-	float inv[3] = {d[0] != 0.0f ? 1.0f / d[0] : 0.0f,
-	                d[1] != 0.0f ? 1.0f / d[1] : 0.0f,
-	                d[2] != 0.0f ? 1.0f / d[2] : 0.0f};
-	memset(hit, 0, sizeof(*hit));
-	hit->prim = BC_NONE;
-	if (!clip(s->lo, s->hi, o, d, &ta, &tb)) {
-		return false;
-	}
-	st[0].node = 0;
-	memcpy(st[0].lo, s->lo, sizeof(st[0].lo));
-	memcpy(st[0].hi, s->hi, sizeof(st[0].hi));
-	st[0].ta = ta;
-	st[0].tb = tb;
-	sp = 1;
-	while (sp && !found) {
-		struct ent e = st[--sp];
-		const struct bc__svo_node *nd = &s->nodes[e.node];
-		float mid[3], cut[5];
-		uint32_t ncut = 0;
-		if (!nd->child) {
-			const struct bc__svo_leaf *lf = &s->leaves[nd->leaf];
-			if (lf->state == BC_SVO_STATE_FULL) {
-				mask = s->full_c;
-				th = e.ta;
-				found = true;
-			} else if (lf->state == BC_SVO_STATE_ACTIVE) {
-				mask.pairs = s->pool.v + 2u * (size_t)lf->off;
-				mask.nwords = lf->npairs;
-				terms = lf->nterms;
-				found =
-				    lf->flags & BC__SVO_LEAF_LIP1
-				        ? leaf_step(c, &mask, o, d, e.ta, e.tb,
-				                    cp, hit, &th, &settled)
-				        : leaf_root(c, &mask, o, d, e.ta, e.tb,
-				                    cp, hit, &th);
-			}
-			continue;
-		}
-		/* The octants the segment crosses, split where it crosses
-		 * the node's three mid planes. */
-		cut[ncut++] = e.ta;
-		for (int i = 0; i < 3; i++) {
-			mid[i] = 0.5f * (e.lo[i] + e.hi[i]);
-			if (d[i] != 0.0f) {
-				float tc = (mid[i] - o[i]) * inv[i];
-				if (tc > e.ta && tc < e.tb) {
-					uint32_t k = ncut++;
-					while (k > 1 && cut[k - 1] > tc) {
-						cut[k] = cut[k - 1];
-						k--;
-					}
-					cut[k] = tc;
-				}
-			}
-		}
-		cut[ncut++] = e.tb;
-		/* Push back to front so the nearest piece is popped first. */
-		for (uint32_t k = ncut - 1; k > 0; k--) {
-			float u0 = cut[k - 1], u1 = cut[k],
-			      um = 0.5f * (u0 + u1);
-			struct ent *ch = &st[sp++];
-			uint32_t oct = 0;
-			for (int i = 0; i < 3; i++) {
-				float p = o[i] + um * d[i];
-				bool upper = p >= mid[i];
-				oct |= upper ? 1u << i : 0u;
-				ch->lo[i] = upper ? mid[i] : e.lo[i];
-				ch->hi[i] = upper ? e.hi[i] : mid[i];
-			}
-			ch->node = nd->child + oct;
-			ch->ta = u0;
-			ch->tb = u1;
-		}
-	}
-	if (!found) {
-		return false;
-	}
 	hit->leaf_terms = terms;
 	{
 		/* The leaf phase is over: its scratch list is free. */
@@ -656,5 +660,335 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
 		(void)bc_svo_cmask_eval_id(s->rpn, hit->mask, p, &hit->prim);
 		hit->evals++;
 	}
+}
+
+struct ent {
+	uint32_t node;
+	float lo[3], hi[3];
+	float ta, tb;
+};
+
+bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
+                 float t0, float t1, const struct bc_svo_cast_params *cp,
+                 struct bc_svo_hit *hit)
+{
+	const struct bc_svo *s = c->s;
+	/* Each level pushes at most four children (a ray crosses at most four
+	 * octants of a node) and pops one. */
+	struct ent st[4 * (BC_SVO_MAX_DEPTH + 1) + 4];
+	struct bc_svo_cmask mask = {NULL, 0};
+	uint32_t sp = 0, terms = 0;
+	float th = 0.0f, ta = t0, tb = t1, inv[3];
+	bool found = false, settled = false;
+	reciprocal(d, inv);
+	memset(hit, 0, sizeof(*hit));
+	hit->prim = BC_NONE;
+	if (!clip(s->lo, s->hi, o, d, &ta, &tb)) {
+		return false;
+	}
+	st[0].node = 0;
+	memcpy(st[0].lo, s->lo, sizeof(st[0].lo));
+	memcpy(st[0].hi, s->hi, sizeof(st[0].hi));
+	st[0].ta = ta;
+	st[0].tb = tb;
+	sp = 1;
+	while (sp && !found) {
+		struct ent e = st[--sp];
+		const struct bc__svo_node *nd = &s->nodes[e.node];
+		float mid[3], cut[5];
+		uint32_t oct[4], npiece;
+		if (!nd->child) {
+			const struct bc__svo_leaf *lf = &s->leaves[nd->leaf];
+			if (lf->state == BC_SVO_STATE_FULL) {
+				mask = s->full_c;
+				th = e.ta;
+				found = true;
+			} else if (lf->state == BC_SVO_STATE_ACTIVE) {
+				mask.pairs = s->pool.v + 2u * (size_t)lf->off;
+				mask.nwords = lf->npairs;
+				terms = lf->nterms;
+				found =
+				    lf->flags & BC__SVO_LEAF_LIP1
+				        ? leaf_step(c, &mask, o, d, e.ta, e.tb,
+				                    cp, hit, &th, &settled)
+				        : leaf_root(c, &mask, o, d, e.ta, e.tb,
+				                    cp, hit, &th);
+			}
+			continue;
+		}
+		for (int i = 0; i < 3; i++) {
+			mid[i] = 0.5f * (e.lo[i] + e.hi[i]);
+		}
+		npiece = split(mid, o, d, inv, e.ta, e.tb, cut, oct);
+		/* Push back to front so the nearest piece is popped first. */
+		for (uint32_t k = npiece; k > 0; k--) {
+			struct ent *ch = &st[sp++];
+			child_box(e.lo, e.hi, mid, oct[k - 1], ch->lo, ch->hi);
+			ch->node = nd->child + oct[k - 1];
+			ch->ta = cut[k - 1];
+			ch->tb = cut[k];
+		}
+	}
+	if (!found) {
+		return false;
+	}
+	finish_hit(c, o, d, ta, tb, th, settled, terms, mask, cp, hit);
 	return true;
+}
+
+/* ---- Ray packets -------------------------------------------------------- */
+
+/* A node on a packet's walk: the rays (lanes) whose segments cross it, and
+ * each one's segment. */
+struct pent {
+	uint32_t node, lanes;
+	float lo[3], hi[3];
+	float ta[BC_SVO_PACKET], tb[BC_SVO_PACKET];
+};
+
+/* The leaf's variant (its terms list[0..n)) at o + t[l] d[l] for the
+ * lanes of `lanes` (not zero), in one call; the other lanes evaluate a
+ * copy of the first one's point. */
+static void lanes_at(const struct bc_svo_rpn *r, const uint32_t *list,
+                     uint32_t n, const float o[3], const float (*d)[3],
+                     const float *t, uint32_t lanes, float *v)
+{
+	float px[BC__SVO_LANES], py[BC__SVO_LANES], pz[BC__SVO_LANES];
+	uint32_t first = bc__svo_lowest(lanes);
+	for (uint32_t l = 0; l < BC__SVO_LANES; l++) {
+		uint32_t k = (lanes >> l) & 1u ? l : first;
+		px[l] = o[0] + t[k] * d[k][0];
+		py[l] = o[1] + t[k] * d[k][1];
+		pz[l] = o[2] + t[k] * d[k][2];
+	}
+	bc__svo_list_eval_lanes(r, list, n, px, py, pz, v);
+}
+
+/* leaf_step for the lanes of `lanes` at once: every lane takes the samples
+ * leaf_step would take (step_next, step_take), and each round of samples
+ * is one evaluation of the variant over the lanes. Returns the lanes that
+ * hit in this leaf (th, settled set). */
+static uint32_t packet_step(struct bc_svo_caster *c,
+                            const struct bc_svo_cmask *m, const float o[3],
+                            const float (*d)[3], const struct pent *e,
+                            uint32_t lanes, const struct bc_svo_cast_params *cp,
+                            struct bc_svo_hit *hits, float *th, bool *settled)
+{
+	const struct bc_svo_rpn *r = c->s->rpn;
+	struct lane_step ls[BC_SVO_PACKET];
+	float q[BC_SVO_PACKET], v[BC__SVO_LANES];
+	uint32_t n = decode(m, c->pidx), found = 0, going = 0;
+	for (uint32_t b = lanes; b; b &= b - 1u) {
+		uint32_t l = bc__svo_lowest(b);
+		ls[l] = (struct lane_step){e->ta[l], 0.0f, e->tb[l],
+		                           band_at(cp, e->tb[l]), 0};
+		q[l] = e->ta[l];
+	}
+	lanes_at(r, c->pidx, n, o, d, q, lanes, v);
+	for (uint32_t b = lanes; b; b &= b - 1u) {
+		uint32_t l = bc__svo_lowest(b);
+		hits[l].evals++;
+		ls[l].g = v[l] - band_at(cp, q[l]);
+		if (ls[l].g <= 0.0f) {
+			th[l] = q[l];
+			found |= 1u << l;
+		} else {
+			going |= 1u << l;
+		}
+	}
+	while (going) {
+		uint32_t want = 0;
+		for (uint32_t b = going; b; b &= b - 1u) {
+			uint32_t l = bc__svo_lowest(b);
+			if (step_next(cp, &ls[l], &q[l])) {
+				want |= 1u << l;
+				continue;
+			}
+			going &= ~(1u << l);
+			if (leaf_root(c, m, o, d[l], ls[l].t, ls[l].tb, cp,
+			              &hits[l], &th[l])) {
+				found |= 1u << l;
+			}
+		}
+		if (!want) {
+			break;
+		}
+		lanes_at(r, c->pidx, n, o, d, q, want, v);
+		for (uint32_t b = want; b; b &= b - 1u) {
+			uint32_t l = bc__svo_lowest(b);
+			float gq = v[l] - band_at(cp, q[l]);
+			hits[l].evals++;
+			if (gq <= 0.0f) {
+				struct ray_field rf = {
+				    c->s,  m,    c->pidx, n,    NULL,
+				    o,     d[l], cp,      true, &hits[l].evals,
+				    false, {0}};
+				th[l] = step_hit(&rf, &ls[l], q[l], gq,
+				                 &settled[l]);
+				found |= 1u << l;
+				going &= ~(1u << l);
+			} else if (!step_on(&ls[l], q[l], gq)) {
+				going &= ~(1u << l);
+			}
+		}
+	}
+	return found;
+}
+
+uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
+                            const float (*d)[3], uint32_t n, float t0, float t1,
+                            const struct bc_svo_cast_params *cp,
+                            struct bc_svo_hit *hits)
+{
+	const struct bc_svo *s = c->s;
+	/* Each level pops one node and pushes at most its eight children. */
+	struct pent st[8 * (BC_SVO_MAX_DEPTH + 1) + 1];
+	float ta0[BC_SVO_PACKET], tb0[BC_SVO_PACKET], th[BC_SVO_PACKET];
+	float inv[BC_SVO_PACKET][3];
+	bool settled[BC_SVO_PACKET];
+	uint32_t terms[BC_SVO_PACKET];
+	struct bc_svo_cmask mask[BC_SVO_PACKET];
+	uint32_t sp, live = 0, found = 0, alone = 0, hit = 0, sgn = 0;
+	if (n > BC_SVO_PACKET) {
+		n = BC_SVO_PACKET;
+	}
+	for (uint32_t l = 0; l < n; l++) {
+		memset(&hits[l], 0, sizeof(hits[l]));
+		hits[l].prim = BC_NONE;
+		settled[l] = false;
+		terms[l] = 0;
+		mask[l] = (struct bc_svo_cmask){NULL, 0};
+		th[l] = 0.0f;
+		ta0[l] = t0;
+		tb0[l] = t1;
+		reciprocal(d[l], inv[l]);
+		if (clip(s->lo, s->hi, o, d[l], &ta0[l], &tb0[l])) {
+			live |= 1u << l;
+			for (int i = 0; i < 3; i++) {
+				sgn |= d[l][i] < 0.0f ? 1u << i : 0u;
+			}
+		}
+	}
+	if (!live) {
+		return 0;
+	}
+	st[0].node = 0;
+	st[0].lanes = live;
+	memcpy(st[0].lo, s->lo, sizeof(st[0].lo));
+	memcpy(st[0].hi, s->hi, sizeof(st[0].hi));
+	memcpy(st[0].ta, ta0, sizeof(ta0));
+	memcpy(st[0].tb, tb0, sizeof(tb0));
+	sp = 1;
+	while (sp) {
+		/* Children are pushed where the entry lies: copy it out. */
+		struct pent e = st[--sp];
+		const struct bc__svo_node *nd = &s->nodes[e.node];
+		uint32_t lanes = e.lanes & ~(found | alone);
+		uint32_t clanes[8] = {0};
+		float mid[3];
+		if (!lanes) {
+			continue;
+		}
+		if (!nd->child) {
+			const struct bc__svo_leaf *lf = &s->leaves[nd->leaf];
+			struct bc_svo_cmask m = {NULL, 0};
+			uint32_t got = 0;
+			if (lf->state == BC_SVO_STATE_FULL) {
+				m = s->full_c;
+				got = lanes;
+				for (uint32_t b = lanes; b; b &= b - 1u) {
+					th[bc__svo_lowest(b)] =
+					    e.ta[bc__svo_lowest(b)];
+				}
+			} else if (lf->state == BC_SVO_STATE_ACTIVE) {
+				m.pairs = s->pool.v + 2u * (size_t)lf->off;
+				m.nwords = lf->npairs;
+				for (uint32_t b = lanes; b; b &= b - 1u) {
+					terms[bc__svo_lowest(b)] = lf->nterms;
+				}
+				if (lf->flags & BC__SVO_LEAF_LIP1) {
+					got =
+					    packet_step(c, &m, o, d, &e, lanes,
+					                cp, hits, th, settled);
+				} else {
+					for (uint32_t b = lanes; b;
+					     b &= b - 1u) {
+						uint32_t l = bc__svo_lowest(b);
+						got |= leaf_root(
+						           c, &m, o, d[l],
+						           e.ta[l], e.tb[l], cp,
+						           &hits[l], &th[l])
+						           ? 1u << l
+						           : 0u;
+					}
+				}
+			}
+			for (uint32_t b = got; b; b &= b - 1u) {
+				mask[bc__svo_lowest(b)] = m;
+			}
+			found |= got;
+			continue;
+		}
+		for (int i = 0; i < 3; i++) {
+			mid[i] = 0.5f * (e.lo[i] + e.hi[i]);
+		}
+		/* Children are visited in the order of their octant's bits
+		 * flipped where the packet's rays run down an axis: front to
+		 * back for every ray whose pieces follow that order (a ray
+		 * running up an axis the others run down crosses its mid
+		 * plane the other way). A ray whose pieces do not is cast on
+		 * its own afterwards. */
+		{
+			float cta[8][BC_SVO_PACKET], ctb[8][BC_SVO_PACKET];
+			for (uint32_t b = lanes; b; b &= b - 1u) {
+				uint32_t l = bc__svo_lowest(b), oct[4];
+				float cut[5];
+				uint32_t np = split(mid, o, d[l], inv[l],
+				                    e.ta[l], e.tb[l], cut, oct);
+				bool order = true;
+				for (uint32_t k = 1; k < np; k++) {
+					order = order && (oct[k - 1] ^ sgn) <
+					                     (oct[k] ^ sgn);
+				}
+				if (!order) {
+					alone |= 1u << l;
+					continue;
+				}
+				for (uint32_t k = 0; k < np; k++) {
+					clanes[oct[k]] |= 1u << l;
+					cta[oct[k]][l] = cut[k];
+					ctb[oct[k]][l] = cut[k + 1];
+				}
+			}
+			for (uint32_t k = 8; k-- > 0;) {
+				uint32_t oc = k ^ sgn;
+				struct pent *ch;
+				if (!clanes[oc]) {
+					continue;
+				}
+				ch = &st[sp++];
+				ch->node = nd->child + oc;
+				ch->lanes = clanes[oc];
+				child_box(e.lo, e.hi, mid, oc, ch->lo, ch->hi);
+				for (uint32_t b = clanes[oc]; b; b &= b - 1u) {
+					uint32_t l = bc__svo_lowest(b);
+					ch->ta[l] = cta[oc][l];
+					ch->tb[l] = ctb[oc][l];
+				}
+			}
+		}
+	}
+	for (uint32_t b = found & ~alone; b; b &= b - 1u) {
+		uint32_t l = bc__svo_lowest(b);
+		finish_hit(c, o, d[l], ta0[l], tb0[l], th[l], settled[l],
+		           terms[l], mask[l], cp, &hits[l]);
+		hit |= 1u << l;
+	}
+	for (uint32_t b = alone; b; b &= b - 1u) {
+		uint32_t l = bc__svo_lowest(b);
+		if (bc_svo_cast(c, o, d[l], t0, t1, cp, &hits[l])) {
+			hit |= 1u << l;
+		}
+	}
+	return hit;
 }

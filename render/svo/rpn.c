@@ -500,90 +500,116 @@ float bc_svo_cmask_eval_id(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
 	return eval_cmask(r, m, p, prim);
 }
 
+/* One term of the stack machine at BC__SVO_LANES points at once: step()
+ * lane by lane, operation for operation (the same float in every lane),
+ * with the term's record read and dispatched once for all of them. The
+ * loops over the lanes are what the compiler vectorizes. */
+static inline void lanes_step(const struct bc_svo_rpn *r, uint32_t i,
+                              float (*st)[BC__SVO_LANES], uint32_t *sp,
+                              const float *px, const float *py, const float *pz)
+{
+	const struct bc_svo_term *t = &r->terms[i];
+	const float *rec = r->rec + t->rec;
+	uint32_t s = *sp;
+	if (t->type == BC_SVO_TERM_PRIM && r->prim_dom &&
+	    r->prim_dom[t->prim] != BC_NONE) {
+		for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
+			const float p[3] = {px[j], py[j], pz[j]};
+			st[s][j] = bc__svo_prim_eval(r, t, p);
+		}
+		*sp = s + 1;
+	} else if (t->type == BC_SVO_TERM_PRIM) {
+		float x[BC__SVO_LANES], y[BC__SVO_LANES], z[BC__SVO_LANES];
+		for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
+			x[j] = rec[0] * px[j] + rec[1] * py[j] +
+			       rec[2] * pz[j] + rec[3];
+			y[j] = rec[4] * px[j] + rec[5] * py[j] +
+			       rec[6] * pz[j] + rec[7];
+			z[j] = rec[8] * px[j] + rec[9] * py[j] +
+			       rec[10] * pz[j] + rec[11];
+		}
+		if (t->kind == BC_PRIM_SPHERE) {
+			for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
+				st[s][j] = sqrtf(x[j] * x[j] + y[j] * y[j] +
+				                 z[j] * z[j]) -
+				           rec[12];
+			}
+		} else {
+			for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
+				st[s][j] =
+				    bc_prim_sdf((enum bc_prim)t->kind, rec + 12,
+				                x[j], y[j], z[j]);
+			}
+		}
+		*sp = s + 1;
+	} else if (t->type == BC_SVO_TERM_NEG) {
+		for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
+			st[s - 1][j] = -st[s - 1][j];
+		}
+	} else if (t->type == BC_SVO_TERM_UNARY) {
+		for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
+			const float p[3] = {px[j], py[j], pz[j]};
+			st[s - 1][j] =
+			    bc__svo_unary_value(r, t->rec, st[s - 1][j], p);
+		}
+	} else {
+		float *f0 = st[s - 2], *f1 = st[s - 1];
+		/* step()'s sharp operators; | rather than || keeps the
+		 * loops free of branches, so they vectorize. */
+		if (t->kind == BC_OP_UNION) {
+			for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
+				f0[j] = (f1[j] < f0[j]) | (f0[j] != f0[j])
+				            ? f1[j]
+				            : f0[j];
+			}
+		} else if (t->kind == BC_OP_INTERSECTION) {
+			for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
+				f0[j] = (f1[j] > f0[j]) | (f0[j] != f0[j])
+				            ? f1[j]
+				            : f0[j];
+			}
+		} else {
+			for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
+				f0[j] = bc_op_eval((enum bc_op)t->kind, rec[0],
+				                   rec[1], f0[j], f1[j]);
+			}
+		}
+		*sp = s - 1;
+	}
+}
+
+void bc__svo_list_eval_lanes(const struct bc_svo_rpn *r, const uint32_t *idx,
+                             uint32_t n, const float *px, const float *py,
+                             const float *pz, float *out)
+{
+	float st[BC_EVAL_STACK][BC__SVO_LANES];
+	uint32_t sp = 0;
+	for (uint32_t k = 0; k < n; k++) {
+		lanes_step(r, idx[k], st, &sp, px, py, pz);
+	}
+	for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
+		out[j] = sp ? st[0][j] : INFINITY;
+	}
+}
+
 void bc_svo_cmask_eval4(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
                         const float p[4][3], float out[4])
 {
-	/* Terms outside, points inside: each term's record is read and
-	 * dispatched once for the four points, and the inner loops over
-	 * four lanes are what the compiler vectorizes. */
-	float st[BC_EVAL_STACK][4];
+	/* The four points fill the lanes twice over. */
+	float px[BC__SVO_LANES], py[BC__SVO_LANES], pz[BC__SVO_LANES];
+	float st[BC_EVAL_STACK][BC__SVO_LANES];
 	uint32_t sp = 0;
+	for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
+		px[j] = p[j % 4u][0];
+		py[j] = p[j % 4u][1];
+		pz[j] = p[j % 4u][2];
+	}
 	for (uint32_t w = 0; w < m.nwords; w++) {
 		uint32_t base = m.pairs[2 * w] << 5, b = m.pairs[2 * w + 1];
 		while (b) {
-			const struct bc_svo_term *t =
-			    &r->terms[base + bc__svo_lowest(b)];
-			const float *rec = r->rec + t->rec;
+			lanes_step(r, base + bc__svo_lowest(b), st, &sp, px, py,
+			           pz);
 			b &= b - 1u;
-			if (t->type == BC_SVO_TERM_PRIM && r->prim_dom &&
-			    r->prim_dom[t->prim] != BC_NONE) {
-				for (int j = 0; j < 4; j++) {
-					st[sp][j] =
-					    bc__svo_prim_eval(r, t, p[j]);
-				}
-				sp++;
-			} else if (t->type == BC_SVO_TERM_UNARY) {
-				for (int j = 0; j < 4; j++) {
-					st[sp - 1][j] = bc__svo_unary_value(
-					    r, t->rec, st[sp - 1][j], p[j]);
-				}
-			} else if (t->type == BC_SVO_TERM_PRIM) {
-				float x[4], y[4], z[4];
-				for (int j = 0; j < 4; j++) {
-					x[j] = rec[0] * p[j][0] +
-					       rec[1] * p[j][1] +
-					       rec[2] * p[j][2] + rec[3];
-					y[j] = rec[4] * p[j][0] +
-					       rec[5] * p[j][1] +
-					       rec[6] * p[j][2] + rec[7];
-					z[j] = rec[8] * p[j][0] +
-					       rec[9] * p[j][1] +
-					       rec[10] * p[j][2] + rec[11];
-				}
-				if (t->kind == BC_PRIM_SPHERE) {
-					for (int j = 0; j < 4; j++) {
-						st[sp][j] = sqrtf(x[j] * x[j] +
-						                  y[j] * y[j] +
-						                  z[j] * z[j]) -
-						            rec[12];
-					}
-				} else {
-					for (int j = 0; j < 4; j++) {
-						st[sp][j] = bc_prim_sdf(
-						    (enum bc_prim)t->kind,
-						    rec + 12, x[j], y[j], z[j]);
-					}
-				}
-				sp++;
-			} else if (t->type == BC_SVO_TERM_NEG) {
-				for (int j = 0; j < 4; j++) {
-					st[sp - 1][j] = -st[sp - 1][j];
-				}
-			} else {
-				float *f0 = st[sp - 2], *f1 = st[sp - 1];
-				if (t->kind == BC_OP_UNION) {
-					for (int j = 0; j < 4; j++) {
-						f0[j] = f1[j] < f0[j] ||
-						                f0[j] != f0[j]
-						            ? f1[j]
-						            : f0[j];
-					}
-				} else if (t->kind == BC_OP_INTERSECTION) {
-					for (int j = 0; j < 4; j++) {
-						f0[j] = f1[j] > f0[j] ||
-						                f0[j] != f0[j]
-						            ? f1[j]
-						            : f0[j];
-					}
-				} else {
-					for (int j = 0; j < 4; j++) {
-						f0[j] = bc_op_eval(
-						    (enum bc_op)t->kind, rec[0],
-						    rec[1], f0[j], f1[j]);
-					}
-				}
-				sp--;
-			}
 		}
 	}
 	for (int j = 0; j < 4; j++) {

@@ -7,7 +7,10 @@
 #define BLOBCAST_TESTS_SVO_UTIL_H
 
 #include <math.h>
+#include <stdbool.h>
 #include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "blobcast/blobtree.h"
@@ -182,6 +185,132 @@ static inline void rng_in(struct rng *r, const struct bc_svo_region *rg,
 			p[i] = rng_f(r, rg->lo[i], rg->hi[i]);
 		}
 	}
+}
+
+/* Whether two casts of one ray agree bit for bit: hit or not, depth, id,
+ * normals' variant, terms and evaluation counts. */
+static inline bool same_hit(bool ha, const struct bc_svo_hit *a, bool hb,
+                            const struct bc_svo_hit *b)
+{
+	return ha == hb && a->evals == b->evals &&
+	       a->range_evals == b->range_evals &&
+	       (!ha || (memcmp(&a->t, &b->t, sizeof(a->t)) == 0 &&
+	                a->prim == b->prim && a->mask.pairs == b->mask.pairs &&
+	                a->mask.nwords == b->mask.nwords &&
+	                a->leaf_terms == b->leaf_terms));
+}
+
+/*
+ * bc_svo_cast_packet against bc_svo_cast over the w x h pixels of cam, ray
+ * by ray, bit for bit, with three groupings: the backend's 4 x 2 blocks,
+ * packets of eight pixels drawn at random from the whole image (their rays
+ * run different ways along an axis, so some are cast alone), and blocks
+ * of one to seven pixels. cp is filled for the frame. Returns how many
+ * rays differ, printing the first; *hits counts the rays that hit.
+ */
+static inline uint32_t packet_mismatches(const struct bc_svo *s,
+                                         const struct bc_camera *cam,
+                                         uint32_t w, uint32_t h,
+                                         struct bc_svo_cast_params *cp,
+                                         uint32_t *hits)
+{
+	struct bc_svo_caster *c = NULL;
+	struct bc_view_rays vr;
+	struct bc_svo_hit *one = calloc((size_t)w * h, sizeof(*one));
+	bool *hit = calloc((size_t)w * h, sizeof(*hit));
+	struct rng r = {0x5eed};
+	uint32_t bad = 0, n = w * h;
+	*hits = 0;
+	bc_view_rays_init(&vr, cam, w, h);
+	if (!one || !hit || bc_svo_caster_create(&c, s)) {
+		free(one);
+		free(hit);
+		return UINT32_MAX;
+	}
+	for (uint32_t i = 0; i < n; i++) {
+		float d[3];
+		bc_view_rays_dir(&vr, (float)(i % w) + 0.5f,
+		                 (float)(i / w) + 0.5f, d);
+		hit[i] = bc_svo_cast(c, vr.eye, d, 0.0f, INFINITY, cp, &one[i]);
+		*hits += hit[i];
+	}
+	for (int pass = 0; pass < 3; pass++) {
+		for (uint32_t k = 0; k < n; k += BC_SVO_PACKET) {
+			uint32_t pix[BC_SVO_PACKET], m = 0, got;
+			float d[BC_SVO_PACKET][3];
+			struct bc_svo_hit ph[BC_SVO_PACKET];
+			uint32_t want =
+			    pass == 2 ? 1u + rng_below(&r, 7u) : BC_SVO_PACKET;
+			for (uint32_t l = 0; l < want; l++) {
+				/* Block k / 8 of 4 x 2 pixels, or anywhere. */
+				uint32_t b = k / BC_SVO_PACKET, bw = w / 4u;
+				uint32_t x = (b % bw) * 4u + l % 4u,
+				         y = (b / bw) * 2u + l / 4u;
+				uint32_t i =
+				    pass == 1 ? rng_below(&r, n) : y * w + x;
+				if (y >= h) {
+					continue;
+				}
+				bc_view_rays_dir(&vr, (float)(i % w) + 0.5f,
+				                 (float)(i / w) + 0.5f, d[m]);
+				pix[m++] = i;
+			}
+			if (!m) {
+				continue;
+			}
+			got =
+			    bc_svo_cast_packet(c, vr.eye, (const float(*)[3])d,
+			                       m, 0.0f, INFINITY, cp, ph);
+			for (uint32_t l = 0; l < m; l++) {
+				uint32_t i = pix[l];
+				if (!same_hit(hit[i], &one[i], (got >> l) & 1u,
+				              &ph[l])) {
+					if (!bad) {
+						printf(
+						    "  pass %d pixel %u: "
+						    "alone %d t %.9g evals %u"
+						    ", packet %d t %.9g "
+						    "evals %u\n",
+						    pass, i, hit[i],
+						    (double)one[i].t,
+						    one[i].evals,
+						    (int)((got >> l) & 1u),
+						    (double)ph[l].t,
+						    ph[l].evals);
+					}
+					bad++;
+				}
+			}
+		}
+	}
+	bc_svo_caster_destroy(c);
+	free(one);
+	free(hit);
+	return bad;
+}
+
+/* The cast parameters of a w x h frame of cam, as the backend sets them,
+ * and the hit band the octree must keep for them (with its 50 % slack). */
+static inline float frame_cast_params(const struct bc_svo_rpn *rpn,
+                                      const struct bc_camera *cam, uint32_t w,
+                                      uint32_t h, struct bc_svo_cast_params *cp)
+{
+	struct bc_view_rays vr;
+	float far = 0.0f;
+	bc_view_rays_init(&vr, cam, w, h);
+	memset(cp, 0, sizeof(*cp));
+	cp->pix_angle = 2.0f * vr.tan_half_y / (float)h;
+	cp->min_step = BC_SVO_MIN_STEP_REL * rpn->size;
+	cp->refine_tol = BC_SVO_REFINE_REL * rpn->size;
+	for (uint32_t k = 0; k < 8; k++) {
+		float s2 = 0.0f;
+		for (int a = 0; a < 3; a++) {
+			float x = (k >> a) & 1u ? rpn->hi[a] : rpn->lo[a];
+			s2 += (x - vr.eye[a]) * (x - vr.eye[a]);
+		}
+		far = fmaxf(far, sqrtf(s2));
+	}
+	return 1.5f * bc_svo_hit_band(cp, far);
 }
 
 #endif

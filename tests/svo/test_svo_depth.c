@@ -407,31 +407,18 @@ static void stepping_matches_bisection(void)
 		struct bc_svo_rpn rpn;
 		struct bc_svo *sa = NULL, *sb = NULL;
 		struct bc_svo_stats st;
-		struct bc_view_rays vr;
-		struct bc_svo_cast_params cp = {0};
+		struct bc_svo_cast_params cp;
 		float *da = calloc(2 * W * H, sizeof(*da)), *db = da + W * H;
-		float *err = calloc(W * H, sizeof(*err)), far = 0.0f;
+		float *err = calloc(W * H, sizeof(*err));
 		uint32_t diff = 0, both = 0;
 		uint64_t ra, rb;
 		REQUIRE(t && da && err);
 		REQUIRE(bc_gen(scenes[i].name, &scenes[i].o, t, &cam, &ei) ==
 		        0);
 		REQUIRE(bc_svo_rpn_init(&rpn, bc_tree_lin(t)) == 0);
-		bc_view_rays_init(&vr, &cam, W, H);
-		cp.pix_angle = 2.0f * vr.tan_half_y / (float)H;
-		cp.min_step = BC_SVO_MIN_STEP_REL * rpn.size;
-		cp.refine_tol = BC_SVO_REFINE_REL * rpn.size;
-		for (uint32_t k = 0; k < 8; k++) {
-			float s2 = 0.0f;
-			for (int a = 0; a < 3; a++) {
-				float x = (k >> a) & 1u ? rpn.hi[a] : rpn.lo[a];
-				s2 += (x - vr.eye[a]) * (x - vr.eye[a]);
-			}
-			far = fmaxf(far, sqrtf(s2));
-		}
 		{
 			struct bc_svo_opts oa = {
-			    .band = 1.5f * bc_svo_hit_band(&cp, far)};
+			    .band = frame_cast_params(&rpn, &cam, W, H, &cp)};
 			struct bc_svo_opts ob = oa;
 			ob.no_step = true;
 			REQUIRE(bc_svo_build(&sa, &rpn, &oa, &ei) == 0);
@@ -478,7 +465,78 @@ static void stepping_matches_bisection(void)
 	}
 }
 
+/* A packet of rays (bc_svo_cast_packet, what the backend casts) finds,
+ * ray by ray, bit for bit what each ray cast alone finds: on scenes whose
+ * leaves are all stepped, some, or none (blends), under every arithmetic
+ * on the default scene, from their own cameras and grazing ones. */
+static void packets_match_single_rays(void)
+{
+	static const struct {
+		const char *name;
+		struct bc_gen_opts o;
+	} scenes[] = {
+	    {"fig18",
+	     {.count = 48,
+	      .kind = BC_GEN_KIND_SPHERES,
+	      .blend = BC_GEN_BLEND_SHARP}},
+	    {"gears", {.teeth = 16}},
+	    {"catalogue", {0}},
+	    {"fig18", {.count = 24, .blend = BC_GEN_BLEND_SMOOTH}},
+	    {"many-spheres", {.count = 120}},
+	    {NULL, {0}}, /* the default scene */
+	};
+	for (size_t i = 0; i < sizeof(scenes) / sizeof(scenes[0]); i++) {
+		struct bc_tree *t = bc_tree_create();
+		struct bc_camera cams[2];
+		struct bc_errinfo ei = {0};
+		struct bc_svo_rpn rpn;
+		REQUIRE(t);
+		if (scenes[i].name) {
+			REQUIRE(bc_gen(scenes[i].name, &scenes[i].o, t,
+			               &cams[0], &ei) == 0);
+		} else {
+			const char *json = bc_scene_default_json();
+			REQUIRE(bc_scene_parse_json(json, strlen(json), t,
+			                            &cams[0], &ei) == 0);
+		}
+		grazing(&cams[0], 1, 4.0f, &cams[1]);
+		REQUIRE(bc_svo_rpn_init(&rpn, bc_tree_lin(t)) == 0);
+		for (int a = 0; a < 3; a++) {
+			static const enum bc_range_arith ar[3] = {
+			    BC_RANGE_IA, BC_RANGE_REVAA, BC_RANGE_AA};
+			static const char *const an[3] = {"ia", "revaa", "aa"};
+			if (a > 0 && scenes[i].name) {
+				break; /* every arithmetic on one scene */
+			}
+			for (int k = 0; k < 2; k++) {
+				struct bc_svo_cast_params cp;
+				struct bc_svo_opts o = {
+				    .arith = ar[a],
+				    .band = frame_cast_params(&rpn, &cams[k], W,
+				                              H, &cp)};
+				struct bc_svo *s = NULL;
+				uint32_t bad, hits;
+				REQUIRE(bc_svo_build(&s, &rpn, &o, &ei) == 0);
+				bad = packet_mismatches(s, &cams[k], W, H, &cp,
+				                        &hits);
+				printf("  %-12s %s %s: %u of %u rays hit, %u "
+				       "differ in packets\n",
+				       scenes[i].name ? scenes[i].name
+				                      : "default",
+				       k ? "grazing" : "own", an[a], hits,
+				       W * H, bad);
+				CHECK_EQ_INT(bad, 0);
+				CHECK(hits > W * H / 20);
+				bc_svo_destroy(s);
+			}
+		}
+		bc_svo_rpn_finish(&rpn);
+		bc_tree_destroy(t);
+	}
+}
+
 static const struct bc_test tests[] = {
+    {"packets_match_single_rays", packets_match_single_rays},
     {"stepping_matches_bisection", stepping_matches_bisection},
     {"svo_depth_matches_tiled", svo_depth_matches_tiled},
     {"svo_depth_matches_tiled_on_the_default_scene",

@@ -313,7 +313,37 @@ static void svo_draws_what_tiled_draws(void)
 	}
 }
 
+/* The caster's ray packets find what single rays find, bit for bit, on
+ * every kind of node (domain-mapped primitives and value maps in the
+ * packets' lane evaluation, stepped and bisected leaves). */
+static void packets_match_single_rays(void)
+{
+	for (size_t i = 0; i < NSCENES; i++) {
+		struct bc_camera cam;
+		struct bc_tree *t = load(i, &cam);
+		struct bc_svo_rpn rpn;
+		struct bc_svo_cast_params cp;
+		struct bc_svo *s = NULL;
+		struct bc_errinfo ei = {0};
+		struct bc_svo_opts o = {.threshold = 2};
+		uint32_t bad, hits;
+		REQUIRE(t);
+		REQUIRE(bc_svo_rpn_init(&rpn, bc_tree_lin(t)) == 0);
+		o.band = frame_cast_params(&rpn, &cam, W, H, &cp);
+		REQUIRE(bc_svo_build(&s, &rpn, &o, &ei) == 0);
+		bad = packet_mismatches(s, &cam, W, H, &cp, &hits);
+		printf("  %-8s %u of %u rays hit, %u differ in packets\n",
+		       scenes[i].name, hits, W * H, bad);
+		CHECK_EQ_INT(bad, 0);
+		CHECK(hits > W * H / 20);
+		bc_svo_destroy(s);
+		bc_svo_rpn_finish(&rpn);
+		bc_tree_destroy(t);
+	}
+}
+
 static const struct bc_test tests[] = {
+    {"packets_match_single_rays", packets_match_single_rays},
     {"scenes_parse_with_unary_nodes", scenes_parse_with_unary_nodes},
     {"rpn_equals_reference_evaluator", rpn_equals_reference_evaluator},
     {"ranges_enclose_the_field", ranges_enclose_the_field},

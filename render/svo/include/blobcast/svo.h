@@ -386,6 +386,21 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
                  float t0, float t1, const struct bc_svo_cast_params *cp,
                  struct bc_svo_hit *hit);
 
+/* Rays of one packet at most. */
+#define BC_SVO_PACKET 8u
+
+/* Casts the n <= BC_SVO_PACKET rays o + t d[i] together: they walk the
+ * octree as one (a node is visited once for all the rays that cross it),
+ * and in a leaf that they step through, each round of their samples is one
+ * evaluation of the leaf's variant over all of them. hits[i] is what
+ * bc_svo_cast fills for ray i, bit for bit (the tests compare them).
+ * Returns the rays that hit, bit i for ray i. Coherent rays (a block of
+ * neighbouring pixels) gain; any rays are allowed. */
+uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
+                            const float (*d)[3], uint32_t n, float t0, float t1,
+                            const struct bc_svo_cast_params *cp,
+                            struct bc_svo_hit *hits);
+
 /* ---- Measurements (measure.c) ------------------------------------------- */
 
 /* Evaluation cost at random points of the tree's box (the thesis's §6.1
