@@ -359,17 +359,43 @@ static inline bool step_next(const struct bc_svo_cast_params *cp,
 }
 
 /* The sample at q = step_next's fell below the band (gq = field minus
- * band <= 0): the hit, refined in rf. */
+ * band <= 0): the hit, refined in rf.
+ *
+ * Where the field is negative at q the crossing lies in [t, q] and is
+ * refined at once. Where it is still positive (the ray entered the band
+ * but not the solid: the common case on an oblique surface, whose field
+ * falls slower than the ray advances), one more sample goes past the
+ * crossing the two samples' slope predicts, at most a pixel footprint
+ * further and not past the leaf: if it is inside, the crossing lies
+ * between it and q and is refined there, and settle() is not needed (its
+ * march from the band's entry, in [t, q], would look for the same first
+ * crossing). Otherwise (a silhouette: a ray that only grazes) the band's
+ * entry is refined and settle() takes over. */
 static float step_hit(struct ray_field *rf, const struct lane_step *ls, float q,
                       float gq, bool *settled)
 {
 	const struct bc_svo_cast_params *cp = rf->cp;
 	float fq = gq + band_at(cp, q);
+	float ft = ls->g + band_at(cp, ls->t);
 	if (fq <= 0.0f) {
-		float ft = ls->g + band_at(cp, ls->t);
 		rf->banded = false;
 		*settled = true;
 		return refine(rf, ls->t, ft, q, fq);
+	}
+	if (ft > fq) {
+		float w = maxf(cp->pix_angle * q, cp->min_step);
+		float slope = minf((ft - fq) / (q - ls->t), 1.0f);
+		float q2 = minf(q + minf(w, 1.125f * fq / slope), ls->tb);
+		if (q2 > q) {
+			float f2;
+			rf->banded = false;
+			f2 = field_at(rf, q2);
+			if (f2 <= 0.0f) {
+				*settled = true;
+				return refine(rf, q, fq, q2, f2);
+			}
+			rf->banded = true;
+		}
 	}
 	return refine(rf, ls->t, ls->g, q, gq);
 }
