@@ -80,6 +80,7 @@ enum bc_viewer_wheel {
 	BC_VIEWER_WHEEL_NONE = 0,
 	BC_VIEWER_WHEEL_SIZE,  /* Shift: the primitive's size parameter */
 	BC_VIEWER_WHEEL_BLEND, /* Ctrl: the parent operator's blend */
+	BC_VIEWER_WHEEL_UNARY, /* Alt: the unary node above's parameter */
 	BC_VIEWER_WHEEL_COUNT
 };
 
@@ -123,6 +124,10 @@ struct bc_viewer_app {
 		uint32_t sel; /* the selection the gesture began on */
 		struct bc_viewer_edit edit;
 		double end_at;
+		/* Alt: the unary node's kind and the size its steps scale
+		 * with (bc_viewer_unary_notch). */
+		enum bc_op unary_kind;
+		float extent;
 	} wheel;
 	uint32_t selected;
 

@@ -6,7 +6,9 @@
  *    drag) orbits the camera; right or middle drag, or Shift with the left
  *    button, pans;
  *  - the wheel zooms; with Shift it scales the selected primitive's size
- *    parameter, with Ctrl the blend of the operator above it;
+ *    parameter, with Ctrl the blend of the operator above it, with Alt the
+ *    main parameter of the innermost unary node above it that has one
+ *    (unary.c: sizes scale, signed values step);
  *  - keys: S lossless snapshot, P window screenshot, O overlay, R the
  *    scene's camera, Escape or Q quit; Ctrl-Z undo, Ctrl-Shift-Z or
  *    Ctrl-Y redo (sent without waiting; the answer shows on the overlay);
@@ -191,7 +193,31 @@ static void on_cursor(GLFWwindow *w, double x, double y)
 	}
 }
 
-/* Starts or continues a Shift/Ctrl wheel gesture on the selection. */
+/* Starts an Alt+wheel gesture: e edits the parameter of the innermost unary
+ * node above the selection that has one. Returns false (with a note on the
+ * overlay) when there is none. */
+static bool start_unary(struct bc_viewer_app *a, const struct bc_tree *t,
+                        struct bc_viewer_edit *e)
+{
+	struct bc_unary u;
+	struct bc_viewer_unary_param p;
+	uint32_t node = bc_viewer_unary_target(t, a->selected, &u);
+	if (!node || !bc_viewer_unary_param(u.kind, &p)) {
+		bc_viewer_status(a, "no unary node with a value above #%u",
+		                 a->selected);
+		return false;
+	}
+	e->node = node;
+	e->nfields = 1;
+	e->fields[0].field = BC_PROTO_FIELD_PARAM0;
+	e->fields[0].count = p.count;
+	memcpy(e->fields[0].v, u.u, p.count * sizeof(float));
+	a->wheel.unary_kind = u.kind;
+	a->wheel.extent = bc_viewer_unary_extent(t, node);
+	return true;
+}
+
+/* Starts or continues a Shift/Ctrl/Alt wheel gesture on the selection. */
 static void wheel_edit(struct bc_viewer_app *a, enum bc_viewer_wheel what,
                        double notches)
 {
@@ -235,6 +261,10 @@ static void wheel_edit(struct bc_viewer_app *a, enum bc_viewer_wheel what,
 			memcpy(e->fields[0].v,
 			       p.params + info->params[k].offset,
 			       info->params[k].count * sizeof(float));
+		} else if (what == BC_VIEWER_WHEEL_UNARY) {
+			if (!start_unary(a, t, e)) {
+				return;
+			}
 		} else {
 			uint32_t parent = bc_tree_parent(t, a->selected);
 			if (!parent || !bc_tree_get(t, parent, NULL, &op) ||
@@ -256,11 +286,18 @@ static void wheel_edit(struct bc_viewer_app *a, enum bc_viewer_wheel what,
 		a->wheel.what = what;
 		a->wheel.sel = a->selected;
 	}
-	/* Blend and range scale together, keeping range > blend / 6. */
-	for (uint32_t i = 0; i < e->nfields; i++) {
-		for (uint32_t k = 0; k < e->fields[i].count; k++) {
-			float v = e->fields[i].v[k] * f;
-			e->fields[i].v[k] = fminf(fmaxf(v, 1e-4f), 1e5f);
+	if (what == BC_VIEWER_WHEEL_UNARY) {
+		bc_viewer_unary_notch(a->wheel.unary_kind, e->fields[0].v,
+		                      (float)notches, a->wheel.extent);
+	} else {
+		/* Blend and range scale together, keeping range > blend /
+		 * 6. */
+		for (uint32_t i = 0; i < e->nfields; i++) {
+			for (uint32_t k = 0; k < e->fields[i].count; k++) {
+				float v = e->fields[i].v[k] * f;
+				e->fields[i].v[k] =
+				    fminf(fmaxf(v, 1e-4f), 1e5f);
+			}
 		}
 	}
 	e->interacting = true;
@@ -276,13 +313,17 @@ static void on_scroll(GLFWwindow *w, double xoff, double yoff)
 	             glfwGetKey(w, GLFW_KEY_RIGHT_SHIFT) == GLFW_PRESS;
 	bool ctrl = glfwGetKey(w, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS ||
 	            glfwGetKey(w, GLFW_KEY_RIGHT_CONTROL) == GLFW_PRESS;
+	bool alt = glfwGetKey(w, GLFW_KEY_LEFT_ALT) == GLFW_PRESS ||
+	           glfwGetKey(w, GLFW_KEY_RIGHT_ALT) == GLFW_PRESS;
 	(void)xoff;
 	if (yoff == 0.0) {
 		return;
 	}
-	if (shift || ctrl) {
+	if (shift || ctrl || alt) {
 		wheel_edit(a,
-		           ctrl ? BC_VIEWER_WHEEL_BLEND : BC_VIEWER_WHEEL_SIZE,
+		           alt    ? BC_VIEWER_WHEEL_UNARY
+		           : ctrl ? BC_VIEWER_WHEEL_BLEND
+		                  : BC_VIEWER_WHEEL_SIZE,
 		           yoff);
 		return;
 	}

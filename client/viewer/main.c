@@ -213,9 +213,13 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o,
 	    .footer = "Mouse: drag orbits, or moves the shape under the "
 	              "pointer; right drag\nor Shift-drag pans; the wheel "
 	              "zooms, Shift+wheel sizes the selected\nshape, "
-	              "Ctrl+wheel changes its operator's blend. Keys: S "
-	              "snapshot,\nP screenshot, O overlay, R scene camera, Q "
-	              "or Escape quit;\nCtrl-Z undo, Ctrl-Shift-Z or Ctrl-Y "
+	              "Ctrl+wheel changes its operator's blend, Alt+wheel "
+	              "the\nvalue of the nearest unary node above it (offset "
+	              "amount, onion\nthickness, elongate half_extents, twist "
+	              "or bend rate, repeat\nspacing, scale factor; mirrors "
+	              "are passed over). Keys: S snapshot,\nP screenshot, O "
+	              "overlay, R scene camera, Q or Escape quit;\nCtrl-Z "
+	              "undo, Ctrl-Shift-Z or Ctrl-Y "
 	              "redo; F follow the presenter\n(this window shows what "
 	              "the presenter's camera sees, at its own size;\nmoving "
 	              "the camera or F again stops), Shift-F present "
@@ -360,6 +364,7 @@ static void fmt_selection(struct bc_viewer_app *a, char *out, size_t n)
 	struct bc_prim_data p;
 	struct bc_op_data op;
 	const struct bc_prim_info *info;
+	struct bc_unary u;
 	uint32_t parent;
 	int k, len;
 	if (!a->selected || !t || !bc_tree_get(t, a->selected, &p, NULL) ||
@@ -376,16 +381,24 @@ static void fmt_selection(struct bc_viewer_app *a, char *out, size_t n)
 		                (double)p.params[info->params[k].offset]);
 	}
 	parent = bc_tree_parent(t, a->selected);
-	if (parent && bc_tree_get(t, parent, NULL, &op) && len >= 0 &&
-	    (size_t)len < n) {
+	/* A unary parent is named below, as what Alt+wheel edits (or not
+	 * at all: a mirror has no value to change). */
+	if (parent && bc_tree_get(t, parent, NULL, &op) &&
+	    !bc_op_is_unary(op.kind) && len >= 0 && (size_t)len < n) {
 		if (bc_op_is_smooth(op.kind)) {
-			snprintf(out + len, n - (size_t)len,
-			         " in %s blend %.3g", bc_op_name(op.kind),
-			         (double)op.blend);
+			len += snprintf(out + len, n - (size_t)len,
+			                " in %s blend %.3g",
+			                bc_op_name(op.kind), (double)op.blend);
 		} else {
-			snprintf(out + len, n - (size_t)len, " in %s",
-			         bc_op_name(op.kind));
+			len += snprintf(out + len, n - (size_t)len, " in %s",
+			                bc_op_name(op.kind));
 		}
+	}
+	if (bc_viewer_unary_target(t, a->selected, &u) && len >= 0 &&
+	    (size_t)len < n) {
+		char words[64];
+		snprintf(out + len, n - (size_t)len, " under %s",
+		         bc_viewer_unary_text(&u, words, sizeof(words)));
 	}
 }
 

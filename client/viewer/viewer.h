@@ -5,6 +5,7 @@
  *    points to view pixels with the server's conventions, moving a point in
  *    the view plane, a primitive's bounding box corners, which parameter is
  *    its "size";
+ *  - unary.c: which unary node Alt+wheel edits and what a notch does;
  *  - meter.c: frames per second, edit -> frame latency and kB per frame;
  *  - edits.c: the edit queue (at most one INTERACTING edit in flight, the
  *    newest values replacing any not yet sent) and the matching of edits to
@@ -75,6 +76,71 @@ extern const uint8_t bc_viewer_box_edges[12][2];
  * values must be positive, else the first non-negative one. Returns its
  * index, or -1 when the kind has none. */
 int bc_viewer_size_param(enum bc_prim kind);
+
+/* ---- unary.c ------------------------------------------------------------- */
+
+/* Alt+wheel on a unary node's main parameter. Sizes that must stay
+ * positive or non-negative scale by e^(0.1 n) per n notches, as Shift+wheel
+ * does; signed ones move by steps scaled to the shape the node wraps. */
+enum bc_viewer_notch {
+	BC_VIEWER_NOTCH_NONE = 0, /* no numeric parameter (mirror's axes) */
+	BC_VIEWER_NOTCH_SCALE,    /* every component times e^(0.1 n) */
+	BC_VIEWER_NOTCH_ADD,      /* plus n steps of a size over the extent */
+	BC_VIEWER_NOTCH_COUNT
+};
+
+/* An offset notch moves the amount by this fraction of the extent (the
+ * diagonal of the wrapped shape's box): a unit sphere grows 7 % a notch,
+ * so three notches show plainly. */
+#define BC_VIEWER_OFFSET_STEP 0.02f
+/* A twist or bend notch changes the rate by this many radians over the
+ * extent: the wrapped shape turns about 10 degrees more from end to end,
+ * so three notches show plainly. */
+#define BC_VIEWER_RATE_STEP 0.3f
+/* A notch up on a non-negative size that is 0 (an onion of thickness 0)
+ * starts it at this fraction of the extent: scaling 0 keeps it 0. */
+#define BC_VIEWER_SEED_STEP 0.01f
+/* Scaled sizes stay at or above this (above 0, which a scale could never
+ * leave; scale's own floor, 1e-3, is higher). */
+#define BC_VIEWER_NOTCH_MIN 1e-4f
+
+/* Alt+wheel's parameter of a unary kind: PARAM0, count floats from u[0]
+ * (elongate's half_extents, repeat's spacing: 3), named name. */
+struct bc_viewer_unary_param {
+	enum bc_viewer_notch rule;
+	uint8_t count;
+	float lo; /* SCALE: the smallest value a component may take, 0 kept */
+	const char *name;
+};
+
+/* Fills *out for kind and returns true; false (out zeroed) for mirror,
+ * which has no numeric parameter, and for kinds that are not unary. */
+bool bc_viewer_unary_param(enum bc_op kind, struct bc_viewer_unary_param *out);
+/* The unary node Alt+wheel edits for node id: its innermost unary ancestor
+ * with a numeric parameter (mirrors are passed over, binary operators
+ * climbed through), read into *out. Returns its id, or 0 (out zeroed)
+ * when there is none. */
+uint32_t bc_viewer_unary_target(const struct bc_tree *t, uint32_t id,
+                                struct bc_unary *out);
+/* The size additive steps scale with for unary node id: the diagonal of the
+ * world box of the ABVs of the primitives below it (bc_lin), divided by the
+ * factors of the scale nodes above it, which the node's parameter does not
+ * see. Repeats and mirrors above widen the box; a step stays a step. Never
+ * below 1e-3; 1 when the tree has no linearized form. */
+float bc_viewer_unary_extent(const struct bc_tree *t, uint32_t id);
+/* Applies notches (positive: wheel up) to the parameter v of a unary node
+ * of kind (bc_viewer_unary_param's count floats) with extent from
+ * bc_viewer_unary_extent: SCALE rules multiply each component by
+ * e^(0.1 notches), kept in [lo, BC_PARAM_MAX_ABS] (a 0 stays 0, unless
+ * every component is 0 and the wheel goes up: they start at
+ * BC_VIEWER_SEED_STEP extent); offset adds notches BC_VIEWER_OFFSET_STEP
+ * extent, twist and bend notches BC_VIEWER_RATE_STEP / extent, kept within
+ * +-BC_PARAM_MAX_ABS. Mirror and other kinds: v unchanged. */
+void bc_viewer_unary_notch(enum bc_op kind, float *v, float notches,
+                           float extent);
+/* The overlay's words for unary node u: "twist rate 1.3", "repeat spacing
+ * 2,2,2", "mirror axes xz". Returns out. */
+const char *bc_viewer_unary_text(const struct bc_unary *u, char *out, size_t n);
 
 /* ---- meter.c ------------------------------------------------------------- */
 

@@ -11,8 +11,11 @@
 #     the selection's outline, Ctrl-Z / Ctrl-Shift-Z / Ctrl-Y undo and
 #     redo the last step (the verbose undo/redo lines name the same edit),
 #     Shift-F presents and Shift-F again stops (the verbose presenter
-#     lines), Q quits; the daemon's saved scene then holds
-#     the new position, radius and blend.
+#     lines), Alt+wheel on the sphere (no unary node above it) only says
+#     so, a click selects a bar under a mirror under a twist and
+#     Alt+wheel steps the twist's rate, Q quits; the daemon's saved scene
+#     then holds the new position, radius, blend and twist rate, and the
+#     mirror and the bar as they were.
 #
 # usage: test_viewer.sh BLOBCAST-VIEW BLOBCASTD IMGCHECK [XPOKE]
 # Exits 77 (skipped) when xvfb-run, the viewer or the daemon is missing;
@@ -128,6 +131,16 @@ if [ -n "$inner" ]; then
       ok=
     }
   fi
+  # Alt+wheel: nothing above the sphere has a value to change (a note,
+  # no edit); the bar's centre projects to (160, 39), and above it the
+  # mirror is passed over for the twist. Its final edit leaves 250 ms
+  # after the last notch.
+  [ -n "$ok" ] && poke keydown Alt_L wheel 1 keyup Alt_L
+  [ -n "$ok" ] && wait_for '^status no unary node with a value above #2$' \
+    "$tmp/drag.log" 200 || ok=
+  [ -n "$ok" ] && poke move 160 39 down 1 sleep 200 up 1
+  [ -n "$ok" ] && wait_for '^pick node=4$' "$tmp/drag.log" 200 || ok=
+  [ -n "$ok" ] && poke keydown Alt_L wheel 3 keyup Alt_L sleep 700
   # Q closes the window on its press: no release to send to a window
   # that is gone.
   poke keydown q
@@ -197,8 +210,9 @@ LD_PRELOAD=$d/swrast_dri.so"
 fi
 export VIEWENV
 
-# The scene of part 3: a red sphere and a blue box in a smooth union, seen
-# from (0, 0, 6); the session exists on disk before the daemon starts.
+# The scene of part 3: a red sphere, a blue box and a green bar (a box
+# under a mirror under a twist) in a smooth union, seen from (0, 0, 6); the
+# session exists on disk before the daemon starts.
 mkdir -p "$tmp/data/sessions/drag"
 cat > "$tmp/data/sessions/drag/snap-0.json" <<'EOF'
 {"blobcast": 1,
@@ -209,7 +223,11 @@ cat > "$tmp/data/sessions/drag/snap-0.json" <<'EOF'
    {"type": "sphere", "id": 2, "radius": 0.8, "translate": [-1.2, 0, 0],
     "color": [0.9, 0.25, 0.2]},
    {"type": "box", "id": 3, "half_extents": [0.6, 0.6, 0.6],
-    "translate": [1.3, 0, 0], "color": [0.2, 0.45, 0.9]}]}}
+    "translate": [1.3, 0, 0], "color": [0.2, 0.45, 0.9]},
+   {"type": "twist", "id": 5, "rate": 0.5, "children": [
+    {"type": "mirror", "id": 6, "axes": "x", "children": [
+     {"type": "box", "id": 4, "half_extents": [0.8, 0.3, 0.3],
+      "translate": [0, 1.6, 0], "color": [0.3, 0.8, 0.35]}]}]}]}}
 EOF
 
 "$DAEMON" --listen 127.0.0.1:0 --data "$tmp/data" --backend cpu --log warn \
@@ -301,7 +319,8 @@ if [ -z "$XPOKE" ] || [ ! -x "$XPOKE" ]; then
 else
   if xvfb-run -a -s "-screen 0 640x480x24" sh "$0" --inner "$VIEW" \
      "$DAEMON" "$CHECK" "$XPOKE" "$tmp" "$port"; then
-    echo "ok   pick, drag, Shift+wheel, Ctrl+wheel, S, P, Ctrl-Z/Y, Shift-F and Q"
+    echo "ok   pick, drag, Shift+wheel, Ctrl+wheel, S, P, Ctrl-Z/Y, Shift-F," \
+      "Alt+wheel and Q"
   else
     fail "direct manipulation"
   fi
@@ -356,6 +375,19 @@ if [ -n "$XPOKE" ] && [ -x "$XPOKE" ]; then
     fail "Shift+wheel did not scale the radius to 1.08: $sphere"
   echo "$blend" | awk '{ exit !($1 > 0.235 && $1 < 0.255) }' ||
     fail "Ctrl+wheel did not scale the blend to 0.2456: $blend"
+  # Alt+wheel, 3 notches up on the bar: the twist's rate grows by 3 x 0.3
+  # radians over the extent of what it wraps (the bar's ABV turned about
+  # y, about 3.9 across: 0.5 + 0.23), the mirror and the bar are as they
+  # were.
+  rate=$(grep '"id": 5,' "$scene" | sed -n 's/.*"twist".*"rate": \([-0-9.e]*\).*/\1/p')
+  echo "     twist rate $rate"
+  echo "$rate" | awk '{ exit !($1 > 0.6 && $1 < 1.0) }' ||
+    fail "Alt+wheel did not step the twist's rate from 0.5 to about 0.73: $rate"
+  grep -q '"type": "mirror", "id": 6, "axes": "x",' "$scene" ||
+    fail "the mirror under the twist changed: $(grep '"id": 6,' "$scene")"
+  grep '"id": 4,' "$scene" |
+    grep -q '"half_extents": \[0.8, 0.3, 0.3\], "translate": \[0, 1.6, 0\]' ||
+    fail "the bar changed: $(grep '"id": 4,' "$scene")"
 fi
 
 if [ $failures -ne 0 ]; then

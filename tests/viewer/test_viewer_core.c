@@ -3,7 +3,8 @@
  * projection against blobtree's own ray generator, bounding boxes against
  * the primitives' fields, the meters, the edit queue's one-in-flight rule
  * and latency matching, frame assembly (rectangles, downscaled frames, the
- * stale-base case, errors, allocation failures) and the bitmap font.
+ * stale-base case, errors, allocation failures), the bitmap font, and
+ * Alt+wheel's rules for unary nodes (which node, what a notch gives).
  */
 #include <math.h>
 #include <stdint.h>
@@ -333,6 +334,291 @@ static void test_size_parameter_of_every_kind(void)
 		CHECK(info->params[k].flags &
 		      (BC_PARAM_POSITIVE | BC_PARAM_NONNEG));
 	}
+}
+
+/* ---- unary nodes (Alt+wheel) --------------------------------------------- */
+
+/* Every unary kind has its rule: signed values step, sizes scale, mirror
+ * has nothing to change; binary operators are not unary. */
+static void test_unary_param_of_every_kind(void)
+{
+	static const struct {
+		enum bc_op kind;
+		enum bc_viewer_notch rule;
+		uint8_t count;
+		const char *name;
+	} want[] = {
+	    {BC_OP_OFFSET, BC_VIEWER_NOTCH_ADD, 1, "amount"},
+	    {BC_OP_ONION, BC_VIEWER_NOTCH_SCALE, 1, "thickness"},
+	    {BC_OP_ELONGATE, BC_VIEWER_NOTCH_SCALE, 3, "half_extents"},
+	    {BC_OP_TWIST, BC_VIEWER_NOTCH_ADD, 1, "rate"},
+	    {BC_OP_BEND, BC_VIEWER_NOTCH_ADD, 1, "rate"},
+	    {BC_OP_REPEAT, BC_VIEWER_NOTCH_SCALE, 3, "spacing"},
+	    {BC_OP_SCALE, BC_VIEWER_NOTCH_SCALE, 1, "factor"},
+	};
+	struct bc_viewer_unary_param p;
+	for (size_t i = 0; i < sizeof(want) / sizeof(want[0]); i++) {
+		REQUIRE(bc_viewer_unary_param(want[i].kind, &p));
+		CHECK_EQ_INT(p.rule, want[i].rule);
+		CHECK_EQ_INT(p.count, want[i].count);
+		CHECK_STREQ(p.name, want[i].name);
+		CHECK(p.rule != BC_VIEWER_NOTCH_SCALE || p.lo > 0.0f);
+	}
+	CHECK(bc_viewer_unary_param(BC_OP_SCALE, &p) && p.lo == 1e-3f);
+	CHECK(!bc_viewer_unary_param(BC_OP_MIRROR, &p));
+	CHECK(p.rule == BC_VIEWER_NOTCH_NONE && p.count == 0);
+	for (int k = 0; k <= BC_OP_SMOOTH_DIFFERENCE; k++) {
+		CHECK(!bc_viewer_unary_param((enum bc_op)k, &p));
+	}
+	CHECK(!bc_viewer_unary_param(BC_OP_COUNT, &p));
+}
+
+/* What one notch gives, kind by kind, with an extent of 3. */
+static void test_unary_notch_values(void)
+{
+	const float ext = 3.0f, up = expf(0.1f);
+	float v[BC_UNARY_MAX_PARAMS];
+
+	/* Offset: 0.02 extent a notch, either sign, across 0. */
+	v[0] = 0.1f;
+	bc_viewer_unary_notch(BC_OP_OFFSET, v, 2.0f, ext);
+	CHECK_NEAR(v[0], 0.1f + 2.0f * 0.06f, 1e-6);
+	bc_viewer_unary_notch(BC_OP_OFFSET, v, -5.0f, ext);
+	CHECK_NEAR(v[0], 0.1f - 3.0f * 0.06f, 1e-6);
+	CHECK(v[0] < 0.0f);
+
+	/* Twist and bend: 0.3 radians over the extent a notch, signed. */
+	for (int k = 0; k < 2; k++) {
+		enum bc_op kind = k ? BC_OP_BEND : BC_OP_TWIST;
+		v[0] = 1.0f;
+		bc_viewer_unary_notch(kind, v, 3.0f, ext);
+		CHECK_NEAR(v[0], 1.0f + 3.0f * 0.1f, 1e-6);
+		bc_viewer_unary_notch(kind, v, -20.0f, ext);
+		CHECK_NEAR(v[0], 1.3f - 2.0f, 1e-5);
+		/* A larger shape turns as much over its length with a
+		 * smaller rate step. */
+		v[0] = 0.0f;
+		bc_viewer_unary_notch(kind, v, 1.0f, 30.0f);
+		CHECK_NEAR(v[0], 0.01f, 1e-7);
+	}
+
+	/* Onion: scales; 0 starts at 0.01 extent going up, stays going
+	 * down. */
+	v[0] = 0.05f;
+	bc_viewer_unary_notch(BC_OP_ONION, v, 2.0f, ext);
+	CHECK_NEAR(v[0], 0.05f * up * up, 1e-6);
+	bc_viewer_unary_notch(BC_OP_ONION, v, -2.0f, ext);
+	CHECK_NEAR(v[0], 0.05f, 1e-6);
+	v[0] = 0.0f;
+	bc_viewer_unary_notch(BC_OP_ONION, v, -1.0f, ext);
+	CHECK(v[0] == 0.0f);
+	bc_viewer_unary_notch(BC_OP_ONION, v, 1.0f, ext);
+	CHECK_NEAR(v[0], 0.03f, 1e-7);
+
+	/* Elongate: every component scales, a 0 axis stays 0. */
+	v[0] = 0.5f;
+	v[1] = 0.0f;
+	v[2] = 0.2f;
+	bc_viewer_unary_notch(BC_OP_ELONGATE, v, 1.0f, ext);
+	CHECK_NEAR(v[0], 0.5f * up, 1e-6);
+	CHECK(v[1] == 0.0f);
+	CHECK_NEAR(v[2], 0.2f * up, 1e-6);
+
+	/* Repeat: the spacing scales, the counts after it are not
+	 * touched. */
+	v[0] = 2.0f;
+	v[1] = 1.5f;
+	v[2] = 0.0f;
+	v[3] = 3.0f;
+	v[4] = 2.0f;
+	v[5] = 1.0f;
+	bc_viewer_unary_notch(BC_OP_REPEAT, v, -1.0f, ext);
+	CHECK_NEAR(v[0], 2.0f / up, 1e-6);
+	CHECK_NEAR(v[1], 1.5f / up, 1e-6);
+	CHECK(v[2] == 0.0f);
+	CHECK(v[3] == 3.0f && v[4] == 2.0f && v[5] == 1.0f);
+
+	/* Scale: scales, never below 1e-3 nor above the parameter limit. */
+	v[0] = 1.0f;
+	bc_viewer_unary_notch(BC_OP_SCALE, v, 1.0f, ext);
+	CHECK_NEAR(v[0], up, 1e-6);
+	bc_viewer_unary_notch(BC_OP_SCALE, v, -500.0f, ext);
+	CHECK(v[0] == 1e-3f);
+	bc_viewer_unary_notch(BC_OP_SCALE, v, 5000.0f, ext);
+	CHECK(v[0] == BC_PARAM_MAX_ABS);
+
+	/* Mirror: nothing to change. */
+	v[0] = 5.0f;
+	bc_viewer_unary_notch(BC_OP_MIRROR, v, 3.0f, ext);
+	CHECK(v[0] == 5.0f);
+}
+
+/* Whatever the notches, a node that was valid stays valid: the rules keep
+ * blobtree's bounds (onion and elongate >= 0, repeat spacing > 0 where it
+ * repeats, scale >= 1e-3, |values| <= BC_PARAM_MAX_ABS). */
+static void test_unary_notch_keeps_bounds(void)
+{
+	for (int kind = BC_OP_FIRST_UNARY; kind < BC_OP_COUNT; kind++) {
+		bool bad = false;
+		/* One report per kind is enough. */
+		for (int n = 0; n < 50 && !bad; n++) {
+			struct bc_unary u;
+			float ext = expf(frand(-6.0f, 10.0f));
+			bc_unary_init(&u, (enum bc_op)kind);
+			for (int step = 0; step < 40 && !bad; step++) {
+				struct bc_errinfo ei = {0};
+				/* Big runs reach the limits; small ones
+				 * wander. */
+				float notches = frand(-1.0f, 1.0f) *
+				                (n % 2 ? 400.0f : 4.0f);
+				bc_viewer_unary_notch(u.kind, u.u, notches,
+				                      ext);
+				if (bc_unary_validate(&u, &ei) != 0) {
+					fprintf(stderr,
+					        "kind %d after %g: %s\n", kind,
+					        (double)notches, ei.msg);
+					CHECK(0);
+					bad = true;
+				}
+			}
+		}
+	}
+}
+
+/* A tree of unary nodes for the target and extent tests:
+ *   smooth_union 1
+ *     sphere 2
+ *     twist 5 (rate 0.5) > mirror 6 (x) > box 4
+ *     offset 7 > union 8 { sphere 9, scale 11 (2) > onion 12 > sphere 13 }
+ *     mirror 14 > sphere 15
+ */
+static struct bc_tree *unary_tree(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_op_data su = {BC_OP_SMOOTH_UNION, 0.3f, 0.4f};
+	struct bc_op_data un = {BC_OP_UNION, 0.0f, 0.0f};
+	struct bc_prim_data sphere, box;
+	struct bc_unary tw, mi, off, sc, on;
+	int rc = 0;
+	if (!t) {
+		return NULL;
+	}
+	bc_prim_data_init(&sphere, BC_PRIM_SPHERE);
+	bc_prim_data_init(&box, BC_PRIM_BOX);
+	bc_unary_init(&tw, BC_OP_TWIST);
+	tw.u[0] = 0.5f;
+	bc_unary_init(&mi, BC_OP_MIRROR);
+	bc_unary_init(&off, BC_OP_OFFSET);
+	bc_unary_init(&sc, BC_OP_SCALE);
+	sc.u[0] = 2.0f;
+	bc_unary_init(&on, BC_OP_ONION);
+	rc |= bc_tree_begin(t);
+	rc |= bc_tree_push_op(t, 1, &su, NULL);
+	rc |= bc_tree_put_prim(t, 2, &sphere, NULL);
+	rc |= bc_tree_push_unary(t, 5, &tw, NULL);
+	rc |= bc_tree_push_unary(t, 6, &mi, NULL);
+	rc |= bc_tree_put_prim(t, 4, &box, NULL);
+	rc |= bc_tree_pop_op(t, NULL);
+	rc |= bc_tree_pop_op(t, NULL);
+	rc |= bc_tree_push_unary(t, 7, &off, NULL);
+	rc |= bc_tree_push_op(t, 8, &un, NULL);
+	rc |= bc_tree_put_prim(t, 9, &sphere, NULL);
+	rc |= bc_tree_push_unary(t, 11, &sc, NULL);
+	rc |= bc_tree_push_unary(t, 12, &on, NULL);
+	rc |= bc_tree_put_prim(t, 13, &sphere, NULL);
+	rc |= bc_tree_pop_op(t, NULL);
+	rc |= bc_tree_pop_op(t, NULL);
+	rc |= bc_tree_pop_op(t, NULL);
+	rc |= bc_tree_pop_op(t, NULL);
+	rc |= bc_tree_push_unary(t, 14, &mi, NULL);
+	rc |= bc_tree_put_prim(t, 15, &sphere, NULL);
+	rc |= bc_tree_pop_op(t, NULL);
+	rc |= bc_tree_pop_op(t, NULL);
+	rc |= bc_tree_end(t, NULL);
+	if (rc) {
+		bc_tree_destroy(t);
+		return NULL;
+	}
+	return t;
+}
+
+/* The innermost unary ancestor with a value: mirrors passed over, binary
+ * operators climbed through, none above a plain operand. */
+static void test_unary_target_skips_mirror(void)
+{
+	struct bc_tree *t = unary_tree();
+	struct bc_unary u;
+	REQUIRE(t);
+	CHECK_EQ_INT(bc_viewer_unary_target(t, 4, &u), 5);
+	CHECK(u.kind == BC_OP_TWIST && u.u[0] == 0.5f);
+	CHECK_EQ_INT(bc_viewer_unary_target(t, 13, &u), 12);
+	CHECK(u.kind == BC_OP_ONION);
+	CHECK_EQ_INT(bc_viewer_unary_target(t, 9, &u), 7);
+	CHECK(u.kind == BC_OP_OFFSET);
+	/* Only a mirror above, or nothing: no target, u zeroed. */
+	CHECK_EQ_INT(bc_viewer_unary_target(t, 15, &u), 0);
+	CHECK(u.kind == BC_OP_INVALID && u.u[0] == 0.0f);
+	CHECK_EQ_INT(bc_viewer_unary_target(t, 2, &u), 0);
+	CHECK_EQ_INT(bc_viewer_unary_target(t, 1, &u), 0);
+	CHECK_EQ_INT(bc_viewer_unary_target(t, 999, &u), 0);
+	CHECK_EQ_INT(bc_viewer_unary_target(NULL, 4, &u), 0);
+	bc_tree_destroy(t);
+}
+
+/* The extent is the wrapped shape's box diagonal in the node's own units
+ * (its primitives' ABVs: their bounds grown by the blend's reach, r+ 0.4
+ * here, then mapped out through the domain nodes), and a scale node above
+ * does not change it. */
+static void test_unary_extent_in_node_units(void)
+{
+	struct bc_tree *t = unary_tree();
+	float twist, onion, offset;
+	REQUIRE(t);
+	/* Twist 5 wraps a box of half extents 1 (1.4 grown), mapped to a
+	 * cylinder about y of radius 1.4 sqrt 2: diagonal 6.26. */
+	twist = bc_viewer_unary_extent(t, 5);
+	CHECK(twist > 2.0f * sqrtf(5.0f) && twist < 7.0f);
+	/* Offset 7 wraps a unit sphere and another drawn twice as large by
+	 * scale 11, whose box holds the first. */
+	offset = bc_viewer_unary_extent(t, 7);
+	CHECK(offset > 4.0f * sqrtf(3.0f) && offset < 10.5f);
+	/* Onion 12 wraps only that large sphere, but in its own units,
+	 * inside scale 11, the sphere is half as large. */
+	onion = bc_viewer_unary_extent(t, 12);
+	CHECK_NEAR(onion, offset / 2.0f, 1e-3 * offset);
+	/* Not a unary node, or no tree: a unit extent. */
+	CHECK(bc_viewer_unary_extent(t, 1) == 1.0f);
+	CHECK(bc_viewer_unary_extent(NULL, 5) == 1.0f);
+	bc_tree_destroy(t);
+}
+
+static void test_unary_text(void)
+{
+	struct bc_unary u;
+	char line[64], small[8];
+	bc_unary_init(&u, BC_OP_TWIST);
+	u.u[0] = 1.3f;
+	CHECK_STREQ(bc_viewer_unary_text(&u, line, sizeof(line)),
+	            "twist rate 1.3");
+	bc_unary_init(&u, BC_OP_REPEAT);
+	CHECK_STREQ(bc_viewer_unary_text(&u, line, sizeof(line)),
+	            "repeat spacing 2,2,2");
+	bc_unary_init(&u, BC_OP_ELONGATE);
+	CHECK_STREQ(bc_viewer_unary_text(&u, line, sizeof(line)),
+	            "elongate half_extents 0.5,0,0");
+	bc_unary_init(&u, BC_OP_MIRROR);
+	u.u[0] = 5.0f;
+	CHECK_STREQ(bc_viewer_unary_text(&u, line, sizeof(line)),
+	            "mirror axes xz");
+	bc_unary_init(&u, BC_OP_OFFSET);
+	u.u[0] = -0.25f;
+	CHECK_STREQ(bc_viewer_unary_text(&u, line, sizeof(line)),
+	            "offset amount -0.25");
+	/* Cut, never overrun. */
+	CHECK(strlen(bc_viewer_unary_text(&u, small, sizeof(small))) ==
+	      sizeof(small) - 1);
+	u.kind = BC_OP_UNION;
+	CHECK_STREQ(bc_viewer_unary_text(&u, line, sizeof(line)), "");
 }
 
 /* ---- meter --------------------------------------------------------------- */
@@ -970,6 +1256,12 @@ static const struct bc_test tests[] = {
     {"box_contains_every_primitive", test_box_contains_every_primitive},
     {"box_of_a_box_is_tight", test_box_of_a_box_is_tight},
     {"size_parameter_of_every_kind", test_size_parameter_of_every_kind},
+    {"unary_param_of_every_kind", test_unary_param_of_every_kind},
+    {"unary_notch_values", test_unary_notch_values},
+    {"unary_notch_keeps_bounds", test_unary_notch_keeps_bounds},
+    {"unary_target_skips_mirror", test_unary_target_skips_mirror},
+    {"unary_extent_in_node_units", test_unary_extent_in_node_units},
+    {"unary_text", test_unary_text},
     {"meter_counts_the_last_second", test_meter_counts_the_last_second},
     {"edits_one_in_flight", test_edits_one_in_flight},
     {"edits_refused", test_edits_refused},

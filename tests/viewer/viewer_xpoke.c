@@ -11,7 +11,9 @@
  *   down B, up B     press / release button B (1 left, 3 right)
  *   wheel N          N notches of the wheel (negative: down)
  *   keydown K, keyup K, key K
- *                    a key by its X keysym name (Shift_L, Control_L, s)
+ *                    a key by its X keysym name (Shift_L, Control_L,
+ *                    Alt_L, s); held modifiers go into later events'
+ *                    state
  *   sleep MS
  * Exits 0, or 1 when the window cannot be found, a command is wrong or
  * the X server refused a request (the window is gone).
@@ -146,6 +148,9 @@ static int key(const char *name, int down)
 		mod = ShiftMask;
 	} else if (sym == XK_Control_L || sym == XK_Control_R) {
 		mod = ControlMask;
+	} else if (sym == XK_Alt_L || sym == XK_Alt_R) {
+		/* Alt is Mod1 in the X servers' default modifier map. */
+		mod = Mod1Mask;
 	}
 	if (down) {
 		state |= mod;
