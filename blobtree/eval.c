@@ -151,13 +151,24 @@ float bc_unary_value(const struct bc_lin *l, uint32_t u, float f,
 
 /* Field of the leaf at slot s: its point mapped through the domain nodes
  * around it, then its own record. */
+/* The point mapped through domain chain d last (BC_NONE: none yet). The
+ * leaves under one domain node share their chain and come in a row, so an
+ * evaluation maps the point once per chain, not once per primitive. */
+struct dom_cache {
+	uint32_t d;
+	float q[3];
+};
+
 static inline float eval_leaf(const struct bc_lin *l, uint32_t s, uint32_t kind,
-                              const float *rec, const float p[3])
+                              const float *rec, const float p[3],
+                              struct dom_cache *c)
 {
 	if (l->nunary && l->dom[s] != BC_NONE) {
-		float q[3];
-		bc_domain_map(l, l->dom[s], p, q);
-		return eval_record(kind, rec, q);
+		if (c->d != l->dom[s]) {
+			c->d = l->dom[s];
+			bc_domain_map(l, c->d, p, c->q);
+		}
+		return eval_record(kind, rec, c->q);
 	}
 	return eval_record(kind, rec, p);
 }
@@ -178,7 +189,8 @@ static inline float wrap_value(const struct bc_lin *l, uint32_t s, float f,
 float bc_eval_prim(const struct bc_lin *l, uint32_t k, const float p[3])
 {
 	uint32_t s = l->prim_slot[k];
-	return eval_leaf(l, s, bc_lin_kind(l, s), bc_lin_param(l, s), p);
+	struct dom_cache c = {BC_NONE, {0.0f, 0.0f, 0.0f}};
+	return eval_leaf(l, s, bc_lin_kind(l, s), bc_lin_param(l, s), p, &c);
 }
 
 /* Which operand an operator's value follows, for colours and ids: the one
@@ -202,11 +214,12 @@ static float full(const struct bc_lin *l, const float p[3], uint32_t *prim)
 	float val[BC_EVAL_STACK];
 	uint32_t who[BC_EVAL_STACK];
 	uint32_t sp = 0;
+	struct dom_cache c = {BC_NONE, {0.0f, 0.0f, 0.0f}};
 	for (uint32_t s = 0; s < l->count; s++) {
 		uint32_t kind = bc_lin_kind(l, s);
 		const float *rec = bc_lin_param(l, s);
 		if (bc_lin_is_leaf(l, s)) {
-			val[sp] = eval_leaf(l, s, kind, rec, p);
+			val[sp] = eval_leaf(l, s, kind, rec, p, &c);
 			who[sp++] = l->prim_of[s];
 		} else {
 			float f1 = val[--sp];
@@ -470,6 +483,7 @@ static float run(const struct bc_view *v, const struct bc_lin *l,
 	float val[BC_EVAL_STACK];
 	uint32_t who[BC_EVAL_STACK];
 	uint32_t sp = 0;
+	struct dom_cache c = {BC_NONE, {0.0f, 0.0f, 0.0f}};
 	if (v->empty || v->n == 0) {
 		if (prim) {
 			*prim = BC_NONE;
@@ -483,7 +497,7 @@ static float run(const struct bc_view *v, const struct bc_lin *l,
 			val[sp - 1] =
 			    bc_unary_value(l, in->slot, val[sp - 1], p);
 		} else if (in->leaf) {
-			val[sp] = eval_leaf(l, in->slot, in->kind, rec, p);
+			val[sp] = eval_leaf(l, in->slot, in->kind, rec, p, &c);
 			who[sp++] = l->prim_of[in->slot];
 		} else {
 			float f1 = val[--sp];
