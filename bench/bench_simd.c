@@ -3,8 +3,9 @@
  * on and off (`opts.simd`, BC_SIMD_AUTO against BC_SIMD_OFF) and with one
  * and two threads, side by side in one run, at 512x512 on the paper's
  * synthetic scenes (Zanni 2024 Fig. 18 smooth spheres 256/1024/4096 and
- * Fig. 16 levels 1-4) and on the Lipschitz Pruning scenes converted into
- * bench/scenes/lipschitz/ (Trees, Molecule).
+ * Fig. 16 levels 1-4), on the Lipschitz Pruning scenes converted into
+ * bench/scenes/lipschitz/ (Trees, Molecule), and on two trees with unary
+ * and domain nodes (bench/scenes/unary/, written by make_unary.sh).
  *
  * It reports ratios, not absolute times: this machine is shared and has no
  * GPU. For each scene and each of the four configurations one renderer is
@@ -33,7 +34,7 @@
  *   --reps R      timed rounds per configuration, the fastest kept (3)
  *   --scenes DIR  directory holding lipschitz/{trees,molecule}.json
  *                 (default: the source tree's bench/scenes)
- *   --quick       fig18 256 and the Lipschitz scenes only
+ *   --quick       fig18 256, the Lipschitz and the unary scenes only
  *   --scene FILE  time this scene file (with its camera) instead of the
  *                 built-in list; may be repeated (up to 16)
  */
@@ -147,7 +148,8 @@ static int load_scene(const struct scene *s, const char *dir, struct bc_tree *t,
 		fprintf(stderr,
 		        "bench_simd: %s does not load (%s): %s\n"
 		        "  (regenerate it with bench/scenes/"
-		        "convert_lipschitz.py, or pass --scenes DIR)\n",
+		        "convert_lipschitz.py or make_unary.sh, or pass "
+		        "--scenes DIR)\n",
 		        path, bc_err_name(ei.code), ei.msg);
 		exit(1);
 	}
@@ -214,6 +216,8 @@ int main(int argc, char **argv)
 	     0},
 	    {"lipschitz trees", NULL, "lipschitz/trees.json", {0}, 1},
 	    {"lipschitz molecule", NULL, "lipschitz/molecule.json", {0}, 1},
+	    {"unary twist (fig18 256)", NULL, "unary/twist.json", {0}, 1},
+	    {"unary repeat (fig18 64)", NULL, "unary/repeat.json", {0}, 1},
 	};
 	size_t nscenes = sizeof(scenes) / sizeof(scenes[0]);
 	struct scene files[16];

@@ -133,8 +133,9 @@ static bool march_head(struct bc__pk_ray *r, const struct bc__frame_ctx *fc)
 	float eps =
 	    bc__maxf(BC_CPU_HIT_FOOTPRINT * fc->pix_angle * r->t, fc->min_step);
 	float step;
+	eps /= fc->lin->lip;
 	if (r->v < eps) {
-		r->cap = r->t + 64.0f * BC_CPU_LIPSCHITZ * eps;
+		r->cap = r->t + 64.0f * BC_CPU_LIPSCHITZ * fc->lin->lip * eps;
 		r->limit = bc__minf(r->cap, r->t1);
 		r->i = 0;
 		return refine_head(r, fc);

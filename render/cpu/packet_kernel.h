@@ -77,6 +77,51 @@ static vf scalar_sdf(uint32_t kind, const float *k, vf x, vf y, vf z,
 	return vload(out);
 }
 
+/* The points (px, py, pz) mapped through the domain nodes from d (a unary
+ * index, blobtree's bc_domain_map) lane by lane: the maps (twist's and
+ * bend's rotations, repeat's cells) have no vector form here. */
+static void domain_lanes(const struct bc_lin *lin, uint32_t d, vf *px, vf *py,
+                         vf *pz, uint32_t active)
+{
+	_Alignas(64) float xs[PK_LANES], ys[PK_LANES], zs[PK_LANES];
+	vstore(xs, *px);
+	vstore(ys, *py);
+	vstore(zs, *pz);
+	for (uint32_t i = 0; i < PK_LANES; i++) {
+		if ((active >> i) & 1u) {
+			const float p[3] = {xs[i], ys[i], zs[i]};
+			float q[3];
+			bc_domain_map(lin, d, p, q);
+			xs[i] = q[0];
+			ys[i] = q[1];
+			zs[i] = q[2];
+		}
+	}
+	*px = vload(xs);
+	*py = vload(ys);
+	*pz = vload(zs);
+}
+
+/* Unary node u's value map of f at the world points, lane by lane
+ * (blobtree's bc_unary_value). */
+static vf unary_lanes(const struct bc_lin *lin, uint32_t u, vf f, vf px, vf py,
+                      vf pz, uint32_t active)
+{
+	_Alignas(64) float xs[PK_LANES], ys[PK_LANES], zs[PK_LANES],
+	    fs[PK_LANES];
+	vstore(xs, px);
+	vstore(ys, py);
+	vstore(zs, pz);
+	vstore(fs, f);
+	for (uint32_t i = 0; i < PK_LANES; i++) {
+		if ((active >> i) & 1u) {
+			const float p[3] = {xs[i], ys[i], zs[i]};
+			fs[i] = bc_unary_value(lin, u, fs[i], p);
+		}
+	}
+	return vload(fs);
+}
+
 /* The field of a primitive record (affine map, then packed shape) at the
  * world points (px, py, pz). */
 static inline vf prim_field(uint32_t kind, const float *rec, vf px, vf py,
@@ -221,15 +266,37 @@ run(const struct bc_view *v, const struct bc_lin *lin, struct bc__pk_lanes *ln,
 	vf px = vfma(t, vload(ln->dx), vload(ln->ox));
 	vf py = vfma(t, vload(ln->dy), vload(ln->oy));
 	vf pz = vfma(t, vload(ln->dz), vload(ln->oz));
+	/* The points mapped through domain chain `dom` last: the leaves
+	 * under one domain node share their chain and come in a row. */
+	uint32_t dom = BC_NONE;
+	vf qx = px, qy = py, qz = pz;
 	for (uint32_t i = 0; i < v->n; i++) {
 		const struct bc_view_instr *in = &v->instr[i];
 		const float *rec = lin->param + 4u * (size_t)in->param;
-		if (in->leaf) {
+		if (in->leaf == BC_VIEW_UNARY) {
+			stack[sp - 1] = unary_lanes(
+			    lin, in->slot, stack[sp - 1], px, py, pz, active);
+		} else if (in->leaf) {
 			if (with_id) {
 				who[sp] = vbits(lin->prim_of[in->slot]);
 			}
-			stack[sp++] =
-			    prim_field(in->kind, rec, px, py, pz, active);
+			if (lin->nunary && lin->dom[in->slot] != BC_NONE) {
+				/* Under domain nodes: the primitive sees the
+				 * mapped point (eval.c's eval_leaf). */
+				if (lin->dom[in->slot] != dom) {
+					dom = lin->dom[in->slot];
+					qx = px;
+					qy = py;
+					qz = pz;
+					domain_lanes(lin, dom, &qx, &qy, &qz,
+					             active);
+				}
+				stack[sp++] = prim_field(in->kind, rec, qx, qy,
+				                         qz, active);
+			} else {
+				stack[sp++] = prim_field(in->kind, rec, px, py,
+				                         pz, active);
+			}
 		} else {
 			vf f1 = stack[--sp], f0 = stack[sp - 1];
 			if (with_id) {
@@ -262,14 +329,18 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
 		return active;
 	}
 	/* packet.c's step_check and march_head for an ordinary step (the
-	 * same expressions, in their order), lane-wise. */
-	vn = vmul(vload(ln->v), vset1(1.0f / BC_CPU_LIPSCHITZ));
+	 * same expressions, in their order), lane-wise; the tree's own
+	 * Lipschitz bound (above 1 under twist and bend) divides the field
+	 * and the hit epsilon as trace.c's eval_at and bc__trace do. */
+	vn = vdiv(vmul(vload(ln->v), vset1(1.0f / BC_CPU_LIPSCHITZ)),
+	          vset1(lin->lip));
 	t = vload(ln->mt);
 	fv = vload(ln->mv);
 	tn = vload(ln->t);
 	om = vload(ln->momega);
 	t1 = vload(ln->mt1);
-	eps = vmax(vmul(vset1(eps_per_t), tn), vset1(min_step));
+	eps = vdiv(vmax(vmul(vset1(eps_per_t), tn), vset1(min_step)),
+	           vset1(lin->lip));
 	/* Not the fallback, vn >= 0 (not NaN), not within eps, not at t1. */
 	fast = mand(
 	    mfrombits(march),

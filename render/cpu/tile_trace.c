@@ -299,9 +299,11 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 			if ((march >> i) & 1u) {
 				from_lanes(r, &ln, i);
 			}
-			/* trace.c's eval_at: the field over the bound. */
-			if (!bc__pk_ray_feed(
-			        r, fc, ln.v[i] * (1.0f / BC_CPU_LIPSCHITZ))) {
+			/* trace.c's eval_at: the field over the bounds. */
+			if (!bc__pk_ray_feed(r, fc,
+			                     ln.v[i] *
+			                         (1.0f / BC_CPU_LIPSCHITZ) /
+			                         fc->lin->lip)) {
 				ln.t[i] = r->q;
 				if (r->state == BC__PK_STEP) {
 					to_lanes(r, &ln, i);
@@ -411,9 +413,7 @@ void bc__trace_tile(struct bc__tile_worker *wk, const struct bc__tile_job *job)
 		} else if (wk->view.empty) {
 			continue; /* no surface can be in this range */
 		}
-		/* The vector kernels evaluate leaves and binary operators
-		 * only: trees with unary nodes take the scalar path. */
-		if (k.march && f.view && lin->nunary == 0) {
+		if (k.march && f.view) {
 			trace_range_packets(wk, job, k, &px, z_begin, z_end);
 			continue;
 		}

@@ -94,6 +94,32 @@ static int sc_random(struct bc_tree *t, uint32_t n, uint64_t seed)
 	              (struct bc_gen_opts){.count = n, .seed = seed});
 }
 
+/* One scene with every kind of unary and domain node (twist, onion over a
+ * cut, repeat of a scale, offset of a bend of a mirror of an elongate),
+ * JSON text. */
+#define SC_UNARY_JSON                                                          \
+	"{\"blobcast\": 1, \"root\": {\"type\": \"union\", "                   \
+	"\"children\": ["                                                      \
+	"{\"type\": \"twist\", \"rate\": 1.2, \"children\": "                  \
+	"[{\"type\": \"box\", \"half_extents\": [0.4, 1.2, 0.4], "             \
+	"\"translate\": [-1.5, 0, 0]}]},"                                      \
+	"{\"type\": \"onion\", \"thickness\": 0.05, \"children\": "            \
+	"[{\"type\": \"difference\", \"children\": [{\"type\": "               \
+	"\"sphere\", \"radius\": 0.6}, {\"type\": \"box\", "                   \
+	"\"half_extents\": [1, 1, 1], \"translate\": [0, 0, 1]}]}]},"          \
+	"{\"type\": \"repeat\", \"spacing\": [0.6, 1, 0.6], \"count\": "       \
+	"[3, 1, 2], \"children\": [{\"type\": \"scale\", \"factor\": "         \
+	"0.5, \"children\": [{\"type\": \"sphere\", \"radius\": 0.4, "         \
+	"\"translate\": [3.2, -1.6, 0]}]}]},"                                  \
+	"{\"type\": \"offset\", \"amount\": 0.1, \"children\": "               \
+	"[{\"type\": \"bend\", \"rate\": 0.6, \"children\": "                  \
+	"[{\"type\": \"mirror\", \"axes\": \"x\", \"children\": "              \
+	"[{\"type\": \"elongate\", \"half_extents\": [0.3, 0, 0], "            \
+	"\"children\": [{\"type\": \"capsule\", \"a\": [0.5, 0, 0], "          \
+	"\"b\": [0.9, 0, 0], \"radius\": 0.1, \"translate\": [0, 1.2, "        \
+	"0]}]}]}]}]}"                                                          \
+	"]}}"
+
 /* A camera looking at the scene's AABB from the front, a little from above
  * and the right, close enough to fill most of a 40 degree field of view. */
 static void sc_frame(const struct bc_lin *l, struct bc_camera *cam)

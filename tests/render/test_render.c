@@ -152,28 +152,7 @@ static void test_tiled_matches_naive_comb_and_random(void)
  * with naive (the full tree). */
 static void test_tiled_matches_naive_unary_nodes(void)
 {
-	static const char scene[] =
-	    "{\"blobcast\": 1, \"root\": {\"type\": \"union\", "
-	    "\"children\": ["
-	    "{\"type\": \"twist\", \"rate\": 1.2, \"children\": "
-	    "[{\"type\": \"box\", \"half_extents\": [0.4, 1.2, 0.4], "
-	    "\"translate\": [-1.5, 0, 0]}]},"
-	    "{\"type\": \"onion\", \"thickness\": 0.05, \"children\": "
-	    "[{\"type\": \"difference\", \"children\": [{\"type\": "
-	    "\"sphere\", \"radius\": 0.6}, {\"type\": \"box\", "
-	    "\"half_extents\": [1, 1, 1], \"translate\": [0, 0, 1]}]}]},"
-	    "{\"type\": \"repeat\", \"spacing\": [0.6, 1, 0.6], \"count\": "
-	    "[3, 1, 2], \"children\": [{\"type\": \"scale\", \"factor\": "
-	    "0.5, \"children\": [{\"type\": \"sphere\", \"radius\": 0.4, "
-	    "\"translate\": [3.2, -1.6, 0]}]}]},"
-	    "{\"type\": \"offset\", \"amount\": 0.1, \"children\": "
-	    "[{\"type\": \"bend\", \"rate\": 0.6, \"children\": "
-	    "[{\"type\": \"mirror\", \"axes\": \"x\", \"children\": "
-	    "[{\"type\": \"elongate\", \"half_extents\": [0.3, 0, 0], "
-	    "\"children\": [{\"type\": \"capsule\", \"a\": [0.5, 0, 0], "
-	    "\"b\": [0.9, 0, 0], \"radius\": 0.1, \"translate\": [0, 1.2, "
-	    "0]}]}]}]}]}"
-	    "]}}";
+	static const char scene[] = SC_UNARY_JSON;
 	struct bc_tree *t = bc_tree_create();
 	struct bc_errinfo ei = {0};
 	int tested = 0;
