@@ -225,35 +225,32 @@ static void put_hit(const struct frame *fr, uint32_t x, uint32_t y,
 	}
 }
 
-/* Casts the pixels of the block at (x0, y0) that this pass renders, as
- * one packet, and writes them; returns how many. */
-static uint32_t cast_block(const struct frame *fr, struct bc_svo_caster *c,
-                           uint32_t x0, uint32_t y0, uint64_t *evals)
+/* Casts n pixels (px[l], py[l]) as one packet and writes them. A packet of
+ * one or two rays gains nothing from sharing, so those are cast alone
+ * (the same result either way: bc_svo_cast_packet). */
+static void cast_packet(const struct frame *fr, struct bc_svo_caster *c,
+                        const uint32_t *px, const uint32_t *py, uint32_t n,
+                        uint64_t *evals)
 {
-	const struct bc_render_region *rg = fr->region;
-	const struct bc_frame *out = fr->out;
 	float d[BC_SVO_PACKET][3];
-	uint32_t px[BC_SVO_PACKET], py[BC_SVO_PACKET], n = 0, hit = 0;
+	uint32_t hit = 0;
 	struct bc_svo_hit hits[BC_SVO_PACKET];
-	for (uint32_t y = y0; y < y0 + PACKET_H && y < out->height; y++) {
-		for (uint32_t x = x0; x < x0 + PACKET_W && x < out->width;
-		     x++) {
-			if (bc_render_level_has(x, y, rg->level, rg->refine)) {
-				bc_view_rays_dir(&fr->vr, (float)x + 0.5f,
-				                 (float)y + 0.5f, d[n]);
-				px[n] = x;
-				py[n++] = y;
-			}
-		}
+	for (uint32_t l = 0; l < n; l++) {
+		bc_view_rays_dir(&fr->vr, (float)px[l] + 0.5f,
+		                 (float)py[l] + 0.5f, d[l]);
 	}
-	if (!n) {
-		return 0;
-	}
-	if (c) {
+	if (!c) {
+		memset(hits, 0, sizeof(hits));
+	} else if (n > 2) {
 		hit = bc_svo_cast_packet(c, fr->vr.eye, (const float(*)[3])d, n,
 		                         0.0f, INFINITY, &fr->cp, hits);
 	} else {
-		memset(hits, 0, sizeof(hits));
+		for (uint32_t l = 0; l < n; l++) {
+			hit |= bc_svo_cast(c, fr->vr.eye, d[l], 0.0f, INFINITY,
+			                   &fr->cp, &hits[l])
+			           ? 1u << l
+			           : 0u;
+		}
 	}
 	for (uint32_t l = 0; l < n; l++) {
 		if ((hit >> l) & 1u) {
@@ -264,7 +261,48 @@ static uint32_t cast_block(const struct frame *fr, struct bc_svo_caster *c,
 		}
 		*evals += hits[l].evals + hits[l].range_evals;
 	}
-	return n;
+}
+
+/* Casts the pixels of the tile at (x0, y0) that this pass renders, in
+ * packets of BC_SVO_PACKET taken block by block (PACKET_W x PACKET_H
+ * pixels: neighbouring rays cross the same nodes and leaves); a coarse
+ * level's few pixels per block fill a packet from several blocks. Returns
+ * how many pixels. */
+static uint32_t cast_tile(const struct frame *fr, struct bc_svo_caster *c,
+                          uint32_t x0, uint32_t y0, uint64_t *evals)
+{
+	const struct bc_render_region *rg = fr->region;
+	const struct bc_frame *out = fr->out;
+	uint32_t px[BC_SVO_PACKET], py[BC_SVO_PACKET], n = 0, total = 0;
+	for (uint32_t by = y0; by < y0 + SVO_TILE && by < out->height;
+	     by += PACKET_H) {
+		for (uint32_t bx = x0; bx < x0 + SVO_TILE && bx < out->width;
+		     bx += PACKET_W) {
+			for (uint32_t y = by;
+			     y < by + PACKET_H && y < out->height; y++) {
+				for (uint32_t x = bx;
+				     x < bx + PACKET_W && x < out->width; x++) {
+					if (!bc_render_level_has(
+					        x, y, rg->level, rg->refine)) {
+						continue;
+					}
+					px[n] = x;
+					py[n++] = y;
+					if (n == BC_SVO_PACKET) {
+						cast_packet(fr, c, px, py, n,
+						            evals);
+						total += n;
+						n = 0;
+					}
+				}
+			}
+		}
+	}
+	if (n) {
+		cast_packet(fr, c, px, py, n, evals);
+		total += n;
+	}
+	return total;
 }
 
 static void worker(void *arg, uint32_t thread)
@@ -311,16 +349,7 @@ static void worker(void *arg, uint32_t thread)
 			}
 			continue;
 		}
-		/* Blocks of PACKET_W x PACKET_H pixels, cast as one packet:
-		 * neighbouring rays cross the same nodes and leaves. */
-		for (uint32_t by = y0; by < y0 + SVO_TILE && by < out->height;
-		     by += PACKET_H) {
-			for (uint32_t bx = x0;
-			     bx < x0 + SVO_TILE && bx < out->width;
-			     bx += PACKET_W) {
-				rays += cast_block(fr, c, bx, by, &evals);
-			}
-		}
+		rays += cast_tile(fr, c, x0, y0, &evals);
 	}
 	atomic_fetch_add(&fr->evals, evals);
 	atomic_fetch_add(&fr->rays, rays);

@@ -49,7 +49,8 @@ struct bc_svo_caster {
 	const struct bc_svo *s;
 	struct bc_svo_ranger *g;
 	uint32_t *idx;
-	uint32_t *pidx; /* a packet's leaf terms (leaf_root uses idx) */
+	uint32_t *pidx;         /* a packet's leaf terms (leaf_root uses idx) */
+	uint64_t packed, alone; /* bc_svo_caster_counts */
 };
 
 int bc_svo_caster_create(struct bc_svo_caster **out, const struct bc_svo *s)
@@ -787,13 +788,13 @@ static void lanes_at(const struct bc_svo_rpn *r, const uint32_t *list,
 		py[l] = o[1] + t[k] * d[k][1];
 		pz[l] = o[2] + t[k] * d[k][2];
 	}
-	bc__svo_list_eval_lanes(r, list, n, px, py, pz, v);
+	bc__svo_list_eval_lanes(r, list, n, px, py, pz, lanes, v);
 }
 
 /* leaf_step for the lanes of `lanes` at once: every lane takes the samples
- * leaf_step would take (step_next, step_take), and each round of samples
- * is one evaluation of the variant over the lanes. Returns the lanes that
- * hit in this leaf (th, settled set). */
+ * leaf_step would take (step_next, step_hit, step_on), and each round of
+ * samples is one evaluation of the variant over the lanes. Returns the lanes
+ * that hit in this leaf (th, settled set). */
 static uint32_t packet_step(struct bc_svo_caster *c,
                             const struct bc_svo_cmask *m, const float o[3],
                             const float (*d)[3], const struct pent *e,
@@ -876,7 +877,11 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 	struct bc_svo_cmask mask[BC_SVO_PACKET];
 	uint32_t sp, live = 0, found = 0, alone = 0, hit = 0, sgn = 0;
 	if (n > BC_SVO_PACKET) {
-		n = BC_SVO_PACKET;
+		for (uint32_t l = 0; l < n; l++) {
+			memset(&hits[l], 0, sizeof(hits[l]));
+			hits[l].prim = BC_NONE;
+		}
+		return 0;
 	}
 	for (uint32_t l = 0; l < n; l++) {
 		memset(&hits[l], 0, sizeof(hits[l]));
@@ -1016,5 +1021,14 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 			hit |= 1u << l;
 		}
 	}
+	c->packed += (uint64_t)__builtin_popcount(live & ~alone);
+	c->alone += (uint64_t)__builtin_popcount(alone);
 	return hit;
+}
+
+void bc_svo_caster_counts(const struct bc_svo_caster *c, uint64_t *packed,
+                          uint64_t *alone)
+{
+	*packed = c->packed;
+	*alone = c->alone;
 }

@@ -503,10 +503,14 @@ float bc_svo_cmask_eval_id(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
 /* One term of the stack machine at BC__SVO_LANES points at once: step()
  * lane by lane, operation for operation (the same float in every lane),
  * with the term's record read and dispatched once for all of them. The
- * loops over the lanes are what the compiler vectorizes. */
+ * arithmetic loops run over every lane and are what the compiler
+ * vectorizes; the kinds that call out (primitives other than spheres,
+ * domain maps, value maps, blends) run only the lanes of `live` and leave
+ * 0 in the others, so a packet of one or two rays does not pay for eight. */
 static inline void lanes_step(const struct bc_svo_rpn *r, uint32_t i,
                               float (*st)[BC__SVO_LANES], uint32_t *sp,
-                              const float *px, const float *py, const float *pz)
+                              const float *px, const float *py, const float *pz,
+                              uint32_t live)
 {
 	const struct bc_svo_term *t = &r->terms[i];
 	const float *rec = r->rec + t->rec;
@@ -515,7 +519,8 @@ static inline void lanes_step(const struct bc_svo_rpn *r, uint32_t i,
 	    r->prim_dom[t->prim] != BC_NONE) {
 		for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
 			const float p[3] = {px[j], py[j], pz[j]};
-			st[s][j] = bc__svo_prim_eval(r, t, p);
+			st[s][j] = (live >> j) & 1u ? bc__svo_prim_eval(r, t, p)
+			                            : 0.0f;
 		}
 		*sp = s + 1;
 	} else if (t->type == BC_SVO_TERM_PRIM) {
@@ -536,9 +541,11 @@ static inline void lanes_step(const struct bc_svo_rpn *r, uint32_t i,
 			}
 		} else {
 			for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
-				st[s][j] =
-				    bc_prim_sdf((enum bc_prim)t->kind, rec + 12,
-				                x[j], y[j], z[j]);
+				st[s][j] = (live >> j) & 1u
+				               ? bc_prim_sdf(
+				                     (enum bc_prim)t->kind,
+				                     rec + 12, x[j], y[j], z[j])
+				               : 0.0f;
 			}
 		}
 		*sp = s + 1;
@@ -549,8 +556,10 @@ static inline void lanes_step(const struct bc_svo_rpn *r, uint32_t i,
 	} else if (t->type == BC_SVO_TERM_UNARY) {
 		for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
 			const float p[3] = {px[j], py[j], pz[j]};
-			st[s - 1][j] =
-			    bc__svo_unary_value(r, t->rec, st[s - 1][j], p);
+			st[s - 1][j] = (live >> j) & 1u
+			                   ? bc__svo_unary_value(
+			                         r, t->rec, st[s - 1][j], p)
+			                   : 0.0f;
 		}
 	} else {
 		float *f0 = st[s - 2], *f1 = st[s - 1];
@@ -570,8 +579,11 @@ static inline void lanes_step(const struct bc_svo_rpn *r, uint32_t i,
 			}
 		} else {
 			for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
-				f0[j] = bc_op_eval((enum bc_op)t->kind, rec[0],
-				                   rec[1], f0[j], f1[j]);
+				f0[j] = (live >> j) & 1u
+				            ? bc_op_eval((enum bc_op)t->kind,
+				                         rec[0], rec[1], f0[j],
+				                         f1[j])
+				            : 0.0f;
 			}
 		}
 		*sp = s - 1;
@@ -580,12 +592,12 @@ static inline void lanes_step(const struct bc_svo_rpn *r, uint32_t i,
 
 void bc__svo_list_eval_lanes(const struct bc_svo_rpn *r, const uint32_t *idx,
                              uint32_t n, const float *px, const float *py,
-                             const float *pz, float *out)
+                             const float *pz, uint32_t live, float *out)
 {
 	float st[BC_EVAL_STACK][BC__SVO_LANES];
 	uint32_t sp = 0;
 	for (uint32_t k = 0; k < n; k++) {
-		lanes_step(r, idx[k], st, &sp, px, py, pz);
+		lanes_step(r, idx[k], st, &sp, px, py, pz, live);
 	}
 	for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
 		out[j] = sp ? st[0][j] : INFINITY;
@@ -595,7 +607,8 @@ void bc__svo_list_eval_lanes(const struct bc_svo_rpn *r, const uint32_t *idx,
 void bc_svo_cmask_eval4(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
                         const float p[4][3], float out[4])
 {
-	/* The four points fill the lanes twice over. */
+	/* The four points fill the first four lanes (and, for the loops
+	 * that run every lane, the other four again). */
 	float px[BC__SVO_LANES], py[BC__SVO_LANES], pz[BC__SVO_LANES];
 	float st[BC_EVAL_STACK][BC__SVO_LANES];
 	uint32_t sp = 0;
@@ -608,7 +621,7 @@ void bc_svo_cmask_eval4(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
 		uint32_t base = m.pairs[2 * w] << 5, b = m.pairs[2 * w + 1];
 		while (b) {
 			lanes_step(r, base + bc__svo_lowest(b), st, &sp, px, py,
-			           pz);
+			           pz, 0x0Fu);
 			b &= b - 1u;
 		}
 	}

@@ -81,15 +81,16 @@ float bc__svo_unary_value(const struct bc_svo_rpn *r, uint32_t u, float f,
 float bc__svo_list_eval(const struct bc_svo_rpn *r, const uint32_t *idx,
                         uint32_t n, const float p[3]);
 
-/* The same at BC__SVO_LANES points at once, (px[j], py[j], pz[j]): out[j]
- * is bc__svo_list_eval's value at that point, bit for bit. The ray packets
- * of the caster (cast.c) evaluate a leaf's variant for all their rays with
- * one call: each term is read and dispatched once, and the arithmetic runs
- * over the lanes. */
+/* The same at BC__SVO_LANES points at once, (px[j], py[j], pz[j]): for
+ * every lane j of `live`, out[j] is bc__svo_list_eval's value at that
+ * point, bit for bit (the other lanes' out is meaningless). The ray
+ * packets of the caster (cast.c) evaluate a leaf's variant for all their
+ * rays with one call: each term is read and dispatched once, and the
+ * arithmetic runs over the lanes. */
 #define BC__SVO_LANES BC_SVO_PACKET
 void bc__svo_list_eval_lanes(const struct bc_svo_rpn *r, const uint32_t *idx,
                              uint32_t n, const float *px, const float *py,
-                             const float *pz, float *out);
+                             const float *pz, uint32_t live, float *out);
 
 /* A primitive term's field at point p of its own input frame (the world
  * mapped through its domain nodes), exactly as eval.c computes it (same

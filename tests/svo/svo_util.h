@@ -206,14 +206,18 @@ static inline bool same_hit(bool ha, const struct bc_svo_hit *a, bool hb,
  * packets of eight pixels drawn at random from the whole image (their rays
  * run different ways along an axis, so some are cast alone), and blocks
  * of one to seven pixels. cp is filled for the frame. Returns how many
- * rays differ, printing the first; *hits counts the rays that hit.
+ * rays differ, printing the first; *hits counts the rays that hit and
+ * *alone the rays of the 4 x 2 blocks that their packet cast alone (the
+ * packets must really walk together: a caster that cast every ray alone
+ * would find the same hits).
  */
 static inline uint32_t packet_mismatches(const struct bc_svo *s,
                                          const struct bc_camera *cam,
                                          uint32_t w, uint32_t h,
                                          struct bc_svo_cast_params *cp,
-                                         uint32_t *hits)
+                                         uint32_t *hits, uint32_t *alone)
 {
+	uint64_t packed0, alone0, packed1, alone1;
 	struct bc_svo_caster *c = NULL;
 	struct bc_view_rays vr;
 	struct bc_svo_hit *one = calloc((size_t)w * h, sizeof(*one));
@@ -221,6 +225,7 @@ static inline uint32_t packet_mismatches(const struct bc_svo *s,
 	struct rng r = {0x5eed};
 	uint32_t bad = 0, n = w * h;
 	*hits = 0;
+	*alone = UINT32_MAX;
 	bc_view_rays_init(&vr, cam, w, h);
 	if (!one || !hit || bc_svo_caster_create(&c, s)) {
 		free(one);
@@ -234,6 +239,7 @@ static inline uint32_t packet_mismatches(const struct bc_svo *s,
 		hit[i] = bc_svo_cast(c, vr.eye, d, 0.0f, INFINITY, cp, &one[i]);
 		*hits += hit[i];
 	}
+	bc_svo_caster_counts(c, &packed0, &alone0);
 	for (int pass = 0; pass < 3; pass++) {
 		for (uint32_t k = 0; k < n; k += BC_SVO_PACKET) {
 			uint32_t pix[BC_SVO_PACKET], m = 0, got;
@@ -282,10 +288,88 @@ static inline uint32_t packet_mismatches(const struct bc_svo *s,
 				}
 			}
 		}
+		if (pass == 0) {
+			bc_svo_caster_counts(c, &packed1, &alone1);
+			*alone = (uint32_t)(alone1 - alone0);
+			if (packed1 - packed0 + alone1 - alone0 == 0) {
+				*alone = UINT32_MAX; /* nothing was cast */
+			}
+		}
 	}
 	bc_svo_caster_destroy(c);
 	free(one);
 	free(hit);
+	return bad;
+}
+
+/*
+ * bc_svo_cast_packet against bc_svo_cast on rays no camera makes: npackets
+ * packets of one to eight rays from an origin drawn in and around the
+ * tree's box (inside the octree too), with t0 and t1 drawn (t1 finite or
+ * not), half of them coherent (directions a few degrees apart), half any
+ * directions, some with components exactly 0. Returns how many rays
+ * differ (printing the first).
+ */
+static inline uint32_t
+packet_mismatches_random(const struct bc_svo *s, const struct bc_svo_rpn *rpn,
+                         const struct bc_svo_cast_params *cp, uint32_t npackets,
+                         uint64_t seed)
+{
+	struct bc_svo_caster *c = NULL;
+	struct rng r = {seed};
+	uint32_t bad = 0;
+	if (bc_svo_caster_create(&c, s)) {
+		return UINT32_MAX;
+	}
+	for (uint32_t k = 0; k < npackets; k++) {
+		float o[3], base[3], d[BC_SVO_PACKET][3], t0, t1;
+		struct bc_svo_hit ph[BC_SVO_PACKET], one;
+		uint32_t n = 1u + rng_below(&r, BC_SVO_PACKET), got;
+		bool coherent = k & 1u;
+		for (int i = 0; i < 3; i++) {
+			float m = 0.2f * (rpn->hi[i] - rpn->lo[i]);
+			o[i] = rng_f(&r, rpn->lo[i] - m, rpn->hi[i] + m);
+			base[i] = rng_f(&r, -1.0f, 1.0f);
+		}
+		t0 =
+		    rng_below(&r, 2) ? 0.0f : rng_f(&r, 0.0f, 0.3f) * rpn->size;
+		t1 = rng_below(&r, 2) ? INFINITY
+		                      : t0 + rng_f(&r, 0.05f, 1.5f) * rpn->size;
+		for (uint32_t l = 0; l < n; l++) {
+			float len = 0.0f;
+			for (int i = 0; i < 3; i++) {
+				d[l][i] = coherent ? base[i] + rng_f(&r, -0.05f,
+				                                     0.05f)
+				                   : rng_f(&r, -1.0f, 1.0f);
+				if (rng_below(&r, 16) == 0) {
+					d[l][i] = 0.0f;
+				}
+				len += d[l][i] * d[l][i];
+			}
+			len = sqrtf(len);
+			for (int i = 0; i < 3; i++) {
+				d[l][i] = len > 0.0f ? d[l][i] / len
+				                     : (i == 0 ? 1.0f : 0.0f);
+			}
+		}
+		got = bc_svo_cast_packet(c, o, (const float(*)[3])d, n, t0, t1,
+		                         cp, ph);
+		for (uint32_t l = 0; l < n; l++) {
+			bool h = bc_svo_cast(c, o, d[l], t0, t1, cp, &one);
+			if (!same_hit(h, &one, (got >> l) & 1u, &ph[l])) {
+				if (!bad) {
+					printf(
+					    "  random packet %u ray %u: alone "
+					    "%d t %.9g, packet %d t %.9g\n",
+					    k, l, h, (double)one.t,
+					    (int)((got >> l) & 1u),
+					    (double)ph[l].t);
+				}
+				bad++;
+			}
+		}
+	}
+	bc_svo_caster_destroy(c);
 	return bad;
 }
 

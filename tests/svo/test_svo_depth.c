@@ -468,7 +468,10 @@ static void stepping_matches_bisection(void)
 /* A packet of rays (bc_svo_cast_packet, what the backend casts) finds,
  * ray by ray, bit for bit what each ray cast alone finds: on scenes whose
  * leaves are all stepped, some, or none (blends), under every arithmetic
- * on the default scene, from their own cameras and grazing ones. */
+ * on the default scene, from their own cameras and grazing ones, and on
+ * random packets from origins in and around the octree with random ray
+ * intervals. The backend's 4 x 2 blocks mostly walk together (at most one
+ * ray in 20 cast alone). */
 static void packets_match_single_rays(void)
 {
 	static const struct {
@@ -515,18 +518,24 @@ static void packets_match_single_rays(void)
 				    .band = frame_cast_params(&rpn, &cams[k], W,
 				                              H, &cp)};
 				struct bc_svo *s = NULL;
-				uint32_t bad, hits;
+				uint32_t bad, hits, alone, rnd;
 				REQUIRE(bc_svo_build(&s, &rpn, &o, &ei) == 0);
 				bad = packet_mismatches(s, &cams[k], W, H, &cp,
-				                        &hits);
+				                        &hits, &alone);
+				rnd = packet_mismatches_random(s, &rpn, &cp,
+				                               300, 7u + i);
 				printf("  %-12s %s %s: %u of %u rays hit, %u "
-				       "differ in packets\n",
+				       "differ in packets (%u of the blocks' "
+				       "cast alone), %u of random packets\n",
 				       scenes[i].name ? scenes[i].name
 				                      : "default",
 				       k ? "grazing" : "own", an[a], hits,
-				       W * H, bad);
+				       W * H, bad, alone, rnd);
 				CHECK_EQ_INT(bad, 0);
+				CHECK_EQ_INT(rnd, 0);
 				CHECK(hits > W * H / 20);
+				/* The blocks' rays walk together. */
+				CHECK(alone * 20u <= W * H);
 				bc_svo_destroy(s);
 			}
 		}

@@ -395,11 +395,19 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
  * evaluation of the leaf's variant over all of them. hits[i] is what
  * bc_svo_cast fills for ray i, bit for bit (the tests compare them).
  * Returns the rays that hit, bit i for ray i. Coherent rays (a block of
- * neighbouring pixels) gain; any rays are allowed. */
+ * neighbouring pixels) gain; any rays are allowed: a ray that runs the
+ * other way along an axis than the others (so that their common order of
+ * children is not front to back for it) is cast alone. n above
+ * BC_SVO_PACKET casts nothing: every hits[i] is cleared (a miss, no
+ * evaluations) and 0 returned. */
 uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
                             const float (*d)[3], uint32_t n, float t0, float t1,
                             const struct bc_svo_cast_params *cp,
                             struct bc_svo_hit *hits);
+/* Rays this caster's packets have cast so far together (*packed) and
+ * alone (*alone; bc_svo_cast_packet). */
+void bc_svo_caster_counts(const struct bc_svo_caster *c, uint64_t *packed,
+                          uint64_t *alone);
 
 /* ---- Measurements (measure.c) ------------------------------------------- */
 
