@@ -149,16 +149,18 @@ float bc_unary_value(const struct bc_lin *l, uint32_t u, float f,
 	}
 }
 
-/* Field of the leaf at slot s: its point mapped through the domain nodes
- * around it, then its own record. */
-/* The point mapped through domain chain d last (BC_NONE: none yet). The
- * leaves under one domain node share their chain and come in a row, so an
- * evaluation maps the point once per chain, not once per primitive. */
+/* The point mapped through the domain chain from d last (d the innermost
+ * domain node; BC_NONE: none yet). The leaves under one innermost domain
+ * node share its chain and come in a row, so an evaluation maps the point
+ * once per such run of leaves rather than once per primitive (a nested
+ * domain node in between starts another run). */
 struct dom_cache {
 	uint32_t d;
 	float q[3];
 };
 
+/* Field of the leaf at slot s: its point mapped through the domain nodes
+ * around it (through c), then its own record. */
 static inline float eval_leaf(const struct bc_lin *l, uint32_t s, uint32_t kind,
                               const float *rec, const float p[3],
                               struct dom_cache *c)

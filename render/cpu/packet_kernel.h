@@ -266,8 +266,9 @@ run(const struct bc_view *v, const struct bc_lin *lin, struct bc__pk_lanes *ln,
 	vf px = vfma(t, vload(ln->dx), vload(ln->ox));
 	vf py = vfma(t, vload(ln->dy), vload(ln->oy));
 	vf pz = vfma(t, vload(ln->dz), vload(ln->oz));
-	/* The points mapped through domain chain `dom` last: the leaves
-	 * under one domain node share their chain and come in a row. */
+	/* The points mapped through the domain chain from `dom` (the
+	 * innermost domain node) last: the leaves under one innermost domain
+	 * node come in a row and share the map (eval.c's dom_cache). */
 	uint32_t dom = BC_NONE;
 	vf qx = px, qy = py, qz = pz;
 	for (uint32_t i = 0; i < v->n; i++) {
