@@ -456,6 +456,7 @@ int bc_svo_ranger_create(struct bc_svo_ranger **out, const struct bc_svo_rpn *r,
 	}
 	g->rpn = r;
 	g->arith = arith;
+	g->dom_d = BC_NONE;
 	g->ivl = bc_calloc(r->n, sizeof(*g->ivl));
 	g->kid0 = bc_calloc(r->n, sizeof(*g->kid0));
 	g->kid1 = bc_calloc(r->n, sizeof(*g->kid1));

@@ -58,11 +58,13 @@ static RT t_prim(struct bc_svo_ranger *g, const struct bc_svo_term *t,
 		 * through them: its interval range over a box holding that
 		 * image (range.c), as a fresh form (the maps are not affine:
 		 * folds, clamps, rotations by a varying angle). */
-		struct bc_svo_region q;
 		struct bc_svo_ivl v;
-		bc__svo_domain_region(r, r->prim_dom[t->prim], rg, &q);
+		if (g->dom_d != r->prim_dom[t->prim]) {
+			g->dom_d = r->prim_dom[t->prim];
+			bc__svo_domain_region(r, g->dom_d, rg, &g->dom_q);
+		}
 		g->in_domain = true;
-		v = bc__svo_ia_prim(g, (uint32_t)(t - r->terms), &q);
+		v = bc__svo_ia_prim(g, (uint32_t)(t - r->terms), &g->dom_q);
 		g->in_domain = false;
 		return f_from(g, v.lo, v.hi);
 	}
@@ -165,6 +167,7 @@ static struct bc_svo_ivl t_run(struct bc_svo_ranger *g, const uint32_t *idx,
 	uint32_t sp = 0;
 	bc__svo_geo_init(&geo, rg);
 	f_input(g, rg, p);
+	g->dom_d = BC_NONE; /* a new region */
 	for (uint32_t k = 0; k < n; k++) {
 		uint32_t i = idx[k];
 		const struct bc_svo_term *t = &r->terms[i];
@@ -257,6 +260,9 @@ static struct bc_svo_ivl t_prim_only(struct bc_svo_ranger *g, uint32_t term,
 	bc__svo_geo_init(&geo, rg);
 	m0 = f_mark(g);
 	f_input(g, rg, p);
+	if (!g->in_domain) {
+		g->dom_d = BC_NONE; /* a new region */
+	}
 	f = t_prim(g, &g->rpn->terms[term], p, &geo, rg);
 	v = f_range(g, f);
 	(void)f_keep(g, m0, f_const(g, 0.0));

@@ -156,6 +156,12 @@ struct bc_svo_ranger {
 	/* Set while a domain-mapped primitive's range is computed over its
 	 * mapped box (range_tmpl.h): that box is the primitive's own input. */
 	bool in_domain;
+	/* The current pass's region mapped through the domain chain from
+	 * dom_d (BC_NONE: none yet). Primitives under one innermost domain
+	 * node come in a row and share the box; every pass over a new
+	 * region starts afresh (range_tmpl.h). */
+	uint32_t dom_d;
+	struct bc_svo_region dom_q;
 	/* AA arena, used as a stack. */
 	uint32_t *aa_sym;
 	double *aa_coef;
