@@ -196,47 +196,76 @@ static float field_at(struct ray_field *rf, float t)
  * the next sample would fall within half the tolerance of the last one, it
  * goes half the tolerance past it instead, and the bracket closes at once
  * if the root is there. */
-static float refine(struct ray_field *rf, float a, float fa, float b, float fb)
+/* refine()'s state, cut at each sample so that a packet's lanes can run it
+ * in lockstep (packet_hits) with the same operations. */
+struct illinois {
+	float a, fa, b, fb;
+	int side, i;
+};
+
+/* The loop head: the next sample m, or false when the bracket is done. */
+static inline bool ill_next(const struct illinois *s, float tol, float *m_out)
 {
-	const float tol = rf->cp->refine_tol;
-	int side = 0;
-	for (int i = 0; i < CAST_MAX_REFINE && b - a > tol; i++) {
-		float m = fa - fb > 0.0f ? a + (b - a) * fa / (fa - fb)
-		                         : 0.5f * (a + b);
-		float fm;
-		if (side == 1 && m - a < 0.5f * tol) {
-			m = a + 0.5f * tol;
-		} else if (side == -1 && b - m < 0.5f * tol) {
-			m = b - 0.5f * tol;
-		}
+	float a = s->a, b = s->b, fa = s->fa, fb = s->fb, m;
+	if (!(s->i < CAST_MAX_REFINE && b - a > tol)) {
+		return false;
+	}
+	m = fa - fb > 0.0f ? a + (b - a) * fa / (fa - fb) : 0.5f * (a + b);
+	if (s->side == 1 && m - a < 0.5f * tol) {
+		m = a + 0.5f * tol;
+	} else if (s->side == -1 && b - m < 0.5f * tol) {
+		m = b - 0.5f * tol;
+	}
+	if (!(m > a && m < b)) {
+		m = 0.5f * (a + b);
 		if (!(m > a && m < b)) {
-			m = 0.5f * (a + b);
-			if (!(m > a && m < b)) {
-				break; /* float resolution */
-			}
-		}
-		fm = field_at(rf, m);
-		if (fm > 0.0f) {
-			a = m;
-			fa = fm;
-			if (side == 1) {
-				fb *= 0.5f; /* Illinois: unstick the far end */
-			}
-			side = 1;
-		} else {
-			b = m;
-			fb = fm;
-			if (side == -1) {
-				fa *= 0.5f;
-			}
-			side = -1;
+			return false; /* float resolution */
 		}
 	}
+	*m_out = m;
+	return true;
+}
+
+/* The sample fm at m narrows the bracket. */
+static inline void ill_take(struct illinois *s, float m, float fm)
+{
+	if (fm > 0.0f) {
+		s->a = m;
+		s->fa = fm;
+		if (s->side == 1) {
+			s->fb *= 0.5f; /* Illinois: unstick the far end */
+		}
+		s->side = 1;
+	} else {
+		s->b = m;
+		s->fb = fm;
+		if (s->side == -1) {
+			s->fa *= 0.5f;
+		}
+		s->side = -1;
+	}
+	s->i++;
+}
+
+/* The root interpolated in the last bracket. */
+static inline float ill_root(const struct illinois *s)
+{
+	float a = s->a, b = s->b, fa = s->fa, fb = s->fb;
 	if (fa - fb > 0.0f && isfinite(fa - fb)) {
 		float t = a + (b - a) * fa / (fa - fb);
 		return t < a ? a : (t > b ? b : t);
 	}
 	return a;
+}
+
+static float refine(struct ray_field *rf, float a, float fa, float b, float fb)
+{
+	struct illinois s = {a, fa, b, fb, 0, 0};
+	float m;
+	while (ill_next(&s, rf->cp->refine_tol, &m)) {
+		ill_take(&s, m, field_at(rf, m));
+	}
+	return ill_root(&s);
 }
 
 /* Alg. 5.7 on one leaf's segment [ta, tb]: the first t where the variant
@@ -370,35 +399,77 @@ static inline bool step_next(const struct bc_svo_cast_params *cp,
  * further and not past the leaf: if it is inside, the crossing lies
  * between it and q and is refined there, and settle() is not needed (its
  * march from the band's entry, in [t, q], would look for the same first
- * crossing). Otherwise (a silhouette: a ray that only grazes) the band's
- * entry is refined and settle() takes over. */
-static float step_hit(struct ray_field *rf, const struct lane_step *ls, float q,
-                      float gq, bool *settled)
+ * crossing; a sliver thinner than the probe's overshoot is the exception,
+ * docs/svo.md). Otherwise (a silhouette: a ray that only grazes) the band's
+ * entry is refined and settle() takes over.
+ *
+ * hit_plan says what that takes: the bracket to refine (on the banded
+ * field or the field itself), after the probe at q2 if `probe` is set
+ * (hit_probed: if the field there is not positive, [q, q2] unbanded and
+ * settled instead); step_hit runs it for one ray, packet_hits for the
+ * lanes of a packet in lockstep. */
+struct hit_plan {
+	struct illinois ill;
+	bool banded, settled, probe;
+	float q, fq, q2;
+};
+
+static struct hit_plan hit_plan(const struct bc_svo_cast_params *cp,
+                                const struct lane_step *ls, float q, float gq)
 {
-	const struct bc_svo_cast_params *cp = rf->cp;
+	struct hit_plan h;
 	float fq = gq + band_at(cp, q);
 	float ft = ls->g + band_at(cp, ls->t);
+	memset(&h, 0, sizeof(h));
 	if (fq <= 0.0f) {
-		rf->banded = false;
-		*settled = true;
-		return refine(rf, ls->t, ft, q, fq);
+		h.ill = (struct illinois){ls->t, ft, q, fq, 0, 0};
+		h.settled = true;
+		return h;
 	}
+	h.ill = (struct illinois){ls->t, ls->g, q, gq, 0, 0};
+	h.banded = true;
 	if (ft > fq) {
 		float w = maxf(cp->pix_angle * q, cp->min_step);
 		float slope = minf((ft - fq) / (q - ls->t), 1.0f);
 		float q2 = minf(q + minf(w, 1.125f * fq / slope), ls->tb);
 		if (q2 > q) {
-			float f2;
-			rf->banded = false;
-			f2 = field_at(rf, q2);
-			if (f2 <= 0.0f) {
-				*settled = true;
-				return refine(rf, q, fq, q2, f2);
-			}
-			rf->banded = true;
+			h.probe = true;
+			h.q = q;
+			h.fq = fq;
+			h.q2 = q2;
 		}
 	}
-	return refine(rf, ls->t, ls->g, q, gq);
+	return h;
+}
+
+/* The probe's field f2 at q2 decides the bracket. */
+static void hit_probed(struct hit_plan *h, float f2)
+{
+	h->probe = false;
+	if (f2 <= 0.0f) {
+		h->ill = (struct illinois){h->q, h->fq, h->q2, f2, 0, 0};
+		h->banded = false;
+		h->settled = true;
+	}
+}
+
+/* The hit, refined in rf (the leaf's variant); *settled when the depth
+ * is the crossing already. */
+static float step_hit(struct ray_field *rf, const struct lane_step *ls, float q,
+                      float gq, bool *settled)
+{
+	struct hit_plan h = hit_plan(rf->cp, ls, q, gq);
+	float m;
+	if (h.probe) {
+		rf->banded = false;
+		hit_probed(&h, field_at(rf, h.q2));
+	}
+	rf->banded = h.banded;
+	while (ill_next(&h.ill, rf->cp->refine_tol, &m)) {
+		ill_take(&h.ill, m, field_at(rf, m));
+	}
+	*settled = h.settled;
+	return ill_root(&h.ill);
 }
 
 /* The sample gq > 0 at q: the next step, or false at the leaf's exit. */
@@ -791,6 +862,59 @@ static void lanes_at(const struct bc_svo_rpn *r, const uint32_t *list,
 	bc__svo_list_eval_lanes(r, list, n, px, py, pz, lanes, v);
 }
 
+/* step_hit for the lanes of `lanes` at once (their hit plans h[l]): the
+ * probes in one evaluation of the leaf's variant, then every round of the
+ * refinements in one. Each lane takes the samples step_hit would. */
+static void packet_hits(struct bc_svo_caster *c, uint32_t n, const float o[3],
+                        const float (*d)[3], uint32_t lanes,
+                        const struct bc_svo_cast_params *cp, struct hit_plan *h,
+                        struct bc_svo_hit *hits, float *th, bool *settled)
+{
+	const struct bc_svo_rpn *r = c->s->rpn;
+	float m[BC_SVO_PACKET], v[BC__SVO_LANES];
+	uint32_t want = 0, live = lanes;
+	for (uint32_t b = lanes; b; b &= b - 1u) {
+		uint32_t l = bc__svo_lowest(b);
+		if (h[l].probe) {
+			m[l] = h[l].q2;
+			want |= 1u << l;
+		}
+	}
+	if (want) {
+		lanes_at(r, c->pidx, n, o, d, m, want, v);
+		for (uint32_t b = want; b; b &= b - 1u) {
+			uint32_t l = bc__svo_lowest(b);
+			hits[l].evals++;
+			hit_probed(&h[l], v[l]);
+		}
+	}
+	while (live) {
+		want = 0;
+		for (uint32_t b = live; b; b &= b - 1u) {
+			uint32_t l = bc__svo_lowest(b);
+			if (ill_next(&h[l].ill, cp->refine_tol, &m[l])) {
+				want |= 1u << l;
+			}
+		}
+		live = want;
+		if (!want) {
+			break;
+		}
+		lanes_at(r, c->pidx, n, o, d, m, want, v);
+		for (uint32_t b = want; b; b &= b - 1u) {
+			uint32_t l = bc__svo_lowest(b);
+			hits[l].evals++;
+			ill_take(&h[l].ill, m[l],
+			         h[l].banded ? v[l] - band_at(cp, m[l]) : v[l]);
+		}
+	}
+	for (uint32_t b = lanes; b; b &= b - 1u) {
+		uint32_t l = bc__svo_lowest(b);
+		th[l] = ill_root(&h[l].ill);
+		settled[l] = h[l].settled;
+	}
+}
+
 /* leaf_step for the lanes of `lanes` at once: every lane takes the samples
  * leaf_step would take (step_next, step_hit, step_on), and each round of
  * samples is one evaluation of the variant over the lanes. Returns the lanes
@@ -803,8 +927,9 @@ static uint32_t packet_step(struct bc_svo_caster *c,
 {
 	const struct bc_svo_rpn *r = c->s->rpn;
 	struct lane_step ls[BC_SVO_PACKET];
+	struct hit_plan plan[BC_SVO_PACKET];
 	float q[BC_SVO_PACKET], v[BC__SVO_LANES];
-	uint32_t n = decode(m, c->pidx), found = 0, going = 0;
+	uint32_t n = decode(m, c->pidx), found = 0, going = 0, hit = 0;
 	for (uint32_t b = lanes; b; b &= b - 1u) {
 		uint32_t l = bc__svo_lowest(b);
 		ls[l] = (struct lane_step){e->ta[l], 0.0f, e->tb[l],
@@ -846,20 +971,20 @@ static uint32_t packet_step(struct bc_svo_caster *c,
 			float gq = v[l] - band_at(cp, q[l]);
 			hits[l].evals++;
 			if (gq <= 0.0f) {
-				struct ray_field rf = {
-				    c->s,  m,    c->pidx, n,    NULL,
-				    o,     d[l], cp,      true, &hits[l].evals,
-				    false, {0}};
-				th[l] = step_hit(&rf, &ls[l], q[l], gq,
-				                 &settled[l]);
-				found |= 1u << l;
+				/* Refined with the others that hit here,
+				 * below. */
+				plan[l] = hit_plan(cp, &ls[l], q[l], gq);
+				hit |= 1u << l;
 				going &= ~(1u << l);
 			} else if (!step_on(&ls[l], q[l], gq)) {
 				going &= ~(1u << l);
 			}
 		}
 	}
-	return found;
+	if (hit) {
+		packet_hits(c, n, o, d, hit, cp, plan, hits, th, settled);
+	}
+	return found | hit;
 }
 
 uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
