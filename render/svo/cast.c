@@ -363,29 +363,21 @@ struct lane_step {
 static inline bool step_next(const struct bc_svo_cast_params *cp,
                              const struct lane_step *ls, float *q_out)
 {
-	/* g = f - c(t), so f - c(tb) = g + c(t) - c(tb). */
-	float t = ls->t, g = ls->g;
-	float safe = STEP_SAFE * (g + band_at(cp, t) - ls->cmax);
+	/* g = f - c(t), so f - c(tb) = g + c(t) - c(tb). The choices are
+	 * selects, not branches: a packet's lanes take them every round,
+	 * and which way they go is a coin toss for the predictor. */
+	float t = ls->t, g = ls->g, c = band_at(cp, t);
+	float safe = STEP_SAFE * (g + c - ls->cmax);
 	float w = maxf(cp->pix_angle * t, cp->min_step);
-	float q = t + safe;
-	if (ls->i >= STEP_MAX) {
-		return false;
-	}
-	if (!(safe > 0.0f)) {
-		safe = 0.0f; /* the band widens ahead: w decides */
-	}
-	if (safe < w) {
-		/* Close to the band: where a surface faces the ray, the
-		 * field's own value is the distance to it, and a sample a
-		 * little past that lands beyond the crossing and brackets it
-		 * tightly. */
-		q = t + minf(w, 1.125f * (g + band_at(cp, t)));
-	}
-	if (!(q > t)) {
-		return false; /* float resolution: bisection decides */
-	}
+	/* Close to the band (safe below w, or not positive: the band
+	 * widens ahead, w decides): where a surface faces the ray, the
+	 * field's own value is the distance to it, and a sample a little
+	 * past that lands beyond the crossing and brackets it tightly. */
+	bool near = !(safe > 0.0f) | (safe < w);
+	float q = near ? t + minf(w, 1.125f * (g + c)) : t + safe;
 	*q_out = minf(q, ls->tb);
-	return true;
+	/* Float resolution, or STEP_MAX samples: bisection decides. */
+	return (ls->i < STEP_MAX) & (q > t);
 }
 
 /* The sample at q = step_next's fell below the band (gq = field minus
