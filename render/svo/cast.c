@@ -403,8 +403,34 @@ static inline bool step_next(const struct bc_svo_cast_params *cp,
 struct hit_plan {
 	struct illinois ill;
 	bool banded, settled, probe;
-	float q, fq, q2;
+	float q, fq, q2; /* the last sample in the band and the next probe */
+	float tb;        /* the leaf's exit */
+	int probes;      /* taken or under way */
 };
+
+/* Probes at most: each goes at most a pixel footprint ahead, and on an
+ * oblique surface the first may fall short of the crossing. */
+#define HIT_PROBES 3
+
+/* The next probe after the sample fq at q, the previous one fp at tp:
+ * past the crossing their slope predicts, at most a pixel footprint
+ * ahead and not past the leaf. False where there is no room. */
+static inline bool probe_next(const struct bc_svo_cast_params *cp,
+                              struct hit_plan *h, float tp, float fp, float q,
+                              float fq)
+{
+	float w = maxf(cp->pix_angle * q, cp->min_step);
+	float slope = minf((fp - fq) / (q - tp), 1.0f);
+	float q2 = minf(q + minf(w, 1.125f * fq / slope), h->tb);
+	if (!(q2 > q)) {
+		return false;
+	}
+	h->q = q;
+	h->fq = fq;
+	h->q2 = q2;
+	h->probes++;
+	return true;
+}
 
 static struct hit_plan hit_plan(const struct bc_svo_cast_params *cp,
                                 const struct lane_step *ls, float q, float gq)
@@ -420,29 +446,27 @@ static struct hit_plan hit_plan(const struct bc_svo_cast_params *cp,
 	}
 	h.ill = (struct illinois){ls->t, ls->g, q, gq, 0, 0};
 	h.banded = true;
-	if (ft > fq) {
-		float w = maxf(cp->pix_angle * q, cp->min_step);
-		float slope = minf((ft - fq) / (q - ls->t), 1.0f);
-		float q2 = minf(q + minf(w, 1.125f * fq / slope), ls->tb);
-		if (q2 > q) {
-			h.probe = true;
-			h.q = q;
-			h.fq = fq;
-			h.q2 = q2;
-		}
-	}
+	h.tb = ls->tb;
+	h.probe = ft > fq && probe_next(cp, &h, ls->t, ft, q, fq);
 	return h;
 }
 
-/* The probe's field f2 at q2 decides the bracket. */
-static void hit_probed(struct hit_plan *h, float f2)
+/* The probe's field f2 at q2: inside, the crossing is bracketed; still
+ * falling and in the band, another probe; else the band's entry is what
+ * gets refined (settle() follows). */
+static void hit_probed(const struct bc_svo_cast_params *cp, struct hit_plan *h,
+                       float f2)
 {
-	h->probe = false;
 	if (f2 <= 0.0f) {
 		h->ill = (struct illinois){h->q, h->fq, h->q2, f2, 0, 0};
 		h->banded = false;
 		h->settled = true;
+		h->probe = false;
+		return;
 	}
+	h->probe = h->probes < HIT_PROBES && f2 < h->fq &&
+	           f2 <= band_at(cp, h->q2) &&
+	           probe_next(cp, h, h->q, h->fq, h->q2, f2);
 }
 
 /* The hit, refined in rf (the leaf's variant); *settled when the depth
@@ -452,9 +476,9 @@ static float step_hit(struct ray_field *rf, const struct lane_step *ls, float q,
 {
 	struct hit_plan h = hit_plan(rf->cp, ls, q, gq);
 	float m;
-	if (h.probe) {
+	while (h.probe) {
 		rf->banded = false;
-		hit_probed(&h, field_at(rf, h.q2));
+		hit_probed(rf->cp, &h, field_at(rf, h.q2));
 	}
 	rf->banded = h.banded;
 	while (ill_next(&h.ill, rf->cp->refine_tol, &m)) {
@@ -864,20 +888,24 @@ static void packet_hits(struct bc_svo_caster *c, uint32_t n, const float o[3],
 {
 	const struct bc_svo_rpn *r = c->s->rpn;
 	float m[BC_SVO_PACKET], v[BC__SVO_LANES];
-	uint32_t want = 0, live = lanes;
-	for (uint32_t b = lanes; b; b &= b - 1u) {
-		uint32_t l = bc__svo_lowest(b);
-		if (h[l].probe) {
-			m[l] = h[l].q2;
-			want |= 1u << l;
+	uint32_t want, live = lanes;
+	for (;;) {
+		want = 0;
+		for (uint32_t b = lanes; b; b &= b - 1u) {
+			uint32_t l = bc__svo_lowest(b);
+			if (h[l].probe) {
+				m[l] = h[l].q2;
+				want |= 1u << l;
+			}
 		}
-	}
-	if (want) {
+		if (!want) {
+			break;
+		}
 		lanes_at(r, c->pidx, n, o, d, m, want, v);
 		for (uint32_t b = want; b; b &= b - 1u) {
 			uint32_t l = bc__svo_lowest(b);
 			hits[l].evals++;
-			hit_probed(&h[l], v[l]);
+			hit_probed(cp, &h[l], v[l]);
 		}
 	}
 	while (live) {
