@@ -741,12 +741,12 @@ static inline void reciprocal(const float d[3], float inv[3])
 /* The ray entered the hit band at th in a leaf whose variant is mask (the
  * full tree's for a full leaf), after leaves of terms active terms at
  * most; [ta, tb] is its segment in the octree. Settles the depth and takes
- * the id and the normals' variant. */
+ * the id and the normals' variant (the id is `id` if have_id). */
 static void finish_hit(struct bc_svo_caster *c, const float o[3],
                        const float d[3], float ta, float tb, float th,
                        bool settled, uint32_t terms, struct bc_svo_cmask mask,
-                       const struct bc_svo_cast_params *cp,
-                       struct bc_svo_hit *hit)
+                       const struct bc_svo_cast_params *cp, bool have_id,
+                       uint32_t id, struct bc_svo_hit *hit)
 {
 	const struct bc_svo *s = c->s;
 	hit->leaf_terms = terms;
@@ -761,6 +761,14 @@ static void finish_hit(struct bc_svo_caster *c, const float o[3],
 	}
 	hit->t = th;
 	hit->mask = mask;
+	if (have_id) {
+		/* The packet took the id already: the point lies in the leaf
+		 * of the hit (whose variant mask is), where bc_svo_locate
+		 * would have found it (packet_step). */
+		hit->prim = id;
+		hit->evals++;
+		return;
+	}
 	{
 		float p[3] = {o[0] + th * d[0], o[1] + th * d[1],
 		              o[2] + th * d[2]};
@@ -846,7 +854,8 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
 	if (!found) {
 		return false;
 	}
-	finish_hit(c, o, d, ta, tb, th, settled, terms, mask, cp, hit);
+	finish_hit(c, o, d, ta, tb, th, settled, terms, mask, cp, false, 0,
+	           hit);
 	return true;
 }
 
@@ -935,6 +944,50 @@ static void packet_hits(struct bc_svo_caster *c, uint32_t n, const float o[3],
 	}
 }
 
+/* The ids of the lanes of `lanes` whose hit is settled and lies in this
+ * leaf (e's box, the same floats bc_svo_locate computes): finish_hit
+ * would take each from this leaf's variant at that point; here one
+ * evaluation of the variant with ids takes them all. Returns those lanes
+ * (pid set). */
+static uint32_t packet_ids(struct bc_svo_caster *c, uint32_t n,
+                           const float o[3], const float (*d)[3],
+                           const struct pent *e, uint32_t lanes,
+                           const float *th, const bool *settled, uint32_t *pid)
+{
+	float px[BC__SVO_LANES], py[BC__SVO_LANES], pz[BC__SVO_LANES];
+	float v[BC__SVO_LANES];
+	uint32_t prim[BC__SVO_LANES], in = 0;
+	for (uint32_t b = lanes; b; b &= b - 1u) {
+		uint32_t l = bc__svo_lowest(b);
+		float p[3] = {o[0] + th[l] * d[l][0], o[1] + th[l] * d[l][1],
+		              o[2] + th[l] * d[l][2]};
+		if (settled[l] && in_box(e->lo, e->hi, p)) {
+			in |= 1u << l;
+		}
+		px[l] = p[0];
+		py[l] = p[1];
+		pz[l] = p[2];
+	}
+	if (!in) {
+		return 0;
+	}
+	for (uint32_t l = 0; l < BC__SVO_LANES; l++) {
+		if (!((in >> l) & 1u)) {
+			uint32_t k = bc__svo_lowest(in);
+			px[l] = px[k];
+			py[l] = py[k];
+			pz[l] = pz[k];
+		}
+	}
+	bc__svo_list_eval_lanes_id(c->s->rpn, c->pidx, n, px, py, pz, in, v,
+	                           prim);
+	for (uint32_t b = in; b; b &= b - 1u) {
+		uint32_t l = bc__svo_lowest(b);
+		pid[l] = prim[l];
+	}
+	return in;
+}
+
 /* leaf_step for the lanes of `lanes` at once: every lane takes the samples
  * leaf_step would take (step_next, step_hit, step_on), and each round of
  * samples is one evaluation of the variant over the lanes. Returns the lanes
@@ -943,7 +996,8 @@ static uint32_t packet_step(struct bc_svo_caster *c,
                             const struct bc_svo_cmask *m, const float o[3],
                             const float (*d)[3], const struct pent *e,
                             uint32_t lanes, const struct bc_svo_cast_params *cp,
-                            struct bc_svo_hit *hits, float *th, bool *settled)
+                            struct bc_svo_hit *hits, float *th, bool *settled,
+                            uint32_t *pid, uint32_t *idset)
 {
 	const struct bc_svo_rpn *r = c->s->rpn;
 	struct lane_step ls[BC_SVO_PACKET];
@@ -1003,6 +1057,7 @@ static uint32_t packet_step(struct bc_svo_caster *c,
 	}
 	if (hit) {
 		packet_hits(c, n, o, d, hit, cp, plan, hits, th, settled);
+		*idset |= packet_ids(c, n, o, d, e, hit, th, settled, pid);
 	}
 	return found | hit;
 }
@@ -1018,6 +1073,7 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 	float ta0[BC_SVO_PACKET], tb0[BC_SVO_PACKET], th[BC_SVO_PACKET];
 	float inv[BC_SVO_PACKET][3];
 	bool settled[BC_SVO_PACKET];
+	uint32_t pid[BC_SVO_PACKET], idset = 0;
 	uint32_t terms[BC_SVO_PACKET];
 	struct bc_svo_cmask mask[BC_SVO_PACKET];
 	uint32_t sp, live = 0, found = 0, alone = 0, hit = 0, sgn = 0;
@@ -1033,6 +1089,7 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 		hits[l].prim = BC_NONE;
 		settled[l] = false;
 		terms[l] = 0;
+		pid[l] = BC_NONE;
 		mask[l] = (struct bc_svo_cmask){NULL, 0};
 		th[l] = 0.0f;
 		ta0[l] = t0;
@@ -1083,9 +1140,9 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 					terms[bc__svo_lowest(b)] = lf->nterms;
 				}
 				if (lf->flags & BC__SVO_LEAF_LIP1) {
-					got =
-					    packet_step(c, &m, o, d, &e, lanes,
-					                cp, hits, th, settled);
+					got = packet_step(c, &m, o, d, &e,
+					                  lanes, cp, hits, th,
+					                  settled, pid, &idset);
 				} else {
 					for (uint32_t b = lanes; b;
 					     b &= b - 1u) {
@@ -1157,7 +1214,8 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 	for (uint32_t b = found & ~alone; b; b &= b - 1u) {
 		uint32_t l = bc__svo_lowest(b);
 		finish_hit(c, o, d[l], ta0[l], tb0[l], th[l], settled[l],
-		           terms[l], mask[l], cp, &hits[l]);
+		           terms[l], mask[l], cp, (idset >> l) & 1u, pid[l],
+		           &hits[l]);
 		hit |= 1u << l;
 	}
 	for (uint32_t b = alone; b; b &= b - 1u) {

@@ -510,11 +510,16 @@ float bc_svo_cmask_eval_id(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
 static inline void lanes_step(const struct bc_svo_rpn *r, uint32_t i,
                               float (*st)[BC__SVO_LANES], uint32_t *sp,
                               const float *px, const float *py, const float *pz,
-                              uint32_t live)
+                              uint32_t live, uint32_t (*who)[BC__SVO_LANES])
 {
 	const struct bc_svo_term *t = &r->terms[i];
 	const float *rec = r->rec + t->rec;
 	uint32_t s = *sp;
+	if (who && t->type == BC_SVO_TERM_PRIM) {
+		for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
+			who[s][j] = t->prim;
+		}
+	}
 	if (t->type == BC_SVO_TERM_PRIM && r->prim_dom &&
 	    r->prim_dom[t->prim] != BC_NONE) {
 		for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
@@ -563,6 +568,17 @@ static inline void lanes_step(const struct bc_svo_rpn *r, uint32_t i,
 		}
 	} else {
 		float *f0 = st[s - 2], *f1 = st[s - 1];
+		if (who) {
+			/* The operand the value follows, as step() decides
+			 * (before f0 is overwritten). */
+			bool un = t->kind == BC_OP_UNION ||
+			          t->kind == BC_OP_SMOOTH_UNION;
+			for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
+				bool right = un ? f1[j] < f0[j] : f1[j] > f0[j];
+				who[s - 2][j] =
+				    right ? who[s - 1][j] : who[s - 2][j];
+			}
+		}
 		/* step()'s sharp operators; | rather than || keeps the
 		 * loops free of branches, so they vectorize. */
 		if (t->kind == BC_OP_UNION) {
@@ -597,10 +613,27 @@ void bc__svo_list_eval_lanes(const struct bc_svo_rpn *r, const uint32_t *idx,
 	float st[BC_EVAL_STACK][BC__SVO_LANES];
 	uint32_t sp = 0;
 	for (uint32_t k = 0; k < n; k++) {
-		lanes_step(r, idx[k], st, &sp, px, py, pz, live);
+		lanes_step(r, idx[k], st, &sp, px, py, pz, live, NULL);
 	}
 	for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
 		out[j] = sp ? st[0][j] : INFINITY;
+	}
+}
+
+void bc__svo_list_eval_lanes_id(const struct bc_svo_rpn *r, const uint32_t *idx,
+                                uint32_t n, const float *px, const float *py,
+                                const float *pz, uint32_t live, float *out,
+                                uint32_t *prim)
+{
+	float st[BC_EVAL_STACK][BC__SVO_LANES];
+	uint32_t who[BC_EVAL_STACK][BC__SVO_LANES];
+	uint32_t sp = 0;
+	for (uint32_t k = 0; k < n; k++) {
+		lanes_step(r, idx[k], st, &sp, px, py, pz, live, who);
+	}
+	for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
+		out[j] = sp ? st[0][j] : INFINITY;
+		prim[j] = sp ? who[0][j] : BC_NONE;
 	}
 }
 
@@ -621,7 +654,7 @@ void bc_svo_cmask_eval4(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
 		uint32_t base = m.pairs[2 * w] << 5, b = m.pairs[2 * w + 1];
 		while (b) {
 			lanes_step(r, base + bc__svo_lowest(b), st, &sp, px, py,
-			           pz, 0x0Fu);
+			           pz, 0x0Fu, NULL);
 			b &= b - 1u;
 		}
 	}

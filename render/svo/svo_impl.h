@@ -91,6 +91,12 @@ float bc__svo_list_eval(const struct bc_svo_rpn *r, const uint32_t *idx,
 void bc__svo_list_eval_lanes(const struct bc_svo_rpn *r, const uint32_t *idx,
                              uint32_t n, const float *px, const float *py,
                              const float *pz, uint32_t live, float *out);
+/* The same, and prim[j] the primitive that decides the value in lane j
+ * (bc_svo_cmask_eval_id's, bit for bit). */
+void bc__svo_list_eval_lanes_id(const struct bc_svo_rpn *r, const uint32_t *idx,
+                                uint32_t n, const float *px, const float *py,
+                                const float *pz, uint32_t live, float *out,
+                                uint32_t *prim);
 
 /* A primitive term's field at point p of its own input frame (the world
  * mapped through its domain nodes), exactly as eval.c computes it (same
