@@ -606,18 +606,33 @@ static inline void lanes_step(const struct bc_svo_rpn *r, uint32_t i,
 	}
 }
 
+/* The two entry points below: prim NULL or not is a constant in each, and
+ * the inlining makes two copies, so the ids cost the other nothing. */
+static inline void list_lanes(const struct bc_svo_rpn *r, const uint32_t *idx,
+                              uint32_t n, const float *px, const float *py,
+                              const float *pz, uint32_t live, float *out,
+                              uint32_t *prim)
+{
+	float st[BC_EVAL_STACK][BC__SVO_LANES];
+	uint32_t who[BC_EVAL_STACK][BC__SVO_LANES];
+	uint32_t sp = 0;
+	for (uint32_t k = 0; k < n; k++) {
+		lanes_step(r, idx[k], st, &sp, px, py, pz, live,
+		           prim ? who : NULL);
+	}
+	for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
+		out[j] = sp ? st[0][j] : INFINITY;
+		if (prim) {
+			prim[j] = sp ? who[0][j] : BC_NONE;
+		}
+	}
+}
+
 void bc__svo_list_eval_lanes(const struct bc_svo_rpn *r, const uint32_t *idx,
                              uint32_t n, const float *px, const float *py,
                              const float *pz, uint32_t live, float *out)
 {
-	float st[BC_EVAL_STACK][BC__SVO_LANES];
-	uint32_t sp = 0;
-	for (uint32_t k = 0; k < n; k++) {
-		lanes_step(r, idx[k], st, &sp, px, py, pz, live, NULL);
-	}
-	for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
-		out[j] = sp ? st[0][j] : INFINITY;
-	}
+	list_lanes(r, idx, n, px, py, pz, live, out, NULL);
 }
 
 void bc__svo_list_eval_lanes_id(const struct bc_svo_rpn *r, const uint32_t *idx,
@@ -625,16 +640,7 @@ void bc__svo_list_eval_lanes_id(const struct bc_svo_rpn *r, const uint32_t *idx,
                                 const float *pz, uint32_t live, float *out,
                                 uint32_t *prim)
 {
-	float st[BC_EVAL_STACK][BC__SVO_LANES];
-	uint32_t who[BC_EVAL_STACK][BC__SVO_LANES];
-	uint32_t sp = 0;
-	for (uint32_t k = 0; k < n; k++) {
-		lanes_step(r, idx[k], st, &sp, px, py, pz, live, who);
-	}
-	for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
-		out[j] = sp ? st[0][j] : INFINITY;
-		prim[j] = sp ? who[0][j] : BC_NONE;
-	}
+	list_lanes(r, idx, n, px, py, pz, live, out, prim);
 }
 
 void bc_svo_cmask_eval4(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
