@@ -944,6 +944,47 @@ static void packet_hits(struct bc_svo_caster *c, uint32_t n, const float o[3],
 	}
 }
 
+/*
+ * Whether no lane of `lanes` can hit in this leaf: the variant's range
+ * (the octree's arithmetic) over the box of all their segments in it lies
+ * above the hit band at the farthest of their exits. The samples a ray
+ * takes, o + t d for t in its segment, lie between its ends' points (the
+ * float expression is monotone in t), so the box holds them all. Stepping
+ * covers a leaf by the field's value at a time: where a leaf is long and
+ * its surface a few pixels off the rays, that took about five rounds of
+ * samples to learn what one range evaluation of the packet's beam tells
+ * (fig18: 62 % of the rounds, in 99 % of the leaves crossed without a
+ * hit). Every lane counts the range evaluation.
+ */
+static bool beam_clear(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
+                       const float o[3], const float (*d)[3],
+                       const struct pent *e, uint32_t lanes,
+                       const struct bc_svo_cast_params *cp,
+                       struct bc_svo_hit *hits)
+{
+	struct bc_svo_region rg;
+	struct bc_svo_ivl v;
+	float cmax = 0.0f;
+	memset(&rg, 0, sizeof(rg));
+	for (int i = 0; i < 3; i++) {
+		rg.lo[i] = INFINITY;
+		rg.hi[i] = -INFINITY;
+	}
+	for (uint32_t b = lanes; b; b &= b - 1u) {
+		uint32_t l = bc__svo_lowest(b);
+		for (int i = 0; i < 3; i++) {
+			float p0 = o[i] + e->ta[l] * d[l][i];
+			float p1 = o[i] + e->tb[l] * d[l][i];
+			rg.lo[i] = minf(rg.lo[i], minf(p0, p1));
+			rg.hi[i] = maxf(rg.hi[i], maxf(p0, p1));
+		}
+		cmax = maxf(cmax, band_at(cp, e->tb[l]));
+		hits[l].range_evals++;
+	}
+	v = bc_svo_range(c->g, c->idx, decode(m, c->idx), &rg);
+	return v.lo > (double)cmax;
+}
+
 /* The ids of the lanes of `lanes` whose hit is settled and lies in this
  * leaf (e's box, the same floats bc_svo_locate computes): finish_hit
  * would take each from this leaf's variant at that point; here one
@@ -1139,7 +1180,10 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 				for (uint32_t b = lanes; b; b &= b - 1u) {
 					terms[bc__svo_lowest(b)] = lf->nterms;
 				}
-				if (lf->flags & BC__SVO_LEAF_LIP1) {
+				if (beam_clear(c, &m, o, d, &e, lanes, cp,
+				               hits)) {
+					/* No hit here for any of them. */
+				} else if (lf->flags & BC__SVO_LEAF_LIP1) {
 					got = packet_step(c, &m, o, d, &e,
 					                  lanes, cp, hits, th,
 					                  settled, pid, &idset);
