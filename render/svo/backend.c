@@ -176,35 +176,42 @@ static void put_miss(const struct frame *fr, uint32_t x, uint32_t y,
 	}
 }
 
-static void put_hit(const struct frame *fr, uint32_t x, uint32_t y,
-                    const float d[3], const struct bc_svo_hit *hit)
+/* The tetrahedral normal's directions. */
+static const float tet[4][3] = {
+    {1, -1, -1}, {-1, -1, 1}, {-1, 1, -1}, {1, 1, 1}};
+
+/* The four points whose field gives a hit's normal: differences over the
+ * hit thickness, the scale the surface was resolved at (as the CPU
+ * backends take them). */
+static void tet_points(const struct frame *fr, const float d[3],
+                       const struct bc_svo_hit *hit, float q[4][3])
 {
-	static const float tet[4][3] = {
-	    {1, -1, -1}, {-1, -1, 1}, {-1, 1, -1}, {1, 1, 1}};
+	const float *eye = fr->vr.eye;
+	float t = hit->t;
+	float p[3] = {eye[0] + t * d[0], eye[1] + t * d[1], eye[2] + t * d[2]};
+	float h =
+	    fmaxf(BC_SVO_HIT_FOOTPRINT * fr->cp.pix_angle * t, fr->cp.min_step);
+	for (int k = 0; k < 4; k++) {
+		for (int c = 0; c < 3; c++) {
+			q[k][c] = p[c] + h * tet[k][c];
+		}
+	}
+}
+
+/* Writes a hit; v holds the field at its tet_points. */
+static void put_hit(const struct frame *fr, uint32_t x, uint32_t y,
+                    const float d[3], const struct bc_svo_hit *hit,
+                    const float v[4])
+{
 	const struct bc_svo_rpn *rpn = &fr->r->rpn;
 	struct bc_frame *out = fr->out;
 	size_t i = (size_t)y * out->width + x;
 	uint8_t *px = out->rgba + 4 * i;
-	const float *eye = fr->vr.eye;
 	float t = hit->t;
-	float p[3] = {eye[0] + t * d[0], eye[1] + t * d[1], eye[2] + t * d[2]};
 	float n[3] = {0.0f, 0.0f, 0.0f};
-	/* Differences over the hit thickness, the scale the surface was
-	 * resolved at (as the CPU backends take them). */
-	float h =
-	    fmaxf(BC_SVO_HIT_FOOTPRINT * fr->cp.pix_angle * t, fr->cp.min_step);
-	{
-		float q[4][3], v[4];
-		for (int k = 0; k < 4; k++) {
-			for (int c = 0; c < 3; c++) {
-				q[k][c] = p[c] + h * tet[k][c];
-			}
-		}
-		bc_svo_cmask_eval4(rpn, hit->mask, q, v);
-		for (int k = 0; k < 4; k++) {
-			for (int c = 0; c < 3; c++) {
-				n[c] += tet[k][c] * v[k];
-			}
+	for (int k = 0; k < 4; k++) {
+		for (int c = 0; c < 3; c++) {
+			n[c] += tet[k][c] * v[k];
 		}
 	}
 	if (fr->r->base.opts.debug != BC_DEBUG_NONE) {
@@ -225,6 +232,39 @@ static void put_hit(const struct frame *fr, uint32_t x, uint32_t y,
 	}
 }
 
+/* The normals' samples v[l] of the hits `hit`: two hits whose variant is
+ * the same share one evaluation of it over eight points. */
+static void normals(const struct frame *fr, const float (*d)[3],
+                    const struct bc_svo_hit *hits, uint32_t hit, float (*v)[4])
+{
+	const struct bc_svo_rpn *rpn = &fr->r->rpn;
+	while (hit) {
+		uint32_t a = (uint32_t)__builtin_ctz(hit), b = BC_NONE;
+		float q[8][3], out[8];
+		hit &= hit - 1u;
+		for (uint32_t rest = hit; rest; rest &= rest - 1u) {
+			uint32_t l = (uint32_t)__builtin_ctz(rest);
+			if (hits[l].mask.pairs == hits[a].mask.pairs &&
+			    hits[l].mask.nwords == hits[a].mask.nwords) {
+				b = l;
+				break;
+			}
+		}
+		tet_points(fr, d[a], &hits[a], q);
+		if (b == BC_NONE) {
+			bc_svo_cmask_eval_n(rpn, hits[a].mask,
+			                    (const float(*)[3])q, 4, v[a]);
+			continue;
+		}
+		hit &= ~(1u << b);
+		tet_points(fr, d[b], &hits[b], q + 4);
+		bc_svo_cmask_eval_n(rpn, hits[a].mask, (const float(*)[3])q, 8,
+		                    out);
+		memcpy(v[a], out, sizeof(v[a]));
+		memcpy(v[b], out + 4, sizeof(v[b]));
+	}
+}
+
 /* Casts n pixels (px[l], py[l]) as one packet and writes them. A packet of
  * one or two rays gains nothing from sharing, so those are cast alone
  * (the same result either way: bc_svo_cast_packet). */
@@ -232,7 +272,7 @@ static void cast_packet(const struct frame *fr, struct bc_svo_caster *c,
                         const uint32_t *px, const uint32_t *py, uint32_t n,
                         uint64_t *evals)
 {
-	float d[BC_SVO_PACKET][3];
+	float d[BC_SVO_PACKET][3], v[BC_SVO_PACKET][4];
 	uint32_t hit = 0;
 	struct bc_svo_hit hits[BC_SVO_PACKET];
 	for (uint32_t l = 0; l < n; l++) {
@@ -252,9 +292,10 @@ static void cast_packet(const struct frame *fr, struct bc_svo_caster *c,
 			           : 0u;
 		}
 	}
+	normals(fr, d, hits, hit, v);
 	for (uint32_t l = 0; l < n; l++) {
 		if ((hit >> l) & 1u) {
-			put_hit(fr, px[l], py[l], d[l], &hits[l]);
+			put_hit(fr, px[l], py[l], d[l], &hits[l], v[l]);
 		} else {
 			put_miss(fr, px[l], py[l],
 			         hits[l].evals + hits[l].range_evals);

@@ -643,28 +643,39 @@ void bc__svo_list_eval_lanes_id(const struct bc_svo_rpn *r, const uint32_t *idx,
 	list_lanes(r, idx, n, px, py, pz, live, out, prim);
 }
 
-void bc_svo_cmask_eval4(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
-                        const float p[4][3], float out[4])
+void bc_svo_cmask_eval_n(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
+                         const float (*p)[3], uint32_t n, float *out)
 {
-	/* The four points fill the first four lanes (and, for the loops
-	 * that run every lane, the other four again). */
+	/* The n points fill the first n lanes (and, for the loops that run
+	 * every lane, the others again). */
 	float px[BC__SVO_LANES], py[BC__SVO_LANES], pz[BC__SVO_LANES];
 	float st[BC_EVAL_STACK][BC__SVO_LANES];
-	uint32_t sp = 0;
+	uint32_t sp = 0, live;
+	if (n == 0) {
+		return;
+	}
+	n = n < BC__SVO_LANES ? n : BC__SVO_LANES;
+	live = (uint32_t)((1ull << n) - 1u);
 	for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
-		px[j] = p[j % 4u][0];
-		py[j] = p[j % 4u][1];
-		pz[j] = p[j % 4u][2];
+		px[j] = p[j % n][0];
+		py[j] = p[j % n][1];
+		pz[j] = p[j % n][2];
 	}
 	for (uint32_t w = 0; w < m.nwords; w++) {
 		uint32_t base = m.pairs[2 * w] << 5, b = m.pairs[2 * w + 1];
 		while (b) {
 			lanes_step(r, base + bc__svo_lowest(b), st, &sp, px, py,
-			           pz, 0x0Fu, NULL);
+			           pz, live, NULL);
 			b &= b - 1u;
 		}
 	}
-	for (int j = 0; j < 4; j++) {
+	for (uint32_t j = 0; j < n; j++) {
 		out[j] = sp ? st[0][j] : INFINITY;
 	}
+}
+
+void bc_svo_cmask_eval4(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
+                        const float p[4][3], float out[4])
+{
+	bc_svo_cmask_eval_n(r, m, p, 4, out);
 }

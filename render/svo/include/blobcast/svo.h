@@ -188,6 +188,11 @@ float bc_svo_cmask_eval_id(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
  * out[j] equals bc_svo_cmask_eval at p[j], bit for bit. */
 void bc_svo_cmask_eval4(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
                         const float p[4][3], float out[4]);
+/* The same at n points, n <= BC_SVO_PACKET (two normals' samples at
+ * once, say): out[j] for j < n; more than BC_SVO_PACKET are not
+ * evaluated (the first BC_SVO_PACKET are). */
+void bc_svo_cmask_eval_n(const struct bc_svo_rpn *r, struct bc_svo_cmask m,
+                         const float (*p)[3], uint32_t n, float *out);
 
 /* ---- Range arithmetic (ia.c, aa.c, revaa.c) ----------------------------- */
 
