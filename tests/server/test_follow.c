@@ -261,9 +261,12 @@ static void presenters_race_and_disconnect(void)
 	send_camera(&b, &cam2, false);
 	conn_view(&f, 48, 32, BC_PROTO_ENC_JPEG);
 
-	/* Both present at once; the server orders them: the later one
-	 * presents, and everyone hears the same final presenter. */
-	send_toggle(&a, BC_MSG_PRESENT, 1);
+	/* alice presents, then bob: the later one presents (a new presenter
+	 * replaces the old), and everyone hears the same final presenter.
+	 * alice's answer comes first: sent on two connections at once, the
+	 * two requests reach the server in either order. */
+	seq = send_toggle(&a, BC_MSG_PRESENT, 1);
+	CHECK_EQ_INT(await_answer(&a, seq, &pm), 0);
 	seq = send_toggle(&b, BC_MSG_PRESENT, 1);
 	CHECK_EQ_INT(await_answer(&b, seq, &pm), 0);
 	seq = send_toggle(&f, BC_MSG_FOLLOW, 1);
