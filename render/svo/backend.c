@@ -239,11 +239,11 @@ static void normals(const struct frame *fr, const float (*d)[3],
 {
 	const struct bc_svo_rpn *rpn = &fr->r->rpn;
 	while (hit) {
-		uint32_t a = (uint32_t)__builtin_ctz(hit), b = BC_NONE;
+		uint32_t a = bc__svo_lowest(hit), b = BC_NONE;
 		float q[8][3], out[8];
 		hit &= hit - 1u;
 		for (uint32_t rest = hit; rest; rest &= rest - 1u) {
-			uint32_t l = (uint32_t)__builtin_ctz(rest);
+			uint32_t l = bc__svo_lowest(rest);
 			if (hits[l].mask.pairs == hits[a].mask.pairs &&
 			    hits[l].mask.nwords == hits[a].mask.nwords) {
 				b = l;

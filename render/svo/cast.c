@@ -871,10 +871,11 @@ struct pent {
 
 /* The leaf's variant (its terms list[0..n)) at o + t[l] d[l] for the
  * lanes of `lanes` (not zero), in one call; the other lanes evaluate a
- * copy of the first one's point. */
+ * copy of the first one's point. With prim, also the primitive deciding
+ * each lane's value. */
 static void lanes_at(const struct bc_svo_rpn *r, const uint32_t *list,
                      uint32_t n, const float o[3], const float (*d)[3],
-                     const float *t, uint32_t lanes, float *v)
+                     const float *t, uint32_t lanes, float *v, uint32_t *prim)
 {
 	float px[BC__SVO_LANES], py[BC__SVO_LANES], pz[BC__SVO_LANES];
 	uint32_t first = bc__svo_lowest(lanes);
@@ -884,7 +885,12 @@ static void lanes_at(const struct bc_svo_rpn *r, const uint32_t *list,
 		py[l] = o[1] + t[k] * d[k][1];
 		pz[l] = o[2] + t[k] * d[k][2];
 	}
-	bc__svo_list_eval_lanes(r, list, n, px, py, pz, lanes, v);
+	if (prim) {
+		bc__svo_list_eval_lanes_id(r, list, n, px, py, pz, lanes, v,
+		                           prim);
+	} else {
+		bc__svo_list_eval_lanes(r, list, n, px, py, pz, lanes, v);
+	}
 }
 
 /* step_hit for the lanes of `lanes` at once (their hit plans h[l]): the
@@ -910,7 +916,7 @@ static void packet_hits(struct bc_svo_caster *c, uint32_t n, const float o[3],
 		if (!want) {
 			break;
 		}
-		lanes_at(r, c->pidx, n, o, d, m, want, v);
+		lanes_at(r, c->pidx, n, o, d, m, want, v, NULL);
 		for (uint32_t b = want; b; b &= b - 1u) {
 			uint32_t l = bc__svo_lowest(b);
 			hits[l].evals++;
@@ -929,7 +935,7 @@ static void packet_hits(struct bc_svo_caster *c, uint32_t n, const float o[3],
 		if (!want) {
 			break;
 		}
-		lanes_at(r, c->pidx, n, o, d, m, want, v);
+		lanes_at(r, c->pidx, n, o, d, m, want, v, NULL);
 		for (uint32_t b = want; b; b &= b - 1u) {
 			uint32_t l = bc__svo_lowest(b);
 			hits[l].evals++;
@@ -956,10 +962,9 @@ static void packet_hits(struct bc_svo_caster *c, uint32_t n, const float o[3],
  * (fig18: 62 % of the rounds, in 99 % of the leaves crossed without a
  * hit). Every lane counts the range evaluation.
  */
-static bool beam_clear(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
-                       const float o[3], const float (*d)[3],
-                       const struct pent *e, uint32_t lanes,
-                       const struct bc_svo_cast_params *cp,
+static bool beam_clear(struct bc_svo_caster *c, uint32_t n, const float o[3],
+                       const float (*d)[3], const struct pent *e,
+                       uint32_t lanes, const struct bc_svo_cast_params *cp,
                        struct bc_svo_hit *hits)
 {
 	struct bc_svo_region rg;
@@ -981,7 +986,7 @@ static bool beam_clear(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
 		cmax = maxf(cmax, band_at(cp, e->tb[l]));
 		hits[l].range_evals++;
 	}
-	v = bc_svo_range(c->g, c->idx, decode(m, c->idx), &rg);
+	v = bc_svo_range(c->g, c->pidx, n, &rg);
 	return v.lo > (double)cmax;
 }
 
@@ -995,7 +1000,6 @@ static uint32_t packet_ids(struct bc_svo_caster *c, uint32_t n,
                            const struct pent *e, uint32_t lanes,
                            const float *th, const bool *settled, uint32_t *pid)
 {
-	float px[BC__SVO_LANES], py[BC__SVO_LANES], pz[BC__SVO_LANES];
 	float v[BC__SVO_LANES];
 	uint32_t prim[BC__SVO_LANES], in = 0;
 	for (uint32_t b = lanes; b; b &= b - 1u) {
@@ -1005,23 +1009,11 @@ static uint32_t packet_ids(struct bc_svo_caster *c, uint32_t n,
 		if (settled[l] && in_box(e->lo, e->hi, p)) {
 			in |= 1u << l;
 		}
-		px[l] = p[0];
-		py[l] = p[1];
-		pz[l] = p[2];
 	}
 	if (!in) {
 		return 0;
 	}
-	for (uint32_t l = 0; l < BC__SVO_LANES; l++) {
-		if (!((in >> l) & 1u)) {
-			uint32_t k = bc__svo_lowest(in);
-			px[l] = px[k];
-			py[l] = py[k];
-			pz[l] = pz[k];
-		}
-	}
-	bc__svo_list_eval_lanes_id(c->s->rpn, c->pidx, n, px, py, pz, in, v,
-	                           prim);
+	lanes_at(c->s->rpn, c->pidx, n, o, d, th, in, v, prim);
 	for (uint32_t b = in; b; b &= b - 1u) {
 		uint32_t l = bc__svo_lowest(b);
 		pid[l] = prim[l];
@@ -1031,12 +1023,14 @@ static uint32_t packet_ids(struct bc_svo_caster *c, uint32_t n,
 
 /* leaf_step for the lanes of `lanes` at once: every lane takes the samples
  * leaf_step would take (step_next, step_hit, step_on), and each round of
- * samples is one evaluation of the variant over the lanes. Returns the lanes
- * that hit in this leaf (th, settled set). */
+ * samples is one evaluation of the variant (mask m, its n terms decoded in
+ * c->pidx) over the lanes. Returns the lanes that hit in this leaf (th,
+ * settled set). */
 static uint32_t packet_step(struct bc_svo_caster *c,
-                            const struct bc_svo_cmask *m, const float o[3],
-                            const float (*d)[3], const struct pent *e,
-                            uint32_t lanes, const struct bc_svo_cast_params *cp,
+                            const struct bc_svo_cmask *m, uint32_t n,
+                            const float o[3], const float (*d)[3],
+                            const struct pent *e, uint32_t lanes,
+                            const struct bc_svo_cast_params *cp,
                             struct bc_svo_hit *hits, float *th, bool *settled,
                             uint32_t *pid, uint32_t *idset)
 {
@@ -1044,14 +1038,14 @@ static uint32_t packet_step(struct bc_svo_caster *c,
 	struct lane_step ls[BC_SVO_PACKET];
 	struct hit_plan plan[BC_SVO_PACKET];
 	float q[BC_SVO_PACKET], v[BC__SVO_LANES];
-	uint32_t n = decode(m, c->pidx), found = 0, going = 0, hit = 0;
+	uint32_t found = 0, going = 0, hit = 0;
 	for (uint32_t b = lanes; b; b &= b - 1u) {
 		uint32_t l = bc__svo_lowest(b);
 		ls[l] = (struct lane_step){e->ta[l], 0.0f, e->tb[l],
 		                           band_at(cp, e->tb[l]), 0};
 		q[l] = e->ta[l];
 	}
-	lanes_at(r, c->pidx, n, o, d, q, lanes, v);
+	lanes_at(r, c->pidx, n, o, d, q, lanes, v, NULL);
 	for (uint32_t b = lanes; b; b &= b - 1u) {
 		uint32_t l = bc__svo_lowest(b);
 		hits[l].evals++;
@@ -1080,7 +1074,7 @@ static uint32_t packet_step(struct bc_svo_caster *c,
 		if (!want) {
 			break;
 		}
-		lanes_at(r, c->pidx, n, o, d, q, want, v);
+		lanes_at(r, c->pidx, n, o, d, q, want, v, NULL);
 		for (uint32_t b = want; b; b &= b - 1u) {
 			uint32_t l = bc__svo_lowest(b);
 			float gq = v[l] - band_at(cp, q[l]);
@@ -1118,16 +1112,14 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 	uint32_t terms[BC_SVO_PACKET];
 	struct bc_svo_cmask mask[BC_SVO_PACKET];
 	uint32_t sp, live = 0, found = 0, alone = 0, hit = 0, sgn = 0;
-	if (n > BC_SVO_PACKET) {
-		for (uint32_t l = 0; l < n; l++) {
-			memset(&hits[l], 0, sizeof(hits[l]));
-			hits[l].prim = BC_NONE;
-		}
-		return 0;
-	}
 	for (uint32_t l = 0; l < n; l++) {
 		memset(&hits[l], 0, sizeof(hits[l]));
 		hits[l].prim = BC_NONE;
+	}
+	if (n > BC_SVO_PACKET) {
+		return 0;
+	}
+	for (uint32_t l = 0; l < n; l++) {
 		settled[l] = false;
 		terms[l] = 0;
 		pid[l] = BC_NONE;
@@ -1180,11 +1172,15 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 				for (uint32_t b = lanes; b; b &= b - 1u) {
 					terms[bc__svo_lowest(b)] = lf->nterms;
 				}
-				if (beam_clear(c, &m, o, d, &e, lanes, cp,
+				/* The terms, for the beam test and the
+				 * packet's steps (leaf_root decodes its own).
+				 */
+				uint32_t nt = decode(&m, c->pidx);
+				if (beam_clear(c, nt, o, d, &e, lanes, cp,
 				               hits)) {
 					/* No hit here for any of them. */
 				} else if (lf->flags & BC__SVO_LEAF_LIP1) {
-					got = packet_step(c, &m, o, d, &e,
+					got = packet_step(c, &m, nt, o, d, &e,
 					                  lanes, cp, hits, th,
 					                  settled, pid, &idset);
 				} else {

@@ -312,8 +312,9 @@ static inline uint32_t packet_mismatches(const struct bc_svo *s,
  * packets of one to eight rays from an origin drawn in and around the
  * tree's box (inside the octree too), with t0 and t1 drawn (t1 finite or
  * not), half of them coherent (directions a few degrees apart), half any
- * directions, some with components exactly 0. Returns how many rays
- * differ (printing the first).
+ * directions, some with components exactly 0; and one packet of more rays
+ * than it may hold, which must cast nothing and clear every hit. Returns
+ * how many rays differ (printing the first).
  */
 static inline uint32_t
 packet_mismatches_random(const struct bc_svo *s, const struct bc_svo_rpn *rpn,
@@ -373,6 +374,26 @@ packet_mismatches_random(const struct bc_svo *s, const struct bc_svo_rpn *rpn,
 				}
 				bad++;
 			}
+		}
+	}
+	{
+		/* More rays than a packet holds: nothing cast, every hit
+		 * cleared (svo.h). */
+		float o[3] = {0.0f, 0.0f, 0.0f}, d[BC_SVO_PACKET + 1][3];
+		struct bc_svo_hit ph[BC_SVO_PACKET + 1];
+		uint32_t got;
+		memset(ph, 0xab, sizeof(ph));
+		for (uint32_t l = 0; l <= BC_SVO_PACKET; l++) {
+			d[l][0] = 0.0f;
+			d[l][1] = 0.0f;
+			d[l][2] = 1.0f;
+		}
+		got = bc_svo_cast_packet(c, o, (const float(*)[3])d,
+		                         BC_SVO_PACKET + 1, 0.0f, INFINITY, cp,
+		                         ph);
+		for (uint32_t l = 0; l <= BC_SVO_PACKET; l++) {
+			bad += got != 0 || ph[l].prim != BC_NONE ||
+			       ph[l].evals != 0 || ph[l].range_evals != 0;
 		}
 	}
 	bc_svo_caster_destroy(c);
