@@ -699,36 +699,44 @@ static inline void child_box(const float lo[3], const float hi[3],
  * piece [cut[k], cut[k + 1]] in the octant oct[k] of its own midpoint.
  * Returns the number of pieces (at most four). Where the segment crosses a
  * mid plane only splits it, so a product by the reciprocal inv serves
- * instead of a division per plane per node. */
+ * instead of a division per plane per node. Every ray runs this at every
+ * node it crosses, and which planes a ray crosses is a coin toss for the
+ * branch predictor: the crossings are sorted by a network of selects
+ * (planes not crossed sort last, as +inf) and all four midpoints are
+ * classified, used or not. */
 static uint32_t split(const float mid[3], const float o[3], const float d[3],
                       const float inv[3], float ta, float tb, float cut[5],
                       uint32_t oct[4])
 {
-	uint32_t ncut = 0;
-	cut[ncut++] = ta;
+	float c[3];
+	uint32_t ncross = 0;
 	for (int i = 0; i < 3; i++) {
-		if (d[i] != 0.0f) {
-			float tc = (mid[i] - o[i]) * inv[i];
-			if (tc > ta && tc < tb) {
-				uint32_t k = ncut++;
-				while (k > 1 && cut[k - 1] > tc) {
-					cut[k] = cut[k - 1];
-					k--;
-				}
-				cut[k] = tc;
-			}
-		}
+		float tc = (mid[i] - o[i]) * inv[i];
+		bool in = (d[i] != 0.0f) & (tc > ta) & (tc < tb);
+		c[i] = in ? tc : INFINITY;
+		ncross += in;
 	}
-	cut[ncut++] = tb;
-	for (uint32_t k = 1; k < ncut; k++) {
-		float um = 0.5f * (cut[k - 1] + cut[k]);
+	{
+		float lo = minf(c[0], c[1]), hi = maxf(c[0], c[1]);
+		float a = minf(lo, c[2]), m = maxf(lo, c[2]);
+		cut[1] = a;
+		cut[2] = minf(m, hi);
+		cut[3] = maxf(m, hi);
+	}
+	cut[0] = ta;
+	cut[4] = INFINITY;
+	cut[ncross + 1] = tb;
+	for (uint32_t k = 0; k < 4; k++) {
+		/* Past the last piece the midpoint may be inf or NaN: its
+		 * octant is not used. */
+		float um = 0.5f * (cut[k] + cut[k + 1]);
 		uint32_t b = 0;
 		for (int i = 0; i < 3; i++) {
 			b |= o[i] + um * d[i] >= mid[i] ? 1u << i : 0u;
 		}
-		oct[k - 1] = b;
+		oct[k] = b;
 	}
-	return ncut - 1;
+	return ncross + 1;
 }
 
 static inline void reciprocal(const float d[3], float inv[3])
@@ -1264,8 +1272,8 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 			hit |= 1u << l;
 		}
 	}
-	c->packed += (uint64_t)__builtin_popcount(live & ~alone);
-	c->alone += (uint64_t)__builtin_popcount(alone);
+	c->packed += (uint64_t)bc__svo_popcount(live & ~alone);
+	c->alone += (uint64_t)bc__svo_popcount(alone);
 	return hit;
 }
 
