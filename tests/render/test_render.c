@@ -18,6 +18,7 @@
 #include "blobcast/render.h"
 #include "blobcast/render_cpu.h"
 #include "blobcast/scene.h"
+#include "blobcast/shade.h"
 #include "test.h"
 
 #include "compare.h"
@@ -564,7 +565,83 @@ static void test_tiled_allocation_failures(void)
 	bc_tree_destroy(t);
 }
 
+/* The sRGB transfer function rounded to a byte, written out here as the
+ * oracle of the shader's table. */
+static uint8_t srgb8_oracle(float c)
+{
+	float s;
+	if (!(c > 0.0f)) {
+		return 0;
+	}
+	if (c >= 1.0f) {
+		return 255;
+	}
+	s = c <= 0.0031308f ? 12.92f * c
+	                    : 1.055f * powf(c, 1.0f / 2.4f) - 0.055f;
+	return (uint8_t)(s * 255.0f + 0.5f);
+}
+
+static float float_bits(uint32_t b)
+{
+	float f;
+	memcpy(&f, &b, sizeof(f));
+	return f;
+}
+
+/* bc_shade_srgb8 is a table: it must give the formula's byte for every
+ * float. A sweep over [0, 1] in steps of 61 bit patterns, and wherever the
+ * byte changes between two samples, the exact float where it changes
+ * (bisection) and its neighbours; every byte value must be met. */
+static void test_srgb_table_matches_formula(void)
+{
+	static const float odd[] = {-1.0f, -0.0f,     0.0f,     1.0f,  1.5f,
+	                            1e30f, -INFINITY, INFINITY, 1e-45f};
+	uint32_t one, prev_b = 0, mismatches = 0, edges = 0;
+	uint8_t prev = 0;
+	bool seen[256] = {false};
+	memcpy(&one, &(float){1.0f}, sizeof(one));
+	for (size_t i = 0; i < sizeof(odd) / sizeof(odd[0]); i++) {
+		CHECK_EQ_INT(bc_shade_srgb8(odd[i]), srgb8_oracle(odd[i]));
+	}
+	CHECK_EQ_INT(bc_shade_srgb8(NAN), 0);
+	for (uint32_t b = 0;; b = b + 61u < one ? b + 61u : one) {
+		float c = float_bits(b);
+		uint8_t want = srgb8_oracle(c);
+		mismatches += bc_shade_srgb8(c) != want;
+		seen[want] = true;
+		if (want != prev) {
+			/* The first float of the new byte in (prev_b, b]. */
+			uint32_t lo = prev_b + 1u, hi = b;
+			while (lo < hi) {
+				uint32_t mid = lo + (hi - lo) / 2u;
+				if (srgb8_oracle(float_bits(mid)) == want) {
+					hi = mid;
+				} else {
+					lo = mid + 1u;
+				}
+			}
+			for (uint32_t e = lo - 1u; e <= lo + 1u; e++) {
+				float f = float_bits(e);
+				mismatches +=
+				    bc_shade_srgb8(f) != srgb8_oracle(f);
+			}
+			edges++;
+		}
+		prev = want;
+		prev_b = b;
+		if (b == one) {
+			break;
+		}
+	}
+	CHECK_EQ_INT(mismatches, 0);
+	CHECK_EQ_INT(edges, 255);
+	for (int k = 0; k < 256; k++) {
+		CHECK(seen[k]);
+	}
+}
+
 static const struct bc_test tests[] = {
+    {"srgb_table_matches_formula", test_srgb_table_matches_formula},
     {"tiled_matches_naive_unary_nodes", test_tiled_matches_naive_unary_nodes},
     {"depth_through_offset_and_scale_is_analytic",
      test_depth_through_offset_and_scale_is_analytic},

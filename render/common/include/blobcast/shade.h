@@ -30,6 +30,11 @@ void bc_shade_hit(const struct bc_shade *s, const float grad[3],
 /* Writes the background of row y of an image height rows tall. */
 void bc_shade_miss(uint32_t y, uint32_t height, uint8_t px[4]);
 
+/* The sRGB byte of linear intensity c (0 at or below 0 and for NaN, 255
+ * at or above 1): the sRGB transfer function, rounded to the nearest byte.
+ * Thread-safe; the first call builds a table. */
+uint8_t bc_shade_srgb8(float c);
+
 /* Writes the debug ramp's colour for x in [0, 1] (clamped). */
 void bc_shade_ramp(float x, uint8_t px[4]);
 
