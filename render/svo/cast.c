@@ -20,6 +20,7 @@
  */
 #include "svo_impl.h"
 
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -694,56 +695,114 @@ static inline void child_box(const float lo[3], const float hi[3],
 	}
 }
 
-/* The pieces of a ray's segment [ta, tb] in a node, front to back: the
- * segment split where it crosses the node's three mid planes (mid), each
- * piece [cut[k], cut[k + 1]] in the octant oct[k] of its own midpoint.
- * Returns the number of pieces (at most four). Where the segment crosses a
- * mid plane only splits it, so a product by the reciprocal inv serves
- * instead of a division per plane per node. Every ray runs this at every
- * node it crosses, and which planes a ray crosses is a coin toss for the
- * branch predictor: the crossings are sorted by a network of selects
- * (planes not crossed sort last, as +inf) and all four midpoints are
- * classified, used or not. */
-static uint32_t split(const float mid[3], const float o[3], const float d[3],
-                      const float inv[3], float ta, float tb, float cut[5],
-                      uint32_t oct[4])
+/*
+ * A ray's way through a node's children. On axis i the ray crosses the
+ * node's mid plane at tc = (mid - o) / d (a product by the reciprocal
+ * inv: only the order of the crossings matters) and spends the t of
+ * [lo0, lo1) in the lower half and of [up0, up1) in the upper: (-inf, tc)
+ * and (tc, inf), the other way round where it runs down the axis. A ray
+ * parallel to the plane (inv 0) is in one half all along: tc is -inf on
+ * the plane or above it, +inf below. A child's stretch of the ray's
+ * segment [ta, tb] is then [max(ta, its halves' starts), min(tb, their
+ * ends)), empty unless the start is below the end: the segment cut where
+ * it crosses the mid planes, each piece in the child it lies in, with no
+ * zero-length pieces. Only max, min and selects: the same floats whether a
+ * ray is walked alone or in a packet, and branch-free over a packet's
+ * lanes (the lane loops vectorize).
+ */
+enum { HALF_LO0, HALF_LO1, HALF_UP0, HALF_UP1 };
+
+/* h for a ray whose reciprocal on the axis is inv; dm = mid - o, and par
+ * the crossing of a ray parallel to the plane. inv 0 adds par to a zero
+ * product, any other inv adds zero: arithmetic rather than a select, so
+ * the product is not moved into a branch (where, as it might trap, the
+ * compiler would not vectorize the lanes' loop). */
+static inline void halves(float dm, float par, float inv, float h[4])
 {
-	float c[3];
-	uint32_t ncross = 0;
-	for (int i = 0; i < 3; i++) {
-		float tc = (mid[i] - o[i]) * inv[i];
-		bool in = (d[i] != 0.0f) & (tc > ta) & (tc < tb);
-		c[i] = in ? tc : INFINITY;
-		ncross += in;
-	}
-	{
-		float lo = minf(c[0], c[1]), hi = maxf(c[0], c[1]);
-		float a = minf(lo, c[2]), m = maxf(lo, c[2]);
-		cut[1] = a;
-		cut[2] = minf(m, hi);
-		cut[3] = maxf(m, hi);
-	}
-	cut[0] = ta;
-	cut[4] = INFINITY;
-	cut[ncross + 1] = tb;
-	for (uint32_t k = 0; k < 4; k++) {
-		/* Past the last piece the midpoint may be inf or NaN: its
-		 * octant is not used. */
-		float um = 0.5f * (cut[k] + cut[k + 1]);
-		uint32_t b = 0;
-		for (int i = 0; i < 3; i++) {
-			b |= o[i] + um * d[i] >= mid[i] ? 1u << i : 0u;
-		}
-		oct[k] = b;
-	}
-	return ncross + 1;
+	float tc = dm * inv + (inv == 0.0f ? par : 0.0f);
+	bool down = inv < 0.0f;
+	h[HALF_LO0] = down ? tc : -INFINITY;
+	h[HALF_LO1] = down ? INFINITY : tc;
+	h[HALF_UP0] = down ? -INFINITY : tc;
+	h[HALF_UP1] = down ? tc : INFINITY;
 }
 
-static inline void reciprocal(const float d[3], float inv[3])
+static inline float parallel_crossing(float mid, float o)
+{
+	return o >= mid ? -INFINITY : INFINITY;
+}
+
+/* halves for the lanes of a packet: h[k][l] is lane l's h[k]. */
+static inline void halves_lanes(float mid, float o, const float *inv,
+                                float (*h)[BC_SVO_PACKET])
+{
+	float dm = mid - o, par = parallel_crossing(mid, o);
+	for (uint32_t l = 0; l < BC_SVO_PACKET; l++) {
+		float hl[4];
+		halves(dm, par, inv[l], hl);
+		for (int k = 0; k < 4; k++) {
+			h[k][l] = hl[k];
+		}
+	}
+}
+
+/* Child oc's stretch [*a, *b) of the segment [ta, tb]; h[i] the ray's
+ * halves on axis i. True where it is not empty. */
+static inline bool child_span(uint32_t oc, const float h[3][4], float ta,
+                              float tb, float *a, float *b)
 {
 	for (int i = 0; i < 3; i++) {
-		inv[i] = d[i] != 0.0f ? 1.0f / d[i] : 0.0f;
+		bool up = (oc >> i) & 1u;
+		ta = maxf(ta, h[i][up ? HALF_UP0 : HALF_LO0]);
+		tb = minf(tb, h[i][up ? HALF_UP1 : HALF_LO1]);
 	}
+	*a = ta;
+	*b = tb;
+	return ta < tb;
+}
+
+/* child_span for the lanes of a packet (h[i][k][l]: lane l's halves):
+ * child oc's stretches [a[l], b[l]) of the segments [ta[l], tb[l]), the
+ * same floats lane by lane. Returns the lanes whose stretch is not
+ * empty. */
+static inline uint32_t child_spans(uint32_t oc,
+                                   const float (*h)[4][BC_SVO_PACKET],
+                                   const float *ta, const float *tb, float *a,
+                                   float *b)
+{
+	static const uint32_t lane_bit[BC_SVO_PACKET] = {1u,  2u,  4u,  8u,
+	                                                 16u, 32u, 64u, 128u};
+	const float *s[3], *e[3];
+	uint32_t m = 0, on[BC_SVO_PACKET];
+	for (int i = 0; i < 3; i++) {
+		bool up = (oc >> i) & 1u;
+		s[i] = h[i][up ? HALF_UP0 : HALF_LO0];
+		e[i] = h[i][up ? HALF_UP1 : HALF_LO1];
+	}
+	for (uint32_t l = 0; l < BC_SVO_PACKET; l++) {
+		float x = maxf(maxf(maxf(ta[l], s[0][l]), s[1][l]), s[2][l]);
+		float y = minf(minf(minf(tb[l], e[0][l]), e[1][l]), e[2][l]);
+		a[l] = x;
+		b[l] = y;
+		/* A table of the bits, not 1u << l: the loop vectorizes. */
+		on[l] = x < y ? lane_bit[l] : 0u;
+	}
+	for (uint32_t l = 0; l < BC_SVO_PACKET; l++) {
+		m |= on[l];
+	}
+	return m;
+}
+
+/* 1/d per axis, 0 where the ray runs parallel to the axis's planes (or so
+ * nearly that 1/d is not finite). The bits of the axes it runs down. */
+static inline uint32_t reciprocal(const float d[3], float inv[3])
+{
+	uint32_t down = 0;
+	for (int i = 0; i < 3; i++) {
+		inv[i] = fabsf(d[i]) >= FLT_MIN ? 1.0f / d[i] : 0.0f;
+		down |= inv[i] < 0.0f ? 1u << i : 0u;
+	}
+	return down;
 }
 
 /* The ray entered the hit band at th in a leaf whose variant is mask (the
@@ -810,7 +869,7 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
 	uint32_t sp = 0, terms = 0;
 	float th = 0.0f, ta = t0, tb = t1, inv[3];
 	bool found = false, settled = false;
-	reciprocal(d, inv);
+	uint32_t down = reciprocal(d, inv);
 	memset(hit, 0, sizeof(*hit));
 	hit->prim = BC_NONE;
 	if (!clip(s->lo, s->hi, o, d, &ta, &tb)) {
@@ -825,8 +884,7 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
 	while (sp && !found) {
 		struct ent e = st[--sp];
 		const struct bc__svo_node *nd = &s->nodes[e.node];
-		float mid[3], cut[5];
-		uint32_t oct[4], npiece;
+		float mid[3], h[3][4];
 		if (!nd->child) {
 			const struct bc__svo_leaf *lf = &s->leaves[nd->leaf];
 			if (lf->state == BC_SVO_STATE_FULL) {
@@ -848,15 +906,21 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
 		}
 		for (int i = 0; i < 3; i++) {
 			mid[i] = 0.5f * (e.lo[i] + e.hi[i]);
+			halves(mid[i] - o[i], parallel_crossing(mid[i], o[i]),
+			       inv[i], h[i]);
 		}
-		npiece = split(mid, o, d, inv, e.ta, e.tb, cut, oct);
-		/* Push back to front so the nearest piece is popped first. */
-		for (uint32_t k = npiece; k > 0; k--) {
-			struct ent *ch = &st[sp++];
-			child_box(e.lo, e.hi, mid, oct[k - 1], ch->lo, ch->hi);
-			ch->node = nd->child + oct[k - 1];
-			ch->ta = cut[k - 1];
-			ch->tb = cut[k];
+		/* Children front to back are those of octant k ^ down for k
+		 * up from 0: pushed the other way round, the nearest is popped
+		 * first. */
+		for (uint32_t k = 8; k-- > 0;) {
+			uint32_t oc = k ^ down;
+			struct ent *ch = &st[sp];
+			if (child_span(oc, (const float(*)[4])h, e.ta, e.tb,
+			               &ch->ta, &ch->tb)) {
+				child_box(e.lo, e.hi, mid, oc, ch->lo, ch->hi);
+				ch->node = nd->child + oc;
+				sp++;
+			}
 		}
 	}
 	if (!found) {
@@ -1114,9 +1178,9 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 	/* Each level pops one node and pushes at most its eight children. */
 	struct pent st[8 * (BC_SVO_MAX_DEPTH + 1) + 1];
 	float ta0[BC_SVO_PACKET], tb0[BC_SVO_PACKET], th[BC_SVO_PACKET];
-	float inv[BC_SVO_PACKET][3];
+	float inv[3][BC_SVO_PACKET];
 	bool settled[BC_SVO_PACKET];
-	uint32_t pid[BC_SVO_PACKET], idset = 0;
+	uint32_t pid[BC_SVO_PACKET], idset = 0, down[BC_SVO_PACKET];
 	uint32_t terms[BC_SVO_PACKET];
 	struct bc_svo_cmask mask[BC_SVO_PACKET];
 	uint32_t sp, live = 0, found = 0, alone = 0, hit = 0, sgn = 0;
@@ -1127,38 +1191,46 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 	if (n > BC_SVO_PACKET) {
 		return 0;
 	}
-	for (uint32_t l = 0; l < n; l++) {
-		settled[l] = false;
-		terms[l] = 0;
-		pid[l] = BC_NONE;
-		mask[l] = (struct bc_svo_cmask){NULL, 0};
-		th[l] = 0.0f;
-		ta0[l] = t0;
-		tb0[l] = t1;
-		reciprocal(d[l], inv[l]);
-		if (clip(s->lo, s->hi, o, d[l], &ta0[l], &tb0[l])) {
-			live |= 1u << l;
-			for (int i = 0; i < 3; i++) {
-				sgn |= d[l][i] < 0.0f ? 1u << i : 0u;
+	/* Every lane's segment and reciprocal are set, rays or not: the walk
+	 * computes all lanes (a lane without a ray has an empty segment). */
+	st[0].node = 0;
+	memcpy(st[0].lo, s->lo, sizeof(st[0].lo));
+	memcpy(st[0].hi, s->hi, sizeof(st[0].hi));
+	for (uint32_t l = 0; l < BC_SVO_PACKET; l++) {
+		float il[3] = {0.0f, 0.0f, 0.0f};
+		down[l] = 0;
+		st[0].ta[l] = INFINITY;
+		st[0].tb[l] = -INFINITY;
+		if (l < n) {
+			settled[l] = false;
+			terms[l] = 0;
+			pid[l] = BC_NONE;
+			mask[l] = (struct bc_svo_cmask){NULL, 0};
+			th[l] = 0.0f;
+			ta0[l] = t0;
+			tb0[l] = t1;
+			down[l] = reciprocal(d[l], il);
+			if (clip(s->lo, s->hi, o, d[l], &ta0[l], &tb0[l])) {
+				live |= 1u << l;
+				sgn |= down[l];
+				st[0].ta[l] = ta0[l];
+				st[0].tb[l] = tb0[l];
 			}
+		}
+		for (int i = 0; i < 3; i++) {
+			inv[i][l] = il[i];
 		}
 	}
 	if (!live) {
 		return 0;
 	}
-	st[0].node = 0;
 	st[0].lanes = live;
-	memcpy(st[0].lo, s->lo, sizeof(st[0].lo));
-	memcpy(st[0].hi, s->hi, sizeof(st[0].hi));
-	memcpy(st[0].ta, ta0, sizeof(ta0));
-	memcpy(st[0].tb, tb0, sizeof(tb0));
 	sp = 1;
 	while (sp) {
 		/* Children are pushed where the entry lies: copy it out. */
 		struct pent e = st[--sp];
 		const struct bc__svo_node *nd = &s->nodes[e.node];
 		uint32_t lanes = e.lanes & ~(found | alone);
-		uint32_t clanes[8] = {0};
 		float mid[3];
 		if (!lanes) {
 			continue;
@@ -1215,46 +1287,41 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 		}
 		/* Children are visited in the order of their octant's bits
 		 * flipped where the packet's rays run down an axis: front to
-		 * back for every ray whose pieces follow that order (a ray
+		 * back for every ray whose crossings follow that order (a ray
 		 * running up an axis the others run down crosses its mid
-		 * plane the other way). A ray whose pieces do not is cast on
-		 * its own afterwards. */
+		 * plane the other way). A ray whose crossings do not is cast
+		 * on its own afterwards. */
 		{
-			float cta[8][BC_SVO_PACKET], ctb[8][BC_SVO_PACKET];
+			float h[3][4][BC_SVO_PACKET];
+			for (int i = 0; i < 3; i++) {
+				mid[i] = 0.5f * (e.lo[i] + e.hi[i]);
+				halves_lanes(mid[i], o[i], inv[i], h[i]);
+			}
 			for (uint32_t b = lanes; b; b &= b - 1u) {
-				uint32_t l = bc__svo_lowest(b), oct[4];
-				float cut[5];
-				uint32_t np = split(mid, o, d[l], inv[l],
-				                    e.ta[l], e.tb[l], cut, oct);
-				bool order = true;
-				for (uint32_t k = 1; k < np; k++) {
-					order = order && (oct[k - 1] ^ sgn) <
-					                     (oct[k] ^ sgn);
-				}
-				if (!order) {
-					alone |= 1u << l;
-					continue;
-				}
-				for (uint32_t k = 0; k < np; k++) {
-					clanes[oct[k]] |= 1u << l;
-					cta[oct[k]][l] = cut[k];
-					ctb[oct[k]][l] = cut[k + 1];
+				uint32_t l = bc__svo_lowest(b);
+				for (uint32_t w = down[l] ^ sgn; w;
+				     w &= w - 1u) {
+					uint32_t i = bc__svo_lowest(w);
+					float tc = h[i][down[l] >> i & 1u
+					                    ? HALF_LO0
+					                    : HALF_LO1][l];
+					if (tc > e.ta[l] && tc < e.tb[l]) {
+						alone |= 1u << l;
+					}
 				}
 			}
+			lanes &= ~alone;
 			for (uint32_t k = 8; k-- > 0;) {
 				uint32_t oc = k ^ sgn;
-				struct pent *ch;
-				if (!clanes[oc]) {
-					continue;
-				}
-				ch = &st[sp++];
-				ch->node = nd->child + oc;
-				ch->lanes = clanes[oc];
-				child_box(e.lo, e.hi, mid, oc, ch->lo, ch->hi);
-				for (uint32_t b = clanes[oc]; b; b &= b - 1u) {
-					uint32_t l = bc__svo_lowest(b);
-					ch->ta[l] = cta[oc][l];
-					ch->tb[l] = ctb[oc][l];
+				struct pent *ch = &st[sp];
+				ch->lanes =
+				    lanes & child_spans(oc, h, e.ta, e.tb,
+				                        ch->ta, ch->tb);
+				if (ch->lanes) {
+					ch->node = nd->child + oc;
+					child_box(e.lo, e.hi, mid, oc, ch->lo,
+					          ch->hi);
+					sp++;
 				}
 			}
 		}
