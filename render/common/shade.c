@@ -16,17 +16,6 @@ static inline float maxf(float a, float b)
 	return a > b ? a : b;
 }
 
-void bc_shade_init(struct bc_shade *s, const struct bc_view_rays *vr)
-{
-	/* Light from the camera's upper left, slightly from the front. */
-	for (int i = 0; i < 3; i++) {
-		s->light[i] = -0.5f * vr->right[i] + 0.6f * vr->up[i] -
-		              0.6f * vr->forward[i];
-	}
-	bc_v3_normalize_div(s->light);
-	s->ambient = 0.18f;
-}
-
 /* The sRGB byte of linear c: the transfer function, rounded. This is the
  * definition; bc_shade_srgb8 gives the same bytes by table. */
 static uint8_t srgb8_formula(float c)
@@ -95,10 +84,12 @@ static void srgb_init(void)
 	}
 }
 
-uint8_t bc_shade_srgb8(float c)
+/* bc_shade_srgb8 once the table is built. A bucket holds at most one
+ * edge (it is narrower than a byte's step), so one comparison, added
+ * rather than branched on, finishes the lookup. */
+static inline uint8_t srgb8_table(float c)
 {
 	uint32_t i, k;
-	(void)pthread_once(&srgb_once, srgb_init);
 	if (!(c >= srgb_edge[1])) {
 		return 0; /* NaN too */
 	}
@@ -107,10 +98,27 @@ uint8_t bc_shade_srgb8(float c)
 	}
 	i = bits_of(c) >> SRGB_SHIFT;
 	k = i >= srgb_base ? srgb_guess[i] : 0u;
-	while (c >= srgb_edge[k + 1u]) {
-		k++;
-	}
+	k += c >= srgb_edge[k + 1u];
 	return (uint8_t)k;
+}
+
+uint8_t bc_shade_srgb8(float c)
+{
+	(void)pthread_once(&srgb_once, srgb_init);
+	return srgb8_table(c);
+}
+
+void bc_shade_init(struct bc_shade *s, const struct bc_view_rays *vr)
+{
+	/* Light from the camera's upper left, slightly from the front. */
+	for (int i = 0; i < 3; i++) {
+		s->light[i] = -0.5f * vr->right[i] + 0.6f * vr->up[i] -
+		              0.6f * vr->forward[i];
+	}
+	bc_v3_normalize_div(s->light);
+	s->ambient = 0.18f;
+	/* bc_shade_hit's sRGB table. */
+	(void)pthread_once(&srgb_once, srgb_init);
 }
 
 /* A perceptual ramp (viridis, sampled at five points and interpolated) for
@@ -175,7 +183,7 @@ void bc_shade_hit(const struct bc_shade *s, const float grad[3],
 		float lit =
 		    albedo[c] * (s->ambient + (1.0f - s->ambient) * diff) +
 		    0.25f * spec;
-		px[c] = bc_shade_srgb8(lit);
+		px[c] = srgb8_table(lit);
 	}
 	px[3] = 255;
 }

@@ -17,13 +17,14 @@ struct bc_shade {
 	float ambient;
 };
 
-/* Sets the light for a view (camera-relative, so every view is lit alike). */
+/* Sets the light for a view (camera-relative, so every view is lit alike)
+ * and builds the sRGB table bc_shade_hit reads (once per process). */
 void bc_shade_init(struct bc_shade *s, const struct bc_view_rays *vr);
 
 /* Writes the RGBA of a surface point seen along unit direction d with field
  * gradient grad (any length; zero or non-finite: the surface faces the
  * viewer; seen from inside: the side facing the viewer is lit) and linear
- * albedo. */
+ * albedo. s must have been set by bc_shade_init. */
 void bc_shade_hit(const struct bc_shade *s, const float grad[3],
                   const float d[3], const float albedo[3], uint8_t px[4]);
 
