@@ -315,6 +315,9 @@ static uint32_t cast_tile(const struct frame *fr, struct bc_svo_caster *c,
 	const struct bc_render_region *rg = fr->region;
 	const struct bc_frame *out = fr->out;
 	uint32_t px[BC_SVO_PACKET], py[BC_SVO_PACKET], n = 0, total = 0;
+	if (c) {
+		bc_svo_caster_forget(c);
+	}
 	for (uint32_t by = y0; by < y0 + SVO_TILE && by < out->height;
 	     by += PACKET_H) {
 		for (uint32_t bx = x0; bx < x0 + SVO_TILE && bx < out->width;

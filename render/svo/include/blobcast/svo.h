@@ -409,6 +409,12 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
                             const float (*d)[3], uint32_t n, float t0, float t1,
                             const struct bc_svo_cast_params *cp,
                             struct bc_svo_hit *hits);
+/* Forgets the leaf where this caster's last packet hit. A packet skips the
+ * range test of its beam (a test that cannot clear a leaf where rays hit)
+ * in that leaf; the hits do not depend on it, the evaluation counts do:
+ * calling this before each tile keeps them independent of which tiles a
+ * thread took before. */
+void bc_svo_caster_forget(struct bc_svo_caster *c);
 /* Rays this caster's packets have cast so far together (*packed) and
  * alone (*alone; bc_svo_cast_packet). */
 void bc_svo_caster_counts(const struct bc_svo_caster *c, uint64_t *packed,
