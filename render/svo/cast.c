@@ -57,6 +57,8 @@ struct bc_svo_caster {
 	uint32_t *pidx;         /* a packet's leaf terms (leaf_root uses idx) */
 	uint64_t packed, alone; /* bc_svo_caster_counts */
 	uint32_t hit_leaf;      /* where the last packet hit (BC_NONE: none) */
+	float pd[3][BC_SVO_PACKET]; /* the packet's directions by axis (0 past
+	                               its rays) */
 };
 
 int bc_svo_caster_create(struct bc_svo_caster **out, const struct bc_svo *s)
@@ -947,27 +949,30 @@ struct pent {
 	float ta[BC_SVO_PACKET], tb[BC_SVO_PACKET];
 };
 
-/* The leaf's variant (its terms list[0..n)) at o + t[l] d[l] for the
- * lanes of `lanes` (not zero), in one call; the other lanes evaluate a
- * copy of the first one's point. With prim, also the primitive deciding
- * each lane's value. */
-static void lanes_at(const struct bc_svo_rpn *r, const uint32_t *list,
-                     uint32_t n, const float o[3], const float (*d)[3],
-                     const float *t, uint32_t lanes, float *v, uint32_t *prim)
+/* The leaf's variant (its n terms decoded in c->pidx) at o + t[l] d[l]
+ * for the lanes of `lanes` (not zero), in one call (d[l]: the packet's
+ * directions, c->pd); the other lanes evaluate the point o, whatever their
+ * t. With prim, also the primitive deciding each lane's value. */
+static void lanes_at(const struct bc_svo_caster *c, uint32_t n,
+                     const float o[3], const float *t, uint32_t lanes, float *v,
+                     uint32_t *prim)
 {
+	static const uint32_t lane_bit[BC__SVO_LANES] = {1u,  2u,  4u,  8u,
+	                                                 16u, 32u, 64u, 128u};
 	float px[BC__SVO_LANES], py[BC__SVO_LANES], pz[BC__SVO_LANES];
-	uint32_t first = bc__svo_lowest(lanes);
 	for (uint32_t l = 0; l < BC__SVO_LANES; l++) {
-		uint32_t k = (lanes >> l) & 1u ? l : first;
-		px[l] = o[0] + t[k] * d[k][0];
-		py[l] = o[1] + t[k] * d[k][1];
-		pz[l] = o[2] + t[k] * d[k][2];
+		/* A select, not a gather: the loop vectorizes. */
+		float tl = lanes & lane_bit[l] ? t[l] : 0.0f;
+		px[l] = o[0] + tl * c->pd[0][l];
+		py[l] = o[1] + tl * c->pd[1][l];
+		pz[l] = o[2] + tl * c->pd[2][l];
 	}
 	if (prim) {
-		bc__svo_list_eval_lanes_id(r, list, n, px, py, pz, lanes, v,
-		                           prim);
+		bc__svo_list_eval_lanes_id(c->s->rpn, c->pidx, n, px, py, pz,
+		                           lanes, v, prim);
 	} else {
-		bc__svo_list_eval_lanes(r, list, n, px, py, pz, lanes, v);
+		bc__svo_list_eval_lanes(c->s->rpn, c->pidx, n, px, py, pz,
+		                        lanes, v);
 	}
 }
 
@@ -975,12 +980,11 @@ static void lanes_at(const struct bc_svo_rpn *r, const uint32_t *list,
  * probes in one evaluation of the leaf's variant, then every round of the
  * refinements in one. Each lane takes the samples step_hit would. */
 static void packet_hits(struct bc_svo_caster *c, uint32_t n, const float o[3],
-                        const float (*d)[3], uint32_t lanes,
-                        const struct bc_svo_cast_params *cp, struct hit_plan *h,
-                        struct bc_svo_hit *hits, float *th, bool *settled)
+                        uint32_t lanes, const struct bc_svo_cast_params *cp,
+                        struct hit_plan *h, struct bc_svo_hit *hits, float *th,
+                        bool *settled)
 {
-	const struct bc_svo_rpn *r = c->s->rpn;
-	float m[BC_SVO_PACKET], v[BC__SVO_LANES];
+	float m[BC_SVO_PACKET] = {0}, v[BC__SVO_LANES];
 	uint32_t want, live = lanes;
 	for (;;) {
 		want = 0;
@@ -994,7 +998,7 @@ static void packet_hits(struct bc_svo_caster *c, uint32_t n, const float o[3],
 		if (!want) {
 			break;
 		}
-		lanes_at(r, c->pidx, n, o, d, m, want, v, NULL);
+		lanes_at(c, n, o, m, want, v, NULL);
 		for (uint32_t b = want; b; b &= b - 1u) {
 			uint32_t l = bc__svo_lowest(b);
 			hits[l].evals++;
@@ -1013,7 +1017,7 @@ static void packet_hits(struct bc_svo_caster *c, uint32_t n, const float o[3],
 		if (!want) {
 			break;
 		}
-		lanes_at(r, c->pidx, n, o, d, m, want, v, NULL);
+		lanes_at(c, n, o, m, want, v, NULL);
 		for (uint32_t b = want; b; b &= b - 1u) {
 			uint32_t l = bc__svo_lowest(b);
 			hits[l].evals++;
@@ -1091,7 +1095,7 @@ static uint32_t packet_ids(struct bc_svo_caster *c, uint32_t n,
 	if (!in) {
 		return 0;
 	}
-	lanes_at(c->s->rpn, c->pidx, n, o, d, th, in, v, prim);
+	lanes_at(c, n, o, th, in, v, prim);
 	for (uint32_t b = in; b; b &= b - 1u) {
 		uint32_t l = bc__svo_lowest(b);
 		pid[l] = prim[l];
@@ -1112,10 +1116,9 @@ static uint32_t packet_step(struct bc_svo_caster *c,
                             struct bc_svo_hit *hits, float *th, bool *settled,
                             uint32_t *pid, uint32_t *idset)
 {
-	const struct bc_svo_rpn *r = c->s->rpn;
 	struct lane_step ls[BC_SVO_PACKET];
 	struct hit_plan plan[BC_SVO_PACKET];
-	float q[BC_SVO_PACKET], v[BC__SVO_LANES];
+	float q[BC_SVO_PACKET] = {0}, v[BC__SVO_LANES];
 	uint32_t found = 0, going = 0, hit = 0;
 	for (uint32_t b = lanes; b; b &= b - 1u) {
 		uint32_t l = bc__svo_lowest(b);
@@ -1123,7 +1126,7 @@ static uint32_t packet_step(struct bc_svo_caster *c,
 		                           band_at(cp, e->tb[l]), 0};
 		q[l] = e->ta[l];
 	}
-	lanes_at(r, c->pidx, n, o, d, q, lanes, v, NULL);
+	lanes_at(c, n, o, q, lanes, v, NULL);
 	for (uint32_t b = lanes; b; b &= b - 1u) {
 		uint32_t l = bc__svo_lowest(b);
 		hits[l].evals++;
@@ -1152,7 +1155,7 @@ static uint32_t packet_step(struct bc_svo_caster *c,
 		if (!want) {
 			break;
 		}
-		lanes_at(r, c->pidx, n, o, d, q, want, v, NULL);
+		lanes_at(c, n, o, q, want, v, NULL);
 		for (uint32_t b = want; b; b &= b - 1u) {
 			uint32_t l = bc__svo_lowest(b);
 			float gq = v[l] - band_at(cp, q[l]);
@@ -1169,7 +1172,7 @@ static uint32_t packet_step(struct bc_svo_caster *c,
 		}
 	}
 	if (hit) {
-		packet_hits(c, n, o, d, hit, cp, plan, hits, th, settled);
+		packet_hits(c, n, o, hit, cp, plan, hits, th, settled);
 		*idset |= packet_ids(c, n, o, d, e, hit, th, settled, pid);
 	}
 	return found | hit;
@@ -1183,7 +1186,7 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 	const struct bc_svo *s = c->s;
 	/* Each level pops one node and pushes at most its eight children. */
 	struct pent st[8 * (BC_SVO_MAX_DEPTH + 1) + 1];
-	float ta0[BC_SVO_PACKET], tb0[BC_SVO_PACKET], th[BC_SVO_PACKET];
+	float ta0[BC_SVO_PACKET], tb0[BC_SVO_PACKET], th[BC_SVO_PACKET] = {0};
 	float inv[3][BC_SVO_PACKET];
 	bool settled[BC_SVO_PACKET];
 	uint32_t pid[BC_SVO_PACKET], idset = 0, down[BC_SVO_PACKET];
@@ -1225,6 +1228,7 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 		}
 		for (int i = 0; i < 3; i++) {
 			inv[i][l] = il[i];
+			c->pd[i][l] = l < n ? d[l][i] : 0.0f;
 		}
 	}
 	if (!live) {
