@@ -178,7 +178,17 @@ void bc_shade_hit(const struct bc_shade *s, const float grad[3],
 	}
 	diff = maxf(bc_v3_dot(n, s->light), 0.0f);
 	bc_v3_normalize_div(hv);
-	spec = diff > 0.0f ? powf(maxf(bc_v3_dot(n, hv), 0.0f), 48.0f) : 0.0f;
+	if (diff > 0.0f) {
+		/* x^48 as (x^3)^16: five products instead of a powf call (2 %
+		 * of an svo frame); the highlight moves by a few ulps. */
+		float x = maxf(bc_v3_dot(n, hv), 0.0f);
+		spec = x * x * x;
+		for (int k = 0; k < 4; k++) {
+			spec *= spec;
+		}
+	} else {
+		spec = 0.0f;
+	}
 	for (int c = 0; c < 3; c++) {
 		float lit =
 		    albedo[c] * (s->ambient + (1.0f - s->ambient) * diff) +
