@@ -1116,39 +1116,58 @@ static uint32_t packet_step(struct bc_svo_caster *c,
                             struct bc_svo_hit *hits, float *th, bool *settled,
                             uint32_t *pid, uint32_t *idset)
 {
-	struct lane_step ls[BC_SVO_PACKET];
+	static const uint32_t lane_bit[BC_SVO_PACKET] = {1u,  2u,  4u,  8u,
+	                                                 16u, 32u, 64u, 128u};
+	/* The lanes' struct lane_step by field: every round's decisions
+	 * (step_next, the sample's test, step_on) run over all eight lanes
+	 * as selects, in loops the compiler vectorizes; the lanes outside
+	 * `lanes` hold an empty segment and are masked off. */
+	float t[BC_SVO_PACKET], g[BC_SVO_PACKET], tb[BC_SVO_PACKET];
+	float cmax[BC_SVO_PACKET], q[BC_SVO_PACKET], gq[BC_SVO_PACKET];
+	float v[BC__SVO_LANES];
+	int steps[BC_SVO_PACKET];
+	uint32_t bits[BC_SVO_PACKET], more[BC_SVO_PACKET];
 	struct hit_plan plan[BC_SVO_PACKET];
-	float q[BC_SVO_PACKET] = {0}, v[BC__SVO_LANES];
 	uint32_t found = 0, going = 0, hit = 0;
-	for (uint32_t b = lanes; b; b &= b - 1u) {
-		uint32_t l = bc__svo_lowest(b);
-		ls[l] = (struct lane_step){e->ta[l], 0.0f, e->tb[l],
-		                           band_at(cp, e->tb[l]), 0};
-		q[l] = e->ta[l];
+	for (uint32_t l = 0; l < BC_SVO_PACKET; l++) {
+		bool in = lanes & lane_bit[l];
+		t[l] = in ? e->ta[l] : 0.0f;
+		tb[l] = in ? e->tb[l] : 0.0f;
+		cmax[l] = band_at(cp, tb[l]);
+		steps[l] = 0;
+		q[l] = t[l];
 	}
 	lanes_at(c, n, o, q, lanes, v, NULL);
+	for (uint32_t l = 0; l < BC_SVO_PACKET; l++) {
+		g[l] = v[l] - band_at(cp, q[l]);
+		bits[l] = g[l] <= 0.0f ? lane_bit[l] : 0u;
+	}
+	for (uint32_t l = 0; l < BC_SVO_PACKET; l++) {
+		found |= bits[l];
+	}
+	found &= lanes;
+	going = lanes & ~found;
 	for (uint32_t b = lanes; b; b &= b - 1u) {
-		uint32_t l = bc__svo_lowest(b);
-		hits[l].evals++;
-		ls[l].g = v[l] - band_at(cp, q[l]);
-		if (ls[l].g <= 0.0f) {
-			th[l] = q[l];
-			found |= 1u << l;
-		} else {
-			going |= 1u << l;
-		}
+		hits[bc__svo_lowest(b)].evals++;
+	}
+	for (uint32_t b = found; b; b &= b - 1u) {
+		th[bc__svo_lowest(b)] = t[bc__svo_lowest(b)];
 	}
 	while (going) {
-		uint32_t want = 0;
-		for (uint32_t b = going; b; b &= b - 1u) {
-			uint32_t l = bc__svo_lowest(b);
-			if (step_next(cp, &ls[l], &q[l])) {
-				want |= 1u << l;
-				continue;
-			}
-			going &= ~(1u << l);
-			if (leaf_root(c, m, o, d[l], ls[l].t, ls[l].tb, cp,
-			              &hits[l], &th[l])) {
+		uint32_t want = 0, stop, on = 0;
+		for (uint32_t l = 0; l < BC_SVO_PACKET; l++) {
+			struct lane_step ls = {t[l], g[l], tb[l], cmax[l],
+			                       steps[l]};
+			bits[l] = step_next(cp, &ls, &q[l]) ? lane_bit[l] : 0u;
+		}
+		for (uint32_t l = 0; l < BC_SVO_PACKET; l++) {
+			want |= bits[l];
+		}
+		want &= going;
+		for (stop = going & ~want; stop; stop &= stop - 1u) {
+			uint32_t l = bc__svo_lowest(stop);
+			if (leaf_root(c, m, o, d[l], t[l], tb[l], cp, &hits[l],
+			              &th[l])) {
 				found |= 1u << l;
 			}
 		}
@@ -1156,20 +1175,37 @@ static uint32_t packet_step(struct bc_svo_caster *c,
 			break;
 		}
 		lanes_at(c, n, o, q, want, v, NULL);
-		for (uint32_t b = want; b; b &= b - 1u) {
-			uint32_t l = bc__svo_lowest(b);
-			float gq = v[l] - band_at(cp, q[l]);
-			hits[l].evals++;
-			if (gq <= 0.0f) {
-				/* Refined with the others that hit here,
-				 * below. */
-				plan[l] = hit_plan(cp, &ls[l], q[l], gq);
-				hit |= 1u << l;
-				going &= ~(1u << l);
-			} else if (!step_on(&ls[l], q[l], gq)) {
-				going &= ~(1u << l);
-			}
+		for (uint32_t l = 0; l < BC_SVO_PACKET; l++) {
+			/* step_on: a sample above the band inside the leaf
+			 * is the next step. */
+			bool up, go;
+			gq[l] = v[l] - band_at(cp, q[l]);
+			up = !(gq[l] <= 0.0f);
+			go = up & (q[l] < tb[l]) & ((want & lane_bit[l]) != 0u);
+			bits[l] = up ? 0u : lane_bit[l];
+			more[l] = go ? lane_bit[l] : 0u;
+			t[l] = go ? q[l] : t[l];
+			g[l] = go ? gq[l] : g[l];
+			steps[l] += go;
 		}
+		going = 0;
+		for (uint32_t l = 0; l < BC_SVO_PACKET; l++) {
+			going |= more[l];
+			on |= bits[l];
+		}
+		on &= want;
+		for (uint32_t b = want; b; b &= b - 1u) {
+			hits[bc__svo_lowest(b)].evals++;
+		}
+		/* The lanes that hit (their t, g still the last step's) are
+		 * refined with the others that hit here, below. */
+		for (uint32_t b = on; b; b &= b - 1u) {
+			uint32_t l = bc__svo_lowest(b);
+			struct lane_step ls = {t[l], g[l], tb[l], cmax[l],
+			                       steps[l]};
+			plan[l] = hit_plan(cp, &ls, q[l], gq[l]);
+		}
+		hit |= on;
 	}
 	if (hit) {
 		packet_hits(c, n, o, hit, cp, plan, hits, th, settled);
