@@ -960,7 +960,8 @@ static void lanes_at(const struct bc_svo_caster *c, uint32_t n,
 	static const uint32_t lane_bit[BC__SVO_LANES] = {1u,  2u,  4u,  8u,
 	                                                 16u, 32u, 64u, 128u};
 	float px[BC__SVO_LANES], py[BC__SVO_LANES], pz[BC__SVO_LANES];
-	if (!prim && bc__svo_popcount(lanes) <= 2u) {
+	uint32_t rest = lanes & (lanes - 1u); /* all but the lowest */
+	if (!prim && !(rest & (rest - 1u))) {
 		/* One or two samples (a seventh of the rounds): the scalar
 		 * evaluator, whose values are the lanes' bit for bit, costs a
 		 * third of an eight-lane round each. */
