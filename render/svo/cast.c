@@ -541,49 +541,93 @@ static bool leaf_step(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
 
 /* The ray passes a surface by without crossing it: the field along it has
  * a minimum in [a, b] (the value at a, va > 0, and at b are above the
- * samples inside). Golden section search narrows the bracket to the
- * refinement tolerance, so a silhouette's depth is the closest approach;
- * a negative sample on the way is a crossing after all and is refined.
+ * samples inside). Brent's method narrows the bracket to the refinement
+ * tolerance, so a silhouette's depth is the closest approach: a parabola
+ * through the three best samples where it falls well inside the bracket
+ * (near a smooth minimum that converges in a few samples where golden
+ * section search took 16), a golden section step where it does not. A
+ * negative sample on the way is a crossing after all and is refined.
  * Inside the hit band the octree's field is the exact field (a variant
  * keeps the sign of f - c for every level c of the band, hence the value
  * of f wherever it lies in the band), so the minimum found is the true
  * field's. */
 static float closest(struct ray_field *rf, float a, float va, float b)
 {
-	const float g = 0.618034f;
-	float c = b - g * (b - a), e = a + g * (b - a);
-	float vc = field_at(rf, c), ve;
-	if (vc <= 0.0f) {
-		return refine(rf, a, va, c, vc);
+	const float cg = 0.381966f; /* 2 - the golden ratio */
+	const float tol = rf->cp->refine_tol;
+	/* x the best sample, w the second best, v the one before w; d the
+	 * last step, e the one before it. */
+	float x = a + cg * (b - a), fx = field_at(rf, x);
+	float w = x, fw = fx, v = x, fv = fx, d = 0.0f, e = 0.0f;
+	if (fx <= 0.0f) {
+		return refine(rf, a, va, x, fx);
 	}
-	ve = field_at(rf, e);
-	if (ve <= 0.0f) {
-		return refine(rf, a, va, e, ve);
-	}
-	for (int i = 0; i < CAST_MAX_REFINE && b - a > rf->cp->refine_tol;
-	     i++) {
-		if (vc < ve) {
-			b = e;
-			e = c;
-			ve = vc;
-			c = b - g * (b - a);
-			vc = field_at(rf, c);
-			if (vc <= 0.0f) {
-				return refine(rf, a, va, c, vc);
+	for (int i = 0; i < CAST_MAX_REFINE && b - a > tol; i++) {
+		float m = 0.5f * (a + b), u, fu;
+		bool golden = true;
+		if (fabsf(e) > tol) {
+			float r = (x - w) * (fx - fv), q = (x - v) * (fx - fw);
+			float p = (x - v) * q - (x - w) * r, last = e;
+			q = 2.0f * (q - r);
+			p = q > 0.0f ? -p : p;
+			q = fabsf(q);
+			e = d;
+			/* The parabola's vertex, if it is inside the bracket
+			 * and the step is under half the one before last. */
+			if (fabsf(p) < fabsf(0.5f * q * last) &&
+			    p > q * (a - x) && p < q * (b - x)) {
+				d = p / q;
+				golden = false;
+				if (x + d - a < 2.0f * tol ||
+				    b - (x + d) < 2.0f * tol) {
+					d = x < m ? tol : -tol;
+				}
 			}
+		}
+		if (golden) {
+			e = (x >= m ? a : b) - x;
+			d = cg * e;
+		}
+		u = fabsf(d) >= tol ? x + d : x + (d > 0.0f ? tol : -tol);
+		if (!(u > a && u < b) || u == x) {
+			break; /* float resolution */
+		}
+		fu = field_at(rf, u);
+		if (fu <= 0.0f) {
+			return refine(rf, a, va, u, fu);
+		}
+		if (fu <= fx) {
+			if (u >= x) {
+				a = x;
+				va = fx;
+			} else {
+				b = x;
+			}
+			v = w;
+			fv = fw;
+			w = x;
+			fw = fx;
+			x = u;
+			fx = fu;
 		} else {
-			a = c;
-			va = vc;
-			c = e;
-			vc = ve;
-			e = a + g * (b - a);
-			ve = field_at(rf, e);
-			if (ve <= 0.0f) {
-				return refine(rf, a, va, e, ve);
+			if (u < x) {
+				a = u;
+				va = fu;
+			} else {
+				b = u;
+			}
+			if (fu <= fw || w == x) {
+				v = w;
+				fv = fw;
+				w = u;
+				fw = fu;
+			} else if (fu <= fv || v == x || v == w) {
+				v = u;
+				fv = fu;
 			}
 		}
 	}
-	return vc < ve ? c : e;
+	return x;
 }
 
 /* The ray entered the hit band at th (the caster's bracketing finds the
