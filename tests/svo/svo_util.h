@@ -337,6 +337,25 @@ packet_mismatches_random(const struct bc_svo *s, const struct bc_svo_rpn *rpn,
 			o[i] = rng_f(&r, rpn->lo[i] - m, rpn->hi[i] + m);
 			base[i] = rng_f(&r, -1.0f, 1.0f);
 		}
+		/* A quarter of the packets start on a mid plane of one of the
+		 * octree's first three levels (the same floats the walk
+		 * computes), and half of their rays run parallel to it: the
+		 * walk's rule for a ray in a plane it never crosses. */
+		int plane = rng_below(&r, 4) == 0 ? (int)rng_below(&r, 3) : -1;
+		if (plane >= 0) {
+			float lo[3], hi[3], mid = 0.0f;
+			bc_svo_bounds(s, lo, hi);
+			for (uint32_t j = 0, lv = 1u + rng_below(&r, 3); j < lv;
+			     j++) {
+				mid = 0.5f * (lo[plane] + hi[plane]);
+				if (rng_below(&r, 2)) {
+					lo[plane] = mid;
+				} else {
+					hi[plane] = mid;
+				}
+			}
+			o[plane] = mid;
+		}
 		t0 =
 		    rng_below(&r, 2) ? 0.0f : rng_f(&r, 0.0f, 0.3f) * rpn->size;
 		t1 = rng_below(&r, 2) ? INFINITY
@@ -347,7 +366,8 @@ packet_mismatches_random(const struct bc_svo *s, const struct bc_svo_rpn *rpn,
 				d[l][i] = coherent ? base[i] + rng_f(&r, -0.05f,
 				                                     0.05f)
 				                   : rng_f(&r, -1.0f, 1.0f);
-				if (rng_below(&r, 16) == 0) {
+				if (rng_below(&r, 16) == 0 ||
+				    (i == plane && rng_below(&r, 2))) {
 					d[l][i] = 0.0f;
 				}
 				len += d[l][i] * d[l][i];

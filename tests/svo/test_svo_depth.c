@@ -9,12 +9,15 @@
  * pixel footprints unless the two renderers saw different surfaces (a ray
  * grazing one solid and hitting another behind it), which stays rare.
  */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "blobcast/render.h"
 #include "blobcast/scene.h"
 #include "blobcast/svo.h"
+#include "blobcast/vec.h"
 #include "svo_util.h"
 #include "test.h"
 
@@ -544,7 +547,160 @@ static void packets_match_single_rays(void)
 	}
 }
 
+/* Rays along an axis that lie in the octree's mid planes never cross them:
+ * the walk puts such a ray in the upper half, where a point on the plane
+ * lies (bc_svo_locate). A sphere with eight small ones around it, in an
+ * octree subdivided down to one term a leaf (two levels): rays along each axis, both
+ * ways, in the planes of the first three levels (and at their crossings)
+ * hit the first sphere on their line where the formula puts it, and miss
+ * where no sphere is near their line, alone and in packets with tilted
+ * rays. */
+#define MIDPLANE_SPHERES 9
+static void axis_rays_in_mid_planes_hit_the_spheres(void)
+{
+	const struct bc_prim_info *info = bc_prim_info(BC_PRIM_SPHERE);
+	struct bc_tree *t = bc_tree_create();
+	struct bc_errinfo ei = {0};
+	struct bc_svo_rpn rpn;
+	struct bc_svo_cast_params cp;
+	struct bc_svo *s = NULL;
+	struct bc_svo_caster *cs = NULL;
+	struct bc_svo_stats stats;
+	struct bc_camera cam = {
+	    {0.0f, 0.0f, 6.0f}, {0.0f, 0.0f, 0.0f}, {0.0f, 1.0f, 0.0f}, 45.0f};
+	float c[MIDPLANE_SPHERES][3], r[MIDPLANE_SPHERES];
+	float lo[3], hi[3], planes[3][7];
+	uint32_t hits = 0, misses = 0, bad = 0, packed_bad = 0;
+	REQUIRE(t && info);
+	REQUIRE(bc_tree_begin(t) == 0);
+	REQUIRE(bc_tree_push_op(t, 0, &(struct bc_op_data){BC_OP_UNION, 0, 0},
+	                        &ei) == 0);
+	for (uint32_t k = 0; k < MIDPLANE_SPHERES; k++) {
+		struct bc_prim_data p;
+		static const float big[3] = {0.13f, -0.21f, 0.07f};
+		for (int i = 0; i < 3; i++) {
+			c[k][i] = big[i] +
+			          (k == 0 ? 0.0f
+			                  : ((k - 1) >> i & 1u ? 1.2f : -1.2f));
+		}
+		r[k] = k == 0 ? 0.6f : 0.15f;
+		bc_prim_data_init(&p, BC_PRIM_SPHERE);
+		for (uint32_t i = 0; i < info->nparams; i++) {
+			if (strcmp(info->params[i].name, "radius") == 0) {
+				p.params[info->params[i].offset] = r[k];
+			}
+		}
+		memcpy(p.translate, c[k], sizeof(p.translate));
+		REQUIRE(bc_tree_put_prim(t, 0, &p, &ei) == 0);
+	}
+	REQUIRE(bc_tree_pop_op(t, &ei) == 0);
+	REQUIRE(bc_tree_end(t, &ei) == 0);
+	REQUIRE(bc_svo_rpn_init(&rpn, bc_tree_lin(t)) == 0);
+	{
+		struct bc_svo_opts o = {
+		    .threshold = 1,
+		    .band = frame_cast_params(&rpn, &cam, W, H, &cp)};
+		REQUIRE(bc_svo_build(&s, &rpn, &o, &ei) == 0);
+	}
+	bc_svo_get_stats(s, &stats);
+	CHECK(stats.max_depth >= 2); /* the walk has nodes to cross */
+	REQUIRE(bc_svo_caster_create(&cs, s) == 0);
+	bc_svo_bounds(s, lo, hi);
+	/* The mid planes of levels 1-3 on each axis, as the walk computes
+	 * them: halving the box's floats. */
+	for (int i = 0; i < 3; i++) {
+		float m1 = 0.5f * (lo[i] + hi[i]);
+		float m2l = 0.5f * (lo[i] + m1), m2h = 0.5f * (m1 + hi[i]);
+		float v[7] = {m1,
+		              m2l,
+		              m2h,
+		              0.5f * (lo[i] + m2l),
+		              0.5f * (m2l + m1),
+		              0.5f * (m1 + m2h),
+		              0.5f * (m2h + hi[i])};
+		memcpy(planes[i], v, sizeof(v));
+	}
+	for (int a = 0; a < 3; a++) {
+		int b = (a + 1) % 3, e = (a + 2) % 3;
+		for (int sg = -1; sg <= 1; sg += 2) {
+			for (int j = 0; j < 7 * 7; j++) {
+				float o[3], d[BC_SVO_PACKET][3],
+				    want = INFINITY;
+				bool near = false;
+				struct bc_svo_hit one, ph[BC_SVO_PACKET];
+				uint32_t got;
+				bool h;
+				o[a] = sg > 0 ? lo[a] - 1.0f : hi[a] + 1.0f;
+				o[b] = planes[b][j / 7];
+				o[e] = planes[e][j % 7];
+				memset(d, 0, sizeof(d));
+				d[0][a] = (float)sg;
+				for (uint32_t k = 0; k < MIDPLANE_SPHERES;
+				     k++) {
+					float rho2 =
+					    (o[b] - c[k][b]) *
+					        (o[b] - c[k][b]) +
+					    (o[e] - c[k][e]) * (o[e] - c[k][e]);
+					float r2 = r[k] * r[k];
+					if (rho2 < 0.98f * r2) {
+						want = fminf(
+						    want,
+						    fabsf(o[a] - c[k][a]) -
+						        sqrtf(r2 - rho2));
+					} else if (rho2 <= 1.1f * r2) {
+						near = true; /* a silhouette */
+					}
+				}
+				h = bc_svo_cast(cs, o, d[0], 0.0f, INFINITY,
+				                &cp, &one);
+				if (want < INFINITY) {
+					hits++;
+					bad +=
+					    !h || fabsf(one.t - want) > 1e-4f;
+				} else if (!near) {
+					misses++;
+					bad += h;
+				}
+				/* A packet: the axis ray, and rays tilted off
+				 * the planes by growing angles. */
+				for (uint32_t l = 1; l < BC_SVO_PACKET; l++) {
+					float tilt = 0.02f * (float)l;
+					d[l][a] = (float)sg;
+					d[l][b] = l & 1u ? tilt : 0.0f;
+					d[l][e] = l & 2u ? -tilt : 0.0f;
+					bc_v3_normalize_div(d[l]);
+				}
+				got = bc_svo_cast_packet(
+				    cs, o, (const float(*)[3])d, BC_SVO_PACKET,
+				    0.0f, INFINITY, &cp, ph);
+				for (uint32_t l = 0; l < BC_SVO_PACKET; l++) {
+					struct bc_svo_hit al;
+					bool ha =
+					    bc_svo_cast(cs, o, d[l], 0.0f,
+					                INFINITY, &cp, &al);
+					packed_bad += !same_hit(
+					    ha, &al, (got >> l) & 1u, &ph[l]);
+				}
+			}
+		}
+	}
+	printf("  octree depth %u; %u rays in mid planes that must hit, %u "
+	       "that must miss: %u wrong; %u packed rays differ from "
+	       "alone\n",
+	       stats.max_depth, hits, misses, bad, packed_bad);
+	CHECK(hits > 50);
+	CHECK(misses > 100);
+	CHECK_EQ_INT(bad, 0);
+	CHECK_EQ_INT(packed_bad, 0);
+	bc_svo_caster_destroy(cs);
+	bc_svo_destroy(s);
+	bc_svo_rpn_finish(&rpn);
+	bc_tree_destroy(t);
+}
+
 static const struct bc_test tests[] = {
+    {"axis_rays_in_mid_planes_hit_the_spheres",
+     axis_rays_in_mid_planes_hit_the_spheres},
     {"packets_match_single_rays", packets_match_single_rays},
     {"stepping_matches_bisection", stepping_matches_bisection},
     {"svo_depth_matches_tiled", svo_depth_matches_tiled},
