@@ -747,6 +747,12 @@ static inline void child_box(const float lo[3], const float hi[3],
 	}
 }
 
+/* Lane l's bit in a packet's masks. Loops that build a mask take it from
+ * this table rather than shifting by l: they then vectorize. */
+_Static_assert(BC_SVO_PACKET == 8, "lane_bit holds eight lanes");
+static const uint32_t lane_bit[BC_SVO_PACKET] = {1u,  2u,  4u,  8u,
+                                                 16u, 32u, 64u, 128u};
+
 /*
  * A ray's way through a node's children. On axis i the ray crosses the
  * node's mid plane at tc = (mid - o) / d (a product by the reciprocal
@@ -822,8 +828,6 @@ static inline uint32_t child_spans(uint32_t oc,
                                    const float *ta, const float *tb, float *a,
                                    float *b)
 {
-	static const uint32_t lane_bit[BC_SVO_PACKET] = {1u,  2u,  4u,  8u,
-	                                                 16u, 32u, 64u, 128u};
 	const float *s[3], *e[3];
 	uint32_t m = 0, on[BC_SVO_PACKET];
 	for (int i = 0; i < 3; i++) {
@@ -836,7 +840,6 @@ static inline uint32_t child_spans(uint32_t oc,
 		float y = minf(minf(minf(tb[l], e[0][l]), e[1][l]), e[2][l]);
 		a[l] = x;
 		b[l] = y;
-		/* A table of the bits, not 1u << l: the loop vectorizes. */
 		on[l] = x < y ? lane_bit[l] : 0u;
 	}
 	for (uint32_t l = 0; l < BC_SVO_PACKET; l++) {
@@ -1001,8 +1004,6 @@ static void lanes_at(const struct bc_svo_caster *c, uint32_t n,
                      const float o[3], const float *t, uint32_t lanes, float *v,
                      uint32_t *prim)
 {
-	static const uint32_t lane_bit[BC__SVO_LANES] = {1u,  2u,  4u,  8u,
-	                                                 16u, 32u, 64u, 128u};
 	float px[BC__SVO_LANES], py[BC__SVO_LANES], pz[BC__SVO_LANES];
 	uint32_t rest = lanes & (lanes - 1u); /* all but the lowest */
 	if (!prim && !(rest & (rest - 1u))) {
@@ -1177,8 +1178,6 @@ static uint32_t packet_step(struct bc_svo_caster *c,
                             struct bc_svo_hit *hits, float *th, bool *settled,
                             uint32_t *pid, uint32_t *idset)
 {
-	static const uint32_t lane_bit[BC_SVO_PACKET] = {1u,  2u,  4u,  8u,
-	                                                 16u, 32u, 64u, 128u};
 	/* The lanes' struct lane_step by field: every round's decisions
 	 * (step_next, the sample's test, step_on) run over all eight lanes
 	 * as selects, in loops the compiler vectorizes; the lanes outside
