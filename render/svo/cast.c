@@ -638,8 +638,8 @@ static float closest(struct ray_field *rf, float a, float va, float b)
  * prediction of its zero, overshot by half, as the sphere tracer's
  * refinement in render/cpu/trace.c does) while it descends, and walks a
  * band at a time where it does not; a sample below zero is a crossing and
- * is refined to it; a sample above the band ends the stretch, and golden
- * section search then narrows the smallest sample's bracket. Probes go at
+ * is refined to it; a sample above the band ends the stretch, and
+ * closest() then narrows the smallest sample's bracket. Probes go at
  * most SETTLE_MAX_REACH bands ahead (a ray nearly parallel to a surface
  * predicts its zero far away, and a long probe could jump a dip and the
  * bump after it), the march at most 64 bands deep (beyond that the ray is
