@@ -1442,9 +1442,19 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 	}
 	for (uint32_t b = found & ~alone; b; b &= b - 1u) {
 		uint32_t l = bc__svo_lowest(b);
-		finish_hit(c, o, d[l], ta0[l], tb0[l], th[l], settled[l],
-		           terms[l], mask[l], cp, (idset >> l) & 1u, pid[l],
-		           &hits[l]);
+		if (settled[l] && (idset >> l) & 1u) {
+			/* finish_hit's whole work for most hits, without the
+			 * call (its frame is sized for settling). */
+			hits[l].leaf_terms = terms[l];
+			hits[l].t = th[l];
+			hits[l].mask = mask[l];
+			hits[l].prim = pid[l];
+			hits[l].evals++;
+		} else {
+			finish_hit(c, o, d[l], ta0[l], tb0[l], th[l],
+			           settled[l], terms[l], mask[l], cp,
+			           (idset >> l) & 1u, pid[l], &hits[l]);
+		}
 		hit |= 1u << l;
 	}
 	for (uint32_t b = alone; b; b &= b - 1u) {
