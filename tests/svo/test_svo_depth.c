@@ -550,11 +550,11 @@ static void packets_match_single_rays(void)
 /* Rays along an axis that lie in the octree's mid planes never cross them:
  * the walk puts such a ray in the upper half, where a point on the plane
  * lies (bc_svo_locate). A sphere with eight small ones around it, in an
- * octree subdivided down to one term a leaf (two levels): rays along each axis, both
- * ways, in the planes of the first three levels (and at their crossings)
- * hit the first sphere on their line where the formula puts it, and miss
- * where no sphere is near their line, alone and in packets with tilted
- * rays. */
+ * octree subdivided down to one term a leaf (two levels): rays along each
+ * axis, both ways, in the planes of the first three levels (and at their
+ * crossings) hit the first sphere on their line where the formula puts
+ * it, and miss where no sphere is near their line, alone and in packets
+ * with tilted rays. */
 #define MIDPLANE_SPHERES 9
 static void axis_rays_in_mid_planes_hit_the_spheres(void)
 {
