@@ -422,6 +422,28 @@ packet_mismatches_random(const struct bc_svo *s, const struct bc_svo_rpn *rpn,
 
 /* The cast parameters of a w x h frame of cam, as the backend sets them,
  * and the hit band the octree must keep for them (with its 50 % slack). */
+/* The packet tests' verdict on one octree and view: packet_mismatches over
+ * a w x h frame (cp filled for it) and packet_mismatches_random (300
+ * packets from seed) find no ray that differs from its cast alone, more
+ * than a twentieth of the frame's rays hit, and at most a twentieth of
+ * the blocks' rays are cast alone (the packets really walk together).
+ * Prints one line, label first, with the counts. */
+static inline bool packets_agree(const struct bc_svo *s,
+                                 const struct bc_svo_rpn *rpn,
+                                 const struct bc_camera *cam, uint32_t w,
+                                 uint32_t h, struct bc_svo_cast_params *cp,
+                                 uint64_t seed, const char *label)
+{
+	uint32_t hits, alone;
+	uint32_t bad = packet_mismatches(s, cam, w, h, cp, &hits, &alone);
+	uint32_t rnd = packet_mismatches_random(s, rpn, cp, 300, seed);
+	printf("  %s: %u of %u rays hit, %u differ in packets (%u of the "
+	       "blocks' cast alone), %u of random packets\n",
+	       label, hits, w * h, bad, alone, rnd);
+	return bad == 0 && rnd == 0 && hits > w * h / 20 &&
+	       alone * 20u <= w * h;
+}
+
 static inline float frame_cast_params(const struct bc_svo_rpn *rpn,
                                       const struct bc_camera *cam, uint32_t w,
                                       uint32_t h, struct bc_svo_cast_params *cp)
