@@ -863,12 +863,13 @@ static inline uint32_t reciprocal(const float d[3], float inv[3])
 /* The ray entered the hit band at th in a leaf whose variant is mask (the
  * full tree's for a full leaf), after leaves of terms active terms at
  * most; [ta, tb] is its segment in the octree. Settles the depth and takes
- * the id and the normals' variant (the id is `id` if have_id). */
+ * the id and the normals' variant. (A packet's settled hits whose id it
+ * took already are finished in place: bc_svo_cast_packet.) */
 static void finish_hit(struct bc_svo_caster *c, const float o[3],
                        const float d[3], float ta, float tb, float th,
                        bool settled, uint32_t terms, struct bc_svo_cmask mask,
-                       const struct bc_svo_cast_params *cp, bool have_id,
-                       uint32_t id, struct bc_svo_hit *hit)
+                       const struct bc_svo_cast_params *cp,
+                       struct bc_svo_hit *hit)
 {
 	const struct bc_svo *s = c->s;
 	hit->leaf_terms = terms;
@@ -883,14 +884,6 @@ static void finish_hit(struct bc_svo_caster *c, const float o[3],
 	}
 	hit->t = th;
 	hit->mask = mask;
-	if (have_id) {
-		/* The packet took the id already: the point lies in the leaf
-		 * of the hit (whose variant mask is), where bc_svo_locate
-		 * would have found it (packet_step). */
-		hit->prim = id;
-		hit->evals++;
-		return;
-	}
 	{
 		float p[3] = {o[0] + th * d[0], o[1] + th * d[1],
 		              o[2] + th * d[2]};
@@ -981,8 +974,7 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
 	if (!found) {
 		return false;
 	}
-	finish_hit(c, o, d, ta, tb, th, settled, terms, mask, cp, false, 0,
-	           hit);
+	finish_hit(c, o, d, ta, tb, th, settled, terms, mask, cp, hit);
 	return true;
 }
 
@@ -998,8 +990,9 @@ struct pent {
 
 /* The leaf's variant (its n terms decoded in c->pidx) at o + t[l] d[l]
  * for the lanes of `lanes` (not zero), in one call (d[l]: the packet's
- * directions, c->pd); the other lanes evaluate the point o, whatever their
- * t. With prim, also the primitive deciding each lane's value. */
+ * directions, c->pd); the other lanes' values are the variant's at o,
+ * whatever their t (0 where one or two lanes are live). With prim, also
+ * the primitive deciding each lane's value. */
 static void lanes_at(const struct bc_svo_caster *c, uint32_t n,
                      const float o[3], const float *t, uint32_t lanes, float *v,
                      uint32_t *prim)
@@ -1442,8 +1435,11 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 	}
 	for (uint32_t b = found & ~alone; b; b &= b - 1u) {
 		uint32_t l = bc__svo_lowest(b);
-		if (settled[l] && (idset >> l) & 1u) {
-			/* finish_hit's whole work for most hits, without the
+		if ((idset >> l) & 1u) {
+			/* The packet took the id of this settled hit: the
+			 * point lies in the leaf of the hit (whose variant
+			 * mask is), where bc_svo_locate would have found it
+			 * (packet_ids). What finish_hit would do, without its
 			 * call (its frame is sized for settling). */
 			hits[l].leaf_terms = terms[l];
 			hits[l].t = th[l];
@@ -1452,8 +1448,7 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 			hits[l].evals++;
 		} else {
 			finish_hit(c, o, d[l], ta0[l], tb0[l], th[l],
-			           settled[l], terms[l], mask[l], cp,
-			           (idset >> l) & 1u, pid[l], &hits[l]);
+			           settled[l], terms[l], mask[l], cp, &hits[l]);
 		}
 		hit |= 1u << l;
 	}
