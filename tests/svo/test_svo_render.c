@@ -5,6 +5,7 @@
  * the backend's contract: empty trees, syncs after edits, bad options.
  */
 #include <stdio.h>
+#include <string.h>
 
 #include "blobcast/render.h"
 #include "blobcast/scene.h"
@@ -282,7 +283,46 @@ static void frame_over_budget_is_incomplete(void)
 	bc_tree_destroy(t);
 }
 
+/* A packet skips its beam test in the leaf where the caster's previous
+ * packet hit, and every thread has its own caster: the evaluation counts
+ * (the stats, the debug view's colours) must still not depend on which
+ * tiles a thread took (svo.h, bc_svo_caster_forget). One to four threads,
+ * twice each: the same counts and the same debug frame. */
+static void evaluation_counts_do_not_depend_on_threads(void)
+{
+	struct bc_gen_opts o = {.count = 64,
+	                        .kind = BC_GEN_KIND_SPHERES,
+	                        .blend = BC_GEN_BLEND_SHARP};
+	struct bc_tree *t = bc_tree_create();
+	struct bc_camera cam;
+	struct bc_frame f, g;
+	struct bc_render_stats st;
+	uint64_t evals = 0;
+	REQUIRE(t);
+	REQUIRE(bc_gen("fig18", &o, t, &cam, NULL) == 0);
+	REQUIRE(bc_frame_init(&f, W, H) == 0);
+	REQUIRE(bc_frame_init(&g, W, H) == 0);
+	for (uint32_t k = 0; k < 8; k++) {
+		struct bc_render_opts ro = {.threads = 1 + k % 4,
+		                            .debug = BC_DEBUG_EVALS};
+		REQUIRE(bc_render_once(BC_BACKEND_SVO, &ro, t, &cam,
+		                       k ? &g : &f, &st, NULL) == 0);
+		if (k == 0) {
+			evals = st.field_evals;
+			continue;
+		}
+		CHECK(st.field_evals == evals);
+		CHECK(memcmp(f.rgba, g.rgba, (size_t)W * H * 4) == 0);
+	}
+	CHECK(evals > (uint64_t)W * H);
+	bc_frame_finish(&f);
+	bc_frame_finish(&g);
+	bc_tree_destroy(t);
+}
+
 static const struct bc_test tests[] = {
+    {"evaluation_counts_do_not_depend_on_threads",
+     evaluation_counts_do_not_depend_on_threads},
     {"frame_over_budget_is_incomplete", frame_over_budget_is_incomplete},
     {"svo_matches_tiled_on_generated_scenes",
      svo_matches_tiled_on_generated_scenes},
