@@ -710,6 +710,9 @@ static int dec_pick_result(struct dec *d, struct bc_msg_pick_result *p)
 	return 0;
 }
 
+/* STATS's optional load section (PROTOCOL.md 7.18). */
+#define STATS_LOAD_BYTES 44u
+
 static int dec_stats(struct dec *d, struct bc_msg_stats *s)
 {
 	TRY(rd_u64(d, "uptime_ms", &s->uptime_ms));
@@ -724,6 +727,49 @@ static int dec_stats(struct dec *d, struct bc_msg_stats *s)
 	TRY(rd_f32_nonneg(d, "encode_ms_avg", &s->encode_ms_avg));
 	TRY(rd_f32_nonneg(d, "edit_ms_avg", &s->edit_ms_avg));
 	TRY(rd_f32_nonneg(d, "fps", &s->fps));
+	/* The load section follows only when the client asked for it: the
+	 * payload's length tells (64 or 64 + 44 bytes); anything else
+	 * is bytes after the last field. */
+	if (bc_rd_left(&d->c) == 0) {
+		return 0;
+	}
+	if (bc_rd_left(&d->c) != STATS_LOAD_BYTES) {
+		return fail(
+		    d, BC_EPROTO_TRAILING,
+		    "%zu bytes after the last field, not a load section",
+		    bc_rd_left(&d->c));
+	}
+	s->has_load = true;
+	TRY(rd_f32_nonneg(d, "loop_turn_max_ms", &s->load.loop_turn_max_ms));
+	TRY(rd_f32_nonneg(d, "loop_request_max_ms",
+	                  &s->load.loop_request_max_ms));
+	TRY(rd_u32(d, "render_workers", &s->load.render_workers));
+	TRY(rd_u32(d, "jobs_queued", &s->load.jobs_queued));
+	TRY(rd_u32(d, "jobs_running", &s->load.jobs_running));
+	TRY(rd_u64(d, "view_bytes", &s->load.view_bytes));
+	TRY(rd_u64(d, "view_cap", &s->load.view_cap));
+	TRY(rd_u64(d, "session_render_us", &s->load.session_render_us));
+	return 0;
+}
+
+/* GET_STATS: empty, or one byte of parts (PROTOCOL.md 7.18). */
+static int dec_get_stats(struct dec *d, struct bc_msg_get_stats *g)
+{
+	if (bc_rd_left(&d->c) == 0) {
+		return 0;
+	}
+	TRY(rd_u8(d, "parts", &g->parts));
+	if (g->parts & ~BC_PROTO_STATS_PARTS_ALL) {
+		return fail(d, BC_EPROTO_FLAGS,
+		            "parts 0x%02x has undefined bits",
+		            (unsigned)g->parts);
+	}
+	if (g->parts == 0) {
+		return fail(d, BC_ERANGE, "parts 0 (leave it out)");
+	}
+	if (!(g->parts & BC_PROTO_STATS_LOAD)) {
+		return fail(d, BC_ERANGE, "parts RESET without LOAD");
+	}
 	return 0;
 }
 
@@ -739,9 +785,10 @@ static int dec_body(struct dec *d, struct bc_msg *m)
 	case BC_MSG_PING:
 	case BC_MSG_PONG:
 		return rd_u64(d, "stamp", &m->ping.stamp);
+	case BC_MSG_GET_STATS:
+		return dec_get_stats(d, &m->get_stats);
 	case BC_MSG_OK:
 	case BC_MSG_SESSION_LEAVE:
-	case BC_MSG_GET_STATS:
 	case BC_MSG_UNDO:
 	case BC_MSG_REDO:
 	case BC_MSG_SESSION_LIST:

@@ -324,8 +324,25 @@ static void w_body(struct bc__w *w, const struct bc_msg *m)
 		bc__put_f32(w, s->encode_ms_avg);
 		bc__put_f32(w, s->edit_ms_avg);
 		bc__put_f32(w, s->fps);
+		if (s->has_load) {
+			const struct bc_proto_load *l = &s->load;
+			bc__put_f32(w, l->loop_turn_max_ms);
+			bc__put_f32(w, l->loop_request_max_ms);
+			bc__put_u32(w, l->render_workers);
+			bc__put_u32(w, l->jobs_queued);
+			bc__put_u32(w, l->jobs_running);
+			bc__put_u64(w, l->view_bytes);
+			bc__put_u64(w, l->view_cap);
+			bc__put_u64(w, l->session_render_us);
+		}
 		break;
 	}
+	case BC_MSG_GET_STATS:
+		/* Left out when 0: the first version's empty GET_STATS. */
+		if (m->get_stats.parts != 0) {
+			bc__put_u8(w, m->get_stats.parts);
+		}
+		break;
 	case BC_MSG_SESSION_DELETE:
 		w_str(w, "name", m->session_delete.name, BC_PROTO_MAX_NAME);
 		break;
@@ -348,7 +365,7 @@ static void w_body(struct bc__w *w, const struct bc_msg *m)
 		}
 		break;
 	}
-	default: /* OK, SESSION_LEAVE, GET_STATS, UNDO, REDO, SESSION_LIST:
+	default: /* OK, SESSION_LEAVE, UNDO, REDO, SESSION_LIST:
 	          * no payload */
 		break;
 	}

@@ -26,6 +26,8 @@
 #define SESSION_ENTRY_MAX (STR_MAX(BC_PROTO_MAX_NAME) + 2u + 4u + 8u + 8u + 1u)
 #define SESSIONS_MAX (2u + BC_PROTO_MAX_SESSIONS_LISTED * SESSION_ENTRY_MAX)
 #define BULK BC_PROTO_MAX_PAYLOAD
+/* STATS: the client's figures, then the optional load section. */
+#define STATS_MAX (64u + 44u)
 /* A camera: eye, target, up (3 f32 each) and fov_y_deg. */
 #define CAMERA_SIZE 40u
 
@@ -60,8 +62,8 @@ static const struct bc__type_info types[BC_MSG_COUNT] = {
     [BC_MSG_PICK] = {"PICK", BC__FROM_CLIENT, 0, 4},
     [BC_MSG_PICK_RESULT] = {"PICK_RESULT", BC__FROM_SERVER, 0, 24},
     [BC_MSG_SNAPSHOT] = {"SNAPSHOT", BC__FROM_CLIENT, 0, 2},
-    [BC_MSG_GET_STATS] = {"GET_STATS", BC__FROM_CLIENT, 0, 0},
-    [BC_MSG_STATS] = {"STATS", BC__FROM_SERVER, 0, 64},
+    [BC_MSG_GET_STATS] = {"GET_STATS", BC__FROM_CLIENT, 0, 1},
+    [BC_MSG_STATS] = {"STATS", BC__FROM_SERVER, 0, STATS_MAX},
     [BC_MSG_SESSION_DELETE] = {"SESSION_DELETE", BC__FROM_CLIENT, 0,
                                STR_MAX(BC_PROTO_MAX_NAME)},
     [BC_MSG_UNDO] = {"UNDO", BC__FROM_CLIENT, 0, 0},

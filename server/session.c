@@ -641,6 +641,11 @@ void bc_handle_stats(struct bc_conn *c, const struct bc_msg *m)
 	    c->session ? (float)c->session->edit_ms_avg : 0.0f;
 	st.stats.fps =
 	    secs > 0.0 ? (float)((double)c->frames_sent / secs) : 0.0f;
+	if (m->get_stats.parts & BC_PROTO_STATS_LOAD) {
+		st.stats.has_load = true;
+		st.stats.load.render_workers = 1;
+		st.stats.load.view_cap = BC_SRV_VIEW_BYTES;
+	}
 	bc_conn_send(c, &st);
 }
 

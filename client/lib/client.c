@@ -975,8 +975,15 @@ int bc_client_camera(struct bc_client *c, const struct bc_camera *cam,
 int bc_client_stats(struct bc_client *c, struct bc_msg_stats *out,
                     struct bc_errinfo *ei)
 {
+	return bc_client_stats_parts(c, 0, out, ei);
+}
+
+int bc_client_stats_parts(struct bc_client *c, uint8_t parts,
+                          struct bc_msg_stats *out, struct bc_errinfo *ei)
+{
 	struct bc_msg m = {.type = BC_MSG_GET_STATS};
 	uint32_t seq;
+	m.get_stats.parts = parts;
 	int rc;
 	memset(out, 0, sizeof(*out));
 	if ((rc = send_or_say(c, &m, &seq, ei)) ||

@@ -90,6 +90,9 @@ export const FLAG = Object.freeze({
  * only. */
 export const PLANE = Object.freeze({ DEPTH: 0x01, IDS: 0x02, ALL: 0x03 });
 
+/* GET_STATS parts: the daemon's load section, and a reset of its maxima. */
+export const STATS_PARTS = Object.freeze({ LOAD: 0x01, RESET: 0x02, ALL: 0x03 });
+
 /* The number of plane rectangles (0..2) a FRAME with these flags carries
  * after its colour rectangle. */
 export function framePlanes(flags) {
@@ -252,8 +255,8 @@ T(17, 'FRAME', FROM_SERVER, FLAG.STILL | FLAG.SNAPSHOT | FLAG.INCOMPLETE |
 T(18, 'PICK', FROM_CLIENT, 0, 4);
 T(19, 'PICK_RESULT', FROM_SERVER, 0, 24);
 T(20, 'SNAPSHOT', FROM_CLIENT, 0, 2);
-T(21, 'GET_STATS', FROM_CLIENT, 0, 0);
-T(22, 'STATS', FROM_SERVER, 0, 64);
+T(21, 'GET_STATS', FROM_CLIENT, 0, 1);
+T(22, 'STATS', FROM_SERVER, 0, 64 + 44); /* + the load section */
 T(23, 'SESSION_DELETE', FROM_CLIENT, 0, strMax(L.MAX_NAME));
 T(24, 'UNDO', FROM_CLIENT, 0, 0);
 T(25, 'REDO', FROM_CLIENT, 0, 0);
@@ -698,6 +701,11 @@ function decFrame(d, flags, m) {
 
 const STATS_FLOATS = ['render_ms_last', 'render_ms_avg', 'encode_ms_last',
 	'encode_ms_avg', 'edit_ms_avg', 'fps'];
+/* STATS's optional load section (PROTOCOL.md 7.18). */
+const STATS_LOAD_BYTES = 44;
+const LOAD_F32 = ['loop_turn_max_ms', 'loop_request_max_ms'];
+const LOAD_U32 = ['render_workers', 'jobs_queued', 'jobs_running'];
+const LOAD_U64 = ['view_bytes', 'view_cap', 'session_render_us'];
 
 /* The origin of an applied change, as EDIT_APPLIED and SESSION_CAMERA_SET
  * carry it: its order (from 1), its author's id and the author's seq. */
@@ -770,9 +778,25 @@ function decBody(d, m) {
 	case MSG.PONG:
 		m.stamp = d.u64('stamp');
 		break;
+	case MSG.GET_STATS:
+		/* parts is optional, left out when 0 (PROTOCOL.md 7.18). */
+		m.parts = 0;
+		if (d.left()) {
+			m.parts = d.u8('parts');
+			if (m.parts & ~STATS_PARTS.ALL) {
+				d.fail('EPROTO_FLAGS',
+					`parts ${m.parts} has undefined bits`);
+			}
+			if (m.parts === 0) {
+				d.fail('ERANGE', 'parts 0 (leave it out)');
+			}
+			if (!(m.parts & STATS_PARTS.LOAD)) {
+				d.fail('ERANGE', 'parts RESET without LOAD');
+			}
+		}
+		break;
 	case MSG.OK:
 	case MSG.SESSION_LEAVE:
-	case MSG.GET_STATS:
 	case MSG.UNDO:
 	case MSG.REDO:
 	case MSG.SESSION_LIST:
@@ -933,6 +957,25 @@ function decBody(d, m) {
 		m.clients = d.u32('clients');
 		for (const k of STATS_FLOATS) {
 			m[k] = d.f32nonneg(k);
+		}
+		/* The load section answers a GET_STATS that asked for it:
+		 * exactly 44 more bytes, or none. */
+		if (d.left() === 0) {
+			break;
+		}
+		if (d.left() !== STATS_LOAD_BYTES) {
+			d.fail('EPROTO_TRAILING',
+				`${d.left()} bytes after the last field`);
+		}
+		m.has_load = true;
+		for (const k of LOAD_F32) {
+			m[k] = d.f32nonneg(k);
+		}
+		for (const k of LOAD_U32) {
+			m[k] = d.u32(k);
+		}
+		for (const k of LOAD_U64) {
+			m[k] = d.u64(k);
 		}
 		break;
 	default:
@@ -1382,9 +1425,14 @@ function encBody(w, m) {
 	case MSG.PONG:
 		w.u64('stamp', m.stamp);
 		break;
+	case MSG.GET_STATS:
+		/* Left out when 0: the first version's empty GET_STATS. */
+		if (m.parts) {
+			w.u8('parts', m.parts);
+		}
+		break;
 	case MSG.OK:
 	case MSG.SESSION_LEAVE:
-	case MSG.GET_STATS:
 	case MSG.UNDO:
 	case MSG.REDO:
 	case MSG.SESSION_LIST:
@@ -1519,6 +1567,17 @@ function encBody(w, m) {
 		w.u32('clients', m.clients);
 		for (const k of STATS_FLOATS) {
 			w.f32(k, m[k]);
+		}
+		if (m.has_load) {
+			for (const k of LOAD_F32) {
+				w.f32(k, m[k]);
+			}
+			for (const k of LOAD_U32) {
+				w.u32(k, m[k]);
+			}
+			for (const k of LOAD_U64) {
+				w.u64(k, m[k]);
+			}
 		}
 		break;
 	default:

@@ -77,7 +77,7 @@ TYPE_MAX = {
     "SCENE_LOAD": MAX_PAYLOAD, "SCENE_STATE": MAX_PAYLOAD,
     "EDIT": MAX_PAYLOAD, "EDIT_APPLIED": MAX_PAYLOAD,
     "CAMERA": 40, "VIEW": 8, "FRAME": MAX_PAYLOAD, "PICK": 4,
-    "PICK_RESULT": 24, "SNAPSHOT": 2, "GET_STATS": 0, "STATS": 64,
+    "PICK_RESULT": 24, "SNAPSHOT": 2, "GET_STATS": 1, "STATS": 64 + 44,
     "SESSION_DELETE": strmax(MAX_NAME), "UNDO": 0, "REDO": 0,
     "SESSION_LIST": 0,
     "SESSIONS": 2 + MAX_SESSIONS_LISTED * (strmax(MAX_NAME) + 2 + 4 + 8 + 8 + 1),
@@ -351,11 +351,27 @@ STATS_F = ["render_ms_last", "render_ms_avg", "encode_ms_last",
            "encode_ms_avg", "edit_ms_avg", "fps"]
 
 
+LOAD_F32 = ["loop_turn_max_ms", "loop_request_max_ms"]
+LOAD_U32 = ["render_workers", "jobs_queued", "jobs_running"]
+LOAD_U64 = ["view_bytes", "view_cap", "session_render_us"]
+
+
 def w_stats(f):
     b = b"".join(u64(int(f[k])) for k in ("uptime_ms", "frames", "bytes",
                                             "order"))
     b += u32(f["sessions"]) + u32(f["clients"])
-    return b + b"".join(f32(f[k]) for k in STATS_F)
+    b += b"".join(f32(f[k]) for k in STATS_F)
+    # The load section only answers a GET_STATS that asked for it.
+    if f.get("has_load"):
+        b += b"".join(f32(f[k]) for k in LOAD_F32)
+        b += b"".join(u32(f[k]) for k in LOAD_U32)
+        b += b"".join(u64(int(f[k])) for k in LOAD_U64)
+    return b
+
+
+def w_get_stats(f):
+    # parts is optional and left out when 0 (the client's figures only).
+    return u8(f["parts"]) if f["parts"] else b""
 
 
 WRITERS = {
@@ -367,7 +383,7 @@ WRITERS = {
     "EDIT": w_edit, "EDIT_APPLIED": w_edit_applied, "CAMERA": w_camera,
     "VIEW": w_view, "FRAME": w_frame, "PICK": w_pick,
     "PICK_RESULT": w_pick_result, "SNAPSHOT": w_snapshot,
-    "GET_STATS": w_empty, "STATS": w_stats,
+    "GET_STATS": w_get_stats, "STATS": w_stats,
     "SESSION_DELETE": w_session_delete, "UNDO": w_empty, "REDO": w_empty,
     "SESSION_LIST": w_empty, "SESSIONS": w_sessions,
     "PRESENT": w_toggle, "FOLLOW": w_toggle, "PRESENTER": w_presenter,
@@ -1257,7 +1273,46 @@ def gen_stats():
     t.badp("NaN render time", pre + f32bits(0x7fc00000) + p[44:],
            "ENONFINITE")
     t.badp("negative fps", p[:60] + f32(-1.0), "ERANGE")
+    load = dict(base, has_load=True, loop_turn_max_ms=fl(3.25),
+                loop_request_max_ms=fl(1.5), render_workers=2,
+                jobs_queued=3, jobs_running=2, view_bytes="402653184",
+                view_cap="402653184", session_render_us="123456789")
+    q = t.ok("with the load section", load, seq=62)
+    t.badp("load section one byte short", q[:-1], "EPROTO_TRAILING")
+    t.badp("half a load section", q[:64 + 20], "EPROTO_TRAILING")
+    t.badp("load section, NaN loop turn", q[:64] + f32bits(0x7fc00000)
+           + q[68:], "ENONFINITE")
+    t.badp("load section, negative request time", q[:68] + f32(-1.0)
+           + q[72:], "ERANGE")
     t.dump("stats.json")
+
+
+def gen_get_stats():
+    t = Table("GET_STATS")
+    t.ok("empty", dict(parts=0), seq=12)
+    t.ok("load", dict(parts=1), seq=13)
+    p = t.ok("load and reset", dict(parts=3), seq=14)
+    # parts is an optional byte, so Table.common's shortened and
+    # lengthened payloads are written out here.
+    t.badp("parts 0", u8(0), "ERANGE")
+    t.badp("reset without load", u8(2), "ERANGE")
+    t.badp("parts bit 2", u8(5), "EPROTO_FLAGS")
+    t.badp("parts 0xff", u8(0xff), "EPROTO_FLAGS")
+    t.badp("one trailing byte", p + b"\x00", "EPROTO_LENGTH")
+    t.bad("length = type maximum + 1", header("GET_STATS", 2),
+          "EPROTO_LENGTH")
+    t.bad("length 2^31", header("GET_STATS", 2 ** 31), "EPROTO_LENGTH")
+    t.bad("length 2^32-1", header("GET_STATS", 2 ** 32 - 1),
+          "EPROTO_LENGTH")
+    t.bad("stream ends inside the header", frame("GET_STATS", p)[:9],
+          "EPROTO_TRUNCATED")
+    t.bad("stream ends inside the payload", frame("GET_STATS", p)[:-1],
+          "EPROTO_TRUNCATED")
+    t.bad("sent by the wrong side", frame("GET_STATS", b""), "EPROTO_TYPE",
+          reader=CLIENT)
+    t.bad("refused by a server before HELLO", frame("GET_STATS", b""),
+          "ESTATE", reader=PRE_HELLO)
+    t.dump("get_stats.json")
 
 
 # ---- Stream-level cases ------------------------------------------------------
@@ -1434,7 +1489,7 @@ def main():
     gen_pick()
     gen_pick_result()
     gen_snapshot()
-    gen_empty("GET_STATS", "client")
+    gen_get_stats()
     gen_stats()
     gen_session_delete()
     gen_empty("UNDO", "client")

@@ -351,8 +351,25 @@ static void build(enum bc_msg_type type, const json_t *f, struct bc_msg *m)
 		s->encode_ms_avg = jflt(json_object_get(f, "encode_ms_avg"));
 		s->edit_ms_avg = jflt(json_object_get(f, "edit_ms_avg"));
 		s->fps = jflt(json_object_get(f, "fps"));
+		s->has_load = json_is_true(json_object_get(f, "has_load"));
+		if (s->has_load) {
+			struct bc_proto_load *l = &s->load;
+			l->loop_turn_max_ms =
+			    jflt(json_object_get(f, "loop_turn_max_ms"));
+			l->loop_request_max_ms =
+			    jflt(json_object_get(f, "loop_request_max_ms"));
+			l->render_workers = (uint32_t)jint(f, "render_workers");
+			l->jobs_queued = (uint32_t)jint(f, "jobs_queued");
+			l->jobs_running = (uint32_t)jint(f, "jobs_running");
+			l->view_bytes = jint(f, "view_bytes");
+			l->view_cap = jint(f, "view_cap");
+			l->session_render_us = jint(f, "session_render_us");
+		}
 		break;
 	}
+	case BC_MSG_GET_STATS:
+		m->get_stats.parts = (uint8_t)jint(f, "parts");
+		break;
 	default:
 		break;
 	}
@@ -544,6 +561,8 @@ static int msg_eq(const struct bc_msg *a, const struct bc_msg *b)
 		       a->snapshot.planes == b->snapshot.planes;
 	case BC_MSG_STATS:
 		return memcmp(&a->stats, &b->stats, sizeof(a->stats)) == 0;
+	case BC_MSG_GET_STATS:
+		return a->get_stats.parts == b->get_stats.parts;
 	case BC_MSG_SESSION_DELETE:
 		return str_eq(a->session_delete.name, b->session_delete.name);
 	case BC_MSG_SESSIONS:

@@ -32,7 +32,8 @@ const fileOf = (name) => name.toLowerCase() + '.json';
 /* JSON fields -> the codec's shapes: u64 travel as decimal strings in the
  * vectors and are BigInt here; byte ranges travel as hex. */
 const U64 = new Set(['order', 'stamp', 'uptime_ms', 'frames', 'bytes',
-	'target_order', 'last_edit_ms']);
+	'target_order', 'last_edit_ms', 'view_bytes', 'view_cap',
+	'session_render_us']);
 const BYTES = new Set(['scene', 'subtree', 'data']);
 
 function fromJson(v, key) {

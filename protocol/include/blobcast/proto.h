@@ -130,6 +130,13 @@ enum bc_msg_type {
 #define BC_PROTO_PLANE_IDS 0x02u
 #define BC_PROTO_PLANES_ALL 0x03u
 
+/* GET_STATS parts (PROTOCOL.md 7.18): what STATS carries besides the
+ * client's own figures. LOAD asks for the daemon's load section; RESET
+ * (with LOAD only) then starts its maxima anew. */
+#define BC_PROTO_STATS_LOAD 0x01u
+#define BC_PROTO_STATS_RESET 0x02u
+#define BC_PROTO_STATS_PARTS_ALL 0x03u
+
 /* The number of plane rectangles (0..2) a FRAME with these flags carries
  * after its colour rectangle. */
 static inline unsigned bc_proto_flags_nplanes(uint16_t flags)
@@ -402,6 +409,28 @@ struct bc_msg_snapshot {
 	uint8_t planes;
 };
 
+/* GET_STATS: BC_PROTO_STATS_* bits; 0: the client's figures only. Encoded
+ * as an optional byte, left out when 0, so the first version's empty
+ * GET_STATS is the same message (a present 0 does not decode). */
+struct bc_msg_get_stats {
+	uint8_t parts;
+};
+
+/* STATS's load section, sent only to a GET_STATS that asked
+ * BC_PROTO_STATS_LOAD: how busy the daemon is. Maxima run from the start
+ * or from the last RESET. */
+struct bc_proto_load {
+	float loop_turn_max_ms;    /* longest busy turn of the event loop */
+	float loop_request_max_ms; /* longest single request on the loop */
+	uint32_t render_workers;
+	uint32_t jobs_queued;  /* render jobs waiting for a worker */
+	uint32_t jobs_running; /* render jobs started, not finished */
+	uint64_t view_bytes;   /* the view cache's planes and renderer state */
+	uint64_t view_cap;     /* its cap */
+	/* Render time spent for the client's session (0: in none), us. */
+	uint64_t session_render_us;
+};
+
 struct bc_msg_stats {
 	uint64_t uptime_ms;
 	uint64_t frames; /* FRAMEs sent to this client */
@@ -412,6 +441,8 @@ struct bc_msg_stats {
 	float encode_ms_last, encode_ms_avg;
 	float edit_ms_avg; /* applying one EDIT */
 	float fps;         /* frames per second sent to this client */
+	bool has_load;     /* the load section follows (asked by LOAD) */
+	struct bc_proto_load load;
 };
 
 /* PRESENT and FOLLOW: on 1 starts presenting (following), 0 stops; other
@@ -448,7 +479,7 @@ struct bc_msg_session_camera_set {
  * buffer (zero copy), arrays (members, ops, fields, rects) into storage the
  * reader owns. Both stay valid until the next call of any function on that
  * reader. For encoding, the caller points them at its own memory. Types
- * without payload (OK, SESSION_LEAVE, GET_STATS) use no union member. */
+ * without payload (OK, SESSION_LEAVE, UNDO, REDO) use no union member. */
 struct bc_msg {
 	enum bc_msg_type type;
 	uint16_t flags;
@@ -470,6 +501,7 @@ struct bc_msg {
 		struct bc_msg_pick pick;
 		struct bc_msg_pick_result pick_result;
 		struct bc_msg_snapshot snapshot;
+		struct bc_msg_get_stats get_stats;
 		struct bc_msg_stats stats;
 		struct bc_msg_session_delete session_delete;
 		struct bc_msg_sessions sessions;

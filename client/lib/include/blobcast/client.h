@@ -331,6 +331,11 @@ BC_API int bc_client_session_camera(struct bc_client *c,
 /* Sends GET_STATS and waits for STATS, copied into *out (reset on entry). */
 BC_API int bc_client_stats(struct bc_client *c, struct bc_msg_stats *out,
                            struct bc_errinfo *ei);
+/* The same asking for parts (BC_PROTO_STATS_LOAD, optionally with
+ * BC_PROTO_STATS_RESET): out->has_load tells that the load section came. */
+BC_API int bc_client_stats_parts(struct bc_client *c, uint8_t parts,
+                                 struct bc_msg_stats *out,
+                                 struct bc_errinfo *ei);
 
 /* ---- Edits
  * ----------------------------------------------------------------------- */
