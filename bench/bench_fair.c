@@ -458,6 +458,18 @@ static long log_first(const struct daemon *d, const char *needle, char *first,
 	return count;
 }
 
+/* Removes the daemon's directory and socket, and its log unless keep. */
+static void rm_daemon_files(const struct daemon *d, bool keep)
+{
+	char cmd[512], lp[128];
+	log_path(d, lp, sizeof(lp));
+	snprintf(cmd, sizeof(cmd), "rm -rf %s %s%s%s", d->dir, d->sock,
+	         keep ? "" : " ", keep ? "" : lp);
+	if (system(cmd) != 0) {
+		progress("could not remove %s", d->dir);
+	}
+}
+
 /*
  * Starts the daemon on a fresh directory /tmp/bc-fair-PID-N with its log
  * in DIR.log: the options daemon.h gives, then every --daemon-arg, then
@@ -465,7 +477,8 @@ static long log_first(const struct daemon *d, const char *needle, char *first,
  * four extra options and waits 10 s for a daemon that has already exited;
  * this one takes any number and notices at once. Returns 0 once the socket
  * accepts; -1 with the reason in why, and *exited set when the daemon
- * exited by itself (an option it refuses).
+ * exited by itself (an option it refuses). After a failure nothing of it
+ * is left but the log of a daemon that never listened (why names it).
  */
 static int fair_start(struct daemon *d, const char *const *extra, char *why,
                       bool *exited)
@@ -537,6 +550,8 @@ static int fair_start(struct daemon *d, const char *const *extra, char *why,
 			live_pid = 0;
 			d->pid = 0;
 			*exited = true;
+			/* The reason is in why: nothing to keep. */
+			rm_daemon_files(d, false);
 			return -1;
 		}
 		if (conn_open(&c, d) == 0) {
@@ -545,8 +560,11 @@ static int fair_start(struct daemon *d, const char *const *extra, char *why,
 		}
 		t_sleep_ms(20);
 	}
-	seterr(why, "the daemon did not listen on %s within %d s", d->sock,
-	       START_MS / 1000);
+	seterr(why, "the daemon did not listen on %s within %d s (its log: %s)",
+	       d->sock, START_MS / 1000, lp);
+	live_pid = 0;
+	daemon_stop(d, SIGKILL);
+	rm_daemon_files(d, true);
 	return -1;
 }
 
@@ -559,7 +577,7 @@ static int fair_start(struct daemon *d, const char *const *extra, char *why,
  */
 static void fair_stop(struct daemon *d, const char *scenario, bool keep)
 {
-	char cmd[512], lp[128];
+	char lp[128];
 	int status = 0;
 	log_path(d, lp, sizeof(lp));
 	live_pid = 0;
@@ -567,14 +585,14 @@ static void fair_stop(struct daemon *d, const char *scenario, bool keep)
 		if (waitpid(d->pid, &status, WNOHANG) == d->pid) {
 			char tail[512];
 			log_tail(d, tail, sizeof(tail));
-			error_line(
-			    "%s: the daemon had died by itself "
-			    "(%s %d) before the end; its log's last line: "
-			    "\"%s\" (log kept: %s)",
-			    scenario, WIFSIGNALED(status) ? "signal" : "status",
-			    WIFSIGNALED(status) ? WTERMSIG(status)
-			                        : WEXITSTATUS(status),
-			    tail, lp);
+			error_line("%s: the daemon had died by itself "
+			           "(%s %d) before the end; its log ends: "
+			           "\"%s\" (log kept: %s)",
+			           scenario,
+			           WIFSIGNALED(status) ? "signal" : "status",
+			           WIFSIGNALED(status) ? WTERMSIG(status)
+			                               : WEXITSTATUS(status),
+			           tail, lp);
 			keep = true;
 			d->pid = 0;
 		} else {
@@ -582,11 +600,7 @@ static void fair_stop(struct daemon *d, const char *scenario, bool keep)
 		}
 	}
 	if (d->dir[0]) {
-		snprintf(cmd, sizeof(cmd), "rm -rf %s %s%s%s", d->dir, d->sock,
-		         keep ? "" : " ", keep ? "" : lp);
-		if (system(cmd) != 0) {
-			progress("could not remove %s", d->dir);
-		}
+		rm_daemon_files(d, keep);
 	}
 }
 
@@ -2122,7 +2136,8 @@ struct orbit {
  * One orbit on a fresh daemon started with --render-threads threads (no
  * option when threads is NULL): the next CAMERA as soon as a FRAME for the
  * previous one has come. Returns 0; 1 when the daemon exited at start
- * (an option it does not take); -1 on another failure (r->err).
+ * (an option it does not take, r->err saying which); -1 on another
+ * failure (r->err).
  */
 static int scaling_run(const char *threads, struct orbit *r)
 {
@@ -2140,7 +2155,7 @@ static int scaling_run(const char *threads, struct orbit *r)
 	memset(r, 0, sizeof(*r));
 	if (fair_start(&d, extra, r->err, &exited)) {
 		fair_stop(&d, "scaling", !exited);
-		return exited && threads ? 1 : -1;
+		return exited ? 1 : -1;
 	}
 	if (client_session(&c, &d, "orbit", "orbit", true, &member, r->err) ||
 	    scene_fig18(&s, SCALE_SPHERES, BC_GEN_BLEND_SMOOTH, r->err) ||
@@ -2222,6 +2237,7 @@ static void scenario_scaling(void)
 	const char *sc = "scaling";
 	static const char *const threads[2] = {"1", "2"};
 	struct orbit r[2];
+	char refusal[ERRLEN] = "";
 	bool supported = true;
 	report("\n### scaling\n\n");
 	report("One client orbits fig18 %u smooth in a %dx%d JPEG view "
@@ -2237,21 +2253,33 @@ static void scenario_scaling(void)
 		rc = scaling_run(threads[i], &r[i]);
 		if (rc == 1) {
 			supported = false;
-			report("- --render-threads: not supported by this "
-			       "daemon (%s)\n",
-			       r[i].err);
-			report("RESULT scenario=%s what=orbit "
-			       "render_threads=%s supported=0\n",
-			       sc, threads[i]);
+			memcpy(refusal, r[i].err, sizeof(refusal));
 		} else if (rc < 0) {
 			error_line("%s, --render-threads %s: %s", sc,
 			           threads[i], r[i].err);
 		}
 	}
 	if (!supported) {
-		/* Today's daemon: its one render thread, as the before. */
+		/* Today's daemon: its one render thread, as the before. A
+		 * daemon that exits without the option too refuses something
+		 * else (a --daemon-arg), not --render-threads. */
+		int rc;
 		progress("scaling: the daemon's default");
-		if (scaling_run(NULL, &r[0]) != 0) {
+		rc = scaling_run(NULL, &r[0]);
+		if (rc == 1) {
+			error_line("%s: the daemon exits at start even without "
+			           "--render-threads: %s",
+			           sc, r[0].err);
+			disarm_alarm(sc);
+			return;
+		}
+		report("- --render-threads: not supported by this daemon "
+		       "(%s)\n",
+		       refusal);
+		report("RESULT scenario=%s what=orbit render_threads=1 "
+		       "supported=0\n",
+		       sc);
+		if (rc < 0) {
 			error_line("%s, default daemon: %s", sc, r[0].err);
 		}
 	}
