@@ -717,7 +717,7 @@ static void phase_trace(void *arg, uint32_t thread)
 		uint32_t tile = atomic_fetch_add(&tf->next, 1u);
 		uint32_t tx = tile % tf->tw, ty = tile / tf->tw;
 		struct bc__tile_job job;
-		uint64_t mask;
+		uint64_t mask, cut;
 		if (tile >= tf->ntiles) {
 			break;
 		}
@@ -744,7 +744,15 @@ static void phase_trace(void *arg, uint32_t thread)
 		        (ty + 1) * BC_CPU_TILE < h ? (ty + 1) * BC_CPU_TILE : h,
 		    .mask = mask,
 		};
-		bc__trace_tile(wk, &job);
+		cut = bc__trace_tile(wk, &job);
+		if (cut) {
+			/* One thread draws a tile: its byte is this
+			 * thread's to write. */
+			wk->short_rays += bc__popcount64(cut);
+			if (fc->short_tiles) {
+				fc->short_tiles[tile] = 1;
+			}
+		}
 		atomic_fetch_add(&tf->tiles_done, 1u);
 		if (thread == 0) {
 			bc__progress_tick(&tf->progress,
@@ -770,6 +778,7 @@ static int prepare_workers(struct bc__cpu *r, const struct bc_lin *lin,
 	for (uint32_t i = 0; i < r->threads; i++) {
 		struct bc__tile_worker *wk = &b->workers[i];
 		wk->evals = 0;
+		wk->short_rays = 0;
 		wk->overflows = 0;
 		wk->simd = r->base.opts.simd;
 		if (wk->cap < need) {
@@ -894,6 +903,8 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 	b = r->tiled;
 	lin = bc_tree_lin(base->tree);
 	bc__frame_setup(&fc, lin, cam, out, base->opts.debug);
+	fc.max_evals = region->max_evals;
+	fc.short_tiles = region->short_tiles;
 	tf.fc = &fc;
 	tf.region = region;
 	tf.b = b;
@@ -956,6 +967,7 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 		stats->rays = atomic_load(&tf.rays);
 		for (uint32_t i = 0; i < r->threads; i++) {
 			stats->field_evals += b->workers[i].evals;
+			stats->short_rays += b->workers[i].short_rays;
 		}
 	}
 	return 0;
