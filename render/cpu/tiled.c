@@ -21,7 +21,9 @@
  * edit (the sync hook's dirty primitives) drops the lists of the tiles in
  * its primitives' rectangles before and after the edit, which are the only
  * lists that can hold them. A list is computed from the tile alone, so it
- * is the same whichever render computes it.
+ * is the same whichever render computes it. For the same reason a
+ * release (bc_renderer_release) may drop everything kept: the renders
+ * after it compute the lists again, the same lists.
  *
  * Tracing. Each tile (one work item, on any thread) sorts its list by entry
  * and walks depth ranges as §6.2 does (eq. 21-22): drop active primitives
@@ -1033,6 +1035,45 @@ static void tiled_damage(struct bc_renderer *base, const struct bc_camera *cam,
 	}
 }
 
+/* Frees every buffer kept for the last view: the next render finds no
+ * buffers, as the first one did, and computes the lists it needs again
+ * from their tiles alone, so it draws the same pixels. */
+static void tiled_release(struct bc_renderer *base)
+{
+	struct bc__cpu *r = bc__cpu_of(base);
+	bc__tiled_free(r->tiled);
+	r->tiled = NULL;
+}
+
+/* What tiled_release frees, from the buffers' capacities. */
+static size_t tiled_kept_bytes(const struct bc_renderer *base)
+{
+	const struct bc__tiled_bufs *b =
+	    ((const struct bc__cpu *)(const void *)base)->tiled;
+	size_t n;
+	if (!b) {
+		return 0;
+	}
+	n = sizeof(*b) + b->dirs_cap * sizeof(*b->dirs) +
+	    b->prims_cap * sizeof(*b->prims) + b->cand_cap * sizeof(*b->cand) +
+	    (b->frags_cap + b->frags_alt_cap) * sizeof(*b->frags);
+	if (b->tiles_cap) {
+		n += b->tiles_cap * (sizeof(*b->state) + sizeof(*b->list_n) +
+		                     sizeof(*b->cur) +
+		                     CONES_PER_TILE * sizeof(*b->cones)) +
+		     2 * (b->tiles_cap + 1) * sizeof(*b->cand_off);
+	}
+	for (uint32_t i = 0; i < BC_CPU_MAX_THREADS; i++) {
+		const struct bc__tile_worker *wk = &b->workers[i];
+		n +=
+		    (size_t)wk->cap * (sizeof(*wk->act) + sizeof(*wk->act_t1)) +
+		    (size_t)wk->tile_cap * sizeof(*wk->tile_act) +
+		    ((size_t)wk->view.cap + wk->tile_view.cap) *
+		        sizeof(*wk->view.instr);
+	}
+	return n;
+}
+
 const struct bc_backend_ops bc_backend_tiled_ops = {
     .name = "tiled",
     .create = tiled_create,
@@ -1041,4 +1082,6 @@ const struct bc_backend_ops bc_backend_tiled_ops = {
     .render = tiled_render,
     .key = bc__cpu_key,
     .damage = tiled_damage,
+    .release = tiled_release,
+    .kept_bytes = tiled_kept_bytes,
 };
