@@ -14,7 +14,8 @@
  * and counts against the frame's time budget: past it no tile is started.
  * A region's evaluation bound goes to the caster (cast.c), which stops a
  * ray at it; a ray that ran out, or whose normal would go past it, is left
- * as the frame held it.
+ * as the frame held it. release frees the octree and keeps its band, so
+ * the next render builds the same one.
  */
 #include "svo_impl.h"
 
@@ -116,9 +117,11 @@ static int svo_sync(struct bc_renderer *base, const struct bc_tree *t,
 	if (r->synced && unchanged(dirty)) {
 		return 0;
 	}
-	/* Any change moves the field somewhere: the octree is rebuilt. */
+	/* Any change moves the field somewhere: the octree is rebuilt, for
+	 * the band of the next frame. */
 	bc_svo_destroy(r->svo);
 	r->svo = NULL;
+	r->band = 0.0f;
 	bc_svo_rpn_finish(&r->rpn);
 	r->synced = false;
 	l = t ? bc_tree_lin(t) : NULL;
@@ -482,11 +485,15 @@ static int svo_render(struct bc_renderer *base, const struct bc_camera *cam,
 	if (!r->empty) {
 		float need = frame_band(&r->rpn, fr.vr.eye, &fr.cp);
 		if (!r->svo || need > r->band) {
+			/* After a release the octree is built again with
+			 * the band it had: the same octree, the same
+			 * pixels. */
 			struct bc_svo_opts so = {
 			    .arith = base->opts.svo_range,
 			    .threshold = base->opts.svo_threshold,
 			    .max_depth = base->opts.svo_max_depth,
-			    .band = need * SVO_BAND_SLACK,
+			    .band = need > r->band ? need * SVO_BAND_SLACK
+			                           : r->band,
 			};
 			bc_svo_destroy(r->svo);
 			r->svo = NULL;
@@ -527,12 +534,38 @@ static int svo_render(struct bc_renderer *base, const struct bc_camera *cam,
 	return 0;
 }
 
+/* Frees the octree, by far the largest thing kept (the RPN belongs to the
+ * synced tree and stays). The band it was built with stays too, so that
+ * the next render builds the same octree. */
+static void svo_release(struct bc_renderer *base)
+{
+	struct svo_renderer *r = svo_of(base);
+	bc_svo_destroy(r->svo);
+	r->svo = NULL;
+}
+
+/* The octree's bytes, from its arrays' capacities. */
+static size_t svo_kept_bytes(const struct bc_renderer *base)
+{
+	const struct bc_svo *s =
+	    ((const struct svo_renderer *)(const void *)base)->svo;
+	if (!s) {
+		return 0;
+	}
+	return sizeof(*s) + (size_t)s->capnodes * sizeof(*s->nodes) +
+	       (size_t)s->capleaves * sizeof(*s->leaves) +
+	       s->pool.cap * sizeof(*s->pool.v) +
+	       (size_t)s->rpn->nwords * sizeof(*s->full);
+}
+
 const struct bc_backend_ops bc_backend_svo_ops = {
     .name = "svo",
     .create = svo_create,
     .destroy = svo_destroy,
     .sync = svo_sync,
     .render = svo_render,
+    .release = svo_release,
+    .kept_bytes = svo_kept_bytes,
     /* No key and no damage hook: any edit rebuilds the octree, whose
      * cells (and so every pixel) depend on all primitives. */
 };
