@@ -39,6 +39,10 @@
  * Short buffer, read back with the statistics: its pixel is not copied
  * and its tile is marked in the region's short_tiles.
  *
+ * Memory. The images, the readback buffer, the tile table and the
+ * A-buffer's storage are sized for the last view and kept; release frees
+ * them and the next frame allocates them again.
+ *
  * Each entry point makes the context current and releases it before
  * returning, so a renderer may be driven from any one thread at a time.
  */
@@ -1376,6 +1380,62 @@ static void gl_damage(struct bc_renderer *base, const struct bc_camera *cam,
 	}
 }
 
+/* Frees the storage of everything sized for the last view: the images
+ * and the readback buffer, the tile table and Short words, the A-buffer's
+ * fragments and the tracer's scratch, the region's tile list. The next
+ * render allocates them again as the first did (fragment room for what the
+ * last frame had, so it need not draw twice), and since no pixel depends
+ * on where these live or how large they are, it draws the same pixels. */
+static void gl_release(struct bc_renderer *base)
+{
+	static const int per_view[] = {BC__GL_BUF_LINKS,  BC__GL_BUF_TILES,
+	                               BC__GL_BUF_SORTED, BC__GL_BUF_SCRATCH,
+	                               BC__GL_BUF_REGION, BC__GL_BUF_SHORT};
+	struct gl_renderer *r = gl_of(base);
+	GladGLContext *gl = &r->ctx.gl;
+	bc_free(r->region);
+	r->region = NULL;
+	r->region_cap = 0;
+	if (enter(r, NULL)) {
+		return; /* a lost context: nothing on it to free */
+	}
+	gl->DeleteTextures(3, r->tex);
+	memset(r->tex, 0, sizeof(r->tex));
+	r->tex_w = r->tex_h = 0;
+	gl->BindBuffer(GL_PIXEL_PACK_BUFFER, r->pbo);
+	gl->BufferData(GL_PIXEL_PACK_BUFFER, 0, NULL, GL_STREAM_READ);
+	gl->BindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+	r->pbo_size = 0;
+	for (size_t i = 0; i < sizeof(per_view) / sizeof(per_view[0]); i++) {
+		buf_alloc(r, per_view[i], 0, NULL);
+	}
+	if (!r->want_cap && r->frag_cap) {
+		r->want_cap = r->frag_cap;
+	}
+	r->frag_cap = 0;
+	(void)bc__gl_check(&r->ctx, "releasing a view", NULL);
+	bc__gl_ctx_unbind(&r->ctx);
+}
+
+/* What gl_release frees: the per-view buffers above their floor of 64
+ * bytes, the images (12 bytes a pixel), the readback buffer and the host
+ * tile list. */
+static size_t gl_kept_bytes(const struct bc_renderer *base)
+{
+	static const int per_view[] = {BC__GL_BUF_LINKS,  BC__GL_BUF_TILES,
+	                               BC__GL_BUF_SORTED, BC__GL_BUF_SCRATCH,
+	                               BC__GL_BUF_REGION, BC__GL_BUF_SHORT};
+	const struct gl_renderer *r = (const struct gl_renderer *)base;
+	size_t n = 12 * (size_t)r->tex_w * r->tex_h + r->pbo_size +
+	           r->region_cap * sizeof(*r->region);
+	for (size_t i = 0; i < sizeof(per_view) / sizeof(per_view[0]); i++) {
+		if (r->buf_size[per_view[i]] > 64) {
+			n += r->buf_size[per_view[i]];
+		}
+	}
+	return n;
+}
+
 int bc_render_gl_info(const struct bc_renderer *base, struct bc_gl_info *out)
 {
 	const struct gl_renderer *r = (const struct gl_renderer *)base;
@@ -1424,4 +1484,6 @@ const struct bc_backend_ops bc_backend_gl_ops = {
     .render = gl_render,
     .key = gl_key,
     .damage = gl_damage,
+    .release = gl_release,
+    .kept_bytes = gl_kept_bytes,
 };
