@@ -212,7 +212,7 @@ int bc_renderer_render_region(struct bc_renderer *r,
                               struct bc_errinfo *ei)
 {
 	struct bc_render_stats local;
-	struct bc_render_region whole = {NULL, 0, false};
+	struct bc_render_region whole = {NULL, 0, false, 0, NULL};
 	uint64_t key;
 	int rc;
 	if (!stats) {
@@ -240,8 +240,11 @@ int bc_renderer_render_region(struct bc_renderer *r,
 		region = &whole;
 	} else if (out->key != key && (region->tiles || region->refine)) {
 		/* The frame holds another rendering: redraw all of it at
-		 * this level. */
+		 * this level, within the caller's bound (its scheduler
+		 * counts on the bound whatever the call draws). */
 		whole.level = region->level;
+		whole.max_evals = region->max_evals;
+		whole.short_tiles = region->short_tiles;
 		region = &whole;
 		stats->whole = true;
 	}
@@ -260,6 +263,21 @@ int bc_renderer_render(struct bc_renderer *r, const struct bc_camera *cam,
                        struct bc_errinfo *ei)
 {
 	return bc_renderer_render_region(r, cam, out, NULL, stats, ei);
+}
+
+void bc_renderer_release(struct bc_renderer *r)
+{
+	if (r && r->ops->release) {
+		r->ops->release(r);
+	}
+}
+
+size_t bc_renderer_kept_bytes(const struct bc_renderer *r)
+{
+	if (!r || !r->ops->kept_bytes) {
+		return 0;
+	}
+	return r->ops->kept_bytes(r);
 }
 
 void bc_renderer_damage(struct bc_renderer *r, const struct bc_camera *cam,

@@ -93,6 +93,8 @@
 #define BC_SLOT_TILE_WORDS 8u
 #define BC_SLOT_RAY_WORDS 9u
 #define BC_SLOT_WORDS (BC_SLOT_TILE_WORDS + BC_SLOT_RAY_WORDS * BC_TILE_RAYS)
+// Words per tile of the Short buffer: a bit for each of its 64 rays.
+#define BC_SHORT_WORDS 2u
 // Coarsest refinement level (blobcast/render.h's BC_RENDER_MAX_LEVEL).
 #define BC_MAX_LEVEL 3u
 
@@ -120,6 +122,9 @@ layout(std140, binding = 0) uniform Frame {
 	// (1: skip the pixels of the level above), tiles listed in b_region,
 	// and 1 when the list is used (0: every tile, in row-major order).
 	uvec4 u_region;
+	// x: the most field evaluations one ray may spend (0: no bound); a ray
+	// that would go past it stops, undrawn, and its bit is set in b_short.
+	uvec4 u_bound;
 };
 
 // ---- Storage buffers -------------------------------------------------------
@@ -166,6 +171,11 @@ layout(std430, binding = 9) buffer Stats { uint b_stat[]; };
 // The tiles a region lists (u_region.w == 1): their indices, in row-major
 // order (u_region.z of them), then a bit per tile of the frame.
 layout(std430, binding = 10) readonly buffer Region { uint b_region[]; };
+// Per tile, two words: a bit per pixel (bit (y % 8) * 8 + x % 8, the
+// invocation index) whose ray ran out of the evaluation bound (u_bound.x).
+// Cleared by the host for bounded frames; the copy to the caller's frame
+// skips those pixels.
+layout(std430, binding = 11) buffer Short { uint b_short[]; };
 
 // ---- Regions ------------------------------------------------------------------
 

@@ -33,6 +33,12 @@
 // suspends, its walk and rays saved in a scratch slot, when the dispatch's
 // budget is spent. The host dispatches again until no tile is suspended.
 //
+// A region's evaluation bound (u_bound.x, blobcast/render.h) is of another
+// kind: it caps each ray's samples over the whole frame, so that a scene
+// whose rays crawl (a huge Lipschitz bound) costs a bounded call. A ray
+// stops before its first sample past it and is marked in b_short; the host
+// does not copy its pixel out, whatever this pass wrote there.
+//
 // The tracer and the shading are render/cpu/trace.c and shade.c, step for
 // step, so that the two backends draw the same pictures.
 #include "common.glsl"
@@ -66,6 +72,7 @@ layout(r32ui, binding = 2) uniform writeonly uimage2D img_ids;
 #define TRACE_HIT 2u
 #define TRACE_NEAR_END 3u
 #define TRACE_PAUSED 4u // out of budget between two steps: resume there
+#define TRACE_SHORT 5u  // out of the region's evaluation bound: not drawn
 
 // Samples a ray may still take after its step budget runs out (refinement,
 // bisection, closest approach and shading are not cut): 8 + 40 + 8 + 5.
@@ -1081,8 +1088,12 @@ void resume(uint lid, uint slot)
 // passes split a ray's steps never changes its samples: a paused ray
 // continues with the step it was about to take, so its value depends on
 // nothing but its own ray and the tile's depth ranges (not on the other
-// rays of the workgroup, whose samples set s_cap).
-uint trace_pass(ivec2 px, vec3 d)
+// rays of the workgroup, whose samples set s_cap). A ray whose samples over
+// all its ranges (shading's included) would go past the region's bound
+// stops before the first one past it: it is done, its pixel is not drawn
+// (a near hit it wrote in an earlier range is not copied out either) and
+// its bit is set in the tile's b_short words.
+uint trace_pass(ivec2 px, vec3 d, uint tid)
 {
 	uint samples = 0u;
 	r_t1 = s_ze;
@@ -1105,6 +1116,10 @@ uint trace_pass(ivec2 px, vec3 d)
 	}
 	vec3 hit_p = vec3(0.0);
 	while (r_state != ST_END && r_result != TRACE_PAUSED) {
+		if (u_bound.x != 0u && g_evals >= u_bound.x) {
+			r_result = TRACE_SHORT;
+			break;
+		}
 		vec3 q;
 		if (r_state == ST_NORMAL) {
 			q = hit_p + r_h * tet[r_count];
@@ -1124,6 +1139,15 @@ uint trace_pass(ivec2 px, vec3 d)
 		return samples;
 	}
 	p_todo = false;
+	if (r_result == TRACE_SHORT) {
+		uint lid = gl_LocalInvocationIndex;
+		p_done = true;
+		p_pending = false;
+		atomicOr(b_short[BC_SHORT_WORDS * tid + lid / 32u],
+			 1u << (lid % 32u));
+		atomicAdd(s_left, 0xffffffffu);
+		return samples;
+	}
 	if (r_result == TRACE_MISS) {
 		p_pending = false;
 		return samples;
@@ -1274,7 +1298,7 @@ void main()
 			barrier();
 			uint samples = 0u;
 			if (p_todo) {
-				samples = trace_pass(px, d);
+				samples = trace_pass(px, d, tid);
 				if (p_todo) {
 					atomicAdd(s_todo, 1u);
 				}

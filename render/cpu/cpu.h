@@ -121,12 +121,23 @@ static inline uint32_t bc__popcount64(uint64_t x)
 /* ---- The field ---------------------------------------------------------- */
 
 /* The field a ray is traced in: the whole tree, or a pruned view that
- * equals it inside the current depth range. evals counts calls. */
+ * equals it inside the current depth range. evals counts calls, those of
+ * earlier ranges of the ray included. */
 struct bc__field {
 	const struct bc_lin *lin;
 	const struct bc_view *view; /* NULL: the full tree */
 	uint32_t evals;
+	/* The region's bound on evals (0: none): bc__trace stops before
+	 * an evaluation past it, and callers check it before shading. */
+	uint32_t max_evals;
 };
+
+/* Whether the ray may still spend n evaluations of f within its bound. */
+static inline bool bc__field_can(const struct bc__field *f, uint32_t n)
+{
+	return f->max_evals == 0 ||
+	       (f->evals <= f->max_evals && f->max_evals - f->evals >= n);
+}
 
 static inline float bc__field_eval(struct bc__field *f, const float p[3])
 {
@@ -155,6 +166,10 @@ struct bc__frame_ctx {
 	float pix_angle;  /* pixel footprint per unit of t */
 	float refine_tol; /* world units */
 	struct bc_shade shade;
+	/* The region's max_evals (0: no bound) and short_tiles (may be
+	 * NULL): set by the backend after bc__frame_setup. */
+	uint32_t max_evals;
+	uint8_t *short_tiles;
 };
 
 /* Fills fc for a frame. lin may be NULL (empty tree). */
@@ -171,10 +186,14 @@ enum bc__trace_result {
 	 * the field traced may no longer hold. *t_hit is the closest point;
 	 * a caller without a following interval takes it as a hit. */
 	BC__TRACE_NEAR_END,
+	/* The ray reached its bound (bc__field's max_evals) before an
+	 * answer: its pixel is left as it is. */
+	BC__TRACE_SHORT,
 	BC__TRACE_RESULT_COUNT
 };
 
-/* Sphere traces o + t d (d unit) over [t0, t1] in field f. */
+/* Sphere traces o + t d (d unit) over [t0, t1] in field f, within f's
+ * bound (BC__TRACE_SHORT when it ran out). */
 enum bc__trace_result bc__trace(struct bc__field *f,
                                 const struct bc__frame_ctx *fc,
                                 const float o[3], const float d[3], float t0,

@@ -44,8 +44,11 @@ struct bc__pk_lanes {
 	 * the field (bc_view_eval_id's), BC_NONE where none does. */
 	_Alignas(64) uint32_t id[BC_PK_MAX_LANES];
 	/* Marching lanes (bc__pk_march_fn): bc__pk_ray's t, v, t_prev,
-	 * v_prev, omega and t1, its tn being t[] above, and the values
-	 * taken since the ray last went through the state machine. */
+	 * v_prev, omega and t1, its tn being t[] above, the values taken
+	 * since the ray last went through the state machine, and how many
+	 * it may take before it must go through it again (what its
+	 * evaluation bound leaves; the kernel steps a lane on only while a
+	 * next sample fits). */
 	_Alignas(64) float mt[BC_PK_MAX_LANES];
 	_Alignas(64) float mv[BC_PK_MAX_LANES];
 	_Alignas(64) float mt_prev[BC_PK_MAX_LANES];
@@ -53,6 +56,7 @@ struct bc__pk_lanes {
 	_Alignas(64) float momega[BC_PK_MAX_LANES];
 	_Alignas(64) float mt1[BC_PK_MAX_LANES];
 	_Alignas(64) float mevals[BC_PK_MAX_LANES];
+	_Alignas(64) float mbudget[BC_PK_MAX_LANES];
 };
 
 /* Evaluates view v (not empty) of lin for the lanes whose bit is set in
@@ -64,11 +68,12 @@ typedef void (*bc__pk_eval_fn)(const struct bc_view *v,
 /* Evaluates as bc__pk_eval_fn, then takes the next step of every lane of
  * `march` (lanes waiting at a marching step, their state in the m* arrays)
  * whose step is ordinary (the relaxed sphere held, no crossing, not within
- * the hit epsilon, not at the interval's end) as packet.c's state machine
- * would, with the same float operations: t[] is then the next step. Returns the
- * active lanes it did not step (v[] holds their field, not yet divided by the
- * Lipschitz bound). eps_per_t and min_step are the frame's hit epsilon
- * terms (BC_CPU_HIT_FOOTPRINT * pix_angle, min_step). */
+ * the hit epsilon, not at the interval's end, another sample within
+ * mbudget) as packet.c's state machine would, with the same float
+ * operations: t[] is then the next step. Returns the active lanes it did
+ * not step (v[] holds their field, not yet divided by the Lipschitz
+ * bound). eps_per_t and min_step are the frame's hit epsilon terms
+ * (BC_CPU_HIT_FOOTPRINT * pix_angle, min_step). */
 typedef uint32_t (*bc__pk_march_fn)(const struct bc_view *v,
                                     const struct bc_lin *lin,
                                     struct bc__pk_lanes *ln, uint32_t active,

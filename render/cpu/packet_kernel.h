@@ -342,9 +342,12 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
 	t1 = vload(ln->mt1);
 	eps = vdiv(vmax(vmul(vset1(eps_per_t), tn), vset1(min_step)),
 	           vset1(lin->lip));
-	/* Not the fallback, vn >= 0 (not NaN), not within eps, not at t1. */
+	/* Not the fallback, vn >= 0 (not NaN), not within eps, not at t1,
+	 * and the next sample within the lane's budget: a lane whose bound
+	 * is spent goes back to the state machine, which stops it. */
 	fast = mand(
-	    mfrombits(march),
+	    mand(mfrombits(march),
+	         vlt(vadd(vload(ln->mevals), vset1(1.0f)), vload(ln->mbudget))),
 	    mand(vge(vn, zero),
 	         mand(vge(vn, eps),
 	              mand(vlt(tn, t1),

@@ -11,7 +11,12 @@
  * in packets of 8 or 16 rays through a vector kernel (packet.h). Packets
  * take the range's pixels in row-major order and a lane whose ray ends
  * takes the next pixel; each lane's arithmetic is its own, so a pixel's
- * value does not depend on which other pixels are traced.
+ * value does not depend on which other pixels are traced. A region's
+ * evaluation bound counts each pixel's samples over all its ranges, the
+ * shading's five included; a lane checks it where the scalar tracer would
+ * and the kernel steps a lane on only within it, so a ray stops after the
+ * samples the scalar tracer would stop it after (given the same values),
+ * and is left undrawn.
  */
 #include "tiled.h"
 
@@ -89,20 +94,39 @@ static const struct bc_view *tile_view(struct bc__tile_worker *wk,
 	return &wk->tile_view;
 }
 
+/* Samples that shade a hit: its primitive and four for the normal
+ * (bc__put_hit). */
+#define SHADE_EVALS 5u
+
+/* Whether a ray that spent `evals` may still take n samples within the
+ * frame's bound. */
+static inline bool within(const struct bc__frame_ctx *fc, uint32_t evals,
+                          uint32_t n)
+{
+	struct bc__field f = {fc->lin, NULL, evals, fc->max_evals};
+	return bc__field_can(&f, n);
+}
+
 /* A near hit that no following range took over: shade it in the view of
  * the tile's whole list, since the range whose view held there is gone (a
  * few pixels per frame, on silhouettes). Not in the full tree: that would
  * let a primitive the tile does not list (an edit far away) change the
- * pixel, and damage renders could not be exact. */
-static void settle(const struct bc__tile_job *job, struct bc__tile_worker *wk,
+ * pixel, and damage renders could not be exact. Returns false, drawing
+ * nothing, when the shading would go past the ray's bound. */
+static bool settle(const struct bc__tile_job *job, struct bc__tile_worker *wk,
                    uint32_t x, uint32_t y, const float d[3], float t,
                    uint32_t *evals)
 {
 	const struct bc__frame_ctx *fc = job->fc;
-	struct bc__field f = {fc->lin, tile_view(wk, job), *evals};
+	struct bc__field f = {fc->lin, NULL, *evals, fc->max_evals};
+	if (!bc__field_can(&f, SHADE_EVALS)) {
+		return false;
+	}
+	f.view = tile_view(wk, job);
 	bc__put_hit(fc, &f, x, y, d, t, job->n);
 	wk->evals += f.evals - *evals;
 	*evals = f.evals;
+	return true;
 }
 
 /* What one tile's trace keeps per pixel across its depth ranges. */
@@ -115,12 +139,50 @@ struct tile_px {
 	float pending[BC_CPU_TILE * BC_CPU_TILE];
 	bool has_pending[BC_CPU_TILE * BC_CPU_TILE];
 	uint32_t left;
+	/* Rays that ran out of the frame's bound: done, not drawn. */
+	uint64_t cut;
 };
+
+/* Ends pixel p's ray, which ran out of its bound. */
+static void cut(struct tile_px *px, uint32_t p)
+{
+	px->done[p] = true;
+	px->left--;
+	px->cut |= 1ull << p;
+}
+
+/* Ends pixel p's ray at its near hit (settle), or cuts it when shading
+ * the hit would go past its bound. */
+static void settle_px(const struct bc__tile_job *job,
+                      struct bc__tile_worker *wk, struct tile_px *px,
+                      uint32_t p, uint32_t x, uint32_t y, const float d[3])
+{
+	if (!settle(job, wk, x, y, d, px->pending[p], &px->evals[p])) {
+		cut(px, p);
+		return;
+	}
+	px->done[p] = true;
+	px->left--;
+}
+
+/* Evaluations a marching lane may take in the kernel before the state
+ * machine must see it again: what its bound leaves after `spent`, and at
+ * most 2^24, up to which the kernel's float count is exact. */
+static float lane_budget(const struct bc__frame_ctx *fc, uint32_t spent)
+{
+	const uint32_t most = 1u << 24;
+	uint32_t left = most;
+	if (fc->max_evals) {
+		left = fc->max_evals > spent ? fc->max_evals - spent : 0u;
+		left = left < most ? left : most;
+	}
+	return (float)left;
+}
 
 /* A marching lane's state moves between the ray (the state machine's)
  * and the packet's arrays (the vector step's). */
 static void to_lanes(const struct bc__pk_ray *r, struct bc__pk_lanes *ln,
-                     uint32_t i)
+                     uint32_t i, float budget)
 {
 	ln->mt[i] = r->t;
 	ln->mv[i] = r->v;
@@ -129,6 +191,7 @@ static void to_lanes(const struct bc__pk_ray *r, struct bc__pk_lanes *ln,
 	ln->momega[i] = r->omega;
 	ln->mt1[i] = r->t1;
 	ln->mevals[i] = 0.0f;
+	ln->mbudget[i] = budget;
 }
 
 static void from_lanes(struct bc__pk_ray *r, const struct bc__pk_lanes *ln,
@@ -215,8 +278,8 @@ static void shade_packets(struct bc__tile_worker *wk,
 		uint32_t p = hit_px[h];
 		uint32_t x = job->x0 + p % BC_CPU_TILE;
 		uint32_t y = job->y0 + p / BC_CPU_TILE;
-		px->evals[p] += 5;
-		wk->evals += 5;
+		px->evals[p] += SHADE_EVALS;
+		wk->evals += SHADE_EVALS;
 		bc__put_shaded(fc, x, y, job->dirs + 3 * ((size_t)y * w + x),
 		               hit_t[h], n[h], prim[h], px->evals[p], job->n);
 	}
@@ -247,11 +310,8 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 				continue;
 			}
 			if (px->has_pending[p] && z_begin > px->pending[p]) {
-				settle(job, wk, x, y,
-				       job->dirs + 3 * ((size_t)y * w + x),
-				       px->pending[p], &px->evals[p]);
-				px->done[p] = true;
-				px->left--;
+				settle_px(job, wk, px, p, x, y,
+				          job->dirs + 3 * ((size_t)y * w + x));
 				continue;
 			}
 			queue[nq++] = (uint8_t)p;
@@ -279,6 +339,10 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 					px->has_pending[p] = false;
 					continue;
 				}
+				if (!within(fc, px->evals[p], 1)) {
+					cut(px, p);
+					continue;
+				}
 				lane_px[i] = (uint8_t)p;
 				ln.dx[i] = d[0];
 				ln.dy[i] = d[1];
@@ -300,27 +364,43 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 				from_lanes(r, &ln, i);
 			}
 			/* trace.c's eval_at: the field over the bounds. */
+			p = lane_px[i];
 			if (!bc__pk_ray_feed(r, fc,
 			                     ln.v[i] *
 			                         (1.0f / BC_CPU_LIPSCHITZ) /
 			                         fc->lin->lip)) {
-				ln.t[i] = r->q;
-				if (r->state == BC__PK_STEP) {
-					to_lanes(r, &ln, i);
-					march |= 1u << i;
-				} else {
-					march &= ~(1u << i);
+				uint32_t spent = px->evals[p] + r->evals;
+				if (within(fc, spent, 1)) {
+					ln.t[i] = r->q;
+					if (r->state == BC__PK_STEP) {
+						to_lanes(
+						    r, &ln, i,
+						    lane_budget(fc, spent));
+						march |= 1u << i;
+					} else {
+						march &= ~(1u << i);
+					}
+					continue;
 				}
+				/* The bound stops the ray where the scalar
+				 * tracer's eval_at would. */
+				march &= ~(1u << i);
+				active &= ~(1u << i);
+				px->evals[p] = spent;
+				wk->evals += r->evals;
+				cut(px, p);
 				continue;
 			}
 			march &= ~(1u << i);
 			active &= ~(1u << i);
-			p = lane_px[i];
 			px->evals[p] += r->evals;
 			wk->evals += r->evals;
 			px->has_pending[p] = r->res == BC__TRACE_NEAR_END;
 			px->pending[p] = r->t_hit;
-			if (r->res == BC__TRACE_HIT) {
+			if (r->res == BC__TRACE_HIT &&
+			    !within(fc, px->evals[p], SHADE_EVALS)) {
+				cut(px, p);
+			} else if (r->res == BC__TRACE_HIT) {
 				hit_px[nh] = (uint8_t)p;
 				hit_t[nh++] = r->t_hit;
 				px->done[p] = true;
@@ -333,7 +413,8 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 	}
 }
 
-void bc__trace_tile(struct bc__tile_worker *wk, const struct bc__tile_job *job)
+uint64_t bc__trace_tile(struct bc__tile_worker *wk,
+                        const struct bc__tile_job *job)
 {
 	const struct bc__frame_ctx *fc = job->fc;
 	const struct bc_lin *lin = fc->lin;
@@ -347,6 +428,7 @@ void bc__trace_tile(struct bc__tile_worker *wk, const struct bc__tile_job *job)
 	float z_end = 0.0f;
 	wk->tile_view_state = 0; /* built again for this tile's list */
 	px.left = 0;
+	px.cut = 0;
 	for (uint32_t p = 0; p < BC_CPU_TILE * BC_CPU_TILE; p++) {
 		px.evals[p] = 0;
 		px.has_pending[p] = false;
@@ -355,7 +437,7 @@ void bc__trace_tile(struct bc__tile_worker *wk, const struct bc__tile_job *job)
 		px.left += px.done[p] ? 0u : 1u;
 	}
 	if (px.left == 0) {
-		return;
+		return 0;
 	}
 	if (n > 1) {
 		qsort(list, n, sizeof(*list), frag_cmp);
@@ -363,7 +445,7 @@ void bc__trace_tile(struct bc__tile_worker *wk, const struct bc__tile_job *job)
 	while (px.left > 0) {
 		float z_begin, max_exit = -INFINITY;
 		uint32_t kept = 0, fetched = 0;
-		struct bc__field f = {lin, &wk->view, 0};
+		struct bc__field f = {lin, &wk->view, 0, fc->max_evals};
 		/* Retire primitives that ended with the previous range. */
 		for (uint32_t i = 0; i < na; i++) {
 			if (wk->act_t1[i] > z_end) {
@@ -429,10 +511,7 @@ void bc__trace_tile(struct bc__tile_worker *wk, const struct bc__tile_job *job)
 				}
 				if (px.has_pending[p] &&
 				    z_begin > px.pending[p]) {
-					settle(job, wk, x, y, d, px.pending[p],
-					       &px.evals[p]);
-					px.done[p] = true;
-					px.left--;
+					settle_px(job, wk, &px, p, x, y, d);
 					continue;
 				}
 				f.evals = px.evals[p];
@@ -440,7 +519,11 @@ void bc__trace_tile(struct bc__tile_worker *wk, const struct bc__tile_job *job)
 				                z_end, &t);
 				px.has_pending[p] = res == BC__TRACE_NEAR_END;
 				px.pending[p] = t;
-				if (res == BC__TRACE_HIT) {
+				if (res == BC__TRACE_SHORT ||
+				    (res == BC__TRACE_HIT &&
+				     !bc__field_can(&f, SHADE_EVALS))) {
+					cut(&px, p);
+				} else if (res == BC__TRACE_HIT) {
 					bc__put_hit(fc, &f, x, y, d, t, n);
 					px.done[p] = true;
 					px.left--;
@@ -457,12 +540,12 @@ void bc__trace_tile(struct bc__tile_worker *wk, const struct bc__tile_job *job)
 				continue;
 			}
 			if (px.has_pending[p]) {
-				settle(job, wk, x, y,
-				       job->dirs + 3 * ((size_t)y * w + x),
-				       px.pending[p], &px.evals[p]);
+				settle_px(job, wk, &px, p, x, y,
+				          job->dirs + 3 * ((size_t)y * w + x));
 			} else {
 				bc__put_miss(fc, x, y, px.evals[p], n);
 			}
 		}
 	}
+	return px.cut;
 }

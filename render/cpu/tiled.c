@@ -21,7 +21,9 @@
  * edit (the sync hook's dirty primitives) drops the lists of the tiles in
  * its primitives' rectangles before and after the edit, which are the only
  * lists that can hold them. A list is computed from the tile alone, so it
- * is the same whichever render computes it.
+ * is the same whichever render computes it. For the same reason a
+ * release (bc_renderer_release) may drop everything kept: the renders
+ * after it compute the lists again, the same lists.
  *
  * Tracing. Each tile (one work item, on any thread) sorts its list by entry
  * and walks depth ranges as §6.2 does (eq. 21-22): drop active primitives
@@ -717,7 +719,7 @@ static void phase_trace(void *arg, uint32_t thread)
 		uint32_t tile = atomic_fetch_add(&tf->next, 1u);
 		uint32_t tx = tile % tf->tw, ty = tile / tf->tw;
 		struct bc__tile_job job;
-		uint64_t mask;
+		uint64_t mask, cut;
 		if (tile >= tf->ntiles) {
 			break;
 		}
@@ -744,7 +746,15 @@ static void phase_trace(void *arg, uint32_t thread)
 		        (ty + 1) * BC_CPU_TILE < h ? (ty + 1) * BC_CPU_TILE : h,
 		    .mask = mask,
 		};
-		bc__trace_tile(wk, &job);
+		cut = bc__trace_tile(wk, &job);
+		if (cut) {
+			/* One thread draws a tile: its byte is this
+			 * thread's to write. */
+			wk->short_rays += bc__popcount64(cut);
+			if (fc->short_tiles) {
+				fc->short_tiles[tile] = 1;
+			}
+		}
 		atomic_fetch_add(&tf->tiles_done, 1u);
 		if (thread == 0) {
 			bc__progress_tick(&tf->progress,
@@ -770,6 +780,7 @@ static int prepare_workers(struct bc__cpu *r, const struct bc_lin *lin,
 	for (uint32_t i = 0; i < r->threads; i++) {
 		struct bc__tile_worker *wk = &b->workers[i];
 		wk->evals = 0;
+		wk->short_rays = 0;
 		wk->overflows = 0;
 		wk->simd = r->base.opts.simd;
 		if (wk->cap < need) {
@@ -894,6 +905,8 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 	b = r->tiled;
 	lin = bc_tree_lin(base->tree);
 	bc__frame_setup(&fc, lin, cam, out, base->opts.debug);
+	fc.max_evals = region->max_evals;
+	fc.short_tiles = region->short_tiles;
 	tf.fc = &fc;
 	tf.region = region;
 	tf.b = b;
@@ -956,6 +969,7 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 		stats->rays = atomic_load(&tf.rays);
 		for (uint32_t i = 0; i < r->threads; i++) {
 			stats->field_evals += b->workers[i].evals;
+			stats->short_rays += b->workers[i].short_rays;
 		}
 	}
 	return 0;
@@ -1021,6 +1035,45 @@ static void tiled_damage(struct bc_renderer *base, const struct bc_camera *cam,
 	}
 }
 
+/* Frees every buffer kept for the last view: the next render finds no
+ * buffers, as the first one did, and computes the lists it needs again
+ * from their tiles alone, so it draws the same pixels. */
+static void tiled_release(struct bc_renderer *base)
+{
+	struct bc__cpu *r = bc__cpu_of(base);
+	bc__tiled_free(r->tiled);
+	r->tiled = NULL;
+}
+
+/* What tiled_release frees, from the buffers' capacities. */
+static size_t tiled_kept_bytes(const struct bc_renderer *base)
+{
+	const struct bc__tiled_bufs *b =
+	    ((const struct bc__cpu *)(const void *)base)->tiled;
+	size_t n;
+	if (!b) {
+		return 0;
+	}
+	n = sizeof(*b) + b->dirs_cap * sizeof(*b->dirs) +
+	    b->prims_cap * sizeof(*b->prims) + b->cand_cap * sizeof(*b->cand) +
+	    (b->frags_cap + b->frags_alt_cap) * sizeof(*b->frags);
+	if (b->tiles_cap) {
+		n += b->tiles_cap * (sizeof(*b->state) + sizeof(*b->list_n) +
+		                     sizeof(*b->cur) +
+		                     CONES_PER_TILE * sizeof(*b->cones)) +
+		     2 * (b->tiles_cap + 1) * sizeof(*b->cand_off);
+	}
+	for (uint32_t i = 0; i < BC_CPU_MAX_THREADS; i++) {
+		const struct bc__tile_worker *wk = &b->workers[i];
+		n +=
+		    (size_t)wk->cap * (sizeof(*wk->act) + sizeof(*wk->act_t1)) +
+		    (size_t)wk->tile_cap * sizeof(*wk->tile_act) +
+		    ((size_t)wk->view.cap + wk->tile_view.cap) *
+		        sizeof(*wk->view.instr);
+	}
+	return n;
+}
+
 const struct bc_backend_ops bc_backend_tiled_ops = {
     .name = "tiled",
     .create = tiled_create,
@@ -1029,4 +1082,6 @@ const struct bc_backend_ops bc_backend_tiled_ops = {
     .render = tiled_render,
     .key = bc__cpu_key,
     .damage = tiled_damage,
+    .release = tiled_release,
+    .kept_bytes = tiled_kept_bytes,
 };

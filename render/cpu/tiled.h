@@ -25,6 +25,7 @@ struct bc__tile_worker {
 	float *act_t1; /* their exits */
 	uint32_t cap;  /* room in act and act_t1 */
 	uint64_t evals;
+	uint64_t short_rays; /* rays that ran out of the frame's bound */
 	uint32_t overflows;
 	/* The renderer's opts.simd, set before each frame (0: AUTO). */
 	enum bc_simd simd;
@@ -52,7 +53,9 @@ struct bc__tile_job {
 
 /* Walks the tile's depth ranges (paper §6.2, eq. 21-22) and sphere traces
  * its masked pixels in each range's pruned view; writes their colour,
- * depth and id. */
-void bc__trace_tile(struct bc__tile_worker *wk, const struct bc__tile_job *job);
+ * depth and id. Returns the pixels (bits as in job->mask) whose rays ran
+ * out of the frame's bound (fc->max_evals) and were left as they were. */
+uint64_t bc__trace_tile(struct bc__tile_worker *wk,
+                        const struct bc__tile_job *job);
 
 #endif

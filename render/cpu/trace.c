@@ -8,26 +8,38 @@
  * minimal step), or a sign change; both are refined to the crossing by
  * bisection. Both CPU
  * backends trace through here, so their depths agree to the refinement
- * tolerance wherever they find the same surface.
+ * tolerance wherever they find the same surface. A region's evaluation
+ * bound stops a ray before any sample past it (BC__TRACE_SHORT); a ray it
+ * does not stop takes the samples it takes without one.
  */
 #include "cpu.h"
 
 #include <math.h>
 
-static inline float eval_at(struct bc__field *f, const float o[3],
-                            const float d[3], float t)
+/* The field over the bounds at o + t d into *v; false, with nothing
+ * evaluated, when the ray has spent its bound. Every sample of a ray goes
+ * through here, so the bound covers the steps, the refinement and the
+ * bisection alike. */
+static inline bool eval_at(struct bc__field *f, const float o[3],
+                           const float d[3], float t, float *v)
 {
 	float p[3] = {o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]};
+	if (f->max_evals && f->evals >= f->max_evals) {
+		return false;
+	}
 	/* The tree's own bound (above 1 under twist and bend) multiplies
 	 * the operators'. */
-	return bc__field_eval(f, p) * (1.0f / BC_CPU_LIPSCHITZ) / f->lin->lip;
+	*v = bc__field_eval(f, p) * (1.0f / BC_CPU_LIPSCHITZ) / f->lin->lip;
+	return true;
 }
 
 /* Bisects [a, b] with f(a) > 0 > f(b) down to the refinement tolerance, then
- * interpolates linearly inside the last bracket. */
-static float bisect(struct bc__field *f, const struct bc__frame_ctx *fc,
-                    const float o[3], const float d[3], float a, float fa,
-                    float b, float fb)
+ * interpolates linearly inside the last bracket into *t_hit. Returns
+ * BC__TRACE_HIT, or BC__TRACE_SHORT when the bound stopped it. */
+static enum bc__trace_result bisect(struct bc__field *f,
+                                    const struct bc__frame_ctx *fc,
+                                    const float o[3], const float d[3], float a,
+                                    float fa, float b, float fb, float *t_hit)
 {
 	/* The bracket halves per step: 40 steps reach float resolution from
 	 * any interval a scene can produce. */
@@ -36,7 +48,9 @@ static float bisect(struct bc__field *f, const struct bc__frame_ctx *fc,
 		if (!(m > a && m < b)) {
 			break; /* float resolution reached */
 		}
-		fm = eval_at(f, o, d, m);
+		if (!eval_at(f, o, d, m, &fm)) {
+			return BC__TRACE_SHORT;
+		}
 		if (fm < 0.0f) {
 			b = m;
 			fb = fm;
@@ -45,31 +59,38 @@ static float bisect(struct bc__field *f, const struct bc__frame_ctx *fc,
 			fa = fm;
 		}
 	}
+	*t_hit = a;
 	if (fa - fb > 0.0f && isfinite(fa - fb)) {
 		float t = a + (b - a) * fa / (fa - fb);
-		return t < a ? a : (t > b ? b : t);
+		*t_hit = t < a ? a : (t > b ? b : t);
 	}
-	return a;
+	return BC__TRACE_HIT;
 }
 
 /* The ray passes a surface by without crossing it: the field along it
  * has a minimum in [a, b] (v(a), v(b) >= the samples inside). Golden
  * section search narrows it so the silhouette's depth is the closest
  * approach, wherever the steps landed; a negative sample on the way is a
- * crossing after all and is bisected. */
-static float closest(struct bc__field *f, const struct bc__frame_ctx *fc,
-                     const float o[3], const float d[3], float a, float va,
-                     float b)
+ * crossing after all and is bisected. Returns as bisect() does. */
+static enum bc__trace_result closest(struct bc__field *f,
+                                     const struct bc__frame_ctx *fc,
+                                     const float o[3], const float d[3],
+                                     float a, float va, float b, float *t_hit)
 {
 	const float g = 0.618034f;
 	float c = b - g * (b - a), e = a + g * (b - a);
-	float vc = eval_at(f, o, d, c), ve;
-	if (vc < 0.0f) {
-		return bisect(f, fc, o, d, a, va, c, vc);
+	float vc, ve;
+	if (!eval_at(f, o, d, c, &vc)) {
+		return BC__TRACE_SHORT;
 	}
-	ve = eval_at(f, o, d, e);
+	if (vc < 0.0f) {
+		return bisect(f, fc, o, d, a, va, c, vc, t_hit);
+	}
+	if (!eval_at(f, o, d, e, &ve)) {
+		return BC__TRACE_SHORT;
+	}
 	if (ve < 0.0f) {
-		return bisect(f, fc, o, d, a, va, e, ve);
+		return bisect(f, fc, o, d, a, va, e, ve, t_hit);
 	}
 	/* Six steps shrink the bracket twenty-fold. */
 	for (int i = 0; i < 6; i++) {
@@ -78,9 +99,11 @@ static float closest(struct bc__field *f, const struct bc__frame_ctx *fc,
 			e = c;
 			ve = vc;
 			c = b - g * (b - a);
-			vc = eval_at(f, o, d, c);
+			if (!eval_at(f, o, d, c, &vc)) {
+				return BC__TRACE_SHORT;
+			}
 			if (vc < 0.0f) {
-				return bisect(f, fc, o, d, a, va, c, vc);
+				return bisect(f, fc, o, d, a, va, c, vc, t_hit);
 			}
 		} else {
 			a = c;
@@ -88,13 +111,16 @@ static float closest(struct bc__field *f, const struct bc__frame_ctx *fc,
 			c = e;
 			vc = ve;
 			e = a + g * (b - a);
-			ve = eval_at(f, o, d, e);
+			if (!eval_at(f, o, d, e, &ve)) {
+				return BC__TRACE_SHORT;
+			}
 			if (ve < 0.0f) {
-				return bisect(f, fc, o, d, a, va, e, ve);
+				return bisect(f, fc, o, d, a, va, e, ve, t_hit);
 			}
 		}
 	}
-	return vc < ve ? c : e;
+	*t_hit = vc < ve ? c : e;
+	return BC__TRACE_HIT;
 }
 
 /* The ray came within the hit epsilon of a surface at t (field v >= 0).
@@ -132,17 +158,17 @@ static enum bc__trace_result refine(struct bc__field *f,
 			*t_hit = t;
 			return t1 < cap ? BC__TRACE_NEAR_END : BC__TRACE_HIT;
 		}
-		vp = eval_at(f, o, d, probe);
+		if (!eval_at(f, o, d, probe, &vp)) {
+			return BC__TRACE_SHORT;
+		}
 		if (vp < 0.0f) {
-			*t_hit = bisect(f, fc, o, d, t, v, probe, vp);
-			return BC__TRACE_HIT;
+			return bisect(f, fc, o, d, t, v, probe, vp, t_hit);
 		}
 		if (!(vp < v)) {
 			/* Rising: the ray passes the surface by, closest
 			 * somewhere between the previous sample and here. */
-			*t_hit = closest(f, fc, o, d, t_prev < t ? t_prev : t,
-			                 t_prev < t ? v_prev : v, probe);
-			return BC__TRACE_HIT;
+			return closest(f, fc, o, d, t_prev < t ? t_prev : t,
+			               t_prev < t ? v_prev : v, probe, t_hit);
 		}
 		t_prev = t;
 		v_prev = v;
@@ -163,7 +189,9 @@ enum bc__trace_result bc__trace(struct bc__field *f,
 	if (!(t1 >= t0)) {
 		return BC__TRACE_MISS;
 	}
-	v = eval_at(f, o, d, t);
+	if (!eval_at(f, o, d, t, &v)) {
+		return BC__TRACE_SHORT;
+	}
 	if (v < 0.0f) {
 		/* Inside at the interval's start: the surface is here. */
 		*t_hit = t0;
@@ -189,18 +217,21 @@ enum bc__trace_result bc__trace(struct bc__field *f,
 		 * loop advances even far from the origin. */
 		step = bc__maxf(omega * v, 1.0e-6f * t);
 		tn = bc__minf(t + step, t1);
-		vn = eval_at(f, o, d, tn);
+		if (!eval_at(f, o, d, tn, &vn)) {
+			return BC__TRACE_SHORT;
+		}
 		if (omega > 1.0f && v + fabsf(vn) < tn - t) {
 			/* The unbounding spheres at t and tn are disjoint: the
 			 * gap between them was never proven empty. Take the
 			 * plain step, which is. */
 			omega = 1.0f;
 			tn = bc__minf(t + bc__maxf(v, 1.0e-6f * t), t1);
-			vn = eval_at(f, o, d, tn);
+			if (!eval_at(f, o, d, tn, &vn)) {
+				return BC__TRACE_SHORT;
+			}
 		}
 		if (vn < 0.0f) {
-			*t_hit = bisect(f, fc, o, d, t, v, tn, vn);
-			return BC__TRACE_HIT;
+			return bisect(f, fc, o, d, t, v, tn, vn, t_hit);
 		}
 		if (!(vn == vn)) {
 			return BC__TRACE_MISS; /* NaN: give up on this ray */

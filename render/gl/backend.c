@@ -34,7 +34,14 @@
  * tree and the frame constants, and its own ray (a ray paused by the loop
  * budget resumes with the step it was about to take), so a frame assembled
  * from regions equals a whole render bit for bit (docs/gl.md). Only the
- * drawn pixels are copied into the caller's frame.
+ * drawn pixels are copied into the caller's frame. Under an evaluation
+ * bound a ray that runs out stops (trace.comp) and sets its bit in the
+ * Short buffer, read back with the statistics: its pixel is not copied
+ * and its tile is marked in the region's short_tiles.
+ *
+ * Memory. The images, the readback buffer, the tile table and the
+ * A-buffer's storage are sized for the last view and kept; release frees
+ * them and the next frame allocates them again.
  *
  * Each entry point makes the context current and releases it before
  * returning, so a renderer may be driven from any one thread at a time.
@@ -63,7 +70,7 @@ _Static_assert(BC_PRIM_RECORD_VEC4 == 5 && BC_OP_RECORD_VEC4 == 1,
                "shaders/common.glsl record sizes");
 _Static_assert(BC_PRIM_PACKED == 8, "shaders/prim.glsl packed parameters");
 _Static_assert(BC_EVAL_STACK == 130, "shaders/common.glsl BC_EVAL_STACK");
-_Static_assert(sizeof(struct bc__gl_frame_ubo) == 160, "std140 Frame block");
+_Static_assert(sizeof(struct bc__gl_frame_ubo) == 176, "std140 Frame block");
 _Static_assert(BC_RENDER_TILE == BC_GL_TILE, "tiles of the front");
 _Static_assert(BC_RENDER_MAX_LEVEL == 3, "shaders/common.glsl BC_MAX_LEVEL");
 /* Primitive indices share a 32-bit view instruction word with 11 bits of
@@ -93,6 +100,7 @@ struct gl_renderer {
 	size_t buf_size[BC__GL_BUF_COUNT];
 	GLuint tex[3]; /* rgba (r32ui), depth (r32f), ids (r32ui) */
 	uint32_t tex_w, tex_h;
+	size_t pbo_size;
 	GLuint queries[Q_COUNT];
 	/* The tree last uploaded and the counts its buffers were sized for. */
 	const struct bc_tree *tree;
@@ -599,15 +607,20 @@ static int frame_buffers(struct gl_renderer *r, uint32_t w, uint32_t h)
 	}
 	gl->BindTexture(GL_TEXTURE_2D, 0);
 	buf_alloc(r, BC__GL_BUF_TILES, (size_t)tw * th * 16, NULL);
+	buf_alloc(r, BC__GL_BUF_SHORT, (size_t)tw * th * BC_GL_SHORT_WORDS * 4,
+	          NULL);
 	gl->BindFramebuffer(GL_FRAMEBUFFER, r->fbo);
 	gl->FramebufferParameteri(GL_FRAMEBUFFER, GL_FRAMEBUFFER_DEFAULT_WIDTH,
 	                          (GLint)tw);
 	gl->FramebufferParameteri(GL_FRAMEBUFFER, GL_FRAMEBUFFER_DEFAULT_HEIGHT,
 	                          (GLint)th);
 	gl->BindFramebuffer(GL_FRAMEBUFFER, 0);
+	/* The planes, the statistics, then the Short words of a bounded
+	 * frame. */
+	r->pbo_size = 12 * npix + BC_GL_STAT_WORDS * 4 +
+	              (size_t)tw * th * BC_GL_SHORT_WORDS * 4;
 	gl->BindBuffer(GL_PIXEL_PACK_BUFFER, r->pbo);
-	gl->BufferData(GL_PIXEL_PACK_BUFFER,
-	               (GLsizeiptr)(12 * npix + BC_GL_STAT_WORDS * 4), NULL,
+	gl->BufferData(GL_PIXEL_PACK_BUFFER, (GLsizeiptr)r->pbo_size, NULL,
 	               GL_STREAM_READ);
 	gl->BindBuffer(GL_PIXEL_PACK_BUFFER, 0);
 	r->tex_w = w;
@@ -762,16 +775,27 @@ static void upload_region(struct gl_renderer *r, const struct plan *p,
 	}
 }
 
+/* The tile's bits in the mapped Short words: pixels whose rays ran out. */
+static uint64_t short_bits(const char *shorts, uint32_t tile)
+{
+	uint32_t wd[BC_GL_SHORT_WORDS];
+	memcpy(wd, shorts + (size_t)tile * sizeof(wd), sizeof(wd));
+	return (uint64_t)wd[0] | (uint64_t)wd[1] << 32;
+}
+
 /* Copies the pixels p drew from the mapped planes (rgba, depth, ids, each
- * w * h words) into out; the others keep their values. */
+ * w * h words) into out; the others keep their values, and so do those
+ * whose rays ran out of the bound when shorts (the mapped Short words of a
+ * bounded frame) is given. */
 static void copy_region(struct gl_renderer *r, const struct plan *p,
-                        const char *map, struct bc_frame *out)
+                        const char *map, const char *shorts,
+                        struct bc_frame *out)
 {
 	uint32_t w = out->width, h = out->height, tw = bc_render_tiles_x(w);
 	size_t npix = (size_t)w * h;
 	uint32_t n = p->list ? p->nlist : tw * bc_render_tiles_y(h);
 	uint32_t step = 1u << p->level;
-	if (!p->list && p->level == 0) {
+	if (!p->list && p->level == 0 && !shorts) {
 		memcpy(out->rgba, map, 4 * npix);
 		if (out->depth) {
 			memcpy(out->depth, map + 4 * npix, 4 * npix);
@@ -784,12 +808,15 @@ static void copy_region(struct gl_renderer *r, const struct plan *p,
 	for (uint32_t j = 0; j < n; j++) {
 		uint32_t i = p->list ? r->region[j] : j;
 		uint32_t x0 = (i % tw) * BC_GL_TILE, y0 = (i / tw) * BC_GL_TILE;
+		uint64_t cut = shorts ? short_bits(shorts, i) : 0;
 		for (uint32_t y = y0; y < y0 + BC_GL_TILE && y < h; y += step) {
 			for (uint32_t x = x0; x < x0 + BC_GL_TILE && x < w;
 			     x += step) {
 				size_t k = (size_t)y * w + x;
+				uint32_t bit = (y - y0) * BC_GL_TILE + (x - x0);
 				if (!bc_render_level_has(x, y, p->level,
-				                         p->refine)) {
+				                         p->refine) ||
+				    (cut >> bit) & 1u) {
 					continue;
 				}
 				memcpy(out->rgba + 4 * k, map + 4 * k, 4);
@@ -804,6 +831,30 @@ static void copy_region(struct gl_renderer *r, const struct plan *p,
 			}
 		}
 	}
+}
+
+/* Marks in short_tiles (may be NULL) the tiles p drew where a ray ran out
+ * of the bound, from the mapped Short words. Returns those rays. */
+static uint64_t mark_short(const struct gl_renderer *r, const struct plan *p,
+                           const char *shorts, uint32_t ntiles,
+                           uint8_t *short_tiles)
+{
+	uint32_t n = p->list ? p->nlist : ntiles;
+	uint64_t rays = 0;
+	for (uint32_t j = 0; j < n; j++) {
+		uint32_t i = p->list ? r->region[j] : j;
+		uint64_t cut = short_bits(shorts, i);
+		if (!cut) {
+			continue;
+		}
+		for (; cut; cut &= cut - 1u) {
+			rays++;
+		}
+		if (short_tiles) {
+			short_tiles[i] = 1;
+		}
+	}
+	return rays;
 }
 
 /* Issues the passes of one frame, up to the first tracing dispatch. */
@@ -828,6 +879,15 @@ static void draw(struct gl_renderer *r, const struct bc__gl_frame_ubo *u,
 	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->bufs[BC__GL_BUF_STATS]);
 	gl->ClearBufferData(GL_SHADER_STORAGE_BUFFER, GL_R32UI, GL_RED_INTEGER,
 	                    GL_UNSIGNED_INT, &zero);
+	if (u->bound[0]) {
+		/* Only the tracer of a bounded frame sets Short bits. */
+		gl->BindBuffer(GL_SHADER_STORAGE_BUFFER,
+		               r->bufs[BC__GL_BUF_SHORT]);
+		gl->ClearBufferSubData(
+		    GL_SHADER_STORAGE_BUFFER, GL_R32UI, 0,
+		    (GLsizeiptr)((size_t)tw * th * BC_GL_SHORT_WORDS * 4),
+		    GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+	}
 	gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
 	gl->QueryCounter(r->queries[Q_START], GL_TIMESTAMP);
 
@@ -914,8 +974,9 @@ static int finish_tracing(struct gl_renderer *r, struct bc__gl_frame_ubo *u,
 }
 
 /* Issues the copies of the planes and statistics into the readback
- * buffer. */
-static void read_back(struct gl_renderer *r, size_t npix)
+ * buffer, and of the Short words of a bounded frame (short_bytes of them;
+ * 0: none). */
+static void read_back(struct gl_renderer *r, size_t npix, size_t short_bytes)
 {
 	GladGLContext *gl = &r->ctx.gl;
 	gl->MemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT |
@@ -941,6 +1002,13 @@ static void read_back(struct gl_renderer *r, size_t npix)
 	gl->BindBuffer(GL_COPY_WRITE_BUFFER, r->pbo);
 	gl->CopyBufferSubData(GL_COPY_READ_BUFFER, GL_COPY_WRITE_BUFFER, 0,
 	                      (GLintptr)(12 * npix), BC_GL_STAT_WORDS * 4);
+	if (short_bytes) {
+		gl->BindBuffer(GL_COPY_READ_BUFFER, r->bufs[BC__GL_BUF_SHORT]);
+		gl->CopyBufferSubData(
+		    GL_COPY_READ_BUFFER, GL_COPY_WRITE_BUFFER, 0,
+		    (GLintptr)(12 * npix + BC_GL_STAT_WORDS * 4),
+		    (GLsizeiptr)short_bytes);
+	}
 	gl->BindBuffer(GL_COPY_READ_BUFFER, 0);
 	gl->BindBuffer(GL_COPY_WRITE_BUFFER, 0);
 }
@@ -1012,8 +1080,8 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 	struct plan plan;
 	const struct bc_lin *l;
 	double t_start = bc_clock_ms();
-	uint32_t w, h, nprims, stat[BC_GL_STAT_WORDS], limit;
-	size_t npix;
+	uint32_t w, h, nprims, stat[BC_GL_STAT_WORDS], limit, ntiles;
+	size_t npix, short_bytes;
 	int rc;
 	if (!r->tree || !r->synced) {
 		return bc_errinfo_set(ei, BC_ESTATE,
@@ -1022,6 +1090,10 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 	w = out->width;
 	h = out->height;
 	npix = (size_t)w * h;
+	ntiles = bc_render_tiles_x(w) * bc_render_tiles_y(h);
+	/* A bounded frame reads back which rays ran out. */
+	short_bytes =
+	    region->max_evals ? (size_t)ntiles * BC_GL_SHORT_WORDS * 4 : 0;
 	if (plan_region(r, region, w, h, &plan)) {
 		return bc_errinfo_set(ei, BC_ENOMEM,
 		                      "gl: out of memory for a region");
@@ -1064,6 +1136,7 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 		u.region[1] = plan.refine ? 1u : 0u;
 		u.region[2] = plan.nlist;
 		u.region[3] = plan.list ? 1u : 0u;
+		u.bound[0] = region->max_evals;
 		tiles = u.size[2] * u.size[3];
 		draw(r, &u, &plan, nprims);
 		if ((rc = bc__gl_check(&r->ctx, "drawing a frame", ei)) ||
@@ -1071,15 +1144,16 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 		                         &incomplete, ei))) {
 			goto done;
 		}
-		read_back(r, npix);
+		read_back(r, npix, short_bytes);
 		if ((rc = wait_fence(r, ei))) {
 			goto done;
 		}
 		gl->BindBuffer(GL_PIXEL_PACK_BUFFER, r->pbo);
-		map = gl->MapBufferRange(
-		    GL_PIXEL_PACK_BUFFER, 0,
-		    (GLsizeiptr)(12 * npix + BC_GL_STAT_WORDS * 4),
-		    GL_MAP_READ_BIT);
+		map = gl->MapBufferRange(GL_PIXEL_PACK_BUFFER, 0,
+		                         (GLsizeiptr)(12 * npix +
+		                                      BC_GL_STAT_WORDS * 4 +
+		                                      short_bytes),
+		                         GL_MAP_READ_BIT);
 		if (!map) {
 			gl->BindBuffer(GL_PIXEL_PACK_BUFFER, 0);
 			rc = bc__gl_check(&r->ctx, "glMapBufferRange", ei);
@@ -1094,7 +1168,16 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 		fits = stat[BC_GL_STAT_FRAGMENTS] <= r->frag_cap &&
 		       stat[BC_GL_STAT_NO_SLOT] == 0;
 		if (fits) {
-			copy_region(r, &plan, map, out);
+			const char *shorts =
+			    short_bytes ? (const char *)map + 12 * npix +
+			                      BC_GL_STAT_WORDS * 4
+			                : NULL;
+			copy_region(r, &plan, map, shorts, out);
+			if (shorts) {
+				stats->short_rays =
+				    mark_short(r, &plan, shorts, ntiles,
+				               region->short_tiles);
+			}
 		}
 		gl->UnmapBuffer(GL_PIXEL_PACK_BUFFER);
 		gl->BindBuffer(GL_PIXEL_PACK_BUFFER, 0);
@@ -1297,6 +1380,62 @@ static void gl_damage(struct bc_renderer *base, const struct bc_camera *cam,
 	}
 }
 
+/* Frees the storage of everything sized for the last view: the images
+ * and the readback buffer, the tile table and Short words, the A-buffer's
+ * fragments and the tracer's scratch, the region's tile list. The next
+ * render allocates them again as the first did (fragment room for what the
+ * last frame had, so it need not draw twice), and since no pixel depends
+ * on where these live or how large they are, it draws the same pixels. */
+static void gl_release(struct bc_renderer *base)
+{
+	static const int per_view[] = {BC__GL_BUF_LINKS,  BC__GL_BUF_TILES,
+	                               BC__GL_BUF_SORTED, BC__GL_BUF_SCRATCH,
+	                               BC__GL_BUF_REGION, BC__GL_BUF_SHORT};
+	struct gl_renderer *r = gl_of(base);
+	GladGLContext *gl = &r->ctx.gl;
+	bc_free(r->region);
+	r->region = NULL;
+	r->region_cap = 0;
+	if (enter(r, NULL)) {
+		return; /* a lost context: nothing on it to free */
+	}
+	gl->DeleteTextures(3, r->tex);
+	memset(r->tex, 0, sizeof(r->tex));
+	r->tex_w = r->tex_h = 0;
+	gl->BindBuffer(GL_PIXEL_PACK_BUFFER, r->pbo);
+	gl->BufferData(GL_PIXEL_PACK_BUFFER, 0, NULL, GL_STREAM_READ);
+	gl->BindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+	r->pbo_size = 0;
+	for (size_t i = 0; i < sizeof(per_view) / sizeof(per_view[0]); i++) {
+		buf_alloc(r, per_view[i], 0, NULL);
+	}
+	if (!r->want_cap && r->frag_cap) {
+		r->want_cap = r->frag_cap;
+	}
+	r->frag_cap = 0;
+	(void)bc__gl_check(&r->ctx, "releasing a view", NULL);
+	bc__gl_ctx_unbind(&r->ctx);
+}
+
+/* What gl_release frees: the per-view buffers above their floor of 64
+ * bytes, the images (12 bytes a pixel), the readback buffer and the host
+ * tile list. */
+static size_t gl_kept_bytes(const struct bc_renderer *base)
+{
+	static const int per_view[] = {BC__GL_BUF_LINKS,  BC__GL_BUF_TILES,
+	                               BC__GL_BUF_SORTED, BC__GL_BUF_SCRATCH,
+	                               BC__GL_BUF_REGION, BC__GL_BUF_SHORT};
+	const struct gl_renderer *r = (const struct gl_renderer *)base;
+	size_t n = 12 * (size_t)r->tex_w * r->tex_h + r->pbo_size +
+	           r->region_cap * sizeof(*r->region);
+	for (size_t i = 0; i < sizeof(per_view) / sizeof(per_view[0]); i++) {
+		if (r->buf_size[per_view[i]] > 64) {
+			n += r->buf_size[per_view[i]];
+		}
+	}
+	return n;
+}
+
 int bc_render_gl_info(const struct bc_renderer *base, struct bc_gl_info *out)
 {
 	const struct gl_renderer *r = (const struct gl_renderer *)base;
@@ -1345,4 +1484,6 @@ const struct bc_backend_ops bc_backend_gl_ops = {
     .render = gl_render,
     .key = gl_key,
     .damage = gl_damage,
+    .release = gl_release,
+    .kept_bytes = gl_kept_bytes,
 };

@@ -87,6 +87,7 @@ enum bc__gl_buf {
 	BC__GL_BUF_SCRATCH,
 	BC__GL_BUF_STATS,
 	BC__GL_BUF_REGION, /* a region's tile list and tile bits */
+	BC__GL_BUF_SHORT,  /* per tile, the rays that ran out of the bound */
 	BC__GL_BUF_COUNT
 };
 
@@ -106,7 +107,12 @@ struct bc__gl_frame_ubo {
 	uint32_t counts[4]; /* primitives, fragment capacity, debug mode */
 	uint32_t pool[4];   /* slot base (scratch words), slots, budget */
 	uint32_t region[4]; /* level, refine, tiles listed, list used */
+	uint32_t bound[4];  /* the region's max_evals (0: none), 0, 0, 0 */
 };
+
+/* Words per tile in the Short buffer: a bit per pixel whose ray ran out of
+ * the region's evaluation bound (bit (y % 8) * 8 + x % 8). */
+#define BC_GL_SHORT_WORDS 2u
 
 /* Suspension slots (trace.comp): 8 words for the tile's walk and 9 per
  * ray (flags, the pending hit, a paused ray's sphere tracing state and

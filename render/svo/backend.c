@@ -12,6 +12,10 @@
  * `svo` and `tiled` compare pixel by pixel. The octree's build time is
  * reported as ms_abuffer, the slot for a frame's acceleration structure,
  * and counts against the frame's time budget: past it no tile is started.
+ * A region's evaluation bound goes to the caster (cast.c), which stops a
+ * ray at it; a ray that ran out, or whose normal would go past it, is left
+ * as the frame held it. release frees the octree and keeps its band, so
+ * the next render builds the same one.
  */
 #include "svo_impl.h"
 
@@ -113,9 +117,11 @@ static int svo_sync(struct bc_renderer *base, const struct bc_tree *t,
 	if (r->synced && unchanged(dirty)) {
 		return 0;
 	}
-	/* Any change moves the field somewhere: the octree is rebuilt. */
+	/* Any change moves the field somewhere: the octree is rebuilt, for
+	 * the band of the next frame. */
 	bc_svo_destroy(r->svo);
 	r->svo = NULL;
+	r->band = 0.0f;
 	bc_svo_rpn_finish(&r->rpn);
 	r->synced = false;
 	l = t ? bc_tree_lin(t) : NULL;
@@ -142,7 +148,7 @@ struct frame {
 	double start, budget_ms; /* budget 0: none */
 	atomic_bool late;        /* the budget ran out: tiles left blank */
 	atomic_uint next;
-	atomic_uint_fast64_t evals, rays;
+	atomic_uint_fast64_t evals, rays, short_rays;
 	atomic_uint tiles;
 	atomic_int err;
 };
@@ -265,15 +271,28 @@ static void normals(const struct frame *fr, const float (*d)[3],
 	}
 }
 
-/* Casts n pixels (px[l], py[l]) as one packet and writes them. A packet of
- * one or two rays gains nothing from sharing, so those are cast alone
- * (the same result either way: bc_svo_cast_packet). */
-static void cast_packet(const struct frame *fr, struct bc_svo_caster *c,
-                        const uint32_t *px, const uint32_t *py, uint32_t n,
-                        uint64_t *evals)
+/* Samples of a hit's normal (tet_points). */
+#define NORMAL_EVALS 4u
+
+/* Whether a hit's normal fits within the frame's bound after what its
+ * cast spent. */
+static bool can_shade(const struct frame *fr, const struct bc_svo_hit *h)
+{
+	uint32_t used = h->evals + h->range_evals, most = fr->cp.max_evals;
+	return most == 0 || (used <= most && most - used >= NORMAL_EVALS);
+}
+
+/* Casts n pixels (px[l], py[l]) as one packet and writes them, but for
+ * those whose rays ran out of the frame's bound (their normal's samples
+ * included): those are left as they are and counted in the return value.
+ * A packet of one or two rays gains nothing from sharing, so those are
+ * cast alone (the same result either way: bc_svo_cast_packet). */
+static uint32_t cast_packet(const struct frame *fr, struct bc_svo_caster *c,
+                            const uint32_t *px, const uint32_t *py, uint32_t n,
+                            uint64_t *evals)
 {
 	float d[BC_SVO_PACKET][3], v[BC_SVO_PACKET][4];
-	uint32_t hit = 0;
+	uint32_t hit = 0, cut = 0;
 	struct bc_svo_hit hits[BC_SVO_PACKET];
 	for (uint32_t l = 0; l < n; l++) {
 		bc_view_rays_dir(&fr->vr, (float)px[l] + 0.5f,
@@ -292,25 +311,34 @@ static void cast_packet(const struct frame *fr, struct bc_svo_caster *c,
 			           : 0u;
 		}
 	}
+	for (uint32_t l = 0; l < n; l++) {
+		if (hits[l].ran_out ||
+		    ((hit >> l) & 1u && !can_shade(fr, &hits[l]))) {
+			cut |= 1u << l;
+		}
+	}
+	hit &= ~cut;
 	normals(fr, d, hits, hit, v);
 	for (uint32_t l = 0; l < n; l++) {
 		if ((hit >> l) & 1u) {
 			put_hit(fr, px[l], py[l], d[l], &hits[l], v[l]);
-		} else {
+		} else if (!((cut >> l) & 1u)) {
 			put_miss(fr, px[l], py[l],
 			         hits[l].evals + hits[l].range_evals);
 		}
 		*evals += hits[l].evals + hits[l].range_evals;
 	}
+	return bc__svo_popcount(cut);
 }
 
 /* Casts the pixels of the tile at (x0, y0) that this pass renders, in
  * packets of BC_SVO_PACKET taken block by block (PACKET_W x PACKET_H
  * pixels: neighbouring rays cross the same nodes and leaves); a coarse
  * level's few pixels per block fill a packet from several blocks. Returns
- * how many pixels. */
+ * how many pixels; *cut gets those whose rays ran out of the bound. */
 static uint32_t cast_tile(const struct frame *fr, struct bc_svo_caster *c,
-                          uint32_t x0, uint32_t y0, uint64_t *evals)
+                          uint32_t x0, uint32_t y0, uint64_t *evals,
+                          uint32_t *cut)
 {
 	const struct bc_render_region *rg = fr->region;
 	const struct bc_frame *out = fr->out;
@@ -333,8 +361,8 @@ static uint32_t cast_tile(const struct frame *fr, struct bc_svo_caster *c,
 					px[n] = x;
 					py[n++] = y;
 					if (n == BC_SVO_PACKET) {
-						cast_packet(fr, c, px, py, n,
-						            evals);
+						*cut += cast_packet(
+						    fr, c, px, py, n, evals);
 						total += n;
 						n = 0;
 					}
@@ -343,7 +371,7 @@ static uint32_t cast_tile(const struct frame *fr, struct bc_svo_caster *c,
 		}
 	}
 	if (n) {
-		cast_packet(fr, c, px, py, n, evals);
+		*cut += cast_packet(fr, c, px, py, n, evals);
 		total += n;
 	}
 	return total;
@@ -355,7 +383,7 @@ static void worker(void *arg, uint32_t thread)
 	const struct bc_render_region *rg = fr->region;
 	struct bc_svo_caster *c = NULL;
 	struct bc_frame *out = fr->out;
-	uint64_t evals = 0, rays = 0;
+	uint64_t evals = 0, rays = 0, cut_rays = 0;
 	int rc = fr->r->svo ? bc_svo_caster_create(&c, fr->r->svo) : 0;
 	if (rc) {
 		/* The other threads take this one's share. */
@@ -393,10 +421,19 @@ static void worker(void *arg, uint32_t thread)
 			}
 			continue;
 		}
-		rays += cast_tile(fr, c, x0, y0, &evals);
+		{
+			uint32_t cut = 0;
+			rays += cast_tile(fr, c, x0, y0, &evals, &cut);
+			cut_rays += cut;
+			if (cut && rg->short_tiles) {
+				/* This thread alone draws the tile. */
+				rg->short_tiles[tile] = 1;
+			}
+		}
 	}
 	atomic_fetch_add(&fr->evals, evals);
 	atomic_fetch_add(&fr->rays, rays);
+	atomic_fetch_add(&fr->short_rays, cut_rays);
 	bc_svo_caster_destroy(c);
 }
 
@@ -443,15 +480,20 @@ static int svo_render(struct bc_renderer *base, const struct bc_camera *cam,
 	fr.cp.pix_angle = 2.0f * fr.vr.tan_half_y / (float)fr.vr.height;
 	fr.cp.min_step = BC_SVO_MIN_STEP_REL * size;
 	fr.cp.refine_tol = BC_SVO_REFINE_REL * size;
+	fr.cp.max_evals = region->max_evals;
 	bc_shade_init(&fr.shade, &fr.vr);
 	if (!r->empty) {
 		float need = frame_band(&r->rpn, fr.vr.eye, &fr.cp);
 		if (!r->svo || need > r->band) {
+			/* After a release the octree is built again with
+			 * the band it had: the same octree, the same
+			 * pixels. */
 			struct bc_svo_opts so = {
 			    .arith = base->opts.svo_range,
 			    .threshold = base->opts.svo_threshold,
 			    .max_depth = base->opts.svo_max_depth,
-			    .band = need * SVO_BAND_SLACK,
+			    .band = need > r->band ? need * SVO_BAND_SLACK
+			                           : r->band,
 			};
 			bc_svo_destroy(r->svo);
 			r->svo = NULL;
@@ -469,6 +511,7 @@ static int svo_render(struct bc_renderer *base, const struct bc_camera *cam,
 	atomic_init(&fr.err, 0);
 	atomic_init(&fr.late, false);
 	atomic_init(&fr.rays, 0u);
+	atomic_init(&fr.short_rays, 0u);
 	atomic_init(&fr.tiles, 0u);
 	bc_pool_run(r->threads, worker, &fr);
 	if (atomic_load(&fr.next) < fr.ntiles) {
@@ -484,10 +527,35 @@ static int svo_render(struct bc_renderer *base, const struct bc_camera *cam,
 		stats->ms_trace = t2 - t1;
 		stats->field_evals = atomic_load(&fr.evals);
 		stats->rays = atomic_load(&fr.rays);
+		stats->short_rays = atomic_load(&fr.short_rays);
 		stats->tiles = atomic_load(&fr.tiles);
 		stats->incomplete = atomic_load(&fr.late);
 	}
 	return 0;
+}
+
+/* Frees the octree, by far the largest thing kept (the RPN belongs to the
+ * synced tree and stays). The band it was built with stays too, so that
+ * the next render builds the same octree. */
+static void svo_release(struct bc_renderer *base)
+{
+	struct svo_renderer *r = svo_of(base);
+	bc_svo_destroy(r->svo);
+	r->svo = NULL;
+}
+
+/* The octree's bytes, from its arrays' capacities. */
+static size_t svo_kept_bytes(const struct bc_renderer *base)
+{
+	const struct bc_svo *s =
+	    ((const struct svo_renderer *)(const void *)base)->svo;
+	if (!s) {
+		return 0;
+	}
+	return sizeof(*s) + (size_t)s->capnodes * sizeof(*s->nodes) +
+	       (size_t)s->capleaves * sizeof(*s->leaves) +
+	       s->pool.cap * sizeof(*s->pool.v) +
+	       (size_t)s->rpn->nwords * sizeof(*s->full);
 }
 
 const struct bc_backend_ops bc_backend_svo_ops = {
@@ -496,6 +564,8 @@ const struct bc_backend_ops bc_backend_svo_ops = {
     .destroy = svo_destroy,
     .sync = svo_sync,
     .render = svo_render,
+    .release = svo_release,
+    .kept_bytes = svo_kept_bytes,
     /* No key and no damage hook: any edit rebuilds the octree, whose
      * cells (and so every pixel) depend on all primitives. */
 };

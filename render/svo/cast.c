@@ -17,6 +17,12 @@
  * settle() refines it to the field's zero crossing, or on a silhouette to
  * the ray's closest approach, as the sphere tracer does, so that depths
  * agree to the refinement tolerance and not to the band's thickness.
+ *
+ * An evaluation bound (cp->max_evals) is checked before every point and
+ * range evaluation of a ray (afford); where it is spent, the function
+ * returns at once, the ray is marked ran_out and every caller up to the
+ * cast gives it up, neither hit nor miss. Nothing else changes, so a ray
+ * the bound does not stop is cast exactly as without one.
  */
 #include "svo_impl.h"
 
@@ -121,6 +127,27 @@ float bc_svo_hit_band(const struct bc_svo_cast_params *cp, float t)
 	return band_at(cp, t);
 }
 
+/* Whether the ray of hit may spend n more evaluations (point and range)
+ * within cp's bound. When it may not, it has run out: ran_out is set and
+ * the caller stops the ray without evaluating. Every evaluation of a ray
+ * is preceded by this test, so a bounded ray stops before the first one
+ * past the bound, and one that never meets it takes the same samples as
+ * without a bound. */
+static inline bool afford(const struct bc_svo_cast_params *cp,
+                          struct bc_svo_hit *hit, uint32_t n)
+{
+	uint32_t used;
+	if (!cp->max_evals) {
+		return true;
+	}
+	used = hit->evals + hit->range_evals;
+	if (used <= cp->max_evals && cp->max_evals - used >= n) {
+		return true;
+	}
+	hit->ran_out = true;
+	return false;
+}
+
 /* A field along the ray: a leaf's variant, or the octree (mask NULL).
  * Through the octree, the last leaf found is kept: the samples of a
  * refinement lie close together, mostly in one leaf, and the walk from
@@ -134,8 +161,8 @@ struct ray_field {
 	                  found last are decoded (NULL: not decoded) */
 	const float *o, *d;
 	const struct bc_svo_cast_params *cp;
-	bool banded; /* subtract the hit band */
-	uint32_t *evals;
+	bool banded;            /* subtract the hit band */
+	struct bc_svo_hit *hit; /* counts the evaluations */
 	bool cached;
 	struct bc_svo_leaf_ref leaf;
 };
@@ -192,7 +219,7 @@ static float field_at(struct ray_field *rf, float t)
 			v = bc_svo_cmask_eval(rf->s->rpn, rf->leaf.mask, p);
 		}
 	}
-	(*rf->evals)++;
+	rf->hit->evals++;
 	return rf->banded ? v - band_at(rf->cp, t) : v;
 }
 
@@ -267,18 +294,24 @@ static inline float ill_root(const struct illinois *s)
 	return a;
 }
 
+/* (Returns no root when the ray runs out of its bound: the callers look
+ * at hit->ran_out.) */
 static float refine(struct ray_field *rf, float a, float fa, float b, float fb)
 {
 	struct illinois s = {a, fa, b, fb, 0, 0};
 	float m;
 	while (ill_next(&s, rf->cp->refine_tol, &m)) {
+		if (!afford(rf->cp, rf->hit, 1)) {
+			return a;
+		}
 		ill_take(&s, m, field_at(rf, m));
 	}
 	return ill_root(&s);
 }
 
 /* Alg. 5.7 on one leaf's segment [ta, tb]: the first t where the variant
- * drops below the band, if any. */
+ * drops below the band, if any (false, and hit->ran_out, when the ray's
+ * bound stopped it). */
 static bool leaf_root(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
                       const float o[3], const float d[3], float ta, float tb,
                       const struct bc_svo_cast_params *cp,
@@ -287,8 +320,8 @@ static bool leaf_root(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
 	struct {
 		float a, b;
 	} st[CAST_MAX_LEVELS + 2];
-	struct ray_field rf = {c->s, m,  NULL, 0,           NULL,  o,
-	                       d,    cp, true, &hit->evals, false, {0}};
+	struct ray_field rf = {c->s, m,  NULL, 0,   NULL,  o,
+	                       d,    cp, true, hit, false, {0}};
 	struct bc_svo_region rg;
 	uint32_t n = decode(m, c->idx), sp = 0;
 	memset(&rg, 0, sizeof(rg));
@@ -307,6 +340,9 @@ static bool leaf_root(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
 		c1 = band_at(cp, u1);
 		rg.t0 = u0;
 		rg.t1 = u1;
+		if (!afford(cp, hit, 1)) {
+			return false;
+		}
 		r = bc_svo_range(c->g, c->idx, n, &rg);
 		hit->range_evals++;
 		if (r.lo > (double)c1) {
@@ -320,15 +356,22 @@ static bool leaf_root(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
 		um = 0.5f * (u0 + u1);
 		if (u1 - u0 <= maxf(cp->pix_angle * u1, cp->min_step) ||
 		    sp >= CAST_MAX_LEVELS || !(um > u0 && um < u1)) {
-			float g0 = field_at(&rf, u0), g1;
+			float g0, g1;
+			if (!afford(cp, hit, 1)) {
+				return false;
+			}
+			g0 = field_at(&rf, u0);
 			if (g0 <= 0.0f) {
 				*t_out = u0;
 				return true;
 			}
+			if (!afford(cp, hit, 1)) {
+				return false;
+			}
 			g1 = field_at(&rf, u1);
 			if (g1 <= 0.0f) {
 				*t_out = refine(&rf, u0, g0, u1, g1);
-				return true;
+				return !hit->ran_out;
 			}
 			continue; /* a dip narrower than a pixel */
 		}
@@ -479,18 +522,25 @@ static void hit_probed(const struct bc_svo_cast_params *cp, struct hit_plan *h,
 }
 
 /* The hit, refined in rf (the leaf's variant); *settled when the depth
- * is the crossing already. */
+ * is the crossing already. (No hit when the ray runs out of its bound:
+ * the caller looks at hit->ran_out.) */
 static float step_hit(struct ray_field *rf, const struct lane_step *ls, float q,
                       float gq, bool *settled)
 {
 	struct hit_plan h = hit_plan(rf->cp, ls, q, gq);
 	float m;
 	while (h.probe) {
+		if (!afford(rf->cp, rf->hit, 1)) {
+			return q;
+		}
 		rf->banded = false;
 		hit_probed(rf->cp, &h, field_at(rf, h.q2));
 	}
 	rf->banded = h.banded;
 	while (ill_next(&h.ill, rf->cp->refine_tol, &m)) {
+		if (!afford(rf->cp, rf->hit, 1)) {
+			return q;
+		}
 		ill_take(&h.ill, m, field_at(rf, m));
 	}
 	*settled = h.settled;
@@ -514,10 +564,13 @@ static bool leaf_step(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
                       const struct bc_svo_cast_params *cp,
                       struct bc_svo_hit *hit, float *t_out, bool *settled)
 {
-	struct ray_field rf = {c->s, m,  c->idx, 0,           NULL,  o,
-	                       d,    cp, true,   &hit->evals, false, {0}};
+	struct ray_field rf = {c->s, m,  c->idx, 0,   NULL,  o,
+	                       d,    cp, true,   hit, false, {0}};
 	struct lane_step ls = {ta, 0.0f, tb, band_at(cp, tb), 0};
 	rf.nlist = decode(m, c->idx);
+	if (!afford(cp, hit, 1)) {
+		return false;
+	}
 	ls.g = field_at(&rf, ta);
 	if (ls.g <= 0.0f) {
 		*t_out = ta;
@@ -528,10 +581,13 @@ static bool leaf_step(struct bc_svo_caster *c, const struct bc_svo_cmask *m,
 		if (!step_next(cp, &ls, &q)) {
 			return leaf_root(c, m, o, d, ls.t, tb, cp, hit, t_out);
 		}
+		if (!afford(cp, hit, 1)) {
+			return false;
+		}
 		float gq = field_at(&rf, q);
 		if (gq <= 0.0f) {
 			*t_out = step_hit(&rf, &ls, q, gq, settled);
-			return true;
+			return !hit->ran_out;
 		}
 		if (!step_on(&ls, q, gq)) {
 			return false;
@@ -557,8 +613,15 @@ static float closest(struct ray_field *rf, float a, float va, float b)
 	const float tol = rf->cp->refine_tol;
 	/* x the best sample, w the second best, v the one before w; d the
 	 * last step, e the one before it. */
-	float x = a + cg * (b - a), fx = field_at(rf, x);
-	float w = x, fw = fx, v = x, fv = fx, d = 0.0f, e = 0.0f;
+	float x = a + cg * (b - a), fx, w, fw, v, fv, d = 0.0f, e = 0.0f;
+	if (!afford(rf->cp, rf->hit, 1)) {
+		return a;
+	}
+	fx = field_at(rf, x);
+	w = x;
+	fw = fx;
+	v = x;
+	fv = fx;
 	if (fx <= 0.0f) {
 		return refine(rf, a, va, x, fx);
 	}
@@ -591,6 +654,9 @@ static float closest(struct ray_field *rf, float a, float va, float b)
 		u = fabsf(d) >= tol ? x + d : x + (d > 0.0f ? tol : -tol);
 		if (!(u > a && u < b) || u == x) {
 			break; /* float resolution */
+		}
+		if (!afford(rf->cp, rf->hit, 1)) {
+			return x;
 		}
 		fu = field_at(rf, u);
 		if (fu <= 0.0f) {
@@ -650,13 +716,20 @@ static float settle(struct ray_field *rf, float th, float ta, float tb)
 	const struct bc_svo_cast_params *cp = rf->cp;
 	float band = band_at(cp, th);
 	float limit = minf(th + 64.0f * band, tb);
-	float t = th, v = field_at(rf, th), tp = th - 0.5f * band, vp = 0.0f;
+	float t = th, v, tp = th - 0.5f * band, vp = 0.0f;
 	float best_t = th, best_v, before, before_v, after = th;
 	bool slope = false, after_set = false;
+	if (!afford(cp, rf->hit, 1)) {
+		return th;
+	}
+	v = field_at(rf, th);
 	if (!(v > 0.0f)) {
 		return th; /* at or inside the surface already */
 	}
 	if (tp >= ta) {
+		if (!afford(cp, rf->hit, 1)) {
+			return th;
+		}
 		vp = field_at(rf, tp);
 		slope = vp > v;
 	}
@@ -674,6 +747,9 @@ static float settle(struct ray_field *rf, float th, float ta, float tb)
 		probe = minf(t + reach, limit);
 		if (!(probe > t)) {
 			break; /* the march's end */
+		}
+		if (!afford(cp, rf->hit, 1)) {
+			return th;
 		}
 		vq = field_at(rf, probe);
 		if (vq <= 0.0f) {
@@ -863,9 +939,10 @@ static inline uint32_t reciprocal(const float d[3], float inv[3])
 /* The ray entered the hit band at th in a leaf whose variant is mask (the
  * full tree's for a full leaf), after leaves of terms active terms at
  * most; [ta, tb] is its segment in the octree. Settles the depth and takes
- * the id and the normals' variant. (A packet's settled hits whose id it
- * took already are finished in place: bc_svo_cast_packet.) */
-static void finish_hit(struct bc_svo_caster *c, const float o[3],
+ * the id and the normals' variant. Returns false when the ray ran out of
+ * its bound on the way (hit->ran_out). (A packet's settled hits whose id
+ * it took already are finished in place: bc_svo_cast_packet.) */
+static bool finish_hit(struct bc_svo_caster *c, const float o[3],
                        const float d[3], float ta, float tb, float th,
                        bool settled, uint32_t terms, struct bc_svo_cmask mask,
                        const struct bc_svo_cast_params *cp,
@@ -877,10 +954,12 @@ static void finish_hit(struct bc_svo_caster *c, const float o[3],
 		/* The leaf phase is over: its scratch list is free. (Built
 		 * only here: zeroing the struct for every hit was 40 % of
 		 * this function's time.) */
-		struct ray_field rf = {s,      NULL,        NULL,  0,
-		                       c->idx, o,           d,     cp,
-		                       false,  &hit->evals, false, {0}};
+		struct ray_field rf = {s, NULL, NULL,  0,   c->idx, o,
+		                       d, cp,   false, hit, false,  {0}};
 		th = settle(&rf, th, ta, tb);
+	}
+	if (hit->ran_out || !afford(cp, hit, 1)) {
+		return false;
 	}
 	hit->t = th;
 	hit->mask = mask;
@@ -897,6 +976,7 @@ static void finish_hit(struct bc_svo_caster *c, const float o[3],
 		(void)bc_svo_cmask_eval_id(s->rpn, hit->mask, p, &hit->prim);
 		hit->evals++;
 	}
+	return true;
 }
 
 struct ent {
@@ -949,6 +1029,9 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
 				                    cp, hit, &th, &settled)
 				        : leaf_root(c, &mask, o, d, e.ta, e.tb,
 				                    cp, hit, &th);
+				if (hit->ran_out) {
+					return false;
+				}
 			}
 			continue;
 		}
@@ -974,8 +1057,7 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
 	if (!found) {
 		return false;
 	}
-	finish_hit(c, o, d, ta, tb, th, settled, terms, mask, cp, hit);
-	return true;
+	return finish_hit(c, o, d, ta, tb, th, settled, terms, mask, cp, hit);
 }
 
 /* ---- Ray packets -------------------------------------------------------- */
@@ -1045,6 +1127,10 @@ static void packet_hits(struct bc_svo_caster *c, uint32_t n, const float o[3],
 		want = 0;
 		for (uint32_t b = lanes; b; b &= b - 1u) {
 			uint32_t l = bc__svo_lowest(b);
+			if (h[l].probe && !afford(cp, &hits[l], 1)) {
+				h[l].probe = false;
+				live &= ~(1u << l);
+			}
 			if (h[l].probe) {
 				m[l] = h[l].q2;
 				want |= 1u << l;
@@ -1064,7 +1150,8 @@ static void packet_hits(struct bc_svo_caster *c, uint32_t n, const float o[3],
 		want = 0;
 		for (uint32_t b = live; b; b &= b - 1u) {
 			uint32_t l = bc__svo_lowest(b);
-			if (ill_next(&h[l].ill, cp->refine_tol, &m[l])) {
+			if (ill_next(&h[l].ill, cp->refine_tol, &m[l]) &&
+			    afford(cp, &hits[l], 1)) {
 				want |= 1u << l;
 			}
 		}
@@ -1097,7 +1184,8 @@ static void packet_hits(struct bc_svo_caster *c, uint32_t n, const float o[3],
  * its surface a few pixels off the rays, that took about five rounds of
  * samples to learn what one range evaluation of the packet's beam tells
  * (fig18: 62 % of the rounds, in 99 % of the leaves crossed without a
- * hit). Every lane counts the range evaluation.
+ * hit). Every lane counts the range evaluation (the caller made sure
+ * each can afford it).
  */
 static bool beam_clear(struct bc_svo_caster *c, uint32_t n, const float o[3],
                        const float (*d)[3], const struct pent *e,
@@ -1135,7 +1223,9 @@ static bool beam_clear(struct bc_svo_caster *c, uint32_t n, const float o[3],
 static uint32_t packet_ids(struct bc_svo_caster *c, uint32_t n,
                            const float o[3], const float (*d)[3],
                            const struct pent *e, uint32_t lanes,
-                           const float *th, const bool *settled, uint32_t *pid)
+                           const float *th, const bool *settled, uint32_t *pid,
+                           const struct bc_svo_cast_params *cp,
+                           struct bc_svo_hit *hits)
 {
 	float v[BC__SVO_LANES];
 	uint32_t prim[BC__SVO_LANES], in = 0;
@@ -1143,7 +1233,9 @@ static uint32_t packet_ids(struct bc_svo_caster *c, uint32_t n,
 		uint32_t l = bc__svo_lowest(b);
 		float p[3] = {o[0] + th[l] * d[l][0], o[1] + th[l] * d[l][1],
 		              o[2] + th[l] * d[l][2]};
-		if (settled[l] && in_box(e->lo, e->hi, p)) {
+		/* The id costs the evaluation finish_hit would spend. */
+		if (settled[l] && !hits[l].ran_out && in_box(e->lo, e->hi, p) &&
+		    afford(cp, &hits[l], 1)) {
 			in |= 1u << l;
 		}
 	}
@@ -1158,11 +1250,41 @@ static uint32_t packet_ids(struct bc_svo_caster *c, uint32_t n,
 	return in;
 }
 
+/* The lanes of `lanes` that may spend n more evaluations within cp's
+ * bound; the others have run out (afford). */
+static uint32_t afford_lanes(const struct bc_svo_cast_params *cp,
+                             struct bc_svo_hit *hits, uint32_t lanes,
+                             uint32_t n)
+{
+	if (!cp->max_evals) {
+		return lanes;
+	}
+	for (uint32_t b = lanes; b; b &= b - 1u) {
+		uint32_t l = bc__svo_lowest(b);
+		if (!afford(cp, &hits[l], n)) {
+			lanes &= ~(1u << l);
+		}
+	}
+	return lanes;
+}
+
+/* The lanes of `lanes` that ran out of their bound. */
+static uint32_t ran_out_lanes(const struct bc_svo_hit *hits, uint32_t lanes)
+{
+	uint32_t out = 0;
+	for (uint32_t b = lanes; b; b &= b - 1u) {
+		uint32_t l = bc__svo_lowest(b);
+		out |= hits[l].ran_out ? 1u << l : 0u;
+	}
+	return out;
+}
+
 /* leaf_step for the lanes of `lanes` at once: every lane takes the samples
  * leaf_step would take (step_next, step_hit, step_on), and each round of
  * samples is one evaluation of the variant (mask m, its n terms decoded in
- * c->pidx) over the lanes. Returns the lanes that hit in this leaf (th,
- * settled set). */
+ * c->pidx) over the lanes; a lane that cannot afford its next sample
+ * drops out (ran_out). Returns the lanes that hit in this leaf (th,
+ * settled set), some of which may have run out while refining. */
 static uint32_t packet_step(struct bc_svo_caster *c,
                             const struct bc_svo_cmask *m, uint32_t n,
                             const float o[3], const float (*d)[3],
@@ -1182,6 +1304,10 @@ static uint32_t packet_step(struct bc_svo_caster *c,
 	uint32_t bits[BC_SVO_PACKET], more[BC_SVO_PACKET];
 	struct hit_plan plan[BC_SVO_PACKET];
 	uint32_t found = 0, going = 0, hit = 0;
+	lanes = afford_lanes(cp, hits, lanes, 1);
+	if (!lanes) {
+		return 0;
+	}
 	for (uint32_t l = 0; l < BC_SVO_PACKET; l++) {
 		bool in = lanes & lane_bit[l];
 		t[l] = in ? e->ta[l] : 0.0f;
@@ -1224,6 +1350,7 @@ static uint32_t packet_step(struct bc_svo_caster *c,
 				found |= 1u << l;
 			}
 		}
+		want = afford_lanes(cp, hits, want, 1);
 		if (!want) {
 			break;
 		}
@@ -1262,7 +1389,8 @@ static uint32_t packet_step(struct bc_svo_caster *c,
 	}
 	if (hit) {
 		packet_hits(c, n, o, hit, cp, plan, hits, th, settled);
-		*idset |= packet_ids(c, n, o, d, e, hit, th, settled, pid);
+		*idset |=
+		    packet_ids(c, n, o, d, e, hit, th, settled, pid, cp, hits);
 	}
 	return found | hit;
 }
@@ -1281,7 +1409,7 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 	uint32_t pid[BC_SVO_PACKET], idset = 0, down[BC_SVO_PACKET];
 	uint32_t terms[BC_SVO_PACKET];
 	struct bc_svo_cmask mask[BC_SVO_PACKET];
-	uint32_t sp, live = 0, found = 0, alone = 0, hit = 0, sgn = 0;
+	uint32_t sp, live = 0, found = 0, alone = 0, hit = 0, sgn = 0, out = 0;
 	for (uint32_t l = 0; l < n; l++) {
 		memset(&hits[l], 0, sizeof(hits[l]));
 		hits[l].prim = BC_NONE;
@@ -1329,7 +1457,7 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 		/* Children are pushed where the entry lies: copy it out. */
 		struct pent e = st[--sp];
 		const struct bc__svo_node *nd = &s->nodes[e.node];
-		uint32_t lanes = e.lanes & ~(found | alone);
+		uint32_t lanes = e.lanes & ~(found | alone | out);
 		float mid[3];
 		if (!lanes) {
 			continue;
@@ -1348,6 +1476,9 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 			} else if (lf->state == BC_SVO_STATE_ACTIVE) {
 				m.pairs = s->pool.v + 2u * (size_t)lf->off;
 				m.nwords = lf->npairs;
+				/* Every way through the leaf starts with an
+				 * evaluation, the beam test's or a lane's. */
+				lanes = afford_lanes(cp, hits, lanes, 1);
 				for (uint32_t b = lanes; b; b &= b - 1u) {
 					terms[bc__svo_lowest(b)] = lf->nterms;
 				}
@@ -1359,9 +1490,11 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 				 * does too (fig18: three quarters of the beam
 				 * tests that failed), and a failed test costs
 				 * a range evaluation for nothing. */
-				if (nd->leaf != c->hit_leaf &&
-				    beam_clear(c, nt, o, d, &e, lanes, cp,
-				               hits)) {
+				if (!lanes) {
+					/* Every one of them ran out. */
+				} else if (nd->leaf != c->hit_leaf &&
+				           beam_clear(c, nt, o, d, &e, lanes,
+				                      cp, hits)) {
 					/* No hit here for any of them. */
 				} else if (lf->flags & BC__SVO_LEAF_LIP1) {
 					got = packet_step(c, &m, nt, o, d, &e,
@@ -1380,6 +1513,9 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 					}
 				}
 			}
+			/* Lanes that ran out here are done, hit or not. */
+			out |= ran_out_lanes(hits, e.lanes & ~(found | alone));
+			got &= ~out;
 			if (got) {
 				c->hit_leaf = nd->leaf;
 			}
@@ -1446,9 +1582,10 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 			hits[l].mask = mask[l];
 			hits[l].prim = pid[l];
 			hits[l].evals++;
-		} else {
-			finish_hit(c, o, d[l], ta0[l], tb0[l], th[l],
-			           settled[l], terms[l], mask[l], cp, &hits[l]);
+		} else if (!finish_hit(c, o, d[l], ta0[l], tb0[l], th[l],
+		                       settled[l], terms[l], mask[l], cp,
+		                       &hits[l])) {
+			continue; /* ran out of its bound */
 		}
 		hit |= 1u << l;
 	}

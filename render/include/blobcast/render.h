@@ -9,6 +9,7 @@
 #define BLOBCAST_RENDER_H
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 
 #include "blobcast/blobtree.h"
@@ -109,6 +110,7 @@ struct bc_render_stats {
 	uint32_t tiles;       /* tiles rendered by this call */
 	bool incomplete;      /* cut short by a time budget */
 	bool whole;           /* a region was asked, the whole frame drawn */
+	uint64_t short_rays;  /* rays that ran out of max_evals, not drawn */
 };
 
 /*
@@ -122,11 +124,48 @@ struct bc_render_stats {
  * 3 down to 0 traces every pixel exactly once. Each pixel's value does not
  * depend on the level it was traced at: a frame refined to level 0 is the
  * same, bit for bit, as a whole render.
+ *
+ * An evaluation bound (max_evals) makes a call's cost follow the pixels it
+ * asks for, whatever the scene: a ray stops before its first evaluation
+ * past the bound, so a call spends at most max_evals per ray plus each
+ * tile's setup (its list and the views of its depth ranges; svo: the
+ * octree walk, and the octree's build after a sync). The evaluations
+ * counted are those of stats.field_evals, and everything a ray's pixel
+ * takes counts, shading included:
+ *   naive, tiled: one value of the field (the full tree, a depth range's
+ *     pruned view or the tile's view) at one point: each sphere tracing
+ *     step; each sample of the refinement, bisection and closest-approach
+ *     searches and of settling a near hit; the five samples that shade a
+ *     hit (its primitive, its normal). Packets count the samples as the
+ *     scalar path does (the vector kernels' rounding, which may move a
+ *     pixel in its last bits, may also move a ray's count).
+ *   gl: the same samples as tiled (trace.comp is trace.c step by step),
+ *     per invocation; a near hit at a depth range's end is shaded there.
+ *   svo: a point evaluation of a variant (a leaf's or the full tree's) or
+ *     a range evaluation (interval bisection's, or a packet's beam test,
+ *     which each ray of the packet counts), and the four samples of a
+ *     hit's normal. A ray that leaves its packet (it runs against the
+ *     packet's order) is cast again alone with the whole bound, so it may
+ *     spend up to twice the bound.
+ * A ray that does not run out is drawn bit for bit as without a bound.
+ * Whether a ray runs out depends only on the ray in naive, tiled and gl;
+ * in svo on the rays cast in its packet too (their beam tests are shared;
+ * a region fixes the packets, so a call is still deterministic).
  */
 struct bc_render_region {
 	const uint8_t *tiles; /* non-zero byte: draw the tile; NULL: all */
 	uint32_t level;       /* 0..BC_RENDER_MAX_LEVEL */
 	bool refine;          /* skip the pixels level + 1 traced */
+	/* The most field evaluations one ray of this call may spend, 0: no
+	 * bound. A ray that would need more stops before the first one past
+	 * the bound and its pixel is not written: colour, depth and id keep
+	 * what the frame held (a coarser level's value, say), so one scene
+	 * whose rays crawl cannot hold a render for long. */
+	uint32_t max_evals;
+	/* NULL, or ceil(width / 8) x ceil(height / 8) bytes: the renderer
+	 * sets byte t to 1 when a ray of tile t ran out and never clears a
+	 * byte (the caller zeroes them). */
+	uint8_t *short_tiles;
 };
 
 struct bc_renderer;
@@ -167,6 +206,20 @@ int bc_renderer_render_region(struct bc_renderer *r,
                               const struct bc_render_region *region,
                               struct bc_render_stats *stats,
                               struct bc_errinfo *ei);
+
+/* Frees what r keeps between renders for its last view (tiled: ray
+ * directions, tile lists and candidates, per-thread scratch; svo: the
+ * octree; gl: the frame's images, readback and A-buffer storage), so that
+ * a caller holding many renderers can give memory back. r stays usable:
+ * the next render rebuilds what it needs and draws the same pixels, bit
+ * for bit. Accepts NULL. */
+void bc_renderer_release(struct bc_renderer *r);
+
+/* Returns the bytes r keeps for views between renders, estimated from its
+ * buffers' capacities: what bc_renderer_release would give back (gl: GPU
+ * memory, host memory on llvmpipe). 0 after a release, for NULL, and for
+ * backends that keep nothing (naive). */
+size_t bc_renderer_kept_bytes(const struct bc_renderer *r);
 
 /* Marks (sets to 1) in tiles, ceil(width / 8) x ceil(height / 8) bytes,
  * every tile of a width x height frame through cam whose pixels can depend

@@ -9,6 +9,7 @@
 #define BLOBCAST_RENDER_BACKEND_H
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 
 #include "blobcast/render.h"
@@ -40,7 +41,10 @@ struct bc_backend_ops {
 	            const struct bc_dirty *dirty, struct bc_errinfo *ei);
 	/* Draws region's pixels (region is never NULL; the front checked
 	 * the frame, the camera, the level, and that a tree is synced).
-	 * stats is never NULL and zeroed. */
+	 * stats is never NULL and zeroed. Every backend honours the
+	 * region's max_evals: it leaves the pixels of rays that run out as
+	 * they are, counts them in stats->short_rays and marks their tiles
+	 * in short_tiles. */
 	int (*render)(struct bc_renderer *r, const struct bc_camera *cam,
 	              struct bc_frame *out,
 	              const struct bc_render_region *region,
@@ -55,6 +59,11 @@ struct bc_backend_ops {
 	void (*damage)(struct bc_renderer *r, const struct bc_camera *cam,
 	               uint32_t width, uint32_t height,
 	               const struct bc_abv *abv, uint8_t *tiles);
+	/* Optional: frees what the backend keeps for its last view (see
+	 * bc_renderer_release). NULL: it keeps nothing. */
+	void (*release)(struct bc_renderer *r);
+	/* Optional: the bytes release would free. NULL: 0. */
+	size_t (*kept_bytes)(const struct bc_renderer *r);
 };
 
 #endif

@@ -356,6 +356,10 @@ struct bc_svo_cast_params {
 	float pix_angle;  /* pixel footprint per unit of t */
 	float min_step;   /* world units */
 	float refine_tol; /* world units */
+	/* The most evaluations, point and range together (evals +
+	 * range_evals of struct bc_svo_hit), a ray may spend; 0: no bound.
+	 * A ray stops before one past it and reports ran_out. */
+	uint32_t max_evals;
 };
 
 struct bc_svo_hit {
@@ -367,6 +371,9 @@ struct bc_svo_hit {
 	uint32_t leaf_terms;  /* active terms of the leaf hit */
 	uint32_t evals;       /* point evaluations spent on the ray */
 	uint32_t range_evals; /* range evaluations spent on the ray */
+	/* The ray stopped at cp->max_evals before it was decided: neither
+	 * a hit nor a miss (the cast returns false). */
+	bool ran_out;
 };
 
 /* Per-thread scratch of the caster. */
@@ -386,7 +393,8 @@ float bc_svo_hit_band(const struct bc_svo_cast_params *cp, float t);
  * the secant method refines it; the depth is then refined to the field's zero
  * crossing behind the band's entry, or on a ray that only grazes the
  * surface to its closest approach (docs/svo.md). Returns true and fills *hit on
- * a hit; hit->evals and range_evals are filled either way. */
+ * a hit; hit->evals and range_evals are filled either way. A ray that would
+ * spend more than cp->max_evals stops before it: false, hit->ran_out set. */
 bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
                  float t0, float t1, const struct bc_svo_cast_params *cp,
                  struct bc_svo_hit *hit);
@@ -398,7 +406,10 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
  * octree as one (a node is visited once for all the rays that cross it),
  * and in a leaf that they step through, each round of their samples is one
  * evaluation of the leaf's variant over all of them. hits[i] is what
- * bc_svo_cast fills for ray i, bit for bit (the tests compare them).
+ * bc_svo_cast fills for ray i, bit for bit (the tests compare them), but
+ * for its counts and, under an evaluation bound, whether it ran out: the
+ * packet's beam tests count for each of its rays and spare them samples,
+ * so a ray may run out in a packet and not alone, or the other way.
  * Returns the rays that hit, bit i for ray i. Coherent rays (a block of
  * neighbouring pixels) gain; any rays are allowed: a ray that runs the
  * other way along an axis than the others (so that their common order of
