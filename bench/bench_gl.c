@@ -123,8 +123,7 @@ static struct bc_renderer *open_backend(enum bc_backend b,
 static int frames(const char *platform, uint32_t size, int reps, bool quick)
 {
 	/* The coarsest refinement level: one ray per tile. */
-	const struct bc_render_region coarse = {NULL, BC_RENDER_MAX_LEVEL,
-	                                        false};
+	const struct bc_render_region coarse = {.level = BC_RENDER_MAX_LEVEL};
 	struct bc_render_opts go = {.gl_platform = platform};
 	struct bc_render_opts to = {0};
 	struct bc_renderer *rg, *rt;

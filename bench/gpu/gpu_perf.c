@@ -337,7 +337,7 @@ static int edit_scene(struct bc_renderer *r, const struct gpu_opts *op,
 		uint32_t id = l->node_id[l->prim_slot[k]];
 		struct bc_abv before = l->abv[k];
 		struct bc_prim_data p;
-		struct bc_render_region reg = {tiles, 0, false};
+		struct bc_render_region reg = {.tiles = tiles};
 		double t0;
 		uint32_t marked = 0;
 		bc_tree_get(t, id, &p, NULL);

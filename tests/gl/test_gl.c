@@ -674,7 +674,8 @@ static int draw_region(struct bc_renderer *r, const struct bc_camera *cam,
                        struct bc_frame *f, const uint8_t *tiles, uint32_t level,
                        bool refine, struct bc_render_stats *st)
 {
-	struct bc_render_region reg = {tiles, level, refine};
+	struct bc_render_region reg = {
+	    .tiles = tiles, .level = level, .refine = refine};
 	struct bc_errinfo ei = {0};
 	int rc = bc_renderer_render_region(r, cam, f, &reg, st, &ei);
 	if (rc) {

@@ -273,7 +273,8 @@ static void heavy_one(struct bc_renderer *r, const char *label, enum bc_op kind)
 	struct bc_errinfo ei = {0};
 	uint8_t shorts[(HEAVY_W / 8) * (HEAVY_H / 8)] = {0};
 	uint8_t tiles[sizeof(shorts)];
-	struct bc_render_region rg = {NULL, 0, false, HEAVY_BOUND, shorts};
+	struct bc_render_region rg = {.max_evals = HEAVY_BOUND,
+	                              .short_tiles = shorts};
 	uint64_t left = 0;
 	double ms;
 	char what[96];
@@ -313,7 +314,11 @@ static void heavy_one(struct bc_renderer *r, const char *label, enum bc_op kind)
 	}
 	memset(shorts, 0, sizeof(shorts));
 	fill_sentinel(&f);
-	rg = (struct bc_render_region){tiles, 1, true, HEAVY_BOUND, shorts};
+	rg = (struct bc_render_region){.tiles = tiles,
+	                               .level = 1,
+	                               .refine = true,
+	                               .max_evals = HEAVY_BOUND,
+	                               .short_tiles = shorts};
 	REQUIRE(bc_renderer_render_region(r, &cam, &f, &rg, &st, &ei) == 0);
 	CHECK(!st.whole);
 	CHECK(st.rays > 0 && st.field_evals <= st.rays * HEAVY_BOUND);
@@ -335,7 +340,8 @@ static void test_region_made_whole_keeps_its_bound(void)
 	struct bc_errinfo ei = {0};
 	uint8_t shorts[(HEAVY_W / 8) * (HEAVY_H / 8)] = {0};
 	uint8_t tiles[sizeof(shorts)] = {1};
-	struct bc_render_region rg = {tiles, 0, false, HEAVY_BOUND, shorts};
+	struct bc_render_region rg = {
+	    .tiles = tiles, .max_evals = HEAVY_BOUND, .short_tiles = shorts};
 	uint64_t left = 0;
 	REQUIRE(t && r);
 	REQUIRE(build_heavy(t, BC_OP_TWIST, 1.0e6f) == 0);
@@ -372,9 +378,12 @@ static int refine_all(struct bc_renderer *r, const struct bc_camera *cam,
 	}
 	memset(tiles, 1, sizeof(tiles));
 	for (int level = (int)BC_RENDER_MAX_LEVEL; level >= 0; level--) {
-		struct bc_render_region rg = {tiles, (uint32_t)level,
-		                              level != (int)BC_RENDER_MAX_LEVEL,
-		                              bound, shorts};
+		struct bc_render_region rg = {
+		    .tiles = tiles,
+		    .level = (uint32_t)level,
+		    .refine = level != (int)BC_RENDER_MAX_LEVEL,
+		    .max_evals = bound,
+		    .short_tiles = shorts};
 		struct bc_render_stats st;
 		int rc = bc_renderer_render_region(r, cam, f, &rg, &st, &ei);
 		if (rc) {
@@ -401,7 +410,8 @@ static void plain_backend(struct bc_renderer *r, const char *label,
 	struct bc_camera cam;
 	struct bc_errinfo ei = {0};
 	uint8_t shorts[8 * 6] = {0};
-	struct bc_render_region rg = {NULL, 0, false, LOOSE_BOUND, shorts};
+	struct bc_render_region rg = {.max_evals = LOOSE_BOUND,
+	                              .short_tiles = shorts};
 	uint64_t left = 0, refined_short = 0;
 	char what[96];
 	REQUIRE(t);

@@ -631,7 +631,7 @@ static void damage_scene(enum bc_backend b, const struct scene *s, uint32_t n,
 			}
 			if (bc_renderer_render_region(
 			        r, &cam, &sub,
-			        &(struct bc_render_region){subset, 0, false},
+			        &(struct bc_render_region){.tiles = subset},
 			        &st, &ei)) {
 				CHECK(!"subset render");
 				break;
@@ -668,9 +668,8 @@ static void damage_scene(enum bc_backend b, const struct scene *s, uint32_t n,
 			}
 		}
 		if (bc_renderer_render_region(
-		        r, &cam, &f,
-		        &(struct bc_render_region){tiles, 0, false}, &st,
-		        &ei)) {
+		        r, &cam, &f, &(struct bc_render_region){.tiles = tiles},
+		        &st, &ei)) {
 			fprintf(stderr, "  region: %s\n", ei.msg);
 			CHECK(!"region render");
 			break;
@@ -839,7 +838,7 @@ static void region_backend(enum bc_backend b)
 	uint32_t w = 61, h = 47;
 	size_t nt = ntiles(w, h);
 	uint8_t tiles[64];
-	struct bc_render_region rg = {tiles, 0, false};
+	struct bc_render_region rg = {.tiles = tiles};
 	const char *name = bc_backend_name(b);
 	REQUIRE(t);
 	REQUIRE(nt <= sizeof(tiles));
@@ -879,8 +878,9 @@ static void region_backend(enum bc_backend b)
 	/* At a coarser level, only that level's pixels of the region. */
 	for (uint32_t level = 1; level <= BC_RENDER_MAX_LEVEL; level++) {
 		for (int refine = 0; refine < 2; refine++) {
-			struct bc_render_region lr = {tiles, level,
-			                              refine != 0};
+			struct bc_render_region lr = {.tiles = tiles,
+			                              .level = level,
+			                              .refine = refine != 0};
 			copy_frame(&f, &sen);
 			f.key = ref.key;
 			REQUIRE(bc_renderer_render_region(r, &cam, &f, &lr, &st,
@@ -926,7 +926,7 @@ static void region_backend(enum bc_backend b)
 	/* A refine call on a foreign frame is drawn whole at its level. */
 	copy_frame(&f, &sen);
 	f.key = 0;
-	rg = (struct bc_render_region){NULL, 1, true};
+	rg = (struct bc_render_region){.level = 1, .refine = true};
 	REQUIRE(bc_renderer_render_region(r, &cam2, &f, &rg, &st, &ei) == 0);
 	CHECK(st.whole);
 	rg.refine = false;
@@ -1007,7 +1007,8 @@ static void refine_one(enum bc_backend b, const struct scene *s, uint32_t w,
 	REQUIRE(bc_renderer_sync(r, t, NULL, &ei) == 0);
 	for (int level = (int)BC_RENDER_MAX_LEVEL; level >= 0; level--) {
 		struct bc_render_region rg = {
-		    NULL, (uint32_t)level, level != (int)BC_RENDER_MAX_LEVEL};
+		    .level = (uint32_t)level,
+		    .refine = level != (int)BC_RENDER_MAX_LEVEL};
 		REQUIRE(bc_renderer_render_region(r, &cam, &f, &rg, &st, &ei) ==
 		        0);
 		CHECK(!st.whole);
@@ -1077,7 +1078,7 @@ static void key_backend(enum bc_backend b)
 	float size0, x0;
 	/* Every tile, without refine: the key alone decides whether the
 	 * call counts as a region made whole. */
-	struct bc_render_region rg = {tiles, 0, false};
+	struct bc_render_region rg = {.tiles = tiles};
 	const char *name = bc_backend_name(b);
 	REQUIRE(t);
 	REQUIRE(nt <= sizeof(tiles));

@@ -240,7 +240,8 @@ static void check_regions(const char *what, struct bc_tree *t, uint32_t w,
 	CHECK_EQ_INT(bc_renderer_render(r, &cam, &whole, &st, &ei), 0);
 	/* (1) Progressive refinement: level 3 traces one pixel per tile. */
 	for (int level = 3; level >= 0; level--) {
-		struct bc_render_region rg = {NULL, (uint32_t)level, level < 3};
+		struct bc_render_region rg = {.level = (uint32_t)level,
+		                              .refine = level < 3};
 		CHECK_EQ_INT(
 		    bc_renderer_render_region(r, &cam, &f, &rg, &st, &ei), 0);
 	}
@@ -268,7 +269,7 @@ static void check_regions(const char *what, struct bc_tree *t, uint32_t w,
 		}
 	}
 	{
-		struct bc_render_region rg = {tiles, 0, false};
+		struct bc_render_region rg = {.tiles = tiles};
 		CHECK_EQ_INT(
 		    bc_renderer_render_region(r, &cam, &f, &rg, &st, &ei), 0);
 		CHECK(!st.whole);

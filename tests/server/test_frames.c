@@ -57,7 +57,7 @@ static uint8_t *local_picture(const struct bc_tree *t,
 {
 	struct bc_renderer *r = NULL;
 	struct bc_frame f = {0};
-	struct bc_render_region rg = {NULL, level, false};
+	struct bc_render_region rg = {.level = level};
 	uint8_t *out = NULL;
 	*w = (VW + (1u << level) - 1) >> level;
 	*h = (VH + (1u << level) - 1) >> level;
@@ -275,7 +275,7 @@ static void a_snapshot_carries_depth_and_ids_of_a_whole_render(void)
 	struct bc_camera cam;
 	struct bc_renderer *r = NULL;
 	struct bc_frame f = {0};
-	struct bc_render_region all = {NULL, 0, false};
+	struct bc_render_region all = {0};
 	struct bc_msg m = {.type = BC_MSG_SNAPSHOT};
 	uint32_t seq, misses = 0, hits = 0;
 	test_camera(&cam);
