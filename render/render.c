@@ -212,7 +212,7 @@ int bc_renderer_render_region(struct bc_renderer *r,
                               struct bc_errinfo *ei)
 {
 	struct bc_render_stats local;
-	struct bc_render_region whole = {NULL, 0, false, 0, NULL};
+	struct bc_render_region whole = {0};
 	uint64_t key;
 	int rc;
 	if (!stats) {
@@ -238,7 +238,16 @@ int bc_renderer_render_region(struct bc_renderer *r,
 	key = frame_key(r, cam, out->width, out->height);
 	if (!region) {
 		region = &whole;
-	} else if (out->key != key && (region->tiles || region->refine)) {
+	} else if (region->tile_count &&
+	           ((uint64_t)region->tile_first + region->tile_count >
+	            (uint64_t)bc_render_tiles_x(out->width) *
+	                bc_render_tiles_y(out->height))) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+		                      "render: tiles %u..%u past the frame's",
+		                      region->tile_first,
+		                      region->tile_first + region->tile_count);
+	} else if (out->key != key && (region->tiles || region->refine) &&
+	           !region->adopt_key) {
 		/* The frame holds another rendering: redraw all of it at
 		 * this level, within the caller's bound (its scheduler
 		 * counts on the bound whatever the call draws). */

@@ -204,6 +204,7 @@ struct tiled_frame {
 	struct bc__tiled_bufs *b;
 	struct bc__ab_kernel kern;
 	uint32_t tw, th, ntiles;
+	uint32_t t0, t1; /* the region's tiles are in [t0, t1) */
 	uint32_t nprims;
 	const struct bc_render_region *region;
 	atomic_uint next; /* work counter of the running phase */
@@ -662,7 +663,7 @@ static void phase_lists(void *arg, uint32_t thread)
 		uint32_t tx = tile % tf->tw, ty = tile / tf->tw;
 		struct bc__ab_rays rays;
 		uint64_t quarter[4];
-		if (tile >= tf->ntiles) {
+		if (tile >= tf->t1) {
 			break;
 		}
 		if ((b->state[tile] & TILE_DONE) == TILE_DONE ||
@@ -720,7 +721,7 @@ static void phase_trace(void *arg, uint32_t thread)
 		uint32_t tx = tile % tf->tw, ty = tile / tf->tw;
 		struct bc__tile_job job;
 		uint64_t mask, cut;
-		if (tile >= tf->ntiles) {
+		if (tile >= tf->t1) {
 			break;
 		}
 		mask = bc__region_mask(tf->region, tx, ty, w, h);
@@ -914,6 +915,9 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 	tf.tw = (out->width + BC_CPU_TILE - 1) / BC_CPU_TILE;
 	tf.th = (out->height + BC_CPU_TILE - 1) / BC_CPU_TILE;
 	tf.ntiles = tf.tw * tf.th;
+	tf.t0 = region->tile_count ? region->tile_first : 0;
+	tf.t1 = region->tile_count ? region->tile_first + region->tile_count
+	                           : tf.ntiles;
 	tf.nprims = lin ? lin->nprims : 0;
 	atomic_init(&tf.next, 0u);
 	atomic_init(&tf.tiles_done, 0u);
@@ -928,16 +932,16 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 		}
 		return rc;
 	}
-	for (uint32_t t = 0; t < tf.ntiles; t++) {
+	for (uint32_t t = tf.t0; t < tf.t1; t++) {
 		if (!region->tiles || region->tiles[t]) {
 			todo += (b->state[t] & TILE_DONE) != TILE_DONE;
 		}
 	}
 	if (todo > 0) {
-		atomic_store(&tf.next, 0u);
+		atomic_store(&tf.next, tf.t0);
 		bc_pool_run(r->threads, phase_lists, &tf);
 	}
-	for (uint32_t t = 0; t < tf.ntiles; t++) {
+	for (uint32_t t = tf.t0; t < tf.t1; t++) {
 		if ((!region->tiles || region->tiles[t]) &&
 		    b->list_n[t] > longest) {
 			longest = b->list_n[t];
@@ -948,7 +952,7 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 	}
 	t_ab = bc_clock_ms();
 	bc__progress_init(&tf.progress, r, tf.ntiles);
-	atomic_store(&tf.next, 0u);
+	atomic_store(&tf.next, tf.t0);
 	bc_pool_run(r->threads, phase_trace, &tf);
 	for (uint32_t i = 0; i < r->threads; i++) {
 		overflows += b->workers[i].overflows;

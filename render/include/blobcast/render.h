@@ -166,6 +166,16 @@ struct bc_render_region {
 	 * sets byte t to 1 when a ray of tile t ran out and never clears a
 	 * byte (the caller zeroes them). */
 	uint8_t *short_tiles;
+	/* Tiles [tile_first, tile_first + tile_count) hold every tile the
+	 * region draws (0 count: any tile may): a call of a few tiles of a
+	 * large frame then looks at those only (the tiled backend; others
+	 * look at every tile). Past the frame's tiles: BC_EINVAL. */
+	uint32_t tile_first, tile_count;
+	/* The caller keeps track of which of the frame's tiles hold what
+	 * (the daemon's views: a level per tile). A frame drawn under other
+	 * conditions (another key, or none yet) then takes this rendering's
+	 * key and only the region is drawn, instead of the whole frame. */
+	bool adopt_key;
 };
 
 struct bc_renderer;
