@@ -4,9 +4,12 @@
  * synced to disk, and only then broadcast as EDIT_APPLIED to every member
  * -- the author's copy is its acknowledgement; a batch that cannot be
  * journaled is undone. A parameter edit touches only the edited nodes
- * (blobtree keeps the layout); structural edits replace the tree by an
- * edited copy. The render thread's replica follows either way; which tiles
- * an edit damages is decided there (rthread.c), not here.
+ * (blobtree keeps the layout); a structural edit builds an edited copy,
+ * on a task for a big scene (BC_SRV_HEAVY_NODES), the session busy and
+ * its later changes parked meanwhile. The work layer's copy follows with
+ * the nodes' new states or the batch's operations; which tiles an edit
+ * damages is decided there (flow.c), not here. Also SCENE_LOAD (a large
+ * one prepared on a task) and UNDO/REDO's entry point.
  */
 #include <inttypes.h>
 #include <string.h>
@@ -16,7 +19,7 @@
 #include "blobcast/edit.h"
 #include "blobcast/log.h"
 #include "blobcast/scene.h"
-#include "server.h"
+#include "sessions_impl.h"
 
 /* Bytes of the scene encoding (PROTOCOL.md section 8) of one node. */
 #define OP_BYTES 17u
@@ -66,21 +69,302 @@ static int check_scene_bytes(const struct bc_tree *t, struct bc_errinfo *ei)
 	return 0;
 }
 
-/* A SCENE_LOAD on its way. prepare() makes everything the load needs --
- * the decoded and checked tree, the render thread's copy, the members'
- * SCENE_STATE bytes and the snapshot on disk -- on the loop, or on a
- * worker thread for a large one (BC_SRV_ASYNC_LOAD_BYTES; the session is
- * `loading` meanwhile, its store used by that thread alone); commit()
- * then applies it on the loop. */
-struct load {
-	uv_work_t work;
+bool bc__refuse_change(struct bc_member *m, uint32_t seq, int *park)
+{
+	struct bc_session *s = m->session;
+	*park = 0;
+	if (s->busy || s->park_head) {
+		/* Behind the work running for the session, and behind those
+		 * already waiting for it: changes keep their order. */
+		*park = bc__park(s, m, seq);
+		return true;
+	}
+	if (s->store_failed) {
+		bc__send_error(m, seq, BC_EIO,
+		               "the session cannot be saved: changes are "
+		               "refused");
+		return true;
+	}
+	return false;
+}
+
+/* ---- one batch ------------------------------------------------------------- */
+
+/* A batch on its way. It is applied to a tree (the session's, in place,
+ * for parameters; an edited copy for structure: on the loop, or on the
+ * task for a big scene), checked, encoded as its journal record, then
+ * appended and synced on the task -- a disk's sync takes milliseconds
+ * under load, which the loop must not wait for -- and only then committed
+ * on the loop. The session is busy throughout: its next changes park. */
+struct batch {
+	struct bc_task t;
 	struct bc_session *s;
-	struct bc_conn_ref author;
-	uint32_t author_id, seq;
-	uint8_t *owned; /* the payload's copy, for a worker */
+	struct bc_ops_copy ops; /* the message is gone by the task's end */
+	const struct bc_proto_edit_op *op;
+	uint32_t nops;
+	bool heavy; /* applied on the task */
+	bool applied;
+	struct bc_author author;
+	struct bc_change how;
+	bc_applied_fn done;
+	void *ud;
+	struct bc_tree *tree; /* the scene after the batch */
+	struct bc_edit_batch b;
+	struct bc_proto_buf rec; /* the journal record (an EDIT message) */
+	uint64_t t0_ns;
+	int rc;
+	struct bc_errinfo ei;
+};
+
+/* Applies, checks and encodes the batch's journal record. */
+static int batch_apply(struct batch *x)
+{
+	struct bc_session *s = x->s;
+	struct bc_msg as_edit = {.type = BC_MSG_EDIT};
+	x->tree = s->tree;
+	if ((x->rc = bc_edit_batch_apply(&x->b, &x->tree, x->op, x->nops,
+	                                 &x->ei))) {
+		return x->rc;
+	}
+	x->applied = true;
+	/* A structural edit can grow the scene past what a member's queue
+	 * holds, and a record must encode: undone like an edit that could
+	 * not be journaled. */
+	bc_proto_buf_init(&x->rec, 0);
+	as_edit.edit.nops = (uint16_t)x->nops;
+	as_edit.edit.ops = x->op;
+	if ((x->b.structural && (x->rc = check_scene_bytes(x->tree, &x->ei))) ||
+	    (x->rc = bc_proto_encode(&x->rec, &as_edit, &x->ei))) {
+		bc_edit_batch_undo(&x->b, &x->tree);
+		x->applied = false;
+	}
+	return x->rc;
+}
+
+/* On the task: the record appended and synced before anyone hears of the
+ * edit; a batch that cannot be journaled is undone (the session, busy,
+ * has not changed meanwhile). */
+static void batch_run(struct bc_task *t)
+{
+	struct batch *x = (struct batch *)t;
+	struct bc_session *s = x->s;
+	if (x->heavy && batch_apply(x)) {
+		return;
+	}
+	if ((x->rc = bc_store_append(
+	         s->store, s->order + 1, x->rec.data + BC_PROTO_HEADER_SIZE,
+	         x->rec.len - BC_PROTO_HEADER_SIZE, &x->ei))) {
+		bc_edit_batch_undo(&x->b, &x->tree);
+		x->applied = false;
+	}
+}
+
+/* The render copy follows: the nodes' new states, or the operations. A
+ * copy that cannot follow (out of memory, its queue over its cap) gets
+ * the scene whole. */
+static void follow(struct bc_session *s, const struct batch *x)
+{
+	struct bc_work *w = s->ss->work;
+	struct bc_edit_saved *st = NULL;
+	struct bc_tree *copy;
+	uint32_t n = 0;
+	int rc;
+	if (x->b.structural) {
+		rc = bc_work_ops(w, s->id, s->order, x->op, x->nops);
+	} else if ((st = bc_calloc(x->nops ? x->nops : 1, sizeof(*st)))) {
+		for (uint32_t i = 0; i < x->nops; i++) {
+			st[n].id = x->op[i].node;
+			if (bc_tree_get(s->tree, st[n].id, &st[n].p,
+			                &st[n].op)) {
+				bc_tree_get_unary(s->tree, st[n].id, &st[n].un);
+				n++;
+			}
+		}
+		rc = bc_work_states(w, s->id, s->order, st, n);
+		bc_free(st);
+	} else {
+		rc = BC_ENOMEM;
+	}
+	if (rc && (copy = bc_tree_create()) &&
+	    bc_tree_copy(copy, s->tree, NULL) == 0) {
+		bc_work_scene(w, s->id, copy, s->order);
+	} else if (rc) {
+		bc_tree_destroy(copy);
+		bc_log(BC_LOG_ERROR, "session %s: its render copy is behind",
+		       s->name);
+	}
+}
+
+/* EDIT_APPLIED to every member; each owes a frame. */
+static void broadcast(struct bc_session *s, const struct batch *x)
+{
+	struct bc_msg a = {.type = BC_MSG_EDIT_APPLIED, .flags = x->how.flags};
+	struct bc_member *list[BC_PROTO_MAX_MEMBERS];
+	bool interacting = (x->how.flags & BC_PROTO_FLAG_INTERACTING) != 0;
+	uint64_t until =
+	    interacting ? bc__now_ms(s->ss) + BC_SRV_STILL_DELAY_MS : 0;
+	uint32_t n = bc__members(s, list);
+	a.edit_applied.order = s->order;
+	a.edit_applied.author = x->author.member_id;
+	a.edit_applied.author_seq = x->author.seq;
+	a.edit_applied.nops = (uint16_t)x->nops;
+	a.edit_applied.ops = x->op;
+	a.edit_applied.target_order = x->how.target_order;
+	if (x->how.target_author[0]) {
+		a.edit_applied.target_author.ptr = x->how.target_author;
+		a.edit_applied.target_author.len =
+		    (uint32_t)strlen(x->how.target_author);
+	}
+	for (uint32_t i = 0; i < n; i++) {
+		bc__send(list[i], &a);
+		list[i]->interacting_until = until;
+		if (x->b.structural) {
+			list[i]->shown.view = 0;
+		}
+		bc__owe_frame(list[i]);
+	}
+}
+
+/* The batch is on disk: it becomes the session's, everyone hears of it. */
+static void batch_commit(struct batch *x)
+{
+	struct bc_session *s = x->s;
+	double ms = (double)(bc_clock_ns() - x->t0_ns) / 1e6;
+	s->tree = x->tree;
+	s->order++;
+	s->scene_order = s->order;
+	s->last_edit_ms = bc__unix_ms();
+	s->edit_ms_avg =
+	    s->edit_ms_avg == 0.0 ? ms : 0.9 * s->edit_ms_avg + 0.1 * ms;
+	bc__session_changed(s);
+	follow(s, x);
+	broadcast(s, x);
+	x->done(s, &x->author, &x->how, &x->b, x->ud);
+	bc__session_snapshot_due(s);
+	bc__schedule(s);
+}
+
+static void batch_free(struct batch *x)
+{
+	bc_edit_batch_finish(&x->b);
+	bc_ops_copy_finish(&x->ops);
+	bc_proto_buf_finish(&x->rec);
+	bc_free(x);
+}
+
+/* After the task: committed, or its author hears why not. */
+static void batch_done(struct bc_task *t)
+{
+	struct batch *x = (struct batch *)t;
+	struct bc_session *s = x->s;
+	struct bc_member *m = bc__member_of(s->ss, x->author.ref);
+	if (s->removed) {
+		/* Deleted meanwhile: an edited copy goes, the session's own
+		 * tree is freed with it. */
+		if (x->applied && x->b.structural) {
+			bc_tree_destroy(x->tree);
+			x->b.old = NULL;
+		}
+	} else if (x->rc) {
+		s->store_failed = s->store_failed || x->rc == BC_EIO;
+		if (m) {
+			bc__send_error(m, x->author.seq, x->rc,
+			               "edit refused: %s", x->ei.msg);
+		}
+	} else {
+		batch_commit(x);
+	}
+	batch_free(x);
+}
+
+int bc__apply(struct bc_member *m, const struct bc_proto_edit_op *ops,
+              uint16_t nops, uint32_t seq, const struct bc_change *how,
+              bc_applied_fn done, void *ud, struct bc_errinfo *ei)
+{
+	struct bc_session *s = m->session;
+	struct batch *x = bc_calloc(1, sizeof(*x));
+	bool structural = false;
+	if (!x || bc_ops_copy(&x->ops, ops, nops)) {
+		bc_free(x);
+		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+	}
+	for (uint32_t i = 0; i < nops; i++) {
+		structural = structural || ops[i].kind != BC_PROTO_EDIT_SET;
+	}
+	x->heavy =
+	    structural && bc_tree_node_count(s->tree) >= BC_SRV_HEAVY_NODES;
+	x->s = s;
+	x->op = x->ops.ops;
+	x->nops = nops;
+	x->author = (struct bc_author){m->peer->ref, m->member_id, seq, {0}};
+	memcpy(x->author.name, m->peer->name, sizeof(x->author.name));
+	x->how = *how;
+	x->done = done;
+	x->ud = ud;
+	x->t0_ns = bc_clock_ns();
+	if (!x->heavy && batch_apply(x)) {
+		int rc = bc_errinfo_set(ei, x->rc, "%s", x->ei.msg);
+		batch_free(x);
+		return rc;
+	}
+	x->t.run = batch_run;
+	x->t.done = batch_done;
+	x->t.holds_order = true;
+	bc__task_start(s, &x->t);
+	return 1;
+}
+
+/* ---- EDIT ------------------------------------------------------------------ */
+
+static void edit_applied(struct bc_session *s, const struct bc_author *a,
+                         const struct bc_change *how, struct bc_edit_batch *b,
+                         void *ud)
+{
+	(void)ud;
+	/* The history takes what undoes the batch. */
+	bc__undo_record(s, a, b, (how->flags & BC_PROTO_FLAG_INTERACTING) != 0);
+}
+
+int bc_handle_edit(struct bc_member *m, const struct bc_msg *msg)
+{
+	struct bc_errinfo ei = {0};
+	struct bc_change how = {.flags =
+	                            msg->flags & BC_PROTO_FLAG_INTERACTING};
+	int rc, park;
+	if (bc__refuse_change(m, msg->seq, &park)) {
+		return park;
+	}
+	rc = bc__apply(m, msg->edit.ops, msg->edit.nops, msg->seq, &how,
+	               edit_applied, NULL, &ei);
+	if (rc < 0) {
+		bc__send_error(m, msg->seq, rc, "edit refused: %s", ei.msg);
+		return 0;
+	}
+	return bc__hold(m->session, m, msg->seq);
+}
+
+int bc_handle_undo(struct bc_member *m, const struct bc_msg *msg)
+{
+	int park;
+	if (bc__refuse_change(m, msg->seq, &park)) {
+		return park;
+	}
+	return bc__undo_step(m, msg->type == BC_MSG_REDO, msg->seq);
+}
+
+/* ---- SCENE_LOAD ------------------------------------------------------------ */
+
+/* A SCENE_LOAD on its way: the decoded and checked tree, the work
+ * layer's copy, the members' SCENE_STATE bytes and the snapshot on disk
+ * are made by prepare() on a task, the session busy; commit() then
+ * applies it on the loop. */
+struct load {
+	struct bc_task t;
+	struct bc_author author;
+	uint8_t *owned; /* the payload's copy, for a task */
 	struct bc_proto_bytes scene;
 	uint64_t order;
-	struct bc_tree *t, *copy;
+	struct bc_tree *tree, *copy;
 	struct bc_camera cam;
 	bool has_cam;
 	uint8_t *state;
@@ -89,306 +373,120 @@ struct load {
 	struct bc_errinfo ei;
 };
 
-static void prepare(struct load *l)
+static void prepare(struct bc_task *t)
 {
+	struct load *l = (struct load *)t;
 	struct bc_errinfo *ei = &l->ei;
-	if (!(l->t = bc_tree_create()) || !(l->copy = bc_tree_create())) {
+	if (!(l->tree = bc_tree_create()) || !(l->copy = bc_tree_create())) {
 		l->rc = bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
 		return;
 	}
-	if ((l->rc = bc_scene_decode(l->scene.ptr, l->scene.len, l->t, &l->cam,
-	                             &l->has_cam, ei))) {
+	if ((l->rc = bc_scene_decode(l->scene.ptr, l->scene.len, l->tree,
+	                             &l->cam, &l->has_cam, ei))) {
 		return;
 	}
-	if (bc_tree_node_count(l->t) > BC_SRV_MAX_NODES) {
+	if (bc_tree_node_count(l->tree) > BC_SRV_MAX_NODES) {
 		l->rc = bc_errinfo_set(ei, BC_ELIMIT, "more than %u nodes",
 		                       BC_SRV_MAX_NODES);
 		return;
 	}
-	if ((l->rc = check_scene_bytes(l->t, ei)) ||
-	    (l->rc = bc_tree_copy(l->copy, l->t, ei))) {
+	if ((l->rc = check_scene_bytes(l->tree, ei)) ||
+	    (l->rc = bc_tree_copy(l->copy, l->tree, ei))) {
 		return;
 	}
 	if ((l->rc =
-	         bc_scene_encode(l->t, &l->cam, &l->state, &l->state_len))) {
+	         bc_scene_encode(l->tree, &l->cam, &l->state, &l->state_len))) {
 		bc_errinfo_set(ei, l->rc, "cannot encode the scene");
 		return;
 	}
 	/* On disk before anyone hears of it: the load is acknowledged only
 	 * once it is safe. */
-	l->rc = bc_store_snapshot(l->s->store, l->t, &l->cam, l->order, ei);
+	l->rc = bc_store_snapshot(t->s->store, l->tree, &l->cam, l->order, ei);
 }
 
 static void load_free(struct load *l)
 {
-	bc_tree_destroy(l->t);
+	bc_tree_destroy(l->tree);
 	bc_tree_destroy(l->copy);
 	bc_free(l->state);
 	bc_free(l->owned);
 	bc_free(l);
 }
 
-static void commit(struct load *l)
+static void commit(struct bc_task *t)
 {
-	struct bc_session *s = l->s;
-	struct bc_srv *srv = s->srv;
-	struct bc_conn *author = bc_conn_get(srv, l->author);
+	struct load *l = (struct load *)t;
+	struct bc_session *s = t->s;
+	struct bc_member *author = bc__member_of(s->ss, l->author.ref);
+	if (s->removed) {
+		load_free(l);
+		return;
+	}
 	if (l->rc) {
 		/* Only a failed write locks the session: a scene the store
 		 * refuses up front (too big or too deep to restore) left
 		 * nothing on disk. */
-		if (l->rc == BC_EIO) {
-			s->store_failed = true;
-		}
+		s->store_failed = s->store_failed || l->rc == BC_EIO;
 		if (author) {
-			bc_conn_send_error(author, l->seq, l->rc, false,
-			                   "scene not loaded: %s", l->ei.msg);
+			bc__send_error(author, l->author.seq, l->rc,
+			               "scene not loaded: %s", l->ei.msg);
 		}
+		load_free(l);
 		return;
 	}
 	bc_tree_destroy(s->tree);
-	s->tree = l->t;
-	l->t = NULL;
+	s->tree = l->tree;
 	s->camera = l->cam;
-	s->order = l->order;
-	s->last_edit_ms = bc_unix_ms();
-	bc_rthread_scene(srv, s->id, l->copy);
-	l->copy = NULL;
-	bc_session_send_state_bytes(s, NULL, l->author_id, l->seq, l->state,
-	                            l->state_len);
-	if (l->has_cam) {
-		for (uint32_t i = 0; i < s->nmembers; i++) {
-			struct bc_conn *o = bc_conn_get(srv, s->members[i]);
-			if (o) {
-				o->camera = l->cam;
-			}
-		}
+	s->order = s->scene_order = l->order;
+	s->last_edit_ms = bc__unix_ms();
+	bc__session_changed(s);
+	bc_work_scene(s->ss->work, s->id, l->copy, s->order);
+	l->tree = l->copy = NULL;
+	bc__send_state(s, NULL, l->author.member_id, l->author.seq, l->state,
+	               l->state_len);
+	for (uint32_t i = 0; i < s->nmembers && l->has_cam; i++) {
+		s->members[i]->camera = l->cam;
 	}
 	/* A new scene: nothing before it can be undone. */
-	bc_undo_clear(s);
-	bc_session_mark_all(s);
-	bc_session_schedule(s);
-}
-
-static void prepare_work(uv_work_t *w)
-{
-	prepare(w->data);
-}
-
-static void prepared(uv_work_t *w, int status)
-{
-	struct load *l = w->data;
-	struct bc_session *s = l->s;
-	s->loading = false;
-	if (status != 0 && l->rc == 0) {
-		l->rc =
-		    bc_errinfo_set(&l->ei, BC_EIO, "the load was cancelled");
-	}
-	if (!s->removed) {
-		commit(l);
-	}
+	bc__undo_clear(s);
+	bc__mark_all(s);
+	bc__schedule(s);
 	load_free(l);
-	bc_session_unref(s);
 }
 
-/* A session whose scene is being replaced by a large load takes no change
- * until it is: refused with EBUSY (the client retries after the load's
- * SCENE_STATE). */
-static bool busy(struct bc_conn *c, const struct bc_msg *m)
+int bc_handle_scene_load(struct bc_member *m, const struct bc_msg *msg)
 {
-	if (!c->session->loading) {
-		return false;
-	}
-	bc_conn_send_error(c, m->seq, BC_EBUSY, false,
-	                   "the session's scene is being replaced by a "
-	                   "SCENE_LOAD; retry after its SCENE_STATE");
-	return true;
-}
-
-void bc_handle_scene_load(struct bc_conn *c, const struct bc_msg *m)
-{
-	struct bc_session *s = c->session;
+	struct bc_session *s = m->session;
 	struct load *l;
-	if (busy(c, m)) {
-		return;
-	}
-	if (s->store_failed) {
-		bc_conn_send_error(c, m->seq, BC_EIO, false,
-		                   "scene not loaded: the session cannot be "
-		                   "saved: changes are refused");
-		return;
+	int park;
+	if (bc__refuse_change(m, msg->seq, &park)) {
+		return park;
 	}
 	if (!(l = bc_calloc(1, sizeof(*l)))) {
-		bc_conn_send_error(c, m->seq, BC_ENOMEM, false,
-		                   "scene not loaded: out of memory");
-		return;
+		bc__send_error(m, msg->seq, BC_ENOMEM,
+		               "scene not loaded: out of memory");
+		return 0;
 	}
-	l->s = s;
-	l->author = bc_conn_ref_of(c);
-	l->author_id = c->member_id;
-	l->seq = m->seq;
-	l->scene = m->scene_load.scene;
+	l->author =
+	    (struct bc_author){m->peer->ref, m->member_id, msg->seq, {0}};
+	l->scene = msg->scene_load.scene;
 	l->cam = s->camera;
 	l->order = s->order + 1;
-	l->work.data = l;
-	if (m->scene_load.scene.len >= BC_SRV_ASYNC_LOAD_BYTES) {
-		/* The payload lives in the reader's buffer only until the
-		 * next message. */
-		if (!(l->owned = bc_malloc(l->scene.len))) {
-			bc_free(l);
-			bc_conn_send_error(c, m->seq, BC_ENOMEM, false,
-			                   "scene not loaded: out of memory");
-			return;
-		}
+	l->t.run = prepare;
+	l->t.done = commit;
+	l->t.holds_order = true;
+	/* The payload lives in the reader's buffer only until the next
+	 * message. */
+	if (!(l->owned = bc_malloc(l->scene.len ? l->scene.len : 1))) {
+		bc_free(l);
+		bc__send_error(m, msg->seq, BC_ENOMEM,
+		               "scene not loaded: out of memory");
+		return 0;
+	}
+	if (l->scene.len) {
 		memcpy(l->owned, l->scene.ptr, l->scene.len);
-		l->scene.ptr = l->owned;
-		if (uv_queue_work(c->srv->loop, &l->work, prepare_work,
-		                  prepared) == 0) {
-			s->loading = true;
-			s->handles_open++;
-			return;
-		}
 	}
-	prepare(l);
-	commit(l);
-	load_free(l);
-}
-
-int bc_session_apply(struct bc_conn *c, const struct bc_proto_edit_op *ops,
-                     uint16_t nops, uint32_t seq, const struct bc_change *how,
-                     struct bc_edit_batch *b, struct bc_errinfo *ei)
-{
-	struct bc_session *s = c->session;
-	struct bc_srv *srv = c->srv;
-	struct bc_proto_buf rec;
-	struct bc_msg applied = {.type = BC_MSG_EDIT_APPLIED};
-	struct bc_msg as_edit = {.type = BC_MSG_EDIT};
-	struct bc_conn_ref refs[BC_PROTO_MAX_MEMBERS];
-	bool interacting = (how->flags & BC_PROTO_FLAG_INTERACTING) != 0;
-	uint32_t nrefs;
-	uint64_t t0 = bc_clock_ns();
-	int rc;
-	memset(b, 0, sizeof(*b));
-	if (s->store_failed) {
-		return bc_errinfo_set(ei, BC_EIO,
-		                      "the session cannot be saved: edits are "
-		                      "refused");
-	}
-	if ((rc = bc_edit_batch_apply(b, &s->tree, ops, nops, ei))) {
-		return rc;
-	}
-	/* A structural edit can grow the scene past what a member's queue
-	 * holds: undone like an edit that could not be journaled. */
-	if (b->structural && (rc = check_scene_bytes(s->tree, ei))) {
-		bc_edit_batch_undo(b, &s->tree);
-		return rc;
-	}
-	/* The journal record is the EDIT payload: sync it before anyone
-	 * hears of the edit. */
-	bc_proto_buf_init(&rec, 0);
-	as_edit.edit.nops = nops;
-	as_edit.edit.ops = ops;
-	if ((rc = bc_proto_encode(&rec, &as_edit, ei)) ||
-	    (rc = bc_store_append(s->store, s->order + 1,
-	                          rec.data + BC_PROTO_HEADER_SIZE,
-	                          rec.len - BC_PROTO_HEADER_SIZE, ei))) {
-		if (rc == BC_EIO) {
-			s->store_failed = true;
-		}
-		/* Not on disk, so not applied: the structural copy goes, or
-		 * the parameters are put back. */
-		bc_edit_batch_undo(b, &s->tree);
-		bc_proto_buf_finish(&rec);
-		return rc;
-	}
-	bc_proto_buf_finish(&rec);
-	s->order++;
-	s->last_edit_ms = bc_unix_ms();
-	{
-		double ms = (double)(bc_clock_ns() - t0) / 1e6;
-		s->edit_ms_avg = s->edit_ms_avg == 0.0
-		                     ? ms
-		                     : 0.9 * s->edit_ms_avg + 0.1 * ms;
-	}
-	/* The render thread's replica follows. */
-	if (b->structural) {
-		struct bc_tree *copy = bc_tree_create();
-		if (copy && bc_tree_copy(copy, s->tree, NULL) == 0) {
-			bc_rthread_scene(srv, s->id, copy);
-		} else {
-			bc_tree_destroy(copy);
-		}
-	} else {
-		for (uint32_t i = 0; i < nops; i++) {
-			struct bc_prim_data p;
-			struct bc_op_data op;
-			uint32_t id = ops[i].node;
-			bc_tree_get(s->tree, id, &p, &op);
-			if (op.kind != BC_OP_INVALID) {
-				bc_rthread_set_op(srv, s->id, id, &op);
-			} else {
-				bc_rthread_set_prim(srv, s->id, id, &p);
-			}
-		}
-	}
-	applied.flags = how->flags;
-	applied.edit_applied.order = s->order;
-	applied.edit_applied.author = c->member_id;
-	applied.edit_applied.author_seq = seq;
-	applied.edit_applied.nops = nops;
-	applied.edit_applied.ops = ops;
-	applied.edit_applied.target_order = how->target_order;
-	if (how->target_author) {
-		applied.edit_applied.target_author.ptr = how->target_author;
-		applied.edit_applied.target_author.len =
-		    (uint32_t)strlen(how->target_author);
-	}
-	nrefs = bc_session_members(s, refs);
-	for (uint32_t i = 0; i < nrefs; i++) {
-		struct bc_conn *o = bc_conn_get(srv, refs[i]);
-		if (!o) {
-			continue;
-		}
-		bc_conn_send(o, &applied);
-		o->dirty = true;
-		o->interacting_until =
-		    interacting ? bc_now_ms(srv) + BC_SRV_STILL_DELAY_MS : 0;
-		if (b->structural) {
-			o->shown.view = 0;
-		}
-	}
-	/* Logs its own failures and backs off after one (a full disk). */
-	bc_store_snapshot_due(s->store, BC_SRV_SNAPSHOT_EVERY, s->tree,
-	                      &s->camera, s->order, ei);
-	bc_session_schedule(s);
-	return 0;
-}
-
-void bc_handle_edit(struct bc_conn *c, const struct bc_msg *m)
-{
-	struct bc_errinfo ei = {0};
-	struct bc_edit_batch batch;
-	struct bc_change how = {.flags = m->flags & BC_PROTO_FLAG_INTERACTING};
-	int rc;
-	if (busy(c, m)) {
-		return;
-	}
-	rc = bc_session_apply(c, m->edit.ops, m->edit.nops, m->seq, &how,
-	                      &batch, &ei);
-	if (rc) {
-		bc_conn_send_error(c, m->seq, rc, false, "edit refused: %s",
-		                   ei.msg);
-		return;
-	}
-	/* The history takes what undoes the batch. */
-	bc_undo_record(c, &batch, (how.flags & BC_PROTO_FLAG_INTERACTING) != 0);
-	bc_edit_batch_finish(&batch);
-}
-
-void bc_handle_undo(struct bc_conn *c, const struct bc_msg *m)
-{
-	if (busy(c, m)) {
-		return;
-	}
-	bc_undo_step(c, m->type == BC_MSG_REDO, m->seq);
+	l->scene.ptr = l->owned;
+	bc__task_start(s, &l->t);
+	return bc__hold(s, m, msg->seq);
 }

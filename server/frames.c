@@ -4,27 +4,28 @@
  * changes marked INTERACTING keep arriving a member's frames are
  * interactive (coarse levels, damage rectangles, interactive quality);
  * BC_SRV_STILL_DELAY_MS after the last one it gets the still. Members whose
- * frames would be equal share one render and one encode (the render thread
- * decides levels and rectangles: rthread.c). Also the requests that shape
- * frames: CAMERA, VIEW, PICK and SNAPSHOT.
+ * frames would be equal share one job and one encode (the work layer
+ * decides levels and rectangles: job.c). A member has at most one frame
+ * job; a change it does not show retracts the job while it waits for a
+ * worker, and makes a running one give way where it can (latest wins).
+ * Also the requests that shape frames (CAMERA, VIEW, PICK, SNAPSHOT) and
+ * what the work layer gives back.
  */
 #include <string.h>
 
 #include "blobcast/alloc.h"
 #include "blobcast/edit.h"
 #include "blobcast/log.h"
-#include "server.h"
+#include "sessions_impl.h"
 
 static void kick_due(uv_timer_t *t)
 {
-	bc_session_schedule(t->data);
+	bc__schedule(t->data);
 }
-
-/* ---- frames -------------------------------------------------------------- */
 
 /* Two members can share a render when everything that shapes the frame is
  * equal. */
-static bool same_frame(const struct bc_conn *a, const struct bc_conn *b,
+static bool same_frame(const struct bc_member *a, const struct bc_member *b,
                        bool still_a, bool still_b)
 {
 	return still_a == still_b &&
@@ -35,7 +36,7 @@ static bool same_frame(const struct bc_conn *a, const struct bc_conn *b,
 	       a->view.quality_interactive == b->view.quality_interactive &&
 	       a->view.quality_still == b->view.quality_still &&
 	       a->view.downscale == b->view.downscale &&
-	       a->encodings == b->encodings &&
+	       a->peer->encodings == b->peer->encodings &&
 	       memcmp(&a->shown, &b->shown, sizeof(a->shown)) == 0;
 }
 
@@ -50,68 +51,91 @@ static uint32_t max_level(uint32_t d)
 	return n;
 }
 
-/* The VIEW's encoding governs every frame, coarse levels and damage
- * rectangles included (PROTOCOL.md 7.14): a client that asks PNG gets no
- * JPEG it may not want; one that wants cheap interactive frames asks JPEG. */
-static int frame_encoding(const struct bc_conn *c, bool still)
-{
-	(void)still;
-	return (int)c->view.encoding;
-}
-
 static void still_due(uv_timer_t *timer)
 {
 	struct bc_session *s = timer->data;
-	uint64_t now = bc_now_ms(s->srv);
+	uint64_t now = bc__now_ms(s->ss);
 	for (uint32_t i = 0; i < s->nmembers; i++) {
-		struct bc_conn *m = bc_conn_get(s->srv, s->members[i]);
-		if (m && m->has_view && !m->still_sent &&
+		struct bc_member *m = s->members[i];
+		if (m->has_view && !m->still_sent &&
 		    now >= m->interacting_until) {
-			m->dirty = true;
+			bc__owe_frame(m);
 		}
 	}
-	bc_session_schedule(s);
+	bc__schedule(s);
 }
 
-void bc_session_schedule(struct bc_session *s)
+/* Whether m can start a frame job now. One frame in flight per client:
+ * while one is being written, changes only accumulate (the next frame
+ * shows the newest state); a client that stopped reading costs no
+ * renders. */
+static bool ready(const struct bc_member *m)
 {
-	struct bc_srv *srv = s->srv;
-	uint64_t now = bc_now_ms(srv), next_still = 0;
-	struct bc_conn *group[BC_PROTO_MAX_MEMBERS];
+	return m->has_view && m->dirty && !m->job && !m->frame_out;
+}
+
+/* The job request of member m's frame. */
+static void frame_req(struct bc_session *s, const struct bc_member *m,
+                      bool still, struct bc_job_req *q)
+{
+	memset(q, 0, sizeof(*q));
+	q->kind = BC_JOB_FRAME;
+	q->session_id = s->id;
+	q->camera = m->camera;
+	q->width = m->view.width;
+	q->height = m->view.height;
+	/* The VIEW's encoding governs every frame, coarse levels and damage
+	 * rectangles included (PROTOCOL.md 7.14). */
+	q->encoding = (int)m->view.encoding;
+	q->encoding_interactive = (int)m->view.encoding;
+	q->quality_still = m->view.quality_still;
+	q->quality_interactive = m->view.quality_interactive;
+	q->max_level = max_level(m->view.downscale);
+	q->final = still;
+	q->shown = m->shown;
+	q->camera_seq = m->camera_seq;
+	q->order = s->order;
+	q->scene_order = s->scene_order;
+	q->frame_no = ++s->ss->frame_no;
+}
+
+void bc__schedule(struct bc_session *s)
+{
+	struct bc_sessions *ss = s->ss;
+	uint64_t now = bc__now_ms(ss), next_still = 0;
 	bool done[BC_PROTO_MAX_MEMBERS] = {0};
+	struct bc_job_req q;
 	for (uint32_t i = 0; i < s->nmembers; i++) {
-		struct bc_conn *c = bc_conn_get(srv, s->members[i]);
-		struct bc_rjob *job;
+		struct bc_member *m = s->members[i],
+		                 *group[BC_PROTO_MAX_MEMBERS];
 		uint32_t ng = 0;
+		struct bc_job *job;
 		bool still;
-		/* One frame in flight per client: while one is being
-		 * written, changes only accumulate (the next frame shows the
-		 * newest state); a client that stopped reading costs no
-		 * renders. */
-		if (!c || done[i] || !c->has_view || !c->dirty ||
-		    c->render_pending || c->frame_writing) {
+		if (done[i] || !ready(m)) {
 			continue;
 		}
-		still = now >= c->interacting_until;
+		still = now >= m->interacting_until;
 		if (!still &&
-		    (next_still == 0 || c->interacting_until > next_still)) {
-			next_still = c->interacting_until;
+		    (next_still == 0 || m->interacting_until > next_still)) {
+			next_still = m->interacting_until;
 		}
-		group[ng++] = c;
+		frame_req(s, m, still, &q);
+		group[ng++] = m;
 		for (uint32_t j = i + 1; j < s->nmembers; j++) {
-			struct bc_conn *o = bc_conn_get(srv, s->members[j]);
-			if (o && !done[j] && o->has_view && o->dirty &&
-			    !o->render_pending && !o->frame_writing &&
-			    same_frame(c, o, still,
+			struct bc_member *o = s->members[j];
+			if (!done[j] && ready(o) &&
+			    same_frame(m, o, still,
 			               now >= o->interacting_until)) {
 				group[ng++] = o;
 				done[j] = true;
 			}
 		}
-		if (!(job = bc_calloc(1, sizeof(*job))) ||
-		    !(job->targets = bc_calloc(ng, sizeof(*job->targets)))) {
-			/* The group stays dirty: owed its frame, retried. */
-			bc_free(job);
+		for (uint32_t g = 0; g < ng; g++) {
+			q.targets[g] = group[g]->peer->ref;
+		}
+		q.ntargets = ng;
+		if (!(job = bc_work_submit(ss->work, &q))) {
+			/* The group stays owed its frame, retried. */
 			bc_log(BC_LOG_ERROR,
 			       "session %u: out of memory for a frame job; "
 			       "retrying in %u ms",
@@ -120,203 +144,387 @@ void bc_session_schedule(struct bc_session *s)
 			               0);
 			break;
 		}
-		job->session_id = s->id;
-		job->camera = c->camera;
-		job->width = c->view.width;
-		job->height = c->view.height;
-		job->encoding = frame_encoding(c, true);
-		job->encoding_interactive = frame_encoding(c, false);
-		job->quality_still = c->view.quality_still;
-		job->quality_interactive = c->view.quality_interactive;
-		job->max_level = max_level(c->view.downscale);
-		job->final = still;
-		job->shown = c->shown;
-		job->camera_seq = c->camera_seq;
-		job->order = s->order;
-		job->frame_no = ++srv->frame_no;
 		for (uint32_t g = 0; g < ng; g++) {
-			struct bc_conn *m = group[g];
-			job->targets[g] = bc_conn_ref_of(m);
-			m->dirty = false;
-			m->render_pending = true;
+			group[g]->job = job;
+			group[g]->dirty = false;
 		}
-		job->ntargets = ng;
-		bc_rthread_job(srv, job);
 	}
 	if (next_still > now) {
 		uv_timer_start(&s->still_timer, still_due, next_still - now, 0);
 	}
 }
 
-void bc_session_client_ready(struct bc_conn *c)
+/* The members of s that wait for job, made owed again (the job is gone
+ * without a frame). */
+static void reowe_group(struct bc_session *s, const struct bc_job *job)
 {
-	/* Not at once: the other members' frame writes usually finish in the
-	 * same loop turn, and scheduling after them keeps equal views in one
-	 * shared render. */
-	if (c->session && c->dirty) {
-		uv_timer_start(&c->session->kick, kick_due, 0, 0);
+	for (uint32_t i = 0; i < s->nmembers; i++) {
+		if (s->members[i]->job == job) {
+			s->members[i]->job = NULL;
+			s->members[i]->dirty = true;
+		}
 	}
 }
 
-void bc_session_frame_failed(struct bc_srv *srv, const struct bc_rjob *job)
+void bc__owe_frame(struct bc_member *m)
 {
-	struct bc_session *s = bc_session_by_id(srv, job->session_id);
-	for (uint32_t i = 0; i < job->ntargets; i++) {
-		struct bc_conn *c = bc_conn_get(srv, job->targets[i]);
-		if (!c) {
-			continue;
-		}
-		if (job->pick || job->snapshot_seq) {
-			bc_conn_send_error(
-			    c, job->pick ? job->pick_seq : job->snapshot_seq,
-			    BC_ENOMEM, false, "the server is out of memory");
-			continue;
-		}
-		c->render_pending = false;
-		c->dirty = true;
+	struct bc_job *job = m->job;
+	m->dirty = true;
+	if (!job || !m->session) {
+		return;
 	}
-	if (s && !job->pick && !job->snapshot_seq) {
-		bc_log(BC_LOG_ERROR,
-		       "session %u: frame %u failed; retrying in %u ms", s->id,
-		       job->frame_no, BC_SRV_OOM_RETRY_MS);
-		uv_timer_start(&s->kick, kick_due, BC_SRV_OOM_RETRY_MS, 0);
+	/* Latest wins: a job still waiting for a worker goes (its members
+	 * get a new one at the next schedule); a running one gives way at
+	 * its next slice if what it does can wait. */
+	if (bc_work_retract(m->ss->work, job)) {
+		reowe_group(m->session, job);
 	}
 }
 
-void bc_session_frame_done(struct bc_srv *srv, uint32_t session_id,
-                           const struct bc_conn_ref *targets, uint32_t n)
+/* Drops m's PICKs and SNAPSHOTs: they answer nobody once m leaves. */
+static uint32_t forget_requests(struct bc_member *m)
 {
-	struct bc_session *s = bc_session_by_id(srv, session_id);
-	for (uint32_t i = 0; i < n; i++) {
-		struct bc_conn *c = bc_conn_get(srv, targets[i]);
-		if (c) {
-			c->render_pending = false;
+	uint32_t dropped = 0;
+	for (uint32_t i = 0; i < BC_SRV_MAX_CLIENT_REQUESTS; i++) {
+		if (m->req_jobs[i]) {
+			dropped += bc_work_cancel(m->ss->work, m->req_jobs[i]);
+			m->req_jobs[i] = NULL;
 		}
 	}
-	if (s) {
-		bc_session_schedule(s);
+	m->requests = 0;
+	return dropped;
+}
+
+void bc__frames_forget(struct bc_member *m)
+{
+	struct bc_session *s = m->session;
+	struct bc_job *job = m->job;
+	uint32_t dropped = forget_requests(m);
+	bool shared = false;
+	m->job = NULL;
+	m->dirty = false;
+	m->frame_out = false;
+	for (uint32_t i = 0; job && s && i < s->nmembers; i++) {
+		shared =
+		    shared || (s->members[i] != m && s->members[i]->job == job);
+	}
+	/* A job nobody else waits for serves nobody once m is gone. */
+	if (job && s && !shared) {
+		dropped += bc_work_cancel(m->ss->work, job);
+	}
+	if (dropped > 0) {
+		bc_log(BC_LOG_INFO,
+		       "dropped %u queued render job%s of clients that left",
+		       dropped, dropped == 1 ? "" : "s");
 	}
 }
 
-void bc_handle_camera(struct bc_conn *c, const struct bc_msg *m)
+/* ---- what the work layer gives back ---------------------------------------- */
+
+/* The member a job's target ref still is, in the job's session, or NULL. */
+static struct bc_member *target(struct bc_sessions *ss,
+                                const struct bc_job_req *q, uint32_t i)
+{
+	struct bc_member *m = bc__member_of(ss, q->targets[i]);
+	return m && m->session && m->session->id == q->session_id ? m : NULL;
+}
+
+/* A frame too large for m is not sent: m hears ERROR ELIMIT, non-fatal,
+ * with the SNAPSHOT's seq or 0 (PROTOCOL.md 7.15), and keeps the picture
+ * it has. */
+static bool over_limit(struct bc_member *m, const struct bc_work_done *d)
+{
+	const struct bc_job_req *q = d->req;
+	size_t len = d->frame ? d->frame->len - BC_PROTO_HEADER_SIZE : 0;
+	if (d->outcome != BC_WORK_TOO_BIG &&
+	    len <= (size_t)m->peer->max_frame_bytes) {
+		return false;
+	}
+	bc_log(BC_LOG_WARN,
+	       "client %u: frame %u not sent: over its limit of %u",
+	       m->peer->ref.gen, q->frame_no, m->peer->max_frame_bytes);
+	bc__send_error(m, q->kind == BC_JOB_SNAPSHOT ? q->seq : 0, BC_ELIMIT,
+	               "the %s (%ux%u) does not fit the frame size limit (%u "
+	               "bytes)",
+	               q->kind == BC_JOB_SNAPSHOT ? "snapshot" : "frame",
+	               q->width, q->height, m->peer->max_frame_bytes);
+	return true;
+}
+
+static void send_frame(struct bc_member *m, struct bc_shared *frame)
+{
+	m->ss->link->send_frame(m->ss->link->ud, m->peer->ref, frame);
+	m->frames++;
+}
+
+static void pick_done(struct bc_member *m, const struct bc_work_done *d)
+{
+	struct bc_msg r = {.type = BC_MSG_PICK_RESULT, .seq = d->req->seq};
+	r.pick_result.x = d->req->pick_x;
+	r.pick_result.y = d->req->pick_y;
+	r.pick_result.node = d->hit ? d->node : 0;
+	if (d->hit) {
+		memcpy(r.pick_result.position, d->position,
+		       sizeof(d->position));
+		r.pick_result.depth = d->depth;
+	}
+	bc__send(m, &r);
+}
+
+static void snapshot_done(struct bc_member *m, const struct bc_work_done *d)
+{
+	uint32_t seq = d->req->seq;
+	switch (d->outcome) {
+	case BC_WORK_DONE:
+	case BC_WORK_TOO_BIG:
+		if (!over_limit(m, d)) {
+			send_frame(m, d->frame);
+		}
+		break;
+	case BC_WORK_OOM:
+		bc__send_error(m, seq, BC_ENOMEM,
+		               "the server is out of memory for this snapshot");
+		break;
+	case BC_WORK_DROPPED:
+		break;
+	default:
+		bc__send_error(m, seq, BC_EIO,
+		               "the snapshot could not be rendered or encoded");
+		break;
+	}
+}
+
+/* Takes job out of m's requests; false when it was not one of them (m
+ * left and came back meanwhile). */
+static bool forget_request(struct bc_member *m, const struct bc_job *job)
+{
+	for (uint32_t i = 0; i < BC_SRV_MAX_CLIENT_REQUESTS; i++) {
+		if (m->req_jobs[i] == job) {
+			m->req_jobs[i] = NULL;
+			m->requests--;
+			return true;
+		}
+	}
+	return false;
+}
+
+/* A frame for one of the job's targets. */
+static void frame_to(struct bc_member *m, const struct bc_work_done *d)
+{
+	if (m->job == d->job) {
+		m->job = NULL;
+	}
+	switch (d->outcome) {
+	case BC_WORK_DONE:
+	case BC_WORK_TOO_BIG:
+		if (over_limit(m, d)) {
+			break;
+		}
+		send_frame(m, d->frame);
+		m->frame_out = true;
+		m->shown = d->shown;
+		m->still_sent = d->shown.still;
+		/* A finer level is owed while nothing else changes; during
+		 * an interaction it waits for its end (the still timer), so
+		 * the next camera or edit never queues behind a refinement.
+		 * A frame of an older order than the session's is owed anew
+		 * too (an edit came while it rendered). */
+		m->dirty = m->dirty ||
+		           (d->shown.refining &&
+		            bc__now_ms(m->ss) >= m->interacting_until) ||
+		           d->order < m->session->order;
+		break;
+	case BC_WORK_NOTHING:
+	case BC_WORK_OOM:
+		m->dirty = true;
+		break;
+	default:
+		break;
+	}
+}
+
+static void note_times(struct bc_sessions *ss, const struct bc_work_done *d)
+{
+	if (d->render_ms <= 0.0) {
+		return;
+	}
+	ss->render_ms_last = d->render_ms;
+	ss->encode_ms_last = d->encode_ms;
+	ss->render_ms_avg = ss->render_ms_avg == 0.0
+	                        ? d->render_ms
+	                        : 0.9 * ss->render_ms_avg + 0.1 * d->render_ms;
+	ss->encode_ms_avg = ss->encode_ms_avg == 0.0
+	                        ? d->encode_ms
+	                        : 0.9 * ss->encode_ms_avg + 0.1 * d->encode_ms;
+}
+
+void bc_sessions_job_done(void *ud, const struct bc_work_done *d)
+{
+	struct bc_sessions *ss = ud;
+	const struct bc_job_req *q = d->req;
+	struct bc_session *s = bc__session_by_id(ss, q->session_id);
+	struct bc_member *m;
+	note_times(ss, d);
+	if (q->kind != BC_JOB_FRAME) {
+		if ((m = target(ss, q, 0)) && forget_request(m, d->job)) {
+			if (q->kind == BC_JOB_PICK) {
+				pick_done(m, d);
+			} else {
+				snapshot_done(m, d);
+			}
+		}
+		return;
+	}
+	for (uint32_t i = 0; i < q->ntargets; i++) {
+		if ((m = target(ss, q, i))) {
+			frame_to(m, d);
+		}
+	}
+	if (s && !s->removed) {
+		if (d->outcome == BC_WORK_OOM) {
+			bc_log(BC_LOG_ERROR,
+			       "session %u: frame %u failed; retrying in %u ms",
+			       s->id, q->frame_no, BC_SRV_OOM_RETRY_MS);
+			uv_timer_start(&s->kick, kick_due, BC_SRV_OOM_RETRY_MS,
+			               0);
+		} else {
+			bc__schedule(s);
+		}
+	}
+}
+
+/* ---- requests -------------------------------------------------------------- */
+
+int bc_handle_camera(struct bc_member *m, const struct bc_msg *msg)
 {
 	struct bc_camera cam;
 	struct bc_errinfo ei = {0};
-	bc_edit_camera_from_msg(&m->camera, &cam);
+	bc_edit_camera_from_msg(&msg->camera, &cam);
 	if (bc_camera_validate(&cam, &ei)) {
-		bc_conn_send_error(c, m->seq, ei.code, false, "%s", ei.msg);
-		return;
+		bc__send_error(m, msg->seq, ei.code, "%s", ei.msg);
+		return 0;
 	}
-	c->camera = cam;
-	c->has_camera = true;
-	c->camera_seq = m->seq;
-	c->dirty = true;
-	c->interacting_until = (m->flags & BC_PROTO_FLAG_INTERACTING)
-	                           ? bc_now_ms(c->srv) + BC_SRV_STILL_DELAY_MS
+	m->camera = cam;
+	m->has_camera = true;
+	m->camera_seq = msg->seq;
+	m->interacting_until = (msg->flags & BC_PROTO_FLAG_INTERACTING)
+	                           ? bc__now_ms(m->ss) + BC_SRV_STILL_DELAY_MS
 	                           : 0;
+	bc__owe_frame(m);
 	/* A follower leaves the follow; a presenter's followers track. */
-	bc_present_camera_moved(c, m->flags);
+	bc__present_camera_moved(m, msg->flags);
 	/* Before joining, the camera waits for the session. */
-	if (c->session) {
-		bc_session_schedule(c->session);
+	if (m->session) {
+		bc__schedule(m->session);
 	}
+	return 0;
 }
 
-void bc_handle_view(struct bc_conn *c, const struct bc_msg *m)
+int bc_handle_view(struct bc_member *m, const struct bc_msg *msg)
 {
-	const struct bc_msg_view *v = &m->view;
+	const struct bc_msg_view *v = &msg->view;
 	if (v->width > BC_SRV_MAX_DIM || v->height > BC_SRV_MAX_DIM) {
-		bc_conn_send_error(c, m->seq, BC_ERANGE, false,
-		                   "view %ux%u is over this server's %ux%u",
-		                   v->width, v->height, BC_SRV_MAX_DIM,
-		                   BC_SRV_MAX_DIM);
-		return;
+		bc__send_error(m, msg->seq, BC_ERANGE,
+		               "view %ux%u is over this server's %ux%u",
+		               v->width, v->height, BC_SRV_MAX_DIM,
+		               BC_SRV_MAX_DIM);
+		return 0;
 	}
-	if (!(c->encodings & (1u << (v->encoding - 1)))) {
-		bc_conn_send_error(c, m->seq, BC_EINVAL, false,
-		                   "the view asks for an encoding the "
-		                   "client's HELLO did not list");
-		return;
+	if (!(m->peer->encodings & (1u << (v->encoding - 1)))) {
+		bc__send_error(m, msg->seq, BC_EINVAL,
+		               "the view asks for an encoding the client's "
+		               "HELLO did not list");
+		return 0;
 	}
-	c->view = *v;
-	c->has_view = true;
-	c->dirty = true;
-	c->shown.view = 0;
-	if (c->session) {
-		bc_session_schedule(c->session);
+	m->view = *v;
+	m->has_view = true;
+	m->shown.view = 0;
+	bc__owe_frame(m);
+	if (m->session) {
+		bc__schedule(m->session);
 	}
+	return 0;
 }
 
-/* A render job for c alone at its full view size, answering request seq
- * (a PICK or a SNAPSHOT), or NULL: c already has BC_SRV_MAX_CLIENT_REQUESTS
- * of them queued (answered EBUSY), or out of memory (ENOMEM). */
-static struct bc_rjob *single_job(struct bc_conn *c, uint32_t seq)
+/* A job request for m alone at its full view size, answering request
+ * seq (a PICK or a SNAPSHOT), or false: m already has
+ * BC_SRV_MAX_CLIENT_REQUESTS of them queued (answered EBUSY). */
+static bool single_req(struct bc_member *m, uint32_t seq, enum bc_job_kind kind,
+                       struct bc_job_req *q)
 {
-	struct bc_rjob *job;
-	if (c->requests >= BC_SRV_MAX_CLIENT_REQUESTS) {
-		bc_conn_send_error(c, seq, BC_EBUSY, false,
-		                   "%u picks and snapshots are already being "
-		                   "rendered for this client; wait for their "
-		                   "answers",
-		                   c->requests);
-		return NULL;
+	if (m->requests >= BC_SRV_MAX_CLIENT_REQUESTS) {
+		bc__send_error(m, seq, BC_EBUSY,
+		               "%u picks and snapshots are already being "
+		               "rendered for this client; wait for their "
+		               "answers",
+		               m->requests);
+		return false;
 	}
-	job = bc_calloc(1, sizeof(*job));
-	if (!job || !(job->targets = bc_calloc(1, sizeof(*job->targets)))) {
-		bc_free(job);
+	memset(q, 0, sizeof(*q));
+	q->kind = kind;
+	q->session_id = m->session->id;
+	q->camera = m->camera;
+	q->width = m->view.width;
+	q->height = m->view.height;
+	q->seq = seq;
+	q->targets[0] = m->peer->ref;
+	q->ntargets = 1;
+	return true;
+}
+
+static void submit_single(struct bc_member *m, const struct bc_job_req *q)
+{
+	struct bc_job *job = bc_work_submit(m->ss->work, q);
+	if (!job) {
 		bc_log(BC_LOG_ERROR, "out of memory for a render request");
-		bc_conn_send_error(c, seq, BC_ENOMEM, false,
-		                   "the server is out of memory");
-		return NULL;
+		bc__send_error(m, q->seq, BC_ENOMEM,
+		               "the server is out of memory");
+		return;
 	}
-	c->requests++;
-	job->session_id = c->session->id;
-	job->camera = c->camera;
-	job->width = c->view.width;
-	job->height = c->view.height;
-	job->targets[0] = bc_conn_ref_of(c);
-	job->ntargets = 1;
-	return job;
+	for (uint32_t i = 0; i < BC_SRV_MAX_CLIENT_REQUESTS; i++) {
+		if (!m->req_jobs[i]) {
+			m->req_jobs[i] = job;
+			break;
+		}
+	}
+	m->requests++;
 }
 
-void bc_handle_pick(struct bc_conn *c, const struct bc_msg *m)
+int bc_handle_pick(struct bc_member *m, const struct bc_msg *msg)
 {
-	struct bc_rjob *job;
-	if (!c->session || !c->has_view || m->pick.x >= c->view.width ||
-	    m->pick.y >= c->view.height) {
-		bc_conn_send_error(c, m->seq, BC_ERANGE, false,
-		                   "pick outside the view (send VIEW first)");
-		return;
+	struct bc_job_req q;
+	if (!m->session || !m->has_view || msg->pick.x >= m->view.width ||
+	    msg->pick.y >= m->view.height) {
+		bc__send_error(m, msg->seq, BC_ERANGE,
+		               "pick outside the view (send VIEW first)");
+		return 0;
 	}
-	if (!(job = single_job(c, m->seq))) {
-		return;
+	if (single_req(m, msg->seq, BC_JOB_PICK, &q)) {
+		q.pick_x = msg->pick.x;
+		q.pick_y = msg->pick.y;
+		submit_single(m, &q);
 	}
-	job->pick = true;
-	job->pick_x = m->pick.x;
-	job->pick_y = m->pick.y;
-	job->pick_seq = m->seq;
-	bc_rthread_job(c->srv, job);
+	return 0;
 }
 
-void bc_handle_snapshot(struct bc_conn *c, const struct bc_msg *m)
+int bc_handle_snapshot(struct bc_member *m, const struct bc_msg *msg)
 {
-	struct bc_rjob *job;
-	if (!c->session || !c->has_view) {
-		bc_conn_send_error(c, m->seq, BC_ESTATE, false,
-		                   "join a session and send VIEW before "
-		                   "SNAPSHOT");
-		return;
+	struct bc_job_req q;
+	if (!m->session || !m->has_view) {
+		bc__send_error(m, msg->seq, BC_ESTATE,
+		               "join a session and send VIEW before SNAPSHOT");
+		return 0;
 	}
-	if (!(job = single_job(c, m->seq))) {
-		return;
+	if (single_req(m, msg->seq, BC_JOB_SNAPSHOT, &q)) {
+		q.encoding = (int)msg->snapshot.encoding;
+		q.quality_still = 100;
+		q.final = true;
+		q.camera_seq = m->camera_seq;
+		q.order = m->session->order;
+		q.scene_order = m->session->scene_order;
+		q.frame_no = ++m->ss->frame_no;
+		q.snapshot_planes = msg->snapshot.planes;
+		submit_single(m, &q);
 	}
-	job->encoding = (int)m->snapshot.encoding;
-	job->quality_still = 100;
-	job->final = true;
-	job->camera_seq = c->camera_seq;
-	job->order = c->session->order;
-	job->frame_no = ++c->srv->frame_no;
-	job->snapshot_seq = m->seq;
-	job->snapshot_planes = m->snapshot.planes;
-	bc_rthread_job(c->srv, job);
+	return 0;
 }

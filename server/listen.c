@@ -1,10 +1,12 @@
 /*
  * Accepting connections (loop thread): the TCP and Unix listeners opened
  * from --listen and --unix, and the checks a new connection passes before
- * it gets a slot -- the connection limit, loopback or a configured token
- * for TCP peers, and the cap on connections from one address that have
- * not said HELLO; refusals are logged at most once a second. An accepted
- * connection is handed to net.c's reader and HELLO timer.
+ * it gets a slot -- loopback or a configured token for TCP peers, and
+ * admission (admit.c: caps per address and per prefix on connections that
+ * have not said HELLO, room made by closing the oldest of those); refusals
+ * are logged at most once a second. An accepted connection is handed to
+ * net.c's reader and HELLO timer. Also what main needs of the listeners:
+ * where they are, the plaintext rule, reloading the certificate.
  */
 #include <arpa/inet.h>
 #include <stdio.h>
@@ -30,153 +32,84 @@ static bool is_loopback(uv_tcp_t *tcp)
 	return bc_addr_is_loopback((const struct sockaddr *)&sa);
 }
 
-/* The peer address of a TCP connection as 16 bytes (IPv4 in its v4-mapped
- * IPv6 form, so both spellings of one host compare equal); false when it
- * cannot be read. */
-static bool peer_addr16(uv_tcp_t *tcp, uint8_t out[16])
-{
-	struct sockaddr_storage sa;
-	int len = sizeof(sa);
-	if (uv_tcp_getpeername(tcp, (struct sockaddr *)&sa, &len) != 0) {
-		return false;
-	}
-	if (sa.ss_family == AF_INET) {
-		const struct sockaddr_in *in = (const struct sockaddr_in *)&sa;
-		memset(out, 0, 10);
-		out[10] = out[11] = 0xff;
-		memcpy(out + 12, &in->sin_addr.s_addr, 4);
-		return true;
-	}
-	if (sa.ss_family == AF_INET6) {
-		const struct sockaddr_in6 *in6 =
-		    (const struct sockaddr_in6 *)&sa;
-		memcpy(out, in6->sin6_addr.s6_addr, 16);
-		return true;
-	}
-	return false;
-}
-
-/* Whether c's peer already holds BC_SRV_MAX_PREHELLO_PER_ADDR connections
- * that have not completed HELLO (c, not yet in the table, not counted). */
-static bool prehello_cap_reached(struct bc_srv *srv, struct bc_conn *c)
-{
-	uint8_t mine[16], theirs[16];
-	uint32_t n = 0;
-	if (c->is_tcp && !peer_addr16(&c->h.tcp, mine)) {
-		return false;
-	}
-	for (uint32_t i = 0; i < BC_SRV_MAX_CONNECTIONS; i++) {
-		struct bc_conn *o = srv->clients[i];
-		if (!o || o->closing || o->draining ||
-		    o->stage != BC_PROTO_STAGE_HELLO ||
-		    o->is_tcp != c->is_tcp) {
-			continue;
-		}
-		if (c->is_tcp && (!peer_addr16(&o->h.tcp, theirs) ||
-		                  memcmp(mine, theirs, 16) != 0)) {
-			continue;
-		}
-		if (++n >= BC_SRV_MAX_PREHELLO_PER_ADDR) {
-			return true;
-		}
-	}
-	return false;
-}
-
 /* A warning for refused connections at most once a second: a flood must
  * not flood the log too. */
-static void warn_refused(struct bc_srv *srv, const char *why)
+static void warn_refused(struct bc_net *n, const char *why)
 {
-	static uint64_t last_ms;
-	static uint32_t suppressed;
-	uint64_t now = bc_now_ms(srv);
-	if (last_ms && now - last_ms < 1000) {
-		suppressed++;
+	uint64_t now = uv_now(n->loop);
+	if (n->refused_log_ms && now - n->refused_log_ms < 1000) {
+		n->refused_quiet++;
 		return;
 	}
-	if (suppressed) {
+	if (n->refused_quiet) {
 		bc_log(BC_LOG_WARN,
 		       "refusing a connection: %s (and %u more refused in "
 		       "the last second)",
-		       why, suppressed);
+		       why, n->refused_quiet);
 	} else {
 		bc_log(BC_LOG_WARN, "refusing a connection: %s", why);
 	}
-	last_ms = now;
-	suppressed = 0;
+	n->refused_log_ms = now;
+	n->refused_quiet = 0;
+}
+
+/* Closes a connection that never got a slot. */
+static void discard(struct bc_conn *c)
+{
+	c->handles_open = 2;
+	c->closing = true;
+	uv_close(&c->h.handle, bc__net_handle_closed);
+	uv_close((uv_handle_t *)&c->hello_timer, bc__net_handle_closed);
 }
 
 static void on_connection(uv_stream_t *server, int status)
 {
-	struct bc_srv *srv = server->data;
-	bool tcp = server == (uv_stream_t *)&srv->tcp_listener;
+	struct bc_net *n = server->data;
+	bool tcp = server == (uv_stream_t *)&n->tcp_listener;
+	const char *why = NULL;
 	struct bc_conn *c;
-	uint32_t slot = 0;
+	uint32_t slot;
 	if (status < 0) {
 		bc_log(BC_LOG_WARN, "accept: %s", uv_strerror(status));
 		return;
 	}
-	c = bc_calloc(1, sizeof(*c));
-	if (!c) {
+	if (!(c = bc_calloc(1, sizeof(*c)))) {
 		return;
 	}
-	c->srv = srv;
+	c->net = n;
 	if (tcp) {
-		uv_tcp_init(srv->loop, &c->h.tcp);
+		uv_tcp_init(n->loop, &c->h.tcp);
 	} else {
-		uv_pipe_init(srv->loop, &c->h.pipe, 0);
+		uv_pipe_init(n->loop, &c->h.pipe, 0);
 	}
 	c->h.handle.data = c;
-	uv_timer_init(srv->loop, &c->hello_timer);
-	c->hello_timer.data = c;
+	uv_timer_init(n->loop, &c->hello_timer);
 	c->is_tcp = tcp;
+	c->accepted_ms = uv_now(n->loop);
 	if (uv_accept(server, &c->h.stream) != 0) {
-		c->handles_open = 2;
-		c->closing = true;
-		uv_close(&c->h.handle, bc__net_handle_closed);
-		uv_close((uv_handle_t *)&c->hello_timer, bc__net_handle_closed);
+		discard(c);
 		return;
 	}
 	c->trusted = !tcp || is_loopback(&c->h.tcp);
-	while (slot < BC_SRV_MAX_CONNECTIONS && srv->clients[slot]) {
-		slot++;
+	bc__admit_address(c);
+	if (n->stopping) {
+		why = "shutting down";
+	} else if (tcp && !c->trusted && n->cfg->ntokens == 0) {
+		why = "not loopback and no token configured";
 	}
-	if (srv->stopping || slot == BC_SRV_MAX_CONNECTIONS ||
-	    (tcp && !c->trusted && srv->cfg.ntokens == 0) ||
-	    prehello_cap_reached(srv, c)) {
-		warn_refused(srv,
-		             srv->stopping ? "shutting down"
-		             : slot == BC_SRV_MAX_CONNECTIONS
-		                 ? "too many connections"
-		             : (tcp && !c->trusted && srv->cfg.ntokens == 0)
-		                 ? "not loopback and no token configured"
-		                 : "too many connections from one address "
-		                   "without HELLO");
-		c->handles_open = 2;
-		c->closing = true;
-		uv_close(&c->h.handle, bc__net_handle_closed);
-		uv_close((uv_handle_t *)&c->hello_timer, bc__net_handle_closed);
+	if (why || (slot = bc__admit(n, c, &why)) == BC_SRV_MAX_CONNECTIONS) {
+		warn_refused(n, why);
+		discard(c);
 		return;
 	}
-	c->slot = slot;
-	c->gen = ++srv->gens[slot] * BC_SRV_MAX_CONNECTIONS + slot;
-	srv->clients[slot] = c;
-	srv->nclients++;
-	snprintf(c->name, sizeof(c->name), "?");
-	bc_proto_reader_init(&c->reader, &(struct bc_proto_reader_opts){
-	                                     .side = BC_PROTO_SIDE_SERVER,
-	                                     .await_hello = true,
-	                                 });
 	if (tcp) {
 		uv_tcp_nodelay(&c->h.tcp, 1);
 	}
-	if (tcp && srv->tls && !(c->tls = bc_tls_new(srv->tls))) {
-		bc_conn_close(c, "out of memory for TLS");
+	if (tcp && n->tls && !(c->tls = bc_tls_new(n->tls))) {
+		discard(c);
 		return;
 	}
-	uv_timer_start(&c->hello_timer, bc__net_hello_timeout,
-	               BC_SRV_HELLO_TIMEOUT_MS, 0);
-	uv_read_start(&c->h.stream, bc__net_on_alloc, bc__net_on_read);
+	bc__conn_start(c, slot);
 	bc_log(BC_LOG_INFO, "connection %u from %s%s", c->gen,
 	       tcp ? (c->trusted ? "loopback" : "network") : "unix socket",
 	       c->tls ? " (TLS)" : "");
@@ -210,14 +143,14 @@ static int parse_listen(const char *spec, char *host, size_t hostlen, int *port)
 	return 0;
 }
 
-bool bc_net_tokens_in_clear(struct bc_srv *srv)
+bool bc_net_tokens_in_clear(struct bc_net *n)
 {
 	struct sockaddr_storage sa;
 	int len = sizeof(sa);
-	if (!srv->has_tcp || srv->tls || srv->cfg.ntokens == 0) {
+	if (!n->has_tcp || n->tls || n->cfg->ntokens == 0) {
 		return false;
 	}
-	if (uv_tcp_getsockname(&srv->tcp_listener, (struct sockaddr *)&sa,
+	if (uv_tcp_getsockname(&n->tcp_listener, (struct sockaddr *)&sa,
 	                       &len) != 0) {
 		return true;
 	}
@@ -227,12 +160,12 @@ bool bc_net_tokens_in_clear(struct bc_srv *srv)
 /* Tokens would cross the network readable by anyone on the path: refused
  * unless the operator said --allow-plaintext (a network of its own, a
  * proxy in front on the same host), and then warned about. */
-static int check_plaintext(struct bc_srv *srv, struct bc_errinfo *ei)
+static int check_plaintext(struct bc_net *n, struct bc_errinfo *ei)
 {
-	if (!bc_net_tokens_in_clear(srv)) {
+	if (!bc_net_tokens_in_clear(n)) {
 		return 0;
 	}
-	if (!srv->cfg.allow_plaintext) {
+	if (!n->cfg->allow_plaintext) {
 		return bc_errinfo_set(ei, BC_EINVAL,
 		                      "--listen %s is reachable from other "
 		                      "hosts and tokens are configured: give "
@@ -240,74 +173,134 @@ static int check_plaintext(struct bc_srv *srv, struct bc_errinfo *ei)
 		                      "are not sent in clear, or "
 		                      "--allow-plaintext (docs/operations.md, "
 		                      "TLS)",
-		                      srv->cfg.listen);
+		                      n->cfg->listen);
 	}
 	bc_log(BC_LOG_WARN,
 	       "listening on %s without TLS (--allow-plaintext): tokens and "
 	       "scenes cross the network in clear",
-	       srv->cfg.listen);
+	       n->cfg->listen);
 	return 0;
 }
 
-int bc_net_listen(struct bc_srv *srv, struct bc_errinfo *ei)
+int bc_net_listen(struct bc_net *n, struct bc_errinfo *ei)
 {
 	int rc;
-	if (srv->cfg.listen && srv->cfg.tls_cert && !srv->tls &&
-	    (rc = bc_tls_ctx_new(&srv->tls, srv->cfg.tls_cert,
-	                         srv->cfg.tls_key ? srv->cfg.tls_key
-	                                          : srv->cfg.tls_cert,
-	                         ei))) {
+	if (n->cfg->listen && n->cfg->tls_cert && !n->tls &&
+	    (rc = bc_tls_ctx_new(
+	         &n->tls, n->cfg->tls_cert,
+	         n->cfg->tls_key ? n->cfg->tls_key : n->cfg->tls_cert, ei))) {
 		return rc;
 	}
-	uv_timer_init(srv->loop, &srv->stall_timer);
-	srv->stall_timer.data = srv;
-	uv_timer_start(&srv->stall_timer, bc__net_check_stalls, 1000, 1000);
-	if (srv->cfg.listen) {
+	uv_timer_start(&n->stall_timer, bc__net_check_stalls, 1000, 1000);
+	if (n->cfg->listen) {
 		char host[256];
 		int port;
 		struct sockaddr_storage sa;
-		if (parse_listen(srv->cfg.listen, host, sizeof(host), &port)) {
+		if (parse_listen(n->cfg->listen, host, sizeof(host), &port)) {
 			return bc_errinfo_set(ei, BC_EINVAL,
 			                      "--listen %s: expected HOST:PORT",
-			                      srv->cfg.listen);
+			                      n->cfg->listen);
 		}
 		if (uv_ip4_addr(host, port, (struct sockaddr_in *)&sa) != 0 &&
 		    uv_ip6_addr(host, port, (struct sockaddr_in6 *)&sa) != 0) {
 			return bc_errinfo_set(ei, BC_EINVAL,
 			                      "--listen %s: not an IP address",
-			                      srv->cfg.listen);
+			                      n->cfg->listen);
 		}
-		uv_tcp_init(srv->loop, &srv->tcp_listener);
-		srv->tcp_listener.data = srv;
-		srv->has_tcp = true;
-		if ((rc = uv_tcp_bind(&srv->tcp_listener,
+		uv_tcp_init(n->loop, &n->tcp_listener);
+		n->tcp_listener.data = n;
+		n->has_tcp = true;
+		if ((rc = uv_tcp_bind(&n->tcp_listener,
 		                      (const struct sockaddr *)&sa, 0)) ||
-		    (rc = uv_listen((uv_stream_t *)&srv->tcp_listener, 64,
+		    (rc = uv_listen((uv_stream_t *)&n->tcp_listener, 64,
 		                    on_connection))) {
 			return bc_errinfo_set(ei, BC_EIO, "listen on %s: %s",
-			                      srv->cfg.listen, uv_strerror(rc));
+			                      n->cfg->listen, uv_strerror(rc));
 		}
-		if ((rc = check_plaintext(srv, ei))) {
+		if ((rc = check_plaintext(n, ei))) {
 			return rc;
 		}
-		bc_log(BC_LOG_INFO, "listening on %s%s", srv->cfg.listen,
-		       srv->tls ? " (TLS)" : "");
+		bc_log(BC_LOG_INFO, "listening on %s%s", n->cfg->listen,
+		       n->tls ? " (TLS)" : "");
 	}
-	if (srv->cfg.unix_path) {
-		uv_pipe_init(srv->loop, &srv->unix_listener, 0);
-		srv->unix_listener.data = srv;
-		srv->has_unix = true;
+	if (n->cfg->unix_path) {
+		uv_pipe_init(n->loop, &n->unix_listener, 0);
+		n->unix_listener.data = n;
+		n->has_unix = true;
 		/* A socket file left by a daemon that died is replaced. */
-		unlink(srv->cfg.unix_path);
-		if ((rc = uv_pipe_bind(&srv->unix_listener,
-		                       srv->cfg.unix_path)) ||
-		    (rc = uv_listen((uv_stream_t *)&srv->unix_listener, 64,
+		unlink(n->cfg->unix_path);
+		if ((rc = uv_pipe_bind(&n->unix_listener, n->cfg->unix_path)) ||
+		    (rc = uv_listen((uv_stream_t *)&n->unix_listener, 64,
 		                    on_connection))) {
 			return bc_errinfo_set(ei, BC_EIO, "listen on %s: %s",
-			                      srv->cfg.unix_path,
+			                      n->cfg->unix_path,
 			                      uv_strerror(rc));
 		}
-		bc_log(BC_LOG_INFO, "listening on unix:%s", srv->cfg.unix_path);
+		bc_log(BC_LOG_INFO, "listening on unix:%s", n->cfg->unix_path);
 	}
+	return 0;
+}
+
+/* Without tokens only loopback and Unix-socket clients get in: say so when
+ * the TCP listener is reachable from other hosts, where an operator would
+ * otherwise see connections refused with no hint at start. */
+void bc_net_warn_exposed(struct bc_net *n)
+{
+	struct sockaddr_storage sa;
+	int len = sizeof(sa);
+	if (!n->has_tcp || n->cfg->ntokens > 0 ||
+	    uv_tcp_getsockname(&n->tcp_listener, (struct sockaddr *)&sa,
+	                       &len) != 0 ||
+	    bc_addr_is_loopback((const struct sockaddr *)&sa)) {
+		return;
+	}
+	bc_log(BC_LOG_WARN,
+	       "listening on %s with no tokens configured: only loopback "
+	       "and Unix-socket clients will be accepted (docs/operations.md, "
+	       "Access)",
+	       n->cfg->listen);
+}
+
+void bc_net_announce(struct bc_net *n)
+{
+	if (n->has_tcp) {
+		struct sockaddr_storage sa;
+		int len = sizeof(sa);
+		char host[64] = "?";
+		int port = 0;
+		uv_tcp_getsockname(&n->tcp_listener, (struct sockaddr *)&sa,
+		                   &len);
+		if (sa.ss_family == AF_INET) {
+			struct sockaddr_in *in = (struct sockaddr_in *)&sa;
+			uv_ip4_name(in, host, sizeof(host));
+			port = ntohs(in->sin_port);
+		} else if (sa.ss_family == AF_INET6) {
+			struct sockaddr_in6 *in6 = (struct sockaddr_in6 *)&sa;
+			uv_ip6_name(in6, host, sizeof(host));
+			port = ntohs(in6->sin6_port);
+		}
+		fprintf(stderr, "blobcastd: listening on %s:%d\n", host, port);
+	}
+	if (n->has_unix) {
+		fprintf(stderr, "blobcastd: listening on unix:%s\n",
+		        n->cfg->unix_path);
+	}
+	bc_net_warn_exposed(n);
+}
+
+int bc_net_reload_tls(struct bc_net *n, struct bc_errinfo *ei)
+{
+	struct bc_tls_ctx *fresh = NULL;
+	int rc;
+	if (!n->tls) {
+		return 0;
+	}
+	if ((rc = bc_tls_ctx_new(
+	         &fresh, n->cfg->tls_cert,
+	         n->cfg->tls_key ? n->cfg->tls_key : n->cfg->tls_cert, ei))) {
+		return rc;
+	}
+	bc_tls_ctx_free(n->tls);
+	n->tls = fresh;
 	return 0;
 }

@@ -3,8 +3,13 @@
  *
  * With no arguments it serves the embedded default scene in session
  * "default" on 127.0.0.1:7878 with ./blobcast-data as its data directory.
- * SIGTERM or SIGINT saves every session and stops; SIGHUP re-reads the
- * access tokens of the --config file.
+ * SIGTERM or SIGINT saves every session and stops within
+ * BC_SRV_STOP_MS whatever the load; SIGHUP re-reads the access tokens of
+ * the --config file.
+ *
+ * main is where the layers meet (link.h): it makes them bottom up -- the
+ * store, the work layer, the transport (whose link the others send
+ * through), the sessions, dispatch -- and wires each one's callbacks.
  */
 #include <signal.h>
 #include <stddef.h>
@@ -20,10 +25,13 @@
 #include "blobcast/alloc.h"
 #include "blobcast/args.h"
 #include "blobcast/log.h"
-#include "addr.h"
-#include "net_impl.h"
-#include "server.h"
-#include "tls.h"
+#include "config.h"
+#include "dispatch.h"
+#include "sessions.h"
+#include "srv_limits.h"
+#include "store.h"
+#include "transport.h"
+#include "work.h"
 
 /* auto and cpu: on hosts without a GPU the CPU tile tracer beats llvmpipe
  * (docs/benchmarks.md); a GPU host asks for gl. */
@@ -49,7 +57,7 @@ struct cli {
 	const char *tls_cert, *tls_key, *server_id;
 	int backend, gl_platform, simd, log;
 	bool allow_plaintext, no_damage;
-	uint32_t frame_budget_ms;
+	uint32_t frame_budget_ms, render_threads, view_cache_mib;
 };
 
 /* The option table over c; --help is printed from it. */
@@ -123,6 +131,22 @@ struct cli {
 		     .help = "time one refinement step may take,\n"            \
 		             "{range} (default 2000); past it the\n"           \
 		             "picture stays at its coarser level"},            \
+		    {.name = "render-threads",                                 \
+		     .kind = BC_OPT_U32,                                       \
+		     .dst = &(c)->render_threads,                              \
+		     .lo = 1,                                                  \
+		     .hi = 64,                                                 \
+		     .arg = "N",                                               \
+		     .help = "render workers, {range} (default: one\n"         \
+		             "per core); sessions share them fairly"},         \
+		    {.name = "view-cache",                                     \
+		     .kind = BC_OPT_U32,                                       \
+		     .dst = &(c)->view_cache_mib,                              \
+		     .lo = 16,                                                 \
+		     .hi = 1048576,                                            \
+		     .arg = "MIB",                                             \
+		     .help = "memory for kept views and renderer\n"            \
+		             "state, {range} (default 384)"},                  \
 		    {.name = "config",                                         \
 		     .kind = BC_OPT_STRING,                                    \
 		     .dst = &(c)->config,                                      \
@@ -335,30 +359,21 @@ static void config_free(struct bc_srv_config *cfg)
 	memset(cfg, 0, sizeof(*cfg));
 }
 
-/* SIGHUP's handle and the file it re-reads (NULL: no --config). They live
- * here rather than in struct bc_srv because only this file uses them. */
-static uv_signal_t sighup;
-static const char *config_path;
-
-/* Without tokens only loopback and Unix-socket clients get in: say so when
- * the TCP listener is reachable from other hosts, where an operator would
- * otherwise see connections refused with no hint at start. */
-static void warn_if_exposed(struct bc_srv *srv)
-{
-	struct sockaddr_storage sa;
-	int len = sizeof(sa);
-	if (!srv->has_tcp || srv->cfg.ntokens > 0 ||
-	    uv_tcp_getsockname(&srv->tcp_listener, (struct sockaddr *)&sa,
-	                       &len) != 0 ||
-	    bc_addr_is_loopback((const struct sockaddr *)&sa)) {
-		return;
-	}
-	bc_log(BC_LOG_WARN,
-	       "listening on %s with no tokens configured: only loopback "
-	       "and Unix-socket clients will be accepted (docs/operations.md, "
-	       "Access)",
-	       srv->cfg.listen);
-}
+/* The daemon: its layers, its signals, and the file SIGHUP re-reads
+ * (NULL: no --config). */
+struct daemon {
+	uv_loop_t *loop;
+	struct bc_srv_config cfg;
+	const char *config_path;
+	struct bc_store *store;
+	struct bc_work *work;
+	struct bc_net *net;
+	struct bc_sessions *ss;
+	struct bc_dispatch *d;
+	uv_signal_t sigterm, sigint, sighup;
+	uv_timer_t deadline;
+	bool stopping;
+};
 
 /* systemd's readiness protocol (sd_notify(3), Type=notify): one datagram
  * to the socket $NOTIFY_SOCKET names (a path, or @ for the abstract
@@ -400,143 +415,298 @@ static void notify_systemd(const char *state)
  * takes effect without a restart): new connections get the new ones,
  * established ones keep theirs. A pair that does not load leaves the
  * one in use. */
-static void reload_tls(struct bc_srv *srv)
+static void reload_tls(struct daemon *dm)
 {
-	struct bc_tls_ctx *fresh = NULL;
 	struct bc_errinfo ei = {0};
-	if (!srv->tls) {
+	if (!dm->cfg.tls_cert) {
 		return;
 	}
-	if (bc_tls_ctx_new(
-	        &fresh, srv->cfg.tls_cert,
-	        srv->cfg.tls_key ? srv->cfg.tls_key : srv->cfg.tls_cert, &ei)) {
+	if (bc_net_reload_tls(dm->net, &ei)) {
 		bc_log(BC_LOG_ERROR,
 		       "SIGHUP: %s; keeping the certificate in use", ei.msg);
 		return;
 	}
-	bc_tls_ctx_free(srv->tls);
-	srv->tls = fresh;
 	bc_log(BC_LOG_INFO, "SIGHUP: reloaded the TLS certificate %s",
-	       srv->cfg.tls_cert);
+	       dm->cfg.tls_cert);
 }
 
 /* Re-reads the configuration file and replaces the access tokens, and only
  * them: the listeners, data directory and renderer are set up once. This
- * runs on the loop thread, the only one that reads the tokens (net.c, when
- * a HELLO arrives), so the swap needs no lock. Connections that already
- * said HELLO keep the role they were given. On any error the tokens in use
- * stay. */
+ * runs on the loop thread, the only one that reads the tokens (dispatch,
+ * when a HELLO arrives), so the swap needs no lock. Connections that
+ * already said HELLO keep the role they were given. On any error the
+ * tokens in use stay. */
 static void on_sighup(uv_signal_t *sig, int signum)
 {
-	struct bc_srv *srv = sig->data;
+	struct daemon *dm = sig->data;
 	struct bc_srv_config fresh = {0};
 	struct bc_errinfo ei = {0};
 	struct bc_token *old_tokens;
 	uint32_t old_ntokens;
-	int rc;
 	(void)signum;
-	if (srv->stopping) {
+	if (dm->stopping) {
 		return;
 	}
-	if (!config_path) {
+	if (!dm->config_path) {
 		bc_log(BC_LOG_INFO,
 		       "SIGHUP: no --config file, nothing to reload%s",
-		       srv->tls ? " but the TLS certificate" : "");
-		reload_tls(srv);
+		       dm->cfg.tls_cert ? " but the TLS certificate" : "");
+		reload_tls(dm);
 		return;
 	}
-	rc = load_config(&fresh, config_path, &ei);
-	if (rc) {
+	if (load_config(&fresh, dm->config_path, &ei)) {
 		bc_log(BC_LOG_ERROR, "SIGHUP: %s; keeping the %u tokens in use",
-		       ei.msg[0] ? ei.msg : bc_strerror(rc), srv->cfg.ntokens);
+		       ei.msg[0] ? ei.msg : bc_strerror(ei.code),
+		       dm->cfg.ntokens);
 		config_free(&fresh);
 		return;
 	}
-	old_tokens = srv->cfg.tokens;
-	old_ntokens = srv->cfg.ntokens;
-	srv->cfg.tokens = fresh.tokens;
-	srv->cfg.ntokens = fresh.ntokens;
-	if (bc_net_tokens_in_clear(srv) && !srv->cfg.allow_plaintext) {
+	old_tokens = dm->cfg.tokens;
+	old_ntokens = dm->cfg.ntokens;
+	dm->cfg.tokens = fresh.tokens;
+	dm->cfg.ntokens = fresh.ntokens;
+	if (bc_net_tokens_in_clear(dm->net) && !dm->cfg.allow_plaintext) {
 		/* The same rule as at start: no tokens in clear. */
-		srv->cfg.tokens = old_tokens;
-		srv->cfg.ntokens = old_ntokens;
+		dm->cfg.tokens = old_tokens;
+		dm->cfg.ntokens = old_ntokens;
 		bc_log(BC_LOG_ERROR,
 		       "SIGHUP: %s has tokens but %s is plain TCP reachable "
 		       "from other hosts (no TLS, no --allow-plaintext); "
 		       "keeping the %u tokens in use",
-		       config_path, srv->cfg.listen, old_ntokens);
+		       dm->config_path, dm->cfg.listen, old_ntokens);
 		config_free(&fresh);
 		return;
 	}
 	fresh.tokens = old_tokens;
 	fresh.ntokens = old_ntokens;
 	config_free(&fresh);
-	reload_tls(srv);
+	reload_tls(dm);
 	bc_log(BC_LOG_INFO,
 	       "SIGHUP: reloaded %u tokens from %s (only tokens are reloaded: "
 	       "other settings take effect on restart)",
-	       srv->cfg.ntokens, config_path);
-	warn_if_exposed(srv);
+	       dm->cfg.ntokens, dm->config_path);
+	bc_net_warn_exposed(dm->net);
 }
 
-static void on_signal(uv_signal_t *sig, int signum)
+/* The stop's deadline: what did not finish by then is left (every
+ * acknowledged edit is in a journal already). */
+static void deadline_passed(uv_timer_t *t)
 {
-	struct bc_srv *srv = sig->data;
-	if (srv->stopping) {
-		return;
-	}
-	bc_log(BC_LOG_INFO, "signal %d: saving sessions and stopping", signum);
-	notify_systemd("STOPPING=1");
-	srv->stopping = true;
-	bc_sessions_save_all(srv);
-	bc_net_close_all(srv);
-	bc_sessions_free(srv);
-	bc_rthread_stop(srv);
-	uv_close((uv_handle_t *)&srv->sigterm, NULL);
-	uv_close((uv_handle_t *)&srv->sigint, NULL);
-	uv_close((uv_handle_t *)&sighup, NULL);
+	(void)t;
+	bc_log(BC_LOG_WARN,
+	       "stopping: %u ms passed; exiting without waiting "
+	       "for the work still running",
+	       BC_SRV_STOP_MS);
+	_exit(0);
+}
+
+/* Closes the daemon's own handles. */
+static void close_handles(struct daemon *dm)
+{
+	uv_close((uv_handle_t *)&dm->sigterm, NULL);
+	uv_close((uv_handle_t *)&dm->sigint, NULL);
+	uv_close((uv_handle_t *)&dm->sighup, NULL);
 	/* Closing the handle restored SIGHUP's default action, which would
 	 * kill the daemon before the loop has finished closing. */
 	signal(SIGHUP, SIG_IGN);
 }
 
-static void print_endpoints(struct bc_srv *srv)
+static void on_signal(uv_signal_t *sig, int signum)
 {
-	if (srv->has_tcp) {
-		struct sockaddr_storage sa;
-		int len = sizeof(sa);
-		char host[64] = "?";
-		int port = 0;
-		uv_tcp_getsockname(&srv->tcp_listener, (struct sockaddr *)&sa,
-		                   &len);
-		if (sa.ss_family == AF_INET) {
-			struct sockaddr_in *in = (struct sockaddr_in *)&sa;
-			uv_ip4_name(in, host, sizeof(host));
-			port = ntohs(in->sin_port);
-		} else if (sa.ss_family == AF_INET6) {
-			struct sockaddr_in6 *in6 = (struct sockaddr_in6 *)&sa;
-			uv_ip6_name(in6, host, sizeof(host));
-			port = ntohs(in6->sin6_port);
-		}
-		fprintf(stderr, "blobcastd: listening on %s:%d\n", host, port);
+	struct daemon *dm = sig->data;
+	if (dm->stopping) {
+		return;
 	}
-	if (srv->has_unix) {
-		fprintf(stderr, "blobcastd: listening on unix:%s\n",
-		        srv->cfg.unix_path);
+	bc_log(BC_LOG_INFO, "signal %d: saving sessions and stopping", signum);
+	notify_systemd("STOPPING=1");
+	dm->stopping = true;
+	uv_timer_init(dm->loop, &dm->deadline);
+	uv_timer_start(&dm->deadline, deadline_passed, BC_SRV_STOP_MS, 0);
+	uv_unref((uv_handle_t *)&dm->deadline);
+	bc_sessions_save_all(dm->ss, BC_SRV_STOP_SAVE_MS);
+	bc_net_close_all(dm->net);
+	bc_dispatch_free(dm->d);
+	dm->d = NULL;
+	bc_sessions_free(dm->ss);
+	dm->ss = NULL;
+	if (!bc_work_stop(dm->work, BC_SRV_STOP_WORKERS_MS)) {
+		/* A renderer call is still running on what the work layer
+		 * holds: nothing of it can be freed. */
+		_exit(0);
 	}
+	dm->work = NULL;
+	close_handles(dm);
+}
+
+/* The work layer's results go to the sessions layer. */
+static void job_done(void *ud, const struct bc_work_done *d)
+{
+	struct daemon *dm = ud;
+	if (dm->ss) {
+		bc_sessions_job_done(dm->ss, d);
+	}
+}
+
+/* Command-line options over the file's (c: what the command line gave). */
+static void apply_cli(struct bc_srv_config *cfg, const struct cli *c,
+                      const struct bc_args *args)
+{
+	if (c->listen) {
+		set_str(&cfg->listen, c->listen);
+	}
+	if (c->unix_path) {
+		set_str(&cfg->unix_path, c->unix_path);
+	}
+	if (c->data_dir) {
+		set_str(&cfg->data_dir, c->data_dir);
+	}
+	if (bc_args_given(args, "gl-platform")) {
+		set_str(&cfg->gl_platform, platform_names[c->gl_platform].name);
+	}
+	if (c->server_id) {
+		set_str(&cfg->server_id, c->server_id);
+	}
+	if (c->backend) {
+		cfg->backend = (enum bc_backend)c->backend;
+	}
+	if (c->tls_cert) {
+		set_str(&cfg->tls_cert, c->tls_cert);
+	}
+	if (c->tls_key) {
+		set_str(&cfg->tls_key, c->tls_key);
+	}
+	cfg->allow_plaintext = cfg->allow_plaintext || c->allow_plaintext;
+	cfg->simd = (enum bc_simd)c->simd;
+	cfg->no_damage = c->no_damage;
+	cfg->frame_budget_ms = c->frame_budget_ms;
+	cfg->render_threads = c->render_threads;
+	cfg->view_cache_mib = c->view_cache_mib;
+}
+
+/* Defaults for what neither gave, and the checks between options. Returns
+ * 0, or 1 after saying what is wrong. */
+static int settle_config(struct bc_srv_config *cfg)
+{
+	if (!cfg->listen) {
+		set_str(&cfg->listen, "127.0.0.1:7878");
+	}
+	if (strcmp(cfg->listen, "none") == 0) {
+		bc_free(cfg->listen);
+		cfg->listen = NULL;
+	}
+	if (!cfg->data_dir) {
+		set_str(&cfg->data_dir, "blobcast-data");
+	}
+	if (!cfg->server_id) {
+		set_str(&cfg->server_id, "blobcastd");
+	}
+	if (!cfg->backend) {
+		cfg->backend = BC_BACKEND_TILED;
+	}
+	if (cfg->tls_key && !cfg->tls_cert) {
+		fprintf(stderr, "blobcastd: --tls-key needs --tls-cert\n");
+		return 1;
+	}
+	if (cfg->tls_cert && !cfg->listen) {
+		fprintf(stderr, "blobcastd: --tls-cert needs a TCP listener "
+		                "(--listen); Unix sockets never use TLS\n");
+		return 1;
+	}
+	if (strlen(cfg->server_id) > BC_PROTO_MAX_NAME) {
+		fprintf(stderr, "blobcastd: --server-id longer than %u bytes\n",
+		        BC_PROTO_MAX_NAME);
+		return 1;
+	}
+	return 0;
+}
+
+/* Makes the layers bottom up and wires them. Returns 0 or an error. */
+static int start(struct daemon *dm, struct bc_errinfo *ei)
+{
+	int rc;
+	if ((rc = bc_store_open(&dm->store, dm->cfg.data_dir, ei))) {
+		return rc;
+	}
+	if ((rc = bc_work_start(
+	         &dm->work,
+	         &(struct bc_work_opts){
+	             .loop = dm->loop,
+	             .backend = dm->cfg.backend,
+	             .gl_platform = dm->cfg.gl_platform,
+	             .simd = dm->cfg.simd,
+	             .workers = dm->cfg.render_threads,
+	             .budget_ms = dm->cfg.frame_budget_ms,
+	             .no_damage = dm->cfg.no_damage,
+	             .view_cap = (size_t)dm->cfg.view_cache_mib << 20,
+	             .done = job_done,
+	             .ud = dm,
+	         },
+	         ei))) {
+		return rc;
+	}
+	if (bc_net_new(&dm->net, dm->loop, &dm->cfg)) {
+		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+	}
+	if ((rc = bc_sessions_new(&dm->ss,
+	                          &(struct bc_sessions_opts){
+	                              .loop = dm->loop,
+	                              .link = bc_net_link(dm->net),
+	                              .work = dm->work,
+	                              .store = dm->store,
+	                              .no_damage = dm->cfg.no_damage,
+	                          },
+	                          ei))) {
+		return rc;
+	}
+	if ((rc = bc_dispatch_new(&dm->d,
+	                          &(struct bc_dispatch_opts){
+	                              .loop = dm->loop,
+	                              .link = bc_net_link(dm->net),
+	                              .sessions = dm->ss,
+	                              .work = dm->work,
+	                              .cfg = &dm->cfg,
+	                          },
+	                          ei))) {
+		return rc;
+	}
+	bc_net_set_dispatch(dm->net, dm->d);
+	return bc_net_listen(dm->net, ei);
+}
+
+/* Undoes a start that failed part way, running the loop until its handles
+ * are closed. */
+static void abandon(struct daemon *dm)
+{
+	if (dm->net) {
+		bc_net_close_all(dm->net);
+	}
+	bc_dispatch_free(dm->d);
+	bc_sessions_free(dm->ss);
+	if (!bc_work_stop(dm->work, BC_SRV_STOP_WORKERS_MS)) {
+		_exit(1);
+	}
+	uv_run(dm->loop, UV_RUN_DEFAULT);
+}
+
+static void watch_signals(struct daemon *dm)
+{
+	uv_signal_init(dm->loop, &dm->sigterm);
+	uv_signal_init(dm->loop, &dm->sigint);
+	uv_signal_init(dm->loop, &dm->sighup);
+	dm->sigterm.data = dm->sigint.data = dm->sighup.data = dm;
+	uv_signal_start(&dm->sigterm, on_signal, SIGTERM);
+	uv_signal_start(&dm->sigint, on_signal, SIGINT);
+	uv_signal_start(&dm->sighup, on_sighup, SIGHUP);
 }
 
 int main(int argc, char **argv)
 {
-	struct bc_srv srv;
+	static struct daemon dm;
 	struct bc_errinfo ei = {0};
-	const char *config = NULL;
 	struct cli cli = {.log = BC_LOG_INFO};
 	const struct bc_opt opts[] = DAEMON_OPTS(&cli);
 	struct bc_args args = daemon_args(opts);
 	int rc = 1;
-
-	memset(&srv, 0, sizeof(srv));
 	if (bc_args_parse(&args, argc, argv)) {
 		return args.status;
 	}
@@ -545,70 +715,13 @@ int main(int argc, char **argv)
 		                     args.pos[0]);
 	}
 	bc_log_init((enum bc_log_level)cli.log);
-	config = cli.config;
-	if (config && load_config(&srv.cfg, config, &ei)) {
+	dm.config_path = cli.config;
+	if (cli.config && load_config(&dm.cfg, cli.config, &ei)) {
 		fprintf(stderr, "blobcastd: %s\n", ei.msg);
 		goto out;
 	}
-	/* Command-line options override the file. */
-	if (cli.listen) {
-		set_str(&srv.cfg.listen, cli.listen);
-	}
-	if (cli.unix_path) {
-		set_str(&srv.cfg.unix_path, cli.unix_path);
-	}
-	if (cli.data_dir) {
-		set_str(&srv.cfg.data_dir, cli.data_dir);
-	}
-	if (bc_args_given(&args, "gl-platform")) {
-		set_str(&srv.cfg.gl_platform,
-		        platform_names[cli.gl_platform].name);
-	}
-	if (cli.server_id) {
-		set_str(&srv.cfg.server_id, cli.server_id);
-	}
-	if (cli.backend) {
-		srv.cfg.backend = (enum bc_backend)cli.backend;
-	}
-	if (cli.tls_cert) {
-		set_str(&srv.cfg.tls_cert, cli.tls_cert);
-	}
-	if (cli.tls_key) {
-		set_str(&srv.cfg.tls_key, cli.tls_key);
-	}
-	srv.cfg.allow_plaintext =
-	    srv.cfg.allow_plaintext || cli.allow_plaintext;
-	srv.cfg.simd = (enum bc_simd)cli.simd;
-	srv.cfg.no_damage = cli.no_damage;
-	srv.cfg.frame_budget_ms = cli.frame_budget_ms;
-	if (!srv.cfg.listen) {
-		set_str(&srv.cfg.listen, "127.0.0.1:7878");
-	}
-	if (strcmp(srv.cfg.listen, "none") == 0) {
-		bc_free(srv.cfg.listen);
-		srv.cfg.listen = NULL;
-	}
-	if (!srv.cfg.data_dir) {
-		set_str(&srv.cfg.data_dir, "blobcast-data");
-	}
-	if (!srv.cfg.server_id) {
-		set_str(&srv.cfg.server_id, "blobcastd");
-	}
-	if (!srv.cfg.backend) {
-		srv.cfg.backend = BC_BACKEND_TILED;
-	}
-	if (srv.cfg.tls_key && !srv.cfg.tls_cert) {
-		fprintf(stderr, "blobcastd: --tls-key needs --tls-cert\n");
-		goto out;
-	}
-	if (srv.cfg.tls_cert && !srv.cfg.listen) {
-		fprintf(stderr, "blobcastd: --tls-cert needs a TCP listener "
-		                "(--listen); Unix sockets never use TLS\n");
-		goto out;
-	}
-	if (strlen(srv.cfg.server_id) > BC_PROTO_MAX_NAME) {
-		fprintf(stderr, "blobcastd: --server-id longer than %u bytes\n",
-		        BC_PROTO_MAX_NAME);
+	apply_cli(&dm.cfg, &cli, &args);
+	if (settle_config(&dm.cfg)) {
 		goto out;
 	}
 	/* A write to a closed connection returns EPIPE instead of killing
@@ -616,43 +729,28 @@ int main(int argc, char **argv)
 	 * its handler is installed once the listeners are up. */
 	signal(SIGPIPE, SIG_IGN);
 	signal(SIGHUP, SIG_IGN);
-	config_path = config;
-	srv.loop = uv_default_loop();
-	srv.started_ms = uv_now(srv.loop);
-	if (bc_store_open(&srv.store, srv.cfg.data_dir, &ei) ||
-	    bc_rthread_start(&srv, &ei) || bc_sessions_restore(&srv, &ei) ||
-	    bc_net_listen(&srv, &ei)) {
+	dm.loop = uv_default_loop();
+	/* dispatch reports the loop's busy turns from its idle time. */
+	uv_loop_configure(dm.loop, UV_METRICS_IDLE_TIME);
+	if (start(&dm, &ei)) {
 		fprintf(stderr, "blobcastd: %s\n", ei.msg);
-		if (srv.rt) {
-			bc_sessions_free(&srv);
-			bc_rthread_stop(&srv);
-			bc_net_close_all(&srv);
-			uv_run(srv.loop, UV_RUN_DEFAULT);
-		}
+		abandon(&dm);
 		goto out;
 	}
-	uv_signal_init(srv.loop, &srv.sigterm);
-	uv_signal_init(srv.loop, &srv.sigint);
-	srv.sigterm.data = srv.sigint.data = &srv;
-	uv_signal_start(&srv.sigterm, on_signal, SIGTERM);
-	uv_signal_start(&srv.sigint, on_signal, SIGINT);
-	uv_signal_init(srv.loop, &sighup);
-	sighup.data = &srv;
-	uv_signal_start(&sighup, on_sighup, SIGHUP);
-	print_endpoints(&srv);
-	warn_if_exposed(&srv);
+	watch_signals(&dm);
+	bc_net_announce(dm.net);
 	fprintf(stderr, "blobcastd: backend %s, data in %s\n",
-	        bc_backend_name(srv.cfg.backend), srv.cfg.data_dir);
+	        bc_backend_name(dm.cfg.backend), dm.cfg.data_dir);
 	/* Sessions restored and listeners up: clients may come. */
 	notify_systemd("READY=1");
-	uv_run(srv.loop, UV_RUN_DEFAULT);
+	uv_run(dm.loop, UV_RUN_DEFAULT);
 	rc = 0;
 out:
-	if (srv.loop) {
-		uv_loop_close(srv.loop);
+	if (dm.loop) {
+		uv_loop_close(dm.loop);
 	}
-	bc_store_close(srv.store);
-	bc_tls_ctx_free(srv.tls);
-	config_free(&srv.cfg);
+	bc_net_free(dm.net);
+	bc_store_close(dm.store);
+	config_free(&dm.cfg);
 	return rc;
 }

@@ -1,13 +1,22 @@
 /*
- * Connections (loop thread): the per-connection protocol reader and state
- * machine up to the session layer, timeouts, and output queues (listen.c
- * accepts them). Messages are written as they come; FRAMEs are written one
- * at a time per client and a newer frame replaces one not yet started
- * (frame spoiling), so a slow client gets fewer frames, never a growing
- * backlog.
- * A client whose queue still passes BC_SRV_MAX_CLIENT_QUEUE is dropped.
- * Clients are freed from their close callback, never inside a callback that
- * still uses them.
+ * Connections (loop thread): reading (TLS or plain) into the protocol's
+ * push reader, whole messages handed to dispatch, timeouts, and output
+ * queues (listen.c accepts connections, admit.c decides who gets a slot).
+ * Messages are written as they come; FRAMEs are written one at a time per
+ * client and a newer frame replaces one not yet started (frame spoiling),
+ * so a slow client gets fewer frames, never a growing backlog. A client
+ * whose queue still passes BC_SRV_MAX_CLIENT_QUEUE is dropped alone.
+ *
+ * A message that must wait for its session (dispatch answers PARK) stays
+ * where the reader decoded it: the connection reads nothing more and the
+ * reader is not touched until the sessions layer resumes it through the
+ * link; then, in a later turn of the loop, the message is dispatched
+ * again and reading goes on. A connection's messages so keep their order
+ * without a copy, and a waiting client holds one message, not a queue.
+ *
+ * This file also implements the link (link.h): the callbacks the layers
+ * below send through. Clients are freed from their close callback, never
+ * inside a callback that still uses them.
  */
 #include <inttypes.h>
 #include <stdarg.h>
@@ -23,6 +32,7 @@
 #include "blobcast/alloc.h"
 #include "blobcast/bytes.h"
 #include "blobcast/log.h"
+#include "blobcast/proto.h"
 #include "net_impl.h"
 #include "tls.h"
 
@@ -35,52 +45,29 @@
 struct write_req {
 	uv_write_t req;
 	struct bc_conn_ref who;
-	struct bc_srv *srv;
+	struct bc_net *net;
 	struct bc_shared *shared; /* a frame, or NULL */
 	uint8_t *owned;           /* a message's bytes, or NULL */
 	uint8_t *cipher;          /* what goes out on a TLS connection */
 	size_t len;
 };
 
-struct bc_shared *bc_shared_new(size_t len)
+static uint64_t now_ms(const struct bc_net *n)
 {
-	struct bc_shared *s = bc_malloc(sizeof(*s) + len);
-	if (s) {
-		s->refs = 1;
-		s->len = len;
-	}
-	return s;
+	return uv_now(n->loop);
 }
 
-void bc_shared_unref(struct bc_shared *s)
-{
-	if (s && --s->refs == 0) {
-		bc_free(s);
-	}
-}
-
-/* The loop's cached time, not base's bc_clock: libuv arms every timer
- * (the still timer, the stall check, the sweeps) against uv_now, which it
- * caches as the loop turns, from CLOCK_MONOTONIC_COARSE where that is fine
- * enough. Deadlines compared in a timer's callback must come from the
- * same reading, or a timer can fire while a second clock still says
- * "not yet". */
-uint64_t bc_now_ms(struct bc_srv *srv)
-{
-	return uv_now(srv->loop);
-}
-
-struct bc_conn *bc_conn_get(struct bc_srv *srv, struct bc_conn_ref ref)
+struct bc_conn *bc__conn_get(struct bc_net *n, struct bc_conn_ref ref)
 {
 	struct bc_conn *c;
 	if (ref.slot >= BC_SRV_MAX_CONNECTIONS) {
 		return NULL;
 	}
-	c = srv->clients[ref.slot];
+	c = n->clients[ref.slot];
 	return (c && c->gen == ref.gen && !c->closing) ? c : NULL;
 }
 
-struct bc_conn_ref bc_conn_ref_of(const struct bc_conn *c)
+static struct bc_conn_ref ref_of(const struct bc_conn *c)
 {
 	return (struct bc_conn_ref){c->slot, c->gen};
 }
@@ -88,10 +75,11 @@ struct bc_conn_ref bc_conn_ref_of(const struct bc_conn *c)
 void bc__net_handle_closed(uv_handle_t *h)
 {
 	struct bc_conn *c = h->data;
+	bool trim;
 	if (--c->handles_open > 0) {
 		return;
 	}
-	bool trim = c->queued >= BC_SRV_TRIM_AFTER_BYTES;
+	trim = c->queued >= BC_SRV_TRIM_AFTER_BYTES;
 	bc_proto_reader_finish(&c->reader);
 	bc_shared_unref(c->frame_next);
 	bc_tls_free(c->tls);
@@ -108,20 +96,54 @@ void bc__net_handle_closed(uv_handle_t *h)
 #endif
 }
 
-void bc_conn_close(struct bc_conn *c, const char *why)
+/* Takes c out of the resume queue. */
+static void unqueue_resume(struct bc_conn *c)
 {
-	struct bc_srv *srv = c->srv;
+	struct bc_net *n = c->net;
+	struct bc_conn **p;
+	if (!c->resume_queued) {
+		return;
+	}
+	for (p = &n->resume_head; *p; p = &(*p)->resume_next) {
+		if (*p == c) {
+			*p = c->resume_next;
+			break;
+		}
+	}
+	n->resume_tail = NULL;
+	for (struct bc_conn *q = n->resume_head; q; q = q->resume_next) {
+		n->resume_tail = q;
+	}
+	c->resume_queued = false;
+	c->resume_next = NULL;
+}
+
+/* The layers below forget c: its member leaves, its jobs go. */
+static void forget(struct bc_conn *c)
+{
+	if (c->slot < BC_SRV_MAX_CONNECTIONS && c->net->clients[c->slot] == c &&
+	    c->net->d) {
+		bc_dispatch_closed(c->net->d, ref_of(c));
+	}
+	unqueue_resume(c);
+}
+
+void bc__conn_close(struct bc_conn *c, const char *why)
+{
+	struct bc_net *n = c->net;
 	if (c->closing) {
 		return;
 	}
 	bc_log(BC_LOG_INFO, "connection %u (%s) closed: %s", c->gen, c->name,
 	       why);
-	if (c->session) {
-		bc_session_leave(c);
+	if (!c->draining) {
+		forget(c);
 	}
 	c->closing = true;
-	srv->clients[c->slot] = NULL;
-	srv->nclients--;
+	if (n->clients[c->slot] == c) {
+		n->clients[c->slot] = NULL;
+		n->nclients--;
+	}
 	c->handles_open = 2;
 	uv_close(&c->h.handle, bc__net_handle_closed);
 	uv_close((uv_handle_t *)&c->hello_timer, bc__net_handle_closed);
@@ -131,17 +153,15 @@ static void shutdown_done(uv_shutdown_t *req, int status)
 {
 	struct bc_conn *c = req->data;
 	(void)status;
-	bc_conn_close(c, c->drain_why);
+	bc__conn_close(c, c->drain_why);
 }
 
-void bc_conn_close_after_flush(struct bc_conn *c, const char *why)
+void bc__conn_close_after_flush(struct bc_conn *c, const char *why)
 {
 	if (c->closing || c->draining) {
 		return;
 	}
-	if (c->session) {
-		bc_session_leave(c);
-	}
+	forget(c);
 	c->draining = true;
 	c->drain_why = why;
 	uv_read_stop(&c->h.stream);
@@ -155,32 +175,35 @@ void bc_conn_close_after_flush(struct bc_conn *c, const char *why)
 	}
 	c->shutdown.data = c;
 	if (uv_shutdown(&c->shutdown, &c->h.stream, shutdown_done) != 0) {
-		bc_conn_close(c, why);
+		bc__conn_close(c, why);
 	}
 }
+
+static void send_frame(struct bc_conn *c, struct bc_shared *frame);
 
 static void write_done(uv_write_t *req, int status)
 {
 	struct write_req *w = (struct write_req *)req;
-	struct bc_conn *c = bc_conn_get(w->srv, w->who);
+	struct bc_conn *c = bc__conn_get(w->net, w->who);
 	if (c) {
 		c->queued -= w->len;
+		c->frame_bytes -= w->shared ? w->len : 0;
 		if (status < 0) {
-			bc_conn_close(c, uv_strerror(status));
+			bc__conn_close(c, uv_strerror(status));
 		} else if (w->shared) {
 			c->frame_writing = false;
-			c->frames_sent++;
-			c->bytes_sent += w->len;
+			c->counters.frames_sent++;
+			c->counters.bytes_sent += w->len;
 			if (c->frame_next) {
 				struct bc_shared *next = c->frame_next;
 				c->frame_next = NULL;
-				bc_conn_send_frame(c, next);
+				send_frame(c, next);
 				bc_shared_unref(next);
-			} else {
-				bc_session_client_ready(c);
+			} else if (!c->draining) {
+				bc_dispatch_writable(c->net->d, ref_of(c));
 			}
 		} else {
-			c->bytes_sent += w->len;
+			c->counters.bytes_sent += w->len;
 		}
 	}
 	bc_shared_unref(w->shared);
@@ -198,7 +221,7 @@ void bc__net_tls_flush(struct bc_conn *c)
 	size_t n;
 	uv_buf_t buf;
 	if (bc_tls_take_output(c->tls, &bytes, &n)) {
-		bc_conn_close(c, "out of memory");
+		bc__conn_close(c, "out of memory");
 		return;
 	}
 	if (n == 0) {
@@ -206,17 +229,17 @@ void bc__net_tls_flush(struct bc_conn *c)
 	}
 	if (!(w = bc_calloc(1, sizeof(*w)))) {
 		bc_free(bytes);
-		bc_conn_close(c, "out of memory");
+		bc__conn_close(c, "out of memory");
 		return;
 	}
-	w->srv = c->srv;
-	w->who = bc_conn_ref_of(c);
+	w->net = c->net;
+	w->who = ref_of(c);
 	w->cipher = bytes;
 	buf = uv_buf_init((char *)bytes, (unsigned int)n);
 	if (uv_write(&w->req, &c->h.stream, &buf, 1, write_done) < 0) {
 		bc_free(bytes);
 		bc_free(w);
-		bc_conn_close(c, "write failed");
+		bc__conn_close(c, "write failed");
 	}
 }
 
@@ -241,14 +264,41 @@ static int tls_seal(struct bc_conn *c, struct write_req *w, uv_buf_t *buf,
 	return 0;
 }
 
-/* Queues bytes (taking owned or a reference to shared). */
+static void write_req_free(struct write_req *w)
+{
+	bc_shared_unref(w->shared);
+	bc_free(w->owned);
+	bc_free(w->cipher);
+	bc_free(w);
+}
+
+/* The buffers of a FRAME shared by a view group: frame_no counts this
+ * client's frames (PROTOCOL.md 7.15), so the header and frame_no go out
+ * from a private copy, the rest shared. Returns false when out of memory. */
+static bool frame_bufs(struct bc_conn *c, struct write_req *w,
+                       struct bc_shared *shared, uv_buf_t *buf)
+{
+	if (!(w->owned = bc_malloc(FRAME_PREFIX))) {
+		return false;
+	}
+	memcpy(w->owned, shared->data, FRAME_PREFIX);
+	bc_put_le32(w->owned + BC_PROTO_HEADER_SIZE, ++c->frame_no);
+	buf[0] = uv_buf_init((char *)w->owned, FRAME_PREFIX);
+	buf[1] = uv_buf_init((char *)shared->data + FRAME_PREFIX,
+	                     (unsigned int)(shared->len - FRAME_PREFIX));
+	shared->refs++;
+	w->shared = shared;
+	return true;
+}
+
+/* Queues bytes (taking owned), or a reference to a shared frame. */
 static void queue_bytes(struct bc_conn *c, uint8_t *owned,
-                        struct bc_shared *shared, const uint8_t *data,
-                        size_t len)
+                        struct bc_shared *shared, size_t len)
 {
 	struct write_req *w;
 	uv_buf_t buf[2];
-	unsigned int nbufs;
+	unsigned int nbufs = shared ? 2u : 1u;
+	size_t frame, cap;
 	int rc;
 	if (c->tls && !bc_tls_ready(c->tls)) {
 		/* Nothing can be said before the handshake (an ERROR for a
@@ -256,123 +306,79 @@ static void queue_bytes(struct bc_conn *c, uint8_t *owned,
 		bc_free(owned);
 		return;
 	}
-	if (c->queued + len > BC_SRV_MAX_CLIENT_QUEUE) {
+	/* The queue's cap holds a frame of any size the protocol allows (a
+	 * snapshot with its planes may pass the cap alone) with a little
+	 * room beside it; frames go one at a time, a newer one spoiling the
+	 * one waiting, so only a client that stopped reading fills it. */
+	frame = shared ? len : c->frame_bytes;
+	cap = frame + BC_SRV_QUEUE_BESIDE_FRAME > BC_SRV_MAX_CLIENT_QUEUE
+	          ? frame + BC_SRV_QUEUE_BESIDE_FRAME
+	          : BC_SRV_MAX_CLIENT_QUEUE;
+	if (c->queued + len > cap) {
 		bc_free(owned);
 		bc_log(BC_LOG_WARN,
-		       "dropping client %u (%s): %zu bytes queued, it stopped "
-		       "reading",
-		       c->gen, c->name, c->queued);
-		bc_conn_close(c, "output queue over its limit");
+		       "dropping client %u (%s): %zu bytes queued and %zu more "
+		       "to send, over %zu: it stopped reading",
+		       c->gen, c->name, c->queued, len, cap);
+		bc__conn_close(c, "output queue over its limit");
 		return;
 	}
-	w = bc_calloc(1, sizeof(*w));
-	if (!w) {
+	if (!(w = bc_calloc(1, sizeof(*w)))) {
 		bc_free(owned);
-		bc_conn_close(c, "out of memory");
+		bc__conn_close(c, "out of memory");
 		return;
 	}
-	w->srv = c->srv;
-	w->who = bc_conn_ref_of(c);
+	w->net = c->net;
+	w->who = ref_of(c);
 	w->owned = owned;
 	w->len = len;
-	nbufs = 1;
-	buf[0] = uv_buf_init((char *)data, (unsigned int)len);
-	if (shared) {
-		/* A FRAME shared by a view group: frame_no counts this
-		 * client's frames (PROTOCOL.md 7.15), so the header and
-		 * frame_no go out from a private copy, the rest shared. */
-		if (!(w->owned = bc_malloc(FRAME_PREFIX))) {
-			bc_free(w);
-			bc_log(BC_LOG_ERROR,
-			       "client %u: out of memory for a "
-			       "frame",
-			       c->gen);
-			bc_conn_close(c, "out of memory");
-			return;
-		}
-		memcpy(w->owned, data, FRAME_PREFIX);
-		bc_put_le32(w->owned + BC_PROTO_HEADER_SIZE, ++c->frame_no);
-		buf[0] = uv_buf_init((char *)w->owned, FRAME_PREFIX);
-		buf[1] = uv_buf_init((char *)data + FRAME_PREFIX,
-		                     (unsigned int)(len - FRAME_PREFIX));
-		nbufs = 2;
-		shared->refs++;
-		w->shared = shared;
-	}
-	if (c->tls && tls_seal(c, w, buf, &nbufs)) {
-		bc_shared_unref(w->shared);
-		bc_free(w->owned);
-		bc_free(w->cipher);
-		bc_free(w);
-		bc_conn_close(c, "TLS encryption failed");
+	buf[0] = uv_buf_init((char *)owned, (unsigned int)len);
+	if ((shared && !frame_bufs(c, w, shared, buf)) ||
+	    (c->tls && tls_seal(c, w, buf, &nbufs))) {
+		write_req_free(w);
+		bc__conn_close(c, "out of memory or TLS failure");
 		return;
 	}
 	c->queued += len;
-	rc = uv_write(&w->req, &c->h.stream, buf, nbufs, write_done);
-	if (rc < 0) {
+	c->frame_bytes += shared ? len : 0;
+	if ((rc = uv_write(&w->req, &c->h.stream, buf, nbufs, write_done)) <
+	    0) {
 		c->queued -= len;
-		bc_shared_unref(w->shared);
-		bc_free(w->owned);
-		bc_free(w->cipher);
-		bc_free(w);
-		bc_conn_close(c, uv_strerror(rc));
+		c->frame_bytes -= shared ? len : 0;
+		write_req_free(w);
+		bc__conn_close(c, uv_strerror(rc));
 	}
 }
 
-void bc_conn_send(struct bc_conn *c, const struct bc_msg *m)
+static void send_msg(struct bc_conn *c, const struct bc_msg *m)
 {
 	struct bc_proto_buf b;
 	struct bc_errinfo ei = {0};
-	int rc;
 	if (c->closing || c->draining) {
 		return;
 	}
 	bc_proto_buf_init(&b, 0);
-	rc = bc_proto_encode(&b, m, &ei);
-	if (rc) {
+	if (bc_proto_encode(&b, m, &ei)) {
 		bc_log(BC_LOG_ERROR, "cannot encode %s for client %u: %s",
 		       bc_proto_type_name(m->type), c->gen, ei.msg);
 		bc_proto_buf_finish(&b);
 		return;
 	}
-	queue_bytes(c, b.data, NULL, b.data, b.len);
+	queue_bytes(c, b.data, NULL, b.len);
 }
 
-void bc_conn_send_error(struct bc_conn *c, uint32_t seq, int code, bool fatal,
-                        const char *fmt, ...)
+static void send_frame(struct bc_conn *c, struct bc_shared *frame)
 {
-	char text[BC_PROTO_MAX_ERROR_TEXT];
-	struct bc_msg m = {.type = BC_MSG_ERROR, .seq = seq};
-	va_list args;
-	int n;
-	va_start(args, fmt);
-	n = vsnprintf(text, sizeof(text), fmt, args);
-	va_end(args);
-	if (n < 0) {
-		n = 0;
-	}
-	m.flags = fatal ? BC_PROTO_FLAG_FATAL : 0;
-	m.error.code = (uint16_t)(code < 0 ? -code : code);
-	m.error.text.ptr = text;
-	m.error.text.len =
-	    (uint32_t)((size_t)n < sizeof(text) ? (size_t)n : sizeof(text) - 1);
-	bc_log(BC_LOG_INFO, "client %u: error %s: %s", c->gen,
-	       bc_err_name(code), text);
-	bc_conn_send(c, &m);
-}
-
-void bc_conn_send_frame(struct bc_conn *c, struct bc_shared *frame)
-{
+	uint64_t now = now_ms(c->net);
 	if (c->closing || c->draining) {
 		return;
 	}
-	if (c->frame_writing &&
-	    bc_now_ms(c->srv) - c->frame_started_ms > BC_SRV_STALL_MS) {
+	if (c->frame_writing && now - c->frame_started_ms > BC_SRV_STALL_MS) {
 		bc_log(BC_LOG_WARN,
 		       "dropping client %u (%s): a frame has waited %u ms, it "
 		       "stopped reading",
 		       c->gen, c->name, BC_SRV_STALL_MS);
-		bc_conn_close(c, "stopped reading");
+		bc__conn_close(c, "stopped reading");
 		return;
 	}
 	if (c->frame_writing) {
@@ -386,107 +392,67 @@ void bc_conn_send_frame(struct bc_conn *c, struct bc_shared *frame)
 		return;
 	}
 	c->frame_writing = true;
-	c->frame_started_ms = bc_now_ms(c->srv);
-	if (!c->first_frame_ms) {
-		c->first_frame_ms = bc_now_ms(c->srv);
+	c->frame_started_ms = now;
+	if (!c->counters.first_frame_ms) {
+		c->counters.first_frame_ms = now;
 	}
-	queue_bytes(c, NULL, frame, frame->data, frame->len);
+	queue_bytes(c, NULL, frame, frame->len);
 }
 
-/* ---- HELLO -------------------------------------------------------------- */
+/* ---- the link ------------------------------------------------------------- */
 
-static enum bc_proto_role token_role(struct bc_srv *srv, struct bc_conn *c,
-                                     struct bc_proto_str tok)
+static void link_send(void *ud, struct bc_conn_ref to, const struct bc_msg *m)
 {
-	for (uint32_t i = 0; i < srv->cfg.ntokens; i++) {
-		const char *t = srv->cfg.tokens[i].token;
-		if (strlen(t) == tok.len && memcmp(t, tok.ptr, tok.len) == 0) {
-			return srv->cfg.tokens[i].role;
-		}
+	struct bc_conn *c = bc__conn_get(ud, to);
+	if (c) {
+		send_msg(c, m);
 	}
-	/* No token: only trusted peers, and only when no token is configured
-	 * or they come over the Unix socket (filesystem permissions). */
-	if (tok.len == 0 && c->trusted &&
-	    (srv->cfg.ntokens == 0 || !c->is_tcp)) {
-		return BC_PROTO_ROLE_EDITOR;
-	}
-	return BC_PROTO_ROLE_INVALID;
 }
 
-static void handle_hello(struct bc_conn *c, const struct bc_msg *m)
+static void link_send_frame(void *ud, struct bc_conn_ref to,
+                            struct bc_shared *frame)
 {
-	struct bc_srv *srv = c->srv;
-	const struct bc_msg_hello *h = &m->hello;
-	struct bc_msg w = {.type = BC_MSG_WELCOME, .seq = m->seq};
-	if (h->version_min > BC_PROTO_VERSION ||
-	    h->version_max < BC_PROTO_VERSION) {
-		bc_conn_send_error(c, m->seq, BC_EPROTO_VERSION, true,
-		                   "this server speaks version %u only",
-		                   BC_PROTO_VERSION);
-		bc_conn_close_after_flush(c, "version mismatch");
-		return;
+	struct bc_conn *c = bc__conn_get(ud, to);
+	if (c) {
+		send_frame(c, frame);
 	}
-	c->max_role = token_role(srv, c, h->token);
-	if (c->max_role == BC_PROTO_ROLE_INVALID) {
-		bc_conn_send_error(c, m->seq, BC_EAUTH, true,
-		                   "a valid token is required");
-		bc_conn_close_after_flush(c, "authentication failed");
-		return;
-	}
-	memcpy(c->name, h->client_name.ptr, h->client_name.len);
-	c->name[h->client_name.len] = '\0';
-	/* 0: the client wants no frames; its VIEWs are refused (EINVAL). */
-	c->encodings = h->encodings;
-	c->max_frame_bytes =
-	    h->max_frame_bytes ? h->max_frame_bytes : BC_PROTO_MAX_PAYLOAD;
-	c->stage = BC_PROTO_STAGE_READY;
-	uv_timer_stop(&c->hello_timer);
-	bc_proto_reader_hello_done(&c->reader);
-	w.welcome.version = BC_PROTO_VERSION;
-	w.welcome.connection_id = c->gen;
-	w.welcome.max_payload = BC_PROTO_MAX_PAYLOAD;
-	w.welcome.max_frame_bytes = c->max_frame_bytes;
-	w.welcome.max_nodes = BC_SRV_MAX_NODES;
-	w.welcome.max_dim = BC_SRV_MAX_DIM;
-	w.welcome.max_members = BC_PROTO_MAX_MEMBERS;
-	w.welcome.max_edit_ops = BC_PROTO_MAX_EDIT_OPS;
-	w.welcome.server_id.ptr = srv->cfg.server_id;
-	w.welcome.server_id.len = (uint32_t)strlen(srv->cfg.server_id);
-	bc_conn_send(c, &w);
 }
 
-static void dispatch(struct bc_conn *c, const struct bc_msg *m)
+static void link_close(void *ud, struct bc_conn_ref to, const char *why,
+                       bool flush)
 {
-	int rc = bc_proto_client_may_send(c->stage, c->role, m->type);
-	if (m->type == BC_MSG_PING) {
-		struct bc_msg pong = {.type = BC_MSG_PONG, .seq = m->seq};
-		pong.ping.stamp = m->ping.stamp;
-		bc_conn_send(c, &pong);
-		return;
+	struct bc_conn *c = bc__conn_get(ud, to);
+	if (c && flush) {
+		bc__conn_close_after_flush(c, why);
+	} else if (c) {
+		bc__conn_close(c, why);
 	}
-	if (m->type == BC_MSG_PONG || m->type == BC_MSG_ERROR) {
-		return;
-	}
-	/* A client that sends a type of the presentation messages knows
-	 * those the server sends (PROTOCOL.md 4), refused or not. */
-	if (m->type >= BC_MSG_PRESENT) {
-		c->knows_present = true;
-	}
-	if (rc) {
-		bc_conn_send_error(c, m->seq, rc, false, "%s is not allowed %s",
-		                   bc_proto_type_name(m->type),
-		                   rc == BC_EPERM ? "for a viewer"
-		                                  : "at this point");
-		return;
-	}
-	if (m->type == BC_MSG_HELLO) {
-		handle_hello(c, m);
-		return;
-	}
-	bc_session_handle(c, m);
 }
 
-void bc__net_on_alloc(uv_handle_t *h, size_t suggested, uv_buf_t *buf)
+static void resume_due(uv_idle_t *idle);
+
+static void link_resume(void *ud, struct bc_conn_ref to, bool again)
+{
+	struct bc_net *n = ud;
+	struct bc_conn *c = bc__conn_get(n, to);
+	if (!c || !c->parked || c->resume_queued) {
+		return;
+	}
+	c->resume_again = again;
+	c->resume_queued = true;
+	c->resume_next = NULL;
+	if (n->resume_tail) {
+		n->resume_tail->resume_next = c;
+	} else {
+		n->resume_head = c;
+		uv_idle_start(&n->resumer, resume_due);
+	}
+	n->resume_tail = c;
+}
+
+/* ---- reading --------------------------------------------------------------- */
+
+static void on_alloc(uv_handle_t *h, size_t suggested, uv_buf_t *buf)
 {
 	static char chunk[READ_CHUNK];
 	(void)h;
@@ -496,21 +462,42 @@ void bc__net_on_alloc(uv_handle_t *h, size_t suggested, uv_buf_t *buf)
 	*buf = uv_buf_init(chunk, sizeof(chunk));
 }
 
-/* Plaintext bytes from the peer: fed to the protocol reader, and every
- * whole message dispatched. */
-static void on_bytes(struct bc_conn *c, const char *bytes, size_t n)
+/* Hands m to dispatch. Returns false when c may read nothing more now. */
+static bool deliver(struct bc_conn *c, const struct bc_msg *m)
+{
+	switch (bc_dispatch_message(c->net->d, ref_of(c), m)) {
+	case BC_DISPATCH_PARK:
+		c->parked = true;
+		c->parked_msg = *m;
+		uv_read_stop(&c->h.stream);
+		return false;
+	case BC_DISPATCH_HELLO:
+		/* The name it gave, for the log. */
+		snprintf(c->name, sizeof(c->name), "%.*s",
+		         (int)m->hello.client_name.len,
+		         m->hello.client_name.ptr);
+		c->authed = true;
+		uv_timer_stop(&c->hello_timer);
+		bc_proto_reader_hello_done(&c->reader);
+		return true;
+	default:
+		return !c->closing && !c->draining;
+	}
+}
+
+/* Dispatches the whole messages the reader holds, until one parks. */
+static void drain_reader(struct bc_conn *c)
 {
 	struct bc_msg m;
-	int rc;
-	c->last_read_ms = bc_now_ms(c->srv);
-	rc = bc_proto_reader_feed(&c->reader, bytes, n);
-	while (rc == 0 && !c->closing && !c->draining) {
+	int rc = 0;
+	while (!c->closing && !c->draining && !c->parked) {
 		rc = bc_proto_reader_next(&c->reader, &m);
-		if (rc == 1) {
-			c->msg_started_ms = 0;
-			dispatch(c, &m);
-			rc = 0;
-		} else {
+		if (rc != 1) {
+			break;
+		}
+		c->msg_started_ms = 0;
+		rc = 0;
+		if (!deliver(c, &m)) {
 			break;
 		}
 	}
@@ -523,41 +510,37 @@ static void on_bytes(struct bc_conn *c, const char *bytes, size_t n)
 	}
 	if (rc < 0 && !c->closing && !c->draining) {
 		/* The stream cannot be resynchronized: say why, then close. */
-		bc_conn_send_error(c, 0, rc, true, "%s", c->reader.errstr);
-		bc_conn_close_after_flush(c, "protocol error");
+		bc_link_error(&c->net->link, ref_of(c), 0, rc, true, "%s",
+		              c->reader.errstr);
+		bc__conn_close_after_flush(c, "protocol error");
 	}
 }
 
-/* Ciphertext from the peer of a TLS connection: the handshake advanced,
- * records decrypted and their bytes handled, whatever TLS has to say
- * written. A peer that speaks the plain protocol to this port hears why
- * it is refused, in the plain protocol. */
-static void on_tls_bytes(struct bc_conn *c, const char *bytes, size_t n)
+/* Plaintext bytes from the peer: fed to the protocol reader, and every
+ * whole message dispatched. */
+static void on_bytes(struct bc_conn *c, const char *bytes, size_t n)
+{
+	int rc;
+	c->last_read_ms = now_ms(c->net);
+	if ((rc = bc_proto_reader_feed(&c->reader, bytes, n)) < 0) {
+		bc_link_error(&c->net->link, ref_of(c), 0, rc, true, "%s",
+		              c->reader.errstr);
+		bc__conn_close_after_flush(c, "protocol error");
+		return;
+	}
+	drain_reader(c);
+}
+
+/* Decrypted bytes of a TLS connection, fed while it reads (a parked one
+ * leaves the rest in its TLS state until resumed). Returns what the last
+ * read said: > 0 bytes, 0 more needed, or an error with why. */
+static long tls_pump(struct bc_conn *c, char *why, size_t whylen)
 {
 	static char plain[READ_CHUNK];
-	char why[256];
 	long got = 0;
-	if (!bc_tls_started(c->tls) &&
-	    (uint8_t)bytes[0] != 0x16 /* TLS handshake record */) {
-		bc_tls_free(c->tls);
-		c->tls = NULL;
-		bc_log(BC_LOG_INFO,
-		       "connection %u: plain protocol on the TLS port, refused",
-		       c->gen);
-		bc_conn_send_error(c, 0, BC_ENOTSUP, true,
-		                   "this port speaks TLS: connect with "
-		                   "tls://HOST:PORT");
-		bc_conn_close_after_flush(c, "not TLS");
-		return;
-	}
-	if (bc_tls_feed(c->tls, bytes, n)) {
-		bc_conn_close(c, "out of memory");
-		return;
-	}
-	while (!c->closing && !c->draining) {
+	while (!c->closing && !c->draining && !c->parked) {
 		bool was_ready = bc_tls_ready(c->tls);
-		got =
-		    bc_tls_read(c->tls, plain, sizeof(plain), why, sizeof(why));
+		got = bc_tls_read(c->tls, plain, sizeof(plain), why, whylen);
 		if (!was_ready && bc_tls_ready(c->tls)) {
 			char desc[128];
 			bc_log(BC_LOG_INFO, "connection %u: TLS (%s)", c->gen,
@@ -568,24 +551,53 @@ static void on_tls_bytes(struct bc_conn *c, const char *bytes, size_t n)
 		}
 		on_bytes(c, plain, (size_t)got);
 	}
+	return got;
+}
+
+/* Ciphertext from the peer of a TLS connection: the handshake advanced,
+ * records decrypted and their bytes handled, whatever TLS has to say
+ * written. A peer that speaks the plain protocol to this port hears why
+ * it is refused, in the plain protocol. */
+static void on_tls_bytes(struct bc_conn *c, const char *bytes, size_t n)
+{
+	char why[256] = "";
+	long got;
+	if (!bc_tls_started(c->tls) &&
+	    (uint8_t)bytes[0] != 0x16 /* TLS handshake record */) {
+		bc_tls_free(c->tls);
+		c->tls = NULL;
+		bc_log(BC_LOG_INFO,
+		       "connection %u: plain protocol on the TLS port, refused",
+		       c->gen);
+		bc_link_error(&c->net->link, ref_of(c), 0, BC_ENOTSUP, true,
+		              "this port speaks TLS: connect with "
+		              "tls://HOST:PORT");
+		bc__conn_close_after_flush(c, "not TLS");
+		return;
+	}
+	if (bc_tls_feed(c->tls, bytes, n)) {
+		bc__conn_close(c, "out of memory");
+		return;
+	}
+	got = tls_pump(c, why, sizeof(why));
 	if (c->closing) {
 		return;
 	}
 	bc__net_tls_flush(c);
 	if (got < 0 && !c->closing && !c->draining) {
 		if (got == BC_ECLOSED) {
-			bc_conn_close(c, "peer closed");
+			bc__conn_close(c, "peer closed");
 		} else {
 			bc_log(BC_LOG_INFO, "connection %u: TLS: %s", c->gen,
 			       why);
-			bc_conn_close(c, bc_tls_ready(c->tls)
-			                     ? "TLS error"
-			                     : "TLS handshake failed");
+			bc__conn_close(c, bc_tls_ready(c->tls)
+			                      ? "TLS error"
+			                      : "TLS handshake failed");
 		}
 	}
 }
 
-void bc__net_on_read(uv_stream_t *s, ssize_t n, const uv_buf_t *buf)
+static void on_read(uv_stream_t *s, ssize_t n, const uv_buf_t *buf)
 {
 	struct bc_conn *c = s->data;
 	if (c->closing || c->draining) {
@@ -597,18 +609,18 @@ void bc__net_on_read(uv_stream_t *s, ssize_t n, const uv_buf_t *buf)
 			/* The stream ended inside a message (PROTOCOL.md 3.1):
 			 * a peer that only shut down its sending side still
 			 * hears why. */
-			bc_conn_send_error(c, 0, eof, true, "%s",
-			                   c->reader.errstr);
-			bc_conn_close_after_flush(c, "stream ended inside a "
-			                             "message");
+			bc_link_error(&c->net->link, ref_of(c), 0, eof, true,
+			              "%s", c->reader.errstr);
+			bc__conn_close_after_flush(c, "stream ended inside a "
+			                              "message");
 			return;
 		}
 		if (eof < 0) {
 			bc_log(BC_LOG_INFO, "client %u: %s", c->gen,
 			       c->reader.errstr);
 		}
-		bc_conn_close(c, n == UV_EOF ? "peer closed"
-		                             : uv_strerror((int)n));
+		bc__conn_close(c, n == UV_EOF ? "peer closed"
+		                              : uv_strerror((int)n));
 		return;
 	}
 	if (n == 0) {
@@ -621,49 +633,88 @@ void bc__net_on_read(uv_stream_t *s, ssize_t n, const uv_buf_t *buf)
 	}
 }
 
-void bc__net_hello_timeout(uv_timer_t *t)
+/* A parked connection goes on: its message again (or dropped, answered
+ * meanwhile), the rest of what the reader and TLS hold, then reading. */
+static void resume_one(struct bc_conn *c)
+{
+	char why[256];
+	c->parked = false;
+	if (c->resume_again && !deliver(c, &c->parked_msg)) {
+		return;
+	}
+	drain_reader(c);
+	if (c->tls && !c->parked && !c->closing && !c->draining) {
+		tls_pump(c, why, sizeof(why));
+		bc__net_tls_flush(c);
+	}
+	if (!c->parked && !c->closing && !c->draining) {
+		uv_read_start(&c->h.stream, on_alloc, on_read);
+	}
+}
+
+static void resume_due(uv_idle_t *idle)
+{
+	struct bc_net *n = idle->data;
+	struct bc_conn *c;
+	uv_idle_stop(idle);
+	/* Those queued meanwhile wait for the next turn. */
+	while ((c = n->resume_head)) {
+		n->resume_head = c->resume_next;
+		if (!n->resume_head) {
+			n->resume_tail = NULL;
+		}
+		c->resume_queued = false;
+		c->resume_next = NULL;
+		resume_one(c);
+	}
+}
+
+/* ---- timeouts ---------------------------------------------------------------- */
+
+static void hello_timeout(uv_timer_t *t)
 {
 	struct bc_conn *c = t->data;
-	bc_conn_send_error(c, 0, BC_ETIMEOUT, true, "no HELLO within %u ms",
-	                   BC_SRV_HELLO_TIMEOUT_MS);
-	bc_conn_close_after_flush(c, "HELLO timeout");
+	bc_link_error(&c->net->link, ref_of(c), 0, BC_ETIMEOUT, true,
+	              "no HELLO within %u ms", BC_SRV_HELLO_TIMEOUT_MS);
+	bc__conn_close_after_flush(c, "HELLO timeout");
 }
 
 /* After HELLO: a message must complete within the message timeout of its
  * first byte, and a client in no session may not stay silent past the idle
- * timeout. (Before HELLO the HELLO timeout covers both.) */
-static void check_timeouts(struct bc_srv *srv, struct bc_conn *c, uint64_t now)
+ * timeout. (Before HELLO the HELLO timeout covers both; a parked message
+ * is whole, and waits for its session.) */
+static void check_timeouts(struct bc_net *n, struct bc_conn *c, uint64_t now)
 {
-	uint64_t msg_ms = srv->cfg.message_timeout_ms
-	                      ? srv->cfg.message_timeout_ms
-	                      : BC_SRV_MESSAGE_TIMEOUT_MS;
-	uint64_t idle_ms = srv->cfg.idle_timeout_ms ? srv->cfg.idle_timeout_ms
-	                                            : BC_SRV_IDLE_TIMEOUT_MS;
-	if (c->closing || c->draining || c->stage == BC_PROTO_STAGE_HELLO) {
+	const struct bc_srv_config *cfg = n->cfg;
+	uint64_t msg_ms = cfg->message_timeout_ms ? cfg->message_timeout_ms
+	                                          : BC_SRV_MESSAGE_TIMEOUT_MS;
+	uint64_t idle_ms = cfg->idle_timeout_ms ? cfg->idle_timeout_ms
+	                                        : BC_SRV_IDLE_TIMEOUT_MS;
+	if (c->closing || c->draining || !c->authed || c->parked) {
 		return;
 	}
 	if (c->msg_started_ms && now - c->msg_started_ms > msg_ms) {
-		bc_conn_send_error(c, 0, BC_ETIMEOUT, true,
-		                   "a message did not complete within %" PRIu64
-		                   " ms of its first byte",
-		                   msg_ms);
-		bc_conn_close_after_flush(c, "message timeout");
-	} else if (!c->session && now - c->last_read_ms > idle_ms) {
-		bc_conn_send_error(c, 0, BC_ETIMEOUT, true,
-		                   "idle for %" PRIu64 " ms in no session",
-		                   idle_ms);
-		bc_conn_close_after_flush(c, "idle timeout");
+		bc_link_error(&n->link, ref_of(c), 0, BC_ETIMEOUT, true,
+		              "a message did not complete within %" PRIu64
+		              " ms of its first byte",
+		              msg_ms);
+		bc__conn_close_after_flush(c, "message timeout");
+	} else if (bc_dispatch_idle(n->d, ref_of(c)) &&
+	           now - c->last_read_ms > idle_ms) {
+		bc_link_error(&n->link, ref_of(c), 0, BC_ETIMEOUT, true,
+		              "idle for %" PRIu64 " ms in no session", idle_ms);
+		bc__conn_close_after_flush(c, "idle timeout");
 	}
 }
 
 void bc__net_check_stalls(uv_timer_t *t)
 {
-	struct bc_srv *srv = t->data;
-	uint64_t now = bc_now_ms(srv);
+	struct bc_net *n = t->data;
+	uint64_t now = now_ms(n);
 	for (uint32_t i = 0; i < BC_SRV_MAX_CONNECTIONS; i++) {
-		struct bc_conn *c = srv->clients[i];
+		struct bc_conn *c = n->clients[i];
 		if (c) {
-			check_timeouts(srv, c, now);
+			check_timeouts(n, c, now);
 		}
 		if (c && !c->closing && c->frame_writing &&
 		    now - c->frame_started_ms > BC_SRV_STALL_MS) {
@@ -672,28 +723,94 @@ void bc__net_check_stalls(uv_timer_t *t)
 			       "%llu ms, it stopped reading",
 			       c->gen, c->name,
 			       (unsigned long long)(now - c->frame_started_ms));
-			bc_conn_close(c, "stopped reading");
+			bc__conn_close(c, "stopped reading");
 		}
 	}
 }
 
-void bc_net_close_all(struct bc_srv *srv)
+/* ---- connections and the layer ---------------------------------------------- */
+
+void bc__conn_start(struct bc_conn *c, uint32_t slot)
 {
+	struct bc_net *n = c->net;
+	c->slot = slot;
+	c->gen = ++n->gens[slot] * BC_SRV_MAX_CONNECTIONS + slot;
+	n->clients[slot] = c;
+	n->nclients++;
+	snprintf(c->name, sizeof(c->name), "?");
+	bc_proto_reader_init(&c->reader, &(struct bc_proto_reader_opts){
+	                                     .side = BC_PROTO_SIDE_SERVER,
+	                                     .await_hello = true,
+	                                 });
+	if (bc_dispatch_open(n->d, ref_of(c), c->trusted, c->is_tcp,
+	                     &c->counters)) {
+		bc__conn_close(c, "out of memory");
+		return;
+	}
+	c->hello_timer.data = c;
+	uv_timer_start(&c->hello_timer, hello_timeout, BC_SRV_HELLO_TIMEOUT_MS,
+	               0);
+	uv_read_start(&c->h.stream, on_alloc, on_read);
+}
+
+int bc_net_new(struct bc_net **out, uv_loop_t *loop,
+               const struct bc_srv_config *cfg)
+{
+	struct bc_net *n = bc_calloc(1, sizeof(*n));
+	*out = NULL;
+	if (!n) {
+		return BC_ENOMEM;
+	}
+	n->loop = loop;
+	n->cfg = cfg;
+	n->link = (struct bc_link){
+	    .ud = n,
+	    .send = link_send,
+	    .send_frame = link_send_frame,
+	    .close = link_close,
+	    .resume = link_resume,
+	};
+	uv_idle_init(loop, &n->resumer);
+	n->resumer.data = n;
+	uv_timer_init(loop, &n->stall_timer);
+	n->stall_timer.data = n;
+	*out = n;
+	return 0;
+}
+
+const struct bc_link *bc_net_link(struct bc_net *n)
+{
+	return &n->link;
+}
+
+void bc_net_set_dispatch(struct bc_net *n, struct bc_dispatch *d)
+{
+	n->d = d;
+}
+
+void bc_net_close_all(struct bc_net *n)
+{
+	n->stopping = true;
 	for (uint32_t i = 0; i < BC_SRV_MAX_CONNECTIONS; i++) {
-		if (srv->clients[i]) {
-			bc_conn_close(srv->clients[i], "server stopping");
+		if (n->clients[i]) {
+			bc__conn_close(n->clients[i], "server stopping");
 		}
 	}
-	if (uv_is_active((uv_handle_t *)&srv->stall_timer) ||
-	    srv->stall_timer.data == srv) {
-		uv_close((uv_handle_t *)&srv->stall_timer, NULL);
-		srv->stall_timer.data = NULL;
+	uv_close((uv_handle_t *)&n->stall_timer, NULL);
+	uv_close((uv_handle_t *)&n->resumer, NULL);
+	if (n->has_tcp) {
+		uv_close((uv_handle_t *)&n->tcp_listener, NULL);
 	}
-	if (srv->has_tcp) {
-		uv_close((uv_handle_t *)&srv->tcp_listener, NULL);
+	if (n->has_unix) {
+		uv_close((uv_handle_t *)&n->unix_listener, NULL);
+		unlink(n->cfg->unix_path);
 	}
-	if (srv->has_unix) {
-		uv_close((uv_handle_t *)&srv->unix_listener, NULL);
-		unlink(srv->cfg.unix_path);
+}
+
+void bc_net_free(struct bc_net *n)
+{
+	if (n) {
+		bc_tls_ctx_free(n->tls);
+		bc_free(n);
 	}
 }

@@ -1,32 +1,105 @@
 /*
- * The libuv callbacks net.c (connections: reading, HELLO, output queues,
- * timeouts) lends listen.c (accepting connections) when it sets up a new
- * connection or the listeners.
+ * The transport's private types, shared by net.c (connections: reading,
+ * framing, parking, writing, timeouts), listen.c (the listeners, accepting)
+ * and admit.c (who gets a slot when connections run short).
  */
 #ifndef BLOBCAST_SERVER_NET_IMPL_H
 #define BLOBCAST_SERVER_NET_IMPL_H
 
-#include "server.h"
+#include "dispatch.h"
+#include "srv_limits.h"
+#include "transport.h"
 
+struct bc_conn {
+	struct bc_net *net;
+	uint32_t slot, gen;
+	union {
+		uv_tcp_t tcp;
+		uv_pipe_t pipe;
+		uv_stream_t stream;
+		uv_handle_t handle;
+	} h;
+	uv_timer_t hello_timer;
+	struct bc_tls *tls;   /* TLS state (tls.h) on a TLS listener, or NULL */
+	bool is_tcp, trusted; /* trusted: loopback TCP or Unix socket */
+	bool authed;          /* HELLO accepted */
+	bool closing;
+	bool draining; /* shut down after the queued bytes are written */
+	uv_shutdown_t shutdown;
+	const char *drain_why;
+	uint32_t handles_open;
+	struct bc_proto_reader reader;
+	char name[BC_PROTO_MAX_NAME + 1]; /* for the log */
+	/* Admission (admit.c): the peer's address as 16 bytes (IPv4 in its
+	 * v4-mapped form), whether known, and when it came (loop clock). */
+	uint8_t addr[16];
+	bool has_addr;
+	uint64_t accepted_ms;
+	/* A message that waits for its session (BC_DISPATCH_PARK): the
+	 * reader is not touched, so it stays valid, until it is resumed. */
+	bool parked, resume_again;
+	struct bc_msg parked_msg;
+	struct bc_conn *resume_next;
+	bool resume_queued;
+	/* Output: messages go out at once; frames one at a time. queued
+	 * counts both, frame_bytes the frame being written. */
+	size_t queued, frame_bytes;
+	bool frame_writing;
+	uint64_t frame_started_ms;
+	struct bc_shared *frame_next;
+	uint32_t frame_no; /* FRAMEs written to this client */
+	/* Timeouts (loop clock, ms): when the first byte of a message still
+	 * incomplete arrived (0: none pending), and when the last bytes did. */
+	uint64_t msg_started_ms, last_read_ms;
+	struct bc_conn_counters counters;
+	uint64_t frames_spoiled;
+};
+
+struct bc_net {
+	uv_loop_t *loop;
+	const struct bc_srv_config *cfg;
+	struct bc_dispatch *d;
+	struct bc_link link;
+	uv_tcp_t tcp_listener;
+	uv_pipe_t unix_listener;
+	bool has_tcp, has_unix;
+	struct bc_tls_ctx *tls; /* certificate and key, or NULL: plain TCP */
+	uv_timer_t stall_timer; /* timeouts, clients that stopped reading */
+	uv_idle_t resumer;      /* parked connections to resume */
+	struct bc_conn *resume_head, *resume_tail;
+	struct bc_conn *clients[BC_SRV_MAX_CONNECTIONS];
+	uint32_t gens[BC_SRV_MAX_CONNECTIONS];
+	uint32_t nclients;
+	bool stopping;
+	uint64_t refused_log_ms; /* refusals are logged once a second */
+	uint32_t refused_quiet;
+};
+
+/* ---- net.c ---- */
+
+struct bc_conn *bc__conn_get(struct bc_net *n, struct bc_conn_ref ref);
+void bc__conn_close(struct bc_conn *c, const char *why);
+void bc__conn_close_after_flush(struct bc_conn *c, const char *why);
+/* Starts a connection accepted into slot: its reader, HELLO timer and
+ * reads. */
+void bc__conn_start(struct bc_conn *c, uint32_t slot);
 /* Close callback of a connection's handles: frees it after the last. */
 void bc__net_handle_closed(uv_handle_t *h);
-
-/* Read callbacks of a connection's stream. */
-void bc__net_on_alloc(uv_handle_t *h, size_t suggested, uv_buf_t *buf);
-void bc__net_on_read(uv_stream_t *s, ssize_t n, const uv_buf_t *buf);
-
-/* Writes what a TLS connection's state has to send (handshake records,
- * alerts); closes the connection when that fails. */
+/* Writes what a TLS connection's state has to send. */
 void bc__net_tls_flush(struct bc_conn *c);
-
-/* Whether tokens are configured and the TCP listener is plain and
- * reachable from other hosts (listen.c). */
-bool bc_net_tokens_in_clear(struct bc_srv *srv);
-
-/* A connection said no HELLO in time: ERROR ETIMEOUT, then closed. */
-void bc__net_hello_timeout(uv_timer_t *t);
-
 /* Once a second: message and idle timeouts, clients that stopped reading. */
 void bc__net_check_stalls(uv_timer_t *t);
+
+/* ---- admit.c ---- */
+
+/* Makes room for connection c (its address read, not in the table yet):
+ * closes older unauthenticated connections of its address or prefix past
+ * their caps, and when every slot is taken the oldest unauthenticated one
+ * anywhere, else the longest-idle one that said HELLO and joined nothing.
+ * Returns the free slot, or BC_SRV_MAX_CONNECTIONS with *why when c must
+ * be refused. */
+uint32_t bc__admit(struct bc_net *n, struct bc_conn *c, const char **why);
+/* Reads the peer address of a TCP connection into c. */
+void bc__admit_address(struct bc_conn *c);
 
 #endif

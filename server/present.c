@@ -10,111 +10,105 @@
  */
 #include <string.h>
 
+#include "blobcast/alloc.h"
 #include "blobcast/edit.h"
 #include "blobcast/log.h"
-#include "server.h"
+#include "sessions_impl.h"
 
-static struct bc_conn *presenter_of(struct bc_session *s)
+static struct bc_member *presenter_of(struct bc_session *s)
 {
-	struct bc_conn *p;
-	if (!s->presenter_id) {
+	struct bc_member *p = s->presenter;
+	if (!s->presenter_id || !p) {
 		return NULL;
 	}
-	p = bc_conn_get(s->srv, s->presenter);
-	return p && p->session == s && p->member_id == s->presenter_id ? p
-	                                                               : NULL;
+	return p->session == s && p->member_id == s->presenter_id ? p : NULL;
 }
 
 /* PRESENTER to one member that knows the type. */
-static void tell(struct bc_session *s, struct bc_conn *m)
+static void tell(struct bc_session *s, struct bc_member *m)
 {
 	struct bc_msg pm = {.type = BC_MSG_PRESENTER};
-	if (!m->knows_present) {
+	if (!m->peer->knows_present) {
 		return;
 	}
 	pm.presenter.presenter = s->presenter_id;
 	pm.presenter.following = m->follows && s->presenter_id ? 1 : 0;
-	bc_conn_send(m, &pm);
+	bc__send(m, &pm);
 }
 
 /* PRESENTER to every member but except (one leaving, or NULL). */
-static void tell_all(struct bc_session *s, const struct bc_conn *except)
+static void tell_all(struct bc_session *s, const struct bc_member *except)
 {
-	struct bc_conn_ref refs[BC_PROTO_MAX_MEMBERS];
-	uint32_t n = bc_session_members(s, refs);
+	struct bc_member *list[BC_PROTO_MAX_MEMBERS];
+	uint32_t n = bc__members(s, list);
 	for (uint32_t i = 0; i < n; i++) {
-		struct bc_conn *m = bc_conn_get(s->srv, refs[i]);
-		if (m && m != except) {
-			tell(s, m);
+		if (list[i] != except) {
+			tell(s, list[i]);
 		}
 	}
 }
 
 /* Follower f takes presenter p's camera (and its interaction state), is
  * told so and is owed a frame at its own view. */
-static void track(struct bc_conn *f, const struct bc_conn *p, uint16_t flags)
+static void track(struct bc_member *f, const struct bc_member *p,
+                  uint16_t flags)
 {
 	struct bc_msg fc = {.type = BC_MSG_FOLLOW_CAMERA};
 	f->camera = p->camera;
 	f->has_camera = true;
 	f->interacting_until = p->interacting_until;
-	f->dirty = true;
+	bc__owe_frame(f);
 	fc.flags = flags & BC_PROTO_FLAG_INTERACTING;
 	fc.follow_camera.presenter = p->member_id;
 	bc_edit_camera_to_msg(&p->camera, &fc.follow_camera.camera);
-	if (f->knows_present) {
-		bc_conn_send(f, &fc);
+	if (f->peer->knows_present) {
+		bc__send(f, &fc);
 	}
 }
 
 /* Nobody presents any more: every follow ends. */
-static void end_presentation(struct bc_session *s, const struct bc_conn *except)
+static void end_presentation(struct bc_session *s,
+                             const struct bc_member *except)
 {
-	struct bc_conn_ref refs[BC_PROTO_MAX_MEMBERS];
-	uint32_t n = bc_session_members(s, refs);
 	s->presenter_id = 0;
-	s->presenter = (struct bc_conn_ref){0, 0};
-	for (uint32_t i = 0; i < n; i++) {
-		struct bc_conn *m = bc_conn_get(s->srv, refs[i]);
-		if (m) {
-			m->follows = false;
-		}
+	s->presenter = NULL;
+	for (uint32_t i = 0; i < s->nmembers; i++) {
+		s->members[i]->follows = false;
 	}
 	tell_all(s, except);
 }
 
-static void send_ok(struct bc_conn *c, uint32_t seq)
+static void send_ok(struct bc_member *c, uint32_t seq)
 {
 	struct bc_msg ok = {.type = BC_MSG_OK, .seq = seq};
-	bc_conn_send(c, &ok);
+	bc__send(c, &ok);
 }
 
-void bc_handle_present(struct bc_conn *c, const struct bc_msg *m)
+int bc_handle_present(struct bc_member *c, const struct bc_msg *m)
 {
 	struct bc_session *s = c->session;
-	struct bc_conn *p = presenter_of(s);
+	struct bc_member *p = presenter_of(s);
 	if (m->toggle.on) {
-		struct bc_conn_ref refs[BC_PROTO_MAX_MEMBERS];
+		struct bc_member *list[BC_PROTO_MAX_MEMBERS];
 		uint32_t n;
 		s->presenter_id = c->member_id;
-		s->presenter = bc_conn_ref_of(c);
+		s->presenter = c;
 		c->follows = false; /* nobody follows themselves */
 		if (p != c) {
 			bc_log(BC_LOG_INFO,
 			       "session %s: member %u (%s) presents%s", s->name,
-			       c->member_id, c->name,
+			       c->member_id, c->peer->name,
 			       p ? " in place of another member" : "");
 		}
 		/* Followers of a replaced presenter follow the new one. */
-		n = bc_session_members(s, refs);
+		n = bc__members(s, list);
 		for (uint32_t i = 0; i < n; i++) {
-			struct bc_conn *f = bc_conn_get(s->srv, refs[i]);
-			if (f && f->follows) {
-				track(f, c, 0);
+			if (list[i]->follows) {
+				track(list[i], c, 0);
 			}
 		}
 		tell_all(s, NULL);
-		bc_session_schedule(s);
+		bc__schedule(s);
 	} else if (p == c) {
 		bc_log(BC_LOG_INFO, "session %s: member %u stops presenting",
 		       s->name, c->member_id);
@@ -125,40 +119,42 @@ void bc_handle_present(struct bc_conn *c, const struct bc_msg *m)
 		tell(s, c);
 	}
 	send_ok(c, m->seq);
+	return 0;
 }
 
-void bc_handle_follow(struct bc_conn *c, const struct bc_msg *m)
+int bc_handle_follow(struct bc_member *c, const struct bc_msg *m)
 {
 	struct bc_session *s = c->session;
-	struct bc_conn *p = presenter_of(s);
+	struct bc_member *p = presenter_of(s);
 	if (m->toggle.on) {
 		if (!p) {
-			bc_conn_send_error(c, m->seq, BC_ESTATE, false,
-			                   "nobody presents in session %s",
-			                   s->name);
+			bc__send_error(c, m->seq, BC_ESTATE,
+			               "nobody presents in session %s",
+			               s->name);
 			tell(s, c);
-			return;
+			return 0;
 		}
 		if (p == c) {
-			bc_conn_send_error(c, m->seq, BC_ESTATE, false,
-			                   "you are presenting; a presenter "
-			                   "does not follow");
-			return;
+			bc__send_error(c, m->seq, BC_ESTATE,
+			               "you are presenting; a presenter does "
+			               "not follow");
+			return 0;
 		}
 		c->follows = true;
 		track(c, p, 0);
-		bc_session_schedule(s);
+		bc__schedule(s);
 	} else {
 		c->follows = false;
 	}
 	tell(s, c);
 	send_ok(c, m->seq);
+	return 0;
 }
 
-void bc_present_camera_moved(struct bc_conn *c, uint16_t flags)
+void bc__present_camera_moved(struct bc_member *c, uint16_t flags)
 {
 	struct bc_session *s = c->session;
-	struct bc_conn_ref refs[BC_PROTO_MAX_MEMBERS];
+	struct bc_member *list[BC_PROTO_MAX_MEMBERS];
 	uint32_t n;
 	if (!s) {
 		return;
@@ -172,16 +168,15 @@ void bc_present_camera_moved(struct bc_conn *c, uint16_t flags)
 	if (presenter_of(s) != c) {
 		return;
 	}
-	n = bc_session_members(s, refs);
+	n = bc__members(s, list);
 	for (uint32_t i = 0; i < n; i++) {
-		struct bc_conn *f = bc_conn_get(s->srv, refs[i]);
-		if (f && f != c && f->follows) {
-			track(f, c, flags);
+		if (list[i] != c && list[i]->follows) {
+			track(list[i], c, flags);
 		}
 	}
 }
 
-void bc_present_leave(struct bc_conn *c)
+void bc__present_leave(struct bc_member *c)
 {
 	struct bc_session *s = c->session;
 	c->follows = false;
@@ -194,7 +189,7 @@ void bc_present_leave(struct bc_conn *c)
 	}
 }
 
-void bc_present_joined(struct bc_conn *c)
+void bc__present_joined(struct bc_member *c)
 {
 	struct bc_session *s = c->session;
 	c->follows = false;
@@ -207,8 +202,8 @@ void bc_present_joined(struct bc_conn *c)
 
 #define CAMERA_RECORD_MAGIC_LEN 2u
 
-int bc_present_camera_record(const uint8_t *rec, size_t len,
-                             struct bc_camera *cam)
+int bc__present_camera_record(const uint8_t *rec, size_t len,
+                              struct bc_camera *cam)
 {
 	struct bc_proto_reader r;
 	struct bc_msg m;
@@ -235,75 +230,158 @@ int bc_present_camera_record(const uint8_t *rec, size_t len,
 	return rc;
 }
 
-void bc_handle_session_camera(struct bc_conn *c, const struct bc_msg *m)
+/* Members that do not know SESSION_CAMERA_SET are sent the whole
+ * SCENE_STATE at the new order instead, so their mirrors see no gap
+ * (PROTOCOL.md 7.25); that is up to a whole scene per member for a
+ * 40-byte request, so it is allowed once per BC_SRV_CAMERA_STATE_MS in a
+ * session that has such members. Returns true when it must wait. */
+static bool state_rate_limited(struct bc_member *c, uint32_t seq)
 {
 	struct bc_session *s = c->session;
-	struct bc_srv *srv = c->srv;
+	uint64_t now = bc__now_ms(s->ss);
+	bool old = false;
+	for (uint32_t i = 0; i < s->nmembers; i++) {
+		old = old || !s->members[i]->peer->knows_present;
+	}
+	if (!old) {
+		return false;
+	}
+	if (s->camera_state_ms &&
+	    now - s->camera_state_ms < BC_SRV_CAMERA_STATE_MS) {
+		bc__send_error(c, seq, BC_EBUSY,
+		               "the session camera changes at most once in %u "
+		               "ms while members of an older protocol are in "
+		               "the session; try again in %u ms",
+		               BC_SRV_CAMERA_STATE_MS,
+		               (unsigned)(BC_SRV_CAMERA_STATE_MS -
+		                          (now - s->camera_state_ms)));
+		return true;
+	}
+	s->camera_state_ms = now;
+	return false;
+}
+
+/* A SESSION_CAMERA on its way: its journal record (two zero bytes, then
+ * the SESSION_CAMERA payload) appended and synced on a task, the session
+ * busy; then the camera is the session's and every member hears of it. */
+struct camera_task {
+	struct bc_task t;
+	struct bc_author author;
+	struct bc_msg_camera wire;
 	struct bc_camera cam;
-	struct bc_errinfo ei = {0};
+	uint8_t rec[CAMERA_RECORD_MAGIC_LEN + 64];
+	size_t len;
+	int rc;
+	struct bc_errinfo ei;
+};
+
+static void camera_run(struct bc_task *t)
+{
+	struct camera_task *c = (struct camera_task *)t;
+	c->rc = bc_store_append(t->s->store, t->s->order + 1, c->rec, c->len,
+	                        &c->ei);
+}
+
+static void camera_commit(struct bc_session *s, const struct camera_task *c)
+{
+	struct bc_msg set = {.type = BC_MSG_SESSION_CAMERA_SET};
+	struct bc_member *list[BC_PROTO_MAX_MEMBERS];
+	uint32_t n;
+	s->order++;
+	s->last_edit_ms = bc__unix_ms();
+	s->camera = c->cam;
+	bc__session_changed(s);
+	bc_log(BC_LOG_INFO, "session %s: camera set by member %u (order %llu)",
+	       s->name, c->author.member_id, (unsigned long long)s->order);
+	set.session_camera_set.order = s->order;
+	set.session_camera_set.author = c->author.member_id;
+	set.session_camera_set.author_seq = c->author.seq;
+	set.session_camera_set.camera = c->wire;
+	n = bc__members(s, list);
+	for (uint32_t i = 0; i < n; i++) {
+		if (list[i]->peer->knows_present) {
+			bc__send(list[i], &set);
+		} else {
+			bc__send_state(s, list[i], 0, 0, NULL, 0);
+		}
+	}
+	bc__session_snapshot_due(s);
+}
+
+static void camera_done(struct bc_task *t)
+{
+	struct camera_task *c = (struct camera_task *)t;
+	struct bc_session *s = t->s;
+	struct bc_member *m = bc__member_of(s->ss, c->author.ref);
+	if (s->removed) {
+		/* Deleted meanwhile: nobody to tell. */
+	} else if (c->rc) {
+		s->store_failed = s->store_failed || c->rc == BC_EIO;
+		if (m) {
+			bc__send_error(m, c->author.seq, c->rc,
+			               "camera not set: %s", c->ei.msg);
+		}
+	} else {
+		camera_commit(s, c);
+	}
+	bc_free(c);
+}
+
+/* Prepares c's journal record from the request. */
+static int camera_record(struct camera_task *c, const struct bc_msg *m,
+                         struct bc_errinfo *ei)
+{
 	struct bc_proto_buf rec;
 	struct bc_msg as_rec = {.type = BC_MSG_SESSION_CAMERA};
-	struct bc_msg set = {.type = BC_MSG_SESSION_CAMERA_SET};
-	struct bc_conn_ref refs[BC_PROTO_MAX_MEMBERS];
-	uint32_t n;
 	int rc;
-	bc_edit_camera_from_msg(&m->session_camera, &cam);
-	if (bc_camera_validate(&cam, &ei)) {
-		bc_conn_send_error(c, m->seq, ei.code, false, "%s", ei.msg);
-		return;
-	}
-	if (s->loading) {
-		bc_conn_send_error(c, m->seq, BC_EBUSY, false,
-		                   "the session's scene is being replaced by a "
-		                   "SCENE_LOAD; retry after its SCENE_STATE");
-		return;
-	}
-	if (s->store_failed) {
-		bc_conn_send_error(c, m->seq, BC_EIO, false,
-		                   "camera not set: the session cannot be "
-		                   "saved: changes are refused");
-		return;
-	}
-	/* The record: two zero bytes, then the SESSION_CAMERA payload. */
 	bc_proto_buf_init(&rec, 0);
 	as_rec.session_camera = m->session_camera;
-	if ((rc = bc_proto_encode(&rec, &as_rec, &ei)) == 0) {
-		uint8_t bytes[CAMERA_RECORD_MAGIC_LEN + 64] = {0};
-		size_t len = rec.len - BC_PROTO_HEADER_SIZE;
-		memcpy(bytes + CAMERA_RECORD_MAGIC_LEN,
-		       rec.data + BC_PROTO_HEADER_SIZE, len);
-		rc = bc_store_append(s->store, s->order + 1, bytes,
-		                     CAMERA_RECORD_MAGIC_LEN + len, &ei);
+	if ((rc = bc_proto_encode(&rec, &as_rec, ei)) == 0) {
+		c->len =
+		    CAMERA_RECORD_MAGIC_LEN + rec.len - BC_PROTO_HEADER_SIZE;
+		memcpy(c->rec + CAMERA_RECORD_MAGIC_LEN,
+		       rec.data + BC_PROTO_HEADER_SIZE,
+		       rec.len - BC_PROTO_HEADER_SIZE);
 	}
 	bc_proto_buf_finish(&rec);
-	if (rc) {
-		if (rc == BC_EIO) {
-			s->store_failed = true;
-		}
-		bc_conn_send_error(c, m->seq, rc, false, "camera not set: %s",
-		                   ei.msg);
-		return;
+	return rc;
+}
+
+int bc_handle_session_camera(struct bc_member *m, const struct bc_msg *msg)
+{
+	struct bc_session *s = m->session;
+	struct bc_camera cam;
+	struct bc_errinfo ei = {0};
+	struct camera_task *c;
+	int rc, park;
+	bc_edit_camera_from_msg(&msg->session_camera, &cam);
+	if (bc_camera_validate(&cam, &ei)) {
+		bc__send_error(m, msg->seq, ei.code, "%s", ei.msg);
+		return 0;
 	}
-	s->order++;
-	s->last_edit_ms = bc_unix_ms();
-	s->camera = cam;
-	bc_log(BC_LOG_INFO, "session %s: camera set by member %u (order %llu)",
-	       s->name, c->member_id, (unsigned long long)s->order);
-	set.session_camera_set.order = s->order;
-	set.session_camera_set.author = c->member_id;
-	set.session_camera_set.author_seq = m->seq;
-	set.session_camera_set.camera = m->session_camera;
-	/* Members that do not know SESSION_CAMERA_SET get the scene again
-	 * (SCENE_STATE at the new order), so their mirrors see no gap. */
-	n = bc_session_members(s, refs);
-	for (uint32_t i = 0; i < n; i++) {
-		struct bc_conn *o = bc_conn_get(srv, refs[i]);
-		if (o && o->knows_present) {
-			bc_conn_send(o, &set);
-		} else if (o) {
-			bc_session_send_state(s, o, 0, 0);
-		}
+	if (bc__refuse_change(m, msg->seq, &park)) {
+		return park;
 	}
-	bc_store_snapshot_due(s->store, BC_SRV_SNAPSHOT_EVERY, s->tree,
-	                      &s->camera, s->order, &ei);
+	if (state_rate_limited(m, msg->seq)) {
+		return 0;
+	}
+	if (!(c = bc_calloc(1, sizeof(*c)))) {
+		bc__send_error(m, msg->seq, BC_ENOMEM,
+		               "camera not set: out of memory");
+		return 0;
+	}
+	if ((rc = camera_record(c, msg, &ei))) {
+		bc_free(c);
+		bc__send_error(m, msg->seq, rc, "camera not set: %s", ei.msg);
+		return 0;
+	}
+	c->author =
+	    (struct bc_author){m->peer->ref, m->member_id, msg->seq, {0}};
+	c->wire = msg->session_camera;
+	c->cam = cam;
+	c->t.run = camera_run;
+	c->t.done = camera_done;
+	c->t.holds_order = true;
+	bc__task_start(s, &c->t);
+	return bc__hold(s, m, msg->seq);
 }

@@ -1,10 +1,16 @@
 /*
- * Sessions (loop thread): their lifecycle (open, restore from the store,
- * save, unload when idle, delete, free), their members (join, leave,
- * SESSION_INFO, SCENE_STATE) and
- * the table that routes a client's requests to their handlers: edits.c
- * (EDIT, SCENE_LOAD), frames.c (CAMERA, VIEW, PICK, SNAPSHOT and frame
- * scheduling) and the session and STATS handlers here.
+ * Sessions (loop thread): the table of loaded sessions and their life --
+ * loaded from the store (on libuv's thread pool for a JOIN, so a big
+ * session's replay never holds the loop), unloaded when idle, saved,
+ * deleted, freed -- with the two mechanisms that keep the loop free:
+ *  - tasks: work on the thread pool for one session; one that holds the
+ *    session's order (a load, a big structural edit, a snapshot, a scene
+ *    encode) makes the session busy while it runs;
+ *  - parking: a request that must come after that work (an edit, a join,
+ *    a delete) waits with its connection, which reads nothing more until
+ *    the session is free; then the transport dispatches it again.
+ * Also SESSION_CREATE, SESSION_JOIN, SESSION_LEAVE, SESSION_DELETE and
+ * SESSION_LIST (from the index of sessions on disk, index.c).
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -12,26 +18,39 @@
 #include <time.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/clock.h"
 #include "blobcast/edit.h"
 #include "blobcast/log.h"
 #include "blobcast/scene.h"
-#include "server.h"
+#include "sessions_impl.h"
 
-struct bc_session *bc_session_by_id(struct bc_srv *srv, uint32_t id)
+uint64_t bc__now_ms(const struct bc_sessions *ss)
+{
+	return uv_now(ss->loop);
+}
+
+uint64_t bc__unix_ms(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_REALTIME, &ts);
+	return (uint64_t)ts.tv_sec * 1000u + (uint64_t)ts.tv_nsec / 1000000u;
+}
+
+struct bc_session *bc__session_by_id(struct bc_sessions *ss, uint32_t id)
 {
 	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
-		if (srv->sessions[i] && srv->sessions[i]->id == id) {
-			return srv->sessions[i];
+		if (ss->sessions[i] && ss->sessions[i]->id == id) {
+			return ss->sessions[i];
 		}
 	}
 	return NULL;
 }
 
-static struct bc_session *session_by_name(struct bc_srv *srv, const char *name,
-                                          size_t len)
+struct bc_session *bc__session_by_name(struct bc_sessions *ss, const char *name,
+                                       size_t len)
 {
 	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
-		struct bc_session *s = srv->sessions[i];
+		struct bc_session *s = ss->sessions[i];
 		if (s && strlen(s->name) == len &&
 		    memcmp(s->name, name, len) == 0) {
 			return s;
@@ -40,64 +59,140 @@ static struct bc_session *session_by_name(struct bc_srv *srv, const char *name,
 	return NULL;
 }
 
-uint64_t bc_unix_ms(void)
+struct bc_member *bc__member_of(struct bc_sessions *ss, struct bc_conn_ref ref)
 {
-	struct timespec ts;
-	clock_gettime(CLOCK_REALTIME, &ts);
-	return (uint64_t)ts.tv_sec * 1000u + (uint64_t)ts.tv_nsec / 1000000u;
+	struct bc_member *m;
+	if (ref.slot >= BC_SRV_MAX_CONNECTIONS) {
+		return NULL;
+	}
+	m = ss->by_slot[ref.slot];
+	return m && bc_conn_ref_eq(m->peer->ref, ref) ? m : NULL;
 }
 
-/* ---- what is known of unloaded sessions ---------------------------------- */
+/* ---- tasks and parking --------------------------------------------------- */
 
-static struct bc_session_summary *summary_of(struct bc_srv *srv,
-                                             const char *name)
+static void free_session(struct bc_session *s)
 {
-	for (uint32_t i = 0; i < srv->nunloaded; i++) {
-		if (strcmp(srv->unloaded[i].name, name) == 0) {
-			return &srv->unloaded[i];
+	bc__undo_clear(s);
+	bc_store_session_close(s->store);
+	bc_tree_destroy(s->tree);
+	bc_free(s->state_bytes);
+	bc_free(s);
+}
+
+void bc__session_unref(struct bc_session *s)
+{
+	if (--s->handles_open == 0) {
+		free_session(s);
+	}
+}
+
+/* Resumes the members parked behind s, in order, while it is free: each
+ * one's request comes again in a later loop turn (and parks again if s is
+ * busy by then). */
+static void resume_parked(struct bc_session *s)
+{
+	while (s->park_head && !s->busy) {
+		struct bc_member *m = s->park_head;
+		s->park_head = m->park_next;
+		if (!s->park_head) {
+			s->park_tail = NULL;
+		}
+		m->parked = NULL;
+		m->park_next = NULL;
+		s->ss->link->resume(s->ss->link->ud, m->peer->ref,
+		                    m->park_again);
+	}
+}
+
+static int wait_for(struct bc_session *s, struct bc_member *m, uint32_t seq,
+                    bool again)
+{
+	bc__unpark(m); /* a held request that goes on to more work */
+	m->parked = s;
+	m->park_seq = seq;
+	m->park_again = again;
+	m->park_next = NULL;
+	if (s->park_tail) {
+		s->park_tail->park_next = m;
+	} else {
+		s->park_head = m;
+	}
+	s->park_tail = m;
+	return again ? BC_PARK : BC_HOLD;
+}
+
+int bc__park(struct bc_session *s, struct bc_member *m, uint32_t seq)
+{
+	return wait_for(s, m, seq, true);
+}
+
+int bc__hold(struct bc_session *s, struct bc_member *m, uint32_t seq)
+{
+	return wait_for(s, m, seq, false);
+}
+
+void bc__unpark(struct bc_member *m)
+{
+	struct bc_session *s = m->parked;
+	struct bc_member **p;
+	if (!s) {
+		return;
+	}
+	for (p = &s->park_head; *p; p = &(*p)->park_next) {
+		if (*p == m) {
+			*p = m->park_next;
+			break;
 		}
 	}
-	return NULL;
+	s->park_tail = NULL;
+	for (struct bc_member *q = s->park_head; q; q = q->park_next) {
+		s->park_tail = q;
+	}
+	m->parked = NULL;
+	m->park_next = NULL;
 }
 
-static void summary_forget(struct bc_srv *srv, const char *name)
+static void task_run(uv_work_t *req)
 {
-	struct bc_session_summary *s = summary_of(srv, name);
-	if (s) {
-		*s = srv->unloaded[--srv->nunloaded];
+	struct bc_task *t = req->data;
+	t->run(t);
+}
+
+static void task_after(uv_work_t *req, int status)
+{
+	struct bc_task *t = req->data;
+	struct bc_session *s = t->s;
+	(void)status;
+	if (t->holds_order) {
+		s->busy--;
+	}
+	t->done(t); /* frees t */
+	if (!s->removed) {
+		resume_parked(s);
+	}
+	bc__session_unref(s);
+}
+
+void bc__task_start(struct bc_session *s, struct bc_task *t)
+{
+	t->s = s;
+	t->req.data = t;
+	s->handles_open++;
+	if (t->holds_order) {
+		s->busy++;
+	}
+	if (uv_queue_work(s->ss->loop, &t->req, task_run, task_after) != 0) {
+		/* Cannot happen with a valid request; the work still has to
+		 * be done. */
+		t->run(t);
+		task_after(&t->req, 0);
 	}
 }
 
-/* Remembers what SESSIONS says of s once it is unloaded (best effort: out
- * of memory, it is listed without details). */
-static void summary_keep(struct bc_session *s)
-{
-	struct bc_srv *srv = s->srv;
-	struct bc_session_summary *sum = summary_of(srv, s->name);
-	if (!sum) {
-		if (srv->nunloaded == srv->unloaded_cap) {
-			uint32_t cap =
-			    srv->unloaded_cap ? 2u * srv->unloaded_cap : 16u;
-			struct bc_session_summary *more =
-			    bc_realloc(srv->unloaded, cap * sizeof(*more));
-			if (!more) {
-				return;
-			}
-			srv->unloaded = more;
-			srv->unloaded_cap = cap;
-		}
-		sum = &srv->unloaded[srv->nunloaded++];
-	}
-	snprintf(sum->name, sizeof(sum->name), "%s", s->name);
-	sum->prims = bc_tree_prim_count(s->tree);
-	sum->order = s->order;
-	sum->last_edit_ms = s->last_edit_ms;
-}
-
-/* ---- sessions ------------------------------------------------------------ */
+/* ---- loading ------------------------------------------------------------- */
 
 struct replay_ctx {
-	struct bc_srv *srv;
 	struct bc_tree **tree;
 	struct bc_camera *camera;
 };
@@ -113,7 +208,7 @@ static int replay_record(void *ud, uint64_t order, const uint8_t *rec,
 	int rc;
 	(void)order;
 	/* A SESSION_CAMERA record (present.c) or an EDIT. */
-	if ((rc = bc_present_camera_record(rec, len, ctx->camera)) != 0) {
+	if ((rc = bc__present_camera_record(rec, len, ctx->camera)) != 0) {
 		return rc < 0 ? rc : 0;
 	}
 	bc_proto_reader_init(&r, NULL);
@@ -130,53 +225,141 @@ static int replay_record(void *ud, uint64_t order, const uint8_t *rec,
 	return rc;
 }
 
-static void free_session(struct bc_session *s)
-{
-	bc_undo_clear(s);
-	bc_store_session_close(s->store);
-	bc_tree_destroy(s->tree);
-	bc_free(s);
-}
+/* Loading a session: its snapshot and journal read (or a new session made
+ * with the default scene), and the work layer's copy of its tree. */
+struct load_task {
+	struct bc_task t;
+	struct bc_store *store;
+	struct bc_store_session *st;
+	struct bc_tree *tree, *copy;
+	struct bc_camera cam;
+	uint64_t order;
+	bool created;
+	int rc;
+	struct bc_errinfo ei;
+};
 
-void bc_session_unref(struct bc_session *s)
+static void load_run(struct bc_task *t)
 {
-	if (--s->handles_open == 0) {
-		free_session(s);
+	struct load_task *l = (struct load_task *)t;
+	struct bc_session *s = t->s;
+	struct replay_ctx ctx = {&l->tree, &l->cam};
+	bc_camera_default(&l->cam);
+	if (!(l->tree = bc_tree_create()) || !(l->copy = bc_tree_create())) {
+		l->rc = bc_errinfo_set(&l->ei, BC_ENOMEM, "out of memory");
+		return;
 	}
-}
-
-static void still_closed(uv_handle_t *h)
-{
-	bc_session_unref(h->data);
-}
-
-/* Takes s out of the server (it has no members left): its replica goes,
- * and it is freed once its timers have closed. */
-static void session_remove(struct bc_session *s)
-{
-	struct bc_srv *srv = s->srv;
-	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
-		if (srv->sessions[i] == s) {
-			srv->sessions[i] = NULL;
-			srv->nsessions--;
+	l->rc = bc_store_session_open(l->store, s->name, &l->st, l->tree,
+	                              &l->cam, &l->order, &l->created,
+	                              replay_record, &ctx, &l->ei);
+	if (!l->rc && l->created) {
+		const char *json = bc_scene_default_json();
+		if (!(l->rc = bc_scene_parse_json(json, strlen(json), l->tree,
+		                                  &l->cam, &l->ei))) {
+			l->rc = bc_store_snapshot(l->st, l->tree, &l->cam, 0,
+			                          &l->ei);
 		}
 	}
-	s->removed = true;
-	bc_rthread_drop(srv, s->id);
-	uv_close((uv_handle_t *)&s->still_timer, still_closed);
-	uv_close((uv_handle_t *)&s->kick, still_closed);
+	if (!l->rc) {
+		l->rc = bc_tree_copy(l->copy, l->tree, &l->ei);
+	}
 }
 
-/* Whether s may be unloaded: it has no members, and every applied edit
- * is in its journal (a session whose storage failed stays, holding what it
- * could not write; one being loaded waits for its load). */
+static void load_free(struct load_task *l)
+{
+	bc_store_session_close(l->st);
+	bc_tree_destroy(l->tree);
+	bc_tree_destroy(l->copy);
+	bc_free(l);
+}
+
+/* A failed load: members waiting to join hear why; the session goes. */
+static void load_failed(struct bc_session *s, const struct load_task *l)
+{
+	struct bc_sessions *ss = s->ss;
+	bc_log(BC_LOG_ERROR, "cannot load session %s: %s", s->name, l->ei.msg);
+	while (s->park_head) {
+		struct bc_member *m = s->park_head;
+		s->park_head = m->park_next;
+		m->parked = NULL;
+		m->park_next = NULL;
+		if (m->park_again) {
+			bc__send_error(m, m->park_seq, l->rc,
+			               "cannot load session %s: %s", s->name,
+			               l->ei.msg);
+		}
+		ss->link->resume(ss->link->ud, m->peer->ref, false);
+	}
+	s->park_tail = NULL;
+	bc__session_unload(s, "its load failed");
+}
+
+static void load_done(struct bc_task *t)
+{
+	struct load_task *l = (struct load_task *)t;
+	struct bc_session *s = t->s;
+	if (s->removed) {
+		load_free(l);
+		return;
+	}
+	if (l->rc) {
+		load_failed(s, l);
+		load_free(l);
+		return;
+	}
+	s->tree = l->tree;
+	s->store = l->st;
+	s->camera = l->cam;
+	s->order = s->scene_order = l->order;
+	s->last_edit_ms = bc_store_session_mtime_ms(s->store);
+	bc_work_scene(s->ss->work, s->id, l->copy, s->order);
+	l->tree = l->copy = NULL;
+	l->st = NULL;
+	bc__index_note(s->ss->index, s);
+	bc_log(BC_LOG_INFO, "session %s: %u primitives, edit order %llu%s",
+	       s->name, bc_tree_prim_count(s->tree),
+	       (unsigned long long)s->order, l->created ? " (new)" : "");
+	load_free(l);
+}
+
+/* ---- the table ------------------------------------------------------------ */
+
+static void timer_closed(uv_handle_t *h)
+{
+	bc__session_unref(h->data);
+}
+
+/* Takes s out of the table: its copy goes, and it is freed once its
+ * timers and tasks are done. */
+static void session_remove(struct bc_session *s)
+{
+	struct bc_sessions *ss = s->ss;
+	struct bc_index_entry *e = bc__index_get(ss->index, s->name);
+	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
+		if (ss->sessions[i] == s) {
+			ss->sessions[i] = NULL;
+			ss->nsessions--;
+		}
+	}
+	if (e && e->loaded == s) {
+		e->loaded = NULL;
+	}
+	s->removed = true;
+	bc_work_drop(ss->work, s->id);
+	uv_close((uv_handle_t *)&s->still_timer, timer_closed);
+	uv_close((uv_handle_t *)&s->kick, timer_closed);
+}
+
+/* Whether s may be unloaded: no members, nobody waiting for it, nothing
+ * running for it, and every applied edit in its journal (a session whose
+ * storage failed stays, holding what it could not write). */
 static bool unloadable(const struct bc_session *s)
 {
-	return s->nmembers == 0 && !s->store_failed && !s->loading;
+	return s->nmembers == 0 && !s->busy && !s->park_head &&
+	       !s->store_failed;
 }
 
-/* Unloads s when unloadable(): a JOIN restores it as it was. */
-static bool session_unload(struct bc_session *s, const char *why)
+bool bc__session_unload(struct bc_session *s, const char *why)
 {
 	if (!unloadable(s)) {
 		return false;
@@ -184,33 +367,35 @@ static bool session_unload(struct bc_session *s, const char *why)
 	bc_log(BC_LOG_INFO,
 	       "session %s unloaded (%s); it loads again when joined", s->name,
 	       why);
-	summary_keep(s);
+	if (s->tree) {
+		bc__index_note(s->ss->index, s);
+	}
 	session_remove(s);
 	return true;
 }
 
-/* A free slot in the session table, unloading the session that has been
- * without members longest when there is none; BC_SRV_MAX_SESSIONS when
- * every session has members. */
-static uint32_t free_slot(struct bc_srv *srv)
+/* A free slot in the table, unloading the session that has been without
+ * members longest when there is none; BC_SRV_MAX_SESSIONS when every
+ * session is in use. */
+static uint32_t free_slot(struct bc_sessions *ss)
 {
 	struct bc_session *oldest = NULL;
 	uint32_t slot = 0;
-	while (slot < BC_SRV_MAX_SESSIONS && srv->sessions[slot]) {
+	while (slot < BC_SRV_MAX_SESSIONS && ss->sessions[slot]) {
 		slot++;
 	}
 	if (slot < BC_SRV_MAX_SESSIONS) {
 		return slot;
 	}
 	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
-		struct bc_session *s = srv->sessions[i];
+		struct bc_session *s = ss->sessions[i];
 		if (unloadable(s) &&
 		    (!oldest || s->empty_since_ms < oldest->empty_since_ms)) {
 			oldest = s;
 			slot = i;
 		}
 	}
-	if (!oldest || !session_unload(oldest, "its place is needed")) {
+	if (!oldest || !bc__session_unload(oldest, "its place is needed")) {
 		return BC_SRV_MAX_SESSIONS;
 	}
 	return slot;
@@ -218,118 +403,177 @@ static uint32_t free_slot(struct bc_srv *srv)
 
 static void sweep_idle(uv_timer_t *t)
 {
-	struct bc_srv *srv = t->data;
-	uint64_t now = bc_now_ms(srv);
+	struct bc_sessions *ss = t->data;
+	uint64_t now = bc__now_ms(ss);
 	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
-		struct bc_session *s = srv->sessions[i];
+		struct bc_session *s = ss->sessions[i];
 		if (s && unloadable(s) &&
 		    now - s->empty_since_ms >= BC_SRV_SESSION_IDLE_MS) {
-			session_unload(s, "no members for 15 minutes");
+			bc__session_unload(s, "no members for 15 minutes");
 		}
 	}
 }
 
-/* Opens (or creates, with the default scene) session name. */
-static int session_open(struct bc_srv *srv, const char *name,
-                        struct bc_session **out, struct bc_errinfo *ei)
+/* A session object for name in a free slot of the table, its load not
+ * started. NULL with ei set when the table is full or out of memory. */
+static struct bc_session *session_new(struct bc_sessions *ss, const char *name,
+                                      struct bc_errinfo *ei)
 {
 	struct bc_session *s;
-	struct replay_ctx ctx;
-	bool created;
-	uint32_t slot = 0;
-	struct bc_tree *copy;
-	int rc;
-	*out = NULL;
-	if ((slot = free_slot(srv)) == BC_SRV_MAX_SESSIONS) {
-		return bc_errinfo_set(ei, BC_ELIMIT,
-		                      "at most %u sessions with members",
-		                      BC_SRV_MAX_SESSIONS);
+	struct bc_index_entry *e;
+	uint32_t slot = free_slot(ss);
+	if (slot == BC_SRV_MAX_SESSIONS) {
+		bc_errinfo_set(ei, BC_ELIMIT, "at most %u sessions in use",
+		               BC_SRV_MAX_SESSIONS);
+		return NULL;
 	}
-	if (!(s = bc_calloc(1, sizeof(*s))) || !(s->tree = bc_tree_create())) {
+	if (!(s = bc_calloc(1, sizeof(*s))) ||
+	    !(e = bc__index_add(ss->index, name))) {
 		bc_free(s);
-		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+		bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+		return NULL;
 	}
-	s->srv = srv;
+	s->ss = ss;
 	snprintf(s->name, sizeof(s->name), "%s", name);
 	bc_camera_default(&s->camera);
-	ctx.srv = srv;
-	ctx.tree = &s->tree;
-	ctx.camera = &s->camera;
-	rc = bc_store_session_open(srv->store, name, &s->store, s->tree,
-	                           &s->camera, &s->order, &created,
-	                           replay_record, &ctx, ei);
-	if (rc) {
-		free_session(s);
-		return rc;
-	}
-	if (created) {
-		const char *json = bc_scene_default_json();
-		if ((rc = bc_scene_parse_json(json, strlen(json), s->tree,
-		                              &s->camera, ei)) ||
-		    (rc = bc_store_snapshot(s->store, s->tree, &s->camera, 0,
-		                            ei))) {
-			free_session(s);
-			return rc;
-		}
-	}
-	if (!(copy = bc_tree_create()) || bc_tree_copy(copy, s->tree, NULL)) {
-		bc_tree_destroy(copy);
-		free_session(s);
-		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
-	}
-	s->id = ++srv->next_session_id;
+	s->id = ++ss->next_session_id;
 	s->next_member_id = 1;
-	s->last_edit_ms = bc_store_session_mtime_ms(s->store);
-	summary_forget(srv, name);
-	s->empty_since_ms = bc_now_ms(srv);
-	uv_timer_init(srv->loop, &s->still_timer);
+	s->empty_since_ms = bc__now_ms(ss);
+	uv_timer_init(ss->loop, &s->still_timer);
 	s->still_timer.data = s;
-	uv_timer_init(srv->loop, &s->kick);
+	uv_timer_init(ss->loop, &s->kick);
 	s->kick.data = s;
 	s->handles_open = 2;
-	srv->sessions[slot] = s;
-	srv->nsessions++;
-	bc_rthread_scene(srv, s->id, copy);
-	bc_log(BC_LOG_INFO, "session %s: %u primitives, edit order %llu%s",
-	       name, bc_tree_prim_count(s->tree), (unsigned long long)s->order,
-	       created ? " (new)" : "");
+	ss->sessions[slot] = s;
+	ss->nsessions++;
+	e->loaded = s;
+	return s;
+}
+
+static struct load_task *load_task_new(struct bc_sessions *ss)
+{
+	struct load_task *l = bc_calloc(1, sizeof(*l));
+	if (l) {
+		l->store = ss->store;
+		l->t.run = load_run;
+		l->t.done = load_done;
+		l->t.holds_order = true;
+	}
+	return l;
+}
+
+/* Opens session name now, on the loop (start-up, and new sessions, whose
+ * default scene is small). */
+static int session_open_now(struct bc_sessions *ss, const char *name,
+                            struct bc_session **out, struct bc_errinfo *ei)
+{
+	struct bc_session *s = session_new(ss, name, ei);
+	struct load_task *l;
+	int rc;
+	*out = NULL;
+	if (!s) {
+		return ei->code;
+	}
+	if (!(l = load_task_new(ss))) {
+		session_remove(s);
+		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+	}
+	l->t.s = s;
+	load_run(&l->t);
+	if ((rc = l->rc)) {
+		bc_errinfo_set(ei, rc, "%s", l->ei.msg);
+		load_free(l);
+		session_remove(s);
+		return rc;
+	}
+	load_done(&l->t);
 	*out = s;
 	return 0;
 }
 
-static void restore_one(void *ud, const char *name)
+/* Starts loading session name on a task; joiners park meanwhile. */
+static int session_open_later(struct bc_sessions *ss, const char *name,
+                              struct bc_session **out, struct bc_errinfo *ei)
 {
-	struct bc_srv *srv = ud;
-	struct bc_session *s;
-	struct bc_errinfo ei = {0};
-	if (session_open(srv, name, &s, &ei)) {
-		bc_log(BC_LOG_ERROR, "cannot restore session %s: %s", name,
-		       ei.msg);
+	struct bc_session *s = session_new(ss, name, ei);
+	struct load_task *l;
+	*out = NULL;
+	if (!s) {
+		return ei->code;
 	}
+	if (!(l = load_task_new(ss))) {
+		session_remove(s);
+		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+	}
+	bc__task_start(s, &l->t);
+	*out = s;
+	return 0;
 }
 
-int bc_sessions_restore(struct bc_srv *srv, struct bc_errinfo *ei)
+/* ---- the layer ------------------------------------------------------------ */
+
+int bc_sessions_new(struct bc_sessions **out,
+                    const struct bc_sessions_opts *opts, struct bc_errinfo *ei)
 {
+	struct bc_sessions *ss = bc_calloc(1, sizeof(*ss));
 	struct bc_session *s;
-	uv_timer_init(srv->loop, &srv->session_sweep);
-	srv->session_sweep.data = srv;
-	uv_timer_start(&srv->session_sweep, sweep_idle, BC_SRV_SESSION_SWEEP_MS,
+	uint32_t n;
+	int rc;
+	*out = NULL;
+	if (!ss) {
+		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+	}
+	ss->loop = opts->loop;
+	ss->link = opts->link;
+	ss->work = opts->work;
+	ss->store = opts->store;
+	ss->no_damage = opts->no_damage;
+	if ((rc = bc__index_new(&ss->index, ss->store))) {
+		bc_free(ss);
+		return bc_errinfo_set(ei, rc, "cannot list the sessions");
+	}
+	*out = ss;
+	uv_timer_init(ss->loop, &ss->sweep);
+	ss->sweep.data = ss;
+	uv_timer_start(&ss->sweep, sweep_idle, BC_SRV_SESSION_SWEEP_MS,
 	               BC_SRV_SESSION_SWEEP_MS);
-	bc_store_list(srv->store, restore_one, srv);
-	if (!session_by_name(srv, "default", 7)) {
-		return session_open(srv, "default", &s, ei);
+	/* Sessions on disk load now up to the table's size; the others when
+	 * joined. */
+	n = bc__index_count(ss->index);
+	for (uint32_t i = 0; i < n && ss->nsessions + 1 < BC_SRV_MAX_SESSIONS;
+	     i++) {
+		struct bc_errinfo e = {0};
+		const char *name = bc__index_at(ss->index, i)->name;
+		if (session_open_now(ss, name, &s, &e)) {
+			bc_log(BC_LOG_ERROR, "cannot restore session %s: %s",
+			       name, e.msg);
+		}
+	}
+	if (!bc__session_by_name(ss, "default", 7)) {
+		return session_open_now(ss, "default", &s, ei);
 	}
 	return 0;
 }
 
-void bc_sessions_save_all(struct bc_srv *srv)
+void bc_sessions_save_all(struct bc_sessions *ss, uint32_t budget_ms)
 {
+	double end = bc_clock_ms() + budget_ms;
+	ss->stopping = true;
 	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
-		struct bc_session *s = srv->sessions[i];
+		struct bc_session *s = ss->sessions[i];
 		struct bc_errinfo ei = {0};
-		/* A load in flight writes its own snapshot. */
-		if (!s || s->store_failed || s->loading ||
+		if (!s || !s->tree || s->store_failed || s->busy ||
 		    bc_store_journal_records(s->store) == 0) {
+			continue;
+		}
+		/* A big scene's snapshot alone could pass the time the stop
+		 * has; its journal restores it just the same. */
+		if (bc_clock_ms() >= end ||
+		    bc_tree_node_count(s->tree) >= BC_SRV_HEAVY_NODES) {
+			bc_log(BC_LOG_INFO,
+			       "session %s: left to its journal (no time to "
+			       "save it whole)",
+			       s->name);
 			continue;
 		}
 		if (bc_store_snapshot(s->store, s->tree, &s->camera, s->order,
@@ -339,457 +583,266 @@ void bc_sessions_save_all(struct bc_srv *srv)
 	}
 }
 
-void bc_sessions_free(struct bc_srv *srv)
+void bc_sessions_free(struct bc_sessions *ss)
 {
-	if (srv->session_sweep.data) {
-		uv_close((uv_handle_t *)&srv->session_sweep, NULL);
-		srv->session_sweep.data = NULL;
+	if (!ss) {
+		return;
 	}
-	bc_free(srv->unloaded);
-	srv->unloaded = NULL;
-	srv->nunloaded = srv->unloaded_cap = 0;
+	uv_close((uv_handle_t *)&ss->sweep, NULL);
 	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
-		if (srv->sessions[i]) {
-			srv->sessions[i]->removed = true;
-			uv_close((uv_handle_t *)&srv->sessions[i]->still_timer,
-			         still_closed);
-			uv_close((uv_handle_t *)&srv->sessions[i]->kick,
-			         still_closed);
-			srv->sessions[i] = NULL;
+		if (ss->sessions[i]) {
+			ss->sessions[i]->park_head = NULL;
+			ss->sessions[i]->nmembers = 0;
+			session_remove(ss->sessions[i]);
 		}
 	}
+	bc__index_free(ss->index);
+	/* The sessions themselves go as their handles close. */
+	bc_free(ss);
 }
 
-/* ---- members ------------------------------------------------------------- */
-
-uint32_t bc_session_members(const struct bc_session *s, struct bc_conn_ref *out)
+void bc_sessions_stats(const struct bc_sessions *ss,
+                       struct bc_sessions_stats *out)
 {
-	memcpy(out, s->members, s->nmembers * sizeof(*out));
-	return s->nmembers;
+	out->sessions = ss->nsessions;
+	out->render_ms_last = ss->render_ms_last;
+	out->render_ms_avg = ss->render_ms_avg;
+	out->encode_ms_last = ss->encode_ms_last;
+	out->encode_ms_avg = ss->encode_ms_avg;
 }
 
-void bc_session_send_info(struct bc_session *s)
-{
-	struct bc_proto_member members[BC_PROTO_MAX_MEMBERS];
-	struct bc_conn_ref refs[BC_PROTO_MAX_MEMBERS];
-	uint32_t n = 0, nrefs;
-	for (uint32_t i = 0; i < s->nmembers; i++) {
-		struct bc_conn *m = bc_conn_get(s->srv, s->members[i]);
-		if (m) {
-			members[n].id = m->member_id;
-			members[n].role = m->role;
-			members[n].name.ptr = m->name;
-			members[n].name.len = (uint32_t)strlen(m->name);
-			n++;
-		}
-	}
-	nrefs = bc_session_members(s, refs);
-	for (uint32_t i = 0; i < nrefs; i++) {
-		struct bc_conn *m = bc_conn_get(s->srv, refs[i]);
-		struct bc_msg info = {.type = BC_MSG_SESSION_INFO};
-		if (!m || n == 0) {
-			continue;
-		}
-		info.session_info.session_id = s->id;
-		info.session_info.member_id = m->member_id;
-		info.session_info.role = m->role;
-		info.session_info.name.ptr = s->name;
-		info.session_info.name.len = (uint32_t)strlen(s->name);
-		info.session_info.nmembers = (uint16_t)n;
-		info.session_info.members = members;
-		bc_conn_send(m, &info);
-	}
-}
+/* ---- requests ------------------------------------------------------------ */
 
-void bc_session_send_state(struct bc_session *s, struct bc_conn *to,
-                           uint32_t author, uint32_t author_seq)
+/* The name of a session request, checked and NUL-terminated into name.
+ * Returns false after answering. */
+static bool name_of(struct bc_member *m, uint32_t seq,
+                    const struct bc_proto_str *n, int code, char *name)
 {
-	uint8_t *bytes = NULL;
-	size_t len = 0;
-	if (bc_scene_encode(s->tree, &s->camera, &bytes, &len)) {
-		bc_log(BC_LOG_ERROR, "session %s: cannot encode the scene",
-		       s->name);
-		return;
-	}
-	bc_session_send_state_bytes(s, to, author, author_seq, bytes, len);
-	bc_free(bytes);
-}
-
-void bc_session_send_state_bytes(struct bc_session *s, struct bc_conn *to,
-                                 uint32_t author, uint32_t author_seq,
-                                 const uint8_t *bytes, size_t len)
-{
-	struct bc_msg st = {.type = BC_MSG_SCENE_STATE};
-	st.scene_state.order = s->order;
-	st.scene_state.author = author;
-	st.scene_state.author_seq = author_seq;
-	st.scene_state.scene.ptr = bytes;
-	st.scene_state.scene.len = (uint32_t)len;
-	if (to) {
-		bc_conn_send(to, &st);
-	} else {
-		struct bc_conn_ref refs[BC_PROTO_MAX_MEMBERS];
-		uint32_t n = bc_session_members(s, refs);
-		for (uint32_t i = 0; i < n; i++) {
-			struct bc_conn *m = bc_conn_get(s->srv, refs[i]);
-			if (m) {
-				bc_conn_send(m, &st);
-			}
-		}
-	}
-}
-
-void bc_session_leave(struct bc_conn *c)
-{
-	struct bc_session *s = c->session;
-	struct bc_conn_ref me = bc_conn_ref_of(c);
-	if (!s) {
-		return;
-	}
-	bc_present_leave(c);
-	for (uint32_t i = 0; i < s->nmembers; i++) {
-		if (s->members[i].slot == me.slot &&
-		    s->members[i].gen == me.gen) {
-			s->members[i] = s->members[--s->nmembers];
-			break;
-		}
-	}
-	c->session = NULL;
-	c->stage = BC_PROTO_STAGE_READY;
-	c->role = BC_PROTO_ROLE_INVALID;
-	c->render_pending = false;
-	/* When c is closing, its queued renders serve nobody once it is
-	 * gone (a client still connected keeps its PICK and SNAPSHOT
-	 * answers). */
-	bc_rthread_sweep_soon(s->srv);
-	if (s->nmembers == 0) {
-		s->empty_since_ms = bc_now_ms(s->srv);
-	}
-	bc_session_send_info(s);
-}
-
-void bc_session_mark_all(struct bc_session *s)
-{
-	for (uint32_t i = 0; i < s->nmembers; i++) {
-		struct bc_conn *m = bc_conn_get(s->srv, s->members[i]);
-		if (m) {
-			m->shown.view = 0; /* the next frame is whole */
-			m->dirty = true;
-		}
-	}
-}
-
-static void join(struct bc_conn *c, struct bc_session *s,
-                 enum bc_proto_role role, uint32_t seq)
-{
-	(void)seq;
-	if (s->nmembers >= BC_PROTO_MAX_MEMBERS) {
-		bc_conn_send_error(c, seq, BC_ELIMIT, false,
-		                   "session %s is full (%u members)", s->name,
-		                   BC_PROTO_MAX_MEMBERS);
-		return;
-	}
-	if (c->session) {
-		bc_session_leave(c);
-	}
-	s->members[s->nmembers++] = bc_conn_ref_of(c);
-	c->session = s;
-	c->member_id = s->next_member_id++;
-	c->role = role;
-	c->stage = BC_PROTO_STAGE_SESSION;
-	/* A camera the client chose (even before joining) stays its own. */
-	if (!c->has_camera) {
-		c->camera = s->camera;
-		c->camera_seq = 0;
-	}
-	c->shown.view = 0;
-	c->dirty = true;
-	bc_session_send_info(s);
-	bc_session_send_state(s, c, 0, 0);
-	bc_present_joined(c);
-	bc_session_schedule(s);
-}
-
-void bc_handle_session(struct bc_conn *c, const struct bc_msg *m)
-{
-	struct bc_srv *srv = c->srv;
-	const struct bc_msg_session *req = &m->session;
-	struct bc_session *s =
-	    session_by_name(srv, req->name.ptr, req->name.len);
-	struct bc_errinfo ei = {0};
-	char name[BC_PROTO_MAX_NAME + 1];
-	if ((req->role == BC_PROTO_ROLE_EDITOR ||
-	     m->type == BC_MSG_SESSION_CREATE) &&
-	    c->max_role != BC_PROTO_ROLE_EDITOR) {
-		bc_conn_send_error(c, m->seq, BC_EPERM, false,
-		                   "your token grants the viewer role only%s",
-		                   m->type == BC_MSG_SESSION_CREATE
-		                       ? ", which cannot create sessions"
-		                       : "");
-		return;
-	}
-	if (!bc_store_name_ok(req->name.ptr, req->name.len)) {
-		bc_conn_send_error(c, m->seq, BC_EINVAL, false,
-		                   "session names use letters, digits, '-', "
-		                   "'_' and '.', not starting with '.'");
-		return;
-	}
-	memcpy(name, req->name.ptr, req->name.len);
-	name[req->name.len] = '\0';
-	if (m->type == BC_MSG_SESSION_CREATE &&
-	    (s || bc_store_session_exists(srv->store, name))) {
-		bc_conn_send_error(c, m->seq, BC_EEXIST, false,
-		                   "session %s exists", name);
-		return;
-	}
-	if (!s && m->type == BC_MSG_SESSION_JOIN &&
-	    !bc_store_session_exists(srv->store, name)) {
-		bc_conn_send_error(c, m->seq, BC_ENOSESSION, false,
-		                   "no session named %s", name);
-		return;
-	}
-	/* A new session, or one unloaded while it had no members. */
-	if (!s && session_open(srv, name, &s, &ei)) {
-		bc_conn_send_error(c, m->seq, ei.code, false, "%s", ei.msg);
-		return;
-	}
-	join(c, s, req->role, m->seq);
-}
-
-void bc_handle_session_delete(struct bc_conn *c, const struct bc_msg *m)
-{
-	struct bc_srv *srv = c->srv;
-	const struct bc_proto_str *n = &m->session_delete.name;
-	struct bc_session *s = session_by_name(srv, n->ptr, n->len);
-	struct bc_msg ok = {.type = BC_MSG_OK, .seq = m->seq};
-	struct bc_conn_ref refs[BC_PROTO_MAX_MEMBERS];
-	struct bc_errinfo ei = {0};
-	char name[BC_PROTO_MAX_NAME + 1];
-	uint32_t nrefs;
-	if (c->max_role != BC_PROTO_ROLE_EDITOR) {
-		bc_conn_send_error(c, m->seq, BC_EPERM, false,
-		                   "your token grants the viewer role only, "
-		                   "which cannot delete sessions");
-		return;
-	}
 	if (!bc_store_name_ok(n->ptr, n->len)) {
-		bc_conn_send_error(c, m->seq, BC_ENOSESSION, false,
-		                   "no session has that name");
-		return;
+		bc__send_error(m, seq, code,
+		               "session names use letters, digits, '-', '_' "
+		               "and '.', not starting with '.'");
+		return false;
 	}
 	memcpy(name, n->ptr, n->len);
 	name[n->len] = '\0';
-	if (!s && !bc_store_session_exists(srv->store, name)) {
-		bc_conn_send_error(c, m->seq, BC_ENOSESSION, false,
-		                   "no session named %s", name);
-		return;
+	return true;
+}
+
+int bc_handle_session(struct bc_member *m, const struct bc_msg *msg)
+{
+	struct bc_sessions *ss = m->ss;
+	const struct bc_msg_session *req = &msg->session;
+	bool create = msg->type == BC_MSG_SESSION_CREATE;
+	struct bc_session *s;
+	struct bc_errinfo ei = {0};
+	char name[BC_PROTO_MAX_NAME + 1];
+	int rc;
+	if ((req->role == BC_PROTO_ROLE_EDITOR || create) &&
+	    m->peer->max_role != BC_PROTO_ROLE_EDITOR) {
+		bc__send_error(m, msg->seq, BC_EPERM,
+		               "your token grants the viewer role only%s",
+		               create ? ", which cannot create sessions" : "");
+		return 0;
 	}
-	if (s && s->loading) {
-		bc_conn_send_error(c, m->seq, BC_EBUSY, false,
-		                   "session %s is loading a scene; retry after "
-		                   "its SCENE_STATE",
-		                   name);
-		return;
+	if (!name_of(m, msg->seq, &req->name, BC_EINVAL, name)) {
+		return 0;
+	}
+	s = bc__session_by_name(ss, name, req->name.len);
+	if (create && s && bc_conn_ref_eq(s->creator, m->peer->ref)) {
+		/* Its own CREATE, come again once the session loaded. */
+		create = false;
+	} else if (create && (s || bc_store_session_exists(ss->store, name))) {
+		bc__send_error(m, msg->seq, BC_EEXIST, "session %s exists",
+		               name);
+		return 0;
+	}
+	if (!s && !create && !bc__index_get(ss->index, name)) {
+		bc__send_error(m, msg->seq, BC_ENOSESSION,
+		               "no session named %s", name);
+		return 0;
+	}
+	/* A new session, or one not loaded: the member waits for it. */
+	if (!s) {
+		if (session_open_later(ss, name, &s, &ei)) {
+			bc__send_error(m, msg->seq, ei.code, "%s", ei.msg);
+			return 0;
+		}
+		s->creator = create ? m->peer->ref : (struct bc_conn_ref){0, 0};
+	}
+	rc = bc__join(m, s, req->role, msg->seq);
+	if (rc == 0 && bc_conn_ref_eq(s->creator, m->peer->ref)) {
+		s->creator = (struct bc_conn_ref){0, 0};
+	}
+	return rc;
+}
+
+int bc_handle_leave(struct bc_member *m, const struct bc_msg *msg)
+{
+	struct bc_msg ok = {.type = BC_MSG_OK, .seq = msg->seq};
+	bc__leave(m);
+	bc__send(m, &ok);
+	return 0;
+}
+
+/* Sends every member of s back to READY, telling why. */
+static void evict_members(struct bc_session *s, const struct bc_member *by,
+                          const char *name)
+{
+	struct bc_member *list[BC_PROTO_MAX_MEMBERS];
+	uint32_t n = bc__members(s, list);
+	for (uint32_t i = 0; i < n; i++) {
+		bc__send_error(list[i], 0, BC_ENOSESSION,
+		               "session %s was deleted by %s", name,
+		               by->peer->name[0] ? by->peer->name : "a client");
+		bc__leave(list[i]);
+	}
+}
+
+int bc_handle_session_delete(struct bc_member *m, const struct bc_msg *msg)
+{
+	struct bc_sessions *ss = m->ss;
+	struct bc_session *s;
+	struct bc_errinfo ei = {0};
+	char name[BC_PROTO_MAX_NAME + 1];
+	if (m->peer->max_role != BC_PROTO_ROLE_EDITOR) {
+		bc__send_error(m, msg->seq, BC_EPERM,
+		               "your token grants the viewer role only, which "
+		               "cannot delete sessions");
+		return 0;
+	}
+	if (!name_of(m, msg->seq, &msg->session_delete.name, BC_ENOSESSION,
+	             name)) {
+		return 0;
+	}
+	s = bc__session_by_name(ss, name, strlen(name));
+	if (!s && !bc__index_get(ss->index, name)) {
+		bc__send_error(m, msg->seq, BC_ENOSESSION,
+		               "no session named %s", name);
+		return 0;
+	}
+	if (s && (s->busy || s->park_head)) {
+		return bc__park(s, m, msg->seq);
 	}
 	if (s) {
-		/* The presentation goes with the session, untold. */
-		s->presenter_id = 0;
-		/* Members first hear why they are back in READY. */
-		nrefs = bc_session_members(s, refs);
-		for (uint32_t i = 0; i < nrefs; i++) {
-			struct bc_conn *mc = bc_conn_get(srv, refs[i]);
-			if (!mc) {
-				continue;
-			}
-			bc_conn_send_error(mc, 0, BC_ENOSESSION, false,
-			                   "session %s was deleted by %s", name,
-			                   c->name[0] ? c->name : "a client");
-			bc_session_leave(mc);
-		}
-		s->nmembers = 0; /* members already closing are gone too */
+		evict_members(s, m, name);
 		session_remove(s);
 	}
-	if (bc_store_session_delete(srv->store, name, &ei)) {
+	if (bc_store_session_delete(ss->store, name, &ei)) {
 		bc_log(BC_LOG_ERROR, "session %s: %s", name, ei.msg);
-		bc_conn_send_error(c, m->seq, ei.code, false, "%s", ei.msg);
-		return;
+		bc__send_error(m, msg->seq, ei.code, "%s", ei.msg);
+		return 0;
 	}
-	summary_forget(srv, name);
+	bc__index_remove(ss->index, name);
 	bc_log(BC_LOG_INFO, "session %s deleted by connection %u (%s)", name,
-	       c->gen, c->name);
-	bc_conn_send(c, &ok);
+	       m->peer->ref.gen, m->peer->name);
+	bc_link_ok(ss->link, m->peer->ref, msg->seq);
+	return 0;
 }
 
-void bc_handle_stats(struct bc_conn *c, const struct bc_msg *m)
+/* SESSIONS's entry for index entry e. */
+static void list_entry(const struct bc_index_entry *e,
+                       struct bc_proto_session_entry *out)
 {
-	struct bc_srv *srv = c->srv;
-	struct bc_msg st = {.type = BC_MSG_STATS, .seq = m->seq};
-	uint64_t now = bc_now_ms(srv);
-	double secs =
-	    c->first_frame_ms ? (double)(now - c->first_frame_ms) / 1e3 : 0.0;
-	st.stats.uptime_ms = now - srv->started_ms;
-	st.stats.frames = c->frames_sent;
-	st.stats.bytes = c->bytes_sent;
-	st.stats.order = c->session ? c->session->order : 0;
-	st.stats.sessions = srv->nsessions;
-	st.stats.clients = srv->nclients;
-	st.stats.render_ms_last = (float)srv->render_ms_last;
-	st.stats.render_ms_avg = (float)srv->render_ms_avg;
-	st.stats.encode_ms_last = (float)srv->encode_ms_last;
-	st.stats.encode_ms_avg = (float)srv->encode_ms_avg;
-	st.stats.edit_ms_avg =
-	    c->session ? (float)c->session->edit_ms_avg : 0.0f;
-	st.stats.fps =
-	    secs > 0.0 ? (float)((double)c->frames_sent / secs) : 0.0f;
-	if (m->get_stats.parts & BC_PROTO_STATS_LOAD) {
-		st.stats.has_load = true;
-		st.stats.load.render_workers = 1;
-		st.stats.load.view_cap = BC_SRV_VIEW_BYTES;
+	const struct bc_session *s = e->loaded;
+	memset(out, 0, sizeof(*out));
+	out->name.ptr = e->name;
+	out->name.len = (uint32_t)strlen(e->name);
+	if (s && s->tree) {
+		out->members = (uint16_t)s->nmembers;
+		out->prims = bc_tree_prim_count(s->tree);
+		out->order = s->order;
+		out->last_edit_ms = s->last_edit_ms;
+		out->flags = BC_PROTO_SESSION_LOADED | BC_PROTO_SESSION_KNOWN;
+	} else if (e->known) {
+		out->prims = e->prims;
+		out->order = e->order;
+		out->last_edit_ms = e->last_edit_ms;
+		out->flags = BC_PROTO_SESSION_KNOWN;
 	}
-	bc_conn_send(c, &st);
 }
 
-/* SESSION_LIST: the sessions loaded, then those on disk, by name. */
-struct listing {
-	struct bc_srv *srv;
+int bc_handle_session_list(struct bc_member *m, const struct bc_msg *msg)
+{
+	struct bc_sessions *ss = m->ss;
+	struct bc_msg out = {.type = BC_MSG_SESSIONS, .seq = msg->seq};
+	uint32_t n = bc__index_count(ss->index);
 	struct bc_proto_session_entry *e;
-	char (*names)[BC_PROTO_MAX_NAME + 1];
-	uint32_t n, cap;
-	bool oom;
+	/* The index is kept in name order: the first entries are the
+	 * answer, without a look at the disk. */
+	if (n > BC_PROTO_MAX_SESSIONS_LISTED) {
+		n = BC_PROTO_MAX_SESSIONS_LISTED;
+	}
+	if (!(e = bc_calloc(n ? n : 1, sizeof(*e)))) {
+		bc__send_error(m, msg->seq, BC_ENOMEM,
+		               "the server is out of memory");
+		return 0;
+	}
+	for (uint32_t i = 0; i < n; i++) {
+		list_entry(bc__index_at(ss->index, i), &e[i]);
+	}
+	out.sessions.nsessions = (uint16_t)n;
+	out.sessions.sessions = e;
+	bc__send(m, &out);
+	bc_free(e);
+	return 0;
+}
+
+/* ---- snapshots on a task ------------------------------------------------- */
+
+struct snap_task {
+	struct bc_task t;
+	int rc;
+	struct bc_errinfo ei;
 };
 
-static struct bc_proto_session_entry *listing_add(struct listing *l,
-                                                  const char *name)
+static void snap_run(struct bc_task *t)
 {
-	struct bc_proto_session_entry *e;
-	if (l->n == l->cap) {
-		uint32_t cap = l->cap ? 2u * l->cap : 64u;
-		struct bc_proto_session_entry *more =
-		    bc_realloc(l->e, cap * sizeof(*more));
-		char(*names)[BC_PROTO_MAX_NAME + 1];
-		if (!more) {
-			l->oom = true;
-			return NULL;
-		}
-		l->e = more;
-		names = bc_realloc(l->names, cap * sizeof(*names));
-		if (!names) {
-			l->oom = true;
-			return NULL;
-		}
-		l->names = names;
-		l->cap = cap;
-	}
-	e = &l->e[l->n];
-	memset(e, 0, sizeof(*e));
-	snprintf(l->names[l->n], sizeof(l->names[l->n]), "%s", name);
-	l->n++;
-	return e;
+	struct snap_task *st = (struct snap_task *)t;
+	struct bc_session *s = t->s;
+	/* The session is busy: nothing changes its tree or store. */
+	st->rc = bc_store_snapshot_due(s->store, BC_SRV_SNAPSHOT_EVERY, s->tree,
+	                               &s->camera, s->order, &st->ei);
 }
 
-static void list_stored(void *ud, const char *name)
+static void snap_done(struct bc_task *t)
 {
-	struct listing *l = ud;
-	struct bc_session_summary *sum;
-	struct bc_proto_session_entry *e;
-	if (session_by_name(l->srv, name, strlen(name)) ||
-	    !(e = listing_add(l, name))) {
+	bc_free(t);
+}
+
+void bc__session_snapshot_due(struct bc_session *s)
+{
+	struct snap_task *st;
+	if (bc_store_journal_records(s->store) < BC_SRV_SNAPSHOT_EVERY ||
+	    s->ss->stopping || !(st = bc_calloc(1, sizeof(*st)))) {
 		return;
 	}
-	if ((sum = summary_of(l->srv, name))) {
-		e->prims = sum->prims;
-		e->order = sum->order;
-		e->last_edit_ms = sum->last_edit_ms;
-		e->flags = BC_PROTO_SESSION_KNOWN;
-	}
+	st->t.run = snap_run;
+	st->t.done = snap_done;
+	st->t.holds_order = true;
+	bc__task_start(s, &st->t);
 }
 
-static int by_name(const void *a, const void *b)
+void bc__session_changed(struct bc_session *s)
 {
-	return strcmp(((const struct bc_proto_session_entry *)a)->name.ptr,
-	              ((const struct bc_proto_session_entry *)b)->name.ptr);
+	bc_free(s->state_bytes);
+	s->state_bytes = NULL;
+	s->state_len = 0;
 }
 
-void bc_handle_session_list(struct bc_conn *c, const struct bc_msg *m)
+/* ---- member figures ------------------------------------------------------- */
+
+uint64_t bc_member_order(const struct bc_member *m)
 {
-	struct bc_srv *srv = c->srv;
-	struct listing l = {.srv = srv};
-	struct bc_msg out = {.type = BC_MSG_SESSIONS, .seq = m->seq};
-	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
-		struct bc_session *s = srv->sessions[i];
-		struct bc_proto_session_entry *e;
-		if (!s || !(e = listing_add(&l, s->name))) {
-			continue;
-		}
-		e->members = (uint16_t)s->nmembers;
-		e->prims = bc_tree_prim_count(s->tree);
-		e->order = s->order;
-		e->last_edit_ms = s->last_edit_ms;
-		e->flags = BC_PROTO_SESSION_LOADED | BC_PROTO_SESSION_KNOWN;
-	}
-	bc_store_list(srv->store, list_stored, &l);
-	if (l.oom) {
-		bc_conn_send_error(c, m->seq, BC_ENOMEM, false,
-		                   "the server is out of memory");
-		goto out;
-	}
-	/* The names move with the entries only once the arrays stop
-	 * growing. */
-	for (uint32_t i = 0; i < l.n; i++) {
-		l.e[i].name.ptr = l.names[i];
-		l.e[i].name.len = (uint32_t)strlen(l.names[i]);
-	}
-	qsort(l.e, l.n, sizeof(*l.e), by_name);
-	out.sessions.nsessions = (uint16_t)(l.n < BC_PROTO_MAX_SESSIONS_LISTED
-	                                        ? l.n
-	                                        : BC_PROTO_MAX_SESSIONS_LISTED);
-	out.sessions.sessions = l.e;
-	bc_conn_send(c, &out);
-out:
-	bc_free(l.e);
-	bc_free(l.names);
+	return m->session ? m->session->order : 0;
 }
 
-static void handle_leave(struct bc_conn *c, const struct bc_msg *m)
+double bc_member_edit_ms(const struct bc_member *m)
 {
-	struct bc_msg ok = {.type = BC_MSG_OK, .seq = m->seq};
-	bc_session_leave(c);
-	bc_conn_send(c, &ok);
+	return m->session ? m->session->edit_ms_avg : 0.0;
 }
 
-typedef void (*handler_fn)(struct bc_conn *c, const struct bc_msg *m);
-
-/* What the server does with each request a client may send after HELLO
- * (net.c has already checked the stage and the role: PROTOCOL.md 5). */
-static const handler_fn handlers[BC_MSG_COUNT] = {
-    [BC_MSG_SESSION_CREATE] = bc_handle_session,
-    [BC_MSG_SESSION_JOIN] = bc_handle_session,
-    [BC_MSG_SESSION_LEAVE] = handle_leave,
-    [BC_MSG_SCENE_LOAD] = bc_handle_scene_load,
-    [BC_MSG_EDIT] = bc_handle_edit,
-    [BC_MSG_CAMERA] = bc_handle_camera,
-    [BC_MSG_VIEW] = bc_handle_view,
-    [BC_MSG_PICK] = bc_handle_pick,
-    [BC_MSG_SNAPSHOT] = bc_handle_snapshot,
-    [BC_MSG_GET_STATS] = bc_handle_stats,
-    [BC_MSG_SESSION_DELETE] = bc_handle_session_delete,
-    [BC_MSG_UNDO] = bc_handle_undo,
-    [BC_MSG_REDO] = bc_handle_undo,
-    [BC_MSG_SESSION_LIST] = bc_handle_session_list,
-    [BC_MSG_PRESENT] = bc_handle_present,
-    [BC_MSG_FOLLOW] = bc_handle_follow,
-    [BC_MSG_SESSION_CAMERA] = bc_handle_session_camera,
-};
-
-void bc_session_handle(struct bc_conn *c, const struct bc_msg *m)
+uint32_t bc_member_session_id(const struct bc_member *m)
 {
-	handler_fn h =
-	    (unsigned)m->type < BC_MSG_COUNT ? handlers[m->type] : NULL;
-	if (!h) {
-		bc_conn_send_error(c, m->seq, BC_EPROTO_TYPE, false,
-		                   "%s is not a request",
-		                   bc_proto_type_name(m->type));
-		return;
-	}
-	h(c, m);
+	return m->session ? m->session->id : 0;
 }

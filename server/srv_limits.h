@@ -56,18 +56,33 @@
  * Default of the config key "idle_timeout_ms". */
 #define BC_SRV_IDLE_TIMEOUT_MS (5u * 60u * 1000u)
 
-/* Connections from one peer address that have not completed HELLO (Unix
- * socket peers count as one address). Honest clients send HELLO at once,
- * so a handful suffices even behind a NAT; a flood of silent connections
- * then fills 16 slots, not all BC_SRV_MAX_CONNECTIONS, and other clients
- * still get in. Over it a new connection is closed at once. */
+/* Connections from one peer address, and from one prefix (/24 of IPv4,
+ * /56 of IPv6), that have not completed HELLO (Unix socket peers count as
+ * one address). Honest clients send HELLO at once, so a handful suffices
+ * even behind a NAT; a flood of silent connections then fills 16 slots of
+ * an address, 64 of a prefix, not all BC_SRV_MAX_CONNECTIONS. Over a cap
+ * the oldest such connection of the address or prefix is closed for the
+ * new one (admit.c), so a client sharing a prefix with a flood still gets
+ * in. */
 #define BC_SRV_MAX_PREHELLO_PER_ADDR 16u
+#define BC_SRV_MAX_PREHELLO_PER_PREFIX 64u
+
+/* When every connection slot is taken and none is without HELLO, a client
+ * that said HELLO, joined no session and has been silent this long is
+ * closed to make room for a new connection. */
+#define BC_SRV_EVICT_IDLE_MS 10000u
 
 /* Bytes queued for one client (frames and messages not yet taken by the
  * kernel). Frames are spoiled, so only a client that stopped reading fills
  * this; 32 MiB holds several full-size PNG stills. Over it the client is
  * dropped, with the reason in the log. */
 #define BC_SRV_MAX_CLIENT_QUEUE (32u * 1024u * 1024u)
+
+/* A frame larger than BC_SRV_MAX_CLIENT_QUEUE (a 2048^2 snapshot with its
+ * depth and id planes, up to the protocol's payload limit) is not a
+ * reason to drop its client: the cap is then the frame plus this much of
+ * other messages. */
+#define BC_SRV_QUEUE_BESIDE_FRAME (1024u * 1024u)
 
 /* Largest scene, as its SCENE_STATE payload (the scene encoding plus the
  * 16 bytes before it): every member and joiner is sent the whole scene in
@@ -93,7 +108,7 @@
  * to feel immediate when the user lets go. */
 #define BC_SRV_STILL_DELAY_MS 300u
 
-/* PICK and SNAPSHOT requests of one client queued for the render thread
+/* PICK and SNAPSHOT requests of one client queued for the render workers
  * and not yet answered. Frames need no such cap (a client has at most one
  * frame in flight); requests are answered in order, so a client that wants
  * more than this waits for answers first. Over it: ERROR EBUSY, not fatal.
@@ -103,7 +118,7 @@
 #define BC_SRV_MAX_CLIENT_REQUESTS 8u
 
 /* A SCENE_LOAD of at least this many bytes is decoded, checked, copied for
- * the render thread, encoded for the members and written to disk on a
+ * the work layer, encoded for the members and written to disk on a
  * worker thread, not the loop: an 800 000-node load took the loop for
  * 5.6 s, delaying every other session's messages. Meanwhile its session
  * refuses edits and loads (EBUSY); smaller loads take a few milliseconds
@@ -127,23 +142,112 @@
 #define BC_SRV_SNAPSHOT_EVERY 1000u
 
 /* Time budget of one refinement step, milliseconds (default of
- * --frame-budget). A level is refined in BC_SRV_REFINE_BANDS bands of tile
- * rows; past the budget no band starts, so one pathological scene cannot
- * hold the render thread that every session shares for long. The picture
- * then stays complete at its coarser level, flagged INCOMPLETE, until the
- * next change. */
+ * --frame-budget): a refinement that takes longer (its slices share the
+ * workers with other sessions) sends the picture it has, complete at its
+ * coarser level and flagged INCOMPLETE, and goes on in the next frame, so
+ * a client sees progress at least this often. */
 #define BC_SRV_FRAME_BUDGET_MS 2000u
-#define BC_SRV_REFINE_BANDS 8u
 
-/* Views whose planes (colour, depth, ids: 12 bytes a pixel) the render
- * thread keeps for damage renders and refinement: a few per member of a
+/* ---- The render scheduler (work.c) --------------------------------------- */
+
+/* Render workers at most (--render-threads), and the flows (a session's
+ * render side) the work layer keeps: every loaded session, plus those
+ * dropped and not yet freed by a worker. */
+#define BC_SRV_MAX_WORKERS 64u
+#define BC_SRV_MAX_FLOWS (2u * BC_SRV_MAX_SESSIONS)
+
+/* Milliseconds of work one slice aims at: a job gives way between slices,
+ * so this bounds how long a quiet session's frame waits for a free worker
+ * (with two workers about half of it on average). Tiles per slice follow
+ * from the session's cost model; the first slice of a job takes
+ * BC_SRV_SLICE_TILES_FIRST, none more than BC_SRV_SLICE_TILES_MAX. */
+#define BC_SRV_SLICE_MS 4.0
+#define BC_SRV_SLICE_TILES_FIRST 64u
+#define BC_SRV_SLICE_TILES_MAX 16384u
+
+/* A slice that took this long (a new view's A-buffer of a big scene is
+ * one renderer call) marks its session, and so do first slices of its
+ * jobs that take this long on average: while the other workers run such
+ * slices, the last one keeps to shorter work whenever some waits or
+ * waited within BC_SRV_SHORT_RECENT_MS. */
+#define BC_SRV_LONG_SLICE_MS 20.0
+/* Short work that waited this recently counts as waiting: its session is
+ * probably between two requests (an editor's drag at 20 Hz). */
+#define BC_SRV_SHORT_RECENT_MS 500.0
+
+/* How far behind the least busy session's clock a session that wakes from
+ * idle may start (milliseconds of render time): a quiet session goes first
+ * at once, but sleeping banks no more than this. */
+#define BC_SRV_WAKE_CREDIT_MS 10.0
+
+/* What the scheduler adds to a session's clock when its next job is a
+ * still or a snapshot: interactive frames go first across sessions too,
+ * and the others are delayed, never starved. */
+#define BC_SRV_STILL_PENALTY_MS 5.0
+#define BC_SRV_SNAPSHOT_PENALTY_MS 20.0
+
+/* Niceness of render workers: rendering yields the CPU to the event loop
+ * and to clients on the same host. */
+#define BC_SRV_WORKER_NICE 5
+
+/* Field evaluations one ray may spend in a render slice. Ordinary rays
+ * take tens to a few hundred; a legal but costly scene (twist or bend at a
+ * high rate, repeat with many cells) would take millions, and a tile of
+ * 64 such rays would hold a worker for minutes. Rays that run out keep the
+ * coarser level's value and the frame says INCOMPLETE; later frames retry
+ * those tiles with four times the bound, up to BC_SRV_RAY_EVALS_MAX, after
+ * which the picture stays incomplete until the scene changes. */
+#define BC_SRV_RAY_EVALS 4096u
+#define BC_SRV_RAY_EVALS_MAX (64u * 1024u)
+
+/* Primitive evaluations of one PICK's ray (steps times primitives): a pick
+ * is one ray of the whole tree, answered as a miss past this. */
+#define BC_SRV_PICK_EVALS 50000000u
+
+/* Memory a node of a render copy holds, to count queued scenes against
+ * BC_SRV_FLOW_CHANGE_BYTES. */
+#define BC_SRV_NODE_BYTES 256u
+
+/* Changes queued for one session's render copy while its worker renders:
+ * parameter states are merged per node, so only structural edits arriving
+ * faster than frames fill this; past it the copy takes the scene whole. */
+#define BC_SRV_FLOW_CHANGE_BYTES (64u * 1024u * 1024u)
+
+/* ---- Keeping the event loop free ------------------------------------------ */
+
+/* Nodes from which a session's heavy work leaves the loop for a task on
+ * libuv's thread pool: structural edits and the undo of one, SCENE_STATE
+ * for joiners. Below it they take well under a millisecond. */
+#define BC_SRV_HEAVY_NODES 20000u
+
+/* A request that takes longer than this on the loop is logged. */
+#define BC_SRV_SLOW_REQUEST_MS 5u
+
+/* A SESSION_CAMERA makes the server send the whole scene to every member
+ * that does not know SESSION_CAMERA_SET (PROTOCOL.md 7.25); in a session
+ * with such members it is taken at most once in this many milliseconds
+ * (EBUSY otherwise), so a 40-byte request cannot make the server send
+ * scenes without a bound. */
+#define BC_SRV_CAMERA_STATE_MS 1000u
+
+/* SIGTERM and SIGINT: the daemon exits within BC_SRV_STOP_MS whatever is
+ * running; it spends at most BC_SRV_STOP_SAVE_MS writing snapshots (the
+ * rest stays in journals) and waits BC_SRV_STOP_WORKERS_MS for render
+ * workers to leave their slices. */
+#define BC_SRV_STOP_MS 1800u
+#define BC_SRV_STOP_SAVE_MS 1000u
+#define BC_SRV_STOP_WORKERS_MS 300u
+
+/* Views whose planes (colour, depth, ids: 12 bytes a pixel) the work
+ * layer keeps for damage renders and refinement: a few per member of a
  * busy session, least recently used dropped first, and at most
- * BC_SRV_VIEW_BYTES in all (about 14 views of 1920x1080). */
+ * BC_SRV_VIEW_BYTES in all, the renderers' own per-view state (up to 16
+ * bytes a pixel) counted in (about 14 views of 1920x1080 without it). */
 #define BC_SRV_MAX_VIEWS 32u
 #define BC_SRV_VIEW_BYTES (384u * 1024u * 1024u)
 
 /* Milliseconds the first, coarse picture of a new view should take: the
- * render thread picks the finest level its cost model says fits, so a
+ * worker picks the finest level its cost model says fits, so a
  * camera drag shows a complete picture at about 10 frames a second. */
 #define BC_SRV_COARSE_MS 60.0
 

@@ -14,6 +14,10 @@
  * edits of one member's drag (INTERACTING, up to the release) make one
  * step; a SCENE_LOAD clears the history. It lives in memory: after a
  * restart, undo starts from the restored scene.
+ *
+ * A structural step of a big scene (BC_SRV_HEAVY_NODES) is encoded on a
+ * task and applied on another (edits.c), the session busy throughout, so
+ * neither holds the loop.
  */
 #include <string.h>
 
@@ -21,7 +25,7 @@
 #include "blobcast/edit.h"
 #include "blobcast/log.h"
 #include "blobcast/scene.h"
-#include "server.h"
+#include "sessions_impl.h"
 
 /* Memory a structural step holds per node of its saved tree (the model and
  * its layout), for the history's byte bound. */
@@ -61,7 +65,7 @@ static void drop(struct bc_undo *u, struct step *stack, uint32_t *n, uint32_t i)
 	memset(&stack[*n], 0, sizeof(*stack));
 }
 
-void bc_undo_clear(struct bc_session *s)
+void bc__undo_clear(struct bc_session *s)
 {
 	struct bc_undo *u = s->undo;
 	if (!u) {
@@ -188,10 +192,9 @@ static struct bc_undo *history(struct bc_session *s)
 	return s->undo;
 }
 
-void bc_undo_record(struct bc_conn *c, struct bc_edit_batch *b,
-                    bool interacting)
+void bc__undo_record(struct bc_session *s, const struct bc_author *a,
+                     struct bc_edit_batch *b, bool interacting)
 {
-	struct bc_session *s = c->session;
 	struct bc_undo *u = history(s);
 	struct step *top;
 	bool ok;
@@ -204,7 +207,7 @@ void bc_undo_record(struct bc_conn *c, struct bc_edit_batch *b,
 		drop(u, u->redo, &u->nredo, u->nredo - 1);
 	}
 	top = u->nundo ? &u->undo[u->nundo - 1] : NULL;
-	if (top && top->open && top->member == c->member_id && !top->old &&
+	if (top && top->open && top->member == a->member_id && !top->old &&
 	    !b->structural && top->n + b->nsaved <= BC_PROTO_MAX_EDIT_OPS) {
 		/* The drag goes on (or ends with this edit): one step. */
 		ok = step_add(u, top, b, s->tree);
@@ -213,8 +216,8 @@ void bc_undo_record(struct bc_conn *c, struct bc_edit_batch *b,
 			top->open = false;
 		}
 		top = push(u, u->undo, &u->nundo);
-		top->member = c->member_id;
-		snprintf(top->author, sizeof(top->author), "%s", c->name);
+		top->member = a->member_id;
+		snprintf(top->author, sizeof(top->author), "%s", a->name);
 		ok = step_add(u, top, b, s->tree);
 	}
 	top->order = s->order;
@@ -224,74 +227,41 @@ void bc_undo_record(struct bc_conn *c, struct bc_edit_batch *b,
 		       "session %s: no memory for the undo history; it "
 		       "restarts here",
 		       s->name);
-		bc_undo_clear(s);
+		bc__undo_clear(s);
 		return;
 	}
 	trim(u);
 }
 
-void bc_undo_step(struct bc_conn *c, bool redo, uint32_t seq)
+/* The step an UNDO (or REDO) applies: the newest of its stack. */
+static struct step *top_of(struct bc_undo *u, bool redo)
 {
-	struct bc_session *s = c->session;
+	return redo ? &u->redo[u->nredo - 1] : &u->undo[u->nundo - 1];
+}
+
+/* An undo (redo) was applied: what it saved goes the other way (undone,
+ * it can be redone; redone, undone again), and the step leaves its
+ * stack. The session was busy or on the loop throughout: the step is
+ * still the top of its stack. */
+static void step_applied(struct bc_session *s, const struct bc_author *a,
+                         const struct bc_change *how, struct bc_edit_batch *b,
+                         void *ud)
+{
+	bool redo = ud != NULL;
 	struct bc_undo *u = s->undo;
-	struct bc_errinfo ei = {0};
-	struct bc_proto_edit_op *ops = NULL;
-	struct bc_proto_field *fields = NULL;
-	struct bc_edit_batch batch;
-	struct bc_change how = {0};
 	struct step *st, *back;
-	uint8_t *subtree = NULL;
-	size_t len = 0;
-	uint32_t nops;
-	int rc;
+	(void)a;
+	(void)how;
 	if (!u || (redo ? u->nredo : u->nundo) == 0) {
-		bc_conn_send_error(c, seq, BC_ESTATE, false, "nothing to %s",
-		                   redo ? "redo" : "undo");
 		return;
 	}
-	st = redo ? &u->redo[u->nredo - 1] : &u->undo[u->nundo - 1];
-	if (st->old) {
-		/* The whole tree back, as a REPLACE of the root. */
-		if (bc_scene_encode(st->old, NULL, &subtree, &len) ||
-		    !(ops = bc_calloc(1, sizeof(*ops)))) {
-			rc = bc_errinfo_set(&ei, BC_ENOMEM, "out of memory");
-			goto fail;
-		}
-		ops->kind = BC_PROTO_EDIT_REPLACE;
-		ops->node = bc_tree_root(s->tree);
-		ops->subtree.ptr = subtree;
-		ops->subtree.len = (uint32_t)len;
-		nops = 1;
-	} else {
-		if (!(ops = bc_calloc(st->n, sizeof(*ops))) ||
-		    !(fields =
-		          bc_calloc((size_t)st->n * BC_PROTO_MAX_SET_FIELDS,
-		                    sizeof(*fields)))) {
-			rc = bc_errinfo_set(&ei, BC_ENOMEM, "out of memory");
-			goto fail;
-		}
-		for (uint32_t i = 0; i < st->n; i++) {
-			bc_edit_state_set(
-			    &st->nodes[i],
-			    st->nodes[i].op.kind != BC_OP_INVALID, &ops[i],
-			    &fields[(size_t)i * BC_PROTO_MAX_SET_FIELDS]);
-		}
-		nops = st->n;
-	}
-	how.flags = redo ? BC_PROTO_FLAG_REDO : BC_PROTO_FLAG_UNDO;
-	how.target_order = st->order;
-	how.target_author = st->author;
-	if ((rc = bc_session_apply(c, ops, (uint16_t)nops, seq, &how, &batch,
-	                           &ei))) {
-		goto fail;
-	}
-	/* What this change saved goes the other way: undone, it can be
-	 * redone, and redone, undone again. */
+	st = top_of(u, redo);
 	back = redo ? push(u, u->undo, &u->nundo) : push(u, u->redo, &u->nredo);
+	st = top_of(u, redo); /* push may have dropped the oldest step */
 	back->order = st->order;
 	back->member = st->member;
 	memcpy(back->author, st->author, sizeof(back->author));
-	if (!step_add(u, back, &batch, s->tree)) {
+	if (!step_add(u, back, b, s->tree)) {
 		bc_log(BC_LOG_WARN, "session %s: no memory to keep the %s",
 		       s->name, redo ? "undo" : "redo");
 		if (redo) {
@@ -300,22 +270,157 @@ void bc_undo_step(struct bc_conn *c, bool redo, uint32_t seq)
 			drop(u, u->redo, &u->nredo, u->nredo - 1);
 		}
 	}
-	bc_edit_batch_finish(&batch);
-	/* The step applied leaves its stack. */
 	if (redo) {
 		drop(u, u->redo, &u->nredo, u->nredo - 1);
 	} else {
 		drop(u, u->undo, &u->nundo, u->nundo - 1);
 	}
 	trim(u);
+}
+
+/* The operations that apply step st: a REPLACE of the root by its whole
+ * tree, or a SET of each saved node. Returns 0 or BC_ENOMEM. */
+static int step_ops(const struct bc_session *s, const struct step *st,
+                    struct bc_proto_edit_op **ops, uint32_t *nops,
+                    struct bc_proto_field **fields, uint8_t **subtree)
+{
+	size_t len = 0;
+	*ops = NULL;
+	*fields = NULL;
+	*subtree = NULL;
+	if (st->old) {
+		if (bc_scene_encode(st->old, NULL, subtree, &len) ||
+		    !(*ops = bc_calloc(1, sizeof(**ops)))) {
+			return BC_ENOMEM;
+		}
+		(*ops)->kind = BC_PROTO_EDIT_REPLACE;
+		(*ops)->node = bc_tree_root(s->tree);
+		(*ops)->subtree.ptr = *subtree;
+		(*ops)->subtree.len = (uint32_t)len;
+		*nops = 1;
+		return 0;
+	}
+	if (!(*ops = bc_calloc(st->n ? st->n : 1, sizeof(**ops))) ||
+	    !(*fields = bc_calloc((size_t)(st->n ? st->n : 1) *
+	                              BC_PROTO_MAX_SET_FIELDS,
+	                          sizeof(**fields)))) {
+		return BC_ENOMEM;
+	}
+	for (uint32_t i = 0; i < st->n; i++) {
+		bc_edit_state_set(
+		    &st->nodes[i], st->nodes[i].op.kind != BC_OP_INVALID,
+		    &(*ops)[i],
+		    &(*fields)[(size_t)i * BC_PROTO_MAX_SET_FIELDS]);
+	}
+	*nops = st->n;
+	return 0;
+}
+
+/* Applies the top step with ops; errors go to m. Returns 0, or BC_HOLD
+ * while the step is applied on a task. */
+static int apply_step(struct bc_member *m, bool redo, uint32_t seq,
+                      struct bc_proto_edit_op *ops, uint32_t nops)
+{
+	struct bc_session *s = m->session;
+	struct step *st = top_of(s->undo, redo);
+	struct bc_errinfo ei = {0};
+	struct bc_change how = {0};
+	int rc;
+	how.flags = redo ? BC_PROTO_FLAG_REDO : BC_PROTO_FLAG_UNDO;
+	how.target_order = st->order;
+	memcpy(how.target_author, st->author, sizeof(how.target_author));
+	rc = bc__apply(m, ops, (uint16_t)nops, seq, &how, step_applied,
+	               redo ? (void *)s : NULL, &ei);
+	if (rc < 0) {
+		bc__send_error(m, seq, rc, "%s refused: %s",
+		               redo ? "redo" : "undo", ei.msg);
+		return 0;
+	}
+	return bc__hold(s, m, seq);
+}
+
+/* A big structural step's tree, encoded off the loop (the session busy,
+ * so its history stays as it is). */
+struct encode_task {
+	struct bc_task t;
+	struct bc_conn_ref who;
+	uint32_t seq;
+	bool redo;
+	uint8_t *bytes;
+	size_t len;
+	int rc;
+};
+
+static void encode_run(struct bc_task *t)
+{
+	struct encode_task *e = (struct encode_task *)t;
+	e->rc = bc_scene_encode(top_of(t->s->undo, e->redo)->old, NULL,
+	                        &e->bytes, &e->len);
+}
+
+static void encode_done(struct bc_task *t)
+{
+	struct encode_task *e = (struct encode_task *)t;
+	struct bc_session *s = t->s;
+	struct bc_member *m = bc__member_of(s->ss, e->who);
+	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_REPLACE};
+	struct bc_undo *u = s->undo;
+	if (s->removed || !m || m->session != s || !u ||
+	    (e->redo ? u->nredo : u->nundo) == 0) {
+		/* Its author left, or the session went. */
+	} else if (e->rc) {
+		bc__send_error(m, e->seq, e->rc, "%s refused: out of memory",
+		               e->redo ? "redo" : "undo");
+	} else {
+		op.node = bc_tree_root(s->tree);
+		op.subtree.ptr = e->bytes;
+		op.subtree.len = (uint32_t)e->len;
+		/* m is held by this task already: the step's own task holds
+		 * it on. */
+		(void)apply_step(m, e->redo, e->seq, &op, 1);
+	}
+	bc_free(e->bytes);
+	bc_free(e);
+}
+
+int bc__undo_step(struct bc_member *m, bool redo, uint32_t seq)
+{
+	struct bc_session *s = m->session;
+	struct bc_undo *u = s->undo;
+	struct bc_proto_edit_op *ops = NULL;
+	struct bc_proto_field *fields = NULL;
+	struct step *st;
+	uint8_t *subtree = NULL;
+	uint32_t nops = 0;
+	int rc;
+	if (!u || (redo ? u->nredo : u->nundo) == 0) {
+		bc__send_error(m, seq, BC_ESTATE, "nothing to %s",
+		               redo ? "redo" : "undo");
+		return 0;
+	}
+	st = top_of(u, redo);
+	if (st->old && bc_tree_node_count(st->old) >= BC_SRV_HEAVY_NODES) {
+		struct encode_task *e = bc_calloc(1, sizeof(*e));
+		if (e) {
+			e->who = m->peer->ref;
+			e->seq = seq;
+			e->redo = redo;
+			e->t.run = encode_run;
+			e->t.done = encode_done;
+			e->t.holds_order = true;
+			bc__task_start(s, &e->t);
+			return bc__hold(s, m, seq);
+		}
+	}
+	if ((rc = step_ops(s, st, &ops, &nops, &fields, &subtree)) == 0) {
+		rc = apply_step(m, redo, seq, ops, nops);
+	} else {
+		bc__send_error(m, seq, rc, "%s refused: out of memory",
+		               redo ? "redo" : "undo");
+		rc = 0;
+	}
 	bc_free(ops);
 	bc_free(fields);
 	bc_free(subtree);
-	return;
-fail:
-	bc_free(ops);
-	bc_free(fields);
-	bc_free(subtree);
-	bc_conn_send_error(c, seq, rc, false, "%s refused: %s",
-	                   redo ? "redo" : "undo", ei.msg);
+	return rc;
 }

@@ -1,0 +1,106 @@
+/*
+ * The shared pieces of link.h: reference-counted frames and the ERROR and
+ * OK messages every layer below transport sends.
+ */
+#include "link.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "blobcast/alloc.h"
+#include "blobcast/log.h"
+
+struct bc_shared *bc_shared_new(size_t len)
+{
+	struct bc_shared *s = bc_malloc(sizeof(*s) + len);
+	if (s) {
+		s->refs = 1;
+		s->len = len;
+	}
+	return s;
+}
+
+void bc_shared_unref(struct bc_shared *s)
+{
+	if (s && --s->refs == 0) {
+		bc_free(s);
+	}
+}
+
+void bc_link_error(const struct bc_link *l, struct bc_conn_ref to, uint32_t seq,
+                   int code, bool fatal, const char *fmt, ...)
+{
+	char text[BC_PROTO_MAX_ERROR_TEXT];
+	struct bc_msg m = {.type = BC_MSG_ERROR, .seq = seq};
+	va_list args;
+	int n;
+	va_start(args, fmt);
+	n = vsnprintf(text, sizeof(text), fmt, args);
+	va_end(args);
+	if (n < 0) {
+		n = 0;
+	}
+	m.flags = fatal ? BC_PROTO_FLAG_FATAL : 0;
+	m.error.code = (uint16_t)(code < 0 ? -code : code);
+	m.error.text.ptr = text;
+	m.error.text.len =
+	    (uint32_t)((size_t)n < sizeof(text) ? (size_t)n : sizeof(text) - 1);
+	bc_log(BC_LOG_INFO, "client %u: error %s: %s", to.gen,
+	       bc_err_name(code), text);
+	l->send(l->ud, to, &m);
+}
+
+void bc_link_ok(const struct bc_link *l, struct bc_conn_ref to, uint32_t seq)
+{
+	struct bc_msg ok = {.type = BC_MSG_OK, .seq = seq};
+	l->send(l->ud, to, &ok);
+}
+
+int bc_ops_copy(struct bc_ops_copy *out, const struct bc_proto_edit_op *ops,
+                uint32_t n)
+{
+	size_t blob = 0, at = 0;
+	memset(out, 0, sizeof(*out));
+	for (uint32_t i = 0; i < n; i++) {
+		blob += (size_t)ops[i].nfields * sizeof(*ops[i].fields);
+		blob += ops[i].subtree.len;
+	}
+	if (!(out->ops = bc_calloc(n ? n : 1, sizeof(*ops))) ||
+	    (blob && !(out->blob = bc_malloc(blob)))) {
+		bc_ops_copy_finish(out);
+		return BC_ENOMEM;
+	}
+	if (n) {
+		memcpy(out->ops, ops, (size_t)n * sizeof(*ops));
+	}
+	for (uint32_t i = 0; i < n; i++) {
+		struct bc_proto_edit_op *op = &out->ops[i];
+		size_t fbytes = (size_t)op->nfields * sizeof(*op->fields);
+		if (fbytes) {
+			memcpy(out->blob + at, ops[i].fields, fbytes);
+			op->fields =
+			    (struct bc_proto_field *)(void *)(out->blob + at);
+			at += fbytes;
+		}
+		if (op->subtree.len) {
+			memcpy(out->blob + at, ops[i].subtree.ptr,
+			       op->subtree.len);
+			op->subtree.ptr = out->blob + at;
+			at += op->subtree.len;
+		}
+	}
+	out->n = n;
+	out->bytes = (size_t)n * sizeof(*ops) + blob;
+	return 0;
+}
+
+void bc_ops_copy_finish(struct bc_ops_copy *c)
+{
+	if (!c) {
+		return;
+	}
+	bc_free(c->ops);
+	bc_free(c->blob);
+	memset(c, 0, sizeof(*c));
+}

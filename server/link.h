@@ -1,0 +1,107 @@
+/*
+ * What every layer of blobcastd shares, and the one way a lower layer
+ * speaks upward. The layers, each calling only the ones below it
+ * (docs/architecture.md, checked by tests/server/check_layers.py):
+ *
+ *   transport (net.c, listen.c, admit.c, tls.c, addr.c)
+ *     -> dispatch (dispatch.c)
+ *       -> sessions (session.c, members.c, frames.c, edits.c, undo.c,
+ *                    present.c, index.c, store.c, journal.c, snapshot.c)
+ *         -> work (work.c, flow.c, job.c, views.c, encode.c)
+ *           -> renderers (render/)
+ *
+ * Messages to clients go up: the sessions and dispatch layers hold a
+ * struct bc_link, a table of callbacks the transport fills in, and send
+ * through it. Shared here besides: connection handles, reference-counted
+ * frames and the client's identity as the layers below transport see it.
+ */
+#ifndef BLOBCAST_SERVER_LINK_H
+#define BLOBCAST_SERVER_LINK_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "blobcast/proto.h"
+
+/* A connection handle that survives the connection: stale ones (another
+ * generation) find nothing. */
+struct bc_conn_ref {
+	uint32_t slot, gen;
+};
+
+static inline bool bc_conn_ref_eq(struct bc_conn_ref a, struct bc_conn_ref b)
+{
+	return a.slot == b.slot && a.gen == b.gen;
+}
+
+/* A reference-counted byte buffer: one encoded FRAME shared by every client
+ * of a view group. The counts change on the loop thread only. */
+struct bc_shared {
+	uint32_t refs;
+	size_t len;
+	uint8_t data[];
+};
+/* Returns a buffer of len bytes with one reference, or NULL. */
+struct bc_shared *bc_shared_new(size_t len);
+void bc_shared_unref(struct bc_shared *s);
+
+/* A client as the layers below transport know it, owned by dispatch: who
+ * it is and what it said in HELLO. */
+struct bc_peer {
+	struct bc_conn_ref ref;
+	char name[BC_PROTO_MAX_NAME + 1];
+	enum bc_proto_role max_role; /* what its token grants */
+	enum bc_proto_role role;     /* in its session */
+	enum bc_proto_stage stage;
+	uint8_t encodings;
+	uint32_t max_frame_bytes;
+	/* It has sent a type of 28 or more (PRESENT, FOLLOW, SESSION_CAMERA),
+	 * so it is sent PRESENTER, FOLLOW_CAMERA and SESSION_CAMERA_SET
+	 * (PROTOCOL.md 4). */
+	bool knows_present;
+};
+
+/* What the transport lends the layers below it: each call concerns one
+ * connection, by handle; a stale handle is ignored. */
+struct bc_link {
+	void *ud;
+	/* Encodes and queues m; a failure closes the connection. */
+	void (*send)(void *ud, struct bc_conn_ref to, const struct bc_msg *m);
+	/* Queues a FRAME (the transport takes its own reference; an unsent
+	 * older frame is spoiled). */
+	void (*send_frame)(void *ud, struct bc_conn_ref to,
+	                   struct bc_shared *frame);
+	/* Closes the connection, after its queued bytes when flush is set
+	 * (an ERROR just sent then still goes out). */
+	void (*close)(void *ud, struct bc_conn_ref to, const char *why,
+	              bool flush);
+	/* A message of this connection waited (BC_PARK, sessions.h): in a
+	 * later turn of the loop, dispatch it again (again) or drop it (it
+	 * was answered meanwhile), then read on. */
+	void (*resume)(void *ud, struct bc_conn_ref to, bool again);
+};
+
+/* ERROR to one connection: a code (BC_E*) and a sentence, logged; fatal
+ * ones carry the FATAL flag (the caller closes). */
+void bc_link_error(const struct bc_link *l, struct bc_conn_ref to, uint32_t seq,
+                   int code, bool fatal, const char *fmt, ...)
+    __attribute__((format(printf, 6, 7)));
+
+/* A deep copy of edit operations (their fields and subtrees), made
+ * because a decoded message lives only until its reader's next call. */
+struct bc_ops_copy {
+	struct bc_proto_edit_op *ops;
+	uint32_t n;
+	uint8_t *blob; /* the fields and subtrees */
+	size_t bytes;  /* everything the copy holds */
+};
+/* Returns 0 or BC_ENOMEM (out zeroed). */
+int bc_ops_copy(struct bc_ops_copy *out, const struct bc_proto_edit_op *ops,
+                uint32_t n);
+void bc_ops_copy_finish(struct bc_ops_copy *c);
+
+/* OK answering seq. */
+void bc_link_ok(const struct bc_link *l, struct bc_conn_ref to, uint32_t seq);
+
+#endif

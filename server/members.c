@@ -1,0 +1,258 @@
+/*
+ * Members (loop thread): a client's member state from HELLO to close,
+ * joining and leaving sessions, and what members are told of their
+ * session: SESSION_INFO (who is in it) and SCENE_STATE (its scene; for a
+ * big scene encoded on a task while the joiner waits, and kept for the
+ * next joiners until the scene changes).
+ */
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "blobcast/alloc.h"
+#include "blobcast/log.h"
+#include "blobcast/scene.h"
+#include "sessions_impl.h"
+
+void bc_member_init(struct bc_member *m, struct bc_sessions *ss,
+                    struct bc_peer *peer)
+{
+	memset(m, 0, sizeof(*m));
+	m->ss = ss;
+	m->peer = peer;
+	if (peer->ref.slot < BC_SRV_MAX_CONNECTIONS) {
+		ss->by_slot[peer->ref.slot] = m;
+	}
+}
+
+void bc_member_finish(struct bc_member *m)
+{
+	if (!m->ss) {
+		return;
+	}
+	bc__unpark(m);
+	bc__leave(m);
+	if (m->peer->ref.slot < BC_SRV_MAX_CONNECTIONS &&
+	    m->ss->by_slot[m->peer->ref.slot] == m) {
+		m->ss->by_slot[m->peer->ref.slot] = NULL;
+	}
+	m->ss = NULL;
+}
+
+static void kick_due(uv_timer_t *t)
+{
+	bc__schedule(t->data);
+}
+
+void bc_member_writable(struct bc_member *m)
+{
+	m->frame_out = false;
+	/* Not at once: the other members' frame writes usually finish in the
+	 * same loop turn, and scheduling after them keeps equal views in one
+	 * shared render. */
+	if (m->session && m->dirty) {
+		uv_timer_start(&m->session->kick, kick_due, 0, 0);
+	}
+}
+
+/* ---- sending --------------------------------------------------------------- */
+
+void bc__send(struct bc_member *m, const struct bc_msg *msg)
+{
+	m->ss->link->send(m->ss->link->ud, m->peer->ref, msg);
+}
+
+void bc__send_error(struct bc_member *m, uint32_t seq, int code,
+                    const char *fmt, ...)
+{
+	char text[BC_PROTO_MAX_ERROR_TEXT];
+	va_list args;
+	va_start(args, fmt);
+	vsnprintf(text, sizeof(text), fmt, args);
+	va_end(args);
+	bc_link_error(m->ss->link, m->peer->ref, seq, code, false, "%s", text);
+}
+
+uint32_t bc__members(const struct bc_session *s, struct bc_member **out)
+{
+	memcpy(out, s->members, s->nmembers * sizeof(*out));
+	return s->nmembers;
+}
+
+void bc__send_info(struct bc_session *s)
+{
+	struct bc_proto_member list[BC_PROTO_MAX_MEMBERS];
+	struct bc_member *members[BC_PROTO_MAX_MEMBERS];
+	uint32_t n = bc__members(s, members);
+	for (uint32_t i = 0; i < n; i++) {
+		list[i].id = members[i]->member_id;
+		list[i].role = members[i]->peer->role;
+		list[i].name.ptr = members[i]->peer->name;
+		list[i].name.len = (uint32_t)strlen(members[i]->peer->name);
+	}
+	for (uint32_t i = 0; i < n; i++) {
+		struct bc_msg info = {.type = BC_MSG_SESSION_INFO};
+		info.session_info.session_id = s->id;
+		info.session_info.member_id = members[i]->member_id;
+		info.session_info.role = members[i]->peer->role;
+		info.session_info.name.ptr = s->name;
+		info.session_info.name.len = (uint32_t)strlen(s->name);
+		info.session_info.nmembers = (uint16_t)n;
+		info.session_info.members = list;
+		bc__send(members[i], &info);
+	}
+}
+
+void bc__send_state(struct bc_session *s, struct bc_member *to, uint32_t author,
+                    uint32_t author_seq, const uint8_t *bytes, size_t len)
+{
+	struct bc_msg st = {.type = BC_MSG_SCENE_STATE};
+	struct bc_member *members[BC_PROTO_MAX_MEMBERS];
+	uint8_t *own = NULL;
+	uint32_t n;
+	if (!bytes && bc_scene_encode(s->tree, &s->camera, &own, &len)) {
+		bc_log(BC_LOG_ERROR, "session %s: cannot encode the scene",
+		       s->name);
+		return;
+	}
+	st.scene_state.order = s->order;
+	st.scene_state.author = author;
+	st.scene_state.author_seq = author_seq;
+	st.scene_state.scene.ptr = bytes ? bytes : own;
+	st.scene_state.scene.len = (uint32_t)len;
+	if (to) {
+		bc__send(to, &st);
+	} else {
+		n = bc__members(s, members);
+		for (uint32_t i = 0; i < n; i++) {
+			bc__send(members[i], &st);
+		}
+	}
+	bc_free(own);
+}
+
+/* ---- joining and leaving -------------------------------------------------- */
+
+void bc__leave(struct bc_member *m)
+{
+	struct bc_session *s = m->session;
+	if (!s) {
+		return;
+	}
+	bc__present_leave(m);
+	bc__frames_forget(m);
+	for (uint32_t i = 0; i < s->nmembers; i++) {
+		if (s->members[i] == m) {
+			s->members[i] = s->members[--s->nmembers];
+			break;
+		}
+	}
+	m->session = NULL;
+	m->peer->stage = BC_PROTO_STAGE_READY;
+	m->peer->role = BC_PROTO_ROLE_INVALID;
+	if (s->nmembers == 0) {
+		s->empty_since_ms = bc__now_ms(s->ss);
+	}
+	bc__send_info(s);
+}
+
+void bc__mark_all(struct bc_session *s)
+{
+	for (uint32_t i = 0; i < s->nmembers; i++) {
+		s->members[i]->shown.view = 0; /* the next frame is whole */
+		bc__owe_frame(s->members[i]);
+	}
+}
+
+/* Encoding a big scene's SCENE_STATE for joiners, off the loop. */
+struct state_task {
+	struct bc_task t;
+	uint8_t *bytes;
+	size_t len;
+	int rc;
+};
+
+static void state_run(struct bc_task *t)
+{
+	struct state_task *st = (struct state_task *)t;
+	/* The session is busy: its tree and camera do not change. */
+	st->rc =
+	    bc_scene_encode(t->s->tree, &t->s->camera, &st->bytes, &st->len);
+}
+
+static void state_done(struct bc_task *t)
+{
+	struct state_task *st = (struct state_task *)t;
+	struct bc_session *s = t->s;
+	if (!s->removed && st->rc == 0) {
+		bc__session_changed(s);
+		s->state_bytes = st->bytes;
+		s->state_len = st->len;
+		s->state_order = s->order;
+		st->bytes = NULL;
+	} else if (st->rc) {
+		bc_log(BC_LOG_ERROR, "session %s: cannot encode the scene",
+		       s->name);
+	}
+	bc_free(st->bytes);
+	bc_free(st);
+}
+
+/* Whether the joiner must wait for s: it is busy, loading, or its scene
+ * is big and not encoded at this order yet (a task is started). */
+static bool must_wait(struct bc_session *s)
+{
+	struct state_task *st;
+	if (s->busy || !s->tree) {
+		return true;
+	}
+	if (bc_tree_node_count(s->tree) < BC_SRV_HEAVY_NODES ||
+	    (s->state_bytes && s->state_order == s->order)) {
+		return false;
+	}
+	if (!(st = bc_calloc(1, sizeof(*st)))) {
+		return false; /* encoded on the loop, then */
+	}
+	st->t.run = state_run;
+	st->t.done = state_done;
+	st->t.holds_order = true;
+	bc__task_start(s, &st->t);
+	return true;
+}
+
+int bc__join(struct bc_member *m, struct bc_session *s, enum bc_proto_role role,
+             uint32_t seq)
+{
+	bool cached;
+	if (must_wait(s)) {
+		return bc__park(s, m, seq);
+	}
+	if (s->nmembers >= BC_PROTO_MAX_MEMBERS) {
+		bc__send_error(m, seq, BC_ELIMIT,
+		               "session %s is full (%u members)", s->name,
+		               BC_PROTO_MAX_MEMBERS);
+		return 0;
+	}
+	if (m->session) {
+		bc__leave(m);
+	}
+	s->members[s->nmembers++] = m;
+	m->session = s;
+	m->member_id = s->next_member_id++;
+	m->peer->role = role;
+	m->peer->stage = BC_PROTO_STAGE_SESSION;
+	/* A camera the client chose (even before joining) stays its own. */
+	if (!m->has_camera) {
+		m->camera = s->camera;
+		m->camera_seq = 0;
+	}
+	m->shown.view = 0;
+	bc__send_info(s);
+	cached = s->state_bytes && s->state_order == s->order;
+	bc__send_state(s, m, 0, 0, cached ? s->state_bytes : NULL,
+	               cached ? s->state_len : 0);
+	bc__present_joined(m);
+	bc__owe_frame(m);
+	bc__schedule(s);
+	return 0;
+}

@@ -1,0 +1,236 @@
+/*
+ * The sessions layer's private types, shared by its files:
+ *  - session.c: the table of loaded sessions, loading (on a task),
+ *    unloading when idle, restore at start, saving, deleting, tasks and
+ *    parking (a busy session's requests wait);
+ *  - members.c: members joining and leaving, SESSION_INFO, SCENE_STATE;
+ *  - index.c: every session on disk, with what SESSION_LIST says of it;
+ *  - frames.c: which member is owed a frame and when, the jobs that make
+ *    them, CAMERA, VIEW, PICK and SNAPSHOT, and the work layer's results;
+ *  - edits.c: EDIT and SCENE_LOAD: applied, journaled, broadcast;
+ *  - undo.c: each session's undo and redo history;
+ *  - present.c: presenting, following, the session camera.
+ */
+#ifndef BLOBCAST_SERVER_SESSIONS_IMPL_H
+#define BLOBCAST_SERVER_SESSIONS_IMPL_H
+
+#include "blobcast/edit.h"
+#include "sessions.h"
+#include "srv_limits.h"
+#include "store.h"
+
+struct bc_index;
+
+struct bc_session {
+	struct bc_sessions *ss;
+	uint32_t id;
+	char name[BC_PROTO_MAX_NAME + 1];
+	struct bc_tree *tree; /* NULL while it loads */
+	struct bc_camera
+	    camera; /* the scene's camera: new members start here */
+	uint64_t order;
+	uint64_t scene_order; /* of the last change to the scene's nodes */
+	struct bc_store_session *store;
+	bool store_failed; /* a write failed: edits are refused */
+	struct bc_member *members[BC_PROTO_MAX_MEMBERS];
+	uint32_t nmembers;
+	uint32_t next_member_id;
+	uv_timer_t still_timer;
+	uv_timer_t kick; /* schedules frames once a loop turn's writes end */
+	uint64_t empty_since_ms; /* loop clock; when the last member left */
+	uint64_t last_edit_ms;   /* Unix ms of its last change (0: unknown) */
+	struct bc_undo *undo;    /* undo/redo history (undo.c), or NULL */
+	/* The member presenting (present.c): its id, 0 when nobody does. */
+	uint32_t presenter_id;
+	struct bc_member *presenter;
+	bool removed; /* out of the table, freed once its handles close */
+	uint32_t handles_open; /* timers and tasks in flight */
+	double edit_ms_avg;
+	/* Work on the thread pool that the order of its changes must wait
+	 * for (a load, a big structural edit, a snapshot, an encode), and
+	 * the members whose requests wait meanwhile, in order. */
+	uint32_t busy;
+	struct bc_member *park_head, *park_tail;
+	/* Made by a SESSION_CREATE that waits for its load: that request,
+	 * dispatched again, joins instead of finding the name taken. */
+	struct bc_conn_ref creator;
+	/* SCENE_STATE of a big scene, encoded on a task for joiners, while
+	 * the order stays state_order. */
+	uint8_t *state_bytes;
+	size_t state_len;
+	uint64_t state_order;
+	/* When a SESSION_CAMERA last sent members of an older protocol the
+	 * whole scene (loop clock; present.c). */
+	uint64_t camera_state_ms;
+};
+
+struct bc_sessions {
+	uv_loop_t *loop;
+	const struct bc_link *link;
+	struct bc_work *work;
+	struct bc_store *store;
+	bool no_damage;
+	struct bc_session *sessions[BC_SRV_MAX_SESSIONS];
+	uint32_t nsessions;
+	uint32_t next_session_id;
+	struct bc_member *by_slot[BC_SRV_MAX_CONNECTIONS];
+	uv_timer_t sweep; /* unloads sessions idle without members */
+	struct bc_index *index;
+	uint32_t frame_no;
+	double render_ms_last, render_ms_avg, encode_ms_last, encode_ms_avg;
+	bool stopping;
+};
+
+/* Work for a session on libuv's thread pool: run off the loop, done on it
+ * (where the session may have been removed meanwhile: s->removed). */
+struct bc_task {
+	uv_work_t req;
+	struct bc_session *s;
+	bool holds_order; /* the session is busy while it runs */
+	void (*run)(struct bc_task *t);
+	void (*done)(struct bc_task *t);
+};
+
+/* ---- session.c ---- */
+
+uint64_t bc__now_ms(const struct bc_sessions *ss);
+uint64_t bc__unix_ms(void);
+struct bc_session *bc__session_by_name(struct bc_sessions *ss, const char *name,
+                                       size_t len);
+struct bc_session *bc__session_by_id(struct bc_sessions *ss, uint32_t id);
+/* The member of connection ref, or NULL. */
+struct bc_member *bc__member_of(struct bc_sessions *ss, struct bc_conn_ref ref);
+/* Starts t (the caller filled run and done); holds_order makes s busy. */
+void bc__task_start(struct bc_session *s, struct bc_task *t);
+/* m's request seq waits for s: returns BC_PARK. */
+int bc__park(struct bc_session *s, struct bc_member *m, uint32_t seq);
+/* m's request seq was taken by work of s: m reads nothing more until that
+ * work is done. Returns BC_HOLD. */
+int bc__hold(struct bc_session *s, struct bc_member *m, uint32_t seq);
+/* m leaves whatever queue it waits in (its connection closes). */
+void bc__unpark(struct bc_member *m);
+/* Frees s once nothing refers to it (its timers and tasks). */
+void bc__session_unref(struct bc_session *s);
+/* Its snapshot on a task, when the journal says one is due. */
+void bc__session_snapshot_due(struct bc_session *s);
+/* The session's scene changed: SCENE_STATEs encoded before go. */
+void bc__session_changed(struct bc_session *s);
+/* Unloads s when it has no members and nothing waits; true if it did. */
+bool bc__session_unload(struct bc_session *s, const char *why);
+
+/* ---- members.c ---- */
+
+/* Copies s's members into out (BC_PROTO_MAX_MEMBERS) and returns their
+ * count: loops that send iterate the copy, since a send can drop a member
+ * (its queue overflowed), which reorders s->members under the loop. */
+uint32_t bc__members(const struct bc_session *s, struct bc_member **out);
+void bc__send(struct bc_member *m, const struct bc_msg *msg);
+void bc__send_error(struct bc_member *m, uint32_t seq, int code,
+                    const char *fmt, ...) __attribute__((format(printf, 4, 5)));
+void bc__send_info(struct bc_session *s);
+/* SCENE_STATE to one member (to) or, with to NULL, to every member;
+ * bytes: the scene already encoded, or NULL. */
+void bc__send_state(struct bc_session *s, struct bc_member *to, uint32_t author,
+                    uint32_t author_seq, const uint8_t *bytes, size_t len);
+void bc__leave(struct bc_member *m);
+/* m joins s (its role asked, its request seq). Returns 0 or BC_PARK. */
+int bc__join(struct bc_member *m, struct bc_session *s, enum bc_proto_role role,
+             uint32_t seq);
+/* Every member's next frame is whole. */
+void bc__mark_all(struct bc_session *s);
+
+/* ---- index.c ---- */
+
+/* What SESSION_LIST says of a session on disk. */
+struct bc_index_entry {
+	char name[BC_PROTO_MAX_NAME + 1];
+	struct bc_session *loaded; /* NULL when on disk only */
+	bool known;                /* the figures below are known */
+	uint32_t prims;
+	uint64_t order, last_edit_ms;
+};
+int bc__index_new(struct bc_index **out, struct bc_store *store);
+void bc__index_free(struct bc_index *ix);
+/* The entry of name, or NULL. */
+struct bc_index_entry *bc__index_get(struct bc_index *ix, const char *name);
+/* Adds name (sorted), or returns its entry. NULL when out of memory. */
+struct bc_index_entry *bc__index_add(struct bc_index *ix, const char *name);
+void bc__index_remove(struct bc_index *ix, const char *name);
+uint32_t bc__index_count(const struct bc_index *ix);
+/* Entry i in name order. */
+struct bc_index_entry *bc__index_at(struct bc_index *ix, uint32_t i);
+/* Keeps what is known of s as it unloads or changes. */
+void bc__index_note(struct bc_index *ix, const struct bc_session *s);
+
+/* ---- frames.c ---- */
+
+/* Starts a job for every member owed a frame (grouping equal ones). */
+void bc__schedule(struct bc_session *s);
+/* m's state changed in a way its queued frame does not show: the job is
+ * retracted (latest wins) and m is owed a new one. */
+void bc__owe_frame(struct bc_member *m);
+/* Forgets m's jobs (it leaves its session or closes). */
+void bc__frames_forget(struct bc_member *m);
+
+/* ---- edits.c ---- */
+
+/* How an applied change presents itself in its EDIT_APPLIED. */
+struct bc_change {
+	uint16_t flags;        /* BC_PROTO_FLAG_INTERACTING, _UNDO or _REDO */
+	uint64_t target_order; /* UNDO, REDO: the edit undone or redone */
+	char target_author[BC_PROTO_MAX_NAME + 1]; /* and its author */
+};
+/* Who made a change (kept across a task: the member may be gone). */
+struct bc_author {
+	struct bc_conn_ref ref;
+	uint32_t member_id, seq;
+	char name[BC_PROTO_MAX_NAME + 1];
+};
+/* Called once a batch is applied, journaled and broadcast, with b holding
+ * what undoes it (the callee may take its old tree; the caller finishes
+ * b). */
+typedef void (*bc_applied_fn)(struct bc_session *s, const struct bc_author *a,
+                              const struct bc_change *how,
+                              struct bc_edit_batch *b, void *ud);
+/* Applies ops from member m (request seq) to m's session as one batch:
+ * checked, journaled and synced, then broadcast as EDIT_APPLIED, passed
+ * to the work layer, and handed to done. The sync (and for a big scene,
+ * BC_SRV_HEAVY_NODES, a structural batch itself) runs on a task, the
+ * session busy meanwhile. Returns 1 (done follows, or the author hears
+ * the error), or an error in ei with nothing changed. */
+int bc__apply(struct bc_member *m, const struct bc_proto_edit_op *ops,
+              uint16_t nops, uint32_t seq, const struct bc_change *how,
+              bc_applied_fn done, void *ud, struct bc_errinfo *ei);
+/* Whether m's session refuses changes (answered to m with seq), or the
+ * request must wait for it (*park set). */
+bool bc__refuse_change(struct bc_member *m, uint32_t seq, int *park);
+
+/* ---- undo.c ---- */
+
+/* Records what undoes batch b, just applied by m (takes b's old tree);
+ * clears the redo steps. Edits of one drag (interacting, up to the first
+ * edit without it) make one step. */
+void bc__undo_record(struct bc_session *s, const struct bc_author *a,
+                     struct bc_edit_batch *b, bool interacting);
+/* UNDO (or REDO) from m, request seq. Returns 0 or BC_PARK. */
+int bc__undo_step(struct bc_member *m, bool redo, uint32_t seq);
+/* Forgets s's history (a new scene, or s going away). */
+void bc__undo_clear(struct bc_session *s);
+
+/* ---- present.c ---- */
+
+/* m's own CAMERA was applied (flags: the CAMERA's): a follower stops
+ * following; the presenter's followers take its camera. */
+void bc__present_camera_moved(struct bc_member *m, uint16_t flags);
+/* m leaves its session: a presenter's presentation ends for everyone. */
+void bc__present_leave(struct bc_member *m);
+/* m joined its session: tells it who presents (when it knows the types). */
+void bc__present_joined(struct bc_member *m);
+/* A journal record that sets the session camera: two zero bytes (an
+ * op_count no EDIT has) and the SESSION_CAMERA payload. Returns 1 and
+ * fills *cam when rec is one (0 when it is an EDIT, an error code when it
+ * is a damaged camera record). */
+int bc__present_camera_record(const uint8_t *rec, size_t len,
+                              struct bc_camera *cam);
+
+#endif
