@@ -458,11 +458,13 @@ static long log_first(const struct daemon *d, const char *needle, char *first,
 	return count;
 }
 
-/* Removes the daemon's directory and socket, and its log unless keep. */
+/* Removes the daemon's directory and socket, and its log unless keep (or
+ * BENCH_FAIR_KEEP_LOGS is set in the environment, to read them after). */
 static void rm_daemon_files(const struct daemon *d, bool keep)
 {
 	char cmd[512], lp[128];
 	log_path(d, lp, sizeof(lp));
+	keep = keep || getenv("BENCH_FAIR_KEEP_LOGS") != NULL;
 	snprintf(cmd, sizeof(cmd), "rm -rf %s %s%s%s", d->dir, d->sock,
 	         keep ? "" : " ", keep ? "" : lp);
 	if (system(cmd) != 0) {
