@@ -251,6 +251,7 @@ static void apply_one(struct bc_work *w, struct flow *f, struct upd *u)
 		/* Another scene: its cost is unknown, so its first pictures
 		 * start at the coarsest level again. */
 		f->ms_per_ray = f->ms_abuffer = 0.0;
+		f->ray_bound = BC_SRV_RAY_EVALS;
 		bc__views_drop(w, f->sid);
 		break;
 	case UPD_STATES:
@@ -276,6 +277,7 @@ static void apply_one(struct bc_work *w, struct flow *f, struct upd *u)
 		bc_edit_batch_finish(&b);
 		f->fresh = true;
 		f->ms_per_ray = f->ms_abuffer = 0.0;
+		f->ray_bound = BC_SRV_RAY_EVALS;
 		bc__views_drop(w, f->sid);
 		break;
 	default:

@@ -241,7 +241,7 @@ static void plan_pass(const struct flow *f, struct bc_job *job, bool first)
 	int level = bc__view_level(v);
 	int8_t l;
 	job->cursor = 0;
-	job->bound = BC_SRV_RAY_EVALS;
+	job->bound = f->ray_bound;
 	job->pass = PASS_NONE;
 	if (level < 0) {
 		job->pass = PASS_FIRST;
@@ -262,8 +262,9 @@ static void plan_pass(const struct flow *f, struct bc_job *job, bool first)
 	    (l = level_of_marked(v, v->shorts)) >= 0) {
 		job->pass = PASS_RETRY;
 		job->pass_level = l;
-		v->bound = v->bound ? 4u * v->bound : 4u * BC_SRV_RAY_EVALS;
-		job->bound = v->bound;
+		job->bound = 4u * v->bound < BC_SRV_RAY_EVALS_MAX
+		                 ? 4u * v->bound
+		                 : BC_SRV_RAY_EVALS_MAX;
 		return;
 	}
 	if (level > 0) {
@@ -299,14 +300,18 @@ static void prefill(const struct bc_job *job, uint32_t t)
 			}
 			if (!refine) {
 				bc_shade_miss(y, v->height, fr->rgba + 4u * i);
-				fr->depth[i] = INFINITY;
-				fr->ids[i] = 0;
+				if (fr->depth) {
+					fr->depth[i] = INFINITY;
+					fr->ids[i] = 0;
+				}
 				continue;
 			}
 			from = (size_t)(y & ~m2) * v->width + (x & ~m2);
 			memcpy(fr->rgba + 4u * i, fr->rgba + 4u * from, 4);
-			fr->depth[i] = fr->depth[from];
-			fr->ids[i] = fr->ids[from];
+			if (fr->depth) {
+				fr->depth[i] = fr->depth[from];
+				fr->ids[i] = fr->ids[from];
+			}
 		}
 	}
 }
@@ -359,8 +364,8 @@ static void gather(struct bc_job *job, struct worker *wk, struct slice *sl)
 /* What a render call did to the view's tiles: those drawn now hold the
  * pass's level, undamaged, short or not as the renderer says (a refinement
  * traced only the level's new pixels: rays that ran out before still
- * did). Rays that run out outside a retry start the retries' bounds
- * anew. The worker's masks are left all zero. */
+ * did); the view remembers the bound they ran out under, which retries
+ * raise. The worker's masks are left all zero. */
 static void account(struct bc_job *job, struct worker *wk,
                     const struct slice *sl, bool whole)
 {
@@ -382,8 +387,8 @@ static void account(struct bc_job *job, struct worker *wk,
 	}
 	memset(wk->mask + t0, 0, t1 - t0);
 	memset(wk->shorts + t0, 0, t1 - t0);
-	if (shorts && job->pass != PASS_RETRY) {
-		v->bound = 0;
+	if (shorts) {
+		v->bound = job->bound;
 	}
 }
 
@@ -404,6 +409,17 @@ static void learn(const struct bc_work *w, struct flow *f, struct bc_job *job,
 		f->ms_abuffer = f->ms_abuffer > 0.0
 		                    ? 0.7 * f->ms_abuffer + 0.3 * st->ms_abuffer
 		                    : st->ms_abuffer;
+	}
+	/* Most rays ran out: this scene crawls, and a picture of coarser
+	 * values now beats a picture never finished. The retries raise the
+	 * bound for the tiles that need it. */
+	if (job->pass != PASS_RETRY && st->short_rays * 4u > st->rays) {
+		f->ray_bound = f->ray_bound / 8u > BC_SRV_RAY_EVALS_MIN
+		                   ? f->ray_bound / 8u
+		                   : BC_SRV_RAY_EVALS_MIN;
+		job->bound = f->ray_bound;
+	} else if (st->short_rays == 0 && f->ray_bound < BC_SRV_RAY_EVALS) {
+		f->ray_bound *= 2u;
 	}
 	/* The next slice scales to the target from what this one took (its
 	 * lists included), growing at most twofold: tiles differ a lot (a
@@ -717,13 +733,26 @@ static int start(struct bc_work *w, struct flow *f, struct bc_job *job,
 			return rc;
 		}
 	}
+	/* The renderer keeps state for one view: for another it would be
+	 * rebuilt anyway, so it goes first and the cap has room for it. */
+	if (f->r && (f->rw != job->req.width || f->rh != job->req.height ||
+	             memcmp(&f->rcam, &job->req.camera, sizeof(f->rcam)))) {
+		bc_renderer_release(f->r);
+		bc__flow_kept(w, f);
+	}
+	f->rcam = job->req.camera;
+	f->rw = job->req.width;
+	f->rh = job->req.height;
 	job->v = bc__view_acquire(w, f->sid, &job->req.camera, job->req.width,
 	                          job->req.height);
-	if (!job->v) {
-		return bc_errinfo_set(ei, BC_ENOMEM,
-		                      "no room for a %ux%u view under the view "
-		                      "cache's cap",
-		                      job->req.width, job->req.height);
+	if (!job->v ||
+	    (job->req.snapshot_planes && bc__view_planes(w, job->v))) {
+		return bc_errinfo_set(
+		    ei, BC_ENOMEM,
+		    "no room for a %ux%u view%s under the view "
+		    "cache's cap (--view-cache)",
+		    job->req.width, job->req.height,
+		    job->req.snapshot_planes ? " with planes" : "");
 	}
 	forget_large_damage(w, job);
 	plan(w, f, job, true);

@@ -117,14 +117,6 @@
  * snapshots once held another session's client for 178 s). */
 #define BC_SRV_MAX_CLIENT_REQUESTS 8u
 
-/* A SCENE_LOAD of at least this many bytes is decoded, checked, copied for
- * the work layer, encoded for the members and written to disk on a
- * worker thread, not the loop: an 800 000-node load took the loop for
- * 5.6 s, delaying every other session's messages. Meanwhile its session
- * refuses edits and loads (EBUSY); smaller loads take a few milliseconds
- * and stay on the loop. */
-#define BC_SRV_ASYNC_LOAD_BYTES (1024u * 1024u)
-
 /* Undo history of a session: steps kept (a drag is one step) and the
  * memory they may hold (a structural step keeps the whole tree before it,
  * about 256 bytes a node). The oldest steps go first. A hundred steps
@@ -162,7 +154,7 @@
  * from the session's cost model; the first slice of a job takes
  * BC_SRV_SLICE_TILES_FIRST, none more than BC_SRV_SLICE_TILES_MAX. */
 #define BC_SRV_SLICE_MS 4.0
-#define BC_SRV_SLICE_TILES_FIRST 64u
+#define BC_SRV_SLICE_TILES_FIRST 8u
 #define BC_SRV_SLICE_TILES_MAX 16384u
 
 /* A slice that took this long (a new view's A-buffer of a big scene is
@@ -199,6 +191,11 @@
  * which the picture stays incomplete until the scene changes. */
 #define BC_SRV_RAY_EVALS 4096u
 #define BC_SRV_RAY_EVALS_MAX (64u * 1024u)
+/* While most of a slice's rays run out, the session's bound drops
+ * eightfold, down to this: a full-size first picture of a crawling scene
+ * (800x600 rays of a twist at a rate of 10^6) then comes in about a second
+ * instead of minutes, and retries raise the bound tile by tile. */
+#define BC_SRV_RAY_EVALS_MIN 16u
 
 /* Primitive evaluations of one PICK's ray (steps times primitives): a pick
  * is one ray of the whole tree, answered as a miss past this. */
@@ -245,6 +242,11 @@
  * bytes a pixel) counted in (about 14 views of 1920x1080 without it). */
 #define BC_SRV_MAX_VIEWS 32u
 #define BC_SRV_VIEW_BYTES (384u * 1024u * 1024u)
+/* What a renderer keeps per pixel of the view it last drew (the tiled
+ * backend: 12 bytes of ray directions and its tile lists, 14.4 bytes a
+ * pixel measured at 2048^2): counted against BC_SRV_VIEW_BYTES before a
+ * new view is drawn, so that the cap holds while it is built. */
+#define BC_SRV_RENDERER_BYTES_PX 16u
 
 /* Milliseconds the first, coarse picture of a new view should take: the
  * worker picks the finest level its cost model says fits, so a

@@ -17,12 +17,19 @@
 #include "blobcast/log.h"
 #include "work_impl.h"
 
-/* Bytes a view of this size holds. */
+/* Bytes a view of this size holds: its colour plane and per-tile state
+ * (depth and ids come only with a snapshot that asks for them), and the
+ * state its session's renderer will keep for it. */
 static size_t view_bytes(uint32_t width, uint32_t height)
 {
 	size_t ntiles =
 	    (size_t)bc_render_tiles_x(width) * bc_render_tiles_y(height);
-	return (size_t)width * height * 12u + ntiles * 7u;
+	return (size_t)width * height * 4u + ntiles * 7u;
+}
+
+static size_t renderer_bytes(uint32_t width, uint32_t height)
+{
+	return (size_t)width * height * BC_SRV_RENDERER_BYTES_PX;
 }
 
 int bc__views_init(struct views *vs, size_t cap)
@@ -111,7 +118,10 @@ static int view_init(struct view *v, uint32_t width, uint32_t height)
 	v->tw = bc_render_tiles_x(width);
 	v->th = bc_render_tiles_y(height);
 	v->ntiles = v->tw * v->th;
-	if (bc_frame_init(&v->frame, width, height) ||
+	memset(&v->frame, 0, sizeof(v->frame));
+	v->frame.width = width;
+	v->frame.height = height;
+	if (!(v->frame.rgba = bc_malloc((size_t)width * height * 4u)) ||
 	    !(v->tlevel = bc_malloc(v->ntiles)) ||
 	    !(v->damage = bc_calloc(v->ntiles, 1)) ||
 	    !(v->shorts = bc_calloc(v->ntiles, 1)) ||
@@ -136,13 +146,15 @@ struct view *bc__view_acquire(struct bc_work *w, uint32_t sid,
 		uv_mutex_unlock(&vs->lock);
 		return v;
 	}
-	v = make_room(vs, need, bc__work_kept_bytes(w));
+	v = make_room(vs, need + renderer_bytes(width, height),
+	              bc__work_kept_bytes(w));
 	uv_mutex_unlock(&vs->lock);
 	if (!v) {
 		/* Renderers of idle sessions give their state back first. */
 		bc__work_trim(w);
 		uv_mutex_lock(&vs->lock);
-		v = make_room(vs, need, bc__work_kept_bytes(w));
+		v = make_room(vs, need + renderer_bytes(width, height),
+		              bc__work_kept_bytes(w));
 		uv_mutex_unlock(&vs->lock);
 	}
 	if (!v) {
@@ -155,7 +167,8 @@ struct view *bc__view_acquire(struct bc_work *w, uint32_t sid,
 	uv_mutex_lock(&vs->lock);
 	if (v->id) {
 		/* Another worker took the slot meanwhile. */
-		v = make_room(vs, need, bc__work_kept_bytes(w));
+		v = make_room(vs, need + renderer_bytes(width, height),
+		              bc__work_kept_bytes(w));
 	}
 	if (!v || view_init(v, width, height)) {
 		if (v) {
@@ -229,6 +242,34 @@ size_t bc__views_bytes(struct bc_work *w)
 	bytes = w->views.bytes;
 	uv_mutex_unlock(&w->views.lock);
 	return bytes + bc__work_kept_bytes(w);
+}
+
+int bc__view_planes(struct bc_work *w, struct view *v)
+{
+	struct views *vs = &w->views;
+	size_t n = (size_t)v->width * v->height, need = 8u * n;
+	int rc = 0;
+	if (v->frame.depth) {
+		return 0;
+	}
+	uv_mutex_lock(&vs->lock);
+	/* This view is pinned, so make_room never drops it. */
+	if (vs->bytes + bc__work_kept_bytes(w) + need > vs->cap &&
+	    !make_room(vs, need, bc__work_kept_bytes(w))) {
+		rc = BC_ENOMEM;
+	} else if (!(v->frame.depth = bc_malloc(n * sizeof(float))) ||
+	           !(v->frame.ids = bc_malloc(n * sizeof(uint32_t)))) {
+		bc_free(v->frame.depth);
+		v->frame.depth = NULL;
+		rc = BC_ENOMEM;
+	} else {
+		v->bytes += need;
+		vs->bytes += need;
+		v->frame.key = 0;
+		bc__view_reset(v);
+	}
+	uv_mutex_unlock(&vs->lock);
+	return rc;
 }
 
 void bc__view_reset(struct view *v)

@@ -68,6 +68,7 @@ static struct flow *flow_of(struct bc_work *w, uint32_t sid, bool create)
 	}
 	memset(free_slot, 0, sizeof(*free_slot));
 	free_slot->sid = sid;
+	free_slot->ray_bound = BC_SRV_RAY_EVALS;
 	free_slot->vruntime = w->min_vruntime;
 	return free_slot;
 }

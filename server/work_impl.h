@@ -98,7 +98,15 @@ struct flow {
 	 * slice size: running averages of milliseconds per traced ray and
 	 * per A-buffer of a new view. */
 	double ms_per_ray, ms_abuffer;
+	/* Evaluations a ray may spend in this scene's passes: lowered while
+	 * most rays run out (a crawling scene's first picture comes at once,
+	 * retries go on from there), raised back while none do. */
+	uint32_t ray_bound;
 	size_t kept_bytes; /* renderer state, counted in the cache */
+	/* The view the renderer keeps state for (bc_renderer_release when
+	 * another comes). */
+	struct bc_camera rcam;
+	uint32_t rw, rh;
 };
 
 /* Per worker scratch: reused across slices, never shared. */
@@ -225,6 +233,10 @@ void bc__views_drop(struct bc_work *w, uint32_t sid);
 uint32_t bc__views_of(struct bc_work *w, uint32_t sid, struct view **out);
 /* Sets every tile of v to hold nothing. */
 void bc__view_reset(struct view *v);
+/* Gives pinned view v its depth and id planes (views keep colour only
+ * until a snapshot asks for them; all tiles are then drawn again).
+ * Returns 0, or BC_ENOMEM when they do not fit under the cap. */
+int bc__view_planes(struct bc_work *w, struct view *v);
 /* The level of v's picture: the coarsest of its tiles' (-1: a tile holds
  * nothing). */
 int bc__view_level(const struct view *v);
