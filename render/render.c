@@ -254,6 +254,7 @@ int bc_renderer_render_region(struct bc_renderer *r,
 		whole.level = region->level;
 		whole.max_evals = region->max_evals;
 		whole.short_tiles = region->short_tiles;
+		whole.threads = region->threads;
 		region = &whole;
 		stats->whole = true;
 	}

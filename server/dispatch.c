@@ -15,6 +15,7 @@
 #include "dispatch.h"
 
 #include <stdio.h>
+#include <time.h>
 #include <string.h>
 
 #include "blobcast/alloc.h"
@@ -52,7 +53,7 @@ struct bc_dispatch {
 	struct client clients[BC_SRV_MAX_CONNECTIONS];
 	/* The loop's timing (see the file comment), nanoseconds. */
 	uv_prepare_t turn;
-	uint64_t turn_t, turn_idle;
+	uint64_t turn_t, turn_idle, turn_cpu;
 	uint64_t turn_max_ns, request_max_ns;
 	bool metrics;
 };
@@ -107,17 +108,38 @@ static void refuse(struct bc_dispatch *d, struct client *c, uint32_t seq,
 
 /* ---- loop timing ---------------------------------------------------------- */
 
+/* CPU time of the calling thread. */
+static uint64_t thread_cpu_ns(void)
+{
+	struct timespec ts;
+	if (clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts)) {
+		return 0;
+	}
+	return (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
+}
+
 static void on_turn(uv_prepare_t *p)
 {
 	struct bc_dispatch *d = p->data;
 	uint64_t now = uv_hrtime(), idle = uv_metrics_idle_time(d->loop);
+	uint64_t cpu = thread_cpu_ns();
 	if (d->turn_t) {
 		uint64_t wall = now - d->turn_t, waited = idle - d->turn_idle;
 		uint64_t busy = wall > waited ? wall - waited : 0;
 		d->turn_max_ns = busy > d->turn_max_ns ? busy : d->turn_max_ns;
+		/* A long turn that used little of the CPU waited for it (other
+		 * processes, or workers on every core): the log tells which. */
+		if (busy > BC_SRV_SLOW_TURN_MS * 1000000u) {
+			bc_log(BC_LOG_INFO,
+			       "a loop turn took %.1f ms, %.1f ms of it on the "
+			       "CPU",
+			       (double)busy / 1e6,
+			       (double)(cpu - d->turn_cpu) / 1e6);
+		}
 	}
 	d->turn_t = now;
 	d->turn_idle = idle;
+	d->turn_cpu = cpu;
 }
 
 /* ---- HELLO, STATS ---------------------------------------------------------- */

@@ -236,6 +236,8 @@ static void batch_commit(struct batch *x)
 	s->last_edit_ms = bc__unix_ms();
 	s->edit_ms_avg =
 	    s->edit_ms_avg == 0.0 ? ms : 0.9 * s->edit_ms_avg + 0.1 * ms;
+	bc_log(BC_LOG_DEBUG, "session %s: edit %llu journaled in %.1f ms",
+	       s->name, (unsigned long long)s->order, ms);
 	bc__session_changed(s);
 	follow(s, x);
 	broadcast(s, x);

@@ -462,6 +462,8 @@ static int render_slice(struct bc_work *w, struct worker *wk, struct flow *f,
 		rg.tile_first = sl.first;
 		rg.tile_count = sl.count;
 		rg.adopt_key = true;
+		rg.threads = wk->team;
+		f->render_calls++;
 		rc = bc_renderer_render_region(f->r, &v->camera, &v->frame, &rg,
 		                               &st, ei);
 		if (rc) {
@@ -829,12 +831,16 @@ bool bc__job_slice(struct bc_work *w, struct worker *wk, struct flow *f,
 	double t0 = bc_clock_ms();
 	int rc = 0;
 	bool over = false;
+	uint64_t rendered = f->render_calls;
 	if (job->stage == JS_START) {
 		job->started_ms = t0;
 	}
 	/* Steps while the slice has time: a small job ends in one. */
 	while (!over && bc_clock_ms() - t0 < BC_SRV_SLICE_MS) {
 		over = step(w, wk, f, job, &ei, &rc);
+	}
+	if (f->render_calls == rendered) {
+		wk->team = 1; /* encoding: one thread */
 	}
 	if (!over) {
 		return false;

@@ -16,11 +16,13 @@
  *
  * Slices. The worker runs one slice of the flow's current job (job.c: a
  * few milliseconds of tiles, or of encoding) and puts the flow back; any
- * job gives way between slices. A slice that ran long (a new view of a big
- * scene builds its A-buffer in one renderer call) marks its flow, and
- * while one worker is inside such a slice the others do not start another
- * one as long as shorter work waits: one heavy session never holds every
- * worker.
+ * job gives way between slices. While the other workers wait for work and
+ * no other flow has any, a slice's renderer call uses their cores too
+ * (team_of): one session alone gets the whole machine, slice by slice,
+ * and is charged for every core it used. A slice that ran long (a new view of a
+ * big scene builds its A-buffer in one renderer call) marks its flow, and while
+ * one worker is inside such a slice the others do not start another one as long
+ * as shorter work waits: one heavy session never holds every worker.
  *
  * Inside a flow, between jobs, the queued changes are applied to the copy
  * (flow.c); jobs run interactive class first, then stills, then snapshots,
@@ -32,7 +34,6 @@
  * waits a bounded time, since a renderer call does not return early.
  */
 #include <string.h>
-#include <sys/resource.h>
 #include <unistd.h>
 
 #include "blobcast/alloc.h"
@@ -273,17 +274,29 @@ static void drop_flow(struct bc_work *w, struct flow *f)
 	memset(f, 0, sizeof(*f));
 }
 
+/* The render threads the next slice may use: while every other worker
+ * waits and no other flow has work, the cores they would use are free,
+ * and one session's frames come as fast as the machine allows (a worker
+ * woken meanwhile shares a core for the rest of the slice, a few
+ * milliseconds). Called with the lock held, the slice's flow held. */
+static uint32_t team_of(const struct bc_work *w)
+{
+	if (w->waiting + 1u < w->nworkers) {
+		return 1u;
+	}
+	for (uint32_t i = 0; i < BC_SRV_MAX_FLOWS; i++) {
+		const struct flow *f = &w->flows[i];
+		if (has_work(f) && !f->held) {
+			return 1u;
+		}
+	}
+	return w->nworkers;
+}
+
 static void worker_main(void *arg)
 {
 	struct worker *wk = arg;
 	struct bc_work *w = wk->w;
-	/* Rendering yields the CPU to the loop thread and to clients on the
-	 * same host: a frame may wait, a PING should not. On Linux the nice
-	 * value is a thread's: who 0 is the calling thread. */
-	if (setpriority(PRIO_PROCESS, 0, BC_SRV_WORKER_NICE) != 0) {
-		bc_log(BC_LOG_DEBUG, "render worker %u keeps its priority",
-		       wk->index);
-	}
 	uv_mutex_lock(&w->lock);
 	while (!w->quit) {
 		struct flow *f = pick(w, bc_clock_ms());
@@ -293,7 +306,9 @@ static void worker_main(void *arg)
 		bool over, was_long, first;
 		double t0, ms;
 		if (!f) {
+			w->waiting++;
 			uv_cond_wait(&w->cond, &w->lock);
+			w->waiting--;
 			continue;
 		}
 		f->held = true;
@@ -305,6 +320,7 @@ static void worker_main(void *arg)
 		job = take_turn(w, f, &changes, &stop);
 		was_long = runs_long(f);
 		w->long_slices += was_long ? 1u : 0u;
+		wk->team = team_of(w);
 		wk->in_slice = true;
 		uv_mutex_unlock(&w->lock);
 		t0 = bc_clock_ms();
@@ -313,8 +329,9 @@ static void worker_main(void *arg)
 		uv_mutex_lock(&w->lock);
 		wk->in_slice = false;
 		w->long_slices -= was_long ? 1u : 0u;
-		f->vruntime += ms;
-		f->render_us += (uint64_t)(ms * 1000.0);
+		/* A slice is charged for every core it used. */
+		f->vruntime += ms * (double)wk->team;
+		f->render_us += (uint64_t)(ms * (double)wk->team * 1000.0);
 		f->long_ms = ms >= BC_SRV_LONG_SLICE_MS ? ms : 0.0;
 		if (first && job) {
 			f->first_ms = 0.7 * f->first_ms + 0.3 * ms;
@@ -623,9 +640,9 @@ int bc_work_start(struct bc_work **out, const struct bc_work_opts *opts,
 	}
 	w->budget_ms =
 	    opts->budget_ms ? opts->budget_ms : BC_SRV_FRAME_BUDGET_MS;
-	/* Workers are the parallelism: each renderer traces on its
-	 * worker's thread alone. */
-	w->ropts.threads = 1;
+	/* A renderer has a thread per worker; each slice says how many it
+	 * may use (team_of). */
+	w->ropts.threads = w->nworkers;
 	w->ropts.gl_platform = opts->gl_platform;
 	w->ropts.simd = opts->simd;
 	if (uv_mutex_init(&w->lock) || uv_cond_init(&w->cond)) {

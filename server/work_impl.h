@@ -102,7 +102,8 @@ struct flow {
 	 * most rays run out (a crawling scene's first picture comes at once,
 	 * retries go on from there), raised back while none do. */
 	uint32_t ray_bound;
-	size_t kept_bytes; /* renderer state, counted in the cache */
+	uint64_t render_calls; /* renderer calls of its slices */
+	size_t kept_bytes;     /* renderer state, counted in the cache */
 	/* The view the renderer keeps state for (bc_renderer_release when
 	 * another comes). */
 	struct bc_camera rcam;
@@ -116,6 +117,10 @@ struct worker {
 	uint32_t index;
 	bool started;
 	bool in_slice; /* for bc_work_stop's bounded wait */
+	/* Render threads this worker's slice may use: 1, or every worker's
+	 * when the others wait for work (work.c); a slice that does not
+	 * render sets it back to 1 (job.c). */
+	uint32_t team;
 	struct bc_encoder *enc;
 	uint8_t *mask, *shorts; /* per tile of the view being rendered */
 	size_t mask_cap;
@@ -177,6 +182,7 @@ struct bc_work {
 	double min_vruntime;
 	uint32_t queued, running; /* jobs */
 	uint32_t long_slices;     /* workers inside a long slice now */
+	uint32_t waiting;         /* workers waiting for work */
 	double short_seen_ms; /* when short work last waited (bc_clock_ms) */
 	struct bc_job *rhead, *rtail; /* finished, for the loop */
 	uv_async_t results;

@@ -128,7 +128,8 @@ static int naive_render(struct bc_renderer *base, const struct bc_camera *cam,
 	nf.region = region;
 	atomic_init(&nf.next_band, 0u);
 	bc__progress_init(&nf.progress, r, out->height);
-	bc_pool_run(r->threads, naive_rows, &nf);
+	bc_pool_run(bc_render_region_threads(region, r->threads), naive_rows,
+	            &nf);
 	for (uint32_t i = 0; i < BC_CPU_MAX_THREADS; i++) {
 		stats->field_evals += nf.evals[i];
 		stats->rays += nf.rays[i];

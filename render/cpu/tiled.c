@@ -207,6 +207,7 @@ struct tiled_frame {
 	uint32_t t0, t1; /* the region's tiles are in [t0, t1) */
 	uint32_t nprims;
 	const struct bc_render_region *region;
+	uint32_t threads; /* the call's share of the renderer's threads */
 	atomic_uint next; /* work counter of the running phase */
 	atomic_uint tiles_done;
 	struct bc__progress progress;
@@ -870,7 +871,7 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 	memset(b->state, 0, tf->ntiles * sizeof(*b->state));
 	atomic_store(&tf->next, 0u);
 	if (tf->nprims > 0) {
-		bc_pool_run(r->threads, phase_prims, tf);
+		bc_pool_run(tf->threads, phase_prims, tf);
 	}
 	if ((rc = build_cand(tf, false, ei))) {
 		return rc;
@@ -910,6 +911,7 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 	fc.short_tiles = region->short_tiles;
 	tf.fc = &fc;
 	tf.region = region;
+	tf.threads = bc_render_region_threads(region, r->threads);
 	tf.b = b;
 	tf.kern = bc__ab_kernel_for(base->opts.simd);
 	tf.tw = (out->width + BC_CPU_TILE - 1) / BC_CPU_TILE;
@@ -939,7 +941,7 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 	}
 	if (todo > 0) {
 		atomic_store(&tf.next, tf.t0);
-		bc_pool_run(r->threads, phase_lists, &tf);
+		bc_pool_run(tf.threads, phase_lists, &tf);
 	}
 	for (uint32_t t = tf.t0; t < tf.t1; t++) {
 		if ((!region->tiles || region->tiles[t]) &&
@@ -953,7 +955,7 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 	t_ab = bc_clock_ms();
 	bc__progress_init(&tf.progress, r, tf.ntiles);
 	atomic_store(&tf.next, tf.t0);
-	bc_pool_run(r->threads, phase_trace, &tf);
+	bc_pool_run(tf.threads, phase_trace, &tf);
 	for (uint32_t i = 0; i < r->threads; i++) {
 		overflows += b->workers[i].overflows;
 	}

@@ -513,7 +513,7 @@ static int svo_render(struct bc_renderer *base, const struct bc_camera *cam,
 	atomic_init(&fr.rays, 0u);
 	atomic_init(&fr.short_rays, 0u);
 	atomic_init(&fr.tiles, 0u);
-	bc_pool_run(r->threads, worker, &fr);
+	bc_pool_run(bc_render_region_threads(region, r->threads), worker, &fr);
 	if (atomic_load(&fr.next) < fr.ntiles) {
 		/* Every thread failed to get its scratch memory. */
 		rc = atomic_load(&fr.err);

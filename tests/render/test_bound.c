@@ -25,6 +25,7 @@
  * tracer (and its variant for unary nodes) takes some twenty more.
  */
 #include <math.h>
+#include <stdlib.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
@@ -587,6 +588,63 @@ static void test_tiled_scalar_and_packets_bound_rays_alike(void)
 	}
 }
 
+/* ---- A call's share of the threads -------------------------------------- */
+
+/* A renderer of four threads draws the same pixels whether a call uses
+ * all of them or one (the daemon lends a slice the idle workers' cores),
+ * in one call or in slices of tiles. */
+static void threads_one(enum bc_backend b)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_render_opts o = {.threads = 4};
+	struct bc_renderer *all = NULL, *one = NULL;
+	struct bc_frame fa = {0}, f1 = {0};
+	struct bc_render_stats st;
+	struct bc_camera cam;
+	struct bc_errinfo ei = {0};
+	uint32_t n = bc_render_tiles_x(PLAIN_W) * bc_render_tiles_y(PLAIN_H);
+	REQUIRE(t && build_plain(t) == 0);
+	frame_scene(bc_tree_lin(t), &cam);
+	REQUIRE(bc_renderer_create(&all, b, &o, &ei) == 0);
+	REQUIRE(bc_renderer_create(&one, b, &o, &ei) == 0);
+	REQUIRE(bc_frame_init(&fa, PLAIN_W, PLAIN_H) == 0);
+	REQUIRE(bc_frame_init(&f1, PLAIN_W, PLAIN_H) == 0);
+	REQUIRE(bc_renderer_sync(all, t, NULL, &ei) == 0);
+	REQUIRE(bc_renderer_sync(one, t, NULL, &ei) == 0);
+	REQUIRE(bc_renderer_render(all, &cam, &fa, &st, &ei) == 0);
+	fill_sentinel(&f1);
+	f1.key = 0;
+	for (uint32_t first = 0; first < n; first += 37) {
+		struct bc_render_region rg = {
+		    .tile_first = first,
+		    .tile_count = n - first < 37 ? n - first : 37,
+		    .adopt_key = true,
+		    .threads = first % 2 ? 1u : 3u};
+		uint8_t *tiles = calloc(n, 1);
+		REQUIRE(tiles);
+		memset(tiles + first, 1, rg.tile_count);
+		rg.tiles = tiles;
+		memset(&st, 0, sizeof(st));
+		CHECK_EQ_INT(
+		    bc_renderer_render_region(one, &cam, &f1, &rg, &st, &ei),
+		    0);
+		free(tiles);
+	}
+	CHECK_EQ_INT(diff_frames(&f1, &fa, bc_backend_name(b)), 0);
+	bc_renderer_destroy(all);
+	bc_renderer_destroy(one);
+	bc_frame_finish(&fa);
+	bc_frame_finish(&f1);
+	bc_tree_destroy(t);
+}
+
+static void test_a_calls_threads_do_not_change_pixels(void)
+{
+	threads_one(BC_BACKEND_NAIVE);
+	threads_one(BC_BACKEND_TILED);
+	threads_one(BC_BACKEND_SVO);
+}
+
 static void test_release_and_kept_bytes_accept_null(void)
 {
 	bc_renderer_release(NULL);
@@ -608,6 +666,8 @@ static const struct bc_test tests[] = {
      test_svo_bounds_rays_and_releases_memory},
     {"gl_bounds_rays_and_releases_memory",
      test_gl_bounds_rays_and_releases_memory},
+    {"a_calls_threads_do_not_change_pixels",
+     test_a_calls_threads_do_not_change_pixels},
 };
 
 BC_TEST_MAIN(tests)

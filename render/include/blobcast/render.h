@@ -176,7 +176,24 @@ struct bc_render_region {
 	 * conditions (another key, or none yet) then takes this rendering's
 	 * key and only the region is drawn, instead of the whole frame. */
 	bool adopt_key;
+	/* Threads of the renderer's (opts.threads) this call may use, 0:
+	 * all of them. A caller that schedules its own workers gives a call
+	 * the cores that are free at the time, and pixels do not depend on
+	 * it (the CPU backends hand out tiles or rows, not pixels, to
+	 * threads; gl ignores it). */
+	uint32_t threads;
 };
+
+/* The threads a call of a renderer with `threads` threads may use under
+ * region (NULL: all). */
+static inline uint32_t
+bc_render_region_threads(const struct bc_render_region *region,
+                         uint32_t threads)
+{
+	return region && region->threads && region->threads < threads
+	           ? region->threads
+	           : threads;
+}
 
 struct bc_renderer;
 
