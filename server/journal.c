@@ -124,6 +124,115 @@ struct kept {
 	uint32_t len;
 };
 
+/* The records that applied, where they lie in the file being replayed. */
+struct kept_list {
+	struct kept *at;
+	size_t n, cap;
+};
+
+static int keep_record(struct kept_list *k, off_t off, uint32_t len)
+{
+	if (k->n == k->cap) {
+		size_t c = k->cap ? 2 * k->cap : 64;
+		struct kept *g = bc_reallocarray(k->at, c, sizeof(*k->at));
+		if (!g) {
+			return BC_ENOMEM;
+		}
+		k->at = g;
+		k->cap = c;
+	}
+	k->at[k->n].off = off;
+	k->at[k->n++].len = len;
+	return 0;
+}
+
+/* Puts a journal of the kept records of fd (file) in file's place, the
+ * damaged file set aside as evidence; *rec and *cap are the caller's
+ * buffer. Returns 0 or an error in ei. */
+static int rewrite_journal(struct bc_store_session *ss, int fd,
+                           const char *file, const struct kept_list *k,
+                           uint64_t skipped, uint8_t **rec, size_t *cap,
+                           struct bc_errinfo *ei)
+{
+	char tmp[PATH_LEN], aside[PATH_LEN];
+	int out_fd, rc = 0;
+	bc__store_fmt_path(tmp, "%s/journal-%llu.bin.tmp", ss->path,
+	                   (unsigned long long)ss->base);
+	out_fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+	if (out_fd < 0) {
+		return bc__store_sys_error(ei, "cannot create", tmp);
+	}
+	for (size_t i = 0; i < k->n && !rc; i++) {
+		size_t n = RECORD_HEADER + k->at[i].len;
+		if (n > *cap) {
+			uint8_t *g = bc_realloc(*rec, n);
+			if (!g) {
+				rc = bc_errinfo_set(ei, BC_ENOMEM,
+				                    "out of memory");
+				break;
+			}
+			*rec = g;
+			*cap = n;
+		}
+		if (!read_at(fd, *rec, n, k->at[i].off) ||
+		    write(out_fd, *rec, n) != (ssize_t)n) {
+			rc = bc__store_sys_error(ei, "cannot write", tmp);
+		}
+	}
+	if (!rc && fsync(out_fd) != 0) {
+		rc = bc__store_sys_error(ei, "cannot sync", tmp);
+	}
+	close(out_fd);
+	if (!rc && bc__store_set_aside(file, aside) != 0) {
+		rc = bc__store_sys_error(ei, "cannot set aside", file);
+	}
+	if (!rc && rename(tmp, file) != 0) {
+		rc = bc__store_sys_error(ei, "cannot rename", tmp);
+	}
+	if (rc) {
+		unlink(tmp);
+		return rc;
+	}
+	bc__store_sync_dir(ss->path);
+	bc_log(BC_LOG_ERROR,
+	       "session %s: journal %s: %llu damaged part(s) skipped, "
+	       "%llu records restored; the damaged file is kept as %s",
+	       ss->name, file, (unsigned long long)skipped,
+	       (unsigned long long)ss->records, aside);
+	return 0;
+}
+
+/* Applies the record of edit ord at off (len bytes in rec) through fn.
+ * Returns 1 when it applied (kept in k), 0 when it did not (logged and
+ * counted in *skipped), or BC_ENOMEM. */
+static int apply_record(struct bc_store_session *ss, const char *file,
+                        bc_store_replay_fn fn, void *ud, uint64_t *order,
+                        const uint8_t *rec, uint32_t len, uint64_t ord,
+                        off_t off, struct kept_list *k, uint64_t *skipped)
+{
+	int r = fn(ud, ord, rec, len);
+	if (r) {
+		bc_log(BC_LOG_ERROR,
+		       "session %s: journal %s: record at bytes %lld..%lld "
+		       "(edit %llu) does not apply (%s): skipped",
+		       ss->name, file, (long long)off,
+		       (long long)(off + RECORD_HEADER + len),
+		       (unsigned long long)ord, bc_strerror(r));
+		(*skipped)++;
+		return 0;
+	}
+	if (ord != *order + 1 && *order >= ss->base) {
+		bc_log(BC_LOG_ERROR,
+		       "session %s: journal %s: edits %llu..%llu are missing "
+		       "before byte %lld",
+		       ss->name, file, (unsigned long long)(*order + 1),
+		       (unsigned long long)(ord - 1), (long long)off);
+	}
+	*order = ord;
+	ss->records++;
+	return keep_record(k, off, len) ? BC_ENOMEM : 1;
+}
+
 /*
  * Replays journal-<base>.bin. Records are applied in file order while
  * their order numbers rise. A record that fails its checks is skipped and
@@ -138,15 +247,14 @@ struct kept {
 int bc__store_replay(struct bc_store_session *ss, bc_store_replay_fn fn,
                      void *ud, uint64_t *order, struct bc_errinfo *ei)
 {
-	char file[PATH_LEN], tmp[PATH_LEN], aside[PATH_LEN];
+	char file[PATH_LEN];
 	uint8_t *rec = NULL;
 	size_t cap = 0;
-	struct kept *kept = NULL;
-	size_t nkept = 0, kcap = 0;
+	struct kept_list kept = {0};
 	off_t off = 0, size, good = 0;
 	uint64_t skipped = 0;
 	struct stat st;
-	int fd, rc = 0;
+	int fd, r = 0, rc = 0;
 	bc__store_fmt_path(file, "%s/journal-%llu.bin", ss->path,
 	                   (unsigned long long)ss->base);
 	fd = open(file, O_RDWR | O_CLOEXEC);
@@ -164,61 +272,27 @@ int bc__store_replay(struct bc_store_session *ss, bc_store_replay_fn fn,
 		uint32_t len;
 		uint64_t ord;
 		off_t next = size; /* resync sets it; GCC cannot tell */
-		int r = record_at(fd, off, size, &rec, &cap, &len, &ord);
-		if (r < 0) {
-			rc = bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
-			goto out;
-		}
+		r = record_at(fd, off, size, &rec, &cap, &len, &ord);
 		if (r == 0 && ord > *order) {
-			if ((r = fn(ud, ord, rec, len))) {
-				bc_log(
-				    BC_LOG_ERROR,
-				    "session %s: journal %s: record at bytes "
-				    "%lld..%lld (edit %llu) does not apply "
-				    "(%s): skipped",
-				    ss->name, file, (long long)off,
-				    (long long)(off + RECORD_HEADER + len),
-				    (unsigned long long)ord, bc_strerror(r));
-				skipped++;
-			} else {
-				if (ord != *order + 1 && *order >= ss->base) {
-					bc_log(BC_LOG_ERROR,
-					       "session %s: journal %s: edits "
-					       "%llu..%llu are missing before "
-					       "byte %lld",
-					       ss->name, file,
-					       (unsigned long long)(*order + 1),
-					       (unsigned long long)(ord - 1),
-					       (long long)off);
-				}
-				*order = ord;
-				ss->records++;
-				if (nkept == kcap) {
-					size_t c = kcap ? 2 * kcap : 64;
-					struct kept *g = bc_reallocarray(
-					    kept, c, sizeof(*kept));
-					if (!g) {
-						rc = bc_errinfo_set(
-						    ei, BC_ENOMEM,
-						    "out of memory");
-						goto out;
-					}
-					kept = g;
-					kcap = c;
-				}
-				kept[nkept].off = off;
-				kept[nkept++].len = len;
+			/* Whole and new: applied, or skipped when fn refuses
+			 * it; the next record follows it either way. */
+			r = apply_record(ss, file, fn, ud, order, rec, len, ord,
+			                 off, &kept, &skipped);
+			if (r < 0) {
+				break;
 			}
 			off += (off_t)RECORD_HEADER + len;
 			good = off;
 			continue;
 		}
+		if (r < 0) {
+			break;
+		}
 		/* Damaged, or an order already restored: find the next whole
 		 * record after it. */
 		if ((r = resync(fd, off + 1, size, *order, &rec, &cap, &next)) <
 		    0) {
-			rc = bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
-			goto out;
+			break;
 		}
 		if (next == size) {
 			break; /* nothing valid follows: a torn tail */
@@ -230,57 +304,12 @@ int bc__store_replay(struct bc_store_session *ss, bc_store_replay_fn fn,
 		skipped++;
 		off = next;
 	}
-	if (skipped) {
+	if (r < 0) {
+		rc = bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+	} else if (skipped) {
 		/* Keep the evidence; install the records that applied. */
-		int out_fd;
-		bc__store_fmt_path(tmp, "%s/journal-%llu.bin.tmp", ss->path,
-		                   (unsigned long long)ss->base);
-		out_fd =
-		    open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-		if (out_fd < 0) {
-			rc = bc__store_sys_error(ei, "cannot create", tmp);
-			goto out;
-		}
-		good = 0;
-		for (size_t i = 0; i < nkept && !rc; i++) {
-			size_t n = RECORD_HEADER + kept[i].len;
-			if (n > cap) {
-				uint8_t *g = bc_realloc(rec, n);
-				if (!g) {
-					rc = bc_errinfo_set(ei, BC_ENOMEM,
-					                    "out of memory");
-					break;
-				}
-				rec = g;
-				cap = n;
-			}
-			if (!read_at(fd, rec, n, kept[i].off) ||
-			    write(out_fd, rec, n) != (ssize_t)n) {
-				rc = bc__store_sys_error(ei, "cannot write",
-				                         tmp);
-			}
-			good += (off_t)n;
-		}
-		if (!rc && fsync(out_fd) != 0) {
-			rc = bc__store_sys_error(ei, "cannot sync", tmp);
-		}
-		close(out_fd);
-		if (!rc && bc__store_set_aside(file, aside) != 0) {
-			rc = bc__store_sys_error(ei, "cannot set aside", file);
-		}
-		if (!rc && rename(tmp, file) != 0) {
-			rc = bc__store_sys_error(ei, "cannot rename", tmp);
-		}
-		if (rc) {
-			unlink(tmp);
-			goto out;
-		}
-		bc__store_sync_dir(ss->path);
-		bc_log(BC_LOG_ERROR,
-		       "session %s: journal %s: %llu damaged part(s) skipped, "
-		       "%llu records restored; the damaged file is kept as %s",
-		       ss->name, file, (unsigned long long)skipped,
-		       (unsigned long long)ss->records, aside);
+		rc = rewrite_journal(ss, fd, file, &kept, skipped, &rec, &cap,
+		                     ei);
 	} else if (good != size) {
 		bc_log(BC_LOG_WARN,
 		       "session %s: journal %s: cutting a torn tail at byte "
@@ -293,7 +322,7 @@ int bc__store_replay(struct bc_store_session *ss, bc_store_replay_fn fn,
 	}
 out:
 	bc_free(rec);
-	bc_free(kept);
+	bc_free(kept.at);
 	close(fd);
 	return rc;
 }

@@ -207,6 +207,47 @@ static int set_str(char **dst, const char *v)
 	return 0;
 }
 
+/* The configuration's "tokens": [{"token": ..., "role": ...}, ...]. */
+static int config_tokens(struct bc_srv_config *cfg, const char *path,
+                         json_t *val, struct bc_errinfo *ei)
+{
+	size_t i;
+	json_t *tok;
+	if (!json_is_array(val) || json_array_size(val) > 1024) {
+		return bc_errinfo_set(ei, BC_EPARSE,
+		                      "%s: tokens: expected an array of at "
+		                      "most 1024",
+		                      path);
+	}
+	cfg->tokens = bc_calloc(json_array_size(val) + 1, sizeof(*cfg->tokens));
+	if (!cfg->tokens) {
+		return BC_ENOMEM;
+	}
+	json_array_foreach(val, i, tok)
+	{
+		const char *t =
+		    json_string_value(json_object_get(tok, "token"));
+		const char *r = json_string_value(json_object_get(tok, "role"));
+		if (!t || !*t || strlen(t) > BC_PROTO_MAX_TOKEN || !r ||
+		    (strcmp(r, "editor") && strcmp(r, "viewer"))) {
+			return bc_errinfo_set(
+			    ei, BC_EPARSE,
+			    "%s: tokens[%zu]: needs \"token\" "
+			    "(1..%u bytes) and \"role\" "
+			    "(editor|viewer)",
+			    path, i, BC_PROTO_MAX_TOKEN);
+		}
+		if (!(cfg->tokens[i].token = bc_strdup(t))) {
+			return BC_ENOMEM;
+		}
+		cfg->tokens[i].role = strcmp(r, "editor") == 0
+		                          ? BC_PROTO_ROLE_EDITOR
+		                          : BC_PROTO_ROLE_VIEWER;
+		cfg->ntokens++;
+	}
+	return 0;
+}
+
 static int load_config(struct bc_srv_config *cfg, const char *path,
                        struct bc_errinfo *ei)
 {
@@ -227,49 +268,8 @@ static int load_config(struct bc_srv_config *cfg, const char *path,
 	json_object_foreach(root, key, val)
 	{
 		if (strcmp(key, "tokens") == 0) {
-			size_t i;
-			json_t *tok;
-			if (!json_is_array(val) ||
-			    json_array_size(val) > 1024) {
-				rc = bc_errinfo_set(ei, BC_EPARSE,
-				                    "%s: tokens: expected an "
-				                    "array of at most 1024",
-				                    path);
+			if ((rc = config_tokens(cfg, path, val, ei))) {
 				goto out;
-			}
-			cfg->tokens = bc_calloc(json_array_size(val) + 1,
-			                        sizeof(*cfg->tokens));
-			if (!cfg->tokens) {
-				rc = BC_ENOMEM;
-				goto out;
-			}
-			json_array_foreach(val, i, tok)
-			{
-				const char *t = json_string_value(
-				    json_object_get(tok, "token"));
-				const char *r = json_string_value(
-				    json_object_get(tok, "role"));
-				if (!t || !*t ||
-				    strlen(t) > BC_PROTO_MAX_TOKEN || !r ||
-				    (strcmp(r, "editor") &&
-				     strcmp(r, "viewer"))) {
-					rc = bc_errinfo_set(
-					    ei, BC_EPARSE,
-					    "%s: tokens[%zu]: needs "
-					    "\"token\" (1..%u bytes) and "
-					    "\"role\" (editor|viewer)",
-					    path, i, BC_PROTO_MAX_TOKEN);
-					goto out;
-				}
-				if (!(cfg->tokens[i].token = bc_strdup(t))) {
-					rc = BC_ENOMEM;
-					goto out;
-				}
-				cfg->tokens[i].role =
-				    strcmp(r, "editor") == 0
-				        ? BC_PROTO_ROLE_EDITOR
-				        : BC_PROTO_ROLE_VIEWER;
-				cfg->ntokens++;
 			}
 			continue;
 		}

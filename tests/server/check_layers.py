@@ -99,8 +99,8 @@ def check_lengths(src):
             lines = f.read().split("\n")
         start = None
         for i, line in enumerate(lines):
-            if line == "{" and i > 0 and re.match(r"^[a-z_].*", lines[i - 1]
-                                                  .lstrip("\t")):
+            if line == "{" and i > 0 and re.match(r"^[a-z_].*",
+                                                  lines[i - 1].lstrip()):
                 # The signature may take several lines: back to the one
                 # at column 0 that starts it.
                 start = i - 1
