@@ -27,23 +27,23 @@ export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 echo "== format (.clang-format)"
 sh tests/check_format.sh
 
+# The tests build in folders of their own (build-asan, build-check), never
+# in build/, which is the user's (the quick start's daemon and CLI).
+release=build-check
+
 echo "== sanitizer build (ASan + UBSan, -Werror)"
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-	-DBLOBCAST_SANITIZE=ON -DBLOBCAST_WERROR=ON >/dev/null
+	-DBLOBCAST_SANITIZE=ON -DBLOBCAST_WERROR=ON \
+	-DBLOBCAST_GPU_KIT_BUILD="$PWD/$release" >/dev/null
 cmake --build build-asan -j "$jobs"
 
 # The optimized build uses CMake's default generator (Unix Makefiles), the
-# sanitizer build Ninja, so that both keep working. A build/ configured by
-# another generator (older scripts used Ninja) is reconfigured from scratch,
-# as CMake refuses to switch generators in place.
+# sanitizer build Ninja, so that both keep working. test_rss and
+# test_gpu_run use its programs.
 echo "== optimized build (-Werror, default generator)"
-if [ -f build/CMakeCache.txt ] &&
-	! grep -q '^CMAKE_GENERATOR:INTERNAL=Unix Makefiles$' build/CMakeCache.txt; then
-	rm -rf build/CMakeCache.txt build/CMakeFiles
-fi
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release \
+cmake -S . -B "$release" -DCMAKE_BUILD_TYPE=Release \
 	-DBLOBCAST_WERROR=ON >/dev/null
-cmake --build build -j "$jobs"
+cmake --build "$release" -j "$jobs"
 
 if [ "$fuzz" = 1 ] && [ -f tests/fuzz/run.sh ]; then
 	echo "== fuzzing"

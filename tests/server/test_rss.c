@@ -12,14 +12,14 @@
  *
  * RSS means something only without AddressSanitizer's allocator, so this
  * test runs the optimized daemon that tests/run.sh builds beside the
- * sanitizer build (BLOBCASTD_RELEASE, default build/server/blobcastd in
+ * sanitizer build (BLOBCASTD_RELEASE, default build-check/server/blobcastd in
  * the source tree). Without one it says so and is skipped.
  */
 #include "test.h" /* before daemon.h: its test runner needs it */
 #include "daemon.h"
 
 #ifndef BLOBCASTD_RELEASE_PATH
-#define BLOBCASTD_RELEASE_PATH "build/server/blobcastd"
+#define BLOBCASTD_RELEASE_PATH "build-check/server/blobcastd"
 #endif
 
 enum { STALLED = 16, SIZE = 1400 };
