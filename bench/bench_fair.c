@@ -1435,7 +1435,15 @@ static void *heavy_main(void *arg)
 					break;
 				}
 			}
-			rc = conn_recv(&h->c, ms_until(next, 30));
+			/* A client with nothing to send before an answer
+			 * comes (A with its window full, B always) waits for
+			 * one: a zero timeout would spin and take a core from
+			 * the daemon it measures. */
+			rc = conn_recv(
+			    &h->c, (h->tag == 'A' && h->ninflight < A_WINDOW) ||
+			                   h->tag == 'C'
+			               ? ms_until(next, 30)
+			               : 30);
 			if (rc < 0) {
 				closed_text(&h->c, h->last_error,
 				            sizeof(h->last_error));
