@@ -84,6 +84,22 @@ size_t bc_proto_reader_pending(const struct bc_proto_reader *r)
 	return r->len - r->pos;
 }
 
+void *bc_proto_reader_detach(struct bc_proto_reader *r)
+{
+	uint8_t *old = r->buf, *tail = NULL;
+	size_t left = r->len - r->pos;
+	if (!old || (left > 0 && !(tail = bc_malloc(left)))) {
+		return NULL;
+	}
+	if (left > 0) {
+		memcpy(tail, r->buf + r->pos, left);
+	}
+	r->buf = tail;
+	r->cap = r->len = left;
+	r->pos = 0;
+	return old;
+}
+
 int bc_proto_reader_feed(struct bc_proto_reader *r, const void *bytes, size_t n)
 {
 	if (r->err) {

@@ -72,6 +72,15 @@ struct bc_link {
 	 * older frame is spoiled). */
 	void (*send_frame)(void *ud, struct bc_conn_ref to,
 	                   struct bc_shared *frame);
+	/* Queues a whole encoded message (the transport takes its own
+	 * reference): one encoding for many clients, made off the loop (a
+	 * big scene's SCENE_STATE), and no copy of it on the loop. */
+	void (*send_shared)(void *ud, struct bc_conn_ref to,
+	                    struct bc_shared *msg);
+	/* The buffer the message being handled lies in, now the caller's
+	 * (bc_free): a big payload kept without a copy on the loop. NULL
+	 * when out of memory; the message is unchanged either way. */
+	void *(*detach)(void *ud, struct bc_conn_ref from);
 	/* Closes the connection, after its queued bytes when flush is set
 	 * (an ERROR just sent then still goes out). */
 	void (*close)(void *ud, struct bc_conn_ref to, const char *why,

@@ -103,32 +103,62 @@ void bc__send_info(struct bc_session *s)
 	}
 }
 
-void bc__send_state(struct bc_session *s, struct bc_member *to, uint32_t author,
-                    uint32_t author_seq, const uint8_t *bytes, size_t len)
+struct bc_shared *bc__state_msg(const struct bc_tree *t,
+                                const struct bc_camera *cam, uint64_t order,
+                                uint32_t author, uint32_t author_seq)
 {
 	struct bc_msg st = {.type = BC_MSG_SCENE_STATE};
+	struct bc_proto_buf b;
+	struct bc_errinfo ei = {0};
+	struct bc_shared *msg = NULL;
+	uint8_t *bytes = NULL;
+	size_t len = 0;
+	if (bc_scene_encode(t, cam, &bytes, &len)) {
+		return NULL;
+	}
+	st.scene_state.order = order;
+	st.scene_state.author = author;
+	st.scene_state.author_seq = author_seq;
+	st.scene_state.scene.ptr = bytes;
+	st.scene_state.scene.len = (uint32_t)len;
+	bc_proto_buf_init(&b, 0);
+	if (bc_proto_encode(&b, &st, &ei) == 0 &&
+	    (msg = bc_shared_new(b.len))) {
+		memcpy(msg->data, b.data, b.len);
+	}
+	bc_proto_buf_finish(&b);
+	bc_free(bytes);
+	return msg;
+}
+
+void bc__send_state_msg(struct bc_session *s, struct bc_member *to,
+                        struct bc_shared *msg)
+{
+	const struct bc_link *l = s->ss->link;
 	struct bc_member *members[BC_PROTO_MAX_MEMBERS];
-	uint8_t *own = NULL;
 	uint32_t n;
-	if (!bytes && bc_scene_encode(s->tree, &s->camera, &own, &len)) {
+	if (to) {
+		l->send_shared(l->ud, to->peer->ref, msg);
+		return;
+	}
+	n = bc__members(s, members);
+	for (uint32_t i = 0; i < n; i++) {
+		l->send_shared(l->ud, members[i]->peer->ref, msg);
+	}
+}
+
+void bc__send_state(struct bc_session *s, struct bc_member *to, uint32_t author,
+                    uint32_t author_seq)
+{
+	struct bc_shared *msg =
+	    bc__state_msg(s->tree, &s->camera, s->order, author, author_seq);
+	if (!msg) {
 		bc_log(BC_LOG_ERROR, "session %s: cannot encode the scene",
 		       s->name);
 		return;
 	}
-	st.scene_state.order = s->order;
-	st.scene_state.author = author;
-	st.scene_state.author_seq = author_seq;
-	st.scene_state.scene.ptr = bytes ? bytes : own;
-	st.scene_state.scene.len = (uint32_t)len;
-	if (to) {
-		bc__send(to, &st);
-	} else {
-		n = bc__members(s, members);
-		for (uint32_t i = 0; i < n; i++) {
-			bc__send(members[i], &st);
-		}
-	}
-	bc_free(own);
+	bc__send_state_msg(s, to, msg);
+	bc_shared_unref(msg);
 }
 
 /* ---- joining and leaving -------------------------------------------------- */
@@ -167,34 +197,31 @@ void bc__mark_all(struct bc_session *s)
 /* Encoding a big scene's SCENE_STATE for joiners, off the loop. */
 struct state_task {
 	struct bc_task t;
-	uint8_t *bytes;
-	size_t len;
-	int rc;
+	struct bc_shared *msg;
+	uint64_t order;
 };
 
 static void state_run(struct bc_task *t)
 {
 	struct state_task *st = (struct state_task *)t;
 	/* The session is busy: its tree and camera do not change. */
-	st->rc =
-	    bc_scene_encode(t->s->tree, &t->s->camera, &st->bytes, &st->len);
+	st->msg = bc__state_msg(t->s->tree, &t->s->camera, st->order, 0, 0);
 }
 
 static void state_done(struct bc_task *t)
 {
 	struct state_task *st = (struct state_task *)t;
 	struct bc_session *s = t->s;
-	if (!s->removed && st->rc == 0) {
+	if (!s->removed && st->msg) {
 		bc__session_changed(s);
-		s->state_bytes = st->bytes;
-		s->state_len = st->len;
-		s->state_order = s->order;
-		st->bytes = NULL;
-	} else if (st->rc) {
+		s->state_msg = st->msg;
+		s->state_order = st->order;
+		st->msg = NULL;
+	} else if (!st->msg) {
 		bc_log(BC_LOG_ERROR, "session %s: cannot encode the scene",
 		       s->name);
 	}
-	bc_free(st->bytes);
+	bc_shared_unref(st->msg);
 	bc_free(st);
 }
 
@@ -207,12 +234,13 @@ static bool must_wait(struct bc_session *s)
 		return true;
 	}
 	if (bc_tree_node_count(s->tree) < BC_SRV_HEAVY_NODES ||
-	    (s->state_bytes && s->state_order == s->order)) {
+	    (s->state_msg && s->state_order == s->order)) {
 		return false;
 	}
 	if (!(st = bc_calloc(1, sizeof(*st)))) {
 		return false; /* encoded on the loop, then */
 	}
+	st->order = s->order;
 	st->t.run = state_run;
 	st->t.done = state_done;
 	st->t.holds_order = true;
@@ -223,7 +251,6 @@ static bool must_wait(struct bc_session *s)
 int bc__join(struct bc_member *m, struct bc_session *s, enum bc_proto_role role,
              uint32_t seq)
 {
-	bool cached;
 	if (must_wait(s)) {
 		return bc__park(s, m, seq);
 	}
@@ -248,9 +275,11 @@ int bc__join(struct bc_member *m, struct bc_session *s, enum bc_proto_role role,
 	}
 	m->shown.view = 0;
 	bc__send_info(s);
-	cached = s->state_bytes && s->state_order == s->order;
-	bc__send_state(s, m, 0, 0, cached ? s->state_bytes : NULL,
-	               cached ? s->state_len : 0);
+	if (s->state_msg && s->state_order == s->order) {
+		bc__send_state_msg(s, m, s->state_msg);
+	} else {
+		bc__send_state(s, m, 0, 0);
+	}
 	bc__present_joined(m);
 	bc__owe_frame(m);
 	bc__schedule(s);

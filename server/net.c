@@ -46,7 +46,8 @@ struct write_req {
 	uv_write_t req;
 	struct bc_conn_ref who;
 	struct bc_net *net;
-	struct bc_shared *shared; /* a frame, or NULL */
+	struct bc_shared *shared; /* a frame or a whole message, or NULL */
+	bool frame;               /* shared is a frame */
 	uint8_t *owned;           /* a message's bytes, or NULL */
 	uint8_t *cipher;          /* what goes out on a TLS connection */
 	size_t len;
@@ -187,10 +188,10 @@ static void write_done(uv_write_t *req, int status)
 	struct bc_conn *c = bc__conn_get(w->net, w->who);
 	if (c) {
 		c->queued -= w->len;
-		c->frame_bytes -= w->shared ? w->len : 0;
+		c->frame_bytes -= w->frame ? w->len : 0;
 		if (status < 0) {
 			bc__conn_close(c, uv_strerror(status));
-		} else if (w->shared) {
+		} else if (w->frame) {
 			c->frame_writing = false;
 			c->counters.frames_sent++;
 			c->counters.bytes_sent += w->len;
@@ -288,16 +289,18 @@ static bool frame_bufs(struct bc_conn *c, struct write_req *w,
 	                     (unsigned int)(shared->len - FRAME_PREFIX));
 	shared->refs++;
 	w->shared = shared;
+	w->frame = true;
 	return true;
 }
 
-/* Queues bytes (taking owned), or a reference to a shared frame. */
+/* Queues bytes (taking owned), or a reference to a shared frame (frame)
+ * or whole message. */
 static void queue_bytes(struct bc_conn *c, uint8_t *owned,
-                        struct bc_shared *shared, size_t len)
+                        struct bc_shared *shared, size_t len, bool is_frame)
 {
 	struct write_req *w;
 	uv_buf_t buf[2];
-	unsigned int nbufs = shared ? 2u : 1u;
+	unsigned int nbufs = is_frame ? 2u : 1u;
 	size_t frame, cap;
 	int rc;
 	if (c->tls && !bc_tls_ready(c->tls)) {
@@ -310,7 +313,7 @@ static void queue_bytes(struct bc_conn *c, uint8_t *owned,
 	 * snapshot with its planes may pass the cap alone) with a little
 	 * room beside it; frames go one at a time, a newer one spoiling the
 	 * one waiting, so only a client that stopped reading fills it. */
-	frame = shared ? len : c->frame_bytes;
+	frame = is_frame ? len : c->frame_bytes;
 	cap = frame + BC_SRV_QUEUE_BESIDE_FRAME > BC_SRV_MAX_CLIENT_QUEUE
 	          ? frame + BC_SRV_QUEUE_BESIDE_FRAME
 	          : BC_SRV_MAX_CLIENT_QUEUE;
@@ -333,18 +336,23 @@ static void queue_bytes(struct bc_conn *c, uint8_t *owned,
 	w->owned = owned;
 	w->len = len;
 	buf[0] = uv_buf_init((char *)owned, (unsigned int)len);
-	if ((shared && !frame_bufs(c, w, shared, buf)) ||
+	if (shared && !is_frame) {
+		buf[0] = uv_buf_init((char *)shared->data, (unsigned int)len);
+		shared->refs++;
+		w->shared = shared;
+	}
+	if ((is_frame && !frame_bufs(c, w, shared, buf)) ||
 	    (c->tls && tls_seal(c, w, buf, &nbufs))) {
 		write_req_free(w);
 		bc__conn_close(c, "out of memory or TLS failure");
 		return;
 	}
 	c->queued += len;
-	c->frame_bytes += shared ? len : 0;
+	c->frame_bytes += is_frame ? len : 0;
 	if ((rc = uv_write(&w->req, &c->h.stream, buf, nbufs, write_done)) <
 	    0) {
 		c->queued -= len;
-		c->frame_bytes -= shared ? len : 0;
+		c->frame_bytes -= is_frame ? len : 0;
 		write_req_free(w);
 		bc__conn_close(c, uv_strerror(rc));
 	}
@@ -364,7 +372,7 @@ static void send_msg(struct bc_conn *c, const struct bc_msg *m)
 		bc_proto_buf_finish(&b);
 		return;
 	}
-	queue_bytes(c, b.data, NULL, b.len);
+	queue_bytes(c, b.data, NULL, b.len, false);
 }
 
 static void send_frame(struct bc_conn *c, struct bc_shared *frame)
@@ -396,7 +404,7 @@ static void send_frame(struct bc_conn *c, struct bc_shared *frame)
 	if (!c->counters.first_frame_ms) {
 		c->counters.first_frame_ms = now;
 	}
-	queue_bytes(c, NULL, frame, frame->len);
+	queue_bytes(c, NULL, frame, frame->len, true);
 }
 
 /* ---- the link ------------------------------------------------------------- */
@@ -415,6 +423,21 @@ static void link_send_frame(void *ud, struct bc_conn_ref to,
 	struct bc_conn *c = bc__conn_get(ud, to);
 	if (c) {
 		send_frame(c, frame);
+	}
+}
+
+static void *link_detach(void *ud, struct bc_conn_ref from)
+{
+	struct bc_conn *c = bc__conn_get(ud, from);
+	return c ? bc_proto_reader_detach(&c->reader) : NULL;
+}
+
+static void link_send_shared(void *ud, struct bc_conn_ref to,
+                             struct bc_shared *msg)
+{
+	struct bc_conn *c = bc__conn_get(ud, to);
+	if (c && !c->closing && !c->draining) {
+		queue_bytes(c, NULL, msg, msg->len, false);
 	}
 }
 
@@ -767,6 +790,8 @@ int bc_net_new(struct bc_net **out, uv_loop_t *loop,
 	    .ud = n,
 	    .send = link_send,
 	    .send_frame = link_send_frame,
+	    .send_shared = link_send_shared,
+	    .detach = link_detach,
 	    .close = link_close,
 	    .resume = link_resume,
 	};

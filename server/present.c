@@ -286,6 +286,7 @@ static void camera_commit(struct bc_session *s, const struct camera_task *c)
 {
 	struct bc_msg set = {.type = BC_MSG_SESSION_CAMERA_SET};
 	struct bc_member *list[BC_PROTO_MAX_MEMBERS];
+	struct bc_shared *state = NULL;
 	uint32_t n;
 	s->order++;
 	s->last_edit_ms = bc__unix_ms();
@@ -301,10 +302,13 @@ static void camera_commit(struct bc_session *s, const struct camera_task *c)
 	for (uint32_t i = 0; i < n; i++) {
 		if (list[i]->peer->knows_present) {
 			bc__send(list[i], &set);
-		} else {
-			bc__send_state(s, list[i], 0, 0, NULL, 0);
+		} else if (state || (state = bc__state_msg(s->tree, &s->camera,
+		                                           s->order, 0, 0))) {
+			/* One encoding for every older member. */
+			bc__send_state_msg(s, list[i], state);
 		}
 	}
+	bc_shared_unref(state);
 	bc__session_snapshot_due(s);
 }
 

@@ -71,12 +71,51 @@ struct bc_member *bc__member_of(struct bc_sessions *ss, struct bc_conn_ref ref)
 
 /* ---- tasks and parking --------------------------------------------------- */
 
+/* A tree being freed, off the loop. */
+struct tree_free {
+	uv_work_t req;
+	struct bc_tree *t;
+};
+
+static void tree_free_run(uv_work_t *req)
+{
+	struct tree_free *f = req->data;
+	bc_tree_destroy(f->t);
+}
+
+static void tree_free_done(uv_work_t *req, int status)
+{
+	(void)status;
+	bc_free(req->data);
+}
+
+void bc__tree_free_later(uv_loop_t *loop, struct bc_tree *t)
+{
+	struct tree_free *f;
+	if (!t) {
+		return;
+	}
+	if (bc_tree_node_count(t) < BC_SRV_HEAVY_NODES ||
+	    !(f = bc_calloc(1, sizeof(*f)))) {
+		bc_tree_destroy(t);
+		return;
+	}
+	f->t = t;
+	f->req.data = f;
+	if (uv_queue_work(loop, &f->req, tree_free_run, tree_free_done)) {
+		bc_tree_destroy(t);
+		bc_free(f);
+	}
+}
+
 static void free_session(struct bc_session *s)
 {
 	bc__undo_clear(s);
 	bc_store_session_close(s->store);
-	bc_tree_destroy(s->tree);
-	bc_free(s->state_bytes);
+	/* The layer may be gone (its sessions go as their handles close):
+	 * the loop is the timer's. */
+	bc__tree_free_later(s->kick.loop, s->tree);
+	bc_shared_unref(s->state_msg);
 	bc_free(s);
 }
 
@@ -268,8 +307,8 @@ static void load_run(struct bc_task *t)
 static void load_free(struct load_task *l)
 {
 	bc_store_session_close(l->st);
-	bc_tree_destroy(l->tree);
-	bc_tree_destroy(l->copy);
+	bc__tree_free_later(l->t.s->kick.loop, l->tree);
+	bc__tree_free_later(l->t.s->kick.loop, l->copy);
 	bc_free(l);
 }
 
@@ -825,9 +864,8 @@ void bc__session_snapshot_due(struct bc_session *s)
 
 void bc__session_changed(struct bc_session *s)
 {
-	bc_free(s->state_bytes);
-	s->state_bytes = NULL;
-	s->state_len = 0;
+	bc_shared_unref(s->state_msg);
+	s->state_msg = NULL;
 }
 
 /* ---- member figures ------------------------------------------------------- */

@@ -56,8 +56,7 @@ struct bc_session {
 	struct bc_conn_ref creator;
 	/* SCENE_STATE of a big scene, encoded on a task for joiners, while
 	 * the order stays state_order. */
-	uint8_t *state_bytes;
-	size_t state_len;
+	struct bc_shared *state_msg;
 	uint64_t state_order;
 	/* When a SESSION_CAMERA last sent members of an older protocol the
 	 * whole scene (loop clock; present.c). */
@@ -100,6 +99,10 @@ struct bc_session *bc__session_by_name(struct bc_sessions *ss, const char *name,
 struct bc_session *bc__session_by_id(struct bc_sessions *ss, uint32_t id);
 /* The member of connection ref, or NULL. */
 struct bc_member *bc__member_of(struct bc_sessions *ss, struct bc_conn_ref ref);
+/* Frees t (NULL: nothing), on libuv's thread pool when it is big: a scene
+ * of 600 000 nodes takes 20 ms to free, which the loop must not wait for
+ * (Redis frees big values in the background alike). */
+void bc__tree_free_later(uv_loop_t *loop, struct bc_tree *t);
 /* Starts t (the caller filled run and done); holds_order makes s busy. */
 void bc__task_start(struct bc_session *s, struct bc_task *t);
 /* m's request seq waits for s: returns BC_PARK. */
@@ -128,10 +131,18 @@ void bc__send(struct bc_member *m, const struct bc_msg *msg);
 void bc__send_error(struct bc_member *m, uint32_t seq, int code,
                     const char *fmt, ...) __attribute__((format(printf, 4, 5)));
 void bc__send_info(struct bc_session *s);
-/* SCENE_STATE to one member (to) or, with to NULL, to every member;
- * bytes: the scene already encoded, or NULL. */
+/* A SCENE_STATE of tree t and camera cam at order, encoded whole (any
+ * thread), or NULL when out of memory. */
+struct bc_shared *bc__state_msg(const struct bc_tree *t,
+                                const struct bc_camera *cam, uint64_t order,
+                                uint32_t author, uint32_t author_seq);
+/* msg, a SCENE_STATE, to one member (to) or, with to NULL, to every
+ * member: one encoding, queued by reference. */
+void bc__send_state_msg(struct bc_session *s, struct bc_member *to,
+                        struct bc_shared *msg);
+/* s's SCENE_STATE, encoded here, to one member or every one. */
 void bc__send_state(struct bc_session *s, struct bc_member *to, uint32_t author,
-                    uint32_t author_seq, const uint8_t *bytes, size_t len);
+                    uint32_t author_seq);
 void bc__leave(struct bc_member *m);
 /* m joins s (its role asked, its request seq). Returns 0 or BC_PARK. */
 int bc__join(struct bc_member *m, struct bc_session *s, enum bc_proto_role role,

@@ -217,6 +217,12 @@
  * for joiners. Below it they take well under a millisecond. */
 #define BC_SRV_HEAVY_NODES 20000u
 
+/* A SCENE_LOAD payload of at least this many bytes is kept in the
+ * reader's own buffer (handed over, bc_proto_reader_detach) instead of
+ * copied on the loop; smaller ones are copied, cheaper than a new buffer
+ * for the reader. */
+#define BC_SRV_DETACH_BYTES (1024u * 1024u)
+
 /* A request that takes longer than this on the loop is logged. */
 #define BC_SRV_SLOW_REQUEST_MS 5u
 /* A turn of the loop (requests, results, writes) longer than this is

@@ -43,6 +43,7 @@ struct step {
 };
 
 struct bc_undo {
+	uv_loop_t *loop; /* frees big trees off it */
 	struct step undo[BC_SRV_UNDO_STEPS], redo[BC_SRV_UNDO_STEPS];
 	uint32_t nundo, nredo;
 	size_t bytes;
@@ -52,7 +53,7 @@ static void step_free(struct bc_undo *u, struct step *st)
 {
 	u->bytes -= st->bytes;
 	bc_free(st->nodes);
-	bc_tree_destroy(st->old);
+	bc__tree_free_later(u->loop, st->old);
 	memset(st, 0, sizeof(*st));
 }
 
@@ -186,8 +187,8 @@ static struct step *push(struct bc_undo *u, struct step *stack, uint32_t *n)
 
 static struct bc_undo *history(struct bc_session *s)
 {
-	if (!s->undo) {
-		s->undo = bc_calloc(1, sizeof(*s->undo));
+	if (!s->undo && (s->undo = bc_calloc(1, sizeof(*s->undo)))) {
+		s->undo->loop = s->ss->loop;
 	}
 	return s->undo;
 }

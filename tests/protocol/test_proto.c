@@ -553,6 +553,44 @@ static void test_zero_copy(void)
 	bc_proto_buf_finish(&b);
 }
 
+/* detach() hands over the buffer a SCENE_LOAD lies in: its scene stays
+ * valid after the reader goes on, and the bytes after it (the start of a
+ * PING) are the reader's still. */
+static void test_detach(void)
+{
+	static const struct bc_proto_reader_opts server = {
+	    .side = BC_PROTO_SIDE_SERVER};
+	struct bc_proto_buf b;
+	struct bc_msg m, ping = {.type = BC_MSG_PING, .seq = 7};
+	struct bc_proto_reader r;
+	size_t load_len;
+	uint8_t *kept;
+	bc_proto_buf_init(&b, 0);
+	sample(BC_MSG_SCENE_LOAD, &m);
+	REQUIRE(bc_proto_encode(&b, &m, NULL) == 0);
+	load_len = b.len;
+	REQUIRE(bc_proto_encode(&b, &ping, NULL) == 0);
+	bc_proto_reader_init(&r, &server);
+	REQUIRE(bc_proto_reader_feed(&r, b.data, load_len + 5) == 0);
+	REQUIRE(bc_proto_reader_next(&r, &m) == 1);
+	REQUIRE(m.type == BC_MSG_SCENE_LOAD);
+	kept = bc_proto_reader_detach(&r);
+	REQUIRE(kept != NULL);
+	CHECK(m.scene_load.scene.ptr > kept &&
+	      m.scene_load.scene.ptr < kept + load_len);
+	CHECK_EQ_INT(bc_proto_reader_pending(&r), 5);
+	REQUIRE(bc_proto_reader_feed(&r, b.data + load_len + 5,
+	                             b.len - load_len - 5) == 0);
+	CHECK_EQ_INT(bc_proto_reader_next(&r, &ping), 1);
+	CHECK(ping.type == BC_MSG_PING && ping.seq == 7);
+	CHECK_EQ_INT(m.scene_load.scene.len, sizeof(scene_bytes));
+	CHECK(memcmp(m.scene_load.scene.ptr, scene_bytes,
+	             sizeof(scene_bytes)) == 0);
+	bc_free(kept);
+	bc_proto_reader_finish(&r);
+	bc_proto_buf_finish(&b);
+}
+
 /* ---- Reader rules
  * --------------------------------------------------------------- */
 
@@ -1158,6 +1196,7 @@ static const struct bc_test tests[] = {
     {"malformed_table", test_malformed_table},
     {"round_trip_every_type", test_round_trip_every_type},
     {"zero_copy", test_zero_copy},
+    {"detach", test_detach},
     {"error_is_sticky", test_error_is_sticky},
     {"announced_length_allocates_nothing",
      test_announced_length_allocates_nothing},

@@ -587,6 +587,14 @@ BC_API void bc_proto_reader_set_max_payload(struct bc_proto_reader *r,
 /* Bytes buffered and not yet returned as messages. */
 BC_API size_t bc_proto_reader_pending(const struct bc_proto_reader *r);
 
+/* Hands the caller the buffer that the message last returned by next()
+ * lies in, to free with bc_free: its byte ranges (a SCENE_LOAD's scene)
+ * stay valid as long as the caller keeps the buffer, so a big payload is
+ * kept without a copy. r goes on in a buffer of its own holding the bytes
+ * after that message. Call it before the next feed() or next(). Returns
+ * NULL when out of memory (or nothing is buffered), r unchanged. */
+BC_API void *bc_proto_reader_detach(struct bc_proto_reader *r);
+
 /* Decodes one payload of the given type, outside any stream: no header,
  * no side or stage rules, only the type's own payload checks (including its
  * maximum size). Arrays go to r's storage and byte ranges point into
