@@ -508,10 +508,23 @@ static bool deliver(struct bc_conn *c, const struct bc_msg *m)
 	}
 }
 
-/* Dispatches the whole messages the reader holds, until one parks. */
+/* c has had its share of this loop turn: it reads nothing more until its
+ * turn comes again (the resume queue, next turn), so that a client
+ * sending many costly requests at once (EDITs of 1024 SETs) delays
+ * another's PING by one request, not by all of them. */
+static void yield_turn(struct bc_conn *c)
+{
+	c->parked = true;
+	uv_read_stop(&c->h.stream);
+	link_resume(c->net, ref_of(c), false);
+}
+
+/* Dispatches the whole messages the reader holds, until one parks or the
+ * connection has used its share of the turn. */
 static void drain_reader(struct bc_conn *c)
 {
 	struct bc_msg m;
+	uint64_t t0 = uv_hrtime();
 	int rc = 0;
 	while (!c->closing && !c->draining && !c->parked) {
 		rc = bc_proto_reader_next(&c->reader, &m);
@@ -521,6 +534,11 @@ static void drain_reader(struct bc_conn *c)
 		c->msg_started_ms = 0;
 		rc = 0;
 		if (!deliver(c, &m)) {
+			break;
+		}
+		if (uv_hrtime() - t0 > BC_SRV_READ_SHARE_MS * 1000000u &&
+		    bc_proto_reader_pending(&c->reader) > 0) {
+			yield_turn(c);
 			break;
 		}
 	}

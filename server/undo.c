@@ -82,31 +82,70 @@ void bc__undo_clear(struct bc_session *s)
 	s->undo = NULL;
 }
 
-static bool has_node(const struct step *st, uint32_t id)
+/* The saved nodes of a step by id, for step_add: a drag of 1024-SET edits
+ * merges into a step of thousands of nodes, and a linear search per node
+ * (and a look at every saved node per edit) took the loop milliseconds
+ * per edit. Open addressing; keys are id + 1 (0: empty), values the
+ * node's index in the step. */
+struct id_set {
+	uint64_t *keys;
+	uint32_t *at;
+	uint32_t mask;
+};
+
+static bool id_set_init(struct id_set *s, uint32_t n)
 {
-	for (uint32_t i = 0; i < st->n; i++) {
-		if (st->nodes[i].id == id) {
-			return true;
-		}
+	uint32_t cap = 16;
+	while (cap < 2u * n) {
+		cap <<= 1;
 	}
-	return false;
+	s->mask = cap - 1u;
+	s->keys = bc_calloc(cap, sizeof(*s->keys));
+	s->at = bc_calloc(cap, sizeof(*s->at));
+	if (!s->keys || !s->at) {
+		bc_free(s->keys);
+		bc_free(s->at);
+		return false;
+	}
+	return true;
+}
+
+static void id_set_finish(struct id_set *s)
+{
+	bc_free(s->keys);
+	bc_free(s->at);
+}
+
+/* The slot of id: where it is, or the empty one it would take. */
+static uint32_t id_set_slot(const struct id_set *s, uint32_t id)
+{
+	uint32_t i = (id * 2654435761u) & s->mask;
+	while (s->keys[i] && s->keys[i] != (uint64_t)id + 1u) {
+		i = (i + 1u) & s->mask;
+	}
+	return i;
 }
 
 /* A SET cannot take a colour away: a step that must restore a primitive
  * without colour over one with colour becomes structural -- a copy of t
- * (the scene now) with the saved states written back. Returns false when
- * out of memory. */
+ * (the scene now) with the saved states written back. Only the nodes
+ * batch b touched can have changed since the step was last settled.
+ * Returns false when out of memory. */
 static bool settle_colours(struct bc_undo *u, struct step *st,
-                           const struct bc_tree *t)
+                           const struct bc_tree *t,
+                           const struct bc_edit_batch *b,
+                           const struct id_set *ids)
 {
 	struct bc_tree *copy;
 	bool needed = false;
-	for (uint32_t i = 0; i < st->n && !needed; i++) {
+	for (uint32_t i = 0; i < b->nsaved && !needed; i++) {
+		const struct bc_edit_saved *first =
+		    &st->nodes[ids->at[id_set_slot(ids, b->saved[i].id)]];
 		struct bc_prim_data p;
 		struct bc_op_data op;
-		bc_tree_get(t, st->nodes[i].id, &p, &op);
-		needed = op.kind == BC_OP_INVALID &&
-		         !st->nodes[i].p.has_color && p.has_color;
+		bc_tree_get(t, first->id, &p, &op);
+		needed = op.kind == BC_OP_INVALID && !first->p.has_color &&
+		         p.has_color;
 	}
 	if (!needed) {
 		return true;
@@ -135,6 +174,8 @@ static bool settle_colours(struct bc_undo *u, struct step *st,
 static bool step_add(struct bc_undo *u, struct step *st,
                      struct bc_edit_batch *b, const struct bc_tree *t)
 {
+	struct id_set ids;
+	bool ok = true;
 	if (b->structural) {
 		st->old = b->old;
 		b->old = NULL;
@@ -143,25 +184,39 @@ static bool step_add(struct bc_undo *u, struct step *st,
 		u->bytes += st->bytes;
 		return true;
 	}
-	for (uint32_t i = 0; i < b->nsaved; i++) {
-		if (has_node(st, b->saved[i].id)) {
-			continue;
+	if (!id_set_init(&ids, st->n + b->nsaved)) {
+		return false;
+	}
+	for (uint32_t i = 0; i < st->n; i++) {
+		uint32_t k = id_set_slot(&ids, st->nodes[i].id);
+		ids.keys[k] = (uint64_t)st->nodes[i].id + 1u;
+		ids.at[k] = i;
+	}
+	for (uint32_t i = 0; i < b->nsaved && ok; i++) {
+		uint32_t k = id_set_slot(&ids, b->saved[i].id);
+		if (ids.keys[k]) {
+			continue; /* its first state is kept already */
 		}
 		if (st->n == st->cap) {
 			uint32_t cap = st->cap ? 2u * st->cap : 8u;
 			struct bc_edit_saved *more =
 			    bc_realloc(st->nodes, cap * sizeof(*more));
 			if (!more) {
-				return false;
+				ok = false;
+				break;
 			}
 			st->nodes = more;
 			st->cap = cap;
 		}
+		ids.keys[k] = (uint64_t)b->saved[i].id + 1u;
+		ids.at[k] = st->n;
 		st->nodes[st->n++] = b->saved[i];
 		st->bytes += sizeof(*st->nodes);
 		u->bytes += sizeof(*st->nodes);
 	}
-	return settle_colours(u, st, t);
+	ok = ok && settle_colours(u, st, t, b, &ids);
+	id_set_finish(&ids);
+	return ok;
 }
 
 /* Keeps the history within its bounds, dropping the oldest steps. */

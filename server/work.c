@@ -33,6 +33,8 @@
  * Stopping: the workers leave at their next slice boundary; bc_work_stop
  * waits a bounded time, since a renderer call does not return early.
  */
+#include <pthread.h>
+#include <sched.h>
 #include <string.h>
 #include <unistd.h>
 
@@ -293,10 +295,30 @@ static uint32_t team_of(const struct bc_work *w)
 	return w->nworkers;
 }
 
+/* Workers render as SCHED_BATCH: the same share of the CPU as any thread
+ * (niced ones lost their cores to clients on the same host), but a thread
+ * that wakes (the loop, with a PING to answer) runs at once instead of
+ * after their time slice: with plain SCHED_OTHER workers the loop waited
+ * up to 30 ms for a core. Threads a worker starts (the renderers' pool)
+ * inherit it. */
+static void batch_policy(uint32_t index)
+{
+#ifdef SCHED_BATCH
+	struct sched_param p = {.sched_priority = 0};
+	if (pthread_setschedparam(pthread_self(), SCHED_BATCH, &p) != 0) {
+		bc_log(BC_LOG_DEBUG, "render worker %u keeps its policy",
+		       index);
+	}
+#else
+	(void)index;
+#endif
+}
+
 static void worker_main(void *arg)
 {
 	struct worker *wk = arg;
 	struct bc_work *w = wk->w;
+	batch_policy(wk->index);
 	uv_mutex_lock(&w->lock);
 	while (!w->quit) {
 		struct flow *f = pick(w, bc_clock_ms());
