@@ -484,6 +484,7 @@ static int render_slice(struct bc_work *w, struct worker *wk, struct flow *f,
 		learn(w, f, job, sl.n, &st, new_view);
 		job->render_ms += st.ms_total;
 		bc__flow_kept(w, f);
+		bc__views_settle(w);
 		if (st.whole) {
 			sl.end = v->ntiles;
 		}

@@ -176,6 +176,14 @@
  * beside three heavy sessions, with 40 it waits 23 ms. */
 #define BC_SRV_WAKE_CREDIT_MS 40.0
 
+/* A worker goes on with the job of its last slice unless another session
+ * is more than this behind in render time (Linux CFS's wakeup
+ * granularity): switching sessions every slice made every job of eight
+ * busy sessions wait for the others' slices between its own, so each took
+ * as long as all of them (processor sharing), where finishing one job
+ * before the next halves the mean wait for jobs of a size. */
+#define BC_SRV_GRANULARITY_MS 10.0
+
 /* What the scheduler adds to a session's clock when its next job is a
  * still or a snapshot: interactive frames go first across sessions too,
  * and the others are delayed, never starved. */

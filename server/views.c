@@ -244,6 +244,30 @@ size_t bc__views_bytes(struct bc_work *w)
 	return bytes + bc__work_kept_bytes(w);
 }
 
+/* Drops least recently used views that no job holds while the cache and
+ * the renderers' state pass the cap. Called with the lock held. */
+static void shed(struct views *vs, size_t kept)
+{
+	struct view *old;
+	while (vs->bytes + kept > vs->cap && (old = lru(vs))) {
+		view_free(vs, old);
+	}
+}
+
+void bc__views_settle(struct bc_work *w)
+{
+	struct views *vs = &w->views;
+	if (bc__views_bytes(w) <= vs->cap) {
+		return;
+	}
+	/* Renderers of idle sessions give their state back first, then
+	 * views go. */
+	bc__work_trim(w);
+	uv_mutex_lock(&vs->lock);
+	shed(vs, bc__work_kept_bytes(w));
+	uv_mutex_unlock(&vs->lock);
+}
+
 int bc__view_planes(struct bc_work *w, struct view *v)
 {
 	struct views *vs = &w->views;

@@ -126,7 +126,7 @@ static bool runs_long(const struct flow *f)
  * worker is kept for short work while the others run long slices, when
  * short work waits or came within BC_SRV_SHORT_RECENT_MS: a quiet
  * session's next frame must not wait behind two heavy ones. */
-static struct flow *pick(struct bc_work *w, double now)
+static struct flow *pick(struct bc_work *w, const struct flow *prev, double now)
 {
 	struct flow *best = NULL, *best_short = NULL;
 	double key = 0.0, key_short = 0.0, least = -1.0;
@@ -143,6 +143,10 @@ static struct flow *pick(struct bc_work *w, double now)
 			least = f->vruntime;
 		}
 		k = f->vruntime + class_penalty_ms[next_class(f)];
+		if (f == prev && f->cur) {
+			/* Its job goes on unless another is well behind. */
+			k -= BC_SRV_GRANULARITY_MS;
+		}
 		if (!best || k < key) {
 			best = f;
 			key = k;
@@ -321,7 +325,7 @@ static void worker_main(void *arg)
 	batch_policy(wk->index);
 	uv_mutex_lock(&w->lock);
 	while (!w->quit) {
-		struct flow *f = pick(w, bc_clock_ms());
+		struct flow *f = pick(w, wk->prev, bc_clock_ms());
 		struct upd *changes;
 		struct bc_job *job;
 		enum bc_work_outcome stop;
@@ -336,6 +340,7 @@ static void worker_main(void *arg)
 		f->held = true;
 		if (f->dropped) {
 			drop_flow(w, f);
+			wk->prev = NULL;
 			continue;
 		}
 		first = !f->cur;
@@ -359,6 +364,7 @@ static void worker_main(void *arg)
 			f->first_ms = 0.7 * f->first_ms + 0.3 * ms;
 		}
 		f->held = false;
+		wk->prev = f;
 		if (over) {
 			f->cur = NULL;
 			w->running--;

@@ -121,6 +121,7 @@ struct worker {
 	 * when the others wait for work (work.c); a slice that does not
 	 * render sets it back to 1 (job.c). */
 	uint32_t team;
+	const struct flow *prev; /* the flow of its last slice */
 	struct bc_encoder *enc;
 	uint8_t *mask, *shorts; /* per tile of the view being rendered */
 	size_t mask_cap;
@@ -239,6 +240,10 @@ void bc__views_drop(struct bc_work *w, uint32_t sid);
 uint32_t bc__views_of(struct bc_work *w, uint32_t sid, struct view **out);
 /* Sets every tile of v to hold nothing. */
 void bc__view_reset(struct view *v);
+/* A renderer's state grows past what was counted for its view (tile lists
+ * of a crowded scene): back under the cap, idle renderers' state and then
+ * least recently used views go. Called by a worker after a render. */
+void bc__views_settle(struct bc_work *w);
 /* Gives pinned view v its depth and id planes (views keep colour only
  * until a snapshot asks for them; all tiles are then drawn again).
  * Returns 0, or BC_ENOMEM when they do not fit under the cap. */
