@@ -293,8 +293,11 @@ int bc__apply(struct bc_member *m, const struct bc_proto_edit_op *ops,
 	for (uint32_t i = 0; i < nops; i++) {
 		structural = structural || ops[i].kind != BC_PROTO_EDIT_SET;
 	}
-	x->heavy =
-	    structural && bc_tree_node_count(s->tree) >= BC_SRV_HEAVY_NODES;
+	/* A big scene's structural edit, or a long batch of SETs on it,
+	 * applies on the task: the session is busy meanwhile, so nothing on
+	 * the loop reads the tree the task changes. */
+	x->heavy = bc_tree_node_count(s->tree) >= BC_SRV_HEAVY_NODES &&
+	           (structural || nops >= BC_SRV_HEAVY_SETS);
 	x->s = s;
 	x->op = x->ops.ops;
 	x->nops = nops;

@@ -455,6 +455,105 @@ static void a_burst_of_requests_leaves_others_their_turn(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
+/* The tree of the SCENE_STATE in c->m, or NULL. */
+static struct bc_tree *state_tree(const struct conn *c)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_camera cam;
+	bool has_cam;
+	if (!t || c->m.type != BC_MSG_SCENE_STATE ||
+	    bc_scene_decode(c->m.scene_state.scene.ptr,
+	                    c->m.scene_state.scene.len, t, &cam, &has_cam,
+	                    NULL) != 0) {
+		bc_tree_destroy(t);
+		return NULL;
+	}
+	return t;
+}
+
+/* The scene a new member of name gets, or NULL. */
+static struct bc_tree *joined_tree(const struct daemon *d, const char *name)
+{
+	struct conn j;
+	struct bc_tree *t = NULL;
+	if (conn_open(&j, d) == 0 && conn_hello(&j, "joiner") == 0 &&
+	    conn_join(&j, name, BC_PROTO_ROLE_VIEWER, false) == 0 &&
+	    conn_expect(&j, BC_MSG_SCENE_STATE, 60000) == 1) {
+		t = state_tree(&j);
+	}
+	conn_close(&j);
+	return t;
+}
+
+/* A long batch of SETs on a big scene applies off the loop, the session
+ * busy meanwhile: a PING sent after it comes back after its EDIT_APPLIED,
+ * the batch is applied whole, and one UNDO takes it back whole. */
+static void a_long_batch_of_sets_on_a_big_scene_applies_whole(void)
+{
+	enum { NOPS = 300 };
+	struct daemon d;
+	struct conn c;
+	struct bc_tree *t;
+	const struct bc_lin *lin;
+	struct bc_proto_field fields[NOPS];
+	struct bc_proto_edit_op ops[NOPS];
+	uint32_t ids[NOPS], seq, ping_seq, undo_seq;
+	struct bc_msg m = {.type = BC_MSG_EDIT}, ping = {.type = BC_MSG_PING},
+	              undo = {.type = BC_MSG_UNDO};
+	struct bc_prim_data p, before;
+	struct bc_op_data op;
+	bool applied = false;
+	char dir[96];
+	snprintf(dir, sizeof(dir), "%s/sets", base_dir);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	member(&c, &d, "big", true, 64, 64, BC_PROTO_ENC_RAW);
+	load_gen(&c, "fig18", BC_SRV_HEAVY_NODES, BC_GEN_BLEND_SMOOTH);
+	REQUIRE((t = state_tree(&c)));
+	lin = bc_tree_lin(t);
+	REQUIRE(bc_tree_node_count(t) >= BC_SRV_HEAVY_NODES);
+	REQUIRE(lin->nprims >= NOPS && NOPS >= BC_SRV_HEAVY_SETS);
+	for (uint32_t i = 0; i < NOPS; i++) {
+		ids[i] = lin->node_id[lin->prim_slot[i]];
+		fields[i] = (struct bc_proto_field){
+		    .field = BC_PROTO_FIELD_TRANSLATE,
+		    .count = 3,
+		    .v = {0.001f * (float)i, 7.0f, -3.0f}};
+		ops[i] = (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_SET,
+		                                   .node = ids[i],
+		                                   .nfields = 1,
+		                                   .fields = &fields[i]};
+	}
+	REQUIRE(bc_tree_get(t, ids[NOPS - 1], &before, &op));
+	bc_tree_destroy(t);
+	m.edit.nops = NOPS;
+	m.edit.ops = ops;
+	REQUIRE((seq = conn_send(&c, &m)));
+	REQUIRE((ping_seq = conn_send(&c, &ping)));
+	while (conn_recv(&c, 60000) == 1 &&
+	       !(c.m.type == BC_MSG_PONG && c.m.seq == ping_seq)) {
+		CHECK(c.m.type != BC_MSG_ERROR);
+		applied = applied || (c.m.type == BC_MSG_EDIT_APPLIED &&
+		                      c.m.edit_applied.author_seq == seq &&
+		                      c.m.edit_applied.nops == NOPS);
+	}
+	CHECK(applied); /* before the PONG */
+	REQUIRE((t = joined_tree(&d, "big")));
+	for (uint32_t i = 0; i < NOPS; i++) {
+		REQUIRE(bc_tree_get(t, ids[i], &p, &op));
+		CHECK(p.translate[1] == 7.0f && p.translate[2] == -3.0f);
+	}
+	bc_tree_destroy(t);
+	REQUIRE((undo_seq = conn_send(&c, &undo)));
+	REQUIRE(conn_expect(&c, BC_MSG_EDIT_APPLIED, 60000) == 1);
+	REQUIRE((t = joined_tree(&d, "big")));
+	REQUIRE(bc_tree_get(t, ids[NOPS - 1], &p, &op));
+	CHECK(memcmp(p.translate, before.translate, sizeof(p.translate)) == 0);
+	bc_tree_destroy(t);
+	(void)undo_seq;
+	conn_close(&c);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
 /* GET_STATS with parts; STATS into c->m. */
 static void get_stats(struct conn *c, uint8_t parts)
 {
@@ -550,6 +649,8 @@ static const struct bc_test tests[] = {
     {"answers_keep_the_order_of_requests", answers_keep_the_order_of_requests},
     {"a_burst_of_requests_leaves_others_their_turn",
      a_burst_of_requests_leaves_others_their_turn},
+    {"a_long_batch_of_sets_on_a_big_scene_applies_whole",
+     a_long_batch_of_sets_on_a_big_scene_applies_whole},
     {"stats_tell_the_load", stats_tell_the_load},
     {"the_view_cache_stays_under_its_cap", the_view_cache_stays_under_its_cap},
 };
