@@ -2,10 +2,13 @@
  * Connections (loop thread): reading (TLS or plain) into the protocol's
  * push reader, whole messages handed to dispatch, timeouts, and output
  * queues (listen.c accepts connections, admit.c decides who gets a slot).
- * Messages are written as they come; FRAMEs are written one at a time per
- * client and a newer frame replaces one not yet started (frame spoiling),
- * so a slow client gets fewer frames, never a growing backlog. A client
- * whose queue still passes BC_SRV_MAX_CLIENT_QUEUE is dropped alone.
+ * Messages are written in the order they come, each a piece of at most
+ * BC_SRV_WRITE_PIECE bytes per loop turn (sealed piece by piece on TLS), so
+ * no message, however big, holds the loop while the kernel copies it;
+ * FRAMEs are written one at a time per client and a newer frame replaces
+ * one not yet started (frame spoiling), so a slow client gets fewer frames,
+ * never a growing backlog. A client whose queue still passes
+ * BC_SRV_MAX_CLIENT_QUEUE is dropped alone.
  *
  * A message that must wait for its session (dispatch answers PARK) stays
  * where the reader decoded it: the connection reads nothing more and the
@@ -42,15 +45,23 @@
 /* A FRAME's header and frame_no, the part written per client. */
 #define FRAME_PREFIX (BC_PROTO_HEADER_SIZE + 4u)
 
+/* A message in a connection's output queue (or, with no buffers, a turn
+ * to write what the TLS state holds), written a piece at a time. */
 struct write_req {
 	uv_write_t req;
-	struct bc_conn_ref who;
+	struct bc_conn *c; /* valid until its stream's close callback */
+	struct write_req *next;
+	struct bc_conn_ref who; /* c, while it is open */
 	struct bc_net *net;
 	struct bc_shared *shared; /* a frame or a whole message, or NULL */
 	bool frame;               /* shared is a frame */
 	uint8_t *owned;           /* a message's bytes, or NULL */
-	uint8_t *cipher;          /* what goes out on a TLS connection */
-	size_t len;
+	uint8_t *cipher;          /* the piece in flight on a TLS connection */
+	bool close_notify;        /* TLS: say close_notify at its turn */
+	uv_buf_t buf[2];          /* the plaintext */
+	unsigned int nbufs;
+	size_t len;         /* plaintext bytes, counted in the queue */
+	size_t done, piece; /* of them written, and in flight */
 };
 
 static uint64_t now_ms(const struct bc_net *n)
@@ -73,6 +84,10 @@ static struct bc_conn_ref ref_of(const struct bc_conn *c)
 	return (struct bc_conn_ref){c->slot, c->gen};
 }
 
+static void write_req_free(struct write_req *w);
+static void pump(struct bc_conn *c);
+static void queue_tls_turn(struct bc_conn *c, bool close_notify);
+
 void bc__net_handle_closed(uv_handle_t *h)
 {
 	struct bc_conn *c = h->data;
@@ -81,13 +96,19 @@ void bc__net_handle_closed(uv_handle_t *h)
 		return;
 	}
 	trim = c->queued >= BC_SRV_TRIM_AFTER_BYTES;
+	/* The piece in flight was cancelled before this last close callback;
+	 * the messages behind it never started. */
+	while (c->out_head) {
+		struct write_req *w = c->out_head;
+		c->out_head = w->next;
+		write_req_free(w);
+	}
 	bc_proto_reader_finish(&c->reader);
 	bc_shared_unref(c->frame_next);
 	bc_tls_free(c->tls);
 	bc_free(c);
-	/* The pending writes were cancelled (their buffers freed) before this
-	 * last close callback; glibc keeps freed memory in its arenas unless
-	 * asked to give it back. */
+	/* glibc keeps freed memory in its arenas unless asked to give it
+	 * back. */
 #if defined(__GLIBC__)
 	if (trim) {
 		malloc_trim(0);
@@ -167,103 +188,18 @@ void bc__conn_close_after_flush(struct bc_conn *c, const char *why)
 	c->drain_why = why;
 	uv_read_stop(&c->h.stream);
 	if (c->tls) {
-		/* close_notify goes out after the queued records. */
-		bc_tls_close_notify(c->tls);
-		bc__net_tls_flush(c);
+		/* close_notify goes out after the queued messages, at its
+		 * turn: nothing can be sealed after it. */
+		queue_tls_turn(c, true);
 		if (c->closing) {
 			return;
 		}
 	}
-	c->shutdown.data = c;
-	if (uv_shutdown(&c->shutdown, &c->h.stream, shutdown_done) != 0) {
-		bc__conn_close(c, why);
-	}
+	c->shutdown_due = true;
+	pump(c);
 }
 
 static void send_frame(struct bc_conn *c, struct bc_shared *frame);
-
-static void write_done(uv_write_t *req, int status)
-{
-	struct write_req *w = (struct write_req *)req;
-	struct bc_conn *c = bc__conn_get(w->net, w->who);
-	if (c) {
-		c->queued -= w->len;
-		c->frame_bytes -= w->frame ? w->len : 0;
-		if (status < 0) {
-			bc__conn_close(c, uv_strerror(status));
-		} else if (w->frame) {
-			c->frame_writing = false;
-			c->counters.frames_sent++;
-			c->counters.bytes_sent += w->len;
-			if (c->frame_next) {
-				struct bc_shared *next = c->frame_next;
-				c->frame_next = NULL;
-				send_frame(c, next);
-				bc_shared_unref(next);
-			} else if (!c->draining) {
-				bc_dispatch_writable(c->net->d, ref_of(c));
-			}
-		} else {
-			c->counters.bytes_sent += w->len;
-		}
-	}
-	bc_shared_unref(w->shared);
-	bc_free(w->owned);
-	bc_free(w->cipher);
-	bc_free(w);
-}
-
-/* Writes the ciphertext c's TLS state holds (handshake records, alerts,
- * close_notify). Those bytes count for no message. */
-void bc__net_tls_flush(struct bc_conn *c)
-{
-	struct write_req *w;
-	uint8_t *bytes;
-	size_t n;
-	uv_buf_t buf;
-	if (bc_tls_take_output(c->tls, &bytes, &n)) {
-		bc__conn_close(c, "out of memory");
-		return;
-	}
-	if (n == 0) {
-		return;
-	}
-	if (!(w = bc_calloc(1, sizeof(*w)))) {
-		bc_free(bytes);
-		bc__conn_close(c, "out of memory");
-		return;
-	}
-	w->net = c->net;
-	w->who = ref_of(c);
-	w->cipher = bytes;
-	buf = uv_buf_init((char *)bytes, (unsigned int)n);
-	if (uv_write(&w->req, &c->h.stream, &buf, 1, write_done) < 0) {
-		bc_free(bytes);
-		bc_free(w);
-		bc__conn_close(c, "write failed");
-	}
-}
-
-/* On a TLS connection the plaintext buffers are encrypted into one
- * ciphertext buffer that is written instead (w keeps the plaintext
- * references for write_done's bookkeeping). Returns 0 or a BC_E* code. */
-static int tls_seal(struct bc_conn *c, struct write_req *w, uv_buf_t *buf,
-                    unsigned int *nbufs)
-{
-	size_t n;
-	int rc;
-	for (unsigned int i = 0; i < *nbufs; i++) {
-		if ((rc = bc_tls_write(c->tls, buf[i].base, buf[i].len))) {
-			return rc;
-		}
-	}
-	if ((rc = bc_tls_take_output(c->tls, &w->cipher, &n))) {
-		return rc;
-	}
-	buf[0] = uv_buf_init((char *)w->cipher, (unsigned int)n);
-	*nbufs = 1;
-	return 0;
-}
 
 static void write_req_free(struct write_req *w)
 {
@@ -273,20 +209,192 @@ static void write_req_free(struct write_req *w)
 	bc_free(w);
 }
 
+/* The bookkeeping of a message that left (status 0) or never will: the
+ * queue's count, the next frame, the layer told it may send again. */
+static void finish(struct bc_conn *c, struct write_req *w, int status)
+{
+	struct bc_conn *live = bc__conn_get(w->net, w->who);
+	c->out_head = w->next;
+	if (!c->out_head) {
+		c->out_tail = NULL;
+	}
+	if (live) {
+		live->queued -= w->len;
+		live->frame_bytes -= w->frame ? w->len : 0;
+		if (status < 0) {
+			bc__conn_close(live, uv_strerror(status));
+		} else if (w->frame) {
+			live->frame_writing = false;
+			live->counters.frames_sent++;
+			live->counters.bytes_sent += w->len;
+			if (live->frame_next) {
+				struct bc_shared *next = live->frame_next;
+				live->frame_next = NULL;
+				send_frame(live, next);
+				bc_shared_unref(next);
+			} else if (!live->draining) {
+				bc_dispatch_writable(live->net->d,
+				                     ref_of(live));
+			}
+		} else {
+			live->counters.bytes_sent += w->len;
+		}
+	}
+	write_req_free(w);
+}
+
+/* The next piece of w's plaintext, at most BC_SRV_WRITE_PIECE bytes, in
+ * part; on a TLS connection sealed into w->cipher (with whatever records
+ * the TLS state held before them), which part then holds. Returns the
+ * count of buffers (0: nothing to write), or -1 when TLS fails. */
+static int next_piece(struct bc_conn *c, struct write_req *w, uv_buf_t *part)
+{
+	size_t skip = w->done, room = BC_SRV_WRITE_PIECE, n;
+	int nparts = 0;
+	for (unsigned int i = 0; i < w->nbufs && room > 0; i++) {
+		size_t len = w->buf[i].len, take;
+		if (skip >= len) {
+			skip -= len;
+			continue;
+		}
+		take = len - skip < room ? len - skip : room;
+		part[nparts++] =
+		    uv_buf_init(w->buf[i].base + skip, (unsigned int)take);
+		skip = 0;
+		room -= take;
+	}
+	w->piece = BC_SRV_WRITE_PIECE - room;
+	if (!c->tls) {
+		return nparts;
+	}
+	if (w->close_notify) {
+		bc_tls_close_notify(c->tls);
+	}
+	for (int i = 0; i < nparts; i++) {
+		if (bc_tls_write(c->tls, part[i].base, part[i].len)) {
+			return -1;
+		}
+	}
+	bc_free(w->cipher);
+	if (bc_tls_take_output(c->tls, &w->cipher, &n)) {
+		return -1;
+	}
+	part[0] = uv_buf_init((char *)w->cipher, (unsigned int)n);
+	return n > 0 ? 1 : 0;
+}
+
+static void write_done(uv_write_t *req, int status);
+
+/* Writes the next piece of the message at the head of c's output queue,
+ * or finishes those with nothing left; once the queue is empty, a
+ * draining connection is shut down. One piece per connection is with the
+ * kernel at a time, and the next goes from write_done, in a later turn
+ * of the loop: a big message (a snapshot with its planes) is copied and
+ * sealed a piece per turn, never all in one, and no message is cut by
+ * another. */
+static void pump(struct bc_conn *c)
+{
+	struct write_req *w;
+	uv_buf_t part[2];
+	int n;
+	while (!c->closing && !c->writing && (w = c->out_head)) {
+		if ((n = next_piece(c, w, part)) < 0) {
+			bc__conn_close(c, "TLS failure");
+			return;
+		}
+		if (n == 0) {
+			finish(c, w, 0);
+			continue;
+		}
+		if ((n = uv_write(&w->req, &c->h.stream, part, (unsigned int)n,
+		                  write_done)) < 0) {
+			bc__conn_close(c, uv_strerror(n));
+			return;
+		}
+		c->writing = true;
+	}
+	if (!c->closing && !c->writing && c->draining && c->shutdown_due) {
+		c->shutdown_due = false;
+		c->shutdown.data = c;
+		if (uv_shutdown(&c->shutdown, &c->h.stream, shutdown_done)) {
+			bc__conn_close(c, c->drain_why);
+		}
+	}
+}
+
+/* A piece went out (or was cancelled: c is closing, its stream's close
+ * callback, which frees c, comes after this one). */
+static void write_done(uv_write_t *req, int status)
+{
+	struct write_req *w = (struct write_req *)req;
+	struct bc_conn *c = w->c;
+	c->writing = false;
+	bc_free(w->cipher);
+	w->cipher = NULL;
+	if (status == 0 && !c->closing) {
+		w->done += w->piece;
+		if (w->done < w->len) {
+			pump(c);
+			return;
+		}
+	}
+	finish(c, w, status);
+	pump(c);
+}
+
+/* Appends w to c's output queue and starts writing when it is idle. */
+static void enqueue(struct bc_conn *c, struct write_req *w)
+{
+	w->c = c;
+	w->net = c->net;
+	w->who = ref_of(c);
+	if (c->out_tail) {
+		c->out_tail->next = w;
+	} else {
+		c->out_head = w;
+	}
+	c->out_tail = w;
+	pump(c);
+}
+
+/* Queues a write of the records c's TLS state holds when its turn comes
+ * (handshake records, alerts, close_notify): taken then, they keep their
+ * order with the records sealed for the messages queued before. Those
+ * bytes count for no message. */
+static void queue_tls_turn(struct bc_conn *c, bool close_notify)
+{
+	struct write_req *w;
+	if (c->closing) {
+		return;
+	}
+	if (!(w = bc_calloc(1, sizeof(*w)))) {
+		bc__conn_close(c, "out of memory");
+		return;
+	}
+	w->close_notify = close_notify;
+	enqueue(c, w);
+}
+
+void bc__net_tls_flush(struct bc_conn *c)
+{
+	queue_tls_turn(c, false);
+}
+
 /* The buffers of a FRAME shared by a view group: frame_no counts this
  * client's frames (PROTOCOL.md 7.15), so the header and frame_no go out
  * from a private copy, the rest shared. Returns false when out of memory. */
 static bool frame_bufs(struct bc_conn *c, struct write_req *w,
-                       struct bc_shared *shared, uv_buf_t *buf)
+                       struct bc_shared *shared)
 {
 	if (!(w->owned = bc_malloc(FRAME_PREFIX))) {
 		return false;
 	}
 	memcpy(w->owned, shared->data, FRAME_PREFIX);
 	bc_put_le32(w->owned + BC_PROTO_HEADER_SIZE, ++c->frame_no);
-	buf[0] = uv_buf_init((char *)w->owned, FRAME_PREFIX);
-	buf[1] = uv_buf_init((char *)shared->data + FRAME_PREFIX,
-	                     (unsigned int)(shared->len - FRAME_PREFIX));
+	w->buf[0] = uv_buf_init((char *)w->owned, FRAME_PREFIX);
+	w->buf[1] = uv_buf_init((char *)shared->data + FRAME_PREFIX,
+	                        (unsigned int)(shared->len - FRAME_PREFIX));
+	w->nbufs = 2;
 	shared->refs++;
 	w->shared = shared;
 	w->frame = true;
@@ -299,10 +407,7 @@ static void queue_bytes(struct bc_conn *c, uint8_t *owned,
                         struct bc_shared *shared, size_t len, bool is_frame)
 {
 	struct write_req *w;
-	uv_buf_t buf[2];
-	unsigned int nbufs = is_frame ? 2u : 1u;
 	size_t frame, cap;
-	int rc;
 	if (c->tls && !bc_tls_ready(c->tls)) {
 		/* Nothing can be said before the handshake (an ERROR for a
 		 * HELLO timeout): the connection is closed without it. */
@@ -331,31 +436,24 @@ static void queue_bytes(struct bc_conn *c, uint8_t *owned,
 		bc__conn_close(c, "out of memory");
 		return;
 	}
-	w->net = c->net;
-	w->who = ref_of(c);
 	w->owned = owned;
 	w->len = len;
-	buf[0] = uv_buf_init((char *)owned, (unsigned int)len);
+	w->buf[0] = uv_buf_init((char *)owned, (unsigned int)len);
+	w->nbufs = 1;
 	if (shared && !is_frame) {
-		buf[0] = uv_buf_init((char *)shared->data, (unsigned int)len);
+		w->buf[0] =
+		    uv_buf_init((char *)shared->data, (unsigned int)len);
 		shared->refs++;
 		w->shared = shared;
 	}
-	if ((is_frame && !frame_bufs(c, w, shared, buf)) ||
-	    (c->tls && tls_seal(c, w, buf, &nbufs))) {
+	if (is_frame && !frame_bufs(c, w, shared)) {
 		write_req_free(w);
-		bc__conn_close(c, "out of memory or TLS failure");
+		bc__conn_close(c, "out of memory");
 		return;
 	}
 	c->queued += len;
 	c->frame_bytes += is_frame ? len : 0;
-	if ((rc = uv_write(&w->req, &c->h.stream, buf, nbufs, write_done)) <
-	    0) {
-		c->queued -= len;
-		c->frame_bytes -= is_frame ? len : 0;
-		write_req_free(w);
-		bc__conn_close(c, uv_strerror(rc));
-	}
+	enqueue(c, w);
 }
 
 static void send_msg(struct bc_conn *c, const struct bc_msg *m)

@@ -41,8 +41,12 @@ struct bc_conn {
 	struct bc_msg parked_msg;
 	struct bc_conn *resume_next;
 	bool resume_queued;
-	/* Output: messages go out at once; frames one at a time. queued
-	 * counts both, frame_bytes the frame being written. */
+	/* Output: messages go out in order, a piece at a time (net.c,
+	 * pump); frames one at a time. queued counts both, frame_bytes the
+	 * frame being written. */
+	struct write_req *out_head, *out_tail;
+	bool writing;      /* a piece is with libuv */
+	bool shutdown_due; /* draining: shut down once the queue is empty */
 	size_t queued, frame_bytes;
 	bool frame_writing;
 	uint64_t frame_started_ms;

@@ -78,6 +78,12 @@
  * dropped, with the reason in the log. */
 #define BC_SRV_MAX_CLIENT_QUEUE (32u * 1024u * 1024u)
 
+/* The most bytes of one connection's output handed to the kernel in one
+ * write: a big message goes a piece per loop turn, so that copying (and
+ * sealing, on TLS) a 36 MiB snapshot does not hold the loop for its whole
+ * length while a fast reader drains the socket as it is filled. */
+#define BC_SRV_WRITE_PIECE (256u * 1024u)
+
 /* A frame larger than BC_SRV_MAX_CLIENT_QUEUE (a 2048^2 snapshot with its
  * depth and id planes, up to the protocol's payload limit) is not a
  * reason to drop its client: the cap is then the frame plus this much of

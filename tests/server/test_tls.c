@@ -181,6 +181,84 @@ static void join_edit_snapshot_over_tls(void)
 	bc_client_destroy(c);
 }
 
+/* Messages several times the daemon's write piece (BC_SRV_WRITE_PIECE:
+ * raw frames of 1.9 MiB, a snapshot with its planes of 5.8 MiB) go out a
+ * piece per loop turn; the small ones queued meanwhile (EDIT_APPLIED, the
+ * answers) must come after them whole, never inside. The client's reader
+ * refuses a stream that is cut anywhere. */
+static void big_messages_arrive_whole(const char *addr, const char *ca,
+                                      const char *token)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	struct bc_client_image img, shot;
+	struct bc_msg m;
+	uint32_t seq = 0, node, frames = 0;
+	uint64_t order = 0;
+	struct bc_msg_view v = {.width = 700,
+	                        .height = 700,
+	                        .encoding = BC_PROTO_ENC_RAW,
+	                        .downscale = 1};
+	char kv[64];
+	const char *kvs[] = {kv};
+	CHECK_EQ_INT(connect_to(&c, addr, ca, false, token, &ei), 0);
+	if (!c) {
+		fprintf(stderr, "  %s: %s\n", addr, ei.msg);
+		return;
+	}
+	CHECK_EQ_INT(bc_client_join(c, "big", BC_PROTO_ROLE_EDITOR,
+	                            BC_CLIENT_JOIN_ANY, &ei),
+	             0);
+	CHECK_EQ_INT(bc_client_view(c, &v, NULL, &ei), 0);
+	node = some_prim(c);
+	for (int i = 0; i < 6; i++) {
+		snprintf(kv, sizeof(kv), "translate=%g,0,0", 0.02 * i);
+		CHECK_EQ_INT(
+		    bc_client_edit_kv(c, node, kvs, 1, false, &seq, &ei), 0);
+	}
+	CHECK_EQ_INT(bc_client_wait_applied(c, seq, &order, &ei), 0);
+	bc_client_image_init(&img);
+	while (frames < 50 &&
+	       bc_client_wait(c, BC_MSG_FRAME, 0, &m, 0, &ei) == 0) {
+		frames++;
+		CHECK_EQ_INT(bc_client_image_apply(&img, &m, &ei), 0);
+		if (m.frame.order >= order &&
+		    bc_proto_flags_level(m.flags) == 0 &&
+		    !(m.flags & BC_PROTO_FLAG_INCOMPLETE)) {
+			break;
+		}
+	}
+	CHECK(frames < 50);
+	CHECK_EQ_INT(img.width, 700);
+	CHECK_EQ_INT(img.height, 700);
+	bc_client_image_init(&shot);
+	CHECK_EQ_INT(bc_client_snapshot_planes(
+	                 c, BC_PROTO_ENC_RAW,
+	                 BC_PROTO_PLANE_DEPTH | BC_PROTO_PLANE_IDS, &shot, &ei),
+	             0);
+	CHECK_EQ_INT(shot.width, 700);
+	CHECK(shot.depth != NULL && shot.ids != NULL);
+	/* The connection still speaks: an answer after all of it. */
+	CHECK_EQ_INT(bc_client_edit_kv(c, node, kvs, 1, false, &seq, &ei), 0);
+	CHECK_EQ_INT(bc_client_wait_applied(c, seq, &order, &ei), 0);
+	if (ei.msg[0]) {
+		fprintf(stderr, "  %s: %s\n", addr, ei.msg);
+	}
+	bc_client_image_finish(&shot);
+	bc_client_image_finish(&img);
+	bc_client_destroy(c);
+}
+
+static void big_messages_arrive_whole_over_tls_and_tcp(void)
+{
+	char addr[64], ca[128];
+	path_of(ca, sizeof(ca), "ca.pem");
+	snprintf(addr, sizeof(addr), "tls://127.0.0.1:%d", tls_port);
+	big_messages_arrive_whole(addr, ca, TOKEN);
+	snprintf(addr, sizeof(addr), "127.0.0.1:%d", plain_port);
+	big_messages_arrive_whole(addr, NULL, NULL);
+}
+
 static void untrusted_certificates_are_refused(void)
 {
 	char addr[64], ca[128], other[128];
@@ -586,6 +664,8 @@ static void tokens_in_clear_need_allow_plaintext(void)
 
 static const struct bc_test tests[] = {
     {"join_edit_snapshot_over_tls", join_edit_snapshot_over_tls},
+    {"big_messages_arrive_whole_over_tls_and_tcp",
+     big_messages_arrive_whole_over_tls_and_tcp},
     {"untrusted_certificates_are_refused", untrusted_certificates_are_refused},
     {"wrong_protocol_on_either_port_is_refused_cleanly",
      wrong_protocol_on_either_port_is_refused_cleanly},
