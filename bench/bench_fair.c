@@ -706,19 +706,6 @@ static void closed_text(const struct conn *c, char *buf, size_t n)
 	}
 }
 
-static uint32_t send_view(struct conn *c, uint16_t w, uint16_t h,
-                          enum bc_proto_encoding enc, uint8_t downscale)
-{
-	struct bc_msg m = {.type = BC_MSG_VIEW};
-	m.view.width = w;
-	m.view.height = h;
-	m.view.encoding = enc;
-	m.view.quality_interactive = 60;
-	m.view.quality_still = 90;
-	m.view.downscale = downscale;
-	return conn_send(c, &m);
-}
-
 /* A CAMERA on base's orbit about its target (y up), angle radians on. */
 static uint32_t send_orbit(struct conn *c, const struct bc_camera *base,
                            double angle, bool interacting)
@@ -1422,8 +1409,8 @@ static void *heavy_main(void *arg)
 			} else if (h->tag == 'C' && now >= next) {
 				uint16_t w = (step & 1u) ? 1312 : 1280;
 				uint16_t hh = (step & 1u) ? 984 : 960;
-				ok = send_view(&h->c, w, hh, BC_PROTO_ENC_JPEG,
-				               2) &&
+				ok = conn_view_scaled(&h->c, w, hh,
+				                      BC_PROTO_ENC_JPEG, 2) &&
 				     send_orbit(&h->c, &h->sc.cam,
 				                C_ORBIT_STEP * step, true);
 				step++;
@@ -2170,7 +2157,7 @@ static int scaling_run(const char *threads, struct orbit *r)
 	if (client_session(&c, &d, "orbit", "orbit", true, &member, r->err) ||
 	    scene_fig18(&s, SCALE_SPHERES, BC_GEN_BLEND_SMOOTH, r->err) ||
 	    scene_load(&c, &s, SMALL_LOAD_MS, r->err) ||
-	    !send_view(&c, SCALE_W, SCALE_H, BC_PROTO_ENC_JPEG, 1) ||
+	    !conn_view_scaled(&c, SCALE_W, SCALE_H, BC_PROTO_ENC_JPEG, 1) ||
 	    wait_still(&c, STILL_MS, "orbit", r->err)) {
 		goto out;
 	}
@@ -2486,7 +2473,7 @@ static void scenario_loop(void)
 	report("- loaded %s in %.1f s (SCENE_LOAD to its SCENE_STATE)\n",
 	       s.what, s.load_s);
 	t0 = now_us();
-	send_view(&c, LOOP_W, LOOP_H, BC_PROTO_ENC_JPEG, 2);
+	conn_view_scaled(&c, LOOP_W, LOOP_H, BC_PROTO_ENC_JPEG, 2);
 	end = t0 + (int64_t)BIG_STILL_MS * 1000;
 	while (t_still < 0 && now_us() < end) {
 		int got = conn_recv(&c, ms_until(end, 1000));
@@ -2640,7 +2627,7 @@ static int memory_view(struct conn *c, const struct bc_camera *cam,
 	uint32_t vseq = 0, cseq;
 	int64_t end = now_us() + (int64_t)timeout_ms * 1000;
 	if (new_size &&
-	    !(vseq = send_view(c, dim, dim, BC_PROTO_ENC_JPEG, 2))) {
+	    !(vseq = conn_view_scaled(c, dim, dim, BC_PROTO_ENC_JPEG, 2))) {
 		return -1;
 	}
 	if (!(cseq = send_orbit(c, cam, angle, false))) {

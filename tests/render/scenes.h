@@ -18,8 +18,8 @@
 #include "blobcast/blobtree.h"
 #include "blobcast/gen.h"
 
-static void sc_sphere(struct bc_prim_data *p, float x, float y, float z,
-                      float r)
+static inline void sc_sphere(struct bc_prim_data *p, float x, float y, float z,
+                             float r)
 {
 	bc_prim_data_init(p, BC_PRIM_SPHERE);
 	p->params[0] = r;
@@ -32,7 +32,7 @@ static void sc_sphere(struct bc_prim_data *p, float x, float y, float z,
 	p->color[2] = 0.3f + 0.7f * fabsf(sinf(7.0f * z + 3.0f));
 }
 
-static struct bc_op_data sc_op(bool smooth, float blend)
+static inline struct bc_op_data sc_op(bool smooth, float blend)
 {
 	struct bc_op_data op = {BC_OP_UNION, 0.0f, 0.0f};
 	if (smooth) {
@@ -44,7 +44,8 @@ static struct bc_op_data sc_op(bool smooth, float blend)
 }
 
 /* A generated scene (blobcast/gen.h). Returns 0 or the generator's error. */
-static int sc_gen(struct bc_tree *t, const char *name, struct bc_gen_opts opts)
+static inline int sc_gen(struct bc_tree *t, const char *name,
+                         struct bc_gen_opts opts)
 {
 	struct bc_errinfo ei = {0};
 	int rc = bc_gen(name, &opts, t, NULL, &ei);
@@ -55,7 +56,7 @@ static int sc_gen(struct bc_tree *t, const char *name, struct bc_gen_opts opts)
 }
 
 /* Fig. 16: recursive aggregates (level 1: 10 primitives, 2: 110). */
-static int sc_fig16(struct bc_tree *t, uint32_t level, bool smooth)
+static inline int sc_fig16(struct bc_tree *t, uint32_t level, bool smooth)
 {
 	return sc_gen(t, "fig16",
 	              (struct bc_gen_opts){.level = level,
@@ -65,8 +66,8 @@ static int sc_fig16(struct bc_tree *t, uint32_t level, bool smooth)
 }
 
 /* Fig. 18: n instances in a cube under one n-ary (left comb) union. */
-static int sc_fig18(struct bc_tree *t, uint32_t n, bool boxes, bool smooth,
-                    uint64_t seed)
+static inline int sc_fig18(struct bc_tree *t, uint32_t n, bool boxes,
+                           bool smooth, uint64_t seed)
 {
 	return sc_gen(
 	    t, "fig18",
@@ -78,7 +79,7 @@ static int sc_fig18(struct bc_tree *t, uint32_t n, bool boxes, bool smooth,
 }
 
 /* A left comb of n spheres. */
-static int sc_comb(struct bc_tree *t, uint32_t n, bool smooth)
+static inline int sc_comb(struct bc_tree *t, uint32_t n, bool smooth)
 {
 	return sc_gen(t, "comb",
 	              (struct bc_gen_opts){.count = n,
@@ -88,7 +89,7 @@ static int sc_comb(struct bc_tree *t, uint32_t n, bool smooth)
 }
 
 /* A random tree with every operator kind. */
-static int sc_random(struct bc_tree *t, uint32_t n, uint64_t seed)
+static inline int sc_random(struct bc_tree *t, uint32_t n, uint64_t seed)
 {
 	return sc_gen(t, "random",
 	              (struct bc_gen_opts){.count = n, .seed = seed});
@@ -122,7 +123,7 @@ static int sc_random(struct bc_tree *t, uint32_t n, uint64_t seed)
 
 /* A camera looking at the scene's AABB from the front, a little from above
  * and the right, close enough to fill most of a 40 degree field of view. */
-static void sc_frame(const struct bc_lin *l, struct bc_camera *cam)
+static inline void sc_frame(const struct bc_lin *l, struct bc_camera *cam)
 {
 	float c[3], r = 0.5f * l->size;
 	float dir[3] = {0.35f, 0.45f, 1.0f};

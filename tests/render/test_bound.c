@@ -34,6 +34,7 @@
 #include "blobcast/blobtree.h"
 #include "blobcast/gen.h"
 #include "blobcast/render.h"
+#include "scenes.h"
 #include "test.h"
 
 /* The heavy scenes' frame and bound. */
@@ -195,23 +196,6 @@ static uint64_t check_short(const struct bc_frame *f,
 
 /* ---- Scenes ------------------------------------------------------------- */
 
-/* A camera on the scene's AABB from the front, a little from above and
- * the right, filling most of a 40 degree field of view (test_damage.c's). */
-static void frame_scene(const struct bc_lin *l, struct bc_camera *cam)
-{
-	float r = 0.5f * l->size;
-	float dir[3] = {0.35f, 0.45f, 1.0f};
-	float n = sqrtf(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
-	float dist = 0.75f * r / sinf(20.0f * 3.14159265f / 180.0f);
-	bc_camera_default(cam);
-	for (int i = 0; i < 3; i++) {
-		float c = 0.5f * (l->lo[i] + l->hi[i]);
-		cam->target[i] = c;
-		cam->eye[i] = c + dir[i] / n * dist;
-	}
-	cam->fov_y_deg = 40.0f;
-}
-
 /* One sphere under a twist or a bend of the given rate. */
 static int build_heavy(struct bc_tree *t, enum bc_op kind, float rate)
 {
@@ -284,7 +268,7 @@ static void heavy_one(struct bc_renderer *r, const char *label, enum bc_op kind)
 	REQUIRE(t);
 	REQUIRE(build_heavy(t, kind, 1.0e6f) == 0);
 	REQUIRE(bc_tree_lin(t)->lip > 1.0e5f);
-	frame_scene(bc_tree_lin(t), &cam);
+	sc_frame(bc_tree_lin(t), &cam);
 	REQUIRE(bc_frame_init(&f, HEAVY_W, HEAVY_H) == 0);
 	fill_sentinel(&f);
 	REQUIRE(bc_renderer_sync(r, t, NULL, &ei) == 0);
@@ -346,7 +330,7 @@ static void test_region_made_whole_keeps_its_bound(void)
 	uint64_t left = 0;
 	REQUIRE(t && r);
 	REQUIRE(build_heavy(t, BC_OP_TWIST, 1.0e6f) == 0);
-	frame_scene(bc_tree_lin(t), &cam);
+	sc_frame(bc_tree_lin(t), &cam);
 	REQUIRE(bc_frame_init(&f, HEAVY_W, HEAVY_H) == 0);
 	fill_sentinel(&f);
 	f.key = 0;
@@ -417,7 +401,7 @@ static void plain_backend(struct bc_renderer *r, const char *label,
 	char what[96];
 	REQUIRE(t);
 	REQUIRE(build_plain(t) == 0);
-	frame_scene(bc_tree_lin(t), &cam);
+	sc_frame(bc_tree_lin(t), &cam);
 	REQUIRE(bc_frame_init(&ref, PLAIN_W, PLAIN_H) == 0);
 	REQUIRE(bc_frame_init(&f, PLAIN_W, PLAIN_H) == 0);
 	REQUIRE(ntiles(&f) <= sizeof(shorts));
@@ -604,7 +588,7 @@ static void threads_one(enum bc_backend b)
 	struct bc_errinfo ei = {0};
 	uint32_t n = bc_render_tiles_x(PLAIN_W) * bc_render_tiles_y(PLAIN_H);
 	REQUIRE(t && build_plain(t) == 0);
-	frame_scene(bc_tree_lin(t), &cam);
+	sc_frame(bc_tree_lin(t), &cam);
 	REQUIRE(bc_renderer_create(&all, b, &o, &ei) == 0);
 	REQUIRE(bc_renderer_create(&one, b, &o, &ei) == 0);
 	REQUIRE(bc_frame_init(&fa, PLAIN_W, PLAIN_H) == 0);

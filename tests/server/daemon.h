@@ -259,8 +259,9 @@ static int conn_join(struct conn *c, const char *session,
 	return conn_expect(c, BC_MSG_SESSION_INFO, 5000) == 1 ? 0 : -1;
 }
 
-static uint32_t conn_view(struct conn *c, uint16_t w, uint16_t h,
-                          enum bc_proto_encoding enc)
+/* VIEW of w x h in enc, qualities 60 and 90, coarsest block downscale. */
+static uint32_t conn_view_scaled(struct conn *c, uint16_t w, uint16_t h,
+                                 enum bc_proto_encoding enc, uint8_t downscale)
 {
 	struct bc_msg m = {.type = BC_MSG_VIEW};
 	m.view.width = w;
@@ -268,8 +269,14 @@ static uint32_t conn_view(struct conn *c, uint16_t w, uint16_t h,
 	m.view.encoding = enc;
 	m.view.quality_interactive = 60;
 	m.view.quality_still = 90;
-	m.view.downscale = 2;
+	m.view.downscale = downscale;
 	return conn_send(c, &m);
+}
+
+static uint32_t conn_view(struct conn *c, uint16_t w, uint16_t h,
+                          enum bc_proto_encoding enc)
+{
+	return conn_view_scaled(c, w, h, enc, 2);
 }
 
 /* A SET edit of one translate field on node id. */

@@ -67,20 +67,16 @@ static void member(struct conn *c, const struct daemon *d, const char *name,
 	REQUIRE(conn_send(c, &m));
 }
 
-/* Loads a generated scene into c's session and waits for its
- * SCENE_STATE. */
-static void load_gen(struct conn *c, const char *gen, uint32_t count,
-                     enum bc_gen_blend blend)
+/* Loads tree t (taking it) with camera cam into c's session and waits
+ * for its SCENE_STATE. */
+static void load_tree(struct conn *c, struct bc_tree *t,
+                      const struct bc_camera *cam)
 {
-	struct bc_tree *t = bc_tree_create();
-	struct bc_camera cam;
-	struct bc_gen_opts o = {.count = count, .blend = blend};
 	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
 	uint8_t *bytes = NULL;
 	size_t len = 0;
 	uint32_t seq;
-	REQUIRE(t && bc_gen(gen, &o, t, &cam, NULL) == 0);
-	REQUIRE(bc_scene_encode(t, &cam, &bytes, &len) == 0);
+	REQUIRE(bc_scene_encode(t, cam, &bytes, &len) == 0);
 	m.scene_load.scene.ptr = bytes;
 	m.scene_load.scene.len = (uint32_t)len;
 	REQUIRE((seq = conn_send(c, &m)));
@@ -91,26 +87,25 @@ static void load_gen(struct conn *c, const char *gen, uint32_t count,
 	bc_tree_destroy(t);
 }
 
+/* Loads a generated scene into c's session. */
+static void load_gen(struct conn *c, const char *gen, uint32_t count,
+                     enum bc_gen_blend blend)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_camera cam;
+	struct bc_gen_opts o = {.count = count, .blend = blend};
+	REQUIRE(t && bc_gen(gen, &o, t, &cam, NULL) == 0);
+	load_tree(c, t, &cam);
+}
+
 /* Loads scene JSON into c's session. */
 static void load_json(struct conn *c, const char *json)
 {
 	struct bc_tree *t = bc_tree_create();
 	struct bc_camera cam;
-	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
-	uint8_t *bytes = NULL;
-	size_t len = 0;
-	uint32_t seq;
 	REQUIRE(t &&
 	        bc_scene_parse_json(json, strlen(json), t, &cam, NULL) == 0);
-	REQUIRE(bc_scene_encode(t, &cam, &bytes, &len) == 0);
-	m.scene_load.scene.ptr = bytes;
-	m.scene_load.scene.len = (uint32_t)len;
-	REQUIRE((seq = conn_send(c, &m)));
-	do {
-		REQUIRE(conn_expect(c, BC_MSG_SCENE_STATE, 60000) == 1);
-	} while (c->m.scene_state.author_seq != seq);
-	bc_free(bytes);
-	bc_tree_destroy(t);
+	load_tree(c, t, &cam);
 }
 
 /* A scene of nspheres in a row, ids 2.., under a union with id 1. */
