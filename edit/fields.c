@@ -287,23 +287,46 @@ static int apply_set(struct bc_tree *t, const struct bc_proto_edit_op *e,
 	             : bc_tree_set_prim(t, e->node, &p, ei);
 }
 
+/* The node a REMOVE of id takes out: id, or the top of the chain of unary
+ * nodes above it (a unary node cannot lose its only child, PROTOCOL.md
+ * 9); 0 for an unknown id. */
+static uint32_t removed_top(const struct bc_tree *t, uint32_t id)
+{
+	struct bc_op_data op;
+	uint32_t parent;
+	if (!bc_tree_get(t, id, NULL, NULL)) {
+		return 0;
+	}
+	while ((parent = bc_tree_parent(t, id)) != 0 &&
+	       bc_tree_get(t, parent, NULL, &op) && bc_op_is_unary(op.kind)) {
+		id = parent;
+	}
+	return id;
+}
+
 int bc_edit_apply_op(struct bc_tree *t, const struct bc_proto_edit_op *e,
                      struct bc_errinfo *ei)
 {
 	struct bc_proto_scene_info info;
 	struct bc_tree *sub;
+	uint32_t top;
 	int rc;
 	switch (e->kind) {
 	case BC_PROTO_EDIT_SET:
 		return apply_set(t, e, ei);
 	case BC_PROTO_EDIT_REMOVE:
-		if (e->node == bc_tree_root(t) &&
-		    bc_tree_get(t, e->node, NULL, NULL)) {
-			return bc_errinfo_set(ei, BC_EINVAL,
-			                      "node %u is the root: a scene is "
-			                      "never empty (REPLACE it "
-			                      "instead)",
-			                      e->node);
+		if ((top = removed_top(t, e->node)) == bc_tree_root(t) &&
+		    top != 0) {
+			return bc_errinfo_set(
+			    ei, BC_EINVAL,
+			    top == e->node
+			        ? "node %u is the root: a scene is never empty "
+			          "(REPLACE it instead)"
+			        : "removing node %u takes the unary nodes "
+			          "above "
+			          "it up to the root: a scene is never empty "
+			          "(REPLACE the root instead)",
+			    e->node);
 		}
 		return bc_tree_remove(t, e->node, ei);
 	case BC_PROTO_EDIT_INSERT:

@@ -269,6 +269,38 @@ static struct bc_tree *unary_scene(void)
 	return t;
 }
 
+/* REMOVE of a unary node's child takes the chain of unary nodes above it
+ * (PROTOCOL.md 9): under offset(twist(repeat(sphere))) that chain is the
+ * whole scene, so removing the sphere, or any node of the chain, would
+ * leave it empty and is refused like removing the root; the tree is
+ * untouched and still encodes. */
+static void remove_up_a_unary_chain_to_the_root_is_einval(void)
+{
+	struct bc_tree *t = unary_scene();
+	struct bc_errinfo ei = {0};
+	uint8_t *bytes = NULL;
+	size_t n = 0;
+	REQUIRE(t);
+	for (uint32_t id = 12; id <= 15; id++) {
+		CHECK_EQ_INT(
+		    apply1(&t,
+		           (struct bc_proto_edit_op){
+		               .kind = BC_PROTO_EDIT_REMOVE, .node = id},
+		           &ei),
+		    BC_EINVAL);
+		CHECK(strstr(ei.msg, "never empty") != NULL);
+	}
+	CHECK_EQ_INT((int)bc_tree_node_count(t), 4);
+	CHECK_EQ_INT(bc_tree_encode(t, &bytes, &n), 0);
+	bc_free(bytes);
+	CHECK_EQ_INT(apply1(&t,
+	                    (struct bc_proto_edit_op){
+	                        .kind = BC_PROTO_EDIT_REMOVE, .node = 99},
+	                    &ei),
+	             BC_ENONODE);
+	bc_tree_destroy(t);
+}
+
 /* SET on unary nodes: parameters by PARAM0 (repeat: spacing and count),
  * a kind change starting from the new kind's defaults, wrong counts and
  * kinds refused, and a batch undone back to the exact state. */
@@ -363,6 +395,8 @@ static const struct bc_test tests[] = {
     {"unary_nodes_take_set_fields_and_undo",
      unary_nodes_take_set_fields_and_undo},
     {"unary_key_values", unary_key_values},
+    {"remove_up_a_unary_chain_to_the_root_is_einval",
+     remove_up_a_unary_chain_to_the_root_is_einval},
 };
 
 BC_TEST_MAIN(tests)

@@ -37,13 +37,13 @@ struct daemon {
 	char sock[90]; /* fits sockaddr_un.sun_path (108) */
 };
 
-static void t_sleep_ms(long ms)
+static inline void t_sleep_ms(long ms)
 {
 	struct timespec ts = {ms / 1000, (ms % 1000) * 1000000L};
 	nanosleep(&ts, NULL);
 }
 
-static int64_t t_now_ms(void)
+static inline int64_t t_now_ms(void)
 {
 	struct timespec ts;
 	clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -52,8 +52,8 @@ static int64_t t_now_ms(void)
 
 /* Starts blobcastd on dir (created by the caller or here), with up to four
  * extra options (NULL-terminated; extra may be NULL). */
-static int daemon_start_with(struct daemon *d, const char *dir,
-                             const char *const *extra)
+static inline int daemon_start_with(struct daemon *d, const char *dir,
+                                    const char *const *extra)
 {
 	const char *more[5] = {NULL};
 	for (int i = 0; extra && i < 4 && extra[i]; i++) {
@@ -100,12 +100,12 @@ static int daemon_start_with(struct daemon *d, const char *dir,
 	return -1;
 }
 
-static int daemon_start(struct daemon *d, const char *dir)
+static inline int daemon_start(struct daemon *d, const char *dir)
 {
 	return daemon_start_with(d, dir, NULL);
 }
 
-static int daemon_stop(struct daemon *d, int sig)
+static inline int daemon_stop(struct daemon *d, int sig)
 {
 	int status = 0;
 	if (d->pid <= 0) {
@@ -124,7 +124,7 @@ struct conn {
 	struct bc_msg m; /* the last message received */
 };
 
-static int conn_open(struct conn *c, const struct daemon *d)
+static inline int conn_open(struct conn *c, const struct daemon *d)
 {
 	struct sockaddr_un sa = {.sun_family = AF_UNIX};
 	memset(c, 0, sizeof(*c));
@@ -139,7 +139,7 @@ static int conn_open(struct conn *c, const struct daemon *d)
 	return 0;
 }
 
-static void conn_close(struct conn *c)
+static inline void conn_close(struct conn *c)
 {
 	if (c->fd > 0) {
 		close(c->fd);
@@ -148,7 +148,7 @@ static void conn_close(struct conn *c)
 	c->fd = -1;
 }
 
-static int send_raw(struct conn *c, const void *bytes, size_t n)
+static inline int send_raw(struct conn *c, const void *bytes, size_t n)
 {
 	const uint8_t *p = bytes;
 	while (n > 0) {
@@ -163,7 +163,7 @@ static int send_raw(struct conn *c, const void *bytes, size_t n)
 }
 
 /* Sends m with the next seq; returns that seq, 0 on failure. */
-static uint32_t conn_send(struct conn *c, struct bc_msg *m)
+static inline uint32_t conn_send(struct conn *c, struct bc_msg *m)
 {
 	struct bc_proto_buf b;
 	int rc;
@@ -178,7 +178,7 @@ static uint32_t conn_send(struct conn *c, struct bc_msg *m)
 }
 
 /* Receives the next message into c->m: 1, 0 on timeout, -1 closed/error. */
-static int conn_recv(struct conn *c, int timeout_ms)
+static inline int conn_recv(struct conn *c, int timeout_ms)
 {
 	int64_t end = t_now_ms() + timeout_ms;
 	for (;;) {
@@ -206,7 +206,8 @@ static int conn_recv(struct conn *c, int timeout_ms)
 }
 
 /* Receives until a message of type arrives (others are skipped). */
-static int conn_expect(struct conn *c, enum bc_msg_type type, int timeout_ms)
+static inline int conn_expect(struct conn *c, enum bc_msg_type type,
+                              int timeout_ms)
 {
 	int64_t end = t_now_ms() + timeout_ms;
 	for (;;) {
@@ -226,7 +227,7 @@ static int conn_expect(struct conn *c, enum bc_msg_type type, int timeout_ms)
 }
 
 /* HELLO listing the encodings in mask (bit e - 1: encoding e). */
-static int conn_hello_enc(struct conn *c, const char *name, uint8_t mask)
+static inline int conn_hello_enc(struct conn *c, const char *name, uint8_t mask)
 {
 	struct bc_msg m = {.type = BC_MSG_HELLO};
 	m.hello.version_min = 1;
@@ -240,13 +241,13 @@ static int conn_hello_enc(struct conn *c, const char *name, uint8_t mask)
 	return conn_expect(c, BC_MSG_WELCOME, 5000) == 1 ? 0 : -1;
 }
 
-static int conn_hello(struct conn *c, const char *name)
+static inline int conn_hello(struct conn *c, const char *name)
 {
 	return conn_hello_enc(c, name, BC_PROTO_ENCODINGS_ALL);
 }
 
-static int conn_join(struct conn *c, const char *session,
-                     enum bc_proto_role role, bool create)
+static inline int conn_join(struct conn *c, const char *session,
+                            enum bc_proto_role role, bool create)
 {
 	struct bc_msg m = {.type = create ? BC_MSG_SESSION_CREATE
 	                                  : BC_MSG_SESSION_JOIN};
@@ -260,8 +261,9 @@ static int conn_join(struct conn *c, const char *session,
 }
 
 /* VIEW of w x h in enc, qualities 60 and 90, coarsest block downscale. */
-static uint32_t conn_view_scaled(struct conn *c, uint16_t w, uint16_t h,
-                                 enum bc_proto_encoding enc, uint8_t downscale)
+static inline uint32_t conn_view_scaled(struct conn *c, uint16_t w, uint16_t h,
+                                        enum bc_proto_encoding enc,
+                                        uint8_t downscale)
 {
 	struct bc_msg m = {.type = BC_MSG_VIEW};
 	m.view.width = w;
@@ -273,15 +275,15 @@ static uint32_t conn_view_scaled(struct conn *c, uint16_t w, uint16_t h,
 	return conn_send(c, &m);
 }
 
-static uint32_t conn_view(struct conn *c, uint16_t w, uint16_t h,
-                          enum bc_proto_encoding enc)
+static inline uint32_t conn_view(struct conn *c, uint16_t w, uint16_t h,
+                                 enum bc_proto_encoding enc)
 {
 	return conn_view_scaled(c, w, h, enc, 2);
 }
 
 /* A SET edit of one translate field on node id. */
-static uint32_t conn_move(struct conn *c, uint32_t id, float x, float y,
-                          float z, bool interacting)
+static inline uint32_t conn_move(struct conn *c, uint32_t id, float x, float y,
+                                 float z, bool interacting)
 {
 	struct bc_proto_field f = {
 	    .field = BC_PROTO_FIELD_TRANSLATE, .count = 3, .v = {x, y, z}};

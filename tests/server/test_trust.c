@@ -1,0 +1,283 @@
+/*
+ * What the daemon must not lose or get wrong, over raw protocol
+ * connections (each a regression of a loss path or a wrong answer):
+ *  - a REMOVE whose chain of unary nodes reaches the root would empty the
+ *    scene: it is refused with EINVAL, and the session keeps its scene for
+ *    every joiner, also after a restart (PROTOCOL.md 9);
+ *  - a SET of a unary node's parameter or kind changes the picture at
+ *    once: the render copy follows it, so a snapshot after the edit equals
+ *    the snapshot of the scene the session then reports (SCENE_STATE),
+ *    loaded fresh into another session;
+ *  - a HELLO whose max_frame_bytes is above what the protocol can carry is
+ *    welcomed, with the protocol's limit (PROTOCOL.md 7.2).
+ */
+#include "blobcast/alloc.h"
+#include "blobcast/blobtree.h"
+#include "blobcast/scene.h"
+#include "test.h" /* before daemon.h: its test runner needs it */
+#include "daemon.h"
+
+static char base_dir[48];
+
+#define W 64
+#define H 48
+
+/* root (id 1: its type and parameter as JSON members) of an onion (id 2,
+ * thickness 0.05) of a sphere (id 3, radius 0.6), seen from the front. */
+static void chain_json(char *buf, size_t n, const char *root)
+{
+	snprintf(buf, n,
+	         "{\"blobcast\": 1, \"camera\": {\"eye\": [0, 0, 4], "
+	         "\"target\": [0, 0, 0], \"up\": [0, 1, 0], \"fov_y_deg\": "
+	         "40}, \"root\": {%s, \"id\": 1, \"children\": [{\"type\": "
+	         "\"onion\", \"id\": 2, \"thickness\": 0.05, \"children\": "
+	         "[{\"type\": \"sphere\", \"id\": 3, \"radius\": 0.6}]}]}}",
+	         root);
+}
+
+#define OFFSET_01 "\"type\": \"offset\", \"amount\": 0.1"
+
+/* Connects as name and joins (creating) session s. */
+static void member(struct conn *c, const struct daemon *d, const char *name,
+                   const char *s, bool create)
+{
+	REQUIRE(conn_open(c, d) == 0);
+	REQUIRE(conn_hello(c, name) == 0);
+	REQUIRE(conn_join(c, s, BC_PROTO_ROLE_EDITOR, create) == 0);
+}
+
+/* Loads scene JSON into c's session and waits for its SCENE_STATE. */
+static void load_json(struct conn *c, const char *json)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_camera cam;
+	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
+	uint8_t *bytes = NULL;
+	size_t len = 0;
+	uint32_t seq;
+	REQUIRE(t &&
+	        bc_scene_parse_json(json, strlen(json), t, &cam, NULL) == 0);
+	REQUIRE(bc_scene_encode(t, &cam, &bytes, &len) == 0);
+	m.scene_load.scene.ptr = bytes;
+	m.scene_load.scene.len = (uint32_t)len;
+	REQUIRE((seq = conn_send(c, &m)));
+	do {
+		REQUIRE(conn_expect(c, BC_MSG_SCENE_STATE, 20000) == 1);
+	} while (c->m.scene_state.author_seq != seq);
+	bc_free(bytes);
+	bc_tree_destroy(t);
+}
+
+/* Sends one operation; *type becomes the answer's: EDIT_APPLIED, or
+ * ERROR with its code in *code (0 when neither came in 20 s). */
+static void edit1(struct conn *c, struct bc_proto_edit_op op,
+                  enum bc_msg_type *type, int *code)
+{
+	struct bc_msg m = {.type = BC_MSG_EDIT};
+	uint32_t seq;
+	*type = 0;
+	m.edit.nops = 1;
+	m.edit.ops = &op;
+	REQUIRE((seq = conn_send(c, &m)));
+	while (conn_recv(c, 20000) == 1) {
+		if (c->m.type == BC_MSG_ERROR && c->m.seq == seq) {
+			*type = BC_MSG_ERROR;
+			*code = c->m.error.code;
+			return;
+		}
+		if (c->m.type == BC_MSG_EDIT_APPLIED &&
+		    c->m.edit_applied.author_seq == seq) {
+			*type = BC_MSG_EDIT_APPLIED;
+			return;
+		}
+	}
+}
+
+/* A joiner of session s gets its SCENE_STATE, of nodes nodes. */
+static void joiner_gets_the_scene(const struct daemon *d, const char *s,
+                                  uint32_t nodes)
+{
+	struct conn c;
+	struct bc_tree *t;
+	member(&c, d, "joiner", s, false);
+	REQUIRE(conn_expect(&c, BC_MSG_SCENE_STATE, 20000) == 1);
+	REQUIRE((t = scene_of(&c)));
+	CHECK_EQ_INT((int)bc_tree_node_count(t), (int)nodes);
+	bc_tree_destroy(t);
+	conn_close(&c);
+}
+
+static void remove_up_a_unary_chain_keeps_the_session(void)
+{
+	char dir[96], json[512];
+	struct daemon d;
+	struct conn a;
+	int code = 0;
+	snprintf(dir, sizeof(dir), "%s/chain", base_dir);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	member(&a, &d, "editor", "chain", true);
+	chain_json(json, sizeof(json), OFFSET_01);
+	load_json(&a, json);
+	/* The sphere, then each unary node: every one would take the
+	 * chain up to the root with it. */
+	for (uint32_t id = 3; id >= 1; id--) {
+		struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_REMOVE,
+		                              .node = id};
+		enum bc_msg_type type;
+		edit1(&a, op, &type, &code);
+		CHECK_EQ_INT(type, BC_MSG_ERROR);
+		CHECK_EQ_INT(code, -BC_EINVAL);
+	}
+	joiner_gets_the_scene(&d, "chain", 3);
+	conn_close(&a);
+	CHECK_EQ_INT(daemon_stop(&d, SIGTERM), 0);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	joiner_gets_the_scene(&d, "chain", 3);
+	CHECK_EQ_INT(daemon_stop(&d, SIGTERM), 0);
+}
+
+/* A raw colour snapshot of c's view into px (W x H x 4 bytes); false when
+ * it did not come. */
+static bool snapshot(struct conn *c, uint8_t *px)
+{
+	struct bc_msg m = {.type = BC_MSG_SNAPSHOT};
+	uint32_t seq;
+	m.snapshot.encoding = BC_PROTO_ENC_RAW;
+	if (!(seq = conn_send(c, &m))) {
+		return false;
+	}
+	do {
+		if (conn_expect(c, BC_MSG_FRAME, 30000) != 1) {
+			return false;
+		}
+	} while (c->m.seq != seq);
+	if (c->m.frame.nrects != 1 ||
+	    c->m.frame.rects[0].data.len != (uint32_t)(W * H * 4)) {
+		return false;
+	}
+	memcpy(px, c->m.frame.rects[0].data.ptr, (size_t)W * H * 4);
+	return true;
+}
+
+/* Session s with the chain scene under root in a W x H view. */
+static void viewer_of(struct conn *c, const struct daemon *d, const char *s,
+                      const char *root)
+{
+	char json[512];
+	member(c, d, s, s, true);
+	chain_json(json, sizeof(json), root);
+	load_json(c, json);
+	REQUIRE(conn_view_scaled(c, W, H, BC_PROTO_ENC_RAW, 1));
+}
+
+/* Session s loaded fresh with the scene session of says it has now (a
+ * joiner's SCENE_STATE), under the chain scene's camera, in a W x H
+ * view. */
+static void copy_of(struct conn *c, const struct daemon *d, const char *s,
+                    const char *of)
+{
+	char json[512];
+	struct conn j;
+	struct bc_tree *t = NULL, *unused = bc_tree_create();
+	struct bc_camera cam;
+	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
+	uint8_t *bytes = NULL;
+	size_t len = 0;
+	uint32_t seq;
+	chain_json(json, sizeof(json), OFFSET_01);
+	REQUIRE(unused && bc_scene_parse_json(json, strlen(json), unused, &cam,
+	                                      NULL) == 0);
+	bc_tree_destroy(unused);
+	member(&j, d, "joiner", of, false);
+	REQUIRE(conn_expect(&j, BC_MSG_SCENE_STATE, 20000) == 1);
+	REQUIRE((t = scene_of(&j)));
+	conn_close(&j);
+	member(c, d, s, s, true);
+	REQUIRE(bc_scene_encode(t, &cam, &bytes, &len) == 0);
+	bc_tree_destroy(t);
+	m.scene_load.scene.ptr = bytes;
+	m.scene_load.scene.len = (uint32_t)len;
+	REQUIRE((seq = conn_send(c, &m)));
+	do {
+		REQUIRE(conn_expect(c, BC_MSG_SCENE_STATE, 20000) == 1);
+	} while (c->m.scene_state.author_seq != seq);
+	bc_free(bytes);
+	REQUIRE(conn_view_scaled(c, W, H, BC_PROTO_ENC_RAW, 1));
+}
+
+static void unary_sets_change_the_picture(void)
+{
+	char dir[96];
+	struct daemon d;
+	struct conn live, fresh, kind;
+	struct bc_proto_field amount = {BC_PROTO_FIELD_PARAM0, 1, {0.3f}};
+	struct bc_proto_field to_elongate = {
+	    BC_PROTO_FIELD_OP_KIND, 1, {(float)BC_OP_ELONGATE}};
+	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_SET,
+	                              .node = 1,
+	                              .nfields = 1,
+	                              .fields = &amount};
+	static uint8_t before[W * H * 4], after[W * H * 4], want[W * H * 4];
+	enum bc_msg_type type;
+	int code = 0;
+	snprintf(dir, sizeof(dir), "%s/unary", base_dir);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	viewer_of(&live, &d, "live", OFFSET_01);
+	REQUIRE(snapshot(&live, before));
+	edit1(&live, op, &type, &code);
+	CHECK_EQ_INT(type, BC_MSG_EDIT_APPLIED);
+	REQUIRE(snapshot(&live, after));
+	copy_of(&fresh, &d, "fresh", "live");
+	REQUIRE(snapshot(&fresh, want));
+	CHECK(memcmp(before, after, sizeof(after)) != 0);
+	CHECK(memcmp(after, want, sizeof(after)) == 0);
+	/* The kind: offset becomes elongate, with the new kind's default
+	 * parameters (PROTOCOL.md 9). */
+	op.fields = &to_elongate;
+	edit1(&live, op, &type, &code);
+	CHECK_EQ_INT(type, BC_MSG_EDIT_APPLIED);
+	REQUIRE(snapshot(&live, after));
+	copy_of(&kind, &d, "kind", "live");
+	REQUIRE(snapshot(&kind, want));
+	CHECK(memcmp(before, after, sizeof(after)) != 0);
+	CHECK(memcmp(after, want, sizeof(after)) == 0);
+	conn_close(&kind);
+	conn_close(&live);
+	conn_close(&fresh);
+	CHECK_EQ_INT(daemon_stop(&d, SIGTERM), 0);
+}
+
+static void a_huge_max_frame_bytes_is_welcomed_with_the_limit(void)
+{
+	char dir[96];
+	struct daemon d;
+	struct conn c;
+	struct bc_msg m = {.type = BC_MSG_HELLO};
+	snprintf(dir, sizeof(dir), "%s/hello", base_dir);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	REQUIRE(conn_open(&c, &d) == 0);
+	m.hello.version_min = 1;
+	m.hello.version_max = 1;
+	m.hello.encodings = BC_PROTO_ENCODINGS_ALL;
+	m.hello.max_frame_bytes = 0xffffffffu;
+	REQUIRE(conn_send(&c, &m));
+	CHECK_EQ_INT(conn_expect(&c, BC_MSG_WELCOME, 5000), 1);
+	CHECK_EQ_INT((long long)c.m.welcome.max_frame_bytes,
+	             (long long)BC_PROTO_MAX_PAYLOAD);
+	conn_close(&c);
+	CHECK_EQ_INT(daemon_stop(&d, SIGTERM), 0);
+}
+
+static const struct bc_test tests[] = {
+    {"remove_up_a_unary_chain_keeps_the_session",
+     remove_up_a_unary_chain_keeps_the_session},
+    {"unary_sets_change_the_picture", unary_sets_change_the_picture},
+    {"a_huge_max_frame_bytes_is_welcomed_with_the_limit",
+     a_huge_max_frame_bytes_is_welcomed_with_the_limit},
+};
+
+int main(int argc, char **argv)
+{
+	return daemon_tests_run("trust", base_dir, sizeof(base_dir), tests,
+	                        sizeof(tests) / sizeof(tests[0]), argc, argv);
+}
