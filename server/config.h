@@ -33,7 +33,8 @@ struct bc_srv_config {
 	uint32_t message_timeout_ms; /* 0: BC_SRV_MESSAGE_TIMEOUT_MS */
 	uint32_t idle_timeout_ms;    /* 0: BC_SRV_IDLE_TIMEOUT_MS */
 	char *tls_cert, *tls_key;    /* PEM files: TLS on the TCP listener */
-	bool allow_plaintext; /* tokens may cross a non-loopback plain TCP */
+	bool allow_plaintext;   /* tokens may cross a non-loopback plain TCP */
+	bool tls_allow_expired; /* start with an out-of-date certificate */
 };
 
 #endif

@@ -186,9 +186,10 @@ int bc_net_listen(struct bc_net *n, struct bc_errinfo *ei)
 {
 	int rc;
 	if (n->cfg->listen && n->cfg->tls_cert && !n->tls &&
-	    (rc = bc_tls_ctx_new(
-	         &n->tls, n->cfg->tls_cert,
-	         n->cfg->tls_key ? n->cfg->tls_key : n->cfg->tls_cert, ei))) {
+	    (rc = bc_tls_ctx_new(&n->tls, n->cfg->tls_cert,
+	                         n->cfg->tls_key ? n->cfg->tls_key
+	                                         : n->cfg->tls_cert,
+	                         n->cfg->tls_allow_expired, ei))) {
 		return rc;
 	}
 	uv_timer_start(&n->stall_timer, bc__net_check_stalls, 1000, 1000);
@@ -295,9 +296,10 @@ int bc_net_reload_tls(struct bc_net *n, struct bc_errinfo *ei)
 	if (!n->tls) {
 		return 0;
 	}
-	if ((rc = bc_tls_ctx_new(
-	         &fresh, n->cfg->tls_cert,
-	         n->cfg->tls_key ? n->cfg->tls_key : n->cfg->tls_cert, ei))) {
+	if ((rc = bc_tls_ctx_new(&fresh, n->cfg->tls_cert,
+	                         n->cfg->tls_key ? n->cfg->tls_key
+	                                         : n->cfg->tls_cert,
+	                         n->cfg->tls_allow_expired, ei))) {
 		return rc;
 	}
 	bc_tls_ctx_free(n->tls);

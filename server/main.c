@@ -56,7 +56,7 @@ struct cli {
 	const char *listen, *unix_path, *data_dir, *config;
 	const char *tls_cert, *tls_key, *server_id;
 	int backend, gl_platform, simd, log;
-	bool allow_plaintext, no_damage;
+	bool allow_plaintext, tls_allow_expired, no_damage;
 	uint32_t frame_budget_ms, render_threads, view_cache_mib;
 };
 
@@ -86,6 +86,12 @@ struct cli {
 		     .arg = "FILE",                                            \
 		     .help = "its private key (PEM; default: the\n"            \
 		             "--tls-cert file)"},                              \
+		    {.name = "tls-allow-expired",                              \
+		     .kind = BC_OPT_FLAG,                                      \
+		     .dst = &(c)->tls_allow_expired,                           \
+		     .help = "start even when the certificate has\n"           \
+		             "expired or is not valid yet (refused\n"          \
+		             "otherwise; a warning in the log)"},              \
 		    {.name = "allow-plaintext",                                \
 		     .kind = BC_OPT_FLAG,                                      \
 		     .dst = &(c)->allow_plaintext,                             \
@@ -292,7 +298,8 @@ static int load_config(struct bc_srv_config *cfg, const char *path,
 			}
 			continue;
 		}
-		if (strcmp(key, "allow_plaintext") == 0) {
+		if (strcmp(key, "allow_plaintext") == 0 ||
+		    strcmp(key, "tls_allow_expired") == 0) {
 			if (!json_is_boolean(val)) {
 				rc = bc_errinfo_set(ei, BC_EPARSE,
 				                    "%s: %s: expected true or "
@@ -300,7 +307,9 @@ static int load_config(struct bc_srv_config *cfg, const char *path,
 				                    path, key);
 				goto out;
 			}
-			cfg->allow_plaintext = json_is_true(val);
+			*(key[0] == 'a' ? &cfg->allow_plaintext
+			                : &cfg->tls_allow_expired) =
+			    json_is_true(val);
 			continue;
 		}
 		if (!json_is_string(val)) {
@@ -576,6 +585,7 @@ static void apply_cli(struct bc_srv_config *cfg, const struct cli *c,
 		set_str(&cfg->tls_key, c->tls_key);
 	}
 	cfg->allow_plaintext = cfg->allow_plaintext || c->allow_plaintext;
+	cfg->tls_allow_expired = cfg->tls_allow_expired || c->tls_allow_expired;
 	cfg->simd = (enum bc_simd)c->simd;
 	cfg->no_damage = c->no_damage;
 	cfg->frame_budget_ms = c->frame_budget_ms;

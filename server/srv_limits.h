@@ -78,6 +78,10 @@
  * dropped, with the reason in the log. */
 #define BC_SRV_MAX_CLIENT_QUEUE (32u * 1024u * 1024u)
 
+/* A TLS certificate that expires within this many days is named in the
+ * log at start and at each SIGHUP reload. */
+#define BC_SRV_TLS_WARN_DAYS 14
+
 /* The most bytes of one connection's output handed to the kernel in one
  * write: a big message goes a piece per loop turn, so that copying (and
  * sealing, on TLS) a 36 MiB snapshot does not hold the loop for its whole

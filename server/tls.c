@@ -13,6 +13,8 @@
 #include <openssl/ssl.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/log.h"
+#include "srv_limits.h"
 #include "tls.h"
 
 struct bc_tls_ctx {
@@ -39,9 +41,71 @@ static void ssl_reason(char *buf, size_t len)
 	ERR_clear_error();
 }
 
-int bc_tls_ctx_new(struct bc_tls_ctx **out, const char *cert_file,
-                   const char *key_file, struct bc_errinfo *ei)
+/* t as text ("Dec  3 08:00:00 2026 GMT"). */
+static void time_text(const ASN1_TIME *t, char *buf, size_t len)
 {
+	BIO *b = BIO_new(BIO_s_mem());
+	int n = 0;
+	if (b && ASN1_TIME_print(b, t)) {
+		n = BIO_read(b, buf, (int)len - 1);
+	}
+	buf[n > 0 ? n : 0] = '\0';
+	BIO_free(b);
+	ERR_clear_error();
+}
+
+/* The certificate's dates against the clock (see bc_tls_ctx_new). */
+static int check_dates(SSL_CTX *ssl, const char *cert_file, bool allow_expired,
+                       struct bc_errinfo *ei)
+{
+	X509 *x = SSL_CTX_get0_certificate(ssl);
+	const ASN1_TIME *from, *until;
+	char when[64];
+	const char *what = NULL;
+	int days = 0, secs = 0;
+	if (!x) {
+		return 0;
+	}
+	from = X509_get0_notBefore(x);
+	until = X509_get0_notAfter(x);
+	if (X509_cmp_current_time(from) > 0) {
+		what = "is not valid before";
+		time_text(from, when, sizeof(when));
+	} else if (X509_cmp_current_time(until) < 0) {
+		what = "expired on";
+		time_text(until, when, sizeof(when));
+	}
+	if (what && !allow_expired) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+		                      "--tls-cert %s: the certificate %s %s, "
+		                      "so clients would refuse it: renew it or "
+		                      "check the clock (--tls-allow-expired "
+		                      "starts anyway)",
+		                      cert_file, what, when);
+	}
+	if (what) {
+		bc_log(BC_LOG_WARN,
+		       "--tls-cert %s: the certificate %s %s; starting as "
+		       "--tls-allow-expired says, but clients that check it "
+		       "will refuse to connect",
+		       cert_file, what, when);
+	} else if (ASN1_TIME_diff(&days, &secs, NULL, until) &&
+	           days < BC_SRV_TLS_WARN_DAYS) {
+		time_text(until, when, sizeof(when));
+		bc_log(BC_LOG_WARN,
+		       "--tls-cert %s: the certificate expires in %d day%s "
+		       "(%s): renew it, then SIGHUP reloads it",
+		       cert_file, days, days == 1 ? "" : "s", when);
+	}
+	ERR_clear_error();
+	return 0;
+}
+
+int bc_tls_ctx_new(struct bc_tls_ctx **out, const char *cert_file,
+                   const char *key_file, bool allow_expired,
+                   struct bc_errinfo *ei)
+{
+	int rc;
 	struct bc_tls_ctx *ctx;
 	char why[256];
 	*out = NULL;
@@ -86,6 +150,10 @@ int bc_tls_ctx_new(struct bc_tls_ctx **out, const char *cert_file,
 		                      "--tls-key %s does not belong to the "
 		                      "certificate in %s: %s",
 		                      key_file, cert_file, why);
+	}
+	if ((rc = check_dates(ctx->ssl, cert_file, allow_expired, ei))) {
+		bc_tls_ctx_free(ctx);
+		return rc;
 	}
 	*out = ctx;
 	return 0;

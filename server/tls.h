@@ -18,9 +18,13 @@ struct bc_tls_ctx;
 struct bc_tls;
 
 /* Loads a PEM certificate chain and its private key (TLS 1.2 and newer).
- * Returns 0 or BC_EIO/BC_EINVAL with the file and OpenSSL's reason. */
+ * A certificate that has expired or is not valid yet is refused (clients
+ * would refuse it) unless allow_expired, which logs a warning instead;
+ * one that expires within BC_SRV_TLS_WARN_DAYS is logged as a warning.
+ * Returns 0 or BC_EIO/BC_EINVAL with the file and the reason. */
 int bc_tls_ctx_new(struct bc_tls_ctx **out, const char *cert_file,
-                   const char *key_file, struct bc_errinfo *ei);
+                   const char *key_file, bool allow_expired,
+                   struct bc_errinfo *ei);
 void bc_tls_ctx_free(struct bc_tls_ctx *ctx);
 
 /* A server-side connection state; NULL when out of memory. It holds its

@@ -14,6 +14,9 @@
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <openssl/err.h>
+#include <openssl/evp.h>
+#include <openssl/pem.h>
+#include <openssl/x509.h>
 #include <openssl/ssl.h>
 #include <sys/socket.h>
 #include <sys/time.h>
@@ -617,6 +620,84 @@ static int run_daemon(const char *log, const char *const *args)
 	return -1;
 }
 
+#define DAY_S (24L * 3600L)
+
+/* A self-signed certificate for localhost, valid from now + from_s to now
+ * + until_s (seconds; negative: in the past), with its key, in file name
+ * under base_dir (the openssl command cannot date one in the past). */
+static bool make_dated_cert(const char *name, long from_s, long until_s)
+{
+	char path[160];
+	EVP_PKEY *key = EVP_EC_gen("P-256");
+	X509 *x = X509_new();
+	X509_NAME *nm = x ? X509_get_subject_name(x) : NULL;
+	FILE *f;
+	bool ok = false;
+	if (key && nm && X509_set_version(x, 2) &&
+	    ASN1_INTEGER_set(X509_get_serialNumber(x), 1) &&
+	    X509_gmtime_adj(X509_getm_notBefore(x), from_s) &&
+	    X509_gmtime_adj(X509_getm_notAfter(x), until_s) &&
+	    X509_set_pubkey(x, key) &&
+	    X509_NAME_add_entry_by_txt(nm, "CN", MBSTRING_ASC,
+	                               (const unsigned char *)"localhost", -1,
+	                               -1, 0) &&
+	    X509_set_issuer_name(x, nm) &&
+	    X509_sign(x, key, EVP_sha256()) > 0) {
+		path_of(path, sizeof(path), name);
+		if ((f = fopen(path, "w"))) {
+			ok = PEM_write_X509(f, x) &&
+			     PEM_write_PrivateKey(f, key, NULL, NULL, 0, NULL,
+			                          NULL);
+			fclose(f);
+		}
+	}
+	X509_free(x);
+	EVP_PKEY_free(key);
+	return ok;
+}
+
+/* The daemon with certificate name: its exit status (run_daemon). */
+static int start_with_cert(const char *name, bool allow, const char *log)
+{
+	char data[128], cert[128];
+	const char *args[] = {"--listen",
+	                      "127.0.0.1:0",
+	                      "--data",
+	                      data,
+	                      "--tls-cert",
+	                      cert,
+	                      allow ? "--tls-allow-expired" : NULL,
+	                      NULL};
+	path_of(data, sizeof(data), "data-dates");
+	path_of(cert, sizeof(cert), name);
+	return run_daemon(log, args);
+}
+
+/* A certificate out of its dates is refused at start with the date that
+ * passed, unless --tls-allow-expired, which warns; one that expires within
+ * 14 days starts with a warning that says when. (-1: still running after
+ * run_daemon's wait, so it started.) */
+static void out_of_date_certificates_are_refused(void)
+{
+	char log[128];
+	path_of(log, sizeof(log), "dates.log");
+	REQUIRE(make_dated_cert("expired.pem", -10 * DAY_S, -DAY_S));
+	REQUIRE(make_dated_cert("future.pem", DAY_S, 10 * DAY_S));
+	REQUIRE(make_dated_cert("soon.pem", -DAY_S, 5 * DAY_S));
+	REQUIRE(make_dated_cert("fine.pem", -DAY_S, 60 * DAY_S));
+	CHECK_EQ_INT(start_with_cert("expired.pem", false, log), 1);
+	CHECK(file_has(log, "the certificate expired on"));
+	CHECK(file_has(log, "--tls-allow-expired"));
+	CHECK_EQ_INT(start_with_cert("future.pem", false, log), 1);
+	CHECK(file_has(log, "is not valid before"));
+	CHECK_EQ_INT(start_with_cert("expired.pem", true, log), -1);
+	CHECK(file_has(log, "will refuse to connect"));
+	CHECK_EQ_INT(start_with_cert("soon.pem", false, log), -1);
+	CHECK(file_has(log, "the certificate expires in 4 days"));
+	CHECK_EQ_INT(start_with_cert("fine.pem", false, log), -1);
+	CHECK(!file_has(log, "the certificate"));
+}
+
 static void tokens_in_clear_need_allow_plaintext(void)
 {
 	char log[128], cfg[128], data[128];
@@ -675,6 +756,8 @@ static const struct bc_test tests[] = {
      token_never_sent_before_the_handshake},
     {"tokens_in_clear_need_allow_plaintext",
      tokens_in_clear_need_allow_plaintext},
+    {"out_of_date_certificates_are_refused",
+     out_of_date_certificates_are_refused},
 };
 
 int main(int argc, char **argv)
