@@ -16,7 +16,7 @@
  *       - REFINE: the coarsest tiles one level finer, tracing only the
  *         pixels the level adds;
  *     a frame takes FIRST or DAMAGE, or else one RETRY or REFINE step; a
- *     snapshot goes on to level 0;
+ *     snapshot goes on to level 0, retrying within the frame budget;
  *  3. encode: the tiles changed since the picture the clients hold, or
  *     the whole picture at the view's level (a large PNG a band of rows
  *     per slice);
@@ -224,17 +224,26 @@ static uint32_t tiles_for(const struct flow *f, const struct bc_job *job,
 }
 
 /* Chooses the next pass (job->pass, PASS_NONE when the picture is as far
- * as this job takes it) and its slice size. first: the job's first plan. */
-static void plan_pass(const struct flow *f, struct bc_job *job, bool first);
+ * as this job takes it) and its slice size. first: the job's first plan;
+ * retry: rays that ran out may be traced again with a larger bound. */
+static void plan_pass(const struct flow *f, struct bc_job *job, bool first,
+                      bool retry);
 
 static void plan(struct bc_work *w, const struct flow *f, struct bc_job *job,
                  bool first)
 {
-	plan_pass(f, job, first);
+	/* A snapshot goes down to level 0 whatever it costs, but retries
+	 * only within the frame budget: past it, it is sent INCOMPLETE
+	 * (a twist at rate 1e6 retried every tile at the largest bound for
+	 * a minute). A frame's refinement is cut in after_pass. */
+	bool retry = job->req.kind != BC_JOB_SNAPSHOT ||
+	             bc_clock_ms() - job->started_ms <= (double)w->budget_ms;
+	plan_pass(f, job, first, retry);
 	job->slice_tiles = tiles_for(f, job, slice_target(w, job));
 }
 
-static void plan_pass(const struct flow *f, struct bc_job *job, bool first)
+static void plan_pass(const struct flow *f, struct bc_job *job, bool first,
+                      bool retry)
 {
 	struct view *v = job->v;
 	bool snapshot = job->req.kind == BC_JOB_SNAPSHOT;
@@ -258,7 +267,7 @@ static void plan_pass(const struct flow *f, struct bc_job *job, bool first)
 	if (!first && !snapshot) {
 		return; /* one step per frame */
 	}
-	if (v->bound < BC_SRV_RAY_EVALS_MAX &&
+	if (retry && v->bound < BC_SRV_RAY_EVALS_MAX &&
 	    (l = level_of_marked(v, v->shorts)) >= 0) {
 		job->pass = PASS_RETRY;
 		job->pass_level = l;
@@ -438,6 +447,15 @@ static void learn(const struct bc_work *w, struct flow *f, struct bc_job *job,
 	}
 }
 
+/* A snapshot's retries stop at the frame budget, also inside a pass: the
+ * tiles not retried keep the values they have and their marks. */
+static bool snapshot_out_of_budget(const struct bc_work *w,
+                                   const struct bc_job *job)
+{
+	return job->req.kind == BC_JOB_SNAPSHOT && job->pass == PASS_RETRY &&
+	       bc_clock_ms() - job->started_ms > (double)w->budget_ms;
+}
+
 /* Renders the pass's next slice of tiles. Returns 0, or an error in ei;
  * job->pass becomes PASS_NONE when the pass is over. */
 static int render_slice(struct bc_work *w, struct worker *wk, struct flow *f,
@@ -490,7 +508,7 @@ static int render_slice(struct bc_work *w, struct worker *wk, struct flow *f,
 		}
 	}
 	job->cursor = sl.end;
-	if (sl.end >= v->ntiles) {
+	if (sl.end >= v->ntiles || snapshot_out_of_budget(w, job)) {
 		job->pass = PASS_NONE;
 	}
 	return 0;

@@ -255,7 +255,8 @@ static void a_quiet_session_keeps_its_share_beside_a_heavy_one(void)
 
 static void a_crawling_scene_is_slow_for_itself_only(void)
 {
-	static const char *const opts[] = {"--render-threads", "2", NULL};
+	static const char *const opts[] = {"--render-threads", "2",
+	                                   "--frame-budget", "500", NULL};
 	static const char twist[] =
 	    "{\"blobcast\": 1, \"root\": {\"type\": \"twist\", \"id\": 1, "
 	    "\"rate\": 1000000, \"children\": [{\"type\": \"box\", \"id\": 2, "
@@ -282,6 +283,25 @@ static void a_crawling_scene_is_slow_for_itself_only(void)
 	printf("  twist rate 1e6: an INCOMPLETE picture after %lld ms\n",
 	       (long long)took);
 	CHECK(incomplete);
+	/* A snapshot goes to level 0 but retries its rays only within the
+	 * frame budget, then says INCOMPLETE (it retried every tile up to the
+	 * largest bound: minutes at this size). */
+	{
+		struct bc_msg snap = {.type = BC_MSG_SNAPSHOT};
+		uint32_t seq;
+		snap.snapshot.encoding = BC_PROTO_ENC_RAW;
+		t0 = t_now_ms();
+		REQUIRE((seq = conn_send(&crawl, &snap)));
+		do {
+			REQUIRE(conn_expect(&crawl, BC_MSG_FRAME, 60000) == 1);
+		} while (crawl.m.seq != seq);
+		took = t_now_ms() - t0;
+		printf("  its snapshot: INCOMPLETE after %lld ms\n",
+		       (long long)took);
+		CHECK(crawl.m.flags & BC_PROTO_FLAG_SNAPSHOT);
+		CHECK(crawl.m.flags & BC_PROTO_FLAG_INCOMPLETE);
+		CHECK(took < 30000);
+	}
 	/* Another session is served meanwhile. */
 	row_member(&quiet, &d, "quiet", 160, 120);
 	REQUIRE(conn_expect(&quiet, BC_MSG_FRAME, 30000) == 1);
