@@ -654,6 +654,63 @@ static void the_view_cache_stays_under_its_cap(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
+/* Whether file path holds needle (its first 64 KiB). */
+static bool file_has(const char *path, const char *needle)
+{
+	static char buf[65536];
+	FILE *f = fopen(path, "r");
+	size_t n = f ? fread(buf, 1, sizeof(buf) - 1, f) : 0;
+	if (f) {
+		fclose(f);
+	}
+	buf[n] = '\0';
+	return strstr(buf, needle) != NULL;
+}
+
+/* The gl backend is one more kind of worker, scheduled alike: through EGL
+ * (Mesa llvmpipe where there is no GPU) two sessions are served side by
+ * side, each edit shows in its own frame, and a crawling scene's picture
+ * comes INCOMPLETE without holding them. */
+static void gl_workers_are_scheduled_alike(void)
+{
+	static const char *const opts[] = {
+	    "--backend", "gl", "--render-threads", "2", "--frame-budget",
+	    "500",       NULL};
+	static const char twist[] =
+	    "{\"blobcast\": 1, \"root\": {\"type\": \"twist\", \"id\": 1, "
+	    "\"rate\": 1000000, \"children\": [{\"type\": \"box\", \"id\": 2, "
+	    "\"half_extents\": [1, 1, 1]}]}}";
+	struct daemon d;
+	struct conn a, b, crawl;
+	int64_t ms[3];
+	bool incomplete = false;
+	char dir[96], log[128];
+	snprintf(dir, sizeof(dir), "%s/gl", base_dir);
+	snprintf(log, sizeof(log), "%s/gl.log", base_dir);
+	daemon_log_path = log;
+	REQUIRE(daemon_start_with(&d, dir, opts) == 0);
+	daemon_log_path = NULL;
+	row_member(&a, &d, "gl-a", 64, 48);
+	row_member(&b, &d, "gl-b", 64, 48);
+	member(&crawl, &d, "gl-crawl", true, 64, 48, BC_PROTO_ENC_RAW);
+	load_json(&crawl, twist);
+	REQUIRE(conn_expect(&a, BC_MSG_FRAME, 60000) == 1);
+	REQUIRE(conn_expect(&b, BC_MSG_FRAME, 60000) == 1);
+	CHECK_EQ_INT(edit_frames(&a, 3, ms), 3);
+	CHECK_EQ_INT(edit_frames(&b, 3, ms), 3);
+	while (!incomplete && conn_expect(&crawl, BC_MSG_FRAME, 60000) == 1) {
+		incomplete = (crawl.m.flags & BC_PROTO_FLAG_INCOMPLETE) != 0;
+	}
+	CHECK(incomplete);
+	conn_close(&a);
+	conn_close(&b);
+	conn_close(&crawl);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+	/* The pictures came from the gl backend, not a fallback. */
+	CHECK(file_has(log, "backend gl"));
+	CHECK(file_has(log, "gl: "));
+}
+
 static const struct bc_test tests[] = {
     {"a_quiet_session_keeps_its_share_beside_a_heavy_one",
      a_quiet_session_keeps_its_share_beside_a_heavy_one},
@@ -668,6 +725,7 @@ static const struct bc_test tests[] = {
      a_long_batch_of_sets_on_a_big_scene_applies_whole},
     {"stats_tell_the_load", stats_tell_the_load},
     {"the_view_cache_stays_under_its_cap", the_view_cache_stays_under_its_cap},
+    {"gl_workers_are_scheduled_alike", gl_workers_are_scheduled_alike},
 };
 
 int main(int argc, char **argv)
