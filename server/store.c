@@ -45,8 +45,14 @@ bool bc__store_injected(const char *step, const char *path)
 	return false;
 }
 
+/* Names set aside per base and second, at most. */
+#define ASIDE_NAMES 100000u
+
 /* Renames path to base.WHY-YYYYMMDDTHHMMSSZ(-k) (base NULL: path itself),
- * keeping it as evidence; writes the new name into aside (PATH_LEN). */
+ * keeping it as evidence; writes the new name into aside (PATH_LEN). k
+ * counts the names of that second already taken: a name deleted and
+ * created again many times a second gets as many (it ran out at 100 and
+ * the 101st SESSION_DELETE answered EIO). */
 static int set_aside_why(const char *path, const char *base, const char *why,
                          char *aside)
 {
@@ -59,7 +65,7 @@ static int set_aside_why(const char *path, const char *base, const char *why,
 	}
 	gmtime_r(&now, &tm);
 	strftime(stamp, sizeof(stamp), "%Y%m%dT%H%M%SZ", &tm);
-	for (unsigned k = 0; k < 100; k++) {
+	for (unsigned k = 0; k < ASIDE_NAMES; k++) {
 		int n =
 		    k ? snprintf(aside, PATH_LEN, "%s.%s-%s-%u", base, why,
 		                 stamp, k)
@@ -71,6 +77,7 @@ static int set_aside_why(const char *path, const char *base, const char *why,
 			return rename(path, aside);
 		}
 	}
+	errno = EEXIST;
 	return -1;
 }
 

@@ -50,14 +50,33 @@ static inline int64_t t_now_ms(void)
 	return (int64_t)ts.tv_sec * 1000 + ts.tv_nsec / 1000000;
 }
 
-/* Starts blobcastd on dir (created by the caller or here), with up to four
- * extra options (NULL-terminated; extra may be NULL). */
+/* The daemons started and not yet stopped: a test that ends early (a
+ * failed REQUIRE) leaves its daemon to daemon_tests_run, which kills it,
+ * rather than running on after the test program. */
+static pid_t daemon_running[32];
+
+static inline void daemon_track(pid_t pid, bool on)
+{
+	for (size_t i = 0; i < sizeof(daemon_running) / sizeof(pid_t); i++) {
+		if (daemon_running[i] == (on ? 0 : pid)) {
+			daemon_running[i] = on ? pid : 0;
+			return;
+		}
+	}
+}
+
+/* Starts blobcastd on dir (created by the caller or here), with up to
+ * eight extra options (NULL-terminated; extra may be NULL; more: -1). */
 static inline int daemon_start_with(struct daemon *d, const char *dir,
                                     const char *const *extra)
 {
-	const char *more[5] = {NULL};
-	for (int i = 0; extra && i < 4 && extra[i]; i++) {
-		more[i] = extra[i];
+	const char *more[9] = {NULL};
+	int nmore = 0;
+	for (; extra && nmore < 8 && extra[nmore]; nmore++) {
+		more[nmore] = extra[nmore];
+	}
+	if (extra && extra[nmore]) {
+		return -1;
 	}
 	if (strlen(dir) + 6 > sizeof(d->sock)) {
 		return -1;
@@ -82,9 +101,11 @@ static inline int daemon_start_with(struct daemon *d, const char *dir,
 		}
 		execl(daemon_path, "blobcastd", "--listen", "none", "--unix",
 		      d->sock, "--data", d->dir, "--log", "info", more[0],
-		      more[1], more[2], more[3], (char *)NULL);
+		      more[1], more[2], more[3], more[4], more[5], more[6],
+		      more[7], (char *)NULL);
 		_exit(127);
 	}
+	daemon_track(d->pid, true);
 	/* Wait for the socket to accept. */
 	for (int i = 0; i < 400; i++) {
 		struct sockaddr_un sa = {.sun_family = AF_UNIX};
@@ -113,6 +134,7 @@ static inline int daemon_stop(struct daemon *d, int sig)
 	}
 	kill(d->pid, sig);
 	waitpid(d->pid, &status, 0);
+	daemon_track(d->pid, false);
 	d->pid = 0;
 	return status;
 }
@@ -310,6 +332,17 @@ static inline int daemon_tests_run(const char *name, char *dir, size_t n,
 	snprintf(dir, n, "/tmp/bc-%s-test-%d", name, (int)getpid());
 	mkdir(dir, 0700);
 	rc = bc_test_run(tests, ntests, argc, argv);
+	for (size_t i = 0; i < sizeof(daemon_running) / sizeof(pid_t); i++) {
+		if (daemon_running[i] > 0) {
+			fprintf(stderr,
+			        "a test left blobcastd %d running: "
+			        "killed\n",
+			        (int)daemon_running[i]);
+			kill(daemon_running[i], SIGKILL);
+			waitpid(daemon_running[i], NULL, 0);
+			rc = 1;
+		}
+	}
 	if (rc == 0) {
 		snprintf(cmd, sizeof(cmd), "rm -rf %s", dir);
 		if (system(cmd) != 0) {

@@ -9,8 +9,14 @@
  *    the snapshot of the scene the session then reports (SCENE_STATE),
  *    loaded fresh into another session;
  *  - a HELLO whose max_frame_bytes is above what the protocol can carry is
- *    welcomed, with the protocol's limit (PROTOCOL.md 7.2).
+ *    welcomed, with the protocol's limit (PROTOCOL.md 7.2);
+ *  - one name created and deleted many times a second: every DELETE is
+ *    answered OK and every CREATE starts anew (PROTOCOL.md 7.19).
  */
+#include <errno.h>
+#include <sys/stat.h>
+#include <time.h>
+
 #include "blobcast/alloc.h"
 #include "blobcast/blobtree.h"
 #include "blobcast/scene.h"
@@ -268,12 +274,73 @@ static void a_huge_max_frame_bytes_is_welcomed_with_the_limit(void)
 	CHECK_EQ_INT(daemon_stop(&d, SIGTERM), 0);
 }
 
+/* Creates and deletes session "again" through c: true when the DELETE
+ * was answered OK. */
+static bool create_and_delete(struct conn *c)
+{
+	struct bc_msg m = {.type = BC_MSG_SESSION_DELETE};
+	uint32_t seq;
+	if (conn_join(c, "again", BC_PROTO_ROLE_EDITOR, true) != 0) {
+		return false;
+	}
+	m.session_delete.name.ptr = "again";
+	m.session_delete.name.len = 5;
+	if (!(seq = conn_send(c, &m))) {
+		return false;
+	}
+	while (conn_recv(c, 20000) == 1) {
+		if (c->m.seq == seq) { /* ENOSESSION seq 0 first: we were in */
+			return c->m.type == BC_MSG_OK;
+		}
+	}
+	return false;
+}
+
+/* One name deleted many times a second: its files go aside under a name
+ * of their own each time (NAME.deleted-STAMP, then -1, -2...). Only 100
+ * such names a second were tried, so the 101st SESSION_DELETE of a
+ * second answered EIO, left the directory, and the next CREATE got
+ * EEXIST. The 100 names of this second and the next two are taken first,
+ * so the test does not depend on the machine's speed. */
+static void a_name_deleted_many_times_a_second(void)
+{
+	char dir[96], path[256], stamp[32];
+	struct daemon d;
+	struct conn c;
+	int ok = 0;
+	snprintf(dir, sizeof(dir), "%s/delete", base_dir);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	snprintf(path, sizeof(path), "%s/sessions/.deleted", dir);
+	REQUIRE(mkdir(path, 0755) == 0 || errno == EEXIST);
+	for (time_t t = time(NULL); t < time(NULL) + 3; t++) {
+		struct tm tm;
+		gmtime_r(&t, &tm);
+		strftime(stamp, sizeof(stamp), "%Y%m%dT%H%M%SZ", &tm);
+		for (int k = 0; k < 100; k++) {
+			snprintf(path, sizeof(path),
+			         k ? "%s/sessions/.deleted/again.deleted-%s-%d"
+			           : "%s/sessions/.deleted/again.deleted-%s",
+			         dir, stamp, k);
+			REQUIRE(mkdir(path, 0755) == 0);
+		}
+	}
+	REQUIRE(conn_open(&c, &d) == 0);
+	REQUIRE(conn_hello(&c, "deleter") == 0);
+	for (int i = 0; i < 20; i++) {
+		ok += create_and_delete(&c);
+	}
+	CHECK_EQ_INT(ok, 20);
+	conn_close(&c);
+	CHECK_EQ_INT(daemon_stop(&d, SIGTERM), 0);
+}
+
 static const struct bc_test tests[] = {
     {"remove_up_a_unary_chain_keeps_the_session",
      remove_up_a_unary_chain_keeps_the_session},
     {"unary_sets_change_the_picture", unary_sets_change_the_picture},
     {"a_huge_max_frame_bytes_is_welcomed_with_the_limit",
      a_huge_max_frame_bytes_is_welcomed_with_the_limit},
+    {"a_name_deleted_many_times_a_second", a_name_deleted_many_times_a_second},
 };
 
 int main(int argc, char **argv)
