@@ -132,6 +132,7 @@ void bc__schedule(struct bc_session *s)
 		}
 		for (uint32_t g = 0; g < ng; g++) {
 			q.targets[g] = group[g]->peer->ref;
+			q.target_camera_seq[g] = group[g]->camera_seq;
 		}
 		q.ntargets = ng;
 		if (!(job = bc_work_submit(ss->work, &q))) {
@@ -251,9 +252,12 @@ static bool over_limit(struct bc_member *m, const struct bc_work_done *d)
 	return true;
 }
 
-static void send_frame(struct bc_member *m, struct bc_shared *frame)
+/* The job's frame to its target i, m. */
+static void send_frame(struct bc_member *m, const struct bc_work_done *d,
+                       uint32_t i)
 {
-	m->ss->link->send_frame(m->ss->link->ud, m->peer->ref, frame);
+	m->ss->link->send_frame(m->ss->link->ud, m->peer->ref, d->frame,
+	                        d->req->target_camera_seq[i]);
 	m->frames++;
 }
 
@@ -278,7 +282,7 @@ static void snapshot_done(struct bc_member *m, const struct bc_work_done *d)
 	case BC_WORK_DONE:
 	case BC_WORK_TOO_BIG:
 		if (!over_limit(m, d)) {
-			send_frame(m, d->frame);
+			send_frame(m, d, 0);
 		}
 		break;
 	case BC_WORK_OOM:
@@ -308,8 +312,9 @@ static bool forget_request(struct bc_member *m, const struct bc_job *job)
 	return false;
 }
 
-/* A frame for one of the job's targets. */
-static void frame_to(struct bc_member *m, const struct bc_work_done *d)
+/* A frame for the job's target i, m. */
+static void frame_to(struct bc_member *m, const struct bc_work_done *d,
+                     uint32_t i)
 {
 	if (m->job == d->job) {
 		m->job = NULL;
@@ -320,7 +325,7 @@ static void frame_to(struct bc_member *m, const struct bc_work_done *d)
 		if (over_limit(m, d)) {
 			break;
 		}
-		send_frame(m, d->frame);
+		send_frame(m, d, i);
 		m->frame_out = true;
 		m->shown = d->shown;
 		m->still_sent = d->shown.still;
@@ -377,7 +382,7 @@ void bc_sessions_job_done(void *ud, const struct bc_work_done *d)
 	}
 	for (uint32_t i = 0; i < q->ntargets; i++) {
 		if ((m = target(ss, q, i))) {
-			frame_to(m, d);
+			frame_to(m, d, i);
 		}
 	}
 	if (s && !s->removed) {
@@ -468,6 +473,7 @@ static bool single_req(struct bc_member *m, uint32_t seq, enum bc_job_kind kind,
 	q->height = m->view.height;
 	q->seq = seq;
 	q->targets[0] = m->peer->ref;
+	q->target_camera_seq[0] = m->camera_seq;
 	q->ntargets = 1;
 	return true;
 }

@@ -69,9 +69,10 @@ struct bc_link {
 	/* Encodes and queues m; a failure closes the connection. */
 	void (*send)(void *ud, struct bc_conn_ref to, const struct bc_msg *m);
 	/* Queues a FRAME (the transport takes its own reference; an unsent
-	 * older frame is spoiled). */
+	 * older frame is spoiled), with camera_seq for this client in place
+	 * of the shared one. */
 	void (*send_frame)(void *ud, struct bc_conn_ref to,
-	                   struct bc_shared *frame);
+	                   struct bc_shared *frame, uint32_t camera_seq);
 	/* Queues a whole encoded message (the transport takes its own
 	 * reference): one encoding for many clients, made off the loop (a
 	 * big scene's SCENE_STATE), and no copy of it on the loop. */

@@ -42,8 +42,10 @@
 /* Reads land in a buffer of this size before being fed to the reader. */
 #define READ_CHUNK (64u * 1024u)
 
-/* A FRAME's header and frame_no, the part written per client. */
-#define FRAME_PREFIX (BC_PROTO_HEADER_SIZE + 4u)
+/* A FRAME's header and frame_no, order and camera_seq (PROTOCOL.md 7.15):
+ * the part written per client. */
+#define FRAME_PREFIX (BC_PROTO_HEADER_SIZE + 16u)
+#define FRAME_CAMERA_SEQ (BC_PROTO_HEADER_SIZE + 12u)
 
 /* A message in a connection's output queue (or, with no buffers, a turn
  * to write what the TLS state holds), written a piece at a time. */
@@ -199,7 +201,8 @@ void bc__conn_close_after_flush(struct bc_conn *c, const char *why)
 	pump(c);
 }
 
-static void send_frame(struct bc_conn *c, struct bc_shared *frame);
+static void send_frame(struct bc_conn *c, struct bc_shared *frame,
+                       uint32_t camera_seq);
 
 static void write_req_free(struct write_req *w)
 {
@@ -230,7 +233,8 @@ static void finish(struct bc_conn *c, struct write_req *w, int status)
 			if (live->frame_next) {
 				struct bc_shared *next = live->frame_next;
 				live->frame_next = NULL;
-				send_frame(live, next);
+				send_frame(live, next,
+				           live->frame_next_camera_seq);
 				bc_shared_unref(next);
 			} else if (!live->draining) {
 				bc_dispatch_writable(live->net->d,
@@ -381,16 +385,18 @@ void bc__net_tls_flush(struct bc_conn *c)
 }
 
 /* The buffers of a FRAME shared by a view group: frame_no counts this
- * client's frames (PROTOCOL.md 7.15), so the header and frame_no go out
- * from a private copy, the rest shared. Returns false when out of memory. */
+ * client's frames and camera_seq is this client's last CAMERA (PROTOCOL.md
+ * 7.15, 5), so the header up to camera_seq goes out from a private copy,
+ * the rest shared. Returns false when out of memory. */
 static bool frame_bufs(struct bc_conn *c, struct write_req *w,
-                       struct bc_shared *shared)
+                       struct bc_shared *shared, uint32_t camera_seq)
 {
 	if (!(w->owned = bc_malloc(FRAME_PREFIX))) {
 		return false;
 	}
 	memcpy(w->owned, shared->data, FRAME_PREFIX);
 	bc_put_le32(w->owned + BC_PROTO_HEADER_SIZE, ++c->frame_no);
+	bc_put_le32(w->owned + FRAME_CAMERA_SEQ, camera_seq);
 	w->buf[0] = uv_buf_init((char *)w->owned, FRAME_PREFIX);
 	w->buf[1] = uv_buf_init((char *)shared->data + FRAME_PREFIX,
 	                        (unsigned int)(shared->len - FRAME_PREFIX));
@@ -401,10 +407,11 @@ static bool frame_bufs(struct bc_conn *c, struct write_req *w,
 	return true;
 }
 
-/* Queues bytes (taking owned), or a reference to a shared frame (frame)
- * or whole message. */
+/* Queues bytes (taking owned), or a reference to a shared frame (is_frame:
+ * with this client's camera_seq) or whole message. */
 static void queue_bytes(struct bc_conn *c, uint8_t *owned,
-                        struct bc_shared *shared, size_t len, bool is_frame)
+                        struct bc_shared *shared, size_t len, bool is_frame,
+                        uint32_t camera_seq)
 {
 	struct write_req *w;
 	size_t frame, cap;
@@ -446,7 +453,7 @@ static void queue_bytes(struct bc_conn *c, uint8_t *owned,
 		shared->refs++;
 		w->shared = shared;
 	}
-	if (is_frame && !frame_bufs(c, w, shared)) {
+	if (is_frame && !frame_bufs(c, w, shared, camera_seq)) {
 		write_req_free(w);
 		bc__conn_close(c, "out of memory");
 		return;
@@ -470,10 +477,11 @@ static void send_msg(struct bc_conn *c, const struct bc_msg *m)
 		bc_proto_buf_finish(&b);
 		return;
 	}
-	queue_bytes(c, b.data, NULL, b.len, false);
+	queue_bytes(c, b.data, NULL, b.len, false, 0);
 }
 
-static void send_frame(struct bc_conn *c, struct bc_shared *frame)
+static void send_frame(struct bc_conn *c, struct bc_shared *frame,
+                       uint32_t camera_seq)
 {
 	uint64_t now = now_ms(c->net);
 	if (c->closing || c->draining) {
@@ -495,6 +503,7 @@ static void send_frame(struct bc_conn *c, struct bc_shared *frame)
 		}
 		frame->refs++;
 		c->frame_next = frame;
+		c->frame_next_camera_seq = camera_seq;
 		return;
 	}
 	c->frame_writing = true;
@@ -502,7 +511,7 @@ static void send_frame(struct bc_conn *c, struct bc_shared *frame)
 	if (!c->counters.first_frame_ms) {
 		c->counters.first_frame_ms = now;
 	}
-	queue_bytes(c, NULL, frame, frame->len, true);
+	queue_bytes(c, NULL, frame, frame->len, true, camera_seq);
 }
 
 /* ---- the link ------------------------------------------------------------- */
@@ -516,11 +525,11 @@ static void link_send(void *ud, struct bc_conn_ref to, const struct bc_msg *m)
 }
 
 static void link_send_frame(void *ud, struct bc_conn_ref to,
-                            struct bc_shared *frame)
+                            struct bc_shared *frame, uint32_t camera_seq)
 {
 	struct bc_conn *c = bc__conn_get(ud, to);
 	if (c) {
-		send_frame(c, frame);
+		send_frame(c, frame, camera_seq);
 	}
 }
 
@@ -535,7 +544,7 @@ static void link_send_shared(void *ud, struct bc_conn_ref to,
 {
 	struct bc_conn *c = bc__conn_get(ud, to);
 	if (c && !c->closing && !c->draining) {
-		queue_bytes(c, NULL, msg, msg->len, false);
+		queue_bytes(c, NULL, msg, msg->len, false, 0);
 	}
 }
 

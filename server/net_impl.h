@@ -51,6 +51,7 @@ struct bc_conn {
 	bool frame_writing;
 	uint64_t frame_started_ms;
 	struct bc_shared *frame_next;
+	uint32_t frame_next_camera_seq;
 	uint32_t frame_no; /* FRAMEs written to this client */
 	/* Timeouts (loop clock, ms): when the first byte of a message still
 	 * incomplete arrived (0: none pending), and when the last bytes did. */

@@ -189,6 +189,13 @@ void bc__present_leave(struct bc_member *c)
 	}
 }
 
+void bc__present_session_gone(struct bc_session *s)
+{
+	if (s->presenter_id) {
+		end_presentation(s, NULL);
+	}
+}
+
 void bc__present_joined(struct bc_member *c)
 {
 	struct bc_session *s = c->session;

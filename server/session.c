@@ -730,6 +730,7 @@ static void evict_members(struct bc_session *s, const struct bc_member *by,
 {
 	struct bc_member *list[BC_PROTO_MAX_MEMBERS];
 	uint32_t n = bc__members(s, list);
+	bc__present_session_gone(s);
 	for (uint32_t i = 0; i < n; i++) {
 		bc__send_error(list[i], 0, BC_ENOSESSION,
 		               "session %s was deleted by %s", name,

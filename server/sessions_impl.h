@@ -237,6 +237,10 @@ void bc__present_camera_moved(struct bc_member *m, uint16_t flags);
 void bc__present_leave(struct bc_member *m);
 /* m joined its session: tells it who presents (when it knows the types). */
 void bc__present_joined(struct bc_member *m);
+/* The session is going away (deleted): a presentation ends, and every
+ * member that knows PRESENTER hears it (PRESENTER 0) before it is sent
+ * out of the session. */
+void bc__present_session_gone(struct bc_session *s);
 /* A journal record that sets the session camera: two zero bytes (an
  * op_count no EDIT has) and the SESSION_CAMERA payload. Returns 1 and
  * fills *cam when rec is one (0 when it is an EDIT, an error code when it

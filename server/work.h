@@ -78,6 +78,10 @@ struct bc_job_req {
 	uint8_t snapshot_planes; /* BC_PROTO_PLANE_* bits */
 	uint16_t pick_x, pick_y;
 	struct bc_conn_ref targets[BC_PROTO_MAX_MEMBERS];
+	/* Each target's own last CAMERA when the job was made: a FRAME
+	 * shared by a view group carries, for each, its own (a follower's
+	 * is not its presenter's, PROTOCOL.md 5). */
+	uint32_t target_camera_seq[BC_PROTO_MAX_MEMBERS];
 	uint32_t ntargets;
 };
 

@@ -245,6 +245,79 @@ static void followers_track_the_presenter(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
+/* A follower whose view equals the presenter's shares its render, but
+ * each FRAME carries its receiver's own last CAMERA in camera_seq (the
+ * follow adds none, PROTOCOL.md 5); the presenter's carry its CAMERA's.
+ * When another member deletes the session, the follower hears PRESENTER
+ * 0 before its ERROR ENOSESSION, though it comes before the presenter in
+ * the session. */
+static void shared_frames_carry_each_ones_camera_seq(void)
+{
+	struct daemon d;
+	struct conn a, b, p;
+	struct bc_msg_presenter pm = {0};
+	struct bc_msg del = {.type = BC_MSG_SESSION_DELETE};
+	uint32_t seq, own_b, drag = 0;
+	int frames_b = 0, frames_p = 0;
+	bool told = false;
+	char dir[96];
+	snprintf(dir, sizeof(dir), "%s/camseq", base_dir);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	member(&a, &d, "alice", "c", BC_PROTO_ROLE_EDITOR, true);
+	member(&b, &d, "bob", "c", BC_PROTO_ROLE_VIEWER, false);
+	member(&p, &d, "carol", "c", BC_PROTO_ROLE_EDITOR, false);
+	conn_view(&p, 64, 48, BC_PROTO_ENC_RAW);
+	conn_view(&b, 64, 48, BC_PROTO_ENC_RAW);
+	/* bob's own CAMERA, then carol's seqs run far ahead of bob's. */
+	own_b = send_camera(&b, &cam3, false);
+	for (int i = 0; i < 40; i++) {
+		struct bc_msg ping = {.type = BC_MSG_PING};
+		conn_send(&p, &ping);
+	}
+	seq = send_toggle(&p, BC_MSG_PRESENT, 1);
+	CHECK_EQ_INT(await_answer(&p, seq, &pm), 0);
+	seq = send_toggle(&b, BC_MSG_FOLLOW, 1);
+	CHECK_EQ_INT(await_answer(&b, seq, NULL), 0);
+	drain(&p);
+	drain(&b);
+	/* carol drags: both views are equal and show the same cameras. */
+	for (int i = 0; i < 4; i++) {
+		drag = send_camera(&p, (i % 2) ? &cam1 : &cam2, i < 3);
+	}
+	CHECK(drag > own_b);
+	for (int64_t end = t_now_ms() + 3000; t_now_ms() < end;) {
+		if (conn_recv(&b, 100) == 1 && b.m.type == BC_MSG_FRAME) {
+			frames_b++;
+			CHECK_EQ_INT(b.m.frame.camera_seq, own_b);
+		}
+		if (conn_recv(&p, 100) == 1 && p.m.type == BC_MSG_FRAME) {
+			frames_p++;
+			CHECK(p.m.frame.camera_seq > own_b);
+		}
+	}
+	CHECK(frames_b > 0);
+	CHECK(frames_p > 0);
+	/* alice deletes the session: bob's follow ends, and he is told. */
+	del.session_delete.name.ptr = "c";
+	del.session_delete.name.len = 1;
+	REQUIRE(conn_send(&a, &del));
+	while (conn_recv(&b, 5000) == 1) {
+		if (b.m.type == BC_MSG_PRESENTER) {
+			told = b.m.presenter.presenter == 0 &&
+			       b.m.presenter.following == 0;
+		}
+		if (b.m.type == BC_MSG_ERROR) {
+			CHECK_EQ_INT(b.m.error.code, -BC_ENOSESSION);
+			break;
+		}
+	}
+	CHECK(told);
+	conn_close(&a);
+	conn_close(&b);
+	conn_close(&p);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
 static void presenters_race_and_disconnect(void)
 {
 	struct daemon d;
@@ -439,6 +512,8 @@ static void session_camera_survives_kill(void)
 }
 
 static const struct bc_test tests[] = {
+    {"shared_frames_carry_each_ones_camera_seq",
+     shared_frames_carry_each_ones_camera_seq},
     {"followers_track_the_presenter", followers_track_the_presenter},
     {"presenters_race_and_disconnect", presenters_race_and_disconnect},
     {"refusals_and_old_clients", refusals_and_old_clients},
