@@ -356,6 +356,14 @@ void bc_dispatch_writable(struct bc_dispatch *d, struct bc_conn_ref ref)
 	}
 }
 
+void bc_dispatch_answered(struct bc_dispatch *d, struct bc_conn_ref ref)
+{
+	struct client *c = client_of(d, ref);
+	if (c) {
+		bc_member_answered(&c->member);
+	}
+}
+
 void bc_dispatch_closed(struct bc_dispatch *d, struct bc_conn_ref ref)
 {
 	struct client *c = client_of(d, ref);

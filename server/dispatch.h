@@ -59,6 +59,8 @@ enum bc_dispatch_result bc_dispatch_message(struct bc_dispatch *d,
                                             const struct bc_msg *m);
 /* ref's last frame has left its queue. */
 void bc_dispatch_writable(struct bc_dispatch *d, struct bc_conn_ref ref);
+/* A SNAPSHOT's answer to ref was written. */
+void bc_dispatch_answered(struct bc_dispatch *d, struct bc_conn_ref ref);
 /* ref is closing: nothing more is sent to it. */
 void bc_dispatch_closed(struct bc_dispatch *d, struct bc_conn_ref ref);
 /* Whether ref has completed HELLO and is in no session: what admission

@@ -283,6 +283,7 @@ static void snapshot_done(struct bc_member *m, const struct bc_work_done *d)
 	case BC_WORK_TOO_BIG:
 		if (!over_limit(m, d)) {
 			send_frame(m, d, 0);
+			m->answers_unsent++;
 		}
 		break;
 	case BC_WORK_OOM:
@@ -457,12 +458,12 @@ int bc_handle_view(struct bc_member *m, const struct bc_msg *msg)
 static bool single_req(struct bc_member *m, uint32_t seq, enum bc_job_kind kind,
                        struct bc_job_req *q)
 {
-	if (m->requests >= BC_SRV_MAX_CLIENT_REQUESTS) {
+	if (m->requests + m->answers_unsent >= BC_SRV_MAX_CLIENT_REQUESTS) {
 		bc__send_error(m, seq, BC_EBUSY,
 		               "%u picks and snapshots are already being "
 		               "rendered for this client; wait for their "
 		               "answers",
-		               m->requests);
+		               m->requests + m->answers_unsent);
 		return false;
 	}
 	memset(q, 0, sizeof(*q));

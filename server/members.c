@@ -55,6 +55,11 @@ void bc_member_writable(struct bc_member *m)
 	}
 }
 
+void bc_member_answered(struct bc_member *m)
+{
+	m->answers_unsent -= m->answers_unsent > 0 ? 1u : 0u;
+}
+
 /* ---- sending --------------------------------------------------------------- */
 
 void bc__send(struct bc_member *m, const struct bc_msg *msg)

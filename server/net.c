@@ -60,10 +60,18 @@ struct write_req {
 	uint8_t *owned;           /* a message's bytes, or NULL */
 	uint8_t *cipher;          /* the piece in flight on a TLS connection */
 	bool close_notify;        /* TLS: say close_notify at its turn */
+	bool answer;              /* the frame is a SNAPSHOT's answer */
 	uv_buf_t buf[2];          /* the plaintext */
 	unsigned int nbufs;
 	size_t len;         /* plaintext bytes, counted in the queue */
 	size_t done, piece; /* of them written, and in flight */
+};
+
+/* A SNAPSHOT's answer waiting for the frame slot. */
+struct bc_answer {
+	struct bc_shared *frame;
+	uint32_t camera_seq;
+	struct bc_answer *next;
 };
 
 static uint64_t now_ms(const struct bc_net *n)
@@ -104,6 +112,12 @@ void bc__net_handle_closed(uv_handle_t *h)
 		struct write_req *w = c->out_head;
 		c->out_head = w->next;
 		write_req_free(w);
+	}
+	while (c->answers_head) {
+		struct bc_answer *a = c->answers_head;
+		c->answers_head = a->next;
+		bc_shared_unref(a->frame);
+		bc_free(a);
 	}
 	bc_proto_reader_finish(&c->reader);
 	bc_shared_unref(c->frame_next);
@@ -230,7 +244,19 @@ static void finish(struct bc_conn *c, struct write_req *w, int status)
 			live->frame_writing = false;
 			live->counters.frames_sent++;
 			live->counters.bytes_sent += w->len;
-			if (live->frame_next) {
+			if (w->answer) {
+				bc_dispatch_answered(live->net->d,
+				                     ref_of(live));
+			}
+			if (live->answers_head) {
+				struct bc_answer *a = live->answers_head;
+				live->answers_head = a->next;
+				live->answers_tail =
+				    a->next ? live->answers_tail : NULL;
+				send_frame(live, a->frame, a->camera_seq);
+				bc_shared_unref(a->frame);
+				bc_free(a);
+			} else if (live->frame_next) {
 				struct bc_shared *next = live->frame_next;
 				live->frame_next = NULL;
 				send_frame(live, next,
@@ -407,12 +433,20 @@ static bool frame_bufs(struct bc_conn *c, struct write_req *w,
 	return true;
 }
 
-/* Queues bytes (taking owned), or a reference to a shared frame (is_frame:
- * with this client's camera_seq) or whole message. */
+/* What queue_bytes queues. */
+enum out_kind {
+	OUT_MESSAGE, /* bytes, or a shared whole message */
+	OUT_FRAME,   /* a shared FRAME in the frame slot */
+	OUT_ANSWER,  /* a shared FRAME answering a SNAPSHOT, in the slot */
+};
+
+/* Queues bytes (taking owned), or a reference to a shared frame (with
+ * this client's camera_seq) or whole message. */
 static void queue_bytes(struct bc_conn *c, uint8_t *owned,
-                        struct bc_shared *shared, size_t len, bool is_frame,
-                        uint32_t camera_seq)
+                        struct bc_shared *shared, size_t len,
+                        enum out_kind kind, uint32_t camera_seq)
 {
+	bool is_frame = kind != OUT_MESSAGE;
 	struct write_req *w;
 	size_t frame, cap;
 	if (c->tls && !bc_tls_ready(c->tls)) {
@@ -458,6 +492,7 @@ static void queue_bytes(struct bc_conn *c, uint8_t *owned,
 		bc__conn_close(c, "out of memory");
 		return;
 	}
+	w->answer = kind == OUT_ANSWER;
 	c->queued += len;
 	c->frame_bytes += is_frame ? len : 0;
 	enqueue(c, w);
@@ -477,13 +512,18 @@ static void send_msg(struct bc_conn *c, const struct bc_msg *m)
 		bc_proto_buf_finish(&b);
 		return;
 	}
-	queue_bytes(c, b.data, NULL, b.len, false, 0);
+	queue_bytes(c, b.data, NULL, b.len, OUT_MESSAGE, 0);
 }
 
+/* A FRAME for c, in its frame slot: one at a time; a newer frame spoils
+ * the one waiting, but a SNAPSHOT's answer (header flag SNAPSHOT) is
+ * neither spoiled nor spoils: answers wait in order and go first. */
 static void send_frame(struct bc_conn *c, struct bc_shared *frame,
                        uint32_t camera_seq)
 {
 	uint64_t now = now_ms(c->net);
+	bool answer =
+	    (bc_get_le16(frame->data + 6) & BC_PROTO_FLAG_SNAPSHOT) != 0;
 	if (c->closing || c->draining) {
 		return;
 	}
@@ -493,6 +533,24 @@ static void send_frame(struct bc_conn *c, struct bc_shared *frame,
 		       "stopped reading",
 		       c->gen, c->name, BC_SRV_STALL_MS);
 		bc__conn_close(c, "stopped reading");
+		return;
+	}
+	if (c->frame_writing && answer) {
+		/* A SNAPSHOT's answer waits its turn, never spoiled. */
+		struct bc_answer *a = bc_calloc(1, sizeof(*a));
+		if (!a) {
+			bc__conn_close(c, "out of memory");
+			return;
+		}
+		frame->refs++;
+		a->frame = frame;
+		a->camera_seq = camera_seq;
+		if (c->answers_tail) {
+			c->answers_tail->next = a;
+		} else {
+			c->answers_head = a;
+		}
+		c->answers_tail = a;
 		return;
 	}
 	if (c->frame_writing) {
@@ -511,7 +569,8 @@ static void send_frame(struct bc_conn *c, struct bc_shared *frame,
 	if (!c->counters.first_frame_ms) {
 		c->counters.first_frame_ms = now;
 	}
-	queue_bytes(c, NULL, frame, frame->len, true, camera_seq);
+	queue_bytes(c, NULL, frame, frame->len, answer ? OUT_ANSWER : OUT_FRAME,
+	            camera_seq);
 }
 
 /* ---- the link ------------------------------------------------------------- */
@@ -544,7 +603,7 @@ static void link_send_shared(void *ud, struct bc_conn_ref to,
 {
 	struct bc_conn *c = bc__conn_get(ud, to);
 	if (c && !c->closing && !c->draining) {
-		queue_bytes(c, NULL, msg, msg->len, false, 0);
+		queue_bytes(c, NULL, msg, msg->len, OUT_MESSAGE, 0);
 	}
 }
 

@@ -52,6 +52,10 @@ struct bc_conn {
 	uint64_t frame_started_ms;
 	struct bc_shared *frame_next;
 	uint32_t frame_next_camera_seq;
+	/* SNAPSHOT answers waiting for the frame being written: never
+	 * spoiled, written in order before frame_next (at most
+	 * BC_SRV_MAX_CLIENT_REQUESTS, the sessions layer's cap). */
+	struct bc_answer *answers_head, *answers_tail;
 	uint32_t frame_no; /* FRAMEs written to this client */
 	/* Timeouts (loop clock, ms): when the first byte of a message still
 	 * incomplete arrived (0: none pending), and when the last bytes did. */

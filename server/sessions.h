@@ -49,9 +49,10 @@ struct bc_member {
 	struct bc_camera camera;
 	uint32_t camera_seq;
 	uint64_t interacting_until; /* ms, loop clock */
-	bool dirty;         /* owed a frame: a change, or a finer level */
-	struct bc_job *job; /* its frame job in the work layer, or NULL */
-	uint32_t requests;  /* PICKs and SNAPSHOTs queued, unanswered */
+	bool dirty;              /* owed a frame: a change, or a finer level */
+	struct bc_job *job;      /* its frame job in the work layer, or NULL */
+	uint32_t requests;       /* PICKs and SNAPSHOTs queued, unanswered */
+	uint32_t answers_unsent; /* SNAPSHOT answers the transport holds */
 	struct bc_job *req_jobs[BC_SRV_MAX_CLIENT_REQUESTS]; /* their jobs */
 	bool still_sent;       /* the last frame sent was the still of now */
 	bool frame_out;        /* a frame is being written to it */
@@ -96,6 +97,9 @@ void bc_member_init(struct bc_member *m, struct bc_sessions *ss,
 void bc_member_finish(struct bc_member *m);
 /* Its last frame left the transport's queue: it may get the next. */
 void bc_member_writable(struct bc_member *m);
+/* A SNAPSHOT's answer left the transport's queue (or was dropped with the
+ * connection): one more request may be made. */
+void bc_member_answered(struct bc_member *m);
 
 /* ---- figures for STATS ---------------------------------------------------- */
 

@@ -119,8 +119,10 @@
 #define BC_SRV_STILL_DELAY_MS 300u
 
 /* PICK and SNAPSHOT requests of one client queued for the render workers
- * and not yet answered. Frames need no such cap (a client has at most one
- * frame in flight); requests are answered in order, so a client that wants
+ * and not yet answered, SNAPSHOT answers not yet written counted (the
+ * transport keeps them in order, never spoiled: this caps what it holds
+ * for a client to eight answers). Frames need no such cap (a client has at most
+ * one frame in flight); requests are answered in order, so a client that wants
  * more than this waits for answers first. Over it: ERROR EBUSY, not fatal.
  * Eight keep a picking or snapshotting client busy without letting it queue
  * minutes of full-size renders ahead of everyone (100 queued 4096^2

@@ -11,7 +11,10 @@
  *  - a HELLO whose max_frame_bytes is above what the protocol can carry is
  *    welcomed, with the protocol's limit (PROTOCOL.md 7.2);
  *  - one name created and deleted many times a second: every DELETE is
- *    answered OK and every CREATE starts anew (PROTOCOL.md 7.19).
+ *    answered OK and every CREATE starts anew (PROTOCOL.md 7.19);
+ *  - eight SNAPSHOTs pipelined with edits, twice: each answered (an answer
+ *    waiting behind another frame was spoiled by the next one, so about
+ *    half of the runs lost some).
  */
 #include <errno.h>
 #include <sys/stat.h>
@@ -334,7 +337,69 @@ static void a_name_deleted_many_times_a_second(void)
 	CHECK_EQ_INT(daemon_stop(&d, SIGTERM), 0);
 }
 
+/* SNAPSHOTs pipelined with edits between them, the most a client may
+ * have outstanding (BC_SRV_MAX_CLIENT_REQUESTS, 8), each answered by its
+ * own FRAME; then eight more: the queue is free again. */
+static void pipelined_snapshots_are_all_answered(void)
+{
+	char dir[96], json[512];
+	struct daemon d;
+	struct conn c;
+	int answered = 0, errors = 0;
+	snprintf(dir, sizeof(dir), "%s/snaps", base_dir);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	member(&c, &d, "snapper", "snaps", true);
+	chain_json(json, sizeof(json), OFFSET_01);
+	load_json(&c, json);
+	REQUIRE(conn_view_scaled(&c, W, H, BC_PROTO_ENC_RAW, 8));
+	for (int round = 0; round < 2; round++) {
+		uint32_t first = 0, last = 0;
+		for (int i = 0; i < 8; i++) {
+			struct bc_msg m = {.type = BC_MSG_SNAPSHOT};
+			struct bc_proto_field f = {BC_PROTO_FIELD_PARAM0,
+			                           1,
+			                           {0.1f + 0.01f * (float)i}};
+			struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_SET,
+			                              .node = 1,
+			                              .nfields = 1,
+			                              .fields = &f};
+			struct bc_msg e = {.type = BC_MSG_EDIT};
+			e.edit.nops = 1;
+			e.edit.ops = &op;
+			REQUIRE(conn_send(&c, &e));
+			m.snapshot.encoding = BC_PROTO_ENC_RAW;
+			REQUIRE((last = conn_send(&c, &m)));
+			first = first ? first : last;
+		}
+		for (int got = 0; got < 8;) {
+			if (conn_recv(&c, 30000) != 1) {
+				fprintf(stderr,
+				        "  round %d: %d of 8 answered\n", round,
+				        got);
+				break;
+			}
+			if (c.m.type == BC_MSG_FRAME && c.m.seq >= first &&
+			    c.m.seq <= last &&
+			    (c.m.flags & BC_PROTO_FLAG_SNAPSHOT)) {
+				answered++;
+				got++;
+			} else if (c.m.type == BC_MSG_ERROR && c.m.seq) {
+				errors++;
+				got++;
+				fprintf(stderr, "  seq %u: error %d\n", c.m.seq,
+				        (int)c.m.error.code);
+			}
+		}
+	}
+	CHECK_EQ_INT(answered, 16);
+	CHECK_EQ_INT(errors, 0);
+	conn_close(&c);
+	CHECK_EQ_INT(daemon_stop(&d, SIGTERM), 0);
+}
+
 static const struct bc_test tests[] = {
+    {"pipelined_snapshots_are_all_answered",
+     pipelined_snapshots_are_all_answered},
     {"remove_up_a_unary_chain_keeps_the_session",
      remove_up_a_unary_chain_keeps_the_session},
     {"unary_sets_change_the_picture", unary_sets_change_the_picture},
