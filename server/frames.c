@@ -202,6 +202,8 @@ void bc__frames_forget(struct bc_member *m)
 	struct bc_job *job = m->job;
 	uint32_t dropped = forget_requests(m);
 	bool shared = false;
+	m->ss->link->forget_frames(m->ss->link->ud, m->peer->ref);
+	m->answers_unsent = 0;
 	m->job = NULL;
 	m->dirty = false;
 	m->frame_out = false;

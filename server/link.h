@@ -78,6 +78,10 @@ struct bc_link {
 	 * big scene's SCENE_STATE), and no copy of it on the loop. */
 	void (*send_shared)(void *ud, struct bc_conn_ref to,
 	                    struct bc_shared *msg);
+	/* Drops the FRAMEs and SNAPSHOT answers waiting for the connection
+	 * (not the one being written): it left its session, and nothing of
+	 * that session follows the OK or ERROR that says so. */
+	void (*forget_frames)(void *ud, struct bc_conn_ref to);
 	/* The buffer the message being handled lies in, now the caller's
 	 * (bc_free): a big payload kept without a copy on the loop. NULL
 	 * when out of memory; the message is unchanged either way. */

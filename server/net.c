@@ -95,6 +95,7 @@ static struct bc_conn_ref ref_of(const struct bc_conn *c)
 }
 
 static void write_req_free(struct write_req *w);
+static void drop_answers(struct bc_conn *c);
 static void pump(struct bc_conn *c);
 static void queue_tls_turn(struct bc_conn *c, bool close_notify);
 
@@ -113,12 +114,7 @@ void bc__net_handle_closed(uv_handle_t *h)
 		c->out_head = w->next;
 		write_req_free(w);
 	}
-	while (c->answers_head) {
-		struct bc_answer *a = c->answers_head;
-		c->answers_head = a->next;
-		bc_shared_unref(a->frame);
-		bc_free(a);
-	}
+	drop_answers(c);
 	bc_proto_reader_finish(&c->reader);
 	bc_shared_unref(c->frame_next);
 	bc_tls_free(c->tls);
@@ -592,6 +588,28 @@ static void link_send_frame(void *ud, struct bc_conn_ref to,
 	}
 }
 
+/* Frees c's waiting answers. */
+static void drop_answers(struct bc_conn *c)
+{
+	while (c->answers_head) {
+		struct bc_answer *a = c->answers_head;
+		c->answers_head = a->next;
+		bc_shared_unref(a->frame);
+		bc_free(a);
+	}
+	c->answers_tail = NULL;
+}
+
+static void link_forget_frames(void *ud, struct bc_conn_ref to)
+{
+	struct bc_conn *c = bc__conn_get(ud, to);
+	if (c) {
+		bc_shared_unref(c->frame_next);
+		c->frame_next = NULL;
+		drop_answers(c);
+	}
+}
+
 static void *link_detach(void *ud, struct bc_conn_ref from)
 {
 	struct bc_conn *c = bc__conn_get(ud, from);
@@ -975,6 +993,7 @@ int bc_net_new(struct bc_net **out, uv_loop_t *loop,
 	    .send = link_send,
 	    .send_frame = link_send_frame,
 	    .send_shared = link_send_shared,
+	    .forget_frames = link_forget_frames,
 	    .detach = link_detach,
 	    .close = link_close,
 	    .resume = link_resume,

@@ -14,7 +14,9 @@
  *    answered OK and every CREATE starts anew (PROTOCOL.md 7.19);
  *  - eight SNAPSHOTs pipelined with edits, twice: each answered (an answer
  *    waiting behind another frame was spoiled by the next one, so about
- *    half of the runs lost some).
+ *    half of the runs lost some);
+ *  - a member whose session is deleted with SNAPSHOTs outstanding gets no
+ *    FRAME of it after its ERROR ENOSESSION (PROTOCOL.md 7.19).
  */
 #include <errno.h>
 #include <sys/stat.h>
@@ -397,7 +399,54 @@ static void pipelined_snapshots_are_all_answered(void)
 	CHECK_EQ_INT(daemon_stop(&d, SIGTERM), 0);
 }
 
+/* A member with SNAPSHOTs outstanding whose session is deleted hears
+ * ERROR ENOSESSION, and nothing of the session after it (up to five
+ * snapshot FRAMEs used to follow: answers queued behind its frame). */
+static void nothing_of_a_deleted_session_follows_enosession(void)
+{
+	char dir[96], json[512];
+	struct daemon d;
+	struct conn c, del;
+	struct bc_msg m = {.type = BC_MSG_SESSION_DELETE};
+	int after = 0;
+	bool gone = false;
+	snprintf(dir, sizeof(dir), "%s/gone", base_dir);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	member(&c, &d, "snapper", "gone", true);
+	chain_json(json, sizeof(json), OFFSET_01);
+	load_json(&c, json);
+	REQUIRE(conn_view_scaled(&c, 512, 384, BC_PROTO_ENC_RAW, 1));
+	for (int i = 0; i < 8; i++) {
+		struct bc_msg s = {.type = BC_MSG_SNAPSHOT};
+		s.snapshot.encoding = BC_PROTO_ENC_RAW;
+		REQUIRE(conn_send(&c, &s));
+	}
+	/* Some answers are made and queued behind the first frame. */
+	t_sleep_ms(300);
+	REQUIRE(conn_open(&del, &d) == 0);
+	REQUIRE(conn_hello(&del, "deleter") == 0);
+	m.session_delete.name.ptr = "gone";
+	m.session_delete.name.len = 4;
+	REQUIRE(conn_send(&del, &m));
+	while (conn_recv(&c, 1500) == 1) {
+		if (c.m.type == BC_MSG_ERROR && c.m.seq == 0 &&
+		    c.m.error.code == -BC_ENOSESSION) {
+			gone = true;
+		} else if (gone && (c.m.type == BC_MSG_FRAME ||
+		                    c.m.type == BC_MSG_PICK_RESULT)) {
+			after++;
+		}
+	}
+	CHECK(gone);
+	CHECK_EQ_INT(after, 0);
+	conn_close(&c);
+	conn_close(&del);
+	CHECK_EQ_INT(daemon_stop(&d, SIGTERM), 0);
+}
+
 static const struct bc_test tests[] = {
+    {"nothing_of_a_deleted_session_follows_enosession",
+     nothing_of_a_deleted_session_follows_enosession},
     {"pipelined_snapshots_are_all_answered",
      pipelined_snapshots_are_all_answered},
     {"remove_up_a_unary_chain_keeps_the_session",
