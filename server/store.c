@@ -492,9 +492,13 @@ int bc_store_session_open(struct bc_store *st, const char *name,
 		       "the journals after it, up to edit %llu",
 		       name, file, (unsigned long long)*order);
 	}
-	/* Files older than the snapshot that loaded go; it and every journal
-	 * from it stay (the chain the next restore follows). */
-	bc__store_tidy(path, snaps[used]);
+	/* Files older than the generation before the snapshot that loaded
+	 * go; that generation stays, as when a snapshot is written, so that
+	 * a file damaged after this restart still has a backup (a restore
+	 * used to delete it: kill -9, restart, then an emptied newest
+	 * snapshot lost the session). It and every journal from it are the
+	 * chain the next restore follows. */
+	bc__store_tidy(path, used + 1 < nsnaps ? snaps[used + 1] : snaps[used]);
 	if ((rc = bc__store_open_journal(ss, ei))) {
 		goto fail;
 	}

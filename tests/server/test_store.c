@@ -343,6 +343,53 @@ static void a_corrupt_snapshot_falls_back_to_the_previous(void)
 	free(dir);
 }
 
+/* A restore keeps the generation before the snapshot it loaded, as
+ * writing a snapshot does (docs/operations.md): after a restart, an
+ * emptied newest snapshot is recovered from the previous one and the
+ * journals, with no acknowledged edit lost. */
+static void a_restore_keeps_the_previous_generation(void)
+{
+	char *dir = make_dir(), file[600], sdir[512];
+	struct bc_store *st;
+	struct bc_store_session *ss;
+	struct bc_tree *t = default_tree();
+	struct replayed r;
+	uint64_t order;
+	bool created;
+	REQUIRE(dir && t);
+	make_session(dir, "a", 10, 0);
+	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
+	REQUIRE(bc_store_snapshot(ss, t, NULL, 10, NULL) == 0);
+	for (uint32_t k = 11; k <= 15; k++) {
+		REQUIRE(bc_store_append(ss, k, (const uint8_t *)"later", 5,
+		                        NULL) == 0);
+	}
+	bc_store_session_close(ss);
+	bc_store_close(st);
+	/* A restart (as after kill -9): the session comes back whole... */
+	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
+	CHECK_EQ_INT(order, 15);
+	bc_store_session_close(ss);
+	bc_store_close(st);
+	/* ... and the generation before its snapshot is still there. */
+	snprintf(sdir, sizeof(sdir), "%s/sessions/a", dir);
+	CHECK_EQ_INT(count_named(sdir, "snap-0.json"), 1);
+	CHECK_EQ_INT(count_named(sdir, "journal-0.bin"), 1);
+	/* The newest snapshot emptied, another restart: the previous
+	 * snapshot and the journals give back every edit. */
+	snprintf(file, sizeof(file), "%s/snap-10.json", sdir);
+	write_file(file, "");
+	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
+	CHECK(!created);
+	CHECK_EQ_INT(order, 15);
+	CHECK_EQ_INT(r.n, 15);
+	bc_store_session_close(ss);
+	bc_store_close(st);
+	bc_tree_destroy(t);
+	rm_rf(dir);
+	free(dir);
+}
+
 struct inject {
 	const char *step;
 	int calls;
@@ -475,6 +522,8 @@ static const struct bc_test tests[] = {
     {"a_corrupt_snapshot_falls_back_to_the_previous",
      a_corrupt_snapshot_falls_back_to_the_previous},
     {"a_failed_snapshot_leaves_no_trace", a_failed_snapshot_leaves_no_trace},
+    {"a_restore_keeps_the_previous_generation",
+     a_restore_keeps_the_previous_generation},
     {"failures_back_off_and_are_logged_as_errors",
      failures_back_off_and_are_logged_as_errors},
 };
