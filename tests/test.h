@@ -106,6 +106,19 @@ static inline int bc_test_streq(const char *a, const char *b, const char *ea,
 	return 0;
 }
 
+/* Whether the file at path holds needle in its first 64 KiB (a log, say). */
+static inline int bc_test_file_has(const char *path, const char *needle)
+{
+	static char buf[1 << 16];
+	FILE *f = fopen(path, "r");
+	size_t n = f ? fread(buf, 1, sizeof(buf) - 1, f) : 0;
+	if (f) {
+		fclose(f);
+	}
+	buf[n] = '\0';
+	return strstr(buf, needle) != NULL;
+}
+
 /* Returns 1 when the n bytes at a and b are equal; otherwise prints the
  * first differing offset and up to 16 bytes of each from 8 before it. */
 static inline int bc_test_memeq(const void *a, const void *b, size_t n,

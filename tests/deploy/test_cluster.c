@@ -39,18 +39,6 @@ static void sleep_ms(long ms)
 	nanosleep(&ts, NULL);
 }
 
-static bool file_has(const char *path, const char *needle)
-{
-	static char buf[1 << 16];
-	FILE *f = fopen(path, "r");
-	size_t n = f ? fread(buf, 1, sizeof(buf) - 1, f) : 0;
-	if (f) {
-		fclose(f);
-	}
-	buf[n] = '\0';
-	return strstr(buf, needle) != NULL;
-}
-
 static bool have(const char *tool)
 {
 	char cmd[256];
@@ -176,7 +164,8 @@ static void restart_node(int node)
 		fprintf(f, "%d\n", (int)pid);
 		fclose(f);
 	}
-	for (int i = 0; i < 400 && !file_has(log, "blobcastd: backend"); i++) {
+	for (int i = 0; i < 400 && !bc_test_file_has(log, "blobcastd: backend");
+	     i++) {
 		sleep_ms(25);
 	}
 }
@@ -364,15 +353,15 @@ int main(int argc, char **argv)
 		      "--port", port, "--data", dir, (char *)NULL);
 		_exit(127);
 	}
-	for (int i = 0; i < 1200 && !file_has(out, "cluster-demo: ready");
-	     i++) {
+	for (int i = 0;
+	     i < 1200 && !bc_test_file_has(out, "cluster-demo: ready"); i++) {
 		if (waitpid(demo_pid, &status, WNOHANG) == demo_pid) {
 			demo_pid = 0;
 			break;
 		}
 		sleep_ms(50);
 	}
-	if (!file_has(out, "cluster-demo: ready")) {
+	if (!bc_test_file_has(out, "cluster-demo: ready")) {
 		snprintf(cmd, sizeof(cmd), "cat %s", out);
 		fprintf(stderr, "cluster-demo.sh did not start:\n");
 		if (system(cmd) != 0) {

@@ -654,19 +654,6 @@ static void the_view_cache_stays_under_its_cap(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
-/* Whether file path holds needle (its first 64 KiB). */
-static bool file_has(const char *path, const char *needle)
-{
-	static char buf[65536];
-	FILE *f = fopen(path, "r");
-	size_t n = f ? fread(buf, 1, sizeof(buf) - 1, f) : 0;
-	if (f) {
-		fclose(f);
-	}
-	buf[n] = '\0';
-	return strstr(buf, needle) != NULL;
-}
-
 /* The gl backend is one more kind of worker, scheduled alike: through EGL
  * (Mesa llvmpipe where there is no GPU) two sessions are served side by
  * side, each edit shows in its own frame, and a crawling scene's picture
@@ -707,8 +694,8 @@ static void gl_workers_are_scheduled_alike(void)
 	conn_close(&crawl);
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 	/* The pictures came from the gl backend, not a fallback. */
-	CHECK(file_has(log, "backend gl"));
-	CHECK(file_has(log, "gl: "));
+	CHECK(bc_test_file_has(log, "backend gl"));
+	CHECK(bc_test_file_has(log, "gl: "));
 }
 
 static const struct bc_test tests[] = {

@@ -294,6 +294,26 @@ static void a_corrupt_snapshot_spares_the_other_session(void)
 	free(dir);
 }
 
+/* Session "a" in dir: make_session's snapshot 0 and edits 1..10, a
+ * snapshot at 10 and edits 11..15 after it. */
+static void two_generations(const char *dir, struct bc_tree *t)
+{
+	struct bc_store *st;
+	struct bc_store_session *ss;
+	struct replayed r;
+	uint64_t order;
+	bool created;
+	make_session(dir, "a", 10, 0);
+	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
+	REQUIRE(bc_store_snapshot(ss, t, NULL, 10, NULL) == 0);
+	for (uint32_t k = 11; k <= 15; k++) {
+		REQUIRE(bc_store_append(ss, k, (const uint8_t *)"later", 5,
+		                        NULL) == 0);
+	}
+	bc_store_session_close(ss);
+	bc_store_close(st);
+}
+
 /* The newest snapshot corrupt: the previous one and both journals give
  * back every edit. */
 static void a_corrupt_snapshot_falls_back_to_the_previous(void)
@@ -306,15 +326,7 @@ static void a_corrupt_snapshot_falls_back_to_the_previous(void)
 	uint64_t order;
 	bool created;
 	REQUIRE(dir && t);
-	make_session(dir, "a", 10, 0);
-	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
-	REQUIRE(bc_store_snapshot(ss, t, NULL, 10, NULL) == 0);
-	for (uint32_t k = 11; k <= 15; k++) {
-		REQUIRE(bc_store_append(ss, k, (const uint8_t *)"later", 5,
-		                        NULL) == 0);
-	}
-	bc_store_session_close(ss);
-	bc_store_close(st);
+	two_generations(dir, t);
 	snprintf(sdir, sizeof(sdir), "%s/sessions/a", dir);
 	snprintf(file, sizeof(file), "%s/snap-10.json", sdir);
 	write_file(file, "not json");
@@ -357,15 +369,7 @@ static void a_restore_keeps_the_previous_generation(void)
 	uint64_t order;
 	bool created;
 	REQUIRE(dir && t);
-	make_session(dir, "a", 10, 0);
-	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
-	REQUIRE(bc_store_snapshot(ss, t, NULL, 10, NULL) == 0);
-	for (uint32_t k = 11; k <= 15; k++) {
-		REQUIRE(bc_store_append(ss, k, (const uint8_t *)"later", 5,
-		                        NULL) == 0);
-	}
-	bc_store_session_close(ss);
-	bc_store_close(st);
+	two_generations(dir, t);
 	/* A restart (as after kill -9): the session comes back whole... */
 	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
 	CHECK_EQ_INT(order, 15);

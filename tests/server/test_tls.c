@@ -98,18 +98,6 @@ static int port_from_log(const char *log)
 	return -1;
 }
 
-static bool file_has(const char *path, const char *needle)
-{
-	char buf[16384];
-	FILE *f = fopen(path, "r");
-	size_t n = f ? fread(buf, 1, sizeof(buf) - 1, f) : 0;
-	if (f) {
-		fclose(f);
-	}
-	buf[n] = '\0';
-	return strstr(buf, needle) != NULL;
-}
-
 static struct daemon tls_d, plain_d;
 static int tls_port, plain_port;
 static char tls_log[128], plain_log[128];
@@ -175,7 +163,7 @@ static void join_edit_snapshot_over_tls(void)
 	}
 	bc_client_image_finish(&img);
 	bc_client_destroy(c);
-	CHECK(file_has(tls_log, "TLS (TLSv1.3"));
+	CHECK(bc_test_file_has(tls_log, "TLS (TLSv1.3"));
 
 	/* By name: the certificate names localhost too. */
 	c = NULL;
@@ -305,7 +293,7 @@ static void untrusted_certificates_are_refused(void)
 	t_sleep_ms(300);
 	CHECK_EQ_INT(connect_to(&c, addr, ca, false, TOKEN, &ei), 0);
 	bc_client_destroy(c);
-	CHECK(file_has(tls_log, "reloaded the TLS certificate"));
+	CHECK(bc_test_file_has(tls_log, "reloaded the TLS certificate"));
 }
 
 static int tcp_connect(int port)
@@ -686,16 +674,16 @@ static void out_of_date_certificates_are_refused(void)
 	REQUIRE(make_dated_cert("soon.pem", -DAY_S, 5 * DAY_S));
 	REQUIRE(make_dated_cert("fine.pem", -DAY_S, 60 * DAY_S));
 	CHECK_EQ_INT(start_with_cert("expired.pem", false, log), 1);
-	CHECK(file_has(log, "the certificate expired on"));
-	CHECK(file_has(log, "--tls-allow-expired"));
+	CHECK(bc_test_file_has(log, "the certificate expired on"));
+	CHECK(bc_test_file_has(log, "--tls-allow-expired"));
 	CHECK_EQ_INT(start_with_cert("future.pem", false, log), 1);
-	CHECK(file_has(log, "is not valid before"));
+	CHECK(bc_test_file_has(log, "is not valid before"));
 	CHECK_EQ_INT(start_with_cert("expired.pem", true, log), -1);
-	CHECK(file_has(log, "will refuse to connect"));
+	CHECK(bc_test_file_has(log, "will refuse to connect"));
 	CHECK_EQ_INT(start_with_cert("soon.pem", false, log), -1);
-	CHECK(file_has(log, "the certificate expires in 4 days"));
+	CHECK(bc_test_file_has(log, "the certificate expires in 4 days"));
 	CHECK_EQ_INT(start_with_cert("fine.pem", false, log), -1);
-	CHECK(!file_has(log, "the certificate"));
+	CHECK(!bc_test_file_has(log, "the certificate"));
 }
 
 static void tokens_in_clear_need_allow_plaintext(void)
@@ -717,14 +705,14 @@ static void tokens_in_clear_need_allow_plaintext(void)
 		const char *args[] = {"--listen", "0.0.0.0:0", "--data", data,
 		                      "--config", cfg,         NULL};
 		CHECK_EQ_INT(run_daemon(log, args), 1);
-		CHECK(file_has(log, "--allow-plaintext"));
+		CHECK(bc_test_file_has(log, "--allow-plaintext"));
 	}
 	{
 		const char *args[] = {
 		    "--listen", "0.0.0.0:0",         "--data", data, "--config",
 		    cfg,        "--allow-plaintext", NULL};
 		CHECK_EQ_INT(run_daemon(log, args), -1);
-		CHECK(file_has(log, "without TLS (--allow-plaintext)"));
+		CHECK(bc_test_file_has(log, "without TLS (--allow-plaintext)"));
 	}
 	{
 		/* Loopback needs no TLS: nobody else is on that path. */
@@ -739,7 +727,7 @@ static void tokens_in_clear_need_allow_plaintext(void)
 		                      data,       "--tls-cert",  cert,
 		                      NULL};
 		CHECK_EQ_INT(run_daemon(log, args), 1);
-		CHECK(file_has(log, "private key"));
+		CHECK(bc_test_file_has(log, "private key"));
 	}
 }
 
