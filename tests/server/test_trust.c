@@ -16,9 +16,12 @@
  *    waiting behind another frame was spoiled by the next one, so about
  *    half of the runs lost some);
  *  - a member whose session is deleted with SNAPSHOTs outstanding gets no
- *    FRAME of it after its ERROR ENOSESSION (PROTOCOL.md 7.19).
+ *    FRAME of it after its ERROR ENOSESSION (PROTOCOL.md 7.19);
+ *  - 400 sessions on disk and a limit of 128 descriptors: the daemon
+ *    starts, lists them and serves one.
  */
 #include <errno.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <time.h>
 
@@ -444,7 +447,60 @@ static void nothing_of_a_deleted_session_follows_enosession(void)
 	CHECK_EQ_INT(daemon_stop(&d, SIGTERM), 0);
 }
 
+/* More sessions on disk than the daemon may open files: it starts, lists
+ * them all and serves any (sessions are opened when joined and closed
+ * when they unload, PROTOCOL.md 7.21; about 4 100 sessions once passed
+ * the unit's LimitNOFILE and the daemon exited at start with "too many
+ * open files"). */
+static void more_sessions_than_file_descriptors(void)
+{
+	enum { N = 400 };
+	char dir[96], path[256], json[512];
+	struct daemon d;
+	struct conn c;
+	struct rlimit old, low;
+	struct bc_msg list = {.type = BC_MSG_SESSION_LIST};
+	FILE *f;
+	int started;
+	snprintf(dir, sizeof(dir), "%s/many", base_dir);
+	chain_json(json, sizeof(json), OFFSET_01);
+	snprintf(path, sizeof(path), "%s", dir);
+	REQUIRE(mkdir(path, 0755) == 0);
+	snprintf(path, sizeof(path), "%s/sessions", dir);
+	REQUIRE(mkdir(path, 0755) == 0);
+	for (int i = 0; i < N; i++) {
+		snprintf(path, sizeof(path), "%s/sessions/s%d", dir, i);
+		REQUIRE(mkdir(path, 0755) == 0);
+		snprintf(path, sizeof(path), "%s/sessions/s%d/snap-0.json", dir,
+		         i);
+		REQUIRE((f = fopen(path, "w")));
+		fputs(json, f);
+		fclose(f);
+	}
+	/* The daemon inherits a limit of 128 descriptors. */
+	REQUIRE(getrlimit(RLIMIT_NOFILE, &old) == 0);
+	low = old;
+	low.rlim_cur = 128;
+	REQUIRE(setrlimit(RLIMIT_NOFILE, &low) == 0);
+	started = daemon_start(&d, dir);
+	setrlimit(RLIMIT_NOFILE, &old);
+	REQUIRE(started == 0);
+	REQUIRE(conn_open(&c, &d) == 0);
+	REQUIRE(conn_hello(&c, "lister") == 0);
+	REQUIRE(conn_send(&c, &list));
+	REQUIRE(conn_expect(&c, BC_MSG_SESSIONS, 20000) == 1);
+	/* Every one of them, and the daemon's own default. */
+	CHECK(c.m.sessions.nsessions >= N);
+	/* The last one (in no particular order on disk) is served. */
+	REQUIRE(conn_join(&c, "s399", BC_PROTO_ROLE_EDITOR, false) == 0);
+	CHECK_EQ_INT(conn_expect(&c, BC_MSG_SCENE_STATE, 20000), 1);
+	conn_close(&c);
+	CHECK_EQ_INT(daemon_stop(&d, SIGTERM), 0);
+}
+
 static const struct bc_test tests[] = {
+    {"more_sessions_than_file_descriptors",
+     more_sessions_than_file_descriptors},
     {"nothing_of_a_deleted_session_follows_enosession",
      nothing_of_a_deleted_session_follows_enosession},
     {"pipelined_snapshots_are_all_answered",
