@@ -116,6 +116,24 @@ struct batch {
 	struct bc_errinfo ei;
 };
 
+/* A session's scene is written to JSON snapshots, which hold
+ * BC_SCENE_JSON_MAX_DEPTH levels (SCENE_LOAD is refused past them when its
+ * snapshot is written): a structural edit past them made every later
+ * snapshot fail, so the journal was never compacted and SIGTERM saved
+ * nothing. It is refused instead. */
+static int check_scene_depth(const struct bc_tree *t, struct bc_errinfo *ei)
+{
+	uint32_t n = bc_tree_nesting(t);
+	if (n <= BC_SCENE_JSON_MAX_DEPTH) {
+		return 0;
+	}
+	return bc_errinfo_set(ei, BC_EDEPTH,
+	                      "the edit would nest the scene %u levels deep; "
+	                      "a session's scene holds at most %u (its "
+	                      "snapshots are JSON scene files)",
+	                      n, BC_SCENE_JSON_MAX_DEPTH);
+}
+
 /* Applies, checks and encodes the batch's journal record. */
 static int batch_apply(struct batch *x)
 {
@@ -133,7 +151,9 @@ static int batch_apply(struct batch *x)
 	bc_proto_buf_init(&x->rec, 0);
 	as_edit.edit.nops = (uint16_t)x->nops;
 	as_edit.edit.ops = x->op;
-	if ((x->b.structural && (x->rc = check_scene_bytes(x->tree, &x->ei))) ||
+	if ((x->b.structural &&
+	     ((x->rc = check_scene_bytes(x->tree, &x->ei)) ||
+	      (x->rc = check_scene_depth(x->tree, &x->ei)))) ||
 	    (x->rc = bc_proto_encode(&x->rec, &as_edit, &x->ei))) {
 		bc_edit_batch_undo(&x->b, &x->tree);
 		x->applied = false;

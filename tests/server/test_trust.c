@@ -18,7 +18,9 @@
  *  - a member whose session is deleted with SNAPSHOTs outstanding gets no
  *    FRAME of it after its ERROR ENOSESSION (PROTOCOL.md 7.19);
  *  - 400 sessions on disk and a limit of 128 descriptors: the daemon
- *    starts, lists them and serves one.
+ *    starts, lists them and serves one;
+ *  - a structural EDIT past the depth a snapshot holds (1023) is refused
+ *    with EDEPTH; up to it, the scene survives a restart.
  */
 #include <errno.h>
 #include <sys/resource.h>
@@ -498,7 +500,92 @@ static void more_sessions_than_file_descriptors(void)
 	CHECK_EQ_INT(daemon_stop(&d, SIGTERM), 0);
 }
 
+/* Encodes a left chain: depth smooth unions (ids 1000..), each with the
+ * next and a sphere (ids 5000..), the last with two spheres. */
+static void chain_bytes(struct bc_proto_buf *b, uint32_t depth)
+{
+	static const float t0[3] = {0, 0, 0}, r0[4] = {0, 0, 0, 1};
+	float r = 0.1f;
+	bc_proto_buf_init(b, 0);
+	bc_proto_scene_begin(b, NULL, 2u * depth + 1u);
+	for (uint32_t i = 0; i < depth; i++) {
+		bc_proto_scene_op(b, BC_OP_SMOOTH_UNION, 1000u + i, 0.05f, 0.0f,
+		                  2);
+	}
+	for (uint32_t i = 0; i <= depth; i++) {
+		bc_proto_scene_prim(b, BC_PRIM_SPHERE, 5000u + i, t0, r0, NULL,
+		                    1, &r);
+	}
+}
+
+/* Sends INSERT of b's subtree under parent; the answer's type and code. */
+static void insert(struct conn *c, uint32_t parent,
+                   const struct bc_proto_buf *b, enum bc_msg_type *type,
+                   int *code)
+{
+	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_INSERT,
+	                              .node = parent,
+	                              .subtree = {b->data, (uint32_t)b->len}};
+	edit1(c, op, type, code);
+}
+
+/* A structural edit that would nest the scene deeper than its snapshot
+ * can hold (1023 levels) is refused with EDEPTH; up to it, it applies
+ * and the session's snapshot at SIGTERM restores it. (It was applied, and
+ * every later snapshot failed: the journal was never compacted.) */
+static void an_edit_past_the_snapshot_depth_is_refused(void)
+{
+	char dir[96];
+	struct daemon d;
+	struct conn c;
+	struct bc_proto_buf deep, one;
+	enum bc_msg_type type;
+	int code = 0;
+	struct bc_tree *t;
+	snprintf(dir, sizeof(dir), "%s/depth", base_dir);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	member(&c, &d, "deep", "deep", true);
+	load_json(&c, "{\"blobcast\": 1, \"root\": {\"type\": \"union\", "
+	              "\"id\": 1, \"children\": [{\"type\": \"sphere\", "
+	              "\"id\": 2, \"radius\": 0.3}, {\"type\": \"sphere\", "
+	              "\"id\": 3, \"radius\": 0.3}]}}");
+	/* Under the root (level 1): 1022 more levels, 1023 in all. */
+	chain_bytes(&deep, 1021);
+	insert(&c, 1, &deep, &type, &code);
+	CHECK_EQ_INT(type, BC_MSG_EDIT_APPLIED);
+	/* One level more under the deepest union: refused. */
+	{
+		static const float t0[3] = {0, 0, 0}, r0[4] = {0, 0, 0, 1};
+		float r = 0.1f;
+		bc_proto_buf_init(&one, 0);
+		bc_proto_scene_begin(&one, NULL, 3);
+		bc_proto_scene_op(&one, BC_OP_UNION, 9000, 0.0f, 0.0f, 2);
+		bc_proto_scene_prim(&one, BC_PRIM_SPHERE, 9001, t0, r0, NULL, 1,
+		                    &r);
+		bc_proto_scene_prim(&one, BC_PRIM_SPHERE, 9002, t0, r0, NULL, 1,
+		                    &r);
+	}
+	insert(&c, 1000u + 1020u, &one, &type, &code);
+	CHECK_EQ_INT(type, BC_MSG_ERROR);
+	CHECK_EQ_INT(code, -BC_EDEPTH);
+	bc_proto_buf_finish(&deep);
+	bc_proto_buf_finish(&one);
+	conn_close(&c);
+	/* SIGTERM writes its snapshot; the restart reads it back whole. */
+	CHECK_EQ_INT(daemon_stop(&d, SIGTERM), 0);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	member(&c, &d, "deep", "deep", false);
+	REQUIRE(conn_expect(&c, BC_MSG_SCENE_STATE, 20000) == 1);
+	REQUIRE((t = scene_of(&c)));
+	CHECK_EQ_INT((int)bc_tree_nesting(t), 1023);
+	bc_tree_destroy(t);
+	conn_close(&c);
+	CHECK_EQ_INT(daemon_stop(&d, SIGTERM), 0);
+}
+
 static const struct bc_test tests[] = {
+    {"an_edit_past_the_snapshot_depth_is_refused",
+     an_edit_past_the_snapshot_depth_is_refused},
     {"more_sessions_than_file_descriptors",
      more_sessions_than_file_descriptors},
     {"nothing_of_a_deleted_session_follows_enosession",
