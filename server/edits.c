@@ -116,24 +116,6 @@ struct batch {
 	struct bc_errinfo ei;
 };
 
-/* A session's scene is written to JSON snapshots, which hold
- * BC_SCENE_JSON_MAX_DEPTH levels (SCENE_LOAD is refused past them when its
- * snapshot is written): a structural edit past them made every later
- * snapshot fail, so the journal was never compacted and SIGTERM saved
- * nothing. It is refused instead. */
-static int check_scene_depth(const struct bc_tree *t, struct bc_errinfo *ei)
-{
-	uint32_t n = bc_tree_nesting(t);
-	if (n <= BC_SCENE_JSON_MAX_DEPTH) {
-		return 0;
-	}
-	return bc_errinfo_set(ei, BC_EDEPTH,
-	                      "the edit would nest the scene %u levels deep; "
-	                      "a session's scene holds at most %u (its "
-	                      "snapshots are JSON scene files)",
-	                      n, BC_SCENE_JSON_MAX_DEPTH);
-}
-
 /* Applies, checks and encodes the batch's journal record. */
 static int batch_apply(struct batch *x)
 {
@@ -146,14 +128,15 @@ static int batch_apply(struct batch *x)
 	}
 	x->applied = true;
 	/* A structural edit can grow the scene past what a member's queue
-	 * holds, and a record must encode: undone like an edit that could
-	 * not be journaled. */
+	 * holds, or nest it deeper than its snapshots hold (every later
+	 * snapshot would fail, the journal never compacted), and a record
+	 * must encode: undone like an edit that could not be journaled. */
 	bc_proto_buf_init(&x->rec, 0);
 	as_edit.edit.nops = (uint16_t)x->nops;
 	as_edit.edit.ops = x->op;
 	if ((x->b.structural &&
 	     ((x->rc = check_scene_bytes(x->tree, &x->ei)) ||
-	      (x->rc = check_scene_depth(x->tree, &x->ei)))) ||
+	      (x->rc = bc_store_scene_depth_ok(x->tree, &x->ei)))) ||
 	    (x->rc = bc_proto_encode(&x->rec, &as_edit, &x->ei))) {
 		bc_edit_batch_undo(&x->b, &x->tree);
 		x->applied = false;

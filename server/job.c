@@ -196,6 +196,12 @@ static void forget_large_damage(struct bc_work *w, struct bc_job *job)
 	}
 }
 
+/* Whether the job has run past the frame budget since it started. */
+static bool over_budget(const struct bc_work *w, const struct bc_job *job)
+{
+	return bc_clock_ms() - job->started_ms > (double)w->budget_ms;
+}
+
 /* Milliseconds a slice of the job's pass aims at: BC_SRV_SLICE_MS, and
  * no more than the frame budget for a step that the budget may cut. */
 static double slice_target(const struct bc_work *w, const struct bc_job *job)
@@ -236,8 +242,7 @@ static void plan(struct bc_work *w, const struct flow *f, struct bc_job *job,
 	 * only within the frame budget: past it, it is sent INCOMPLETE
 	 * (a twist at rate 1e6 retried every tile at the largest bound for
 	 * a minute). A frame's refinement is cut in after_pass. */
-	bool retry = job->req.kind != BC_JOB_SNAPSHOT ||
-	             bc_clock_ms() - job->started_ms <= (double)w->budget_ms;
+	bool retry = job->req.kind != BC_JOB_SNAPSHOT || !over_budget(w, job);
 	plan_pass(f, job, first, retry);
 	job->slice_tiles = tiles_for(f, job, slice_target(w, job));
 }
@@ -453,7 +458,7 @@ static bool snapshot_out_of_budget(const struct bc_work *w,
                                    const struct bc_job *job)
 {
 	return job->req.kind == BC_JOB_SNAPSHOT && job->pass == PASS_RETRY &&
-	       bc_clock_ms() - job->started_ms > (double)w->budget_ms;
+	       over_budget(w, job);
 }
 
 /* Renders the pass's next slice of tiles. Returns 0, or an error in ei;
@@ -792,7 +797,7 @@ static void after_pass(struct bc_work *w, const struct flow *f,
 	}
 	if (job->req.kind == BC_JOB_FRAME &&
 	    (job->pass == PASS_REFINE || job->pass == PASS_RETRY) &&
-	    bc_clock_ms() - job->started_ms > (double)w->budget_ms) {
+	    over_budget(w, job)) {
 		job->incomplete = true;
 		job->pass = PASS_NONE;
 	}

@@ -46,6 +46,8 @@
  * the part written per client. */
 #define FRAME_PREFIX (BC_PROTO_HEADER_SIZE + 16u)
 #define FRAME_CAMERA_SEQ (BC_PROTO_HEADER_SIZE + 12u)
+/* The header's flags (PROTOCOL.md 3). */
+#define HEADER_FLAGS 6u
 
 /* A message in a connection's output queue (or, with no buffers, a turn
  * to write what the TLS state holds), written a piece at a time. */
@@ -53,8 +55,6 @@ struct write_req {
 	uv_write_t req;
 	struct bc_conn *c; /* valid until its stream's close callback */
 	struct write_req *next;
-	struct bc_conn_ref who; /* c, while it is open */
-	struct bc_net *net;
 	struct bc_shared *shared; /* a frame or a whole message, or NULL */
 	bool frame;               /* shared is a frame */
 	uint8_t *owned;           /* a message's bytes, or NULL */
@@ -226,44 +226,40 @@ static void write_req_free(struct write_req *w)
  * queue's count, the next frame, the layer told it may send again. */
 static void finish(struct bc_conn *c, struct write_req *w, int status)
 {
-	struct bc_conn *live = bc__conn_get(w->net, w->who);
 	c->out_head = w->next;
 	if (!c->out_head) {
 		c->out_tail = NULL;
 	}
-	if (live) {
-		live->queued -= w->len;
-		live->frame_bytes -= w->frame ? w->len : 0;
+	if (!c->closing) {
+		c->queued -= w->len;
+		c->frame_bytes -= w->frame ? w->len : 0;
 		if (status < 0) {
-			bc__conn_close(live, uv_strerror(status));
+			bc__conn_close(c, uv_strerror(status));
 		} else if (w->frame) {
-			live->frame_writing = false;
-			live->counters.frames_sent++;
-			live->counters.bytes_sent += w->len;
+			c->frame_writing = false;
+			c->counters.frames_sent++;
+			c->counters.bytes_sent += w->len;
 			if (w->answer) {
-				bc_dispatch_answered(live->net->d,
-				                     ref_of(live));
+				bc_dispatch_answered(c->net->d, ref_of(c));
 			}
-			if (live->answers_head) {
-				struct bc_answer *a = live->answers_head;
-				live->answers_head = a->next;
-				live->answers_tail =
-				    a->next ? live->answers_tail : NULL;
-				send_frame(live, a->frame, a->camera_seq);
+			if (c->answers_head) {
+				struct bc_answer *a = c->answers_head;
+				c->answers_head = a->next;
+				c->answers_tail =
+				    a->next ? c->answers_tail : NULL;
+				send_frame(c, a->frame, a->camera_seq);
 				bc_shared_unref(a->frame);
 				bc_free(a);
-			} else if (live->frame_next) {
-				struct bc_shared *next = live->frame_next;
-				live->frame_next = NULL;
-				send_frame(live, next,
-				           live->frame_next_camera_seq);
+			} else if (c->frame_next) {
+				struct bc_shared *next = c->frame_next;
+				c->frame_next = NULL;
+				send_frame(c, next, c->frame_next_camera_seq);
 				bc_shared_unref(next);
-			} else if (!live->draining) {
-				bc_dispatch_writable(live->net->d,
-				                     ref_of(live));
+			} else if (!c->draining) {
+				bc_dispatch_writable(c->net->d, ref_of(c));
 			}
 		} else {
-			live->counters.bytes_sent += w->len;
+			c->counters.bytes_sent += w->len;
 		}
 	}
 	write_req_free(w);
@@ -372,8 +368,6 @@ static void write_done(uv_write_t *req, int status)
 static void enqueue(struct bc_conn *c, struct write_req *w)
 {
 	w->c = c;
-	w->net = c->net;
-	w->who = ref_of(c);
 	if (c->out_tail) {
 		c->out_tail->next = w;
 	} else {
@@ -518,8 +512,8 @@ static void send_frame(struct bc_conn *c, struct bc_shared *frame,
                        uint32_t camera_seq)
 {
 	uint64_t now = now_ms(c->net);
-	bool answer =
-	    (bc_get_le16(frame->data + 6) & BC_PROTO_FLAG_SNAPSHOT) != 0;
+	bool answer = (bc_get_le16(frame->data + HEADER_FLAGS) &
+	               BC_PROTO_FLAG_SNAPSHOT) != 0;
 	if (c->closing || c->draining) {
 		return;
 	}

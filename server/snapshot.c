@@ -39,6 +39,18 @@ static bool write_all(int fd, const char *p, size_t len)
 	return true;
 }
 
+int bc_store_scene_depth_ok(const struct bc_tree *t, struct bc_errinfo *ei)
+{
+	uint32_t n = bc_tree_nesting(t);
+	if (n <= BC_SCENE_JSON_MAX_DEPTH) {
+		return 0;
+	}
+	return bc_errinfo_set(ei, BC_EDEPTH,
+	                      "the scene would nest %u levels; a session's "
+	                      "snapshot (a JSON scene file) holds at most %u",
+	                      n, BC_SCENE_JSON_MAX_DEPTH);
+}
+
 /*
  * Writes snap-ORDER.json and starts journal-ORDER.bin, or changes nothing
  * on disk: the text is made and its size checked against the reader's
@@ -65,12 +77,8 @@ int bc_store_snapshot(struct bc_store_session *ss, const struct bc_tree *t,
 	                   (unsigned long long)order);
 	bc__store_fmt_path(jfile, "%s/journal-%llu.bin", ss->path,
 	                   (unsigned long long)order);
-	if (bc_tree_nesting(t) > BC_SCENE_JSON_MAX_DEPTH) {
-		return bc_errinfo_set(ei, BC_EDEPTH,
-		                      "the scene nests %u levels; a snapshot "
-		                      "holds at most %u",
-		                      bc_tree_nesting(t),
-		                      BC_SCENE_JSON_MAX_DEPTH);
+	if ((rc = bc_store_scene_depth_ok(t, ei))) {
+		return rc;
 	}
 	if (!(text = bc_scene_to_json(t, cam))) {
 		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");

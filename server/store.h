@@ -68,6 +68,11 @@ int bc_store_session_open(struct bc_store *st, const char *name,
                           struct bc_errinfo *ei);
 void bc_store_session_close(struct bc_store_session *ss);
 
+/* 0 when a snapshot can hold scene t, else BC_EDEPTH with the reason: it
+ * nests deeper than a JSON scene file holds (BC_SCENE_JSON_MAX_DEPTH). A
+ * change that fails it is refused before it applies. */
+int bc_store_scene_depth_ok(const struct bc_tree *t, struct bc_errinfo *ei);
+
 /* Writes the whole scene as of order (atomic) and starts a new journal.
  * On failure nothing on disk has changed (the old snapshot and journal are
  * the state): BC_EIO, BC_ENOMEM, BC_ELIMIT (the snapshot would pass
