@@ -20,6 +20,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "blobcast/alloc.h"
 #include "blobcast/proto.h"
 
 #ifndef BLOBCASTD_PATH
@@ -368,6 +369,44 @@ static inline struct bc_tree *scene_of(const struct conn *c)
 	}
 	return t;
 }
+
+#if defined(BLOBCAST_TESTS_TEST_H)
+/* Loads tree t (taking it) with camera cam into c's session and waits
+ * for the SCENE_STATE that answers it. */
+static inline void conn_load_tree(struct conn *c, struct bc_tree *t,
+                                  const struct bc_camera *cam)
+{
+	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
+	uint8_t *bytes = NULL;
+	size_t len = 0;
+	uint32_t seq;
+	int rc = bc_scene_encode(t, cam, &bytes, &len);
+	bc_tree_destroy(t);
+	REQUIRE(rc == 0);
+	m.scene_load.scene.ptr = bytes;
+	m.scene_load.scene.len = (uint32_t)len;
+	seq = conn_send(c, &m);
+	bc_free(bytes);
+	REQUIRE(seq);
+	do {
+		REQUIRE(conn_expect(c, BC_MSG_SCENE_STATE, 60000) == 1);
+	} while (c->m.scene_state.author_seq != seq);
+}
+
+/* Loads scene JSON into c's session (conn_load_tree). */
+static inline void conn_load_json(struct conn *c, const char *json)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_camera cam;
+	int parsed = t ? bc_scene_parse_json(json, strlen(json), t, &cam, NULL)
+	               : BC_ENOMEM;
+	if (parsed) {
+		bc_tree_destroy(t);
+	}
+	REQUIRE(parsed == 0);
+	conn_load_tree(c, t, &cam);
+}
+#endif
 #endif
 
 #endif

@@ -67,26 +67,6 @@ static void member(struct conn *c, const struct daemon *d, const char *name,
 	REQUIRE(conn_send(c, &m));
 }
 
-/* Loads tree t (taking it) with camera cam into c's session and waits
- * for its SCENE_STATE. */
-static void load_tree(struct conn *c, struct bc_tree *t,
-                      const struct bc_camera *cam)
-{
-	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
-	uint8_t *bytes = NULL;
-	size_t len = 0;
-	uint32_t seq;
-	REQUIRE(bc_scene_encode(t, cam, &bytes, &len) == 0);
-	m.scene_load.scene.ptr = bytes;
-	m.scene_load.scene.len = (uint32_t)len;
-	REQUIRE((seq = conn_send(c, &m)));
-	do {
-		REQUIRE(conn_expect(c, BC_MSG_SCENE_STATE, 60000) == 1);
-	} while (c->m.scene_state.author_seq != seq);
-	bc_free(bytes);
-	bc_tree_destroy(t);
-}
-
 /* Loads a generated scene into c's session. */
 static void load_gen(struct conn *c, const char *gen, uint32_t count,
                      enum bc_gen_blend blend)
@@ -95,17 +75,7 @@ static void load_gen(struct conn *c, const char *gen, uint32_t count,
 	struct bc_camera cam;
 	struct bc_gen_opts o = {.count = count, .blend = blend};
 	REQUIRE(t && bc_gen(gen, &o, t, &cam, NULL) == 0);
-	load_tree(c, t, &cam);
-}
-
-/* Loads scene JSON into c's session. */
-static void load_json(struct conn *c, const char *json)
-{
-	struct bc_tree *t = bc_tree_create();
-	struct bc_camera cam;
-	REQUIRE(t &&
-	        bc_scene_parse_json(json, strlen(json), t, &cam, NULL) == 0);
-	load_tree(c, t, &cam);
+	conn_load_tree(c, t, &cam);
 }
 
 /* A scene of nspheres in a row, ids 2.., under a union with id 1. */
@@ -133,7 +103,7 @@ static void row_member(struct conn *c, const struct daemon *d, const char *name,
 	char json[2048];
 	member(c, d, name, true, w, h, BC_PROTO_ENC_RAW);
 	row_json(json, sizeof(json), 5);
-	load_json(c, json);
+	conn_load_json(c, json);
 }
 
 /* Waits for a FRAME whose order reaches order; its arrival time, or -1. */
@@ -272,7 +242,7 @@ static void a_crawling_scene_is_slow_for_itself_only(void)
 	member(&crawl, &d, "crawl", true, 320, 240, BC_PROTO_ENC_RAW);
 	REQUIRE(conn_expect(&crawl, BC_MSG_FRAME, 30000) == 1);
 	t0 = t_now_ms();
-	load_json(&crawl, twist);
+	conn_load_json(&crawl, twist);
 	/* A whole picture at once (one render thread was held for over an
 	 * hour by such a scene), saying it is not finished. */
 	while (t_now_ms() - t0 < 60000 && !incomplete &&
@@ -680,7 +650,7 @@ static void gl_workers_are_scheduled_alike(void)
 	row_member(&a, &d, "gl-a", 64, 48);
 	row_member(&b, &d, "gl-b", 64, 48);
 	member(&crawl, &d, "gl-crawl", true, 64, 48, BC_PROTO_ENC_RAW);
-	load_json(&crawl, twist);
+	conn_load_json(&crawl, twist);
 	REQUIRE(conn_expect(&a, BC_MSG_FRAME, 60000) == 1);
 	REQUIRE(conn_expect(&b, BC_MSG_FRAME, 60000) == 1);
 	CHECK_EQ_INT(edit_frames(&a, 3, ms), 3);

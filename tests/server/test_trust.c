@@ -62,28 +62,6 @@ static void member(struct conn *c, const struct daemon *d, const char *name,
 	REQUIRE(conn_join(c, s, BC_PROTO_ROLE_EDITOR, create) == 0);
 }
 
-/* Loads scene JSON into c's session and waits for its SCENE_STATE. */
-static void load_json(struct conn *c, const char *json)
-{
-	struct bc_tree *t = bc_tree_create();
-	struct bc_camera cam;
-	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
-	uint8_t *bytes = NULL;
-	size_t len = 0;
-	uint32_t seq;
-	REQUIRE(t &&
-	        bc_scene_parse_json(json, strlen(json), t, &cam, NULL) == 0);
-	REQUIRE(bc_scene_encode(t, &cam, &bytes, &len) == 0);
-	m.scene_load.scene.ptr = bytes;
-	m.scene_load.scene.len = (uint32_t)len;
-	REQUIRE((seq = conn_send(c, &m)));
-	do {
-		REQUIRE(conn_expect(c, BC_MSG_SCENE_STATE, 20000) == 1);
-	} while (c->m.scene_state.author_seq != seq);
-	bc_free(bytes);
-	bc_tree_destroy(t);
-}
-
 /* Sends one operation; *type becomes the answer's: EDIT_APPLIED, or
  * ERROR with its code in *code (0 when neither came in 20 s). */
 static void edit1(struct conn *c, struct bc_proto_edit_op op,
@@ -133,7 +111,7 @@ static void remove_up_a_unary_chain_keeps_the_session(void)
 	REQUIRE(daemon_start(&d, dir) == 0);
 	member(&a, &d, "editor", "chain", true);
 	chain_json(json, sizeof(json), OFFSET_01);
-	load_json(&a, json);
+	conn_load_json(&a, json);
 	/* The sphere, then each unary node: every one would take the
 	 * chain up to the root with it. */
 	for (uint32_t id = 3; id >= 1; id--) {
@@ -182,7 +160,7 @@ static void viewer_of(struct conn *c, const struct daemon *d, const char *s,
 	char json[512];
 	member(c, d, s, s, true);
 	chain_json(json, sizeof(json), root);
-	load_json(c, json);
+	conn_load_json(c, json);
 	REQUIRE(conn_view_scaled(c, W, H, BC_PROTO_ENC_RAW, 1));
 }
 
@@ -196,10 +174,6 @@ static void copy_of(struct conn *c, const struct daemon *d, const char *s,
 	struct conn j;
 	struct bc_tree *t = NULL, *unused = bc_tree_create();
 	struct bc_camera cam;
-	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
-	uint8_t *bytes = NULL;
-	size_t len = 0;
-	uint32_t seq;
 	chain_json(json, sizeof(json), OFFSET_01);
 	REQUIRE(unused && bc_scene_parse_json(json, strlen(json), unused, &cam,
 	                                      NULL) == 0);
@@ -209,15 +183,7 @@ static void copy_of(struct conn *c, const struct daemon *d, const char *s,
 	REQUIRE((t = scene_of(&j)));
 	conn_close(&j);
 	member(c, d, s, s, true);
-	REQUIRE(bc_scene_encode(t, &cam, &bytes, &len) == 0);
-	bc_tree_destroy(t);
-	m.scene_load.scene.ptr = bytes;
-	m.scene_load.scene.len = (uint32_t)len;
-	REQUIRE((seq = conn_send(c, &m)));
-	do {
-		REQUIRE(conn_expect(c, BC_MSG_SCENE_STATE, 20000) == 1);
-	} while (c->m.scene_state.author_seq != seq);
-	bc_free(bytes);
+	conn_load_tree(c, t, &cam);
 	REQUIRE(conn_view_scaled(c, W, H, BC_PROTO_ENC_RAW, 1));
 }
 
@@ -357,7 +323,7 @@ static void pipelined_snapshots_are_all_answered(void)
 	REQUIRE(daemon_start(&d, dir) == 0);
 	member(&c, &d, "snapper", "snaps", true);
 	chain_json(json, sizeof(json), OFFSET_01);
-	load_json(&c, json);
+	conn_load_json(&c, json);
 	REQUIRE(conn_view_scaled(&c, W, H, BC_PROTO_ENC_RAW, 8));
 	for (int round = 0; round < 2; round++) {
 		uint32_t first = 0, last = 0;
@@ -419,7 +385,7 @@ static void nothing_of_a_deleted_session_follows_enosession(void)
 	REQUIRE(daemon_start(&d, dir) == 0);
 	member(&c, &d, "snapper", "gone", true);
 	chain_json(json, sizeof(json), OFFSET_01);
-	load_json(&c, json);
+	conn_load_json(&c, json);
 	REQUIRE(conn_view_scaled(&c, 512, 384, BC_PROTO_ENC_RAW, 1));
 	for (int i = 0; i < 8; i++) {
 		struct bc_msg s = {.type = BC_MSG_SNAPSHOT};
@@ -545,10 +511,11 @@ static void an_edit_past_the_snapshot_depth_is_refused(void)
 	snprintf(dir, sizeof(dir), "%s/depth", base_dir);
 	REQUIRE(daemon_start(&d, dir) == 0);
 	member(&c, &d, "deep", "deep", true);
-	load_json(&c, "{\"blobcast\": 1, \"root\": {\"type\": \"union\", "
-	              "\"id\": 1, \"children\": [{\"type\": \"sphere\", "
-	              "\"id\": 2, \"radius\": 0.3}, {\"type\": \"sphere\", "
-	              "\"id\": 3, \"radius\": 0.3}]}}");
+	conn_load_json(&c,
+	               "{\"blobcast\": 1, \"root\": {\"type\": \"union\", "
+	               "\"id\": 1, \"children\": [{\"type\": \"sphere\", "
+	               "\"id\": 2, \"radius\": 0.3}, {\"type\": \"sphere\", "
+	               "\"id\": 3, \"radius\": 0.3}]}}");
 	/* Under the root (level 1): 1022 more levels, 1023 in all. */
 	chain_bytes(&deep, 1021);
 	insert(&c, 1, &deep, &type, &code);
