@@ -298,6 +298,12 @@ static int dec_hello(struct dec *d, struct bc_msg_hello *h)
 	}
 	TRY(rd_str(d, "client_name", 0, BC_PROTO_MAX_NAME, &h->client_name));
 	TRY(rd_str(d, "token", 0, BC_PROTO_MAX_TOKEN, &h->token));
+	/* The features field: absent in an earlier client's HELLO. Bits this
+	 * text does not name are a later client's features, not an error. */
+	if (bc_rd_left(&d->c) != 0) {
+		h->has_features = true;
+		TRY(rd_u32(d, "features", &h->features));
+	}
 	return 0;
 }
 
@@ -328,6 +334,17 @@ static int dec_welcome(struct dec *d, struct bc_msg_welcome *w)
 	TRY(rd_u16_range(d, "max_edit_ops", 1, BC_PROTO_MAX_EDIT_OPS,
 	                 &w->max_edit_ops));
 	TRY(rd_str(d, "server_id", 0, BC_PROTO_MAX_NAME, &w->server_id));
+	/* Granted features: only an answer to a HELLO that announced some,
+	 * and never a feature this text does not know. */
+	if (bc_rd_left(&d->c) != 0) {
+		w->has_features = true;
+		TRY(rd_u32(d, "features", &w->features));
+		if (w->features & ~BC_PROTO_FEATURES_ALL) {
+			return fail(d, BC_EPROTO_FLAGS,
+			            "features 0x%08x has undefined bits",
+			            w->features);
+		}
+	}
 	return 0;
 }
 
@@ -710,11 +727,26 @@ static int dec_pick_result(struct dec *d, struct bc_msg_pick_result *p)
 	return 0;
 }
 
-/* STATS's optional load section (PROTOCOL.md 7.18). */
+/* STATS's optional load and TLS sections (PROTOCOL.md 7.18). */
 #define STATS_LOAD_BYTES 44u
+#define STATS_TLS_BYTES 9u
+
+static int dec_stats_load(struct dec *d, struct bc_proto_load *l)
+{
+	TRY(rd_f32_nonneg(d, "loop_turn_max_ms", &l->loop_turn_max_ms));
+	TRY(rd_f32_nonneg(d, "loop_request_max_ms", &l->loop_request_max_ms));
+	TRY(rd_u32(d, "render_workers", &l->render_workers));
+	TRY(rd_u32(d, "jobs_queued", &l->jobs_queued));
+	TRY(rd_u32(d, "jobs_running", &l->jobs_running));
+	TRY(rd_u64(d, "view_bytes", &l->view_bytes));
+	TRY(rd_u64(d, "view_cap", &l->view_cap));
+	TRY(rd_u64(d, "session_render_us", &l->session_render_us));
+	return 0;
+}
 
 static int dec_stats(struct dec *d, struct bc_msg_stats *s)
 {
+	size_t left;
 	TRY(rd_u64(d, "uptime_ms", &s->uptime_ms));
 	TRY(rd_u64(d, "frames", &s->frames));
 	TRY(rd_u64(d, "bytes", &s->bytes));
@@ -727,28 +759,32 @@ static int dec_stats(struct dec *d, struct bc_msg_stats *s)
 	TRY(rd_f32_nonneg(d, "encode_ms_avg", &s->encode_ms_avg));
 	TRY(rd_f32_nonneg(d, "edit_ms_avg", &s->edit_ms_avg));
 	TRY(rd_f32_nonneg(d, "fps", &s->fps));
-	/* The load section follows only when the client asked for it: the
-	 * payload's length tells (64 or 64 + 44 bytes); anything else
-	 * is bytes after the last field. */
-	if (bc_rd_left(&d->c) == 0) {
-		return 0;
+	/* The sections follow only when the client asked for them: the
+	 * payload's length tells which (0, 44, 9 or 53 bytes more); anything
+	 * else is bytes after the last field. */
+	left = bc_rd_left(&d->c);
+	if (left != 0 && left != STATS_LOAD_BYTES && left != STATS_TLS_BYTES &&
+	    left != STATS_LOAD_BYTES + STATS_TLS_BYTES) {
+		return fail(d, BC_EPROTO_TRAILING,
+		            "%zu bytes after the last field, not a load or TLS "
+		            "section",
+		            left);
 	}
-	if (bc_rd_left(&d->c) != STATS_LOAD_BYTES) {
-		return fail(
-		    d, BC_EPROTO_TRAILING,
-		    "%zu bytes after the last field, not a load section",
-		    bc_rd_left(&d->c));
+	if (left == STATS_LOAD_BYTES ||
+	    left == STATS_LOAD_BYTES + STATS_TLS_BYTES) {
+		s->has_load = true;
+		TRY(dec_stats_load(d, &s->load));
 	}
-	s->has_load = true;
-	TRY(rd_f32_nonneg(d, "loop_turn_max_ms", &s->load.loop_turn_max_ms));
-	TRY(rd_f32_nonneg(d, "loop_request_max_ms",
-	                  &s->load.loop_request_max_ms));
-	TRY(rd_u32(d, "render_workers", &s->load.render_workers));
-	TRY(rd_u32(d, "jobs_queued", &s->load.jobs_queued));
-	TRY(rd_u32(d, "jobs_running", &s->load.jobs_running));
-	TRY(rd_u64(d, "view_bytes", &s->load.view_bytes));
-	TRY(rd_u64(d, "view_cap", &s->load.view_cap));
-	TRY(rd_u64(d, "session_render_us", &s->load.session_render_us));
+	if (bc_rd_left(&d->c) == STATS_TLS_BYTES) {
+		s->has_tls = true;
+		TRY(rd_u64(d, "tls_not_after_ms", &s->tls_not_after_ms));
+		TRY(rd_u8(d, "tls_expiring", &s->tls_expiring));
+		if (s->tls_expiring > 1) {
+			return fail(d, BC_ERANGE,
+			            "tls_expiring %u is not 0 or 1",
+			            (unsigned)s->tls_expiring);
+		}
+	}
 	return 0;
 }
 
@@ -767,7 +803,8 @@ static int dec_get_stats(struct dec *d, struct bc_msg_get_stats *g)
 	if (g->parts == 0) {
 		return fail(d, BC_ERANGE, "parts 0 (leave it out)");
 	}
-	if (!(g->parts & BC_PROTO_STATS_LOAD)) {
+	if ((g->parts & BC_PROTO_STATS_RESET) &&
+	    !(g->parts & BC_PROTO_STATS_LOAD)) {
 		return fail(d, BC_ERANGE, "parts RESET without LOAD");
 	}
 	return 0;

@@ -184,6 +184,9 @@ static void w_body(struct bc__w *w, const struct bc_msg *m)
 		bc__put_u32(w, h->max_frame_bytes);
 		w_str(w, "client_name", h->client_name, BC_PROTO_MAX_NAME);
 		w_str(w, "token", h->token, BC_PROTO_MAX_TOKEN);
+		if (h->has_features) {
+			bc__put_u32(w, h->features);
+		}
 		break;
 	}
 	case BC_MSG_WELCOME: {
@@ -197,6 +200,9 @@ static void w_body(struct bc__w *w, const struct bc_msg *m)
 		bc__put_u16(w, wl->max_members);
 		bc__put_u16(w, wl->max_edit_ops);
 		w_str(w, "server_id", wl->server_id, BC_PROTO_MAX_NAME);
+		if (wl->has_features) {
+			bc__put_u32(w, wl->features);
+		}
 		break;
 	}
 	case BC_MSG_ERROR:
@@ -334,6 +340,10 @@ static void w_body(struct bc__w *w, const struct bc_msg *m)
 			bc__put_u64(w, l->view_bytes);
 			bc__put_u64(w, l->view_cap);
 			bc__put_u64(w, l->session_render_us);
+		}
+		if (s->has_tls) {
+			bc__put_u64(w, s->tls_not_after_ms);
+			bc__put_u8(w, s->tls_expiring);
 		}
 		break;
 	}

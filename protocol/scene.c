@@ -23,7 +23,8 @@
 struct scan {
 	struct bc_rd c;
 	struct bc_errinfo *ei;
-	uint32_t node; /* index of the node being read */
+	uint32_t node;     /* index of the node being read */
+	uint32_t features; /* BC_PROTO_FEATURE_KINDS when it uses them */
 };
 
 static int sfail(struct scan *s, int code, const char *fmt,
@@ -115,6 +116,7 @@ static int scan_op(struct scan *s, uint8_t tag, uint32_t after,
 		             (unsigned)tag);
 	}
 	if (kind >= BC_PROTO_OP_KIND_FIRST_UNARY) {
+		s->features |= BC_PROTO_FEATURE_KINDS;
 		/* A unary node: nfloats, its floats, and one child. blobtree
 		 * requires exactly the kind's count. */
 		uint8_t nfloats;
@@ -155,6 +157,9 @@ static int scan_prim(struct scan *s, uint8_t tag)
 	if (tag == 0 || tag > BC_PROTO_PRIM_KIND_MAX) {
 		return sfail(s, BC_EENUM, "primitive tag 0x%02x is unknown",
 		             (unsigned)tag);
+	}
+	if (tag > BC_PROTO_PRIM_KIND_MAX_FIRST) {
+		s->features |= BC_PROTO_FEATURE_KINDS;
 	}
 	TRY(s_floats(s, 3, "translate", NULL));
 	TRY(s_floats(s, 4, "rotate", NULL));
@@ -296,6 +301,7 @@ int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
 		             "%zu bytes after the last node", bc_rd_left(&s.c));
 	}
 	out.nodes = count;
+	out.features = s.features;
 	if (info) {
 		*info = out;
 	}

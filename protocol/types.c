@@ -14,9 +14,10 @@
 
 #define HELLO_MAX                                                              \
 	(2u + 2u + 1u + 4u + STR_MAX(BC_PROTO_MAX_NAME) +                      \
-	 STR_MAX(BC_PROTO_MAX_TOKEN))
+	 STR_MAX(BC_PROTO_MAX_TOKEN) + 4u)
 #define WELCOME_MAX                                                            \
-	(2u + 4u + 4u + 4u + 4u + 2u + 2u + 2u + STR_MAX(BC_PROTO_MAX_NAME))
+	(2u + 4u + 4u + 4u + 4u + 2u + 2u + 2u + STR_MAX(BC_PROTO_MAX_NAME) +  \
+	 4u)
 #define ERROR_MAX (2u + STR_MAX(BC_PROTO_MAX_ERROR_TEXT))
 #define SESSION_MAX (1u + STR_MAX(BC_PROTO_MAX_NAME))
 #define SESSION_INFO_MAX                                                       \
@@ -26,8 +27,9 @@
 #define SESSION_ENTRY_MAX (STR_MAX(BC_PROTO_MAX_NAME) + 2u + 4u + 8u + 8u + 1u)
 #define SESSIONS_MAX (2u + BC_PROTO_MAX_SESSIONS_LISTED * SESSION_ENTRY_MAX)
 #define BULK BC_PROTO_MAX_PAYLOAD
-/* STATS: the client's figures, then the optional load section. */
-#define STATS_MAX (64u + 44u)
+/* STATS: the client's figures, then the optional load and TLS
+ * sections. */
+#define STATS_MAX (64u + 44u + 9u)
 /* A camera: eye, target, up (3 f32 each) and fov_y_deg. */
 #define CAMERA_SIZE 40u
 
@@ -189,5 +191,57 @@ int bc_proto_client_may_send(enum bc_proto_stage stage, enum bc_proto_role role,
 		return role == BC_PROTO_ROLE_EDITOR ? 0 : BC_EPERM;
 	default:
 		return BC_EPROTO_TYPE;
+	}
+}
+
+/* ---- Features (PROTOCOL.md 4) --------------------------------------------- */
+
+static uint32_t ops_features(const struct bc_msg_edit_applied *ea)
+{
+	uint32_t f = 0;
+	for (uint16_t i = 0; i < ea->nops; i++) {
+		const struct bc_proto_edit_op *op = &ea->ops[i];
+		struct bc_proto_scene_info info;
+		if (op->subtree.len &&
+		    bc_proto_scene_scan(op->subtree.ptr, op->subtree.len, &info,
+		                        NULL) == 0) {
+			f |= info.features;
+		}
+		for (uint8_t k = 0; k < op->nfields; k++) {
+			if (op->fields[k].field == BC_PROTO_FIELD_OP_KIND &&
+			    op->fields[k].count >= 1 &&
+			    op->fields[k].v[0] >=
+			        (float)BC_PROTO_OP_KIND_FIRST_UNARY) {
+				f |= BC_PROTO_FEATURE_KINDS;
+			}
+		}
+	}
+	return f;
+}
+
+uint32_t bc_proto_msg_features(const struct bc_msg *m)
+{
+	struct bc_proto_scene_info info;
+	switch (m->type) {
+	case BC_MSG_FRAME:
+		return bc_proto_flags_level(m->flags) ? BC_PROTO_FEATURE_LEVELS
+		                                      : 0u;
+	case BC_MSG_EDIT_APPLIED:
+		return ((m->flags & (BC_PROTO_FLAG_UNDO | BC_PROTO_FLAG_REDO))
+		            ? BC_PROTO_FEATURE_UNDO
+		            : 0u) |
+		       ops_features(&m->edit_applied);
+	case BC_MSG_SCENE_STATE:
+		return bc_proto_scene_scan(m->scene_state.scene.ptr,
+		                           m->scene_state.scene.len, &info,
+		                           NULL) == 0
+		           ? info.features
+		           : 0u;
+	case BC_MSG_PRESENTER:
+	case BC_MSG_FOLLOW_CAMERA:
+	case BC_MSG_SESSION_CAMERA_SET:
+		return BC_PROTO_FEATURE_PRESENT;
+	default:
+		return 0;
 	}
 }

@@ -56,6 +56,7 @@ struct bc_dispatch {
 	uint64_t turn_t, turn_idle, turn_cpu;
 	uint64_t turn_max_ns, request_max_ns;
 	bool metrics;
+	uint64_t tls_not_after_ms; /* the certificate's end, or 0 */
 };
 
 static enum bc_dispatch_result hello(struct bc_dispatch *d, struct client *c,
@@ -195,6 +196,14 @@ static enum bc_dispatch_result hello(struct bc_dispatch *d, struct client *c,
 	        ? h->max_frame_bytes
 	        : BC_PROTO_MAX_PAYLOAD;
 	c->peer.stage = BC_PROTO_STAGE_READY;
+	/* Features: those announced that this server has (PROTOCOL.md 4);
+	 * an earlier client's HELLO has none, and its WELCOME no field. */
+	c->peer.announced = h->has_features;
+	c->peer.features = h->features & BC_PROTO_FEATURES_ALL;
+	c->peer.knows_present =
+	    (c->peer.features & BC_PROTO_FEATURE_PRESENT) != 0;
+	w.welcome.has_features = h->has_features;
+	w.welcome.features = c->peer.features;
 	w.welcome.version = BC_PROTO_VERSION;
 	w.welcome.connection_id = c->peer.ref.gen;
 	w.welcome.max_payload = BC_PROTO_MAX_PAYLOAD;
@@ -223,6 +232,11 @@ static void load_section(struct bc_dispatch *d, const struct bc_member *m,
 	l->view_bytes = ws.view_bytes;
 	l->view_cap = ws.view_cap;
 	l->session_render_us = sid ? bc_work_session_us(d->work, sid) : 0;
+}
+
+void bc_dispatch_set_tls_expiry(struct bc_dispatch *d, uint64_t not_after_ms)
+{
+	d->tls_not_after_ms = not_after_ms;
 }
 
 static enum bc_dispatch_result stats(struct bc_dispatch *d, struct client *c,
@@ -255,6 +269,19 @@ static enum bc_dispatch_result stats(struct bc_dispatch *d, struct client *c,
 		st.stats.has_load = true;
 		load_section(d, &c->member, &st.stats.load);
 	}
+	if (msg->get_stats.parts & BC_PROTO_STATS_TLS) {
+		uint64_t warn_ms =
+		    (uint64_t)BC_SRV_TLS_WARN_DAYS * 24u * 3600u * 1000u;
+		struct timespec ts;
+		uint64_t unix_ms;
+		clock_gettime(CLOCK_REALTIME, &ts);
+		unix_ms = (uint64_t)ts.tv_sec * 1000u +
+		          (uint64_t)ts.tv_nsec / 1000000u;
+		st.stats.has_tls = true;
+		st.stats.tls_not_after_ms = d->tls_not_after_ms;
+		st.stats.tls_expiring = d->tls_not_after_ms &&
+		                        d->tls_not_after_ms < unix_ms + warn_ms;
+	}
 	d->link->send(d->link->ud, c->peer.ref, &st);
 	if (msg->get_stats.parts & BC_PROTO_STATS_RESET) {
 		d->turn_max_ns = d->request_max_ns = 0;
@@ -285,9 +312,10 @@ enum bc_dispatch_result bc_dispatch_message(struct bc_dispatch *d,
 	if (m->type == BC_MSG_PONG || m->type == BC_MSG_ERROR) {
 		return BC_DISPATCH_OK;
 	}
-	/* A client that sends a type of the presentation messages knows
-	 * those the server sends (PROTOCOL.md 4), refused or not. */
-	if (m->type >= BC_MSG_PRESENT) {
+	/* An earlier client (a HELLO without features) that sends a type of
+	 * the presentation messages knows those the server sends (PROTOCOL.md
+	 * 4), refused or not. */
+	if (m->type >= BC_MSG_PRESENT && !c->peer.announced) {
 		c->peer.knows_present = true;
 	}
 	if ((rc = bc_proto_client_may_send(c->peer.stage, c->peer.role,

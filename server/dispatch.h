@@ -61,6 +61,9 @@ enum bc_dispatch_result bc_dispatch_message(struct bc_dispatch *d,
 void bc_dispatch_writable(struct bc_dispatch *d, struct bc_conn_ref ref);
 /* A SNAPSHOT's answer to ref was written. */
 void bc_dispatch_answered(struct bc_dispatch *d, struct bc_conn_ref ref);
+/* The TLS certificate in use ends its validity at this Unix time in ms
+ * (0: no TLS), for STATS's TLS section; set at start and each reload. */
+void bc_dispatch_set_tls_expiry(struct bc_dispatch *d, uint64_t not_after_ms);
 /* ref is closing: nothing more is sent to it. */
 void bc_dispatch_closed(struct bc_dispatch *d, struct bc_conn_ref ref);
 /* Whether ref has completed HELLO and is in no session: what admission

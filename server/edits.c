@@ -219,12 +219,14 @@ static void broadcast(struct bc_session *s, const struct batch *x)
 		    (uint32_t)strlen(x->how.target_author);
 	}
 	for (uint32_t i = 0; i < n; i++) {
-		bc__send(list[i], &a);
 		list[i]->interacting_until = until;
 		if (x->b.structural) {
 			list[i]->shown.view = 0;
 		}
 		bc__owe_frame(list[i]);
+		/* Last: a member whose client cannot be sent the edit leaves
+		 * here (bc__send closes it, PROTOCOL.md 4). */
+		bc__send(list[i], &a);
 	}
 }
 

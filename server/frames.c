@@ -37,6 +37,8 @@ static bool same_frame(const struct bc_member *a, const struct bc_member *b,
 	       a->view.quality_still == b->view.quality_still &&
 	       a->view.downscale == b->view.downscale &&
 	       a->peer->encodings == b->peer->encodings &&
+	       (a->peer->features & BC_PROTO_FEATURE_LEVELS) ==
+	           (b->peer->features & BC_PROTO_FEATURE_LEVELS) &&
 	       memcmp(&a->shown, &b->shown, sizeof(a->shown)) == 0;
 }
 
@@ -90,7 +92,11 @@ static void frame_req(struct bc_session *s, const struct bc_member *m,
 	q->encoding_interactive = (int)m->view.encoding;
 	q->quality_still = m->view.quality_still;
 	q->quality_interactive = m->view.quality_interactive;
-	q->max_level = max_level(m->view.downscale);
+	/* Coarse levels only for a client that announced them (PROTOCOL.md
+	 * 4); an earlier one gets level 0 frames, whole or damaged. */
+	q->max_level = (m->peer->features & BC_PROTO_FEATURE_LEVELS)
+	                   ? max_level(m->view.downscale)
+	                   : 0;
 	q->final = still;
 	q->shown = m->shown;
 	q->camera_seq = m->camera_seq;

@@ -16,6 +16,7 @@ struct bc_shared *bc_shared_new(size_t len)
 	struct bc_shared *s = bc_malloc(sizeof(*s) + len);
 	if (s) {
 		s->refs = 1;
+		s->needs = 0;
 		s->len = len;
 	}
 	return s;

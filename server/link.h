@@ -39,6 +39,7 @@ static inline bool bc_conn_ref_eq(struct bc_conn_ref a, struct bc_conn_ref b)
  * of a view group. The counts change on the loop thread only. */
 struct bc_shared {
 	uint32_t refs;
+	uint32_t needs; /* features a receiver must have (bc_proto) */
 	size_t len;
 	uint8_t data[];
 };
@@ -56,9 +57,14 @@ struct bc_peer {
 	enum bc_proto_stage stage;
 	uint8_t encodings;
 	uint32_t max_frame_bytes;
-	/* It has sent a type of 28 or more (PRESENT, FOLLOW, SESSION_CAMERA),
-	 * so it is sent PRESENTER, FOLLOW_CAMERA and SESSION_CAMERA_SET
-	 * (PROTOCOL.md 4). */
+	/* The features its HELLO announced that this server has
+	 * (BC_PROTO_FEATURE_*, PROTOCOL.md 4); 0 for an earlier client's
+	 * HELLO without the field (announced false). */
+	uint32_t features;
+	bool announced;
+	/* It is sent PRESENTER, FOLLOW_CAMERA and SESSION_CAMERA_SET: it
+	 * announced PRESENT, or (a HELLO without features) it has sent a
+	 * type of 28 or more (PRESENT, FOLLOW, SESSION_CAMERA). */
 	bool knows_present;
 };
 

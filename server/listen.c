@@ -192,6 +192,10 @@ int bc_net_listen(struct bc_net *n, struct bc_errinfo *ei)
 	                         n->cfg->tls_allow_expired, ei))) {
 		return rc;
 	}
+	if (n->tls) {
+		bc_dispatch_set_tls_expiry(n->d,
+		                           bc_tls_ctx_not_after_ms(n->tls));
+	}
 	uv_timer_start(&n->stall_timer, bc__net_check_stalls, 1000, 1000);
 	if (n->cfg->listen) {
 		char host[256];
@@ -304,5 +308,6 @@ int bc_net_reload_tls(struct bc_net *n, struct bc_errinfo *ei)
 	}
 	bc_tls_ctx_free(n->tls);
 	n->tls = fresh;
+	bc_dispatch_set_tls_expiry(n->d, bc_tls_ctx_not_after_ms(n->tls));
 	return 0;
 }

@@ -62,9 +62,44 @@ void bc_member_answered(struct bc_member *m)
 
 /* ---- sending --------------------------------------------------------------- */
 
+/* m cannot be sent what its session now holds: a scene or edit with
+ * kinds its client did not announce (PROTOCOL.md 4). Told why, closed. */
+static void cannot_serve(struct bc_member *m, uint32_t needs)
+{
+	const struct bc_link *l = m->ss->link;
+	bc_link_error(l, m->peer->ref, 0, BC_ENOTSUP, true,
+	              "the session's scene uses node kinds that this client "
+	              "did not announce (features 0x%x, announced 0x%x): use "
+	              "a newer client",
+	              needs, m->peer->features);
+	l->close(l->ud, m->peer->ref, "its client cannot decode the scene",
+	         true);
+}
+
 void bc__send(struct bc_member *m, const struct bc_msg *msg)
 {
-	m->ss->link->send(m->ss->link->ud, m->peer->ref, msg);
+	const struct bc_link *l = m->ss->link;
+	uint32_t missing = 0;
+	struct bc_msg older;
+	if (msg->type == BC_MSG_EDIT_APPLIED) {
+		missing = bc_proto_msg_features(msg) & ~m->peer->features;
+	}
+	if (missing & ~BC_PROTO_FEATURE_UNDO) {
+		cannot_serve(m, missing);
+		return;
+	}
+	if (missing) {
+		/* A client without UNDO gets the undo's operations as an
+		 * edit like any other: the same scene, without the flag and
+		 * the fields it would not know. */
+		older = *msg;
+		older.flags &=
+		    (uint16_t) ~(BC_PROTO_FLAG_UNDO | BC_PROTO_FLAG_REDO);
+		older.edit_applied.target_order = 0;
+		older.edit_applied.target_author.len = 0;
+		msg = &older;
+	}
+	l->send(l->ud, m->peer->ref, msg);
 }
 
 void bc__send_error(struct bc_member *m, uint32_t seq, int code,
@@ -130,6 +165,8 @@ struct bc_shared *bc__state_msg(const struct bc_tree *t,
 	if (bc_proto_encode(&b, &st, &ei) == 0 &&
 	    (msg = bc_shared_new(b.len))) {
 		memcpy(msg->data, b.data, b.len);
+		/* Who may be sent it (PROTOCOL.md 4). */
+		msg->needs = bc_proto_msg_features(&st);
 	}
 	bc_proto_buf_finish(&b);
 	bc_free(bytes);
@@ -143,12 +180,18 @@ void bc__send_state_msg(struct bc_session *s, struct bc_member *to,
 	struct bc_member *members[BC_PROTO_MAX_MEMBERS];
 	uint32_t n;
 	if (to) {
-		l->send_shared(l->ud, to->peer->ref, msg);
-		return;
+		members[0] = to;
+		n = 1;
+	} else {
+		n = bc__members(s, members);
 	}
-	n = bc__members(s, members);
 	for (uint32_t i = 0; i < n; i++) {
-		l->send_shared(l->ud, members[i]->peer->ref, msg);
+		uint32_t missing = msg->needs & ~members[i]->peer->features;
+		if (missing) {
+			cannot_serve(members[i], missing);
+		} else {
+			l->send_shared(l->ud, members[i]->peer->ref, msg);
+		}
 	}
 }
 

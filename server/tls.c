@@ -7,6 +7,7 @@
  */
 #include <stdio.h>
 #include <string.h>
+#include <time.h>
 
 #include <openssl/bio.h>
 #include <openssl/err.h>
@@ -157,6 +158,21 @@ int bc_tls_ctx_new(struct bc_tls_ctx **out, const char *cert_file,
 	}
 	*out = ctx;
 	return 0;
+}
+
+uint64_t bc_tls_ctx_not_after_ms(const struct bc_tls_ctx *ctx)
+{
+	X509 *x = SSL_CTX_get0_certificate(ctx->ssl);
+	int days = 0, secs = 0;
+	int64_t at;
+	/* Its distance from now, added to the clock: no time zone
+	 * arithmetic of our own. */
+	if (!x || !ASN1_TIME_diff(&days, &secs, NULL, X509_get0_notAfter(x))) {
+		ERR_clear_error();
+		return 0;
+	}
+	at = (int64_t)time(NULL) + (int64_t)days * 86400 + secs;
+	return at > 0 ? (uint64_t)at * 1000u : 0u;
 }
 
 void bc_tls_ctx_free(struct bc_tls_ctx *ctx)

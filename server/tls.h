@@ -26,6 +26,9 @@ int bc_tls_ctx_new(struct bc_tls_ctx **out, const char *cert_file,
                    const char *key_file, bool allow_expired,
                    struct bc_errinfo *ei);
 void bc_tls_ctx_free(struct bc_tls_ctx *ctx);
+/* When ctx's certificate stops being valid, Unix milliseconds (0 when it
+ * cannot be read). */
+uint64_t bc_tls_ctx_not_after_ms(const struct bc_tls_ctx *ctx);
 
 /* A server-side connection state; NULL when out of memory. It holds its
  * own reference to ctx, so ctx may be freed (replaced) before it. */

@@ -421,6 +421,9 @@ static int hello(struct bc_client *c, const struct bc_client_opts *o,
 	m.hello.client_name.len = (uint32_t)strlen(name);
 	m.hello.token.ptr = token;
 	m.hello.token.len = (uint32_t)strlen(token);
+	/* Everything of the protocol this library decodes. */
+	m.hello.has_features = true;
+	m.hello.features = BC_PROTO_FEATURES_ALL;
 	if ((rc = send_or_say(c, &m, NULL, ei))) {
 		return rc;
 	}
@@ -437,6 +440,7 @@ static int hello(struct bc_client *c, const struct bc_client_opts *o,
 	c->info.max_edit_ops = m.welcome.max_edit_ops;
 	copy_str(c->info.server_id, sizeof(c->info.server_id),
 	         m.welcome.server_id);
+	c->info.features = m.welcome.features;
 	return 0;
 }
 

@@ -503,7 +503,8 @@ class App {
 			el.className = 'conn up';
 			this.conn.send(P.MSG.HELLO, { version_min: 1, version_max: 1,
 				encodings: P.ENCODINGS_ALL, max_frame_bytes: 0,
-				client_name: this.cfg.name, token: this.cfg.token });
+				client_name: this.cfg.name, token: this.cfg.token,
+				features: P.FEATURE.ALL });
 			return;
 		}
 		if (s === 'error') {

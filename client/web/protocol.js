@@ -90,8 +90,16 @@ export const FLAG = Object.freeze({
  * only. */
 export const PLANE = Object.freeze({ DEPTH: 0x01, IDS: 0x02, ALL: 0x03 });
 
-/* GET_STATS parts: the daemon's load section, and a reset of its maxima. */
-export const STATS_PARTS = Object.freeze({ LOAD: 0x01, RESET: 0x02, ALL: 0x03 });
+/* GET_STATS parts: the daemon's load section, a reset of its maxima, and
+ * the TLS section (the certificate's end of validity). */
+export const STATS_PARTS = Object.freeze({ LOAD: 0x01, RESET: 0x02, TLS: 0x04,
+	ALL: 0x07 });
+
+/* Features (PROTOCOL.md 4): what version 1 gained after its first text; a
+ * server sends each only to a client that announced it in HELLO, and
+ * WELCOME says which it grants. */
+export const FEATURE = Object.freeze({ LEVELS: 0x01, UNDO: 0x02,
+	PRESENT: 0x04, KINDS: 0x08, ALL: 0x0f });
 
 /* The number of plane rectangles (0..2) a FRAME with these flags carries
  * after its colour rectangle. */
@@ -231,8 +239,9 @@ function T(type, name, from, flags, max) {
 	TYPES[type] = Object.freeze({ type, name, from, flags, max });
 }
 T(1, 'HELLO', FROM_CLIENT, 0,
-	2 + 2 + 1 + 4 + strMax(L.MAX_NAME) + strMax(L.MAX_TOKEN));
-T(2, 'WELCOME', FROM_SERVER, 0, 2 + 4 * 4 + 2 * 3 + strMax(L.MAX_NAME));
+	2 + 2 + 1 + 4 + strMax(L.MAX_NAME) + strMax(L.MAX_TOKEN) + 4);
+T(2, 'WELCOME', FROM_SERVER, 0,
+	2 + 4 * 4 + 2 * 3 + strMax(L.MAX_NAME) + 4);
 T(3, 'ERROR', FROM_BOTH, FLAG.FATAL, 2 + strMax(L.MAX_ERROR_TEXT));
 T(4, 'PING', FROM_BOTH, 0, 8);
 T(5, 'PONG', FROM_BOTH, 0, 8);
@@ -256,7 +265,7 @@ T(18, 'PICK', FROM_CLIENT, 0, 4);
 T(19, 'PICK_RESULT', FROM_SERVER, 0, 24);
 T(20, 'SNAPSHOT', FROM_CLIENT, 0, 2);
 T(21, 'GET_STATS', FROM_CLIENT, 0, 1);
-T(22, 'STATS', FROM_SERVER, 0, 64 + 44); /* + the load section */
+T(22, 'STATS', FROM_SERVER, 0, 64 + 44 + 9); /* + load and TLS sections */
 T(23, 'SESSION_DELETE', FROM_CLIENT, 0, strMax(L.MAX_NAME));
 T(24, 'UNDO', FROM_CLIENT, 0, 0);
 T(25, 'REDO', FROM_CLIENT, 0, 0);
@@ -701,8 +710,9 @@ function decFrame(d, flags, m) {
 
 const STATS_FLOATS = ['render_ms_last', 'render_ms_avg', 'encode_ms_last',
 	'encode_ms_avg', 'edit_ms_avg', 'fps'];
-/* STATS's optional load section (PROTOCOL.md 7.18). */
+/* STATS's optional load and TLS sections (PROTOCOL.md 7.18). */
 const STATS_LOAD_BYTES = 44;
+const STATS_TLS_BYTES = 9;
 const LOAD_F32 = ['loop_turn_max_ms', 'loop_request_max_ms'];
 const LOAD_U32 = ['render_workers', 'jobs_queued', 'jobs_running'];
 const LOAD_U64 = ['view_bytes', 'view_cap', 'session_render_us'];
@@ -755,6 +765,11 @@ function decBody(d, m) {
 		}
 		m.client_name = d.str('client_name', 0, L.MAX_NAME);
 		m.token = d.str('token', 0, L.MAX_TOKEN);
+		/* features: absent in an earlier client's HELLO; bits this
+		 * text does not name are a later client's, not an error. */
+		if (d.left()) {
+			m.features = d.u32('features');
+		}
 		break;
 	}
 	case MSG.WELCOME:
@@ -769,6 +784,14 @@ function decBody(d, m) {
 		m.max_members = d.u16range('max_members', 1, L.MAX_MEMBERS);
 		m.max_edit_ops = d.u16range('max_edit_ops', 1, L.MAX_EDIT_OPS);
 		m.server_id = d.str('server_id', 0, L.MAX_NAME);
+		/* Granted features: only when the HELLO announced some. */
+		if (d.left()) {
+			m.features = d.u32('features');
+			if (m.features & ~FEATURE.ALL) {
+				d.fail('EPROTO_FLAGS', `features ${m.features} ` +
+					'has undefined bits');
+			}
+		}
 		break;
 	case MSG.ERROR:
 		m.code = d.u16range('code', 1, 0xffff);
@@ -790,7 +813,8 @@ function decBody(d, m) {
 			if (m.parts === 0) {
 				d.fail('ERANGE', 'parts 0 (leave it out)');
 			}
-			if (!(m.parts & STATS_PARTS.LOAD)) {
+			if ((m.parts & STATS_PARTS.RESET) &&
+			    !(m.parts & STATS_PARTS.LOAD)) {
 				d.fail('ERANGE', 'parts RESET without LOAD');
 			}
 		}
@@ -958,24 +982,33 @@ function decBody(d, m) {
 		for (const k of STATS_FLOATS) {
 			m[k] = d.f32nonneg(k);
 		}
-		/* The load section answers a GET_STATS that asked for it:
-		 * exactly 44 more bytes, or none. */
-		if (d.left() === 0) {
-			break;
-		}
-		if (d.left() !== STATS_LOAD_BYTES) {
+		/* The load and TLS sections answer a GET_STATS that asked
+		 * for them: the length tells which (0, 44, 9 or 53 more). */
+		if (![0, STATS_LOAD_BYTES, STATS_TLS_BYTES,
+			STATS_LOAD_BYTES + STATS_TLS_BYTES].includes(d.left())) {
 			d.fail('EPROTO_TRAILING',
 				`${d.left()} bytes after the last field`);
 		}
-		m.has_load = true;
-		for (const k of LOAD_F32) {
-			m[k] = d.f32nonneg(k);
+		if (d.left() >= STATS_LOAD_BYTES) {
+			m.has_load = true;
+			for (const k of LOAD_F32) {
+				m[k] = d.f32nonneg(k);
+			}
+			for (const k of LOAD_U32) {
+				m[k] = d.u32(k);
+			}
+			for (const k of LOAD_U64) {
+				m[k] = d.u64(k);
+			}
 		}
-		for (const k of LOAD_U32) {
-			m[k] = d.u32(k);
-		}
-		for (const k of LOAD_U64) {
-			m[k] = d.u64(k);
+		if (d.left() === STATS_TLS_BYTES) {
+			m.has_tls = true;
+			m.tls_not_after_ms = d.u64('tls_not_after_ms');
+			m.tls_expiring = d.u8('tls_expiring');
+			if (m.tls_expiring > 1) {
+				d.fail('ERANGE', `tls_expiring ${m.tls_expiring} ` +
+					'is not 0 or 1');
+			}
 		}
 		break;
 	default:
@@ -1405,6 +1438,9 @@ function encBody(w, m) {
 		w.u32('max_frame_bytes', m.max_frame_bytes);
 		w.str('client_name', m.client_name);
 		w.str('token', m.token);
+		if (m.features !== undefined) {
+			w.u32('features', m.features);
+		}
 		break;
 	case MSG.WELCOME:
 		w.u16('version', m.version);
@@ -1416,6 +1452,9 @@ function encBody(w, m) {
 		w.u16('max_members', m.max_members);
 		w.u16('max_edit_ops', m.max_edit_ops);
 		w.str('server_id', m.server_id);
+		if (m.features !== undefined) {
+			w.u32('features', m.features);
+		}
 		break;
 	case MSG.ERROR:
 		w.u16('code', m.code);
@@ -1578,6 +1617,10 @@ function encBody(w, m) {
 			for (const k of LOAD_U64) {
 				w.u64(k, m[k]);
 			}
+		}
+		if (m.has_tls) {
+			w.u64('tls_not_after_ms', m.tls_not_after_ms);
+			w.u8('tls_expiring', m.tls_expiring);
 		}
 		break;
 	default:

@@ -65,8 +65,8 @@ def strmax(n):
 
 
 TYPE_MAX = {
-    "HELLO": 2 + 2 + 1 + 4 + strmax(MAX_NAME) + strmax(MAX_TOKEN),
-    "WELCOME": 2 + 4 * 4 + 2 * 3 + strmax(MAX_NAME),
+    "HELLO": 2 + 2 + 1 + 4 + strmax(MAX_NAME) + strmax(MAX_TOKEN) + 4,
+    "WELCOME": 2 + 4 * 4 + 2 * 3 + strmax(MAX_NAME) + 4,
     "ERROR": 2 + strmax(MAX_ERROR_TEXT),
     "PING": 8, "PONG": 8, "OK": 0,
     "SESSION_CREATE": 1 + strmax(MAX_NAME),
@@ -77,7 +77,7 @@ TYPE_MAX = {
     "SCENE_LOAD": MAX_PAYLOAD, "SCENE_STATE": MAX_PAYLOAD,
     "EDIT": MAX_PAYLOAD, "EDIT_APPLIED": MAX_PAYLOAD,
     "CAMERA": 40, "VIEW": 8, "FRAME": MAX_PAYLOAD, "PICK": 4,
-    "PICK_RESULT": 24, "SNAPSHOT": 2, "GET_STATS": 1, "STATS": 64 + 44,
+    "PICK_RESULT": 24, "SNAPSHOT": 2, "GET_STATS": 1, "STATS": 64 + 44 + 9,
     "SESSION_DELETE": strmax(MAX_NAME), "UNDO": 0, "REDO": 0,
     "SESSION_LIST": 0,
     "SESSIONS": 2 + MAX_SESSIONS_LISTED * (strmax(MAX_NAME) + 2 + 4 + 8 + 8 + 1),
@@ -200,14 +200,18 @@ def deep_scene(depth):
 def w_hello(f):
     return (u16(f["version_min"]) + u16(f["version_max"]) + u8(f["encodings"])
             + u32(f["max_frame_bytes"]) + sstr(f["client_name"])
-            + sstr(f["token"]))
+            + sstr(f["token"])
+            # features: absent in an earlier client's HELLO (section 4).
+            + (u32(f["features"]) if "features" in f else b""))
 
 
 def w_welcome(f):
     return (u16(f["version"]) + u32(f["connection_id"]) + u32(f["max_payload"])
             + u32(f["max_frame_bytes"]) + u32(f["max_nodes"])
             + u16(f["max_dim"]) + u16(f["max_members"])
-            + u16(f["max_edit_ops"]) + sstr(f["server_id"]))
+            + u16(f["max_edit_ops"]) + sstr(f["server_id"])
+            # Granted features: only when the HELLO announced some.
+            + (u32(f["features"]) if "features" in f else b""))
 
 
 def w_error(f):
@@ -366,6 +370,9 @@ def w_stats(f):
         b += b"".join(f32(f[k]) for k in LOAD_F32)
         b += b"".join(u32(f[k]) for k in LOAD_U32)
         b += b"".join(u64(int(f[k])) for k in LOAD_U64)
+    # The TLS section likewise, after the load section when both.
+    if f.get("has_tls"):
+        b += u64(int(f["tls_not_after_ms"])) + u8(f["tls_expiring"])
     return b
 
 
@@ -472,8 +479,16 @@ def gen_hello():
     t = Table("HELLO")
     base = dict(version_min=1, version_max=1, encodings=7,
                 max_frame_bytes=8 * 1024 * 1024, client_name="viewer",
-                token="s3cret")
-    p = t.ok("viewer, all encodings", base, seq=1)
+                token="s3cret", features=0x0f)
+    p = t.ok("viewer, all encodings, every feature of this text", base,
+             seq=1)
+    old = dict(base)
+    del old["features"]
+    t.ok("an earlier client's HELLO: no features field", old, seq=1)
+    t.ok("features a later text adds (unknown bits are no error)",
+         dict(base, features=0xffffffff), seq=2)
+    t.ok("features 0: announced, none of them", dict(base, features=0),
+         seq=3)
     t.ok("no encodings, no name, no token, server's frame limit",
          dict(base, encodings=0, max_frame_bytes=0, client_name="",
               token=""), seq=1)
@@ -483,6 +498,8 @@ def gen_hello():
               client_name=pad64("Zoë's 🌐 viewer "),
               token="t" * MAX_TOKEN), seq=7)
     t.common(p)
+    t.badp("features cut short (3 bytes)", w_hello(old) + b"\x0f\x00\x00",
+           "EPROTO_TRUNCATED")
     hdr = u16(1) + u16(1) + u8(7) + u32(0)
     t.badp("version_min 0", u16(0) + u16(1) + u8(7) + u32(0) + sstr("")
            + sstr(""), "ERANGE")
@@ -519,8 +536,12 @@ def gen_welcome():
     base = dict(version=1, connection_id=17, max_payload=MAX_PAYLOAD,
                 max_frame_bytes=8 * 1024 * 1024, max_nodes=4194303,
                 max_dim=8192, max_members=64, max_edit_ops=1024,
-                server_id="blobcastd@render-01")
-    p = t.ok("default limits", base)
+                server_id="blobcastd@render-01", features=0x0f)
+    p = t.ok("default limits, every feature granted", base)
+    old = dict(base)
+    del old["features"]
+    t.ok("answer to an earlier client's HELLO: no features field", old)
+    t.ok("answer to a HELLO that announced none", dict(base, features=0))
     t.ok("smallest limits", dict(base, max_payload=HELLO_MAX_PAYLOAD,
                                  max_frame_bytes=MIN_FRAME_BYTES,
                                  max_nodes=1, max_dim=1, max_members=1,
@@ -540,6 +561,10 @@ def gen_welcome():
     t.badp("max_dim 8193", wl(max_dim=8193), "ERANGE")
     t.badp("max_members 65", wl(max_members=65), "ERANGE")
     t.badp("max_edit_ops 0", wl(max_edit_ops=0), "ERANGE")
+    t.badp("a feature this text does not define", wl(features=0x10),
+           "EPROTO_FLAGS")
+    t.badp("features cut short (2 bytes)", w_welcome(old) + b"\x0f\x00",
+           "EPROTO_TRUNCATED")
     t.bad("refused by a server reader", frame("WELCOME", p),
           "EPROTO_TYPE", reader=SERVER)
     t.dump("welcome.json")
@@ -1284,6 +1309,16 @@ def gen_stats():
            + q[68:], "ENONFINITE")
     t.badp("load section, negative request time", q[:68] + f32(-1.0)
            + q[72:], "ERANGE")
+    tls = dict(base, has_tls=True, tls_not_after_ms="1796083200000",
+               tls_expiring=0)
+    r = t.ok("with the TLS section", tls, seq=63)
+    t.ok("with both sections, the certificate expiring",
+         dict(load, has_tls=True, tls_not_after_ms="1796083200000",
+              tls_expiring=1), seq=64)
+    t.ok("TLS section of a daemon without TLS",
+         dict(tls, tls_not_after_ms="0"), seq=65)
+    t.badp("TLS section, tls_expiring 2", r[:-1] + u8(2), "ERANGE")
+    t.badp("TLS section one byte short", r[:-1], "EPROTO_TRAILING")
     t.dump("stats.json")
 
 
@@ -1292,11 +1327,14 @@ def gen_get_stats():
     t.ok("empty", dict(parts=0), seq=12)
     t.ok("load", dict(parts=1), seq=13)
     p = t.ok("load and reset", dict(parts=3), seq=14)
+    t.ok("TLS", dict(parts=4), seq=15)
+    t.ok("load, reset and TLS", dict(parts=7), seq=16)
     # parts is an optional byte, so Table.common's shortened and
     # lengthened payloads are written out here.
     t.badp("parts 0", u8(0), "ERANGE")
     t.badp("reset without load", u8(2), "ERANGE")
-    t.badp("parts bit 2", u8(5), "EPROTO_FLAGS")
+    t.badp("TLS and reset without load", u8(6), "ERANGE")
+    t.badp("parts bit 3", u8(9), "EPROTO_FLAGS")
     t.badp("parts 0xff", u8(0xff), "EPROTO_FLAGS")
     t.badp("one trailing byte", p + b"\x00", "EPROTO_LENGTH")
     t.bad("length = type maximum + 1", header("GET_STATS", 2),
@@ -1468,6 +1506,106 @@ def gen_scene():
     write_json("scene.json", {"type": None, "valid": valid, "invalid": inv})
 
 
+# ---- Transcripts of earlier clients (section 4.1) -----------------------------
+
+
+def gen_earlier():
+    """Byte transcripts of clients of the first text of version 1
+    (2026-11-22): every message such a client sends, with the answers it
+    waits for. A server must serve them; while replaying, every message the
+    server sends must be one that text defines (types 1..22, its flags,
+    STATS of 64 bytes, scenes of primitive kinds 1..16 and binary
+    operators only). These bytes follow that text's diagrams; its HELLO
+    has no features field."""
+    out = []
+
+    def script(name, about):
+        steps = []
+        out.append({"name": name, "about": about, "steps": steps})
+        seq = [0]
+
+        def send(mtype, payload, flags=0):
+            seq[0] += 1
+            steps.append({"send": frame(mtype, payload, flags=flags,
+                                        seq=seq[0]).hex(), "type": mtype,
+                          "seq": seq[0]})
+            return seq[0]
+
+        def expect(mtype, **kw):
+            e = {"expect": mtype}
+            e.update(kw)
+            steps.append(e)
+        return send, expect
+
+    hello = dict(version_min=1, version_max=1, encodings=7,
+                 max_frame_bytes=0, token="")
+    cam_a = [0.0, 1.0, 6.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 45.0]
+    cam_b = [1.0, 1.0, 6.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 45.0]
+    send, expect = script(
+        "editor", "creates a session, loads a scene, views it with "
+        "downscale 4 through a drag, edits (SET, INSERT, REMOVE, an "
+        "unknown node), picks, takes a snapshot and its figures, leaves")
+    q = send("HELLO", w_hello(dict(hello, client_name="first-text editor")))
+    expect("WELCOME", seq=q)
+    send("SESSION_CREATE", u8(1) + sstr("first-text"))
+    expect("SESSION_INFO")
+    expect("SCENE_STATE")
+    q = send("SCENE_LOAD", blob(SCENE_SMALL))
+    expect("SCENE_STATE", author_seq=q)
+    send("VIEW", w_view(dict(width=96, height=64, encoding=2,
+                             quality_interactive=70, quality_still=90,
+                             downscale=4)))
+    expect("FRAME", still=True)
+    q = send("CAMERA", b"".join(f32(v) for v in cam_b), flags=1)
+    expect("FRAME", camera_seq=q)
+    q = send("CAMERA", b"".join(f32(v) for v in cam_a))
+    expect("FRAME", camera_seq=q, still=True)
+    q = send("EDIT", w_ops([{"kind": 1, "node": 2, "fields": [
+        {"field": 1, "values": [-0.5, 0.25, 0.0]}]}]))
+    expect("EDIT_APPLIED", author_seq=q)
+    q = send("EDIT", w_ops([{"kind": 2, "parent": 1, "position": 2,
+                             "subtree": scene([scene_prim(
+                                 1, 10, [0.5], translate=(0, 0.8, 0))]
+                             ).hex()}]))
+    expect("EDIT_APPLIED", author_seq=q)
+    expect("FRAME", still=True)
+    q = send("EDIT", w_ops([{"kind": 3, "node": 10}]))
+    expect("EDIT_APPLIED", author_seq=q)
+    q = send("EDIT", w_ops([{"kind": 1, "node": 99, "fields": [
+        {"field": 1, "values": [0.0, 0.0, 0.0]}]}]))
+    expect("ERROR", seq=q, code="ENONODE")
+    q = send("PICK", u16(48) + u16(32))
+    expect("PICK_RESULT", seq=q)
+    q = send("SNAPSHOT", u8(2))
+    expect("FRAME", seq=q, snapshot=True)
+    q = send("GET_STATS", b"")
+    expect("STATS", seq=q)
+    q = send("PING", u64(7))
+    expect("PONG", seq=q)
+    q = send("SESSION_LEAVE", b"")
+    expect("OK", seq=q)
+
+    send, expect = script(
+        "viewer", "joins that session as a viewer, is refused an edit, "
+        "watches and leaves")
+    q = send("HELLO", w_hello(dict(hello, client_name="first-text viewer")))
+    expect("WELCOME", seq=q)
+    send("SESSION_JOIN", u8(2) + sstr("first-text"))
+    expect("SESSION_INFO")
+    expect("SCENE_STATE")
+    send("VIEW", w_view(dict(width=64, height=48, encoding=1,
+                             quality_interactive=60, quality_still=85,
+                             downscale=2)))
+    expect("FRAME", still=True)
+    q = send("EDIT", w_ops([{"kind": 3, "node": 3}]))
+    expect("ERROR", seq=q, code="EPERM")
+    q = send("SESSION_LEAVE", b"")
+    expect("OK", seq=q)
+    os.makedirs(os.path.join(HERE, "earlier"), exist_ok=True)
+    write_json(os.path.join("earlier", "first_text.json"),
+               {"text": "version 1 as of 2026-11-22", "transcripts": out})
+
+
 def main():
     gen_hello()
     gen_welcome()
@@ -1504,6 +1642,7 @@ def main():
     gen_session_camera_set()
     gen_framing()
     gen_scene()
+    gen_earlier()
 
 
 if __name__ == "__main__":

@@ -368,12 +368,13 @@ static void sample(enum bc_msg_type t, struct bc_msg *m)
 	m->seq = 1000u + (uint32_t)t;
 	switch (t) {
 	case BC_MSG_HELLO:
-		m->hello = (struct bc_msg_hello){1,        2,        5,
-		                                 1u << 20, S("cli"), S("tok")};
+		m->hello = (struct bc_msg_hello){
+		    1, 2, 5, 1u << 20, S("cli"), S("tok"), true, 0x8000000fu};
 		break;
 	case BC_MSG_WELCOME:
 		m->welcome = (struct bc_msg_welcome){
-		    1, 77, 1u << 24, 1u << 20, 1000, 4096, 8, 64, S("srv")};
+		    1, 77, 1u << 24, 1u << 20, 1000, 4096,
+		    8, 64, S("srv"), true,     0x0fu};
 		break;
 	case BC_MSG_ERROR:
 		m->flags = BC_PROTO_FLAG_FATAL;
@@ -458,7 +459,9 @@ static void sample(enum bc_msg_type t, struct bc_msg *m)
 		    7.0f,  8.0f,
 		    9.0f,  10.0f,
 		    11.0f, 12.0f,
-		    true,  {1.5f, 2.5f, 2u, 3u, 4u, 5u, 6u, 7u}};
+		    true,  {1.5f, 2.5f, 2u, 3u, 4u, 5u, 6u, 7u},
+		    true,  1764748800000u,
+		    1};
 		break;
 	case BC_MSG_SESSION_DELETE:
 		m->session_delete.name = S("old-review");

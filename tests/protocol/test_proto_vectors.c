@@ -171,6 +171,8 @@ static void build(enum bc_msg_type type, const json_t *f, struct bc_msg *m)
 		m->hello.max_frame_bytes = (uint32_t)jint(f, "max_frame_bytes");
 		m->hello.client_name = jstr(f, "client_name");
 		m->hello.token = jstr(f, "token");
+		m->hello.has_features = json_object_get(f, "features") != NULL;
+		m->hello.features = (uint32_t)jint(f, "features");
 		break;
 	case BC_MSG_WELCOME:
 		m->welcome.version = (uint16_t)jint(f, "version");
@@ -183,6 +185,9 @@ static void build(enum bc_msg_type type, const json_t *f, struct bc_msg *m)
 		m->welcome.max_members = (uint16_t)jint(f, "max_members");
 		m->welcome.max_edit_ops = (uint16_t)jint(f, "max_edit_ops");
 		m->welcome.server_id = jstr(f, "server_id");
+		m->welcome.has_features =
+		    json_object_get(f, "features") != NULL;
+		m->welcome.features = (uint32_t)jint(f, "features");
 		break;
 	case BC_MSG_ERROR:
 		m->error.code = (uint16_t)jint(f, "code");
@@ -365,6 +370,11 @@ static void build(enum bc_msg_type type, const json_t *f, struct bc_msg *m)
 			l->view_cap = jint(f, "view_cap");
 			l->session_render_us = jint(f, "session_render_us");
 		}
+		s->has_tls = json_is_true(json_object_get(f, "has_tls"));
+		if (s->has_tls) {
+			s->tls_not_after_ms = jint(f, "tls_not_after_ms");
+			s->tls_expiring = (uint8_t)jint(f, "tls_expiring");
+		}
 		break;
 	}
 	case BC_MSG_GET_STATS:
@@ -439,7 +449,9 @@ static int msg_eq(const struct bc_msg *a, const struct bc_msg *b)
 		       a->hello.encodings == b->hello.encodings &&
 		       a->hello.max_frame_bytes == b->hello.max_frame_bytes &&
 		       str_eq(a->hello.client_name, b->hello.client_name) &&
-		       str_eq(a->hello.token, b->hello.token);
+		       str_eq(a->hello.token, b->hello.token) &&
+		       a->hello.has_features == b->hello.has_features &&
+		       a->hello.features == b->hello.features;
 	case BC_MSG_WELCOME:
 		return a->welcome.version == b->welcome.version &&
 		       a->welcome.connection_id == b->welcome.connection_id &&
@@ -450,7 +462,9 @@ static int msg_eq(const struct bc_msg *a, const struct bc_msg *b)
 		       a->welcome.max_dim == b->welcome.max_dim &&
 		       a->welcome.max_members == b->welcome.max_members &&
 		       a->welcome.max_edit_ops == b->welcome.max_edit_ops &&
-		       str_eq(a->welcome.server_id, b->welcome.server_id);
+		       str_eq(a->welcome.server_id, b->welcome.server_id) &&
+		       a->welcome.has_features == b->welcome.has_features &&
+		       a->welcome.features == b->welcome.features;
 	case BC_MSG_ERROR:
 		return a->error.code == b->error.code &&
 		       str_eq(a->error.text, b->error.text);

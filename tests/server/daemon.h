@@ -249,8 +249,12 @@ static inline int conn_expect(struct conn *c, enum bc_msg_type type,
 	}
 }
 
-/* HELLO listing the encodings in mask (bit e - 1: encoding e). */
-static inline int conn_hello_enc(struct conn *c, const char *name, uint8_t mask)
+/* HELLO listing the encodings in mask (bit e - 1: encoding e) and, when
+ * announce, the features (PROTOCOL.md 4); without, an earlier client's
+ * HELLO. The WELCOME must carry the features field exactly when it was
+ * announced. */
+static inline int conn_hello_as(struct conn *c, const char *name, uint8_t mask,
+                                bool announce, uint32_t features)
 {
 	struct bc_msg m = {.type = BC_MSG_HELLO};
 	m.hello.version_min = 1;
@@ -258,10 +262,23 @@ static inline int conn_hello_enc(struct conn *c, const char *name, uint8_t mask)
 	m.hello.encodings = mask;
 	m.hello.client_name.ptr = name;
 	m.hello.client_name.len = (uint32_t)strlen(name);
+	m.hello.has_features = announce;
+	m.hello.features = features;
 	if (!conn_send(c, &m)) {
 		return -1;
 	}
-	return conn_expect(c, BC_MSG_WELCOME, 5000) == 1 ? 0 : -1;
+	if (conn_expect(c, BC_MSG_WELCOME, 5000) != 1 ||
+	    c->m.welcome.has_features != announce ||
+	    c->m.welcome.features != (features & BC_PROTO_FEATURES_ALL)) {
+		return -1;
+	}
+	return 0;
+}
+
+/* HELLO of a client of this text: every feature announced. */
+static inline int conn_hello_enc(struct conn *c, const char *name, uint8_t mask)
+{
+	return conn_hello_as(c, name, mask, true, BC_PROTO_FEATURES_ALL);
 }
 
 static inline int conn_hello(struct conn *c, const char *name)

@@ -31,14 +31,23 @@ static bool same_camera(const struct bc_msg_camera *a,
 	return memcmp(a, b, sizeof(*a)) == 0;
 }
 
-/* Connects, says hello as name and joins (creating) session s. */
+/* Connects, says hello as name (announcing features when announce, else
+ * as an earlier client) and joins (creating) session s. */
+static void member_as(struct conn *c, const struct daemon *d, const char *name,
+                      const char *s, enum bc_proto_role role, bool create,
+                      bool announce, uint32_t features)
+{
+	REQUIRE(conn_open(c, d) == 0);
+	REQUIRE(conn_hello_as(c, name, BC_PROTO_ENCODINGS_ALL, announce,
+	                      features) == 0);
+	REQUIRE(conn_join(c, s, role, create) == 0);
+	REQUIRE(conn_expect(c, BC_MSG_SCENE_STATE, 5000) == 1);
+}
+
 static void member(struct conn *c, const struct daemon *d, const char *name,
                    const char *s, enum bc_proto_role role, bool create)
 {
-	REQUIRE(conn_open(c, d) == 0);
-	REQUIRE(conn_hello(c, name) == 0);
-	REQUIRE(conn_join(c, s, role, create) == 0);
-	REQUIRE(conn_expect(c, BC_MSG_SCENE_STATE, 5000) == 1);
+	member_as(c, d, name, s, role, create, true, BC_PROTO_FEATURES_ALL);
 }
 
 static uint32_t send_toggle(struct conn *c, enum bc_msg_type t, uint8_t on)
@@ -388,7 +397,7 @@ static void presenters_race_and_disconnect(void)
 static void refusals_and_old_clients(void)
 {
 	struct daemon d;
-	struct conn a, old, v, x;
+	struct conn a, old, np, v, x;
 	struct bc_msg m = {.type = BC_MSG_SESSION_CAMERA};
 	uint32_t seq;
 	/* PRESENT with on = 2: a decoding error (ERANGE), fatal. */
@@ -411,9 +420,17 @@ static void refusals_and_old_clients(void)
 	CHECK(x.m.flags & BC_PROTO_FLAG_FATAL);
 	conn_close(&x);
 
-	/* A member that never sent a presentation message hears nothing
-	 * of it, and gets a session camera change as SCENE_STATE. */
-	member(&old, &d, "old", "q", BC_PROTO_ROLE_VIEWER, false);
+	/* An earlier client (a HELLO without features) that never sent a
+	 * presentation message hears nothing of it, and gets a session
+	 * camera change as SCENE_STATE. */
+	member_as(&old, &d, "old", "q", BC_PROTO_ROLE_VIEWER, false, false, 0);
+	/* A client that announced features without PRESENT hears nothing
+	 * of types 30, 31 and 33 either, even after sending FOLLOW (for an
+	 * earlier client, sending one would announce them). */
+	member_as(&np, &d, "np", "q", BC_PROTO_ROLE_VIEWER, false, true,
+	          BC_PROTO_FEATURES_ALL & ~BC_PROTO_FEATURE_PRESENT);
+	seq = send_toggle(&np, BC_MSG_FOLLOW, 0);
+	CHECK_EQ_INT(await_answer(&np, seq, NULL), 0);
 	member(&a, &d, "alice", "q", BC_PROTO_ROLE_EDITOR, false);
 	member(&v, &d, "vic", "q", BC_PROTO_ROLE_VIEWER, false);
 	seq = send_toggle(&a, BC_MSG_PRESENT, 1);
@@ -446,6 +463,10 @@ static void refusals_and_old_clients(void)
 	while (conn_recv(&old, 300) == 1) {
 		CHECK(old.m.type < BC_MSG_PRESENTER);
 	}
+	while (conn_recv(&np, 300) == 1) {
+		CHECK(np.m.type < BC_MSG_PRESENTER);
+	}
+	conn_close(&np);
 	conn_close(&old);
 	conn_close(&a);
 	conn_close(&v);

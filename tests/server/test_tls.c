@@ -20,6 +20,7 @@
 #include <openssl/ssl.h>
 #include <sys/socket.h>
 #include <sys/time.h>
+#include <time.h>
 
 #include "blobcast/client.h"
 #include "blobcast/log.h"
@@ -162,6 +163,18 @@ static void join_edit_snapshot_over_tls(void)
 		fprintf(stderr, "  %s\n", ei.msg);
 	}
 	bc_client_image_finish(&img);
+	/* STATS's TLS section: the certificate (-days 2) ends in about two
+	 * days, so it is expiring (under 14). */
+	{
+		struct bc_msg_stats st;
+		uint64_t now_ms = (uint64_t)time(NULL) * 1000u;
+		CHECK_EQ_INT(
+		    bc_client_stats_parts(c, BC_PROTO_STATS_TLS, &st, &ei), 0);
+		CHECK(st.has_tls && !st.has_load);
+		CHECK(st.tls_not_after_ms > now_ms + 86400000u &&
+		      st.tls_not_after_ms < now_ms + 3u * 86400000u);
+		CHECK_EQ_INT(st.tls_expiring, 1);
+	}
 	bc_client_destroy(c);
 	CHECK(bc_test_file_has(tls_log, "TLS (TLSv1.3"));
 

@@ -135,7 +135,21 @@ enum bc_msg_type {
  * (with LOAD only) then starts its maxima anew. */
 #define BC_PROTO_STATS_LOAD 0x01u
 #define BC_PROTO_STATS_RESET 0x02u
-#define BC_PROTO_STATS_PARTS_ALL 0x03u
+/* TLS asks for the TLS section: the certificate's end of validity. */
+#define BC_PROTO_STATS_TLS 0x04u
+#define BC_PROTO_STATS_PARTS_ALL 0x07u
+
+/* Features (PROTOCOL.md 4): what version 1 gained after its first text
+ * (2026-11-22), each sent by a server only to a client that announced it
+ * in HELLO and saw it granted in WELCOME. */
+#define BC_PROTO_FEATURE_LEVELS 0x01u  /* FRAME's LEVEL (coarse levels) */
+#define BC_PROTO_FEATURE_UNDO 0x02u    /* EDIT_APPLIED's UNDO and REDO */
+#define BC_PROTO_FEATURE_PRESENT 0x04u /* types 30, 31 and 33 */
+#define BC_PROTO_FEATURE_KINDS 0x08u   /* prim kinds 17..32, unary nodes */
+#define BC_PROTO_FEATURES_ALL 0x0fu
+/* The scene kinds of the first text: primitives 1..16, binary operators
+ * only. A scene beyond them needs BC_PROTO_FEATURE_KINDS. */
+#define BC_PROTO_PRIM_KIND_MAX_FIRST 16u
 
 /* The number of plane rectangles (0..2) a FRAME with these flags carries
  * after its colour rectangle. */
@@ -243,6 +257,11 @@ struct bc_msg_hello {
 	uint32_t max_frame_bytes; /* largest FRAME payload; 0 = server's */
 	struct bc_proto_str client_name; /* 0..BC_PROTO_MAX_NAME bytes */
 	struct bc_proto_str token;       /* 0..BC_PROTO_MAX_TOKEN bytes */
+	/* The features field (BC_PROTO_FEATURE_*; unknown bits allowed, a
+	 * server ignores them): sent when has_features; a HELLO without it
+	 * is an earlier client's. */
+	bool has_features;
+	uint32_t features;
 };
 
 struct bc_msg_welcome {
@@ -255,6 +274,10 @@ struct bc_msg_welcome {
 	uint16_t max_members;          /* clients per session */
 	uint16_t max_edit_ops;         /* operations per EDIT */
 	struct bc_proto_str server_id; /* 0..BC_PROTO_MAX_NAME bytes */
+	/* The features granted, present (has_features) only when the HELLO
+	 * had its features field: those announced that the server uses. */
+	bool has_features;
+	uint32_t features;
 };
 
 struct bc_msg_error {
@@ -443,6 +466,12 @@ struct bc_msg_stats {
 	float fps;         /* frames per second sent to this client */
 	bool has_load;     /* the load section follows (asked by LOAD) */
 	struct bc_proto_load load;
+	bool has_tls; /* the TLS section follows (asked by TLS) */
+	/* The end of the server certificate's validity, Unix ms (0: the
+	 * server listens without TLS), and whether fewer than 14 days are
+	 * left. */
+	uint64_t tls_not_after_ms;
+	uint8_t tls_expiring;
 };
 
 /* PRESENT and FOLLOW: on 1 starts presenting (following), 0 stops; other
@@ -641,6 +670,10 @@ struct bc_proto_scene_info {
 	uint32_t nodes, prims, ops;
 	uint32_t depth;    /* most nodes on a path from the root (root = 1) */
 	uint32_t zero_ids; /* nodes with id 0 (the decoder names them) */
+	/* What a receiver must have announced to be sent these bytes:
+	 * BC_PROTO_FEATURE_KINDS when a node is of a kind added after the
+	 * first text (PROTOCOL.md 4). */
+	uint32_t features;
 };
 
 /* Checks scene bytes as PROTOCOL.md describes them, with the checks and the
@@ -691,6 +724,13 @@ enum bc_proto_stage {
 	BC_PROTO_STAGE_SESSION,   /* member of a session, with a role */
 	BC_PROTO_STAGE_COUNT
 };
+
+/* The features (BC_PROTO_FEATURE_*) a receiver must have announced to be
+ * sent m (PROTOCOL.md 4): LEVELS for a FRAME above level 0, UNDO for an
+ * EDIT_APPLIED with UNDO or REDO, PRESENT for types 30, 31 and 33, KINDS
+ * for a scene or an edit's subtree with a kind added after the first text
+ * (scanned: linear in the scene's bytes) or a SET of a unary OP_KIND. */
+BC_API uint32_t bc_proto_msg_features(const struct bc_msg *m);
 
 /* Whether a client in stage (and, in a session, role) may send type.
  * Returns 0, BC_EPROTO_TYPE (not a client message), BC_ESTATE (not in this

@@ -134,6 +134,10 @@ struct bc_client_info {
 	uint32_t max_nodes;
 	uint16_t max_dim, max_members, max_edit_ops;
 	char server_id[BC_PROTO_MAX_NAME + 1];
+	/* Features the server granted of those announced (every one this
+	 * library knows, BC_PROTO_FEATURES_ALL; PROTOCOL.md 4). A server
+	 * that predates them grants none and sends no field. */
+	uint32_t features;
 	/* The session, once joined (zero before and after leaving). */
 	uint32_t session_id, member_id;
 	enum bc_proto_role role;
@@ -332,7 +336,8 @@ BC_API int bc_client_session_camera(struct bc_client *c,
 BC_API int bc_client_stats(struct bc_client *c, struct bc_msg_stats *out,
                            struct bc_errinfo *ei);
 /* The same asking for parts (BC_PROTO_STATS_LOAD, optionally with
- * BC_PROTO_STATS_RESET): out->has_load tells that the load section came. */
+ * BC_PROTO_STATS_RESET; BC_PROTO_STATS_TLS): out->has_load and
+ * out->has_tls tell which sections came. */
 BC_API int bc_client_stats_parts(struct bc_client *c, uint8_t parts,
                                  struct bc_msg_stats *out,
                                  struct bc_errinfo *ei);
