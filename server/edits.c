@@ -409,9 +409,24 @@ static void prepare(struct bc_task *t)
 		    bc_errinfo_set(ei, BC_ENOMEM, "cannot encode the scene");
 		return;
 	}
-	/* On disk before anyone hears of it: the load is acknowledged only
-	 * once it is safe. */
-	l->rc = bc_store_snapshot(t->s->store, l->tree, &l->cam, l->order, ei);
+	/* On disk before anyone hears of it: journaled, so that no state is
+	 * held by one snapshot alone (a damaged snapshot is recovered from
+	 * the one before it and the journals), then a snapshot, which starts
+	 * the next journal. A scene no snapshot could hold is refused before
+	 * either. Once journaled the load is safe: a failed snapshot is
+	 * tried again by the periodic ones. */
+	if ((l->rc = bc_store_scene_depth_ok(l->tree, ei)) ||
+	    (l->rc = bc__journal_load(t->s->store, l->order, l->scene.ptr,
+	                              l->scene.len, ei))) {
+		return;
+	}
+	if (bc_store_snapshot(t->s->store, l->tree, &l->cam, l->order, ei)) {
+		bc_log(BC_LOG_WARN,
+		       "session %s: the load of edit %llu is journaled; its "
+		       "snapshot failed (%s)",
+		       t->s->name, (unsigned long long)l->order, ei->msg);
+		memset(ei, 0, sizeof(*ei));
+	}
 }
 
 static void load_free(struct load *l)

@@ -2,9 +2,9 @@
  * The edit journals of the data directory (see store.h for the layout):
  * appending a record (framed by a magic, length, order and CRC32, synced
  * before the edit is acknowledged), and replaying journal-N.bin on
- * restore -- resynchronising past damaged records, cutting a torn tail,
- * and replacing a damaged file by a clean one of the records that applied
- * while the damaged one is kept. Snapshots and session files are store.c's.
+ * restore without changing it -- resynchronising past damaged records and
+ * counting what could not be given back, finding a torn tail to cut.
+ * Snapshots, session files and what a restore decides are store.c's.
  */
 #include <errno.h>
 #include <fcntl.h>
@@ -118,107 +118,24 @@ static int resync(int fd, off_t off, off_t size, uint64_t after, uint8_t **buf,
 	return 0;
 }
 
-/* One record of the rebuilt journal: where it lies in the old file. */
-struct kept {
-	off_t off;
-	uint32_t len;
-};
-
-/* The records that applied, where they lie in the file being replayed. */
-struct kept_list {
-	struct kept *at;
-	size_t n, cap;
-};
-
-static int keep_record(struct kept_list *k, off_t off, uint32_t len)
-{
-	if (k->n == k->cap) {
-		size_t c = k->cap ? 2 * k->cap : 64;
-		struct kept *g = bc_reallocarray(k->at, c, sizeof(*k->at));
-		if (!g) {
-			return BC_ENOMEM;
-		}
-		k->at = g;
-		k->cap = c;
-	}
-	k->at[k->n].off = off;
-	k->at[k->n++].len = len;
-	return 0;
-}
-
-/* Puts a journal of the kept records of fd (file) in file's place, the
- * damaged file set aside as evidence; *rec and *cap are the caller's
- * buffer. Returns 0 or an error in ei. */
-static int rewrite_journal(struct bc_store_session *ss, int fd,
-                           const char *file, const struct kept_list *k,
-                           uint64_t skipped, uint8_t **rec, size_t *cap,
-                           struct bc_errinfo *ei)
-{
-	char tmp[PATH_LEN], aside[PATH_LEN];
-	int out_fd, rc = 0;
-	bc__store_fmt_path(tmp, "%s/journal-%llu.bin.tmp", ss->path,
-	                   (unsigned long long)ss->base);
-	out_fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-	if (out_fd < 0) {
-		return bc__store_sys_error(ei, "cannot create", tmp);
-	}
-	for (size_t i = 0; i < k->n && !rc; i++) {
-		size_t n = RECORD_HEADER + k->at[i].len;
-		if (n > *cap) {
-			uint8_t *g = bc_realloc(*rec, n);
-			if (!g) {
-				rc = bc_errinfo_set(ei, BC_ENOMEM,
-				                    "out of memory");
-				break;
-			}
-			*rec = g;
-			*cap = n;
-		}
-		if (!read_at(fd, *rec, n, k->at[i].off) ||
-		    write(out_fd, *rec, n) != (ssize_t)n) {
-			rc = bc__store_sys_error(ei, "cannot write", tmp);
-		}
-	}
-	if (!rc && fsync(out_fd) != 0) {
-		rc = bc__store_sys_error(ei, "cannot sync", tmp);
-	}
-	close(out_fd);
-	if (!rc && bc__store_set_aside(file, aside) != 0) {
-		rc = bc__store_sys_error(ei, "cannot set aside", file);
-	}
-	if (!rc && rename(tmp, file) != 0) {
-		rc = bc__store_sys_error(ei, "cannot rename", tmp);
-	}
-	if (rc) {
-		unlink(tmp);
-		return rc;
-	}
-	bc__store_sync_dir(ss->path);
-	bc_log(BC_LOG_ERROR,
-	       "session %s: journal %s: %llu damaged part(s) skipped, "
-	       "%llu records restored; the damaged file is kept as %s",
-	       ss->name, file, (unsigned long long)skipped,
-	       (unsigned long long)ss->records, aside);
-	return 0;
-}
-
 /* Applies the record of edit ord at off (len bytes in rec) through fn.
- * Returns 1 when it applied (kept in k), 0 when it did not (logged and
- * counted in *skipped), or BC_ENOMEM. */
+ * Returns 1 when it applied, 0 when it did not (logged and counted in
+ * ss->skipped: an acknowledged edit the restore cannot give back). */
 static int apply_record(struct bc_store_session *ss, const char *file,
                         bc_store_replay_fn fn, void *ud, uint64_t *order,
                         const uint8_t *rec, uint32_t len, uint64_t ord,
-                        off_t off, struct kept_list *k, uint64_t *skipped)
+                        off_t off)
 {
 	int r = fn(ud, ord, rec, len);
 	if (r) {
 		bc_log(BC_LOG_ERROR,
 		       "session %s: journal %s: record at bytes %lld..%lld "
-		       "(edit %llu) does not apply (%s): skipped",
+		       "(edit %llu) does not apply (%s)",
 		       ss->name, file, (long long)off,
 		       (long long)(off + RECORD_HEADER + len),
 		       (unsigned long long)ord, bc_strerror(r));
-		(*skipped)++;
+		ss->skipped++;
+		*order = ord; /* lost, and counted once */
 		return 0;
 	}
 	if (ord != *order + 1 && *order >= ss->base) {
@@ -227,22 +144,23 @@ static int apply_record(struct bc_store_session *ss, const char *file,
 		       "before byte %lld",
 		       ss->name, file, (unsigned long long)(*order + 1),
 		       (unsigned long long)(ord - 1), (long long)off);
+		ss->skipped += ord - *order - 1;
 	}
 	*order = ord;
 	ss->records++;
-	return keep_record(k, off, len) ? BC_ENOMEM : 1;
+	return 1;
 }
 
 /*
- * Replays journal-<base>.bin. Records are applied in file order while
- * their order numbers rise. A record that fails its checks is skipped and
- * the reader resynchronises on the next whole record; a record that does
- * not apply is skipped; both are logged with the file, the byte offsets
- * and the orders, since later edits then apply to a state that lacks them
- * (the best the journal still knows). Damage with nothing valid after it is
- * a torn tail (a crash mid-write) and is cut. When anything in the middle
- * was skipped, the file is kept as evidence (renamed *.damaged-TIME) and a
- * clean journal of the records that applied takes its place.
+ * Replays journal-<base>.bin without changing it. Records are applied in
+ * file order while their order numbers rise. A record that fails its
+ * checks is skipped and the reader resynchronises on the next whole
+ * record; a record that does not apply is skipped; both are logged with
+ * the file, the byte offsets and the orders, and counted in ss->skipped:
+ * the restore is then not whole, and the caller does not serve it
+ * (store.c). Damage with nothing valid after it is a torn tail (a crash
+ * mid-write, never acknowledged): where it starts goes to ss->tail_good,
+ * for the caller to cut once it knows the restore is whole.
  */
 int bc__store_replay(struct bc_store_session *ss, bc_store_replay_fn fn,
                      void *ud, uint64_t *order, struct bc_errinfo *ei)
@@ -250,14 +168,13 @@ int bc__store_replay(struct bc_store_session *ss, bc_store_replay_fn fn,
 	char file[PATH_LEN];
 	uint8_t *rec = NULL;
 	size_t cap = 0;
-	struct kept_list kept = {0};
 	off_t off = 0, size, good = 0;
-	uint64_t skipped = 0;
 	struct stat st;
 	int fd, r = 0, rc = 0;
 	bc__store_fmt_path(file, "%s/journal-%llu.bin", ss->path,
 	                   (unsigned long long)ss->base);
-	fd = open(file, O_RDWR | O_CLOEXEC);
+	ss->tail_good = -1;
+	fd = open(file, O_RDONLY | O_CLOEXEC);
 	if (fd < 0) {
 		return errno == ENOENT
 		           ? 0
@@ -276,11 +193,8 @@ int bc__store_replay(struct bc_store_session *ss, bc_store_replay_fn fn,
 		if (r == 0 && ord > *order) {
 			/* Whole and new: applied, or skipped when fn refuses
 			 * it; the next record follows it either way. */
-			r = apply_record(ss, file, fn, ud, order, rec, len, ord,
-			                 off, &kept, &skipped);
-			if (r < 0) {
-				break;
-			}
+			apply_record(ss, file, fn, ud, order, rec, len, ord,
+			             off);
 			off += (off_t)RECORD_HEADER + len;
 			good = off;
 			continue;
@@ -297,34 +211,77 @@ int bc__store_replay(struct bc_store_session *ss, bc_store_replay_fn fn,
 		if (next == size) {
 			break; /* nothing valid follows: a torn tail */
 		}
+		/* What it held shows as a gap in the order numbers. */
 		bc_log(BC_LOG_ERROR,
 		       "session %s: journal %s: bytes %lld..%lld are damaged "
-		       "or out of order: skipped",
+		       "or out of order",
 		       ss->name, file, (long long)off, (long long)next);
-		skipped++;
 		off = next;
 	}
 	if (r < 0) {
 		rc = bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
-	} else if (skipped) {
-		/* Keep the evidence; install the records that applied. */
-		rc = rewrite_journal(ss, fd, file, &kept, skipped, &rec, &cap,
-		                     ei);
 	} else if (good != size) {
-		bc_log(BC_LOG_WARN,
-		       "session %s: journal %s: cutting a torn tail at byte "
-		       "%lld (%lld bytes)",
-		       ss->name, file, (long long)good,
-		       (long long)(size - good));
-		if (ftruncate(fd, good) != 0 || fsync(fd) != 0) {
-			rc = bc__store_sys_error(ei, "cannot truncate", file);
-		}
+		ss->tail_good = good;
 	}
 out:
 	bc_free(rec);
-	bc_free(kept.at);
 	close(fd);
 	return rc;
+}
+
+uint64_t bc__store_journal_last(const struct bc_store_session *ss,
+                                uint64_t base)
+{
+	char file[PATH_LEN];
+	uint8_t *rec = NULL;
+	size_t cap = 0;
+	uint64_t last = base;
+	struct stat st;
+	off_t off = 0;
+	int fd;
+	bc__store_fmt_path(file, "%s/journal-%llu.bin", ss->path,
+	                   (unsigned long long)base);
+	if ((fd = open(file, O_RDONLY | O_CLOEXEC)) < 0) {
+		return base;
+	}
+	while (fstat(fd, &st) == 0 && off < st.st_size) {
+		uint32_t len;
+		uint64_t ord;
+		off_t next = st.st_size;
+		if (record_at(fd, off, st.st_size, &rec, &cap, &len, &ord) ==
+		    0) {
+			last = ord > last ? ord : last;
+			off += (off_t)RECORD_HEADER + len;
+		} else if (resync(fd, off + 1, st.st_size, 0, &rec, &cap,
+		                  &next) < 0 ||
+		           next == st.st_size) {
+			break;
+		} else {
+			off = next;
+		}
+	}
+	bc_free(rec);
+	close(fd);
+	return last;
+}
+
+/* Cuts the torn tail replay found in the journal it read last. */
+int bc__store_cut_tail(struct bc_store_session *ss, struct bc_errinfo *ei)
+{
+	char file[PATH_LEN];
+	if (ss->tail_good < 0) {
+		return 0;
+	}
+	bc__store_fmt_path(file, "%s/journal-%llu.bin", ss->path,
+	                   (unsigned long long)ss->base);
+	bc_log(BC_LOG_WARN,
+	       "session %s: journal %s: cutting a torn tail at byte %lld",
+	       ss->name, file, (long long)ss->tail_good);
+	if (truncate(file, ss->tail_good) != 0) {
+		return bc__store_sys_error(ei, "cannot truncate", file);
+	}
+	ss->tail_good = -1;
+	return 0;
 }
 
 int bc__store_open_journal(struct bc_store_session *ss, struct bc_errinfo *ei)

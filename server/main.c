@@ -54,9 +54,9 @@ static const struct bc_opt_name log_names[] = {
  * Strings point into argv; 0 and NULL mean "not given". */
 struct cli {
 	const char *listen, *unix_path, *data_dir, *config;
-	const char *tls_cert, *tls_key, *server_id;
+	const char *tls_cert, *tls_key, *server_id, *check;
 	int backend, gl_platform, simd, log;
-	bool allow_plaintext, tls_allow_expired, no_damage;
+	bool allow_plaintext, tls_allow_expired, no_damage, repair;
 	uint32_t frame_budget_ms, render_threads, view_cache_mib;
 };
 
@@ -164,6 +164,19 @@ struct cli {
 		     .dst = &(c)->server_id,                                   \
 		     .arg = "NAME",                                            \
 		     .help = "name sent to clients (default blobcastd)"},      \
+		    {.name = "check",                                          \
+		     .kind = BC_OPT_STRING,                                    \
+		     .dst = &(c)->check,                                       \
+		     .arg = "DIR",                                             \
+		     .help = "read every session of data directory\n"          \
+		             "DIR as a start would, print whether\n"           \
+		             "each is whole, and exit (0: all are)"},          \
+		    {.name = "repair",                                         \
+		     .kind = BC_OPT_FLAG,                                      \
+		     .dst = &(c)->repair,                                      \
+		     .help = "with --check: a session that is not\n"           \
+		             "whole is set aside (files kept) and\n"           \
+		             "goes on from the best state they give"},         \
 		    {.name = "log",                                            \
 		     .kind = BC_OPT_ENUM,                                      \
 		     .dst = &(c)->log,                                         \
@@ -725,6 +738,12 @@ int main(int argc, char **argv)
 		                     args.pos[0]);
 	}
 	bc_log_init((enum bc_log_level)cli.log);
+	if (cli.check) {
+		return bc_sessions_check(cli.check, cli.repair, stdout);
+	}
+	if (cli.repair) {
+		return bc_args_error(&args, "--repair goes with --check DIR");
+	}
 	dm.config_path = cli.config;
 	if (cli.config && load_config(&dm.cfg, cli.config, &ei)) {
 		fprintf(stderr, "blobcastd: %s\n", ei.msg);

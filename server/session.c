@@ -231,13 +231,60 @@ void bc__task_start(struct bc_session *s, struct bc_task *t)
 
 /* ---- loading ------------------------------------------------------------- */
 
-struct replay_ctx {
-	struct bc_tree **tree;
-	struct bc_camera *camera;
-};
+/* The first bytes of a journaled SCENE_LOAD: an op_count (65535) that no
+ * EDIT has, as the camera records' two zero bytes. */
+#define LOAD_RECORD_MAGIC 0xffu
+#define LOAD_RECORD_MAGIC_LEN 2u
 
-static int replay_record(void *ud, uint64_t order, const uint8_t *rec,
-                         size_t len)
+int bc__journal_load(struct bc_store_session *st, uint64_t order,
+                     const uint8_t *scene, size_t len, struct bc_errinfo *ei)
+{
+	uint8_t *rec = bc_malloc(len + LOAD_RECORD_MAGIC_LEN);
+	int rc;
+	if (!rec) {
+		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+	}
+	rec[0] = rec[1] = LOAD_RECORD_MAGIC;
+	memcpy(rec + LOAD_RECORD_MAGIC_LEN, scene, len);
+	rc = bc_store_append(st, order, rec, len + LOAD_RECORD_MAGIC_LEN, ei);
+	bc_free(rec);
+	return rc;
+}
+
+/* A journaled SCENE_LOAD: 1 when rec is one and it replaced the tree
+ * (and the camera, when it carries one), 0 when rec is no load record,
+ * else an error code. */
+static int replay_load(struct replay_ctx *ctx, const uint8_t *rec, size_t len)
+{
+	struct bc_tree *t;
+	struct bc_camera cam;
+	struct bc_errinfo ei = {0};
+	bool has_cam = false;
+	int rc;
+	if (len < LOAD_RECORD_MAGIC_LEN || rec[0] != LOAD_RECORD_MAGIC ||
+	    rec[1] != LOAD_RECORD_MAGIC) {
+		return 0;
+	}
+	if (!(t = bc_tree_create())) {
+		return BC_ENOMEM;
+	}
+	if ((rc = bc_scene_decode(rec + LOAD_RECORD_MAGIC_LEN,
+	                          len - LOAD_RECORD_MAGIC_LEN, t, &cam,
+	                          &has_cam, &ei))) {
+		bc_log(BC_LOG_ERROR, "journal replay: a scene load: %s",
+		       ei.msg);
+		bc_tree_destroy(t);
+		return rc;
+	}
+	bc_tree_destroy(*ctx->tree);
+	*ctx->tree = t;
+	if (has_cam) {
+		*ctx->camera = cam;
+	}
+	return 1;
+}
+
+int bc__replay_record(void *ud, uint64_t order, const uint8_t *rec, size_t len)
 {
 	struct replay_ctx *ctx = ud;
 	struct bc_proto_reader r;
@@ -246,8 +293,9 @@ static int replay_record(void *ud, uint64_t order, const uint8_t *rec,
 	struct bc_edit_batch b;
 	int rc;
 	(void)order;
-	/* A SESSION_CAMERA record (present.c) or an EDIT. */
-	if ((rc = bc__present_camera_record(rec, len, ctx->camera)) != 0) {
+	/* A SESSION_CAMERA record (present.c), a SCENE_LOAD or an EDIT. */
+	if ((rc = bc__present_camera_record(rec, len, ctx->camera)) != 0 ||
+	    (rc = replay_load(ctx, rec, len)) != 0) {
 		return rc < 0 ? rc : 0;
 	}
 	bc_proto_reader_init(&r, NULL);
@@ -290,7 +338,7 @@ static void load_run(struct bc_task *t)
 	}
 	l->rc = bc_store_session_open(l->store, s->name, &l->st, l->tree,
 	                              &l->cam, &l->order, &l->created,
-	                              replay_record, &ctx, &l->ei);
+	                              bc__replay_record, &ctx, &l->ei);
 	if (!l->rc && l->created) {
 		const char *json = bc_scene_default_json();
 		if (!(l->rc = bc_scene_parse_json(json, strlen(json), l->tree,

@@ -13,6 +13,7 @@
 #define BLOBCAST_SERVER_SESSIONS_H
 
 #include <stdbool.h>
+#include <stdio.h>
 #include <stdint.h>
 #include <uv.h>
 
@@ -85,6 +86,17 @@ void bc_sessions_save_all(struct bc_sessions *ss, uint32_t budget_ms);
 /* Frees everything once the loop has closed its handles (call, then run
  * the loop until it returns). Accepts NULL. */
 void bc_sessions_free(struct bc_sessions *ss);
+
+/* blobcastd --check DIR [--repair]: restores every session of data
+ * directory dir as a start would, changing nothing, and prints to out one
+ * line per session: whole (its last edit), or not whole (why, and how far
+ * its files can be read). With repair, a session that is not whole is
+ * set aside (its files kept under sessions/.damaged/) and goes on from
+ * the best state its files give, at the highest order number they named
+ * (the default scene when no snapshot loads). Returns 0 when every
+ * session is whole or repaired, 1 when one is not whole, 2 when the
+ * directory cannot be read (a running daemon holds it). */
+int bc_sessions_check(const char *dir, bool repair, FILE *out);
 
 /* The work layer's callback: a job is done (bc_work_opts.done). */
 void bc_sessions_job_done(void *ud, const struct bc_work_done *d);

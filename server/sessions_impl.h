@@ -247,5 +247,17 @@ void bc__present_session_gone(struct bc_session *s);
  * is a damaged camera record). */
 int bc__present_camera_record(const uint8_t *rec, size_t len,
                               struct bc_camera *cam);
+/* Restoring a session: a journal record applied to *tree and *camera
+ * (bc_store_replay_fn, ud a struct replay_ctx): an EDIT, a session camera
+ * or a SCENE_LOAD. */
+struct replay_ctx {
+	struct bc_tree **tree;
+	struct bc_camera *camera;
+};
+int bc__replay_record(void *ud, uint64_t order, const uint8_t *rec, size_t len);
+/* Journals a SCENE_LOAD (its scene bytes, camera included) as edit order:
+ * two 0xff bytes (an op_count no EDIT has) and the scene encoding. */
+int bc__journal_load(struct bc_store_session *st, uint64_t order,
+                     const uint8_t *scene, size_t len, struct bc_errinfo *ei);
 
 #endif

@@ -370,40 +370,180 @@ static size_t list_snapshots(const char *path, uint64_t *orders, size_t cap)
 }
 
 /* Moves the whole session directory to DIR/sessions/.damaged/NAME-TIME
- * (a name bc_store_list never lists), so that the session starts anew and
- * its files stay for inspection. */
-static void set_session_aside(struct bc_store *st, const char *name,
-                              const char *path)
+ * (a name bc_store_list never lists), keeping its files for inspection.
+ * 0, or -1 with errno set. */
+static int set_session_aside(struct bc_store *st, const char *name,
+                             const char *path, char *aside)
 {
-	char parent[PATH_LEN], base[PATH_LEN], aside[PATH_LEN];
+	char parent[PATH_LEN], base[PATH_LEN];
 	bc__store_fmt_path(parent, "%s/sessions/.damaged", st->dir);
 	mkdir(parent, 0755);
 	bc__store_fmt_path(base, "%s/%s", parent, name);
-	if (set_aside_as(path, base, aside) == 0) {
-		bc_log(BC_LOG_ERROR,
-		       "session %s: no snapshot loads; its files are kept in "
-		       "%s and the session starts anew",
-		       name, aside);
-	} else {
-		bc_log(BC_LOG_ERROR, "session %s: cannot set %s aside: %s",
-		       name, path, strerror(errno));
+	return set_aside_as(path, base, aside);
+}
+
+/* The highest N of the journal-N.bin files in path (0 when none). */
+static uint64_t newest_journal(const char *path)
+{
+	DIR *d = opendir(path);
+	struct dirent *e;
+	uint64_t newest = 0, v;
+	if (!d) {
+		return 0;
+	}
+	while ((e = readdir(d))) {
+		if (parse_numbered(e->d_name, "journal-", ".bin", &v) &&
+		    v > newest) {
+			newest = v;
+		}
+	}
+	closedir(d);
+	return newest;
+}
+
+/* What a restore read, for deciding whether it may be served. */
+struct restore {
+	uint64_t snaps[BC_STORE_SNAPSHOTS_TRIED];
+	size_t nsnaps, used; /* used: SIZE_MAX when none loads */
+	struct bc_store_check c;
+};
+
+/* The frontier raised to the last record of the newest journal: the
+ * highest order number the session ever acknowledged, which a repair
+ * goes on from (never using one twice). */
+static void frontier_of_journals(const struct bc_store_session *ss,
+                                 struct restore *r)
+{
+	uint64_t last = bc__store_journal_last(ss, newest_journal(ss->path));
+	if (last > r->c.frontier) {
+		r->c.frontier = last;
 	}
 }
 
-int bc_store_session_open(struct bc_store *st, const char *name,
-                          struct bc_store_session **out, struct bc_tree *t,
-                          struct bc_camera *cam, uint64_t *order, bool *created,
-                          bc_store_replay_fn fn, void *ud,
-                          struct bc_errinfo *ei)
+/* Loads the newest snapshot that loads into t and cam, then every journal
+ * that follows it (by order: journal-N follows edit N, whether or not
+ * snap-N loaded), changing nothing on disk. r->c says how far it got and
+ * what the files promised. */
+static int restore(struct bc_store_session *ss, struct bc_tree *t,
+                   struct bc_camera *cam, uint64_t *order,
+                   bc_store_replay_fn fn, void *ud, struct restore *r,
+                   struct bc_errinfo *ei)
+{
+	char file[PATH_LEN];
+	int rc;
+	r->used = SIZE_MAX;
+	r->nsnaps =
+	    list_snapshots(ss->path, r->snaps, BC_STORE_SNAPSHOTS_TRIED);
+	for (size_t i = 0; i < r->nsnaps; i++) {
+		struct bc_errinfo lei = {0};
+		bc__store_fmt_path(file, "%s/snap-%llu.json", ss->path,
+		                   (unsigned long long)r->snaps[i]);
+		if (bc_scene_load_json(file, t, cam, &lei) == 0) {
+			r->used = i;
+			break;
+		}
+		if (lei.code == BC_ENOMEM) {
+			return bc_errinfo_set(ei, BC_ENOMEM,
+			                      "session %s: %s: out of memory",
+			                      ss->name, file);
+		}
+		r->c.damaged_snapshots++;
+		bc_log(BC_LOG_ERROR,
+		       "session %s: snapshot %s does not load (%s)", ss->name,
+		       file, lei.msg);
+		if (i == 0) {
+			snprintf(r->c.why, sizeof(r->c.why),
+			         "its newest snapshot snap-%llu.json does not "
+			         "load (%.300s)",
+			         (unsigned long long)r->snaps[i], lei.msg);
+		}
+	}
+	r->c.snapshots = (uint32_t)r->nsnaps;
+	r->c.frontier = r->nsnaps ? r->snaps[0] : 0;
+	if (newest_journal(ss->path) > r->c.frontier) {
+		r->c.frontier = newest_journal(ss->path);
+	}
+	if (r->used == SIZE_MAX) {
+		frontier_of_journals(ss, r);
+		return 0;
+	}
+	r->c.loaded = true;
+	ss->base = *order = r->snaps[r->used];
+	if ((rc = bc__store_replay(ss, fn, ud, order, ei))) {
+		return rc;
+	}
+	for (;;) {
+		char next[PATH_LEN];
+		struct stat jst;
+		if (*order == ss->base) {
+			break;
+		}
+		bc__store_fmt_path(next, "%s/journal-%llu.bin", ss->path,
+		                   (unsigned long long)*order);
+		if (stat(next, &jst) != 0) {
+			break;
+		}
+		ss->base = *order;
+		ss->records = 0;
+		if ((rc = bc__store_replay(ss, fn, ud, order, ei))) {
+			return rc;
+		}
+	}
+	r->c.order = *order;
+	r->c.lost = ss->skipped;
+	if (*order > r->c.frontier) {
+		r->c.frontier = *order;
+	}
+	r->c.whole = r->c.lost == 0 && *order >= r->c.frontier;
+	if (!r->c.whole) {
+		frontier_of_journals(ss, r);
+	}
+	if (!r->c.whole && !r->c.why[0]) {
+		snprintf(r->c.why, sizeof(r->c.why),
+		         "%llu journal record(s) are damaged, missing or do "
+		         "not apply",
+		         (unsigned long long)r->c.lost);
+	}
+	return 0;
+}
+
+/* A whole restore becomes the session's files: the snapshots that did
+ * not load go aside (kept, never deleted), a torn tail is cut, files
+ * older than the generation before the snapshot that loaded go (that
+ * generation stays, so that a file damaged after this restart still has
+ * a backup), and the journal opens for appending. */
+static int settle(struct bc_store_session *ss, const struct restore *r,
+                  struct bc_errinfo *ei)
+{
+	char file[PATH_LEN], aside[PATH_LEN];
+	int rc;
+	for (size_t i = 0; i < r->used; i++) {
+		bc__store_fmt_path(file, "%s/snap-%llu.json", ss->path,
+		                   (unsigned long long)r->snaps[i]);
+		if (bc__store_set_aside(file, aside) == 0) {
+			bc_log(BC_LOG_ERROR,
+			       "session %s: snapshot %s is kept as %s; the "
+			       "older snapshot and the journals gave back "
+			       "every edit, up to %llu",
+			       ss->name, file, aside,
+			       (unsigned long long)r->c.order);
+		}
+	}
+	if ((rc = bc__store_cut_tail(ss, ei))) {
+		return rc;
+	}
+	bc__store_tidy(ss->path, r->used + 1 < r->nsnaps ? r->snaps[r->used + 1]
+	                                                 : r->snaps[r->used]);
+	return bc__store_open_journal(ss, ei);
+}
+
+static int new_session(struct bc_store *st, const char *name,
+                       struct bc_store_session **out, struct bc_errinfo *ei)
 {
 	struct bc_store_session *ss;
-	char path[PATH_LEN], file[PATH_LEN], aside[PATH_LEN];
-	uint64_t snaps[BC_STORE_SNAPSHOTS_TRIED];
-	size_t nsnaps, used = SIZE_MAX;
+	char path[PATH_LEN];
 	int rc;
 	*out = NULL;
-	*order = 0;
-	*created = false;
 	if (!bc_store_name_ok(name, strlen(name))) {
 		return bc_errinfo_set(ei, BC_EINVAL, "bad session name");
 	}
@@ -418,94 +558,104 @@ int bc_store_session_open(struct bc_store *st, const char *name,
 	}
 	ss->st = st;
 	ss->journal_fd = -1;
+	ss->tail_good = -1;
 	snprintf(ss->name, sizeof(ss->name), "%s", name);
-	nsnaps = list_snapshots(path, snaps, BC_STORE_SNAPSHOTS_TRIED);
-	/* The newest snapshot that loads; the ones that do not are set
-	 * aside (never deleted) with the session and file named. */
-	for (size_t i = 0; i < nsnaps && used == SIZE_MAX; i++) {
-		struct bc_errinfo lei = {0};
-		bc__store_fmt_path(file, "%s/snap-%llu.json", path,
-		                   (unsigned long long)snaps[i]);
-		if (bc_scene_load_json(file, t, cam, &lei) == 0) {
-			used = i;
-			break;
-		}
-		if (lei.code == BC_ENOMEM) {
-			rc = bc_errinfo_set(ei, BC_ENOMEM,
-			                    "session %s: %s: out of memory",
-			                    name, file);
-			goto fail;
-		}
-		if (bc__store_set_aside(file, aside) == 0) {
-			bc_log(BC_LOG_ERROR,
-			       "session %s: snapshot %s does not load (%s); "
-			       "kept as %s",
-			       name, file, lei.msg, aside);
-		} else {
-			bc_log(BC_LOG_ERROR,
-			       "session %s: snapshot %s does not load (%s)",
-			       name, file, lei.msg);
-		}
+	*out = ss;
+	return 0;
+}
+
+int bc_store_session_open(struct bc_store *st, const char *name,
+                          struct bc_store_session **out, struct bc_tree *t,
+                          struct bc_camera *cam, uint64_t *order, bool *created,
+                          bc_store_replay_fn fn, void *ud,
+                          struct bc_errinfo *ei)
+{
+	struct bc_store_session *ss;
+	struct restore r = {0};
+	int rc;
+	*order = 0;
+	*created = false;
+	if ((rc = new_session(st, name, &ss, ei))) {
+		return rc;
 	}
-	if (nsnaps && used == SIZE_MAX) {
-		/* Nothing loads: the session's files go aside whole. */
-		set_session_aside(st, name, path);
-		if ((rc = make_dir(path, ei))) {
-			goto fail;
-		}
+	if ((rc = restore(ss, t, cam, order, fn, ud, &r, ei))) {
+		goto fail;
 	}
-	if (used == SIZE_MAX) {
+	if (r.nsnaps == 0 && r.c.frontier == 0) {
 		*created = true;
 		*out = ss;
 		return 0;
 	}
-	bc__store_fmt_path(file, "%s/snap-%llu.json", path,
-	                   (unsigned long long)snaps[used]);
-	ss->base = snaps[used];
-	*order = snaps[used];
-	if ((rc = bc__store_replay(ss, fn, ud, order, ei))) {
+	if (!r.c.whole) {
+		/* Never an older state under order numbers already given
+		 * out: the files stay as they are for an operator. */
+		rc = bc_errinfo_set(
+		    ei, BC_EIO,
+		    "session %s cannot be restored whole: %s; edits up to %llu "
+		    "of %llu can be read. Its files are kept unchanged and it "
+		    "is not served: see `blobcastd --check %s`",
+		    name, r.c.why[0] ? r.c.why : "no snapshot loads",
+		    (unsigned long long)r.c.order,
+		    (unsigned long long)r.c.frontier, st->dir);
+		bc_log(BC_LOG_ERROR, "%s", ei ? ei->msg : "session damaged");
 		goto fail;
 	}
-	/* Journals chain by order: journal-N follows edit N, whether or not
-	 * snap-N loaded (a damaged one was set aside), so the edits after a
-	 * damaged snapshot are still restored from the older one. */
-	for (;;) {
-		char next[PATH_LEN];
-		struct stat jst;
-		if (*order == ss->base) {
-			break;
-		}
-		bc__store_fmt_path(next, "%s/journal-%llu.bin", path,
-		                   (unsigned long long)*order);
-		if (stat(next, &jst) != 0) {
-			break;
-		}
-		ss->base = *order;
-		ss->records = 0;
-		if ((rc = bc__store_replay(ss, fn, ud, order, ei))) {
-			goto fail;
-		}
-	}
-	if (used > 0) {
-		bc_log(BC_LOG_ERROR,
-		       "session %s: restored from the older snapshot %s and "
-		       "the journals after it, up to edit %llu",
-		       name, file, (unsigned long long)*order);
-	}
-	/* Files older than the generation before the snapshot that loaded
-	 * go; that generation stays, as when a snapshot is written, so that
-	 * a file damaged after this restart still has a backup (a restore
-	 * used to delete it: kill -9, restart, then an emptied newest
-	 * snapshot lost the session). It and every journal from it are the
-	 * chain the next restore follows. */
-	bc__store_tidy(path, used + 1 < nsnaps ? snaps[used + 1] : snaps[used]);
-	if ((rc = bc__store_open_journal(ss, ei))) {
+	if ((rc = settle(ss, &r, ei))) {
 		goto fail;
 	}
 	*out = ss;
 	return 0;
 fail:
 	bc_store_session_close(ss);
+	*out = NULL;
+	return rc;
+}
+
+int bc_store_session_check(struct bc_store *st, const char *name,
+                           struct bc_tree *t, struct bc_camera *cam,
+                           bc_store_replay_fn fn, void *ud,
+                           struct bc_store_check *out, struct bc_errinfo *ei)
+{
+	struct bc_store_session *ss;
+	struct restore r = {0};
+	uint64_t order = 0;
+	int rc;
+	memset(out, 0, sizeof(*out));
+	if ((rc = new_session(st, name, &ss, ei))) {
+		return rc;
+	}
+	rc = restore(ss, t, cam, &order, fn, ud, &r, ei);
+	*out = r.c;
+	if (r.nsnaps == 0 && r.c.frontier == 0) {
+		out->whole = true;
+	}
+	bc_store_session_close(ss);
+	return rc;
+}
+
+int bc_store_session_repair(struct bc_store *st, const char *name,
+                            const struct bc_tree *t,
+                            const struct bc_camera *cam, uint64_t order,
+                            struct bc_errinfo *ei)
+{
+	struct bc_store_session *ss;
+	char path[PATH_LEN], aside[PATH_LEN];
+	int rc;
+	bc__store_fmt_path(path, "%s/sessions/%s", st->dir, name);
+	if (set_session_aside(st, name, path, aside) != 0) {
+		return bc__store_sys_error(ei, "cannot move aside", path);
+	}
+	if ((rc = new_session(st, name, &ss, ei))) {
+		return rc;
+	}
+	rc = bc_store_snapshot(ss, t, cam, order, ei);
+	bc_store_session_close(ss);
+	if (!rc) {
+		bc_log(BC_LOG_WARN,
+		       "session %s repaired: its old files are kept in %s; it "
+		       "goes on from edit %llu",
+		       name, aside, (unsigned long long)order);
+	}
 	return rc;
 }
 

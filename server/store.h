@@ -11,15 +11,19 @@
  * fails its checksum and is cut off on restore. The previous snapshot and
  * its journal are kept until the next snapshot, for recovery.
  *
- * Damage is recovered from, and never deleted: a damaged journal record is
- * skipped (the reader resynchronises on the next whole record) and one that
- * does not apply is skipped, each logged with the session, file and byte
- * offsets; the damaged journal is then kept as journal-N.bin.damaged-TIME
- * and a clean one of the applied records takes its place. A snapshot that
- * does not load is kept as snap-N.json.damaged-TIME and the session is
- * restored from the previous snapshot and journals; when none loads, the
- * session's directory moves to sessions/.damaged/NAME.damaged-TIME and the
- * session starts anew.
+ * A restore never goes back in time. A snapshot that does not load is
+ * recovered from the previous snapshot and the journals after it (a
+ * SCENE_LOAD is journaled too, so that no state is held by one snapshot
+ * alone); it is then kept as snap-N.json.damaged-TIME. When the files
+ * cannot give back every edit they acknowledged (records damaged,
+ * missing or not applying, or a newest state no older file reaches), the
+ * session is not served and its files are not touched: opening it fails
+ * with BC_EIO and a sentence naming `blobcastd --check`, which reports
+ * (bc_store_session_check) and repairs (bc_store_session_repair: the old
+ * files go to sessions/.damaged/NAME.damaged-TIME and the best state
+ * they give goes on from the highest order number they named, so no
+ * order number is used twice). A torn tail (a crash mid-write, never
+ * acknowledged) is cut.
  */
 #ifndef BLOBCAST_SERVER_STORE_H
 #define BLOBCAST_SERVER_STORE_H
@@ -60,13 +64,41 @@ typedef int (*bc_store_replay_fn)(void *ud, uint64_t order, const uint8_t *rec,
 /* Opens session name: loads its newest snapshot into t and cam and replays
  * its journal through fn; *order is the last order restored. A session that
  * does not exist yet is created empty (*order = 0, t untouched) and
- * *created set. */
+ * *created set. BC_EIO (files unchanged) when it cannot be restored whole
+ * (see above). */
 int bc_store_session_open(struct bc_store *st, const char *name,
                           struct bc_store_session **out, struct bc_tree *t,
                           struct bc_camera *cam, uint64_t *order, bool *created,
                           bc_store_replay_fn fn, void *ud,
                           struct bc_errinfo *ei);
 void bc_store_session_close(struct bc_store_session *ss);
+
+/* What a session's files give back (bc_store_session_check). */
+struct bc_store_check {
+	bool loaded;       /* a snapshot loaded */
+	bool whole;        /* every acknowledged edit can be given back */
+	uint64_t order;    /* the last edit restored */
+	uint64_t frontier; /* the highest edit any of its files names */
+	uint64_t lost;     /* journal records damaged, missing or refused */
+	uint32_t snapshots, damaged_snapshots;
+	char why[512]; /* when not whole: the first reason */
+};
+
+/* Restores session name into t and cam as bc_store_session_open would,
+ * changing nothing on disk, and says how far it got in *out. */
+int bc_store_session_check(struct bc_store *st, const char *name,
+                           struct bc_tree *t, struct bc_camera *cam,
+                           bc_store_replay_fn fn, void *ud,
+                           struct bc_store_check *out, struct bc_errinfo *ei);
+
+/* An operator's repair of a session that is not whole: its directory goes
+ * to sessions/.damaged/NAME.damaged-TIME (kept), and t and cam become its
+ * snapshot at order (the highest order its files named), from which it
+ * goes on. */
+int bc_store_session_repair(struct bc_store *st, const char *name,
+                            const struct bc_tree *t,
+                            const struct bc_camera *cam, uint64_t order,
+                            struct bc_errinfo *ei);
 
 /* 0 when a snapshot can hold scene t, else BC_EDEPTH with the reason: it
  * nests deeper than a JSON scene file holds (BC_SCENE_JSON_MAX_DEPTH). A

@@ -24,6 +24,11 @@ struct bc_store_session {
 	int journal_fd;
 	uint64_t base; /* order of the snapshot the journal follows */
 	uint64_t records;
+	/* Restoring: acknowledged edits the journals could not give back
+	 * (damaged, missing or not applying records), and where a torn tail
+	 * starts in the journal read last (-1: none). */
+	uint64_t skipped;
+	off_t tail_good;
 	off_t size; /* journal bytes known good */
 	/* Periodic snapshots after a failure wait backoff_ms (doubling). */
 	uint64_t retry_at_ms, backoff_ms;
@@ -57,9 +62,16 @@ void bc__store_tidy(const char *path, uint64_t keep);
 /* ---- journal.c ---- */
 
 /* Replays journal-<ss->base>.bin through fn after *order (raised to the
- * last order applied), recovering from damage (see journal.c). */
+ * last order applied), changing nothing on disk; what could not be given
+ * back is counted in ss->skipped (see journal.c). */
 int bc__store_replay(struct bc_store_session *ss, bc_store_replay_fn fn,
                      void *ud, uint64_t *order, struct bc_errinfo *ei);
+/* The highest order of a whole record in journal-<base>.bin (base when
+ * none), read without applying anything. */
+uint64_t bc__store_journal_last(const struct bc_store_session *ss,
+                                uint64_t base);
+/* Cuts the torn tail that the last bc__store_replay found (if any). */
+int bc__store_cut_tail(struct bc_store_session *ss, struct bc_errinfo *ei);
 
 /* Opens journal-<ss->base>.bin for appending (creating it) and syncs the
  * session's directory. */

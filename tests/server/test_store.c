@@ -1,10 +1,11 @@
 /*
  * The data directory's recovery (server/store.c, snapshot.c, journal.c):
- * damaged journal records are skipped and every other record restored,
- * with the damaged file kept; a snapshot that does not load is set aside
- * for an older one, or the session's files are, and other sessions carry
- * on; a snapshot that failed at any step (injected) leaves nothing on
- * disk; periodic snapshots back off after a failure; journal write
+ * a restore never goes back in time: a snapshot that does not load is
+ * recovered from the previous one and the journals; a session whose files
+ * cannot give back every acknowledged edit is refused with its files
+ * unchanged, checked and repaired on from its highest order; other
+ * sessions carry on; a snapshot that failed at any step (injected) leaves
+ * nothing on disk; periodic snapshots back off after a failure; journal write
  * failures are logged as errors.
  */
 #include <dirent.h>
@@ -159,74 +160,113 @@ static void flip(const char *file, long off, int n)
 	fclose(f);
 }
 
-/* Damage at offset delta into record 50 (payload: CRC fails; length
- * field: the framing is lost) loses record 50 only. */
-static void damaged_record(long delta)
+/* Size of file (-1 when it cannot be read). */
+static long file_size(const char *file)
 {
-	char *dir = make_dir(), sdir[512], file[600];
+	struct stat sb;
+	return stat(file, &sb) == 0 ? (long)sb.st_size : -1;
+}
+
+/* What bc_store_session_check says of session name in dir. */
+static void check_session(const char *dir, const char *name,
+                          struct bc_store_check *c)
+{
+	struct bc_store *st;
+	struct bc_tree *t = default_tree();
+	struct bc_camera cam;
+	struct replayed r = {0};
+	REQUIRE(t && bc_store_open(&st, dir, NULL) == 0);
+	REQUIRE(bc_store_session_check(st, name, t, &cam, collect, &r, c,
+	                               NULL) == 0);
+	bc_store_close(st);
+	bc_tree_destroy(t);
+}
+
+/* A session that is not whole is refused (BC_EIO) with its files as they
+ * were; the check names what is lost; a repair goes on from the highest
+ * order its files named, its old files kept aside. */
+static void refused_then_repaired(const char *dir, const char *name,
+                                  const char *file, uint64_t frontier,
+                                  uint64_t lost, bool loaded)
+{
+	char sdir[512], aside[512];
 	struct bc_store *st;
 	struct bc_store_session *ss;
 	struct bc_tree *t = default_tree();
+	struct bc_store_check c;
 	struct replayed r;
 	uint64_t order;
 	bool created;
-	REQUIRE(dir && t);
-	make_session(dir, "a", NREC, 0);
-	snprintf(sdir, sizeof(sdir), "%s/sessions/a", dir);
-	snprintf(file, sizeof(file), "%s/journal-0.bin", sdir);
-	flip(file, record_offset(50) + delta, 4);
-	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
-	CHECK_EQ_INT(r.n, NREC - 1);
-	CHECK_EQ_INT(order, NREC);
-	for (uint32_t i = 0; i < r.n; i++) {
-		CHECK(r.orders[i] == (i < 49 ? i + 1 : i + 2));
-	}
-	CHECK_EQ_INT(count_named(sdir, "journal-0.bin.damaged-"), 1);
-	/* New edits follow; the next restore sees a clean journal. */
-	REQUIRE(bc_store_append(ss, NREC + 1, (const uint8_t *)"next", 4,
+	long size = file_size(file);
+	REQUIRE(t);
+	snprintf(sdir, sizeof(sdir), "%s/sessions/%s", dir, name);
+	CHECK_EQ_INT(open_session(dir, name, &st, &ss, t, &r, &order, &created),
+	             BC_EIO);
+	CHECK_EQ_INT(count_named(sdir, ".damaged-"), 0);
+	CHECK(file_size(file) == size);
+	check_session(dir, name, &c);
+	CHECK(!c.whole);
+	CHECK(c.loaded == loaded);
+	CHECK_EQ_INT(c.frontier, frontier);
+	CHECK_EQ_INT(c.lost, lost);
+	CHECK(c.why[0] != '\0');
+	/* (A tree that a failed load left alone; the state is the test's.) */
+	bc_tree_destroy(t);
+	REQUIRE((t = default_tree()) && bc_store_open(&st, dir, NULL) == 0);
+	REQUIRE(bc_store_session_repair(st, name, t, NULL, c.frontier, NULL) ==
+	        0);
+	bc_store_close(st);
+	snprintf(aside, sizeof(aside), "%s/sessions/.damaged", dir);
+	CHECK_EQ_INT(count_named(aside, name), 1);
+	/* It goes on after the highest order: none is used twice. */
+	REQUIRE(open_session(dir, name, &st, &ss, t, &r, &order, &created) ==
+	        0);
+	CHECK(!created);
+	CHECK_EQ_INT(order, frontier);
+	CHECK_EQ_INT(r.n, 0);
+	REQUIRE(bc_store_append(ss, frontier + 1, (const uint8_t *)"next", 4,
 	                        NULL) == 0);
 	bc_store_session_close(ss);
 	bc_store_close(st);
-	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
-	CHECK_EQ_INT(r.n, NREC);
-	CHECK_EQ_INT(order, NREC + 1);
-	CHECK_EQ_INT(count_named(sdir, ".damaged-"), 1);
-	bc_store_session_close(ss);
-	bc_store_close(st);
+	check_session(dir, name, &c);
+	CHECK(c.whole);
+	CHECK_EQ_INT(c.order, frontier + 1);
 	bc_tree_destroy(t);
+}
+
+/* Damage at offset delta into record 50 (payload: CRC fails; length
+ * field: the framing is lost): edit 50 cannot be given back, so the
+ * session is not served from the rest (which would show a state that
+ * never was under order numbers already given out). */
+static void damaged_record(long delta)
+{
+	char *dir = make_dir(), file[600];
+	REQUIRE(dir);
+	make_session(dir, "a", NREC, 0);
+	snprintf(file, sizeof(file), "%s/sessions/a/journal-0.bin", dir);
+	flip(file, record_offset(50) + delta, 4);
+	refused_then_repaired(dir, "a", file, NREC, 1, true);
 	rm_rf(dir);
 	free(dir);
 }
 
-static void flipped_payload_bytes_lose_one_record(void)
+static void a_flipped_payload_is_not_served(void)
 {
 	damaged_record(24);
 }
 
-static void flipped_length_field_loses_one_record(void)
+static void a_flipped_length_field_is_not_served(void)
 {
 	damaged_record(4);
 }
 
-static void a_record_that_does_not_apply_is_skipped(void)
+static void a_record_that_does_not_apply_is_not_served(void)
 {
-	char *dir = make_dir(), sdir[512];
-	struct bc_store *st;
-	struct bc_store_session *ss;
-	struct bc_tree *t = default_tree();
-	struct replayed r;
-	uint64_t order;
-	bool created;
-	REQUIRE(dir && t);
+	char *dir = make_dir(), file[600];
+	REQUIRE(dir);
 	make_session(dir, "a", NREC, 30);
-	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
-	CHECK_EQ_INT(r.n, NREC - 1);
-	CHECK_EQ_INT(order, NREC);
-	snprintf(sdir, sizeof(sdir), "%s/sessions/a", dir);
-	CHECK_EQ_INT(count_named(sdir, "journal-0.bin.damaged-"), 1);
-	bc_store_session_close(ss);
-	bc_store_close(st);
-	bc_tree_destroy(t);
+	snprintf(file, sizeof(file), "%s/sessions/a/journal-0.bin", dir);
+	refused_then_repaired(dir, "a", file, NREC, 1, true);
 	rm_rf(dir);
 	free(dir);
 }
@@ -262,11 +302,12 @@ static void write_file(const char *path, const char *text)
 	fclose(f);
 }
 
-/* A corrupt snapshot of one session: the other restores; the bad one's
- * files are set aside and it starts anew (created). */
+/* A corrupt snapshot of one session, its only one: the other restores;
+ * the bad one is refused, its files unchanged, and a repair goes on from
+ * the last edit its journal holds (5), not from 0. */
 static void a_corrupt_snapshot_spares_the_other_session(void)
 {
-	char *dir = make_dir(), file[600], aside[600];
+	char *dir = make_dir(), file[600];
 	struct bc_store *st;
 	struct bc_store_session *ss;
 	struct bc_tree *t = default_tree();
@@ -282,13 +323,7 @@ static void a_corrupt_snapshot_spares_the_other_session(void)
 	CHECK_EQ_INT(order, 7);
 	bc_store_session_close(ss);
 	bc_store_close(st);
-	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
-	CHECK(created);
-	CHECK_EQ_INT(order, 0);
-	snprintf(aside, sizeof(aside), "%s/sessions/.damaged", dir);
-	CHECK_EQ_INT(count_named(aside, "a.damaged-"), 1);
-	bc_store_session_close(ss);
-	bc_store_close(st);
+	refused_then_repaired(dir, "a", file, 5, 0, false);
 	bc_tree_destroy(t);
 	rm_rf(dir);
 	free(dir);
@@ -514,12 +549,11 @@ static void failures_back_off_and_are_logged_as_errors(void)
 }
 
 static const struct bc_test tests[] = {
-    {"flipped_payload_bytes_lose_one_record",
-     flipped_payload_bytes_lose_one_record},
-    {"flipped_length_field_loses_one_record",
-     flipped_length_field_loses_one_record},
-    {"a_record_that_does_not_apply_is_skipped",
-     a_record_that_does_not_apply_is_skipped},
+    {"a_flipped_payload_is_not_served", a_flipped_payload_is_not_served},
+    {"a_flipped_length_field_is_not_served",
+     a_flipped_length_field_is_not_served},
+    {"a_record_that_does_not_apply_is_not_served",
+     a_record_that_does_not_apply_is_not_served},
     {"a_torn_tail_is_cut", a_torn_tail_is_cut},
     {"a_corrupt_snapshot_spares_the_other_session",
      a_corrupt_snapshot_spares_the_other_session},
