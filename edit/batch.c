@@ -112,6 +112,11 @@ static int batch_apply(struct bc_edit_batch *b, struct bc_tree **tp,
 		bc_edit_batch_finish(b);
 		return rc;
 	}
+	if (inv && (rc = bc__inverse_bound(inv, t, work))) {
+		bc_tree_destroy(work);
+		bc_edit_batch_finish(b);
+		return bc_errinfo_set(ei, rc, "no memory for what undoes it");
+	}
 	if (b->structural) {
 		b->old = t;
 		*tp = work;

@@ -31,4 +31,10 @@ int bc__inverse_after(struct bc_edit_inverse *inv, const struct bc_tree *t,
                       const struct bc_proto_edit_op *e, uint32_t k,
                       const struct bc_edit_saved *was);
 
+/* When the subtrees of inv (the inverse of the batch that made now from
+ * old) add up past old's own encoding, makes inv one REPLACE of now's root
+ * by old. Returns 0 or BC_ENOMEM (inv as it was). */
+int bc__inverse_bound(struct bc_edit_inverse *inv, const struct bc_tree *old,
+                      const struct bc_tree *now);
+
 #endif

@@ -21,6 +21,11 @@
  *                           when it gave a primitive its first colour
  *                           (no SET takes one away), REPLACE of N by a
  *                           one-node subtree of that state
+ *
+ * Each inverse is at most the subtree of the change, but a batch can make
+ * them add up past the scene (REMOVEs down a chain of two-child operators
+ * each put back all below): the inverse is then one REPLACE of the root
+ * by the scene before (bc__inverse_bound), the smallest exact one.
  */
 #include <string.h>
 
@@ -321,6 +326,47 @@ int bc__inverse_after(struct bc_edit_inverse *inv, const struct bc_tree *t,
 	default:
 		return 0;
 	}
+}
+
+/* Smallest bytes a scene of n nodes encodes to: an operator, 17 bytes, has
+ * two children or more, a primitive takes 35 bytes and more. */
+static size_t scene_bytes_at_least(uint32_t n)
+{
+	return 5u + (size_t)n * 26u;
+}
+
+int bc__inverse_bound(struct bc_edit_inverse *inv, const struct bc_tree *old,
+                      const struct bc_tree *now)
+{
+	struct bc_edit_inverse whole;
+	size_t carried = 0;
+	uint8_t *bytes;
+	size_t len;
+	int rc;
+	for (uint32_t i = 0; i < inv->nops; i++) {
+		carried += inv->ops[i].subtree.len;
+	}
+	if (carried <= scene_bytes_at_least(bc_tree_node_count(old))) {
+		return 0;
+	}
+	if ((rc = bc_scene_encode(old, NULL, &bytes, &len)) ||
+	    (rc = bc__inverse_init(&whole, 1))) {
+		bc_free(bytes);
+		return rc;
+	}
+	if (len >= carried) {
+		bc_free(bytes);
+		bc_edit_inverse_finish(&whole);
+		return 0;
+	}
+	whole.ops[0] = (struct bc_proto_edit_op){
+	    .kind = BC_PROTO_EDIT_REPLACE,
+	    .node = bc_tree_root(now),
+	    .subtree = {.ptr = bytes, .len = (uint32_t)len}};
+	own(&whole, 0, bytes, len);
+	bc_edit_inverse_finish(inv);
+	*inv = whole;
+	return 0;
 }
 
 int bc_edit_inverse_of_states(struct bc_edit_inverse *inv,

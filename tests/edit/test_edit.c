@@ -628,6 +628,56 @@ static void saved_states_come_back_as_operations(void)
 	bc_tree_destroy(before);
 }
 
+/* union 50 { sphere 51, union 52 { sphere 53, union 54 { sphere 55,
+ * union 56 { sphere 57, sphere 58 } } } }: removing 51, 53 and 55 takes
+ * an operator each time, and each would be put back with all below it,
+ * more than the scene: the inverse is one REPLACE of the root by the
+ * scene before, and is exact. */
+static void inverse_is_never_bigger_than_the_scene(void)
+{
+	struct bc_proto_buf b;
+	struct bc_tree *t = bc_tree_create(), *before, *after, *mirror;
+	struct bc_errinfo ei = {0};
+	struct bc_edit_batch e, u;
+	struct bc_proto_edit_op ops[3];
+	float r = 0.5f;
+	bc_proto_buf_init(&b, 0);
+	bc_proto_scene_begin(&b, NULL, 9);
+	for (uint32_t id = 50; id <= 56; id += 2) {
+		bc_proto_scene_op(&b, BC_OP_UNION, id, 0, 0, 2);
+		bc_proto_scene_prim(&b, BC_PRIM_SPHERE, id + 1, T0, R0, NULL, 1,
+		                    &r);
+	}
+	bc_proto_scene_prim(&b, BC_PRIM_SPHERE, 58, T0, R0, NULL, 1, &r);
+	REQUIRE(t && bc_scene_decode(b.data, b.len, t, NULL, NULL, NULL) == 0);
+	bc_proto_buf_finish(&b);
+	before = copy_of(t);
+	for (uint32_t i = 0; i < 3; i++) {
+		ops[i] = (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_REMOVE,
+		                                   .node = 51 + 2 * i};
+	}
+	REQUIRE(bc_edit_batch_apply_undoable(&e, &t, ops, 3, &ei) == 0);
+	after = copy_of(t);
+	mirror = copy_of(t);
+	CHECK_EQ_INT(e.inv.nops, 1);
+	CHECK_EQ_INT(e.inv.ops[0].kind, BC_PROTO_EDIT_REPLACE);
+	CHECK_EQ_INT(e.inv.ops[0].node, 56);
+	CHECK(e.inv.ops[0].subtree.len <= 5 + 4 * 17 + 5 * 39);
+	CHECK_EQ_INT(replay(&mirror, &e.inv), 0);
+	CHECK(same_bytes(mirror, before));
+	REQUIRE(bc_edit_batch_apply_undoable(&u, &t, e.inv.ops, e.inv.nops,
+	                                     &ei) == 0);
+	CHECK(same_bytes(t, before));
+	CHECK_EQ_INT(replay(&mirror, &u.inv), 0);
+	CHECK(same_bytes(mirror, after));
+	bc_edit_batch_finish(&e);
+	bc_edit_batch_finish(&u);
+	bc_tree_destroy(t);
+	bc_tree_destroy(before);
+	bc_tree_destroy(after);
+	bc_tree_destroy(mirror);
+}
+
 static const struct bc_test tests[] = {
     {"subtree_with_id_0_is_einval", subtree_with_id_0_is_einval},
     {"remove_root_is_einval", remove_root_is_einval},
@@ -649,6 +699,8 @@ static const struct bc_test tests[] = {
      regroup_batch_is_undone_newest_first},
     {"saved_states_come_back_as_operations",
      saved_states_come_back_as_operations},
+    {"inverse_is_never_bigger_than_the_scene",
+     inverse_is_never_bigger_than_the_scene},
 };
 
 BC_TEST_MAIN(tests)
