@@ -9,6 +9,7 @@
 #include "blobcast/alloc.h"
 #include "blobcast/edit.h"
 #include "blobcast/scene.h"
+#include "edit_impl.h"
 
 /* Where field f of a primitive lands and how many values it takes, or NULL
  * when it does not apply to p's kind. */
@@ -287,10 +288,7 @@ static int apply_set(struct bc_tree *t, const struct bc_proto_edit_op *e,
 	             : bc_tree_set_prim(t, e->node, &p, ei);
 }
 
-/* The node a REMOVE of id takes out: id, or the top of the chain of unary
- * nodes above it (a unary node cannot lose its only child, PROTOCOL.md
- * 9); 0 for an unknown id. */
-static uint32_t removed_top(const struct bc_tree *t, uint32_t id)
+uint32_t bc__edit_removed_top(const struct bc_tree *t, uint32_t id)
 {
 	struct bc_op_data op;
 	uint32_t parent;
@@ -315,7 +313,8 @@ int bc_edit_apply_op(struct bc_tree *t, const struct bc_proto_edit_op *e,
 	case BC_PROTO_EDIT_SET:
 		return apply_set(t, e, ei);
 	case BC_PROTO_EDIT_REMOVE:
-		if ((top = removed_top(t, e->node)) == bc_tree_root(t) &&
+		if ((top = bc__edit_removed_top(t, e->node)) ==
+		        bc_tree_root(t) &&
 		    top != 0) {
 			return bc_errinfo_set(
 			    ei, BC_EINVAL,

@@ -122,8 +122,8 @@ static int batch_apply(struct batch *x)
 	struct bc_session *s = x->s;
 	struct bc_msg as_edit = {.type = BC_MSG_EDIT};
 	x->tree = s->tree;
-	if ((x->rc = bc_edit_batch_apply(&x->b, &x->tree, x->op, x->nops,
-	                                 &x->ei))) {
+	if ((x->rc = bc_edit_batch_apply_undoable(&x->b, &x->tree, x->op,
+	                                          x->nops, &x->ei))) {
 		return x->rc;
 	}
 	x->applied = true;

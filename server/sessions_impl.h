@@ -198,8 +198,8 @@ struct bc_author {
 	char name[BC_PROTO_MAX_NAME + 1];
 };
 /* Called once a batch is applied, journaled and broadcast, with b holding
- * what undoes it (the callee may take its old tree; the caller finishes
- * b). */
+ * what undoes it (the callee may take its old tree and its inverse; the
+ * caller finishes b). */
 typedef void (*bc_applied_fn)(struct bc_session *s, const struct bc_author *a,
                               const struct bc_change *how,
                               struct bc_edit_batch *b, void *ud);
@@ -218,7 +218,8 @@ bool bc__refuse_change(struct bc_member *m, uint32_t seq, int *park);
 
 /* ---- undo.c ---- */
 
-/* Records what undoes batch b, just applied by m (takes b's old tree);
+/* Records what undoes batch b, just applied by m (takes b's inverse, and
+ * its old tree to free off the loop);
  * clears the redo steps. Edits of one drag (interacting, up to the first
  * edit without it) make one step. */
 void bc__undo_record(struct bc_session *s, const struct bc_author *a,

@@ -1,13 +1,18 @@
 /*
  * Undo and redo (loop thread). Each session keeps a bounded history of the
  * changes applied to its scene since it was loaded: for each, what puts the
- * scene back -- the earlier states of the nodes a parameter edit changed,
- * or the whole tree before a structural edit. UNDO applies the newest
- * step's reverse as an ordinary edit (SETs of the saved states, or a
- * REPLACE of the root by the saved tree), so it is journaled and broadcast
- * as EDIT_APPLIED (flag UNDO, naming the edit undone and its author) and
- * every mirror, and a restart, sees a plain edit. What that edit's own
- * batch saved is the REDO step, and the other way round.
+ * scene back, in proportion to the change -- the earlier states of the
+ * nodes a parameter edit changed, or for a structural edit the operations
+ * that take it back (edit/inverse.c: a REMOVE of what was inserted, an
+ * INSERT of what was removed with its ids at its place, a REPLACE by the
+ * subtree that was replaced; the removed and replaced subtrees kept as
+ * their scene bytes, never the whole scene unless the change was to it).
+ * UNDO applies the newest step's operations as an ordinary edit (SETs of
+ * the saved states, or the kept operations), so it is journaled and
+ * broadcast as EDIT_APPLIED (flag UNDO, naming the edit undone and its
+ * author) as a record of that size, and every mirror, and a restart, sees
+ * a plain edit. What that edit's own batch yields (its saved states, or
+ * its inverse) is the REDO step, and the other way round.
  *
  * The history is linear and the session's, not a member's: undo takes back
  * the newest change whoever made it. A new edit clears the redo steps; the
@@ -15,9 +20,10 @@
  * step; a SCENE_LOAD clears the history. It lives in memory: after a
  * restart, undo starts from the restored scene.
  *
- * A structural step of a big scene (BC_SRV_HEAVY_NODES) is encoded on a
- * task and applied on another (edits.c), the session busy throughout, so
- * neither holds the loop.
+ * The inverse of a structural batch is made as the batch applies (on a
+ * task for a big scene, BC_SRV_HEAVY_NODES, edits.c), and an undo is
+ * applied the same way, so neither holds the loop; the tree a structural
+ * batch replaced is freed off the loop too.
  */
 #include <string.h>
 
@@ -27,10 +33,6 @@
 #include "blobcast/scene.h"
 #include "sessions_impl.h"
 
-/* Memory a structural step holds per node of its saved tree (the model and
- * its layout), for the history's byte bound. */
-#define TREE_BYTES_PER_NODE 256u
-
 struct step {
 	uint64_t order; /* the edit this step undoes (or, redo, redoes) */
 	char author[BC_PROTO_MAX_NAME + 1];
@@ -38,12 +40,14 @@ struct step {
 	bool open;       /* that drag still adds to it */
 	struct bc_edit_saved *nodes; /* parameter step: states to restore */
 	uint32_t n, cap;
-	struct bc_tree *old; /* structural step: the tree to restore */
+	/* Structural step: the operations that undo it, with the subtrees
+	 * they put back (counted at their size in bytes). */
+	struct bc_edit_inverse inv;
 	size_t bytes;
 };
 
 struct bc_undo {
-	uv_loop_t *loop; /* frees big trees off it */
+	uv_loop_t *loop; /* frees replaced trees off it */
 	struct step undo[BC_SRV_UNDO_STEPS], redo[BC_SRV_UNDO_STEPS];
 	uint32_t nundo, nredo;
 	size_t bytes;
@@ -53,7 +57,7 @@ static void step_free(struct bc_undo *u, struct step *st)
 {
 	u->bytes -= st->bytes;
 	bc_free(st->nodes);
-	bc__tree_free_later(u->loop, st->old);
+	bc_edit_inverse_finish(&st->inv);
 	memset(st, 0, sizeof(*st));
 }
 
@@ -126,61 +130,21 @@ static uint32_t id_set_slot(const struct id_set *s, uint32_t id)
 	return i;
 }
 
-/* A SET cannot take a colour away: a step that must restore a primitive
- * without colour over one with colour becomes structural -- a copy of t
- * (the scene now) with the saved states written back. Only the nodes
- * batch b touched can have changed since the step was last settled.
- * Returns false when out of memory. */
-static bool settle_colours(struct bc_undo *u, struct step *st,
-                           const struct bc_tree *t,
-                           const struct bc_edit_batch *b,
-                           const struct id_set *ids)
-{
-	struct bc_tree *copy;
-	bool needed = false;
-	for (uint32_t i = 0; i < b->nsaved && !needed; i++) {
-		const struct bc_edit_saved *first =
-		    &st->nodes[ids->at[id_set_slot(ids, b->saved[i].id)]];
-		struct bc_prim_data p;
-		struct bc_op_data op;
-		bc_tree_get(t, first->id, &p, &op);
-		needed = op.kind == BC_OP_INVALID && !first->p.has_color &&
-		         p.has_color;
-	}
-	if (!needed) {
-		return true;
-	}
-	if (!(copy = bc_tree_create()) || bc_tree_copy(copy, t, NULL)) {
-		bc_tree_destroy(copy);
-		return false;
-	}
-	for (uint32_t i = 0; i < st->n; i++) {
-		bc_edit_saved_restore(copy, &st->nodes[i]);
-	}
-	u->bytes -= st->bytes;
-	bc_free(st->nodes);
-	st->nodes = NULL;
-	st->n = st->cap = 0;
-	st->old = copy;
-	st->bytes = (size_t)bc_tree_node_count(copy) * TREE_BYTES_PER_NODE;
-	u->bytes += st->bytes;
-	return true;
-}
-
-/* Adds to st what undoes batch b, applied to make t: b's old tree, or the
+/* Adds to st what undoes batch b: b's inverse (a structural batch), or the
  * saved states of the nodes st does not hold yet (a node's first saved
- * state is its state before). Takes b's old tree. Returns false when out
- * of memory. */
+ * state is its state before). Takes b's inverse, and frees b's old tree
+ * off the loop. Returns false when out of memory. */
 static bool step_add(struct bc_undo *u, struct step *st,
-                     struct bc_edit_batch *b, const struct bc_tree *t)
+                     struct bc_edit_batch *b)
 {
 	struct id_set ids;
 	bool ok = true;
 	if (b->structural) {
-		st->old = b->old;
+		st->inv = b->inv;
+		memset(&b->inv, 0, sizeof(b->inv));
+		bc__tree_free_later(u->loop, b->old);
 		b->old = NULL;
-		st->bytes =
-		    (size_t)bc_tree_node_count(st->old) * TREE_BYTES_PER_NODE;
+		st->bytes = st->inv.bytes;
 		u->bytes += st->bytes;
 		return true;
 	}
@@ -214,7 +178,6 @@ static bool step_add(struct bc_undo *u, struct step *st,
 		st->bytes += sizeof(*st->nodes);
 		u->bytes += sizeof(*st->nodes);
 	}
-	ok = ok && settle_colours(u, st, t, b, &ids);
 	id_set_finish(&ids);
 	return ok;
 }
@@ -263,10 +226,10 @@ void bc__undo_record(struct bc_session *s, const struct bc_author *a,
 		drop(u, u->redo, &u->nredo, u->nredo - 1);
 	}
 	top = u->nundo ? &u->undo[u->nundo - 1] : NULL;
-	if (top && top->open && top->member == a->member_id && !top->old &&
+	if (top && top->open && top->member == a->member_id && !top->inv.ops &&
 	    !b->structural && top->n + b->nsaved <= BC_PROTO_MAX_EDIT_OPS) {
 		/* The drag goes on (or ends with this edit): one step. */
-		ok = step_add(u, top, b, s->tree);
+		ok = step_add(u, top, b);
 	} else {
 		if (top) {
 			top->open = false;
@@ -274,7 +237,7 @@ void bc__undo_record(struct bc_session *s, const struct bc_author *a,
 		top = push(u, u->undo, &u->nundo);
 		top->member = a->member_id;
 		snprintf(top->author, sizeof(top->author), "%s", a->name);
-		ok = step_add(u, top, b, s->tree);
+		ok = step_add(u, top, b);
 	}
 	top->order = s->order;
 	top->open = interacting;
@@ -317,7 +280,7 @@ static void step_applied(struct bc_session *s, const struct bc_author *a,
 	back->order = st->order;
 	back->member = st->member;
 	memcpy(back->author, st->author, sizeof(back->author));
-	if (!step_add(u, back, b, s->tree)) {
+	if (!step_add(u, back, b)) {
 		bc_log(BC_LOG_WARN, "session %s: no memory to keep the %s",
 		       s->name, redo ? "undo" : "redo");
 		if (redo) {
@@ -334,59 +297,35 @@ static void step_applied(struct bc_session *s, const struct bc_author *a,
 	trim(u);
 }
 
-/* The operations that apply step st: a REPLACE of the root by its whole
- * tree, or a SET of each saved node. Returns 0 or BC_ENOMEM. */
-static int step_ops(const struct bc_session *s, const struct step *st,
-                    struct bc_proto_edit_op **ops, uint32_t *nops,
-                    struct bc_proto_field **fields, uint8_t **subtree)
-{
-	size_t len = 0;
-	*ops = NULL;
-	*fields = NULL;
-	*subtree = NULL;
-	if (st->old) {
-		if (bc_scene_encode(st->old, NULL, subtree, &len) ||
-		    !(*ops = bc_calloc(1, sizeof(**ops)))) {
-			return BC_ENOMEM;
-		}
-		(*ops)->kind = BC_PROTO_EDIT_REPLACE;
-		(*ops)->node = bc_tree_root(s->tree);
-		(*ops)->subtree.ptr = *subtree;
-		(*ops)->subtree.len = (uint32_t)len;
-		*nops = 1;
-		return 0;
-	}
-	if (!(*ops = bc_calloc(st->n ? st->n : 1, sizeof(**ops))) ||
-	    !(*fields = bc_calloc((size_t)(st->n ? st->n : 1) *
-	                              BC_PROTO_MAX_SET_FIELDS,
-	                          sizeof(**fields)))) {
-		return BC_ENOMEM;
-	}
-	for (uint32_t i = 0; i < st->n; i++) {
-		bc_edit_state_set(
-		    &st->nodes[i], st->nodes[i].op.kind != BC_OP_INVALID,
-		    &(*ops)[i],
-		    &(*fields)[(size_t)i * BC_PROTO_MAX_SET_FIELDS]);
-	}
-	*nops = st->n;
-	return 0;
-}
-
-/* Applies the top step with ops; errors go to m. Returns 0, or BC_HOLD
- * while the step is applied on a task. */
-static int apply_step(struct bc_member *m, bool redo, uint32_t seq,
-                      struct bc_proto_edit_op *ops, uint32_t nops)
+/* Applies the top step, as an EDIT of m's (request seq) whose operations
+ * are the step's inverse, or SETs (and, for a colour to take away, a
+ * one-node REPLACE) of its saved states; errors go to m. Returns 0, or
+ * BC_HOLD while the step is applied on a task. */
+static int apply_step(struct bc_member *m, bool redo, uint32_t seq)
 {
 	struct bc_session *s = m->session;
 	struct step *st = top_of(s->undo, redo);
+	struct bc_edit_inverse states = {0};
+	const struct bc_edit_inverse *inv = &st->inv;
 	struct bc_errinfo ei = {0};
 	struct bc_change how = {0};
 	int rc;
+	if (!st->inv.ops && (rc = bc_edit_inverse_of_states(
+	                         &states, s->tree, st->nodes, st->n))) {
+		bc__send_error(m, seq, rc, "%s refused: out of memory",
+		               redo ? "redo" : "undo");
+		return 0;
+	}
+	if (!st->inv.ops) {
+		inv = &states;
+	}
 	how.flags = redo ? BC_PROTO_FLAG_REDO : BC_PROTO_FLAG_UNDO;
 	how.target_order = st->order;
 	memcpy(how.target_author, st->author, sizeof(how.target_author));
-	rc = bc__apply(m, ops, (uint16_t)nops, seq, &how, step_applied,
-	               redo ? (void *)s : NULL, &ei);
+	/* bc__apply copies the operations: the step may go meanwhile. */
+	rc = bc__apply(m, inv->ops, (uint16_t)inv->nops, seq, &how,
+	               step_applied, redo ? (void *)s : NULL, &ei);
+	bc_edit_inverse_finish(&states);
 	if (rc < 0) {
 		bc__send_error(m, seq, rc, "%s refused: %s",
 		               redo ? "redo" : "undo", ei.msg);
@@ -395,88 +334,14 @@ static int apply_step(struct bc_member *m, bool redo, uint32_t seq,
 	return bc__hold(s, m, seq);
 }
 
-/* A big structural step's tree, encoded off the loop (the session busy,
- * so its history stays as it is). */
-struct encode_task {
-	struct bc_task t;
-	struct bc_conn_ref who;
-	uint32_t seq;
-	bool redo;
-	uint8_t *bytes;
-	size_t len;
-	int rc;
-};
-
-static void encode_run(struct bc_task *t)
-{
-	struct encode_task *e = (struct encode_task *)t;
-	e->rc = bc_scene_encode(top_of(t->s->undo, e->redo)->old, NULL,
-	                        &e->bytes, &e->len);
-}
-
-static void encode_done(struct bc_task *t)
-{
-	struct encode_task *e = (struct encode_task *)t;
-	struct bc_session *s = t->s;
-	struct bc_member *m = bc__member_of(s->ss, e->who);
-	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_REPLACE};
-	struct bc_undo *u = s->undo;
-	if (s->removed || !m || m->session != s || !u ||
-	    (e->redo ? u->nredo : u->nundo) == 0) {
-		/* Its author left, or the session went. */
-	} else if (e->rc) {
-		bc__send_error(m, e->seq, e->rc, "%s refused: out of memory",
-		               e->redo ? "redo" : "undo");
-	} else {
-		op.node = bc_tree_root(s->tree);
-		op.subtree.ptr = e->bytes;
-		op.subtree.len = (uint32_t)e->len;
-		/* m is held by this task already: the step's own task holds
-		 * it on. */
-		(void)apply_step(m, e->redo, e->seq, &op, 1);
-	}
-	bc_free(e->bytes);
-	bc_free(e);
-}
-
 int bc__undo_step(struct bc_member *m, bool redo, uint32_t seq)
 {
 	struct bc_session *s = m->session;
 	struct bc_undo *u = s->undo;
-	struct bc_proto_edit_op *ops = NULL;
-	struct bc_proto_field *fields = NULL;
-	struct step *st;
-	uint8_t *subtree = NULL;
-	uint32_t nops = 0;
-	int rc;
 	if (!u || (redo ? u->nredo : u->nundo) == 0) {
 		bc__send_error(m, seq, BC_ESTATE, "nothing to %s",
 		               redo ? "redo" : "undo");
 		return 0;
 	}
-	st = top_of(u, redo);
-	if (st->old && bc_tree_node_count(st->old) >= BC_SRV_HEAVY_NODES) {
-		struct encode_task *e = bc_calloc(1, sizeof(*e));
-		if (e) {
-			e->who = m->peer->ref;
-			e->seq = seq;
-			e->redo = redo;
-			e->t.run = encode_run;
-			e->t.done = encode_done;
-			e->t.holds_order = true;
-			bc__task_start(s, &e->t);
-			return bc__hold(s, m, seq);
-		}
-	}
-	if ((rc = step_ops(s, st, &ops, &nops, &fields, &subtree)) == 0) {
-		rc = apply_step(m, redo, seq, ops, nops);
-	} else {
-		bc__send_error(m, seq, rc, "%s refused: out of memory",
-		               redo ? "redo" : "undo");
-		rc = 0;
-	}
-	bc_free(ops);
-	bc_free(fields);
-	bc_free(subtree);
-	return rc;
+	return apply_step(m, redo, seq);
 }

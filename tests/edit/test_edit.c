@@ -1,7 +1,8 @@
 /*
  * The edit module: what a SET field means (the corner cases PROTOCOL.md
  * section 9 fixes), subtrees and removals that would make mirrors diverge
- * or empty a scene, atomic batches and their undo, and the key=value
+ * or empty a scene, atomic batches and their undo, the operations that
+ * undo (and redo) each kind of structural edit exactly, and the key=value
  * syntax.
  */
 #include <stdlib.h>
@@ -384,6 +385,299 @@ static void unary_key_values(void)
 	bc_tree_destroy(t);
 }
 
+/* smooth_union 10 { sphere 11 (red), union 12 { sphere 13, sphere 14 },
+ * union 15 { sphere 16, sphere 17, sphere 18 },
+ * offset 19 { onion 20 { sphere 21 } } }: every structural case. */
+static struct bc_tree *wide_scene(void)
+{
+	static const float red[3] = {1, 0, 0};
+	struct bc_proto_buf b;
+	struct bc_tree *t = bc_tree_create();
+	float r = 0.5f, amount = 0.1f, thick = 0.05f;
+	bc_proto_buf_init(&b, 0);
+	bc_proto_scene_begin(&b, NULL, 12);
+	bc_proto_scene_op(&b, BC_OP_SMOOTH_UNION, 10, 0.5f, 0.0f, 4);
+	bc_proto_scene_prim(&b, BC_PRIM_SPHERE, 11, T0, R0, red, 1, &r);
+	bc_proto_scene_op(&b, BC_OP_UNION, 12, 0.0f, 0.0f, 2);
+	bc_proto_scene_prim(&b, BC_PRIM_SPHERE, 13, T0, R0, NULL, 1, &r);
+	bc_proto_scene_prim(&b, BC_PRIM_SPHERE, 14, T0, R0, NULL, 1, &r);
+	bc_proto_scene_op(&b, BC_OP_UNION, 15, 0.0f, 0.0f, 3);
+	for (uint32_t id = 16; id <= 18; id++) {
+		bc_proto_scene_prim(&b, BC_PRIM_SPHERE, id, T0, R0, NULL, 1,
+		                    &r);
+	}
+	bc_proto_scene_unary(&b, BC_OP_OFFSET, 19, 1, &amount);
+	bc_proto_scene_unary(&b, BC_OP_ONION, 20, 1, &thick);
+	bc_proto_scene_prim(&b, BC_PRIM_SPHERE, 21, T0, R0, NULL, 1, &r);
+	if (!t || bc_scene_decode(b.data, b.len, t, NULL, NULL, NULL)) {
+		abort();
+	}
+	bc_proto_buf_finish(&b);
+	return t;
+}
+
+static struct bc_tree *copy_of(const struct bc_tree *t)
+{
+	struct bc_tree *c = bc_tree_create();
+	if (!c || bc_tree_copy(c, t, NULL)) {
+		abort();
+	}
+	return c;
+}
+
+/* Replays ops into mirror as an EDIT_APPLIED. */
+static int replay(struct bc_tree **mirror, const struct bc_edit_inverse *inv)
+{
+	struct bc_msg_edit_applied ea = {.order = 1, .author = 1};
+	struct bc_errinfo ei = {0};
+	ea.nops = (uint16_t)inv->nops;
+	ea.ops = inv->ops;
+	return bc_edit_replay(mirror, &ea, &ei);
+}
+
+static size_t subtree_bytes(const struct bc_edit_inverse *inv)
+{
+	size_t n = 0;
+	for (uint32_t i = 0; i < inv->nops; i++) {
+		n += inv->ops[i].subtree.len;
+	}
+	return n;
+}
+
+/* Applies ops (n) to the wide scene, then what undoes them, then what
+ * undoes that (the redo): the undo gives the scene before back node for
+ * node, ids included, the redo the scene after, and a mirror replaying
+ * the same operations ends alike each time. The undo's first operation
+ * is of kind first, and its subtrees take at most max_bytes. */
+static void undo_redo_exact(const struct bc_proto_edit_op *ops, uint32_t n,
+                            enum bc_proto_edit_kind first, size_t max_bytes)
+{
+	struct bc_tree *t = wide_scene(), *before = copy_of(t), *after;
+	struct bc_tree *mirror;
+	struct bc_errinfo ei = {0};
+	struct bc_edit_batch b, u, r;
+	REQUIRE(bc_edit_batch_apply_undoable(&b, &t, ops, n, &ei) == 0);
+	after = copy_of(t);
+	mirror = copy_of(t);
+	CHECK(!same_bytes(before, after));
+	CHECK_EQ_INT(b.inv.nops, n);
+	CHECK_EQ_INT(b.inv.ops[0].kind, first);
+	CHECK(subtree_bytes(&b.inv) <= max_bytes);
+	/* Undo, on the tree and on the mirror. */
+	CHECK_EQ_INT(
+	    bc_edit_batch_apply_undoable(&u, &t, b.inv.ops, b.inv.nops, &ei),
+	    0);
+	CHECK(same_bytes(t, before));
+	CHECK_EQ_INT(replay(&mirror, &b.inv), 0);
+	CHECK(same_bytes(mirror, before));
+	/* Redo. */
+	CHECK_EQ_INT(u.inv.nops, n);
+	CHECK_EQ_INT(
+	    bc_edit_batch_apply_undoable(&r, &t, u.inv.ops, u.inv.nops, &ei),
+	    0);
+	CHECK(same_bytes(t, after));
+	CHECK_EQ_INT(replay(&mirror, &u.inv), 0);
+	CHECK(same_bytes(mirror, after));
+	/* And the undo again. */
+	CHECK_EQ_INT(replay(&mirror, &r.inv), 0);
+	CHECK(same_bytes(mirror, before));
+	bc_edit_batch_finish(&b);
+	bc_edit_batch_finish(&u);
+	bc_edit_batch_finish(&r);
+	bc_tree_destroy(t);
+	bc_tree_destroy(before);
+	bc_tree_destroy(after);
+	bc_tree_destroy(mirror);
+}
+
+/* An INSERT is undone by a REMOVE of what it inserted: no subtree. */
+static void insert_is_undone_by_remove(void)
+{
+	struct bc_proto_buf sub, grp;
+	float rad = 0.2f;
+	sphere_bytes(&sub, 30);
+	undo_redo_exact(
+	    &(struct bc_proto_edit_op){
+	        .kind = BC_PROTO_EDIT_INSERT,
+	        .node = 15,
+	        .position = 1,
+	        .subtree = {sub.data, (uint32_t)sub.len}},
+	    1, BC_PROTO_EDIT_REMOVE, 0);
+	/* An operator with its children, appended to the root. */
+	bc_proto_buf_init(&grp, 0);
+	bc_proto_scene_begin(&grp, NULL, 3);
+	bc_proto_scene_op(&grp, BC_OP_INTERSECTION, 31, 0, 0, 2);
+	bc_proto_scene_prim(&grp, BC_PRIM_SPHERE, 32, T0, R0, NULL, 1, &rad);
+	bc_proto_scene_prim(&grp, BC_PRIM_SPHERE, 33, T0, R0, NULL, 1, &rad);
+	undo_redo_exact(
+	    &(struct bc_proto_edit_op){
+	        .kind = BC_PROTO_EDIT_INSERT,
+	        .node = 10,
+	        .position = 4,
+	        .subtree = {grp.data, (uint32_t)grp.len}},
+	    1, BC_PROTO_EDIT_REMOVE, 0);
+	bc_proto_buf_finish(&sub);
+	bc_proto_buf_finish(&grp);
+}
+
+/* A REMOVE is undone by an INSERT of the removed subtree at its place:
+ * the middle child of three, the chain of unary nodes above a sphere
+ * (which the REMOVE takes with it); an operator left with one child goes
+ * too, and is put back by a REPLACE of that child by the operator's
+ * subtree (three nodes here). */
+static void remove_is_undone_by_insert_at_its_place(void)
+{
+	/* One sphere node: 39 bytes, plus the scene's flags and count. */
+	undo_redo_exact(&(struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_REMOVE,
+	                                           .node = 17},
+	                1, BC_PROTO_EDIT_INSERT, 5 + 39);
+	undo_redo_exact(&(struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_REMOVE,
+	                                           .node = 21},
+	                1, BC_PROTO_EDIT_INSERT, 5 + 10 + 10 + 39);
+	undo_redo_exact(&(struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_REMOVE,
+	                                           .node = 11},
+	                1, BC_PROTO_EDIT_INSERT, 5 + 51);
+	undo_redo_exact(&(struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_REMOVE,
+	                                           .node = 13},
+	                1, BC_PROTO_EDIT_REPLACE, 5 + 17 + 2 * 39);
+}
+
+/* A REPLACE is undone by a REPLACE of the new subtree by the old one: by
+ * a node of the same id, and by a new operator over the old children in
+ * another order (ids of the replaced subtree reused below its root). */
+static void replace_is_undone_by_replace(void)
+{
+	struct bc_proto_buf sub, swap;
+	float rad = 0.2f;
+	sphere_bytes(&sub, 15);
+	undo_redo_exact(
+	    &(struct bc_proto_edit_op){
+	        .kind = BC_PROTO_EDIT_REPLACE,
+	        .node = 15,
+	        .subtree = {sub.data, (uint32_t)sub.len}},
+	    1, BC_PROTO_EDIT_REPLACE, 5 + 17 + 3 * 39);
+	bc_proto_buf_init(&swap, 0);
+	bc_proto_scene_begin(&swap, NULL, 3);
+	bc_proto_scene_op(&swap, BC_OP_DIFFERENCE, 40, 0, 0, 2);
+	bc_proto_scene_prim(&swap, BC_PRIM_SPHERE, 14, T0, R0, NULL, 1, &rad);
+	bc_proto_scene_prim(&swap, BC_PRIM_SPHERE, 13, T0, R0, NULL, 1, &rad);
+	undo_redo_exact(
+	    &(struct bc_proto_edit_op){
+	        .kind = BC_PROTO_EDIT_REPLACE,
+	        .node = 12,
+	        .subtree = {swap.data, (uint32_t)swap.len}},
+	    1, BC_PROTO_EDIT_REPLACE, 5 + 17 + 2 * 39);
+	bc_proto_buf_finish(&sub);
+	bc_proto_buf_finish(&swap);
+}
+
+/* A move to another group (REMOVE, then INSERT of the same ids), a SET
+ * and a first colour in one batch: undone newest first, the colour by a
+ * one-node REPLACE (no SET takes a colour away). */
+static void regroup_batch_is_undone_newest_first(void)
+{
+	struct bc_proto_buf moved;
+	struct bc_proto_field mv = {BC_PROTO_FIELD_TRANSLATE, 3, {1, 2, 3, 0}};
+	struct bc_proto_field red = {BC_PROTO_FIELD_COLOR, 3, {1, 0, 0, 0}};
+	struct bc_proto_edit_op ops[4];
+	sphere_bytes(&moved, 16);
+	ops[0] =
+	    (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_REMOVE, .node = 16};
+	ops[1] = (struct bc_proto_edit_op){
+	    .kind = BC_PROTO_EDIT_INSERT,
+	    .node = 12,
+	    .position = 0,
+	    .subtree = {moved.data, (uint32_t)moved.len}};
+	ops[2] = set_op(11, &mv, 1);
+	ops[3] = set_op(16, &red, 1);
+	undo_redo_exact(ops, 4, BC_PROTO_EDIT_REPLACE, 3 * (5 + 51));
+	bc_proto_buf_finish(&moved);
+}
+
+/* A parameter step's states come back as SETs, and a first colour as a
+ * one-node REPLACE; a batch refused part way keeps no inverse. */
+static void saved_states_come_back_as_operations(void)
+{
+	struct bc_tree *t = wide_scene(), *before = copy_of(t);
+	struct bc_errinfo ei = {0};
+	struct bc_edit_batch b;
+	struct bc_edit_inverse inv;
+	struct bc_proto_field red = {BC_PROTO_FIELD_COLOR, 3, {1, 0, 0, 0}};
+	struct bc_proto_field mv = {BC_PROTO_FIELD_TRANSLATE, 3, {1, 2, 3, 0}};
+	struct bc_proto_edit_op ops[2] = {set_op(13, &red, 1),
+	                                  set_op(11, &mv, 1)};
+	REQUIRE(bc_edit_batch_apply_undoable(&b, &t, ops, 2, &ei) == 0);
+	CHECK(!b.structural && b.inv.nops == 0 && b.nsaved == 2);
+	REQUIRE(bc_edit_inverse_of_states(&inv, t, b.saved, b.nsaved) == 0);
+	CHECK_EQ_INT(inv.nops, 2);
+	CHECK_EQ_INT(inv.ops[0].kind, BC_PROTO_EDIT_REPLACE);
+	CHECK_EQ_INT(inv.ops[1].kind, BC_PROTO_EDIT_SET);
+	CHECK_EQ_INT(replay(&t, &inv), 0);
+	CHECK(same_bytes(t, before));
+	bc_edit_inverse_finish(&inv);
+	bc_edit_batch_finish(&b);
+	ops[1] =
+	    (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_REMOVE, .node = 99};
+	ops[0] =
+	    (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_REMOVE, .node = 17};
+	CHECK_EQ_INT(bc_edit_batch_apply_undoable(&b, &t, ops, 2, &ei),
+	             BC_ENONODE);
+	CHECK(b.inv.nops == 0 && b.inv.ops == NULL);
+	CHECK(same_bytes(t, before));
+	bc_tree_destroy(t);
+	bc_tree_destroy(before);
+}
+
+/* union 50 { sphere 51, union 52 { sphere 53, union 54 { sphere 55,
+ * union 56 { sphere 57, sphere 58 } } } }: removing 51, 53 and 55 takes
+ * an operator each time, and each would be put back with all below it,
+ * more than the scene: the inverse is one REPLACE of the root by the
+ * scene before, and is exact. */
+static void inverse_is_never_bigger_than_the_scene(void)
+{
+	struct bc_proto_buf b;
+	struct bc_tree *t = bc_tree_create(), *before, *after, *mirror;
+	struct bc_errinfo ei = {0};
+	struct bc_edit_batch e, u;
+	struct bc_proto_edit_op ops[3];
+	float r = 0.5f;
+	bc_proto_buf_init(&b, 0);
+	bc_proto_scene_begin(&b, NULL, 9);
+	for (uint32_t id = 50; id <= 56; id += 2) {
+		bc_proto_scene_op(&b, BC_OP_UNION, id, 0, 0, 2);
+		bc_proto_scene_prim(&b, BC_PRIM_SPHERE, id + 1, T0, R0, NULL, 1,
+		                    &r);
+	}
+	bc_proto_scene_prim(&b, BC_PRIM_SPHERE, 58, T0, R0, NULL, 1, &r);
+	REQUIRE(t && bc_scene_decode(b.data, b.len, t, NULL, NULL, NULL) == 0);
+	bc_proto_buf_finish(&b);
+	before = copy_of(t);
+	for (uint32_t i = 0; i < 3; i++) {
+		ops[i] = (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_REMOVE,
+		                                   .node = 51 + 2 * i};
+	}
+	REQUIRE(bc_edit_batch_apply_undoable(&e, &t, ops, 3, &ei) == 0);
+	after = copy_of(t);
+	mirror = copy_of(t);
+	CHECK_EQ_INT(e.inv.nops, 1);
+	CHECK_EQ_INT(e.inv.ops[0].kind, BC_PROTO_EDIT_REPLACE);
+	CHECK_EQ_INT(e.inv.ops[0].node, 56);
+	CHECK(e.inv.ops[0].subtree.len <= 5 + 4 * 17 + 5 * 39);
+	CHECK_EQ_INT(replay(&mirror, &e.inv), 0);
+	CHECK(same_bytes(mirror, before));
+	REQUIRE(bc_edit_batch_apply_undoable(&u, &t, e.inv.ops, e.inv.nops,
+	                                     &ei) == 0);
+	CHECK(same_bytes(t, before));
+	CHECK_EQ_INT(replay(&mirror, &u.inv), 0);
+	CHECK(same_bytes(mirror, after));
+	bc_edit_batch_finish(&e);
+	bc_edit_batch_finish(&u);
+	bc_tree_destroy(t);
+	bc_tree_destroy(before);
+	bc_tree_destroy(after);
+	bc_tree_destroy(mirror);
+}
+
 static const struct bc_test tests[] = {
     {"subtree_with_id_0_is_einval", subtree_with_id_0_is_einval},
     {"remove_root_is_einval", remove_root_is_einval},
@@ -397,6 +691,16 @@ static const struct bc_test tests[] = {
     {"unary_key_values", unary_key_values},
     {"remove_up_a_unary_chain_to_the_root_is_einval",
      remove_up_a_unary_chain_to_the_root_is_einval},
+    {"insert_is_undone_by_remove", insert_is_undone_by_remove},
+    {"remove_is_undone_by_insert_at_its_place",
+     remove_is_undone_by_insert_at_its_place},
+    {"replace_is_undone_by_replace", replace_is_undone_by_replace},
+    {"regroup_batch_is_undone_newest_first",
+     regroup_batch_is_undone_newest_first},
+    {"saved_states_come_back_as_operations",
+     saved_states_come_back_as_operations},
+    {"inverse_is_never_bigger_than_the_scene",
+     inverse_is_never_bigger_than_the_scene},
 };
 
 BC_TEST_MAIN(tests)

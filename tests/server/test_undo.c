@@ -6,7 +6,11 @@
  * and the scene equals what it was before (after) the changes undone
  * (redone). Undos name the edit and author they take back; a new edit
  * leaves nothing to redo; a restart replays the undos from the journal.
+ * The undo and redo of each kind of structural edit carry the subtrees of
+ * the change, not the scene, to the members and to the journal.
  */
+#include <dirent.h>
+
 #include "blobcast/alloc.h"
 #include "blobcast/blobtree.h"
 #include "blobcast/edit.h"
@@ -20,6 +24,10 @@ struct editor {
 	struct conn c;
 	uint32_t member; /* its member id in the session */
 	struct bc_tree *mirror;
+	/* The last EDIT_APPLIED answering it: the bytes of its subtrees, and
+	 * whether one of its operations replaced the root. */
+	size_t subtree_bytes;
+	bool replaced_root;
 };
 
 /* Replays every EDIT_APPLIED in what e has received, until (ms) one
@@ -30,6 +38,7 @@ static int await_applied(struct editor *e, uint32_t seq, int ms)
 	int64_t end = t_now_ms() + ms;
 	while (t_now_ms() < end) {
 		struct bc_errinfo ei = {0};
+		uint32_t root;
 		if (conn_recv(&e->c, 100) != 1) {
 			continue;
 		}
@@ -39,12 +48,24 @@ static int await_applied(struct editor *e, uint32_t seq, int ms)
 		if (e->c.m.type != BC_MSG_EDIT_APPLIED) {
 			continue;
 		}
+		root = bc_tree_root(e->mirror);
 		if (bc_edit_replay(&e->mirror, &e->c.m.edit_applied, &ei)) {
 			CHECK(!"an EDIT_APPLIED does not replay");
 			return -1;
 		}
 		if (e->c.m.edit_applied.author == e->member &&
 		    e->c.m.edit_applied.author_seq == seq) {
+			const struct bc_msg_edit_applied *a =
+			    &e->c.m.edit_applied;
+			e->subtree_bytes = 0;
+			e->replaced_root = false;
+			for (uint32_t i = 0; i < a->nops; i++) {
+				e->subtree_bytes += a->ops[i].subtree.len;
+				e->replaced_root =
+				    e->replaced_root ||
+				    (a->ops[i].kind == BC_PROTO_EDIT_REPLACE &&
+				     a->ops[i].node == root);
+			}
 			return e->c.m.flags;
 		}
 	}
@@ -303,9 +324,258 @@ static void two_editors_undo_and_redo_each_other(void)
 	bc_tree_destroy(after);
 }
 
+/* ---- structural steps, kept and sent in proportion to the change ---- */
+
+static const float T0[3] = {0, 0, 0}, R0[4] = {0, 0, 0, 1};
+
+/* union 1 { spheres 100 .. 100 + n - 1, union 5 { sphere 6, sphere 7 },
+ * offset 8 { sphere 9 } }, loaded into alice's session; both mirrors
+ * start from its SCENE_STATE. */
+static void load_spheres(struct editor *alice, struct editor *bob, uint32_t n)
+{
+	struct bc_proto_buf b;
+	struct bc_tree *t = bc_tree_create();
+	float r = 0.05f, amount = 0.02f;
+	REQUIRE(t);
+	bc_proto_buf_init(&b, 0);
+	bc_proto_scene_begin(&b, NULL, n + 6);
+	bc_proto_scene_op(&b, BC_OP_UNION, 1, 0, 0, n + 2);
+	for (uint32_t i = 0; i < n; i++) {
+		float at[3] = {(float)(i % 100) * 0.02f - 1.0f,
+		               (float)(i / 100) * 0.02f - 1.0f, 0.0f};
+		bc_proto_scene_prim(&b, BC_PRIM_SPHERE, 100 + i, at, R0, NULL,
+		                    1, &r);
+	}
+	bc_proto_scene_op(&b, BC_OP_UNION, 5, 0, 0, 2);
+	bc_proto_scene_prim(&b, BC_PRIM_SPHERE, 6, T0, R0, NULL, 1, &r);
+	bc_proto_scene_prim(&b, BC_PRIM_SPHERE, 7, T0, R0, NULL, 1, &r);
+	bc_proto_scene_unary(&b, BC_OP_OFFSET, 8, 1, &amount);
+	bc_proto_scene_prim(&b, BC_PRIM_SPHERE, 9, T0, R0, NULL, 1, &r);
+	REQUIRE(bc_scene_decode(b.data, b.len, t, NULL, NULL, NULL) == 0);
+	bc_proto_buf_finish(&b);
+	conn_load_tree(&alice->c, t, NULL);
+	bc_tree_destroy(alice->mirror);
+	REQUIRE((alice->mirror = scene_of(&alice->c)));
+	REQUIRE(conn_expect(&bob->c, BC_MSG_SCENE_STATE, 60000) == 1);
+	bc_tree_destroy(bob->mirror);
+	REQUIRE((bob->mirror = scene_of(&bob->c)));
+}
+
+static uint32_t send_ops(struct editor *e, const struct bc_proto_edit_op *ops,
+                         uint16_t n)
+{
+	struct bc_msg m = {.type = BC_MSG_EDIT};
+	m.edit.nops = n;
+	m.edit.ops = ops;
+	return conn_send(&e->c, &m);
+}
+
+/* A one-sphere subtree of id. */
+static struct bc_proto_buf sphere_bytes(uint32_t id)
+{
+	struct bc_proto_buf b;
+	float r = 0.1f;
+	bc_proto_buf_init(&b, 0);
+	bc_proto_scene_begin(&b, NULL, 1);
+	bc_proto_scene_prim(&b, BC_PRIM_SPHERE, id, T0, R0, NULL, 1, &r);
+	return b;
+}
+
+/* alice applies ops; bob undoes them, alice redoes them, bob undoes them
+ * again. Each time the session's scene (a joiner's) and both mirrors are
+ * the scene before (an undo) or after (the redo), node for node, and the
+ * EDIT_APPLIED of each undo and redo carries at most max_bytes of
+ * subtrees and replaces no root. */
+static void undo_redo_one(const struct daemon *d, struct editor *alice,
+                          struct editor *bob,
+                          const struct bc_proto_edit_op *ops, uint16_t n,
+                          size_t max_bytes)
+{
+	struct bc_tree *before = copy_of(alice->mirror), *after = NULL;
+	uint64_t o;
+	REQUIRE(before);
+	if (await_applied(alice, send_ops(alice, ops, n), 30000) < 0) {
+		fprintf(stderr, "  edit refused: %.*s\n",
+		        (int)alice->c.m.error.text.len,
+		        alice->c.m.error.text.ptr);
+		CHECK(!"the edit applies");
+		bc_tree_destroy(before);
+		return;
+	}
+	o = last_order(alice);
+	REQUIRE((after = copy_of(alice->mirror)));
+	CHECK(!same_tree(before, after));
+	check_state(d, alice, bob, after);
+	undo(bob, false, o, "alice");
+	CHECK(bob->subtree_bytes <= max_bytes);
+	CHECK(!bob->replaced_root);
+	check_state(d, alice, bob, before);
+	undo(alice, true, o, "alice");
+	CHECK(alice->subtree_bytes <= max_bytes);
+	CHECK(!alice->replaced_root);
+	check_state(d, alice, bob, after);
+	/* Undone again (the inverse of the redo): the next case starts from
+	 * the same scene. */
+	undo(bob, false, o, "alice");
+	CHECK(bob->subtree_bytes <= max_bytes);
+	check_state(d, alice, bob, before);
+	bc_tree_destroy(before);
+	bc_tree_destroy(after);
+}
+
+/* Every structural edit kind on a 2000-sphere scene (78 KB encoded):
+ * INSERT, REMOVE (of one of many children; of the child of a unary node,
+ * which takes the node too; of one of two children, which takes their
+ * operator), REPLACE, and a move to another group (REMOVE and INSERT of
+ * the same id). Undo and redo restore the exact scene on the server and
+ * on mirrors replaying the broadcast EDIT_APPLIED, each carrying the
+ * subtrees of the change -- a sphere, an operator of two -- not the
+ * scene; a restart restores the same scene. */
+static void structural_undo_redo_exact_and_small(void)
+{
+	struct daemon d;
+	struct editor alice = {0}, bob = {0};
+	struct bc_proto_buf s1 = sphere_bytes(3), s2 = sphere_bytes(5);
+	struct bc_proto_buf s3 = sphere_bytes(103);
+	struct bc_proto_edit_op op[2];
+	char dir[64];
+	/* A sphere node is 39 bytes, an operator 17; scene header 5. */
+	const size_t one = 5 + 39, group = 5 + 17 + 2 * 39;
+	snprintf(dir, sizeof(dir), "%s/kinds", base_dir);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	join(&alice, &d, "alice", true);
+	join(&bob, &d, "bob", false);
+	load_spheres(&alice, &bob, 2000);
+
+	op[0] =
+	    (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_INSERT,
+	                              .node = 1,
+	                              .position = 7,
+	                              .subtree = {s1.data, (uint32_t)s1.len}};
+	undo_redo_one(&d, &alice, &bob, op, 1, one);
+	op[0] = (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_REMOVE,
+	                                  .node = 150};
+	undo_redo_one(&d, &alice, &bob, op, 1, one);
+	op[0].node = 9; /* offset 8 goes with it */
+	undo_redo_one(&d, &alice, &bob, op, 1, one + 10);
+	op[0].node = 6; /* union 5 goes, sphere 7 in its place */
+	undo_redo_one(&d, &alice, &bob, op, 1, group);
+	op[0] =
+	    (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_REPLACE,
+	                              .node = 5,
+	                              .subtree = {s2.data, (uint32_t)s2.len}};
+	undo_redo_one(&d, &alice, &bob, op, 1, group + one);
+	op[0] = (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_REMOVE,
+	                                  .node = 103};
+	op[1] =
+	    (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_INSERT,
+	                              .node = 5,
+	                              .position = 1,
+	                              .subtree = {s3.data, (uint32_t)s3.len}};
+	undo_redo_one(&d, &alice, &bob, op, 2, 2 * one);
+
+	/* The journal, undos and redos included, restores that scene. */
+	conn_close(&alice.c);
+	conn_close(&bob.c);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGKILL)) == 0);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	{
+		struct bc_tree *j = joiner_scene(&d);
+		CHECK(j && same_tree(alice.mirror, j));
+		bc_tree_destroy(j);
+	}
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+	bc_proto_buf_finish(&s1);
+	bc_proto_buf_finish(&s2);
+	bc_proto_buf_finish(&s3);
+	bc_tree_destroy(alice.mirror);
+	bc_tree_destroy(bob.mirror);
+}
+
+/* Bytes of the session's journals (DIR/sessions/u/journal-*.bin). */
+static long long journal_bytes(const char *dir)
+{
+	char path[160];
+	long long total = 0;
+	DIR *dp;
+	struct dirent *de;
+	snprintf(path, sizeof(path), "%s/sessions/u", dir);
+	if (!(dp = opendir(path))) {
+		return -1;
+	}
+	while ((de = readdir(dp))) {
+		struct stat st;
+		char file[512];
+		if (strncmp(de->d_name, "journal-", 8) != 0) {
+			continue;
+		}
+		snprintf(file, sizeof(file), "%s/%s", path, de->d_name);
+		if (stat(file, &st) == 0) {
+			total += (long long)st.st_size;
+		}
+	}
+	closedir(dp);
+	return total;
+}
+
+/* The UNDO of an INSERT of one sphere into a 10 000-sphere scene (390 KB
+ * encoded) is journaled as a REMOVE: its record takes well under 4 KiB,
+ * and so does the REDO's (an INSERT of the sphere). A restart on the same
+ * data directory replays them to the same scene. */
+static void undo_of_an_insert_journals_a_small_record(void)
+{
+	struct daemon d;
+	struct editor alice = {0}, bob = {0};
+	struct bc_proto_buf s1 = sphere_bytes(3);
+	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_INSERT,
+	                              .node = 1,
+	                              .position = 5000,
+	                              .subtree = {s1.data, (uint32_t)s1.len}};
+	struct bc_tree *before;
+	long long j0, j1, j2;
+	char dir[64];
+	uint64_t o;
+	snprintf(dir, sizeof(dir), "%s/journal", base_dir);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	join(&alice, &d, "alice", true);
+	join(&bob, &d, "bob", false);
+	load_spheres(&alice, &bob, 10000);
+	REQUIRE((before = copy_of(alice.mirror)));
+	REQUIRE(await_applied(&alice, send_ops(&alice, &op, 1), 30000) >= 0);
+	o = last_order(&alice);
+	REQUIRE((j0 = journal_bytes(dir)) > 0);
+	undo(&bob, false, o, "alice");
+	j1 = journal_bytes(dir);
+	undo(&bob, true, o, "alice");
+	j2 = journal_bytes(dir);
+	CHECK(j1 - j0 > 0 && j1 - j0 < 4096);
+	CHECK(j2 - j1 > 0 && j2 - j1 < 4096);
+	undo(&alice, false, o, "alice");
+	check_state(&d, &alice, &bob, before);
+
+	conn_close(&alice.c);
+	conn_close(&bob.c);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGKILL)) == 0);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	{
+		struct bc_tree *j = joiner_scene(&d);
+		CHECK(j && same_tree(before, j));
+		bc_tree_destroy(j);
+	}
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+	bc_proto_buf_finish(&s1);
+	bc_tree_destroy(before);
+	bc_tree_destroy(alice.mirror);
+	bc_tree_destroy(bob.mirror);
+}
+
 static const struct bc_test tests[] = {
     {"two_editors_undo_and_redo_each_other",
      two_editors_undo_and_redo_each_other},
+    {"structural_undo_redo_exact_and_small",
+     structural_undo_redo_exact_and_small},
+    {"undo_of_an_insert_journals_a_small_record",
+     undo_of_an_insert_journals_a_small_record},
 };
 
 int main(int argc, char **argv)

@@ -77,6 +77,38 @@ void bc_edit_state_set(const struct bc_edit_saved *s, bool is_op,
                        struct bc_proto_edit_op *e,
                        struct bc_proto_field *fields);
 
+/*
+ * Operations that undo a change: applied as one batch (bc_edit_batch_apply)
+ * to the tree the change made, they give back the tree before it, node for
+ * node, ids included, and take memory and bytes on the wire in proportion
+ * to the change, not the scene. An INSERT is undone by a REMOVE, a REMOVE
+ * by an INSERT of the removed subtree with its ids at its place, a REPLACE
+ * by a REPLACE with the earlier subtree, a SET by a SET of every field of
+ * the earlier state. Two cases need a REPLACE of a bigger subtree, the
+ * smallest that is exact: a REMOVE that took an operator left with one
+ * child (undone by a REPLACE of that child by the operator's earlier
+ * subtree) and a SET that gave a primitive its first colour (a REPLACE of
+ * the primitive by itself without it). Each operation owns its fields or
+ * subtree bytes; bc_edit_inverse_finish() frees them.
+ */
+struct bc_edit_inverse {
+	struct bc_proto_edit_op *ops; /* in the order to apply them */
+	void **owned;                 /* per operation: what it points to */
+	uint32_t nops;
+	size_t bytes; /* memory held, everything counted */
+};
+
+/* Frees what inv holds; accepts a zeroed inv. */
+void bc_edit_inverse_finish(struct bc_edit_inverse *inv);
+
+/* The operations that put the saved states s[0..n) back on their nodes in
+ * t (distinct ids; t holds the nodes as they are now): a SET each, or the
+ * one-node REPLACE above where a SET cannot take a colour away. inv is
+ * reset on entry. Returns 0 or BC_ENOMEM (inv then empty). */
+int bc_edit_inverse_of_states(struct bc_edit_inverse *inv,
+                              const struct bc_tree *t,
+                              const struct bc_edit_saved *s, uint32_t n);
+
 /* What an applied batch needs to be undone. Zero it before use;
  * bc_edit_batch_finish() frees it. */
 struct bc_edit_batch {
@@ -84,6 +116,8 @@ struct bc_edit_batch {
 	struct bc_tree *old; /* structural: the tree before the batch */
 	struct bc_edit_saved *saved; /* parameter batch: nodes before it */
 	uint32_t nsaved;
+	/* Structural, bc_edit_batch_apply_undoable(): what undoes it. */
+	struct bc_edit_inverse inv;
 };
 
 /*
@@ -98,11 +132,21 @@ int bc_edit_batch_apply(struct bc_edit_batch *b, struct bc_tree **tp,
                         const struct bc_proto_edit_op *ops, uint32_t n,
                         struct bc_errinfo *ei);
 
+/* As bc_edit_batch_apply(), and for a structural batch also writes into
+ * b->inv the operations that undo it, computed operation by operation as
+ * the batch applies (the earlier subtrees encoded from the tree before
+ * each operation). A batch whose inverse cannot be kept fails (BC_ENOMEM;
+ * BC_ELIMIT when a subtree it removes or replaces is over one message). */
+int bc_edit_batch_apply_undoable(struct bc_edit_batch *b, struct bc_tree **tp,
+                                 const struct bc_proto_edit_op *ops, uint32_t n,
+                                 struct bc_errinfo *ei);
+
 /* Undoes the batch b applied to *tp (cannot fail: it only puts back states
  * that were valid). b is then empty. */
 void bc_edit_batch_undo(struct bc_edit_batch *b, struct bc_tree **tp);
 
-/* Frees what b holds (the old tree, the saved nodes); accepts a zeroed b. */
+/* Frees what b holds (the old tree, the saved nodes, the inverse); accepts
+ * a zeroed b. */
 void bc_edit_batch_finish(struct bc_edit_batch *b);
 
 /* Replays EDIT_APPLIED's operations into a mirror, atomically, with the
