@@ -290,7 +290,6 @@ int bc__replay_record(void *ud, uint64_t order, const uint8_t *rec, size_t len)
 	struct bc_proto_reader r;
 	struct bc_msg m;
 	struct bc_errinfo ei = {0};
-	struct bc_edit_batch b;
 	int rc;
 	(void)order;
 	/* A SESSION_CAMERA record (present.c), a SCENE_LOAD or an EDIT. */
@@ -300,10 +299,13 @@ int bc__replay_record(void *ud, uint64_t order, const uint8_t *rec, size_t len)
 	}
 	bc_proto_reader_init(&r, NULL);
 	rc = bc_proto_decode_payload(&r, BC_MSG_EDIT, 0, 0, rec, len, &m, &ei);
-	if (!rc) {
-		rc = bc_edit_batch_apply(&b, ctx->tree, m.edit.ops, m.edit.nops,
-		                         &ei);
-		bc_edit_batch_finish(&b);
+	/* In place, each operation in turn: no copy of the tree per record
+	 * (a journal of structural edits on a big scene replays in time
+	 * proportional to the edits). These records applied when they were
+	 * acknowledged; one that fails now is a loss, which leaves the
+	 * session not whole (store.h), whatever state it left. */
+	for (uint16_t i = 0; !rc && i < m.edit.nops; i++) {
+		rc = bc_edit_apply_op(*ctx->tree, &m.edit.ops[i], &ei);
 	}
 	if (rc) {
 		bc_log(BC_LOG_ERROR, "journal replay: %s", ei.msg);
