@@ -2026,13 +2026,28 @@ export function applyOps(scene, ops, layout = () => null) {
 			while (n.parent && n.parent.unary) {
 				n = n.parent;
 			}
-			if (n.parent) {
-				n.parent.children.splice(
-					n.parent.children.indexOf(n), 1);
+			const p = n.parent;
+			if (p) {
+				p.children.splice(p.children.indexOf(n), 1);
 			} else {
 				scene.root = null;
 			}
 			forget(n);
+			/* An operator left with one child is replaced by that
+			 * child, as blobtree does (bc_tree_remove). */
+			if (p && p.children.length === 1) {
+				const only = p.children[0];
+				only.parent = p.parent;
+				if (p.parent) {
+					p.parent.children[
+						p.parent.children.indexOf(p)] = only;
+				} else {
+					scene.root = only;
+				}
+				if (scene.byId.get(p.id) === p) {
+					scene.byId.delete(p.id);
+				}
+			}
 			touched.push(op.node);
 			break;
 		}

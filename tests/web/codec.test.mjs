@@ -519,6 +519,31 @@ test('applyOps: set, insert, remove, replace follow the server', () => {
 		depth: 2 });
 });
 
+test('applyOps: a REMOVE that leaves an operator one child collapses it', () => {
+	/* union 1 {sphere 100, sphere 101, union 5 {sphere 6, sphere 7}}:
+	 * removing 6 leaves union 5 one child, which takes its place, as
+	 * blobtree's bc_tree_remove does (the server's scene). */
+	const sph = (id) => ({ isOp: false, kind: 1, id, translate: [0, 0, 0],
+		rotate: [0, 0, 0, 1], color: null, params: [0.5] });
+	const un = (id, children) => ({ isOp: true, kind: 1, id, blend: 0,
+		range: 0, children });
+	const s = P.parseScene(P.encodeScene({ root: un(1, [sph(100), sph(101),
+		un(5, [sph(6), sph(7)])]) }));
+	P.applyOps(s, [{ kind: P.EDIT.REMOVE, node: 6 }]);
+	assert.equal(s.byId.has(5), false);
+	assert.equal(s.byId.has(6), false);
+	assert.deepEqual(s.root.children.map((c) => c.id), [100, 101, 7]);
+	assert.equal(s.byId.get(7).parent, s.root);
+	/* Down to the root: removing 100 then 101 leaves 7 the root. */
+	P.applyOps(s, [{ kind: P.EDIT.REMOVE, node: 100 },
+		{ kind: P.EDIT.REMOVE, node: 101 }]);
+	assert.equal(s.root, s.byId.get(7));
+	assert.equal(s.root.parent, null);
+	assert.equal(s.byId.has(1), false);
+	assert.deepEqual(P.scanScene(P.encodeScene(s)), { has_camera: false,
+		nodes: 1, prims: 1, ops: 0, depth: 1 });
+});
+
 test('totals', () => {
 	/* Runs last (node:test keeps file order): every entry of every
 	 * message file and of framing.json went through. */
