@@ -75,6 +75,9 @@ int bc_ops_copy(struct bc_ops_copy *out, const struct bc_proto_edit_op *ops,
 	if (n) {
 		memcpy(out->ops, ops, (size_t)n * sizeof(*ops));
 	}
+	/* Every field array first, then the subtree bytes: a subtree of a
+	 * length that is no multiple of 4 must not leave the next array
+	 * misaligned (the fields hold floats). */
 	for (uint32_t i = 0; i < n; i++) {
 		struct bc_proto_edit_op *op = &out->ops[i];
 		size_t fbytes = (size_t)op->nfields * sizeof(*op->fields);
@@ -84,6 +87,9 @@ int bc_ops_copy(struct bc_ops_copy *out, const struct bc_proto_edit_op *ops,
 			    (struct bc_proto_field *)(void *)(out->blob + at);
 			at += fbytes;
 		}
+	}
+	for (uint32_t i = 0; i < n; i++) {
+		struct bc_proto_edit_op *op = &out->ops[i];
 		if (op->subtree.len) {
 			memcpy(out->blob + at, ops[i].subtree.ptr,
 			       op->subtree.len);

@@ -84,6 +84,9 @@ static void on_connection(uv_stream_t *server, int status)
 	}
 	c->h.handle.data = c;
 	uv_timer_init(n->loop, &c->hello_timer);
+	/* Before anything can discard it: both handles' close callbacks
+	 * find the connection through data. */
+	c->hello_timer.data = c;
 	c->is_tcp = tcp;
 	c->accepted_ms = uv_now(n->loop);
 	if (uv_accept(server, &c->h.stream) != 0) {

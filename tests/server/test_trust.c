@@ -20,9 +20,16 @@
  *  - 400 sessions on disk and a limit of 128 descriptors: the daemon
  *    starts, lists them and serves one;
  *  - a structural EDIT past the depth a snapshot holds (1023) is refused
- *    with EDEPTH; up to it, the scene survives a restart.
+ *    with EDEPTH; up to it, the scene survives a restart;
+ *  - one EDIT of an INSERT whose subtree is no multiple of 4 bytes long
+ *    and a SET applies (the daemon's copy of the operations once put the
+ *    SET's fields at a misaligned address: the sanitizer daemon died);
+ *  - TCP connections reset before they are accepted are let go without
+ *    harm (refusing one dereferenced a handle not yet set up).
  */
+#include <arpa/inet.h>
 #include <errno.h>
+#include <netinet/in.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <time.h>
@@ -550,7 +557,108 @@ static void an_edit_past_the_snapshot_depth_is_refused(void)
 	CHECK_EQ_INT(daemon_stop(&d, SIGTERM), 0);
 }
 
+static void a_short_subtree_then_a_set_applies(void)
+{
+	char dir[96];
+	struct daemon d;
+	struct conn a;
+	struct bc_msg m = {.type = BC_MSG_EDIT};
+	struct bc_proto_edit_op ops[2] = {{.kind = BC_PROTO_EDIT_INSERT},
+	                                  {.kind = BC_PROTO_EDIT_SET}};
+	struct bc_proto_field f = {.field = BC_PROTO_FIELD_TRANSLATE,
+	                           .count = 3,
+	                           .v = {1.0f, 2.0f, 3.0f}};
+	struct bc_proto_buf b;
+	uint32_t seq;
+	snprintf(dir, sizeof(dir), "%s/align", base_dir);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	member(&a, &d, "editor", "align", true);
+	/* offset(sphere): 54 bytes of subtree. */
+	bc_proto_buf_init(&b, 0);
+	REQUIRE(bc_proto_scene_begin(&b, NULL, 2) == 0);
+	REQUIRE(bc_proto_scene_unary(&b, 7, 0x1000, 1,
+	                             (const float[]){0.1f}) == 0);
+	REQUIRE(bc_proto_scene_prim(&b, 1, 0x1001, (const float[]){0, 0, 0},
+	                            (const float[]){0, 0, 0, 1}, NULL, 1,
+	                            (const float[]){0.5f}) == 0);
+	CHECK(b.len % 4 != 0);
+	REQUIRE(conn_expect(&a, BC_MSG_SCENE_STATE, 20000) == 1);
+	{
+		struct bc_tree *t = scene_of(&a);
+		REQUIRE(t);
+		ops[0].node = bc_tree_root(t);
+		bc_tree_destroy(t);
+	}
+	ops[0].position = 0;
+	ops[0].subtree.ptr = b.data;
+	ops[0].subtree.len = (uint32_t)b.len;
+	ops[1].node = 0x1001;
+	ops[1].nfields = 1;
+	ops[1].fields = &f;
+	m.edit.nops = 2;
+	m.edit.ops = ops;
+	REQUIRE((seq = conn_send(&a, &m)));
+	bc_proto_buf_finish(&b);
+	do {
+		REQUIRE(conn_expect(&a, BC_MSG_EDIT_APPLIED, 20000) == 1);
+	} while (a.m.edit_applied.author_seq != seq);
+	conn_close(&a);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
+/* A free TCP port on 127.0.0.1 (bound, then let go). */
+static int free_port(void)
+{
+	struct sockaddr_in sa = {.sin_family = AF_INET};
+	socklen_t len = sizeof(sa);
+	int fd = socket(AF_INET, SOCK_STREAM, 0), port = 0;
+	sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+	if (fd >= 0 && bind(fd, (struct sockaddr *)&sa, sizeof(sa)) == 0 &&
+	    getsockname(fd, (struct sockaddr *)&sa, &len) == 0) {
+		port = ntohs(sa.sin_port);
+	}
+	close(fd);
+	return port;
+}
+
+static void reset_connections_are_let_go(void)
+{
+	char dir[96], listen_on[32];
+	struct daemon d;
+	struct conn c;
+	int port = free_port();
+	const char *extra[] = {"--listen", listen_on, NULL};
+	struct sockaddr_in sa = {.sin_family = AF_INET};
+	REQUIRE(port > 0);
+	snprintf(listen_on, sizeof(listen_on), "127.0.0.1:%d", port);
+	snprintf(dir, sizeof(dir), "%s/reset", base_dir);
+	REQUIRE(daemon_start_with(&d, dir, extra) == 0);
+	sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+	sa.sin_port = htons((uint16_t)port);
+	/* Connect and reset at once (SO_LINGER 0): the peer is gone before
+	 * the daemon accepts, so it is refused (no peer address). */
+	for (int i = 0; i < 400; i++) {
+		struct linger lg = {1, 0};
+		int fd = socket(AF_INET, SOCK_STREAM, 0);
+		REQUIRE(fd >= 0);
+		setsockopt(fd, SOL_SOCKET, SO_LINGER, &lg, sizeof(lg));
+		if (connect(fd, (struct sockaddr *)&sa, sizeof(sa)) != 0) {
+			close(fd);
+			break;
+		}
+		close(fd);
+	}
+	/* Still there and serving. */
+	REQUIRE(conn_open(&c, &d) == 0);
+	CHECK(conn_hello(&c, "after") == 0);
+	conn_close(&c);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
 static const struct bc_test tests[] = {
+    {"a_short_subtree_then_a_set_applies",
+     a_short_subtree_then_a_set_applies},
+    {"reset_connections_are_let_go", reset_connections_are_let_go},
     {"an_edit_past_the_snapshot_depth_is_refused",
      an_edit_past_the_snapshot_depth_is_refused},
     {"more_sessions_than_file_descriptors",
