@@ -406,7 +406,7 @@ struct fz {
 	struct bc_proto_reader r;
 	struct bc_msg m;
 	uint32_t seq;
-	bool welcomed, in_session, closed, fatal;
+	bool in_session, closed, fatal;
 	/* The daemon has sent something or closed: it accepted the link. */
 	bool heard;
 	/* Something that may desynchronise the stream was sent when the
@@ -540,9 +540,6 @@ static void fz_handle(struct fz *f)
 	const struct bc_msg *m = &f->m;
 	atomic_fetch_add(&n_answers[m->type], 1);
 	switch (m->type) {
-	case BC_MSG_WELCOME:
-		f->welcomed = true;
-		break;
 	case BC_MSG_ERROR:
 		atomic_fetch_add(
 		    &n_errors[m->error.code < BC_ERR_COUNT ? m->error.code
@@ -1501,7 +1498,7 @@ static int fz_open(struct fz *f)
 	bc_proto_reader_init(&f->r, &(struct bc_proto_reader_opts){
 	                                .side = BC_PROTO_SIDE_CLIENT});
 	f->seq = 0;
-	f->welcomed = f->in_session = f->closed = f->fatal = f->risky = false;
+	f->in_session = f->closed = f->fatal = f->risky = false;
 	f->heard = false;
 	f->pings_out = 0;
 	f->enter_seq = 0;
