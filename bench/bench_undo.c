@@ -25,32 +25,6 @@
 
 static const float T0[3] = {0, 0, 0}, R0[4] = {0, 0, 0, 1};
 
-/* Bytes of the session's journals (DIR/sessions/bench/journal-*.bin). */
-static long long journal_bytes(const char *dir)
-{
-	char path[160];
-	long long total = 0;
-	DIR *dp;
-	struct dirent *de;
-	snprintf(path, sizeof(path), "%s/sessions/bench", dir);
-	if (!(dp = opendir(path))) {
-		return -1;
-	}
-	while ((de = readdir(dp))) {
-		struct stat st;
-		char file[512];
-		if (strncmp(de->d_name, "journal-", 8) != 0) {
-			continue;
-		}
-		snprintf(file, sizeof(file), "%s/%s", path, de->d_name);
-		if (stat(file, &st) == 0) {
-			total += (long long)st.st_size;
-		}
-	}
-	closedir(dp);
-	return total;
-}
-
 /* Waits for the EDIT_APPLIED answering seq; returns its subtree bytes,
  * -1 on an ERROR or a timeout. */
 static long long await_applied(struct conn *c, uint32_t seq)
@@ -186,7 +160,7 @@ int main(int argc, char **argv)
 	if (await_applied(&c, conn_send(&c, &m)) < 0) {
 		return 1;
 	}
-	j0 = journal_bytes(dir);
+	j0 = session_journal_bytes(dir, "bench");
 	for (int i = 0; i < steps; i++) {
 		struct bc_msg u = {.type = i % 2 ? BC_MSG_REDO : BC_MSG_UNDO};
 		int64_t t0 = t_now_ms();
@@ -197,7 +171,7 @@ int main(int argc, char **argv)
 		ms[i] = t_now_ms() - t0;
 		carried += k;
 	}
-	j1 = journal_bytes(dir);
+	j1 = session_journal_bytes(dir, "bench");
 	conn_close(&c);
 	daemon_stop(&d, SIGKILL);
 	replay_ms = restart_ms(&d, dir);

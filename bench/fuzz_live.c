@@ -321,23 +321,6 @@ static int start_daemon(void)
 	return 0;
 }
 
-/* A free TCP port on 127.0.0.1 (kept for every restart). */
-static int pick_port(void)
-{
-	struct sockaddr_in sa = {.sin_family = AF_INET};
-	socklen_t len = sizeof(sa);
-	int fd = socket(AF_INET, SOCK_STREAM, 0), port = 0;
-	sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-	if (fd >= 0 && bind(fd, (struct sockaddr *)&sa, sizeof(sa)) == 0 &&
-	    getsockname(fd, (struct sockaddr *)&sa, &len) == 0) {
-		port = ntohs(sa.sin_port);
-	}
-	if (fd >= 0) {
-		close(fd);
-	}
-	return port;
-}
-
 static int tcp_connect(void)
 {
 	struct sockaddr_in sa = {.sin_family = AF_INET};
@@ -2271,7 +2254,7 @@ int main(int argc, char **argv)
 	if (load_vectors(opt.vectors) < 0) {
 		printf("warning: no test vectors read from %s\n", opt.vectors);
 	}
-	if (!(tcp_port = pick_port())) {
+	if (!(tcp_port = daemon_free_port())) {
 		fprintf(stderr, "no free TCP port\n");
 		return 2;
 	}

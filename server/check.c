@@ -72,16 +72,18 @@ static void check_one(void *ud, const char *name)
 		        "%s: whole: edit %llu, %u primitives (%u snapshot(s), "
 		        "%u of them damaged and covered by the journals)\n",
 		        name, (unsigned long long)c.order,
-		        bc_tree_prim_count(t), c.snapshots, c.damaged_snapshots);
+		        bc_tree_prim_count(t), c.snapshots,
+		        c.damaged_snapshots);
 	} else {
 		fprintf(k->out,
 		        "%s: NOT WHOLE: %s; its files give edits up to %llu "
 		        "of %llu%s\n",
 		        name, c.why, (unsigned long long)c.order,
 		        (unsigned long long)c.frontier,
-		        k->repair ? "" : "; blobcastd will not serve it "
-		                         "(--repair sets its files aside and "
-		                         "goes on from there)");
+		        k->repair ? ""
+		                  : "; blobcastd will not serve it "
+		                    "(--repair sets its files aside and "
+		                    "goes on from there)");
 		if (k->repair) {
 			repair(k, name, &t, &cam, &c);
 		} else {

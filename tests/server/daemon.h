@@ -6,8 +6,11 @@
 #ifndef BLOBCAST_TESTS_DAEMON_H
 #define BLOBCAST_TESTS_DAEMON_H
 
+#include <arpa/inet.h>
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <netinet/in.h>
 #include <poll.h>
 #include <signal.h>
 #include <stdio.h>
@@ -334,6 +337,50 @@ static inline uint32_t conn_move(struct conn *c, uint32_t id, float x, float y,
 	m.edit.nops = 1;
 	m.edit.ops = &op;
 	return conn_send(c, &m);
+}
+
+/* A free TCP port on 127.0.0.1 (bound, then let go), 0 when none. */
+static inline int daemon_free_port(void)
+{
+	struct sockaddr_in sa = {.sin_family = AF_INET};
+	socklen_t len = sizeof(sa);
+	int fd = socket(AF_INET, SOCK_STREAM, 0), port = 0;
+	sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+	if (fd >= 0 && bind(fd, (struct sockaddr *)&sa, sizeof(sa)) == 0 &&
+	    getsockname(fd, (struct sockaddr *)&sa, &len) == 0) {
+		port = ntohs(sa.sin_port);
+	}
+	if (fd >= 0) {
+		close(fd);
+	}
+	return port;
+}
+
+/* Bytes of session name's journals in data directory dir
+ * (DIR/sessions/NAME/journal-*.bin), -1 when it cannot be read. */
+static inline long long session_journal_bytes(const char *dir, const char *name)
+{
+	char path[512];
+	long long total = 0;
+	DIR *dp;
+	struct dirent *de;
+	snprintf(path, sizeof(path), "%s/sessions/%s", dir, name);
+	if (!(dp = opendir(path))) {
+		return -1;
+	}
+	while ((de = readdir(dp))) {
+		struct stat st;
+		char file[1024];
+		if (strncmp(de->d_name, "journal-", 8) != 0) {
+			continue;
+		}
+		snprintf(file, sizeof(file), "%s/%s", path, de->d_name);
+		if (stat(file, &st) == 0) {
+			total += (long long)st.st_size;
+		}
+	}
+	closedir(dp);
+	return total;
 }
 
 #if defined(BLOBCAST_TESTS_TEST_H)

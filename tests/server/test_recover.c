@@ -54,8 +54,8 @@ static void move_to(struct conn *c, int k, uint64_t *order)
 }
 
 /* A joiner's SCENE_STATE of session s: its order and node 2's x. */
-static void joined_state(const struct daemon *d, const char *s,
-                         uint64_t *order, float *x)
+static void joined_state(const struct daemon *d, const char *s, uint64_t *order,
+                         float *x)
 {
 	struct conn j;
 	struct bc_tree *t;

@@ -576,8 +576,8 @@ static void a_short_subtree_then_a_set_applies(void)
 	/* offset(sphere): 54 bytes of subtree. */
 	bc_proto_buf_init(&b, 0);
 	REQUIRE(bc_proto_scene_begin(&b, NULL, 2) == 0);
-	REQUIRE(bc_proto_scene_unary(&b, 7, 0x1000, 1,
-	                             (const float[]){0.1f}) == 0);
+	REQUIRE(bc_proto_scene_unary(&b, 7, 0x1000, 1, (const float[]){0.1f}) ==
+	        0);
 	REQUIRE(bc_proto_scene_prim(&b, 1, 0x1001, (const float[]){0, 0, 0},
 	                            (const float[]){0, 0, 0, 1}, NULL, 1,
 	                            (const float[]){0.5f}) == 0);
@@ -606,27 +606,12 @@ static void a_short_subtree_then_a_set_applies(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
-/* A free TCP port on 127.0.0.1 (bound, then let go). */
-static int free_port(void)
-{
-	struct sockaddr_in sa = {.sin_family = AF_INET};
-	socklen_t len = sizeof(sa);
-	int fd = socket(AF_INET, SOCK_STREAM, 0), port = 0;
-	sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-	if (fd >= 0 && bind(fd, (struct sockaddr *)&sa, sizeof(sa)) == 0 &&
-	    getsockname(fd, (struct sockaddr *)&sa, &len) == 0) {
-		port = ntohs(sa.sin_port);
-	}
-	close(fd);
-	return port;
-}
-
 static void reset_connections_are_let_go(void)
 {
 	char dir[96], listen_on[32];
 	struct daemon d;
 	struct conn c;
-	int port = free_port();
+	int port = daemon_free_port();
 	const char *extra[] = {"--listen", listen_on, NULL};
 	struct sockaddr_in sa = {.sin_family = AF_INET};
 	REQUIRE(port > 0);
@@ -656,8 +641,7 @@ static void reset_connections_are_let_go(void)
 }
 
 static const struct bc_test tests[] = {
-    {"a_short_subtree_then_a_set_applies",
-     a_short_subtree_then_a_set_applies},
+    {"a_short_subtree_then_a_set_applies", a_short_subtree_then_a_set_applies},
     {"reset_connections_are_let_go", reset_connections_are_let_go},
     {"an_edit_past_the_snapshot_depth_is_refused",
      an_edit_past_the_snapshot_depth_is_refused},

@@ -492,32 +492,6 @@ static void structural_undo_redo_exact_and_small(void)
 	bc_tree_destroy(bob.mirror);
 }
 
-/* Bytes of the session's journals (DIR/sessions/u/journal-*.bin). */
-static long long journal_bytes(const char *dir)
-{
-	char path[160];
-	long long total = 0;
-	DIR *dp;
-	struct dirent *de;
-	snprintf(path, sizeof(path), "%s/sessions/u", dir);
-	if (!(dp = opendir(path))) {
-		return -1;
-	}
-	while ((de = readdir(dp))) {
-		struct stat st;
-		char file[512];
-		if (strncmp(de->d_name, "journal-", 8) != 0) {
-			continue;
-		}
-		snprintf(file, sizeof(file), "%s/%s", path, de->d_name);
-		if (stat(file, &st) == 0) {
-			total += (long long)st.st_size;
-		}
-	}
-	closedir(dp);
-	return total;
-}
-
 /* The UNDO of an INSERT of one sphere into a 10 000-sphere scene (390 KB
  * encoded) is journaled as a REMOVE: its record takes well under 4 KiB,
  * and so does the REDO's (an INSERT of the sphere). A restart on the same
@@ -543,11 +517,11 @@ static void undo_of_an_insert_journals_a_small_record(void)
 	REQUIRE((before = copy_of(alice.mirror)));
 	REQUIRE(await_applied(&alice, send_ops(&alice, &op, 1), 30000) >= 0);
 	o = last_order(&alice);
-	REQUIRE((j0 = journal_bytes(dir)) > 0);
+	REQUIRE((j0 = session_journal_bytes(dir, "u")) > 0);
 	undo(&bob, false, o, "alice");
-	j1 = journal_bytes(dir);
+	j1 = session_journal_bytes(dir, "u");
 	undo(&bob, true, o, "alice");
-	j2 = journal_bytes(dir);
+	j2 = session_journal_bytes(dir, "u");
 	CHECK(j1 - j0 > 0 && j1 - j0 < 4096);
 	CHECK(j2 - j1 > 0 && j2 - j1 < 4096);
 	undo(&alice, false, o, "alice");
