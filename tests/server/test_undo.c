@@ -211,6 +211,21 @@ static uint64_t last_order(const struct editor *e)
 	return e->c.m.edit_applied.order;
 }
 
+/* kill -9 and a restart on dir: a joiner's scene equals mirror; then the
+ * daemon stops. */
+static void restart_gives(struct daemon *d, const char *dir,
+                          const struct bc_tree *mirror)
+{
+	CHECK(WIFEXITED(daemon_stop(d, SIGKILL)) == 0);
+	REQUIRE(daemon_start(d, dir) == 0);
+	{
+		struct bc_tree *j = joiner_scene(d);
+		CHECK(j && same_tree(mirror, j));
+		bc_tree_destroy(j);
+	}
+	CHECK(WIFEXITED(daemon_stop(d, SIGTERM)));
+}
+
 static void two_editors_undo_and_redo_each_other(void)
 {
 	struct daemon d;
@@ -310,14 +325,7 @@ static void two_editors_undo_and_redo_each_other(void)
 	 * scene. */
 	conn_close(&alice.c);
 	conn_close(&bob.c);
-	CHECK(WIFEXITED(daemon_stop(&d, SIGKILL)) == 0);
-	REQUIRE(daemon_start(&d, dir) == 0);
-	{
-		struct bc_tree *j = joiner_scene(&d);
-		CHECK(j && same_tree(alice.mirror, j));
-		bc_tree_destroy(j);
-	}
-	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+	restart_gives(&d, dir, alice.mirror);
 	bc_tree_destroy(alice.mirror);
 	bc_tree_destroy(bob.mirror);
 	bc_tree_destroy(before);
@@ -477,14 +485,7 @@ static void structural_undo_redo_exact_and_small(void)
 	/* The journal, undos and redos included, restores that scene. */
 	conn_close(&alice.c);
 	conn_close(&bob.c);
-	CHECK(WIFEXITED(daemon_stop(&d, SIGKILL)) == 0);
-	REQUIRE(daemon_start(&d, dir) == 0);
-	{
-		struct bc_tree *j = joiner_scene(&d);
-		CHECK(j && same_tree(alice.mirror, j));
-		bc_tree_destroy(j);
-	}
-	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+	restart_gives(&d, dir, alice.mirror);
 	bc_proto_buf_finish(&s1);
 	bc_proto_buf_finish(&s2);
 	bc_proto_buf_finish(&s3);
