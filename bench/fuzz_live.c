@@ -1052,6 +1052,15 @@ static void act_hello(struct fz *f, bool mutated)
 		m.hello.token.ptr = token;
 		m.hello.token.len = len;
 	}
+	/* Features (PROTOCOL.md 4.1): mostly every one, so that sessions
+	 * with every node kind keep their members; sometimes a random mask
+	 * or none (an earlier client, closed with ENOTSUP when its session
+	 * gains a kind it did not announce). */
+	if (pm(s, 900)) {
+		m.hello.has_features = true;
+		m.hello.features = pm(s, 900) ? BC_PROTO_FEATURES_ALL
+		                              : (uint32_t)next_u64(s);
+	}
 	fz_emit(f, &m, mutated);
 }
 
