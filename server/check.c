@@ -76,14 +76,15 @@ static void check_one(void *ud, const char *name)
 		        c.damaged_snapshots);
 	} else {
 		fprintf(k->out,
-		        "%s: NOT WHOLE: %s; its files give edits up to %llu "
-		        "of %llu%s\n",
-		        name, c.why, (unsigned long long)c.order,
-		        (unsigned long long)c.frontier,
+		        "%s: NOT WHOLE: %s; its files name edits up to %llu "
+		        "and give back a state at %llu without the lost "
+		        "ones%s\n",
+		        name, c.why, (unsigned long long)c.frontier,
+		        (unsigned long long)c.order,
 		        k->repair ? ""
-		                  : "; blobcastd will not serve it "
-		                    "(--repair sets its files aside and "
-		                    "goes on from there)");
+		                  : "; blobcastd will not serve it (--repair "
+		                    "sets its files aside and goes on from "
+		                    "there)");
 		if (k->repair) {
 			repair(k, name, &t, &cam, &c);
 		} else {

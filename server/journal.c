@@ -79,6 +79,23 @@ static int record_at(int fd, off_t off, off_t size, uint8_t **buf, size_t *cap,
 	return 0;
 }
 
+/* Whether a record header with the magic lies at off and the length it
+ * gives ends within the file: a record written whole, damaged if its
+ * checksum fails (a crash leaves a record short, never long). */
+static bool whole_length_at(int fd, off_t off, off_t size)
+{
+	uint8_t hdr[RECORD_HEADER];
+	uint32_t len;
+	if (size - off < (off_t)RECORD_HEADER ||
+	    !read_at(fd, hdr, sizeof(hdr), off) ||
+	    bc_get_le32(hdr) != JOURNAL_MAGIC) {
+		return false;
+	}
+	len = bc_get_le32(hdr + 4);
+	return len <= MAX_RECORD &&
+	       (off_t)len <= size - off - (off_t)RECORD_HEADER;
+}
+
 /* The next offset after off where a whole record with an order above
  * after starts, or size. A damaged length cannot be trusted, so the
  * search goes byte by byte for the magic; a false match must also pass
@@ -209,7 +226,22 @@ int bc__store_replay(struct bc_store_session *ss, bc_store_replay_fn fn,
 			break;
 		}
 		if (next == size) {
-			break; /* nothing valid follows: a torn tail */
+			/* Nothing valid follows: a torn tail (a crash
+			 * mid-write, never acknowledged) -- unless the record
+			 * there is whole in length with a valid header: then
+			 * its bytes were damaged after it was written, and
+			 * the edit it held is lost. */
+			if (whole_length_at(fd, off, size)) {
+				bc_log(
+				    BC_LOG_ERROR,
+				    "session %s: journal %s: the last record "
+				    "(bytes %lld..%lld) is damaged",
+				    ss->name, file, (long long)off,
+				    (long long)size);
+				ss->skipped++;
+				ss->skipped_last++;
+			}
+			break;
 		}
 		/* What it held shows as a gap in the order numbers. */
 		bc_log(BC_LOG_ERROR,

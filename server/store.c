@@ -497,11 +497,16 @@ static int restore(struct bc_store_session *ss, struct bc_tree *t,
 	r->c.whole = r->c.lost == 0 && *order >= r->c.frontier;
 	if (!r->c.whole) {
 		frontier_of_journals(ss, r);
+		/* A lost record past the last one read (a damaged last
+		 * record) named an order too: never give it out again. */
+		if (*order + ss->skipped_last > r->c.frontier) {
+			r->c.frontier = *order + ss->skipped_last;
+		}
 	}
 	if (!r->c.whole && !r->c.why[0]) {
 		snprintf(r->c.why, sizeof(r->c.why),
-		         "%llu journal record(s) are damaged, missing or do "
-		         "not apply",
+		         "%llu acknowledged edit(s) cannot be given back "
+		         "(journal records damaged, missing or not applying)",
 		         (unsigned long long)r->c.lost);
 	}
 	return 0;
@@ -591,11 +596,10 @@ int bc_store_session_open(struct bc_store *st, const char *name,
 		 * out: the files stay as they are for an operator. */
 		rc = bc_errinfo_set(
 		    ei, BC_EIO,
-		    "session %s cannot be restored whole: %s; edits up to %llu "
-		    "of %llu can be read. Its files are kept unchanged and it "
+		    "session %s cannot be restored whole: %s (its files name "
+		    "edits up to %llu). Its files are kept unchanged and it "
 		    "is not served: see `blobcastd --check %s`",
 		    name, r.c.why[0] ? r.c.why : "no snapshot loads",
-		    (unsigned long long)r.c.order,
 		    (unsigned long long)r.c.frontier, st->dir);
 		bc_log(BC_LOG_ERROR, "%s", ei ? ei->msg : "session damaged");
 		goto fail;

@@ -28,6 +28,7 @@ struct bc_store_session {
 	 * (damaged, missing or not applying records), and where a torn tail
 	 * starts in the journal read last (-1: none). */
 	uint64_t skipped;
+	uint64_t skipped_last; /* of them, damaged last records */
 	off_t tail_good;
 	off_t size; /* journal bytes known good */
 	/* Periodic snapshots after a failure wait backoff_ms (doubling). */

@@ -260,6 +260,21 @@ static void a_flipped_length_field_is_not_served(void)
 	damaged_record(4);
 }
 
+/* The last record damaged in place (its header and length intact, its
+ * payload flipped) was written whole: a loss, not a torn tail to cut. A
+ * repair goes on after its order. */
+static void a_damaged_last_record_is_not_a_torn_tail(void)
+{
+	char *dir = make_dir(), file[600];
+	REQUIRE(dir);
+	make_session(dir, "a", NREC, 0);
+	snprintf(file, sizeof(file), "%s/sessions/a/journal-0.bin", dir);
+	flip(file, record_offset(NREC) + 24, 4);
+	refused_then_repaired(dir, "a", file, NREC, 1, true);
+	rm_rf(dir);
+	free(dir);
+}
+
 static void a_record_that_does_not_apply_is_not_served(void)
 {
 	char *dir = make_dir(), file[600];
@@ -555,6 +570,8 @@ static const struct bc_test tests[] = {
     {"a_record_that_does_not_apply_is_not_served",
      a_record_that_does_not_apply_is_not_served},
     {"a_torn_tail_is_cut", a_torn_tail_is_cut},
+    {"a_damaged_last_record_is_not_a_torn_tail",
+     a_damaged_last_record_is_not_a_torn_tail},
     {"a_corrupt_snapshot_spares_the_other_session",
      a_corrupt_snapshot_spares_the_other_session},
     {"a_corrupt_snapshot_falls_back_to_the_previous",
