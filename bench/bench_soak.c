@@ -23,6 +23,41 @@
  *    counts the acknowledged edits the restored scenes do not hold; the
  *    exit status is 1 when it is not 0.
  *
+ * With --damage, each kill (after the SIGKILL, before the restart) also
+ * damages the data directory of one busy session, the two taking turns
+ * and each going through four cases in rotation (a case that cannot apply
+ * gives way to the next), to test the recovery rules of
+ * docs/operations.md, "Data directory":
+ *
+ *  1. its newest snap-N.json is cut to half its size, when the previous
+ *     generation's snapshot is there: the older snapshot and the journals
+ *     give back every edit;
+ *  2. bytes are flipped inside a record in the middle of a journal-M.bin
+ *     that a newer snapshot covers (M < N): it is not even read;
+ *  3. the session directory is made read-only (a read-only bind mount,
+ *     else chattr +i) for a restart of 3 s while clients try it: the
+ *     session is not served, or its edits are refused, never an older
+ *     state; then it is writable again, SIGKILL, restart;
+ *  4. bytes are flipped inside a record in the middle of the newest
+ *     journal: an acknowledged edit is lost for real (no copy exists).
+ *     The session must be refused for 3 s (ERROR EIO naming `blobcastd
+ *     --check`); then the daemon is killed, `blobcastd --check DIR` must
+ *     exit 1 naming it NOT WHOLE, `--check DIR --repair` must exit 0, and
+ *     after the restart the session's order must be at least the highest
+ *     it ever acknowledged.
+ *
+ * After each cycle a joiner checks both busy sessions: every edit
+ * acknowledged before the kill is there (but the one whose record case 4
+ * flipped, counted apart as lost to unrepairable damage) and the order is
+ * not behind. Each EDIT_APPLIED is kept with the daemon generation that
+ * sent it: an order at or below one an earlier generation acknowledged in
+ * the same session is an order number reused. Per case the soak prints
+ * the times applied, acknowledged edits lost, orders reused and JOINs
+ * refused; the exit status is also 1 when a case other than 4 lost an
+ * acknowledged edit, case 4 lost more than its flipped record, an order
+ * number was reused, an older state was served, or a check of case 4
+ * failed. Clients refused a session back off (up to 2 s) and retry.
+ *
  * The daemon's RSS (VmRSS) is sampled every second, per phase.
  *
  * The defaults compress 30 minutes of a busy review ten times: four
@@ -32,6 +67,7 @@
  * Usage: bench_soak PATH/TO/blobcastd [options]; --help lists them.
  */
 #include <arpa/inet.h>
+#include <dirent.h>
 #include <math.h>
 #include <netinet/in.h>
 #include <pthread.h>
@@ -40,6 +76,7 @@
 /* scene.h first: daemon.h then offers scene_of(). */
 #include "blobcast/alloc.h"
 #include "blobcast/blobtree.h"
+#include "blobcast/bytes.h"
 #include "blobcast/gen.h"
 #include "blobcast/scene.h"
 #include "../tests/server/daemon.h"
@@ -52,11 +89,17 @@
 #define MAX_THREADS 64
 #define EDITOR_WINDOW 8u
 #define MAX_PHASES 64
+/* Daemon starts whose damage case is remembered (a run of hours with a
+ * kill every second stays below it; later ones count as undamaged). */
+#define MAX_GENS 8192
+/* What a JOIN refusal's text is copied into. */
+#define WHY_LEN 512
 
 struct opts {
 	double duration_s, kill_every_s;
 	int editors, viewers, flooders, stalled, flood_addrs, flood_per_s;
 	int edit_hz, alone_edits;
+	bool damage;
 };
 
 static struct opts opt = {.duration_s = 180,
@@ -81,6 +124,24 @@ static int dmn_gen; /* restarts so far; changes while it is down */
 static bool dmn_up;
 static atomic_bool stopping;
 
+/* The damage cases of --damage (see the comment at the top). */
+enum damage {
+	DAMAGE_NONE = 0,
+	DAMAGE_SNAP_TORN,
+	DAMAGE_OLD_JOURNAL,
+	DAMAGE_READ_ONLY,
+	DAMAGE_LIVE_JOURNAL,
+	DAMAGE_COUNT
+};
+
+/* Which damage each daemon start follows, and in which busy session
+ * (-1: none), so that what a client of that generation sees is counted
+ * under its case. Written before the start is published (dmn_lock). */
+static uint8_t gen_damage[MAX_GENS];
+static int8_t gen_session[MAX_GENS];
+static enum damage pending_damage;
+static int pending_session = -1;
+
 /* Whether the daemon was up through [gen_before, now]: a failure then is
  * the daemon's refusal, not its restart. */
 static int up_gen(void)
@@ -98,6 +159,10 @@ static int start_daemon(void)
 	int rc = daemon_start_with(&dmn, data_dir, extra);
 	pthread_mutex_lock(&dmn_lock);
 	dmn_gen++;
+	if (dmn_gen < MAX_GENS) {
+		gen_damage[dmn_gen] = (uint8_t)pending_damage;
+		gen_session[dmn_gen] = (int8_t)pending_session;
+	}
 	dmn_up = rc == 0;
 	pthread_mutex_unlock(&dmn_lock);
 	return rc;
@@ -149,47 +214,162 @@ static long rss_kib(pid_t pid)
 
 /* ---- counters ---------------------------------------------------------- */
 
+#define BUSY_SESSIONS 2
+#define BUSY_PRIMS 256u
+
+static const char *const busy_name[BUSY_SESSIONS] = {"busy0", "busy1"};
+
 static atomic_long connects, connects_refused;
 static atomic_long edits_sent, edits_acked, edits_refused;
 static atomic_long frames_seen, snapshots_asked, snapshots_got;
 static atomic_long stalled_dropped, stalled_rounds;
 static atomic_long flood_opened, flood_closed_at_once, flood_connect_failed;
 
-/* Connects c (HELLO, then joins session in role); counts a refusal only
- * when the daemon was up throughout. */
+/* Per damage case (DAMAGE_NONE: what no damage explains). */
+struct damage_stats {
+	long applied, skipped;   /* main thread only */
+	long lost, lost_flipped; /* found by the checks (main thread) */
+	long reused;             /* found at the end */
+	long older_state;        /* a JOIN answered with an older order */
+	long unserved;           /* a session not served after its cycle */
+	long check_failed;       /* case 4: --check, --repair or the order */
+	atomic_long joins_refused, joins_refused_named, edits_refused;
+};
+
+static struct damage_stats dstats[DAMAGE_COUNT];
+
+static const char *const damage_label[DAMAGE_COUNT] = {
+    "no damage", "1 newest snapshot torn", "2 covered journal flipped",
+    "3 directory read-only", "4 live journal flipped"};
+
+/* The busy session named name, or -1. */
+static int busy_index(const char *name)
+{
+	for (int s = 0; s < BUSY_SESSIONS; s++) {
+		if (!strcmp(name, busy_name[s])) {
+			return s;
+		}
+	}
+	return -1;
+}
+
+/* The case that generation g's daemon started after in busy session s. */
+static enum damage damage_of(int g, int s)
+{
+	if (g <= 0 || g >= MAX_GENS || s < 0 || gen_session[g] != s) {
+		return DAMAGE_NONE;
+	}
+	return (enum damage)gen_damage[g];
+}
+
+/* SESSION_JOIN of session in role: 0 when SESSION_INFO came, the ERROR's
+ * code (> 0, its text copied to why) when refused, -1 when the link
+ * failed or nothing came within 5 s. */
+static int join(struct conn *c, const char *session, enum bc_proto_role role,
+                char why[WHY_LEN])
+{
+	struct bc_msg m = {.type = BC_MSG_SESSION_JOIN};
+	int64_t end = t_now_ms() + 5000;
+	uint32_t seq;
+	why[0] = 0;
+	m.session.role = role;
+	m.session.name.ptr = session;
+	m.session.name.len = (uint32_t)strlen(session);
+	if (!(seq = conn_send(c, &m))) {
+		return -1;
+	}
+	while (t_now_ms() < end) {
+		int rc = conn_recv(c, (int)(end - t_now_ms()));
+		if (rc < 0) {
+			return -1;
+		}
+		if (rc == 1 && c->m.type == BC_MSG_SESSION_INFO) {
+			return 0;
+		}
+		if (rc == 1 && c->m.type == BC_MSG_ERROR &&
+		    (c->m.seq == seq || c->m.seq == 0)) {
+			size_t n = c->m.error.text.len < WHY_LEN - 1
+			               ? c->m.error.text.len
+			               : WHY_LEN - 1;
+			memcpy(why, c->m.error.text.ptr, n);
+			why[n] = 0;
+			return c->m.error.code ? c->m.error.code : -1;
+		}
+	}
+	return -1;
+}
+
+/* What a failed connect_to means for the caller's next try. */
+enum {
+	CONNECT_DOWN = -1,    /* the daemon was (re)starting: retry soon */
+	CONNECT_REFUSED = -2, /* refused while it was up: back off */
+};
+
+/* Connects c (HELLO, then joins session in role). Returns the daemon's
+ * generation (>= 0) when it was the same daemon throughout, else
+ * CONNECT_DOWN or CONNECT_REFUSED; counts a refusal only when the daemon
+ * was up throughout, a JOIN refused with EIO under the damage case of the
+ * session in that generation. */
 static int connect_to(struct conn *c, const char *name, const char *session,
                       enum bc_proto_role role)
 {
 	int g = up_gen();
 	int rc;
+	char why[WHY_LEN];
 	if (g < 0) {
-		return -1;
+		return CONNECT_DOWN;
 	}
 	atomic_fetch_add(&connects, 1);
 	/* conn_open closes its socket itself when it fails. */
 	rc = conn_open(c, &dmn);
-	if (rc == 0 &&
-	    (conn_hello(c, name) || conn_join(c, session, role, false))) {
+	if (rc == 0 && conn_hello(c, name)) {
 		conn_close(c);
 		rc = -1;
+	} else if (rc == 0 && (rc = join(c, session, role, why)) != 0) {
+		conn_close(c);
+	}
+	if (rc != 0 && up_gen() != g) {
+		atomic_fetch_sub(&connects, 1);
+		return CONNECT_DOWN;
+	}
+	if (rc == -BC_EIO) {
+		struct damage_stats *d =
+		    &dstats[damage_of(g, busy_index(session))];
+		atomic_fetch_add(&d->joins_refused, 1);
+		if (strstr(why, "blobcastd --check")) {
+			atomic_fetch_add(&d->joins_refused_named, 1);
+		}
+		return CONNECT_REFUSED;
 	}
 	if (rc != 0) {
-		if (up_gen() == g) {
-			atomic_fetch_add(&connects_refused, 1);
-		} else {
-			atomic_fetch_sub(&connects, 1);
-		}
-		return -1;
+		atomic_fetch_add(&connects_refused, 1);
+		return CONNECT_REFUSED;
 	}
-	return 0;
+	if (up_gen() != g) {
+		/* Killed and started again meanwhile: which daemon answered
+		 * is not known; try again. */
+		conn_close(c);
+		atomic_fetch_sub(&connects, 1);
+		return CONNECT_DOWN;
+	}
+	return g;
+}
+
+/* Waits before the next connect: 50 ms after the daemon was down, else
+ * *backoff ms, doubled each time up to 2 s (a session refused while its
+ * files are damaged is asked again calmly, not in a busy loop). A
+ * successful connect resets *backoff to 50. */
+static void retry_wait(int why, long *backoff)
+{
+	if (why == CONNECT_DOWN) {
+		t_sleep_ms(50);
+		return;
+	}
+	t_sleep_ms(*backoff);
+	*backoff = *backoff >= 1000 ? 2000 : *backoff * 2;
 }
 
 /* ---- sessions and their scenes ---------------------------------------- */
-
-#define BUSY_SESSIONS 2
-#define BUSY_PRIMS 256u
-
-static const char *const busy_name[BUSY_SESSIONS] = {"busy0", "busy1"};
 static uint32_t busy_prims[BUSY_SESSIONS][BUSY_PRIMS];
 static uint32_t calm_id;
 static struct bc_prim_data calm_prim;
@@ -244,31 +424,44 @@ static int read_prims(int s)
 
 /* ---- editors ----------------------------------------------------------- */
 
+#define MARKER_BIT 0x80000000u
+
+/* One acknowledged edit. */
+struct ack {
+	uint64_t order; /* its EDIT_APPLIED's */
+	uint32_t k;     /* the colour's k, or a marker's id | MARKER_BIT */
+	int gen;        /* the daemon start that acknowledged it */
+	bool flipped;   /* its journal record was flipped (case 4) */
+	bool missed;    /* already counted as lost by a check */
+};
+
 struct editor {
 	int index, session;
 	uint32_t prim;   /* the primitive it recolours */
 	uint32_t next_k; /* increasing over the whole run */
-	/* In flight: seq -> k (k | 1 << 31 for a marker). */
+	int gen;         /* of the daemon it is connected to */
+	/* In flight: seq -> k (k | MARKER_BIT for a marker). */
 	uint32_t pend_seq[EDITOR_WINDOW], pend_k[EDITOR_WINDOW];
 	uint32_t npend;
-	/* Acknowledged: colours (k) and markers (ids), in order. */
-	uint32_t *acked_k, nacked_k, cap_k;
-	uint32_t *acked_m, nacked_m, cap_m;
+	/* Acknowledged, in order; the checks read them under lock. */
+	pthread_mutex_t lock;
+	struct ack *acks;
+	size_t nacks, cap;
 	uint64_t max_order; /* largest order acknowledged */
 };
 
-static int push_u32(uint32_t **a, uint32_t *n, uint32_t *cap, uint32_t v)
+static int push_ack(struct editor *e, const struct ack *a)
 {
-	if (*n == *cap) {
-		uint32_t c = *cap ? *cap * 2 : 1024;
-		uint32_t *p = bc_realloc(*a, (size_t)c * sizeof(uint32_t));
+	if (e->nacks == e->cap) {
+		size_t c = e->cap ? e->cap * 2 : 1024;
+		struct ack *p = bc_realloc(e->acks, c * sizeof(*p));
 		if (!p) {
 			return -1;
 		}
-		*a = p;
-		*cap = c;
+		e->acks = p;
+		e->cap = c;
 	}
-	(*a)[(*n)++] = v;
+	e->acks[e->nacks++] = *a;
 	return 0;
 }
 
@@ -309,7 +502,7 @@ static uint32_t editor_send(struct editor *e, struct conn *c, uint32_t root)
 		op.position = 0;
 		op.subtree.ptr = sub.data;
 		op.subtree.len = (uint32_t)sub.len;
-		k = id | 0x80000000u;
+		k = id | MARKER_BIT;
 	} else {
 		k_color(k, f.v);
 		op.kind = BC_PROTO_EDIT_SET;
@@ -344,18 +537,19 @@ static void editor_answer(struct editor *e, uint32_t seq, bool acked,
 		e->npend--;
 		if (!acked) {
 			atomic_fetch_add(&edits_refused, 1);
+			atomic_fetch_add(&dstats[damage_of(e->gen, e->session)]
+			                      .edits_refused,
+			                 1);
 			return;
 		}
 		atomic_fetch_add(&edits_acked, 1);
+		pthread_mutex_lock(&e->lock);
 		if (order > e->max_order) {
 			e->max_order = order;
 		}
-		if (k & 0x80000000u) {
-			push_u32(&e->acked_m, &e->nacked_m, &e->cap_m,
-			         k & 0x7fffffffu);
-		} else {
-			push_u32(&e->acked_k, &e->nacked_k, &e->cap_k, k);
-		}
+		push_ack(e,
+		         &(struct ack){.order = order, .k = k, .gen = e->gen});
+		pthread_mutex_unlock(&e->lock);
 		return;
 	}
 }
@@ -364,17 +558,21 @@ static void *editor_main(void *arg)
 {
 	struct editor *e = arg;
 	char name[16];
+	long backoff = 50;
 	snprintf(name, sizeof(name), "editor%d", e->index);
 	while (!atomic_load(&stopping)) {
 		struct conn c;
 		struct bc_tree *t;
 		uint32_t me, root;
 		int64_t next = t_now_ms();
-		if (connect_to(&c, name, busy_name[e->session],
-		               BC_PROTO_ROLE_EDITOR) != 0) {
-			t_sleep_ms(50);
+		int g = connect_to(&c, name, busy_name[e->session],
+		                   BC_PROTO_ROLE_EDITOR);
+		if (g < 0) {
+			retry_wait(g, &backoff);
 			continue;
 		}
+		backoff = 50;
+		e->gen = g;
 		me = c.m.session_info.member_id;
 		if (conn_expect(&c, BC_MSG_SCENE_STATE, 10000) != 1 ||
 		    !(t = scene_of(&c))) {
@@ -449,16 +647,19 @@ static void *viewer_main(void *arg)
 {
 	struct worker *w = arg;
 	char name[16];
-	int step = 0;
+	int step = 0, g;
+	long backoff = 50;
 	snprintf(name, sizeof(name), "viewer%d", w->index);
 	while (!atomic_load(&stopping)) {
 		struct conn c;
 		int64_t next_orbit;
-		if (connect_to(&c, name, busy_name[w->index % BUSY_SESSIONS],
-		               BC_PROTO_ROLE_VIEWER) != 0) {
-			t_sleep_ms(50);
+		if ((g = connect_to(&c, name,
+		                    busy_name[w->index % BUSY_SESSIONS],
+		                    BC_PROTO_ROLE_VIEWER)) < 0) {
+			retry_wait(g, &backoff);
 			continue;
 		}
+		backoff = 50;
 		send_view(&c, 384, BC_PROTO_ENC_JPEG, 4);
 		next_orbit = t_now_ms() + 2000;
 		while (!atomic_load(&stopping)) {
@@ -484,15 +685,18 @@ static void *viewer_main(void *arg)
 static void *flooder_main(void *arg)
 {
 	struct worker *w = arg;
+	long backoff = 50;
 	while (!atomic_load(&stopping)) {
 		struct conn c;
 		int64_t end;
-		if (connect_to(&c, "flooder",
-		               busy_name[w->index % BUSY_SESSIONS],
-		               BC_PROTO_ROLE_VIEWER) != 0) {
-			t_sleep_ms(50);
+		int g = connect_to(&c, "flooder",
+		                   busy_name[w->index % BUSY_SESSIONS],
+		                   BC_PROTO_ROLE_VIEWER);
+		if (g < 0) {
+			retry_wait(g, &backoff);
 			continue;
 		}
+		backoff = 50;
 		send_view(&c, 512, BC_PROTO_ENC_PNG, 1);
 		for (int i = 0; i < 20; i++) {
 			struct bc_msg m = {.type = BC_MSG_SNAPSHOT};
@@ -525,16 +729,18 @@ static void *stalled_main(void *arg)
 	struct worker *w = arg;
 	static const char *const sessions[] = {"busy0", "busy1", "calm"};
 	char name[16];
+	long backoff = 50;
 	snprintf(name, sizeof(name), "stalled%d", w->index);
 	while (!atomic_load(&stopping)) {
 		struct conn c;
 		int64_t end;
-		int g = up_gen();
-		if (connect_to(&c, name, sessions[w->index % 3],
-		               BC_PROTO_ROLE_VIEWER) != 0) {
-			t_sleep_ms(50);
+		int g = connect_to(&c, name, sessions[w->index % 3],
+		                   BC_PROTO_ROLE_VIEWER);
+		if (g < 0) {
+			retry_wait(g, &backoff);
 			continue;
 		}
+		backoff = 50;
 		atomic_fetch_add(&stalled_rounds, 1);
 		send_view(&c, 2048, BC_PROTO_ENC_RAW, 1);
 		for (int i = 0; i < 4; i++) {
@@ -665,7 +871,7 @@ static int64_t pct(struct samples *s, int p)
 /* Joins calm, a 512^2 JPEG view like bench_daemon, up to the still. */
 static int calm_connect(struct conn *c)
 {
-	if (connect_to(c, "calm", "calm", BC_PROTO_ROLE_EDITOR) != 0) {
+	if (connect_to(c, "calm", "calm", BC_PROTO_ROLE_EDITOR) < 0) {
 		return -1;
 	}
 	conn_view(c, 512, 512, BC_PROTO_ENC_JPEG);
@@ -784,82 +990,673 @@ static void sleep_sampling(int64_t ms)
 	}
 }
 
-/* ---- the end: what the restarted daemon holds --------------------------- */
+/* ---- what a restarted daemon holds ---------------------------------------- */
 
 static struct editor editors[MAX_THREADS];
 
-/* Acknowledged edits absent from the sessions' scenes. */
+/* The largest order acknowledged in busy session s before generation
+ * gnow. */
+static uint64_t acked_top(int s, int gnow)
+{
+	uint64_t top = 0;
+	for (int e = 0; e < opt.editors; e++) {
+		struct editor *ed = &editors[e];
+		if (ed->session != s) {
+			continue;
+		}
+		pthread_mutex_lock(&ed->lock);
+		for (size_t i = 0; i < ed->nacks; i++) {
+			if (ed->acks[i].gen < gnow && ed->acks[i].order > top) {
+				top = ed->acks[i].order;
+			}
+		}
+		pthread_mutex_unlock(&ed->lock);
+	}
+	return top;
+}
+
+/* Editor ed's acknowledged edits before generation gnow that tree t does
+ * not hold (colour behind, marker absent), but those counted before and
+ * those whose record was flipped on purpose; each is counted once.
+ * *checked adds the edits looked at. */
+static long editor_missing(struct editor *ed, struct bc_tree *t, int gnow,
+                           long *checked)
+{
+	struct bc_prim_data p = {0};
+	bool colored = t && bc_tree_get(t, ed->prim, &p, NULL) && p.has_color;
+	uint32_t kf = colored ? color_k(p.color) : 0, last = 0;
+	long gone = 0;
+	pthread_mutex_lock(&ed->lock);
+	for (size_t i = 0; i < ed->nacks; i++) {
+		struct ack *a = &ed->acks[i];
+		bool lost;
+		if (a->gen >= gnow || a->flipped) {
+			continue;
+		}
+		(*checked)++;
+		if (a->missed) {
+			continue;
+		}
+		if (a->k & MARKER_BIT) {
+			lost = !t ||
+			       !bc_tree_get(t, a->k & ~MARKER_BIT, NULL, NULL);
+		} else {
+			lost = !colored || a->k > kf;
+			last = a->k;
+		}
+		if (lost) {
+			a->missed = true;
+			gone++;
+		}
+	}
+	pthread_mutex_unlock(&ed->lock);
+	if (gone) {
+		printf("editor %d (%s): %ld acknowledged edits missing (colour "
+		       "k %u, last acknowledged %u)\n",
+		       ed->index, busy_name[ed->session], gone, kf, last);
+	}
+	return gone;
+}
+
+/* Checks busy session s as a fresh joiner finds it against what its
+ * editors had acknowledged before generation gnow: the order is not
+ * below the largest acknowledged (else older_state), and every such edit
+ * is there (editor_missing); new losses are counted under d. A session
+ * that cannot be joined counts under unserved, and at the end (final)
+ * all its edits count as lost. Returns the edits newly found lost. */
+static long check_session(int s, enum damage d, int gnow, bool final,
+                          long *checked)
+{
+	struct conn c;
+	struct bc_tree *t = NULL;
+	char why[WHY_LEN] = "";
+	uint64_t order = 0, top = acked_top(s, gnow);
+	long lost = 0;
+	int rc = -1;
+	if (conn_open(&c, &dmn) == 0) {
+		rc = conn_hello(&c, "verify")
+		         ? -1
+		         : join(&c, busy_name[s], BC_PROTO_ROLE_VIEWER, why);
+		if (rc == 0 &&
+		    conn_expect(&c, BC_MSG_SCENE_STATE, 30000) == 1) {
+			order = c.m.scene_state.order;
+			t = scene_of(&c);
+		}
+		conn_close(&c);
+	}
+	if (!t) {
+		printf(
+		    "session %s: cannot be joined after the restart (%s)%s\n",
+		    busy_name[s], why[0] ? why : "no answer",
+		    final ? ": all its acknowledged edits count as lost" : "");
+		dstats[d].unserved++;
+		if (!final) {
+			return 0;
+		}
+	} else if (order < top) {
+		printf("session %s: served at order %llu, below the %llu it "
+		       "acknowledged\n",
+		       busy_name[s], (unsigned long long)order,
+		       (unsigned long long)top);
+		dstats[d].older_state++;
+	}
+	for (int e = 0; e < opt.editors; e++) {
+		if (editors[e].session == s) {
+			lost += editor_missing(&editors[e], t, gnow, checked);
+		}
+	}
+	dstats[d].lost += lost;
+	bc_tree_destroy(t);
+	return lost;
+}
+
+/* Acknowledged edits absent from the sessions' scenes after the last
+ * restart (those found lost earlier are not counted again). */
 static long verify(long *checked)
 {
 	long lost = 0;
+	int g = up_gen();
 	*checked = 0;
 	for (int s = 0; s < BUSY_SESSIONS; s++) {
-		struct conn c;
-		struct bc_tree *t;
-		uint64_t order;
-		if (conn_open(&c, &dmn)) {
-			c.fd = -1;
-		}
-		if (c.fd < 0 || conn_hello(&c, "verify") ||
-		    conn_join(&c, busy_name[s], BC_PROTO_ROLE_VIEWER, false) ||
-		    conn_expect(&c, BC_MSG_SCENE_STATE, 30000) != 1 ||
-		    !(t = scene_of(&c))) {
-			printf("session %s: cannot be joined after the "
-			       "restart: all its acknowledged edits count "
-			       "as lost\n",
-			       busy_name[s]);
-			for (int e = 0; e < opt.editors; e++) {
-				if (editors[e].session == s) {
-					lost += editors[e].nacked_k +
-					        editors[e].nacked_m;
-					*checked += editors[e].nacked_k +
-					            editors[e].nacked_m;
-				}
-			}
-			conn_close(&c);
-			continue;
-		}
-		order = c.m.scene_state.order;
-		for (int e = 0; e < opt.editors; e++) {
-			struct editor *ed = &editors[e];
-			struct bc_prim_data p = {0};
-			bool colored;
-			uint32_t kf = 0;
-			long gone = 0;
-			if (ed->session != s) {
-				continue;
-			}
-			colored =
-			    bc_tree_get(t, ed->prim, &p, NULL) && p.has_color;
-			if (colored) {
-				kf = color_k(p.color);
-			}
-			for (uint32_t i = 0; i < ed->nacked_k; i++) {
-				gone += !colored || ed->acked_k[i] > kf;
-			}
-			for (uint32_t i = 0; i < ed->nacked_m; i++) {
-				gone +=
-				    !bc_tree_get(t, ed->acked_m[i], NULL, NULL);
-			}
-			if (gone || order < ed->max_order) {
-				printf(
-				    "editor %d (%s): %ld acknowledged edits "
-				    "missing (colour k %u, last acknowledged "
-				    "%u); session order %llu, largest "
-				    "acknowledged %llu\n",
-				    e, busy_name[s], gone, kf,
-				    ed->nacked_k ? ed->acked_k[ed->nacked_k - 1]
-				                 : 0,
-				    (unsigned long long)order,
-				    (unsigned long long)ed->max_order);
-			}
-			lost += gone;
-			*checked += ed->nacked_k + ed->nacked_m;
-		}
-		bc_tree_destroy(t);
-		conn_close(&c);
+		lost += check_session(s, DAMAGE_NONE, g, true, checked);
 	}
 	return lost;
+}
+
+/* Order numbers reused: per busy session, an acknowledged order at or
+ * below one that an earlier daemon generation acknowledged, counted
+ * under the case that generation started after. */
+static long count_reused(void)
+{
+	static uint64_t below[MAX_GENS];
+	long total = 0;
+	for (int s = 0; s < BUSY_SESSIONS; s++) {
+		uint64_t run = 0;
+		memset(below, 0, sizeof(below));
+		for (int e = 0; e < opt.editors; e++) {
+			struct editor *ed = &editors[e];
+			for (size_t i = 0; ed->session == s && i < ed->nacks;
+			     i++) {
+				int g = ed->acks[i].gen < MAX_GENS
+				            ? ed->acks[i].gen
+				            : MAX_GENS - 1;
+				if (ed->acks[i].order > below[g]) {
+					below[g] = ed->acks[i].order;
+				}
+			}
+		}
+		/* below[g]: the largest order of generations before g. */
+		for (int g = 0; g < MAX_GENS; g++) {
+			uint64_t top = below[g];
+			below[g] = run;
+			run = top > run ? top : run;
+		}
+		for (int e = 0; e < opt.editors; e++) {
+			struct editor *ed = &editors[e];
+			for (size_t i = 0; ed->session == s && i < ed->nacks;
+			     i++) {
+				const struct ack *a = &ed->acks[i];
+				int g =
+				    a->gen < MAX_GENS ? a->gen : MAX_GENS - 1;
+				if (a->order > below[g]) {
+					continue;
+				}
+				if (total++ < 10) {
+					printf("session %s: order %llu "
+					       "acknowledged again by start "
+					       "%d (an earlier start had "
+					       "reached %llu)\n",
+					       busy_name[s],
+					       (unsigned long long)a->order, g,
+					       (unsigned long long)below[g]);
+				}
+				dstats[damage_of(g, s)].reused++;
+			}
+		}
+	}
+	return total;
+}
+
+/* ---- damaged files (--damage) ------------------------------------------- */
+
+/* Case 2 never flips a journal twice (a second flip of the same bytes
+ * would mend it), and case 1 never tears a snapshot whose older
+ * generation needs a journal case 2 flipped: that would be damage the
+ * rules do not promise to survive. */
+#define MAX_FLIPPED 256
+#define MAX_FILES 64
+#define JOURNAL_MAGIC 0x314a4342u /* 'BCJ1', server/journal.c */
+#define RECORD_HEADER 20u         /* magic, length, order, CRC32 */
+
+static int next_case[BUSY_SESSIONS] = {DAMAGE_SNAP_TORN, DAMAGE_SNAP_TORN};
+static uint64_t flipped_journal[BUSY_SESSIONS][MAX_FLIPPED];
+static size_t nflipped_journal[BUSY_SESSIONS];
+static bool ro_by_chattr;      /* else a read-only bind mount */
+static long check_exits[2][3]; /* [repair][exit status 0, 1, other] */
+
+static void session_dir(int s, char *buf, size_t n)
+{
+	snprintf(buf, n, "%s/sessions/%s", data_dir, busy_name[s]);
+}
+
+static int cmp_desc_u64(const void *a, const void *b)
+{
+	uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+	return x < y ? 1 : x > y ? -1 : 0;
+}
+
+/* The N of each PREFIX-N.SUFFIX in dir (exactly), newest first; returns
+ * how many (at most max). */
+static size_t list_numbered(const char *dir, const char *prefix,
+                            const char *suffix, uint64_t *out, size_t max)
+{
+	DIR *d = opendir(dir);
+	struct dirent *de;
+	size_t n = 0, lp = strlen(prefix);
+	if (!d) {
+		return 0;
+	}
+	while ((de = readdir(d)) && n < max) {
+		const char *p = de->d_name;
+		char *end;
+		if (strncmp(p, prefix, lp) != 0 || p[lp] < '0' || p[lp] > '9') {
+			continue;
+		}
+		out[n] = strtoull(p + lp, &end, 10);
+		n += !strcmp(end, suffix);
+	}
+	closedir(d);
+	qsort(out, n, sizeof(*out), cmp_desc_u64);
+	return n;
+}
+
+static bool was_flipped(int s, uint64_t journal)
+{
+	for (size_t i = 0; i < nflipped_journal[s]; i++) {
+		if (flipped_journal[s][i] == journal) {
+			return true;
+		}
+	}
+	return false;
+}
+
+struct record {
+	long off;
+	uint32_t len;
+	uint64_t order;
+};
+
+/* The whole records of journal file at the front of it, by their headers
+ * (magic and length; the CRC32 is the daemon's to check): their count,
+ * and record number want in *r. -1 when the file cannot be read. */
+static long journal_records(const char *file, long want, struct record *r)
+{
+	FILE *f = fopen(file, "rb");
+	uint8_t hdr[RECORD_HEADER];
+	long n = 0, off = 0, size;
+	if (!f || fseek(f, 0, SEEK_END) != 0 || (size = ftell(f)) < 0) {
+		if (f) {
+			fclose(f);
+		}
+		return -1;
+	}
+	while (off + (long)RECORD_HEADER <= size &&
+	       fseek(f, off, SEEK_SET) == 0 &&
+	       fread(hdr, 1, sizeof(hdr), f) == sizeof(hdr) &&
+	       bc_get_le32(hdr) == JOURNAL_MAGIC &&
+	       (long)bc_get_le32(hdr + 4) <= size - off - (long)RECORD_HEADER) {
+		if (n == want) {
+			r->off = off;
+			r->len = bc_get_le32(hdr + 4);
+			r->order = bc_get_le64(hdr + 8);
+		}
+		off += (long)RECORD_HEADER + (long)bc_get_le32(hdr + 4);
+		n++;
+	}
+	fclose(f);
+	return n;
+}
+
+/* Flips (xor 0xff) up to 4 payload bytes in the middle of record r of
+ * file: its CRC32 no longer matches. 0, or -1. */
+static int flip_record(const char *file, const struct record *r)
+{
+	uint8_t b[4];
+	size_t n = r->len < 4 ? r->len : 4;
+	long at = r->off + (long)RECORD_HEADER + (long)(r->len - n) / 2;
+	FILE *f = fopen(file, "r+b");
+	int rc = -1;
+	if (f && n > 0 && fseek(f, at, SEEK_SET) == 0 &&
+	    fread(b, 1, n, f) == n) {
+		for (size_t i = 0; i < n && i < sizeof(b); i++) {
+			b[i] ^= 0xffu;
+		}
+		if (fseek(f, at, SEEK_SET) == 0 && fwrite(b, 1, n, f) == n &&
+		    fflush(f) == 0 && fsync(fileno(f)) == 0) {
+			rc = 0;
+		}
+	}
+	if (f && fclose(f) != 0) {
+		rc = -1;
+	}
+	return rc;
+}
+
+/* Case 1: the newest snapshot cut to half, when the previous generation
+ * (an older snapshot and its journal, not flipped) is there. 0 applied,
+ * 1 not applicable, -1 failed. */
+static int tear_newest_snapshot(int s, const char *dir, char *what, size_t n)
+{
+	uint64_t snaps[MAX_FILES];
+	char file[256];
+	struct stat st;
+	size_t ns = list_numbered(dir, "snap-", ".json", snaps, MAX_FILES);
+	if (ns < 2 || was_flipped(s, snaps[1])) {
+		return 1;
+	}
+	snprintf(file, sizeof(file), "%s/journal-%llu.bin", dir,
+	         (unsigned long long)snaps[1]);
+	if (stat(file, &st) != 0) {
+		printf("  note: %s has snap-%llu.json but not its journal\n",
+		       busy_name[s], (unsigned long long)snaps[1]);
+		return 1;
+	}
+	snprintf(file, sizeof(file), "%s/snap-%llu.json", dir,
+	         (unsigned long long)snaps[0]);
+	if (stat(file, &st) != 0 || truncate(file, st.st_size / 2) != 0) {
+		return -1;
+	}
+	snprintf(what, n,
+	         "snap-%llu.json cut from %lld to %lld bytes "
+	         "(snap-%llu.json is there)",
+	         (unsigned long long)snaps[0], (long long)st.st_size,
+	         (long long)(st.st_size / 2), (unsigned long long)snaps[1]);
+	return 0;
+}
+
+/* Flips the middle record of journal-J.bin of s, which must hold at
+ * least min records; *r is that record. 0, 1 (too few), -1. */
+static int flip_middle(const char *dir, uint64_t j, long min, struct record *r,
+                       char *what, size_t n)
+{
+	char file[256];
+	long nrec;
+	snprintf(file, sizeof(file), "%s/journal-%llu.bin", dir,
+	         (unsigned long long)j);
+	nrec = journal_records(file, -1, r);
+	if (nrec < min) {
+		return nrec < 0 ? -1 : 1;
+	}
+	if (journal_records(file, (nrec - 1) / 2, r) != nrec ||
+	    flip_record(file, r) != 0) {
+		return -1;
+	}
+	snprintf(what, n,
+	         "journal-%llu.bin: record %ld of %ld (edit %llu, bytes "
+	         "%ld..%ld) flipped",
+	         (unsigned long long)j, (nrec - 1) / 2 + 1, nrec,
+	         (unsigned long long)r->order, r->off,
+	         r->off + (long)RECORD_HEADER + (long)r->len);
+	return 0;
+}
+
+/* Case 2: a record flipped in the newest journal older than the newest
+ * snapshot (which covers it). */
+static int flip_covered_journal(int s, const char *dir, char *what, size_t n)
+{
+	uint64_t snaps[MAX_FILES], journals[MAX_FILES];
+	struct record r;
+	size_t ns = list_numbered(dir, "snap-", ".json", snaps, MAX_FILES);
+	size_t nj = list_numbered(dir, "journal-", ".bin", journals, MAX_FILES);
+	int rc;
+	for (size_t i = 0; ns > 0 && i < nj; i++) {
+		if (journals[i] >= snaps[0]) {
+			continue;
+		}
+		if (was_flipped(s, journals[i]) ||
+		    nflipped_journal[s] == MAX_FLIPPED) {
+			return 1;
+		}
+		if ((rc = flip_middle(dir, journals[i], 1, &r, what, n)) == 0) {
+			flipped_journal[s][nflipped_journal[s]++] = journals[i];
+		}
+		return rc;
+	}
+	return 1;
+}
+
+/* Case 4: a record flipped in the middle of the newest journal, with a
+ * whole record after it (else it would read as a torn tail); *order is
+ * the edit it held. */
+static int flip_live_journal(const char *dir, uint64_t *order, char *what,
+                             size_t n)
+{
+	uint64_t snaps[MAX_FILES], journals[MAX_FILES];
+	struct record r;
+	size_t ns = list_numbered(dir, "snap-", ".json", snaps, MAX_FILES);
+	size_t nj = list_numbered(dir, "journal-", ".bin", journals, MAX_FILES);
+	int rc;
+	if (nj == 0 || (ns > 0 && journals[0] < snaps[0])) {
+		return 1;
+	}
+	if ((rc = flip_middle(dir, journals[0], 2, &r, what, n)) == 0) {
+		*order = r.order;
+	}
+	return rc;
+}
+
+/* Case 3: dir read-only, by a read-only bind mount (then even its
+ * existing files refuse writes), else chattr +i (on this ext4 as root;
+ * chmod does not stop root). 0, or -1. */
+static int make_read_only(const char *dir, char *what, size_t n)
+{
+	char cmd[1024];
+	snprintf(cmd, sizeof(cmd),
+	         "mount --bind '%s' '%s' 2>/dev/null && "
+	         "mount -o remount,ro,bind '%s' '%s' 2>/dev/null",
+	         dir, dir, dir, dir);
+	ro_by_chattr = false;
+	if (system(cmd) == 0) {
+		snprintf(what, n,
+		         "read-only bind mount of the session "
+		         "directory");
+		return 0;
+	}
+	snprintf(cmd, sizeof(cmd), "umount '%s' 2>/dev/null", dir);
+	if (system(cmd) != 0) {
+		/* Not mounted: nothing to undo. */
+	}
+	snprintf(cmd, sizeof(cmd), "chattr +i '%s' 2>/dev/null", dir);
+	if (system(cmd) != 0) {
+		return -1;
+	}
+	ro_by_chattr = true;
+	snprintf(what, n, "chattr +i on the session directory");
+	return 0;
+}
+
+static int make_writable(const char *dir)
+{
+	char cmd[512];
+	snprintf(cmd, sizeof(cmd),
+	         ro_by_chattr ? "chattr -i '%s'" : "umount '%s'", dir);
+	return system(cmd) == 0 ? 0 : -1;
+}
+
+/* Applies the next case of busy session s that can apply (its rotation
+ * goes on from the one after it); *what says what was done. Case 4 sets
+ * *order to the edit of the flipped record. Returns the case, or
+ * DAMAGE_NONE when none applied. */
+static enum damage damage_session(int s, char *what, size_t n, uint64_t *order)
+{
+	char dir[192];
+	session_dir(s, dir, sizeof(dir));
+	for (int i = 0; i < DAMAGE_COUNT - 1; i++) {
+		enum damage d = (enum damage)(1 + (next_case[s] - 1 + i) %
+		                                      (DAMAGE_COUNT - 1));
+		int rc = d == DAMAGE_SNAP_TORN
+		             ? tear_newest_snapshot(s, dir, what, n)
+		         : d == DAMAGE_OLD_JOURNAL
+		             ? flip_covered_journal(s, dir, what, n)
+		         : d == DAMAGE_READ_ONLY
+		             ? make_read_only(dir, what, n)
+		             : flip_live_journal(dir, order, what, n);
+		if (rc == 0) {
+			next_case[s] = (int)d % (DAMAGE_COUNT - 1) + 1;
+			dstats[d].applied++;
+			return d;
+		}
+		if (rc < 0) {
+			printf("  case %s could not be applied to %s: %s\n",
+			       damage_label[d], busy_name[s], strerror(errno));
+		}
+		dstats[d].skipped++;
+	}
+	return DAMAGE_NONE;
+}
+
+/* Marks the acknowledged edit of order in busy session s as flipped on
+ * purpose (case 4): lost by nature, counted apart. */
+static void mark_flipped(int s, uint64_t order)
+{
+	for (int e = 0; e < opt.editors; e++) {
+		struct editor *ed = &editors[e];
+		if (ed->session != s) {
+			continue;
+		}
+		pthread_mutex_lock(&ed->lock);
+		for (size_t i = ed->nacks; i-- > 0;) {
+			if (ed->acks[i].order == order &&
+			    !ed->acks[i].flipped) {
+				ed->acks[i].flipped = true;
+				dstats[DAMAGE_LIVE_JOURNAL].lost_flipped++;
+				printf("  edit %llu was acknowledged to editor "
+				       "%d (%s k %u): lost by nature\n",
+				       (unsigned long long)order, e,
+				       ed->acks[i].k & MARKER_BIT ? "marker"
+				                                  : "colour",
+				       ed->acks[i].k & ~MARKER_BIT);
+				i = 0;
+			}
+		}
+		pthread_mutex_unlock(&ed->lock);
+	}
+}
+
+/* A viewer's JOIN of busy session s now: 0 served (its order in *order),
+ * > 0 the ERROR's code (text in why), -1 no answer. */
+static int probe(int s, uint64_t *order, char why[WHY_LEN])
+{
+	struct conn c;
+	int rc = -1;
+	*order = 0;
+	why[0] = 0;
+	if (conn_open(&c, &dmn) != 0) {
+		return -1;
+	}
+	if (!conn_hello(&c, "probe")) {
+		rc = join(&c, busy_name[s], BC_PROTO_ROLE_VIEWER, why);
+	}
+	if (rc == 0) {
+		rc = conn_expect(&c, BC_MSG_SCENE_STATE, 30000) == 1 ? 0 : -1;
+		*order = c.m.scene_state.order;
+	}
+	conn_close(&c);
+	return rc;
+}
+
+/* Runs `blobcastd --check DATA [--repair]` (the daemon stopped), prints
+ * its lines and says whether one names busy session s NOT WHOLE. Returns
+ * its exit status (-1 when it did not run). */
+static int run_check(int s, bool repair, bool *named)
+{
+	char cmd[512], line[1024], want[64];
+	FILE *p;
+	int status;
+	snprintf(cmd, sizeof(cmd), "'%s' --check '%s'%s", daemon_path, data_dir,
+	         repair ? " --repair" : "");
+	snprintf(want, sizeof(want), "%s: NOT WHOLE", busy_name[s]);
+	*named = false;
+	if (!(p = popen(cmd, "r"))) {
+		return -1;
+	}
+	while (fgets(line, sizeof(line), p)) {
+		printf("  %s: %s", repair ? "--check --repair" : "--check",
+		       line);
+		*named = *named || !strncmp(line, want, strlen(want));
+	}
+	status = pclose(p);
+	status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+	check_exits[repair][status == 0 ? 0 : status == 1 ? 1 : 2]++;
+	return status;
+}
+
+/* Case 3's and 4's time with the damage in place: the restarted daemon
+ * runs 3 s while the clients try the session; a probe JOIN sees what
+ * they see. Case 4 must be refused with EIO naming `blobcastd --check`;
+ * case 3 refused, or served at an order not below the acknowledged. */
+static void damaged_window(int s, enum damage d)
+{
+	uint64_t order, top = acked_top(s, up_gen());
+	char why[WHY_LEN];
+	int rc = probe(s, &order, why);
+	if (rc == -BC_EIO) {
+		printf("  JOIN %s: refused, EIO: %s\n", busy_name[s], why);
+		if (d == DAMAGE_LIVE_JOURNAL &&
+		    !strstr(why, "blobcastd --check")) {
+			printf(
+			    "  the refusal does not name blobcastd --check\n");
+			dstats[d].check_failed++;
+		}
+	} else if (rc == 0) {
+		printf("  JOIN %s: served at order %llu (largest acknowledged "
+		       "%llu)\n",
+		       busy_name[s], (unsigned long long)order,
+		       (unsigned long long)top);
+		if (order < top) {
+			dstats[d].older_state++;
+		}
+		if (d == DAMAGE_LIVE_JOURNAL) {
+			dstats[d].check_failed++;
+		}
+	} else {
+		printf("  JOIN %s: %s %d (%s)\n", busy_name[s],
+		       rc > 0 ? "refused with code" : "no answer", rc, why);
+		if (d == DAMAGE_LIVE_JOURNAL) {
+			dstats[d].check_failed++;
+		}
+	}
+	sleep_sampling(3000);
+}
+
+/* After SIGKILL number nth with --damage: damages one busy session (they
+ * take turns), restarts the daemon, and for cases 3 and 4 keeps it up 3 s
+ * with the damage, kills it again (*kills counts it), undoes what case 3
+ * did or runs --check and --check --repair for case 4, and restarts it;
+ * then checks both busy sessions. 0, or -1 when the daemon did not
+ * start. */
+static int damage_cycle(int nth, int *kills, int64_t t0)
+{
+	int s = nth % BUSY_SESSIONS, rc, g;
+	char what[512] = "", dir[192];
+	uint64_t order = 0;
+	enum damage d = damage_session(s, what, sizeof(what), &order);
+	session_dir(s, dir, sizeof(dir));
+	printf("t=%llds kill %d: %s: %s%s%s\n",
+	       (long long)((t_now_ms() - t0) / 1000), *kills, busy_name[s],
+	       d ? damage_label[d] : "no case applies", d ? ": " : "", what);
+	if (d == DAMAGE_LIVE_JOURNAL) {
+		mark_flipped(s, order);
+	}
+	pending_damage = d;
+	pending_session = s;
+	rc = start_daemon();
+	if (rc == 0 && (d == DAMAGE_READ_ONLY || d == DAMAGE_LIVE_JOURNAL)) {
+		damaged_window(s, d);
+		kill_daemon();
+		(*kills)++;
+	}
+	if (d == DAMAGE_READ_ONLY && make_writable(dir) != 0) {
+		printf("  cannot make %s writable again\n", dir);
+		rc = -1;
+	}
+	if (rc == 0 && d == DAMAGE_LIVE_JOURNAL) {
+		bool named, unused;
+		int st = run_check(s, false, &named);
+		int sr = run_check(s, true, &unused);
+		if (st != 1 || !named || sr != 0) {
+			printf(
+			    "  --check exited %d (%s), --repair %d: expected "
+			    "1 naming it, then 0\n",
+			    st, named ? "naming it" : "not naming it", sr);
+			dstats[d].check_failed++;
+		}
+	}
+	if (rc == 0 && (d == DAMAGE_READ_ONLY || d == DAMAGE_LIVE_JOURNAL)) {
+		rc = start_daemon();
+	}
+	pending_damage = DAMAGE_NONE;
+	pending_session = -1;
+	if (rc != 0) {
+		return -1;
+	}
+	g = up_gen();
+	for (int i = 0; i < BUSY_SESSIONS; i++) {
+		long checked = 0;
+		if (i == s && d == DAMAGE_LIVE_JOURNAL) {
+			uint64_t o;
+			char why[WHY_LEN];
+			int pr = probe(s, &o, why);
+			printf("  after --repair: %s %s order %llu, largest "
+			       "acknowledged %llu\n",
+			       busy_name[s],
+			       pr == 0 ? "served at" : "NOT served,",
+			       (unsigned long long)o,
+			       (unsigned long long)acked_top(s, g));
+		}
+		check_session(i, damage_of(g, i), g, false, &checked);
+	}
+	return 0;
 }
 
 /* ---- main ---------------------------------------------------------------- */
@@ -888,7 +1685,20 @@ static void usage(FILE *f)
 	    "  --flood-per-s N   silent connections per second (default "
 	    "%d)\n"
 	    "  --alone-edits N   edits timed alone before and after the\n"
-	    "                    load (default %d)\n",
+	    "                    load (default %d)\n"
+	    "  --damage          at each kill, damage one busy session's\n"
+	    "                    files, rotating through: 1 newest snapshot\n"
+	    "                    torn (when an older one is there), 2 a\n"
+	    "                    record flipped in a journal a newer\n"
+	    "                    snapshot covers, 3 the session directory\n"
+	    "                    read-only for a 3 s restart, 4 a record\n"
+	    "                    flipped in the live journal (that edit is\n"
+	    "                    lost: the session must be refused, named\n"
+	    "                    by blobcastd --check and repaired by\n"
+	    "                    --repair without reusing an order);\n"
+	    "                    exit status 1 also when cases 1-3 lose an\n"
+	    "                    acknowledged edit or an order is reused\n"
+	    "                    (needs root: mount, chattr)\n",
 	    opt.duration_s, opt.kill_every_s, opt.editors, opt.viewers,
 	    opt.flooders, opt.stalled, opt.edit_hz, opt.flood_addrs,
 	    opt.flood_per_s, opt.alone_edits);
@@ -900,6 +1710,10 @@ static int parse_args(int argc, char **argv)
 		const char *a = argv[i];
 		double v;
 		char *end;
+		if (!strcmp(a, "--damage")) {
+			opt.damage = true;
+			continue;
+		}
 		if (i + 1 >= argc) {
 			return -1;
 		}
@@ -963,8 +1777,8 @@ int main(int argc, char **argv)
 	struct samples alone = {0}, alone_after = {0}, calm_load = {0};
 	struct calm_job job = {.s = &calm_load};
 	atomic_init(&job.done, false);
-	int nworkers = 0, kills = 0, crashes = 0;
-	long lost, checked;
+	int nworkers = 0, kills = 0, crashes = 0, cycles = 0;
+	long lost, checked, reused, flipped, bad = 0;
 	int64_t t0, next_kill, next_print;
 	char cmd[256];
 	(void)daemon_start; /* daemon.h's; restarts need the TCP port too */
@@ -999,6 +1813,10 @@ int main(int argc, char **argv)
 	       opt.duration_s, opt.kill_every_s, opt.editors, opt.edit_hz,
 	       opt.viewers, opt.flooders, opt.stalled,
 	       opt.flood_addrs ? opt.flood_per_s : 0, opt.flood_addrs);
+	if (opt.damage) {
+		printf("damage: at each kill, one busy session's files, cases "
+		       "1-4 in rotation\n");
+	}
 	if (start_daemon() != 0) {
 		printf("cannot start %s\n", argv[1]);
 		return 2;
@@ -1027,6 +1845,7 @@ int main(int argc, char **argv)
 	for (int e = 0; e < opt.editors; e++) {
 		editors[e].index = e;
 		editors[e].session = e % BUSY_SESSIONS;
+		pthread_mutex_init(&editors[e].lock, NULL);
 		editors[e].prim =
 		    busy_prims[e % BUSY_SESSIONS]
 		              [(37u * (uint32_t)e + 11u) % BUSY_PRIMS];
@@ -1077,11 +1896,16 @@ int main(int argc, char **argv)
 		}
 		if (t_now_ms() >= next_kill) {
 			char name[32];
-			if (dmn.pid > 0) {
+			bool killed = dmn.pid > 0;
+			int rc;
+			if (killed) {
 				kill_daemon();
 				kills++;
 			}
-			if (start_daemon() != 0) {
+			rc = opt.damage && killed
+			         ? damage_cycle(cycles++, &kills, t0)
+			         : start_daemon();
+			if (rc != 0) {
 				printf("the daemon did not restart after kill "
 				       "%d: see %s.log\n",
 				       kills, data_dir);
@@ -1124,7 +1948,8 @@ int main(int argc, char **argv)
 	}
 	phase_begin("restarted, verify");
 	phase_sample();
-	lost = verify(&checked);
+	verify(&checked);
+	reused = count_reused();
 	phase_sample();
 	atomic_store(&stopping, false);
 	alone_phase(&alone_after);
@@ -1167,19 +1992,59 @@ int main(int argc, char **argv)
 		       (double)phases[i].max / 1024.0,
 		       (double)phases[i].last / 1024.0);
 	}
+	lost = 0;
+	for (int d = 0; d < DAMAGE_COUNT; d++) {
+		lost += dstats[d].lost;
+		bad += dstats[d].older_state + dstats[d].unserved +
+		       dstats[d].check_failed;
+	}
+	flipped = dstats[DAMAGE_LIVE_JOURNAL].lost_flipped;
+	if (opt.damage) {
+		printf("damage cycles: %d (kills incl. those of cases 3 and 4 "
+		       "and the last: %d)\n",
+		       cycles, kills);
+		printf("  %-26s %7s %7s %5s %7s %6s %6s %6s %6s %5s %5s %5s\n",
+		       "case", "applied", "skipped", "lost", "flipped",
+		       "reused", "joinEIO", "naming", "editEIO", "older",
+		       "unsrv", "chk!");
+		for (int d = 0; d < DAMAGE_COUNT; d++) {
+			const struct damage_stats *x = &dstats[d];
+			printf("  %-26s %7ld %7ld %5ld %7ld %6ld %6ld %6ld "
+			       "%6ld %5ld %5ld %5ld\n",
+			       damage_label[d], x->applied, x->skipped, x->lost,
+			       x->lost_flipped, x->reused,
+			       atomic_load(&x->joins_refused),
+			       atomic_load(&x->joins_refused_named),
+			       atomic_load(&x->edits_refused), x->older_state,
+			       x->unserved, x->check_failed);
+		}
+		printf("blobcastd --check exits: %ld x 0, %ld x 1, %ld other; "
+		       "--check --repair: %ld x 0, %ld x 1, %ld other\n",
+		       check_exits[0][0], check_exits[0][1], check_exits[0][2],
+		       check_exits[1][0], check_exits[1][1], check_exits[1][2]);
+		printf("case 3 made the directory read-only by %s\n",
+		       ro_by_chattr ? "chattr +i" : "a read-only bind mount");
+	}
 	printf("acknowledged edits checked: %ld\n", checked);
 	printf("acknowledged edits lost: %ld\n", lost);
+	if (opt.damage) {
+		printf("acknowledged edits lost to unrepairable damage, named "
+		       "by --check: %ld\n",
+		       flipped);
+	}
+	printf("order numbers reused: %ld\n", reused);
+	bad += lost + reused;
 
 	daemon_stop(&dmn, SIGTERM);
 	for (int e = 0; e < opt.editors; e++) {
-		bc_free(editors[e].acked_k);
-		bc_free(editors[e].acked_m);
+		bc_free(editors[e].acks);
+		pthread_mutex_destroy(&editors[e].lock);
 	}
 	bc_free(alone.v);
 	bc_free(alone_after.v);
 	bc_free(calm_load.v);
 	bc_free(calm_back.v);
-	if (lost == 0) {
+	if (bad == 0) {
 		snprintf(cmd, sizeof(cmd), "rm -rf %s %s.sock %s.log", data_dir,
 		         data_dir, data_dir);
 		if (system(cmd) != 0) {
@@ -1189,5 +2054,5 @@ int main(int argc, char **argv)
 		printf("data directory and log kept: %s, %s.log\n", data_dir,
 		       data_dir);
 	}
-	return lost == 0 ? 0 : 1;
+	return bad == 0 ? 0 : 1;
 }

@@ -1058,8 +1058,8 @@ static void act_hello(struct fz *f, bool mutated)
 	 * gains a kind it did not announce). */
 	if (pm(s, 900)) {
 		m.hello.has_features = true;
-		m.hello.features = pm(s, 900) ? BC_PROTO_FEATURES_ALL
-		                              : (uint32_t)next_u64(s);
+		m.hello.features =
+		    pm(s, 900) ? BC_PROTO_FEATURES_ALL : (uint32_t)next_u64(s);
 	}
 	fz_emit(f, &m, mutated);
 }
