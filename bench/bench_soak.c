@@ -176,23 +176,6 @@ static void kill_daemon(void)
 	daemon_stop(&dmn, SIGKILL);
 }
 
-/* A free TCP port on 127.0.0.1 (kept for every restart). */
-static int pick_port(void)
-{
-	struct sockaddr_in sa = {.sin_family = AF_INET};
-	socklen_t len = sizeof(sa);
-	int fd = socket(AF_INET, SOCK_STREAM, 0), port = 0;
-	sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-	if (fd >= 0 && bind(fd, (struct sockaddr *)&sa, sizeof(sa)) == 0 &&
-	    getsockname(fd, (struct sockaddr *)&sa, &len) == 0) {
-		port = ntohs(sa.sin_port);
-	}
-	if (fd >= 0) {
-		close(fd);
-	}
-	return port;
-}
-
 static long rss_kib(pid_t pid)
 {
 	char path[64], line[256];
@@ -1800,7 +1783,7 @@ int main(int argc, char **argv)
 	}
 	setenv("BLOBCAST_TEST_VERBOSE", "1", 1);
 	setvbuf(stdout, NULL, _IOLBF, 0);
-	if (!(tcp_port = pick_port())) {
+	if (!(tcp_port = daemon_free_port())) {
 		printf("no free TCP port\n");
 		return 2;
 	}
