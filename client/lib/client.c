@@ -563,20 +563,14 @@ static int send_all(int fd, const void *req, size_t len, double deadline)
 	return 0;
 }
 
-/* Asks a second connection to a what it is, by deadline, with the request
- * that opens a WebSocket. */
-static void probe_http(const struct bc_client_addr *a, double deadline,
-                       struct peer_answer *p)
+/* Opens a second connection to a and asks it what it is, by deadline,
+ * with the request that opens a WebSocket. Returns the socket, or -1. */
+static int probe_start(const struct bc_client_addr *a, double deadline)
 {
 	char req[BC_CLIENT_MAX_HOST + 256];
-	uint8_t buf[PROBE_BYTES];
-	struct bc_proto_reader r;
-	struct bc_msg m;
-	size_t have = 0;
 	int fd = -1, len;
-	memset(p, 0, sizeof(*p));
 	if (open_tcp(a, deadline, &fd, NULL)) {
-		return;
+		return -1;
 	}
 	len = snprintf(req, sizeof(req),
 	               "GET / HTTP/1.1\r\nHost: %s:%u\r\nUpgrade: websocket\r\n"
@@ -588,10 +582,22 @@ static void probe_http(const struct bc_client_addr *a, double deadline,
 	if (len < 0 || (size_t)len >= sizeof(req) ||
 	    send_all(fd, req, (size_t)len, deadline)) {
 		close(fd);
-		return;
+		return -1;
 	}
-	/* Enough for a status line, or one whole ERROR of blobcastd's. */
-	while (have < sizeof(buf)) {
+	return fd;
+}
+
+/* Reads the answer to probe_start()'s request on fd until deadline: enough
+ * for a status line, or one whole ERROR of blobcastd's. p->kind stays
+ * PEER_NONE when nothing came. */
+static void probe_read(int fd, double deadline, struct peer_answer *p)
+{
+	uint8_t buf[PROBE_BYTES];
+	struct bc_proto_reader r;
+	struct bc_msg m;
+	size_t have = 0;
+	memset(p, 0, sizeof(*p));
+	while (fd >= 0 && have < sizeof(buf)) {
 		struct pollfd pf = {.fd = fd, .events = POLLIN};
 		ssize_t n;
 		int k = poll(&pf, 1, bc__client_ms_left(deadline));
@@ -612,31 +618,41 @@ static void probe_http(const struct bc_client_addr *a, double deadline,
 			break;
 		}
 		have += (size_t)n;
-		if (memchr(buf, '\n', have) || have >= 12) {
-			/* A status line, or a header's worth of BCST:
-			 * read on only for a whole ERROR message. */
-			classify(buf, have, p);
-			if (p->kind != PEER_BLOBCAST) {
-				break;
-			}
-			bc_proto_reader_init(&r,
-			                     &(struct bc_proto_reader_opts){
-			                         .side = BC_PROTO_SIDE_CLIENT});
-			if (bc_proto_reader_feed(&r, buf, have) == 0 &&
-			    bc_proto_reader_next(&r, &m) == 1) {
-				if (m.type == BC_MSG_ERROR) {
-					p->error_code = -(int)m.error.code;
-				}
-				bc_proto_reader_finish(&r);
-				break;
+		if (!memchr(buf, '\n', have) && have < BC_PROTO_HEADER_SIZE) {
+			continue;
+		}
+		/* A status line, or a header's worth of BCST: read on only
+		 * for a whole ERROR message. */
+		classify(buf, have, p);
+		if (p->kind != PEER_BLOBCAST) {
+			return;
+		}
+		bc_proto_reader_init(&r, &(struct bc_proto_reader_opts){
+		                             .side = BC_PROTO_SIDE_CLIENT});
+		if (bc_proto_reader_feed(&r, buf, have) == 0 &&
+		    bc_proto_reader_next(&r, &m) == 1) {
+			if (m.type == BC_MSG_ERROR) {
+				p->error_code = -(int)m.error.code;
 			}
 			bc_proto_reader_finish(&r);
+			return;
 		}
+		bc_proto_reader_finish(&r);
 	}
-	if (p->kind == PEER_NONE && have) {
+	if (have) {
 		classify(buf, have, p);
 	}
-	close(fd);
+}
+
+/* probe_start() and probe_read() on one connection. */
+static void probe_http(const struct bc_client_addr *a, double deadline,
+                       struct peer_answer *p)
+{
+	int fd = probe_start(a, deadline);
+	probe_read(fd, deadline, p);
+	if (fd >= 0) {
+		close(fd);
+	}
 }
 
 /* Whether a TLS handshake (certificate not checked) succeeds at a by
@@ -700,12 +716,41 @@ static int not_blobcastd(const struct bc_client_addr *a,
 	}
 }
 
+/* What first_answer() returns when it closed the connection to hear the
+ * probe, and the probe then found a blobcastd: connect again. */
+#define HELLO_AGAIN 1
+
+/* Waits for fd to be readable until deadline: 1, 0 at the deadline, or
+ * -1 with errno. */
+static int readable(int fd, double deadline)
+{
+	struct pollfd pf = {.fd = fd, .events = POLLIN};
+	int k;
+	do {
+		k = poll(&pf, 1, bc__client_ms_left(deadline));
+	} while (k < 0 && errno == EINTR);
+	return k;
+}
+
+/* The answer to HELLO was silent until deadline. */
+static int silent(const struct bc_client *c, const struct bc_client_addr *a,
+                  bool probed, struct bc_errinfo *ei)
+{
+	return bc_errinfo_set(ei, BC_ETIMEOUT,
+	                      "no WELCOME from %s:%u within %d ms: it "
+	                      "accepted the connection but stays silent%s "
+	                      "(not a blobcastd? on a slow link, allow more "
+	                      "time)",
+	                      a->host, (unsigned)a->port, c->timeout_ms,
+	                      probed ? ", to an HTTP request too" : "");
+}
+
 /*
  * Waits, on a plain TCP connection that has sent HELLO, for the first bytes
  * of the answer and checks that they are blobcastd's. Returns 0 when they
- * are (the reader takes them), or an error with what listens there:
- * BC_EPROTO_MAGIC (another program answered), BC_ECLOSED (closed without
- * a word), BC_ETIMEOUT (silent until deadline).
+ * are (the reader takes them), HELLO_AGAIN, or an error with what listens
+ * there: BC_EPROTO_MAGIC (another program answered), BC_ECLOSED (closed
+ * without a word), BC_ETIMEOUT (silent until deadline).
  */
 static int first_answer(struct bc_client *c, const struct bc_client_addr *a,
                         double deadline, struct bc_errinfo *ei)
@@ -713,39 +758,47 @@ static int first_answer(struct bc_client *c, const struct bc_client_addr *a,
 	struct peer_answer p, probe = {0};
 	uint8_t buf[PROBE_BYTES];
 	double quiet = deadline_min(deadline, HELLO_QUIET_MS);
-	bool probed = false;
+	int k = readable(c->fd, quiet), pfd;
 	ssize_t n;
-	for (;;) {
-		struct pollfd pf = {.fd = c->fd, .events = POLLIN};
-		int k = poll(&pf, 1, bc__client_ms_left(quiet));
-		if (k < 0 && errno == EINTR) {
-			continue;
-		}
-		if (k < 0) {
-			return bc_errinfo_set(ei, BC_EIO, "poll: %s",
-			                      strerror(errno));
-		}
-		if (k > 0) {
-			break;
-		}
-		if (probed || quiet == deadline) {
-			return bc_errinfo_set(
-			    ei, BC_ETIMEOUT,
-			    "no WELCOME from %s:%u within %d ms: it accepted "
-			    "the connection but stays silent%s (not a "
-			    "blobcastd? on a slow link, allow more time)",
-			    a->host, (unsigned)a->port, c->timeout_ms,
-			    probed ? ", to an HTTP request too" : "");
-		}
+	if (k == 0 && quiet == deadline) {
+		return silent(c, a, false, ei);
+	}
+	if (k == 0) {
 		/* Silent so far: ask what listens there. */
-		probe_http(a, deadline_min(deadline, PROBE_MS), &probe);
-		probed = true;
+		pfd = probe_start(a, deadline_min(deadline, PROBE_MS));
+		probe_read(pfd, deadline_min(deadline, PROBE_MS), &probe);
+		if (probe.kind == PEER_NONE && pfd >= 0) {
+			/* The probe is silent too: a server that serves
+			 * one connection at a time (python's HTTPServer) is
+			 * still busy with HELLO. Let it go and hear the
+			 * probe; a blobcastd that answers it after all is
+			 * connected to again. */
+			close(c->fd);
+			c->fd = -1;
+			probe_read(pfd, deadline, &probe);
+			close(pfd);
+			if (probe.kind == PEER_BLOBCAST) {
+				return HELLO_AGAIN;
+			}
+			if (probe.kind == PEER_NONE) {
+				return silent(c, a, true, ei);
+			}
+			return not_blobcastd(a, &probe, ei);
+		}
+		if (pfd >= 0) {
+			close(pfd);
+		}
 		if (probe.kind == PEER_HTTP || probe.kind == PEER_WEBSOCKET ||
 		    probe.kind == PEER_TLS || probe.kind == PEER_OTHER) {
 			return not_blobcastd(a, &probe, ei);
 		}
 		/* A blobcastd (a slow one), or no telling: wait on. */
-		quiet = deadline;
+		if ((k = readable(c->fd, deadline)) == 0) {
+			return silent(c, a, true, ei);
+		}
+	}
+	if (k < 0) {
+		return bc_errinfo_set(ei, BC_EIO, "poll: %s", strerror(errno));
 	}
 	do {
 		n = recv(c->fd, buf, sizeof(buf), MSG_PEEK);
@@ -916,12 +969,25 @@ int bc_client_connect(struct bc_client **out, const struct bc_client_opts *opts,
 	if (!rc && addr.ws && bc__client_ws_start(c, &addr, deadline)) {
 		rc = sticky(c, ei);
 	}
-	if (rc ||
-	    (rc = hello(c, o,
-	                addr.kind == BC_CLIENT_ADDR_TCP && !addr.tls && !addr.ws
-	                    ? &addr
-	                    : NULL,
-	                deadline, ei))) {
+	if (!rc) {
+		rc = hello(c, o,
+		           addr.kind == BC_CLIENT_ADDR_TCP && !addr.tls &&
+		                   !addr.ws
+		               ? &addr
+		               : NULL,
+		           deadline, ei);
+	}
+	if (rc == HELLO_AGAIN) {
+		/* A slow blobcastd: once more on a new connection, waiting
+		 * for it without asking. */
+		c->next_seq = 1;
+		memset(&c->info, 0, sizeof(c->info));
+		rc = open_tcp(&addr, deadline, &c->fd, ei);
+		if (!rc) {
+			rc = hello(c, o, NULL, deadline, ei);
+		}
+	}
+	if (rc) {
 		goto fail;
 	}
 	*out = c;
