@@ -217,6 +217,19 @@ int bc_client_addr_parse(const char *s, struct bc_client_addr *out,
 		memcpy(out->path, s + 5, n + 1);
 		return 0;
 	}
+	{
+		/* A URL of another scheme, such as the page's http:// address:
+		 * say so rather than misread it as HOST:PORT. */
+		size_t n = strspn(s, "abcdefghijklmnopqrstuvwxyz+.-");
+		if (n > 0 && strncmp(s + n, "://", 3) == 0) {
+			return bc_errinfo_set(
+			    ei, BC_EINVAL,
+			    "\"%.64s\": %.*s:// is not a blobcastd address "
+			    "(HOST:PORT, tls://, ws://, wss:// or unix:PATH; "
+			    "a web page's address is not the daemon's)",
+			    s, (int)n, s);
+		}
+	}
 	if (s[0] == '[') {
 		const char *close = strchr(s, ']');
 		if (!close) {

@@ -148,6 +148,8 @@ expect 2 "--json takes no value" nodes --session s --json=1
 # failures (status 3), with the reason and what to check.
 expect 2 "port must be a number" edit --server host:0 --session s 1 radius=1
 expect 2 "IPv6" edit --server ::1 --session s 1 radius=1
+expect 2 "http:// is not a blobcastd address" \
+  sessions --server http://127.0.0.1:8080
 expect 3 "cannot connect" edit --server 127.0.0.1:1 --session s 1 radius=1
 expect 3 "connection refused: nothing listens on port 1" \
   sessions --server 127.0.0.1:1
