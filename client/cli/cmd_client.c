@@ -7,8 +7,10 @@
  * measurements of watch and bench-latency. All protocol work goes through
  * libblobcast (blobcast/client.h); image files through bc_image (OpenImageIO).
  *
- * Exit status: 0 success, 1 the server or the connection failed (the
- * server's ERROR text is printed), 2 usage error.
+ * Exit status (cli.h, docs/client.md): 0 success, 1 the server refused
+ * (its ERROR text is printed), 2 usage error, 3 the network (no
+ * connection, TLS, a timeout, a closed connection, not a blobcastd), 4
+ * authentication; every failure also says what to do.
  */
 #include "cmd_client.h"
 
@@ -30,10 +32,13 @@
 #include "blobcast/image.h"
 #include "blobcast/num.h"
 #include "blobcast/scene.h"
+#include "cli.h"
 #include "cmd_inspect.h"
 
-#define EXIT_FAIL 1
-#define EXIT_USAGE 2
+/* A failure that is neither the server's answer nor the network's (out of
+ * memory, a file that cannot be written, too few frames): status 1. */
+#define EXIT_FAIL BC_CLI_EXIT_REFUSED
+#define EXIT_USAGE BC_CLI_EXIT_USAGE
 
 /* Positional arguments a subcommand may take: edit's node id and one
  * key=value per field is the most. */
@@ -124,14 +129,23 @@ static bool parse_u64(const char *s, uint64_t lo, uint64_t hi, uint64_t *out)
 	return bc_num_u64(s, lo, hi, out) == 0;
 }
 
-/* Prints a failure of the server or the connection; returns EXIT_FAIL. */
-static int failed(const struct args *a, const char *what,
-                  const struct bc_errinfo *ei)
+/* Prints a failure of the server or the connection (on c, NULL while
+ * connecting) and what to do about it; returns its exit status
+ * (bc_cli_exit_for). */
+static int failed(const struct args *a, const struct bc_client *c,
+                  const char *what, const struct bc_errinfo *ei)
 {
+	enum bc_cli_stage stage =
+	    c ? BC_CLI_STAGE_SESSION : BC_CLI_STAGE_CONNECT;
+	const char *hint = bc_cli_hint(ei->code, stage, ei->msg);
 	fprintf(stderr, "blobcast %s: %s%s%s (%s)\n", a->cmd, what ? what : "",
 	        what ? ": " : "", ei->msg[0] ? ei->msg : bc_strerror(ei->code),
 	        bc_err_name(ei->code));
-	return EXIT_FAIL;
+	if (hint) {
+		fprintf(stderr, "blobcast %s: %s\n", a->cmd, hint);
+	}
+	return bc_cli_exit_for(ei->code, stage,
+	                       c && bc_client_error(c, NULL) != 0);
 }
 
 /* The connection the options ask for: --server, --token (or their
@@ -152,7 +166,7 @@ static int connect_to(const struct args *a, struct bc_client **c)
 	struct bc_errinfo ei = {0};
 	struct bc_client_opts opts = connect_opts(a);
 	if (bc_client_connect(c, &opts, &ei)) {
-		return failed(a, NULL, &ei);
+		return failed(a, NULL, NULL, &ei);
 	}
 	return 0;
 }
@@ -169,7 +183,7 @@ static int open_session(const struct args *a, enum bc_proto_role role,
 	if (bc_client_join(*c, a->session, role, mode, &ei)) {
 		char what[128];
 		snprintf(what, sizeof(what), "session %s", a->session);
-		return failed(a, what, &ei);
+		return failed(a, *c, what, &ei);
 	}
 	return 0;
 }
@@ -194,7 +208,7 @@ static int run_load(struct args *a)
 	/* The file is read before connecting: a bad file is the caller's
 	 * mistake (status 2) and costs the server nothing. */
 	if (bc_scene_load_json(a->pos[0], t, &cam, &ei)) {
-		fprintf(stderr, "blobcast load: %s\n", ei.msg);
+		bc_cli_explain(stderr, "blobcast load", ei.msg);
 		status = EXIT_USAGE;
 		goto out;
 	}
@@ -209,7 +223,7 @@ static int run_load(struct args *a)
 		goto out;
 	}
 	if (bc_client_load_scene(c, bytes, len, &order, &ei)) {
-		status = failed(a, "scene not loaded", &ei);
+		status = failed(a, c, "scene not loaded", &ei);
 		goto out;
 	}
 	printf("session %s: loaded %s (%u nodes), edit order %llu\n",
@@ -247,15 +261,21 @@ static int run_edit(struct args *a)
 	                      &ei)) {
 		/* Bad key=value text is the user's mistake, not the server's;
 		 * the connection failing is not. */
-		status = bc_client_error(c, NULL) ? failed(a, NULL, &ei)
-		                                  : EXIT_USAGE;
-		if (status == EXIT_USAGE) {
-			fprintf(stderr, "blobcast edit: %s\n", ei.msg);
+		if (bc_client_error(c, NULL)) {
+			status = failed(a, c, NULL, &ei);
+		} else {
+			const char *hint =
+			    bc_cli_hint(ei.code, BC_CLI_STAGE_SESSION, ei.msg);
+			bc_cli_explain(stderr, "blobcast edit", ei.msg);
+			if (hint) {
+				fprintf(stderr, "blobcast edit: %s\n", hint);
+			}
+			status = EXIT_USAGE;
 		}
 		goto out;
 	}
 	if (bc_client_wait_applied(c, seq, &order, &ei)) {
-		status = failed(a, NULL, &ei);
+		status = failed(a, c, NULL, &ei);
 		goto out;
 	}
 	printf("node %llu: edit applied, edit order %llu\n",
@@ -330,7 +350,7 @@ static int run_camera(struct args *a)
 		goto out;
 	}
 	if (bc_client_session_camera(c, &cam, &order, &ei)) {
-		status = failed(a, "camera not set", &ei);
+		status = failed(a, c, "camera not set", &ei);
 		goto out;
 	}
 	printf("session %s: camera eye %g,%g,%g target %g,%g,%g up %g,%g,%g "
@@ -402,7 +422,7 @@ static int run_snapshot(struct args *a)
 		/* Before VIEW, so that the one stream frame VIEW causes is
 		 * already from this camera. */
 		if (bc_client_camera(c, &cam, false, &seq, &ei)) {
-			status = failed(a, NULL, &ei);
+			status = failed(a, c, NULL, &ei);
 			goto out;
 		}
 	}
@@ -416,7 +436,7 @@ static int run_snapshot(struct args *a)
 	                                         .quality_still = 30},
 	                   &seq, &ei) ||
 	    bc_client_snapshot_planes(c, BC_PROTO_ENC_PNG, planes, &img, &ei)) {
-		status = failed(a, "snapshot", &ei);
+		status = failed(a, c, "snapshot", &ei);
 		goto out;
 	}
 	if (img.flags & BC_PROTO_FLAG_INCOMPLETE) {
@@ -518,13 +538,14 @@ static int frames_timed_out(const struct args *a, uint64_t nframes,
 
 /* Reports the server's ERROR message m the way failed() reports our own
  * errors; returns the exit status for it. */
-static int server_failed(const struct args *a, const struct bc_msg *m)
+static int server_failed(const struct args *a, const struct bc_client *c,
+                         const struct bc_msg *m)
 {
 	struct bc_errinfo ei = {0};
 	ei.code = -(int)m->error.code;
 	snprintf(ei.msg, sizeof(ei.msg), "%.*s", (int)m->error.text.len,
 	         m->error.text.ptr);
-	return failed(a, NULL, &ei);
+	return failed(a, c, NULL, &ei);
 }
 
 /* Arrival times of edit orders, to measure frames against. */
@@ -754,7 +775,7 @@ static int run_watch(struct args *a)
 	/* The first connection must work: a wrong address or session is a
 	 * mistake to report, not to retry. */
 	if ((rc = watch_open(a, &c, roster, &view_at, &ei))) {
-		status = failed(a, NULL, &ei);
+		status = failed(a, c, NULL, &ei);
 		goto out;
 	}
 	last_frame_at = bc_clock_ms();
@@ -778,7 +799,7 @@ static int run_watch(struct args *a)
 			memset(&ei, 0, sizeof(ei));
 			rc = watch_open(a, &c, roster, &view_at, &ei);
 			if (rc && watch_gives_up(rc)) {
-				status = failed(a, "reconnecting", &ei);
+				status = failed(a, c, "reconnecting", &ei);
 				goto out;
 			}
 			if (rc) {
@@ -818,7 +839,7 @@ static int run_watch(struct args *a)
 				bc_client_error(c, &ei);
 			}
 			if (watch_gives_up(ei.code)) {
-				status = failed(a, NULL, &ei);
+				status = failed(a, c, NULL, &ei);
 				goto out;
 			}
 			fprintf(stderr,
@@ -881,7 +902,7 @@ static int run_watch(struct args *a)
 			}
 			break;
 		case BC_MSG_ERROR:
-			status = server_failed(a, &m);
+			status = server_failed(a, c, &m);
 			goto out;
 		case BC_MSG_FRAME:
 			nframes++;
@@ -929,7 +950,7 @@ static int run_watch(struct args *a)
 	 * reconnecting reports its own counts only. */
 	memset(&st, 0, sizeof(st));
 	if (c && bc_client_stats(c, &st, &ei)) {
-		status = failed(a, "stats", &ei);
+		status = failed(a, c, "stats", &ei);
 		goto out;
 	}
 	printf("stats frames=%llu bytes=%llu server_frames=%llu "
@@ -982,7 +1003,7 @@ static int run_present(struct args *a)
 	}
 	if (bc_client_camera(c, &cam, false, NULL, &ei) ||
 	    bc_client_present(c, true, &ei)) {
-		status = failed(a, "present", &ei);
+		status = failed(a, c, "present", &ei);
 		goto out;
 	}
 	me = bc_client_info(c)->member_id;
@@ -1003,7 +1024,7 @@ static int run_present(struct args *a)
 		rc = bc_client_recv(c, &m, WATCH_SLICE_MS);
 		if (rc < 0) {
 			bc_client_error(c, &ei);
-			status = failed(a, NULL, &ei);
+			status = failed(a, c, NULL, &ei);
 			goto out;
 		}
 		if (rc == 0) {
@@ -1016,12 +1037,12 @@ static int run_present(struct args *a)
 			break;
 		}
 		if (m.type == BC_MSG_ERROR) {
-			status = server_failed(a, &m);
+			status = server_failed(a, c, &m);
 			goto out;
 		}
 	}
 	if (strcmp(end, "replaced") != 0 && bc_client_present(c, false, &ei)) {
-		status = failed(a, "stop presenting", &ei);
+		status = failed(a, c, "stop presenting", &ei);
 		goto out;
 	}
 	printf("end=%s\n", end);
@@ -1064,7 +1085,7 @@ static int run_follow(struct args *a)
 	}
 	/* FOLLOW 0 first: the server then says who presents (PRESENTER). */
 	if (bc_client_follow(c, false, &ei)) {
-		status = failed(a, "follow", &ei);
+		status = failed(a, c, "follow", &ei);
 		goto out;
 	}
 	if (bc_client_view(c,
@@ -1073,7 +1094,7 @@ static int run_follow(struct args *a)
 	                                         .encoding = a->encoding,
 	                                         .downscale = a->downscale},
 	                   NULL, &ei)) {
-		status = failed(a, "view", &ei);
+		status = failed(a, c, "view", &ei);
 		goto out;
 	}
 	/* Behave as if PRESENTER had just said who presents. */
@@ -1092,7 +1113,7 @@ static int run_follow(struct args *a)
 			rc = bc_client_recv(c, &m, WATCH_SLICE_MS);
 			if (rc < 0) {
 				bc_client_error(c, &ei);
-				status = failed(a, NULL, &ei);
+				status = failed(a, c, NULL, &ei);
 				goto out;
 			}
 			continue;
@@ -1116,7 +1137,7 @@ static int run_follow(struct args *a)
 				f.toggle.on = 1;
 				if (bc_client_send(c, &f, NULL)) {
 					bc_client_error(c, &ei);
-					status = failed(a, "follow", &ei);
+					status = failed(a, c, "follow", &ei);
 					goto out;
 				}
 			}
@@ -1163,7 +1184,7 @@ static int run_follow(struct args *a)
 			if (-(int)m.error.code == BC_ESTATE && m.seq != 0) {
 				break;
 			}
-			status = server_failed(a, &m);
+			status = server_failed(a, c, &m);
 			goto out;
 		default:
 			break;
@@ -1232,7 +1253,7 @@ static int run_delete(struct args *a)
 	int status = connect_to(a, &c);
 	if (status == 0 && bc_client_delete_session(c, a->session, &ei)) {
 		snprintf(what, sizeof(what), "session %s", a->session);
-		status = failed(a, what, &ei);
+		status = failed(a, c, what, &ei);
 	}
 	if (status == 0) {
 		printf("deleted session %s\n", a->session);
@@ -1253,7 +1274,7 @@ static int run_undo(struct args *a)
 		goto out;
 	}
 	if (bc_client_undo(c, redo, &u, &ei)) {
-		status = failed(a, NULL, &ei);
+		status = failed(a, c, NULL, &ei);
 		goto out;
 	}
 	printf("%s edit %llu by \"%s\": edit order %llu\n",
@@ -1283,7 +1304,7 @@ static int run_sessions(struct args *a)
 	size_t n = 0;
 	int status = connect_to(a, &c);
 	if (status == 0 && bc_client_sessions(c, &list, &n, &ei)) {
-		status = failed(a, NULL, &ei);
+		status = failed(a, c, NULL, &ei);
 	}
 	if (status == 0 && a->json) {
 		json_t *arr = json_array();
@@ -1447,7 +1468,7 @@ static int one_edit(const struct args *a, struct bc_client *c, uint32_t node,
 	double deadline = bc_clock_ms() + (double)timeout;
 	memcpy(f.v, pos, 3 * sizeof(float));
 	if (bc_client_edit_set(c, node, &f, 1, a->interacting, &seq, &ei)) {
-		return failed(a, NULL, &ei);
+		return failed(a, c, NULL, &ei);
 	}
 	for (;;) {
 		double left = deadline - bc_clock_ms();
@@ -1455,7 +1476,7 @@ static int one_edit(const struct args *a, struct bc_client *c, uint32_t node,
 		    c, &m, timeout < 0 ? -1 : (left > 0.0 ? (int)left + 1 : 0));
 		if (rc < 0) {
 			bc_client_error(c, &ei);
-			return failed(a, NULL, &ei);
+			return failed(a, c, NULL, &ei);
 		}
 		if (rc == 0) {
 			fprintf(stderr,
@@ -1465,7 +1486,7 @@ static int one_edit(const struct args *a, struct bc_client *c, uint32_t node,
 			return EXIT_FAIL;
 		}
 		if (m.type == BC_MSG_ERROR) {
-			return server_failed(a, &m);
+			return server_failed(a, c, &m);
 		}
 		if (m.type == BC_MSG_EDIT_APPLIED &&
 		    m.edit_applied.author == bc_client_info(c)->member_id &&
@@ -1538,7 +1559,7 @@ static int run_bench(struct args *a)
 	                                         .downscale = a->downscale},
 	                   &seq, &ei) ||
 	    bc_client_wait(c, BC_MSG_FRAME, 0, &m, 0, &ei)) {
-		status = failed(a, "first frame", &ei);
+		status = failed(a, c, "first frame", &ei);
 		goto out;
 	}
 	for (uint32_t i = 0; i < a->edits; i++) {
@@ -1563,7 +1584,7 @@ static int run_bench(struct args *a)
 		}
 	}
 	if (bc_client_stats(c, &st, &ei)) {
-		status = failed(a, "stats", &ei);
+		status = failed(a, c, "stats", &ei);
 		goto out;
 	}
 	qsort(lat, a->edits, sizeof(*lat), cmp_double);
@@ -2139,10 +2160,11 @@ int bc_cli_client(const char *subcommand, int argc, char **argv)
 	pa.prog = prog;
 	pa.usage = usage;
 	pa.about = about;
-	pa.footer = "exit status: 0 done, 1 the server or the connection "
-	            "failed, 2 usage error";
+	pa.footer = "exit status: 0 done, 1 the server refused, 2 usage "
+	            "error, 3 network\n(cannot connect, TLS, timeout, closed, "
+	            "not a blobcastd), 4 authentication\n(token, role)";
 	pa.opts = opts;
-	if (bc_args_parse(&pa, argc, argv)) {
+	if (bc_cli_args_parse(&pa, argc, argv)) {
 		return pa.status;
 	}
 	for (int i = 0; i < nopts; i++) {

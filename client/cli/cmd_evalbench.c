@@ -23,6 +23,7 @@
 #include "blobcast/blobtree.h"
 #include "blobcast/scene.h"
 #include "blobcast/svo.h"
+#include "cli.h"
 
 /* Default and largest number of timed points: a million points take a
  * fraction of a second through pruned variants; 10^8 bounds the points'
@@ -115,7 +116,7 @@ static int parse(int argc, char **argv, struct args *a, bool *done)
 	              "build_ms, bytes, sign_mismatches (always 0).",
 	    .opts = opts};
 	*done = true;
-	if (bc_args_parse(&p, argc, argv)) {
+	if (bc_cli_args_parse(&p, argc, argv)) {
 		return p.status;
 	}
 	a->arith = (enum bc_range_arith)arith;
@@ -273,7 +274,7 @@ int bc_cli_eval_bench(int argc, char **argv)
 		goto cleanup;
 	}
 	if (bc_cli_load_scene(a.scene, t, &cam, &ei)) {
-		fprintf(stderr, "blobcast eval-bench: %s\n", ei.msg);
+		bc_cli_explain(stderr, "blobcast eval-bench", ei.msg);
 		goto cleanup;
 	}
 	if (!(l = bc_tree_lin(t))) {

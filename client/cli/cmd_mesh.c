@@ -15,6 +15,7 @@
 #include "blobcast/clock.h"
 #include "blobcast/num.h"
 #include "blobcast/mesh.h"
+#include "cli.h"
 #include "cmd_render.h"
 
 struct mesh_args {
@@ -75,7 +76,7 @@ static int parse(int argc, char **argv, struct mesh_args *a, bool *done)
 	memset(a, 0, sizeof(*a));
 	a->resolution = BC_MESH_DEFAULT_RESOLUTION;
 	*done = true;
-	if (bc_args_parse(&p, argc, argv)) {
+	if (bc_cli_args_parse(&p, argc, argv)) {
 		return p.status;
 	}
 	if (p.npos == 0) {
@@ -146,7 +147,7 @@ int bc_cli_mesh(int argc, char **argv)
 		return 1;
 	}
 	if (bc_cli_load_scene(a.scene, t, &cam, &ei)) {
-		fprintf(stderr, "blobcast mesh: %s\n", ei.msg);
+		bc_cli_explain(stderr, "blobcast mesh", ei.msg);
 		goto done;
 	}
 	o.resolution = a.resolution;

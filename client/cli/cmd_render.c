@@ -20,6 +20,7 @@
 #include "blobcast/render.h"
 #include "blobcast/render_cpu.h"
 #include "blobcast/scene.h"
+#include "cli.h"
 
 /* Most worker threads --threads accepts; the CPU backends cap lower. */
 #define MAX_THREADS 1024u
@@ -197,7 +198,7 @@ static int parse(int argc, char **argv, struct args *a)
 	const struct bc_opt opts[] = RENDER_OPTS(a);
 	struct bc_args p = render_args(opts);
 	*a = (struct args){.backend_opt = BC_BACKEND_TILED};
-	if (bc_args_parse(&p, argc, argv)) {
+	if (bc_cli_args_parse(&p, argc, argv)) {
 		return p.status == 0 ? -1 : p.status;
 	}
 	if (p.npos == 0) {
@@ -367,8 +368,8 @@ int bc_cli_render(int argc, char **argv)
 		goto cleanup;
 	}
 	if ((rc = bc_cli_load_scene(a.scene, t, &cam, &ei))) {
-		fprintf(stderr, "blobcast render: %s\n",
-		        ei.msg[0] ? ei.msg : bc_strerror(rc));
+		bc_cli_explain(stderr, "blobcast render",
+		               ei.msg[0] ? ei.msg : bc_strerror(rc));
 		goto cleanup;
 	}
 	if ((rc = bc_frame_init(&frame, a.size[0], a.size[1]))) {

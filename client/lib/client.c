@@ -217,6 +217,19 @@ int bc_client_addr_parse(const char *s, struct bc_client_addr *out,
 		memcpy(out->path, s + 5, n + 1);
 		return 0;
 	}
+	{
+		/* A URL of another scheme, such as the page's http:// address:
+		 * say so rather than misread it as HOST:PORT. */
+		size_t n = strspn(s, "abcdefghijklmnopqrstuvwxyz+.-");
+		if (n > 0 && strncmp(s + n, "://", 3) == 0) {
+			return bc_errinfo_set(
+			    ei, BC_EINVAL,
+			    "\"%.64s\": %.*s:// is not a blobcastd address "
+			    "(HOST:PORT, tls://, ws://, wss:// or unix:PATH; "
+			    "a web page's address is not the daemon's)",
+			    s, (int)n, s);
+		}
+	}
 	if (s[0] == '[') {
 		const char *close = strchr(s, ']');
 		if (!close) {
@@ -277,6 +290,24 @@ int bc_client_addr_parse(const char *s, struct bc_client_addr *out,
 
 /* ---- connecting -------------------------------------------------------------- */
 
+/* With the default timeout, how long a TCP connect waits for the server to
+ * accept. Three seconds cover one lost SYN (sent again after one second)
+ * on any link, so a host that is down or a firewall that drops the
+ * connection is reported then rather than after the whole timeout. */
+#define CONNECT_DEFAULT_MS 3000
+/* How long the answer to HELLO may be silent before the client asks, on a
+ * second connection, what listens there. blobcastd answers HELLO at once
+ * (its event loop never waits on work), so silence past half a second is a
+ * slow link or another program; the probe ends the wait early only when it
+ * proves the latter (python's http.server and websockify wait silently for
+ * a request line that HELLO never ends). */
+#define HELLO_QUIET_MS 500
+/* How long that probe waits for its answer. */
+#define PROBE_MS 1000
+/* Bytes of an answer looked at to tell what sent it: an HTTP status line,
+ * a TLS alert, the first line of a banner. */
+#define PROBE_BYTES 256
+
 static int set_nonblock(int fd)
 {
 	int fl = fcntl(fd, F_GETFL);
@@ -285,6 +316,13 @@ static int set_nonblock(int fd)
 		return -1;
 	}
 	return 0;
+}
+
+/* The earlier of deadline (-1: none) and ms from now. */
+static double deadline_min(double deadline, int ms)
+{
+	double d = bc_clock_ms() + (double)ms;
+	return deadline < 0.0 || d < deadline ? d : deadline;
 }
 
 /* Connects a non-blocking socket, waiting until deadline. Returns 0 or an
@@ -320,6 +358,7 @@ static int open_unix(const struct bc_client_addr *a, double deadline,
                      int *fd_out, struct bc_errinfo *ei)
 {
 	struct sockaddr_un sun;
+	const char *why;
 	int fd, e;
 	memset(&sun, 0, sizeof(sun));
 	sun.sun_family = AF_UNIX;
@@ -334,21 +373,68 @@ static int open_unix(const struct bc_client_addr *a, double deadline,
 	}
 	e = connect_wait(fd, (const struct sockaddr *)&sun, sizeof(sun),
 	                 deadline);
-	if (e) {
-		close(fd);
-		return bc_errinfo_set(ei, e == ETIMEDOUT ? BC_ETIMEOUT : BC_EIO,
-		                      "cannot connect to unix:%s: %s", a->path,
-		                      strerror(e));
+	if (!e) {
+		*fd_out = fd;
+		return 0;
 	}
-	*fd_out = fd;
-	return 0;
+	close(fd);
+	switch (e) {
+	case ENOENT:
+		why = "no such socket (is blobcastd running with --unix at "
+		      "that path?)";
+		break;
+	case ECONNREFUSED:
+		why = "nothing listens on it (a socket left behind by a "
+		      "daemon that stopped?)";
+		break;
+	case EACCES:
+		why = "permission denied (the socket's directory or mode "
+		      "keeps this user out)";
+		break;
+	default:
+		why = strerror(e);
+		break;
+	}
+	return bc_errinfo_set(ei, e == ETIMEDOUT ? BC_ETIMEOUT : BC_EIO,
+	                      "cannot connect to unix:%s: %s", a->path, why);
+}
+
+/* The reason a TCP connect failed with errno e, and what to do. */
+static void tcp_reason(const struct bc_client_addr *a, int e, int waited_ms,
+                       char *buf, size_t cap)
+{
+	switch (e) {
+	case ECONNREFUSED:
+		snprintf(buf, cap,
+		         "connection refused: nothing listens on port %u (is "
+		         "blobcastd running? it listens on %u unless told "
+		         "otherwise)",
+		         (unsigned)a->port, BC_CLIENT_DEFAULT_PORT);
+		break;
+	case ETIMEDOUT:
+		snprintf(buf, cap,
+		         "no answer within %d ms (the host is down or a "
+		         "firewall drops the connection; on a slow link, "
+		         "allow more time)",
+		         waited_ms);
+		break;
+	case EHOSTUNREACH:
+	case ENETUNREACH:
+		snprintf(buf, cap, "%s (check the host and the network)",
+		         strerror(e));
+		break;
+	default:
+		snprintf(buf, cap, "%s", e ? strerror(e) : "no address");
+		break;
+	}
 }
 
 static int open_tcp(const struct bc_client_addr *a, double deadline,
                     int *fd_out, struct bc_errinfo *ei)
 {
 	struct addrinfo hints, *res = NULL, *ai;
-	char port[8];
+	char port[8], why[200];
+	double start = bc_clock_ms();
 	int rc, e = 0, fd = -1, one = 1;
 	memset(&hints, 0, sizeof(hints));
 	hints.ai_family = AF_UNSPEC;
@@ -357,7 +443,9 @@ static int open_tcp(const struct bc_client_addr *a, double deadline,
 	snprintf(port, sizeof(port), "%u", (unsigned)a->port);
 	rc = getaddrinfo(a->host, port, &hints, &res);
 	if (rc != 0) {
-		return bc_errinfo_set(ei, BC_EIO, "cannot resolve %s: %s",
+		return bc_errinfo_set(ei, BC_EIO,
+		                      "cannot resolve %s: %s (check the host "
+		                      "name)",
 		                      a->host, gai_strerror(rc));
 	}
 	for (ai = res; ai; ai = ai->ai_next) {
@@ -383,10 +471,11 @@ static int open_tcp(const struct bc_client_addr *a, double deadline,
 	}
 	freeaddrinfo(res);
 	if (fd < 0) {
+		tcp_reason(a, e, (int)(bc_clock_ms() - start + 0.5), why,
+		           sizeof(why));
 		return bc_errinfo_set(ei, e == ETIMEDOUT ? BC_ETIMEOUT : BC_EIO,
 		                      "cannot connect to %s:%u: %s", a->host,
-		                      (unsigned)a->port,
-		                      e ? strerror(e) : "no address");
+		                      (unsigned)a->port, why);
 	}
 	/* Requests are small and latency-bound: do not let Nagle hold an EDIT
 	 * back waiting for the ACK of the previous one. */
@@ -397,13 +486,405 @@ static int open_tcp(const struct bc_client_addr *a, double deadline,
 	return 0;
 }
 
+/* ---- what listens there, when it is not a blobcastd ----------------------- */
+
+/*
+ * blobcastd starts every answer with the magic "BCST", whatever it was
+ * sent. When the answer to HELLO starts otherwise, is cut, or does not come,
+ * the client looks at what did come and, where that says too little, asks
+ * the port once more on a second connection: with the HTTP request that
+ * opens a WebSocket (a web server answers it with a status line, websockify
+ * with 101, blobcastd with an ERROR, a TLS server with an alert or by
+ * closing), or with a TLS handshake. Only the error message depends on it.
+ */
+enum peer {
+	PEER_NONE = 0,  /* no connection, or nothing came before the deadline */
+	PEER_CLOSED,    /* closed (or reset) without a byte */
+	PEER_BLOBCAST,  /* "BCST": a blobcastd */
+	PEER_HTTP,      /* an HTTP status line other than 101 */
+	PEER_WEBSOCKET, /* 101 Switching Protocols: a WebSocket endpoint */
+	PEER_TLS,       /* a TLS alert record */
+	PEER_OTHER,     /* anything else */
+	PEER_COUNT
+};
+
+struct peer_answer {
+	enum peer kind;
+	/* HTTP: the status line; OTHER: the first line, printable only. */
+	char line[64];
+	/* BLOBCAST: the code of its ERROR, when the answer was one. */
+	int error_code;
+};
+
+/* What the first n bytes of an answer say about who sent them. */
+static void classify(const uint8_t *b, size_t n, struct peer_answer *p)
+{
+	static const char magic[4] = {BC_PROTO_MAGIC0, BC_PROTO_MAGIC1,
+	                              BC_PROTO_MAGIC2, BC_PROTO_MAGIC3};
+	size_t k = 0;
+	memset(p, 0, sizeof(*p));
+	if (n == 0) {
+		p->kind = PEER_NONE;
+		return;
+	}
+	if (memcmp(b, magic, n < 4 ? n : 4) == 0) {
+		p->kind = PEER_BLOBCAST;
+		return;
+	}
+	if (n >= 2 && b[0] == 0x15 && b[1] == 0x03) {
+		p->kind = PEER_TLS;
+		return;
+	}
+	/* The first line, control bytes left out. */
+	for (size_t i = 0;
+	     i < n && b[i] != '\r' && b[i] != '\n' && k + 1 < sizeof(p->line);
+	     i++) {
+		if (b[i] >= 0x20 && b[i] < 0x7f) {
+			p->line[k++] = (char)b[i];
+		}
+	}
+	p->line[k] = '\0';
+	if (n >= 5 && memcmp(b, "HTTP/", 5) == 0) {
+		const char *sp = strchr(p->line, ' ');
+		p->kind = sp && strncmp(sp + 1, "101", 3) == 0 ? PEER_WEBSOCKET
+		                                               : PEER_HTTP;
+		return;
+	}
+	p->kind = PEER_OTHER;
+}
+
+/* Sends all of req on the non-blocking fd by deadline; 0 or -1. */
+static int send_all(int fd, const void *req, size_t len, double deadline)
+{
+	size_t done = 0;
+	while (done < len) {
+		struct pollfd p = {.fd = fd, .events = POLLOUT};
+		ssize_t n = send(fd, (const char *)req + done, len - done,
+		                 MSG_NOSIGNAL);
+		if (n > 0) {
+			done += (size_t)n;
+			continue;
+		}
+		if (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK &&
+		    errno != EINTR) {
+			return -1;
+		}
+		if (poll(&p, 1, bc__client_ms_left(deadline)) == 0) {
+			return -1;
+		}
+	}
+	return 0;
+}
+
+/* Opens a second connection to a and asks it what it is, by deadline,
+ * with the request that opens a WebSocket. Returns the socket, or -1. */
+static int probe_start(const struct bc_client_addr *a, double deadline)
+{
+	char req[BC_CLIENT_MAX_HOST + 256];
+	int fd = -1, len;
+	if (open_tcp(a, deadline, &fd, NULL)) {
+		return -1;
+	}
+	len = snprintf(req, sizeof(req),
+	               "GET / HTTP/1.1\r\nHost: %s:%u\r\nUpgrade: websocket\r\n"
+	               "Connection: Upgrade\r\n"
+	               "Sec-WebSocket-Key: YmxvYmNhc3QtcHJvYmUtMQ==\r\n"
+	               "Sec-WebSocket-Version: 13\r\n"
+	               "Sec-WebSocket-Protocol: binary\r\n\r\n",
+	               a->host, (unsigned)a->port);
+	if (len < 0 || (size_t)len >= sizeof(req) ||
+	    send_all(fd, req, (size_t)len, deadline)) {
+		close(fd);
+		return -1;
+	}
+	return fd;
+}
+
+/* Reads the answer to probe_start()'s request on fd until deadline: enough
+ * for a status line, or one whole ERROR of blobcastd's. p->kind stays
+ * PEER_NONE when nothing came. */
+static void probe_read(int fd, double deadline, struct peer_answer *p)
+{
+	uint8_t buf[PROBE_BYTES];
+	struct bc_proto_reader r;
+	struct bc_msg m;
+	size_t have = 0;
+	memset(p, 0, sizeof(*p));
+	while (fd >= 0 && have < sizeof(buf)) {
+		struct pollfd pf = {.fd = fd, .events = POLLIN};
+		ssize_t n;
+		int k = poll(&pf, 1, bc__client_ms_left(deadline));
+		if (k < 0 && errno == EINTR) {
+			continue;
+		}
+		if (k <= 0) {
+			break;
+		}
+		n = recv(fd, buf + have, sizeof(buf) - have, 0);
+		if (n < 0 && (errno == EINTR || errno == EAGAIN)) {
+			continue;
+		}
+		if (n <= 0) {
+			if (have == 0) {
+				p->kind = PEER_CLOSED;
+			}
+			break;
+		}
+		have += (size_t)n;
+		if (!memchr(buf, '\n', have) && have < BC_PROTO_HEADER_SIZE) {
+			continue;
+		}
+		/* A status line, or a header's worth of BCST: read on only
+		 * for a whole ERROR message. */
+		classify(buf, have, p);
+		if (p->kind != PEER_BLOBCAST) {
+			return;
+		}
+		bc_proto_reader_init(&r, &(struct bc_proto_reader_opts){
+		                             .side = BC_PROTO_SIDE_CLIENT});
+		if (bc_proto_reader_feed(&r, buf, have) == 0 &&
+		    bc_proto_reader_next(&r, &m) == 1) {
+			if (m.type == BC_MSG_ERROR) {
+				p->error_code = -(int)m.error.code;
+			}
+			bc_proto_reader_finish(&r);
+			return;
+		}
+		bc_proto_reader_finish(&r);
+	}
+	if (have) {
+		classify(buf, have, p);
+	}
+}
+
+/* probe_start() and probe_read() on one connection. */
+static void probe_http(const struct bc_client_addr *a, double deadline,
+                       struct peer_answer *p)
+{
+	int fd = probe_start(a, deadline);
+	probe_read(fd, deadline, p);
+	if (fd >= 0) {
+		close(fd);
+	}
+}
+
+/* Whether a TLS handshake (certificate not checked) succeeds at a by
+ * deadline: the question is only whether the port speaks TLS. */
+static bool probe_tls(const struct bc_client_addr *a, double deadline)
+{
+	struct bc_client t;
+	bool ok;
+	memset(&t, 0, sizeof(t));
+	t.fd = -1;
+	t.timeout_ms = PROBE_MS;
+	if (open_tcp(a, deadline, &t.fd, NULL)) {
+		return false;
+	}
+	ok = bc__client_tls_start(&t, a->host, NULL, true, deadline) == 0;
+	bc__client_transport_free(&t);
+	close(t.fd);
+	return ok;
+}
+
+/* Says in ei what answered at a instead of blobcastd (p: its answer to
+ * HELLO, or to the probe) and returns the code: BC_EPROTO_MAGIC when
+ * something else answered, BC_ECLOSED when it only closed. */
+static int not_blobcastd(const struct bc_client_addr *a,
+                         const struct peer_answer *p, struct bc_errinfo *ei)
+{
+	const char *h = a->host;
+	unsigned port = a->port;
+	switch (p->kind) {
+	case PEER_WEBSOCKET:
+		return bc_errinfo_set(
+		    ei, BC_EPROTO_MAGIC,
+		    "%s:%u is a WebSocket endpoint (websockify "
+		    "or a proxy), not blobcastd itself: "
+		    "connect through it as ws://%s:%u/",
+		    h, port, h, port);
+	case PEER_HTTP:
+		return bc_errinfo_set(
+		    ei, BC_EPROTO_MAGIC,
+		    "%s:%u answers HTTP (\"%s\"): that is a web server, not "
+		    "blobcastd; use the daemon's own port (%u unless set "
+		    "otherwise), or ws://HOST:PORT/ of its websockify",
+		    h, port, p->line, BC_CLIENT_DEFAULT_PORT);
+	case PEER_TLS:
+		return bc_errinfo_set(ei, BC_EPROTO_MAGIC,
+		                      "%s:%u speaks TLS: connect with "
+		                      "tls://%s:%u",
+		                      h, port, h, port);
+	case PEER_OTHER:
+		return bc_errinfo_set(ei, BC_EPROTO_MAGIC,
+		                      "%s:%u answers \"%s\", not the blobcast "
+		                      "protocol: another program listens "
+		                      "there, not blobcastd",
+		                      h, port, p->line);
+	default:
+		return bc_errinfo_set(ei, BC_ECLOSED,
+		                      "%s:%u closed the connection without "
+		                      "answering HELLO: not a blobcastd, or a "
+		                      "proxy whose daemon is down",
+		                      h, port);
+	}
+}
+
+/* What first_answer() returns when it closed the connection to hear the
+ * probe, and the probe then found a blobcastd: connect again. */
+#define HELLO_AGAIN 1
+
+/* Waits for fd to be readable until deadline: 1, 0 at the deadline, or
+ * -1 with errno. */
+static int readable(int fd, double deadline)
+{
+	struct pollfd pf = {.fd = fd, .events = POLLIN};
+	int k;
+	do {
+		k = poll(&pf, 1, bc__client_ms_left(deadline));
+	} while (k < 0 && errno == EINTR);
+	return k;
+}
+
+/* The answer to HELLO was silent until deadline. */
+static int silent(const struct bc_client *c, const struct bc_client_addr *a,
+                  bool probed, struct bc_errinfo *ei)
+{
+	return bc_errinfo_set(ei, BC_ETIMEOUT,
+	                      "no WELCOME from %s:%u within %d ms: it "
+	                      "accepted the connection but stays silent%s "
+	                      "(not a blobcastd? on a slow link, allow more "
+	                      "time)",
+	                      a->host, (unsigned)a->port, c->timeout_ms,
+	                      probed ? ", to an HTTP request too" : "");
+}
+
+/*
+ * Waits, on a plain TCP connection that has sent HELLO, for the first bytes
+ * of the answer and checks that they are blobcastd's. Returns 0 when they
+ * are (the reader takes them), HELLO_AGAIN, or an error with what listens
+ * there: BC_EPROTO_MAGIC (another program answered), BC_ECLOSED (closed
+ * without a word), BC_ETIMEOUT (silent until deadline).
+ */
+static int first_answer(struct bc_client *c, const struct bc_client_addr *a,
+                        double deadline, struct bc_errinfo *ei)
+{
+	struct peer_answer p, probe = {0};
+	uint8_t buf[PROBE_BYTES];
+	double quiet = deadline_min(deadline, HELLO_QUIET_MS);
+	int k = readable(c->fd, quiet), pfd;
+	ssize_t n;
+	if (k == 0 && quiet == deadline) {
+		return silent(c, a, false, ei);
+	}
+	if (k == 0) {
+		/* Silent so far: ask what listens there. */
+		pfd = probe_start(a, deadline_min(deadline, PROBE_MS));
+		probe_read(pfd, deadline_min(deadline, PROBE_MS), &probe);
+		if (probe.kind == PEER_NONE && pfd >= 0) {
+			/* The probe is silent too: a server that serves
+			 * one connection at a time (python's HTTPServer) is
+			 * still busy with HELLO. Let it go and hear the
+			 * probe; a blobcastd that answers it after all is
+			 * connected to again. */
+			close(c->fd);
+			c->fd = -1;
+			probe_read(pfd, deadline, &probe);
+			close(pfd);
+			if (probe.kind == PEER_BLOBCAST) {
+				return HELLO_AGAIN;
+			}
+			if (probe.kind == PEER_NONE) {
+				return silent(c, a, true, ei);
+			}
+			return not_blobcastd(a, &probe, ei);
+		}
+		if (pfd >= 0) {
+			close(pfd);
+		}
+		if (probe.kind == PEER_HTTP || probe.kind == PEER_WEBSOCKET ||
+		    probe.kind == PEER_TLS || probe.kind == PEER_OTHER) {
+			return not_blobcastd(a, &probe, ei);
+		}
+		/* A blobcastd (a slow one), or no telling: wait on. */
+		if ((k = readable(c->fd, deadline)) == 0) {
+			return silent(c, a, true, ei);
+		}
+	}
+	if (k < 0) {
+		return bc_errinfo_set(ei, BC_EIO, "poll: %s", strerror(errno));
+	}
+	do {
+		n = recv(c->fd, buf, sizeof(buf), MSG_PEEK);
+	} while (n < 0 && errno == EINTR);
+	if (n < 0 && errno != ECONNRESET) {
+		/* The reader meets the same error and says so. */
+		return 0;
+	}
+	classify(buf, n > 0 ? (size_t)n : 0, &p);
+	if (p.kind == PEER_BLOBCAST) {
+		return 0;
+	}
+	if (p.kind == PEER_NONE) {
+		/* Closed without a word: TLS servers do that to plain
+		 * bytes. */
+		p.kind = probe_tls(a, deadline_min(deadline, PROBE_MS))
+		             ? PEER_TLS
+		             : PEER_CLOSED;
+	} else if (p.kind == PEER_HTTP) {
+		/* A web server, or a WebSocket endpoint that refuses what is
+		 * not an upgrade: ask with one. */
+		probe_http(a, deadline_min(deadline, PROBE_MS), &probe);
+		if (probe.kind == PEER_WEBSOCKET) {
+			p = probe;
+		}
+	}
+	return not_blobcastd(a, &p, ei);
+}
+
+/* A TLS handshake with a failed (the sticky error of c): when the port
+ * answers plain HTTP or the plain blobcast protocol, says so in ei, after
+ * the TLS reason; returns the sticky code. */
+static int tls_failed(struct bc_client *c, const struct bc_client_addr *a,
+                      struct bc_errinfo *ei)
+{
+	struct peer_answer p;
+	if (c->err != BC_EIO && c->err != BC_ETIMEOUT) {
+		return sticky(c, ei);
+	}
+	/* The handshake may have used up the deadline: the probe has its
+	 * own. */
+	probe_http(a, bc_clock_ms() + PROBE_MS, &p);
+	/* blobcastd's TLS port answers plain bytes with ENOTSUP; its plain
+	 * port with any other ERROR. */
+	if (p.kind == PEER_BLOBCAST && p.error_code != BC_ENOTSUP) {
+		return bc_errinfo_set(ei, c->err,
+		                      "TLS handshake with %s:%u failed: it "
+		                      "speaks the blobcast protocol without "
+		                      "TLS: connect with %s:%u (no tls://)",
+		                      a->host, (unsigned)a->port, a->host,
+		                      (unsigned)a->port);
+	}
+	if (p.kind == PEER_HTTP || p.kind == PEER_WEBSOCKET) {
+		return bc_errinfo_set(ei, c->err,
+		                      "TLS handshake with %s:%u failed; in "
+		                      "plain it answers HTTP (\"%s\"): a web "
+		                      "server, not blobcastd",
+		                      a->host, (unsigned)a->port, p.line);
+	}
+	return sticky(c, ei);
+}
+
+/* Sends HELLO and waits until deadline for WELCOME; on a plain TCP
+ * connection (a: its address, else NULL) checks first that blobcastd is
+ * the one answering. */
 static int hello(struct bc_client *c, const struct bc_client_opts *o,
+                 const struct bc_client_addr *a, double deadline,
                  struct bc_errinfo *ei)
 {
 	struct bc_msg m = {.type = BC_MSG_HELLO};
 	const char *name = o->name ? o->name : "libblobcast";
 	const char *token = o->token ? o->token : "";
-	int rc;
+	int rc, left;
 	if (strlen(name) > BC_PROTO_MAX_NAME) {
 		return bc_errinfo_set(ei, BC_EINVAL,
 		                      "client name over %u bytes",
@@ -427,7 +908,12 @@ static int hello(struct bc_client *c, const struct bc_client_opts *o,
 	if ((rc = send_or_say(c, &m, NULL, ei))) {
 		return rc;
 	}
-	if ((rc = bc_client_wait(c, BC_MSG_WELCOME, 0, &m, 0, ei))) {
+	if (a && (rc = first_answer(c, a, deadline, ei))) {
+		return rc;
+	}
+	left = bc__client_ms_left(deadline);
+	if ((rc = bc_client_wait(c, BC_MSG_WELCOME, 0, &m, left == 0 ? 1 : left,
+	                         ei))) {
 		return rc;
 	}
 	c->info.version = m.welcome.version;
@@ -478,19 +964,43 @@ int bc_client_connect(struct bc_client **out, const struct bc_client_opts *opts,
 	bc_proto_reader_init(&c->reader, &ro);
 	bc_proto_buf_init(&c->out, 0);
 	deadline = deadline_after(c->timeout_ms);
+	/* The default timeout waits less for the TCP connect than for an
+	 * answer (CONNECT_DEFAULT_MS); a timeout given is the caller's. */
 	rc = addr.kind == BC_CLIENT_ADDR_UNIX
 	         ? open_unix(&addr, deadline, &c->fd, ei)
-	         : open_tcp(&addr, deadline, &c->fd, ei);
+	         : open_tcp(&addr,
+	                    o->timeout_ms == 0
+	                        ? deadline_min(deadline, CONNECT_DEFAULT_MS)
+	                        : deadline,
+	                    &c->fd, ei);
 	/* The token goes out in HELLO: only after the handshake succeeded. */
 	if (!rc && addr.tls &&
 	    bc__client_tls_start(c, addr.host, o->ca_file, o->insecure,
 	                         deadline)) {
-		rc = sticky(c, ei);
+		rc = tls_failed(c, &addr, ei);
 	}
 	if (!rc && addr.ws && bc__client_ws_start(c, &addr, deadline)) {
 		rc = sticky(c, ei);
 	}
-	if (rc || (rc = hello(c, o, ei))) {
+	if (!rc) {
+		rc = hello(c, o,
+		           addr.kind == BC_CLIENT_ADDR_TCP && !addr.tls &&
+		                   !addr.ws
+		               ? &addr
+		               : NULL,
+		           deadline, ei);
+	}
+	if (rc == HELLO_AGAIN) {
+		/* A slow blobcastd: once more on a new connection, waiting
+		 * for it without asking. */
+		c->next_seq = 1;
+		memset(&c->info, 0, sizeof(c->info));
+		rc = open_tcp(&addr, deadline, &c->fd, ei);
+		if (!rc) {
+			rc = hello(c, o, NULL, deadline, ei);
+		}
+	}
+	if (rc) {
 		goto fail;
 	}
 	*out = c;

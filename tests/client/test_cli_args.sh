@@ -1,8 +1,10 @@
 #!/bin/sh
 # The client subcommands of the blobcast CLI without a server: every
 # --help exits 0 and says what the command takes, bad or inapplicable
-# arguments exit 2 with a message before anything is sent, and a server
-# that cannot be reached exits 1.
+# arguments exit 2 with a message before anything is sent (a mistyped
+# command, option or kind with git's "did you mean"), the global options
+# work before and after the command word alike, and a server that cannot
+# be reached exits 3.
 #
 # usage: test_cli_args.sh BLOBCAST   (exit 77 when BLOBCAST is not built)
 set -u
@@ -142,16 +144,100 @@ expect 2 "--edits does not apply to watch" watch --session s --edits 3
 expect 2 "--session does not apply to sessions" sessions --session s
 expect 2 "blobcast watch: unknown option '--bogus'" watch --session s --bogus
 expect 2 "--json takes no value" nodes --session s --json=1
-# Bad server addresses are usage errors; unreachable servers are not.
+# Bad server addresses are usage errors; unreachable servers are network
+# failures (status 3), with the reason and what to check.
 expect 2 "port must be a number" edit --server host:0 --session s 1 radius=1
 expect 2 "IPv6" edit --server ::1 --session s 1 radius=1
-expect 1 "cannot connect" edit --server 127.0.0.1:1 --session s 1 radius=1
+expect 2 "http:// is not a blobcastd address" \
+  sessions --server http://127.0.0.1:8080
+expect 3 "cannot connect" edit --server 127.0.0.1:1 --session s 1 radius=1
+expect 3 "connection refused: nothing listens on port 1" \
+  sessions --server 127.0.0.1:1
 printf '{"blobcast": 1, "root": {"type": "sphere", "radius": 1}}' \
   > "$tmp/s.json"
-expect 1 "cannot connect" load --server "unix:$tmp/none.sock" --session s \
+expect 3 "cannot connect" load --server "unix:$tmp/none.sock" --session s \
+  "$tmp/s.json"
+expect 3 "no such socket" load --server "unix:$tmp/none.sock" --session s \
   "$tmp/s.json"
 # main passes a global --server after the command word.
-expect 1 "cannot connect" --server 127.0.0.1:1 watch --session s --frames 1
+expect 3 "cannot connect" --server 127.0.0.1:1 watch --session s --frames 1
+
+# Did you mean: a command, an option (the command's or a global one), a
+# primitive kind and a key of a scene file (read before connecting).
+expect 2 "blobcast: unknown command 'edti' (did you mean 'edit'?)" edti
+expect 2 "unknown command 'sesions' (did you mean 'sessions'?)" sesions
+expect 2 "unknown command 'edti' (did you mean 'edit'?)" help edti
+expect 2 "unknown command 'frobnicate'" frobnicate
+expect 2 "blobcast watch: unknown option '--sever' (did you mean '--server'?)" \
+  watch --session s --sever 127.0.0.1:1
+expect 2 "unknown option '--sesion' (did you mean '--session'?)" \
+  load --sesion s a.json
+expect 2 "unknown option '--tiemout' (did you mean '--timeout'?)" \
+  sessions --tiemout 5
+expect 2 "blobcast: unknown option '--sever' (did you mean '--server'?)" \
+  --sever 127.0.0.1:1 sessions
+expect 2 "unknown option '--sizee' (did you mean '--size'?)" \
+  render default --sizee 8x8
+printf '{"blobcast": 1, "root": {"type": "spere", "radius": 1}}' \
+  > "$tmp/kind.json"
+expect 2 "unknown primitive type \"spere\" (did you mean 'sphere'?)" \
+  load --server 127.0.0.1:1 --session s "$tmp/kind.json"
+expect 2 "primitive kinds: sphere, box," \
+  load --server 127.0.0.1:1 --session s "$tmp/kind.json"
+expect 2 "operator kinds: union, intersection," \
+  load --server 127.0.0.1:1 --session s "$tmp/kind.json"
+printf '{"blobcast": 1, "root": {"type": "sphere", "raduis": 1}}' \
+  > "$tmp/key.json"
+expect 2 "unknown key \"raduis\" for sphere (did you mean 'radius'?)" \
+  load --server 127.0.0.1:1 --session s "$tmp/key.json"
+expect 1 "(did you mean 'radius'?)" render "$tmp/key.json" --size 8x8 \
+  --out "$tmp/k.png"
+
+# Every global option may stand before the command or after it: the same
+# status and the same words either way.
+# same ARGS_BEFORE -- ARGS_AFTER: both command lines give one result.
+same() {
+  before=
+  while [ "$1" != "--" ]; do
+    before="$before $1"
+    shift
+  done
+  shift
+  # shellcheck disable=SC2086
+  "$BLOBCAST" $before > "$tmp/before" 2>&1
+  s1=$?
+  "$BLOBCAST" "$@" > "$tmp/after" 2>&1
+  s2=$?
+  if [ "$s1" -ne "$s2" ] || ! cmp -s "$tmp/before" "$tmp/after"; then
+    echo "FAIL: blobcast$before (exit $s1) differs from blobcast $* (exit $s2)"
+    sed 's/^/    before: /' "$tmp/before"
+    sed 's/^/    after:  /' "$tmp/after"
+    failures=$((failures + 1))
+  else
+    echo "ok   blobcast$before = blobcast $* (exit $s1)"
+  fi
+}
+same --timeout 50 sessions --server 127.0.0.1:1 -- \
+  sessions --timeout 50 --server 127.0.0.1:1
+same --token t --name n --timeout 50 --server 127.0.0.1:1 nodes --session s \
+  -- nodes --session s --token t --name n --timeout 50 --server 127.0.0.1:1
+same --ca "$tmp/none.pem" --server tls://127.0.0.1:1 sessions -- \
+  sessions --ca "$tmp/none.pem" --server tls://127.0.0.1:1
+same --insecure --server tls://127.0.0.1:1 sessions -- \
+  sessions --insecure --server tls://127.0.0.1:1
+same --timeout -5 load --session s a.json -- \
+  load --session s --timeout -5 a.json
+same --name 01234567890123456789012345678901234567890123456789012345678901234 \
+  watch --session s -- watch --session s \
+  --name 01234567890123456789012345678901234567890123456789012345678901234
+same --server host:0 edit --session s 1 radius=1 -- \
+  edit --server host:0 --session s 1 radius=1
+expect 2 "--timeout '-5' is not a whole decimal number" \
+  --timeout -5 load --session s a.json
+expect 2 "--token applies to the server commands only, not 'render'" \
+  --token t render default
+# After the command, the later of two wins (the global one comes first).
+expect 3 "port 1 " --server 127.0.0.1:2 sessions --server 127.0.0.1:1
 
 if [ "$failures" -ne 0 ]; then
   echo "$failures check(s) failed"

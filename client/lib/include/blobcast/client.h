@@ -112,7 +112,9 @@ struct bc_client_opts {
 	uint8_t encodings;        /* HELLO bits (1 << (encoding - 1)); 0: all */
 	uint32_t max_frame_bytes; /* 0: the server's limit */
 	/* Milliseconds for connecting, for completing one send, and for each
-	 * helper's wait; 0: BC_CLIENT_DEFAULT_TIMEOUT_MS; negative: none. */
+	 * helper's wait; 0: BC_CLIENT_DEFAULT_TIMEOUT_MS, of which the TCP
+	 * connect itself takes at most 3 s (a host that is down is reported
+	 * then); negative: none. */
 	int timeout_ms;
 	/* TLS (a tls:// address): the server's certificate must chain to a
 	 * certificate in ca_file (PEM; NULL: the system's trust store) and
@@ -162,9 +164,16 @@ struct bc_client_info {
  * trusted; BC_EIO: no TLS there) and the WebSocket one for ws:// and wss://,
  * sends HELLO and waits for WELCOME. On success *out (reset on entry) is a
  * client to free with bc_client_destroy(). Returns 0, BC_EINVAL (bad options),
- * BC_EIO (no connection), BC_ETIMEOUT, BC_ENOMEM, a protocol error, or the
- * code of the server's ERROR (BC_EAUTH, BC_EPROTO_VERSION...) with its text;
- * the reason is in ei (which may be NULL).
+ * BC_EIO (no connection: refused, unreachable, not resolved), BC_ETIMEOUT,
+ * BC_ENOMEM, a protocol error, or the code of the server's ERROR (BC_EAUTH,
+ * BC_EPROTO_VERSION...) with its text; the reason is in ei (which may be
+ * NULL). On a plain TCP address, a peer that answers HELLO with anything
+ * but blobcastd's magic (an HTTP server, a WebSocket proxy, a TLS server)
+ * gives BC_EPROTO_MAGIC, and one that closes without a word BC_ECLOSED,
+ * with a sentence naming what listens there and the address to use; when
+ * HELLO gets no answer for half a second, a second connection asks the
+ * port what it is, so that such a peer is reported in about a second, while
+ * a slow blobcastd is still waited for.
  */
 BC_API int bc_client_connect(struct bc_client **out,
                              const struct bc_client_opts *opts,
