@@ -218,10 +218,8 @@ static int set_value(struct bc_args *a, const struct bc_opt *o, const char *val)
 	return 0;
 }
 
-/* The option named by arg ("--name", "--name=v", "-n", "-nv"), with *val
- * set to the attached value or NULL; NULL when there is none. */
-static const struct bc_opt *find(const struct bc_opt *opts, const char *arg,
-                                 const char **val, int *index)
+const struct bc_opt *bc_args_find(const struct bc_opt *opts, const char *arg,
+                                  const char **val, int *index)
 {
 	*val = NULL;
 	for (int i = 0; opts && opts[i].kind != BC_OPT_INVALID; i++) {
@@ -274,7 +272,7 @@ int bc_args_parse(struct bc_args *a, int argc, char **argv)
 			a->status = 0;
 			return 1;
 		}
-		if (!(o = find(a->opts, arg, &val, &index))) {
+		if (!(o = bc_args_find(a->opts, arg, &val, &index))) {
 			const char *eq = strchr(arg, '=');
 			int n = eq ? (int)(eq - arg) : (int)strlen(arg);
 			return fail(a, "unknown option '%.*s'", n, arg);

@@ -468,30 +468,6 @@ bool bc_cli_did_you_mean(const char *word, const char *const *candidates,
 	return true;
 }
 
-/* The option of table opts that arg ("--name", "--name=v", "-n", "-nv")
- * names, or NULL; *attached: the value is in arg. */
-static const struct bc_opt *find_opt(const struct bc_opt *opts, const char *arg,
-                                     bool *attached)
-{
-	*attached = false;
-	for (int i = 0; opts && opts[i].kind != BC_OPT_INVALID; i++) {
-		const struct bc_opt *o = &opts[i];
-		if (arg[1] == '-') {
-			const char *name = arg + 2, *eq = strchr(name, '=');
-			size_t n = eq ? (size_t)(eq - name) : strlen(name);
-			if (strlen(o->name) == n &&
-			    strncmp(o->name, name, n) == 0) {
-				*attached = eq != NULL;
-				return o;
-			}
-		} else if (o->short_name && arg[1] == o->short_name) {
-			*attached = arg[2] != '\0';
-			return o;
-		}
-	}
-	return NULL;
-}
-
 /* Refuses the unknown option arg of a's table with the closest ones it
  * lists in its help. Returns 1 with a->status 2. */
 static int unknown_option(struct bc_args *a, const char *arg)
@@ -524,7 +500,6 @@ int bc_cli_args_parse(struct bc_args *a, int argc, char **argv)
 	for (int i = 1; i < argc; i++) {
 		const char *arg = argv[i];
 		const struct bc_opt *o;
-		bool attached;
 		if (arg[0] != '-' || arg[1] == '\0') {
 			if (a->stop_at_positional) {
 				break;
@@ -536,10 +511,12 @@ int bc_cli_args_parse(struct bc_args *a, int argc, char **argv)
 			/* The rest is positional, or the help wins. */
 			break;
 		}
-		if (!(o = find_opt(a->opts, arg, &attached))) {
+		const char *val;
+		int index;
+		if (!(o = bc_args_find(a->opts, arg, &val, &index))) {
 			return unknown_option(a, arg);
 		}
-		if (o->kind != BC_OPT_FLAG && !attached) {
+		if (o->kind != BC_OPT_FLAG && !val) {
 			i++; /* its value, whatever it looks like */
 		}
 	}

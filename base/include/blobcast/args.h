@@ -106,6 +106,12 @@ struct bc_args {
  * callers set defaults before parsing. */
 int bc_args_parse(struct bc_args *a, int argc, char **argv);
 
+/* The option of table opts that arg ("--name", "--name=v", "-n", "-nv")
+ * names, or NULL; *val is the value attached to arg (or NULL), *index the
+ * option's place in opts. */
+const struct bc_opt *bc_args_find(const struct bc_opt *opts, const char *arg,
+                                  const char **val, int *index);
+
 /* Whether the option with this long name was given. */
 bool bc_args_given(const struct bc_args *a, const char *name);
 
