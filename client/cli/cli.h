@@ -1,5 +1,5 @@
 /*
- * What every `blobcast` command shares (main.c): the exit statuses and the
+ * What every `blobcast` command shares (cli.c): the exit statuses and the
  * one place that maps a failure to them, the hint that says what to do
  * after a failure, and "did you mean" for a mistyped command, option,
  * key or kind, from one edit distance.
