@@ -1,8 +1,8 @@
 /*
  * What `blobcast nodes` and `blobcast scene` print about a session's scene
  * (the scene mirror a join receives): a node listing, as text or JSON, and
- * the scene file. Kept apart from cmd_client.c, which owns the connection
- * and the options, so that the formats can be read in one place.
+ * the scene file. Kept apart from cmd_session.c, which runs the commands,
+ * so that the formats can be read in one place.
  */
 #ifndef BLOBCAST_CLI_CMD_INSPECT_H
 #define BLOBCAST_CLI_CMD_INSPECT_H

@@ -1,0 +1,269 @@
+/*
+ * `blobcast load|edit|camera|undo|redo`: the client commands that change a
+ * session, each as an editor: a whole scene file, one node's parameters,
+ * the session's saved camera, or the newest change taken back and applied
+ * again. Each waits for the server's answer and prints the edit order it
+ * gave the change.
+ */
+#include "cmd_client.h"
+
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "blobcast/alloc.h"
+#include "blobcast/client.h"
+#include "blobcast/num.h"
+#include "blobcast/scene.h"
+#include "cli.h"
+
+/* ---- load ---------------------------------------------------------------- */
+
+static int run_load(struct bc_cli_call *a)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	struct bc_tree *t = bc_tree_create();
+	struct bc_camera cam;
+	uint8_t *bytes = NULL;
+	size_t len = 0;
+	uint64_t order;
+	int status = 0, rc;
+	if (!t) {
+		fprintf(stderr, "blobcast load: out of memory\n");
+		return BC_CLI_EXIT_FAIL;
+	}
+	/* The file is read before connecting: a bad file is the caller's
+	 * mistake (status 2) and costs the server nothing. */
+	if (bc_scene_load_json(a->pos[0], t, &cam, &ei)) {
+		bc_cli_explain(stderr, "blobcast load", ei.msg);
+		status = BC_CLI_EXIT_USAGE;
+		goto out;
+	}
+	if ((rc = bc_scene_encode(t, &cam, &bytes, &len))) {
+		fprintf(stderr, "blobcast load: cannot encode %s: %s\n",
+		        a->pos[0], bc_strerror(rc));
+		status = BC_CLI_EXIT_FAIL;
+		goto out;
+	}
+	if ((status = bc_cli_open_session(a, BC_PROTO_ROLE_EDITOR,
+	                                  BC_CLIENT_JOIN_ANY, &c))) {
+		goto out;
+	}
+	if (bc_client_load_scene(c, bytes, len, &order, &ei)) {
+		status = bc_cli_failed(a, c, "scene not loaded", &ei);
+		goto out;
+	}
+	printf("session %s: loaded %s (%u nodes), edit order %llu\n",
+	       a->session, a->pos[0], bc_tree_node_count(t),
+	       (unsigned long long)order);
+out:
+	bc_free(bytes);
+	bc_tree_destroy(t);
+	bc_client_destroy(c);
+	return status;
+}
+
+const struct bc_cli_cmd bc_cli_cmd_load = {
+    .name = "load",
+    .opts = BC_CLI_O_SESSION,
+    .min_pos = 1,
+    .max_pos = 1,
+    .synopsis = "--session NAME SCENE.json",
+    .summary = "load a JSON scene into a session (created if missing)",
+    .help = "Loads SCENE.json (blobtree's JSON scene format, with its camera)\n"
+            "into session NAME, replacing its scene; every member sees it at\n"
+            "once. Creates the session when it does not exist.",
+    .run = run_load};
+
+/* ---- edit ---------------------------------------------------------------- */
+
+/* The shared number rules (blobcast/num.h), with the protocol's bounds. */
+static bool parse_u64(const char *s, uint64_t lo, uint64_t hi, uint64_t *out)
+{
+	return bc_num_u64(s, lo, hi, out) == 0;
+}
+
+static int run_edit(struct bc_cli_call *a)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	uint64_t id, order;
+	uint32_t seq;
+	int status;
+	if (!parse_u64(a->pos[0], 1, UINT32_MAX, &id)) {
+		fprintf(stderr,
+		        "blobcast edit: \"%s\" is not a node id (1..%u)\n",
+		        a->pos[0], UINT32_MAX);
+		return BC_CLI_EXIT_USAGE;
+	}
+	if ((status = bc_cli_open_session(a, BC_PROTO_ROLE_EDITOR,
+	                                  BC_CLIENT_JOIN_EXISTING, &c))) {
+		goto out;
+	}
+	if (bc_client_edit_kv(c, (uint32_t)id, a->pos + 1,
+	                      (size_t)(a->npos - 1), a->interacting, &seq,
+	                      &ei)) {
+		/* Bad key=value text is the user's mistake, not the server's;
+		 * the connection failing is not. */
+		if (bc_client_error(c, NULL)) {
+			status = bc_cli_failed(a, c, NULL, &ei);
+		} else {
+			const char *hint =
+			    bc_cli_hint(ei.code, BC_CLI_STAGE_SESSION, ei.msg);
+			bc_cli_explain(stderr, "blobcast edit", ei.msg);
+			if (hint) {
+				fprintf(stderr, "blobcast edit: %s\n", hint);
+			}
+			status = BC_CLI_EXIT_USAGE;
+		}
+		goto out;
+	}
+	if (bc_client_wait_applied(c, seq, &order, &ei)) {
+		status = bc_cli_failed(a, c, NULL, &ei);
+		goto out;
+	}
+	printf("node %llu: edit applied, edit order %llu\n",
+	       (unsigned long long)id, (unsigned long long)order);
+out:
+	bc_client_destroy(c);
+	return status;
+}
+
+const struct bc_cli_cmd bc_cli_cmd_edit = {
+    .name = "edit",
+    .opts = BC_CLI_O_SESSION | BC_CLI_O_INTERACTING,
+    .min_pos = 2,
+    .max_pos = BC_CLI_MAX_POSITIONAL,
+    .synopsis = "--session NAME ID key=value...",
+    .summary = "set parameters of one node",
+    .help =
+        "Sets fields of node ID and waits until the server has applied the\n"
+        "edit. Primitives: translate=x,y,z rotate=x,y,z,w (unit quaternion)\n"
+        "color=r,g,b and their kind's parameters (radius=0.4,\n"
+        "half_extents=0.5,0.5,0.5, ...; see docs/primitives.md). Operators:\n"
+        "blend=B range=R kind=NAME (union, smooth_union, ...).",
+    .texts =
+        (const struct bc_cli_opt_text[]){
+            {"interacting", NULL,
+             "mark the edit as part of a drag (the "
+             "server\nanswers with fast interactive "
+             "frames)"},
+            {NULL, NULL, NULL}},
+    .run = run_edit};
+
+/* ---- camera -------------------------------------------------------------- */
+
+/*
+ * The server keeps a camera per connection (CAMERA changes only the
+ * sender's view) and one per session: the scene's, which members start
+ * with and which is saved with the scene. SESSION_CAMERA sets the latter
+ * alone: the scene's nodes are not sent, so edits other members make at
+ * the same moment stand.
+ */
+static int run_camera(struct bc_cli_call *a)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	struct bc_camera cam;
+	uint64_t order;
+	int status;
+	if (!a->has_eye || !a->has_target) {
+		fprintf(stderr, "blobcast camera: --eye and --target are "
+		                "required (see blobcast camera --help)\n");
+		return BC_CLI_EXIT_USAGE;
+	}
+	if ((status = bc_cli_open_session(a, BC_PROTO_ROLE_EDITOR,
+	                                  BC_CLIENT_JOIN_EXISTING, &c))) {
+		goto out;
+	}
+	if ((status = bc_cli_camera_from_opts(a, c, &cam))) {
+		goto out;
+	}
+	if (bc_client_session_camera(c, &cam, &order, &ei)) {
+		status = bc_cli_failed(a, c, "camera not set", &ei);
+		goto out;
+	}
+	printf("session %s: camera eye %g,%g,%g target %g,%g,%g up %g,%g,%g "
+	       "fov %g, edit order %llu\n",
+	       a->session, (double)cam.eye[0], (double)cam.eye[1],
+	       (double)cam.eye[2], (double)cam.target[0], (double)cam.target[1],
+	       (double)cam.target[2], (double)cam.up[0], (double)cam.up[1],
+	       (double)cam.up[2], (double)cam.fov_y_deg,
+	       (unsigned long long)order);
+out:
+	bc_client_destroy(c);
+	return status;
+}
+
+const struct bc_cli_cmd bc_cli_cmd_camera = {
+    .name = "camera",
+    .opts = BC_CLI_O_SESSION | BC_CLI_O_CAMERA,
+    .min_pos = 0,
+    .max_pos = 0,
+    .synopsis =
+        "--session NAME --eye x,y,z --target x,y,z [--up x,y,z] [--fov DEG]",
+    .summary = "set the session's camera",
+    .help =
+        "Sets the session's saved camera: the view members who join from\n"
+        "now on start with, saved with the scene (and given back by\n"
+        "'blobcast scene'). Members already in the session keep their own\n"
+        "cameras (to take viewers along, use 'present'). Only the camera is\n"
+        "sent, so edits other members make meanwhile stand. Needs the\n"
+        "editor role. --up and --fov default to the session's current\n"
+        "values.",
+    .run = run_camera};
+
+/* ---- undo, redo ---------------------------------------------------------- */
+
+static int run_undo(struct bc_cli_call *a)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	struct bc_client_undone u;
+	bool redo = strcmp(a->cmd, "redo") == 0;
+	int status;
+	if ((status = bc_cli_open_session(a, BC_PROTO_ROLE_EDITOR,
+	                                  BC_CLIENT_JOIN_EXISTING, &c))) {
+		goto out;
+	}
+	if (bc_client_undo(c, redo, &u, &ei)) {
+		status = bc_cli_failed(a, c, NULL, &ei);
+		goto out;
+	}
+	printf("%s edit %llu by \"%s\": edit order %llu\n",
+	       redo ? "redid" : "undid", (unsigned long long)u.target_order,
+	       u.target_author, (unsigned long long)u.order);
+out:
+	bc_client_destroy(c);
+	return status;
+}
+
+const struct bc_cli_cmd bc_cli_cmd_undo = {
+    .name = "undo",
+    .opts = BC_CLI_O_SESSION,
+    .min_pos = 0,
+    .max_pos = 0,
+    .synopsis = "--session NAME",
+    .summary = "take back the session's newest change, whoever made it",
+    .help =
+        "Undoes the newest change of session NAME that is not undone yet:\n"
+        "a parameter edit, a structural edit, or a whole drag. It is applied\n"
+        "as an edit of its own, seen by every member, and prints\n"
+        "  undid edit ORDER by \"AUTHOR\": edit order NEW\n"
+        "Exit status 1 with ESTATE when there is nothing to undo (the\n"
+        "history starts at the last load or restart, 100 steps deep).",
+    .run = run_undo};
+
+const struct bc_cli_cmd bc_cli_cmd_redo = {
+    .name = "redo",
+    .opts = BC_CLI_O_SESSION,
+    .min_pos = 0,
+    .max_pos = 0,
+    .synopsis = "--session NAME",
+    .summary = "apply again the change undone last",
+    .help =
+        "Redoes the change undone last in session NAME, as 'undo' takes it\n"
+        "back; a new edit in between leaves nothing to redo.",
+    .run = run_undo};

@@ -1,0 +1,474 @@
+/*
+ * `blobcast watch`: joins a session as a viewer and prints a line per
+ * frame, with the latency this client can measure, and a line per member
+ * list, change and presenter; a lost connection is joined again. It owns
+ * the roster that names the authors of changes and the arrival times that
+ * frames are measured against.
+ */
+#include "cmd_client.h"
+
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+
+#include "blobcast/alloc.h"
+#include "blobcast/client.h"
+#include "blobcast/clock.h"
+
+/* Edit orders whose arrival time is remembered for the latency of
+ * the frame that shows them (frames lag edits by a few at most). */
+#define WATCH_ORDERS 256u
+/* watch: the first and the longest delay between attempts to reconnect. A
+ * restarting daemon is back in well under a second; a longer outage is
+ * tried every few seconds, which costs the server nothing noticeable. */
+#define WATCH_BACKOFF_MIN_MS 250
+#define WATCH_BACKOFF_MAX_MS 4000
+
+/* Arrival times of edit orders, to measure frames against. */
+struct order_times {
+	uint64_t order[WATCH_ORDERS];
+	double at[WATCH_ORDERS];
+};
+
+static void order_seen(struct order_times *o, uint64_t order, double at)
+{
+	uint32_t k = (uint32_t)(order % WATCH_ORDERS);
+	o->order[k] = order;
+	o->at[k] = at;
+}
+
+static bool order_time(const struct order_times *o, uint64_t order, double *at)
+{
+	uint32_t k = (uint32_t)(order % WATCH_ORDERS);
+	if (order == 0 || o->order[k] != order) {
+		return false;
+	}
+	*at = o->at[k];
+	return true;
+}
+
+/* The session's members as the last SESSION_INFO listed them, to name
+ * the authors of edits. */
+struct roster {
+	uint16_t n;
+	uint32_t self;
+	struct {
+		uint32_t id;
+		enum bc_proto_role role;
+		char name[BC_PROTO_MAX_NAME + 1];
+	} m[BC_PROTO_MAX_MEMBERS];
+};
+
+static void roster_update(struct roster *r,
+                          const struct bc_msg_session_info *si)
+{
+	r->n = 0;
+	r->self = si->member_id;
+	for (uint16_t i = 0; i < si->nmembers && i < BC_PROTO_MAX_MEMBERS;
+	     i++) {
+		const struct bc_proto_member *pm = &si->members[i];
+		r->m[i].id = pm->id;
+		r->m[i].role = pm->role;
+		snprintf(r->m[i].name, sizeof(r->m[i].name), "%.*s",
+		         (int)pm->name.len, pm->name.ptr);
+		r->n++;
+	}
+}
+
+static const char *roster_name(const struct roster *r, uint32_t id)
+{
+	for (uint16_t i = 0; i < r->n; i++) {
+		if (r->m[i].id == id) {
+			return r->m[i].name;
+		}
+	}
+	return NULL;
+}
+
+/* "members 3: alice (editor, 4), blobcast-cli (viewer, 7, this client)" */
+static void print_members(const struct roster *r)
+{
+	printf("members %u:", r->n);
+	for (uint16_t i = 0; i < r->n; i++) {
+		printf(
+		    "%s \"%s\" (%s, %u%s)", i ? "," : "", r->m[i].name,
+		    r->m[i].role == BC_PROTO_ROLE_EDITOR ? "editor" : "viewer",
+		    r->m[i].id, r->m[i].id == r->self ? ", this client" : "");
+	}
+	printf("\n");
+}
+
+/* `edit order=5 by="carol" member=20 ops=1`: the author's name comes from
+ * the member list (an author who already left prints as ""). */
+static void print_change(const struct roster *r, const char *what,
+                         uint64_t order, uint32_t author, const char *tail)
+{
+	const char *name = roster_name(r, author);
+	printf("%s order=%llu by=\"%s\" member=%u%s\n", what,
+	       (unsigned long long)order, name ? name : "", author, tail);
+}
+
+/* `undo order=6 of=5 by="bob" author="alice" member=20 ops=3` (or redo):
+ * edit 6, sent by bob (member 20), takes back (applies again) edit 5, whose
+ * author the server names. */
+static void print_undo(const struct roster *r, const struct bc_msg *m)
+{
+	const struct bc_msg_edit_applied *e = &m->edit_applied;
+	const char *name = roster_name(r, e->author);
+	printf("%s order=%llu of=%llu by=\"%s\" author=\"%.*s\" member=%u "
+	       "ops=%u\n",
+	       (m->flags & BC_PROTO_FLAG_REDO) ? "redo" : "undo",
+	       (unsigned long long)e->order,
+	       (unsigned long long)e->target_order, name ? name : "",
+	       (int)e->target_author.len, e->target_author.ptr, e->author,
+	       e->nops);
+}
+
+/* `presenter member=4 name="alice"` or `presenter none`, with
+ * ` following` when this client follows. */
+static void print_presenter(const struct roster *r, uint32_t id, bool following)
+{
+	const char *name = roster_name(r, id);
+	if (!id) {
+		printf("presenter none\n");
+		return;
+	}
+	printf("presenter member=%u name=\"%s\"%s\n", id, name ? name : "",
+	       following ? " following" : "");
+}
+
+/* The errors after which connecting again would be refused the same way:
+ * watch reports them and stops instead of retrying. */
+static bool watch_gives_up(int code)
+{
+	return code == BC_EAUTH || code == BC_EPERM ||
+	       code == BC_EPROTO_VERSION || code == BC_ENOSESSION ||
+	       code == BC_EINVAL || code == BC_ELIMIT;
+}
+
+/* Connects, joins a->session as a viewer and asks for frames. The join is
+ * done here rather than with bc_client_join() to keep SESSION_INFO's
+ * member list (the scene state that follows is read by the frame loop).
+ * Returns 0 or a BC_E* code with the reason in ei; *c is set either way
+ * (NULL when the connection failed). */
+static int watch_open(const struct bc_cli_call *a, struct bc_client **c,
+                      struct roster *roster, double *view_at,
+                      struct bc_errinfo *ei)
+{
+	struct bc_client_opts opts = bc_cli_connect_opts(a);
+	struct bc_msg m = {.type = BC_MSG_SESSION_JOIN};
+	int rc;
+	*c = NULL;
+	if ((rc = bc_client_connect(c, &opts, ei))) {
+		return rc;
+	}
+	m.session.role = BC_PROTO_ROLE_VIEWER;
+	m.session.name.ptr = a->session;
+	m.session.name.len = (uint32_t)strlen(a->session);
+	if ((rc = bc_client_send(*c, &m, NULL)) ||
+	    (rc = bc_client_wait(*c, BC_MSG_SESSION_INFO, 0, &m, 0, ei))) {
+		if (!ei->code) {
+			bc_client_error(*c, ei);
+			ei->code = rc;
+		}
+		return rc;
+	}
+	roster_update(roster, &m.session_info);
+	print_members(roster);
+	/* FOLLOW 0 follows nobody; it asks the server to say who presents
+	 * (PRESENTER), now and whenever that changes. */
+	if ((rc = bc_client_follow(*c, false, ei))) {
+		return rc;
+	}
+	print_presenter(roster, bc_client_info(*c)->presenter, false);
+	*view_at = bc_clock_ms();
+	return bc_client_view(*c,
+	                      &(struct bc_msg_view){.width = a->width,
+	                                            .height = a->height,
+	                                            .encoding = a->encoding,
+	                                            .downscale = a->downscale},
+	                      NULL, ei);
+}
+
+/*
+ * Latency of a frame, as this client can measure it without a shared
+ * clock: from the moment this client learned of the newest change the
+ * frame shows to the moment the frame arrived. The change is an edit
+ * (EDIT_APPLIED, or SCENE_STATE for a load) when the frame's edit order is
+ * new; for the first frame after joining it is our VIEW request. Frames
+ * that show nothing new (a finer level or the still refining an earlier
+ * frame) get "-".
+ *
+ * A lost connection (the daemon restarted, the network dropped) is
+ * retried with a doubling delay and the session joined again; errors that
+ * a retry would meet again (a refused token, a missing session) end the
+ * run. With --frames N the run also ends when no frame has come for the
+ * --timeout (end=timeout, status 1).
+ */
+static int run_watch(struct bc_cli_call *a)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	struct bc_client_image img;
+	struct order_times *times = NULL;
+	struct roster *roster = NULL;
+	struct bc_cli_stop sig;
+	struct bc_msg m;
+	struct bc_msg_stats st;
+	uint64_t nframes = 0, last_order = 0, total_bytes = 0;
+	uint64_t joined_at_frame = 0;
+	double view_at = 0.0, last_frame_at, retry_at = 0.0;
+	int backoff_ms = WATCH_BACKOFF_MIN_MS, rc, status = 0;
+	/* --timeout bounds the wait for each frame when --frames asks for a
+	 * count; without it watch runs until stopped. */
+	double idle_limit = bc_cli_frame_idle_limit(a);
+	const char *end = "stopped";
+	bc_client_image_init(&img);
+	bc_cli_stop_install(&sig);
+	if (!(times = bc_calloc(1, sizeof(*times))) ||
+	    !(roster = bc_calloc(1, sizeof(*roster)))) {
+		fprintf(stderr, "blobcast watch: out of memory\n");
+		status = BC_CLI_EXIT_FAIL;
+		goto out;
+	}
+	/* The first connection must work: a wrong address or session is a
+	 * mistake to report, not to retry. */
+	if ((rc = watch_open(a, &c, roster, &view_at, &ei))) {
+		status = bc_cli_failed(a, c, NULL, &ei);
+		goto out;
+	}
+	last_frame_at = bc_clock_ms();
+	while (!bc_cli_stopped() && (a->frames == 0 || nframes < a->frames)) {
+		double at, since;
+		const char *after = "-";
+		if (a->frames && idle_limit >= 0.0 &&
+		    bc_clock_ms() - last_frame_at > idle_limit) {
+			end = "timeout";
+			break;
+		}
+		if (!c) {
+			/* Reconnecting: wait out the back-off in slices so
+			 * that Ctrl-C and the timeout are noticed. */
+			if (bc_clock_ms() < retry_at) {
+				struct timespec ts = {0, BC_CLI_SLICE_MS *
+				                             1000000L};
+				nanosleep(&ts, NULL);
+				continue;
+			}
+			memset(&ei, 0, sizeof(ei));
+			rc = watch_open(a, &c, roster, &view_at, &ei);
+			if (rc && watch_gives_up(rc)) {
+				status =
+				    bc_cli_failed(a, c, "reconnecting", &ei);
+				goto out;
+			}
+			if (rc) {
+				bc_client_destroy(c);
+				c = NULL;
+				retry_at = bc_clock_ms() + backoff_ms;
+				fprintf(
+				    stderr,
+				    "blobcast watch: reconnecting failed: %s "
+				    "(%s); next try in %d ms\n",
+				    ei.msg, bc_err_name(rc), backoff_ms);
+				backoff_ms =
+				    backoff_ms * 2 > WATCH_BACKOFF_MAX_MS
+				        ? WATCH_BACKOFF_MAX_MS
+				        : backoff_ms * 2;
+				continue;
+			}
+			fprintf(stderr, "blobcast watch: rejoined session %s\n",
+			        a->session);
+			printf("rejoined session=%s\n", a->session);
+			backoff_ms = WATCH_BACKOFF_MIN_MS;
+			joined_at_frame = nframes;
+			last_order = 0;
+		}
+		rc = bc_client_recv(c, &m, BC_CLI_SLICE_MS);
+		if (rc == 0) {
+			continue;
+		}
+		if (rc < 0 || (m.type == BC_MSG_ERROR &&
+		               (m.flags & BC_PROTO_FLAG_FATAL))) {
+			if (rc > 0) {
+				ei.code = -(int)m.error.code;
+				snprintf(ei.msg, sizeof(ei.msg), "server: %.*s",
+				         (int)m.error.text.len,
+				         m.error.text.ptr);
+			} else {
+				bc_client_error(c, &ei);
+			}
+			if (watch_gives_up(ei.code)) {
+				status = bc_cli_failed(a, c, NULL, &ei);
+				goto out;
+			}
+			fprintf(stderr,
+			        "blobcast watch: connection lost: %s (%s); "
+			        "reconnecting\n",
+			        ei.msg[0] ? ei.msg : bc_strerror(ei.code),
+			        bc_err_name(ei.code));
+			printf("lost reason=%s\n", bc_err_name(ei.code));
+			fflush(stdout);
+			bc_client_destroy(c);
+			c = NULL;
+			retry_at = bc_clock_ms() + backoff_ms;
+			continue;
+		}
+		at = bc_clock_ms();
+		switch (m.type) {
+		case BC_MSG_SESSION_INFO:
+			roster_update(roster, &m.session_info);
+			print_members(roster);
+			fflush(stdout);
+			break;
+		case BC_MSG_EDIT_APPLIED: {
+			const struct bc_msg_edit_applied *e = &m.edit_applied;
+			order_seen(times, e->order, at);
+			if (m.flags &
+			    (BC_PROTO_FLAG_UNDO | BC_PROTO_FLAG_REDO)) {
+				print_undo(roster, &m);
+			} else {
+				char tail[32];
+				snprintf(tail, sizeof(tail), " ops=%u%s",
+				         e->nops,
+				         (m.flags & BC_PROTO_FLAG_INTERACTING)
+				             ? " interacting"
+				             : "");
+				print_change(roster, "edit", e->order,
+				             e->author, tail);
+			}
+			fflush(stdout);
+			break;
+		}
+		case BC_MSG_PRESENTER:
+			print_presenter(roster, m.presenter.presenter,
+			                m.presenter.following != 0);
+			fflush(stdout);
+			break;
+		case BC_MSG_SESSION_CAMERA_SET:
+			order_seen(times, m.session_camera_set.order, at);
+			print_change(roster, "camera",
+			             m.session_camera_set.order,
+			             m.session_camera_set.author, "");
+			fflush(stdout);
+			break;
+		case BC_MSG_SCENE_STATE:
+			order_seen(times, m.scene_state.order, at);
+			if (m.scene_state.author) {
+				print_change(roster, "load",
+				             m.scene_state.order,
+				             m.scene_state.author, "");
+				fflush(stdout);
+			}
+			break;
+		case BC_MSG_ERROR:
+			status = bc_cli_server_failed(a, c, &m);
+			goto out;
+		case BC_MSG_FRAME:
+			nframes++;
+			last_frame_at = at;
+			total_bytes += bc_client_info(c)->last_msg_bytes;
+			if (bc_client_image_apply(&img, &m, &ei)) {
+				fprintf(stderr,
+				        "blobcast watch: frame %u does not "
+				        "decode: %s\n",
+				        m.frame.frame_no, ei.msg);
+			}
+			since = -1.0;
+			if (nframes == joined_at_frame + 1) {
+				since = at - view_at;
+				after = "view";
+			} else if (m.frame.order > last_order &&
+			           order_time(times, m.frame.order, &since)) {
+				since = at - since;
+				after = "edit";
+			}
+			last_order = m.frame.order;
+			printf("frame %llu no=%u order=%llu bytes=%u rects=%u "
+			       "image=%ux%u level=%u %s latency_ms=",
+			       (unsigned long long)nframes, m.frame.frame_no,
+			       (unsigned long long)m.frame.order,
+			       bc_client_info(c)->last_msg_bytes,
+			       m.frame.nrects, m.frame.image_width,
+			       m.frame.image_height,
+			       bc_proto_flags_level(m.flags),
+			       bc_cli_frame_kind(m.flags));
+			if (since >= 0.0) {
+				printf("%.2f after=%s\n", since, after);
+			} else {
+				printf("- after=-\n");
+			}
+			fflush(stdout);
+			break;
+		default:
+			break;
+		}
+	}
+	if (a->frames && nframes >= a->frames) {
+		end = "frames";
+	}
+	/* Server averages when the connection is up; a run that ends while
+	 * reconnecting reports its own counts only. */
+	memset(&st, 0, sizeof(st));
+	if (c && bc_client_stats(c, &st, &ei)) {
+		status = bc_cli_failed(a, c, "stats", &ei);
+		goto out;
+	}
+	printf("stats frames=%llu bytes=%llu server_frames=%llu "
+	       "server_fps=%.1f render_ms_avg=%.2f encode_ms_avg=%.2f "
+	       "edit_ms_avg=%.3f end=%s\n",
+	       (unsigned long long)nframes, (unsigned long long)total_bytes,
+	       (unsigned long long)st.frames, (double)st.fps,
+	       (double)st.render_ms_avg, (double)st.encode_ms_avg,
+	       (double)st.edit_ms_avg, end);
+	if (strcmp(end, "timeout") == 0) {
+		status = bc_cli_frames_timed_out(a, nframes, idle_limit);
+	}
+out:
+	bc_cli_stop_restore(&sig);
+	bc_free(times);
+	bc_free(roster);
+	bc_client_image_finish(&img);
+	bc_client_destroy(c);
+	return status;
+}
+
+const struct bc_cli_cmd bc_cli_cmd_watch = {
+    .name = "watch",
+    .opts = BC_CLI_O_SESSION | BC_CLI_O_SIZE | BC_CLI_O_FRAMES |
+            BC_CLI_O_ENCODING | BC_CLI_O_DOWNSCALE,
+    .min_pos = 0,
+    .max_pos = 0,
+    .synopsis = "--session NAME [--frames N] [--size WxH]",
+    .summary = "print a line per frame the session sends",
+    .help =
+        "Joins session NAME as a viewer and prints one line per frame:\n"
+        "  frame K no=SERVER_FRAME_NO order=EDIT_ORDER bytes=B rects=R\n"
+        "  image=WxH level=N still|interactive latency_ms=L after=edit|view|-\n"
+        "level is the frame's refinement level (0: full resolution; N: one\n"
+        "pixel per 2^N block, finer frames follow). latency_ms is measured\n"
+        "on this client: from the arrival of the newest change the frame\n"
+        "shows (the EDIT_APPLIED or SCENE_STATE of its edit order; for the\n"
+        "first frame, our VIEW request) to the arrival of the frame. It\n"
+        "covers the server's render, encode and send, not the editor's\n"
+        "upload; frames that show nothing new (a finer level, a still after\n"
+        "interactive frames) print '-'. Other lines name the members and\n"
+        "who changed the scene:\n"
+        "  members 2: \"alice\" (editor, 4), \"blobcast-cli\" (viewer, 7, this "
+        "client)\n"
+        "  edit order=5 by=\"alice\" member=4 ops=1 [interacting]\n"
+        "  undo order=6 of=5 by=\"bob\" author=\"alice\" member=9 ops=1\n"
+        "  redo order=7 of=5 by=\"alice\" author=\"alice\" member=4 ops=1\n"
+        "  load order=8 by=\"alice\" member=4\n"
+        "  camera order=9 by=\"alice\" member=4   (the session camera)\n"
+        "  presenter member=4 name=\"alice\" | presenter none\n"
+        "(undo and redo: edit ORDER by member BY takes back, or applies\n"
+        "again, edit OF whose author was AUTHOR).\n"
+        "A lost connection prints 'lost reason=CODE' and is retried every\n"
+        "0.25 s, doubling up to 4 s, then 'rejoined session=NAME'; a refused\n"
+        "token or a missing session ends the run instead. At the end one\n"
+        "'stats' line gives the server's averages and end=frames (N frames\n"
+        "came), end=timeout or end=stopped (Ctrl-C, SIGTERM).",
+    .run = run_watch};
