@@ -35,6 +35,16 @@ int bc_cli_failed(const struct bc_cli_call *a, const struct bc_client *c,
 	                       c && bc_client_error(c, NULL) != 0);
 }
 
+/* A receive or send that failed: its reason is the connection's sticky
+ * error (bc_client_error). */
+int bc_cli_conn_failed(const struct bc_cli_call *a, const struct bc_client *c,
+                       const char *what)
+{
+	struct bc_errinfo ei = {0};
+	bc_client_error(c, &ei);
+	return bc_cli_failed(a, c, what, &ei);
+}
+
 /* The connection the options ask for: --server, --token (or their
  * environment variables), --name, --timeout, --ca, --insecure. */
 struct bc_client_opts bc_cli_connect_opts(const struct bc_cli_call *a)

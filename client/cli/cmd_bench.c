@@ -81,8 +81,7 @@ static int one_edit(const struct bc_cli_call *a, struct bc_client *c,
 		int rc = bc_client_recv(
 		    c, &m, timeout < 0 ? -1 : (left > 0.0 ? (int)left + 1 : 0));
 		if (rc < 0) {
-			bc_client_error(c, &ei);
-			return bc_cli_failed(a, c, NULL, &ei);
+			return bc_cli_conn_failed(a, c, NULL);
 		}
 		if (rc == 0) {
 			fprintf(stderr,

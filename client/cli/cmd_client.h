@@ -129,6 +129,12 @@ extern const struct bc_cli_cmd bc_cli_cmd_redo;
 int bc_cli_failed(const struct bc_cli_call *a, const struct bc_client *c,
                   const char *what, const struct bc_errinfo *ei);
 
+/* Reports the connection's own error (bc_client_error(), after a receive
+ * or send that failed) the way bc_cli_failed() does, with what in front
+ * when not NULL; returns the exit status for it. */
+int bc_cli_conn_failed(const struct bc_cli_call *a, const struct bc_client *c,
+                       const char *what);
+
 /* Reports the server's ERROR message m the way bc_cli_failed() reports our
  * own errors; returns the exit status for it. */
 int bc_cli_server_failed(const struct bc_cli_call *a, const struct bc_client *c,

@@ -62,8 +62,7 @@ static int run_present(struct bc_cli_call *a)
 		}
 		rc = bc_client_recv(c, &m, BC_CLI_SLICE_MS);
 		if (rc < 0) {
-			bc_client_error(c, &ei);
-			status = bc_cli_failed(a, c, NULL, &ei);
+			status = bc_cli_conn_failed(a, c, NULL);
 			goto out;
 		}
 		if (rc == 0) {
@@ -172,8 +171,7 @@ static int run_follow(struct bc_cli_call *a)
 			}
 			rc = bc_client_recv(c, &m, BC_CLI_SLICE_MS);
 			if (rc < 0) {
-				bc_client_error(c, &ei);
-				status = bc_cli_failed(a, c, NULL, &ei);
+				status = bc_cli_conn_failed(a, c, NULL);
 				goto out;
 			}
 			continue;
@@ -196,9 +194,8 @@ static int run_follow(struct bc_cli_call *a)
 				       m.presenter.presenter);
 				f.toggle.on = 1;
 				if (bc_client_send(c, &f, NULL)) {
-					bc_client_error(c, &ei);
 					status =
-					    bc_cli_failed(a, c, "follow", &ei);
+					    bc_cli_conn_failed(a, c, "follow");
 					goto out;
 				}
 			}
