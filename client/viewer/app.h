@@ -48,6 +48,10 @@
 /* One attempt waits at most this long (ms) for the daemon's answers; the
  * window does not redraw meanwhile, so keep it short. */
 #define BC_VIEWER_RETRY_TIMEOUT_MS 2000
+/* Exit status of --screenshot when the picture written is not finished
+ * (a level above 0 or INCOMPLETE: the daemon stopped refining it, or the
+ * --screenshot-wait ran out); 1 and 2 are failures and bad options. */
+#define BC_VIEWER_EXIT_UNFINISHED 5
 /* Largest number of vertices of overlay text. */
 #define BC_VIEWER_TEXT_FLOATS (64u * 1024u)
 
@@ -64,6 +68,7 @@ struct bc_viewer_opts {
 	uint32_t frames;        /* ... once this many frames were shown */
 	float turn_deg;         /* camera turn between those frames */
 	const char *dump_frame; /* with --screenshot: the picture received */
+	uint32_t shot_wait_s;   /* --screenshot-wait: seconds per picture */
 	const char *snapshot_dir;
 };
 
@@ -107,6 +112,8 @@ struct bc_viewer_app {
 	/* The VIEW sent (0 before), and a resize waiting to be sent. */
 	uint32_t view_w, view_h;
 	double view_due;
+	/* The view was capped by the daemon's max_dim (said once). */
+	bool view_capped_said;
 
 	/* Mouse. */
 	double mx, my; /* cursor, window pixels */
@@ -147,6 +154,12 @@ struct bc_viewer_app {
 	} last;
 	bool redraw;
 	bool turn_pending; /* --frames: a camera turn asked for a frame */
+	/* --screenshot: the frames of the picture waited for; whether a
+	 * picture was counted and the next turn not made yet; whether the
+	 * last one counted was settled unfinished (exit status
+	 * BC_VIEWER_EXIT_UNFINISHED). */
+	struct bc_viewer_shot shot;
+	bool shot_ready, shot_unfinished;
 
 	/* The last UNDO or REDO sent (Ctrl-Z, Ctrl-Shift-Z, Ctrl-Y) that the
 	 * server has not answered yet (0: none), and which of the two. */
@@ -199,8 +212,12 @@ int bc_viewer_pump(struct bc_viewer_app *a);
  * end of a wheel gesture. Returns the ms until something else falls due
  * (negative: nothing scheduled). */
 double bc_viewer_send_due(struct bc_viewer_app *a, double now);
-/* Sends VIEW for the framebuffer's current size. */
+/* Sends VIEW for the framebuffer's current size (bc_viewer_view_size
+ * under the daemon's max_dim and the GL texture limit). */
 int bc_viewer_send_view(struct bc_viewer_app *a);
+/* Whether the framebuffer now asks for another VIEW than the last one
+ * sent (a resize or a content-scale change). */
+bool bc_viewer_view_changed(struct bc_viewer_app *a);
 /* Marks the camera changed; interacting false sends it at once. */
 void bc_viewer_camera_changed(struct bc_viewer_app *a, bool interacting);
 /* Queues an edit and sends it when the queue allows. */

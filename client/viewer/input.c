@@ -390,6 +390,18 @@ static void on_resize(GLFWwindow *w, int width, int height)
 	a->redraw = true;
 }
 
+/* Moving to a screen of another density changes the content scale; the
+ * framebuffer usually follows (on_resize), but the VIEW is checked either
+ * way, and the overlay's text size changes with it. */
+static void on_content_scale(GLFWwindow *w, float sx, float sy)
+{
+	struct bc_viewer_app *a = glfwGetWindowUserPointer(w);
+	(void)sx;
+	(void)sy;
+	a->view_due = bc_viewer_now_ms() + BC_VIEWER_RESIZE_MS;
+	a->redraw = true;
+}
+
 static void on_refresh(GLFWwindow *w)
 {
 	struct bc_viewer_app *a = glfwGetWindowUserPointer(w);
@@ -404,5 +416,6 @@ void bc_viewer_input_install(struct bc_viewer_app *a)
 	glfwSetScrollCallback(a->win, on_scroll);
 	glfwSetKeyCallback(a->win, on_key);
 	glfwSetFramebufferSizeCallback(a->win, on_resize);
+	glfwSetWindowContentScaleCallback(a->win, on_content_scale);
 	glfwSetWindowRefreshCallback(a->win, on_refresh);
 }

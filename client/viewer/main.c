@@ -174,7 +174,18 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o,
 	     .dst = &o->screenshot,
 	     .arg = "FILE",
 	     .help = "save the window to FILE once --frames\n"
-	             "pictures were shown, then exit"},
+	             "pictures were shown, then exit: 0 when the\n"
+	             "last was finished, 5 when the daemon stopped\n"
+	             "refining it or --screenshot-wait ran out"},
+	    {.name = "screenshot-wait",
+	     .kind = BC_OPT_U32,
+	     .dst = &o->shot_wait_s,
+	     .lo = 1,
+	     .hi = 86400,
+	     .arg = "SEC",
+	     .help = "with --screenshot: wait at most SEC seconds\n"
+	             "for each finished picture, {range}\n"
+	             "(default {default})"},
 	    {.name = "frames",
 	     .kind = BC_OPT_U32,
 	     .dst = &o->frames,
@@ -236,6 +247,7 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o,
 	    .name = "blobcast-view",
 	    .overlay = true,
 	    .frames = 1,
+	    .shot_wait_s = BC_VIEWER_SHOT_WAIT_S,
 	    .turn_deg = 15.0f,
 	    .snapshot_dir = ".",
 	    /* As the blobcast CLI: the environment names the daemon. */
@@ -457,9 +469,16 @@ static void draw_overlay(struct bc_viewer_app *a, uint32_t fw, uint32_t fh,
 	const float pad = 6.0f;
 	const float panel_rgba[4] = {0.0f, 0.0f, 0.0f, 0.6f};
 	const float text_rgba[4] = {0.95f, 0.95f, 0.9f, 1.0f};
-	float scale = fw >= 900 ? 2.0f : 1.0f, w, h, panel[12];
+	float scale = fw >= 900 ? 2.0f : 1.0f, w, h, panel[12], sx = 1.0f,
+	      sy = 1.0f;
 	size_t nf;
 	int lines = 1;
+	/* On a HiDPI screen the framebuffer has more pixels than the window
+	 * has screen coordinates: the text grows with the content scale. */
+	glfwGetWindowContentScale(a->win, &sx, &sy);
+	if (floorf(sy + 0.5f) > scale) {
+		scale = floorf(sy + 0.5f);
+	}
 	fmt_latency(&a->meter, lat, sizeof(lat));
 	fmt_selection(a, sel, sizeof(sel));
 	bc_viewer_refining_text(a->last.flags, refining, sizeof(refining));
@@ -620,7 +639,8 @@ static void draw(struct bc_viewer_app *a, double now)
 		    save_window(a, a->o.screenshot, fw, fh) ||
 		            (a->o.dump_frame && dump_frame(a, a->o.dump_frame))
 		        ? EXIT_FAIL
-		        : 0;
+		    : a->shot_unfinished ? BC_VIEWER_EXIT_UNFINISHED
+		                         : 0;
 		a->quit = true;
 	} else if (a->screenshot_now) {
 		char path[64];
@@ -666,14 +686,56 @@ static void update_title(struct bc_viewer_app *a, double now)
 	a->stats_at = now;
 }
 
-/* --frames N: the daemon renders on change only; turning the camera after
- * each finished picture gives it one. Turning while it refines would cut
- * the refinement short. */
-static void maybe_turn(struct bc_viewer_app *a)
+/* --screenshot: a picture that will not be finished counts as it is once
+ * the daemon stopped refining it or the wait for it ran out (shot.c); the
+ * screenshot then says so on stderr and in its exit status. Returns the
+ * ms until the answer may change (negative: nothing to wait for). */
+static double shot_poll(struct bc_viewer_app *a, double now)
 {
-	if (!a->o.screenshot || a->npictures == 0 ||
-	    a->npictures >= a->o.frames || a->turn_pending ||
-	    a->frames.refining) {
+	enum bc_viewer_shot_state st;
+	double due, wait_ms = (double)a->o.shot_wait_s * 1e3;
+	char what[200];
+	if (!a->o.screenshot || a->shot_ready || a->npictures >= a->o.frames) {
+		return -1.0;
+	}
+	st = bc_viewer_shot_check(&a->shot, now, bc_viewer_pending_since(a),
+	                          wait_ms, &due);
+	if (st == BC_VIEWER_SHOT_WAITING || st == BC_VIEWER_SHOT_FINISHED) {
+		return due;
+	}
+	bc_viewer_shot_text(&a->shot, st, wait_ms, what, sizeof(what));
+	if (a->npictures + 1u < a->o.frames) {
+		fprintf(stderr,
+		        "blobcast-view: picture %llu of %u not finished: %s; "
+		        "going on with the next\n",
+		        (unsigned long long)a->npictures + 1u, a->o.frames,
+		        what);
+	} else {
+		fprintf(stderr,
+		        "blobcast-view: picture %llu of %u not finished: %s; "
+		        "%s shows it as it is (exit status %d)\n",
+		        (unsigned long long)a->npictures + 1u, a->o.frames,
+		        what, a->o.screenshot, BC_VIEWER_EXIT_UNFINISHED);
+	}
+	if (a->o.verbose) {
+		printf("unfinished %s\n", what);
+		fflush(stdout);
+	}
+	a->npictures++;
+	a->shot_ready = true;
+	a->shot_unfinished = true;
+	a->redraw = true;
+	return -1.0;
+}
+
+/* --frames N: the daemon renders on change only; turning the camera after
+ * each picture gives it one. Turning while it refines would cut the
+ * refinement short, so the turn waits for a finished picture, or for one
+ * shot_poll took as it is. */
+static void maybe_turn(struct bc_viewer_app *a, double now)
+{
+	if (!a->o.screenshot || !a->shot_ready || a->npictures >= a->o.frames ||
+	    a->turn_pending) {
 		return;
 	}
 	bc_viewer_orbit(&a->cam,
@@ -682,6 +744,8 @@ static void maybe_turn(struct bc_viewer_app *a)
 	                0.0f);
 	bc_viewer_camera_changed(a, false);
 	a->turn_pending = true;
+	a->shot_ready = false;
+	bc_viewer_shot_start(&a->shot, now);
 }
 
 /* One SESSION_JOIN or SESSION_CREATE, keeping the member list of its
@@ -876,9 +940,13 @@ static void run(struct bc_viewer_app *a)
 			a->redraw = true;
 		}
 		if (!a->offline) {
+			double shot_due = shot_poll(a, now);
 			bc_viewer_drag_step(a, false);
-			maybe_turn(a);
+			maybe_turn(a, now);
 			due = bc_viewer_send_due(a, now);
+			if (shot_due >= 0.0 && (due < 0.0 || shot_due < due)) {
+				due = shot_due;
+			}
 		} else if (!a->gave_up) {
 			due = a->retry_at > now ? a->retry_at - now : 0.0;
 		} else {
@@ -1012,6 +1080,7 @@ int main(int argc, char **argv)
 	}
 	a->exit_code = 0;
 	a->redraw = true;
+	bc_viewer_shot_start(&a->shot, bc_viewer_now_ms());
 	run(a);
 cleanup:
 	watch_stop(a);

@@ -18,22 +18,51 @@
 
 /* ---- sending ------------------------------------------------------------- */
 
-int bc_viewer_send_view(struct bc_viewer_app *a)
+/* The largest side the daemon (WELCOME max_dim) and our textures take. */
+static uint32_t view_max(const struct bc_viewer_app *a)
 {
-	struct bc_errinfo ei = {0};
 	const struct bc_client_info *info = bc_client_info(a->c);
-	int fw = 0, fh = 0, rc;
-	uint32_t w, h, max = info->max_dim ? info->max_dim : BC_PROTO_MAX_DIM;
-	glfwGetFramebufferSize(a->win, &fw, &fh);
+	uint32_t max = info->max_dim ? info->max_dim : BC_PROTO_MAX_DIM;
 	if (a->gl.max_tex > 0 && (uint32_t)a->gl.max_tex < max) {
 		max = (uint32_t)a->gl.max_tex;
 	}
+	return max;
+}
+
+bool bc_viewer_view_changed(struct bc_viewer_app *a)
+{
+	int fw = 0, fh = 0;
+	uint32_t w, h;
+	glfwGetFramebufferSize(a->win, &fw, &fh);
+	if (fw <= 0 || fh <= 0) {
+		return false;
+	}
+	bc_viewer_view_size((uint32_t)fw, (uint32_t)fh, view_max(a), &w, &h);
+	return w != a->view_w || h != a->view_h;
+}
+
+int bc_viewer_send_view(struct bc_viewer_app *a)
+{
+	struct bc_errinfo ei = {0};
+	int fw = 0, fh = 0, ww = 0, wh = 0, rc;
+	uint32_t w, h, max = view_max(a);
+	bool capped;
+	/* Pixels, not screen coordinates: on a HiDPI screen the framebuffer
+	 * is larger than the window, and the picture is rendered for it. */
+	glfwGetFramebufferSize(a->win, &fw, &fh);
 	/* A minimized window has no size; keep the last view. */
 	if (fw <= 0 || fh <= 0) {
 		return 0;
 	}
-	w = (uint32_t)fw < max ? (uint32_t)fw : max;
-	h = (uint32_t)fh < max ? (uint32_t)fh : max;
+	capped = bc_viewer_view_size((uint32_t)fw, (uint32_t)fh, max, &w, &h);
+	if (capped && !a->view_capped_said) {
+		fprintf(stderr,
+		        "blobcast-view: the window is %dx%d pixels; the daemon "
+		        "renders at most %u a side: the view is %ux%u, scaled "
+		        "up\n",
+		        fw, fh, max, w, h);
+		a->view_capped_said = true;
+	}
 	rc = bc_client_view(
 	    a->c,
 	    &(struct bc_msg_view){
@@ -55,7 +84,13 @@ int bc_viewer_send_view(struct bc_viewer_app *a)
 	a->view_h = h;
 	a->view_sent_at = bc_viewer_now_ms();
 	if (a->o.verbose) {
-		printf("view %ux%u\n", w, h);
+		float sx = 1.0f, sy = 1.0f;
+		glfwGetWindowSize(a->win, &ww, &wh);
+		glfwGetWindowContentScale(a->win, &sx, &sy);
+		printf("view %ux%u framebuffer %dx%d window %dx%d scale "
+		       "%.2gx%.2g%s\n",
+		       w, h, fw, fh, ww, wh, (double)sx, (double)sy,
+		       capped ? " capped" : "");
 		fflush(stdout);
 	}
 	return 0;
@@ -248,7 +283,11 @@ double bc_viewer_send_due(struct bc_viewer_app *a, double now)
 	if (a->view_due > 0.0) {
 		if (now >= a->view_due) {
 			a->view_due = 0.0;
-			bc_viewer_send_view(a);
+			/* A VIEW of the same size would only make the daemon
+			 * render the picture again. */
+			if (bc_viewer_view_changed(a)) {
+				bc_viewer_send_view(a);
+			}
 		} else {
 			DUE(a->view_due);
 		}
@@ -385,8 +424,11 @@ static void got_frame(struct bc_viewer_app *a, const struct bc_msg *m)
 		bc_viewer_send_view(a);
 	}
 	a->nframes++;
+	bc_viewer_shot_frame(&a->shot, m->flags, bc_viewer_now_ms());
 	if (!a->frames.refining) {
 		a->npictures++;
+		a->shot_ready = true;
+		a->shot_unfinished = false;
 	}
 	bc_viewer_meter_frame(&a->meter, bc_client_info(a->c)->last_msg_bytes,
 	                      bc_viewer_now_ms());
@@ -410,17 +452,18 @@ static void got_frame(struct bc_viewer_app *a, const struct bc_msg *m)
 		a->cam_seq = 0;
 	}
 	if (a->o.verbose) {
-		printf("frame %llu no=%u order=%llu %s %s image=%ux%u level=%u "
-		       "rects=%u bytes=%u%s%s\n",
-		       (unsigned long long)a->nframes, fr->frame_no,
-		       (unsigned long long)fr->order,
-		       (m->flags & BC_PROTO_FLAG_STILL) ? "still"
-		                                        : "interactive",
-		       bc_proto_encoding_name(fr->encoding), fr->image_width,
-		       fr->image_height, (unsigned)a->frames.level, fr->nrects,
-		       bc_client_info(a->c)->last_msg_bytes,
-		       a->frames.refining ? " refining" : "",
-		       up.want_refresh ? " refresh" : "");
+		printf(
+		    "frame %llu no=%u order=%llu %s %s image=%ux%u level=%u "
+		    "rects=%u bytes=%u%s%s%s\n",
+		    (unsigned long long)a->nframes, fr->frame_no,
+		    (unsigned long long)fr->order,
+		    (m->flags & BC_PROTO_FLAG_STILL) ? "still" : "interactive",
+		    bc_proto_encoding_name(fr->encoding), fr->image_width,
+		    fr->image_height, (unsigned)a->frames.level, fr->nrects,
+		    bc_client_info(a->c)->last_msg_bytes,
+		    a->frames.refining ? " refining" : "",
+		    (m->flags & BC_PROTO_FLAG_INCOMPLETE) ? " incomplete" : "",
+		    up.want_refresh ? " refresh" : "");
 		fflush(stdout);
 	}
 }

@@ -13,6 +13,8 @@
  *  - frames.c: FRAME messages assembled into what the textures hold: a
  *    view-size composite updated rectangle by rectangle, and the latest
  *    downscaled interactive image;
+ *  - shot.c: when --screenshot stops waiting for a finished picture, and
+ *    the VIEW size a framebuffer asks for under the daemon's max_dim;
  *  - font.c: a 5x7 bitmap font turned into triangles.
  */
 #ifndef BLOBCAST_VIEWER_H
@@ -305,6 +307,68 @@ void bc_viewer_upscale_part(const uint8_t *src, uint32_t sw, uint32_t sh,
  * not final (a level above 0), "refining (level N, cut by budget)" for
  * INCOMPLETE, else "". Returns out. */
 const char *bc_viewer_refining_text(uint16_t flags, char *out, size_t n);
+
+/* ---- shot.c -------------------------------------------------------------- */
+
+/* A picture that is not finished (a level above 0, or INCOMPLETE) is taken
+ * as all the daemon will send once no frame has come for this long
+ * (ms) while nothing we sent waits for an answer, or for this many times
+ * the longest gap between its frames if that is longer: the daemon sends
+ * a refinement step at least every --frame-budget ms (2000 by default),
+ * which the client is not told. */
+#define BC_VIEWER_SHOT_QUIET_MS 5000.0
+#define BC_VIEWER_SHOT_QUIET_GAPS 3.0
+/* Default of --screenshot-wait (seconds per picture): a crawling scene in
+ * a big window may refine for minutes; a screenshot should not. */
+#define BC_VIEWER_SHOT_WAIT_S 60u
+
+enum bc_viewer_shot_state {
+	BC_VIEWER_SHOT_WAITING = 0,
+	BC_VIEWER_SHOT_FINISHED, /* level 0 without INCOMPLETE */
+	BC_VIEWER_SHOT_SETTLED,  /* not finished; frames stopped coming */
+	BC_VIEWER_SHOT_TIMEOUT,  /* the wait for this picture ran out */
+	BC_VIEWER_SHOT_COUNT
+};
+
+/* The frames of the picture a screenshot waits for. */
+struct bc_viewer_shot {
+	double start;   /* when the wait began (ms) */
+	double last_at; /* the last frame's arrival */
+	double max_gap; /* longest wait for a frame, from start on */
+	uint64_t nframes;
+	uint16_t flags; /* the last frame's (LEVEL, INCOMPLETE) */
+};
+
+/* Starts waiting for a new picture at now (the VIEW or a camera turn). */
+void bc_viewer_shot_start(struct bc_viewer_shot *s, double now);
+/* A frame with flags arrived at now. */
+void bc_viewer_shot_frame(struct bc_viewer_shot *s, uint16_t flags, double now);
+/* Whether the last frame left nothing to refine. */
+bool bc_viewer_shot_finished(const struct bc_viewer_shot *s);
+/* How long frames must stop before an unfinished picture counts as
+ * settled: BC_VIEWER_SHOT_QUIET_MS or BC_VIEWER_SHOT_QUIET_GAPS times the
+ * longest gap, whichever is longer. */
+double bc_viewer_shot_quiet_ms(const struct bc_viewer_shot *s);
+/* Where the wait stands at now: pending_since is when the oldest request
+ * of ours without an answer was sent (0: none; bc_viewer_pending_since),
+ * which keeps a quiet daemon from counting as settled; wait_ms bounds the
+ * wait. While WAITING, *due_ms is the time until the answer may change,
+ * else -1. */
+enum bc_viewer_shot_state bc_viewer_shot_check(const struct bc_viewer_shot *s,
+                                               double now, double pending_since,
+                                               double wait_ms, double *due_ms);
+/* What the picture is, for stderr: "level 1, INCOMPLETE: no better frame
+ * for 5.0 s (the daemon stopped refining it)", "level 2: still refining
+ * after 60 s", "no frame within 60 s". Returns out. */
+const char *bc_viewer_shot_text(const struct bc_viewer_shot *s,
+                                enum bc_viewer_shot_state st, double wait_ms,
+                                char *out, size_t n);
+/* The VIEW for a framebuffer of fb_w x fb_h pixels when the daemon renders
+ * at most max a side (WELCOME max_dim, or less): the framebuffer itself,
+ * or, when a side is over max, the size with the longer side max and the
+ * same aspect ratio. Returns whether it was capped. */
+bool bc_viewer_view_size(uint32_t fb_w, uint32_t fb_h, uint32_t max,
+                         uint32_t *w, uint32_t *h);
 
 /* ---- roster.c ------------------------------------------------------------ */
 

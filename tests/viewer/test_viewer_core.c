@@ -1244,6 +1244,140 @@ static void test_undo_text_names_both_members(void)
 	      sizeof(small) - 1);
 }
 
+/* ---- the screenshot's wait and the view size ----------------------------- */
+
+static uint16_t level_flags(unsigned level, bool incomplete)
+{
+	return (uint16_t)((level << 3) |
+	                  (incomplete ? BC_PROTO_FLAG_INCOMPLETE : 0u));
+}
+
+/* Level 0 without INCOMPLETE ends the wait at once; a level above 0 or
+ * INCOMPLETE does not. */
+static void test_shot_waits_for_the_finished_picture(void)
+{
+	struct bc_viewer_shot s;
+	double due;
+	bc_viewer_shot_start(&s, 1000.0);
+	CHECK(!bc_viewer_shot_finished(&s));
+	CHECK(bc_viewer_shot_check(&s, 1000.0, 1000.0, 60000.0, &due) ==
+	      BC_VIEWER_SHOT_WAITING);
+	CHECK_NEAR(due, 60000.0, 1e-6);
+	bc_viewer_shot_frame(&s, level_flags(2, false), 1100.0);
+	CHECK(bc_viewer_shot_check(&s, 1100.0, 0.0, 60000.0, &due) ==
+	      BC_VIEWER_SHOT_WAITING);
+	bc_viewer_shot_frame(&s, level_flags(0, true), 1200.0);
+	CHECK(!bc_viewer_shot_finished(&s));
+	CHECK(bc_viewer_shot_check(&s, 1200.0, 0.0, 60000.0, &due) ==
+	      BC_VIEWER_SHOT_WAITING);
+	bc_viewer_shot_frame(&s, level_flags(0, false) | BC_PROTO_FLAG_STILL,
+	                     1300.0);
+	CHECK(bc_viewer_shot_finished(&s));
+	CHECK(bc_viewer_shot_check(&s, 1300.0, 0.0, 60000.0, &due) ==
+	      BC_VIEWER_SHOT_FINISHED);
+	CHECK(due < 0.0);
+}
+
+/* INCOMPLETE frames that stop coming while nothing changes: the picture
+ * is settled after the quiet time, not before, and not while a request of
+ * ours waits for its frame. */
+static void test_shot_settles_when_incomplete_frames_stop(void)
+{
+	struct bc_viewer_shot s;
+	char text[160];
+	double due;
+	bc_viewer_shot_start(&s, 0.0);
+	for (int i = 1; i <= 7; i++) {
+		bc_viewer_shot_frame(&s, level_flags(1, true), 50.0 * i);
+	}
+	CHECK_NEAR(bc_viewer_shot_quiet_ms(&s), BC_VIEWER_SHOT_QUIET_MS, 1e-6);
+	CHECK(bc_viewer_shot_check(&s, 350.0 + BC_VIEWER_SHOT_QUIET_MS - 1.0,
+	                           0.0, 60000.0,
+	                           &due) == BC_VIEWER_SHOT_WAITING);
+	CHECK_NEAR(due, 1.0, 1e-6);
+	/* A camera of ours without its frame yet: the daemon will answer. */
+	CHECK(bc_viewer_shot_check(&s, 350.0 + BC_VIEWER_SHOT_QUIET_MS, 300.0,
+	                           60000.0, &due) == BC_VIEWER_SHOT_WAITING);
+	CHECK(bc_viewer_shot_check(&s, 350.0 + BC_VIEWER_SHOT_QUIET_MS, 0.0,
+	                           60000.0, &due) == BC_VIEWER_SHOT_SETTLED);
+	CHECK_STREQ(bc_viewer_shot_text(&s, BC_VIEWER_SHOT_SETTLED, 60000.0,
+	                                text, sizeof(text)),
+	            "level 1, INCOMPLETE: no better frame for 5.0 s (the "
+	            "daemon stopped refining it)");
+}
+
+/* A daemon whose steps take long (a frame budget of 4 s) is given three
+ * times its longest gap before its silence counts. */
+static void test_shot_quiet_time_follows_the_gaps(void)
+{
+	struct bc_viewer_shot s;
+	double due;
+	bc_viewer_shot_start(&s, 0.0);
+	bc_viewer_shot_frame(&s, level_flags(2, false), 500.0);
+	bc_viewer_shot_frame(&s, level_flags(1, true), 4500.0);
+	CHECK_NEAR(bc_viewer_shot_quiet_ms(&s), 12000.0, 1e-6);
+	CHECK(bc_viewer_shot_check(&s, 4500.0 + 11999.0, 0.0, 60000.0, &due) ==
+	      BC_VIEWER_SHOT_WAITING);
+	CHECK(bc_viewer_shot_check(&s, 4500.0 + 12000.0, 0.0, 60000.0, &due) ==
+	      BC_VIEWER_SHOT_SETTLED);
+}
+
+/* Frames that keep coming unfinished, or none at all: the wait ends the
+ * picture. */
+static void test_shot_wait_runs_out(void)
+{
+	struct bc_viewer_shot s;
+	char text[160];
+	double due, t;
+	bc_viewer_shot_start(&s, 0.0);
+	CHECK(bc_viewer_shot_check(&s, 9999.0, 0.0, 10000.0, &due) ==
+	      BC_VIEWER_SHOT_WAITING);
+	CHECK(bc_viewer_shot_check(&s, 10000.0, 0.0, 10000.0, &due) ==
+	      BC_VIEWER_SHOT_TIMEOUT);
+	CHECK_STREQ(bc_viewer_shot_text(&s, BC_VIEWER_SHOT_TIMEOUT, 10000.0,
+	                                text, sizeof(text)),
+	            "no frame within 10 s");
+	for (t = 1000.0; t <= 12000.0; t += 1000.0) {
+		bc_viewer_shot_frame(&s, level_flags(0, true), t);
+		CHECK(bc_viewer_shot_check(&s, t, 0.0, 10000.0, &due) ==
+		      (t < 10000.0 ? BC_VIEWER_SHOT_WAITING
+		                   : BC_VIEWER_SHOT_TIMEOUT));
+	}
+	CHECK_STREQ(bc_viewer_shot_text(&s, BC_VIEWER_SHOT_TIMEOUT, 10000.0,
+	                                text, sizeof(text)),
+	            "level 0, INCOMPLETE: still refining after 10 s");
+	/* A new picture (a camera turn) starts the wait again. */
+	bc_viewer_shot_start(&s, 12000.0);
+	CHECK(bc_viewer_shot_check(&s, 12001.0, 12000.0, 10000.0, &due) ==
+	      BC_VIEWER_SHOT_WAITING);
+	CHECK_NEAR(due, 9999.0, 1e-6);
+}
+
+/* The VIEW is the framebuffer's size unless a side exceeds the daemon's
+ * max_dim; then the longer side is max_dim and the aspect ratio stays. */
+static void test_view_size_follows_the_framebuffer(void)
+{
+	uint32_t w, h;
+	CHECK(!bc_viewer_view_size(1920, 1200, 4096, &w, &h));
+	CHECK_EQ_INT(w, 1920);
+	CHECK_EQ_INT(h, 1200);
+	CHECK(!bc_viewer_view_size(4096, 4096, 4096, &w, &h));
+	CHECK_EQ_INT(w, 4096);
+	CHECK_EQ_INT(h, 4096);
+	/* A 2x HiDPI 2880x1800 window (5760x3600 pixels). */
+	CHECK(bc_viewer_view_size(5760, 3600, 4096, &w, &h));
+	CHECK_EQ_INT(w, 4096);
+	CHECK_EQ_INT(h, 2560);
+	CHECK(bc_viewer_view_size(100, 8000, 4096, &w, &h));
+	CHECK_EQ_INT(w, 51);
+	CHECK_EQ_INT(h, 4096);
+	CHECK(bc_viewer_view_size(8192, 1, 4096, &w, &h));
+	CHECK_EQ_INT(w, 4096);
+	CHECK_EQ_INT(h, 1);
+	CHECK(!bc_viewer_view_size(300, 200, 0, &w, &h));
+	CHECK_EQ_INT(w, 300);
+}
+
 static const struct bc_test tests[] = {
     {"project_inverts_view_rays", test_project_inverts_view_rays},
     {"project_refuses_points_behind_the_eye",
@@ -1277,6 +1411,14 @@ static const struct bc_test tests[] = {
      test_roster_names_members_and_last_editor},
     {"undo_text_names_both_members", test_undo_text_names_both_members},
     {"roster_names_the_presenter", test_roster_names_the_presenter},
+    {"shot_waits_for_the_finished_picture",
+     test_shot_waits_for_the_finished_picture},
+    {"shot_settles_when_incomplete_frames_stop",
+     test_shot_settles_when_incomplete_frames_stop},
+    {"shot_quiet_time_follows_the_gaps", test_shot_quiet_time_follows_the_gaps},
+    {"shot_wait_runs_out", test_shot_wait_runs_out},
+    {"view_size_follows_the_framebuffer",
+     test_view_size_follows_the_framebuffer},
 };
 
 BC_TEST_MAIN(tests)
