@@ -208,8 +208,8 @@ BC_API int bc_client_send(struct bc_client *c, struct bc_msg *m,
  * negative code: BC_ECLOSED when the server closed the stream, a protocol
  * error, BC_EIO. A FATAL ERROR message is returned like any other, and its
  * code becomes the sticky error of the calls that follow. SESSION_INFO,
- * SCENE_STATE and EDIT_APPLIED also update bc_client_info() and the scene
- * mirror before they are returned.
+ * SCENE_STATE and EDIT_APPLIED also update bc_client_info(), the roster
+ * (bc_client_members) and the scene mirror before they are returned.
  */
 BC_API int bc_client_recv(struct bc_client *c, struct bc_msg *out,
                           int timeout_ms);
