@@ -2,8 +2,8 @@
  * `blobcast watch`: joins a session as a viewer and prints a line per
  * frame, with the latency this client can measure, and a line per member
  * list, change and presenter; a lost connection is joined again. It owns
- * the roster that names the authors of changes and the arrival times that
- * frames are measured against.
+ * the arrival times that frames are measured against; the authors of
+ * changes are named from the library's roster (bc_client_members).
  */
 #include "cmd_client.h"
 
@@ -49,63 +49,37 @@ static bool order_time(const struct order_times *o, uint64_t order, double *at)
 	return true;
 }
 
-/* The session's members as the last SESSION_INFO listed them, to name
- * the authors of edits. */
-struct roster {
-	uint16_t n;
-	uint32_t self;
-	struct {
-		uint32_t id;
-		enum bc_proto_role role;
-		char name[BC_PROTO_MAX_NAME + 1];
-	} m[BC_PROTO_MAX_MEMBERS];
-};
-
-static void roster_update(struct roster *r,
-                          const struct bc_msg_session_info *si)
+/* "members 3: alice (editor, 4), blobcast-cli (viewer, 7, this client)",
+ * from the library's roster of the session. */
+static void print_members(const struct bc_client *c)
 {
-	r->n = 0;
-	r->self = si->member_id;
-	for (uint16_t i = 0; i < si->nmembers && i < BC_PROTO_MAX_MEMBERS;
-	     i++) {
-		const struct bc_proto_member *pm = &si->members[i];
-		r->m[i].id = pm->id;
-		r->m[i].role = pm->role;
-		snprintf(r->m[i].name, sizeof(r->m[i].name), "%.*s",
-		         (int)pm->name.len, pm->name.ptr);
-		r->n++;
-	}
-}
-
-static const char *roster_name(const struct roster *r, uint32_t id)
-{
-	for (uint16_t i = 0; i < r->n; i++) {
-		if (r->m[i].id == id) {
-			return r->m[i].name;
-		}
-	}
-	return NULL;
-}
-
-/* "members 3: alice (editor, 4), blobcast-cli (viewer, 7, this client)" */
-static void print_members(const struct roster *r)
-{
-	printf("members %u:", r->n);
-	for (uint16_t i = 0; i < r->n; i++) {
-		printf(
-		    "%s \"%s\" (%s, %u%s)", i ? "," : "", r->m[i].name,
-		    r->m[i].role == BC_PROTO_ROLE_EDITOR ? "editor" : "viewer",
-		    r->m[i].id, r->m[i].id == r->self ? ", this client" : "");
+	const struct bc_client_member *list;
+	uint32_t self = bc_client_info(c)->member_id;
+	size_t n;
+	bc_client_members(c, &list, &n);
+	printf("members %zu:", n);
+	for (size_t i = 0; i < n; i++) {
+		printf("%s \"%s\" (%s, %u%s)", i ? "," : "", list[i].name,
+		       list[i].role == BC_PROTO_ROLE_EDITOR ? "editor"
+		                                            : "viewer",
+		       list[i].id, list[i].id == self ? ", this client" : "");
 	}
 	printf("\n");
 }
 
+/* The name member id gave in HELLO, or NULL once it has left. */
+static const char *member_name(const struct bc_client *c, uint32_t id)
+{
+	const struct bc_client_member *e = bc_client_member_find(c, id);
+	return e ? e->name : NULL;
+}
+
 /* `edit order=5 by="carol" member=20 ops=1`: the author's name comes from
  * the member list (an author who already left prints as ""). */
-static void print_change(const struct roster *r, const char *what,
+static void print_change(const struct bc_client *c, const char *what,
                          uint64_t order, uint32_t author, const char *tail)
 {
-	const char *name = roster_name(r, author);
+	const char *name = member_name(c, author);
 	printf("%s order=%llu by=\"%s\" member=%u%s\n", what,
 	       (unsigned long long)order, name ? name : "", author, tail);
 }
@@ -113,10 +87,10 @@ static void print_change(const struct roster *r, const char *what,
 /* `undo order=6 of=5 by="bob" author="alice" member=20 ops=3` (or redo):
  * edit 6, sent by bob (member 20), takes back (applies again) edit 5, whose
  * author the server names. */
-static void print_undo(const struct roster *r, const struct bc_msg *m)
+static void print_undo(const struct bc_client *c, const struct bc_msg *m)
 {
 	const struct bc_msg_edit_applied *e = &m->edit_applied;
-	const char *name = roster_name(r, e->author);
+	const char *name = member_name(c, e->author);
 	printf("%s order=%llu of=%llu by=\"%s\" author=\"%.*s\" member=%u "
 	       "ops=%u\n",
 	       (m->flags & BC_PROTO_FLAG_REDO) ? "redo" : "undo",
@@ -128,9 +102,10 @@ static void print_undo(const struct roster *r, const struct bc_msg *m)
 
 /* `presenter member=4 name="alice"` or `presenter none`, with
  * ` following` when this client follows. */
-static void print_presenter(const struct roster *r, uint32_t id, bool following)
+static void print_presenter(const struct bc_client *c, uint32_t id,
+                            bool following)
 {
-	const char *name = roster_name(r, id);
+	const char *name = member_name(c, id);
 	if (!id) {
 		printf("presenter none\n");
 		return;
@@ -149,13 +124,13 @@ static bool watch_gives_up(int code)
 }
 
 /* Connects, joins a->session as a viewer and asks for frames. The join is
- * done here rather than with bc_client_join() to keep SESSION_INFO's
- * member list (the scene state that follows is read by the frame loop).
+ * done here rather than with bc_client_join() to print the member list as
+ * soon as SESSION_INFO arrives (the scene state that follows is read by the
+ * frame loop).
  * Returns 0 or a BC_E* code with the reason in ei; *c is set either way
  * (NULL when the connection failed). */
 static int watch_open(const struct bc_cli_call *a, struct bc_client **c,
-                      struct roster *roster, double *view_at,
-                      struct bc_errinfo *ei)
+                      double *view_at, struct bc_errinfo *ei)
 {
 	struct bc_client_opts opts = bc_cli_connect_opts(a);
 	struct bc_msg m = {.type = BC_MSG_SESSION_JOIN};
@@ -175,14 +150,13 @@ static int watch_open(const struct bc_cli_call *a, struct bc_client **c,
 		}
 		return rc;
 	}
-	roster_update(roster, &m.session_info);
-	print_members(roster);
+	print_members(*c);
 	/* FOLLOW 0 follows nobody; it asks the server to say who presents
 	 * (PRESENTER), now and whenever that changes. */
 	if ((rc = bc_client_follow(*c, false, ei))) {
 		return rc;
 	}
-	print_presenter(roster, bc_client_info(*c)->presenter, false);
+	print_presenter(*c, bc_client_info(*c)->presenter, false);
 	*view_at = bc_clock_ms();
 	return bc_client_view(*c,
 	                      &(struct bc_msg_view){.width = a->width,
@@ -213,7 +187,6 @@ static int run_watch(struct bc_cli_call *a)
 	struct bc_errinfo ei = {0};
 	struct bc_client_image img;
 	struct order_times *times = NULL;
-	struct roster *roster = NULL;
 	struct bc_cli_stop sig;
 	struct bc_msg m;
 	struct bc_msg_stats st;
@@ -227,15 +200,14 @@ static int run_watch(struct bc_cli_call *a)
 	const char *end = "stopped";
 	bc_client_image_init(&img);
 	bc_cli_stop_install(&sig);
-	if (!(times = bc_calloc(1, sizeof(*times))) ||
-	    !(roster = bc_calloc(1, sizeof(*roster)))) {
+	if (!(times = bc_calloc(1, sizeof(*times)))) {
 		fprintf(stderr, "blobcast watch: out of memory\n");
 		status = BC_CLI_EXIT_FAIL;
 		goto out;
 	}
 	/* The first connection must work: a wrong address or session is a
 	 * mistake to report, not to retry. */
-	if ((rc = watch_open(a, &c, roster, &view_at, &ei))) {
+	if ((rc = watch_open(a, &c, &view_at, &ei))) {
 		status = bc_cli_failed(a, c, NULL, &ei);
 		goto out;
 	}
@@ -258,7 +230,7 @@ static int run_watch(struct bc_cli_call *a)
 				continue;
 			}
 			memset(&ei, 0, sizeof(ei));
-			rc = watch_open(a, &c, roster, &view_at, &ei);
+			rc = watch_open(a, &c, &view_at, &ei);
 			if (rc && watch_gives_up(rc)) {
 				status =
 				    bc_cli_failed(a, c, "reconnecting", &ei);
@@ -319,8 +291,7 @@ static int run_watch(struct bc_cli_call *a)
 		at = bc_clock_ms();
 		switch (m.type) {
 		case BC_MSG_SESSION_INFO:
-			roster_update(roster, &m.session_info);
-			print_members(roster);
+			print_members(c);
 			fflush(stdout);
 			break;
 		case BC_MSG_EDIT_APPLIED: {
@@ -328,7 +299,7 @@ static int run_watch(struct bc_cli_call *a)
 			order_seen(times, e->order, at);
 			if (m.flags &
 			    (BC_PROTO_FLAG_UNDO | BC_PROTO_FLAG_REDO)) {
-				print_undo(roster, &m);
+				print_undo(c, &m);
 			} else {
 				char tail[32];
 				snprintf(tail, sizeof(tail), " ops=%u%s",
@@ -336,29 +307,27 @@ static int run_watch(struct bc_cli_call *a)
 				         (m.flags & BC_PROTO_FLAG_INTERACTING)
 				             ? " interacting"
 				             : "");
-				print_change(roster, "edit", e->order,
-				             e->author, tail);
+				print_change(c, "edit", e->order, e->author,
+				             tail);
 			}
 			fflush(stdout);
 			break;
 		}
 		case BC_MSG_PRESENTER:
-			print_presenter(roster, m.presenter.presenter,
+			print_presenter(c, m.presenter.presenter,
 			                m.presenter.following != 0);
 			fflush(stdout);
 			break;
 		case BC_MSG_SESSION_CAMERA_SET:
 			order_seen(times, m.session_camera_set.order, at);
-			print_change(roster, "camera",
-			             m.session_camera_set.order,
+			print_change(c, "camera", m.session_camera_set.order,
 			             m.session_camera_set.author, "");
 			fflush(stdout);
 			break;
 		case BC_MSG_SCENE_STATE:
 			order_seen(times, m.scene_state.order, at);
 			if (m.scene_state.author) {
-				print_change(roster, "load",
-				             m.scene_state.order,
+				print_change(c, "load", m.scene_state.order,
 				             m.scene_state.author, "");
 				fflush(stdout);
 			}
@@ -429,7 +398,6 @@ static int run_watch(struct bc_cli_call *a)
 out:
 	bc_cli_stop_restore(&sig);
 	bc_free(times);
-	bc_free(roster);
 	bc_client_image_finish(&img);
 	bc_client_destroy(c);
 	return status;

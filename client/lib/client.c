@@ -2,8 +2,9 @@
  * The connection: address parsing, connecting (TCP or Unix, non-blocking
  * with a deadline), the HELLO/WELCOME handshake, whole-message writes, the
  * receive loop over the protocol's push reader, the bookkeeping that
- * SESSION_INFO, SCENE_STATE and EDIT_APPLIED drive (session details and the
- * scene mirror), and the request/response helpers built on bc_client_wait().
+ * SESSION_INFO, SCENE_STATE and EDIT_APPLIED drive (session details, the
+ * roster of members and the scene mirror), and the request/response helpers
+ * built on bc_client_wait().
  */
 #include <errno.h>
 #include <fcntl.h>
@@ -1079,6 +1080,10 @@ static int send_msg(struct bc_client *c, struct bc_msg *m, uint32_t *seq_out,
 	}
 	c->info.msgs_out++;
 	c->info.bytes_out += c->out.len;
+	if (m->type == BC_MSG_SESSION_LEAVE) {
+		/* Its OK says we are out: the roster is emptied then. */
+		c->leave_seq = m->seq;
+	}
 	if (seq_out) {
 		*seq_out = m->seq;
 	}
@@ -1100,8 +1105,32 @@ static void drop_scene(struct bc_client *c, const char *why)
 	c->has_scene = false;
 }
 
-/* Keeps the session details and the scene mirror current. Failures here
- * concern the mirror only, never the stream: they are logged and the
+/* Back in READY (left, or the session was deleted): no session details,
+ * no roster. */
+static void left_session(struct bc_client *c)
+{
+	c->info.session_id = 0;
+	c->info.nmembers = 0;
+	c->nmembers = 0;
+}
+
+/* Replaces the roster with si's member list. */
+static void roster_update(struct bc_client *c,
+                          const struct bc_msg_session_info *si)
+{
+	size_t n = si->nmembers < BC_PROTO_MAX_MEMBERS ? si->nmembers
+	                                               : BC_PROTO_MAX_MEMBERS;
+	for (size_t i = 0; i < n; i++) {
+		struct bc_client_member *e = &c->members[i];
+		e->id = si->members[i].id;
+		e->role = si->members[i].role;
+		copy_str(e->name, sizeof(e->name), si->members[i].name);
+	}
+	c->nmembers = n;
+}
+
+/* Keeps the session details, the roster and the scene mirror current. Failures
+ * here concern the mirror only, never the stream: they are logged and the
  * mirror is dropped until the next SCENE_STATE. */
 static void track(struct bc_client *c, const struct bc_msg *m)
 {
@@ -1120,9 +1149,15 @@ static void track(struct bc_client *c, const struct bc_msg *m)
 		c->info.nmembers = m->session_info.nmembers;
 		copy_str(c->info.session, sizeof(c->info.session),
 		         m->session_info.name);
+		roster_update(c, &m->session_info);
 		break;
 	case BC_MSG_OK:
-		/* SESSION_LEAVE and SESSION_DELETE are answered with OK. */
+		/* SESSION_LEAVE and SESSION_DELETE are answered with OK; only
+		 * the first takes us out of the session. */
+		if (c->leave_seq && m->seq == c->leave_seq) {
+			c->leave_seq = 0;
+			left_session(c);
+		}
 		break;
 	case BC_MSG_SCENE_STATE: {
 		struct bc_tree *t = c->scene ? c->scene : bc_tree_create();
@@ -1195,8 +1230,7 @@ static void track(struct bc_client *c, const struct bc_msg *m)
 		} else if (m->seq == 0 &&
 		           -(int)m->error.code == BC_ENOSESSION) {
 			/* Our session was deleted: back in READY. */
-			c->info.session_id = 0;
-			c->info.nmembers = 0;
+			left_session(c);
 			drop_scene(c, "the session was deleted");
 		}
 		break;
@@ -1371,6 +1405,25 @@ int bc_client_join(struct bc_client *c, const char *name,
 		}
 	}
 	return rc;
+}
+
+int bc_client_members(const struct bc_client *c,
+                      const struct bc_client_member **list, size_t *n)
+{
+	*list = c->nmembers ? c->members : NULL;
+	*n = c->nmembers;
+	return 0;
+}
+
+const struct bc_client_member *bc_client_member_find(const struct bc_client *c,
+                                                     uint32_t id)
+{
+	for (size_t i = 0; id && i < c->nmembers; i++) {
+		if (c->members[i].id == id) {
+			return &c->members[i];
+		}
+	}
+	return NULL;
 }
 
 const struct bc_tree *bc_client_scene(const struct bc_client *c,

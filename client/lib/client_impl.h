@@ -1,6 +1,7 @@
 /*
  * Private parts of libblobcast shared by its files: the connection struct
- * (client.c), the scene mirror's edit replay (edit.c) and the clock.
+ * and the roster (client.c), the scene mirror's edit replay (edit.c) and the
+ * clock.
  */
 #ifndef BLOBCAST_CLIENT_IMPL_H
 #define BLOBCAST_CLIENT_IMPL_H
@@ -34,6 +35,11 @@ struct bc_client {
 	struct bc_camera camera;
 	bool has_scene;
 	uint64_t scene_order;
+	/* The roster (bc_client_members), from the last SESSION_INFO. */
+	struct bc_client_member members[BC_PROTO_MAX_MEMBERS];
+	size_t nmembers;
+	/* The seq of the SESSION_LEAVE awaiting its OK (0: none). */
+	uint32_t leave_seq;
 };
 
 /* Milliseconds left until deadline (a bc_clock_ms() value), rounded

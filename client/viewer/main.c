@@ -748,9 +748,9 @@ static void maybe_turn(struct bc_viewer_app *a, double now)
 	bc_viewer_shot_start(&a->shot, now);
 }
 
-/* One SESSION_JOIN or SESSION_CREATE, keeping the member list of its
- * SESSION_INFO (bc_client_join() would consume it), then the SCENE_STATE
- * that fills the scene mirror. */
+/* One SESSION_JOIN or SESSION_CREATE, its SESSION_INFO (which fills the
+ * library's roster, taken into *roster), then the SCENE_STATE that fills
+ * the scene mirror. */
 static int join_once(struct bc_client *c, enum bc_msg_type type,
                      const struct bc_viewer_opts *o,
                      struct bc_viewer_roster *roster, struct bc_errinfo *ei)
@@ -770,11 +770,11 @@ static int join_once(struct bc_client *c, enum bc_msg_type type,
 	if ((rc = bc_client_wait(c, BC_MSG_SESSION_INFO, 0, &m, 0, ei))) {
 		return rc;
 	}
-	memset(roster, 0, sizeof(*roster));
-	bc_viewer_roster_update(roster, &m.session_info);
 	if ((rc = bc_client_wait(c, BC_MSG_SCENE_STATE, 0, &m, 0, ei))) {
 		return rc;
 	}
+	memset(roster, 0, sizeof(*roster));
+	bc_viewer_roster_update(roster, c);
 	/* FOLLOW 0 asks the server to say who presents (PRESENTER, handled
 	 * by bc_viewer_pump, which follows again when F is on). */
 	m = (struct bc_msg){.type = BC_MSG_FOLLOW};

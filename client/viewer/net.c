@@ -160,7 +160,7 @@ static int send_toggle(struct bc_viewer_app *a, enum bc_msg_type type, bool on)
 static const char *member_name(const struct bc_viewer_roster *r, uint32_t id,
                                char *buf, size_t n)
 {
-	for (uint16_t i = 0; i < r->n; i++) {
+	for (size_t i = 0; i < r->n; i++) {
 		if (r->m[i].id == id && r->m[i].name[0]) {
 			snprintf(buf, n, "%s", r->m[i].name);
 			return buf;
@@ -636,6 +636,10 @@ int bc_viewer_pump(struct bc_viewer_app *a)
 			bc_viewer_status(a, "connection lost: %s", ei.msg);
 			return rc;
 		}
+		/* The roster borrowed from the client lasts until it receives:
+		 * take it again after each message (it changes with
+		 * SESSION_INFO and with the session's deletion). */
+		bc_viewer_roster_update(&a->roster, a->c);
 		switch (m.type) {
 		case BC_MSG_FRAME:
 			got_frame(a, &m);
@@ -651,7 +655,6 @@ int bc_viewer_pump(struct bc_viewer_app *a)
 			got_scene(a, &m);
 			break;
 		case BC_MSG_SESSION_INFO:
-			bc_viewer_roster_update(&a->roster, &m.session_info);
 			a->stats_at = 0.0;
 			a->redraw = true;
 			if (a->o.verbose) {

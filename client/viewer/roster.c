@@ -1,7 +1,7 @@
 /*
- * The viewer's picture of who is in the session: the member list of the
- * last SESSION_INFO (names as the members gave them in HELLO) and the
- * author of the last change, formatted as one overlay line.
+ * The viewer's picture of who is in the session: the library's roster
+ * (names as the members gave them in HELLO), who presents and the author
+ * of the last change, formatted as the overlay's lines.
  */
 #include <stdio.h>
 #include <string.h>
@@ -9,28 +9,16 @@
 #include "viewer.h"
 
 void bc_viewer_roster_update(struct bc_viewer_roster *r,
-                             const struct bc_msg_session_info *si)
+                             const struct bc_client *c)
 {
-	r->n = 0;
-	r->self = si->member_id;
-	for (uint16_t i = 0; i < si->nmembers && i < BC_PROTO_MAX_MEMBERS;
-	     i++) {
-		const struct bc_proto_member *pm = &si->members[i];
-		struct bc_viewer_member *m = &r->m[r->n++];
-		size_t len = pm->name.len < BC_PROTO_MAX_NAME
-		                 ? pm->name.len
-		                 : BC_PROTO_MAX_NAME;
-		m->id = pm->id;
-		m->role = pm->role;
-		memcpy(m->name, pm->name.ptr, len);
-		m->name[len] = '\0';
-	}
+	bc_client_members(c, &r->m, &r->n);
+	r->self = bc_client_info(c)->member_id;
 }
 
-static const struct bc_viewer_member *find(const struct bc_viewer_roster *r,
+static const struct bc_client_member *find(const struct bc_viewer_roster *r,
                                            uint32_t id)
 {
-	for (uint16_t i = 0; i < r->n; i++) {
+	for (size_t i = 0; i < r->n; i++) {
 		if (r->m[i].id == id) {
 			return &r->m[i];
 		}
@@ -41,7 +29,7 @@ static const struct bc_viewer_member *find(const struct bc_viewer_roster *r,
 void bc_viewer_roster_edit(struct bc_viewer_roster *r, uint32_t author,
                            uint64_t order)
 {
-	const struct bc_viewer_member *m = find(r, author);
+	const struct bc_client_member *m = find(r, author);
 	r->last_author = author;
 	r->last_order = order;
 	if (author == r->self) {
@@ -58,7 +46,7 @@ const char *bc_viewer_undo_text(const struct bc_viewer_roster *r,
                                 const struct bc_msg *m, char *out, size_t n)
 {
 	const struct bc_msg_edit_applied *e = &m->edit_applied;
-	const struct bc_viewer_member *who = find(r, e->author);
+	const struct bc_client_member *who = find(r, e->author);
 	char by[BC_PROTO_MAX_NAME + 16];
 	if (who && who->name[0]) {
 		snprintf(by, sizeof(by), "%s", who->name);
@@ -100,11 +88,11 @@ const char *bc_viewer_roster_text(const struct bc_viewer_roster *r, char *out,
 		return out;
 	}
 	out[0] = '\0';
-	snprintf(item, sizeof(item), "%u member%s:", r->n,
+	snprintf(item, sizeof(item), "%zu member%s:", r->n,
 	         r->n == 1 ? "" : "s");
 	ok = put(out, n, &len, item);
-	for (uint16_t i = 0; ok && i < r->n; i++) {
-		const struct bc_viewer_member *m = &r->m[i];
+	for (size_t i = 0; ok && i < r->n; i++) {
+		const struct bc_client_member *m = &r->m[i];
 		const char *role =
 		    m->role == BC_PROTO_ROLE_VIEWER ? "viewer" : "editor";
 		const char *pres =
@@ -122,7 +110,7 @@ const char *bc_viewer_roster_text(const struct bc_viewer_roster *r, char *out,
 		ok = put(out, n, &len, item);
 	}
 	if (ok && r->presenter) {
-		const struct bc_viewer_member *p = find(r, r->presenter);
+		const struct bc_client_member *p = find(r, r->presenter);
 		char who[BC_PROTO_MAX_NAME + 16];
 		if (p && p->name[0]) {
 			snprintf(who, sizeof(who), "%s", p->name);

@@ -372,18 +372,14 @@ bool bc_viewer_view_size(uint32_t fb_w, uint32_t fb_h, uint32_t max,
 
 /* ---- roster.c ------------------------------------------------------------ */
 
-/* Who is in the session (the member list of the last SESSION_INFO) and who
+/* Who is in the session (the library's roster, bc_client_members) and who
  * changed the scene last, for the overlay. */
-struct bc_viewer_member {
-	uint32_t id;
-	enum bc_proto_role role;
-	char name[BC_PROTO_MAX_NAME + 1];
-};
-
 struct bc_viewer_roster {
-	uint16_t n;
+	/* The members, borrowed from the client: valid until it next
+	 * receives, so bc_viewer_roster_update() follows every receive. */
+	const struct bc_client_member *m;
+	size_t n;
 	uint32_t self; /* our member id */
-	struct bc_viewer_member m[BC_PROTO_MAX_MEMBERS];
 	/* The last edit or load: its author (0: none yet), the author's name
 	 * then (kept when the author leaves) and its order. */
 	uint32_t last_author;
@@ -395,10 +391,10 @@ struct bc_viewer_roster {
 	bool following;
 };
 
-/* Replaces the member list with si's (at most BC_PROTO_MAX_MEMBERS, as the
- * decoder guarantees). */
+/* Takes the member list and our member id from c (the last SESSION_INFO it
+ * received; none before joining). */
 void bc_viewer_roster_update(struct bc_viewer_roster *r,
-                             const struct bc_msg_session_info *si);
+                             const struct bc_client *c);
 /* Notes an edit or load by member author with order. */
 void bc_viewer_roster_edit(struct bc_viewer_roster *r, uint32_t author,
                            uint64_t order);

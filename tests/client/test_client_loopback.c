@@ -5,6 +5,7 @@
  * as blobcastd would -- or as a broken or hostile peer would. Covers the
  * handshake, sessions, the scene mirror (parameter and structural edits,
  * a skipped order), edit acknowledgements among other members' edits,
+ * the roster of members through joins, leaves and deletion,
  * presenting, following and the session camera (which moves the mirror's
  * camera and order), frames and snapshots, messages larger than one read, and
  * every way a connection can fail (refused, wrong protocol, silence, ERROR, a
@@ -782,6 +783,125 @@ static void test_presenting_and_session_camera(void)
 	fake_stop(&f);
 }
 
+/* ---- the roster --------------------------------------------------------------- */
+
+/* SESSION_INFO with seq 0 for member 3 of session s1, listing ids[0..n)
+ * ("loopback-test" for 3, "bob" for 5, unnamed otherwise). */
+static void srv_members(struct fake *f, int fd, const uint32_t *ids, uint16_t n)
+{
+	struct bc_proto_member mem[4];
+	struct bc_msg info = {.type = BC_MSG_SESSION_INFO};
+	for (uint16_t i = 0; i < n; i++) {
+		mem[i] = (struct bc_proto_member){.id = ids[i]};
+		mem[i].role =
+		    ids[i] == 5 ? BC_PROTO_ROLE_VIEWER : BC_PROTO_ROLE_EDITOR;
+		if (ids[i] == 3) {
+			mem[i].name =
+			    (struct bc_proto_str){"loopback-test", 13};
+		} else if (ids[i] == 5) {
+			mem[i].name = (struct bc_proto_str){"bob", 3};
+		}
+	}
+	info.session_info.session_id = 11;
+	info.session_info.member_id = 3;
+	info.session_info.role = BC_PROTO_ROLE_EDITOR;
+	info.session_info.name = (struct bc_proto_str){"s1", 2};
+	info.session_info.nmembers = n;
+	info.session_info.members = mem;
+	srv_send(f, fd, &info);
+}
+
+static void script_roster(struct fake *f, int fd)
+{
+	const uint32_t both[] = {3, 5}, three[] = {3, 5, 8}, me[] = {3};
+	struct bc_msg m;
+	if (!srv_hello(f, fd) || !srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
+		return;
+	}
+	srv_session(f, fd, m.seq, 5);
+	srv_members(f, fd, both, 2);  /* bob joins */
+	srv_members(f, fd, three, 3); /* member 8, unnamed, joins */
+	srv_members(f, fd, me, 1);    /* both leave */
+	if (!srv_expect(f, fd, BC_MSG_SESSION_LEAVE, &m)) {
+		return;
+	}
+	srv_send(f, fd, &(struct bc_msg){.type = BC_MSG_OK, .seq = m.seq});
+	if (!srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
+		return;
+	}
+	srv_session(f, fd, m.seq, 5);
+	srv_members(f, fd, both, 2); /* bob is back */
+	srv_error(f, fd, 0, BC_ENOSESSION, false, "session s1 was deleted");
+	SCHECK(f, !srv_next(f, fd, &m));
+}
+
+/* The roster follows every SESSION_INFO: joins add members with their
+ * names and roles, leaves drop them (bc_client_member_find too); leaving
+ * (the OK of SESSION_LEAVE) and the session's deletion empty it. */
+static void test_roster_follows_joins_and_leaves(void)
+{
+	struct fake f;
+	struct bc_client *c;
+	struct bc_errinfo ei = {0};
+	const struct bc_client_member *list = NULL, *bob;
+	struct bc_msg m;
+	size_t n = 99;
+	REQUIRE(fake_start(&f, script_roster, false) == 0);
+	c = connect_to(&f, 5000);
+	if (c) {
+		CHECK_EQ_INT(bc_client_members(c, &list, &n), 0);
+		CHECK(list == NULL && n == 0);
+		REQUIRE(bc_client_join(c, "s1", 0, 0, &ei) == 0);
+		bc_client_members(c, &list, &n);
+		REQUIRE(n == 1 && list);
+		CHECK_EQ_INT(list[0].id, 3);
+		CHECK_STREQ(list[0].name, "loopback-test");
+		CHECK(bc_client_member_find(c, 5) == NULL);
+
+		REQUIRE(bc_client_recv(c, &m, 5000) == 1);
+		CHECK_EQ_INT(m.type, BC_MSG_SESSION_INFO);
+		bc_client_members(c, &list, &n);
+		REQUIRE(n == 2);
+		CHECK(list[0].id == 3 && list[1].id == 5);
+		REQUIRE((bob = bc_client_member_find(c, 5)) != NULL);
+		CHECK_STREQ(bob->name, "bob");
+		CHECK_EQ_INT(bob->role, BC_PROTO_ROLE_VIEWER);
+		CHECK_EQ_INT(bc_client_info(c)->nmembers, 2);
+
+		REQUIRE(bc_client_recv(c, &m, 5000) == 1);
+		bc_client_members(c, &list, &n);
+		REQUIRE(n == 3);
+		CHECK_EQ_INT(list[2].id, 8);
+		CHECK_STREQ(list[2].name, "");
+
+		REQUIRE(bc_client_recv(c, &m, 5000) == 1);
+		bc_client_members(c, &list, &n);
+		CHECK(n == 1 && list[0].id == 3);
+		CHECK(bc_client_member_find(c, 5) == NULL);
+		CHECK(bc_client_member_find(c, 8) == NULL);
+		CHECK(bc_client_member_find(c, 0) == NULL);
+
+		m = (struct bc_msg){.type = BC_MSG_SESSION_LEAVE};
+		REQUIRE(bc_client_send(c, &m, NULL) == 0);
+		REQUIRE(bc_client_wait(c, BC_MSG_OK, m.seq, &m, 0, &ei) == 0);
+		bc_client_members(c, &list, &n);
+		CHECK(list == NULL && n == 0);
+		CHECK_EQ_INT(bc_client_info(c)->session_id, 0);
+
+		REQUIRE(bc_client_join(c, "s1", 0, 0, &ei) == 0);
+		REQUIRE(bc_client_recv(c, &m, 5000) == 1);
+		bc_client_members(c, &list, &n);
+		CHECK_EQ_INT(n, 2);
+		REQUIRE(bc_client_recv(c, &m, 5000) == 1);
+		CHECK_EQ_INT(m.type, BC_MSG_ERROR);
+		bc_client_members(c, &list, &n);
+		CHECK(list == NULL && n == 0);
+		CHECK(bc_client_member_find(c, 3) == NULL);
+	}
+	bc_client_destroy(c);
+	fake_stop(&f);
+}
+
 /* ---- frames and snapshots ---------------------------------------------------------- */
 
 static void script_frames(struct fake *f, int fd)
@@ -1272,6 +1392,7 @@ static const struct bc_test tests[] = {
     {"refused_and_bad_options", test_refused_and_bad_options},
     {"allocation_failures_are_reported", test_allocation_failures_are_reported},
     {"presenting_and_session_camera", test_presenting_and_session_camera},
+    {"roster_follows_joins_and_leaves", test_roster_follows_joins_and_leaves},
 };
 
 BC_TEST_MAIN(tests)

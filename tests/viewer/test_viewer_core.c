@@ -1122,34 +1122,28 @@ static void test_font_triangles(void)
 	CHECK_NEAR(bc_viewer_text_width("", 1.0f), 0.0, 0.0);
 }
 
-/* The member line: names and roles from SESSION_INFO, "you" for this
+/* The member line: names and roles from the roster, "you" for this
  * client, unnamed members by id, the last editor kept after leaving, and
  * a line too long for its buffer cut with "...". */
 static void test_roster_names_members_and_last_editor(void)
 {
-	struct bc_proto_member mem[3] = {
-	    {.id = 4, .role = BC_PROTO_ROLE_EDITOR, .name = {"alice", 5}},
-	    {.id = 7, .role = BC_PROTO_ROLE_VIEWER, .name = {"", 0}},
-	    {.id = 9, .role = BC_PROTO_ROLE_EDITOR, .name = {"carol", 5}},
+	const struct bc_client_member mem[3] = {
+	    {.id = 4, .role = BC_PROTO_ROLE_EDITOR, .name = "alice"},
+	    {.id = 7, .role = BC_PROTO_ROLE_VIEWER, .name = ""},
+	    {.id = 9, .role = BC_PROTO_ROLE_EDITOR, .name = "carol"},
 	};
-	struct bc_msg_session_info si = {.session_id = 1,
-	                                 .member_id = 7,
-	                                 .role = BC_PROTO_ROLE_VIEWER,
-	                                 .name = {"s", 1},
-	                                 .nmembers = 3,
-	                                 .members = mem};
 	struct bc_viewer_roster r;
 	char line[200], small[24];
 	memset(&r, 0, sizeof(r));
-	bc_viewer_roster_update(&r, &si);
-	CHECK(r.n == 3 && r.self == 7);
+	r.m = mem;
+	r.n = 3;
+	r.self = 7;
 	CHECK(strcmp(bc_viewer_roster_text(&r, line, sizeof(line)),
 	             "3 members: alice (editor), you (viewer), carol "
 	             "(editor)") == 0);
 	bc_viewer_roster_edit(&r, 9, 12);
 	/* carol leaves: the list shrinks, her edit keeps her name. */
-	si.nmembers = 2;
-	bc_viewer_roster_update(&r, &si);
+	r.n = 2;
 	CHECK(strcmp(bc_viewer_roster_text(&r, line, sizeof(line)),
 	             "2 members: alice (editor), you (viewer)\nlast edit: "
 	             "carol, order 12") == 0);
@@ -1168,20 +1162,16 @@ static void test_roster_names_members_and_last_editor(void)
  * not, or presented by this client. */
 static void test_roster_names_the_presenter(void)
 {
-	struct bc_proto_member mem[2] = {
-	    {.id = 4, .role = BC_PROTO_ROLE_EDITOR, .name = {"alice", 5}},
-	    {.id = 7, .role = BC_PROTO_ROLE_VIEWER, .name = {"bob", 3}},
+	const struct bc_client_member mem[2] = {
+	    {.id = 4, .role = BC_PROTO_ROLE_EDITOR, .name = "alice"},
+	    {.id = 7, .role = BC_PROTO_ROLE_VIEWER, .name = "bob"},
 	};
-	struct bc_msg_session_info si = {.session_id = 1,
-	                                 .member_id = 7,
-	                                 .role = BC_PROTO_ROLE_VIEWER,
-	                                 .name = {"s", 1},
-	                                 .nmembers = 2,
-	                                 .members = mem};
 	struct bc_viewer_roster r;
 	char line[200];
 	memset(&r, 0, sizeof(r));
-	bc_viewer_roster_update(&r, &si);
+	r.m = mem;
+	r.n = 2;
+	r.self = 7;
 	r.presenter = 4;
 	CHECK_STREQ(bc_viewer_roster_text(&r, line, sizeof(line)),
 	            "2 members: alice (editor, presenting), you (viewer)\n"
@@ -1191,7 +1181,8 @@ static void test_roster_names_the_presenter(void)
 	            "2 members: alice (editor, presenting), you (viewer)\n"
 	            "following alice (F stops)");
 	/* A new member list keeps the presenter. */
-	bc_viewer_roster_update(&r, &si);
+	r.m = mem;
+	r.n = 2;
 	r.presenter = 7;
 	r.following = false;
 	CHECK_STREQ(bc_viewer_roster_text(&r, line, sizeof(line)),
@@ -1207,22 +1198,18 @@ static void test_roster_names_the_presenter(void)
  * it; REDO says "redid"; an empty author reads "an unnamed member's". */
 static void test_undo_text_names_both_members(void)
 {
-	struct bc_proto_member mem[2] = {
-	    {.id = 4, .role = BC_PROTO_ROLE_EDITOR, .name = {"alice", 5}},
-	    {.id = 9, .role = BC_PROTO_ROLE_EDITOR, .name = {"bob", 3}},
+	const struct bc_client_member mem[2] = {
+	    {.id = 4, .role = BC_PROTO_ROLE_EDITOR, .name = "alice"},
+	    {.id = 9, .role = BC_PROTO_ROLE_EDITOR, .name = "bob"},
 	};
-	struct bc_msg_session_info si = {.session_id = 1,
-	                                 .member_id = 4,
-	                                 .role = BC_PROTO_ROLE_EDITOR,
-	                                 .name = {"s", 1},
-	                                 .nmembers = 2,
-	                                 .members = mem};
 	struct bc_viewer_roster r;
 	struct bc_msg m = {.type = BC_MSG_EDIT_APPLIED,
 	                   .flags = BC_PROTO_FLAG_UNDO};
 	char line[200], small[12];
 	memset(&r, 0, sizeof(r));
-	bc_viewer_roster_update(&r, &si);
+	r.m = mem;
+	r.n = 2;
+	r.self = 4;
 	m.edit_applied.order = 13;
 	m.edit_applied.author = 9;
 	m.edit_applied.target_order = 12;

@@ -208,8 +208,8 @@ BC_API int bc_client_send(struct bc_client *c, struct bc_msg *m,
  * negative code: BC_ECLOSED when the server closed the stream, a protocol
  * error, BC_EIO. A FATAL ERROR message is returned like any other, and its
  * code becomes the sticky error of the calls that follow. SESSION_INFO,
- * SCENE_STATE and EDIT_APPLIED also update bc_client_info() and the scene
- * mirror before they are returned.
+ * SCENE_STATE and EDIT_APPLIED also update bc_client_info(), the roster
+ * (bc_client_members) and the scene mirror before they are returned.
  */
 BC_API int bc_client_recv(struct bc_client *c, struct bc_msg *out,
                           int timeout_ms);
@@ -254,6 +254,31 @@ BC_API int bc_client_join(struct bc_client *c, const char *name,
  * BC_ENOSESSION when there is no such session. */
 BC_API int bc_client_delete_session(struct bc_client *c, const char *name,
                                     struct bc_errinfo *ei);
+
+/* One member of the session, as SESSION_INFO lists it (PROTOCOL.md 7.8). */
+struct bc_client_member {
+	uint32_t id;
+	enum bc_proto_role role;
+	char name[BC_PROTO_MAX_NAME + 1]; /* its HELLO client_name; may be "" */
+};
+
+/*
+ * The roster: the members of the session this client is in, this client
+ * included, in the order of the last SESSION_INFO received (the server
+ * sends one to every member whenever someone joins or leaves).
+ * *list and *n are reset on entry; *list then points to *n entries owned by
+ * c, valid until the next call on c that receives (bc_client_recv(),
+ * bc_client_wait() and the helpers that wait) or bc_client_destroy(). The
+ * roster is empty (*list NULL, *n 0) before joining, after leaving (the OK
+ * of SESSION_LEAVE) and after the session was deleted; a new connection
+ * starts empty. Returns 0.
+ */
+BC_API int bc_client_members(const struct bc_client *c,
+                             const struct bc_client_member **list, size_t *n);
+/* The roster's entry for member id, owned by c and valid as long as
+ * bc_client_members()'s list; NULL when id is not (or no longer) a member. */
+BC_API const struct bc_client_member *
+bc_client_member_find(const struct bc_client *c, uint32_t id);
 
 /* What an UNDO or REDO did (bc_client_undo). */
 struct bc_client_undone {
