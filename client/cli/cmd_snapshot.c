@@ -137,7 +137,9 @@ const struct bc_cli_cmd bc_cli_cmd_snapshot = {
         "server.",
     .texts =
         (const struct bc_cli_opt_text[]){
-            {"size", NULL, "picture size, each {range} (required)"},
+            {"size", NULL,
+             "picture size, each {range} (required); a server may serve\n"
+             "less: blobcastd up to 4096, its WELCOME max_dim"},
             {"out", NULL, "write the picture to IMG (required)"},
             {NULL, NULL, NULL}},
     .run = run_snapshot};
