@@ -194,20 +194,8 @@ fail() {
   failures=$((failures + 1))
 }
 
-# Under AddressSanitizer, Mesa's DRI driver is unloaded when GLFW ends and
-# LeakSanitizer then reports the driver's own allocations as leaks from an
-# "<unknown module>". Keeping the driver loaded makes them reachable; leaks
-# of ours are still reported.
-VIEWENV=
-if ldd "$VIEW" 2>/dev/null | grep -q libasan; then
-  for d in /usr/lib/x86_64-linux-gnu/dri /usr/lib/*/dri /usr/lib/dri; do
-    if [ -f "$d/swrast_dri.so" ]; then
-      VIEWENV="env ASAN_OPTIONS=verify_asan_link_order=0 \
-LD_PRELOAD=$d/swrast_dri.so"
-      break
-    fi
-  done
-fi
+# VIEWENV: how blobcast-view runs here (viewer_env.sh).
+. "$(dirname "$0")/viewer_env.sh"
 export VIEWENV
 
 # The scene of part 3: a red sphere, a blue box and a green bar (a box

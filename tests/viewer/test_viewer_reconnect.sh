@@ -56,18 +56,8 @@ fail() {
   ok=
 }
 
-# As in test_viewer.sh: under AddressSanitizer keep Mesa's driver loaded so
-# that its allocations are not reported as leaks of an unloaded module.
-VIEWENV=
-if ldd "$VIEW" 2>/dev/null | grep -q libasan; then
-  for d in /usr/lib/x86_64-linux-gnu/dri /usr/lib/*/dri /usr/lib/dri; do
-    if [ -f "$d/swrast_dri.so" ]; then
-      VIEWENV="env ASAN_OPTIONS=verify_asan_link_order=0 \
-LD_PRELOAD=$d/swrast_dri.so"
-      break
-    fi
-  done
-fi
+# VIEWENV: how blobcast-view runs here (viewer_env.sh).
+. "$(dirname "$0")/viewer_env.sh"
 
 # start_daemon ADDR: blobcastd on ADDR; sets $port.
 start_daemon() {
