@@ -81,7 +81,11 @@ void bc__send(struct bc_member *m, const struct bc_msg *msg)
 	const struct bc_link *l = m->ss->link;
 	uint32_t missing = 0;
 	struct bc_msg older;
-	if (msg->type == BC_MSG_EDIT_APPLIED) {
+	/* Only a client without every feature needs the message looked
+	 * at (which scans an edit's subtrees), not each member of a
+	 * broadcast. */
+	if (msg->type == BC_MSG_EDIT_APPLIED &&
+	    m->peer->features != BC_PROTO_FEATURES_ALL) {
 		missing = bc_proto_msg_features(msg) & ~m->peer->features;
 	}
 	if (missing & ~BC_PROTO_FEATURE_UNDO) {

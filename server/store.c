@@ -406,6 +406,7 @@ struct restore {
 	uint64_t snaps[BC_STORE_SNAPSHOTS_TRIED];
 	size_t nsnaps, used; /* used: SIZE_MAX when none loads */
 	struct bc_store_check c;
+	uint64_t newest_journal; /* the highest N of the journal-N.bin files */
 };
 
 /* The frontier raised to the last record of the newest journal: the
@@ -414,7 +415,7 @@ struct restore {
 static void frontier_of_journals(const struct bc_store_session *ss,
                                  struct restore *r)
 {
-	uint64_t last = bc__store_journal_last(ss, newest_journal(ss->path));
+	uint64_t last = bc__store_journal_last(ss, r->newest_journal);
 	if (last > r->c.frontier) {
 		r->c.frontier = last;
 	}
@@ -460,8 +461,9 @@ static int restore(struct bc_store_session *ss, struct bc_tree *t,
 	}
 	r->c.snapshots = (uint32_t)r->nsnaps;
 	r->c.frontier = r->nsnaps ? r->snaps[0] : 0;
-	if (newest_journal(ss->path) > r->c.frontier) {
-		r->c.frontier = newest_journal(ss->path);
+	r->newest_journal = newest_journal(ss->path);
+	if (r->newest_journal > r->c.frontier) {
+		r->c.frontier = r->newest_journal;
 	}
 	if (r->used == SIZE_MAX) {
 		frontier_of_journals(ss, r);
