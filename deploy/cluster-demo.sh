@@ -86,6 +86,16 @@ cleanup() {
 trap cleanup EXIT
 trap 'exit 0' INT TERM
 
+# Every port must be free: something already answering on one would pass
+# for ours below.
+for p in "$port" $(seq $((port + 10)) $((port + 9 + n))) \
+	$(seq $((port + 20)) $((port + 19 + n))); do
+	if (exec 3<>"/dev/tcp/127.0.0.1/$p") 2>/dev/null; then
+		echo "cluster-demo: port $p on 127.0.0.1 is in use; choose another --port" >&2
+		exit 1
+	fi
+done
+
 # A CA and a certificate for this machine's loopback names.
 tls=$data/tls
 mkdir -p "$tls"
@@ -161,8 +171,17 @@ nginx_pid=$!
 pids+=($nginx_pid)
 echo "NGINX_PID=$nginx_pid DATA=$data" >> "$data/cluster.env"
 
-# Ready when the front door answers and every daemon listens.
-for _ in $(seq 1 200); do
+# Ready when the front door answers and every daemon listens: up to a
+# minute, for a loaded machine; at once when one of them has died.
+ready=0
+for _ in $(seq 1 1200); do
+	for p in "${pids[@]}"; do
+		if ! kill -0 "$p" 2>/dev/null; then
+			echo "cluster-demo: a process exited while starting; see $data/*.log and $data/nginx/error.log:" >&2
+			tail -n 5 "$data"/node-*.log "$data"/websockify-*.log "$data/nginx/error.log" >&2 2>/dev/null || true
+			exit 1
+		fi
+	done
 	ok=1
 	for i in $(seq 0 $((n - 1))); do
 		grep -q 'blobcastd: backend' "$data/node-$i.log" 2>/dev/null || ok=0
@@ -170,12 +189,13 @@ for _ in $(seq 1 200); do
 			ok=0
 	done
 	if [ $ok = 1 ] && (exec 3<>"/dev/tcp/127.0.0.1/$port") 2>/dev/null; then
+		ready=1
 		break
 	fi
 	sleep 0.05
 done
-if [ $ok != 1 ]; then
-	echo "cluster-demo: not every daemon, websockify and nginx started; see $data/*.log" >&2
+if [ $ready != 1 ]; then
+	echo "cluster-demo: not every daemon, websockify and nginx answered within a minute; see $data/*.log and $data/nginx/error.log" >&2
 	exit 1
 fi
 echo "cluster-demo: $n daemons behind https://127.0.0.1:$port (CA $tls/ca.pem)"

@@ -11,12 +11,15 @@
  * back with every acknowledged edit. Skipped (77) without nginx,
  * websockify or openssl.
  */
+#include <arpa/inet.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <netinet/in.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <time.h>
@@ -37,6 +40,43 @@ static void sleep_ms(long ms)
 {
 	struct timespec ts = {ms / 1000, (ms % 1000) * 1000000L};
 	nanosleep(&ts, NULL);
+}
+
+/* Whether port on 127.0.0.1 can be bound now. */
+static bool port_free(int port)
+{
+	struct sockaddr_in sa = {.sin_family = AF_INET};
+	int fd = socket(AF_INET, SOCK_STREAM, 0), one = 1;
+	bool ok;
+	sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+	sa.sin_port = htons((uint16_t)port);
+	if (fd < 0) {
+		return false;
+	}
+	setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof(one));
+	ok = bind(fd, (struct sockaddr *)&sa, sizeof(sa)) == 0;
+	close(fd);
+	return ok;
+}
+
+/* A front port P for cluster-demo.sh such that P, P+10+i and P+20+i are
+ * all free. Below 32768, the start of Linux's ephemeral range, so that no
+ * outgoing connection of another test can hold one meanwhile; starting
+ * from the pid so that parallel runs try different ones first. */
+static int pick_front_port(void)
+{
+	int start = (int)(getpid() % 375);
+	for (int k = 0; k < 375; k++) {
+		int p = 20000 + ((start + k) % 375) * 32;
+		bool ok = port_free(p);
+		for (int i = 0; i < NODES && ok; i++) {
+			ok = port_free(p + 10 + i) && port_free(p + 20 + i);
+		}
+		if (ok) {
+			return p;
+		}
+	}
+	return 0;
 }
 
 static bool have(const char *tool)
@@ -201,6 +241,10 @@ static void cluster(void)
 			fprintf(stderr, "  %s: %s\n", s->name, ei.msg);
 			CHECK(false);
 			bc_client_destroy(c);
+			/* When the first fails, the front door is down and
+			 * nothing further can pass: stop here, not at the
+			 * timeout. */
+			REQUIRE(i > 0);
 			continue;
 		}
 		bc_client_destroy(c);
@@ -337,8 +381,11 @@ int main(int argc, char **argv)
 	mkdir(dir, 0700);
 	snprintf(ca, sizeof(ca), "%s/tls/ca.pem", dir);
 	snprintf(out, sizeof(out), "%s.out", dir);
-	/* A port from the pid, so that parallel runs do not meet. */
-	front_port = 20000 + (int)(getpid() % 2000) * 16;
+	front_port = pick_front_port();
+	if (front_port == 0) {
+		fprintf(stderr, "no free ports for the cluster on 127.0.0.1\n");
+		return 1;
+	}
 	demo_pid = fork();
 	if (demo_pid == 0) {
 		char port[16];
