@@ -74,14 +74,27 @@ void bc_view_rays_init(struct bc_view_rays *vr, const struct bc_camera *cam,
 	vr->width = width ? width : 1;
 	vr->height = height ? height : 1;
 	vr->aspect = (float)vr->width / (float)vr->height;
+	vr->x0 = 0;
+	vr->y0 = 0;
+}
+
+void bc_view_rays_init_window(struct bc_view_rays *vr,
+                              const struct bc_camera *cam, uint32_t width,
+                              uint32_t height, uint32_t x0, uint32_t y0)
+{
+	bc_view_rays_init(vr, cam, width, height);
+	vr->x0 = x0;
+	vr->y0 = y0;
 }
 
 void bc_view_rays_dir(const struct bc_view_rays *vr, float x, float y,
                       float dir[3])
 {
-	float sx =
-	    (2.0f * x / (float)vr->width - 1.0f) * vr->tan_half_y * vr->aspect;
-	float sy = (1.0f - 2.0f * y / (float)vr->height) * vr->tan_half_y;
+	float sx = (2.0f * (x + (float)vr->x0) / (float)vr->width - 1.0f) *
+	           vr->tan_half_y * vr->aspect;
+	float sy =
+	    (1.0f - 2.0f * (y + (float)vr->y0) / (float)vr->height) *
+	    vr->tan_half_y;
 	for (int i = 0; i < 3; i++) {
 		dir[i] = vr->forward[i] + sx * vr->right[i] + sy * vr->up[i];
 	}

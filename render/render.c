@@ -103,6 +103,27 @@ int bc_frame_init(struct bc_frame *f, uint32_t width, uint32_t height)
 	return 0;
 }
 
+int bc_frame_window(struct bc_frame *f, uint32_t x, uint32_t y,
+                    uint32_t full_width, uint32_t full_height)
+{
+	if (full_width == 0) {
+		f->win_x = f->win_y = f->full_width = f->full_height = 0;
+		f->key = 0;
+		return 0;
+	}
+	if (full_width > BC_RENDER_MAX_DIM || full_height > BC_RENDER_MAX_DIM ||
+	    x >= full_width || y >= full_height || f->width > full_width - x ||
+	    f->height > full_height - y) {
+		return BC_ERANGE;
+	}
+	f->win_x = x;
+	f->win_y = y;
+	f->full_width = full_width;
+	f->full_height = full_height;
+	f->key = 0;
+	return 0;
+}
+
 void bc_frame_finish(struct bc_frame *f)
 {
 	if (!f) {

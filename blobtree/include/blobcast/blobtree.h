@@ -336,14 +336,24 @@ BC_API int bc_camera_validate(const struct bc_camera *cam,
 struct bc_view_rays {
 	float eye[3];
 	float forward[3], right[3], up[3]; /* orthonormal */
-	float tan_half_y, aspect;
-	uint32_t width, height;
+	float tan_half_y, aspect; /* of the whole view */
+	uint32_t width, height;   /* of the whole view */
+	/* The window drawn, in pixels of the whole view: (x0, y0) is the
+	 * window's top-left pixel; both 0 for the whole view. */
+	uint32_t x0, y0;
 };
 BC_API void bc_view_rays_init(struct bc_view_rays *vr,
                               const struct bc_camera *cam, uint32_t width,
                               uint32_t height);
-/* Direction for the (fractional) pixel coordinate (x, y): pixel centres are
- * at (i + 0.5, j + 0.5). */
+/* bc_view_rays_init for the window at (x0, y0) of a width x height view
+ * (a tile of a big picture): pixel (i, j) of the window gets the ray of
+ * pixel (x0 + i, y0 + j) of the view. */
+BC_API void bc_view_rays_init_window(struct bc_view_rays *vr,
+                                     const struct bc_camera *cam,
+                                     uint32_t width, uint32_t height,
+                                     uint32_t x0, uint32_t y0);
+/* Direction for the (fractional) pixel coordinate (x, y) of the window:
+ * pixel centres are at (i + 0.5, j + 0.5). */
 BC_API void bc_view_rays_dir(const struct bc_view_rays *vr, float x, float y,
                              float dir[3]);
 

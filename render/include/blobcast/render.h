@@ -41,12 +41,26 @@ struct bc_frame {
 	float *depth;  /* width * height */
 	uint32_t *ids; /* width * height */
 	uint64_t key;
+	/* A window of a larger picture (a tile of a big snapshot): the frame
+	 * holds pixels [win_x, win_x + width) x [win_y, win_y + height) of a
+	 * full_width x full_height view of the camera, each pixel exactly as
+	 * a render of the whole view would give it. full_width 0 (as
+	 * bc_frame_init leaves it): the frame is the whole view. Set with
+	 * bc_frame_window. */
+	uint32_t win_x, win_y, full_width, full_height;
 };
 
 /* Allocates all three planes. Returns 0, BC_ERANGE (size 0 or over
  * BC_RENDER_MAX_DIM) or BC_ENOMEM. bc_frame_finish accepts a zeroed frame. */
 int bc_frame_init(struct bc_frame *f, uint32_t width, uint32_t height);
 void bc_frame_finish(struct bc_frame *f);
+/* Makes f (of its width x height) the window at (x, y) of a full_width x
+ * full_height view; full_width 0 makes it the whole view again. Returns 0,
+ * or BC_ERANGE when the window does not lie inside the view or the view
+ * is over BC_RENDER_MAX_DIM. Changes the frame's key (0: nothing of the
+ * new window is rendered yet). */
+int bc_frame_window(struct bc_frame *f, uint32_t x, uint32_t y,
+                    uint32_t full_width, uint32_t full_height);
 
 enum bc_debug_mode {
 	BC_DEBUG_NONE = 0,
