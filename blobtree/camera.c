@@ -92,9 +92,8 @@ void bc_view_rays_dir(const struct bc_view_rays *vr, float x, float y,
 {
 	float sx = (2.0f * (x + (float)vr->x0) / (float)vr->width - 1.0f) *
 	           vr->tan_half_y * vr->aspect;
-	float sy =
-	    (1.0f - 2.0f * (y + (float)vr->y0) / (float)vr->height) *
-	    vr->tan_half_y;
+	float sy = (1.0f - 2.0f * (y + (float)vr->y0) / (float)vr->height) *
+	           vr->tan_half_y;
 	for (int i = 0; i < 3; i++) {
 		dir[i] = vr->forward[i] + sx * vr->right[i] + sy * vr->up[i];
 	}

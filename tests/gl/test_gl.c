@@ -1161,7 +1161,8 @@ static void test_odd_sizes_and_empty_scene(void)
 	rgba = malloc(4 * 37 * 23);
 	REQUIRE(rgba);
 	{
-		struct bc_frame only = {.width = 37, .height = 23, .rgba = rgba};
+		struct bc_frame only = {
+		    .width = 37, .height = 23, .rgba = rgba};
 		struct bc_errinfo ei = {0};
 		CHECK(bc_renderer_render(r, &cam, &only, NULL, &ei) == 0);
 		CHECK(memcmp(rgba, g.rgba, 4 * 37 * 23) == 0);

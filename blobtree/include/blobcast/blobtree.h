@@ -336,8 +336,8 @@ BC_API int bc_camera_validate(const struct bc_camera *cam,
 struct bc_view_rays {
 	float eye[3];
 	float forward[3], right[3], up[3]; /* orthonormal */
-	float tan_half_y, aspect; /* of the whole view */
-	uint32_t width, height;   /* of the whole view */
+	float tan_half_y, aspect;          /* of the whole view */
+	uint32_t width, height;            /* of the whole view */
 	/* The window drawn, in pixels of the whole view: (x0, y0) is the
 	 * window's top-left pixel; both 0 for the whole view. */
 	uint32_t x0, y0;
