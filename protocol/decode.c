@@ -706,6 +706,20 @@ static int dec_frame(struct dec *d, struct bc_msg_frame *f)
 	return 0;
 }
 
+/* SNAPSHOT's tile form: the picture's size, then the tile inside it. */
+static int dec_snapshot_tile(struct dec *d, struct bc_msg_snapshot *s)
+{
+	TRY(rd_u16_range(d, "full_width", 1, BC_PROTO_MAX_DIM, &s->full_width));
+	TRY(rd_u16_range(d, "full_height", 1, BC_PROTO_MAX_DIM,
+	                 &s->full_height));
+	TRY(rd_u16_range(d, "tile_x", 0, s->full_width - 1u, &s->tile_x));
+	TRY(rd_u16_range(d, "tile_y", 0, s->full_height - 1u, &s->tile_y));
+	TRY(rd_u16_range(d, "tile_width", 1, s->full_width - s->tile_x,
+	                 &s->tile_width));
+	return rd_u16_range(d, "tile_height", 1, s->full_height - s->tile_y,
+	                    &s->tile_height);
+}
+
 static int dec_pick_result(struct dec *d, struct bc_msg_pick_result *p)
 {
 	static const char *const names[3] = {"position.x", "position.y",
@@ -916,12 +930,17 @@ static int dec_body(struct dec *d, struct bc_msg *m)
 			            "planes 0x%02x has undefined bits",
 			            (unsigned)m->snapshot.planes);
 		}
-		/* Colour only leaves the byte out: one encoding per
-		 * SNAPSHOT. */
-		if (m->snapshot.planes == 0) {
-			return fail(d, BC_ERANGE, "planes 0 (leave it out)");
+		m->snapshot.has_tile = bc_rd_left(&d->c) > 0;
+		if (!m->snapshot.has_tile) {
+			/* Colour only leaves the byte out: one encoding per
+			 * SNAPSHOT. */
+			if (m->snapshot.planes == 0) {
+				return fail(d, BC_ERANGE,
+				            "planes 0 (leave it out)");
+			}
+			return 0;
 		}
-		return 0;
+		return dec_snapshot_tile(d, &m->snapshot);
 	}
 	case BC_MSG_STATS:
 		return dec_stats(d, &m->stats);

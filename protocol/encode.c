@@ -311,9 +311,18 @@ static void w_body(struct bc__w *w, const struct bc_msg *m)
 	case BC_MSG_SNAPSHOT:
 		w_enum(w, "encoding", (int)m->snapshot.encoding,
 		       BC_PROTO_ENC_COUNT);
-		/* Left out when 0: the one-byte SNAPSHOT of colour only. */
-		if (m->snapshot.planes != 0) {
+		/* Left out when 0: the one-byte SNAPSHOT of colour only;
+		 * the tile form always has it. */
+		if (m->snapshot.planes != 0 || m->snapshot.has_tile) {
 			bc__put_u8(w, m->snapshot.planes);
+		}
+		if (m->snapshot.has_tile) {
+			bc__put_u16(w, m->snapshot.full_width);
+			bc__put_u16(w, m->snapshot.full_height);
+			bc__put_u16(w, m->snapshot.tile_x);
+			bc__put_u16(w, m->snapshot.tile_y);
+			bc__put_u16(w, m->snapshot.tile_width);
+			bc__put_u16(w, m->snapshot.tile_height);
 		}
 		break;
 	case BC_MSG_STATS: {

@@ -63,7 +63,7 @@ static const struct bc__type_info types[BC_MSG_COUNT] = {
                       BULK},
     [BC_MSG_PICK] = {"PICK", BC__FROM_CLIENT, 0, 4},
     [BC_MSG_PICK_RESULT] = {"PICK_RESULT", BC__FROM_SERVER, 0, 24},
-    [BC_MSG_SNAPSHOT] = {"SNAPSHOT", BC__FROM_CLIENT, 0, 2},
+    [BC_MSG_SNAPSHOT] = {"SNAPSHOT", BC__FROM_CLIENT, 0, 14},
     [BC_MSG_GET_STATS] = {"GET_STATS", BC__FROM_CLIENT, 0, 1},
     [BC_MSG_STATS] = {"STATS", BC__FROM_SERVER, 0, STATS_MAX},
     [BC_MSG_SESSION_DELETE] = {"SESSION_DELETE", BC__FROM_CLIENT, 0,

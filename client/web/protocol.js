@@ -99,7 +99,7 @@ export const STATS_PARTS = Object.freeze({ LOAD: 0x01, RESET: 0x02, TLS: 0x04,
  * server sends each only to a client that announced it in HELLO, and
  * WELCOME says which it grants. */
 export const FEATURE = Object.freeze({ LEVELS: 0x01, UNDO: 0x02,
-	PRESENT: 0x04, KINDS: 0x08, ALL: 0x0f });
+	PRESENT: 0x04, KINDS: 0x08, TILES: 0x10, ALL: 0x1f });
 
 /* The number of plane rectangles (0..2) a FRAME with these flags carries
  * after its colour rectangle. */
@@ -263,7 +263,7 @@ T(17, 'FRAME', FROM_SERVER, FLAG.STILL | FLAG.SNAPSHOT | FLAG.INCOMPLETE |
   BULK);
 T(18, 'PICK', FROM_CLIENT, 0, 4);
 T(19, 'PICK_RESULT', FROM_SERVER, 0, 24);
-T(20, 'SNAPSHOT', FROM_CLIENT, 0, 2);
+T(20, 'SNAPSHOT', FROM_CLIENT, 0, 14);
 T(21, 'GET_STATS', FROM_CLIENT, 0, 1);
 T(22, 'STATS', FROM_SERVER, 0, 64 + 44 + 9); /* + load and TLS sections */
 T(23, 'SESSION_DELETE', FROM_CLIENT, 0, strMax(L.MAX_NAME));
@@ -968,9 +968,21 @@ function decBody(d, m) {
 				d.fail('EPROTO_FLAGS',
 					`planes ${m.planes} has undefined bits`);
 			}
-			if (m.planes === 0) {
+			if (m.planes === 0 && !d.left()) {
 				d.fail('ERANGE', 'planes 0 (leave it out)');
 			}
+		}
+		/* The tile form (feature TILES): the picture's size, then
+		 * the tile inside it. */
+		if (d.left()) {
+			m.full_width = d.u16range('full_width', 1, L.MAX_DIM);
+			m.full_height = d.u16range('full_height', 1, L.MAX_DIM);
+			m.tile_x = d.u16range('tile_x', 0, m.full_width - 1);
+			m.tile_y = d.u16range('tile_y', 0, m.full_height - 1);
+			m.tile_width = d.u16range('tile_width', 1,
+				m.full_width - m.tile_x);
+			m.tile_height = d.u16range('tile_height', 1,
+				m.full_height - m.tile_y);
 		}
 		break;
 	case MSG.STATS:
@@ -1593,9 +1605,16 @@ function encBody(w, m) {
 		break;
 	case MSG.SNAPSHOT:
 		w.u8('encoding', m.encoding, 'EENUM');
-		/* Left out when 0: the one-byte SNAPSHOT of colour only. */
-		if (m.planes) {
+		/* Left out when 0: the one-byte SNAPSHOT of colour only;
+		 * the tile form always has it. */
+		if (m.planes || m.full_width !== undefined) {
 			w.u8('planes', m.planes);
+		}
+		if (m.full_width !== undefined) {
+			for (const k of ['full_width', 'full_height', 'tile_x',
+				'tile_y', 'tile_width', 'tile_height']) {
+				w.u16(k, m[k]);
+			}
 		}
 		break;
 	case MSG.STATS:

@@ -77,7 +77,7 @@ TYPE_MAX = {
     "SCENE_LOAD": MAX_PAYLOAD, "SCENE_STATE": MAX_PAYLOAD,
     "EDIT": MAX_PAYLOAD, "EDIT_APPLIED": MAX_PAYLOAD,
     "CAMERA": 40, "VIEW": 8, "FRAME": MAX_PAYLOAD, "PICK": 4,
-    "PICK_RESULT": 24, "SNAPSHOT": 2, "GET_STATS": 1, "STATS": 64 + 44 + 9,
+    "PICK_RESULT": 24, "SNAPSHOT": 14, "GET_STATS": 1, "STATS": 64 + 44 + 9,
     "SESSION_DELETE": strmax(MAX_NAME), "UNDO": 0, "REDO": 0,
     "SESSION_LIST": 0,
     "SESSIONS": 2 + MAX_SESSIONS_LISTED * (strmax(MAX_NAME) + 2 + 4 + 8 + 8 + 1),
@@ -346,8 +346,16 @@ def w_pick_result(f):
             + b"".join(f32(v) for v in f["position"]) + f32(f["depth"]))
 
 
+TILE_F = ["full_width", "full_height", "tile_x", "tile_y", "tile_width",
+          "tile_height"]
+
+
 def w_snapshot(f):
-    # planes is optional and left out when 0 (colour only).
+    # planes is optional and left out when 0 (colour only), except in the
+    # tile form, which always has it (section 7.17).
+    if "full_width" in f:
+        return (u8(f["encoding"]) + u8(f["planes"])
+                + b"".join(u16(f[k]) for k in TILE_F))
     return u8(f["encoding"]) + (u8(f["planes"]) if f["planes"] else b"")
 
 
@@ -561,7 +569,8 @@ def gen_welcome():
     t.badp("max_dim 8193", wl(max_dim=8193), "ERANGE")
     t.badp("max_members 65", wl(max_members=65), "ERANGE")
     t.badp("max_edit_ops 0", wl(max_edit_ops=0), "ERANGE")
-    t.badp("a feature this text does not define", wl(features=0x10),
+    t.ok("every feature of this text granted", dict(base, features=0x1f))
+    t.badp("a feature this text does not define", wl(features=0x20),
            "EPROTO_FLAGS")
     t.badp("features cut short (2 bytes)", w_welcome(old) + b"\x0f\x00",
            "EPROTO_TRUNCATED")
@@ -1261,9 +1270,43 @@ def gen_snapshot():
     # Colour only leaves the byte out, so each SNAPSHOT has one encoding.
     t.badp("planes byte 0", u8(2) + u8(0), "ERANGE")
     t.badp("empty payload", b"", "EPROTO_TRUNCATED")
-    t.badp("one trailing byte", p + b"\x00", "EPROTO_LENGTH")
-    t.bad("length = type maximum + 1", header("SNAPSHOT", 3),
+    # A third byte starts the tile form, which needs 14.
+    t.badp("one byte after the planes: a tile form cut short",
+           p + b"\x00", "EPROTO_TRUNCATED")
+    t.bad("length = type maximum + 1", header("SNAPSHOT", 15),
           "EPROTO_LENGTH")
+    # The tile form (feature TILES): the planes byte, then the picture's
+    # size and the tile inside it.
+    tile = dict(encoding=2, planes=0, full_width=8192, full_height=8192,
+                tile_x=7168, tile_y=7168, tile_width=1024,
+                tile_height=1024)
+    t.ok("tile form: the last 1024^2 tile of 8192^2, colour only", tile,
+         seq=60)
+    tp = t.ok("tile form: a ragged edge tile with depth and ids",
+              dict(tile, encoding=3, planes=3, full_width=1000,
+                   full_height=700, tile_x=768, tile_y=512,
+                   tile_width=232, tile_height=188), seq=61)
+    t.ok("tile form: one pixel", dict(tile, full_width=1, full_height=1,
+                                      tile_x=0, tile_y=0, tile_width=1,
+                                      tile_height=1), seq=62)
+    w = w_snapshot
+
+    def tb(**k):
+        return w(dict(tile, **k))
+    t.badp("tile form cut short (13 bytes)", tp[:-1], "EPROTO_TRUNCATED")
+    t.badp("tile form with only the size", tp[:6], "EPROTO_TRUNCATED")
+    t.badp("tile form, full_width 0", tb(full_width=0), "ERANGE")
+    t.badp("tile form, full_height 8193", tb(full_height=8193), "ERANGE")
+    t.badp("tile form, tile_x at the width", tb(tile_x=8192), "ERANGE")
+    t.badp("tile form, tile_y past the height", tb(tile_y=9000), "ERANGE")
+    t.badp("tile form, tile_width 0", tb(tile_width=0), "ERANGE")
+    t.badp("tile form, tile past the right edge", tb(tile_width=1025),
+           "ERANGE")
+    t.badp("tile form, tile past the bottom edge", tb(tile_height=1025),
+           "ERANGE")
+    t.badp("tile form, planes bit 2", tb(planes=4), "EPROTO_FLAGS")
+    t.badp("tile form, jpeg", tb(encoding=1), "EENUM")
+    t.badp("tile form and one trailing byte", tp + b"\x00", "EPROTO_LENGTH")
     t.bad("length 2^31", header("SNAPSHOT", 2 ** 31), "EPROTO_LENGTH")
     t.bad("length 2^32-1", header("SNAPSHOT", 2 ** 32 - 1),
           "EPROTO_LENGTH")

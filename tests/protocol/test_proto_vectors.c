@@ -341,6 +341,19 @@ static void build(enum bc_msg_type type, const json_t *f, struct bc_msg *m)
 		m->snapshot.encoding =
 		    (enum bc_proto_encoding)jint(f, "encoding");
 		m->snapshot.planes = (uint8_t)jint(f, "planes");
+		if ((m->snapshot.has_tile =
+		         json_object_get(f, "full_width") != NULL)) {
+			m->snapshot.full_width =
+			    (uint16_t)jint(f, "full_width");
+			m->snapshot.full_height =
+			    (uint16_t)jint(f, "full_height");
+			m->snapshot.tile_x = (uint16_t)jint(f, "tile_x");
+			m->snapshot.tile_y = (uint16_t)jint(f, "tile_y");
+			m->snapshot.tile_width =
+			    (uint16_t)jint(f, "tile_width");
+			m->snapshot.tile_height =
+			    (uint16_t)jint(f, "tile_height");
+		}
 		break;
 	case BC_MSG_STATS: {
 		struct bc_msg_stats *s = &m->stats;
@@ -572,7 +585,15 @@ static int msg_eq(const struct bc_msg *a, const struct bc_msg *b)
 		       f_eq(&a->pick_result.depth, &b->pick_result.depth, 1);
 	case BC_MSG_SNAPSHOT:
 		return a->snapshot.encoding == b->snapshot.encoding &&
-		       a->snapshot.planes == b->snapshot.planes;
+		       a->snapshot.planes == b->snapshot.planes &&
+		       a->snapshot.has_tile == b->snapshot.has_tile &&
+		       (!a->snapshot.has_tile ||
+		        (a->snapshot.full_width == b->snapshot.full_width &&
+		         a->snapshot.full_height == b->snapshot.full_height &&
+		         a->snapshot.tile_x == b->snapshot.tile_x &&
+		         a->snapshot.tile_y == b->snapshot.tile_y &&
+		         a->snapshot.tile_width == b->snapshot.tile_width &&
+		         a->snapshot.tile_height == b->snapshot.tile_height));
 	case BC_MSG_STATS:
 		return memcmp(&a->stats, &b->stats, sizeof(a->stats)) == 0;
 	case BC_MSG_GET_STATS:

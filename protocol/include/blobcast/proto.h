@@ -146,7 +146,14 @@ enum bc_msg_type {
 #define BC_PROTO_FEATURE_UNDO 0x02u    /* EDIT_APPLIED's UNDO and REDO */
 #define BC_PROTO_FEATURE_PRESENT 0x04u /* types 30, 31 and 33 */
 #define BC_PROTO_FEATURE_KINDS 0x08u   /* prim kinds 17..32, unary nodes */
-#define BC_PROTO_FEATURES_ALL 0x0fu
+/* Not something the server sends but a request form it accepts: granted,
+ * the client may send SNAPSHOT's tile form (PROTOCOL.md 7.17). */
+#define BC_PROTO_FEATURE_TILES 0x10u
+#define BC_PROTO_FEATURES_ALL 0x1fu
+/* The features that decide what a server may send. */
+#define BC_PROTO_FEATURES_SENT                                                 \
+	(BC_PROTO_FEATURE_LEVELS | BC_PROTO_FEATURE_UNDO |                     \
+	 BC_PROTO_FEATURE_PRESENT | BC_PROTO_FEATURE_KINDS)
 /* The scene kinds of the first text: primitives 1..16, binary operators
  * only. A scene beyond them needs BC_PROTO_FEATURE_KINDS. */
 #define BC_PROTO_PRIM_KIND_MAX_FIRST 16u
@@ -428,8 +435,16 @@ struct bc_msg_snapshot {
 	enum bc_proto_encoding encoding; /* PNG or RAW */
 	/* BC_PROTO_PLANE_* bits; 0: colour only. Encoded as an optional
 	 * second byte, left out when 0, so a colour-only SNAPSHOT is the
-	 * same one byte it always was (a present 0 does not decode). */
+	 * same one byte it always was (a present 0 does not decode), except
+	 * in the tile form, which always carries it. */
 	uint8_t planes;
+	/* The tile form (feature TILES): the answer is the window of
+	 * tile_width x tile_height pixels at (tile_x, tile_y) of a
+	 * full_width x full_height picture from the client's camera, not
+	 * the VIEW. full 1..BC_PROTO_MAX_DIM, the tile inside it. */
+	bool has_tile;
+	uint16_t full_width, full_height;
+	uint16_t tile_x, tile_y, tile_width, tile_height;
 };
 
 /* GET_STATS: BC_PROTO_STATS_* bits; 0: the client's figures only. Encoded
