@@ -205,8 +205,11 @@ static void damage_end(struct bc_work *w, const struct flow *f,
 	for (uint32_t i = 0; i < nviews; i++) {
 		struct view *v = views[i];
 		v->damaged = true;
-		if (!d->old || !f->r || !l || w->opts.no_damage) {
-			/* Too many to project, or no renderer yet. */
+		if (!d->old || !f->r || !l || w->opts.no_damage ||
+		    v->frame.full_width) {
+			/* Too many to project, no renderer yet, or a
+			 * snapshot tile's window (projected as a whole view
+			 * it would miss): all of it. */
 			memset(v->damage, 1, v->ntiles);
 			continue;
 		}

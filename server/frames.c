@@ -524,13 +524,35 @@ int bc_handle_pick(struct bc_member *m, const struct bc_msg *msg)
 
 int bc_handle_snapshot(struct bc_member *m, const struct bc_msg *msg)
 {
+	const struct bc_msg_snapshot *sn = &msg->snapshot;
 	struct bc_job_req q;
 	if (!m->session || !m->has_view) {
 		bc__send_error(m, msg->seq, BC_ESTATE,
 		               "join a session and send VIEW before SNAPSHOT");
 		return 0;
 	}
+	if (sn->has_tile && !(m->peer->features & BC_PROTO_FEATURE_TILES)) {
+		bc__send_error(m, msg->seq, BC_ENOTSUP,
+		               "the tile form of SNAPSHOT needs the feature "
+		               "TILES announced in HELLO");
+		return 0;
+	}
+	if (sn->has_tile && (sn->tile_width > BC_SRV_MAX_DIM ||
+	                     sn->tile_height > BC_SRV_MAX_DIM)) {
+		bc__send_error(m, msg->seq, BC_ERANGE,
+		               "tile %ux%u is over this server's %ux%u",
+		               sn->tile_width, sn->tile_height, BC_SRV_MAX_DIM,
+		               BC_SRV_MAX_DIM);
+		return 0;
+	}
 	if (single_req(m, msg->seq, BC_JOB_SNAPSHOT, &q)) {
+		if (sn->has_tile) {
+			q.width = sn->tile_width;
+			q.height = sn->tile_height;
+			q.win = (struct bc_job_window){sn->tile_x, sn->tile_y,
+			                               sn->full_width,
+			                               sn->full_height};
+		}
 		q.encoding = (int)msg->snapshot.encoding;
 		q.quality_still = 100;
 		q.final = true;

@@ -762,15 +762,17 @@ static int start(struct bc_work *w, struct flow *f, struct bc_job *job,
 	/* The renderer keeps state for one view: for another it would be
 	 * rebuilt anyway, so it goes first and the cap has room for it. */
 	if (f->r && (f->rw != job->req.width || f->rh != job->req.height ||
+	             memcmp(&f->rwin, &job->req.win, sizeof(f->rwin)) ||
 	             memcmp(&f->rcam, &job->req.camera, sizeof(f->rcam)))) {
 		bc_renderer_release(f->r);
 		bc__flow_kept(w, f);
 	}
 	f->rcam = job->req.camera;
+	f->rwin = job->req.win;
 	f->rw = job->req.width;
 	f->rh = job->req.height;
-	job->v = bc__view_acquire(w, f->sid, &job->req.camera, job->req.width,
-	                          job->req.height);
+	job->v = bc__view_acquire(w, f->sid, &job->req.win, &job->req.camera,
+	                          job->req.width, job->req.height);
 	if (!job->v ||
 	    (job->req.snapshot_planes && bc__view_planes(w, job->v))) {
 		return bc_errinfo_set(

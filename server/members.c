@@ -85,7 +85,8 @@ void bc__send(struct bc_member *m, const struct bc_msg *msg)
 	 * at (which scans an edit's subtrees), not each member of a
 	 * broadcast. */
 	if (msg->type == BC_MSG_EDIT_APPLIED &&
-	    m->peer->features != BC_PROTO_FEATURES_ALL) {
+	    (m->peer->features & BC_PROTO_FEATURES_SENT) !=
+	        BC_PROTO_FEATURES_SENT) {
 		missing = bc_proto_msg_features(msg) & ~m->peer->features;
 	}
 	if (missing & ~BC_PROTO_FEATURE_UNDO) {

@@ -73,15 +73,26 @@ static struct view *lru(struct views *vs)
 	return oldest;
 }
 
-/* A kept view of (sid, cam, width, height), pinned, or NULL. Lock held. */
+/* Whether the frame is the window win (or the whole view, without one). */
+static bool same_window(const struct bc_frame *f,
+                        const struct bc_job_window *win)
+{
+	return f->full_width == win->full_width &&
+	       (!win->full_width || (f->full_height == win->full_height &&
+	                             f->win_x == win->x && f->win_y == win->y));
+}
+
+/* A kept view of (sid, win, cam, width, height), pinned, or NULL. Lock
+ * held. */
 static struct view *find(struct views *vs, uint32_t sid,
+                         const struct bc_job_window *win,
                          const struct bc_camera *cam, uint32_t width,
                          uint32_t height)
 {
 	for (uint32_t i = 0; i < BC_SRV_MAX_VIEWS; i++) {
 		struct view *v = &vs->v[i];
 		if (v->id && !v->dead && v->sid == sid && v->width == width &&
-		    v->height == height &&
+		    v->height == height && same_window(&v->frame, win) &&
 		    memcmp(&v->camera, cam, sizeof(*cam)) == 0) {
 			v->pins++;
 			v->used = ++vs->clock;
@@ -113,7 +124,8 @@ static struct view *make_room(struct views *vs, size_t need, size_t kept)
 	return slot;
 }
 
-static int view_init(struct view *v, uint32_t width, uint32_t height)
+static int view_init(struct view *v, const struct bc_job_window *win,
+                     uint32_t width, uint32_t height)
 {
 	v->tw = bc_render_tiles_x(width);
 	v->th = bc_render_tiles_y(height);
@@ -128,6 +140,11 @@ static int view_init(struct view *v, uint32_t width, uint32_t height)
 	    !(v->changed = bc_calloc(v->ntiles, sizeof(*v->changed)))) {
 		return BC_ENOMEM;
 	}
+	if (win->full_width &&
+	    bc_frame_window(&v->frame, win->x, win->y, win->full_width,
+	                    win->full_height)) {
+		return BC_ERANGE;
+	}
 	v->width = width;
 	v->height = height;
 	bc__view_reset(v);
@@ -135,6 +152,7 @@ static int view_init(struct view *v, uint32_t width, uint32_t height)
 }
 
 struct view *bc__view_acquire(struct bc_work *w, uint32_t sid,
+                              const struct bc_job_window *win,
                               const struct bc_camera *cam, uint32_t width,
                               uint32_t height)
 {
@@ -142,7 +160,7 @@ struct view *bc__view_acquire(struct bc_work *w, uint32_t sid,
 	size_t need = view_bytes(width, height);
 	struct view *v;
 	uv_mutex_lock(&vs->lock);
-	if ((v = find(vs, sid, cam, width, height))) {
+	if ((v = find(vs, sid, win, cam, width, height))) {
 		uv_mutex_unlock(&vs->lock);
 		return v;
 	}
@@ -170,7 +188,7 @@ struct view *bc__view_acquire(struct bc_work *w, uint32_t sid,
 		v = make_room(vs, need + renderer_bytes(width, height),
 		              bc__work_kept_bytes(w));
 	}
-	if (!v || view_init(v, width, height)) {
+	if (!v || view_init(v, win, width, height)) {
 		if (v) {
 			view_free(vs, v);
 		}

@@ -57,12 +57,20 @@ enum bc_job_kind {
 /* One job: a frame for a group of clients sharing a view and holding the
  * same picture of it, or a PICK, or a SNAPSHOT for one client. The worker
  * decides the level and the rectangles (job.c). */
+/* A snapshot tile (PROTOCOL.md 7.17): the job's width x height pixels are
+ * the window at (x, y) of a full_width x full_height picture. full_width
+ * 0: the job's size is the whole picture. */
+struct bc_job_window {
+	uint32_t x, y, full_width, full_height;
+};
+
 struct bc_job_req {
 	enum bc_job_kind kind;
 	uint32_t session_id;
 	struct bc_camera camera;
-	uint32_t width, height; /* VIEW size */
-	int encoding;           /* of stills and snapshots */
+	uint32_t width, height; /* VIEW size (a tile's, with win) */
+	struct bc_job_window win;
+	int encoding; /* of stills and snapshots */
 	int encoding_interactive;
 	int quality_still, quality_interactive;
 	uint32_t max_level; /* coarsest level the clients accept */

@@ -108,6 +108,7 @@ struct flow {
 	 * another comes). */
 	struct bc_camera rcam;
 	uint32_t rw, rh;
+	struct bc_job_window rwin;
 };
 
 /* Per worker scratch: reused across slices, never shared. */
@@ -226,10 +227,12 @@ void bc__flow_clear(struct bc_work *w, struct flow *f);
 
 int bc__views_init(struct views *vs, size_t cap);
 void bc__views_finish(struct views *vs);
-/* The view of (sid, cam, width x height), kept or new, pinned; NULL when
+/* The view of (sid, cam, width x height, the window win of a bigger
+ * picture or none), kept or new, pinned; NULL when
  * out of memory or when the cache cannot make room under its cap (every
  * other view pinned). extra: bytes the renderer will keep beside it. */
 struct view *bc__view_acquire(struct bc_work *w, uint32_t sid,
+                              const struct bc_job_window *win,
                               const struct bc_camera *cam, uint32_t width,
                               uint32_t height);
 void bc__view_release(struct bc_work *w, struct view *v);

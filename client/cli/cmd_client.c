@@ -116,6 +116,17 @@ static int client_opts(const struct bc_cli_cmd *k, struct bc_cli_call *a,
 	      .help = "stop after N frames ({range}; default: run until\n"
 	              "stopped); give up when no frame came for --timeout\n"
 	              "MS (default 10000; 0: never), exit status 1"}},
+	    {BC_CLI_O_TILE,
+	     {.name = "tile",
+	      .kind = BC_OPT_U32,
+	      .dst = &a->tile,
+	      .lo = 8,
+	      .hi = BC_PROTO_MAX_DIM,
+	      .arg = "N",
+	      .help = "ask for the picture in N x N tiles ({range},\n"
+	              "rounded down to a multiple of 8; default: one\n"
+	              "picture when the server's max_dim allows, else\n"
+	              "1024)"}},
 	    {BC_CLI_O_FOR,
 	     {.name = "for",
 	      .kind = BC_OPT_U64,

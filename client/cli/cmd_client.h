@@ -61,6 +61,7 @@ enum {
 	BC_CLI_O_IDS = 1u << 14,
 	BC_CLI_O_JSON = 1u << 15,
 	BC_CLI_O_FOR = 1u << 16,
+	BC_CLI_O_TILE = 1u << 17,
 };
 #define BC_CLI_O_CAMERA                                                        \
 	(BC_CLI_O_EYE | BC_CLI_O_TARGET | BC_CLI_O_UP | BC_CLI_O_FOV)
@@ -80,6 +81,7 @@ struct bc_cli_call {
 	uint64_t frames;
 	uint64_t for_s; /* present --for SECONDS; 0: until stopped */
 	uint32_t edits, node;
+	uint32_t tile; /* snapshot --tile: tile edge, 0: as the size needs */
 	enum bc_proto_encoding encoding;
 	bool interacting, json;
 	uint8_t downscale;

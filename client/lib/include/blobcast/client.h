@@ -496,4 +496,50 @@ BC_API int bc_client_snapshot_planes(struct bc_client *c,
                                      struct bc_client_image *out,
                                      struct bc_errinfo *ei);
 
+/* ---- Big snapshots
+ * ------------------------------------------------------------------------ */
+
+/* The tile edge bc_client_snapshot_big() asks for unless told: 1024^2
+ * PNG tiles stay far under any max_frame_bytes a client sensibly sets,
+ * and each is a short job for the server, so other sessions are not held
+ * up behind one big picture. */
+#define BC_CLIENT_BIG_TILE 1024u
+
+/* Progress of bc_client_snapshot_big(): tiles arrived of total (a tile
+ * asked for again counts again). */
+typedef void (*bc_client_progress_fn)(void *ud, uint32_t done, uint32_t total);
+
+/* Zero means default for every field but the size. */
+struct bc_client_big_opts {
+	uint32_t width, height;          /* the picture, 1..BC_PROTO_MAX_DIM */
+	enum bc_proto_encoding encoding; /* PNG (0 or 2) or raw */
+	unsigned planes;                 /* BC_PROTO_PLANE_* bits */
+	/* Tile edge in pixels, rounded down to a multiple of 8 and capped at
+	 * the server's max_dim; 0: BC_CLIENT_BIG_TILE. */
+	uint32_t tile;
+	uint32_t in_flight; /* tiles asked for at once, 1..4; 0: 2 */
+	int timeout_ms;     /* for each tile; 0: the client's timeout */
+	bc_client_progress_fn progress;
+	void *ud;
+};
+
+/*
+ * A lossless picture of width x height (up to 8192 x 8192, beyond the
+ * server's VIEW limit) from this client's camera, asked for in tiles with
+ * SNAPSHOT's tile form and assembled into *out (initialized; replaced):
+ * out->rgba, and out->depth / out->ids when planes asked for them, at the
+ * full size; out->order is the edit order every tile shows (a tile that
+ * an edit overtook is asked for again), out->flags has INCOMPLETE when a
+ * tile was cut by the server's time budget. A VIEW must have been sent
+ * (any size: it plays no part). Needs the feature TILES (WELCOME).
+ * Returns 0, BC_ENOTSUP (the server did not grant TILES), BC_ERANGE (a
+ * size outside 1..8192), BC_EINVAL (encoding or planes), BC_ENOMEM,
+ * BC_EBUSY (the scene or camera kept changing between tiles), or the
+ * server's or the connection's error, with the reason in ei.
+ */
+BC_API int bc_client_snapshot_big(struct bc_client *c,
+                                  const struct bc_client_big_opts *opts,
+                                  struct bc_client_image *out,
+                                  struct bc_errinfo *ei);
+
 #endif
