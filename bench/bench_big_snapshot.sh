@@ -1,0 +1,69 @@
+#!/bin/sh
+# A big snapshot end to end: blobcastd on its embedded default scene and
+# `blobcast snapshot --size SIZE` through it (in tiles over the daemon's
+# max_dim, 4096), timed, with the peak resident memory of the client
+# (GNU time) and of the daemon (VmHWM, the daemon's own, read before it
+# stops), and a second daemon-side figure: the peak while idle, so that
+# the snapshot's own share shows.
+#
+#   bench/bench_big_snapshot.sh [BUILD_DIR] [SIZE ...]
+#
+# BUILD_DIR defaults to build-rel (a Release build: ASan would measure the
+# sanitizer); SIZEs default to 2048 4096 8192 (square). Extra daemon
+# options come from $BC_DAEMON_OPTS (e.g. "--backend gl"). Prints one
+# Markdown table row per size.
+set -eu
+build=${1:-build-rel}
+[ $# -gt 0 ] && shift
+sizes=${*:-2048 4096 8192}
+daemon=$build/server/blobcastd
+cli=$build/client/blobcast
+for f in "$daemon" "$cli"; do
+	if [ ! -x "$f" ]; then
+		echo "bench_big_snapshot: $f is not built (cmake --build $build)" >&2
+		exit 1
+	fi
+done
+if [ ! -x /usr/bin/time ]; then
+	echo "bench_big_snapshot: /usr/bin/time is missing (apt install time)" >&2
+	exit 1
+fi
+dir=$(mktemp -d /tmp/bc-bigsnap.XXXXXX)
+pid=
+cleanup() {
+	[ -n "$pid" ] && kill "$pid" 2>/dev/null && wait "$pid" 2>/dev/null
+	rm -rf "$dir"
+}
+trap cleanup EXIT INT TERM
+
+# shellcheck disable=SC2086
+"$daemon" --listen none --unix "$dir/sock" --data "$dir/data" \
+	${BC_DAEMON_OPTS:-} 2>"$dir/daemon.log" &
+pid=$!
+i=0
+until [ -S "$dir/sock" ] && grep -q 'blobcastd: backend' "$dir/daemon.log"; do
+	i=$((i + 1))
+	if [ $i -gt 400 ] || ! kill -0 "$pid" 2>/dev/null; then
+		echo "bench_big_snapshot: blobcastd did not start:" >&2
+		cat "$dir/daemon.log" >&2
+		exit 1
+	fi
+	sleep 0.05
+done
+hwm() { awk '/^VmHWM/ {print int($2 / 1024)}' "/proc/$pid/status"; }
+echo "daemon idle peak: $(hwm) MiB ($(sed -n 's/^blobcastd: backend \([a-z]*\).*/\1/p' "$dir/daemon.log") backend)"
+echo "| size | tiles | wall s | client peak MiB | daemon peak MiB | bytes from the server |"
+echo "|---:|---:|---:|---:|---:|---:|"
+for s in $sizes; do
+	/usr/bin/time -f '%e %M' -o "$dir/time" "$cli" snapshot \
+		--server "unix:$dir/sock" --session default --size "${s}x${s}" \
+		--timeout 600000 --out "$dir/out.png" >"$dir/out" 2>"$dir/err" || {
+		echo "bench_big_snapshot: snapshot at $s failed:" >&2
+		cat "$dir/err" >&2
+		exit 1
+	}
+	tiles=$(sed -n 's/.*tile [0-9]* of \([0-9]*\).*/\1/p' "$dir/err" | tail -1)
+	bytes=$(sed -n 's/.*order [0-9]*, \([0-9]*\) bytes.*/\1/p' "$dir/out")
+	read -r wall kb <"$dir/time"
+	echo "| ${s}² | ${tiles:-1} | $wall | $((kb / 1024)) | $(hwm) | $bytes |"
+done
