@@ -128,6 +128,23 @@ if command -v oiiotool > /dev/null 2>&1; then
     fi
   done
 fi
+# In 16x16 tiles (ragged at the right: 96 = 6 x 16, 64 = 4 x 16; then 40,
+# ragged both ways) the picture and its planes are the same.
+run 0 "wrote $tmp/t.png (96x64" \
+  $S snapshot --session review --size 96x64 --tile 16 --out "$tmp/t.png" \
+  --depth "$tmp/t.exr" --ids "$tmp/t.tif"
+grep -q "tile 24 of 24" "$tmp/out" || fail "no progress line: $(cat "$tmp/out")"
+run 0 "wrote $tmp/u.png (96x64" \
+  $S snapshot --session review --size 96x64 --tile 40 --out "$tmp/u.png"
+if command -v oiiotool > /dev/null 2>&1; then
+  for f in t.png t.exr t.tif u.png; do
+    if ! oiiotool "$tmp/$f" "$tmp/a.${f#*.}" --diff > "$tmp/diff" 2>&1; then
+      fail "tiled $f and whole a.${f#*.} differ: $(cat "$tmp/diff")"
+    fi
+  done
+fi
+run 2 "between 8 and 8192" $S snapshot --session review --size 96x64 \
+  --tile 4 --out "$tmp/x.png"
 run 2 "depth needs a float format" $S snapshot --session review \
   --size 96x64 --out "$tmp/x.png" --depth "$tmp/x.png"
 
