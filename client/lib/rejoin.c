@@ -1,8 +1,10 @@
 /*
  * Reconnecting: what a client remembers of how it connected and which
  * session it entered, the call that opens a new connection into the same
- * session (bc_client_rejoin), the back-off between attempts and the errors
- * after which attempting again is pointless. The CLI's `watch` and
+ * session (bc_client_rejoin), letting go of a lost connection's socket
+ * while keeping what the rejoin needs (bc_client_disconnect), the back-off
+ * between attempts and the errors after which attempting again is
+ * pointless. The CLI's `watch` and
  * blobcast-view both keep going across a daemon restart with these, so
  * that the policy is written once.
  */
@@ -10,6 +12,7 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "blobcast/alloc.h"
 #include "blobcast/client.h"
@@ -117,6 +120,20 @@ void bc__client_joined(struct bc_client *c, const char *name,
 	snprintf(c->join_name, sizeof(c->join_name), "%s", name);
 	c->join_role = role;
 	c->join_mode = mode;
+}
+
+void bc_client_disconnect(struct bc_client *c)
+{
+	if (!c || c->fd < 0) {
+		return;
+	}
+	/* Every call checks the sticky error before it touches the socket,
+	 * so none reaches the closed one. */
+	bc__client_fail(c, BC_ECLOSED, "connection closed by this client");
+	bc__client_transport_free(c);
+	bc__client_ws_free(c);
+	close(c->fd);
+	c->fd = -1;
 }
 
 int bc_client_rejoin(const struct bc_client *old, int timeout_ms,

@@ -2,7 +2,8 @@
  * libblobcast's reconnect (rejoin.c): the back-off's delays, which errors
  * make another attempt pointless, and bc_client_rejoin() against a real
  * blobcastd that is stopped and started again on the same data directory,
- * into a session that persisted, one that was deleted, and none.
+ * into a session that persisted, one that was deleted, and none; and
+ * bc_client_disconnect(), which lets the daemon drop the member at once.
  */
 #include <limits.h>
 
@@ -227,6 +228,64 @@ static void rejoin_without_a_session_only_connects(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
+/* Receives on c until its roster has n members (at most 5 s). */
+static bool roster_reaches(struct bc_client *c, size_t n)
+{
+	const struct bc_client_member *list;
+	size_t have = 0;
+	struct bc_msg m;
+	for (int i = 0; i < 50; i++) {
+		bc_client_members(c, &list, &have);
+		if (have == n || bc_client_recv(c, &m, 100) < 0) {
+			break;
+		}
+	}
+	bc_client_members(c, &list, &have);
+	return have == n;
+}
+
+static void disconnect_lets_the_member_go_and_keeps_the_rest(void)
+{
+	struct daemon d = {0};
+	struct bc_client *a = NULL, *b = NULL, *again = NULL;
+	struct bc_errinfo ei = {0};
+	uint32_t a_member;
+	char dir[160];
+	snprintf(dir, sizeof(dir), "%s/disconnect", base_dir);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	REQUIRE(connect_to(&d, "a", &a, &ei) == 0);
+	REQUIRE(bc_client_join(a, "pair", BC_PROTO_ROLE_EDITOR,
+	                       BC_CLIENT_JOIN_ANY, &ei) == 0);
+	REQUIRE(connect_to(&d, "b", &b, &ei) == 0);
+	REQUIRE(bc_client_join(b, "pair", BC_PROTO_ROLE_VIEWER,
+	                       BC_CLIENT_JOIN_EXISTING, &ei) == 0);
+	CHECK(roster_reaches(b, 2));
+	a_member = bc_client_info(a)->member_id;
+
+	bc_client_disconnect(a);
+	/* The daemon lets a's member go at once ... */
+	CHECK(roster_reaches(b, 1));
+	CHECK(bc_client_member_find(b, a_member) == NULL);
+	/* ... while a keeps what it knew, refuses more work, and can be
+	 * disconnected again. */
+	CHECK_EQ_INT(bc_client_fd(a), -1);
+	CHECK_EQ_INT(bc_client_error(a, &ei), BC_ECLOSED);
+	CHECK(strcmp(bc_client_info(a)->session, "pair") == 0);
+	CHECK_EQ_INT(bc_client_stats(a, &(struct bc_msg_stats){0}, NULL),
+	             BC_ECLOSED);
+	bc_client_disconnect(a);
+	bc_client_disconnect(NULL);
+	/* It still knows where to go back to. */
+	memset(&ei, 0, sizeof(ei));
+	REQUIRE(bc_client_rejoin(a, 0, &again, &ei) == 0);
+	CHECK(strcmp(bc_client_info(again)->session, "pair") == 0);
+	CHECK(roster_reaches(b, 2));
+	bc_client_destroy(again);
+	bc_client_destroy(a);
+	bc_client_destroy(b);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
 static const struct bc_test tests[] = {
     {"backoff_doubles_from_first_to_longest",
      backoff_doubles_from_first_to_longest},
@@ -238,6 +297,8 @@ static const struct bc_test tests[] = {
      rejoin_a_deleted_session_is_useless},
     {"rejoin_without_a_session_only_connects",
      rejoin_without_a_session_only_connects},
+    {"disconnect_lets_the_member_go_and_keeps_the_rest",
+     disconnect_lets_the_member_go_and_keeps_the_rest},
 };
 
 int main(int argc, char **argv)

@@ -506,7 +506,7 @@ BC_API int bc_client_snapshot_planes(struct bc_client *c,
  *   bc_client_backoff_init(&b, 0, 0);
  *   ... bc_client_recv() fails, or a FATAL ERROR arrives, with code:
  *   if (bc_client_retry_useless(code)) stop;
- *   bc_client_backoff_reset(&b, now);
+ *   bc_client_disconnect(c); bc_client_backoff_reset(&b, now);
  *   ... once bc_client_backoff_due(&b, now):
  *   if ((rc = bc_client_rejoin(c, 0, &fresh, &ei)) == 0) {
  *           bc_client_destroy(c); c = fresh;  (send VIEW, CAMERA again)
@@ -571,6 +571,17 @@ BC_API int bc_client_backoff_next(struct bc_client_backoff *b, double now_ms);
 /* Whether the next attempt is due at now_ms. */
 BC_API bool bc_client_backoff_due(const struct bc_client_backoff *b,
                                   double now_ms);
+
+/*
+ * Closes c's socket now (TLS and WebSocket state with it), so that the
+ * daemon sees this member leave at once rather than whenever it notices a
+ * dead or confused connection, while c keeps its info, roster, scene
+ * mirror and what bc_client_rejoin() needs. c's sticky error stays, or
+ * becomes BC_ECLOSED when there was none; bc_client_fd() returns -1.
+ * Accepts NULL and a client already disconnected; bc_client_destroy()
+ * still frees c.
+ */
+BC_API void bc_client_disconnect(struct bc_client *c);
 
 /*
  * Opens a new connection with the options old was connected with (their
