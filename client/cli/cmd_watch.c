@@ -166,8 +166,9 @@ static int watch_open(const struct bc_cli_call *a, struct bc_client **c,
  */
 static int run_watch(struct bc_cli_call *a)
 {
-	/* While offline, c is the lost connection: bc_client_rejoin() takes
-	 * the address, options and session from it. */
+	/* While offline, c is the lost connection, disconnected:
+	 * bc_client_rejoin() takes the address, options and session from
+	 * it. */
 	struct bc_client *c = NULL, *fresh = NULL;
 	struct bc_client_backoff backoff;
 	bool offline = false;
@@ -276,6 +277,7 @@ static int run_watch(struct bc_cli_call *a)
 			printf("lost reason=%s\n", bc_err_name(ei.code));
 			fflush(stdout);
 			offline = true;
+			bc_client_disconnect(c);
 			bc_client_backoff_reset(&backoff, bc_clock_ms());
 			continue;
 		}

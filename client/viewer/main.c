@@ -800,6 +800,9 @@ static void lost(struct bc_viewer_app *a, int code, double now)
 	char why[sizeof(a->status)];
 	snprintf(why, sizeof(why), "%s", a->status);
 	watch_stop(a);
+	/* The daemon drops our member now; the scene mirror and roster stay
+	 * for the overlay, the options for bc_client_rejoin(). */
+	bc_client_disconnect(a->c);
 	a->offline = true;
 	bc_client_backoff_reset(&a->retry, now);
 	a->gave_up = bc_client_retry_useless(code);
