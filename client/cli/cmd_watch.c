@@ -20,11 +20,6 @@
 /* Edit orders whose arrival time is remembered for the latency of
  * the frame that shows them (frames lag edits by a few at most). */
 #define WATCH_ORDERS 256u
-/* watch: the first and the longest delay between attempts to reconnect. A
- * restarting daemon is back in well under a second; a longer outage is
- * tried every few seconds, which costs the server nothing noticeable. */
-#define WATCH_BACKOFF_MIN_MS 250
-#define WATCH_BACKOFF_MAX_MS 4000
 
 /* Arrival times of edit orders, to measure frames against. */
 struct order_times {
@@ -114,56 +109,43 @@ static void print_presenter(const struct bc_client *c, uint32_t id,
 	       following ? " following" : "");
 }
 
-/* The errors after which connecting again would be refused the same way:
- * watch reports them and stops instead of retrying. */
-static bool watch_gives_up(int code)
+/* After joining (the roster is the library's): prints the member list,
+ * asks who presents and sends the VIEW, whose time *view_at receives.
+ * Returns 0 or a BC_E* code with the reason in ei. */
+static int watch_start(const struct bc_cli_call *a, struct bc_client *c,
+                       double *view_at, struct bc_errinfo *ei)
 {
-	return code == BC_EAUTH || code == BC_EPERM ||
-	       code == BC_EPROTO_VERSION || code == BC_ENOSESSION ||
-	       code == BC_EINVAL || code == BC_ELIMIT;
+	int rc;
+	print_members(c);
+	/* FOLLOW 0 follows nobody; it asks the server to say who presents
+	 * (PRESENTER), now and whenever that changes. */
+	if ((rc = bc_client_follow(c, false, ei))) {
+		return rc;
+	}
+	print_presenter(c, bc_client_info(c)->presenter, false);
+	*view_at = bc_clock_ms();
+	return bc_client_view(c,
+	                      &(struct bc_msg_view){.width = a->width,
+	                                            .height = a->height,
+	                                            .encoding = a->encoding,
+	                                            .downscale = a->downscale},
+	                      NULL, ei);
 }
 
-/* Connects, joins a->session as a viewer and asks for frames. The join is
- * done here rather than with bc_client_join() to print the member list as
- * soon as SESSION_INFO arrives (the scene state that follows is read by the
- * frame loop).
+/* Connects, joins a->session as a viewer and asks for frames.
  * Returns 0 or a BC_E* code with the reason in ei; *c is set either way
  * (NULL when the connection failed). */
 static int watch_open(const struct bc_cli_call *a, struct bc_client **c,
                       double *view_at, struct bc_errinfo *ei)
 {
 	struct bc_client_opts opts = bc_cli_connect_opts(a);
-	struct bc_msg m = {.type = BC_MSG_SESSION_JOIN};
 	int rc;
-	*c = NULL;
-	if ((rc = bc_client_connect(c, &opts, ei))) {
+	if ((rc = bc_client_connect(c, &opts, ei)) ||
+	    (rc = bc_client_join(*c, a->session, BC_PROTO_ROLE_VIEWER,
+	                         BC_CLIENT_JOIN_EXISTING, ei))) {
 		return rc;
 	}
-	m.session.role = BC_PROTO_ROLE_VIEWER;
-	m.session.name.ptr = a->session;
-	m.session.name.len = (uint32_t)strlen(a->session);
-	if ((rc = bc_client_send(*c, &m, NULL)) ||
-	    (rc = bc_client_wait(*c, BC_MSG_SESSION_INFO, 0, &m, 0, ei))) {
-		if (!ei->code) {
-			bc_client_error(*c, ei);
-			ei->code = rc;
-		}
-		return rc;
-	}
-	print_members(*c);
-	/* FOLLOW 0 follows nobody; it asks the server to say who presents
-	 * (PRESENTER), now and whenever that changes. */
-	if ((rc = bc_client_follow(*c, false, ei))) {
-		return rc;
-	}
-	print_presenter(*c, bc_client_info(*c)->presenter, false);
-	*view_at = bc_clock_ms();
-	return bc_client_view(*c,
-	                      &(struct bc_msg_view){.width = a->width,
-	                                            .height = a->height,
-	                                            .encoding = a->encoding,
-	                                            .downscale = a->downscale},
-	                      NULL, ei);
+	return watch_start(a, *c, view_at, ei);
 }
 
 /*
@@ -176,14 +158,20 @@ static int watch_open(const struct bc_cli_call *a, struct bc_client **c,
  * frame) get "-".
  *
  * A lost connection (the daemon restarted, the network dropped) is
- * retried with a doubling delay and the session joined again; errors that
- * a retry would meet again (a refused token, a missing session) end the
- * run. With --frames N the run also ends when no frame has come for the
+ * retried with the library's doubling delay (bc_client_backoff) and the
+ * session joined again (bc_client_rejoin); errors that a retry would meet
+ * again (bc_client_retry_useless: a refused token, a missing session) end
+ * the run. With --frames N the run also ends when no frame has come for the
  * --timeout (end=timeout, status 1).
  */
 static int run_watch(struct bc_cli_call *a)
 {
-	struct bc_client *c = NULL;
+	/* While offline, c is the lost connection, disconnected:
+	 * bc_client_rejoin() takes the address, options and session from
+	 * it. */
+	struct bc_client *c = NULL, *fresh = NULL;
+	struct bc_client_backoff backoff;
+	bool offline = false;
 	struct bc_errinfo ei = {0};
 	struct bc_client_image img;
 	struct order_times *times = NULL;
@@ -192,13 +180,14 @@ static int run_watch(struct bc_cli_call *a)
 	struct bc_msg_stats st;
 	uint64_t nframes = 0, last_order = 0, total_bytes = 0;
 	uint64_t joined_at_frame = 0;
-	double view_at = 0.0, last_frame_at, retry_at = 0.0;
-	int backoff_ms = WATCH_BACKOFF_MIN_MS, rc, status = 0;
+	double view_at = 0.0, last_frame_at;
+	int rc, status = 0;
 	/* --timeout bounds the wait for each frame when --frames asks for a
 	 * count; without it watch runs until stopped. */
 	double idle_limit = bc_cli_frame_idle_limit(a);
 	const char *end = "stopped";
 	bc_client_image_init(&img);
+	bc_client_backoff_init(&backoff, 0, 0);
 	bc_cli_stop_install(&sig);
 	if (!(times = bc_calloc(1, sizeof(*times)))) {
 		fprintf(stderr, "blobcast watch: out of memory\n");
@@ -220,41 +209,45 @@ static int run_watch(struct bc_cli_call *a)
 			end = "timeout";
 			break;
 		}
-		if (!c) {
+		if (offline) {
 			/* Reconnecting: wait out the back-off in slices so
 			 * that Ctrl-C and the timeout are noticed. */
-			if (bc_clock_ms() < retry_at) {
+			if (!bc_client_backoff_due(&backoff, bc_clock_ms())) {
 				struct timespec ts = {0, BC_CLI_SLICE_MS *
 				                             1000000L};
 				nanosleep(&ts, NULL);
 				continue;
 			}
 			memset(&ei, 0, sizeof(ei));
-			rc = watch_open(a, &c, &view_at, &ei);
-			if (rc && watch_gives_up(rc)) {
-				status =
-				    bc_cli_failed(a, c, "reconnecting", &ei);
+			rc = bc_client_rejoin(c, 0, &fresh, &ei);
+			if (!rc) {
+				rc = watch_start(a, fresh, &view_at, &ei);
+			}
+			if (rc && bc_client_retry_useless(rc)) {
+				status = bc_cli_failed(a, fresh, "reconnecting",
+				                       &ei);
 				goto out;
 			}
 			if (rc) {
-				bc_client_destroy(c);
-				c = NULL;
-				retry_at = bc_clock_ms() + backoff_ms;
+				int delay;
+				bc_client_destroy(fresh);
+				fresh = NULL;
+				delay = bc_client_backoff_next(&backoff,
+				                               bc_clock_ms());
 				fprintf(
 				    stderr,
 				    "blobcast watch: reconnecting failed: %s "
 				    "(%s); next try in %d ms\n",
-				    ei.msg, bc_err_name(rc), backoff_ms);
-				backoff_ms =
-				    backoff_ms * 2 > WATCH_BACKOFF_MAX_MS
-				        ? WATCH_BACKOFF_MAX_MS
-				        : backoff_ms * 2;
+				    ei.msg, bc_err_name(rc), delay);
 				continue;
 			}
+			bc_client_destroy(c);
+			c = fresh;
+			fresh = NULL;
+			offline = false;
 			fprintf(stderr, "blobcast watch: rejoined session %s\n",
 			        a->session);
 			printf("rejoined session=%s\n", a->session);
-			backoff_ms = WATCH_BACKOFF_MIN_MS;
 			joined_at_frame = nframes;
 			last_order = 0;
 		}
@@ -272,7 +265,7 @@ static int run_watch(struct bc_cli_call *a)
 			} else {
 				bc_client_error(c, &ei);
 			}
-			if (watch_gives_up(ei.code)) {
+			if (bc_client_retry_useless(ei.code)) {
 				status = bc_cli_failed(a, c, NULL, &ei);
 				goto out;
 			}
@@ -283,9 +276,9 @@ static int run_watch(struct bc_cli_call *a)
 			        bc_err_name(ei.code));
 			printf("lost reason=%s\n", bc_err_name(ei.code));
 			fflush(stdout);
-			bc_client_destroy(c);
-			c = NULL;
-			retry_at = bc_clock_ms() + backoff_ms;
+			offline = true;
+			bc_client_disconnect(c);
+			bc_client_backoff_reset(&backoff, bc_clock_ms());
 			continue;
 		}
 		at = bc_clock_ms();
@@ -381,7 +374,7 @@ static int run_watch(struct bc_cli_call *a)
 	/* Server averages when the connection is up; a run that ends while
 	 * reconnecting reports its own counts only. */
 	memset(&st, 0, sizeof(st));
-	if (c && bc_client_stats(c, &st, &ei)) {
+	if (!offline && bc_client_stats(c, &st, &ei)) {
 		status = bc_cli_failed(a, c, "stats", &ei);
 		goto out;
 	}
@@ -399,6 +392,7 @@ out:
 	bc_cli_stop_restore(&sig);
 	bc_free(times);
 	bc_client_image_finish(&img);
+	bc_client_destroy(fresh);
 	bc_client_destroy(c);
 	return status;
 }

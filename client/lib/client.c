@@ -957,6 +957,10 @@ int bc_client_connect(struct bc_client **out, const struct bc_client_opts *opts,
 	}
 	c->fd = -1;
 	c->next_seq = 1;
+	if (bc__client_remember(c, o)) {
+		rc = bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+		goto fail;
+	}
 	c->timeout_ms =
 	    o->timeout_ms == 0 ? BC_CLIENT_DEFAULT_TIMEOUT_MS : o->timeout_ms;
 	c->encodings = o->encodings ? o->encodings : BC_PROTO_ENCODINGS_ALL;
@@ -1025,6 +1029,7 @@ void bc_client_destroy(struct bc_client *c)
 	bc_proto_buf_finish(&c->out);
 	bc_tree_destroy(c->scene);
 	bc_free(c->chunk);
+	bc__client_forget(c);
 	bc_free(c);
 }
 
@@ -1394,15 +1399,20 @@ int bc_client_join(struct bc_client *c, const char *name,
 		role = BC_PROTO_ROLE_EDITOR;
 	}
 	if (mode == BC_CLIENT_JOIN_CREATE) {
-		return join_once(c, BC_MSG_SESSION_CREATE, name, role, ei);
+		rc = join_once(c, BC_MSG_SESSION_CREATE, name, role, ei);
+	} else {
+		rc = join_once(c, BC_MSG_SESSION_JOIN, name, role, ei);
 	}
-	rc = join_once(c, BC_MSG_SESSION_JOIN, name, role, ei);
 	if (rc == BC_ENOSESSION && mode == BC_CLIENT_JOIN_ANY) {
 		rc = join_once(c, BC_MSG_SESSION_CREATE, name, role, ei);
 		/* Someone else created it between our two requests. */
 		if (rc == BC_EEXIST) {
 			rc = join_once(c, BC_MSG_SESSION_JOIN, name, role, ei);
 		}
+	}
+	if (!rc) {
+		/* What bc_client_rejoin() repeats. */
+		bc__client_joined(c, name, role, mode);
 	}
 	return rc;
 }

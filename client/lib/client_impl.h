@@ -40,6 +40,13 @@ struct bc_client {
 	size_t nmembers;
 	/* The seq of the SESSION_LEAVE awaiting its OK (0: none). */
 	uint32_t leave_seq;
+	/* What bc_client_rejoin() repeats (rejoin.c): the options connected
+	 * with, their strings the client's own copies, and the session
+	 * bc_client_join() entered last (join_name "" before any). */
+	struct bc_client_opts opts;
+	char join_name[BC_PROTO_MAX_NAME + 1];
+	enum bc_proto_role join_role;
+	enum bc_client_join_mode join_mode;
 };
 
 /* Milliseconds left until deadline (a bc_clock_ms() value), rounded
@@ -49,6 +56,17 @@ int bc__client_ms_left(double deadline);
 /* Records a sticky error on c (the first one wins) and returns it. */
 int bc__client_fail(struct bc_client *c, int code, const char *fmt,
                     ...) BC__ERRINFO_PRINTF;
+
+/* ---- rejoin.c: what a reconnect repeats --------------------------------- */
+
+/* Copies o, its strings included, into c->opts. Returns 0 or BC_ENOMEM
+ * (what was copied is freed by bc__client_forget()). */
+int bc__client_remember(struct bc_client *c, const struct bc_client_opts *o);
+/* Frees the copies; accepts a client that remembered nothing. */
+void bc__client_forget(struct bc_client *c);
+/* Records the session that bc_client_join() entered (name checked). */
+void bc__client_joined(struct bc_client *c, const char *name,
+                       enum bc_proto_role role, enum bc_client_join_mode mode);
 
 /* ---- transport.c: the byte stream ---------------------------------------- */
 

@@ -40,11 +40,6 @@
 /* Messages handled per loop turn before input and drawing get their turn:
  * a burst of frames must not freeze the window. */
 #define BC_VIEWER_MSGS_PER_TURN 64
-/* A lost connection is tried again after this delay (ms), doubled after
- * each failed attempt up to the maximum: a restarting daemon is back within
- * a second, a longer outage costs one attempt every few seconds. */
-#define BC_VIEWER_RETRY_MIN_MS 250.0
-#define BC_VIEWER_RETRY_MAX_MS 4000.0
 /* One attempt waits at most this long (ms) for the daemon's answers; the
  * window does not redraw meanwhile, so keep it short. */
 #define BC_VIEWER_RETRY_TIMEOUT_MS 2000
@@ -187,8 +182,10 @@ struct bc_viewer_app {
 
 	bool offline; /* the connection failed; the status says why */
 	bool gave_up; /* ... for a reason a retry would meet again */
-	double retry_at, retry_ms;
-	unsigned attempts; /* failed attempts since the connection was lost */
+	/* When to try again, and the failed attempts since the connection
+	 * was lost: the library's delays (BC_CLIENT_BACKOFF_FIRST_MS doubling
+	 * up to BC_CLIENT_BACKOFF_LONGEST_MS). */
+	struct bc_client_backoff retry;
 	bool quit;
 	int exit_code;
 };

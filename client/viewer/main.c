@@ -13,10 +13,12 @@
  * single-threaded as it requires.
  *
  * A lost connection (the daemon restarted, the network dropped) keeps the
- * last picture on screen and is tried again after a doubling delay; the
- * new connection joins the session again, sends our view and camera, and
- * replaces the old one. Errors a retry would meet again (a refused token
- * or role, a missing session) stop the retries and stay on the overlay.
+ * last picture on screen and is tried again after the library's doubling
+ * delay (bc_client_backoff); the new connection joins the session again
+ * (bc_client_rejoin), sends our view and camera, and replaces the old one.
+ * Errors a retry would meet again (bc_client_retry_useless: a refused
+ * token or role, a missing session) stop the retries and stay on the
+ * overlay.
  */
 #include <errno.h>
 #include <math.h>
@@ -748,36 +750,17 @@ static void maybe_turn(struct bc_viewer_app *a, double now)
 	bc_viewer_shot_start(&a->shot, now);
 }
 
-/* One SESSION_JOIN or SESSION_CREATE, its SESSION_INFO (which fills the
- * library's roster, taken into *roster), then the SCENE_STATE that fills
- * the scene mirror. */
-static int join_once(struct bc_client *c, enum bc_msg_type type,
-                     const struct bc_viewer_opts *o,
-                     struct bc_viewer_roster *roster, struct bc_errinfo *ei)
+/* After joining (bc_client_join or bc_client_rejoin, which fill the
+ * library's roster and scene mirror): takes the roster into *roster and
+ * asks with FOLLOW 0 who presents (PRESENTER, handled by bc_viewer_pump,
+ * which follows again when F is on). Returns 0 or the sticky error. */
+static int joined(struct bc_client *c, struct bc_viewer_roster *roster,
+                  struct bc_errinfo *ei)
 {
-	struct bc_msg m = {.type = type};
+	struct bc_msg m = {.type = BC_MSG_FOLLOW};
 	int rc;
-	m.session.role = o->role;
-	m.session.name.ptr = o->session;
-	m.session.name.len = (uint32_t)strlen(o->session);
-	if ((rc = bc_client_send(c, &m, NULL))) {
-		if (!bc_client_error(c, ei)) {
-			bc_errinfo_set(ei, rc, "session %s: %s", o->session,
-			               bc_strerror(rc));
-		}
-		return rc;
-	}
-	if ((rc = bc_client_wait(c, BC_MSG_SESSION_INFO, 0, &m, 0, ei))) {
-		return rc;
-	}
-	if ((rc = bc_client_wait(c, BC_MSG_SCENE_STATE, 0, &m, 0, ei))) {
-		return rc;
-	}
 	memset(roster, 0, sizeof(*roster));
 	bc_viewer_roster_update(roster, c);
-	/* FOLLOW 0 asks the server to say who presents (PRESENTER, handled
-	 * by bc_viewer_pump, which follows again when F is on). */
-	m = (struct bc_msg){.type = BC_MSG_FOLLOW};
 	if ((rc = bc_client_send(c, &m, NULL))) {
 		bc_client_error(c, ei);
 	}
@@ -788,15 +771,13 @@ static int join_once(struct bc_client *c, enum bc_msg_type type,
  * when missing, a viewer needs it to exist. Returns 0 or the error with its
  * reason in ei; *c is set either way (NULL when connecting failed). */
 static int open_session(const struct bc_viewer_app *a, struct bc_client **c,
-                        struct bc_viewer_roster *roster, int timeout_ms,
-                        struct bc_errinfo *ei)
+                        struct bc_viewer_roster *roster, struct bc_errinfo *ei)
 {
 	int rc = bc_client_connect(c,
 	                           &(struct bc_client_opts){
 	                               .addr = a->o.server,
 	                               .name = a->o.name,
 	                               .token = a->o.token,
-	                               .timeout_ms = timeout_ms,
 	                               .ca_file = a->o.ca,
 	                               .insecure = a->o.insecure,
 	                           },
@@ -804,31 +785,12 @@ static int open_session(const struct bc_viewer_app *a, struct bc_client **c,
 	if (rc) {
 		return rc;
 	}
-	if (!*a->o.session || strlen(a->o.session) > BC_PROTO_MAX_NAME) {
-		return bc_errinfo_set(ei, BC_EINVAL,
-		                      "session names have 1..%u bytes",
-		                      BC_PROTO_MAX_NAME);
-	}
-	rc = join_once(*c, BC_MSG_SESSION_JOIN, &a->o, roster, ei);
-	if (rc == BC_ENOSESSION && a->o.role == BC_PROTO_ROLE_EDITOR) {
-		/* An editor creates a session that is missing; someone may
-		 * create it between our two requests. */
-		memset(ei, 0, sizeof(*ei));
-		rc = join_once(*c, BC_MSG_SESSION_CREATE, &a->o, roster, ei);
-		if (rc == BC_EEXIST) {
-			memset(ei, 0, sizeof(*ei));
-			rc = join_once(*c, BC_MSG_SESSION_JOIN, &a->o, roster,
-			               ei);
-		}
-	}
-	return rc;
-}
-
-/* Errors that connecting again would meet again. */
-static bool retry_useless(int code)
-{
-	return code == BC_EAUTH || code == BC_EPERM || code == BC_ENOSESSION ||
-	       code == BC_EPROTO_VERSION || code == BC_EINVAL;
+	rc = bc_client_join(*c, a->o.session, a->o.role,
+	                    a->o.role == BC_PROTO_ROLE_EDITOR
+	                        ? BC_CLIENT_JOIN_ANY
+	                        : BC_CLIENT_JOIN_EXISTING,
+	                    ei);
+	return rc ? rc : joined(*c, roster, ei);
 }
 
 /* The connection failed with code: keep the picture, stop watching the
@@ -838,48 +800,50 @@ static void lost(struct bc_viewer_app *a, int code, double now)
 	char why[sizeof(a->status)];
 	snprintf(why, sizeof(why), "%s", a->status);
 	watch_stop(a);
+	/* The daemon drops our member now; the scene mirror and roster stay
+	 * for the overlay, the options for bc_client_rejoin(). */
+	bc_client_disconnect(a->c);
 	a->offline = true;
-	a->attempts = 0;
-	a->retry_ms = BC_VIEWER_RETRY_MIN_MS;
-	a->gave_up = retry_useless(code);
+	bc_client_backoff_reset(&a->retry, now);
+	a->gave_up = bc_client_retry_useless(code);
 	if (a->o.verbose) {
 		printf("lost %s\n", bc_err_name(code));
 		fflush(stdout);
 	}
 	if (!a->gave_up) {
-		a->retry_at = now + a->retry_ms;
 		bc_viewer_status(a, "%s - reconnecting", why);
 	}
 }
 
-/* One attempt to reconnect. On success the new connection replaces the
- * dead one (whose scene mirror the overlay read meanwhile) and everything
- * tied to the old one's sequence numbers starts afresh. */
+/* One attempt to reconnect (bc_client_rejoin: the dead connection's
+ * address, options and session). On success the new connection replaces
+ * the dead one (whose scene mirror the overlay read meanwhile) and
+ * everything tied to the old one's sequence numbers starts afresh. */
 static void reconnect(struct bc_viewer_app *a, double now)
 {
 	struct bc_client *c = NULL;
 	struct bc_errinfo ei = {0};
 	struct bc_camera scene_cam;
 	struct bc_viewer_roster roster;
-	int rc = open_session(a, &c, &roster, BC_VIEWER_RETRY_TIMEOUT_MS, &ei);
+	int rc = bc_client_rejoin(a->c, BC_VIEWER_RETRY_TIMEOUT_MS, &c, &ei);
+	if (!rc) {
+		rc = joined(c, &roster, &ei);
+	}
 	if (rc) {
+		int delay;
 		bc_client_destroy(c);
-		a->attempts++;
-		if (retry_useless(rc)) {
+		if (bc_client_retry_useless(rc)) {
 			a->gave_up = true;
 			bc_viewer_status(a, "reconnecting refused: %s (%s)",
 			                 ei.msg, bc_err_name(rc));
 			return;
 		}
-		a->retry_ms = a->retry_ms * 2.0 > BC_VIEWER_RETRY_MAX_MS
-		                  ? BC_VIEWER_RETRY_MAX_MS
-		                  : a->retry_ms * 2.0;
-		a->retry_at = bc_viewer_now_ms() + a->retry_ms;
+		delay = bc_client_backoff_next(&a->retry, bc_viewer_now_ms());
 		bc_viewer_status(
 		    a,
 		    "connection lost; attempt %u failed (%s), next "
 		    "in %.1f s",
-		    a->attempts, bc_err_name(rc), a->retry_ms / 1e3);
+		    a->retry.attempts, bc_err_name(rc), delay / 1e3);
 		return;
 	}
 	bc_client_destroy(a->c);
@@ -906,10 +870,11 @@ static void reconnect(struct bc_viewer_app *a, double now)
 	}
 	bc_viewer_camera_changed(a, false);
 	bc_viewer_status(a, "rejoined session %s after %u failed attempt%s",
-	                 a->o.session, a->attempts,
-	                 a->attempts == 1 ? "" : "s");
+	                 a->o.session, a->retry.attempts,
+	                 a->retry.attempts == 1 ? "" : "s");
 	if (a->o.verbose) {
-		printf("rejoined %s attempts=%u\n", a->o.session, a->attempts);
+		printf("rejoined %s attempts=%u\n", a->o.session,
+		       a->retry.attempts);
 		fflush(stdout);
 	}
 }
@@ -934,7 +899,8 @@ static void run(struct bc_viewer_app *a)
 			}
 		}
 		now = bc_viewer_now_ms();
-		if (a->offline && !a->gave_up && now >= a->retry_at) {
+		if (a->offline && !a->gave_up &&
+		    bc_client_backoff_due(&a->retry, now)) {
 			reconnect(a, now);
 			now = bc_viewer_now_ms();
 			a->redraw = true;
@@ -948,7 +914,8 @@ static void run(struct bc_viewer_app *a)
 				due = shot_due;
 			}
 		} else if (!a->gave_up) {
-			due = a->retry_at > now ? a->retry_at - now : 0.0;
+			due = a->retry.next_at > now ? a->retry.next_at - now
+			                             : 0.0;
 		} else {
 			due = -1.0;
 		}
@@ -1032,13 +999,14 @@ int main(int argc, char **argv)
 	bc_viewer_frames_init(&a->frames);
 	bc_viewer_meter_init(&a->meter);
 	bc_viewer_edits_init(&a->edits);
+	bc_client_backoff_init(&a->retry, 0, 0);
 	a->exit_code = EXIT_FAIL;
 	if (!(a->text = bc_malloc(BC_VIEWER_TEXT_FLOATS * sizeof(float)))) {
 		fprintf(stderr, "blobcast-view: out of memory\n");
 		goto cleanup;
 	}
 
-	if ((rc = open_session(a, &a->c, &a->roster, 0, &ei))) {
+	if ((rc = open_session(a, &a->c, &a->roster, &ei))) {
 		fprintf(stderr, "blobcast-view: %s: %s\n",
 		        a->o.server ? a->o.server : "127.0.0.1:7878", ei.msg);
 		goto cleanup;

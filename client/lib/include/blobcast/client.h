@@ -541,5 +541,109 @@ BC_API int bc_client_snapshot_big(struct bc_client *c,
                                   const struct bc_client_big_opts *opts,
                                   struct bc_client_image *out,
                                   struct bc_errinfo *ei);
+/* ---- Reconnecting
+ * ------------------------------------------------------------------ */
+
+/*
+ * A program that outlives its connection (a viewer, `blobcast watch`) keeps
+ * going across a daemon restart or a network drop like this:
+ *
+ *   bc_client_backoff_init(&b, 0, 0);
+ *   ... bc_client_recv() fails, or a FATAL ERROR arrives, with code:
+ *   if (bc_client_retry_useless(code)) stop;
+ *   bc_client_disconnect(c); bc_client_backoff_reset(&b, now);
+ *   ... once bc_client_backoff_due(&b, now):
+ *   if ((rc = bc_client_rejoin(c, 0, &fresh, &ei)) == 0) {
+ *           bc_client_destroy(c); c = fresh;  (send VIEW, CAMERA again)
+ *   } else {
+ *           bc_client_destroy(fresh);
+ *           if (bc_client_retry_useless(rc)) stop;
+ *           bc_client_backoff_next(&b, now);
+ *   }
+ *
+ * The new connection is a new member of the session: a new member id, an
+ * empty edit history of its own, no VIEW and the session's camera; what
+ * the old connection had set up beyond the join is the caller's to send
+ * again.
+ */
+
+/* The delays between attempts unless bc_client_backoff_init() is given
+ * others: a restarting blobcastd is back well within a second, and a
+ * longer outage is tried every few seconds, which costs the daemon
+ * nothing noticeable. */
+#define BC_CLIENT_BACKOFF_FIRST_MS 250
+#define BC_CLIENT_BACKOFF_LONGEST_MS 4000
+
+/*
+ * Whether an error (a negative BC_E* code from connecting, joining, or a
+ * connection that failed) would be met again by connecting again with the
+ * same options: BC_EAUTH (the token or the certificate is refused),
+ * BC_EPERM (the token does not grant the role), BC_EPROTO_VERSION (the
+ * daemon speaks another version), BC_ENOSESSION (the session is gone; a
+ * viewer cannot create it) and BC_EINVAL (options that are wrong in
+ * themselves). Everything else may pass with time: the daemon down or
+ * restarting (BC_EIO, BC_ECLOSED, BC_ETIMEOUT), busy, or a full session
+ * (BC_ELIMIT) that empties as members leave.
+ */
+BC_API bool bc_client_retry_useless(int code);
+
+/*
+ * When to attempt again: the first attempt comes first_ms after the loss,
+ * and each failed attempt doubles the delay up to longest_ms. Times are
+ * milliseconds on any monotonic clock of the caller's (the same one for
+ * every call). Fields are read-only for users; the struct lives in the
+ * caller's memory and owns nothing.
+ */
+struct bc_client_backoff {
+	int first_ms, longest_ms; /* as set by bc_client_backoff_init() */
+	int delay_ms;             /* the delay last scheduled */
+	unsigned attempts;        /* failed attempts since the last reset */
+	double next_at;           /* when the next attempt is due */
+};
+
+/* Sets the delays (first_ms <= 0: BC_CLIENT_BACKOFF_FIRST_MS; longest_ms
+ * <= 0: BC_CLIENT_BACKOFF_LONGEST_MS; a longest below the first is raised
+ * to it), no attempts, and an attempt due at once (next_at 0). */
+BC_API void bc_client_backoff_init(struct bc_client_backoff *b, int first_ms,
+                                   int longest_ms);
+/* The connection was lost at now_ms: no failed attempts yet, the delay
+ * back to first_ms, the first attempt due at now_ms + first_ms. */
+BC_API void bc_client_backoff_reset(struct bc_client_backoff *b, double now_ms);
+/* An attempt failed at now_ms: counts it in attempts, doubles the delay
+ * (at most longest_ms) and makes the next attempt due that much after
+ * now_ms. Returns the new delay in milliseconds. */
+BC_API int bc_client_backoff_next(struct bc_client_backoff *b, double now_ms);
+/* Whether the next attempt is due at now_ms. */
+BC_API bool bc_client_backoff_due(const struct bc_client_backoff *b,
+                                  double now_ms);
+
+/*
+ * Closes c's socket now (TLS and WebSocket state with it), so that the
+ * daemon sees this member leave at once rather than whenever it notices a
+ * dead or confused connection, while c keeps its info, roster, scene
+ * mirror and what bc_client_rejoin() needs. c's sticky error stays, or
+ * becomes BC_ECLOSED when there was none; bc_client_fd() returns -1.
+ * Accepts NULL and a client already disconnected; bc_client_destroy()
+ * still frees c.
+ */
+BC_API void bc_client_disconnect(struct bc_client *c);
+
+/*
+ * Opens a new connection with the options old was connected with (their
+ * strings are kept by old; timeout_ms, when not 0, replaces their
+ * timeout_ms: a window that does not redraw while it waits wants a short
+ * one) and, when old entered a session with bc_client_join(), joins that
+ * session again with the same role. The join mode is the same, except
+ * that BC_CLIENT_JOIN_CREATE becomes BC_CLIENT_JOIN_ANY: the session old
+ * created may exist now. old is only read; it may be a connection that
+ * failed. *out (reset on entry) receives the new client, which the caller
+ * frees with bc_client_destroy() and, usually, puts in old's place; its
+ * roster and scene mirror are those of the join.
+ * Returns 0, or the error of bc_client_connect() (*out then NULL) or of
+ * bc_client_join() (*out then the connection that could not join, for the
+ * caller to inspect and destroy), with the reason in ei.
+ */
+BC_API int bc_client_rejoin(const struct bc_client *old, int timeout_ms,
+                            struct bc_client **out, struct bc_errinfo *ei);
 
 #endif
