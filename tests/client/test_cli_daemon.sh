@@ -143,7 +143,7 @@ if command -v oiiotool > /dev/null 2>&1; then
     fi
   done
 fi
-run 2 "between 8 and 8192" $S snapshot --session review --size 96x64 \
+run 2 "out of range (8..8192)" $S snapshot --session review --size 96x64 \
   --tile 4 --out "$tmp/x.png"
 run 2 "depth needs a float format" $S snapshot --session review \
   --size 96x64 --out "$tmp/x.png" --depth "$tmp/x.png"
