@@ -54,6 +54,7 @@
  * for anyone curious in the developer console.
  */
 import * as P from './protocol.js';
+import { Picture, parseSize } from './picture.js';
 import { OPS, PRIMS, layout, unaryLayout, unaryRange, unaryValue }
 	from './prims.js';
 
@@ -459,6 +460,7 @@ class App {
 		this.installUndo();
 		this.followWanted = false; /* F: kept across reconnects */
 		this.installPresent();
+		this.installPicture();
 		new ResizeObserver(() => this.resize()).observe($('stage'));
 		setInterval(() => this.tick(), 250);
 		this.conn.open();
@@ -514,6 +516,7 @@ class App {
 		for (const resolve of this.picks.values()) {
 			resolve(null);
 		}
+		this.picture?.fail(`the connection was lost (${why})`);
 		this.reset();
 		this.renderPanel();
 		this.showPending();
@@ -611,6 +614,12 @@ class App {
 	}
 
 	handle(m) {
+		/* The answers to a picture's tiles are its own, not frames of
+		 * the view. */
+		if ((m.type === P.MSG.FRAME || m.type === P.MSG.ERROR) &&
+			this.picture?.handle(m)) {
+			return;
+		}
 		switch (m.type) {
 		case P.MSG.WELCOME:
 			this.welcome = m;
@@ -624,6 +633,7 @@ class App {
 			for (const id of ['undobtn', 'redobtn']) {
 				$(id).disabled = m.role !== P.ROLE.EDITOR;
 			}
+			this.renderPicture();
 			if (this.viewOnly) {
 				$('session').title = this.viewOnly;
 				this.say(this.viewOnly);
@@ -1117,6 +1127,64 @@ class App {
 				this.toggleFollow();
 			}
 		});
+	}
+
+	/* ---- big pictures (picture.js) ---- */
+
+	installPicture() {
+		$('pictureform').addEventListener('submit', (e) => {
+			e.preventDefault();
+			const size = parseSize($('picturesize').value);
+			if (!size) {
+				this.say('picture size: WxH, each 1..8192');
+				return;
+			}
+			this.savePicture(size.w, size.h).catch(() => {});
+		});
+	}
+
+	/* The form works once joined, with a daemon that takes tiles. */
+	renderPicture() {
+		const tiles = !!this.welcome && ((this.welcome.features ?? 0) &
+			P.FEATURE.TILES) !== 0;
+		$('picturebtn').disabled = !this.info || !tiles || !!this.picture;
+		$('pictureinfo').textContent = this.info && !tiles
+			? 'this daemon does not take pictures in tiles'
+			: 'lossless PNG up to 8192×8192 of this view\'s camera';
+	}
+
+	/* Asks for a w x h picture in tiles and saves it as a download;
+	 * resolves with { canvas, order } (tile: the tile edge, tests). */
+	async savePicture(w, h, tile) {
+		if (this.picture) {
+			throw new Error('a picture is on its way');
+		}
+		this.picture = new Picture({ width: w, height: h, tile,
+			send: (type, fields) => this.conn.send(type, fields),
+			progress: (done, total) => {
+				$('pictureinfo').textContent =
+					`picture ${w}×${h}: tile ${done} of ${total}`;
+			} });
+		this.renderPicture();
+		try {
+			const r = await this.picture.start();
+			const blob = await new Promise((resolve) =>
+				r.canvas.toBlob(resolve, 'image/png'));
+			const a = document.createElement('a');
+			a.href = URL.createObjectURL(blob);
+			a.download = `blobcast-${this.cfg.session}-${r.order}.png`;
+			a.click();
+			setTimeout(() => URL.revokeObjectURL(a.href), 60000);
+			this.say(`saved a ${w}×${h} picture of edit ${r.order}`);
+			this.lastPicture = r;
+			return r;
+		} catch (e) {
+			this.say(`picture: ${e.message}`);
+			throw e;
+		} finally {
+			this.picture = null;
+			this.renderPicture();
+		}
 	}
 
 	showNotice(text) {
@@ -1720,4 +1788,12 @@ window.blobcast = {
 		app.camera.orbit(dx, dy);
 		app.sendCamera(false);
 	},
+	/* Saves a w x h picture in tiles of tile (as the form does);
+	 * resolves with its size and edit order. */
+	picture: (w, h, tile) => app.savePicture(w, h, tile).then((r) => ({
+		width: r.canvas.width, height: r.canvas.height,
+		order: String(r.order) })),
+	/* RGBA of the last picture's rectangle (x, y, w, h), as an array. */
+	picturePixels: (x, y, w, h) => Array.from(app.lastPicture.canvas
+		.getContext('2d').getImageData(x, y, w, h).data),
 };
