@@ -212,15 +212,23 @@ static uint64_t hash_bytes(uint64_t h, const void *p, size_t n)
 }
 
 static uint64_t frame_key(struct bc_renderer *r, const struct bc_camera *cam,
-                          uint32_t w, uint32_t h)
+                          const struct bc_frame *f)
 {
 	uint64_t k = 0xcbf29ce484222325ull, backend = 0;
+	uint32_t w = f->width, h = f->height;
 	uint32_t dims[3] = {w, h, (uint32_t)r->opts.debug};
 	if (r->ops->key) {
 		backend = r->ops->key(r, cam, w, h);
 	}
 	k = hash_bytes(k, cam, sizeof(*cam));
 	k = hash_bytes(k, dims, sizeof(dims));
+	if (f->full_width) {
+		/* Another window of the view is other pixels. A whole frame
+		 * hashes as before windows existed. */
+		uint32_t win[4] = {f->win_x, f->win_y, f->full_width,
+		                   f->full_height};
+		k = hash_bytes(k, win, sizeof(win));
+	}
 	k = hash_bytes(k, &r->generation, sizeof(r->generation));
 	k = hash_bytes(k, &backend, sizeof(backend));
 	return k ? k : 1; /* 0 means "nothing rendered" */
@@ -245,6 +253,19 @@ int bc_renderer_render_region(struct bc_renderer *r,
 	    out->height > BC_RENDER_MAX_DIM) {
 		return bc_errinfo_set(ei, BC_EINVAL, "render: bad frame");
 	}
+	if (out->full_width &&
+	    (out->full_width > BC_RENDER_MAX_DIM ||
+	     out->full_height > BC_RENDER_MAX_DIM ||
+	     out->win_x >= out->full_width || out->win_y >= out->full_height ||
+	     out->width > out->full_width - out->win_x ||
+	     out->height > out->full_height - out->win_y)) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+		                      "render: window %ux%u at (%u, %u) not "
+		                      "inside a %ux%u view",
+		                      out->width, out->height, out->win_x,
+		                      out->win_y, out->full_width,
+		                      out->full_height);
+	}
 	if (region && region->level > BC_RENDER_MAX_LEVEL) {
 		return bc_errinfo_set(ei, BC_ERANGE, "render: level %u over %u",
 		                      region->level, BC_RENDER_MAX_LEVEL);
@@ -256,7 +277,7 @@ int bc_renderer_render_region(struct bc_renderer *r,
 	if ((rc = bc_camera_validate(cam, ei))) {
 		return rc;
 	}
-	key = frame_key(r, cam, out->width, out->height);
+	key = frame_key(r, cam, out);
 	if (!region) {
 		region = &whole;
 	} else if (region->tile_count &&

@@ -31,7 +31,11 @@ void main()
 	bc_abv_rec a = b_abv[v_prim[0]];
 	float m = bc_abv_margin(a.lo.xyz, a.hi.xyz);
 	vec3 lo = a.lo.xyz - m, hi = a.hi.xyz + m;
-	float w = float(u_size.x), h = float(u_size.y);
+	// Corners project into the whole view (u_window), the rectangle is
+	// clipped to the frame's window there and counted in the frame's
+	// tiles: render/cpu/tiled.c's project_box.
+	float w = float(u_window.z), h = float(u_window.w);
+	vec2 o = vec2(u_window.xy);
 	float px0 = BC_INF, px1 = -BC_INF, py0 = BC_INF, py1 = -BC_INF;
 	uint behind = 0u;
 	for (uint c = 0u; c < 8u; c++) {
@@ -60,15 +64,17 @@ void main()
 	} else {
 		// One pixel of margin absorbs rounding (pixel i is covered
 		// when its centre i + 0.5 is inside).
-		px0 = max(px0 - 1.5, 0.0);
-		py0 = max(py0 - 1.5, 0.0);
-		px1 = min(px1 + 0.5, w - 1.0);
-		py1 = min(py1 + 0.5, h - 1.0);
+		px0 = max(px0 - 1.5, o.x);
+		py0 = max(py0 - 1.5, o.y);
+		px1 = min(px1 + 0.5, float(u_window.x + u_size.x) - 1.0);
+		py1 = min(py1 + 0.5, float(u_window.y + u_size.y) - 1.0);
 		if (!(px0 <= px1 && py0 <= py1)) {
 			return;
 		}
-		r = uvec4(uint(px0) / BC_TILE, uint(py0) / BC_TILE,
-			  uint(px1) / BC_TILE + 1u, uint(py1) / BC_TILE + 1u);
+		r = uvec4((uint(px0) - u_window.x) / BC_TILE,
+			  (uint(py0) - u_window.y) / BC_TILE,
+			  (uint(px1) - u_window.x) / BC_TILE + 1u,
+			  (uint(py1) - u_window.y) / BC_TILE + 1u);
 	}
 	// Window y runs with the tile row here: the framebuffer is never
 	// shown, so tile row ty is window row ty.

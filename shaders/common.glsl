@@ -102,7 +102,7 @@
 
 layout(std140, binding = 0) uniform Frame {
 	vec4 u_eye;     // xyz: eye; w: tan(fov_y / 2)
-	vec4 u_forward; // xyz: unit view direction; w: aspect (width / height)
+	vec4 u_forward; // xyz: unit view direction; w: aspect of the whole view
 	vec4 u_right;   // xyz: unit right; w: minimal step (world units)
 	vec4 u_up;      // xyz: unit up; w: pixel footprint per unit of t
 	vec4 u_light;   // xyz: unit vector toward the light; w: ambient
@@ -125,6 +125,12 @@ layout(std140, binding = 0) uniform Frame {
 	// x: the most field evaluations one ray may spend (0: no bound); a ray
 	// that would go past it stops, undrawn, and its bit is set in b_short.
 	uvec4 u_bound;
+	// The frame as a window of the whole view (blobcast/render.h's
+	// bc_frame_window): x0, y0, full width, full height; (0, 0, width,
+	// height) for a frame that is the whole view. Rays, projections and
+	// the background are the whole view's; pixels, tiles and refinement
+	// levels count in the frame.
+	uvec4 u_window;
 };
 
 // ---- Storage buffers -------------------------------------------------------
@@ -228,12 +234,14 @@ float bc_abv_margin(vec3 lo, vec3 hi)
 
 // ---- Camera rays ------------------------------------------------------------
 
-// Direction through the fractional pixel position (x, y), y counted from the
-// top row: the formula of bc_view_rays_dir.
+// Direction through the fractional pixel position (x, y) of the frame, y
+// counted from the top row: the formula of bc_view_rays_dir, which adds the
+// window's origin (whole numbers: the sum is exact).
 vec3 bc_ray_dir(float x, float y)
 {
-	float w = float(u_size.x), h = float(u_size.y);
-	float sx = (2.0 * x / w - 1.0) * u_eye.w * u_forward.w;
-	float sy = (1.0 - 2.0 * y / h) * u_eye.w;
+	float w = float(u_window.z), h = float(u_window.w);
+	float sx = (2.0 * (x + float(u_window.x)) / w - 1.0) * u_eye.w *
+		   u_forward.w;
+	float sy = (1.0 - 2.0 * (y + float(u_window.y)) / h) * u_eye.w;
 	return normalize(u_forward.xyz + sx * u_right.xyz + sy * u_up.xyz);
 }

@@ -935,8 +935,11 @@ void put_miss(ivec2 px, uint overlaps)
 	if (u_counts.z != BC_DEBUG_NONE) {
 		c = debug_colour(overlaps);
 	} else {
-		float h = float(u_size.y);
-		float v = u_size.y > 1u ? float(px.y) / (h - 1.0) : 0.0;
+		// The whole view's gradient (u_window).
+		float h = float(u_window.w);
+		float v = u_window.w > 1u
+			      ? float(uint(px.y) + u_window.y) / (h - 1.0)
+			      : 0.0;
 		c = pack_rgba(uvec4(uint(30.0 - 22.0 * v), uint(33.0 - 24.0 * v),
 				    uint(42.0 - 30.0 * v), 255u));
 	}

@@ -37,11 +37,13 @@ static _Alignas(64) const float ab_off_y[4][BC__AB_QUARTER_RAYS] = {
     {4, 4, 4, 4, 5, 5, 5, 5, 6, 6, 6, 6, 7, 7, 7, 7},
 };
 
-/* bc_view_rays_dir for pixel centres (float)x + 0.5f, (float)y + 0.5f. */
+/* bc_view_rays_dir for pixel centres (float)x + 0.5f, (float)y + 0.5f of
+ * the window, to which it adds the window's origin in the view. */
 void AB_DIRS(const struct bc_view_rays *vr, uint32_t x0, uint32_t y0,
              struct bc__ab_rays *out)
 {
 	vf fx = vset1((float)x0), fy = vset1((float)y0), half = vset1(0.5f);
+	vf ox = vset1((float)vr->x0), oy = vset1((float)vr->y0);
 	vf two = vset1(2.0f), one = vset1(1.0f), zero = vset1(0.0f);
 	vf w = vset1((float)vr->width), h = vset1((float)vr->height);
 	vf th = vset1(vr->tan_half_y), asp = vset1(vr->aspect);
@@ -54,8 +56,10 @@ void AB_DIRS(const struct bc_view_rays *vr, uint32_t x0, uint32_t y0,
 	for (uint32_t q = 0; q < 4; q++) {
 		for (uint32_t k = 0; k < AB_PER_QUARTER; k++) {
 			uint32_t l = k * AB_LANES;
-			vf x = vadd(vadd(fx, vload(&ab_off_x[q][l])), half);
-			vf y = vadd(vadd(fy, vload(&ab_off_y[q][l])), half);
+			vf x = vadd(
+			    vadd(vadd(fx, vload(&ab_off_x[q][l])), half), ox);
+			vf y = vadd(
+			    vadd(vadd(fy, vload(&ab_off_y[q][l])), half), oy);
 			vf sx = vmul(vmul(vsub(vdiv(vmul(two, x), w), one), th),
 			             asp);
 			vf sy = vmul(vsub(one, vdiv(vmul(two, y), h)), th);

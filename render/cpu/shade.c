@@ -19,7 +19,9 @@ void bc__frame_setup(struct bc__frame_ctx *fc, const struct bc_lin *lin,
 	fc->lin = lin;
 	fc->out = out;
 	fc->debug = debug;
-	bc_view_rays_init(&fc->vr, cam, out->width, out->height);
+	/* A window's rays are those of its pixels in the whole view, and
+	 * the footprint below is the whole view's pixel's. */
+	bc_frame_view_rays(&fc->vr, cam, out);
 	/* A power of two: edits that move the scene's bounds a little keep
 	 * every step length, so damage renders stay exact. */
 	size = bc_render_scale(lin);
@@ -49,7 +51,8 @@ void bc__put_miss(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
 	if (fc->debug != BC_DEBUG_NONE) {
 		debug_colour(fc, evals, overlaps, px);
 	} else {
-		bc_shade_miss(y, out->height, px);
+		bc_shade_miss(bc_frame_view_row(out, y),
+		              bc_frame_view_height(out), px);
 	}
 	if (out->depth) {
 		out->depth[i] = INFINITY;

@@ -94,6 +94,7 @@ struct bc__tiled_bufs {
 	bool view_ok;
 	struct bc_camera cam;
 	uint32_t w, h, nprims;
+	uint32_t win[4]; /* the frame's window: x, y, full width, height */
 	uint64_t generation;
 	const struct bc_lin *lin;
 	float min_step, pix_angle;
@@ -245,7 +246,13 @@ static struct rect project_box(const struct tiled_frame *tf, const float lo[3],
 {
 	const struct bc__frame_ctx *fc = tf->fc;
 	const struct bc_view_rays *vr = &fc->vr;
-	float w = (float)fc->out->width, h = (float)fc->out->height;
+	/* Points project into the whole view (its size is the frame's when
+	 * the frame is the view), and the pixel rectangle is clipped to
+	 * the frame's window there: a window's tile lists are those of the
+	 * view's tiles it holds, bit for bit, when its origin is a
+	 * multiple of the tile. */
+	float w = (float)vr->width, h = (float)vr->height;
+	uint32_t ox = vr->x0, oy = vr->y0;
 	float px0 = INFINITY, px1 = -INFINITY, py0 = INFINITY, py1 = -INFINITY;
 	struct rect all = {0, 0, tf->tw, tf->th}, none = {0, 0, 0, 0}, r;
 	int behind = 0;
@@ -275,18 +282,20 @@ static struct rect project_box(const struct tiled_frame *tf, const float lo[3],
 		return all; /* straddles the eye plane: anywhere on screen */
 	}
 	/* Pixel i is covered when its centre i + 0.5 is inside; one pixel of
-	 * margin absorbs rounding. */
-	px0 = bc__maxf(px0 - 1.5f, 0.0f);
-	py0 = bc__maxf(py0 - 1.5f, 0.0f);
-	px1 = bc__minf(px1 + 0.5f, w - 1.0f);
-	py1 = bc__minf(py1 + 0.5f, h - 1.0f);
+	 * margin absorbs rounding. The window's edges are whole numbers
+	 * (exact as floats), and (uint32_t) rounds down, so subtracting
+	 * the origin after it is exact. */
+	px0 = bc__maxf(px0 - 1.5f, (float)ox);
+	py0 = bc__maxf(py0 - 1.5f, (float)oy);
+	px1 = bc__minf(px1 + 0.5f, (float)(ox + fc->out->width) - 1.0f);
+	py1 = bc__minf(py1 + 0.5f, (float)(oy + fc->out->height) - 1.0f);
 	if (!(px0 <= px1 && py0 <= py1)) {
 		return none;
 	}
-	r.x0 = (uint32_t)px0 / BC_CPU_TILE;
-	r.y0 = (uint32_t)py0 / BC_CPU_TILE;
-	r.x1 = (uint32_t)px1 / BC_CPU_TILE + 1;
-	r.y1 = (uint32_t)py1 / BC_CPU_TILE + 1;
+	r.x0 = ((uint32_t)px0 - ox) / BC_CPU_TILE;
+	r.y0 = ((uint32_t)py0 - oy) / BC_CPU_TILE;
+	r.x1 = ((uint32_t)px1 - ox) / BC_CPU_TILE + 1;
+	r.y1 = ((uint32_t)py1 - oy) / BC_CPU_TILE + 1;
 	return r;
 }
 
@@ -821,9 +830,11 @@ static bool same_view(const struct bc__tiled_bufs *b, const struct bc__cpu *r,
                       const struct bc__frame_ctx *fc,
                       const struct bc_camera *cam)
 {
-	return b->view_ok && b->w == fc->out->width &&
-	       b->h == fc->out->height && b->generation == r->base.generation &&
-	       b->lin == fc->lin &&
+	const struct bc_frame *f = fc->out;
+	uint32_t win[4] = {f->win_x, f->win_y, f->full_width, f->full_height};
+	return b->view_ok && b->w == f->width && b->h == f->height &&
+	       memcmp(b->win, win, sizeof(win)) == 0 &&
+	       b->generation == r->base.generation && b->lin == fc->lin &&
 	       b->nprims == (fc->lin ? fc->lin->nprims : 0) &&
 	       memcmp(&b->cam, cam, sizeof(*cam)) == 0 &&
 	       memcmp(&b->min_step, &fc->min_step, sizeof(float)) == 0 &&
@@ -879,6 +890,10 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 	b->cam = *cam;
 	b->w = fc->out->width;
 	b->h = fc->out->height;
+	b->win[0] = fc->out->win_x;
+	b->win[1] = fc->out->win_y;
+	b->win[2] = fc->out->full_width;
+	b->win[3] = fc->out->full_height;
 	b->generation = r->base.generation;
 	b->lin = fc->lin;
 	b->nprims = tf->nprims;

@@ -70,7 +70,7 @@ _Static_assert(BC_PRIM_RECORD_VEC4 == 5 && BC_OP_RECORD_VEC4 == 1,
                "shaders/common.glsl record sizes");
 _Static_assert(BC_PRIM_PACKED == 8, "shaders/prim.glsl packed parameters");
 _Static_assert(BC_EVAL_STACK == 130, "shaders/common.glsl BC_EVAL_STACK");
-_Static_assert(sizeof(struct bc__gl_frame_ubo) == 176, "std140 Frame block");
+_Static_assert(sizeof(struct bc__gl_frame_ubo) == 192, "std140 Frame block");
 _Static_assert(BC_RENDER_TILE == BC_GL_TILE, "tiles of the front");
 _Static_assert(BC_RENDER_MAX_LEVEL == 3, "shaders/common.glsl BC_MAX_LEVEL");
 /* Primitive indices share a 32-bit view instruction word with 11 bits of
@@ -539,19 +539,25 @@ static int gl_sync(struct bc_renderer *base, const struct bc_tree *t,
  */
 
 /* The frame's uniforms: render/cpu/shade.c's frame setup (the region's
- * part is filled by the caller). */
+ * part is filled by the caller). Rays, aspect and pixel footprint are the
+ * whole view's when the frame is a window of it. */
 static void frame_setup(struct bc__gl_frame_ubo *u, const struct bc_lin *l,
-                        const struct bc_camera *cam, uint32_t w, uint32_t h,
+                        const struct bc_camera *cam, const struct bc_frame *out,
                         enum bc_debug_mode debug, uint32_t nprims, uint32_t cap,
                         uint32_t slots, uint32_t budget)
 {
 	struct bc_view_rays vr;
+	uint32_t w = out->width, h = out->height;
 	/* The scene's scale, not its size: an edit that moves the bounds a
 	 * little keeps every constant, so a damaged region is drawn with the
 	 * constants of the frame around it. */
 	float size = bc_render_scale(l), light[3];
 	memset(u, 0, sizeof(*u));
-	bc_view_rays_init(&vr, cam, w, h);
+	bc_frame_view_rays(&vr, cam, out);
+	u->window[0] = vr.x0;
+	u->window[1] = vr.y0;
+	u->window[2] = vr.width;
+	u->window[3] = vr.height;
 	for (int i = 0; i < 3; i++) {
 		u->eye[i] = vr.eye[i];
 		u->forward[i] = vr.forward[i];
@@ -1130,7 +1136,7 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 		uint32_t dispatches = 0, tiles;
 		bool fits, incomplete = false;
 		void *map;
-		frame_setup(&u, l, cam, w, h, base->opts.debug, nprims,
+		frame_setup(&u, l, cam, out, base->opts.debug, nprims,
 		            r->frag_cap, r->slots, r->budget);
 		u.region[0] = plan.level;
 		u.region[1] = plan.refine ? 1u : 0u;

@@ -108,6 +108,9 @@ struct bc__gl_frame_ubo {
 	uint32_t pool[4];   /* slot base (scratch words), slots, budget */
 	uint32_t region[4]; /* level, refine, tiles listed, list used */
 	uint32_t bound[4];  /* the region's max_evals (0: none), 0, 0, 0 */
+	/* The frame as a window of the whole view: x0, y0, full width,
+	 * full height; (0, 0, width, height) for the whole view. */
+	uint32_t window[4];
 };
 
 /* Words per tile in the Short buffer: a bit per pixel whose ray ran out of

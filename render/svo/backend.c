@@ -172,7 +172,8 @@ static void put_miss(const struct frame *fr, uint32_t x, uint32_t y,
 	if (fr->r->base.opts.debug != BC_DEBUG_NONE) {
 		debug_px(fr, evals, 0, px);
 	} else {
-		bc_shade_miss(y, out->height, px);
+		bc_shade_miss(bc_frame_view_row(out, y),
+		              bc_frame_view_height(out), px);
 	}
 	if (out->depth) {
 		out->depth[i] = INFINITY;
@@ -473,7 +474,8 @@ static int svo_render(struct bc_renderer *base, const struct bc_camera *cam,
 	fr.region = region;
 	fr.start = t0;
 	fr.budget_ms = (double)base->opts.budget_ms;
-	bc_view_rays_init(&fr.vr, cam, out->width, out->height);
+	/* A window's rays and pixel footprint are the whole view's. */
+	bc_frame_view_rays(&fr.vr, cam, out);
 	size = !r->empty && r->rpn.size > 0.0f && isfinite(r->rpn.size)
 	           ? r->rpn.size
 	           : 1.0f;

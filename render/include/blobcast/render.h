@@ -46,7 +46,13 @@ struct bc_frame {
 	 * full_width x full_height view of the camera, each pixel exactly as
 	 * a render of the whole view would give it. full_width 0 (as
 	 * bc_frame_init leaves it): the frame is the whole view. Set with
-	 * bc_frame_window. */
+	 * bc_frame_window. Tiles, regions and refinement levels count in
+	 * the frame's own pixels: with an origin at a multiple of
+	 * BC_RENDER_TILE (8) they are the view's tiles and levels, and
+	 * every backend's window equals the crop of the whole render bit
+	 * for bit (naive's at any origin); at other origins the tiled, svo
+	 * and gl tiles group other rays and pixels may differ in their
+	 * last bits. */
 	uint32_t win_x, win_y, full_width, full_height;
 };
 
@@ -263,7 +269,9 @@ void bc_renderer_release(struct bc_renderer *r);
 size_t bc_renderer_kept_bytes(const struct bc_renderer *r);
 
 /* Marks (sets to 1) in tiles, ceil(width / 8) x ceil(height / 8) bytes,
- * every tile of a width x height frame through cam whose pixels can depend
+ * every tile of a width x height frame through cam (the whole view: for a
+ * window at an origin of multiples of 8, its tiles are the view's tiles
+ * from (win_x / 8, win_y / 8) on) whose pixels can depend
  * on a primitive with world ABV abv, margins of the backend's own tile
  * lists included. A parameter edit that changes only primitives' ABVs and
  * data changes a frame only in the tiles marked for their ABVs before and

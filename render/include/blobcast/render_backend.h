@@ -66,4 +66,32 @@ struct bc_backend_ops {
 	size_t (*kept_bytes)(const struct bc_renderer *r);
 };
 
+/* The rays of frame f through cam: those of f's window of the whole view
+ * when f is a window (bc_frame_window), else those of f itself. Every
+ * backend prepares its rays here, so a window's pixels get exactly the
+ * rays the whole view's render gives them. */
+static inline void bc_frame_view_rays(struct bc_view_rays *vr,
+                                      const struct bc_camera *cam,
+                                      const struct bc_frame *f)
+{
+	if (f->full_width) {
+		bc_view_rays_init_window(vr, cam, f->full_width, f->full_height,
+		                         f->win_x, f->win_y);
+	} else {
+		bc_view_rays_init(vr, cam, f->width, f->height);
+	}
+}
+
+/* Row y of frame f as a row of the whole view, and the whole view's
+ * height: the background gradient runs over the whole view. */
+static inline uint32_t bc_frame_view_row(const struct bc_frame *f, uint32_t y)
+{
+	return f->full_width ? f->win_y + y : y;
+}
+
+static inline uint32_t bc_frame_view_height(const struct bc_frame *f)
+{
+	return f->full_width ? f->full_height : f->height;
+}
+
 #endif
