@@ -1143,14 +1143,17 @@ class App {
 		});
 	}
 
-	/* The form works once joined, with a daemon that takes tiles. */
-	renderPicture() {
+	/* The form works once joined, with a daemon that takes tiles; the
+	 * line under it says so, or what the last picture did (keep). */
+	renderPicture(keep = false) {
 		const tiles = !!this.welcome && ((this.welcome.features ?? 0) &
 			P.FEATURE.TILES) !== 0;
 		$('picturebtn').disabled = !this.info || !tiles || !!this.picture;
-		$('pictureinfo').textContent = this.info && !tiles
-			? 'this daemon does not take pictures in tiles'
-			: 'lossless PNG up to 8192×8192 of this view\'s camera';
+		if (!keep) {
+			$('pictureinfo').textContent = this.info && !tiles
+				? 'this daemon does not take pictures in tiles'
+				: 'lossless PNG up to 8192×8192 of this view\'s camera';
+		}
 	}
 
 	/* Asks for a w x h picture in tiles and saves it as a download;
@@ -1175,15 +1178,16 @@ class App {
 			a.download = `blobcast-${this.cfg.session}-${r.order}.png`;
 			a.click();
 			setTimeout(() => URL.revokeObjectURL(a.href), 60000);
-			this.say(`saved a ${w}×${h} picture of edit ${r.order}`);
+			$('pictureinfo').textContent = `saved ${w}×${h} of edit ` +
+				`${r.order} (${this.picture.total} tiles)`;
 			this.lastPicture = r;
 			return r;
 		} catch (e) {
-			this.say(`picture: ${e.message}`);
+			$('pictureinfo').textContent = `picture: ${e.message}`;
 			throw e;
 		} finally {
 			this.picture = null;
-			this.renderPicture();
+			this.renderPicture(true);
 		}
 	}
 

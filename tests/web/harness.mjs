@@ -192,7 +192,7 @@ const TYPES = { '.html': 'text/html; charset=utf-8', '.js': 'text/javascript',
 /* Serves the files of client/web/ and nothing else. */
 export async function startStatic() {
 	const files = new Set(['index.html', 'app.js', 'protocol.js',
-		'prims.js', 'style.css']);
+		'prims.js', 'picture.js', 'style.css']);
 	const server = createServer((req, res) => {
 		const name = new URL(req.url, 'http://x').pathname.slice(1) ||
 			'index.html';

@@ -84,7 +84,8 @@ try {
 	assert.match(download.suggestedFilename(), /^blobcast-default-\d+\.png$/);
 	const info = await page.evaluate(() =>
 		document.getElementById('pictureinfo').textContent);
-	assert.match(info, /tile 4 of 4/, 'the form showed the tiles');
+	assert.match(info, /^saved 1100×700 of edit \d+ \(2 tiles\)$/,
+		`the form says what it saved: "${info}"`);
 	step(`"save PNG" downloaded ${download.suggestedFilename()}, ` +
 		`${size.w}x${size.h}, after "${info}"`);
 
