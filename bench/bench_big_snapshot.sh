@@ -2,20 +2,20 @@
 # A big snapshot end to end: blobcastd on its embedded default scene and
 # `blobcast snapshot --size SIZE` through it (in tiles over the daemon's
 # max_dim, 4096), timed, with the peak resident memory of the client
-# (GNU time) and of the daemon (VmHWM, the daemon's own, read before it
-# stops), and a second daemon-side figure: the peak while idle, so that
-# the snapshot's own share shows.
+# (GNU time) and of the daemon (VmHWM, read before it stops; a fresh
+# daemon per size, and its peak after start-up alone for comparison).
 #
 #   bench/bench_big_snapshot.sh [BUILD_DIR] [SIZE ...]
 #
 # BUILD_DIR defaults to build-rel (a Release build: ASan would measure the
-# sanitizer); SIZEs default to 2048 4096 8192 (square). Extra daemon
+# sanitizer); SIZEs default to 2048 4096 4096:1024 8192 (square; :T asks
+# for tiles of T even where one snapshot would do). Extra daemon
 # options come from $BC_DAEMON_OPTS (e.g. "--backend gl"). Prints one
 # Markdown table row per size.
 set -eu
 build=${1:-build-rel}
 [ $# -gt 0 ] && shift
-sizes=${*:-2048 4096 8192}
+sizes=${*:-2048 4096 4096:1024 8192}
 daemon=$build/server/blobcastd
 cli=$build/client/blobcast
 for f in "$daemon" "$cli"; do
@@ -36,34 +36,53 @@ cleanup() {
 }
 trap cleanup EXIT INT TERM
 
-# shellcheck disable=SC2086
-"$daemon" --listen none --unix "$dir/sock" --data "$dir/data" \
-	${BC_DAEMON_OPTS:-} 2>"$dir/daemon.log" &
-pid=$!
-i=0
-until [ -S "$dir/sock" ] && grep -q 'blobcastd: backend' "$dir/daemon.log"; do
-	i=$((i + 1))
-	if [ $i -gt 400 ] || ! kill -0 "$pid" 2>/dev/null; then
-		echo "bench_big_snapshot: blobcastd did not start:" >&2
-		cat "$dir/daemon.log" >&2
-		exit 1
-	fi
-	sleep 0.05
-done
+start_daemon() {
+	rm -rf "$dir/data" "$dir/sock"
+	# shellcheck disable=SC2086
+	"$daemon" --listen none --unix "$dir/sock" --data "$dir/data" \
+		${BC_DAEMON_OPTS:-} 2>"$dir/daemon.log" &
+	pid=$!
+	i=0
+	until [ -S "$dir/sock" ] &&
+		grep -q 'blobcastd: backend' "$dir/daemon.log"; do
+		i=$((i + 1))
+		if [ $i -gt 400 ] || ! kill -0 "$pid" 2>/dev/null; then
+			echo "bench_big_snapshot: blobcastd did not start:" >&2
+			cat "$dir/daemon.log" >&2
+			exit 1
+		fi
+		sleep 0.05
+	done
+}
+stop_daemon() {
+	kill "$pid" 2>/dev/null && wait "$pid" 2>/dev/null
+	pid=
+}
 hwm() { awk '/^VmHWM/ {print int($2 / 1024)}' "/proc/$pid/status"; }
-echo "daemon idle peak: $(hwm) MiB ($(sed -n 's/^blobcastd: backend \([a-z]*\).*/\1/p' "$dir/daemon.log") backend)"
+
+# One daemon per size, so that each peak is that picture's.
+start_daemon
+echo "daemon peak after start-up: $(hwm) MiB ($(sed -n 's/^blobcastd: backend \([a-z]*\).*/\1/p' "$dir/daemon.log") backend)"
+stop_daemon
 echo "| size | tiles | wall s | client peak MiB | daemon peak MiB | bytes from the server |"
 echo "|---:|---:|---:|---:|---:|---:|"
-for s in $sizes; do
+for spec in $sizes; do
+	s=${spec%%:*}
+	tile=
+	[ "$spec" != "$s" ] && tile="--tile ${spec#*:}"
+	start_daemon
+	# shellcheck disable=SC2086
 	/usr/bin/time -f '%e %M' -o "$dir/time" "$cli" snapshot \
 		--server "unix:$dir/sock" --session default --size "${s}x${s}" \
-		--timeout 600000 --out "$dir/out.png" >"$dir/out" 2>"$dir/err" || {
-		echo "bench_big_snapshot: snapshot at $s failed:" >&2
+		--timeout 600000 $tile --out "$dir/out.png" >"$dir/out" \
+		2>"$dir/err" || {
+		echo "bench_big_snapshot: snapshot at $spec failed:" >&2
 		cat "$dir/err" >&2
 		exit 1
 	}
 	tiles=$(sed -n 's/.*tile [0-9]* of \([0-9]*\).*/\1/p' "$dir/err" | tail -1)
 	bytes=$(sed -n 's/.*order [0-9]*, \([0-9]*\) bytes.*/\1/p' "$dir/out")
 	read -r wall kb <"$dir/time"
-	echo "| ${s}² | ${tiles:-1} | $wall | $((kb / 1024)) | $(hwm) | $bytes |"
+	echo "| ${s}²${tile:+ ($tile)} | ${tiles:-1} | $wall | $((kb / 1024)) | $(hwm) | $bytes |"
+	stop_daemon
 done

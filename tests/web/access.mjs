@@ -171,12 +171,6 @@ try {
 	failed = true;
 	console.error(`FAIL: ${e.stack || e}\n${H.logs()}`);
 } finally {
-	if (browser) {
-		await browser.close().catch(() => {});
-	}
-	await H.stopAll();
 	rmSync(cfgDir, { recursive: true, force: true });
-	clearTimeout(watchdog);
+	await H.finish(browser, failed, watchdog);
 }
-console.log(failed ? '0 passed, 1 failed' : '1 passed, 0 failed');
-process.exit(failed ? 1 : 0);

@@ -131,11 +131,5 @@ try {
 	console.error(`FAIL: ${e.stack || e}`);
 	console.error(H.logs());
 } finally {
-	if (browser) {
-		await browser.close().catch(() => {});
-	}
-	await H.stopAll();
-	clearTimeout(watchdog);
+	await H.finish(browser, failed, watchdog);
 }
-console.log(failed ? '0 passed, 1 failed' : '1 passed, 0 failed');
-process.exit(failed ? 1 : 0);

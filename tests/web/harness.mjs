@@ -8,7 +8,7 @@
  * browser test does alike: loading playwright-core (never a downloaded
  * browser), a watchdog, and polling the page until a condition holds.
  */
-import { spawn, spawnSync } from 'node:child_process';
+import { execFile, spawn, spawnSync } from 'node:child_process';
 import { existsSync, mkdtempSync, readFileSync, rmSync, statSync } from 'node:fs';
 import { createServer } from 'node:http';
 import net from 'node:net';
@@ -281,4 +281,36 @@ export async function until(page, what, fn, arg, ms, pollMs) {
 		}
 		await page.waitForTimeout(pollMs);
 	}
+}
+
+/* Ends a browser test: closes the browser, stops every child this module
+ * started, clears the watchdog, prints the count and exits (status 1 when
+ * failed). */
+export async function finish(browser, failed, watchdog) {
+	if (browser) {
+		await browser.close().catch(() => {});
+	}
+	await stopAll();
+	clearTimeout(watchdog);
+	console.log(failed ? '0 passed, 1 failed' : '1 passed, 0 failed');
+	process.exit(failed ? 1 : 0);
+}
+
+/* The blobcast CLI given as --blobcast PATH, or null after adding what is
+ * missing to lacking. */
+export function findCli(argv, lacking) {
+	const i = argv.indexOf('--blobcast');
+	const cli = i > 0 ? argv[i + 1] : null;
+	if (!cli || !existsSync(cli)) {
+		lacking.push(`the blobcast CLI (${cli ?? 'give --blobcast PATH'})`);
+		return null;
+	}
+	return cli;
+}
+
+/* Runs the CLI; resolves with { code, stdout, stderr }. */
+export function runCli(cli, args, ms = 15000) {
+	return new Promise((resolve) => execFile(cli, args, { timeout: ms },
+		(err, stdout, stderr) => resolve({ code: err ? err.code : 0,
+			stdout, stderr })));
 }

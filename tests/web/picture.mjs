@@ -12,8 +12,7 @@
  * missing). Usage: node tests/web/picture.mjs --blobcastd PATH --blobcast PATH
  */
 import assert from 'node:assert/strict';
-import { execFile } from 'node:child_process';
-import { existsSync, readFileSync } from 'node:fs';
+import { readFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 
@@ -22,12 +21,8 @@ import * as H from './harness.mjs';
 const DEADLINE_MS = 90000;
 
 const daemon = H.findDaemon(process.argv);
-const ci = process.argv.indexOf('--blobcast');
-const cli = ci > 0 ? process.argv[ci + 1] : null;
 const lacking = H.missing({ daemon, browser: true });
-if (!cli || !existsSync(cli)) {
-	lacking.push(`the blobcast CLI (${cli ?? 'give --blobcast PATH'})`);
-}
+const cli = H.findCli(process.argv, lacking);
 H.skipIfMissing('web picture', lacking);
 const chromium = await H.playwright();
 
@@ -39,11 +34,7 @@ const watchdog = H.watchdog(DEADLINE_MS);
 const until = (page, what, fn, arg, ms = 30000) =>
 	H.until(page, what, fn, arg, ms, 30);
 
-function run(args) {
-	return new Promise((resolve) => execFile(cli, args, { timeout: 60000 },
-		(err, stdout, stderr) => resolve({ code: err ? err.code : 0,
-			stdout, stderr })));
-}
+const run = (args) => H.runCli(cli, args, 60000);
 
 /* Width and height from a PNG's IHDR. */
 function pngSize(bytes) {
@@ -135,11 +126,5 @@ try {
 	console.error(`FAIL: ${e.stack || e}`);
 	console.error(H.logs());
 } finally {
-	if (browser) {
-		await browser.close().catch(() => {});
-	}
-	await H.stopAll();
-	clearTimeout(watchdog);
+	await H.finish(browser, failed, watchdog);
 }
-console.log(failed ? '0 passed, 1 failed' : '1 passed, 0 failed');
-process.exit(failed ? 1 : 0);

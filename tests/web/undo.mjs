@@ -14,20 +14,14 @@
  * missing). Usage: node tests/web/undo.mjs --blobcastd PATH --blobcast PATH
  */
 import assert from 'node:assert/strict';
-import { execFile } from 'node:child_process';
-import { existsSync } from 'node:fs';
 
 import * as H from './harness.mjs';
 
 const DEADLINE_MS = 60000;
 
 const daemon = H.findDaemon(process.argv);
-const ci = process.argv.indexOf('--blobcast');
-const cli = ci > 0 ? process.argv[ci + 1] : null;
 const lacking = H.missing({ daemon, browser: true });
-if (!cli || !existsSync(cli)) {
-	lacking.push(`the blobcast CLI (${cli ?? 'give --blobcast PATH'})`);
-}
+const cli = H.findCli(process.argv, lacking);
 H.skipIfMissing('web undo', lacking);
 const chromium = await H.playwright();
 
@@ -40,11 +34,7 @@ const watchdog = H.watchdog(DEADLINE_MS);
 const until = (page, what, fn, arg, ms = 15000) =>
 	H.until(page, what, fn, arg, ms, 30);
 
-function run(args) {
-	return new Promise((resolve) => execFile(cli, args, { timeout: 15000 },
-		(err, stdout, stderr) => resolve({ code: err ? err.code : 0,
-			stdout, stderr })));
-}
+const run = (args) => H.runCli(cli, args, 15000);
 
 const near = (a, b) => a.every((v, i) => Math.abs(v - b[i]) < 1e-5);
 
@@ -138,11 +128,5 @@ try {
 	console.error(`FAIL: ${e.stack || e}`);
 	console.error(H.logs());
 } finally {
-	if (browser) {
-		await browser.close().catch(() => {});
-	}
-	await H.stopAll();
-	clearTimeout(watchdog);
+	await H.finish(browser, failed, watchdog);
 }
-console.log(failed ? '0 passed, 1 failed' : '1 passed, 0 failed');
-process.exit(failed ? 1 : 0);
