@@ -11,7 +11,8 @@
  * its LIMITS against proto_limits.h and the kinds of proto_fields.h, its
  * FIELD numbers against proto_fields.h, and its decoder against that
  * header's table of SET fields (which numbers are fields and how many
- * values each takes).
+ * values each takes); and the table of SET fields in PROTOCOL.md against
+ * that of proto_fields.h.
  */
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
@@ -121,6 +122,42 @@ test('page field numbers: those of proto_fields.h', () => {
 	assert.equal(rows.reduce((a, r) => a + r.numbers, 0),
 		P.LIMITS.MAX_SET_FIELDS);
 });
+
+test('PROTOCOL.md field table: numbers, counts and nodes as proto_fields.h',
+	() => {
+		const spec = readFileSync(join(ROOT, 'protocol', 'PROTOCOL.md'),
+			'utf8');
+		const body = spec.match(/\| field +\| name +\| count +\| applies to +\|.*\n\|[-:| ]+\|\n((?:\|.*\n)+)/)[1];
+		/* [field, name, count, applies to, meaning] */
+		const docs = body.trim().split('\n').map((l) =>
+			l.split(/(?<!\\)\|/).slice(1, -1).map((c) => c.trim()));
+		const rows = fieldRows();
+		for (const r of rows) {
+			const first = P.FIELD[r.name];
+			const mine = docs.filter((d) => Number(d[0].split(/\s/)[0]) ===
+				first);
+			assert.ok(mine.length, `PROTOCOL.md has no field ${first}`);
+			const count = r.min === r.max ? `${r.min}` : `${r.min}..${r.max}`;
+			assert.ok(mine.some((d) => d[2] === count),
+				`field ${first}: ${count} values`);
+			const nodes = mine.map((d) => d[3]).join(', ');
+			assert.equal(/primitives/.test(nodes),
+				r.flags.includes('BC_PROTO_ON_PRIM'), `${first}: primitives`);
+			assert.equal(/(^|, )operators/.test(nodes),
+				r.flags.includes('BC_PROTO_ON_OP'), `${first}: operators`);
+			assert.equal(/unary nodes/.test(nodes),
+				r.flags.includes('BC_PROTO_ON_UNARY'), `${first}: unary nodes`);
+			if (r.key) {
+				assert.ok(mine.some((d) => d[1] === r.key ||
+					d[1].endsWith(` ${r.key}`)), `field ${first}: ${r.key}`);
+			}
+		}
+		for (const d of docs) {
+			const n = Number(d[0].split(/\s/)[0]);
+			assert.ok(rows.some((r) => n >= P.FIELD[r.name] &&
+				n < P.FIELD[r.name] + r.numbers), `PROTOCOL.md field ${n}`);
+		}
+	});
 
 /* One EDIT payload: a SET of node 1 with one field of count values (and
  * room for one value at least, so that a count of 0 is refused for its
