@@ -24,7 +24,9 @@ _Static_assert(BC_PROTO_MAX_UNARY_PARAMS == BC_UNARY_MAX_PARAMS,
                "unary parameter limit differs from blobtree's");
 _Static_assert(BC_PROTO_MAX_PRIM_PARAMS == BC_PRIM_MAX_PARAMS,
                "primitive parameter limit differs from blobtree's");
-_Static_assert(BC_PROTO_MAX_ABS == BC_PARAM_MAX_ABS,
+/* Float constants may appear in an integer constant expression only as
+ * the operand of a cast (C11 6.6); both limits are whole numbers. */
+_Static_assert((long)BC_PROTO_MAX_ABS == (long)BC_PARAM_MAX_ABS,
                "coordinate limit differs from blobtree's");
 _Static_assert(BC_PROTO_SCENE_MAX_NODES == BC_TREE_MAX_NODES,
                "scene node limit differs from blobtree's");
