@@ -11,6 +11,43 @@
 #include "blobcast/scene.h"
 #include "edit_impl.h"
 
+/* The protocol repeats blobtree's kinds and limits (it must not include
+ * blobtree's headers) and this module turns one into the other, so the
+ * two are held together here, in a file every build compiles. */
+_Static_assert(BC_PROTO_PRIM_KIND_MAX == BC_PRIM_COUNT - 1,
+               "primitive kinds differ from blobtree's");
+_Static_assert(BC_PROTO_OP_KIND_MAX == BC_OP_COUNT - 1,
+               "operator kinds differ from blobtree's");
+_Static_assert(BC_PROTO_OP_KIND_FIRST_UNARY == BC_OP_FIRST_UNARY,
+               "the first unary kind differs from blobtree's");
+_Static_assert(BC_PROTO_MAX_UNARY_PARAMS == BC_UNARY_MAX_PARAMS,
+               "unary parameter limit differs from blobtree's");
+_Static_assert(BC_PROTO_MAX_PRIM_PARAMS == BC_PRIM_MAX_PARAMS,
+               "primitive parameter limit differs from blobtree's");
+/* Float constants may appear in an integer constant expression only as
+ * the operand of a cast (C11 6.6); both limits are whole numbers. */
+_Static_assert((long)BC_PROTO_MAX_ABS == (long)BC_PARAM_MAX_ABS,
+               "coordinate limit differs from blobtree's");
+_Static_assert(BC_PROTO_SCENE_MAX_NODES == BC_TREE_MAX_NODES,
+               "scene node limit differs from blobtree's");
+_Static_assert(BC_PROTO_SCENE_MAX_DEPTH == BC_TREE_MAX_DEPTH,
+               "scene depth limit differs from blobtree's");
+/* Where the fields land: a field takes as many values as its array has. */
+#define NFLOATS(member) (sizeof(member) / sizeof(float))
+_Static_assert(NFLOATS(((struct bc_prim_data *)0)->translate) ==
+                   BC_PROTO_FIELD_TRANSLATE_VALUES,
+               "translate values");
+_Static_assert(NFLOATS(((struct bc_prim_data *)0)->rotate) ==
+                   BC_PROTO_FIELD_ROTATE_VALUES,
+               "rotate values");
+_Static_assert(NFLOATS(((struct bc_prim_data *)0)->color) ==
+                   BC_PROTO_FIELD_COLOR_VALUES,
+               "color values");
+_Static_assert(BC_PROTO_FIELD_BLEND_VALUES == 1 &&
+                   BC_PROTO_FIELD_RANGE_VALUES == 1 &&
+                   BC_PROTO_FIELD_OP_KIND_VALUES == 1,
+               "an operator's blend, range and kind are one float each");
+
 /* Where field f of a primitive lands and how many values it takes, or NULL
  * when it does not apply to p's kind. */
 static float *prim_field(struct bc_prim_data *p, uint8_t f, uint32_t *want)
@@ -18,13 +55,13 @@ static float *prim_field(struct bc_prim_data *p, uint8_t f, uint32_t *want)
 	const struct bc_prim_info *info = bc_prim_info(p->kind);
 	switch (f) {
 	case BC_PROTO_FIELD_TRANSLATE:
-		*want = 3;
+		*want = BC_PROTO_FIELD_TRANSLATE_VALUES;
 		return p->translate;
 	case BC_PROTO_FIELD_ROTATE:
-		*want = 4;
+		*want = BC_PROTO_FIELD_ROTATE_VALUES;
 		return p->rotate;
 	case BC_PROTO_FIELD_COLOR:
-		*want = 3;
+		*want = BC_PROTO_FIELD_COLOR_VALUES;
 		return p->color;
 	default:
 		break;
@@ -46,21 +83,23 @@ static int set_op_fields(const struct bc_proto_edit_op *e,
 	bool gave_blend = false, gave_range = false;
 	for (uint32_t i = 0; i < e->nfields; i++) {
 		const struct bc_proto_field *f = &e->fields[i];
+		const struct bc_proto_field_info *info =
+		    bc_proto_field_info(f->field);
 		float k = f->v[0];
-		if (f->field != BC_PROTO_FIELD_BLEND &&
-		    f->field != BC_PROTO_FIELD_RANGE &&
-		    f->field != BC_PROTO_FIELD_OP_KIND) {
+		if (!info || !(info->flags & BC_PROTO_ON_OP)) {
 			return bc_errinfo_set(ei, BC_EINVAL,
 			                      "node %u: field %u does not "
 			                      "apply to an operator",
 			                      e->node, (unsigned)f->field);
 		}
-		if (f->count != 1) {
+		if (f->count != info->max_values) {
 			return bc_errinfo_set(
 			    ei, BC_EINVAL,
-			    "node %u: field %u takes 1 value, "
-			    "got %u",
-			    e->node, (unsigned)f->field, (unsigned)f->count);
+			    "node %u: field %u takes %u value%s, got %u",
+			    e->node, (unsigned)f->field,
+			    (unsigned)info->max_values,
+			    info->max_values == 1 ? "" : "s",
+			    (unsigned)f->count);
 		}
 		if (f->field == BC_PROTO_FIELD_BLEND) {
 			op->blend = k;
@@ -213,8 +252,9 @@ void bc_edit_state_set(const struct bc_edit_saved *s, bool is_op,
 	} else {
 		const struct bc_prim_info *info = bc_prim_info(s->p.kind);
 		put_field(e, fields, BC_PROTO_FIELD_TRANSLATE, s->p.translate,
-		          3);
-		put_field(e, fields, BC_PROTO_FIELD_ROTATE, s->p.rotate, 4);
+		          BC_PROTO_FIELD_TRANSLATE_VALUES);
+		put_field(e, fields, BC_PROTO_FIELD_ROTATE, s->p.rotate,
+		          BC_PROTO_FIELD_ROTATE_VALUES);
 		for (uint32_t k = 0; info && k < info->nparams; k++) {
 			put_field(e, fields,
 			          (uint8_t)(BC_PROTO_FIELD_PARAM0 + k),
@@ -223,7 +263,7 @@ void bc_edit_state_set(const struct bc_edit_saved *s, bool is_op,
 		}
 		if (s->p.has_color) {
 			put_field(e, fields, BC_PROTO_FIELD_COLOR, s->p.color,
-			          3);
+			          BC_PROTO_FIELD_COLOR_VALUES);
 		}
 	}
 }

@@ -19,42 +19,44 @@ struct key {
 	uint8_t count;
 };
 
-/* Fills keys[] with what a node accepts (prim, op or unary node: op's
- * kind), returns how many. */
+/* Fills keys[0..cap) with what a node accepts (prim, op or unary node:
+ * op's kind), returns how many: the named fields of proto_fields.h's
+ * table that apply to the node, then the parameters its kind names. A
+ * unary node's kind thus comes before the parameters it decides. */
 static uint32_t node_keys(const struct bc_prim_data *p, bool is_op,
-                          enum bc_op op, struct key *keys)
+                          enum bc_op op, struct key *keys, uint32_t cap)
 {
-	const struct bc_prim_info *info;
+	unsigned on = !is_op               ? BC_PROTO_ON_PRIM
+	              : bc_op_is_unary(op) ? BC_PROTO_ON_UNARY
+	                                   : BC_PROTO_ON_OP;
 	uint32_t n = 0;
-	if (is_op && bc_op_is_unary(op)) {
+#define NAMED(name, k, lo, hi, numbers, flags)                                 \
+	if ((k) != NULL && (on & (flags)) && n < cap) {                        \
+		keys[n++] = (struct key){(k), BC_PROTO_FIELD_##name, (hi)};    \
+	}
+	BC_PROTO_FIELDS(NAMED)
+#undef NAMED
+	if (on == BC_PROTO_ON_UNARY) {
 		const struct bc_unary_info *u = bc_unary_info(op);
-		keys[n++] = (struct key){"kind", BC_PROTO_FIELD_OP_KIND, 1};
-		if (op == BC_OP_REPEAT) {
+		if (op == BC_OP_REPEAT && n + 2 <= cap) {
 			keys[n++] =
 			    (struct key){"spacing", BC_PROTO_FIELD_PARAM0, 3};
 			keys[n++] =
 			    (struct key){"count", BC_PROTO_FIELD_PARAM0 + 1, 3};
-		} else {
+		} else if (u && n < cap) {
 			keys[n++] = (struct key){
 			    u->param, BC_PROTO_FIELD_PARAM0, u->nparams};
 		}
-		return n;
-	}
-	if (is_op) {
-		keys[n++] = (struct key){"blend", BC_PROTO_FIELD_BLEND, 1};
-		keys[n++] = (struct key){"range", BC_PROTO_FIELD_RANGE, 1};
-		keys[n++] = (struct key){"kind", BC_PROTO_FIELD_OP_KIND, 1};
-		return n;
-	}
-	keys[n++] = (struct key){"translate", BC_PROTO_FIELD_TRANSLATE, 3};
-	keys[n++] = (struct key){"rotate", BC_PROTO_FIELD_ROTATE, 4};
-	keys[n++] = (struct key){"color", BC_PROTO_FIELD_COLOR, 3};
-	info = bc_prim_info(p->kind);
-	for (uint32_t k = 0;
-	     info && k < info->nparams && k < BC_PROTO_MAX_PRIM_PARAMS; k++) {
-		keys[n++] = (struct key){info->params[k].name,
-		                         (uint8_t)(BC_PROTO_FIELD_PARAM0 + k),
-		                         info->params[k].count};
+	} else if (on == BC_PROTO_ON_PRIM) {
+		const struct bc_prim_info *info = bc_prim_info(p->kind);
+		for (uint32_t k = 0; info && k < info->nparams &&
+		                     k < BC_PROTO_MAX_PRIM_PARAMS && n < cap;
+		     k++) {
+			keys[n++] =
+			    (struct key){info->params[k].name,
+			                 (uint8_t)(BC_PROTO_FIELD_PARAM0 + k),
+			                 info->params[k].count};
+		}
 	}
 	return n;
 }
@@ -186,7 +188,8 @@ int bc_edit_parse_kv(const struct bc_tree *scene, uint32_t node,
                      struct bc_proto_field *fields, uint8_t *nfields,
                      struct bc_errinfo *ei)
 {
-	struct key keys[3 + BC_PROTO_MAX_PRIM_PARAMS];
+	/* One key per field number at most. */
+	struct key keys[BC_PROTO_MAX_SET_FIELDS];
 	struct bc_prim_data p;
 	struct bc_op_data op;
 	const char *what;
@@ -205,7 +208,8 @@ int bc_edit_parse_kv(const struct bc_tree *scene, uint32_t node,
 		what = info ? info->name : NULL;
 	}
 	what = what ? what : "node";
-	nkeys = node_keys(&p, is_op, op.kind, keys);
+	nkeys = node_keys(&p, is_op, op.kind, keys,
+	                  (uint32_t)(sizeof(keys) / sizeof(keys[0])));
 	if (n == 0) {
 		char list[256];
 		key_list(keys, nkeys, list, sizeof(list));

@@ -423,34 +423,13 @@ static int dec_sessions(struct dec *d, struct bc_msg_sessions *l)
 	return 0;
 }
 
-/* Field numbers and how many values each takes: 0 = not a field,
- * -1 = a shape parameter (1..BC_PROTO_MAX_FIELD_VALUES values). */
-static int field_values(unsigned field)
-{
-	switch (field) {
-	case BC_PROTO_FIELD_TRANSLATE:
-	case BC_PROTO_FIELD_COLOR:
-		return 3;
-	case BC_PROTO_FIELD_ROTATE:
-		return 4;
-	case BC_PROTO_FIELD_BLEND:
-	case BC_PROTO_FIELD_RANGE:
-	case BC_PROTO_FIELD_OP_KIND:
-		return 1;
-	default:
-		if (field >= BC_PROTO_FIELD_PARAM0 &&
-		    field < BC_PROTO_FIELD_PARAM0 + BC_PROTO_MAX_PRIM_PARAMS) {
-			return -1;
-		}
-		return 0;
-	}
-}
-
 static int dec_field(struct dec *d, uint64_t *seen, struct bc_proto_field *f)
 {
 	TRY(rd_u8(d, "field", &f->field));
-	int want = field_values(f->field);
-	if (want == 0) {
+	/* Field numbers and the value counts each takes: the table of
+	 * proto_fields.h. */
+	const struct bc_proto_field_info *info = bc_proto_field_info(f->field);
+	if (!info) {
 		return fail(d, BC_EENUM, "field %u is not a field number",
 		            (unsigned)f->field);
 	}
@@ -461,15 +440,18 @@ static int dec_field(struct dec *d, uint64_t *seen, struct bc_proto_field *f)
 	}
 	*seen |= UINT64_C(1) << f->field;
 	TRY(rd_u8(d, "field.count", &f->count));
-	bool ok =
-	    want > 0 ? f->count == (unsigned)want
-	             : (f->count >= 1 && f->count <= BC_PROTO_MAX_FIELD_VALUES);
-	if (!ok) {
+	if (f->count < info->min_values || f->count > info->max_values) {
+		if (info->min_values == info->max_values) {
+			return fail(d, BC_EPROTO_COUNT,
+			            "field %u has %u values, expected %u",
+			            (unsigned)f->field, (unsigned)f->count,
+			            (unsigned)info->max_values);
+		}
 		return fail(d, BC_EPROTO_COUNT,
-		            "field %u has %u values, expected %s%d",
+		            "field %u has %u values, expected %u..%u",
 		            (unsigned)f->field, (unsigned)f->count,
-		            want > 0 ? "" : "1..",
-		            want > 0 ? want : (int)BC_PROTO_MAX_FIELD_VALUES);
+		            (unsigned)info->min_values,
+		            (unsigned)info->max_values);
 	}
 	if ((size_t)f->count * 4u > bc_rd_left(&d->c)) {
 		return fail(d, BC_EPROTO_COUNT,

@@ -15,6 +15,7 @@
 #include "blobcast/args.h"
 #include "blobcast/blobtree.h"
 #include "blobcast/error.h"
+#include "blobcast/proto_fields.h"
 
 int bc_cli_exit_for(int code, enum bc_cli_stage stage, bool broken)
 {
@@ -266,6 +267,21 @@ static size_t kind_names(const char **names, size_t cap)
 	return n;
 }
 
+/* The scene file members of proto_fields.h's table with a fixed name that
+ * apply to nodes `on` (translate rotate color; blend range), into keys;
+ * returns how many (at most 3). */
+static size_t named_scene_keys(unsigned on, const char **keys)
+{
+	size_t n = 0;
+#define SCENE_KEY(name, k, lo, hi, numbers, flags)                             \
+	if ((k) != NULL && (on & (flags)) && (BC_PROTO_IN_SCENE & (flags))) {  \
+		keys[n++] = (k);                                               \
+	}
+	BC_PROTO_FIELDS(SCENE_KEY)
+#undef SCENE_KEY
+	return n;
+}
+
 /* The keys a scene file's node of kind what ("sphere", "smooth_union",
  * "twist") takes, as blobtree's JSON reader lists them; returns the count
  * (0 for an unknown kind). */
@@ -281,9 +297,7 @@ static size_t scene_keys(const char *what, const char **keys, size_t cap)
 	keys[n++] = "id";
 	if (pk != BC_PRIM_INVALID) {
 		const struct bc_prim_info *info = bc_prim_info(pk);
-		keys[n++] = "translate";
-		keys[n++] = "rotate";
-		keys[n++] = "color";
+		n += named_scene_keys(BC_PROTO_ON_PRIM, keys + n);
 		for (uint32_t i = 0; info && i < info->nparams; i++) {
 			keys[n++] = info->params[i].name;
 		}
@@ -299,8 +313,7 @@ static size_t scene_keys(const char *what, const char **keys, size_t cap)
 	} else if (bc_op_is_unary(op)) {
 		keys[n++] = bc_unary_info(op)->param;
 	} else if (bc_op_is_smooth(op)) {
-		keys[n++] = "blend";
-		keys[n++] = "range";
+		n += named_scene_keys(BC_PROTO_ON_OP, keys + n);
 	}
 	return n;
 }

@@ -118,7 +118,154 @@ static void test_blobtree_encodings_scan(void)
 	}
 }
 
+/* The parameters of every primitive and unary kind, as blobtree describes
+ * them, fit the table's parameter fields (proto_fields.h): as many fields
+ * as the PARAM0 row has numbers, each with a value count the decoder
+ * accepts, and no parameter named like a fixed key (the key=value parser
+ * would find the fixed field first). */
+static bool named_key(const char *name)
+{
+	for (unsigned f = 1; f < 64; f++) {
+		const struct bc_proto_field_info *r = bc_proto_field_info(f);
+		if (r && r->key && strcmp(r->key, name) == 0) {
+			return true;
+		}
+	}
+	return false;
+}
+
+static void test_kind_params_fit_the_field_table(void)
+{
+	const struct bc_proto_field_info *par =
+	    bc_proto_field_info(BC_PROTO_FIELD_PARAM0);
+	REQUIRE(par && !par->key);
+	CHECK(par->flags & BC_PROTO_ON_PRIM);
+	CHECK(par->flags & BC_PROTO_ON_UNARY);
+	for (int k = 1; k < BC_PRIM_COUNT; k++) {
+		const struct bc_prim_info *info = bc_prim_info((enum bc_prim)k);
+		REQUIRE(info);
+		CHECK(info->nparams <= par->numbers);
+		for (uint32_t i = 0; i < info->nparams; i++) {
+			const struct bc_param_desc *d = &info->params[i];
+			CHECK(d->count >= par->min_values &&
+			      d->count <= par->max_values);
+			if (named_key(d->name)) {
+				fprintf(stderr, "  %s.%s is a fixed key\n",
+				        info->name, d->name);
+				CHECK(false);
+			}
+		}
+	}
+	for (int k = BC_OP_FIRST_UNARY; k < BC_OP_COUNT; k++) {
+		const struct bc_unary_info *u = bc_unary_info((enum bc_op)k);
+		REQUIRE(u);
+		/* repeat: spacing and count, 3 values each; the others one
+		 * field of nparams values (edit/fields.c). */
+		uint32_t per = k == BC_OP_REPEAT ? 3u : u->nparams;
+		CHECK(per >= par->min_values && per <= par->max_values);
+		CHECK(u->nparams <= BC_PROTO_MAX_UNARY_PARAMS);
+		CHECK(!named_key(u->param));
+	}
+	/* Each operator kind is a valid OP_KIND value; the table says which
+	 * nodes the kind field applies to. */
+	const struct bc_proto_field_info *kind =
+	    bc_proto_field_info(BC_PROTO_FIELD_OP_KIND);
+	REQUIRE(kind);
+	CHECK(kind->flags & BC_PROTO_ON_OP);
+	CHECK(kind->flags & BC_PROTO_ON_UNARY);
+	CHECK(!(kind->flags & BC_PROTO_ON_PRIM));
+	CHECK(!(kind->flags & BC_PROTO_IN_SCENE));
+	CHECK(!bc_proto_field_info(0));
+	CHECK(!bc_proto_field_info(BC_PROTO_FIELD_PARAM0 +
+	                           BC_PROTO_MAX_PRIM_PARAMS));
+	CHECK(!bc_proto_field_info(255));
+}
+
+/* The keys the table marks as scene file members are the members
+ * blobtree's JSON writer uses for them: a coloured, moved, turned sphere
+ * under a smooth union has exactly its table keys, its parameters, "type"
+ * and "id"; the union has its table keys, "type", "id" and "children". */
+static void check_members(json_t *node, unsigned on, const char *const *more,
+                          size_t nmore)
+{
+	const char *key;
+	json_t *v;
+	size_t want = nmore;
+	REQUIRE(json_is_object(node));
+	for (unsigned f = 1; f < 64; f++) {
+		const struct bc_proto_field_info *r = bc_proto_field_info(f);
+		if (!r || !r->key || f != r->first || !(r->flags & on) ||
+		    !(r->flags & BC_PROTO_IN_SCENE)) {
+			continue;
+		}
+		want++;
+		if (!json_object_get(node, r->key)) {
+			fprintf(stderr, "  no \"%s\" in the scene file\n",
+			        r->key);
+			CHECK(false);
+		}
+	}
+	json_object_foreach(node, key, v)
+	{
+		bool known = false;
+		for (size_t i = 0; i < nmore; i++) {
+			known = known || strcmp(key, more[i]) == 0;
+		}
+		known = known || named_key(key);
+		if (!known) {
+			fprintf(stderr, "  \"%s\" is not in the table\n", key);
+			CHECK(false);
+		}
+	}
+	CHECK_EQ_INT(json_object_size(node), want);
+}
+
+static void test_scene_file_keys_match_the_field_table(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_errinfo ei = {0};
+	struct bc_prim_data p;
+	struct bc_op_data op = {BC_OP_SMOOTH_UNION, 0.25f, 0.5f};
+	struct bc_camera cam;
+	json_error_t jerr;
+	REQUIRE(t);
+	bc_prim_data_init(&p, BC_PRIM_SPHERE);
+	p.params[0] = 1.0f;
+	p.translate[0] = 0.5f;
+	p.rotate[2] = 0.6f;
+	p.rotate[3] = 0.8f;
+	p.color[0] = 1.0f;
+	p.has_color = true;
+	CHECK(bc_tree_begin(t) == 0);
+	CHECK(bc_tree_push_op(t, 1, &op, &ei) == 0);
+	CHECK(bc_tree_put_prim(t, 2, &p, &ei) == 0);
+	p.translate[0] = -0.5f;
+	CHECK(bc_tree_put_prim(t, 3, &p, &ei) == 0);
+	CHECK(bc_tree_pop_op(t, &ei) == 0);
+	REQUIRE(bc_tree_end(t, &ei) == 0);
+	bc_camera_default(&cam);
+	char *text = bc_scene_to_json(t, &cam);
+	REQUIRE(text);
+	json_t *doc = json_loads(text, 0, &jerr);
+	REQUIRE(doc);
+	json_t *root = json_object_get(doc, "root");
+	static const char *const op_more[] = {"type", "id", "children"};
+	check_members(root, BC_PROTO_ON_OP, op_more, 3);
+	json_t *kids = json_object_get(root, "children");
+	REQUIRE(json_is_array(kids) && json_array_size(kids) == 2);
+	const struct bc_prim_info *info = bc_prim_info(BC_PRIM_SPHERE);
+	REQUIRE(info && info->nparams == 1);
+	const char *prim_more[] = {"type", "id", info->params[0].name};
+	check_members(json_array_get(kids, 0), BC_PROTO_ON_PRIM, prim_more, 3);
+	json_decref(doc);
+	bc_free(text);
+	bc_tree_destroy(t);
+}
+
 static const struct bc_test tests[] = {
+    {"kind_params_fit_the_field_table", test_kind_params_fit_the_field_table},
+    {"scene_file_keys_match_the_field_table",
+     test_scene_file_keys_match_the_field_table},
     {"scene_vectors_agree_with_blobtree",
      test_scene_vectors_agree_with_blobtree},
     {"blobtree_encodings_scan", test_blobtree_encodings_scan},

@@ -23,6 +23,7 @@
 
 #include "blobcast/error.h"
 #include "blobcast/export.h"
+#include "blobcast/proto_fields.h"
 #include "blobcast/proto_limits.h"
 
 /* ---- Framing ------------------------------------------------------------ */
@@ -223,26 +224,8 @@ enum bc_proto_edit_kind {
 	BC_PROTO_EDIT_COUNT
 };
 
-/* Field numbers of a set operation (sparse, so not an enum). Parameter k
- * (0-based, in the order of docs/primitives.md) is BC_PROTO_FIELD_PARAM0 + k,
- * k < BC_PROTO_MAX_PRIM_PARAMS. */
-#define BC_PROTO_FIELD_TRANSLATE 1u /* 3 values */
-#define BC_PROTO_FIELD_ROTATE 2u    /* 4 values, quaternion x y z w */
-#define BC_PROTO_FIELD_COLOR 3u     /* 3 values */
-#define BC_PROTO_FIELD_PARAM0 16u   /* 16..23: 1..4 values each */
-#define BC_PROTO_FIELD_BLEND 32u    /* 1 value */
-#define BC_PROTO_FIELD_RANGE 33u    /* 1 value */
-#define BC_PROTO_FIELD_OP_KIND 34u  /* 1 value: an integer 1..14 */
-
-/* Operator kinds as the scene encoding and the OP_KIND field number them
- * (the same numbers as blobtree's enum bc_op): 1..6 binary, 7..14 unary
- * and domain nodes (offset .. scale), which carry nfloats parameters (at
- * most BC_PROTO_MAX_UNARY_PARAMS) and exactly one child. */
-#define BC_PROTO_OP_KIND_MAX 14u
-#define BC_PROTO_OP_KIND_FIRST_UNARY 7u
-#define BC_PROTO_MAX_UNARY_PARAMS 6u
-/* Primitive kinds run 1..32 (blobtree's enum bc_prim). */
-#define BC_PROTO_PRIM_KIND_MAX 32u
+/* Field numbers of a set operation, the node kinds OP_KIND and the scene
+ * encoding number, and what each field takes: blobcast/proto_fields.h. */
 
 /* ---- Message fields ------------------------------------------------------ */
 

@@ -6,7 +6,9 @@
  *
  * A few values mirror limits of other modules (blobtree, render). The
  * protocol must not include those headers, so the values are repeated here
- * and tests/protocol asserts at compile time that they still agree.
+ * and edit/fields.c (compiled in every build) and tests/protocol assert at
+ * compile time that they still agree. proto_fields.h asserts the ones that
+ * follow from its table of SET fields.
  */
 #ifndef BLOBCAST_PROTO_LIMITS_H
 #define BLOBCAST_PROTO_LIMITS_H
