@@ -149,7 +149,7 @@ int main(int argc, char **argv)
 	conn_close(&c);
 	daemon_stop(&d, SIGTERM);
 	{
-		char cmd[128];
+		char cmd[160];
 		snprintf(cmd, sizeof(cmd), "rm -rf %s %s.sock", dir, dir);
 		if (system(cmd) != 0) {
 			return 1;
