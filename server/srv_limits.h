@@ -307,4 +307,15 @@
  * letters, digits, '-', '_' and '.', not starting with '.'. */
 #define BC_SRV_MAX_SESSION_NAME 64u
 
+/* The server's limits stay within the wire's: WELCOME announces them in
+ * fields whose ranges PROTOCOL.md fixes, and a session name must be one
+ * the protocol can carry. */
+#include "blobcast/proto_limits.h"
+_Static_assert(BC_SRV_MAX_DIM >= 1 && BC_SRV_MAX_DIM <= BC_PROTO_MAX_DIM,
+               "WELCOME max_dim is 1..BC_PROTO_MAX_DIM");
+_Static_assert(BC_SRV_MAX_SESSION_NAME == BC_PROTO_MAX_NAME,
+               "a session directory holds any session name the wire carries");
+_Static_assert(BC_SRV_MAX_NODES <= BC_LIMIT_NODES,
+               "WELCOME max_nodes within the layout's limit");
+
 #endif
