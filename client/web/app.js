@@ -620,6 +620,11 @@ class App {
 			this.picture?.handle(m)) {
 			return;
 		}
+		/* The page asks for snapshots only as a picture's tiles: one
+		 * that arrives after its picture failed is not for the view. */
+		if (m.type === P.MSG.FRAME && (m.flags & P.FLAG.SNAPSHOT)) {
+			return;
+		}
 		switch (m.type) {
 		case P.MSG.WELCOME:
 			this.welcome = m;
