@@ -179,7 +179,8 @@ const struct bc_cli_cmd bc_cli_cmd_snapshot = {
             BC_CLI_O_IDS | BC_CLI_O_CAMERA | BC_CLI_O_TILE,
     .min_pos = 0,
     .max_pos = 0,
-    .synopsis = "--session NAME --size WxH --out IMG [--depth IMG] [--ids IMG]",
+    .synopsis = "--session NAME --size WxH --out IMG [--depth IMG] [--ids IMG] "
+                "[--tile N]",
     .summary = "save a lossless still of a session to an image file",
     .help =
         "Asks the server for a lossless (PNG) still of session NAME at WxH\n"
