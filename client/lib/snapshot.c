@@ -16,35 +16,36 @@
 /* Rounds of asking again for tiles an edit overtook. */
 #define BIG_MAX_ROUNDS 4
 
-struct big {
+struct bc_client_big {
 	struct bc_client *c;
-	const struct bc_client_big_opts *o;
+	struct bc_client_big_opts o;
 	struct bc_client_image *out;
-	uint32_t tile, across, down, total;
+	struct bc_client_image t; /* the tile being decoded */
+	uint32_t tile, across, down, total, in_flight, busy;
 	uint8_t *state;   /* per tile: 0 to ask, 1 asked, 2 arrived */
 	uint32_t *seq;    /* per tile, while asked */
 	uint64_t *order;  /* per tile, once arrived */
 	uint32_t *camera; /* per tile, once arrived */
 	uint32_t arrived, asked;
+	int rounds;
 };
 
-static int ask(struct big *b, uint32_t k, struct bc_errinfo *ei)
+static int ask(struct bc_client_big *b, uint32_t k, struct bc_errinfo *ei)
 {
 	struct bc_msg m = {.type = BC_MSG_SNAPSHOT};
 	uint32_t tx = (k % b->across) * b->tile, ty = (k / b->across) * b->tile;
 	int rc;
-	m.snapshot.encoding = b->o->encoding;
-	m.snapshot.planes = (uint8_t)b->o->planes;
+	m.snapshot.encoding = b->o.encoding;
+	m.snapshot.planes = (uint8_t)b->o.planes;
 	m.snapshot.has_tile = true;
-	m.snapshot.full_width = (uint16_t)b->o->width;
-	m.snapshot.full_height = (uint16_t)b->o->height;
+	m.snapshot.full_width = (uint16_t)b->o.width;
+	m.snapshot.full_height = (uint16_t)b->o.height;
 	m.snapshot.tile_x = (uint16_t)tx;
 	m.snapshot.tile_y = (uint16_t)ty;
 	m.snapshot.tile_width =
-	    (uint16_t)(b->o->width - tx < b->tile ? b->o->width - tx : b->tile);
+	    (uint16_t)(b->o.width - tx < b->tile ? b->o.width - tx : b->tile);
 	m.snapshot.tile_height =
-	    (uint16_t)(b->o->height - ty < b->tile ? b->o->height - ty
-	                                           : b->tile);
+	    (uint16_t)(b->o.height - ty < b->tile ? b->o.height - ty : b->tile);
 	b->state[k] = 1;
 	b->asked++;
 	if ((rc = bc_client_send(b->c, &m, &b->seq[k])) &&
@@ -56,7 +57,8 @@ static int ask(struct big *b, uint32_t k, struct bc_errinfo *ei)
 }
 
 /* Copies the decoded tile k into the picture. */
-static void place(struct big *b, uint32_t k, const struct bc_client_image *t)
+static void place(struct bc_client_big *b, uint32_t k,
+                  const struct bc_client_image *t)
 {
 	struct bc_client_image *out = b->out;
 	size_t x0 = (k % b->across) * b->tile, y0 = (k / b->across) * b->tile;
@@ -76,84 +78,63 @@ static void place(struct big *b, uint32_t k, const struct bc_client_image *t)
 	}
 }
 
-/* Receives one answer: a tile placed (or an error). */
-static int receive(struct big *b, struct bc_client_image *t,
-                   struct bc_errinfo *ei)
+/* Tile k's FRAME m: decoded and placed. */
+static int arrive(struct bc_client_big *b, uint32_t k, const struct bc_msg *m,
+                  struct bc_errinfo *ei)
 {
-	struct bc_msg m;
-	uint32_t k;
+	struct bc_client_image *t = &b->t;
+	uint32_t tx = (k % b->across) * b->tile, ty = (k / b->across) * b->tile;
+	uint32_t w = b->o.width - tx < b->tile ? b->o.width - tx : b->tile;
+	uint32_t h = b->o.height - ty < b->tile ? b->o.height - ty : b->tile;
 	int rc;
-	for (;;) {
-		int got = bc_client_recv(b->c, &m,
-		                         b->o->timeout_ms ? b->o->timeout_ms
-		                                          : b->c->timeout_ms);
-		if (got < 0) {
-			return bc_client_error(b->c, ei);
-		}
-		if (got == 0) {
-			return bc_errinfo_set(
-			    ei, BC_ETIMEOUT,
-			    "no tile from the server in time (%u of %u "
-			    "arrived); a longer --timeout gives it more",
-			    b->arrived, b->total);
-		}
-		for (k = 0; k < b->total; k++) {
-			if (b->state[k] == 1 && b->seq[k] == m.seq) {
-				break;
-			}
-		}
-		if (k == b->total || m.seq == 0) {
-			continue; /* stream frames, broadcasts */
-		}
-		if (m.type == BC_MSG_ERROR) {
-			return bc_errinfo_set(
-			    ei, m.error.code ? -(int)m.error.code : BC_EINVAL,
-			    "%.*s", (int)m.error.text.len, m.error.text.ptr);
-		}
-		if (m.type == BC_MSG_FRAME &&
-		    (m.flags & BC_PROTO_FLAG_SNAPSHOT)) {
-			break;
-		}
-	}
 	bc_client_image_finish(t);
 	bc_client_image_init(t);
-	if ((rc = bc_client_image_apply(t, &m, ei))) {
+	if ((rc = bc_client_image_apply(t, m, ei))) {
 		return rc;
 	}
-	if (((b->o->planes & BC_PROTO_PLANE_DEPTH) && !t->depth) ||
-	    ((b->o->planes & BC_PROTO_PLANE_IDS) && !t->ids)) {
+	if (((b->o.planes & BC_PROTO_PLANE_DEPTH) && !t->depth) ||
+	    ((b->o.planes & BC_PROTO_PLANE_IDS) && !t->ids)) {
 		return bc_errinfo_set(ei, BC_EIO,
 		                      "a tile lacks a plane asked for");
 	}
-	{
-		uint32_t tx = (k % b->across) * b->tile,
-		         ty = (k / b->across) * b->tile;
-		uint32_t w =
-		    b->o->width - tx < b->tile ? b->o->width - tx : b->tile;
-		uint32_t h =
-		    b->o->height - ty < b->tile ? b->o->height - ty : b->tile;
-		if (!t->complete || t->width != w || t->height != h) {
-			return bc_errinfo_set(
-			    ei, BC_EIO, "tile %u came as %ux%u, not %ux%u", k,
-			    t->width, t->height, w, h);
-		}
+	if (!t->complete || t->width != w || t->height != h) {
+		return bc_errinfo_set(ei, BC_EIO,
+		                      "tile %u came as %ux%u, not %ux%u", k,
+		                      t->width, t->height, w, h);
 	}
 	place(b, k, t);
 	b->state[k] = 2;
-	b->order[k] = m.frame.order;
-	b->camera[k] = m.frame.camera_seq;
-	b->out->flags |= m.flags & BC_PROTO_FLAG_INCOMPLETE;
-	b->out->frame_no = m.frame.frame_no;
+	b->order[k] = m->frame.order;
+	b->camera[k] = m->frame.camera_seq;
+	b->out->flags |= m->flags & BC_PROTO_FLAG_INCOMPLETE;
+	b->out->frame_no = m->frame.frame_no;
 	b->arrived++;
-	if (b->o->progress) {
-		b->o->progress(b->o->ud, b->arrived, b->total);
+	b->busy--;
+	if (b->o.progress) {
+		b->o.progress(b->o.ud, b->arrived, b->total);
+	}
+	return 0;
+}
+
+/* Asks for tiles not yet asked for, up to in_flight at once. */
+static int fill(struct bc_client_big *b, struct bc_errinfo *ei)
+{
+	for (uint32_t k = 0; k < b->total && b->busy < b->in_flight; k++) {
+		int rc;
+		if (b->state[k] != 0) {
+			continue;
+		}
+		if ((rc = ask(b, k, ei))) {
+			return rc;
+		}
+		b->busy++;
 	}
 	return 0;
 }
 
 /* Tiles that show an older scene than the newest tile are asked for
  * again. Returns how many. */
-static uint32_t overtaken(struct big *b)
+static uint32_t overtaken(struct bc_client_big *b)
 {
 	uint64_t newest = 0;
 	uint32_t n = 0;
@@ -171,23 +152,23 @@ static uint32_t overtaken(struct big *b)
 	return n;
 }
 
-static int alloc_picture(struct big *b)
+static int alloc_picture(struct bc_client_big *b)
 {
 	struct bc_client_image *out = b->out;
-	size_t n = (size_t)b->o->width * b->o->height;
+	size_t n = (size_t)b->o.width * b->o.height;
 	bc_client_image_finish(out);
 	bc_client_image_init(out);
-	out->width = out->view_width = b->o->width;
-	out->height = out->view_height = b->o->height;
+	out->width = out->view_width = b->o.width;
+	out->height = out->view_height = b->o.height;
 	if (!(out->rgba = bc_malloc(4 * n)) ||
-	    ((b->o->planes & BC_PROTO_PLANE_DEPTH) &&
+	    ((b->o.planes & BC_PROTO_PLANE_DEPTH) &&
 	     !(out->depth = bc_malloc(n * sizeof(float)))) ||
-	    ((b->o->planes & BC_PROTO_PLANE_IDS) &&
+	    ((b->o.planes & BC_PROTO_PLANE_IDS) &&
 	     !(out->ids = bc_malloc(n * sizeof(uint32_t))))) {
 		return BC_ENOMEM;
 	}
 	out->flags = BC_PROTO_FLAG_SNAPSHOT | BC_PROTO_FLAG_STILL;
-	out->encoding = b->o->encoding;
+	out->encoding = b->o.encoding;
 	return 0;
 }
 
@@ -234,85 +215,163 @@ static int check_opts(const struct bc_client *c,
 	return 0;
 }
 
-int bc_client_snapshot_big(struct bc_client *c,
-                           const struct bc_client_big_opts *opts,
-                           struct bc_client_image *out, struct bc_errinfo *ei)
+void bc_client_big_free(struct bc_client_big *b)
 {
+	if (!b) {
+		return;
+	}
+	bc_client_image_finish(&b->t);
+	bc_free(b->state);
+	bc_free(b->seq);
+	bc_free(b->order);
+	bc_free(b->camera);
+	bc_free(b);
+}
+
+int bc_client_big_start(struct bc_client *c,
+                        const struct bc_client_big_opts *opts,
+                        struct bc_client_image *out, struct bc_client_big **big,
+                        struct bc_errinfo *ei)
+{
+	struct bc_client_big *b;
+	uint32_t tile;
+	int rc;
 	struct bc_client_big_opts o = *opts;
-	struct bc_client_image t;
-	struct big b = {.c = c, .o = &o, .out = out};
-	uint32_t in_flight, tile;
-	int rc, round = 0;
+	*big = NULL;
 	if (o.encoding == BC_PROTO_ENC_INVALID) {
 		o.encoding = BC_PROTO_ENC_PNG;
 	}
 	if ((rc = check_opts(c, &o, &tile, ei))) {
 		return rc;
 	}
-	in_flight = o.in_flight ? o.in_flight : 2u;
-	if (in_flight > BIG_MAX_IN_FLIGHT) {
-		in_flight = BIG_MAX_IN_FLIGHT;
+	if (!(b = bc_calloc(1, sizeof(*b)))) {
+		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
 	}
-	b.tile = tile;
-	b.across = (o.width + tile - 1) / tile;
-	b.down = (o.height + tile - 1) / tile;
-	b.total = b.across * b.down;
-	bc_client_image_init(&t);
-	if (!(b.state = bc_calloc(b.total, 1)) ||
-	    !(b.seq = bc_calloc(b.total, sizeof(*b.seq))) ||
-	    !(b.order = bc_calloc(b.total, sizeof(*b.order))) ||
-	    !(b.camera = bc_calloc(b.total, sizeof(*b.camera))) ||
-	    alloc_picture(&b)) {
-		rc = bc_errinfo_set(ei, BC_ENOMEM,
-		                    "no memory for a %ux%u picture", o.width,
-		                    o.height);
-		goto out;
+	b->c = c;
+	b->o = o;
+	b->out = out;
+	b->in_flight = o.in_flight ? o.in_flight : 2u;
+	if (b->in_flight > BIG_MAX_IN_FLIGHT) {
+		b->in_flight = BIG_MAX_IN_FLIGHT;
 	}
-	for (;;) {
-		uint32_t next = 0, busy = 0;
-		while (b.arrived < b.total) {
-			for (; busy < in_flight && next < b.total; next++) {
-				if (b.state[next] == 0) {
-					if ((rc = ask(&b, next, ei))) {
-						goto out;
-					}
-					busy++;
-				}
-			}
-			if ((rc = receive(&b, &t, ei))) {
-				goto out;
-			}
-			busy--;
-		}
-		if (!overtaken(&b)) {
-			break;
-		}
-		if (++round >= BIG_MAX_ROUNDS) {
-			rc = bc_errinfo_set(
+	b->tile = tile;
+	b->across = (o.width + tile - 1) / tile;
+	b->down = (o.height + tile - 1) / tile;
+	b->total = b->across * b->down;
+	bc_client_image_init(&b->t);
+	if (!(b->state = bc_calloc(b->total, 1)) ||
+	    !(b->seq = bc_calloc(b->total, sizeof(*b->seq))) ||
+	    !(b->order = bc_calloc(b->total, sizeof(*b->order))) ||
+	    !(b->camera = bc_calloc(b->total, sizeof(*b->camera))) ||
+	    alloc_picture(b)) {
+		bc_client_big_free(b);
+		return bc_errinfo_set(ei, BC_ENOMEM,
+		                      "no memory for a %ux%u picture", o.width,
+		                      o.height);
+	}
+	if ((rc = fill(b, ei))) {
+		bc_client_big_free(b);
+		return rc;
+	}
+	*big = b;
+	return 0;
+}
+
+/* After the last tile: tiles an edit overtook are asked for again, or
+ * the picture is whole. */
+static int last_tile(struct bc_client_big *b, struct bc_errinfo *ei)
+{
+	int rc;
+	if (overtaken(b)) {
+		if (++b->rounds >= BIG_MAX_ROUNDS) {
+			return bc_errinfo_set(
 			    ei, BC_EBUSY,
 			    "the scene kept changing while the tiles were "
 			    "rendered (%d rounds); try again when edits pause",
-			    round);
-			goto out;
+			    b->rounds);
+		}
+		return (rc = fill(b, ei)) ? rc : BC_CLIENT_BIG_MORE;
+	}
+	for (uint32_t k = 1; k < b->total; k++) {
+		if (b->camera[k] != b->camera[0]) {
+			return bc_errinfo_set(
+			    ei, BC_EBUSY,
+			    "the camera changed while the tiles "
+			    "were rendered; try again");
 		}
 	}
-	for (uint32_t k = 1; k < b.total; k++) {
-		if (b.camera[k] != b.camera[0]) {
-			rc =
-			    bc_errinfo_set(ei, BC_EBUSY,
-			                   "the camera changed while the tiles "
-			                   "were rendered; try again");
-			goto out;
+	b->out->camera_seq = b->camera[0];
+	b->out->complete = true;
+	return BC_CLIENT_BIG_DONE;
+}
+
+int bc_client_big_take(struct bc_client_big *b, const struct bc_msg *m,
+                       struct bc_errinfo *ei)
+{
+	uint32_t k;
+	int rc;
+	if (m->seq == 0 ||
+	    (m->type != BC_MSG_FRAME && m->type != BC_MSG_ERROR)) {
+		return BC_CLIENT_BIG_NOT_OURS;
+	}
+	for (k = 0; k < b->total; k++) {
+		if (b->state[k] == 1 && b->seq[k] == m->seq) {
+			break;
 		}
 	}
-	out->camera_seq = b.camera[0];
-	out->complete = true;
-	rc = 0;
-out:
-	bc_client_image_finish(&t);
-	bc_free(b.state);
-	bc_free(b.seq);
-	bc_free(b.order);
-	bc_free(b.camera);
+	if (k == b->total) {
+		return BC_CLIENT_BIG_NOT_OURS;
+	}
+	if (m->type == BC_MSG_ERROR) {
+		return bc_errinfo_set(
+		    ei, m->error.code ? -(int)m->error.code : BC_EINVAL, "%.*s",
+		    (int)m->error.text.len, m->error.text.ptr);
+	}
+	if (!(m->flags & BC_PROTO_FLAG_SNAPSHOT)) {
+		return BC_CLIENT_BIG_NOT_OURS;
+	}
+	if ((rc = arrive(b, k, m, ei))) {
+		return rc;
+	}
+	if (b->arrived < b->total) {
+		return (rc = fill(b, ei)) ? rc : BC_CLIENT_BIG_MORE;
+	}
+	return last_tile(b, ei);
+}
+
+void bc_client_big_progress(const struct bc_client_big *b, uint32_t *done,
+                            uint32_t *total)
+{
+	*done = b->arrived;
+	*total = b->total;
+}
+
+int bc_client_snapshot_big(struct bc_client *c,
+                           const struct bc_client_big_opts *opts,
+                           struct bc_client_image *out, struct bc_errinfo *ei)
+{
+	struct bc_client_big *b;
+	int rc = bc_client_big_start(c, opts, out, &b, ei);
+	int wait = opts->timeout_ms ? opts->timeout_ms : c->timeout_ms;
+	while (rc == 0) {
+		struct bc_msg m;
+		int got = bc_client_recv(c, &m, wait);
+		if (got < 0) {
+			rc = bc_client_error(c, ei);
+		} else if (got == 0) {
+			rc = bc_errinfo_set(
+			    ei, BC_ETIMEOUT,
+			    "no tile from the server in time (%u of %u "
+			    "arrived); a longer --timeout gives it more",
+			    b->arrived, b->total);
+		} else if ((rc = bc_client_big_take(b, &m, ei)) ==
+		           BC_CLIENT_BIG_DONE) {
+			rc = 0;
+			break;
+		} else if (rc > 0) {
+			rc = 0; /* not ours, or more to come */
+		}
+	}
+	bc_client_big_free(b);
 	return rc;
 }

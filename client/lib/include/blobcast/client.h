@@ -541,6 +541,35 @@ BC_API int bc_client_snapshot_big(struct bc_client *c,
                                   const struct bc_client_big_opts *opts,
                                   struct bc_client_image *out,
                                   struct bc_errinfo *ei);
+
+/*
+ * The same picture without blocking, for a program with its own loop (the
+ * viewer): bc_client_big_start() asks for the first tiles; each message
+ * the program receives (bc_client_recv) goes to bc_client_big_take()
+ * first, which answers BC_CLIENT_BIG_NOT_OURS (the program handles it as
+ * usual), BC_CLIENT_BIG_MORE (a tile taken, more to come), BC_CLIENT_BIG_
+ * DONE (*out is the whole picture) or a negative BC_E* code with ei (the
+ * picture failed: free it). out must stay valid until then.
+ * bc_client_big_free() ends it at any time (answers still on their way
+ * are then not ours: a FRAME with SNAPSHOT the program did not ask for).
+ */
+enum {
+	BC_CLIENT_BIG_NOT_OURS = 1,
+	BC_CLIENT_BIG_MORE = 2,
+	BC_CLIENT_BIG_DONE = 3,
+};
+struct bc_client_big;
+BC_API int bc_client_big_start(struct bc_client *c,
+                               const struct bc_client_big_opts *opts,
+                               struct bc_client_image *out,
+                               struct bc_client_big **big,
+                               struct bc_errinfo *ei);
+BC_API int bc_client_big_take(struct bc_client_big *b, const struct bc_msg *m,
+                              struct bc_errinfo *ei);
+/* Tiles arrived and in all, for a progress display. */
+BC_API void bc_client_big_progress(const struct bc_client_big *b,
+                                   uint32_t *done, uint32_t *total);
+BC_API void bc_client_big_free(struct bc_client_big *b);
 /* ---- Reconnecting
  * ------------------------------------------------------------------ */
 
