@@ -65,6 +65,9 @@ struct bc_viewer_opts {
 	const char *dump_frame; /* with --screenshot: the picture received */
 	uint32_t shot_wait_s;   /* --screenshot-wait: seconds per picture */
 	const char *snapshot_dir;
+	/* --snapshot-size: S asks for a picture of this size in tiles
+	 * (PROTOCOL.md 7.17), up to 8192 x 8192; 0: the window's size. */
+	uint32_t snap_width, snap_height;
 };
 
 enum bc_viewer_drag {
@@ -167,6 +170,9 @@ struct bc_viewer_app {
 
 	/* S (lossless snapshot) and P (window screenshot). */
 	uint32_t snapshot_seq;
+	/* S with --snapshot-size: the picture whose tiles are arriving. */
+	struct bc_client_big *big;
+	struct bc_client_image big_img;
 	bool screenshot_now;
 	unsigned shots;
 
@@ -230,6 +236,9 @@ void bc_viewer_follow_toggle(struct bc_viewer_app *a);
 void bc_viewer_present_toggle(struct bc_viewer_app *a);
 /* Sends SNAPSHOT (PNG) unless one is on its way. */
 void bc_viewer_request_snapshot(struct bc_viewer_app *a);
+/* Ends a picture in tiles that is on its way (S with --snapshot-size),
+ * saying why on the status line. */
+void bc_viewer_picture_drop(struct bc_viewer_app *a, const char *why);
 /* When the oldest request of ours that no frame answers yet was sent (ms),
  * 0 when none: a VIEW before its first frame, a CAMERA newer than the last
  * frame's camera_seq, an EDIT not applied or applied but not shown. */

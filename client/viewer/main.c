@@ -70,7 +70,7 @@ static const struct bc_opt_name encoding_names[] = {
 /* What the table parses into before it is moved into the options. */
 struct cli {
 	int role, encoding;
-	uint32_t size[2], quality, downscale;
+	uint32_t size[2], snap[2], quality, downscale;
 	bool no_overlay;
 };
 
@@ -171,6 +171,15 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o,
 	     .arg = "DIR",
 	     .help = "where S saves lossless snapshots\n"
 	             "(default {default})"},
+	    {.name = "snapshot-size",
+	     .kind = BC_OPT_SIZE,
+	     .dst = c.snap,
+	     .lo = 1,
+	     .hi = BC_PROTO_MAX_DIM,
+	     .arg = "WxH",
+	     .help = "S saves a picture of WxH, each {range},\n"
+	             "asked for in tiles (default: the window's\n"
+	             "size, in one piece)"},
 	    {.name = "screenshot",
 	     .kind = BC_OPT_STRING,
 	     .dst = &o->screenshot,
@@ -267,6 +276,8 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o,
 	o->encoding = (enum bc_proto_encoding)c.encoding;
 	o->width = c.size[0];
 	o->height = c.size[1];
+	o->snap_width = c.snap[0];
+	o->snap_height = c.snap[1];
 	o->quality = (uint8_t)c.quality;
 	o->downscale = (uint8_t)c.downscale;
 	o->overlay = !c.no_overlay;
@@ -846,6 +857,7 @@ static void reconnect(struct bc_viewer_app *a, double now)
 		    a->retry.attempts, bc_err_name(rc), delay / 1e3);
 		return;
 	}
+	bc_viewer_picture_drop(a, "the connection was lost");
 	bc_client_destroy(a->c);
 	a->c = c;
 	a->roster = roster;
@@ -1062,6 +1074,8 @@ cleanup:
 		glfwTerminate();
 	}
 	bc_viewer_frames_finish(&a->frames);
+	bc_client_big_free(a->big);
+	bc_client_image_finish(&a->big_img);
 	bc_client_destroy(a->c);
 	bc_free(a->text);
 	return a->exit_code;

@@ -254,9 +254,51 @@ void bc_viewer_undo(struct bc_viewer_app *a, bool redo)
 	a->undo_redo = redo;
 }
 
+void bc_viewer_picture_drop(struct bc_viewer_app *a, const char *why)
+{
+	if (!a->big) {
+		return;
+	}
+	bc_client_big_free(a->big);
+	a->big = NULL;
+	bc_client_image_finish(&a->big_img);
+	bc_viewer_status(a, "picture abandoned: %s", why);
+}
+
+/* S with --snapshot-size: the picture in tiles, taken from the messages
+ * as they arrive (bc_viewer_pump) while the window keeps drawing. */
+static void request_picture(struct bc_viewer_app *a)
+{
+	struct bc_errinfo ei = {0};
+	uint32_t done, total;
+	if (a->big) {
+		bc_viewer_status(a, "a picture is on its way");
+		return;
+	}
+	bc_client_image_init(&a->big_img);
+	if (bc_client_big_start(
+	        a->c,
+	        &(struct bc_client_big_opts){.width = a->o.snap_width,
+	                                     .height = a->o.snap_height},
+	        &a->big_img, &a->big, &ei)) {
+		bc_client_image_finish(&a->big_img);
+		bc_viewer_status(a, "picture not asked for: %s (%s)", ei.msg,
+		                 bc_err_name(ei.code));
+		return;
+	}
+	bc_client_big_progress(a->big, &done, &total);
+	bc_viewer_status(a, "picture %ux%u: asking for %u tile%s",
+	                 a->o.snap_width, a->o.snap_height, total,
+	                 total == 1 ? "" : "s");
+}
+
 void bc_viewer_request_snapshot(struct bc_viewer_app *a)
 {
 	struct bc_msg m = {.type = BC_MSG_SNAPSHOT};
+	if (a->o.snap_width) {
+		request_picture(a);
+		return;
+	}
 	if (a->snapshot_seq) {
 		bc_viewer_status(a, "a snapshot is on its way");
 		return;
@@ -361,33 +403,69 @@ static void snapshot_name(struct bc_viewer_app *a, char *out, size_t n)
 	}
 }
 
+/* Writes a snapshot or a picture to the next free name. */
+static void save_picture(struct bc_viewer_app *a,
+                         const struct bc_client_image *img)
+{
+	struct bc_errinfo ei = {0};
+	char path[4096];
+	snapshot_name(a, path, sizeof(path));
+	/* Writing a PNG takes tens of milliseconds (a second for 8192^2):
+	 * one stutter on a key press is acceptable for a file the user
+	 * asked for. */
+	if (bc_image_write_rgba8(path, img->width, img->height, img->rgba,
+	                         &ei)) {
+		bc_viewer_status(a, "snapshot not saved: %s", ei.msg);
+		return;
+	}
+	bc_viewer_status(a, "saved %s (%ux%u, lossless)",
+	                 strrchr(path, '/') ? strrchr(path, '/') + 1 : path,
+	                 img->width, img->height);
+	if (a->o.verbose) {
+		printf("snapshot %s %ux%u\n", path, img->width, img->height);
+		fflush(stdout);
+	}
+}
+
 static void got_snapshot(struct bc_viewer_app *a, const struct bc_msg *m)
 {
 	struct bc_client_image img;
 	struct bc_errinfo ei = {0};
-	char path[4096];
 	bc_client_image_init(&img);
 	a->snapshot_seq = 0;
 	if (bc_client_image_apply(&img, m, &ei)) {
 		bc_viewer_status(a, "snapshot does not decode: %s", ei.msg);
-		goto cleanup;
+	} else {
+		save_picture(a, &img);
 	}
-	snapshot_name(a, path, sizeof(path));
-	/* Writing a PNG takes tens of milliseconds: one stutter on a key
-	 * press is acceptable for a file the user asked for. */
-	if (bc_image_write_rgba8(path, img.width, img.height, img.rgba, &ei)) {
-		bc_viewer_status(a, "snapshot not saved: %s", ei.msg);
-		goto cleanup;
-	}
-	bc_viewer_status(a, "saved %s (%ux%u, lossless)",
-	                 strrchr(path, '/') ? strrchr(path, '/') + 1 : path,
-	                 img.width, img.height);
-	if (a->o.verbose) {
-		printf("snapshot %s %ux%u\n", path, img.width, img.height);
-		fflush(stdout);
-	}
-cleanup:
 	bc_client_image_finish(&img);
+}
+
+/* Offers m to the picture in tiles; true when it was one of its. */
+static bool picture_take(struct bc_viewer_app *a, const struct bc_msg *m)
+{
+	struct bc_errinfo ei = {0};
+	uint32_t done, total;
+	int rc = bc_client_big_take(a->big, m, &ei);
+	if (rc == BC_CLIENT_BIG_NOT_OURS) {
+		return false;
+	}
+	if (rc < 0) {
+		bc_viewer_picture_drop(a, ei.msg);
+		return true;
+	}
+	if (rc == BC_CLIENT_BIG_MORE) {
+		bc_client_big_progress(a->big, &done, &total);
+		bc_viewer_status(a, "picture %ux%u: tile %u of %u",
+		                 a->big_img.width, a->big_img.height, done,
+		                 total);
+		return true;
+	}
+	bc_client_big_free(a->big);
+	a->big = NULL;
+	save_picture(a, &a->big_img);
+	bc_client_image_finish(&a->big_img);
+	return true;
 }
 
 static void got_frame(struct bc_viewer_app *a, const struct bc_msg *m)
@@ -640,6 +718,10 @@ int bc_viewer_pump(struct bc_viewer_app *a)
 		 * take it again after each message (it changes with
 		 * SESSION_INFO and with the session's deletion). */
 		bc_viewer_roster_update(&a->roster, a->c);
+		if (a->big && picture_take(a, &m)) {
+			a->redraw = true;
+			continue;
+		}
 		switch (m.type) {
 		case BC_MSG_FRAME:
 			got_frame(a, &m);

@@ -7,7 +7,8 @@
 #     (screenshot against --dump-frame), on GL 2.1 and on GLES 2;
 #  3. with synthetic X events (viewer_xpoke): a press on a sphere picks it,
 #     a drag moves it, Shift+wheel grows it, Ctrl+wheel changes its
-#     operator's blend, S saves a lossless snapshot, P a screenshot showing
+#     operator's blend, S saves a lossless snapshot (and with
+#     --snapshot-size a 1100x300 picture in tiles), P a screenshot showing
 #     the selection's outline, Ctrl-Z / Ctrl-Shift-Z / Ctrl-Y undo and
 #     redo the last step (the verbose undo/redo lines name the same edit),
 #     Shift-F presents and Shift-F again stops (the verbose presenter
@@ -161,6 +162,24 @@ if [ -n "$inner" ]; then
     sed 's/^/    /' "$tmp/drag.err"
     ok=
   fi
+  # With --snapshot-size S asks for a picture larger than the window in
+  # tiles (two of 1024 across) while the window keeps drawing.
+  mkdir -p "$tmp/big"
+  $VIEWENV "$VIEW" --server "127.0.0.1:$port" --session drag \
+    --size 160x120 --verbose --snapshot-dir "$tmp/big" \
+    --snapshot-size 1100x300 > "$tmp/big.log" 2> "$tmp/big.err" &
+  vpid=$!
+  [ -n "$ok" ] && wait_for '^frame 1 ' "$tmp/big.log" 300 || ok=
+  [ -n "$ok" ] && poke wait 5000 key s
+  [ -n "$ok" ] && wait_for '^snapshot .* 1100x300$' "$tmp/big.log" 600 || ok=
+  poke keydown q
+  n=0
+  while kill -0 "$vpid" 2>/dev/null && [ $n -lt 100 ]; do
+    sleep 0.1
+    n=$((n + 1))
+  done
+  kill "$vpid" 2>/dev/null
+  wait "$vpid" || { echo "FAIL: the second viewer exited $?"; ok=; }
   [ -n "$ok" ]
   exit $?
 fi
@@ -340,6 +359,13 @@ else
     image_ok "$snap" 320 240 || fail "the S snapshot is blank or mis-sized"
   else
     fail "S saved no snapshot"
+  fi
+  big=$tmp/big/blobcast-snapshot-001.png
+  if [ -s "$big" ]; then
+    image_ok "$big" 1100 300 ||
+      fail "the --snapshot-size picture is blank or mis-sized"
+  else
+    fail "S with --snapshot-size saved no picture"
   fi
 fi
 
