@@ -17,23 +17,8 @@ for prog in "$BLOBCAST" "$BLOBCASTD"; do
   fi
 done
 
-tmp=$(mktemp -d /tmp/bc-cli-daemon.XXXXXX) || exit 1
-daemon=
-stop_daemon() {
-  if [ -n "$daemon" ]; then
-    kill -TERM "$daemon" 2>/dev/null
-    wait "$daemon" 2>/dev/null
-    daemon=
-  fi
-}
-trap 'stop_daemon; rm -rf "$tmp"' EXIT
-trap 'exit 1' INT TERM
-failures=0
-
-fail() {
-  echo "FAIL: $*"
-  failures=$((failures + 1))
-}
+. "$(dirname "$0")/../scratch.sh"
+bc_scratch cli-daemon
 
 # run STATUS PATTERN ARGS...: blobcast ARGS must exit STATUS and print
 # PATTERN (fixed string, "" for any); output is kept in $tmp/out.

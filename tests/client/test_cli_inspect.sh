@@ -28,23 +28,9 @@ for prog in "$BLOBCAST" "$BLOBCASTD"; do
   fi
 done
 
-tmp=$(mktemp -d /tmp/bc-cli-inspect.XXXXXX) || exit 1
-daemon=
 watcher=
-stop_daemon() {
-  if [ -n "$daemon" ]; then
-    kill -TERM "$daemon" 2>/dev/null
-    wait "$daemon" 2>/dev/null
-    daemon=
-  fi
-}
-trap 'stop_daemon; [ -n "$watcher" ] && kill "$watcher" 2>/dev/null; rm -rf "$tmp"' EXIT
-trap 'exit 1' INT TERM
-failures=0
-fail() {
-  echo "FAIL: $*"
-  failures=$((failures + 1))
-}
+. "$(dirname "$0")/../scratch.sh"
+bc_scratch cli-inspect '[ -n "$watcher" ] && kill "$watcher" 2>/dev/null'
 
 # start_daemon ADDR: starts blobcastd on ADDR and sets $port.
 start_daemon() {

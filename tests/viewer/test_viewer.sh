@@ -196,22 +196,8 @@ if ! command -v xvfb-run > /dev/null 2>&1; then
   exit 77
 fi
 
-tmp=$(mktemp -d /tmp/bc-viewer.XXXXXX) || exit 1
-daemon=
-stop_daemon() {
-  if [ -n "$daemon" ]; then
-    kill -TERM "$daemon" 2>/dev/null
-    wait "$daemon" 2>/dev/null
-    daemon=
-  fi
-}
-trap 'stop_daemon; [ -n "${BC_VIEWER_KEEP:-}" ] || rm -rf "$tmp"' EXIT
-trap 'exit 1' INT TERM
-failures=0
-fail() {
-  echo "FAIL: $*"
-  failures=$((failures + 1))
-}
+. "$(dirname "$0")/../scratch.sh"
+bc_scratch viewer
 
 # VIEWENV: how blobcast-view runs here (viewer_env.sh).
 . "$(dirname "$0")/viewer_env.sh"

@@ -38,23 +38,9 @@ if [ "${BC_RECONNECT_INNER:-}" != 1 ]; then
 fi
 
 # --- inside Xvfb ---------------------------------------------------------------
-tmp=$(mktemp -d /tmp/bc-viewer-rc.XXXXXX) || exit 1
-daemon=
 vpid=
-stop_daemon() {
-  if [ -n "$daemon" ]; then
-    kill -TERM "$daemon" 2>/dev/null
-    wait "$daemon" 2>/dev/null
-    daemon=
-  fi
-}
-trap 'stop_daemon; [ -n "$vpid" ] && kill "$vpid" 2>/dev/null; rm -rf "$tmp"' EXIT
-trap 'exit 1' INT TERM
-ok=1
-fail() {
-  echo "FAIL: $*"
-  ok=
-}
+. "$(dirname "$0")/../scratch.sh"
+bc_scratch viewer-rc '[ -n "$vpid" ] && kill "$vpid" 2>/dev/null'
 
 # VIEWENV: how blobcast-view runs here (viewer_env.sh).
 . "$(dirname "$0")/viewer_env.sh"
@@ -105,7 +91,7 @@ wait_for '^rejoined default attempts=[1-9][0-9]*$' 150
 # The first frame of the new connection (frame numbers restart at 1), as
 # the viewer's second frame or later.
 wait_for '^frame [2-9][0-9]* no=1 ' 300
-[ -n "$ok" ] && sleep 0.3
+[ "$failures" -eq 0 ] && sleep 0.3
 "$XPOKE" blobcast-view keydown q || fail "xpoke"
 n=0
 while kill -0 "$vpid" 2>/dev/null && [ $n -lt 100 ]; do
@@ -121,7 +107,7 @@ rc=$?
 vpid=
 [ "$rc" -eq 0 ] || fail "the viewer exited $rc"
 sed 's/^/    /' "$tmp/v.log" "$tmp/v.err" | grep -v '^    applied\|^    latency'
-if [ -n "$ok" ]; then
+if [ "$failures" -eq 0 ]; then
   echo "all checks passed"
   exit 0
 fi
