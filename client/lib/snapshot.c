@@ -21,33 +21,42 @@ struct bc_client_big {
 	struct bc_client_big_opts o;
 	struct bc_client_image *out;
 	struct bc_client_image t; /* the tile being decoded */
-	uint32_t tile, across, down, total, in_flight, busy;
+	uint32_t tile, across, total, in_flight, busy;
 	uint8_t *state;   /* per tile: 0 to ask, 1 asked, 2 arrived */
 	uint32_t *seq;    /* per tile, while asked */
 	uint64_t *order;  /* per tile, once arrived */
 	uint32_t *camera; /* per tile, once arrived */
-	uint32_t arrived, asked;
+	uint32_t arrived;
 	int rounds;
 };
+
+/* Tile k's place in the picture: row-major, the last column and row
+ * ragged. */
+static void tile_rect(const struct bc_client_big *b, uint32_t k, uint32_t *x,
+                      uint32_t *y, uint32_t *w, uint32_t *h)
+{
+	*x = (k % b->across) * b->tile;
+	*y = (k / b->across) * b->tile;
+	*w = b->o.width - *x < b->tile ? b->o.width - *x : b->tile;
+	*h = b->o.height - *y < b->tile ? b->o.height - *y : b->tile;
+}
 
 static int ask(struct bc_client_big *b, uint32_t k, struct bc_errinfo *ei)
 {
 	struct bc_msg m = {.type = BC_MSG_SNAPSHOT};
-	uint32_t tx = (k % b->across) * b->tile, ty = (k / b->across) * b->tile;
+	uint32_t x, y, w, h;
 	int rc;
+	tile_rect(b, k, &x, &y, &w, &h);
 	m.snapshot.encoding = b->o.encoding;
 	m.snapshot.planes = (uint8_t)b->o.planes;
 	m.snapshot.has_tile = true;
 	m.snapshot.full_width = (uint16_t)b->o.width;
 	m.snapshot.full_height = (uint16_t)b->o.height;
-	m.snapshot.tile_x = (uint16_t)tx;
-	m.snapshot.tile_y = (uint16_t)ty;
-	m.snapshot.tile_width =
-	    (uint16_t)(b->o.width - tx < b->tile ? b->o.width - tx : b->tile);
-	m.snapshot.tile_height =
-	    (uint16_t)(b->o.height - ty < b->tile ? b->o.height - ty : b->tile);
+	m.snapshot.tile_x = (uint16_t)x;
+	m.snapshot.tile_y = (uint16_t)y;
+	m.snapshot.tile_width = (uint16_t)w;
+	m.snapshot.tile_height = (uint16_t)h;
 	b->state[k] = 1;
-	b->asked++;
 	if ((rc = bc_client_send(b->c, &m, &b->seq[k])) &&
 	    !bc_client_error(b->c, ei)) {
 		/* Not sticky: the encoder refused the message. */
@@ -61,9 +70,10 @@ static void place(struct bc_client_big *b, uint32_t k,
                   const struct bc_client_image *t)
 {
 	struct bc_client_image *out = b->out;
-	size_t x0 = (k % b->across) * b->tile, y0 = (k / b->across) * b->tile;
+	uint32_t x0, y0, w, h;
+	tile_rect(b, k, &x0, &y0, &w, &h);
 	for (uint32_t y = 0; y < t->height; y++) {
-		size_t at = (y0 + y) * out->width + x0,
+		size_t at = ((size_t)y0 + y) * out->width + x0,
 		       from = (size_t)y * t->width;
 		memcpy(out->rgba + 4 * at, t->rgba + 4 * from,
 		       4 * (size_t)t->width);
@@ -83,10 +93,9 @@ static int arrive(struct bc_client_big *b, uint32_t k, const struct bc_msg *m,
                   struct bc_errinfo *ei)
 {
 	struct bc_client_image *t = &b->t;
-	uint32_t tx = (k % b->across) * b->tile, ty = (k / b->across) * b->tile;
-	uint32_t w = b->o.width - tx < b->tile ? b->o.width - tx : b->tile;
-	uint32_t h = b->o.height - ty < b->tile ? b->o.height - ty : b->tile;
+	uint32_t x, y, w, h;
 	int rc;
+	tile_rect(b, k, &x, &y, &w, &h);
 	bc_client_image_finish(t);
 	bc_client_image_init(t);
 	if ((rc = bc_client_image_apply(t, m, ei))) {
@@ -256,8 +265,7 @@ int bc_client_big_start(struct bc_client *c,
 	}
 	b->tile = tile;
 	b->across = (o.width + tile - 1) / tile;
-	b->down = (o.height + tile - 1) / tile;
-	b->total = b->across * b->down;
+	b->total = b->across * ((o.height + tile - 1) / tile);
 	bc_client_image_init(&b->t);
 	if (!(b->state = bc_calloc(b->total, 1)) ||
 	    !(b->seq = bc_calloc(b->total, sizeof(*b->seq))) ||
