@@ -213,7 +213,10 @@ void bc__view_release(struct bc_work *w, struct view *v)
 {
 	struct views *vs = &w->views;
 	uv_mutex_lock(&vs->lock);
-	if (--v->pins == 0 && v->dead) {
+	/* A snapshot tile's window is never asked for again as it is (the
+	 * next tile is another window): kept, it would only push other
+	 * sessions' views out of the cache. */
+	if (--v->pins == 0 && (v->dead || v->frame.full_width)) {
 		view_free(vs, v);
 	}
 	uv_mutex_unlock(&vs->lock);

@@ -74,6 +74,7 @@ static void tiles_equal_whole_on(const char *backend)
 	struct bc_client *c;
 	struct bc_errinfo ei = {0};
 	struct bc_client_image whole, tiled;
+	struct bc_msg_stats before = {0}, after = {0};
 	char sub[128];
 	const char *extra[] = {"--backend", backend, NULL};
 	snprintf(sub, sizeof(sub), "%s/%s", dir, backend);
@@ -87,6 +88,8 @@ static void tiles_equal_whole_on(const char *backend)
 	CHECK_EQ_INT(bc_client_snapshot_planes(
 	                 c, BC_PROTO_ENC_RAW, BC_PROTO_PLANES_ALL, &whole, &ei),
 	             0);
+	CHECK_EQ_INT(
+	    bc_client_stats_parts(c, BC_PROTO_STATS_LOAD, &before, &ei), 0);
 	/* Tiles of 64 (ragged at the right and bottom), four in flight;
 	 * then 48, PNG, one at a time. */
 	for (int round = 0; round < 2; round++) {
@@ -116,6 +119,13 @@ static void tiles_equal_whole_on(const char *backend)
 		}
 		CHECK(bad == 0);
 	}
+	/* A tile's view is freed with its job: the cache holds no more
+	 * than before the tiles (the renderer's state for the whole view
+	 * went when the first tile came). */
+	CHECK_EQ_INT(bc_client_stats_parts(c, BC_PROTO_STATS_LOAD, &after, &ei),
+	             0);
+	CHECK(after.has_load &&
+	      after.load.view_bytes <= before.load.view_bytes);
 	bc_client_image_finish(&whole);
 	bc_client_image_finish(&tiled);
 	bc_client_destroy(c);
