@@ -434,14 +434,24 @@ int bc_handle_camera(struct bc_member *m, const struct bc_msg *msg)
 	return 0;
 }
 
+/* A VIEW or a snapshot tile (what) of w x h over WELCOME's max_dim is
+ * refused with ERANGE: true when it was. */
+static bool over_max_dim(struct bc_member *m, uint32_t seq, const char *what,
+                         uint32_t w, uint32_t h)
+{
+	if (w <= BC_SRV_MAX_DIM && h <= BC_SRV_MAX_DIM) {
+		return false;
+	}
+	bc__send_error(m, seq, BC_ERANGE,
+	               "%s %ux%u is over this server's %ux%u", what, w, h,
+	               BC_SRV_MAX_DIM, BC_SRV_MAX_DIM);
+	return true;
+}
+
 int bc_handle_view(struct bc_member *m, const struct bc_msg *msg)
 {
 	const struct bc_msg_view *v = &msg->view;
-	if (v->width > BC_SRV_MAX_DIM || v->height > BC_SRV_MAX_DIM) {
-		bc__send_error(m, msg->seq, BC_ERANGE,
-		               "view %ux%u is over this server's %ux%u",
-		               v->width, v->height, BC_SRV_MAX_DIM,
-		               BC_SRV_MAX_DIM);
+	if (over_max_dim(m, msg->seq, "view", v->width, v->height)) {
 		return 0;
 	}
 	if (!(m->peer->encodings & (1u << (v->encoding - 1)))) {
@@ -537,12 +547,8 @@ int bc_handle_snapshot(struct bc_member *m, const struct bc_msg *msg)
 		               "TILES announced in HELLO");
 		return 0;
 	}
-	if (sn->has_tile && (sn->tile_width > BC_SRV_MAX_DIM ||
-	                     sn->tile_height > BC_SRV_MAX_DIM)) {
-		bc__send_error(m, msg->seq, BC_ERANGE,
-		               "tile %ux%u is over this server's %ux%u",
-		               sn->tile_width, sn->tile_height, BC_SRV_MAX_DIM,
-		               BC_SRV_MAX_DIM);
+	if (sn->has_tile && over_max_dim(m, msg->seq, "tile", sn->tile_width,
+	                                 sn->tile_height)) {
 		return 0;
 	}
 	if (single_req(m, msg->seq, BC_JOB_SNAPSHOT, &q)) {
