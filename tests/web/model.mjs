@@ -13,7 +13,10 @@
  *  - refused in A before anything is sent (no EDIT leaves A, B's scene
  *    does not change), each with a message saying what to do: a menu
  *    entry dropped on a primitive's row (adding under a primitive), a
- *    group dropped on its own child, deleting the root.
+ *    group dropped on its own child, deleting the root;
+ *  - a race: B adds a sphere while the daemon's messages to A are held,
+ *    A adds one with the same new id; the daemon refuses A's (EDUPID)
+ *    and A shows its ERROR text and what to do.
  * Exit status: 0 passed, 1 failed, 77 skipped (the message names what is
  * missing). Usage: node tests/web/model.mjs --blobcastd PATH
  */
@@ -37,22 +40,32 @@ const watchdog = H.watchdog(DEADLINE_MS);
 const until = (page, what, fn, arg, ms = 20000) =>
 	H.until(page, what, fn, arg, ms, 30);
 
-/* The page's EDIT messages, decoded from the WebSocket frames it sends. */
-function countEdits(page) {
-	const seen = { edits: [] };
-	page.on('websocket', (ws) => {
+/* Routes a page's WebSocket through this script: its EDIT messages are
+ * decoded and kept (edits), and while hold.on the daemon's messages to it
+ * wait (an editor that has not yet heard of another's edit) until
+ * release(). */
+async function route(page) {
+	const seen = { edits: [], on: false, queue: [] };
+	await page.routeWebSocket(/.*/, (ws) => {
+		const server = ws.connectToServer();
 		const r = new P.Reader({ side: 'server' });
-		ws.on('framesent', (f) => {
-			if (typeof f.payload === 'string') {
-				return;
-			}
-			r.feed(new Uint8Array(f.payload));
-			for (let m; (m = r.next());) {
-				if (m.type === P.MSG.EDIT) {
-					seen.edits.push(m);
+		ws.onMessage((m) => {
+			server.send(m);
+			r.feed(new Uint8Array(Buffer.from(m)));
+			for (let x; (x = r.next());) {
+				if (x.type === P.MSG.EDIT) {
+					seen.edits.push(x);
 				}
 			}
 		});
+		server.onMessage((m) => (seen.on ? seen.queue.push(m)
+			: ws.send(m)));
+		seen.release = () => {
+			seen.on = false;
+			for (const m of seen.queue.splice(0)) {
+				ws.send(m);
+			}
+		};
 	});
 	return seen;
 }
@@ -66,7 +79,7 @@ async function openPage(port, ws, name) {
 		console.error(`page ${name}: ${e.message}`);
 		failed = true;
 	});
-	const sent = countEdits(page);
+	const sent = await route(page);
 	await page.goto(`http://127.0.0.1:${port}/?ws=${ws}&session=default` +
 		`&name=${name}`);
 	return { page, sent };
@@ -285,6 +298,30 @@ try {
 	assert.equal((await b.evaluate(() => window.blobcast.state())).order,
 		order, "B's scene did not change");
 	step('nothing was sent for the refusals');
+
+	/* A race: B adds a sphere while A has not heard of it yet, and A
+	 * adds one with the same new id. The daemon refuses A's (EDUPID);
+	 * A says so, with the daemon's text, and then holds B's. */
+	A.sent.on = true;
+	await b.click('#addbtn');
+	await b.click('#addprims button[data-prim="1"]');
+	await until(b, 'B: its sphere #53', () => window.blobcast.outliner()
+		.message.startsWith('added sphere #53'));
+	await a.click('#addbtn');
+	await a.click('#addprims button[data-prim="1"]');
+	for (let t = 0; A.sent.edits.length < 5; t++) {
+		assert.ok(t < 200, 'A sent its add');
+		await a.waitForTimeout(25);
+	}
+	A.sent.release();
+	const race = await until(a, 'A: the refusal shown', () => {
+		const o = window.blobcast.outliner();
+		return o.refusal && o.message.includes('EDUPID') ? o : null;
+	});
+	assert.match(race.message, /^the daemon refused "added sphere #53 under union #1": EDUPID: .*id 53.* \(another member added a node with the same id at the same time\): try again$/);
+	assert.equal(race.tree.filter((c) => c[1] === 53).length, 1,
+		"A's mirror holds B's sphere #53 once");
+	step(`the race: "${race.message}"`);
 } catch (e) {
 	failed = true;
 	console.error(`FAIL: ${e.stack || e}`);
