@@ -91,6 +91,7 @@ export class Outliner {
 	reset() {
 		this.sent.clear();
 		this.render();
+		this.renderTools();
 	}
 
 	/* The mirror changed: m is the EDIT_APPLIED, or null for a new
@@ -361,19 +362,15 @@ export class Outliner {
 	/* ---- the tools ---- */
 
 	installMenu() {
-		const prims = $('addprims');
-		for (const [kind, [name]] of Object.entries(PRIMS)) {
-			const b = el('button', 'item', name);
-			b.type = 'button';
-			b.dataset.prim = kind;
-			prims.append(b);
-		}
-		const unary = $('addunary');
-		for (const [kind, [name]] of Object.entries(UNARY)) {
-			const b = el('button', 'item', name);
-			b.type = 'button';
-			b.dataset.unary = kind;
-			unary.append(b);
+		/* An entry per kind of prims.js's tables. */
+		for (const [box, table, key] of [[$('addprims'), PRIMS, 'prim'],
+			[$('addunary'), UNARY, 'unary']]) {
+			for (const [kind, [name]] of Object.entries(table)) {
+				const b = el('button', 'item', name);
+				b.type = 'button';
+				b.dataset[key] = kind;
+				box.append(b);
+			}
 		}
 		$('addbtn').addEventListener('click', () => this.menu(
 			$('addmenu').hidden));
@@ -406,6 +403,17 @@ export class Outliner {
 	}
 
 	installTools() {
+		/* The Delete key, outside text fields, is the delete button. */
+		document.addEventListener('keydown', (e) => {
+			const t = e.target;
+			if (e.key !== 'Delete' || e.ctrlKey || e.metaKey || e.altKey ||
+				(t && (t.isContentEditable || ['INPUT', 'TEXTAREA', 'SELECT']
+					.includes(t.tagName))) || $('delbtn').disabled) {
+				return;
+			}
+			e.preventDefault();
+			$('delbtn').click();
+		});
 		$('delbtn').addEventListener('click', () => {
 			const id = this.app.selected;
 			if (!id) {
