@@ -219,56 +219,79 @@ export function count(n) {
 /* Measures a tree as the daemon does when it builds one: { nodes, prims,
  * depth (nodes on the longest path, the root counting 1), stack (the
  * evaluation stack it needs: a child after the first of an operator is
- * evaluated above the ones before it), domain (domain nodes on one
- * path) }. Iterative: trees may be deep. */
+ * evaluated above the ones before it, so it needs one entry more),
+ * domain (domain nodes on one path) }. One iterative depth-first walk
+ * that keeps only the open operators: trees may be deep and big. */
 export function measure(root) {
 	const out = { nodes: 0, prims: 0, depth: 0, stack: 0, domain: 0 };
-	const order = [];
-	const todo = [[root, 1, 0]];
-	while (todo.length) {
-		const [n, d, dom] = todo.pop();
-		order.push(n);
+	const path = [], at = [], need = [];
+	let dom = 0;
+	for (let n = root; ;) {
 		out.nodes++;
-		out.depth = Math.max(out.depth, d);
-		if (!n.isOp) {
-			out.prims++;
+		out.depth = Math.max(out.depth, path.length + 1);
+		if (n.isOp) {
+			/* Every unary kind but offset and onion maps the domain. */
+			if (n.unary && n.kind > 8) {
+				out.domain = Math.max(out.domain, ++dom);
+			}
+			path.push(n);
+			at.push(0);
+			need.push(0);
+			n = n.children[0];
 			continue;
 		}
-		/* Every unary kind but offset and onion maps the domain. */
-		const below = dom + (n.unary && n.kind > 8 ? 1 : 0);
-		out.domain = Math.max(out.domain, below);
-		for (const c of n.children) {
-			todo.push([c, d + 1, below]);
+		out.prims++;
+		/* A primitive needs one entry; finish the operators it
+		 * completes and go on with the next child. */
+		let done = 1;
+		for (;;) {
+			const top = path.length - 1;
+			if (top < 0) {
+				out.stack = done;
+				return out;
+			}
+			const p = path[top], i = at[top];
+			need[top] = i === 0 ? done : Math.max(need[top], done + 1);
+			if (i + 1 < p.children.length) {
+				at[top] = i + 1;
+				n = p.children[i + 1];
+				break;
+			}
+			done = need[top];
+			path.pop();
+			at.pop();
+			need.pop();
+			if (p.unary && p.kind > 8) {
+				dom--;
+			}
 		}
 	}
-	const need = new Map();
-	for (let i = order.length - 1; i >= 0; i--) {
-		const n = order[i];
-		if (!n.isOp) {
-			need.set(n, 1);
-			continue;
-		}
-		let s = need.get(n.children[0]);
-		for (let c = 1; c < n.children.length; c++) {
-			s = Math.max(s, need.get(n.children[c]) + 1);
-		}
-		need.set(n, s);
-	}
-	out.stack = need.get(root);
-	return out;
 }
 
-/* The mirror with ops applied, on a copy: the tree the daemon would
- * build. */
+/* The mirror's structure with ops applied, on a copy: the tree the daemon
+ * would build, for measuring. The copy keeps what applyOps and measure
+ * read of each node (primitives: kind and id; operators also blend,
+ * range and a unary node's parameters), which is what the operations
+ * built here touch; it is cheap enough for a 100 000-node scene. */
 export function preview(scene, ops) {
-	const root = copyTree(scene.root);
 	const byId = new Map();
+	const lean = (n, parent) => {
+		const c = n.isOp ? { isOp: true, unary: n.unary, kind: n.kind,
+			id: n.id, blend: n.blend, range: n.range, params: n.params &&
+				n.params.slice(), parent, children: n.children.slice() }
+			: { isOp: false, kind: n.kind, id: n.id, parent };
+		byId.set(c.id, c);
+		return c;
+	};
+	const root = lean(scene.root, null);
 	const todo = [root];
 	while (todo.length) {
-		const n = todo.pop();
-		byId.set(n.id, n);
-		if (n.isOp) {
-			todo.push(...n.children);
+		const c = todo.pop();
+		if (c.isOp) {
+			for (let i = 0; i < c.children.length; i++) {
+				c.children[i] = lean(c.children[i], c);
+				todo.push(c.children[i]);
+			}
 		}
 	}
 	const out = { root, byId };
@@ -307,10 +330,19 @@ function checkLimits(scene, ops, limits) {
 	return after;
 }
 
+/* The limits of an action's options o: o.limits, by default the
+ * protocol's; none with o.quick (the structural checks only: the hover
+ * feedback of a drag, which must stay fast on big scenes). */
+function limitsOf(o) {
+	return o.quick ? null : o.limits ?? limitsFor(null);
+}
+
 /* The result of an action: the EDIT's operations, the node to select
  * once it is applied, and a sentence saying what it did. */
 function result(scene, ops, limits, select, text) {
-	checkLimits(scene, ops, limits);
+	if (limits) {
+		checkLimits(scene, ops, limits);
+	}
 	return { ops, select, text };
 }
 
@@ -333,7 +365,7 @@ export function addPrimitive(scene, parent, kind, o = {}) {
 	if (!PRIMS[kind]) {
 		throw new Refusal(`there is no primitive kind ${kind}`);
 	}
-	const limits = o.limits ?? limitsFor(null);
+	const limits = limitsOf(o);
 	const [id, unionId] = freshIds(scene, 2);
 	const node = { isOp: false, kind, id, translate: (o.translate ??
 		[0, 0, 0]).slice(), rotate: [0, 0, 0, 1], color: o.color ?? null,
@@ -369,7 +401,7 @@ export function wrap(scene, id, kind, o = {}) {
 	const u = { isOp: true, unary: true, kind, id: uid,
 		params: unaryDefaults(kind), children: [n] };
 	return result(scene, [{ kind: EDIT.REPLACE, node: n.id,
-		subtree: encodeScene({ root: u }) }], o.limits ?? limitsFor(null),
+		subtree: encodeScene({ root: u }) }], limitsOf(o),
 	uid, `wrapped ${nodeName(n)} in ${nodeName(u)}`);
 }
 
@@ -386,7 +418,7 @@ export function remove(scene, id, o = {}) {
 				'empty. Replace the scene, or add a shape beside it first');
 	}
 	return result(scene, [{ kind: EDIT.REMOVE, node: n.id }],
-		o.limits ?? limitsFor(null), top.parent.id, `deleted ${nodeName(n)}` +
+		limitsOf(o), top.parent.id, `deleted ${nodeName(n)}` +
 		(top === n ? '' : ` with ${nodeName(top)} around it`));
 }
 
@@ -396,7 +428,7 @@ export function remove(scene, id, o = {}) {
 export function duplicate(scene, id, o = {}) {
 	const n = get(scene, id);
 	const top = removedTop(n);
-	const limits = o.limits ?? limitsFor(null);
+	const limits = limitsOf(o);
 	const ids = freshIds(scene, count(top) + 1);
 	const copy = copyTree(top, ids);
 	const off = o.offset ?? [0, 0, 0];
@@ -458,7 +490,7 @@ export function setOperator(scene, id, { base, smooth, blend }, o = {}) {
 			(smooth ? ` with radius ${n.blend}` : '') + ': nothing to change');
 	}
 	return result(scene, [{ kind: EDIT.SET, node: n.id, fields }],
-		o.limits ?? limitsFor(null), n.id, `${nodeName(n)} is now ` +
+		limitsOf(o), n.id, `${nodeName(n)} is now ` +
 		`${OPS[kind]}${smooth ? ` (radius ${blend})` : ''}`);
 }
 
@@ -495,6 +527,6 @@ export function move(scene, id, target, o = {}) {
 	const ops = [{ kind: EDIT.REMOVE, node: top.id },
 		{ kind: EDIT.INSERT, parent: t.id, position: t.children.length,
 			subtree: encodeScene({ root: top }) }];
-	return result(scene, ops, o.limits ?? limitsFor(null), n.id,
+	return result(scene, ops, limitsOf(o), n.id,
 		`moved ${nodeName(n)} into ${nodeName(t)}`);
 }

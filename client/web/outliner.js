@@ -529,17 +529,17 @@ export class Outliner {
 	}
 
 	/* What dropping the drag on node id would do: the action, or a
-	 * Refusal. */
-	dropPlan(d, id) {
+	 * Refusal (quick: the structural checks only, for hovering). */
+	dropPlan(d, id, quick = false) {
 		const scene = this.app.scene;
 		const limits = M.limitsFor(this.app.welcome);
 		if (d.node) {
-			return () => M.move(scene, d.node, id, { limits });
+			return () => M.move(scene, d.node, id, { limits, quick });
 		}
 		if (d.unary) {
-			return () => M.wrap(scene, id, d.unary, { limits });
+			return () => M.wrap(scene, id, d.unary, { limits, quick });
 		}
-		return () => M.addPrimitive(scene, id, d.prim, { limits });
+		return () => M.addPrimitive(scene, id, d.prim, { limits, quick });
 	}
 
 	/* The row under the pointer that drag d may be dropped on. */
@@ -587,7 +587,7 @@ export class Outliner {
 			if (row) {
 				let why = '';
 				try {
-					this.dropPlan(d, Number(row.dataset.id))();
+					this.dropPlan(d, Number(row.dataset.id), true)();
 				} catch (err) {
 					if (!(err instanceof M.Refusal)) {
 						throw err;

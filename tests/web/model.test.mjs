@@ -235,6 +235,10 @@ test('the node, depth, stack and domain limits', () => {
 	refused(() => M.addPrimitive(s, 1, 1, { limits: { ...M.limitsFor(null),
 		nodes: 8 } }), /would need 9 nodes, more than the 8 this daemon takes: delete some shapes first/);
 	M.addPrimitive(s, 1, 1, { limits: { ...M.limitsFor(null), nodes: 9 } });
+	/* quick (a drag's hover): the structural checks only. */
+	M.addPrimitive(s, 1, 1, { limits: { ...M.limitsFor(null), nodes: 8 },
+		quick: true });
+	refused(() => M.addPrimitive(s, 2, 1, { quick: true }), /a primitive has no children/);
 	assert.equal(M.limitsFor({ max_nodes: 1000 }).nodes, 1000);
 	refused(() => M.move(s, 2, 3, { limits: { ...M.limitsFor(null),
 		depth: 2 } }), /nest 3 levels deep, more than 2/);
