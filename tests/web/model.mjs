@@ -16,7 +16,9 @@
  *    group dropped on its own child, deleting the root;
  *  - a race: B adds a sphere while the daemon's messages to A are held,
  *    A adds one with the same new id; the daemon refuses A's (EDUPID)
- *    and A shows its ERROR text and what to do.
+ *    and A shows its ERROR text and what to do;
+ *  - A wraps a sphere in a twist from the menu (REPLACE, its id kept) and
+ *    duplicates the twist (fresh ids next to it); B's tree follows.
  * Exit status: 0 passed, 1 failed, 77 skipped (the message names what is
  * missing). Usage: node tests/web/model.mjs --blobcastd PATH
  */
@@ -322,6 +324,25 @@ try {
 	assert.equal(race.tree.filter((c) => c[1] === 53).length, 1,
 		"A's mirror holds B's sphere #53 once");
 	step(`the race: "${race.message}"`);
+
+	/* The daemon takes a wrap (REPLACE, the ids kept) and a duplicate
+	 * (fresh ids) as the page builds them. */
+	await a.mouse.click(...Object.values(await rowAt(a, 50)));
+	await a.click('#addbtn');
+	await a.click('#addunary button[data-unary="10"]');
+	await until(a, 'A: sphere #50 wrapped', () => window.blobcast.outliner()
+		.message === 'wrapped sphere #50 in twist #54');
+	await a.click('#dupbtn');
+	const dup = await until(a, 'A: twist #54 duplicated', () => {
+		const o = window.blobcast.outliner();
+		return o.message === 'duplicated twist #54 as twist #55' ? o : null;
+	});
+	assert.deepEqual(dup.tree.slice(2).filter((c) => c[0] === 'twist'),
+		[['twist', 54, ['sphere', 50]], ['twist', 55, ['sphere', 56]]]);
+	await until(b, "B: the wrap and the copy", () => JSON.stringify(
+		window.blobcast.outliner().tree).includes('["twist",54,["sphere",' +
+		'50]],["twist",55,["sphere",56]]'));
+	step('sphere #50 wrapped in twist #54, duplicated as twist #55 (#56)');
 } catch (e) {
 	failed = true;
 	console.error(`FAIL: ${e.stack || e}`);
