@@ -151,7 +151,8 @@ export class Outliner {
 		return {
 			tree: this.app.scene?.root ? shape(this.app.scene.root) : null,
 			rows: [...this.list.querySelectorAll('.row')].map((r) => ({
-				id: Number(r.dataset.id), level: Number(r.getAttribute('aria-level')),
+				id: Number(r.dataset.id),
+				level: Number(r.getAttribute('aria-level')),
 				text: r.querySelector('.label').textContent,
 				selected: r.classList.contains('sel') })),
 			message: $('outlinermsg').textContent,
@@ -374,8 +375,15 @@ export class Outliner {
 		}
 		$('addbtn').addEventListener('click', () => this.menu(
 			$('addmenu').hidden));
+		/* Escape, or a press anywhere else, closes it. */
 		document.addEventListener('keydown', (e) => {
 			if (e.key === 'Escape') {
+				this.menu(false);
+			}
+		});
+		document.addEventListener('pointerdown', (e) => {
+			if (!$('addmenu').hidden && !e.target.closest?.('#addmenu, ' +
+				'#addbtn')) {
 				this.menu(false);
 			}
 		});
@@ -504,6 +512,12 @@ export class Outliner {
 		$('addmenu').addEventListener('pointerdown', down);
 		document.addEventListener('pointermove', (e) => this.dragMove(e));
 		document.addEventListener('pointerup', (e) => this.dragEnd(e));
+		/* The browser took the pointer (a touch scroll): no drop. */
+		document.addEventListener('pointercancel', () => {
+			if (this.drag) {
+				this.dragEnd(null);
+			}
+		});
 		this.list.addEventListener('click', (e) => {
 			const more = e.target.closest('.more');
 			if (more) {
@@ -600,6 +614,7 @@ export class Outliner {
 		}
 	}
 
+	/* The end of a press: e the pointerup, null when cancelled. */
 	dragEnd(e) {
 		const d = this.drag;
 		if (!d) {
@@ -613,6 +628,9 @@ export class Outliner {
 			d.over.title = '';
 		}
 		if (!d.moving) {
+			if (!e) {
+				return;
+			}
 			if (d.node && d.twist) {
 				this.toggle(d.node);
 			} else if (d.node) {
@@ -625,7 +643,7 @@ export class Outliner {
 		setTimeout(() => {
 			this.clickDone = false;
 		}, 0);
-		const row = this.dropTarget(d, e);
+		const row = e && this.dropTarget(d, e);
 		if (row) {
 			const plan = this.dropPlan(d, Number(row.dataset.id));
 			this.act(() => plan());
