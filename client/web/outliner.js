@@ -82,6 +82,7 @@ export class Outliner {
 		this.installMenu();
 		this.installTools();
 		this.installDrag();
+		this.installKeys();
 		this.reset();
 	}
 
@@ -402,7 +403,8 @@ export class Outliner {
 		if (open) {
 			const b = $('addbtn').getBoundingClientRect();
 			const panel = $('scenepanel').getBoundingClientRect();
-			m.style.top = `${Math.max(4, Math.min(b.top, innerHeight - 360))}px`;
+			const top = Math.min(b.top, innerHeight - 360);
+			m.style.top = `${Math.max(4, top)}px`;
 			m.style.right = `${innerWidth - panel.left + 12}px`;
 		}
 		m.hidden = !open;
@@ -649,6 +651,42 @@ export class Outliner {
 			this.act(() => plan());
 			this.menu(false);
 		}
+	}
+
+	/* The list takes the keyboard focus: up and down select the row
+	 * above or below, right opens a group, left closes it (or selects
+	 * the group above). */
+	installKeys() {
+		this.list.tabIndex = 0;
+		this.list.addEventListener('keydown', (e) => {
+			const rows = [...this.list.querySelectorAll('.row')];
+			const at = rows.findIndex((r) => r.classList.contains('sel'));
+			const n = this.app.scene?.byId.get(this.app.selected);
+			let id = 0;
+			if (e.key === 'ArrowDown' || e.key === 'ArrowUp') {
+				const to = at < 0 ? 0 : at + (e.key === 'ArrowDown' ? 1 : -1);
+				id = Number(rows[Math.max(0, Math.min(rows.length - 1, to))]
+					?.dataset.id ?? 0);
+			} else if (e.key === 'ArrowRight' && n?.isOp &&
+				this.open.get(n.id) !== true) {
+				this.open.set(n.id, true);
+				this.render();
+			} else if (e.key === 'ArrowLeft' && n) {
+				const open = rows[at]?.getAttribute('aria-expanded') === 'true';
+				if (open) {
+					this.open.set(n.id, false);
+					this.render();
+				} else {
+					id = n.parent?.id ?? 0;
+				}
+			} else {
+				return;
+			}
+			e.preventDefault();
+			if (id) {
+				this.app.select(id);
+			}
+		});
 	}
 
 	toggle(id) {

@@ -8,8 +8,9 @@
  *    smooth intersection with the operator form; deletes the sphere.
  *    After each step page B's mirror and outliner rows hold the new tree
  *    and B draws a frame of it whose pixels differ from the step before;
- *  - a pick in A's picture selects the shape's row in A's outliner, and
- *    a click on a row selects it for the sliders;
+ *  - a pick in A's picture selects the shape's row in A's outliner, a
+ *    click on a row selects it, the arrows of rows close groups, and
+ *    the down and left keys select the next row and the parent;
  *  - refused in A before anything is sent (no EDIT leaves A, B's scene
  *    does not change), each with a message saying what to do: a menu
  *    entry dropped on a primitive's row (adding under a primitive), a
@@ -194,6 +195,16 @@ try {
 			.outliner().rows.every((r) => r.id !== g + 1), id);
 	}
 	step('closed #10, #21, #24 and #30 with their arrows');
+
+	/* The keyboard: down selects the next row, left the parent. */
+	await a.focus('#outliner');
+	await a.keyboard.press('ArrowDown');
+	await until(a, 'torus #41 selected by the down key', () =>
+		window.blobcast.state().selected === 41);
+	await a.keyboard.press('ArrowLeft');
+	await until(a, 'smooth_union #40 selected by the left key', () =>
+		window.blobcast.state().selected === 40);
+	step('down and left keys select torus #41, then smooth_union #40');
 
 	/* 1. Add a sphere from the menu: it goes under #40. */
 	await a.click('#addbtn');
