@@ -20,6 +20,9 @@
  *  - The side panel lists the members, who edited last, and sliders for the
  *    selected primitive (position, shape parameters, colour, the blend of
  *    its smooth parent).
+ *  - The Scene panel (outliner.js) lists the tree, shares the selection
+ *    and changes the structure: add, wrap, delete, duplicate, regroup,
+ *    operator kind and blend, each one EDIT built by model.js.
  *  - The overlay shows frames per second, edit -> frame latency (from
  *    sending an EDIT to drawing the first frame whose order reflects it)
  *    and kilobytes per frame.
@@ -55,13 +58,9 @@
  */
 import * as P from './protocol.js';
 import { Picture, parseSize } from './picture.js';
-import { OPS, PRIMS, layout, unaryLayout, unaryRange, unaryValue }
-	from './prims.js';
-
-function kindName(n) {
-	return n.isOp ? OPS[n.kind] ?? `op ${n.kind}`
-		: PRIMS[n.kind]?.[0] ?? `kind ${n.kind}`;
-}
+import { layout, unaryLayout, unaryRange, unaryValue } from './prims.js';
+import { kindName } from './model.js';
+import { Outliner } from './outliner.js';
 
 /* ---- Small vector helpers ------------------------------------------------ */
 
@@ -461,6 +460,7 @@ class App {
 		this.followWanted = false; /* F: kept across reconnects */
 		this.installPresent();
 		this.installPicture();
+		this.outliner = new Outliner(this);
 		new ResizeObserver(() => this.resize()).observe($('stage'));
 		setInterval(() => this.tick(), 250);
 		this.conn.open();
@@ -494,6 +494,7 @@ class App {
 		this.following = false;
 		this.presenceAsked = false;
 		this.renderPresent();
+		this.outliner?.reset();
 	}
 
 	/* ---- connection and messages ---- */
@@ -703,6 +704,7 @@ class App {
 	}
 
 	serverError(m) {
+		this.outliner.refused(m);
 		const undo = this.undoSent.get(m.seq);
 		this.undoSent.delete(m.seq);
 		if (undo && m.code === P.ERR.ESTATE) {
@@ -794,6 +796,7 @@ class App {
 			this.selected = 0;
 		}
 		this.renderPanel();
+		this.outliner.sceneChanged(null);
 	}
 
 	editApplied(m) {
@@ -843,6 +846,7 @@ class App {
 		this.renderMembers();
 		this.refreshSliders();
 		this.drawOverlay();
+		this.outliner.sceneChanged(m);
 	}
 
 	/* A frame is on screen: settle the latencies it answers. */
@@ -992,22 +996,28 @@ class App {
 			return;
 		}
 		this.pendingEdit = null;
-		const ops = [{ kind: P.EDIT.SET, node: e.node, fields: e.fields }];
+		const seq = this.sendOps([{ kind: P.EDIT.SET, node: e.node,
+			fields: e.fields }], e.interacting, e.done);
+		if (seq && e.interacting) {
+			this.inflight = seq;
+		}
+	}
+
+	/* Sends one EDIT of ops (the outliner's structural edits go at once,
+	 * whole); returns its seq, 0 when not sent. */
+	sendOps(ops, interacting = false, done = undefined) {
 		let seq;
 		try {
 			seq = this.conn.send(P.MSG.EDIT, { ops },
-				e.interacting ? P.FLAG.INTERACTING : 0);
+				interacting ? P.FLAG.INTERACTING : 0);
 		} catch (err) {
 			this.say(`edit not sent: ${err.message}`);
-			return;
+			return 0;
 		}
 		if (seq) {
-			this.editSent.set(seq, { sentAt: performance.now(),
-				done: e.done });
-			if (e.interacting) {
-				this.inflight = seq;
-			}
+			this.editSent.set(seq, { sentAt: performance.now(), done });
 		}
+		return seq;
 	}
 
 	pick(x, y) {
@@ -1381,6 +1391,7 @@ class App {
 		this.selected = id;
 		this.renderPanel();
 		this.drawOverlay();
+		this.outliner.selected(id);
 	}
 
 	/* Rough size of a primitive, for slider ranges. */
@@ -1523,6 +1534,10 @@ class App {
 		}
 		$('selname').textContent = `${kindName(n)} #${n.id}` +
 			(n.stale ? ' (parameters out of date)' : '');
+		if (n.isOp) {
+			/* Operators and unary nodes are edited in the Scene panel. */
+			return;
+		}
 		const size = App.radius(n);
 		const group = (title) => {
 			this.group = title.split(' ')[0];
@@ -1802,6 +1817,8 @@ window.blobcast = {
 	picture: (w, h, tile) => app.savePicture(w, h, tile).then((r) => ({
 		width: r.canvas.width, height: r.canvas.height,
 		order: String(r.order) })),
+	/* The Scene panel: the tree, its rows, its message line. */
+	outliner: () => app.outliner.state(),
 	/* RGBA of the last picture's rectangle (x, y, w, h), as an array. */
 	picturePixels: (x, y, w, h) => Array.from(app.lastPicture.canvas
 		.getContext('2d').getImageData(x, y, w, h).data),
