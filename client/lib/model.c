@@ -94,9 +94,7 @@ static const char *kind_name(const struct bc_tree *t, uint32_t id)
 static int no_node(uint32_t id, struct bc_errinfo *ei)
 {
 	return bc_errinfo_set(ei, BC_ENONODE,
-	                      "no node %u in the session's scene (blobcast "
-	                      "nodes lists them)",
-	                      id);
+	                      "no node %u in the session's scene", id);
 }
 
 /* The node a REMOVE or move of id takes: id, or the top of the chain of

@@ -458,7 +458,7 @@ static void refusals_are_made_before_sending(void)
 	refused(a, rc, BC_EINVAL, &ei, out, "exactly one child");
 	rc = bc_model_add(
 	    a, &(struct bc_model_add){.kind = "sphere", .parent = 99}, &r, &ei);
-	refused(a, rc, BC_ENONODE, &ei, out, "blobcast nodes");
+	refused(a, rc, BC_ENONODE, &ei, out, "no node 99");
 	rc = bc_model_add(a, &(struct bc_model_add){.kind = "spehre"}, &r, &ei);
 	refused(a, rc, BC_EINVAL, &ei, out, "a primitive (sphere, box");
 	rc = bc_model_add(
