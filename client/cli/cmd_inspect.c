@@ -19,18 +19,37 @@
  * IEEE single back. */
 #define FLOAT_DIGITS 9
 
-/* The double nearest to the shortest decimal that gives v back as a float:
- * 0.3f prints as 0.3, not 0.300000012. */
-static double shortest(float v)
+/* Whether v printed with p significant digits reads back as v; *d is
+ * what it reads back as a double. */
+static bool round_trips(float v, int p, double *d)
 {
 	char buf[32];
-	for (int p = 1; p < FLOAT_DIGITS; p++) {
-		snprintf(buf, sizeof(buf), "%.*g", p, (double)v);
-		if (strtof(buf, NULL) == v) {
-			return strtod(buf, NULL);
+	snprintf(buf, sizeof(buf), "%.*g", p, (double)v);
+	*d = strtod(buf, NULL);
+	return strtof(buf, NULL) == v;
+}
+
+/* The double nearest to the shortest decimal that gives v back as a float:
+ * 0.3f prints as 0.3, not 0.300000012. A bisection over the digits (more
+ * digits are never farther from v), so a listing of many floats costs a
+ * few conversions each, not nine. */
+static double shortest(float v)
+{
+	int lo = 1, hi = FLOAT_DIGITS;
+	double d, best = (double)v;
+	while (lo < hi) {
+		int mid = lo + (hi - lo) / 2;
+		if (round_trips(v, mid, &d)) {
+			hi = mid;
+			best = d;
+		} else {
+			lo = mid + 1;
 		}
 	}
-	return (double)v;
+	if (hi == FLOAT_DIGITS) {
+		return (double)v;
+	}
+	return best;
 }
 
 static bool is_identity_rotation(const float q[4])
