@@ -171,9 +171,9 @@ static int run_add(struct bc_cli_call *a)
 		goto out;
 	}
 	if (bc_model_add(c, &add, &r, &ei)) {
+		status = action_failed(a, c, &ei);
 		kind_hint(a, add.kind);
 		kind_hint(a, add.child_kind);
-		status = action_failed(a, c, &ei);
 		goto out;
 	}
 	ids_text(&r, ids, sizeof(ids));
@@ -377,9 +377,9 @@ static int run_wrap(struct bc_cli_call *a)
 		goto out;
 	}
 	if (bc_model_wrap(c, &w, &r, &ei)) {
+		status = action_failed(a, c, &ei);
 		kind_hint(a, w.kind);
 		kind_hint(a, w.child_kind);
-		status = action_failed(a, c, &ei);
 		goto out;
 	}
 	ids_text(&r, ids, sizeof(ids));

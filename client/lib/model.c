@@ -30,6 +30,7 @@
 static int mirror(const struct bc_client *c, const struct bc_tree **t,
                   struct bc_camera *cam, struct bc_errinfo *ei)
 {
+	*t = NULL;
 	if (c->err) {
 		return bc_errinfo_set(ei, c->err, "%s", c->errstr);
 	}
@@ -347,12 +348,38 @@ static int unknown_kind(const char *kind, const char *what,
 	char names[400];
 	prim_names(names, sizeof(names));
 	return bc_errinfo_set(ei, BC_EINVAL,
-	                      "unknown %s kind \"%.40s\": a primitive "
-	                      "(%.120s...), an operator (union, "
-	                      "intersection, difference, smooth_...) or a "
-	                      "unary node (offset, onion, elongate, twist, "
-	                      "bend, mirror, repeat, scale)",
-	                      what, kind ? kind : "(none)", names);
+	                      "unknown %s kind \"%.40s\": give a primitive "
+	                      "(%.60s..., docs/primitives.md)%s",
+	                      what, kind ? kind : "(none)", names,
+	                      strcmp(what, "node") == 0
+	                          ? ", an operator (union, smooth_union, "
+	                            "...) or a unary node (offset, twist, "
+	                            "...)"
+	                          : "");
+}
+
+/* A key=value refusal for the scratch node 1 is about the new node:
+ * "node 1 (sphere) has no ..." becomes "a new sphere has no ...", and
+ * "node 1: ..." "the new node: ...". */
+static int about_new(int rc, struct bc_errinfo *ei)
+{
+	const char *lead = "node 1 (", *close;
+	char msg[sizeof(ei->msg)];
+	if (!ei) {
+		return rc;
+	}
+	if (strncmp(ei->msg, "node 1: ", 8) == 0) {
+		snprintf(msg, sizeof(msg), "the new node: %s", ei->msg + 8);
+		return bc_errinfo_set(ei, rc, "%s", msg);
+	}
+	if (strncmp(ei->msg, lead, strlen(lead)) != 0 ||
+	    !(close = strchr(ei->msg, ')'))) {
+		return rc;
+	}
+	snprintf(msg, sizeof(msg), "a new %.*s%s",
+	         (int)(close - ei->msg - strlen(lead)), ei->msg + strlen(lead),
+	         close + 1);
+	return bc_errinfo_set(ei, rc, "%s", msg);
 }
 
 /* Resolves kind and applies kv to a node of that kind: on a scratch tree
@@ -407,6 +434,7 @@ static int new_node(const char *kind, const char *const *kv, size_t nkv,
 			set.fields = fields;
 			rc = bc_edit_apply_op(t, &set, ei);
 		}
+		rc = about_new(rc, ei);
 		for (uint8_t i = 0; !rc && i < set.nfields; i++) {
 			if (fields[i].field == BC_PROTO_FIELD_TRANSLATE) {
 				nn->has_translate = true;
@@ -632,7 +660,7 @@ int bc_model_add(struct bc_client *c, const struct bc_model_add *a,
 {
 	struct bc_model_result dummy;
 	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_INSERT};
-	const struct bc_tree *t;
+	const struct bc_tree *t = NULL;
 	struct bc_tree *sub = NULL;
 	struct bc_prim_data child;
 	struct new_node nn;
@@ -727,7 +755,7 @@ int bc_model_remove(struct bc_client *c, uint32_t node,
 {
 	struct bc_model_result dummy;
 	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_REMOVE};
-	const struct bc_tree *t;
+	const struct bc_tree *t = NULL;
 	struct survey sv;
 	uint32_t top;
 	int rc;
@@ -817,12 +845,12 @@ int bc_model_move(struct bc_client *c, const struct bc_model_move *m,
 {
 	struct bc_model_result dummy;
 	struct bc_proto_edit_op ops[MODEL_MAX_OPS];
-	const struct bc_tree *t;
+	const struct bc_tree *t = NULL;
 	struct bc_tree *sub = NULL;
 	struct survey sv;
 	uint8_t *bytes = NULL;
 	size_t len = 0;
-	uint32_t top, from, pos, nops = 0;
+	uint32_t top, from, pos = 0, nops = 0;
 	int rc;
 	out = out ? out : &dummy;
 	reset(out);
@@ -893,7 +921,7 @@ int bc_model_wrap(struct bc_client *c, const struct bc_model_wrap *w,
 {
 	struct bc_model_result dummy;
 	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_REPLACE};
-	const struct bc_tree *t;
+	const struct bc_tree *t = NULL;
 	struct bc_tree *sub = NULL;
 	struct bc_prim_data child;
 	struct new_node nn;
@@ -973,7 +1001,7 @@ int bc_model_duplicate(struct bc_client *c, const struct bc_model_duplicate *d,
 {
 	struct bc_model_result dummy;
 	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_INSERT};
-	const struct bc_tree *t;
+	const struct bc_tree *t = NULL;
 	struct bc_tree *sub = NULL;
 	struct survey sv;
 	uint8_t *bytes = NULL;
@@ -1037,7 +1065,7 @@ int bc_model_set_operator(struct bc_client *c, uint32_t node, const char *kind,
 	struct bc_proto_field fields[3];
 	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_SET,
 	                              .fields = fields};
-	const struct bc_tree *t;
+	const struct bc_tree *t = NULL;
 	struct bc_op_data cur;
 	enum bc_op k = kind ? bc_op_from_name(kind) : BC_OP_INVALID;
 	struct survey sv;
