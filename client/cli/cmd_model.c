@@ -148,6 +148,62 @@ static void ids_text(const struct bc_model_result *r, char *buf, size_t cap)
 	}
 }
 
+/* One modelling call with its argument: the verbs' shared part. */
+typedef int (*action_fn)(struct bc_client *c, const void *arg,
+                         struct bc_model_result *r, struct bc_errinfo *ei);
+
+/* Joins the session as an editor and runs fn; on a refusal says why (and
+ * "did you mean" for kinds[0..2), which may be NULL). Returns 0 or the
+ * exit status; *c is the connection either way, for the caller to
+ * destroy. */
+static int perform(const struct bc_cli_call *a, action_fn fn, const void *arg,
+                   const char *const kinds[2], struct bc_client **c,
+                   struct bc_model_result *r)
+{
+	struct bc_errinfo ei = {0};
+	int status = bc_cli_open_session(a, BC_PROTO_ROLE_EDITOR,
+	                                 BC_CLIENT_JOIN_EXISTING, c);
+	if (status) {
+		return status;
+	}
+	if (fn(*c, arg, r, &ei)) {
+		status = action_failed(a, *c, &ei);
+		kind_hint(a, kinds ? kinds[0] : NULL);
+		kind_hint(a, kinds ? kinds[1] : NULL);
+	}
+	return status;
+}
+
+static int do_add(struct bc_client *c, const void *arg,
+                  struct bc_model_result *r, struct bc_errinfo *ei)
+{
+	return bc_model_add(c, arg, r, ei);
+}
+
+static int do_remove(struct bc_client *c, const void *arg,
+                     struct bc_model_result *r, struct bc_errinfo *ei)
+{
+	return bc_model_remove(c, *(const uint32_t *)arg, r, ei);
+}
+
+static int do_move(struct bc_client *c, const void *arg,
+                   struct bc_model_result *r, struct bc_errinfo *ei)
+{
+	return bc_model_move(c, arg, r, ei);
+}
+
+static int do_wrap(struct bc_client *c, const void *arg,
+                   struct bc_model_result *r, struct bc_errinfo *ei)
+{
+	return bc_model_wrap(c, arg, r, ei);
+}
+
+static int do_duplicate(struct bc_client *c, const void *arg,
+                        struct bc_model_result *r, struct bc_errinfo *ei)
+{
+	return bc_model_duplicate(c, arg, r, ei);
+}
+
 /* ---- add --------------------------------------------------------------------- */
 
 static int run_add(struct bc_cli_call *a)
@@ -158,7 +214,6 @@ static int run_add(struct bc_cli_call *a)
 	                           .parent = a->parent,
 	                           .child_kind = a->child};
 	struct bc_client *c = NULL;
-	struct bc_errinfo ei = {0};
 	struct bc_model_result r;
 	char ids[48], sentence[200];
 	int status;
@@ -166,14 +221,9 @@ static int run_add(struct bc_cli_call *a)
 	    (status = vec_opt(a, "at", a->at, &add.has_at, add.at))) {
 		return status;
 	}
-	if ((status = bc_cli_open_session(a, BC_PROTO_ROLE_EDITOR,
-	                                  BC_CLIENT_JOIN_EXISTING, &c))) {
-		goto out;
-	}
-	if (bc_model_add(c, &add, &r, &ei)) {
-		status = action_failed(a, c, &ei);
-		kind_hint(a, add.kind);
-		kind_hint(a, add.child_kind);
+	if ((status = perform(a, do_add, &add,
+	                      (const char *const[]){add.kind, add.child_kind},
+	                      &c, &r))) {
 		goto out;
 	}
 	ids_text(&r, ids, sizeof(ids));
@@ -231,7 +281,6 @@ const struct bc_cli_cmd bc_cli_cmd_add = {
 static int run_remove(struct bc_cli_call *a)
 {
 	struct bc_client *c = NULL;
-	struct bc_errinfo ei = {0};
 	struct bc_model_result r;
 	char sentence[160];
 	uint32_t id;
@@ -239,12 +288,7 @@ static int run_remove(struct bc_cli_call *a)
 	if ((status = node_arg(a, a->pos[0], &id))) {
 		return status;
 	}
-	if ((status = bc_cli_open_session(a, BC_PROTO_ROLE_EDITOR,
-	                                  BC_CLIENT_JOIN_EXISTING, &c))) {
-		goto out;
-	}
-	if (bc_model_remove(c, id, &r, &ei)) {
-		status = action_failed(a, c, &ei);
+	if ((status = perform(a, do_remove, &id, NULL, &c, &r))) {
 		goto out;
 	}
 	if (r.node == id) {
@@ -292,7 +336,6 @@ static int run_move(struct bc_cli_call *a)
 {
 	struct bc_model_move mv = {.parent = a->parent};
 	struct bc_client *c = NULL;
-	struct bc_errinfo ei = {0};
 	struct bc_model_result r;
 	char sentence[160];
 	int status;
@@ -307,12 +350,7 @@ static int run_move(struct bc_cli_call *a)
 		        mv.node);
 		return BC_CLI_EXIT_USAGE;
 	}
-	if ((status = bc_cli_open_session(a, BC_PROTO_ROLE_EDITOR,
-	                                  BC_CLIENT_JOIN_EXISTING, &c))) {
-		goto out;
-	}
-	if (bc_model_move(c, &mv, &r, &ei)) {
-		status = action_failed(a, c, &ei);
+	if ((status = perform(a, do_move, &mv, NULL, &c, &r))) {
 		goto out;
 	}
 	snprintf(sentence, sizeof(sentence),
@@ -364,7 +402,6 @@ static int run_wrap(struct bc_cli_call *a)
 	                          .nkv = (size_t)(a->npos - 2),
 	                          .child_kind = a->child};
 	struct bc_client *c = NULL;
-	struct bc_errinfo ei = {0};
 	struct bc_model_result r;
 	char ids[48], sentence[200];
 	int status;
@@ -372,14 +409,9 @@ static int run_wrap(struct bc_cli_call *a)
 	    (status = vec_opt(a, "at", a->at, &w.has_at, w.at))) {
 		return status;
 	}
-	if ((status = bc_cli_open_session(a, BC_PROTO_ROLE_EDITOR,
-	                                  BC_CLIENT_JOIN_EXISTING, &c))) {
-		goto out;
-	}
-	if (bc_model_wrap(c, &w, &r, &ei)) {
-		status = action_failed(a, c, &ei);
-		kind_hint(a, w.kind);
-		kind_hint(a, w.child_kind);
+	if ((status = perform(a, do_wrap, &w,
+	                      (const char *const[]){w.kind, w.child_kind}, &c,
+	                      &r))) {
 		goto out;
 	}
 	ids_text(&r, ids, sizeof(ids));
@@ -427,7 +459,6 @@ static int run_duplicate(struct bc_cli_call *a)
 {
 	struct bc_model_duplicate d = {0};
 	struct bc_client *c = NULL;
-	struct bc_errinfo ei = {0};
 	struct bc_model_result r;
 	char ids[48], sentence[200];
 	int status;
@@ -436,12 +467,7 @@ static int run_duplicate(struct bc_cli_call *a)
 	         vec_opt(a, "offset", a->offset, &d.has_offset, d.offset))) {
 		return status;
 	}
-	if ((status = bc_cli_open_session(a, BC_PROTO_ROLE_EDITOR,
-	                                  BC_CLIENT_JOIN_EXISTING, &c))) {
-		goto out;
-	}
-	if (bc_model_duplicate(c, &d, &r, &ei)) {
-		status = action_failed(a, c, &ei);
+	if ((status = perform(a, do_duplicate, &d, NULL, &c, &r))) {
 		goto out;
 	}
 	ids_text(&r, ids, sizeof(ids));
