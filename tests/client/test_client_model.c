@@ -80,6 +80,45 @@ static const char *domain_chain_scene(void)
 	return text;
 }
 
+/* The deepest operator of right_nested_scene(): its unions take ids
+ * 101, 103, ... down 128 levels. */
+#define DEEPEST_UNION (101u + 2u * 127u)
+
+/* union 1 [union 2 [sphere 3, sphere 4], sphere 5, R(128)], where R(k) is
+ * union [sphere, R(k - 1)] and R(0) a sphere: each level nests the next in
+ * its right operand, so evaluating the tree needs a stack of exactly
+ * BC_EVAL_STACK (130) entries. Moving union 2 under the deepest union
+ * (DEEPEST_UNION) would need one more. */
+static const char *right_nested_scene(void)
+{
+	static char text[40000];
+	size_t n = 0;
+	uint32_t id = 101;
+	n += (size_t)snprintf(
+	    text + n, sizeof(text) - n,
+	    "{\"blobcast\": 1, \"root\": {\"type\": \"union\", \"id\": 1, "
+	    "\"children\": [{\"type\": \"union\", \"id\": 2, \"children\": "
+	    "[{\"type\": \"sphere\", \"id\": 3, \"radius\": 0.2}, {\"type\": "
+	    "\"sphere\", \"id\": 4, \"radius\": 0.2}]}, {\"type\": "
+	    "\"sphere\", \"id\": 5, \"radius\": 0.2}, ");
+	for (unsigned i = 0; i < 128; i++, id += 2) {
+		n += (size_t)snprintf(text + n, sizeof(text) - n,
+		                      "{\"type\": \"union\", \"id\": %u, "
+		                      "\"children\": [{\"type\": \"sphere\", "
+		                      "\"id\": %u, \"radius\": 0.1}, ",
+		                      id, id + 1);
+	}
+	n += (size_t)snprintf(text + n, sizeof(text) - n,
+	                      "{\"type\": \"sphere\", \"id\": %u, "
+	                      "\"radius\": 0.1}",
+	                      id);
+	for (unsigned i = 0; i < 128; i++) {
+		n += (size_t)snprintf(text + n, sizeof(text) - n, "]}");
+	}
+	snprintf(text + n, sizeof(text) - n, "]}}");
+	return text;
+}
+
 static int connect_to(const struct daemon *d, const char *name,
                       struct bc_client **c)
 {
@@ -550,6 +589,22 @@ static void refusals_are_made_before_sending(void)
 	/* A legal move still passes on that scene. */
 	CHECK_EQ_INT(rc, 0);
 	CHECK(rc || applied(a, &r) == 0);
+
+	/* A regroup that would make evaluation need a deeper stack. */
+	REQUIRE(bc_client_load_scene_file(
+	            a, write_scene("right.json", right_nested_scene()), NULL,
+	            NULL, &ei) == 0);
+	out = bc_client_info(a)->msgs_out;
+	rc = bc_model_move(
+	    a, &(struct bc_model_move){.node = 2, .parent = DEEPEST_UNION}, &r,
+	    &ei);
+	refused(a, rc, BC_EDEPTH, &ei, out, "stack of 131 entries");
+	/* One level up it fits. */
+	rc = bc_model_move(
+	    a, &(struct bc_model_move){.node = 2, .parent = DEEPEST_UNION - 2},
+	    &r, &ei);
+	CHECK_EQ_INT(rc, 0);
+	CHECK(rc || applied(a, &r) == 0);
 	bc_client_destroy(a);
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
@@ -680,6 +735,32 @@ static void the_daemon_refuses_the_same_edits_sent_raw(void)
 		CHECK_EQ_INT(send_raw_op(a, BC_PROTO_EDIT_REPLACE, 100, &deep),
 		             BC_EDEPTH);
 		bc_proto_buf_finish(&deep);
+	}
+	/* A regroup under the deepest operator of a tree whose evaluation
+	 * already needs the longest stack. */
+	REQUIRE(bc_client_load_scene_file(
+	            a, write_scene("rawright.json", right_nested_scene()), NULL,
+	            NULL, &ei) == 0);
+	{
+		struct bc_proto_buf two;
+		struct bc_proto_edit_op ops[2] = {
+		    {.kind = BC_PROTO_EDIT_REMOVE, .node = 2},
+		    {.kind = BC_PROTO_EDIT_INSERT,
+		     .node = DEEPEST_UNION,
+		     .position = 2}};
+		static const float at[3] = {0}, q[4] = {0, 0, 0, 1};
+		static const float radius = 0.2f;
+		bc_proto_buf_init(&two, 0);
+		bc_proto_scene_begin(&two, NULL, 3);
+		bc_proto_scene_op(&two, BC_OP_UNION, 2, 0, 0, 2);
+		bc_proto_scene_prim(&two, BC_PRIM_SPHERE, 3, at, q, NULL, 1,
+		                    &radius);
+		bc_proto_scene_prim(&two, BC_PRIM_SPHERE, 4, at, q, NULL, 1,
+		                    &radius);
+		ops[1].subtree = (struct bc_proto_bytes){
+		    .ptr = two.data, .len = (uint32_t)two.len};
+		CHECK_EQ_INT(send_raw_edit(a, ops, 2), BC_EDEPTH);
+		bc_proto_buf_finish(&two);
 	}
 	/* The connection is still good: a legal edit applies. */
 	CHECK_EQ_INT(send_raw_op(a, BC_PROTO_EDIT_INSERT, 1, &t), 0);
