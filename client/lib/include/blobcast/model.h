@@ -205,9 +205,10 @@ BC_API int bc_model_duplicate(struct bc_client *c,
                               struct bc_errinfo *ei);
 
 /* Makes operator node an operator of kind (an operator name, sharp or
- * smooth) with blend (smooth kinds; 0: the node's blend when it is smooth,
- * else BC_MODEL_DEFAULT_BLEND) and range (smooth kinds; 0: the default,
- * 1.25 blend): one SET. A sharp kind takes blend and range to 0. */
+ * smooth) with blend and range: one SET. For a smooth kind, blend 0 keeps
+ * the node's blend when it is smooth (else BC_MODEL_DEFAULT_BLEND), and
+ * range 0 keeps its range when the blend is kept, else asks for the
+ * default (PROTOCOL.md 8); a sharp kind takes blend and range to 0. */
 BC_API int bc_model_set_operator(struct bc_client *c, uint32_t node,
                                  const char *kind, float blend, float range,
                                  struct bc_model_result *out,
