@@ -641,6 +641,11 @@ static int add_parent(const struct bc_tree *t, uint32_t parent, uint32_t *out,
 		p = bc_tree_child(t, p, 0);
 		cls = classify(t, p, NULL, NULL, NULL);
 	}
+	if (!parent && cls == NODE_PRIM) {
+		/* No operator at the top: beside the root, in a new union. */
+		*out = 0;
+		return 0;
+	}
 	switch (cls) {
 	case NODE_NONE:
 		return no_node(p, ei);
@@ -681,6 +686,56 @@ static int check_position(const struct bc_tree *t, uint32_t parent, bool has,
 
 /* ---- the actions ---------------------------------------------------------------- */
 
+/* Emits the node nn with id first (and the primitives it starts with,
+ * first + 1 ...) into the builder sub, placed around pos. */
+static int put_new(struct bc_tree *sub, const struct new_node *nn,
+                   uint32_t first, const struct bc_prim_data *child,
+                   const float pos[3], const float right[3],
+                   struct bc_errinfo *ei)
+{
+	float half = 0.5f * BC_MODEL_PAIR_SPACING;
+	int rc;
+	if (nn->cls == NODE_PRIM) {
+		return put_placed(sub, first, nn->p, nn->has_translate, pos,
+		                  right, 0.0f, ei);
+	}
+	if (nn->cls == NODE_UNARY) {
+		rc = bc_tree_push_unary(sub, first, &nn->u, ei);
+		rc = rc ? rc
+		        : put_placed(sub, first + 1, *child, false, pos, right,
+		                     0.0f, ei);
+		return rc ? rc : bc_tree_pop_op(sub, ei);
+	}
+	rc = bc_tree_push_op(sub, first, &nn->op, ei);
+	rc = rc ? rc
+	        : put_placed(sub, first + 1, *child, false, pos, right, -half,
+	                     ei);
+	rc = rc ? rc
+	        : put_placed(sub, first + 2, *child, false, pos, right, half,
+	                     ei);
+	return rc ? rc : bc_tree_pop_op(sub, ei);
+}
+
+/* The root with the new node beside it, under a new union of id uid (the
+ * new node at position pos, 0 or 1): a REPLACE of the root. */
+static int put_beside_root(struct bc_tree *sub, const struct bc_tree *t,
+                           uint32_t uid, uint32_t at, const struct new_node *nn,
+                           uint32_t first, const struct bc_prim_data *child,
+                           const float pos[3], const float right[3],
+                           struct bc_errinfo *ei)
+{
+	const struct bc_op_data u = {.kind = BC_OP_UNION};
+	int rc = bc_tree_push_op(sub, uid, &u, ei);
+	if (!rc && at == 0) {
+		rc = put_new(sub, nn, first, child, pos, right, ei);
+	}
+	rc = rc ? rc : put_subtree(sub, t, bc_tree_root(t), false, 0, NULL, ei);
+	if (!rc && at == 1) {
+		rc = put_new(sub, nn, first, child, pos, right, ei);
+	}
+	return rc ? rc : bc_tree_pop_op(sub, ei);
+}
+
 int bc_model_add(struct bc_client *c, const struct bc_model_add *a,
                  struct bc_model_result *out, struct bc_errinfo *ei)
 {
@@ -692,51 +747,52 @@ int bc_model_add(struct bc_client *c, const struct bc_model_add *a,
 	struct new_node nn;
 	struct bc_camera cam;
 	struct survey sv;
-	float pos[3], right[3], half = 0.5f * BC_MODEL_PAIR_SPACING;
-	uint32_t parent, first, nids;
+	float pos[3], right[3];
+	uint32_t parent, first, nids, own;
 	int rc;
 	out = out ? out : &dummy;
 	reset(out);
 	if ((rc = mirror(c, &t, &cam, ei)) ||
-	    (rc = add_parent(t, a->parent, &parent, ei)) ||
-	    (rc = check_position(t, parent, a->has_position, a->position,
-	                         &op.position, ei)) ||
-	    (rc = new_node(a->kind, a->kv, a->nkv, &nn, ei)) ||
+	    (rc = add_parent(t, a->parent, &parent, ei))) {
+		return rc;
+	}
+	if (parent != 0) {
+		rc = check_position(t, parent, a->has_position, a->position,
+		                    &op.position, ei);
+	} else if (a->has_position && a->position > 1) {
+		rc = bc_errinfo_set(ei, BC_ERANGE,
+		                    "position %u: the scene's root is not an "
+		                    "operator, so the new node goes beside it "
+		                    "in a new union: give 0 (before it) or 1",
+		                    a->position);
+	} else {
+		op.position = a->has_position ? a->position : 1u;
+	}
+	if (rc || (rc = new_node(a->kind, a->kv, a->nkv, &nn, ei)) ||
 	    (rc = child_prim(a->child_kind, &child, ei)) ||
 	    (rc = survey(t, 0, &sv, ei))) {
 		return rc;
 	}
-	nids = nn.cls == NODE_PRIM ? 1u : nn.cls == NODE_UNARY ? 2u : 3u;
+	own = nn.cls == NODE_PRIM ? 1u : nn.cls == NODE_UNARY ? 2u : 3u;
+	nids = own + (parent == 0 ? 1u : 0u);
 	if ((rc = fresh_ids(c, t, sv.max_id, nids, &first, ei))) {
 		return rc;
 	}
 	*out = (struct bc_model_result){.node = first,
 	                                .first_id = first,
 	                                .nids = nids,
-	                                .parent = parent,
+	                                .parent = parent ? parent : first + own,
 	                                .position = op.position};
-	op.node = parent;
 	placement(&cam, a->has_at, a->at, pos, right);
-	if ((rc = new_builder(&sub, ei))) {
-		/* send_built() reports it. */
-	} else if (nn.cls == NODE_PRIM) {
-		rc = put_placed(sub, first, nn.p, nn.has_translate, pos, right,
-		                0.0f, ei);
-	} else if (nn.cls == NODE_UNARY) {
-		rc = bc_tree_push_unary(sub, first, &nn.u, ei);
-		rc = rc ? rc
-		        : put_placed(sub, first + 1, child, false, pos, right,
-		                     0.0f, ei);
-		rc = rc ? rc : bc_tree_pop_op(sub, ei);
-	} else {
-		rc = bc_tree_push_op(sub, first, &nn.op, ei);
-		rc = rc ? rc
-		        : put_placed(sub, first + 1, child, false, pos, right,
-		                     -half, ei);
-		rc = rc ? rc
-		        : put_placed(sub, first + 2, child, false, pos, right,
-		                     half, ei);
-		rc = rc ? rc : bc_tree_pop_op(sub, ei);
+	rc = new_builder(&sub, ei);
+	if (!rc && parent == 0) {
+		op.kind = BC_PROTO_EDIT_REPLACE;
+		op.node = bc_tree_root(t);
+		rc = put_beside_root(sub, t, first + own, op.position, &nn,
+		                     first, &child, pos, right, ei);
+	} else if (!rc) {
+		op.node = parent;
+		rc = put_new(sub, &nn, first, &child, pos, right, ei);
 	}
 	return send_built(c, t, sub, rc, &op, 1, out, ei);
 }

@@ -570,8 +570,27 @@ static void refusals_are_made_before_sending(void)
 	refused(a, rc, BC_EINVAL, &ei, out, "up to the root");
 	rc = bc_model_remove(a, 2, &r, &ei);
 	refused(a, rc, BC_EINVAL, &ei, out, "up to the root");
-	rc = bc_model_add(a, &(struct bc_model_add){.kind = "sphere"}, &r, &ei);
-	refused(a, rc, BC_EINVAL, &ei, out, "wrap it in one first");
+	rc = bc_model_add(a,
+	                  &(struct bc_model_add){.kind = "sphere",
+	                                         .has_position = true,
+	                                         .position = 2},
+	                  &r, &ei);
+	refused(a, rc, BC_ERANGE, &ei, out, "give 0 (before it) or 1");
+	/* With no operator at the top, a new node goes beside the root in a
+	 * new union (its id the last of the run), as one REPLACE. */
+	rc = bc_model_add(a, &(struct bc_model_add){.kind = "box"}, &r, &ei);
+	CHECK_EQ_INT(rc, 0);
+	CHECK_EQ_INT(r.nids, 2);
+	CHECK_EQ_INT(r.node, r.first_id);
+	CHECK_EQ_INT(r.parent, r.first_id + 1);
+	CHECK_EQ_INT(r.position, 1);
+	CHECK(rc || applied(a, &r) == 0);
+	CHECK_EQ_INT(bc_tree_root(mirror_of(a)), r.parent);
+	CHECK_EQ_INT(op_kind(mirror_of(a), r.parent), BC_OP_UNION);
+	CHECK_EQ_INT(bc_tree_child(mirror_of(a), r.parent, 0), 1);
+	CHECK_EQ_INT(
+	    prim_kind(mirror_of(a), bc_tree_child(mirror_of(a), r.parent, 1)),
+	    BC_PRIM_BOX);
 
 	/* 32 domain nodes on a path already: one more is over the limit. */
 	REQUIRE(bc_client_load_scene_file(

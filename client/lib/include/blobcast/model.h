@@ -88,7 +88,8 @@ struct bc_model_result {
 	uint32_t node;
 	/* The ids the action created: first_id .. first_id + nids - 1, in
 	 * the pre-order of the new subtree (add: the node, then its new
-	 * primitives; wrap: the new node, then a new primitive beside the
+	 * primitives, then the union made to hold it beside the root if
+	 * one was; wrap: the new node, then a new primitive beside the
 	 * wrapped one; duplicate: the copy). nids 0: none. */
 	uint32_t first_id, nids;
 	/* Where node is once applied: its parent (0: it is the root) and
@@ -112,10 +113,14 @@ struct bc_model_add {
 	const char *const *kv;
 	size_t nkv;
 	/* The operator to add under; 0: the root, or the operator under
-	 * the unary nodes at the top of the scene. */
+	 * the unary nodes at the top of the scene, or, when there is none
+	 * (the scene is one primitive, perhaps inside unary nodes), beside
+	 * the root in a new union: one REPLACE of the root, the union's id
+	 * the last of the new ids and out->parent. */
 	uint32_t parent;
 	/* The child index to insert at (0 first, up to the parent's child
-	 * count); without has_position: after the last child. */
+	 * count; beside the root, 0 before it or 1 after it); without
+	 * has_position: after the last child. */
 	bool has_position;
 	uint32_t position;
 	/* Where new primitives are placed when kv gives no translate= (an
@@ -128,7 +133,8 @@ struct bc_model_add {
 	const char *child_kind;
 };
 
-/* Adds a->kind under a->parent: one INSERT. */
+/* Adds a->kind under a->parent: one INSERT (one REPLACE of the root when
+ * the scene has no operator to add under). */
 BC_API int bc_model_add(struct bc_client *c, const struct bc_model_add *a,
                         struct bc_model_result *out, struct bc_errinfo *ei);
 
