@@ -8,6 +8,7 @@
  */
 #include <math.h>
 
+#include "blobcast/alloc.h"
 #include "blobcast/model.h"
 #include "blobcast/scene.h"
 #include "test.h" /* before daemon.h: its test runner needs it */
@@ -842,6 +843,73 @@ static void two_editors_adding_at_once_one_is_refused_whole(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
+/* Runs action i of allocation_failures_free_everything on c. */
+static int run_action(struct bc_client *c, int i, struct bc_model_result *r,
+                      struct bc_errinfo *ei)
+{
+	switch (i) {
+	case 0:
+		return bc_model_add(
+		    c,
+		    &(struct bc_model_add){
+		        .kind = "smooth_union",
+		        .kv = (const char *const[]){"blend=0.2"},
+		        .nkv = 1},
+		    r, ei);
+	case 1:
+		return bc_model_wrap(
+		    c, &(struct bc_model_wrap){.node = 6, .kind = "difference"},
+		    r, ei);
+	case 2:
+		return bc_model_move(
+		    c, &(struct bc_model_move){.node = 7, .parent = 1}, r, ei);
+	case 3:
+		return bc_model_duplicate(
+		    c, &(struct bc_model_duplicate){.node = 4}, r, ei);
+	default:
+		return bc_model_remove(c, 2, r, ei);
+	}
+}
+
+/* Each action with its Nth allocation failing, for every N until it
+ * succeeds: every failure is BC_ENOMEM, sends nothing and frees what it
+ * took (LeakSanitizer checks at exit), and the connection goes on. */
+static void allocation_failures_free_everything(void)
+{
+	struct daemon d = {0};
+	struct bc_client *a = NULL;
+	struct bc_errinfo ei = {0};
+	struct bc_model_result r;
+	char dir[160];
+	snprintf(dir, sizeof(dir), "%s/alloc", base_dir);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	REQUIRE(connect_to(&d, "grace", &a) == 0);
+	REQUIRE(enter(a, "alloc", write_scene("alloc.json", SCENE)) == 0);
+	for (int i = 0; i < 5; i++) {
+		unsigned long n;
+		int rc = -1;
+		for (n = 1; n < 1000 && rc != 0; n++) {
+			uint64_t out = bc_client_info(a)->msgs_out;
+			bc_alloc_fail_after(n);
+			rc = run_action(a, i, &r, &ei);
+			bc_alloc_fail_after(0);
+			if (rc) {
+				CHECK_EQ_INT(rc, BC_ENOMEM);
+				CHECK_EQ_INT(bc_client_info(a)->msgs_out, out);
+				CHECK_EQ_INT(r.seq, 0);
+			}
+		}
+		CHECK_EQ_INT(rc, 0);
+		/* Every action allocates: a scratch tree, a walk, a
+		 * builder, the copy the dry run applies to. */
+		CHECK(n > 4);
+		CHECK(rc || applied(a, &r) == 0);
+	}
+	CHECK_EQ_INT(bc_client_error(a, NULL), 0);
+	bc_client_destroy(a);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
 static const struct bc_test tests[] = {
     {"every_action_is_one_edit_seen_by_every_member",
      every_action_is_one_edit_seen_by_every_member},
@@ -850,6 +918,8 @@ static const struct bc_test tests[] = {
      the_daemon_refuses_the_same_edits_sent_raw},
     {"two_editors_adding_at_once_one_is_refused_whole",
      two_editors_adding_at_once_one_is_refused_whole},
+    {"allocation_failures_free_everything",
+     allocation_failures_free_everything},
 };
 
 int main(int argc, char **argv)
