@@ -47,6 +47,9 @@
  * (a level above 0 or INCOMPLETE: the daemon stopped refining it, or the
  * --screenshot-wait ran out); 1 and 2 are failures and bad options. */
 #define BC_VIEWER_EXIT_UNFINISHED 5
+/* Bytes of the text of the panel along the bottom (the add palette or the
+ * keys). */
+#define BC_VIEWER_PANEL_TEXT 2048
 /* Largest number of vertices of overlay text. */
 #define BC_VIEWER_TEXT_FLOATS (64u * 1024u)
 
@@ -176,6 +179,9 @@ struct bc_viewer_app {
 	bool screenshot_now;
 	unsigned shots;
 
+	/* H: the keys listed along the bottom of the overlay. */
+	bool help;
+
 	char status[200];
 	double status_at, stats_at;
 	float *text;
@@ -185,6 +191,10 @@ struct bc_viewer_app {
 	pthread_t watcher;
 	bool watching;
 	atomic_int fired; /* it woke the loop and waits to be re-armed */
+
+	/* Joined as a viewer because the token grants viewing only (no
+	 * --role given): the overlay says why edits are off. */
+	bool view_only_token;
 
 	bool offline; /* the connection failed; the status says why */
 	bool gave_up; /* ... for a reason a retry would meet again */
@@ -205,6 +215,13 @@ void bc_viewer_status(struct bc_viewer_app *a, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)))
 #endif
     ;
+
+/* Whether this window may edit (it joined as an editor). When not, says
+ * on the overlay that `what` (a sentence's subject: "undo", "adding a
+ * shape") is off in a view-only window, and why. */
+bool bc_viewer_may_edit(struct bc_viewer_app *a, const char *what);
+/* The overlay's words for a view-only window, "" for an editor. */
+const char *bc_viewer_view_only_text(const struct bc_viewer_app *a);
 
 /* net.c */
 /* Handles messages already received or readable, at most
@@ -252,6 +269,9 @@ void bc_viewer_drag_step(struct bc_viewer_app *a, bool final);
 /* The PICK answer for a pending press arrived (node 0: nothing hit). */
 void bc_viewer_pick_answer(struct bc_viewer_app *a, uint32_t seq, uint32_t node,
                            const float position[3]);
+/* The text of the panel along the bottom of the window: the keys (H).
+ * Returns false when there is none to show. */
+bool bc_viewer_lower_panel(struct bc_viewer_app *a, char *out, size_t n);
 /* Window pixels to view pixels. */
 void bc_viewer_to_view(struct bc_viewer_app *a, double x, double y, float *vx,
                        float *vy);

@@ -226,8 +226,7 @@ static void wheel_edit(struct bc_viewer_app *a, enum bc_viewer_wheel what,
 	struct bc_op_data op;
 	float f = expf((float)notches * 0.1f);
 	struct bc_viewer_edit *e = &a->wheel.edit;
-	if (!is_editor(a)) {
-		bc_viewer_status(a, "viewers cannot edit");
+	if (!bc_viewer_may_edit(a, "editing with the wheel")) {
 		return;
 	}
 	if (!a->selected || !t || !bc_tree_get(t, a->selected, &p, NULL) ||
@@ -333,6 +332,49 @@ static void on_scroll(GLFWwindow *w, double xoff, double yoff)
 	a->cam_final_at = bc_viewer_now_ms() + BC_VIEWER_WHEEL_END_MS;
 }
 
+/* Home: zoom to fit the whole scene (id 0) or node id's subtree, from the
+ * camera's own direction. */
+static void frame_node(struct bc_viewer_app *a, uint32_t id)
+{
+	const struct bc_tree *t = bc_client_scene(a->c, NULL);
+	float lo[3], hi[3];
+	uint32_t node = id ? id : t ? bc_tree_root(t) : 0;
+	if (!node || !bc_viewer_node_box(t, node, lo, hi)) {
+		bc_viewer_status(a, id ? "select a shape to frame first"
+		                       : "no scene to frame yet");
+		return;
+	}
+	bc_viewer_frame_box(&a->cam, lo, hi,
+	                    a->view_h ? (float)a->view_w / (float)a->view_h
+	                              : 1.0f);
+	bc_viewer_camera_changed(a, false);
+	if (id) {
+		bc_viewer_status(a, "framed #%u", id);
+	} else {
+		bc_viewer_status(a, "framed the whole scene");
+	}
+}
+
+/* H: what every key does, as the overlay lists it. */
+static const char key_help[] =
+    "Keys (H hides)\n"
+    "drag: orbit, or move the shape under the pointer; right drag: pan\n"
+    "wheel: zoom; Shift/Ctrl/Alt+wheel: size, blend, unary value\n"
+    "R: the session's camera   Home: fit the whole scene\n"
+    "Shift+Home: fit the selection\n"
+    "Ctrl+Z: undo   Ctrl+Shift+Z, Ctrl+Y: redo\n"
+    "F: follow the presenter   Shift+F: present\n"
+    "S: snapshot   P: screenshot   O: overlay   Q, Esc: quit";
+
+bool bc_viewer_lower_panel(struct bc_viewer_app *a, char *out, size_t n)
+{
+	if (!a->help || !n) {
+		return false;
+	}
+	snprintf(out, n, "%s", key_help);
+	return true;
+}
+
 static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
 {
 	struct bc_viewer_app *a = glfwGetWindowUserPointer(w);
@@ -365,9 +407,17 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
 		a->o.overlay = !a->o.overlay;
 		a->redraw = true;
 		break;
+	case GLFW_KEY_H:
+		a->help = !a->help;
+		a->redraw = true;
+		break;
 	case GLFW_KEY_R:
 		a->cam = a->scene_cam;
 		bc_viewer_camera_changed(a, false);
+		bc_viewer_status(a, "the session's camera");
+		break;
+	case GLFW_KEY_HOME:
+		frame_node(a, (mods & GLFW_MOD_SHIFT) ? a->selected : 0);
 		break;
 	case GLFW_KEY_F:
 		if (mods & GLFW_MOD_SHIFT) {

@@ -241,9 +241,7 @@ void bc_viewer_undo(struct bc_viewer_app *a, bool redo)
 {
 	struct bc_msg m = {.type = redo ? BC_MSG_REDO : BC_MSG_UNDO};
 	uint32_t seq = 0;
-	if (bc_client_info(a->c)->role != BC_PROTO_ROLE_EDITOR) {
-		bc_viewer_status(a, "viewers cannot %s",
-		                 redo ? "redo" : "undo");
+	if (!bc_viewer_may_edit(a, redo ? "redo" : "undo")) {
 		return;
 	}
 	if (bc_client_send(a->c, &m, &seq)) {
