@@ -252,26 +252,40 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o,
 	    .usage = "blobcast-view [options]",
 	    .about = "Shows a blobcast session in a window and edits it "
 	             "with the mouse.",
-	    .footer = "Mouse: drag orbits, or moves the shape under the "
-	              "pointer; right drag\nor Shift-drag pans; the wheel "
-	              "zooms, Shift+wheel sizes the selected\nshape, "
-	              "Ctrl+wheel changes its operator's blend, Alt+wheel "
-	              "the\nvalue of the nearest unary node above it (offset "
-	              "amount, onion\nthickness, elongate half_extents, twist "
-	              "or bend rate, repeat\nspacing, scale factor; mirrors "
-	              "are passed over). Keys: S snapshot,\nP screenshot, O "
-	              "overlay, R scene camera, Q or Escape quit;\nCtrl-Z "
-	              "undo, Ctrl-Shift-Z or Ctrl-Y "
-	              "redo; F follow the presenter\n(this window shows what "
-	              "the presenter's camera sees, at its own size;\nmoving "
-	              "the camera or F again stops), Shift-F present "
-	              "(members who\nfollow see this window's camera; "
-	              "Shift-F again stops). The overlay\nnames who presents "
-	              "and whether this window follows.\n\nA lost connection "
-	              "is retried (after 0.25 s, doubling up to 4 s)\nand the "
-	              "session joined again; a refused token or role or a\n"
-	              "missing session stop the retries. With --screenshot a "
-	              "lost\nconnection exits 1 instead.",
+	    .footer =
+	        "Mouse: drag orbits, or moves the shape under the pointer; "
+	        "right drag\nor Shift-drag pans; the wheel zooms, Shift+wheel "
+	        "sizes the selected\nshape, Ctrl+wheel changes its operator's "
+	        "blend, Alt+wheel the\nvalue of the nearest unary node above "
+	        "it (offset amount, onion\nthickness, elongate half_extents, "
+	        "twist or bend rate, repeat\nspacing, scale factor; mirrors "
+	        "are passed over).\n\n"
+	        "Keys: H lists them on the overlay. Home zooms to fit the "
+	        "whole\nscene (Shift+Home the selection), R goes back to the "
+	        "session's\ncamera; S snapshot, P screenshot, O overlay, Q or "
+	        "Escape quit;\nCtrl-Z undo, Ctrl-Shift-Z or Ctrl-Y redo; F "
+	        "follow the presenter\n(this window shows what the "
+	        "presenter's camera sees, at its own size;\nmoving the camera "
+	        "or F again stops), Shift-F present (members who\nfollow see "
+	        "this window's camera; Shift-F again stops).\n\n"
+	        "Modelling, one edit each (every member sees it at once, and "
+	        "it "
+	        "undoes\nas one step): Up and Down select the parent of the "
+	        "selection "
+	        "and back;\nA opens the add palette (Up/Down, PgUp/PgDn, a "
+	        "letter "
+	        "jumps,\nEnter chooses, Escape closes): a shape or an operator "
+	        "is added\nunder the selection's operator at the centre of the "
+	        "view, a unary\nkind wraps the selection (W opens the palette "
+	        "there); Delete or X\ndeletes the selection, D duplicates it; "
+	        "M marks the selected\noperator and G moves the selection "
+	        "under it.\n\n"
+	        "A token that grants viewing only opens the window view-only "
+	        "(the\noverlay says so; edit keys are off) unless --role "
+	        "editor asks\nfor more. A lost connection is retried (after "
+	        "0.25 s, doubling up\nto 4 s) and the session joined again; a "
+	        "refused token or role or a\nmissing session stop the retries. "
+	        "With --screenshot a lost\nconnection exits 1 instead.",
 	    .opts = opts};
 	*o = (struct bc_viewer_opts){
 	    .session = "default",
@@ -412,9 +426,13 @@ static void fmt_selection(struct bc_viewer_app *a, char *out, size_t n)
 	struct bc_unary u;
 	uint32_t parent;
 	int k, len;
-	if (!a->selected || !t || !bc_tree_get(t, a->selected, &p, NULL) ||
-	    !(info = bc_prim_info(p.kind))) {
+	if (!a->selected || !t || !bc_tree_get(t, a->selected, &p, NULL)) {
 		snprintf(out, n, "click a shape to select it");
+		return;
+	}
+	if (!(info = bc_prim_info(p.kind))) {
+		/* An operator or unary node, selected with Up. */
+		bc_viewer_node_text(t, a->selected, out, n);
 		return;
 	}
 	len = snprintf(out, n, "#%u %s", a->selected, info->name);
@@ -564,6 +582,14 @@ static void draw_overlay(struct bc_viewer_app *a, uint32_t fw, uint32_t fh,
 	    a->last.nrects == 1 ? "" : "s", (unsigned long long)a->last.order,
 	    refining[0] ? "  " : "", refining, sel,
 	    bc_viewer_roster_text(&a->roster, who, sizeof(who)));
+	if (a->mark) {
+		char words[96];
+		size_t len = strlen(text);
+		snprintf(text + len, sizeof(text) - len,
+		         "\nregroup parent %s (G moves the selection under it)",
+		         bc_viewer_node_text(bc_client_scene(a->c, NULL),
+		                             a->mark, words, sizeof(words)));
+	}
 	if (bc_viewer_view_only_text(a)[0]) {
 		size_t len = strlen(text);
 		snprintf(text + len, sizeof(text) - len,
@@ -580,21 +606,30 @@ static void draw_overlay(struct bc_viewer_app *a, uint32_t fw, uint32_t fh,
 	draw_tag(a, fw, fh, scale, refining, now);
 }
 
-/* Outlines the selected primitive's bounding box, projected with our
- * camera (the one the picture was rendered for, or about to be). */
-static void draw_highlight(struct bc_viewer_app *a, uint32_t fw, uint32_t fh)
+/* Outlines node id in colour rgba, projected with our camera (the one the
+ * picture was rendered for, or about to be): a primitive's bounding box,
+ * turned with it, or the world box around the ABVs of a subtree. */
+static void outline(struct bc_viewer_app *a, uint32_t id, uint32_t fw,
+                    uint32_t fh, const float rgba[4])
 {
 	const struct bc_tree *t = bc_client_scene(a->c, NULL);
 	const float dark[4] = {0.0f, 0.0f, 0.0f, 0.7f};
-	const float bright[4] = {0.95f, 0.72f, 0.29f, 1.0f};
 	struct bc_prim_data p;
-	float corners[8][3], px[8][2], lines[48], shadow[48];
-	if (!a->selected || !t || !a->view_w ||
-	    !bc_tree_get(t, a->selected, &p, NULL) ||
-	    p.kind == BC_PRIM_INVALID) {
+	float corners[8][3], px[8][2], lines[48], shadow[48], lo[3], hi[3];
+	if (!id || !t || !a->view_w || !bc_tree_get(t, id, &p, NULL)) {
 		return;
 	}
-	bc_viewer_box_corners(&p, corners);
+	if (p.kind != BC_PRIM_INVALID) {
+		bc_viewer_box_corners(&p, corners);
+	} else if (bc_viewer_node_box(t, id, lo, hi)) {
+		for (int k = 0; k < 8; k++) {
+			for (int i = 0; i < 3; i++) {
+				corners[k][i] = ((k >> i) & 1) ? hi[i] : lo[i];
+			}
+		}
+	} else {
+		return;
+	}
 	for (int i = 0; i < 8; i++) {
 		float v[3];
 		if (!bc_viewer_project(&a->cam, a->view_w, a->view_h,
@@ -614,7 +649,18 @@ static void draw_highlight(struct bc_viewer_app *a, uint32_t fw, uint32_t fh)
 		}
 	}
 	bc_viewer_gl_draw(&a->gl, GL_LINES, shadow, 24, dark);
-	bc_viewer_gl_draw(&a->gl, GL_LINES, lines, 24, bright);
+	bc_viewer_gl_draw(&a->gl, GL_LINES, lines, 24, rgba);
+}
+
+/* The selection in amber, the regroup parent (M) in blue. */
+static void draw_highlight(struct bc_viewer_app *a, uint32_t fw, uint32_t fh)
+{
+	const float amber[4] = {0.95f, 0.72f, 0.29f, 1.0f};
+	const float blue[4] = {0.35f, 0.7f, 1.0f, 1.0f};
+	if (a->mark != a->selected) {
+		outline(a, a->mark, fw, fh, blue);
+	}
+	outline(a, a->selected, fw, fh, amber);
 }
 
 /* Writes the back buffer (before the swap) to path. */
@@ -927,6 +973,8 @@ static void reconnect(struct bc_viewer_app *a, double now)
 	a->c = c;
 	a->roster = roster;
 	bc_viewer_edits_init(&a->edits);
+	a->model_seq = 0;
+	a->model_select = 0;
 	a->drag.mode = BC_VIEWER_DRAG_NONE;
 	a->wheel.what = BC_VIEWER_WHEEL_NONE;
 	a->snapshot_seq = 0;

@@ -283,6 +283,11 @@ bool bc_viewer_edits_ready(const struct bc_viewer_edits *q);
 /* The pending edit was sent as seq at now_ms. */
 void bc_viewer_edits_sent(struct bc_viewer_edits *q, uint32_t seq,
                           double now_ms);
+/* An EDIT built elsewhere (a modelling action: one structural edit) was
+ * sent as seq at now_ms: its answer and its first frame are matched like
+ * the queue's own, and the pending edit stays. */
+void bc_viewer_edits_track(struct bc_viewer_edits *q, uint32_t seq,
+                           double now_ms);
 /* This client's EDIT seq was applied with order. Returns true when it was
  * the one in flight (a pending edit may then go). */
 bool bc_viewer_edits_applied(struct bc_viewer_edits *q, uint32_t seq,

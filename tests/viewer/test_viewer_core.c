@@ -873,16 +873,41 @@ static void test_edits_one_in_flight(void)
 }
 
 /* A refused edit frees the slot and is never measured. */
+/* A fresh queue and meter with an interacting edit in flight (seq 3, sent
+ * at 0 ms) and the next one pending. */
+static void one_in_flight(struct bc_viewer_edits *q, struct bc_viewer_meter *m)
+{
+	struct bc_viewer_edit e = move_edit(5, 1.0f, true);
+	bc_viewer_edits_init(q);
+	bc_viewer_meter_init(m);
+	bc_viewer_edits_queue(q, &e);
+	bc_viewer_edits_sent(q, 3, 0.0);
+	bc_viewer_edits_queue(q, &e);
+}
+
+/* A modelling EDIT sent around the queue is matched to its answer and
+ * its frame like the queue's own, and leaves a pending drag edit alone. */
+static void test_edits_track_leaves_the_pending_edit(void)
+{
+	struct bc_viewer_edits q;
+	struct bc_viewer_meter m;
+	one_in_flight(&q, &m);
+	bc_viewer_edits_track(&q, 4, 1.0);
+	CHECK(q.has_pending && q.inflight == 3);
+	CHECK(!bc_viewer_edits_applied(&q, 4, 7));
+	CHECK(q.has_pending && !bc_viewer_edits_ready(&q));
+	CHECK_EQ_INT(bc_viewer_edits_frame(&q, 7, 21.0, &m), 1);
+	CHECK_NEAR(m.last_latency, 20.0, 1e-9);
+	bc_viewer_edits_track(&q, 5, 2.0);
+	CHECK(bc_viewer_edits_refused(&q, 5));
+	CHECK(!bc_viewer_edits_refused(&q, 5));
+}
+
 static void test_edits_refused(void)
 {
 	struct bc_viewer_edits q;
 	struct bc_viewer_meter m;
-	struct bc_viewer_edit e = move_edit(5, 1.0f, true);
-	bc_viewer_edits_init(&q);
-	bc_viewer_meter_init(&m);
-	bc_viewer_edits_queue(&q, &e);
-	bc_viewer_edits_sent(&q, 3, 0.0);
-	bc_viewer_edits_queue(&q, &e);
+	one_in_flight(&q, &m);
 	CHECK(!bc_viewer_edits_ready(&q));
 	CHECK(!bc_viewer_edits_refused(&q, 4));
 	CHECK(bc_viewer_edits_refused(&q, 3));
@@ -1550,6 +1575,8 @@ static const struct bc_test tests[] = {
     {"meter_counts_the_last_second", test_meter_counts_the_last_second},
     {"edits_one_in_flight", test_edits_one_in_flight},
     {"edits_refused", test_edits_refused},
+    {"edits_track_leaves_the_pending_edit",
+     test_edits_track_leaves_the_pending_edit},
     {"edits_bounded", test_edits_bounded},
     {"frames_rectangles_and_downscale", test_frames_rectangles_and_downscale},
     {"frames_levels", test_frames_levels},

@@ -15,36 +15,8 @@
 # Exits 77 (skipped) when xvfb-run or one of the programs is missing.
 set -u
 
-abspath() {
-  case $1 in
-    /*|"") echo "$1" ;;
-    *) echo "$(pwd)/$1" ;;
-  esac
-}
-VIEW=$(abspath "${1:-}")
-DAEMON=$(abspath "${2:-}")
-CHECK=$(abspath "${3:-}")
-XPOKE=$(abspath "${4:-}")
-
-if [ "${BC_FIT_INNER:-}" != 1 ]; then
-  for prog in "$VIEW" "$DAEMON" "$CHECK" "$XPOKE"; do
-    if [ -z "$prog" ] || [ ! -x "$prog" ]; then
-      echo "skip: blobcast-view, blobcastd and the test tools must be built"
-      exit 77
-    fi
-  done
-  if ! command -v xvfb-run > /dev/null 2>&1; then
-    echo "skip: xvfb-run not found (Debian package xvfb)"
-    exit 77
-  fi
-  BC_FIT_INNER=1 exec xvfb-run -a -s "-screen 0 640x480x24" \
-    sh "$0" "$VIEW" "$DAEMON" "$CHECK" "$XPOKE"
-fi
-
-# --- inside Xvfb ---------------------------------------------------------------
-. "$(dirname "$0")/../scratch.sh"
-bc_scratch viewer-fit '[ -n "$vpid" ] && kill "$vpid" 2>/dev/null'
 . "$(dirname "$0")/viewer_lib.sh"
+vl_enter viewer-fit "$@"
 
 mkdir -p "$tmp/data/sessions/far"
 cat > "$tmp/data/sessions/far/snap-0.json" <<'JSON'
