@@ -30,6 +30,7 @@
 static int mirror(const struct bc_client *c, const struct bc_tree **t,
                   struct bc_camera *cam, struct bc_errinfo *ei)
 {
+	*t = NULL;
 	if (c->err) {
 		return bc_errinfo_set(ei, c->err, "%s", c->errstr);
 	}
@@ -94,9 +95,7 @@ static const char *kind_name(const struct bc_tree *t, uint32_t id)
 static int no_node(uint32_t id, struct bc_errinfo *ei)
 {
 	return bc_errinfo_set(ei, BC_ENONODE,
-	                      "no node %u in the session's scene (blobcast "
-	                      "nodes lists them)",
-	                      id);
+	                      "no node %u in the session's scene", id);
 }
 
 /* The node a REMOVE or move of id takes: id, or the top of the chain of
@@ -349,12 +348,38 @@ static int unknown_kind(const char *kind, const char *what,
 	char names[400];
 	prim_names(names, sizeof(names));
 	return bc_errinfo_set(ei, BC_EINVAL,
-	                      "unknown %s kind \"%.40s\": a primitive "
-	                      "(%.120s...), an operator (union, "
-	                      "intersection, difference, smooth_...) or a "
-	                      "unary node (offset, onion, elongate, twist, "
-	                      "bend, mirror, repeat, scale)",
-	                      what, kind ? kind : "(none)", names);
+	                      "unknown %s kind \"%.40s\": give a primitive "
+	                      "(%.60s..., docs/primitives.md)%s",
+	                      what, kind ? kind : "(none)", names,
+	                      strcmp(what, "node") == 0
+	                          ? ", an operator (union, smooth_union, "
+	                            "...) or a unary node (offset, twist, "
+	                            "...)"
+	                          : "");
+}
+
+/* A key=value refusal for the scratch node 1 is about the new node:
+ * "node 1 (sphere) has no ..." becomes "a new sphere has no ...", and
+ * "node 1: ..." "the new node: ...". */
+static int about_new(int rc, struct bc_errinfo *ei)
+{
+	const char *lead = "node 1 (", *close;
+	char msg[sizeof(ei->msg)];
+	if (!ei) {
+		return rc;
+	}
+	if (strncmp(ei->msg, "node 1: ", 8) == 0) {
+		snprintf(msg, sizeof(msg), "the new node: %s", ei->msg + 8);
+		return bc_errinfo_set(ei, rc, "%s", msg);
+	}
+	if (strncmp(ei->msg, lead, strlen(lead)) != 0 ||
+	    !(close = strchr(ei->msg, ')'))) {
+		return rc;
+	}
+	snprintf(msg, sizeof(msg), "a new %.*s%s",
+	         (int)(close - ei->msg - strlen(lead)), ei->msg + strlen(lead),
+	         close + 1);
+	return bc_errinfo_set(ei, rc, "%s", msg);
 }
 
 /* Resolves kind and applies kv to a node of that kind: on a scratch tree
@@ -409,6 +434,7 @@ static int new_node(const char *kind, const char *const *kv, size_t nkv,
 			set.fields = fields;
 			rc = bc_edit_apply_op(t, &set, ei);
 		}
+		rc = about_new(rc, ei);
 		for (uint8_t i = 0; !rc && i < set.nfields; i++) {
 			if (fields[i].field == BC_PROTO_FIELD_TRANSLATE) {
 				nn->has_translate = true;
@@ -562,13 +588,44 @@ static int send_ops(struct bc_client *c, const struct bc_tree *t,
 	return 0;
 }
 
-/* Finishes the builder sub and encodes it into *bytes / *len. */
-static int encode_built(struct bc_tree *sub, int rc, uint8_t **bytes,
-                        size_t *len, struct bc_errinfo *ei)
+static void reset(struct bc_model_result *out)
 {
+	memset(out, 0, sizeof(*out));
+}
+
+/* A new builder in *sub (bc_tree_begin done). Returns 0 or BC_ENOMEM. */
+static int new_builder(struct bc_tree **sub, struct bc_errinfo *ei)
+{
+	if (!(*sub = bc_tree_create())) {
+		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+	}
+	return bc_tree_begin(*sub);
+}
+
+/* Ends an action whose last operation carries the subtree built in sub
+ * (rc: how building it went; sub may be NULL after a failure): finishes
+ * and encodes it, checks and sends ops (send_ops), frees sub. out, filled
+ * by the caller, is reset on failure. */
+static int send_built(struct bc_client *c, const struct bc_tree *t,
+                      struct bc_tree *sub, int rc, struct bc_proto_edit_op *ops,
+                      uint32_t nops, struct bc_model_result *out,
+                      struct bc_errinfo *ei)
+{
+	uint8_t *bytes = NULL;
+	size_t len = 0;
 	rc = rc ? rc : bc_tree_end(sub, ei);
-	if (!rc && (rc = bc_scene_encode(sub, NULL, bytes, len))) {
-		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
+	if (!rc && (rc = bc_scene_encode(sub, NULL, &bytes, &len))) {
+		bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
+	}
+	if (!rc) {
+		ops[nops - 1].subtree =
+		    (struct bc_proto_bytes){.ptr = bytes, .len = (uint32_t)len};
+		rc = send_ops(c, t, ops, nops, out, ei);
+	}
+	bc_free(bytes);
+	bc_tree_destroy(sub);
+	if (rc) {
+		reset(out);
 	}
 	return rc;
 }
@@ -622,11 +679,6 @@ static int check_position(const struct bc_tree *t, uint32_t parent, bool has,
 	return 0;
 }
 
-static void reset(struct bc_model_result *out)
-{
-	memset(out, 0, sizeof(*out));
-}
-
 /* ---- the actions ---------------------------------------------------------------- */
 
 int bc_model_add(struct bc_client *c, const struct bc_model_add *a,
@@ -634,15 +686,13 @@ int bc_model_add(struct bc_client *c, const struct bc_model_add *a,
 {
 	struct bc_model_result dummy;
 	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_INSERT};
-	const struct bc_tree *t;
+	const struct bc_tree *t = NULL;
 	struct bc_tree *sub = NULL;
 	struct bc_prim_data child;
 	struct new_node nn;
 	struct bc_camera cam;
 	struct survey sv;
 	float pos[3], right[3], half = 0.5f * BC_MODEL_PAIR_SPACING;
-	uint8_t *bytes = NULL;
-	size_t len = 0;
 	uint32_t parent, first, nids;
 	int rc;
 	out = out ? out : &dummy;
@@ -660,12 +710,16 @@ int bc_model_add(struct bc_client *c, const struct bc_model_add *a,
 	if ((rc = fresh_ids(c, t, sv.max_id, nids, &first, ei))) {
 		return rc;
 	}
-	if (!(sub = bc_tree_create())) {
-		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
-	}
+	*out = (struct bc_model_result){.node = first,
+	                                .first_id = first,
+	                                .nids = nids,
+	                                .parent = parent,
+	                                .position = op.position};
+	op.node = parent;
 	placement(&cam, a->has_at, a->at, pos, right);
-	bc_tree_begin(sub);
-	if (nn.cls == NODE_PRIM) {
+	if ((rc = new_builder(&sub, ei))) {
+		/* send_built() reports it. */
+	} else if (nn.cls == NODE_PRIM) {
 		rc = put_placed(sub, first, nn.p, nn.has_translate, pos, right,
 		                0.0f, ei);
 	} else if (nn.cls == NODE_UNARY) {
@@ -684,23 +738,7 @@ int bc_model_add(struct bc_client *c, const struct bc_model_add *a,
 		                     half, ei);
 		rc = rc ? rc : bc_tree_pop_op(sub, ei);
 	}
-	if (!(rc = encode_built(sub, rc, &bytes, &len, ei))) {
-		op.node = parent;
-		op.subtree.ptr = bytes;
-		op.subtree.len = (uint32_t)len;
-		*out = (struct bc_model_result){.node = first,
-		                                .first_id = first,
-		                                .nids = nids,
-		                                .parent = parent,
-		                                .position = op.position};
-		rc = send_ops(c, t, &op, 1, out, ei);
-	}
-	bc_free(bytes);
-	bc_tree_destroy(sub);
-	if (rc) {
-		reset(out);
-	}
-	return rc;
+	return send_built(c, t, sub, rc, &op, 1, out, ei);
 }
 
 /* The refusal for removing or moving the root (or a chain up to it). */
@@ -729,7 +767,7 @@ int bc_model_remove(struct bc_client *c, uint32_t node,
 {
 	struct bc_model_result dummy;
 	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_REMOVE};
-	const struct bc_tree *t;
+	const struct bc_tree *t = NULL;
 	struct survey sv;
 	uint32_t top;
 	int rc;
@@ -788,30 +826,22 @@ static int move_target(const struct bc_tree *t, uint32_t top, uint32_t parent,
 	return 0;
 }
 
-/* A REPLACE of operator p (two children, top one of them) by itself with
- * its children swapped: the move within p that a REMOVE cannot make. */
-static int swap_children(const struct bc_tree *t, uint32_t p, uint8_t **bytes,
-                         size_t *len, struct bc_errinfo *ei)
+/* Builds in *sub operator p (two children) as itself with its children
+ * swapped, for a REPLACE: the move within p that a REMOVE cannot make. */
+static int swap_children(const struct bc_tree *t, uint32_t p,
+                         struct bc_tree **sub, struct bc_errinfo *ei)
 {
-	struct bc_tree *sub = bc_tree_create();
 	struct bc_op_data op;
-	int rc;
-	if (!sub) {
-		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
-	}
+	int rc = new_builder(sub, ei);
 	bc_tree_get(t, p, NULL, &op);
-	bc_tree_begin(sub);
-	rc = bc_tree_push_op(sub, p, &op, ei);
+	rc = rc ? rc : bc_tree_push_op(*sub, p, &op, ei);
 	rc = rc ? rc
-	        : put_subtree(sub, t, bc_tree_child(t, p, 1), false, 0, NULL,
+	        : put_subtree(*sub, t, bc_tree_child(t, p, 1), false, 0, NULL,
 	                      ei);
 	rc = rc ? rc
-	        : put_subtree(sub, t, bc_tree_child(t, p, 0), false, 0, NULL,
+	        : put_subtree(*sub, t, bc_tree_child(t, p, 0), false, 0, NULL,
 	                      ei);
-	rc = rc ? rc : bc_tree_pop_op(sub, ei);
-	rc = encode_built(sub, rc, bytes, len, ei);
-	bc_tree_destroy(sub);
-	return rc;
+	return rc ? rc : bc_tree_pop_op(*sub, ei);
 }
 
 int bc_model_move(struct bc_client *c, const struct bc_model_move *m,
@@ -819,12 +849,10 @@ int bc_model_move(struct bc_client *c, const struct bc_model_move *m,
 {
 	struct bc_model_result dummy;
 	struct bc_proto_edit_op ops[MODEL_MAX_OPS];
-	const struct bc_tree *t;
+	const struct bc_tree *t = NULL;
 	struct bc_tree *sub = NULL;
 	struct survey sv;
-	uint8_t *bytes = NULL;
-	size_t len = 0;
-	uint32_t top, from, pos, nops = 0;
+	uint32_t top, from, pos = 0, nops = 0;
 	int rc;
 	out = out ? out : &dummy;
 	reset(out);
@@ -856,16 +884,13 @@ int bc_model_move(struct bc_client *c, const struct bc_model_move *m,
 	if (from == m->parent && bc_tree_child_count(t, from) == 2) {
 		/* Taking one of two children out would dissolve the
 		 * operator it is to go back into. */
-		rc = swap_children(t, from, &bytes, &len, ei);
+		rc = swap_children(t, from, &sub, ei);
 		ops[nops++] = (struct bc_proto_edit_op){
 		    .kind = BC_PROTO_EDIT_REPLACE, .node = from};
 		out->position = 1u - sv.index;
-	} else if ((sub = bc_tree_create()) == NULL) {
-		rc = bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
 	} else {
-		bc_tree_begin(sub);
-		rc = put_subtree(sub, t, top, false, 0, NULL, ei);
-		rc = encode_built(sub, rc, &bytes, &len, ei);
+		rc = new_builder(&sub, ei);
+		rc = rc ? rc : put_subtree(sub, t, top, false, 0, NULL, ei);
 		if (from == m->parent && sv.index < pos) {
 			pos--;
 		}
@@ -877,17 +902,7 @@ int bc_model_move(struct bc_client *c, const struct bc_model_move *m,
 		                              .position = pos};
 		out->position = pos;
 	}
-	if (!rc) {
-		ops[nops - 1].subtree.ptr = bytes;
-		ops[nops - 1].subtree.len = (uint32_t)len;
-		rc = send_ops(c, t, ops, nops, out, ei);
-	}
-	bc_free(bytes);
-	bc_tree_destroy(sub);
-	if (rc) {
-		reset(out);
-	}
-	return rc;
+	return send_built(c, t, sub, rc, ops, nops, out, ei);
 }
 
 int bc_model_wrap(struct bc_client *c, const struct bc_model_wrap *w,
@@ -895,15 +910,13 @@ int bc_model_wrap(struct bc_client *c, const struct bc_model_wrap *w,
 {
 	struct bc_model_result dummy;
 	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_REPLACE};
-	const struct bc_tree *t;
+	const struct bc_tree *t = NULL;
 	struct bc_tree *sub = NULL;
 	struct bc_prim_data child;
 	struct new_node nn;
 	struct bc_camera cam;
 	struct survey sv;
 	float pos[3], right[3];
-	uint8_t *bytes = NULL;
-	size_t len = 0;
 	uint32_t first, nids;
 	int rc;
 	out = out ? out : &dummy;
@@ -937,37 +950,26 @@ int bc_model_wrap(struct bc_client *c, const struct bc_model_wrap *w,
 	if ((rc = fresh_ids(c, t, sv.max_id, nids, &first, ei))) {
 		return rc;
 	}
-	if (!(sub = bc_tree_create())) {
-		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
-	}
+	*out = (struct bc_model_result){.node = first,
+	                                .first_id = first,
+	                                .nids = nids,
+	                                .parent = bc_tree_parent(t, w->node),
+	                                .position = sv.index};
+	op.node = w->node;
 	placement(&cam, w->has_at, w->at, pos, right);
-	bc_tree_begin(sub);
-	rc = nn.cls == NODE_UNARY ? bc_tree_push_unary(sub, first, &nn.u, ei)
-	                          : bc_tree_push_op(sub, first, &nn.op, ei);
+	rc = new_builder(&sub, ei);
+	if (!rc) {
+		rc = nn.cls == NODE_UNARY
+		         ? bc_tree_push_unary(sub, first, &nn.u, ei)
+		         : bc_tree_push_op(sub, first, &nn.op, ei);
+	}
 	rc = rc ? rc : put_subtree(sub, t, w->node, false, 0, NULL, ei);
 	if (!rc && nn.cls == NODE_OP) {
 		rc = put_placed(sub, first + 1, child, false, pos, right, 0.0f,
 		                ei);
 	}
 	rc = rc ? rc : bc_tree_pop_op(sub, ei);
-	if (!(rc = encode_built(sub, rc, &bytes, &len, ei))) {
-		op.node = w->node;
-		op.subtree.ptr = bytes;
-		op.subtree.len = (uint32_t)len;
-		*out = (struct bc_model_result){.node = first,
-		                                .first_id = first,
-		                                .nids = nids,
-		                                .parent =
-		                                    bc_tree_parent(t, w->node),
-		                                .position = sv.index};
-		rc = send_ops(c, t, &op, 1, out, ei);
-	}
-	bc_free(bytes);
-	bc_tree_destroy(sub);
-	if (rc) {
-		reset(out);
-	}
-	return rc;
+	return send_built(c, t, sub, rc, &op, 1, out, ei);
 }
 
 int bc_model_duplicate(struct bc_client *c, const struct bc_model_duplicate *d,
@@ -975,11 +977,9 @@ int bc_model_duplicate(struct bc_client *c, const struct bc_model_duplicate *d,
 {
 	struct bc_model_result dummy;
 	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_INSERT};
-	const struct bc_tree *t;
+	const struct bc_tree *t = NULL;
 	struct bc_tree *sub = NULL;
 	struct survey sv;
-	uint8_t *bytes = NULL;
-	size_t len = 0;
 	uint32_t top, first;
 	int rc;
 	out = out ? out : &dummy;
@@ -1005,30 +1005,18 @@ int bc_model_duplicate(struct bc_client *c, const struct bc_model_duplicate *d,
 	    (rc = fresh_ids(c, t, sv.max_id, sv.nodes, &first, ei))) {
 		return rc;
 	}
-	if (!(sub = bc_tree_create())) {
-		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
-	}
-	bc_tree_begin(sub);
-	rc = put_subtree(sub, t, top, true, first,
-	                 d->has_offset ? d->offset : NULL, ei);
-	if (!(rc = encode_built(sub, rc, &bytes, &len, ei))) {
-		op.node = bc_tree_parent(t, top);
-		op.position = sv.index + 1u;
-		op.subtree.ptr = bytes;
-		op.subtree.len = (uint32_t)len;
-		*out = (struct bc_model_result){.node = first,
-		                                .first_id = first,
-		                                .nids = sv.nodes,
-		                                .parent = op.node,
-		                                .position = op.position};
-		rc = send_ops(c, t, &op, 1, out, ei);
-	}
-	bc_free(bytes);
-	bc_tree_destroy(sub);
-	if (rc) {
-		reset(out);
-	}
-	return rc;
+	op.node = bc_tree_parent(t, top);
+	op.position = sv.index + 1u;
+	*out = (struct bc_model_result){.node = first,
+	                                .first_id = first,
+	                                .nids = sv.nodes,
+	                                .parent = op.node,
+	                                .position = op.position};
+	rc = new_builder(&sub, ei);
+	rc = rc ? rc
+	        : put_subtree(sub, t, top, true, first,
+	                      d->has_offset ? d->offset : NULL, ei);
+	return send_built(c, t, sub, rc, &op, 1, out, ei);
 }
 
 int bc_model_set_operator(struct bc_client *c, uint32_t node, const char *kind,
@@ -1039,7 +1027,7 @@ int bc_model_set_operator(struct bc_client *c, uint32_t node, const char *kind,
 	struct bc_proto_field fields[3];
 	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_SET,
 	                              .fields = fields};
-	const struct bc_tree *t;
+	const struct bc_tree *t = NULL;
 	struct bc_op_data cur;
 	enum bc_op k = kind ? bc_op_from_name(kind) : BC_OP_INVALID;
 	struct survey sv;

@@ -458,7 +458,7 @@ static void refusals_are_made_before_sending(void)
 	refused(a, rc, BC_EINVAL, &ei, out, "exactly one child");
 	rc = bc_model_add(
 	    a, &(struct bc_model_add){.kind = "sphere", .parent = 99}, &r, &ei);
-	refused(a, rc, BC_ENONODE, &ei, out, "blobcast nodes");
+	refused(a, rc, BC_ENONODE, &ei, out, "no node 99");
 	rc = bc_model_add(a, &(struct bc_model_add){.kind = "spehre"}, &r, &ei);
 	refused(a, rc, BC_EINVAL, &ei, out, "a primitive (sphere, box");
 	rc = bc_model_add(
@@ -571,6 +571,19 @@ static int send_raw_edit(struct bc_client *c,
 	return bc_client_wait_applied(c, seq, NULL, &ei);
 }
 
+/* One operation sent raw (sub: its subtree, or NULL); the daemon's
+ * answer as send_raw_edit() gives it. */
+static int send_raw_op(struct bc_client *c, enum bc_proto_edit_kind kind,
+                       uint32_t node, const struct bc_proto_buf *sub)
+{
+	struct bc_proto_edit_op op = {.kind = kind, .node = node};
+	if (sub) {
+		op.subtree = (struct bc_proto_bytes){.ptr = sub->data,
+		                                     .len = (uint32_t)sub->len};
+	}
+	return send_raw_edit(c, &op, 1);
+}
+
 /* A scene encoding of one sphere, or of twist(sphere), with these ids. */
 static void sphere_bytes(struct bc_proto_buf *b, uint32_t twist_id, uint32_t id)
 {
@@ -582,11 +595,6 @@ static void sphere_bytes(struct bc_proto_buf *b, uint32_t twist_id, uint32_t id)
 		bc_proto_scene_unary(b, BC_OP_TWIST, twist_id, 1, &rate);
 	}
 	bc_proto_scene_prim(b, BC_PRIM_SPHERE, id, t, q, NULL, 1, &radius);
-}
-
-static struct bc_proto_bytes bytes_of(const struct bc_proto_buf *b)
-{
-	return (struct bc_proto_bytes){.ptr = b->data, .len = (uint32_t)b->len};
 }
 
 static void the_daemon_refuses_the_same_edits_sent_raw(void)
@@ -606,26 +614,10 @@ static void the_daemon_refuses_the_same_edits_sent_raw(void)
 	sphere_bytes(&t, 51, 52);
 
 	/* Under a primitive, under a unary node. */
-	CHECK_EQ_INT(send_raw_edit(a,
-	                           &(struct bc_proto_edit_op){
-	                               .kind = BC_PROTO_EDIT_INSERT,
-	                               .node = 2,
-	                               .subtree = bytes_of(&s)},
-	                           1),
-	             BC_EINVAL);
-	CHECK_EQ_INT(send_raw_edit(a,
-	                           &(struct bc_proto_edit_op){
-	                               .kind = BC_PROTO_EDIT_INSERT,
-	                               .node = 3,
-	                               .subtree = bytes_of(&s)},
-	                           1),
-	             BC_EINVAL);
+	CHECK_EQ_INT(send_raw_op(a, BC_PROTO_EDIT_INSERT, 2, &s), BC_EINVAL);
+	CHECK_EQ_INT(send_raw_op(a, BC_PROTO_EDIT_INSERT, 3, &s), BC_EINVAL);
 	/* The root. */
-	CHECK_EQ_INT(send_raw_edit(a,
-	                           &(struct bc_proto_edit_op){
-	                               .kind = BC_PROTO_EDIT_REMOVE, .node = 1},
-	                           1),
-	             BC_EINVAL);
+	CHECK_EQ_INT(send_raw_op(a, BC_PROTO_EDIT_REMOVE, 1, NULL), BC_EINVAL);
 	/* Under its own descendant: the REMOVE takes 7 with 5, so the
 	 * INSERT names a node that is gone, and none of it applies. */
 	{
@@ -661,21 +653,11 @@ static void the_daemon_refuses_the_same_edits_sent_raw(void)
 	{
 		struct bc_proto_buf zero;
 		sphere_bytes(&zero, 0, 0);
-		CHECK_EQ_INT(send_raw_edit(a,
-		                           &(struct bc_proto_edit_op){
-		                               .kind = BC_PROTO_EDIT_INSERT,
-		                               .node = 1,
-		                               .subtree = bytes_of(&zero)},
-		                           1),
+		CHECK_EQ_INT(send_raw_op(a, BC_PROTO_EDIT_INSERT, 1, &zero),
 		             BC_EINVAL);
 		bc_proto_buf_finish(&zero);
 		sphere_bytes(&zero, 0, 7);
-		CHECK_EQ_INT(send_raw_edit(a,
-		                           &(struct bc_proto_edit_op){
-		                               .kind = BC_PROTO_EDIT_INSERT,
-		                               .node = 1,
-		                               .subtree = bytes_of(&zero)},
-		                           1),
+		CHECK_EQ_INT(send_raw_op(a, BC_PROTO_EDIT_INSERT, 1, &zero),
 		             BC_EDUPID);
 		bc_proto_buf_finish(&zero);
 	}
@@ -687,11 +669,7 @@ static void the_daemon_refuses_the_same_edits_sent_raw(void)
 	REQUIRE(bc_client_load_scene_file(
 	            a, write_scene("rawchain.json", CHAIN_SCENE), NULL, NULL,
 	            &ei) == 0);
-	CHECK_EQ_INT(send_raw_edit(a,
-	                           &(struct bc_proto_edit_op){
-	                               .kind = BC_PROTO_EDIT_REMOVE, .node = 3},
-	                           1),
-	             BC_EINVAL);
+	CHECK_EQ_INT(send_raw_op(a, BC_PROTO_EDIT_REMOVE, 3, NULL), BC_EINVAL);
 	/* A 33rd domain node on a path. */
 	REQUIRE(bc_client_load_scene_file(
 	            a, write_scene("rawdomains.json", domain_chain_scene()),
@@ -699,23 +677,12 @@ static void the_daemon_refuses_the_same_edits_sent_raw(void)
 	{
 		struct bc_proto_buf deep;
 		sphere_bytes(&deep, 101, 100);
-		CHECK_EQ_INT(send_raw_edit(a,
-		                           &(struct bc_proto_edit_op){
-		                               .kind = BC_PROTO_EDIT_REPLACE,
-		                               .node = 100,
-		                               .subtree = bytes_of(&deep)},
-		                           1),
+		CHECK_EQ_INT(send_raw_op(a, BC_PROTO_EDIT_REPLACE, 100, &deep),
 		             BC_EDEPTH);
 		bc_proto_buf_finish(&deep);
 	}
 	/* The connection is still good: a legal edit applies. */
-	CHECK_EQ_INT(send_raw_edit(a,
-	                           &(struct bc_proto_edit_op){
-	                               .kind = BC_PROTO_EDIT_INSERT,
-	                               .node = 1,
-	                               .subtree = bytes_of(&t)},
-	                           1),
-	             0);
+	CHECK_EQ_INT(send_raw_op(a, BC_PROTO_EDIT_INSERT, 1, &t), 0);
 	bc_proto_buf_finish(&s);
 	bc_proto_buf_finish(&t);
 	bc_client_destroy(a);
