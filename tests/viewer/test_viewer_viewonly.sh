@@ -5,9 +5,9 @@
 #     verbose "joined default role=view-only token=viewer" line), shows the
 #     picture (a screenshot that is not blank) and its overlay says why
 #     (a screenshot with the overlay differs from one without);
-#  2. edit keys say so instead of sending: Ctrl-Z and Shift+wheel on a
-#     picked shape print "view-only (the token grants viewing only): ...
-#     is off" and no edit is applied (no "applied" line; the session's
+#  2. edit keys say so instead of sending: Ctrl-Z, Shift+wheel on a
+#     picked shape, A (add) and Delete print "view-only (the token grants
+#     viewing only): ... is off" and no edit is applied (no "applied" line; the session's
 #     scene, read with blobcast nodes, is unchanged);
 #  3. --role editor with the viewer token exits 1 and says that without
 #     --role editor the window opens view-only;
@@ -54,6 +54,15 @@ vl_wait "$tmp/v.log" '^joined default role=view-only token=viewer$' 100 || ok=
 [ -n "$ok" ] && { vl_poke keydown Shift_L wheel 2 keyup Shift_L || ok=; }
 [ -n "$ok" ] && { vl_wait "$tmp/v.log" \
   '^status view-only \(the token grants viewing only\): editing with the wheel is off$' \
+  100 || ok=; }
+# The modelling keys: A (the palette does not open) and Delete.
+[ -n "$ok" ] && { vl_poke key a || ok=; }
+[ -n "$ok" ] && { vl_wait "$tmp/v.log" \
+  '^status view-only \(the token grants viewing only\): adding is off$' 100 ||
+  ok=; }
+[ -n "$ok" ] && { vl_poke key Delete || ok=; }
+[ -n "$ok" ] && { vl_wait "$tmp/v.log" \
+  '^status view-only \(the token grants viewing only\): deleting is off$' \
   100 || ok=; }
 vl_quit
 if [ -n "$ok" ]; then
