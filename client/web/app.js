@@ -588,7 +588,9 @@ class App {
 	}
 
 	handle(m) {
-		this.review.saw(m);
+		if (this.review.saw(m)) {
+			return;
+		}
 		/* The answers to a picture's tiles are its own, not frames of
 		 * the view. */
 		if ((m.type === P.MSG.FRAME || m.type === P.MSG.ERROR) &&

@@ -15,7 +15,8 @@
  *    warnings that go with them;
  *  - the session list (sessions.js).
  * The page (app.js) calls saw(m) with every message before handling it
- * and update() on its overlay tick; everything else starts from here.
+ * (true: an answer to the session list, not for the page) and update()
+ * on its overlay tick; everything else starts from here.
  */
 import * as P from './protocol.js';
 import { DEFAULT_CAMERA, fitCamera, treeBox } from './bounds.js';
@@ -54,6 +55,9 @@ export class Review {
 			url: () => app.cfg.ws,
 			token: () => app.cfg.token,
 			name: () => app.cfg.name,
+			canSend: () => !!app.welcome && app.conn.ws?.readyState ===
+				WebSocket.OPEN,
+			send: (type, fields) => app.conn.send(type, fields),
 			current: () => (app.info ? app.info.name : ''),
 			join: (name) => this.join(name),
 		});
@@ -222,8 +226,13 @@ export class Review {
 
 	/* ---- messages the page receives ---- */
 
+	/* Sees every message before the page; returns whether it was an
+	 * answer to this module's requests (the page then skips it). */
 	saw(m) {
 		const app = this.app;
+		if (this.sessions.handle(m)) {
+			return true;
+		}
 		if (m.type === P.MSG.SESSION_CAMERA_SET && app.scene) {
 			/* The mirror keeps the session's camera (7.25): reset goes
 			 * there. */
@@ -231,7 +240,7 @@ export class Review {
 				.slice(), up: m.up.slice(), fov_y_deg: m.fov_y_deg };
 		}
 		if (m.type !== P.MSG.ERROR) {
-			return;
+			return false;
 		}
 		const ask = this.viewAsk;
 		if (ask && m.seq && m.seq === ask.seq) {
@@ -252,6 +261,7 @@ export class Review {
 				' join or create another', true);
 			this.sessions.refresh().catch(() => {});
 		}
+		return false;
 	}
 
 	/* ---- the header and the buttons, on the page's tick ---- */

@@ -4,11 +4,12 @@
  * (SESSION_DELETE, 7.19), and a form that creates one (SESSION_CREATE,
  * 7.6) and joins it.
  *
- * Each request goes over a short connection of its own (HELLO with the
- * page's token, the request, its answer, close), not the page's: the page
- * stays in its session while it lists or deletes, a refused request
- * leaves it untouched, and the list works while the page is stopped (a
- * session that does not exist, say). The daemon decides who may do what
+ * The list is asked for on the page's own connection (SESSION_LIST is
+ * allowed in a session). Creating and deleting go over a short
+ * connection of their own (HELLO with the page's token, the request, its
+ * answer, close): the page stays in its session meanwhile and a refused
+ * request leaves it untouched; so does listing while the page has no
+ * connection (stopped by a refused token). The daemon decides who may do what
  * (a viewer-only token may neither create nor delete: EPERM); the panel
  * shows its answer as it came. Joining is the page's own reconnect, to
  * the chosen session (join() from the caller).
@@ -172,15 +173,70 @@ export class Channel {
 	}
 }
 
+/* Requests on the page's own connection, with Channel's ask(): send(type,
+ * fields) sends one and returns its seq (0 when the page cannot send), and
+ * the page hands every message it receives to handle(), which takes the
+ * answers. */
+class PageLink {
+	constructor(send) {
+		this.sendFn = send;
+		this.want = null;
+	}
+
+	ask(type, fields, accept) {
+		return new Promise((resolve, reject) => {
+			const seq = this.sendFn(type, fields);
+			if (!seq) {
+				reject(new Error('the page is not connected'));
+				return;
+			}
+			this.drop(new Error('asked again'));
+			this.want = { seq, accept, resolve, reject, timer: setTimeout(
+				() => this.drop(new Error(`no answer in ${ANSWER_MS /
+					1000} s`)), ANSWER_MS) };
+		});
+	}
+
+	drop(err) {
+		const w = this.want;
+		this.want = null;
+		if (w) {
+			clearTimeout(w.timer);
+			w.reject(err);
+		}
+	}
+
+	/* Whether m answered the request waiting here. */
+	handle(m) {
+		const w = this.want;
+		if (!w || m.seq !== w.seq) {
+			return false;
+		}
+		this.want = null;
+		clearTimeout(w.timer);
+		if (m.type === P.MSG.ERROR) {
+			w.reject(new Refusal(m.code, m.text));
+		} else if (w.accept(m, w.seq)) {
+			w.resolve(m);
+		} else {
+			w.reject(new Error(`a ${P.typeName(m.type)} came for the ` +
+				'request'));
+		}
+		return true;
+	}
+}
+
 const $ = (id) => document.getElementById(id);
 
 /* The "Sessions" section of the side panel. ctx gives: url() and token()
- * and name() for the requests, current() the name of the session the
- * page is in (or ''), join(name) to move the page there, say(text) for
- * the header. */
+ * and name() for the short connections, canSend() and send(type, fields)
+ * on the page's (send returns the seq), current() the name of the session the page is in
+ * (or ''), join(name) to move the page there. The page hands every
+ * message to handle(). */
 export class SessionPanel {
 	constructor(ctx) {
 		this.ctx = ctx;
+		this.link = new PageLink(ctx.send);
 		this.entries = null; /* the last SESSIONS, or null */
 		this.status = '';
 		this.busy = false;
@@ -200,15 +256,25 @@ export class SessionPanel {
 		el.classList.toggle('bad', bad);
 	}
 
-	/* Runs fn(channel) on a fresh connection; what went wrong becomes the
-	 * status line, saying what to try. */
-	async run(what, fn) {
+	/* Whether m answered a request of the panel (the page then leaves
+	 * it alone). */
+	handle(m) {
+		return this.link.handle(m);
+	}
+
+	/* Runs fn(channel) on a fresh connection, or on the page's (onPage,
+	 * when it has one); what went wrong becomes the status line, saying
+	 * what to try. */
+	async run(what, fn, onPage = false) {
 		this.busy = true;
 		this.render();
-		const ch = new Channel(this.ctx.url(), { token: this.ctx.token(),
-			name: this.ctx.name() });
+		const ch = onPage && this.ctx.canSend() ? this.link
+			: new Channel(this.ctx.url(), {
+				token: this.ctx.token(), name: this.ctx.name() });
 		try {
-			await ch.open();
+			if (ch !== this.link) {
+				await ch.open();
+			}
 			return await fn(ch);
 		} catch (e) {
 			let text = `${what}: ${e.message}`;
@@ -222,7 +288,9 @@ export class SessionPanel {
 			this.setStatus(text, true);
 			throw e;
 		} finally {
-			ch.close();
+			if (ch !== this.link) {
+				ch.close();
+			}
 			this.busy = false;
 			this.render();
 		}
@@ -232,7 +300,7 @@ export class SessionPanel {
 	async refresh() {
 		const m = await this.run('listing the sessions', (ch) =>
 			ch.ask(P.MSG.SESSION_LIST, {}, (a, seq) => a.type ===
-				P.MSG.SESSIONS && a.seq === seq));
+				P.MSG.SESSIONS && a.seq === seq), true);
 		this.entries = m.sessions;
 		this.setStatus(`${m.sessions.length} session` +
 			`${m.sessions.length === 1 ? '' : 's'} on this daemon`);
