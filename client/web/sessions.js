@@ -228,11 +228,11 @@ class PageLink {
 
 const $ = (id) => document.getElementById(id);
 
-/* The "Sessions" section of the side panel. ctx gives: url() and token()
- * and name() for the short connections, canSend() and send(type, fields)
- * on the page's (send returns the seq), current() the name of the session the page is in
- * (or ''), join(name) to move the page there. The page hands every
- * message to handle(). */
+/* The "Sessions" section of the side panel. ctx gives: url(), token()
+ * and name() for the short connections; canSend() and send(type, fields)
+ * (returning the seq) on the page's connection; current(), the name of
+ * the session the page is in (or ''); join(name), to move the page
+ * there. The page hands every message to handle(). */
 export class SessionPanel {
 	constructor(ctx) {
 		this.ctx = ctx;

@@ -232,8 +232,9 @@ try {
 		.test(document.getElementById('sessioninfo').textContent));
 	await b.fill('#sessionname', 'nope');
 	await b.click('#sessionform button');
-	await until(b, 'the refusal of create', () => /create “nope”: refused.*EPERM/
-		.test(document.getElementById('sessioninfo').textContent));
+	await until(b, 'the refusal of create', () =>
+		/create “nope”: refused.*EPERM/.test(document.getElementById(
+			'sessioninfo').textContent));
 	await b.click('#sessionrefresh');
 	await listed(b, ['default', 'review-a'], ['nope']);
 	step('viewer token: delete and create refused (EPERM), shown, nothing ' +

@@ -79,8 +79,10 @@ test('random floats read back to the same bits, shortest of 6 or 9', () => {
 test('optional parameters are those prim.c marks optional', () => {
 	const src = readFileSync(join(ROOT, 'blobtree', 'prim.c'), 'utf8');
 	const found = {};
-	for (const m of src.matchAll(/static const struct bc_param_desc p_(\w+)\[\] = \{([\s\S]*?)\};/g)) {
-		for (const r of m[2].matchAll(/\{"(\w+)", \d+, \d+, ([^,]+), ([-\d.]+)f\}/g)) {
+	const table = /static const struct bc_param_desc p_(\w+)\[\] = \{([\s\S]*?)\};/g;
+	const row = /\{"(\w+)", \d+, \d+, ([^,]+), ([-\d.]+)f\}/g;
+	for (const m of src.matchAll(table)) {
+		for (const r of m[2].matchAll(row)) {
 			if (/\bOPT\b/.test(r[2])) {
 				const kind = Object.keys(PRIMS).find((k) => PRIMS[k][0] ===
 					m[1]);
@@ -118,23 +120,29 @@ test('unary nodes, defaults left out, -0 kept, and back', () => {
 				[1, 0.5, 0.2, 0.125], { rotate: [0, 0, -0, 1] }))),
 			prim(5, [1, 0.25]),
 		] };
-	let id = 1;
+	let id = 1; /* in pre-order, as the file lists them */
 	const todo = [root];
 	while (todo.length) {
 		const n = todo.pop();
 		n.id = id++;
-		todo.push(...(n.children ?? []));
+		todo.push(...(n.children ?? []).slice().reverse());
 	}
 	const text = sceneToJson({ camera: { eye: [0, 1, 6], target: [0, 0, 0],
 		up: [0, 1, 0], fov_y_deg: 45 }, root });
-	assert.match(text, /"type": "mirror", "id": \d+, "axes": "xz"/);
-	assert.match(text, /"type": "repeat", "id": \d+, "spacing": \[1, 2, 0.5\], "count": \[3, 1, 2\]/);
-	assert.match(text, /"type": "box", "id": \d+, "half_extents": \[1, 0.5, 0.25\]}/,
-		'round 0 left out, no translate, no rotate');
-	assert.match(text, /"translate": \[-0.0, 1, 0\]/);
-	assert.match(text, /"rotate": \[0, 0, -0.0, 1\]/);
-	assert.match(text, /"round": 0.125/);
-	assert.match(text, /^\{\n {2}"blobcast": 1,\n {2}"camera": \{"eye": \[0, 1, 6\], "target": \[0, 0, 0\], "up": \[0, 1, 0\], "fov_y_deg": 45\},\n {2}"root": \{"type": "smooth_union", "id": 1, "blend": 0.25, "range": 0.3125, "children": \[\n/);
+	const has = (part, why) => assert.ok(text.includes(part),
+		`${why ?? part} in:\n${text}`);
+	has('"type": "mirror", "id": 2, "axes": "xz", "children"');
+	has('"type": "repeat", "id": 4, "spacing": [1, 2, 0.5], ' +
+		'"count": [3, 1, 2], "children"');
+	has('{"type": "box", "id": 3, "half_extents": [1, 0.5, 0.25]}',
+		'round 0, translate and rotate left out');
+	has('"translate": [-0.0, 1, 0]');
+	has('"rotate": [0, 0, -0.0, 1]');
+	has('"round": 0.125');
+	assert.ok(text.startsWith('{\n  "blobcast": 1,\n  "camera": ' +
+		'{"eye": [0, 1, 6], "target": [0, 0, 0], "up": [0, 1, 0], ' +
+		'"fov_y_deg": 45},\n  "root": {"type": "smooth_union", "id": 1, ' +
+		'"blend": 0.25, "range": 0.3125, "children": [\n'), text);
 	assert.deepEqual(treeFromJson(text).root.children.map((n) => n.kind),
 		[12, 13, 9, 5]);
 	const back = treeFromJson(text);
