@@ -15,7 +15,7 @@
  *    warnings that go with them;
  *  - the session list (sessions.js).
  * The page (app.js) calls saw(m) with every message before handling it
- * (true: an answer to the session list, not for the page) and update()
+ * (true: an answer to this module's own requests) and update()
  * on its overlay tick; everything else starts from here.
  */
 import * as P from './protocol.js';
@@ -227,7 +227,8 @@ export class Review {
 	/* ---- messages the page receives ---- */
 
 	/* Sees every message before the page; returns whether it was an
-	 * answer to this module's requests (the page then skips it). */
+	 * answer to this module's requests, which it has dealt with (the
+	 * page then skips it). */
 	saw(m) {
 		const app = this.app;
 		if (this.sessions.handle(m)) {
@@ -254,6 +255,10 @@ export class Review {
 			app.cfg.encoding = ask.back.encoding;
 			app.cfg.quality = ask.back.quality;
 			this.renderView();
+			/* Said here, in full; a refused VIEW gets no frame, so it
+			 * is not pending (what the page does with such an ERROR). */
+			app.viewSentAt = 0;
+			return true;
 		}
 		if (m.code === P.ERR.ENOSESSION && m.seq === 0 && app.info) {
 			/* Someone deleted this page's session. */

@@ -14,6 +14,9 @@
  *    view; reset (R) brings back the session's camera and its picture;
  *  - frames: the encoding control switches the FRAMEs between PNG, raw
  *    and JPEG; the header's PNG button downloads a PNG of the view size;
+ *    against a stand-in server that refuses raw frames (the page's
+ *    WebSocket answered by this script), the control marks raw refused
+ *    and goes back to the encoding the server still sends;
  *  - the JSON button downloads the scene (every primitive kind, unary
  *    nodes, an edit from the page, a session camera set by another
  *    client): the file equals `blobcast scene` of the session byte for
@@ -29,6 +32,7 @@ import { copyFileSync, mkdirSync, mkdtempSync, readFileSync, rmSync,
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 
+import * as P from '../../client/web/protocol.js';
 import * as H from './harness.mjs';
 
 const DEADLINE_MS = 150000;
@@ -122,6 +126,42 @@ const coverage = (page, keep, than) => page.evaluate(([k, t]) => {
 	}
 	return { share: n / (c.width * c.height), diff };
 }, [keep ?? null, than ?? null]);
+
+/* A stand-in for the daemon on a page's WebSocket that refuses VIEWs
+ * asking for raw frames (ERROR EINVAL, as blobcastd refuses an encoding
+ * a client did not announce); views: the VIEWs it took. */
+function refusingServer(ws, views) {
+	const r = new P.Reader({ side: 'server' });
+	const send = (m) => ws.send(Buffer.from(P.encode(m)));
+	ws.onMessage((msg) => {
+		r.feed(typeof msg === 'string' ? Buffer.from(msg) : msg);
+		for (let m; (m = r.next());) {
+			if (m.type === P.MSG.HELLO) {
+				send({ type: P.MSG.WELCOME, seq: m.seq, flags: 0,
+					version: 1, connection_id: 1,
+					max_payload: P.LIMITS.MAX_PAYLOAD,
+					max_frame_bytes: P.LIMITS.MAX_PAYLOAD, max_nodes: 1000,
+					max_dim: 4096, max_members: 8, max_edit_ops: 64,
+					server_id: 'stand-in' });
+			} else if (m.type === P.MSG.SESSION_JOIN) {
+				send({ type: P.MSG.SESSION_INFO, seq: 0, flags: 0,
+					session_id: 1, member_id: 1, role: m.role,
+					name: m.name, members: [{ id: 1, role: m.role,
+						name: 'dave' }] });
+			} else if (m.type === P.MSG.SESSION_LIST) {
+				send({ type: P.MSG.SESSIONS, seq: m.seq, flags: 0,
+					sessions: [] });
+			} else if (m.type === P.MSG.VIEW && m.encoding ===
+				P.ENC.RAW) {
+				send({ type: P.MSG.ERROR, seq: m.seq, flags: 0,
+					code: P.ERR.EINVAL, text: 'encoding 3 was not in ' +
+						'your HELLO' });
+			} else if (m.type === P.MSG.VIEW) {
+				views.push(m.encoding);
+			}
+		}
+	});
+}
 
 /* The screen position of world point p with the page's camera (its
  * conventions: forward = target - eye, right = forward x up). */
@@ -319,6 +359,35 @@ try {
 		[view.width, view.height]);
 	assert.match(png.name, /^blobcast-review-a-\d+\.png$/);
 	step(`PNG button: ${png.name}, ${view.width}x${view.height}`);
+
+	/* A server that refuses raw frames. */
+	const e = await browser.newPage({ viewport: { width: W + 280,
+		height: H2 + 90 } });
+	e.on('pageerror', (err) => {
+		console.error(`page: ${err.message}`);
+		failed = true;
+	});
+	const views = [];
+	await e.routeWebSocket(/.*/, (ws) => refusingServer(ws, views));
+	await e.goto(`http://127.0.0.1:${web.port}/?ws=ws://127.0.0.1:9/` +
+		'&session=s&name=dave&enc=png');
+	await until(e, 'the stand-in\'s session', () =>
+		window.blobcast.state().connected);
+	await e.selectOption('#encoding', String(P.ENC.RAW));
+	await until(e, 'raw marked refused', () => {
+		const o = document.querySelector('#encoding option[value="3"]');
+		return o.disabled && o.textContent === 'raw (refused)' &&
+			document.getElementById('encoding').value === '2';
+	});
+	assert.match(await e.textContent('#message'), /raw frames refused by /);
+	await e.selectOption('#encoding', String(P.ENC.JPEG));
+	for (const end = Date.now() + 10000; views.at(-1) !== P.ENC.JPEG;) {
+		assert.ok(Date.now() < end, `a JPEG VIEW; VIEWs taken: ${views}`);
+		await e.waitForTimeout(30);
+	}
+	assert.deepEqual(views.filter((v) => v === P.ENC.RAW), []);
+	await e.close();
+	step('a server refusing raw: "raw (refused)", the control back on png');
 
 	/* ---- the scene as JSON, and back ---- */
 	const gen = JSON.parse((await run(['gen', 'catalogue', '--blend',
