@@ -98,7 +98,17 @@ function fail(n, why) {
 		'as a JSON scene file');
 }
 
+/* A node whose parameters the page could not follow (protocol.js's
+ * applyOps marks it stale) would be written wrong: refuse instead. */
+function current(n) {
+	if (n.stale) {
+		fail(n, 'this page could not follow an edit of it (reload the ' +
+			'page to fetch the scene again)');
+	}
+}
+
 function primText(n) {
+	current(n);
 	const info = PRIMS[n.kind];
 	const lay = layout(n.kind);
 	if (!info || !lay) {
@@ -130,6 +140,7 @@ function primText(n) {
 }
 
 function opText(n) {
+	current(n);
 	const name = OPS[n.kind];
 	if (!name) {
 		fail(n, `operator kind ${n.kind} is unknown to this page`);
@@ -165,8 +176,9 @@ function opText(n) {
 /* The scene file of a tree ({ camera, root } from parseScene) as an
  * array of strings to be joined (a Blob takes them as they are; a big
  * scene is never one string). Throws an Error saying why when the tree
- * cannot be a scene file: deeper than JSON_MAX_DEPTH, or holding a kind
- * this page does not know. Walks without recursion. */
+ * cannot be a scene file: deeper than JSON_MAX_DEPTH, holding a kind
+ * this page does not know, or a node it could not keep up to date. Walks
+ * without recursion. */
 export function sceneJsonParts({ camera, root }) {
 	if (!root) {
 		throw new Error('the scene is empty; there is nothing to write');

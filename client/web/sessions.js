@@ -296,8 +296,18 @@ export class SessionPanel {
 		}
 	}
 
-	/* Asks for the list again; resolves with its entries. */
-	async refresh() {
+	/* Asks for the list again; resolves with its entries. A refresh
+	 * asked for while one is on its way gets that one's answer. */
+	refresh() {
+		if (!this.listing) {
+			this.listing = this.list().finally(() => {
+				this.listing = null;
+			});
+		}
+		return this.listing;
+	}
+
+	async list() {
 		const m = await this.run('listing the sessions', (ch) =>
 			ch.ask(P.MSG.SESSION_LIST, {}, (a, seq) => a.type ===
 				P.MSG.SESSIONS && a.seq === seq), true);

@@ -11,7 +11,8 @@
  *    every operator, random transforms and colours, a camera), read into
  *    the page's tree and written by the page: the same bytes;
  *  - a hand-made tree with unary nodes reads back (JSON.parse) to the
- *    same values; a tree deeper than a JSON file holds is refused;
+ *    same values; a tree deeper than a JSON file holds, or with a node
+ *    the page could not keep up to date, is refused;
  *  - session names as the daemon checks them, and the list's lines.
  * Needs BLOBCAST_CLI for the `blobcast gen` scenes (the ctest row sets it).
  */
@@ -149,7 +150,7 @@ test('unary nodes, defaults left out, -0 kept, and back', () => {
 	assert.equal(sceneToJson(back), text, 'read back and written again');
 });
 
-test('a tree deeper than a JSON file holds is refused', () => {
+test('a tree too deep, or out of date, is refused', () => {
 	let n = { isOp: false, kind: 1, id: 1, params: [1],
 		translate: [0, 0, 0], rotate: [0, 0, 0, 1], color: null };
 	for (let d = 0; d < JSON_MAX_DEPTH; d++) {
@@ -162,6 +163,10 @@ test('a tree deeper than a JSON file holds is refused', () => {
 	assert.ok(sceneToJson({ camera: null, root: n.children[0] })
 		.length > 1000);
 	assert.throws(() => sceneToJson({ camera: null, root: null }), /empty/);
+	const stale = n.children[0].children[0];
+	stale.stale = true;
+	assert.throws(() => sceneToJson({ camera: null, root: stale }),
+		/could not follow an edit/);
 });
 
 test('session names and list lines', () => {
