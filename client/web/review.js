@@ -58,6 +58,7 @@ export class Review {
 			canSend: () => !!app.welcome && app.conn.ws?.readyState ===
 				WebSocket.OPEN,
 			send: (type, fields) => app.conn.send(type, fields),
+			socket: () => app.conn.ws,
 			current: () => (app.info ? app.info.name : ''),
 			join: (name) => this.join(name),
 		});

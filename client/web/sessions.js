@@ -174,13 +174,22 @@ export class Channel {
 }
 
 /* Requests on the page's own connection, with Channel's ask(): send(type,
- * fields) sends one and returns its seq (0 when the page cannot send), and
- * the page hands every message it receives to handle(), which takes the
- * answers. */
+ * fields) sends one and returns its seq (0 when the page cannot send),
+ * socket() names the connection it went on, and the page hands every
+ * message it receives to handle(), which takes the answers. A request
+ * whose connection is gone is dropped by check(). */
 class PageLink {
-	constructor(send) {
+	constructor(send, socket) {
 		this.sendFn = send;
+		this.socket = socket;
 		this.want = null;
+	}
+
+	check() {
+		if (this.want && this.want.socket !== this.socket()) {
+			this.drop(new Error('the page\'s connection closed before ' +
+				'the answer; ask again'));
+		}
 	}
 
 	ask(type, fields, accept) {
@@ -191,7 +200,8 @@ class PageLink {
 				return;
 			}
 			this.drop(new Error('asked again'));
-			this.want = { seq, accept, resolve, reject, timer: setTimeout(
+			this.want = { seq, accept, resolve, reject,
+				socket: this.socket(), timer: setTimeout(
 				() => this.drop(new Error(`no answer in ${ANSWER_MS /
 					1000} s`)), ANSWER_MS) };
 		});
@@ -229,14 +239,15 @@ class PageLink {
 const $ = (id) => document.getElementById(id);
 
 /* The "Sessions" section of the side panel. ctx gives: url(), token()
- * and name() for the short connections; canSend() and send(type, fields)
- * (returning the seq) on the page's connection; current(), the name of
+ * and name() for the short connections; canSend(), send(type, fields)
+ * (returning the seq) and socket() (which connection) for the page's;
+ * current(), the name of
  * the session the page is in (or ''); join(name), to move the page
  * there. The page hands every message to handle(). */
 export class SessionPanel {
 	constructor(ctx) {
 		this.ctx = ctx;
-		this.link = new PageLink(ctx.send);
+		this.link = new PageLink(ctx.send, ctx.socket);
 		this.entries = null; /* the last SESSIONS, or null */
 		this.status = '';
 		this.busy = false;
@@ -356,6 +367,7 @@ export class SessionPanel {
 
 	/* Redraws the list when something it shows changed. */
 	update() {
+		this.link.check();
 		if (this.shownFor !== this.ctx.current()) {
 			this.render();
 		}
