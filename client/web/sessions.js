@@ -323,8 +323,11 @@ export class SessionPanel {
 			ch.ask(P.MSG.SESSION_LIST, {}, (a, seq) => a.type ===
 				P.MSG.SESSIONS && a.seq === seq), true);
 		this.entries = m.sessions;
-		this.setStatus(`${m.sessions.length} session` +
-			`${m.sessions.length === 1 ? '' : 's'} on this daemon`);
+		const n = m.sessions.length;
+		/* A daemon with more lists the first ones by name (7.21). */
+		this.setStatus(n >= P.LIMITS.MAX_SESSIONS_LISTED ? `the first ${n} ` +
+			'sessions of this daemon, by name' : `${n} session` +
+			`${n === 1 ? '' : 's'} on this daemon`);
 		this.render();
 		return m.sessions;
 	}
