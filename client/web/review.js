@@ -92,6 +92,7 @@ export class Review {
 			}
 			this.setView(this.app.cfg.encoding, q);
 		});
+		this.renderView();
 	}
 
 	installKeys() {
