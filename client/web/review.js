@@ -236,6 +236,11 @@ export class Review {
 		if (this.sessions.handle(m)) {
 			return true;
 		}
+		if (m.type === P.MSG.SESSION_INFO || m.type === P.MSG.ERROR) {
+			/* The header follows a join or a refusal at once, once the
+			 * page has taken the message (not at the next tick). */
+			setTimeout(() => this.update(), 0);
+		}
 		if (m.type === P.MSG.SESSION_CAMERA_SET && app.scene) {
 			/* The mirror keeps the session's camera (7.25): reset goes
 			 * there. */

@@ -209,16 +209,17 @@ try {
 		`#token=${EDITOR}`);
 	await joined(a, 'default');
 	step('alice joined');
-	assert.equal(await a.getAttribute('#tokenstate', 'data-state'),
-		'editor');
+	const tokenState = (page, state) => until(page, `token state ${state}`,
+		(st) => document.getElementById('tokenstate').dataset.state === st,
+		state);
+	await tokenState(a, 'editor');
 	assert.equal(await a.textContent('#tokenstate'), 'editor · token');
 	assert.equal(await a.isVisible('#tokenwarn'), false, 'no warning');
 	const b = await openPage(`${base}&session=default&name=bob` +
 		`#token=${VIEWER}`);
 	await joined(b, 'default');
 	step('bob joined');
-	assert.equal(await b.getAttribute('#tokenstate', 'data-state'),
-		'view-only');
+	await tokenState(b, 'view-only');
 	assert.equal(await b.textContent('#tokenstate'),
 		'view only · viewer token ⚠');
 	assert.match(await b.textContent('#tokenwarn'), /viewing only/);
@@ -226,8 +227,7 @@ try {
 	const c = await openPage(`${base}&session=default&name=carol`);
 	await until(c, 'the EAUTH stop', () =>
 		window.blobcast.state().halted?.code === 'EAUTH');
-	assert.equal(await c.getAttribute('#tokenstate', 'data-state'),
-		'refused');
+	await tokenState(c, 'refused');
 	assert.match(await c.textContent('#tokenstate'), /^token needed/);
 	assert.match(await c.textContent('#tokenwarn'), /wants a token/);
 	await c.close();
