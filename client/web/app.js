@@ -801,7 +801,10 @@ class App {
 				`${m.target_author || 'an unnamed member'}'s edit ` +
 				`${m.target_order}`);
 		}
-		const rec = { order: m.order, author: m.author, node: nodes[0],
+		/* The author's name as the roster gives it now: a CLI member
+		 * leaves right after its edit, and the label outlives it. */
+		const rec = { order: m.order, author: m.author,
+			name: this.memberName(m.author), node: nodes[0],
 			at: now, frameAt: 0, interacting: !!(m.flags &
 				P.FLAG.INTERACTING) };
 		this.lastEdits.set(m.author, rec);
@@ -1494,7 +1497,7 @@ class App {
 		}
 		const n = this.scene?.byId.get(e.node);
 		const ago = ((performance.now() - e.at) / 1000).toFixed(1);
-		$('lastedit').textContent = `last edit: ${this.memberName(e.author)}` +
+		$('lastedit').textContent = `last edit: ${e.name}` +
 			` · ${n ? kindName(n) + ' #' + n.id : 'node ' + e.node}` +
 			` · order ${e.order} · ${ago} s ago`;
 	}

@@ -419,6 +419,16 @@ try {
 	assert.equal(r.code, 0, `blobcast camera: ${r.stderr}`);
 	await until(a, 'the session camera in the mirror', () =>
 		window.blobcast.sessionCamera().fov_y_deg === 41.5);
+	/* An edit from the CLI with --name: the page names its author
+	 * after the CLI has left the session. */
+	r = await run(['edit', ...srv, '--session', 'rich', '--name', 'dave',
+		String(moved), 'translate=0.25,2.5,-3.75']);
+	assert.equal(r.code, 0, `blobcast edit: ${r.stderr}`);
+	await until(a, 'dave gone from the roster', () => !window.blobcast
+		.state().members.some((m) => m.name === 'dave') &&
+		/^last edit: dave /.test(document.getElementById('lastedit')
+			.textContent));
+	step('the CLI\'s --name names its edit in the page after it left');
 	const json = await download(a, '#jsonbtn');
 	assert.match(json.name, /^blobcast-rich-\d+\.json$/);
 	const text = json.bytes.toString('utf8');
