@@ -1,0 +1,118 @@
+#!/bin/sh
+# `blobcast mesh` writes closed 2-manifolds, counted by a reader that shares
+# no code with the mesher (check_mesh.py): the default scene, fig18 with
+# 1024 smoothly blended spheres and the catalogue (every primitive kind),
+# in each format (OBJ, PLY, STL welded by position, glb checked against the
+# glTF rules), the same mesh in every format; a box that cuts the surface
+# still gives a closed mesh; --format overrides the extension; the checker
+# itself fails on a boundary edge, an edge of three triangles, a
+# degenerate triangle and a broken glb.
+#
+# usage: test_mesh_manifold.sh BLOBCAST
+# Exits 77 (skipped) when blobcast has not been built or python3 is missing.
+set -u
+BLOBCAST=${1:-}
+if [ -z "$BLOBCAST" ] || [ ! -x "$BLOBCAST" ]; then
+  echo "skip: blobcast must be built"
+  exit 77
+fi
+if ! command -v python3 > /dev/null; then
+  echo "skip: python3 is missing"
+  exit 77
+fi
+here=$(dirname "$0")
+. "$here/../scratch.sh"
+bc_scratch mesh-manifold
+CHECK="python3 $here/check_mesh.py"
+
+# check WANT FILE...: check_mesh.py must exit WANT (0: all closed
+# 2-manifolds) on the files.
+check() {
+  want=$1
+  shift
+  $CHECK "$@" > "$tmp/check" 2>&1
+  got=$?
+  sed 's/^/    /' "$tmp/check"
+  if [ "$got" -ne "$want" ]; then
+    fail "check_mesh.py $*: exit $got, wanted $want"
+  else
+    echo "ok   check_mesh.py $*"
+  fi
+}
+
+# mesh ARGS...: blobcast mesh ARGS --quiet must succeed.
+mesh() {
+  if ! "$BLOBCAST" mesh "$@" --quiet > "$tmp/out" 2>&1; then
+    fail "blobcast mesh $*"
+    sed 's/^/    /' "$tmp/out"
+  fi
+}
+
+"$BLOBCAST" gen default --out "$tmp/default.json" &&
+  "$BLOBCAST" gen fig18 --count 1024 --kind spheres --blend smooth \
+    --out "$tmp/fig18.json" &&
+  "$BLOBCAST" gen catalogue --out "$tmp/catalogue.json" ||
+  fail "blobcast gen"
+
+# The default scene in every format: each a closed 2-manifold, the same
+# mesh (triangle count, vertex positions) in all four.
+for ext in obj ply stl glb; do
+  mesh "$tmp/default.json" --resolution 48 --out "$tmp/default.$ext"
+done
+check 0 --same "$tmp/default.obj" "$tmp/default.ply" "$tmp/default.stl" \
+  "$tmp/default.glb"
+
+# fig18-1024 smooth (a foam of blended spheres, many thin necks) and the
+# catalogue, whose boxes, cones, tori and the rest meet the grid every way.
+mesh "$tmp/fig18.json" --resolution 32 --out "$tmp/fig18.glb"
+mesh "$tmp/catalogue.json" --resolution 48 --out "$tmp/catalogue.ply"
+mesh "$tmp/catalogue.json" --resolution 48 --out "$tmp/catalogue.stl"
+check 0 "$tmp/fig18.glb" "$tmp/catalogue.ply" "$tmp/catalogue.stl"
+
+# A box through the middle of the default scene: the cut solids are closed
+# along its faces. --format wins over the extension.
+mesh "$tmp/default.json" --resolution 40 --bounds -1,-1,-1,1,0.2,1 \
+  --format glb --out "$tmp/cut.bin"
+cp "$tmp/cut.bin" "$tmp/cut.glb"
+check 0 "$tmp/cut.glb"
+
+# The checker finds what it looks for.
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\n' \
+  > "$tmp/open.obj"
+check 1 "$tmp/open.obj"
+grep -q "boundary=3 " "$tmp/check" || fail "open tetrahedron: boundary=3"
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 0 -1 0\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\nf 1 2 5\n' \
+  > "$tmp/fin.obj"
+check 1 "$tmp/fin.obj"
+grep -q "nonmanifold=1 " "$tmp/check" || fail "fin: nonmanifold=1"
+printf 'v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 0 1\nf 1 2 3\nf 1 3 4\nf 3 2 4\nf 2 1 4\n' \
+  > "$tmp/flat.obj"
+check 1 "$tmp/flat.obj"
+grep -q "degenerate=1 " "$tmp/check" || fail "flat: degenerate=1"
+# A glb whose JSON chunk length is off by one.
+python3 - "$tmp/default.glb" "$tmp/broken.glb" <<'PY'
+import struct, sys
+b = bytearray(open(sys.argv[1], "rb").read())
+struct.pack_into("<I", b, 12, struct.unpack_from("<I", b, 12)[0] + 1)
+open(sys.argv[2], "wb").write(b)
+PY
+check 1 "$tmp/broken.glb"
+
+# Bad arguments.
+"$BLOBCAST" mesh "$tmp/default.json" --out "$tmp/x.mesh" > "$tmp/out" 2>&1
+[ $? -eq 2 ] && grep -q "give --format" "$tmp/out" ||
+  fail "an unknown extension without --format is a usage error"
+"$BLOBCAST" mesh "$tmp/default.json" --token x --out "$tmp/x.obj" \
+  > "$tmp/out" 2>&1
+[ $? -eq 2 ] && grep -q "with --session only" "$tmp/out" ||
+  fail "--token without --session is a usage error"
+"$BLOBCAST" mesh "$tmp/default.json" --session s --out "$tmp/x.obj" \
+  > "$tmp/out" 2>&1
+[ $? -eq 2 ] && grep -q "not both" "$tmp/out" ||
+  fail "SCENE and --session together are a usage error"
+
+if [ "$failures" -ne 0 ]; then
+  echo "$failures check(s) failed"
+  exit 1
+fi
+echo "all checks passed"
