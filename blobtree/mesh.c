@@ -179,6 +179,18 @@ static int push_tri(struct bc_mesh *m, uint32_t a, uint32_t b, uint32_t c)
 	return 0;
 }
 
+/* Whether grid corner c lies on the box's boundary, where the field counts
+ * as outside so that a solid the box cuts is closed. */
+static bool on_boundary(const struct build *b, const int64_t c[3])
+{
+	for (int a = 0; a < 3; a++) {
+		if (c[a] <= 0 || c[a] >= (int64_t)b->n[a]) {
+			return true;
+		}
+	}
+	return false;
+}
+
 /* The corner value at global index (i, j, k), from the block's samples. */
 static float cval(const struct build *b, const int64_t c[3])
 {
@@ -220,6 +232,7 @@ static int edge_vertex(struct build *b, const int64_t c[3], int dir,
 	float p[3];
 	uint8_t rgb[3] = {178, 178, 178};
 	uint32_t prim = BC_NONE;
+	bool cap;
 	int rc;
 	if (2 * (b->map.n + 1) > b->map.cap && (rc = vmap_grow(&b->map))) {
 		return rc;
@@ -234,7 +247,10 @@ static int edge_vertex(struct build *b, const int64_t c[3], int dir,
 	}
 	v0 = cval(b, c);
 	v1 = cval(b, e);
-	t = clamp_t(v0 / (v0 - v1));
+	/* An edge from the box's boundary (outside by fiat) into the solid:
+	 * the cap closing a cut solid, half a cell inside the box. */
+	cap = on_boundary(b, c) || on_boundary(b, e);
+	t = cap ? 0.5 : clamp_t(v0 / (v0 - v1));
 	for (int a = 0; a < 3; a++) {
 		p[a] = (float)((double)b->org[a] +
 		               ((double)c[a] + t * (double)(e[a] - c[a])) *
@@ -242,7 +258,7 @@ static int edge_vertex(struct build *b, const int64_t c[3], int dir,
 	}
 	b->m->evals++;
 	f = bc_view_eval_id(&b->view, b->l, p, &prim);
-	if (isfinite(f) && f != 0.0) {
+	if (!cap && isfinite(f) && f != 0.0) {
 		/* The zero lies between p and the end of the other sign. */
 		double tf = (f < 0.0) == (v0 < 0.0)
 		                ? t + (1.0 - t) * f / (f - v1)
@@ -379,8 +395,10 @@ static int tet(struct build *b, const int64_t q[4][3])
 static const uint8_t kuhn[6][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1},
                                    {0, 2, 1}, {2, 1, 0}, {1, 0, 2}};
 
-/* A leaf region: cells [c0, c0 + BLOCK) clipped to the grid. */
-static int leaf(struct build *b, const uint32_t c0[3])
+/* A leaf region: cells [c0, c0 + BLOCK) clipped to the grid; inside: known
+ * to lie inside the solid (only its corners on the box's boundary are
+ * outside). */
+static int leaf(struct build *b, const uint32_t c0[3], bool inside)
 {
 	uint32_t c1[3];
 	int rc;
@@ -392,17 +410,19 @@ static int leaf(struct build *b, const uint32_t c0[3])
 	for (int64_t k = c0[2]; k <= (int64_t)c1[2]; k++) {
 		for (int64_t j = c0[1]; j <= (int64_t)c1[1]; j++) {
 			for (int64_t i = c0[0]; i <= (int64_t)c1[0]; i++) {
+				int64_t g[3] = {i, j, k};
 				float p[3], v;
 				size_t at = (size_t)(((k - b->base[2]) * SIDE +
 				                      (j - b->base[1])) *
 				                         SIDE +
 				                     (i - b->base[0]));
-				bool edge = i <= 0 || j <= 0 || k <= 0 ||
-				            i >= b->n[0] || j >= b->n[1] ||
-				            k >= b->n[2];
-				if (edge) {
+				if (on_boundary(b, g)) {
 					/* The box's faces close the solid. */
 					b->val[at] = 1.0f;
+					continue;
+				}
+				if (inside) {
+					b->val[at] = -1.0f;
 					continue;
 				}
 				corner_pos(b, i, j, k, p);
@@ -475,9 +495,23 @@ static void progress(struct build *b, uint64_t cells)
 	}
 }
 
-/* Region cells [c0, c1), primitives b->act[depth][0..n). */
+/* Whether region cells [c0, c1) reach the box's boundary. */
+static bool touches_boundary(const struct build *b, const uint32_t c0[3],
+                             const uint32_t c1[3])
+{
+	for (int a = 0; a < 3; a++) {
+		if (c0[a] == 0 || c1[a] == b->n[a]) {
+			return true;
+		}
+	}
+	return false;
+}
+
+/* Region cells [c0, c1), primitives b->act[depth][0..n). inside: an
+ * ancestor found the field negative all over it and built b->view; only
+ * the cap along the box's faces is left to make. */
 static int region(struct build *b, const uint32_t c0[3], const uint32_t c1[3],
-                  uint32_t depth, uint32_t n)
+                  uint32_t depth, uint32_t n, bool inside)
 {
 	float lo[3], hi[3], c[3], r = 0.0f, f;
 	const uint32_t *act = b->act[depth];
@@ -485,7 +519,11 @@ static int region(struct build *b, const uint32_t c0[3], const uint32_t c1[3],
 	int rc;
 	uint64_t cells =
 	    (uint64_t)(c1[0] - c0[0]) * (c1[1] - c0[1]) * (c1[2] - c0[2]);
-	if (n == 0) {
+	if (inside && !touches_boundary(b, c0, c1)) {
+		progress(b, cells);
+		return 0; /* all inside, away from the box's faces */
+	}
+	if (n == 0 && !inside) {
 		progress(b, cells);
 		return 0; /* nothing reaches here: +inf, outside */
 	}
@@ -496,20 +534,30 @@ static int region(struct build *b, const uint32_t c0[3], const uint32_t c1[3],
 		side = c1[a] - c0[a] > side ? c1[a] - c0[a] : side;
 	}
 	r = sqrtf(r);
-	if ((rc = bc_view_build(&b->view, b->l, act, n))) {
-		return rc;
-	}
-	f = eval_view(b, c);
-	if (fabsf(f) > LIPSCHITZ * b->l->lip * r * 1.001f + 1e-6f * b->cell) {
-		progress(b, cells);
-		return 0; /* no sign change in the region */
+	if (!inside) {
+		if ((rc = bc_view_build(&b->view, b->l, act, n))) {
+			return rc;
+		}
+		f = eval_view(b, c);
+		if (fabsf(f) >
+		    LIPSCHITZ * b->l->lip * r * 1.001f + 1e-6f * b->cell) {
+			/* No sign change in the region. Outside, or inside
+			 * away from the box's faces: nothing to make. Inside
+			 * against them: the cap, from the known sign (this
+			 * view gives the colours). */
+			if (!(f < 0.0f) || !touches_boundary(b, c0, c1)) {
+				progress(b, cells);
+				return 0;
+			}
+			inside = true;
+		}
 	}
 	if (side <= BLOCK || depth + 1 >= b->levels) {
 		if (side > BLOCK) {
 			return BC_ELIMIT; /* levels counts every halving */
 		}
 		b->m->cells_visited += cells;
-		rc = leaf(b, c0);
+		rc = leaf(b, c0, inside);
 		progress(b, cells);
 		return rc;
 	}
@@ -536,13 +584,13 @@ static int region(struct build *b, const uint32_t c0[3], const uint32_t c1[3],
 				continue;
 			}
 			region_box(b, d0, d1, clo, chi);
-			for (uint32_t i = 0; i < n; i++) {
+			for (uint32_t i = 0; i < n && !inside; i++) {
 				if (bc_abv_meets_box(&b->l->abv[act[i]], clo,
 				                     chi)) {
 					b->act[depth + 1][m2++] = act[i];
 				}
 			}
-			if ((rc = region(b, d0, d1, depth + 1, m2))) {
+			if ((rc = region(b, d0, d1, depth + 1, m2, inside))) {
 				return rc;
 			}
 		}
@@ -619,7 +667,7 @@ int bc_mesh_build(struct bc_mesh *m, const struct bc_tree *t,
 		for (uint32_t k = 0; k < l->nprims; k++) {
 			b.act[0][k] = k;
 		}
-		rc = region(&b, zero, b.n, 0, l->nprims);
+		rc = region(&b, zero, b.n, 0, l->nprims, false);
 	}
 	if (rc) {
 		bc_errinfo_set(ei, rc, "mesh: %s", bc_strerror(rc));

@@ -3,8 +3,9 @@
 # no code with the mesher (check_mesh.py): the default scene, fig18 with
 # 1024 smoothly blended spheres and the catalogue (every primitive kind),
 # in each format (OBJ, PLY, STL welded by position, glb checked against the
-# glTF rules), the same mesh in every format; a box that cuts the surface
-# still gives a closed mesh; --format overrides the extension; the checker
+# glTF rules), the same mesh in every format; a box that cuts the surface,
+# or lies wholly inside a solid, still gives a closed mesh; --format
+# overrides the extension; the checker
 # itself fails on a boundary edge, an edge of three triangles, a
 # degenerate triangle and a broken glb.
 #
@@ -75,6 +76,16 @@ mesh "$tmp/default.json" --resolution 40 --bounds -1,-1,-1,1,0.2,1 \
   --format glb --out "$tmp/cut.bin"
 cp "$tmp/cut.bin" "$tmp/cut.glb"
 check 0 "$tmp/cut.glb"
+
+# A box wholly inside a solid (a sphere of radius 10, the box 2 wide at
+# the centre): no surface crosses it, yet the mesh is the closed box, a
+# sphere's topology (V - E + F = 2).
+printf '{"blobcast": 1, "root": {"type": "sphere", "id": 1, "radius": 10}}\n' \
+  > "$tmp/big.json"
+mesh "$tmp/big.json" --resolution 24 --bounds -1,-1,-1,1,1,1 \
+  --out "$tmp/inside.stl"
+check 0 "$tmp/inside.stl"
+grep -q "euler=2$" "$tmp/check" || fail "the box inside a solid: euler=2"
 
 # The checker finds what it looks for.
 printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\n' \
