@@ -52,7 +52,7 @@ static bool is_client_cmd(const char *s)
 static const char main_about[] =
     "Local commands:\n"
     "  render      render a scene file to images on this machine\n"
-    "  mesh        write a triangle mesh (.obj, .ply, .stl) of a scene\n"
+    "  mesh        write a closed mesh (.obj .ply .stl .glb) of a scene\n"
     "  gen         print a generated scene (the paper's synthetic\n"
     "              families and more) as JSON\n"
     "  eval-bench  measure interval pruning and pruned evaluation\n"
