@@ -87,19 +87,17 @@ mesh "$tmp/big.json" --resolution 24 --bounds -1,-1,-1,1,1,1 \
 check 0 "$tmp/inside.stl"
 grep -q "euler=2$" "$tmp/check" || fail "the box inside a solid: euler=2"
 
-# The checker finds what it looks for.
-printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\n' \
-  > "$tmp/open.obj"
-check 1 "$tmp/open.obj"
-grep -q "boundary=3 " "$tmp/check" || fail "open tetrahedron: boundary=3"
-printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 0 -1 0\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\nf 1 2 5\n' \
-  > "$tmp/fin.obj"
-check 1 "$tmp/fin.obj"
-grep -q "nonmanifold=1 " "$tmp/check" || fail "fin: nonmanifold=1"
-printf 'v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 0 1\nf 1 2 3\nf 1 3 4\nf 3 2 4\nf 2 1 4\n' \
-  > "$tmp/flat.obj"
-check 1 "$tmp/flat.obj"
-grep -q "degenerate=1 " "$tmp/check" || fail "flat: degenerate=1"
+# The checker finds what it looks for: bad NAME COUNT OBJ-TEXT: the OBJ
+# fails with NAME=COUNT.
+bad() {
+  printf "$3" > "$tmp/$1.obj"
+  check 1 "$tmp/$1.obj"
+  grep -q " $1=$2 " "$tmp/check" || fail "$1.obj: wanted $1=$2"
+}
+tet='v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\n'
+bad boundary 3 "$tet"
+bad nonmanifold 1 "${tet}v 0 -1 0\nf 3 1 4\nf 1 2 5\n"
+bad degenerate 1 'v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 0 1\nf 1 2 3\nf 1 3 4\nf 3 2 4\nf 2 1 4\n'
 # A glb whose JSON chunk length is off by one.
 python3 - "$tmp/default.glb" "$tmp/broken.glb" <<'PY'
 import struct, sys

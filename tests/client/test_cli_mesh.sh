@@ -41,29 +41,27 @@ if [ ! -S "$tmp/d.sock" ]; then
 fi
 U="--server unix:$tmp/d.sock"
 
-# run STATUS PATTERN ARGS...: blobcast ARGS must exit STATUS and print
-# PATTERN (fixed string, "" for any).
-run() {
-  want=$1 pattern=$2
-  shift 2
+# blob STATUS ARGS...: blobcast ARGS must exit STATUS (its output in
+# $tmp/out).
+blob() {
+  want=$1
+  shift
   "$BLOBCAST" "$@" > "$tmp/out" 2>&1
   got=$?
-  if [ "$got" -ne "$want" ]; then
-    fail "blobcast $*: exit $got, wanted $want"
-    sed 's/^/    /' "$tmp/out"
-  elif [ -n "$pattern" ] && ! grep -qF -- "$pattern" "$tmp/out"; then
-    fail "blobcast $*: output lacks \"$pattern\""
-    sed 's/^/    /' "$tmp/out"
-  else
+  if [ "$got" -eq "$want" ]; then
     echo "ok   blobcast $*"
+    return 0
   fi
+  fail "blobcast $*: exit $got, wanted $want"
+  sed 's/^/    /' "$tmp/out"
+  return 1
 }
 
-run 0 "" gen catalogue --out "$tmp/cat.json"
-run 0 "loaded" $U load --session m "$tmp/cat.json"
-run 0 "meshing: done" mesh "$tmp/cat.json" --resolution 40 \
+blob 0 gen catalogue --out "$tmp/cat.json"
+blob 0 $U load --session m "$tmp/cat.json"
+blob 0 mesh "$tmp/cat.json" --resolution 40 \
   --out "$tmp/file.ply"
-run 0 "meshing: done" mesh $U --session m --resolution 40 \
+blob 0 mesh $U --session m --resolution 40 \
   --out "$tmp/live.ply"
 if ! cmp -s "$tmp/file.ply" "$tmp/live.ply"; then
   fail "the session's mesh differs from the scene file's"
@@ -77,8 +75,8 @@ fi
 sed 's/^/    /' "$tmp/check"
 
 # An edit shows: the first primitive (id 2, a sphere) grows.
-run 0 "" $U edit --session m 2 radius=1.5
-run 0 "meshing: done" mesh $U --session m --resolution 40 \
+blob 0 $U edit --session m 2 radius=1.5
+blob 0 mesh $U --session m --resolution 40 \
   --out "$tmp/edited.glb"
 if python3 "$here/../blobtree/check_mesh.py" "$tmp/edited.glb" \
   > "$tmp/check" 2>&1; then
@@ -93,7 +91,8 @@ if [ -z "$n_edit" ] || [ "$n_edit" -le "$n_live" ]; then
   fail "a bigger sphere gave $n_edit triangles, before $n_live"
 fi
 
-run 1 "nosuch" mesh $U --session nosuch --out "$tmp/x.obj"
+blob 1 mesh $U --session nosuch --out "$tmp/x.obj" &&
+  ! grep -q nosuch "$tmp/out" && fail "the refusal does not name the session"
 [ -e "$tmp/x.obj" ] && fail "a failed mesh left $tmp/x.obj"
 
 if [ "$failures" -ne 0 ]; then
