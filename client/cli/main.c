@@ -270,7 +270,8 @@ int main(int argc, char **argv)
 	if (nwords == 0) {
 		return dispatch(a.npos, a.pos);
 	}
-	if (!is_client_cmd(a.pos[0])) {
+	/* mesh takes them too, for --session. */
+	if (!is_client_cmd(a.pos[0]) && strcmp(a.pos[0], "mesh") != 0) {
 		bool known = false;
 		for (size_t i = 0; i < N_LOCAL_CMDS; i++) {
 			known = known || strcmp(a.pos[0], local_cmds[i]) == 0;

@@ -76,8 +76,8 @@ sed 's/^/    /' "$tmp/check"
 
 # An edit shows: the first primitive (id 2, a sphere) grows.
 blob 0 $U edit --session m 2 radius=1.5
-blob 0 mesh $U --session m --resolution 40 \
-  --out "$tmp/edited.glb"
+# (--server before the command word, as a global option, works too.)
+blob 0 $U mesh --session m --resolution 40 --out "$tmp/edited.glb"
 if python3 "$here/../blobtree/check_mesh.py" "$tmp/edited.glb" \
   > "$tmp/check" 2>&1; then
   echo "ok   check_mesh.py edited.glb"
