@@ -27,6 +27,7 @@
  * argument in full.
  */
 #include "blobcast/mesh.h"
+#include "mesh_impl.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -40,6 +41,11 @@
 /* The blobtree field's Lipschitz bound (docs/architecture.md: the tracers
  * step by it). */
 #define LIPSCHITZ 1.45f
+/* Edges shorter than this many cells are collapsed (mesh_collapse.c), in
+ * at most this many passes: each pass takes about a third of the edges it
+ * could, the first eight halve the triangle count. */
+#define COLLAPSE 0.5f
+#define PASSES 8
 
 /* ---- cell -> vertex hash ------------------------------------------------- */
 
@@ -111,6 +117,7 @@ struct build {
 	float val[SIDE * SIDE * SIDE];
 	int32_t base[3]; /* corner index of val[0] */
 	uint64_t done_cells, total_cells;
+	double share; /* of the progress, the grid's (the rest: collapses) */
 	const struct bc_mesh_opts *o;
 	uint32_t levels; /* entries of act */
 };
@@ -490,8 +497,8 @@ static void progress(struct build *b, uint64_t cells)
 {
 	b->done_cells += cells;
 	if (b->o && b->o->progress) {
-		b->o->progress(b->o->ctx,
-		               (double)b->done_cells / (double)b->total_cells);
+		b->o->progress(b->o->ctx, b->share * (double)b->done_cells /
+		                              (double)b->total_cells);
 	}
 }
 
@@ -505,6 +512,14 @@ static bool touches_boundary(const struct build *b, const uint32_t c0[3],
 		}
 	}
 	return false;
+}
+
+static void collapse_progress(void *ctx, double done)
+{
+	struct build *b = ctx;
+	if (b->o && b->o->progress) {
+		b->o->progress(b->o->ctx, b->share + (1.0 - b->share) * done);
+	}
 }
 
 /* Region cells [c0, c1), primitives b->act[depth][0..n). inside: an
@@ -649,6 +664,8 @@ int bc_mesh_build(struct bc_mesh *m, const struct bc_tree *t,
 	}
 	b.m = m;
 	b.l = l;
+	/* The collapses take about as long as the grid, on foams. */
+	b.share = opts && opts->raw ? 1.0 : 0.6;
 	b.o = opts;
 	m->cell = b.cell;
 	b.total_cells = (uint64_t)b.n[0] * b.n[1] * b.n[2];
@@ -668,6 +685,10 @@ int bc_mesh_build(struct bc_mesh *m, const struct bc_tree *t,
 			b.act[0][k] = k;
 		}
 		rc = region(&b, zero, b.n, 0, l->nprims, false);
+	}
+	if (rc == 0 && !(opts && opts->raw)) {
+		rc = bc_mesh_collapse_short(m, COLLAPSE * b.cell, PASSES,
+		                            collapse_progress, &b);
 	}
 	if (rc) {
 		bc_errinfo_set(ei, rc, "mesh: %s", bc_strerror(rc));

@@ -2,7 +2,8 @@
 # `blobcast mesh` writes closed 2-manifolds, counted by a reader that shares
 # no code with the mesher (check_mesh.py): the default scene in each format
 # (OBJ, PLY, STL welded by position, glb checked against the glTF rules),
-# the same mesh in all four; fig18 with 1024 smoothly blended spheres (glb)
+# the same mesh in all four; fig18 with 1024 smoothly blended spheres (glb,
+# with and without --raw: the same V - E + F, fewer triangles without)
 # and the catalogue, every primitive kind (STL); a box that cuts the
 # surface, or lies wholly inside a solid, still gives a closed mesh;
 # --format overrides the extension; bad arguments are refused; the checker
@@ -66,6 +67,7 @@ check 0 --same "$tmp/default.obj" "$tmp/default.ply" "$tmp/default.stl" \
 # fig18-1024 smooth (a foam of blended spheres, many thin necks) and the
 # catalogue, whose boxes, cones, tori and the rest meet the grid every way.
 mesh "$tmp/fig18.json" --resolution 32 --out "$tmp/fig18.glb"
+mesh "$tmp/fig18.json" --resolution 32 --raw --out "$tmp/fig18-raw.glb"
 mesh "$tmp/catalogue.json" --resolution 48 --out "$tmp/catalogue.stl"
 
 # A box through the middle of the default scene: the cut solids are closed
@@ -81,8 +83,16 @@ printf '{"blobcast": 1, "root": {"type": "sphere", "id": 1, "radius": 10}}\n' \
   > "$tmp/big.json"
 mesh "$tmp/big.json" --resolution 24 --bounds -1,-1,-1,1,1,1 \
   --out "$tmp/inside.stl"
-check 0 "$tmp/fig18.glb" "$tmp/catalogue.stl" "$tmp/cut.glb" \
-  "$tmp/inside.stl"
+check 0 "$tmp/fig18.glb" "$tmp/fig18-raw.glb" "$tmp/catalogue.stl" \
+  "$tmp/cut.glb" "$tmp/inside.stl"
+# Collapsing short edges keeps the topology (V - E + F) and thins out.
+euler() { sed -n "s|^.*$1: ok .*euler=\(-*[0-9]*\)$|\1|p" "$tmp/check"; }
+tris() { sed -n "s|^.*$1: ok .*triangles=\([0-9]*\) .*|\1|p" "$tmp/check"; }
+if [ -z "$(euler fig18.glb)" ] ||
+  [ "$(euler fig18.glb)" != "$(euler fig18-raw.glb)" ] ||
+  [ "$(tris fig18.glb)" -ge "$(tris fig18-raw.glb)" ]; then
+  fail "fig18: collapsed $(tris fig18.glb) triangles, euler $(euler fig18.glb); raw $(tris fig18-raw.glb), euler $(euler fig18-raw.glb)"
+fi
 grep -q "inside.stl: ok .*euler=2$" "$tmp/check" ||
   fail "the box inside a solid: euler=2"
 

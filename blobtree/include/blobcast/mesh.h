@@ -29,6 +29,10 @@ struct bc_mesh_opts {
 	/* The box to mesh; all zero: the tree's box grown by two cells. The
 	 * solid is clipped to it (closed by the box's faces). */
 	float lo[3], hi[3];
+	/* Keep every triangle marching tetrahedra make: no collapse of the
+	 * edges shorter than half a cell (faster, about twice the
+	 * triangles; closed 2-manifold either way). */
+	bool raw;
 	/* Called now and then with the fraction done (may be NULL). */
 	void (*progress)(void *ctx, double done);
 	void *ctx;
