@@ -42,8 +42,8 @@
  * step by it). */
 #define LIPSCHITZ 1.45f
 /* Edges shorter than this many cells are collapsed (mesh_collapse.c), in
- * at most this many passes: each pass takes about a third of the edges it
- * could, the first eight halve the triangle count. */
+ * at most this many passes (a pass leaves the neighbours of each collapse
+ * for the next; eight about halve the triangle count). */
 #define COLLAPSE 0.5f
 #define PASSES 8
 
