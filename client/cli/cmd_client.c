@@ -34,11 +34,13 @@
 
 /* Every client command, in the order the overview lists them. */
 static const struct bc_cli_cmd *const cmds[] = {
-    &bc_cli_cmd_load,    &bc_cli_cmd_edit,          &bc_cli_cmd_camera,
-    &bc_cli_cmd_present, &bc_cli_cmd_follow,        &bc_cli_cmd_snapshot,
-    &bc_cli_cmd_watch,   &bc_cli_cmd_bench_latency, &bc_cli_cmd_nodes,
-    &bc_cli_cmd_scene,   &bc_cli_cmd_delete,        &bc_cli_cmd_sessions,
-    &bc_cli_cmd_undo,    &bc_cli_cmd_redo};
+    &bc_cli_cmd_load,     &bc_cli_cmd_edit,          &bc_cli_cmd_camera,
+    &bc_cli_cmd_present,  &bc_cli_cmd_follow,        &bc_cli_cmd_snapshot,
+    &bc_cli_cmd_watch,    &bc_cli_cmd_bench_latency, &bc_cli_cmd_nodes,
+    &bc_cli_cmd_scene,    &bc_cli_cmd_delete,        &bc_cli_cmd_sessions,
+    &bc_cli_cmd_undo,     &bc_cli_cmd_redo,          &bc_cli_cmd_add,
+    &bc_cli_cmd_remove,   &bc_cli_cmd_move,          &bc_cli_cmd_wrap,
+    &bc_cli_cmd_duplicate};
 
 static const struct bc_cli_cmd *find_cmd(const char *name)
 {
@@ -74,7 +76,7 @@ struct parsed {
 };
 
 /* Most options of the table below. */
-#define MAX_OPTS 24
+#define MAX_OPTS 32
 
 /*
  * One table of every client command's options: the command-specific ones,
@@ -223,6 +225,43 @@ static int client_opts(const struct bc_cli_cmd *k, struct bc_cli_call *a,
 	      .arg = "DEG",
 	      .help = "vertical field of view in degrees (between 0\n"
 	              "and 180)"}},
+	    {BC_CLI_O_PARENT,
+	     {.name = "parent",
+	      .kind = BC_OPT_U32,
+	      .dst = &a->parent,
+	      .lo = 1,
+	      .hi = UINT32_MAX,
+	      .arg = "ID",
+	      .help = "the operator to add under (default: the root,\n"
+	              "or the operator under the unary nodes on top)"}},
+	    {BC_CLI_O_POSITION,
+	     {.name = "position",
+	      .kind = BC_OPT_STRING,
+	      .dst = &a->position,
+	      .arg = "N",
+	      .help = "child index under the parent, 0 first (default:\n"
+	              "after the last child)"}},
+	    {BC_CLI_O_AT,
+	     {.name = "at",
+	      .kind = BC_OPT_STRING,
+	      .dst = &a->at,
+	      .arg = "x,y,z",
+	      .help = "where new primitives go without translate=\n"
+	              "(default: the session camera's target)"}},
+	    {BC_CLI_O_CHILD,
+	     {.name = "child",
+	      .kind = BC_OPT_STRING,
+	      .dst = &a->child,
+	      .arg = "KIND",
+	      .help = "the primitive a new operator or unary node\n"
+	              "starts with (default sphere)"}},
+	    {BC_CLI_O_OFFSET,
+	     {.name = "offset",
+	      .kind = BC_OPT_STRING,
+	      .dst = &a->offset,
+	      .arg = "x,y,z",
+	      .help = "move the copy by x,y,z (default: on the\n"
+	              "original)"}},
 	    {BC_CLI_O_JSON,
 	     {.name = "json",
 	      .kind = BC_OPT_FLAG,

@@ -1,7 +1,8 @@
 /*
  * The `blobcast` subcommands that talk to a blobcastd through libblobcast:
  * load, edit, camera, present, follow, snapshot, watch, bench-latency,
- * nodes, scene, delete, sessions, undo and redo. main.c calls the first
+ * nodes, scene, delete, sessions, undo, redo and the modelling verbs add,
+ * remove, move, wrap and duplicate. main.c calls the first
  * two functions; the rest is shared by the commands' files (cmd_client.c
  * parses the options, client_common.c holds the helpers).
  */
@@ -62,6 +63,11 @@ enum {
 	BC_CLI_O_JSON = 1u << 15,
 	BC_CLI_O_FOR = 1u << 16,
 	BC_CLI_O_TILE = 1u << 17,
+	BC_CLI_O_PARENT = 1u << 18,
+	BC_CLI_O_POSITION = 1u << 19,
+	BC_CLI_O_AT = 1u << 20,
+	BC_CLI_O_CHILD = 1u << 21,
+	BC_CLI_O_OFFSET = 1u << 22,
 };
 #define BC_CLI_O_CAMERA                                                        \
 	(BC_CLI_O_EYE | BC_CLI_O_TARGET | BC_CLI_O_UP | BC_CLI_O_FOV)
@@ -85,6 +91,10 @@ struct bc_cli_call {
 	enum bc_proto_encoding encoding;
 	bool interacting, json;
 	uint8_t downscale;
+	/* The modelling verbs (cmd_model.c): --parent (0: not given), and
+	 * --position, --at, --child, --offset as typed (NULL: not given). */
+	uint32_t parent;
+	const char *position, *at, *child, *offset;
 	const char *pos[BC_CLI_MAX_POSITIONAL];
 	int npos;
 };
@@ -124,6 +134,11 @@ extern const struct bc_cli_cmd bc_cli_cmd_delete;
 extern const struct bc_cli_cmd bc_cli_cmd_sessions;
 extern const struct bc_cli_cmd bc_cli_cmd_undo;
 extern const struct bc_cli_cmd bc_cli_cmd_redo;
+extern const struct bc_cli_cmd bc_cli_cmd_add;
+extern const struct bc_cli_cmd bc_cli_cmd_remove;
+extern const struct bc_cli_cmd bc_cli_cmd_move;
+extern const struct bc_cli_cmd bc_cli_cmd_wrap;
+extern const struct bc_cli_cmd bc_cli_cmd_duplicate;
 
 /* Prints a failure of the server or the connection (on c, NULL while
  * connecting) and what to do about it; returns its exit status

@@ -13,23 +13,43 @@
 
 #include "blobcast/alloc.h"
 #include "blobcast/error.h"
+#include "blobcast/scene.h"
 
 /* Floats keep 9 significant digits: the fewest that always give the same
  * IEEE single back. */
 #define FLOAT_DIGITS 9
 
-/* The double nearest to the shortest decimal that gives v back as a float:
- * 0.3f prints as 0.3, not 0.300000012. */
-static double shortest(float v)
+/* Whether v printed with p significant digits reads back as v; *d is
+ * what it reads back as a double. */
+static bool round_trips(float v, int p, double *d)
 {
 	char buf[32];
-	for (int p = 1; p < FLOAT_DIGITS; p++) {
-		snprintf(buf, sizeof(buf), "%.*g", p, (double)v);
-		if (strtof(buf, NULL) == v) {
-			return strtod(buf, NULL);
+	snprintf(buf, sizeof(buf), "%.*g", p, (double)v);
+	*d = strtod(buf, NULL);
+	return strtof(buf, NULL) == v;
+}
+
+/* The double nearest to the shortest decimal that gives v back as a float:
+ * 0.3f prints as 0.3, not 0.300000012. A bisection over the digits (more
+ * digits are never farther from v), so a listing of many floats costs a
+ * few conversions each, not nine. */
+static double shortest(float v)
+{
+	int lo = 1, hi = FLOAT_DIGITS;
+	double d, best = (double)v;
+	while (lo < hi) {
+		int mid = lo + (hi - lo) / 2;
+		if (round_trips(v, mid, &d)) {
+			hi = mid;
+			best = d;
+		} else {
+			lo = mid + 1;
 		}
 	}
-	return (double)v;
+	if (hi == FLOAT_DIGITS) {
+		return (double)v;
+	}
+	return best;
 }
 
 static bool is_identity_rotation(const float q[4])
@@ -112,9 +132,21 @@ static json_t *json_floats(const float *v, int n)
 	return a;
 }
 
-/* Returns the node's object, NULL when memory runs out. */
-static json_t *json_node(const struct bc_tree *t, uint32_t id)
+/* The nodes of a tree in pre-order: ids[i] and end[i], the index after
+ * node i's subtree, so that node i's children are ids[i + 1], then
+ * ids[end[i + 1]], ... up to end[i]: every listing costs time linear in
+ * the tree (the model's child k costs O(k), which made wide operators
+ * quadratic). */
+struct order {
+	uint32_t *ids, *end;
+	uint32_t n;
+};
+
+/* Returns node i's object, NULL when memory runs out. */
+static json_t *json_node(const struct bc_tree *t, const struct order *ord,
+                         uint32_t i)
 {
+	uint32_t id = ord->ids[i];
 	struct bc_prim_data p;
 	struct bc_op_data op;
 	json_t *o = json_object();
@@ -144,14 +176,14 @@ static json_t *json_node(const struct bc_tree *t, uint32_t id)
 	} else {
 		const char *name = bc_op_name(op.kind);
 		json_t *kids = json_array();
-		uint32_t n = bc_tree_child_count(t, id);
 		ok = ok && name && kids &&
 		     !json_object_set_new(o, "type", json_string(name)) &&
 		     !json_object_set_new(o, "parent",
 		                          json_integer(bc_tree_parent(t, id)));
-		for (uint32_t k = 0; ok && k < n; k++) {
-			ok = !json_array_append_new(
-			    kids, json_integer(bc_tree_child(t, id, k)));
+		for (uint32_t k = i + 1; ok && k < ord->end[i];
+		     k = ord->end[k]) {
+			ok = !json_array_append_new(kids,
+			                            json_integer(ord->ids[k]));
 		}
 		ok = ok && !json_object_set(o, "children", kids);
 		json_decref(kids);
@@ -172,17 +204,64 @@ static json_t *json_node(const struct bc_tree *t, uint32_t id)
 /* ---- the walk --------------------------------------------------------------
  */
 
+/* Fills o with t's nodes in pre-order (one walk). Returns 0, BC_ENOMEM or
+ * the walk's error. */
+static int order_init(struct order *o, const struct bc_tree *t)
+{
+	uint32_t n = bc_tree_node_count(t), depth = bc_tree_nesting(t);
+	/* open[d]: the node open at depth d, its subtree not yet ended. */
+	uint32_t *open = bc_calloc(depth ? depth : 1, sizeof(*open));
+	uint32_t nopen = 0;
+	struct bc_scene_walk w;
+	struct bc_scene_node sn;
+	int rc;
+	memset(o, 0, sizeof(*o));
+	o->ids = bc_calloc(n ? n : 1, sizeof(*o->ids));
+	o->end = bc_calloc(n ? n : 1, sizeof(*o->end));
+	if (!open || !o->ids || !o->end) {
+		rc = BC_ENOMEM;
+		goto out;
+	}
+	if (n == 0) {
+		rc = 0;
+		goto out;
+	}
+	if ((rc = bc_scene_walk_init(&w, t))) {
+		goto out;
+	}
+	while (o->n < n && bc_scene_walk_next(&w, &sn)) {
+		/* A node at depth d ends the subtrees open at d and below. */
+		while (nopen > sn.depth) {
+			o->end[open[--nopen]] = o->n;
+		}
+		if (sn.depth < depth) {
+			open[nopen++] = o->n;
+		}
+		o->ids[o->n++] = sn.id;
+	}
+	bc_scene_walk_finish(&w);
+	while (nopen > 0) {
+		o->end[open[--nopen]] = o->n;
+	}
+out:
+	bc_free(open);
+	return rc;
+}
+
+static void order_finish(struct order *o)
+{
+	bc_free(o->ids);
+	bc_free(o->end);
+	memset(o, 0, sizeof(*o));
+}
+
 int bc_cli_print_nodes(FILE *out, const struct bc_tree *t, bool json)
 {
-	uint32_t n = bc_tree_node_count(t), top = 0;
-	/* Pre-order with an explicit stack: trees may nest far deeper than a
-	 * thread's stack would allow recursion (BC_TREE_MAX_DEPTH). Every node
-	 * is pushed once, so n entries suffice. */
-	uint32_t *stack = bc_calloc(n ? n : 1, sizeof(*stack));
-	bool first = true;
-	int rc = 0;
-	if (!stack) {
-		return BC_ENOMEM;
+	struct order o;
+	int rc = order_init(&o, t);
+	if (rc) {
+		order_finish(&o);
+		return rc;
 	}
 	if (json) {
 		fputs("[", out);
@@ -190,36 +269,26 @@ int bc_cli_print_nodes(FILE *out, const struct bc_tree *t, bool json)
 		fprintf(out, "%-8s %-19s %-8s %s\n", "id", "type", "parent",
 		        "parameters");
 	}
-	if (n) {
-		stack[top++] = bc_tree_root(t);
-	}
-	while (top > 0) {
-		uint32_t id = stack[--top];
-		uint32_t kids = bc_tree_child_count(t, id);
+	for (uint32_t i = 0; i < o.n; i++) {
 		if (json) {
 			/* One compact object per line: easy to grep, and
 			 * still one JSON document. */
-			json_t *o = json_node(t, id);
-			fputs(first ? "\n" : ",\n", out);
-			if (!o) {
+			json_t *obj = json_node(t, &o, i);
+			fputs(i == 0 ? "\n" : ",\n", out);
+			if (!obj) {
 				rc = BC_ENOMEM;
 				goto out;
 			}
-			rc = json_dumpf(o, out,
+			rc = json_dumpf(obj, out,
 			                JSON_COMPACT | JSON_PRESERVE_ORDER |
 			                    JSON_REAL_PRECISION(FLOAT_DIGITS));
-			json_decref(o);
+			json_decref(obj);
 			if (rc) {
 				rc = BC_EIO;
 				goto out;
 			}
 		} else {
-			text_node(out, t, id);
-		}
-		first = false;
-		/* Children go on in reverse so the first is listed first. */
-		for (uint32_t k = kids; k > 0 && top < n; k--) {
-			stack[top++] = bc_tree_child(t, id, k - 1);
+			text_node(out, t, o.ids[i]);
 		}
 	}
 	if (json) {
@@ -229,6 +298,6 @@ int bc_cli_print_nodes(FILE *out, const struct bc_tree *t, bool json)
 		rc = BC_EIO;
 	}
 out:
-	bc_free(stack);
+	order_finish(&o);
 	return rc;
 }

@@ -47,6 +47,9 @@ struct bc_client {
 	char join_name[BC_PROTO_MAX_NAME + 1];
 	enum bc_proto_role join_role;
 	enum bc_client_join_mode join_mode;
+	/* The id after the last one model.c handed out (0: none), so that
+	 * actions sent before the mirror shows the last one take others. */
+	uint32_t model_next_id;
 };
 
 /* Milliseconds left until deadline (a bc_clock_ms() value), rounded

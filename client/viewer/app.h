@@ -1,7 +1,8 @@
 /*
  * The state of one blobcast-view window, shared by its files: main.c
  * (options, start-up, the loop, drawing), net.c (messages from the server,
- * sending camera, view and edits) and input.c (mouse and keyboard).
+ * sending camera, view and edits), input.c (mouse and keyboard) and
+ * modelling.c (adding, deleting, duplicating, wrapping, regrouping).
  * Everything runs on the main thread except the socket watcher of main.c,
  * which only polls the socket and wakes the loop.
  */
@@ -47,8 +48,14 @@
  * (a level above 0 or INCOMPLETE: the daemon stopped refining it, or the
  * --screenshot-wait ran out); 1 and 2 are failures and bad options. */
 #define BC_VIEWER_EXIT_UNFINISHED 5
-/* Largest number of vertices of overlay text. */
-#define BC_VIEWER_TEXT_FLOATS (64u * 1024u)
+/* Bytes of the text of the panel along the bottom (the add palette or the
+ * keys). */
+#define BC_VIEWER_PANEL_TEXT 2048
+/* Floats of the triangles of one panel's text: a lit font pixel takes 12
+ * (two triangles), a character about 15 lit pixels, so 256 Ki floats draw
+ * some 1400 characters, more than the key list (about 600) or the
+ * overlay's lines hold. */
+#define BC_VIEWER_TEXT_FLOATS (256u * 1024u)
 
 struct bc_viewer_opts {
 	const char *server, *session, *name, *token;
@@ -134,7 +141,16 @@ struct bc_viewer_app {
 		enum bc_op unary_kind;
 		float extent;
 	} wheel;
-	uint32_t selected;
+	/* The selection: a primitive picked, or a node above it (Up). Down
+	 * walks back towards sel_leaf, the primitive picked last. */
+	uint32_t selected, sel_leaf;
+	/* M: the operator G moves the selection under (0: none). */
+	uint32_t mark;
+	/* The add palette (A, W). */
+	struct bc_viewer_palette palette;
+	/* The modelling EDIT on its way (0: none), and the node that becomes
+	 * the selection once it is applied (0: none). */
+	uint32_t model_seq, model_select;
 
 	/* Frames. */
 	uint64_t nframes; /* shown, snapshots excluded */
@@ -176,6 +192,9 @@ struct bc_viewer_app {
 	bool screenshot_now;
 	unsigned shots;
 
+	/* H: the keys listed along the bottom of the overlay. */
+	bool help;
+
 	char status[200];
 	double status_at, stats_at;
 	float *text;
@@ -185,6 +204,10 @@ struct bc_viewer_app {
 	pthread_t watcher;
 	bool watching;
 	atomic_int fired; /* it woke the loop and waits to be re-armed */
+
+	/* Joined as a viewer because the token grants viewing only (no
+	 * --role given): the overlay says why edits are off. */
+	bool view_only_token;
 
 	bool offline; /* the connection failed; the status says why */
 	bool gave_up; /* ... for a reason a retry would meet again */
@@ -205,6 +228,38 @@ void bc_viewer_status(struct bc_viewer_app *a, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)))
 #endif
     ;
+
+/* Whether this window may edit (it joined as an editor). When not, says
+ * on the overlay that `what` (a sentence's subject: "undo", "adding a
+ * shape") is off in a view-only window, and why. */
+bool bc_viewer_may_edit(struct bc_viewer_app *a, const char *what);
+/* The overlay's words for a view-only window, "" for an editor. */
+const char *bc_viewer_view_only_text(const struct bc_viewer_app *a);
+
+/* modelling.c: each action is one EDIT (blobcast/model.h), refused on the
+ * overlay with the library's reason before anything is sent when it cannot
+ * be done, and never sent by a view-only window. */
+/* Enter in the palette: a shape or operator is added under the selection's
+ * operator at the camera's target and selected; a unary kind wraps the
+ * selection. */
+void bc_viewer_model_choose(struct bc_viewer_app *a,
+                            const struct bc_viewer_pal_entry *e);
+/* Delete, X, Backspace: removes the selection with its subtree. */
+void bc_viewer_model_delete(struct bc_viewer_app *a);
+/* D: a copy of the selection beside it, selected once applied. */
+void bc_viewer_model_duplicate(struct bc_viewer_app *a);
+/* M: marks the selected operator as the regroup parent (again, or with
+ * nothing selected: unmarks). */
+void bc_viewer_model_mark(struct bc_viewer_app *a);
+/* G: moves the selection under the marked operator. */
+void bc_viewer_model_regroup(struct bc_viewer_app *a);
+/* Our EDIT seq was applied, or refused (ERROR): the action is over. */
+void bc_viewer_model_applied(struct bc_viewer_app *a, uint32_t seq);
+void bc_viewer_model_refused(struct bc_viewer_app *a, uint32_t seq);
+/* The overlay's words for node id: "#4 sphere", "#1 smooth_union blend
+ * 0.3, 3 children", "#5 twist rate 0.5". Returns out. */
+const char *bc_viewer_node_text(const struct bc_tree *t, uint32_t id, char *out,
+                                size_t n);
 
 /* net.c */
 /* Handles messages already received or readable, at most
@@ -252,6 +307,10 @@ void bc_viewer_drag_step(struct bc_viewer_app *a, bool final);
 /* The PICK answer for a pending press arrived (node 0: nothing hit). */
 void bc_viewer_pick_answer(struct bc_viewer_app *a, uint32_t seq, uint32_t node,
                            const float position[3]);
+/* The text of the panel along the bottom of the window: the add palette
+ * while it is open, else the keys (H).
+ * Returns false when there is none to show. */
+bool bc_viewer_lower_panel(struct bc_viewer_app *a, char *out, size_t n);
 /* Window pixels to view pixels. */
 void bc_viewer_to_view(struct bc_viewer_app *a, double x, double y, float *vx,
                        float *vy);

@@ -132,6 +132,77 @@ void bc_viewer_move_in_plane(const struct bc_camera *cam, uint32_t height,
 	}
 }
 
+bool bc_viewer_node_box(const struct bc_tree *t, uint32_t id, float lo[3],
+                        float hi[3])
+{
+	const struct bc_lin *l = t ? bc_tree_lin(t) : NULL;
+	uint32_t slot, first, k0, n;
+	for (int i = 0; i < 3; i++) {
+		lo[i] = INFINITY;
+		hi[i] = -INFINITY;
+	}
+	/* A unary node takes no slot: its box is its child's (a chain of
+	 * them ends at an operator or a primitive). */
+	while (t && bc_tree_child_count(t, id) == 1) {
+		id = bc_tree_child(t, id, 0);
+	}
+	if (!l || (slot = bc_tree_slot(t, id)) >= l->count) {
+		return false;
+	}
+	/* The primitives below a slot are consecutive in post-order. */
+	first = l->first[slot];
+	k0 = l->prim_of[first];
+	n = (slot - first) / 2u + 1u;
+	if (k0 >= l->nprims || n > l->nprims - k0) {
+		return false;
+	}
+	for (uint32_t k = k0; k < k0 + n; k++) {
+		float a[3], b[3];
+		bc_abv_aabb(&l->abv[k], a, b);
+		for (int i = 0; i < 3; i++) {
+			lo[i] = fminf(lo[i], a[i]);
+			hi[i] = fmaxf(hi[i], b[i]);
+		}
+	}
+	for (int i = 0; i < 3; i++) {
+		if (!(isfinite(lo[i]) && isfinite(hi[i]) && lo[i] <= hi[i])) {
+			return false;
+		}
+	}
+	return true;
+}
+
+void bc_viewer_frame_box(struct bc_camera *cam, const float lo[3],
+                         const float hi[3], float aspect)
+{
+	float dir[3], c[3], d[3], r, n, half_y, half_x, half, dist;
+	bc_v3_sub(cam->eye, cam->target, dir);
+	if (!((n = bc_v3_len(dir)) > 0.0f) || !isfinite(n)) {
+		return;
+	}
+	for (int i = 0; i < 3; i++) {
+		c[i] = 0.5f * (lo[i] + hi[i]);
+		d[i] = hi[i] - lo[i];
+		dir[i] /= n;
+	}
+	/* The sphere around the box fits whatever the view direction. */
+	r = 0.5f * bc_v3_len(d);
+	if (!isfinite(r) || !(aspect > 0.0f)) {
+		return;
+	}
+	r = fmaxf(r, BC_VIEWER_ZOOM_MIN);
+	half_y = 0.5f * cam->fov_y_deg * 3.14159265f / 180.0f;
+	half_x = atanf(tanf(half_y) * aspect);
+	half = fminf(half_y, half_x);
+	dist = r / sinf(half) * BC_VIEWER_FIT_MARGIN;
+	dist = fminf(fmaxf(dist, BC_VIEWER_ZOOM_MIN), BC_VIEWER_ZOOM_MAX);
+	for (int i = 0; i < 3; i++) {
+		cam->target[i] = c[i];
+		cam->eye[i] = c[i] + dir[i] * dist;
+	}
+	bc_viewer_cam_clamp(cam);
+}
+
 const uint8_t bc_viewer_box_edges[12][2] = {
     {0, 1}, {2, 3}, {4, 5}, {6, 7}, {0, 2}, {1, 3},
     {4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6}, {3, 7},

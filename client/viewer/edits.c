@@ -34,6 +34,16 @@ bool bc_viewer_edits_ready(const struct bc_viewer_edits *q)
 void bc_viewer_edits_sent(struct bc_viewer_edits *q, uint32_t seq,
                           double now_ms)
 {
+	bc_viewer_edits_track(q, seq, now_ms);
+	if (q->has_pending && q->pending.interacting) {
+		q->inflight = seq;
+	}
+	q->has_pending = false;
+}
+
+void bc_viewer_edits_track(struct bc_viewer_edits *q, uint32_t seq,
+                           double now_ms)
+{
 	if (q->nsent == BC_VIEWER_EDITS_SENT) {
 		/* An answer that never came: forget the oldest. */
 		memmove(&q->sent[0], &q->sent[1],
@@ -43,10 +53,6 @@ void bc_viewer_edits_sent(struct bc_viewer_edits *q, uint32_t seq,
 	q->sent[q->nsent].seq = seq;
 	q->sent[q->nsent].at = now_ms;
 	q->nsent++;
-	if (q->has_pending && q->pending.interacting) {
-		q->inflight = seq;
-	}
-	q->has_pending = false;
 }
 
 /* Removes seq from the sent list; returns its send time or a negative

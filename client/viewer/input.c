@@ -9,10 +9,16 @@
  *    parameter, with Ctrl the blend of the operator above it, with Alt the
  *    main parameter of the innermost unary node above it that has one
  *    (unary.c: sizes scale, signed values step);
- *  - keys: S lossless snapshot, P window screenshot, O overlay, R the
- *    scene's camera, Escape or Q quit; Ctrl-Z undo, Ctrl-Shift-Z or
- *    Ctrl-Y redo (sent without waiting; the answer shows on the overlay);
- *    F follow the presenter (again: stop), Shift-F present (again: stop).
+ *  - keys: S lossless snapshot, P window screenshot, O overlay, H the
+ *    keys, R the session's camera, Home zoom to fit (Shift: the
+ *    selection), Escape or Q quit; Ctrl-Z undo, Ctrl-Shift-Z or Ctrl-Y
+ *    redo (sent without waiting; the answer shows on the overlay); F
+ *    follow the presenter (again: stop), Shift-F present (again: stop);
+ *  - modelling (modelling.c does the edits): Up and Down walk the
+ *    selection up the tree and back, A opens the add palette (W on its
+ *    unary kinds), which then takes the keys until Enter or Escape,
+ *    Delete/X deletes, D duplicates, M marks the regroup parent and G
+ *    moves the selection under it.
  * Callbacks only record what happened; bc_viewer_drag_step() turns the
  * motion of a whole loop turn into one message. Gestures send their
  * messages with INTERACTING and end with one without it.
@@ -121,6 +127,7 @@ void bc_viewer_pick_answer(struct bc_viewer_app *a, uint32_t seq, uint32_t node,
 	}
 	if (prim) {
 		select_node(a, node);
+		a->sel_leaf = node;
 	} else if (!a->drag.moved) {
 		select_node(a, 0);
 	}
@@ -201,7 +208,11 @@ static bool start_unary(struct bc_viewer_app *a, const struct bc_tree *t,
 {
 	struct bc_unary u;
 	struct bc_viewer_unary_param p;
-	uint32_t node = bc_viewer_unary_target(t, a->selected, &u);
+	/* A unary node selected with Up is its own target. */
+	uint32_t node = bc_tree_get_unary(t, a->selected, &u) &&
+	                        bc_viewer_unary_param(u.kind, &p)
+	                    ? a->selected
+	                    : bc_viewer_unary_target(t, a->selected, &u);
 	if (!node || !bc_viewer_unary_param(u.kind, &p)) {
 		bc_viewer_status(a, "no unary node with a value above #%u",
 		                 a->selected);
@@ -226,12 +237,11 @@ static void wheel_edit(struct bc_viewer_app *a, enum bc_viewer_wheel what,
 	struct bc_op_data op;
 	float f = expf((float)notches * 0.1f);
 	struct bc_viewer_edit *e = &a->wheel.edit;
-	if (!is_editor(a)) {
-		bc_viewer_status(a, "viewers cannot edit");
+	if (!bc_viewer_may_edit(a, "editing with the wheel")) {
 		return;
 	}
-	if (!a->selected || !t || !bc_tree_get(t, a->selected, &p, NULL) ||
-	    p.kind == BC_PRIM_INVALID) {
+	if (!a->selected || !t || !bc_tree_get(t, a->selected, &p, &op) ||
+	    (what == BC_VIEWER_WHEEL_SIZE && p.kind == BC_PRIM_INVALID)) {
 		bc_viewer_status(a, "click a shape first");
 		return;
 	}
@@ -266,7 +276,11 @@ static void wheel_edit(struct bc_viewer_app *a, enum bc_viewer_wheel what,
 				return;
 			}
 		} else {
-			uint32_t parent = bc_tree_parent(t, a->selected);
+			/* A smooth operator selected with Up, else the
+			 * operator above the selection. */
+			uint32_t parent = bc_op_is_smooth(op.kind)
+			                      ? a->selected
+			                      : bc_tree_parent(t, a->selected);
 			if (!parent || !bc_tree_get(t, parent, NULL, &op) ||
 			    !bc_op_is_smooth(op.kind)) {
 				bc_viewer_status(a,
@@ -333,11 +347,157 @@ static void on_scroll(GLFWwindow *w, double xoff, double yoff)
 	a->cam_final_at = bc_viewer_now_ms() + BC_VIEWER_WHEEL_END_MS;
 }
 
+/* Home: zoom to fit the whole scene (id 0) or node id's subtree, from the
+ * camera's own direction. */
+static void frame_node(struct bc_viewer_app *a, uint32_t id)
+{
+	const struct bc_tree *t = bc_client_scene(a->c, NULL);
+	float lo[3], hi[3];
+	uint32_t node = id ? id : t ? bc_tree_root(t) : 0;
+	if (!node || !bc_viewer_node_box(t, node, lo, hi)) {
+		bc_viewer_status(a, id ? "select a shape to frame first"
+		                       : "no scene to frame yet");
+		return;
+	}
+	bc_viewer_frame_box(&a->cam, lo, hi,
+	                    a->view_h ? (float)a->view_w / (float)a->view_h
+	                              : 1.0f);
+	bc_viewer_camera_changed(a, false);
+	if (id) {
+		bc_viewer_status(a, "framed #%u", id);
+	} else {
+		bc_viewer_status(a, "framed the whole scene");
+	}
+}
+
+/* H: what every key does, as the overlay lists it. */
+static const char key_help[] =
+    "Keys (H hides)\n"
+    "drag: orbit, or move the shape under the pointer; right drag: pan\n"
+    "wheel: zoom; Shift/Ctrl/Alt+wheel: size, blend, unary value\n"
+    "click: select a shape   Up/Down: its parent / back down\n"
+    "A: add (palette)   W: wrap the selection   D: duplicate\n"
+    "Delete, X: delete   M: mark an operator   G: move under the mark\n"
+    "R: the session's camera   Home: fit the scene (Shift: selection)\n"
+    "Ctrl+Z: undo   Ctrl+Shift+Z, Ctrl+Y: redo\n"
+    "F: follow the presenter   Shift+F: present\n"
+    "S: snapshot   P: screenshot   O: overlay   Q, Esc: quit";
+
+bool bc_viewer_lower_panel(struct bc_viewer_app *a, char *out, size_t n)
+{
+	if (!n) {
+		return false;
+	}
+	if (a->palette.open) {
+		bc_viewer_palette_text(&a->palette, out, n);
+		return true;
+	}
+	if (a->help) {
+		snprintf(out, n, "%s", key_help);
+		return true;
+	}
+	return false;
+}
+
+/* Up: the selection's parent becomes the selection; Down: back towards
+ * the primitive picked last. */
+static void select_step(struct bc_viewer_app *a, bool up)
+{
+	const struct bc_tree *t = bc_client_scene(a->c, NULL);
+	char words[96];
+	uint32_t next = 0;
+	if (!t || !a->selected) {
+		bc_viewer_status(a, "click a shape first");
+		return;
+	}
+	if (up) {
+		next = bc_tree_parent(t, a->selected);
+	} else {
+		/* The node below the selection on the way to the leaf. */
+		for (uint32_t id = a->sel_leaf; id && id != a->selected;
+		     id = bc_tree_parent(t, id)) {
+			next = id;
+		}
+		if (next && bc_tree_parent(t, next) != a->selected) {
+			next = 0;
+		}
+	}
+	if (!next) {
+		bc_viewer_status(
+		    a, up ? "#%u is the root" : "#%u: nothing picked below it",
+		    a->selected);
+		return;
+	}
+	select_node(a, next);
+	bc_viewer_status(a, "selected %s",
+	                 bc_viewer_node_text(t, next, words, sizeof(words)));
+}
+
+/* Keys while the palette is open; returns false for keys it leaves to
+ * the rest (Ctrl combinations). */
+static bool palette_key(struct bc_viewer_app *a, int key, int mods)
+{
+	struct bc_viewer_pal_entry e;
+	if (mods & (GLFW_MOD_CONTROL | GLFW_MOD_ALT | GLFW_MOD_SUPER)) {
+		return false;
+	}
+	a->redraw = true;
+	switch (key) {
+	case GLFW_KEY_UP:
+		bc_viewer_palette_move(&a->palette, -1);
+		break;
+	case GLFW_KEY_DOWN:
+		bc_viewer_palette_move(&a->palette, 1);
+		break;
+	case GLFW_KEY_PAGE_UP:
+		bc_viewer_palette_page(&a->palette, -1);
+		break;
+	case GLFW_KEY_PAGE_DOWN:
+		bc_viewer_palette_page(&a->palette, 1);
+		break;
+	case GLFW_KEY_ENTER:
+	case GLFW_KEY_KP_ENTER:
+		a->palette.open = false;
+		if (bc_viewer_palette_entry(a->palette.cur, &e)) {
+			bc_viewer_model_choose(a, &e);
+		}
+		break;
+	case GLFW_KEY_ESCAPE:
+	case GLFW_KEY_A:
+	case GLFW_KEY_W:
+		a->palette.open = false;
+		break;
+	default:
+		/* GLFW's letter keys are their upper-case ASCII codes. */
+		if (key >= GLFW_KEY_A && key <= GLFW_KEY_Z &&
+		    !bc_viewer_palette_jump(&a->palette, (char)key)) {
+			bc_viewer_status(a, "no kind starts with %c",
+			                 (char)(key - GLFW_KEY_A + 'a'));
+		}
+		break;
+	}
+	return true;
+}
+
+/* A and W: open the palette, on its shapes or its unary kinds. */
+static void palette_open(struct bc_viewer_app *a, enum bc_viewer_pal_section s)
+{
+	if (!bc_viewer_may_edit(a, s == BC_VIEWER_PAL_UNARY ? "wrapping"
+	                                                    : "adding")) {
+		return;
+	}
+	bc_viewer_palette_open(&a->palette, s);
+	a->redraw = true;
+}
+
 static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
 {
 	struct bc_viewer_app *a = glfwGetWindowUserPointer(w);
 	(void)scancode;
 	if (action != GLFW_PRESS && action != GLFW_REPEAT) {
+		return;
+	}
+	if (a->palette.open && palette_key(a, key, mods)) {
 		return;
 	}
 	/* Ctrl-Z undo, Ctrl-Shift-Z or Ctrl-Y redo (held: repeated). */
@@ -365,9 +525,41 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
 		a->o.overlay = !a->o.overlay;
 		a->redraw = true;
 		break;
+	case GLFW_KEY_H:
+		a->help = !a->help;
+		a->redraw = true;
+		break;
 	case GLFW_KEY_R:
 		a->cam = a->scene_cam;
 		bc_viewer_camera_changed(a, false);
+		bc_viewer_status(a, "the session's camera");
+		break;
+	case GLFW_KEY_HOME:
+		frame_node(a, (mods & GLFW_MOD_SHIFT) ? a->selected : 0);
+		break;
+	case GLFW_KEY_UP:
+	case GLFW_KEY_DOWN:
+		select_step(a, key == GLFW_KEY_UP);
+		break;
+	case GLFW_KEY_A:
+		palette_open(a, BC_VIEWER_PAL_SHAPE);
+		break;
+	case GLFW_KEY_W:
+		palette_open(a, BC_VIEWER_PAL_UNARY);
+		break;
+	case GLFW_KEY_DELETE:
+	case GLFW_KEY_BACKSPACE:
+	case GLFW_KEY_X:
+		bc_viewer_model_delete(a);
+		break;
+	case GLFW_KEY_D:
+		bc_viewer_model_duplicate(a);
+		break;
+	case GLFW_KEY_M:
+		bc_viewer_model_mark(a);
+		break;
+	case GLFW_KEY_G:
+		bc_viewer_model_regroup(a);
 		break;
 	case GLFW_KEY_F:
 		if (mods & GLFW_MOD_SHIFT) {

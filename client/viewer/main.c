@@ -58,9 +58,28 @@ void bc_viewer_status(struct bc_viewer_app *a, const char *fmt, ...)
 	}
 }
 
+const char *bc_viewer_view_only_text(const struct bc_viewer_app *a)
+{
+	if (bc_client_info(a->c)->role != BC_PROTO_ROLE_VIEWER) {
+		return "";
+	}
+	return a->view_only_token ? "view-only (the token grants viewing only)"
+	                          : "view-only (--role viewer)";
+}
+
+bool bc_viewer_may_edit(struct bc_viewer_app *a, const char *what)
+{
+	if (bc_client_info(a->c)->role == BC_PROTO_ROLE_EDITOR) {
+		return true;
+	}
+	bc_viewer_status(a, "%s: %s is off", bc_viewer_view_only_text(a), what);
+	return false;
+}
+
 /* ---- options ------------------------------------------------------------- */
 
 static const struct bc_opt_name role_names[] = {
+    {"auto", BC_PROTO_ROLE_INVALID},
     {"editor", BC_PROTO_ROLE_EDITOR},
     {"viewer", BC_PROTO_ROLE_VIEWER},
     {NULL, 0}};
@@ -80,7 +99,7 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o,
                       bool *done)
 {
 	struct cli c = {
-	    .role = BC_PROTO_ROLE_EDITOR,
+	    .role = BC_PROTO_ROLE_INVALID,
 	    .encoding = BC_PROTO_ENC_JPEG,
 	    .size = {960, 600},
 	    .quality = 85,
@@ -114,7 +133,8 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o,
 	     .kind = BC_OPT_ENUM,
 	     .dst = &c.role,
 	     .arg = "ROLE",
-	     .help = "{choices} (default {default})",
+	     .help = "{choices} (default {default}: an editor\n"
+	             "when the token allows it, else view-only)",
 	     .names = role_names},
 	    {.name = "name",
 	     .kind = BC_OPT_STRING,
@@ -232,26 +252,40 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o,
 	    .usage = "blobcast-view [options]",
 	    .about = "Shows a blobcast session in a window and edits it "
 	             "with the mouse.",
-	    .footer = "Mouse: drag orbits, or moves the shape under the "
-	              "pointer; right drag\nor Shift-drag pans; the wheel "
-	              "zooms, Shift+wheel sizes the selected\nshape, "
-	              "Ctrl+wheel changes its operator's blend, Alt+wheel "
-	              "the\nvalue of the nearest unary node above it (offset "
-	              "amount, onion\nthickness, elongate half_extents, twist "
-	              "or bend rate, repeat\nspacing, scale factor; mirrors "
-	              "are passed over). Keys: S snapshot,\nP screenshot, O "
-	              "overlay, R scene camera, Q or Escape quit;\nCtrl-Z "
-	              "undo, Ctrl-Shift-Z or Ctrl-Y "
-	              "redo; F follow the presenter\n(this window shows what "
-	              "the presenter's camera sees, at its own size;\nmoving "
-	              "the camera or F again stops), Shift-F present "
-	              "(members who\nfollow see this window's camera; "
-	              "Shift-F again stops). The overlay\nnames who presents "
-	              "and whether this window follows.\n\nA lost connection "
-	              "is retried (after 0.25 s, doubling up to 4 s)\nand the "
-	              "session joined again; a refused token or role or a\n"
-	              "missing session stop the retries. With --screenshot a "
-	              "lost\nconnection exits 1 instead.",
+	    .footer =
+	        "Mouse: drag orbits, or moves the shape under the pointer; "
+	        "right drag\nor Shift-drag pans; the wheel zooms, Shift+wheel "
+	        "sizes the selected\nshape, Ctrl+wheel changes its operator's "
+	        "blend, Alt+wheel the\nvalue of the nearest unary node above "
+	        "it (offset amount, onion\nthickness, elongate half_extents, "
+	        "twist or bend rate, repeat\nspacing, scale factor; mirrors "
+	        "are passed over).\n\n"
+	        "Keys: H lists them on the overlay. Home zooms to fit the "
+	        "whole\nscene (Shift+Home the selection), R goes back to the "
+	        "session's\ncamera; S snapshot, P screenshot, O overlay, Q or "
+	        "Escape quit;\nCtrl-Z undo, Ctrl-Shift-Z or Ctrl-Y redo; F "
+	        "follow the presenter\n(this window shows what the "
+	        "presenter's camera sees, at its own size;\nmoving the camera "
+	        "or F again stops), Shift-F present (members who\nfollow see "
+	        "this window's camera; Shift-F again stops).\n\n"
+	        "Modelling, one edit each (every member sees it at once, and "
+	        "it "
+	        "undoes\nas one step): Up and Down select the parent of the "
+	        "selection "
+	        "and back;\nA opens the add palette (Up/Down, PgUp/PgDn, a "
+	        "letter "
+	        "jumps,\nEnter chooses, Escape closes): a shape or an operator "
+	        "is added\nunder the selection's operator at the centre of the "
+	        "view, a unary\nkind wraps the selection (W opens the palette "
+	        "there); Delete or X\ndeletes the selection, D duplicates it; "
+	        "M marks the selected\noperator and G moves the selection "
+	        "under it.\n\n"
+	        "A token that grants viewing only opens the window view-only "
+	        "(the\noverlay says so; edit keys are off) unless --role "
+	        "editor asks\nfor more. A lost connection is retried (after "
+	        "0.25 s, doubling up\nto 4 s) and the session joined again; a "
+	        "refused token or role or a\nmissing session stop the retries. "
+	        "With --screenshot a lost\nconnection exits 1 instead.",
 	    .opts = opts};
 	*o = (struct bc_viewer_opts){
 	    .session = "default",
@@ -369,7 +403,7 @@ static void watch_stop(struct bc_viewer_app *a)
 
 static const char *role_name(enum bc_proto_role r)
 {
-	return r == BC_PROTO_ROLE_VIEWER ? "viewer" : "editor";
+	return r == BC_PROTO_ROLE_VIEWER ? "view-only" : "editor";
 }
 
 static void fmt_latency(const struct bc_viewer_meter *m, char *out, size_t n)
@@ -392,10 +426,13 @@ static void fmt_selection(struct bc_viewer_app *a, char *out, size_t n)
 	struct bc_unary u;
 	uint32_t parent;
 	int k, len;
-	if (!a->selected || !t || !bc_tree_get(t, a->selected, &p, NULL) ||
-	    !(info = bc_prim_info(p.kind))) {
-		snprintf(out, n, "%s - click a shape to select it",
-		         role_name(bc_client_info(a->c)->role));
+	if (!a->selected || !t || !bc_tree_get(t, a->selected, &p, NULL)) {
+		snprintf(out, n, "click a shape to select it");
+		return;
+	}
+	if (!(info = bc_prim_info(p.kind))) {
+		/* An operator or unary node, selected with Up. */
+		bc_viewer_node_text(t, a->selected, out, n);
 		return;
 	}
 	len = snprintf(out, n, "#%u %s", a->selected, info->name);
@@ -427,77 +464,113 @@ static void fmt_selection(struct bc_viewer_app *a, char *out, size_t n)
 	}
 }
 
-/* The top-right tag: whether the picture on screen is final, and whether
- * a render we asked for has not come yet. Amber, apart from the numbers,
- * so that a coarse or budget-cut picture never passes for the real one. */
-static void draw_tag(struct bc_viewer_app *a, uint32_t fw, uint32_t fh,
-                     float scale, const char *refining, double now)
+/* Where a panel of text sits in the window. */
+enum panel_corner {
+	PANEL_TOP_LEFT = 0,
+	PANEL_BOTTOM_LEFT,
+	PANEL_BOTTOM_RIGHT,
+	PANEL_CORNER_COUNT
+};
+
+/* Draws text in colour rgba on a dark panel in a corner of the fw x fh
+ * window, text pixels scale window pixels wide. */
+static void draw_panel(struct bc_viewer_app *a, const char *text,
+                       enum panel_corner corner, uint32_t fw, uint32_t fh,
+                       float scale, const float rgba[4])
 {
 	const float pad = 6.0f;
 	const float panel_rgba[4] = {0.0f, 0.0f, 0.0f, 0.6f};
-	const float tag_rgba[4] = {0.95f, 0.72f, 0.29f, 1.0f};
-	double since = a->offline ? 0.0 : bc_viewer_pending_since(a);
-	char tag[96];
-	float w, h, x, y;
+	float w, h, x = 0.0f, y = 0.0f;
 	size_t nf;
-	int lines = 0;
-	tag[0] = '\0';
-	if (refining[0]) {
-		snprintf(tag, sizeof(tag), "%s", refining);
-		lines++;
+	int lines = 1;
+	for (const char *p = text; *p; p++) {
+		lines += *p == '\n';
 	}
-	if (since > 0.0) {
-		size_t len = strlen(tag);
-		snprintf(tag + len, sizeof(tag) - len,
-		         "%srender pending %.1f s", lines ? "\n" : "",
-		         (now - since) / 1e3);
-		lines++;
-	}
-	if (!lines) {
-		return;
-	}
-	w = bc_viewer_text_width(tag, scale) + 2.0f * pad;
+	w = bc_viewer_text_width(text, scale) + 2.0f * pad;
 	h = (float)lines * BC_VIEWER_LINE_ADVANCE * scale + 2.0f * pad -
 	    2.0f * scale;
-	/* Bottom right: the overlay's text runs along the top. */
-	x = (float)fw - w;
-	y = (float)fh - h;
+	if (corner != PANEL_TOP_LEFT) {
+		y = (float)fh - h;
+	}
+	if (corner == PANEL_BOTTOM_RIGHT) {
+		x = (float)fw - w;
+	}
 	{
 		const float q[12] = {x, y, x + w, y,     x + w, y + h,
 		                     x, y, x + w, y + h, x,     y + h};
 		bc_viewer_gl_draw(&a->gl, GL_TRIANGLES, q, 6, panel_rgba);
 	}
-	nf = bc_viewer_text_tris(tag, x + pad, y + pad, scale, a->text,
+	nf = bc_viewer_text_tris(text, x + pad, y + pad, scale, a->text,
 	                         BC_VIEWER_TEXT_FLOATS);
 	if (nf > BC_VIEWER_TEXT_FLOATS) {
 		nf = BC_VIEWER_TEXT_FLOATS;
 	}
-	bc_viewer_gl_draw(&a->gl, GL_TRIANGLES, a->text, nf / 2u, tag_rgba);
+	bc_viewer_gl_draw(&a->gl, GL_TRIANGLES, a->text, nf / 2u, rgba);
+}
+
+/* The bottom-right tag: whether the picture on screen is final, and
+ * whether a render we asked for has not come yet. Amber, apart from the
+ * numbers, so that a coarse or budget-cut picture never passes for the
+ * real one. */
+static void draw_tag(struct bc_viewer_app *a, uint32_t fw, uint32_t fh,
+                     float scale, const char *refining, double now)
+{
+	const float tag_rgba[4] = {0.95f, 0.72f, 0.29f, 1.0f};
+	double since = a->offline ? 0.0 : bc_viewer_pending_since(a);
+	char tag[96];
+	tag[0] = '\0';
+	if (refining[0]) {
+		snprintf(tag, sizeof(tag), "%s", refining);
+	}
+	if (since > 0.0) {
+		size_t len = strlen(tag);
+		snprintf(tag + len, sizeof(tag) - len,
+		         "%srender pending %.1f s", len ? "\n" : "",
+		         (now - since) / 1e3);
+	}
+	if (tag[0]) {
+		/* Bottom right: the overlay's text runs along the top. */
+		draw_panel(a, tag, PANEL_BOTTOM_RIGHT, fw, fh, scale, tag_rgba);
+	}
+}
+
+/* Text pixels per font pixel: 2 in a wide window, and on a HiDPI screen
+ * (whose framebuffer has more pixels than the window has screen
+ * coordinates) at least the content scale. */
+static float overlay_scale(struct bc_viewer_app *a, uint32_t fw)
+{
+	float scale = fw >= 900 ? 2.0f : 1.0f, sx = 1.0f, sy = 1.0f;
+	glfwGetWindowContentScale(a->win, &sx, &sy);
+	if (floorf(sy + 0.5f) > scale) {
+		scale = floorf(sy + 0.5f);
+	}
+	return scale;
+}
+
+/* The panel along the bottom (the add palette, or the keys), shown with
+ * or without the rest of the overlay. */
+static void draw_lower(struct bc_viewer_app *a, uint32_t fw, uint32_t fh)
+{
+	const float menu_rgba[4] = {0.75f, 0.9f, 1.0f, 1.0f};
+	char lower[BC_VIEWER_PANEL_TEXT];
+	if (bc_viewer_lower_panel(a, lower, sizeof(lower))) {
+		draw_panel(a, lower, PANEL_BOTTOM_LEFT, fw, fh,
+		           overlay_scale(a, fw), menu_rgba);
+	}
 }
 
 static void draw_overlay(struct bc_viewer_app *a, uint32_t fw, uint32_t fh,
                          double now)
 {
 	char text[1000], lat[64], sel[200], refining[48], who[160];
-	const float pad = 6.0f;
-	const float panel_rgba[4] = {0.0f, 0.0f, 0.0f, 0.6f};
 	const float text_rgba[4] = {0.95f, 0.95f, 0.9f, 1.0f};
-	float scale = fw >= 900 ? 2.0f : 1.0f, w, h, panel[12], sx = 1.0f,
-	      sy = 1.0f;
-	size_t nf;
-	int lines = 1;
-	/* On a HiDPI screen the framebuffer has more pixels than the window
-	 * has screen coordinates: the text grows with the content scale. */
-	glfwGetWindowContentScale(a->win, &sx, &sy);
-	if (floorf(sy + 0.5f) > scale) {
-		scale = floorf(sy + 0.5f);
-	}
+	float scale = overlay_scale(a, fw);
 	fmt_latency(&a->meter, lat, sizeof(lat));
 	fmt_selection(a, sel, sizeof(sel));
 	bc_viewer_refining_text(a->last.flags, refining, sizeof(refining));
 	snprintf(
 	    text, sizeof(text),
-	    "%.0f fps  edit>frame %s  %.1f kB/frame\n"
+	    "%.0f fps  edit>frame %s  %.1f kB/frame  H: keys\n"
 	    "frame %u %s %s %ux%u %u rect%s order %llu%s%s\n%s\n%s",
 	    bc_viewer_meter_fps(&a->meter, now), lat,
 	    bc_viewer_meter_kb(&a->meter), a->last.frame_no,
@@ -509,47 +582,54 @@ static void draw_overlay(struct bc_viewer_app *a, uint32_t fw, uint32_t fh,
 	    a->last.nrects == 1 ? "" : "s", (unsigned long long)a->last.order,
 	    refining[0] ? "  " : "", refining, sel,
 	    bc_viewer_roster_text(&a->roster, who, sizeof(who)));
+	if (a->mark) {
+		char words[96];
+		size_t len = strlen(text);
+		snprintf(text + len, sizeof(text) - len,
+		         "\nregroup parent %s (G moves the selection under it)",
+		         bc_viewer_node_text(bc_client_scene(a->c, NULL),
+		                             a->mark, words, sizeof(words)));
+	}
+	if (bc_viewer_view_only_text(a)[0]) {
+		size_t len = strlen(text);
+		snprintf(text + len, sizeof(text) - len,
+		         "\n%s: edit keys are off",
+		         bc_viewer_view_only_text(a));
+	}
 	if (a->status[0] &&
 	    (a->offline || now - a->status_at < BC_VIEWER_STATUS_MS)) {
 		size_t len = strlen(text);
 		snprintf(text + len, sizeof(text) - len, "\n%s", a->status);
 	}
-	for (const char *p = text; *p; p++) {
-		lines += *p == '\n';
-	}
-	w = bc_viewer_text_width(text, scale) + 2.0f * pad;
-	h = (float)lines * BC_VIEWER_LINE_ADVANCE * scale + 2.0f * pad -
-	    2.0f * scale;
-	{
-		const float q[12] = {0.0f, 0.0f, w, 0.0f, w,    h,
-		                     0.0f, 0.0f, w, h,    0.0f, h};
-		memcpy(panel, q, sizeof(panel));
-	}
-	bc_viewer_gl_draw(&a->gl, GL_TRIANGLES, panel, 6, panel_rgba);
-	nf = bc_viewer_text_tris(text, pad, pad, scale, a->text,
-	                         BC_VIEWER_TEXT_FLOATS);
-	if (nf > BC_VIEWER_TEXT_FLOATS) {
-		nf = BC_VIEWER_TEXT_FLOATS;
-	}
-	bc_viewer_gl_draw(&a->gl, GL_TRIANGLES, a->text, nf / 2u, text_rgba);
+	draw_panel(a, text, PANEL_TOP_LEFT, fw, fh, scale, text_rgba);
+	draw_lower(a, fw, fh);
 	draw_tag(a, fw, fh, scale, refining, now);
 }
 
-/* Outlines the selected primitive's bounding box, projected with our
- * camera (the one the picture was rendered for, or about to be). */
-static void draw_highlight(struct bc_viewer_app *a, uint32_t fw, uint32_t fh)
+/* Outlines node id in colour rgba, projected with our camera (the one the
+ * picture was rendered for, or about to be): a primitive's bounding box,
+ * turned with it, or the world box around the ABVs of a subtree. */
+static void outline(struct bc_viewer_app *a, uint32_t id, uint32_t fw,
+                    uint32_t fh, const float rgba[4])
 {
 	const struct bc_tree *t = bc_client_scene(a->c, NULL);
 	const float dark[4] = {0.0f, 0.0f, 0.0f, 0.7f};
-	const float bright[4] = {0.95f, 0.72f, 0.29f, 1.0f};
 	struct bc_prim_data p;
-	float corners[8][3], px[8][2], lines[48], shadow[48];
-	if (!a->selected || !t || !a->view_w ||
-	    !bc_tree_get(t, a->selected, &p, NULL) ||
-	    p.kind == BC_PRIM_INVALID) {
+	float corners[8][3], px[8][2], lines[48], shadow[48], lo[3], hi[3];
+	if (!id || !t || !a->view_w || !bc_tree_get(t, id, &p, NULL)) {
 		return;
 	}
-	bc_viewer_box_corners(&p, corners);
+	if (p.kind != BC_PRIM_INVALID) {
+		bc_viewer_box_corners(&p, corners);
+	} else if (bc_viewer_node_box(t, id, lo, hi)) {
+		for (int k = 0; k < 8; k++) {
+			for (int i = 0; i < 3; i++) {
+				corners[k][i] = ((k >> i) & 1) ? hi[i] : lo[i];
+			}
+		}
+	} else {
+		return;
+	}
 	for (int i = 0; i < 8; i++) {
 		float v[3];
 		if (!bc_viewer_project(&a->cam, a->view_w, a->view_h,
@@ -569,7 +649,18 @@ static void draw_highlight(struct bc_viewer_app *a, uint32_t fw, uint32_t fh)
 		}
 	}
 	bc_viewer_gl_draw(&a->gl, GL_LINES, shadow, 24, dark);
-	bc_viewer_gl_draw(&a->gl, GL_LINES, lines, 24, bright);
+	bc_viewer_gl_draw(&a->gl, GL_LINES, lines, 24, rgba);
+}
+
+/* The selection in amber, the regroup parent (M) in blue. */
+static void draw_highlight(struct bc_viewer_app *a, uint32_t fw, uint32_t fh)
+{
+	const float amber[4] = {0.95f, 0.72f, 0.29f, 1.0f};
+	const float blue[4] = {0.35f, 0.7f, 1.0f, 1.0f};
+	if (a->mark != a->selected) {
+		outline(a, a->mark, fw, fh, blue);
+	}
+	outline(a, a->selected, fw, fh, amber);
 }
 
 /* Writes the back buffer (before the swap) to path. */
@@ -646,6 +737,8 @@ static void draw(struct bc_viewer_app *a, double now)
 	draw_highlight(a, fw, fh);
 	if (a->o.overlay) {
 		draw_overlay(a, fw, fh, now);
+	} else {
+		draw_lower(a, fw, fh);
 	}
 	if (shot_done) {
 		a->exit_code =
@@ -779,11 +872,15 @@ static int joined(struct bc_client *c, struct bc_viewer_roster *roster,
 }
 
 /* Connects and joins the session of the options: an editor creates it
- * when missing, a viewer needs it to exist. Returns 0 or the error with its
- * reason in ei; *c is set either way (NULL when connecting failed). */
+ * when missing, a viewer needs it to exist. Without --role, a token that
+ * grants viewing only (EPERM for the editor role) joins as a viewer:
+ * *view_only_token then says so. Returns 0 or the error with its reason in
+ * ei; *c is set either way (NULL when connecting failed). */
 static int open_session(const struct bc_viewer_app *a, struct bc_client **c,
-                        struct bc_viewer_roster *roster, struct bc_errinfo *ei)
+                        struct bc_viewer_roster *roster, bool *view_only_token,
+                        struct bc_errinfo *ei)
 {
+	const char *s = a->o.session;
 	int rc = bc_client_connect(c,
 	                           &(struct bc_client_opts){
 	                               .addr = a->o.server,
@@ -793,14 +890,28 @@ static int open_session(const struct bc_viewer_app *a, struct bc_client **c,
 	                               .insecure = a->o.insecure,
 	                           },
 	                           ei);
+	*view_only_token = false;
 	if (rc) {
 		return rc;
 	}
-	rc = bc_client_join(*c, a->o.session, a->o.role,
-	                    a->o.role == BC_PROTO_ROLE_EDITOR
-	                        ? BC_CLIENT_JOIN_ANY
-	                        : BC_CLIENT_JOIN_EXISTING,
-	                    ei);
+	if (a->o.role == BC_PROTO_ROLE_VIEWER) {
+		rc = bc_client_join(*c, s, BC_PROTO_ROLE_VIEWER,
+		                    BC_CLIENT_JOIN_EXISTING, ei);
+		return rc ? rc : joined(*c, roster, ei);
+	}
+	rc =
+	    bc_client_join(*c, s, BC_PROTO_ROLE_EDITOR, BC_CLIENT_JOIN_ANY, ei);
+	if (rc == BC_EPERM && a->o.role == BC_PROTO_ROLE_INVALID) {
+		/* The refusal is not fatal: the same connection may look.
+		 * A viewer cannot create the session, so it must exist. */
+		rc = bc_client_join(*c, s, BC_PROTO_ROLE_VIEWER,
+		                    BC_CLIENT_JOIN_EXISTING, ei);
+		*view_only_token = rc == 0;
+	} else if (rc == BC_EPERM) {
+		size_t len = strlen(ei->msg);
+		snprintf(ei->msg + len, sizeof(ei->msg) - len,
+		         "; without --role editor the window opens view-only");
+	}
 	return rc ? rc : joined(*c, roster, ei);
 }
 
@@ -862,6 +973,8 @@ static void reconnect(struct bc_viewer_app *a, double now)
 	a->c = c;
 	a->roster = roster;
 	bc_viewer_edits_init(&a->edits);
+	a->model_seq = 0;
+	a->model_select = 0;
 	a->drag.mode = BC_VIEWER_DRAG_NONE;
 	a->wheel.what = BC_VIEWER_WHEEL_NONE;
 	a->snapshot_seq = 0;
@@ -1018,10 +1131,17 @@ int main(int argc, char **argv)
 		goto cleanup;
 	}
 
-	if ((rc = open_session(a, &a->c, &a->roster, &ei))) {
+	if ((rc = open_session(a, &a->c, &a->roster, &a->view_only_token,
+	                       &ei))) {
 		fprintf(stderr, "blobcast-view: %s: %s\n",
 		        a->o.server ? a->o.server : "127.0.0.1:7878", ei.msg);
 		goto cleanup;
+	}
+	if (a->o.verbose) {
+		printf("joined %s role=%s%s\n", a->o.session,
+		       role_name(bc_client_info(a->c)->role),
+		       a->view_only_token ? " token=viewer" : "");
+		fflush(stdout);
 	}
 	if ((scene = bc_client_scene(a->c, &a->cam)) == NULL) {
 		bc_camera_default(&a->cam);

@@ -241,9 +241,7 @@ void bc_viewer_undo(struct bc_viewer_app *a, bool redo)
 {
 	struct bc_msg m = {.type = redo ? BC_MSG_REDO : BC_MSG_UNDO};
 	uint32_t seq = 0;
-	if (bc_client_info(a->c)->role != BC_PROTO_ROLE_EDITOR) {
-		bc_viewer_status(a, "viewers cannot %s",
-		                 redo ? "redo" : "undo");
+	if (!bc_viewer_may_edit(a, redo ? "redo" : "undo")) {
 		return;
 	}
 	if (bc_client_send(a->c, &m, &seq)) {
@@ -546,6 +544,18 @@ static void got_frame(struct bc_viewer_app *a, const struct bc_msg *m)
 	}
 }
 
+/* The selection and the regroup mark name nodes that another member (or
+ * an undo) may have removed: forget those. */
+static void forget_gone(struct bc_viewer_app *a, const struct bc_tree *t)
+{
+	uint32_t *ids[3] = {&a->selected, &a->sel_leaf, &a->mark};
+	for (int i = 0; i < 3; i++) {
+		if (*ids[i] && (!t || !bc_tree_get(t, *ids[i], NULL, NULL))) {
+			*ids[i] = 0;
+		}
+	}
+}
+
 static void got_scene(struct bc_viewer_app *a, const struct bc_msg *m)
 {
 	struct bc_proto_scene_info si;
@@ -560,9 +570,7 @@ static void got_scene(struct bc_viewer_app *a, const struct bc_msg *m)
 		a->cam = cam;
 		a->scene_cam = cam;
 	}
-	if (a->selected && (!t || !bc_tree_get(t, a->selected, NULL, NULL))) {
-		a->selected = 0;
-	}
+	forget_gone(a, t);
 	if (m->scene_state.author) {
 		bc_viewer_roster_edit(&a->roster, m->scene_state.author,
 		                      m->scene_state.order);
@@ -579,10 +587,9 @@ static void got_applied(struct bc_viewer_app *a, const struct bc_msg *m)
 		                            e->order)) {
 			flush_edits(a);
 		}
+		bc_viewer_model_applied(a, e->author_seq);
 	}
-	if (a->selected && t && !bc_tree_get(t, a->selected, NULL, NULL)) {
-		a->selected = 0;
-	}
+	forget_gone(a, t);
 	bc_viewer_roster_edit(&a->roster, e->author, e->order);
 	if (m->flags & (BC_PROTO_FLAG_UNDO | BC_PROTO_FLAG_REDO)) {
 		char text[200];
@@ -680,6 +687,7 @@ static void got_error(struct bc_viewer_app *a, const struct bc_msg *m)
 	if (bc_viewer_edits_refused(&a->edits, m->seq)) {
 		flush_edits(a);
 	}
+	bc_viewer_model_refused(a, m->seq);
 	if (m->seq == a->snapshot_seq) {
 		a->snapshot_seq = 0;
 	}

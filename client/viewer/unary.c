@@ -72,29 +72,12 @@ uint32_t bc_viewer_unary_target(const struct bc_tree *t, uint32_t id,
 
 float bc_viewer_unary_extent(const struct bc_tree *t, uint32_t id)
 {
-	const struct bc_lin *l = t ? bc_tree_lin(t) : NULL;
-	float lo[3] = {INFINITY, INFINITY, INFINITY};
-	float hi[3] = {-INFINITY, -INFINITY, -INFINITY}, d[3], e;
-	uint32_t slot, first, k0, n;
+	float lo[3], hi[3], d[3], e;
 	struct bc_unary u;
 	/* A unary node takes no slot: its primitives are its child's. */
-	if (!l || bc_tree_child_count(t, id) != 1 ||
-	    (slot = bc_tree_slot(t, bc_tree_child(t, id, 0))) >= l->count) {
+	if (!t || bc_tree_child_count(t, id) != 1 ||
+	    !bc_viewer_node_box(t, bc_tree_child(t, id, 0), lo, hi)) {
 		return 1.0f;
-	}
-	first = l->first[slot];
-	k0 = l->prim_of[first];
-	n = (slot - first) / 2u + 1u;
-	if (k0 >= l->nprims || n > l->nprims - k0) {
-		return 1.0f;
-	}
-	for (uint32_t k = k0; k < k0 + n; k++) {
-		float a[3], b[3];
-		bc_abv_aabb(&l->abv[k], a, b);
-		for (int i = 0; i < 3; i++) {
-			lo[i] = fminf(lo[i], a[i]);
-			hi[i] = fmaxf(hi[i], b[i]);
-		}
 	}
 	for (int i = 0; i < 3; i++) {
 		d[i] = hi[i] - lo[i];

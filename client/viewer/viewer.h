@@ -67,6 +67,22 @@ void bc_viewer_move_in_plane(const struct bc_camera *cam, uint32_t height,
                              const float origin[3], float z, float dx, float dy,
                              float out[3]);
 
+/* The world box of node id's subtree: around the ABVs (bc_lin, already
+ * widened by repeats, mirrors and the operators' ranges) of the primitives
+ * below it; a unary node's is its child's. The whole scene's is the
+ * root's. Returns false (lo, hi then empty) when the tree has no
+ * linearized form or id is unknown. */
+bool bc_viewer_node_box(const struct bc_tree *t, uint32_t id, float lo[3],
+                        float hi[3]);
+/* Zoom to fit: the sphere around the box [lo, hi] seen whole by a view of
+ * width / height aspect, with BC_VIEWER_FIT_MARGIN to spare, from the
+ * camera's own direction (target at the box's centre, eye moved along the
+ * view line; up and field of view kept). */
+void bc_viewer_frame_box(struct bc_camera *cam, const float lo[3],
+                         const float hi[3], float aspect);
+/* Zoom to fit leaves the sphere around the box this much room. */
+#define BC_VIEWER_FIT_MARGIN 1.05f
+
 /* The eight world-space corners of primitive p's bounding box (its local
  * bound from bc_prim_bound, rotated and translated), corner i having bit 0
  * for x, bit 1 for y and bit 2 for z. */
@@ -144,6 +160,53 @@ void bc_viewer_unary_notch(enum bc_op kind, float *v, float notches,
  * 2,2,2", "mirror axes xz". Returns out. */
 const char *bc_viewer_unary_text(const struct bc_unary *u, char *out, size_t n);
 
+/* ---- palette.c ----------------------------------------------------------- */
+
+/* The add palette's sections, in the order they are listed. */
+enum bc_viewer_pal_section {
+	BC_VIEWER_PAL_NONE = 0,
+	BC_VIEWER_PAL_SHAPE,    /* primitive kinds: add */
+	BC_VIEWER_PAL_OPERATOR, /* operator kinds: add, with two spheres */
+	BC_VIEWER_PAL_UNARY,    /* unary kinds: wrap the selection */
+	BC_VIEWER_PAL_COUNT
+};
+
+/* Entries the palette shows at once around its cursor. */
+#define BC_VIEWER_PAL_ROWS 9u
+
+struct bc_viewer_pal_entry {
+	enum bc_viewer_pal_section section;
+	int kind;         /* enum bc_prim for shapes, enum bc_op otherwise */
+	const char *name; /* the kind's scene-file name */
+};
+
+struct bc_viewer_palette {
+	bool open;
+	uint32_t cur; /* the entry Enter chooses */
+};
+
+/* Entries in all: every primitive kind, every operator, every unary
+ * kind. */
+uint32_t bc_viewer_palette_count(void);
+/* Entry i (0 .. count - 1) into *out; false (out zeroed) past the end. */
+bool bc_viewer_palette_entry(uint32_t i, struct bc_viewer_pal_entry *out);
+/* Opens the palette on the first entry of section s. */
+void bc_viewer_palette_open(struct bc_viewer_palette *p,
+                            enum bc_viewer_pal_section s);
+/* Moves the cursor by delta entries, round from the last to the first. */
+void bc_viewer_palette_move(struct bc_viewer_palette *p, int delta);
+/* Moves to the first entry of the next (dir > 0) or previous section,
+ * round. */
+void bc_viewer_palette_page(struct bc_viewer_palette *p, int dir);
+/* Moves to the next entry after the cursor whose name starts with letter
+ * (any case), round; false (cursor kept) when none does. */
+bool bc_viewer_palette_jump(struct bc_viewer_palette *p, char letter);
+/* The panel: two lines of help, then BC_VIEWER_PAL_ROWS entries around
+ * the cursor as "> shape    sphere" (the cursor's) or "  wrap in  twist".
+ * Returns out. */
+const char *bc_viewer_palette_text(const struct bc_viewer_palette *p, char *out,
+                                   size_t n);
+
 /* ---- meter.c ------------------------------------------------------------- */
 
 /* Frames averaged for kB per frame. */
@@ -220,6 +283,11 @@ bool bc_viewer_edits_ready(const struct bc_viewer_edits *q);
 /* The pending edit was sent as seq at now_ms. */
 void bc_viewer_edits_sent(struct bc_viewer_edits *q, uint32_t seq,
                           double now_ms);
+/* An EDIT built elsewhere (a modelling action: one structural edit) was
+ * sent as seq at now_ms: its answer and its first frame are matched like
+ * the queue's own, and the pending edit stays. */
+void bc_viewer_edits_track(struct bc_viewer_edits *q, uint32_t seq,
+                           double now_ms);
 /* This client's EDIT seq was applied with order. Returns true when it was
  * the one in flight (a pending edit may then go). */
 bool bc_viewer_edits_applied(struct bc_viewer_edits *q, uint32_t seq,

@@ -20,6 +20,9 @@
  *  - The side panel lists the members, who edited last, and sliders for the
  *    selected primitive (position, shape parameters, colour, the blend of
  *    its smooth parent).
+ *  - The Scene panel (outliner.js) lists the tree, shares the selection
+ *    and changes the structure: add, wrap, delete, duplicate, regroup,
+ *    operator kind and blend, each one EDIT built by model.js.
  *  - The overlay shows frames per second, edit -> frame latency (from
  *    sending an EDIT to drawing the first frame whose order reflects it)
  *    and kilobytes per frame.
@@ -55,13 +58,11 @@
  */
 import * as P from './protocol.js';
 import { Picture, parseSize } from './picture.js';
-import { OPS, PRIMS, layout, unaryLayout, unaryRange, unaryValue }
-	from './prims.js';
-
-function kindName(n) {
-	return n.isOp ? OPS[n.kind] ?? `op ${n.kind}`
-		: PRIMS[n.kind]?.[0] ?? `kind ${n.kind}`;
-}
+import { localBox } from './bounds.js';
+import { layout, unaryLayout, unaryRange, unaryValue } from './prims.js';
+import { kindName } from './model.js';
+import { Outliner } from './outliner.js';
+import { Review } from './review.js';
 
 /* ---- Small vector helpers ------------------------------------------------ */
 
@@ -86,46 +87,6 @@ function quatRotate(q, v) {
 	const u = [q[0], q[1], q[2]];
 	const t = scale(cross(u, v), 2);
 	return add(add(v, scale(t, q[3])), cross(u, t));
-}
-
-/* A primitive's local bounding box [lo, hi] from its parameters (the
- * layouts of PRIMS; cylinders, cones and tori stand on their local y
- * axis). Kinds without a simple rule get a cube of their largest
- * parameter. */
-function localBox(n) {
-	const p = n.params;
-	const sym = (x, y, z) => [[-x, -y, -z], [x, y, z]];
-	const segment = (a, b, r) => [
-		[0, 1, 2].map((i) => Math.min(a[i], b[i]) - r),
-		[0, 1, 2].map((i) => Math.max(a[i], b[i]) + r)];
-	const m = Math.max(0.05, ...p.map(Math.abs));
-	if (p.length !== (layout(n.kind) ?? []).reduce((a, d) => a + d.count,
-		0)) {
-		return sym(m, m, m);
-	}
-	switch (n.kind) {
-	case 1:
-		return sym(p[0], p[0], p[0]);
-	case 2:
-	case 8:
-	case 11:
-		return sym(p[0], p[1], p[2]);
-	case 3:
-		return segment(p.slice(0, 3), p.slice(3, 6), p[6]);
-	case 4:
-		return sym(p[0], p[1], p[0]);
-	case 5:
-	case 12:
-		return sym(p[0] + p[1], p[1], p[0] + p[1]);
-	case 6: {
-		const r = Math.max(p[1], p[2]);
-		return sym(r, p[0], r);
-	}
-	case 7:
-		return segment(p.slice(0, 3), p.slice(3, 6), Math.max(p[6], p[7]));
-	default:
-		return sym(m, m, m);
-	}
 }
 
 /* The 12 edges of a box whose corner i has bit 0: x, bit 1: y, bit 2: z. */
@@ -437,7 +398,8 @@ class App {
 			session: q.get('session') || 'default',
 			name: (q.get('name') || 'browser').slice(0, 32),
 			role: q.get('role') === 'viewer' ? P.ROLE.VIEWER : P.ROLE.EDITOR,
-			encoding: q.get('enc') === 'png' ? P.ENC.PNG : P.ENC.JPEG,
+			encoding: { png: P.ENC.PNG, raw: P.ENC.RAW }[q.get('enc')] ??
+				P.ENC.JPEG,
 			downscale: clampInt(q.get('downscale'), 1, 8, 2),
 			quality: clampInt(q.get('quality'), 1, 100, 85),
 		};
@@ -461,6 +423,8 @@ class App {
 		this.followWanted = false; /* F: kept across reconnects */
 		this.installPresent();
 		this.installPicture();
+		this.outliner = new Outliner(this);
+		this.review = new Review(this); /* review.js: toolbar, sessions */
 		new ResizeObserver(() => this.resize()).observe($('stage'));
 		setInterval(() => this.tick(), 250);
 		this.conn.open();
@@ -494,6 +458,7 @@ class App {
 		this.following = false;
 		this.presenceAsked = false;
 		this.renderPresent();
+		this.outliner?.reset();
 	}
 
 	/* ---- connection and messages ---- */
@@ -552,6 +517,15 @@ class App {
 		if (code === P.ERR.EAUTH) {
 			$('token').focus();
 		}
+	}
+
+	/* Moves the page to session name (the session list): a new
+	 * connection joins it from that session's camera. */
+	switchSession(name) {
+		this.cfg.session = name;
+		this.cameraMoved = false;
+		this.followWanted = false;
+		this.resume();
 	}
 
 	/* Starts over after a halt, with what the user gave. */
@@ -614,6 +588,9 @@ class App {
 	}
 
 	handle(m) {
+		if (this.review.saw(m)) {
+			return;
+		}
 		/* The answers to a picture's tiles are its own, not frames of
 		 * the view. */
 		if ((m.type === P.MSG.FRAME || m.type === P.MSG.ERROR) &&
@@ -703,6 +680,7 @@ class App {
 	}
 
 	serverError(m) {
+		this.outliner.refused(m);
 		const undo = this.undoSent.get(m.seq);
 		this.undoSent.delete(m.seq);
 		if (undo && m.code === P.ERR.ESTATE) {
@@ -794,6 +772,7 @@ class App {
 			this.selected = 0;
 		}
 		this.renderPanel();
+		this.outliner.sceneChanged(null);
 	}
 
 	editApplied(m) {
@@ -843,6 +822,7 @@ class App {
 		this.renderMembers();
 		this.refreshSliders();
 		this.drawOverlay();
+		this.outliner.sceneChanged(m);
 	}
 
 	/* A frame is on screen: settle the latencies it answers. */
@@ -992,22 +972,28 @@ class App {
 			return;
 		}
 		this.pendingEdit = null;
-		const ops = [{ kind: P.EDIT.SET, node: e.node, fields: e.fields }];
+		const seq = this.sendOps([{ kind: P.EDIT.SET, node: e.node,
+			fields: e.fields }], e.interacting, e.done);
+		if (seq && e.interacting) {
+			this.inflight = seq;
+		}
+	}
+
+	/* Sends one EDIT of ops (the outliner's structural edits go at once,
+	 * whole); returns its seq, 0 when not sent. */
+	sendOps(ops, interacting = false, done = undefined) {
 		let seq;
 		try {
 			seq = this.conn.send(P.MSG.EDIT, { ops },
-				e.interacting ? P.FLAG.INTERACTING : 0);
+				interacting ? P.FLAG.INTERACTING : 0);
 		} catch (err) {
 			this.say(`edit not sent: ${err.message}`);
-			return;
+			return 0;
 		}
 		if (seq) {
-			this.editSent.set(seq, { sentAt: performance.now(),
-				done: e.done });
-			if (e.interacting) {
-				this.inflight = seq;
-			}
+			this.editSent.set(seq, { sentAt: performance.now(), done });
 		}
+		return seq;
 	}
 
 	pick(x, y) {
@@ -1381,6 +1367,7 @@ class App {
 		this.selected = id;
 		this.renderPanel();
 		this.drawOverlay();
+		this.outliner.selected(id);
 	}
 
 	/* Rough size of a primitive, for slider ranges. */
@@ -1392,7 +1379,7 @@ class App {
 	/* The corners of a primitive's bounding box, in view pixels (null if
 	 * one is behind the eye). */
 	corners(n) {
-		const [lo, hi] = localBox(n);
+		const [lo, hi] = localBox(n.kind, n.params);
 		const out = [];
 		for (let i = 0; i < 8; i++) {
 			const c = [i & 1 ? hi[0] : lo[0], i & 2 ? hi[1] : lo[1],
@@ -1523,6 +1510,10 @@ class App {
 		}
 		$('selname').textContent = `${kindName(n)} #${n.id}` +
 			(n.stale ? ' (parameters out of date)' : '');
+		if (n.isOp) {
+			/* Operators and unary nodes are edited in the Scene panel. */
+			return;
+		}
 		const size = App.radius(n);
 		const group = (title) => {
 			this.group = title.split(' ')[0];
@@ -1682,6 +1673,7 @@ class App {
 		}
 		this.renderLastEdit();
 		this.showPending();
+		this.review.update();
 	}
 
 	/* ---- for tests and the console ---- */
@@ -1802,7 +1794,10 @@ window.blobcast = {
 	picture: (w, h, tile) => app.savePicture(w, h, tile).then((r) => ({
 		width: r.canvas.width, height: r.canvas.height,
 		order: String(r.order) })),
+	/* The Scene panel: the tree, its rows, its message line. */
+	outliner: () => app.outliner.state(),
 	/* RGBA of the last picture's rectangle (x, y, w, h), as an array. */
 	picturePixels: (x, y, w, h) => Array.from(app.lastPicture.canvas
 		.getContext('2d').getImageData(x, y, w, h).data),
 };
+Object.assign(window.blobcast, app.review.api());

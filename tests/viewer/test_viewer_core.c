@@ -592,6 +592,167 @@ static void test_unary_extent_in_node_units(void)
 	bc_tree_destroy(t);
 }
 
+/* A node's box holds the ABVs of the primitives below it; a unary node's
+ * is its child's; the root's is the whole scene's, the linearized form's
+ * own box. */
+static void test_node_box_holds_the_subtree(void)
+{
+	struct bc_tree *t = unary_tree();
+	const struct bc_lin *l;
+	float lo[3], hi[3], clo[3], chi[3];
+	REQUIRE(t);
+	l = bc_tree_lin(t);
+	REQUIRE(l);
+	REQUIRE(bc_viewer_node_box(t, 1, lo, hi));
+	for (int i = 0; i < 3; i++) {
+		CHECK_NEAR(lo[i], l->lo[i], 1e-5);
+		CHECK_NEAR(hi[i], l->hi[i], 1e-5);
+	}
+	/* The twist's box is its mirror's, which is the box's ABV. */
+	REQUIRE(bc_viewer_node_box(t, 5, lo, hi));
+	REQUIRE(bc_viewer_node_box(t, 4, clo, chi));
+	CHECK_MEMEQ(lo, clo, sizeof(lo));
+	CHECK_MEMEQ(hi, chi, sizeof(hi));
+	/* The union 8 holds both of its spheres' boxes. */
+	REQUIRE(bc_viewer_node_box(t, 8, lo, hi));
+	REQUIRE(bc_viewer_node_box(t, 13, clo, chi));
+	for (int i = 0; i < 3; i++) {
+		CHECK(lo[i] <= clo[i] && hi[i] >= chi[i]);
+	}
+	CHECK(!bc_viewer_node_box(t, 999, lo, hi));
+	CHECK(!bc_viewer_node_box(NULL, 1, lo, hi));
+	bc_tree_destroy(t);
+}
+
+/* Zoom to fit from far away and from too close: the box's corners all
+ * project inside the view, the camera's direction and up are kept, and
+ * the box's sphere spans most of the view's narrower side. */
+static void test_frame_box_fits_the_view(void)
+{
+	const float lo[3] = {-3.0f, -1.0f, -0.5f}, hi[3] = {1.0f, 2.0f, 0.5f};
+	const float dists[2] = {200.0f, 0.2f};
+	const uint32_t sizes[2][2] = {{320, 240}, {200, 400}};
+	for (int d = 0; d < 2; d++) {
+		for (int s = 0; s < 2; s++) {
+			struct bc_camera c;
+			float dir0[3], dir1[3], c0[3], n0, n1,
+			    xmin = 1e9f, xmax = -1e9f, ymin = 1e9f,
+			    ymax = -1e9f;
+			uint32_t w = sizes[s][0], h = sizes[s][1];
+			bc_camera_default(&c);
+			c.eye[0] = dists[d] * 0.6f;
+			c.eye[2] = dists[d] * 0.8f;
+			for (int i = 0; i < 3; i++) {
+				dir0[i] = c.eye[i] - c.target[i];
+			}
+			n0 = sqrtf(dot3(dir0, dir0));
+			bc_viewer_frame_box(&c, lo, hi, (float)w / (float)h);
+			for (int i = 0; i < 3; i++) {
+				dir1[i] = c.eye[i] - c.target[i];
+				CHECK_NEAR(c.target[i], 0.5f * (lo[i] + hi[i]),
+				           1e-5);
+			}
+			n1 = sqrtf(dot3(dir1, dir1));
+			for (int i = 0; i < 3; i++) {
+				CHECK_NEAR(dir1[i] / n1, dir0[i] / n0, 1e-5);
+			}
+			CHECK(c.up[1] == 1.0f && c.fov_y_deg == 45.0f);
+			for (int k = 0; k < 8; k++) {
+				float p[3], px[3];
+				for (int i = 0; i < 3; i++) {
+					p[i] = ((k >> i) & 1) ? hi[i] : lo[i];
+				}
+				REQUIRE(bc_viewer_project(&c, w, h, p, px));
+				CHECK(px[0] >= 0.0f && px[0] <= (float)w);
+				CHECK(px[1] >= 0.0f && px[1] <= (float)h);
+				xmin = fminf(xmin, px[0]);
+				xmax = fmaxf(xmax, px[0]);
+				ymin = fminf(ymin, px[1]);
+				ymax = fmaxf(ymax, px[1]);
+			}
+			/* The sphere around the box is larger than the
+			 * box: its corners span at least half the narrower
+			 * side. */
+			CHECK(fmaxf(xmax - xmin, ymax - ymin) >
+			      0.5f * (float)(w < h ? w : h));
+			memcpy(c0, c.eye, sizeof(c0));
+			/* Fitting again changes nothing. */
+			bc_viewer_frame_box(&c, lo, hi, (float)w / (float)h);
+			for (int i = 0; i < 3; i++) {
+				CHECK_NEAR(c.eye[i], c0[i], 1e-3);
+			}
+		}
+	}
+}
+
+/* The palette lists every primitive, operator and unary kind once, by
+ * its scene-file name; the cursor moves round, by section and by
+ * initial; the panel marks the cursor's entry. */
+static void test_palette_lists_every_kind(void)
+{
+	struct bc_viewer_palette p = {0};
+	struct bc_viewer_pal_entry e;
+	uint32_t n = bc_viewer_palette_count(),
+	         counts[BC_VIEWER_PAL_COUNT] = {0};
+	char text[1024];
+	CHECK_EQ_INT(n, (BC_PRIM_COUNT - 1) + 6 + (BC_OP_COUNT - BC_OP_OFFSET));
+	for (uint32_t i = 0; i < n; i++) {
+		REQUIRE(bc_viewer_palette_entry(i, &e));
+		counts[e.section]++;
+		if (e.section == BC_VIEWER_PAL_SHAPE) {
+			CHECK_STREQ(e.name,
+			            bc_prim_info((enum bc_prim)e.kind)->name);
+		} else {
+			CHECK_STREQ(e.name, bc_op_name((enum bc_op)e.kind));
+			CHECK(bc_op_is_unary((enum bc_op)e.kind) ==
+			      (e.section == BC_VIEWER_PAL_UNARY));
+		}
+	}
+	CHECK_EQ_INT(counts[BC_VIEWER_PAL_SHAPE], BC_PRIM_COUNT - 1);
+	CHECK_EQ_INT(counts[BC_VIEWER_PAL_OPERATOR], 6);
+	CHECK_EQ_INT(counts[BC_VIEWER_PAL_UNARY], BC_OP_COUNT - BC_OP_OFFSET);
+	CHECK(!bc_viewer_palette_entry(n, &e) && e.name == NULL);
+
+	bc_viewer_palette_open(&p, BC_VIEWER_PAL_SHAPE);
+	CHECK(p.open && p.cur == 0);
+	bc_viewer_palette_move(&p, -1);
+	CHECK_EQ_INT(p.cur, n - 1);
+	bc_viewer_palette_move(&p, 2);
+	CHECK_EQ_INT(p.cur, 1);
+	bc_viewer_palette_entry(p.cur, &e);
+	CHECK_STREQ(e.name, "box");
+	bc_viewer_palette_page(&p, 1);
+	bc_viewer_palette_entry(p.cur, &e);
+	CHECK(e.section == BC_VIEWER_PAL_OPERATOR && e.kind == BC_OP_UNION);
+	bc_viewer_palette_page(&p, 1);
+	bc_viewer_palette_entry(p.cur, &e);
+	CHECK(e.section == BC_VIEWER_PAL_UNARY && e.kind == BC_OP_OFFSET);
+	bc_viewer_palette_page(&p, 1);
+	CHECK_EQ_INT(p.cur, 0);
+	bc_viewer_palette_page(&p, -1);
+	bc_viewer_palette_entry(p.cur, &e);
+	CHECK(e.section == BC_VIEWER_PAL_UNARY);
+	/* 't' from the unary section: twist, then round to torus. */
+	CHECK(bc_viewer_palette_jump(&p, 'T'));
+	bc_viewer_palette_entry(p.cur, &e);
+	CHECK_STREQ(e.name, "twist");
+	CHECK(bc_viewer_palette_jump(&p, 't'));
+	bc_viewer_palette_entry(p.cur, &e);
+	CHECK_STREQ(e.name, "torus");
+	CHECK(!bc_viewer_palette_jump(&p, 'j'));
+	CHECK_STREQ(e.name, "torus");
+	bc_viewer_palette_text(&p, text, sizeof(text));
+	CHECK(strstr(text, "> shape    torus") != NULL);
+	CHECK(strstr(text, "  shape    cylinder") != NULL);
+	/* At the ends the window stays full. */
+	p.cur = n - 1;
+	bc_viewer_palette_text(&p, text, sizeof(text));
+	CHECK(strstr(text, "> wrap in  scale") != NULL);
+	CHECK(strstr(text, "  wrap in  offset") != NULL);
+	bc_viewer_palette_text(&p, text, 40);
+	CHECK_EQ_INT(strlen(text), 39);
+}
+
 static void test_unary_text(void)
 {
 	struct bc_unary u;
@@ -712,16 +873,41 @@ static void test_edits_one_in_flight(void)
 }
 
 /* A refused edit frees the slot and is never measured. */
+/* A fresh queue and meter with an interacting edit in flight (seq 3, sent
+ * at 0 ms) and the next one pending. */
+static void one_in_flight(struct bc_viewer_edits *q, struct bc_viewer_meter *m)
+{
+	struct bc_viewer_edit e = move_edit(5, 1.0f, true);
+	bc_viewer_edits_init(q);
+	bc_viewer_meter_init(m);
+	bc_viewer_edits_queue(q, &e);
+	bc_viewer_edits_sent(q, 3, 0.0);
+	bc_viewer_edits_queue(q, &e);
+}
+
+/* A modelling EDIT sent around the queue is matched to its answer and
+ * its frame like the queue's own, and leaves a pending drag edit alone. */
+static void test_edits_track_leaves_the_pending_edit(void)
+{
+	struct bc_viewer_edits q;
+	struct bc_viewer_meter m;
+	one_in_flight(&q, &m);
+	bc_viewer_edits_track(&q, 4, 1.0);
+	CHECK(q.has_pending && q.inflight == 3);
+	CHECK(!bc_viewer_edits_applied(&q, 4, 7));
+	CHECK(q.has_pending && !bc_viewer_edits_ready(&q));
+	CHECK_EQ_INT(bc_viewer_edits_frame(&q, 7, 21.0, &m), 1);
+	CHECK_NEAR(m.last_latency, 20.0, 1e-9);
+	bc_viewer_edits_track(&q, 5, 2.0);
+	CHECK(bc_viewer_edits_refused(&q, 5));
+	CHECK(!bc_viewer_edits_refused(&q, 5));
+}
+
 static void test_edits_refused(void)
 {
 	struct bc_viewer_edits q;
 	struct bc_viewer_meter m;
-	struct bc_viewer_edit e = move_edit(5, 1.0f, true);
-	bc_viewer_edits_init(&q);
-	bc_viewer_meter_init(&m);
-	bc_viewer_edits_queue(&q, &e);
-	bc_viewer_edits_sent(&q, 3, 0.0);
-	bc_viewer_edits_queue(&q, &e);
+	one_in_flight(&q, &m);
 	CHECK(!bc_viewer_edits_ready(&q));
 	CHECK(!bc_viewer_edits_refused(&q, 4));
 	CHECK(bc_viewer_edits_refused(&q, 3));
@@ -1383,9 +1569,14 @@ static const struct bc_test tests[] = {
     {"unary_target_skips_mirror", test_unary_target_skips_mirror},
     {"unary_extent_in_node_units", test_unary_extent_in_node_units},
     {"unary_text", test_unary_text},
+    {"node_box_holds_the_subtree", test_node_box_holds_the_subtree},
+    {"frame_box_fits_the_view", test_frame_box_fits_the_view},
+    {"palette_lists_every_kind", test_palette_lists_every_kind},
     {"meter_counts_the_last_second", test_meter_counts_the_last_second},
     {"edits_one_in_flight", test_edits_one_in_flight},
     {"edits_refused", test_edits_refused},
+    {"edits_track_leaves_the_pending_edit",
+     test_edits_track_leaves_the_pending_edit},
     {"edits_bounded", test_edits_bounded},
     {"frames_rectangles_and_downscale", test_frames_rectangles_and_downscale},
     {"frames_levels", test_frames_levels},

@@ -8,9 +8,15 @@
  *                        they differ and exits 1
  *   count FILE R G B TOL prints how many pixels are within TOL of (R, G, B)
  *                        in every channel
+ *   lit FILE LEVEL       prints how many pixels have a channel above LEVEL:
+ *                        the lit shapes against the renderer's dark
+ *                        background (every channel below 43)
+ *   border FILE LEVEL    the same for the outermost rows and columns only:
+ *                        0 when the shapes lie wholly inside the image
  * Exit 2 on bad usage or an unreadable file.
  */
 #include <math.h>
+#include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -121,7 +127,16 @@ out:
 	return rc;
 }
 
-static int count(const char *path, int r, int g, int b, int tol)
+/* What count() counts. */
+enum count_mode {
+	COUNT_NEAR = 0, /* pixels within v[3] of (v[0], v[1], v[2]) */
+	COUNT_LIT,      /* pixels with a channel above v[0] */
+	COUNT_BORDER,   /* such pixels in the outermost rows and columns */
+	COUNT_MODE_COUNT
+};
+
+/* Prints how many pixels of the image at path are as mode says. */
+static int count(const char *path, enum count_mode mode, const int v[4])
 {
 	struct bc_image img;
 	size_t n = 0;
@@ -131,8 +146,16 @@ static int count(const char *path, int r, int g, int b, int tol)
 	for (size_t i = 0; i < (size_t)img.width * img.height; i++) {
 		const uint8_t *p =
 		    (const uint8_t *)img.pixels + i * img.channels;
-		n += abs(p[0] - r) <= tol && abs(p[1] - g) <= tol &&
-		     abs(p[2] - b) <= tol;
+		size_t x = i % img.width, y = i / img.width;
+		bool edge = x == 0 || y == 0 || x + 1 == img.width ||
+		            y + 1 == img.height;
+		if (mode == COUNT_NEAR) {
+			n += abs(p[0] - v[0]) <= v[3] &&
+			     abs(p[1] - v[1]) <= v[3] &&
+			     abs(p[2] - v[2]) <= v[3];
+		} else if (mode == COUNT_LIT || edge) {
+			n += p[0] > v[0] || p[1] > v[0] || p[2] > v[0];
+		}
 	}
 	printf("%zu\n", n);
 	bc_image_finish(&img);
@@ -148,10 +171,18 @@ int main(int argc, char **argv)
 		return same(argv[2], argv[3], atoi(argv[4]));
 	}
 	if (argc == 7 && strcmp(argv[1], "count") == 0) {
-		return count(argv[2], atoi(argv[3]), atoi(argv[4]),
-		             atoi(argv[5]), atoi(argv[6]));
+		const int v[4] = {atoi(argv[3]), atoi(argv[4]), atoi(argv[5]),
+		                  atoi(argv[6])};
+		return count(argv[2], COUNT_NEAR, v);
+	}
+	if (argc == 4 &&
+	    (strcmp(argv[1], "lit") == 0 || strcmp(argv[1], "border") == 0)) {
+		const int v[4] = {atoi(argv[3]), 0, 0, 0};
+		return count(argv[2],
+		             argv[1][0] == 'l' ? COUNT_LIT : COUNT_BORDER, v);
 	}
 	fprintf(stderr, "usage: viewer_imgcheck info FILE | same A B TOL | "
-	                "count FILE R G B TOL\n");
+	                "count FILE R G B TOL | lit FILE LEVEL | border FILE "
+	                "LEVEL\n");
 	return 2;
 }

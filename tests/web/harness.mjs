@@ -9,7 +9,8 @@
  * browser), a watchdog, and polling the page until a condition holds.
  */
 import { execFile, spawn, spawnSync } from 'node:child_process';
-import { existsSync, mkdtempSync, readFileSync, rmSync, statSync } from 'node:fs';
+import { existsSync, mkdtempSync, readdirSync, readFileSync, rmSync, statSync }
+	from 'node:fs';
 import { createServer } from 'node:http';
 import net from 'node:net';
 import { tmpdir } from 'node:os';
@@ -189,10 +190,11 @@ export async function startProxy(target) {
 const TYPES = { '.html': 'text/html; charset=utf-8', '.js': 'text/javascript',
 	'.css': 'text/css', '.json': 'application/json' };
 
-/* Serves the files of client/web/ and nothing else. */
+/* Serves the page's files (the .html, .js and .css of client/web/) and
+ * nothing else. */
 export async function startStatic() {
-	const files = new Set(['index.html', 'app.js', 'protocol.js',
-		'prims.js', 'picture.js', 'style.css']);
+	const files = new Set(readdirSync(WEB).filter((f) =>
+		/\.(html|js|css)$/.test(f)));
 	const server = createServer((req, res) => {
 		const name = new URL(req.url, 'http://x').pathname.slice(1) ||
 			'index.html';

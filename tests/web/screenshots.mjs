@@ -1,5 +1,10 @@
 /*
- * Makes docs/web.png and docs/viewer.png: one session, three members. A
+ * Makes docs/web-outliner.png, docs/web.png and docs/viewer.png.
+ * web-outliner.png: the page as "dana" with smooth_union #31 selected in
+ * the Scene panel (its row, the operator form) and the Add menu open; the
+ * page then leaves, the scene unchanged. With --outliner-only the script
+ * stops there (no viewer needed).
+ * web.png and viewer.png: one session, three members. A
  * blobcastd with websockify in front, the page as "alice" (editor) and
  * "bob" (viewer) in headless chromium, and blobcast-view as "carol" under
  * Xvfb. Alice drags the red marble (an edit every member sees, "last edit").
@@ -12,6 +17,7 @@
  *
  * usage: xvfb-run -a -s "-screen 0 1280x800x24" node tests/web/screenshots.mjs
  *            --blobcastd PATH --viewer PATH --xpoke PATH [--out DIR]
+ *        node tests/web/screenshots.mjs --blobcastd PATH --outliner-only
  */
 import { spawn } from 'node:child_process';
 import { copyFileSync, existsSync, mkdtempSync } from 'node:fs';
@@ -41,6 +47,8 @@ function run(cmd, args) {
 	});
 }
 
+/* Thrown to end the script early (--outliner-only), not a failure. */
+const DONE = new Error('done');
 let browser = null;
 let view = null;
 const work = mkdtempSync(join(tmpdir(), 'blobcast-shots-'));
@@ -58,6 +66,19 @@ try {
 		await until(p, () => window.blobcast.state().framesDrawn >= 1);
 		return p;
 	};
+	/* The Scene panel: a group selected by its row, the Add menu open. */
+	const dana = await open('dana', 'editor');
+	await dana.locator('#outliner .row[data-id="31"]').click();
+	await until(dana, () => !document.getElementById('opedit').hidden);
+	await dana.click('#addbtn');
+	await dana.hover('#addprims button[data-prim="5"]');
+	await sleep(800);
+	await dana.screenshot({ path: join(out, 'web-outliner.png') });
+	console.log(`wrote ${join(out, 'web-outliner.png')}`);
+	await dana.close();
+	if (process.argv.includes('--outliner-only')) {
+		throw DONE;
+	}
 	const alice = await open('alice', 'editor');
 	const bob = await open('bob', 'viewer');
 	view = spawn(viewer, ['--server', `127.0.0.1:${d.port}`, '--name',
@@ -132,8 +153,10 @@ try {
 	console.log(`wrote ${join(out, 'viewer.png')}`);
 	await bob.close();
 } catch (e) {
-	console.error(`FAIL: ${e.stack || e}\n${H.logs()}`);
-	process.exitCode = 1;
+	if (e !== DONE) {
+		console.error(`FAIL: ${e.stack || e}\n${H.logs()}`);
+		process.exitCode = 1;
+	}
 } finally {
 	view?.kill();
 	if (browser) {

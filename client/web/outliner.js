@@ -1,0 +1,701 @@
+/*
+ * The Scene panel of the page: an outliner of the session's tree and the
+ * tools that change its structure.
+ *
+ *  - The outliner lists operators, unary nodes and primitives as an
+ *    indented tree, each row the node's kind and id (the scene format has
+ *    no node names), groups collapsible. It reads the page's scene mirror
+ *    and follows every SCENE_STATE and EDIT_APPLIED: an edit that only
+ *    sets fields (a drag, a slider) updates the labels of the rows it
+ *    touched, a structural one redraws the list once per animation frame.
+ *    Big scenes stay cheap: groups deeper than OPEN_DEPTH start closed, a
+ *    group shows MAX_CHILDREN children before a "more" row, and the list
+ *    stops at MAX_ROWS rows.
+ *  - Selection is the page's: a click on a row selects the node as a pick
+ *    in the picture does, and a pick opens the groups above the node and
+ *    scrolls its row into view.
+ *  - The Add menu lists every primitive kind (added under the selected
+ *    operator, or the operator above the selected node, at the camera's
+ *    target) and every unary kind (wrapping the selection); delete and
+ *    duplicate act on the selection; a selected operator's kind, sharp or
+ *    smooth, and radius are set in a small form. A row dragged onto an
+ *    operator's row moves the node there; a menu entry dragged onto a row
+ *    adds (or wraps) there.
+ *  - Every action is one EDIT built by model.js, which refuses what the
+ *    daemon would refuse before anything is sent; the panel's message line
+ *    says what happened, or why not and what to do, and shows the
+ *    daemon's ERROR text when it refuses an edit anyway (an editor racing
+ *    for the same ids, a node removed meanwhile).
+ */
+import * as P from './protocol.js';
+import * as M from './model.js';
+import { OPS, PRIMS, UNARY } from './prims.js';
+
+/* Rows drawn at most: a 100 000-node scene would otherwise cost seconds
+ * of DOM work per structural edit. */
+const MAX_ROWS = 2000;
+/* Children a group shows before a "more" row (each click shows as many
+ * again). */
+const MAX_CHILDREN = 200;
+/* Groups with fewer nodes above them than this start open. */
+const OPEN_DEPTH = 3;
+/* Pointer travel (CSS pixels) that turns a press on a row into a drag. */
+const DRAG_START = 5;
+/* A new shape's size and a duplicate's offset, as fractions of the
+ * camera's distance to its target: visible, not filling the view. */
+const NEW_SIZE = 0.06;
+const DUP_OFFSET = 0.08;
+/* Colours of new shapes, in turn. */
+const PALETTE = [[0.9, 0.45, 0.2], [0.3, 0.6, 0.9], [0.55, 0.8, 0.35],
+	[0.85, 0.3, 0.6], [0.95, 0.8, 0.3]];
+
+const $ = (id) => document.getElementById(id);
+
+function el(tag, cls, text) {
+	const e = document.createElement(tag);
+	if (cls) {
+		e.className = cls;
+	}
+	if (text !== undefined) {
+		e.textContent = text;
+	}
+	return e;
+}
+
+/* The tree as nested [kind, id, ...children], for tests and the console. */
+function shape(n) {
+	return n.isOp ? [M.kindName(n), n.id, ...n.children.map(shape)]
+		: [M.kindName(n), n.id];
+}
+
+export class Outliner {
+	constructor(app) {
+		this.app = app;
+		this.list = $('outliner');
+		this.open = new Map(); /* id -> open (the user's choice) */
+		this.more = new Map(); /* id -> children shown, past MAX_CHILDREN */
+		this.rows = new Map(); /* id -> its row, when drawn */
+		this.sent = new Map(); /* my EDIT seq -> the action's result */
+		this.sentCount = 0;
+		this.drag = null;
+		this.redraw = 0;
+		this.installMenu();
+		this.installTools();
+		this.installDrag();
+		this.installKeys();
+		this.reset();
+	}
+
+	/* ---- the page's hooks ---- */
+
+	/* A new connection: nothing to show until the scene comes. */
+	reset() {
+		this.sent.clear();
+		this.render();
+		this.renderTools();
+	}
+
+	/* The mirror changed: m is the EDIT_APPLIED, or null for a new
+	 * SCENE_STATE. */
+	sceneChanged(m) {
+		if (m && m.ops.every((op) => op.kind === P.EDIT.SET)) {
+			for (const op of m.ops) {
+				this.label(op.node);
+			}
+		} else {
+			this.schedule();
+		}
+		const me = this.app.info?.member_id;
+		const r = m && m.author === me ? this.sent.get(m.author_seq) : null;
+		if (r) {
+			this.sent.delete(m.author_seq);
+			this.tell(r.text);
+			this.app.select(this.app.scene?.byId.has(r.select) ? r.select : 0);
+		}
+		this.renderTools();
+	}
+
+	/* The page's selection changed (a pick, a row, an action). */
+	selected(id) {
+		for (const row of this.list.querySelectorAll('.row.sel')) {
+			row.classList.remove('sel');
+			row.setAttribute('aria-selected', 'false');
+		}
+		const n = id ? this.app.scene?.byId.get(id) : null;
+		if (n) {
+			this.reveal(n);
+		}
+		this.renderTools();
+	}
+
+	/* An ERROR from the daemon: when it answers an edit of this panel,
+	 * say which and why. Returns whether it did. */
+	refused(m) {
+		const r = this.sent.get(m.seq);
+		if (!m.seq || !r) {
+			return false;
+		}
+		this.sent.delete(m.seq);
+		const race = m.code === P.ERR.EDUPID
+			? ' (another member added a node with the same id at the same ' +
+				'time): try again'
+			: m.code === P.ERR.ENONODE ? ' (another member changed that ' +
+				'part of the scene meanwhile): try again' : '';
+		this.tell(`the daemon refused "${r.text}": ` +
+			`${P.errName(m.code)}: ${m.text}${race}`, true);
+		return true;
+	}
+
+	/* ---- state for tests and the console ---- */
+
+	state() {
+		return {
+			tree: this.app.scene?.root ? shape(this.app.scene.root) : null,
+			rows: [...this.list.querySelectorAll('.row')].map((r) => ({
+				id: Number(r.dataset.id),
+				level: Number(r.getAttribute('aria-level')),
+				text: r.querySelector('.label').textContent,
+				selected: r.classList.contains('sel') })),
+			message: $('outlinermsg').textContent,
+			refusal: $('outlinermsg').classList.contains('bad'),
+			sent: this.sentCount,
+		};
+	}
+
+	/* ---- drawing ---- */
+
+	schedule() {
+		if (!this.redraw) {
+			this.redraw = requestAnimationFrame(() => {
+				this.redraw = 0;
+				this.render();
+			});
+		}
+	}
+
+	isOpen(n, depth) {
+		return this.open.get(n.id) ?? depth < OPEN_DEPTH;
+	}
+
+	/* Draws the visible rows, pre-order, up to MAX_ROWS. */
+	render() {
+		cancelAnimationFrame(this.redraw);
+		this.redraw = 0;
+		this.rows.clear();
+		const frag = document.createDocumentFragment();
+		const root = this.app.scene?.root;
+		const todo = root ? [[root, 0]] : [];
+		let drawn = 0;
+		while (todo.length) {
+			const [n, depth] = todo.pop();
+			if (n.more !== undefined) {
+				frag.append(this.moreRow(n, depth));
+				continue;
+			}
+			if (drawn === MAX_ROWS) {
+				frag.append(el('div', 'cap', `only the first ${MAX_ROWS} ` +
+					'rows are shown: close a group to see further'));
+				break;
+			}
+			frag.append(this.row(n, depth));
+			drawn++;
+			if (n.isOp && this.isOpen(n, depth)) {
+				const shown = Math.min(n.children.length,
+					this.more.get(n.id) ?? MAX_CHILDREN);
+				if (shown < n.children.length) {
+					todo.push([{ more: n.children.length - shown, parent: n },
+						depth + 1]);
+				}
+				for (let i = shown - 1; i >= 0; i--) {
+					todo.push([n.children[i], depth + 1]);
+				}
+			}
+		}
+		this.list.replaceChildren(frag);
+		if (!root) {
+			this.list.append(el('p', 'dim', 'no scene yet'));
+		}
+	}
+
+	row(n, depth) {
+		const row = el('div', `row ${n.isOp ? (n.unary ? 'unary' : 'op')
+			: 'prim'}`);
+		row.dataset.id = String(n.id);
+		row.setAttribute('role', 'treeitem');
+		row.setAttribute('aria-level', String(depth + 1));
+		row.style.paddingLeft = `${0.3 + depth * 0.9}em`;
+		const twist = el('span', 'twist', n.isOp ? (this.isOpen(n, depth)
+			? '▾' : '▸') : '');
+		if (n.isOp) {
+			row.setAttribute('aria-expanded', String(this.isOpen(n, depth)));
+		}
+		const sel = n.id === this.app.selected;
+		row.classList.toggle('sel', sel);
+		row.setAttribute('aria-selected', String(sel));
+		row.append(twist, el('span', 'label', this.text(n)));
+		this.rows.set(n.id, row);
+		return row;
+	}
+
+	moreRow(m, depth) {
+		const row = el('div', 'more', `… ${m.more} more in ` +
+			`${M.nodeName(m.parent)}: show them`);
+		row.dataset.more = String(m.parent.id);
+		row.style.paddingLeft = `${0.3 + depth * 0.9}em`;
+		return row;
+	}
+
+	text(n) {
+		return M.nodeName(n) + (M.isGroup(n) && n.kind > M.SMOOTH
+			? ` · r ${+n.blend.toFixed(3)}` : '');
+	}
+
+	/* A row's label after a SET (an operator's kind or radius). */
+	label(id) {
+		const row = this.rows.get(id);
+		const n = this.app.scene?.byId.get(id);
+		if (row && n) {
+			row.querySelector('.label').textContent = this.text(n);
+		}
+	}
+
+	/* Opens the groups above n, draws its row, selects and scrolls to
+	 * it. */
+	reveal(n) {
+		let redraw = false;
+		for (let c = n, p = n.parent; p; c = p, p = p.parent) {
+			if (this.open.get(p.id) !== true) {
+				this.open.set(p.id, true);
+				redraw = true;
+			}
+			const at = p.children.indexOf(c);
+			if (at >= (this.more.get(p.id) ?? MAX_CHILDREN)) {
+				this.more.set(p.id, at + 1);
+				redraw = true;
+			}
+		}
+		if (redraw || !this.rows.has(n.id)) {
+			this.render();
+		}
+		const row = this.rows.get(n.id);
+		if (row) {
+			row.classList.add('sel');
+			row.setAttribute('aria-selected', 'true');
+			row.scrollIntoView({ block: 'nearest' });
+		}
+	}
+
+	/* ---- messages ---- */
+
+	tell(text, bad = false) {
+		const p = $('outlinermsg');
+		p.textContent = text;
+		p.classList.toggle('bad', bad);
+		if (bad) {
+			this.app.say(text);
+		}
+	}
+
+	/* ---- actions ---- */
+
+	editor() {
+		return this.app.info?.role === P.ROLE.EDITOR && !!this.app.scene?.root;
+	}
+
+	/* Builds an action with model.js and sends it as one EDIT; a refusal
+	 * is shown and nothing is sent. */
+	act(build) {
+		if (!this.editor()) {
+			this.tell(this.app.info ? 'viewers cannot change the scene'
+				: 'not connected: nothing sent', true);
+			return;
+		}
+		let r;
+		try {
+			r = build(this.app.scene, M.limitsFor(this.app.welcome));
+		} catch (e) {
+			if (e instanceof M.Refusal) {
+				this.tell(e.message, true);
+				return;
+			}
+			throw e;
+		}
+		const seq = this.app.sendOps(r.ops);
+		if (!seq) {
+			this.tell('not connected: nothing sent', true);
+			return;
+		}
+		this.sentCount++;
+		this.sent.set(seq, r);
+		this.tell(`${r.text}…`);
+	}
+
+	/* Where the camera looks, how big a new shape is, how far right a
+	 * duplicate goes. */
+	placement() {
+		const c = this.app.camera;
+		const d = Math.hypot(...c.eye.map((v, i) => v - c.target[i]));
+		const right = c.basis().r;
+		return { at: c.target.slice(), size: NEW_SIZE * d,
+			offset: right.map((v) => v * DUP_OFFSET * d) };
+	}
+
+	add(kind, parent) {
+		this.act((scene, limits) => {
+			const g = parent ?? M.groupFor(scene, this.app.selected)?.id ??
+				null;
+			const p = this.placement();
+			return M.addPrimitive(scene, g, kind, { translate: p.at,
+				size: p.size, limits, color: PALETTE[M.freshIds(scene)[0] %
+					PALETTE.length] });
+		});
+	}
+
+	wrap(kind, id) {
+		const target = id ?? this.app.selected;
+		if (!target) {
+			this.tell('select a node to wrap first (a row, or a shape in ' +
+				'the picture)', true);
+			return;
+		}
+		this.act((scene, limits) => M.wrap(scene, target, kind, { limits }));
+	}
+
+	/* ---- the tools ---- */
+
+	installMenu() {
+		/* An entry per kind of prims.js's tables. */
+		for (const [box, table, key] of [[$('addprims'), PRIMS, 'prim'],
+			[$('addunary'), UNARY, 'unary']]) {
+			for (const [kind, [name]] of Object.entries(table)) {
+				const b = el('button', 'item', name);
+				b.type = 'button';
+				b.dataset[key] = kind;
+				box.append(b);
+			}
+		}
+		$('addbtn').addEventListener('click', () => this.menu(
+			$('addmenu').hidden));
+		/* Escape, or a press anywhere else, closes it. */
+		document.addEventListener('keydown', (e) => {
+			if (e.key === 'Escape') {
+				this.menu(false);
+			}
+		});
+		document.addEventListener('pointerdown', (e) => {
+			if (!$('addmenu').hidden && !e.target.closest?.('#addmenu, ' +
+				'#addbtn')) {
+				this.menu(false);
+			}
+		});
+		const base = $('opbase');
+		for (let k = 1; k <= M.SMOOTH; k++) {
+			const o = el('option', '', OPS[k]);
+			o.value = String(k);
+			base.append(o);
+		}
+	}
+
+	/* Opens the menu beside the panel, over the picture, so that the
+	 * rows stay where they are to drop its entries on. */
+	menu(open) {
+		const m = $('addmenu');
+		if (open) {
+			const b = $('addbtn').getBoundingClientRect();
+			const panel = $('scenepanel').getBoundingClientRect();
+			const top = Math.min(b.top, innerHeight - 360);
+			m.style.top = `${Math.max(4, top)}px`;
+			m.style.right = `${innerWidth - panel.left + 12}px`;
+		}
+		m.hidden = !open;
+		$('addbtn').setAttribute('aria-expanded', String(open));
+		this.renderTools();
+	}
+
+	installTools() {
+		/* The Delete key, outside text fields, is the delete button. */
+		document.addEventListener('keydown', (e) => {
+			const t = e.target;
+			if (e.key !== 'Delete' || e.ctrlKey || e.metaKey || e.altKey ||
+				(t && (t.isContentEditable || ['INPUT', 'TEXTAREA', 'SELECT']
+					.includes(t.tagName))) || $('delbtn').disabled) {
+				return;
+			}
+			e.preventDefault();
+			$('delbtn').click();
+		});
+		$('delbtn').addEventListener('click', () => {
+			const id = this.app.selected;
+			if (!id) {
+				this.tell('select a node to delete first', true);
+				return;
+			}
+			this.act((scene, limits) => M.remove(scene, id, { limits }));
+		});
+		$('dupbtn').addEventListener('click', () => {
+			const id = this.app.selected;
+			if (!id) {
+				this.tell('select a node to duplicate first', true);
+				return;
+			}
+			const { offset } = this.placement();
+			this.act((scene, limits) => M.duplicate(scene, id, { offset,
+				limits }));
+		});
+		$('opsmooth').addEventListener('change', () => {
+			if ($('opsmooth').checked && !(Number($('opradius').value) > 0)) {
+				$('opradius').value = '0.1';
+			}
+		});
+		$('opedit').addEventListener('submit', (e) => {
+			e.preventDefault();
+			const id = this.app.selected;
+			const smooth = $('opsmooth').checked;
+			this.act((scene, limits) => M.setOperator(scene, id, {
+				base: Number($('opbase').value), smooth,
+				blend: smooth ? Number($('opradius').value) : 0 },
+			{ limits }));
+		});
+	}
+
+	/* Buttons, the menu's target line and the operator form follow the
+	 * selection and the role. */
+	renderTools() {
+		const ok = this.editor();
+		const n = this.app.selected ? this.app.scene?.byId.get(
+			this.app.selected) : null;
+		$('addbtn').disabled = !ok;
+		$('dupbtn').disabled = !ok || !n;
+		$('delbtn').disabled = !ok || !n;
+		for (const b of document.querySelectorAll('#addmenu button')) {
+			b.disabled = !ok || (!!b.dataset.unary && !n);
+		}
+		if (!$('addmenu').hidden && this.app.scene?.root) {
+			const g = M.groupFor(this.app.scene, this.app.selected);
+			$('addwhere').textContent = g ? `shapes go under ${M.nodeName(g)}`
+				: 'shapes go beside the root, in a new union';
+			$('wrapwhere').textContent = n ? `wrap ${M.nodeName(n)} in`
+				: 'select a node to wrap it in';
+		}
+		const form = $('opedit');
+		const group = M.isGroup(n);
+		form.hidden = !group;
+		if (group && !form.contains(document.activeElement)) {
+			$('opname').textContent = M.nodeName(n);
+			$('opbase').value = String((n.kind - 1) % M.SMOOTH + 1);
+			$('opsmooth').checked = n.kind > M.SMOOTH;
+			$('opradius').value = String(n.kind > M.SMOOTH
+				? +n.blend.toFixed(4) : 0.1);
+		}
+		for (const c of form.elements) {
+			c.disabled = !ok;
+		}
+	}
+
+	/* ---- pointer: select, open and close, drag and drop ---- */
+
+	installDrag() {
+		const down = (e) => {
+			if (e.button !== 0) {
+				return;
+			}
+			const row = e.target.closest('.row');
+			const item = e.target.closest('#addmenu button.item');
+			if (!row && !item) {
+				return;
+			}
+			this.drag = { x: e.clientX, y: e.clientY, moving: false,
+				node: row ? Number(row.dataset.id) : 0,
+				prim: item ? Number(item.dataset.prim ?? 0) : 0,
+				unary: item ? Number(item.dataset.unary ?? 0) : 0,
+				twist: !!e.target.closest('.twist'), item };
+		};
+		this.list.addEventListener('pointerdown', down);
+		$('addmenu').addEventListener('pointerdown', down);
+		document.addEventListener('pointermove', (e) => this.dragMove(e));
+		document.addEventListener('pointerup', (e) => this.dragEnd(e));
+		/* The browser took the pointer (a touch scroll): no drop. */
+		document.addEventListener('pointercancel', () => {
+			if (this.drag) {
+				this.dragEnd(null);
+			}
+		});
+		this.list.addEventListener('click', (e) => {
+			const more = e.target.closest('.more');
+			if (more) {
+				const id = Number(more.dataset.more);
+				this.more.set(id, (this.more.get(id) ?? MAX_CHILDREN) +
+					MAX_CHILDREN);
+				this.render();
+			}
+		});
+		/* A click on a menu entry, or Enter on it. */
+		$('addmenu').addEventListener('click', (e) => {
+			const b = e.target.closest('button.item');
+			if (!b || this.clickDone) {
+				return;
+			}
+			if (b.dataset.prim) {
+				this.add(Number(b.dataset.prim));
+			} else {
+				this.wrap(Number(b.dataset.unary));
+			}
+			this.menu(false);
+		});
+	}
+
+	/* What dropping the drag on node id would do: the action, or a
+	 * Refusal (quick: the structural checks only, for hovering). */
+	dropPlan(d, id, quick = false) {
+		const scene = this.app.scene;
+		const limits = M.limitsFor(this.app.welcome);
+		if (d.node) {
+			return () => M.move(scene, d.node, id, { limits, quick });
+		}
+		if (d.unary) {
+			return () => M.wrap(scene, id, d.unary, { limits, quick });
+		}
+		return () => M.addPrimitive(scene, id, d.prim, { limits, quick });
+	}
+
+	/* The row under the pointer that drag d may be dropped on. */
+	dropTarget(d, e) {
+		const hit = document.elementFromPoint(e.clientX, e.clientY);
+		const row = hit?.closest?.('#outliner .row');
+		return row && (!d.node || Number(row.dataset.id) !== d.node) ? row
+			: null;
+	}
+
+	dragMove(e) {
+		const d = this.drag;
+		if (!d) {
+			return;
+		}
+		if (!d.moving) {
+			if (Math.hypot(e.clientX - d.x, e.clientY - d.y) < DRAG_START ||
+				!this.editor()) {
+				return;
+			}
+			d.moving = true;
+			const src = d.node ? this.app.scene?.byId.get(d.node) : null;
+			d.ghost = el('div', 'dragghost', src ? `move ${M.nodeName(src)}`
+				: d.prim ? `add ${PRIMS[d.prim][0]}`
+					: `wrap in ${UNARY[d.unary][0]}`);
+			document.body.append(d.ghost);
+			document.body.classList.add('dragging-node');
+		}
+		d.ghost.style.left = `${e.clientX + 12}px`;
+		d.ghost.style.top = `${e.clientY + 8}px`;
+		/* Near the list's top or bottom edge, scroll it. */
+		const box = this.list.getBoundingClientRect();
+		if (e.clientX >= box.left && e.clientX <= box.right) {
+			const edge = Math.min(40, box.height / 4);
+			if (e.clientY < box.top + edge) {
+				this.list.scrollTop -= 12;
+			} else if (e.clientY > box.bottom - edge) {
+				this.list.scrollTop += 12;
+			}
+		}
+		const row = this.dropTarget(d, e);
+		if (row !== d.over) {
+			d.over?.classList.remove('drop-ok', 'drop-bad');
+			d.over = row;
+			if (row) {
+				let why = '';
+				try {
+					this.dropPlan(d, Number(row.dataset.id), true)();
+				} catch (err) {
+					if (!(err instanceof M.Refusal)) {
+						throw err;
+					}
+					why = err.message;
+				}
+				row.classList.add(why ? 'drop-bad' : 'drop-ok');
+				row.title = why;
+			}
+		}
+	}
+
+	/* The end of a press: e the pointerup, null when cancelled. */
+	dragEnd(e) {
+		const d = this.drag;
+		if (!d) {
+			return;
+		}
+		this.drag = null;
+		d.ghost?.remove();
+		document.body.classList.remove('dragging-node');
+		d.over?.classList.remove('drop-ok', 'drop-bad');
+		if (d.over) {
+			d.over.title = '';
+		}
+		if (!d.moving) {
+			if (!e) {
+				return;
+			}
+			if (d.node && d.twist) {
+				this.toggle(d.node);
+			} else if (d.node) {
+				this.app.select(d.node);
+			}
+			return;
+		}
+		/* The click that follows the drop (in this task) is not one. */
+		this.clickDone = true;
+		setTimeout(() => {
+			this.clickDone = false;
+		}, 0);
+		const row = e && this.dropTarget(d, e);
+		if (row) {
+			const plan = this.dropPlan(d, Number(row.dataset.id));
+			this.act(() => plan());
+			this.menu(false);
+		}
+	}
+
+	/* The list takes the keyboard focus: up and down select the row
+	 * above or below, right opens a group, left closes it (or selects
+	 * the group above). */
+	installKeys() {
+		this.list.tabIndex = 0;
+		this.list.addEventListener('keydown', (e) => {
+			const rows = [...this.list.querySelectorAll('.row')];
+			const at = rows.findIndex((r) => r.classList.contains('sel'));
+			const n = this.app.scene?.byId.get(this.app.selected);
+			let id = 0;
+			if (e.key === 'ArrowDown' || e.key === 'ArrowUp') {
+				const to = at < 0 ? 0 : at + (e.key === 'ArrowDown' ? 1 : -1);
+				id = Number(rows[Math.max(0, Math.min(rows.length - 1, to))]
+					?.dataset.id ?? 0);
+			} else if (e.key === 'ArrowRight' && n?.isOp &&
+				this.open.get(n.id) !== true) {
+				this.open.set(n.id, true);
+				this.render();
+			} else if (e.key === 'ArrowLeft' && n) {
+				const open = rows[at]?.getAttribute('aria-expanded') === 'true';
+				if (open) {
+					this.open.set(n.id, false);
+					this.render();
+				} else {
+					id = n.parent?.id ?? 0;
+				}
+			} else {
+				return;
+			}
+			e.preventDefault();
+			if (id) {
+				this.app.select(id);
+			}
+		});
+	}
+
+	toggle(id) {
+		const n = this.app.scene?.byId.get(id);
+		const row = this.rows.get(id);
+		if (!n || !row) {
+			return;
+		}
+		this.open.set(id, row.getAttribute('aria-expanded') !== 'true');
+		this.render();
+	}
+}

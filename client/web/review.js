@@ -1,0 +1,369 @@
+/*
+ * What a reviewer needs around the picture, on the page's toolbar and
+ * header:
+ *  - camera reset (R): back to the session's camera (the one the scene
+ *    carries, PROTOCOL.md 7.25), or bc_camera_default() without one;
+ *  - zoom to fit (Home): the whole scene in view, from conservative boxes
+ *    of the mirror's primitives (bounds.js);
+ *  - downloads: a PNG of the view (the Picture panel's tiled snapshot at
+ *    the view's size) and the scene as a JSON scene file (scenejson.js);
+ *  - the frame encoding (JPEG, PNG, raw) and JPEG quality, sent as VIEW
+ *    (7.14); an encoding the daemon refuses is marked and the control
+ *    goes back;
+ *  - the token state in the header: editor, viewer, view only (a
+ *    viewer-only token), with or without a token, refused, and the
+ *    warnings that go with them;
+ *  - the session list (sessions.js).
+ * The page (app.js) calls saw(m) with every message before handling it
+ * (true: an answer to this module's own requests) and update()
+ * on its overlay tick; everything else starts from here.
+ */
+import * as P from './protocol.js';
+import { DEFAULT_CAMERA, fitCamera, treeBox } from './bounds.js';
+import { sceneJsonParts } from './scenejson.js';
+import { SessionPanel } from './sessions.js';
+
+const $ = (id) => document.getElementById(id);
+
+/* Encoding names as VIEW numbers them. */
+const ENC_NAME = { [P.ENC.JPEG]: 'jpeg', [P.ENC.PNG]: 'png',
+	[P.ENC.RAW]: 'raw' };
+
+/* Keys typed into a field keep their meaning there. */
+function typing(e) {
+	const t = e.target;
+	return t && (t.isContentEditable || ['INPUT', 'TEXTAREA', 'SELECT']
+		.includes(t.tagName));
+}
+
+/* Saves a Blob as a download named name. */
+function download(blob, name) {
+	const a = document.createElement('a');
+	a.href = URL.createObjectURL(blob);
+	a.download = name;
+	a.click();
+	setTimeout(() => URL.revokeObjectURL(a.href), 60000);
+}
+
+export class Review {
+	constructor(app) {
+		this.app = app;
+		this.refused = new Set(); /* encodings the daemon refused */
+		this.viewAsk = null; /* { seq, back: { encoding, quality } } */
+		this.listedFor = null; /* the session the list was asked in */
+		this.sessions = new SessionPanel({
+			url: () => app.cfg.ws,
+			token: () => app.cfg.token,
+			name: () => app.cfg.name,
+			canSend: () => !!app.welcome && app.conn.ws?.readyState ===
+				WebSocket.OPEN,
+			send: (type, fields) => app.conn.send(type, fields),
+			socket: () => app.conn.ws,
+			current: () => (app.info ? app.info.name : ''),
+			join: (name) => this.join(name),
+		});
+		this.installToolbar();
+		this.installKeys();
+		this.update();
+	}
+
+	installToolbar() {
+		$('resetbtn').addEventListener('click', () => this.resetCamera());
+		$('fitbtn').addEventListener('click', () => this.fit());
+		$('pngbtn').addEventListener('click', () => this.savePng()
+			.catch(() => {}));
+		$('jsonbtn').addEventListener('click', () => this.saveJson());
+		const enc = $('encoding');
+		for (const o of enc.options) {
+			/* Only what the page announced in HELLO. */
+			o.disabled = !(P.ENCODINGS_ALL & (1 << (Number(o.value) - 1)));
+		}
+		enc.value = String(this.app.cfg.encoding);
+		$('quality').value = String(this.app.cfg.quality);
+		enc.addEventListener('change', () => this.setView(Number(enc.value),
+			this.app.cfg.quality));
+		$('quality').addEventListener('change', () => {
+			const q = Math.round(Number($('quality').value));
+			if (!(q >= 1 && q <= P.LIMITS.MAX_QUALITY)) {
+				this.app.say(`JPEG quality: a whole number from 1 to ` +
+					`${P.LIMITS.MAX_QUALITY}`);
+				$('quality').value = String(this.app.cfg.quality);
+				return;
+			}
+			this.setView(this.app.cfg.encoding, q);
+		});
+		this.renderView();
+	}
+
+	installKeys() {
+		document.addEventListener('keydown', (e) => {
+			if (e.ctrlKey || e.metaKey || e.altKey || typing(e)) {
+				return;
+			}
+			if (e.key === 'Home') {
+				e.preventDefault();
+				this.fit();
+			} else if (e.key.toLowerCase() === 'r' && !e.shiftKey) {
+				e.preventDefault();
+				this.resetCamera();
+			}
+		});
+	}
+
+	/* ---- camera ---- */
+
+	/* The session's camera, as the scene carries it, or the default. */
+	sessionCamera() {
+		return this.app.scene?.camera ?? DEFAULT_CAMERA;
+	}
+
+	resetCamera() {
+		if (!this.app.info) {
+			return;
+		}
+		this.app.camera.set(this.sessionCamera());
+		this.app.sendCamera(false);
+	}
+
+	/* The scene's box, or null (no scene, or nothing to show). */
+	box() {
+		return this.app.scene ? treeBox(this.app.scene.root) : null;
+	}
+
+	fit() {
+		const box = this.box();
+		const v = this.app.view;
+		if (!this.app.info || !v) {
+			return;
+		}
+		if (!box) {
+			this.app.say('zoom to fit: the scene has no shape to frame');
+			return;
+		}
+		this.app.camera.set(fitCamera(this.app.camera.msg(), box,
+			v.width / v.height));
+		this.app.sendCamera(false);
+	}
+
+	/* ---- downloads ---- */
+
+	fileName(ext) {
+		return `blobcast-${this.app.cfg.session}-${this.app.order}.${ext}`;
+	}
+
+	/* A PNG of this view's size, through the Picture panel's tiles. */
+	savePng() {
+		const v = this.app.view;
+		if (!v) {
+			return Promise.reject(new Error('no view yet'));
+		}
+		return this.app.savePicture(v.width, v.height).catch((e) => {
+			this.app.say(`PNG not saved: ${e.message}`);
+			throw e;
+		});
+	}
+
+	/* The scene file text of the mirror (throws saying why not). */
+	sceneJson() {
+		const s = this.app.scene;
+		if (!s) {
+			throw new Error('no scene yet');
+		}
+		return sceneJsonParts({ camera: s.camera, root: s.root });
+	}
+
+	saveJson() {
+		let parts;
+		try {
+			parts = this.sceneJson();
+		} catch (e) {
+			this.app.say(`JSON not saved: ${e.message}`);
+			return;
+		}
+		download(new Blob(parts, { type: 'application/json' }),
+			this.fileName('json'));
+	}
+
+	/* ---- frames ---- */
+
+	/* Asks for frames in encoding at quality (VIEW); the daemon's refusal
+	 * puts the control back. Also kept in the address bar. */
+	setView(encoding, quality) {
+		const cfg = this.app.cfg;
+		const back = { encoding: cfg.encoding, quality: cfg.quality };
+		cfg.encoding = encoding;
+		cfg.quality = quality;
+		const q = new URLSearchParams(location.search);
+		q.set('enc', ENC_NAME[encoding]);
+		q.set('quality', String(quality));
+		history.replaceState(null, '', `${location.pathname}?${q}` +
+			location.hash);
+		if (this.app.info) {
+			/* resize(true) sends the VIEW from a zero timer: its seq is
+			 * known after that one runs. */
+			const ask = { seq: 0, back };
+			this.viewAsk = ask;
+			this.app.resize(true);
+			setTimeout(() => {
+				ask.seq = this.app.viewSeq;
+			}, 0);
+		}
+		this.renderView();
+	}
+
+	renderView() {
+		const cfg = this.app.cfg;
+		const enc = $('encoding');
+		enc.value = String(cfg.encoding);
+		for (const o of enc.options) {
+			const e = Number(o.value);
+			if (this.refused.has(e)) {
+				o.disabled = true;
+				o.textContent = `${ENC_NAME[e]} (refused)`;
+			}
+		}
+		$('quality').value = String(cfg.quality);
+		$('quality').disabled = cfg.encoding !== P.ENC.JPEG;
+	}
+
+	/* ---- messages the page receives ---- */
+
+	/* Sees every message before the page; returns whether it was an
+	 * answer to this module's requests, which it has dealt with (the
+	 * page then skips it). */
+	saw(m) {
+		const app = this.app;
+		if (this.sessions.handle(m)) {
+			return true;
+		}
+		if (m.type === P.MSG.SESSION_INFO || m.type === P.MSG.ERROR) {
+			/* The header follows a join or a refusal at once, once the
+			 * page has taken the message (not at the next tick). */
+			setTimeout(() => this.update(), 0);
+		}
+		if (m.type === P.MSG.SESSION_CAMERA_SET && app.scene) {
+			/* The mirror keeps the session's camera (7.25): reset goes
+			 * there. */
+			app.scene.camera = { eye: m.eye.slice(), target: m.target
+				.slice(), up: m.up.slice(), fov_y_deg: m.fov_y_deg };
+		}
+		if (m.type !== P.MSG.ERROR) {
+			return false;
+		}
+		const ask = this.viewAsk;
+		if (ask && m.seq && m.seq === ask.seq) {
+			/* The daemon keeps the VIEW it had: so does the control. */
+			this.viewAsk = null;
+			if (m.code === P.ERR.EINVAL) {
+				this.refused.add(app.cfg.encoding);
+			}
+			app.say(`${ENC_NAME[app.cfg.encoding]} frames refused by the ` +
+				`daemon (${P.errName(m.code)}: ${m.text})`);
+			app.cfg.encoding = ask.back.encoding;
+			app.cfg.quality = ask.back.quality;
+			this.renderView();
+			/* Said here, in full; a refused VIEW gets no frame, so it
+			 * is not pending (what the page does with such an ERROR). */
+			app.viewSentAt = 0;
+			return true;
+		}
+		if (m.code === P.ERR.ENOSESSION && m.seq === 0 && app.info) {
+			/* Someone deleted this page's session. */
+			this.sessions.setStatus(`this session was deleted (${m.text});` +
+				' join or create another', true);
+			this.sessions.refresh().catch(() => {});
+		}
+		return false;
+	}
+
+	/* ---- the header and the buttons, on the page's tick ---- */
+
+	join(name) {
+		const q = new URLSearchParams(location.search);
+		q.set('session', name);
+		history.replaceState(null, '', `${location.pathname}?${q}` +
+			location.hash);
+		this.app.switchSession(name);
+	}
+
+	/* { state, text, warn } for the header: how the page is connected
+	 * and with what token. */
+	tokenState() {
+		const app = this.app;
+		const token = !!app.cfg.token;
+		const warns = [];
+		if (app.tokenInQuery) {
+			warns.push('a ?token= in the address is ignored (proxies log ' +
+				'it): use #token= or the token… button');
+		}
+		let state, text;
+		if (app.halted?.code === P.ERR.EAUTH) {
+			state = 'refused';
+			text = token ? 'token refused' : 'token needed';
+			warns.unshift(token ? 'the daemon refused this token: enter ' +
+				'another with the token… button' : 'the daemon wants a ' +
+				'token: enter it with the token… button');
+		} else if (!app.info) {
+			state = 'connecting';
+			text = token ? 'token set' : 'no token';
+		} else if (app.info.role === P.ROLE.EDITOR) {
+			state = 'editor';
+			text = `editor · ${token ? 'token' : 'no token'}`;
+		} else if (app.viewOnly) {
+			state = 'view-only';
+			text = 'view only · viewer token';
+			warns.unshift('this token allows viewing only: edits, undo, ' +
+				'creating and deleting sessions are refused');
+		} else {
+			state = 'viewer';
+			text = `viewer · ${token ? 'token' : 'no token'}`;
+		}
+		return { state, text, warn: warns.join('; ') };
+	}
+
+	update() {
+		const app = this.app;
+		const t = this.tokenState();
+		const el = $('tokenstate');
+		const text = t.warn ? `${t.text} ⚠` : t.text;
+		if (el.textContent !== text || el.dataset.state !== t.state) {
+			el.textContent = text;
+			el.dataset.state = t.state;
+			el.classList.toggle('warn', !!t.warn);
+		}
+		$('tokenwarn').textContent = t.warn;
+		$('tokenwarn').hidden = !t.warn;
+		el.title = t.warn || 'how this page is connected';
+		const joined = !!app.info;
+		$('resetbtn').disabled = !joined;
+		$('fitbtn').disabled = !joined || !app.scene;
+		$('jsonbtn').disabled = !app.scene;
+		$('pngbtn').disabled = $('picturebtn').disabled;
+		const name = app.info?.name ?? null;
+		if (name && name !== this.listedFor && !this.sessions.busy) {
+			/* Each session joined: what else is there. */
+			this.listedFor = name;
+			this.sessions.refresh().catch(() => {});
+		} else if (!name && app.halted?.code === P.ERR.ENOSESSION &&
+			this.listedFor !== '') {
+			/* Stopped on a missing session: show the ones there are. */
+			this.listedFor = '';
+			this.sessions.refresh().catch(() => {});
+		}
+		this.sessions.update();
+	}
+
+	/* For tests and the console (window.blobcast). */
+	api() {
+		return {
+			sceneBox: () => this.box(),
+			sceneJson: () => this.sceneJson().join(''),
+			sessionCamera: () => this.sessionCamera(),
+			cameraSeq: () => this.app.cameraSeq,
+			tokenState: () => this.tokenState(),
+			sessions: () => ({ status: this.sessions.status,
+				busy: this.sessions.busy,
+				names: this.sessions.entries?.map((e) => e.name) ?? null }),
+		};
+	}
+}
