@@ -1,46 +1,51 @@
 /*
- * Surface nets over a uniform grid (one vertex per cell the surface
- * crosses, one quad per grid edge whose ends differ in sign, joining the
- * four cells around that edge), visited through an octree of regions:
+ * Marching tetrahedra over a uniform grid, visited through an octree of
+ * regions:
  *
  *  - a region keeps the primitives whose ABVs meet it (its parent's list,
  *    filtered), and is dropped when none does (the field is +inf there)
  *    or when the field at its centre, through the pruned view of its
  *    primitives, exceeds the Lipschitz bound times its half diagonal (no
  *    sign change inside);
- *  - a region of BLOCK cells a side evaluates its grid corners, one layer
- *    more on the low side, through its view, gives every cell the surface
- *    crosses a vertex (the mean of its edges' interpolated crossings,
- *    moved once along the gradient onto the surface and kept inside the
- *    cell), and emits the quads of the grid edges whose low end it owns.
+ *  - a region of BLOCK cells a side evaluates its grid corners through its
+ *    view and splits every cell whose corners differ in sign into the six
+ *    tetrahedra of the Kuhn (Freudenthal) triangulation, which tile space
+ *    with the same edges and faces seen from every cell; each tetrahedron
+ *    whose corners differ in sign gets the zero set of the linear
+ *    interpolation of its corner values, one triangle or a quad of two.
  *
- * The pruned view has the sign of the full field everywhere in its region
- * (blobtree's sparse evaluation), so every block agrees on the sign at the
- * corners it shares: the quads form a closed surface. A cell's vertex is
- * made once, by whichever block first needs it (a hash from cell to
- * vertex). Corners on the box's boundary count as outside, so a solid cut
- * by the box is closed by its faces. Quads are oriented with the outward
- * side (towards positive field) counter-clockwise, and split into two
- * triangles along the diagonal whose ends are nearer.
+ * The mesh's vertices lie on the tetrahedra's edges (a hash from grid
+ * edge to vertex, so each is made once), strictly inside them. A segment
+ * of the surface on a tetrahedron face is shared by exactly the two
+ * tetrahedra on either side of that face, and a quad's diagonal by its two
+ * triangles: every edge of the mesh is used by exactly two triangles, in
+ * opposite directions. The pruned view has the sign of the full field
+ * everywhere in its region (blobtree's sparse evaluation), so the blocks
+ * agree on the sign of every corner they share. Corners on the box's
+ * boundary count as outside, so a solid cut by the box is closed along
+ * its faces; a zero value counts as outside. docs/mesh.md has the
+ * argument in full.
  */
 #include "blobcast/mesh.h"
+#include "mesh_impl.h"
 
-#include <errno.h>
 #include <math.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
-#include <unistd.h>
 
 #include "blobcast/alloc.h"
 
-/* Cells a side of a leaf region: 16^3 cells, 18^3 corner samples. */
+/* Cells a side of a leaf region: 16^3 cells, 17^3 corner samples. */
 #define BLOCK 16u
-#define SIDE (BLOCK + 2u)
+#define SIDE (BLOCK + 1u)
 /* The blobtree field's Lipschitz bound (docs/architecture.md: the tracers
  * step by it). */
 #define LIPSCHITZ 1.45f
+/* Edges shorter than this many cells are collapsed (mesh_collapse.c), in
+ * at most this many passes (a pass leaves the neighbours of each collapse
+ * for the next; eight about halve the triangle count). */
+#define COLLAPSE 0.5f
+#define PASSES 8
 
 /* ---- cell -> vertex hash ------------------------------------------------- */
 
@@ -112,6 +117,7 @@ struct build {
 	float val[SIDE * SIDE * SIDE];
 	int32_t base[3]; /* corner index of val[0] */
 	uint64_t done_cells, total_cells;
+	double share; /* of the progress, the grid's (the rest: collapses) */
 	const struct bc_mesh_opts *o;
 	uint32_t levels; /* entries of act */
 };
@@ -180,88 +186,98 @@ static int push_tri(struct bc_mesh *m, uint32_t a, uint32_t b, uint32_t c)
 	return 0;
 }
 
-/* The corner value at global index (i, j, k), from the block's samples. */
-static float cval(const struct build *b, int64_t i, int64_t j, int64_t k)
+/* Whether grid corner c lies on the box's boundary, where the field counts
+ * as outside so that a solid the box cuts is closed. */
+static bool on_boundary(const struct build *b, const int64_t c[3])
 {
-	int64_t x = i - b->base[0], y = j - b->base[1], z = k - b->base[2];
+	for (int a = 0; a < 3; a++) {
+		if (c[a] <= 0 || c[a] >= (int64_t)b->n[a]) {
+			return true;
+		}
+	}
+	return false;
+}
+
+/* The corner value at global index (i, j, k), from the block's samples. */
+static float cval(const struct build *b, const int64_t c[3])
+{
+	int64_t x = c[0] - b->base[0], y = c[1] - b->base[1],
+	        z = c[2] - b->base[2];
 	return b->val[(z * SIDE + y) * SIDE + x];
 }
 
-/* The vertex of cell (i, j, k), made from the block's samples on first
- * use. */
-static int cell_vertex(struct build *b, int64_t i, int64_t j, int64_t k,
+/* Where on an edge a vertex may sit, as a fraction of the edge: never at
+ * its ends, so that the vertices of distinct edges are distinct points and
+ * no triangle is degenerate (docs/mesh.md). */
+#define T_MIN (1.0 / 64.0)
+
+static double clamp_t(double t)
+{
+	/* NaN (an infinite or undefined field) lands on T_MIN. */
+	return t > T_MIN ? (t < 1.0 - T_MIN ? t : 1.0 - T_MIN) : T_MIN;
+}
+
+/* The vertex on the grid edge from corner c along dir (bit a: +1 along
+ * axis a), whose ends differ in sign; made from the block's samples on
+ * first use. It starts where the linear interpolation of the ends' values
+ * is zero and takes one false-position step with the field's value there
+ * (the sample that also gives its colour), staying strictly inside the
+ * edge. */
+static int edge_vertex(struct build *b, const int64_t c[3], int dir,
                        uint32_t *id)
 {
-	uint64_t c =
-	    (uint64_t)i +
-	    (uint64_t)b->n[0] * ((uint64_t)j + (uint64_t)b->n[1] * (uint64_t)k);
+	uint64_t key =
+	    ((uint64_t)c[0] +
+	     (uint64_t)(b->n[0] + 1) *
+	         ((uint64_t)c[1] + (uint64_t)(b->n[1] + 1) * (uint64_t)c[2])) *
+	        8u +
+	    (uint64_t)dir;
+	int64_t e[3];
 	bool found;
 	size_t slot;
-	float v[8], acc[3] = {0, 0, 0}, p[3], g[3], f, gg;
-	uint32_t cross = 0;
+	double v0, v1, f, t;
+	float p[3];
 	uint8_t rgb[3] = {178, 178, 178};
 	uint32_t prim = BC_NONE;
+	bool cap;
 	int rc;
 	if (2 * (b->map.n + 1) > b->map.cap && (rc = vmap_grow(&b->map))) {
 		return rc;
 	}
-	slot = vmap_slot(&b->map, c, &found);
+	slot = vmap_slot(&b->map, key, &found);
 	if (found) {
 		*id = b->map.val[slot];
 		return 0;
 	}
-	for (int q = 0; q < 8; q++) {
-		v[q] = cval(b, i + (q & 1), j + ((q >> 1) & 1), k + (q >> 2));
-	}
-	/* The 12 edges: corners differing in one bit. */
-	for (int q = 0; q < 8; q++) {
-		for (int bit = 1; bit < 8; bit <<= 1) {
-			int r = q | bit;
-			float t;
-			if (r == q || (v[q] < 0.0f) == (v[r] < 0.0f)) {
-				continue;
-			}
-			t = v[q] / (v[q] - v[r]);
-			acc[0] +=
-			    (float)(q & 1) + t * (float)((r & 1) - (q & 1));
-			acc[1] += (float)((q >> 1) & 1) +
-			          t * (float)(((r >> 1) & 1) - ((q >> 1) & 1));
-			acc[2] +=
-			    (float)(q >> 2) + t * (float)((r >> 2) - (q >> 2));
-			cross++;
-		}
-	}
-	corner_pos(b, i, j, k, p);
 	for (int a = 0; a < 3; a++) {
-		p[a] += b->cell * (cross ? acc[a] / (float)cross : 0.5f);
+		e[a] = c[a] + ((dir >> a) & 1);
 	}
-	/* One step along the gradient onto the surface, kept in the cell
-	 * (a cell holding a sharp edge keeps its mean point instead of
-	 * being pulled onto one face far away). */
-	f = eval_view(b, p);
-	{
-		float h = 0.25f * b->cell;
-		for (int a = 0; a < 3; a++) {
-			float q1[3] = {p[0], p[1], p[2]},
-			      q2[3] = {p[0], p[1], p[2]};
-			q1[a] += h;
-			q2[a] -= h;
-			g[a] =
-			    (eval_view(b, q1) - eval_view(b, q2)) / (2.0f * h);
-		}
-	}
-	gg = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
-	if (gg > 0.25f && isfinite(f)) {
-		float lo[3], q[3];
-		corner_pos(b, i, j, k, lo);
-		for (int a = 0; a < 3; a++) {
-			q[a] = p[a] - f * g[a] / gg;
-			q[a] = fminf(fmaxf(q[a], lo[a]), lo[a] + b->cell);
-		}
-		memcpy(p, q, sizeof(p));
+	v0 = cval(b, c);
+	v1 = cval(b, e);
+	/* An edge from the box's boundary (outside by fiat) into the solid:
+	 * the cap closing a cut solid, half a cell inside the box. */
+	cap = on_boundary(b, c) || on_boundary(b, e);
+	t = cap ? 0.5 : clamp_t(v0 / (v0 - v1));
+	for (int a = 0; a < 3; a++) {
+		p[a] = (float)((double)b->org[a] +
+		               ((double)c[a] + t * (double)(e[a] - c[a])) *
+		                   (double)b->cell);
 	}
 	b->m->evals++;
-	(void)bc_view_eval_id(&b->view, b->l, p, &prim);
+	f = bc_view_eval_id(&b->view, b->l, p, &prim);
+	if (!cap && isfinite(f) && f != 0.0) {
+		/* The zero lies between p and the end of the other sign. */
+		double tf = (f < 0.0) == (v0 < 0.0)
+		                ? t + (1.0 - t) * f / (f - v1)
+		                : t * v0 / (v0 - f);
+		t = clamp_t(tf);
+		for (int a = 0; a < 3; a++) {
+			p[a] =
+			    (float)((double)b->org[a] +
+			            ((double)c[a] + t * (double)(e[a] - c[a])) *
+			                (double)b->cell);
+		}
+	}
 	if (prim != BC_NONE && prim < b->l->nprims) {
 		for (int a = 0; a < 3; a++) {
 			float cc = b->l->color[prim][a];
@@ -272,135 +288,192 @@ static int cell_vertex(struct build *b, int64_t i, int64_t j, int64_t k,
 	if ((rc = push_vertex(b->m, p, rgb, id))) {
 		return rc;
 	}
-	b->map.key[slot] = c + 1;
+	b->map.key[slot] = key + 1;
 	b->map.val[slot] = *id;
 	b->map.n++;
 	return 0;
 }
 
-/* A leaf region: cells [c0, c0 + BLOCK) clipped to the grid. */
-static int leaf(struct build *b, const uint32_t c0[3])
+/* The vertex on the edge between corners q[u] and q[w] of a Kuhn
+ * tetrahedron: one is the other plus a vector of zeros and ones. */
+static int tet_vertex(struct build *b, const int64_t q[4][3], int u, int w,
+                      uint32_t *id)
+{
+	int dir = 0;
+	if (q[w][0] + q[w][1] + q[w][2] < q[u][0] + q[u][1] + q[u][2]) {
+		int s = u;
+		u = w;
+		w = s;
+	}
+	for (int a = 0; a < 3; a++) {
+		dir |= (int)(q[w][a] - q[u][a]) << a;
+	}
+	return edge_vertex(b, q[u], dir, id);
+}
+
+static double dist2(const float *p, const float *q)
+{
+	double d = 0.0;
+	for (int a = 0; a < 3; a++) {
+		d += ((double)p[a] - q[a]) * ((double)p[a] - q[a]);
+	}
+	return d;
+}
+
+/* Orders of the corners (even permutations of 0..3, so the orientation is
+ * kept) that put the negative corner first (one negative), the positive
+ * corner first (one positive), or the two negative corners first (two). */
+static const uint8_t lone_first[4][4] = {
+    {0, 1, 2, 3}, {1, 0, 3, 2}, {2, 3, 0, 1}, {3, 2, 1, 0}};
+static const uint8_t pair_first[4][4][4] = {
+    [0][1] = {0, 1, 2, 3}, [0][2] = {0, 2, 3, 1}, [0][3] = {0, 3, 1, 2},
+    [1][2] = {1, 2, 0, 3}, [1][3] = {1, 3, 2, 0}, [2][3] = {2, 3, 0, 1}};
+
+/* The surface in one tetrahedron q[0..4), positively oriented
+ * (det(q1 - q0, q2 - q0, q3 - q0) > 0): the zero set of the linear
+ * interpolation of its corners' signs, one triangle or one quad (two
+ * triangles), counter-clockwise seen from the positive side. */
+static int tet(struct build *b, const int64_t q[4][3])
+{
+	int neg = 0, count = 0, rc;
+	uint32_t id[4];
+	for (int v = 0; v < 4; v++) {
+		if (cval(b, q[v]) < 0.0f) {
+			neg |= 1 << v;
+			count++;
+		}
+	}
+	if (count == 0 || count == 4) {
+		return 0;
+	}
+	if (count != 2) {
+		/* One corner apart: the triangle on its three edges faces away
+		 * from it when it is the negative one. */
+		int lone = 0;
+		const uint8_t *o;
+		while (((neg >> lone) & 1) != (count == 1)) {
+			lone++;
+		}
+		o = lone_first[lone];
+		for (int k = 1; k < 4; k++) {
+			if ((rc = tet_vertex(b, q, o[0], o[k], &id[k - 1]))) {
+				return rc;
+			}
+		}
+		return count == 1 ? push_tri(b->m, id[0], id[1], id[2])
+		                  : push_tri(b->m, id[0], id[2], id[1]);
+	}
+	{
+		/* Negatives a, b, positives c, d: the quad on edges ac, ad, bd,
+		 * bc, split along its shorter diagonal. */
+		int lo = 0, hi;
+		const uint8_t *o;
+		while (!((neg >> lo) & 1)) {
+			lo++;
+		}
+		hi = lo + 1;
+		while (!((neg >> hi) & 1)) {
+			hi++;
+		}
+		o = pair_first[lo][hi];
+		if ((rc = tet_vertex(b, q, o[0], o[2], &id[0])) ||
+		    (rc = tet_vertex(b, q, o[0], o[3], &id[1])) ||
+		    (rc = tet_vertex(b, q, o[1], o[3], &id[2])) ||
+		    (rc = tet_vertex(b, q, o[1], o[2], &id[3]))) {
+			return rc;
+		}
+		if (dist2(b->m->pos[id[0]], b->m->pos[id[2]]) <=
+		    dist2(b->m->pos[id[1]], b->m->pos[id[3]])) {
+			if ((rc = push_tri(b->m, id[0], id[1], id[2]))) {
+				return rc;
+			}
+			return push_tri(b->m, id[0], id[2], id[3]);
+		}
+		if ((rc = push_tri(b->m, id[0], id[1], id[3]))) {
+			return rc;
+		}
+		return push_tri(b->m, id[1], id[2], id[3]);
+	}
+}
+
+/* The six Kuhn tetrahedra of a cell: corner 0 to the opposite corner
+ * along the axes in the order of a permutation; odd permutations have
+ * their middle corners swapped to keep the orientation positive. */
+static const uint8_t kuhn[6][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1},
+                                   {0, 2, 1}, {2, 1, 0}, {1, 0, 2}};
+
+/* A leaf region: cells [c0, c0 + BLOCK) clipped to the grid; inside: known
+ * to lie inside the solid (only its corners on the box's boundary are
+ * outside). */
+static int leaf(struct build *b, const uint32_t c0[3], bool inside)
 {
 	uint32_t c1[3];
 	int rc;
 	for (int a = 0; a < 3; a++) {
 		c1[a] = c0[a] + BLOCK < b->n[a] ? c0[a] + BLOCK : b->n[a];
-		b->base[a] = (int32_t)c0[a] - 1;
+		b->base[a] = (int32_t)c0[a];
 	}
-	/* Corners base .. c1 (one layer below the block for the cells on its
-	 * low side that its edges need). */
-	for (int64_t k = b->base[2]; k <= (int64_t)c1[2]; k++) {
-		for (int64_t j = b->base[1]; j <= (int64_t)c1[1]; j++) {
-			for (int64_t i = b->base[0]; i <= (int64_t)c1[0]; i++) {
+	/* Corners c0 .. c1: those of the block's cells. */
+	for (int64_t k = c0[2]; k <= (int64_t)c1[2]; k++) {
+		for (int64_t j = c0[1]; j <= (int64_t)c1[1]; j++) {
+			for (int64_t i = c0[0]; i <= (int64_t)c1[0]; i++) {
+				int64_t g[3] = {i, j, k};
 				float p[3], v;
 				size_t at = (size_t)(((k - b->base[2]) * SIDE +
 				                      (j - b->base[1])) *
 				                         SIDE +
 				                     (i - b->base[0]));
-				bool edge = i <= 0 || j <= 0 || k <= 0 ||
-				            i >= b->n[0] || j >= b->n[1] ||
-				            k >= b->n[2];
-				if (edge) {
+				if (on_boundary(b, g)) {
 					/* The box's faces close the solid. */
 					b->val[at] = 1.0f;
 					continue;
 				}
+				if (inside) {
+					b->val[at] = -1.0f;
+					continue;
+				}
 				corner_pos(b, i, j, k, p);
 				v = eval_view(b, p);
+				/* Zero counts as outside; NaN too (v < 0
+				 * is false). */
 				b->val[at] = v == 0.0f ? 1e-30f : v;
 			}
 		}
 	}
-	/* Edges from corner (i, j, k) along axis a, owned by this block when
-	 * the corner is one of its own (index in [c0, c1)); the four cells
-	 * around it lie in the block or the layer below. */
-	for (int64_t k = c0[2]; k < (int64_t)c1[2] + 1; k++) {
-		for (int64_t j = c0[1]; j < (int64_t)c1[1] + 1; j++) {
-			for (int64_t i = c0[0]; i < (int64_t)c1[0] + 1; i++) {
-				int64_t at[3] = {i, j, k};
-				bool own = true;
-				for (int a = 0; a < 3; a++) {
-					/* The block's last corner layer
-					 * belongs to the next block, except
-					 * at the grid's end. */
-					own &= at[a] < (int64_t)c1[a] ||
-					       c1[a] == b->n[a];
+	for (int64_t k = c0[2]; k < (int64_t)c1[2]; k++) {
+		for (int64_t j = c0[1]; j < (int64_t)c1[1]; j++) {
+			for (int64_t i = c0[0]; i < (int64_t)c1[0]; i++) {
+				bool any_neg = false, any_pos = false;
+				for (int v = 0; v < 8; v++) {
+					int64_t c[3] = {i + (v & 1),
+					                j + ((v >> 1) & 1),
+					                k + (v >> 2)};
+					bool n = cval(b, c) < 0.0f;
+					any_neg |= n;
+					any_pos |= !n;
 				}
-				if (!own) {
+				if (!any_neg || !any_pos) {
 					continue;
 				}
-				for (int a = 0; a < 3; a++) {
-					int u = (a + 1) % 3, w = (a + 2) % 3;
-					int64_t e[3] = {i, j, k};
-					float v0, v1;
-					uint32_t id[4];
-					e[a]++;
-					if (e[a] > (int64_t)b->n[a] ||
-					    at[u] < 1 || at[w] < 1 ||
-					    at[u] >= b->n[u] ||
-					    at[w] >= b->n[w]) {
-						continue;
+				for (int s = 0; s < 6; s++) {
+					int64_t q[4][3];
+					q[0][0] = i;
+					q[0][1] = j;
+					q[0][2] = k;
+					memcpy(q[1], q[0], sizeof(q[0]));
+					q[1][kuhn[s][0]]++;
+					memcpy(q[2], q[1], sizeof(q[0]));
+					q[2][kuhn[s][1]]++;
+					memcpy(q[3], q[2], sizeof(q[0]));
+					q[3][kuhn[s][2]]++;
+					if (s >= 3) {
+						int64_t t[3];
+						memcpy(t, q[1], sizeof(t));
+						memcpy(q[1], q[2], sizeof(t));
+						memcpy(q[2], t, sizeof(t));
 					}
-					v0 = cval(b, i, j, k);
-					v1 = cval(b, e[0], e[1], e[2]);
-					if ((v0 < 0.0f) == (v1 < 0.0f)) {
-						continue;
-					}
-					/* Cells around the edge, counter-
-					 * clockwise about +a. */
-					for (int q = 0; q < 4; q++) {
-						int64_t cc[3] = {i, j, k};
-						cc[u] -= (q == 0 || q == 3);
-						cc[w] -= (q == 0 || q == 1);
-						if ((rc = cell_vertex(
-						         b, cc[0], cc[1], cc[2],
-						         &id[q]))) {
-							return rc;
-						}
-					}
-					if (!(v0 < 0.0f)) {
-						/* Inside towards -a: flip. */
-						uint32_t s = id[1];
-						id[1] = id[3];
-						id[3] = s;
-					}
-					{
-						const float
-						    *p0 = b->m->pos[id[0]],
-						    *p1 = b->m->pos[id[1]],
-						    *p2 = b->m->pos[id[2]],
-						    *p3 = b->m->pos[id[3]];
-						float d02 = 0, d13 = 0;
-						for (int x = 0; x < 3; x++) {
-							d02 += (p0[x] - p2[x]) *
-							       (p0[x] - p2[x]);
-							d13 += (p1[x] - p3[x]) *
-							       (p1[x] - p3[x]);
-						}
-						if (d02 <= d13) {
-							rc = push_tri(
-							    b->m, id[0], id[1],
-							    id[2]);
-							if (!rc) {
-								rc = push_tri(
-								    b->m, id[0],
-								    id[2],
-								    id[3]);
-							}
-						} else {
-							rc = push_tri(
-							    b->m, id[0], id[1],
-							    id[3]);
-							if (!rc) {
-								rc = push_tri(
-								    b->m, id[1],
-								    id[2],
-								    id[3]);
-							}
-						}
-						if (rc) {
-							return rc;
-						}
+					if ((rc = tet(b, q))) {
+						return rc;
 					}
 				}
 			}
@@ -413,10 +486,10 @@ static void region_box(const struct build *b, const uint32_t c0[3],
                        const uint32_t c1[3], float lo[3], float hi[3])
 {
 	for (int a = 0; a < 3; a++) {
-		/* One cell more below (the leaf samples that layer too) and
-		 * above (a vertex's gradient samples reach past its cell). */
-		lo[a] = b->org[a] + ((float)c0[a] - 1.0f) * b->cell;
-		hi[a] = b->org[a] + ((float)c1[a] + 1.0f) * b->cell;
+		/* Every sample of a leaf (its corners, its edges' points)
+		 * lies in the closed box of its cells. */
+		lo[a] = b->org[a] + (float)c0[a] * b->cell;
+		hi[a] = b->org[a] + (float)c1[a] * b->cell;
 	}
 }
 
@@ -424,14 +497,36 @@ static void progress(struct build *b, uint64_t cells)
 {
 	b->done_cells += cells;
 	if (b->o && b->o->progress) {
-		b->o->progress(b->o->ctx,
-		               (double)b->done_cells / (double)b->total_cells);
+		b->o->progress(b->o->ctx, b->share * (double)b->done_cells /
+		                              (double)b->total_cells);
 	}
 }
 
-/* Region cells [c0, c1), primitives b->act[depth][0..n). */
+/* Whether region cells [c0, c1) reach the box's boundary. */
+static bool touches_boundary(const struct build *b, const uint32_t c0[3],
+                             const uint32_t c1[3])
+{
+	for (int a = 0; a < 3; a++) {
+		if (c0[a] == 0 || c1[a] == b->n[a]) {
+			return true;
+		}
+	}
+	return false;
+}
+
+static void collapse_progress(void *ctx, double done)
+{
+	struct build *b = ctx;
+	if (b->o && b->o->progress) {
+		b->o->progress(b->o->ctx, b->share + (1.0 - b->share) * done);
+	}
+}
+
+/* Region cells [c0, c1), primitives b->act[depth][0..n). inside: an
+ * ancestor found the field negative all over it and built b->view; only
+ * the cap along the box's faces is left to make. */
 static int region(struct build *b, const uint32_t c0[3], const uint32_t c1[3],
-                  uint32_t depth, uint32_t n)
+                  uint32_t depth, uint32_t n, bool inside)
 {
 	float lo[3], hi[3], c[3], r = 0.0f, f;
 	const uint32_t *act = b->act[depth];
@@ -439,7 +534,11 @@ static int region(struct build *b, const uint32_t c0[3], const uint32_t c1[3],
 	int rc;
 	uint64_t cells =
 	    (uint64_t)(c1[0] - c0[0]) * (c1[1] - c0[1]) * (c1[2] - c0[2]);
-	if (n == 0) {
+	if (inside && !touches_boundary(b, c0, c1)) {
+		progress(b, cells);
+		return 0; /* all inside, away from the box's faces */
+	}
+	if (n == 0 && !inside) {
 		progress(b, cells);
 		return 0; /* nothing reaches here: +inf, outside */
 	}
@@ -450,20 +549,30 @@ static int region(struct build *b, const uint32_t c0[3], const uint32_t c1[3],
 		side = c1[a] - c0[a] > side ? c1[a] - c0[a] : side;
 	}
 	r = sqrtf(r);
-	if ((rc = bc_view_build(&b->view, b->l, act, n))) {
-		return rc;
-	}
-	f = eval_view(b, c);
-	if (fabsf(f) > LIPSCHITZ * b->l->lip * r * 1.001f + 1e-6f * b->cell) {
-		progress(b, cells);
-		return 0; /* no sign change in the region */
+	if (!inside) {
+		if ((rc = bc_view_build(&b->view, b->l, act, n))) {
+			return rc;
+		}
+		f = eval_view(b, c);
+		if (fabsf(f) >
+		    LIPSCHITZ * b->l->lip * r * 1.001f + 1e-6f * b->cell) {
+			/* No sign change in the region. Outside, or inside
+			 * away from the box's faces: nothing to make. Inside
+			 * against them: the cap, from the known sign (this
+			 * view gives the colours). */
+			if (!(f < 0.0f) || !touches_boundary(b, c0, c1)) {
+				progress(b, cells);
+				return 0;
+			}
+			inside = true;
+		}
 	}
 	if (side <= BLOCK || depth + 1 >= b->levels) {
 		if (side > BLOCK) {
 			return BC_ELIMIT; /* levels counts every halving */
 		}
 		b->m->cells_visited += cells;
-		rc = leaf(b, c0);
+		rc = leaf(b, c0, inside);
 		progress(b, cells);
 		return rc;
 	}
@@ -490,13 +599,13 @@ static int region(struct build *b, const uint32_t c0[3], const uint32_t c1[3],
 				continue;
 			}
 			region_box(b, d0, d1, clo, chi);
-			for (uint32_t i = 0; i < n; i++) {
+			for (uint32_t i = 0; i < n && !inside; i++) {
 				if (bc_abv_meets_box(&b->l->abv[act[i]], clo,
 				                     chi)) {
 					b->act[depth + 1][m2++] = act[i];
 				}
 			}
-			if ((rc = region(b, d0, d1, depth + 1, m2))) {
+			if ((rc = region(b, d0, d1, depth + 1, m2, inside))) {
 				return rc;
 			}
 		}
@@ -555,6 +664,8 @@ int bc_mesh_build(struct bc_mesh *m, const struct bc_tree *t,
 	}
 	b.m = m;
 	b.l = l;
+	/* The collapses take about as long as the grid, on foams. */
+	b.share = opts && opts->raw ? 1.0 : 0.6;
 	b.o = opts;
 	m->cell = b.cell;
 	b.total_cells = (uint64_t)b.n[0] * b.n[1] * b.n[2];
@@ -573,7 +684,11 @@ int bc_mesh_build(struct bc_mesh *m, const struct bc_tree *t,
 		for (uint32_t k = 0; k < l->nprims; k++) {
 			b.act[0][k] = k;
 		}
-		rc = region(&b, zero, b.n, 0, l->nprims);
+		rc = region(&b, zero, b.n, 0, l->nprims, false);
+	}
+	if (rc == 0 && !(opts && opts->raw)) {
+		rc = bc_mesh_collapse_short(m, COLLAPSE * b.cell, PASSES,
+		                            collapse_progress, &b);
 	}
 	if (rc) {
 		bc_errinfo_set(ei, rc, "mesh: %s", bc_strerror(rc));
@@ -598,169 +713,4 @@ void bc_mesh_finish(struct bc_mesh *m)
 	bc_free(m->rgb);
 	bc_free(m->tri);
 	memset(m, 0, sizeof(*m));
-}
-
-/* ---- writers ------------------------------------------------------------- */
-
-enum bc_mesh_format bc_mesh_format_of(const char *path)
-{
-	const char *dot = path ? strrchr(path, '.') : NULL;
-	if (!dot) {
-		return BC_MESH_FORMAT_INVALID;
-	}
-	if (strcasecmp(dot, ".obj") == 0) {
-		return BC_MESH_FORMAT_OBJ;
-	}
-	if (strcasecmp(dot, ".ply") == 0) {
-		return BC_MESH_FORMAT_PLY;
-	}
-	if (strcasecmp(dot, ".stl") == 0) {
-		return BC_MESH_FORMAT_STL;
-	}
-	return BC_MESH_FORMAT_INVALID;
-}
-
-static void put_f32(FILE *f, float v)
-{
-	uint32_t u;
-	uint8_t b[4];
-	memcpy(&u, &v, 4);
-	for (int i = 0; i < 4; i++) {
-		b[i] = (uint8_t)(u >> (8 * i));
-	}
-	fwrite(b, 1, 4, f);
-}
-
-static void put_u32(FILE *f, uint32_t u)
-{
-	uint8_t b[4];
-	for (int i = 0; i < 4; i++) {
-		b[i] = (uint8_t)(u >> (8 * i));
-	}
-	fwrite(b, 1, 4, f);
-}
-
-static void write_body(const struct bc_mesh *m, FILE *f,
-                       enum bc_mesh_format fmt)
-{
-	switch (fmt) {
-	case BC_MESH_FORMAT_OBJ:
-		fprintf(f, "# blobcast mesh: %u vertices, %u triangles\n",
-		        m->nverts, m->ntris);
-		for (uint32_t i = 0; i < m->nverts; i++) {
-			fprintf(f, "v %.9g %.9g %.9g %.4g %.4g %.4g\n",
-			        (double)m->pos[i][0], (double)m->pos[i][1],
-			        (double)m->pos[i][2], m->rgb[i][0] / 255.0,
-			        m->rgb[i][1] / 255.0, m->rgb[i][2] / 255.0);
-		}
-		for (uint32_t i = 0; i < m->ntris; i++) {
-			fprintf(f, "f %u %u %u\n", m->tri[i][0] + 1,
-			        m->tri[i][1] + 1, m->tri[i][2] + 1);
-		}
-		break;
-	case BC_MESH_FORMAT_PLY:
-		fprintf(
-		    f,
-		    "ply\nformat binary_little_endian 1.0\n"
-		    "comment blobcast mesh\n"
-		    "element vertex %u\nproperty float x\nproperty float y\n"
-		    "property float z\nproperty uchar red\n"
-		    "property uchar green\nproperty uchar blue\n"
-		    "element face %u\nproperty list uchar uint "
-		    "vertex_indices\nend_header\n",
-		    m->nverts, m->ntris);
-		for (uint32_t i = 0; i < m->nverts; i++) {
-			for (int a = 0; a < 3; a++) {
-				put_f32(f, m->pos[i][a]);
-			}
-			fwrite(m->rgb[i], 1, 3, f);
-		}
-		for (uint32_t i = 0; i < m->ntris; i++) {
-			fputc(3, f);
-			for (int a = 0; a < 3; a++) {
-				put_u32(f, m->tri[i][a]);
-			}
-		}
-		break;
-	default: { /* STL */
-		char head[80];
-		memset(head, 0, sizeof(head));
-		snprintf(head, sizeof(head), "blobcast mesh");
-		fwrite(head, 1, sizeof(head), f);
-		put_u32(f, m->ntris);
-		for (uint32_t i = 0; i < m->ntris; i++) {
-			const float *a = m->pos[m->tri[i][0]],
-			            *b = m->pos[m->tri[i][1]],
-			            *c = m->pos[m->tri[i][2]];
-			float u[3], v[3], n[3], len;
-			for (int x = 0; x < 3; x++) {
-				u[x] = b[x] - a[x];
-				v[x] = c[x] - a[x];
-			}
-			n[0] = u[1] * v[2] - u[2] * v[1];
-			n[1] = u[2] * v[0] - u[0] * v[2];
-			n[2] = u[0] * v[1] - u[1] * v[0];
-			len = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-			for (int x = 0; x < 3; x++) {
-				put_f32(f, len > 0.0f ? n[x] / len : 0.0f);
-			}
-			for (int x = 0; x < 3; x++) {
-				put_f32(f, a[x]);
-			}
-			for (int x = 0; x < 3; x++) {
-				put_f32(f, b[x]);
-			}
-			for (int x = 0; x < 3; x++) {
-				put_f32(f, c[x]);
-			}
-			fputc(0, f);
-			fputc(0, f);
-		}
-		break;
-	}
-	}
-}
-
-int bc_mesh_write(const struct bc_mesh *m, const char *path,
-                  enum bc_mesh_format format, struct bc_errinfo *ei)
-{
-	size_t plen = path ? strlen(path) : 0;
-	char *tmp;
-	FILE *f;
-	int rc = 0;
-	if (format <= BC_MESH_FORMAT_INVALID ||
-	    format >= BC_MESH_FORMAT_COUNT) {
-		return bc_errinfo_set(ei, BC_EINVAL, "mesh: unknown format");
-	}
-	if (!path || !plen) {
-		return bc_errinfo_set(ei, BC_EINVAL, "mesh: no file name");
-	}
-	tmp = bc_malloc(plen + 48);
-	if (!tmp) {
-		return bc_errinfo_set(ei, BC_ENOMEM, "mesh: out of memory");
-	}
-	/* Beside the target, so that rename() replaces it in one step. */
-	snprintf(tmp, plen + 48, "%s.tmp.%ld", path, (long)getpid());
-	f = fopen(tmp, "wb");
-	if (!f) {
-		rc = bc_errinfo_set(ei, BC_EIO, "%s: %s", tmp, strerror(errno));
-		bc_free(tmp);
-		return rc;
-	}
-	write_body(m, f, format);
-	if (fflush(f) != 0 || ferror(f) || fsync(fileno(f)) != 0) {
-		rc = bc_errinfo_set(ei, BC_EIO, "%s: %s", tmp, strerror(errno));
-	}
-	if (fclose(f) != 0 && rc == 0) {
-		rc = bc_errinfo_set(ei, BC_EIO, "%s: %s", tmp, strerror(errno));
-	}
-	if (rc == 0 && rename(tmp, path) != 0) {
-		rc =
-		    bc_errinfo_set(ei, BC_EIO, "%s: %s", path, strerror(errno));
-	}
-	if (rc) {
-		(void)remove(tmp);
-	}
-	bc_free(tmp);
-	return rc;
 }

@@ -1,28 +1,42 @@
 /*
- * `blobcast mesh`: loads a scene (a file, '-' for stdin, 'default'),
- * meshes its surface with surface nets on a grid visited through an octree
- * of the primitives' ABVs (blobtree/mesh.c), and writes the mesh in the
- * format the output's extension names. Progress goes to stderr.
+ * `blobcast mesh`: takes a scene (a file, '-' for stdin, 'default', or a
+ * live session's scene through libblobcast, joined as a viewer), meshes
+ * its surface with marching tetrahedra on a grid visited through an octree
+ * of the primitives' ABVs (blobtree/mesh.c), and writes the mesh as OBJ,
+ * PLY, STL or binary glTF. Progress goes to stderr.
  */
 #include "cmd_mesh.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "blobcast/args.h"
 #include "blobcast/blobtree.h"
 #include "blobcast/clock.h"
-#include "blobcast/num.h"
 #include "blobcast/mesh.h"
+#include "blobcast/num.h"
 #include "cli.h"
+#include "cmd_client.h"
 #include "cmd_render.h"
 
 struct mesh_args {
 	const char *scene, *out;
+	enum bc_mesh_format format;
 	uint32_t resolution;
 	float lo[3], hi[3];
-	bool bounds, quiet;
+	bool bounds, quiet, raw;
+	/* A live session instead of SCENE: the client commands' options. */
+	struct bc_cli_call call;
+};
+
+static const struct bc_opt_name format_names[] = {
+    {"obj", BC_MESH_FORMAT_OBJ},
+    {"ply", BC_MESH_FORMAT_PLY},
+    {"stl", BC_MESH_FORMAT_STL},
+    {"glb", BC_MESH_FORMAT_GLB},
+    {NULL, 0},
 };
 
 /* Returns 0 to go on, or the exit status (0 after --help, 2 on a bad
@@ -30,14 +44,25 @@ struct mesh_args {
 static int parse(int argc, char **argv, struct mesh_args *a, bool *done)
 {
 	const char *bounds = NULL;
+	int format = BC_MESH_FORMAT_INVALID;
+	uint32_t timeout_ms = 10000;
+	struct bc_cli_call *c = &a->call;
 	const struct bc_opt opts[] = {
 	    {.name = "out",
 	     .kind = BC_OPT_STRING,
 	     .dst = &a->out,
 	     .arg = "FILE",
-	     .help = ".obj (text), .ply (binary) or .stl\n"
-	             "(binary), by extension (required)",
+	     .help = "the mesh file (required); its extension names\n"
+	             "the format unless --format does: .obj (text),\n"
+	             ".ply (binary), .stl (binary) or .glb (binary\n"
+	             "glTF 2.0 with normals and vertex colours)",
 	     .flags = BC_OPT_REQUIRED},
+	    {.name = "format",
+	     .kind = BC_OPT_ENUM,
+	     .dst = &format,
+	     .arg = "F",
+	     .names = format_names,
+	     .help = "{choices}: the format, whatever\nFILE's extension"},
 	    {.name = "resolution",
 	     .kind = BC_OPT_U32,
 	     .dst = &a->resolution,
@@ -52,25 +77,88 @@ static int parse(int argc, char **argv, struct mesh_args *a, bool *done)
 	     .arg = "X0,Y0,Z0,X1,Y1,Z1",
 	     .help = "the box to mesh (default: the scene's\n"
 	             "box and two cells of margin); a solid\n"
-	             "cut by it is closed by its faces"},
+	             "cut by it is closed along its faces"},
+	    {.name = "raw",
+	     .kind = BC_OPT_FLAG,
+	     .dst = &a->raw,
+	     .help = "keep every triangle of the tetrahedra (no\n"
+	             "collapse of edges under half a cell): faster,\n"
+	             "about twice the triangles"},
 	    {.name = "quiet",
 	     .kind = BC_OPT_FLAG,
 	     .dst = &a->quiet,
 	     .help = "no progress and no summary line"},
+	    {.name = "session",
+	     .kind = BC_OPT_STRING,
+	     .dst = &c->session,
+	     .arg = "NAME",
+	     .help = "mesh the scene of live session NAME instead\n"
+	             "of SCENE (joined as a viewer, then left)"},
+	    {.name = "server",
+	     .kind = BC_OPT_STRING,
+	     .dst = &c->server,
+	     .arg = "ADDR",
+	     .help = "with --session: the blobcastd, as for the\n"
+	             "server commands (default $BLOBCAST_SERVER,\n"
+	             "else 127.0.0.1:7878)"},
+	    {.name = "token",
+	     .kind = BC_OPT_STRING,
+	     .dst = &c->token,
+	     .arg = "TOKEN",
+	     .flags = BC_OPT_EMPTY,
+	     .help = "with --session: authentication token\n"
+	             "(default $BLOBCAST_TOKEN)"},
+	    {.name = "name",
+	     .kind = BC_OPT_STRING,
+	     .dst = &c->name,
+	     .arg = "NAME",
+	     .flags = BC_OPT_EMPTY,
+	     .help = "with --session: the name other members see"},
+	    {.name = "timeout",
+	     .kind = BC_OPT_U32,
+	     .dst = &timeout_ms,
+	     .lo = 0,
+	     .hi = 86400000,
+	     .arg = "MS",
+	     .help = "with --session: limit for connecting and each\n"
+	             "answer ({range}; default 10000; 0 waits\n"
+	             "forever)"},
+	    {.name = "ca",
+	     .kind = BC_OPT_STRING,
+	     .dst = &c->ca,
+	     .arg = "FILE",
+	     .help = "with --session over TLS: trust the CA\n"
+	             "certificates in FILE (PEM)"},
+	    {.name = "insecure",
+	     .kind = BC_OPT_FLAG,
+	     .dst = &c->insecure,
+	     .help = "with --session over TLS: do not check the\n"
+	             "server's certificate"},
 	    {.kind = BC_OPT_INVALID},
 	};
 	struct bc_args p = {
 	    .prog = "blobcast mesh",
-	    .usage = "blobcast mesh SCENE --out FILE [options]",
-	    .about = "Writes a closed triangle mesh of SCENE's surface. "
-	             "SCENE is a\nJSON scene file, '-' to read one from "
-	             "stdin, or 'default'.\nThe surface is sampled on a "
-	             "uniform grid (surface nets: one\nvertex per grid "
-	             "cell the surface crosses, placed on the\nsurface "
-	             "within its cell); only cells near the surface are\n"
-	             "evaluated. Triangles are wound counter-clockwise "
-	             "seen from\noutside; vertices carry their primitive's "
-	             "colour (OBJ, PLY).",
+	    .usage = "blobcast mesh (SCENE | --session NAME) --out FILE "
+	             "[options]",
+	    .about =
+	        "Writes the surface of SCENE (a JSON scene file, '-' to read "
+	        "one\nfrom stdin, or 'default') or of a live session's scene "
+	        "as a\ntriangle mesh that is a closed 2-manifold: every edge "
+	        "is used\nby exactly two triangles, in opposite directions "
+	        "(no holes, no\nedge shared by more than two), and no triangle "
+	        "is degenerate.\nTriangles wind counter-clockwise seen from "
+	        "outside. Vertices\ncarry their primitive's colour (OBJ, PLY, "
+	        "glb). The surface is\nsampled on a uniform grid (marching "
+	        "tetrahedra: the zero set of\nthe field's linear "
+	        "interpolation); only cells near the surface\nare evaluated. "
+	        "Edges under half a cell are then collapsed where\nthat keeps "
+	        "the topology (--raw: not). Detail smaller than a grid\ncell "
+	        "is lost, and a sharp edge is bevelled within a cell\n"
+	        "(docs/mesh.md).\n\n"
+	        "Progress: on a terminal, a 'meshing: N%' line on stderr "
+	        "updated\nin place after the first second; otherwise one such "
+	        "line every\n10 s. Then one summary line; --quiet prints "
+	        "neither.",
 	    .opts = opts};
 	float b[6];
 	memset(a, 0, sizeof(*a));
@@ -79,13 +167,46 @@ static int parse(int argc, char **argv, struct mesh_args *a, bool *done)
 	if (bc_cli_args_parse(&p, argc, argv)) {
 		return p.status;
 	}
-	if (p.npos == 0) {
-		return bc_args_error(&p, "SCENE is required");
-	}
 	if (p.npos > 1) {
 		return bc_args_error(&p, "a second scene '%s'", p.pos[1]);
 	}
-	a->scene = p.pos[0];
+	if (c->session) {
+		struct bc_client_addr addr;
+		struct bc_errinfo ei = {0};
+		if (p.npos) {
+			return bc_args_error(&p, "give SCENE or --session, not "
+			                         "both");
+		}
+		if (strlen(c->session) > BC_PROTO_MAX_NAME ||
+		    (c->name && strlen(c->name) > BC_PROTO_MAX_NAME)) {
+			return bc_args_error(&p,
+			                     "--session and --name are at most "
+			                     "%u bytes",
+			                     BC_PROTO_MAX_NAME);
+		}
+		if (c->server && bc_client_addr_parse(c->server, &addr, &ei)) {
+			return bc_args_error(&p, "--server: %s", ei.msg);
+		}
+		c->cmd = "mesh";
+		c->timeout_ms = (int)timeout_ms;
+	} else {
+		const char *only[] = {"server",  "token", "name",
+		                      "timeout", "ca",    "insecure"};
+		if (p.npos == 0) {
+			return bc_args_error(&p, "SCENE (or --session NAME) is "
+			                         "required");
+		}
+		for (size_t i = 0; i < sizeof(only) / sizeof(only[0]); i++) {
+			if (bc_args_given(&p, only[i])) {
+				return bc_args_error(
+				    &p,
+				    "--%s applies with --session "
+				    "only",
+				    only[i]);
+			}
+		}
+		a->scene = p.pos[0];
+	}
 	if (bounds) {
 		if (bc_num_f32s(bounds, b, 6) ||
 		    !(b[3] > b[0] && b[4] > b[1] && b[5] > b[2])) {
@@ -99,29 +220,68 @@ static int parse(int argc, char **argv, struct mesh_args *a, bool *done)
 		memcpy(a->hi, b + 3, sizeof(a->hi));
 		a->bounds = true;
 	}
-	if (bc_mesh_format_of(a->out) == BC_MESH_FORMAT_INVALID) {
+	a->format = format != BC_MESH_FORMAT_INVALID
+	                ? (enum bc_mesh_format)format
+	                : bc_mesh_format_of(a->out);
+	if (a->format == BC_MESH_FORMAT_INVALID) {
 		return bc_args_error(&p,
-		                     "%s: the extension must be .obj, .ply "
-		                     "or .stl",
+		                     "%s: the extension must be .obj, .ply, "
+		                     ".stl or .glb, or give --format",
 		                     a->out);
 	}
 	*done = false;
 	return 0;
 }
 
+/* Progress on stderr: on a terminal one line rewritten in place, from the
+ * first second on; elsewhere (a log, a pipe) a whole line every 10 s, so
+ * that a log shows a long run moving without filling up. */
 struct prog {
-	double last;
-	bool on;
+	double start, last;
+	bool on, tty, shown;
 };
 
 static void on_progress(void *ctx, double done)
 {
 	struct prog *p = ctx;
 	double t = bc_clock_ms();
-	if (p->on && t - p->last > 500.0) {
+	if (!p->on) {
+		return;
+	}
+	if (p->tty && t - p->start > 1000.0 && t - p->last > 250.0) {
 		fprintf(stderr, "\rmeshing: %3.0f%%", 100.0 * done);
 		p->last = t;
+		p->shown = true;
+	} else if (!p->tty && t - p->last > 10000.0) {
+		fprintf(stderr, "meshing: %3.0f%% after %.0f s\n", 100.0 * done,
+		        (t - p->start) / 1000.0);
+		p->last = t;
 	}
+}
+
+/* The scene of the live session a->call names, copied into t (the
+ * connection is closed before meshing, which may take long). 0, or the
+ * exit status after saying why. */
+static int session_scene(struct mesh_args *a, struct bc_tree *t)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	const struct bc_tree *s;
+	int status = bc_cli_open_session(&a->call, BC_PROTO_ROLE_VIEWER,
+	                                 BC_CLIENT_JOIN_EXISTING, &c);
+	if (status == 0) {
+		if (!(s = bc_client_scene(c, NULL))) {
+			fprintf(stderr,
+			        "blobcast mesh: the session's scene did "
+			        "not decode (see the log above)\n");
+			status = BC_CLI_EXIT_FAIL;
+		} else if (bc_tree_copy(t, s, &ei)) {
+			fprintf(stderr, "blobcast mesh: %s\n", ei.msg);
+			status = BC_CLI_EXIT_FAIL;
+		}
+	}
+	bc_client_destroy(c);
+	return status;
 }
 
 int bc_cli_mesh(int argc, char **argv)
@@ -146,36 +306,44 @@ int bc_cli_mesh(int argc, char **argv)
 		fprintf(stderr, "blobcast mesh: out of memory\n");
 		return 1;
 	}
-	if (bc_cli_load_scene(a.scene, t, &cam, &ei)) {
+	if (a.call.session) {
+		if ((status = session_scene(&a, t))) {
+			goto done;
+		}
+		status = 1;
+	} else if (bc_cli_load_scene(a.scene, t, &cam, &ei)) {
 		bc_cli_explain(stderr, "blobcast mesh", ei.msg);
 		goto done;
 	}
 	o.resolution = a.resolution;
+	o.raw = a.raw;
 	if (a.bounds) {
 		memcpy(o.lo, a.lo, sizeof(o.lo));
 		memcpy(o.hi, a.hi, sizeof(o.hi));
 	}
 	pg.on = !a.quiet;
-	pg.last = bc_clock_ms();
+	pg.tty = isatty(STDERR_FILENO) == 1;
+	pg.start = pg.last = bc_clock_ms();
 	o.progress = on_progress;
 	o.ctx = &pg;
 	t0 = bc_clock_ms();
 	if (bc_mesh_build(&m, t, &o, &ei)) {
-		fprintf(stderr, "%sblobcast mesh: %s\n", pg.on ? "\n" : "",
+		fprintf(stderr, "%sblobcast mesh: %s\n", pg.shown ? "\n" : "",
 		        ei.msg);
 		goto done;
 	}
-	if (bc_mesh_write(&m, a.out, bc_mesh_format_of(a.out), &ei)) {
-		fprintf(stderr, "%sblobcast mesh: %s\n", pg.on ? "\n" : "",
+	if (bc_mesh_write(&m, a.out, a.format, &ei)) {
+		fprintf(stderr, "%sblobcast mesh: %s\n", pg.shown ? "\n" : "",
 		        ei.msg);
 		goto done;
 	}
 	if (!a.quiet) {
 		fprintf(stderr,
-		        "\rmeshing: done. %s: %u vertices, %u triangles, cell "
+		        "%smeshing: done. %s: %u vertices, %u triangles, cell "
 		        "%.4g, %.1f ms, %llu field evaluations\n",
-		        a.out, m.nverts, m.ntris, (double)m.cell,
-		        bc_clock_ms() - t0, (unsigned long long)m.evals);
+		        pg.shown ? "\r" : "", a.out, m.nverts, m.ntris,
+		        (double)m.cell, bc_clock_ms() - t0,
+		        (unsigned long long)m.evals);
 	}
 	status = 0;
 done:

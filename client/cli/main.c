@@ -53,7 +53,7 @@ static bool is_client_cmd(const char *s)
 static const char main_about[] =
     "Local commands:\n"
     "  render      render a scene file to images on this machine\n"
-    "  mesh        write a triangle mesh (.obj, .ply, .stl) of a scene\n"
+    "  mesh        write a closed mesh (.obj .ply .stl .glb) of a scene\n"
     "  gen         print a generated scene (the paper's synthetic\n"
     "              families and more) as JSON\n"
     "  eval-bench  measure interval pruning and pruned evaluation\n"
@@ -271,7 +271,8 @@ int main(int argc, char **argv)
 	if (nwords == 0) {
 		return dispatch(a.npos, a.pos);
 	}
-	if (!is_client_cmd(a.pos[0])) {
+	/* mesh takes them too, for --session. */
+	if (!is_client_cmd(a.pos[0]) && strcmp(a.pos[0], "mesh") != 0) {
 		bool known = false;
 		for (size_t i = 0; i < N_LOCAL_CMDS; i++) {
 			known = known || strcmp(a.pos[0], local_cmds[i]) == 0;

@@ -1,11 +1,11 @@
 /*
- * Mesh export (blobtree/mesh.c): the surface-nets mesh of a sphere is a
+ * Mesh export (blobtree/mesh.c): the mesh of a sphere is a
  * closed 2-manifold of genus 0 (every edge used by exactly two triangles,
  * in opposite directions; V - E + F = 2) whose enclosed volume is the
  * ball's to 2 %; on the catalogue (every primitive kind) and on generated
  * scenes every vertex lies within a grid cell of the zero set, every
- * directed edge has its reverse (watertight, consistently oriented; fewer
- * than 0.5 % of the edges shared by four triangles), the enclosed volume
+ * directed edge is used once and has its reverse (a closed, consistently
+ * oriented 2-manifold), the enclosed volume
  * matches a count of the grid points inside to 2 %, and most of the grid
  * is never evaluated; the OBJ, PLY and STL files
  * written parse back to the same mesh; bad arguments are refused.
@@ -186,12 +186,10 @@ static void scenes_mesh_closed_near_the_surface(void)
 		       (double)scenes[s].res * scenes[s].res * scenes[s].res);
 		CHECK(m.ntris > 1000);
 		CHECK_EQ_INT(far, 0);
-		/* Watertight and consistently oriented: every directed edge
-		 * has its reverse. Surface nets join four sheets at a grid
-		 * face whose corners alternate in sign (docs/mesh.md): those
-		 * edges are used four times, a few per thousand. */
+		/* A closed 2-manifold, consistently oriented: every directed
+		 * edge once, with its reverse. */
 		CHECK_EQ_INT(tp.open, 0);
-		CHECK(tp.shared * 200 < tp.edges);
+		CHECK_EQ_INT(tp.shared, 0);
 		CHECK(fabs(tp.volume / vv - 1.0) < 0.02);
 		/* Only the cells near the surface were evaluated. */
 		CHECK((double)m.cells_visited <
@@ -257,7 +255,8 @@ static void files_parse_back(void)
 	CHECK_EQ_INT(bc_mesh_format_of("a.OBJ"), BC_MESH_FORMAT_OBJ);
 	CHECK_EQ_INT(bc_mesh_format_of("a.ply"), BC_MESH_FORMAT_PLY);
 	CHECK_EQ_INT(bc_mesh_format_of("a.stl"), BC_MESH_FORMAT_STL);
-	CHECK_EQ_INT(bc_mesh_format_of("a.glb"), BC_MESH_FORMAT_INVALID);
+	CHECK_EQ_INT(bc_mesh_format_of("a.glb"), BC_MESH_FORMAT_GLB);
+	CHECK_EQ_INT(bc_mesh_format_of("a.gltf"), BC_MESH_FORMAT_INVALID);
 	CHECK_EQ_INT(bc_mesh_format_of("obj"), BC_MESH_FORMAT_INVALID);
 
 	/* OBJ: v lines then f lines, 1-based indices. */

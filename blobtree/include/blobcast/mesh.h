@@ -1,10 +1,12 @@
 /*
- * Triangle meshes of a blobtree's surface: surface nets on a uniform grid
- * over a box, visited through an octree of regions so that only the cells
- * near the surface are evaluated, each region through the pruned view of
- * the primitives whose ABVs meet it (blobtree's sparse evaluation); and
- * writers for OBJ, PLY and STL. docs/mesh.md explains the method and what
- * the output guarantees.
+ * Triangle meshes of a blobtree's surface: marching tetrahedra on a uniform
+ * grid over a box, visited through an octree of regions so that only the
+ * cells near the surface are evaluated, each region through the pruned
+ * view of the primitives whose ABVs meet it (blobtree's sparse
+ * evaluation); and writers for OBJ, PLY, STL and binary glTF 2.0. The mesh
+ * is a closed 2-manifold: every edge is used by exactly two triangles, in
+ * opposite directions, and no triangle is degenerate. docs/mesh.md
+ * explains the method and what the output guarantees.
  */
 #ifndef BLOBCAST_MESH_H
 #define BLOBCAST_MESH_H
@@ -27,6 +29,10 @@ struct bc_mesh_opts {
 	/* The box to mesh; all zero: the tree's box grown by two cells. The
 	 * solid is clipped to it (closed by the box's faces). */
 	float lo[3], hi[3];
+	/* Keep every triangle marching tetrahedra make: no collapse of the
+	 * edges shorter than half a cell (faster, about twice the
+	 * triangles; closed 2-manifold either way). */
+	bool raw;
 	/* Called now and then with the fraction done (may be NULL). */
 	void (*progress)(void *ctx, double done);
 	void *ctx;
@@ -56,15 +62,21 @@ enum bc_mesh_format {
 	BC_MESH_FORMAT_OBJ, /* text, v x y z r g b (colours in [0, 1]) */
 	BC_MESH_FORMAT_PLY, /* binary little endian, uchar colours */
 	BC_MESH_FORMAT_STL, /* binary, facet normals */
+	BC_MESH_FORMAT_GLB, /* binary glTF 2.0: normals, COLOR_0, indices */
 	BC_MESH_FORMAT_COUNT
 };
 
-/* The format a file name's extension names (.obj, .ply, .stl, any case),
- * BC_MESH_FORMAT_INVALID otherwise. */
+/* The format a file name's extension names (.obj, .ply, .stl, .glb, any
+ * case), BC_MESH_FORMAT_INVALID otherwise. */
 enum bc_mesh_format bc_mesh_format_of(const char *path);
+/* The format named "obj", "ply", "stl" or "glb" (any case), else
+ * BC_MESH_FORMAT_INVALID. */
+enum bc_mesh_format bc_mesh_format_named(const char *name);
 
 /* Writes m to path in format, atomically (a temporary file renamed over
- * path). Returns 0, BC_EINVAL (format) or BC_EIO with the reason in ei. */
+ * path). Returns 0, BC_EINVAL (format; an empty mesh as glTF, which has no
+ * empty accessors), BC_ERANGE (a .glb over 4 GiB), BC_ENOMEM or BC_EIO
+ * with the reason in ei. */
 int bc_mesh_write(const struct bc_mesh *m, const char *path,
                   enum bc_mesh_format format, struct bc_errinfo *ei);
 
