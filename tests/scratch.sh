@@ -34,3 +34,14 @@ bc_scratch() {
     [ -n "${BC_KEEP_TMP:-}${BC_VIEWER_KEEP:-}" ] || rm -rf "$tmp"' EXIT
   trap 'exit 1' INT TERM
 }
+
+# bc_need PROG...: exits 77 (skipped) unless every PROG is an executable
+# that has been built.
+bc_need() {
+  for prog in "$@"; do
+    if [ -z "$prog" ] || [ ! -x "$prog" ]; then
+      echo "skip: blobcast and blobcastd must both be built"
+      exit 77
+    fi
+  done
+}

@@ -10,14 +10,9 @@
 set -u
 BLOBCAST=${1:-}
 BLOBCASTD=${2:-}
-for prog in "$BLOBCAST" "$BLOBCASTD"; do
-  if [ -z "$prog" ] || [ ! -x "$prog" ]; then
-    echo "skip: blobcast and blobcastd must both be built"
-    exit 77
-  fi
-done
-
 . "$(dirname "$0")/../scratch.sh"
+bc_need "$BLOBCAST" "$BLOBCASTD"
+
 bc_scratch cli-daemon
 
 # run STATUS PATTERN ARGS...: blobcast ARGS must exit STATUS and print

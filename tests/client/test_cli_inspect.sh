@@ -21,15 +21,10 @@
 set -u
 BLOBCAST=${1:-}
 BLOBCASTD=${2:-}
-for prog in "$BLOBCAST" "$BLOBCASTD"; do
-  if [ -z "$prog" ] || [ ! -x "$prog" ]; then
-    echo "skip: blobcast and blobcastd must both be built"
-    exit 77
-  fi
-done
+. "$(dirname "$0")/../scratch.sh"
+bc_need "$BLOBCAST" "$BLOBCASTD"
 
 watcher=
-. "$(dirname "$0")/../scratch.sh"
 bc_scratch cli-inspect '[ -n "$watcher" ] && kill "$watcher" 2>/dev/null'
 
 # start_daemon ADDR: starts blobcastd on ADDR and sets $port.

@@ -12,18 +12,13 @@
 set -u
 BLOBCAST=${1:-}
 BLOBCASTD=${2:-}
-for prog in "$BLOBCAST" "$BLOBCASTD"; do
-  if [ -z "$prog" ] || [ ! -x "$prog" ]; then
-    echo "skip: blobcast and blobcastd must both be built"
-    exit 77
-  fi
-done
+. "$(dirname "$0")/../scratch.sh"
+bc_need "$BLOBCAST" "$BLOBCASTD"
 if ! command -v python3 > /dev/null; then
   echo "skip: python3 is missing"
   exit 77
 fi
 here=$(dirname "$0")
-. "$here/../scratch.sh"
 bc_scratch cli-mesh
 
 "$BLOBCASTD" --listen 127.0.0.1:0 --unix "$tmp/d.sock" --data "$tmp/data" \

@@ -20,19 +20,14 @@
 set -u
 BLOBCAST=${1:-}
 BLOBCASTD=${2:-}
-for prog in "$BLOBCAST" "$BLOBCASTD"; do
-  if [ -z "$prog" ] || [ ! -x "$prog" ]; then
-    echo "skip: blobcast and blobcastd must both be built"
-    exit 77
-  fi
-done
+. "$(dirname "$0")/../scratch.sh"
+bc_need "$BLOBCAST" "$BLOBCASTD"
 if ! command -v python3 > /dev/null 2>&1; then
   echo "skip: python3 is needed to read --json"
   exit 77
 fi
 
 watcher=
-. "$(dirname "$0")/../scratch.sh"
 bc_scratch cli-model '[ -n "$watcher" ] && kill "$watcher" 2>/dev/null'
 
 "$BLOBCASTD" --listen none --unix "$tmp/sock" --data "$tmp/data" \
