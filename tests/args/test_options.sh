@@ -107,7 +107,7 @@ if [ -n "$viewer" ]; then
     "$viewer" --quality 101
   expect 2 "blobcast-view: --turn 'x' is not a finite decimal number" \
     "$viewer" --turn x
-  expect 2 "blobcast-view: --role 'owner' is not one of editor, viewer" \
+  expect 2 "blobcast-view: --role 'owner' is not one of auto, editor, viewer" \
     "$viewer" --role owner
   expect 2 "blobcast-view: --dump-frame needs --screenshot" \
     "$viewer" --dump-frame f.png
