@@ -116,11 +116,29 @@ struct batch {
 	struct bc_errinfo ei;
 };
 
-/* Applies, checks and encodes the batch's journal record. */
+/* The history's view of batch x (its order filled in once committed). */
+static struct bc_undo_change change_of(const struct batch *x)
+{
+	return (struct bc_undo_change){
+	    .kind = x->how.kind ? x->how.kind : BC_UNDO_EDIT,
+	    .interacting = (x->how.flags & BC_PROTO_FLAG_INTERACTING) != 0,
+	    .order = x->s->order,
+	    .target = x->how.target_order,
+	    .time_ms = x->how.time_ms,
+	    .name = x->author.name,
+	    .member = x->author.member_id,
+	    .ops = x->op,
+	    .nops = x->nops,
+	};
+}
+
+/* Applies, checks and encodes the batch's journal record: its
+ * operations, who made it and, for a structural batch, what undoes it
+ * (the history is journaled with the edits, undo.c). */
 static int batch_apply(struct batch *x)
 {
 	struct bc_session *s = x->s;
-	struct bc_msg as_edit = {.type = BC_MSG_EDIT};
+	struct bc_undo_change c = change_of(x);
 	x->tree = s->tree;
 	if ((x->rc = bc_edit_batch_apply_undoable(&x->b, &x->tree, x->op,
 	                                          x->nops, &x->ei))) {
@@ -131,13 +149,11 @@ static int batch_apply(struct batch *x)
 	 * holds, or nest it deeper than its snapshots hold (every later
 	 * snapshot would fail, the journal never compacted), and a record
 	 * must encode: undone like an edit that could not be journaled. */
-	bc_proto_buf_init(&x->rec, 0);
-	as_edit.edit.nops = (uint16_t)x->nops;
-	as_edit.edit.ops = x->op;
 	if ((x->b.structural &&
 	     ((x->rc = check_scene_bytes(x->tree, &x->ei)) ||
 	      (x->rc = bc_store_scene_depth_ok(x->tree, &x->ei)))) ||
-	    (x->rc = bc_proto_encode(&x->rec, &as_edit, &x->ei))) {
+	    (x->rc = bc__undo_record_encode(&x->rec, &c, x->b.inv.ops,
+	                                    x->b.inv.nops, &x->ei))) {
 		bc_edit_batch_undo(&x->b, &x->tree);
 		x->applied = false;
 	}
@@ -154,9 +170,8 @@ static void batch_run(struct bc_task *t)
 	if (x->heavy && batch_apply(x)) {
 		return;
 	}
-	if ((x->rc = bc_store_append(
-	         s->store, s->order + 1, x->rec.data + BC_PROTO_HEADER_SIZE,
-	         x->rec.len - BC_PROTO_HEADER_SIZE, &x->ei))) {
+	if ((x->rc = bc_store_append(s->store, s->order + 1, x->rec.data,
+	                             x->rec.len, &x->ei))) {
 		bc_edit_batch_undo(&x->b, &x->tree);
 		x->applied = false;
 	}
@@ -246,7 +261,7 @@ static void batch_commit(struct batch *x)
 	bc__session_changed(s);
 	follow(s, x);
 	broadcast(s, x);
-	x->done(s, &x->author, &x->how, &x->b, x->ud);
+	x->done(s, &x->author, &x->how, &x->b, x->op, x->nops, x->ud);
 	bc__session_snapshot_due(s);
 	bc__schedule(s);
 }
@@ -309,6 +324,7 @@ int bc__apply(struct bc_member *m, const struct bc_proto_edit_op *ops,
 	x->author = (struct bc_author){m->peer->ref, m->member_id, seq, {0}};
 	memcpy(x->author.name, m->peer->name, sizeof(x->author.name));
 	x->how = *how;
+	x->how.time_ms = bc__unix_ms();
 	x->done = done;
 	x->ud = ud;
 	x->t0_ns = bc_clock_ns();
@@ -328,11 +344,22 @@ int bc__apply(struct bc_member *m, const struct bc_proto_edit_op *ops,
 
 static void edit_applied(struct bc_session *s, const struct bc_author *a,
                          const struct bc_change *how, struct bc_edit_batch *b,
+                         const struct bc_proto_edit_op *ops, uint32_t nops,
                          void *ud)
 {
+	struct bc_undo_change c = {
+	    .kind = BC_UNDO_EDIT,
+	    .interacting = (how->flags & BC_PROTO_FLAG_INTERACTING) != 0,
+	    .order = s->order,
+	    .time_ms = how->time_ms,
+	    .name = a->name,
+	    .member = a->member_id,
+	    .ops = ops,
+	    .nops = nops,
+	};
 	(void)ud;
 	/* The history takes what undoes the batch. */
-	bc__undo_record(s, a, b, (how->flags & BC_PROTO_FLAG_INTERACTING) != 0);
+	bc__undo_record(s, &c, b);
 }
 
 int bc_handle_edit(struct bc_member *m, const struct bc_msg *msg)
@@ -353,13 +380,21 @@ int bc_handle_edit(struct bc_member *m, const struct bc_msg *msg)
 	return bc__hold(m->session, m, msg->seq);
 }
 
+int bc_handle_history(struct bc_member *m, const struct bc_msg *msg)
+{
+	/* Read only: it answers at once, even while the session is busy
+	 * (the history changes on the loop only). */
+	return bc__undo_history(m, msg->seq);
+}
+
 int bc_handle_undo(struct bc_member *m, const struct bc_msg *msg)
 {
 	int park;
 	if (bc__refuse_change(m, msg->seq, &park)) {
 		return park;
 	}
-	return bc__undo_step(m, msg->type == BC_MSG_REDO, msg->seq);
+	return bc__undo_step(m, msg->type == BC_MSG_REDO, msg->undo.scope,
+	                     msg->seq);
 }
 
 /* ---- SCENE_LOAD ------------------------------------------------------------ */
