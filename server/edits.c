@@ -116,29 +116,14 @@ struct batch {
 	struct bc_errinfo ei;
 };
 
-/* The history's view of batch x (its order filled in once committed). */
-static struct bc_undo_change change_of(const struct batch *x)
-{
-	return (struct bc_undo_change){
-	    .kind = x->how.kind ? x->how.kind : BC_UNDO_EDIT,
-	    .interacting = (x->how.flags & BC_PROTO_FLAG_INTERACTING) != 0,
-	    .order = x->s->order,
-	    .target = x->how.target_order,
-	    .time_ms = x->how.time_ms,
-	    .name = x->author.name,
-	    .member = x->author.member_id,
-	    .ops = x->op,
-	    .nops = x->nops,
-	};
-}
-
 /* Applies, checks and encodes the batch's journal record: its
  * operations, who made it and, for a structural batch, what undoes it
  * (the history is journaled with the edits, undo.c). */
 static int batch_apply(struct batch *x)
 {
 	struct bc_session *s = x->s;
-	struct bc_undo_change c = change_of(x);
+	struct bc_undo_change c =
+	    bc__undo_change_of(s, &x->author, &x->how, x->op, x->nops);
 	x->tree = s->tree;
 	if ((x->rc = bc_edit_batch_apply_undoable(&x->b, &x->tree, x->op,
 	                                          x->nops, &x->ei))) {
@@ -342,26 +327,6 @@ int bc__apply(struct bc_member *m, const struct bc_proto_edit_op *ops,
 
 /* ---- EDIT ------------------------------------------------------------------ */
 
-static void edit_applied(struct bc_session *s, const struct bc_author *a,
-                         const struct bc_change *how, struct bc_edit_batch *b,
-                         const struct bc_proto_edit_op *ops, uint32_t nops,
-                         void *ud)
-{
-	struct bc_undo_change c = {
-	    .kind = BC_UNDO_EDIT,
-	    .interacting = (how->flags & BC_PROTO_FLAG_INTERACTING) != 0,
-	    .order = s->order,
-	    .time_ms = how->time_ms,
-	    .name = a->name,
-	    .member = a->member_id,
-	    .ops = ops,
-	    .nops = nops,
-	};
-	(void)ud;
-	/* The history takes what undoes the batch. */
-	bc__undo_record(s, &c, b);
-}
-
 int bc_handle_edit(struct bc_member *m, const struct bc_msg *msg)
 {
 	struct bc_errinfo ei = {0};
@@ -372,7 +337,7 @@ int bc_handle_edit(struct bc_member *m, const struct bc_msg *msg)
 		return park;
 	}
 	rc = bc__apply(m, msg->edit.ops, msg->edit.nops, msg->seq, &how,
-	               edit_applied, NULL, &ei);
+	               bc__undo_applied, NULL, &ei);
 	if (rc < 0) {
 		bc__send_error(m, msg->seq, rc, "edit refused: %s", ei.msg);
 		return 0;

@@ -274,6 +274,19 @@ void bc__undo_restored(struct bc_undo *u);
 /* Whether a change by (author, member) is who's. */
 bool bc__undo_owns(const char *author, uint32_t member,
                    const struct bc_undo_who *who);
+/* The history's view of a change a made (its operations ops), now
+ * applied at s->order. */
+struct bc_undo_change bc__undo_change_of(const struct bc_session *s,
+                                         const struct bc_author *a,
+                                         const struct bc_change *how,
+                                         const struct bc_proto_edit_op *ops,
+                                         uint32_t nops);
+/* A bc_applied_fn: the history takes what undoes an applied EDIT, UNDO or
+ * REDO (how->kind). */
+void bc__undo_applied(struct bc_session *s, const struct bc_author *a,
+                      const struct bc_change *how, struct bc_edit_batch *b,
+                      const struct bc_proto_edit_op *ops, uint32_t nops,
+                      void *ud);
 /* The live form of bc__undo_note for s (takes b's old tree to free off
  * the loop); a failure drops the history, logged. */
 void bc__undo_record(struct bc_session *s, const struct bc_undo_change *c,

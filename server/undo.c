@@ -603,15 +603,15 @@ static struct step *choose(struct bc_member *m, bool redo, bool mine,
 	return NULL;
 }
 
-/* An undo (redo) was applied: the history follows it. */
-static void step_applied(struct bc_session *s, const struct bc_author *a,
-                         const struct bc_change *how, struct bc_edit_batch *b,
-                         const struct bc_proto_edit_op *ops, uint32_t nops,
-                         void *ud)
+struct bc_undo_change bc__undo_change_of(const struct bc_session *s,
+                                         const struct bc_author *a,
+                                         const struct bc_change *how,
+                                         const struct bc_proto_edit_op *ops,
+                                         uint32_t nops)
 {
-	struct bc_undo_change c = {
-	    .kind =
-	        (how->flags & BC_PROTO_FLAG_REDO) ? BC_UNDO_REDO : BC_UNDO_UNDO,
+	return (struct bc_undo_change){
+	    .kind = how->kind ? how->kind : BC_UNDO_EDIT,
+	    .interacting = (how->flags & BC_PROTO_FLAG_INTERACTING) != 0,
 	    .order = s->order,
 	    .target = how->target_order,
 	    .time_ms = how->time_ms,
@@ -620,8 +620,18 @@ static void step_applied(struct bc_session *s, const struct bc_author *a,
 	    .ops = ops,
 	    .nops = nops,
 	};
+}
+
+void bc__undo_applied(struct bc_session *s, const struct bc_author *a,
+                      const struct bc_change *how, struct bc_edit_batch *b,
+                      const struct bc_proto_edit_op *ops, uint32_t nops,
+                      void *ud)
+{
+	struct bc_undo_change c = bc__undo_change_of(s, a, how, ops, nops);
 	(void)ud;
-	if (!s->undo) {
+	/* An undo or redo moves a step of a history that is there (one
+	 * dropped meanwhile for lack of memory stays dropped). */
+	if (c.kind != BC_UNDO_EDIT && !s->undo) {
 		return;
 	}
 	bc__undo_record(s, &c, b);
@@ -656,8 +666,8 @@ static int apply_step(struct bc_member *m, struct step *st, bool redo,
 	how.kind = redo ? BC_UNDO_REDO : BC_UNDO_UNDO;
 	memcpy(how.target_author, st->author, sizeof(how.target_author));
 	/* bc__apply copies the operations: the step may go meanwhile. */
-	rc = bc__apply(m, ops, (uint16_t)nops, seq, &how, step_applied, NULL,
-	               &ei);
+	rc = bc__apply(m, ops, (uint16_t)nops, seq, &how, bc__undo_applied,
+	               NULL, &ei);
 	bc_edit_inverse_finish(&states);
 	if (rc < 0) {
 		bc__send_error(m, seq, rc, "%s refused: %s",
