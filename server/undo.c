@@ -258,7 +258,7 @@ static bool builds_on(uint32_t later, uint32_t was)
 	       ((later & MARK_PARENT) && (was & MARK_SHAPE));
 }
 
-/* The newest applied step after `after` (an order) that built on st, or
+/* The newest applied step made after st (its `at`) that built on st, or
  * NULL (also when out of memory: then nothing is refused for it). */
 static const struct step *built_on(const struct bc_undo *u,
                                    const struct step *st)
