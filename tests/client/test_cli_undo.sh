@@ -16,14 +16,8 @@
 set -u
 BLOBCAST=${1:-}
 BLOBCASTD=${2:-}
-for prog in "$BLOBCAST" "$BLOBCASTD"; do
-  if [ -z "$prog" ] || [ ! -x "$prog" ]; then
-    echo "skip: blobcast and blobcastd must both be built"
-    exit 77
-  fi
-done
-
 . "$(dirname "$0")/../scratch.sh"
+bc_need "$BLOBCAST" "$BLOBCASTD"
 bc_scratch cli-undo
 
 # start_daemon ADDR: starts blobcastd on ADDR and sets $port.
