@@ -326,6 +326,7 @@ static void replay_note(struct replay_ctx *ctx, uint64_t order,
 	    .member = h->member,
 	    .ops = m->edit.ops,
 	    .nops = m->edit.nops,
+	    .tree = *ctx->tree,
 	};
 	int rc = 0;
 	if (!ctx->undo) {

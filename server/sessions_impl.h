@@ -247,6 +247,8 @@ struct bc_undo_change {
 	uint32_t member;
 	const struct bc_proto_edit_op *ops; /* the change's operations */
 	uint32_t nops;
+	/* The scene after it (names parameters in the history), or NULL. */
+	const struct bc_tree *tree;
 };
 /* A history record read back from the journal (bc__undo_record_parse):
  * the change and its EDIT payloads, pointing into the record. */

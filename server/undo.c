@@ -383,9 +383,30 @@ static bool owns(const struct step *st, const struct bc_undo_who *who)
 	return bc__undo_owns(st->author, st->member, who);
 }
 
-/* "SET node 12 translate, rotate", "REMOVE node 7", "3 operations". */
+/* The name of SET field `field` of node `node` in t: its key, or a
+ * primitive's parameter name ("radius"), else "paramK". */
+static void field_name(char *out, size_t cap, const struct bc_tree *t,
+                       uint32_t node, uint8_t field)
+{
+	const struct bc_proto_field_info *f = bc_proto_field_info(field);
+	unsigned k = (unsigned)(field - BC_PROTO_FIELD_PARAM0);
+	struct bc_prim_data p;
+	const struct bc_prim_info *info;
+	if (f && f->key) {
+		snprintf(out, cap, "%s", f->key);
+	} else if (t && bc_tree_get(t, node, &p, NULL) &&
+	           p.kind != BC_PRIM_INVALID && (info = bc_prim_info(p.kind)) &&
+	           k < info->nparams) {
+		snprintf(out, cap, "%s", info->params[k].name);
+	} else {
+		snprintf(out, cap, "param%u", k);
+	}
+}
+
+/* "SET node 12 translate, radius", "REMOVE node 7", "3 operations"; t is
+ * the scene after the change (NULL: parameters by number). */
 static void describe(char *out, size_t cap, const struct bc_proto_edit_op *ops,
-                     uint32_t n)
+                     uint32_t n, const struct bc_tree *t)
 {
 	const struct bc_proto_edit_op *op = n ? &ops[0] : NULL;
 	size_t at;
@@ -405,19 +426,11 @@ static void describe(char *out, size_t cap, const struct bc_proto_edit_op *ops,
 	case BC_PROTO_EDIT_SET:
 		at = (size_t)snprintf(out, cap, "SET node %u", op->node);
 		for (uint8_t k = 0; k < op->nfields && at < cap; k++) {
-			const struct bc_proto_field_info *f =
-			    bc_proto_field_info(op->fields[k].field);
-			if (f && f->key) {
-				at +=
-				    (size_t)snprintf(out + at, cap - at, "%s%s",
-				                     k ? ", " : " ", f->key);
-			} else {
-				at += (size_t)snprintf(
-				    out + at, cap - at, "%sparam%u",
-				    k ? ", " : " ",
-				    (unsigned)(op->fields[k].field -
-				               BC_PROTO_FIELD_PARAM0));
-			}
+			char name[64];
+			field_name(name, sizeof(name), t, op->node,
+			           op->fields[k].field);
+			at += (size_t)snprintf(out + at, cap - at, "%s%s",
+			                       k ? ", " : " ", name);
 		}
 		break;
 	case BC_PROTO_EDIT_INSERT:
@@ -500,7 +513,8 @@ int bc__undo_note(struct bc_undo *u, const struct bc_undo_change *c,
 			st->order = c->order;
 			st->member = c->member;
 			snprintf(st->author, sizeof(st->author), "%s", c->name);
-			describe(st->what, sizeof(st->what), c->ops, c->nops);
+			describe(st->what, sizeof(st->what), c->ops, c->nops,
+			         c->tree);
 			ok = step_add(u, st, b, c->ops, c->nops, inv, ninv);
 		}
 		st->time_ms = c->time_ms;
@@ -619,6 +633,7 @@ struct bc_undo_change bc__undo_change_of(const struct bc_session *s,
 	    .member = a->member_id,
 	    .ops = ops,
 	    .nops = nops,
+	    .tree = s->tree,
 	};
 }
 

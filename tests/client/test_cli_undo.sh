@@ -78,7 +78,7 @@ grep -qE "^undid edit $eb by \"bob\": edit order [0-9]+\$" "$tmp/u3" ||
 "$BLOBCAST" $S history $R --name bob > "$tmp/h1" 2>&1 ||
   fail "history: $(cat "$tmp/h1")"
 sed 's/^/    /' "$tmp/h1"
-grep -qE "^ +$eb  [0-9-]+ [0-9:]+  undone   bob +SET node 50 param0  <- your redo\$" \
+grep -qE "^ +$eb  [0-9-]+ [0-9:]+  undone   bob +SET node 50 radius  <- your redo\$" \
   "$tmp/h1" || fail "history: no line for bob's $eb"
 grep -qE "^ +$ea  [0-9-]+ [0-9:]+  undone   alice +SET node 11 translate\$" \
   "$tmp/h1" || fail "history: no line for alice's $ea"
