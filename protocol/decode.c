@@ -38,9 +38,11 @@ struct dec {
  * checks (PROTOCOL.md gives the same numbers). */
 #define MEMBER_MIN 7u         /* u32 id, u8 role, empty name */
 #define SESSION_ENTRY_MIN 26u /* a 1-byte name and the fixed fields */
-#define OP_MIN 5u             /* REMOVE: u8 kind, u32 node */
-#define FIELD_MIN 6u          /* u8 field, u8 count, one f32 */
-#define RECT_MIN 13u          /* 4 x u16, u32 length, one byte */
+/* A HISTORY entry: its fixed fields and two empty strings. */
+#define HISTORY_ENTRY_MIN 30u
+#define OP_MIN 5u    /* REMOVE: u8 kind, u32 node */
+#define FIELD_MIN 6u /* u8 field, u8 count, one f32 */
+#define RECT_MIN 13u /* 4 x u16, u32 length, one byte */
 
 /* Records code with "TYPE: reason (payload byte N)" in d->ei. */
 static int fail(struct dec *d, int code, const char *fmt,
@@ -806,6 +808,63 @@ static int dec_get_stats(struct dec *d, struct bc_msg_get_stats *g)
 	return 0;
 }
 
+static int dec_history(struct dec *d, struct bc_msg_history *h)
+{
+	struct bc_proto_history_entry *out = NULL;
+	TRY(rd_u64(d, "order", &h->order));
+	TRY(rd_u16(d, "entry_count", &h->nentries));
+	TRY(check_count(d, "entry_count", h->nentries, 0, BC_PROTO_MAX_HISTORY,
+	                HISTORY_ENTRY_MIN));
+	if (d->store && h->nentries) {
+		TRY(reserve(d, (void **)&d->store->history,
+		            &d->store->history_cap, h->nentries, sizeof(*out)));
+		out = d->store->history;
+	}
+	for (unsigned i = 0; i < h->nentries; i++) {
+		struct bc_proto_history_entry e = {0};
+		TRY(rd_u64(d, "entry.order", &e.order));
+		if (e.order == 0) {
+			return fail(d, BC_ERANGE, "entry.order is 0");
+		}
+		TRY(rd_u64(d, "entry.time_ms", &e.time_ms));
+		TRY(rd_u64(d, "entry.built_on", &e.built_on));
+		TRY(rd_u8(d, "entry.state", &e.state));
+		if (e.state == 0 || e.state >= BC_PROTO_HISTORY_STATE_COUNT) {
+			return fail(d, BC_EENUM, "entry.state %u is unknown",
+			            (unsigned)e.state);
+		}
+		TRY(rd_u8(d, "entry.flags", &e.flags));
+		if (e.flags & ~BC_PROTO_HISTORY_FLAGS_ALL) {
+			return fail(d, BC_EPROTO_FLAGS,
+			            "entry flags 0x%02x has undefined bits",
+			            (unsigned)e.flags);
+		}
+		TRY(rd_str(d, "entry.author", 0, BC_PROTO_MAX_NAME, &e.author));
+		TRY(rd_str(d, "entry.what", 0, BC_PROTO_MAX_HISTORY_TEXT,
+		           &e.what));
+		if (out) {
+			out[i] = e;
+		}
+	}
+	h->entries = out;
+	return 0;
+}
+
+/* UNDO and REDO: empty, or one byte of scope (PROTOCOL.md 7.20). */
+static int dec_undo(struct dec *d, struct bc_msg_undo *u)
+{
+	u->scope = BC_PROTO_UNDO_DEFAULT;
+	if (bc_rd_left(&d->c) == 0) {
+		return 0;
+	}
+	TRY(rd_u8(d, "scope", &u->scope));
+	if (u->scope == 0 || u->scope >= BC_PROTO_UNDO_SCOPE_COUNT) {
+		return fail(d, BC_EENUM, "scope %u is unknown",
+		            (unsigned)u->scope);
+	}
+	return 0;
+}
+
 static int dec_body(struct dec *d, struct bc_msg *m)
 {
 	switch (m->type) {
@@ -822,10 +881,14 @@ static int dec_body(struct dec *d, struct bc_msg *m)
 		return dec_get_stats(d, &m->get_stats);
 	case BC_MSG_OK:
 	case BC_MSG_SESSION_LEAVE:
+	case BC_MSG_SESSION_LIST:
+	case BC_MSG_HISTORY_GET:
+		return 0;
 	case BC_MSG_UNDO:
 	case BC_MSG_REDO:
-	case BC_MSG_SESSION_LIST:
-		return 0;
+		return dec_undo(d, &m->undo);
+	case BC_MSG_HISTORY:
+		return dec_history(d, &m->history);
 	case BC_MSG_SESSIONS:
 		return dec_sessions(d, &m->sessions);
 	case BC_MSG_SESSION_CREATE:
@@ -960,5 +1023,6 @@ void bc__store_free(struct bc_proto_store *s)
 	bc_free(s->fields);
 	bc_free(s->rects);
 	bc_free(s->sessions);
+	bc_free(s->history);
 	memset(s, 0, sizeof(*s));
 }

@@ -384,7 +384,45 @@ static void w_body(struct bc__w *w, const struct bc_msg *m)
 		}
 		break;
 	}
-	default: /* OK, SESSION_LEAVE, UNDO, REDO, SESSION_LIST:
+	case BC_MSG_UNDO:
+	case BC_MSG_REDO:
+		/* Left out when 0: the first text's empty UNDO and REDO. */
+		if (m->undo.scope != BC_PROTO_UNDO_DEFAULT) {
+			w_enum(w, "scope", (int)m->undo.scope,
+			       BC_PROTO_UNDO_SCOPE_COUNT);
+		}
+		break;
+	case BC_MSG_HISTORY: {
+		const struct bc_msg_history *h = &m->history;
+		bc__put_u64(w, h->order);
+		if (!w_count(w, "entry_count", h->nentries,
+		             BC_PROTO_MAX_HISTORY, h->entries)) {
+			break;
+		}
+		bc__put_u16(w, h->nentries);
+		for (unsigned i = 0; i < h->nentries; i++) {
+			const struct bc_proto_history_entry *e = &h->entries[i];
+			if (e->order == 0) {
+				wfail(w, BC_ERANGE, "entry.order is 0");
+			}
+			bc__put_u64(w, e->order);
+			bc__put_u64(w, e->time_ms);
+			bc__put_u64(w, e->built_on);
+			w_enum(w, "entry.state", e->state ? (int)e->state : -1,
+			       BC_PROTO_HISTORY_STATE_COUNT);
+			if (e->flags & ~BC_PROTO_HISTORY_FLAGS_ALL) {
+				wfail(w, BC_EPROTO_FLAGS,
+				      "entry flags 0x%02x has undefined bits",
+				      (unsigned)e->flags);
+			}
+			bc__put_u8(w, e->flags);
+			w_str(w, "entry.author", e->author, BC_PROTO_MAX_NAME);
+			w_str(w, "entry.what", e->what,
+			      BC_PROTO_MAX_HISTORY_TEXT);
+		}
+		break;
+	}
+	default: /* OK, SESSION_LEAVE, SESSION_LIST, HISTORY_GET:
 	          * no payload */
 		break;
 	}

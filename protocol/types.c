@@ -30,6 +30,11 @@
 /* STATS: the client's figures, then the optional load and TLS
  * sections. */
 #define STATS_MAX (64u + 44u + 9u)
+/* A HISTORY entry: order, time, built_on, state, flags, author, what. */
+#define HISTORY_ENTRY_MAX                                                      \
+	(8u + 8u + 8u + 1u + 1u + STR_MAX(BC_PROTO_MAX_NAME) +                 \
+	 STR_MAX(BC_PROTO_MAX_HISTORY_TEXT))
+#define HISTORY_MAX (8u + 2u + BC_PROTO_MAX_HISTORY * HISTORY_ENTRY_MAX)
 /* A camera: eye, target, up (3 f32 each) and fov_y_deg. */
 #define CAMERA_SIZE 40u
 
@@ -68,8 +73,8 @@ static const struct bc__type_info types[BC_MSG_COUNT] = {
     [BC_MSG_STATS] = {"STATS", BC__FROM_SERVER, 0, STATS_MAX},
     [BC_MSG_SESSION_DELETE] = {"SESSION_DELETE", BC__FROM_CLIENT, 0,
                                STR_MAX(BC_PROTO_MAX_NAME)},
-    [BC_MSG_UNDO] = {"UNDO", BC__FROM_CLIENT, 0, 0},
-    [BC_MSG_REDO] = {"REDO", BC__FROM_CLIENT, 0, 0},
+    [BC_MSG_UNDO] = {"UNDO", BC__FROM_CLIENT, 0, 1},
+    [BC_MSG_REDO] = {"REDO", BC__FROM_CLIENT, 0, 1},
     [BC_MSG_SESSION_LIST] = {"SESSION_LIST", BC__FROM_CLIENT, 0, 0},
     [BC_MSG_SESSIONS] = {"SESSIONS", BC__FROM_SERVER, 0, SESSIONS_MAX},
     [BC_MSG_PRESENT] = {"PRESENT", BC__FROM_CLIENT, 0, 1},
@@ -81,6 +86,8 @@ static const struct bc__type_info types[BC_MSG_COUNT] = {
                                CAMERA_SIZE},
     [BC_MSG_SESSION_CAMERA_SET] = {"SESSION_CAMERA_SET", BC__FROM_SERVER, 0,
                                    8u + 4u + 4u + CAMERA_SIZE},
+    [BC_MSG_HISTORY_GET] = {"HISTORY_GET", BC__FROM_CLIENT, 0, 0},
+    [BC_MSG_HISTORY] = {"HISTORY", BC__FROM_SERVER, 0, HISTORY_MAX},
 };
 
 const struct bc__type_info *bc__type_info(unsigned type)
@@ -179,6 +186,7 @@ int bc_proto_client_may_send(enum bc_proto_stage stage, enum bc_proto_role role,
 	case BC_MSG_SNAPSHOT:
 	case BC_MSG_PRESENT:
 	case BC_MSG_FOLLOW:
+	case BC_MSG_HISTORY_GET:
 		return stage == BC_PROTO_STAGE_SESSION ? 0 : BC_ESTATE;
 	case BC_MSG_SCENE_LOAD:
 	case BC_MSG_EDIT:

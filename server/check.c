@@ -55,7 +55,7 @@ static void check_one(void *ud, const char *name)
 	struct check *k = ud;
 	struct bc_tree *t = bc_tree_create();
 	struct bc_camera cam;
-	struct replay_ctx ctx = {&t, &cam};
+	struct replay_ctx ctx = {&t, &cam, NULL};
 	struct bc_store_check c;
 	struct bc_errinfo ei = {0};
 	bc_camera_default(&cam);

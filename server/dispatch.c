@@ -86,6 +86,7 @@ static const struct route routes[BC_MSG_COUNT] = {
     [BC_MSG_PRESENT] = {bc_handle_present, NULL},
     [BC_MSG_FOLLOW] = {bc_handle_follow, NULL},
     [BC_MSG_SESSION_CAMERA] = {bc_handle_session_camera, NULL},
+    [BC_MSG_HISTORY_GET] = {bc_handle_history, NULL},
 };
 
 static struct client *client_of(struct bc_dispatch *d, struct bc_conn_ref ref)

@@ -116,11 +116,14 @@ struct batch {
 	struct bc_errinfo ei;
 };
 
-/* Applies, checks and encodes the batch's journal record. */
+/* Applies, checks and encodes the batch's journal record: its
+ * operations, who made it and, for a structural batch, what undoes it
+ * (the history is journaled with the edits, undo.c). */
 static int batch_apply(struct batch *x)
 {
 	struct bc_session *s = x->s;
-	struct bc_msg as_edit = {.type = BC_MSG_EDIT};
+	struct bc_undo_change c =
+	    bc__undo_change_of(s, &x->author, &x->how, x->op, x->nops);
 	x->tree = s->tree;
 	if ((x->rc = bc_edit_batch_apply_undoable(&x->b, &x->tree, x->op,
 	                                          x->nops, &x->ei))) {
@@ -131,13 +134,11 @@ static int batch_apply(struct batch *x)
 	 * holds, or nest it deeper than its snapshots hold (every later
 	 * snapshot would fail, the journal never compacted), and a record
 	 * must encode: undone like an edit that could not be journaled. */
-	bc_proto_buf_init(&x->rec, 0);
-	as_edit.edit.nops = (uint16_t)x->nops;
-	as_edit.edit.ops = x->op;
 	if ((x->b.structural &&
 	     ((x->rc = check_scene_bytes(x->tree, &x->ei)) ||
 	      (x->rc = bc_store_scene_depth_ok(x->tree, &x->ei)))) ||
-	    (x->rc = bc_proto_encode(&x->rec, &as_edit, &x->ei))) {
+	    (x->rc = bc__undo_record_encode(&x->rec, &c, x->b.inv.ops,
+	                                    x->b.inv.nops, &x->ei))) {
 		bc_edit_batch_undo(&x->b, &x->tree);
 		x->applied = false;
 	}
@@ -154,9 +155,8 @@ static void batch_run(struct bc_task *t)
 	if (x->heavy && batch_apply(x)) {
 		return;
 	}
-	if ((x->rc = bc_store_append(
-	         s->store, s->order + 1, x->rec.data + BC_PROTO_HEADER_SIZE,
-	         x->rec.len - BC_PROTO_HEADER_SIZE, &x->ei))) {
+	if ((x->rc = bc_store_append(s->store, s->order + 1, x->rec.data,
+	                             x->rec.len, &x->ei))) {
 		bc_edit_batch_undo(&x->b, &x->tree);
 		x->applied = false;
 	}
@@ -246,7 +246,7 @@ static void batch_commit(struct batch *x)
 	bc__session_changed(s);
 	follow(s, x);
 	broadcast(s, x);
-	x->done(s, &x->author, &x->how, &x->b, x->ud);
+	x->done(s, &x->author, &x->how, &x->b, x->op, x->nops, x->ud);
 	bc__session_snapshot_due(s);
 	bc__schedule(s);
 }
@@ -309,6 +309,7 @@ int bc__apply(struct bc_member *m, const struct bc_proto_edit_op *ops,
 	x->author = (struct bc_author){m->peer->ref, m->member_id, seq, {0}};
 	memcpy(x->author.name, m->peer->name, sizeof(x->author.name));
 	x->how = *how;
+	x->how.time_ms = bc__unix_ms();
 	x->done = done;
 	x->ud = ud;
 	x->t0_ns = bc_clock_ns();
@@ -326,15 +327,6 @@ int bc__apply(struct bc_member *m, const struct bc_proto_edit_op *ops,
 
 /* ---- EDIT ------------------------------------------------------------------ */
 
-static void edit_applied(struct bc_session *s, const struct bc_author *a,
-                         const struct bc_change *how, struct bc_edit_batch *b,
-                         void *ud)
-{
-	(void)ud;
-	/* The history takes what undoes the batch. */
-	bc__undo_record(s, a, b, (how->flags & BC_PROTO_FLAG_INTERACTING) != 0);
-}
-
 int bc_handle_edit(struct bc_member *m, const struct bc_msg *msg)
 {
 	struct bc_errinfo ei = {0};
@@ -345,12 +337,19 @@ int bc_handle_edit(struct bc_member *m, const struct bc_msg *msg)
 		return park;
 	}
 	rc = bc__apply(m, msg->edit.ops, msg->edit.nops, msg->seq, &how,
-	               edit_applied, NULL, &ei);
+	               bc__undo_applied, NULL, &ei);
 	if (rc < 0) {
 		bc__send_error(m, msg->seq, rc, "edit refused: %s", ei.msg);
 		return 0;
 	}
 	return bc__hold(m->session, m, msg->seq);
+}
+
+int bc_handle_history(struct bc_member *m, const struct bc_msg *msg)
+{
+	/* Read only: it answers at once, even while the session is busy
+	 * (the history changes on the loop only). */
+	return bc__undo_history(m, msg->seq);
 }
 
 int bc_handle_undo(struct bc_member *m, const struct bc_msg *msg)
@@ -359,7 +358,8 @@ int bc_handle_undo(struct bc_member *m, const struct bc_msg *msg)
 	if (bc__refuse_change(m, msg->seq, &park)) {
 		return park;
 	}
-	return bc__undo_step(m, msg->type == BC_MSG_REDO, msg->seq);
+	return bc__undo_step(m, msg->type == BC_MSG_REDO, msg->undo.scope,
+	                     msg->seq);
 }
 
 /* ---- SCENE_LOAD ------------------------------------------------------------ */

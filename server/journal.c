@@ -23,9 +23,10 @@
 /* 'BCJ1' little-endian: the first bytes of every journal record. */
 #define JOURNAL_MAGIC 0x314a4342u
 #define RECORD_HEADER 20u
-/* A journal record carries one EDIT's operations: at most one protocol
- * payload. */
-#define MAX_RECORD (64u * 1024u * 1024u)
+/* A journal record carries one EDIT's operations (at most one protocol
+ * payload) and, for its undo history, the operations that undo it (at
+ * most the scene, BC_SRV_MAX_SCENE_BYTES < 64 MiB) and who made it. */
+#define MAX_RECORD (2u * 64u * 1024u * 1024u + 4096u)
 
 /* Reads exactly n bytes at off; false on a short read. */
 static bool read_at(int fd, void *buf, size_t n, off_t off)

@@ -284,32 +284,132 @@ static int replay_load(struct replay_ctx *ctx, const uint8_t *rec, size_t len)
 	return 1;
 }
 
+/* Applies an EDIT payload's operations to *ctx->tree in place, each in
+ * turn: no copy of the tree per record (a journal of structural edits on
+ * a big scene replays in time proportional to the edits). A batch of
+ * SETs goes through a batch, whose saved states the history keeps (in b,
+ * which the caller finishes). */
+static int replay_ops(struct replay_ctx *ctx, const struct bc_msg *m,
+                      struct bc_edit_batch *b, struct bc_errinfo *ei)
+{
+	int rc = 0;
+	for (uint16_t i = 0; i < m->edit.nops; i++) {
+		b->structural =
+		    b->structural || m->edit.ops[i].kind != BC_PROTO_EDIT_SET;
+	}
+	if (!b->structural) {
+		return bc_edit_batch_apply(b, ctx->tree, m->edit.ops,
+		                           m->edit.nops, ei);
+	}
+	for (uint16_t i = 0; !rc && i < m->edit.nops; i++) {
+		rc = bc_edit_apply_op(*ctx->tree, &m->edit.ops[i], ei);
+	}
+	return rc;
+}
+
+/* The history follows a replayed record (undo.c): a failure to keep it
+ * loses the history, never the scene. */
+static void replay_note(struct replay_ctx *ctx, uint64_t order,
+                        const struct bc_undo_record *h, const struct bc_msg *m,
+                        const struct bc_edit_batch *b)
+{
+	struct bc_proto_reader r;
+	struct bc_msg inv = {0};
+	struct bc_errinfo ei = {0};
+	struct bc_undo_change c = {
+	    .kind = h->kind,
+	    .interacting = h->interacting,
+	    .order = order,
+	    .target = h->target,
+	    .time_ms = h->time_ms,
+	    .name = h->name,
+	    .member = h->member,
+	    .ops = m->edit.ops,
+	    .nops = m->edit.nops,
+	    .tree = *ctx->tree,
+	};
+	int rc = 0;
+	if (!ctx->undo) {
+		return;
+	}
+	bc_proto_reader_init(&r, NULL);
+	if (b->structural &&
+	    (!h->inv || bc_proto_decode_payload(&r, BC_MSG_EDIT, 0, 0, h->inv,
+	                                        h->inv_len, &inv, &ei))) {
+		rc = BC_EINVAL;
+	}
+	if (!rc) {
+		rc = bc__undo_note(ctx->undo, &c, b, inv.edit.ops,
+		                   b->structural ? inv.edit.nops : 0);
+	}
+	bc_proto_reader_finish(&r);
+	if (rc) {
+		bc_log(BC_LOG_WARN,
+		       "journal replay: edit %llu: the undo history cannot "
+		       "follow (%s); it restarts after it",
+		       (unsigned long long)order, bc_strerror(rc));
+		bc__undo_free(ctx->undo);
+		ctx->undo = bc__undo_new();
+	}
+}
+
 int bc__replay_record(void *ud, uint64_t order, const uint8_t *rec, size_t len)
 {
 	struct replay_ctx *ctx = ud;
 	struct bc_proto_reader r;
 	struct bc_msg m;
 	struct bc_errinfo ei = {0};
+	struct bc_undo_record h;
+	struct bc_edit_batch b = {0};
 	int rc;
-	(void)order;
-	/* A SESSION_CAMERA record (present.c), a SCENE_LOAD or an EDIT. */
-	if ((rc = bc__present_camera_record(rec, len, ctx->camera)) != 0 ||
-	    (rc = replay_load(ctx, rec, len)) != 0) {
+	if (order == 0) {
+		/* The history carried by the snapshot the journal follows
+		 * (store.h): lost, never the scene, when it does not read. */
+		if (ctx->undo && (rc = bc__undo_uncarry(ctx->undo, rec, len))) {
+			bc_log(BC_LOG_WARN,
+			       "journal replay: the undo history kept with the "
+			       "snapshot does not read (%s); it restarts here",
+			       bc_strerror(rc));
+		}
+		return 0;
+	}
+	/* A SESSION_CAMERA record (present.c), a SCENE_LOAD, an edit with
+	 * its history (undo.c) or a plain EDIT (an earlier journal). */
+	if ((rc = bc__present_camera_record(rec, len, ctx->camera)) != 0) {
 		return rc < 0 ? rc : 0;
 	}
+	if ((rc = replay_load(ctx, rec, len)) != 0) {
+		if (rc > 0 && ctx->undo) {
+			/* A new scene: nothing before it can be undone. */
+			bc__undo_free(ctx->undo);
+			ctx->undo = bc__undo_new();
+		}
+		return rc < 0 ? rc : 0;
+	}
+	if ((rc = bc__undo_record_parse(rec, len, &h)) < 0) {
+		bc_log(BC_LOG_ERROR,
+		       "journal replay: a damaged edit record "
+		       "(%s)",
+		       bc_strerror(rc));
+		return rc;
+	}
 	bc_proto_reader_init(&r, NULL);
-	rc = bc_proto_decode_payload(&r, BC_MSG_EDIT, 0, 0, rec, len, &m, &ei);
-	/* In place, each operation in turn: no copy of the tree per record
-	 * (a journal of structural edits on a big scene replays in time
-	 * proportional to the edits). These records applied when they were
-	 * acknowledged; one that fails now is a loss, which leaves the
-	 * session not whole (store.h), whatever state it left. */
-	for (uint16_t i = 0; !rc && i < m.edit.nops; i++) {
-		rc = bc_edit_apply_op(*ctx->tree, &m.edit.ops[i], &ei);
+	rc = rc ? bc_proto_decode_payload(&r, BC_MSG_EDIT, 0, 0, h.fwd,
+	                                  h.fwd_len, &m, &ei)
+	        : bc_proto_decode_payload(&r, BC_MSG_EDIT, 0, 0, rec, len, &m,
+	                                  &ei);
+	/* These records applied when they were acknowledged; one that
+	 * fails now is a loss, which leaves the session not whole
+	 * (store.h), whatever state it left. */
+	if (!rc) {
+		rc = replay_ops(ctx, &m, &b, &ei);
 	}
 	if (rc) {
 		bc_log(BC_LOG_ERROR, "journal replay: %s", ei.msg);
+	} else if (h.fwd) {
+		replay_note(ctx, order, &h, &m, &b);
 	}
+	bc_edit_batch_finish(&b);
 	bc_proto_reader_finish(&r);
 	return rc;
 }
@@ -324,6 +424,8 @@ struct load_task {
 	struct bc_camera cam;
 	uint64_t order;
 	bool created;
+	struct bc_undo *undo; /* the history the journal gave back */
+	char owner[BC_STORE_OWNER_MAX + 1];
 	int rc;
 	struct bc_errinfo ei;
 };
@@ -332,7 +434,7 @@ static void load_run(struct bc_task *t)
 {
 	struct load_task *l = (struct load_task *)t;
 	struct bc_session *s = t->s;
-	struct replay_ctx ctx = {&l->tree, &l->cam};
+	struct replay_ctx ctx = {&l->tree, &l->cam, bc__undo_new()};
 	bc_camera_default(&l->cam);
 	if (!(l->tree = bc_tree_create()) || !(l->copy = bc_tree_create())) {
 		l->rc = bc_errinfo_set(&l->ei, BC_ENOMEM, "out of memory");
@@ -341,6 +443,7 @@ static void load_run(struct bc_task *t)
 	l->rc = bc_store_session_open(l->store, s->name, &l->st, l->tree,
 	                              &l->cam, &l->order, &l->created,
 	                              bc__replay_record, &ctx, &l->ei);
+	l->undo = ctx.undo;
 	if (!l->rc && l->created) {
 		const char *json = bc_scene_default_json();
 		if (!(l->rc = bc_scene_parse_json(json, strlen(json), l->tree,
@@ -348,6 +451,13 @@ static void load_run(struct bc_task *t)
 			l->rc = bc_store_snapshot(l->st, l->tree, &l->cam, 0,
 			                          &l->ei);
 		}
+		/* Its creator owns it (PROTOCOL.md 7.20); the session is
+		 * busy, so its owner field stays as the CREATE set it. */
+		if (!l->rc && s->owner[0]) {
+			l->rc = bc_store_owner_write(l->st, s->owner, &l->ei);
+		}
+	} else if (!l->rc) {
+		bc_store_owner_read(l->st, l->owner);
 	}
 	if (!l->rc) {
 		l->rc = bc_tree_copy(l->copy, l->tree, &l->ei);
@@ -356,6 +466,7 @@ static void load_run(struct bc_task *t)
 
 static void load_free(struct load_task *l)
 {
+	bc__undo_free(l->undo);
 	bc_store_session_close(l->st);
 	bc__tree_free_later(l->t.s->kick.loop, l->tree);
 	bc__tree_free_later(l->t.s->kick.loop, l->copy);
@@ -401,6 +512,12 @@ static void load_done(struct bc_task *t)
 	s->camera = l->cam;
 	s->order = s->scene_order = l->order;
 	s->last_edit_ms = bc_store_session_mtime_ms(s->store);
+	if (!l->created) {
+		memcpy(s->owner, l->owner, sizeof(s->owner));
+	}
+	bc__undo_restored(l->undo);
+	s->undo = l->undo;
+	l->undo = NULL;
 	bc_work_scene(s->ss->work, s->id, l->copy, s->order);
 	l->tree = l->copy = NULL;
 	l->st = NULL;
@@ -644,6 +761,19 @@ int bc_sessions_new(struct bc_sessions **out,
 	return 0;
 }
 
+/* The session's history in the form a snapshot keeps (undo.c); without
+ * memory for it the snapshot goes on and the history before it is lost
+ * on a restart, logged. */
+static void carry(struct bc_session *s, uint8_t **hist, size_t *hlen)
+{
+	if (bc__undo_carry(s->undo, s->tree, hist, hlen)) {
+		bc_log(BC_LOG_WARN,
+		       "session %s: no memory to keep the undo history with "
+		       "its snapshot",
+		       s->name);
+	}
+}
+
 void bc_sessions_save_all(struct bc_sessions *ss, uint32_t budget_ms)
 {
 	double end = bc_clock_ms() + budget_ms;
@@ -665,10 +795,14 @@ void bc_sessions_save_all(struct bc_sessions *ss, uint32_t budget_ms)
 			       s->name);
 			continue;
 		}
-		if (bc_store_snapshot(s->store, s->tree, &s->camera, s->order,
-		                      &ei)) {
+		uint8_t *hist = NULL;
+		size_t hlen = 0;
+		carry(s, &hist, &hlen);
+		if (bc_store_snapshot_with(s->store, s->tree, &s->camera,
+		                           s->order, hist, hlen, &ei)) {
 			bc_log(BC_LOG_ERROR, "session %s: %s", s->name, ei.msg);
 		}
+		bc_free(hist);
 	}
 }
 
@@ -758,6 +892,9 @@ int bc_handle_session(struct bc_member *m, const struct bc_msg *msg)
 			return 0;
 		}
 		s->creator = create ? m->peer->ref : (struct bc_conn_ref){0, 0};
+		if (create) {
+			memcpy(s->owner, m->peer->name, sizeof(s->owner));
+		}
 	}
 	rc = bc__join(m, s, req->role, msg->seq);
 	if (rc == 0 && bc_conn_ref_eq(s->creator, m->peer->ref)) {
@@ -890,9 +1027,18 @@ static void snap_run(struct bc_task *t)
 {
 	struct snap_task *st = (struct snap_task *)t;
 	struct bc_session *s = t->s;
-	/* The session is busy: nothing changes its tree or store. */
-	st->rc = bc_store_snapshot_due(s->store, BC_SRV_SNAPSHOT_EVERY, s->tree,
-	                               &s->camera, s->order, &st->ei);
+	uint8_t *hist = NULL;
+	size_t hlen = 0;
+	/* The session is busy: nothing changes its tree, history or
+	 * store. */
+	if (!bc_store_snapshot_is_due(s->store, BC_SRV_SNAPSHOT_EVERY)) {
+		return;
+	}
+	carry(s, &hist, &hlen);
+	st->rc = bc_store_snapshot_due_with(s->store, BC_SRV_SNAPSHOT_EVERY,
+	                                    s->tree, &s->camera, s->order, hist,
+	                                    hlen, &st->ei);
+	bc_free(hist);
 }
 
 static void snap_done(struct bc_task *t)

@@ -136,6 +136,7 @@ int bc_handle_session_list(struct bc_member *m, const struct bc_msg *msg);
 int bc_handle_scene_load(struct bc_member *m, const struct bc_msg *msg);
 int bc_handle_edit(struct bc_member *m, const struct bc_msg *msg);
 int bc_handle_undo(struct bc_member *m, const struct bc_msg *msg);
+int bc_handle_history(struct bc_member *m, const struct bc_msg *msg);
 int bc_handle_camera(struct bc_member *m, const struct bc_msg *msg);
 int bc_handle_view(struct bc_member *m, const struct bc_msg *msg);
 int bc_handle_pick(struct bc_member *m, const struct bc_msg *msg);

@@ -40,6 +40,10 @@ struct bc_session {
 	uint64_t empty_since_ms; /* loop clock; when the last member left */
 	uint64_t last_edit_ms;   /* Unix ms of its last change (0: unknown) */
 	struct bc_undo *undo;    /* undo/redo history (undo.c), or NULL */
+	/* The client name of the member whose SESSION_CREATE made it (kept
+	 * in its directory); "" when the server made it or the creator had
+	 * no name. It may undo anyone's change (PROTOCOL.md 7.20). */
+	char owner[BC_PROTO_MAX_NAME + 1];
 	/* The member presenting (present.c): its id, 0 when nobody does. */
 	uint32_t presenter_id;
 	struct bc_member *presenter;
@@ -185,9 +189,12 @@ void bc__frames_forget(struct bc_member *m);
 
 /* ---- edits.c ---- */
 
-/* How an applied change presents itself in its EDIT_APPLIED. */
+/* How an applied change presents itself in its EDIT_APPLIED, and what
+ * its journal record says of it. */
 struct bc_change {
 	uint16_t flags;        /* BC_PROTO_FLAG_INTERACTING, _UNDO or _REDO */
+	uint8_t kind;          /* BC_UNDO_*; 0: an edit */
+	uint64_t time_ms;      /* when it applied, Unix ms (set by bc__apply) */
 	uint64_t target_order; /* UNDO, REDO: the edit undone or redone */
 	char target_author[BC_PROTO_MAX_NAME + 1]; /* and its author */
 };
@@ -197,12 +204,14 @@ struct bc_author {
 	uint32_t member_id, seq;
 	char name[BC_PROTO_MAX_NAME + 1];
 };
-/* Called once a batch is applied, journaled and broadcast, with b holding
- * what undoes it (the callee may take its old tree and its inverse; the
- * caller finishes b). */
+/* Called once a batch (operations ops) is applied, journaled and
+ * broadcast, with b holding what undoes it (the callee may take its old
+ * tree; the caller finishes b). */
 typedef void (*bc_applied_fn)(struct bc_session *s, const struct bc_author *a,
                               const struct bc_change *how,
-                              struct bc_edit_batch *b, void *ud);
+                              struct bc_edit_batch *b,
+                              const struct bc_proto_edit_op *ops, uint32_t nops,
+                              void *ud);
 /* Applies ops from member m (request seq) to m's session as one batch:
  * checked, journaled and synced, then broadcast as EDIT_APPLIED, passed
  * to the work layer, and handed to done. The sync (and for a big scene,
@@ -218,16 +227,97 @@ bool bc__refuse_change(struct bc_member *m, uint32_t seq, int *park);
 
 /* ---- undo.c ---- */
 
-/* Records what undoes batch b, just applied by m (takes b's inverse, and
- * its old tree to free off the loop);
- * clears the redo steps. Edits of one drag (interacting, up to the first
- * edit without it) make one step. */
-void bc__undo_record(struct bc_session *s, const struct bc_author *a,
-                     struct bc_edit_batch *b, bool interacting);
-/* UNDO (or REDO) from m, request seq. Returns 0 or BC_PARK. */
-int bc__undo_step(struct bc_member *m, bool redo, uint32_t seq);
+struct bc_undo;
+/* Who owns a change: a client name, or for a member without one its
+ * member id while it is connected (0: nobody). */
+struct bc_undo_who {
+	const char *name;
+	uint32_t member;
+};
+/* What a change did to the history: an edit, or an undo or redo of the
+ * step of edit target. */
+enum { BC_UNDO_EDIT = 1, BC_UNDO_UNDO = 2, BC_UNDO_REDO = 3 };
+struct bc_undo_change {
+	uint8_t kind;
+	bool interacting; /* an edit of a drag (INTERACTING) */
+	uint64_t order;   /* the change's own order number */
+	uint64_t target;  /* UNDO, REDO: the step's order */
+	uint64_t time_ms;
+	const char *name; /* who made it */
+	uint32_t member;
+	const struct bc_proto_edit_op *ops; /* the change's operations */
+	uint32_t nops;
+	/* The scene after it (names parameters in the history), or NULL. */
+	const struct bc_tree *tree;
+};
+/* A history record read back from the journal (bc__undo_record_parse):
+ * the change and its EDIT payloads, pointing into the record. */
+struct bc_undo_record {
+	uint8_t kind;
+	bool interacting;
+	uint64_t time_ms, target;
+	uint32_t member;
+	uint16_t name_len;
+	char name[BC_PROTO_MAX_NAME + 1];
+	const uint8_t *fwd, *inv; /* inv NULL: a parameter change */
+	uint32_t fwd_len, inv_len;
+};
+
+struct bc_undo *bc__undo_new(void);
+void bc__undo_free(struct bc_undo *u);
+/* The history change c makes: b (the batch applied) holds the saved
+ * states of a parameter change; inv[0..ninv) undoes a structural one.
+ * Returns 0 or BC_ENOMEM (the history is then not whole: drop it). */
+int bc__undo_note(struct bc_undo *u, const struct bc_undo_change *c,
+                  const struct bc_edit_batch *b,
+                  const struct bc_proto_edit_op *inv, uint32_t ninv);
+/* A restored history: member ids of the run before mean nothing now. */
+void bc__undo_restored(struct bc_undo *u);
+/* Whether a change by (author, member) is who's. */
+bool bc__undo_owns(const char *author, uint32_t member,
+                   const struct bc_undo_who *who);
+/* The history's view of a change a made (its operations ops), now
+ * applied at s->order. */
+struct bc_undo_change bc__undo_change_of(const struct bc_session *s,
+                                         const struct bc_author *a,
+                                         const struct bc_change *how,
+                                         const struct bc_proto_edit_op *ops,
+                                         uint32_t nops);
+/* A bc_applied_fn: the history takes what undoes an applied EDIT, UNDO or
+ * REDO (how->kind). */
+void bc__undo_applied(struct bc_session *s, const struct bc_author *a,
+                      const struct bc_change *how, struct bc_edit_batch *b,
+                      const struct bc_proto_edit_op *ops, uint32_t nops,
+                      void *ud);
+/* The live form of bc__undo_note for s (takes b's old tree to free off
+ * the loop); a failure drops the history, logged. */
+void bc__undo_record(struct bc_session *s, const struct bc_undo_change *c,
+                     struct bc_edit_batch *b);
+/* UNDO (or REDO) of scope (BC_PROTO_UNDO_*) from m, request seq.
+ * Returns 0 or BC_HOLD. */
+int bc__undo_step(struct bc_member *m, bool redo, uint8_t scope, uint32_t seq);
+/* HISTORY_GET from m: answers HISTORY. Returns 0. */
+int bc__undo_history(struct bc_member *m, uint32_t seq);
 /* Forgets s's history (a new scene, or s going away). */
 void bc__undo_clear(struct bc_session *s);
+/* The journal record of change c (its operations, and inv that undoes
+ * a structural one) into out. Returns 0 or an error in ei. */
+int bc__undo_record_encode(struct bc_proto_buf *out,
+                           const struct bc_undo_change *c,
+                           const struct bc_proto_edit_op *inv, uint32_t ninv,
+                           struct bc_errinfo *ei);
+/* The history in the form a snapshot carries (history-N.bin): *out
+ * (bc_free) and *len, NULL and 0 for an empty one; t is the scene now.
+ * Returns 0 or BC_ENOMEM. */
+int bc__undo_carry(const struct bc_undo *u, const struct bc_tree *t,
+                   uint8_t **out, size_t *len);
+/* u becomes the history p[0..len) carries; bytes that do not hold one
+ * leave it empty and return an error. */
+int bc__undo_uncarry(struct bc_undo *u, const uint8_t *p, size_t len);
+/* 1 and *r when rec is a history record, 0 when it is not one, or an
+ * error code for a damaged one. */
+int bc__undo_record_parse(const uint8_t *rec, size_t len,
+                          struct bc_undo_record *r);
 
 /* ---- present.c ---- */
 
@@ -254,6 +344,7 @@ int bc__present_camera_record(const uint8_t *rec, size_t len,
 struct replay_ctx {
 	struct bc_tree **tree;
 	struct bc_camera *camera;
+	struct bc_undo *undo; /* the history rebuilt, or NULL */
 };
 int bc__replay_record(void *ud, uint64_t order, const uint8_t *rec, size_t len);
 /* Journals a SCENE_LOAD (its scene bytes, camera included) as edit order:

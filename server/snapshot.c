@@ -12,8 +12,10 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <zlib.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/bytes.h"
 #include "blobcast/clock.h"
 #include "blobcast/log.h"
 #include "blobcast/scene.h"
@@ -63,6 +65,14 @@ int bc_store_scene_depth_ok(const struct bc_tree *t, struct bc_errinfo *ei)
 int bc_store_snapshot(struct bc_store_session *ss, const struct bc_tree *t,
                       const struct bc_camera *cam, uint64_t order,
                       struct bc_errinfo *ei)
+{
+	return bc_store_snapshot_with(ss, t, cam, order, NULL, 0, ei);
+}
+
+int bc_store_snapshot_with(struct bc_store_session *ss, const struct bc_tree *t,
+                           const struct bc_camera *cam, uint64_t order,
+                           const uint8_t *hist, size_t hlen,
+                           struct bc_errinfo *ei)
 {
 	char file[PATH_LEN], tmp[PATH_LEN], jfile[PATH_LEN];
 	char *text = NULL;
@@ -122,6 +132,10 @@ int bc_store_snapshot(struct bc_store_session *ss, const struct bc_tree *t,
 		rc = bc__store_sys_error(ei, "cannot create", jfile);
 		goto out;
 	}
+	/* The history that goes with it is in place before it is. */
+	if ((rc = bc__store_history_write(ss, order, hist, hlen, ei))) {
+		goto out;
+	}
 	if (bc__store_injected("snapshot-rename", file) ||
 	    rename(tmp, file) != 0) {
 		rc = bc__store_sys_error(ei, "cannot rename to", file);
@@ -164,16 +178,32 @@ out:
 	return rc;
 }
 
+bool bc_store_snapshot_is_due(const struct bc_store_session *ss, uint64_t every)
+{
+	return ss->records >= every &&
+	       bc_clock_ns() / 1000000u >= ss->retry_at_ms;
+}
+
 int bc_store_snapshot_due(struct bc_store_session *ss, uint64_t every,
                           const struct bc_tree *t, const struct bc_camera *cam,
                           uint64_t order, struct bc_errinfo *ei)
+{
+	return bc_store_snapshot_due_with(ss, every, t, cam, order, NULL, 0,
+	                                  ei);
+}
+
+int bc_store_snapshot_due_with(struct bc_store_session *ss, uint64_t every,
+                               const struct bc_tree *t,
+                               const struct bc_camera *cam, uint64_t order,
+                               const uint8_t *hist, size_t hlen,
+                               struct bc_errinfo *ei)
 {
 	uint64_t now = bc_clock_ns() / 1000000u;
 	int rc;
 	if (ss->records < every || now < ss->retry_at_ms) {
 		return 0;
 	}
-	if ((rc = bc_store_snapshot(ss, t, cam, order, ei))) {
+	if ((rc = bc_store_snapshot_with(ss, t, cam, order, hist, hlen, ei))) {
 		ss->backoff_ms = ss->backoff_ms
 		                     ? ss->backoff_ms * 2u
 		                     : BC_STORE_SNAPSHOT_RETRY_MIN_MS;
@@ -188,4 +218,84 @@ int bc_store_snapshot_due(struct bc_store_session *ss, uint64_t every,
 		       (unsigned long long)ss->backoff_ms);
 	}
 	return rc;
+}
+
+/* history-N.bin: 'BCH1', u32 length, u32 CRC32 of what follows, then the
+ * history (undo.c's carried form). */
+#define HISTORY_MAGIC 0x31484342u
+#define HISTORY_HEADER 12u
+/* The history is bounded by BC_SRV_UNDO_BYTES in memory; its carried form
+ * adds a few bytes per node and step. */
+#define HISTORY_MAX_BYTES (256u * 1024u * 1024u)
+
+int bc__store_history_write(struct bc_store_session *ss, uint64_t order,
+                            const uint8_t *p, size_t len, struct bc_errinfo *ei)
+{
+	char file[PATH_LEN], tmp[PATH_LEN];
+	uint8_t hdr[HISTORY_HEADER];
+	int fd;
+	bool ok;
+	bc__store_fmt_path(file, "%s/history-%llu.bin", ss->path,
+	                   (unsigned long long)order);
+	bc__store_fmt_path(tmp, "%s/history-%llu.bin.tmp", ss->path,
+	                   (unsigned long long)order);
+	if (len == 0 || len > HISTORY_MAX_BYTES) {
+		unlink(file);
+		return 0;
+	}
+	bc_put_le32(hdr, HISTORY_MAGIC);
+	bc_put_le32(hdr + 4, (uint32_t)len);
+	bc_put_le32(hdr + 8, (uint32_t)crc32(0L, p, (uInt)len));
+	if ((fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644)) <
+	    0) {
+		return bc__store_sys_error(ei, "cannot create", tmp);
+	}
+	ok = !bc__store_injected("history-write", tmp) &&
+	     write_all(fd, (const char *)hdr, sizeof(hdr)) &&
+	     write_all(fd, (const char *)p, len) && fsync(fd) == 0;
+	close(fd);
+	if (!ok || rename(tmp, file) != 0) {
+		int rc = bc__store_sys_error(ei, "cannot write", tmp);
+		unlink(tmp);
+		return rc;
+	}
+	return 0;
+}
+
+int bc__store_history_give(struct bc_store_session *ss, bc_store_replay_fn fn,
+                           void *ud)
+{
+	char file[PATH_LEN];
+	uint8_t hdr[HISTORY_HEADER], *p = NULL;
+	struct stat st;
+	uint32_t len;
+	bool ok;
+	int fd;
+	bc__store_fmt_path(file, "%s/history-%llu.bin", ss->path,
+	                   (unsigned long long)ss->base);
+	if ((fd = open(file, O_RDONLY | O_CLOEXEC)) < 0) {
+		return 0;
+	}
+	ok = fstat(fd, &st) == 0 && st.st_size >= (off_t)HISTORY_HEADER &&
+	     read(fd, hdr, sizeof(hdr)) == (ssize_t)sizeof(hdr) &&
+	     bc_get_le32(hdr) == HISTORY_MAGIC &&
+	     (len = bc_get_le32(hdr + 4)) <= HISTORY_MAX_BYTES &&
+	     (off_t)len == st.st_size - (off_t)HISTORY_HEADER;
+	if (ok && !(p = bc_malloc(len ? len : 1))) {
+		close(fd);
+		return BC_ENOMEM;
+	}
+	ok = ok && read(fd, p, len) == (ssize_t)len &&
+	     (uint32_t)crc32(0L, p, len) == bc_get_le32(hdr + 8);
+	close(fd);
+	if (ok) {
+		fn(ud, 0, p, len);
+	} else {
+		bc_log(BC_LOG_WARN,
+		       "session %s: %s is damaged; the undo history before "
+		       "the snapshot is lost (the scene is not)",
+		       ss->name, file);
+	}
+	bc_free(p);
+	return 0;
 }

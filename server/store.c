@@ -323,7 +323,8 @@ void bc__store_tidy(const char *path, uint64_t keep)
 		size_t len = strlen(e->d_name);
 		bool old =
 		    (parse_numbered(e->d_name, "snap-", ".json", &n) ||
-		     parse_numbered(e->d_name, "journal-", ".bin", &n)) &&
+		     parse_numbered(e->d_name, "journal-", ".bin", &n) ||
+		     parse_numbered(e->d_name, "history-", ".bin", &n)) &&
 		    n < keep;
 		bool tmp = len > 4 && (strstr(e->d_name, ".tmp") != NULL) &&
 		           strstr(e->d_name, ".damaged-") == NULL;
@@ -471,6 +472,10 @@ static int restore(struct bc_store_session *ss, struct bc_tree *t,
 	}
 	r->c.loaded = true;
 	ss->base = *order = r->snaps[r->used];
+	if ((rc = bc__store_history_give(ss, fn, ud))) {
+		return bc_errinfo_set(ei, rc, "session %s: out of memory",
+		                      ss->name);
+	}
 	if ((rc = bc__store_replay(ss, fn, ud, order, ei))) {
 		return rc;
 	}
@@ -675,4 +680,44 @@ void bc_store_session_close(struct bc_store_session *ss)
 	}
 	bc_free(ss->path);
 	bc_free(ss);
+}
+
+/* The session's owner: one line, the client name, in DIR/.../owner. */
+int bc_store_owner_write(struct bc_store_session *ss, const char *owner,
+                         struct bc_errinfo *ei)
+{
+	char file[PATH_LEN];
+	size_t len = strlen(owner);
+	int fd;
+	bool ok;
+	bc__store_fmt_path(file, "%s/owner", ss->path);
+	if ((fd = open(file, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644)) <
+	    0) {
+		return bc__store_sys_error(ei, "cannot create", file);
+	}
+	ok = write(fd, owner, len) == (ssize_t)len && fsync(fd) == 0;
+	close(fd);
+	if (!ok || bc__store_sync_dir(ss->path) != 0) {
+		return bc__store_sys_error(ei, "cannot write", file);
+	}
+	return 0;
+}
+
+void bc_store_owner_read(const struct bc_store_session *ss,
+                         char out[BC_STORE_OWNER_MAX + 1])
+{
+	char file[PATH_LEN];
+	ssize_t n = -1;
+	int fd;
+	out[0] = '\0';
+	bc__store_fmt_path(file, "%s/owner", ss->path);
+	if ((fd = open(file, O_RDONLY | O_CLOEXEC)) >= 0) {
+		n = read(fd, out, BC_STORE_OWNER_MAX);
+		close(fd);
+	}
+	out[n > 0 ? n : 0] = '\0';
+	/* A name with a NUL in it is no name (the file was damaged). */
+	if (n > 0 && strlen(out) != (size_t)n) {
+		out[0] = '\0';
+	}
 }

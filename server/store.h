@@ -3,6 +3,8 @@
  *
  *   DIR/sessions/NAME/snap-ORDER.json   the scene after edit ORDER (atomic)
  *   DIR/sessions/NAME/journal-ORDER.bin edits after that snapshot
+ *   DIR/sessions/NAME/history-ORDER.bin the undo history as of it
+ *   DIR/sessions/NAME/owner             who created the session
  *
  * A snapshot is written to a temporary file, fsynced, renamed and the
  * directory fsynced; then a new journal starts and older files go. Journal
@@ -113,6 +115,14 @@ int bc_store_scene_depth_ok(const struct bc_tree *t, struct bc_errinfo *ei);
 int bc_store_snapshot(struct bc_store_session *ss, const struct bc_tree *t,
                       const struct bc_camera *cam, uint64_t order,
                       struct bc_errinfo *ei);
+/* As bc_store_snapshot, and keeps hist[0..hlen) (the session's undo
+ * history as of order) in history-ORDER.bin beside it, written before the
+ * snapshot is renamed into place: a restore from snap-ORDER hands it to
+ * the replay function as a record of order 0 before the journal's. */
+int bc_store_snapshot_with(struct bc_store_session *ss, const struct bc_tree *t,
+                           const struct bc_camera *cam, uint64_t order,
+                           const uint8_t *hist, size_t hlen,
+                           struct bc_errinfo *ei);
 /* The periodic snapshot: taken when every or more records were journaled
  * since the last one, unless a failed attempt is still backing off
  * (BC_STORE_SNAPSHOT_RETRY_*). Returns 0 when nothing was due or it
@@ -120,6 +130,25 @@ int bc_store_snapshot(struct bc_store_session *ss, const struct bc_tree *t,
 int bc_store_snapshot_due(struct bc_store_session *ss, uint64_t every,
                           const struct bc_tree *t, const struct bc_camera *cam,
                           uint64_t order, struct bc_errinfo *ei);
+/* As bc_store_snapshot_due, keeping hist as bc_store_snapshot_with does. */
+int bc_store_snapshot_due_with(struct bc_store_session *ss, uint64_t every,
+                               const struct bc_tree *t,
+                               const struct bc_camera *cam, uint64_t order,
+                               const uint8_t *hist, size_t hlen,
+                               struct bc_errinfo *ei);
+/* Whether the periodic snapshot is due now (bc_store_snapshot_due would
+ * write one). */
+bool bc_store_snapshot_is_due(const struct bc_store_session *ss,
+                              uint64_t every);
+
+/* The client name that created a session, kept in its directory's
+ * "owner" file (written once, when a SESSION_CREATE makes it). */
+#define BC_STORE_OWNER_MAX 64u
+int bc_store_owner_write(struct bc_store_session *ss, const char *owner,
+                         struct bc_errinfo *ei);
+/* The owner, or "" when none was written. */
+void bc_store_owner_read(const struct bc_store_session *ss,
+                         char out[BC_STORE_OWNER_MAX + 1]);
 
 /* Appends one record and syncs it to disk before returning 0. */
 int bc_store_append(struct bc_store_session *ss, uint64_t order,

@@ -59,6 +59,16 @@ int bc__store_sync_dir(const char *path);
 
 /* Removes temporary files and every snapshot or journal older than keep. */
 void bc__store_tidy(const char *path, uint64_t keep);
+/* Hands the history kept with snapshot ss->base (history-N.bin) to fn as
+ * a record of order 0, when its file is there and whole; a damaged one
+ * is logged and left out. Returns 0 or BC_ENOMEM. */
+int bc__store_history_give(struct bc_store_session *ss, bc_store_replay_fn fn,
+                           void *ud);
+/* Writes history-ORDER.bin (synced, renamed into place) from len bytes;
+ * with len 0 removes a stale one. Returns 0 or an error in ei. */
+int bc__store_history_write(struct bc_store_session *ss, uint64_t order,
+                            const uint8_t *p, size_t len,
+                            struct bc_errinfo *ei);
 
 /* ---- journal.c ---- */
 

@@ -34,13 +34,13 @@
 
 /* Every client command, in the order the overview lists them. */
 static const struct bc_cli_cmd *const cmds[] = {
-    &bc_cli_cmd_load,     &bc_cli_cmd_edit,          &bc_cli_cmd_camera,
-    &bc_cli_cmd_present,  &bc_cli_cmd_follow,        &bc_cli_cmd_snapshot,
-    &bc_cli_cmd_watch,    &bc_cli_cmd_bench_latency, &bc_cli_cmd_nodes,
-    &bc_cli_cmd_scene,    &bc_cli_cmd_delete,        &bc_cli_cmd_sessions,
-    &bc_cli_cmd_undo,     &bc_cli_cmd_redo,          &bc_cli_cmd_add,
-    &bc_cli_cmd_remove,   &bc_cli_cmd_move,          &bc_cli_cmd_wrap,
-    &bc_cli_cmd_duplicate};
+    &bc_cli_cmd_load,      &bc_cli_cmd_edit,          &bc_cli_cmd_camera,
+    &bc_cli_cmd_present,   &bc_cli_cmd_follow,        &bc_cli_cmd_snapshot,
+    &bc_cli_cmd_watch,     &bc_cli_cmd_bench_latency, &bc_cli_cmd_nodes,
+    &bc_cli_cmd_scene,     &bc_cli_cmd_delete,        &bc_cli_cmd_sessions,
+    &bc_cli_cmd_undo,      &bc_cli_cmd_redo,          &bc_cli_cmd_add,
+    &bc_cli_cmd_remove,    &bc_cli_cmd_move,          &bc_cli_cmd_wrap,
+    &bc_cli_cmd_duplicate, &bc_cli_cmd_history};
 
 static const struct bc_cli_cmd *find_cmd(const char *name)
 {
@@ -76,7 +76,7 @@ struct parsed {
 };
 
 /* Most options of the table below. */
-#define MAX_OPTS 32
+#define MAX_OPTS 33
 
 /*
  * One table of every client command's options: the command-specific ones,
@@ -262,6 +262,12 @@ static int client_opts(const struct bc_cli_cmd *k, struct bc_cli_call *a,
 	      .arg = "x,y,z",
 	      .help = "move the copy by x,y,z (default: on the\n"
 	              "original)"}},
+	    {BC_CLI_O_ANY,
+	     {.name = "any",
+	      .kind = BC_OPT_FLAG,
+	      .dst = &a->any,
+	      .help = "the session's newest change, whoever made it\n"
+	              "(the session's owner or presenter only)"}},
 	    {BC_CLI_O_JSON,
 	     {.name = "json",
 	      .kind = BC_OPT_FLAG,

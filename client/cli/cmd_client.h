@@ -1,8 +1,8 @@
 /*
  * The `blobcast` subcommands that talk to a blobcastd through libblobcast:
  * load, edit, camera, present, follow, snapshot, watch, bench-latency,
- * nodes, scene, delete, sessions, undo, redo and the modelling verbs add,
- * remove, move, wrap and duplicate. main.c calls the first
+ * nodes, scene, delete, sessions, undo, redo, history and the modelling
+ * verbs add, remove, move, wrap and duplicate. main.c calls the first
  * two functions; the rest is shared by the commands' files (cmd_client.c
  * parses the options, client_common.c holds the helpers).
  */
@@ -68,6 +68,7 @@ enum {
 	BC_CLI_O_AT = 1u << 20,
 	BC_CLI_O_CHILD = 1u << 21,
 	BC_CLI_O_OFFSET = 1u << 22,
+	BC_CLI_O_ANY = 1u << 23,
 };
 #define BC_CLI_O_CAMERA                                                        \
 	(BC_CLI_O_EYE | BC_CLI_O_TARGET | BC_CLI_O_UP | BC_CLI_O_FOV)
@@ -90,6 +91,7 @@ struct bc_cli_call {
 	uint32_t tile; /* snapshot --tile: tile edge, 0: as the size needs */
 	enum bc_proto_encoding encoding;
 	bool interacting, json;
+	bool any; /* undo, redo --any: the session's change, whoever made it */
 	uint8_t downscale;
 	/* The modelling verbs (cmd_model.c): --parent (0: not given), and
 	 * --position, --at, --child, --offset as typed (NULL: not given). */
@@ -139,6 +141,7 @@ extern const struct bc_cli_cmd bc_cli_cmd_remove;
 extern const struct bc_cli_cmd bc_cli_cmd_move;
 extern const struct bc_cli_cmd bc_cli_cmd_wrap;
 extern const struct bc_cli_cmd bc_cli_cmd_duplicate;
+extern const struct bc_cli_cmd bc_cli_cmd_history;
 
 /* Prints a failure of the server or the connection (on c, NULL while
  * connecting) and what to do about it; returns its exit status

@@ -1,16 +1,20 @@
 /*
- * `blobcast load|edit|camera|undo|redo`: the client commands that change a
- * session, each as an editor: a whole scene file, one node's parameters,
- * the session's saved camera, or the newest change taken back and applied
- * again. Each waits for the server's answer and prints the edit order it
- * gave the change.
+ * `blobcast load|edit|camera|undo|redo|history`: the client commands that
+ * change a session, each as an editor: a whole scene file, one node's
+ * parameters, the session's saved camera, or a change taken back and
+ * applied again; and the undo history they act on (as a viewer). Each waits for
+ * the server's answer and prints the edit order it gave the change.
  */
 #include "cmd_client.h"
 
 #include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <time.h>
+
+#include <jansson.h>
 
 #include "blobcast/alloc.h"
 #include "blobcast/client.h"
@@ -215,7 +219,7 @@ const struct bc_cli_cmd bc_cli_cmd_camera = {
         "values.",
     .run = run_camera};
 
-/* ---- undo, redo ---------------------------------------------------------- */
+/* ---- undo, redo, history ----------------------------------------------- */
 
 static int run_undo(struct bc_cli_call *a)
 {
@@ -223,12 +227,23 @@ static int run_undo(struct bc_cli_call *a)
 	struct bc_errinfo ei = {0};
 	struct bc_client_undone u;
 	bool redo = strcmp(a->cmd, "redo") == 0;
-	int status;
+	int status, rc;
 	if ((status = bc_cli_open_session(a, BC_PROTO_ROLE_EDITOR,
 	                                  BC_CLIENT_JOIN_EXISTING, &c))) {
 		goto out;
 	}
-	if (bc_client_undo(c, redo, &u, &ei)) {
+	/* Without --any: this name's own change (or, from a server without
+	 * per-person undo, the session's, as such a server does). */
+	rc = a->any ? bc_client_undo_session(c, redo, &u, &ei)
+	            : bc_client_undo(c, redo, &u, &ei);
+	if (rc == BC_EPERM && a->any) {
+		/* Not a token's role: the server named who may (the owner
+		 * or the presenter). */
+		fprintf(stderr, "blobcast %s: %s (EPERM)\n", a->cmd, ei.msg);
+		status = BC_CLI_EXIT_FAIL;
+		goto out;
+	}
+	if (rc) {
 		status = bc_cli_failed(a, c, NULL, &ei);
 		goto out;
 	}
@@ -240,30 +255,147 @@ out:
 	return status;
 }
 
+#define UNDO_WHO                                                               \
+	"Whose change: the connection's client name (--name, default\n"        \
+	"\"blobcast-cli\") is the person, since every run joins anew: runs\n"  \
+	"with the same --name share one history with a page or viewer of\n"    \
+	"that name. A change another member has since built on (changed the\n" \
+	"same node, or the subtree around it) is skipped and stays; when\n"    \
+	"only such changes are left the server refuses (exit status 1, "       \
+	"ESTATE)"                                                              \
+	"\nnaming the change built on it. --any takes the session's newest\n"  \
+	"change whoever made it; only the session's owner (the name that\n"    \
+	"created it) or its presenter may (EPERM otherwise). The history\n"    \
+	"survives restarts and keeps 100 steps ('blobcast history')."
+
 const struct bc_cli_cmd bc_cli_cmd_undo = {
     .name = "undo",
-    .opts = BC_CLI_O_SESSION,
+    .opts = BC_CLI_O_SESSION | BC_CLI_O_ANY,
     .min_pos = 0,
     .max_pos = 0,
-    .synopsis = "--session NAME",
-    .summary = "take back the session's newest change, whoever made it",
-    .help =
-        "Undoes the newest change of session NAME that is not undone yet:\n"
-        "a parameter edit, a structural edit, or a whole drag. It is applied\n"
-        "as an edit of its own, seen by every member, and prints\n"
-        "  undid edit ORDER by \"AUTHOR\": edit order NEW\n"
-        "Exit status 1 with ESTATE when there is nothing to undo (the\n"
-        "history starts at the last load or restart, 100 steps deep).",
+    .synopsis = "--session NAME [--name WHO] [--any]",
+    .summary = "take back your newest change (--any: anyone's)",
+    .help = "Undoes the newest change of yours in session NAME that is not\n"
+            "undone yet: a parameter edit, a structural edit, or a whole\n"
+            "drag. It is applied as an edit of its own, seen by every\n"
+            "member, and prints\n"
+            "  undid edit ORDER by \"AUTHOR\": edit order NEW\n" UNDO_WHO
+            "\nExample: blobcast undo --session review --name alice",
     .run = run_undo};
 
 const struct bc_cli_cmd bc_cli_cmd_redo = {
     .name = "redo",
-    .opts = BC_CLI_O_SESSION,
+    .opts = BC_CLI_O_SESSION | BC_CLI_O_ANY,
     .min_pos = 0,
     .max_pos = 0,
-    .synopsis = "--session NAME",
-    .summary = "apply again the change undone last",
-    .help =
-        "Redoes the change undone last in session NAME, as 'undo' takes it\n"
-        "back; a new edit in between leaves nothing to redo.",
+    .synopsis = "--session NAME [--name WHO] [--any]",
+    .summary = "apply again your change undone last (--any: anyone's)",
+    .help = "Redoes your change undone last in session NAME, as 'undo' takes\n"
+            "it back; a new edit of yours in between leaves nothing to\n"
+            "redo.\n" UNDO_WHO,
     .run = run_undo};
+
+/* "2026-12-03 16:20:05" (UTC) of Unix ms, or "-" when unknown. */
+static void when(char *out, size_t n, uint64_t ms)
+{
+	time_t s = (time_t)(ms / 1000u);
+	struct tm tm;
+	if (!ms || !gmtime_r(&s, &tm) ||
+	    !strftime(out, n, "%Y-%m-%d %H:%M:%S", &tm)) {
+		snprintf(out, n, "-");
+	}
+}
+
+static int print_history_json(const struct bc_client_change *h, size_t n,
+                              uint64_t order)
+{
+	json_t *arr = json_array(), *doc;
+	char *text;
+	for (size_t i = 0; arr && i < n; i++) {
+		json_array_append_new(
+		    arr, json_pack("{s:I,s:I,s:I,s:s,s:s,s:s,s:b,s:b}", "order",
+		                   (json_int_t)h[i].order, "time_ms",
+		                   (json_int_t)h[i].time_ms, "built_on",
+		                   (json_int_t)h[i].built_on, "state",
+		                   h[i].undone ? "undone" : "applied", "author",
+		                   h[i].author, "what", h[i].what, "yours",
+		                   h[i].yours, "next", h[i].next));
+	}
+	doc =
+	    json_pack("{s:I,s:o}", "order", (json_int_t)order, "changes", arr);
+	if (!doc || !(text = json_dumps(doc, JSON_INDENT(2)))) {
+		json_decref(doc);
+		fprintf(stderr, "blobcast history: out of memory\n");
+		return BC_CLI_EXIT_FAIL;
+	}
+	printf("%s\n", text);
+	free(text);
+	json_decref(doc);
+	return 0;
+}
+
+static int run_history(struct bc_cli_call *a)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	struct bc_client_change *h = NULL;
+	size_t n = 0;
+	uint64_t order = 0;
+	int status;
+	if ((status = bc_cli_open_session(a, BC_PROTO_ROLE_VIEWER,
+	                                  BC_CLIENT_JOIN_EXISTING, &c))) {
+		goto out;
+	}
+	if (bc_client_history(c, &h, &n, &order, &ei)) {
+		status = bc_cli_failed(a, c, NULL, &ei);
+		goto out;
+	}
+	if (a->json) {
+		status = print_history_json(h, n, order);
+		goto out;
+	}
+	printf("session %s: edit order %llu, %zu change%s kept, newest first\n",
+	       a->session, (unsigned long long)order, n, n == 1 ? "" : "s");
+	for (size_t i = 0; i < n; i++) {
+		char t[32], on[48] = "";
+		when(t, sizeof(t), h[i].time_ms);
+		if (h[i].built_on) {
+			snprintf(on, sizeof(on), " built on by %llu",
+			         (unsigned long long)h[i].built_on);
+		}
+		printf("%6llu  %s  %-7s  %-16s  %s%s%s\n",
+		       (unsigned long long)h[i].order, t,
+		       h[i].undone ? "undone" : "applied",
+		       h[i].author[0] ? h[i].author : "(anonymous)", h[i].what,
+		       on,
+		       h[i].next
+		           ? (h[i].undone ? "  <- your redo" : "  <- your undo")
+		           : "");
+	}
+out:
+	bc_free(h);
+	bc_client_destroy(c);
+	return status;
+}
+
+const struct bc_cli_cmd bc_cli_cmd_history = {
+    .name = "history",
+    .opts = BC_CLI_O_SESSION | BC_CLI_O_JSON,
+    .min_pos = 0,
+    .max_pos = 0,
+    .synopsis = "--session NAME [--name WHO] [--json]",
+    .summary = "list the recent changes: who, what, when, undoable by whom",
+    .help =
+        "Lists the changes of session NAME that undo and redo can still\n"
+        "take, newest first (at most 200: 100 applied, 100 undone):\n"
+        "  ORDER  DATE TIME (UTC)  applied|undone  AUTHOR  WHAT\n"
+        "followed by \"built on by N\" when a later change N was made on top\n"
+        "of it (its author's undo skips it) and \"<- your undo\" (redo) on\n"
+        "the change 'blobcast undo' ('redo') with this --name would take.\n"
+        "Joins as a viewer. --json prints {\"order\", \"changes\": "
+        "[{\"order\",\n"
+        "\"time_ms\", \"built_on\", \"state\", \"author\", \"what\", "
+        "\"yours\",\n"
+        "\"next\"}]}.\n"
+        "Example: blobcast history --session review --name alice",
+    .run = run_history};

@@ -30,7 +30,7 @@ static const char *const client_cmds[] = {
     "load",          "edit",     "camera",  "snapshot",  "watch",
     "bench-latency", "nodes",    "scene",   "delete",    "undo",
     "redo",          "sessions", "present", "follow",    "add",
-    "remove",        "move",     "wrap",    "duplicate",
+    "remove",        "move",     "wrap",    "duplicate", "history",
 };
 
 /* The commands that run here, and help. */

@@ -1712,8 +1712,21 @@ int bc_client_delete_session(struct bc_client *c, const char *name,
 	return rc;
 }
 
-int bc_client_undo(struct bc_client *c, bool redo, struct bc_client_undone *out,
-                   struct bc_errinfo *ei)
+/* BC_ENOTSUP unless the server granted per-person undo and HISTORY. */
+static int need_history(const struct bc_client *c, struct bc_errinfo *ei)
+{
+	if (c->info.features & BC_PROTO_FEATURE_HISTORY) {
+		return 0;
+	}
+	return bc_errinfo_set(ei, BC_ENOTSUP,
+	                      "the server has no per-person undo or history "
+	                      "(it is older than this client): only the "
+	                      "session's undo is there");
+}
+
+/* UNDO or REDO of scope (BC_PROTO_UNDO_*; 0: no scope byte). */
+static int undo_with(struct bc_client *c, bool redo, uint8_t scope,
+                     struct bc_client_undone *out, struct bc_errinfo *ei)
 {
 	struct bc_msg m = {.type = redo ? BC_MSG_REDO : BC_MSG_UNDO};
 	const struct bc_msg_edit_applied *a = &m.edit_applied;
@@ -1722,6 +1735,10 @@ int bc_client_undo(struct bc_client *c, bool redo, struct bc_client_undone *out,
 	if (out) {
 		memset(out, 0, sizeof(*out));
 	}
+	if (scope && (rc = need_history(c, ei))) {
+		return rc;
+	}
+	m.undo.scope = scope;
 	if ((rc = send_or_say(c, &m, &seq, ei)) ||
 	    (rc = bc_client_wait(c, BC_MSG_EDIT_APPLIED, seq, &m, 0, ei))) {
 		return rc;
@@ -1731,6 +1748,63 @@ int bc_client_undo(struct bc_client *c, bool redo, struct bc_client_undone *out,
 		out->target_order = a->target_order;
 		copy_str(out->target_author, sizeof(out->target_author),
 		         a->target_author);
+	}
+	return 0;
+}
+
+int bc_client_undo(struct bc_client *c, bool redo, struct bc_client_undone *out,
+                   struct bc_errinfo *ei)
+{
+	return undo_with(c, redo, BC_PROTO_UNDO_DEFAULT, out, ei);
+}
+
+int bc_client_undo_mine(struct bc_client *c, bool redo,
+                        struct bc_client_undone *out, struct bc_errinfo *ei)
+{
+	return undo_with(c, redo, BC_PROTO_UNDO_MINE, out, ei);
+}
+
+int bc_client_undo_session(struct bc_client *c, bool redo,
+                           struct bc_client_undone *out, struct bc_errinfo *ei)
+{
+	return undo_with(c, redo, BC_PROTO_UNDO_SESSION, out, ei);
+}
+
+int bc_client_history(struct bc_client *c, struct bc_client_change **out,
+                      size_t *n, uint64_t *order, struct bc_errinfo *ei)
+{
+	struct bc_msg m = {.type = BC_MSG_HISTORY_GET};
+	struct bc_client_change *list = NULL;
+	uint32_t seq;
+	int rc;
+	*out = NULL;
+	*n = 0;
+	if (order) {
+		*order = 0;
+	}
+	if ((rc = need_history(c, ei)) || (rc = send_or_say(c, &m, &seq, ei)) ||
+	    (rc = bc_client_wait(c, BC_MSG_HISTORY, seq, &m, 0, ei))) {
+		return rc;
+	}
+	if (m.history.nentries &&
+	    !(list = bc_calloc(m.history.nentries, sizeof(*list)))) {
+		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+	}
+	for (uint32_t i = 0; i < m.history.nentries; i++) {
+		const struct bc_proto_history_entry *e = &m.history.entries[i];
+		list[i].order = e->order;
+		list[i].time_ms = e->time_ms;
+		list[i].built_on = e->built_on;
+		list[i].undone = e->state == BC_PROTO_HISTORY_UNDONE;
+		list[i].yours = (e->flags & BC_PROTO_HISTORY_YOURS) != 0;
+		list[i].next = (e->flags & BC_PROTO_HISTORY_NEXT) != 0;
+		copy_str(list[i].author, sizeof(list[i].author), e->author);
+		copy_str(list[i].what, sizeof(list[i].what), e->what);
+	}
+	*out = list;
+	*n = m.history.nentries;
+	if (order) {
+		*order = m.history.order;
 	}
 	return 0;
 }

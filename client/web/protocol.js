@@ -39,6 +39,8 @@ export const LIMITS = Object.freeze({
 	MAX_ERROR_TEXT: 1024,
 	MAX_MEMBERS: 64,
 	MAX_SESSIONS_LISTED: 1024,
+	MAX_HISTORY: 200,
+	MAX_HISTORY_TEXT: 128,
 	MAX_DIM: 8192,
 	MIN_FRAME_BYTES: 64 * 1024,
 	MAX_RECTS: 4096,
@@ -66,7 +68,8 @@ export const MSG = Object.freeze({
 	PICK_RESULT: 19, SNAPSHOT: 20, GET_STATS: 21, STATS: 22,
 	SESSION_DELETE: 23, UNDO: 24, REDO: 25, SESSION_LIST: 26, SESSIONS: 27,
 	PRESENT: 28, FOLLOW: 29, PRESENTER: 30, FOLLOW_CAMERA: 31,
-	SESSION_CAMERA: 32, SESSION_CAMERA_SET: 33,
+	SESSION_CAMERA: 32, SESSION_CAMERA_SET: 33, HISTORY_GET: 34,
+	HISTORY: 35,
 });
 
 /* Header flag bits; each is defined for some types only. */
@@ -99,7 +102,17 @@ export const STATS_PARTS = Object.freeze({ LOAD: 0x01, RESET: 0x02, TLS: 0x04,
  * server sends each only to a client that announced it in HELLO, and
  * WELCOME says which it grants. */
 export const FEATURE = Object.freeze({ LEVELS: 0x01, UNDO: 0x02,
-	PRESENT: 0x04, KINDS: 0x08, TILES: 0x10, ALL: 0x1f });
+	PRESENT: 0x04, KINDS: 0x08, TILES: 0x10, HISTORY: 0x20, ALL: 0x3f });
+
+/* UNDO and REDO's optional scope byte (PROTOCOL.md 7.20), only for a
+ * client granted HISTORY: its own newest change, or the session's (the
+ * owner or presenter). Without the byte a client granted HISTORY undoes
+ * its own. */
+export const UNDO_SCOPE = Object.freeze({ MINE: 1, SESSION: 2 });
+/* HISTORY entries (PROTOCOL.md 7.26): state and flags. */
+export const HISTORY_STATE = Object.freeze({ APPLIED: 1, UNDONE: 2 });
+export const HISTORY_FLAG = Object.freeze({ YOURS: 0x01, NEXT: 0x02,
+	ALL: 0x03 });
 
 /* The number of plane rectangles (0..2) a FRAME with these flags carries
  * after its colour rectangle. */
@@ -267,8 +280,8 @@ T(20, 'SNAPSHOT', FROM_CLIENT, 0, 14);
 T(21, 'GET_STATS', FROM_CLIENT, 0, 1);
 T(22, 'STATS', FROM_SERVER, 0, 64 + 44 + 9); /* + load and TLS sections */
 T(23, 'SESSION_DELETE', FROM_CLIENT, 0, strMax(L.MAX_NAME));
-T(24, 'UNDO', FROM_CLIENT, 0, 0);
-T(25, 'REDO', FROM_CLIENT, 0, 0);
+T(24, 'UNDO', FROM_CLIENT, 0, 1);
+T(25, 'REDO', FROM_CLIENT, 0, 1);
 T(26, 'SESSION_LIST', FROM_CLIENT, 0, 0);
 T(27, 'SESSIONS', FROM_SERVER, 0, 2 + L.MAX_SESSIONS_LISTED *
 	(strMax(L.MAX_NAME) + 2 + 4 + 8 + 8 + 1));
@@ -279,6 +292,9 @@ T(30, 'PRESENTER', FROM_SERVER, 0, 5);
 T(31, 'FOLLOW_CAMERA', FROM_SERVER, FLAG.INTERACTING, 4 + CAMERA_SIZE);
 T(32, 'SESSION_CAMERA', FROM_CLIENT, 0, CAMERA_SIZE);
 T(33, 'SESSION_CAMERA_SET', FROM_SERVER, 0, 8 + 4 + 4 + CAMERA_SIZE);
+T(34, 'HISTORY_GET', FROM_CLIENT, 0, 0);
+T(35, 'HISTORY', FROM_SERVER, 0, 8 + 2 + L.MAX_HISTORY *
+	(8 + 8 + 8 + 1 + 1 + strMax(L.MAX_NAME) + strMax(L.MAX_HISTORY_TEXT)));
 
 function typeInfo(type) {
 	return Number.isInteger(type) ? TYPES[type] ?? null : null;
@@ -372,6 +388,7 @@ const bitsFinite = (u) => (u & 0x7f800000) !== 0x7f800000;
  * checks (the same numbers as protocol/decode.c). */
 const MEMBER_MIN = 7; /* u32 id, u8 role, empty name */
 const SESSION_ENTRY_MIN = 26; /* a 1-byte name and the fixed fields */
+const HISTORY_ENTRY_MIN = 30; /* the fixed fields and two empty strings */
 /* SESSIONS entry flags: loaded in the server's memory; details known. */
 export const SESSION_FLAG = Object.freeze({ LOADED: 0x01, KNOWN: 0x02,
 	ALL: 0x03 });
@@ -821,10 +838,49 @@ function decBody(d, m) {
 		break;
 	case MSG.OK:
 	case MSG.SESSION_LEAVE:
+	case MSG.SESSION_LIST:
+	case MSG.HISTORY_GET:
+		break;
 	case MSG.UNDO:
 	case MSG.REDO:
-	case MSG.SESSION_LIST:
+		/* scope is optional: the first text's UNDO is empty. */
+		if (d.left()) {
+			m.scope = d.u8('scope');
+			if (m.scope < UNDO_SCOPE.MINE ||
+			    m.scope > UNDO_SCOPE.SESSION) {
+				d.fail('EENUM', `scope ${m.scope} is unknown`);
+			}
+		}
 		break;
+	case MSG.HISTORY: {
+		m.order = d.u64('order');
+		const n = d.u16('entry_count');
+		d.count('entry_count', n, 0, L.MAX_HISTORY, HISTORY_ENTRY_MIN);
+		m.entries = [];
+		for (let i = 0; i < n; i++) {
+			const e = {};
+			e.order = d.u64('entry.order');
+			if (e.order === 0n) {
+				d.fail('ERANGE', 'entry.order is 0');
+			}
+			e.time_ms = d.u64('entry.time_ms');
+			e.built_on = d.u64('entry.built_on');
+			e.state = d.u8('entry.state');
+			if (e.state < HISTORY_STATE.APPLIED ||
+			    e.state > HISTORY_STATE.UNDONE) {
+				d.fail('EENUM', `entry.state ${e.state} is unknown`);
+			}
+			e.flags = d.u8('entry.flags');
+			if (e.flags & ~HISTORY_FLAG.ALL) {
+				d.fail('EPROTO_FLAGS', 'entry flags ' + e.flags +
+					' has undefined bits');
+			}
+			e.author = d.str('entry.author', 0, L.MAX_NAME);
+			e.what = d.str('entry.what', 0, L.MAX_HISTORY_TEXT);
+			m.entries.push(e);
+		}
+		break;
+	}
 	case MSG.SESSION_CREATE:
 	case MSG.SESSION_JOIN:
 		m.role = d.role('role');
@@ -1484,9 +1540,29 @@ function encBody(w, m) {
 		break;
 	case MSG.OK:
 	case MSG.SESSION_LEAVE:
+	case MSG.SESSION_LIST:
+	case MSG.HISTORY_GET:
+		break;
 	case MSG.UNDO:
 	case MSG.REDO:
-	case MSG.SESSION_LIST:
+		/* Left out when absent: the first text's empty UNDO. */
+		if (m.scope !== undefined) {
+			w.u8('scope', m.scope, 'EENUM');
+		}
+		break;
+	case MSG.HISTORY:
+		w.u64('order', m.order);
+		w.u16('entry_count', w.count('entries', m.entries,
+			L.MAX_HISTORY));
+		for (const e of m.entries) {
+			w.u64('entry.order', e.order);
+			w.u64('entry.time_ms', e.time_ms);
+			w.u64('entry.built_on', e.built_on);
+			w.u8('entry.state', e.state, 'EENUM');
+			w.u8('entry.flags', e.flags, 'EPROTO_FLAGS');
+			w.str('entry.author', e.author);
+			w.str('entry.what', e.what);
+		}
 		break;
 	case MSG.SESSION_CREATE:
 	case MSG.SESSION_JOIN:
@@ -1645,6 +1721,48 @@ function encBody(w, m) {
 	default:
 		throw new ProtoError('EPROTO_TYPE', `encode: type ${m.type}`);
 	}
+}
+
+/* UNDO (or REDO with redo) as bytes, for Ctrl+Z (Ctrl+Shift+Z):
+ * encodeUndo({ mine: true }) takes back the sender's own newest change,
+ * encodeUndo({ session: true }) the session's newest (the owner or
+ * presenter only; others get ERROR EPERM), encodeUndo() the first text's
+ * empty UNDO. A scope needs FEATURE.HISTORY granted in WELCOME. */
+export function encodeUndo({ redo = false, mine = false, session = false,
+	seq = 0 } = {}) {
+	const m = { type: redo ? MSG.REDO : MSG.UNDO, seq };
+	if (mine && session) {
+		throw new ProtoError('EINVAL', 'encodeUndo: mine or session');
+	}
+	if (mine || session) {
+		m.scope = mine ? UNDO_SCOPE.MINE : UNDO_SCOPE.SESSION;
+	}
+	return encode(m);
+}
+
+/* HISTORY_GET as bytes (PROTOCOL.md 7.26; FEATURE.HISTORY granted). */
+export function encodeHistoryGet({ seq = 0 } = {}) {
+	return encode({ type: MSG.HISTORY_GET, seq });
+}
+
+/* A decoded HISTORY message as rows for a history panel, newest first:
+ * { order, time (a Date, or null), author, what, undone, yours, next,
+ * builtOn } -- order and builtOn as BigInt (builtOn 0n: nothing built on
+ * it; while not 0n its author's own undo skips it). */
+export function decodeHistory(m) {
+	if (m.type !== MSG.HISTORY) {
+		throw new ProtoError('EPROTO_TYPE', 'decodeHistory: not HISTORY');
+	}
+	return m.entries.map((e) => ({
+		order: e.order,
+		time: e.time_ms ? new Date(Number(e.time_ms)) : null,
+		author: e.author,
+		what: e.what,
+		undone: e.state === HISTORY_STATE.UNDONE,
+		yours: (e.flags & HISTORY_FLAG.YOURS) !== 0,
+		next: (e.flags & HISTORY_FLAG.NEXT) !== 0,
+		builtOn: e.built_on,
+	}));
 }
 
 /* Encodes one message, header included. Returns a new Uint8Array; throws a

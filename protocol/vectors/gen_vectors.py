@@ -29,12 +29,15 @@ TYPES = {
     "SESSION_DELETE": 23, "UNDO": 24, "REDO": 25, "SESSION_LIST": 26,
     "SESSIONS": 27, "PRESENT": 28, "FOLLOW": 29, "PRESENTER": 30,
     "FOLLOW_CAMERA": 31, "SESSION_CAMERA": 32, "SESSION_CAMERA_SET": 33,
+    "HISTORY_GET": 34, "HISTORY": 35,
 }
 MAX_PAYLOAD = 64 * 1024 * 1024
 HELLO_MAX_PAYLOAD = 4096
 MAX_NAME, MAX_TOKEN, MAX_ERROR_TEXT = 64, 1024, 1024
 MAX_MEMBERS, MAX_DIM, MAX_RECTS = 64, 8192, 4096
 MAX_SESSIONS_LISTED = 1024
+# HISTORY (section 7.26): entries listed, description bytes.
+MAX_HISTORY, MAX_HISTORY_TEXT = 200, 128
 MAX_EDIT_OPS, MAX_SET_FIELDS = 1024, 14
 MIN_FRAME_BYTES = 65536
 # FRAME header flags (section 2): STILL, SNAPSHOT, INCOMPLETE, the
@@ -78,11 +81,14 @@ TYPE_MAX = {
     "EDIT": MAX_PAYLOAD, "EDIT_APPLIED": MAX_PAYLOAD,
     "CAMERA": 40, "VIEW": 8, "FRAME": MAX_PAYLOAD, "PICK": 4,
     "PICK_RESULT": 24, "SNAPSHOT": 14, "GET_STATS": 1, "STATS": 64 + 44 + 9,
-    "SESSION_DELETE": strmax(MAX_NAME), "UNDO": 0, "REDO": 0,
+    "SESSION_DELETE": strmax(MAX_NAME), "UNDO": 1, "REDO": 1,
     "SESSION_LIST": 0,
     "SESSIONS": 2 + MAX_SESSIONS_LISTED * (strmax(MAX_NAME) + 2 + 4 + 8 + 8 + 1),
     "PRESENT": 1, "FOLLOW": 1, "PRESENTER": 5, "FOLLOW_CAMERA": 44,
     "SESSION_CAMERA": 40, "SESSION_CAMERA_SET": 56,
+    "HISTORY_GET": 0,
+    "HISTORY": 8 + 2 + MAX_HISTORY * (8 + 8 + 8 + 1 + 1 + strmax(MAX_NAME)
+                                      + strmax(MAX_HISTORY_TEXT)),
 }
 
 # ---- Byte helpers --------------------------------------------------------------
@@ -245,6 +251,23 @@ def w_sessions(f):
         w_session_entry(e) for e in f["sessions"])
 
 
+def w_undo(f):
+    # The scope byte is optional (section 7.20): absent, the first text's
+    # empty UNDO and REDO.
+    return u8(f["scope"]) if "scope" in f else b""
+
+
+def w_history_entry(e):
+    return (u64(int(e["order"])) + u64(int(e["time_ms"]))
+            + u64(int(e["built_on"])) + u8(e["state"]) + u8(e["flags"])
+            + sstr(e["author"]) + sstr(e["what"]))
+
+
+def w_history(f):
+    return u64(int(f["order"])) + u16(len(f["entries"])) + b"".join(
+        w_history_entry(e) for e in f["entries"])
+
+
 def w_session_info(f):
     b = (u32(f["session_id"]) + u32(f["member_id"]) + u8(f["role"])
          + sstr(f["name"]) + u16(len(f["members"])))
@@ -399,11 +422,12 @@ WRITERS = {
     "VIEW": w_view, "FRAME": w_frame, "PICK": w_pick,
     "PICK_RESULT": w_pick_result, "SNAPSHOT": w_snapshot,
     "GET_STATS": w_get_stats, "STATS": w_stats,
-    "SESSION_DELETE": w_session_delete, "UNDO": w_empty, "REDO": w_empty,
+    "SESSION_DELETE": w_session_delete, "UNDO": w_undo, "REDO": w_undo,
     "SESSION_LIST": w_empty, "SESSIONS": w_sessions,
     "PRESENT": w_toggle, "FOLLOW": w_toggle, "PRESENTER": w_presenter,
     "FOLLOW_CAMERA": w_follow_camera, "SESSION_CAMERA": w_camera,
     "SESSION_CAMERA_SET": w_session_camera_set,
+    "HISTORY_GET": w_empty, "HISTORY": w_history,
 }
 
 # ---- Vector tables -----------------------------------------------------------
@@ -569,8 +593,8 @@ def gen_welcome():
     t.badp("max_dim 8193", wl(max_dim=8193), "ERANGE")
     t.badp("max_members 65", wl(max_members=65), "ERANGE")
     t.badp("max_edit_ops 0", wl(max_edit_ops=0), "ERANGE")
-    t.ok("every feature of this text granted", dict(base, features=0x1f))
-    t.badp("a feature this text does not define", wl(features=0x20),
+    t.ok("every feature of this text granted", dict(base, features=0x3f))
+    t.badp("a feature this text does not define", wl(features=0x40),
            "EPROTO_FLAGS")
     t.badp("features cut short (2 bytes)", w_welcome(old) + b"\x0f\x00",
            "EPROTO_TRUNCATED")
@@ -622,6 +646,68 @@ def gen_empty(name, side):
         t.bad("refused by a server before HELLO", frame(name, b""),
               "ESTATE", reader=PRE_HELLO)
     t.dump(name.lower() + ".json")
+
+
+def gen_undo(name):
+    t = Table(name)
+    t.ok("empty: the first text's form", {}, seq=12)
+    t.ok("scope MINE", dict(scope=1), seq=13)
+    t.ok("scope SESSION", dict(scope=2), seq=14)
+    t.badp("scope 0", u8(0), "EENUM")
+    t.badp("scope 3", u8(3), "EENUM")
+    t.badp("scope 255", u8(255), "EENUM")
+    t.bad("two bytes: over the type's maximum", frame(name, u8(1) + u8(1)),
+          "EPROTO_LENGTH")
+    t.bad("length = type maximum + 1", header(name, 2), "EPROTO_LENGTH")
+    t.bad("length 2^32-1", header(name, 2 ** 32 - 1), "EPROTO_LENGTH")
+    t.bad("stream ends inside the payload", frame(name, u8(1))[:-1],
+          "EPROTO_TRUNCATED")
+    t.bad("sent by the wrong side", frame(name, u8(1)), "EPROTO_TYPE",
+          reader=CLIENT)
+    t.bad("refused by a server before HELLO", frame(name, b""), "ESTATE",
+          reader=PRE_HELLO)
+    t.dump(name.lower() + ".json")
+
+
+def gen_history():
+    t = Table("HISTORY")
+    mine = dict(order="41", time_ms="1764547200000", built_on="0", state=1,
+                flags=3, author="alice", what="SET node 12 translate")
+    built = dict(order="40", time_ms="1764547100000", built_on="42",
+                 state=1, flags=1, author="alice", what="REMOVE node 7")
+    undone = dict(order="39", time_ms="0", built_on="0", state=2, flags=0,
+                  author="", what="INSERT under node 3")
+    p = t.ok("three changes, newest first",
+             dict(order="44", entries=[mine, built, undone]), seq=21)
+    t.ok("no history", dict(order="0", entries=[]), seq=22)
+    t.ok("largest: 200 entries with the longest strings",
+         dict(order=str(2 ** 64 - 1),
+              entries=[dict(mine, order=str(i + 1), author="a" * 64,
+                            what="w" * MAX_HISTORY_TEXT)
+                       for i in range(MAX_HISTORY)]), seq=23)
+    t.common(p)
+    t.badp("entry_count 201", u64(1) + u16(201), "EPROTO_COUNT")
+    t.badp("entry_count larger than the bytes left",
+           u64(1) + u16(2) + w_history_entry(mine), "EPROTO_COUNT")
+    t.badp("entry order 0",
+           u64(1) + u16(1) + w_history_entry(dict(mine, order="0")),
+           "ERANGE")
+    t.badp("state 0", u64(1) + u16(1) + w_history_entry(dict(mine, state=0)),
+           "EENUM")
+    t.badp("state 3", u64(1) + u16(1) + w_history_entry(dict(mine, state=3)),
+           "EENUM")
+    t.badp("flags with bit 2",
+           u64(1) + u16(1) + w_history_entry(dict(mine, flags=4)),
+           "EPROTO_FLAGS")
+    t.badp("author of 65 bytes",
+           u64(1) + u16(1) + w_history_entry(dict(mine, author="a" * 65)),
+           "EPROTO_LENGTH")
+    t.badp("description of 129 bytes",
+           u64(1) + u16(1) + w_history_entry(dict(mine, what="w" * 129))
+           , "EPROTO_LENGTH")
+    t.bad("refused by a server reader", frame("HISTORY", p), "EPROTO_TYPE",
+          reader=SERVER)
+    t.dump("history.json")
 
 
 def gen_session(name):
@@ -1425,7 +1511,7 @@ def gen_framing():
     bad("version 255, header cut after it", MAGIC + u8(255),
         "EPROTO_VERSION")
     bad("type 0", header(0, 0), "EPROTO_TYPE")
-    bad("type 34", header(34, 0), "EPROTO_TYPE")
+    bad("type 36", header(36, 0), "EPROTO_TYPE")
     bad("type 255", header(255, 0), "EPROTO_TYPE")
     bad("unknown type is reported before the rest of the header",
         MAGIC + u8(1) + u8(99), "EPROTO_TYPE")
@@ -1673,8 +1759,8 @@ def main():
     gen_get_stats()
     gen_stats()
     gen_session_delete()
-    gen_empty("UNDO", "client")
-    gen_empty("REDO", "client")
+    gen_undo("UNDO")
+    gen_undo("REDO")
     gen_empty("SESSION_LIST", "client")
     gen_sessions()
     gen_toggle("PRESENT")
@@ -1683,6 +1769,8 @@ def main():
     gen_follow_camera()
     gen_session_camera()
     gen_session_camera_set()
+    gen_empty("HISTORY_GET", "client")
+    gen_history()
     gen_framing()
     gen_scene()
     gen_earlier()

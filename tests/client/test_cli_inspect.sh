@@ -161,8 +161,8 @@ watcher=$!
 wait_for '^frame 1 ' "$tmp/watch3" || fail "watch: no first frame"
 "$BLOBCAST" $S edit --name carol --session default 50 radius=0.2 \
   > /dev/null || fail "edit as carol"
-"$BLOBCAST" $S undo --name dave --session default > "$tmp/undo" 2>&1 ||
-  fail "undo as dave: $(cat "$tmp/undo")"
+"$BLOBCAST" $S undo --name carol --session default > "$tmp/undo" 2>&1 ||
+  fail "undo as carol: $(cat "$tmp/undo")"
 "$BLOBCAST" $S redo --name carol --session default > "$tmp/redo" 2>&1 ||
   fail "redo as carol: $(cat "$tmp/redo")"
 wait_for '^redo ' "$tmp/watch3" || fail "watch: no redo line"
@@ -182,8 +182,8 @@ if [ -z "$e" ] || [ -z "$u" ] || [ -z "$r" ]; then
 else
   grep -qE "^edit order=$e by=\"carol\" member=[0-9]+ ops=1\$" \
     "$tmp/watch3" || fail "watch: no line for carol's edit $e"
-  grep -qE "^undo order=$u of=$e by=\"dave\" author=\"carol\" member=[0-9]+ ops=[0-9]+\$" \
-    "$tmp/watch3" || fail "watch: no undo line naming dave, carol and edit $e"
+  grep -qE "^undo order=$u of=$e by=\"carol\" author=\"carol\" member=[0-9]+ ops=[0-9]+\$" \
+    "$tmp/watch3" || fail "watch: no undo line naming carol and edit $e"
   grep -qE "^redo order=$r of=$e by=\"carol\" author=\"carol\" member=[0-9]+ ops=[0-9]+\$" \
     "$tmp/watch3" || fail "watch: no redo line naming carol and edit $e"
   grep -qE '^edit order=('"$u|$r"') ' "$tmp/watch3" &&

@@ -393,6 +393,33 @@ static void build(enum bc_msg_type type, const json_t *f, struct bc_msg *m)
 	case BC_MSG_GET_STATS:
 		m->get_stats.parts = (uint8_t)jint(f, "parts");
 		break;
+	case BC_MSG_UNDO:
+	case BC_MSG_REDO:
+		m->undo.scope = (uint8_t)jint(f, "scope");
+		break;
+	case BC_MSG_HISTORY: {
+		static struct bc_proto_history_entry list[BC_PROTO_MAX_HISTORY];
+		json_t *arr = json_object_get(f, "entries");
+		size_t i;
+		json_t *e;
+		json_array_foreach(arr, i, e)
+		{
+			if (i >= BC_PROTO_MAX_HISTORY) {
+				break;
+			}
+			list[i].order = jint(e, "order");
+			list[i].time_ms = jint(e, "time_ms");
+			list[i].built_on = jint(e, "built_on");
+			list[i].state = (uint8_t)jint(e, "state");
+			list[i].flags = (uint8_t)jint(e, "flags");
+			list[i].author = jstr(e, "author");
+			list[i].what = jstr(e, "what");
+		}
+		m->history.order = jint(f, "order");
+		m->history.nentries = (uint16_t)json_array_size(arr);
+		m->history.entries = list;
+		break;
+	}
 	default:
 		break;
 	}
@@ -598,6 +625,28 @@ static int msg_eq(const struct bc_msg *a, const struct bc_msg *b)
 		return memcmp(&a->stats, &b->stats, sizeof(a->stats)) == 0;
 	case BC_MSG_GET_STATS:
 		return a->get_stats.parts == b->get_stats.parts;
+	case BC_MSG_UNDO:
+	case BC_MSG_REDO:
+		return a->undo.scope == b->undo.scope;
+	case BC_MSG_HISTORY:
+		if (a->history.order != b->history.order ||
+		    a->history.nentries != b->history.nentries) {
+			return 0;
+		}
+		for (unsigned i = 0; i < a->history.nentries; i++) {
+			const struct bc_proto_history_entry *x =
+			    &a->history.entries[i];
+			const struct bc_proto_history_entry *y =
+			    &b->history.entries[i];
+			if (x->order != y->order || x->time_ms != y->time_ms ||
+			    x->built_on != y->built_on ||
+			    x->state != y->state || x->flags != y->flags ||
+			    !str_eq(x->author, y->author) ||
+			    !str_eq(x->what, y->what)) {
+				return 0;
+			}
+		}
+		return 1;
 	case BC_MSG_SESSION_DELETE:
 		return str_eq(a->session_delete.name, b->session_delete.name);
 	case BC_MSG_SESSIONS:

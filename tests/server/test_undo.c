@@ -5,9 +5,11 @@
  * EDIT_APPLIED with the edit module -- equals a late joiner's SCENE_STATE,
  * and the scene equals what it was before (after) the changes undone
  * (redone). Undos name the edit and author they take back; a new edit
- * leaves nothing to redo; a restart replays the undos from the journal.
- * The undo and redo of each kind of structural edit carry the subtrees of
- * the change, not the scene, to the members and to the journal.
+ * by the author of what was undone leaves nothing to redo; a restart replays
+ * the undos from the journal. The editors do not announce HISTORY, so their
+ * UNDO is the session's. The undo and redo of each kind of structural edit
+ * carry the subtrees of the change, not the scene, to the members and to the
+ * journal.
  */
 #include <dirent.h>
 
@@ -88,7 +90,11 @@ static void join(struct editor *e, const struct daemon *d, const char *name,
                  bool create)
 {
 	REQUIRE(conn_open(&e->c, d) == 0);
-	REQUIRE(conn_hello(&e->c, name) == 0);
+	/* Without HISTORY: UNDO takes the session's newest change, whoever
+	 * made it (PROTOCOL.md 7.20); test_undo_mine covers the rest. */
+	REQUIRE(conn_hello_as(&e->c, name, BC_PROTO_ENCODINGS_ALL, true,
+	                      BC_PROTO_FEATURES_ALL &
+	                          ~BC_PROTO_FEATURE_HISTORY) == 0);
 	REQUIRE(conn_join(&e->c, "u", BC_PROTO_ROLE_EDITOR, create) == 0);
 	e->member = e->c.m.session_info.member_id;
 	REQUIRE(conn_expect(&e->c, BC_MSG_SCENE_STATE, 5000) == 1);
@@ -310,11 +316,12 @@ static void two_editors_undo_and_redo_each_other(void)
 	REQUIRE(bc_tree_get(alice.mirror, 9001, &p, &op));
 	CHECK(!p.has_color);
 
-	/* A new edit leaves nothing to redo. */
+	/* A new edit by the author of the change undone leaves nothing to
+	 * redo (PROTOCOL.md 7.20: it drops its author's undone steps). */
 	v[0] = -0.3f, v[1] = 0.1f, v[2] = 0.0f;
-	REQUIRE(await_applied(&bob,
-	                      send_set(&bob, prim1, BC_PROTO_FIELD_TRANSLATE, v,
-	                               3, false),
+	REQUIRE(await_applied(&alice,
+	                      send_set(&alice, prim1, BC_PROTO_FIELD_TRANSLATE,
+	                               v, 3, false),
 	                      10000) >= 0);
 	seq = send_undo(&alice, true);
 	CHECK(await_applied(&alice, seq, 5000) == -1);

@@ -33,7 +33,7 @@ const fileOf = (name) => name.toLowerCase() + '.json';
  * vectors and are BigInt here; byte ranges travel as hex. */
 const U64 = new Set(['order', 'stamp', 'uptime_ms', 'frames', 'bytes',
 	'target_order', 'last_edit_ms', 'view_bytes', 'view_cap',
-	'session_render_us', 'tls_not_after_ms']);
+	'session_render_us', 'tls_not_after_ms', 'time_ms', 'built_on']);
 const BYTES = new Set(['scene', 'subtree', 'data']);
 
 function fromJson(v, key) {
@@ -170,7 +170,7 @@ test('vectors: no unknown files, every type covered', () => {
 		assert.ok(known.has(f), `unknown vector file ${f}`);
 	}
 	assert.equal(files.length, typeNames.length + 2);
-	assert.equal(typeNames.length, 33);
+	assert.equal(typeNames.length, 35);
 });
 
 /* ---- Properties the page relies on -------------------------------------- */
@@ -294,7 +294,7 @@ test('encoder refuses what the decoder refuses', () => {
 		[{ ...cam, fov_y_deg: 180 }, 'ERANGE'],
 		[{ ...cam, eye: [0, 5] }, 'EPROTO_COUNT'],
 		[{ ...cam, flags: 2 }, 'EPROTO_FLAGS'],
-		[{ ...cam, type: 34 }, 'EPROTO_TYPE'],
+		[{ ...cam, type: 36 }, 'EPROTO_TYPE'],
 		[{ ...cam, type: 0 }, 'EPROTO_TYPE'],
 		[{ ...cam, seq: -1 }, 'ERANGE'],
 		[{ type: P.MSG.SESSION_JOIN, role: 3, name: 'x' }, 'EENUM'],
@@ -419,7 +419,7 @@ test('error names and numbers match error.h', () => {
 	assert.equal(P.errText(31), 'string not valid UTF-8 or contains NUL');
 	assert.equal(new P.ProtoError('EDEPTH', 'x').errno, 21);
 	assert.equal(P.typeName(17), 'FRAME');
-	assert.equal(P.typeName(34), null);
+	assert.equal(P.typeName(36), null);
 });
 
 test('utf8Check: the strict rules of the C codec', () => {
@@ -542,6 +542,33 @@ test('applyOps: a REMOVE that leaves an operator one child collapses it', () => 
 	assert.equal(s.byId.has(1), false);
 	assert.deepEqual(P.scanScene(P.encodeScene(s)), { has_camera: false,
 		nodes: 1, prims: 1, ops: 0, depth: 1 });
+});
+
+test('encodeUndo, encodeHistoryGet, decodeHistory: what the page sends and shows', () => {
+	const mine = P.encodeUndo({ mine: true, seq: 7 });
+	const m = P.decodePayload(P.MSG.UNDO, 0, 7, mine.subarray(16));
+	assert.equal(m.scope, P.UNDO_SCOPE.MINE);
+	assert.equal(mine[5], P.MSG.UNDO);
+	const redo = P.encodeUndo({ redo: true, session: true });
+	assert.equal(redo[5], P.MSG.REDO);
+	assert.equal(redo[16], P.UNDO_SCOPE.SESSION);
+	/* No scope: the first text's empty UNDO. */
+	assert.equal(P.encodeUndo().length, 16);
+	assert.throws(() => P.encodeUndo({ mine: true, session: true }),
+		(e) => e.code === 'EINVAL');
+	assert.equal(P.encodeHistoryGet({ seq: 3 })[5], P.MSG.HISTORY_GET);
+	const h = load('history.json').valid[0];
+	const bytes = unhex(h.hex);
+	const rows = P.decodeHistory(P.decodePayload(P.MSG.HISTORY, 0, 1,
+		bytes.subarray(16)));
+	assert.equal(rows.length, 3);
+	assert.deepEqual(rows[0], { order: 41n,
+		time: new Date(1764547200000), author: 'alice',
+		what: 'SET node 12 translate', undone: false, yours: true,
+		next: true, builtOn: 0n });
+	assert.equal(rows[1].builtOn, 42n);
+	assert.equal(rows[2].undone, true);
+	assert.equal(rows[2].time, null);
 });
 
 test('totals', () => {

@@ -77,6 +77,8 @@ enum bc_msg_type {
 	BC_MSG_FOLLOW_CAMERA = 31,      /* server -> client */
 	BC_MSG_SESSION_CAMERA = 32,     /* client -> server */
 	BC_MSG_SESSION_CAMERA_SET = 33, /* server -> client */
+	BC_MSG_HISTORY_GET = 34,        /* client -> server */
+	BC_MSG_HISTORY = 35,            /* server -> client */
 	BC_MSG_COUNT
 };
 
@@ -150,7 +152,11 @@ enum bc_msg_type {
 /* Not something the server sends but a request form it accepts: granted,
  * the client may send SNAPSHOT's tile form (PROTOCOL.md 7.17). */
 #define BC_PROTO_FEATURE_TILES 0x10u
-#define BC_PROTO_FEATURES_ALL 0x1fu
+/* A request form too: granted, the client may send UNDO and REDO with a
+ * scope byte (its own changes, or the session's) and HISTORY_GET
+ * (PROTOCOL.md 7.20, 7.26). */
+#define BC_PROTO_FEATURE_HISTORY 0x20u
+#define BC_PROTO_FEATURES_ALL 0x3fu
 /* The features that decide what a server may send. */
 #define BC_PROTO_FEATURES_SENT                                                 \
 	(BC_PROTO_FEATURE_LEVELS | BC_PROTO_FEATURE_UNDO |                     \
@@ -310,6 +316,50 @@ struct bc_proto_session_entry {
 struct bc_msg_sessions {
 	uint16_t nsessions; /* 0..BC_PROTO_MAX_SESSIONS_LISTED */
 	const struct bc_proto_session_entry *sessions;
+};
+
+/* UNDO and REDO's optional scope byte (PROTOCOL.md 7.20). 0: the byte is
+ * left out (a client not granted HISTORY: the session's newest change; one
+ * granted it: its own). */
+enum bc_proto_undo_scope {
+	BC_PROTO_UNDO_DEFAULT = 0,
+	BC_PROTO_UNDO_MINE = 1,    /* the sender's own newest change */
+	BC_PROTO_UNDO_SESSION = 2, /* the session's, the owner or presenter */
+	BC_PROTO_UNDO_SCOPE_COUNT
+};
+
+struct bc_msg_undo {
+	uint8_t scope; /* enum bc_proto_undo_scope */
+};
+
+/* One change of a HISTORY answer (PROTOCOL.md 7.26). */
+enum bc_proto_history_state {
+	BC_PROTO_HISTORY_INVALID = 0,
+	BC_PROTO_HISTORY_APPLIED = 1, /* in the scene: it can be undone */
+	BC_PROTO_HISTORY_UNDONE = 2,  /* taken back: it can be redone */
+	BC_PROTO_HISTORY_STATE_COUNT
+};
+/* HISTORY entry flags: the change is the receiver's own (its UNDO or REDO
+ * of scope MINE may take it); it is the one the receiver's own UNDO
+ * (applied) or REDO (undone) takes now. Other bits: EPROTO_FLAGS. */
+#define BC_PROTO_HISTORY_YOURS 0x01u
+#define BC_PROTO_HISTORY_NEXT 0x02u
+#define BC_PROTO_HISTORY_FLAGS_ALL 0x03u
+
+struct bc_proto_history_entry {
+	uint64_t order;    /* the edit that made the change, >= 1 */
+	uint64_t time_ms;  /* when, Unix ms; 0: unknown */
+	uint64_t built_on; /* the newest later change built on it, or 0 */
+	uint8_t state;     /* enum bc_proto_history_state */
+	uint8_t flags;     /* BC_PROTO_HISTORY_* */
+	struct bc_proto_str author; /* its author's client name */
+	struct bc_proto_str what;   /* a short description */
+};
+
+struct bc_msg_history {
+	uint64_t order;    /* the session's order number now */
+	uint16_t nentries; /* 0..BC_PROTO_MAX_HISTORY, newest first */
+	const struct bc_proto_history_entry *entries;
 };
 
 struct bc_proto_member {
@@ -506,7 +556,8 @@ struct bc_msg_session_camera_set {
  * buffer (zero copy), arrays (members, ops, fields, rects) into storage the
  * reader owns. Both stay valid until the next call of any function on that
  * reader. For encoding, the caller points them at its own memory. Types
- * without payload (OK, SESSION_LEAVE, UNDO, REDO) use no union member. */
+ * without payload (OK, SESSION_LEAVE, SESSION_LIST, HISTORY_GET) use no
+ * union member. */
 struct bc_msg {
 	enum bc_msg_type type;
 	uint16_t flags;
@@ -537,6 +588,8 @@ struct bc_msg {
 		struct bc_msg_follow_camera follow_camera;
 		struct bc_msg_camera session_camera; /* SESSION_CAMERA */
 		struct bc_msg_session_camera_set session_camera_set;
+		struct bc_msg_undo undo; /* UNDO and REDO */
+		struct bc_msg_history history;
 	};
 };
 
@@ -563,6 +616,8 @@ struct bc_proto_store {
 	size_t members_cap, ops_cap, fields_cap, rects_cap;
 	struct bc_proto_session_entry *sessions;
 	size_t sessions_cap;
+	struct bc_proto_history_entry *history;
+	size_t history_cap;
 };
 
 struct bc_proto_reader {

@@ -67,6 +67,13 @@
  * entries of at most 89 bytes keep the answer under 92 KB. */
 #define BC_PROTO_MAX_SESSIONS_LISTED 1024u
 
+/* Changes one HISTORY answer lists: a server keeps at most 100 steps to
+ * undo and 100 to redo (PROTOCOL.md 7.20), and a list longer than that is
+ * more than a person reads. */
+#define BC_PROTO_MAX_HISTORY 200u
+/* A HISTORY entry's description ("SET node 12 translate, rotate"). */
+#define BC_PROTO_MAX_HISTORY_TEXT 128u
+
 /* ---- Frames and views ------------------------------------------------------
  */
 

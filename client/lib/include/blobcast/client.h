@@ -287,11 +287,47 @@ struct bc_client_undone {
 	char target_author[BC_PROTO_MAX_NAME + 1]; /* that edit's author */
 };
 
-/* Undoes (redo false) or redoes the session's newest change, whoever made
- * it, and waits until it is applied; *out (may be NULL) says what it was.
- * Needs the editor role. BC_ESTATE when there is nothing to undo (redo). */
+/* Undoes (redo false) or redoes a change and waits until it is applied;
+ * *out (may be NULL) says what it was. Needs the editor role. Against a
+ * server that granted per-person undo (BC_PROTO_FEATURE_HISTORY) it is
+ * bc_client_undo_mine; against an older one, the session's newest change,
+ * whoever made it. BC_ESTATE when there is nothing to undo (redo). */
 BC_API int bc_client_undo(struct bc_client *c, bool redo,
                           struct bc_client_undone *out, struct bc_errinfo *ei);
+/* Undoes (redoes) this client's own newest change -- its client name's,
+ * whichever connection made it (PROTOCOL.md 7.20) -- skipping changes
+ * another member has since built on. BC_ESTATE when none is left (the
+ * text names a change built on it and its author), BC_ENOTSUP when the
+ * server has no per-person undo. */
+BC_API int bc_client_undo_mine(struct bc_client *c, bool redo,
+                               struct bc_client_undone *out,
+                               struct bc_errinfo *ei);
+/* Undoes (redoes) the session's newest change, whoever made it: only for
+ * the session's owner (the client name that created it) or its presenter,
+ * others get BC_EPERM; BC_ENOTSUP as above. */
+BC_API int bc_client_undo_session(struct bc_client *c, bool redo,
+                                  struct bc_client_undone *out,
+                                  struct bc_errinfo *ei);
+
+/* One change of the session's undo history (bc_client_history). */
+struct bc_client_change {
+	uint64_t order;    /* the edit that made it: what undo names */
+	uint64_t time_ms;  /* when, Unix ms; 0: unknown */
+	uint64_t built_on; /* newest later change built on it; 0: none */
+	bool undone;       /* taken back (can be redone), else applied */
+	bool yours;        /* this client's own (its client name's) */
+	bool next;         /* the one this client's own undo/redo takes */
+	char author[BC_PROTO_MAX_NAME + 1];
+	char what[BC_PROTO_MAX_HISTORY_TEXT + 1]; /* "SET node 12 translate" */
+};
+
+/* The session's undo history, newest first, at most BC_PROTO_MAX_HISTORY
+ * (HISTORY_GET): *out receives a bc_malloc'ed array of *n entries (NULL
+ * when none) the caller bc_free's; *order (may be NULL) the session's
+ * order number. Any role, in a session; BC_ENOTSUP when the server has no
+ * per-person undo. */
+BC_API int bc_client_history(struct bc_client *c, struct bc_client_change **out,
+                             size_t *n, uint64_t *order, struct bc_errinfo *ei);
 
 /* One session of the server (bc_client_sessions). */
 struct bc_client_session {
