@@ -34,12 +34,15 @@
  *    unless `create=1` or the user asks to create it) stop the page with
  *    a notice instead of retrying; a lost connection is retried with a
  *    doubling delay and the session joined again.
- *  - Undo and redo: Ctrl-Z sends UNDO, Ctrl-Shift-Z or Ctrl-Y REDO (as do
- *    the two header buttons; editors only, and not while typing in a
- *    field). The server answers every member with an EDIT_APPLIED
- *    flagged UNDO or REDO whose operations the mirror applies like any
- *    edit, and the page says who took back whose edit; ESTATE means
- *    there was nothing to undo (redo).
+ *  - Undo and redo, per person: Ctrl-Z sends UNDO (this member's own
+ *    newest change that nobody built on), Ctrl-Shift-Z or Ctrl-Y REDO,
+ *    Ctrl-Alt-Z UNDO with the session scope (the session's newest change,
+ *    for its owner or the presenter; PROTOCOL.md 7.20), as do the header
+ *    buttons; editors only, and not while typing in a field. The server
+ *    answers every member with an EDIT_APPLIED flagged UNDO or REDO whose
+ *    operations the mirror applies like any edit, and the page says who
+ *    took back whose edit; ESTATE's text (nothing left, or the change
+ *    someone built on) is shown as the daemon words it.
  *  - Presenting and following: the "present" button (or Shift-F) makes
  *    this page the session's presenter (PRESENT); "follow" (or F) makes
  *    its camera track the presenter's (FOLLOW; the server sends each of
@@ -612,7 +615,7 @@ class App {
 			this.info = m;
 			$('session').textContent = `session ${m.name}` +
 				(m.role === P.ROLE.VIEWER ? ' · view only' : '');
-			for (const id of ['undobtn', 'redobtn']) {
+			for (const id of ['undobtn', 'redobtn', 'undoanybtn']) {
 				$(id).disabled = m.role !== P.ROLE.EDITOR;
 			}
 			this.renderPicture();
@@ -683,9 +686,15 @@ class App {
 		this.outliner.refused(m);
 		const undo = this.undoSent.get(m.seq);
 		this.undoSent.delete(m.seq);
-		if (undo && m.code === P.ERR.ESTATE) {
+		if (undo) {
 			this.editSent.delete(m.seq);
-			this.showNotice(`nothing to ${undo}`);
+			/* The daemon says why: nothing of mine left, my newest
+			 * change built on by someone else's (ESTATE), or an undo
+			 * of the session's change from neither its owner nor the
+			 * presenter (EPERM). */
+			this.showNotice(m.code === P.ERR.ESTATE
+				? m.text || `nothing to ${undo}`
+				: `${P.errName(m.code)}: ${m.text}`);
 			return;
 		}
 		this.say(`${P.errName(m.code)}: ${m.text}`);
@@ -1012,12 +1021,23 @@ class App {
 
 	/* Sends UNDO (redo false) or REDO without waiting: the answer is
 	 * the EDIT_APPLIED every member gets, or ERROR ESTATE. */
-	undo(redo) {
+	undo(redo, session = false) {
 		if (!this.info || this.info.role !== P.ROLE.EDITOR) {
 			this.say('viewers cannot undo');
 			return;
 		}
-		const seq = this.conn.send(redo ? P.MSG.REDO : P.MSG.UNDO, {});
+		/* A daemon that granted HISTORY undoes the member's own change
+		 * for an empty UNDO; the session's newest needs the scope byte
+		 * (owner or presenter only: others get EPERM, shown as is). */
+		const history = ((this.welcome?.features ?? 0) &
+			P.FEATURE.HISTORY) !== 0;
+		if (session && !history) {
+			this.say('this daemon has no per-person undo: undo takes ' +
+				"back the session's newest change already");
+			return;
+		}
+		const seq = this.conn.send(redo ? P.MSG.REDO : P.MSG.UNDO,
+			session ? { scope: P.UNDO_SCOPE.SESSION } : {});
 		if (seq) {
 			this.undoSent.set(seq, redo ? 'redo' : 'undo');
 			this.editSent.set(seq, { sentAt: performance.now() });
@@ -1193,14 +1213,23 @@ class App {
 	installUndo() {
 		$('undobtn').addEventListener('click', () => this.undo(false));
 		$('redobtn').addEventListener('click', () => this.undo(true));
+		$('undoanybtn').addEventListener('click', () =>
+			this.undo(false, true));
 		document.addEventListener('keydown', (e) => {
-			if (!(e.ctrlKey || e.metaKey) || e.altKey) {
+			if (!(e.ctrlKey || e.metaKey)) {
 				return;
 			}
 			const t = e.target;
 			if (t && (t.isContentEditable || ['INPUT', 'TEXTAREA',
 				'SELECT'].includes(t.tagName))) {
 				return; /* the field's own undo */
+			}
+			if (e.altKey) {
+				if (e.code === 'KeyZ' && !e.shiftKey) {
+					e.preventDefault();
+					this.undo(false, true);
+				}
+				return;
 			}
 			const k = e.key.toLowerCase();
 			if (k === 'z' || (k === 'y' && !e.shiftKey)) {
