@@ -66,6 +66,7 @@ import { layout, unaryLayout, unaryRange, unaryValue } from './prims.js';
 import { kindName } from './model.js';
 import { Outliner } from './outliner.js';
 import { Review } from './review.js';
+import { HistoryPanel } from './history.js';
 
 /* ---- Small vector helpers ------------------------------------------------ */
 
@@ -428,6 +429,7 @@ class App {
 		this.installPicture();
 		this.outliner = new Outliner(this);
 		this.review = new Review(this); /* review.js: toolbar, sessions */
+		this.history = new HistoryPanel(this); /* history.js */
 		new ResizeObserver(() => this.resize()).observe($('stage'));
 		setInterval(() => this.tick(), 250);
 		this.conn.open();
@@ -591,7 +593,7 @@ class App {
 	}
 
 	handle(m) {
-		if (this.review.saw(m)) {
+		if (this.review.saw(m) || this.history.saw(m)) {
 			return;
 		}
 		/* The answers to a picture's tiles are its own, not frames of
@@ -659,6 +661,7 @@ class App {
 			break;
 		case P.MSG.EDIT_APPLIED:
 			this.editApplied(m);
+			this.history.changed();
 			break;
 		case P.MSG.FRAME:
 			this.frames.push(m, performance.now());
@@ -1833,3 +1836,4 @@ window.blobcast = {
 		.getContext('2d').getImageData(x, y, w, h).data),
 };
 Object.assign(window.blobcast, app.review.api());
+window.blobcast.history = () => app.history.state();

@@ -15,6 +15,8 @@
  *    it: refused (EPERM) for alice until she presents, then it takes
  *    back bob's change;
  *  - Ctrl-Z with nothing of alice's left: the daemon's "nothing to undo";
+ *  - the History panel lists the changes newest first (author, what,
+ *    undone, alice's own marked) and, while open, follows a new edit;
  *  - Ctrl-Z typed in the token field is the field's own: nothing is sent.
  * Exit status: 0 passed, 1 failed, 77 skipped (the message names what is
  * missing). Usage: node tests/web/undo.mjs --blobcastd PATH --blobcast PATH
@@ -185,6 +187,33 @@ try {
 	await alice.keyboard.press('Control+z');
 	await expect(alice, 'Ctrl-Z with nothing left', p.id, p.translate,
 		"nothing to undo: no change of yours is left");
+
+	/* The History panel: who, what, applied or undone, whose. */
+	await alice.click('#historypanel summary', { position: { x: 4, y: 6 } });
+	const h = await until(alice, 'the history listed', () => {
+		const st = window.blobcast.history();
+		return st.open && st.rows.length ? st : null;
+	});
+	/* Kept: bob's undone b3 and alice's undone a2 (a new edit empties
+	 * its author's redo steps, so the earlier ones are gone). */
+	assert.equal(h.rows.length, 2, JSON.stringify(h.rows));
+	const row = (o) => h.rows.find((r) => r.order === String(o));
+	assert.equal(h.rows[0].order, String(b3), 'newest first');
+	assert.deepEqual([row(b3).author, row(b3).undone, row(b3).yours,
+		row(b3).what], ['bob', true, false, `SET node ${q.id} translate`]);
+	assert.deepEqual([row(a2).author, row(a2).undone, row(a2).yours,
+		row(a2).next], ['alice', true, true, true]);
+	assert.ok(row(b3).time > 0, 'a time');
+	assert.equal(await alice.locator('#historylist li').count(),
+		h.rows.length, 'a row each');
+	assert.match(await alice.textContent(
+		`#historylist li[data-order="${a2}"]`),
+	/alice \(you\).*undone · ← your redo/);
+	step(`History: ${h.rows.length} changes, newest bob's ${b3} (undone)`);
+	const b4 = await move(bob, q.id, qMoved);
+	await until(alice, 'the open panel follows an edit', (o) => window
+		.blobcast.history().rows[0]?.order === o, String(b4));
+	step(`the open panel shows bob's next edit ${b4} by itself`);
 
 	/* In a text field Ctrl-Z belongs to the field. */
 	const page = alice;
