@@ -253,6 +253,8 @@ void bc_viewer_model_duplicate(struct bc_viewer_app *a);
 void bc_viewer_model_mark(struct bc_viewer_app *a);
 /* G: moves the selection under the marked operator. */
 void bc_viewer_model_regroup(struct bc_viewer_app *a);
+/* K (Shift: sharp <-> smooth): the selected operator's next kind. */
+void bc_viewer_model_op_kind(struct bc_viewer_app *a, bool smooth);
 /* Our EDIT seq was applied, or refused (ERROR): the action is over. */
 void bc_viewer_model_applied(struct bc_viewer_app *a, uint32_t seq);
 void bc_viewer_model_refused(struct bc_viewer_app *a, uint32_t seq);

@@ -378,6 +378,7 @@ static const char key_help[] =
     "click: select a shape   Up/Down: its parent / back down\n"
     "A: add (palette)   W: wrap the selection   D: duplicate\n"
     "Delete, X: delete   M: mark an operator   G: move under the mark\n"
+    "K: operator kind (Shift+K: sharp/smooth)\n"
     "R: the session's camera   Home: fit the scene (Shift: selection)\n"
     "Ctrl+Z: undo   Ctrl+Shift+Z, Ctrl+Y: redo\n"
     "F: follow the presenter   Shift+F: present\n"
@@ -560,6 +561,9 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
 		break;
 	case GLFW_KEY_G:
 		bc_viewer_model_regroup(a);
+		break;
+	case GLFW_KEY_K:
+		bc_viewer_model_op_kind(a, (mods & GLFW_MOD_SHIFT) != 0);
 		break;
 	case GLFW_KEY_F:
 		if (mods & GLFW_MOD_SHIFT) {

@@ -287,6 +287,49 @@ void bc_viewer_model_regroup(struct bc_viewer_app *a)
 	bc_viewer_status(a, "moved #%u under #%u", r.node, a->mark);
 }
 
+/* K: the next kind of the selected operator, union -> intersection ->
+ * difference -> union, keeping it sharp or smooth (and a smooth one's
+ * blend and range); Shift+K (smooth) turns it sharp or smooth, keeping
+ * its kind. */
+void bc_viewer_model_op_kind(struct bc_viewer_app *a, bool smooth)
+{
+	static const enum bc_op next[][2] = {
+	    [BC_OP_UNION] = {BC_OP_INTERSECTION, BC_OP_SMOOTH_UNION},
+	    [BC_OP_INTERSECTION] = {BC_OP_DIFFERENCE,
+	                            BC_OP_SMOOTH_INTERSECTION},
+	    [BC_OP_DIFFERENCE] = {BC_OP_UNION, BC_OP_SMOOTH_DIFFERENCE},
+	    [BC_OP_SMOOTH_UNION] = {BC_OP_SMOOTH_INTERSECTION, BC_OP_UNION},
+	    [BC_OP_SMOOTH_INTERSECTION] = {BC_OP_SMOOTH_DIFFERENCE,
+	                                   BC_OP_INTERSECTION},
+	    [BC_OP_SMOOTH_DIFFERENCE] = {BC_OP_SMOOTH_UNION, BC_OP_DIFFERENCE},
+	};
+	struct bc_errinfo ei = {0};
+	struct bc_model_result r;
+	struct bc_op_data op;
+	const struct bc_tree *t;
+	enum bc_op to;
+	if (!(t = ready(a, "changing an operator"))) {
+		return;
+	}
+	if (classify(t, a->selected, &op) != NODE_OP ||
+	    (size_t)op.kind >= sizeof(next) / sizeof(next[0])) {
+		bc_viewer_status(a, "K changes an operator's kind: select one "
+		                    "(Up selects the one above a shape)");
+		return;
+	}
+	to = next[op.kind][smooth ? 1 : 0];
+	/* Blend and range 0: the node's own when it stays smooth, the
+	 * defaults when it turns smooth (bc_model_set_operator). */
+	if (bc_model_set_operator(a->c, a->selected, bc_op_name(to), 0.0f, 0.0f,
+	                          &r, &ei)) {
+		refused(a, "changing an operator", &ei);
+		return;
+	}
+	sent(a, &r, a->selected, "operator");
+	bc_viewer_status(a, "#%u: %s -> %s", a->selected, bc_op_name(op.kind),
+	                 bc_op_name(to));
+}
+
 void bc_viewer_model_applied(struct bc_viewer_app *a, uint32_t seq)
 {
 	const struct bc_tree *t = bc_client_scene(a->c, NULL);

@@ -15,7 +15,10 @@
 #     daemon), Delete removes the copy, a click on the box and X remove it:
 #     the daemon's scene is the first one again; M with nothing selected
 #     unmarks union 4, and the picture is the first one again, pixel for
-#     pixel.
+#     pixel;
+#  5. K on union 4 makes it an intersection at the daemon, K twice more
+#     a difference and a union again; a click on the empty centre selects
+#     nothing.
 # Each action is one EDIT: one "model" line and one "applied" line with
 # its seq, and the verbose lines name the new ids.
 #
@@ -131,6 +134,20 @@ fi
 act remove key Delete
 pick 120 90 "$box"
 act remove key x
+# 5. K on union 4 (Up from the sphere at the top): intersection at the
+# daemon; K twice more: difference, then union again.
+pick 120 36 5
+[ -n "$ok" ] && { vl_poke key Up || ok=; }
+act operator key k
+if [ -n "$ok" ]; then
+  nodes kinded
+  [ "$(awk '$1 == 4 { print $2 }' "$tmp/kinded.txt")" = intersection ] ||
+    fail "K did not make union 4 an intersection: $(cat "$tmp/kinded.txt")"
+fi
+act operator key k
+act operator key k
+# A click on the empty centre selects nothing (no outline of union 4).
+pick 120 90 0
 # M with nothing selected unmarks union 4 (its blue outline goes).
 [ -n "$ok" ] && { vl_poke key m || ok=; }
 [ -n "$ok" ] && { vl_wait "$L" '^status no regroup parent marked$' 100 || ok=; }
@@ -142,12 +159,12 @@ if [ -n "$ok" ]; then
   "$CHECK" same blobcast-view-001.png blobcast-view-003.png 2 ||
     fail "the picture is not the first one"
   n=$(grep -c '^model ' "$L")
-  [ "$n" -eq 6 ] || fail "$n model actions, not 6"
+  [ "$n" -eq 9 ] || fail "$n model actions, not 9"
 fi
 vl_quit || ok=
 [ -n "$ok" ] || fail "a step failed"
 if [ "$failures" -eq 0 ]; then
-  echo "ok   add, wrap, regroup, duplicate and delete, one EDIT each"
+  echo "ok   add, wrap, regroup, duplicate, delete and operator kinds, one EDIT each"
   echo "all checks passed"
   exit 0
 fi
