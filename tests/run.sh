@@ -22,16 +22,29 @@ jobs=$(nproc)
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=0}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 
+# phase TITLE: starts a phase of the log, saying how long the last one
+# took, so that a slow run shows where its time went.
+phase_title=
+phase_start=0
+phase() {
+	if [ -n "$phase_title" ]; then
+		echo "   ($phase_title: $((SECONDS - phase_start)) s)"
+	fi
+	phase_title=$1
+	phase_start=$SECONDS
+	echo "== $1"
+}
+
 # Layout first: it takes a second and says which file to run clang-format
 # on (the formatting commit is listed in .git-blame-ignore-revs).
-echo "== format (.clang-format)"
+phase "format (.clang-format)"
 sh tests/check_format.sh
 
 # The tests build in folders of their own (build-asan, build-check), never
 # in build/, which is the user's (the quick start's daemon and CLI).
 release=build-check
 
-echo "== sanitizer build (ASan + UBSan, -Werror)"
+phase "sanitizer build (ASan + UBSan, -Werror)"
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
 	-DBLOBCAST_SANITIZE=ON -DBLOBCAST_WERROR=ON \
 	-DBLOBCAST_GPU_KIT_BUILD="$PWD/$release" >/dev/null
@@ -42,17 +55,17 @@ cmake --build build-asan -j "$jobs"
 # test_gpu_run use its programs. The test programs themselves are built
 # once, in the sanitizer build (also -O2 and -Werror): building them again
 # here took more than a third of this build's time.
-echo "== optimized build (-Werror, default generator)"
+phase "optimized build (-Werror, default generator)"
 cmake -S . -B "$release" -DCMAKE_BUILD_TYPE=Release \
 	-DBLOBCAST_WERROR=ON -DBLOBCAST_TESTS=OFF >/dev/null
 cmake --build "$release" -j "$jobs"
 
 if [ "$fuzz" = 1 ] && [ -f tests/fuzz/run.sh ]; then
-	echo "== fuzzing"
+	phase "fuzzing"
 	bash tests/fuzz/run.sh "${BLOBCAST_FUZZ_SECONDS:-20}"
 fi
 
-echo "== tests"
+phase "tests"
 if [ -n "$filter" ]; then
 	ctest --test-dir build-asan --output-on-failure -j "$jobs" -R "$filter"
 else
