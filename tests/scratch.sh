@@ -1,5 +1,6 @@
 # Sourced by the shell tests that run blobcastd (tests/client, tests/viewer):
-# the scratch folder, stopping the daemon and the exit traps, and fail().
+# the scratch folder, starting and stopping the daemon, the exit traps, fail()
+# and bc_need.
 #
 #   . "$(dirname "$0")/../scratch.sh"
 #   bc_scratch NAME [ON_EXIT]
@@ -44,4 +45,28 @@ bc_need() {
       exit 77
     fi
   done
+}
+
+# start_daemon ADDR: starts $BLOBCASTD on ADDR (CPU backend, data in
+# $tmp/data, log in $tmp/daemon.log), sets $daemon and $port; exits 1
+# with the log when it does not start.
+start_daemon() {
+  "$BLOBCASTD" --listen "$1" --data "$tmp/data" --backend cpu --log warn \
+    >> "$tmp/daemon.log" 2>&1 &
+  daemon=$!
+  port=
+  i=0
+  while [ $i -lt 100 ]; do
+    port=$(sed -n 's/^blobcastd: listening on 127\.0\.0\.1:\([0-9][0-9]*\)$/\1/p' \
+      "$tmp/daemon.log" | tail -n 1)
+    [ -n "$port" ] && break
+    kill -0 "$daemon" 2>/dev/null || break
+    sleep 0.1
+    i=$((i + 1))
+  done
+  if [ -z "$port" ]; then
+    echo "FAIL: blobcastd did not start"
+    sed 's/^/    /' "$tmp/daemon.log"
+    exit 1
+  fi
 }

@@ -27,28 +27,6 @@ bc_need "$BLOBCAST" "$BLOBCASTD"
 watcher=
 bc_scratch cli-inspect '[ -n "$watcher" ] && kill "$watcher" 2>/dev/null'
 
-# start_daemon ADDR: starts blobcastd on ADDR and sets $port.
-start_daemon() {
-  "$BLOBCASTD" --listen "$1" --data "$tmp/data" --backend cpu --log warn \
-    >> "$tmp/daemon.log" 2>&1 &
-  daemon=$!
-  port=
-  i=0
-  while [ $i -lt 100 ]; do
-    port=$(sed -n 's/^blobcastd: listening on 127\.0\.0\.1:\([0-9][0-9]*\)$/\1/p' \
-      "$tmp/daemon.log" | tail -n 1)
-    [ -n "$port" ] && break
-    kill -0 "$daemon" 2>/dev/null || break
-    sleep 0.1
-    i=$((i + 1))
-  done
-  if [ -z "$port" ]; then
-    echo "FAIL: blobcastd did not start"
-    sed 's/^/    /' "$tmp/daemon.log"
-    exit 1
-  fi
-}
-
 # wait_for PATTERN FILE [TENTHS]: waits until FILE has a line matching
 # PATTERN (grep -E); returns 1 after TENTHS/10 seconds (default 10 s).
 wait_for() {

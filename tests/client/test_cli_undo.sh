@@ -20,28 +20,6 @@ BLOBCASTD=${2:-}
 bc_need "$BLOBCAST" "$BLOBCASTD"
 bc_scratch cli-undo
 
-# start_daemon ADDR: starts blobcastd on ADDR and sets $port.
-start_daemon() {
-  "$BLOBCASTD" --listen "$1" --data "$tmp/data" --backend cpu --log warn \
-    >> "$tmp/daemon.log" 2>&1 &
-  daemon=$!
-  port=
-  i=0
-  while [ $i -lt 100 ]; do
-    port=$(sed -n 's/^blobcastd: listening on 127\.0\.0\.1:\([0-9][0-9]*\)$/\1/p' \
-      "$tmp/daemon.log" | tail -n 1)
-    [ -n "$port" ] && break
-    kill -0 "$daemon" 2>/dev/null || break
-    sleep 0.1
-    i=$((i + 1))
-  done
-  if [ -z "$port" ]; then
-    echo "FAIL: blobcastd did not start"
-    sed 's/^/    /' "$tmp/daemon.log"
-    exit 1
-  fi
-}
-
 start_daemon 127.0.0.1:0
 S="--server 127.0.0.1:$port"
 R="--session rev"
