@@ -46,18 +46,6 @@ static int cmp_cand(const void *a, const void *b)
 	return (x > y) - (x < y);
 }
 
-static void cross3(const float *a, const float *b, const float *c, double n[3])
-{
-	double u[3], v[3];
-	for (int x = 0; x < 3; x++) {
-		u[x] = (double)b[x] - a[x];
-		v[x] = (double)c[x] - a[x];
-	}
-	n[0] = u[1] * v[2] - u[2] * v[1];
-	n[1] = u[2] * v[0] - u[0] * v[2];
-	n[2] = u[0] * v[1] - u[1] * v[0];
-}
-
 struct pass {
 	struct bc_mesh *m;
 	uint32_t *off, *inc;    /* vertex -> incident triangles (CSR) */
@@ -81,11 +69,11 @@ static bool moves_ok(const struct pass *p, uint32_t u, uint32_t v)
 		for (int c = 0; c < 3; c++) {
 			q[c] = m->pos[t[c]];
 		}
-		cross3(q[0], q[1], q[2], n0);
+		bc_mesh_cross3(q[0], q[1], q[2], n0);
 		for (int c = 0; c < 3; c++) {
 			q[c] = m->pos[t[c] == v ? u : t[c]];
 		}
-		cross3(q[0], q[1], q[2], n1);
+		bc_mesh_cross3(q[0], q[1], q[2], n1);
 		double d = n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2];
 		/* Turned by less than 45 degrees. */
 		if (d <= 0.0 ||

@@ -7,6 +7,21 @@
 
 #include "blobcast/mesh.h"
 
+/* n = (b - a) x (c - a) in double: the normal of triangle a, b, c scaled by
+ * twice its area. */
+static inline void bc_mesh_cross3(const float *a, const float *b,
+                                  const float *c, double n[3])
+{
+	double u[3], v[3];
+	for (int x = 0; x < 3; x++) {
+		u[x] = (double)b[x] - a[x];
+		v[x] = (double)c[x] - a[x];
+	}
+	n[0] = u[1] * v[2] - u[2] * v[1];
+	n[1] = u[2] * v[0] - u[0] * v[2];
+	n[2] = u[0] * v[1] - u[1] * v[0];
+}
+
 /* Collapses edges shorter than max_len of the closed 2-manifold m, in at
  * most passes passes, keeping it a closed 2-manifold of the same topology
  * with no flat or flipped triangle (mesh_collapse.c says how); progress

@@ -7,7 +7,7 @@
  * beside its target and renamed over it, so a reader never sees half a
  * file.
  */
-#include "blobcast/mesh.h"
+#include "mesh_impl.h"
 
 #include <errno.h>
 #include <jansson.h>
@@ -68,16 +68,8 @@ static void put_u32(FILE *f, uint32_t u)
  * of two of its sides). */
 static void tri_normal(const struct bc_mesh *m, uint32_t i, double n[3])
 {
-	const float *a = m->pos[m->tri[i][0]], *b = m->pos[m->tri[i][1]],
-	            *c = m->pos[m->tri[i][2]];
-	double u[3], v[3];
-	for (int x = 0; x < 3; x++) {
-		u[x] = (double)b[x] - a[x];
-		v[x] = (double)c[x] - a[x];
-	}
-	n[0] = u[1] * v[2] - u[2] * v[1];
-	n[1] = u[2] * v[0] - u[0] * v[2];
-	n[2] = u[0] * v[1] - u[1] * v[0];
+	bc_mesh_cross3(m->pos[m->tri[i][0]], m->pos[m->tri[i][1]],
+	               m->pos[m->tri[i][2]], n);
 }
 
 static void write_obj(const struct bc_mesh *m, FILE *f)
