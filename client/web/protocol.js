@@ -102,7 +102,8 @@ export const STATS_PARTS = Object.freeze({ LOAD: 0x01, RESET: 0x02, TLS: 0x04,
  * server sends each only to a client that announced it in HELLO, and
  * WELCOME says which it grants. */
 export const FEATURE = Object.freeze({ LEVELS: 0x01, UNDO: 0x02,
-	PRESENT: 0x04, KINDS: 0x08, TILES: 0x10, HISTORY: 0x20, ALL: 0x3f });
+	PRESENT: 0x04, KINDS: 0x08, TILES: 0x10, HISTORY: 0x20, NAMES: 0x40,
+	ALL: 0x7f });
 
 /* UNDO and REDO's optional scope byte (PROTOCOL.md 7.20), only for a
  * client granted HISTORY: its own newest change, or the session's (the
@@ -165,7 +166,8 @@ export const ROLE = Object.freeze({ EDITOR: 1, VIEWER: 2 });
 export const ENC = Object.freeze({ JPEG: 1, PNG: 2, RAW: 3 });
 /* HELLO.encodings: bit (encoding - 1) set = the client decodes it. */
 export const ENCODINGS_ALL = 0x07;
-export const EDIT = Object.freeze({ SET: 1, INSERT: 2, REMOVE: 3, REPLACE: 4 });
+export const EDIT = Object.freeze({ SET: 1, INSERT: 2, REMOVE: 3, REPLACE: 4,
+	NAME: 5 });
 export const FIELD = Object.freeze({
 	TRANSLATE: 1, ROTATE: 2, COLOR: 3, PARAM0: 16,
 	BLEND: 32, RANGE: 33, OP_KIND: 34,
@@ -654,6 +656,12 @@ function decOps(d) {
 		case EDIT.REPLACE: {
 			const node = d.id('op.node');
 			ops.push({ kind, node, subtree: d.blob('op.subtree') });
+			break;
+		}
+		case EDIT.NAME: {
+			/* An empty name takes the node's name away. */
+			const node = d.id('op.node');
+			ops.push({ kind, node, name: d.str('op.name', 0, L.MAX_NAME) });
 			break;
 		}
 		default:
@@ -1484,6 +1492,10 @@ function encOps(w, ops) {
 			w.u32('op.node', op.node);
 			w.blob('op.subtree', op.subtree);
 			break;
+		case EDIT.NAME:
+			w.u32('op.node', op.node);
+			w.str('op.name', op.name);
+			break;
 		default:
 			throw new ProtoError('EENUM', `encode: op kind ${op.kind}`);
 		}
@@ -1802,8 +1814,9 @@ export function encode(m) {
 /* ---- The scene encoding (PROTOCOL.md section 8, owned by blobtree) ------ */
 
 /*
- * u8 flags (bit 0: a camera follows), [10 f32 camera: eye, target, up,
- * fov_y_deg], u32 node_count, then the nodes in pre-order:
+ * u8 flags (bit 0: a camera follows; bit 1: a names table follows the
+ * tree), [10 f32 camera: eye, target, up, fov_y_deg], u32 node_count,
+ * then the nodes in pre-order:
  *   primitive: u8 kind (1..32), u32 id, 3 f32 translate, 4 f32 rotate
  *              (quaternion x y z w), u8 has_color, [3 f32 color],
  *              u8 nfloats (the kind's count, at most 8), nfloats f32
@@ -1812,11 +1825,18 @@ export function encode(m) {
  *   unary:     u8 0x80 | kind (7..14: offset, onion, elongate, twist,
  *              bend, mirror, repeat, scale), u32 id, u8 nfloats (at most
  *              6), nfloats f32; exactly one child follows
+ * then, with flags bit 1, the names table: u32 name_count (1..node_count),
+ * (u32 id, str(64) name) x name_count, ids strictly increasing, each name
+ * 1..64 bytes of strict UTF-8 without NUL.
  * The checks and their order are those of bc_proto_scene_scan: what the
  * bytes alone decide. Each kind's exact float count, parameter ranges,
- * camera geometry and unique ids are the server's to check.
+ * camera geometry and unique ids are the server's to check; that a name's
+ * id is a node of the scene is parseScene's (ENONODE).
  */
+export const SCENE_FLAG = Object.freeze({ CAMERA: 0x01, NAMES: 0x02,
+	ALL: 0x03 });
 const NODE_MIN = 5; /* tag and id: the least any node takes */
+const NAME_ENTRY_MIN = 7; /* u32 id, u16 length, a one-byte name */
 const OP_TAG = 0x80;
 
 class SceneCur {
@@ -1826,6 +1846,7 @@ class SceneCur {
 			this.b.byteLength);
 		this.pos = 0;
 		this.node = 0;
+		this.where = null; /* "name 3" once in the names table */
 	}
 
 	left() {
@@ -1833,8 +1854,8 @@ class SceneCur {
 	}
 
 	fail(code, reason) {
-		throw new ProtoError(code,
-			`scene: node ${this.node}: ${reason} (byte ${this.pos})`);
+		throw new ProtoError(code, `scene: ${this.where ??
+			`node ${this.node}`}: ${reason} (byte ${this.pos})`);
 	}
 
 	need(n, what) {
@@ -1847,6 +1868,13 @@ class SceneCur {
 	u8(what) {
 		this.need(1, what);
 		return this.b[this.pos++];
+	}
+
+	u16(what) {
+		this.need(2, what);
+		const v = this.dv.getUint16(this.pos, true);
+		this.pos += 2;
+		return v;
 	}
 
 	u32(what) {
@@ -1927,20 +1955,67 @@ function scanPrim(s, tag, id) {
 	return { isOp: false, kind: tag, id, translate, rotate, color, params };
 }
 
+/* The names table after a tree of count nodes (PROTOCOL.md 8, check 6):
+ * [[id, name], ...] in the table's order. */
+function scanNames(s, count) {
+	s.where = 'names';
+	const n = s.u32('name_count');
+	if (n === 0 || n > count) {
+		s.fail('EPROTO_COUNT', `name_count ${n} is outside 1..${count} ` +
+			'(the node count)');
+	}
+	if (n > Math.floor(s.left() / NAME_ENTRY_MIN)) {
+		s.fail('EPROTO_COUNT', `name_count ${n} needs at least ` +
+			`${n * NAME_ENTRY_MIN} bytes, ${s.left()} left`);
+	}
+	const out = [];
+	let prev = 0;
+	for (let i = 0; i < n; i++) {
+		s.where = `name ${i}`;
+		const id = s.u32('id');
+		const len = s.u16('name length');
+		if (id === 0) {
+			s.fail('ERANGE', 'id 0 (a node to be numbered by the server ' +
+				'cannot be named)');
+		}
+		if (id <= prev) {
+			s.fail(id === prev ? 'EDUPID' : 'ERANGE', `id ${id} after ` +
+				`${prev}: the ids must be strictly increasing`);
+		}
+		prev = id;
+		if (len === 0 || len > L.MAX_NAME) {
+			s.fail('EPROTO_LENGTH', `name length ${len} is outside ` +
+				`1..${L.MAX_NAME}`);
+		}
+		s.need(len, 'name');
+		const bad = utf8Check(s.b, s.pos, len);
+		if (bad < len) {
+			s.pos += bad;
+			s.fail('ESTRING', `byte ${bad} of the name breaks UTF-8 or ` +
+				'is NUL');
+		}
+		out.push([id, utf8dec.decode(s.b.subarray(s.pos, s.pos + len))]);
+		s.pos += len;
+	}
+	s.where = null;
+	return out;
+}
+
 /* Walks scene bytes, checking them, and calls visit(node) for each node in
  * pre-order when visit is given. Iterative, one pass, no recursion.
- * Returns { has_camera, camera, nodes, prims, ops, depth } (depth: nodes
- * on the deepest path, the root counting 1); throws a ProtoError. */
+ * Returns { has_camera, camera, nodes, prims, ops, depth, names } (depth:
+ * nodes on the deepest path, the root counting 1; names: the names table
+ * as [[id, name], ...], null without one); throws a ProtoError. */
 function walkScene(bytes, visit) {
 	const s = new SceneCur(bytes);
 	const out = { has_camera: false, camera: null, nodes: 0, prims: 0,
-		ops: 0, depth: 0 };
+		ops: 0, depth: 0, names: null };
 	const open = []; /* children still expected by each open operator */
 	const flags = s.u8('flags');
-	if (flags & ~1) {
+	if (flags & ~SCENE_FLAG.ALL) {
 		s.fail('EPROTO_FLAGS', `scene flags ${flags}`);
 	}
-	out.has_camera = (flags & 1) !== 0;
+	out.has_camera = (flags & SCENE_FLAG.CAMERA) !== 0;
 	if (out.has_camera) {
 		const c = s.floats(10, 'camera');
 		out.camera = { eye: c.slice(0, 3), target: c.slice(3, 6),
@@ -1994,24 +2069,34 @@ function walkScene(bytes, visit) {
 		s.fail('EPROTO_COUNT', `${open[open.length - 1]} children of an ` +
 			'operator are missing after the last node');
 	}
+	if (flags & SCENE_FLAG.NAMES) {
+		out.names = scanNames(s, count);
+	}
 	if (s.left()) {
-		s.fail('EPROTO_TRAILING', `${s.left()} bytes after the last node`);
+		s.fail('EPROTO_TRAILING', `${s.left()} bytes after the ` +
+			(out.names ? 'names table' : 'last node'));
 	}
 	out.nodes = count;
 	return out;
 }
 
-/* Checks scene bytes; returns { has_camera, nodes, prims, ops, depth }. */
+/* Checks scene bytes; returns { has_camera, nodes, prims, ops, depth },
+ * and names (the names table's count) when the scene has one. */
 export function scanScene(bytes) {
 	const r = walkScene(bytes, null);
-	return { has_camera: r.has_camera, nodes: r.nodes, prims: r.prims,
+	const out = { has_camera: r.has_camera, nodes: r.nodes, prims: r.prims,
 		ops: r.ops, depth: r.depth };
+	if (r.names) {
+		out.names = r.names.length;
+	}
+	return out;
 }
 
 /* Builds a tree from scene bytes (checked as scanScene does): returns
  * { camera, root, byId } where every node has parent and, for operators,
- * children. Node ids of 0 are kept (a subtree may leave ids to the server)
- * but are not indexed. Throws a ProtoError. */
+ * children, and a named node its name. Node ids of 0 are kept (a subtree
+ * may leave ids to the server) but are not indexed. A name for an id no
+ * node has (or only a node of id 0) is ENONODE. Throws a ProtoError. */
 export function parseScene(bytes) {
 	const byId = new Map();
 	let root = null;
@@ -2040,14 +2125,24 @@ export function parseScene(bytes) {
 			stack.pop();
 		}
 	});
+	for (const [id, name] of info.names ?? []) {
+		const n = byId.get(id);
+		if (!n) {
+			throw new ProtoError('ENONODE', `scene: the names table names ` +
+				`node ${id}, which the scene does not have`);
+		}
+		n.name = name;
+	}
 	return { camera: info.camera, root, byId };
 }
 
 /* Encodes a tree ({ camera?, root }, nodes shaped as parseScene makes them)
- * back to scene bytes; the result is checked with scanScene. */
+ * back to scene bytes, with the names table when a node has a name (a
+ * non-empty n.name); the result is checked with scanScene. A name on a
+ * node of id 0 is ENONODE, as the decoder would have it. */
 export function encodeScene({ camera = null, root }) {
 	const w = new Enc();
-	w.u8('flags', camera ? 1 : 0);
+	w.u8('flags', camera ? SCENE_FLAG.CAMERA : 0);
 	if (camera) {
 		w.f32v('camera.eye', camera.eye, 3);
 		w.f32v('camera.target', camera.target, 3);
@@ -2057,10 +2152,18 @@ export function encodeScene({ camera = null, root }) {
 	const countAt = w.n;
 	w.u32('node_count', 0);
 	let count = 0;
+	const named = [];
 	const todo = [root];
 	while (todo.length) {
 		const n = todo.pop();
 		count++;
+		if (n.name) {
+			if (!n.id) {
+				throw new ProtoError('ENONODE', `encode: a node of id 0 ` +
+					`is named "${n.name}"; only numbered nodes take names`);
+			}
+			named.push(n);
+		}
 		if (n.isOp && n.kind >= L.OP_KIND_FIRST_UNARY) {
 			w.u8('tag', OP_TAG | n.kind, 'EENUM');
 			w.u32('id', n.id);
@@ -2092,6 +2195,15 @@ export function encodeScene({ camera = null, root }) {
 		w.f32v('params', n.params, n.params.length);
 	}
 	w.dv.setUint32(countAt, count, true);
+	if (named.length) {
+		w.b[0] |= SCENE_FLAG.NAMES;
+		named.sort((a, b) => a.id - b.id);
+		w.u32('name_count', named.length);
+		for (const n of named) {
+			w.u32('id', n.id);
+			w.str('name', n.name);
+		}
+	}
 	const out = w.bytes();
 	scanScene(out);
 	return out;
@@ -2099,8 +2211,8 @@ export function encodeScene({ camera = null, root }) {
 
 /* ---- Applying edits to a parsed scene ----------------------------------------- */
 
-/* Applies the operations of an EDIT_APPLIED to a tree from parseScene, the
- * way the server applied them, so a client's model follows the session
+/* Applies the operations of an EDIT_APPLIED (SET, INSERT, REMOVE, REPLACE,
+ * NAME) to a tree from parseScene, the way the server applied them, so a client's model follows the session
  * without a new SCENE_STATE. layout(kind) gives a primitive kind's
  * parameters as [{ offset, count }] in field order (docs/primitives.md), or
  * null when the kind is unknown: a parameter edit of such a node marks it
@@ -2197,6 +2309,18 @@ export function applyOps(scene, ops, layout = () => null) {
 				n.parent.children[n.parent.children.indexOf(n)] = r;
 			} else {
 				scene.root = r;
+			}
+			touched.push(op.node);
+			break;
+		}
+		case EDIT.NAME: {
+			/* Names live on the nodes: a REMOVE takes them along, a
+			 * subtree brings its own (parseScene). */
+			const n = get(op.node);
+			if (op.name) {
+				n.name = op.name;
+			} else {
+				delete n.name;
 			}
 			touched.push(op.node);
 			break;

@@ -544,6 +544,237 @@ test('applyOps: a REMOVE that leaves an operator one child collapses it', () => 
 		nodes: 1, prims: 1, ops: 0, depth: 1 });
 });
 
+/* ---- Names (PROTOCOL.md 4.1, 8, 9) ---------------------------------------- */
+
+/* Little-endian pieces for hand-made bytes. */
+const u8b = (v) => Uint8Array.of(v);
+const u16b = (v) => Uint8Array.of(v & 0xff, v >> 8);
+const u32b = (v) => { const b = new Uint8Array(4);
+	new DataView(b.buffer).setUint32(0, v, true); return b; };
+const cat = (...parts) => Uint8Array.from(parts.flatMap((p) => [...p]));
+const utf8 = (t) => new TextEncoder().encode(t);
+/* A sphere of radius 1 with id id: tag, id, translate, rotate, no colour,
+ * one parameter. */
+const sphereB = (id) => cat(u8b(1), u32b(id), new Uint8Array(12),
+	new Uint8Array(new Float32Array([0, 0, 0, 1]).buffer), u8b(0), u8b(1),
+	new Uint8Array(new Float32Array([1]).buffer));
+const unionB = (id, n) => cat(u8b(0x81), u32b(id), new Uint8Array(8),
+	u32b(n));
+/* union 1 { sphere 2, sphere 3 } with flags and what follows the tree. */
+const named = (flags, ...table) => cat(u8b(flags), u32b(3), unionB(1, 2),
+	sphereB(2), sphereB(3), ...table);
+const entry = (id, name) => { const b = typeof name === 'string'
+	? utf8(name) : name; return cat(u32b(id), u16b(b.length), b); };
+
+test('FEATURE.NAMES: bit 6, in ALL, and the page announces it', () => {
+	assert.equal(P.FEATURE.NAMES, 0x40);
+	assert.equal(P.FEATURE.ALL, 0x7f);
+	assert.equal(P.EDIT.NAME, 5);
+	assert.deepEqual(P.SCENE_FLAG, { CAMERA: 1, NAMES: 2, ALL: 3 });
+	const src = readFileSync(join(HERE, '..', '..', 'client', 'web',
+		'app.js'), 'utf8');
+	assert.match(src, /features: P\.FEATURE\.ALL/);
+	/* A WELCOME granting NAMES decodes; bit 7 is still undefined. */
+	const welcome = { type: P.MSG.WELCOME, version: 1, connection_id: 1,
+		max_payload: 1 << 20, max_frame_bytes: 1 << 20, max_nodes: 100,
+		max_dim: 4096, max_members: 8, max_edit_ops: 100, server_id: 'x',
+		features: P.FEATURE.NAMES | P.FEATURE.HISTORY };
+	const r = new P.Reader({ side: 'client' });
+	r.feed(P.encode(welcome));
+	assert.equal(r.next().features, 0x60);
+	assert.throws(() => P.encode({ ...welcome, features: 0x80 }),
+		(e) => e.code === 'EPROTO_FLAGS');
+});
+
+test('scene names: the table decodes, attaches and encodes back', () => {
+	const bytes = named(2, u32b(2), entry(1, 'body'), entry(3,
+		'wheel 🛞'));
+	assert.deepEqual(P.scanScene(bytes), { has_camera: false, nodes: 3,
+		prims: 2, ops: 1, depth: 2, names: 2 });
+	const s = P.parseScene(bytes);
+	assert.equal(s.root.name, 'body');
+	assert.equal(s.byId.get(2).name, undefined);
+	assert.equal(s.byId.get(3).name, 'wheel 🛞');
+	assert.deepEqual(P.encodeScene(s), bytes);
+	/* Without names: flags 0, no table, the tree's bytes as they are. */
+	delete s.root.name;
+	delete s.byId.get(3).name;
+	assert.deepEqual(P.encodeScene(s), named(0));
+	assert.equal(P.scanScene(named(0)).names, undefined);
+	/* With a camera (bit 0) too; the longest name, 64 bytes of
+	 * two-byte characters; every node named. */
+	const cam = new Uint8Array(new Float32Array([0, 1, 6, 0, 0, 0, 0, 1,
+		0, 45]).buffer);
+	const long = 'é'.repeat(32);
+	const both = cat(u8b(3), cam, u32b(3), unionB(1, 2), sphereB(2),
+		sphereB(3), u32b(3), entry(1, 'a'), entry(2, long), entry(3, 'c'));
+	const t = P.parseScene(both);
+	assert.equal(t.byId.get(2).name, long);
+	assert.equal(P.scanScene(both).has_camera, true);
+	assert.deepEqual(P.encodeScene(t), both);
+	/* The encoder sorts by id, whatever the tree's order. */
+	const u = P.parseScene(named(0));
+	u.byId.get(3).name = 'z';
+	u.byId.get(2).name = 'y';
+	assert.deepEqual(P.encodeScene(u), named(2, u32b(2), entry(2, 'y'),
+		entry(3, 'z')));
+});
+
+test('scene names: every check, in the decoder\'s order', () => {
+	const bad = (label, bytes, code, parseCode = code) => {
+		assert.throws(() => P.scanScene(bytes), (e) => e instanceof
+			P.ProtoError && e.code === code, `scan: ${label}: want ${code}`);
+		assert.throws(() => P.parseScene(bytes), (e) => e.code ===
+			parseCode, `parse: ${label}: want ${parseCode}`);
+	};
+	bad('flags bit 2', named(4), 'EPROTO_FLAGS');
+	bad('flags bit 7 with bit 1', named(0x82, u32b(1), entry(1, 'a')),
+		'EPROTO_FLAGS');
+	/* Check 5 comes before the table. */
+	bad('an operator missing a child, then a bad table',
+		cat(u8b(2), u32b(2), unionB(1, 2), sphereB(2), u32b(0)),
+		'EPROTO_COUNT');
+	bad('bit 1 without a table', named(2), 'EPROTO_TRUNCATED');
+	bad('name_count cut short', named(2, u16b(1)), 'EPROTO_TRUNCATED');
+	bad('name_count 0', named(2, u32b(0)), 'EPROTO_COUNT');
+	bad('name_count above node_count', named(2, u32b(4), entry(1, 'a'),
+		entry(2, 'b'), entry(3, 'c'), entry(4, 'd')), 'EPROTO_COUNT');
+	bad('name_count above bytes left / 7', named(2, u32b(2),
+		entry(1, 'abcdef')), 'EPROTO_COUNT');
+	/* The second entry has its id and no length. */
+	bad('entry cut inside its length', named(2, u32b(2),
+		entry(1, 'abcdefgh'), u32b(2), u8b(1)), 'EPROTO_TRUNCATED');
+	/* Id and length are read before the id is judged. */
+	bad('id 0 without its length', named(2, u32b(2),
+		entry(1, 'abcdefgh'), u32b(0)), 'EPROTO_TRUNCATED');
+	bad('id 0', named(2, u32b(1), entry(0, 'a')), 'ERANGE');
+	bad('the same id twice', named(2, u32b(2), entry(2, 'a'),
+		entry(2, 'b')), 'EDUPID');
+	bad('ids going down', named(2, u32b(2), entry(3, 'a'),
+		entry(2, 'b')), 'ERANGE');
+	/* The id is judged before the name's length. */
+	bad('a repeated id with an empty name', named(2, u32b(2),
+		entry(1, 'abc'), entry(1, '')), 'EDUPID');
+	bad('an empty name', named(2, u32b(1), entry(1, ''), u8b(0)),
+		'EPROTO_LENGTH');
+	bad('a 65-byte name', named(2, u32b(1), entry(1, 'x'.repeat(65))),
+		'EPROTO_LENGTH');
+	bad('name bytes cut short', named(2, u32b(1), u32b(1), u16b(10),
+		utf8('abcde')), 'EPROTO_TRUNCATED');
+	bad('an overlong UTF-8 form', named(2, u32b(1), entry(1,
+		Uint8Array.of(0x61, 0xc0, 0xaf))), 'ESTRING');
+	bad('a NUL byte', named(2, u32b(1), entry(1, Uint8Array.of(0x61, 0,
+		0x62))), 'ESTRING');
+	bad('a surrogate', named(2, u32b(1), entry(1, Uint8Array.of(0xed,
+		0xa0, 0x80))), 'ESTRING');
+	bad('a byte after the table', cat(named(2, u32b(1), entry(1, 'a')),
+		u8b(0)), 'EPROTO_TRAILING');
+	/* The table is checked before trailing bytes. */
+	bad('a bad id, then trailing bytes', cat(named(2, u32b(1),
+		entry(0, 'a')), u8b(0)), 'ERANGE');
+	/* Meaning (check 8), parseScene's: a name for a node the scene
+	 * lacks, or for a node of id 0 (numbered by the server). */
+	const ghost = named(2, u32b(1), entry(9, 'ghost'));
+	assert.equal(P.scanScene(ghost).names, 1);
+	assert.throws(() => P.parseScene(ghost), (e) => e.code === 'ENONODE');
+	const zero = cat(u8b(2), u32b(1), sphereB(0), u32b(1), entry(5, 'a'));
+	assert.equal(P.scanScene(zero).names, 1);
+	assert.throws(() => P.parseScene(zero), (e) => e.code === 'ENONODE');
+});
+
+test('encodeScene refuses the names the decoder refuses', () => {
+	const refused = (label, edit, code) => {
+		const s = P.parseScene(named(0));
+		edit(s);
+		assert.throws(() => P.encodeScene(s), (e) => e.code === code,
+			`${label}: want ${code}`);
+	};
+	refused('65 bytes', (s) => { s.root.name = 'ü'.repeat(32) + 'x'; },
+		'EPROTO_LENGTH');
+	refused('a NUL', (s) => { s.root.name = 'a\u0000b'; }, 'ESTRING');
+	refused('a node of id 0', (s) => { s.byId.get(2).id = 0;
+		s.byId.get(2).name = 'a'; }, 'ENONODE');
+	refused('two nodes of one id', (s) => { s.byId.get(3).id = 2;
+		s.byId.get(2).name = 'a'; s.byId.get(3).name = 'b'; }, 'EDUPID');
+	/* An empty name is no name. */
+	const s = P.parseScene(named(0));
+	s.root.name = '';
+	assert.deepEqual(P.encodeScene(s), named(0));
+});
+
+test('NAME operations: encode, decode, and every check', () => {
+	const edit = (ops) => ({ type: P.MSG.EDIT, flags: 0, seq: 4, ops });
+	const ops = [{ kind: P.EDIT.NAME, node: 4, name: 'wheel' },
+		{ kind: P.EDIT.NAME, node: 7, name: '' },
+		{ kind: P.EDIT.NAME, node: 8, name: 'ä'.repeat(32) }];
+	const bytes = P.encode(edit(ops));
+	assert.deepEqual(bytes.subarray(16), cat(u16b(3), u8b(5), u32b(4),
+		entry(0, 'wheel').subarray(4), u8b(5), u32b(7), u16b(0), u8b(5),
+		u32b(8), u16b(64), utf8('ä'.repeat(32))));
+	const r = new P.Reader({ side: 'server' });
+	r.feed(bytes);
+	assert.deepEqual(r.next(), edit(ops));
+	/* In an EDIT_APPLIED too. */
+	const applied = { type: P.MSG.EDIT_APPLIED, flags: 0, seq: 0,
+		order: 9n, author: 2, author_seq: 4, ops: ops.slice(0, 1) };
+	const c = new P.Reader({ side: 'client' });
+	c.feed(P.encode(applied));
+	assert.deepEqual(c.next(), applied);
+	const dec = (payload) => P.decodePayload(P.MSG.EDIT, 0, 1, payload);
+	const bad = (label, payload, code) => assert.throws(() =>
+		dec(payload), (e) => e.code === code, `${label}: want ${code}`);
+	bad('node 0', cat(u16b(1), u8b(5), u32b(0), u16b(1), utf8('a')),
+		'ERANGE');
+	bad('no name length', cat(u16b(1), u8b(5), u32b(4)),
+		'EPROTO_TRUNCATED');
+	bad('65 bytes', cat(u16b(1), u8b(5), u32b(4), u16b(65),
+		utf8('x'.repeat(65))), 'EPROTO_LENGTH');
+	bad('name cut short', cat(u16b(1), u8b(5), u32b(4), u16b(5),
+		utf8('ab')), 'EPROTO_TRUNCATED');
+	bad('a NUL', cat(u16b(1), u8b(5), u32b(4), u16b(2), u8b(0x61),
+		u8b(0)), 'ESTRING');
+	bad('kind 6', cat(u16b(1), u8b(6), u32b(4)), 'EENUM');
+	bad('a byte after it', cat(u16b(1), u8b(5), u32b(4), u16b(0), u8b(0)),
+		'EPROTO_TRAILING');
+	/* The encoder refuses what the decoder refuses. */
+	for (const [name, code] of [['x'.repeat(65), 'EPROTO_LENGTH'],
+		['a\u0000', 'ESTRING']]) {
+		assert.throws(() => P.encode(edit([{ kind: P.EDIT.NAME, node: 1,
+			name }])), (e) => e.code === code, code);
+	}
+	assert.throws(() => P.encode(edit([{ kind: P.EDIT.NAME, node: 0,
+		name: 'a' }])), (e) => e.code === 'ERANGE');
+});
+
+test('applyOps: names follow NAME, REMOVE, INSERT and REPLACE', () => {
+	const s = P.parseScene(named(2, u32b(1), entry(3, 'wheel')));
+	P.applyOps(s, [{ kind: P.EDIT.NAME, node: 2, name: 'body' },
+		{ kind: P.EDIT.NAME, node: 3, name: '' }]);
+	assert.equal(s.byId.get(2).name, 'body');
+	assert.equal('name' in s.byId.get(3), false);
+	assert.throws(() => P.applyOps(s, [{ kind: P.EDIT.NAME, node: 77,
+		name: 'x' }]), (e) => e.code === 'ENONODE');
+	/* An INSERT's subtree brings its names. */
+	const sub = cat(u8b(2), u32b(1), sphereB(9), u32b(1), entry(9,
+		'nine'));
+	assert.deepEqual(P.applyOps(s, [{ kind: P.EDIT.INSERT, parent: 1,
+		position: 2, subtree: sub }]), [1]);
+	assert.equal(s.byId.get(9).name, 'nine');
+	/* A REPLACE's node takes its name away; the subtree's are the new
+	 * nodes'. */
+	P.applyOps(s, [{ kind: P.EDIT.REPLACE, node: 2, subtree: cat(u8b(0),
+		u32b(1), sphereB(2)) }]);
+	assert.equal(s.byId.get(2).name, undefined);
+	P.applyOps(s, [{ kind: P.EDIT.REPLACE, node: 9, subtree: cat(u8b(2),
+		u32b(1), sphereB(10), u32b(1), entry(10, 'ten')) }]);
+	assert.equal(s.byId.get(10).name, 'ten');
+	assert.deepEqual(P.encodeScene(s), cat(u8b(2), u32b(4), unionB(1, 3),
+		sphereB(2), sphereB(3), sphereB(10), u32b(1), entry(10, 'ten')));
+	/* A REMOVE takes the names of what it removes. */
+	P.applyOps(s, [{ kind: P.EDIT.REMOVE, node: 10 }]);
+	assert.equal(P.scanScene(P.encodeScene(s)).names, undefined);
+});
+
 test('encodeUndo, encodeHistoryGet, decodeHistory: what the page sends and shows', () => {
 	const mine = P.encodeUndo({ mine: true, seq: 7 });
 	const m = P.decodePayload(P.MSG.UNDO, 0, 7, mine.subarray(16));
