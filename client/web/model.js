@@ -2,15 +2,16 @@
  * Tree edits of the page as pure functions over its scene mirror (the
  * tree protocol.js's parseScene builds and applyOps keeps up to date):
  * adding a primitive, wrapping a node in a unary node, deleting,
- * duplicating, changing an operator's kind and blend, and moving a node
- * to another operator. Each action becomes the operations of ONE EDIT
+ * duplicating, changing an operator's kind and blend, moving a node to
+ * another operator, and naming a node. Each action becomes the operations of ONE EDIT
  * (PROTOCOL.md section 9), so every member sees it at once and it undoes
  * as one step.
  *
  * Each action first refuses what the daemon would refuse, with a sentence
  * that says what to do instead (a Refusal): adding under a primitive or a
  * unary node, moving a node under itself or its own descendant, deleting
- * the root or a chain of unary nodes up to it, and any result over the
+ * the root or a chain of unary nodes up to it, a name over 64 bytes of
+ * UTF-8 or holding a NUL character, and any result over the
  * limits of nodes, nesting, evaluation stack or domain nodes (those are
  * checked on a copy of the mirror with the operations applied, so what is
  * measured is exactly what the daemon would build). New nodes get ids the
@@ -71,9 +72,62 @@ export function kindName(n) {
 		: PRIMS[n.kind]?.[0] ?? `kind ${n.kind}`;
 }
 
-/* "sphere #12". */
+/* "sphere #12", or "sphere #12 “wheel”" for a named node. */
 export function nodeName(n) {
-	return `${kindName(n)} #${n.id}`;
+	return `${kindName(n)} #${n.id}` + (n.name ? ` “${n.name}”` : '');
+}
+
+/* The longest node name, in bytes of UTF-8 (PROTOCOL.md section 8). */
+export const NAME_MAX = LIMITS.MAX_NAME;
+/* What a duplicate's name ends with (model.js duplicate). */
+const COPY_SUFFIX = ' copy';
+const utf8 = new TextEncoder();
+
+/* Bytes of s in UTF-8. */
+export function nameBytes(s) {
+	return utf8.encode(s).length;
+}
+
+/* Why name cannot be a node's name (a sentence saying what to do), or
+ * null when it can; "" is no name. */
+export function nameProblem(name) {
+	if (typeof name !== 'string') {
+		return 'a name is text';
+	}
+	if (name.includes('\u0000')) {
+		return 'a name cannot hold the NUL character (U+0000): remove it';
+	}
+	if (!name.isWellFormed()) {
+		return 'the name holds a lone surrogate (half of a character ' +
+			'that needs two UTF-16 units): retype it';
+	}
+	const n = nameBytes(name);
+	if (n > NAME_MAX) {
+		return `the name is ${n} bytes of UTF-8, more than the ` +
+			`${NAME_MAX} a name may have: shorten it`;
+	}
+	return null;
+}
+
+/* The longest start of s that fits max bytes of UTF-8, whole characters
+ * only. */
+function clip(s, max) {
+	let out = '', used = 0;
+	for (const ch of s) {
+		const k = nameBytes(ch);
+		if (used + k > max) {
+			break;
+		}
+		out += ch;
+		used += k;
+	}
+	return out;
+}
+
+/* A duplicate's name: "<name> copy", the name shortened (by whole
+ * characters) so that the whole stays within NAME_MAX bytes. */
+export function copyName(name) {
+	return clip(name, NAME_MAX - nameBytes(COPY_SUFFIX)) + COPY_SUFFIX;
 }
 
 /* An operator that takes any number of children (not a unary node). */
@@ -424,13 +478,21 @@ export function remove(scene, id, o = {}) {
 
 /* Duplicates node id (with the unary nodes wrapping it) next to it, every
  * node of the copy with a fresh id; o.offset moves the copy's primitives
- * so that it can be seen. */
+ * so that it can be seen. The copy of a named node id is named "<name>
+ * copy" (copyName); the other nodes of the copy keep their names. */
 export function duplicate(scene, id, o = {}) {
 	const n = get(scene, id);
 	const top = removedTop(n);
 	const limits = limitsOf(o);
 	const ids = freshIds(scene, count(top) + 1);
 	const copy = copyTree(top, ids);
+	let twin = copy;
+	for (let k = n; k !== top; k = k.parent) {
+		twin = twin.children[0];
+	}
+	if (twin.name) {
+		twin.name = copyName(twin.name);
+	}
 	const off = o.offset ?? [0, 0, 0];
 	const todo = [copy];
 	while (todo.length) {
@@ -529,4 +591,23 @@ export function move(scene, id, target, o = {}) {
 			subtree: encodeScene({ root: top }) }];
 	return result(scene, ops, limitsOf(o), n.id,
 		`moved ${nodeName(n)} into ${nodeName(t)}`);
+}
+
+/* Names node id (PROTOCOL.md section 9, NAME): one EDIT of one NAME
+ * operation, one undo step. An empty name takes the node's name away. */
+export function rename(scene, id, name) {
+	const n = get(scene, id);
+	const why = nameProblem(name);
+	if (why) {
+		throw new Refusal(`cannot name ${nodeName(n)}: ${why}`);
+	}
+	if (name === (n.name ?? '')) {
+		throw new Refusal(name ? `${nodeName(n)} is already named so: ` +
+			'nothing to change' : `${nodeName(n)} has no name: nothing ` +
+			'to remove');
+	}
+	const plain = `${kindName(n)} #${n.id}`;
+	return result(scene, [{ kind: EDIT.NAME, node: n.id, name }], null,
+		n.id, name ? `named ${plain} “${name}”` : `took the name ` +
+		`“${n.name}” away from ${plain}`);
 }

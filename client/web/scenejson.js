@@ -93,6 +93,22 @@ const sameBits = (a, b) => a.length === b.length &&
 const indent = (depth) => ' '.repeat(2 + 2 * Math.min(depth,
 	INDENT_LEVELS));
 
+/* A JSON string: quote, backslash and control characters escaped (the
+ * short forms where JSON has them, else \u00XX), everything else as it
+ * is (UTF-8 once in the file). */
+const SHORT = { '"': '\\"', '\\': '\\\\', '\b': '\\b', '\f': '\\f',
+	'\n': '\\n', '\r': '\\r', '\t': '\\t' };
+const hex4 = (c) => c.charCodeAt(0).toString(16).toUpperCase()
+	.padStart(4, '0');
+export function jsonString(s) {
+	return `"${s.replace(/["\\\u0000-\u001f]/g, (c) => SHORT[c] ??
+		`\\u${hex4(c)}`)}"`;
+}
+
+/* `, "name": "wheel"` for a named node (1..64 bytes, docs/scene-format.md),
+ * nothing for the others. */
+const nameMember = (n) => (n.name ? `, "name": ${jsonString(n.name)}` : '');
+
 function fail(n, why) {
 	throw new Error(`node ${n.id}: ${why}; the scene cannot be written ` +
 		'as a JSON scene file');
@@ -118,7 +134,7 @@ function primText(n) {
 		fail(n, `${info[0]} has ${n.params.length} parameters, not the ` +
 			'layout this page knows');
 	}
-	let s = `{"type": "${info[0]}", "id": ${n.id}`;
+	let s = `{"type": "${info[0]}", "id": ${n.id}${nameMember(n)}`;
 	for (const d of lay) {
 		const v = n.params.slice(d.offset, d.offset + d.count);
 		const opt = OPTIONAL[n.kind]?.[d.name];
@@ -145,7 +161,7 @@ function opText(n) {
 	if (!name) {
 		fail(n, `operator kind ${n.kind} is unknown to this page`);
 	}
-	let s = `{"type": "${name}", "id": ${n.id}`;
+	let s = `{"type": "${name}", "id": ${n.id}${nameMember(n)}`;
 	if (n.unary) {
 		const lay = unaryLayout(n.kind);
 		if (!lay || lay.reduce((a, d) => a + d.count, 0) !==

@@ -173,6 +173,69 @@ test('duplicate: fresh ids, next to the original, moved by offset', () => {
 		['sphere', 3]], ['union', 4, ['sphere', 5], ['sphere', 6]]]);
 });
 
+test('rename: one EDIT of one NAME; empty takes the name away', () => {
+	const s = sample();
+	const r = M.rename(s, 5, 'wheel');
+	assert.deepEqual(r.ops, [{ kind: P.EDIT.NAME, node: 5, name: 'wheel' }]);
+	assert.equal(r.select, 5);
+	assert.match(r.text, /named sphere #5 “wheel”/);
+	apply(s, r);
+	assert.equal(s.byId.get(5).name, 'wheel');
+	assert.equal(M.nodeName(s.byId.get(5)), 'sphere #5 “wheel”');
+	/* 64 bytes (32 two-byte characters) is the most a name takes. */
+	apply(s, M.rename(s, 3, 'ö'.repeat(32)));
+	assert.equal(s.byId.get(3).name, 'ö'.repeat(32));
+	refused(() => M.rename(s, 5, 'wheel'), /already named so/);
+	const off = M.rename(s, 5, '');
+	assert.deepEqual(off.ops, [{ kind: P.EDIT.NAME, node: 5, name: '' }]);
+	assert.match(off.text, /took the name “wheel” away from sphere #5/);
+	apply(s, off);
+	assert.equal(s.byId.get(5).name, undefined);
+	refused(() => M.rename(s, 5, ''), /has no name: nothing to remove/);
+	refused(() => M.rename(s, 99, 'x'), /no node #99/);
+});
+
+test('rename: over 64 bytes of UTF-8, a NUL, a lone surrogate: refused', () => {
+	const s = sample();
+	/* 33 two-byte characters are 66 bytes though 33 UTF-16 units. */
+	refused(() => M.rename(s, 2, 'ü'.repeat(33)),
+		/66 bytes of UTF-8, more than the 64 a name may have: shorten it/);
+	refused(() => M.rename(s, 2, 'x'.repeat(65)), /65 bytes/);
+	refused(() => M.rename(s, 2, 'a\u0000b'), /NUL character.*remove it/);
+	refused(() => M.rename(s, 2, 'a\ud800'), /lone surrogate/);
+	assert.equal(M.nameProblem('🛞'.repeat(16)), null);
+	assert.match(M.nameProblem('🛞'.repeat(16) + 'x'), /65 bytes/);
+});
+
+test('duplicate names the copy "<name> copy"; move and wrap keep names', () => {
+	const s = sample();
+	apply(s, M.rename(s, 7, 'spring'));
+	apply(s, M.rename(s, 6, 'coil'));
+	apply(s, M.duplicate(s, 7));
+	/* twist #8 (sphere #9): the copy of the selected node is "... copy",
+	 * the unary node over it keeps its name. */
+	assert.equal(s.byId.get(9).name, 'spring copy');
+	assert.equal(s.byId.get(8).name, 'coil');
+	assert.equal(s.byId.get(7).name, 'spring');
+	/* A long name is cut at a whole character to fit 64 bytes. */
+	apply(s, M.rename(s, 2, 'a' + 'é'.repeat(31)));
+	apply(s, M.duplicate(s, 2));
+	const copy = s.byId.get(10);
+	assert.equal(copy.name, 'a' + 'é'.repeat(29) + ' copy');
+	assert.ok(M.nameBytes(copy.name) <= 64);
+	assert.equal(M.copyName('é'.repeat(32)), 'é'.repeat(29) + ' copy');
+	assert.equal(M.copyName('x'.repeat(59)), 'x'.repeat(59) + ' copy');
+	/* A move (REMOVE, INSERT of the same ids) keeps the names. */
+	apply(s, M.move(s, 7, 3));
+	assert.equal(s.byId.get(7).name, 'spring');
+	assert.equal(s.byId.get(6).name, 'coil');
+	/* So does a wrap (REPLACE by a unary over the node). */
+	apply(s, M.rename(s, 4, 'block'));
+	apply(s, M.wrap(s, 4, 7));
+	assert.equal(s.byId.get(4).name, 'block');
+	assert.equal(P.scanScene(P.encodeScene(s)).names, 7);
+});
+
 test('operator kind and blend obey the sharp/smooth rules', () => {
 	const s = sample();
 	const fields = (r) => r.ops[0].fields.map((f) => [f.field, ...f.values]);

@@ -64,6 +64,9 @@ export function treeFromJson(text) {
 	const todo = [[doc.root, root]];
 	while (todo.length) {
 		const [j, n] = todo.pop();
+		if (j.name !== undefined) {
+			n.name = j.name;
+		}
 		for (const c of j.children ?? []) {
 			const k = node(c);
 			k.parent = n;
