@@ -63,7 +63,7 @@ import * as P from './protocol.js';
 import { Picture, parseSize } from './picture.js';
 import { localBox } from './bounds.js';
 import { layout, unaryLayout, unaryRange, unaryValue } from './prims.js';
-import { kindName } from './model.js';
+import { kindName, nodeName } from './model.js';
 import { Outliner } from './outliner.js';
 import { Review } from './review.js';
 import { HistoryPanel } from './history.js';
@@ -824,7 +824,9 @@ class App {
 		if (mine) {
 			const sent = this.editSent.get(m.author_seq);
 			this.editSent.delete(m.author_seq);
-			if (sent) {
+			/* A change of names only draws nothing new: no frame to
+			 * wait for. */
+			if (sent && !m.ops.every((op) => op.kind === P.EDIT.NAME)) {
 				this.awaitFrame.push({ order: m.order, ...sent });
 			}
 			if (m.author_seq === this.inflight) {
@@ -836,6 +838,10 @@ class App {
 		}
 		this.renderMembers();
 		this.refreshSliders();
+		if (m.ops.some((op) => op.kind === P.EDIT.NAME &&
+			op.node === this.selected)) {
+			this.renderSelName();
+		}
 		this.drawOverlay();
 		this.outliner.sceneChanged(m);
 	}
@@ -1477,7 +1483,7 @@ class App {
 		const top = k.reduce((a, p) => (p.y < a.y ? p : a));
 		ctx.font = '12px system-ui, sans-serif';
 		ctx.fillStyle = '#f2b84b';
-		ctx.fillText(`${kindName(n)} #${n.id}`, top.x * sx + 6,
+		ctx.fillText(nodeName(n), top.x * sx + 6,
 			Math.max(14, top.y * sy - 6));
 	}
 
@@ -1530,21 +1536,41 @@ class App {
 		const n = this.scene?.byId.get(e.node);
 		const ago = ((performance.now() - e.at) / 1000).toFixed(1);
 		$('lastedit').textContent = `last edit: ${e.name}` +
-			` · ${n ? kindName(n) + ' #' + n.id : 'node ' + e.node}` +
+			` · ${n ? nodeName(n) : 'node ' + e.node}` +
 			` · order ${e.order} · ${ago} s ago`;
+	}
+
+	/* The selection's line: its name (when it has one), kind and id. */
+	renderSelName() {
+		const n = this.selected ? this.scene?.byId.get(this.selected) : null;
+		const p = $('selname');
+		if (!n) {
+			p.textContent = 'click a shape to select it';
+			return;
+		}
+		const what = document.createElement('span');
+		what.className = n.name ? 'kindid' : '';
+		what.textContent = `${kindName(n)} #${n.id}` +
+			(n.stale ? ' (parameters out of date)' : '');
+		if (n.name) {
+			const name = document.createElement('strong');
+			name.className = 'selnodename';
+			name.textContent = n.name;
+			p.replaceChildren(name, ' ', what);
+		} else {
+			p.replaceChildren(what);
+		}
 	}
 
 	renderPanel() {
 		const box = $('sliders');
 		box.textContent = '';
 		this.sliders = [];
+		this.renderSelName();
 		const n = this.selected ? this.scene?.byId.get(this.selected) : null;
 		if (!n) {
-			$('selname').textContent = 'click a shape to select it';
 			return;
 		}
-		$('selname').textContent = `${kindName(n)} #${n.id}` +
-			(n.stale ? ' (parameters out of date)' : '');
 		if (n.isOp) {
 			/* Operators and unary nodes are edited in the Scene panel. */
 			return;
@@ -1716,6 +1742,7 @@ class App {
 	state() {
 		return {
 			connected: !!this.info,
+			features: this.welcome?.features ?? 0,
 			memberId: this.info?.member_id ?? 0,
 			members: this.info?.members.map((m) => ({ ...m })) ?? [],
 			order: String(this.order),
@@ -1807,9 +1834,9 @@ window.blobcast = {
 			translate: n.translate.slice() })) : [],
 	node: (id) => {
 		const n = app.scene?.byId.get(id);
-		return n ? { id: n.id, kind: kindName(n), translate: n.isOp ? null
-			: n.translate.slice(), params: n.isOp ? null : n.params.slice() }
-			: null;
+		return n ? { id: n.id, kind: kindName(n), name: n.name ?? '',
+			translate: n.isOp ? null : n.translate.slice(),
+			params: n.isOp ? null : n.params.slice() } : null;
 	},
 	pick: (x, y) => app.pick(x, y).then((r) => r ? { node: r.node,
 		position: r.position, depth: r.depth } : null),

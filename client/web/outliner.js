@@ -3,11 +3,12 @@
  * tools that change its structure.
  *
  *  - The outliner lists operators, unary nodes and primitives as an
- *    indented tree, each row the node's kind and id (the scene format has
- *    no node names), groups collapsible. It reads the page's scene mirror
- *    and follows every SCENE_STATE and EDIT_APPLIED: an edit that only
- *    sets fields (a drag, a slider) updates the labels of the rows it
- *    touched, a structural one redraws the list once per animation frame.
+ *    indented tree, each row the node's kind and id, after its name when
+ *    it has one (the kind and id then muted), groups collapsible. It reads
+ *    the page's scene mirror and follows every SCENE_STATE and
+ *    EDIT_APPLIED: an edit that only sets fields or names (a drag, a
+ *    slider, a rename) updates the rows it touched, a structural one
+ *    redraws the list once per animation frame.
  *    Big scenes stay cheap: groups deeper than OPEN_DEPTH start closed, a
  *    group shows MAX_CHILDREN children before a "more" row, and the list
  *    stops at MAX_ROWS rows.
@@ -21,6 +22,11 @@
  *    smooth, and radius are set in a small form. A row dragged onto an
  *    operator's row moves the node there; a menu entry dragged onto a row
  *    adds (or wraps) there.
+ *  - Rename: a double-click on a row, F2, or the rename button opens an
+ *    inline field on the selected node's row; Enter sends the name (one
+ *    EDIT of one NAME operation; empty removes the name), Escape or a
+ *    click elsewhere leaves it as it was, and the focus goes back to the
+ *    tree. Only with a daemon that granted NAMES (PROTOCOL.md 4.1).
  *  - Every action is one EDIT built by model.js, which refuses what the
  *    daemon would refuse before anything is sent; the panel's message line
  *    says what happened, or why not and what to do, and shows the
@@ -68,6 +74,12 @@ function shape(n) {
 		: [M.kindName(n), n.id];
 }
 
+/* A key typed in a text field is the field's. */
+function typing(t) {
+	return !!t && (t.isContentEditable || ['INPUT', 'TEXTAREA', 'SELECT']
+		.includes(t.tagName));
+}
+
 export class Outliner {
 	constructor(app) {
 		this.app = app;
@@ -79,10 +91,12 @@ export class Outliner {
 		this.sentCount = 0;
 		this.drag = null;
 		this.redraw = 0;
+		this.renaming = null; /* { id, input } while a name is typed */
 		this.installMenu();
 		this.installTools();
 		this.installDrag();
 		this.installKeys();
+		this.installRename();
 		this.reset();
 	}
 
@@ -91,6 +105,7 @@ export class Outliner {
 	/* A new connection: nothing to show until the scene comes. */
 	reset() {
 		this.sent.clear();
+		this.renaming = null;
 		this.render();
 		this.renderTools();
 	}
@@ -98,7 +113,8 @@ export class Outliner {
 	/* The mirror changed: m is the EDIT_APPLIED, or null for a new
 	 * SCENE_STATE. */
 	sceneChanged(m) {
-		if (m && m.ops.every((op) => op.kind === P.EDIT.SET)) {
+		if (m && m.ops.every((op) => op.kind === P.EDIT.SET ||
+			op.kind === P.EDIT.NAME)) {
 			for (const op of m.ops) {
 				this.label(op.node);
 			}
@@ -155,7 +171,9 @@ export class Outliner {
 				id: Number(r.dataset.id),
 				level: Number(r.getAttribute('aria-level')),
 				text: r.querySelector('.label').textContent,
+				name: r.querySelector('.name')?.textContent ?? '',
 				selected: r.classList.contains('sel') })),
+			renaming: this.renaming?.id ?? 0,
 			message: $('outlinermsg').textContent,
 			refusal: $('outlinermsg').classList.contains('bad'),
 			sent: this.sentCount,
@@ -182,6 +200,11 @@ export class Outliner {
 		cancelAnimationFrame(this.redraw);
 		this.redraw = 0;
 		this.rows.clear();
+		/* A field being typed in moves to its node's new row (its blur
+		 * while detached is not the user leaving it). */
+		const typed = this.renaming;
+		const focused = typed && document.activeElement === typed.input;
+		this.redrawing = true;
 		const frag = document.createDocumentFragment();
 		const root = this.app.scene?.root;
 		const todo = root ? [[root, 0]] : [];
@@ -212,8 +235,17 @@ export class Outliner {
 			}
 		}
 		this.list.replaceChildren(frag);
+		this.redrawing = false;
 		if (!root) {
 			this.list.append(el('p', 'dim', 'no scene yet'));
+		}
+		if (typed && !this.rows.has(typed.id)) {
+			/* The node went away (another member deleted it). */
+			this.renaming = null;
+			this.tell(`node #${typed.id} was removed meanwhile: its name ` +
+				'was not sent', true);
+		} else if (focused) {
+			typed.input.focus();
 		}
 	}
 
@@ -232,9 +264,36 @@ export class Outliner {
 		const sel = n.id === this.app.selected;
 		row.classList.toggle('sel', sel);
 		row.setAttribute('aria-selected', String(sel));
-		row.append(twist, el('span', 'label', this.text(n)));
+		row.append(twist);
+		this.fill(row, n);
 		this.rows.set(n.id, row);
 		return row;
+	}
+
+	/* A row's text: the name (when the node has one) and the kind and
+	 * id, or the field a name is typed in. */
+	fill(row, n) {
+		const typed = this.renaming?.id === n.id ? this.renaming.input
+			: null;
+		const focused = typed && document.activeElement === typed;
+		const was = this.redrawing;
+		this.redrawing = true;
+		row.replaceChildren(row.firstChild);
+		this.redrawing = was;
+		row.classList.toggle('named', !!n.name);
+		const label = el('span', 'label', this.text(n));
+		if (typed) {
+			row.append(typed, label);
+			if (focused) {
+				typed.focus();
+			}
+			return;
+		}
+		if (n.name) {
+			row.append(el('span', 'name', n.name), ' ', label);
+		} else {
+			row.append(label);
+		}
 	}
 
 	moreRow(m, depth) {
@@ -246,16 +305,16 @@ export class Outliner {
 	}
 
 	text(n) {
-		return M.nodeName(n) + (M.isGroup(n) && n.kind > M.SMOOTH
-			? ` · r ${+n.blend.toFixed(3)}` : '');
+		return `${M.kindName(n)} #${n.id}` + (M.isGroup(n) &&
+			n.kind > M.SMOOTH ? ` · r ${+n.blend.toFixed(3)}` : '');
 	}
 
-	/* A row's label after a SET (an operator's kind or radius). */
+	/* A row after a SET (an operator's kind or radius) or a NAME. */
 	label(id) {
 		const row = this.rows.get(id);
 		const n = this.app.scene?.byId.get(id);
 		if (row && n) {
-			row.querySelector('.label').textContent = this.text(n);
+			this.fill(row, n);
 		}
 	}
 
@@ -303,12 +362,12 @@ export class Outliner {
 	}
 
 	/* Builds an action with model.js and sends it as one EDIT; a refusal
-	 * is shown and nothing is sent. */
+	 * is shown and nothing is sent. Returns whether it was sent. */
 	act(build) {
 		if (!this.editor()) {
 			this.tell(this.app.info ? 'viewers cannot change the scene'
 				: 'not connected: nothing sent', true);
-			return;
+			return false;
 		}
 		let r;
 		try {
@@ -316,18 +375,127 @@ export class Outliner {
 		} catch (e) {
 			if (e instanceof M.Refusal) {
 				this.tell(e.message, true);
-				return;
+				return false;
 			}
 			throw e;
 		}
 		const seq = this.app.sendOps(r.ops);
 		if (!seq) {
 			this.tell('not connected: nothing sent', true);
-			return;
+			return false;
 		}
 		this.sentCount++;
 		this.sent.set(seq, r);
 		this.tell(`${r.text}…`);
+		return true;
+	}
+
+	/* ---- rename ---- */
+
+	/* Whether the daemon keeps names (it granted NAMES). */
+	names() {
+		return ((this.app.welcome?.features ?? 0) & P.FEATURE.NAMES) !== 0;
+	}
+
+	/* Opens the name field on node id's row (selecting it). */
+	startRename(id) {
+		const n = id ? this.app.scene?.byId.get(id) : null;
+		if (!n) {
+			this.tell('select a node to rename first (a row, or a shape ' +
+				'in the picture)', true);
+			return;
+		}
+		if (!this.editor()) {
+			this.tell(this.app.info ? 'viewers cannot rename nodes'
+				: 'not connected: nothing sent', true);
+			return;
+		}
+		if (!this.names()) {
+			this.tell('this daemon keeps no node names (it did not grant ' +
+				'NAMES): update blobcastd to name nodes', true);
+			return;
+		}
+		this.stopRename(false);
+		this.app.select(id);
+		const input = el('input', 'rename');
+		input.type = 'text';
+		input.value = n.name ?? '';
+		input.spellcheck = false;
+		input.placeholder = 'name (empty: none)';
+		input.setAttribute('aria-label', `name of ${M.kindName(n)} #${n.id}` +
+			` (at most ${M.NAME_MAX} bytes; Enter sends, Escape cancels)`);
+		input.addEventListener('keydown', (e) => {
+			/* The field's keys are not the tree's (arrows, Delete). */
+			e.stopPropagation();
+			if (e.key === 'Enter') {
+				e.preventDefault();
+				this.commitRename();
+			} else if (e.key === 'Escape') {
+				e.preventDefault();
+				this.stopRename(true);
+			}
+		});
+		input.addEventListener('blur', () => {
+			if (!this.redrawing && this.renaming?.input === input) {
+				this.stopRename(false);
+			}
+		});
+		this.renaming = { id, input };
+		this.label(id);
+		input.focus();
+		input.select();
+	}
+
+	/* Enter: sends the name; a refused one keeps the field open to be
+	 * corrected. The same name as before just closes it. */
+	commitRename() {
+		const r = this.renaming;
+		const n = r && this.app.scene?.byId.get(r.id);
+		if (!n) {
+			this.stopRename(true);
+			return;
+		}
+		const name = r.input.value;
+		if (name === (n.name ?? '')) {
+			this.stopRename(true);
+			return;
+		}
+		if (this.act((scene) => M.rename(scene, r.id, name))) {
+			this.stopRename(true);
+		}
+	}
+
+	/* Closes the name field; focus: give the keyboard back to the tree. */
+	stopRename(focus) {
+		const r = this.renaming;
+		if (!r) {
+			return;
+		}
+		this.renaming = null;
+		this.label(r.id);
+		if (focus) {
+			this.list.focus();
+		}
+	}
+
+	installRename() {
+		this.list.addEventListener('dblclick', (e) => {
+			const row = e.target.closest('.row');
+			if (row && !e.target.closest('.twist, input')) {
+				e.preventDefault();
+				this.startRename(Number(row.dataset.id));
+			}
+		});
+		document.addEventListener('keydown', (e) => {
+			if (e.key !== 'F2' || e.ctrlKey || e.metaKey || e.altKey ||
+				typing(e.target) || !this.app.selected) {
+				return;
+			}
+			e.preventDefault();
+			this.startRename(this.app.selected);
+		});
+		$('renamebtn').addEventListener('click', () =>
+			this.startRename(this.app.selected));
 	}
 
 	/* Where the camera looks, how big a new shape is, how far right a
@@ -415,10 +583,8 @@ export class Outliner {
 	installTools() {
 		/* The Delete key, outside text fields, is the delete button. */
 		document.addEventListener('keydown', (e) => {
-			const t = e.target;
 			if (e.key !== 'Delete' || e.ctrlKey || e.metaKey || e.altKey ||
-				(t && (t.isContentEditable || ['INPUT', 'TEXTAREA', 'SELECT']
-					.includes(t.tagName))) || $('delbtn').disabled) {
+				typing(e.target) || $('delbtn').disabled) {
 				return;
 			}
 			e.preventDefault();
@@ -467,6 +633,7 @@ export class Outliner {
 		$('addbtn').disabled = !ok;
 		$('dupbtn').disabled = !ok || !n;
 		$('delbtn').disabled = !ok || !n;
+		$('renamebtn').disabled = !ok || !n || !this.names();
 		for (const b of document.querySelectorAll('#addmenu button')) {
 			b.disabled = !ok || (!!b.dataset.unary && !n);
 		}
@@ -501,7 +668,7 @@ export class Outliner {
 			}
 			const row = e.target.closest('.row');
 			const item = e.target.closest('#addmenu button.item');
-			if (!row && !item) {
+			if ((!row && !item) || e.target.closest('input')) {
 				return;
 			}
 			this.drag = { x: e.clientX, y: e.clientY, moving: false,
