@@ -211,6 +211,43 @@ export async function startStatic() {
 	return { port: server.address().port, server };
 }
 
+/* blobcastd (with extra arguments), websockify in front of it and the
+ * page's files: { d, proxy, web }. */
+export async function startStack(daemon, extra = []) {
+	const d = await startDaemon(daemon, extra);
+	const proxy = await startProxy(d.port);
+	const web = await startStatic();
+	return { d, proxy, web };
+}
+
+/* Uncaught errors of the pages joinPage opened: each fails the test
+ * (finish). */
+const pageErrors = [];
+
+/* A new page of browser (viewport { width, height }) on the page of
+ * stack (startStack) as client name in session; an uncaught error in it
+ * is printed and fails the test. */
+export async function joinPage(browser, stack, { name, viewport,
+	session = 'default' }) {
+	const page = await browser.newPage({ viewport });
+	page.on('pageerror', (e) => {
+		console.error(`page ${name}: ${e.message}`);
+		pageErrors.push(e);
+	});
+	await page.goto(`http://127.0.0.1:${stack.web.port}/?ws=` +
+		`${stack.proxy.port}&session=${session}&name=${name}`);
+	return page;
+}
+
+/* Clicks selector on page and resolves with the file it downloads:
+ * { name (the suggested one), bytes }. */
+export async function download(page, selector, ms = 60000) {
+	const [d] = await Promise.all([page.waitForEvent('download',
+		{ timeout: ms }), page.click(selector)]);
+	return { name: d.suggestedFilename(), bytes: readFileSync(await d
+		.path()) };
+}
+
 /* Stops every child this module started (by its own pid) and removes the
  * temporary data. */
 export async function stopAll() {
@@ -226,6 +263,12 @@ export async function stopAll() {
 	for (const f of cleanups.splice(0)) {
 		f();
 	}
+}
+
+/* Prints e, what failed a test, with the children's logs. */
+export function report(e) {
+	console.error(`FAIL: ${e.stack || e}`);
+	console.error(logs());
 }
 
 /* The log tail of every child, for a failure report. */
@@ -255,6 +298,22 @@ export async function playwright() {
 	const { chromium } = await import(join(HERE, 'node_modules',
 		'playwright-core', 'index.mjs'));
 	return chromium;
+}
+
+/* The start of a browser test of what, against the daemon given as
+ * --blobcastd PATH (and, with cli, the CLI as --blobcast PATH): exits 77
+ * naming what is missing, else starts the watchdog of ms and returns
+ * { daemon, cli, chromium, step (a stepper), watchdog, until (the
+ * harness's until, 20 s and 30 ms polls by default) }. */
+export async function begin(what, { cli = false, ms }) {
+	const daemon = findDaemon(process.argv);
+	const lacking = missing({ daemon, browser: true });
+	const cliPath = cli ? findCli(process.argv, lacking) : null;
+	skipIfMissing(what, lacking);
+	return { daemon, cli: cliPath, chromium: await playwright(),
+		step: stepper(), watchdog: watchdog(ms),
+		until: (page, text, fn, arg, t = 20000) =>
+			until(page, text, fn, arg, t, 30) };
 }
 
 /* Fails the whole test (exit 1, with the children's logs when withLogs)
@@ -288,7 +347,8 @@ export async function until(page, what, fn, arg, ms, pollMs) {
 /* Ends a browser test: closes the browser, stops every child this module
  * started, clears the watchdog, prints the count and exits (status 1 when
  * failed). */
-export async function finish(browser, failed, watchdog) {
+export async function finish(browser, failedBefore, watchdog) {
+	const failed = failedBefore || pageErrors.length > 0;
 	if (browser) {
 		await browser.close().catch(() => {});
 	}

@@ -18,7 +18,6 @@
  * missing). Usage: node tests/web/names.mjs --blobcastd PATH --blobcast PATH
  */
 import assert from 'node:assert/strict';
-import { readFileSync } from 'node:fs';
 
 import * as H from './harness.mjs';
 import * as P from '../../client/web/protocol.js';
@@ -27,20 +26,11 @@ const DEADLINE_MS = 90000;
 /* A node of the built-in scene whose row is drawn from the start. */
 const ID = 50;
 
-const daemon = H.findDaemon(process.argv);
-const lacking = H.missing({ daemon, browser: true });
-const cli = H.findCli(process.argv, lacking);
-H.skipIfMissing('web names', lacking);
-const chromium = await H.playwright();
+const { daemon, cli, chromium, step, watchdog, until } = await H.begin(
+	'web names', { cli: true, ms: DEADLINE_MS });
 
 let browser = null;
 let failed = false;
-const step = H.stepper();
-
-const watchdog = H.watchdog(DEADLINE_MS);
-
-const until = (page, what, fn, arg, ms = 20000) =>
-	H.until(page, what, fn, arg, ms, 30);
 
 /* The row of node id in page's outliner, once it shows name. */
 const rowNamed = (page, who, id, name) => until(page,
@@ -58,28 +48,15 @@ const field = async (page, what) => {
 	return page.locator('#outliner input.rename');
 };
 
-const download = async (page, button) => {
-	const [d] = await Promise.all([page.waitForEvent('download',
-		{ timeout: 30000 }), page.click(button)]);
-	return readFileSync(await d.path(), 'utf8');
-};
-
 try {
-	const d = await H.startDaemon(daemon);
-	const proxy = await H.startProxy(d.port);
-	const web = await H.startStatic();
-	step(`blobcastd :${d.port}, websockify :${proxy.port}, page :${web.port}`);
+	const stack = await H.startStack(daemon);
+	const port = stack.d.port;
+	step(`blobcastd :${port}, websockify :${stack.proxy.port}`);
 	browser = await chromium.launch({ executablePath: H.CHROMIUM,
 		args: H.CHROMIUM_ARGS });
 	const open = async (name) => {
-		const page = await browser.newPage({ viewport: { width: 600,
-			height: 640 } });
-		page.on('pageerror', (e) => {
-			console.error(`page ${name}: ${e.message}`);
-			failed = true;
-		});
-		await page.goto(`http://127.0.0.1:${web.port}/?ws=${proxy.port}` +
-			`&session=default&name=${name}`);
+		const page = await H.joinPage(browser, stack, { name,
+			viewport: { width: 600, height: 640 } });
 		await until(page, `${name}: the scene and its outliner`, (id) =>
 			window.blobcast.state().connected && window.blobcast.outliner()
 				.rows.some((r) => r.id === id), ID, 45000);
@@ -163,7 +140,8 @@ try {
 	await alice.keyboard.press('Enter');
 	await rowNamed(alice, 'alice', ID, fancy);
 	await rowNamed(bob, 'bob', ID, fancy);
-	const text = await download(alice, '#jsonbtn');
+	const text = (await H.download(alice, '#jsonbtn')).bytes
+		.toString('utf8');
 	const found = [];
 	const todo = [JSON.parse(text).root];
 	while (todo.length) {
@@ -175,7 +153,7 @@ try {
 	}
 	assert.deepEqual(found, [[ID, fancy]], 'the file names the node');
 	const r = await H.runCli(cli, ['scene', '--server',
-		`127.0.0.1:${d.port}`, '--session', 'default']);
+		`127.0.0.1:${port}`, '--session', 'default']);
 	assert.equal(r.code, 0, `blobcast scene: ${r.stderr}`);
 	assert.equal(text, r.stdout, 'the download is what `blobcast scene` ' +
 		'writes');
@@ -183,8 +161,7 @@ try {
 		'`blobcast scene` writes it');
 } catch (e) {
 	failed = true;
-	console.error(`FAIL: ${e.stack || e}`);
-	console.error(H.logs());
+	H.report(e);
 } finally {
 	await H.finish(browser, failed, watchdog);
 }

@@ -27,7 +27,7 @@
  * missing). Usage: node tests/web/review.mjs --blobcastd PATH --blobcast PATH
  */
 import assert from 'node:assert/strict';
-import { copyFileSync, mkdirSync, mkdtempSync, readFileSync, rmSync,
+import { copyFileSync, mkdirSync, mkdtempSync, rmSync,
 	writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
@@ -180,13 +180,6 @@ function project(cam, view, p) {
 	return { x: dot(d, r) / (z * t * view.width / view.height),
 		y: dot(d, u) / (z * t), z };
 }
-
-const download = async (page, button) => {
-	const [d] = await Promise.all([page.waitForEvent('download',
-		{ timeout: 60000 }), page.click(button)]);
-	return { name: d.suggestedFilename(), bytes: readFileSync(await d
-		.path()) };
-};
 
 const run = (args) => H.runCli(cli, args, 60000);
 
@@ -353,7 +346,7 @@ try {
 	assert.ok(await a.isDisabled('#quality'), 'quality is for JPEG only');
 	step('encoding control: raw, jpeg (quality 30), png frames');
 	const view = (await a.evaluate(() => window.blobcast.state())).view;
-	const png = await download(a, '#pngbtn');
+	const png = await H.download(a, '#pngbtn');
 	assert.equal(png.bytes.subarray(1, 4).toString('latin1'), 'PNG');
 	assert.deepEqual([png.bytes.readUInt32BE(16), png.bytes.readUInt32BE(20)],
 		[view.width, view.height]);
@@ -429,7 +422,7 @@ try {
 		/^last edit: dave /.test(document.getElementById('lastedit')
 			.textContent));
 	step('the CLI\'s --name names its edit in the page after it left');
-	const json = await download(a, '#jsonbtn');
+	const json = await H.download(a, '#jsonbtn');
 	assert.match(json.name, /^blobcast-rich-\d+\.json$/);
 	const text = json.bytes.toString('utf8');
 	const fromCli = (await run(['scene', ...srv, '--session', 'rich']))

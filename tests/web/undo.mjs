@@ -27,20 +27,11 @@ import * as H from './harness.mjs';
 
 const DEADLINE_MS = 150000;
 
-const daemon = H.findDaemon(process.argv);
-const lacking = H.missing({ daemon, browser: true });
-const cli = H.findCli(process.argv, lacking);
-H.skipIfMissing('web undo', lacking);
-const chromium = await H.playwright();
+const { daemon, cli, chromium, step, watchdog, until } = await H.begin(
+	'web undo', { cli: true, ms: DEADLINE_MS });
 
 let browser = null;
 let failed = false;
-const step = H.stepper();
-
-const watchdog = H.watchdog(DEADLINE_MS);
-
-const until = (page, what, fn, arg, ms = 20000) =>
-	H.until(page, what, fn, arg, ms, 30);
 
 const run = (args) => H.runCli(cli, args, 15000);
 
@@ -62,21 +53,15 @@ async function expect(page, what, id, t, text) {
 }
 
 try {
-	const d = await H.startDaemon(daemon);
-	const proxy = await H.startProxy(d.port);
-	const web = await H.startStatic();
-	step(`blobcastd :${d.port}, websockify :${proxy.port}, page :${web.port}`);
+	const stack = await H.startStack(daemon);
+	const d = stack.d;
+	step(`blobcastd :${d.port}, websockify :${stack.proxy.port}, page ` +
+		`:${stack.web.port}`);
 	browser = await chromium.launch({ executablePath: H.CHROMIUM,
 		args: H.CHROMIUM_ARGS });
 	const open = async (name) => {
-		const page = await browser.newPage({ viewport: { width: 480,
-			height: 320 } });
-		page.on('pageerror', (e) => {
-			console.error(`page ${name}: ${e.message}`);
-			failed = true;
-		});
-		await page.goto(`http://127.0.0.1:${web.port}/?ws=${proxy.port}` +
-			`&session=default&name=${name}`);
+		const page = await H.joinPage(browser, stack, { name,
+			viewport: { width: 480, height: 320 } });
 		await until(page, `${name}: the scene`, () =>
 			window.blobcast.state().connected &&
 			window.blobcast.primitives().length > 1);
@@ -233,8 +218,7 @@ try {
 	step('Ctrl-Shift-Z and Ctrl-Alt-Z in the token field sent nothing');
 } catch (e) {
 	failed = true;
-	console.error(`FAIL: ${e.stack || e}`);
-	console.error(H.logs());
+	H.report(e);
 } finally {
 	await H.finish(browser, failed, watchdog);
 }
