@@ -442,6 +442,13 @@ export class Outliner {
 		});
 		this.renaming = { id, input };
 		this.label(id);
+		if (!this.rows.has(id)) {
+			/* Past MAX_ROWS: no row to type on. */
+			this.renaming = null;
+			this.tell(`the row of ${M.nodeName(n)} is not shown: close a ` +
+				'group above it, then rename', true);
+			return;
+		}
 		input.focus();
 		input.select();
 	}

@@ -93,16 +93,13 @@ const sameBits = (a, b) => a.length === b.length &&
 const indent = (depth) => ' '.repeat(2 + 2 * Math.min(depth,
 	INDENT_LEVELS));
 
-/* A JSON string: quote, backslash and control characters escaped (the
- * short forms where JSON has them, else \u00XX), everything else as it
- * is (UTF-8 once in the file). */
-const SHORT = { '"': '\\"', '\\': '\\\\', '\b': '\\b', '\f': '\\f',
-	'\n': '\\n', '\r': '\\r', '\t': '\\t' };
-const hex4 = (c) => c.charCodeAt(0).toString(16).toUpperCase()
-	.padStart(4, '0');
+/* A JSON string as blobtree writes a name: the quote and the backslash
+ * after a backslash, control characters and DEL as \u00xx (lower-case
+ * hex), everything else as it is (UTF-8 once in the file). */
 export function jsonString(s) {
-	return `"${s.replace(/["\\\u0000-\u001f]/g, (c) => SHORT[c] ??
-		`\\u${hex4(c)}`)}"`;
+	return `"${s.replace(/["\\\u0000-\u001f\u007f]/g, (c) => (c === '"' ||
+		c === '\\' ? `\\${c}` : `\\u${c.charCodeAt(0).toString(16)
+			.padStart(4, '0')}`))}"`;
 }
 
 /* `, "name": "wheel"` for a named node (1..64 bytes, docs/scene-format.md),

@@ -150,26 +150,27 @@ test('unary nodes, defaults left out, -0 kept, and back', () => {
 	assert.equal(sceneToJson(back), text, 'read back and written again');
 });
 
-test('names: "name" after "id", escaped as JSON, and back', () => {
+test('names: "name" after "id", escaped as blobtree does, and back', () => {
 	const sph = (id, name) => ({ isOp: false, kind: 1, id, params: [1],
 		translate: [0, 0, 0], rotate: [0, 0, 0, 1], color: null,
 		...(name === undefined ? {} : { name }) });
 	const root = { isOp: true, kind: 1, id: 1, blend: 0, range: 0,
-		name: 'body', children: [sph(2, 'wheel "front"\\1\n\u0001é🛞'),
+		name: 'body', children: [sph(2, 'wheel "front"\\1\n\u0001é🛞\u007f'),
 			{ isOp: true, unary: true, kind: 7, id: 3, params: [0.1],
 				name: 'shell', children: [sph(4)] }] };
 	const text = sceneToJson({ camera: null, root });
 	assert.ok(text.includes('"root": {"type": "union", "id": 1, "name": ' +
 		'"body", "children": [\n'), text);
 	assert.ok(text.includes('{"type": "sphere", "id": 2, "name": ' +
-		'"wheel \\"front\\"\\\\1\\n\\u0001é🛞", "radius": 1}'), text);
+		'"wheel \\"front\\"\\\\1\\u000a\\u0001é🛞\\u007f", "radius": 1}'),
+	text);
 	assert.ok(text.includes('{"type": "offset", "id": 3, "name": ' +
 		'"shell", "amount": 0.1, "children": [\n'), text);
 	assert.ok(text.includes('{"type": "sphere", "id": 4, "radius": 1}'),
 		'no name, no "name"');
 	const back = treeFromJson(text);
 	assert.equal(back.root.children[0].name,
-		'wheel "front"\\1\n\u0001é🛞');
+		'wheel "front"\\1\n\u0001é🛞\u007f');
 	assert.equal(sceneToJson(back), text, 'read back and written again');
 });
 
