@@ -189,3 +189,9 @@ int bc_num_vec3(const char *s, float out[3])
 {
 	return bc_num_f32s(s, out, 3);
 }
+
+int bc_cmp_u32(const void *a, const void *b)
+{
+	uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+	return (x > y) - (x < y);
+}

@@ -21,6 +21,7 @@
 #include <string.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/num.h"
 #include "blobcast/buf.h"
 #include "blobcast/bytes.h"
 
@@ -203,12 +204,34 @@ static void put_node(struct bc_buf *b, const struct bc_scene_node *n)
 	}
 }
 
+/* The names table (PROTOCOL.md 8): count, then (id, name) by id. */
+static void put_names(struct bc_buf *b, const struct bc_tree *t)
+{
+	uint32_t n, *ids = bc_tree_name_ids(t, &n);
+	if (!ids) {
+		b->err = BC_ENOMEM;
+		return;
+	}
+	put_u32(b, n);
+	for (uint32_t i = 0; i < n; i++) {
+		const char *name = bc_tree_name(t, ids[i]);
+		uint8_t w[2];
+		size_t k = strlen(name);
+		put_u32(b, ids[i]);
+		bc_put_le16(w, (uint16_t)k);
+		bc_buf_append(b, w, sizeof(w));
+		bc_buf_append(b, name, k);
+	}
+	bc_free(ids);
+}
+
 static int encode(const struct bc_tree *t, const struct bc_camera *cam,
                   bool scene, uint8_t **out, size_t *len)
 {
 	struct bc_scene_walk w;
 	struct bc_scene_node n;
 	struct bc_buf b;
+	bool names = scene && bc_tree_name_count(t) > 0;
 	int rc;
 	*out = NULL;
 	*len = 0;
@@ -219,7 +242,8 @@ static int encode(const struct bc_tree *t, const struct bc_camera *cam,
 	/* A sphere node is 51 bytes; start near the final size. */
 	bc_buf_reserve(&b, 16 + 48 * (size_t)bc_tree_node_count(t));
 	if (scene) {
-		put_u8(&b, cam ? BC_SCENE_FLAG_CAMERA : 0);
+		put_u8(&b, (uint8_t)((cam ? BC_SCENE_FLAG_CAMERA : 0) |
+		                     (names ? BC_SCENE_FLAG_NAMES : 0)));
 		if (cam) {
 			put_f32s(&b, cam->eye, 3);
 			put_f32s(&b, cam->target, 3);
@@ -232,6 +256,9 @@ static int encode(const struct bc_tree *t, const struct bc_camera *cam,
 		put_node(&b, &n);
 	}
 	bc_scene_walk_finish(&w);
+	if (names && !b.err) {
+		put_names(&b, t);
+	}
 	/* No ceiling of its own: BC_ENOMEM is the failure left. */
 	return bc_buf_take(&b, out, len);
 }
@@ -418,12 +445,6 @@ static int read_node(struct bc_rd *r, uint32_t index, uint32_t count,
 	return get_f32s(r, n->prim.params, nf, index, "params", ei);
 }
 
-static int cmp_u32(const void *a, const void *b)
-{
-	uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
-	return (x > y) - (x < y);
-}
-
 /* Fresh ids for nodes encoded with id 0: the smallest ids that no node of
  * the encoding names, so an explicit id later in the stream never collides
  * with one handed out earlier. */
@@ -458,15 +479,106 @@ static int at_node(struct bc_errinfo *ei, int rc, uint32_t index, uint32_t id)
 	return bc_errinfo_set(ei, rc, "node %u (id %u): %s", index, id, reason);
 }
 
-static int decode_tree(struct bc_rd *r, struct bc_tree *t,
+/* Pass 1 over the names table (PROTOCOL.md 8, check 6): the bytes alone.
+ * Leaves r after it and *count its entries. */
+static int scan_names(struct bc_rd *r, uint32_t nodes, uint32_t *count,
+                      struct bc_errinfo *ei)
+{
+	uint32_t prev = 0;
+	if (bc_rd_left(r) < 4) {
+		return bc_errinfo_set(ei, BC_EPROTO_TRUNCATED,
+		                      "names: name_count needs 4 bytes, %zu "
+		                      "left",
+		                      bc_rd_left(r));
+	}
+	*count = bc_rd_u32(r);
+	if (*count == 0 || *count > nodes ||
+	    *count > bc_rd_left(r) / BC_SCENE_NAME_MIN_BYTES) {
+		return bc_errinfo_set(ei, BC_EPROTO_COUNT,
+		                      "names: name_count %u is outside 1..%u "
+		                      "(the node count) or beyond the %zu "
+		                      "bytes left",
+		                      *count, nodes, bc_rd_left(r));
+	}
+	for (uint32_t i = 0; i < *count; i++) {
+		uint32_t id;
+		uint16_t n;
+		if (bc_rd_left(r) < 6) {
+			return bc_errinfo_set(ei, BC_EPROTO_TRUNCATED,
+			                      "name %u: id and length need 6 "
+			                      "bytes, %zu left",
+			                      i, bc_rd_left(r));
+		}
+		id = bc_rd_u32(r);
+		n = bc_rd_u16(r);
+		if (id == 0 || id <= prev) {
+			return bc_errinfo_set(
+			    ei, id != 0 && id == prev ? BC_EDUPID : BC_ERANGE,
+			    "name %u: id %u after id %u (ids must increase "
+			    "from 1)",
+			    i, id, prev);
+		}
+		prev = id;
+		if (n == 0 || n > BC_TREE_NAME_MAX) {
+			return bc_errinfo_set(ei, BC_EPROTO_LENGTH,
+			                      "name %u (node %u): length %u is "
+			                      "outside 1..%u",
+			                      i, id, (unsigned)n,
+			                      BC_TREE_NAME_MAX);
+		}
+		if (bc_rd_left(r) < n) {
+			return bc_errinfo_set(
+			    ei, BC_EPROTO_TRUNCATED,
+			    "name %u (node %u): needs %u bytes, "
+			    "%zu left",
+			    i, id, (unsigned)n, bc_rd_left(r));
+		}
+		if (bc_utf8_check(r->p + r->pos, n) < n) {
+			return bc_errinfo_set(
+			    ei, BC_ESTRING,
+			    "name %u (node %u) breaks UTF-8 or "
+			    "holds NUL",
+			    i, id);
+		}
+		r->pos += n;
+	}
+	return 0;
+}
+
+/* Pass 2: names the nodes; ids are the scene's own, sorted (an id the
+ * decoder chose for a node sent with id 0 is not one). */
+static int put_names_in(struct bc_rd *r, struct bc_tree *t, uint32_t count,
+                        const uint32_t *ids, uint32_t nids,
+                        struct bc_errinfo *ei)
+{
+	r->pos += 4;
+	for (uint32_t i = 0; i < count; i++) {
+		uint32_t id = bc_rd_u32(r);
+		uint16_t n = bc_rd_u16(r);
+		int rc;
+		if (!bsearch(&id, ids, nids, sizeof(*ids), bc_cmp_u32)) {
+			return bc_errinfo_set(ei, BC_ENONODE,
+			                      "name %u: no node has id %u", i,
+			                      id);
+		}
+		if ((rc = bc_tree_set_name(t, id, (const char *)r->p + r->pos,
+		                           n, ei))) {
+			return rc;
+		}
+		r->pos += n;
+	}
+	return 0;
+}
+
+static int decode_tree(struct bc_rd *r, bool names, struct bc_tree *t,
                        struct bc_errinfo *ei)
 {
-	uint32_t count, nopen = 0, nids = 0, nzero = 0;
+	uint32_t count, nopen = 0, nids = 0, nzero = 0, nnames = 0;
 	uint32_t *left = NULL, *opener = NULL; /* per open operator */
 	uint32_t *ids = NULL;
 	struct dnode n;
 	struct fresh fr = {0};
-	size_t start;
+	size_t start, names_at = 0;
 	int rc;
 
 	if ((rc = need(r, 4, 0, "node_count", ei))) {
@@ -541,14 +653,18 @@ static int decode_tree(struct bc_rd *r, struct bc_tree *t,
 		                    opener[nopen - 1], left[nopen - 1]);
 		goto cleanup;
 	}
-	if (bc_rd_left(r)) {
-		rc = bc_errinfo_set(ei, BC_EPROTO_TRAILING,
-		                    "%zu bytes after the last node",
-		                    bc_rd_left(r));
+	names_at = r->pos;
+	if (names && (rc = scan_names(r, count, &nnames, ei))) {
 		goto cleanup;
 	}
-	if (nzero) {
-		qsort(ids, nids, sizeof(uint32_t), cmp_u32);
+	if (bc_rd_left(r)) {
+		rc = bc_errinfo_set(ei, BC_EPROTO_TRAILING,
+		                    "%zu bytes after the %s", bc_rd_left(r),
+		                    names ? "names" : "last node");
+		goto cleanup;
+	}
+	if (nzero || nnames) {
+		qsort(ids, nids, sizeof(uint32_t), bc_cmp_u32);
 		fr.ids = ids;
 		fr.n = nids;
 		fr.next = 1;
@@ -586,7 +702,10 @@ static int decode_tree(struct bc_rd *r, struct bc_tree *t,
 			}
 		}
 	}
-	rc = bc_tree_end(t, ei);
+	if ((rc = bc_tree_end(t, ei)) == 0 && nnames) {
+		r->pos = names_at;
+		rc = put_names_in(r, t, nnames, ids, nids, ei);
+	}
 cleanup:
 	bc_free(ids);
 	bc_free(left);
@@ -600,7 +719,7 @@ static int decode(const uint8_t *buf, size_t len, bool scene, struct bc_tree *t,
 {
 	struct bc_rd r = bc_rd_init(buf, buf ? len : 0);
 	struct bc_camera c;
-	bool with_cam = false;
+	bool with_cam = false, names = false;
 	int rc;
 	bc_camera_default(&c);
 	if (cam) {
@@ -621,13 +740,15 @@ static int decode(const uint8_t *buf, size_t len, bool scene, struct bc_tree *t,
 			                      "scene: empty (no flags byte)");
 		}
 		flags = bc_rd_u8(&r);
-		if (flags & ~BC_SCENE_FLAG_CAMERA) {
+		if (flags & ~(BC_SCENE_FLAG_CAMERA | BC_SCENE_FLAG_NAMES)) {
 			return bc_errinfo_set(
 			    ei, BC_EPROTO_FLAGS,
 			    "scene: reserved flag bits 0x%02x "
 			    "set",
-			    flags & ~BC_SCENE_FLAG_CAMERA);
+			    flags &
+			        ~(BC_SCENE_FLAG_CAMERA | BC_SCENE_FLAG_NAMES));
 		}
+		names = (flags & BC_SCENE_FLAG_NAMES) != 0;
 		with_cam = (flags & BC_SCENE_FLAG_CAMERA) != 0;
 		if (with_cam) {
 			float f[10];
@@ -656,7 +777,7 @@ static int decode(const uint8_t *buf, size_t len, bool scene, struct bc_tree *t,
 			}
 		}
 	}
-	if ((rc = decode_tree(&r, t, ei))) {
+	if ((rc = decode_tree(&r, names, t, ei))) {
 		/* Leave the tree empty, not half built. */
 		bc_tree_begin(t);
 		return rc;

@@ -37,6 +37,7 @@
 #include <jansson.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/num.h"
 #include "blobcast/buf.h"
 
 #if defined(__GNUC__)
@@ -312,7 +313,8 @@ static int check_keys(struct jctx *c, json_t *obj, const char *const *allowed,
 		for (size_t i = 0; i < n && !ok; i++) {
 			ok = strcmp(key, allowed[i]) == 0;
 		}
-		if (ok) {
+		/* Every node may carry a name (set_name). */
+		if (ok || strcmp(key, "name") == 0) {
 			continue;
 		}
 		quote_untrusted(q, sizeof(q), key);
@@ -338,6 +340,35 @@ static int builder_fail(struct jctx *c, int rc)
 	memcpy(reason, c->ei->msg, sizeof(reason));
 	reason[sizeof(reason) - 1] = '\0';
 	return jfail(c, rc, NULL, -1, "%s", reason);
+}
+
+/* The node just added with id takes obj's "name", when it has one: a
+ * string of 1..BC_TREE_NAME_MAX bytes (jansson has checked the UTF-8; a
+ * \u0000 escape is refused here). */
+static int set_name(struct jctx *c, const json_t *obj, uint32_t id)
+{
+	const json_t *v = json_object_get(obj, "name");
+	size_t len;
+	int rc;
+	if (!v) {
+		return 0;
+	}
+	if (!json_is_string(v)) {
+		return jfail(c, BC_EPARSE, "name", -1,
+		             "expected a string, got %s", json_kind(v));
+	}
+	len = json_string_length(v);
+	if (len == 0) {
+		return jfail(c, BC_ERANGE, "name", -1,
+		             "a name is 1..%u bytes; leave the key out for "
+		             "none",
+		             BC_TREE_NAME_MAX);
+	}
+	if ((rc = bc_tree_set_name(c->t, id, json_string_value(v), len,
+	                           c->ei))) {
+		return builder_fail(c, rc);
+	}
+	return 0;
 }
 
 /* ---- reading: nodes ------------------------------------------------------ */
@@ -404,11 +435,11 @@ static int parse_prim(struct jctx *c, json_t *obj, enum bc_prim kind)
 	if ((rc = get_id(c, obj, &id))) {
 		return rc;
 	}
-	if ((rc = bc_tree_put_prim(c->t, id ? id : fresh_next(&c->fr), &p,
-	                           c->ei))) {
+	id = id ? id : fresh_next(&c->fr);
+	if ((rc = bc_tree_put_prim(c->t, id, &p, c->ei))) {
 		return builder_fail(c, rc);
 	}
-	return 0;
+	return set_name(c, obj, id);
 }
 
 static int parse_op(struct jctx *c, json_t *obj, enum bc_op kind)
@@ -467,9 +498,12 @@ static int parse_op(struct jctx *c, json_t *obj, enum bc_op kind)
 	if ((rc = get_id(c, obj, &id))) {
 		return rc;
 	}
-	if ((rc = bc_tree_push_op(c->t, id ? id : fresh_next(&c->fr), &op,
-	                          c->ei))) {
+	id = id ? id : fresh_next(&c->fr);
+	if ((rc = bc_tree_push_op(c->t, id, &op, c->ei))) {
 		return builder_fail(c, rc);
+	}
+	if ((rc = set_name(c, obj, id))) {
+		return rc;
 	}
 	c->depth++;
 	for (size_t i = 0; i < n; i++) {
@@ -550,9 +584,12 @@ static int parse_unary(struct jctx *c, json_t *obj, enum bc_op kind)
 	if ((rc = get_id(c, obj, &id))) {
 		return rc;
 	}
-	if ((rc = bc_tree_push_unary(c->t, id ? id : fresh_next(&c->fr), &un,
-	                             c->ei))) {
+	id = id ? id : fresh_next(&c->fr);
+	if ((rc = bc_tree_push_unary(c->t, id, &un, c->ei))) {
 		return builder_fail(c, rc);
+	}
+	if ((rc = set_name(c, obj, id))) {
+		return rc;
 	}
 	c->depth++;
 	c->idx[c->depth] = 0;
@@ -651,12 +688,6 @@ static int collect_ids(struct jctx *c, const json_t *obj, uint32_t depth)
 		}
 	}
 	return 0;
-}
-
-static int cmp_u32(const void *a, const void *b)
-{
-	uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
-	return (x > y) - (x < y);
 }
 
 static int parse_camera(struct jctx *c, json_t *obj, struct bc_camera *cam)
@@ -825,7 +856,7 @@ int bc_scene_parse_json(const char *text, size_t len, struct bc_tree *t,
 		goto cleanup;
 	}
 	if (c.fr.n) {
-		qsort(c.fr.ids, c.fr.n, sizeof(uint32_t), cmp_u32);
+		qsort(c.fr.ids, c.fr.n, sizeof(uint32_t), bc_cmp_u32);
 	}
 	c.fr.next = 1;
 	c.nodes = 0;
@@ -1007,7 +1038,35 @@ static bool same_bits(const float *a, const float *b, uint32_t n)
 	return memcmp(a, b, n * sizeof(float)) == 0;
 }
 
-static void write_prim(struct bc_buf *b, const struct bc_scene_node *n)
+/* `, "name": "..."` when node id has a name: JSON's escapes for the
+ * quote, the backslash and control characters; other UTF-8 as it is. */
+static void sb_name(struct bc_buf *b, const struct bc_tree *t, uint32_t id)
+{
+	const char *s = bc_tree_name(t, id);
+	if (!s) {
+		return;
+	}
+	sb_puts(b, ", \"name\": \"");
+	for (; *s; s++) {
+		unsigned char ch = (unsigned char)*s;
+		char esc[8];
+		if (ch == '"' || ch == '\\') {
+			esc[0] = '\\';
+			esc[1] = (char)ch;
+			esc[2] = '\0';
+			sb_puts(b, esc);
+		} else if (ch < 0x20 || ch == 0x7f) {
+			snprintf(esc, sizeof(esc), "\\u%04x", ch);
+			sb_puts(b, esc);
+		} else {
+			bc_buf_append(b, s, 1);
+		}
+	}
+	sb_puts(b, "\"");
+}
+
+static void write_prim(struct bc_buf *b, const struct bc_tree *t,
+                       const struct bc_scene_node *n)
 {
 	static const float zero[3] = {0.0f, 0.0f, 0.0f};
 	static const float identity[4] = {0.0f, 0.0f, 0.0f, 1.0f};
@@ -1016,6 +1075,7 @@ static void write_prim(struct bc_buf *b, const struct bc_scene_node *n)
 	sb_puts(b, info->name);
 	sb_puts(b, "\", \"id\": ");
 	sb_uint(b, n->id);
+	sb_name(b, t, n->id);
 	for (uint32_t i = 0; i < info->nparams; i++) {
 		const struct bc_param_desc *d = &info->params[i];
 		const float *v = n->prim.params + d->offset;
@@ -1039,12 +1099,14 @@ static void write_prim(struct bc_buf *b, const struct bc_scene_node *n)
 	sb_puts(b, "}");
 }
 
-static void write_op(struct bc_buf *b, const struct bc_scene_node *n)
+static void write_op(struct bc_buf *b, const struct bc_tree *t,
+                     const struct bc_scene_node *n)
 {
 	sb_puts(b, "{\"type\": \"");
 	sb_puts(b, bc_op_name(n->op.kind));
 	sb_puts(b, "\", \"id\": ");
 	sb_uint(b, n->id);
+	sb_name(b, t, n->id);
 	if (bc_op_is_unary(n->op.kind)) {
 		const struct bc_unary_info *info = bc_unary_info(n->op.kind);
 		if (n->op.kind == BC_OP_MIRROR) {
@@ -1098,11 +1160,11 @@ char *bc_scene_to_json(const struct bc_tree *t, const struct bc_camera *cam)
 			sb_indent(&b, indent_of(n.depth));
 		}
 		if (n.is_op) {
-			write_op(&b, &n);
+			write_op(&b, t, &n);
 			rem[nopen++] = n.nchildren;
 			continue;
 		}
-		write_prim(&b, &n);
+		write_prim(&b, t, &n);
 		/* A finished node: separate it from its next sibling, or
 		 * close every operator it was the last descendant of. */
 		while (nopen) {

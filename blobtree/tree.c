@@ -26,7 +26,7 @@ static uint32_t hash_id(uint32_t id)
 	return id;
 }
 
-static uint32_t map_find(const struct bc__idmap *m, uint32_t id)
+uint32_t bc__map_find(const struct bc__idmap *m, uint32_t id)
 {
 	if (!m->cap || id == 0) {
 		return BC_NONE;
@@ -42,7 +42,7 @@ static uint32_t map_find(const struct bc__idmap *m, uint32_t id)
 	}
 }
 
-static void map_put_nogrow(struct bc__idmap *m, uint32_t id, uint32_t val)
+void bc__map_put_nogrow(struct bc__idmap *m, uint32_t id, uint32_t val)
 {
 	uint32_t i = hash_id(id) & (m->cap - 1);
 	while (m->keys[i] != 0 && m->keys[i] != id) {
@@ -56,7 +56,7 @@ static void map_put_nogrow(struct bc__idmap *m, uint32_t id, uint32_t val)
 }
 
 /* Makes room for `more` insertions at load <= 1/2. */
-static int map_reserve(struct bc__idmap *m, uint32_t more)
+int bc__map_reserve(struct bc__idmap *m, uint32_t more)
 {
 	uint64_t need = ((uint64_t)m->count + more) * 2u;
 	uint32_t cap = m->cap ? m->cap : 16;
@@ -81,7 +81,7 @@ static int map_reserve(struct bc__idmap *m, uint32_t more)
 	}
 	for (uint32_t i = 0; i < m->cap; i++) {
 		if (m->keys[i]) {
-			map_put_nogrow(&bigger, m->keys[i], m->vals[i]);
+			bc__map_put_nogrow(&bigger, m->keys[i], m->vals[i]);
 		}
 	}
 	bc_free(m->keys);
@@ -91,7 +91,7 @@ static int map_reserve(struct bc__idmap *m, uint32_t more)
 }
 
 /* Linear-probing deletion with backward shift: no tombstones. */
-static void map_del(struct bc__idmap *m, uint32_t id)
+void bc__map_del(struct bc__idmap *m, uint32_t id)
 {
 	uint32_t mask = m->cap - 1, i, j;
 	if (!m->cap || id == 0) {
@@ -181,7 +181,8 @@ static void pool_release(struct bc_tree *t, uint32_t n)
 /* Returns an id not in use (ids wrap around past 2^32-1, skipping 0). */
 static uint32_t fresh_id(struct bc_tree *t)
 {
-	while (t->next_id == 0 || map_find(&t->ids, t->next_id) != BC_NONE) {
+	while (t->next_id == 0 ||
+	       bc__map_find(&t->ids, t->next_id) != BC_NONE) {
 		t->next_id++;
 	}
 	return t->next_id++;
@@ -196,6 +197,7 @@ static void tree_clear(struct bc_tree *t)
 	bc_free(t->ids.keys);
 	bc_free(t->ids.vals);
 	bc__lin_free(&t->lin);
+	bc__names_free(&t->names);
 	memset(t, 0, sizeof(*t));
 	t->root = BC_NONE;
 	t->free_head = BC_NONE;
@@ -399,8 +401,8 @@ static void free_subtree(struct bc_tree *t, uint32_t top)
 			}
 			/* A replacement may already map this id to its
 			 * own node. */
-			if (map_find(&t->ids, t->pool[n].id) == n) {
-				map_del(&t->ids, t->pool[n].id);
+			if (bc__map_find(&t->ids, t->pool[n].id) == n) {
+				bc__map_del(&t->ids, t->pool[n].id);
 			}
 			if (t->pool[n].is_op) {
 				t->nops--;
@@ -429,7 +431,7 @@ static void remap_ids(struct bc_tree *t, uint32_t top)
 	uint32_t depth = 0;
 	for (uint32_t n = top; n != BC_NONE;
 	     n = preorder_next(t, n, top, &depth)) {
-		map_put_nogrow(&t->ids, t->pool[n].id, n);
+		bc__map_put_nogrow(&t->ids, t->pool[n].id, n);
 	}
 }
 
@@ -556,18 +558,19 @@ static int add_node(struct bc_tree *t, uint32_t id, bool is_op,
 		return bc_errinfo_set(ei, BC_ELIMIT, "tree: more than %u nodes",
 		                      BC_TREE_MAX_NODES);
 	}
-	if (id != 0 && map_find(&t->ids, id) != BC_NONE) {
+	if (id != 0 && bc__map_find(&t->ids, id) != BC_NONE) {
 		return bc_errinfo_set(ei, BC_EDUPID, "tree: duplicate id %u",
 		                      id);
 	}
-	if ((rc = pool_reserve(t, 1)) || (rc = map_reserve(&t->ids, 1))) {
+	if ((rc = pool_reserve(t, 1)) || (rc = bc__map_reserve(&t->ids, 1))) {
 		return bc_errinfo_set(ei, rc, "tree: %s", bc_strerror(rc));
 	}
 	n = pool_take(t);
 	t->pool[n].auto_id = id == 0;
 	t->pool[n].id = id ? id : fresh_id(t);
 	t->pool[n].is_op = is_op;
-	map_put_nogrow(&t->ids, t->pool[n].id, n);
+	bc__map_put_nogrow(&t->ids, t->pool[n].id, n);
+	t->last_added = n;
 	if (t->nopen) {
 		link_child(t, t->open[t->nopen - 1], BC_NONE, n);
 	} else {
@@ -722,7 +725,7 @@ uint32_t bc_tree_root(const struct bc_tree *t)
 bool bc_tree_get(const struct bc_tree *t, uint32_t id,
                  struct bc_prim_data *prim, struct bc_op_data *op)
 {
-	uint32_t n = map_find(&t->ids, id);
+	uint32_t n = bc__map_find(&t->ids, id);
 	if (prim) {
 		memset(prim, 0, sizeof(*prim));
 	}
@@ -742,13 +745,13 @@ bool bc_tree_get(const struct bc_tree *t, uint32_t id,
 
 uint32_t bc_tree_child_count(const struct bc_tree *t, uint32_t id)
 {
-	uint32_t n = map_find(&t->ids, id);
+	uint32_t n = bc__map_find(&t->ids, id);
 	return n == BC_NONE ? 0 : t->pool[n].nchildren;
 }
 
 uint32_t bc_tree_child(const struct bc_tree *t, uint32_t id, uint32_t k)
 {
-	uint32_t n = map_find(&t->ids, id), c;
+	uint32_t n = bc__map_find(&t->ids, id), c;
 	if (n == BC_NONE) {
 		return 0;
 	}
@@ -758,7 +761,7 @@ uint32_t bc_tree_child(const struct bc_tree *t, uint32_t id, uint32_t k)
 
 uint32_t bc_tree_parent(const struct bc_tree *t, uint32_t id)
 {
-	uint32_t n = map_find(&t->ids, id);
+	uint32_t n = bc__map_find(&t->ids, id);
 	if (n == BC_NONE || t->pool[n].parent == BC_NONE) {
 		return 0;
 	}
@@ -767,7 +770,7 @@ uint32_t bc_tree_parent(const struct bc_tree *t, uint32_t id)
 
 uint32_t bc_tree_slot(const struct bc_tree *t, uint32_t id)
 {
-	uint32_t n = map_find(&t->ids, id);
+	uint32_t n = bc__map_find(&t->ids, id);
 	return (n == BC_NONE || !t->has_lin) ? BC_NONE : t->pool[n].slot;
 }
 
@@ -801,7 +804,7 @@ static void dirty_range(uint32_t *lo, uint32_t *hi, uint32_t a, uint32_t b)
 
 static uint32_t live_node(const struct bc_tree *t, uint32_t id)
 {
-	return t->building ? BC_NONE : map_find(&t->ids, id);
+	return t->building ? BC_NONE : bc__map_find(&t->ids, id);
 }
 
 int bc_tree_set_prim(struct bc_tree *t, uint32_t id,
@@ -922,7 +925,7 @@ int bc_tree_set_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
 bool bc_tree_get_unary(const struct bc_tree *t, uint32_t id,
                        struct bc_unary *out)
 {
-	uint32_t n = map_find(&t->ids, id);
+	uint32_t n = bc__map_find(&t->ids, id);
 	memset(out, 0, sizeof(*out));
 	if (n == BC_NONE || !bc__node_unary(&t->pool[n])) {
 		return false;
@@ -958,7 +961,7 @@ static int check_ids(const struct bc_tree *t, const struct bc_tree *sub,
 		if (sn->auto_id) {
 			continue;
 		}
-		m = map_find(&t->ids, sn->id);
+		m = bc__map_find(&t->ids, sn->id);
 		if (m != BC_NONE &&
 		    (allowed == BC_NONE || !within(t, m, allowed))) {
 			return bc_errinfo_set(ei, BC_EDUPID,
@@ -979,7 +982,7 @@ static uint32_t copy_node(struct bc_tree *t, const struct bc__node *sn,
 	memcpy(t->pool[m].uparam, sn->uparam, sizeof(sn->uparam));
 	t->pool[m].auto_id = sn->auto_id;
 	t->pool[m].id = (sn->auto_id && !keep_ids) ? fresh_id(t) : sn->id;
-	map_put_nogrow(&t->ids, t->pool[m].id, m);
+	bc__map_put_nogrow(&t->ids, t->pool[m].id, m);
 	t->nnodes++;
 	if (sn->is_op) {
 		t->nops++;
@@ -1056,7 +1059,7 @@ static int prepare_graft(struct bc_tree *t, const struct bc_tree *sub,
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
 	}
 	if ((rc = pool_reserve(t, st.nodes)) ||
-	    (rc = map_reserve(&t->ids, st.nodes))) {
+	    (rc = bc__map_reserve(&t->ids, st.nodes))) {
 		bc__lin_free(fresh);
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
 	}
@@ -1099,6 +1102,9 @@ int bc_tree_insert(struct bc_tree *t, uint32_t parent_id, uint32_t pos,
 	if ((rc = check_ids(t, sub, sub->root, BC_NONE, ei))) {
 		return rc;
 	}
+	if ((rc = bc__names_reserve(&t->names, sub->names.n))) {
+		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
+	}
 	if ((rc = prepare_graft(t, sub, depth_of(t, p), &none, &fresh, ei))) {
 		return rc;
 	}
@@ -1115,6 +1121,7 @@ int bc_tree_insert(struct bc_tree *t, uint32_t parent_id, uint32_t pos,
 		return rc;
 	}
 	install_lin(t, &fresh);
+	bc__names_graft(t, sub);
 	return 0;
 }
 
@@ -1141,7 +1148,7 @@ static void cut(struct bc_tree *t, uint32_t n)
 			unlink_child(t, p);
 			link_child(t, gp, after, only);
 		}
-		map_del(&t->ids, t->pool[p].id);
+		bc__map_del(&t->ids, t->pool[p].id);
 		t->nops--;
 		t->nnodes--;
 		pool_release(t, p);
@@ -1172,6 +1179,10 @@ int bc_tree_remove(struct bc_tree *t, uint32_t id, struct bc_errinfo *ei)
 	                                        t->nops - st.ops - collapse))) {
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
 	}
+	bc__names_drop_subtree(t, n);
+	if (collapse) {
+		bc__names_del(&t->names, t->pool[p].id);
+	}
 	cut(t, n);
 	install_lin(t, &fresh);
 	return 0;
@@ -1193,6 +1204,9 @@ int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
 	}
 	if ((rc = check_ids(t, sub, sub->root, n, ei))) {
 		return rc;
+	}
+	if ((rc = bc__names_reserve(&t->names, sub->names.n))) {
+		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
 	}
 	subtree_stats(t, n, &gone);
 	p = t->pool[n].parent;
@@ -1226,8 +1240,12 @@ int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
 		bc__lin_free(&fresh);
 		return rc;
 	}
+	/* The replaced nodes' names go, reused ids included: the
+	 * subtree's own names are the new nodes'. */
+	bc__names_drop_subtree(t, n);
 	free_subtree(t, n);
 	install_lin(t, &fresh);
+	bc__names_graft(t, sub);
 	return 0;
 }
 
@@ -1246,6 +1264,11 @@ int bc_tree_copy(struct bc_tree *dst, const struct bc_tree *src,
 	}
 	if ((rc = prepare_graft(dst, src, 0, &none, &fresh, ei))) {
 		return rc;
+	}
+	if ((rc = bc__names_copy(&dst->names, &src->names))) {
+		bc__lin_free(&fresh);
+		tree_clear(dst);
+		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
 	}
 	dst->root = copy_in(dst, src, src->root, true);
 	/* Keep the numbering of fresh ids where src would continue it. */

@@ -44,6 +44,27 @@ struct bc__idmap {
 	uint32_t count;
 };
 
+/* ids map (tree.c): find gives BC_NONE for an unknown id; put needs room
+ * made by reserve (load <= 1/2); del shifts back, leaving no tombstone. */
+uint32_t bc__map_find(const struct bc__idmap *m, uint32_t id);
+void bc__map_put_nogrow(struct bc__idmap *m, uint32_t id, uint32_t val);
+int bc__map_reserve(struct bc__idmap *m, uint32_t more);
+void bc__map_del(struct bc__idmap *m, uint32_t id);
+
+/* Node names (names.c): kept apart from the nodes, which every primitive
+ * pays for, in a dense array indexed through an id map; most scenes name a
+ * few nodes or none. */
+struct bc__name {
+	uint32_t id;
+	uint8_t len;
+	char text[BC_TREE_NAME_MAX + 1]; /* NUL-terminated */
+};
+struct bc__names {
+	struct bc__idmap at; /* id -> index in v */
+	struct bc__name *v;
+	uint32_t n, cap;
+};
+
 struct bc_tree {
 	struct bc__node *pool;
 	uint32_t npool, cap;
@@ -62,7 +83,26 @@ struct bc_tree {
 	struct bc_lin lin;
 	bool has_lin;
 	struct bc_dirty dirty;
+
+	struct bc__names names;
+	uint32_t last_added; /* pool index of the builder's newest node */
 };
+
+/* names.c */
+
+void bc__names_free(struct bc__names *nm);
+/* Room for `more` names. Returns 0 or BC_ENOMEM. */
+int bc__names_reserve(struct bc__names *nm, uint32_t more);
+void bc__names_del(struct bc__names *nm, uint32_t id);
+/* Drops the names of every node of the subtree at pool node top. */
+void bc__names_drop_subtree(struct bc_tree *t, uint32_t top);
+/* Gives t the names of sub's nodes whose ids sub chose (a graft keeps
+ * those ids), room reserved with bc__names_reserve(sub's count). */
+void bc__names_graft(struct bc_tree *t, const struct bc_tree *sub);
+/* dst's names become a copy of src's. Returns 0 or BC_ENOMEM. */
+int bc__names_copy(struct bc__names *dst, const struct bc__names *src);
+/* Checks a name (1..BC_TREE_NAME_MAX bytes of strict UTF-8 without NUL). */
+int bc__name_check(const char *name, size_t len, struct bc_errinfo *ei);
 
 /* tree.c */
 

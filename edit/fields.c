@@ -368,6 +368,9 @@ int bc_edit_apply_op(struct bc_tree *t, const struct bc_proto_edit_op *e,
 			    e->node);
 		}
 		return bc_tree_remove(t, e->node, ei);
+	case BC_PROTO_EDIT_NAME:
+		return bc_tree_set_name(t, e->node, e->name.ptr, e->name.len,
+		                        ei);
 	case BC_PROTO_EDIT_INSERT:
 	case BC_PROTO_EDIT_REPLACE:
 		break;

@@ -27,9 +27,11 @@
  * each put back all below): the inverse is then one REPLACE of the root
  * by the scene before (bc__inverse_bound), the smallest exact one.
  */
+#include <stdlib.h>
 #include <string.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/num.h"
 #include "blobcast/bytes.h"
 #include "blobcast/scene.h"
 #include "edit_impl.h"
@@ -101,6 +103,48 @@ static int put_node(struct bc_proto_buf *b, const struct bc_scene_node *n)
 	                         n->op.range, n->nchildren);
 }
 
+/* The ids of a subtree's named nodes, gathered as it is written. */
+struct named {
+	uint32_t *ids;
+	uint32_t n, cap;
+};
+
+static int named_add(struct named *nm, const struct bc_tree *t, uint32_t id)
+{
+	if (!bc_tree_name(t, id)) {
+		return 0;
+	}
+	if (nm->n == nm->cap) {
+		uint32_t cap = nm->cap ? 2 * nm->cap : 8;
+		uint32_t *grown = bc_reallocarray(nm->ids, cap, sizeof(*grown));
+		if (!grown) {
+			return BC_ENOMEM;
+		}
+		nm->ids = grown;
+		nm->cap = cap;
+	}
+	nm->ids[nm->n++] = id;
+	return 0;
+}
+
+/* Ends the scene that starts at b->data[0] with the names table of the
+ * nodes in nm (PROTOCOL.md 8: a subtree brings its names), and frees nm. */
+static int put_names(struct bc_proto_buf *b, const struct bc_tree *t,
+                     struct named *nm)
+{
+	int rc = 0;
+	if (nm->n) {
+		qsort(nm->ids, nm->n, sizeof(*nm->ids), bc_cmp_u32);
+		rc = bc_proto_scene_names(b, 0, nm->n);
+		for (uint32_t i = 0; i < nm->n && !rc; i++) {
+			const char *s = bc_tree_name(t, nm->ids[i]);
+			rc = bc_proto_scene_name(b, nm->ids[i], s, strlen(s));
+		}
+	}
+	bc_free(nm->ids);
+	return rc;
+}
+
 /* Writes the nodes of id's subtree, in pre-order, after b's scene header,
  * and their count into it; with pos, id's place among its parent's
  * children too. One walk of t in pre-order: a wide operator's children
@@ -111,6 +155,7 @@ static int walk_subtree(struct bc_proto_buf *b, const struct bc_tree *t,
 {
 	struct bc_scene_walk w;
 	struct bc_scene_node n;
+	struct named nm = {0};
 	uint32_t parent = bc_tree_parent(t, id), count = 0, depth = 0;
 	uint32_t pdepth = 0, k = 0;
 	bool in = false, under = false;
@@ -127,7 +172,9 @@ static int walk_subtree(struct bc_proto_buf *b, const struct bc_tree *t,
 			}
 		}
 		if (in) {
-			rc = put_node(b, &n);
+			if (!(rc = put_node(b, &n))) {
+				rc = named_add(&nm, t, n.id);
+			}
 			count++;
 		} else if (parent != 0 && n.id == parent) {
 			under = true;
@@ -143,7 +190,25 @@ static int walk_subtree(struct bc_proto_buf *b, const struct bc_tree *t,
 	if (!rc) {
 		bc_put_le32(b->data + 1, count);
 	}
-	return rc;
+	if (rc) {
+		bc_free(nm.ids);
+		return rc;
+	}
+	return put_names(b, t, &nm);
+}
+
+/* One primitive as a whole scene, its name with it. */
+static int put_lone_prim(struct bc_proto_buf *b, const struct bc_tree *t,
+                         uint32_t id, const struct bc_prim_data *p)
+{
+	struct named nm = {0};
+	int rc;
+	if ((rc = bc_proto_scene_begin(b, NULL, 1)) ||
+	    (rc = put_prim(b, id, p)) || (rc = named_add(&nm, t, id))) {
+		bc_free(nm.ids);
+		return rc;
+	}
+	return put_names(b, t, &nm);
 }
 
 /* The subtree of node id of t as scene bytes (flags 0, ids as in t), in a
@@ -160,13 +225,10 @@ static int encode_subtree(const struct bc_tree *t, uint32_t id, uint32_t *pos,
 	*out = NULL;
 	*len = 0;
 	bc_proto_buf_init(&b, 0);
-	if ((rc = bc_proto_scene_begin(&b, NULL, 1)) == 0) {
-		if (!pos && bc_tree_get(t, id, &p, &op) &&
-		    op.kind == BC_OP_INVALID) {
-			rc = put_prim(&b, id, &p);
-		} else {
-			rc = walk_subtree(&b, t, id, pos);
-		}
+	if (!pos && bc_tree_get(t, id, &p, &op) && op.kind == BC_OP_INVALID) {
+		rc = put_lone_prim(&b, t, id, &p);
+	} else if ((rc = bc_proto_scene_begin(&b, NULL, 1)) == 0) {
+		rc = walk_subtree(&b, t, id, pos);
 	}
 	if (rc) {
 		bc_proto_buf_finish(&b);
@@ -210,8 +272,7 @@ static int put_state(struct bc_edit_inverse *inv, uint32_t k,
 		uint8_t *fit;
 		int rc;
 		bc_proto_buf_init(&b, 0);
-		if ((rc = bc_proto_scene_begin(&b, NULL, 1)) ||
-		    (rc = put_prim(&b, s->id, &s->p))) {
+		if ((rc = put_lone_prim(&b, t, s->id, &s->p))) {
 			bc_proto_buf_finish(&b);
 			return rc;
 		}
@@ -291,6 +352,24 @@ int bc__inverse_before(struct bc_edit_inverse *inv, const struct bc_tree *t,
 			return 0;
 		}
 		return put_unremove(inv, k, t, top);
+	case BC_PROTO_EDIT_NAME: {
+		/* A NAME giving the earlier name back (empty: none). */
+		const char *old = bc_tree_name(t, e->node);
+		size_t nlen = old ? strlen(old) : 0;
+		char *kept = NULL;
+		if (nlen && !(kept = bc_malloc(nlen))) {
+			return BC_ENOMEM;
+		}
+		if (nlen) {
+			memcpy(kept, old, nlen);
+		}
+		inv->ops[k] = (struct bc_proto_edit_op){
+		    .kind = BC_PROTO_EDIT_NAME,
+		    .node = e->node,
+		    .name = {.ptr = kept, .len = (uint32_t)nlen}};
+		own(inv, k, kept, nlen);
+		return 0;
+	}
 	case BC_PROTO_EDIT_REPLACE:
 		if (!bc_tree_get(t, e->node, NULL, NULL)) {
 			return 0;

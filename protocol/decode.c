@@ -204,7 +204,7 @@ static int rd_str(struct dec *d, const char *what, unsigned min, unsigned max,
 		return truncated(d, what, n);
 	}
 	const uint8_t *p = d->c.p + d->c.pos;
-	size_t bad = bc__utf8_check(p, n);
+	size_t bad = bc_utf8_check(p, n);
 	if (bad < n) {
 		d->c.pos += bad;
 		return fail(d, BC_ESTRING,
@@ -526,6 +526,11 @@ static int dec_ops(struct dec *d, uint16_t *nops,
 		case BC_PROTO_EDIT_REPLACE:
 			TRY(rd_id(d, "op.node", &op.node));
 			TRY(rd_blob(d, "op.subtree", &op.subtree));
+			break;
+		case BC_PROTO_EDIT_NAME:
+			TRY(rd_id(d, "op.node", &op.node));
+			TRY(rd_str(d, "op.name", 0, BC_PROTO_MAX_NAME,
+			           &op.name));
 			break;
 		default:
 			break;

@@ -132,6 +132,10 @@ static void w_ops(struct bc__w *w, uint16_t nops,
 			bc__put_u32(w, op->node);
 			w_blob(w, "op.subtree", op->subtree);
 			break;
+		case BC_PROTO_EDIT_NAME:
+			bc__put_u32(w, op->node);
+			w_str(w, "op.name", op->name, BC_PROTO_MAX_NAME);
+			break;
 		default:
 			/* INVALID: w_enum lets 0 through; the decoder
 			 * refuses it with EENUM. */

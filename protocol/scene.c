@@ -258,6 +258,59 @@ static int scan_nodes(struct scan *s, uint32_t count, struct open_stack *o,
 	return 0;
 }
 
+/* The names table (PROTOCOL.md 8, check 6): count, then (id, name) pairs
+ * with strictly increasing ids. */
+static int scan_names(struct scan *s, uint32_t nodes, uint32_t *count)
+{
+	uint32_t prev = 0;
+	s->node = nodes;
+	TRY(s_u32(s, "name_count", count));
+	if (*count == 0 || *count > nodes) {
+		return sfail(s, BC_EPROTO_COUNT,
+		             "name_count %u is outside 1..%u (the node count)",
+		             *count, nodes);
+	}
+	if (*count > bc_rd_left(&s->c) / BC_PROTO_SCENE_NAME_MIN) {
+		return sfail(
+		    s, BC_EPROTO_COUNT,
+		    "name_count %u needs at least %llu bytes, %zu left", *count,
+		    (unsigned long long)*count * BC_PROTO_SCENE_NAME_MIN,
+		    bc_rd_left(&s->c));
+	}
+	for (uint32_t i = 0; i < *count; i++) {
+		uint32_t id;
+		uint16_t n;
+		TRY(s_need(s, 6, "a name's id and length"));
+		id = bc_rd_u32(&s->c);
+		n = bc_rd_u16(&s->c);
+		if (id == 0) {
+			return sfail(s, BC_ERANGE, "name %u: id 0", i);
+		}
+		if (id <= prev) {
+			return sfail(s, id == prev ? BC_EDUPID : BC_ERANGE,
+			             "name %u: id %u after id %u (ids must "
+			             "increase)",
+			             i, id, prev);
+		}
+		prev = id;
+		if (n == 0 || n > BC_PROTO_MAX_NAME) {
+			return sfail(s, BC_EPROTO_LENGTH,
+			             "name %u (node %u): length %u is outside "
+			             "1..%u",
+			             i, id, (unsigned)n, BC_PROTO_MAX_NAME);
+		}
+		TRY(s_need(s, n, "a name"));
+		if (bc_utf8_check(s->c.p + s->c.pos, n) < n) {
+			return sfail(
+			    s, BC_ESTRING,
+			    "name %u (node %u) breaks UTF-8 or holds NUL", i,
+			    id);
+		}
+		s->c.pos += n;
+	}
+	return 0;
+}
+
 int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
                         struct bc_proto_scene_info *info, struct bc_errinfo *ei)
 {
@@ -270,11 +323,11 @@ int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
 	}
 	uint8_t flags;
 	TRY(s_u8(&s, "flags", &flags));
-	if (flags & ~1u) {
+	if (flags & ~(BC_PROTO_SCENE_FLAG_CAMERA | BC_PROTO_SCENE_FLAG_NAMES)) {
 		return sfail(&s, BC_EPROTO_FLAGS, "scene flags 0x%02x",
 		             (unsigned)flags);
 	}
-	out.has_camera = flags & 1u;
+	out.has_camera = flags & BC_PROTO_SCENE_FLAG_CAMERA;
 	if (out.has_camera) {
 		TRY(s_floats(&s, 10, "camera", NULL));
 	}
@@ -296,9 +349,15 @@ int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
 	if (rc) {
 		return rc;
 	}
+	out.names_at = s.c.pos;
+	if (flags & BC_PROTO_SCENE_FLAG_NAMES) {
+		TRY(scan_names(&s, count, &out.names));
+		s.features |= BC_PROTO_FEATURE_NAMES;
+	}
 	if (bc_rd_left(&s.c)) {
-		return sfail(&s, BC_EPROTO_TRAILING,
-		             "%zu bytes after the last node", bc_rd_left(&s.c));
+		return sfail(&s, BC_EPROTO_TRAILING, "%zu bytes after the %s",
+		             bc_rd_left(&s.c),
+		             out.names ? "names" : "last node");
 	}
 	out.nodes = count;
 	out.features = s.features;
@@ -334,6 +393,47 @@ int bc_proto_scene_begin(struct bc_proto_buf *b, const float *camera,
 	}
 	bc__put_u32(&w, node_count);
 	return commit(b, &w);
+}
+
+int bc_proto_scene_names(struct bc_proto_buf *b, size_t scene_at,
+                         uint32_t count)
+{
+	uint8_t tmp[4];
+	struct bc__w w = {.p = tmp, .cap = sizeof(tmp)};
+	int rc;
+	if (scene_at >= b->len) {
+		return BC_EINVAL;
+	}
+	bc__put_u32(&w, count);
+	if ((rc = commit(b, &w)) == 0) {
+		b->data[scene_at] |= BC_PROTO_SCENE_FLAG_NAMES;
+	}
+	return rc;
+}
+
+int bc_proto_scene_name(struct bc_proto_buf *b, uint32_t id, const char *name,
+                        size_t len)
+{
+	uint8_t tmp[4 + 2 + BC_PROTO_MAX_NAME];
+	struct bc__w w = {.p = tmp, .cap = sizeof(tmp)};
+	if (len > BC_PROTO_MAX_NAME) {
+		return BC_ELIMIT;
+	}
+	bc__put_u32(&w, id);
+	bc__put_u16(&w, (uint16_t)len);
+	bc__put_raw(&w, name, len);
+	return commit(b, &w);
+}
+
+size_t bc_proto_scene_strip_names(uint8_t *bytes, size_t len)
+{
+	struct bc_proto_scene_info info;
+	if (len == 0 || !(bytes[0] & BC_PROTO_SCENE_FLAG_NAMES) ||
+	    bc_proto_scene_scan(bytes, len, &info, NULL)) {
+		return len;
+	}
+	bytes[0] &= (uint8_t)~BC_PROTO_SCENE_FLAG_NAMES;
+	return info.names_at;
 }
 
 int bc_proto_scene_prim(struct bc_proto_buf *b, uint8_t kind, uint32_t id,

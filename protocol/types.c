@@ -210,6 +210,9 @@ static uint32_t ops_features(const struct bc_msg_edit_applied *ea)
 	for (uint16_t i = 0; i < ea->nops; i++) {
 		const struct bc_proto_edit_op *op = &ea->ops[i];
 		struct bc_proto_scene_info info;
+		if (op->kind == BC_PROTO_EDIT_NAME) {
+			f |= BC_PROTO_FEATURE_NAMES;
+		}
 		if (op->subtree.len &&
 		    bc_proto_scene_scan(op->subtree.ptr, op->subtree.len, &info,
 		                        NULL) == 0) {

@@ -1,63 +1,11 @@
 /*
- * The shared byte helpers that are not small enough to inline: strict UTF-8
- * validation and the growth rule of struct bc_proto_buf (doubling, never
- * past the ceiling fixed at init).
+ * The shared byte helper that is not small enough to inline: the growth
+ * rule of struct bc_proto_buf (doubling, never past the ceiling fixed at
+ * init). Strict UTF-8 validation is base's bc_utf8_check().
  */
 #include "wire.h"
 
 #include "blobcast/alloc.h"
-
-size_t bc__utf8_check(const uint8_t *p, size_t n)
-{
-	size_t i = 0;
-	while (i < n) {
-		uint8_t c = p[i];
-		if (c >= 0x01 && c <= 0x7f) {
-			i++;
-			continue;
-		}
-		/* Lead byte: the sequence length and the range of the
-		 * second byte, which is what excludes overlong forms,
-		 * surrogates (U+D800..DFFF) and code points over U+10FFFF
-		 * (RFC 3629, section 4). */
-		size_t len;
-		uint8_t lo = 0x80, hi = 0xbf;
-		if (c >= 0xc2 && c <= 0xdf) {
-			len = 2;
-		} else if (c == 0xe0) {
-			len = 3;
-			lo = 0xa0;
-		} else if (c == 0xed) {
-			len = 3;
-			hi = 0x9f;
-		} else if (c >= 0xe1 && c <= 0xef) {
-			len = 3;
-		} else if (c == 0xf0) {
-			len = 4;
-			lo = 0x90;
-		} else if (c >= 0xf1 && c <= 0xf3) {
-			len = 4;
-		} else if (c == 0xf4) {
-			len = 4;
-			hi = 0x8f;
-		} else {
-			return i; /* NUL, a stray continuation, C0, C1, F5+ */
-		}
-		if (n - i < len) {
-			return i;
-		}
-		if (p[i + 1] < lo || p[i + 1] > hi) {
-			return i;
-		}
-		for (size_t k = 2; k < len; k++) {
-			if (p[i + k] < 0x80 || p[i + k] > 0xbf) {
-				return i;
-			}
-		}
-		i += len;
-	}
-	return n;
-}
 
 int bc__buf_reserve(struct bc_proto_buf *b, size_t k)
 {

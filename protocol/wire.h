@@ -45,11 +45,6 @@ static inline bool bc__bits_finite(uint32_t u)
 	return (u & 0x7f800000u) != 0x7f800000u;
 }
 
-/* Returns the offset of the first byte of p[0..n) that breaks strict UTF-8
- * (overlong forms, surrogates, code points above U+10FFFF, truncated
- * sequences) or is NUL; n when the whole string is valid. */
-size_t bc__utf8_check(const uint8_t *p, size_t n);
-
 /* ---- Writing ------------------------------------------------------------ */
 
 /* With p == NULL the writer only counts (n grows, nothing is stored);

@@ -289,8 +289,20 @@ int bc__apply(struct bc_member *m, const struct bc_proto_edit_op *ops,
               bc_applied_fn done, void *ud, struct bc_errinfo *ei)
 {
 	struct bc_session *s = m->session;
-	struct batch *x = bc_calloc(1, sizeof(*x));
-	bool structural = false;
+	struct batch *x;
+	bool structural = false, names_only = nops > 0, old = false;
+	for (uint32_t i = 0; i < nops; i++) {
+		names_only = names_only && ops[i].kind == BC_PROTO_EDIT_NAME;
+	}
+	for (uint32_t i = 0; names_only && i < s->nmembers; i++) {
+		old = old ||
+		      !(s->members[i]->peer->features & BC_PROTO_FEATURE_NAMES);
+	}
+	/* Members without NAMES get such a change as the whole scene. */
+	if (names_only && bc__state_limit(s, old, "names change", ei)) {
+		return ei->code;
+	}
+	x = bc_calloc(1, sizeof(*x));
 	if (!x || bc_ops_copy(&x->ops, ops, nops)) {
 		bc_free(x);
 		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");

@@ -17,6 +17,7 @@ struct bc_shared *bc_shared_new(size_t len)
 	if (s) {
 		s->refs = 1;
 		s->needs = 0;
+		s->older = NULL;
 		s->len = len;
 	}
 	return s;
@@ -25,6 +26,7 @@ struct bc_shared *bc_shared_new(size_t len)
 void bc_shared_unref(struct bc_shared *s)
 {
 	if (s && --s->refs == 0) {
+		bc_shared_unref(s->older);
 		bc_free(s);
 	}
 }
@@ -65,7 +67,7 @@ int bc_ops_copy(struct bc_ops_copy *out, const struct bc_proto_edit_op *ops,
 	memset(out, 0, sizeof(*out));
 	for (uint32_t i = 0; i < n; i++) {
 		blob += (size_t)ops[i].nfields * sizeof(*ops[i].fields);
-		blob += ops[i].subtree.len;
+		blob += ops[i].subtree.len + ops[i].name.len;
 	}
 	if (!(out->ops = bc_calloc(n ? n : 1, sizeof(*ops))) ||
 	    (blob && !(out->blob = bc_malloc(blob)))) {
@@ -95,6 +97,11 @@ int bc_ops_copy(struct bc_ops_copy *out, const struct bc_proto_edit_op *ops,
 			       op->subtree.len);
 			op->subtree.ptr = out->blob + at;
 			at += op->subtree.len;
+		}
+		if (op->name.len) {
+			memcpy(out->blob + at, ops[i].name.ptr, op->name.len);
+			op->name.ptr = (const char *)out->blob + at;
+			at += op->name.len;
 		}
 	}
 	out->n = n;

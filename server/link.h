@@ -40,6 +40,10 @@ static inline bool bc_conn_ref_eq(struct bc_conn_ref a, struct bc_conn_ref b)
 struct bc_shared {
 	uint32_t refs;
 	uint32_t needs; /* features a receiver must have (bc_proto) */
+	/* The same message for a receiver not granted NAMES (its names left
+	 * out, PROTOCOL.md 4.1), owned by this one; NULL when needs has no
+	 * BC_PROTO_FEATURE_NAMES. */
+	struct bc_shared *older;
 	size_t len;
 	uint8_t data[];
 };

@@ -76,11 +76,60 @@ static void cannot_serve(struct bc_member *m, uint32_t needs)
 	         true);
 }
 
+/* ed's operations for a member not granted NAMES (PROTOCOL.md 7.12):
+ * without NAME operations, subtrees without their names tables (copies
+ * in *bytes, which the caller frees). Returns the operations kept (in
+ * ops, BC_PROTO_MAX_EDIT_OPS), or -1 when out of memory. */
+static int without_names(const struct bc_msg_edit_applied *ed,
+                         struct bc_proto_edit_op *ops, uint8_t **bytes)
+{
+	size_t total = 0, at = 0;
+	int n = 0;
+	*bytes = NULL;
+	for (uint16_t i = 0; i < ed->nops; i++) {
+		total += ed->ops[i].subtree.len;
+	}
+	if (total && !(*bytes = bc_malloc(total))) {
+		return -1;
+	}
+	for (uint16_t i = 0; i < ed->nops; i++) {
+		struct bc_proto_edit_op op = ed->ops[i];
+		if (op.kind == BC_PROTO_EDIT_NAME) {
+			continue;
+		}
+		if (op.subtree.len &&
+		    (op.subtree.ptr[0] & BC_PROTO_SCENE_FLAG_NAMES)) {
+			uint8_t *copy = *bytes + at;
+			memcpy(copy, op.subtree.ptr, op.subtree.len);
+			op.subtree.len = (uint32_t)bc_proto_scene_strip_names(
+			    copy, op.subtree.len);
+			op.subtree.ptr = copy;
+			at += op.subtree.len;
+		}
+		ops[n++] = op;
+	}
+	return n;
+}
+
+/* The session's SCENE_STATE at its order, kept for joiners too. */
+static struct bc_shared *state_now(struct bc_session *s)
+{
+	if (!s->state_msg || s->state_order != s->order) {
+		bc_shared_unref(s->state_msg);
+		s->state_msg =
+		    bc__state_msg(s->tree, &s->camera, s->order, 0, 0);
+		s->state_order = s->order;
+	}
+	return s->state_msg;
+}
+
 void bc__send(struct bc_member *m, const struct bc_msg *msg)
 {
 	const struct bc_link *l = m->ss->link;
 	uint32_t missing = 0;
 	struct bc_msg older;
+	struct bc_proto_edit_op *kept = NULL;
+	uint8_t *bytes = NULL;
 	/* Only a client without every feature needs the message looked
 	 * at (which scans an edit's subtrees), not each member of a
 	 * broadcast. */
@@ -89,22 +138,48 @@ void bc__send(struct bc_member *m, const struct bc_msg *msg)
 	        BC_PROTO_FEATURES_SENT) {
 		missing = bc_proto_msg_features(msg) & ~m->peer->features;
 	}
-	if (missing & ~BC_PROTO_FEATURE_UNDO) {
+	if (missing & ~(BC_PROTO_FEATURE_UNDO | BC_PROTO_FEATURE_NAMES)) {
 		cannot_serve(m, missing);
 		return;
 	}
-	if (missing) {
+	older = *msg;
+	if (missing & BC_PROTO_FEATURE_UNDO) {
 		/* A client without UNDO gets the undo's operations as an
 		 * edit like any other: the same scene, without the flag and
 		 * the fields it would not know. */
-		older = *msg;
 		older.flags &=
 		    (uint16_t) ~(BC_PROTO_FLAG_UNDO | BC_PROTO_FLAG_REDO);
 		older.edit_applied.target_order = 0;
 		older.edit_applied.target_author.len = 0;
-		msg = &older;
 	}
-	l->send(l->ud, m->peer->ref, msg);
+	if (missing & BC_PROTO_FEATURE_NAMES) {
+		int n = -1;
+		if ((kept = bc_calloc(msg->edit_applied.nops, sizeof(*kept)))) {
+			n = without_names(&msg->edit_applied, kept, &bytes);
+		}
+		if (n == 0 && m->session) {
+			/* Nothing left: the whole scene at this order. */
+			struct bc_shared *st = state_now(m->session);
+			if (st) {
+				bc__send_state_msg(m->session, m, st);
+			}
+			bc_free(kept);
+			return;
+		}
+		if (n < 0) {
+			bc_log(BC_LOG_ERROR,
+			       "member %u: out of memory for "
+			       "an edit without names",
+			       m->member_id);
+			bc_free(kept);
+			return;
+		}
+		older.edit_applied.nops = (uint16_t)n;
+		older.edit_applied.ops = kept;
+	}
+	l->send(l->ud, m->peer->ref, missing ? &older : msg);
+	bc_free(bytes);
+	bc_free(kept);
 }
 
 void bc__send_error(struct bc_member *m, uint32_t seq, int code,
@@ -148,13 +223,27 @@ void bc__send_info(struct bc_session *s)
 	}
 }
 
+/* st, encoded once for every receiver. */
+static struct bc_shared *shared_msg(const struct bc_msg *st)
+{
+	struct bc_proto_buf b;
+	struct bc_errinfo ei = {0};
+	struct bc_shared *msg = NULL;
+	bc_proto_buf_init(&b, 0);
+	if (bc_proto_encode(&b, st, &ei) == 0 && (msg = bc_shared_new(b.len))) {
+		memcpy(msg->data, b.data, b.len);
+		/* Who may be sent it (PROTOCOL.md 4). */
+		msg->needs = bc_proto_msg_features(st);
+	}
+	bc_proto_buf_finish(&b);
+	return msg;
+}
+
 struct bc_shared *bc__state_msg(const struct bc_tree *t,
                                 const struct bc_camera *cam, uint64_t order,
                                 uint32_t author, uint32_t author_seq)
 {
 	struct bc_msg st = {.type = BC_MSG_SCENE_STATE};
-	struct bc_proto_buf b;
-	struct bc_errinfo ei = {0};
 	struct bc_shared *msg = NULL;
 	uint8_t *bytes = NULL;
 	size_t len = 0;
@@ -166,16 +255,40 @@ struct bc_shared *bc__state_msg(const struct bc_tree *t,
 	st.scene_state.author_seq = author_seq;
 	st.scene_state.scene.ptr = bytes;
 	st.scene_state.scene.len = (uint32_t)len;
-	bc_proto_buf_init(&b, 0);
-	if (bc_proto_encode(&b, &st, &ei) == 0 &&
-	    (msg = bc_shared_new(b.len))) {
-		memcpy(msg->data, b.data, b.len);
-		/* Who may be sent it (PROTOCOL.md 4). */
-		msg->needs = bc_proto_msg_features(&st);
+	msg = shared_msg(&st);
+	if (msg && (msg->needs & BC_PROTO_FEATURE_NAMES)) {
+		/* The tree's bytes are the same without the names table,
+		 * which ends the scene (PROTOCOL.md 8). */
+		st.scene_state.scene.len =
+		    (uint32_t)bc_proto_scene_strip_names(bytes, len);
+		if (!(msg->older = shared_msg(&st))) {
+			bc_shared_unref(msg);
+			msg = NULL;
+		}
 	}
-	bc_proto_buf_finish(&b);
 	bc_free(bytes);
 	return msg;
+}
+
+int bc__state_limit(struct bc_session *s, bool old, const char *what,
+                    struct bc_errinfo *ei)
+{
+	uint64_t now = bc__now_ms(s->ss);
+	if (!old) {
+		return 0;
+	}
+	if (s->camera_state_ms &&
+	    now - s->camera_state_ms < BC_SRV_CAMERA_STATE_MS) {
+		return bc_errinfo_set(
+		    ei, BC_EBUSY,
+		    "%s at most once in %u ms while members of an older "
+		    "protocol are in the session; try again in %u ms",
+		    what, BC_SRV_CAMERA_STATE_MS,
+		    (unsigned)(BC_SRV_CAMERA_STATE_MS -
+		               (now - s->camera_state_ms)));
+	}
+	s->camera_state_ms = now;
+	return 0;
 }
 
 void bc__send_state_msg(struct bc_session *s, struct bc_member *to,
@@ -192,10 +305,16 @@ void bc__send_state_msg(struct bc_session *s, struct bc_member *to,
 	}
 	for (uint32_t i = 0; i < n; i++) {
 		uint32_t missing = msg->needs & ~members[i]->peer->features;
+		struct bc_shared *send = msg;
+		if (missing == BC_PROTO_FEATURE_NAMES && msg->older) {
+			/* Not granted NAMES: the scene without its names. */
+			send = msg->older;
+			missing = send->needs & ~members[i]->peer->features;
+		}
 		if (missing) {
 			cannot_serve(members[i], missing);
 		} else {
-			l->send_shared(l->ud, members[i]->peer->ref, msg);
+			l->send_shared(l->ud, members[i]->peer->ref, send);
 		}
 	}
 }

@@ -239,32 +239,19 @@ int bc__present_camera_record(const uint8_t *rec, size_t len,
 
 /* Members that do not know SESSION_CAMERA_SET are sent the whole
  * SCENE_STATE at the new order instead, so their mirrors see no gap
- * (PROTOCOL.md 7.25); that is up to a whole scene per member for a
- * 40-byte request, so it is allowed once per BC_SRV_CAMERA_STATE_MS in a
- * session that has such members. Returns true when it must wait. */
+ * (PROTOCOL.md 7.25). Returns true when the camera must wait. */
 static bool state_rate_limited(struct bc_member *c, uint32_t seq)
 {
 	struct bc_session *s = c->session;
-	uint64_t now = bc__now_ms(s->ss);
+	struct bc_errinfo ei = {0};
 	bool old = false;
 	for (uint32_t i = 0; i < s->nmembers; i++) {
 		old = old || !s->members[i]->peer->knows_present;
 	}
-	if (!old) {
-		return false;
-	}
-	if (s->camera_state_ms &&
-	    now - s->camera_state_ms < BC_SRV_CAMERA_STATE_MS) {
-		bc__send_error(c, seq, BC_EBUSY,
-		               "the session camera changes at most once in %u "
-		               "ms while members of an older protocol are in "
-		               "the session; try again in %u ms",
-		               BC_SRV_CAMERA_STATE_MS,
-		               (unsigned)(BC_SRV_CAMERA_STATE_MS -
-		                          (now - s->camera_state_ms)));
+	if (bc__state_limit(s, old, "the session camera changes", &ei)) {
+		bc__send_error(c, seq, ei.code, "%s", ei.msg);
 		return true;
 	}
-	s->camera_state_ms = now;
 	return false;
 }
 

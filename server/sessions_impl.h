@@ -62,8 +62,9 @@ struct bc_session {
 	 * the order stays state_order. */
 	struct bc_shared *state_msg;
 	uint64_t state_order;
-	/* When a SESSION_CAMERA last sent members of an older protocol the
-	 * whole scene (loop clock; present.c). */
+	/* When a SESSION_CAMERA or a change made only of NAMEs last sent
+	 * members of an older protocol the whole scene (loop clock;
+	 * bc__state_limit). */
 	uint64_t camera_state_ms;
 };
 
@@ -144,6 +145,12 @@ struct bc_shared *bc__state_msg(const struct bc_tree *t,
  * member: one encoding, queued by reference. */
 void bc__send_state_msg(struct bc_session *s, struct bc_member *to,
                         struct bc_shared *msg);
+/* A change that members of an older protocol (old: s has some) receive as
+ * the whole SCENE_STATE is taken once per BC_SRV_CAMERA_STATE_MS
+ * (PROTOCOL.md 7.12, 7.25): returns 0 (and notes the time), or BC_EBUSY
+ * in ei saying "<what> at most once in ...". */
+int bc__state_limit(struct bc_session *s, bool old, const char *what,
+                    struct bc_errinfo *ei);
 /* s's SCENE_STATE, encoded here, to one member or every one. */
 void bc__send_state(struct bc_session *s, struct bc_member *to, uint32_t author,
                     uint32_t author_seq);

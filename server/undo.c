@@ -203,7 +203,7 @@ static bool mark_subtree(struct bc_undo *u, struct step *st,
 	struct bc_scene_walk w = {0};
 	struct bc_scene_node n;
 	bool ok = t != NULL;
-	if (ok && (bc_tree_decode(sub.ptr, sub.len, t, NULL) ||
+	if (ok && (bc_scene_decode(sub.ptr, sub.len, t, NULL, NULL, NULL) ||
 	           bc_scene_walk_init(&w, t))) {
 		/* Only applied subtrees get here; one that does not decode
 		 * marks nothing more. */
@@ -228,6 +228,7 @@ static bool mark_ops(struct bc_undo *u, struct step *st,
 		const struct bc_proto_edit_op *op = &ops[i];
 		switch (op->kind) {
 		case BC_PROTO_EDIT_SET:
+		case BC_PROTO_EDIT_NAME:
 			ok = mark(u, st, op->node, MARK_FIELDS);
 			break;
 		case BC_PROTO_EDIT_INSERT:
@@ -438,6 +439,14 @@ static void describe(char *out, size_t cap, const struct bc_proto_edit_op *ops,
 		break;
 	case BC_PROTO_EDIT_REMOVE:
 		snprintf(out, cap, "REMOVE node %u", op->node);
+		break;
+	case BC_PROTO_EDIT_NAME:
+		if (op->name.len == 0) {
+			snprintf(out, cap, "NAME node %u (none)", op->node);
+		} else {
+			snprintf(out, cap, "NAME node %u \"%.*s\"", op->node,
+			         (int)op->name.len, op->name.ptr);
+		}
 		break;
 	default:
 		snprintf(out, cap, "REPLACE node %u", op->node);

@@ -169,11 +169,17 @@ def scene_unary(kind, nid, params):
         f32(v) for v in params)
 
 
-def scene(nodes, camera=None):
-    b = u8(1 if camera else 0)
+def names_table(names):
+    """The names table (section 8): (id, name) pairs, ids increasing."""
+    return u32(len(names)) + b"".join(u32(i) + sstr(s) for i, s in names)
+
+
+def scene(nodes, camera=None, names=None):
+    b = u8((1 if camera else 0) | (2 if names else 0))
     if camera:
         b += b"".join(f32(v) for v in camera)
-    return b + u32(len(nodes)) + b"".join(nodes)
+    b += u32(len(nodes)) + b"".join(nodes)
+    return b + (names_table(names) if names else b"")
 
 
 CAM = [0.0, 1.0, 6.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 45.0]
@@ -184,6 +190,11 @@ SCENE_SMALL = scene([
     scene_prim(2, 3, [0.5, 0.5, 0.5, 0.1], translate=(0.6, 0, 0)),
 ], camera=CAM)
 SUBTREE = scene([scene_prim(3, 0, [0, 0, 0, 0, 1, 0, 0.25])])
+# A named subtree (section 8: a subtree brings its nodes' names).
+SUBTREE_NAMED = scene([scene_op(1, 40, 0, 0, 2),
+                       scene_prim(1, 41, [0.5]),
+                       scene_prim(1, 42, [0.5], translate=(1, 0, 0))],
+                      names=[(40, "pair"), (42, "right \u00e9")])
 
 
 def deep_scene(depth):
@@ -302,6 +313,8 @@ def w_ops(ops):
             b += u32(op["node"])
         elif k == 4:
             b += u32(op["node"]) + blob(bytes.fromhex(op["subtree"]))
+        elif k == 5:
+            b += u32(op["node"]) + sstr(op["name"])
     return b
 
 
@@ -593,8 +606,8 @@ def gen_welcome():
     t.badp("max_dim 8193", wl(max_dim=8193), "ERANGE")
     t.badp("max_members 65", wl(max_members=65), "ERANGE")
     t.badp("max_edit_ops 0", wl(max_edit_ops=0), "ERANGE")
-    t.ok("every feature of this text granted", dict(base, features=0x3f))
-    t.badp("a feature this text does not define", wl(features=0x40),
+    t.ok("every feature of this text granted", dict(base, features=0x7f))
+    t.badp("a feature this text does not define", wl(features=0x80),
            "EPROTO_FLAGS")
     t.badp("features cut short (2 bytes)", w_welcome(old) + b"\x0f\x00",
            "EPROTO_TRUNCATED")
@@ -827,6 +840,9 @@ OPS = [
     dict(kind=2, parent=1, position=2, subtree=SUBTREE.hex()),
     dict(kind=3, node=3),
     dict(kind=4, node=2, subtree=SUBTREE.hex()),
+    dict(kind=5, node=2, name="front wheel"),
+    dict(kind=5, node=3, name=""),
+    dict(kind=2, parent=1, position=0, subtree=SUBTREE_NAMED.hex()),
 ]
 
 
@@ -846,7 +862,16 @@ def edit_bad_cases(t, prefix):
     t.badp("op_count larger than the bytes left",
            prefix + u16(4) + (u8(3) + u32(1)) * 3, "EPROTO_COUNT")
     t.badp("op kind 0", one(u8(0) + u32(1)), "EENUM")
-    t.badp("op kind 5", one(u8(5) + u32(1)), "EENUM")
+    t.badp("op kind 6", one(u8(6) + u32(1)), "EENUM")
+    t.badp("name of node 0", one(u8(5) + u32(0) + sstr("a")), "ERANGE")
+    t.badp("name of 65 bytes", one(u8(5) + u32(2) + sstr("n" * 65)),
+           "EPROTO_LENGTH")
+    t.badp("name that is not UTF-8", one(u8(5) + u32(2) + sstr(b"a\xc3(")),
+           "ESTRING")
+    t.badp("name with a NUL byte", one(u8(5) + u32(2) + sstr(b"a\x00b")),
+           "ESTRING")
+    t.badp("name longer than the bytes left",
+           one(u8(5) + u32(2) + u16(9) + b"abc"), "EPROTO_TRUNCATED")
     t.badp("remove node 0", one(u8(3) + u32(0)), "ERANGE")
     t.badp("set with no fields", one(u8(1) + u32(2) + u8(0)),
            "EPROTO_COUNT")
@@ -1549,10 +1574,12 @@ def gen_framing():
 def gen_scene():
     valid, inv = [], []
 
-    def ok(name, b, nodes, prims, ops, depth, camera):
-        valid.append({"name": name, "hex": b.hex(),
-                      "fields": dict(has_camera=camera, nodes=nodes,
-                                     prims=prims, ops=ops, depth=depth)})
+    def ok(name, b, nodes, prims, ops, depth, camera, names=None):
+        fields = dict(has_camera=camera, nodes=nodes, prims=prims, ops=ops,
+                      depth=depth)
+        if names is not None:
+            fields["names"] = names
+        valid.append({"name": name, "hex": b.hex(), "fields": fields})
 
     def bad(name, b, error):
         inv.append({"name": name, "hex": b.hex(), "error": error})
@@ -1580,8 +1607,40 @@ def gen_scene():
               scene_op(1, 0, 0, 0, 2), SPHERE, SPHERE]), 5, 2, 3, 4, False)
     ok("the last kind, 32 (revolve_star)",
        scene([scene_prim(32, 4, [0.35, 5.0, 0.5, 0.75])]), 1, 1, 0, 1, False)
+    ok("named nodes, with camera",
+       scene([scene_op(4, 1, 0.5, 0.5, 2), scene_prim(1, 2, [1.0]),
+              scene_prim(1, 3, [1.0])], camera=CAM,
+             names=[(1, "blob"), (3, "\u6a5f\u68b0 " + "x" * 57)]),
+       3, 2, 1, 2, True, names=2)
+    ok("a subtree with names", SUBTREE_NAMED, 3, 2, 1, 2, False, names=2)
     bad("empty", b"", "EPROTO_TRUNCATED")
-    bad("flags bit 1", u8(2) + u32(1) + SPHERE, "EPROTO_FLAGS")
+    bad("flags bit 2", u8(4) + u32(1) + SPHERE, "EPROTO_FLAGS")
+    union = u32(3) + scene_op(1, 1, 0, 0, 2) + scene_prim(1, 2, [1.0]) \
+        + scene_prim(1, 3, [1.0])
+    named = u8(2) + union
+    bad("names bit without a table", named, "EPROTO_TRUNCATED")
+    bad("name_count 0", named + u32(0), "EPROTO_COUNT")
+    bad("name_count above node_count", named + u32(4)
+        + (u32(1) + sstr("abc")) * 4, "EPROTO_COUNT")
+    bad("name_count above the bytes left / 7", named + u32(2)
+        + u32(1) + sstr("abcdefg"), "EPROTO_COUNT")
+    bad("name id 0", named + u32(1) + u32(0) + sstr("a"), "ERANGE")
+    bad("name ids decreasing", named + u32(2) + u32(3) + sstr("a")
+        + u32(2) + sstr("b"), "ERANGE")
+    bad("name id twice", named + u32(2) + u32(2) + sstr("a")
+        + u32(2) + sstr("b"), "EDUPID")
+    bad("empty name", named + u32(1) + u32(2) + sstr("") + u8(0),
+        "EPROTO_LENGTH")
+    bad("name of 65 bytes", named + u32(1) + u32(2) + sstr("n" * 65),
+        "EPROTO_LENGTH")
+    bad("name cut short", named + u32(1) + u32(2) + u16(5) + b"abc",
+        "EPROTO_TRUNCATED")
+    bad("entry cut inside its length", named + u32(2) + u32(1)
+        + sstr("abcdefgh") + u32(2) + u8(1), "EPROTO_TRUNCATED")
+    bad("name that is not UTF-8", named + u32(1) + u32(2)
+        + sstr(b"\xed\xa0\x80"), "ESTRING")
+    bad("byte after the names", named + u32(1) + u32(2) + sstr("a")
+        + u8(0), "EPROTO_TRAILING")
     bad("camera with NaN", u8(1) + f32bits(0x7fc00000) + f32(0) * 9
         + u32(1) + SPHERE, "ENONFINITE")
     bad("node_count 0", u8(0) + u32(0), "EPROTO_COUNT")

@@ -130,6 +130,9 @@ static const struct bc_proto_edit_op *jops(const json_t *f, uint16_t *n)
 		if (json_object_get(o, "subtree")) {
 			op->subtree = jbytes(o, "subtree");
 		}
+		if (json_object_get(o, "name")) {
+			op->name = jstr(o, "name");
+		}
 		json_t *fa = json_object_get(o, "fields");
 		op->nfields = (uint8_t)json_array_size(fa);
 		struct bc_proto_field *fs = hold(op->nfields * sizeof(*fs));
@@ -917,6 +920,11 @@ static void test_scene_vectors(void)
 		CHECK(info.prims == jint(f, "prims"));
 		CHECK(info.ops == jint(f, "ops"));
 		CHECK(info.depth == jint(f, "depth"));
+		CHECK(info.names == (json_object_get(f, "names")
+		                         ? (uint32_t)jint(f, "names")
+		                         : 0u));
+		CHECK(((info.features & BC_PROTO_FEATURE_NAMES) != 0) ==
+		      (info.names > 0));
 		release();
 	}
 	json_array_foreach(json_object_get(doc, "invalid"), i, e)

@@ -313,9 +313,132 @@ static void b_empty(struct bw *w)
 }
 static void b_flags(struct bw *w)
 {
-	w8(w, 0x03);
+	w8(w, 0x06);
 	w32(w, 1);
 	w_sphere(w, 1, 1.0f, 0.0f);
+}
+
+/* ---- names tables (PROTOCOL.md 8, check 6; ENONODE from the meaning) ---- */
+
+/* A union (id 1) of spheres 2 and 3, flags with the names bit, then the
+ * names table's count. */
+static void w_named_union(struct bw *w, uint32_t count)
+{
+	w8(w, BC_SCENE_FLAG_NAMES);
+	w32(w, 3);
+	w8(w, 0x81);
+	w32(w, 1);
+	wf(w, 0.0f);
+	wf(w, 0.0f);
+	w32(w, 2);
+	w_sphere(w, 2, 1.0f, 0.0f);
+	w_sphere(w, 3, 1.0f, 1.0f);
+	w32(w, count);
+}
+static void w_name(struct bw *w, uint32_t id, const char *s, size_t len)
+{
+	w32(w, id);
+	w8(w, (uint32_t)(len & 0xffu));
+	w8(w, (uint32_t)(len >> 8));
+	for (size_t i = 0; i < len; i++) {
+		w8(w, (uint8_t)s[i]);
+	}
+}
+static void b_names_zero(struct bw *w)
+{
+	w_named_union(w, 0);
+}
+static void b_names_over_nodes(struct bw *w)
+{
+	w_named_union(w, 4);
+	for (uint32_t i = 1; i <= 4; i++) {
+		w_name(w, i, "abc", 3);
+	}
+}
+static void b_names_over_bytes(struct bw *w)
+{
+	w_named_union(w, 3);
+	w_name(w, 1, "a", 1);
+}
+static void b_name_cut(struct bw *w)
+{
+	w_named_union(w, 2);
+	w_name(w, 2, "abcdefgh", 8);
+	w8(w, 3);
+	w8(w, 0);
+	w8(w, 0);
+}
+static void b_name_id_zero(struct bw *w)
+{
+	w_named_union(w, 1);
+	w_name(w, 0, "wheel", 5);
+}
+static void b_name_ids_down(struct bw *w)
+{
+	w_named_union(w, 2);
+	w_name(w, 3, "a", 1);
+	w_name(w, 2, "b", 1);
+}
+static void b_name_id_twice(struct bw *w)
+{
+	w_named_union(w, 2);
+	w_name(w, 2, "a", 1);
+	w_name(w, 2, "b", 1);
+}
+static void b_name_empty(struct bw *w)
+{
+	w_named_union(w, 1);
+	w_name(w, 2, "", 0);
+	w8(w, 0);
+}
+static void b_name_long(struct bw *w)
+{
+	char s[65];
+	memset(s, 'x', sizeof(s));
+	w_named_union(w, 1);
+	w_name(w, 2, s, sizeof(s));
+}
+static void b_name_short(struct bw *w)
+{
+	w_named_union(w, 1);
+	w_name(w, 2, "wheel", 5);
+	w->n -= 2;
+}
+static void b_name_utf8(struct bw *w)
+{
+	w_named_union(w, 1);
+	w_name(w, 2, "a\xc3(", 3);
+}
+static void b_name_nul(struct bw *w)
+{
+	w_named_union(w, 1);
+	w_name(w, 2, "a\0b", 3);
+}
+static void b_name_trailing(struct bw *w)
+{
+	w_named_union(w, 1);
+	w_name(w, 2, "wheel", 5);
+	w8(w, 0);
+}
+static void b_name_unknown_id(struct bw *w)
+{
+	w_named_union(w, 1);
+	w_name(w, 9, "wheel", 5);
+}
+/* A name may not reach a node sent with id 0: its id is the decoder's. */
+static void b_name_of_zero_id(struct bw *w)
+{
+	w8(w, BC_SCENE_FLAG_NAMES);
+	w32(w, 3);
+	w8(w, 0x81);
+	w32(w, 5);
+	wf(w, 0.0f);
+	wf(w, 0.0f);
+	w32(w, 2);
+	w_sphere(w, 0, 1.0f, 0.0f);
+	w_sphere(w, 0, 1.0f, 1.0f);
+	w32(w, 1);
+	w_name(w, 1, "first", 5);
 }
 static void b_camera_short(struct bw *w)
 {
@@ -561,7 +684,25 @@ static void malformed_encodings_fail_with_their_code(void)
 {
 	static const struct bad cases[] = {
 	    {"empty", b_empty, BC_EPROTO_TRUNCATED, "empty"},
-	    {"reserved flags", b_flags, BC_EPROTO_FLAGS, "0x02"},
+	    {"reserved flags", b_flags, BC_EPROTO_FLAGS, "0x04"},
+	    {"name_count 0", b_names_zero, BC_EPROTO_COUNT, "name_count 0"},
+	    {"name_count over the nodes", b_names_over_nodes, BC_EPROTO_COUNT,
+	     "name_count 4"},
+	    {"name_count over the bytes", b_names_over_bytes, BC_EPROTO_COUNT,
+	     "name_count 3"},
+	    {"name cut", b_name_cut, BC_EPROTO_TRUNCATED, "name 1"},
+	    {"name id 0", b_name_id_zero, BC_ERANGE, "id 0"},
+	    {"name ids down", b_name_ids_down, BC_ERANGE, "id 2 after id 3"},
+	    {"name id twice", b_name_id_twice, BC_EDUPID, "id 2 after id 2"},
+	    {"name empty", b_name_empty, BC_EPROTO_LENGTH, "length 0"},
+	    {"name of 65 bytes", b_name_long, BC_EPROTO_LENGTH, "length 65"},
+	    {"name short", b_name_short, BC_EPROTO_TRUNCATED, "needs 5 bytes"},
+	    {"name not UTF-8", b_name_utf8, BC_ESTRING, "UTF-8"},
+	    {"name with NUL", b_name_nul, BC_ESTRING, "NUL"},
+	    {"bytes after the names", b_name_trailing, BC_EPROTO_TRAILING,
+	     "after the names"},
+	    {"name of no node", b_name_unknown_id, BC_ENONODE, "id 9"},
+	    {"name of an id-0 node", b_name_of_zero_id, BC_ENONODE, "id 1"},
 	    {"camera cut", b_camera_short, BC_EPROTO_TRUNCATED, "camera"},
 	    {"camera NaN", b_camera_nan, BC_ENONFINITE, "camera"},
 	    {"camera eye == target", b_camera_degenerate, BC_ERANGE, "camera"},

@@ -435,7 +435,7 @@ static const struct bad bads[] = {
     {"name not UTF-8", 1, 8, 1, 0, -1, "\x01\x01\x00\xff", 4, -BC_ESTRING},
     {"empty name", 1, 8, 1, 0, -1, "\x01\x00\x00", 3, -BC_EPROTO_LENGTH},
     {"op_count 0", 2, 13, 1, 0, -1, "\x00\x00", 2, -BC_EPROTO_COUNT},
-    {"op kind 5", 2, 13, 1, 0, -1, "\x01\x00\x05\x01\x00\x00\x00", 7,
+    {"op kind 6", 2, 13, 1, 0, -1, "\x01\x00\x06\x01\x00\x00\x00", 7,
      -BC_EENUM},
     {"SET of node 0", 2, 13, 1, 0, -1,
      "\x01\x00\x01\x00\x00\x00\x00\x01\x01\x03\x00\x00\x00\x00\x00\x00"

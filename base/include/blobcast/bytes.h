@@ -150,4 +150,9 @@ static inline int bc_rd_bytes(struct bc_rd *r, void *out, size_t n)
 	return r->err;
 }
 
+/* Returns the offset of the first byte of p[0..n) that breaks strict UTF-8
+ * (overlong forms, surrogates, code points above U+10FFFF, truncated
+ * sequences) or is NUL; n when the whole string is valid. */
+size_t bc_utf8_check(const uint8_t *p, size_t n);
+
 #endif

@@ -31,4 +31,7 @@ int bc_num_vec3(const char *s, float out[3]);
 #define BC_NUM_MAX_FLOATS 16
 int bc_num_f32s(const char *s, float *out, int n);
 
+/* qsort's comparison for uint32_t, ascending. */
+int bc_cmp_u32(const void *a, const void *b);
+
 #endif

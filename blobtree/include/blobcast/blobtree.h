@@ -416,6 +416,31 @@ BC_API uint32_t bc_tree_parent(const struct bc_tree *t, uint32_t id);
  * indices prim_of[first[slot]] .. + (slot - first[slot]) / 2. */
 BC_API uint32_t bc_tree_slot(const struct bc_tree *t, uint32_t id);
 
+/* ---- Names -------------------------------------------------------------- */
+
+/* A node may carry a name (PROTOCOL.md 8: a label people give it, never an
+ * address): 1..BC_TREE_NAME_MAX bytes of strict UTF-8 without NUL. Names
+ * need not be unique. Removing a node takes its name; a grafted subtree
+ * (insert, replace, copy) brings its own. */
+#define BC_TREE_NAME_MAX 64u
+
+/* Node id's name, NUL-terminated, or NULL when it has none (or id is
+ * unknown). Valid until the next change of t's names. */
+BC_API const char *bc_tree_name(const struct bc_tree *t, uint32_t id);
+/* Names node id (also while building, once the node is added); len 0 takes
+ * its name away. Returns 0, BC_ENONODE, BC_ERANGE (over BC_TREE_NAME_MAX
+ * bytes), BC_ESTRING (not strict UTF-8, or a NUL) or BC_ENOMEM. */
+BC_API int bc_tree_set_name(struct bc_tree *t, uint32_t id, const char *name,
+                            size_t len, struct bc_errinfo *ei);
+BC_API uint32_t bc_tree_name_count(const struct bc_tree *t);
+/* The ids of the named nodes, increasing, into a bc_malloc'd array the
+ * caller bc_free's (*n set; NULL with *n 0 when none, or out of memory:
+ * then *n is the count). */
+BC_API uint32_t *bc_tree_name_ids(const struct bc_tree *t, uint32_t *n);
+/* The id of the node the builder added last (0 before any): a decoder
+ * names a node whose id the tree chose. */
+BC_API uint32_t bc_tree_last_id(const struct bc_tree *t);
+
 /* ---- Edits -------------------------------------------------------------- */
 
 /* Replaces the parameters of primitive id (kind must be unchanged). Only its

@@ -48,8 +48,12 @@
  * against the bytes left divided by this before looping or allocating. */
 #define BC_SCENE_NODE_MIN_BYTES 5u
 
-/* Flags byte of the binary scene. */
+/* Flags byte of the binary scene: a camera follows the flags; a names
+ * table follows the tree (PROTOCOL.md 8). */
 #define BC_SCENE_FLAG_CAMERA 0x01u
+#define BC_SCENE_FLAG_NAMES 0x02u
+/* Smallest names table entry: id, length and one byte. */
+#define BC_SCENE_NAME_MIN_BYTES 7u
 /* Tag bit that marks an operator node in the binary form. */
 #define BC_SCENE_TAG_OP 0x80u
 

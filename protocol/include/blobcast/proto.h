@@ -156,11 +156,15 @@ enum bc_msg_type {
  * scope byte (its own changes, or the session's) and HISTORY_GET
  * (PROTOCOL.md 7.20, 7.26). */
 #define BC_PROTO_FEATURE_HISTORY 0x20u
-#define BC_PROTO_FEATURES_ALL 0x3fu
+/* Node names: scenes' names table (scene flag bit 1) and NAME operations
+ * (PROTOCOL.md 4.1, 8, 9). */
+#define BC_PROTO_FEATURE_NAMES 0x40u
+#define BC_PROTO_FEATURES_ALL 0x7fu
 /* The features that decide what a server may send. */
 #define BC_PROTO_FEATURES_SENT                                                 \
 	(BC_PROTO_FEATURE_LEVELS | BC_PROTO_FEATURE_UNDO |                     \
-	 BC_PROTO_FEATURE_PRESENT | BC_PROTO_FEATURE_KINDS)
+	 BC_PROTO_FEATURE_PRESENT | BC_PROTO_FEATURE_KINDS |                   \
+	 BC_PROTO_FEATURE_NAMES)
 /* The scene kinds of the first text: primitives 1..16, binary operators
  * only. A scene beyond them needs BC_PROTO_FEATURE_KINDS. */
 #define BC_PROTO_PRIM_KIND_MAX_FIRST 16u
@@ -227,6 +231,7 @@ enum bc_proto_edit_kind {
 	BC_PROTO_EDIT_INSERT = 2,  /* insert subtree under node at position */
 	BC_PROTO_EDIT_REMOVE = 3,  /* remove node and its subtree */
 	BC_PROTO_EDIT_REPLACE = 4, /* replace node by subtree */
+	BC_PROTO_EDIT_NAME = 5,    /* name node (empty: no name) */
 	BC_PROTO_EDIT_COUNT
 };
 
@@ -401,6 +406,7 @@ struct bc_proto_edit_op {
 	struct bc_proto_bytes subtree; /* INSERT, REPLACE: scene encoding */
 	uint8_t nfields;               /* SET: 1..BC_PROTO_MAX_SET_FIELDS */
 	const struct bc_proto_field *fields;
+	struct bc_proto_str name; /* NAME: 0..BC_PROTO_MAX_NAME bytes */
 };
 
 struct bc_msg_edit {
@@ -725,9 +731,18 @@ struct bc_proto_scene_info {
 	uint32_t zero_ids; /* nodes with id 0 (the decoder names them) */
 	/* What a receiver must have announced to be sent these bytes:
 	 * BC_PROTO_FEATURE_KINDS when a node is of a kind added after the
-	 * first text (PROTOCOL.md 4). */
+	 * first text, BC_PROTO_FEATURE_NAMES with a names table (PROTOCOL.md
+	 * 4). */
 	uint32_t features;
+	uint32_t names;  /* entries of the names table (0: none) */
+	size_t names_at; /* where the names table starts: the tree's end */
 };
+
+/* The scene flags byte (PROTOCOL.md 8). */
+#define BC_PROTO_SCENE_FLAG_CAMERA 0x01u
+#define BC_PROTO_SCENE_FLAG_NAMES 0x02u
+/* Smallest names table entry: id, length and one byte. */
+#define BC_PROTO_SCENE_NAME_MIN 7u
 
 /* Checks scene bytes as PROTOCOL.md describes them, with the checks and the
  * check order of blobtree's decoder for everything the bytes alone decide
@@ -759,6 +774,18 @@ BC_API int bc_proto_scene_op(struct bc_proto_buf *b, uint8_t kind, uint32_t id,
 BC_API int bc_proto_scene_unary(struct bc_proto_buf *b, uint8_t kind,
                                 uint32_t id, uint8_t nparams,
                                 const float *params);
+/* After the last node: the names table's count, which also sets the names
+ * bit in the flags byte of the scene that starts at b->data[scene_at];
+ * then count bc_proto_scene_name() calls, ids increasing, each name 1..64
+ * bytes of UTF-8 (the scanner checks). */
+BC_API int bc_proto_scene_names(struct bc_proto_buf *b, size_t scene_at,
+                                uint32_t count);
+BC_API int bc_proto_scene_name(struct bc_proto_buf *b, uint32_t id,
+                               const char *name, size_t len);
+/* For a receiver not granted NAMES (PROTOCOL.md 4.1): clears the names bit
+ * of scene bytes[0..len) in place and returns the length without the names
+ * table (len when the scene has none or does not scan). */
+BC_API size_t bc_proto_scene_strip_names(uint8_t *bytes, size_t len);
 
 /* ---- Names and rules ------------------------------------------------------
  */
