@@ -13,11 +13,18 @@
  *    with a message, before anything is sent (the field stays open);
  *  - a name with quotes and a character outside the BMP reaches bob, and
  *    the JSON scene alice downloads holds it: the same bytes as
- *    `blobcast scene` writes.
+ *    `blobcast scene` writes;
+ *  - a scene whose names hold a tab, a newline, a backslash, U+0001 and
+ *    DEL, loaded with `blobcast load`, reaches both pages (SCENE_STATE's
+ *    names table), and alice's download escapes them as `blobcast scene`
+ *    does.
  * Exit status: 0 passed, 1 failed, 77 skipped (the message names what is
  * missing). Usage: node tests/web/names.mjs --blobcastd PATH --blobcast PATH
  */
 import assert from 'node:assert/strict';
+import { mkdtempSync, rmSync, writeFileSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join } from 'node:path';
 
 import * as H from './harness.mjs';
 import * as P from '../../client/web/protocol.js';
@@ -152,13 +159,39 @@ try {
 		todo.push(...(n.children ?? []));
 	}
 	assert.deepEqual(found, [[ID, fancy]], 'the file names the node');
-	const r = await H.runCli(cli, ['scene', '--server',
-		`127.0.0.1:${port}`, '--session', 'default']);
-	assert.equal(r.code, 0, `blobcast scene: ${r.stderr}`);
-	assert.equal(text, r.stdout, 'the download is what `blobcast scene` ' +
-		'writes');
+	const srv = ['--server', `127.0.0.1:${port}`, '--session', 'default'];
+	const scene = async () => {
+		const r = await H.runCli(cli, ['scene', ...srv]);
+		assert.equal(r.code, 0, `blobcast scene: ${r.stderr}`);
+		return r.stdout;
+	};
+	assert.equal(text, await scene(), 'the download is what `blobcast ' +
+		'scene` writes');
 	step(`"${fancy}" reached bob; the JSON download holds it, as ` +
 		'`blobcast scene` writes it');
+
+	/* Names JSON must escape, from a scene file through SCENE_STATE. */
+	const odd = ['tab\there\nnext', 'back\\slash \u0001 \u007f ü'];
+	const work = mkdtempSync(join(tmpdir(), 'blobcast-names-'));
+	const file = join(work, 'odd.json');
+	writeFileSync(file, JSON.stringify({ blobcast: 1, root: { type:
+		'union', id: 1, name: odd[0], children: [
+			{ type: 'sphere', id: 2, radius: 0.5, name: odd[1] },
+			{ type: 'sphere', id: 3, radius: 0.5,
+				translate: [1, 0, 0] }] } }));
+	const r = await H.runCli(cli, ['load', ...srv, file]);
+	rmSync(work, { recursive: true, force: true });
+	assert.equal(r.code, 0, `blobcast load: ${r.stderr}`);
+	await rowNamed(alice, 'alice', 1, odd[0]);
+	await rowNamed(bob, 'bob', 2, odd[1]);
+	const loaded = (await H.download(alice, '#jsonbtn')).bytes
+		.toString('utf8');
+	assert.ok(loaded.includes('"name": "tab\\u0009here\\u000anext"'),
+		loaded);
+	assert.equal(loaded, await scene(), 'escaped as `blobcast scene` ' +
+		'escapes them');
+	step('a loaded scene\'s names (tab, newline, backslash, U+0001, DEL) ' +
+		'reached both pages; the download equals `blobcast scene`');
 } catch (e) {
 	failed = true;
 	H.report(e);
