@@ -1,9 +1,10 @@
 /*
  * Makes docs/web-outliner.png, docs/web.png and docs/viewer.png.
- * web-outliner.png: the page as "dana" with smooth_union #31 selected in
- * the Scene panel (its row, the operator form) and the Add menu open; the
- * page then leaves, the scene unchanged. With --outliner-only the script
- * stops there (no viewer needed).
+ * web-outliner.png: the page as "dana", who names union #30 "body" and
+ * smooth_union #31 "dome" in the outliner (double-click, type, Enter),
+ * with #31 selected in the Scene panel (its row, the operator form) and
+ * the Add menu open; the page then leaves, the shapes unchanged. With
+ * --outliner-only the script stops there (no viewer needed).
  * web.png and viewer.png: one session, three members. A
  * blobcastd with websockify in front, the page as "alice" (editor) and
  * "bob" (viewer) in headless chromium, and blobcast-view as "carol" under
@@ -68,6 +69,14 @@ try {
 	};
 	/* The Scene panel: a group selected by its row, the Add menu open. */
 	const dana = await open('dana', 'editor');
+	for (const [id, name] of [[30, 'body'], [31, 'dome']]) {
+		await dana.locator(`#outliner .row[data-id="${id}"] .label`)
+			.dblclick();
+		await dana.locator('#outliner input.rename').fill(name);
+		await dana.keyboard.press('Enter');
+		await until(dana, (a) => window.blobcast.node(a.id)?.name ===
+			a.name, { id, name });
+	}
 	await dana.locator('#outliner .row[data-id="31"]').click();
 	await until(dana, () => !document.getElementById('opedit').hidden);
 	await dana.click('#addbtn');
