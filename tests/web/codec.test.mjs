@@ -11,8 +11,10 @@
  *    survive parse -> encode unchanged.
  * Then the properties the page relies on: reassembly across arbitrary
  * WebSocket frame boundaries, sticky errors, the reader's memory ceiling,
- * the encoder refusing what the decoder refuses, and edits applied to a
- * parsed scene. Run with: node --test tests/web/
+ * the encoder refusing what the decoder refuses, edits applied to a
+ * parsed scene, and node names (the scenes' names table and NAME
+ * operations, every check on hand-made bytes in the decoder's order).
+ * Run with: node --test tests/web/
  */
 import { test } from 'node:test';
 import assert from 'node:assert/strict';

@@ -7,7 +7,10 @@
  * sentence that says what to do: adding under a primitive or a unary
  * node, moving a node under itself or its descendant, deleting the root
  * or a unary chain up to it, a result over the node, nesting, stack or
- * domain limits. The defaults of new shapes match blobtree/prim.c.
+ * domain limits. The defaults of new shapes match blobtree/prim.c. A
+ * rename is one NAME (over 64 bytes of UTF-8, a NUL or a lone surrogate
+ * refused); a duplicate's copy is "<name> copy" within 64 bytes; moves
+ * and wraps keep names.
  */
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
