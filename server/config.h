@@ -27,6 +27,7 @@ struct bc_srv_config {
 	uint32_t ntokens;
 	enum bc_simd simd;
 	bool no_damage; /* edits re-render whole views (for comparison) */
+	bool no_pace;   /* frames not held for the link (net.c; to compare) */
 	uint32_t frame_budget_ms;    /* 0: BC_SRV_FRAME_BUDGET_MS */
 	uint32_t render_threads;     /* 0: one per core */
 	uint32_t view_cache_mib;     /* 0: BC_SRV_VIEW_BYTES */

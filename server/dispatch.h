@@ -32,6 +32,7 @@ enum bc_dispatch_result {
 struct bc_conn_counters {
 	uint64_t frames_sent, bytes_sent;
 	uint64_t first_frame_ms; /* loop clock; 0: no frame yet */
+	uint64_t frames_paced;   /* times a frame waited for the link */
 };
 
 struct bc_dispatch_opts {

@@ -56,7 +56,7 @@ struct cli {
 	const char *listen, *unix_path, *data_dir, *config;
 	const char *tls_cert, *tls_key, *server_id, *check;
 	int backend, gl_platform, simd, log;
-	bool allow_plaintext, tls_allow_expired, no_damage, repair;
+	bool allow_plaintext, tls_allow_expired, no_damage, no_pace, repair;
 	uint32_t frame_budget_ms, render_threads, view_cache_mib;
 };
 
@@ -128,6 +128,12 @@ struct cli {
 		     .dst = &(c)->no_damage,                                   \
 		     .help = "edits re-render whole views instead of\n"        \
 		             "the tiles they change (to compare)"},            \
+		    {.name = "no-pace",                                        \
+		     .kind = BC_OPT_FLAG,                                      \
+		     .dst = &(c)->no_pace,                                     \
+		     .help = "write frames as fast as the kernel takes\n"      \
+		             "them, not as the link carries them (to\n"        \
+		             "compare)"},                                      \
 		    {.name = "frame-budget",                                   \
 		     .kind = BC_OPT_U32,                                       \
 		     .dst = &(c)->frame_budget_ms,                             \
@@ -601,6 +607,7 @@ static void apply_cli(struct bc_srv_config *cfg, const struct cli *c,
 	cfg->tls_allow_expired = cfg->tls_allow_expired || c->tls_allow_expired;
 	cfg->simd = (enum bc_simd)c->simd;
 	cfg->no_damage = c->no_damage;
+	cfg->no_pace = c->no_pace;
 	cfg->frame_budget_ms = c->frame_budget_ms;
 	cfg->render_threads = c->render_threads;
 	cfg->view_cache_mib = c->view_cache_mib;

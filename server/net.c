@@ -26,7 +26,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/ioctl.h>
 #include <unistd.h>
+
+#include <linux/sockios.h>
 
 #if defined(__GLIBC__)
 #include <malloc.h>
@@ -222,6 +225,84 @@ static void write_req_free(struct write_req *w)
 	bc_free(w);
 }
 
+/* After a frame: the next answer, the newest frame rendered meanwhile, or
+ * the layer told that c may be sent another. */
+static void next_frame(struct bc_conn *c)
+{
+	c->frame_writing = false;
+	if (c->answers_head) {
+		struct bc_answer *a = c->answers_head;
+		c->answers_head = a->next;
+		c->answers_tail = a->next ? c->answers_tail : NULL;
+		send_frame(c, a->frame, a->camera_seq);
+		bc_shared_unref(a->frame);
+		bc_free(a);
+	} else if (c->frame_next) {
+		struct bc_shared *next = c->frame_next;
+		c->frame_next = NULL;
+		send_frame(c, next, c->frame_next_camera_seq);
+		bc_shared_unref(next);
+	} else if (!c->draining) {
+		bc_dispatch_writable(c->net->d, ref_of(c));
+	}
+}
+
+/* ---- pacing: frames wait for the link, not in its buffers ----------------- */
+
+/* Bytes the kernel still holds for TCP connection c: written but not yet
+ * acknowledged by the peer, or not yet sent (SIOCOUTQ); 0 when unknown. */
+static size_t kernel_backlog(struct bc_conn *c)
+{
+	uv_os_fd_t fd;
+	int n = 0;
+	if (uv_fileno(&c->h.handle, &fd) != 0 || ioctl(fd, SIOCOUTQ, &n) < 0 ||
+	    n < 0) {
+		return 0;
+	}
+	return (size_t)n;
+}
+
+/* Whether c's link still holds more than one frame of len bytes (at least
+ * BC_SRV_PACE_MIN_BYTES). libuv finishes a write once the kernel took the
+ * bytes, and the kernel's send buffer grows to megabytes: on a link slower
+ * than the renderer, frames would queue there, each older than the next,
+ * and a camera move would wait seconds behind them. Held back here
+ * instead, the newest frame rendered meanwhile replaces the one waiting
+ * (send_frame's frame_next), so at most two frames are in flight. */
+static bool link_full(struct bc_conn *c, size_t len)
+{
+	size_t allow =
+	    len > BC_SRV_PACE_MIN_BYTES ? len : BC_SRV_PACE_MIN_BYTES;
+	return c->is_tcp && !c->net->cfg->no_pace && kernel_backlog(c) > allow;
+}
+
+static void pace_tick(uv_timer_t *t)
+{
+	struct bc_conn *c = t->data;
+	if (c->closing || link_full(c, c->paced_len)) {
+		return;
+	}
+	uv_timer_stop(&c->hello_timer);
+	c->pacing = false;
+	next_frame(c);
+}
+
+/* Holds c's next frame while its link is full (the timer, idle once HELLO
+ * is done, looks again every BC_SRV_PACE_TICK_MS). Returns true when it
+ * holds: c stays frame_writing, so newer frames replace frame_next. */
+static bool pace(struct bc_conn *c, size_t len)
+{
+	if (c->draining || !link_full(c, len)) {
+		return false;
+	}
+	c->pacing = true;
+	c->paced_len = len;
+	c->counters.frames_paced++;
+	uv_timer_start(&c->hello_timer, pace_tick, BC_SRV_PACE_TICK_MS,
+	               BC_SRV_PACE_TICK_MS);
+	return true;
+}
+
 /* The bookkeeping of a message that left (status 0) or never will: the
  * queue's count, the next frame, the layer told it may send again. */
 static void finish(struct bc_conn *c, struct write_req *w, int status)
@@ -236,27 +317,13 @@ static void finish(struct bc_conn *c, struct write_req *w, int status)
 		if (status < 0) {
 			bc__conn_close(c, uv_strerror(status));
 		} else if (w->frame) {
-			c->frame_writing = false;
 			c->counters.frames_sent++;
 			c->counters.bytes_sent += w->len;
 			if (w->answer) {
 				bc_dispatch_answered(c->net->d, ref_of(c));
 			}
-			if (c->answers_head) {
-				struct bc_answer *a = c->answers_head;
-				c->answers_head = a->next;
-				c->answers_tail =
-				    a->next ? c->answers_tail : NULL;
-				send_frame(c, a->frame, a->camera_seq);
-				bc_shared_unref(a->frame);
-				bc_free(a);
-			} else if (c->frame_next) {
-				struct bc_shared *next = c->frame_next;
-				c->frame_next = NULL;
-				send_frame(c, next, c->frame_next_camera_seq);
-				bc_shared_unref(next);
-			} else if (!c->draining) {
-				bc_dispatch_writable(c->net->d, ref_of(c));
+			if (!pace(c, w->len)) {
+				next_frame(c);
 			}
 		} else {
 			c->counters.bytes_sent += w->len;

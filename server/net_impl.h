@@ -19,6 +19,7 @@ struct bc_conn {
 		uv_stream_t stream;
 		uv_handle_t handle;
 	} h;
+	/* Before HELLO its deadline; after, the pacing tick (net.c, pace). */
 	uv_timer_t hello_timer;
 	struct bc_tls *tls;   /* TLS state (tls.h) on a TLS listener, or NULL */
 	bool is_tcp, trusted; /* trusted: loopback TCP or Unix socket */
@@ -62,6 +63,9 @@ struct bc_conn {
 	uint64_t msg_started_ms, last_read_ms;
 	struct bc_conn_counters counters;
 	uint64_t frames_spoiled;
+	/* A frame waits for the link (pace): the frame written last. */
+	bool pacing;
+	size_t paced_len;
 };
 
 struct bc_net {

@@ -87,6 +87,12 @@
  * sealing, on TLS) a 36 MiB snapshot does not hold the loop for its whole
  * length while a fast reader drains the socket as it is filled. */
 #define BC_SRV_WRITE_PIECE (256u * 1024u)
+/* Pacing (net.c): a TCP client's next frame waits while the kernel holds
+ * more than one frame (at least this many bytes) not yet acknowledged,
+ * looking again every BC_SRV_PACE_TICK_MS. 64 KiB is about one
+ * bandwidth-delay product of 10 Mbit/s at 50 ms. */
+#define BC_SRV_PACE_MIN_BYTES (64u * 1024u)
+#define BC_SRV_PACE_TICK_MS 4u
 
 /* A frame larger than BC_SRV_MAX_CLIENT_QUEUE (a 2048^2 snapshot with its
  * depth and id planes, up to the protocol's payload limit) is not a

@@ -126,6 +126,7 @@ expect 2 "blobcastd: --frame-budget needs a value (MS)" \
 expect 2 "blobcastd: --backend 'cuda' is not one of auto, cpu, tiled" \
   "$daemon" --backend cuda
 expect 2 "blobcastd: --no-damage takes no value" "$daemon" --no-damage=1
+expect 2 "blobcastd: --no-pace takes no value" "$daemon" --no-pace=1
 expect 2 "blobcastd: unexpected argument 'serve'" "$daemon" serve
 expect 2 "blobcast render: unknown option '--bogus'" \
   "$cli" render default --bogus
