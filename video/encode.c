@@ -31,10 +31,6 @@
  * bitrate: a frame may be several times the average (an IDR, a sudden
  * change) but never so large that it stalls the stream for long. */
 #define VBV_SECONDS_DIV 4
-/* libx264's preset when opts.x264_preset is NULL: at 1920x1080 on one
- * core it encodes faster than the CPU renderer draws the frame
- * (docs/benchmarks.md), with fewer bytes than "ultrafast" at equal PSNR. */
-#define DEFAULT_X264_PRESET "veryfast"
 /* libx264 settings common to both contexts: no scene-cut or periodic
  * IDRs (IDRs only when asked), SPS and PPS before every IDR. */
 #define X264_PARAMS "scenecut=0:keyint=infinite:repeat-headers=1"
@@ -300,7 +296,8 @@ int bc_video_encoder_open(uint32_t width, uint32_t height,
 	enc->still_qp = o->still_qp ? o->still_qp : BC_VIDEO_STILL_QP;
 	enc->src_fmt = bc__video_av_pixfmt(o->pixfmt, &enc->bpp);
 	snprintf(enc->preset, sizeof(enc->preset), "%s",
-	         o->x264_preset ? o->x264_preset : DEFAULT_X264_PRESET);
+	         o->x264_preset ? o->x264_preset
+	                        : BC_VIDEO_DEFAULT_X264_PRESET);
 	enc->threads = o->threads;
 	enc->still_444 = o->still_444;
 	enc->need_idr = true;

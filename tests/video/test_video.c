@@ -172,6 +172,20 @@ static void pair_close(struct pair *p)
 	bc_video_decoder_destroy(p->dec);
 }
 
+/* pair_open and a w x h RGBA picture to fill; NULL (everything freed) on
+ * an error. */
+static uint8_t *pair_open_picture(struct pair *p, uint32_t w, uint32_t h,
+                                  const struct bc_video_opts *o)
+{
+	uint8_t *rgba = malloc((size_t)w * h * 4u);
+	if (!rgba || !pair_open(p, w, h, o)) {
+		pair_close(p);
+		free(rgba);
+		return NULL;
+	}
+	return rgba;
+}
+
 /* Encodes rgba with flags and decodes it; returns the PSNR against rgba,
  * or -1 on an error. *au gets the access unit (valid until the next
  * encode); decoded, unless NULL, a copy of the decoded picture (RGBA). */
@@ -265,7 +279,7 @@ static void check_stills(const char *label, uint32_t w, uint32_t h,
 static void test_idr_rules(void)
 {
 	const uint32_t w = 160, h = 96;
-	uint8_t *rgba = malloc((size_t)w * h * 4u);
+	uint8_t *rgba;
 	struct pair p;
 	/* Frame: flags asked, whether an IDR must come. */
 	static const struct {
@@ -286,13 +300,9 @@ static void test_idr_rules(void)
 	    {BC_VIDEO_FORCE_IDR, true},
 	    {0, false},
 	};
+	rgba = pair_open_picture(&p, w, h,
+	                         &(struct bc_video_opts){.bitrate = 800000});
 	REQUIRE(rgba);
-	if (!pair_open(&p, w, h, &(struct bc_video_opts){.bitrate = 800000})) {
-		CHECK(0);
-		free(rgba);
-		pair_close(&p);
-		return;
-	}
 	for (size_t i = 0; i < sizeof(seq) / sizeof(seq[0]); i++) {
 		struct bc_video_au au;
 		double db;
@@ -317,17 +327,13 @@ static void test_idr_rules(void)
 static void test_psnr(void)
 {
 	const uint32_t w = 192, h = 112;
-	uint8_t *rgba = malloc((size_t)w * h * 4u);
+	uint8_t *rgba;
 	struct bc_video_au au;
 	struct pair p;
 	double worst = 99.0;
+	rgba = pair_open_picture(&p, w, h,
+	                         &(struct bc_video_opts){.bitrate = 1500000});
 	REQUIRE(rgba);
-	if (!pair_open(&p, w, h, &(struct bc_video_opts){.bitrate = 1500000})) {
-		CHECK(0);
-		free(rgba);
-		pair_close(&p);
-		return;
-	}
 	for (int i = 0; i < 12; i++) {
 		double db;
 		synth(rgba, w, h, i);

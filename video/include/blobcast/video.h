@@ -61,6 +61,12 @@
 /* Bits per pixel per frame of the default bitrate (opts.bitrate 0): about
  * 4.4 Mbit/s for 1920 x 1080 at 30 frames per second. */
 #define BC_VIDEO_DEFAULT_BPP 0.07
+/* libx264's preset when opts.x264_preset is NULL: at 1920x1080 on one
+ * core it encodes a frame in about a tenth of the time the CPU renderer
+ * takes to draw it, and at JPEG q80's PSNR in about a fifth of its bytes
+ * ("veryfast" is a little faster and a tenth larger, "medium" half again
+ * as slow and a few percent smaller: docs/benchmarks.md). */
+#define BC_VIDEO_DEFAULT_X264_PRESET "faster"
 /* The bitrate's bounds, bits per second: below 32 kbit/s no frame size is
  * usable, above 400 Mbit/s is past what any level allows. */
 #define BC_VIDEO_MIN_BITRATE 32000u
@@ -90,7 +96,8 @@ struct bc_video_opts {
 	int still_qp;     /* quantizer of stills, 1..51; 0: BC_VIDEO_STILL_QP */
 	enum bc_video_backend backend;
 	enum bc_video_pixfmt pixfmt; /* of the pictures given */
-	/* libx264's preset ("ultrafast" .. "placebo"); NULL: "veryfast". */
+	/* libx264's preset ("ultrafast" .. "placebo"); NULL:
+	 * BC_VIDEO_DEFAULT_X264_PRESET. */
 	const char *x264_preset;
 	uint32_t threads; /* encoder threads, 0: libavcodec's choice */
 	/* Stills in 4:4:4 (the High 4:4:4 Predictive profile) instead of
