@@ -17,7 +17,8 @@
  * printed too.
  *
  * Usage: bench_video [--frames F] [--threads T] [--enc-threads E]
- *                    [--still-qp Q] [--preset P] [--step D] [--quick]
+ *                    [--still-qp Q] [--preset P] [--step D]
+ *                    [--backend x264|nvenc|auto] [--quick]
  */
 #include <math.h>
 #include <stdio.h>
@@ -210,6 +211,13 @@ int main(int argc, char **argv)
 	float step = 2.0f;
 	const char *preset = BC_VIDEO_DEFAULT_X264_PRESET;
 	bool quick = false;
+	int backend = BC_VIDEO_BACKEND_X264;
+	static const struct bc_opt_name backends[] = {
+	    {"x264", BC_VIDEO_BACKEND_X264},
+	    {"nvenc", BC_VIDEO_BACKEND_NVENC},
+	    {"auto", BC_VIDEO_BACKEND_AUTO},
+	    {NULL, 0},
+	};
 	const struct bc_opt opts_table[] = {
 	    {.name = "frames",
 	     .kind = BC_OPT_U32,
@@ -251,6 +259,13 @@ int main(int argc, char **argv)
 	     .arg = "P",
 	     .help =
 	         "libx264 preset (default " BC_VIDEO_DEFAULT_X264_PRESET ")"},
+	    {.name = "backend",
+	     .kind = BC_OPT_ENUM,
+	     .dst = &backend,
+	     .names = backends,
+	     .arg = "B",
+	     .help = "H.264 encoder: {choices} (default x264; nvenc on an "
+	             "NVIDIA GPU)"},
 	    {.name = "quick",
 	     .kind = BC_OPT_FLAG,
 	     .dst = &quick,
@@ -278,10 +293,14 @@ int main(int argc, char **argv)
 		die("fig18", ei.msg);
 	}
 	printf("fig18 smooth spheres 1024, an orbit of %u frames, %.1f "
-	       "degrees a frame; render: tiled, %u thread(s); libx264 %s, "
-	       "%u thread(s), zerolatency; times per frame, ms (CPU of the "
-	       "process, then wall)\n",
-	       nframes, (double)step, threads, preset, enc_threads);
+	       "degrees a frame; render: tiled, %u thread(s); H.264: %s "
+	       "(libx264: preset %s, %u thread(s), zerolatency); times per "
+	       "frame, ms (CPU of the process, then wall)\n",
+	       nframes, (double)step, threads,
+	       backend == BC_VIDEO_BACKEND_X264    ? "x264"
+	       : backend == BC_VIDEO_BACKEND_NVENC ? "nvenc"
+	                                           : "auto",
+	       preset, enc_threads);
 	for (size_t s = quick ? 1 : 0; s < 2; s++) {
 		uint32_t w = sizes[s][0], h = sizes[s][1];
 		uint8_t *frames[MAX_FRAMES];
@@ -290,7 +309,8 @@ int main(int argc, char **argv)
 		struct bc_video_opts vo = {.x264_preset = preset,
 		                           .threads = enc_threads,
 		                           .still_qp = (int)still_qp,
-		                           .backend = BC_VIDEO_BACKEND_X264};
+		                           .backend =
+		                               (enum bc_video_backend)backend};
 		struct run jpeg, still, still444;
 		if (bc_frame_init(&f, w, h)) {
 			die("frame", "out of memory");

@@ -17,6 +17,7 @@
 #include <string.h>
 
 #include <libavcodec/avcodec.h>
+#include <libavutil/error.h>
 #include <libavutil/frame.h>
 #include <libavutil/opt.h>
 #include <libswscale/swscale.h>
@@ -156,15 +157,22 @@ static int open_ctx(struct bc_video_encoder *enc, bool still,
 	}
 	rc = avcodec_open2(c, enc->codec, NULL);
 	if (rc < 0) {
-		char what[96];
+		char why[AV_ERROR_MAX_STRING_SIZE] = "";
 		avcodec_free_context(&c);
-		snprintf(what, sizeof(what),
-		         "video encoder %s (%ux%u) refused its settings",
-		         enc->codec->name, enc->cwidth, enc->cheight);
+		av_strerror(rc, why, sizeof(why));
+		if (enc->nvenc) {
+			return bc_errinfo_set(
+			    ei, BC_ENOTSUP,
+			    "video encoder h264_nvenc did not open (%s): it "
+			    "needs an NVIDIA GPU and its driver",
+			    why);
+		}
 		/* EINVAL: an option's value (a preset's name, say). */
-		return bc__video_av_error(
-		    ei, rc == AVERROR(EINVAL) ? BC_EINVAL : BC_ECODEC, what,
-		    rc);
+		return bc_errinfo_set(
+		    ei, rc == AVERROR(EINVAL) ? BC_EINVAL : BC_ECODEC,
+		    "video encoder %s (%ux%u) did not open: %s%s",
+		    enc->codec->name, enc->cwidth, enc->cheight, why,
+		    rc == AVERROR(EINVAL) ? " (check the preset's name)" : "");
 	}
 	*out = c;
 	return 0;
@@ -306,7 +314,10 @@ int bc_video_encoder_open(uint32_t width, uint32_t height,
 	if (o->backend != BC_VIDEO_BACKEND_X264) {
 		rc = try_codec(enc, "h264_nvenc", &nv);
 		if (rc && o->backend == BC_VIDEO_BACKEND_NVENC) {
-			bc_errinfo_set(ei, rc, "%s", nv.msg);
+			bc_errinfo_set(ei, rc,
+			               "%s; the x264 or auto backend runs "
+			               "without one",
+			               nv.msg);
 			goto fail;
 		}
 	}
@@ -319,13 +330,13 @@ int bc_video_encoder_open(uint32_t width, uint32_t height,
 	if (enc->nvenc) {
 		bc_log(BC_LOG_INFO,
 		       "video: h264_nvenc encodes %ux%u at %u bit/s, %u fps",
-		       enc->cwidth, enc->cheight, enc->bitrate, enc->fps);
+		       width, height, enc->bitrate, enc->fps);
 	} else {
-		bc_log(
-		    BC_LOG_INFO,
-		    "video: libx264 (%s) encodes %ux%u at %u bit/s, %u fps%s%s",
-		    enc->preset, enc->cwidth, enc->cheight, enc->bitrate,
-		    enc->fps, nv.code ? "; no nvenc: " : "", nv.msg);
+		bc_log(BC_LOG_INFO,
+		       "video: libx264 (%s) encodes %ux%u at %u bit/s, %u "
+		       "fps%s%s%s",
+		       enc->preset, width, height, enc->bitrate, enc->fps,
+		       nv.code ? " (" : "", nv.msg, nv.code ? ")" : "");
 	}
 
 	enc->pkt = av_packet_alloc();
