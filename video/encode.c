@@ -32,9 +32,15 @@
  * bitrate: a frame may be several times the average (an IDR, a sudden
  * change) but never so large that it stalls the stream for long. */
 #define VBV_SECONDS_DIV 4
-/* libx264 settings common to both contexts: no scene-cut or periodic
- * IDRs (IDRs only when asked), SPS and PPS before every IDR. */
+/* libx264 settings: no scene-cut or periodic IDRs (IDRs only when
+ * asked), SPS and PPS before every IDR. The stills' context numbers its
+ * SPS and PPS 1, the moving frames' 0: each context alternates its IDRs'
+ * idr_pic_id between 0 and 1 on its own, so a still right after a moving
+ * IDR (or the moving IDR right after a still) may repeat the id, and the
+ * different PPS id is then what marks the second IDR as a new picture
+ * (H.264 7.4.1.2.4) for a decoder that reads the stream as bytes. */
 #define X264_PARAMS "scenecut=0:keyint=infinite:repeat-headers=1"
+#define X264_PARAMS_STILL X264_PARAMS ":sps-id=1"
 
 struct bc_video_encoder {
 	uint32_t width, height;   /* of the pictures given */
@@ -110,7 +116,8 @@ static int configure(struct bc_video_encoder *enc, AVCodecContext *c,
 	if ((rc = set_opt(c, "preset", enc->preset, ei)) ||
 	    (rc = set_opt(c, "tune", "zerolatency", ei)) ||
 	    (rc = set_opt(c, "forced-idr", "1", ei)) ||
-	    (rc = set_opt(c, "x264-params", X264_PARAMS, ei))) {
+	    (rc = set_opt(c, "x264-params",
+	                  still ? X264_PARAMS_STILL : X264_PARAMS, ei))) {
 		return rc;
 	}
 	if (still && (rc = set_opt(c, "qp", qp, ei))) {

@@ -138,6 +138,51 @@ static bool is_p_au(const uint8_t *p, size_t len)
 	       !has_type(t, n, 8);
 }
 
+/* The pic_parameter_set_id of the first slice of an access unit, -1 if
+ * none: the third Exp-Golomb number of its header (after first_mb_in_slice
+ * and slice_type), emulation prevention bytes skipped. */
+static int slice_pps_id(const uint8_t *p, size_t len)
+{
+	size_t i = 0, bit = 0, start = 0, zeros = 0;
+	int value = -1;
+	for (; i + 3 < len; i++) {
+		int t = p[i + 3] & 0x1f;
+		if (p[i] == 0 && p[i + 1] == 0 && p[i + 2] == 1 &&
+		    (t == 1 || t == 5)) {
+			start = i + 4;
+			break;
+		}
+	}
+	if (!start) {
+		return -1;
+	}
+	/* Unescape up to 16 bytes of the header into a bit string. */
+	uint8_t hdr[16];
+	size_t n = 0;
+	for (i = start; i < len && n < sizeof(hdr); i++) {
+		if (zeros >= 2 && p[i] == 3) {
+			zeros = 0;
+			continue;
+		}
+		zeros = p[i] == 0 ? zeros + 1 : 0;
+		hdr[n++] = p[i];
+	}
+	for (int k = 0; k < 3; k++) {
+		int lead = 0;
+		uint32_t v = 0;
+		while (bit < n * 8 && !(hdr[bit / 8] >> (7 - bit % 8) & 1)) {
+			lead++;
+			bit++;
+		}
+		bit++;
+		for (int j = 0; j < lead && bit < n * 8; j++, bit++) {
+			v = v << 1 | (hdr[bit / 8] >> (7 - bit % 8) & 1u);
+		}
+		value = (int)((1u << lead) - 1u + v);
+	}
+	return bit <= n * 8 ? value : -1;
+}
+
 /* ---- Helpers ------------------------------------------------------------- */
 
 struct pair {
@@ -299,6 +344,9 @@ static void test_idr_rules(void)
 	    {BC_VIDEO_STILL, true},
 	    {BC_VIDEO_FORCE_IDR, true},
 	    {0, false},
+	    {BC_VIDEO_FORCE_IDR, true},
+	    {BC_VIDEO_STILL, true}, /* right after a moving IDR */
+	    {0, true},
 	};
 	rgba = pair_open_picture(&p, w, h,
 	                         &(struct bc_video_opts){.bitrate = 800000});
@@ -317,6 +365,10 @@ static void test_idr_rules(void)
 		}
 		CHECK_EQ_INT(au.idr, seq[i].idr);
 		CHECK_EQ_INT(au.still, (seq[i].flags & BC_VIDEO_STILL) != 0);
+		/* Stills' slices name PPS 1, moving frames' PPS 0: an IDR
+		 * right after an IDR of the other context is a new picture
+		 * even when both have the same idr_pic_id. */
+		CHECK_EQ_INT(slice_pps_id(au.data, au.len), au.still ? 1 : 0);
 	}
 	pair_close(&p);
 	free(rgba);
