@@ -540,6 +540,24 @@ static void expect_refused(struct bc_video_decoder *dec, const uint8_t *b,
 	CHECK(px == NULL && stride == 0);
 }
 
+/* Encodes synthetic frame t (w x h, through rgba) and returns a malloc'd
+ * copy of its access unit, NULL on an error. */
+static uint8_t *encode_copy(struct bc_video_encoder *enc, uint8_t *rgba,
+                            uint32_t w, uint32_t h, int t, size_t *len)
+{
+	struct bc_errinfo ei = {0};
+	struct bc_video_au au;
+	uint8_t *copy;
+	synth(rgba, w, h, t);
+	if (bc_video_encode(enc, rgba, w * 4u, 0, &au, &ei) ||
+	    !(copy = malloc(au.len))) {
+		return NULL;
+	}
+	memcpy(copy, au.data, au.len);
+	*len = au.len;
+	return copy;
+}
+
 /* Garbage, truncated and damaged access units, frames before an IDR and
  * wrong sizes are refused; the decoder starts again at the next IDR. */
 static void test_decoder_refuses(void)
@@ -551,25 +569,15 @@ static void test_decoder_refuses(void)
 	struct bc_video_encoder *enc = NULL;
 	struct bc_video_decoder *dec = NULL, *fresh = NULL;
 	struct bc_errinfo ei = {0};
-	struct bc_video_au au;
 	const uint8_t *px, *fpx = NULL;
 	size_t stride, slice;
 	uint64_t seed = 0x9e3779b97f4a7c15ull;
 	REQUIRE(rgba && buf);
 	REQUIRE(bc_video_encoder_open(w, h, NULL, &enc, &ei) == 0);
 	REQUIRE(bc_video_decoder_open(NULL, &dec, &ei) == 0);
-	synth(rgba, w, h, 0);
-	REQUIRE(bc_video_encode(enc, rgba, w * 4u, 0, &au, &ei) == 0);
-	idr = malloc(au.len);
-	REQUIRE(idr);
-	memcpy(idr, au.data, au.len);
-	idr_len = au.len;
-	synth(rgba, w, h, 1);
-	REQUIRE(bc_video_encode(enc, rgba, w * 4u, 0, &au, &ei) == 0);
-	pframe = malloc(au.len);
-	REQUIRE(pframe);
-	memcpy(pframe, au.data, au.len);
-	p_len = au.len;
+	idr = encode_copy(enc, rgba, w, h, 0, &idr_len);
+	pframe = encode_copy(enc, rgba, w, h, 1, &p_len);
+	REQUIRE(idr && pframe);
 
 	/* Lengths out of bounds, checked before the bytes are read. */
 	CHECK_EQ_INT(bc_video_decode(dec, idr, 0, w, h, &px, &stride, &ei),
