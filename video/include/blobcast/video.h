@@ -65,10 +65,10 @@
  * 4.4 Mbit/s for 1920 x 1080 at 30 frames per second. */
 #define BC_VIDEO_DEFAULT_BPP 0.07
 /* libx264's preset when opts.x264_preset is NULL: at 1920x1080 on one
- * core it encodes a frame in about a ninth of the time the CPU renderer
+ * core it encodes a frame in about a tenth of the time the CPU renderer
  * takes to draw it, and at JPEG q80's PSNR in about a fifth of its bytes
  * ("veryfast" takes a quarter less time for 12-13% more bytes, "medium"
- * a quarter more time for 10% fewer: docs/benchmarks.md). */
+ * 1.8 times the time for 10% fewer: docs/benchmarks.md). */
 #define BC_VIDEO_DEFAULT_X264_PRESET "faster"
 /* The bitrate's bounds, bits per second: below 32 kbit/s no frame size is
  * usable, above 400 Mbit/s is past what any level allows. */
