@@ -8,6 +8,7 @@ pkgs=(
 	libjansson-dev
 	libopenimageio-dev openimageio-tools
 	libturbojpeg0-dev libpng-dev zlib1g-dev
+	libavcodec-dev libavutil-dev libswscale-dev
 	libuv1-dev
 	libegl-dev libgl-dev libgles-dev libegl1-mesa-dev libgl1-mesa-dev
 	libgl1-mesa-dri libosmesa6-dev python3-glad glslang-tools
