@@ -64,6 +64,7 @@ int main(int argc, char **argv)
 	double seconds, rate, *sent, *lat, t0, next, end, still_ms = -1.0;
 	uint32_t nlat = 0, ncam = 0, frames = 0, coarse = 0, last_seq = 0;
 	uint64_t bytes = 0;
+	struct bc_proto_link link = {0};
 	if (argc < 6 || sscanf(argv[3], "%ux%u", &w, &h) != 2) {
 		fprintf(stderr, "usage: bench_wan_client ADDR SESSION WxH "
 		                "SECONDS RATE_HZ [QUALITY]\n");
@@ -164,17 +165,29 @@ int main(int argc, char **argv)
 			}
 		}
 	}
+	/* What the server's TCP measured of the path, and what it held. */
+	{
+		struct bc_msg_stats st;
+		if (bc_client_stats_parts(c, BC_PROTO_STATS_LINK, &st, &ei) ==
+		    0) {
+			link = st.link;
+		}
+	}
 	qsort(lat, nlat, sizeof(*lat), cmp_double);
 	printf("{\"size\": \"%ux%u\", \"seconds\": %.1f, \"cameras\": %u, "
 	       "\"frames\": %u, \"coarse_frames\": %u, "
 	       "\"delivered_fps\": %.2f, \"bytes_per_frame\": %.0f, "
 	       "\"latency_p50_ms\": %.1f, \"latency_p99_ms\": %.1f, "
 	       "\"latency_max_ms\": %.1f, \"still_ms\": %.1f, "
-	       "\"last_camera_seq\": %u}\n",
+	       "\"last_camera_seq\": %u, \"server_rtt_ms\": %.1f, "
+	       "\"server_delivery_mbit\": %.2f, \"frames_paced\": %u, "
+	       "\"frames_spoiled\": %llu}\n",
 	       w, h, seconds, ncam, frames, coarse, (double)frames / seconds,
 	       frames ? (double)bytes / (double)frames : 0.0,
 	       pct(lat, nlat, 50.0), pct(lat, nlat, 99.0),
-	       nlat ? lat[nlat - 1] : 0.0, still_ms, last_seq);
+	       nlat ? lat[nlat - 1] : 0.0, still_ms, last_seq,
+	       (double)link.rtt_us / 1e3, (double)link.delivery_bps * 8.0 / 1e6,
+	       link.frames_paced, (unsigned long long)link.frames_spoiled);
 	bc_client_destroy(c);
 	bc_free(sent);
 	bc_free(lat);

@@ -733,6 +733,7 @@ static int dec_pick_result(struct dec *d, struct bc_msg_pick_result *p)
 /* STATS's optional load and TLS sections (PROTOCOL.md 7.18). */
 #define STATS_LOAD_BYTES 44u
 #define STATS_TLS_BYTES 9u
+#define STATS_LINK_BYTES 32u
 
 static int dec_stats_load(struct dec *d, struct bc_proto_load *l)
 {
@@ -762,23 +763,33 @@ static int dec_stats(struct dec *d, struct bc_msg_stats *s)
 	TRY(rd_f32_nonneg(d, "encode_ms_avg", &s->encode_ms_avg));
 	TRY(rd_f32_nonneg(d, "edit_ms_avg", &s->edit_ms_avg));
 	TRY(rd_f32_nonneg(d, "fps", &s->fps));
-	/* The sections follow only when the client asked for them: the
-	 * payload's length tells which (0, 44, 9 or 53 bytes more); anything
-	 * else is bytes after the last field. */
+	/* The sections follow only when the client asked for them, in the
+	 * order load, TLS, link: the payload's length tells which (every sum
+	 * of 44, 9 and 32 differs); anything else is bytes after the last
+	 * field. */
 	left = bc_rd_left(&d->c);
-	if (left != 0 && left != STATS_LOAD_BYTES && left != STATS_TLS_BYTES &&
-	    left != STATS_LOAD_BYTES + STATS_TLS_BYTES) {
-		return fail(d, BC_EPROTO_TRAILING,
-		            "%zu bytes after the last field, not a load or TLS "
-		            "section",
-		            left);
+	bool load = false, tls = false, link = false;
+	for (unsigned k = 0; k < 8; k++) {
+		if (left == ((k & 1u) ? STATS_LOAD_BYTES : 0u) +
+		                ((k & 2u) ? STATS_TLS_BYTES : 0u) +
+		                ((k & 4u) ? STATS_LINK_BYTES : 0u)) {
+			load = (k & 1u) != 0;
+			tls = (k & 2u) != 0;
+			link = (k & 4u) != 0;
+			break;
+		}
+		if (k == 7) {
+			return fail(d, BC_EPROTO_TRAILING,
+			            "%zu bytes after the last field, not a "
+			            "load, TLS or link section",
+			            left);
+		}
 	}
-	if (left == STATS_LOAD_BYTES ||
-	    left == STATS_LOAD_BYTES + STATS_TLS_BYTES) {
+	if (load) {
 		s->has_load = true;
 		TRY(dec_stats_load(d, &s->load));
 	}
-	if (bc_rd_left(&d->c) == STATS_TLS_BYTES) {
+	if (tls) {
 		s->has_tls = true;
 		TRY(rd_u64(d, "tls_not_after_ms", &s->tls_not_after_ms));
 		TRY(rd_u8(d, "tls_expiring", &s->tls_expiring));
@@ -787,6 +798,16 @@ static int dec_stats(struct dec *d, struct bc_msg_stats *s)
 			            "tls_expiring %u is not 0 or 1",
 			            (unsigned)s->tls_expiring);
 		}
+	}
+	if (link) {
+		struct bc_proto_link *l = &s->link;
+		s->has_link = true;
+		TRY(rd_u32(d, "rtt_us", &l->rtt_us));
+		TRY(rd_u32(d, "min_rtt_us", &l->min_rtt_us));
+		TRY(rd_u64(d, "delivery_bps", &l->delivery_bps));
+		TRY(rd_u32(d, "unacked_bytes", &l->unacked_bytes));
+		TRY(rd_u32(d, "frames_paced", &l->frames_paced));
+		TRY(rd_u64(d, "frames_spoiled", &l->frames_spoiled));
 	}
 	return 0;
 }

@@ -358,6 +358,15 @@ static void w_body(struct bc__w *w, const struct bc_msg *m)
 			bc__put_u64(w, s->tls_not_after_ms);
 			bc__put_u8(w, s->tls_expiring);
 		}
+		if (s->has_link) {
+			const struct bc_proto_link *l = &s->link;
+			bc__put_u32(w, l->rtt_us);
+			bc__put_u32(w, l->min_rtt_us);
+			bc__put_u64(w, l->delivery_bps);
+			bc__put_u32(w, l->unacked_bytes);
+			bc__put_u32(w, l->frames_paced);
+			bc__put_u64(w, l->frames_spoiled);
+		}
 		break;
 	}
 	case BC_MSG_GET_STATS:

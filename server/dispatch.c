@@ -283,6 +283,10 @@ static enum bc_dispatch_result stats(struct bc_dispatch *d, struct client *c,
 		st.stats.tls_expiring = d->tls_not_after_ms &&
 		                        d->tls_not_after_ms < unix_ms + warn_ms;
 	}
+	if (msg->get_stats.parts & BC_PROTO_STATS_LINK) {
+		st.stats.has_link = true;
+		d->link->link_info(d->link->ud, c->peer.ref, &st.stats.link);
+	}
 	d->link->send(d->link->ud, c->peer.ref, &st);
 	if (msg->get_stats.parts & BC_PROTO_STATS_RESET) {
 		d->turn_max_ns = d->request_max_ns = 0;

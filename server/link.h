@@ -104,6 +104,12 @@ struct bc_link {
 	 * later turn of the loop, dispatch it again (again) or drop it (it
 	 * was answered meanwhile), then read on. */
 	void (*resume)(void *ud, struct bc_conn_ref to, bool again);
+	/* What the transport knows of the path to this connection (STATS's
+	 * link section): TCP's round trip and delivery rate, the bytes not
+	 * yet acknowledged, the frames paced and spoiled. Zeros when it is
+	 * not TCP or gone. */
+	void (*link_info)(void *ud, struct bc_conn_ref to,
+	                  struct bc_proto_link *out);
 };
 
 /* ERROR to one connection: a code (BC_E*) and a sentence, logged; fatal

@@ -26,10 +26,13 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <netinet/in.h>
 #include <sys/ioctl.h>
+#include <sys/socket.h>
 #include <unistd.h>
 
 #include <linux/sockios.h>
+#include <linux/tcp.h>
 
 #if defined(__GLIBC__)
 #include <malloc.h>
@@ -661,6 +664,38 @@ static void drop_answers(struct bc_conn *c)
 	c->answers_tail = NULL;
 }
 
+static void link_info(void *ud, struct bc_conn_ref to,
+                      struct bc_proto_link *out)
+{
+	struct bc_conn *c = bc__conn_get(ud, to);
+	struct tcp_info ti;
+	socklen_t len = sizeof(ti);
+	uv_os_fd_t fd;
+	memset(out, 0, sizeof(*out));
+	if (!c) {
+		return;
+	}
+	out->frames_paced = (uint32_t)c->counters.frames_paced;
+	out->frames_spoiled = c->frames_spoiled;
+	if (!c->is_tcp || uv_fileno(&c->h.handle, &fd) != 0) {
+		return;
+	}
+	out->unacked_bytes = (uint32_t)kernel_backlog(c);
+	memset(&ti, 0, sizeof(ti));
+	if (getsockopt(fd, IPPROTO_TCP, TCP_INFO, &ti, &len) == 0) {
+		out->rtt_us = ti.tcpi_rtt;
+		/* Fields of later kernels are there when len reached them. */
+		if (len >= offsetof(struct tcp_info, tcpi_min_rtt) +
+		               sizeof(ti.tcpi_min_rtt)) {
+			out->min_rtt_us = ti.tcpi_min_rtt;
+		}
+		if (len >= offsetof(struct tcp_info, tcpi_delivery_rate) +
+		               sizeof(ti.tcpi_delivery_rate)) {
+			out->delivery_bps = ti.tcpi_delivery_rate;
+		}
+	}
+}
+
 static void link_forget_frames(void *ud, struct bc_conn_ref to)
 {
 	struct bc_conn *c = bc__conn_get(ud, to);
@@ -1058,6 +1093,7 @@ int bc_net_new(struct bc_net **out, uv_loop_t *loop,
 	    .detach = link_detach,
 	    .close = link_close,
 	    .resume = link_resume,
+	    .link_info = link_info,
 	};
 	uv_idle_init(loop, &n->resumer);
 	n->resumer.data = n;

@@ -96,7 +96,7 @@ export const PLANE = Object.freeze({ DEPTH: 0x01, IDS: 0x02, ALL: 0x03 });
 /* GET_STATS parts: the daemon's load section, a reset of its maxima, and
  * the TLS section (the certificate's end of validity). */
 export const STATS_PARTS = Object.freeze({ LOAD: 0x01, RESET: 0x02, TLS: 0x04,
-	ALL: 0x07 });
+	LINK: 0x08, ALL: 0x0f });
 
 /* Features (PROTOCOL.md 4): what version 1 gained after its first text; a
  * server sends each only to a client that announced it in HELLO, and
@@ -280,7 +280,7 @@ T(18, 'PICK', FROM_CLIENT, 0, 4);
 T(19, 'PICK_RESULT', FROM_SERVER, 0, 24);
 T(20, 'SNAPSHOT', FROM_CLIENT, 0, 14);
 T(21, 'GET_STATS', FROM_CLIENT, 0, 1);
-T(22, 'STATS', FROM_SERVER, 0, 64 + 44 + 9); /* + load and TLS sections */
+T(22, 'STATS', FROM_SERVER, 0, 64 + 44 + 9 + 32); /* + load, TLS, link */
 T(23, 'SESSION_DELETE', FROM_CLIENT, 0, strMax(L.MAX_NAME));
 T(24, 'UNDO', FROM_CLIENT, 0, 1);
 T(25, 'REDO', FROM_CLIENT, 0, 1);
@@ -735,9 +735,10 @@ function decFrame(d, flags, m) {
 
 const STATS_FLOATS = ['render_ms_last', 'render_ms_avg', 'encode_ms_last',
 	'encode_ms_avg', 'edit_ms_avg', 'fps'];
-/* STATS's optional load and TLS sections (PROTOCOL.md 7.18). */
+/* STATS's optional load, TLS and link sections (PROTOCOL.md 7.18). */
 const STATS_LOAD_BYTES = 44;
 const STATS_TLS_BYTES = 9;
+const STATS_LINK_BYTES = 32;
 const LOAD_F32 = ['loop_turn_max_ms', 'loop_request_max_ms'];
 const LOAD_U32 = ['render_workers', 'jobs_queued', 'jobs_running'];
 const LOAD_U64 = ['view_bytes', 'view_cap', 'session_render_us'];
@@ -1058,14 +1059,24 @@ function decBody(d, m) {
 		for (const k of STATS_FLOATS) {
 			m[k] = d.f32nonneg(k);
 		}
-		/* The load and TLS sections answer a GET_STATS that asked
-		 * for them: the length tells which (0, 44, 9 or 53 more). */
-		if (![0, STATS_LOAD_BYTES, STATS_TLS_BYTES,
-			STATS_LOAD_BYTES + STATS_TLS_BYTES].includes(d.left())) {
+		/* The load, TLS and link sections answer a GET_STATS that
+		 * asked for them, in that order: the length tells which
+		 * (every sum of 44, 9 and 32 differs). */
+		const left = d.left();
+		let sections = -1;
+		for (let k = 0; k < 8; k++) {
+			if (left === ((k & 1) ? STATS_LOAD_BYTES : 0) +
+			    ((k & 2) ? STATS_TLS_BYTES : 0) +
+			    ((k & 4) ? STATS_LINK_BYTES : 0)) {
+				sections = k;
+				break;
+			}
+		}
+		if (sections < 0) {
 			d.fail('EPROTO_TRAILING',
 				`${d.left()} bytes after the last field`);
 		}
-		if (d.left() >= STATS_LOAD_BYTES) {
+		if (sections & 1) {
 			m.has_load = true;
 			for (const k of LOAD_F32) {
 				m[k] = d.f32nonneg(k);
@@ -1077,7 +1088,7 @@ function decBody(d, m) {
 				m[k] = d.u64(k);
 			}
 		}
-		if (d.left() === STATS_TLS_BYTES) {
+		if (sections & 2) {
 			m.has_tls = true;
 			m.tls_not_after_ms = d.u64('tls_not_after_ms');
 			m.tls_expiring = d.u8('tls_expiring');
@@ -1085,6 +1096,15 @@ function decBody(d, m) {
 				d.fail('ERANGE', `tls_expiring ${m.tls_expiring} ` +
 					'is not 0 or 1');
 			}
+		}
+		if (sections & 4) {
+			m.has_link = true;
+			m.rtt_us = d.u32('rtt_us');
+			m.min_rtt_us = d.u32('min_rtt_us');
+			m.delivery_bps = d.u64('delivery_bps');
+			m.unacked_bytes = d.u32('unacked_bytes');
+			m.frames_paced = d.u32('frames_paced');
+			m.frames_spoiled = d.u64('frames_spoiled');
 		}
 		break;
 	default:
@@ -1728,6 +1748,14 @@ function encBody(w, m) {
 		if (m.has_tls) {
 			w.u64('tls_not_after_ms', m.tls_not_after_ms);
 			w.u8('tls_expiring', m.tls_expiring);
+		}
+		if (m.has_link) {
+			w.u32('rtt_us', m.rtt_us);
+			w.u32('min_rtt_us', m.min_rtt_us);
+			w.u64('delivery_bps', m.delivery_bps);
+			w.u32('unacked_bytes', m.unacked_bytes);
+			w.u32('frames_paced', m.frames_paced);
+			w.u64('frames_spoiled', m.frames_spoiled);
 		}
 		break;
 	default:

@@ -80,7 +80,7 @@ TYPE_MAX = {
     "SCENE_LOAD": MAX_PAYLOAD, "SCENE_STATE": MAX_PAYLOAD,
     "EDIT": MAX_PAYLOAD, "EDIT_APPLIED": MAX_PAYLOAD,
     "CAMERA": 40, "VIEW": 8, "FRAME": MAX_PAYLOAD, "PICK": 4,
-    "PICK_RESULT": 24, "SNAPSHOT": 14, "GET_STATS": 1, "STATS": 64 + 44 + 9,
+    "PICK_RESULT": 24, "SNAPSHOT": 14, "GET_STATS": 1, "STATS": 64 + 44 + 9 + 32,
     "SESSION_DELETE": strmax(MAX_NAME), "UNDO": 1, "REDO": 1,
     "SESSION_LIST": 0,
     "SESSIONS": 2 + MAX_SESSIONS_LISTED * (strmax(MAX_NAME) + 2 + 4 + 8 + 8 + 1),
@@ -417,6 +417,11 @@ def w_stats(f):
     # The TLS section likewise, after the load section when both.
     if f.get("has_tls"):
         b += u64(int(f["tls_not_after_ms"])) + u8(f["tls_expiring"])
+    # The link section last.
+    if f.get("has_link"):
+        b += (u32(f["rtt_us"]) + u32(f["min_rtt_us"])
+              + u64(int(f["delivery_bps"])) + u32(f["unacked_bytes"])
+              + u32(f["frames_paced"]) + u64(int(f["frames_spoiled"])))
     return b
 
 
@@ -1473,6 +1478,18 @@ def gen_stats():
          dict(tls, tls_not_after_ms="0"), seq=65)
     t.badp("TLS section, tls_expiring 2", r[:-1] + u8(2), "ERANGE")
     t.badp("TLS section one byte short", r[:-1], "EPROTO_TRAILING")
+    link_f = dict(has_link=True, rtt_us=50213, min_rtt_us=48007,
+                  delivery_bps="1250000", unacked_bytes=65536,
+                  frames_paced=17, frames_spoiled="9")
+    k = t.ok("with the link section", dict(base, **link_f), seq=66)
+    t.ok("with every section", dict(load, has_tls=True,
+                                    tls_not_after_ms="1796083200000",
+                                    tls_expiring=0, **link_f), seq=67)
+    t.ok("link section of a Unix socket",
+         dict(tls, **dict(link_f, rtt_us=0, min_rtt_us=0,
+                          delivery_bps="0")), seq=68)
+    t.badp("link section one byte short", k[:-1], "EPROTO_TRAILING")
+    t.badp("link section one byte long", k + u8(0), "EPROTO_TRAILING")
     t.dump("stats.json")
 
 
@@ -1483,12 +1500,14 @@ def gen_get_stats():
     p = t.ok("load and reset", dict(parts=3), seq=14)
     t.ok("TLS", dict(parts=4), seq=15)
     t.ok("load, reset and TLS", dict(parts=7), seq=16)
+    t.ok("link", dict(parts=8), seq=17)
+    t.ok("every part", dict(parts=15), seq=18)
     # parts is an optional byte, so Table.common's shortened and
     # lengthened payloads are written out here.
     t.badp("parts 0", u8(0), "ERANGE")
     t.badp("reset without load", u8(2), "ERANGE")
     t.badp("TLS and reset without load", u8(6), "ERANGE")
-    t.badp("parts bit 3", u8(9), "EPROTO_FLAGS")
+    t.badp("parts bit 4", u8(0x11), "EPROTO_FLAGS")
     t.badp("parts 0xff", u8(0xff), "EPROTO_FLAGS")
     t.badp("one trailing byte", p + b"\x00", "EPROTO_LENGTH")
     t.bad("length = type maximum + 1", header("GET_STATS", 2),

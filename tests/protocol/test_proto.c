@@ -442,15 +442,25 @@ static void sample(enum bc_msg_type t, struct bc_msg *m)
 		break;
 	case BC_MSG_STATS:
 		m->stats = (struct bc_msg_stats){
-		    1,     2,
-		    3,     4,
-		    5,     6,
-		    7.0f,  8.0f,
-		    9.0f,  10.0f,
-		    11.0f, 12.0f,
-		    true,  {1.5f, 2.5f, 2u, 3u, 4u, 5u, 6u, 7u},
-		    true,  1764748800000u,
-		    1};
+		    1,
+		    2,
+		    3,
+		    4,
+		    5,
+		    6,
+		    7.0f,
+		    8.0f,
+		    9.0f,
+		    10.0f,
+		    11.0f,
+		    12.0f,
+		    true,
+		    {1.5f, 2.5f, 2u, 3u, 4u, 5u, 6u, 7u},
+		    true,
+		    1764748800000u,
+		    1,
+		    true,
+		    {50000u, 48000u, 1250000u, 65536u, 3u, 9u}};
 		break;
 	case BC_MSG_SESSION_DELETE:
 		m->session_delete.name = S("old-review");

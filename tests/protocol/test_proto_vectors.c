@@ -391,6 +391,16 @@ static void build(enum bc_msg_type type, const json_t *f, struct bc_msg *m)
 			s->tls_not_after_ms = jint(f, "tls_not_after_ms");
 			s->tls_expiring = (uint8_t)jint(f, "tls_expiring");
 		}
+		s->has_link = json_is_true(json_object_get(f, "has_link"));
+		if (s->has_link) {
+			struct bc_proto_link *k = &s->link;
+			k->rtt_us = (uint32_t)jint(f, "rtt_us");
+			k->min_rtt_us = (uint32_t)jint(f, "min_rtt_us");
+			k->delivery_bps = jint(f, "delivery_bps");
+			k->unacked_bytes = (uint32_t)jint(f, "unacked_bytes");
+			k->frames_paced = (uint32_t)jint(f, "frames_paced");
+			k->frames_spoiled = jint(f, "frames_spoiled");
+		}
 		break;
 	}
 	case BC_MSG_GET_STATS:

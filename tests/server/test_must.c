@@ -1571,7 +1571,67 @@ static void presenting_rules(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
+/* GET_STATS's LINK part: over TCP the link section carries the round trip
+ * and delivery rate the server's TCP measures (loopback: well under a
+ * second, non-zero once a frame went out), over a Unix socket zeros; the
+ * payload grows by exactly the 32 bytes of the section. */
+static void stats_link_section_measures_the_path(void)
+{
+	char listen_on[32];
+	const char *extra[] = {"--listen", listen_on, NULL};
+	struct sockaddr_in sa = {.sin_family = AF_INET};
+	struct daemon d;
+	struct conn t, u;
+	struct bc_msg m = {.type = BC_MSG_GET_STATS};
+	uint32_t seq;
+	int port = daemon_free_port();
+	REQUIRE(port > 0);
+	snprintf(listen_on, sizeof(listen_on), "127.0.0.1:%d", port);
+	REQUIRE(start(&d, "link", extra) == 0);
+	memset(&t, 0, sizeof(t));
+	t.fd = socket(AF_INET, SOCK_STREAM, 0);
+	sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+	sa.sin_port = htons((uint16_t)port);
+	REQUIRE(t.fd >= 0 &&
+	        connect(t.fd, (struct sockaddr *)&sa, sizeof(sa)) == 0);
+	bc_proto_reader_init(
+	    &t.r, &(struct bc_proto_reader_opts){.side = BC_PROTO_SIDE_CLIENT});
+	REQUIRE(conn_hello(&t, "tcp") == 0);
+	REQUIRE(conn_join(&t, "link", BC_PROTO_ROLE_EDITOR, true) == 0);
+	REQUIRE(conn_expect(&t, BC_MSG_SCENE_STATE, WAIT_MS) == 1);
+	conn_view(&t, 64, 48, BC_PROTO_ENC_RAW);
+	REQUIRE(conn_expect(&t, BC_MSG_FRAME, WAIT_MS) == 1);
+	m.get_stats.parts = BC_PROTO_STATS_LINK;
+	seq = conn_send(&t, &m);
+	REQUIRE(answer(&t, seq) == BC_MSG_STATS);
+	CHECK(t.m.stats.has_link && !t.m.stats.has_load && !t.m.stats.has_tls);
+	CHECK(t.m.stats.link.rtt_us > 0 && t.m.stats.link.rtt_us < 1000000);
+	CHECK(t.m.stats.link.min_rtt_us > 0 &&
+	      t.m.stats.link.min_rtt_us <= t.m.stats.link.rtt_us + 1000);
+	CHECK(t.m.stats.link.delivery_bps > 0);
+	/* Every part at once: the sections in their order. */
+	m.get_stats.parts = BC_PROTO_STATS_PARTS_ALL;
+	seq = conn_send(&t, &m);
+	REQUIRE(answer(&t, seq) == BC_MSG_STATS);
+	CHECK(t.m.stats.has_load && t.m.stats.has_tls && t.m.stats.has_link);
+	CHECK(t.m.stats.link.rtt_us > 0);
+	/* A Unix socket has no round trip to tell. */
+	REQUIRE(member(&u, &d, "unix", "link", BC_PROTO_ROLE_EDITOR, false) ==
+	        0);
+	m.get_stats.parts = BC_PROTO_STATS_LINK;
+	seq = conn_send(&u, &m);
+	REQUIRE(answer(&u, seq) == BC_MSG_STATS);
+	CHECK(u.m.stats.has_link && u.m.stats.link.rtt_us == 0 &&
+	      u.m.stats.link.delivery_bps == 0 &&
+	      u.m.stats.link.frames_paced == 0);
+	conn_close(&u);
+	conn_close(&t);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
 static const struct bc_test tests[] = {
+    {"stats_link_section_measures_the_path",
+     stats_link_section_measures_the_path},
     {"decoding_errors_are_fatal_with_seq_0",
      decoding_errors_are_fatal_with_seq_0},
     {"a_stream_ending_between_messages_ends_cleanly",

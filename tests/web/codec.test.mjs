@@ -35,7 +35,8 @@ const fileOf = (name) => name.toLowerCase() + '.json';
  * vectors and are BigInt here; byte ranges travel as hex. */
 const U64 = new Set(['order', 'stamp', 'uptime_ms', 'frames', 'bytes',
 	'target_order', 'last_edit_ms', 'view_bytes', 'view_cap',
-	'session_render_us', 'tls_not_after_ms', 'time_ms', 'built_on']);
+	'session_render_us', 'tls_not_after_ms', 'time_ms', 'built_on',
+	'delivery_bps', 'frames_spoiled']);
 const BYTES = new Set(['scene', 'subtree', 'data']);
 
 function fromJson(v, key) {

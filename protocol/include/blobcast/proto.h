@@ -140,7 +140,10 @@ enum bc_msg_type {
 #define BC_PROTO_STATS_RESET 0x02u
 /* TLS asks for the TLS section: the certificate's end of validity. */
 #define BC_PROTO_STATS_TLS 0x04u
-#define BC_PROTO_STATS_PARTS_ALL 0x07u
+/* LINK asks for the link section: what the server's TCP measures of the
+ * path to this client, and how many frames waited for it. */
+#define BC_PROTO_STATS_LINK 0x08u
+#define BC_PROTO_STATS_PARTS_ALL 0x0fu
 
 /* Features (PROTOCOL.md 4): what version 1 gained after its first text
  * (2026-11-22), each sent by a server only to a client that announced it
@@ -508,6 +511,16 @@ struct bc_proto_load {
 	uint64_t session_render_us;
 };
 
+/* STATS's link section (PROTOCOL.md 7.18). */
+struct bc_proto_link {
+	uint32_t rtt_us;         /* smoothed round-trip time (0: unknown) */
+	uint32_t min_rtt_us;     /* the least seen on this connection */
+	uint64_t delivery_bps;   /* recent delivery rate, bytes per second */
+	uint32_t unacked_bytes;  /* written, not yet acknowledged or sent */
+	uint32_t frames_paced;   /* times a frame waited for the link */
+	uint64_t frames_spoiled; /* frames a newer one replaced unsent */
+};
+
 struct bc_msg_stats {
 	uint64_t uptime_ms;
 	uint64_t frames; /* FRAMEs sent to this client */
@@ -526,6 +539,8 @@ struct bc_msg_stats {
 	 * left. */
 	uint64_t tls_not_after_ms;
 	uint8_t tls_expiring;
+	bool has_link; /* the link section follows (asked by LINK) */
+	struct bc_proto_link link;
 };
 
 /* PRESENT and FOLLOW: on 1 starts presenting (following), 0 stops; other
