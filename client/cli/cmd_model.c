@@ -590,21 +590,22 @@ const struct bc_cli_cmd bc_cli_cmd_rename = {
     .synopsis = "--session NAME ID TEXT",
     .summary = "name a node, or take its name away",
     .help =
-        "Gives node ID the name TEXT, as one edit (one step of undo): a\n"
-        "label for people, shown by 'blobcast nodes', the history and every\n"
-        "client; nodes are still addressed by id, and names need not be\n"
-        "unique. TEXT is up to 64 bytes of UTF-8; \"\" takes the name\n"
-        "away. Refused before sending: an unknown node, a name over 64\n"
-        "bytes or not UTF-8, the name the node already has, and a server\n"
-        "that does not know names (an older blobcastd: upgrade it).\n"
+        "Gives node ID the name TEXT, as one edit (one step of undo): a label\n"
+        "for people, shown by 'blobcast nodes', the history and every client;\n"
+        "nodes are still addressed by id, and names need not be unique. TEXT\n"
+        "is up to 64 bytes of UTF-8; \"\" takes the name away. Refused before\n"
+        "sending: an unknown node, a name over 64 bytes or not UTF-8, the\n"
+        "name the node already has, and a server that does not know names\n"
+        "(an older blobcastd: upgrade it).\n"
         "\n"
         "examples:\n"
         "  blobcast rename --session demo 7 wheel\n"
         "  blobcast rename --session demo 7 'front wheel' --json\n"
         "  blobcast rename --session demo 7 ''\n"
-        "prints 'named node ID \"TEXT\", edit order O'; with --json\n"
-        "{\"seq\", \"order\", \"node\", \"ids\": [], \"parent\",\n"
-        "\"position\"}; 'blobcast undo' gives the earlier name back.",
+        "prints 'named node ID \"TEXT\", edit order O'; with --json {\"seq\",\n"
+        "\"order\", \"node\", \"ids\": [], \"parent\", \"position\"}. "
+        "'blobcast\n"
+        "undo' gives the earlier name back.",
     .texts =
         (const struct bc_cli_opt_text[]){
             {"json", NULL, "print one JSON object"}, {NULL, NULL, NULL}},
