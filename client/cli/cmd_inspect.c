@@ -64,16 +64,21 @@ static bool is_zero3(const float v[3])
 
 /* ---- text ---------------------------------------------------------------- */
 
-const char *bc_cli_quote_name(const char *name, char *out, size_t cap)
+/* Writes s into out (cap bytes) with control characters as \\xHH (C1
+ * controls \\u00HH) and, with quote, in double quotes with '"' and '\\'
+ * escaped. Output stops short rather than overflow. */
+static const char *escape(const char *s, bool quote, char *out, size_t cap)
 {
-	const unsigned char *p = (const unsigned char *)name;
+	const unsigned char *p = (const unsigned char *)s;
 	size_t used = 0;
 	if (cap < 3) {
 		return cap ? (out[0] = '\0', out) : out;
 	}
-	out[used++] = '"';
+	if (quote) {
+		out[used++] = '"';
+	}
 	for (; *p && used + 7 < cap; p++) {
-		if (*p == '"' || *p == '\\') {
+		if (quote && (*p == '"' || *p == '\\')) {
 			out[used++] = '\\';
 			out[used++] = (char)*p;
 		} else if (*p < 0x20u || *p == 0x7fu) {
@@ -88,9 +93,21 @@ const char *bc_cli_quote_name(const char *name, char *out, size_t cap)
 			out[used++] = (char)*p;
 		}
 	}
-	out[used++] = '"';
+	if (quote) {
+		out[used++] = '"';
+	}
 	out[used] = '\0';
 	return out;
+}
+
+const char *bc_cli_quote_name(const char *name, char *out, size_t cap)
+{
+	return escape(name, true, out, cap);
+}
+
+const char *bc_cli_printable(const char *text, char *out, size_t cap)
+{
+	return escape(text, false, out, cap);
 }
 
 static void put_floats(FILE *out, const char *key, const float *v, int n)

@@ -22,6 +22,11 @@
  * control characters as \xHH (C1 controls as \u00HH), so that a name
  * cannot move the cursor or break a line. Returns out. */
 const char *bc_cli_quote_name(const char *name, char *out, size_t cap);
+/* Writes text into out (cap bytes; 4 times text's length and 1 hold any)
+ * with its control characters escaped as bc_cli_quote_name() does, for
+ * text from the server that may hold a name (a history entry's what).
+ * Returns out. */
+const char *bc_cli_printable(const char *text, char *out, size_t cap);
 
 /*
  * Writes the nodes of t to out in pre-order: as text, a header line and

@@ -8,6 +8,7 @@
 #    again is refused (nothing to remove);
 #  - refused before sending, exit 2, with the reason: 65 bytes (64 of
 #    UTF-8 pass), bytes that are not UTF-8, an unknown node;
+#  - `history` shows a name with its control characters escaped;
 #  - `add ... name=TEXT` and `wrap ... name=TEXT` name the new node; move
 #    and wrap keep the names of what they move; duplicate names the copy
 #    "NAME copy".
@@ -106,6 +107,11 @@ expect_refusal "node 3 already has that name" 3 "$e64"
   fail "rename with a quote: $(cat "$tmp/r3")"
 grep -qF 'named node 3 "a\"b\\c\x1bd", edit order' "$tmp/r3" ||
   fail "rename sentence: $(cat "$tmp/r3")"
+# history prints the daemon's words for it, the escape character escaped.
+"$BLOBCAST" $S history $R > "$tmp/h1" 2>&1 || fail "history: $(cat "$tmp/h1")"
+grep -qF 'NAME node 3 "a"b\c\x1bd"' "$tmp/h1" &&
+  ! grep -q "$(printf '\033')" "$tmp/h1" ||
+  fail "history: $(cat "$tmp/h1")"
 "$BLOBCAST" $S rename $R 3 "" > "$tmp/r4" 2>&1 &&
   grep -q "^took the name of node 3 away, edit order" "$tmp/r4" ||
   fail "rename 3 '': $(cat "$tmp/r4")"
