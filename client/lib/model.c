@@ -258,6 +258,16 @@ static int fresh_ids(struct bc_client *c, const struct bc_tree *t,
 
 /* ---- building subtrees -------------------------------------------------- */
 
+/* Gives node id of the builder dst the name node src_id of src has, if
+ * any. */
+static int keep_name(struct bc_tree *dst, uint32_t id,
+                     const struct bc_tree *src, uint32_t src_id,
+                     struct bc_errinfo *ei)
+{
+	const char *name = bc_tree_name(src, src_id);
+	return name ? bc_tree_set_name(dst, id, name, strlen(name), ei) : 0;
+}
+
 /* Emits the subtree of node of src into the builder dst, in pre-order:
  * with ids as in src, or (renumber) first_id, first_id + 1, ...; with
  * offset (may be NULL) added to every primitive's translate. Each node
@@ -278,7 +288,6 @@ static int put_subtree(struct bc_tree *dst, const struct bc_tree *src,
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
 	}
 	while (!rc && bc_scene_walk_next(&w, &n)) {
-		const char *name;
 		uint32_t rel, id;
 		if (in && n.depth <= depth) {
 			break;
@@ -314,9 +323,7 @@ static int put_subtree(struct bc_tree *dst, const struct bc_tree *src,
 			rc = bc_tree_push_op(dst, id, &n.op, ei);
 			open++;
 		}
-		if (!rc && (name = bc_tree_name(src, n.id)) != NULL) {
-			rc = bc_tree_set_name(dst, id, name, strlen(name), ei);
-		}
+		rc = rc ? rc : keep_name(dst, id, src, n.id, ei);
 	}
 	bc_scene_walk_finish(&w);
 	while (!rc && open > 0) {
@@ -996,6 +1003,8 @@ static int swap_children(const struct bc_tree *t, uint32_t p,
 	int rc = new_builder(sub, ei);
 	bc_tree_get(t, p, NULL, &op);
 	rc = rc ? rc : bc_tree_push_op(*sub, p, &op, ei);
+	/* A REPLACE takes the replaced node's name: give it back. */
+	rc = rc ? rc : keep_name(*sub, p, t, p, ei);
 	rc = rc ? rc
 	        : put_subtree(*sub, t, bc_tree_child(t, p, 1), false, 0, NULL,
 	                      ei);

@@ -32,7 +32,7 @@ cat > "$tmp/scene.json" <<'JSON'
    {"type": "sphere", "id": 2, "radius": 0.5, "translate": [-1, 0, 0],
     "name": "left"},
    {"type": "sphere", "id": 3, "radius": 0.5, "translate": [1, 0, 0]},
-   {"type": "union", "id": 4, "children": [
+   {"type": "union", "id": 4, "name": "arm", "children": [
      {"type": "sphere", "id": 5, "radius": 0.3, "translate": [0, 1, 0]},
      {"type": "twist", "id": 6, "rate": 1, "children": [
        {"type": "sphere", "id": 7, "radius": 0.3, "translate": [0, -1, 0],
@@ -61,8 +61,8 @@ grep -qE '^\{"seq": [0-9]+, "order": [0-9]+, "node": 3, "ids": \[\], "parent": 1
   "$tmp/r1" || fail "rename --json: $(cat "$tmp/r1")"
 [ "$(name_of 3)" = wheel ] || fail "node 3 is not named wheel: $(cat "$tmp/nodes.json")"
 # "name" only on named nodes.
-[ "$(grep -c '"name"' "$tmp/nodes.json")" -eq 3 ] ||
-  fail "nodes --json: not 3 named nodes: $(cat "$tmp/nodes.json")"
+[ "$(grep -c '"name"' "$tmp/nodes.json")" -eq 4 ] ||
+  fail "nodes --json: not 4 named nodes: $(cat "$tmp/nodes.json")"
 "$BLOBCAST" $S nodes $R > "$tmp/nodes.txt" || fail "nodes"
 grep -qE '^3 +sphere +1 +"wheel" radius=0.5 ' "$tmp/nodes.txt" ||
   fail "nodes: no quoted name on node 3: $(cat "$tmp/nodes.txt")"
@@ -125,9 +125,15 @@ echo "ok   64 bytes pass, escaping, \"\" takes the name away"
   fail "add name=hub: $(cat "$tmp/a1")"
 hub=$(sed -n 's/^{"seq": [0-9]*, "order": [0-9]*, "node": \([0-9]*\),.*/\1/p' \
   "$tmp/a1")
+# Within union 4 of two children a move is a REPLACE of the union by
+# itself reordered: the union keeps its name.
+"$BLOBCAST" $S move $R 5 --parent 4 > "$tmp/m0" 2>&1 ||
+  fail "move 5: $(cat "$tmp/m0")"
 "$BLOBCAST" $S move $R 2 --parent 4 > "$tmp/m1" 2>&1 ||
   fail "move 2: $(cat "$tmp/m1")"
 snap
+grep -q '"id":4,"type":"union","parent":1,"children":\[6,5,2\],"name":"arm"' \
+  "$tmp/nodes.json" || fail "the swap lost union 4's name: $(cat "$tmp/nodes.json")"
 [ -n "$hub" ] && [ "$(name_of "$hub")" = hub ] ||
   fail "add name=hub: $(cat "$tmp/a1") $(cat "$tmp/nodes.json")"
 grep -q '"id":2,"type":"sphere","parent":4,.*"name":"left"' "$tmp/nodes.json" ||
