@@ -40,7 +40,7 @@ static const struct bc_cli_cmd *const cmds[] = {
     &bc_cli_cmd_scene,     &bc_cli_cmd_delete,        &bc_cli_cmd_sessions,
     &bc_cli_cmd_undo,      &bc_cli_cmd_redo,          &bc_cli_cmd_add,
     &bc_cli_cmd_remove,    &bc_cli_cmd_move,          &bc_cli_cmd_wrap,
-    &bc_cli_cmd_duplicate, &bc_cli_cmd_history};
+    &bc_cli_cmd_duplicate, &bc_cli_cmd_rename,        &bc_cli_cmd_history};
 
 static const struct bc_cli_cmd *find_cmd(const char *name)
 {

@@ -2,7 +2,7 @@
  * The `blobcast` subcommands that talk to a blobcastd through libblobcast:
  * load, edit, camera, present, follow, snapshot, watch, bench-latency,
  * nodes, scene, delete, sessions, undo, redo, history and the modelling
- * verbs add, remove, move, wrap and duplicate. main.c calls the first
+ * verbs add, remove, move, wrap, duplicate and rename. main.c calls the first
  * two functions; the rest is shared by the commands' files (cmd_client.c
  * parses the options, client_common.c holds the helpers).
  */
@@ -141,6 +141,7 @@ extern const struct bc_cli_cmd bc_cli_cmd_remove;
 extern const struct bc_cli_cmd bc_cli_cmd_move;
 extern const struct bc_cli_cmd bc_cli_cmd_wrap;
 extern const struct bc_cli_cmd bc_cli_cmd_duplicate;
+extern const struct bc_cli_cmd bc_cli_cmd_rename;
 extern const struct bc_cli_cmd bc_cli_cmd_history;
 
 /* Prints a failure of the server or the connection (on c, NULL while

@@ -21,6 +21,7 @@
 #include "blobcast/num.h"
 #include "blobcast/scene.h"
 #include "cli.h"
+#include "cmd_inspect.h"
 
 /* ---- load ---------------------------------------------------------------- */
 
@@ -357,7 +358,9 @@ static int run_history(struct bc_cli_call *a)
 	printf("session %s: edit order %llu, %zu change%s kept, newest first\n",
 	       a->session, (unsigned long long)order, n, n == 1 ? "" : "s");
 	for (size_t i = 0; i < n; i++) {
-		char t[32], on[48] = "";
+		/* Names reach what and author as their members typed them. */
+		char t[32], on[48] = "", what[4 * sizeof(h[i].what)],
+		            who[4 * sizeof(h[i].author)];
 		when(t, sizeof(t), h[i].time_ms);
 		if (h[i].built_on) {
 			snprintf(on, sizeof(on), " built on by %llu",
@@ -366,8 +369,10 @@ static int run_history(struct bc_cli_call *a)
 		printf("%6llu  %s  %-7s  %-16s  %s%s%s\n",
 		       (unsigned long long)h[i].order, t,
 		       h[i].undone ? "undone" : "applied",
-		       h[i].author[0] ? h[i].author : "(anonymous)", h[i].what,
-		       on,
+		       h[i].author[0]
+		           ? bc_cli_printable(h[i].author, who, sizeof(who))
+		           : "(anonymous)",
+		       bc_cli_printable(h[i].what, what, sizeof(what)), on,
 		       h[i].next
 		           ? (h[i].undone ? "  <- your redo" : "  <- your undo")
 		           : "");

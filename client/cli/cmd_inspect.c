@@ -1,8 +1,8 @@
 /*
  * The node listing of `blobcast nodes`: every node of a scene in pre-order
- * with its id, type, parent and parameters, as aligned text for people or
- * as a JSON array for scripts. Parameter keys are those `blobcast edit`
- * takes (docs/client.md), so a line says how to change what it shows.
+ * with its id, type, parent, name and parameters, as aligned text for
+ * people or as a JSON array for scripts. Parameter keys are those `blobcast
+ * edit` takes (docs/client.md), so a line says how to change what it shows.
  */
 #include "cmd_inspect.h"
 
@@ -64,6 +64,52 @@ static bool is_zero3(const float v[3])
 
 /* ---- text ---------------------------------------------------------------- */
 
+/* Writes s into out (cap bytes) with control characters as \\xHH (C1
+ * controls \\u00HH) and, with quote, in double quotes with '"' and '\\'
+ * escaped. Output stops short rather than overflow. */
+static const char *escape(const char *s, bool quote, char *out, size_t cap)
+{
+	const unsigned char *p = (const unsigned char *)s;
+	size_t used = 0;
+	if (cap < 3) {
+		return cap ? (out[0] = '\0', out) : out;
+	}
+	if (quote) {
+		out[used++] = '"';
+	}
+	for (; *p && used + 7 < cap; p++) {
+		if (quote && (*p == '"' || *p == '\\')) {
+			out[used++] = '\\';
+			out[used++] = (char)*p;
+		} else if (*p < 0x20u || *p == 0x7fu) {
+			used += (size_t)snprintf(out + used, cap - used,
+			                         "\\x%02x", *p);
+		} else if (*p == 0xc2u && p[1] >= 0x80u && p[1] <= 0x9fu) {
+			/* C1 controls (U+0080..U+009F) steer terminals too. */
+			used += (size_t)snprintf(out + used, cap - used,
+			                         "\\u%04x", p[1]);
+			p++;
+		} else {
+			out[used++] = (char)*p;
+		}
+	}
+	if (quote) {
+		out[used++] = '"';
+	}
+	out[used] = '\0';
+	return out;
+}
+
+const char *bc_cli_quote_name(const char *name, char *out, size_t cap)
+{
+	return escape(name, true, out, cap);
+}
+
+const char *bc_cli_printable(const char *text, char *out, size_t cap)
+{
+	return escape(text, false, out, cap);
+}
+
 static void put_floats(FILE *out, const char *key, const float *v, int n)
 {
 	fprintf(out, " %s=", key);
@@ -78,13 +124,19 @@ static void text_node(FILE *out, const struct bc_tree *t, uint32_t id)
 	struct bc_prim_data p;
 	struct bc_op_data op;
 	uint32_t parent = bc_tree_parent(t, id);
-	char pbuf[16];
+	const char *name = bc_tree_name(t, id);
+	char pbuf[16], quoted[BC_CLI_QUOTED_NAME];
 	snprintf(pbuf, sizeof(pbuf), "%u", parent);
 	bc_tree_get(t, id, &p, &op);
 	if (p.kind != BC_PRIM_INVALID) {
 		const struct bc_prim_info *info = bc_prim_info(p.kind);
 		fprintf(out, "%-8u %-19s %-8s", id, info ? info->name : "?",
 		        parent ? pbuf : "-");
+		if (name) {
+			fprintf(
+			    out, " %s",
+			    bc_cli_quote_name(name, quoted, sizeof(quoted)));
+		}
 		for (uint8_t k = 0; info && k < info->nparams; k++) {
 			const struct bc_param_desc *d = &info->params[k];
 			put_floats(out, d->name, &p.params[d->offset],
@@ -100,10 +152,15 @@ static void text_node(FILE *out, const struct bc_tree *t, uint32_t id)
 			put_floats(out, "color", p.color, 3);
 		}
 	} else {
-		const char *name = bc_op_name(op.kind);
-		fprintf(out, "%-8u %-19s %-8s children=%u", id,
-		        name ? name : "?", parent ? pbuf : "-",
-		        bc_tree_child_count(t, id));
+		const char *kind = bc_op_name(op.kind);
+		fprintf(out, "%-8u %-19s %-8s", id, kind ? kind : "?",
+		        parent ? pbuf : "-");
+		if (name) {
+			fprintf(
+			    out, " %s",
+			    bc_cli_quote_name(name, quoted, sizeof(quoted)));
+		}
+		fprintf(out, " children=%u", bc_tree_child_count(t, id));
 		if (bc_op_is_smooth(op.kind)) {
 			put_floats(out, "blend", &op.blend, 1);
 			put_floats(out, "range", &op.range, 1);
@@ -151,6 +208,7 @@ static json_t *json_node(const struct bc_tree *t, const struct order *ord,
 	struct bc_op_data op;
 	json_t *o = json_object();
 	bool ok = o != NULL;
+	const char *name = bc_tree_name(t, id);
 	bc_tree_get(t, id, &p, &op);
 	ok = ok && !json_object_set_new(o, "id", json_integer(id));
 	if (p.kind != BC_PRIM_INVALID) {
@@ -174,10 +232,10 @@ static json_t *json_node(const struct bc_tree *t, const struct order *ord,
 			                          json_floats(p.color, 3));
 		}
 	} else {
-		const char *name = bc_op_name(op.kind);
+		const char *kind = bc_op_name(op.kind);
 		json_t *kids = json_array();
-		ok = ok && name && kids &&
-		     !json_object_set_new(o, "type", json_string(name)) &&
+		ok = ok && kind && kids &&
+		     !json_object_set_new(o, "type", json_string(kind)) &&
 		     !json_object_set_new(o, "parent",
 		                          json_integer(bc_tree_parent(t, id)));
 		for (uint32_t k = i + 1; ok && k < ord->end[i];
@@ -193,6 +251,10 @@ static json_t *json_node(const struct bc_tree *t, const struct order *ord,
 			     !json_object_set_new(
 			         o, "range", json_real(shortest(op.range)));
 		}
+	}
+	/* Only on named nodes: a listing without names reads as before. */
+	if (ok && name) {
+		ok = !json_object_set_new(o, "name", json_string(name));
 	}
 	if (!ok) {
 		json_decref(o);

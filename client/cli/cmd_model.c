@@ -1,5 +1,5 @@
 /*
- * `blobcast add|remove|move|wrap|duplicate`: modelling a session's tree
+ * `blobcast add|remove|move|wrap|duplicate|rename`: modelling a session's tree
  * from the command line, each verb one edit through libblobcast's
  * modelling actions (blobcast/model.h), which refuse impossible changes
  * before sending anything. Each waits until the server has applied the
@@ -16,6 +16,7 @@
 #include "blobcast/model.h"
 #include "blobcast/num.h"
 #include "cli.h"
+#include "cmd_inspect.h"
 
 /* ---- shared ------------------------------------------------------------------ */
 
@@ -66,6 +67,32 @@ static int vec_opt(const struct bc_cli_call *a, const char *name, const char *s,
 			        "<= %g)\n",
 			        a->cmd, name, (double)BC_PROTO_MAX_ABS);
 			return BC_CLI_EXIT_USAGE;
+		}
+	}
+	return 0;
+}
+
+/* Takes name=TEXT out of the key=value arguments kv[0..n): the others,
+ * the new node's parameters, go to rest (*nrest of them), TEXT to *name
+ * (NULL when not given). A second name= is a usage error. */
+static int split_name(const struct bc_cli_call *a, const char *const *kv,
+                      size_t n, const char **rest, size_t *nrest,
+                      const char **name)
+{
+	static const char key[] = "name=";
+	*nrest = 0;
+	*name = NULL;
+	for (size_t i = 0; i < n; i++) {
+		if (strncmp(kv[i], key, sizeof(key) - 1) != 0) {
+			rest[(*nrest)++] = kv[i];
+		} else if (*name) {
+			fprintf(stderr,
+			        "blobcast %s: name= is given twice: a node has "
+			        "one name\n",
+			        a->cmd);
+			return BC_CLI_EXIT_USAGE;
+		} else {
+			*name = kv[i] + sizeof(key) - 1;
 		}
 	}
 	return 0;
@@ -208,16 +235,18 @@ static int do_duplicate(struct bc_client *c, const void *arg,
 
 static int run_add(struct bc_cli_call *a)
 {
+	const char *kv[BC_CLI_MAX_POSITIONAL];
 	struct bc_model_add add = {.kind = a->pos[0],
-	                           .kv = a->pos + 1,
-	                           .nkv = (size_t)(a->npos - 1),
+	                           .kv = kv,
 	                           .parent = a->parent,
 	                           .child_kind = a->child};
 	struct bc_client *c = NULL;
 	struct bc_model_result r;
 	char ids[48], sentence[200];
 	int status;
-	if ((status = position_opt(a, &add.has_position, &add.position)) ||
+	if ((status = split_name(a, a->pos + 1, (size_t)(a->npos - 1), kv,
+	                         &add.nkv, &add.name)) ||
+	    (status = position_opt(a, &add.has_position, &add.position)) ||
 	    (status = vec_opt(a, "at", a->at, &add.has_at, add.at))) {
 		return status;
 	}
@@ -251,7 +280,8 @@ const struct bc_cli_cmd bc_cli_cmd_add = {
         "starts with two primitives of --child's kind, side by side) or a\n"
         "unary node (offset, twist, ...; it starts with one primitive of\n"
         "--child's kind inside). key=value sets the new node's parameters\n"
-        "as 'blobcast edit' does (radius=0.4, translate=x,y,z, blend=0.2).\n"
+        "as 'blobcast edit' does (radius=0.4, translate=x,y,z, blend=0.2);\n"
+        "name=TEXT names it (up to 64 bytes of UTF-8) in the same edit.\n"
         "Without translate= new primitives go to --at, else to the session\n"
         "camera's target: the middle of what members look at. Without\n"
         "--parent the node goes under the root operator; a scene that has\n"
@@ -262,6 +292,7 @@ const struct bc_cli_cmd bc_cli_cmd_add = {
         "\n"
         "examples:\n"
         "  blobcast add --session demo sphere radius=0.3 translate=0,1,0\n"
+        "  blobcast add --session demo torus name=wheel\n"
         "  blobcast add --session demo box --parent 5 --position 0\n"
         "  blobcast add --session demo smooth_union blend=0.2 --child "
         "torus\n"
@@ -399,15 +430,16 @@ const struct bc_cli_cmd bc_cli_cmd_move = {
 
 static int run_wrap(struct bc_cli_call *a)
 {
-	struct bc_model_wrap w = {.kind = a->pos[1],
-	                          .kv = a->pos + 2,
-	                          .nkv = (size_t)(a->npos - 2),
-	                          .child_kind = a->child};
+	const char *kv[BC_CLI_MAX_POSITIONAL];
+	struct bc_model_wrap w = {
+	    .kind = a->pos[1], .kv = kv, .child_kind = a->child};
 	struct bc_client *c = NULL;
 	struct bc_model_result r;
 	char ids[48], sentence[200];
 	int status;
-	if ((status = node_arg(a, a->pos[0], &w.node)) ||
+	if ((status = split_name(a, a->pos + 2, (size_t)(a->npos - 2), kv,
+	                         &w.nkv, &w.name)) ||
+	    (status = node_arg(a, a->pos[0], &w.node)) ||
 	    (status = vec_opt(a, "at", a->at, &w.has_at, w.at))) {
 		return status;
 	}
@@ -438,14 +470,15 @@ const struct bc_cli_cmd bc_cli_cmd_wrap = {
         "elongate, twist, bend, mirror, repeat, scale), or an operator: ID\n"
         "becomes its first child and a new primitive of --child's kind (at\n"
         "--at, else the session camera's target) its second. key=value sets\n"
-        "the new node's parameters. Wrapping a primitive in union is how a\n"
-        "one-shape scene gets an operator to add under.\n"
+        "the new node's parameters, name=TEXT its name. Wrapping a\n"
+        "primitive in union is how a one-shape scene gets an operator to\n"
+        "add under.\n"
         "\n"
         "examples:\n"
         "  blobcast wrap --session demo 4 twist rate=1.5\n"
         "  blobcast wrap --session demo 2 smooth_difference blend=0.1 "
         "--child box\n"
-        "  blobcast wrap --session demo 1 union --json\n"
+        "  blobcast wrap --session demo 1 union name=body --json\n"
         "prints 'wrapped node ID in KIND N (ids ...), edit order O'; with\n"
         "--json {\"seq\", \"order\", \"node\" (the new node), \"ids\",\n"
         "\"parent\", \"position\"}.",
@@ -492,8 +525,9 @@ const struct bc_cli_cmd bc_cli_cmd_duplicate = {
     .help =
         "Inserts a copy of node ID, its subtree included, with new ids\n"
         "right after it under the same operator, as one edit. A node inside\n"
-        "unary nodes is copied with them. The root is refused (wrap it in\n"
-        "an operator first).\n"
+        "unary nodes is copied with them. The copied nodes keep their\n"
+        "names, except that the copy of a named ID is named \"NAME copy\".\n"
+        "The root is refused (wrap it in an operator first).\n"
         "\n"
         "examples:\n"
         "  blobcast duplicate --session demo 7 --offset 1,0,0\n"
@@ -507,3 +541,72 @@ const struct bc_cli_cmd bc_cli_cmd_duplicate = {
             {"json", NULL, "print one JSON object with the new ids"},
             {NULL, NULL, NULL}},
     .run = run_duplicate};
+
+/* ---- rename ------------------------------------------------------------------ */
+
+struct rename_arg {
+	uint32_t node;
+	const char *name;
+};
+
+static int do_rename(struct bc_client *c, const void *arg,
+                     struct bc_model_result *r, struct bc_errinfo *ei)
+{
+	const struct rename_arg *n = arg;
+	return bc_model_rename(c, n->node, n->name, r, ei);
+}
+
+static int run_rename(struct bc_cli_call *a)
+{
+	struct rename_arg n = {.name = a->pos[1]};
+	struct bc_client *c = NULL;
+	struct bc_model_result r;
+	char quoted[BC_CLI_QUOTED_NAME], sentence[BC_CLI_QUOTED_NAME + 64];
+	int status;
+	if ((status = node_arg(a, a->pos[0], &n.node))) {
+		return status;
+	}
+	if ((status = perform(a, do_rename, &n, NULL, &c, &r))) {
+		goto out;
+	}
+	if (n.name[0]) {
+		snprintf(sentence, sizeof(sentence), "named node %u %s", n.node,
+		         bc_cli_quote_name(n.name, quoted, sizeof(quoted)));
+	} else {
+		snprintf(sentence, sizeof(sentence),
+		         "took the name of node %u away", n.node);
+	}
+	status = finish(a, c, &r, sentence);
+out:
+	bc_client_destroy(c);
+	return status;
+}
+
+const struct bc_cli_cmd bc_cli_cmd_rename = {
+    .name = "rename",
+    .opts = BC_CLI_O_SESSION | BC_CLI_O_JSON,
+    .min_pos = 2,
+    .max_pos = 2,
+    .synopsis = "--session NAME ID TEXT",
+    .summary = "name a node, or take its name away",
+    .help =
+        "Gives node ID the name TEXT, as one edit (one step of undo): a label\n"
+        "for people, shown by 'blobcast nodes', the history and every client;\n"
+        "nodes are still addressed by id, and names need not be unique. TEXT\n"
+        "is up to 64 bytes of UTF-8; \"\" takes the name away. Refused before\n"
+        "sending: an unknown node, a name over 64 bytes or not UTF-8, the\n"
+        "name the node already has, and a server that does not know names\n"
+        "(an older blobcastd: upgrade it).\n"
+        "\n"
+        "examples:\n"
+        "  blobcast rename --session demo 7 wheel\n"
+        "  blobcast rename --session demo 7 'front wheel' --json\n"
+        "  blobcast rename --session demo 7 ''\n"
+        "prints 'named node ID \"TEXT\", edit order O'; with --json {\"seq\",\n"
+        "\"order\", \"node\", \"ids\": [], \"parent\", \"position\"}. "
+        "'blobcast\n"
+        "undo' gives the earlier name back.",
+    .texts =
+        (const struct bc_cli_opt_text[]){
+            {"json", NULL, "print one JSON object"}, {NULL, NULL, NULL}},
+    .run = run_rename};

@@ -109,6 +109,7 @@ const struct bc_cli_cmd bc_cli_cmd_nodes = {
     .help =
         "Joins session NAME as a viewer and lists its scene's nodes in\n"
         "pre-order, one line each: id, type, parent id ('-' for the root),\n"
+        "its name in double quotes when it has one ('blobcast rename'),\n"
         "then the parameters with the keys 'blobcast edit' takes (operators:\n"
         "children=N and, when smooth, blend and range; primitives: their\n"
         "kind's parameters, translate and rotate unless at rest, color when\n"
@@ -119,7 +120,8 @@ const struct bc_cli_cmd bc_cli_cmd_nodes = {
              "one JSON array instead: objects with id, "
              "type,\nparent (0 for the root), children "
              "(operators) and\nevery parameter, "
-             "translate and rotate included"},
+             "translate and rotate included;\nname on "
+             "named nodes only"},
             {NULL, NULL, NULL}},
     .run = run_nodes};
 

@@ -27,10 +27,10 @@
 
 /* The subcommands that talk to a blobcastd (cmd_client.c). */
 static const char *const client_cmds[] = {
-    "load",          "edit",     "camera",  "snapshot",  "watch",
-    "bench-latency", "nodes",    "scene",   "delete",    "undo",
-    "redo",          "sessions", "present", "follow",    "add",
-    "remove",        "move",     "wrap",    "duplicate", "history",
+    "load",      "edit",   "camera",  "snapshot", "watch", "bench-latency",
+    "nodes",     "scene",  "delete",  "undo",     "redo",  "sessions",
+    "present",   "follow", "add",     "remove",   "move",  "wrap",
+    "duplicate", "rename", "history",
 };
 
 /* The commands that run here, and help. */

@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/bytes.h"
 #include "blobcast/edit.h"
 #include "blobcast/model.h"
 #include "blobcast/scene.h"
@@ -23,6 +24,10 @@
 
 /* The most operations an action sends (move: REMOVE and INSERT). */
 #define MODEL_MAX_OPS 2u
+
+/* What the copy of a named node's name ends with (bc_model_duplicate),
+ * as the web page names its copies. */
+#define MODEL_COPY_SUFFIX " copy"
 
 /* ---- reading the mirror ---------------------------------------------------- */
 
@@ -253,10 +258,23 @@ static int fresh_ids(struct bc_client *c, const struct bc_tree *t,
 
 /* ---- building subtrees -------------------------------------------------- */
 
+/* Gives node id of the builder dst the name node src_id of src has, if
+ * any. */
+static int keep_name(struct bc_tree *dst, uint32_t id,
+                     const struct bc_tree *src, uint32_t src_id,
+                     struct bc_errinfo *ei)
+{
+	const char *name = bc_tree_name(src, src_id);
+	return name ? bc_tree_set_name(dst, id, name, strlen(name), ei) : 0;
+}
+
 /* Emits the subtree of node of src into the builder dst, in pre-order:
  * with ids as in src, or (renumber) first_id, first_id + 1, ...; with
- * offset (may be NULL) added to every primitive's translate. One walk of
- * src; the builder's nesting follows the walk's depths. */
+ * offset (may be NULL) added to every primitive's translate. Each node
+ * keeps its name (PROTOCOL.md 9: a REMOVE takes the names of what it
+ * removes and a subtree brings its own, so a move or a wrap that did not
+ * carry them would drop them). One walk of src; the builder's nesting
+ * follows the walk's depths. */
 static int put_subtree(struct bc_tree *dst, const struct bc_tree *src,
                        uint32_t node, bool renumber, uint32_t first_id,
                        const float *offset, struct bc_errinfo *ei)
@@ -305,6 +323,7 @@ static int put_subtree(struct bc_tree *dst, const struct bc_tree *src,
 			rc = bc_tree_push_op(dst, id, &n.op, ei);
 			open++;
 		}
+		rc = rc ? rc : keep_name(dst, id, src, n.id, ei);
 	}
 	bc_scene_walk_finish(&w);
 	while (!rc && open > 0) {
@@ -507,6 +526,76 @@ static uint32_t node_limit(const struct bc_client *c)
 	return m && m < BC_PROTO_SCENE_MAX_NODES ? m : BC_PROTO_SCENE_MAX_NODES;
 }
 
+/* BC_ENOTSUP unless the server granted NAMES: an earlier daemon refuses a
+ * names table and the NAME operation (PROTOCOL.md 4.1). */
+static int need_names(const struct bc_client *c, struct bc_errinfo *ei)
+{
+	if (bc_client_info(c)->features & BC_PROTO_FEATURE_NAMES) {
+		return 0;
+	}
+	return bc_errinfo_set(ei, BC_ENOTSUP,
+	                      "the server does not know node names (an older "
+	                      "blobcastd): upgrade it");
+}
+
+/* Checks name (len bytes; 0: no name) as the daemon checks a node name:
+ * the server must know names, at most BC_TREE_NAME_MAX bytes, strict
+ * UTF-8 without NUL. */
+static int check_name(const struct bc_client *c, const char *name, size_t len,
+                      struct bc_errinfo *ei)
+{
+	size_t bad;
+	int rc;
+	if ((rc = need_names(c, ei))) {
+		return rc;
+	}
+	if (len > BC_TREE_NAME_MAX) {
+		return bc_errinfo_set(
+		    ei, BC_ERANGE,
+		    "the name is %zu bytes, over the limit of "
+		    "%u bytes (of UTF-8) a node name may have: "
+		    "shorten it",
+		    len, BC_TREE_NAME_MAX);
+	}
+	if ((bad = bc_utf8_check((const uint8_t *)name, len)) < len) {
+		return bc_errinfo_set(ei, BC_ESTRING,
+		                      "the name is not valid UTF-8 (byte %zu "
+		                      "%s): give it as UTF-8 text",
+		                      bad + 1,
+		                      name[bad] ? "breaks it" : "is NUL");
+	}
+	return 0;
+}
+
+/* Names node id of the builder sub (added already) name, when one is
+ * given (NULL or "": none). */
+static int name_new(struct bc_tree *sub, uint32_t id, const char *name,
+                    struct bc_errinfo *ei)
+{
+	if (!name || !name[0]) {
+		return 0;
+	}
+	return bc_tree_set_name(sub, id, name, strlen(name), ei);
+}
+
+/* A copy's name, "<name> copy", name cut at a character boundary so that
+ * the whole stays within BC_TREE_NAME_MAX bytes. */
+static void copy_name(const char *name, char out[BC_TREE_NAME_MAX + 1])
+{
+	size_t keep = strlen(name);
+	size_t room = BC_TREE_NAME_MAX - (sizeof(MODEL_COPY_SUFFIX) - 1u);
+	if (keep > room) {
+		keep = room;
+		/* Back to the first byte of the character cut. */
+		while (keep > 0 &&
+		       ((unsigned char)name[keep] & 0xc0u) == 0x80u) {
+			keep--;
+		}
+	}
+	memcpy(out, name, keep);
+	memcpy(out + keep, MODEL_COPY_SUFFIX, sizeof(MODEL_COPY_SUFFIX));
+}
+
 /* Applies ops to a copy of t with the daemon's edit code, and checks the
  * result against the server's node limit. */
 static int dry_run(const struct bc_client *c, const struct bc_tree *t,
@@ -591,6 +680,26 @@ static int send_ops(struct bc_client *c, const struct bc_tree *t,
 static void reset(struct bc_model_result *out)
 {
 	memset(out, 0, sizeof(*out));
+}
+
+/* Sends op, which changes op->node in place and creates nothing: out says
+ * where the node is. out is reset on failure. */
+static int send_on_node(struct bc_client *c, const struct bc_tree *t,
+                        const struct bc_proto_edit_op *op,
+                        struct bc_model_result *out, struct bc_errinfo *ei)
+{
+	struct survey sv;
+	int rc = survey(t, op->node, &sv, ei);
+	if (!rc) {
+		out->node = op->node;
+		out->parent = bc_tree_parent(t, op->node);
+		out->position = sv.index;
+		rc = send_ops(c, t, op, 1, out, ei);
+	}
+	if (rc) {
+		reset(out);
+	}
+	return rc;
 }
 
 /* A new builder in *sub (bc_tree_begin done). Returns 0 or BC_ENOMEM. */
@@ -770,6 +879,8 @@ int bc_model_add(struct bc_client *c, const struct bc_model_add *a,
 	}
 	if (rc || (rc = new_node(a->kind, a->kv, a->nkv, &nn, ei)) ||
 	    (rc = child_prim(a->child_kind, &child, ei)) ||
+	    (a->name && a->name[0] &&
+	     (rc = check_name(c, a->name, strlen(a->name), ei))) ||
 	    (rc = survey(t, 0, &sv, ei))) {
 		return rc;
 	}
@@ -794,6 +905,7 @@ int bc_model_add(struct bc_client *c, const struct bc_model_add *a,
 		op.node = parent;
 		rc = put_new(sub, &nn, first, &child, pos, right, ei);
 	}
+	rc = rc ? rc : name_new(sub, first, a->name, ei);
 	return send_built(c, t, sub, rc, &op, 1, out, ei);
 }
 
@@ -891,6 +1003,8 @@ static int swap_children(const struct bc_tree *t, uint32_t p,
 	int rc = new_builder(sub, ei);
 	bc_tree_get(t, p, NULL, &op);
 	rc = rc ? rc : bc_tree_push_op(*sub, p, &op, ei);
+	/* A REPLACE takes the replaced node's name: give it back. */
+	rc = rc ? rc : keep_name(*sub, p, t, p, ei);
 	rc = rc ? rc
 	        : put_subtree(*sub, t, bc_tree_child(t, p, 1), false, 0, NULL,
 	                      ei);
@@ -985,6 +1099,8 @@ int bc_model_wrap(struct bc_client *c, const struct bc_model_wrap *w,
 	}
 	if ((rc = new_node(w->kind, w->kv, w->nkv, &nn, ei)) ||
 	    (rc = child_prim(w->child_kind, &child, ei)) ||
+	    (w->name && w->name[0] &&
+	     (rc = check_name(c, w->name, strlen(w->name), ei))) ||
 	    (rc = survey(t, w->node, &sv, ei))) {
 		return rc;
 	}
@@ -1025,6 +1141,7 @@ int bc_model_wrap(struct bc_client *c, const struct bc_model_wrap *w,
 		                ei);
 	}
 	rc = rc ? rc : bc_tree_pop_op(sub, ei);
+	rc = rc ? rc : name_new(sub, first, w->name, ei);
 	return send_built(c, t, sub, rc, &op, 1, out, ei);
 }
 
@@ -1036,6 +1153,7 @@ int bc_model_duplicate(struct bc_client *c, const struct bc_model_duplicate *d,
 	const struct bc_tree *t = NULL;
 	struct bc_tree *sub = NULL;
 	struct survey sv;
+	const char *name;
 	uint32_t top, first;
 	int rc;
 	out = out ? out : &dummy;
@@ -1072,6 +1190,15 @@ int bc_model_duplicate(struct bc_client *c, const struct bc_model_duplicate *d,
 	rc = rc ? rc
 	        : put_subtree(sub, t, top, true, first,
 	                      d->has_offset ? d->offset : NULL, ei);
+	if (!rc && (name = bc_tree_name(t, d->node)) != NULL) {
+		/* d->node is the last of the unary chain from top, each
+		 * node's one child next in pre-order. */
+		char copy[BC_TREE_NAME_MAX + 1];
+		copy_name(name, copy);
+		rc = bc_tree_set_name(
+		    sub, first + depth_of(t, d->node) - depth_of(t, top), copy,
+		    strlen(copy), ei);
+	}
 	return send_built(c, t, sub, rc, &op, 1, out, ei);
 }
 
@@ -1086,7 +1213,6 @@ int bc_model_set_operator(struct bc_client *c, uint32_t node, const char *kind,
 	const struct bc_tree *t = NULL;
 	struct bc_op_data cur;
 	enum bc_op k = kind ? bc_op_from_name(kind) : BC_OP_INVALID;
-	struct survey sv;
 	int rc;
 	out = out ? out : &dummy;
 	reset(out);
@@ -1135,15 +1261,41 @@ int bc_model_set_operator(struct bc_client *c, uint32_t node, const char *kind,
 	    .field = BC_PROTO_FIELD_RANGE, .count = 1, .v = {range}};
 	op.node = node;
 	op.nfields = 3;
-	if ((rc = survey(t, node, &sv, ei))) {
+	return send_on_node(c, t, &op, out, ei);
+}
+
+int bc_model_rename(struct bc_client *c, uint32_t node, const char *name,
+                    struct bc_model_result *out, struct bc_errinfo *ei)
+{
+	struct bc_model_result dummy;
+	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_NAME, .node = node};
+	const struct bc_tree *t = NULL;
+	size_t len = name ? strlen(name) : 0;
+	const char *now;
+	int rc;
+	out = out ? out : &dummy;
+	reset(out);
+	if ((rc = mirror(c, &t, NULL, ei)) || (rc = need_names(c, ei))) {
 		return rc;
 	}
-	out->node = node;
-	out->parent = bc_tree_parent(t, node);
-	out->position = sv.index;
-	rc = send_ops(c, t, &op, 1, out, ei);
-	if (rc) {
-		reset(out);
+	if (classify(t, node, NULL, NULL, NULL) == NODE_NONE) {
+		return no_node(node, ei);
 	}
-	return rc;
+	if ((rc = check_name(c, name ? name : "", len, ei))) {
+		return rc;
+	}
+	now = bc_tree_name(t, node);
+	if (len == 0 && !now) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+		                      "node %u has no name: nothing to remove",
+		                      node);
+	}
+	if (len > 0 && now && strcmp(now, name) == 0) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+		                      "node %u already has that name: nothing "
+		                      "to change",
+		                      node);
+	}
+	op.name = (struct bc_proto_str){.ptr = name, .len = (uint32_t)len};
+	return send_on_node(c, t, &op, out, ei);
 }

@@ -151,6 +151,15 @@ struct bc_viewer_app {
 	/* The modelling EDIT on its way (0: none), and the node that becomes
 	 * the selection once it is applied (0: none). */
 	uint32_t model_seq, model_select;
+	/* F2: the name being typed for node `node`; while open, the entry
+	 * takes every key until Enter or Escape. text holds len bytes of
+	 * UTF-8, NUL-terminated. */
+	struct {
+		bool open;
+		uint32_t node;
+		size_t len;
+		char text[BC_TREE_NAME_MAX + 1];
+	} rename;
 
 	/* Frames. */
 	uint64_t nframes; /* shown, snapshots excluded */
@@ -255,6 +264,23 @@ void bc_viewer_model_mark(struct bc_viewer_app *a);
 void bc_viewer_model_regroup(struct bc_viewer_app *a);
 /* K (Shift: sharp <-> smooth): the selected operator's next kind. */
 void bc_viewer_model_op_kind(struct bc_viewer_app *a, bool smooth);
+/* F2: opens the name entry on the selection, holding its name. */
+void bc_viewer_model_rename_open(struct bc_viewer_app *a);
+/* A character typed into the open entry (a Unicode code point); control
+ * characters and what would pass BC_TREE_NAME_MAX bytes are refused. */
+void bc_viewer_model_rename_char(struct bc_viewer_app *a, uint32_t cp);
+/* Backspace in the entry: takes its last character off. */
+void bc_viewer_model_rename_back(struct bc_viewer_app *a);
+/* Enter in the entry: names the node (one NAME; empty: no name). */
+void bc_viewer_model_rename_send(struct bc_viewer_app *a);
+/* The lower panel's text while the entry is open. */
+void bc_viewer_model_rename_text(const struct bc_viewer_app *a, char *out,
+                                 size_t n);
+/* Node id's name for the overlay, in double quotes after a space
+ * (' "wheel"'), every character the overlay's font lacks as '?'; "" when
+ * it has none. Returns out. */
+const char *bc_viewer_name_text(const struct bc_tree *t, uint32_t id, char *out,
+                                size_t n);
 /* Our EDIT seq was applied, or refused (ERROR): the action is over. */
 void bc_viewer_model_applied(struct bc_viewer_app *a, uint32_t seq);
 void bc_viewer_model_refused(struct bc_viewer_app *a, uint32_t seq);

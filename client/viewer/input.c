@@ -18,7 +18,9 @@
  *    selection up the tree and back, A opens the add palette (W on its
  *    unary kinds), which then takes the keys until Enter or Escape,
  *    Delete/X deletes, D duplicates, M marks the regroup parent and G
- *    moves the selection under it.
+ *    moves the selection under it; F2 opens the name entry, which takes
+ *    every key (typed text through the char callback) until Enter or
+ *    Escape.
  * Callbacks only record what happened; bc_viewer_drag_step() turns the
  * motion of a whole loop turn into one message. Gestures send their
  * messages with INTERACTING and end with one without it.
@@ -378,7 +380,7 @@ static const char key_help[] =
     "click: select a shape   Up/Down: its parent / back down\n"
     "A: add (palette)   W: wrap the selection   D: duplicate\n"
     "Delete, X: delete   M: mark an operator   G: move under the mark\n"
-    "K: operator kind (Shift+K: sharp/smooth)\n"
+    "K: operator kind (Shift+K: sharp/smooth)   F2: name the selection\n"
     "R: the session's camera   Home: fit the scene (Shift: selection)\n"
     "Ctrl+Z: undo   Ctrl+Shift+Z, Ctrl+Y: redo\n"
     "F: follow the presenter   Shift+F: present\n"
@@ -388,6 +390,10 @@ bool bc_viewer_lower_panel(struct bc_viewer_app *a, char *out, size_t n)
 {
 	if (!n) {
 		return false;
+	}
+	if (a->rename.open) {
+		bc_viewer_model_rename_text(a, out, n);
+		return true;
 	}
 	if (a->palette.open) {
 		bc_viewer_palette_text(&a->palette, out, n);
@@ -480,6 +486,36 @@ static bool palette_key(struct bc_viewer_app *a, int key, int mods)
 	return true;
 }
 
+/* Keys while the name entry is open: all of them, so that nothing typed
+ * into a name acts as a shortcut (the text itself comes through on_char). */
+static void rename_key(struct bc_viewer_app *a, int key)
+{
+	switch (key) {
+	case GLFW_KEY_ENTER:
+	case GLFW_KEY_KP_ENTER:
+		bc_viewer_model_rename_send(a);
+		break;
+	case GLFW_KEY_ESCAPE:
+		a->rename.open = false;
+		a->redraw = true;
+		bc_viewer_status(a, "renaming cancelled");
+		break;
+	case GLFW_KEY_BACKSPACE:
+		bc_viewer_model_rename_back(a);
+		break;
+	default:
+		break;
+	}
+}
+
+static void on_char(GLFWwindow *w, unsigned int codepoint)
+{
+	struct bc_viewer_app *a = glfwGetWindowUserPointer(w);
+	if (a->rename.open) {
+		bc_viewer_model_rename_char(a, codepoint);
+	}
+}
+
 /* A and W: open the palette, on its shapes or its unary kinds. */
 static void palette_open(struct bc_viewer_app *a, enum bc_viewer_pal_section s)
 {
@@ -496,6 +532,10 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
 	struct bc_viewer_app *a = glfwGetWindowUserPointer(w);
 	(void)scancode;
 	if (action != GLFW_PRESS && action != GLFW_REPEAT) {
+		return;
+	}
+	if (a->rename.open) {
+		rename_key(a, key);
 		return;
 	}
 	if (a->palette.open && palette_key(a, key, mods)) {
@@ -565,6 +605,9 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
 	case GLFW_KEY_K:
 		bc_viewer_model_op_kind(a, (mods & GLFW_MOD_SHIFT) != 0);
 		break;
+	case GLFW_KEY_F2:
+		bc_viewer_model_rename_open(a);
+		break;
 	case GLFW_KEY_F:
 		if (mods & GLFW_MOD_SHIFT) {
 			bc_viewer_present_toggle(a);
@@ -611,6 +654,7 @@ void bc_viewer_input_install(struct bc_viewer_app *a)
 	glfwSetCursorPosCallback(a->win, on_cursor);
 	glfwSetScrollCallback(a->win, on_scroll);
 	glfwSetKeyCallback(a->win, on_key);
+	glfwSetCharCallback(a->win, on_char);
 	glfwSetFramebufferSizeCallback(a->win, on_resize);
 	glfwSetWindowContentScaleCallback(a->win, on_content_scale);
 	glfwSetWindowRefreshCallback(a->win, on_refresh);

@@ -281,7 +281,9 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o,
 	        "M marks the selected\noperator and G moves the selection "
 	        "under it; K gives the selected\noperator its next kind "
 	        "(union, intersection, difference), Shift-K\nturns it sharp "
-	        "or smooth.\n\n"
+	        "or smooth; F2 names the selection (type the name,\nEnter "
+	        "sends it, an empty one takes the name away, Escape\n"
+	        "cancels).\n\n"
 	        "A token that grants viewing only opens the window view-only "
 	        "(the\noverlay says so; edit keys are off) unless --role "
 	        "editor asks\nfor more. A lost connection is retried (after "
@@ -426,6 +428,7 @@ static void fmt_selection(struct bc_viewer_app *a, char *out, size_t n)
 	struct bc_op_data op;
 	const struct bc_prim_info *info;
 	struct bc_unary u;
+	char name[BC_TREE_NAME_MAX + 4];
 	uint32_t parent;
 	int k, len;
 	if (!a->selected || !t || !bc_tree_get(t, a->selected, &p, NULL)) {
@@ -437,7 +440,8 @@ static void fmt_selection(struct bc_viewer_app *a, char *out, size_t n)
 		bc_viewer_node_text(t, a->selected, out, n);
 		return;
 	}
-	len = snprintf(out, n, "#%u %s", a->selected, info->name);
+	len = snprintf(out, n, "#%u %s%s", a->selected, info->name,
+	               bc_viewer_name_text(t, a->selected, name, sizeof(name)));
 	if ((k = bc_viewer_size_param(p.kind)) >= 0 && len >= 0 &&
 	    (size_t)len < n) {
 		len += snprintf(out + len, n - (size_t)len, " %s %.3g",
@@ -564,7 +568,7 @@ static void draw_lower(struct bc_viewer_app *a, uint32_t fw, uint32_t fh)
 static void draw_overlay(struct bc_viewer_app *a, uint32_t fw, uint32_t fh,
                          double now)
 {
-	char text[1000], lat[64], sel[200], refining[48], who[160];
+	char text[1100], lat[64], sel[280], refining[48], who[160];
 	const float text_rgba[4] = {0.95f, 0.95f, 0.9f, 1.0f};
 	float scale = overlay_scale(a, fw);
 	fmt_latency(&a->meter, lat, sizeof(lat));

@@ -13,6 +13,12 @@
  * the root without a selection), at our camera's target, the centre of
  * the picture; a unary kind wraps the selection; a duplicate goes beside
  * the original, along the screen's right, and becomes the selection.
+ *
+ * Names: F2 opens a one-line entry in the lower panel holding the
+ * selection's name; typed characters (GLFW's char callback, so any
+ * keyboard layout's UTF-8) go into it, Backspace takes the last one off,
+ * Enter sends one NAME (bc_model_rename; empty: no name), Escape closes
+ * it unsent.
  */
 #include <math.h>
 #include <stdio.h>
@@ -40,13 +46,47 @@ static enum node_class classify(const struct bc_tree *t, uint32_t id,
 	return bc_op_is_unary(op.kind) ? NODE_UNARY : NODE_OP;
 }
 
+/* Writes name into out as the overlay can draw it: printable ASCII as
+ * it is, every other character (a whole UTF-8 sequence) as one '?'. */
+static void drawable(const char *name, char *out, size_t n)
+{
+	size_t used = 0;
+	for (const unsigned char *p = (const unsigned char *)name;
+	     *p && used + 1 < n; p++) {
+		if (*p >= 0x20u && *p < 0x7fu) {
+			out[used++] = (char)*p;
+		} else if ((*p & 0xc0u) != 0x80u) {
+			out[used++] = '?';
+		}
+	}
+	if (n) {
+		out[used] = '\0';
+	}
+}
+
+const char *bc_viewer_name_text(const struct bc_tree *t, uint32_t id, char *out,
+                                size_t n)
+{
+	const char *name = t ? bc_tree_name(t, id) : NULL;
+	char shown[BC_TREE_NAME_MAX + 1];
+	if (!n) {
+		return out;
+	}
+	out[0] = '\0';
+	if (name) {
+		drawable(name, shown, sizeof(shown));
+		snprintf(out, n, " \"%s\"", shown);
+	}
+	return out;
+}
+
 const char *bc_viewer_node_text(const struct bc_tree *t, uint32_t id, char *out,
                                 size_t n)
 {
 	struct bc_prim_data p;
 	struct bc_op_data op;
 	struct bc_unary u;
-	char words[64];
+	char words[64], name[BC_TREE_NAME_MAX + 4];
 	if (!n) {
 		return out;
 	}
@@ -54,19 +94,20 @@ const char *bc_viewer_node_text(const struct bc_tree *t, uint32_t id, char *out,
 	if (!t || !id || !bc_tree_get(t, id, &p, &op)) {
 		return out;
 	}
+	bc_viewer_name_text(t, id, name, sizeof(name));
 	if (op.kind == BC_OP_INVALID) {
 		const struct bc_prim_info *info = bc_prim_info(p.kind);
-		snprintf(out, n, "#%u %s", id, info ? info->name : "?");
+		snprintf(out, n, "#%u %s%s", id, info ? info->name : "?", name);
 	} else if (bc_tree_get_unary(t, id, &u)) {
-		snprintf(out, n, "#%u %s", id,
-		         bc_viewer_unary_text(&u, words, sizeof(words)));
+		snprintf(out, n, "#%u %s%s", id,
+		         bc_viewer_unary_text(&u, words, sizeof(words)), name);
 	} else if (bc_op_is_smooth(op.kind)) {
-		snprintf(out, n, "#%u %s blend %.3g, %u children", id,
-		         bc_op_name(op.kind), (double)op.blend,
+		snprintf(out, n, "#%u %s%s blend %.3g, %u children", id,
+		         bc_op_name(op.kind), name, (double)op.blend,
 		         bc_tree_child_count(t, id));
 	} else {
-		snprintf(out, n, "#%u %s, %u children", id, bc_op_name(op.kind),
-		         bc_tree_child_count(t, id));
+		snprintf(out, n, "#%u %s%s, %u children", id,
+		         bc_op_name(op.kind), name, bc_tree_child_count(t, id));
 	}
 	return out;
 }
@@ -328,6 +369,127 @@ void bc_viewer_model_op_kind(struct bc_viewer_app *a, bool smooth)
 	sent(a, &r, a->selected, "operator");
 	bc_viewer_status(a, "#%u: %s -> %s", a->selected, bc_op_name(op.kind),
 	                 bc_op_name(to));
+}
+
+void bc_viewer_model_rename_open(struct bc_viewer_app *a)
+{
+	const struct bc_tree *t;
+	const char *name;
+	if (!(t = ready(a, "renaming"))) {
+		return;
+	}
+	if (!a->selected || !bc_tree_get(t, a->selected, NULL, NULL)) {
+		bc_viewer_status(a,
+		                 "renaming: select what to name first (click "
+		                 "a shape; Up selects its parent)");
+		return;
+	}
+	if (!(bc_client_info(a->c)->features & BC_PROTO_FEATURE_NAMES)) {
+		bc_viewer_status(a, "renaming: the server does not know node "
+		                    "names (an older blobcastd): upgrade it");
+		return;
+	}
+	name = bc_tree_name(t, a->selected);
+	a->rename.open = true;
+	a->rename.node = a->selected;
+	snprintf(a->rename.text, sizeof(a->rename.text), "%s",
+	         name ? name : "");
+	a->rename.len = strlen(a->rename.text);
+	a->redraw = true;
+	if (a->o.verbose) {
+		printf("rename open node=%u\n", a->rename.node);
+		fflush(stdout);
+	}
+}
+
+void bc_viewer_model_rename_char(struct bc_viewer_app *a, uint32_t cp)
+{
+	char u[4];
+	size_t k;
+	/* C0 and C1 controls have no place in a label; surrogates are not
+	 * characters. */
+	if (cp < 0x20u || (cp >= 0x7fu && cp < 0xa0u) ||
+	    (cp >= 0xd800u && cp < 0xe000u) || cp > 0x10ffffu) {
+		return;
+	}
+	if (cp < 0x80u) {
+		u[0] = (char)cp;
+		k = 1;
+	} else if (cp < 0x800u) {
+		u[0] = (char)(0xc0u | (cp >> 6));
+		u[1] = (char)(0x80u | (cp & 0x3fu));
+		k = 2;
+	} else if (cp < 0x10000u) {
+		u[0] = (char)(0xe0u | (cp >> 12));
+		u[1] = (char)(0x80u | ((cp >> 6) & 0x3fu));
+		u[2] = (char)(0x80u | (cp & 0x3fu));
+		k = 3;
+	} else {
+		u[0] = (char)(0xf0u | (cp >> 18));
+		u[1] = (char)(0x80u | ((cp >> 12) & 0x3fu));
+		u[2] = (char)(0x80u | ((cp >> 6) & 0x3fu));
+		u[3] = (char)(0x80u | (cp & 0x3fu));
+		k = 4;
+	}
+	if (a->rename.len + k > BC_TREE_NAME_MAX) {
+		bc_viewer_status(a, "a name has at most %u bytes of UTF-8",
+		                 BC_TREE_NAME_MAX);
+		return;
+	}
+	memcpy(a->rename.text + a->rename.len, u, k);
+	a->rename.len += k;
+	a->rename.text[a->rename.len] = '\0';
+	a->redraw = true;
+}
+
+void bc_viewer_model_rename_back(struct bc_viewer_app *a)
+{
+	/* Back over the continuation bytes to the character's first. */
+	while (a->rename.len > 0 &&
+	       ((unsigned char)a->rename.text[--a->rename.len] & 0xc0u) ==
+	           0x80u) {
+	}
+	a->rename.text[a->rename.len] = '\0';
+	a->redraw = true;
+}
+
+void bc_viewer_model_rename_send(struct bc_viewer_app *a)
+{
+	struct bc_errinfo ei = {0};
+	struct bc_model_result r;
+	uint32_t node = a->rename.node;
+	a->rename.open = false;
+	a->redraw = true;
+	if (!ready(a, "renaming")) {
+		return;
+	}
+	if (bc_model_rename(a->c, node, a->rename.text, &r, &ei)) {
+		refused(a, "renaming", &ei);
+		return;
+	}
+	sent(a, &r, a->selected, "rename");
+	if (a->rename.len) {
+		char shown[BC_TREE_NAME_MAX + 1];
+		drawable(a->rename.text, shown, sizeof(shown));
+		bc_viewer_status(a, "named #%u \"%s\"", node, shown);
+	} else {
+		bc_viewer_status(a, "took the name of #%u away", node);
+	}
+}
+
+void bc_viewer_model_rename_text(const struct bc_viewer_app *a, char *out,
+                                 size_t n)
+{
+	const struct bc_tree *t = bc_client_scene(a->c, NULL);
+	char words[160], shown[BC_TREE_NAME_MAX + 1];
+	drawable(a->rename.text, shown, sizeof(shown));
+	snprintf(out, n,
+	         "Name %s (%zu of %u bytes)\n"
+	         "> %s_\n"
+	         "Enter: rename (empty: no name)   Backspace: erase   "
+	         "Esc: cancel",
+	         bc_viewer_node_text(t, a->rename.node, words, sizeof(words)),
+	         a->rename.len, BC_TREE_NAME_MAX, shown);
 }
 
 void bc_viewer_model_applied(struct bc_viewer_app *a, uint32_t seq)

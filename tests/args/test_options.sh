@@ -91,7 +91,7 @@ done
 # The client commands share one table; each --help lists only the part
 # its command takes (the rest is refused as not applying).
 for cmd in load edit camera present follow snapshot watch bench-latency \
-  nodes scene delete sessions undo redo add remove move wrap duplicate \
+  nodes scene delete sessions undo redo add remove move wrap duplicate rename \
   history; do
   help_options_are_parsed "blobcast $cmd" "$cli" "$cmd"
 done

@@ -6,9 +6,10 @@
 #     picture (a screenshot that is not blank) and its overlay says why
 #     (a screenshot with the overlay differs from one without);
 #  2. edit keys say so instead of sending: Ctrl-Z, Shift+wheel on a
-#     picked shape, A (add) and Delete print "view-only (the token grants
-#     viewing only): ... is off" and no edit is applied (no "applied" line; the session's
-#     scene, read with blobcast nodes, is unchanged);
+#     picked shape, A (add), Delete and F2 (name) print "view-only (the
+#     token grants viewing only): ... is off" and no edit is applied (no
+#     "applied" line; the session's scene, read with blobcast nodes, is
+#     unchanged);
 #  3. --role editor with the viewer token exits 1 and says that without
 #     --role editor the window opens view-only;
 #  4. the editor token still joins as an editor.
@@ -63,6 +64,10 @@ vl_wait "$tmp/v.log" '^joined default role=view-only token=viewer$' 100 || ok=
 [ -n "$ok" ] && { vl_poke key Delete || ok=; }
 [ -n "$ok" ] && { vl_wait "$tmp/v.log" \
   '^status view-only \(the token grants viewing only\): deleting is off$' \
+  100 || ok=; }
+[ -n "$ok" ] && { vl_poke key F2 || ok=; }
+[ -n "$ok" ] && { vl_wait "$tmp/v.log" \
+  '^status view-only \(the token grants viewing only\): renaming is off$' \
   100 || ok=; }
 vl_quit
 if [ -n "$ok" ]; then

@@ -50,11 +50,26 @@
  * "repeat", "scale"). key=value parameters are those of
  * bc_client_edit_parse() for the new node's kind.
  *
+ * Names (PROTOCOL.md 8). A node may carry a name, 1..BC_TREE_NAME_MAX
+ * bytes of UTF-8; bc_tree_name() reads it from the mirror. Every action
+ * keeps the names of the nodes it keeps: move and wrap send the subtree
+ * they take with its names table (a REMOVE takes the names of what it
+ * removes, a subtree brings its own), so a moved or wrapped node keeps
+ * its name. A duplicate's nodes keep their names, except that the copy of
+ * the node asked for, when named, is named "NAME copy" (NAME cut by whole
+ * characters so that the whole stays within BC_TREE_NAME_MAX bytes), as
+ * the web page names its copies. bc_model_rename() names a node; add and
+ * wrap may name the node they make in the same EDIT. Names go only to a
+ * server that granted NAMES (bc_client_info()->features): to an earlier
+ * one a name is refused with BC_ENOTSUP before anything is sent.
+ *
  * Every function returns 0 or a negative BC_E* code with the reason in ei
  * (which may be NULL); *out (which may be NULL) is reset on entry. Codes:
  * BC_ESTATE (no scene: join a session first), BC_ENONODE (a node the mirror
  * does not have), BC_EINVAL (the action is not possible on these nodes, an
- * unknown kind or key), BC_ERANGE (a position or value out of range),
+ * unknown kind or key), BC_ERANGE (a position or value out of range, a
+ * name over BC_TREE_NAME_MAX bytes), BC_ESTRING (a name that is not
+ * UTF-8), BC_ENOTSUP (a name for a server that does not know names),
  * BC_EDEPTH and BC_ELIMIT (the result would be over a limit), BC_EPARSE,
  * BC_ENONFINITE, BC_ENOMEM, or what bc_client_send() returns.
  */
@@ -131,6 +146,9 @@ struct bc_model_add {
 	/* The kind of the primitives an operator or unary node starts with;
 	 * NULL: "sphere". */
 	const char *child_kind;
+	/* The new node's name, sent in the same INSERT (its subtree's names
+	 * table); NULL or "": none. */
+	const char *name;
 };
 
 /* Adds a->kind under a->parent: one INSERT (one REPLACE of the root when
@@ -184,6 +202,9 @@ struct bc_model_wrap {
 	const char *child_kind;
 	bool has_at;
 	float at[3];
+	/* The new node's name, sent in the same REPLACE; NULL or "":
+	 * none. */
+	const char *name;
 };
 
 /* Wraps w->node: one REPLACE of the node by new(node), every id of node's
@@ -203,8 +224,9 @@ struct bc_model_duplicate {
 };
 
 /* Inserts a copy of d->node with fresh ids right after it, under the same
- * operator: one INSERT. Refused for the root (wrap it in an operator
- * first). */
+ * operator: one INSERT. The copy's nodes keep their names; the copy of
+ * d->node, when it is named, is named "NAME copy" (above). Refused for the
+ * root (wrap it in an operator first). */
 BC_API int bc_model_duplicate(struct bc_client *c,
                               const struct bc_model_duplicate *d,
                               struct bc_model_result *out,
@@ -219,5 +241,15 @@ BC_API int bc_model_set_operator(struct bc_client *c, uint32_t node,
                                  const char *kind, float blend, float range,
                                  struct bc_model_result *out,
                                  struct bc_errinfo *ei);
+
+/* Names node name (NUL-terminated UTF-8, at most BC_TREE_NAME_MAX bytes;
+ * "" or NULL takes its name away): one EDIT of one NAME operation, one
+ * step of undo. out->node is node, out->parent and out->position where it
+ * is. Refused before sending: a server without NAMES (BC_ENOTSUP), an
+ * unknown node (BC_ENONODE), a name over the limit (BC_ERANGE) or not
+ * UTF-8 (BC_ESTRING), and a name the node already has, or removing the
+ * name of a node that has none (BC_EINVAL: nothing to change). */
+BC_API int bc_model_rename(struct bc_client *c, uint32_t node, const char *name,
+                           struct bc_model_result *out, struct bc_errinfo *ei);
 
 #endif
