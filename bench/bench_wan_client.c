@@ -6,7 +6,8 @@
  * the first frame that shows it or a later camera), bytes per frame, and
  * how long the exact still takes once the motion stops. One JSON line.
  *
- * usage: bench_wan_client ADDR SESSION WxH SECONDS RATE_HZ [QUALITY]
+ * usage: bench_wan_client ADDR SESSION WxH SECONDS RATE_HZ [QUALITY
+ *                         [DOWNSCALE]]
  * (the token, when the daemon wants one, in BLOBCAST_TOKEN)
  */
 #include <math.h>
@@ -60,20 +61,23 @@ int main(int argc, char **argv)
 	struct bc_errinfo ei = {0};
 	struct bc_camera home, cam;
 	struct bc_msg m;
-	uint32_t w, h, seq, quality = 80;
+	uint32_t w, h, seq, quality = 80, downscale = 1;
 	double seconds, rate, *sent, *lat, t0, next, end, still_ms = -1.0;
 	uint32_t nlat = 0, ncam = 0, frames = 0, coarse = 0, last_seq = 0;
 	uint64_t bytes = 0;
 	struct bc_proto_link link = {0};
 	if (argc < 6 || sscanf(argv[3], "%ux%u", &w, &h) != 2) {
 		fprintf(stderr, "usage: bench_wan_client ADDR SESSION WxH "
-		                "SECONDS RATE_HZ [QUALITY]\n");
+		                "SECONDS RATE_HZ [QUALITY [DOWNSCALE]]\n");
 		return 2;
 	}
 	seconds = atof(argv[4]);
 	rate = atof(argv[5]);
 	if (argc > 6) {
 		quality = (uint32_t)atoi(argv[6]);
+	}
+	if (argc > 7) {
+		downscale = (uint32_t)atoi(argv[7]);
 	}
 	sent = bc_calloc(MAX_SENT, sizeof(*sent));
 	lat = bc_calloc(MAX_SENT, sizeof(*lat));
@@ -100,7 +104,7 @@ int main(int argc, char **argv)
 	                              .encoding = BC_PROTO_ENC_JPEG,
 	                              .quality_interactive = (uint8_t)quality,
 	                              .quality_still = 90,
-	                              .downscale = 1},
+	                              .downscale = (uint8_t)downscale},
 	        &seq, &ei) ||
 	    bc_client_wait(c, BC_MSG_FRAME, 0, &m, 30000, &ei)) {
 		die("first frame", &ei);

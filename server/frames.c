@@ -77,8 +77,42 @@ static bool ready(const struct bc_member *m)
 }
 
 /* The job request of member m's frame. */
-static void frame_req(struct bc_session *s, const struct bc_member *m,
-                      bool still, struct bc_job_req *q)
+/* The finest level m's interactive frames may start at, for its link:
+ * when frames waited for the link since last asked (the transport paces
+ * them, PROTOCOL.md 7.18's frames_paced), one level coarser, a quarter of
+ * the bytes; after BC_SRV_LINK_CALM_FRAMES frames that did not wait, one
+ * finer again. Up to max, the coarsest the VIEW accepts. A still still
+ * refines to level 0: only the interaction is coarser. */
+static uint32_t link_level(struct bc_session *s, struct bc_member *m,
+                           uint32_t max)
+{
+	const struct bc_link *l = s->ss->link;
+	struct bc_proto_link li;
+	l->link_info(l->ud, m->peer->ref, &li);
+	if (li.rtt_us < BC_SRV_LINK_MIN_RTT_US) {
+		/* Loopback or a Unix socket: a slow reader, not a slow
+		 * link; its frames stay as fine as rendering allows. */
+		m->paced_seen = li.frames_paced;
+		m->link_level = 0;
+		return 0;
+	}
+	if (li.frames_paced != m->paced_seen) {
+		m->paced_seen = li.frames_paced;
+		m->link_calm = 0;
+		m->link_level += m->link_level < max ? 1u : 0u;
+		bc_log(BC_LOG_DEBUG,
+		       "member %u: its link holds frames back: interactive "
+		       "frames from level %u",
+		       m->member_id, m->link_level);
+	} else if (++m->link_calm >= BC_SRV_LINK_CALM_FRAMES) {
+		m->link_calm = 0;
+		m->link_level -= m->link_level > 0 ? 1u : 0u;
+	}
+	return m->link_level < max ? m->link_level : max;
+}
+
+static void frame_req(struct bc_session *s, struct bc_member *m, bool still,
+                      struct bc_job_req *q)
 {
 	memset(q, 0, sizeof(*q));
 	q->kind = BC_JOB_FRAME;
@@ -97,6 +131,7 @@ static void frame_req(struct bc_session *s, const struct bc_member *m,
 	q->max_level = (m->peer->features & BC_PROTO_FEATURE_LEVELS)
 	                   ? max_level(m->view.downscale)
 	                   : 0;
+	q->min_level = still ? 0 : link_level(s, m, q->max_level);
 	q->final = still;
 	q->shown = m->shown;
 	q->camera_seq = m->camera_seq;

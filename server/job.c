@@ -136,7 +136,9 @@ static int start_level(const struct flow *f, const struct bc_job_req *q)
 	if (f->ms_per_ray <= 0.0) {
 		return max; /* no estimate yet: the cheapest picture */
 	}
-	for (int l = 0; l < max; l++) {
+	/* A link slower than the renderer (frames.c) asks for coarser. */
+	for (int l = (int)q->min_level < max ? (int)q->min_level : max; l < max;
+	     l++) {
 		double rays = (double)((q->width + (1u << l) - 1) >> l) *
 		              (double)((q->height + (1u << l) - 1) >> l);
 		if (f->ms_abuffer + rays * f->ms_per_ray <= BC_SRV_COARSE_MS) {

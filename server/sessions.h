@@ -55,8 +55,13 @@ struct bc_member {
 	uint32_t requests;       /* PICKs and SNAPSHOTs queued, unanswered */
 	uint32_t answers_unsent; /* SNAPSHOT answers the transport holds */
 	struct bc_job *req_jobs[BC_SRV_MAX_CLIENT_REQUESTS]; /* their jobs */
-	bool still_sent;       /* the last frame sent was the still of now */
-	bool frame_out;        /* a frame is being written to it */
+	bool still_sent; /* the last frame sent was the still of now */
+	bool frame_out;  /* a frame is being written to it */
+	/* Its link (frames.c, link_level): the transport's count of frames
+	 * that waited for it when last looked at, the level interactive
+	 * frames start at no finer than, and frames since it last grew. */
+	uint32_t paced_seen;
+	uint32_t link_level, link_calm;
 	struct bc_shown shown; /* what its last frame left it holding */
 	uint64_t frames;       /* FRAMEs handed to the transport */
 	/* Parked behind a busy session (session.c): which, the request's

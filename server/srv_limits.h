@@ -93,6 +93,12 @@
  * bandwidth-delay product of 10 Mbit/s at 50 ms. */
 #define BC_SRV_PACE_MIN_BYTES (64u * 1024u)
 #define BC_SRV_PACE_TICK_MS 4u
+/* Frames that did not wait for the link before interactive frames start
+ * one level finer again (frames.c, link_level). */
+#define BC_SRV_LINK_CALM_FRAMES 8u
+/* Below this smoothed round trip (microseconds) a connection is local: a
+ * client that reads slowly there is not given coarser frames. */
+#define BC_SRV_LINK_MIN_RTT_US 1000u
 
 /* A frame larger than BC_SRV_MAX_CLIENT_QUEUE (a 2048^2 snapshot with its
  * depth and id planes, up to the protocol's payload limit) is not a

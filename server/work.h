@@ -74,7 +74,10 @@ struct bc_job_req {
 	int encoding_interactive;
 	int quality_still, quality_interactive;
 	uint32_t max_level; /* coarsest level the clients accept */
-	bool final;         /* the interaction is over: refine to the still */
+	/* Finest level an interactive picture starts at (its link is slower
+	 * than the renderer: frames.c); at most max_level. */
+	uint32_t min_level;
+	bool final; /* the interaction is over: refine to the still */
 	struct bc_shown shown; /* what the targets hold */
 	uint32_t camera_seq;
 	/* The session's order, and that of its last change to the scene (a

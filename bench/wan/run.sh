@@ -6,17 +6,21 @@
 # the link and prints what the client got (bench_wan_client's JSON), with
 # the daemon's frame pacing on and, with --no-pace, off.
 #
-# usage (as root): bench/wan/run.sh BUILD_DIR [SIZE [SECONDS [PROFILES]]]
+# usage (as root): bench/wan/run.sh BUILD_DIR [SIZE [SECONDS [PROFILES
+#                  [DOWNSCALE]]]]
 #   BUILD_DIR  a Release build with blobcastd and bench_wan_client
 #   SIZE       view size, default 1280x720
 #   SECONDS    orbit length per run, default 10
 #   PROFILES   "MBIT/RTT_MS ...", default "100/5 20/30 10/50 4/80"
+#   DOWNSCALE  the VIEW's coarsest block, default 1 (full resolution
+#              only); 2, 4, 8 let interactive frames go coarser
 # Output: one line per run, "profile pace JSON"; a markdown table follows.
 set -eu
 B=${1:?usage: bench/wan/run.sh BUILD_DIR [SIZE [SECONDS [PROFILES]]]}
 SIZE=${2:-1280x720}
 SECS=${3:-10}
 PROFILES=${4:-"100/5 20/30 10/50 4/80"}
+DOWN=${5:-1}
 HERE=$(cd "$(dirname "$0")" && pwd)
 DAEMON=$B/server/blobcastd
 CLIENT=$B/bench/bench_wan_client
@@ -62,7 +66,7 @@ wait_port() { # ns host port
 	done
 }
 
-echo "# $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), load $(cut -d' ' -f1-3 /proc/loadavg), view $SIZE, orbit ${SECS}s at 30 Hz, JPEG q80"
+echo "# $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), load $(cut -d' ' -f1-3 /proc/loadavg), view $SIZE, orbit ${SECS}s at 30 Hz, JPEG q80, downscale $DOWN"
 RESULTS=$TMP/results
 : >"$RESULTS"
 for prof in $PROFILES; do
@@ -80,14 +84,14 @@ for prof in $PROFILES; do
 		rm -rf "$TMP/data"
 		ip netns exec "$SRV" "$DAEMON" --listen 10.77.0.1:7878 \
 			--data "$TMP/data" --config "$TMP/config.json" \
-			--allow-plaintext --log error $flag &
+			--allow-plaintext --log "${BC_WAN_LOG:-error}" $flag &
 		DPID=$!
 		ip netns exec "$CLI" python3 "$HERE/delay_relay.py" \
 			127.0.0.1:7879 10.77.0.1:7878 $((rtt / 2)) &
 		RPID=$!
 		wait_port "$SRV" 10.77.0.1 7878
 		wait_port "$CLI" 127.0.0.1 7879
-		line=$(ip netns exec "$CLI" "$CLIENT" 127.0.0.1:7879 wan "$SIZE" "$SECS" 30 80)
+		line=$(ip netns exec "$CLI" "$CLIENT" 127.0.0.1:7879 wan "$SIZE" "$SECS" 30 80 "$DOWN")
 		echo "$prof $pace $line"
 		echo "$prof $pace $line" >>"$RESULTS"
 		kill "$RPID" "$DPID" 2>/dev/null || true
