@@ -15,6 +15,8 @@
  *    picture of the drag comes back);
  *  - a drop at the node's own place (just below the row above it) sends
  *    nothing and says so;
+ *  - Alt+Down on the first of two children is one REPLACE of their
+ *    group (a REMOVE would dissolve it) that the daemon takes;
  *  - a regroup over a limit: a scene loaded with `blobcast load` has 16
  *    twists over a union and 17 over a sphere (each path within the 32
  *    domain nodes of blobtree's BC_DOMAIN_MAX_CHAIN); dragging the 17
@@ -248,7 +250,24 @@ try {
 	assert.equal(own.sent, o0.sent, 'nothing sent');
 	step(`own place: "${own.message}"`);
 
-	/* 5. A regroup over the domain chain limit. */
+	/* 5. Alt+Down in a group of two: one REPLACE, the ids kept. */
+	await alice.mouse.click(...Object.values(await rowAt(alice, 41)));
+	await until(alice, '#41 selected', () =>
+		window.blobcast.state().selected === 41);
+	await alice.keyboard.press('Alt+ArrowDown');
+	const swap = await until(alice, 'alice: #41 swapped', () => {
+		const o = window.blobcast.outliner();
+		return o.message === 'moved torus #41 to place 2 of smooth_union ' +
+			'#40' ? o : null;
+	});
+	assert.deepEqual(swap.lastOps, [[P.EDIT.REPLACE, 40, null]]);
+	await until(bob, 'bob: #40 holds #42, #41', () => JSON.stringify(
+		window.blobcast.outliner().tree).includes('["smooth_union",40,' +
+		'["capsule",42],["torus",41]]'));
+	step('Alt+Down in smooth_union #40 (two children): one REPLACE; bob ' +
+		'lists capsule #42 first');
+
+	/* 6. A regroup over the domain chain limit. */
 	const chain = (first, n, child) => {
 		let c = child;
 		for (let i = n - 1; i >= 0; i--) {
