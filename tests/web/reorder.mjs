@@ -47,26 +47,21 @@ let failed = false;
 
 const outliner = (page) => page.evaluate(() => window.blobcast.outliner());
 
-/* A point on node id's outliner row (scrolled into view) at fraction f
- * of its height, in page coordinates. */
-async function rowAt(page, id, f = 0.5) {
-	const row = page.locator(`#outliner .row[data-id="${id}"]`);
-	await row.scrollIntoViewIfNeeded();
-	const box = await row.boundingBox();
-	assert.ok(box, `row #${id} is drawn`);
-	return { x: box.x + box.width / 3, y: box.y + box.height * f };
-}
+const rowAt = H.rowPoint;
+const press = (page, a, b) => H.pointerPress(page, a, b, 6);
 
-/* A pointer drag from a to b, in steps; the button stays down until the
- * returned function is called. */
-async function press(page, a, b) {
-	await page.mouse.move(a.x, a.y);
-	await page.mouse.down();
-	for (let i = 1; i <= 6; i++) {
-		await page.mouse.move(a.x + (b.x - a.x) * i / 6,
-			a.y + (b.y - a.y) * i / 6);
-	}
-	return () => page.mouse.up();
+/* Selects node id by a click on its row, presses key and waits for the
+ * panel's message to read text (the edit applied); returns the
+ * outliner's state. */
+async function keyMove(page, id, key, text) {
+	await page.mouse.click(...Object.values(await rowAt(page, id)));
+	await until(page, `#${id} selected`, (n) =>
+		window.blobcast.state().selected === n, id);
+	await page.keyboard.press(key);
+	return until(page, `${key} on #${id}: "${text}"`, (t) => {
+		const o = window.blobcast.outliner();
+		return o.message === t ? o : null;
+	}, text);
 }
 
 /* The order of the last edit and the view's pixels (RGB of every 4th
@@ -80,30 +75,14 @@ async function picture(page, who) {
 				f.width === s.view.width && f.height === s.view.height ? s
 				: null;
 		});
-	const px = await page.evaluate(() => {
-		const c = document.getElementById('view');
-		const d = c.getContext('2d').getImageData(0, 0, c.width, c.height)
-			.data;
-		const out = [];
-		for (let i = 0; i < d.length; i += 16) {
-			out.push(d[i], d[i + 1], d[i + 2]);
-		}
-		return out;
-	});
+	const px = await H.viewPixels(page, 4);
 	return { order: st.order, px };
 }
 
 /* Pixels of a and b whose RGB differ by more than 40 in all. */
 function differing(a, b) {
 	assert.equal(a.length, b.length, 'pictures of the same size');
-	let n = 0;
-	for (let i = 0; i < a.length; i += 3) {
-		if (Math.abs(a[i] - b[i]) + Math.abs(a[i + 1] - b[i + 1]) +
-			Math.abs(a[i + 2] - b[i + 2]) > 40) {
-			n++;
-		}
-	}
-	return n;
+	return H.pixelsChanged(a, b);
 }
 
 /* After an edit of alice's: bob's tree holds children of difference #20
@@ -204,16 +183,9 @@ try {
 		px);
 
 	/* 2. Alt+Up on #21. */
-	await alice.mouse.click(...Object.values(await rowAt(alice, 21)));
-	await until(alice, '#21 selected', () =>
-		window.blobcast.state().selected === 21);
-	await alice.keyboard.press('Alt+ArrowUp');
-	const up = await until(alice, 'alice: #21 one place up', () => {
-		const o = window.blobcast.outliner();
-		return o.message.startsWith('moved smooth_intersection #21 to ' +
-			'place 1 of difference #20') && !o.message.endsWith('…') ? o
-			: null;
-	});
+	const up = await keyMove(alice, 21, 'Alt+ArrowUp', 'moved ' +
+		'smooth_intersection #21 to place 1 of difference #20: ' +
+		'smooth_intersection #21 is now the shape the others are cut from');
 	assert.deepEqual(up.lastOps, [[REMOVE, 21, null], [INSERT, 20, 0]]);
 	assert.equal(up.sent, sent + 1, 'one EDIT');
 	px = await bothSee(alice, bob, 'Alt+Up', [21, 50, 24], px);
@@ -251,15 +223,8 @@ try {
 	step(`own place: "${own.message}"`);
 
 	/* 5. Alt+Down in a group of two: one REPLACE, the ids kept. */
-	await alice.mouse.click(...Object.values(await rowAt(alice, 41)));
-	await until(alice, '#41 selected', () =>
-		window.blobcast.state().selected === 41);
-	await alice.keyboard.press('Alt+ArrowDown');
-	const swap = await until(alice, 'alice: #41 swapped', () => {
-		const o = window.blobcast.outliner();
-		return o.message === 'moved torus #41 to place 2 of smooth_union ' +
-			'#40' ? o : null;
-	});
+	const swap = await keyMove(alice, 41, 'Alt+ArrowDown',
+		'moved torus #41 to place 2 of smooth_union #40');
 	assert.deepEqual(swap.lastOps, [[P.EDIT.REPLACE, 40, null]]);
 	await until(bob, 'bob: #40 holds #42, #41', () => JSON.stringify(
 		window.blobcast.outliner().tree).includes('["smooth_union",40,' +
