@@ -10,12 +10,13 @@
  *
  * Each action first refuses what the daemon would refuse, with a sentence
  * that says what to do instead (a Refusal): adding under a primitive or a
- * unary node, moving a node under itself or its own descendant, deleting
- * the root or a chain of unary nodes up to it, a name over 64 bytes of
- * UTF-8 or holding a NUL character, and any result over the
- * limits of nodes, nesting, evaluation stack or domain nodes (those are
- * checked on a copy of the mirror with the operations applied, so what is
- * measured is exactly what the daemon would build). New nodes get ids the
+ * unary node, moving a node under itself or its own descendant (or to
+ * the place it is at, which would change nothing), deleting the root or a
+ * chain of unary nodes up to it, a name over 64 bytes of UTF-8 or holding
+ * a NUL character, and any result over the limits of nodes, nesting,
+ * evaluation stack or domain nodes (those are checked on a copy of the
+ * mirror with the operations applied, so what is measured is exactly what
+ * the daemon would build). New nodes get ids the
  * mirror does not use (PROTOCOL.md 7.12: every inserted node carries one);
  * an editor racing for the same id is refused by the daemon (EDUPID) and
  * the page says so.
