@@ -776,6 +776,11 @@ export class Outliner {
 					return M.place(scene, d.node, id, 0, o);
 				}
 				const p = n.parent;
+				if (!M.isGroup(p)) {
+					throw new M.Refusal(`${M.nodeName(n)} is no longer a ` +
+						'child of an operator (another member changed it): ' +
+						'pick again');
+				}
 				const at = p.children.indexOf(n);
 				return M.place(scene, d.node, p.id, spot.where === 'after'
 					? at + 1 : at, o);
@@ -785,9 +790,9 @@ export class Outliner {
 			return () => M.move(scene, d.node, id, o);
 		}
 		if (d.unary) {
-			return () => M.wrap(scene, id, d.unary, { limits, quick });
+			return () => M.wrap(scene, id, d.unary, o);
 		}
-		return () => M.addPrimitive(scene, id, d.prim, { limits, quick });
+		return () => M.addPrimitive(scene, id, d.prim, o);
 	}
 
 	/* Where drag d would drop at the pointer (e): null, or { row, where
