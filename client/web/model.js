@@ -3,18 +3,20 @@
  * tree protocol.js's parseScene builds and applyOps keeps up to date):
  * adding a primitive, wrapping a node in a unary node, deleting,
  * duplicating, changing an operator's kind and blend, moving a node to
- * another operator, and naming a node. Each action becomes the operations of ONE EDIT
+ * another operator or to another place among its siblings, and naming a
+ * node. Each action becomes the operations of ONE EDIT
  * (PROTOCOL.md section 9), so every member sees it at once and it undoes
  * as one step.
  *
  * Each action first refuses what the daemon would refuse, with a sentence
  * that says what to do instead (a Refusal): adding under a primitive or a
- * unary node, moving a node under itself or its own descendant, deleting
- * the root or a chain of unary nodes up to it, a name over 64 bytes of
- * UTF-8 or holding a NUL character, and any result over the
- * limits of nodes, nesting, evaluation stack or domain nodes (those are
- * checked on a copy of the mirror with the operations applied, so what is
- * measured is exactly what the daemon would build). New nodes get ids the
+ * unary node, moving a node under itself or its own descendant (or to
+ * the place it is at, which would change nothing), deleting the root or a
+ * chain of unary nodes up to it, a name over 64 bytes of UTF-8 or holding
+ * a NUL character, and any result over the limits of nodes, nesting,
+ * evaluation stack or domain nodes (those are checked on a copy of the
+ * mirror with the operations applied, so what is measured is exactly what
+ * the daemon would build). New nodes get ids the
  * mirror does not use (PROTOCOL.md 7.12: every inserted node carries one);
  * an editor racing for the same id is refused by the daemon (EDUPID) and
  * the page says so.
@@ -556,12 +558,11 @@ export function setOperator(scene, id, { base, smooth, blend }, o = {}) {
 		`${OPS[kind]}${smooth ? ` (radius ${blend})` : ''}`);
 }
 
-/* Moves node id (with the unary nodes wrapping it) to the end of
- * operator target's children: a REMOVE and an INSERT of the same subtree
- * with the same ids, in one EDIT (the daemon applies a batch's
- * operations in order, so the ids are free again when the INSERT comes).
- * An operator left with one child is replaced by it, as for any REMOVE. */
-export function move(scene, id, target, o = {}) {
+/* Node id, operator target and the subtree a move of id takes away (id
+ * with the unary nodes wrapping it), after the checks every move makes:
+ * the target is an operator that takes children, outside the subtree,
+ * and the subtree is not the root. */
+function movable(scene, id, target) {
 	const n = get(scene, id);
 	const t = get(scene, target);
 	const top = removedTop(n);
@@ -582,15 +583,101 @@ export function move(scene, id, target, o = {}) {
 			'(with the unary nodes over it); move the shapes inside it ' +
 			'instead');
 	}
+	return { n, t, top };
+}
+
+/* Whether operator n is a difference (sharp or smooth): its first child
+ * is the shape the others are cut from, so its children's order is part
+ * of the shape. */
+export function isDifference(n) {
+	return isGroup(n) && (n.kind - 1) % SMOOTH + 1 === 3;
+}
+
+/* Moves node id (with the unary nodes wrapping it) to the end of
+ * operator target's children: a REMOVE and an INSERT of the same subtree
+ * with the same ids, in one EDIT (the daemon applies a batch's
+ * operations in order, so the ids are free again when the INSERT comes).
+ * An operator left with one child is replaced by it, as for any REMOVE. */
+export function move(scene, id, target, o = {}) {
+	const { n, t, top } = movable(scene, id, target);
 	if (top.parent === t) {
 		throw new Refusal(`${nodeName(n)} is already in ${nodeName(t)}: ` +
-			'drop it on another operator');
+			'drop it on another operator, or between two rows to change ' +
+			'its place');
 	}
 	const ops = [{ kind: EDIT.REMOVE, node: top.id },
 		{ kind: EDIT.INSERT, parent: t.id, position: t.children.length,
 			subtree: encodeScene({ root: top }) }];
 	return result(scene, ops, limitsOf(o), n.id,
 		`moved ${nodeName(n)} into ${nodeName(t)}`);
+}
+
+/* Moves node id (with the unary nodes wrapping it) to place `at` among
+ * operator target's children, at counted in the children as they are
+ * now: 0 before the first, target.children.length after the last. Under
+ * another operator, or under the same one with three children or more,
+ * it is a REMOVE and an INSERT (at the place the REMOVE leaves) of the
+ * same subtree in one EDIT, one undo step. Under the same operator with
+ * two children a REMOVE would replace the operator by its other child
+ * (PROTOCOL.md section 9), so the swap is a REPLACE of the operator by
+ * itself with its two children the other way round, every id and name
+ * kept. The node's own place (just before or after itself) is refused:
+ * nothing would change. In a difference the first child is the shape the
+ * others are cut from: a move that changes the first child changes the
+ * shape, and the message says so. */
+export function place(scene, id, target, at, o = {}) {
+	const { n, t, top } = movable(scene, id, target);
+	const len = t.children.length;
+	if (!Number.isInteger(at) || at < 0 || at > len) {
+		throw new Refusal(`there is no place ${at} among the ${len} ` +
+			`children of ${nodeName(t)}: pick a place from 0 to ${len}`);
+	}
+	const from = top.parent === t ? t.children.indexOf(top) : -1;
+	if (from >= 0 && (at === from || at === from + 1)) {
+		throw new Refusal(`${nodeName(n)} is already at that place in ` +
+			`${nodeName(t)}: nothing to move`);
+	}
+	const pos = from >= 0 && at > from ? at - 1 : at;
+	let ops;
+	if (from >= 0 && len === 2) {
+		const swapped = { ...t, children: [t.children[1], t.children[0]] };
+		ops = [{ kind: EDIT.REPLACE, node: t.id,
+			subtree: encodeScene({ root: swapped }) }];
+	} else {
+		ops = [{ kind: EDIT.REMOVE, node: top.id },
+			{ kind: EDIT.INSERT, parent: t.id, position: pos,
+				subtree: encodeScene({ root: top }) }];
+	}
+	let text = `moved ${nodeName(n)} to place ${pos + 1} of ` +
+		`${nodeName(t)}`;
+	if (isDifference(t) && (pos === 0 || from === 0)) {
+		const first = pos === 0 ? top : t.children[from === 0 ? 1 : 0];
+		text += `: ${nodeName(first)} is now the shape the others are cut ` +
+			'from';
+	}
+	return result(scene, ops, limitsOf(o), n.id, text);
+}
+
+/* Moves node id (with the unary nodes wrapping it) one place up (by -1)
+ * or down (by 1) among its siblings: Alt+Up and Alt+Down in the
+ * outliner. */
+export function shift(scene, id, by, o = {}) {
+	const n = get(scene, id);
+	const top = removedTop(n);
+	const p = top.parent;
+	if (!p) {
+		throw new Refusal(`${nodeName(n)} is the root` + (top === n ? ''
+			: ' (with the unary nodes over it)') + ': it has no siblings ' +
+			'to change places with');
+	}
+	const from = p.children.indexOf(top);
+	const to = from + by;
+	if (to < 0 || to >= p.children.length) {
+		throw new Refusal(`${nodeName(top)} is already the ` +
+			`${by < 0 ? 'first' : 'last'} child of ${nodeName(p)}: ` +
+			`nothing to move ${by < 0 ? 'up' : 'down'}`);
+	}
+	return place(scene, id, p.id, by < 0 ? to : to + 1, o);
 }
 
 /* Names node id (PROTOCOL.md section 9, NAME): one EDIT of one NAME

@@ -20,8 +20,15 @@
  *    target) and every unary kind (wrapping the selection); delete and
  *    duplicate act on the selection; a selected operator's kind, sharp or
  *    smooth, and radius are set in a small form. A row dragged onto an
- *    operator's row moves the node there; a menu entry dragged onto a row
- *    adds (or wraps) there.
+ *    operator's row moves the node there (to its end); dropped between
+ *    two rows (the upper or lower edge of a row: an insertion line shows
+ *    where) it goes to that place among that row's siblings, under the
+ *    same operator or another one; the lower edge of an open group's row
+ *    is its first place. Alt+Up and Alt+Down move the selected node one
+ *    place among its siblings. In a difference the first child is the
+ *    shape the others are cut from: the rows' tooltips say so, and a
+ *    reorder that changes the first child changes the shape. A menu entry
+ *    dragged onto a row adds (or wraps) there.
  *  - Rename: a double-click on a row, F2, or the rename button opens an
  *    inline field on the selected node's row; Enter sends the name (one
  *    EDIT of one NAME operation; empty removes the name), Escape or a
@@ -90,6 +97,7 @@ export class Outliner {
 		this.sent = new Map(); /* my EDIT seq -> the action's result */
 		this.sentCount = 0;
 		this.drag = null;
+		this.lastOps = [];
 		this.redraw = 0;
 		this.renaming = null; /* { id, input } while a name is typed */
 		this.installMenu();
@@ -177,6 +185,9 @@ export class Outliner {
 			message: $('outlinermsg').textContent,
 			refusal: $('outlinermsg').classList.contains('bad'),
 			sent: this.sentCount,
+			/* The operations of the last EDIT sent: [kind, node or
+			 * parent, position]. */
+			lastOps: this.lastOps,
 		};
 	}
 
@@ -256,6 +267,12 @@ export class Outliner {
 		row.setAttribute('role', 'treeitem');
 		row.setAttribute('aria-level', String(depth + 1));
 		row.style.paddingLeft = `${0.3 + depth * 0.9}em`;
+		/* Where an insertion line on this row starts. */
+		row.style.setProperty('--indent', `${0.3 + depth * 0.9}em`);
+		const tip = this.tip(n);
+		if (tip) {
+			row.title = tip;
+		}
 		const twist = el('span', 'twist', n.isOp ? (this.isOpen(n, depth)
 			? '▾' : '▸') : '');
 		if (n.isOp) {
@@ -294,6 +311,26 @@ export class Outliner {
 		} else {
 			row.append(label);
 		}
+	}
+
+	/* A row's tooltip: what order means in a difference, or "". */
+	tip(n) {
+		if (M.isDifference(n)) {
+			return `${M.kindName(n)}: its first child is the shape the ` +
+				'others are cut from, so the order of its children is part ' +
+				'of the shape (drag a row between two others, or Alt+Up and ' +
+				'Alt+Down, to change it)';
+		}
+		const top = M.removedTop(n);
+		const p = top.parent;
+		if (!M.isDifference(p) || top !== n) {
+			return '';
+		}
+		return p.children[0] === n ? `the shape the other children of ` +
+			`${M.nodeName(p)} are cut from; another child moved first ` +
+			'changes the shape' : `cut from the first child of ` +
+			`${M.nodeName(p)}; moved first it becomes the shape the others ` +
+			'are cut from';
 	}
 
 	moreRow(m, depth) {
@@ -385,6 +422,8 @@ export class Outliner {
 			return false;
 		}
 		this.sentCount++;
+		this.lastOps = r.ops.map((op) => [op.kind, op.node ?? op.parent,
+			op.position ?? null]);
 		this.sent.set(seq, r);
 		this.tell(`${r.text}…`);
 		return true;
@@ -718,26 +757,117 @@ export class Outliner {
 		});
 	}
 
-	/* What dropping the drag on node id would do: the action, or a
-	 * Refusal (quick: the structural checks only, for hovering). */
-	dropPlan(d, id, quick = false) {
+	/* What dropping drag d at spot (dropSpot) would do: the action, or
+	 * a Refusal (quick: the structural checks only, for hovering). */
+	dropPlan(d, spot, quick = false) {
 		const scene = this.app.scene;
 		const limits = M.limitsFor(this.app.welcome);
+		const id = Number(spot.row.dataset.id);
+		const o = { limits, quick };
+		if (d.node && spot.where !== 'into') {
+			return () => {
+				const n = scene.byId.get(id);
+				if (!n) {
+					throw new M.Refusal(`there is no node #${id} in the ` +
+						'scene any more (another member changed it): pick ' +
+						'again');
+				}
+				if (spot.where === 'first') {
+					return M.place(scene, d.node, id, 0, o);
+				}
+				const p = n.parent;
+				if (!M.isGroup(p)) {
+					throw new M.Refusal(`${M.nodeName(n)} is no longer a ` +
+						'child of an operator (another member changed it): ' +
+						'pick again');
+				}
+				const at = p.children.indexOf(n);
+				return M.place(scene, d.node, p.id, spot.where === 'after'
+					? at + 1 : at, o);
+			};
+		}
 		if (d.node) {
-			return () => M.move(scene, d.node, id, { limits, quick });
+			return () => M.move(scene, d.node, id, o);
 		}
 		if (d.unary) {
-			return () => M.wrap(scene, id, d.unary, { limits, quick });
+			return () => M.wrap(scene, id, d.unary, o);
 		}
-		return () => M.addPrimitive(scene, id, d.prim, { limits, quick });
+		return () => M.addPrimitive(scene, id, d.prim, o);
 	}
 
-	/* The row under the pointer that drag d may be dropped on. */
-	dropTarget(d, e) {
+	/* Where drag d would drop at the pointer (e): null, or { row, where
+	 * } with where 'into' (onto the row's operator), 'before' or 'after'
+	 * (between the row and its sibling above or below: the upper or lower
+	 * edge of a row whose node is a child of an operator), or 'first' (the
+	 * lower edge of an open group's row: its first place). Only a row
+	 * being moved goes between rows; a menu entry goes onto one. */
+	dropSpot(d, e) {
 		const hit = document.elementFromPoint(e.clientX, e.clientY);
 		const row = hit?.closest?.('#outliner .row');
-		return row && (!d.node || Number(row.dataset.id) !== d.node) ? row
-			: null;
+		const id = row ? Number(row.dataset.id) : 0;
+		if (!row || (d.node && id === d.node)) {
+			return null;
+		}
+		const n = this.app.scene?.byId.get(id);
+		if (!d.node || !n) {
+			return { row, where: 'into' };
+		}
+		const box = row.getBoundingClientRect();
+		const f = (e.clientY - box.top) / box.height;
+		const group = M.isGroup(n);
+		const edge = group ? 0.25 : 0.5;
+		const between = M.isGroup(n.parent);
+		const open = group && row.getAttribute('aria-expanded') === 'true' &&
+			n.children.length > 0;
+		if (between && f < edge) {
+			return { row, where: 'before' };
+		}
+		if (f >= 1 - edge && open) {
+			return { row, where: 'first' };
+		}
+		if (between && f >= 1 - edge) {
+			return { row, where: 'after' };
+		}
+		return { row, where: 'into' };
+	}
+
+	/* Marks spot's row as what a drop there would do: an insertion line
+	 * above or below it, a frame, or (refused) a red frame and the reason
+	 * as its tooltip. */
+	markSpot(d, spot) {
+		const row = spot.row;
+		let why = '';
+		try {
+			this.dropPlan(d, spot, true)();
+		} catch (err) {
+			if (!(err instanceof M.Refusal)) {
+				throw err;
+			}
+			why = err.message;
+		}
+		const into = spot.where === 'into';
+		row.classList.add(why ? 'drop-bad' : into ? 'drop-ok' : 'drop-line',
+			`drop-${spot.where}`);
+		if (spot.where === 'first') {
+			row.classList.add('drop-after');
+		}
+		row.title = why || this.rowTip(row);
+	}
+
+	/* The tooltip row has when nothing is dragged over it. */
+	rowTip(row) {
+		const n = this.app.scene?.byId.get(Number(row.dataset.id));
+		return n ? this.tip(n) : '';
+	}
+
+	/* Takes the marks of markSpot away again. */
+	unmarkSpot(spot) {
+		if (!spot) {
+			return;
+		}
+		spot.row.classList.remove('drop-ok', 'drop-bad', 'drop-line',
+			'drop-before', 'drop-after', 'drop-into', 'drop-first');
+		spot.row.title = this.rowTip(spot.row);
 	}
 
 	dragMove(e) {
@@ -770,22 +900,12 @@ export class Outliner {
 				this.list.scrollTop += 12;
 			}
 		}
-		const row = this.dropTarget(d, e);
-		if (row !== d.over) {
-			d.over?.classList.remove('drop-ok', 'drop-bad');
-			d.over = row;
-			if (row) {
-				let why = '';
-				try {
-					this.dropPlan(d, Number(row.dataset.id), true)();
-				} catch (err) {
-					if (!(err instanceof M.Refusal)) {
-						throw err;
-					}
-					why = err.message;
-				}
-				row.classList.add(why ? 'drop-bad' : 'drop-ok');
-				row.title = why;
+		const spot = this.dropSpot(d, e);
+		if (spot?.row !== d.over?.row || spot?.where !== d.over?.where) {
+			this.unmarkSpot(d.over);
+			d.over = spot;
+			if (spot) {
+				this.markSpot(d, spot);
 			}
 		}
 	}
@@ -799,10 +919,7 @@ export class Outliner {
 		this.drag = null;
 		d.ghost?.remove();
 		document.body.classList.remove('dragging-node');
-		d.over?.classList.remove('drop-ok', 'drop-bad');
-		if (d.over) {
-			d.over.title = '';
-		}
+		this.unmarkSpot(d.over);
 		if (!d.moving) {
 			if (!e) {
 				return;
@@ -819,9 +936,9 @@ export class Outliner {
 		setTimeout(() => {
 			this.clickDone = false;
 		}, 0);
-		const row = e && this.dropTarget(d, e);
-		if (row) {
-			const plan = this.dropPlan(d, Number(row.dataset.id));
+		const spot = e && this.dropSpot(d, e);
+		if (spot) {
+			const plan = this.dropPlan(d, spot);
 			this.act(() => plan());
 			this.menu(false);
 		}
@@ -832,7 +949,28 @@ export class Outliner {
 	 * the group above). */
 	installKeys() {
 		this.list.tabIndex = 0;
+		/* Alt+Up and Alt+Down, outside text fields: the selected node one
+		 * place up or down among its siblings. */
+		document.addEventListener('keydown', (e) => {
+			if (!e.altKey || e.ctrlKey || e.metaKey || e.shiftKey ||
+				(e.key !== 'ArrowUp' && e.key !== 'ArrowDown') ||
+				typing(e.target)) {
+				return;
+			}
+			e.preventDefault();
+			const id = this.app.selected;
+			if (!id) {
+				this.tell('select a node to move first (a row, or a shape ' +
+					'in the picture)', true);
+				return;
+			}
+			const by = e.key === 'ArrowUp' ? -1 : 1;
+			this.act((scene, limits) => M.shift(scene, id, by, { limits }));
+		});
 		this.list.addEventListener('keydown', (e) => {
+			if (e.altKey) {
+				return;
+			}
 			const rows = [...this.list.querySelectorAll('.row')];
 			const at = rows.findIndex((r) => r.classList.contains('sel'));
 			const n = this.app.scene?.byId.get(this.app.selected);

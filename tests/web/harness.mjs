@@ -344,6 +344,58 @@ export async function until(page, what, fn, arg, ms, pollMs) {
 	}
 }
 
+/* A point on node id's outliner row (scrolled into view), a third of
+ * the way across and at fraction f of its height, in page
+ * coordinates. */
+export async function rowPoint(page, id, f = 0.5) {
+	const row = page.locator(`#outliner .row[data-id="${id}"]`);
+	await row.scrollIntoViewIfNeeded();
+	const box = await row.boundingBox();
+	if (!box) {
+		throw new Error(`row #${id} is not drawn`);
+	}
+	return { x: box.x + box.width / 3, y: box.y + box.height * f };
+}
+
+/* A real pointer drag from a to b in steps, the button held: resolves
+ * with the function that lets it go (the drop). */
+export async function pointerPress(page, a, b, steps = 8) {
+	await page.mouse.move(a.x, a.y);
+	await page.mouse.down();
+	for (let i = 1; i <= steps; i++) {
+		await page.mouse.move(a.x + (b.x - a.x) * i / steps,
+			a.y + (b.y - a.y) * i / steps);
+	}
+	return () => page.mouse.up();
+}
+
+/* The RGB of every step-th pixel of page's view, as one flat array. */
+export function viewPixels(page, step = 3) {
+	return page.evaluate((k) => {
+		const c = document.getElementById('view');
+		const d = c.getContext('2d').getImageData(0, 0, c.width, c.height)
+			.data;
+		const out = [];
+		for (let i = 0; i < d.length; i += 4 * k) {
+			out.push(d[i], d[i + 1], d[i + 2]);
+		}
+		return out;
+	}, step);
+}
+
+/* How many pixels of two viewPixels arrays differ by more than 40 in
+ * R + G + B. */
+export function pixelsChanged(a, b) {
+	let n = 0;
+	for (let i = 0; i < a.length; i += 3) {
+		if (Math.abs(a[i] - b[i]) + Math.abs(a[i + 1] - b[i + 1]) +
+			Math.abs(a[i + 2] - b[i + 2]) > 40) {
+			n++;
+		}
+	}
+	return n;
+}
+
 /* Ends a browser test: closes the browser, stops every child this module
  * started, clears the watchdog, prints the count and exits (status 1 when
  * failed). */

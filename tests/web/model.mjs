@@ -88,48 +88,10 @@ async function openPage(port, ws, name) {
 	return { page, sent };
 }
 
-/* A point on node id's outliner row (scrolled into view), in page
- * coordinates. */
-async function rowAt(page, id) {
-	const row = page.locator(`#outliner .row[data-id="${id}"]`);
-	await row.scrollIntoViewIfNeeded();
-	const box = await row.boundingBox();
-	assert.ok(box, `row #${id} is drawn`);
-	return { x: box.x + box.width / 3, y: box.y + box.height / 2 };
-}
+const rowAt = (page, id) => H.rowPoint(page, id);
 
 /* A real pointer drag from a to b, in steps. */
-async function drag(page, a, b) {
-	await page.mouse.move(a.x, a.y);
-	await page.mouse.down();
-	for (let i = 1; i <= 8; i++) {
-		await page.mouse.move(a.x + (b.x - a.x) * i / 8,
-			a.y + (b.y - a.y) * i / 8);
-	}
-	await page.mouse.up();
-}
-
-/* The view's pixels, every 3rd one's RGB. */
-const pixels = (page) => page.evaluate(() => {
-	const c = document.getElementById('view');
-	const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
-	const out = [];
-	for (let i = 0; i < d.length; i += 12) {
-		out.push(d[i], d[i + 1], d[i + 2]);
-	}
-	return out;
-});
-
-function changed(a, b) {
-	let n = 0;
-	for (let i = 0; i < a.length; i += 3) {
-		if (Math.abs(a[i] - b[i]) + Math.abs(a[i + 1] - b[i + 1]) +
-			Math.abs(a[i + 2] - b[i + 2]) > 40) {
-			n++;
-		}
-	}
-	return n;
-}
+const drag = async (page, a, b) => (await H.pointerPress(page, a, b))();
 
 /* Waits until check (run in B with window.blobcast.outliner()) holds and
  * B has drawn a still frame of that edit, whose pixels differ from
@@ -141,8 +103,8 @@ async function bSees(b, what, check, before) {
 		return s.lastFrame && s.lastFrame.still &&
 			BigInt(s.lastFrame.order) >= BigInt(s.order) ? s : null;
 	});
-	const px = await pixels(b);
-	const n = changed(before, px);
+	const px = await H.viewPixels(b);
+	const n = H.pixelsChanged(before, px);
 	assert.ok(n > 20, `B: ${what}: the picture changed (${n} pixels)`);
 	step(`B: ${what} (order ${st.order}, ${n} pixels changed)`);
 	return px;
@@ -165,7 +127,7 @@ try {
 				.some((r) => r.id === 50);
 		}, null, 45000);
 	}
-	let px = await pixels(b);
+	let px = await H.viewPixels(b);
 	const rows = (await a.evaluate(() => window.blobcast.outliner())).rows;
 	assert.deepEqual(rows.slice(0, 3).map((r) => [r.text, r.level]),
 		[['union #1', 1], ['smooth_difference #10 · r 0.05', 2],

@@ -10,7 +10,11 @@
  * domain limits. The defaults of new shapes match blobtree/prim.c. A
  * rename is one NAME (over 64 bytes of UTF-8, a NUL or a lone surrogate
  * refused); a duplicate's copy is "<name> copy" within 64 bytes; moves
- * and wraps keep names.
+ * and wraps keep names. A reorder (place, shift) is a REMOVE and an
+ * INSERT at the place, or a REPLACE with the children swapped in a group
+ * of two; the node's own place, a place that does not exist and a
+ * reorder over the stack limit are refused; in a difference the message
+ * says when the first child (the shape the others are cut from) changes.
  */
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
@@ -336,4 +340,109 @@ test('fresh ids avoid every id in use, even near the top of u32', () => {
 	const s = scene(op(0xfffffffe, 1, prim(1), prim(3)));
 	assert.deepEqual(M.freshIds(s, 3), [2, 4, 5]);
 	assert.deepEqual(M.freshIds(sample(), 2), [8, 9]);
+});
+
+/* union #1 (sphere #2, box #3, difference #4 (sphere #5, box #6, sphere
+ * #7 named "hole"), twist #8 (sphere #9)) */
+const siblings = () => {
+	const s = op(1, 1, prim(2), prim(3, 2), op(4, 3, prim(5), prim(6, 2),
+		prim(7)), un(8, 10, prim(9)));
+	s.children[2].children[2].name = 'hole';
+	return scene(s);
+};
+
+test('place: REMOVE and INSERT at a place among the siblings', () => {
+	const s = siblings();
+	/* Places count the children as they are: 0 before the first, 4
+	 * after the last of union #1. Down past one sibling: 2 -> after #3. */
+	const r = M.place(s, 2, 1, 2);
+	assert.deepEqual(r.ops.map((o) => [o.kind, o.node ?? o.parent,
+		o.position]), [[P.EDIT.REMOVE, 2, undefined], [P.EDIT.INSERT, 1, 1]]);
+	assert.match(r.text, /^moved sphere #2 to place 2 of union #1$/);
+	assert.equal(r.select, 2);
+	apply(s, r);
+	assert.deepEqual(shape(s.root).slice(2).map((c) => c[1]), [3, 2, 4, 8]);
+	/* To the end, and back to the front. */
+	apply(s, M.place(s, 3, 1, 4));
+	assert.deepEqual(shape(s.root).slice(2).map((c) => c[1]), [2, 4, 8, 3]);
+	apply(s, M.place(s, 3, 1, 0));
+	assert.deepEqual(shape(s.root).slice(2).map((c) => c[1]), [3, 2, 4, 8]);
+	/* A wrapped shape moves with its wrapper. */
+	apply(s, M.place(s, 9, 1, 0));
+	assert.deepEqual(shape(s.root).slice(2, 4), [['twist', 8, ['sphere', 9]],
+		['box', 3]]);
+	/* Into another group at a place; the name goes with the node. */
+	apply(s, M.place(s, 7, 1, 1));
+	assert.deepEqual(shape(s.root), ['union', 1, ['twist', 8, ['sphere', 9]],
+		['sphere', 7], ['box', 3], ['sphere', 2], ['difference', 4,
+			['sphere', 5], ['box', 6]]]);
+	assert.equal(s.byId.get(7).name, 'hole');
+});
+
+test('place: the own place and places that do not exist are refused', () => {
+	const s = siblings();
+	refused(() => M.place(s, 3, 1, 1), /box #3 is already at that place in union #1: nothing to move/);
+	refused(() => M.place(s, 3, 1, 2), /already at that place/);
+	refused(() => M.place(s, 3, 1, 5), /no place 5 among the 4 children of union #1: pick a place from 0 to 4/);
+	refused(() => M.place(s, 3, 1, -1), /no place -1/);
+	refused(() => M.place(s, 4, 4, 0), /that is the node itself/);
+	refused(() => M.place(s, 2, 3, 0), /a primitive has no children/);
+	refused(() => M.place(s, 2, 8, 0), /a unary node wraps exactly one child/);
+	refused(() => M.place(s, 1, 4, 0), /inside it/);
+});
+
+test('place in a difference: the first child changes the shape', () => {
+	const s = siblings();
+	const r = M.place(s, 7, 4, 0);
+	assert.match(r.text, /^moved sphere #7 “hole” to place 1 of difference #4: sphere #7 “hole” is now the shape the others are cut from$/);
+	apply(s, r);
+	assert.deepEqual(shape(s.byId.get(4)).slice(2).map((c) => c[1]),
+		[7, 5, 6]);
+	/* The first moved away: the next one is now first. */
+	assert.match(M.place(s, 7, 4, 3).text, /: sphere #5 is now the shape the others are cut from$/);
+	/* Among the later children the shape stays: no note. */
+	assert.match(M.place(s, 6, 4, 1).text, /^moved box #6 to place 2 of difference #4$/);
+});
+
+test('place in a group of two: a REPLACE with the children swapped', () => {
+	const s = scene(op(1, 1, prim(2), op(3, 6, prim(4, 2), prim(5))));
+	s.byId.get(3).name = 'cut';
+	s.byId.get(5).name = 'tool';
+	const r = M.place(s, 5, 3, 0);
+	/* A REMOVE would leave #3 with one child and replace it by that. */
+	assert.deepEqual(r.ops.map((o) => [o.kind, o.node]),
+		[[P.EDIT.REPLACE, 3]]);
+	apply(s, r);
+	assert.deepEqual(shape(s.root), ['union', 1, ['sphere', 2],
+		['smooth_difference', 3, ['sphere', 5], ['box', 4]]]);
+	assert.equal(s.byId.get(3).name, 'cut');
+	assert.equal(s.byId.get(5).name, 'tool');
+	assert.equal(s.byId.get(3).blend, Math.fround(0.1),
+		'the operator is kept as it was');
+	/* Into a group of two from outside: REMOVE and INSERT. */
+	assert.deepEqual(M.place(s, 2, 3, 1).ops.map((o) => o.kind),
+		[P.EDIT.REMOVE, P.EDIT.INSERT]);
+});
+
+test('shift: Alt+Up and Alt+Down move one place among the siblings', () => {
+	const s = siblings();
+	apply(s, M.shift(s, 3, -1));
+	assert.deepEqual(shape(s.root).slice(2).map((c) => c[1]), [3, 2, 4, 8]);
+	apply(s, M.shift(s, 3, 1));
+	assert.deepEqual(shape(s.root).slice(2).map((c) => c[1]), [2, 3, 4, 8]);
+	/* The shape under a twist moves the twist. */
+	apply(s, M.shift(s, 9, -1));
+	assert.deepEqual(shape(s.root).slice(2).map((c) => c[1]), [2, 3, 8, 4]);
+	refused(() => M.shift(s, 2, -1), /sphere #2 is already the first child of union #1: nothing to move up/);
+	refused(() => M.shift(s, 4, 1), /difference #4 is already the last child of union #1: nothing to move down/);
+	refused(() => M.shift(s, 1, 1), /union #1 is the root: it has no siblings/);
+	/* A reorder can need more stack: a right comb (each group's second
+	 * child the next group) moved after a shape. */
+	let right = prim(1000);
+	for (let i = 0; i < M.EVAL_STACK - 1; i++) {
+		right = op(2000 + i, 1, prim(3000 + i), right);
+	}
+	const t = scene(op(1, 1, right, prim(2)));
+	assert.equal(M.measure(t.root).stack, M.EVAL_STACK);
+	refused(() => M.shift(t, 2, -1), /stack of 131 entries, more than 130/);
 });
