@@ -404,6 +404,32 @@ static void field_name(char *out, size_t cap, const struct bc_tree *t,
 	}
 }
 
+/* A node's name for a description: control characters as \xNN (a name
+ * may hold any UTF-8 but NUL, and a history is printed on terminals),
+ * cut whole characters at a time to fit out (cap bytes with the NUL). */
+static void name_text(char *out, size_t cap, struct bc_proto_str name)
+{
+	const uint8_t *p = (const uint8_t *)name.ptr;
+	size_t at = 0;
+	for (uint32_t i = 0; i < name.len;) {
+		uint8_t c = p[i];
+		size_t n = c < 0x80 ? 1 : c < 0xe0 ? 2 : c < 0xf0 ? 3 : 4;
+		bool ctrl = c < 0x20 || c == 0x7f;
+		size_t need = ctrl ? 4 : n;
+		if (at + need + 1 > cap || i + n > name.len) {
+			break;
+		}
+		if (ctrl) {
+			snprintf(out + at, cap - at, "\\x%02x", (unsigned)c);
+		} else {
+			memcpy(out + at, p + i, n);
+		}
+		at += need;
+		i += (uint32_t)n;
+	}
+	out[at] = '\0';
+}
+
 /* "SET node 12 translate, radius", "REMOVE node 7", "3 operations"; t is
  * the scene after the change (NULL: parameters by number). */
 static void describe(char *out, size_t cap, const struct bc_proto_edit_op *ops,
@@ -444,8 +470,15 @@ static void describe(char *out, size_t cap, const struct bc_proto_edit_op *ops,
 		if (op->name.len == 0) {
 			snprintf(out, cap, "NAME node %u (none)", op->node);
 		} else {
-			snprintf(out, cap, "NAME node %u \"%.*s\"", op->node,
-			         (int)op->name.len, op->name.ptr);
+			/* The name where it fits, then the closing quote. */
+			at = (size_t)snprintf(out, cap, "NAME node %u \"",
+			                      op->node);
+			if (at + 2 < cap) {
+				name_text(out + at, cap - at - 1, op->name);
+				at += strlen(out + at);
+				out[at] = '"';
+				out[at + 1] = '\0';
+			}
 		}
 		break;
 	default:

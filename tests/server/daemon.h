@@ -339,6 +339,30 @@ static inline uint32_t conn_move(struct conn *c, uint32_t id, float x, float y,
 	return conn_send(c, &m);
 }
 
+/* The answer to an edit, UNDO or REDO of seq from member (c's member
+ * id): its EDIT_APPLIED's order (c->m holds it), or 0 after an ERROR for
+ * seq (c->m holds that) or 20 s without either. */
+static inline uint64_t conn_edit_answer(struct conn *c, uint32_t member,
+                                        uint32_t seq)
+{
+	int64_t end = t_now_ms() + 20000;
+	while (t_now_ms() < end) {
+		if (conn_recv(c, 200) != 1) {
+			continue;
+		}
+		if (c->m.type == BC_MSG_ERROR && c->m.seq == seq) {
+			return 0;
+		}
+		if (c->m.type == BC_MSG_EDIT_APPLIED &&
+		    c->m.edit_applied.author == member &&
+		    c->m.edit_applied.author_seq == seq) {
+			return c->m.edit_applied.order;
+		}
+	}
+	c->m.type = BC_MSG_INVALID;
+	return 0;
+}
+
 /* A free TCP port on 127.0.0.1 (bound, then let go), 0 when none. */
 static inline int daemon_free_port(void)
 {

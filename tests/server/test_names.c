@@ -7,7 +7,8 @@
  * taken once a second while such members are in the session (EBUSY);
  * joiners get the table as their features allow; a rename undoes and
  * redoes as one step, shows in HISTORY, and survives SIGTERM and kill -9;
- * a NAME of no node and a names table naming no node are refused.
+ * a NAME of no node and a names table naming no node are refused; HISTORY
+ * escapes control characters of names.
  */
 #include "blobcast/alloc.h"
 #include "blobcast/blobtree.h"
@@ -43,22 +44,9 @@ static void enter(struct conn *c, const struct daemon *d, const char *name,
  * an ERROR for seq (c->m holds that). */
 static uint64_t answer(struct conn *c, uint32_t seq)
 {
-	int64_t end = t_now_ms() + 20000;
-	while (t_now_ms() < end) {
-		if (conn_recv(c, 200) != 1) {
-			continue;
-		}
-		if (c->m.type == BC_MSG_ERROR && c->m.seq == seq) {
-			return 0;
-		}
-		if (c->m.type == BC_MSG_EDIT_APPLIED &&
-		    c->m.edit_applied.author == member_of_fd[c->fd] &&
-		    c->m.edit_applied.author_seq == seq) {
-			return c->m.edit_applied.order;
-		}
-	}
-	CHECK(!"no answer");
-	return 0;
+	uint64_t o = conn_edit_answer(c, member_of_fd[c->fd], seq);
+	CHECK(o > 0 || c->m.type == BC_MSG_ERROR);
+	return o;
 }
 
 static uint32_t send_ops(struct conn *c, const struct bc_proto_edit_op *ops,
@@ -321,6 +309,9 @@ static void names_of_no_node_are_refused(void)
 	/* The connection goes on. */
 	conn_load_json(&c, scene_json);
 	CHECK(rename_node(&c, 2, "fine") > 0);
+	/* HISTORY shows a control character escaped, never raw. */
+	CHECK(rename_node(&c, 3, "t\tb\x1b[2J") > 0);
+	CHECK(history_has(&c, "NAME node 3 \"t\\x09b\\x1b[2J\""));
 	conn_close(&c);
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }

@@ -59,22 +59,9 @@ static void prims_of(const struct conn *c, uint32_t *ids, uint32_t n)
  * or 0 after an ERROR for seq (c->m holds that) or a timeout. */
 static uint64_t answer(struct conn *c, uint32_t seq)
 {
-	int64_t end = t_now_ms() + 20000;
-	while (t_now_ms() < end) {
-		if (conn_recv(c, 200) != 1) {
-			continue;
-		}
-		if (c->m.type == BC_MSG_ERROR && c->m.seq == seq) {
-			return 0;
-		}
-		if (c->m.type == BC_MSG_EDIT_APPLIED &&
-		    c->m.edit_applied.author == member_of_fd[c->fd] &&
-		    c->m.edit_applied.author_seq == seq) {
-			return c->m.edit_applied.order;
-		}
-	}
-	CHECK(!"no answer");
-	return 0;
+	uint64_t o = conn_edit_answer(c, member_of_fd[c->fd], seq);
+	CHECK(o > 0 || c->m.type == BC_MSG_ERROR);
+	return o;
 }
 
 /* A SET of node's translate; returns the edit's order. */
