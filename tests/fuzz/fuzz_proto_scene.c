@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "blobcast/bytes.h"
 #include "blobcast/proto.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
@@ -16,7 +17,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 struct ref {
 	const uint8_t *p;
 	size_t n, pos;
-	uint32_t left, prims, ops, depth;
+	uint32_t left, prims, ops, depth, names;
 };
 
 static int rd(struct ref *r, size_t k, uint32_t *v)
@@ -94,18 +95,44 @@ static int node(struct ref *r, uint32_t depth)
 	return 0;
 }
 
+/* The names table after a tree of `nodes` nodes: count 1..nodes, then
+ * (id, length, bytes) with ids increasing from 1, lengths 1..64 and the
+ * bytes strict UTF-8 without NUL (base's check, itself tested against a
+ * reference in test_proto). */
+static int names(struct ref *r, uint32_t nodes)
+{
+	uint32_t count, prev = 0;
+	if (rd(r, 4, &count) || count < 1 || count > nodes) {
+		return -1;
+	}
+	for (uint32_t i = 0; i < count; i++) {
+		uint32_t id, len;
+		if (rd(r, 4, &id) || rd(r, 2, &len) || id <= prev || len < 1 ||
+		    len > BC_PROTO_MAX_NAME || r->n - r->pos < len ||
+		    bc_utf8_check(r->p + r->pos, len) < len) {
+			return -1;
+		}
+		prev = id;
+		r->pos += len;
+	}
+	r->names = count;
+	return 0;
+}
+
 static int reference(const uint8_t *p, size_t n, struct ref *r)
 {
 	uint32_t flags, count;
 	memset(r, 0, sizeof(*r));
 	r->p = p;
 	r->n = n;
-	if (rd(r, 1, &flags) || flags > 1 || floats(r, 10 * flags, NULL) ||
-	    rd(r, 4, &count) || count < 1 || count > BC_PROTO_SCENE_MAX_NODES) {
+	if (rd(r, 1, &flags) || flags > 3 ||
+	    floats(r, 10 * (flags & 1u), NULL) || rd(r, 4, &count) ||
+	    count < 1 || count > BC_PROTO_SCENE_MAX_NODES) {
 		return -1;
 	}
 	r->left = count;
-	if (node(r, 1) || r->left != 0 || r->pos != n) {
+	if (node(r, 1) || r->left != 0 || ((flags & 2u) && names(r, count)) ||
+	    r->pos != n) {
 		return -1;
 	}
 	return 0;
@@ -125,7 +152,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	}
 	if (rc == 0 &&
 	    (info.prims != r.prims || info.ops != r.ops ||
-	     info.depth != r.depth || info.nodes != r.prims + r.ops)) {
+	     info.depth != r.depth || info.nodes != r.prims + r.ops ||
+	     info.names != r.names)) {
 		fprintf(stderr, "counts differ\n");
 		abort();
 	}
