@@ -374,17 +374,21 @@ static int run_watch(struct bc_cli_call *a)
 	/* Server averages when the connection is up; a run that ends while
 	 * reconnecting reports its own counts only. */
 	memset(&st, 0, sizeof(st));
-	if (!offline && bc_client_stats(c, &st, &ei)) {
+	if (!offline &&
+	    bc_client_stats_parts(c, BC_PROTO_STATS_LINK, &st, &ei)) {
 		status = bc_cli_failed(a, c, "stats", &ei);
 		goto out;
 	}
 	printf("stats frames=%llu bytes=%llu server_frames=%llu "
 	       "server_fps=%.1f render_ms_avg=%.2f encode_ms_avg=%.2f "
-	       "edit_ms_avg=%.3f end=%s\n",
+	       "edit_ms_avg=%.3f rtt_ms=%.2f link_mbit=%.2f paced=%u "
+	       "spoiled=%llu end=%s\n",
 	       (unsigned long long)nframes, (unsigned long long)total_bytes,
 	       (unsigned long long)st.frames, (double)st.fps,
 	       (double)st.render_ms_avg, (double)st.encode_ms_avg,
-	       (double)st.edit_ms_avg, end);
+	       (double)st.edit_ms_avg, (double)st.link.rtt_us / 1e3,
+	       (double)st.link.delivery_bps * 8.0 / 1e6, st.link.frames_paced,
+	       (unsigned long long)st.link.frames_spoiled, end);
 	if (strcmp(end, "timeout") == 0) {
 		status = bc_cli_frames_timed_out(a, nframes, idle_limit);
 	}
@@ -431,6 +435,9 @@ const struct bc_cli_cmd bc_cli_cmd_watch = {
         "A lost connection prints 'lost reason=CODE' and is retried every\n"
         "0.25 s, doubling up to 4 s, then 'rejoined session=NAME'; a refused\n"
         "token or a missing session ends the run instead. At the end one\n"
-        "'stats' line gives the server's averages and end=frames (N frames\n"
+        "'stats' line gives the server's averages, what its TCP measures of\n"
+        "the link (rtt_ms, link_mbit: the delivery rate; 0 over a Unix\n"
+        "socket), the frames that waited for the link (paced) or that a\n"
+        "newer one replaced unsent (spoiled), and end=frames (N frames\n"
         "came), end=timeout or end=stopped (Ctrl-C, SIGTERM).",
     .run = run_watch};

@@ -194,7 +194,7 @@ sed 's/^/    /' "$tmp/watch2" "$tmp/watch2.err"
 grep -q '^lost reason=' "$tmp/watch2" || fail "watch: the loss is not shown"
 grep -qE '^frame 2 .*after=view$' "$tmp/watch2" ||
   fail "watch: the first frame after rejoining is not measured from the view"
-grep -qE '^stats frames=3 .* end=frames$' "$tmp/watch2" ||
+grep -qE '^stats frames=3 .* rtt_ms=[0-9.]+ link_mbit=[0-9.]+ paced=[0-9]+ spoiled=[0-9]+ end=frames$' "$tmp/watch2" ||
   fail "watch: no end=frames"
 
 if [ "$failures" -ne 0 ]; then
