@@ -494,7 +494,8 @@ static int bench_prune(bool quick)
 		       "(RevAA / IA %.2f); octree (tau 8, depth 10): IA %.1f "
 		       "ms, %llu cells, %u leaves, %.2f terms; RevAA %.1f ms, "
 		       "%llu cells, %u leaves, %.2f terms (RevAA / IA %.2f); "
-		       "default picks %s, %.1f ms with the trial\n\n",
+		       "default picks %s, %.1f ms (rule and any trial "
+		       "included)\n\n",
 		       scenes[s].label, rpn.n, levels, ms[0], ms[1], ns_term[0],
 		       ns_term[1], ns_term[1] / ns_term[0], build[0],
 		       (unsigned long long)st[0].pruned, st[0].leaves,

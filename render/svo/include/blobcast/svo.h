@@ -275,7 +275,7 @@ int bc_svo_prune(struct bc_svo_ranger *g, const uint32_t *mask_in,
 #define BC_SVO_TRIAL_MAX_LEVELS 8u
 #define BC_SVO_TRIAL_LEVELS 2u
 /* What pruning one term costs in RevAA, in IA terms: measured on the
- * bench's scenes (docs/svo.md, "IA against RevAA"), 2.2-3.1. */
+ * bench's scenes (docs/svo.md, "IA against RevAA"), 1.9-3.6. */
 #define BC_SVO_REVAA_COST 3.0
 
 /* Per level of a trial: cells pruned, those found empty or full, and the
