@@ -12,6 +12,10 @@
  *           per point, memory, and render time per pixel.
  *   arith   the octree built with each arithmetic at one threshold: what
  *           better ranges buy in construction time and leaf size.
+ *   prune   IA against RevAA level by level: the top levels of the octree
+ *           pruned with each (every active cell split), cells, terms
+ *           received and kept per cell, CPU time per term; the default
+ *           octree with each and the per-scene choice (docs/svo.md).
  *   render  `svo` against the CPU `tiled` renderer on the same scenes,
  *           cameras and thread count, side by side in one run, the svo
  *           octree pruned with RevAA and with IA (build and trace each).
@@ -25,7 +29,7 @@
  * has 506-571), Many Spheres `gen many-spheres` (5489, as the thesis's),
  * Many Gears `gen many-gears --count 625` (28 234; the thesis's 30 377).
  *
- * Usage: bench_svo [grid|sweep|arith|render|all] [--quick]
+ * Usage: bench_svo [grid|sweep|arith|prune|render|all] [--quick]
  *        bench_svo files [--size N] [--reps R] [--threads T] [--range A]
  *                  [--threshold TAU] SCENE.json...
  * Every time is measured in this process, one thread unless stated; ratios
@@ -57,6 +61,13 @@ static double now_ms(void)
 {
 	struct timespec ts;
 	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+}
+
+static double cpu_ms(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
 	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
 }
 
@@ -386,6 +397,119 @@ static int bench_arith(bool quick)
 	return 0;
 }
 
+/* ---- IA against RevAA, level by level -------------------------------------
+ */
+
+/* The smallest process CPU time of REPEATS trials (or octree builds when
+ * tr is NULL: st gets the last build's statistics). */
+static double prune_cpu(const struct bc_svo_rpn *rpn, enum bc_range_arith a,
+                        uint32_t levels, struct bc_svo_trial *tr,
+                        struct bc_svo_stats *st)
+{
+	double best = INFINITY;
+	for (int r = 0; r < REPEATS; r++) {
+		double t0 = cpu_ms(), t1;
+		struct bc_svo *sv = NULL;
+		struct bc_svo_opts so = {.arith = a};
+		int rc = tr ? bc_svo_trial_run(rpn, a, 0.0f, levels, tr)
+		            : bc_svo_build(&sv, rpn, &so, NULL);
+		t1 = cpu_ms();
+		if (rc) {
+			fprintf(stderr, "bench_svo: pruning failed (%d)\n", rc);
+			return -1.0;
+		}
+		if (sv) {
+			bc_svo_get_stats(sv, st);
+			bc_svo_destroy(sv);
+		}
+		best = fmin(best, t1 - t0);
+	}
+	return best;
+}
+
+/* Every active cell of the top levels split and pruned from its parent's
+ * variant, with each arithmetic: cells per level, terms received and kept
+ * per cell, CPU time and time per term received; then the default octree
+ * (threshold 8, depth 10) built with each, and the trial's choice. */
+static int bench_prune(bool quick)
+{
+	static const struct scene scenes[] = {
+	    {"Gears", "gears", {.teeth = 100}},
+	    {"Fig18 smooth 64", "fig18", {.count = 64}},
+	    {"Many Gears 16", "many-gears", {.count = 16}},
+	    {"Many Spheres", "many-spheres", {0}},
+	    {"Many Gears", "many-gears", {.count = 625}},
+	};
+	static const char *const names[] = {"default", "IA", "AA", "RevAA"};
+	size_t nsc = quick ? 3 : sizeof(scenes) / sizeof(scenes[0]);
+	uint32_t levels = quick ? 4 : 5;
+	printf("## Pruning by level, IA against RevAA (CPU time)\n\n");
+	printf("| Scene | Arith. | level | cells | empty/full | terms in / "
+	       "cell | terms kept / cell | kept / in |\n");
+	printf("|---|---|---|---|---|---|---|---|\n");
+	for (size_t s = 0; s < nsc; s++) {
+		struct bc_tree *t = make(&scenes[s], NULL);
+		struct bc_svo_rpn rpn;
+		struct bc_svo_trial tr[2];
+		double ms[2], ns_term[2], build[3];
+		struct bc_svo_stats st[3];
+		enum bc_range_arith ar[2] = {BC_RANGE_IA, BC_RANGE_REVAA};
+		if (!t || bc_svo_rpn_init(&rpn, bc_tree_lin(t))) {
+			return 1;
+		}
+		for (int k = 0; k < 2; k++) {
+			uint64_t in = 0;
+			ms[k] = prune_cpu(&rpn, ar[k], levels, &tr[k], NULL);
+			if (ms[k] < 0.0) {
+				return 1;
+			}
+			for (uint32_t l = 0; l < levels; l++) {
+				const struct bc_svo_trial_level *lv =
+				    &tr[k].level[l];
+				double c = lv->cells ? (double)lv->cells : 1.0;
+				in += lv->terms_in;
+				printf("| %s | %s | %u | %llu | %llu | %.1f | "
+				       "%.1f | %.3f |\n",
+				       scenes[s].label, names[ar[k]], l,
+				       (unsigned long long)lv->cells,
+				       (unsigned long long)lv->decided,
+				       (double)lv->terms_in / c,
+				       (double)lv->terms_out / c,
+				       lv->terms_in ? (double)lv->terms_out /
+				                          (double)lv->terms_in
+				                    : 0.0);
+			}
+			ns_term[k] = ms[k] * 1e6 / (double)(in ? in : 1);
+		}
+		for (int k = 0; k < 3; k++) {
+			enum bc_range_arith a =
+			    k == 2 ? BC_RANGE_DEFAULT : ar[k];
+			build[k] = prune_cpu(&rpn, a, 0, NULL, &st[k]);
+			if (build[k] < 0.0) {
+				return 1;
+			}
+		}
+		printf("\n%s: RPN %u terms; top %u levels: IA %.1f ms, RevAA "
+		       "%.1f ms CPU, %.1f / %.1f ns per term received "
+		       "(RevAA / IA %.2f); octree (tau 8, depth 10): IA %.1f "
+		       "ms, %llu cells, %u leaves, %.2f terms; RevAA %.1f ms, "
+		       "%llu cells, %u leaves, %.2f terms (RevAA / IA %.2f); "
+		       "default picks %s, %.1f ms (rule and any trial "
+		       "included)\n\n",
+		       scenes[s].label, rpn.n, levels, ms[0], ms[1], ns_term[0],
+		       ns_term[1], ns_term[1] / ns_term[0], build[0],
+		       (unsigned long long)st[0].pruned, st[0].leaves,
+		       st[0].avg_terms, build[1],
+		       (unsigned long long)st[1].pruned, st[1].leaves,
+		       st[1].avg_terms, build[1] / build[0], names[st[2].arith],
+		       build[2]);
+		fflush(stdout);
+		bc_svo_rpn_finish(&rpn);
+		bc_tree_destroy(t);
+	}
+	return 0;
+}
+
 /* ---- svo against tiled ----------------------------------------------------
  */
 
@@ -436,13 +560,6 @@ static int bench_render(bool quick)
 
 /* ---- scene files, for the libfive comparison ------------------------------
  */
-
-static double cpu_ms(void)
-{
-	struct timespec ts;
-	clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
-}
 
 static int cmp_double(const void *a, const void *b)
 {
@@ -595,6 +712,9 @@ int main(int argc, char **argv)
 	}
 	if (strcmp(what, "arith") == 0 || strcmp(what, "all") == 0) {
 		rc |= bench_arith(quick);
+	}
+	if (strcmp(what, "prune") == 0 || strcmp(what, "all") == 0) {
+		rc |= bench_prune(quick);
 	}
 	if (strcmp(what, "render") == 0 || strcmp(what, "all") == 0) {
 		rc |= bench_render(quick);

@@ -321,24 +321,17 @@ int bc_svo_build(struct bc_svo **out, const struct bc_svo_rpn *rpn,
 	s->opts.max_bytes =
 	    opts->max_bytes ? opts->max_bytes : BC_SVO_DEFAULT_MAX_BYTES;
 	if (s->opts.arith == BC_RANGE_DEFAULT) {
-		s->opts.arith = BC_SVO_DEFAULT_ARITH;
-	}
-	/* A cube about the tree's box, grown so the band around the surface
-	 * fits and by a little more so surface points on the box are inside.
-	 * A cube, not the box: cells of a thin scene's box would be slivers,
-	 * every one of them touching the surface. */
-	{
-		float half = 0.0f;
-		for (int i = 0; i < 3; i++) {
-			half = fmaxf(half, 0.5f * (rpn->hi[i] - rpn->lo[i]));
-		}
-		half += s->opts.band + 1.0e-3f * fmaxf(rpn->size, 1.0e-6f);
-		for (int i = 0; i < 3; i++) {
-			float c = 0.5f * (rpn->lo[i] + rpn->hi[i]);
-			s->lo[i] = c - half;
-			s->hi[i] = c + half;
+		/* The faster pruner for this scene (docs/svo.md, "IA
+		 * against RevAA"). */
+		if ((rc = bc_svo_arith_default(rpn, s->opts.band,
+		                               &s->opts.arith))) {
+			bc_svo_destroy(s);
+			return bc_errinfo_set(ei, rc, "svo: %s",
+			                      bc_strerror(rc));
 		}
 	}
+	s->stats.arith = s->opts.arith;
+	bc__svo_root_box(rpn, s->opts.band, s->lo, s->hi);
 	b.s = s;
 	b.tau = s->opts.threshold;
 	b.max_depth = s->opts.max_depth;

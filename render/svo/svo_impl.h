@@ -258,6 +258,10 @@ double bc__svo_op_blend_bound(enum bc_op kind, double blend, double range,
 /* Outward widening of a blended result for the float evaluator. */
 double bc__svo_op_margin(double blend, struct bc_svo_ivl m);
 
+/* The octree's root cube for rpn and band (choose.c). */
+void bc__svo_root_box(const struct bc_svo_rpn *rpn, float band, float lo[3],
+                      float hi[3]);
+
 static inline struct bc_svo_ivl bc__svo_ivl_meet(struct bc_svo_ivl a,
                                                  struct bc_svo_ivl b)
 {

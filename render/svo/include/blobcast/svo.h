@@ -39,7 +39,8 @@
  * 3.5 GB, more than a render server should spend on one scene. Leaves made
  * after the budget is spent keep more terms than tau: slower, still exact. */
 #define BC_SVO_DEFAULT_MAX_BYTES ((uint64_t)512u << 20)
-/* The arithmetic that prunes when none is asked for: interval arithmetic.
+/* The arithmetic of a range evaluator when none is asked for: interval
+ * arithmetic. The octree chooses per scene (bc_svo_arith_default).
  * Measured side by side on our scenes it builds the same octrees 1.1-5.4
  * times faster than RevAA and traces frames through them up to 2.9 times
  * faster (docs/svo.md, docs/benchmarks.md); the thesis's opposite finding
@@ -267,16 +268,62 @@ int bc_svo_prune(struct bc_svo_ranger *g, const uint32_t *mask_in,
                  uint32_t *mask_out, const struct bc_svo_region *region,
                  float band, struct bc_svo_prune_result *res);
 
+/* ---- Choosing the arithmetic (choose.c) --------------------------------- */
+
+/* Levels a trial may prune, and the levels the octree's default choice
+ * prunes (the root and its eight children). */
+#define BC_SVO_TRIAL_MAX_LEVELS 8u
+#define BC_SVO_TRIAL_LEVELS 2u
+/* What pruning one term costs in RevAA, in IA terms: measured on the
+ * bench's scenes (docs/svo.md, "IA against RevAA"), 1.9-3.6. */
+#define BC_SVO_REVAA_COST 3.0
+
+/* Per level of a trial: cells pruned, those found empty or full, and the
+ * active terms they received and kept. */
+struct bc_svo_trial_level {
+	uint64_t cells, decided, terms_in, terms_out;
+};
+struct bc_svo_trial {
+	enum bc_range_arith arith; /* resolved (never BC_RANGE_DEFAULT) */
+	uint32_t levels;
+	struct bc_svo_trial_level level[BC_SVO_TRIAL_MAX_LEVELS];
+};
+
+/* Prunes the octree's top `levels` levels (1..BC_SVO_TRIAL_MAX_LEVELS)
+ * over the same root cube as bc_svo_build, splitting every active cell,
+ * with arithmetic arith. Returns 0, BC_EINVAL, BC_EENUM or BC_ENOMEM. */
+int bc_svo_trial_run(const struct bc_svo_rpn *rpn, enum bc_range_arith arith,
+                     float band, uint32_t levels, struct bc_svo_trial *out);
+/* The rule: RevAA when IA's trial keeps more than BC_SVO_REVAA_COST times
+ * the terms RevAA's keeps at the last level (each deeper cell evaluates
+ * what its parent kept), IA otherwise. ia and rev are trials of the same
+ * levels with IA and RevAA. */
+enum bc_range_arith bc_svo_arith_choose(const struct bc_svo_trial *ia,
+                                        const struct bc_svo_trial *rev);
+/* Whether rpn has what lets RevAA prune differently from IA: a smooth
+ * operator (RevAA keeps the sharp result's form under the blend) or an
+ * ellipsoid (the one natural extension whose formula repeats a variable,
+ * where a form may beat the interval). Without them RevAA's primitive
+ * ranges fall back on the intervals (docs/svo.md, "Interval fallback")
+ * and sharp operators decide on the same bounds: measured identical on
+ * every generator family (docs/svo.md, "IA against RevAA"). */
+bool bc_svo_arith_may_differ(const struct bc_svo_rpn *rpn);
+/* The octree's default arithmetic for rpn: IA where the two cannot
+ * differ, else the rule on trials of BC_SVO_TRIAL_LEVELS levels. Returns
+ * 0 or a trial's error. */
+int bc_svo_arith_default(const struct bc_svo_rpn *rpn, float band,
+                         enum bc_range_arith *out);
+
 /* ---- Sparse voxel octree (octree.c) ------------------------------------- */
 
 /* Zero means default for every field. */
 struct bc_svo_opts {
-	enum bc_range_arith
-	    arith;          /* pruning arithmetic (BC_SVO_DEFAULT_ARITH) */
-	uint32_t threshold; /* tau */
-	uint32_t max_depth; /* <= BC_SVO_MAX_DEPTH */
-	float band;         /* hit thickness preserved (0: sign only) */
-	uint64_t max_bytes; /* memory budget */
+	enum bc_range_arith arith; /* pruning arithmetic (default: chosen per
+	                              scene by a trial, bc_svo_arith_choose) */
+	uint32_t threshold;        /* tau */
+	uint32_t max_depth;        /* <= BC_SVO_MAX_DEPTH */
+	float band;                /* hit thickness preserved (0: sign only) */
+	uint64_t max_bytes;        /* memory budget */
 	bool no_step; /* the caster searches every leaf by interval bisection
 	                 (thesis Alg. 5.7), 1-Lipschitz ones included: what
 	                 the tests and benchmarks compare stepping with */
@@ -300,6 +347,8 @@ struct bc_svo_stats {
 	uint32_t stepped; /* active leaves whose variant is 1-Lipschitz: the
 	                     caster steps through them (cast.c) */
 	bool truncated;   /* the memory budget stopped subdivision */
+	enum bc_range_arith arith; /* the arithmetic that pruned (the trial's
+	                              choice when none was asked for) */
 };
 
 struct bc_svo;
