@@ -133,7 +133,8 @@ static const struct bc_opt_name range_names[] = {{"ia", BC_RANGE_IA},
 		     .dst = &(a)->range,                                       \
 		     .arg = "A",                                               \
 		     .help = "svo backend only: interval arithmetic\n"         \
-		             "{choices} (default: the backend's, ia)",         \
+		             "{choices} (default: chosen per scene,\n"         \
+		             "docs/svo.md)",                                   \
 		     .names = range_names},                                    \
 		    {.name = "threshold",                                      \
 		     .kind = BC_OPT_U32,                                       \
