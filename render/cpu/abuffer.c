@@ -57,14 +57,39 @@ static void sphere_scalar(const struct bc__ab_rays *rays, uint64_t lanes,
 	t[1] = t1;
 }
 
+static void abv_scalar(const struct bc__ab_rays *rays, uint64_t lanes,
+                       const struct bc_abv *abv, const float eye[3], float t[2])
+{
+	float t0 = t[0], t1 = t[1];
+	for (uint32_t i = 0; i < 4 * BC__AB_QUARTER_RAYS; i++) {
+		uint32_t q = i / BC__AB_QUARTER_RAYS,
+		         l = i % BC__AB_QUARTER_RAYS;
+		float d[3], a, e;
+		if (!((lanes >> i) & 1u)) {
+			continue;
+		}
+		d[0] = rays->d[q][0][l];
+		d[1] = rays->d[q][1][l];
+		d[2] = rays->d[q][2][l];
+		if (bc_abv_ray(abv, eye, d, &a, &e) && e > 0.0f) {
+			a = a > 0.0f ? a : 0.0f;
+			t0 = a < t0 ? a : t0;
+			t1 = e > t1 ? e : t1;
+		}
+	}
+	t[0] = t0;
+	t[1] = t1;
+}
+
 struct bc__ab_kernel bc__ab_kernel_for(enum bc_simd simd)
 {
-	struct bc__ab_kernel k = {dirs_scalar, sphere_scalar};
+	struct bc__ab_kernel k = {dirs_scalar, sphere_scalar, abv_scalar};
 #if defined(BLOBCAST_SIMD_X86)
 	switch (bc__pk_kernel_for(simd).lanes) {
 	case 16:
 		k.dirs = bc__ab_dirs_avx512;
 		k.sphere = bc__ab_sphere_avx512;
+		k.abv = bc__ab_abv_avx512;
 		break;
 	case 8:
 		k.dirs = bc__ab_dirs_avx2;

@@ -638,22 +638,7 @@ static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
 		if (p->wide.shape == BC_ABV_SPHERE) {
 			tf->kern.sphere(rays, lanes, p->v, p->wide.radius, t);
 		} else {
-			for (uint32_t j = 0; j < 64; j++) {
-				uint32_t q = j / BC__AB_QUARTER_RAYS;
-				uint32_t l = j % BC__AB_QUARTER_RAYS;
-				float d[3] = {rays->d[q][0][l],
-				              rays->d[q][1][l],
-				              rays->d[q][2][l]};
-				float a, e;
-				if (!((lanes >> j) & 1u) ||
-				    !bc_abv_ray(&p->wide, eye, d, &a, &e) ||
-				    !(e > 0.0f)) {
-					continue;
-				}
-				a = a > 0.0f ? a : 0.0f;
-				t[0] = a < t[0] ? a : t[0];
-				t[1] = e > t[1] ? e : t[1];
-			}
+			tf->kern.abv(rays, lanes, &p->wide, eye, t);
 		}
 		if (t[1] >= t[0]) {
 			out[n++] = (struct bc__frag){t[0], t[1], k};
