@@ -49,7 +49,48 @@ struct scene {
 	const char *label;
 	const char *gen;
 	struct bc_gen_opts opts;
-	uint32_t band; /* rows of the naive band */
+	uint32_t band; /* rows of the naive band; 0: not in the naive table */
+	int frames;    /* in --frames: 0 no, 1 yes, 2 also with --quick */
+};
+
+/* Every scene of both tables; the first three are fig18's. */
+static const struct scene scenes[] = {
+    {"fig18 smooth spheres 256",
+     "fig18",
+     {.count = 256, .kind = BC_GEN_KIND_SPHERES, .blend = BC_GEN_BLEND_SMOOTH},
+     32,
+     2},
+    {"fig18 smooth spheres 1024",
+     "fig18",
+     {.count = 1024, .kind = BC_GEN_KIND_SPHERES, .blend = BC_GEN_BLEND_SMOOTH},
+     16,
+     1},
+    {"fig18 smooth spheres 4096",
+     "fig18",
+     {.count = 4096, .kind = BC_GEN_KIND_SPHERES, .blend = BC_GEN_BLEND_SMOOTH},
+     8,
+     2},
+    {"gears 24 teeth", "gears", {.teeth = 24}, 0, 2},
+    {"fig16 L1 smooth",
+     "fig16",
+     {.level = 1, .blend = BC_GEN_BLEND_SMOOTH},
+     32,
+     0},
+    {"fig16 L2 smooth",
+     "fig16",
+     {.level = 2, .blend = BC_GEN_BLEND_SMOOTH},
+     16,
+     1},
+    {"fig16 L3 smooth",
+     "fig16",
+     {.level = 3, .blend = BC_GEN_BLEND_SMOOTH},
+     8,
+     2},
+    {"fig16 L4 smooth",
+     "fig16",
+     {.level = 4, .blend = BC_GEN_BLEND_SMOOTH},
+     4,
+     1},
 };
 
 static double clock_ms(clockid_t id)
@@ -238,43 +279,6 @@ static uint64_t frame_diff(const struct bc_frame *a, const struct bc_frame *b)
  */
 static int frames_main(uint32_t size, int reps, bool quick)
 {
-	static const struct {
-		const char *label, *gen;
-		struct bc_gen_opts opts;
-		bool quick; /* one of --quick's */
-	} scenes[] = {
-	    {"fig18 smooth spheres 256",
-	     "fig18",
-	     {.count = 256,
-	      .kind = BC_GEN_KIND_SPHERES,
-	      .blend = BC_GEN_BLEND_SMOOTH},
-	     1},
-	    {"fig18 smooth spheres 1024",
-	     "fig18",
-	     {.count = 1024,
-	      .kind = BC_GEN_KIND_SPHERES,
-	      .blend = BC_GEN_BLEND_SMOOTH},
-	     0},
-	    {"fig18 smooth spheres 4096",
-	     "fig18",
-	     {.count = 4096,
-	      .kind = BC_GEN_KIND_SPHERES,
-	      .blend = BC_GEN_BLEND_SMOOTH},
-	     1},
-	    {"gears 24 teeth", "gears", {.teeth = 24}, 1},
-	    {"fig16 L2 smooth",
-	     "fig16",
-	     {.level = 2, .blend = BC_GEN_BLEND_SMOOTH},
-	     0},
-	    {"fig16 L3 smooth",
-	     "fig16",
-	     {.level = 3, .blend = BC_GEN_BLEND_SMOOTH},
-	     1},
-	    {"fig16 L4 smooth",
-	     "fig16",
-	     {.level = 4, .blend = BC_GEN_BLEND_SMOOTH},
-	     0},
-	};
 	const int warm = 3;
 	char model[256], load[64];
 	struct samples sm[CONF_COUNT];
@@ -309,7 +313,7 @@ static int frames_main(uint32_t size, int reps, bool quick)
 		struct bc_frame f[CONF_COUNT] = {{0}}, cold = {0};
 		double med[CONF_COUNT][5];
 		uint64_t diff_thr = 0, diff_cold = 0;
-		if (quick && !scenes[s].quick) {
+		if (!scenes[s].frames || (quick && scenes[s].frames < 2)) {
 			continue;
 		}
 		t = bc_tree_create();
@@ -431,42 +435,6 @@ static int frames_main(uint32_t size, int reps, bool quick)
 
 int main(int argc, char **argv)
 {
-	struct scene scenes[] = {
-	    {"fig18 smooth spheres 256",
-	     "fig18",
-	     {.count = 256,
-	      .kind = BC_GEN_KIND_SPHERES,
-	      .blend = BC_GEN_BLEND_SMOOTH},
-	     32},
-	    {"fig18 smooth spheres 1024",
-	     "fig18",
-	     {.count = 1024,
-	      .kind = BC_GEN_KIND_SPHERES,
-	      .blend = BC_GEN_BLEND_SMOOTH},
-	     16},
-	    {"fig18 smooth spheres 4096",
-	     "fig18",
-	     {.count = 4096,
-	      .kind = BC_GEN_KIND_SPHERES,
-	      .blend = BC_GEN_BLEND_SMOOTH},
-	     8},
-	    {"fig16 L1 smooth",
-	     "fig16",
-	     {.level = 1, .blend = BC_GEN_BLEND_SMOOTH},
-	     32},
-	    {"fig16 L2 smooth",
-	     "fig16",
-	     {.level = 2, .blend = BC_GEN_BLEND_SMOOTH},
-	     16},
-	    {"fig16 L3 smooth",
-	     "fig16",
-	     {.level = 3, .blend = BC_GEN_BLEND_SMOOTH},
-	     8},
-	    {"fig16 L4 smooth",
-	     "fig16",
-	     {.level = 4, .blend = BC_GEN_BLEND_SMOOTH},
-	     4},
-	};
 	size_t nscenes = sizeof(scenes) / sizeof(scenes[0]);
 	uint32_t size = 512;
 	int reps = 3;
@@ -534,13 +502,17 @@ int main(int argc, char **argv)
 	       "scene", "prims", "hit%", "tiled", "(wall)", "abuf-w", "trace-w",
 	       "maxovl", "band", "tiled", "naive", "speedup");
 	for (size_t s = 0; s < nscenes; s++) {
-		struct bc_tree *t = bc_tree_create();
+		struct bc_tree *t;
 		struct bc_camera cam, bcam;
 		struct bc_errinfo ei = {0};
 		struct bc_frame full = {0}, band = {0};
 		struct timing tiled, tiled_band, naive_band;
 		uint32_t rows = scenes[s].band * size / 512;
+		if (!scenes[s].band) {
+			continue; /* not in this table */
+		}
 		rows = rows < 2 ? 2 : rows;
+		t = bc_tree_create();
 		if (!t ||
 		    bc_gen(scenes[s].gen, &scenes[s].opts, t, &cam, &ei)) {
 			fprintf(stderr, "%s: %s\n", scenes[s].label, ei.msg);

@@ -51,6 +51,12 @@ typedef void (*bc__ab_abv_fn)(const struct bc__ab_rays *rays, uint64_t lanes,
                               const struct bc_abv *abv, const float eye[3],
                               float t[2]);
 
+/* The scalar form of bc__ab_abv_fn (the vector one's reference, and its
+ * fallback for shapes other than boxes and capsules). */
+void bc__ab_abv_scalar(const struct bc__ab_rays *rays, uint64_t lanes,
+                       const struct bc_abv *abv, const float eye[3],
+                       float t[2]);
+
 struct bc__ab_kernel {
 	bc__ab_dirs_fn dirs;
 	bc__ab_sphere_fn sphere;

@@ -255,22 +255,7 @@ void bc__ab_abv_avx512(const struct bc__ab_rays *rays, uint64_t lanes,
 	double o[3] = {eye[0], eye[1], eye[2]};
 	float t0 = t[0], t1 = t[1];
 	if (abv->shape != BC_ABV_BOX && abv->shape != BC_ABV_CAPSULE) {
-		/* Not this kernel's shapes: bc_abv_ray ray by ray. */
-		for (uint32_t i = 0; i < 4 * BC__AB_QUARTER_RAYS; i++) {
-			uint32_t q = i / BC__AB_QUARTER_RAYS,
-			         l = i % BC__AB_QUARTER_RAYS;
-			float d[3] = {rays->d[q][0][l], rays->d[q][1][l],
-			              rays->d[q][2][l]};
-			float a, e;
-			if (((lanes >> i) & 1u) &&
-			    bc_abv_ray(abv, eye, d, &a, &e) && e > 0.0f) {
-				a = a > 0.0f ? a : 0.0f;
-				t0 = a < t0 ? a : t0;
-				t1 = e > t1 ? e : t1;
-			}
-		}
-		t[0] = t0;
-		t[1] = t1;
+		bc__ab_abv_scalar(rays, lanes, abv, eye, t);
 		return;
 	}
 	for (uint32_t q = 0; q < 4; q++) {
