@@ -29,7 +29,7 @@
  *                the threads); --frames always runs 1 and 2
  *   --reps R     tiled runs per measurement, the fastest is kept (3);
  *                --frames: rounds, the median is kept
- *   --quick      only the first three scenes (--frames: three of them)
+ *   --quick      only the first three scenes (--frames: four of them)
  *   --frames     cold and warm frames, scalar and vector, 1 and 2 threads
  */
 #include <inttypes.h>
@@ -462,13 +462,13 @@ int main(int argc, char **argv)
 	     .lo = 1,
 	     .hi = 1000,
 	     .arg = "R",
-	     .help = "tiled runs per scene, the best kept (default "
-	             "{default})"},
+	     .help = "tiled runs per scene, the best kept; --frames: "
+	             "rounds, the median kept (default {default})"},
 	    {.name = "quick",
 	     .kind = BC_OPT_FLAG,
 	     .dst = &quick,
-	     .help = "the first three scenes only (--frames: three "
-	             "scenes)"},
+	     .help = "the first three scenes only (--frames: four of "
+	             "them)"},
 	    {.name = "frames",
 	     .kind = BC_OPT_FLAG,
 	     .dst = &frames,
