@@ -44,6 +44,7 @@
 #include "blobcast/blobtree.h"
 #include "blobcast/gen.h"
 #include "blobcast/render.h"
+#include "tiled_confs.h"
 
 struct scene {
 	const char *label;
@@ -156,19 +157,6 @@ static uint32_t hits(const struct bc_frame *f)
 }
 
 /* ---- --frames: cold and warm frames ------------------------------------- */
-
-enum { CONF_OFF1, CONF_OFF2, CONF_AUTO1, CONF_AUTO2, CONF_COUNT };
-
-static const struct {
-	const char *name;
-	enum bc_simd simd;
-	uint32_t threads;
-} confs[CONF_COUNT] = {
-    [CONF_OFF1] = {"off/1", BC_SIMD_OFF, 1},
-    [CONF_OFF2] = {"off/2", BC_SIMD_OFF, 2},
-    [CONF_AUTO1] = {"auto/1", BC_SIMD_AUTO, 1},
-    [CONF_AUTO2] = {"auto/2", BC_SIMD_AUTO, 2},
-};
 
 /* One configuration's samples: cold and warm frames, wall and CPU time,
  * and the cold frames' A-buffer wall time (ms), one per round. */
@@ -394,15 +382,14 @@ static int frames_main(uint32_t size, int reps, bool quick)
 		       "warm %.2fx\n",
 		       "", med[CONF_OFF1][1] / med[CONF_AUTO1][1],
 		       med[CONF_OFF1][4] / med[CONF_AUTO1][4]);
-		for (int c = CONF_OFF1; c <= CONF_AUTO1; c += 2) {
+		for (int c = CONF_OFF1; c <= CONF_AUTO1; c++) {
+			int c2 = c == CONF_OFF1 ? CONF_OFF2 : CONF_AUTO2;
 			printf("%-26s 2 threads (%s, wall 1/2): cold %.2fx, "
 			       "warm %.2fx; cpu 2/1: cold %.2f, warm %.2f\n",
 			       "",
 			       confs[c].simd == BC_SIMD_OFF ? "off" : "auto",
-			       med[c][0] / med[c + 1][0],
-			       med[c][3] / med[c + 1][3],
-			       med[c + 1][1] / med[c][1],
-			       med[c + 1][4] / med[c][4]);
+			       med[c][0] / med[c2][0], med[c][3] / med[c2][3],
+			       med[c2][1] / med[c][1], med[c2][4] / med[c][4]);
 		}
 		printf("%-26s same pixels: 1 and 2 threads %s, cold and warm "
 		       "%s\n",
