@@ -49,6 +49,7 @@
 #include "blobcast/gen.h"
 #include "blobcast/render.h"
 #include "blobcast/scene.h"
+#include "tiled_confs.h"
 
 #ifndef BC_BENCH_SCENES_DIR
 #define BC_BENCH_SCENES_DIR "bench/scenes"
@@ -60,19 +61,6 @@ struct scene {
 	const char *file; /* under the scenes directory */
 	struct bc_gen_opts opts;
 	int quick; /* part of --quick */
-};
-
-enum { CONF_OFF1, CONF_AUTO1, CONF_OFF2, CONF_AUTO2, CONF_COUNT };
-
-static const struct {
-	const char *name;
-	enum bc_simd simd;
-	uint32_t threads;
-} confs[CONF_COUNT] = {
-    [CONF_OFF1] = {"off/1", BC_SIMD_OFF, 1},
-    [CONF_AUTO1] = {"auto/1", BC_SIMD_AUTO, 1},
-    [CONF_OFF2] = {"off/2", BC_SIMD_OFF, 2},
-    [CONF_AUTO2] = {"auto/2", BC_SIMD_AUTO, 2},
 };
 
 struct timing {

@@ -13,12 +13,26 @@
  * frame notices. Runs from several threads at once take `run_lock` in
  * turn: the pool has one set of workers. The workers are detached and never
  * stopped; they hold no heap memory, so leak checkers stay quiet at exit.
+ *
+ * Waking a sleeping thread costs tens to hundreds of microseconds (more on
+ * a virtual machine, whose idle cores halt), once per run to start a
+ * worker and once more when the caller sleeps for the last worker. A
+ * frame of the tiled backend is two to four runs a few microseconds
+ * apart. So both sides wait for the other by polling first, for at most
+ * SPIN_NS: a worker that took part in a run polls the generation for the
+ * next one (the next phase of the same frame), and the caller polls
+ * `pending` before sleeping on `done`. Either then sleeps as before;
+ * the counters they poll are atomics, changed under the lock as well, so
+ * no wake-up is lost to a sleeper that checked them under it.
  */
 #include "blobcast/render_common.h"
 
 #include <math.h>
 #include <pthread.h>
+#include <sched.h>
+#include <stdatomic.h>
 #include <stdbool.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "blobcast/log.h"
@@ -30,11 +44,13 @@ struct pool {
 	pthread_cond_t done;      /* pending reached 0 */
 	uint32_t started;         /* workers 1..started are running */
 	bool failed;              /* a start failed: do not retry each run */
-	uint64_t generation;
 	bc_pool_fn fn;
 	void *ctx;
-	uint32_t n;       /* shares of the current run */
-	uint32_t pending; /* worker shares of it not finished */
+	uint32_t n; /* shares of the current run */
+	/* Changed under the lock, polled without it, each on a line of its
+	 * own: the run's number, and its worker shares not finished. */
+	_Alignas(64) _Atomic uint64_t generation;
+	_Alignas(64) atomic_uint pending;
 };
 
 static struct pool pool = {
@@ -44,31 +60,93 @@ static struct pool pool = {
     .done = PTHREAD_COND_INITIALIZER,
 };
 
+/* How long a side polls before it sleeps (see above): longer than the
+ * gaps between the phases of one frame, short enough that a worker with
+ * nothing more to do soon leaves the core to others. */
+#define SPIN_NS 200000
+
+static int64_t now_ns(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
+}
+
+/* Lets another runnable thread have the core (the one polled for, when
+ * the machine has fewer cores free than threads), else returns at once. */
+static inline void cpu_relax(void)
+{
+	sched_yield();
+}
+
+/* Polls until *gen differs from seen or SPIN_NS pass; true if it did. */
+static bool spin_generation(uint64_t seen)
+{
+	int64_t start = now_ns();
+	for (uint32_t i = 0;; i++) {
+		if (atomic_load_explicit(&pool.generation,
+		                         memory_order_acquire) != seen) {
+			return true;
+		}
+		cpu_relax();
+		if ((i & 7u) == 7u && now_ns() - start > SPIN_NS) {
+			return false;
+		}
+	}
+}
+
+/* Polls until no worker share is pending or SPIN_NS pass. */
+static bool spin_pending(void)
+{
+	int64_t start = now_ns();
+	for (uint32_t i = 0;; i++) {
+		if (atomic_load_explicit(&pool.pending, memory_order_acquire) ==
+		    0) {
+			return true;
+		}
+		cpu_relax();
+		if ((i & 7u) == 7u && now_ns() - start > SPIN_NS) {
+			return false;
+		}
+	}
+}
+
 /* The worker's index travels in the pointer argument: nothing to free. */
 static void *worker_main(void *arg)
 {
 	uint32_t index = (uint32_t)(uintptr_t)arg;
 	uint64_t seen;
+	bool took_part = false;
 	pthread_mutex_lock(&pool.lock);
 	/* A worker starts during the run that needed it: it takes part. */
-	seen = pool.generation - 1;
+	seen = atomic_load(&pool.generation) - 1;
 	for (;;) {
 		bc_pool_fn fn;
 		void *ctx;
-		while (pool.generation == seen) {
+		if (took_part) {
+			/* The next phase of the frame is likely near. */
+			pthread_mutex_unlock(&pool.lock);
+			spin_generation(seen);
+			pthread_mutex_lock(&pool.lock);
+		}
+		while (atomic_load(&pool.generation) == seen) {
 			pthread_cond_wait(&pool.wake, &pool.lock);
 		}
-		seen = pool.generation;
-		if (index >= pool.n) {
+		seen = atomic_load(&pool.generation);
+		took_part = index < pool.n;
+		if (!took_part) {
 			continue;
 		}
 		fn = pool.fn;
 		ctx = pool.ctx;
 		pthread_mutex_unlock(&pool.lock);
 		fn(ctx, index);
-		pthread_mutex_lock(&pool.lock);
-		if (--pool.pending == 0) {
+		if (atomic_fetch_sub(&pool.pending, 1u) == 1u) {
+			/* The last share: wake the caller if it sleeps. */
+			pthread_mutex_lock(&pool.lock);
 			pthread_cond_signal(&pool.done);
+		} else {
+			pthread_mutex_lock(&pool.lock);
 		}
 	}
 	return NULL;
@@ -120,8 +198,8 @@ void bc_pool_run(uint32_t n, bc_pool_fn fn, void *ctx)
 	pool.fn = fn;
 	pool.ctx = ctx;
 	pool.n = shares;
-	pool.pending = shares - 1;
-	pool.generation++;
+	atomic_store(&pool.pending, shares - 1);
+	atomic_fetch_add_explicit(&pool.generation, 1u, memory_order_release);
 	pthread_cond_broadcast(&pool.wake);
 	pthread_mutex_unlock(&pool.lock);
 	fn(ctx, 0);
@@ -129,8 +207,9 @@ void bc_pool_run(uint32_t n, bc_pool_fn fn, void *ctx)
 	for (uint32_t i = shares; i < n; i++) {
 		fn(ctx, i);
 	}
+	spin_pending();
 	pthread_mutex_lock(&pool.lock);
-	while (pool.pending > 0) {
+	while (atomic_load(&pool.pending) > 0) {
 		pthread_cond_wait(&pool.done, &pool.lock);
 	}
 	pool.fn = NULL;

@@ -33,21 +33,28 @@ static void dirs_scalar(const struct bc_view_rays *vr, uint32_t x0, uint32_t y0,
 	}
 }
 
-static void sphere_scalar(const struct bc__ab_rays *rays, uint64_t lanes,
-                          const float v[3], float r, float t[2])
+/* The scalar clipping of the rays in `lanes`, folded into t: against the
+ * sphere (v relative to the eye, r) when abv is NULL, else against abv
+ * from the eye at v. */
+static void clip_scalar(const struct bc__ab_rays *rays, uint64_t lanes,
+                        const struct bc_abv *abv, const float v[3], float r,
+                        float t[2])
 {
 	float t0 = t[0], t1 = t[1];
 	for (uint32_t i = 0; i < 4 * BC__AB_QUARTER_RAYS; i++) {
 		uint32_t q = i / BC__AB_QUARTER_RAYS,
 		         l = i % BC__AB_QUARTER_RAYS;
 		float d[3], a, e;
+		bool hit;
 		if (!((lanes >> i) & 1u)) {
 			continue;
 		}
 		d[0] = rays->d[q][0][l];
 		d[1] = rays->d[q][1][l];
 		d[2] = rays->d[q][2][l];
-		if (bc__ab_ray_sphere(v, r, d, &a, &e) && e > 0.0f) {
+		hit = abv ? bc_abv_ray(abv, v, d, &a, &e)
+		          : bc__ab_ray_sphere(v, r, d, &a, &e);
+		if (hit && e > 0.0f) {
 			a = a > 0.0f ? a : 0.0f;
 			t0 = a < t0 ? a : t0;
 			t1 = e > t1 ? e : t1;
@@ -57,14 +64,28 @@ static void sphere_scalar(const struct bc__ab_rays *rays, uint64_t lanes,
 	t[1] = t1;
 }
 
+static void sphere_scalar(const struct bc__ab_rays *rays, uint64_t lanes,
+                          const float v[3], float r, float t[2])
+{
+	clip_scalar(rays, lanes, NULL, v, r, t);
+}
+
+void bc__ab_abv_scalar(const struct bc__ab_rays *rays, uint64_t lanes,
+                       const struct bc_abv *abv, const float eye[3], float t[2])
+{
+	clip_scalar(rays, lanes, abv, eye, 0.0f, t);
+}
+
 struct bc__ab_kernel bc__ab_kernel_for(enum bc_simd simd)
 {
-	struct bc__ab_kernel k = {dirs_scalar, sphere_scalar};
+	struct bc__ab_kernel k = {dirs_scalar, sphere_scalar,
+	                          bc__ab_abv_scalar};
 #if defined(BLOBCAST_SIMD_X86)
 	switch (bc__pk_kernel_for(simd).lanes) {
 	case 16:
 		k.dirs = bc__ab_dirs_avx512;
 		k.sphere = bc__ab_sphere_avx512;
+		k.abv = bc__ab_abv_avx512;
 		break;
 	case 8:
 		k.dirs = bc__ab_dirs_avx2;

@@ -41,9 +41,26 @@ typedef void (*bc__ab_dirs_fn)(const struct bc_view_rays *vr, uint32_t x0,
 typedef void (*bc__ab_sphere_fn)(const struct bc__ab_rays *rays, uint64_t lanes,
                                  const float v[3], float r, float t[2]);
 
+/* Clips the rays whose bit is set in `rays` against a box or capsule ABV
+ * with bc_abv_ray (from the eye), and folds every hit whose exit is ahead
+ * of the eye into t as AB_SPHERE does. The AVX-512 form does bc_abv_ray's
+ * double-precision operations in the same order, 8 rays at a time, and
+ * rounds the ends to float as it does (nextafterf outwards), so the
+ * fragments are the same bit for bit. */
+typedef void (*bc__ab_abv_fn)(const struct bc__ab_rays *rays, uint64_t lanes,
+                              const struct bc_abv *abv, const float eye[3],
+                              float t[2]);
+
+/* The scalar form of bc__ab_abv_fn (the vector one's reference, and its
+ * fallback for shapes other than boxes and capsules). */
+void bc__ab_abv_scalar(const struct bc__ab_rays *rays, uint64_t lanes,
+                       const struct bc_abv *abv, const float eye[3],
+                       float t[2]);
+
 struct bc__ab_kernel {
 	bc__ab_dirs_fn dirs;
 	bc__ab_sphere_fn sphere;
+	bc__ab_abv_fn abv;
 };
 
 /* The kernels for a simd choice on this CPU, as bc__pk_kernel_for picks
@@ -82,6 +99,9 @@ void bc__ab_dirs_avx512(const struct bc_view_rays *vr, uint32_t x0, uint32_t y0,
                         struct bc__ab_rays *out);
 void bc__ab_sphere_avx512(const struct bc__ab_rays *rays, uint64_t lanes,
                           const float v[3], float r, float t[2]);
+void bc__ab_abv_avx512(const struct bc__ab_rays *rays, uint64_t lanes,
+                       const struct bc_abv *abv, const float eye[3],
+                       float t[2]);
 #endif
 
 #endif

@@ -209,13 +209,14 @@ struct tiled_frame {
 	uint32_t nprims;
 	const struct bc_render_region *region;
 	uint32_t threads; /* the call's share of the renderer's threads */
-	atomic_uint next; /* work counter of the running phase */
-	atomic_uint tiles_done;
+	/* Work counter of the running phase, and tiles traced: each on a
+	 * cache line of its own, away from the fields every thread reads. */
+	_Alignas(64) atomic_uint next;
+	_Alignas(64) atomic_uint tiles_done;
 	struct bc__progress progress;
 	/* bc_clock_ms() past which no tile starts; 0: none. */
 	double deadline;
 	atomic_uint skipped; /* tiles left as background past the deadline */
-	atomic_uint tiles_asked, rays; /* tiles and pixels the region asks */
 };
 
 /* The cone of the pixel rays through pixel centres [x0, x1] x [y0, y1]
@@ -637,22 +638,7 @@ static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
 		if (p->wide.shape == BC_ABV_SPHERE) {
 			tf->kern.sphere(rays, lanes, p->v, p->wide.radius, t);
 		} else {
-			for (uint32_t j = 0; j < 64; j++) {
-				uint32_t q = j / BC__AB_QUARTER_RAYS;
-				uint32_t l = j % BC__AB_QUARTER_RAYS;
-				float d[3] = {rays->d[q][0][l],
-				              rays->d[q][1][l],
-				              rays->d[q][2][l]};
-				float a, e;
-				if (!((lanes >> j) & 1u) ||
-				    !bc_abv_ray(&p->wide, eye, d, &a, &e) ||
-				    !(e > 0.0f)) {
-					continue;
-				}
-				a = a > 0.0f ? a : 0.0f;
-				t[0] = a < t[0] ? a : t[0];
-				t[1] = e > t[1] ? e : t[1];
-			}
+			tf->kern.abv(rays, lanes, &p->wide, eye, t);
 		}
 		if (t[1] >= t[0]) {
 			out[n++] = (struct bc__frag){t[0], t[1], k};
@@ -661,21 +647,59 @@ static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
 	return n;
 }
 
+/* Tiles are handed out in runs of TILE_RUN neighbours in a row: a thread
+ * then writes whole cache lines of the frame's planes and of the per-tile
+ * arrays (an 8-pixel tile row is 32 bytes of colour, depth and ids), where
+ * single tiles taken in turn by two threads had them share every line
+ * between neighbours, and it takes the shared counter once per run
+ * instead of once per tile. Runs of 8 tiles are a 64-pixel strip; the
+ * last tiles of a phase go one at a time (next_tile). */
+#define TILE_RUN 8u
+
+/* The next tile of the running phase for this thread: *tile + 1 within
+ * its run while it lasts (*end), else the first of a new run. False when
+ * the region's tiles are all taken. */
+static inline bool next_tile(struct tiled_frame *tf, uint32_t *tile,
+                             uint32_t *end)
+{
+	uint32_t run;
+	if (*tile + 1 < *end) {
+		++*tile;
+		return true;
+	}
+	/* The last runs are single tiles, which evens out the threads'
+	 * ends. Racing loads of the counter only choose a run's length:
+	 * the add hands out each tile once whatever they choose. */
+	run = atomic_load_explicit(&tf->next, memory_order_relaxed) +
+	                  2u * TILE_RUN * tf->threads <
+	              tf->t1
+	          ? TILE_RUN
+	          : 1u;
+	*tile = atomic_fetch_add(&tf->next, run);
+	if (*tile >= tf->t1) {
+		return false;
+	}
+	*end = *tile + run < tf->t1 ? *tile + run : tf->t1;
+	return true;
+}
+
 /* Phase 2, per tile of the region not yet complete: its rays and cones
  * (once per view), its list. */
 static void phase_lists(void *arg, uint32_t thread)
 {
 	struct tiled_frame *tf = arg;
 	struct bc__tiled_bufs *b = tf->b;
+	uint32_t tile = 0, end = 0;
 	(void)thread;
 	for (;;) {
-		uint32_t tile = atomic_fetch_add(&tf->next, 1u);
-		uint32_t tx = tile % tf->tw, ty = tile / tf->tw;
+		uint32_t tx, ty;
 		struct bc__ab_rays rays;
 		uint64_t quarter[4];
-		if (tile >= tf->t1) {
+		if (!next_tile(tf, &tile, &end)) {
 			break;
 		}
+		tx = tile % tf->tw;
+		ty = tile / tf->tw;
 		if ((b->state[tile] & TILE_DONE) == TILE_DONE ||
 		    (tf->region->tiles && !tf->region->tiles[tile])) {
 			continue;
@@ -726,20 +750,22 @@ static void phase_trace(void *arg, uint32_t thread)
 	struct bc__tile_worker *wk = &tf->b->workers[thread];
 	const struct bc__frame_ctx *fc = tf->fc;
 	uint32_t w = fc->out->width, h = fc->out->height;
+	uint32_t tile = 0, end = 0;
 	for (;;) {
-		uint32_t tile = atomic_fetch_add(&tf->next, 1u);
-		uint32_t tx = tile % tf->tw, ty = tile / tf->tw;
+		uint32_t tx, ty;
 		struct bc__tile_job job;
 		uint64_t mask, cut;
-		if (tile >= tf->t1) {
+		if (!next_tile(tf, &tile, &end)) {
 			break;
 		}
+		tx = tile % tf->tw;
+		ty = tile / tf->tw;
 		mask = bc__region_mask(tf->region, tx, ty, w, h);
 		if (!mask) {
 			continue;
 		}
-		atomic_fetch_add(&tf->tiles_asked, 1u);
-		atomic_fetch_add(&tf->rays, bc__popcount64(mask));
+		wk->tiles_asked++;
+		wk->rays += bc__popcount64(mask);
 		if (tf->deadline > 0.0 && bc_clock_ms() > tf->deadline) {
 			skip_tile(tf, tx, ty, mask);
 			continue;
@@ -792,6 +818,8 @@ static int prepare_workers(struct bc__cpu *r, const struct bc_lin *lin,
 		struct bc__tile_worker *wk = &b->workers[i];
 		wk->evals = 0;
 		wk->short_rays = 0;
+		wk->tiles_asked = 0;
+		wk->rays = 0;
 		wk->overflows = 0;
 		wk->simd = r->base.opts.simd;
 		if (wk->cap < need) {
@@ -939,8 +967,6 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 	atomic_init(&tf.next, 0u);
 	atomic_init(&tf.tiles_done, 0u);
 	atomic_init(&tf.skipped, 0u);
-	atomic_init(&tf.tiles_asked, 0u);
-	atomic_init(&tf.rays, 0u);
 	tf.deadline =
 	    base->opts.budget_ms ? t_start + base->opts.budget_ms : 0.0;
 	if ((rc = keep_view(r, &tf, cam, ei))) {
@@ -986,9 +1012,9 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 		stats->ms_total = now - t_start;
 		stats->max_overlap = longest;
 		stats->incomplete = atomic_load(&tf.skipped) > 0;
-		stats->tiles = atomic_load(&tf.tiles_asked);
-		stats->rays = atomic_load(&tf.rays);
 		for (uint32_t i = 0; i < r->threads; i++) {
+			stats->tiles += b->workers[i].tiles_asked;
+			stats->rays += b->workers[i].rays;
 			stats->field_evals += b->workers[i].evals;
 			stats->short_rays += b->workers[i].short_rays;
 		}

@@ -25,7 +25,9 @@ struct bc__tile_worker {
 	float *act_t1; /* their exits */
 	uint32_t cap;  /* room in act and act_t1 */
 	uint64_t evals;
-	uint64_t short_rays; /* rays that ran out of the frame's bound */
+	uint64_t short_rays;  /* rays that ran out of the frame's bound */
+	uint32_t tiles_asked; /* tiles of the region this thread took */
+	uint64_t rays;        /* their pixels asked */
 	uint32_t overflows;
 	/* The renderer's opts.simd, set before each frame (0: AUTO). */
 	enum bc_simd simd;

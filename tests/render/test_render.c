@@ -10,12 +10,15 @@
  * frame.
  */
 #include <math.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "blobcast/alloc.h"
 #include "blobcast/render.h"
+#include "blobcast/render_common.h"
 #include "blobcast/render_cpu.h"
 #include "blobcast/scene.h"
 #include "blobcast/shade.h"
@@ -377,11 +380,15 @@ static void test_threads_do_not_change_pixels(void)
 	for (int be = BC_BACKEND_NAIVE; be <= BC_BACKEND_TILED; be++) {
 		struct bc_render_opts one = {.threads = 1},
 		                      three = {.threads = 3};
+		struct bc_render_stats sa, sb;
 		CHECK(bc_render_once((enum bc_backend)be, &one, t, &cam, &a,
-		                     NULL, &ei) == 0);
+		                     &sa, &ei) == 0);
 		CHECK(bc_render_once((enum bc_backend)be, &three, t, &cam, &b,
-		                     NULL, &ei) == 0);
+		                     &sb, &ei) == 0);
 		CHECK(frames_equal(&a, &b));
+		/* Each thread counts its own rays: the sums agree. */
+		CHECK(sa.rays == 77u * 45u && sb.rays == sa.rays);
+		CHECK(be == BC_BACKEND_NAIVE || sb.tiles == sa.tiles);
 	}
 	bc_frame_finish(&a);
 	bc_frame_finish(&b);
@@ -390,6 +397,38 @@ static void test_threads_do_not_change_pixels(void)
 
 /* One renderer, several frames and an edit in between: buffers kept from
  * the previous frame must not leak into the next. */
+struct pool_count {
+	atomic_uint ran[8];
+};
+
+static void count_share(void *ctx, uint32_t i)
+{
+	struct pool_count *c = ctx;
+	atomic_fetch_add(&c->ran[i], 1u);
+}
+
+/* Every share of every pool run runs once, and a run returns only when
+ * all are done: runs of 1 to 5 shares back to back (the workers poll
+ * between runs) and after pauses longer than they poll (they sleep). */
+static void test_pool_runs_every_share_once(void)
+{
+	for (uint32_t round = 0; round < 400; round++) {
+		uint32_t n = 1 + round % 5;
+		struct pool_count c;
+		for (uint32_t i = 0; i < 8; i++) {
+			atomic_init(&c.ran[i], 0u);
+		}
+		if (round % 40 == 39) {
+			struct timespec pause = {0, 2000000};
+			nanosleep(&pause, NULL);
+		}
+		bc_pool_run(n, count_share, &c);
+		for (uint32_t i = 0; i < 8; i++) {
+			CHECK(atomic_load(&c.ran[i]) == (i < n ? 1u : 0u));
+		}
+	}
+}
+
 static void test_renderer_reuse_follows_edits(void)
 {
 	struct bc_renderer *r = NULL;
@@ -653,6 +692,7 @@ static const struct bc_test tests[] = {
     {"depth_of_sphere_is_analytic", test_depth_of_sphere_is_analytic},
     {"centre_ray_points_at_target", test_centre_ray_points_at_target},
     {"threads_do_not_change_pixels", test_threads_do_not_change_pixels},
+    {"pool_runs_every_share_once", test_pool_runs_every_share_once},
     {"renderer_reuse_follows_edits", test_renderer_reuse_follows_edits},
     {"debug_modes", test_debug_modes},
     {"dispatcher_and_frames", test_dispatcher_and_frames},
