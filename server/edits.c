@@ -103,6 +103,9 @@ struct batch {
 	const struct bc_proto_edit_op *op;
 	uint32_t nops;
 	bool heavy; /* applied on the task */
+	/* Only NAME operations: nothing that is drawn changes (the render
+	 * copy, the views and the scene's order stay). */
+	bool names_only;
 	bool applied;
 	struct bc_author author;
 	struct bc_change how;
@@ -172,6 +175,9 @@ static void follow(struct bc_session *s, const struct batch *x)
 	struct bc_tree *copy;
 	uint32_t n = 0;
 	int rc;
+	if (x->names_only) {
+		return; /* names are not drawn: the copy needs none */
+	}
 	if (x->b.structural) {
 		rc = bc_work_ops(w, s->id, s->order, x->op, x->nops);
 	} else if ((st = bc_calloc(x->nops ? x->nops : 1, sizeof(*st)))) {
@@ -198,7 +204,8 @@ static void follow(struct bc_session *s, const struct batch *x)
 	}
 }
 
-/* EDIT_APPLIED to every member; each owes a frame. */
+/* EDIT_APPLIED to every member; each owes a frame, unless only names
+ * changed, which nothing draws. */
 static void broadcast(struct bc_session *s, const struct batch *x)
 {
 	struct bc_msg a = {.type = BC_MSG_EDIT_APPLIED, .flags = x->how.flags};
@@ -219,11 +226,13 @@ static void broadcast(struct bc_session *s, const struct batch *x)
 		    (uint32_t)strlen(x->how.target_author);
 	}
 	for (uint32_t i = 0; i < n; i++) {
-		list[i]->interacting_until = until;
-		if (x->b.structural) {
-			list[i]->shown.view = 0;
+		if (!x->names_only) {
+			list[i]->interacting_until = until;
+			if (x->b.structural) {
+				list[i]->shown.view = 0;
+			}
+			bc__owe_frame(list[i]);
 		}
-		bc__owe_frame(list[i]);
 		/* Last: a member whose client cannot be sent the edit leaves
 		 * here (bc__send closes it, PROTOCOL.md 4). */
 		bc__send(list[i], &a);
@@ -237,7 +246,9 @@ static void batch_commit(struct batch *x)
 	double ms = (double)(bc_clock_ns() - x->t0_ns) / 1e6;
 	s->tree = x->tree;
 	s->order++;
-	s->scene_order = s->order;
+	if (!x->names_only) {
+		s->scene_order = s->order;
+	}
 	s->last_edit_ms = bc__unix_ms();
 	s->edit_ms_avg =
 	    s->edit_ms_avg == 0.0 ? ms : 0.9 * s->edit_ms_avg + 0.1 * ms;
@@ -315,6 +326,7 @@ int bc__apply(struct bc_member *m, const struct bc_proto_edit_op *ops,
 	 * the loop reads the tree the task changes. */
 	x->heavy = bc_tree_node_count(s->tree) >= BC_SRV_HEAVY_NODES &&
 	           (structural || nops >= BC_SRV_HEAVY_SETS);
+	x->names_only = names_only;
 	x->s = s;
 	x->op = x->ops.ops;
 	x->nops = nops;

@@ -4,7 +4,8 @@
  * the change made only of NAMEs comes as the whole SCENE_STATE at its
  * order (without the names table) while a mixed change comes without its
  * NAME operations and with its subtrees' names left out; such changes are
- * taken once a second while such members are in the session (EBUSY);
+ * taken once a second while such members are in the session (EBUSY), and
+ * draw nothing (no frame follows them);
  * joiners get the table as their features allow; a rename undoes and
  * redoes as one step, shows in HISTORY, and survives SIGTERM and kill -9;
  * a NAME of no node and a names table naming no node are refused; HISTORY
@@ -86,6 +87,18 @@ static enum bc_msg_type next_change(struct conn *c)
 			return c->m.type;
 		}
 	}
+}
+
+/* 1 when a FRAME reaches c within ms, else 0. */
+static int next_frame_within(struct conn *c, int ms)
+{
+	int64_t end = t_now_ms() + ms;
+	while (t_now_ms() < end) {
+		if (conn_recv(c, 100) == 1 && c->m.type == BC_MSG_FRAME) {
+			return 1;
+		}
+	}
+	return 0;
 }
 
 /* Whether node's name in c's SCENE_STATE (in c->m) is name (NULL: none);
@@ -190,11 +203,18 @@ static void names_reach_members_as_their_features_allow(void)
 	CHECK(state_names(&late, 9, NULL));
 	conn_close(&late);
 
-	/* Without older members, NAME changes are not held back. */
+	/* Without older members, NAME changes are not held back; and they
+	 * draw nothing: no frame follows them. */
 	conn_close(&old);
 	t_sleep_ms(200);
+	conn_view(&a, 32, 24, BC_PROTO_ENC_RAW);
+	REQUIRE(conn_expect(&a, BC_MSG_FRAME, 10000) == 1);
+	while (conn_recv(&a, 1000) == 1) {
+		/* the view's refinements, if any */
+	}
 	CHECK(rename_node(&a, 2, "l") > 0);
 	CHECK(rename_node(&a, 2, "ll") > 0);
+	CHECK(next_frame_within(&a, 1000) == 0);
 	conn_close(&a);
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
