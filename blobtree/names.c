@@ -191,10 +191,3 @@ uint32_t *bc_tree_name_ids(const struct bc_tree *t, uint32_t *n)
 	qsort(ids, *n, sizeof(*ids), bc_cmp_u32);
 	return ids;
 }
-
-uint32_t bc_tree_last_id(const struct bc_tree *t)
-{
-	return t->last_added < t->npool && t->pool[t->last_added].live
-	           ? t->pool[t->last_added].id
-	           : 0;
-}

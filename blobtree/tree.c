@@ -570,7 +570,6 @@ static int add_node(struct bc_tree *t, uint32_t id, bool is_op,
 	t->pool[n].id = id ? id : fresh_id(t);
 	t->pool[n].is_op = is_op;
 	bc__map_put_nogrow(&t->ids, t->pool[n].id, n);
-	t->last_added = n;
 	if (t->nopen) {
 		link_child(t, t->open[t->nopen - 1], BC_NONE, n);
 	} else {

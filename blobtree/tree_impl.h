@@ -85,7 +85,6 @@ struct bc_tree {
 	struct bc_dirty dirty;
 
 	struct bc__names names;
-	uint32_t last_added; /* pool index of the builder's newest node */
 };
 
 /* names.c */

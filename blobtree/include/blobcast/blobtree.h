@@ -437,9 +437,6 @@ BC_API uint32_t bc_tree_name_count(const struct bc_tree *t);
  * caller bc_free's (*n set; NULL with *n 0 when none, or out of memory:
  * then *n is the count). */
 BC_API uint32_t *bc_tree_name_ids(const struct bc_tree *t, uint32_t *n);
-/* The id of the node the builder added last (0 before any): a decoder
- * names a node whose id the tree chose. */
-BC_API uint32_t bc_tree_last_id(const struct bc_tree *t);
 
 /* ---- Edits -------------------------------------------------------------- */
 
