@@ -599,6 +599,17 @@ static int dec_view(struct dec *d, struct bc_msg_view *v)
 	                &v->quality_still));
 	TRY(rd_u8_range(d, "downscale", 1, BC_PROTO_MAX_DOWNSCALE,
 	                &v->downscale));
+	/* still_encoding is optional: left out, the still is in encoding. */
+	v->still_encoding = BC_PROTO_ENC_INVALID;
+	if (bc_rd_left(&d->c) == 0) {
+		return 0;
+	}
+	TRY(rd_encoding(d, "still_encoding", &v->still_encoding));
+	if (v->still_encoding == BC_PROTO_ENC_H264) {
+		return fail(d, BC_EENUM,
+		            "still_encoding 4: an H.264 still is asked by "
+		            "leaving the byte out");
+	}
 	return 0;
 }
 
@@ -624,18 +635,30 @@ static int dec_frame(struct dec *d, struct bc_msg_frame *f)
 	TRY(rd_u64(d, "order", &f->order));
 	TRY(rd_u32(d, "camera_seq", &f->camera_seq));
 	TRY(rd_encoding(d, "encoding", &f->encoding));
-	if (snap && f->encoding == BC_PROTO_ENC_JPEG) {
-		return fail(d, BC_EENUM, "a snapshot cannot be JPEG");
+	if (snap && (f->encoding == BC_PROTO_ENC_JPEG ||
+	             f->encoding == BC_PROTO_ENC_H264)) {
+		return fail(d, BC_EENUM, "a snapshot cannot be %s",
+		            bc_proto_encoding_name(f->encoding));
 	}
+	/* H.264: one access unit of the whole view at every level. */
+	bool video = f->encoding == BC_PROTO_ENC_H264;
+	if ((d->m->flags & BC_PROTO_FLAG_KEY) && !video) {
+		return fail(d, BC_EPROTO_FLAGS,
+		            "KEY on a FRAME of encoding %u (only H.264 has "
+		            "key frames)",
+		            (unsigned)f->encoding);
+	}
+	whole = whole || video;
 	TRY(rd_u16_range(d, "width", 1, BC_PROTO_MAX_DIM, &f->width));
 	TRY(rd_u16_range(d, "height", 1, BC_PROTO_MAX_DIM, &f->height));
 	/* Level n: one ray per 2^n block, so exactly the blocks that cover
 	 * the view; level 0: at most the view (the view itself when full). */
-	uint16_t iw = bc_proto_level_dim(f->width, level);
-	uint16_t ih = bc_proto_level_dim(f->height, level);
-	TRY(rd_u16_range(d, "image_width", full || level > 0 ? iw : 1, iw,
+	uint16_t iw = video ? f->width : bc_proto_level_dim(f->width, level);
+	uint16_t ih = video ? f->height : bc_proto_level_dim(f->height, level);
+	bool fixed = full || level > 0 || video;
+	TRY(rd_u16_range(d, "image_width", fixed ? iw : 1, iw,
 	                 &f->image_width));
-	TRY(rd_u16_range(d, "image_height", full || level > 0 ? ih : 1, ih,
+	TRY(rd_u16_range(d, "image_height", fixed ? ih : 1, ih,
 	                 &f->image_height));
 	TRY(rd_u16(d, "rect_count", &f->nrects));
 	TRY(check_count(d, "rect_count", f->nrects, snap ? nwhole : 1u,
@@ -980,6 +1003,9 @@ static int dec_body(struct dec *d, struct bc_msg *m)
 		return dec_view(d, &m->view);
 	case BC_MSG_FRAME:
 		return dec_frame(d, &m->frame);
+	case BC_MSG_FRAME_ACK:
+		return rd_u32_range(d, "frame_no", 1, UINT32_MAX,
+		                    &m->frame_ack.frame_no);
 	case BC_MSG_PICK:
 		TRY(rd_u16(d, "x", &m->pick.x));
 		return rd_u16(d, "y", &m->pick.y);

@@ -297,9 +297,16 @@ static void w_body(struct bc__w *w, const struct bc_msg *m)
 		bc__put_u8(w, m->view.quality_interactive);
 		bc__put_u8(w, m->view.quality_still);
 		bc__put_u8(w, m->view.downscale);
+		if (m->view.still_encoding != BC_PROTO_ENC_INVALID) {
+			w_enum(w, "still_encoding", (int)m->view.still_encoding,
+			       BC_PROTO_ENC_H264);
+		}
 		break;
 	case BC_MSG_FRAME:
 		w_frame(w, &m->frame);
+		break;
+	case BC_MSG_FRAME_ACK:
+		bc__put_u32(w, m->frame_ack.frame_no);
 		break;
 	case BC_MSG_PICK:
 		bc__put_u16(w, m->pick.x);

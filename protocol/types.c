@@ -60,11 +60,12 @@ static const struct bc__type_info types[BC_MSG_COUNT] = {
                              BULK},
     [BC_MSG_CAMERA] = {"CAMERA", BC__FROM_CLIENT, BC_PROTO_FLAG_INTERACTING,
                        CAMERA_SIZE},
-    [BC_MSG_VIEW] = {"VIEW", BC__FROM_CLIENT, 0, 8},
+    [BC_MSG_VIEW] = {"VIEW", BC__FROM_CLIENT, 0, 9},
     [BC_MSG_FRAME] = {"FRAME", BC__FROM_SERVER,
                       BC_PROTO_FLAG_STILL | BC_PROTO_FLAG_SNAPSHOT |
                           BC_PROTO_FLAG_INCOMPLETE | BC_PROTO_FLAG_LEVEL_MASK |
-                          BC_PROTO_FLAG_DEPTH | BC_PROTO_FLAG_IDS,
+                          BC_PROTO_FLAG_DEPTH | BC_PROTO_FLAG_IDS |
+                          BC_PROTO_FLAG_KEY,
                       BULK},
     [BC_MSG_PICK] = {"PICK", BC__FROM_CLIENT, 0, 4},
     [BC_MSG_PICK_RESULT] = {"PICK_RESULT", BC__FROM_SERVER, 0, 24},
@@ -88,6 +89,7 @@ static const struct bc__type_info types[BC_MSG_COUNT] = {
                                    8u + 4u + 4u + CAMERA_SIZE},
     [BC_MSG_HISTORY_GET] = {"HISTORY_GET", BC__FROM_CLIENT, 0, 0},
     [BC_MSG_HISTORY] = {"HISTORY", BC__FROM_SERVER, 0, HISTORY_MAX},
+    [BC_MSG_FRAME_ACK] = {"FRAME_ACK", BC__FROM_CLIENT, 0, 4},
 };
 
 const struct bc__type_info *bc__type_info(unsigned type)
@@ -143,6 +145,8 @@ const char *bc_proto_encoding_name(enum bc_proto_encoding e)
 		return "png";
 	case BC_PROTO_ENC_RAW:
 		return "raw";
+	case BC_PROTO_ENC_H264:
+		return "h264";
 	default:
 		return "?";
 	}
@@ -175,6 +179,7 @@ int bc_proto_client_may_send(enum bc_proto_stage stage, enum bc_proto_role role,
 	case BC_MSG_CAMERA:
 	case BC_MSG_VIEW:
 	case BC_MSG_GET_STATS:
+	case BC_MSG_FRAME_ACK:
 	case BC_MSG_SESSION_DELETE:
 	case BC_MSG_SESSION_LIST:
 		return stage == BC_PROTO_STAGE_HELLO ? BC_ESTATE : 0;

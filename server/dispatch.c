@@ -200,7 +200,7 @@ static enum bc_dispatch_result hello(struct bc_dispatch *d, struct client *c,
 	/* Features: those announced that this server has (PROTOCOL.md 4);
 	 * an earlier client's HELLO has none, and its WELCOME no field. */
 	c->peer.announced = h->has_features;
-	c->peer.features = h->features & BC_PROTO_FEATURES_ALL;
+	c->peer.features = h->features & BC_SRV_FEATURES;
 	c->peer.knows_present =
 	    (c->peer.features & BC_PROTO_FEATURE_PRESENT) != 0;
 	w.welcome.has_features = h->has_features;

@@ -489,6 +489,12 @@ int bc_handle_view(struct bc_member *m, const struct bc_msg *msg)
 	if (over_max_dim(m, msg->seq, "view", v->width, v->height)) {
 		return 0;
 	}
+	if (v->encoding == BC_PROTO_ENC_H264) {
+		bc__send_error(m, msg->seq, BC_ENOTSUP,
+		               "this server has no H.264 encoder; ask for "
+		               "JPEG, PNG or raw");
+		return 0;
+	}
 	if (!(m->peer->encodings & (1u << (v->encoding - 1)))) {
 		bc__send_error(m, msg->seq, BC_EINVAL,
 		               "the view asks for an encoding the client's "

@@ -35,6 +35,10 @@
 /* Largest view width or height. 4096^2 RGBA is 64 MiB per rendered frame;
  * the protocol allows 8192 for future GPUs with more memory. */
 #define BC_SRV_MAX_DIM 4096u
+/* The features (PROTOCOL.md 4.1) this server grants when a client
+ * announces them: all of this text's but ACKS, whose FRAME_ACK it does not
+ * take yet. */
+#define BC_SRV_FEATURES (BC_PROTO_FEATURES_ALL & ~BC_PROTO_FEATURE_ACKS)
 
 /* Seconds a connection may take to complete its HELLO: a client that never
  * finishes one holds a slot only this long. */

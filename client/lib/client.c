@@ -905,7 +905,7 @@ static int hello(struct bc_client *c, const struct bc_client_opts *o,
 	m.hello.token.len = (uint32_t)strlen(token);
 	/* Everything of the protocol this library decodes. */
 	m.hello.has_features = true;
-	m.hello.features = BC_PROTO_FEATURES_ALL;
+	m.hello.features = BC_PROTO_FEATURES_READ;
 	if ((rc = send_or_say(c, &m, NULL, ei))) {
 		return rc;
 	}
@@ -963,7 +963,7 @@ int bc_client_connect(struct bc_client **out, const struct bc_client_opts *opts,
 	}
 	c->timeout_ms =
 	    o->timeout_ms == 0 ? BC_CLIENT_DEFAULT_TIMEOUT_MS : o->timeout_ms;
-	c->encodings = o->encodings ? o->encodings : BC_PROTO_ENCODINGS_ALL;
+	c->encodings = o->encodings ? o->encodings : BC_PROTO_ENCODINGS_IMAGES;
 	/* SCENE_STATE may be as large as any message, so the reader keeps the
 	 * protocol's limit; the server holds FRAMEs to max_frame_bytes. */
 	bc_proto_reader_init(&c->reader, &ro);

@@ -474,9 +474,9 @@ class App {
 			el.textContent = 'connected';
 			el.className = 'conn up';
 			this.conn.send(P.MSG.HELLO, { version_min: 1, version_max: 1,
-				encodings: P.ENCODINGS_ALL, max_frame_bytes: 0,
+				encodings: P.ENCODINGS_IMAGES, max_frame_bytes: 0,
 				client_name: this.cfg.name, token: this.cfg.token,
-				features: P.FEATURE.ALL });
+				features: P.FEATURE.ALL & ~P.FEATURE.ACKS });
 			return;
 		}
 		if (s === 'error') {

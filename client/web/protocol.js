@@ -46,6 +46,8 @@ export const LIMITS = Object.freeze({
 	MAX_RECTS: 4096,
 	MAX_DOWNSCALE: 8,
 	MAX_QUALITY: 100,
+	MAX_VIDEO_DIM: 4096,   /* an H.264 view's width and height */
+	MAX_VIDEO_MBS: 36864,  /* an H.264 view's 16x16 macroblocks, sides even */
 	MAX_EDIT_OPS: 1024,
 	MAX_SET_FIELDS: 14,
 	MAX_FIELD_VALUES: 4,
@@ -69,7 +71,7 @@ export const MSG = Object.freeze({
 	SESSION_DELETE: 23, UNDO: 24, REDO: 25, SESSION_LIST: 26, SESSIONS: 27,
 	PRESENT: 28, FOLLOW: 29, PRESENTER: 30, FOLLOW_CAMERA: 31,
 	SESSION_CAMERA: 32, SESSION_CAMERA_SET: 33, HISTORY_GET: 34,
-	HISTORY: 35,
+	HISTORY: 35, FRAME_ACK: 36,
 });
 
 /* Header flag bits; each is defined for some types only. */
@@ -84,6 +86,7 @@ export const FLAG = Object.freeze({
 	LEVEL_MASK: 0x0018,  /* FRAME: the refinement level, bits 3..4 */
 	DEPTH: 0x0020,       /* FRAME, with SNAPSHOT only: a depth plane */
 	IDS: 0x0040,         /* FRAME, with SNAPSHOT only: an id plane */
+	KEY: 0x0080,         /* FRAME of encoding 4 only: an IDR, a start */
 });
 
 /* SNAPSHOT's optional planes byte: the planes the answering FRAME carries
@@ -103,7 +106,11 @@ export const STATS_PARTS = Object.freeze({ LOAD: 0x01, RESET: 0x02, TLS: 0x04,
  * WELCOME says which it grants. */
 export const FEATURE = Object.freeze({ LEVELS: 0x01, UNDO: 0x02,
 	PRESENT: 0x04, KINDS: 0x08, TILES: 0x10, HISTORY: 0x20, NAMES: 0x40,
-	ALL: 0x7f });
+	ACKS: 0x80, ALL: 0xff });
+
+/* FRAMEs of the view a client granted ACKS may leave unacknowledged
+ * (PROTOCOL.md 7.27). */
+export const ACK_WINDOW = 2;
 
 /* UNDO and REDO's optional scope byte (PROTOCOL.md 7.20), only for a
  * client granted HISTORY: its own newest change, or the session's (the
@@ -163,9 +170,12 @@ export function frameScale(m) {
 }
 
 export const ROLE = Object.freeze({ EDITOR: 1, VIEWER: 2 });
-export const ENC = Object.freeze({ JPEG: 1, PNG: 2, RAW: 3 });
+export const ENC = Object.freeze({ JPEG: 1, PNG: 2, RAW: 3, H264: 4 });
 /* HELLO.encodings: bit (encoding - 1) set = the client decodes it. */
-export const ENCODINGS_ALL = 0x07;
+export const ENCODINGS_ALL = 0x0f;
+/* The image encodings (JPEG, PNG, raw), which every server takes in HELLO
+ * (a server of a text before H.264 refuses bit 3, PROTOCOL.md 7.1). */
+export const ENCODINGS_IMAGES = 0x07;
 export const EDIT = Object.freeze({ SET: 1, INSERT: 2, REMOVE: 3, REPLACE: 4,
 	NAME: 5 });
 export const FIELD = Object.freeze({
@@ -272,9 +282,9 @@ T(13, 'EDIT', FROM_CLIENT, FLAG.INTERACTING, BULK);
 T(14, 'EDIT_APPLIED', FROM_SERVER, FLAG.INTERACTING | FLAG.UNDO | FLAG.REDO,
 	BULK);
 T(15, 'CAMERA', FROM_CLIENT, FLAG.INTERACTING, CAMERA_SIZE);
-T(16, 'VIEW', FROM_CLIENT, 0, 8);
+T(16, 'VIEW', FROM_CLIENT, 0, 9);
 T(17, 'FRAME', FROM_SERVER, FLAG.STILL | FLAG.SNAPSHOT | FLAG.INCOMPLETE |
-	FLAG.LEVEL_MASK | FLAG.DEPTH | FLAG.IDS,
+	FLAG.LEVEL_MASK | FLAG.DEPTH | FLAG.IDS | FLAG.KEY,
   BULK);
 T(18, 'PICK', FROM_CLIENT, 0, 4);
 T(19, 'PICK_RESULT', FROM_SERVER, 0, 24);
@@ -297,6 +307,7 @@ T(33, 'SESSION_CAMERA_SET', FROM_SERVER, 0, 8 + 4 + 4 + CAMERA_SIZE);
 T(34, 'HISTORY_GET', FROM_CLIENT, 0, 0);
 T(35, 'HISTORY', FROM_SERVER, 0, 8 + 2 + L.MAX_HISTORY *
 	(8 + 8 + 8 + 1 + 1 + strMax(L.MAX_NAME) + strMax(L.MAX_HISTORY_TEXT)));
+T(36, 'FRAME_ACK', FROM_CLIENT, 0, 4);
 
 function typeInfo(type) {
 	return Number.isInteger(type) ? TYPES[type] ?? null : null;
@@ -522,7 +533,7 @@ class Dec {
 
 	encoding(what) {
 		const v = this.u8(what);
-		if (v === 0 || v > ENC.RAW) {
+		if (v === 0 || v > ENC.H264) {
 			this.fail('EENUM', `${what} = ${v} is not an encoding`);
 		}
 		return v;
@@ -686,20 +697,28 @@ function decFrame(d, flags, m) {
 	m.order = d.u64('order');
 	m.camera_seq = d.u32('camera_seq');
 	m.encoding = d.encoding('encoding');
-	if (snap && m.encoding === ENC.JPEG) {
-		d.fail('EENUM', 'a snapshot cannot be JPEG');
+	if (snap && (m.encoding === ENC.JPEG || m.encoding === ENC.H264)) {
+		d.fail('EENUM', 'a snapshot cannot be ' +
+			(m.encoding === ENC.JPEG ? 'JPEG' : 'H.264'));
+	}
+	/* H.264: one access unit of the whole view at every level. */
+	const video = m.encoding === ENC.H264;
+	if ((flags & FLAG.KEY) && !video) {
+		d.fail('EPROTO_FLAGS', `KEY on a FRAME of encoding ${m.encoding}`);
 	}
 	m.width = d.u16range('width', 1, L.MAX_DIM);
 	m.height = d.u16range('height', 1, L.MAX_DIM);
 	/* Level n: exactly the 2^n blocks that cover the view; level 0: at
-	 * most the view (the view itself when full). */
-	const iw = levelDim(m.width, level), ih = levelDim(m.height, level);
-	const exact = full || level > 0;
-	m.image_width = d.u16range('image_width', exact ? iw : 1, iw);
-	m.image_height = d.u16range('image_height', exact ? ih : 1, ih);
+	 * most the view (the view itself when full); H.264: the view. */
+	const iw = video ? m.width : levelDim(m.width, level);
+	const ih = video ? m.height : levelDim(m.height, level);
+	const fixed = full || level > 0 || video;
+	m.image_width = d.u16range('image_width', fixed ? iw : 1, iw);
+	m.image_height = d.u16range('image_height', fixed ? ih : 1, ih);
 	const nrects = d.u16('rect_count');
+	const one = whole || video;
 	d.count('rect_count', nrects, snap ? nwhole : 1,
-		whole ? nwhole : L.MAX_RECTS, RECT_MIN);
+		one ? nwhole : L.MAX_RECTS, RECT_MIN);
 	m.rects = [];
 	for (let i = 0; i < nrects; i++) {
 		const x = d.u16('rect.x');
@@ -707,12 +726,12 @@ function decFrame(d, flags, m) {
 		const w = d.u16('rect.w');
 		/* A snapshot's or a refinement's one rectangle is the
 		 * whole image. */
-		if (w < (whole ? m.image_width : 1) || x + w > m.image_width) {
+		if (w < (one ? m.image_width : 1) || x + w > m.image_width) {
 			d.fail('ERANGE', `rect ${i}: x ${x} + w ${w} is outside ` +
 				`1..${m.image_width}`);
 		}
 		const h = d.u16('rect.h');
-		if (h < (whole ? m.image_height : 1) || y + h > m.image_height) {
+		if (h < (one ? m.image_height : 1) || y + h > m.image_height) {
 			d.fail('ERANGE', `rect ${i}: y ${y} + h ${h} is outside ` +
 				`1..${m.image_height}`);
 		}
@@ -993,6 +1012,20 @@ function decBody(d, m) {
 			L.MAX_QUALITY);
 		m.quality_still = d.u8range('quality_still', 1, L.MAX_QUALITY);
 		m.downscale = d.u8range('downscale', 1, L.MAX_DOWNSCALE);
+		/* still_encoding is optional: left out, the still is in
+		 * encoding (a present 0 or 4 is EENUM). */
+		if (d.left()) {
+			m.still_encoding = d.encoding('still_encoding');
+			if (m.still_encoding === ENC.H264) {
+				d.fail('EENUM', 'still_encoding 4 (leave it out)');
+			}
+		}
+		break;
+	case MSG.FRAME_ACK:
+		m.frame_no = d.u32('frame_no');
+		if (m.frame_no === 0) {
+			d.fail('ERANGE', 'frame_no 0');
+		}
 		break;
 	case MSG.FRAME:
 		decFrame(d, m.flags, m);
@@ -1680,6 +1713,12 @@ function encBody(w, m) {
 		w.u8('quality_interactive', m.quality_interactive);
 		w.u8('quality_still', m.quality_still);
 		w.u8('downscale', m.downscale);
+		if (m.still_encoding) {
+			w.u8('still_encoding', m.still_encoding, 'EENUM');
+		}
+		break;
+	case MSG.FRAME_ACK:
+		w.u32('frame_no', m.frame_no);
 		break;
 	case MSG.FRAME:
 		w.u32('frame_no', m.frame_no);
@@ -1783,6 +1822,12 @@ export function encodeUndo({ redo = false, mine = false, session = false,
 /* HISTORY_GET as bytes (PROTOCOL.md 7.26; FEATURE.HISTORY granted). */
 export function encodeHistoryGet({ seq = 0 } = {}) {
 	return encode({ type: MSG.HISTORY_GET, seq });
+}
+
+/* FRAME_ACK as bytes (PROTOCOL.md 7.27; FEATURE.ACKS granted): every FRAME
+ * up to frame_no is shown. */
+export function encodeFrameAck({ seq = 0, frame_no }) {
+	return encode({ type: MSG.FRAME_ACK, seq, frame_no });
 }
 
 /* A decoded HISTORY message as rows for a history panel, newest first:

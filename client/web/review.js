@@ -76,7 +76,7 @@ export class Review {
 		const enc = $('encoding');
 		for (const o of enc.options) {
 			/* Only what the page announced in HELLO. */
-			o.disabled = !(P.ENCODINGS_ALL & (1 << (Number(o.value) - 1)));
+			o.disabled = !(P.ENCODINGS_IMAGES & (1 << (Number(o.value) - 1)));
 		}
 		enc.value = String(this.app.cfg.encoding);
 		$('quality').value = String(this.app.cfg.quality);

@@ -102,7 +102,7 @@ export class Channel {
 			ws.onopen = () => this.ask(P.MSG.HELLO, { version_min: 1,
 				version_max: 1, encodings: 0, max_frame_bytes: 0,
 				client_name: this.name, token: this.token,
-				features: P.FEATURE.ALL }, (m) => m.type ===
+				features: P.FEATURE.ALL & ~P.FEATURE.ACKS }, (m) => m.type ===
 				P.MSG.WELCOME).then(resolve, reject);
 			this.want = { accept: () => false, resolve, reject,
 				seq: -1, timer: setTimeout(() => this.settle(null,

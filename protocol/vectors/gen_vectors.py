@@ -29,7 +29,7 @@ TYPES = {
     "SESSION_DELETE": 23, "UNDO": 24, "REDO": 25, "SESSION_LIST": 26,
     "SESSIONS": 27, "PRESENT": 28, "FOLLOW": 29, "PRESENTER": 30,
     "FOLLOW_CAMERA": 31, "SESSION_CAMERA": 32, "SESSION_CAMERA_SET": 33,
-    "HISTORY_GET": 34, "HISTORY": 35,
+    "HISTORY_GET": 34, "HISTORY": 35, "FRAME_ACK": 36,
 }
 MAX_PAYLOAD = 64 * 1024 * 1024
 HELLO_MAX_PAYLOAD = 4096
@@ -46,6 +46,8 @@ STILL, SNAPSHOT, INCOMPLETE = 1, 2, 4
 # EDIT_APPLIED: UNDO and REDO (the payload ends with the target edit).
 UNDO, REDO = 2, 4
 DEPTH, IDS = 0x20, 0x40
+# FRAME of encoding 4 (H.264): the access unit is an IDR.
+KEY = 0x80
 # SNAPSHOT's planes byte.
 PLANE_DEPTH, PLANE_IDS = 1, 2
 LEVEL_SHIFT = 3
@@ -79,14 +81,14 @@ TYPE_MAX = {
     + MAX_MEMBERS * (4 + 1 + strmax(MAX_NAME)),
     "SCENE_LOAD": MAX_PAYLOAD, "SCENE_STATE": MAX_PAYLOAD,
     "EDIT": MAX_PAYLOAD, "EDIT_APPLIED": MAX_PAYLOAD,
-    "CAMERA": 40, "VIEW": 8, "FRAME": MAX_PAYLOAD, "PICK": 4,
+    "CAMERA": 40, "VIEW": 9, "FRAME": MAX_PAYLOAD, "PICK": 4,
     "PICK_RESULT": 24, "SNAPSHOT": 14, "GET_STATS": 1, "STATS": 64 + 44 + 9 + 32,
     "SESSION_DELETE": strmax(MAX_NAME), "UNDO": 1, "REDO": 1,
     "SESSION_LIST": 0,
     "SESSIONS": 2 + MAX_SESSIONS_LISTED * (strmax(MAX_NAME) + 2 + 4 + 8 + 8 + 1),
     "PRESENT": 1, "FOLLOW": 1, "PRESENTER": 5, "FOLLOW_CAMERA": 44,
     "SESSION_CAMERA": 40, "SESSION_CAMERA_SET": 56,
-    "HISTORY_GET": 0,
+    "HISTORY_GET": 0, "FRAME_ACK": 4,
     "HISTORY": 8 + 2 + MAX_HISTORY * (8 + 8 + 8 + 1 + 1 + strmax(MAX_NAME)
                                       + strmax(MAX_HISTORY_TEXT)),
 }
@@ -355,7 +357,12 @@ def w_session_camera_set(f):
 def w_view(f):
     return (u16(f["width"]) + u16(f["height"]) + u8(f["encoding"])
             + u8(f["quality_interactive"]) + u8(f["quality_still"])
-            + u8(f["downscale"]))
+            + u8(f["downscale"])
+            + (u8(f["still_encoding"]) if "still_encoding" in f else b""))
+
+
+def w_frame_ack(f):
+    return u32(f["frame_no"])
 
 
 def w_rects(rects):
@@ -437,7 +444,7 @@ WRITERS = {
     "SESSION_LEAVE": w_empty, "SESSION_INFO": w_session_info,
     "SCENE_LOAD": w_scene_load, "SCENE_STATE": w_scene_state,
     "EDIT": w_edit, "EDIT_APPLIED": w_edit_applied, "CAMERA": w_camera,
-    "VIEW": w_view, "FRAME": w_frame, "PICK": w_pick,
+    "VIEW": w_view, "FRAME": w_frame, "FRAME_ACK": w_frame_ack, "PICK": w_pick,
     "PICK_RESULT": w_pick_result, "SNAPSHOT": w_snapshot,
     "GET_STATS": w_get_stats, "STATS": w_stats,
     "SESSION_DELETE": w_session_delete, "UNDO": w_undo, "REDO": w_undo,
@@ -527,9 +534,9 @@ def pad64(s):
 
 def gen_hello():
     t = Table("HELLO")
-    base = dict(version_min=1, version_max=1, encodings=7,
+    base = dict(version_min=1, version_max=1, encodings=15,
                 max_frame_bytes=8 * 1024 * 1024, client_name="viewer",
-                token="s3cret", features=0x0f)
+                token="s3cret", features=0xff)
     p = t.ok("viewer, all encodings, every feature of this text", base,
              seq=1)
     old = dict(base)
@@ -539,6 +546,8 @@ def gen_hello():
          dict(base, features=0xffffffff), seq=2)
     t.ok("features 0: announced, none of them", dict(base, features=0),
          seq=3)
+    t.ok("H.264 and JPEG, acknowledging frames",
+         dict(base, encodings=0x09, features=0x80), seq=4)
     t.ok("no encodings, no name, no token, server's frame limit",
          dict(base, encodings=0, max_frame_bytes=0, client_name="",
               token=""), seq=1)
@@ -555,7 +564,9 @@ def gen_hello():
            + sstr(""), "ERANGE")
     t.badp("version_max below version_min", u16(2) + u16(1) + u8(7)
            + u32(0) + sstr("") + sstr(""), "ERANGE")
-    t.badp("reserved encoding bit", u16(1) + u16(1) + u8(8) + u32(0)
+    t.badp("reserved encoding bit 4", u16(1) + u16(1) + u8(16) + u32(0)
+           + sstr("") + sstr(""), "EPROTO_FLAGS")
+    t.badp("reserved encoding bit 7", u16(1) + u16(1) + u8(0x8f) + u32(0)
            + sstr("") + sstr(""), "EPROTO_FLAGS")
     t.badp("max_frame_bytes under 64 KiB", u16(1) + u16(1) + u8(7)
            + u32(65535) + sstr("") + sstr(""), "ERANGE")
@@ -612,7 +623,7 @@ def gen_welcome():
     t.badp("max_members 65", wl(max_members=65), "ERANGE")
     t.badp("max_edit_ops 0", wl(max_edit_ops=0), "ERANGE")
     t.ok("every feature of this text granted", dict(base, features=0x7f))
-    t.badp("a feature this text does not define", wl(features=0x80),
+    t.badp("a feature this text does not define", wl(features=0x100),
            "EPROTO_FLAGS")
     t.badp("features cut short (2 bytes)", w_welcome(old) + b"\x0f\x00",
            "EPROTO_TRUNCATED")
@@ -1113,14 +1124,37 @@ def gen_view():
     t.ok("smallest png", dict(base, width=1, height=1, encoding=2,
                               quality_interactive=1, quality_still=1,
                               downscale=1), seq=42)
-    t.common(p)
+    # Encoding 4 (H.264); odd sizes are the server's to pad (section 7.14).
+    t.ok("1080p H.264", dict(base, width=1920, height=1080, encoding=4,
+                             downscale=4), seq=43)
+    t.ok("odd-sized H.264 with a PNG still",
+         dict(base, width=1281, height=721, encoding=4, still_encoding=2),
+         seq=44)
+    t.ok("JPEG with a raw still", dict(base, still_encoding=3), seq=45)
+    long = t.ok("H.264 with a JPEG still",
+                dict(base, encoding=4, still_encoding=1), seq=46)
+    # still_encoding is an optional ninth byte, so Table.common's
+    # "one trailing byte" (a ninth byte of 0) is written out here.
+    t.badp("payload one byte short", p[:-1], "EPROTO_TRUNCATED")
+    t.badp("empty payload", b"", "EPROTO_TRUNCATED")
+    t.badp("still_encoding 0 (leave it out)", p + b"\x00", "EENUM")
+    t.badp("still_encoding 4 (leave it out)", p + b"\x04", "EENUM")
+    t.badp("still_encoding 5", p + b"\x05", "EENUM")
+    t.badp("ten bytes", long + b"\x00", "EPROTO_LENGTH")
+    t.bad("length = type maximum + 1", header("VIEW", 10), "EPROTO_LENGTH")
+    t.bad("length 2^31", header("VIEW", 2 ** 31), "EPROTO_LENGTH")
+    t.bad("length 2^32-1", header("VIEW", 2 ** 32 - 1), "EPROTO_LENGTH")
+    t.bad("stream ends inside the header", frame("VIEW", p)[:9],
+          "EPROTO_TRUNCATED")
+    t.bad("stream ends inside the payload", frame("VIEW", p)[:-1],
+          "EPROTO_TRUNCATED")
 
     def vw(**kw):
         return w_view(dict(base, **kw))
     t.badp("width 0", vw(width=0), "ERANGE")
     t.badp("height 8193", vw(height=8193), "ERANGE")
     t.badp("encoding 0", vw(encoding=0), "EENUM")
-    t.badp("encoding 4", vw(encoding=4), "EENUM")
+    t.badp("encoding 5", vw(encoding=5), "EENUM")
     t.badp("quality 0", vw(quality_interactive=0), "ERANGE")
     t.badp("quality 101", vw(quality_still=101), "ERANGE")
     t.badp("downscale 0", vw(downscale=0), "ERANGE")
@@ -1223,7 +1257,7 @@ def gen_frame():
         dict(x=0, y=0, w=4, h=4, data="00")] * 2)), "EPROTO_COUNT", flags=2)
     t.badp("snapshot rect not the whole image", w_frame(dict(snap, rects=[
         dict(x=0, y=0, w=4, h=3, data="00")])), "ERANGE", flags=2)
-    t.badp("undefined flag bit 7", p, "EPROTO_FLAGS", flags=0x80)
+    t.badp("undefined flag bit 8", p, "EPROTO_FLAGS", flags=0x100)
     t.badp("undefined flag bit 15", p, "EPROTO_FLAGS", flags=0x8000)
 
     # Refinement levels. A level above 0 is never STILL or SNAPSHOT, and
@@ -1336,6 +1370,39 @@ def gen_frame():
     t.badp("depth plane not the whole image", w_frame(dict(both, rects=[
         rect2("89504e47"), dict(x=0, y=0, w=1, h=1, data="0000c03f")])),
         "ERANGE", flags=SNAPSHOT | DEPTH)
+    # Encoding 4 (H.264): one access unit covering the image, the view's
+    # size at every level; KEY marks an IDR and belongs to encoding 4 only.
+    au = "00000001" "6764001eacd940" "00000001" "68ebe3cb" "00000165888480"
+    h264 = dict(frame_no=100, order="20", camera_seq=5, encoding=4,
+                width=1281, height=721, image_width=1281, image_height=721,
+                rects=[dict(x=0, y=0, w=1281, h=721, data=au)])
+    t.ok("H.264 IDR, odd size", h264, flags=KEY, seq=0)
+    t.ok("H.264 at level 2: still the view's size",
+         dict(h264, frame_no=101, rects=[dict(x=0, y=0, w=1281, h=721,
+                                               data="0000000141")]),
+         flags=level(2) | INCOMPLETE, seq=0)
+    t.ok("H.264 still", dict(h264, frame_no=102), flags=STILL | KEY, seq=0)
+
+    def hv(**kw):
+        return w_frame(dict(h264, **kw))
+    t.badp("H.264 at level 1 at the level's size",
+           hv(image_width=641, image_height=361,
+              rects=[dict(x=0, y=0, w=641, h=361, data=au)]),
+           "ERANGE", flags=level(1))
+    t.badp("H.264 image narrower than the view",
+           hv(image_width=1280, rects=[dict(x=0, y=0, w=1280, h=721,
+                                            data=au)]), "ERANGE")
+    t.badp("H.264 in two rects", hv(rects=[
+        dict(x=0, y=0, w=1281, h=360, data=au),
+        dict(x=0, y=360, w=1281, h=361, data=au)]), "EPROTO_COUNT")
+    t.badp("H.264 rect shorter than the image", hv(rects=[
+        dict(x=0, y=0, w=1281, h=720, data=au)]), "ERANGE")
+    t.badp("KEY on a JPEG frame", p, "EPROTO_FLAGS", flags=KEY)
+    t.badp("KEY on a PNG still", hv(encoding=2), "EPROTO_FLAGS",
+           flags=STILL | KEY)
+    t.badp("snapshot as H.264", w_frame(dict(snap, encoding=4, rects=[
+        dict(x=0, y=0, w=4, h=4, data=au)])), "EENUM", flags=SNAPSHOT)
+    t.badp("encoding 5", fr(encoding=5), "EENUM")
     t.bad("over the client's 64 KiB frame limit",
           header("FRAME", 65537), "EPROTO_LENGTH",
           reader={"side": "client", "max_payload": 65536})
@@ -1371,6 +1438,19 @@ def gen_pick_result():
     t.badp("a miss with a depth", u16(0) + u16(0) + u32(0) + f32(0) * 3
            + f32(2), "ERANGE")
     t.dump("pick_result.json")
+
+
+def gen_frame_ack():
+    t = Table("FRAME_ACK")
+    p = t.ok("frame 1", dict(frame_no=1), seq=70)
+    t.ok("the last frame number", dict(frame_no=2 ** 32 - 1), seq=71)
+    t.common(p)
+    t.badp("frame_no 0", u32(0), "ERANGE")
+    t.bad("sent by the wrong side", frame("FRAME_ACK", p), "EPROTO_TYPE",
+          reader={"side": "client"})
+    t.bad("refused by a server before HELLO", frame("FRAME_ACK", p),
+          "ESTATE", reader={"side": "server", "await_hello": True})
+    t.dump("frame_ack.json")
 
 
 def gen_snapshot():
@@ -1555,7 +1635,7 @@ def gen_framing():
     bad("version 255, header cut after it", MAGIC + u8(255),
         "EPROTO_VERSION")
     bad("type 0", header(0, 0), "EPROTO_TYPE")
-    bad("type 36", header(36, 0), "EPROTO_TYPE")
+    bad("type 37", header(37, 0), "EPROTO_TYPE")
     bad("type 255", header(255, 0), "EPROTO_TYPE")
     bad("unknown type is reported before the rest of the header",
         MAGIC + u8(1) + u8(99), "EPROTO_TYPE")
@@ -1849,6 +1929,7 @@ def main():
     gen_session_camera_set()
     gen_empty("HISTORY_GET", "client")
     gen_history()
+    gen_frame_ack()
     gen_framing()
     gen_scene()
     gen_earlier()

@@ -423,8 +423,9 @@ static void sample(enum bc_msg_type t, struct bc_msg *m)
 		    12, 3, 42, {{1, 2, 3}, {0, 0, 0}, {0, 1, 0}, 50.0f}};
 		break;
 	case BC_MSG_VIEW:
-		m->view = (struct bc_msg_view){640, 480, BC_PROTO_ENC_JPEG,
-		                               50,  90,  2};
+		m->view =
+		    (struct bc_msg_view){640, 480, BC_PROTO_ENC_JPEG,   50,
+		                         90,  2,   BC_PROTO_ENC_INVALID};
 		break;
 	case BC_MSG_FRAME:
 		m->frame = (struct bc_msg_frame){
@@ -432,6 +433,9 @@ static void sample(enum bc_msg_type t, struct bc_msg *m)
 		break;
 	case BC_MSG_PICK:
 		m->pick = (struct bc_msg_pick){10, 20};
+		break;
+	case BC_MSG_FRAME_ACK:
+		m->frame_ack.frame_no = 41;
 		break;
 	case BC_MSG_PICK_RESULT:
 		m->pick_result = (struct bc_msg_pick_result){

@@ -304,6 +304,11 @@ static void build(enum bc_msg_type type, const json_t *f, struct bc_msg *m)
 		    (uint8_t)jint(f, "quality_interactive");
 		m->view.quality_still = (uint8_t)jint(f, "quality_still");
 		m->view.downscale = (uint8_t)jint(f, "downscale");
+		m->view.still_encoding =
+		    (enum bc_proto_encoding)jint(f, "still_encoding");
+		break;
+	case BC_MSG_FRAME_ACK:
+		m->frame_ack.frame_no = (uint32_t)jint(f, "frame_no");
 		break;
 	case BC_MSG_FRAME: {
 		struct bc_msg_frame *fr = &m->frame;
@@ -614,6 +619,8 @@ static int msg_eq(const struct bc_msg *a, const struct bc_msg *b)
 		}
 		return 1;
 	}
+	case BC_MSG_FRAME_ACK:
+		return a->frame_ack.frame_no == b->frame_ack.frame_no;
 	case BC_MSG_PICK:
 		return a->pick.x == b->pick.x && a->pick.y == b->pick.y;
 	case BC_MSG_PICK_RESULT:

@@ -281,7 +281,7 @@ static inline int conn_hello_as(struct conn *c, const char *name, uint8_t mask,
 /* HELLO of a client of this text: every feature announced. */
 static inline int conn_hello_enc(struct conn *c, const char *name, uint8_t mask)
 {
-	return conn_hello_as(c, name, mask, true, BC_PROTO_FEATURES_ALL);
+	return conn_hello_as(c, name, mask, true, BC_PROTO_FEATURES_READ);
 }
 
 static inline int conn_hello(struct conn *c, const char *name)

@@ -47,7 +47,7 @@ static void member_as(struct conn *c, const struct daemon *d, const char *name,
 static void member(struct conn *c, const struct daemon *d, const char *name,
                    const char *s, enum bc_proto_role role, bool create)
 {
-	member_as(c, d, name, s, role, create, true, BC_PROTO_FEATURES_ALL);
+	member_as(c, d, name, s, role, create, true, BC_PROTO_FEATURES_READ);
 }
 
 static uint32_t send_toggle(struct conn *c, enum bc_msg_type t, uint8_t on)
@@ -428,7 +428,7 @@ static void refusals_and_old_clients(void)
 	 * of types 30, 31 and 33 either, even after sending FOLLOW (for an
 	 * earlier client, sending one would announce them). */
 	member_as(&np, &d, "np", "q", BC_PROTO_ROLE_VIEWER, false, true,
-	          BC_PROTO_FEATURES_ALL & ~BC_PROTO_FEATURE_PRESENT);
+	          BC_PROTO_FEATURES_READ & ~BC_PROTO_FEATURE_PRESENT);
 	seq = send_toggle(&np, BC_MSG_FOLLOW, 0);
 	CHECK_EQ_INT(await_answer(&np, seq, NULL), 0);
 	member(&a, &d, "alice", "q", BC_PROTO_ROLE_EDITOR, false);

@@ -130,7 +130,7 @@ static const char *const moon =
 static void names_reach_members_as_their_features_allow(void)
 {
 	const uint32_t without =
-	    BC_PROTO_FEATURES_ALL & ~BC_PROTO_FEATURE_NAMES;
+	    BC_PROTO_FEATURES_READ & ~BC_PROTO_FEATURE_NAMES;
 	struct daemon d;
 	struct conn a, old, late;
 	struct bc_proto_edit_op ops[2];
@@ -142,7 +142,7 @@ static void names_reach_members_as_their_features_allow(void)
 	char dir[64];
 	snprintf(dir, sizeof(dir), "%s/features", base_dir);
 	REQUIRE(daemon_start(&d, dir) == 0);
-	enter(&a, &d, "ann", BC_PROTO_FEATURES_ALL, "n", true);
+	enter(&a, &d, "ann", BC_PROTO_FEATURES_READ, "n", true);
 	conn_load_json(&a, scene_json);
 	CHECK(state_names(&a, 1, "base"));
 	/* A joiner without NAMES: the same tree, no names table. */
@@ -195,7 +195,7 @@ static void names_reach_members_as_their_features_allow(void)
 	bc_free(bytes);
 
 	/* Joiners: the table as their features allow. */
-	enter(&late, &d, "lee", BC_PROTO_FEATURES_ALL, "n", false);
+	enter(&late, &d, "lee", BC_PROTO_FEATURES_READ, "n", false);
 	CHECK(state_names(&late, 9, "moon"));
 	CHECK(state_names(&late, 3, "right"));
 	conn_close(&late);
@@ -229,7 +229,7 @@ static uint32_t send_undo(struct conn *c, bool redo)
 /* c's session's scene, asked for by joining again as name. */
 static void rejoin(struct conn *c, const struct daemon *d, const char *name)
 {
-	enter(c, d, name, BC_PROTO_FEATURES_ALL, "r", false);
+	enter(c, d, name, BC_PROTO_FEATURES_READ, "r", false);
 }
 
 /* Whether c's HISTORY has an entry whose text is what. */
@@ -259,7 +259,7 @@ static void a_rename_undoes_and_survives_restarts(void)
 	char dir[64];
 	snprintf(dir, sizeof(dir), "%s/restart", base_dir);
 	REQUIRE(daemon_start(&d, dir) == 0);
-	enter(&c, &d, "rae", BC_PROTO_FEATURES_ALL, "r", true);
+	enter(&c, &d, "rae", BC_PROTO_FEATURES_READ, "r", true);
 	conn_load_json(&c, scene_json);
 	REQUIRE(rename_node(&c, 2, "left") > 0);
 	CHECK(history_has(&c, "NAME node 2 \"left\""));
@@ -306,7 +306,7 @@ static void names_of_no_node_are_refused(void)
 	uint32_t seq;
 	snprintf(dir, sizeof(dir), "%s/refused", base_dir);
 	REQUIRE(daemon_start(&d, dir) == 0);
-	enter(&c, &d, "ray", BC_PROTO_FEATURES_ALL, "x", true);
+	enter(&c, &d, "ray", BC_PROTO_FEATURES_READ, "x", true);
 	CHECK(rename_node(&c, 4000000, "ghost") == 0);
 	CHECK_EQ_INT(c.m.error.code, -BC_ENONODE);
 	CHECK(!(c.m.flags & BC_PROTO_FLAG_FATAL));

@@ -269,7 +269,7 @@ static void tile_form_rules(void)
 	/* A client of this text without TILES. */
 	REQUIRE(conn_open(&c, &d) == 0);
 	REQUIRE(conn_hello_as(&c, "no-tiles", BC_PROTO_ENCODINGS_ALL, true,
-	                      BC_PROTO_FEATURES_ALL &
+	                      BC_PROTO_FEATURES_READ &
 	                          ~BC_PROTO_FEATURE_TILES) == 0);
 	REQUIRE(conn_join(&c, "default", BC_PROTO_ROLE_VIEWER, false) == 0);
 	REQUIRE(conn_view(&c, 64, 64, BC_PROTO_ENC_JPEG) != 0);

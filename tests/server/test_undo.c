@@ -93,7 +93,7 @@ static void join(struct editor *e, const struct daemon *d, const char *name,
 	/* Without HISTORY: UNDO takes the session's newest change, whoever
 	 * made it (PROTOCOL.md 7.20); test_undo_mine covers the rest. */
 	REQUIRE(conn_hello_as(&e->c, name, BC_PROTO_ENCODINGS_ALL, true,
-	                      BC_PROTO_FEATURES_ALL &
+	                      BC_PROTO_FEATURES_READ &
 	                          ~BC_PROTO_FEATURE_HISTORY) == 0);
 	REQUIRE(conn_join(&e->c, "u", BC_PROTO_ROLE_EDITOR, create) == 0);
 	e->member = e->c.m.session_info.member_id;

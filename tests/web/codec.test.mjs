@@ -173,7 +173,7 @@ test('vectors: no unknown files, every type covered', () => {
 		assert.ok(known.has(f), `unknown vector file ${f}`);
 	}
 	assert.equal(files.length, typeNames.length + 2);
-	assert.equal(typeNames.length, 35);
+	assert.equal(typeNames.length, 36);
 });
 
 /* ---- Properties the page relies on -------------------------------------- */
@@ -297,7 +297,7 @@ test('encoder refuses what the decoder refuses', () => {
 		[{ ...cam, fov_y_deg: 180 }, 'ERANGE'],
 		[{ ...cam, eye: [0, 5] }, 'EPROTO_COUNT'],
 		[{ ...cam, flags: 2 }, 'EPROTO_FLAGS'],
-		[{ ...cam, type: 36 }, 'EPROTO_TYPE'],
+		[{ ...cam, type: 37 }, 'EPROTO_TYPE'],
 		[{ ...cam, type: 0 }, 'EPROTO_TYPE'],
 		[{ ...cam, seq: -1 }, 'ERANGE'],
 		[{ type: P.MSG.SESSION_JOIN, role: 3, name: 'x' }, 'EENUM'],
@@ -422,7 +422,8 @@ test('error names and numbers match error.h', () => {
 	assert.equal(P.errText(31), 'string not valid UTF-8 or contains NUL');
 	assert.equal(new P.ProtoError('EDEPTH', 'x').errno, 21);
 	assert.equal(P.typeName(17), 'FRAME');
-	assert.equal(P.typeName(36), null);
+	assert.equal(P.typeName(36), 'FRAME_ACK');
+	assert.equal(P.typeName(37), null);
 });
 
 test('utf8Check: the strict rules of the C codec', () => {
@@ -571,13 +572,13 @@ const entry = (id, name) => { const b = typeof name === 'string'
 
 test('FEATURE.NAMES: bit 6, in ALL, and the page announces it', () => {
 	assert.equal(P.FEATURE.NAMES, 0x40);
-	assert.equal(P.FEATURE.ALL, 0x7f);
+	assert.equal(P.FEATURE.ALL, 0xff);
 	assert.equal(P.EDIT.NAME, 5);
 	assert.deepEqual(P.SCENE_FLAG, { CAMERA: 1, NAMES: 2, ALL: 3 });
 	const src = readFileSync(join(HERE, '..', '..', 'client', 'web',
 		'app.js'), 'utf8');
 	assert.match(src, /features: P\.FEATURE\.ALL/);
-	/* A WELCOME granting NAMES decodes; bit 7 is still undefined. */
+	/* A WELCOME granting NAMES decodes; bit 8 is still undefined. */
 	const welcome = { type: P.MSG.WELCOME, version: 1, connection_id: 1,
 		max_payload: 1 << 20, max_frame_bytes: 1 << 20, max_nodes: 100,
 		max_dim: 4096, max_members: 8, max_edit_ops: 100, server_id: 'x',
@@ -585,7 +586,7 @@ test('FEATURE.NAMES: bit 6, in ALL, and the page announces it', () => {
 	const r = new P.Reader({ side: 'client' });
 	r.feed(P.encode(welcome));
 	assert.equal(r.next().features, 0x60);
-	assert.throws(() => P.encode({ ...welcome, features: 0x80 }),
+	assert.throws(() => P.encode({ ...welcome, features: 0x100 }),
 		(e) => e.code === 'EPROTO_FLAGS');
 });
 
@@ -818,4 +819,48 @@ test('totals', () => {
 	assert.equal(totals.invalid, invalid);
 	console.log(`# ${totals.valid} valid and ${totals.invalid} invalid ` +
 		'message vectors');
+});
+
+test('encoding 4 and FRAME_ACK: H.264 frames, the still encoding, acks', () => {
+	assert.equal(P.ENC.H264, 4);
+	assert.equal(P.ENCODINGS_ALL, 0x0f);
+	assert.equal(P.ENCODINGS_IMAGES, 0x07);
+	assert.equal(P.FLAG.KEY, 0x80);
+	assert.equal(P.FEATURE.ACKS, 0x80);
+	assert.equal(P.ACK_WINDOW, 2);
+	/* VIEW: the ninth byte only when a still encoding is asked. */
+	const view = { type: P.MSG.VIEW, seq: 4, width: 1281, height: 721,
+		encoding: 4, quality_interactive: 60, quality_still: 90,
+		downscale: 4 };
+	assert.equal(P.encode(view).length, 16 + 8);
+	const v9 = P.encode({ ...view, still_encoding: 2 });
+	assert.equal(v9.length, 16 + 9);
+	const r = new P.Reader({ side: 'server' });
+	r.feed(v9);
+	assert.equal(r.next().still_encoding, 2);
+	assert.throws(() => P.encode({ ...view, still_encoding: 4 }),
+		(e) => e.code === 'EENUM');
+	/* FRAME_ACK round trip; frame 0 is refused. */
+	const ack = P.encodeFrameAck({ seq: 9, frame_no: 77 });
+	const ra = new P.Reader({ side: 'server' });
+	ra.feed(ack);
+	const m = ra.next();
+	assert.equal(m.type, P.MSG.FRAME_ACK);
+	assert.equal(m.frame_no, 77);
+	assert.throws(() => P.encodeFrameAck({ frame_no: 0 }),
+		(e) => e.code === 'ERANGE');
+	/* A FRAME of encoding 4 is one rectangle of the view's size at
+	 * every level; KEY belongs to it alone. */
+	const fr = { type: P.MSG.FRAME, seq: 0, flags: P.FLAG.KEY,
+		frame_no: 3, order: 1n, camera_seq: 0, encoding: 4, width: 5,
+		height: 3, image_width: 5, image_height: 3,
+		rects: [{ x: 0, y: 0, w: 5, h: 3,
+			data: new Uint8Array([0, 0, 1, 0x65]) }] };
+	const rc = new P.Reader({ side: 'client' });
+	rc.feed(P.encode(fr));
+	assert.equal(rc.next().encoding, 4);
+	assert.throws(() => P.encode({ ...fr, encoding: 1 }),
+		(e) => e.code === 'EPROTO_FLAGS');
+	assert.throws(() => P.encode({ ...fr, flags: 0, image_width: 3 }),
+		(e) => e.code === 'ERANGE');
 });

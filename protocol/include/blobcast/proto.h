@@ -79,6 +79,7 @@ enum bc_msg_type {
 	BC_MSG_SESSION_CAMERA_SET = 33, /* server -> client */
 	BC_MSG_HISTORY_GET = 34,        /* client -> server */
 	BC_MSG_HISTORY = 35,            /* server -> client */
+	BC_MSG_FRAME_ACK = 36,          /* client -> server (feature ACKS) */
 	BC_MSG_COUNT
 };
 
@@ -125,6 +126,10 @@ enum bc_msg_type {
  * little-endian u32 (node id of the primitive seen, 0 on a miss). Asked by
  * SNAPSHOT's BC_PROTO_PLANE_IDS. */
 #define BC_PROTO_FLAG_IDS 0x0040u
+/* FRAME of encoding 4 (H.264) only (else BC_EPROTO_FLAGS, at the encoding
+ * field): the access unit is an IDR with its SPS and PPS in band, where a
+ * decoder may start (PROTOCOL.md 7.15, "Encoding 4"). */
+#define BC_PROTO_FLAG_KEY 0x0080u
 
 /* SNAPSHOT's optional planes byte: the planes the answer carries besides
  * colour. Other bits: BC_EPROTO_FLAGS. Colour only leaves the byte out (a
@@ -162,7 +167,16 @@ enum bc_msg_type {
 /* Node names: scenes' names table (scene flag bit 1) and NAME operations
  * (PROTOCOL.md 4.1, 8, 9). */
 #define BC_PROTO_FEATURE_NAMES 0x40u
-#define BC_PROTO_FEATURES_ALL 0x7fu
+/* A request form: granted, the client sends FRAME_ACK and the server keeps
+ * at most BC_PROTO_ACK_WINDOW of its view's FRAMEs unacknowledged
+ * (PROTOCOL.md 7.27). */
+#define BC_PROTO_FEATURE_ACKS 0x80u
+#define BC_PROTO_FEATURES_ALL 0xffu
+/* What a client that only reads may announce: every feature but ACKS,
+ * which also binds the client to send FRAME_ACK for each FRAME. */
+#define BC_PROTO_FEATURES_READ (BC_PROTO_FEATURES_ALL & ~BC_PROTO_FEATURE_ACKS)
+/* FRAMEs of the view a client granted ACKS may have unacknowledged. */
+#define BC_PROTO_ACK_WINDOW 2u
 /* The features that decide what a server may send. */
 #define BC_PROTO_FEATURES_SENT                                                 \
 	(BC_PROTO_FEATURE_LEVELS | BC_PROTO_FEATURE_UNDO |                     \
@@ -222,11 +236,17 @@ enum bc_proto_encoding {
 	BC_PROTO_ENC_JPEG = 1,
 	BC_PROTO_ENC_PNG = 2,
 	BC_PROTO_ENC_RAW = 3, /* RGBA8, rows top to bottom, no padding */
+	/* One H.264 access unit (Annex B) of the whole view, a chain of
+	 * frames since the last KEY (PROTOCOL.md 7.15, "Encoding 4"). */
+	BC_PROTO_ENC_H264 = 4,
 	BC_PROTO_ENC_COUNT
 };
 
 /* HELLO.encodings bits: bit (encoding - 1) set = the client decodes it. */
-#define BC_PROTO_ENCODINGS_ALL 0x07u
+#define BC_PROTO_ENCODINGS_ALL 0x0fu
+/* The image encodings (JPEG, PNG, raw): what every server takes in HELLO
+ * (a server of a text before H.264 refuses bit 3, PROTOCOL.md 7.1). */
+#define BC_PROTO_ENCODINGS_IMAGES 0x07u
 
 enum bc_proto_edit_kind {
 	BC_PROTO_EDIT_INVALID = 0,
@@ -441,6 +461,10 @@ struct bc_msg_view {
 	/* 1..BC_PROTO_MAX_DOWNSCALE: the coarsest block the client accepts;
 	 * frames have 2^level <= downscale. */
 	uint8_t downscale;
+	/* The still's encoding (1..3), or 0: the still is in encoding. An
+	 * optional ninth byte, left out when 0 (a present 0 is
+	 * BC_EENUM). */
+	enum bc_proto_encoding still_encoding;
 };
 
 struct bc_proto_rect {
@@ -464,6 +488,11 @@ struct bc_msg_frame {
 
 struct bc_msg_pick {
 	uint16_t x, y; /* pixel in VIEW coordinates */
+};
+
+/* FRAME_ACK: every FRAME numbered up to frame_no (>= 1) is handled. */
+struct bc_msg_frame_ack {
+	uint32_t frame_no;
 };
 
 struct bc_msg_pick_result {
@@ -611,6 +640,7 @@ struct bc_msg {
 		struct bc_msg_session_camera_set session_camera_set;
 		struct bc_msg_undo undo; /* UNDO and REDO */
 		struct bc_msg_history history;
+		struct bc_msg_frame_ack frame_ack;
 	};
 };
 

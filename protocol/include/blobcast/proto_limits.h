@@ -98,6 +98,13 @@
 
 /* JPEG quality, as TurboJPEG takes it (1 worst .. 100 best). */
 #define BC_PROTO_MAX_QUALITY 100u
+/* Largest width or height of an H.264 view (encoding 4): the widest
+ * picture NVENC codes in H.264 and browsers' decoders take. */
+#define BC_PROTO_MAX_VIDEO_DIM 4096u
+/* Largest H.264 view in 16 x 16 macroblocks, its sides rounded up to even
+ * numbers: MaxFS of levels 5.1 and 5.2 (4096 x 2304), the highest levels
+ * hardware decoders and WebCodecs reliably support. */
+#define BC_PROTO_MAX_VIDEO_MBS 36864u
 
 /* ---- Edits ----------------------------------------------------------------
  */

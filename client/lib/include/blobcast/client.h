@@ -106,10 +106,11 @@ BC_API int bc_client_addr_parse(const char *s, struct bc_client_addr *out,
 
 /* Zero means default for every field. */
 struct bc_client_opts {
-	const char *addr;         /* as bc_client_addr_parse() takes it */
-	const char *name;         /* HELLO client_name; NULL: "libblobcast" */
-	const char *token;        /* HELLO token; NULL: none */
-	uint8_t encodings;        /* HELLO bits (1 << (encoding - 1)); 0: all */
+	const char *addr;  /* as bc_client_addr_parse() takes it */
+	const char *name;  /* HELLO client_name; NULL: "libblobcast" */
+	const char *token; /* HELLO token; NULL: none */
+	uint8_t
+	    encodings; /* HELLO bits (1 << (encoding - 1)); 0: JPEG, PNG, raw */
 	uint32_t max_frame_bytes; /* 0: the server's limit */
 	/* Milliseconds for connecting, for completing one send, and for each
 	 * helper's wait; 0: BC_CLIENT_DEFAULT_TIMEOUT_MS, of which the TCP
@@ -137,8 +138,8 @@ struct bc_client_info {
 	uint16_t max_dim, max_members, max_edit_ops;
 	char server_id[BC_PROTO_MAX_NAME + 1];
 	/* Features the server granted of those announced (every one this
-	 * library knows, BC_PROTO_FEATURES_ALL; PROTOCOL.md 4). A server
-	 * that predates them grants none and sends no field. */
+	 * library knows but ACKS, BC_PROTO_FEATURES_READ; PROTOCOL.md 4). A
+	 * server that predates them grants none and sends no field. */
 	uint32_t features;
 	/* The session, once joined (zero before and after leaving). */
 	uint32_t session_id, member_id;
