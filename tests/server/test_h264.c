@@ -221,6 +221,49 @@ static void test_stream_decodes_to_the_snapshot(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
+/* Two members watching the same picture: one render, each its own
+ * stream, each decoding to the snapshot; a VIEW again restarts only the
+ * sender's stream. */
+static void test_two_members_two_streams(void)
+{
+	char dir[96];
+	struct daemon d;
+	struct conn a, b;
+	struct bc_video_decoder *da = NULL, *db = NULL;
+	struct bc_errinfo ei = {0};
+	double qa, qb;
+	snprintf(dir, sizeof(dir), "%s/two", base_dir);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	REQUIRE(bc_video_decoder_open(NULL, &da, &ei) == 0);
+	REQUIRE(bc_video_decoder_open(NULL, &db, &ei) == 0);
+	enter(&a, &d, BC_PROTO_ENCODINGS_ALL, BC_PROTO_FEATURES_READ);
+	enter(&b, &d, BC_PROTO_ENCODINGS_ALL, BC_PROTO_FEATURES_READ);
+	REQUIRE(view(&a, 96, 72, BC_PROTO_ENC_H264, 0, 2));
+	REQUIRE(view(&b, 96, 72, BC_PROTO_ENC_H264, 0, 2));
+	until_still(&a, da, 96, 72, true, &qa);
+	until_still(&b, db, 96, 72, true, &qb);
+	fprintf(stderr, "  two members' stills: %.1f and %.1f dB\n", qa, qb);
+	CHECK(qa >= 30.0 && qb >= 30.0);
+	/* An edit owes both the same picture: one render, two streams,
+	 * each a P frame on its own stream (no KEY needed). */
+	REQUIRE(conn_move(&a, 32, 1.2f, -0.38f, 0.2f, false));
+	until_still(&a, da, 96, 72, false, &qa);
+	until_still(&b, db, 96, 72, false, &qb);
+	CHECK(qa >= 30.0 && qb >= 30.0);
+	/* a starts again; its stream alone restarts, b's still decodes. */
+	REQUIRE(view(&a, 96, 72, BC_PROTO_ENC_H264, 0, 2));
+	until_still(&a, da, 96, 72, true, &qa);
+	CHECK(qa >= 30.0);
+	REQUIRE(camera(&b, 0.3f, false));
+	until_still(&b, db, 96, 72, false, &qb);
+	CHECK(qb >= 30.0);
+	conn_close(&a);
+	conn_close(&b);
+	bc_video_decoder_destroy(da);
+	bc_video_decoder_destroy(db);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
 /* A PNG still between H.264 frames: the stream goes on after it. */
 static void test_png_still_keeps_the_stream(void)
 {
@@ -407,6 +450,7 @@ static void test_acks_hold_two_frames(void)
 static const struct bc_test tests[] = {
     {"stream_decodes_to_the_snapshot", test_stream_decodes_to_the_snapshot},
     {"png_still_keeps_the_stream", test_png_still_keeps_the_stream},
+    {"two_members_two_streams", test_two_members_two_streams},
     {"views_h264_cannot_serve", test_views_h264_cannot_serve},
     {"encoder_failure_falls_back", test_encoder_failure_falls_back},
     {"acks_hold_two_frames", test_acks_hold_two_frames},
