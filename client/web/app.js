@@ -1946,6 +1946,7 @@ class App {
 			pending: !!(this.info && this.pendingSince()),
 			encoding: this.cfg.encoding,
 			stillEncoding: this.cfg.still,
+			encodings: this.encodings(),
 			videoOk: this.videoOk,
 			video: this.video.state(),
 			acks: this.acks ? this.acks.state() : null,

@@ -412,6 +412,9 @@ export class Review {
 			sessionCamera: () => this.sessionCamera(),
 			cameraSeq: () => this.app.cameraSeq,
 			tokenState: () => this.tokenState(),
+			/* Encodings the daemon refused (EINVAL, or ENOTSUP for
+			 * H.264). */
+			refusedEncodings: () => [...this.refused],
 			sessions: () => ({ status: this.sessions.status,
 				busy: this.sessions.busy,
 				names: this.sessions.entries?.map((e) => e.name) ?? null }),
