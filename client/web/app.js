@@ -8,9 +8,14 @@
  *  - Frames: each rectangle is decoded off the main thread by
  *    createImageBitmap (JPEG, PNG) or taken as ImageData (raw) and drawn in
  *    order onto a backing canvas of the VIEW size, scaled from the encoded
- *    image size (a refinement level n image by 2^n); frames queued behind
- *    a newer full frame are skipped. A "refining · level N" mark shows
- *    while the last frame drawn had a level above 0 or INCOMPLETE.
+ *    image size (a refinement level n image by 2^n); image frames queued
+ *    behind a newer full image frame are skipped. H.264 frames (encoding
+ *    4, where WebCodecs decodes it: video.js) go through a VideoDecoder
+ *    in order, none skipped, each picture drawn cropped to the view. A
+ *    "refining · level N" mark shows while the last frame drawn had a
+ *    level above 0 or INCOMPLETE.
+ *  - Acknowledgements: with ACKS granted, FRAME_ACK names the newest
+ *    frame below which every frame is drawn, dropped or taken (7.27).
  *  - Camera: orbit (drag), pan (right drag), zoom (wheel), sent as CAMERA
  *    with INTERACTING while the mouse moves and once more without it.
  *  - Picking and dragging: a press sends PICK; if it hits a primitive, the
