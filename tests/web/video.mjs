@@ -68,17 +68,11 @@ console.log('node: avcCodec and FrameAcks');
 
 /* ---- in the browser ---- */
 
-const daemon = H.findDaemon(process.argv);
-H.skipIfMissing('web video', H.missing({ daemon, browser: true }));
-const chromium = await H.playwright();
+const { daemon, chromium, step, watchdog, until } = await H.begin(
+	'web video', { ms: DEADLINE_MS });
 
 let browser = null;
 let failed = false;
-const step = H.stepper();
-const watchdog = H.watchdog(DEADLINE_MS);
-
-const until = (page, what, fn, arg, ms = 20000) =>
-	H.until(page, what, fn, arg, ms, 30);
 
 /* A page of the stack with query (after ws=), initScript run before the
  * page's own. */
