@@ -789,7 +789,8 @@ class App {
 				return;
 			}
 		}
-		if (m.code === P.ERR.ECODEC && m.seq === 0) {
+		if (m.code === P.ERR.ECODEC && m.seq === 0 &&
+			this.cfg.encoding === P.ENC.H264) {
 			/* The daemon's encoder failed: its frames come in the
 			 * still's encoding or JPEG now (7.15); so says the
 			 * control. */
