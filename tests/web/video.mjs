@@ -298,12 +298,18 @@ async function standInChecks(web) {
 	await page.close();
 }
 
-/* Turns page's camera twice: moving frames, then a still. */
+/* Pans page's camera with a right drag across its view: CAMERAs with
+ * INTERACTING (moving frames), then one without (a still follows). */
 async function move(page) {
-	for (const dx of [40, -25]) {
-		await page.evaluate((x) => window.blobcast.orbit(x, 10), dx);
-		await page.waitForTimeout(150);
+	const box = await page.locator('#view').boundingBox();
+	const x = box.x + box.width / 2, y = box.y + box.height / 2;
+	await page.mouse.move(x, y);
+	await page.mouse.down({ button: 'right' });
+	for (let i = 1; i <= 8; i++) {
+		await page.mouse.move(x + 6 * i, y + 3 * i);
+		await page.waitForTimeout(60);
 	}
+	await page.mouse.up({ button: 'right' });
 }
 
 try {
@@ -366,6 +372,7 @@ try {
 		step(`enc=h264: ${v.drawn} pictures from ${v.chunks} chunks ` +
 			`(${v.keys} key) by ${v.codec}; still ${fmt(r)}`);
 	} else {
+		await move(a);
 		await settled(a, P.ENC.JPEG);
 		const r = await compare(a);
 		assert.ok(!r.error, r.error);
@@ -391,11 +398,11 @@ try {
 	if (encoder) {
 		/* ---- enc=h264png: an exact still after H.264 motion ---- */
 		const b = await open(stack, 'name=exact&enc=h264png');
-		await until(b, 'H.264 frames', () => window.blobcast.state()
-			.video.drawn > 0);
 		await move(b);
 		const s = await settled(b, P.ENC.PNG);
 		assert.equal(s.stillEncoding, P.ENC.PNG);
+		assert.ok(s.video.drawn > 0 && s.video.errors === 0,
+			`H.264 frames while moving: ${JSON.stringify(s.video)}`);
 		const r = await compare(b);
 		assert.ok(!r.error, r.error);
 		assert.ok(r.max <= 2, `the PNG still against the raw snapshot: ` +
