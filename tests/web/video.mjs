@@ -9,7 +9,8 @@
  *    encoder: a delta before any KEY is not decoded, the page sends its
  *    VIEW again (for a KEY) and acknowledges the frame; then KEY and
  *    deltas are drawn (the picture's colour checked) and every frame is
- *    acknowledged, in order;
+ *    acknowledged, in order; a decoder that never gives a picture is
+ *    reset after 2 s, its frame acknowledged and a KEY asked for;
  *  - enc=h264: the page announces encoding 4 (WebCodecs decodes H.264
  *    here), its VideoDecoder draws the frames, key and delta, and the
  *    still on the canvas is within 30 dB PSNR of a raw SNAPSHOT of the
@@ -295,6 +296,20 @@ async function standInChecks(web) {
 	step(`stand-in: a delta before any KEY made the page send VIEW ` +
 		`again; ${s.video.drawn} pictures of ${v.width}x${v.height} by ` +
 		`${s.video.codec}, FRAME_ACKs ${st.acks.join(' ')}`);
+	/* A decoder that takes a chunk and never gives its picture: after
+	 * 2 s the page lets the frame go (acknowledged), resets the decoder
+	 * and asks for a KEY; it never stops waiting for nothing. */
+	await page.evaluate(() => {
+		VideoDecoder.prototype.decode = function () {};
+	});
+	st.send(frame(units[0]));
+	await wait('the stuck frame acknowledged', () => st.acks.at(-1) === no);
+	await wait('the VIEW sent again', () => st.views.length === 3);
+	s = await page.evaluate(() => window.blobcast.state());
+	assert.equal(s.video.stuck, 1, JSON.stringify(s.video));
+	assert.equal(s.acks.forced, 0, 'handled by the page, not let go');
+	step('stand-in: a decoder that gives no picture is reset after 2 s, ' +
+		'its frame acknowledged and a KEY asked for');
 	await page.close();
 }
 
