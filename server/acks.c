@@ -12,7 +12,7 @@
 #include "net_impl.h"
 
 void bc__acks_written(struct bc_acks *a, uint32_t no, size_t len,
-                      uint64_t now_ms)
+                      uint64_t now_us)
 {
 	if (a->n == BC_PROTO_ACK_WINDOW) {
 		/* Only a frame written past a full window (a SNAPSHOT's
@@ -22,7 +22,7 @@ void bc__acks_written(struct bc_acks *a, uint32_t no, size_t len,
 		        (a->n - 1u) * sizeof(a->out[0]));
 		a->n--;
 	}
-	a->out[a->n++] = (struct bc_ack_frame){no, len, now_ms};
+	a->out[a->n++] = (struct bc_ack_frame){no, len, now_us};
 }
 
 bool bc__acks_full(const struct bc_acks *a)
@@ -36,25 +36,25 @@ bool bc__acks_congested(const struct bc_acks *a)
 	                                         BC_SRV_ACK_QUEUE_SLACK_US;
 }
 
-/* One round trip of rtt_us for bytes acknowledged over span_ms. */
+/* One round trip of rtt_us for bytes acknowledged over span_us. */
 static void sample(struct bc_acks *a, uint64_t rtt_us, size_t bytes,
-                   uint64_t span_ms, bool waited)
+                   uint64_t span_us, bool waited)
 {
 	uint32_t r = rtt_us > UINT32_MAX ? UINT32_MAX : (uint32_t)rtt_us;
 	a->srtt_us = a->srtt_us ? a->srtt_us - a->srtt_us / 8u + r / 8u : r;
 	a->min_us = a->min_us && a->min_us < r ? a->min_us : (r ? r : 1u);
-	if (waited && span_ms > 0) {
-		uint64_t bps = (uint64_t)bytes * 1000u / span_ms;
+	if (waited && span_us > 0) {
+		uint64_t bps = (uint64_t)bytes * 1000000u / span_us;
 		a->bps = a->bps ? a->bps - a->bps / 4u + bps / 4u : bps;
 	}
 }
 
 int bc__acks_take(struct bc_acks *a, uint32_t no, uint32_t last,
-                  uint64_t now_ms, struct bc_errinfo *ei)
+                  uint64_t now_us, struct bc_errinfo *ei)
 {
 	uint32_t k = 0;
 	size_t bytes = 0;
-	uint64_t first_ms = 0;
+	uint64_t first_us = 0;
 	if (no > last) {
 		return bc_errinfo_set(ei, BC_ERANGE,
 		                      "FRAME_ACK for frame %u, which was never "
@@ -70,15 +70,15 @@ int bc__acks_take(struct bc_acks *a, uint32_t no, uint32_t last,
 	a->acked = no;
 	while (k < a->n && a->out[k].no <= no) {
 		bytes += a->out[k].len;
-		first_ms = k == 0 ? a->out[k].written_ms : first_ms;
+		first_us = k == 0 ? a->out[k].written_us : first_us;
 		k++;
 	}
 	if (k > 0) {
 		const struct bc_ack_frame *newest = &a->out[k - 1u];
 		/* The rate counts only when the window was full: frames
 		 * then waited for the path, not for the renderer. */
-		sample(a, (now_ms - newest->written_ms) * 1000u, bytes,
-		       now_ms - first_ms, a->n == BC_PROTO_ACK_WINDOW);
+		sample(a, now_us - newest->written_us, bytes, now_us - first_us,
+		       a->n == BC_PROTO_ACK_WINDOW);
 		memmove(&a->out[0], &a->out[k], (a->n - k) * sizeof(a->out[0]));
 		a->n -= k;
 	}

@@ -344,7 +344,7 @@ static void finish(struct bc_conn *c, struct write_req *w, int status)
 				    &c->acks,
 				    bc_get_le32(w->owned +
 				                BC_PROTO_HEADER_SIZE),
-				    w->len, now_ms(c->net));
+				    w->len, uv_hrtime() / 1000u);
 			}
 			if (!pace(c, w->len)) {
 				next_frame(c);
@@ -735,7 +735,7 @@ static int link_frame_ack(void *ud, struct bc_conn_ref from, uint32_t no,
 	if (!c || c->closing) {
 		return 0;
 	}
-	if ((rc = bc__acks_take(&c->acks, no, c->frame_no, now_ms(c->net),
+	if ((rc = bc__acks_take(&c->acks, no, c->frame_no, uv_hrtime() / 1000u,
 	                        ei))) {
 		return rc;
 	}

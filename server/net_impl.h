@@ -20,7 +20,7 @@ struct bc_acks {
 	struct bc_ack_frame {
 		uint32_t no;
 		size_t len;
-		uint64_t written_ms;
+		uint64_t written_us;
 	} out[BC_PROTO_ACK_WINDOW];
 	/* From write to acknowledgement, microseconds: smoothed (1/8) and
 	 * least; bytes per second acknowledged while frames waited. */
@@ -28,9 +28,10 @@ struct bc_acks {
 	uint64_t bps;
 };
 
-/* A view FRAME of len bytes, number no, has been written at now. */
+/* A view FRAME of len bytes, number no, has been written at now_us
+ * (microseconds, uv_hrtime's clock). */
 void bc__acks_written(struct bc_acks *a, uint32_t no, size_t len,
-                      uint64_t now_ms);
+                      uint64_t now_us);
 /* Whether the window is full: the next frame waits. */
 bool bc__acks_full(const struct bc_acks *a);
 /* Whether the acknowledgements come late against the least round trip
@@ -40,7 +41,7 @@ bool bc__acks_congested(const struct bc_acks *a);
  * or BC_ERANGE with a sentence in ei (a frame never sent, or not above
  * the previous acknowledgement): nothing changes then. */
 int bc__acks_take(struct bc_acks *a, uint32_t no, uint32_t last,
-                  uint64_t now_ms, struct bc_errinfo *ei);
+                  uint64_t now_us, struct bc_errinfo *ei);
 /* STATS's link figures as the acknowledgements measure them, over those of
  * TCP (PROTOCOL.md 7.18). */
 void bc__acks_info(const struct bc_acks *a, struct bc_proto_link *out);

@@ -433,6 +433,22 @@ static void test_acks_hold_two_frames(void)
 	/* The same number again: out of order. */
 	seq = ack(&c, acked);
 	expect_error(&c, seq, BC_ERANGE);
+	/* STATS's link section: on a Unix socket TCP measures nothing, the
+	 * acknowledgements do. */
+	{
+		struct bc_msg m = {.type = BC_MSG_GET_STATS};
+		m.get_stats.parts = BC_PROTO_STATS_LINK;
+		seq = conn_send(&c, &m);
+		while (conn_expect(&c, BC_MSG_STATS, 10000) == 1 &&
+		       c.m.seq != seq) {
+		}
+		CHECK(c.m.type == BC_MSG_STATS && c.m.stats.has_link);
+		CHECK(c.m.stats.link.rtt_us > 0 &&
+		      c.m.stats.link.min_rtt_us > 0 &&
+		      c.m.stats.link.min_rtt_us <= c.m.stats.link.rtt_us);
+		fprintf(stderr, "  round trip by acknowledgements: %u us\n",
+		        c.m.stats.link.rtt_us);
+	}
 	REQUIRE(camera(&c, 0.0f, false));
 	/* Without ACKS: ENOTSUP, and its frames are not held. */
 	enter(&plain, &d, BC_PROTO_ENCODINGS_ALL, BC_PROTO_FEATURES_READ);
