@@ -1,7 +1,8 @@
 /*
  * The client-side framebuffer: FRAME rectangles decoded in place (JPEG with
  * TurboJPEG, PNG with libpng, raw RGBA copied, H.264 access units through
- * the video module's libavcodec decoder) into one RGBA image, with a
+ * the video module's libavcodec decoder, in a module opened on first use:
+ * h264_module.h) into one RGBA image, with a
  * record of which pixels have arrived so that a viewer knows when the
  * picture is whole. Rectangle bytes come from the network: each one's
  * position is checked against the image and its decoded size against the
@@ -15,12 +16,22 @@
 
 #include "blobcast/alloc.h"
 #include "blobcast/bytes.h"
-#include "blobcast/video.h"
 #include "client_impl.h"
+#include "h264_module.h"
 
 void bc_client_image_init(struct bc_client_image *img)
 {
 	memset(img, 0, sizeof(*img));
+}
+
+/* Ends the H.264 chain: the next frame must be a KEY frame. */
+static void video_lost(struct bc_client_image *img)
+{
+	const struct bc_h264_ops *ops = NULL;
+	if (img->video && bc__client_h264(&ops, NULL) == 0) {
+		ops->destroy(img->video);
+	}
+	img->video = NULL;
 }
 
 void bc_client_image_finish(struct bc_client_image *img)
@@ -31,7 +42,7 @@ void bc_client_image_finish(struct bc_client_image *img)
 	if (img->tj) {
 		tjDestroy(img->tj);
 	}
-	bc_video_decoder_destroy(img->video);
+	video_lost(img);
 	bc_free(img->rgba);
 	bc_free(img->seen);
 	bc_free(img->depth);
@@ -321,13 +332,6 @@ static void take_header(struct bc_client_image *img, const struct bc_msg *m,
 	img->nrects = ncolour;
 }
 
-/* Ends the H.264 chain: the next frame must be a KEY frame. */
-static void video_lost(struct bc_client_image *img)
-{
-	bc_video_decoder_destroy(img->video);
-	img->video = NULL;
-}
-
 /* An H.264 frame (PROTOCOL.md 7.15, "Encoding 4"): one access unit in one
  * rectangle covering the image, which is the view's size. The access unit
  * is decoded before img changes, so a frame refused leaves the picture as
@@ -337,7 +341,7 @@ static int apply_h264(struct bc_client_image *img, const struct bc_msg *m,
 {
 	const struct bc_msg_frame *f = &m->frame;
 	const struct bc_proto_rect *r = &f->rects[0];
-	struct bc_video_decoder_opts o = {.pixfmt = BC_VIDEO_PIX_RGBA};
+	const struct bc_h264_ops *ops = NULL;
 	struct bc_errinfo why = {0};
 	const uint8_t *px;
 	size_t stride;
@@ -351,8 +355,8 @@ static int apply_h264(struct bc_client_image *img, const struct bc_msg *m,
 		                      f->frame_no, f->width, f->height);
 	}
 	if ((m->flags & BC_PROTO_FLAG_KEY) && !img->video &&
-	    (rc = bc_video_decoder_open(
-	         &o, (struct bc_video_decoder **)&img->video, ei))) {
+	    ((rc = bc__client_h264(&ops, ei)) ||
+	     (rc = ops->open(&img->video, ei)))) {
 		return rc;
 	}
 	if (!img->video) {
@@ -364,9 +368,11 @@ static int apply_h264(struct bc_client_image *img, const struct bc_msg *m,
 		    "send VIEW again to get a KEY frame",
 		    f->frame_no);
 	}
-	if ((rc = bc_video_decode(img->video, r->data.ptr, r->data.len,
-	                          f->image_width, f->image_height, &px, &stride,
-	                          &why))) {
+	/* A decoder exists: the module is loaded. */
+	bc__client_h264(&ops, NULL);
+	if ((rc = ops->decode(img->video, r->data.ptr, r->data.len,
+	                      f->image_width, f->image_height, &px, &stride,
+	                      &why))) {
 		video_lost(img);
 		return bc_errinfo_set(ei, rc == BC_ENOMEM ? rc : BC_ECODEC,
 		                      "H.264 frame %u does not decode (%s); "

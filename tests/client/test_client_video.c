@@ -284,6 +284,38 @@ static void a_raw_still_leaves_the_chain_going(void)
 	bc_client_image_finish(&img);
 }
 
+/* Without its module (BLOBCAST_H264_MODULE naming none, in a child: the
+ * module is looked for once per process) a KEY frame is refused with
+ * ENOTSUP and a sentence naming the module and the variable. */
+static void a_missing_module_is_named(void)
+{
+	struct stream s;
+	int status = 0;
+	pid_t pid;
+	REQUIRE(stream_make(&s, 64, 48, 1));
+	fflush(NULL);
+	REQUIRE((pid = fork()) >= 0);
+	if (pid == 0) {
+		struct bc_client_image img;
+		struct bc_errinfo ei = {0};
+		int rc;
+		setenv("BLOBCAST_H264_MODULE", "/nonexistent/bc_client_h264.so",
+		       1);
+		bc_client_image_init(&img);
+		rc = apply_au(&img, &s, 0, 1, &ei);
+		printf("  %s: %s\n", bc_err_name(rc), ei.msg);
+		fflush(stdout);
+		_exit(rc == BC_ENOTSUP && img.rgba == NULL &&
+		              strstr(ei.msg, "bc_client_h264.so") &&
+		              strstr(ei.msg, "BLOBCAST_H264_MODULE")
+		          ? 0
+		          : 1);
+	}
+	waitpid(pid, &status, 0);
+	CHECK(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+	stream_free(&s);
+}
+
 /* ---- against blobcastd --------------------------------------------------- */
 
 static int connect_video(const struct daemon *d, bool acks,
@@ -514,6 +546,7 @@ static const struct bc_test tests[] = {
     {"frame_shapes_that_are_not_a_view_are_refused",
      frame_shapes_that_are_not_a_view_are_refused},
     {"a_raw_still_leaves_the_chain_going", a_raw_still_leaves_the_chain_going},
+    {"a_missing_module_is_named", a_missing_module_is_named},
     {"daemon_stream_decodes", daemon_stream_decodes},
 };
 
