@@ -480,7 +480,8 @@ uint8_t bc_viewer_encodings(const struct bc_viewer_opts *o)
 void bc_viewer_frame_drawn(struct bc_viewer_app *a)
 {
 	struct bc_errinfo ei = {0};
-	if (!(bc_client_info(a->c)->features & BC_PROTO_FEATURE_ACKS) ||
+	if (a->offline ||
+	    !(bc_client_info(a->c)->features & BC_PROTO_FEATURE_ACKS) ||
 	    a->frame_got <= a->frame_acked) {
 		return;
 	}
