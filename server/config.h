@@ -10,6 +10,7 @@
 
 #include "blobcast/proto.h"
 #include "blobcast/render.h"
+#include "blobcast/video.h"
 
 struct bc_token {
 	char *token;
@@ -26,6 +27,10 @@ struct bc_srv_config {
 	struct bc_token *tokens;
 	uint32_t ntokens;
 	enum bc_simd simd;
+	/* H.264 views: the encoder, and libx264's preset (a static string;
+	 * NULL: the video module's default). */
+	enum bc_video_backend video_encoder;
+	const char *x264_preset;
 	bool no_damage; /* edits re-render whole views (for comparison) */
 	bool no_pace;   /* frames not held for the link (net.c; to compare) */
 	uint32_t frame_budget_ms;    /* 0: BC_SRV_FRAME_BUDGET_MS */

@@ -63,6 +63,8 @@ static enum bc_dispatch_result hello(struct bc_dispatch *d, struct client *c,
                                      const struct bc_msg *m);
 static enum bc_dispatch_result stats(struct bc_dispatch *d, struct client *c,
                                      const struct bc_msg *m);
+static enum bc_dispatch_result
+frame_ack(struct bc_dispatch *d, struct client *c, const struct bc_msg *m);
 
 /* What the server does with each message a client may send (the state
  * machine has been checked). Adding a request: its codec in protocol/, a
@@ -87,6 +89,7 @@ static const struct route routes[BC_MSG_COUNT] = {
     [BC_MSG_FOLLOW] = {bc_handle_follow, NULL},
     [BC_MSG_SESSION_CAMERA] = {bc_handle_session_camera, NULL},
     [BC_MSG_HISTORY_GET] = {bc_handle_history, NULL},
+    [BC_MSG_FRAME_ACK] = {NULL, frame_ack},
 };
 
 static struct client *client_of(struct bc_dispatch *d, struct bc_conn_ref ref)
@@ -203,6 +206,9 @@ static enum bc_dispatch_result hello(struct bc_dispatch *d, struct client *c,
 	c->peer.features = h->features & BC_SRV_FEATURES;
 	c->peer.knows_present =
 	    (c->peer.features & BC_PROTO_FEATURE_PRESENT) != 0;
+	if (c->peer.features & BC_PROTO_FEATURE_ACKS) {
+		d->link->acks_on(d->link->ud, c->peer.ref);
+	}
 	w.welcome.has_features = h->has_features;
 	w.welcome.features = c->peer.features;
 	w.welcome.version = BC_PROTO_VERSION;
@@ -379,6 +385,23 @@ int bc_dispatch_open(struct bc_dispatch *d, struct bc_conn_ref ref,
 	snprintf(c->peer.name, sizeof(c->peer.name), "?");
 	bc_member_init(&c->member, d->ss, &c->peer);
 	return 0;
+}
+
+/* FRAME_ACK: the transport paces the client's frames by it (PROTOCOL.md
+ * 7.27); only from a client granted ACKS. */
+static enum bc_dispatch_result
+frame_ack(struct bc_dispatch *d, struct client *c, const struct bc_msg *m)
+{
+	struct bc_errinfo ei = {0};
+	if (!(c->peer.features & BC_PROTO_FEATURE_ACKS)) {
+		refuse(d, c, m->seq, BC_ENOTSUP, false,
+		       "FRAME_ACK needs the feature ACKS, which the "
+		       "client's HELLO did not announce");
+	} else if (d->link->frame_ack(d->link->ud, c->peer.ref,
+	                              m->frame_ack.frame_no, &ei)) {
+		refuse(d, c, m->seq, ei.code, false, ei.msg);
+	}
+	return BC_DISPATCH_OK;
 }
 
 void bc_dispatch_writable(struct bc_dispatch *d, struct bc_conn_ref ref)

@@ -28,7 +28,8 @@ static void kick_due(uv_timer_t *t)
 static bool same_frame(const struct bc_member *a, const struct bc_member *b,
                        bool still_a, bool still_b)
 {
-	return still_a == still_b &&
+	/* An H.264 frame is one client's: its stream's next access unit. */
+	return still_a == still_b && !a->vstream && !b->vstream &&
 	       memcmp(&a->camera, &b->camera, sizeof(a->camera)) == 0 &&
 	       a->view.width == b->view.width &&
 	       a->view.height == b->view.height &&
@@ -36,6 +37,7 @@ static bool same_frame(const struct bc_member *a, const struct bc_member *b,
 	       a->view.quality_interactive == b->view.quality_interactive &&
 	       a->view.quality_still == b->view.quality_still &&
 	       a->view.downscale == b->view.downscale &&
+	       a->view.still_encoding == b->view.still_encoding &&
 	       a->peer->encodings == b->peer->encodings &&
 	       (a->peer->features & BC_PROTO_FEATURE_LEVELS) ==
 	           (b->peer->features & BC_PROTO_FEATURE_LEVELS) &&
@@ -111,6 +113,42 @@ static uint32_t link_level(struct bc_session *s, struct bc_member *m,
 	return m->link_level < max ? m->link_level : max;
 }
 
+/* The bitrate of m's H.264 stream, from its link: when frames waited for
+ * the link since the last frame, three quarters of the rate the link
+ * delivers (or three quarters of the bitrate, when that is not known);
+ * after BC_SRV_LINK_CALM_FRAMES frames that did not wait, a quarter more,
+ * back to the default. The coarse levels (link_level) take over below
+ * what a rate can save. */
+static void video_rate(struct bc_session *s, struct bc_member *m)
+{
+	const struct bc_link *l = s->ss->link;
+	struct bc_proto_link li;
+	uint32_t def =
+	    bc_video_default_bitrate(m->view.width, m->view.height, 0);
+	l->link_info(l->ud, m->peer->ref, &li);
+	if (li.rtt_us < BC_SRV_LINK_MIN_RTT_US) {
+		m->video_paced_seen = li.frames_paced;
+		return; /* a slow reader on loopback, not a slow link */
+	}
+	if (li.frames_paced != m->video_paced_seen) {
+		uint32_t cur = m->video_bps ? m->video_bps : def;
+		uint64_t link = li.delivery_bps * 8u * 3u / 4u;
+		m->video_paced_seen = li.frames_paced;
+		m->video_calm = 0;
+		m->video_bps =
+		    link && link < cur ? (uint32_t)link : cur / 4u * 3u;
+		bc_log(BC_LOG_DEBUG,
+		       "member %u: its link holds frames back: H.264 at %u "
+		       "bit/s",
+		       m->member_id, m->video_bps);
+	} else if (m->video_bps && ++m->video_calm >= BC_SRV_LINK_CALM_FRAMES) {
+		m->video_calm = 0;
+		m->video_bps += m->video_bps / 4u;
+		m->video_bps = m->video_bps >= def ? 0u : m->video_bps;
+	}
+	bc_vstream_set_bitrate(m->vstream, m->video_bps);
+}
+
 static void frame_req(struct bc_session *s, struct bc_member *m, bool still,
                       struct bc_job_req *q)
 {
@@ -122,8 +160,13 @@ static void frame_req(struct bc_session *s, struct bc_member *m, bool still,
 	q->height = m->view.height;
 	/* The VIEW's encoding governs every frame, coarse levels and damage
 	 * rectangles included (PROTOCOL.md 7.14). */
-	q->encoding = (int)m->view.encoding;
+	q->encoding = (int)(m->view.still_encoding ? m->view.still_encoding
+	                                           : m->view.encoding);
 	q->encoding_interactive = (int)m->view.encoding;
+	if (m->vstream) {
+		q->video = m->vstream;
+		video_rate(s, m);
+	}
 	q->quality_still = m->view.quality_still;
 	q->quality_interactive = m->view.quality_interactive;
 	/* Coarse levels only for a client that announced them (PROTOCOL.md
@@ -299,6 +342,9 @@ static bool over_limit(struct bc_member *m, const struct bc_work_done *d)
 static void send_frame(struct bc_member *m, const struct bc_work_done *d,
                        uint32_t i)
 {
+	if (d->au && d->req->video) {
+		bc_vstream_delivered(d->req->video);
+	}
 	m->ss->link->send_frame(m->ss->link->ud, m->peer->ref, d->frame,
 	                        d->req->target_camera_seq[i]);
 	m->frames++;
@@ -356,6 +402,41 @@ static bool forget_request(struct bc_member *m, const struct bc_job *job)
 	return false;
 }
 
+/* m's H.264 encoder failed (why): its view goes on in the VIEW's still
+ * encoding or the first image encoding its HELLO listed, as if its VIEW
+ * had asked for it, and the client hears ECODEC naming it (PROTOCOL.md
+ * 7.15); without one it gets no frames until its next VIEW. */
+static void video_fallback(struct bc_member *m, const char *why)
+{
+	static const enum bc_proto_encoding order[] = {
+	    BC_PROTO_ENC_JPEG, BC_PROTO_ENC_PNG, BC_PROTO_ENC_RAW};
+	enum bc_proto_encoding e = m->view.still_encoding;
+	for (size_t k = 0; !e && k < sizeof(order) / sizeof(order[0]); k++) {
+		if (m->peer->encodings & (1u << (order[k] - 1))) {
+			e = order[k];
+		}
+	}
+	bc_vstream_unref(m->vstream);
+	m->vstream = NULL;
+	m->shown.view = 0;
+	if (!e) {
+		m->has_view = false;
+		bc__send_error(m, 0, BC_ECODEC,
+		               "the H.264 encoder failed (%s) and the client "
+		               "listed no other encoding: no frames until it "
+		               "sends VIEW again",
+		               why);
+		return;
+	}
+	m->view.encoding = e;
+	m->view.still_encoding = BC_PROTO_ENC_INVALID;
+	m->dirty = true;
+	bc__send_error(m, 0, BC_ECODEC,
+	               "the H.264 encoder failed (%s): frames come as %s "
+	               "until the next VIEW",
+	               why, bc_proto_encoding_name(e));
+}
+
 /* A frame for the job's target i, m. */
 static void frame_to(struct bc_member *m, const struct bc_work_done *d,
                      uint32_t i)
@@ -386,6 +467,12 @@ static void frame_to(struct bc_member *m, const struct bc_work_done *d,
 	case BC_WORK_NOTHING:
 	case BC_WORK_OOM:
 		m->dirty = true;
+		break;
+	case BC_WORK_FAILED:
+		if (d->codec_failed && m->vstream &&
+		    m->vstream == d->req->video) {
+			video_fallback(m, d->why);
+		}
 		break;
 	default:
 		break;
@@ -483,22 +570,59 @@ static bool over_max_dim(struct bc_member *m, uint32_t seq, const char *what,
 	return true;
 }
 
+/* Whether this server can encode m's H.264 VIEW msg: an encoder exists
+ * (ENOTSUP), and the size is one H.264 decoders take (ERANGE). */
+static bool video_view_ok(struct bc_member *m, const struct bc_msg *msg)
+{
+	const struct bc_msg_view *v = &msg->view;
+	uint32_t mbs = ((v->width + 15u) / 16u) * ((v->height + 15u) / 16u);
+	if (!bc_video_encoder_available(m->ss->video.backend)) {
+		bc__send_error(m, msg->seq, BC_ENOTSUP,
+		               "this server has no H.264 encoder; ask for "
+		               "JPEG, PNG or raw");
+		return false;
+	}
+	if (v->width > BC_PROTO_MAX_VIDEO_DIM ||
+	    v->height > BC_PROTO_MAX_VIDEO_DIM ||
+	    mbs > BC_PROTO_MAX_VIDEO_MBS) {
+		bc__send_error(m, msg->seq, BC_ERANGE,
+		               "an H.264 view of %ux%u is over %u pixels a "
+		               "side or %u macroblocks (4096x2304); ask for a "
+		               "smaller view or an image encoding",
+		               v->width, v->height, BC_PROTO_MAX_VIDEO_DIM,
+		               BC_PROTO_MAX_VIDEO_MBS);
+		return false;
+	}
+	return true;
+}
+
 int bc_handle_view(struct bc_member *m, const struct bc_msg *msg)
 {
 	const struct bc_msg_view *v = &msg->view;
 	if (over_max_dim(m, msg->seq, "view", v->width, v->height)) {
 		return 0;
 	}
-	if (v->encoding == BC_PROTO_ENC_H264) {
-		bc__send_error(m, msg->seq, BC_ENOTSUP,
-		               "this server has no H.264 encoder; ask for "
-		               "JPEG, PNG or raw");
+	if (v->encoding == BC_PROTO_ENC_H264 && !video_view_ok(m, msg)) {
 		return 0;
 	}
-	if (!(m->peer->encodings & (1u << (v->encoding - 1)))) {
+	if (!(m->peer->encodings & (1u << (v->encoding - 1))) ||
+	    (v->still_encoding &&
+	     !(m->peer->encodings & (1u << (v->still_encoding - 1))))) {
 		bc__send_error(m, msg->seq, BC_EINVAL,
 		               "the view asks for an encoding the client's "
 		               "HELLO did not list");
+		return 0;
+	}
+	/* Every VIEW of encoding 4 starts a stream: its first frame is an
+	 * IDR (PROTOCOL.md 7.15). */
+	bc_vstream_unref(m->vstream);
+	m->vstream = NULL;
+	m->video_bps = 0;
+	if (v->encoding == BC_PROTO_ENC_H264 &&
+	    !(m->vstream = bc_vstream_new(&m->ss->video))) {
+		m->has_view = false;
+		bc__send_error(m, msg->seq, BC_ENOMEM,
+		               "the server is out of memory");
 		return 0;
 	}
 	m->view = *v;

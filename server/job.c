@@ -29,6 +29,7 @@
  * A PICK is one ray, in one slice.
  */
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "blobcast/alloc.h"
@@ -113,6 +114,7 @@ void bc__job_free(struct bc_job *job)
 	}
 	bc_shared_unref(job->done.frame);
 	bc_encode_job_free(job->enc);
+	bc_vstream_unref(job->req.video);
 	bc_free(job);
 }
 
@@ -551,15 +553,53 @@ static bool lossless_frame(const struct bc_job *job, int level)
 	       (job->req.final && level == 0);
 }
 
+/* The encoding of the job's frame at level: the still's, or the moving
+ * frames'. */
+static int frame_encoding(const struct bc_job *job, int level)
+{
+	return lossless_frame(job, level) ? job->req.encoding
+	                                  : job->req.encoding_interactive;
+}
+
 /* Whether the job sends only the tiles changed since what its targets
  * hold: they hold this view at level 0, and the frame keeps its kind (a
  * still over a lossless base, or an interactive frame). */
 static bool patches(const struct bc_job *job, int level)
 {
 	const struct bc_shown *s = &job->req.shown;
+	/* An H.264 frame is always the whole view (PROTOCOL.md 7.15). */
 	return job->req.kind != BC_JOB_SNAPSHOT && level == 0 &&
+	       frame_encoding(job, level) != BC_PROTO_ENC_H264 &&
 	       s->view == job->v->id && s->level == 0 &&
 	       (!lossless_frame(job, level) || s->lossless);
+}
+
+/* Encodes the view's picture into the job's H.264 stream: one access
+ * unit, the frame's one rectangle. */
+static int encode_video(struct bc_job *job, int level, struct bc_errinfo *ei)
+{
+	const struct view *v = job->v;
+	struct bc_vstream_au au;
+	double t0 = bc_clock_ms();
+	int rc;
+	if (!job->req.video) {
+		return bc_errinfo_set(ei, BC_ESTATE,
+		                      "an H.264 frame without "
+		                      "its stream");
+	}
+	rc = bc_vstream_encode(job->req.video, v->frame.rgba, v->width,
+	                       v->height, level, lossless_frame(job, level),
+	                       &au, ei);
+	if (rc) {
+		job->done.codec_failed = rc != BC_ENOMEM;
+		snprintf(job->done.why, sizeof(job->done.why), "%s", ei->msg);
+		return rc;
+	}
+	job->key = au.key;
+	job->done.au = true;
+	rc = bc_encode_job_given(&job->enc, v->width, v->height, au.data,
+	                         au.len, bc_clock_ms() - t0);
+	return rc ? bc_errinfo_set(ei, rc, "no memory for a frame") : 0;
 }
 
 /* Sets up the encoding of the frame's rectangles. */
@@ -576,6 +616,9 @@ static int encode_begin(struct worker *wk, struct bc_job *job,
 	if (level < 0) {
 		/* A pass that fills every tile always ends before encoding. */
 		return bc_errinfo_set(ei, BC_ESTATE, "the view has no picture");
+	}
+	if (frame_encoding(job, level) == BC_PROTO_ENC_H264) {
+		return encode_video(job, level, ei);
 	}
 	if (!(pix = bc__picture(wk, v, level, &iw, &ih))) {
 		return bc_errinfo_set(ei, BC_ENOMEM, "no memory for a picture");
@@ -596,10 +639,10 @@ static int encode_begin(struct worker *wk, struct bc_job *job,
 			whole.h = (uint16_t)(ih < 16 ? ih : 16);
 		}
 	}
-	rc = bc_encode_job_new(
-	    &job->enc, pix, iw, ih, level > 0, rects, n,
-	    lossless ? job->req.encoding : job->req.encoding_interactive,
-	    lossless ? job->req.quality_still : job->req.quality_interactive);
+	rc = bc_encode_job_new(&job->enc, pix, iw, ih, level > 0, rects, n,
+	                       frame_encoding(job, level),
+	                       lossless ? job->req.quality_still
+	                                : job->req.quality_interactive);
 	if (rc) {
 		return bc_errinfo_set(ei, rc, "cannot encode the frame");
 	}
@@ -649,6 +692,9 @@ static uint16_t frame_flags(const struct bc_job *job, int level)
 	if (job->incomplete) {
 		flags |= BC_PROTO_FLAG_INCOMPLETE;
 	}
+	if (job->key) {
+		flags |= BC_PROTO_FLAG_KEY;
+	}
 	return flags;
 }
 
@@ -690,6 +736,11 @@ static int finish(const struct flow *f, struct bc_job *job,
 	rects = bc_encode_job_rects(job->enc, &n);
 	iw = level ? (v->width + (1u << level) - 1) >> level : v->width;
 	ih = level ? (v->height + (1u << level) - 1) >> level : v->height;
+	if (frame_encoding(job, level) == BC_PROTO_ENC_H264) {
+		/* The view's size at every level (PROTOCOL.md 7.15). */
+		iw = v->width;
+		ih = v->height;
+	}
 	m.flags = frame_flags(job, level);
 	if (job->req.kind == BC_JOB_SNAPSHOT) {
 		all[0] = rects[0];
@@ -707,9 +758,7 @@ static int finish(const struct flow *f, struct bc_job *job,
 		m.frame.order = job->req.order;
 	}
 	m.frame.camera_seq = job->req.camera_seq;
-	m.frame.encoding = (enum bc_proto_encoding)(
-	    lossless_frame(job, level) ? job->req.encoding
-	                               : job->req.encoding_interactive);
+	m.frame.encoding = (enum bc_proto_encoding)frame_encoding(job, level);
 	m.frame.width = (uint16_t)job->req.width;
 	m.frame.height = (uint16_t)job->req.height;
 	m.frame.image_width = (uint16_t)iw;

@@ -92,6 +92,13 @@ struct bc_link {
 	 * (not the one being written): it left its session, and nothing of
 	 * that session follows the OK or ERROR that says so. */
 	void (*forget_frames)(void *ud, struct bc_conn_ref to);
+	/* The connection was granted ACKS: its view's frames wait for its
+	 * FRAME_ACKs from now on (PROTOCOL.md 7.27). */
+	void (*acks_on)(void *ud, struct bc_conn_ref to);
+	/* FRAME_ACK no from the connection. Returns 0, or BC_ERANGE with the
+	 * reason in ei (a frame never sent, or out of order). */
+	int (*frame_ack)(void *ud, struct bc_conn_ref from, uint32_t no,
+	                 struct bc_errinfo *ei);
 	/* The buffer the message being handled lies in, now the caller's
 	 * (bc_free): a big payload kept without a copy on the loop. NULL
 	 * when out of memory; the message is unchanged either way. */

@@ -46,6 +46,17 @@ static const struct bc_opt_name platform_names[] = {
     {"auto", 0}, {"device", 1}, {"surfaceless", 2}, {"osmesa", 3}, {NULL, 0}};
 static const struct bc_opt_name simd_names[] = {
     {"auto", BC_SIMD_AUTO}, {"off", BC_SIMD_OFF}, {NULL, 0}};
+/* H.264 views (encoding 4): which libavcodec encoder, and libx264's
+ * preset (its speed against its bytes, docs/video.md). */
+static const struct bc_opt_name video_names[] = {
+    {"auto", BC_VIDEO_BACKEND_AUTO},
+    {"x264", BC_VIDEO_BACKEND_X264},
+    {"nvenc", BC_VIDEO_BACKEND_NVENC},
+    {NULL, 0}};
+static const struct bc_opt_name preset_names[] = {
+    {"ultrafast", 1}, {"superfast", 2}, {"veryfast", 3}, {"faster", 4},
+    {"fast", 5},      {"medium", 6},    {"slow", 7},     {"slower", 8},
+    {"veryslow", 9},  {NULL, 0}};
 static const struct bc_opt_name log_names[] = {
     {"silent", BC_LOG_SILENT}, {"error", BC_LOG_ERROR}, {"warn", BC_LOG_WARN},
     {"info", BC_LOG_INFO},     {"debug", BC_LOG_DEBUG}, {NULL, 0}};
@@ -55,7 +66,7 @@ static const struct bc_opt_name log_names[] = {
 struct cli {
 	const char *listen, *unix_path, *data_dir, *config;
 	const char *tls_cert, *tls_key, *server_id, *check;
-	int backend, gl_platform, simd, log;
+	int backend, gl_platform, simd, log, video_encoder, x264_preset;
 	bool allow_plaintext, tls_allow_expired, no_damage, no_pace, repair;
 	uint32_t frame_budget_ms, render_threads, view_cache_mib;
 };
@@ -123,6 +134,22 @@ struct cli {
 		     .help = "{choices}: vector instructions of the\n"         \
 		             "CPU tracers (default auto)",                     \
 		     .names = simd_names},                                     \
+		    {.name = "video-encoder",                                  \
+		     .kind = BC_OPT_ENUM,                                      \
+		     .dst = &(c)->video_encoder,                               \
+		     .arg = "NAME",                                            \
+		     .help = "{choices}: H.264 views' encoder\n"               \
+		             "(default auto: h264_nvenc where it opens,\n"     \
+		             "else libx264; nvenc alone fails over to\n"       \
+		             "the client's image encodings)",                  \
+		     .names = video_names},                                    \
+		    {.name = "x264-preset",                                    \
+		     .kind = BC_OPT_ENUM,                                      \
+		     .dst = &(c)->x264_preset,                                 \
+		     .arg = "NAME",                                            \
+		     .help = "libx264's speed against its bytes\n"             \
+		             "(default faster): {choices}",                    \
+		     .names = preset_names},                                   \
 		    {.name = "no-damage",                                      \
 		     .kind = BC_OPT_FLAG,                                      \
 		     .dst = &(c)->no_damage,                                   \
@@ -606,6 +633,13 @@ static void apply_cli(struct bc_srv_config *cfg, const struct cli *c,
 	cfg->allow_plaintext = cfg->allow_plaintext || c->allow_plaintext;
 	cfg->tls_allow_expired = cfg->tls_allow_expired || c->tls_allow_expired;
 	cfg->simd = (enum bc_simd)c->simd;
+	cfg->video_encoder = (enum bc_video_backend)c->video_encoder;
+	cfg->x264_preset = NULL;
+	for (size_t i = 0; c->x264_preset && preset_names[i].name; i++) {
+		if (preset_names[i].value == c->x264_preset) {
+			cfg->x264_preset = preset_names[i].name;
+		}
+	}
 	cfg->no_damage = c->no_damage;
 	cfg->no_pace = c->no_pace;
 	cfg->frame_budget_ms = c->frame_budget_ms;
@@ -677,15 +711,21 @@ static int start(struct daemon *dm, struct bc_errinfo *ei)
 	if (bc_net_new(&dm->net, dm->loop, &dm->cfg)) {
 		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
 	}
-	if ((rc = bc_sessions_new(&dm->ss,
-	                          &(struct bc_sessions_opts){
-	                              .loop = dm->loop,
-	                              .link = bc_net_link(dm->net),
-	                              .work = dm->work,
-	                              .store = dm->store,
-	                              .no_damage = dm->cfg.no_damage,
-	                          },
-	                          ei))) {
+	if ((rc =
+	         bc_sessions_new(&dm->ss,
+	                         &(struct bc_sessions_opts){
+	                             .loop = dm->loop,
+	                             .link = bc_net_link(dm->net),
+	                             .work = dm->work,
+	                             .store = dm->store,
+	                             .no_damage = dm->cfg.no_damage,
+	                             .video =
+	                                 {
+	                                     .backend = dm->cfg.video_encoder,
+	                                     .x264_preset = dm->cfg.x264_preset,
+	                                 },
+	                         },
+	                         ei))) {
 		return rc;
 	}
 	if ((rc = bc_dispatch_new(&dm->d,

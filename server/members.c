@@ -32,6 +32,8 @@ void bc_member_finish(struct bc_member *m)
 	}
 	bc__unpark(m);
 	bc__leave(m);
+	bc_vstream_unref(m->vstream);
+	m->vstream = NULL;
 	if (m->peer->ref.slot < BC_SRV_MAX_CONNECTIONS &&
 	    m->ss->by_slot[m->peer->ref.slot] == m) {
 		m->ss->by_slot[m->peer->ref.slot] = NULL;

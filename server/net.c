@@ -272,11 +272,20 @@ static size_t kernel_backlog(struct bc_conn *c)
  * and a camera move would wait seconds behind them. Held back here
  * instead, the newest frame rendered meanwhile replaces the one waiting
  * (send_frame's frame_next), so at most two frames are in flight. */
-static bool link_full(struct bc_conn *c, size_t len)
+static bool backlog_full(struct bc_conn *c, size_t len)
 {
 	size_t allow =
 	    len > BC_SRV_PACE_MIN_BYTES ? len : BC_SRV_PACE_MIN_BYTES;
 	return c->is_tcp && !c->net->cfg->no_pace && kernel_backlog(c) > allow;
+}
+
+/* Whether c's next frame waits: its link holds a frame (backlog_full),
+ * or, for a client granted ACKS, BC_PROTO_ACK_WINDOW frames wait for its
+ * acknowledgement (acks.c). */
+static bool link_full(struct bc_conn *c, size_t len)
+{
+	return (!c->net->cfg->no_pace && bc__acks_full(&c->acks)) ||
+	       backlog_full(c, len);
 }
 
 static void pace_tick(uv_timer_t *t)
@@ -300,7 +309,13 @@ static bool pace(struct bc_conn *c, size_t len)
 	}
 	c->pacing = true;
 	c->paced_len = len;
-	c->counters.frames_paced++;
+	/* Counted as the link's doing (the sessions layer then codes
+	 * coarser, smaller frames) when bytes queue: in the socket, or,
+	 * behind a proxy, as acknowledgements that come late. A window
+	 * full on a fast, far path is the round trip's doing. */
+	if (backlog_full(c, len) || bc__acks_congested(&c->acks)) {
+		c->counters.frames_paced++;
+	}
 	uv_timer_start(&c->hello_timer, pace_tick, BC_SRV_PACE_TICK_MS,
 	               BC_SRV_PACE_TICK_MS);
 	return true;
@@ -324,6 +339,12 @@ static void finish(struct bc_conn *c, struct write_req *w, int status)
 			c->counters.bytes_sent += w->len;
 			if (w->answer) {
 				bc_dispatch_answered(c->net->d, ref_of(c));
+			} else if (c->acks.on) {
+				bc__acks_written(
+				    &c->acks,
+				    bc_get_le32(w->owned +
+				                BC_PROTO_HEADER_SIZE),
+				    w->len, now_ms(c->net));
 			}
 			if (!pace(c, w->len)) {
 				next_frame(c);
@@ -678,6 +699,7 @@ static void link_info(void *ud, struct bc_conn_ref to,
 	out->frames_paced = (uint32_t)c->counters.frames_paced;
 	out->frames_spoiled = c->frames_spoiled;
 	if (!c->is_tcp || uv_fileno(&c->h.handle, &fd) != 0) {
+		bc__acks_info(&c->acks, out);
 		return;
 	}
 	out->unacked_bytes = (uint32_t)kernel_backlog(c);
@@ -694,6 +716,37 @@ static void link_info(void *ud, struct bc_conn_ref to,
 			out->delivery_bps = ti.tcpi_delivery_rate;
 		}
 	}
+	bc__acks_info(&c->acks, out);
+}
+
+static void link_acks_on(void *ud, struct bc_conn_ref to)
+{
+	struct bc_conn *c = bc__conn_get(ud, to);
+	if (c) {
+		c->acks.on = true;
+	}
+}
+
+static int link_frame_ack(void *ud, struct bc_conn_ref from, uint32_t no,
+                          struct bc_errinfo *ei)
+{
+	struct bc_conn *c = bc__conn_get(ud, from);
+	int rc;
+	if (!c || c->closing) {
+		return 0;
+	}
+	if ((rc = bc__acks_take(&c->acks, no, c->frame_no, now_ms(c->net),
+	                        ei))) {
+		return rc;
+	}
+	/* The frame held for the window goes now, or the layer hears it
+	 * may render the next. */
+	if (c->pacing && !link_full(c, c->paced_len)) {
+		uv_timer_stop(&c->hello_timer);
+		c->pacing = false;
+		next_frame(c);
+	}
+	return 0;
 }
 
 static void link_forget_frames(void *ud, struct bc_conn_ref to)
@@ -1090,6 +1143,8 @@ int bc_net_new(struct bc_net **out, uv_loop_t *loop,
 	    .send_frame = link_send_frame,
 	    .send_shared = link_send_shared,
 	    .forget_frames = link_forget_frames,
+	    .acks_on = link_acks_on,
+	    .frame_ack = link_frame_ack,
 	    .detach = link_detach,
 	    .close = link_close,
 	    .resume = link_resume,

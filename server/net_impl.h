@@ -10,6 +10,41 @@
 #include "srv_limits.h"
 #include "transport.h"
 
+/* A client's acknowledgements (feature ACKS, PROTOCOL.md 7.27; acks.c):
+ * the FRAMEs of its view written and not yet acknowledged, oldest first,
+ * and what their round trips say of the path. */
+struct bc_acks {
+	bool on;        /* granted: frames wait for acknowledgements */
+	uint32_t acked; /* the newest FRAME acknowledged */
+	uint32_t n;
+	struct bc_ack_frame {
+		uint32_t no;
+		size_t len;
+		uint64_t written_ms;
+	} out[BC_PROTO_ACK_WINDOW];
+	/* From write to acknowledgement, microseconds: smoothed (1/8) and
+	 * least; bytes per second acknowledged while frames waited. */
+	uint32_t srtt_us, min_us;
+	uint64_t bps;
+};
+
+/* A view FRAME of len bytes, number no, has been written at now. */
+void bc__acks_written(struct bc_acks *a, uint32_t no, size_t len,
+                      uint64_t now_ms);
+/* Whether the window is full: the next frame waits. */
+bool bc__acks_full(const struct bc_acks *a);
+/* Whether the acknowledgements come late against the least round trip
+ * seen: frames queue somewhere on the path (a slow link, not a far one). */
+bool bc__acks_congested(const struct bc_acks *a);
+/* FRAME_ACK for frame no, the last FRAME written being last. Returns 0,
+ * or BC_ERANGE with a sentence in ei (a frame never sent, or not above
+ * the previous acknowledgement): nothing changes then. */
+int bc__acks_take(struct bc_acks *a, uint32_t no, uint32_t last,
+                  uint64_t now_ms, struct bc_errinfo *ei);
+/* STATS's link figures as the acknowledgements measure them, over those of
+ * TCP (PROTOCOL.md 7.18). */
+void bc__acks_info(const struct bc_acks *a, struct bc_proto_link *out);
+
 struct bc_conn {
 	struct bc_net *net;
 	uint32_t slot, gen;
@@ -66,6 +101,7 @@ struct bc_conn {
 	/* A frame waits for the link (pace): the frame written last. */
 	bool pacing;
 	size_t paced_len;
+	struct bc_acks acks; /* FRAME_ACK (acks.c) */
 };
 
 struct bc_net {

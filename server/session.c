@@ -734,6 +734,7 @@ int bc_sessions_new(struct bc_sessions **out,
 	ss->work = opts->work;
 	ss->store = opts->store;
 	ss->no_damage = opts->no_damage;
+	ss->video = opts->video;
 	if ((rc = bc__index_new(&ss->index, ss->store))) {
 		bc_free(ss);
 		return bc_errinfo_set(ei, rc, "cannot list the sessions");

@@ -62,6 +62,11 @@ struct bc_member {
 	 * frames start at no finer than, and frames since it last grew. */
 	uint32_t paced_seen;
 	uint32_t link_level, link_calm;
+	/* Its H.264 stream (encoding 4; NULL otherwise) and the stream's
+	 * bitrate as its link allows (frames.c, video_rate; 0: the
+	 * default), with the same counters as the level's. */
+	struct bc_vstream *vstream;
+	uint32_t video_bps, video_paced_seen, video_calm;
 	struct bc_shown shown; /* what its last frame left it holding */
 	uint64_t frames;       /* FRAMEs handed to the transport */
 	/* Parked behind a busy session (session.c): which, the request's
@@ -79,6 +84,9 @@ struct bc_sessions_opts {
 	struct bc_work *work;
 	struct bc_store *store;
 	bool no_damage;
+	/* How H.264 views are encoded: backend and preset (the preset
+	 * string must outlive the layer). */
+	struct bc_video_opts video;
 };
 
 /* Makes the layer and restores every stored session (and "default").

@@ -36,9 +36,12 @@
  * the protocol allows 8192 for future GPUs with more memory. */
 #define BC_SRV_MAX_DIM 4096u
 /* The features (PROTOCOL.md 4.1) this server grants when a client
- * announces them: all of this text's but ACKS, whose FRAME_ACK it does not
- * take yet. */
-#define BC_SRV_FEATURES (BC_PROTO_FEATURES_ALL & ~BC_PROTO_FEATURE_ACKS)
+ * announces them: all of this text's. */
+#define BC_SRV_FEATURES BC_PROTO_FEATURES_ALL
+/* Microseconds acknowledgements may come later than 1.5 times the least
+ * round trip seen before frames count as queueing on the path (acks.c):
+ * a client's decode and draw vary by a few milliseconds. */
+#define BC_SRV_ACK_QUEUE_SLACK_US 8000u
 
 /* Seconds a connection may take to complete its HELLO: a client that never
  * finishes one holds a slot only this long. */

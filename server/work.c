@@ -489,6 +489,9 @@ struct bc_job *bc_work_submit(struct bc_work *w, const struct bc_job_req *req)
 		return NULL;
 	}
 	j->req = *req;
+	if (req->video) {
+		bc_vstream_ref(req->video);
+	}
 	j->cls = class_of(req);
 	j->submitted_ms = bc_clock_ms();
 	uv_mutex_lock(&w->lock);

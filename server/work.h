@@ -29,6 +29,7 @@
 #include "blobcast/render.h"
 #include "link.h"
 #include "srv_limits.h"
+#include "vstream.h"
 
 struct bc_work;
 struct bc_job;
@@ -94,6 +95,10 @@ struct bc_job_req {
 	 * is not its presenter's, PROTOCOL.md 5). */
 	uint32_t target_camera_seq[BC_PROTO_MAX_MEMBERS];
 	uint32_t ntargets;
+	/* The target's H.264 stream when a frame of the job is encoding 4
+	 * (one target then: a stream is one client's); the job holds a
+	 * reference. */
+	struct bc_vstream *video;
 };
 
 enum bc_work_outcome {
@@ -120,6 +125,11 @@ struct bc_work_done {
 	uint32_t node;
 	double render_ms, encode_ms; /* 0 when nothing was rendered */
 	uint64_t order;              /* of the scene the frame shows */
+	/* frame carries an access unit of req.video (encoding 4). */
+	bool au;
+	/* BC_WORK_FAILED because the H.264 encoder failed: why. */
+	bool codec_failed;
+	char why[256]; /* as struct bc_errinfo's msg */
 };
 
 /* Zero means default for every field but the loop and the callback. */

@@ -300,14 +300,9 @@ int bc_video_encoder_open(uint32_t width, uint32_t height,
 	enc->cwidth = bc__video_even(width);
 	enc->cheight = bc__video_even(height);
 	enc->fps = o->fps ? o->fps : BC_VIDEO_DEFAULT_FPS;
-	enc->bitrate = o->bitrate;
-	if (!enc->bitrate) {
-		double b = BC_VIDEO_DEFAULT_BPP * (double)enc->cwidth *
-		           (double)enc->cheight * (double)enc->fps;
-		b = b < BC_VIDEO_MIN_BITRATE ? BC_VIDEO_MIN_BITRATE : b;
-		b = b > BC_VIDEO_MAX_BITRATE ? BC_VIDEO_MAX_BITRATE : b;
-		enc->bitrate = (uint32_t)b;
-	}
+	enc->bitrate = o->bitrate
+	                   ? o->bitrate
+	                   : bc_video_default_bitrate(width, height, enc->fps);
 	enc->still_qp = o->still_qp ? o->still_qp : BC_VIDEO_STILL_QP;
 	enc->src_fmt = bc__video_av_pixfmt(o->pixfmt, &enc->bpp);
 	snprintf(enc->preset, sizeof(enc->preset), "%s",
@@ -367,6 +362,26 @@ int bc_video_encoder_open(uint32_t width, uint32_t height,
 fail:
 	bc_video_encoder_destroy(enc);
 	return rc;
+}
+
+uint32_t bc_video_default_bitrate(uint32_t width, uint32_t height, uint32_t fps)
+{
+	double b = BC_VIDEO_DEFAULT_BPP * (double)bc__video_even(width) *
+	           (double)bc__video_even(height) *
+	           (double)(fps ? fps : BC_VIDEO_DEFAULT_FPS);
+	b = b < BC_VIDEO_MIN_DEFAULT_BITRATE ? BC_VIDEO_MIN_DEFAULT_BITRATE : b;
+	b = b > BC_VIDEO_MAX_BITRATE ? BC_VIDEO_MAX_BITRATE : b;
+	return (uint32_t)b;
+}
+
+bool bc_video_encoder_available(enum bc_video_backend backend)
+{
+	if (backend == BC_VIDEO_BACKEND_NVENC) {
+		return avcodec_find_encoder_by_name("h264_nvenc") != NULL;
+	}
+	return avcodec_find_encoder_by_name("libx264") != NULL ||
+	       (backend == BC_VIDEO_BACKEND_AUTO &&
+	        avcodec_find_encoder_by_name("h264_nvenc") != NULL);
 }
 
 void bc_video_encoder_destroy(struct bc_video_encoder *enc)

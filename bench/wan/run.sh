@@ -2,25 +2,35 @@
 # The WAN bench: blobcastd in one network namespace, the client in another,
 # joined by a veth pair shaped with tc tbf (bandwidth) and a user-space
 # relay on the client's side that adds the round-trip time (this kernel has
-# no netem). For each link profile it orbits the camera at 30 Hz through
-# the link and prints what the client got (bench_wan_client's JSON), with
-# the daemon's frame pacing on and, with --no-pace, off.
+# no netem). For each link profile and encoding it orbits the camera at
+# 30 Hz through the link and prints what the client got and decoded
+# (bench_wan_client's JSON), with the daemon's frame pacing on and, with
+# --no-pace, off.
 #
 # usage (as root): bench/wan/run.sh BUILD_DIR [SIZE [SECONDS [PROFILES
-#                  [DOWNSCALE]]]]
+#                  [DOWNSCALE [ENCODINGS [PACES [PLOT]]]]]]]
 #   BUILD_DIR  a Release build with blobcastd and bench_wan_client
 #   SIZE       view size, default 1280x720
 #   SECONDS    orbit length per run, default 10
 #   PROFILES   "MBIT/RTT_MS ...", default "100/5 20/30 10/50 4/80"
 #   DOWNSCALE  the VIEW's coarsest block, default 1 (full resolution
 #              only); 2, 4, 8 let interactive frames go coarser
-# Output: one line per run, "profile pace JSON"; a markdown table follows.
+#   ENCODINGS  of the runs, default "jpeg h264" (also h264-png: H.264
+#              moving frames, a PNG still)
+#   PACES      "on off" (default) or either
+#   PLOT       a PNG of latency and frames/s per profile (needs Debian's
+#              python3-matplotlib), default wan.png; "" for none
+# Output: one line per run, "profile encoding pace JSON"; a markdown table
+# follows.
 set -eu
 B=${1:?usage: bench/wan/run.sh BUILD_DIR [SIZE [SECONDS [PROFILES]]]}
 SIZE=${2:-1280x720}
 SECS=${3:-10}
 PROFILES=${4:-"100/5 20/30 10/50 4/80"}
 DOWN=${5:-1}
+ENCODINGS=${6:-"jpeg h264"}
+PACES=${7:-"on off"}
+PLOT=${8-wan.png}
 HERE=$(cd "$(dirname "$0")" && pwd)
 DAEMON=$B/server/blobcastd
 CLIENT=$B/bench/bench_wan_client
@@ -78,7 +88,9 @@ for prof in $PROFILES; do
 		ip netns exec "$1" tc qdisc replace dev "$2" root tbf \
 			rate "${mbit}mbit" burst 32kb latency 200ms
 	done
-	for pace in on off; do
+	for run in $(for e in $ENCODINGS; do for p in $PACES; do echo "$e:$p"; done; done); do
+		enc=${run%:*}
+		pace=${run#*:}
 		flag=
 		[ "$pace" = off ] && flag=--no-pace
 		rm -rf "$TMP/data"
@@ -91,25 +103,57 @@ for prof in $PROFILES; do
 		RPID=$!
 		wait_port "$SRV" 10.77.0.1 7878
 		wait_port "$CLI" 127.0.0.1 7879
-		line=$(ip netns exec "$CLI" "$CLIENT" 127.0.0.1:7879 wan "$SIZE" "$SECS" 30 80 "$DOWN")
-		echo "$prof $pace $line"
-		echo "$prof $pace $line" >>"$RESULTS"
+		line=$(ip netns exec "$CLI" "$CLIENT" 127.0.0.1:7879 wan "$SIZE" "$SECS" 30 80 "$DOWN" "$enc")
+		echo "$prof $enc $pace $line"
+		echo "$prof $enc $pace $line" >>"$RESULTS"
 		kill "$RPID" "$DPID" 2>/dev/null || true
 		wait "$RPID" "$DPID" 2>/dev/null || true
 		RPID=
 		DPID=
 	done
 done
-python3 - "$RESULTS" <<'PY'
+python3 - "$RESULTS" "$SIZE" "$PLOT" <<'PY'
 import json, sys
-print()
-print("| link | pacing | frames/s | bytes/frame | latency p50 ms | p99 ms | max ms | still ms |")
-print("|------|--------|---------:|------------:|---------------:|-------:|-------:|---------:|")
+rows = []
 for line in open(sys.argv[1]):
-    prof, pace, js = line.split(" ", 2)
-    r = json.loads(js)
+    prof, enc, pace, js = line.split(" ", 3)
+    rows.append((prof, enc, pace, json.loads(js)))
+print()
+print("| link | encoding | pacing | frames/s | bytes/frame | latency p50 ms | p99 ms | still ms | PSNR moving dB | PSNR still dB | decode ms | render ms | encode ms |")
+print("|------|----------|--------|---------:|------------:|---------------:|-------:|---------:|---------------:|--------------:|----------:|----------:|----------:|")
+for prof, enc, pace, r in rows:
     mbit, rtt = prof.split("/")
-    print(f"| {mbit} Mbit/s, {rtt} ms | {pace} | {r['delivered_fps']:.1f} | "
+    print(f"| {mbit} Mbit/s, {rtt} ms | {enc} | {pace} | {r['delivered_fps']:.1f} | "
           f"{r['bytes_per_frame']:.0f} | {r['latency_p50_ms']:.0f} | "
-          f"{r['latency_p99_ms']:.0f} | {r['latency_max_ms']:.0f} | {r['still_ms']:.0f} |")
+          f"{r['latency_p99_ms']:.0f} | {r['still_ms']:.0f} | "
+          f"{r['psnr_moving_db']:.1f} | {r['psnr_still_db']:.1f} | "
+          f"{r['decode_ms']:.1f} | {r['render_ms']:.1f} | {r['encode_ms']:.1f} |")
+if sys.argv[3]:
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        print("\n(no plot: apt-get install python3-matplotlib)")
+        sys.exit(0)
+    profs = list(dict.fromkeys(p for p, _, _, _ in rows))
+    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4))
+    for key in dict.fromkeys((e, p) for _, e, p, _ in rows):
+        rs = {p: r for p, e, pc, r in rows if (e, pc) == key}
+        xs = [i for i, p in enumerate(profs) if p in rs]
+        lab = f"{key[0]}, pacing {key[1]}"
+        a.plot(xs, [rs[profs[i]]['latency_p50_ms'] for i in xs], "o-", label=lab + " p50")
+        a.plot(xs, [rs[profs[i]]['latency_p99_ms'] for i in xs], "x--", label=lab + " p99")
+        b.plot(xs, [rs[profs[i]]['delivered_fps'] for i in xs], "o-", label=lab)
+    for ax, t in ((a, "camera to decoded frame, ms"), (b, "frames/s delivered")):
+        ax.set_xticks(range(len(profs)))
+        ax.set_xticklabels([p.replace("/", " Mbit/s\n") + " ms" for p in profs])
+        ax.set_title(f"{t} ({sys.argv[2]})")
+        ax.grid(True, alpha=0.3)
+    a.set_yscale("log")
+    a.legend(fontsize=7)
+    b.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(sys.argv[3], dpi=90)
+    print(f"\nplot: {sys.argv[3]}")
 PY

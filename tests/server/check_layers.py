@@ -27,14 +27,14 @@ LAYERS = {
 }
 FILES = {
     "net": "transport", "listen": "transport", "admit": "transport",
-    "tls": "transport", "addr": "transport",
+    "tls": "transport", "addr": "transport", "acks": "transport",
     "dispatch": "dispatch",
     "session": "sessions", "members": "sessions", "index": "sessions",
     "frames": "sessions", "edits": "sessions", "undo": "sessions",
     "present": "sessions", "store": "sessions", "snapshot": "sessions",
     "journal": "sessions", "check": "sessions",
     "work": "work", "flow": "work", "views": "work", "job": "work",
-    "encode": "work",
+    "encode": "work", "vstream": "work",
     "link": "shared",
 }
 # main.c is not in the library: it makes the layers and wires them.

@@ -74,6 +74,17 @@
  * usable, above 400 Mbit/s is past what any level allows. */
 #define BC_VIDEO_MIN_BITRATE 32000u
 #define BC_VIDEO_MAX_BITRATE 400000000u
+/* The least default bitrate: BC_VIDEO_DEFAULT_BPP gives a 160 x 120 view
+ * 40 kbit/s, a few hundred bytes a frame, too few for its edges; 600
+ * kbit/s is a small share of any link a view is watched over. */
+#define BC_VIDEO_MIN_DEFAULT_BITRATE 600000u
+
+/* The bitrate an encoder of width x height pictures at fps frames per
+ * second (0: BC_VIDEO_DEFAULT_FPS) runs at when opts.bitrate is 0:
+ * BC_VIDEO_DEFAULT_BPP bits per pixel per frame of the coded (even)
+ * size, at least BC_VIDEO_MIN_DEFAULT_BITRATE, within the bounds. */
+uint32_t bc_video_default_bitrate(uint32_t width, uint32_t height,
+                                  uint32_t fps);
 
 /* The layout of the RGB pictures given and taken (8 bits per channel,
  * rows top first). */
@@ -138,6 +149,11 @@ struct bc_video_encoder;
 int bc_video_encoder_open(uint32_t width, uint32_t height,
                           const struct bc_video_opts *opts,
                           struct bc_video_encoder **out, struct bc_errinfo *ei);
+
+/* Whether this libavcodec has an H.264 encoder that backend would try
+ * (AUTO and X264: libx264; NVENC: h264_nvenc). Opening one may still fail
+ * (no NVIDIA device, say): this only says whether it is worth trying. */
+bool bc_video_encoder_available(enum bc_video_backend backend);
 
 /* Frees enc and everything it holds; NULL is a no-op. */
 void bc_video_encoder_destroy(struct bc_video_encoder *enc);

@@ -1,0 +1,195 @@
+/*
+ * A client's H.264 stream (vstream.h): the encoder of one member's view,
+ * reference counted between the loop thread and the worker that encodes.
+ */
+#include "vstream.h"
+
+#include <stdatomic.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "blobcast/alloc.h"
+#include "blobcast/log.h"
+
+struct bc_vstream {
+	atomic_uint refs;
+	/* Set by the loop thread, taken by the worker. */
+	atomic_bool restart;
+	atomic_uint bitrate;   /* asked; 0: the default */
+	atomic_uint delivered; /* access units the loop thread sent */
+	/* The worker's. */
+	unsigned encoded; /* access units made */
+	uint32_t applied; /* bitrate the encoder runs at (0: default) */
+	struct bc_video_opts opts;
+	char preset[32];
+	struct bc_video_encoder *enc;
+	uint32_t width, height; /* of enc */
+	uint8_t *scaled;        /* a coarse level's picture scaled up */
+	size_t scaled_cap;
+};
+
+struct bc_vstream *bc_vstream_new(const struct bc_video_opts *opts)
+{
+	struct bc_vstream *vs = bc_calloc(1, sizeof(*vs));
+	if (!vs) {
+		return NULL;
+	}
+	atomic_init(&vs->refs, 1u);
+	atomic_init(&vs->restart, false);
+	atomic_init(&vs->bitrate, 0u);
+	atomic_init(&vs->delivered, 0u);
+	if (opts) {
+		vs->opts = *opts;
+	}
+	if (vs->opts.x264_preset) {
+		snprintf(vs->preset, sizeof(vs->preset), "%s",
+		         vs->opts.x264_preset);
+		vs->opts.x264_preset = vs->preset;
+	}
+	return vs;
+}
+
+void bc_vstream_ref(struct bc_vstream *vs)
+{
+	atomic_fetch_add(&vs->refs, 1u);
+}
+
+void bc_vstream_unref(struct bc_vstream *vs)
+{
+	if (!vs || atomic_fetch_sub(&vs->refs, 1u) != 1u) {
+		return;
+	}
+	bc_video_encoder_destroy(vs->enc);
+	bc_free(vs->scaled);
+	bc_free(vs);
+}
+
+void bc_vstream_delivered(struct bc_vstream *vs)
+{
+	atomic_fetch_add(&vs->delivered, 1u);
+}
+
+void bc_vstream_restart(struct bc_vstream *vs)
+{
+	atomic_store(&vs->restart, true);
+}
+
+void bc_vstream_set_bitrate(struct bc_vstream *vs, uint32_t bps)
+{
+	if (bps != 0 && bps < BC_VIDEO_MIN_BITRATE) {
+		bps = BC_VIDEO_MIN_BITRATE;
+	}
+	if (bps > BC_VIDEO_MAX_BITRATE) {
+		bps = BC_VIDEO_MAX_BITRATE;
+	}
+	atomic_store(&vs->bitrate, bps);
+}
+
+uint32_t bc_vstream_bitrate(const struct bc_vstream *vs)
+{
+	return atomic_load(&((struct bc_vstream *)vs)->bitrate);
+}
+
+const char *bc_vstream_encoder_name(const struct bc_vstream *vs)
+{
+	return vs->enc ? bc_video_encoder_name(vs->enc) : "none";
+}
+
+/* The encoder for width x height at the asked bitrate, opened or reopened
+ * (a new size: a new stream, so an IDR). */
+static int ready(struct bc_vstream *vs, uint32_t width, uint32_t height,
+                 struct bc_errinfo *ei)
+{
+	uint32_t bps = atomic_load(&vs->bitrate);
+	if (vs->enc && (vs->width != width || vs->height != height)) {
+		bc_video_encoder_destroy(vs->enc);
+		vs->enc = NULL;
+	}
+	if (!vs->enc) {
+		struct bc_video_opts o = vs->opts;
+		int rc;
+		o.bitrate = bps;
+		if ((rc = bc_video_encoder_open(width, height, &o, &vs->enc,
+		                                ei))) {
+			return rc;
+		}
+		vs->width = width;
+		vs->height = height;
+		vs->applied = bps;
+		return 0;
+	}
+	if (bps != 0 && bps != vs->applied &&
+	    bc_video_encoder_set_bitrate(vs->enc, bps, ei) == 0) {
+		vs->applied = bps;
+	}
+	return 0;
+}
+
+/* The picture of level `level` scaled up to width x height: each 2^level
+ * block takes the value of its top-left pixel, the one rendered. */
+static const uint8_t *scaled_up(struct bc_vstream *vs, const uint8_t *rgba,
+                                uint32_t width, uint32_t height, int level)
+{
+	size_t bytes = (size_t)width * height * 4u;
+	if (level <= 0) {
+		return rgba;
+	}
+	if (vs->scaled_cap < bytes) {
+		uint8_t *p = bc_realloc(vs->scaled, bytes);
+		if (!p) {
+			return NULL;
+		}
+		vs->scaled = p;
+		vs->scaled_cap = bytes;
+	}
+	for (uint32_t y = 0; y < height; y++) {
+		const uint8_t *src =
+		    rgba + (size_t)((y >> level) << level) * width * 4u;
+		uint8_t *dst = vs->scaled + (size_t)y * width * 4u;
+		for (uint32_t x = 0; x < width; x++) {
+			memcpy(dst + (size_t)x * 4u,
+			       src + (size_t)((x >> level) << level) * 4u, 4);
+		}
+	}
+	return vs->scaled;
+}
+
+int bc_vstream_encode(struct bc_vstream *vs, const uint8_t *rgba,
+                      uint32_t width, uint32_t height, int level, bool still,
+                      struct bc_vstream_au *out, struct bc_errinfo *ei)
+{
+	struct bc_video_au au;
+	const uint8_t *pix;
+	unsigned flags = still ? BC_VIDEO_STILL : 0u;
+	int rc;
+	memset(out, 0, sizeof(*out));
+	if ((rc = ready(vs, width, height, ei))) {
+		return rc;
+	}
+	/* A restart asked, or an access unit made that never reached the
+	 * client: its decoder does not hold what ours does. */
+	if (atomic_exchange(&vs->restart, false) ||
+	    atomic_load(&vs->delivered) != vs->encoded) {
+		flags |= BC_VIDEO_FORCE_IDR;
+		atomic_store(&vs->delivered, vs->encoded);
+	}
+	if (!(pix = scaled_up(vs, rgba, width, height, level))) {
+		return bc_errinfo_set(ei, BC_ENOMEM,
+		                      "no memory for a scaled picture");
+	}
+	if ((rc = bc_video_encode(vs->enc, pix, (size_t)width * 4u, flags, &au,
+	                          ei))) {
+		return rc;
+	}
+	if (!(out->data = bc_malloc(au.len ? au.len : 1u))) {
+		/* The encoder moved on without it: an IDR next. */
+		atomic_store(&vs->restart, true);
+		return bc_errinfo_set(ei, BC_ENOMEM,
+		                      "no memory for an access unit");
+	}
+	memcpy(out->data, au.data, au.len);
+	out->len = au.len;
+	out->key = au.idr;
+	vs->encoded++;
+	return 0;
+}
