@@ -75,8 +75,7 @@ static void load(void)
 	why[0] = '\0';
 	if (env && *env) {
 		if (try_module(env) && !why[0]) {
-			snprintf(why, sizeof(why), "%s=%s cannot be read",
-			         BC_H264_MODULE_ENV, env);
+			snprintf(why, sizeof(why), "%s cannot be read", env);
 		}
 		return;
 	}
@@ -96,17 +95,24 @@ static void load(void)
 
 int bc__client_h264(const struct bc_h264_ops **ops, struct bc_errinfo *ei)
 {
+	const char *env = getenv(BC_H264_MODULE_ENV);
 	pthread_once(&load_once, load);
 	*ops = loaded;
 	if (loaded) {
 		return 0;
 	}
-	return bc_errinfo_set(
-	    ei, BC_ENOTSUP,
-	    "H.264 frames need libblobcast's decoder module %s, which was "
-	    "not found (%s; looked in blobcast/ beside libblobcast and "
-	    "beside the program, and in the build tree): install it with "
-	    "the library or name it in %s",
-	    BC_H264_MODULE_FILE, why[0] ? why : "no such file",
-	    BC_H264_MODULE_ENV);
+	if (env && *env) {
+		return bc_errinfo_set(ei, BC_ENOTSUP,
+		                      "H.264 frames need the decoder module "
+		                      "%s: %s; name it in %s, or unset that",
+		                      BC_H264_MODULE_FILE, why,
+		                      BC_H264_MODULE_ENV);
+	}
+	return bc_errinfo_set(ei, BC_ENOTSUP,
+	                      "H.264 frames need the decoder module %s, "
+	                      "not found in blobcast/ beside libblobcast or "
+	                      "the program, nor in the build tree%s%s; "
+	                      "install it or name it in %s",
+	                      BC_H264_MODULE_FILE, why[0] ? ": " : "", why,
+	                      BC_H264_MODULE_ENV);
 }
