@@ -13,7 +13,8 @@
  * usage: bench_wan_client ADDR SESSION WxH SECONDS RATE_HZ [QUALITY
  *                         [DOWNSCALE [jpeg|h264|h264-png]]]
  * (h264-png: H.264 moving frames and a PNG still)
- * (the token, when the daemon wants one, in BLOBCAST_TOKEN)
+ * (the token, when the daemon wants one, in BLOBCAST_TOKEN; a JSON scene
+ * to load into the session first, in BC_WAN_SCENE)
  */
 #include <math.h>
 #include <stdio.h>
@@ -151,6 +152,7 @@ int main(int argc, char **argv)
 	struct decoder dec = {0};
 	enum bc_proto_encoding enc = BC_PROTO_ENC_JPEG, still_enc = 0;
 	double psnr_moving = 0.0, psnr_still = 0.0;
+	const char *scene = getenv("BC_WAN_SCENE");
 	if (argc < 6 || sscanf(argv[3], "%ux%u", &w, &h) != 2) {
 		fprintf(stderr, "usage: bench_wan_client ADDR SESSION WxH "
 		                "SECONDS RATE_HZ [QUALITY [DOWNSCALE "
@@ -195,6 +197,10 @@ int main(int argc, char **argv)
 	if (bc_client_join(c, argv[2], BC_PROTO_ROLE_EDITOR, BC_CLIENT_JOIN_ANY,
 	                   &ei)) {
 		die("join", &ei);
+	}
+	if (scene && *scene &&
+	    bc_client_load_scene_file(c, scene, NULL, NULL, &ei)) {
+		die("load", &ei);
 	}
 	if (!bc_client_scene(c, &home)) {
 		die("no scene", NULL);

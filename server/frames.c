@@ -28,8 +28,9 @@ static void kick_due(uv_timer_t *t)
 static bool same_frame(const struct bc_member *a, const struct bc_member *b,
                        bool still_a, bool still_b)
 {
-	/* An H.264 frame is one client's: its stream's next access unit. */
-	return still_a == still_b && !a->vstream && !b->vstream &&
+	/* H.264 members share the render, each with its own stream's next
+	 * access unit of it; they do not share with image members. */
+	return still_a == still_b && !a->vstream == !b->vstream &&
 	       memcmp(&a->camera, &b->camera, sizeof(a->camera)) == 0 &&
 	       a->view.width == b->view.width &&
 	       a->view.height == b->view.height &&
@@ -163,10 +164,6 @@ static void frame_req(struct bc_session *s, struct bc_member *m, bool still,
 	q->encoding = (int)(m->view.still_encoding ? m->view.still_encoding
 	                                           : m->view.encoding);
 	q->encoding_interactive = (int)m->view.encoding;
-	if (m->vstream) {
-		q->video = m->vstream;
-		video_rate(s, m);
-	}
 	q->quality_still = m->view.quality_still;
 	q->quality_interactive = m->view.quality_interactive;
 	/* Coarse levels only for a client that announced them (PROTOCOL.md
@@ -217,6 +214,10 @@ void bc__schedule(struct bc_session *s)
 		for (uint32_t g = 0; g < ng; g++) {
 			q.targets[g] = group[g]->peer->ref;
 			q.target_camera_seq[g] = group[g]->camera_seq;
+			q.video[g] = group[g]->vstream;
+			if (q.video[g]) {
+				video_rate(s, group[g]);
+			}
 		}
 		q.ntargets = ng;
 		if (!(job = bc_work_submit(ss->work, &q))) {
@@ -319,10 +320,19 @@ static struct bc_member *target(struct bc_sessions *ss,
 /* A frame too large for m is not sent: m hears ERROR ELIMIT, non-fatal,
  * with the SNAPSHOT's seq or 0 (PROTOCOL.md 7.15), and keeps the picture
  * it has. */
-static bool over_limit(struct bc_member *m, const struct bc_work_done *d)
+/* Target i's frame: its own H.264 access unit, or the one frame of all
+ * (images, and an H.264 view's still in another encoding). */
+static struct bc_shared *frame_of(const struct bc_work_done *d, uint32_t i)
+{
+	return d->vframes[i] ? d->vframes[i] : d->frame;
+}
+
+static bool over_limit(struct bc_member *m, const struct bc_work_done *d,
+                       uint32_t i)
 {
 	const struct bc_job_req *q = d->req;
-	size_t len = d->frame ? d->frame->len - BC_PROTO_HEADER_SIZE : 0;
+	const struct bc_shared *fr = frame_of(d, i);
+	size_t len = fr ? fr->len - BC_PROTO_HEADER_SIZE : 0;
 	if (d->outcome != BC_WORK_TOO_BIG &&
 	    len <= (size_t)m->peer->max_frame_bytes) {
 		return false;
@@ -342,10 +352,11 @@ static bool over_limit(struct bc_member *m, const struct bc_work_done *d)
 static void send_frame(struct bc_member *m, const struct bc_work_done *d,
                        uint32_t i)
 {
-	if (d->au && d->req->video) {
-		bc_vstream_delivered(d->req->video);
+	struct bc_shared *fr = frame_of(d, i);
+	if (d->vframes[i]) {
+		bc_vstream_delivered(d->req->video[i]);
 	}
-	m->ss->link->send_frame(m->ss->link->ud, m->peer->ref, d->frame,
+	m->ss->link->send_frame(m->ss->link->ud, m->peer->ref, fr,
 	                        d->req->target_camera_seq[i]);
 	m->frames++;
 }
@@ -370,7 +381,7 @@ static void snapshot_done(struct bc_member *m, const struct bc_work_done *d)
 	switch (d->outcome) {
 	case BC_WORK_DONE:
 	case BC_WORK_TOO_BIG:
-		if (!over_limit(m, d)) {
+		if (!over_limit(m, d, 0)) {
 			send_frame(m, d, 0);
 			m->answers_unsent++;
 		}
@@ -444,10 +455,17 @@ static void frame_to(struct bc_member *m, const struct bc_work_done *d,
 	if (m->job == d->job) {
 		m->job = NULL;
 	}
+	if ((d->vfailed >> i) & 1u) {
+		/* Its stream's encoder failed; the others' frames went. */
+		if (m->vstream && m->vstream == d->req->video[i]) {
+			video_fallback(m, d->why);
+		}
+		return;
+	}
 	switch (d->outcome) {
 	case BC_WORK_DONE:
 	case BC_WORK_TOO_BIG:
-		if (over_limit(m, d)) {
+		if (over_limit(m, d, i)) {
 			break;
 		}
 		send_frame(m, d, i);
@@ -467,12 +485,6 @@ static void frame_to(struct bc_member *m, const struct bc_work_done *d,
 	case BC_WORK_NOTHING:
 	case BC_WORK_OOM:
 		m->dirty = true;
-		break;
-	case BC_WORK_FAILED:
-		if (d->codec_failed && m->vstream &&
-		    m->vstream == d->req->video) {
-			video_fallback(m, d->why);
-		}
 		break;
 	default:
 		break;

@@ -114,7 +114,10 @@ void bc__job_free(struct bc_job *job)
 	}
 	bc_shared_unref(job->done.frame);
 	bc_encode_job_free(job->enc);
-	bc_vstream_unref(job->req.video);
+	for (uint32_t i = 0; i < job->req.ntargets; i++) {
+		bc_shared_unref(job->done.vframes[i]);
+		bc_vstream_unref(job->req.video[i]);
+	}
 	bc_free(job);
 }
 
@@ -574,34 +577,6 @@ static bool patches(const struct bc_job *job, int level)
 	       (!lossless_frame(job, level) || s->lossless);
 }
 
-/* Encodes the view's picture into the job's H.264 stream: one access
- * unit, the frame's one rectangle. */
-static int encode_video(struct bc_job *job, int level, struct bc_errinfo *ei)
-{
-	const struct view *v = job->v;
-	struct bc_vstream_au au;
-	double t0 = bc_clock_ms();
-	int rc;
-	if (!job->req.video) {
-		return bc_errinfo_set(ei, BC_ESTATE,
-		                      "an H.264 frame without "
-		                      "its stream");
-	}
-	rc = bc_vstream_encode(job->req.video, v->frame.rgba, v->width,
-	                       v->height, level, lossless_frame(job, level),
-	                       &au, ei);
-	if (rc) {
-		job->done.codec_failed = rc != BC_ENOMEM;
-		snprintf(job->done.why, sizeof(job->done.why), "%s", ei->msg);
-		return rc;
-	}
-	job->key = au.key;
-	job->done.au = true;
-	rc = bc_encode_job_given(&job->enc, v->width, v->height, au.data,
-	                         au.len, bc_clock_ms() - t0);
-	return rc ? bc_errinfo_set(ei, rc, "no memory for a frame") : 0;
-}
-
 /* Sets up the encoding of the frame's rectangles. */
 static int encode_begin(struct worker *wk, struct bc_job *job,
                         struct bc_errinfo *ei)
@@ -616,9 +591,6 @@ static int encode_begin(struct worker *wk, struct bc_job *job,
 	if (level < 0) {
 		/* A pass that fills every tile always ends before encoding. */
 		return bc_errinfo_set(ei, BC_ESTATE, "the view has no picture");
-	}
-	if (frame_encoding(job, level) == BC_PROTO_ENC_H264) {
-		return encode_video(job, level, ei);
 	}
 	if (!(pix = bc__picture(wk, v, level, &iw, &ih))) {
 		return bc_errinfo_set(ei, BC_ENOMEM, "no memory for a picture");
@@ -692,15 +664,12 @@ static uint16_t frame_flags(const struct bc_job *job, int level)
 	if (job->incomplete) {
 		flags |= BC_PROTO_FLAG_INCOMPLETE;
 	}
-	if (job->key) {
-		flags |= BC_PROTO_FLAG_KEY;
-	}
 	return flags;
 }
 
-/* Encodes the FRAME message into a shared buffer. */
+/* Encodes the FRAME message into a shared buffer, *out. */
 static int frame_bytes(struct bc_job *job, const struct bc_msg *m,
-                       struct bc_errinfo *ei)
+                       struct bc_shared **out, struct bc_errinfo *ei)
 {
 	struct bc_proto_buf b;
 	int rc;
@@ -712,13 +681,59 @@ static int frame_bytes(struct bc_job *job, const struct bc_msg *m,
 	if (rc == BC_ELIMIT || rc == BC_EPROTO_LENGTH) {
 		job->done.outcome = BC_WORK_TOO_BIG;
 		rc = 0;
-	} else if (rc == 0 && !(job->done.frame = bc_shared_new(b.len))) {
+	} else if (rc == 0 && !(*out = bc_shared_new(b.len))) {
 		rc = bc_errinfo_set(ei, BC_ENOMEM, "no memory for a frame");
 	} else if (rc == 0) {
-		memcpy(job->done.frame->data, b.data, b.len);
+		memcpy((*out)->data, b.data, b.len);
 	}
 	bc_proto_buf_finish(&b);
 	return rc;
+}
+
+/* The FRAME's fields but its rectangles, at the view's level. */
+static void frame_msg(const struct flow *f, const struct bc_job *job, int level,
+                      struct bc_msg *m)
+{
+	const struct view *v = job->v;
+	uint32_t iw =
+	    level ? (v->width + (1u << level) - 1) >> level : v->width;
+	uint32_t ih =
+	    level ? (v->height + (1u << level) - 1) >> level : v->height;
+	if (frame_encoding(job, level) == BC_PROTO_ENC_H264) {
+		/* The view's size at every level (PROTOCOL.md 7.15). */
+		iw = v->width;
+		ih = v->height;
+	}
+	*m = (struct bc_msg){.type = BC_MSG_FRAME, .seq = job->req.seq};
+	m->flags = frame_flags(job, level);
+	m->frame.frame_no = job->req.frame_no;
+	m->frame.order = f->order;
+	if (f->order >= job->req.scene_order && job->req.order > f->order) {
+		m->frame.order = job->req.order;
+	}
+	m->frame.camera_seq = job->req.camera_seq;
+	m->frame.encoding = (enum bc_proto_encoding)frame_encoding(job, level);
+	m->frame.width = (uint16_t)job->req.width;
+	m->frame.height = (uint16_t)job->req.height;
+	m->frame.image_width = (uint16_t)iw;
+	m->frame.image_height = (uint16_t)ih;
+}
+
+/* What the targets hold after the job's frame m. */
+static void frame_done(struct bc_job *job, int level, const struct bc_msg *m)
+{
+	const struct view *v = job->v;
+	job->done.order = m->frame.order;
+	job->done.incomplete = job->incomplete;
+	job->done.shown = (struct bc_shown){
+	    .view = v->id,
+	    .version = v->version,
+	    .level = (int8_t)level,
+	    .lossless = lossless_frame(job, level) &&
+	                (patches(job, level) ? job->req.shown.lossless : true),
+	    .refining = (level > 0 || job->incomplete) && !job->stuck,
+	    .still = (m->flags & BC_PROTO_FLAG_STILL) != 0,
+	};
 }
 
 /* Builds the FRAME from the encoded rectangles (and a snapshot's planes)
@@ -726,22 +741,14 @@ static int frame_bytes(struct bc_job *job, const struct bc_msg *m,
 static int finish(const struct flow *f, struct bc_job *job,
                   struct bc_errinfo *ei)
 {
-	const struct view *v = job->v;
-	int level = bc__view_level(v);
-	struct bc_msg m = {.type = BC_MSG_FRAME, .seq = job->req.seq};
+	int level = bc__view_level(job->v);
+	struct bc_msg m;
 	struct bc_proto_rect all[3], *rects;
 	uint8_t *planes[2] = {NULL, NULL};
-	uint32_t n, iw, ih;
+	uint32_t n;
 	int rc = 0, np = 0;
 	rects = bc_encode_job_rects(job->enc, &n);
-	iw = level ? (v->width + (1u << level) - 1) >> level : v->width;
-	ih = level ? (v->height + (1u << level) - 1) >> level : v->height;
-	if (frame_encoding(job, level) == BC_PROTO_ENC_H264) {
-		/* The view's size at every level (PROTOCOL.md 7.15). */
-		iw = v->width;
-		ih = v->height;
-	}
-	m.flags = frame_flags(job, level);
+	frame_msg(f, job, level, &m);
 	if (job->req.kind == BC_JOB_SNAPSHOT) {
 		all[0] = rects[0];
 		if ((np = snapshot_planes(job, all + 1, planes, &m.flags)) <
@@ -752,37 +759,70 @@ static int finish(const struct flow *f, struct bc_job *job,
 		rects = all;
 		n = 1u + (uint32_t)np;
 	}
-	m.frame.frame_no = job->req.frame_no;
-	m.frame.order = f->order;
-	if (f->order >= job->req.scene_order && job->req.order > f->order) {
-		m.frame.order = job->req.order;
-	}
-	m.frame.camera_seq = job->req.camera_seq;
-	m.frame.encoding = (enum bc_proto_encoding)frame_encoding(job, level);
-	m.frame.width = (uint16_t)job->req.width;
-	m.frame.height = (uint16_t)job->req.height;
-	m.frame.image_width = (uint16_t)iw;
-	m.frame.image_height = (uint16_t)ih;
 	m.frame.nrects = (uint16_t)n;
 	m.frame.rects = rects;
-	if ((rc = frame_bytes(job, &m, ei))) {
-		goto out;
+	if ((rc = frame_bytes(job, &m, &job->done.frame, ei)) == 0) {
+		frame_done(job, level, &m);
 	}
-	job->done.order = m.frame.order;
-	job->done.incomplete = job->incomplete;
-	job->done.shown = (struct bc_shown){
-	    .view = v->id,
-	    .version = v->version,
-	    .level = (int8_t)level,
-	    .lossless = lossless_frame(job, level) &&
-	                (patches(job, level) ? job->req.shown.lossless : true),
-	    .refining = (level > 0 || job->incomplete) && !job->stuck,
-	    .still = (m.flags & BC_PROTO_FLAG_STILL) != 0,
-	};
 out:
 	bc_free(planes[0]);
 	bc_free(planes[1]);
 	return rc;
+}
+
+/* H.264 (PROTOCOL.md 7.15): the picture encoded into the next target's
+ * own stream, its FRAME built (one target a step, so that a large group
+ * gives the worker back between them). A target whose encoder fails gets
+ * no frame (done.vfailed). Returns true when the job is over. */
+static bool video_step(const struct flow *f, struct bc_job *job,
+                       struct bc_errinfo *ei, int *rc)
+{
+	const struct view *v = job->v;
+	int level = bc__view_level(v);
+	bool still = lossless_frame(job, level);
+	while (job->vnext < job->req.ntargets) {
+		uint32_t i = job->vnext++;
+		struct bc_vstream_au au;
+		struct bc_proto_rect r = {
+		    0, 0, (uint16_t)v->width, (uint16_t)v->height, {NULL, 0}};
+		struct bc_msg m;
+		double t0 = bc_clock_ms();
+		*rc = bc_vstream_encode(job->req.video[i], v->frame.rgba,
+		                        v->width, v->height, level, still, &au,
+		                        ei);
+		job->encode_ms += bc_clock_ms() - t0;
+		if (*rc == BC_ENOMEM) {
+			return true;
+		}
+		if (*rc) {
+			job->done.vfailed |= (uint64_t)1 << i;
+			snprintf(job->done.why, sizeof(job->done.why), "%s",
+			         ei->msg);
+			continue;
+		}
+		frame_msg(f, job, level, &m);
+		m.flags |= au.key ? BC_PROTO_FLAG_KEY : 0u;
+		r.data = (struct bc_proto_bytes){au.data, (uint32_t)au.len};
+		m.frame.nrects = 1;
+		m.frame.rects = &r;
+		*rc = frame_bytes(job, &m, &job->done.vframes[i], ei);
+		bc_free(au.data);
+		if (*rc) {
+			return true;
+		}
+		frame_done(job, level, &m);
+		return job->vnext == job->req.ntargets;
+	}
+	/* Past the last target. When every target's encoder failed there is
+	 * nothing to send: the job fails (frames.c moves them to images). */
+	*rc = BC_ECODEC;
+	for (uint32_t i = 0; i < job->req.ntargets; i++) {
+		*rc = job->done.vframes[i] ? 0 : *rc;
+	}
+	if (*rc) {
+		bc_errinfo_set(ei, *rc, "%s", job->done.why);
+	}
+	return true;
 }
 
 /* ---- the slice ----------------------------------------------------------- */
@@ -881,6 +921,11 @@ static bool step(struct bc_work *w, struct worker *wk, struct flow *f,
 		}
 		return *rc != 0;
 	case JS_ENCODE:
+		if (job->req.video[0] &&
+		    frame_encoding(job, bc__view_level(job->v)) ==
+		        BC_PROTO_ENC_H264) {
+			return video_step(f, job, ei, rc);
+		}
 		if (!job->enc && (*rc = encode_begin(wk, job, ei))) {
 			return true;
 		}
@@ -893,7 +938,7 @@ static bool step(struct bc_work *w, struct worker *wk, struct flow *f,
 		*rc = 0;
 		return false;
 	case JS_FINISH:
-		job->encode_ms = bc_encode_job_ms(job->enc);
+		job->encode_ms += bc_encode_job_ms(job->enc);
 		*rc = finish(f, job, ei);
 		return true;
 	default:

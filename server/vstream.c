@@ -26,6 +26,8 @@ struct bc_vstream {
 	uint32_t width, height; /* of enc */
 	uint8_t *scaled;        /* a coarse level's picture scaled up */
 	size_t scaled_cap;
+	uint8_t *rows; /* its rows scaled across, one per traced row */
+	size_t rows_cap;
 };
 
 struct bc_vstream *bc_vstream_new(const struct bc_video_opts *opts)
@@ -61,6 +63,7 @@ void bc_vstream_unref(struct bc_vstream *vs)
 	}
 	bc_video_encoder_destroy(vs->enc);
 	bc_free(vs->scaled);
+	bc_free(vs->rows);
 	bc_free(vs);
 }
 
@@ -125,30 +128,69 @@ static int ready(struct bc_vstream *vs, uint32_t width, uint32_t height,
 	return 0;
 }
 
-/* The picture of level `level` scaled up to width x height: each 2^level
- * block takes the value of its top-left pixel, the one rendered. */
+static bool reserve(uint8_t **p, size_t *cap, size_t bytes)
+{
+	if (*cap < bytes) {
+		uint8_t *q = bc_realloc(*p, bytes);
+		if (!q) {
+			return false;
+		}
+		*p = q;
+		*cap = bytes;
+	}
+	return true;
+}
+
+/* Row j of the traced samples (view pixels (i << l, j << l)) across the
+ * whole width: pixel x between samples x >> l and the next, linearly. */
+static void across(const uint8_t *rgba, uint32_t width, uint32_t j, int l,
+                   uint8_t *out)
+{
+	const uint8_t *src = rgba + (size_t)(j << l) * width * 4u;
+	uint32_t s = 1u << l, last = (width - 1u) >> l;
+	for (uint32_t x = 0; x < width; x++) {
+		uint32_t i0 = x >> l, f = x & (s - 1u);
+		uint32_t i1 = i0 < last ? i0 + 1u : last;
+		const uint8_t *a = src + (size_t)(i0 << l) * 4u;
+		const uint8_t *b = src + (size_t)(i1 << l) * 4u;
+		for (int k = 0; k < 4; k++) {
+			out[(size_t)x * 4u + (size_t)k] =
+			    (uint8_t)((a[k] * (s - f) + b[k] * f) >> l);
+		}
+	}
+}
+
+/* The picture of level `level` scaled up to width x height, bilinearly
+ * between the traced pixels (the top-left pixel of each 2^level block):
+ * smoother than blocks, so the encoder spends its bits on the picture and
+ * the client sees what JPEG clients get from their own scaling. Across on
+ * the traced rows first, then down, which costs a blend of two rows per
+ * output row. */
 static const uint8_t *scaled_up(struct bc_vstream *vs, const uint8_t *rgba,
                                 uint32_t width, uint32_t height, int level)
 {
-	size_t bytes = (size_t)width * height * 4u;
+	size_t row = (size_t)width * 4u;
+	uint32_t s = 1u << level, rows;
 	if (level <= 0) {
 		return rgba;
 	}
-	if (vs->scaled_cap < bytes) {
-		uint8_t *p = bc_realloc(vs->scaled, bytes);
-		if (!p) {
-			return NULL;
-		}
-		vs->scaled = p;
-		vs->scaled_cap = bytes;
+	rows = ((height - 1u) >> level) + 1u;
+	if (!reserve(&vs->scaled, &vs->scaled_cap, row * height) ||
+	    !reserve(&vs->rows, &vs->rows_cap, row * rows)) {
+		return NULL;
+	}
+	for (uint32_t j = 0; j < rows; j++) {
+		across(rgba, width, j, level, vs->rows + row * j);
 	}
 	for (uint32_t y = 0; y < height; y++) {
-		const uint8_t *src =
-		    rgba + (size_t)((y >> level) << level) * width * 4u;
-		uint8_t *dst = vs->scaled + (size_t)y * width * 4u;
-		for (uint32_t x = 0; x < width; x++) {
-			memcpy(dst + (size_t)x * 4u,
-			       src + (size_t)((x >> level) << level) * 4u, 4);
+		uint32_t j0 = y >> level, f = y & (s - 1u);
+		uint32_t j1 = j0 + 1u < rows ? j0 + 1u : j0;
+		const uint8_t *a = vs->rows + row * j0,
+		              *b = vs->rows + row * j1;
+		uint8_t *dst = vs->scaled + row * y;
+		for (size_t k = 0; k < row; k++) {
+			dst[k] =
+			    (uint8_t)((a[k] * (s - f) + b[k] * f) >> level);
 		}
 	}
 	return vs->scaled;

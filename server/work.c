@@ -489,8 +489,10 @@ struct bc_job *bc_work_submit(struct bc_work *w, const struct bc_job_req *req)
 		return NULL;
 	}
 	j->req = *req;
-	if (req->video) {
-		bc_vstream_ref(req->video);
+	for (uint32_t i = 0; i < req->ntargets; i++) {
+		if (req->video[i]) {
+			bc_vstream_ref(req->video[i]);
+		}
 	}
 	j->cls = class_of(req);
 	j->submitted_ms = bc_clock_ms();

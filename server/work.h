@@ -95,10 +95,10 @@ struct bc_job_req {
 	 * is not its presenter's, PROTOCOL.md 5). */
 	uint32_t target_camera_seq[BC_PROTO_MAX_MEMBERS];
 	uint32_t ntargets;
-	/* The target's H.264 stream when a frame of the job is encoding 4
-	 * (one target then: a stream is one client's); the job holds a
-	 * reference. */
-	struct bc_vstream *video;
+	/* Each target's H.264 stream when the job's frames are encoding 4
+	 * (every target's then, or none's): one render, and each target's
+	 * own access unit of it. The job holds a reference to each. */
+	struct bc_vstream *video[BC_PROTO_MAX_MEMBERS];
 };
 
 enum bc_work_outcome {
@@ -125,10 +125,11 @@ struct bc_work_done {
 	uint32_t node;
 	double render_ms, encode_ms; /* 0 when nothing was rendered */
 	uint64_t order;              /* of the scene the frame shows */
-	/* frame carries an access unit of req.video (encoding 4). */
-	bool au;
-	/* BC_WORK_FAILED because the H.264 encoder failed: why. */
-	bool codec_failed;
+	/* With req.video: target i's FRAME, its stream's access unit (NULL
+	 * when it has none: bit i of vfailed says its encoder failed, and
+	 * why says how; frame is NULL). Borrowed as frame is. */
+	struct bc_shared *vframes[BC_PROTO_MAX_MEMBERS];
+	uint64_t vfailed;
 	char why[256]; /* as struct bc_errinfo's msg */
 };
 

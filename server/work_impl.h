@@ -169,8 +169,8 @@ struct bc_job {
 	struct view *v;
 	double submitted_ms, started_ms, render_ms, encode_ms;
 	bool incomplete;
-	bool stuck; /* rays still run out at BC_SRV_RAY_EVALS_MAX */
-	bool key;   /* the H.264 access unit is an IDR: FRAME flag KEY */
+	bool stuck;     /* rays still run out at BC_SRV_RAY_EVALS_MAX */
+	uint32_t vnext; /* H.264: the next target to encode for */
 	struct bc_encode_job *enc; /* JS_ENCODE's rectangles */
 	struct bc_work_done done;
 };

@@ -20,6 +20,9 @@
 #   PACES      "on off" (default) or either
 #   PLOT       a PNG of latency and frames/s per profile (needs Debian's
 #              python3-matplotlib), default wan.png; "" for none
+# BC_WAN_SCENE: a JSON scene the client loads first (default: the daemon's
+# default scene); bench/wan/light.json is one the CPU renderer draws at
+# 30 frames/s and more, so that the link, not the renderer, is measured.
 # Output: one line per run, "profile encoding pace JSON"; a markdown table
 # follows.
 set -eu
@@ -103,7 +106,7 @@ for prof in $PROFILES; do
 		RPID=$!
 		wait_port "$SRV" 10.77.0.1 7878
 		wait_port "$CLI" 127.0.0.1 7879
-		line=$(ip netns exec "$CLI" "$CLIENT" 127.0.0.1:7879 wan "$SIZE" "$SECS" 30 80 "$DOWN" "$enc")
+		line=$(ip netns exec "$CLI" env BC_WAN_SCENE="${BC_WAN_SCENE:-}" "$CLIENT" 127.0.0.1:7879 wan "$SIZE" "$SECS" 30 80 "$DOWN" "$enc")
 		echo "$prof $enc $pace $line"
 		echo "$prof $enc $pace $line" >>"$RESULTS"
 		kill "$RPID" "$DPID" 2>/dev/null || true

@@ -8,9 +8,14 @@
  *  - Frames: each rectangle is decoded off the main thread by
  *    createImageBitmap (JPEG, PNG) or taken as ImageData (raw) and drawn in
  *    order onto a backing canvas of the VIEW size, scaled from the encoded
- *    image size (a refinement level n image by 2^n); frames queued behind
- *    a newer full frame are skipped. A "refining · level N" mark shows
- *    while the last frame drawn had a level above 0 or INCOMPLETE.
+ *    image size (a refinement level n image by 2^n); image frames queued
+ *    behind a newer full image frame are skipped. H.264 frames (encoding
+ *    4, where WebCodecs decodes it: video.js) go through a VideoDecoder
+ *    in order, none skipped, each picture drawn cropped to the view. A
+ *    "refining · level N" mark shows while the last frame drawn had a
+ *    level above 0 or INCOMPLETE.
+ *  - Acknowledgements: with ACKS granted, FRAME_ACK names the newest
+ *    frame below which every frame is drawn, dropped or taken (7.27).
  *  - Camera: orbit (drag), pan (right drag), zoom (wheel), sent as CAMERA
  *    with INTERACTING while the mouse moves and once more without it.
  *  - Picking and dragging: a press sends PICK; if it hits a primitive, the
@@ -65,8 +70,9 @@ import { localBox } from './bounds.js';
 import { layout, unaryLayout, unaryRange, unaryValue } from './prims.js';
 import { kindName, nodeName } from './model.js';
 import { Outliner } from './outliner.js';
-import { Review } from './review.js';
+import { Review, frameChoice } from './review.js';
 import { HistoryPanel } from './history.js';
+import { FrameAcks, VideoStream, h264Decodable } from './video.js';
 
 /* ---- Small vector helpers ------------------------------------------------ */
 
@@ -263,7 +269,10 @@ class Connection {
 /* Decodes FRAME rectangles and draws them, in order, onto a backing canvas
  * of the VIEW size; the visible canvas shows that. */
 class FrameView {
-	constructor(canvas, onDrawn) {
+	/* onDrawn(m, receivedAt, skipped): m is on screen; onHandled(m): m
+	 * needs nothing more (drawn, skipped or dropped); video: the
+	 * VideoStream that decodes encoding-4 frames. */
+	constructor(canvas, { onDrawn, onHandled, video }) {
 		this.canvas = canvas;
 		this.ctx = canvas.getContext('2d');
 		this.back = document.createElement('canvas');
@@ -271,12 +280,17 @@ class FrameView {
 		this.queue = [];
 		this.busy = false;
 		this.onDrawn = onDrawn;
+		this.onHandled = onHandled;
+		this.video = video;
 	}
 
+	/* A full picture that makes every image frame before it moot. H.264
+	 * frames are never moot: each one is a link of the stream's chain. */
 	static isFull(m) {
 		const r = m.rects[0];
-		return m.rects.length === 1 && r.x === 0 && r.y === 0 &&
-			r.w === m.image_width && r.h === m.image_height;
+		return m.encoding !== P.ENC.H264 && m.rects.length === 1 &&
+			r.x === 0 && r.y === 0 && r.w === m.image_width &&
+			r.h === m.image_height;
 	}
 
 	push(m, receivedAt) {
@@ -291,18 +305,28 @@ class FrameView {
 		this.busy = true;
 		try {
 			while (this.queue.length) {
-				/* A newer full frame makes every frame before it moot:
-				 * a slow decoder catches up instead of falling behind. */
+				/* A newer full frame makes the image frames before it
+				 * moot: a slow decoder catches up instead of falling
+				 * behind. */
 				let start = 0;
 				this.queue.forEach((f, i) => {
 					if (FrameView.isFull(f.m)) {
 						start = i;
 					}
 				});
-				const skipped = this.queue.splice(0, start);
+				const skipped = this.queue.slice(0, start).filter((f) =>
+					f.m.encoding !== P.ENC.H264);
+				this.queue = this.queue.filter((f, i) => i >= start ||
+					f.m.encoding === P.ENC.H264);
+				skipped.forEach((f) => this.onHandled(f.m));
 				const { m, receivedAt } = this.queue.shift();
-				await this.draw(m);
-				this.onDrawn(m, receivedAt, skipped.length);
+				try {
+					if (await this.draw(m)) {
+						this.onDrawn(m, receivedAt, skipped.length);
+					}
+				} finally {
+					this.onHandled(m);
+				}
 			}
 		} finally {
 			this.busy = false;
@@ -319,11 +343,25 @@ class FrameView {
 		return createImageBitmap(new Blob([r.data], { type }));
 	}
 
+	/* Draws m; resolves with whether it is on screen (an H.264 frame the
+	 * decoder could not take is not). */
 	async draw(m) {
 		if (this.back.width !== m.width || this.back.height !== m.height) {
 			/* A new size: start from black, the next still is whole. */
 			this.back.width = m.width;
 			this.back.height = m.height;
+		}
+		if (m.encoding === P.ENC.H264) {
+			/* The view's size at every level; an odd side was coded
+			 * one pixel larger: the top-left width x height is the
+			 * picture. */
+			const drawn = await this.video.decode(m, (frame) =>
+				this.bctx.drawImage(frame, 0, 0, m.width, m.height, 0, 0,
+					m.width, m.height));
+			if (drawn) {
+				this.show();
+			}
+			return drawn;
 		}
 		const bitmaps = await Promise.all(m.rects.map((r) =>
 			this.decode(m, r).catch(() => null)));
@@ -339,6 +377,7 @@ class FrameView {
 			}
 		});
 		this.show();
+		return true;
 	}
 
 	show() {
@@ -402,16 +441,25 @@ class App {
 			session: q.get('session') || 'default',
 			name: (q.get('name') || 'browser').slice(0, 32),
 			role: q.get('role') === 'viewer' ? P.ROLE.VIEWER : P.ROLE.EDITOR,
-			encoding: { png: P.ENC.PNG, raw: P.ENC.RAW }[q.get('enc')] ??
-				P.ENC.JPEG,
+			/* enc: jpeg (the default), png, raw, h264 or h264png
+			 * (H.264 moving, the still a PNG). */
+			...(frameChoice(q.get('enc')) ?? frameChoice('jpeg')),
 			downscale: clampInt(q.get('downscale'), 1, 8, 2),
 			quality: clampInt(q.get('quality'), 1, 100, 85),
 		};
 		this.canvas = $('view');
 		this.overlay = $('overlay');
 		this.octx = this.overlay.getContext('2d');
-		this.frames = new FrameView(this.canvas, (m, t, skipped) =>
-			this.drawn(m, t, skipped));
+		/* H.264 through WebCodecs, when this browser has it: HELLO
+		 * waits for the answer. */
+		this.videoOk = null; /* null: not known yet */
+		this.videoProbe = h264Decodable().then((ok) => this.videoKnown(ok));
+		this.video = new VideoStream({ needKey: () => this.keyWanted(),
+			failed: (text) => this.videoFailed(text) });
+		this.frames = new FrameView(this.canvas, {
+			onDrawn: (m, t, skipped) => this.drawn(m, t, skipped),
+			onHandled: (m) => m.acks?.done(m.frame_no),
+			video: this.video });
 		this.meter = new Meter();
 		this.camera = new Camera();
 		this.conn = new Connection(this.cfg.ws, (m) => this.handle(m),
@@ -458,6 +506,11 @@ class App {
 		this.cameraSeq = 0; /* my last CAMERA, and when it left */
 		this.cameraSentAt = 0;
 		this.viewSentAt = 0; /* my last VIEW, until a frame comes */
+		this.viewSent = null; /* { seq, encoding, still } of my last VIEW */
+		this.keyAskedAt = -Infinity; /* a VIEW sent again for a KEY */
+		this.acks = null; /* FrameAcks, when WELCOME granted ACKS */
+		this.snapshots = new Map(); /* my SNAPSHOT seq -> resolve */
+		this.video?.reset();
 		this.lastFrame = null;
 		this.presenter = 0; /* PRESENTER: who presents, 0 nobody */
 		this.following = false;
@@ -473,17 +526,26 @@ class App {
 		if (s === 'open') {
 			el.textContent = 'connected';
 			el.className = 'conn up';
-			this.conn.send(P.MSG.HELLO, { version_min: 1, version_max: 1,
-				encodings: P.ENCODINGS_IMAGES, max_frame_bytes: 0,
-				client_name: this.cfg.name, token: this.cfg.token,
-				features: P.FEATURE.ALL & ~P.FEATURE.ACKS });
+			/* Encoding 4 only where WebCodecs decodes H.264; every
+			 * feature this page knows, acknowledgements included. */
+			const ws = this.conn.ws;
+			this.videoProbe.then(() => {
+				if (this.conn.ws !== ws) {
+					return;
+				}
+				this.conn.send(P.MSG.HELLO, { version_min: 1,
+					version_max: 1, encodings: this.encodings(),
+					max_frame_bytes: 0, client_name: this.cfg.name,
+					token: this.cfg.token, features: P.FEATURE.ALL });
+			});
 			return;
 		}
 		if (s === 'error') {
 			this.say(why);
 			return;
 		}
-		for (const resolve of this.picks.values()) {
+		for (const resolve of [...this.picks.values(),
+			...this.snapshots.values()]) {
 			resolve(null);
 		}
 		this.picture?.fail(`the connection was lost (${why})`);
@@ -593,23 +655,33 @@ class App {
 	}
 
 	handle(m) {
+		if (m.type === P.MSG.FRAME && this.acks) {
+			/* Every FRAME is acknowledged once handled (7.27). */
+			m.acks = this.acks;
+			this.acks.got(m.frame_no, performance.now());
+		}
 		if (this.review.saw(m) || this.history.saw(m)) {
 			return;
 		}
 		/* The answers to a picture's tiles are its own, not frames of
-		 * the view. */
+		 * the view; a snapshot's answer is handled once taken. */
 		if ((m.type === P.MSG.FRAME || m.type === P.MSG.ERROR) &&
-			this.picture?.handle(m)) {
+			(this.picture?.handle(m) || this.snapshotAnswer(m))) {
+			m.acks?.done(m.frame_no);
 			return;
 		}
-		/* The page asks for snapshots only as a picture's tiles: one
-		 * that arrives after its picture failed is not for the view. */
+		/* A snapshot whose asker gave up is not for the view. */
 		if (m.type === P.MSG.FRAME && (m.flags & P.FLAG.SNAPSHOT)) {
+			m.acks?.done(m.frame_no);
 			return;
 		}
 		switch (m.type) {
 		case P.MSG.WELCOME:
 			this.welcome = m;
+			if ((m.features ?? 0) & P.FEATURE.ACKS) {
+				this.acks = new FrameAcks((n) => this.conn.send(
+					P.MSG.FRAME_ACK, { frame_no: n }));
+			}
 			this.conn.send(P.MSG.SESSION_JOIN, { role: this.cfg.role,
 				name: this.cfg.session });
 			break;
@@ -708,6 +780,24 @@ class App {
 		}
 		if (m.seq && m.seq === this.viewSeq) {
 			this.viewSentAt = 0;
+			if (this.viewSent?.encoding === P.ENC.H264) {
+				/* No H.264 from this daemon (ENOTSUP: built without
+				 * an encoder): images instead. */
+				this.review.refuse(this.viewSent, m);
+				this.fallBack(`H.264 frames refused by the daemon ` +
+					`(${P.errName(m.code)}: ${m.text})`);
+				return;
+			}
+		}
+		if (m.code === P.ERR.ECODEC && m.seq === 0 &&
+			this.cfg.encoding === P.ENC.H264) {
+			/* The daemon's encoder failed: its frames come in the
+			 * still's encoding or JPEG now (7.15); so says the
+			 * control. */
+			this.cfg.encoding = this.cfg.still || P.ENC.JPEG;
+			this.cfg.still = 0;
+			this.review.renderView();
+			return;
 		}
 		if (m.code === P.ERR.EAUTH) {
 			this.halt(m.code, `The daemon refused ${this.cfg.token
@@ -945,16 +1035,107 @@ class App {
 		this.view = { width: w, height: h };
 		/* Resizing sends many sizes in a row: the last one counts. */
 		clearTimeout(this.viewTimer);
-		this.viewTimer = setTimeout(() => {
-			if ((this.viewSeq = this.conn.send(P.MSG.VIEW, {
-				width: w, height: h, encoding: this.cfg.encoding,
-				quality_interactive: Math.min(this.cfg.quality, 70),
-				quality_still: this.cfg.quality,
-				downscale: this.cfg.downscale,
-			}))) {
-				this.viewSentAt = performance.now();
+		this.viewTimer = setTimeout(() => this.sendView(), force ? 0 : 120);
+	}
+
+	/* VIEW for this.view in the chosen encoding; the still in its own
+	 * (still_encoding) only after a HELLO with encoding 4 that the
+	 * daemon took. */
+	sendView() {
+		const { width, height } = this.view;
+		const { encoding, quality } = this.cfg;
+		const still = encoding === P.ENC.H264 ? this.cfg.still : 0;
+		const seq = this.conn.send(P.MSG.VIEW, { width, height, encoding,
+			quality_interactive: Math.min(quality, 70),
+			quality_still: quality, downscale: this.cfg.downscale,
+			...(still ? { still_encoding: still } : {}) });
+		this.viewSeq = seq;
+		if (seq) {
+			this.viewSentAt = performance.now();
+			this.viewSent = { seq, encoding, still };
+		}
+	}
+
+	/* ---- H.264 (video.js) ---- */
+
+	/* HELLO's encodings: the images, and H.264 where it decodes. */
+	encodings() {
+		return P.ENCODINGS_IMAGES | (this.videoOk ? 1 << (P.ENC.H264 - 1)
+			: 0);
+	}
+
+	/* The answer of the WebCodecs probe: without H.264 the page keeps
+	 * to images, whatever enc= asked. */
+	videoKnown(ok) {
+		this.videoOk = ok;
+		if (!ok && this.cfg.encoding === P.ENC.H264) {
+			this.cfg.encoding = P.ENC.JPEG;
+			this.cfg.still = 0;
+			this.say('H.264 video needs WebCodecs\' VideoDecoder with ' +
+				'H.264, which this browser lacks: JPEG frames instead');
+		}
+		this.review?.renderView();
+	}
+
+	/* A delta frame came with no KEY before it (or the decoder lost its
+	 * place): the same VIEW again makes the daemon start the stream
+	 * over with a KEY (7.15). At most once a second. */
+	keyWanted() {
+		const now = performance.now();
+		if (!this.info || !this.view || this.cfg.encoding !==
+			P.ENC.H264 || now - this.keyAskedAt < 1000) {
+			return;
+		}
+		this.keyAskedAt = now;
+		this.sendView();
+	}
+
+	/* The decoder broke: say so and ask for JPEG. */
+	videoFailed(text) {
+		this.review.videoFailed(text);
+		this.fallBack(`H.264 decoding failed (${text})`);
+	}
+
+	/* JPEG frames instead of H.264, saying why. */
+	fallBack(why) {
+		if (this.cfg.encoding !== P.ENC.H264) {
+			return;
+		}
+		this.cfg.encoding = P.ENC.JPEG;
+		this.cfg.still = 0;
+		this.say(`${why}: JPEG frames instead`);
+		this.review.renderView();
+		if (this.info && this.view) {
+			this.sendView();
+		}
+	}
+
+	/* ---- snapshots of the view (tests and the console) ---- */
+
+	/* SNAPSHOT of the view (PNG or raw): resolves with the answering
+	 * FRAME, or null when refused or the connection went. */
+	snapshot(encoding) {
+		return new Promise((resolve) => {
+			const seq = this.conn.send(P.MSG.SNAPSHOT, { encoding });
+			if (!seq) {
+				resolve(null);
+				return;
 			}
-		}, force ? 0 : 120);
+			this.snapshots.set(seq, resolve);
+		});
+	}
+
+	/* Takes the answer to snapshot() (FRAME or ERROR); returns whether m
+	 * was one. */
+	snapshotAnswer(m) {
+		const resolve = m.seq ? this.snapshots.get(m.seq) : undefined;
+		if (!resolve || (m.type === P.MSG.FRAME && !(m.flags &
+			P.FLAG.SNAPSHOT))) {
+			return false;
+		}
+		this.snapshots.delete(m.seq);
+		resolve(m.type === P.MSG.FRAME ? m : null);
+		return true;
 	}
 
 	sendCamera(interacting) {
@@ -1727,7 +1908,7 @@ class App {
 			$('frameinfo').textContent = `#${f.frame_no} · ` +
 				`${f.image_width}×${f.image_height}` +
 				(f.image_width !== f.width ? ` → ${f.width}×${f.height}` : '') +
-				` · ${['', 'jpeg', 'png', 'raw'][f.encoding]}` +
+				` · ${['', 'jpeg', 'png', 'raw', 'h264'][f.encoding]}` +
 				` · ${f.rects} rect${f.rects > 1 ? 's' : ''}` +
 				(f.level ? ` · level ${f.level}` : '') +
 				(f.still ? ' · still' : '') + ` · order ${f.order}`;
@@ -1735,6 +1916,8 @@ class App {
 		this.renderLastEdit();
 		this.showPending();
 		this.review.update();
+		/* A frame nothing took in 5 s is let go: never a stall. */
+		this.acks?.let(now, 5000);
 	}
 
 	/* ---- for tests and the console ---- */
@@ -1767,6 +1950,12 @@ class App {
 				text: this.halted.text } : null,
 			tokenSet: !!this.cfg.token,
 			pending: !!(this.info && this.pendingSince()),
+			encoding: this.cfg.encoding,
+			stillEncoding: this.cfg.still,
+			encodings: this.encodings(),
+			videoOk: this.videoOk,
+			video: this.video.state(),
+			acks: this.acks ? this.acks.state() : null,
 		};
 	}
 }
@@ -1858,6 +2047,12 @@ window.blobcast = {
 		order: String(r.order) })),
 	/* The Scene panel: the tree, its rows, its message line. */
 	outliner: () => app.outliner.state(),
+	/* SNAPSHOT of the view in encoding (2 PNG, 3 raw): resolves with
+	 * { encoding, width, height, flags, data (the colour's bytes) }, or
+	 * null when refused. */
+	snapshot: (encoding) => app.snapshot(encoding).then((m) => m && {
+		encoding: m.encoding, width: m.width, height: m.height,
+		flags: m.flags, data: m.rects[0].data }),
 	/* RGBA of the last picture's rectangle (x, y, w, h), as an array. */
 	picturePixels: (x, y, w, h) => Array.from(app.lastPicture.canvas
 		.getContext('2d').getImageData(x, y, w, h).data),

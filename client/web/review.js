@@ -7,9 +7,10 @@
  *    of the mirror's primitives (bounds.js);
  *  - downloads: a PNG of the view (the Picture panel's tiled snapshot at
  *    the view's size) and the scene as a JSON scene file (scenejson.js);
- *  - the frame encoding (JPEG, PNG, raw) and JPEG quality, sent as VIEW
- *    (7.14); an encoding the daemon refuses is marked and the control
- *    goes back;
+ *  - the frame encoding (JPEG, PNG, raw, H.264 video, or H.264 with an
+ *    exact PNG still) and JPEG quality, sent as VIEW (7.14); H.264 is
+ *    offered only where WebCodecs decodes it (video.js); an encoding the
+ *    daemon refuses is marked and the control goes back;
  *  - the token state in the header: editor, viewer, view only (a
  *    viewer-only token), with or without a token, refused, and the
  *    warnings that go with them;
@@ -25,9 +26,28 @@ import { SessionPanel } from './sessions.js';
 
 const $ = (id) => document.getElementById(id);
 
-/* Encoding names as VIEW numbers them. */
-const ENC_NAME = { [P.ENC.JPEG]: 'jpeg', [P.ENC.PNG]: 'png',
-	[P.ENC.RAW]: 'raw' };
+/* What the encoding control and the page's `enc` parameter choose: the
+ * VIEW's encoding and its still_encoding (0: the still in the same). */
+const FRAME_CHOICES = Object.freeze([
+	{ name: 'jpeg', encoding: P.ENC.JPEG, still: 0 },
+	{ name: 'png', encoding: P.ENC.PNG, still: 0 },
+	{ name: 'raw', encoding: P.ENC.RAW, still: 0 },
+	{ name: 'h264', encoding: P.ENC.H264, still: 0 },
+	{ name: 'h264png', encoding: P.ENC.H264, still: P.ENC.PNG },
+]);
+
+/* { encoding, still } for an `enc` name, or undefined. */
+export function frameChoice(name) {
+	const c = FRAME_CHOICES.find((f) => f.name === name);
+	return c ? { encoding: c.encoding, still: c.still } : undefined;
+}
+
+/* The choice's name, and its value in the control ("4+2": H.264 with a
+ * PNG still). */
+const choiceName = (encoding, still) => FRAME_CHOICES.find((f) =>
+	f.encoding === encoding && f.still === still)?.name ?? 'jpeg';
+const choiceValue = (encoding, still) => (still ? `${encoding}+${still}`
+	: String(encoding));
 
 /* Keys typed into a field keep their meaning there. */
 function typing(e) {
@@ -75,13 +95,13 @@ export class Review {
 		$('jsonbtn').addEventListener('click', () => this.saveJson());
 		const enc = $('encoding');
 		for (const o of enc.options) {
-			/* Only what the page announced in HELLO. */
-			o.disabled = !(P.ENCODINGS_IMAGES & (1 << (Number(o.value) - 1)));
+			o.dataset.label = o.textContent;
 		}
-		enc.value = String(this.app.cfg.encoding);
 		$('quality').value = String(this.app.cfg.quality);
-		enc.addEventListener('change', () => this.setView(Number(enc.value),
-			this.app.cfg.quality));
+		enc.addEventListener('change', () => {
+			const [e, still = 0] = enc.value.split('+').map(Number);
+			this.setView(e, this.app.cfg.quality, still);
+		});
 		$('quality').addEventListener('change', () => {
 			const q = Math.round(Number($('quality').value));
 			if (!(q >= 1 && q <= P.LIMITS.MAX_QUALITY)) {
@@ -188,13 +208,18 @@ export class Review {
 
 	/* Asks for frames in encoding at quality (VIEW); the daemon's refusal
 	 * puts the control back. Also kept in the address bar. */
-	setView(encoding, quality) {
+	setView(encoding, quality, still = 0) {
 		const cfg = this.app.cfg;
-		const back = { encoding: cfg.encoding, quality: cfg.quality };
+		const back = { encoding: cfg.encoding, quality: cfg.quality,
+			still: cfg.still };
 		cfg.encoding = encoding;
 		cfg.quality = quality;
+		cfg.still = still;
+		if (encoding === P.ENC.H264) {
+			this.videoError = ''; /* a new decoder tries again */
+		}
 		const q = new URLSearchParams(location.search);
-		q.set('enc', ENC_NAME[encoding]);
+		q.set('enc', choiceName(encoding, still));
 		q.set('quality', String(quality));
 		history.replaceState(null, '', `${location.pathname}?${q}` +
 			location.hash);
@@ -214,16 +239,42 @@ export class Review {
 	renderView() {
 		const cfg = this.app.cfg;
 		const enc = $('encoding');
-		enc.value = String(cfg.encoding);
 		for (const o of enc.options) {
-			const e = Number(o.value);
-			if (this.refused.has(e)) {
-				o.disabled = true;
-				o.textContent = `${ENC_NAME[e]} (refused)`;
-			}
+			const e = Number(o.value.split('+')[0]);
+			/* Only what the page announces in HELLO: H.264 where
+			 * WebCodecs decodes it (not known yet: not offered). */
+			const video = e === P.ENC.H264;
+			const unsupported = video ? !this.app.videoOk
+				: !(P.ENCODINGS_IMAGES & (1 << (e - 1)));
+			o.disabled = unsupported || this.refused.has(e);
+			o.textContent = o.dataset.label + (this.refused.has(e)
+				? ' (refused)' : video && unsupported &&
+				this.app.videoOk === false ? ' (not in this browser)'
+				: video && this.videoError ? ' (failed)' : '');
+			o.title = video && this.videoError
+				? `decoding failed: ${this.videoError}` : '';
 		}
+		enc.value = choiceValue(cfg.encoding, cfg.still);
 		$('quality').value = String(cfg.quality);
 		$('quality').disabled = cfg.encoding !== P.ENC.JPEG;
+	}
+
+	/* The daemon refused a VIEW ({ encoding }) with ERROR m: an encoding
+	 * it does not take (EINVAL: not announced; ENOTSUP: H.264 from a
+	 * daemon without an encoder) is marked and no longer offered. */
+	refuse(view, m) {
+		if (m.code === P.ERR.EINVAL || (m.code === P.ERR.ENOTSUP &&
+			view.encoding === P.ENC.H264)) {
+			this.refused.add(view.encoding);
+		}
+		this.renderView();
+	}
+
+	/* The page's H.264 decoder failed (text: why): the control says so;
+	 * choosing H.264 again tries a new decoder. */
+	videoFailed(text) {
+		this.videoError = text;
+		this.renderView();
 	}
 
 	/* ---- messages the page receives ---- */
@@ -254,13 +305,13 @@ export class Review {
 		if (ask && m.seq && m.seq === ask.seq) {
 			/* The daemon keeps the VIEW it had: so does the control. */
 			this.viewAsk = null;
-			if (m.code === P.ERR.EINVAL) {
-				this.refused.add(app.cfg.encoding);
-			}
-			app.say(`${ENC_NAME[app.cfg.encoding]} frames refused by the ` +
-				`daemon (${P.errName(m.code)}: ${m.text})`);
+			this.refuse(app.viewSent ?? app.cfg, m);
+			app.say(`${choiceName(app.cfg.encoding, app.cfg.still)} ` +
+				`frames refused by the daemon (${P.errName(m.code)}: ` +
+				`${m.text})`);
 			app.cfg.encoding = ask.back.encoding;
 			app.cfg.quality = ask.back.quality;
+			app.cfg.still = ask.back.still;
 			this.renderView();
 			/* Said here, in full; a refused VIEW gets no frame, so it
 			 * is not pending (what the page does with such an ERROR). */
@@ -361,6 +412,9 @@ export class Review {
 			sessionCamera: () => this.sessionCamera(),
 			cameraSeq: () => this.app.cameraSeq,
 			tokenState: () => this.tokenState(),
+			/* Encodings the daemon refused (EINVAL, or ENOTSUP for
+			 * H.264). */
+			refusedEncodings: () => [...this.refused],
 			sessions: () => ({ status: this.sessions.status,
 				busy: this.sessions.busy,
 				names: this.sessions.entries?.map((e) => e.name) ?? null }),
