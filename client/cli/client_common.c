@@ -55,7 +55,10 @@ struct bc_client_opts bc_cli_connect_opts(const struct bc_cli_call *a)
 	    .token = a->token ? a->token : getenv("BLOBCAST_TOKEN"),
 	    .timeout_ms = a->timeout_ms,
 	    .ca_file = a->ca,
-	    .insecure = a->insecure};
+	    .insecure = a->insecure,
+	    .encodings = a->encoding == BC_PROTO_ENC_H264
+	                     ? BC_PROTO_ENCODINGS_ALL
+	                     : BC_PROTO_ENCODINGS_IMAGES};
 }
 
 int bc_cli_connect(const struct bc_cli_call *a, struct bc_client **c)

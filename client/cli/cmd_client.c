@@ -63,6 +63,7 @@ static const struct bc_opt_name encoding_names[] = {
     {"jpeg", BC_PROTO_ENC_JPEG},
     {"png", BC_PROTO_ENC_PNG},
     {"raw", BC_PROTO_ENC_RAW},
+    {"h264", BC_PROTO_ENC_H264},
     {NULL, 0},
 };
 
@@ -160,7 +161,17 @@ static int client_opts(const struct bc_cli_cmd *k, struct bc_cli_call *a,
 	      .dst = &p->encoding,
 	      .arg = "E",
 	      .names = encoding_names,
-	      .help = "{choices} for still frames (default jpeg)"}},
+	      .help = "{choices} (default jpeg); h264: one H.264\n"
+	              "access unit of the whole view per frame, still\n"
+	              "included (the server must have an encoder)"}},
+	    {BC_CLI_O_RECORD,
+	     {.name = "record",
+	      .kind = BC_OPT_STRING,
+	      .dst = &a->record,
+	      .arg = "FILE",
+	      .help = "with --encoding h264: save the stream as a raw\n"
+	              "H.264 Annex B file (.h264; ffplay and ffprobe\n"
+	              "read it), from its first KEY frame"}},
 	    {BC_CLI_O_DOWNSCALE,
 	     {.name = "downscale",
 	      .kind = BC_OPT_U32,

@@ -69,6 +69,7 @@ enum {
 	BC_CLI_O_CHILD = 1u << 21,
 	BC_CLI_O_OFFSET = 1u << 22,
 	BC_CLI_O_ANY = 1u << 23,
+	BC_CLI_O_RECORD = 1u << 24,
 };
 #define BC_CLI_O_CAMERA                                                        \
 	(BC_CLI_O_EYE | BC_CLI_O_TARGET | BC_CLI_O_UP | BC_CLI_O_FOV)
@@ -78,8 +79,9 @@ enum {
 struct bc_cli_call {
 	const char *cmd;
 	const char *server, *token, *name, *session, *out, *depth, *ids;
-	const char *ca; /* --ca: TLS trust anchors */
-	bool insecure;  /* --insecure: no TLS certificate checks */
+	const char *ca;     /* --ca: TLS trust anchors */
+	const char *record; /* watch --record: the H.264 file, or NULL */
+	bool insecure;      /* --insecure: no TLS certificate checks */
 	int timeout_ms;
 	uint16_t width, height;
 	bool has_size;
@@ -162,7 +164,9 @@ int bc_cli_server_failed(const struct bc_cli_call *a, const struct bc_client *c,
                          const struct bc_msg *m);
 
 /* The connection the options ask for: --server, --token (or their
- * environment variables), --name, --timeout, --ca, --insecure. */
+ * environment variables), --name, --timeout, --ca, --insecure, and H.264
+ * announced in HELLO with --encoding h264 (only then: a server of a text
+ * before H.264 refuses a HELLO that announces it). */
 struct bc_client_opts bc_cli_connect_opts(const struct bc_cli_call *a);
 
 /* Connects as the options say; 0, or the exit status after saying why. */

@@ -2,15 +2,18 @@
  * `blobcast watch`: joins a session as a viewer and prints a line per
  * frame, with the latency this client can measure, and a line per member
  * list, change and presenter; a lost connection is joined again. It owns
- * the arrival times that frames are measured against; the authors of
- * changes are named from the library's roster (bc_client_members).
+ * the arrival times that frames are measured against and the --record
+ * file of an H.264 stream; the authors of changes are named from the
+ * library's roster (bc_client_members).
  */
 #include "cmd_client.h"
 
+#include <errno.h>
 #include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
+#include <strings.h>
 #include <time.h>
 
 #include "blobcast/alloc.h"
@@ -109,6 +112,113 @@ static void print_presenter(const struct bc_client *c, uint32_t id,
 	       following ? " following" : "");
 }
 
+/* --record: the access units of an H.264 stream, appended as they come
+ * (an Annex B byte stream is its access units one after the other), from
+ * a KEY frame on: the file starts with an SPS and a decoder can play it
+ * from its start. After a frame this client could not decode (the chain
+ * is broken) recording waits for the next KEY frame. */
+struct recorder {
+	FILE *f;
+	const char *path;
+	bool keyed; /* a KEY frame started the chain being written */
+	uint64_t frames, bytes;
+};
+
+/* Containers the file name may ask for that this build cannot write. */
+static const char *const containers[] = {".mp4", ".m4v",  ".mov",
+                                         ".mkv", ".webm", NULL};
+
+/* Opens --record's file. Returns 0, or the exit status after saying why. */
+static int record_open(const struct bc_cli_call *a, struct recorder *r)
+{
+	const char *ext = strrchr(a->record, '.');
+	memset(r, 0, sizeof(*r));
+	if (a->encoding != BC_PROTO_ENC_H264) {
+		fprintf(stderr, "blobcast watch: --record saves an H.264 "
+		                "stream: give --encoding h264 too\n");
+		return BC_CLI_EXIT_USAGE;
+	}
+	for (size_t i = 0; ext && containers[i]; i++) {
+		if (strcasecmp(ext, containers[i]) == 0) {
+			fprintf(stderr,
+			        "blobcast watch: --record %s: this build "
+			        "writes raw H.264 only, not %s (it has no "
+			        "muxer); record to a .h264 file and wrap it "
+			        "later, e.g. ffmpeg -i FILE.h264 -c copy "
+			        "FILE%s\n",
+			        a->record, ext, ext);
+			return BC_CLI_EXIT_USAGE;
+		}
+	}
+	if (!(r->f = fopen(a->record, "wb"))) {
+		fprintf(stderr, "blobcast watch: cannot write %s: %s\n",
+		        a->record, strerror(errno));
+		return BC_CLI_EXIT_FAIL;
+	}
+	r->path = a->record;
+	return 0;
+}
+
+/* Appends FRAME m's access unit when it belongs to the stream being
+ * recorded. Returns 0, or the exit status after saying why. */
+static int record_frame(struct recorder *r, const struct bc_msg *m)
+{
+	const struct bc_proto_rect *rect = &m->frame.rects[0];
+	if (!r->f || m->frame.encoding != BC_PROTO_ENC_H264 ||
+	    (m->flags & BC_PROTO_FLAG_SNAPSHOT) || m->frame.nrects != 1) {
+		return 0;
+	}
+	if (m->flags & BC_PROTO_FLAG_KEY) {
+		r->keyed = true;
+	}
+	if (!r->keyed) {
+		return 0;
+	}
+	if (fwrite(rect->data.ptr, 1, rect->data.len, r->f) != rect->data.len) {
+		fprintf(stderr, "blobcast watch: writing %s: %s\n", r->path,
+		        strerror(errno));
+		return BC_CLI_EXIT_FAIL;
+	}
+	r->frames++;
+	r->bytes += rect->data.len;
+	return 0;
+}
+
+/* Closes the file and prints `record file=PATH frames=N bytes=B`.
+ * Returns 0, or the exit status after saying why. */
+static int record_close(struct recorder *r, bool report)
+{
+	int failed;
+	if (!r->f) {
+		return 0;
+	}
+	failed = fclose(r->f) != 0;
+	r->f = NULL;
+	if (failed) {
+		fprintf(stderr, "blobcast watch: writing %s: %s\n", r->path,
+		        strerror(errno));
+		return BC_CLI_EXIT_FAIL;
+	}
+	if (report) {
+		printf("record file=%s frames=%llu bytes=%llu\n", r->path,
+		       (unsigned long long)r->frames,
+		       (unsigned long long)r->bytes);
+	}
+	return 0;
+}
+
+/* Sends the VIEW the options ask for. */
+static int send_view(const struct bc_cli_call *a, struct bc_client *c,
+                     struct bc_errinfo *ei)
+{
+	return bc_client_view(c,
+	                      &(struct bc_msg_view){.width = a->width,
+	                                            .height = a->height,
+	                                            .encoding = a->encoding,
+	                                            .downscale = a->downscale},
+	                      NULL, ei);
+}
+
 /* After joining (the roster is the library's): prints the member list,
  * asks who presents and sends the VIEW, whose time *view_at receives.
  * Returns 0 or a BC_E* code with the reason in ei. */
@@ -124,12 +234,7 @@ static int watch_start(const struct bc_cli_call *a, struct bc_client *c,
 	}
 	print_presenter(c, bc_client_info(c)->presenter, false);
 	*view_at = bc_clock_ms();
-	return bc_client_view(c,
-	                      &(struct bc_msg_view){.width = a->width,
-	                                            .height = a->height,
-	                                            .encoding = a->encoding,
-	                                            .downscale = a->downscale},
-	                      NULL, ei);
+	return send_view(a, c, ei);
 }
 
 /* Connects, joins a->session as a viewer and asks for frames.
@@ -178,6 +283,10 @@ static int run_watch(struct bc_cli_call *a)
 	struct bc_cli_stop sig;
 	struct bc_msg m;
 	struct bc_msg_stats st;
+	struct recorder rec = {0};
+	/* An H.264 frame did not decode and VIEW went again: until its KEY
+	 * frame comes, frames that fail are expected. */
+	bool awaiting_key = false;
 	uint64_t nframes = 0, last_order = 0, total_bytes = 0;
 	uint64_t joined_at_frame = 0;
 	double view_at = 0.0, last_frame_at;
@@ -192,6 +301,9 @@ static int run_watch(struct bc_cli_call *a)
 	if (!(times = bc_calloc(1, sizeof(*times)))) {
 		fprintf(stderr, "blobcast watch: out of memory\n");
 		status = BC_CLI_EXIT_FAIL;
+		goto out;
+	}
+	if (a->record && (status = record_open(a, &rec))) {
 		goto out;
 	}
 	/* The first connection must work: a wrong address or session is a
@@ -250,6 +362,9 @@ static int run_watch(struct bc_cli_call *a)
 			printf("rejoined session=%s\n", a->session);
 			joined_at_frame = nframes;
 			last_order = 0;
+			/* A new stream: it starts at a KEY frame. */
+			rec.keyed = false;
+			awaiting_key = false;
 		}
 		rc = bc_client_recv(c, &m, BC_CLI_SLICE_MS);
 		if (rc == 0) {
@@ -326,17 +441,44 @@ static int run_watch(struct bc_cli_call *a)
 			}
 			break;
 		case BC_MSG_ERROR:
+			/* The server's H.264 encoder failed: the frames go on
+			 * in another encoding, which the text names. */
+			if (m.error.code == (uint16_t)-BC_ECODEC &&
+			    m.seq == 0) {
+				fprintf(
+				    stderr, "blobcast watch: server: %.*s\n",
+				    (int)m.error.text.len, m.error.text.ptr);
+				break;
+			}
 			status = bc_cli_server_failed(a, c, &m);
 			goto out;
 		case BC_MSG_FRAME:
 			nframes++;
 			last_frame_at = at;
 			total_bytes += bc_client_info(c)->last_msg_bytes;
-			if (bc_client_image_apply(&img, &m, &ei)) {
+			if (m.flags & BC_PROTO_FLAG_KEY) {
+				awaiting_key = false;
+			}
+			if (bc_client_image_apply(&img, &m, &ei) &&
+			    !awaiting_key) {
 				fprintf(stderr,
 				        "blobcast watch: frame %u does not "
 				        "decode: %s\n",
 				        m.frame.frame_no, ei.msg);
+				/* A broken H.264 chain: VIEW again brings a
+				 * KEY frame, where the file goes on too. */
+				if (m.frame.encoding == BC_PROTO_ENC_H264) {
+					rec.keyed = false;
+					awaiting_key = true;
+					if (send_view(a, c, &ei)) {
+						status = bc_cli_failed(
+						    a, c, "VIEW", &ei);
+						goto out;
+					}
+				}
+			} else if (!awaiting_key &&
+			           (status = record_frame(&rec, &m))) {
+				goto out;
 			}
 			since = -1.0;
 			if (nframes == joined_at_frame + 1) {
@@ -371,6 +513,9 @@ static int run_watch(struct bc_cli_call *a)
 	if (a->frames && nframes >= a->frames) {
 		end = "frames";
 	}
+	if ((status = record_close(&rec, true))) {
+		goto out;
+	}
 	/* Server averages when the connection is up; a run that ends while
 	 * reconnecting reports its own counts only. */
 	memset(&st, 0, sizeof(st));
@@ -393,6 +538,7 @@ static int run_watch(struct bc_cli_call *a)
 		status = bc_cli_frames_timed_out(a, nframes, idle_limit);
 	}
 out:
+	record_close(&rec, false);
 	bc_cli_stop_restore(&sig);
 	bc_free(times);
 	bc_client_image_finish(&img);
@@ -404,10 +550,11 @@ out:
 const struct bc_cli_cmd bc_cli_cmd_watch = {
     .name = "watch",
     .opts = BC_CLI_O_SESSION | BC_CLI_O_SIZE | BC_CLI_O_FRAMES |
-            BC_CLI_O_ENCODING | BC_CLI_O_DOWNSCALE,
+            BC_CLI_O_ENCODING | BC_CLI_O_DOWNSCALE | BC_CLI_O_RECORD,
     .min_pos = 0,
     .max_pos = 0,
-    .synopsis = "--session NAME [--frames N] [--size WxH]",
+    .synopsis = "--session NAME [--frames N] [--size WxH] [--encoding h264 "
+                "[--record FILE]]",
     .summary = "print a line per frame the session sends",
     .help =
         "Joins session NAME as a viewer and prints one line per frame:\n"
@@ -439,5 +586,16 @@ const struct bc_cli_cmd bc_cli_cmd_watch = {
         "the link (rtt_ms, link_mbit: the delivery rate; 0 over a Unix\n"
         "socket), the frames that waited for the link (paced) or that a\n"
         "newer one replaced unsent (spoiled), and end=frames (N frames\n"
-        "came), end=timeout or end=stopped (Ctrl-C, SIGTERM).",
+        "came), end=timeout or end=stopped (Ctrl-C, SIGTERM).\n"
+        "With --encoding h264 every frame is one H.264 access unit of the\n"
+        "whole view (a KEY frame where a decoder may start: after each\n"
+        "VIEW, and every still), decoded here to check it; a frame that\n"
+        "does not decode sends the VIEW again for a KEY frame. The server\n"
+        "must have an H.264 encoder (else it refuses, ENOTSUP). --record\n"
+        "FILE saves those access units as they come, from the first KEY\n"
+        "frame, as a raw H.264 Annex B stream (ffplay FILE, ffprobe FILE;\n"
+        "ffmpeg -i FILE -c copy OUT.mp4 makes an MP4), and prints\n"
+        "  record file=FILE frames=N bytes=B\n"
+        "before the stats line. Containers (.mp4, .mkv, ...) are refused:\n"
+        "this build has no muxer.",
     .run = run_watch};

@@ -903,9 +903,11 @@ static int hello(struct bc_client *c, const struct bc_client_opts *o,
 	m.hello.client_name.len = (uint32_t)strlen(name);
 	m.hello.token.ptr = token;
 	m.hello.token.len = (uint32_t)strlen(token);
-	/* Everything of the protocol this library decodes. */
+	/* Everything of the protocol this library decodes; ACKS binds the
+	 * program to acknowledge its frames, so only when it says it will. */
 	m.hello.has_features = true;
-	m.hello.features = BC_PROTO_FEATURES_READ;
+	m.hello.features =
+	    BC_PROTO_FEATURES_READ | (o->acks ? BC_PROTO_FEATURE_ACKS : 0u);
 	if ((rc = send_or_say(c, &m, NULL, ei))) {
 		return rc;
 	}
@@ -1513,10 +1515,48 @@ out:
 	return rc;
 }
 
+/* Whether a VIEW's encodings are ones our HELLO announced (the server
+ * refuses others) and its still_encoding one a server that took our HELLO
+ * reads (a server of a text before H.264 refuses VIEW's ninth byte, and it
+ * would have refused a HELLO announcing H.264). */
+static int view_encodings_announced(const struct bc_client *c,
+                                    const struct bc_msg_view *v,
+                                    struct bc_errinfo *ei)
+{
+	const enum bc_proto_encoding enc[2] = {v->encoding, v->still_encoding};
+	for (int i = 0; i < 2; i++) {
+		if (i == 1 && enc[i] == BC_PROTO_ENC_INVALID) {
+			break;
+		}
+		if (enc[i] <= BC_PROTO_ENC_INVALID ||
+		    enc[i] >= BC_PROTO_ENC_COUNT ||
+		    !(c->encodings & (1u << (enc[i] - 1)))) {
+			return bc_errinfo_set(
+			    ei, BC_EINVAL,
+			    "VIEW %s %s was not announced in HELLO (encodings "
+			    "0x%02x); connect with it in bc_client_opts "
+			    "encodings",
+			    i ? "still_encoding" : "encoding",
+			    bc_proto_encoding_name(enc[i]),
+			    (unsigned)c->encodings);
+		}
+	}
+	if (v->still_encoding != BC_PROTO_ENC_INVALID &&
+	    !(c->encodings & (1u << (BC_PROTO_ENC_H264 - 1)))) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+		                      "VIEW still_encoding needs H.264 "
+		                      "announced in HELLO (encodings bit 3): "
+		                      "a server that does not read it refuses "
+		                      "the VIEW");
+	}
+	return 0;
+}
+
 int bc_client_view(struct bc_client *c, const struct bc_msg_view *view,
                    uint32_t *seq_out, struct bc_errinfo *ei)
 {
 	struct bc_msg m = {.type = BC_MSG_VIEW};
+	int rc;
 	if (seq_out) {
 		*seq_out = 0;
 	}
@@ -1524,6 +1564,9 @@ int bc_client_view(struct bc_client *c, const struct bc_msg_view *view,
 	if (m.view.encoding == BC_PROTO_ENC_INVALID) {
 		bool jpeg = c->encodings & (1u << (BC_PROTO_ENC_JPEG - 1));
 		m.view.encoding = jpeg ? BC_PROTO_ENC_JPEG : BC_PROTO_ENC_PNG;
+	}
+	if ((rc = view_encodings_announced(c, &m.view, ei))) {
+		return rc;
 	}
 	if (m.view.quality_interactive == 0) {
 		m.view.quality_interactive = 75;
@@ -1535,6 +1578,26 @@ int bc_client_view(struct bc_client *c, const struct bc_msg_view *view,
 		m.view.downscale = 1;
 	}
 	return send_or_say(c, &m, seq_out, ei);
+}
+
+int bc_client_frame_ack(struct bc_client *c, uint32_t frame_no,
+                        struct bc_errinfo *ei)
+{
+	struct bc_msg m = {.type = BC_MSG_FRAME_ACK};
+	if (!(c->info.features & BC_PROTO_FEATURE_ACKS)) {
+		return bc_errinfo_set(ei, BC_ENOTSUP,
+		                      "the server did not grant ACKS: it paces "
+		                      "frames by itself and takes no "
+		                      "FRAME_ACK (connect with bc_client_opts "
+		                      "acks to ask for it)");
+	}
+	if (frame_no == 0) {
+		return bc_errinfo_set(ei, BC_ERANGE,
+		                      "FRAME_ACK of frame 0: frames are "
+		                      "numbered from 1");
+	}
+	m.frame_ack.frame_no = frame_no;
+	return send_or_say(c, &m, NULL, ei);
 }
 
 int bc_client_camera(struct bc_client *c, const struct bc_camera *cam,

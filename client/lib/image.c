@@ -1,6 +1,8 @@
 /*
  * The client-side framebuffer: FRAME rectangles decoded in place (JPEG with
- * TurboJPEG, PNG with libpng, raw RGBA copied) into one RGBA image, with a
+ * TurboJPEG, PNG with libpng, raw RGBA copied, H.264 access units through
+ * the video module's libavcodec decoder, in a module opened on first use:
+ * h264_module.h) into one RGBA image, with a
  * record of which pixels have arrived so that a viewer knows when the
  * picture is whole. Rectangle bytes come from the network: each one's
  * position is checked against the image and its decoded size against the
@@ -15,10 +17,21 @@
 #include "blobcast/alloc.h"
 #include "blobcast/bytes.h"
 #include "client_impl.h"
+#include "h264_module.h"
 
 void bc_client_image_init(struct bc_client_image *img)
 {
 	memset(img, 0, sizeof(*img));
+}
+
+/* Ends the H.264 chain: the next frame must be a KEY frame. */
+static void video_lost(struct bc_client_image *img)
+{
+	const struct bc_h264_ops *ops = NULL;
+	if (img->video && bc__client_h264(&ops, NULL) == 0) {
+		ops->destroy(img->video);
+	}
+	img->video = NULL;
 }
 
 void bc_client_image_finish(struct bc_client_image *img)
@@ -29,6 +42,7 @@ void bc_client_image_finish(struct bc_client_image *img)
 	if (img->tj) {
 		tjDestroy(img->tj);
 	}
+	video_lost(img);
 	bc_free(img->rgba);
 	bc_free(img->seen);
 	bc_free(img->depth);
@@ -300,6 +314,87 @@ static int fit(struct bc_client_image *img, const struct bc_msg_frame *f,
 	return 0;
 }
 
+/* Records frame m as the last one applied (planes aside). */
+static void take_header(struct bc_client_image *img, const struct bc_msg *m,
+                        uint32_t ncolour)
+{
+	const struct bc_msg_frame *f = &m->frame;
+	img->view_width = f->width;
+	img->view_height = f->height;
+	img->frame_no = f->frame_no;
+	img->camera_seq = f->camera_seq;
+	img->seq = m->seq;
+	img->order = f->order;
+	img->flags = m->flags;
+	img->level = (uint8_t)bc_proto_flags_level(m->flags);
+	img->refining = img->level > 0 || (m->flags & BC_PROTO_FLAG_INCOMPLETE);
+	img->encoding = f->encoding;
+	img->nrects = ncolour;
+}
+
+/* An H.264 frame (PROTOCOL.md 7.15, "Encoding 4"): one access unit in one
+ * rectangle covering the image, which is the view's size. The access unit
+ * is decoded before img changes, so a frame refused leaves the picture as
+ * it was. */
+static int apply_h264(struct bc_client_image *img, const struct bc_msg *m,
+                      struct bc_errinfo *ei)
+{
+	const struct bc_msg_frame *f = &m->frame;
+	const struct bc_proto_rect *r = &f->rects[0];
+	const struct bc_h264_ops *ops = NULL;
+	struct bc_errinfo why = {0};
+	const uint8_t *px;
+	size_t stride;
+	int rc;
+	if (f->nrects != 1 || r->x != 0 || r->y != 0 ||
+	    r->w != f->image_width || r->h != f->image_height ||
+	    f->image_width != f->width || f->image_height != f->height) {
+		return bc_errinfo_set(ei, BC_ERANGE,
+		                      "H.264 frame %u is not one rectangle "
+		                      "covering its %ux%u view",
+		                      f->frame_no, f->width, f->height);
+	}
+	if ((m->flags & BC_PROTO_FLAG_KEY) && !img->video &&
+	    ((rc = bc__client_h264(&ops, ei)) ||
+	     (rc = ops->open(&img->video, ei)))) {
+		return rc;
+	}
+	if (!img->video) {
+		return bc_errinfo_set(
+		    ei, BC_ESTATE,
+		    "H.264 frame %u builds on frames this "
+		    "image did not decode (no KEY frame since "
+		    "the start or since a frame that failed); "
+		    "send VIEW again to get a KEY frame",
+		    f->frame_no);
+	}
+	/* A decoder exists: the module is loaded. */
+	bc__client_h264(&ops, NULL);
+	if ((rc = ops->decode(img->video, r->data.ptr, r->data.len,
+	                      f->image_width, f->image_height, &px, &stride,
+	                      &why))) {
+		video_lost(img);
+		return bc_errinfo_set(ei, rc == BC_ENOMEM ? rc : BC_ECODEC,
+		                      "H.264 frame %u does not decode (%s); "
+		                      "send VIEW again to get a KEY frame",
+		                      f->frame_no, why.msg);
+	}
+	if ((rc = fit(img, f, ei))) {
+		return rc;
+	}
+	for (uint32_t y = 0; y < img->height; y++) {
+		memcpy(img->rgba + (size_t)y * img->width * 4u,
+		       px + (size_t)y * stride, (size_t)img->width * 4u);
+	}
+	bc_free(img->depth);
+	bc_free(img->ids);
+	img->depth = NULL;
+	img->ids = NULL;
+	take_header(img, m, 1);
+	/* Covers the image: cannot fail. */
+	return mark_seen(img, r);
+}
+
 int bc_client_image_apply(struct bc_client_image *img, const struct bc_msg *m,
                           struct bc_errinfo *ei)
 {
@@ -311,6 +406,10 @@ int bc_client_image_apply(struct bc_client_image *img, const struct bc_msg *m,
 	int rc;
 	if (m->type != BC_MSG_FRAME) {
 		return bc_errinfo_set(ei, BC_EINVAL, "not a FRAME");
+	}
+	if (f->encoding == BC_PROTO_ENC_H264 &&
+	    !(m->flags & BC_PROTO_FLAG_SNAPSHOT)) {
+		return apply_h264(img, m, ei);
 	}
 	nplanes = (m->flags & BC_PROTO_FLAG_SNAPSHOT)
 	              ? bc_proto_flags_nplanes(m->flags)
@@ -374,17 +473,7 @@ int bc_client_image_apply(struct bc_client_image *img, const struct bc_msg *m,
 			img->ids = plane[k];
 		}
 	}
-	img->view_width = f->width;
-	img->view_height = f->height;
-	img->frame_no = f->frame_no;
-	img->camera_seq = f->camera_seq;
-	img->seq = m->seq;
-	img->order = f->order;
-	img->flags = m->flags;
-	img->level = (uint8_t)bc_proto_flags_level(m->flags);
-	img->refining = img->level > 0 || (m->flags & BC_PROTO_FLAG_INCOMPLETE);
-	img->encoding = f->encoding;
-	img->nrects = ncolour;
+	take_header(img, m, ncolour);
 	for (uint32_t i = 0; i < ncolour; i++) {
 		const struct bc_proto_rect *r = &f->rects[i];
 		switch (f->encoding) {
@@ -394,8 +483,14 @@ int bc_client_image_apply(struct bc_client_image *img, const struct bc_msg *m,
 		case BC_PROTO_ENC_PNG:
 			rc = decode_png(img, r, ei);
 			break;
-		default:
+		case BC_PROTO_ENC_RAW:
 			rc = decode_raw(img, r, ei);
+			break;
+		default:
+			/* H.264 in a SNAPSHOT's answer (the codec refuses
+			 * it; a message built by hand may not). */
+			rc = bc_errinfo_set(ei, BC_ECODEC,
+			                    "a snapshot in H.264");
 			break;
 		}
 		if (!rc && (rc = mark_seen(img, r))) {

@@ -62,8 +62,10 @@ struct bc_viewer_opts {
 	const char *ca; /* --ca: TLS trust anchors; NULL: the system's */
 	bool insecure;  /* --insecure: no TLS certificate checks */
 	enum bc_proto_role role;
-	uint32_t width, height;          /* window size asked for */
-	enum bc_proto_encoding encoding; /* still frames: JPEG or PNG */
+	uint32_t width, height; /* window size asked for */
+	/* Frames: JPEG, PNG or H.264 (a video stream decoded here). */
+	enum bc_proto_encoding encoding;
+	bool exact_still; /* --exact-still: the still in PNG */
 	uint8_t quality, downscale;
 	bool gles, overlay, verbose;
 	const char *screenshot; /* write the window here ... */
@@ -163,6 +165,12 @@ struct bc_viewer_app {
 
 	/* Frames. */
 	uint64_t nframes; /* shown, snapshots excluded */
+	/* FRAME_ACK (when the server granted ACKS): the newest frame_no
+	 * received, and the newest acknowledged once drawn. */
+	uint32_t frame_got, frame_acked;
+	/* An H.264 frame did not decode and the VIEW went again: frames that
+	 * fail until its KEY frame are expected, not reported. */
+	bool awaiting_key;
 	/* Finished pictures among them: frames that left nothing to refine
 	 * (level 0 without INCOMPLETE). --frames counts these. */
 	uint64_t npictures;
@@ -301,6 +309,12 @@ double bc_viewer_send_due(struct bc_viewer_app *a, double now);
 /* Sends VIEW for the framebuffer's current size (bc_viewer_view_size
  * under the daemon's max_dim and the GL texture limit). */
 int bc_viewer_send_view(struct bc_viewer_app *a);
+/* The HELLO encodings for the options: the image ones, with H.264 when
+ * --encoding h264 or --exact-still needs it. */
+uint8_t bc_viewer_encodings(const struct bc_viewer_opts *o);
+/* After the window was drawn: acknowledges the frames received so far
+ * (FRAME_ACK) when the server granted ACKS. */
+void bc_viewer_frame_drawn(struct bc_viewer_app *a);
 /* Whether the framebuffer now asks for another VIEW than the last one
  * sent (a resize or a content-scale change). */
 bool bc_viewer_view_changed(struct bc_viewer_app *a);

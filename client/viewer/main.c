@@ -83,8 +83,10 @@ static const struct bc_opt_name role_names[] = {
     {"editor", BC_PROTO_ROLE_EDITOR},
     {"viewer", BC_PROTO_ROLE_VIEWER},
     {NULL, 0}};
-static const struct bc_opt_name encoding_names[] = {
-    {"jpeg", BC_PROTO_ENC_JPEG}, {"png", BC_PROTO_ENC_PNG}, {NULL, 0}};
+static const struct bc_opt_name encoding_names[] = {{"jpeg", BC_PROTO_ENC_JPEG},
+                                                    {"png", BC_PROTO_ENC_PNG},
+                                                    {"h264", BC_PROTO_ENC_H264},
+                                                    {NULL, 0}};
 
 /* What the table parses into before it is moved into the options. */
 struct cli {
@@ -157,8 +159,16 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o,
 	     .kind = BC_OPT_ENUM,
 	     .dst = &c.encoding,
 	     .arg = "ENC",
-	     .help = "still frames as {choices} (default {default})",
+	     .help = "frames as {choices} (default {default}); h264:\n"
+	             "a video stream, decoded here (the server must\n"
+	             "have an H.264 encoder)",
 	     .names = encoding_names},
+	    {.name = "exact-still",
+	     .kind = BC_OPT_FLAG,
+	     .dst = &o->exact_still,
+	     .help = "with jpeg or h264: the still, once the picture\n"
+	             "stops, as a lossless PNG (needs a server that\n"
+	             "knows H.264)"},
 	    {.name = "quality",
 	     .kind = BC_OPT_U32,
 	     .dst = &c.quality,
@@ -312,6 +322,11 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o,
 	}
 	o->role = (enum bc_proto_role)c.role;
 	o->encoding = (enum bc_proto_encoding)c.encoding;
+	if (o->exact_still && o->encoding == BC_PROTO_ENC_PNG) {
+		return bc_args_error(&p, "--exact-still applies to --encoding "
+		                         "jpeg or h264: PNG frames are exact "
+		                         "already");
+	}
 	o->width = c.size[0];
 	o->height = c.size[1];
 	o->snap_width = c.snap[0];
@@ -763,6 +778,7 @@ static void draw(struct bc_viewer_app *a, double now)
 	}
 	glfwSwapBuffers(a->win);
 	a->redraw = false;
+	bc_viewer_frame_drawn(a);
 	if (a->settle) {
 		uint32_t n = bc_viewer_edits_frame(
 		    &a->edits, a->settle_order, bc_viewer_now_ms(), &a->meter);
@@ -894,6 +910,10 @@ static int open_session(const struct bc_viewer_app *a, struct bc_client **c,
 	                               .token = a->o.token,
 	                               .ca_file = a->o.ca,
 	                               .insecure = a->o.insecure,
+	                               .encodings = bc_viewer_encodings(&a->o),
+	                               /* Frames are acknowledged once drawn
+	                                * (bc_viewer_frame_drawn). */
+	                               .acks = true,
 	                           },
 	                           ei);
 	*view_only_token = false;
@@ -987,6 +1007,8 @@ static void reconnect(struct bc_viewer_app *a, double now)
 	a->turn_pending = false;
 	a->cam_seq = 0;
 	a->view_sent_at = 0.0;
+	a->frame_got = a->frame_acked = 0;
+	a->awaiting_key = false;
 	if (bc_client_scene(a->c, &scene_cam)) {
 		a->scene_cam = scene_cam;
 	}

@@ -74,6 +74,8 @@ int bc_viewer_send_view(struct bc_viewer_app *a)
 	            (uint8_t)(a->o.quality < 70 ? a->o.quality : 70),
 	        .quality_still = a->o.quality,
 	        .downscale = a->o.downscale,
+	        .still_encoding =
+	            a->o.exact_still ? BC_PROTO_ENC_PNG : BC_PROTO_ENC_INVALID,
 	    },
 	    &a->view_seq, &ei);
 	if (rc) {
@@ -466,6 +468,47 @@ static bool picture_take(struct bc_viewer_app *a, const struct bc_msg *m)
 	return true;
 }
 
+uint8_t bc_viewer_encodings(const struct bc_viewer_opts *o)
+{
+	/* H.264 is announced only when asked for: a server of a text before
+	 * it refuses the HELLO. still_encoding came with it. */
+	return o->encoding == BC_PROTO_ENC_H264 || o->exact_still
+	           ? BC_PROTO_ENCODINGS_ALL
+	           : BC_PROTO_ENCODINGS_IMAGES;
+}
+
+void bc_viewer_frame_drawn(struct bc_viewer_app *a)
+{
+	struct bc_errinfo ei = {0};
+	if (a->offline ||
+	    !(bc_client_info(a->c)->features & BC_PROTO_FEATURE_ACKS) ||
+	    a->frame_got <= a->frame_acked) {
+		return;
+	}
+	if (bc_client_frame_ack(a->c, a->frame_got, &ei)) {
+		bc_viewer_status(a, "FRAME_ACK not sent: %s", ei.msg);
+		return;
+	}
+	a->frame_acked = a->frame_got;
+}
+
+/* A frame that failed to decode. A broken H.264 chain mends with the
+ * KEY frame that a VIEW sent again brings; until it comes, the frames
+ * that build on the lost ones fail as expected. */
+static void frame_failed(struct bc_viewer_app *a, const struct bc_msg *m,
+                         const struct bc_errinfo *ei)
+{
+	if (m->frame.encoding != BC_PROTO_ENC_H264) {
+		bc_viewer_status(a, "frame %u: %s", m->frame.frame_no, ei->msg);
+		return;
+	}
+	if (!a->awaiting_key) {
+		bc_viewer_status(a, "frame %u: %s", m->frame.frame_no, ei->msg);
+		a->awaiting_key = true;
+		bc_viewer_send_view(a);
+	}
+}
+
 static void got_frame(struct bc_viewer_app *a, const struct bc_msg *m)
 {
 	const struct bc_msg_frame *fr = &m->frame;
@@ -473,14 +516,23 @@ static void got_frame(struct bc_viewer_app *a, const struct bc_msg *m)
 	struct bc_errinfo ei = {0};
 	const uint8_t *pixels;
 	uint32_t w, h;
+	/* Every frame is acknowledged once the window has been drawn after
+	 * it, snapshots and frames that failed included. */
+	if (fr->frame_no > a->frame_got) {
+		a->frame_got = fr->frame_no;
+	}
+	a->redraw = true;
 	if (m->flags & BC_PROTO_FLAG_SNAPSHOT) {
 		if (m->seq == a->snapshot_seq) {
 			got_snapshot(a, m);
 		}
 		return;
 	}
+	if (m->flags & BC_PROTO_FLAG_KEY) {
+		a->awaiting_key = false;
+	}
 	if (bc_viewer_frames_apply(&a->frames, m, &up, &ei)) {
-		bc_viewer_status(a, "frame %u: %s", fr->frame_no, ei.msg);
+		frame_failed(a, m, &ei);
 		return;
 	}
 	if (up.tex == BC_VIEWER_TEX_FULL) {

@@ -1,7 +1,8 @@
 #!/bin/sh
 # The CLI starts without OpenImageIO: `blobcast --help` (and every command
 # that reads or writes no image file) must not load libOpenImageIO, which
-# render/image loads on first use (docs/benchmarks.md, CLI start-up). A
+# render/image loads on first use (docs/benchmarks.md, CLI start-up), nor
+# FFmpeg's libavcodec, which libblobcast's H.264 module brings. A
 # render to a PNG file must still load it and write the file.
 #
 # usage: test_cli_startup.sh BLOBCAST
@@ -29,6 +30,12 @@ if grep -q 'calling init:.*libOpenImageIO' "$tmp/libs"; then
   fail "blobcast --help loads OpenImageIO"
 fi
 echo "ok   --help loads $(grep -c 'calling init:' "$tmp/libs") shared objects, OpenImageIO not among them"
+# FFmpeg's libraries come with libblobcast's H.264 module, opened at the
+# first H.264 frame (client/lib/h264_module.h), in every build.
+if grep -q 'calling init:.*libavcodec' "$tmp/libs"; then
+  fail "blobcast --help loads libavcodec"
+fi
+echo "ok   --help does not load libavcodec"
 
 LD_DEBUG=libs "$cli" render default --size 32x24 --backend tiled \
   --out "$tmp/out.png" > "$tmp/render.out" 2> "$tmp/render.libs" ||

@@ -42,6 +42,13 @@ libs=$(pkg-config --libs blobcast) || fail "pkg-config --libs"
 static_libs=$(pkg-config --static --libs-only-l blobcast | sed 's/-lblobcast//')
 libdir=$(pkg-config --variable=libdir blobcast)
 [ -f "$libdir/libblobcast.a" ] || fail "no libblobcast.a in $libdir"
+# H.264 frames: the decoder module beside the library, which libblobcast
+# opens on first use and does not link (client/lib/h264_module.h).
+[ -f "$libdir/blobcast/bc_client_h264.so" ] ||
+  fail "no blobcast/bc_client_h264.so in $libdir"
+if ldd "$libdir/libblobcast.so" | grep -q libavcodec; then
+  fail "libblobcast.so links libavcodec"
+fi
 for h in client.h proto.h proto_limits.h blobtree.h scene.h error.h export.h; do
   [ -f "$(pkg-config --variable=includedir blobcast)/blobcast/$h" ] ||
     fail "header blobcast/$h not installed"
@@ -88,6 +95,43 @@ for prog in nudge nudge-static nudge-cmake; do
     fail "$prog without arguments: $(cat "$tmp/out")"
   echo "ok   $prog builds and runs"
 done
+
+# The installed libblobcast.so opens the installed module at the first
+# H.264 KEY frame: bytes that are not H.264 then fail to decode (ECODEC),
+# where a missing module would say ENOTSUP.
+cat > "$tmp/key.c" << 'C'
+#include <blobcast/client.h>
+#include <stdio.h>
+int main(void)
+{
+	static const uint8_t junk[] = {0, 0, 0, 1, 0x65, 0x88, 0x84, 0x21};
+	struct bc_proto_rect r = {.w = 16, .h = 16, .data = {junk, 8}};
+	struct bc_msg m = {.type = BC_MSG_FRAME, .flags = BC_PROTO_FLAG_KEY};
+	struct bc_client_image img;
+	struct bc_errinfo ei = {0};
+	int rc;
+	m.frame.encoding = BC_PROTO_ENC_H264;
+	m.frame.width = m.frame.image_width = 16;
+	m.frame.height = m.frame.image_height = 16;
+	m.frame.rects = &r;
+	m.frame.nrects = 1;
+	bc_client_image_init(&img);
+	rc = bc_client_image_apply(&img, &m, &ei);
+	printf("%s: %s\n", bc_err_name(rc), ei.msg);
+	bc_client_image_finish(&img);
+	return rc == BC_ECODEC ? 0 : 1;
+}
+C
+# shellcheck disable=SC2086
+"$cc" -std=c11 -Wall -Wextra -Werror $extra $cflags "$tmp/key.c" \
+  -o "$tmp/key" $libs > "$tmp/cc.log" 2>&1 ||
+  fail "H.264 program build: $(cat "$tmp/cc.log")"
+LD_LIBRARY_PATH="$libdir" LD_DEBUG=files "$tmp/key" > "$tmp/out" \
+  2> "$tmp/key.files" || fail "an H.264 KEY frame: $(cat "$tmp/out")"
+grep -q "file=$libdir/blobcast/bc_client_h264.so" "$tmp/key.files" ||
+  fail "the installed module was not the one opened: $(grep \
+    bc_client_h264 "$tmp/key.files" | head -n 3)"
+echo "ok   the installed library opens its H.264 module: $(cat "$tmp/out")"
 
 if [ -z "$blobcastd" ] || [ ! -x "$blobcastd" ]; then
   echo "blobcastd not built: the example is not run against a server"

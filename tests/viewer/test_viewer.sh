@@ -4,7 +4,9 @@
 #  1. `xvfb-run -a blobcast-view ... --screenshot x.png --frames 2`: the
 #     program exits 0 and the PNG has the window's size and is not blank;
 #  2. without the overlay, the window shows exactly the picture received
-#     (screenshot against --dump-frame), on GL 2.1 and on GLES 2;
+#     (screenshot against --dump-frame), on GL 2.1 with JPEG frames and on
+#     GLES 2 with H.264 frames (--encoding h264: three pictures, each frame
+#     acknowledged after it was drawn when the daemon grants ACKS);
 #  3. with synthetic X events (viewer_xpoke): a press on a sphere picks it,
 #     a drag moves it, Shift+wheel grows it, Ctrl+wheel changes its
 #     operator's blend, S saves a lossless snapshot (and with
@@ -277,18 +279,27 @@ for api in gl gles; do
     flag=
     version="^gl 2\.1 "
   fi
-  # The GLES run joins as a viewer: looking needs no editor rights.
+  # The GLES run joins as a viewer (looking needs no editor rights) and
+  # watches H.264.
   role=editor
-  [ $api = gles ] && role=viewer
+  encoding=jpeg
+  if [ $api = gles ]; then
+    role=viewer
+    encoding=h264
+  fi
   xvfb-run -a env MESA_GL_VERSION_OVERRIDE=2.1 MESA_GLSL_VERSION_OVERRIDE=110 \
     MESA_GLES_VERSION_OVERRIDE=2.0 $VIEWENV "$VIEW" \
     --server "127.0.0.1:$port" --session default --verbose --role $role \
-    --size 288x216 --no-overlay --frames 3 --turn 20 $flag \
+    --encoding $encoding --size 288x216 --no-overlay --frames 3 --turn 20 \
+    $flag \
     --screenshot "$tmp/$api.png" --dump-frame "$tmp/$api-frame.png" \
     > "$tmp/2-$api.log" 2>&1
   rc=$?
   if [ $rc -ne 0 ]; then
     fail "$api: blobcast-view exited $rc"
+    sed 's/^/    /' "$tmp/2-$api.log"
+  elif ! grep -q "^frame .* $encoding image=288x216 " "$tmp/2-$api.log"; then
+    fail "$api: no $encoding frame of 288x216 in the verbose log"
     sed 's/^/    /' "$tmp/2-$api.log"
   elif ! grep -q "$version" "$tmp/2-$api.log"; then
     fail "$api: not the context asked for: $(grep '^gl ' "$tmp/2-$api.log")"

@@ -109,8 +109,12 @@ struct bc_client_opts {
 	const char *addr;  /* as bc_client_addr_parse() takes it */
 	const char *name;  /* HELLO client_name; NULL: "libblobcast" */
 	const char *token; /* HELLO token; NULL: none */
-	uint8_t
-	    encodings; /* HELLO bits (1 << (encoding - 1)); 0: JPEG, PNG, raw */
+	/* HELLO encodings, bits (1 << (encoding - 1)); 0: JPEG, PNG and raw
+	 * (BC_PROTO_ENCODINGS_IMAGES). BC_PROTO_ENCODINGS_ALL adds H.264
+	 * (encoding 4), which bc_client_image_apply() decodes; a server of a
+	 * text before H.264 refuses that HELLO (BC_EPROTO_FLAGS): connect
+	 * again without it. */
+	uint8_t encodings;
 	uint32_t max_frame_bytes; /* 0: the server's limit */
 	/* Milliseconds for connecting, for completing one send, and for each
 	 * helper's wait; 0: BC_CLIENT_DEFAULT_TIMEOUT_MS, of which the TCP
@@ -123,6 +127,13 @@ struct bc_client_opts {
 	 * traffic is still encrypted, but to whoever answers). */
 	const char *ca_file;
 	bool insecure;
+	/* Announce the feature ACKS (PROTOCOL.md 7.27): when the server
+	 * grants it (bc_client_info()->features), the program promises to
+	 * acknowledge every FRAME with bc_client_frame_ack() once it has shown
+	 * it, and the server keeps at most BC_PROTO_ACK_WINDOW frames
+	 * unacknowledged: a program that does not acknowledge stops getting
+	 * frames. false: every other feature (BC_PROTO_FEATURES_READ). */
+	bool acks;
 };
 
 struct bc_client;
@@ -138,8 +149,9 @@ struct bc_client_info {
 	uint16_t max_dim, max_members, max_edit_ops;
 	char server_id[BC_PROTO_MAX_NAME + 1];
 	/* Features the server granted of those announced (every one this
-	 * library knows but ACKS, BC_PROTO_FEATURES_READ; PROTOCOL.md 4). A
-	 * server that predates them grants none and sends no field. */
+	 * library knows but ACKS, BC_PROTO_FEATURES_READ, and ACKS too with
+	 * opts.acks; PROTOCOL.md 4). A server that predates them grants none
+	 * and sends no field. */
 	uint32_t features;
 	/* The session, once joined (zero before and after leaving). */
 	uint32_t session_id, member_id;
@@ -370,9 +382,22 @@ BC_API int bc_client_load_scene_file(struct bc_client *c, const char *path,
 
 /* Sends VIEW. Zero fields take defaults: encoding JPEG when this client
  * decodes it (else PNG), interactive quality 75, still quality 90,
- * downscale 1. width and height are required. */
+ * downscale 1, still_encoding none (the still in encoding). width and
+ * height are required. An encoding or still_encoding that the HELLO did
+ * not announce, or a still_encoding without H.264 announced (a server
+ * of an earlier text refuses its 9-byte form), is refused before sending
+ * (BC_EINVAL). After an H.264 frame that does not decode, sending the
+ * same VIEW again brings a key frame (PROTOCOL.md 7.15). */
 BC_API int bc_client_view(struct bc_client *c, const struct bc_msg_view *view,
                           uint32_t *seq_out, struct bc_errinfo *ei);
+
+/* Acknowledges every FRAME up to frame_no (its frame_no field) as shown
+ * (FRAME_ACK, PROTOCOL.md 7.27). Only when the server granted ACKS
+ * (opts.acks; else BC_ENOTSUP, nothing sent); the server answers a
+ * frame_no not above the previous acknowledgement, or above its last
+ * frame, with a non-fatal ERROR ERANGE. */
+BC_API int bc_client_frame_ack(struct bc_client *c, uint32_t frame_no,
+                               struct bc_errinfo *ei);
 
 /* Sends CAMERA (this connection's camera; the server answers with a frame
  * when a VIEW is set, or with ERROR for an invalid camera). */
@@ -496,6 +521,7 @@ struct bc_client_image {
 	uint8_t *seen; /* one bit per pixel while !complete, or NULL */
 	uint64_t nseen;
 	void *tj;
+	void *video; /* the H.264 decoder since the last KEY frame, or NULL */
 };
 
 /* init/finish on caller memory; finish accepts a zeroed image. */
@@ -508,6 +534,15 @@ BC_API void bc_client_image_finish(struct bc_client_image *img);
  * FRAME), BC_ERANGE (a rectangle outside the image), BC_ECODEC (bytes that
  * do not decode, or decode to another size; the pixels already written stay
  * and img->complete becomes false) or BC_ENOMEM, with the reason in ei.
+ *
+ * H.264 frames (encoding 4, PROTOCOL.md 7.15) are a chain: img keeps a
+ * software decoder (libavcodec), started by a KEY frame, and every frame
+ * of the view must be applied, in order. A frame without KEY when there is
+ * no chain (none started yet, or the last one failed) is refused with
+ * BC_ESTATE, and a frame that does not decode with BC_ECODEC, which ends
+ * the chain; either way img stays as it was, and the caller sends its VIEW
+ * again (bc_client_view) to get a KEY frame. Frames of other encodings
+ * (a PNG or raw still, VIEW still_encoding) leave the chain as it is.
  */
 BC_API int bc_client_image_apply(struct bc_client_image *img,
                                  const struct bc_msg *m, struct bc_errinfo *ei);
