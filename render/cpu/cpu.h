@@ -49,6 +49,10 @@
  * fragments are 200 MiB of lists, far above real scenes (a 4096-primitive
  * scene at 512^2 makes ~10^5). Frames beyond it fail with BC_ELIMIT. */
 #define BC_CPU_MAX_FRAGMENTS (1u << 24)
+/* Primitives a parameter edit may move for the tiled tracer to patch the
+ * candidates of the tiles they cover instead of building every tile's
+ * again (tiled.c, patch_cand): a drag moves one, a selection a few. */
+#define BC_CPU_PATCH_PRIMS 64u
 /* Debug colour ramps saturate here, clamped for readability like the
  * paper's Fig. 15 (whose overlap scale ends at a quarter of M_overlap):
  * field evaluations per ray, primitives per tile list. */

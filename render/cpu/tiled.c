@@ -107,14 +107,16 @@ struct bc__tiled_bufs {
 	size_t prims_cap;
 	/* Per tile: state, list length, candidates (primitives whose
 	 * rectangle holds it, increasing) at cand[cand_off[t] ..
-	 * cand_off[t + 1]), and the list at frags + cand_off[t]. off_alt and
-	 * cur are scratch of rebuilds. */
+	 * cand_end[t]), and the list at frags + cand_off[t]. A full build
+	 * lays the tiles out in order; a patch (patch_cand) writes the tiles
+	 * it changes after cand_used and leaves their old places as garbage
+	 * until the next full build. off_alt and cur are scratch. */
 	uint8_t *state;
-	uint32_t *list_n, *cand_off, *off_alt, *cur;
+	uint32_t *list_n, *cand_off, *cand_end, *off_alt, *cur;
 	struct cone *cones; /* CONES_PER_TILE per tile */
 	size_t tiles_cap;
 	uint32_t *cand;
-	size_t cand_cap;
+	size_t cand_cap, cand_used, cand_garbage;
 	struct bc__frag *frags, *frags_alt;
 	size_t frags_cap, frags_alt_cap;
 	struct bc__tile_worker workers[BC_CPU_MAX_THREADS];
@@ -129,11 +131,12 @@ static void free_tiles(struct bc__tiled_bufs *b)
 	bc_free(b->state);
 	bc_free(b->list_n);
 	bc_free(b->cand_off);
+	bc_free(b->cand_end);
 	bc_free(b->off_alt);
 	bc_free(b->cur);
 	bc_free(b->cones);
 	b->state = NULL;
-	b->list_n = b->cand_off = b->off_alt = b->cur = NULL;
+	b->list_n = b->cand_off = b->cand_end = b->off_alt = b->cur = NULL;
 	b->cones = NULL;
 	b->tiles_cap = 0;
 }
@@ -186,11 +189,12 @@ static int grow_tiles(struct bc__tiled_bufs *b, size_t n)
 	b->state = bc_calloc(n, sizeof(*b->state));
 	b->list_n = bc_calloc(n, sizeof(*b->list_n));
 	b->cand_off = bc_calloc(n + 1, sizeof(*b->cand_off));
+	b->cand_end = bc_calloc(n, sizeof(*b->cand_end));
 	b->off_alt = bc_calloc(n + 1, sizeof(*b->off_alt));
 	b->cur = bc_calloc(n, sizeof(*b->cur));
 	b->cones = bc_calloc(n * CONES_PER_TILE, sizeof(*b->cones));
-	if (!b->state || !b->list_n || !b->cand_off || !b->off_alt || !b->cur ||
-	    !b->cones) {
+	if (!b->state || !b->list_n || !b->cand_off || !b->cand_end ||
+	    !b->off_alt || !b->cur || !b->cones) {
 		free_tiles(b);
 		return BC_ENOMEM;
 	}
@@ -508,6 +512,116 @@ static int build_cand(struct tiled_frame *tf, bool relocate,
 	}
 	b->off_alt = b->cand_off;
 	b->cand_off = off;
+	for (uint32_t t = 0; t < tf->ntiles; t++) {
+		b->cand_end[t] = off[t + 1];
+	}
+	b->cand_used = sum;
+	b->cand_garbage = 0;
+	return 0;
+}
+
+/* Grows *p to at least n elements of size bytes, keeping its contents. */
+static int grow_keep(void **p, size_t *cap, size_t n, size_t size)
+{
+	void *fresh;
+	if (n <= *cap) {
+		return 0;
+	}
+	n += n / 4u;
+	if (!(fresh = bc_realloc(*p, n * size))) {
+		return BC_ENOMEM;
+	}
+	*p = fresh;
+	*cap = n;
+	return 0;
+}
+
+static bool rect_has(const struct rect *r, uint32_t tx, uint32_t ty)
+{
+	return tx >= r->x0 && tx < r->x1 && ty >= r->y0 && ty < r->y1;
+}
+
+/* Marks the tiles of rectangle r in b->cur. */
+static void rect_mark(struct tiled_frame *tf, const struct rect *r)
+{
+	for (uint32_t ty = r->y0; ty < r->y1; ty++) {
+		for (uint32_t tx = r->x0; tx < r->x1; tx++) {
+			tf->b->cur[(size_t)ty * tf->tw + tx] = 1;
+		}
+	}
+}
+
+/* Candidates of marked tile t after primitives lo..hi-1 moved: the old
+ * ones outside that range, with those of the range whose rectangle now
+ * holds t in their place (so the list stays increasing), written at out
+ * when out is not NULL. Returns the count. */
+static uint32_t patched_list(const struct tiled_frame *tf, uint32_t t,
+                             uint32_t lo, uint32_t hi, uint32_t *out)
+{
+	const struct bc__tiled_bufs *b = tf->b;
+	uint32_t n = 0, i = b->cand_off[t], tx = t % tf->tw, ty = t / tf->tw;
+	for (; i < b->cand_end[t] && b->cand[i] < lo; i++, n++) {
+		if (out) {
+			out[n] = b->cand[i];
+		}
+	}
+	for (uint32_t k = lo; k < hi; k++) {
+		if (rect_has(&b->prims[k].rect, tx, ty)) {
+			if (out) {
+				out[n] = k;
+			}
+			n++;
+		}
+	}
+	for (; i < b->cand_end[t]; i++) {
+		if (b->cand[i] >= hi) {
+			if (out) {
+				out[n] = b->cand[i];
+			}
+			n++;
+		}
+	}
+	return n;
+}
+
+/* After a parameter edit moved primitives lo..hi-1, the candidates of the
+ * tiles marked in b->cur (those their old and new rectangles cover) are
+ * written anew after cand_used; every other tile keeps its list and its
+ * fragments where they are. A drag so costs what the edited primitive
+ * covers, not a pass over every primitive of the scene. Returns 0, 1 when
+ * a full build should run instead (the garbage would pass half of what is
+ * used, or the limit), or BC_ENOMEM. */
+static int patch_cand(struct tiled_frame *tf, uint32_t lo, uint32_t hi)
+{
+	struct bc__tiled_bufs *b = tf->b;
+	size_t need = 0, freed = 0;
+	for (uint32_t t = 0; t < tf->ntiles; t++) {
+		if (b->cur[t]) {
+			b->off_alt[t] = patched_list(tf, t, lo, hi, NULL);
+			need += b->off_alt[t];
+			freed += b->cand_end[t] - b->cand_off[t];
+		}
+	}
+	if (b->cand_garbage + freed > b->cand_used / 2u ||
+	    b->cand_used + need > BC_CPU_MAX_FRAGMENTS) {
+		return 1;
+	}
+	if (grow_keep((void **)&b->cand, &b->cand_cap, b->cand_used + need,
+	              sizeof(*b->cand)) ||
+	    grow_keep((void **)&b->frags, &b->frags_cap, b->cand_used + need,
+	              sizeof(*b->frags))) {
+		return BC_ENOMEM;
+	}
+	for (uint32_t t = 0; t < tf->ntiles; t++) {
+		if (b->cur[t]) {
+			uint32_t start = (uint32_t)b->cand_used;
+			patched_list(tf, t, lo, hi, b->cand + start);
+			b->cand_off[t] = start;
+			b->cand_end[t] = start + b->off_alt[t];
+			b->cand_used += b->off_alt[t];
+		}
+	}
+	b->cand_garbage += freed;
 	return 0;
 }
 
@@ -619,7 +733,7 @@ static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
 	const float *eye = tf->fc->vr.eye;
 	struct bc__frag *out = b->frags + b->cand_off[tile];
 	uint32_t n = 0;
-	for (uint32_t i = b->cand_off[tile]; i < b->cand_off[tile + 1]; i++) {
+	for (uint32_t i = b->cand_off[tile]; i < b->cand_end[tile]; i++) {
 		uint32_t k = b->cand[i];
 		const struct ab_prim *p = &b->prims[k];
 		uint64_t lanes = 0;
@@ -711,7 +825,7 @@ static void phase_lists(void *arg, uint32_t thread)
 			b->state[tile] |= TILE_RAYS;
 		}
 		b->list_n[tile] = 0;
-		if (b->cand_off[tile + 1] > b->cand_off[tile]) {
+		if (b->cand_end[tile] > b->cand_off[tile]) {
 			/* Tiles without candidates, often most of a frame's
 			 * background, need no cones. */
 			if (!(b->state[tile] & TILE_CONES)) {
@@ -882,18 +996,33 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 	if (same_view(b, r, fc, cam)) {
 		uint32_t hi =
 		    b->dirty_hi < tf->nprims ? b->dirty_hi : tf->nprims;
-		if (b->dirty_lo >= hi) {
+		uint32_t lo = b->dirty_lo;
+		bool patch = hi - lo <= BC_CPU_PATCH_PRIMS;
+		if (lo >= hi) {
 			return 0;
 		}
-		for (uint32_t k = b->dirty_lo; k < hi; k++) {
+		if (patch) {
+			memset(b->cur, 0, tf->ntiles * sizeof(*b->cur));
+		}
+		for (uint32_t k = lo; k < hi; k++) {
 			struct ab_prim *p = &b->prims[k];
 			rect_state_and(tf, &p->rect, (uint8_t)~TILE_LIST);
+			if (patch) {
+				rect_mark(tf, &p->rect);
+			}
 			prim_setup(tf, k, p);
 			rect_state_and(tf, &p->rect, (uint8_t)~TILE_LIST);
+			if (patch) {
+				rect_mark(tf, &p->rect);
+			}
 		}
 		b->dirty_lo = b->dirty_hi = 0;
 		b->view_ok = false;
-		if ((rc = build_cand(tf, true, ei))) {
+		rc = patch ? patch_cand(tf, lo, hi) : 1;
+		if (rc == 1) {
+			rc = build_cand(tf, true, ei);
+		}
+		if (rc) {
 			return rc;
 		}
 		b->view_ok = true;
