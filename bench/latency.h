@@ -107,7 +107,7 @@ static inline int latency_load_fig18(struct conn *c, uint32_t count,
 	conn_send(c, &m);
 	bc_free(bytes);
 	bc_tree_destroy(t);
-	return conn_expect(c, BC_MSG_SCENE_STATE, 30000) == 1 ? 0 : -1;
+	return conn_expect(c, BC_MSG_SCENE_STATE, 300000) == 1 ? 0 : -1;
 }
 
 #endif
