@@ -32,18 +32,19 @@
 #define STATE_FIXED_BYTES (16u + 1u + 40u + 4u)
 
 /* Whether t's SCENE_STATE (the session's camera always included) would pass
- * BC_SRV_MAX_SCENE_BYTES: such a scene could be sent to no member. Counted
- * by a walk over the nodes when the node count alone does not settle it.
- * Returns 0, BC_ELIMIT (with the sizes in ei) or BC_ENOMEM. */
-static int check_scene_bytes(const struct bc_tree *t, struct bc_errinfo *ei)
+ * cap bytes (the daemon's --max-scene): such a scene could be sent to no
+ * member. Counted by a walk over the nodes when the node count alone does
+ * not settle it. Returns 0, BC_ELIMIT (with the sizes in ei) or
+ * BC_ENOMEM. */
+static int check_scene_bytes(const struct bc_tree *t, size_t cap,
+                             struct bc_errinfo *ei)
 {
 	struct bc_scene_walk w;
 	struct bc_scene_node n;
 	uint64_t bytes = STATE_FIXED_BYTES;
 	uint32_t nodes = bc_tree_node_count(t);
 	int rc;
-	if (bytes + (uint64_t)nodes * NODE_MAX_BYTES <=
-	    BC_SRV_MAX_SCENE_BYTES) {
+	if (bytes + (uint64_t)nodes * NODE_MAX_BYTES <= cap) {
 		return 0;
 	}
 	if ((rc = bc_scene_walk_init(&w, t))) {
@@ -59,12 +60,12 @@ static int check_scene_bytes(const struct bc_tree *t, struct bc_errinfo *ei)
 		}
 	}
 	bc_scene_walk_finish(&w);
-	if (bytes > BC_SRV_MAX_SCENE_BYTES) {
+	if (bytes > cap) {
 		return bc_errinfo_set(
 		    ei, BC_ELIMIT,
 		    "the scene (%u nodes) would take %" PRIu64
-		    " bytes to send, over the %u a client's queue holds",
-		    nodes, bytes, BC_SRV_MAX_SCENE_BYTES);
+		    " bytes to send, over this server's %zu (--max-scene)",
+		    nodes, bytes, cap);
 	}
 	return 0;
 }
@@ -138,7 +139,8 @@ static int batch_apply(struct batch *x)
 	 * snapshot would fail, the journal never compacted), and a record
 	 * must encode: undone like an edit that could not be journaled. */
 	if ((x->b.structural &&
-	     ((x->rc = check_scene_bytes(x->tree, &x->ei)) ||
+	     ((x->rc = check_scene_bytes(x->tree, s->ss->max_scene_bytes,
+	                                 &x->ei)) ||
 	      (x->rc = bc_store_scene_depth_ok(x->tree, &x->ei)))) ||
 	    (x->rc = bc__undo_record_encode(&x->rec, &c, x->b.inv.ops,
 	                                    x->b.inv.nops, &x->ei))) {
@@ -423,7 +425,8 @@ static void prepare(struct bc_task *t)
 		                       BC_SRV_MAX_NODES);
 		return;
 	}
-	if ((l->rc = check_scene_bytes(l->tree, ei)) ||
+	if ((l->rc =
+	         check_scene_bytes(l->tree, l->t.s->ss->max_scene_bytes, ei)) ||
 	    (l->rc = bc_tree_copy(l->copy, l->tree, ei))) {
 		return;
 	}

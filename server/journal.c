@@ -25,7 +25,7 @@
 #define RECORD_HEADER 20u
 /* A journal record carries one EDIT's operations (at most one protocol
  * payload) and, for its undo history, the operations that undo it (at
- * most the scene, BC_SRV_MAX_SCENE_BYTES < 64 MiB) and who made it. */
+ * most the scene, at most BC_SRV_MAX_SCENE_BYTES = 64 MiB) and who made it. */
 #define MAX_RECORD (2u * 64u * 1024u * 1024u + 4096u)
 
 /* Reads exactly n bytes at off; false on a short read. */

@@ -68,7 +68,7 @@ struct cli {
 	const char *tls_cert, *tls_key, *server_id, *check;
 	int backend, gl_platform, simd, log, video_encoder, x264_preset;
 	bool allow_plaintext, tls_allow_expired, no_damage, no_pace, repair;
-	uint32_t frame_budget_ms, render_threads, view_cache_mib;
+	uint32_t frame_budget_ms, render_threads, view_cache_mib, max_scene_mib;
 };
 
 /* The option table over c; --help is printed from it. */
@@ -186,6 +186,15 @@ struct cli {
 		     .arg = "MIB",                                             \
 		     .help = "memory for kept views and renderer\n"            \
 		             "state, {range} (default 384)"},                  \
+		    {.name = "max-scene",                                      \
+		     .kind = BC_OPT_U32,                                       \
+		     .dst = &(c)->max_scene_mib,                               \
+		     .lo = 1,                                                  \
+		     .hi = 64,                                                 \
+		     .arg = "MIB",                                             \
+		     .help = "largest scene as sent, {range} (default\n"       \
+		             "64: the protocol's limit, about 1.7\n"           \
+		             "million spheres)"},                              \
 		    {.name = "config",                                         \
 		     .kind = BC_OPT_STRING,                                    \
 		     .dst = &(c)->config,                                      \
@@ -645,6 +654,7 @@ static void apply_cli(struct bc_srv_config *cfg, const struct cli *c,
 	cfg->frame_budget_ms = c->frame_budget_ms;
 	cfg->render_threads = c->render_threads;
 	cfg->view_cache_mib = c->view_cache_mib;
+	cfg->max_scene_mib = c->max_scene_mib;
 }
 
 /* Defaults for what neither gave, and the checks between options. Returns
@@ -711,21 +721,22 @@ static int start(struct daemon *dm, struct bc_errinfo *ei)
 	if (bc_net_new(&dm->net, dm->loop, &dm->cfg)) {
 		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
 	}
-	if ((rc =
-	         bc_sessions_new(&dm->ss,
-	                         &(struct bc_sessions_opts){
-	                             .loop = dm->loop,
-	                             .link = bc_net_link(dm->net),
-	                             .work = dm->work,
-	                             .store = dm->store,
-	                             .no_damage = dm->cfg.no_damage,
-	                             .video =
-	                                 {
-	                                     .backend = dm->cfg.video_encoder,
-	                                     .x264_preset = dm->cfg.x264_preset,
-	                                 },
-	                         },
-	                         ei))) {
+	if ((rc = bc_sessions_new(
+	         &dm->ss,
+	         &(struct bc_sessions_opts){
+	             .loop = dm->loop,
+	             .link = bc_net_link(dm->net),
+	             .work = dm->work,
+	             .store = dm->store,
+	             .no_damage = dm->cfg.no_damage,
+	             .max_scene_bytes = (size_t)dm->cfg.max_scene_mib << 20,
+	             .video =
+	                 {
+	                     .backend = dm->cfg.video_encoder,
+	                     .x264_preset = dm->cfg.x264_preset,
+	                 },
+	         },
+	         ei))) {
 		return rc;
 	}
 	if ((rc = bc_dispatch_new(&dm->d,

@@ -539,8 +539,12 @@ static void queue_bytes(struct bc_conn *c, uint8_t *owned,
 	/* The queue's cap holds a frame of any size the protocol allows (a
 	 * snapshot with its planes may pass the cap alone) with a little
 	 * room beside it; frames go one at a time, a newer one spoiling the
-	 * one waiting, so only a client that stopped reading fills it. */
-	frame = is_frame ? len : c->frame_bytes;
+	 * one waiting, so only a client that stopped reading fills it. A
+	 * whole message shared by many clients (a large scene's SCENE_STATE,
+	 * one buffer for all) may come beside them, once: a second one
+	 * before the first has gone passes the cap. */
+	frame = (is_frame ? len : c->frame_bytes) +
+	        (shared && !is_frame ? len : 0u);
 	cap = frame + BC_SRV_QUEUE_BESIDE_FRAME > BC_SRV_MAX_CLIENT_QUEUE
 	          ? frame + BC_SRV_QUEUE_BESIDE_FRAME
 	          : BC_SRV_MAX_CLIENT_QUEUE;

@@ -735,6 +735,11 @@ int bc_sessions_new(struct bc_sessions **out,
 	ss->store = opts->store;
 	ss->no_damage = opts->no_damage;
 	ss->video = opts->video;
+	ss->max_scene_bytes =
+	    opts->max_scene_bytes &&
+	            opts->max_scene_bytes < BC_SRV_MAX_SCENE_BYTES
+	        ? opts->max_scene_bytes
+	        : BC_SRV_MAX_SCENE_BYTES;
 	if ((rc = bc__index_new(&ss->index, ss->store))) {
 		bc_free(ss);
 		return bc_errinfo_set(ei, rc, "cannot list the sessions");

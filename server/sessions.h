@@ -84,6 +84,7 @@ struct bc_sessions_opts {
 	struct bc_work *work;
 	struct bc_store *store;
 	bool no_damage;
+	size_t max_scene_bytes; /* 0: BC_SRV_MAX_SCENE_BYTES */
 	/* How H.264 views are encoded: backend and preset (the preset
 	 * string must outlive the layer). */
 	struct bc_video_opts video;

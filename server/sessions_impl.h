@@ -74,6 +74,7 @@ struct bc_sessions {
 	struct bc_work *work;
 	struct bc_store *store;
 	bool no_damage;
+	size_t max_scene_bytes; /* SCENE_STATE payload, at most 64 MiB */
 	struct bc_video_opts video;
 	struct bc_session *sessions[BC_SRV_MAX_SESSIONS];
 	uint32_t nsessions;

@@ -114,12 +114,14 @@
 #define BC_SRV_QUEUE_BESIDE_FRAME (1024u * 1024u)
 
 /* Largest scene, as its SCENE_STATE payload (the scene encoding plus the
- * 16 bytes before it): every member and joiner is sent the whole scene in
- * one message, so a scene must fit in a client's output queue, with 1 MiB
- * left for the messages and the frame queued beside it. A SCENE_LOAD or a
- * structural EDIT that would pass it is refused (ELIMIT) before anything
- * is applied or saved. */
-#define BC_SRV_MAX_SCENE_BYTES (BC_SRV_MAX_CLIENT_QUEUE - 1024u * 1024u)
+ * 16 bytes before it), by default: every member and joiner is sent the
+ * whole scene in one message, so the protocol's payload limit is the
+ * bound (about 1.7 million spheres; --max-scene lowers it). One encoding
+ * is shared by every member it goes to, and a client's output queue takes
+ * one such message beyond its cap (net.c). A SCENE_LOAD or a structural
+ * EDIT that would pass it is refused (ELIMIT) before anything is applied
+ * or saved. */
+#define BC_SRV_MAX_SCENE_BYTES BC_PROTO_MAX_PAYLOAD
 
 /* A client closed with at least this many bytes still queued had large
  * frames or scenes in flight: once they are freed the daemon returns its

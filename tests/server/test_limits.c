@@ -312,10 +312,12 @@ static void a_scene_too_big_to_send_is_refused(void)
 	struct bc_tree *t;
 	char dir[64];
 	uint64_t order;
-	/* 39 bytes a sphere: just over the limit, under the wire's 64 MiB. */
-	uint32_t n = BC_SRV_MAX_SCENE_BYTES / 39u + 1000u;
+	/* A daemon holding scenes to 2 MiB (--max-scene; 64 by default, the
+	 * protocol's limit); 39 bytes a sphere: just over it. */
+	static const char *const cap[] = {"--max-scene", "2", NULL};
+	uint32_t n = (2u << 20) / 39u + 1000u;
 	make_dir_name(dir, sizeof(dir), "bigscene");
-	REQUIRE(daemon_start(&d, dir) == 0);
+	REQUIRE(daemon_start_with(&d, dir, cap) == 0);
 	REQUIRE(conn_open(&a, &d) == 0);
 	REQUIRE(conn_hello(&a, "author") == 0);
 	REQUIRE(conn_join(&a, "s", BC_PROTO_ROLE_EDITOR, true) == 0);
@@ -327,7 +329,7 @@ static void a_scene_too_big_to_send_is_refused(void)
 	bc_tree_destroy(t);
 
 	b = big_scene(n, true, 0);
-	REQUIRE(b.len > BC_SRV_MAX_SCENE_BYTES && b.len < BC_PROTO_MAX_PAYLOAD);
+	REQUIRE(b.len > (2u << 20) && b.len < BC_PROTO_MAX_PAYLOAD);
 	m.scene_load.scene.ptr = b.data;
 	m.scene_load.scene.len = (uint32_t)b.len;
 	REQUIRE(conn_send(&a, &m));
@@ -362,7 +364,7 @@ static void a_scene_too_big_to_send_is_refused(void)
 		if (round == 0) {
 			conn_close(&a);
 			CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
-			REQUIRE(daemon_start(&d, dir) == 0);
+			REQUIRE(daemon_start_with(&d, dir, cap) == 0);
 		}
 	}
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
