@@ -107,16 +107,17 @@ struct bc__tiled_bufs {
 	size_t prims_cap;
 	/* Per tile: state, list length, candidates (primitives whose
 	 * rectangle holds it, increasing) at cand[cand_off[t] ..
-	 * cand_end[t]), and the list at frags + cand_off[t]. A full build
-	 * lays the tiles out in order; a patch (patch_cand) writes the tiles
-	 * it changes after cand_used and leaves their old places as garbage
-	 * until the next full build. off_alt and cur are scratch. */
+	 * cand_end[t]) with room up to cand_lim[t], and the list at frags +
+	 * cand_off[t]. A full build lays the tiles out in order, each with
+	 * some room to spare (slack); a patch (patch_cand) rewrites a tile's
+	 * candidates in place, or, when they outgrow its room, after
+	 * cand_used. off_alt and cur are scratch. */
 	uint8_t *state;
-	uint32_t *list_n, *cand_off, *cand_end, *off_alt, *cur;
+	uint32_t *list_n, *cand_off, *cand_end, *cand_lim, *off_alt, *cur;
 	struct cone *cones; /* CONES_PER_TILE per tile */
 	size_t tiles_cap;
-	uint32_t *cand;
-	size_t cand_cap, cand_used, cand_garbage;
+	uint32_t *cand, *scratch;
+	size_t cand_cap, cand_used, scratch_cap;
 	struct bc__frag *frags, *frags_alt;
 	size_t frags_cap, frags_alt_cap;
 	struct bc__tile_worker workers[BC_CPU_MAX_THREADS];
@@ -132,11 +133,13 @@ static void free_tiles(struct bc__tiled_bufs *b)
 	bc_free(b->list_n);
 	bc_free(b->cand_off);
 	bc_free(b->cand_end);
+	bc_free(b->cand_lim);
 	bc_free(b->off_alt);
 	bc_free(b->cur);
 	bc_free(b->cones);
 	b->state = NULL;
-	b->list_n = b->cand_off = b->cand_end = b->off_alt = b->cur = NULL;
+	b->list_n = b->cand_off = b->cand_end = b->cand_lim = NULL;
+	b->off_alt = b->cur = NULL;
 	b->cones = NULL;
 	b->tiles_cap = 0;
 }
@@ -150,6 +153,7 @@ void bc__tiled_free(struct bc__tiled_bufs *b)
 	bc_free(b->prims);
 	free_tiles(b);
 	bc_free(b->cand);
+	bc_free(b->scratch);
 	bc_free(b->frags);
 	bc_free(b->frags_alt);
 	for (uint32_t i = 0; i < BC_CPU_MAX_THREADS; i++) {
@@ -190,11 +194,12 @@ static int grow_tiles(struct bc__tiled_bufs *b, size_t n)
 	b->list_n = bc_calloc(n, sizeof(*b->list_n));
 	b->cand_off = bc_calloc(n + 1, sizeof(*b->cand_off));
 	b->cand_end = bc_calloc(n, sizeof(*b->cand_end));
+	b->cand_lim = bc_calloc(n, sizeof(*b->cand_lim));
 	b->off_alt = bc_calloc(n + 1, sizeof(*b->off_alt));
 	b->cur = bc_calloc(n, sizeof(*b->cur));
 	b->cones = bc_calloc(n * CONES_PER_TILE, sizeof(*b->cones));
 	if (!b->state || !b->list_n || !b->cand_off || !b->cand_end ||
-	    !b->off_alt || !b->cur || !b->cones) {
+	    !b->cand_lim || !b->off_alt || !b->cur || !b->cones) {
 		free_tiles(b);
 		return BC_ENOMEM;
 	}
@@ -438,6 +443,13 @@ static void rect_state_and(struct tiled_frame *tf, const struct rect *r,
 	}
 }
 
+/* The room a tile of n candidates gets beyond them: a drag moves a
+ * primitive by a tile or so, into tiles it did not cover. */
+static uint32_t slack(uint32_t n)
+{
+	return n / 4u + 4u;
+}
+
 /* Builds the candidates of every tile from the primitives' rectangles
  * (counting sort, primitives increasing). With `relocate`, the lists of
  * the tiles in state TILE_LIST move to their tiles' new places (their
@@ -449,6 +461,7 @@ static int build_cand(struct tiled_frame *tf, bool relocate,
 	struct bc__tiled_bufs *b = tf->b;
 	uint32_t *off = b->off_alt;
 	uint64_t sum = 0;
+	size_t room;
 	memset(b->cur, 0, tf->ntiles * sizeof(*b->cur));
 	for (uint32_t k = 0; k < tf->nprims; k++) {
 		const struct rect *r = &b->prims[k].rect;
@@ -461,7 +474,7 @@ static int build_cand(struct tiled_frame *tf, bool relocate,
 	}
 	for (uint32_t t = 0; t < tf->ntiles; t++) {
 		off[t] = (uint32_t)sum;
-		sum += b->cur[t];
+		sum += b->cur[t] + slack(b->cur[t]);
 		b->cur[t] = off[t];
 		if (sum > BC_CPU_MAX_FRAGMENTS) {
 			return bc_errinfo_set(
@@ -473,8 +486,10 @@ static int build_cand(struct tiled_frame *tf, bool relocate,
 		}
 	}
 	off[tf->ntiles] = (uint32_t)sum;
-	if (grow((void **)&b->cand, &b->cand_cap, sum ? sum : 1,
-	         sizeof(*b->cand))) {
+	/* Room after the tiles for those a patch makes outgrow their own;
+	 * when it runs out, the next patch builds everything again. */
+	room = (size_t)sum + (size_t)sum / 8u + 1024u;
+	if (grow((void **)&b->cand, &b->cand_cap, room, sizeof(*b->cand))) {
 		return BC_ENOMEM;
 	}
 	for (uint32_t k = 0; k < tf->nprims; k++) {
@@ -489,8 +504,8 @@ static int build_cand(struct tiled_frame *tf, bool relocate,
 	if (relocate) {
 		struct bc__frag *swap;
 		size_t cap;
-		if (grow((void **)&b->frags_alt, &b->frags_alt_cap,
-		         sum ? sum : 1, sizeof(*b->frags_alt))) {
+		if (grow((void **)&b->frags_alt, &b->frags_alt_cap, room,
+		         sizeof(*b->frags_alt))) {
 			return BC_ENOMEM;
 		}
 		for (uint32_t t = 0; t < tf->ntiles; t++) {
@@ -506,17 +521,17 @@ static int build_cand(struct tiled_frame *tf, bool relocate,
 		cap = b->frags_cap;
 		b->frags_cap = b->frags_alt_cap;
 		b->frags_alt_cap = cap;
-	} else if (grow((void **)&b->frags, &b->frags_cap, sum ? sum : 1,
+	} else if (grow((void **)&b->frags, &b->frags_cap, room,
 	                sizeof(*b->frags))) {
 		return BC_ENOMEM;
 	}
 	b->off_alt = b->cand_off;
 	b->cand_off = off;
 	for (uint32_t t = 0; t < tf->ntiles; t++) {
-		b->cand_end[t] = off[t + 1];
+		b->cand_end[t] = b->cur[t]; /* the fill's cursor: the count */
+		b->cand_lim[t] = off[t + 1];
 	}
 	b->cand_used = sum;
-	b->cand_garbage = 0;
 	return 0;
 }
 
@@ -586,42 +601,49 @@ static uint32_t patched_list(const struct tiled_frame *tf, uint32_t t,
 
 /* After a parameter edit moved primitives lo..hi-1, the candidates of the
  * tiles marked in b->cur (those their old and new rectangles cover) are
- * written anew after cand_used; every other tile keeps its list and its
- * fragments where they are. A drag so costs what the edited primitive
+ * written anew: in their tile's room when they fit, else after cand_used
+ * with room of their own. Every other tile keeps its list and its
+ * fragments where they are, so a drag costs what the edited primitive
  * covers, not a pass over every primitive of the scene. Returns 0, 1 when
- * a full build should run instead (the garbage would pass half of what is
- * used, or the limit), or BC_ENOMEM. */
+ * a full build should run instead (the room after the tiles is used up),
+ * or BC_ENOMEM. */
 static int patch_cand(struct tiled_frame *tf, uint32_t lo, uint32_t hi)
 {
 	struct bc__tiled_bufs *b = tf->b;
-	size_t need = 0, freed = 0;
+	size_t need = 0, longest = 0;
 	for (uint32_t t = 0; t < tf->ntiles; t++) {
 		if (b->cur[t]) {
-			b->off_alt[t] = patched_list(tf, t, lo, hi, NULL);
-			need += b->off_alt[t];
-			freed += b->cand_end[t] - b->cand_off[t];
+			uint32_t n = patched_list(tf, t, lo, hi, NULL);
+			b->off_alt[t] = n;
+			longest = n > longest ? n : longest;
+			if (n > b->cand_lim[t] - b->cand_off[t]) {
+				need += n + slack(n);
+			}
 		}
 	}
-	if (b->cand_garbage + freed > b->cand_used / 2u ||
-	    b->cand_used + need > BC_CPU_MAX_FRAGMENTS) {
+	if (b->cand_used + need > b->cand_cap ||
+	    b->cand_used + need > b->frags_cap) {
 		return 1;
 	}
-	if (grow_keep((void **)&b->cand, &b->cand_cap, b->cand_used + need,
-	              sizeof(*b->cand)) ||
-	    grow_keep((void **)&b->frags, &b->frags_cap, b->cand_used + need,
-	              sizeof(*b->frags))) {
+	if (grow_keep((void **)&b->scratch, &b->scratch_cap, longest + 1u,
+	              sizeof(*b->scratch))) {
 		return BC_ENOMEM;
 	}
 	for (uint32_t t = 0; t < tf->ntiles; t++) {
-		if (b->cur[t]) {
-			uint32_t start = (uint32_t)b->cand_used;
-			patched_list(tf, t, lo, hi, b->cand + start);
-			b->cand_off[t] = start;
-			b->cand_end[t] = start + b->off_alt[t];
-			b->cand_used += b->off_alt[t];
+		uint32_t n = b->off_alt[t];
+		if (!b->cur[t]) {
+			continue;
 		}
+		patched_list(tf, t, lo, hi, b->scratch);
+		if (n > b->cand_lim[t] - b->cand_off[t]) {
+			b->cand_off[t] = (uint32_t)b->cand_used;
+			b->cand_lim[t] = b->cand_off[t] + n + slack(n);
+			b->cand_used = b->cand_lim[t];
+		}
+		memcpy(b->cand + b->cand_off[t], b->scratch,
+		       n * sizeof(*b->cand));
+		b->cand_end[t] = b->cand_off[t] + n;
 	}
-	b->cand_garbage += freed;
 	return 0;
 }
 
