@@ -469,6 +469,11 @@ static void frame_to(struct bc_member *m, const struct bc_work_done *d,
 			break;
 		}
 		send_frame(m, d, i);
+		if (!m->ss || !m->session) {
+			/* The transport dropped the client while queueing it
+			 * (a frame it left unread too long): it is gone. */
+			break;
+		}
 		m->frame_out = true;
 		m->shown = d->shown;
 		m->still_sent = d->shown.still;
