@@ -1248,6 +1248,13 @@ int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
 	return 0;
 }
 
+void bc_tree_swap(struct bc_tree *a, struct bc_tree *b)
+{
+	struct bc_tree keep = *a;
+	*a = *b;
+	*b = keep;
+}
+
 int bc_tree_copy(struct bc_tree *dst, const struct bc_tree *src,
                  struct bc_errinfo *ei)
 {

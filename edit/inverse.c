@@ -414,18 +414,30 @@ static size_t scene_bytes_at_least(uint32_t n)
 	return 5u + (size_t)n * 26u;
 }
 
+/* Subtree bytes inv's operations carry. */
+static size_t carried_bytes(const struct bc_edit_inverse *inv)
+{
+	size_t carried = 0;
+	for (uint32_t i = 0; i < inv->nops; i++) {
+		carried += inv->ops[i].subtree.len;
+	}
+	return carried;
+}
+
+bool bc__inverse_fits(const struct bc_edit_inverse *inv, uint32_t old_nodes)
+{
+	return carried_bytes(inv) <= scene_bytes_at_least(old_nodes);
+}
+
 int bc__inverse_bound(struct bc_edit_inverse *inv, const struct bc_tree *old,
                       const struct bc_tree *now)
 {
 	struct bc_edit_inverse whole;
-	size_t carried = 0;
+	size_t carried = carried_bytes(inv);
 	uint8_t *bytes;
 	size_t len;
 	int rc;
-	for (uint32_t i = 0; i < inv->nops; i++) {
-		carried += inv->ops[i].subtree.len;
-	}
-	if (carried <= scene_bytes_at_least(bc_tree_node_count(old))) {
+	if (bc__inverse_fits(inv, bc_tree_node_count(old))) {
 		return 0;
 	}
 	if ((rc = bc_scene_encode(old, NULL, &bytes, &len)) ||

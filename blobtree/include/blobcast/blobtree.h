@@ -473,6 +473,10 @@ BC_API int bc_tree_remove(struct bc_tree *t, uint32_t id,
  * sub's ids must be new to t, except that sub's root may reuse id. */
 BC_API int bc_tree_replace(struct bc_tree *t, uint32_t id,
                            const struct bc_tree *sub, struct bc_errinfo *ei);
+/* Exchanges the contents of a and b (model, layout, names, dirty state)
+ * in O(1): a caller that edits a tree in place can hand the result out as
+ * another object and keep the first, emptied, as the one it replaced. */
+BC_API void bc_tree_swap(struct bc_tree *a, struct bc_tree *b);
 /* Copies the whole tree src into dst (dst is cleared first). */
 BC_API int bc_tree_copy(struct bc_tree *dst, const struct bc_tree *src,
                         struct bc_errinfo *ei);
