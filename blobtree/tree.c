@@ -461,6 +461,16 @@ static uint32_t domain_chain(struct bc_tree *t)
 	return most;
 }
 
+static int need_error(const struct bc_tree *t, struct bc_errinfo *ei)
+{
+	return bc_errinfo_set(ei, BC_EDEPTH,
+	                      "tree: evaluating it needs a stack of "
+	                      "%u entries, more than %u (operators "
+	                      "nested too deep in right operands; "
+	                      "left-nested chains may be any depth)",
+	                      t->pool[t->root].need, BC_EVAL_STACK);
+}
+
 static int check_shape(struct bc_tree *t, struct bc_errinfo *ei)
 {
 	uint32_t depth = bc__measure(t, t->root);
@@ -477,14 +487,88 @@ static int check_shape(struct bc_tree *t, struct bc_errinfo *ei)
 		                      BC_TREE_MAX_DEPTH);
 	}
 	if (t->pool[t->root].need > BC_EVAL_STACK) {
-		return bc_errinfo_set(ei, BC_EDEPTH,
-		                      "tree: evaluating it needs a stack of "
-		                      "%u entries, more than %u (operators "
-		                      "nested too deep in right operands; "
-		                      "left-nested chains may be any depth)",
-		                      t->pool[t->root].need, BC_EVAL_STACK);
+		return need_error(t, ei);
 	}
 	return 0;
+}
+
+/* ---- keeping the measures along an edited path ------------------------- */
+
+/* What child c adds to its parent's need: a right operand of the fold is
+ * evaluated above the left one. */
+static uint32_t need_in_parent(const struct bc_tree *t, uint32_t c)
+{
+	uint32_t p = t->pool[c].parent;
+	return t->pool[c].need + (t->pool[p].first_child == c ? 0u : 1u);
+}
+
+/* Pool node m (measured) was linked: its ancestors' needs grow with what
+ * it adds, and with what the old first child adds as the second. */
+static void need_grow(struct bc_tree *t, uint32_t m)
+{
+	uint32_t c = m, p = t->pool[m].parent;
+	while (p != BC_NONE) {
+		uint32_t need = t->pool[p].need, v = need_in_parent(t, c);
+		uint32_t next = t->pool[c].next;
+		if (v > need) {
+			need = v;
+		}
+		if (c == m && next != BC_NONE && t->pool[p].first_child == m &&
+		    (v = need_in_parent(t, next)) > need) {
+			need = v;
+		}
+		if (need == t->pool[p].need) {
+			return;
+		}
+		t->pool[p].need = need;
+		c = p;
+		p = t->pool[p].parent;
+	}
+}
+
+/* A child of pool node a went (or moved up into it): a's need and its
+ * ancestors' shrink to what their children need. A scan stops at the
+ * first child that still needs the old value, so a wide operator costs
+ * little. */
+static void need_shrink(struct bc_tree *t, uint32_t a)
+{
+	while (a != BC_NONE) {
+		uint32_t old = t->pool[a].need, need = 0;
+		for (uint32_t c = t->pool[a].first_child;
+		     c != BC_NONE && need < old; c = t->pool[c].next) {
+			uint32_t v = need_in_parent(t, c);
+			if (v > need) {
+				need = v;
+			}
+		}
+		if (need == old) {
+			return;
+		}
+		t->pool[a].need = need;
+		a = t->pool[a].parent;
+	}
+}
+
+/* Does some node sit at depth `target` or deeper (the root at 1)? Stops
+ * at the first one found. */
+static bool reaches(const struct bc_tree *t, uint32_t target)
+{
+	uint32_t depth = 1;
+	for (uint32_t n = t->root; n != BC_NONE;
+	     n = preorder_next(t, n, t->root, &depth)) {
+		if (depth >= target) {
+			return true;
+		}
+	}
+	return false;
+}
+
+/* Can t (and the subtree sub grafted into it, when given) be edited by
+ * splicing its layout (splice.c)? Not with unary nodes. */
+static bool splices(const struct bc_tree *t, const struct bc_tree *sub)
+{
+	return t->has_lin && t->lin.nunary == 0 &&
+	       (!sub || (sub->has_lin && sub->lin.nunary == 0));
 }
 
 /* Replaces t's layout with one built for the model's current counts. The
@@ -493,11 +577,15 @@ static void install_lin(struct bc_tree *t, struct bc_lin *fresh)
 {
 	bc__lin_free(&t->lin);
 	t->has_lin = false;
+	t->lin_cap = t->lin_kcap = t->lin_pcap = 0;
 	if (t->root == BC_NONE) {
 		bc__lin_free(fresh);
 	} else {
 		t->lin = *fresh;
 		t->has_lin = true;
+		t->lin_cap = fresh->count;
+		t->lin_kcap = fresh->nprims;
+		t->lin_pcap = fresh->nparam;
 		bc__lin_fill(t, &t->lin);
 	}
 	memset(fresh, 0, sizeof(*fresh));
@@ -1025,7 +1113,8 @@ static uint32_t copy_in(struct bc_tree *t, const struct bc_tree *sub,
 
 /* Shared by insert, replace and copy: checks sub against t's limits when
  * `gone` (statistics of what leaves t) is removed and sub is placed at depth
- * `at_depth`, then reserves every resource. */
+ * `at_depth`, then reserves every resource: new layout arrays in fresh, or,
+ * without fresh, room in t's to splice sub in. */
 static int prepare_graft(struct bc_tree *t, const struct bc_tree *sub,
                          uint32_t at_depth, const struct subtree_stats *gone,
                          struct bc_lin *fresh, struct bc_errinfo *ei)
@@ -1054,12 +1143,22 @@ static int prepare_graft(struct bc_tree *t, const struct bc_tree *sub,
 		                      "the result would exceed %u nodes",
 		                      BC_TREE_MAX_NODES);
 	}
-	if ((rc = bc__lin_alloc(fresh, (uint32_t)prims, (uint32_t)ops))) {
+	if (fresh) {
+		rc = bc__lin_alloc(fresh, (uint32_t)prims, (uint32_t)ops);
+	} else {
+		rc = bc__splice_reserve(
+		    t, (uint32_t)(2u * prims - 1u), (uint32_t)prims,
+		    t->lin.nparam + BC_PRIM_RECORD_VEC4 * st.prims +
+		        BC_OP_RECORD_VEC4 * st.ops);
+	}
+	if (rc) {
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
 	}
 	if ((rc = pool_reserve(t, st.nodes)) ||
 	    (rc = bc__map_reserve(&t->ids, st.nodes))) {
-		bc__lin_free(fresh);
+		if (fresh) {
+			bc__lin_free(fresh);
+		}
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
 	}
 	return 0;
@@ -1071,6 +1170,7 @@ int bc_tree_insert(struct bc_tree *t, uint32_t parent_id, uint32_t pos,
 	uint32_t p = live_node(t, parent_id), before, m;
 	struct subtree_stats none = {0};
 	struct bc_lin fresh;
+	bool splice = splices(t, sub), touch;
 	int rc;
 	if (p == BC_NONE) {
 		return bc_errinfo_set(ei, BC_ENONODE, "no node with id %u",
@@ -1104,12 +1204,33 @@ int bc_tree_insert(struct bc_tree *t, uint32_t parent_id, uint32_t pos,
 	if ((rc = bc__names_reserve(&t->names, sub->names.n))) {
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
 	}
-	if ((rc = prepare_graft(t, sub, depth_of(t, p), &none, &fresh, ei))) {
+	if ((rc = prepare_graft(t, sub, depth_of(t, p), &none,
+	                        splice ? NULL : &fresh, ei))) {
 		return rc;
 	}
 	before = child_at(t, p, pos);
 	m = copy_in(t, sub, sub->root, false);
 	link_child(t, p, before, m);
+	if (splice) {
+		/* The measures follow the path from m up (a graft only adds
+		 * nesting and need), then the layout is spliced. */
+		uint32_t nest = depth_of(t, p) + bc__measure(t, m);
+		need_grow(t, m);
+		if (t->pool[t->root].need > BC_EVAL_STACK) {
+			rc = need_error(t, ei);
+			unlink_child(t, m);
+			free_subtree(t, m);
+			bc__measure(t, t->root);
+			return rc;
+		}
+		touch = bc__splice_insert(t, m, sub->nprims, sub->nops);
+		if (nest > t->lin.nesting) {
+			t->lin.nesting = nest;
+		}
+		bc__splice_finish(t, touch);
+		bc__names_graft(t, sub);
+		return 0;
+	}
 	/* The evaluation stack depends on the whole tree: measured on the
 	 * result, and undone (which cannot fail) when over the limit. */
 	if ((rc = check_shape(t, ei))) {
@@ -1173,6 +1294,25 @@ int bc_tree_remove(struct bc_tree *t, uint32_t id, struct bc_errinfo *ei)
 	subtree_stats(t, n, &st);
 	p = t->pool[n].parent;
 	collapse = (p != BC_NONE && t->pool[p].nchildren == 2) ? 1 : 0;
+	if (p != BC_NONE && splices(t, NULL)) {
+		/* Spliced out; the measures follow the path up (nesting
+		 * only looked for again when the deepest path may have
+		 * gone). */
+		uint32_t nest = t->lin.nesting, gp = t->pool[p].parent;
+		uint32_t deepest = depth_of(t, n) - 1u + st.depth;
+		bool touch = bc__splice_remove(t, n);
+		bc__names_drop_subtree(t, n);
+		if (collapse) {
+			bc__names_del(&t->names, t->pool[p].id);
+		}
+		cut(t, n);
+		need_shrink(t, collapse ? gp : p);
+		if ((collapse || deepest >= nest) && !reaches(t, nest)) {
+			t->lin.nesting = bc__measure(t, t->root);
+		}
+		bc__splice_finish(t, touch);
+		return 0;
+	}
 	memset(&fresh, 0, sizeof(fresh));
 	if (p != BC_NONE && (rc = bc__lin_alloc(&fresh, t->nprims - st.prims,
 	                                        t->nops - st.ops - collapse))) {

@@ -82,6 +82,8 @@ struct bc_tree {
 
 	struct bc_lin lin;
 	bool has_lin;
+	/* Room of lin's arrays: slots, primitives, records (vec4). */
+	uint32_t lin_cap, lin_kcap, lin_pcap;
 	struct bc_dirty dirty;
 
 	struct bc__names names;
@@ -119,6 +121,47 @@ int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nops);
 void bc__lin_free(struct bc_lin *l);
 /* Fills l (allocated for t's counts) from t's model; cannot fail. */
 void bc__lin_fill(struct bc_tree *t, struct bc_lin *l);
+/* Where the next emitted slot, primitive, record and unary node go. */
+struct bc__fill {
+	struct bc_lin *l;
+	uint32_t slot, prim, param, unary;
+};
+/* Emits the subtree at pool node top in post-order from fs on: slots,
+ * node words (but top's ancestor), records, colours, and each node's
+ * slot, param, prim and unary. */
+void bc__lin_emit(struct bc_tree *t, struct bc__fill *fs, uint32_t top);
+/* Writes slot o as a fold of operator p over slots left and right. */
+void bc__lin_fold(struct bc_lin *l, const struct bc__node *p, uint32_t left,
+                  uint32_t right, uint32_t o);
+void bc__lin_set_parent(struct bc_lin *l, uint32_t child, uint32_t parent,
+                        bool left);
+/* Slot s's ROI, kill and value counts, depth, fast and jump pointers from
+ * its parent's (which must be final). */
+void bc__lin_link(struct bc_lin *l, uint32_t s);
+/* Places primitive k's ABV (its slot's ROI known) and grows l's box. */
+void bc__lin_place_abv(struct bc_tree *t, struct bc_lin *l, uint32_t k,
+                       const struct bc_prim_data *p);
+void bc__lin_update_size(struct bc_lin *l);
+
+/* splice.c: structural edits of a layout without unary nodes, in place
+ * (the file's comment). */
+
+/* Room in t->lin's arrays for count slots, nprims primitives and nparam
+ * records. Returns 0 or BC_ENOMEM (the arrays as they were, some maybe
+ * larger). */
+int bc__splice_reserve(struct bc_tree *t, uint32_t count, uint32_t nprims,
+                       uint32_t nparam);
+/* Pool node m, with px primitives and ox operators and no unary node, was
+ * just linked under a binary operator: splices it into t->lin (room
+ * reserved). Returns whether the box must be measured again. */
+bool bc__splice_insert(struct bc_tree *t, uint32_t m, uint32_t px, uint32_t ox);
+/* Pool node c (not the root) is about to be cut: splices it, and its
+ * parent when that is left with one child, out of t->lin. Returns whether
+ * the box must be measured again. */
+bool bc__splice_remove(struct bc_tree *t, uint32_t c);
+/* After either, the model final: the box (measured again when touch), the
+ * stack (the root's need), the dirty state. */
+void bc__splice_finish(struct bc_tree *t, bool touch);
 /* Rewrites primitive n's parameter record, colour and ABV in t->lin. */
 void bc__lin_update_prim(struct bc_tree *t, const struct bc__node *n);
 /* Rewrites operator n's node words and record, then the ROIs, kill counts

@@ -1,0 +1,471 @@
+/*
+ * Structural edits without a new layout: an INSERT or a REMOVE splices the
+ * post-order arrays of struct bc_lin in place, and the result is bit for
+ * bit the layout bc__lin_fill would build for the edited tree
+ * (tests/blobtree/test_splice.c holds it to that).
+ *
+ * Why "splice with memmove and fix indices" and not a gap buffer, chunked
+ * arrays or a rope: struct bc_lin is the renderers' contract -- flat
+ * arrays indexed by slot, primitive and record, read in place and uploaded
+ * whole -- and render/ must not change with this. Any of the other
+ * structures would make every reader translate indices. A splice keeps
+ * the arrays as they are: it moves each array's tail by the size of the
+ * change (memmove, at memory bandwidth), adds that size to every stored
+ * index past the edit point (one pass over the index arrays and the
+ * model's nodes), and recomputes what depends on a slot's place in the
+ * binary tree -- depth, fast and jump pointers, ROI, kill counts -- only
+ * in the part of the edited operator's fold whose shape changed (its
+ * operands left of the edit point: they sit one level deeper or higher).
+ * ABVs are placed again only where a slot's ROI changed, and the scalars
+ * follow from what changed: the box grows with new ABVs and is measured
+ * again only when an ABV that touched it went or shrank; the evaluation
+ * stack is the root's need, kept exact along the edited path (tree.c).
+ * docs/benchmarks.md has the costs: the tail move and the index pass are
+ * the linear terms, a few milliseconds per million primitives, against a
+ * full layout's hundreds.
+ *
+ * Trees with unary nodes are laid out whole (tree.c): their wrapper chains,
+ * domain chains and twist and bend bounds reach across the tree.
+ */
+#include "tree_impl.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "blobcast/alloc.h"
+
+/* ---- room -------------------------------------------------------------- */
+
+static int grow(void *pp, size_t n, size_t size)
+{
+	void **p = pp;
+	void *q = bc_reallocarray(*p, n, size);
+	if (!q) {
+		return BC_ENOMEM;
+	}
+	*p = q;
+	return 0;
+}
+
+/* A capacity of at least need, with room for the edits that follow. */
+static uint32_t roomy(uint32_t cap, uint32_t need)
+{
+	uint64_t c = (uint64_t)cap + cap / 2u + 64u;
+	if (c < need) {
+		c = need;
+	}
+	return c > UINT32_MAX ? UINT32_MAX : (uint32_t)c;
+}
+
+int bc__splice_reserve(struct bc_tree *t, uint32_t count, uint32_t nprims,
+                       uint32_t nparam)
+{
+	struct bc_lin *l = &t->lin;
+	if (count > t->lin_cap) {
+		uint32_t c = roomy(t->lin_cap, count);
+		if (grow(&l->node, c, 2 * sizeof(uint32_t)) ||
+		    grow(&l->first, c, sizeof(uint32_t)) ||
+		    grow(&l->fast, c, sizeof(uint32_t)) ||
+		    grow(&l->jump, c, sizeof(uint32_t)) ||
+		    grow(&l->kills, c, sizeof(uint32_t)) ||
+		    grow(&l->depth, c, sizeof(uint32_t)) ||
+		    grow(&l->node_id, c, sizeof(uint32_t)) ||
+		    grow(&l->prim_of, c, sizeof(uint32_t)) ||
+		    grow(&l->roi, c, 2 * sizeof(float)) ||
+		    grow(&l->wrap, c, sizeof(uint32_t)) ||
+		    grow(&l->wrap_top, c, sizeof(uint32_t)) ||
+		    grow(&l->dom, c, sizeof(uint32_t)) ||
+		    grow(&l->ucount, c, sizeof(uint32_t))) {
+			return BC_ENOMEM;
+		}
+		t->lin_cap = c;
+	}
+	if (nprims > t->lin_kcap) {
+		uint32_t c = roomy(t->lin_kcap, nprims);
+		if (grow(&l->prim_slot, c, sizeof(uint32_t)) ||
+		    grow(&l->abv, c, sizeof(struct bc_abv)) ||
+		    grow(&l->color, c, sizeof(*l->color))) {
+			return BC_ENOMEM;
+		}
+		t->lin_kcap = c;
+	}
+	if (nparam > t->lin_pcap) {
+		uint32_t c = roomy(t->lin_pcap, nparam);
+		if (grow(&l->param, c, 4 * sizeof(float))) {
+			return BC_ENOMEM;
+		}
+		t->lin_pcap = c;
+	}
+	return 0;
+}
+
+/* ---- moving and renumbering --------------------------------------------- */
+
+/* In one index space: del entries at `at` go, ins unwritten ones come. */
+struct span {
+	uint32_t at, del, ins;
+};
+
+/* One splice of slots, records (vec4 units) and primitives. keep_first:
+ * first[] values equal to s.at keep pointing there (an operand inserted
+ * at the very left of a subtree becomes its first slot). */
+struct splice {
+	struct span s, p, k;
+	bool keep_first;
+};
+
+/* Where stored index v points after the splice; an index into the deleted
+ * entries lands on `at` (first[] values: the next subtree moves there). */
+static uint32_t remap(const struct span *sp, uint32_t v)
+{
+	if (v < sp->at) {
+		return v;
+	}
+	if (v < sp->at + sp->del) {
+		return sp->at;
+	}
+	return v - sp->del + sp->ins;
+}
+
+static uint32_t remap_opt(const struct span *sp, uint32_t v)
+{
+	return v == BC_NONE ? v : remap(sp, v);
+}
+
+static void move_tail(void *base, size_t size, uint32_t n,
+                      const struct span *sp)
+{
+	char *b = base;
+	size_t tail = (size_t)n - sp->at - sp->del;
+	if (sp->del != sp->ins && tail > 0) {
+		memmove(b + (size_t)(sp->at + sp->ins) * size,
+		        b + (size_t)(sp->at + sp->del) * size, tail * size);
+	}
+}
+
+static bool in_gap(const struct span *sp, uint32_t i)
+{
+	return i >= sp->at && i < sp->at + sp->ins;
+}
+
+/* Moves every array's tail (room reserved) and renumbers every stored
+ * index of the layout and of the model's live nodes. The new entries are
+ * left for the caller to write. */
+static void apply(struct bc_tree *t, const struct splice *sp)
+{
+	struct bc_lin *l = &t->lin;
+	uint32_t n = l->count, np = l->nprims, nr = l->nparam;
+	move_tail(l->node, 2 * sizeof(uint32_t), n, &sp->s);
+	move_tail(l->first, sizeof(uint32_t), n, &sp->s);
+	move_tail(l->fast, sizeof(uint32_t), n, &sp->s);
+	move_tail(l->jump, sizeof(uint32_t), n, &sp->s);
+	move_tail(l->kills, sizeof(uint32_t), n, &sp->s);
+	move_tail(l->depth, sizeof(uint32_t), n, &sp->s);
+	move_tail(l->node_id, sizeof(uint32_t), n, &sp->s);
+	move_tail(l->prim_of, sizeof(uint32_t), n, &sp->s);
+	move_tail(l->roi, 2 * sizeof(float), n, &sp->s);
+	move_tail(l->wrap, sizeof(uint32_t), n, &sp->s);
+	move_tail(l->wrap_top, sizeof(uint32_t), n, &sp->s);
+	move_tail(l->dom, sizeof(uint32_t), n, &sp->s);
+	move_tail(l->ucount, sizeof(uint32_t), n, &sp->s);
+	move_tail(l->prim_slot, sizeof(uint32_t), np, &sp->k);
+	move_tail(l->abv, sizeof(struct bc_abv), np, &sp->k);
+	move_tail(l->color, sizeof(*l->color), np, &sp->k);
+	move_tail(l->param, 4 * sizeof(float), nr, &sp->p);
+	l->count = n - sp->s.del + sp->s.ins;
+	l->nprims = np - sp->k.del + sp->k.ins;
+	l->nparam = nr - sp->p.del + sp->p.ins;
+
+	for (uint32_t s = 0; s < l->count; s++) {
+		uint32_t w, a;
+		if (in_gap(&sp->s, s)) {
+			s = sp->s.at + sp->s.ins - 1;
+			continue;
+		}
+		w = l->node[2 * s];
+		a = w & BC_WORD_ANCESTOR_MASK;
+		if (a != BC_WORD_NO_ANCESTOR) {
+			l->node[2 * s] =
+			    (w & ~BC_WORD_ANCESTOR_MASK) | remap(&sp->s, a);
+		}
+		l->node[2 * s + 1] = remap(&sp->p, l->node[2 * s + 1]);
+		if (!(sp->keep_first && l->first[s] == sp->s.at)) {
+			l->first[s] = remap(&sp->s, l->first[s]);
+		}
+		l->fast[s] = remap_opt(&sp->s, l->fast[s]);
+		l->jump[s] = remap_opt(&sp->s, l->jump[s]);
+		l->prim_of[s] = remap_opt(&sp->k, l->prim_of[s]);
+	}
+	for (uint32_t k = 0; k < l->nprims; k++) {
+		if (in_gap(&sp->k, k)) {
+			k = sp->k.at + sp->k.ins - 1;
+			continue;
+		}
+		l->prim_slot[k] = remap(&sp->s, l->prim_slot[k]);
+	}
+	for (uint32_t i = 0; i < t->npool; i++) {
+		struct bc__node *nd = &t->pool[i];
+		if (!nd->live) {
+			continue;
+		}
+		nd->slot = remap(&sp->s, nd->slot);
+		nd->param = remap(&sp->p, nd->param);
+		if (!nd->is_op) {
+			nd->prim = remap(&sp->k, nd->prim);
+		}
+	}
+}
+
+/* ---- what depends on the place in the tree ------------------------------ */
+
+/* Does the AABB of primitive k's ABV touch l's box (so that the box may
+ * shrink when the ABV goes or changes)? */
+static bool touches_box(const struct bc_lin *l, uint32_t k)
+{
+	float lo[3], hi[3];
+	bc_abv_aabb(&l->abv[k], lo, hi);
+	for (int i = 0; i < 3; i++) {
+		if (lo[i] <= l->lo[i] || hi[i] >= l->hi[i]) {
+			return true;
+		}
+	}
+	return false;
+}
+
+static bool same_bits(float a, float b)
+{
+	return memcmp(&a, &b, sizeof(a)) == 0;
+}
+
+/*
+ * The subtree of slots [lo, top], whose top's parent is final: first[]
+ * from the bottom up, then depth, pointers, ROIs and kill counts from the
+ * top down (bc__lin_link, as the full layout does), and the ABVs of the
+ * primitives whose ROI changed or whose slots are new ([new_lo, new_hi)).
+ * Returns whether an ABV that touched the box changed.
+ */
+static bool relink(struct bc_tree *t, uint32_t lo, uint32_t top,
+                   uint32_t new_lo, uint32_t new_hi)
+{
+	struct bc_lin *l = &t->lin;
+	bool touch = false;
+	for (uint32_t s = lo; s <= top; s++) {
+		l->first[s] =
+		    bc_lin_is_leaf(l, s) ? s : l->first[l->first[s - 1] - 1];
+	}
+	for (uint32_t s = top + 1; s-- > lo;) {
+		float was = l->roi[2 * s + 1];
+		bool fresh = s >= new_lo && s < new_hi;
+		bc__lin_link(l, s);
+		if (bc_lin_is_leaf(l, s) &&
+		    (fresh || !same_bits(was, l->roi[2 * s + 1]))) {
+			uint32_t k = l->prim_of[s];
+			uint32_t n = bc__map_find(&t->ids, l->node_id[s]);
+			if (!fresh && touches_box(l, k)) {
+				touch = true;
+			}
+			bc__lin_place_abv(t, l, k, &t->pool[n].u.prim);
+		}
+	}
+	return touch;
+}
+
+void bc__splice_finish(struct bc_tree *t, bool touch)
+{
+	struct bc_lin *l = &t->lin;
+	if (touch) {
+		/* The box as the full layout measures it: every ABV in
+		 * order. */
+		for (int i = 0; i < 3; i++) {
+			l->lo[i] = INFINITY;
+			l->hi[i] = -INFINITY;
+		}
+		for (uint32_t k = 0; k < l->nprims; k++) {
+			float lo[3], hi[3];
+			bc_abv_aabb(&l->abv[k], lo, hi);
+			for (int i = 0; i < 3; i++) {
+				l->lo[i] = fminf(l->lo[i], lo[i]);
+				l->hi[i] = fmaxf(l->hi[i], hi[i]);
+			}
+		}
+	}
+	bc__lin_update_size(l);
+	l->stack = t->pool[t->root].need;
+	l->lip = 1.0f;
+	t->dirty.structure = true;
+	t->dirty.edits++;
+}
+
+/* Gives slot s the parent and side of a node word w whose ancestor is now
+ * slot a (BC_WORD_NO_ANCESTOR: s becomes the root). */
+static void adopt(struct bc_lin *l, uint32_t s, uint32_t w, uint32_t a)
+{
+	l->node[2 * s] &= ~(BC_WORD_LEFT | BC_WORD_ANCESTOR_MASK);
+	l->node[2 * s] |= (w & BC_WORD_LEFT) | a;
+}
+
+/* The rightmost leaf of the subtree at pool node n (last in pre-order:
+ * its record ends the subtree's records). */
+static uint32_t last_leaf(const struct bc_tree *t, uint32_t n)
+{
+	while (t->pool[n].is_op) {
+		n = t->pool[n].last_child;
+	}
+	return n;
+}
+
+/* ---- insert ------------------------------------------------------------- */
+
+/*
+ * Pool node m (px primitives, ox operators, no unary nodes) was linked as
+ * a child of operator P. Its slots come in as a block with one new fold
+ * f = (left op m): after the fold of the child before it, or, for the
+ * first child, before the old first child c0, whose fold (m op c0) comes
+ * after c0. The operands left of the edit point (the subtree of f) are
+ * linked again; nothing right of it or above P changes but its indices.
+ * Returns whether an ABV that touched the box changed (the first child
+ * changes sides).
+ */
+bool bc__splice_insert(struct bc_tree *t, uint32_t m, uint32_t px, uint32_t ox)
+{
+	struct bc_lin *l = &t->lin;
+	uint32_t p = t->pool[m].parent, prev = t->pool[m].prev;
+	uint32_t next = t->pool[m].next;
+	uint32_t sx = 2 * px - 1,
+	         rx = BC_PRIM_RECORD_VEC4 * px + BC_OP_RECORD_VEC4 * ox;
+	struct bc__fill fs = {.l = l};
+	uint32_t f, lo, block;
+	if (prev != BC_NONE) {
+		uint32_t last = last_leaf(t, prev);
+		uint32_t s0 = t->pool[prev].slot + 1 +
+		              (t->pool[prev].prev != BC_NONE ? 1u : 0u);
+		uint32_t old_top = t->pool[p].slot;
+		uint32_t w = l->node[2 * old_top];
+		struct splice sp = {
+		    .s = {s0, 0, sx + 1},
+		    .p = {t->pool[last].param + BC_PRIM_RECORD_VEC4, 0, rx},
+		    .k = {t->pool[last].prim + 1, 0, px}};
+		apply(t, &sp);
+		fs.slot = s0;
+		fs.prim = sp.k.at;
+		fs.param = sp.p.at;
+		bc__lin_emit(t, &fs, m);
+		f = s0 + sx;
+		bc__lin_fold(l, &t->pool[p], s0 - 1, f - 1, f);
+		if (next == BC_NONE) {
+			/* f is P's new top, where the old one was. */
+			uint32_t a = w & BC_WORD_ANCESTOR_MASK;
+			adopt(l, f, w,
+			      a == BC_WORD_NO_ANCESTOR ? a : remap(&sp.s, a));
+			t->pool[p].slot = f;
+		} else {
+			bc__lin_set_parent(l, f, t->pool[next].slot + 1, true);
+		}
+		lo = l->first[s0 - 1];
+		block = s0;
+	} else {
+		uint32_t c0 = next, c0top = t->pool[c0].slot;
+		uint32_t first = l->first[c0top];
+		struct splice fold = {.s = {c0top + 1, 0, 1}};
+		struct splice sp = {
+		    .s = {first, 0, sx},
+		    .p = {t->pool[p].param + BC_OP_RECORD_VEC4, 0, rx},
+		    .k = {l->prim_of[first], 0, px},
+		    .keep_first = true};
+		apply(t, &fold);
+		apply(t, &sp);
+		fs.slot = first;
+		fs.prim = sp.k.at;
+		fs.param = sp.p.at;
+		bc__lin_emit(t, &fs, m);
+		c0top = t->pool[c0].slot;
+		f = c0top + 1;
+		bc__lin_fold(l, &t->pool[p], first + sx - 1, c0top, f);
+		bc__lin_set_parent(l, f, t->pool[t->pool[c0].next].slot + 1,
+		                   true);
+		lo = first;
+		block = first;
+	}
+	return relink(t, lo, f, block, block + sx);
+}
+
+/* ---- remove -------------------------------------------------------------- */
+
+/*
+ * Takes pool node c's slots, records and primitives out of the layout
+ * before the model drops it (tree.c cuts it next), with the fold that
+ * joined it -- or, when its parent P had two children, P's only fold and
+ * record, the other child taking P's place. The operands that were left
+ * of c in P's fold (or the child that stays) are linked again. Returns
+ * whether an ABV that touched the box went or changed.
+ */
+bool bc__splice_remove(struct bc_tree *t, uint32_t c)
+{
+	struct bc_lin *l = &t->lin;
+	uint32_t p = t->pool[c].parent, nkids = t->pool[p].nchildren;
+	uint32_t prev = t->pool[c].prev, next = t->pool[c].next;
+	uint32_t ctop = t->pool[c].slot, cf = l->first[ctop];
+	uint32_t px = (ctop - cf) / 2 + 1, klo = l->prim_of[cf];
+	uint32_t pend = t->pool[last_leaf(t, c)].param + BC_PRIM_RECORD_VEC4;
+	uint32_t ptop = t->pool[p].slot, w = l->node[2 * ptop];
+	uint32_t a = w & BC_WORD_ANCESTOR_MASK, top;
+	struct splice one = {0}, two = {0};
+	bool touch = false;
+	for (uint32_t k = klo; k < klo + px && !touch; k++) {
+		touch = touches_box(l, k);
+	}
+	if (nkids >= 3 && prev != BC_NONE) {
+		/* c's block and its fold go; the fold below takes over. */
+		one = (struct splice){
+		    .s = {cf, ctop - cf + 2, 0},
+		    .p = {t->pool[c].param, pend - t->pool[c].param, 0},
+		    .k = {klo, px, 0}};
+		apply(t, &one);
+		top = cf - 1;
+		if (next != BC_NONE) {
+			bc__lin_set_parent(l, top, t->pool[next].slot + 1,
+			                   true);
+		} else {
+			adopt(l, top, w,
+			      a == BC_WORD_NO_ANCESTOR ? a : remap(&one.s, a));
+			t->pool[p].slot = top;
+		}
+	} else if (nkids >= 3) {
+		/* The first child and the fold (c op c1) go: c1 is first. */
+		one = (struct splice){.s = {t->pool[next].slot + 1, 1, 0}};
+		two = (struct splice){
+		    .s = {cf, ctop - cf + 1, 0},
+		    .p = {t->pool[c].param, pend - t->pool[c].param, 0},
+		    .k = {klo, px, 0}};
+		apply(t, &one);
+		apply(t, &two);
+		top = t->pool[next].slot;
+		bc__lin_set_parent(l, top, t->pool[t->pool[next].next].slot + 1,
+		                   true);
+	} else {
+		/* P goes with c: its fold and record; the other child takes
+		 * P's place. */
+		uint32_t sib = prev != BC_NONE ? prev : next;
+		uint32_t rec = t->pool[p].param;
+		if (prev != BC_NONE) {
+			one = (struct splice){
+			    .s = {cf, ctop - cf + 2, 0},
+			    .p = {t->pool[c].param, pend - t->pool[c].param, 0},
+			    .k = {klo, px, 0}};
+			two = (struct splice){.p = {rec, BC_OP_RECORD_VEC4, 0}};
+		} else {
+			one = (struct splice){.s = {ptop, 1, 0}};
+			two = (struct splice){.s = {cf, ctop - cf + 1, 0},
+			                      .p = {rec, pend - rec, 0},
+			                      .k = {klo, px, 0}};
+		}
+		apply(t, &one);
+		apply(t, &two);
+		top = t->pool[sib].slot;
+		if (a != BC_WORD_NO_ANCESTOR) {
+			a = remap(&two.s, remap(&one.s, a));
+		}
+		adopt(l, top, w, a);
+	}
+	return relink(t, l->first[top], top, 0, 0) || touch;
+}
