@@ -269,6 +269,7 @@ static void emit_leaf(struct bc_tree *t, struct bc__fill *fs, uint32_t n)
 	struct bc_lin *l = fs->l;
 	uint32_t s = fs->slot++;
 	nd->slot = s;
+	nd->epoch = t->epoch;
 	nd->prim = fs->prim++;
 	nd->param = fs->param;
 	fs->param += BC_PRIM_RECORD_VEC4;
@@ -322,6 +323,7 @@ void bc__lin_emit(struct bc_tree *t, struct bc__fill *fs, uint32_t top)
 		while (t->pool[n].is_op) {
 			struct bc__node *nd = &t->pool[n];
 			nd->param = fs->param;
+			nd->epoch = t->epoch;
 			if (bc__node_unary(nd)) {
 				struct bc_lin *l = fs->l;
 				nd->unary = fs->unary++;
@@ -473,8 +475,18 @@ static void propagate(struct bc_lin *l, uint32_t s)
 
 void bc__lin_link(struct bc_lin *l, uint32_t s)
 {
-	uint32_t a = bc_lin_parent(l, s);
 	propagate(l, s);
+	bc__lin_pointers(l, s);
+}
+
+void bc__lin_propagate(struct bc_lin *l, uint32_t s)
+{
+	propagate(l, s);
+}
+
+void bc__lin_pointers(struct bc_lin *l, uint32_t s)
+{
+	uint32_t a = bc_lin_parent(l, s);
 	if (a == BC_NONE) {
 		l->depth[s] = 0;
 		l->jump[s] = BC_NONE;
@@ -639,7 +651,8 @@ static void place_subtree(struct bc_tree *t, struct bc_lin *l, uint32_t top)
 		while (t->pool[n].is_op) {
 			n = t->pool[n].first_child;
 		}
-		bc__lin_place_abv(t, l, t->pool[n].prim, &t->pool[n].u.prim);
+		bc__lin_place_abv(t, l, bc__prim(t, &t->pool[n]),
+		                  &t->pool[n].u.prim);
 		while (n != top && t->pool[n].next == BC_NONE) {
 			n = t->pool[n].parent;
 		}
@@ -715,6 +728,8 @@ void bc__lin_fill(struct bc_tree *t, struct bc_lin *l)
 	uint32_t root, depth = 0, most = 0;
 	l->nesting = bc__measure(t, t->root);
 	bc__lin_emit(t, &fs, t->root);
+	/* Every node is up to date: no splice to follow. */
+	t->shift_base = t->epoch;
 	l->nunary = fs.unary;
 	l->nparam = fs.param;
 	l->lip = 1.0f;

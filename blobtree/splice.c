@@ -101,39 +101,16 @@ int bc__splice_reserve(struct bc_tree *t, uint32_t count, uint32_t nprims,
 
 /* ---- moving and renumbering --------------------------------------------- */
 
-/* In one index space: del entries at `at` go, ins unwritten ones come. */
-struct span {
-	uint32_t at, del, ins;
-};
-
 /* One splice of slots, records (vec4 units) and primitives. keep_first:
  * first[] values equal to s.at keep pointing there (an operand inserted
  * at the very left of a subtree becomes its first slot). */
 struct splice {
-	struct span s, p, k;
+	struct bc__span s, p, k;
 	bool keep_first;
 };
 
-/* Where stored index v points after the splice; an index into the deleted
- * entries lands on `at` (first[] values: the next subtree moves there). */
-static uint32_t remap(const struct span *sp, uint32_t v)
-{
-	if (v < sp->at) {
-		return v;
-	}
-	if (v < sp->at + sp->del) {
-		return sp->at;
-	}
-	return v - sp->del + sp->ins;
-}
-
-static uint32_t remap_opt(const struct span *sp, uint32_t v)
-{
-	return v == BC_NONE ? v : remap(sp, v);
-}
-
 static void move_tail(void *base, size_t size, uint32_t n,
-                      const struct span *sp)
+                      const struct bc__span *sp)
 {
 	char *b = base;
 	size_t tail = (size_t)n - sp->at - sp->del;
@@ -143,18 +120,68 @@ static void move_tail(void *base, size_t size, uint32_t n,
 	}
 }
 
-static bool in_gap(const struct span *sp, uint32_t i)
+/* Renumbers n indices v[0], v[stride], ... through sp (BC_NONE kept). */
+static void renumber(uint32_t *v, size_t n, size_t stride,
+                     const struct bc__span *sp)
 {
-	return i >= sp->at && i < sp->at + sp->ins;
+	uint32_t at = sp->at, hi = sp->at + sp->del;
+	uint32_t shift = sp->ins - sp->del; /* modulo 2^32 */
+	if (sp->del == 0 && sp->ins == 0) {
+		return;
+	}
+	for (size_t i = 0; i < n; i++) {
+		uint32_t x = v[i * stride];
+		uint32_t y = x >= hi ? x + shift : (x >= at ? at : x);
+		v[i * stride] = x == BC_NONE ? x : y;
+	}
+}
+
+/* The first primitive whose slot is at or past slot s (primitives are in
+ * slot order). */
+static uint32_t prim_from(const struct bc_lin *l, uint32_t s)
+{
+	uint32_t lo = 0, hi = l->nprims;
+	while (lo < hi) {
+		uint32_t mid = lo + (hi - lo) / 2;
+		if (l->prim_slot[mid] < s) {
+			lo = mid + 1;
+		} else {
+			hi = mid;
+		}
+	}
+	return lo;
+}
+
+/* Notes the splice for the model's nodes to follow when read (struct
+ * bc_tree's shift log); a full log is first followed by every live node,
+ * once per BC__SHIFTS splices. */
+static void log_shift(struct bc_tree *t, const struct splice *sp)
+{
+	if (t->epoch - t->shift_base == BC__SHIFTS) {
+		for (uint32_t i = 0; i < t->npool; i++) {
+			if (t->pool[i].live) {
+				bc__refresh(t, &t->pool[i]);
+				t->pool[i].epoch = 0;
+			}
+		}
+		t->epoch = t->shift_base = 0;
+	}
+	t->shift[t->epoch - t->shift_base] =
+	    (struct bc__shift){.s = sp->s, .p = sp->p, .k = sp->k};
+	t->epoch++;
 }
 
 /* Moves every array's tail (room reserved) and renumbers every stored
- * index of the layout and of the model's live nodes. The new entries are
- * left for the caller to write. */
+ * index of the layout (the model's nodes follow the log). The new entries are
+ * left for the caller to write. What lies before the splice point keeps
+ * its first slot, record and primitive (they come before in both
+ * post-order and pre-order); only its pointers up the tree (ancestor,
+ * fast, jump) may cross the point. */
 static void apply(struct bc_tree *t, const struct splice *sp)
 {
 	struct bc_lin *l = &t->lin;
 	uint32_t n = l->count, np = l->nprims, nr = l->nparam;
+	uint32_t tail, ktail;
 	move_tail(l->node, 2 * sizeof(uint32_t), n, &sp->s);
 	move_tail(l->first, sizeof(uint32_t), n, &sp->s);
 	move_tail(l->fast, sizeof(uint32_t), n, &sp->s);
@@ -175,45 +202,38 @@ static void apply(struct bc_tree *t, const struct splice *sp)
 	l->count = n - sp->s.del + sp->s.ins;
 	l->nprims = np - sp->k.del + sp->k.ins;
 	l->nparam = nr - sp->p.del + sp->p.ins;
+	tail = sp->s.at + sp->s.ins;
 
+	/* Pointers up, everywhere but the new entries. */
 	for (uint32_t s = 0; s < l->count; s++) {
-		uint32_t w, a;
-		if (in_gap(&sp->s, s)) {
-			s = sp->s.at + sp->s.ins - 1;
+		uint32_t w = l->node[2 * s], a = w & BC_WORD_ANCESTOR_MASK;
+		if (s == sp->s.at && sp->s.ins > 0) {
+			s = tail - 1;
 			continue;
 		}
-		w = l->node[2 * s];
-		a = w & BC_WORD_ANCESTOR_MASK;
-		if (a != BC_WORD_NO_ANCESTOR) {
-			l->node[2 * s] =
-			    (w & ~BC_WORD_ANCESTOR_MASK) | remap(&sp->s, a);
+		if (a != BC_WORD_NO_ANCESTOR && a >= sp->s.at) {
+			l->node[2 * s] = (w & ~BC_WORD_ANCESTOR_MASK) |
+			                 bc__span_map(&sp->s, a);
 		}
-		l->node[2 * s + 1] = remap(&sp->p, l->node[2 * s + 1]);
+	}
+	renumber(l->fast, sp->s.at, 1, &sp->s);
+	renumber(l->jump, sp->s.at, 1, &sp->s);
+	renumber(l->fast + tail, l->count - tail, 1, &sp->s);
+	renumber(l->jump + tail, l->count - tail, 1, &sp->s);
+	/* First slots, records and primitives, past the point. */
+	renumber(l->node + 2 * (size_t)tail + 1, l->count - tail, 2, &sp->p);
+	renumber(l->prim_of + tail, l->count - tail, 1, &sp->k);
+	for (uint32_t s = tail; s < l->count; s++) {
 		if (!(sp->keep_first && l->first[s] == sp->s.at)) {
-			l->first[s] = remap(&sp->s, l->first[s]);
-		}
-		l->fast[s] = remap_opt(&sp->s, l->fast[s]);
-		l->jump[s] = remap_opt(&sp->s, l->jump[s]);
-		l->prim_of[s] = remap_opt(&sp->k, l->prim_of[s]);
-	}
-	for (uint32_t k = 0; k < l->nprims; k++) {
-		if (in_gap(&sp->k, k)) {
-			k = sp->k.at + sp->k.ins - 1;
-			continue;
-		}
-		l->prim_slot[k] = remap(&sp->s, l->prim_slot[k]);
-	}
-	for (uint32_t i = 0; i < t->npool; i++) {
-		struct bc__node *nd = &t->pool[i];
-		if (!nd->live) {
-			continue;
-		}
-		nd->slot = remap(&sp->s, nd->slot);
-		nd->param = remap(&sp->p, nd->param);
-		if (!nd->is_op) {
-			nd->prim = remap(&sp->k, nd->prim);
+			l->first[s] = bc__span_map(&sp->s, l->first[s]);
 		}
 	}
+	/* Primitives past the point: past the new ones, or found in the
+	 * (then unmoved, increasing) slots. */
+	ktail = sp->k.del || sp->k.ins ? sp->k.at + sp->k.ins
+	                               : prim_from(l, sp->s.at);
+	renumber(l->prim_slot + ktail, l->nprims - ktail, 1, &sp->s);
+	log_shift(t, sp);
 }
 
 /* ---- what depends on the place in the tree ------------------------------ */
@@ -237,28 +257,66 @@ static bool same_bits(float a, float b)
 	return memcmp(&a, &b, sizeof(a)) == 0;
 }
 
+/* In kills[], during relink(): the slot's ROI and counts must be computed
+ * again (kill counts stay far below: at most the tree's depth). */
+#define AGAIN 0x80000000u
+
+static void again(struct bc_lin *l, uint32_t s)
+{
+	l->kills[s] |= AGAIN;
+}
+
+/* first[] of slots lo..hi (whose operands are there too) from the bottom
+ * up: an operator's left operand ends where its right one starts. */
+static void refirst(struct bc_lin *l, uint32_t lo, uint32_t hi)
+{
+	for (uint32_t s = lo; s <= hi; s++) {
+		l->first[s] =
+		    bc_lin_is_leaf(l, s) ? s : l->first[l->first[s - 1] - 1];
+	}
+}
+
 /*
- * The subtree of slots [lo, top], whose top's parent is final: first[]
- * from the bottom up, then depth, pointers, ROIs and kill counts from the
- * top down (bc__lin_link, as the full layout does), and the ABVs of the
- * primitives whose ROI changed or whose slots are new ([new_lo, new_hi)).
- * Returns whether an ABV that touched the box changed.
+ * The subtree of slots [lo, top], whose top's parent is final, from the
+ * top down: depth and pointers everywhere (a depth changed), ROIs and
+ * counts where marked AGAIN (the top, the new slots [new_lo, new_hi), and
+ * what the caller marked: slots whose parent or side changed), and below
+ * every slot whose ROI or counts came out different, as the full layout
+ * computes them (bc__lin_pointers, bc__lin_propagate). ABVs of new
+ * primitives and of those whose ROI changed are placed again. Returns
+ * whether an ABV that touched the box changed.
  */
 static bool relink(struct bc_tree *t, uint32_t lo, uint32_t top,
                    uint32_t new_lo, uint32_t new_hi)
 {
 	struct bc_lin *l = &t->lin;
 	bool touch = false;
-	for (uint32_t s = lo; s <= top; s++) {
-		l->first[s] =
-		    bc_lin_is_leaf(l, s) ? s : l->first[l->first[s - 1] - 1];
+	again(l, top);
+	for (uint32_t s = new_lo; s < new_hi; s++) {
+		again(l, s);
 	}
 	for (uint32_t s = top + 1; s-- > lo;) {
-		float was = l->roi[2 * s + 1];
-		bool fresh = s >= new_lo && s < new_hi;
-		bc__lin_link(l, s);
-		if (bc_lin_is_leaf(l, s) &&
-		    (fresh || !same_bits(was, l->roi[2 * s + 1]))) {
+		float r0 = l->roi[2 * s], r1 = l->roi[2 * s + 1];
+		uint32_t kills = l->kills[s], uc = l->ucount[s],
+		         dom = l->dom[s];
+		bool fresh = s >= new_lo && s < new_hi, changed;
+		bc__lin_pointers(l, s);
+		if (!(kills & AGAIN)) {
+			continue;
+		}
+		bc__lin_propagate(l, s);
+		changed = !same_bits(r0, l->roi[2 * s]) ||
+		          !same_bits(r1, l->roi[2 * s + 1]) ||
+		          (kills & ~AGAIN) != l->kills[s] ||
+		          uc != l->ucount[s] || dom != l->dom[s];
+		if (!bc_lin_is_leaf(l, s)) {
+			if (changed) {
+				again(l, s - 1);
+				again(l, l->first[s - 1] - 1);
+			}
+			continue;
+		}
+		if (fresh || !same_bits(r1, l->roi[2 * s + 1])) {
 			uint32_t k = l->prim_of[s];
 			uint32_t n = bc__map_find(&t->ids, l->node_id[s]);
 			if (!fresh && touches_box(l, k)) {
@@ -337,39 +395,46 @@ bool bc__splice_insert(struct bc_tree *t, uint32_t m, uint32_t px, uint32_t ox)
 	uint32_t f, lo, block;
 	if (prev != BC_NONE) {
 		uint32_t last = last_leaf(t, prev);
-		uint32_t s0 = t->pool[prev].slot + 1 +
+		uint32_t s0 = bc__slot(t, &t->pool[prev]) + 1 +
 		              (t->pool[prev].prev != BC_NONE ? 1u : 0u);
-		uint32_t old_top = t->pool[p].slot;
+		uint32_t old_top = bc__slot(t, &t->pool[p]);
 		uint32_t w = l->node[2 * old_top];
 		struct splice sp = {
 		    .s = {s0, 0, sx + 1},
-		    .p = {t->pool[last].param + BC_PRIM_RECORD_VEC4, 0, rx},
-		    .k = {t->pool[last].prim + 1, 0, px}};
+		    .p = {bc__param(t, &t->pool[last]) + BC_PRIM_RECORD_VEC4, 0,
+		          rx},
+		    .k = {bc__prim(t, &t->pool[last]) + 1, 0, px}};
 		apply(t, &sp);
 		fs.slot = s0;
 		fs.prim = sp.k.at;
 		fs.param = sp.p.at;
 		bc__lin_emit(t, &fs, m);
 		f = s0 + sx;
+		bc__refresh(t, &t->pool[p]);
 		bc__lin_fold(l, &t->pool[p], s0 - 1, f - 1, f);
+		again(l, s0 - 1);
 		if (next == BC_NONE) {
 			/* f is P's new top, where the old one was. */
 			uint32_t a = w & BC_WORD_ANCESTOR_MASK;
 			adopt(l, f, w,
-			      a == BC_WORD_NO_ANCESTOR ? a : remap(&sp.s, a));
+			      a == BC_WORD_NO_ANCESTOR
+			          ? a
+			          : bc__span_map(&sp.s, a));
+			bc__refresh(t, &t->pool[p]);
 			t->pool[p].slot = f;
 		} else {
-			bc__lin_set_parent(l, f, t->pool[next].slot + 1, true);
+			bc__lin_set_parent(
+			    l, f, bc__slot(t, &t->pool[next]) + 1, true);
 		}
 		lo = l->first[s0 - 1];
 		block = s0;
 	} else {
-		uint32_t c0 = next, c0top = t->pool[c0].slot;
+		uint32_t c0 = next, c0top = bc__slot(t, &t->pool[c0]);
 		uint32_t first = l->first[c0top];
 		struct splice fold = {.s = {c0top + 1, 0, 1}};
 		struct splice sp = {
 		    .s = {first, 0, sx},
-		    .p = {t->pool[p].param + BC_OP_RECORD_VEC4, 0, rx},
+		    .p = {bc__param(t, &t->pool[p]) + BC_OP_RECORD_VEC4, 0, rx},
 		    .k = {l->prim_of[first], 0, px},
 		    .keep_first = true};
 		apply(t, &fold);
@@ -378,11 +443,14 @@ bool bc__splice_insert(struct bc_tree *t, uint32_t m, uint32_t px, uint32_t ox)
 		fs.prim = sp.k.at;
 		fs.param = sp.p.at;
 		bc__lin_emit(t, &fs, m);
-		c0top = t->pool[c0].slot;
+		c0top = bc__slot(t, &t->pool[c0]);
+		bc__refresh(t, &t->pool[p]);
 		f = c0top + 1;
+		refirst(l, first + sx, c0top);
 		bc__lin_fold(l, &t->pool[p], first + sx - 1, c0top, f);
-		bc__lin_set_parent(l, f, t->pool[t->pool[c0].next].slot + 1,
-		                   true);
+		again(l, c0top);
+		bc__lin_set_parent(
+		    l, f, bc__slot(t, &t->pool[t->pool[c0].next]) + 1, true);
 		lo = first;
 		block = first;
 	}
@@ -404,10 +472,12 @@ bool bc__splice_remove(struct bc_tree *t, uint32_t c)
 	struct bc_lin *l = &t->lin;
 	uint32_t p = t->pool[c].parent, nkids = t->pool[p].nchildren;
 	uint32_t prev = t->pool[c].prev, next = t->pool[c].next;
-	uint32_t ctop = t->pool[c].slot, cf = l->first[ctop];
+	uint32_t ctop = bc__slot(t, &t->pool[c]), cf = l->first[ctop];
+	uint32_t cparam = bc__param(t, &t->pool[c]);
 	uint32_t px = (ctop - cf) / 2 + 1, klo = l->prim_of[cf];
-	uint32_t pend = t->pool[last_leaf(t, c)].param + BC_PRIM_RECORD_VEC4;
-	uint32_t ptop = t->pool[p].slot, w = l->node[2 * ptop];
+	uint32_t pend =
+	    bc__param(t, &t->pool[last_leaf(t, c)]) + BC_PRIM_RECORD_VEC4;
+	uint32_t ptop = bc__slot(t, &t->pool[p]), w = l->node[2 * ptop];
 	uint32_t a = w & BC_WORD_ANCESTOR_MASK, top;
 	struct splice one = {0}, two = {0};
 	bool touch = false;
@@ -416,42 +486,44 @@ bool bc__splice_remove(struct bc_tree *t, uint32_t c)
 	}
 	if (nkids >= 3 && prev != BC_NONE) {
 		/* c's block and its fold go; the fold below takes over. */
-		one = (struct splice){
-		    .s = {cf, ctop - cf + 2, 0},
-		    .p = {t->pool[c].param, pend - t->pool[c].param, 0},
-		    .k = {klo, px, 0}};
+		one = (struct splice){.s = {cf, ctop - cf + 2, 0},
+		                      .p = {cparam, pend - cparam, 0},
+		                      .k = {klo, px, 0}};
 		apply(t, &one);
 		top = cf - 1;
 		if (next != BC_NONE) {
-			bc__lin_set_parent(l, top, t->pool[next].slot + 1,
-			                   true);
+			bc__lin_set_parent(
+			    l, top, bc__slot(t, &t->pool[next]) + 1, true);
 		} else {
 			adopt(l, top, w,
-			      a == BC_WORD_NO_ANCESTOR ? a : remap(&one.s, a));
+			      a == BC_WORD_NO_ANCESTOR
+			          ? a
+			          : bc__span_map(&one.s, a));
+			bc__refresh(t, &t->pool[p]);
 			t->pool[p].slot = top;
 		}
 	} else if (nkids >= 3) {
 		/* The first child and the fold (c op c1) go: c1 is first. */
-		one = (struct splice){.s = {t->pool[next].slot + 1, 1, 0}};
-		two = (struct splice){
-		    .s = {cf, ctop - cf + 1, 0},
-		    .p = {t->pool[c].param, pend - t->pool[c].param, 0},
-		    .k = {klo, px, 0}};
+		one = (struct splice){
+		    .s = {bc__slot(t, &t->pool[next]) + 1, 1, 0}};
+		two = (struct splice){.s = {cf, ctop - cf + 1, 0},
+		                      .p = {cparam, pend - cparam, 0},
+		                      .k = {klo, px, 0}};
 		apply(t, &one);
 		apply(t, &two);
-		top = t->pool[next].slot;
-		bc__lin_set_parent(l, top, t->pool[t->pool[next].next].slot + 1,
-		                   true);
+		top = bc__slot(t, &t->pool[next]);
+		bc__lin_set_parent(
+		    l, top, bc__slot(t, &t->pool[t->pool[next].next]) + 1,
+		    true);
 	} else {
 		/* P goes with c: its fold and record; the other child takes
 		 * P's place. */
 		uint32_t sib = prev != BC_NONE ? prev : next;
-		uint32_t rec = t->pool[p].param;
+		uint32_t rec = bc__param(t, &t->pool[p]);
 		if (prev != BC_NONE) {
-			one = (struct splice){
-			    .s = {cf, ctop - cf + 2, 0},
-			    .p = {t->pool[c].param, pend - t->pool[c].param, 0},
-			    .k = {klo, px, 0}};
+			one = (struct splice){.s = {cf, ctop - cf + 2, 0},
+			                      .p = {cparam, pend - cparam, 0},
+			                      .k = {klo, px, 0}};
 			two = (struct splice){.p = {rec, BC_OP_RECORD_VEC4, 0}};
 		} else {
 			one = (struct splice){.s = {ptop, 1, 0}};
@@ -461,9 +533,9 @@ bool bc__splice_remove(struct bc_tree *t, uint32_t c)
 		}
 		apply(t, &one);
 		apply(t, &two);
-		top = t->pool[sib].slot;
+		top = bc__slot(t, &t->pool[sib]);
 		if (a != BC_WORD_NO_ANCESTOR) {
-			a = remap(&two.s, remap(&one.s, a));
+			a = bc__span_map(&two.s, bc__span_map(&one.s, a));
 		}
 		adopt(l, top, w, a);
 	}

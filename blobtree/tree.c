@@ -168,6 +168,8 @@ static uint32_t pool_take(struct bc_tree *t)
 	t->pool[n].next = BC_NONE;
 	t->pool[n].prev = BC_NONE;
 	t->pool[n].live = true;
+	/* No splice to follow: its layout fields are written before read. */
+	t->pool[n].epoch = t->epoch;
 	return n;
 }
 
@@ -272,10 +274,22 @@ static void unlink_child(struct bc_tree *t, uint32_t child)
 	c->prev = BC_NONE;
 }
 
-/* Child number pos of parent, BC_NONE past the end. */
+/* Child number pos of parent, BC_NONE past the end; walked from the
+ * nearer end, so appending to a wide operator costs nothing. */
 static uint32_t child_at(const struct bc_tree *t, uint32_t parent, uint32_t pos)
 {
-	uint32_t c = t->pool[parent].first_child;
+	uint32_t n = t->pool[parent].nchildren, c;
+	if (pos >= n) {
+		return BC_NONE;
+	}
+	if (pos > n / 2) {
+		c = t->pool[parent].last_child;
+		for (uint32_t k = n - 1; k > pos; k--) {
+			c = t->pool[c].prev;
+		}
+		return c;
+	}
+	c = t->pool[parent].first_child;
 	while (c != BC_NONE && pos-- > 0) {
 		c = t->pool[c].next;
 	}
@@ -858,7 +872,8 @@ uint32_t bc_tree_parent(const struct bc_tree *t, uint32_t id)
 uint32_t bc_tree_slot(const struct bc_tree *t, uint32_t id)
 {
 	uint32_t n = bc__map_find(&t->ids, id);
-	return (n == BC_NONE || !t->has_lin) ? BC_NONE : t->pool[n].slot;
+	return (n == BC_NONE || !t->has_lin) ? BC_NONE
+	                                     : bc__slot(t, &t->pool[n]);
 }
 
 const struct bc_lin *bc_tree_lin(const struct bc_tree *t)
@@ -894,10 +909,20 @@ static uint32_t live_node(const struct bc_tree *t, uint32_t id)
 	return t->building ? BC_NONE : bc__map_find(&t->ids, id);
 }
 
+/* live_node, with the node's slot, param and prim brought up to date. */
+static uint32_t live_node_now(struct bc_tree *t, uint32_t id)
+{
+	uint32_t n = live_node(t, id);
+	if (n != BC_NONE) {
+		bc__refresh(t, &t->pool[n]);
+	}
+	return n;
+}
+
 int bc_tree_set_prim(struct bc_tree *t, uint32_t id,
                      const struct bc_prim_data *p, struct bc_errinfo *ei)
 {
-	uint32_t n = live_node(t, id);
+	uint32_t n = live_node_now(t, id);
 	struct bc_prim_data copy = *p;
 	int rc;
 	if (n == BC_NONE) {
@@ -930,7 +955,7 @@ int bc_tree_set_prim(struct bc_tree *t, uint32_t id,
 int bc_tree_set_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
                    struct bc_errinfo *ei)
 {
-	uint32_t n = live_node(t, id);
+	uint32_t n = live_node_now(t, id);
 	struct bc_op_data o = *op;
 	const struct bc_lin *l = &t->lin;
 	uint32_t first_slot, k_lo, k_hi;
@@ -981,7 +1006,7 @@ int bc_tree_set_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
 int bc_tree_set_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
                       struct bc_errinfo *ei)
 {
-	uint32_t n = live_node(t, id);
+	uint32_t n = live_node_now(t, id);
 	const struct bc_lin *l = &t->lin;
 	uint32_t first_slot, k_lo, k_hi;
 	int rc;
@@ -1385,6 +1410,20 @@ int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
 	free_subtree(t, n);
 	install_lin(t, &fresh);
 	bc__names_graft(t, sub);
+	return 0;
+}
+
+int bc_tree_relayout(struct bc_tree *t, struct bc_errinfo *ei)
+{
+	struct bc_lin fresh;
+	int rc;
+	if (t->root == BC_NONE || t->building) {
+		return 0;
+	}
+	if ((rc = bc__lin_alloc(&fresh, t->nprims, t->nops))) {
+		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
+	}
+	install_lin(t, &fresh);
 	return 0;
 }
 

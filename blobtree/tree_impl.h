@@ -16,19 +16,22 @@ struct bc__node {
 	bool is_op;
 	bool live;
 	bool auto_id; /* id was assigned, not chosen by the scene */
-	union {
-		struct bc_prim_data prim;
-		struct bc_op_data op;
-	} u;
-	/* A unary node's parameters (u.op.kind says it is one). */
-	float uparam[BC_UNARY_MAX_PARAMS];
-	/* Set by linearization. */
+	/* Set by linearization; next to the links and flags, so that the
+	 * pass a splice makes over the pool (splice.c) reads one cache line
+	 * of a node, not two. */
 	uint32_t slot;   /* the node's top slot */
 	uint32_t param;  /* parameter record, vec4 units */
 	uint32_t prim;   /* primitive index (primitives only) */
 	uint32_t need;   /* evaluation stack entries of its subtree */
 	uint32_t unary;  /* unary index (unary nodes only) */
 	uint32_t dchain; /* domain nodes above it (check_shape's scratch) */
+	uint32_t epoch;  /* splices slot, param and prim have followed */
+	union {
+		struct bc_prim_data prim;
+		struct bc_op_data op;
+	} u;
+	/* A unary node's parameters (u.op.kind says it is one). */
+	float uparam[BC_UNARY_MAX_PARAMS];
 };
 
 static inline bool bc__node_unary(const struct bc__node *n)
@@ -65,6 +68,20 @@ struct bc__names {
 	uint32_t n, cap;
 };
 
+/* One splice of the layout (splice.c): in each index space -- slots,
+ * records (vec4), primitives -- del entries at `at` went and ins new ones
+ * came. */
+struct bc__span {
+	uint32_t at, del, ins;
+};
+struct bc__shift {
+	struct bc__span s, p, k;
+};
+/* Splices a node's slot, param and prim may lag behind (the log below):
+ * a splice then renumbers no node of the model, and a full pass brings
+ * every node up to date once per this many splices. */
+#define BC__SHIFTS 32u
+
 struct bc_tree {
 	struct bc__node *pool;
 	uint32_t npool, cap;
@@ -84,10 +101,66 @@ struct bc_tree {
 	bool has_lin;
 	/* Room of lin's arrays: slots, primitives, records (vec4). */
 	uint32_t lin_cap, lin_kcap, lin_pcap;
+	/* The splices since shift_base: a node whose epoch is e still has
+	 * to follow shift[e - shift_base .. epoch - shift_base). */
+	uint32_t epoch, shift_base;
+	struct bc__shift shift[BC__SHIFTS];
 	struct bc_dirty dirty;
 
 	struct bc__names names;
 };
+
+/* Where index v of one space points after a splice; an index into the
+ * entries that went lands on `at` (for first[]: the next subtree moves
+ * there). */
+static inline uint32_t bc__span_map(const struct bc__span *sp, uint32_t v)
+{
+	if (v < sp->at) {
+		return v;
+	}
+	if (v < sp->at + sp->del) {
+		return sp->at;
+	}
+	return v - sp->del + sp->ins;
+}
+
+/* Node n's slot, record and primitive index as of now. */
+static inline uint32_t bc__slot(const struct bc_tree *t,
+                                const struct bc__node *n)
+{
+	uint32_t v = n->slot;
+	for (uint32_t e = n->epoch; e < t->epoch; e++) {
+		v = bc__span_map(&t->shift[e - t->shift_base].s, v);
+	}
+	return v;
+}
+static inline uint32_t bc__param(const struct bc_tree *t,
+                                 const struct bc__node *n)
+{
+	uint32_t v = n->param;
+	for (uint32_t e = n->epoch; e < t->epoch; e++) {
+		v = bc__span_map(&t->shift[e - t->shift_base].p, v);
+	}
+	return v;
+}
+static inline uint32_t bc__prim(const struct bc_tree *t,
+                                const struct bc__node *n)
+{
+	uint32_t v = n->prim;
+	for (uint32_t e = n->epoch; e < t->epoch; e++) {
+		v = bc__span_map(&t->shift[e - t->shift_base].k, v);
+	}
+	return v;
+}
+/* Brings node n's slot, param and prim up to date (then they may be read
+ * and written directly). */
+static inline void bc__refresh(struct bc_tree *t, struct bc__node *n)
+{
+	n->slot = bc__slot(t, n);
+	n->param = bc__param(t, n);
+	n->prim = bc__prim(t, n);
+	n->epoch = t->epoch;
+}
 
 /* names.c */
 
@@ -138,6 +211,10 @@ void bc__lin_set_parent(struct bc_lin *l, uint32_t child, uint32_t parent,
 /* Slot s's ROI, kill and value counts, depth, fast and jump pointers from
  * its parent's (which must be final). */
 void bc__lin_link(struct bc_lin *l, uint32_t s);
+/* The two halves of bc__lin_link: ROI, kill and value counts and domain
+ * node; depth, fast and jump pointers. */
+void bc__lin_propagate(struct bc_lin *l, uint32_t s);
+void bc__lin_pointers(struct bc_lin *l, uint32_t s);
 /* Places primitive k's ABV (its slot's ROI known) and grows l's box. */
 void bc__lin_place_abv(struct bc_tree *t, struct bc_lin *l, uint32_t k,
                        const struct bc_prim_data *p);
