@@ -860,6 +860,31 @@ uint32_t bc_tree_child(const struct bc_tree *t, uint32_t id, uint32_t k)
 	return c == BC_NONE ? 0 : t->pool[c].id;
 }
 
+uint32_t bc_tree_child_index(const struct bc_tree *t, uint32_t id)
+{
+	uint32_t n = bc__map_find(&t->ids, id), p, s, a, k;
+	const struct bc_lin *l = &t->lin;
+	if (n == BC_NONE || (p = t->pool[n].parent) == BC_NONE ||
+	    bc__node_unary(&t->pool[p])) {
+		return 0;
+	}
+	if (!t->has_lin || t->building) {
+		for (k = 0; t->pool[n].prev != BC_NONE; k++) {
+			n = t->pool[n].prev;
+		}
+		return k;
+	}
+	/* Child i >= 1 is the right operand of the fold i levels up the
+	 * operator's left spine from its first fold; child 0 the left one. */
+	s = bc__slot(t, &t->pool[n]);
+	if (l->node[2 * s] & BC_WORD_LEFT) {
+		return 0;
+	}
+	a = bc_lin_parent(l, s);
+	k = t->pool[p].nchildren;
+	return k - 1u - (l->depth[a] - l->depth[bc__slot(t, &t->pool[p])]);
+}
+
 uint32_t bc_tree_parent(const struct bc_tree *t, uint32_t id)
 {
 	uint32_t n = bc__map_find(&t->ids, id);

@@ -156,32 +156,18 @@ static int walk_subtree(struct bc_proto_buf *b, const struct bc_tree *t,
 	struct bc_scene_walk w;
 	struct bc_scene_node n;
 	struct named nm = {0};
-	uint32_t parent = bc_tree_parent(t, id), count = 0, depth = 0;
-	uint32_t pdepth = 0, k = 0;
-	bool in = false, under = false;
-	int rc = bc_scene_walk_init(&w, t);
+	uint32_t count = 0;
+	/* Only the subtree is walked: what an inverse costs follows the
+	 * change, not the scene. */
+	int rc = bc_scene_walk_init_at(&w, t, id);
+	if (pos) {
+		*pos = bc_tree_child_index(t, id);
+	}
 	while (!rc && bc_scene_walk_next(&w, &n)) {
-		if (in && n.depth <= depth) {
-			break;
+		if (!(rc = put_node(b, &n))) {
+			rc = named_add(&nm, t, n.id);
 		}
-		if (!in && n.id == id) {
-			in = true;
-			depth = n.depth;
-			if (pos) {
-				*pos = k;
-			}
-		}
-		if (in) {
-			if (!(rc = put_node(b, &n))) {
-				rc = named_add(&nm, t, n.id);
-			}
-			count++;
-		} else if (parent != 0 && n.id == parent) {
-			under = true;
-			pdepth = n.depth;
-		} else if (under && n.depth == pdepth + 1) {
-			k++;
-		}
+		count++;
 	}
 	bc_scene_walk_finish(&w);
 	if (!rc && count == 0) {

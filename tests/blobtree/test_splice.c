@@ -83,9 +83,13 @@ static const char *lin_differs(const struct bc_tree *ta,
 		return "unary nodes";
 	}
 	for (size_t s = 0; s < n; s++) {
-		if (bc_tree_slot(ta, a->node_id[s]) !=
-		    bc_tree_slot(tb, a->node_id[s])) {
+		uint32_t id = a->node_id[s], p = bc_tree_parent(ta, id);
+		if (bc_tree_slot(ta, id) != bc_tree_slot(tb, id)) {
 			return "a node's slot";
+		}
+		if (p &&
+		    bc_tree_child(ta, p, bc_tree_child_index(ta, id)) != id) {
+			return "a node's position among its siblings";
 		}
 	}
 	return NULL;

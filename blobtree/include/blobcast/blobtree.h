@@ -411,6 +411,9 @@ BC_API bool bc_tree_get(const struct bc_tree *t, uint32_t id,
  * child k (0 when out of range). */
 BC_API uint32_t bc_tree_child_count(const struct bc_tree *t, uint32_t id);
 BC_API uint32_t bc_tree_child(const struct bc_tree *t, uint32_t id, uint32_t k);
+/* Position of node id among its parent's children (0 for the root or an
+ * unknown id); O(1) from the layout, as bc_tree_child(parent, k) == id. */
+BC_API uint32_t bc_tree_child_index(const struct bc_tree *t, uint32_t id);
 /* Returns the parent's id, 0 for the root or an unknown id. */
 BC_API uint32_t bc_tree_parent(const struct bc_tree *t, uint32_t id);
 /* Returns node id's top slot in the linearized form (an n-ary operator's
