@@ -11,8 +11,9 @@
  * structures would make every reader translate indices. A splice keeps
  * the arrays as they are: it moves each array's tail by the size of the
  * change (memmove, at memory bandwidth), adds that size to every stored
- * index past the edit point (one pass over the index arrays and the
- * model's nodes), and recomputes what depends on a slot's place in the
+ * index past the edit point (one pass over the index arrays; the model's
+ * nodes follow a log of the last splices when read, tree_impl.h), and
+ * recomputes what depends on a slot's place in the
  * binary tree -- depth, fast and jump pointers, ROI, kill counts -- only
  * in the part of the edited operator's fold whose shape changed (its
  * operands left of the edit point: they sit one level deeper or higher).
@@ -20,9 +21,11 @@
  * follow from what changed: the box grows with new ABVs and is measured
  * again only when an ABV that touched it went or shrank; the evaluation
  * stack is the root's need, kept exact along the edited path (tree.c).
- * docs/benchmarks.md has the costs: the tail move and the index pass are
- * the linear terms, a few milliseconds per million primitives, against a
- * full layout's hundreds.
+ * What stays linear in the scene: the tail move and the index pass, and
+ * when an operand is added to or taken from the end of a wide operator,
+ * the depth and jump pointers of every operand before it. These are
+ * memory-speed passes; docs/benchmarks.md ("Structural edits spliced")
+ * has their cost beside a full layout's.
  *
  * Trees with unary nodes are laid out whole (tree.c): their wrapper chains,
  * domain chains and twist and bend bounds reach across the tree.
@@ -36,16 +39,16 @@
 
 /* ---- room -------------------------------------------------------------- */
 
-static int grow(void *pp, size_t n, size_t size)
-{
-	void **p = pp;
-	void *q = bc_reallocarray(*p, n, size);
-	if (!q) {
-		return BC_ENOMEM;
-	}
-	*p = q;
-	return 0;
-}
+/* Grows array ptr to n entries of size bytes, or returns BC_ENOMEM (ptr
+ * as it was). */
+#define GROW(ptr, n, size)                                                     \
+	do {                                                                   \
+		void *grown_ = bc_reallocarray((ptr), (n), (size));            \
+		if (!grown_) {                                                 \
+			return BC_ENOMEM;                                      \
+		}                                                              \
+		(ptr) = grown_;                                                \
+	} while (0)
 
 /* A capacity of at least need, with room for the edits that follow. */
 static uint32_t roomy(uint32_t cap, uint32_t need)
@@ -63,37 +66,31 @@ int bc__splice_reserve(struct bc_tree *t, uint32_t count, uint32_t nprims,
 	struct bc_lin *l = &t->lin;
 	if (count > t->lin_cap) {
 		uint32_t c = roomy(t->lin_cap, count);
-		if (grow(&l->node, c, 2 * sizeof(uint32_t)) ||
-		    grow(&l->first, c, sizeof(uint32_t)) ||
-		    grow(&l->fast, c, sizeof(uint32_t)) ||
-		    grow(&l->jump, c, sizeof(uint32_t)) ||
-		    grow(&l->kills, c, sizeof(uint32_t)) ||
-		    grow(&l->depth, c, sizeof(uint32_t)) ||
-		    grow(&l->node_id, c, sizeof(uint32_t)) ||
-		    grow(&l->prim_of, c, sizeof(uint32_t)) ||
-		    grow(&l->roi, c, 2 * sizeof(float)) ||
-		    grow(&l->wrap, c, sizeof(uint32_t)) ||
-		    grow(&l->wrap_top, c, sizeof(uint32_t)) ||
-		    grow(&l->dom, c, sizeof(uint32_t)) ||
-		    grow(&l->ucount, c, sizeof(uint32_t))) {
-			return BC_ENOMEM;
-		}
+		GROW(l->node, c, 2 * sizeof(uint32_t));
+		GROW(l->first, c, sizeof(uint32_t));
+		GROW(l->fast, c, sizeof(uint32_t));
+		GROW(l->jump, c, sizeof(uint32_t));
+		GROW(l->kills, c, sizeof(uint32_t));
+		GROW(l->depth, c, sizeof(uint32_t));
+		GROW(l->node_id, c, sizeof(uint32_t));
+		GROW(l->prim_of, c, sizeof(uint32_t));
+		GROW(l->roi, c, 2 * sizeof(float));
+		GROW(l->wrap, c, sizeof(uint32_t));
+		GROW(l->wrap_top, c, sizeof(uint32_t));
+		GROW(l->dom, c, sizeof(uint32_t));
+		GROW(l->ucount, c, sizeof(uint32_t));
 		t->lin_cap = c;
 	}
 	if (nprims > t->lin_kcap) {
 		uint32_t c = roomy(t->lin_kcap, nprims);
-		if (grow(&l->prim_slot, c, sizeof(uint32_t)) ||
-		    grow(&l->abv, c, sizeof(struct bc_abv)) ||
-		    grow(&l->color, c, sizeof(*l->color))) {
-			return BC_ENOMEM;
-		}
+		GROW(l->prim_slot, c, sizeof(uint32_t));
+		GROW(l->abv, c, sizeof(struct bc_abv));
+		GROW(l->color, c, sizeof(*l->color));
 		t->lin_kcap = c;
 	}
 	if (nparam > t->lin_pcap) {
 		uint32_t c = roomy(t->lin_pcap, nparam);
-		if (grow(&l->param, c, 4 * sizeof(float))) {
-			return BC_ENOMEM;
-		}
+		GROW(l->param, c, 4 * sizeof(float));
 		t->lin_pcap = c;
 	}
 	return 0;
