@@ -484,6 +484,13 @@ void bc__lin_propagate(struct bc_lin *l, uint32_t s)
 	propagate(l, s);
 }
 
+void bc__lin_pointers_down(struct bc_lin *l, uint32_t lo, uint32_t top)
+{
+	for (uint32_t s = top + 1; s-- > lo;) {
+		bc__lin_pointers(l, s);
+	}
+}
+
 void bc__lin_pointers(struct bc_lin *l, uint32_t s)
 {
 	uint32_t a = bc_lin_parent(l, s);

@@ -292,15 +292,21 @@ static bool relink(struct bc_tree *t, uint32_t lo, uint32_t top,
 	for (uint32_t s = new_lo; s < new_hi; s++) {
 		again(l, s);
 	}
+	/* Depth and pointers need only the parent's, and so do ROIs and
+	 * counts: two passes, the second reading the marks only. */
+	bc__lin_pointers_down(l, lo, top);
 	for (uint32_t s = top + 1; s-- > lo;) {
-		float r0 = l->roi[2 * s], r1 = l->roi[2 * s + 1];
-		uint32_t kills = l->kills[s], uc = l->ucount[s],
-		         dom = l->dom[s];
-		bool fresh = s >= new_lo && s < new_hi, changed;
-		bc__lin_pointers(l, s);
+		float r0, r1;
+		uint32_t kills = l->kills[s], uc, dom;
+		bool fresh, changed;
 		if (!(kills & AGAIN)) {
 			continue;
 		}
+		r0 = l->roi[2 * s];
+		r1 = l->roi[2 * s + 1];
+		uc = l->ucount[s];
+		dom = l->dom[s];
+		fresh = s >= new_lo && s < new_hi;
 		bc__lin_propagate(l, s);
 		changed = !same_bits(r0, l->roi[2 * s]) ||
 		          !same_bits(r1, l->roi[2 * s + 1]) ||

@@ -215,6 +215,8 @@ void bc__lin_link(struct bc_lin *l, uint32_t s);
  * node; depth, fast and jump pointers. */
 void bc__lin_propagate(struct bc_lin *l, uint32_t s);
 void bc__lin_pointers(struct bc_lin *l, uint32_t s);
+/* bc__lin_pointers of slots top down to lo (top's parent final). */
+void bc__lin_pointers_down(struct bc_lin *l, uint32_t lo, uint32_t top);
 /* Places primitive k's ABV (its slot's ROI known) and grows l's box. */
 void bc__lin_place_abv(struct bc_tree *t, struct bc_lin *l, uint32_t k,
                        const struct bc_prim_data *p);
