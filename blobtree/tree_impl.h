@@ -124,33 +124,33 @@ static inline uint32_t bc__span_map(const struct bc__span *sp, uint32_t v)
 	return v - sp->del + sp->ins;
 }
 
+/* Index v of space i (0 slots, 1 records, 2 primitives), stored as of
+ * splice `epoch`, as of now. */
+static inline uint32_t bc__follow(const struct bc_tree *t, uint32_t v,
+                                  uint32_t epoch, int i)
+{
+	for (uint32_t e = epoch; e < t->epoch; e++) {
+		const struct bc__shift *sh = &t->shift[e - t->shift_base];
+		v = bc__span_map(i == 0 ? &sh->s : i == 1 ? &sh->p : &sh->k, v);
+	}
+	return v;
+}
+
 /* Node n's slot, record and primitive index as of now. */
 static inline uint32_t bc__slot(const struct bc_tree *t,
                                 const struct bc__node *n)
 {
-	uint32_t v = n->slot;
-	for (uint32_t e = n->epoch; e < t->epoch; e++) {
-		v = bc__span_map(&t->shift[e - t->shift_base].s, v);
-	}
-	return v;
+	return bc__follow(t, n->slot, n->epoch, 0);
 }
 static inline uint32_t bc__param(const struct bc_tree *t,
                                  const struct bc__node *n)
 {
-	uint32_t v = n->param;
-	for (uint32_t e = n->epoch; e < t->epoch; e++) {
-		v = bc__span_map(&t->shift[e - t->shift_base].p, v);
-	}
-	return v;
+	return bc__follow(t, n->param, n->epoch, 1);
 }
 static inline uint32_t bc__prim(const struct bc_tree *t,
                                 const struct bc__node *n)
 {
-	uint32_t v = n->prim;
-	for (uint32_t e = n->epoch; e < t->epoch; e++) {
-		v = bc__span_map(&t->shift[e - t->shift_base].k, v);
-	}
-	return v;
+	return bc__follow(t, n->prim, n->epoch, 2);
 }
 /* Brings node n's slot, param and prim up to date (then they may be read
  * and written directly). */
