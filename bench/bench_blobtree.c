@@ -1,9 +1,9 @@
 /*
  * Blobtree benchmarks: the cost of a parameter edit against tree size (it
  * must stay flat: nothing is re-processed), a full re-linearization per
- * thousand primitives (what REPLACE costs; INSERT and REMOVE splice the
- * layout instead: bench_splice), and sparse evaluation of a long left comb
- * against a short one (jump pointers make the climb logarithmic).
+ * thousand primitives (what a REPLACE of the root costs; other structural edits
+ * splice the layout instead: bench_splice), and sparse evaluation of a long
+ * left comb against a short one (jump pointers make the climb logarithmic).
  *
  * Usage: bench_blobtree [max_exponent]   (default 6: up to 10^6 primitives)
  */
@@ -89,7 +89,7 @@ static void bench_relinearize(uint32_t n)
 	double best = 1e30;
 	for (int r = 0; r < reps; r++) {
 		double t0 = now_s(), dt;
-		/* INSERT and REMOVE splice the layout now (bench_splice):
+		/* Structural edits splice the layout now (bench_splice):
 		 * the full layout they used to make is timed alone. */
 		bc_tree_relayout(t, NULL);
 		dt = now_s() - t0;

@@ -1,7 +1,7 @@
 /*
- * Structural edits without a new layout: an INSERT or a REMOVE splices the
- * post-order arrays of struct bc_lin in place, and the result is bit for
- * bit the layout bc__lin_fill would build for the edited tree
+ * Structural edits without a new layout: an INSERT, a REMOVE or a REPLACE
+ * splices the post-order arrays of struct bc_lin in place, and the result is
+ * bit for bit the layout bc__lin_fill would build for the edited tree
  * (tests/blobtree/test_splice.c holds it to that).
  *
  * Why "splice with memmove and fix indices" and not a gap buffer, chunked
@@ -200,6 +200,13 @@ static void apply(struct bc_tree *t, const struct splice *sp)
 	l->nprims = np - sp->k.del + sp->k.ins;
 	l->nparam = nr - sp->p.del + sp->p.ins;
 	tail = sp->s.at + sp->s.ins;
+	if (sp->s.del == sp->s.ins && sp->p.del == sp->p.ins &&
+	    sp->k.del == sp->k.ins) {
+		/* A block for one of the same size (a REPLACE): nothing moved,
+		 * and nothing outside the block pointed into it but at its
+		 * first slot, which stays. */
+		return;
+	}
 
 	/* Pointers up, everywhere but the new entries. */
 	for (uint32_t s = 0; s < l->count; s++) {
@@ -470,23 +477,65 @@ bool bc__splice_insert(struct bc_tree *t, uint32_t m, uint32_t px, uint32_t ox)
  * of c in P's fold (or the child that stays) are linked again. Returns
  * whether an ABV that touched the box went or changed.
  */
+/* ---- replace ------------------------------------------------------------ */
+
+void bc__splice_note(struct bc_tree *t, uint32_t c, struct bc__block *b)
+{
+	struct bc_lin *l = &t->lin;
+	b->top = bc__slot(t, &t->pool[c]);
+	b->first = l->first[b->top];
+	b->word = l->node[2 * b->top];
+	b->param = bc__param(t, &t->pool[c]);
+	b->pend = bc__param(t, &t->pool[last_leaf(t, c)]) + BC_PRIM_RECORD_VEC4;
+	b->k = l->prim_of[b->first];
+	b->nprims = (b->top - b->first) / 2 + 1;
+	b->touch = false;
+	for (uint32_t k = b->k; k < b->k + b->nprims && !b->touch; k++) {
+		b->touch = touches_box(l, k);
+	}
+}
+
+bool bc__splice_replace(struct bc_tree *t, const struct bc__block *b,
+                        uint32_t m, uint32_t px, uint32_t ox)
+{
+	struct bc_lin *l = &t->lin;
+	uint32_t sx = 2 * px - 1, a = b->word & BC_WORD_ANCESTOR_MASK;
+	struct bc__fill fs = {
+	    .l = l, .slot = b->first, .prim = b->k, .param = b->param};
+	struct splice sp = {
+	    .s = {b->first, b->top - b->first + 1, sx},
+	    .p = {b->param, b->pend - b->param,
+	          BC_PRIM_RECORD_VEC4 * px + BC_OP_RECORD_VEC4 * ox},
+	    .k = {b->k, b->nprims, px}};
+	apply(t, &sp);
+	bc__lin_emit(t, &fs, m);
+	adopt(l, b->first + sx - 1, b->word,
+	      a == BC_WORD_NO_ANCESTOR ? a : bc__span_map(&sp.s, a));
+	return relink(t, b->first, b->first + sx - 1, b->first,
+	              b->first + sx) ||
+	       b->touch;
+}
+
 bool bc__splice_remove(struct bc_tree *t, uint32_t c)
 {
 	struct bc_lin *l = &t->lin;
 	uint32_t p = t->pool[c].parent, nkids = t->pool[p].nchildren;
 	uint32_t prev = t->pool[c].prev, next = t->pool[c].next;
-	uint32_t ctop = bc__slot(t, &t->pool[c]), cf = l->first[ctop];
-	uint32_t cparam = bc__param(t, &t->pool[c]);
-	uint32_t px = (ctop - cf) / 2 + 1, klo = l->prim_of[cf];
-	uint32_t pend =
-	    bc__param(t, &t->pool[last_leaf(t, c)]) + BC_PRIM_RECORD_VEC4;
-	uint32_t ptop = bc__slot(t, &t->pool[p]), w = l->node[2 * ptop];
-	uint32_t a = w & BC_WORD_ANCESTOR_MASK, top;
+	struct bc__block b;
+	uint32_t ctop, cf, cparam, px, klo, pend, ptop, w, a, top;
 	struct splice one = {0}, two = {0};
-	bool touch = false;
-	for (uint32_t k = klo; k < klo + px && !touch; k++) {
-		touch = touches_box(l, k);
-	}
+	bool touch;
+	bc__splice_note(t, c, &b);
+	ctop = b.top;
+	cf = b.first;
+	cparam = b.param;
+	px = b.nprims;
+	klo = b.k;
+	pend = b.pend;
+	touch = b.touch;
+	ptop = bc__slot(t, &t->pool[p]);
+	w = l->node[2 * ptop];
+	a = w & BC_WORD_ANCESTOR_MASK;
 	if (nkids >= 3 && prev != BC_NONE) {
 		/* c's block and its fold go; the fold below takes over. */
 		one = (struct splice){.s = {cf, ctop - cf + 2, 0},

@@ -1377,12 +1377,57 @@ int bc_tree_remove(struct bc_tree *t, uint32_t id, struct bc_errinfo *ei)
 	return 0;
 }
 
+/* bc_tree_replace's end for a spliced layout: pool node m (a copy of sub)
+ * is linked where n was (whose layout blk notes; it added old_need to its
+ * parent's need). The measures follow the path up, the layout is spliced,
+ * n goes. On a refusal n is put back. */
+static int replace_spliced(struct bc_tree *t, uint32_t n, uint32_t m,
+                           const struct bc__block *blk, uint32_t old_need,
+                           const struct subtree_stats *gone,
+                           const struct bc_tree *sub, struct bc_errinfo *ei)
+{
+	uint32_t p = t->pool[m].parent, after = t->pool[m].next;
+	uint32_t nest = t->lin.nesting, pd = depth_of(t, p);
+	uint32_t deepest = pd + bc__measure(t, m);
+	bool touch;
+	int rc;
+	if (need_in_parent(t, m) >= old_need) {
+		need_grow(t, m);
+	} else {
+		need_shrink(t, p);
+	}
+	if (t->pool[t->root].need > BC_EVAL_STACK) {
+		rc = need_error(t, ei);
+		unlink_child(t, m);
+		link_child(t, p, after, n);
+		free_subtree(t, m);
+		remap_ids(t, n);
+		bc__measure(t, t->root);
+		return rc;
+	}
+	touch = bc__splice_replace(t, blk, m, sub->nprims, sub->nops);
+	/* The replaced nodes' names go, reused ids included: the subtree's
+	 * own names are the new nodes'. */
+	bc__names_drop_subtree(t, n);
+	free_subtree(t, n);
+	if (deepest >= nest) {
+		t->lin.nesting = deepest;
+	} else if (pd + gone->depth >= nest && !reaches(t, nest)) {
+		t->lin.nesting = bc__measure(t, t->root);
+	}
+	bc__splice_finish(t, touch);
+	bc__names_graft(t, sub);
+	return 0;
+}
+
 int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
                     struct bc_errinfo *ei)
 {
-	uint32_t n = live_node(t, id), p, after, m;
+	uint32_t n = live_node(t, id), p, after, m, old_need = 0;
 	struct subtree_stats gone = {0};
+	struct bc__block blk;
 	struct bc_lin fresh;
+	bool splice;
 	int rc;
 	if (n == BC_NONE) {
 		return bc_errinfo_set(ei, BC_ENONODE, "no node with id %u", id);
@@ -1391,6 +1436,7 @@ int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
 		return bc_errinfo_set(ei, BC_EINVAL,
 		                      "the replacement is empty");
 	}
+	splice = t->pool[n].parent != BC_NONE && splices(t, sub);
 	if ((rc = check_ids(t, sub, sub->root, n, ei))) {
 		return rc;
 	}
@@ -1400,8 +1446,12 @@ int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
 	subtree_stats(t, n, &gone);
 	p = t->pool[n].parent;
 	if ((rc = prepare_graft(t, sub, p == BC_NONE ? 0 : depth_of(t, p),
-	                        &gone, &fresh, ei))) {
+	                        &gone, splice ? NULL : &fresh, ei))) {
 		return rc;
+	}
+	if (splice) {
+		bc__splice_note(t, n, &blk);
+		old_need = need_in_parent(t, n);
 	}
 	after = t->pool[n].next;
 	if (p != BC_NONE) {
@@ -1415,6 +1465,9 @@ int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
 		t->root = m;
 	} else {
 		link_child(t, p, after, m);
+	}
+	if (splice) {
+		return replace_spliced(t, n, m, &blk, old_need, &gone, sub, ei);
 	}
 	if ((rc = check_shape(t, ei))) {
 		if (p == BC_NONE) {

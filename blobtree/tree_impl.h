@@ -238,7 +238,21 @@ bool bc__splice_insert(struct bc_tree *t, uint32_t m, uint32_t px, uint32_t ox);
  * parent when that is left with one child, out of t->lin. Returns whether
  * the box must be measured again. */
 bool bc__splice_remove(struct bc_tree *t, uint32_t c);
-/* After either, the model final: the box (measured again when touch), the
+/* Where a subtree's layout lies: its slots [first, top] (top's node word
+ * word), records [param, pend), primitives [k, k + nprims), and whether
+ * one of their ABVs touches the box. */
+struct bc__block {
+	uint32_t first, top, word, param, pend, k, nprims;
+	bool touch;
+};
+/* Notes where pool node c's subtree lies. */
+void bc__splice_note(struct bc_tree *t, uint32_t c, struct bc__block *b);
+/* Pool node m (px primitives, ox operators, no unary node) took the place
+ * of the subtree noted in b: splices it in there (room reserved). Returns
+ * whether the box must be measured again. */
+bool bc__splice_replace(struct bc_tree *t, const struct bc__block *b,
+                        uint32_t m, uint32_t px, uint32_t ox);
+/* After any of these, the model final: the box (measured again when touch), the
  * stack (the root's need), the dirty state. */
 void bc__splice_finish(struct bc_tree *t, bool touch);
 /* Rewrites primitive n's parameter record, colour and ABV in t->lin. */

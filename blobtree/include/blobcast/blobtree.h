@@ -13,9 +13,10 @@
  *
  * Editing a primitive's parameters rewrites that primitive's parameter record
  * and its ABV only; editing an operator's parameters recomputes the ROIs and
- * ABVs of its subtree; INSERT and REMOVE splice the layout in place
- * (splice.c: memory moves and index fixes linear in the scene, the rest in
- * proportion to the change), REPLACE re-linearizes in linear time. Nothing
+ * ABVs of its subtree; INSERT, REMOVE and REPLACE splice the layout in
+ * place (splice.c: memory moves and index fixes linear in the scene, the
+ * rest in proportion to the change; trees with unary nodes, and a new
+ * root, are laid out again in linear time). Nothing
  * else is re-processed, and the dirty ranges say what changed.
  */
 #ifndef BLOBCAST_BLOBTREE_H
@@ -478,7 +479,8 @@ BC_API int bc_tree_insert(struct bc_tree *t, uint32_t parent_id, uint32_t pos,
 BC_API int bc_tree_remove(struct bc_tree *t, uint32_t id,
                           struct bc_errinfo *ei);
 /* Replaces node id (and its subtree) with a copy of sub at the same place.
- * sub's ids must be new to t, except that sub's root may reuse id. */
+ * sub's ids must be new to t, except that sub's root may reuse id. Splices
+ * the layout (re-linearizes for the root, or with unary nodes). */
 BC_API int bc_tree_replace(struct bc_tree *t, uint32_t id,
                            const struct bc_tree *sub, struct bc_errinfo *ei);
 /* Lays t out again from its model, as a whole (what every structural edit
