@@ -151,8 +151,11 @@ int bc_edit_batch_apply_undoable(struct bc_edit_batch *b, struct bc_tree **tp,
                                  const struct bc_proto_edit_op *ops, uint32_t n,
                                  struct bc_errinfo *ei);
 
-/* Undoes the batch b applied to *tp (cannot fail: it only puts back states
- * that were valid). b is then empty. */
+/* Undoes the batch b applied to *tp: it only puts back states that were
+ * valid, into room the batch freed, so only memory can fail it, and only
+ * for a structural batch applied in place (decoding the subtrees its
+ * inverse puts back: memory in proportion to the change). b is then
+ * empty. */
 void bc_edit_batch_undo(struct bc_edit_batch *b, struct bc_tree **tp);
 
 /* Frees what b holds (the old tree, the saved nodes, the inverse); accepts
