@@ -430,11 +430,73 @@ static void refused_batches_leave_the_tree_as_it_was(void)
 	bc_tree_destroy(t);
 }
 
+/* Out of memory at every allocation in turn: a refused INSERT or REPLACE
+ * (the arrays must grow first) leaves the tree as it was; so does a batch
+ * of INSERTs refused part way, put back by REMOVEs, which take no memory. */
+static void allocation_failures_leave_the_tree_as_it_was(void)
+{
+	struct bc_tree *t = bc_tree_create(), *sub = bc_tree_create();
+	struct bc_tree *before = bc_tree_create();
+	struct bc_proto_edit_op ops[3];
+	uint8_t *owned[3] = {0};
+	struct bc_errinfo ei = {0};
+	int failed = 0, rc = 1;
+	REQUIRE(rt_build(t, 5, 40) == 0 && rt_build(sub, 6, 3) == 0);
+	REQUIRE(bc_tree_copy(before, t, NULL) == 0);
+	for (unsigned long n = 1; rc && n < 1000; n++) {
+		uint32_t op = bc_tree_root(t), id = random_node(t, true);
+		bc_alloc_fail_after(n);
+		rc = n % 2 ? bc_tree_insert(t, op, 1, sub, NULL)
+		           : bc_tree_replace(t, id, sub, NULL);
+		bc_alloc_fail_after(0);
+		if (rc) {
+			failed++;
+			CHECK(same_tree(t, before));
+		}
+	}
+	CHECK(failed > 2 && rc == 0);
+	CHECK(differs_from_full(t) == NULL);
+	REQUIRE(bc_tree_copy(before, t, NULL) == 0);
+	for (int i = 0; i < 3; i++) {
+		size_t len = 0;
+		REQUIRE(subtree_bytes(&owned[i], &len) == 0);
+		ops[i] = (struct bc_proto_edit_op){
+		    .kind = BC_PROTO_EDIT_INSERT,
+		    .node = bc_tree_root(t),
+		    .position = (uint32_t)i,
+		    .subtree = {owned[i], (uint32_t)len}};
+	}
+	failed = 0;
+	rc = 1;
+	for (unsigned long n = 1; rc && n < 1000; n++) {
+		struct bc_edit_batch b;
+		bc_alloc_fail_after(n);
+		rc = bc_edit_batch_apply(&b, &t, ops, 3, &ei);
+		bc_alloc_fail_after(0);
+		if (rc) {
+			failed++;
+			CHECK(same_tree(t, before));
+		} else {
+			bc_edit_batch_undo(&b, &t);
+			CHECK(same_tree(t, before));
+		}
+	}
+	CHECK(failed > 2 && rc == 0);
+	for (int i = 0; i < 3; i++) {
+		bc_free(owned[i]);
+	}
+	bc_tree_destroy(before);
+	bc_tree_destroy(sub);
+	bc_tree_destroy(t);
+}
+
 static const struct bc_test tests[] = {
     {"random_edits_equal_a_full_layout", random_edits_equal_a_full_layout},
     {"unary_subtrees_come_and_go", unary_subtrees_come_and_go},
     {"wide_operator_ends", wide_operator_ends},
     {"refused_batches_leave_the_tree_as_it_was",
      refused_batches_leave_the_tree_as_it_was},
+    {"allocation_failures_leave_the_tree_as_it_was",
+     allocation_failures_leave_the_tree_as_it_was},
 };
 BC_TEST_MAIN(tests)
