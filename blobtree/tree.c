@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/scene.h"
 
 /* ---- id map ------------------------------------------------------------- */
 
@@ -188,6 +189,21 @@ static uint32_t fresh_id(struct bc_tree *t)
 		t->next_id++;
 	}
 	return t->next_id++;
+}
+
+/* Adds (sign 1) or takes away (-1) primitive p from the counts the scene
+ * encoding follows (bc_tree_counts). */
+static void count_prim(struct bc_tree *t, const struct bc_prim_data *p,
+                       int sign)
+{
+	uint32_t floats = bc_scene_prim_nfloats(p->kind);
+	if (sign > 0) {
+		t->ncolored += p->has_color ? 1u : 0u;
+		t->nfloats += floats;
+	} else {
+		t->ncolored -= p->has_color ? 1u : 0u;
+		t->nfloats -= floats;
+	}
 }
 
 /* ---- create/destroy ----------------------------------------------------- */
@@ -422,6 +438,7 @@ static void free_subtree(struct bc_tree *t, uint32_t top)
 				t->nops--;
 			} else {
 				t->nprims--;
+				count_prim(t, &t->pool[n].u.prim, -1);
 			}
 			t->nnodes--;
 			pool_release(t, n);
@@ -761,6 +778,7 @@ int bc_tree_put_prim(struct bc_tree *t, uint32_t id,
 	}
 	t->pool[n].u.prim = copy;
 	t->nprims++;
+	count_prim(t, &copy, 1);
 	return 0;
 }
 
@@ -858,6 +876,17 @@ uint32_t bc_tree_child(const struct bc_tree *t, uint32_t id, uint32_t k)
 	}
 	c = child_at(t, n, k);
 	return c == BC_NONE ? 0 : t->pool[c].id;
+}
+
+void bc_tree_counts(const struct bc_tree *t, uint32_t *colored,
+                    uint64_t *floats)
+{
+	if (colored) {
+		*colored = t->ncolored;
+	}
+	if (floats) {
+		*floats = t->nfloats;
+	}
 }
 
 uint32_t bc_tree_child_index(const struct bc_tree *t, uint32_t id)
@@ -962,6 +991,8 @@ int bc_tree_set_prim(struct bc_tree *t, uint32_t id,
 	if ((rc = bc_prim_validate(&copy, ei))) {
 		return rc;
 	}
+	count_prim(t, &t->pool[n].u.prim, -1);
+	count_prim(t, &copy, 1);
 	t->pool[n].u.prim = copy;
 	bc__lin_update_prim(t, &t->pool[n]);
 	dirty_range(&t->dirty.param_lo, &t->dirty.param_hi, t->pool[n].param,
@@ -1125,6 +1156,7 @@ static uint32_t copy_node(struct bc_tree *t, const struct bc__node *sn,
 		t->nops++;
 	} else {
 		t->nprims++;
+		count_prim(t, &sn->u.prim, 1);
 	}
 	return m;
 }

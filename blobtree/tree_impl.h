@@ -89,6 +89,10 @@ struct bc_tree {
 	struct bc__idmap ids;
 	uint32_t root; /* pool index, BC_NONE when empty */
 	uint32_t nnodes, nprims, nops;
+	/* Primitives with a colour, and their shape floats in all
+	 * (bc_tree_counts). */
+	uint32_t ncolored;
+	uint64_t nfloats;
 	uint32_t next_id;
 
 	/* Builder state: the open operators, innermost last (grown on the heap:

@@ -95,6 +95,27 @@ static const char *lin_differs(const struct bc_tree *ta,
 	return NULL;
 }
 
+/* Whether bc_tree_counts agrees with a walk over t's nodes. */
+static bool counts_agree(const struct bc_tree *t)
+{
+	struct bc_scene_walk w;
+	struct bc_scene_node n;
+	uint32_t colored = 0, c;
+	uint64_t floats = 0, f;
+	if (bc_scene_walk_init(&w, t)) {
+		return false;
+	}
+	while (bc_scene_walk_next(&w, &n)) {
+		if (!n.is_op) {
+			colored += n.prim.has_color ? 1u : 0u;
+			floats += bc_scene_prim_nfloats(n.prim.kind);
+		}
+	}
+	bc_scene_walk_finish(&w);
+	bc_tree_counts(t, &c, &f);
+	return c == colored && f == floats;
+}
+
 /* t's layout against a full layout of a copy of t. */
 static const char *differs_from_full(const struct bc_tree *t)
 {
@@ -102,6 +123,9 @@ static const char *differs_from_full(const struct bc_tree *t)
 	const char *why = "copy failed";
 	if (full && bc_tree_copy(full, t, NULL) == 0) {
 		why = lin_differs(t, full);
+	}
+	if (!why && !counts_agree(t)) {
+		why = "colour or float counts";
 	}
 	bc_tree_destroy(full);
 	return why;
@@ -143,8 +167,13 @@ static int random_edit(struct bc_tree *t, struct bc_tree *sub)
 	if (n > 80 || (n > 2 && pick < 4)) {
 		return bc_tree_remove(t, random_node(t, true), NULL);
 	}
-	if (rt_build(sub, rt_next(), 1 + rt_below(4))) {
+	if (rt_build(sub, rt_next(), (n == 1 ? 2 : 1) + rt_below(4))) {
 		return BC_ENOMEM;
+	}
+	if (n == 1) {
+		/* A lone primitive (a REPLACE of the root made it): a tree
+		 * again. */
+		return bc_tree_replace(t, bc_tree_root(t), sub, NULL);
 	}
 	if (pick == 9) {
 		return bc_tree_replace(t, random_node(t, true), sub, NULL);
@@ -156,14 +185,16 @@ static int random_edit(struct bc_tree *t, struct bc_tree *sub)
 	                      sub, NULL);
 }
 
-/* Rewrites a random primitive with its own data: the record, colour and
- * ABV land where the model says they are, which must be where they were. */
+/* Rewrites a random primitive with its own data, its colour taken away or
+ * given at random: the record, colour and ABV land where the model says
+ * they are, which must be where they were. */
 static void rewrite_a_primitive(struct bc_tree *t)
 {
 	const struct bc_lin *l = bc_tree_lin(t);
 	uint32_t id = l->node_id[l->prim_slot[rt_below(l->nprims)]];
 	struct bc_prim_data p;
 	if (bc_tree_get(t, id, &p, NULL)) {
+		p.has_color = rt_below(2) != 0;
 		bc_tree_set_prim(t, id, &p, NULL);
 	}
 }

@@ -397,6 +397,11 @@ BC_API bool bc_tree_has_auto_ids(const struct bc_tree *t);
 /* Counts of the model: scene nodes, primitives, operators. */
 BC_API uint32_t bc_tree_node_count(const struct bc_tree *t);
 BC_API uint32_t bc_tree_prim_count(const struct bc_tree *t);
+/* What the scene encoding's size follows besides the node counts, in O(1):
+ * the primitives that carry a colour, and the shape floats of every
+ * primitive (bc_scene_prim_nfloats of each). Out-parameters may be NULL. */
+BC_API void bc_tree_counts(const struct bc_tree *t, uint32_t *colored,
+                           uint64_t *floats);
 /* Nodes on the longest path from the root (the root counting 1), 0 for an
  * empty tree. */
 BC_API uint32_t bc_tree_nesting(const struct bc_tree *t);
