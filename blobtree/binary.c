@@ -53,6 +53,43 @@ int bc_scene_walk_init(struct bc_scene_walk *w, const struct bc_tree *t)
 	return 0;
 }
 
+int bc_scene_walk_init_at(struct bc_scene_walk *w, const struct bc_tree *t,
+                          uint32_t id)
+{
+	const struct bc_lin *l = bc_tree_lin(t);
+	struct bc_unary un;
+	uint32_t s = bc_tree_slot(t, id), room;
+	memset(w, 0, sizeof(*w));
+	if (!l || s == BC_NONE) {
+		return BC_EINVAL;
+	}
+	/* The subtree's slots, and at most every unary node, are pushed. */
+	room = s - l->first[s] + 1 + l->nunary;
+	w->todo = bc_calloc(room, sizeof(uint32_t));
+	w->left = bc_calloc(room, sizeof(uint32_t));
+	w->todo_wrap = bc_calloc(room, sizeof(uint32_t));
+	if (!w->todo || !w->left || !w->todo_wrap) {
+		bc_scene_walk_finish(w);
+		return BC_ENOMEM;
+	}
+	w->t = t;
+	w->l = l;
+	w->todo[0] = s;
+	/* A unary node starts with itself, then its inner wrappers; any
+	 * other node with its slot (the wrappers around it are above it). */
+	w->todo_wrap[0] = BC_NONE;
+	if (bc_tree_get_unary(t, id, &un)) {
+		for (uint32_t u = l->wrap[s]; u != BC_NONE;
+		     u = l->unary_outer[u]) {
+			if (l->unary_id[u] == id) {
+				w->todo_wrap[0] = u;
+			}
+		}
+	}
+	w->ntodo = 1;
+	return 0;
+}
+
 static void push_todo(struct bc_scene_walk *w, uint32_t s)
 {
 	w->todo_wrap[w->ntodo] = w->l->nunary ? w->l->wrap_top[s] : BC_NONE;

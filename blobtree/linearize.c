@@ -226,8 +226,8 @@ static void set_word(struct bc_lin *l, uint32_t slot, bool leaf, uint32_t type)
 	l->node[2 * slot] = w;
 }
 
-static void set_parent(struct bc_lin *l, uint32_t child, uint32_t parent,
-                       bool left)
+void bc__lin_set_parent(struct bc_lin *l, uint32_t child, uint32_t parent,
+                        bool left)
 {
 	uint32_t w =
 	    l->node[2 * child] & ~(BC_WORD_LEFT | BC_WORD_ANCESTOR_MASK);
@@ -238,11 +238,6 @@ static void set_parent(struct bc_lin *l, uint32_t child, uint32_t parent,
 static const float default_color[3] = {0.78f, 0.78f, 0.80f};
 
 /* ---- filling ------------------------------------------------------------ */
-
-struct fill_state {
-	struct bc_lin *l;
-	uint32_t slot, prim, param, unary;
-};
 
 static void slot_init(struct bc_lin *l, uint32_t s)
 {
@@ -268,12 +263,13 @@ static void add_wrapper(struct bc_lin *l, uint32_t u, uint32_t s)
 	l->wrap_top[s] = u;
 }
 
-static void emit_leaf(struct bc_tree *t, struct fill_state *fs, uint32_t n)
+static void emit_leaf(struct bc_tree *t, struct bc__fill *fs, uint32_t n)
 {
 	struct bc__node *nd = &t->pool[n];
 	struct bc_lin *l = fs->l;
 	uint32_t s = fs->slot++;
 	nd->slot = s;
+	nd->epoch = t->epoch;
 	nd->prim = fs->prim++;
 	nd->param = fs->param;
 	fs->param += BC_PRIM_RECORD_VEC4;
@@ -292,19 +288,24 @@ static void emit_leaf(struct bc_tree *t, struct fill_state *fs, uint32_t n)
 
 /* Folds operator p's subtree so far (top slot p->slot) with its next child
  * c, just emitted: the binary node ((...) op c). */
-static void emit_fold(struct fill_state *fs, struct bc__node *p,
-                      const struct bc__node *c)
+void bc__lin_fold(struct bc_lin *l, const struct bc__node *p, uint32_t left,
+                  uint32_t right, uint32_t o)
 {
-	struct bc_lin *l = fs->l;
-	uint32_t left = p->slot, right = c->slot, o = fs->slot++;
-	set_parent(l, left, o, true);
-	set_parent(l, right, o, false);
+	bc__lin_set_parent(l, left, o, true);
+	bc__lin_set_parent(l, right, o, false);
 	set_word(l, o, false, op_type_byte(p->u.op.kind));
 	l->node[2 * o + 1] = p->param;
 	l->first[o] = l->first[left];
 	l->node_id[o] = p->id;
 	l->prim_of[o] = BC_NONE;
 	slot_init(l, o);
+}
+
+static void emit_fold(struct bc__fill *fs, struct bc__node *p,
+                      const struct bc__node *c)
+{
+	uint32_t o = fs->slot++;
+	bc__lin_fold(fs->l, p, p->slot, c->slot, o);
 	p->slot = o;
 }
 
@@ -315,13 +316,14 @@ static void emit_fold(struct fill_state *fs, struct bc__node *p,
  * were); each child after its first is folded in as soon as it is complete,
  * so an operator's slot is final when its last child is.
  */
-static void emit_all(struct bc_tree *t, struct fill_state *fs, uint32_t top)
+void bc__lin_emit(struct bc_tree *t, struct bc__fill *fs, uint32_t top)
 {
 	uint32_t n = top;
 	for (;;) {
 		while (t->pool[n].is_op) {
 			struct bc__node *nd = &t->pool[n];
 			nd->param = fs->param;
+			nd->epoch = t->epoch;
 			if (bc__node_unary(nd)) {
 				struct bc_lin *l = fs->l;
 				nd->unary = fs->unary++;
@@ -471,6 +473,54 @@ static void propagate(struct bc_lin *l, uint32_t s)
 	l->dom[s] = d;
 }
 
+void bc__lin_link(struct bc_lin *l, uint32_t s)
+{
+	propagate(l, s);
+	bc__lin_pointers(l, s);
+}
+
+void bc__lin_propagate(struct bc_lin *l, uint32_t s)
+{
+	propagate(l, s);
+}
+
+void bc__lin_pointers_down(struct bc_lin *l, uint32_t lo, uint32_t top)
+{
+	for (uint32_t s = top + 1; s-- > lo;) {
+		bc__lin_pointers(l, s);
+	}
+}
+
+void bc__lin_pointers(struct bc_lin *l, uint32_t s)
+{
+	uint32_t a = bc_lin_parent(l, s);
+	if (a == BC_NONE) {
+		l->depth[s] = 0;
+		l->jump[s] = BC_NONE;
+		l->fast[s] = BC_NONE;
+		return;
+	}
+	l->depth[s] = l->depth[a] + 1;
+	/* The run of same-side edges continues through a when a sits on the
+	 * same side of its own parent. */
+	l->fast[s] = a;
+	if (bc_lin_parent(l, a) != BC_NONE &&
+	    ((l->node[2 * a] ^ l->node[2 * s]) & BC_WORD_LEFT) == 0) {
+		l->fast[s] = l->fast[a];
+	}
+	/* Myers' rule: jump twice as far when the parent's jump and its
+	 * jump's jump span equal lengths. */
+	l->jump[s] = a;
+	if (l->jump[a] != BC_NONE) {
+		uint32_t j1 = l->jump[a];
+		uint32_t j2 = l->jump[j1];
+		if (j2 != BC_NONE &&
+		    l->depth[a] - l->depth[j1] == l->depth[j1] - l->depth[j2]) {
+			l->jump[s] = j2;
+		}
+	}
+}
+
 /* ---- domain nodes: bounds and Lipschitz -------------------------------- */
 
 /* The Lipschitz bound of twist (rate k) and bend within radius r of their
@@ -569,8 +619,8 @@ static float abv_preimage(const struct bc_lin *l, uint32_t u,
 	return r;
 }
 
-static void place_abv(struct bc_tree *t, struct bc_lin *l, uint32_t k,
-                      const struct bc_prim_data *p)
+void bc__lin_place_abv(struct bc_tree *t, struct bc_lin *l, uint32_t k,
+                       const struct bc_prim_data *p)
 {
 	float lo[3], hi[3];
 	uint32_t s = l->prim_slot[k];
@@ -592,7 +642,7 @@ static void place_abv(struct bc_tree *t, struct bc_lin *l, uint32_t k,
 	(void)t;
 }
 
-static void update_size(struct bc_lin *l)
+void bc__lin_update_size(struct bc_lin *l)
 {
 	float dx = l->hi[0] - l->lo[0], dy = l->hi[1] - l->lo[1],
 	      dz = l->hi[2] - l->lo[2];
@@ -608,7 +658,8 @@ static void place_subtree(struct bc_tree *t, struct bc_lin *l, uint32_t top)
 		while (t->pool[n].is_op) {
 			n = t->pool[n].first_child;
 		}
-		place_abv(t, l, t->pool[n].prim, &t->pool[n].u.prim);
+		bc__lin_place_abv(t, l, bc__prim(t, &t->pool[n]),
+		                  &t->pool[n].u.prim);
 		while (n != top && t->pool[n].next == BC_NONE) {
 			n = t->pool[n].parent;
 		}
@@ -664,7 +715,7 @@ static void place_all_abvs(struct bc_tree *t, struct bc_lin *l)
 		}
 	}
 	place_subtree(t, l, t->root);
-	update_size(l);
+	bc__lin_update_size(l);
 	compute_lips(l);
 }
 
@@ -680,10 +731,12 @@ bool bc__lin_prim_bends(const struct bc_lin *l, const struct bc__node *n)
 
 void bc__lin_fill(struct bc_tree *t, struct bc_lin *l)
 {
-	struct fill_state fs = {.l = l};
+	struct bc__fill fs = {.l = l};
 	uint32_t root, depth = 0, most = 0;
 	l->nesting = bc__measure(t, t->root);
-	emit_all(t, &fs, t->root);
+	bc__lin_emit(t, &fs, t->root);
+	/* Every node is up to date: no splice to follow. */
+	t->shift_base = t->epoch;
 	l->nunary = fs.unary;
 	l->nparam = fs.param;
 	l->lip = 1.0f;
@@ -693,33 +746,7 @@ void bc__lin_fill(struct bc_tree *t, struct bc_lin *l)
 
 	/* Parents come after children: walk down from the root. */
 	for (uint32_t s = l->count; s-- > 0;) {
-		uint32_t a = bc_lin_parent(l, s);
-		propagate(l, s);
-		if (a == BC_NONE) {
-			l->depth[s] = 0;
-			l->jump[s] = BC_NONE;
-			l->fast[s] = BC_NONE;
-			continue;
-		}
-		l->depth[s] = l->depth[a] + 1;
-		/* The run of same-side edges continues through a when a sits
-		 * on the same side of its own parent. */
-		l->fast[s] = a;
-		if (bc_lin_parent(l, a) != BC_NONE &&
-		    ((l->node[2 * a] ^ l->node[2 * s]) & BC_WORD_LEFT) == 0) {
-			l->fast[s] = l->fast[a];
-		}
-		/* Myers' rule: jump twice as far when the parent's jump and
-		 * its jump's jump span equal lengths. */
-		l->jump[s] = a;
-		if (l->jump[a] != BC_NONE) {
-			uint32_t j1 = l->jump[a];
-			uint32_t j2 = l->jump[j1];
-			if (j2 != BC_NONE && l->depth[a] - l->depth[j1] ==
-			                         l->depth[j1] - l->depth[j2]) {
-				l->jump[s] = j2;
-			}
-		}
+		bc__lin_link(l, s);
 	}
 	for (uint32_t s = 0; s < l->count; s++) {
 		depth += bc_lin_is_leaf(l, s) ? 1u : 0u;
@@ -747,8 +774,8 @@ void bc__lin_update_prim(struct bc_tree *t, const struct bc__node *n)
 		place_all_abvs(t, l);
 		return;
 	}
-	place_abv(t, l, n->prim, &n->u.prim);
-	update_size(l);
+	bc__lin_place_abv(t, l, n->prim, &n->u.prim);
+	bc__lin_update_size(l);
 }
 
 void bc__lin_update_op(struct bc_tree *t, const struct bc__node *n)
@@ -766,7 +793,7 @@ void bc__lin_update_op(struct bc_tree *t, const struct bc__node *n)
 		propagate(l, s);
 	}
 	place_subtree(t, l, (uint32_t)(n - t->pool));
-	update_size(l);
+	bc__lin_update_size(l);
 	if (l->nunary) {
 		/* Twist and bend radii only grew (conservative): their
 		 * bounds follow. */

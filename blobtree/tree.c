@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/scene.h"
 
 /* ---- id map ------------------------------------------------------------- */
 
@@ -168,6 +169,8 @@ static uint32_t pool_take(struct bc_tree *t)
 	t->pool[n].next = BC_NONE;
 	t->pool[n].prev = BC_NONE;
 	t->pool[n].live = true;
+	/* No splice to follow: its layout fields are written before read. */
+	t->pool[n].epoch = t->epoch;
 	return n;
 }
 
@@ -186,6 +189,21 @@ static uint32_t fresh_id(struct bc_tree *t)
 		t->next_id++;
 	}
 	return t->next_id++;
+}
+
+/* Adds (sign 1) or takes away (-1) primitive p from the counts the scene
+ * encoding follows (bc_tree_counts). */
+static void count_prim(struct bc_tree *t, const struct bc_prim_data *p,
+                       int sign)
+{
+	uint32_t floats = bc_scene_prim_nfloats(p->kind);
+	if (sign > 0) {
+		t->ncolored += p->has_color ? 1u : 0u;
+		t->nfloats += floats;
+	} else {
+		t->ncolored -= p->has_color ? 1u : 0u;
+		t->nfloats -= floats;
+	}
 }
 
 /* ---- create/destroy ----------------------------------------------------- */
@@ -272,10 +290,22 @@ static void unlink_child(struct bc_tree *t, uint32_t child)
 	c->prev = BC_NONE;
 }
 
-/* Child number pos of parent, BC_NONE past the end. */
+/* Child number pos of parent, BC_NONE past the end; walked from the
+ * nearer end, so appending to a wide operator costs nothing. */
 static uint32_t child_at(const struct bc_tree *t, uint32_t parent, uint32_t pos)
 {
-	uint32_t c = t->pool[parent].first_child;
+	uint32_t n = t->pool[parent].nchildren, c;
+	if (pos >= n) {
+		return BC_NONE;
+	}
+	if (pos > n / 2) {
+		c = t->pool[parent].last_child;
+		for (uint32_t k = n - 1; k > pos; k--) {
+			c = t->pool[c].prev;
+		}
+		return c;
+	}
+	c = t->pool[parent].first_child;
 	while (c != BC_NONE && pos-- > 0) {
 		c = t->pool[c].next;
 	}
@@ -408,6 +438,7 @@ static void free_subtree(struct bc_tree *t, uint32_t top)
 				t->nops--;
 			} else {
 				t->nprims--;
+				count_prim(t, &t->pool[n].u.prim, -1);
 			}
 			t->nnodes--;
 			pool_release(t, n);
@@ -461,6 +492,16 @@ static uint32_t domain_chain(struct bc_tree *t)
 	return most;
 }
 
+static int need_error(const struct bc_tree *t, struct bc_errinfo *ei)
+{
+	return bc_errinfo_set(ei, BC_EDEPTH,
+	                      "tree: evaluating it needs a stack of "
+	                      "%u entries, more than %u (operators "
+	                      "nested too deep in right operands; "
+	                      "left-nested chains may be any depth)",
+	                      t->pool[t->root].need, BC_EVAL_STACK);
+}
+
 static int check_shape(struct bc_tree *t, struct bc_errinfo *ei)
 {
 	uint32_t depth = bc__measure(t, t->root);
@@ -477,14 +518,88 @@ static int check_shape(struct bc_tree *t, struct bc_errinfo *ei)
 		                      BC_TREE_MAX_DEPTH);
 	}
 	if (t->pool[t->root].need > BC_EVAL_STACK) {
-		return bc_errinfo_set(ei, BC_EDEPTH,
-		                      "tree: evaluating it needs a stack of "
-		                      "%u entries, more than %u (operators "
-		                      "nested too deep in right operands; "
-		                      "left-nested chains may be any depth)",
-		                      t->pool[t->root].need, BC_EVAL_STACK);
+		return need_error(t, ei);
 	}
 	return 0;
+}
+
+/* ---- keeping the measures along an edited path ------------------------- */
+
+/* What child c adds to its parent's need: a right operand of the fold is
+ * evaluated above the left one. */
+static uint32_t need_in_parent(const struct bc_tree *t, uint32_t c)
+{
+	uint32_t p = t->pool[c].parent;
+	return t->pool[c].need + (t->pool[p].first_child == c ? 0u : 1u);
+}
+
+/* Pool node m (measured) was linked: its ancestors' needs grow with what
+ * it adds, and with what the old first child adds as the second. */
+static void need_grow(struct bc_tree *t, uint32_t m)
+{
+	uint32_t c = m, p = t->pool[m].parent;
+	while (p != BC_NONE) {
+		uint32_t need = t->pool[p].need, v = need_in_parent(t, c);
+		uint32_t next = t->pool[c].next;
+		if (v > need) {
+			need = v;
+		}
+		if (c == m && next != BC_NONE && t->pool[p].first_child == m &&
+		    (v = need_in_parent(t, next)) > need) {
+			need = v;
+		}
+		if (need == t->pool[p].need) {
+			return;
+		}
+		t->pool[p].need = need;
+		c = p;
+		p = t->pool[p].parent;
+	}
+}
+
+/* A child of pool node a went (or moved up into it): a's need and its
+ * ancestors' shrink to what their children need. A scan stops at the
+ * first child that still needs the old value, so a wide operator costs
+ * little. */
+static void need_shrink(struct bc_tree *t, uint32_t a)
+{
+	while (a != BC_NONE) {
+		uint32_t old = t->pool[a].need, need = 0;
+		for (uint32_t c = t->pool[a].first_child;
+		     c != BC_NONE && need < old; c = t->pool[c].next) {
+			uint32_t v = need_in_parent(t, c);
+			if (v > need) {
+				need = v;
+			}
+		}
+		if (need == old) {
+			return;
+		}
+		t->pool[a].need = need;
+		a = t->pool[a].parent;
+	}
+}
+
+/* Does some node sit at depth `target` or deeper (the root at 1)? Stops
+ * at the first one found. */
+static bool reaches(const struct bc_tree *t, uint32_t target)
+{
+	uint32_t depth = 1;
+	for (uint32_t n = t->root; n != BC_NONE;
+	     n = preorder_next(t, n, t->root, &depth)) {
+		if (depth >= target) {
+			return true;
+		}
+	}
+	return false;
+}
+
+/* Can t (and the subtree sub grafted into it, when given) be edited by
+ * splicing its layout (splice.c)? Not with unary nodes. */
+static bool splices(const struct bc_tree *t, const struct bc_tree *sub)
+{
+	return t->has_lin && t->lin.nunary == 0 &&
+	       (!sub || (sub->has_lin && sub->lin.nunary == 0));
 }
 
 /* Replaces t's layout with one built for the model's current counts. The
@@ -493,11 +608,15 @@ static void install_lin(struct bc_tree *t, struct bc_lin *fresh)
 {
 	bc__lin_free(&t->lin);
 	t->has_lin = false;
+	t->lin_cap = t->lin_kcap = t->lin_pcap = 0;
 	if (t->root == BC_NONE) {
 		bc__lin_free(fresh);
 	} else {
 		t->lin = *fresh;
 		t->has_lin = true;
+		t->lin_cap = fresh->count;
+		t->lin_kcap = fresh->nprims;
+		t->lin_pcap = fresh->nparam;
 		bc__lin_fill(t, &t->lin);
 	}
 	memset(fresh, 0, sizeof(*fresh));
@@ -659,6 +778,7 @@ int bc_tree_put_prim(struct bc_tree *t, uint32_t id,
 	}
 	t->pool[n].u.prim = copy;
 	t->nprims++;
+	count_prim(t, &copy, 1);
 	return 0;
 }
 
@@ -758,6 +878,42 @@ uint32_t bc_tree_child(const struct bc_tree *t, uint32_t id, uint32_t k)
 	return c == BC_NONE ? 0 : t->pool[c].id;
 }
 
+void bc_tree_counts(const struct bc_tree *t, uint32_t *colored,
+                    uint64_t *floats)
+{
+	if (colored) {
+		*colored = t->ncolored;
+	}
+	if (floats) {
+		*floats = t->nfloats;
+	}
+}
+
+uint32_t bc_tree_child_index(const struct bc_tree *t, uint32_t id)
+{
+	uint32_t n = bc__map_find(&t->ids, id), p, s, a, k;
+	const struct bc_lin *l = &t->lin;
+	if (n == BC_NONE || (p = t->pool[n].parent) == BC_NONE ||
+	    bc__node_unary(&t->pool[p])) {
+		return 0;
+	}
+	if (!t->has_lin || t->building) {
+		for (k = 0; t->pool[n].prev != BC_NONE; k++) {
+			n = t->pool[n].prev;
+		}
+		return k;
+	}
+	/* Child i >= 1 is the right operand of the fold i levels up the
+	 * operator's left spine from its first fold; child 0 the left one. */
+	s = bc__slot(t, &t->pool[n]);
+	if (l->node[2 * s] & BC_WORD_LEFT) {
+		return 0;
+	}
+	a = bc_lin_parent(l, s);
+	k = t->pool[p].nchildren;
+	return k - 1u - (l->depth[a] - l->depth[bc__slot(t, &t->pool[p])]);
+}
+
 uint32_t bc_tree_parent(const struct bc_tree *t, uint32_t id)
 {
 	uint32_t n = bc__map_find(&t->ids, id);
@@ -770,7 +926,8 @@ uint32_t bc_tree_parent(const struct bc_tree *t, uint32_t id)
 uint32_t bc_tree_slot(const struct bc_tree *t, uint32_t id)
 {
 	uint32_t n = bc__map_find(&t->ids, id);
-	return (n == BC_NONE || !t->has_lin) ? BC_NONE : t->pool[n].slot;
+	return (n == BC_NONE || !t->has_lin) ? BC_NONE
+	                                     : bc__slot(t, &t->pool[n]);
 }
 
 const struct bc_lin *bc_tree_lin(const struct bc_tree *t)
@@ -806,10 +963,20 @@ static uint32_t live_node(const struct bc_tree *t, uint32_t id)
 	return t->building ? BC_NONE : bc__map_find(&t->ids, id);
 }
 
+/* live_node, with the node's slot, param and prim brought up to date. */
+static uint32_t live_node_now(struct bc_tree *t, uint32_t id)
+{
+	uint32_t n = live_node(t, id);
+	if (n != BC_NONE) {
+		bc__refresh(t, &t->pool[n]);
+	}
+	return n;
+}
+
 int bc_tree_set_prim(struct bc_tree *t, uint32_t id,
                      const struct bc_prim_data *p, struct bc_errinfo *ei)
 {
-	uint32_t n = live_node(t, id);
+	uint32_t n = live_node_now(t, id);
 	struct bc_prim_data copy = *p;
 	int rc;
 	if (n == BC_NONE) {
@@ -824,6 +991,8 @@ int bc_tree_set_prim(struct bc_tree *t, uint32_t id,
 	if ((rc = bc_prim_validate(&copy, ei))) {
 		return rc;
 	}
+	count_prim(t, &t->pool[n].u.prim, -1);
+	count_prim(t, &copy, 1);
 	t->pool[n].u.prim = copy;
 	bc__lin_update_prim(t, &t->pool[n]);
 	dirty_range(&t->dirty.param_lo, &t->dirty.param_hi, t->pool[n].param,
@@ -842,7 +1011,7 @@ int bc_tree_set_prim(struct bc_tree *t, uint32_t id,
 int bc_tree_set_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
                    struct bc_errinfo *ei)
 {
-	uint32_t n = live_node(t, id);
+	uint32_t n = live_node_now(t, id);
 	struct bc_op_data o = *op;
 	const struct bc_lin *l = &t->lin;
 	uint32_t first_slot, k_lo, k_hi;
@@ -893,7 +1062,7 @@ int bc_tree_set_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
 int bc_tree_set_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
                       struct bc_errinfo *ei)
 {
-	uint32_t n = live_node(t, id);
+	uint32_t n = live_node_now(t, id);
 	const struct bc_lin *l = &t->lin;
 	uint32_t first_slot, k_lo, k_hi;
 	int rc;
@@ -987,6 +1156,7 @@ static uint32_t copy_node(struct bc_tree *t, const struct bc__node *sn,
 		t->nops++;
 	} else {
 		t->nprims++;
+		count_prim(t, &sn->u.prim, 1);
 	}
 	return m;
 }
@@ -1025,7 +1195,8 @@ static uint32_t copy_in(struct bc_tree *t, const struct bc_tree *sub,
 
 /* Shared by insert, replace and copy: checks sub against t's limits when
  * `gone` (statistics of what leaves t) is removed and sub is placed at depth
- * `at_depth`, then reserves every resource. */
+ * `at_depth`, then reserves every resource: new layout arrays in fresh, or,
+ * without fresh, room in t's to splice sub in. */
 static int prepare_graft(struct bc_tree *t, const struct bc_tree *sub,
                          uint32_t at_depth, const struct subtree_stats *gone,
                          struct bc_lin *fresh, struct bc_errinfo *ei)
@@ -1054,12 +1225,22 @@ static int prepare_graft(struct bc_tree *t, const struct bc_tree *sub,
 		                      "the result would exceed %u nodes",
 		                      BC_TREE_MAX_NODES);
 	}
-	if ((rc = bc__lin_alloc(fresh, (uint32_t)prims, (uint32_t)ops))) {
+	if (fresh) {
+		rc = bc__lin_alloc(fresh, (uint32_t)prims, (uint32_t)ops);
+	} else {
+		rc = bc__splice_reserve(
+		    t, (uint32_t)(2u * prims - 1u), (uint32_t)prims,
+		    t->lin.nparam + BC_PRIM_RECORD_VEC4 * st.prims +
+		        BC_OP_RECORD_VEC4 * st.ops);
+	}
+	if (rc) {
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
 	}
 	if ((rc = pool_reserve(t, st.nodes)) ||
 	    (rc = bc__map_reserve(&t->ids, st.nodes))) {
-		bc__lin_free(fresh);
+		if (fresh) {
+			bc__lin_free(fresh);
+		}
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
 	}
 	return 0;
@@ -1071,6 +1252,7 @@ int bc_tree_insert(struct bc_tree *t, uint32_t parent_id, uint32_t pos,
 	uint32_t p = live_node(t, parent_id), before, m;
 	struct subtree_stats none = {0};
 	struct bc_lin fresh;
+	bool splice = splices(t, sub), touch;
 	int rc;
 	if (p == BC_NONE) {
 		return bc_errinfo_set(ei, BC_ENONODE, "no node with id %u",
@@ -1104,12 +1286,33 @@ int bc_tree_insert(struct bc_tree *t, uint32_t parent_id, uint32_t pos,
 	if ((rc = bc__names_reserve(&t->names, sub->names.n))) {
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
 	}
-	if ((rc = prepare_graft(t, sub, depth_of(t, p), &none, &fresh, ei))) {
+	if ((rc = prepare_graft(t, sub, depth_of(t, p), &none,
+	                        splice ? NULL : &fresh, ei))) {
 		return rc;
 	}
 	before = child_at(t, p, pos);
 	m = copy_in(t, sub, sub->root, false);
 	link_child(t, p, before, m);
+	if (splice) {
+		/* The measures follow the path from m up (a graft only adds
+		 * nesting and need), then the layout is spliced. */
+		uint32_t nest = depth_of(t, p) + bc__measure(t, m);
+		need_grow(t, m);
+		if (t->pool[t->root].need > BC_EVAL_STACK) {
+			rc = need_error(t, ei);
+			unlink_child(t, m);
+			free_subtree(t, m);
+			bc__measure(t, t->root);
+			return rc;
+		}
+		touch = bc__splice_insert(t, m, sub->nprims, sub->nops);
+		if (nest > t->lin.nesting) {
+			t->lin.nesting = nest;
+		}
+		bc__splice_finish(t, touch);
+		bc__names_graft(t, sub);
+		return 0;
+	}
 	/* The evaluation stack depends on the whole tree: measured on the
 	 * result, and undone (which cannot fail) when over the limit. */
 	if ((rc = check_shape(t, ei))) {
@@ -1173,6 +1376,25 @@ int bc_tree_remove(struct bc_tree *t, uint32_t id, struct bc_errinfo *ei)
 	subtree_stats(t, n, &st);
 	p = t->pool[n].parent;
 	collapse = (p != BC_NONE && t->pool[p].nchildren == 2) ? 1 : 0;
+	if (p != BC_NONE && splices(t, NULL)) {
+		/* Spliced out; the measures follow the path up (nesting
+		 * only looked for again when the deepest path may have
+		 * gone). */
+		uint32_t nest = t->lin.nesting, gp = t->pool[p].parent;
+		uint32_t deepest = depth_of(t, n) - 1u + st.depth;
+		bool touch = bc__splice_remove(t, n);
+		bc__names_drop_subtree(t, n);
+		if (collapse) {
+			bc__names_del(&t->names, t->pool[p].id);
+		}
+		cut(t, n);
+		need_shrink(t, collapse ? gp : p);
+		if ((collapse || deepest >= nest) && !reaches(t, nest)) {
+			t->lin.nesting = bc__measure(t, t->root);
+		}
+		bc__splice_finish(t, touch);
+		return 0;
+	}
 	memset(&fresh, 0, sizeof(fresh));
 	if (p != BC_NONE && (rc = bc__lin_alloc(&fresh, t->nprims - st.prims,
 	                                        t->nops - st.ops - collapse))) {
@@ -1187,12 +1409,57 @@ int bc_tree_remove(struct bc_tree *t, uint32_t id, struct bc_errinfo *ei)
 	return 0;
 }
 
+/* bc_tree_replace's end for a spliced layout: pool node m (a copy of sub)
+ * is linked where n was (whose layout blk notes; it added old_need to its
+ * parent's need). The measures follow the path up, the layout is spliced,
+ * n goes. On a refusal n is put back. */
+static int replace_spliced(struct bc_tree *t, uint32_t n, uint32_t m,
+                           const struct bc__block *blk, uint32_t old_need,
+                           const struct subtree_stats *gone,
+                           const struct bc_tree *sub, struct bc_errinfo *ei)
+{
+	uint32_t p = t->pool[m].parent, after = t->pool[m].next;
+	uint32_t nest = t->lin.nesting, pd = depth_of(t, p);
+	uint32_t deepest = pd + bc__measure(t, m);
+	bool touch;
+	int rc;
+	if (need_in_parent(t, m) >= old_need) {
+		need_grow(t, m);
+	} else {
+		need_shrink(t, p);
+	}
+	if (t->pool[t->root].need > BC_EVAL_STACK) {
+		rc = need_error(t, ei);
+		unlink_child(t, m);
+		link_child(t, p, after, n);
+		free_subtree(t, m);
+		remap_ids(t, n);
+		bc__measure(t, t->root);
+		return rc;
+	}
+	touch = bc__splice_replace(t, blk, m, sub->nprims, sub->nops);
+	/* The replaced nodes' names go, reused ids included: the subtree's
+	 * own names are the new nodes'. */
+	bc__names_drop_subtree(t, n);
+	free_subtree(t, n);
+	if (deepest >= nest) {
+		t->lin.nesting = deepest;
+	} else if (pd + gone->depth >= nest && !reaches(t, nest)) {
+		t->lin.nesting = bc__measure(t, t->root);
+	}
+	bc__splice_finish(t, touch);
+	bc__names_graft(t, sub);
+	return 0;
+}
+
 int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
                     struct bc_errinfo *ei)
 {
-	uint32_t n = live_node(t, id), p, after, m;
+	uint32_t n = live_node(t, id), p, after, m, old_need = 0;
 	struct subtree_stats gone = {0};
+	struct bc__block blk;
 	struct bc_lin fresh;
+	bool splice;
 	int rc;
 	if (n == BC_NONE) {
 		return bc_errinfo_set(ei, BC_ENONODE, "no node with id %u", id);
@@ -1201,6 +1468,7 @@ int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
 		return bc_errinfo_set(ei, BC_EINVAL,
 		                      "the replacement is empty");
 	}
+	splice = t->pool[n].parent != BC_NONE && splices(t, sub);
 	if ((rc = check_ids(t, sub, sub->root, n, ei))) {
 		return rc;
 	}
@@ -1210,8 +1478,12 @@ int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
 	subtree_stats(t, n, &gone);
 	p = t->pool[n].parent;
 	if ((rc = prepare_graft(t, sub, p == BC_NONE ? 0 : depth_of(t, p),
-	                        &gone, &fresh, ei))) {
+	                        &gone, splice ? NULL : &fresh, ei))) {
 		return rc;
+	}
+	if (splice) {
+		bc__splice_note(t, n, &blk);
+		old_need = need_in_parent(t, n);
 	}
 	after = t->pool[n].next;
 	if (p != BC_NONE) {
@@ -1225,6 +1497,9 @@ int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
 		t->root = m;
 	} else {
 		link_child(t, p, after, m);
+	}
+	if (splice) {
+		return replace_spliced(t, n, m, &blk, old_need, &gone, sub, ei);
 	}
 	if ((rc = check_shape(t, ei))) {
 		if (p == BC_NONE) {
@@ -1246,6 +1521,27 @@ int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
 	install_lin(t, &fresh);
 	bc__names_graft(t, sub);
 	return 0;
+}
+
+int bc_tree_relayout(struct bc_tree *t, struct bc_errinfo *ei)
+{
+	struct bc_lin fresh;
+	int rc;
+	if (t->root == BC_NONE || t->building) {
+		return 0;
+	}
+	if ((rc = bc__lin_alloc(&fresh, t->nprims, t->nops))) {
+		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
+	}
+	install_lin(t, &fresh);
+	return 0;
+}
+
+void bc_tree_swap(struct bc_tree *a, struct bc_tree *b)
+{
+	struct bc_tree keep = *a;
+	*a = *b;
+	*b = keep;
 }
 
 int bc_tree_copy(struct bc_tree *dst, const struct bc_tree *src,

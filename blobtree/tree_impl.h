@@ -16,19 +16,22 @@ struct bc__node {
 	bool is_op;
 	bool live;
 	bool auto_id; /* id was assigned, not chosen by the scene */
-	union {
-		struct bc_prim_data prim;
-		struct bc_op_data op;
-	} u;
-	/* A unary node's parameters (u.op.kind says it is one). */
-	float uparam[BC_UNARY_MAX_PARAMS];
-	/* Set by linearization. */
+	/* Set by linearization; next to the links and flags, so that the
+	 * pass a splice makes over the pool (splice.c) reads one cache line
+	 * of a node, not two. */
 	uint32_t slot;   /* the node's top slot */
 	uint32_t param;  /* parameter record, vec4 units */
 	uint32_t prim;   /* primitive index (primitives only) */
 	uint32_t need;   /* evaluation stack entries of its subtree */
 	uint32_t unary;  /* unary index (unary nodes only) */
 	uint32_t dchain; /* domain nodes above it (check_shape's scratch) */
+	uint32_t epoch;  /* splices slot, param and prim have followed */
+	union {
+		struct bc_prim_data prim;
+		struct bc_op_data op;
+	} u;
+	/* A unary node's parameters (u.op.kind says it is one). */
+	float uparam[BC_UNARY_MAX_PARAMS];
 };
 
 static inline bool bc__node_unary(const struct bc__node *n)
@@ -65,6 +68,20 @@ struct bc__names {
 	uint32_t n, cap;
 };
 
+/* One splice of the layout (splice.c): in each index space -- slots,
+ * records (vec4), primitives -- del entries at `at` went and ins new ones
+ * came. */
+struct bc__span {
+	uint32_t at, del, ins;
+};
+struct bc__shift {
+	struct bc__span s, p, k;
+};
+/* Splices a node's slot, param and prim may lag behind (the log below):
+ * a splice then renumbers no node of the model, and a full pass brings
+ * every node up to date once per this many splices. */
+#define BC__SHIFTS 32u
+
 struct bc_tree {
 	struct bc__node *pool;
 	uint32_t npool, cap;
@@ -72,6 +89,10 @@ struct bc_tree {
 	struct bc__idmap ids;
 	uint32_t root; /* pool index, BC_NONE when empty */
 	uint32_t nnodes, nprims, nops;
+	/* Primitives with a colour, and their shape floats in all
+	 * (bc_tree_counts). */
+	uint32_t ncolored;
+	uint64_t nfloats;
 	uint32_t next_id;
 
 	/* Builder state: the open operators, innermost last (grown on the heap:
@@ -82,10 +103,68 @@ struct bc_tree {
 
 	struct bc_lin lin;
 	bool has_lin;
+	/* Room of lin's arrays: slots, primitives, records (vec4). */
+	uint32_t lin_cap, lin_kcap, lin_pcap;
+	/* The splices since shift_base: a node whose epoch is e still has
+	 * to follow shift[e - shift_base .. epoch - shift_base). */
+	uint32_t epoch, shift_base;
+	struct bc__shift shift[BC__SHIFTS];
 	struct bc_dirty dirty;
 
 	struct bc__names names;
 };
+
+/* Where index v of one space points after a splice; an index into the
+ * entries that went lands on `at` (for first[]: the next subtree moves
+ * there). */
+static inline uint32_t bc__span_map(const struct bc__span *sp, uint32_t v)
+{
+	if (v < sp->at) {
+		return v;
+	}
+	if (v < sp->at + sp->del) {
+		return sp->at;
+	}
+	return v - sp->del + sp->ins;
+}
+
+/* Index v of space i (0 slots, 1 records, 2 primitives), stored as of
+ * splice `epoch`, as of now. */
+static inline uint32_t bc__follow(const struct bc_tree *t, uint32_t v,
+                                  uint32_t epoch, int i)
+{
+	for (uint32_t e = epoch; e < t->epoch; e++) {
+		const struct bc__shift *sh = &t->shift[e - t->shift_base];
+		v = bc__span_map(i == 0 ? &sh->s : i == 1 ? &sh->p : &sh->k, v);
+	}
+	return v;
+}
+
+/* Node n's slot, record and primitive index as of now. */
+static inline uint32_t bc__slot(const struct bc_tree *t,
+                                const struct bc__node *n)
+{
+	return bc__follow(t, n->slot, n->epoch, 0);
+}
+static inline uint32_t bc__param(const struct bc_tree *t,
+                                 const struct bc__node *n)
+{
+	return bc__follow(t, n->param, n->epoch, 1);
+}
+static inline uint32_t bc__prim(const struct bc_tree *t,
+                                const struct bc__node *n)
+{
+	return bc__follow(t, n->prim, n->epoch, 2);
+}
+/* Brings node n's slot, param and prim up to date (then they may be read
+ * and written directly). */
+static inline void bc__refresh(struct bc_tree *t, struct bc__node *n)
+{
+	n->slot = bc__slot(t, n);
+	n->param = bc__param(t, n);
+	n->prim = bc__prim(t, n);
+	n->epoch = t->epoch;
+}
 
 /* names.c */
 
@@ -119,6 +198,67 @@ int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nops);
 void bc__lin_free(struct bc_lin *l);
 /* Fills l (allocated for t's counts) from t's model; cannot fail. */
 void bc__lin_fill(struct bc_tree *t, struct bc_lin *l);
+/* Where the next emitted slot, primitive, record and unary node go. */
+struct bc__fill {
+	struct bc_lin *l;
+	uint32_t slot, prim, param, unary;
+};
+/* Emits the subtree at pool node top in post-order from fs on: slots,
+ * node words (but top's ancestor), records, colours, and each node's
+ * slot, param, prim and unary. */
+void bc__lin_emit(struct bc_tree *t, struct bc__fill *fs, uint32_t top);
+/* Writes slot o as a fold of operator p over slots left and right. */
+void bc__lin_fold(struct bc_lin *l, const struct bc__node *p, uint32_t left,
+                  uint32_t right, uint32_t o);
+void bc__lin_set_parent(struct bc_lin *l, uint32_t child, uint32_t parent,
+                        bool left);
+/* Slot s's ROI, kill and value counts, depth, fast and jump pointers from
+ * its parent's (which must be final). */
+void bc__lin_link(struct bc_lin *l, uint32_t s);
+/* The two halves of bc__lin_link: ROI, kill and value counts and domain
+ * node; depth, fast and jump pointers. */
+void bc__lin_propagate(struct bc_lin *l, uint32_t s);
+void bc__lin_pointers(struct bc_lin *l, uint32_t s);
+/* bc__lin_pointers of slots top down to lo (top's parent final). */
+void bc__lin_pointers_down(struct bc_lin *l, uint32_t lo, uint32_t top);
+/* Places primitive k's ABV (its slot's ROI known) and grows l's box. */
+void bc__lin_place_abv(struct bc_tree *t, struct bc_lin *l, uint32_t k,
+                       const struct bc_prim_data *p);
+void bc__lin_update_size(struct bc_lin *l);
+
+/* splice.c: structural edits of a layout without unary nodes, in place
+ * (the file's comment). */
+
+/* Room in t->lin's arrays for count slots, nprims primitives and nparam
+ * records. Returns 0 or BC_ENOMEM (the arrays as they were, some maybe
+ * larger). */
+int bc__splice_reserve(struct bc_tree *t, uint32_t count, uint32_t nprims,
+                       uint32_t nparam);
+/* Pool node m, with px primitives and ox operators and no unary node, was
+ * just linked under a binary operator: splices it into t->lin (room
+ * reserved). Returns whether the box must be measured again. */
+bool bc__splice_insert(struct bc_tree *t, uint32_t m, uint32_t px, uint32_t ox);
+/* Pool node c (not the root) is about to be cut: splices it, and its
+ * parent when that is left with one child, out of t->lin. Returns whether
+ * the box must be measured again. */
+bool bc__splice_remove(struct bc_tree *t, uint32_t c);
+/* Where a subtree's layout lies: its slots [first, top] (top's node word
+ * word), records [param, pend), primitives [k, k + nprims), and whether
+ * one of their ABVs touches the box. */
+struct bc__block {
+	uint32_t first, top, word, param, pend, k, nprims;
+	bool touch;
+};
+/* Notes where pool node c's subtree lies. */
+void bc__splice_note(struct bc_tree *t, uint32_t c, struct bc__block *b);
+/* Pool node m (px primitives, ox operators, no unary node) took the place
+ * of the subtree noted in b: splices it in there (room reserved). Returns
+ * whether the box must be measured again. */
+bool bc__splice_replace(struct bc_tree *t, const struct bc__block *b,
+                        uint32_t m, uint32_t px, uint32_t ox);
+/* After any of these, the model final: the box (measured again when touch), the
+ * stack (the root's need), the dirty state. */
+void bc__splice_finish(struct bc_tree *t, bool touch);
 /* Rewrites primitive n's parameter record, colour and ABV in t->lin. */
 void bc__lin_update_prim(struct bc_tree *t, const struct bc__node *n);
 /* Rewrites operator n's node words and record, then the ROIs, kill counts

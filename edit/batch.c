@@ -2,9 +2,18 @@
  * Atomic batches: an EDIT's operations apply whole or not at all, and an
  * applied batch can be undone. A batch of SETs changes the tree in place
  * (parameter edits keep the layout, which is what makes them cheap) and
- * saves each node first; a batch with a structural operation works on a
- * copy that replaces the tree only when every operation succeeded, and,
- * asked to, notes operation by operation what undoes it (inverse.c).
+ * saves each node first. A batch with a structural operation changes the
+ * tree in place too, noting before each operation what undoes it
+ * (inverse.c): when an operation fails, the notes of those before it are
+ * applied, newest first, and give back the tree as it was, node for node
+ * and (blobtree lays out one tree one way, whatever edits made it) slot
+ * for slot. Nothing is copied, so a structural edit costs what it changes,
+ * not the scene. The result is handed out as another tree object
+ * (bc_tree_swap, O(1)) and the caller's object, emptied, is kept in
+ * b->old, as when the batch worked on a copy. Where the notes cannot be
+ * kept (a removed subtree over one message; out of memory), or where an
+ * undoable batch's notes outgrow the scene (bc__inverse_bound needs the
+ * tree before), the batch is put back and applied to a copy instead.
  */
 #include <string.h>
 
@@ -32,15 +41,17 @@ static int at_op(struct bc_errinfo *ei, int rc, uint32_t i)
 
 /* Operation i of a structural batch applied to work, with its inverse
  * noted when inv is given (op n - 1 - i of it: the inverse runs newest
- * first). */
+ * first). *noted is set when the inverse could not be kept. */
 static int apply_op(struct bc_edit_inverse *inv, struct bc_tree *work,
                     const struct bc_proto_edit_op *ops, uint32_t i, uint32_t n,
-                    struct bc_errinfo *ei)
+                    bool *noted, struct bc_errinfo *ei)
 {
 	struct bc_edit_saved was;
 	int rc;
+	*noted = false;
 	if (inv &&
 	    (rc = bc__inverse_before(inv, work, &ops[i], n - 1 - i, &was))) {
+		*noted = true;
 		return bc_errinfo_set(ei, rc,
 		                      "operation %u: %s keeping what undoes it",
 		                      i, bc_strerror(rc));
@@ -50,6 +61,12 @@ static int apply_op(struct bc_edit_inverse *inv, struct bc_tree *work,
 	}
 	if (inv &&
 	    (rc = bc__inverse_after(inv, work, &ops[i], n - 1 - i, &was))) {
+		/* Only a SET's note needs memory here: its node's state
+		 * goes back directly, so the batch stands as before it. */
+		if (ops[i].kind == BC_PROTO_EDIT_SET) {
+			bc_edit_saved_restore(work, &was);
+		}
+		*noted = true;
 		return bc_errinfo_set(ei, rc,
 		                      "operation %u: %s keeping what undoes it",
 		                      i, bc_strerror(rc));
@@ -57,69 +74,142 @@ static int apply_op(struct bc_edit_inverse *inv, struct bc_tree *work,
 	return 0;
 }
 
+/* Applies the inverse's operations k0..nops-1 to t in order: undoes the
+ * batch's operations nops-1-k0 .. 0, newest first. They put back states
+ * that were valid, so only memory can fail (the nodes freed by what they
+ * undo are there again for the taking). */
+static int put_back(struct bc_tree *t, const struct bc_edit_inverse *inv,
+                    uint32_t k0)
+{
+	struct bc_errinfo ei = {0};
+	int rc = 0;
+	for (uint32_t k = k0; k < inv->nops && !rc; k++) {
+		rc = bc_edit_apply_op(t, &inv->ops[k], &ei);
+	}
+	return rc;
+}
+
+/* The structural batch on a copy of *tp that replaces it when every
+ * operation succeeded. */
+static int apply_on_copy(struct bc_edit_batch *b, struct bc_tree **tp,
+                         const struct bc_proto_edit_op *ops, uint32_t n,
+                         bool undoable, struct bc_errinfo *ei)
+{
+	struct bc_tree *t = *tp, *work;
+	struct bc_edit_inverse *inv = NULL;
+	bool noted;
+	int rc = 0;
+	if (undoable && bc__inverse_init(&b->inv, n) == 0) {
+		inv = &b->inv;
+	}
+	if ((undoable && !inv) || !(work = bc_tree_create())) {
+		bc_edit_batch_finish(b);
+		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+	}
+	if ((rc = bc_tree_copy(work, t, ei))) {
+		bc_tree_destroy(work);
+		bc_edit_batch_finish(b);
+		return rc;
+	}
+	for (uint32_t i = 0; i < n && !rc; i++) {
+		rc = apply_op(inv, work, ops, i, n, &noted, ei);
+	}
+	if (!rc && inv && (rc = bc__inverse_bound(inv, t, work))) {
+		rc = bc_errinfo_set(ei, rc, "no memory for what undoes it");
+	}
+	if (rc) {
+		bc_tree_destroy(work);
+		bc_edit_batch_finish(b);
+		return rc;
+	}
+	b->structural = true;
+	b->old = t;
+	*tp = work;
+	return 0;
+}
+
+/* The structural batch in place (the file's comment). Returns 0, a BC_E*
+ * code, or 1 when the batch, put back, must go to a copy. */
+static int apply_in_place(struct bc_edit_batch *b, struct bc_tree **tp,
+                          const struct bc_proto_edit_op *ops, uint32_t n,
+                          bool undoable, struct bc_errinfo *ei)
+{
+	struct bc_tree *t = *tp, *shell = NULL;
+	uint32_t old_nodes = bc_tree_node_count(t), i;
+	bool noted = false;
+	int rc = 0;
+	if (bc__inverse_init(&b->inv, n) || !(shell = bc_tree_create())) {
+		bc_edit_batch_finish(b);
+		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+	}
+	for (i = 0; i < n && !rc; i++) {
+		rc = apply_op(&b->inv, t, ops, i, n, &noted, ei);
+	}
+	if (rc) {
+		i--; /* the operation that failed did not apply */
+	} else if (undoable && !bc__inverse_fits(&b->inv, old_nodes)) {
+		noted = true;
+		rc = 1;
+	}
+	if (rc && put_back(t, &b->inv, n - i)) {
+		bc_tree_destroy(shell);
+		bc_edit_batch_finish(b);
+		return bc_errinfo_set(ei, BC_ENOMEM,
+		                      "out of memory putting the scene back "
+		                      "after a refused edit: reload the scene");
+	}
+	if (rc) {
+		bc_tree_destroy(shell);
+		bc_edit_batch_finish(b);
+		/* Notes that could not be kept: a batch that need not be
+		 * undoable, or whose notes only outgrew the scene, still
+		 * applies on a copy. */
+		return noted && (!undoable || rc == 1) ? 1 : rc;
+	}
+	bc_tree_swap(shell, t);
+	b->structural = true;
+	b->in_place = true;
+	b->old = t;
+	*tp = shell;
+	return 0;
+}
+
 static int batch_apply(struct bc_edit_batch *b, struct bc_tree **tp,
                        const struct bc_proto_edit_op *ops, uint32_t n,
                        bool undoable, struct bc_errinfo *ei)
 {
-	struct bc_tree *t = *tp, *work = t;
-	struct bc_edit_inverse *inv = NULL;
+	struct bc_tree *t = *tp;
+	bool structural = false;
 	int rc = 0;
 	memset(b, 0, sizeof(*b));
 	for (uint32_t i = 0; i < n; i++) {
 		if (ops[i].kind != BC_PROTO_EDIT_SET) {
-			b->structural = true;
+			structural = true;
 		}
 	}
-	if (b->structural) {
-		if (undoable && bc__inverse_init(&b->inv, n) == 0) {
-			inv = &b->inv;
-		}
-		if ((undoable && !inv) || !(work = bc_tree_create())) {
-			bc_edit_batch_finish(b);
-			return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
-		}
-		if ((rc = bc_tree_copy(work, t, ei))) {
-			bc_tree_destroy(work);
-			bc_edit_batch_finish(b);
-			return rc;
-		}
-	} else if (n > 0 && !(b->saved = bc_calloc(n, sizeof(*b->saved)))) {
+	if (structural) {
+		rc = apply_in_place(b, tp, ops, n, undoable, ei);
+		return rc == 1 ? apply_on_copy(b, tp, ops, n, undoable, ei)
+		               : rc;
+	}
+	if (n > 0 && !(b->saved = bc_calloc(n, sizeof(*b->saved)))) {
 		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
 	}
 	for (uint32_t i = 0; i < n && !rc; i++) {
-		if (b->structural) {
-			rc = apply_op(inv, work, ops, i, n, ei);
-			continue;
+		struct bc_edit_saved *s = &b->saved[b->nsaved];
+		s->id = ops[i].node;
+		if (bc_tree_get(t, ops[i].node, &s->p, &s->op)) {
+			bc_tree_get_unary(t, ops[i].node, &s->un);
+			b->nsaved++;
 		}
-		{
-			struct bc_edit_saved *s = &b->saved[b->nsaved];
-			s->id = ops[i].node;
-			if (bc_tree_get(work, ops[i].node, &s->p, &s->op)) {
-				bc_tree_get_unary(work, ops[i].node, &s->un);
-				b->nsaved++;
-			}
-		}
-		if ((rc = bc_edit_apply_op(work, &ops[i], ei))) {
+		if ((rc = bc_edit_apply_op(t, &ops[i], ei))) {
 			rc = at_op(ei, rc, i);
 		}
 	}
 	if (rc) {
-		if (b->structural) {
-			bc_tree_destroy(work);
-		} else {
-			restore(t, b->saved, b->nsaved);
-		}
+		restore(t, b->saved, b->nsaved);
 		bc_edit_batch_finish(b);
 		return rc;
-	}
-	if (inv && (rc = bc__inverse_bound(inv, t, work))) {
-		bc_tree_destroy(work);
-		bc_edit_batch_finish(b);
-		return bc_errinfo_set(ei, rc, "no memory for what undoes it");
-	}
-	if (b->structural) {
-		b->old = t;
-		*tp = work;
 	}
 	return 0;
 }
@@ -140,7 +230,15 @@ int bc_edit_batch_apply_undoable(struct bc_edit_batch *b, struct bc_tree **tp,
 
 void bc_edit_batch_undo(struct bc_edit_batch *b, struct bc_tree **tp)
 {
-	if (b->structural && b->old) {
+	if (b->structural && b->old && b->in_place) {
+		/* Applied in place: its notes put the tree back, which goes
+		 * into the caller's object again. */
+		put_back(*tp, &b->inv, 0);
+		bc_tree_swap(b->old, *tp);
+		bc_tree_destroy(*tp);
+		*tp = b->old;
+		b->old = NULL;
+	} else if (b->structural && b->old) {
 		bc_tree_destroy(*tp);
 		*tp = b->old;
 		b->old = NULL;

@@ -4,6 +4,7 @@
 #ifndef BLOBCAST_EDIT_IMPL_H
 #define BLOBCAST_EDIT_IMPL_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "blobcast/edit.h"
@@ -30,6 +31,11 @@ int bc__inverse_before(struct bc_edit_inverse *inv, const struct bc_tree *t,
 int bc__inverse_after(struct bc_edit_inverse *inv, const struct bc_tree *t,
                       const struct bc_proto_edit_op *e, uint32_t k,
                       const struct bc_edit_saved *was);
+
+/* Whether inv's subtrees stay within what a scene of old_nodes nodes
+ * encodes to at least, so that bc__inverse_bound would leave inv as it
+ * is. */
+bool bc__inverse_fits(const struct bc_edit_inverse *inv, uint32_t old_nodes);
 
 /* When the subtrees of inv (the inverse of the batch that made now from
  * old) add up past old's own encoding, makes inv one REPLACE of now's root

@@ -156,32 +156,18 @@ static int walk_subtree(struct bc_proto_buf *b, const struct bc_tree *t,
 	struct bc_scene_walk w;
 	struct bc_scene_node n;
 	struct named nm = {0};
-	uint32_t parent = bc_tree_parent(t, id), count = 0, depth = 0;
-	uint32_t pdepth = 0, k = 0;
-	bool in = false, under = false;
-	int rc = bc_scene_walk_init(&w, t);
+	uint32_t count = 0;
+	/* Only the subtree is walked: what an inverse costs follows the
+	 * change, not the scene. */
+	int rc = bc_scene_walk_init_at(&w, t, id);
+	if (pos) {
+		*pos = bc_tree_child_index(t, id);
+	}
 	while (!rc && bc_scene_walk_next(&w, &n)) {
-		if (in && n.depth <= depth) {
-			break;
+		if (!(rc = put_node(b, &n))) {
+			rc = named_add(&nm, t, n.id);
 		}
-		if (!in && n.id == id) {
-			in = true;
-			depth = n.depth;
-			if (pos) {
-				*pos = k;
-			}
-		}
-		if (in) {
-			if (!(rc = put_node(b, &n))) {
-				rc = named_add(&nm, t, n.id);
-			}
-			count++;
-		} else if (parent != 0 && n.id == parent) {
-			under = true;
-			pdepth = n.depth;
-		} else if (under && n.depth == pdepth + 1) {
-			k++;
-		}
+		count++;
 	}
 	bc_scene_walk_finish(&w);
 	if (!rc && count == 0) {
@@ -414,18 +400,30 @@ static size_t scene_bytes_at_least(uint32_t n)
 	return 5u + (size_t)n * 26u;
 }
 
+/* Subtree bytes inv's operations carry. */
+static size_t carried_bytes(const struct bc_edit_inverse *inv)
+{
+	size_t carried = 0;
+	for (uint32_t i = 0; i < inv->nops; i++) {
+		carried += inv->ops[i].subtree.len;
+	}
+	return carried;
+}
+
+bool bc__inverse_fits(const struct bc_edit_inverse *inv, uint32_t old_nodes)
+{
+	return carried_bytes(inv) <= scene_bytes_at_least(old_nodes);
+}
+
 int bc__inverse_bound(struct bc_edit_inverse *inv, const struct bc_tree *old,
                       const struct bc_tree *now)
 {
 	struct bc_edit_inverse whole;
-	size_t carried = 0;
+	size_t carried = carried_bytes(inv);
 	uint8_t *bytes;
 	size_t len;
 	int rc;
-	for (uint32_t i = 0; i < inv->nops; i++) {
-		carried += inv->ops[i].subtree.len;
-	}
-	if (carried <= scene_bytes_at_least(bc_tree_node_count(old))) {
+	if (bc__inverse_fits(inv, bc_tree_node_count(old))) {
 		return 0;
 	}
 	if ((rc = bc_scene_encode(old, NULL, &bytes, &len)) ||

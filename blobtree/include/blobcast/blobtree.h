@@ -13,7 +13,10 @@
  *
  * Editing a primitive's parameters rewrites that primitive's parameter record
  * and its ABV only; editing an operator's parameters recomputes the ROIs and
- * ABVs of its subtree; structural edits re-linearize in linear time. Nothing
+ * ABVs of its subtree; INSERT, REMOVE and REPLACE splice the layout in
+ * place (splice.c: memory moves and index fixes linear in the scene, the
+ * rest in proportion to the change; trees with unary nodes, and a new
+ * root, are laid out again in linear time). Nothing
  * else is re-processed, and the dirty ranges say what changed.
  */
 #ifndef BLOBCAST_BLOBTREE_H
@@ -394,6 +397,11 @@ BC_API bool bc_tree_has_auto_ids(const struct bc_tree *t);
 /* Counts of the model: scene nodes, primitives, operators. */
 BC_API uint32_t bc_tree_node_count(const struct bc_tree *t);
 BC_API uint32_t bc_tree_prim_count(const struct bc_tree *t);
+/* What the scene encoding's size follows besides the node counts, in O(1):
+ * the primitives that carry a colour, and the shape floats of every
+ * primitive (bc_scene_prim_nfloats of each). Out-parameters may be NULL. */
+BC_API void bc_tree_counts(const struct bc_tree *t, uint32_t *colored,
+                           uint64_t *floats);
 /* Nodes on the longest path from the root (the root counting 1), 0 for an
  * empty tree. */
 BC_API uint32_t bc_tree_nesting(const struct bc_tree *t);
@@ -409,6 +417,9 @@ BC_API bool bc_tree_get(const struct bc_tree *t, uint32_t id,
  * child k (0 when out of range). */
 BC_API uint32_t bc_tree_child_count(const struct bc_tree *t, uint32_t id);
 BC_API uint32_t bc_tree_child(const struct bc_tree *t, uint32_t id, uint32_t k);
+/* Position of node id among its parent's children (0 for the root or an
+ * unknown id); O(1) from the layout, as bc_tree_child(parent, k) == id. */
+BC_API uint32_t bc_tree_child_index(const struct bc_tree *t, uint32_t id);
 /* Returns the parent's id, 0 for the root or an unknown id. */
 BC_API uint32_t bc_tree_parent(const struct bc_tree *t, uint32_t id);
 /* Returns node id's top slot in the linearized form (an n-ary operator's
@@ -461,18 +472,30 @@ BC_API bool bc_tree_get_unary(const struct bc_tree *t, uint32_t id,
 
 /* Inserts a copy of the whole of sub as child number pos of operator
  * parent_id (pos may equal the child count: append). Ids of sub must not
- * exist in t (BC_EDUPID); sub's ids are kept. Re-linearizes. */
+ * exist in t (BC_EDUPID); sub's ids are kept. Splices the subtree into the
+ * layout (blobtree/splice.c; re-linearizes when t or sub has unary
+ * nodes). */
 BC_API int bc_tree_insert(struct bc_tree *t, uint32_t parent_id, uint32_t pos,
                           const struct bc_tree *sub, struct bc_errinfo *ei);
 /* Removes node id and its subtree. An operator left with one child is
  * replaced by that child (operators always have two or more). Removing the
- * root empties the tree. Re-linearizes. */
+ * root empties the tree. Splices the layout (re-linearizes when t has
+ * unary nodes). */
 BC_API int bc_tree_remove(struct bc_tree *t, uint32_t id,
                           struct bc_errinfo *ei);
 /* Replaces node id (and its subtree) with a copy of sub at the same place.
- * sub's ids must be new to t, except that sub's root may reuse id. */
+ * sub's ids must be new to t, except that sub's root may reuse id. Splices
+ * the layout (re-linearizes for the root, or with unary nodes). */
 BC_API int bc_tree_replace(struct bc_tree *t, uint32_t id,
                            const struct bc_tree *sub, struct bc_errinfo *ei);
+/* Lays t out again from its model, as a whole (what every structural edit
+ * did before INSERT and REMOVE learned to splice the layout; benches and
+ * tests compare the two). Returns 0 or BC_ENOMEM (t as it was). */
+BC_API int bc_tree_relayout(struct bc_tree *t, struct bc_errinfo *ei);
+/* Exchanges the contents of a and b (model, layout, names, dirty state)
+ * in O(1): a caller that edits a tree in place can hand the result out as
+ * another object and keep the first, emptied, as the one it replaced. */
+BC_API void bc_tree_swap(struct bc_tree *a, struct bc_tree *b);
 /* Copies the whole tree src into dst (dst is cleared first). */
 BC_API int bc_tree_copy(struct bc_tree *dst, const struct bc_tree *src,
                         struct bc_errinfo *ei);
@@ -480,7 +503,7 @@ BC_API int bc_tree_copy(struct bc_tree *dst, const struct bc_tree *src,
 /* What changed since the last bc_tree_take_dirty(): ranges are half-open,
  * [lo, hi) with lo == hi meaning nothing; structure means everything. */
 struct bc_dirty {
-	bool structure;              /* re-linearized: upload everything */
+	bool structure; /* laid out again or spliced: upload everything */
 	uint32_t slot_lo, slot_hi;   /* node words (an operator kind changed) */
 	uint32_t param_lo, param_hi; /* parameter records, in vec4 units */
 	uint32_t prim_lo, prim_hi;   /* primitives whose ABV changed */

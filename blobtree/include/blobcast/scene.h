@@ -167,6 +167,11 @@ struct bc_scene_walk {
 /* Starts a walk over t (which must stay unchanged during the walk). Returns
  * 0, BC_EINVAL (empty or unfinished tree) or BC_ENOMEM. */
 BC_API int bc_scene_walk_init(struct bc_scene_walk *w, const struct bc_tree *t);
+/* The same over the subtree of node id only (depths from it, 0), in time
+ * and memory of that subtree. Returns 0, BC_EINVAL (no such node, or no
+ * layout) or BC_ENOMEM. */
+BC_API int bc_scene_walk_init_at(struct bc_scene_walk *w,
+                                 const struct bc_tree *t, uint32_t id);
 /* Fills *out with the next node; returns false after the last one. */
 BC_API bool bc_scene_walk_next(struct bc_scene_walk *w,
                                struct bc_scene_node *out);

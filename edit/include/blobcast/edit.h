@@ -112,21 +112,31 @@ int bc_edit_inverse_of_states(struct bc_edit_inverse *inv,
 /* What an applied batch needs to be undone. Zero it before use;
  * bc_edit_batch_finish() frees it. */
 struct bc_edit_batch {
-	bool structural;     /* some operation changed the tree's shape */
-	struct bc_tree *old; /* structural: the tree before the batch */
+	bool structural; /* some operation changed the tree's shape */
+	/* Structural: the caller's tree object. Emptied when the batch
+	 * applied in place (in_place: its contents moved to the new *tp,
+	 * and inv is what puts them back); the whole tree before the batch
+	 * when it applied to a copy. */
+	struct bc_tree *old;
+	bool in_place;
 	struct bc_edit_saved *saved; /* parameter batch: nodes before it */
 	uint32_t nsaved;
-	/* Structural, bc_edit_batch_apply_undoable(): what undoes it. */
+	/* Structural, bc_edit_batch_apply_undoable() or applied in place:
+	 * what undoes it. */
 	struct bc_edit_inverse inv;
 };
 
 /*
  * Applies ops[0..n) to *tp whole or not at all. A batch of SETs only is
- * applied in place (and put back if one fails); a batch with a structural
- * operation is applied to a copy that replaces *tp when every operation
- * succeeded (the old tree is kept in b->old). The error's text starts
- * with "operation i:". Returns 0 or a BC_E* code; on failure *tp is as
- * before and b holds nothing.
+ * applied in place (and put back if one fails). A batch with a structural
+ * operation is applied in place too, each operation's inverse noted
+ * first; a failure puts the earlier ones back with those notes (only out
+ * of memory can stop that: the error then says so). On success *tp
+ * becomes another tree object holding the result (O(1)) and b->old is the
+ * caller's object, emptied; where the notes cannot be kept the batch is
+ * applied to a copy instead, and b->old is the whole tree before it. The
+ * error's text starts with "operation i:". Returns 0 or a BC_E* code; on
+ * failure *tp is as before and b holds nothing.
  */
 int bc_edit_batch_apply(struct bc_edit_batch *b, struct bc_tree **tp,
                         const struct bc_proto_edit_op *ops, uint32_t n,
@@ -141,8 +151,11 @@ int bc_edit_batch_apply_undoable(struct bc_edit_batch *b, struct bc_tree **tp,
                                  const struct bc_proto_edit_op *ops, uint32_t n,
                                  struct bc_errinfo *ei);
 
-/* Undoes the batch b applied to *tp (cannot fail: it only puts back states
- * that were valid). b is then empty. */
+/* Undoes the batch b applied to *tp: it only puts back states that were
+ * valid, into room the batch freed, so only memory can fail it, and only
+ * for a structural batch applied in place (decoding the subtrees its
+ * inverse puts back: memory in proportion to the change). b is then
+ * empty. */
 void bc_edit_batch_undo(struct bc_edit_batch *b, struct bc_tree **tp);
 
 /* Frees what b holds (the old tree, the saved nodes, the inverse); accepts

@@ -1,0 +1,595 @@
+/*
+ * Structural edits without a new layout: an INSERT, a REMOVE or a REPLACE
+ * splices the post-order arrays of struct bc_lin in place, and the result is
+ * bit for bit the layout bc__lin_fill would build for the edited tree
+ * (tests/blobtree/test_splice.c holds it to that).
+ *
+ * Why "splice with memmove and fix indices" and not a gap buffer, chunked
+ * arrays or a rope: struct bc_lin is the renderers' contract -- flat
+ * arrays indexed by slot, primitive and record, read in place and uploaded
+ * whole -- and render/ must not change with this. Any of the other
+ * structures would make every reader translate indices. A splice keeps
+ * the arrays as they are: it moves each array's tail by the size of the
+ * change (memmove, at memory bandwidth), adds that size to every stored
+ * index past the edit point (one pass over the index arrays; the model's
+ * nodes follow a log of the last splices when read, tree_impl.h), and
+ * recomputes what depends on a slot's place in the
+ * binary tree -- depth, fast and jump pointers, ROI, kill counts -- only
+ * in the part of the edited operator's fold whose shape changed (its
+ * operands left of the edit point: they sit one level deeper or higher).
+ * ABVs are placed again only where a slot's ROI changed, and the scalars
+ * follow from what changed: the box grows with new ABVs and is measured
+ * again only when an ABV that touched it went or shrank; the evaluation
+ * stack is the root's need, kept exact along the edited path (tree.c).
+ * What stays linear in the scene: the tail move and the index pass, and
+ * when an operand is added to or taken from the end of a wide operator,
+ * the depth and jump pointers of every operand before it. These are
+ * memory-speed passes; docs/benchmarks.md ("Structural edits spliced")
+ * has their cost beside a full layout's.
+ *
+ * Trees with unary nodes are laid out whole (tree.c): their wrapper chains,
+ * domain chains and twist and bend bounds reach across the tree.
+ */
+#include "tree_impl.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "blobcast/alloc.h"
+
+/* ---- room -------------------------------------------------------------- */
+
+/* Grows array ptr to n entries of size bytes, or returns BC_ENOMEM (ptr
+ * as it was). */
+#define GROW(ptr, n, size)                                                     \
+	do {                                                                   \
+		void *grown_ = bc_reallocarray((ptr), (n), (size));            \
+		if (!grown_) {                                                 \
+			return BC_ENOMEM;                                      \
+		}                                                              \
+		(ptr) = grown_;                                                \
+	} while (0)
+
+/* A capacity of at least need, with room for the edits that follow. */
+static uint32_t roomy(uint32_t cap, uint32_t need)
+{
+	uint64_t c = (uint64_t)cap + cap / 2u + 64u;
+	if (c < need) {
+		c = need;
+	}
+	return c > UINT32_MAX ? UINT32_MAX : (uint32_t)c;
+}
+
+int bc__splice_reserve(struct bc_tree *t, uint32_t count, uint32_t nprims,
+                       uint32_t nparam)
+{
+	struct bc_lin *l = &t->lin;
+	if (count > t->lin_cap) {
+		uint32_t c = roomy(t->lin_cap, count);
+		GROW(l->node, c, 2 * sizeof(uint32_t));
+		GROW(l->first, c, sizeof(uint32_t));
+		GROW(l->fast, c, sizeof(uint32_t));
+		GROW(l->jump, c, sizeof(uint32_t));
+		GROW(l->kills, c, sizeof(uint32_t));
+		GROW(l->depth, c, sizeof(uint32_t));
+		GROW(l->node_id, c, sizeof(uint32_t));
+		GROW(l->prim_of, c, sizeof(uint32_t));
+		GROW(l->roi, c, 2 * sizeof(float));
+		GROW(l->wrap, c, sizeof(uint32_t));
+		GROW(l->wrap_top, c, sizeof(uint32_t));
+		GROW(l->dom, c, sizeof(uint32_t));
+		GROW(l->ucount, c, sizeof(uint32_t));
+		t->lin_cap = c;
+	}
+	if (nprims > t->lin_kcap) {
+		uint32_t c = roomy(t->lin_kcap, nprims);
+		GROW(l->prim_slot, c, sizeof(uint32_t));
+		GROW(l->abv, c, sizeof(struct bc_abv));
+		GROW(l->color, c, sizeof(*l->color));
+		t->lin_kcap = c;
+	}
+	if (nparam > t->lin_pcap) {
+		uint32_t c = roomy(t->lin_pcap, nparam);
+		GROW(l->param, c, 4 * sizeof(float));
+		t->lin_pcap = c;
+	}
+	return 0;
+}
+
+/* ---- moving and renumbering --------------------------------------------- */
+
+/* One splice of slots, records (vec4 units) and primitives. keep_first:
+ * first[] values equal to s.at keep pointing there (an operand inserted
+ * at the very left of a subtree becomes its first slot). */
+struct splice {
+	struct bc__span s, p, k;
+	bool keep_first;
+};
+
+static void move_tail(void *base, size_t size, uint32_t n,
+                      const struct bc__span *sp)
+{
+	char *b = base;
+	size_t tail = (size_t)n - sp->at - sp->del;
+	if (sp->del != sp->ins && tail > 0) {
+		memmove(b + (size_t)(sp->at + sp->ins) * size,
+		        b + (size_t)(sp->at + sp->del) * size, tail * size);
+	}
+}
+
+/* Renumbers n indices v[0], v[stride], ... through sp (BC_NONE kept). */
+static void renumber(uint32_t *v, size_t n, size_t stride,
+                     const struct bc__span *sp)
+{
+	uint32_t at = sp->at, hi = sp->at + sp->del;
+	uint32_t shift = sp->ins - sp->del; /* modulo 2^32 */
+	if (sp->del == 0 && sp->ins == 0) {
+		return;
+	}
+	for (size_t i = 0; i < n; i++) {
+		uint32_t x = v[i * stride];
+		uint32_t y = x >= hi ? x + shift : (x >= at ? at : x);
+		v[i * stride] = x == BC_NONE ? x : y;
+	}
+}
+
+/* The first primitive whose slot is at or past slot s (primitives are in
+ * slot order). */
+static uint32_t prim_from(const struct bc_lin *l, uint32_t s)
+{
+	uint32_t lo = 0, hi = l->nprims;
+	while (lo < hi) {
+		uint32_t mid = lo + (hi - lo) / 2;
+		if (l->prim_slot[mid] < s) {
+			lo = mid + 1;
+		} else {
+			hi = mid;
+		}
+	}
+	return lo;
+}
+
+/* Notes the splice for the model's nodes to follow when read (struct
+ * bc_tree's shift log); a full log is first followed by every live node,
+ * once per BC__SHIFTS splices. */
+static void log_shift(struct bc_tree *t, const struct splice *sp)
+{
+	if (t->epoch - t->shift_base == BC__SHIFTS) {
+		for (uint32_t i = 0; i < t->npool; i++) {
+			if (t->pool[i].live) {
+				bc__refresh(t, &t->pool[i]);
+				t->pool[i].epoch = 0;
+			}
+		}
+		t->epoch = t->shift_base = 0;
+	}
+	t->shift[t->epoch - t->shift_base] =
+	    (struct bc__shift){.s = sp->s, .p = sp->p, .k = sp->k};
+	t->epoch++;
+}
+
+/* Moves every array's tail (room reserved) and renumbers every stored
+ * index of the layout (the model's nodes follow the log). The new entries are
+ * left for the caller to write. What lies before the splice point keeps
+ * its first slot, record and primitive (they come before in both
+ * post-order and pre-order); only its pointers up the tree (ancestor,
+ * fast, jump) may cross the point. */
+static void apply(struct bc_tree *t, const struct splice *sp)
+{
+	struct bc_lin *l = &t->lin;
+	uint32_t n = l->count, np = l->nprims, nr = l->nparam;
+	uint32_t tail, ktail;
+	move_tail(l->node, 2 * sizeof(uint32_t), n, &sp->s);
+	move_tail(l->first, sizeof(uint32_t), n, &sp->s);
+	move_tail(l->fast, sizeof(uint32_t), n, &sp->s);
+	move_tail(l->jump, sizeof(uint32_t), n, &sp->s);
+	move_tail(l->kills, sizeof(uint32_t), n, &sp->s);
+	move_tail(l->depth, sizeof(uint32_t), n, &sp->s);
+	move_tail(l->node_id, sizeof(uint32_t), n, &sp->s);
+	move_tail(l->prim_of, sizeof(uint32_t), n, &sp->s);
+	move_tail(l->roi, 2 * sizeof(float), n, &sp->s);
+	move_tail(l->wrap, sizeof(uint32_t), n, &sp->s);
+	move_tail(l->wrap_top, sizeof(uint32_t), n, &sp->s);
+	move_tail(l->dom, sizeof(uint32_t), n, &sp->s);
+	move_tail(l->ucount, sizeof(uint32_t), n, &sp->s);
+	move_tail(l->prim_slot, sizeof(uint32_t), np, &sp->k);
+	move_tail(l->abv, sizeof(struct bc_abv), np, &sp->k);
+	move_tail(l->color, sizeof(*l->color), np, &sp->k);
+	move_tail(l->param, 4 * sizeof(float), nr, &sp->p);
+	l->count = n - sp->s.del + sp->s.ins;
+	l->nprims = np - sp->k.del + sp->k.ins;
+	l->nparam = nr - sp->p.del + sp->p.ins;
+	tail = sp->s.at + sp->s.ins;
+	if (sp->s.del == sp->s.ins && sp->p.del == sp->p.ins &&
+	    sp->k.del == sp->k.ins) {
+		/* A block for one of the same size (a REPLACE): nothing moved,
+		 * and nothing outside the block pointed into it but at its
+		 * first slot, which stays. */
+		return;
+	}
+
+	/* Pointers up, everywhere but the new entries. */
+	for (uint32_t s = 0; s < l->count; s++) {
+		uint32_t w = l->node[2 * s], a = w & BC_WORD_ANCESTOR_MASK;
+		if (s == sp->s.at && sp->s.ins > 0) {
+			s = tail - 1;
+			continue;
+		}
+		if (a != BC_WORD_NO_ANCESTOR && a >= sp->s.at) {
+			l->node[2 * s] = (w & ~BC_WORD_ANCESTOR_MASK) |
+			                 bc__span_map(&sp->s, a);
+		}
+	}
+	renumber(l->fast, sp->s.at, 1, &sp->s);
+	renumber(l->jump, sp->s.at, 1, &sp->s);
+	renumber(l->fast + tail, l->count - tail, 1, &sp->s);
+	renumber(l->jump + tail, l->count - tail, 1, &sp->s);
+	/* First slots, records and primitives, past the point. */
+	renumber(l->node + 2 * (size_t)tail + 1, l->count - tail, 2, &sp->p);
+	renumber(l->prim_of + tail, l->count - tail, 1, &sp->k);
+	for (uint32_t s = tail; s < l->count; s++) {
+		if (!(sp->keep_first && l->first[s] == sp->s.at)) {
+			l->first[s] = bc__span_map(&sp->s, l->first[s]);
+		}
+	}
+	/* Primitives past the point: past the new ones, or found in the
+	 * (then unmoved, increasing) slots. */
+	ktail = sp->k.del || sp->k.ins ? sp->k.at + sp->k.ins
+	                               : prim_from(l, sp->s.at);
+	renumber(l->prim_slot + ktail, l->nprims - ktail, 1, &sp->s);
+	log_shift(t, sp);
+}
+
+/* ---- what depends on the place in the tree ------------------------------ */
+
+/* Does the AABB of primitive k's ABV touch l's box (so that the box may
+ * shrink when the ABV goes or changes)? */
+static bool touches_box(const struct bc_lin *l, uint32_t k)
+{
+	float lo[3], hi[3];
+	bc_abv_aabb(&l->abv[k], lo, hi);
+	for (int i = 0; i < 3; i++) {
+		if (lo[i] <= l->lo[i] || hi[i] >= l->hi[i]) {
+			return true;
+		}
+	}
+	return false;
+}
+
+static bool same_bits(float a, float b)
+{
+	return memcmp(&a, &b, sizeof(a)) == 0;
+}
+
+/* In kills[], during relink(): the slot's ROI and counts must be computed
+ * again (kill counts stay far below: at most the tree's depth). */
+#define AGAIN 0x80000000u
+
+static void again(struct bc_lin *l, uint32_t s)
+{
+	l->kills[s] |= AGAIN;
+}
+
+/* first[] of slots lo..hi (whose operands are there too) from the bottom
+ * up: an operator's left operand ends where its right one starts. */
+static void refirst(struct bc_lin *l, uint32_t lo, uint32_t hi)
+{
+	for (uint32_t s = lo; s <= hi; s++) {
+		l->first[s] =
+		    bc_lin_is_leaf(l, s) ? s : l->first[l->first[s - 1] - 1];
+	}
+}
+
+/*
+ * The subtree of slots [lo, top], whose top's parent is final, from the
+ * top down: depth and pointers everywhere (a depth changed), ROIs and
+ * counts where marked AGAIN (the top, the new slots [new_lo, new_hi), and
+ * what the caller marked: slots whose parent or side changed), and below
+ * every slot whose ROI or counts came out different, as the full layout
+ * computes them (bc__lin_pointers, bc__lin_propagate). ABVs of new
+ * primitives and of those whose ROI changed are placed again. Returns
+ * whether an ABV that touched the box changed.
+ */
+static bool relink(struct bc_tree *t, uint32_t lo, uint32_t top,
+                   uint32_t new_lo, uint32_t new_hi)
+{
+	struct bc_lin *l = &t->lin;
+	bool touch = false;
+	again(l, top);
+	for (uint32_t s = new_lo; s < new_hi; s++) {
+		again(l, s);
+	}
+	/* Depth and pointers need only the parent's, and so do ROIs and
+	 * counts: two passes, the second reading the marks only. */
+	bc__lin_pointers_down(l, lo, top);
+	for (uint32_t s = top + 1; s-- > lo;) {
+		float r0, r1;
+		uint32_t kills = l->kills[s], uc, dom;
+		bool fresh, changed;
+		if (!(kills & AGAIN)) {
+			continue;
+		}
+		r0 = l->roi[2 * s];
+		r1 = l->roi[2 * s + 1];
+		uc = l->ucount[s];
+		dom = l->dom[s];
+		fresh = s >= new_lo && s < new_hi;
+		bc__lin_propagate(l, s);
+		changed = !same_bits(r0, l->roi[2 * s]) ||
+		          !same_bits(r1, l->roi[2 * s + 1]) ||
+		          (kills & ~AGAIN) != l->kills[s] ||
+		          uc != l->ucount[s] || dom != l->dom[s];
+		if (!bc_lin_is_leaf(l, s)) {
+			if (changed) {
+				again(l, s - 1);
+				again(l, l->first[s - 1] - 1);
+			}
+			continue;
+		}
+		if (fresh || !same_bits(r1, l->roi[2 * s + 1])) {
+			uint32_t k = l->prim_of[s];
+			uint32_t n = bc__map_find(&t->ids, l->node_id[s]);
+			if (!fresh && touches_box(l, k)) {
+				touch = true;
+			}
+			bc__lin_place_abv(t, l, k, &t->pool[n].u.prim);
+		}
+	}
+	return touch;
+}
+
+void bc__splice_finish(struct bc_tree *t, bool touch)
+{
+	struct bc_lin *l = &t->lin;
+	if (touch) {
+		/* The box as the full layout measures it: every ABV in
+		 * order. */
+		for (int i = 0; i < 3; i++) {
+			l->lo[i] = INFINITY;
+			l->hi[i] = -INFINITY;
+		}
+		for (uint32_t k = 0; k < l->nprims; k++) {
+			float lo[3], hi[3];
+			bc_abv_aabb(&l->abv[k], lo, hi);
+			for (int i = 0; i < 3; i++) {
+				l->lo[i] = fminf(l->lo[i], lo[i]);
+				l->hi[i] = fmaxf(l->hi[i], hi[i]);
+			}
+		}
+	}
+	bc__lin_update_size(l);
+	l->stack = t->pool[t->root].need;
+	l->lip = 1.0f;
+	t->dirty.structure = true;
+	t->dirty.edits++;
+}
+
+/* Gives slot s the parent and side of a node word w whose ancestor is now
+ * slot a (BC_WORD_NO_ANCESTOR: s becomes the root). */
+static void adopt(struct bc_lin *l, uint32_t s, uint32_t w, uint32_t a)
+{
+	l->node[2 * s] &= ~(BC_WORD_LEFT | BC_WORD_ANCESTOR_MASK);
+	l->node[2 * s] |= (w & BC_WORD_LEFT) | a;
+}
+
+/* The rightmost leaf of the subtree at pool node n (last in pre-order:
+ * its record ends the subtree's records). */
+static uint32_t last_leaf(const struct bc_tree *t, uint32_t n)
+{
+	while (t->pool[n].is_op) {
+		n = t->pool[n].last_child;
+	}
+	return n;
+}
+
+/* ---- insert ------------------------------------------------------------- */
+
+/*
+ * Pool node m (px primitives, ox operators, no unary nodes) was linked as
+ * a child of operator P. Its slots come in as a block with one new fold
+ * f = (left op m): after the fold of the child before it, or, for the
+ * first child, before the old first child c0, whose fold (m op c0) comes
+ * after c0. The operands left of the edit point (the subtree of f) are
+ * linked again; nothing right of it or above P changes but its indices.
+ * Returns whether an ABV that touched the box changed (the first child
+ * changes sides).
+ */
+bool bc__splice_insert(struct bc_tree *t, uint32_t m, uint32_t px, uint32_t ox)
+{
+	struct bc_lin *l = &t->lin;
+	uint32_t p = t->pool[m].parent, prev = t->pool[m].prev;
+	uint32_t next = t->pool[m].next;
+	uint32_t sx = 2 * px - 1,
+	         rx = BC_PRIM_RECORD_VEC4 * px + BC_OP_RECORD_VEC4 * ox;
+	struct bc__fill fs = {.l = l};
+	uint32_t f, lo, block;
+	if (prev != BC_NONE) {
+		uint32_t last = last_leaf(t, prev);
+		uint32_t s0 = bc__slot(t, &t->pool[prev]) + 1 +
+		              (t->pool[prev].prev != BC_NONE ? 1u : 0u);
+		uint32_t old_top = bc__slot(t, &t->pool[p]);
+		uint32_t w = l->node[2 * old_top];
+		struct splice sp = {
+		    .s = {s0, 0, sx + 1},
+		    .p = {bc__param(t, &t->pool[last]) + BC_PRIM_RECORD_VEC4, 0,
+		          rx},
+		    .k = {bc__prim(t, &t->pool[last]) + 1, 0, px}};
+		apply(t, &sp);
+		fs.slot = s0;
+		fs.prim = sp.k.at;
+		fs.param = sp.p.at;
+		bc__lin_emit(t, &fs, m);
+		f = s0 + sx;
+		bc__refresh(t, &t->pool[p]);
+		bc__lin_fold(l, &t->pool[p], s0 - 1, f - 1, f);
+		again(l, s0 - 1);
+		if (next == BC_NONE) {
+			/* f is P's new top, where the old one was. */
+			uint32_t a = w & BC_WORD_ANCESTOR_MASK;
+			adopt(l, f, w,
+			      a == BC_WORD_NO_ANCESTOR
+			          ? a
+			          : bc__span_map(&sp.s, a));
+			bc__refresh(t, &t->pool[p]);
+			t->pool[p].slot = f;
+		} else {
+			bc__lin_set_parent(
+			    l, f, bc__slot(t, &t->pool[next]) + 1, true);
+		}
+		lo = l->first[s0 - 1];
+		block = s0;
+	} else {
+		uint32_t c0 = next, c0top = bc__slot(t, &t->pool[c0]);
+		uint32_t first = l->first[c0top];
+		struct splice fold = {.s = {c0top + 1, 0, 1}};
+		struct splice sp = {
+		    .s = {first, 0, sx},
+		    .p = {bc__param(t, &t->pool[p]) + BC_OP_RECORD_VEC4, 0, rx},
+		    .k = {l->prim_of[first], 0, px},
+		    .keep_first = true};
+		apply(t, &fold);
+		apply(t, &sp);
+		fs.slot = first;
+		fs.prim = sp.k.at;
+		fs.param = sp.p.at;
+		bc__lin_emit(t, &fs, m);
+		c0top = bc__slot(t, &t->pool[c0]);
+		bc__refresh(t, &t->pool[p]);
+		f = c0top + 1;
+		refirst(l, first + sx, c0top);
+		bc__lin_fold(l, &t->pool[p], first + sx - 1, c0top, f);
+		again(l, c0top);
+		bc__lin_set_parent(
+		    l, f, bc__slot(t, &t->pool[t->pool[c0].next]) + 1, true);
+		lo = first;
+		block = first;
+	}
+	return relink(t, lo, f, block, block + sx);
+}
+
+/* ---- remove -------------------------------------------------------------- */
+
+/*
+ * Takes pool node c's slots, records and primitives out of the layout
+ * before the model drops it (tree.c cuts it next), with the fold that
+ * joined it -- or, when its parent P had two children, P's only fold and
+ * record, the other child taking P's place. The operands that were left
+ * of c in P's fold (or the child that stays) are linked again. Returns
+ * whether an ABV that touched the box went or changed.
+ */
+/* ---- replace ------------------------------------------------------------ */
+
+void bc__splice_note(struct bc_tree *t, uint32_t c, struct bc__block *b)
+{
+	struct bc_lin *l = &t->lin;
+	b->top = bc__slot(t, &t->pool[c]);
+	b->first = l->first[b->top];
+	b->word = l->node[2 * b->top];
+	b->param = bc__param(t, &t->pool[c]);
+	b->pend = bc__param(t, &t->pool[last_leaf(t, c)]) + BC_PRIM_RECORD_VEC4;
+	b->k = l->prim_of[b->first];
+	b->nprims = (b->top - b->first) / 2 + 1;
+	b->touch = false;
+	for (uint32_t k = b->k; k < b->k + b->nprims && !b->touch; k++) {
+		b->touch = touches_box(l, k);
+	}
+}
+
+bool bc__splice_replace(struct bc_tree *t, const struct bc__block *b,
+                        uint32_t m, uint32_t px, uint32_t ox)
+{
+	struct bc_lin *l = &t->lin;
+	uint32_t sx = 2 * px - 1, a = b->word & BC_WORD_ANCESTOR_MASK;
+	struct bc__fill fs = {
+	    .l = l, .slot = b->first, .prim = b->k, .param = b->param};
+	struct splice sp = {
+	    .s = {b->first, b->top - b->first + 1, sx},
+	    .p = {b->param, b->pend - b->param,
+	          BC_PRIM_RECORD_VEC4 * px + BC_OP_RECORD_VEC4 * ox},
+	    .k = {b->k, b->nprims, px}};
+	apply(t, &sp);
+	bc__lin_emit(t, &fs, m);
+	adopt(l, b->first + sx - 1, b->word,
+	      a == BC_WORD_NO_ANCESTOR ? a : bc__span_map(&sp.s, a));
+	return relink(t, b->first, b->first + sx - 1, b->first,
+	              b->first + sx) ||
+	       b->touch;
+}
+
+bool bc__splice_remove(struct bc_tree *t, uint32_t c)
+{
+	struct bc_lin *l = &t->lin;
+	uint32_t p = t->pool[c].parent, nkids = t->pool[p].nchildren;
+	uint32_t prev = t->pool[c].prev, next = t->pool[c].next;
+	struct bc__block b;
+	uint32_t ctop, cf, cparam, px, klo, pend, ptop, w, a, top;
+	struct splice one = {0}, two = {0};
+	bool touch;
+	bc__splice_note(t, c, &b);
+	ctop = b.top;
+	cf = b.first;
+	cparam = b.param;
+	px = b.nprims;
+	klo = b.k;
+	pend = b.pend;
+	touch = b.touch;
+	ptop = bc__slot(t, &t->pool[p]);
+	w = l->node[2 * ptop];
+	a = w & BC_WORD_ANCESTOR_MASK;
+	if (nkids >= 3 && prev != BC_NONE) {
+		/* c's block and its fold go; the fold below takes over. */
+		one = (struct splice){.s = {cf, ctop - cf + 2, 0},
+		                      .p = {cparam, pend - cparam, 0},
+		                      .k = {klo, px, 0}};
+		apply(t, &one);
+		top = cf - 1;
+		if (next != BC_NONE) {
+			bc__lin_set_parent(
+			    l, top, bc__slot(t, &t->pool[next]) + 1, true);
+		} else {
+			adopt(l, top, w,
+			      a == BC_WORD_NO_ANCESTOR
+			          ? a
+			          : bc__span_map(&one.s, a));
+			bc__refresh(t, &t->pool[p]);
+			t->pool[p].slot = top;
+		}
+	} else if (nkids >= 3) {
+		/* The first child and the fold (c op c1) go: c1 is first. */
+		one = (struct splice){
+		    .s = {bc__slot(t, &t->pool[next]) + 1, 1, 0}};
+		two = (struct splice){.s = {cf, ctop - cf + 1, 0},
+		                      .p = {cparam, pend - cparam, 0},
+		                      .k = {klo, px, 0}};
+		apply(t, &one);
+		apply(t, &two);
+		top = bc__slot(t, &t->pool[next]);
+		bc__lin_set_parent(
+		    l, top, bc__slot(t, &t->pool[t->pool[next].next]) + 1,
+		    true);
+	} else {
+		/* P goes with c: its fold and record; the other child takes
+		 * P's place. */
+		uint32_t sib = prev != BC_NONE ? prev : next;
+		uint32_t rec = bc__param(t, &t->pool[p]);
+		if (prev != BC_NONE) {
+			one = (struct splice){.s = {cf, ctop - cf + 2, 0},
+			                      .p = {cparam, pend - cparam, 0},
+			                      .k = {klo, px, 0}};
+			two = (struct splice){.p = {rec, BC_OP_RECORD_VEC4, 0}};
+		} else {
+			one = (struct splice){.s = {ptop, 1, 0}};
+			two = (struct splice){.s = {cf, ctop - cf + 1, 0},
+			                      .p = {rec, pend - rec, 0},
+			                      .k = {klo, px, 0}};
+		}
+		apply(t, &one);
+		apply(t, &two);
+		top = bc__slot(t, &t->pool[sib]);
+		if (a != BC_WORD_NO_ANCESTOR) {
+			a = bc__span_map(&two.s, bc__span_map(&one.s, a));
+		}
+		adopt(l, top, w, a);
+	}
+	return relink(t, l->first[top], top, 0, 0) || touch;
+}

@@ -1,0 +1,533 @@
+/*
+ * Structural edits splice the layout in place (blobtree/splice.c): after
+ * every one of a long random run of INSERTs, REMOVEs and REPLACEs the
+ * layout equals, bit for bit, a full layout of the same tree; the model's
+ * slots and records stay right for the parameter edits that follow; and a
+ * structural batch refused part way (applied in place, edit/batch.c)
+ * leaves the tree exactly as it was.
+ */
+#include <stdbool.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "blobcast/alloc.h"
+#include "blobcast/blobtree.h"
+#include "blobcast/edit.h"
+#include "blobcast/scene.h"
+#include "test.h"
+
+#include "randtree.h"
+
+static bool same(const void *a, const void *b, size_t bytes)
+{
+	return bytes == 0 || memcmp(a, b, bytes) == 0;
+}
+
+/* Where a's layout differs from b's, or NULL: every array, bit for bit,
+ * every scalar, and the slot each node id maps to. */
+static const char *lin_differs(const struct bc_tree *ta,
+                               const struct bc_tree *tb)
+{
+	const struct bc_lin *a = bc_tree_lin(ta), *b = bc_tree_lin(tb);
+	size_t n, k, u;
+	if (!a || !b) {
+		return a == b ? NULL : "one layout is missing";
+	}
+	if (a->count != b->count || a->nprims != b->nprims ||
+	    a->nparam != b->nparam || a->nunary != b->nunary) {
+		return "counts";
+	}
+	n = a->count;
+	k = a->nprims;
+	u = a->nunary;
+	if (a->stack != b->stack || a->nesting != b->nesting) {
+		return "stack or nesting";
+	}
+	if (!same(a->lo, b->lo, sizeof(a->lo)) ||
+	    !same(a->hi, b->hi, sizeof(a->hi)) ||
+	    !same(&a->size, &b->size, sizeof(a->size)) ||
+	    !same(&a->lip, &b->lip, sizeof(a->lip))) {
+		return "box or Lipschitz bound";
+	}
+	if (!same(a->node, b->node, 2 * n * sizeof(uint32_t))) {
+		return "node words";
+	}
+	if (!same(a->first, b->first, n * 4) ||
+	    !same(a->fast, b->fast, n * 4) || !same(a->jump, b->jump, n * 4) ||
+	    !same(a->kills, b->kills, n * 4) ||
+	    !same(a->depth, b->depth, n * 4)) {
+		return "first, fast, jump, kills or depth";
+	}
+	if (!same(a->node_id, b->node_id, n * 4) ||
+	    !same(a->prim_of, b->prim_of, n * 4) ||
+	    !same(a->roi, b->roi, 2 * n * sizeof(float))) {
+		return "ids, primitive indices or ROIs";
+	}
+	if (!same(a->wrap, b->wrap, n * 4) ||
+	    !same(a->wrap_top, b->wrap_top, n * 4) ||
+	    !same(a->dom, b->dom, n * 4) ||
+	    !same(a->ucount, b->ucount, n * 4)) {
+		return "wrappers";
+	}
+	if (!same(a->prim_slot, b->prim_slot, k * 4) ||
+	    !same(a->abv, b->abv, k * sizeof(*a->abv)) ||
+	    !same(a->color, b->color, k * sizeof(*a->color))) {
+		return "primitive slots, ABVs or colours";
+	}
+	if (!same(a->param, b->param, 4 * (size_t)a->nparam * sizeof(float))) {
+		return "parameter records";
+	}
+	if (!same(a->unary_slot, b->unary_slot, u * 4) ||
+	    !same(a->unary_param, b->unary_param, u * 4) ||
+	    !same(a->unary_dom, b->unary_dom, u * 4)) {
+		return "unary nodes";
+	}
+	for (size_t s = 0; s < n; s++) {
+		uint32_t id = a->node_id[s], p = bc_tree_parent(ta, id);
+		if (bc_tree_slot(ta, id) != bc_tree_slot(tb, id)) {
+			return "a node's slot";
+		}
+		if (p &&
+		    bc_tree_child(ta, p, bc_tree_child_index(ta, id)) != id) {
+			return "a node's position among its siblings";
+		}
+	}
+	return NULL;
+}
+
+/* Whether bc_tree_counts agrees with a walk over t's nodes. */
+static bool counts_agree(const struct bc_tree *t)
+{
+	struct bc_scene_walk w;
+	struct bc_scene_node n;
+	uint32_t colored = 0, c;
+	uint64_t floats = 0, f;
+	if (bc_scene_walk_init(&w, t)) {
+		return false;
+	}
+	while (bc_scene_walk_next(&w, &n)) {
+		if (!n.is_op) {
+			colored += n.prim.has_color ? 1u : 0u;
+			floats += bc_scene_prim_nfloats(n.prim.kind);
+		}
+	}
+	bc_scene_walk_finish(&w);
+	bc_tree_counts(t, &c, &f);
+	return c == colored && f == floats;
+}
+
+/* t's layout against a full layout of a copy of t. */
+static const char *differs_from_full(const struct bc_tree *t)
+{
+	struct bc_tree *full = bc_tree_create();
+	const char *why = "copy failed";
+	if (full && bc_tree_copy(full, t, NULL) == 0) {
+		why = lin_differs(t, full);
+	}
+	if (!why && !counts_agree(t)) {
+		why = "colour or float counts";
+	}
+	bc_tree_destroy(full);
+	return why;
+}
+
+/* A random node id of t (a slot's), the root's excluded when asked. */
+static uint32_t random_node(const struct bc_tree *t, bool not_root)
+{
+	const struct bc_lin *l = bc_tree_lin(t);
+	for (;;) {
+		uint32_t id = l->node_id[rt_below(l->count)];
+		if (!not_root || id != bc_tree_root(t)) {
+			return id;
+		}
+	}
+}
+
+/* A random binary operator of t, 0 when it has none. */
+static uint32_t random_operator(const struct bc_tree *t)
+{
+	for (int tries = 0; tries < 64; tries++) {
+		struct bc_op_data op;
+		uint32_t id = random_node(t, false);
+		if (bc_tree_get(t, id, NULL, &op) && op.kind != BC_OP_INVALID &&
+		    !bc_op_is_unary(op.kind)) {
+			return id;
+		}
+	}
+	return 0;
+}
+
+/* One random structural edit; the tree stays between 2 and 80 primitives.
+ * Returns 0 or the error a refused edit gave (a REPLACE of the root by a
+ * subtree whose need is too large, say). */
+static int random_edit(struct bc_tree *t, struct bc_tree *sub)
+{
+	uint32_t n = bc_tree_prim_count(t), pick = rt_below(10);
+	uint32_t id;
+	if (n > 80 || (n > 2 && pick < 4)) {
+		return bc_tree_remove(t, random_node(t, true), NULL);
+	}
+	if (rt_build(sub, rt_next(), (n == 1 ? 2 : 1) + rt_below(4))) {
+		return BC_ENOMEM;
+	}
+	if (n == 1) {
+		/* A lone primitive (a REPLACE of the root made it): a tree
+		 * again. */
+		return bc_tree_replace(t, bc_tree_root(t), sub, NULL);
+	}
+	if (pick == 9) {
+		return bc_tree_replace(t, random_node(t, true), sub, NULL);
+	}
+	if ((id = random_operator(t)) == 0) {
+		return bc_tree_replace(t, bc_tree_root(t), sub, NULL);
+	}
+	return bc_tree_insert(t, id, rt_below(bc_tree_child_count(t, id) + 1),
+	                      sub, NULL);
+}
+
+/* Rewrites a random primitive with its own data, its colour taken away or
+ * given at random: the record, colour and ABV land where the model says
+ * they are, which must be where they were. */
+static void rewrite_a_primitive(struct bc_tree *t)
+{
+	const struct bc_lin *l = bc_tree_lin(t);
+	uint32_t id = l->node_id[l->prim_slot[rt_below(l->nprims)]];
+	struct bc_prim_data p;
+	if (bc_tree_get(t, id, &p, NULL)) {
+		p.has_color = rt_below(2) != 0;
+		bc_tree_set_prim(t, id, &p, NULL);
+	}
+}
+
+static void run_edits(uint64_t seed, float unary_rate, int edits, int every)
+{
+	struct bc_tree *t = bc_tree_create(), *sub = bc_tree_create();
+	int refused = 0, checked = 0;
+	rt_unary_rate = 0.0f;
+	REQUIRE(t && sub && rt_build(t, seed, 24) == 0);
+	rt_unary_rate = unary_rate;
+	for (int e = 0; e < edits; e++) {
+		const char *why;
+		if (random_edit(t, sub)) {
+			refused++;
+		}
+		if (rt_below(8) == 0) {
+			rewrite_a_primitive(t);
+		}
+		if (e % every != 0 && e + 1 != edits) {
+			continue;
+		}
+		checked++;
+		if ((why = differs_from_full(t)) != NULL) {
+			fprintf(stderr, "  seed %llu edit %d: %s\n",
+			        (unsigned long long)seed, e, why);
+			CHECK(why == NULL);
+			break;
+		}
+	}
+	/* Refusals are rare (a REPLACE may nest too deep): the run edits. */
+	CHECK(refused < edits / 10);
+	CHECK(checked > 0);
+	rt_unary_rate = 0.0f;
+	bc_tree_destroy(sub);
+	bc_tree_destroy(t);
+}
+
+/* 10 000 random edits of trees without unary nodes (all spliced), each
+ * compared with a full layout. */
+static void random_edits_equal_a_full_layout(void)
+{
+	for (uint64_t seed = 1; seed <= 4; seed++) {
+		run_edits(seed, 0.0f, 2500, 1);
+	}
+}
+
+/* With unary nodes the layout is built whole; edits in and out of that
+ * case (a unary subtree inserted, then removed) stay exact. */
+static void unary_subtrees_come_and_go(void)
+{
+	run_edits(77, 0.15f, 1500, 3);
+}
+
+/* Wide operators (what big scenes are): the first child, the last and one
+ * in the middle, inserted and removed, two-child operators collapsing. */
+static void wide_operator_ends(void)
+{
+	struct bc_tree *t = bc_tree_create(), *one = bc_tree_create();
+	struct bc_op_data u = {BC_OP_SMOOTH_UNION, 0.2f, 0.3f};
+	struct bc_op_data d = {BC_OP_DIFFERENCE, 0.0f, 0.0f};
+	struct bc_prim_data s;
+	const char *why;
+	rt_state = 5;
+	bc_tree_begin(t);
+	bc_tree_push_op(t, 1, &d, NULL);
+	bc_tree_push_op(t, 2, &u, NULL);
+	for (uint32_t i = 0; i < 40; i++) {
+		rt_random_prim(&s);
+		bc_tree_put_prim(t, 10 + i, &s, NULL);
+	}
+	bc_tree_pop_op(t, NULL);
+	rt_random_prim(&s);
+	bc_tree_put_prim(t, 3, &s, NULL);
+	bc_tree_pop_op(t, NULL);
+	REQUIRE(bc_tree_end(t, NULL) == 0);
+	for (int round = 0; round < 30; round++) {
+		uint32_t n = bc_tree_child_count(t, 2);
+		uint32_t at[3] = {0, n, n / 2};
+		for (int i = 0; i < 3; i++) {
+			rt_random_prim(&s);
+			bc_tree_begin(one);
+			bc_tree_put_prim(
+			    one, 1000u + 3u * (uint32_t)round + (uint32_t)i, &s,
+			    NULL);
+			REQUIRE(bc_tree_end(one, NULL) == 0);
+			REQUIRE(bc_tree_insert(t, 2, at[i], one, NULL) == 0);
+			REQUIRE((why = differs_from_full(t)) == NULL);
+		}
+		for (int i = 0; i < 3; i++) {
+			/* The first, then the last, then one in the middle,
+			 * then (as the union thins) its other children. */
+			uint32_t c = bc_tree_child_count(t, 2);
+			uint32_t kill = i == 0   ? bc_tree_child(t, 2, 0)
+			                : i == 1 ? bc_tree_child(t, 2, c - 1)
+			                         : bc_tree_child(t, 2, c / 2);
+			REQUIRE(bc_tree_remove(t, kill, NULL) == 0);
+			REQUIRE((why = differs_from_full(t)) == NULL);
+		}
+		REQUIRE(bc_tree_remove(t, bc_tree_child(t, 2, 1), NULL) == 0);
+		if (bc_tree_child_count(t, 2) < 2) {
+			break;
+		}
+		REQUIRE((why = differs_from_full(t)) == NULL);
+	}
+	/* Down to two children, then one: the union collapses into the
+	 * difference's left operand. */
+	while (bc_tree_get(t, 2, NULL, NULL)) {
+		REQUIRE(bc_tree_remove(t, bc_tree_child(t, 2, 0), NULL) == 0);
+		REQUIRE((why = differs_from_full(t)) == NULL);
+	}
+	REQUIRE(bc_tree_remove(t, 3, NULL) == 0);
+	CHECK(differs_from_full(t) == NULL);
+	CHECK_EQ_INT(bc_tree_prim_count(t), 1);
+	bc_tree_destroy(one);
+	bc_tree_destroy(t);
+}
+
+/* ---- batches refused part way ------------------------------------------ */
+
+static uint32_t next_id = 100000;
+
+/* Scene bytes of a random subtree of 1..3 primitives with new ids. */
+static int subtree_bytes(uint8_t **out, size_t *len)
+{
+	struct bc_tree *sub = bc_tree_create();
+	struct bc_prim_data p;
+	struct bc_op_data op;
+	uint32_t n = 1 + rt_below(3);
+	int rc;
+	bc_tree_begin(sub);
+	if (n > 1) {
+		rt_random_op(&op);
+		bc_tree_push_op(sub, next_id++, &op, NULL);
+	}
+	for (uint32_t i = 0; i < n; i++) {
+		rt_random_prim(&p);
+		bc_tree_put_prim(sub, next_id++, &p, NULL);
+	}
+	if (n > 1) {
+		bc_tree_pop_op(sub, NULL);
+	}
+	rc = bc_tree_end(sub, NULL);
+	if (!rc) {
+		rc = bc_scene_encode(sub, NULL, out, len);
+	}
+	bc_tree_destroy(sub);
+	return rc;
+}
+
+static bool same_tree(const struct bc_tree *a, const struct bc_tree *b)
+{
+	uint8_t *x = NULL, *y = NULL;
+	size_t nx = 0, ny = 0;
+	bool ok = bc_tree_encode(a, &x, &nx) == 0 &&
+	          bc_tree_encode(b, &y, &ny) == 0 && nx == ny &&
+	          memcmp(x, y, nx) == 0 && lin_differs(a, b) == NULL;
+	bc_free(x);
+	bc_free(y);
+	return ok;
+}
+
+/* A random structural operation of t; its subtree bytes (if any) into
+ * *owned. */
+static struct bc_proto_edit_op random_op(const struct bc_tree *t,
+                                         uint8_t **owned)
+{
+	struct bc_proto_edit_op e = {0};
+	size_t len = 0;
+	uint32_t pick = rt_below(4), parent;
+	*owned = NULL;
+	if (pick == 0 && bc_tree_prim_count(t) > 3) {
+		e.kind = BC_PROTO_EDIT_REMOVE;
+		e.node = random_node(t, true);
+		return e;
+	}
+	if (subtree_bytes(owned, &len)) {
+		return e;
+	}
+	e.subtree.ptr = *owned;
+	e.subtree.len = (uint32_t)len;
+	if (pick == 1) {
+		e.kind = BC_PROTO_EDIT_REPLACE;
+		e.node = random_node(t, true);
+		return e;
+	}
+	parent = random_operator(t);
+	e.kind = BC_PROTO_EDIT_INSERT;
+	e.node = parent ? parent : bc_tree_root(t);
+	e.position = rt_below(bc_tree_child_count(t, e.node) + 1);
+	return e;
+}
+
+/* Batches of a few structural operations whose last is refused leave the
+ * tree as a copy made before them says, model and layout; batches that
+ * apply and are undone too. */
+static void refused_batches_leave_the_tree_as_it_was(void)
+{
+	struct bc_tree *t = bc_tree_create(), *before = bc_tree_create();
+	struct bc_errinfo ei = {0};
+	int refused = 0, undone = 0;
+	REQUIRE(rt_build(t, 99, 30) == 0);
+	for (int round = 0; round < 300; round++) {
+		struct bc_proto_edit_op ops[6];
+		uint8_t *owned[6] = {0};
+		struct bc_edit_batch b;
+		uint32_t n = 2 + rt_below(5), planned;
+		bool fail = rt_below(3) != 0;
+		int rc;
+		REQUIRE(bc_tree_copy(before, t, NULL) == 0);
+		planned = n;
+		/* Each operation is drawn against the tree as it will be,
+		 * so that the earlier ones apply. */
+		for (uint32_t i = 0; i < n; i++) {
+			struct bc_edit_batch one;
+			ops[i] = random_op(t, &owned[i]);
+			if (i + 1 == n && fail) {
+				/* Under a primitive, or an unknown node. */
+				ops[i].kind = owned[i] ? BC_PROTO_EDIT_INSERT
+				                       : BC_PROTO_EDIT_REMOVE;
+				ops[i].node =
+				    owned[i]
+				        ? bc_tree_lin(t)->node_id
+				              [bc_tree_lin(t)->prim_slot[0]]
+				        : 0x7fffffffu;
+				ops[i].position = 0;
+				break;
+			}
+			if (bc_edit_batch_apply(&one, &t, &ops[i], 1, &ei)) {
+				n = i;
+			}
+			bc_edit_batch_finish(&one);
+		}
+		/* An operation drawn that did not apply ends the batch
+		 * early: then it applies whole. */
+		fail = fail && n == planned;
+		/* Back to the start, through the copy. */
+		REQUIRE(bc_tree_copy(t, before, NULL) == 0);
+		rc = n ? bc_edit_batch_apply(&b, &t, ops, n, &ei) : 0;
+		if (fail && n) {
+			CHECK(rc != 0);
+			CHECK(same_tree(t, before));
+			refused++;
+		} else if (n) {
+			CHECK_EQ_INT(rc, 0);
+			CHECK(differs_from_full(t) == NULL);
+			bc_edit_batch_undo(&b, &t);
+			CHECK(same_tree(t, before));
+			undone++;
+			/* And forward again, to move on. */
+			CHECK_EQ_INT(bc_edit_batch_apply(&b, &t, ops, n, &ei),
+			             0);
+			bc_edit_batch_finish(&b);
+		}
+		for (uint32_t i = 0; i < 6; i++) {
+			bc_free(owned[i]);
+		}
+		if (bc_test_failures) {
+			break;
+		}
+	}
+	CHECK(refused > 50 && undone > 30);
+	bc_tree_destroy(before);
+	bc_tree_destroy(t);
+}
+
+/* Out of memory at every allocation in turn: a refused INSERT or REPLACE
+ * (the arrays must grow first) leaves the tree as it was; so does a batch
+ * of INSERTs refused part way, put back by REMOVEs, which take no memory. */
+static void allocation_failures_leave_the_tree_as_it_was(void)
+{
+	struct bc_tree *t = bc_tree_create(), *sub = bc_tree_create();
+	struct bc_tree *before = bc_tree_create();
+	struct bc_proto_edit_op ops[3];
+	uint8_t *owned[3] = {0};
+	struct bc_errinfo ei = {0};
+	int failed = 0, rc = 1;
+	REQUIRE(rt_build(t, 5, 40) == 0 && rt_build(sub, 6, 3) == 0);
+	REQUIRE(bc_tree_copy(before, t, NULL) == 0);
+	for (unsigned long n = 1; rc && n < 1000; n++) {
+		uint32_t op = bc_tree_root(t), id = random_node(t, true);
+		bc_alloc_fail_after(n);
+		rc = n % 2 ? bc_tree_insert(t, op, 1, sub, NULL)
+		           : bc_tree_replace(t, id, sub, NULL);
+		bc_alloc_fail_after(0);
+		if (rc) {
+			failed++;
+			CHECK(same_tree(t, before));
+		}
+	}
+	CHECK(failed > 2 && rc == 0);
+	CHECK(differs_from_full(t) == NULL);
+	REQUIRE(bc_tree_copy(before, t, NULL) == 0);
+	for (int i = 0; i < 3; i++) {
+		size_t len = 0;
+		REQUIRE(subtree_bytes(&owned[i], &len) == 0);
+		ops[i] = (struct bc_proto_edit_op){
+		    .kind = BC_PROTO_EDIT_INSERT,
+		    .node = bc_tree_root(t),
+		    .position = (uint32_t)i,
+		    .subtree = {owned[i], (uint32_t)len}};
+	}
+	failed = 0;
+	rc = 1;
+	for (unsigned long n = 1; rc && n < 1000; n++) {
+		struct bc_edit_batch b;
+		bc_alloc_fail_after(n);
+		rc = bc_edit_batch_apply(&b, &t, ops, 3, &ei);
+		bc_alloc_fail_after(0);
+		if (rc) {
+			failed++;
+			CHECK(same_tree(t, before));
+		} else {
+			bc_edit_batch_undo(&b, &t);
+			CHECK(same_tree(t, before));
+		}
+	}
+	CHECK(failed > 2 && rc == 0);
+	for (int i = 0; i < 3; i++) {
+		bc_free(owned[i]);
+	}
+	bc_tree_destroy(before);
+	bc_tree_destroy(sub);
+	bc_tree_destroy(t);
+}
+
+static const struct bc_test tests[] = {
+    {"random_edits_equal_a_full_layout", random_edits_equal_a_full_layout},
+    {"unary_subtrees_come_and_go", unary_subtrees_come_and_go},
+    {"wide_operator_ends", wide_operator_ends},
+    {"refused_batches_leave_the_tree_as_it_was",
+     refused_batches_leave_the_tree_as_it_was},
+    {"allocation_failures_leave_the_tree_as_it_was",
+     allocation_failures_leave_the_tree_as_it_was},
+};
+BC_TEST_MAIN(tests)
