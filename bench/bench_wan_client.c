@@ -6,8 +6,8 @@
  * sent to the first frame that shows it or a later camera, once the
  * client has decoded it), bytes per frame, the time to decode, how long
  * the still takes once the motion stops, and the PSNR of decoded frames
- * (a few moving ones, and the still) against raw snapshots of the same
- * cameras, asked for after the orbit. JPEG frames decode through
+ * (a few moving ones, and the still) against PNG (lossless) snapshots of the
+ * same cameras, asked for after the orbit. JPEG frames decode through
  * libblobcast, H.264 ones through libavcodec. One JSON line.
  *
  * usage: bench_wan_client ADDR SESSION WxH SECONDS RATE_HZ [QUALITY
@@ -299,20 +299,20 @@ int main(int argc, char **argv)
 			}
 		}
 	}
-	/* The pictures against raw snapshots of their cameras: the still
-	 * first (the camera is where the orbit stopped), then the moving
+	/* The pictures against PNG (lossless) snapshots of their cameras: the
+	 * still first (the camera is where the orbit stopped), then the moving
 	 * frames kept. */
 	{
 		struct bc_client_image raw;
 		bc_client_image_init(&raw);
 		if (still_ms >= 0.0 &&
-		    bc_client_snapshot(c, BC_PROTO_ENC_RAW, &raw, &ei) == 0) {
+		    bc_client_snapshot(c, BC_PROTO_ENC_PNG, &raw, &ei) == 0) {
 			psnr_still = psnr(raw.rgba, dec.px, w, h);
 		}
 		for (uint32_t k = 0; k < nsamples; k++) {
 			if (bc_client_camera(c, &samples[k].cam, false, &seq,
 			                     &ei) ||
-			    bc_client_snapshot(c, BC_PROTO_ENC_RAW, &raw,
+			    bc_client_snapshot(c, BC_PROTO_ENC_PNG, &raw,
 			                       &ei)) {
 				die("snapshot", &ei);
 			}

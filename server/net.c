@@ -291,6 +291,13 @@ static bool link_full(struct bc_conn *c, size_t len)
 static void pace_tick(uv_timer_t *t)
 {
 	struct bc_conn *c = t->data;
+	size_t backlog = c->is_tcp ? kernel_backlog(c) : 0;
+	/* Bytes leaving the kernel are progress: the stall clock restarts
+	 * (a frame of megabytes drains slowly through a slow link). */
+	if (backlog < c->paced_backlog) {
+		c->frame_started_ms = now_ms(c->net);
+	}
+	c->paced_backlog = backlog;
 	if (c->closing || link_full(c, c->paced_len)) {
 		return;
 	}
@@ -309,6 +316,7 @@ static bool pace(struct bc_conn *c, size_t len)
 	}
 	c->pacing = true;
 	c->paced_len = len;
+	c->paced_backlog = SIZE_MAX;
 	/* Counted as the link's doing (the sessions layer then codes
 	 * coarser, smaller frames) when bytes queue: in the socket, or,
 	 * behind a proxy, as acknowledgements that come late. A window
@@ -445,6 +453,12 @@ static void write_done(uv_write_t *req, int status)
 	bc_free(w->cipher);
 	w->cipher = NULL;
 	if (status == 0 && !c->closing) {
+		/* The stall clock runs from the last piece the kernel took:
+		 * a snapshot of megabytes on a slow link moves, a client
+		 * that stopped reading does not. */
+		if (c->frame_writing) {
+			c->frame_started_ms = now_ms(c->net);
+		}
 		w->done += w->piece;
 		if (w->done < w->len) {
 			pump(c);

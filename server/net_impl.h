@@ -86,7 +86,7 @@ struct bc_conn {
 	bool shutdown_due; /* draining: shut down once the queue is empty */
 	size_t queued, frame_bytes;
 	bool frame_writing;
-	uint64_t frame_started_ms;
+	uint64_t frame_started_ms; /* or when the kernel last took a piece */
 	struct bc_shared *frame_next;
 	uint32_t frame_next_camera_seq;
 	/* SNAPSHOT answers waiting for the frame being written: never
@@ -101,7 +101,7 @@ struct bc_conn {
 	uint64_t frames_spoiled;
 	/* A frame waits for the link (pace): the frame written last. */
 	bool pacing;
-	size_t paced_len;
+	size_t paced_len, paced_backlog;
 	struct bc_acks acks; /* FRAME_ACK (acks.c) */
 };
 
