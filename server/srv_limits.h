@@ -129,9 +129,11 @@
  * members are dropped instead of staying at its peak. */
 #define BC_SRV_TRIM_AFTER_BYTES (4u * 1024u * 1024u)
 
-/* A client whose FRAME has been in the kernel's hands this long without
- * being taken has stopped reading: it is dropped (with the reason in the
- * log) instead of holding a frame and a render slot forever. */
+/* A client whose FRAME has made no progress this long (no piece taken by
+ * the kernel and, while it waits for the link, no byte leaving the
+ * socket) has stopped reading: it is dropped (with the reason in the log)
+ * instead of holding a frame and a render slot forever. A large snapshot
+ * draining through a slow link keeps moving and is not dropped. */
 #define BC_SRV_STALL_MS 10000u
 
 /* Idle time after the last change before the still (full quality) frame is
