@@ -125,7 +125,7 @@ static void video_rate(struct bc_session *s, struct bc_member *m)
 	const struct bc_link *l = s->ss->link;
 	struct bc_proto_link li;
 	uint32_t def =
-	    bc_video_default_bitrate(m->view.width, m->view.height, 0);
+	    bc_vstream_default_bitrate(m->view.width, m->view.height);
 	l->link_info(l->ud, m->peer->ref, &li);
 	if (li.rtt_us < BC_SRV_LINK_MIN_RTT_US) {
 		m->video_paced_seen = li.frames_paced;
@@ -593,7 +593,7 @@ static bool video_view_ok(struct bc_member *m, const struct bc_msg *msg)
 {
 	const struct bc_msg_view *v = &msg->view;
 	uint32_t mbs = ((v->width + 15u) / 16u) * ((v->height + 15u) / 16u);
-	if (!bc_video_encoder_available(m->ss->video.backend)) {
+	if (!bc_vstream_can_encode(m->ss->video.backend)) {
 		bc__send_error(m, msg->seq, BC_ENOTSUP,
 		               "this server has no H.264 encoder; ask for "
 		               "JPEG, PNG or raw");

@@ -31,6 +31,7 @@
 #include "srv_limits.h"
 #include "store.h"
 #include "transport.h"
+#include "vstream.h"
 #include "work.h"
 
 /* auto and cpu: on hosts without a GPU the CPU tile tracer beats llvmpipe
@@ -828,6 +829,15 @@ int main(int argc, char **argv)
 	bc_net_announce(dm.net);
 	fprintf(stderr, "blobcastd: backend %s, data in %s\n",
 	        bc_backend_name(dm.cfg.backend), dm.cfg.data_dir);
+	/* The H.264 encoder's module, opened now so that no VIEW waits for
+	 * FFmpeg's libraries to load; without it, encoding 4 is refused. */
+	{
+		struct bc_errinfo vei = {0};
+		if (bc_vstream_load(&vei)) {
+			bc_log(BC_LOG_WARN,
+			       "%s; views of encoding 4 are refused", vei.msg);
+		}
+	}
 	/* Sessions restored and listeners up: clients may come. */
 	notify_systemd("READY=1");
 	uv_run(dm.loop, UV_RUN_DEFAULT);

@@ -4,12 +4,98 @@
  */
 #include "vstream.h"
 
+#include <dlfcn.h>
+#include <limits.h>
+#include <pthread.h>
 #include <stdatomic.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "blobcast/alloc.h"
 #include "blobcast/log.h"
+#include "h264_module.h"
+
+/* ---- the encoder module (h264_module.h), opened once ---------------------- */
+
+static pthread_once_t load_once = PTHREAD_ONCE_INIT;
+static const struct bc_srv_h264_ops *ops;
+static char load_why[640];
+
+/* Opens path and takes its table; true when it is this build's module. */
+static bool try_module(const char *path)
+{
+	void *handle, *sym;
+	bc_srv_h264_fn entry = NULL;
+	const struct bc_srv_h264_ops *o;
+	if (!path || access(path, R_OK) != 0) {
+		return false;
+	}
+	if (!(handle = dlopen(path, RTLD_NOW | RTLD_LOCAL))) {
+		const char *e = dlerror();
+		snprintf(load_why, sizeof(load_why), "%s", e ? e : path);
+		return false;
+	}
+	if ((sym = dlsym(handle, BC_SRV_H264_ENTRY))) {
+		memcpy(&entry, &sym, sizeof(entry));
+	}
+	o = entry ? entry() : NULL;
+	if (!o || o->abi != BC_SRV_H264_ABI) {
+		snprintf(load_why, sizeof(load_why),
+		         "%s is not this build's H.264 module", path);
+		dlclose(handle);
+		return false;
+	}
+	ops = o; /* never closed: encoders live until the daemon ends */
+	return true;
+}
+
+/* $BLOBCASTD_H264_MODULE; beside an installed blobcastd
+ * (BIN/../LIBDIR/blobcast/); where the build tree put it. */
+static void load(void)
+{
+	char exe[PATH_MAX], path[PATH_MAX + 128];
+	ssize_t n = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
+	snprintf(load_why, sizeof(load_why), "no %s found (set %s to its path)",
+	         BC_SRV_H264_FILE, BC_SRV_H264_ENV);
+	if (try_module(getenv(BC_SRV_H264_ENV))) {
+		return;
+	}
+	if (n > 0) {
+		char *slash;
+		exe[n] = '\0';
+		if ((slash = strrchr(exe, '/'))) {
+			*slash = '\0';
+			snprintf(path, sizeof(path), "%s/%s", exe,
+			         BC_SRV_H264_INSTALLED);
+			if (try_module(path)) {
+				return;
+			}
+		}
+	}
+	try_module(BC_SRV_H264_BUILT);
+}
+
+int bc_vstream_load(struct bc_errinfo *ei)
+{
+	pthread_once(&load_once, load);
+	return ops ? 0
+	           : bc_errinfo_set(ei, BC_ENOTSUP, "H.264 encoder: %s",
+	                            load_why);
+}
+
+bool bc_vstream_can_encode(enum bc_video_backend backend)
+{
+	return bc_vstream_load(NULL) == 0 && ops->available(backend);
+}
+
+uint32_t bc_vstream_default_bitrate(uint32_t width, uint32_t height)
+{
+	return bc_vstream_load(NULL) == 0
+	           ? ops->default_bitrate(width, height, 0)
+	           : 0u;
+}
 
 struct bc_vstream {
 	atomic_uint refs;
@@ -61,7 +147,9 @@ void bc_vstream_unref(struct bc_vstream *vs)
 	if (!vs || atomic_fetch_sub(&vs->refs, 1u) != 1u) {
 		return;
 	}
-	bc_video_encoder_destroy(vs->enc);
+	if (vs->enc) {
+		ops->destroy(vs->enc);
+	}
 	bc_free(vs->scaled);
 	bc_free(vs->rows);
 	bc_free(vs);
@@ -95,7 +183,7 @@ uint32_t bc_vstream_bitrate(const struct bc_vstream *vs)
 
 const char *bc_vstream_encoder_name(const struct bc_vstream *vs)
 {
-	return vs->enc ? bc_video_encoder_name(vs->enc) : "none";
+	return vs->enc ? ops->name(vs->enc) : "none";
 }
 
 /* The encoder for width x height at the asked bitrate, opened or reopened
@@ -104,16 +192,18 @@ static int ready(struct bc_vstream *vs, uint32_t width, uint32_t height,
                  struct bc_errinfo *ei)
 {
 	uint32_t bps = atomic_load(&vs->bitrate);
+	int rc;
+	if ((rc = bc_vstream_load(ei))) {
+		return rc;
+	}
 	if (vs->enc && (vs->width != width || vs->height != height)) {
-		bc_video_encoder_destroy(vs->enc);
+		ops->destroy(vs->enc);
 		vs->enc = NULL;
 	}
 	if (!vs->enc) {
 		struct bc_video_opts o = vs->opts;
-		int rc;
 		o.bitrate = bps;
-		if ((rc = bc_video_encoder_open(width, height, &o, &vs->enc,
-		                                ei))) {
+		if ((rc = ops->open(width, height, &o, &vs->enc, ei))) {
 			return rc;
 		}
 		vs->width = width;
@@ -122,7 +212,7 @@ static int ready(struct bc_vstream *vs, uint32_t width, uint32_t height,
 		return 0;
 	}
 	if (bps != 0 && bps != vs->applied &&
-	    bc_video_encoder_set_bitrate(vs->enc, bps, ei) == 0) {
+	    ops->set_bitrate(vs->enc, bps, ei) == 0) {
 		vs->applied = bps;
 	}
 	return 0;
@@ -219,8 +309,8 @@ int bc_vstream_encode(struct bc_vstream *vs, const uint8_t *rgba,
 		return bc_errinfo_set(ei, BC_ENOMEM,
 		                      "no memory for a scaled picture");
 	}
-	if ((rc = bc_video_encode(vs->enc, pix, (size_t)width * 4u, flags, &au,
-	                          ei))) {
+	if ((rc = ops->encode(vs->enc, pix, (size_t)width * 4u, flags, &au,
+	                      ei))) {
 		return rc;
 	}
 	if (!(out->data = bc_malloc(au.len ? au.len : 1u))) {

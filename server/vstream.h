@@ -25,6 +25,17 @@
 
 struct bc_vstream;
 
+/* Opens the encoder module (h264_module.h) once per process; blobcastd
+ * calls it at its start, so that no request pays for it. Returns 0, or
+ * BC_ENOTSUP with where it looked and what to do in ei (NULL allowed):
+ * encoding 4 is then refused. Thread-safe. */
+int bc_vstream_load(struct bc_errinfo *ei);
+/* Whether an H.264 view can be served: the module is there and has an
+ * encoder that backend tries. */
+bool bc_vstream_can_encode(enum bc_video_backend backend);
+/* The module's default bitrate of a width x height view (0 without it). */
+uint32_t bc_vstream_default_bitrate(uint32_t width, uint32_t height);
+
 /* A stream with one reference, encoding with opts (copied; the preset
  * string too); the encoder opens at the first frame, on a worker. NULL
  * when out of memory. */
