@@ -820,6 +820,16 @@ int main(int argc, char **argv)
 	dm.loop = uv_default_loop();
 	/* dispatch reports the loop's busy turns from its idle time. */
 	uv_loop_configure(dm.loop, UV_METRICS_IDLE_TIME);
+	/* The H.264 encoder's module, opened before anything listens: no
+	 * client waits for FFmpeg's libraries to load, and without the module
+	 * encoding 4 is refused. */
+	{
+		struct bc_errinfo vei = {0};
+		if (bc_vstream_load(&vei)) {
+			bc_log(BC_LOG_WARN,
+			       "%s; views of encoding 4 are refused", vei.msg);
+		}
+	}
 	if (start(&dm, &ei)) {
 		fprintf(stderr, "blobcastd: %s\n", ei.msg);
 		abandon(&dm);
@@ -829,15 +839,6 @@ int main(int argc, char **argv)
 	bc_net_announce(dm.net);
 	fprintf(stderr, "blobcastd: backend %s, data in %s\n",
 	        bc_backend_name(dm.cfg.backend), dm.cfg.data_dir);
-	/* The H.264 encoder's module, opened now so that no VIEW waits for
-	 * FFmpeg's libraries to load; without it, encoding 4 is refused. */
-	{
-		struct bc_errinfo vei = {0};
-		if (bc_vstream_load(&vei)) {
-			bc_log(BC_LOG_WARN,
-			       "%s; views of encoding 4 are refused", vei.msg);
-		}
-	}
 	/* Sessions restored and listeners up: clients may come. */
 	notify_systemd("READY=1");
 	uv_run(dm.loop, UV_RUN_DEFAULT);
