@@ -333,22 +333,6 @@ int bc_encode_job_new(struct bc_encode_job **out, const uint8_t *rgba,
 	return 0;
 }
 
-int bc_encode_job_given(struct bc_encode_job **out, uint32_t iw, uint32_t ih,
-                        uint8_t *data, size_t len, double ms)
-{
-	struct bc_proto_rect r = {0, 0, (uint16_t)iw, (uint16_t)ih, {NULL, 0}};
-	int rc = bc_encode_job_new(out, NULL, iw, ih, false, &r, 1, 0, 0);
-	if (rc) {
-		bc_free(data);
-		return rc;
-	}
-	(*out)->rects[0].data.ptr = data;
-	(*out)->rects[0].data.len = (uint32_t)len;
-	(*out)->next = 1;
-	(*out)->ms = ms;
-	return 0;
-}
-
 /* Streams the current rectangle's PNG. Returns 1 when it is done. */
 static int run_png(struct bc_encode_job *e, struct bc_proto_rect *r,
                    double until_ms)

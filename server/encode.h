@@ -48,11 +48,6 @@ int bc_encode_job_new(struct bc_encode_job **out, const uint8_t *rgba,
                       uint32_t iw, uint32_t ih, bool copy,
                       const struct bc_proto_rect *rects, uint32_t n,
                       int encoding, int quality);
-/* A job whose one rectangle (0, 0, iw, ih) is already encoded: data (len
- * bytes, bc_malloc'ed) is taken whatever the result, ms is the time its
- * encoding took. Returns 0 or BC_ENOMEM. */
-int bc_encode_job_given(struct bc_encode_job **out, uint32_t iw, uint32_t ih,
-                        uint8_t *data, size_t len, double ms);
 /* Encodes for about ms milliseconds (at least one band). Returns 1 when
  * every rectangle is done, 0 when more remains, or BC_ECODEC/BC_ENOMEM. */
 int bc_encode_job_run(struct bc_encode_job *e, struct bc_encoder *enc,

@@ -176,16 +176,6 @@ void bc_vstream_set_bitrate(struct bc_vstream *vs, uint32_t bps)
 	atomic_store(&vs->bitrate, bps);
 }
 
-uint32_t bc_vstream_bitrate(const struct bc_vstream *vs)
-{
-	return atomic_load(&((struct bc_vstream *)vs)->bitrate);
-}
-
-const char *bc_vstream_encoder_name(const struct bc_vstream *vs)
-{
-	return vs->enc ? ops->name(vs->enc) : "none";
-}
-
 /* The encoder for width x height at the asked bitrate, opened or reopened
  * (a new size: a new stream, so an IDR). */
 static int ready(struct bc_vstream *vs, uint32_t width, uint32_t height,

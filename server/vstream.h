@@ -52,8 +52,6 @@ void bc_vstream_restart(struct bc_vstream *vs);
  * per second (clamped to what the encoder takes); 0: the default for the
  * view's size. */
 void bc_vstream_set_bitrate(struct bc_vstream *vs, uint32_t bps);
-/* The bitrate the stream asks for now, bits per second (0: default). */
-uint32_t bc_vstream_bitrate(const struct bc_vstream *vs);
 
 /* One encoded frame. data is bc_malloc'ed, the caller's. */
 struct bc_vstream_au {
@@ -72,9 +70,5 @@ struct bc_vstream_au {
 int bc_vstream_encode(struct bc_vstream *vs, const uint8_t *rgba,
                       uint32_t width, uint32_t height, int level, bool still,
                       struct bc_vstream_au *out, struct bc_errinfo *ei);
-
-/* The libavcodec encoder the stream runs ("libx264", "h264_nvenc"), or
- * "none" before its first frame. */
-const char *bc_vstream_encoder_name(const struct bc_vstream *vs);
 
 #endif
