@@ -168,6 +168,94 @@ static void log_shift(struct bc_tree *t, const struct splice *sp)
 	t->epoch++;
 }
 
+/* ---- what the dirty record says of a splice ------------------------------ */
+
+/* Where the end of a half-open range goes through a splice. */
+static uint32_t span_map_end(const struct bc__span *sp, uint32_t v)
+{
+	if (v <= sp->at) {
+		return v;
+	}
+	if (v < sp->at + sp->del) {
+		return sp->at;
+	}
+	return v - sp->del + sp->ins;
+}
+
+/* The dirty record follows a splice of the primitives' indices: the
+ * splice is listed (spliced, while there is room), and the range of dirty
+ * primitives moves with them. A record of a whole layout stays one. */
+/* Whether the dirty record lists splices: a structure change that
+ * starts with this one does. */
+static bool following(struct bc_tree *t)
+{
+	struct bc_dirty *d = &t->dirty;
+	if (!d->structure) {
+		d->structure = true;
+		d->spliced = true;
+	}
+	return d->spliced;
+}
+
+static void note_splice(struct bc_tree *t, const struct bc__span *k)
+{
+	struct bc_dirty *d = &t->dirty;
+	bool listed = following(t);
+	if (k->del == 0 && k->ins == 0) {
+		return;
+	}
+	if (d->prim_lo < d->prim_hi) {
+		d->prim_lo = bc__span_map(k, d->prim_lo);
+		d->prim_hi = span_map_end(k, d->prim_hi);
+		if (d->prim_lo >= d->prim_hi) {
+			d->prim_lo = d->prim_hi = 0;
+		}
+	}
+	if (!listed) {
+		return;
+	}
+	if (d->nsplices == BC_DIRTY_SPLICES) {
+		d->spliced = false;
+		return;
+	}
+	d->splice[d->nsplices++] =
+	    (struct bc_dirty_splice){.at = k->at, .del = k->del, .ins = k->ins};
+}
+
+/* Primitives k .. k + n - 1 go, or are placed again: their ABVs now are
+ * where pixels can change. */
+static void note_gone(struct bc_tree *t, uint32_t k, uint32_t n)
+{
+	struct bc_dirty *d = &t->dirty;
+	if (!following(t)) {
+		return;
+	}
+	if (n > BC_DIRTY_GONE - d->ngone) {
+		d->spliced = false;
+		return;
+	}
+	memcpy(d->gone + d->ngone, t->lin.abv + k, n * sizeof(*d->gone));
+	d->ngone += n;
+}
+
+/* An operand that reaches no pixel leaves a union's value alone, but
+ * makes an intersection's or a difference's nothing (renderers prune it
+ * that way): an operand added to or taken from such an operator changes
+ * pixels wherever its other operands are. Marks every primitive of the
+ * subtree under slot top dirty then. */
+static void note_operands(struct bc_tree *t, uint32_t op, uint32_t top)
+{
+	const struct bc_lin *l = &t->lin;
+	uint32_t first, k;
+	if (op == BC_OP_UNION || op == BC_OP_SMOOTH_UNION) {
+		return;
+	}
+	first = l->first[top];
+	k = l->prim_of[first];
+	bc__dirty_range(&t->dirty.prim_lo, &t->dirty.prim_hi, k,
+	                k + (top - first) / 2 + 1);
+}
+
 /* Moves every array's tail (room reserved) and renumbers every stored
  * index of the layout (the model's nodes follow the log). The new entries are
  * left for the caller to write. What lies before the splice point keeps
@@ -179,6 +267,7 @@ static void apply(struct bc_tree *t, const struct splice *sp)
 	struct bc_lin *l = &t->lin;
 	uint32_t n = l->count, np = l->nprims, nr = l->nparam;
 	uint32_t tail, ktail;
+	note_splice(t, &sp->k);
 	move_tail(l->node, 2 * sizeof(uint32_t), n, &sp->s);
 	move_tail(l->first, sizeof(uint32_t), n, &sp->s);
 	move_tail(l->fast, sizeof(uint32_t), n, &sp->s);
@@ -332,6 +421,11 @@ static bool relink(struct bc_tree *t, uint32_t lo, uint32_t top,
 			if (!fresh && touches_box(l, k)) {
 				touch = true;
 			}
+			if (!fresh) {
+				note_gone(t, k, 1);
+			}
+			bc__dirty_range(&t->dirty.prim_lo, &t->dirty.prim_hi, k,
+			                k + 1);
 			bc__lin_place_abv(t, l, k, &t->pool[n].u.prim);
 		}
 	}
@@ -403,6 +497,7 @@ bool bc__splice_insert(struct bc_tree *t, uint32_t m, uint32_t px, uint32_t ox)
 	         rx = BC_PRIM_RECORD_VEC4 * px + BC_OP_RECORD_VEC4 * ox;
 	struct bc__fill fs = {.l = l};
 	uint32_t f, lo, block;
+	bool touch;
 	if (prev != BC_NONE) {
 		uint32_t last = last_leaf(t, prev);
 		uint32_t s0 = bc__slot(t, &t->pool[prev]) + 1 +
@@ -464,7 +559,9 @@ bool bc__splice_insert(struct bc_tree *t, uint32_t m, uint32_t px, uint32_t ox)
 		lo = first;
 		block = first;
 	}
-	return relink(t, lo, f, block, block + sx);
+	touch = relink(t, lo, f, block, block + sx);
+	note_operands(t, t->pool[p].u.op.kind, bc__slot(t, &t->pool[p]));
+	return touch;
 }
 
 /* ---- remove -------------------------------------------------------------- */
@@ -507,6 +604,7 @@ bool bc__splice_replace(struct bc_tree *t, const struct bc__block *b,
 	    .p = {b->param, b->pend - b->param,
 	          BC_PRIM_RECORD_VEC4 * px + BC_OP_RECORD_VEC4 * ox},
 	    .k = {b->k, b->nprims, px}};
+	note_gone(t, b->k, b->nprims);
 	apply(t, &sp);
 	bc__lin_emit(t, &fs, m);
 	adopt(l, b->first + sx - 1, b->word,
@@ -536,6 +634,7 @@ bool bc__splice_remove(struct bc_tree *t, uint32_t c)
 	ptop = bc__slot(t, &t->pool[p]);
 	w = l->node[2 * ptop];
 	a = w & BC_WORD_ANCESTOR_MASK;
+	note_gone(t, klo, px);
 	if (nkids >= 3 && prev != BC_NONE) {
 		/* c's block and its fold go; the fold below takes over. */
 		one = (struct splice){.s = {cf, ctop - cf + 2, 0},
@@ -591,5 +690,8 @@ bool bc__splice_remove(struct bc_tree *t, uint32_t c)
 		}
 		adopt(l, top, w, a);
 	}
-	return relink(t, l->first[top], top, 0, 0) || touch;
+	touch = relink(t, l->first[top], top, 0, 0) || touch;
+	note_operands(t, t->pool[p].u.op.kind,
+	              nkids >= 3 ? bc__slot(t, &t->pool[p]) : top);
+	return touch;
 }

@@ -620,7 +620,9 @@ static void install_lin(struct bc_tree *t, struct bc_lin *fresh)
 		bc__lin_fill(t, &t->lin);
 	}
 	memset(fresh, 0, sizeof(*fresh));
+	/* Laid out whole: no splices to follow. */
 	t->dirty.structure = true;
+	t->dirty.spliced = false;
 	t->dirty.edits++;
 }
 
@@ -941,22 +943,12 @@ void bc_tree_take_dirty(struct bc_tree *t, struct bc_dirty *out)
 	memset(&t->dirty, 0, sizeof(t->dirty));
 }
 
-/* ---- parameter edits ---------------------------------------------------- */
-
-static void dirty_range(uint32_t *lo, uint32_t *hi, uint32_t a, uint32_t b)
+const struct bc_dirty *bc_tree_dirty(const struct bc_tree *t)
 {
-	if (*lo == *hi) {
-		*lo = a;
-		*hi = b;
-		return;
-	}
-	if (a < *lo) {
-		*lo = a;
-	}
-	if (b > *hi) {
-		*hi = b;
-	}
+	return &t->dirty;
 }
+
+/* ---- parameter edits ---------------------------------------------------- */
 
 static uint32_t live_node(const struct bc_tree *t, uint32_t id)
 {
@@ -995,15 +987,16 @@ int bc_tree_set_prim(struct bc_tree *t, uint32_t id,
 	count_prim(t, &copy, 1);
 	t->pool[n].u.prim = copy;
 	bc__lin_update_prim(t, &t->pool[n]);
-	dirty_range(&t->dirty.param_lo, &t->dirty.param_hi, t->pool[n].param,
-	            t->pool[n].param + BC_PRIM_RECORD_VEC4);
+	bc__dirty_range(&t->dirty.param_lo, &t->dirty.param_hi,
+	                t->pool[n].param,
+	                t->pool[n].param + BC_PRIM_RECORD_VEC4);
 	if (bc__lin_prim_bends(&t->lin, &t->pool[n])) {
 		/* The bounds of its twist and bend ancestors changed. */
-		dirty_range(&t->dirty.param_lo, &t->dirty.param_hi, 0,
-		            t->lin.nparam);
+		bc__dirty_range(&t->dirty.param_lo, &t->dirty.param_hi, 0,
+		                t->lin.nparam);
 	}
-	dirty_range(&t->dirty.prim_lo, &t->dirty.prim_hi, t->pool[n].prim,
-	            t->pool[n].prim + 1);
+	bc__dirty_range(&t->dirty.prim_lo, &t->dirty.prim_hi, t->pool[n].prim,
+	                t->pool[n].prim + 1);
 	t->dirty.edits++;
 	return 0;
 }
@@ -1050,11 +1043,11 @@ int bc_tree_set_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
 	 * (s + 1) / 2 leaves, all consecutive primitives. */
 	k_lo = l->prim_of[first_slot];
 	k_hi = k_lo + (t->pool[n].slot - first_slot) / 2 + 1;
-	dirty_range(&t->dirty.slot_lo, &t->dirty.slot_hi, first_slot,
-	            t->pool[n].slot + 1);
-	dirty_range(&t->dirty.param_lo, &t->dirty.param_hi, t->pool[n].param,
-	            t->pool[n].param + BC_OP_RECORD_VEC4);
-	dirty_range(&t->dirty.prim_lo, &t->dirty.prim_hi, k_lo, k_hi);
+	bc__dirty_range(&t->dirty.slot_lo, &t->dirty.slot_hi, first_slot,
+	                t->pool[n].slot + 1);
+	bc__dirty_range(&t->dirty.param_lo, &t->dirty.param_hi,
+	                t->pool[n].param, t->pool[n].param + BC_OP_RECORD_VEC4);
+	bc__dirty_range(&t->dirty.prim_lo, &t->dirty.prim_hi, k_lo, k_hi);
 	t->dirty.edits++;
 	return 0;
 }
@@ -1084,8 +1077,8 @@ int bc_tree_set_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
 	k_hi = k_lo + (t->pool[n].slot - first_slot) / 2 + 1;
 	/* Its record, and the bounds of every twist and bend (conservatively
 	 * the whole parameter range: these trees are small). */
-	dirty_range(&t->dirty.param_lo, &t->dirty.param_hi, 0, l->nparam);
-	dirty_range(&t->dirty.prim_lo, &t->dirty.prim_hi, k_lo, k_hi);
+	bc__dirty_range(&t->dirty.param_lo, &t->dirty.param_hi, 0, l->nparam);
+	bc__dirty_range(&t->dirty.prim_lo, &t->dirty.prim_hi, k_lo, k_hi);
 	t->dirty.edits++;
 	return 0;
 }

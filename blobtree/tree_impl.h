@@ -128,6 +128,23 @@ static inline uint32_t bc__span_map(const struct bc__span *sp, uint32_t v)
 	return v - sp->del + sp->ins;
 }
 
+/* Widens the dirty range [*lo, *hi) to hold [a, b). */
+static inline void bc__dirty_range(uint32_t *lo, uint32_t *hi, uint32_t a,
+                                   uint32_t b)
+{
+	if (*lo == *hi) {
+		*lo = a;
+		*hi = b;
+		return;
+	}
+	if (a < *lo) {
+		*lo = a;
+	}
+	if (b > *hi) {
+		*hi = b;
+	}
+}
+
 /* Index v of space i (0 slots, 1 records, 2 primitives), stored as of
  * splice `epoch`, as of now. */
 static inline uint32_t bc__follow(const struct bc_tree *t, uint32_t v,

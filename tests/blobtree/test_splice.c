@@ -199,20 +199,112 @@ static void rewrite_a_primitive(struct bc_tree *t)
 	}
 }
 
+/* The primitives of a layout: node ids and ABVs, by index. */
+struct prims {
+	uint32_t n;
+	uint32_t id[1024];
+	struct bc_abv abv[1024];
+};
+
+static void prims_of(const struct bc_tree *t, struct prims *p)
+{
+	const struct bc_lin *l = bc_tree_lin(t);
+	p->n = l ? l->nprims : 0;
+	REQUIRE(p->n <= 1024);
+	for (uint32_t k = 0; k < p->n; k++) {
+		p->id[k] = l->node_id[l->prim_slot[k]];
+		p->abv[k] = l->abv[k];
+	}
+}
+
+static bool gone_has(const struct bc_dirty *d, const struct bc_abv *a)
+{
+	for (uint32_t i = 0; i < d->ngone; i++) {
+		if (memcmp(&d->gone[i], a, sizeof(*a)) == 0) {
+			return true;
+		}
+	}
+	return false;
+}
+
+/* What a spliced dirty record says, checked against the primitives
+ * before (was) and after: its splices take the old indices to the new
+ * ones; every new primitive, and every one whose ABV changed, is in
+ * [prim_lo, prim_hi); every ABV that went is in gone[]. Returns why not,
+ * or NULL. */
+static const char *dirty_wrong(const struct bc_dirty *d, struct prims *was,
+                               const struct bc_tree *t)
+{
+	const struct bc_lin *l = bc_tree_lin(t);
+	static struct prims now;
+	for (uint32_t i = 0; i < d->nsplices; i++) {
+		const struct bc_dirty_splice *sp = &d->splice[i];
+		if (sp->at + sp->del > was->n ||
+		    was->n - sp->del + sp->ins > 1024) {
+			return "a splice beyond the primitives";
+		}
+		for (uint32_t k = sp->at; k < sp->at + sp->del; k++) {
+			if (was->id[k] != 0 && !gone_has(d, &was->abv[k])) {
+				return "a removed primitive's ABV not gone";
+			}
+		}
+		memmove(was->id + sp->at + sp->ins, was->id + sp->at + sp->del,
+		        (was->n - sp->at - sp->del) * sizeof(*was->id));
+		memmove(was->abv + sp->at + sp->ins,
+		        was->abv + sp->at + sp->del,
+		        (was->n - sp->at - sp->del) * sizeof(*was->abv));
+		memset(was->id + sp->at, 0, sp->ins * sizeof(*was->id));
+		was->n = was->n - sp->del + sp->ins;
+	}
+	prims_of(t, &now);
+	if (!l || was->n != now.n) {
+		return "the splices give another primitive count";
+	}
+	for (uint32_t k = 0; k < now.n; k++) {
+		bool dirty = k >= d->prim_lo && k < d->prim_hi;
+		if (was->id[k] == 0) {
+			if (!dirty) {
+				return "an inserted primitive not dirty";
+			}
+		} else if (was->id[k] != now.id[k]) {
+			return "the splices lose a primitive's place";
+		} else if (memcmp(&was->abv[k], &now.abv[k],
+		                  sizeof(now.abv[k])) != 0 &&
+		           (!dirty || !gone_has(d, &was->abv[k]))) {
+			return "a primitive placed again, not dirty or gone";
+		}
+	}
+	return NULL;
+}
+
 static void run_edits(uint64_t seed, float unary_rate, int edits, int every)
 {
 	struct bc_tree *t = bc_tree_create(), *sub = bc_tree_create();
-	int refused = 0, checked = 0;
+	int refused = 0, checked = 0, spliced = 0;
+	static struct prims was;
 	rt_unary_rate = 0.0f;
 	REQUIRE(t && sub && rt_build(t, seed, 24) == 0);
 	rt_unary_rate = unary_rate;
 	for (int e = 0; e < edits; e++) {
+		struct bc_dirty d;
 		const char *why;
+		bc_tree_take_dirty(t, &d);
+		prims_of(t, &was);
 		if (random_edit(t, sub)) {
 			refused++;
 		}
 		if (rt_below(8) == 0) {
 			rewrite_a_primitive(t);
+		}
+		bc_tree_take_dirty(t, &d);
+		if (d.spliced) {
+			spliced++;
+			if ((why = dirty_wrong(&d, &was, t)) != NULL) {
+				fprintf(stderr, "  seed %llu edit %d: %s\n",
+				        (unsigned long long)seed, e, why);
+				CHECK(why == NULL);
+				break;
+			}
 		}
 		if (e % every != 0 && e + 1 != edits) {
 			continue;
@@ -225,8 +317,13 @@ static void run_edits(uint64_t seed, float unary_rate, int edits, int every)
 			break;
 		}
 	}
-	/* Refusals are rare (a REPLACE may nest too deep): the run edits. */
+	/* Refusals are rare (a REPLACE may nest too deep): the run edits.
+	 * Without unary nodes nearly every edit is spliced and says so (a
+	 * removal of over BC_DIRTY_GONE primitives does not). */
 	CHECK(refused < edits / 10);
+	if (unary_rate == 0.0f) {
+		CHECK(spliced > edits * 3 / 4);
+	}
 	CHECK(checked > 0);
 	rt_unary_rate = 0.0f;
 	bc_tree_destroy(sub);

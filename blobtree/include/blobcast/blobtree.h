@@ -500,16 +500,46 @@ BC_API void bc_tree_swap(struct bc_tree *a, struct bc_tree *b);
 BC_API int bc_tree_copy(struct bc_tree *dst, const struct bc_tree *src,
                         struct bc_errinfo *ei);
 
-/* What changed since the last bc_tree_take_dirty(): ranges are half-open,
- * [lo, hi) with lo == hi meaning nothing; structure means everything. */
+/* Primitives [at, at + del) became [at, at + ins); those past them moved
+ * by ins - del. */
+struct bc_dirty_splice {
+	uint32_t at, del, ins;
+};
+/* Splices and gone ABVs one dirty record holds; past either, spliced is
+ * cleared (everything changed). */
+#define BC_DIRTY_SPLICES 16
+#define BC_DIRTY_GONE 64
+
+/*
+ * What changed since the last bc_tree_take_dirty(): ranges are half-open,
+ * [lo, hi) with lo == hi meaning nothing; structure means everything.
+ *
+ * A structural change made only of splices (INSERT, REMOVE and REPLACE on
+ * a tree without unary nodes, splice.c) also says what it did, so that a
+ * renderer keeping state per primitive can follow it and redraw only
+ * what it can change (spliced true): the splices of the primitives'
+ * indices in the order made, and the world ABVs that went (removed
+ * primitives', and the old ABVs of those placed again). [prim_lo,
+ * prim_hi) then also covers, in the indices after, every inserted
+ * primitive and every primitive whose pixels the change can reach
+ * outside those ABVs (the whole subtree of an intersection or difference
+ * that gained or lost an operand). A pixel can change only where the
+ * gone ABVs or the new ABVs of [prim_lo, prim_hi) reach.
+ */
 struct bc_dirty {
 	bool structure; /* laid out again or spliced: upload everything */
+	bool spliced;   /* structure changed by the splices below alone */
 	uint32_t slot_lo, slot_hi;   /* node words (an operator kind changed) */
 	uint32_t param_lo, param_hi; /* parameter records, in vec4 units */
 	uint32_t prim_lo, prim_hi;   /* primitives whose ABV changed */
 	uint32_t edits;              /* edits applied since the last take */
+	uint32_t nsplices, ngone;
+	struct bc_dirty_splice splice[BC_DIRTY_SPLICES];
+	struct bc_abv gone[BC_DIRTY_GONE];
 };
 BC_API void bc_tree_take_dirty(struct bc_tree *t, struct bc_dirty *out);
+/* What bc_tree_take_dirty() would take now, left in place. */
+BC_API const struct bc_dirty *bc_tree_dirty(const struct bc_tree *t);
 
 /* ---- The linearized form (read-only for renderers) --------------------- */
 
