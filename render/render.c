@@ -188,13 +188,21 @@ enum bc_backend bc_renderer_backend(const struct bc_renderer *r)
 	return r ? r->backend : BC_BACKEND_INVALID;
 }
 
+bool bc_renderer_follows(const struct bc_renderer *r,
+                         const struct bc_dirty *dirty)
+{
+	return r && r->tree && dirty && dirty->spliced &&
+	       r->ops->follows_splices;
+}
+
 int bc_renderer_sync(struct bc_renderer *r, const struct bc_tree *t,
                      const struct bc_dirty *dirty, struct bc_errinfo *ei)
 {
 	if (!r || !t) {
 		return bc_errinfo_set(ei, BC_EINVAL, "render: no tree to sync");
 	}
-	if (!dirty || dirty->structure || t != r->tree) {
+	if (!bc_renderer_follows(r, dirty) &&
+	    (!dirty || dirty->structure || t != r->tree)) {
 		r->generation++;
 	}
 	r->tree = t;

@@ -1178,18 +1178,89 @@ nomem:
 	                      out->width, out->height);
 }
 
+/* Where the end of a half-open range of primitives goes through sp. */
+static uint32_t splice_end(const struct bc_dirty_splice *sp, uint32_t v)
+{
+	return v <= sp->at            ? v
+	       : v < sp->at + sp->del ? sp->at
+	                              : v - sp->del + sp->ins;
+}
+
+/* The kept view follows one splice of the primitives' indices: the
+ * primitives that went leave every candidate list (and the lists of
+ * their tiles are dropped), those past them are renumbered there and in
+ * the kept lists, and the new ones get empty rectangles (their tiles
+ * come with the dirty range, keep_view). One pass over the candidates:
+ * memory speed, no geometry. */
+static int follow_splice(struct bc__tiled_bufs *b,
+                         const struct bc_dirty_splice *sp)
+{
+	uint32_t ntiles = ((b->w + BC_CPU_TILE - 1) / BC_CPU_TILE) *
+	                  ((b->h + BC_CPU_TILE - 1) / BC_CPU_TILE);
+	uint32_t lo = sp->at, hi = sp->at + sp->del, n = b->nprims;
+	uint32_t shift = sp->ins - sp->del; /* modulo 2^32 */
+	if (hi > n ||
+	    grow_keep((void **)&b->prims, &b->prims_cap,
+	              (size_t)n - sp->del + sp->ins + 1u, sizeof(*b->prims))) {
+		return BC_ENOMEM;
+	}
+	for (uint32_t t = 0; t < ntiles; t++) {
+		uint32_t o = b->cand_off[t], w = o;
+		for (uint32_t i = o; i < b->cand_end[t]; i++) {
+			uint32_t k = b->cand[i];
+			if (k >= lo && k < hi) {
+				continue;
+			}
+			b->cand[w++] = k >= hi ? k + shift : k;
+		}
+		if (w != b->cand_end[t]) {
+			b->state[t] &= (uint8_t)~TILE_LIST;
+			b->cand_end[t] = w;
+		} else if ((b->state[t] & TILE_LIST) && shift) {
+			struct bc__frag *f = b->frags + o;
+			for (uint32_t i = 0; i < b->list_n[t]; i++) {
+				f[i].prim += f[i].prim >= hi ? shift : 0u;
+			}
+		}
+	}
+	memmove(b->prims + lo + sp->ins, b->prims + hi,
+	        (size_t)(n - hi) * sizeof(*b->prims));
+	for (uint32_t k = lo; k < lo + sp->ins; k++) {
+		memset(&b->prims[k].rect, 0, sizeof(b->prims[k].rect));
+	}
+	b->nprims = n - sp->del + sp->ins;
+	if (b->dirty_lo < b->dirty_hi) {
+		b->dirty_lo = b->dirty_lo < lo   ? b->dirty_lo
+		              : b->dirty_lo < hi ? lo
+		                                 : b->dirty_lo + shift;
+		b->dirty_hi = splice_end(sp, b->dirty_hi);
+		if (b->dirty_lo >= b->dirty_hi) {
+			b->dirty_lo = b->dirty_hi = 0;
+		}
+	}
+	return 0;
+}
+
 /* Records the primitives whose ABVs changed, for the next render to drop
- * the lists they can reach (keep_view). A structural change drops all. */
+ * the lists they can reach (keep_view). A structural change drops all,
+ * but one made of splices, which the kept view follows. */
 static int tiled_sync(struct bc_renderer *base, const struct bc_tree *t,
                       const struct bc_dirty *dirty, struct bc_errinfo *ei)
 {
 	struct bc__tiled_bufs *b = bc__cpu_of(base)->tiled;
-	(void)t;
 	(void)ei;
 	if (!b) {
 		return 0;
 	}
-	if (!dirty || dirty->structure) {
+	if (dirty && dirty->structure && dirty->spliced && b->view_ok) {
+		for (uint32_t i = 0; i < dirty->nsplices && b->view_ok; i++) {
+			if (follow_splice(b, &dirty->splice[i])) {
+				b->view_ok = false;
+			}
+		}
+		/* The scene may be another object now (bc_tree_swap). */
+		b->lin = bc_tree_lin(t);
+	} else if (!dirty || dirty->structure) {
 		b->view_ok = false;
 		return 0;
 	}
@@ -1280,6 +1351,7 @@ const struct bc_backend_ops bc_backend_tiled_ops = {
     .render = tiled_render,
     .key = bc__cpu_key,
     .damage = tiled_damage,
+    .follows_splices = true,
     .release = tiled_release,
     .kept_bytes = tiled_kept_bytes,
 };

@@ -789,6 +789,190 @@ static void test_svo_damage_and_subsets_are_exact(void)
 	damage_backend(BC_BACKEND_SVO, 25);
 }
 
+/* ---- Structural edits followed splice by splice ------------------------- */
+
+struct splice_tally {
+	uint64_t edits, followed, wholes, mismatches, marked, tiles;
+};
+
+/* One random structural edit of t (the tree kept between 2 and 40
+ * primitives): a REMOVE, an INSERT of a random subtree under a random
+ * binary operator at a random place, or a REPLACE. 0 or the tree's
+ * error (the caller skips such an edit). */
+static int splice_edit(struct bc_tree *t, struct bc_tree *sub, char *desc,
+                       size_t cap)
+{
+	uint32_t ids[1024], n = collect_ids(t, ids, 1024);
+	uint32_t prims = bc_tree_prim_count(t), pick = dmg_below(10);
+	uint32_t id = n > 1 ? ids[1 + dmg_below(n - 1)] : 0;
+	if (id && (prims > 40 || (prims > 2 && pick < 4))) {
+		snprintf(desc, cap, "REMOVE node %u", id);
+		return bc_tree_remove(t, id, NULL);
+	}
+	if (rt_build(sub, dmg_next(), 1 + dmg_below(3))) {
+		return BC_ENOMEM;
+	}
+	if (id && pick == 9) {
+		snprintf(desc, cap, "REPLACE node %u", id);
+		return bc_tree_replace(t, id, sub, NULL);
+	}
+	for (int tries = 0; tries < 32; tries++) {
+		struct bc_op_data op;
+		uint32_t p = ids[dmg_below(n)];
+		if (bc_tree_get(t, p, NULL, &op) && op.kind != BC_OP_INVALID &&
+		    !bc_op_is_unary(op.kind)) {
+			uint32_t at = dmg_below(bc_tree_child_count(t, p) + 1);
+			snprintf(desc, cap, "INSERT under %s node %u at %u",
+			         bc_op_name(op.kind), p, at);
+			return bc_tree_insert(t, p, at, sub, NULL);
+		}
+	}
+	return BC_EINVAL;
+}
+
+static void splice_scene(const struct scene *s, uint32_t n,
+                         struct splice_tally *ty)
+{
+	struct bc_tree *t = bc_tree_create(), *sub = bc_tree_create();
+	struct bc_renderer *r = NULL, *ref = NULL;
+	struct bc_frame f = {0}, f2 = {0}, g = {0};
+	struct bc_render_stats st;
+	struct bc_camera cam;
+	struct bc_errinfo ei = {0};
+	uint32_t w = s->w ? s->w : 61, h = s->h ? s->h : 47;
+	size_t nt = ntiles(w, h);
+	uint8_t *tiles = bc_calloc(nt, 1);
+	REQUIRE(t && sub && tiles);
+	if (build_scene(s, t) != 0 || !bc_tree_lin(t)) {
+		CHECK(!"scene builds");
+		goto done;
+	}
+	frame_scene(bc_tree_lin(t), &cam);
+	if (bc_frame_init(&f, w, h) || bc_frame_init(&f2, w, h) ||
+	    bc_frame_init(&g, w, h) ||
+	    bc_renderer_create(&r, BC_BACKEND_TILED, NULL, &ei) ||
+	    bc_renderer_create(&ref, BC_BACKEND_TILED, NULL, &ei) ||
+	    bc_renderer_sync(r, t, NULL, &ei) ||
+	    bc_renderer_render(r, &cam, &f, &st, &ei)) {
+		CHECK(!"first frame");
+		goto done;
+	}
+	for (uint32_t i = 0; i < n; i++) {
+		struct bc_dirty dirty;
+		const struct bc_lin *l;
+		char desc[96];
+		uint64_t bad, marked = 0;
+		bool follows;
+		if (splice_edit(t, sub, desc, sizeof(desc)) != 0) {
+			continue;
+		}
+		if (i % 4 == 0) {
+			/* As an edit batch hands its result out: the same
+			 * scene in another object. */
+			struct bc_tree *u = bc_tree_create();
+			REQUIRE(u);
+			bc_tree_swap(u, t);
+			bc_tree_destroy(t);
+			t = u;
+		}
+		bc_tree_take_dirty(t, &dirty);
+		l = bc_tree_lin(t);
+		follows = bc_renderer_follows(r, &dirty);
+		CHECK(follows == dirty.spliced);
+		if (bc_renderer_sync(r, t, &dirty, &ei) ||
+		    bc_renderer_sync(ref, t, NULL, &ei) ||
+		    bc_renderer_render(ref, &cam, &g, &st, &ei)) {
+			fprintf(stderr, "  %s: %s\n", s->label, ei.msg);
+			CHECK(!"sync and whole render");
+			break;
+		}
+		memset(tiles, !follows, nt);
+		for (uint32_t k = 0; follows && k < dirty.ngone; k++) {
+			bc_renderer_damage(r, &cam, w, h, &dirty.gone[k],
+			                   tiles);
+		}
+		for (uint32_t k = dirty.prim_lo; follows && k < dirty.prim_hi;
+		     k++) {
+			bc_renderer_damage(r, &cam, w, h, &l->abv[k], tiles);
+		}
+		for (size_t k = 0; k < nt; k++) {
+			marked += tiles[k] != 0;
+		}
+		if (bc_renderer_render_region(
+		        r, &cam, &f, &(struct bc_render_region){.tiles = tiles},
+		        &st, &ei)) {
+			fprintf(stderr, "  region: %s\n", ei.msg);
+			CHECK(!"region render");
+			break;
+		}
+		CHECK(!st.incomplete);
+		ty->edits++;
+		ty->followed += follows;
+		ty->wholes += st.whole;
+		ty->marked += st.whole ? nt : marked;
+		ty->tiles += nt;
+		if ((bad = diff_frames(&f, &g, tiles, desc)) != 0) {
+			fprintf(stderr,
+			        "  %s edit %u (%s): %llu pixels differ, %u "
+			        "splices, %u ABVs gone, primitives [%u, %u) "
+			        "dirty, %llu of %zu tiles marked, whole %d\n",
+			        s->label, i, desc, (unsigned long long)bad,
+			        dirty.nsplices, dirty.ngone, dirty.prim_lo,
+			        dirty.prim_hi, (unsigned long long)marked, nt,
+			        st.whole);
+			ty->mismatches += bad;
+			copy_frame(&f, &g);
+		}
+		/* Every tile through what r kept (lists of tiles the edit
+		 * did not reach, renumbered), as refinement draws them. */
+		if (i % 2 == 0 &&
+		    (bc_renderer_render(r, &cam, &f2, &st, &ei) ||
+		     (bad = diff_frames(&f2, &g, NULL, desc)) != 0)) {
+			fprintf(stderr,
+			        "  %s edit %u (%s): whole frame from "
+			        "kept lists differs\n",
+			        s->label, i, desc);
+			ty->mismatches += bad ? bad : 1;
+		}
+	}
+done:
+	bc_renderer_destroy(ref);
+	bc_renderer_destroy(r);
+	bc_frame_finish(&f);
+	bc_frame_finish(&f2);
+	bc_frame_finish(&g);
+	bc_free(tiles);
+	bc_tree_destroy(sub);
+	bc_tree_destroy(t);
+}
+
+/* INSERTs, REMOVEs and REPLACEs on trees without unary nodes are followed
+ * by the tiled backend (struct bc_dirty's splices): the frame before,
+ * with only the tiles marked for the gone ABVs and for the dirty
+ * primitives' new ABVs drawn again, equals a whole render of the scene
+ * after, bit for bit, and the frame key stays unless the scene's scale
+ * moved. */
+static void test_tiled_follows_structural_edits(void)
+{
+	struct splice_tally ty = {0};
+	double t0 = now_s();
+	dmg_state = 0x5eed5000u;
+	for (size_t i = 0; i < sizeof(scenes) / sizeof(scenes[0]); i++) {
+		splice_scene(&scenes[i], 60, &ty);
+	}
+	printf("  tiled: %llu structural edits, %llu followed by splices, "
+	       "%llu drawn whole, damage %.1f%% of tiles on average, %llu "
+	       "mismatching pixels; %.1f s\n",
+	       (unsigned long long)ty.edits, (unsigned long long)ty.followed,
+	       (unsigned long long)ty.wholes,
+	       ty.tiles ? 100.0 * (double)ty.marked / (double)ty.tiles : 0.0,
+	       (unsigned long long)ty.mismatches, now_s() - t0);
+	CHECK(ty.edits > 600);
+	CHECK(ty.followed > ty.edits / 2);
+	CHECK(ty.wholes < ty.followed / 2);
+	CHECK_EQ_INT(ty.mismatches, 0);
+}
+
 /* ---- Regions and frame keys --------------------------------------------- */
 
 static const enum bc_backend cpu_backends[] = {
@@ -1162,6 +1346,7 @@ static const struct bc_test tests[] = {
     {"frame_key_follows_the_scene_scale",
      test_frame_key_follows_the_scene_scale},
     {"tiled_damage_is_exact", test_tiled_damage_is_exact},
+    {"tiled_follows_structural_edits", test_tiled_follows_structural_edits},
     {"naive_damage_and_subsets_are_exact",
      test_naive_damage_and_subsets_are_exact},
     {"svo_damage_and_subsets_are_exact", test_svo_damage_and_subsets_are_exact},

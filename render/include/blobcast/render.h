@@ -234,9 +234,21 @@ enum bc_backend bc_renderer_backend(const struct bc_renderer *r);
 
 /* Tells r the tree to draw and what changed since the previous sync
  * (dirty == NULL or dirty->structure: everything, and every frame's key
- * changes). The tree must outlive its use by r. */
+ * changes; but see bc_renderer_follows). The tree must outlive its use by
+ * r. */
 int bc_renderer_sync(struct bc_renderer *r, const struct bc_tree *t,
                      const struct bc_dirty *dirty, struct bc_errinfo *ei);
+
+/* Whether r, synced before, follows the spliced structure change dirty
+ * describes (struct bc_dirty, spliced): then bc_renderer_sync keeps the
+ * frame key, and a frame of the state before needs only the tiles that
+ * bc_renderer_damage marks for dirty's gone ABVs and for the new ABVs of
+ * its primitives [prim_lo, prim_hi) drawn again. The tree given to that
+ * sync may be another object holding the same scene (bc_tree_swap, as an
+ * edit batch hands its result out). tiled follows splices; gl, svo and
+ * naive start over. */
+bool bc_renderer_follows(const struct bc_renderer *r,
+                         const struct bc_dirty *dirty);
 
 /* Draws the whole frame (every pixel) of the last synced tree. Returns 0,
  * BC_EINVAL (bad frame), BC_ERANGE (bad camera), BC_ESTATE (nothing synced)

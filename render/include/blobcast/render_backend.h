@@ -23,9 +23,9 @@ struct bc_renderer {
 	enum bc_backend backend;
 	struct bc_render_opts opts; /* gl_platform is not kept (NULL) */
 	const struct bc_tree *tree; /* last synced, NULL before */
-	/* Counts syncs that changed the tree's structure: part of every
-	 * frame's key, so no region is drawn over a frame of another
-	 * structure. */
+	/* Counts syncs that changed the tree's structure (but those the
+	 * backend follows splice by splice): part of every frame's key, so
+	 * no region is drawn over a frame of another structure. */
 	uint64_t generation;
 };
 
@@ -59,6 +59,11 @@ struct bc_backend_ops {
 	void (*damage)(struct bc_renderer *r, const struct bc_camera *cam,
 	               uint32_t width, uint32_t height,
 	               const struct bc_abv *abv, uint8_t *tiles);
+	/* Whether sync follows a spliced structure change (struct
+	 * bc_dirty's spliced) with what it keeps, so that such a change
+	 * keeps the frame key and damages only what bc_dirty says it can
+	 * reach. false: every structure change is a new generation. */
+	bool follows_splices;
 	/* Optional: frees what the backend keeps for its last view (see
 	 * bc_renderer_release). NULL: it keeps nothing. */
 	void (*release)(struct bc_renderer *r);
