@@ -1186,17 +1186,44 @@ static uint32_t splice_end(const struct bc_dirty_splice *sp, uint32_t v)
 	                              : v - sp->del + sp->ins;
 }
 
+/* Tile t's candidates without primitives [lo, hi), those past hi moved
+ * by shift; its list is dropped when it lost one, else renumbered. */
+static void follow_tile(struct bc__tiled_bufs *b, uint32_t t, uint32_t lo,
+                        uint32_t hi, uint32_t shift)
+{
+	uint32_t o = b->cand_off[t], w = o;
+	for (uint32_t i = o; i < b->cand_end[t]; i++) {
+		uint32_t k = b->cand[i];
+		if (k >= lo && k < hi) {
+			continue;
+		}
+		b->cand[w++] = k >= hi ? k + shift : k;
+	}
+	if (w != b->cand_end[t]) {
+		b->state[t] &= (uint8_t)~TILE_LIST;
+		b->cand_end[t] = w;
+	} else if ((b->state[t] & TILE_LIST) && shift) {
+		struct bc__frag *f = b->frags + o;
+		for (uint32_t i = 0; i < b->list_n[t]; i++) {
+			f[i].prim += f[i].prim >= hi ? shift : 0u;
+		}
+	}
+}
+
 /* The kept view follows one splice of the primitives' indices: the
- * primitives that went leave every candidate list (and the lists of
- * their tiles are dropped), those past them are renumbered there and in
- * the kept lists, and the new ones get empty rectangles (their tiles
- * come with the dirty range, keep_view). One pass over the candidates:
- * memory speed, no geometry. */
+ * primitives that went leave the candidate lists (and the lists of their
+ * tiles are dropped), those past them are renumbered there and in the
+ * kept lists, and the new ones get empty rectangles (their tiles come
+ * with the dirty range, keep_view). A splice at the end of the
+ * primitives (an operand added to or taken from the end of the root's
+ * operator, the usual edit of a big scene) touches only the tiles of
+ * those that went; one before it takes a pass over every candidate, at
+ * memory speed. */
 static int follow_splice(struct bc__tiled_bufs *b,
                          const struct bc_dirty_splice *sp)
 {
-	uint32_t ntiles = ((b->w + BC_CPU_TILE - 1) / BC_CPU_TILE) *
-	                  ((b->h + BC_CPU_TILE - 1) / BC_CPU_TILE);
+	uint32_t tw = (b->w + BC_CPU_TILE - 1) / BC_CPU_TILE;
+	uint32_t ntiles = tw * ((b->h + BC_CPU_TILE - 1) / BC_CPU_TILE);
 	uint32_t lo = sp->at, hi = sp->at + sp->del, n = b->nprims;
 	uint32_t shift = sp->ins - sp->del; /* modulo 2^32 */
 	if (hi > n ||
@@ -1204,23 +1231,19 @@ static int follow_splice(struct bc__tiled_bufs *b,
 	              (size_t)n - sp->del + sp->ins + 1u, sizeof(*b->prims))) {
 		return BC_ENOMEM;
 	}
-	for (uint32_t t = 0; t < ntiles; t++) {
-		uint32_t o = b->cand_off[t], w = o;
-		for (uint32_t i = o; i < b->cand_end[t]; i++) {
-			uint32_t k = b->cand[i];
-			if (k >= lo && k < hi) {
-				continue;
+	if (hi == n) {
+		for (uint32_t k = lo; k < hi; k++) {
+			const struct rect *r = &b->prims[k].rect;
+			for (uint32_t ty = r->y0; ty < r->y1; ty++) {
+				for (uint32_t tx = r->x0; tx < r->x1; tx++) {
+					follow_tile(b, ty * tw + tx, lo, hi,
+					            shift);
+				}
 			}
-			b->cand[w++] = k >= hi ? k + shift : k;
 		}
-		if (w != b->cand_end[t]) {
-			b->state[t] &= (uint8_t)~TILE_LIST;
-			b->cand_end[t] = w;
-		} else if ((b->state[t] & TILE_LIST) && shift) {
-			struct bc__frag *f = b->frags + o;
-			for (uint32_t i = 0; i < b->list_n[t]; i++) {
-				f[i].prim += f[i].prim >= hi ? shift : 0u;
-			}
+	} else {
+		for (uint32_t t = 0; t < ntiles; t++) {
+			follow_tile(b, t, lo, hi, shift);
 		}
 	}
 	memmove(b->prims + lo + sp->ins, b->prims + hi,
