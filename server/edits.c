@@ -213,10 +213,11 @@ static void broadcast(struct bc_session *s, const struct batch *x)
 	}
 	for (uint32_t i = 0; i < n; i++) {
 		if (!x->names_only) {
+			/* A structural batch keeps what the member was shown:
+			 * where the render copy cannot follow it splice by
+			 * splice (flow.c), its views go, and a view of
+			 * another id is sent whole. */
 			list[i]->interacting_until = until;
-			if (x->b.structural) {
-				list[i]->shown.view = 0;
-			}
 			bc__owe_frame(list[i]);
 		}
 		/* Last: a member whose client cannot be sent the edit leaves

@@ -11,6 +11,10 @@
  *  - a structural edit arrives as its operations, replayed with the edit
  *    module's own code (bc_edit_batch_apply), so the copy's tree is the
  *    session's, node for node, and the loop never copies a tree for it;
+ *    when its layout was spliced and the renderer follows splices, the
+ *    views keep their pictures and redraw the tiles the tree's dirty
+ *    record says the change can reach, as for a parameter edit; else
+ *    the pictures start over;
  *  - a loaded or restored scene arrives whole.
  * Applying a parameter change marks, in each of the session's views, the
  * tiles the renderer says the edited primitives' ABVs reach before and
@@ -198,31 +202,72 @@ static void damage_begin(const struct flow *f, uint32_t id, struct damage *d)
 	}
 }
 
-static void damage_end(struct bc_work *w, const struct flow *f,
-                       struct view **views, uint32_t nviews, struct damage *d)
+/* Marks in each view the tiles the ABVs a[0..na) and b[0..nb) can reach
+ * (all of them when `all`). */
+static void mark_views(struct bc_work *w, const struct flow *f,
+                       struct view **views, uint32_t nviews,
+                       const struct bc_abv *a, uint32_t na,
+                       const struct bc_abv *b, uint32_t nb, bool all)
 {
-	const struct bc_lin *l = bc_tree_lin(f->tree);
 	for (uint32_t i = 0; i < nviews; i++) {
 		struct view *v = views[i];
 		v->damaged = true;
-		if (!d->old || !f->r || !l || w->opts.no_damage ||
-		    v->frame.full_width) {
+		if (all || !f->r || w->opts.no_damage || v->frame.full_width) {
 			/* Too many to project, no renderer yet, or a
 			 * snapshot tile's window (projected as a whole view
 			 * it would miss): all of it. */
 			memset(v->damage, 1, v->ntiles);
 			continue;
 		}
-		for (uint32_t k = 0; k < d->n; k++) {
+		for (uint32_t k = 0; k < na; k++) {
 			bc_renderer_damage(f->r, &v->camera, v->width,
-			                   v->height, &d->old[k], v->damage);
+			                   v->height, &a[k], v->damage);
+		}
+		for (uint32_t k = 0; k < nb; k++) {
 			bc_renderer_damage(f->r, &v->camera, v->width,
-			                   v->height, &l->abv[d->k0 + k],
-			                   v->damage);
+			                   v->height, &b[k], v->damage);
 		}
 	}
+}
+
+static void damage_end(struct bc_work *w, const struct flow *f,
+                       struct view **views, uint32_t nviews, struct damage *d)
+{
+	const struct bc_lin *l = bc_tree_lin(f->tree);
+	mark_views(w, f, views, nviews, d->old, d->n, l ? l->abv + d->k0 : NULL,
+	           d->n, !d->old || !l);
 	bc_free(d->old);
 	d->old = NULL;
+}
+
+/* A structural batch the renderer follows splice by splice (struct
+ * bc_dirty's spliced, bc_renderer_follows): the renderer syncs here (the
+ * batch may have handed the scene out in another tree object, and the
+ * damage is projected with the scene's new scale), and the views keep
+ * their pictures and redraw only the tiles the ABVs that went and the
+ * dirty primitives' new ABVs reach. */
+static bool damage_spliced(struct bc_work *w, struct flow *f)
+{
+	const struct bc_lin *l = bc_tree_lin(f->tree);
+	struct view *views[BC_SRV_MAX_VIEWS];
+	struct bc_dirty d;
+	uint32_t nviews, n;
+	if (f->fresh || !l ||
+	    !bc_renderer_follows(f->r, bc_tree_dirty(f->tree))) {
+		return false;
+	}
+	bc_tree_take_dirty(f->tree, &d);
+	if (bc_renderer_sync(f->r, f->tree, &d, NULL)) {
+		return false;
+	}
+	n = d.prim_hi - d.prim_lo;
+	nviews = bc__views_of(w, f->sid, views);
+	mark_views(w, f, views, nviews, d.gone, d.ngone, l->abv + d.prim_lo, n,
+	           n > BC_SRV_DAMAGE_PRIMS);
+	for (uint32_t i = 0; i < nviews; i++) {
+		bc__view_release(w, views[i]);
+	}
+	return true;
 }
 
 static void apply_states(struct bc_work *w, struct flow *f, const struct upd *u)
@@ -278,6 +323,9 @@ static void apply_one(struct bc_work *w, struct flow *f, struct upd *u)
 			f->broken = true;
 		}
 		bc_edit_batch_finish(&b);
+		if (!f->broken && damage_spliced(w, f)) {
+			break;
+		}
 		f->fresh = true;
 		f->ms_per_ray = f->ms_abuffer = 0.0;
 		f->ray_bound = BC_SRV_RAY_EVALS;

@@ -403,11 +403,110 @@ static void a_client_that_stops_reading_is_dropped(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
+/* Lays the rectangles of a level-0 raw FRAME on img (w x h RGBA) and
+ * returns the pixels they cover. */
+static uint64_t compose(uint8_t *img, uint32_t w, const struct bc_msg *m)
+{
+	uint64_t area = 0;
+	for (uint32_t i = 0; i < m->frame.nrects; i++) {
+		const struct bc_proto_rect *r = &m->frame.rects[i];
+		CHECK(r->data.len == 4u * r->w * r->h && r->x + r->w <= w);
+		for (uint32_t y = 0;
+		     y < r->h && r->data.len == 4u * r->w * r->h; y++) {
+			memcpy(img + 4 * ((size_t)(r->y + y) * w + r->x),
+			       r->data.ptr + 4 * (size_t)y * r->w, 4u * r->w);
+		}
+		area += (uint64_t)r->w * r->h;
+	}
+	return area;
+}
+
+/* Sends one structural operation and lays every frame after its
+ * EDIT_APPLIED on img until the still: each at the still's level (the
+ * picture is not started over) and smaller than the view. */
+static void structural_step(struct conn *c, struct bc_proto_edit_op op,
+                            uint8_t *img, uint32_t w, uint32_t h)
+{
+	struct bc_msg m = {.type = BC_MSG_EDIT};
+	uint64_t order;
+	m.edit.nops = 1;
+	m.edit.ops = &op;
+	REQUIRE(conn_send(c, &m));
+	REQUIRE(conn_expect(c, BC_MSG_EDIT_APPLIED, 20000) == 1);
+	order = c->m.edit_applied.order;
+	do {
+		REQUIRE(conn_expect(c, BC_MSG_FRAME, 20000) == 1);
+		CHECK(c->m.frame.order >= order);
+		CHECK(bc_proto_flags_level(c->m.flags) == 0);
+		CHECK(compose(img, w, &c->m) < (uint64_t)w * h / 2);
+	} while (!(c->m.flags & BC_PROTO_FLAG_STILL));
+}
+
+/* INSERT and REMOVE keep the picture too (the renderer follows the
+ * spliced layout): a small sphere added at the end of the root union and
+ * taken away again redraws only blocks it reaches, at the still's level,
+ * and the picture after both equals the one before, bit for bit. */
+static void structural_edits_send_damage_only(void)
+{
+	static const char scene[] =
+	    "{\"blobcast\": 1, \"camera\": {\"eye\": [0, 0, 9], "
+	    "\"target\": [0, 0, 0], \"up\": [0, 1, 0], \"fov_y_deg\": 40}, "
+	    "\"root\": {\"type\": \"smooth_union\", \"id\": 1, "
+	    "\"blend\": 0.2, \"range\": 0.3, \"children\": ["
+	    "{\"type\": \"sphere\", \"id\": 2, \"radius\": 0.8, "
+	    "\"translate\": [-1.2, 0, 0]}, "
+	    "{\"type\": \"sphere\", \"id\": 3, \"radius\": 0.6, "
+	    "\"translate\": [1.2, 0, 0]}, "
+	    "{\"type\": \"sphere\", \"id\": 4, \"radius\": 0.5, "
+	    "\"translate\": [0, -1.2, 0]}]}}";
+	enum { W = 96, H = 64 };
+	static uint8_t before[W * H * 4], img[W * H * 4];
+	static const float at[3] = {0.0f, 0.4f, 0.0f}, rot[4] = {0, 0, 0, 1};
+	const float radius = 0.15f;
+	struct bc_proto_buf sub;
+	struct daemon d;
+	struct conn a;
+	char dir[64];
+	make_dir_name(dir, sizeof(dir), "splice");
+	REQUIRE(daemon_start(&d, dir) == 0);
+	REQUIRE(conn_open(&a, &d) == 0 && conn_hello(&a, "a") == 0);
+	REQUIRE(conn_join(&a, "splice", BC_PROTO_ROLE_EDITOR, true) == 0);
+	conn_load_json(&a, scene);
+	REQUIRE(conn_view(&a, W, H, BC_PROTO_ENC_RAW));
+	do {
+		REQUIRE(conn_expect(&a, BC_MSG_FRAME, 20000) == 1);
+	} while (!(a.m.flags & BC_PROTO_FLAG_STILL));
+	REQUIRE(bc_proto_flags_level(a.m.flags) == 0);
+	CHECK(compose(before, W, &a.m) == (uint64_t)W * H);
+	memcpy(img, before, sizeof(img));
+	bc_proto_buf_init(&sub, 0);
+	REQUIRE(bc_proto_scene_begin(&sub, NULL, 1) == 0 &&
+	        bc_proto_scene_prim(&sub, BC_PRIM_SPHERE, 50, at, rot, NULL, 1,
+	                            &radius) == 0);
+	structural_step(
+	    &a,
+	    (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_INSERT,
+	                              .node = 1,
+	                              .position = 3,
+	                              .subtree = {sub.data, (uint32_t)sub.len}},
+	    img, W, H);
+	bc_proto_buf_finish(&sub);
+	CHECK(memcmp(img, before, sizeof(img)) != 0); /* the sphere shows */
+	structural_step(
+	    &a,
+	    (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_REMOVE, .node = 50},
+	    img, W, H);
+	CHECK(memcmp(img, before, sizeof(img)) == 0);
+	conn_close(&a);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
 static const struct bc_test tests[] = {
     {"members_see_the_same_edits_in_order",
      members_see_the_same_edits_in_order},
     {"frames_follow_views_and_edits_send_damage_only",
      frames_follow_views_and_edits_send_damage_only},
+    {"structural_edits_send_damage_only", structural_edits_send_damage_only},
     {"bad_input_never_disturbs_other_clients",
      bad_input_never_disturbs_other_clients},
     {"kill_9_loses_no_acknowledged_edit", kill_9_loses_no_acknowledged_edit},
