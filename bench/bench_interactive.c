@@ -9,9 +9,16 @@
  *    of the previous one arrived: camera -> first (coarse) frame p50 / p99,
  *    the levels seen, and frames per second while orbiting.
  *
+ *  - structural (when asked): one sphere INSERTed at the end of the root
+ *    union, then REMOVEd, again and again, then the same in the middle of
+ *    its operands: edit -> EDIT_APPLIED and edit -> the FRAME that
+ *    reflects it, p50 / p99 of each kind.
+ *
  * Usage: bench_interactive PATH/TO/blobcastd [edits] [cameras] [spheres]
+ *                          [structural]
  * (spheres: fig18's count, default 1024; a large scene loads for a while
- * before the drag starts, and above 4096 the no-damage run is left out)
+ * before the drag starts, and above 4096 the no-damage run is left out;
+ * structural: how many INSERT and REMOVE pairs, default 0)
  */
 #include <math.h>
 #include <stdint.h>
@@ -27,6 +34,8 @@
 
 static struct bc_camera scene_cam;
 static uint32_t spheres = 1024;
+static int structural;
+static uint32_t root_id = 1, root_children; /* fig18: the root union is id 1 */
 static struct bc_prim_data original;
 
 static void send_view(struct conn *c)
@@ -80,6 +89,137 @@ static void drag(struct conn *c, uint32_t id, int edits, const char *label)
 		    label, l.n, (long long)l.p50, (long long)l.p99,
 		    (long long)l.max, l.bytes, l.rects);
 	}
+}
+
+/* Sends op alone and waits for its EDIT_APPLIED and then the FRAME whose
+ * order reflects it: the two latencies in ms, or -1 on an error. */
+static int timed_edit(struct conn *c, const struct bc_proto_edit_op *op,
+                      int64_t *applied_ms, int64_t *frame_ms)
+{
+	struct bc_msg m = {.type = BC_MSG_EDIT};
+	int64_t t0 = t_now_ms();
+	uint64_t order = 0;
+	uint32_t seq;
+	m.edit.nops = 1;
+	m.edit.ops = op;
+	seq = conn_send(c, &m);
+	for (;;) {
+		int rc = conn_recv(c, 60000);
+		if (rc != 1) {
+			fprintf(stderr, "no answer to the edit (%s)\n",
+			        rc == 0 ? "timed out" : "connection lost");
+			return -1;
+		}
+		if (c->m.type == BC_MSG_ERROR && c->m.seq == seq) {
+			fprintf(stderr, "edit refused: %.*s\n",
+			        (int)c->m.error.text.len, c->m.error.text.ptr);
+			return -1;
+		}
+		if (c->m.type == BC_MSG_EDIT_APPLIED && !order) {
+			order = c->m.edit_applied.order;
+			*applied_ms = t_now_ms() - t0;
+		} else if (c->m.type == BC_MSG_FRAME && order &&
+		           c->m.frame.order >= order) {
+			*frame_ms = t_now_ms() - t0;
+			return 0;
+		}
+	}
+}
+
+static void print_pcts(const char *what, int64_t *v, int n)
+{
+	qsort(v, (size_t)n, sizeof(int64_t), latency_cmp_i64);
+	printf(" %s_p50_ms=%lld %s_p99_ms=%lld", what, (long long)v[n / 2],
+	       what, (long long)v[(n * 99) / 100]);
+}
+
+/* The CPU time (clock ticks) process pid has used, -1 when unknown. */
+static long long cpu_ticks(pid_t pid)
+{
+	char path[64], buf[1024], *p;
+	long long ut = 0, st = 0;
+	FILE *f;
+	size_t n;
+	snprintf(path, sizeof(path), "/proc/%d/stat", (int)pid);
+	if (!(f = fopen(path, "r"))) {
+		return -1;
+	}
+	n = fread(buf, 1, sizeof(buf) - 1, f);
+	fclose(f);
+	buf[n] = 0;
+	/* Fields 14 and 15, after the command's closing parenthesis. */
+	if (!(p = strrchr(buf, ')')) ||
+	    sscanf(p + 2,
+	           "%*c %*d %*d %*d %*d %*d %*u %*u %*u %*u %*u %lld %lld", &ut,
+	           &st) != 2) {
+		return -1;
+	}
+	return ut + st;
+}
+
+/* Waits (at most two minutes) until the daemon's CPU time stops growing
+ * for a second: a large scene's load leaves its snapshot being written
+ * in the background for a while, which would be timed with the edits. */
+static void wait_idle(pid_t pid)
+{
+	long long last = cpu_ticks(pid);
+	for (int i = 0; i < 120 && last >= 0; i++) {
+		long long now;
+		t_sleep_ms(1000);
+		now = cpu_ticks(pid);
+		if (now < 0 || now - last <= 2) {
+			return;
+		}
+		last = now;
+	}
+}
+
+/* INSERT one sphere as operand `position` of the root union, then REMOVE
+ * it, pairs times, each edit waiting for the frame that shows it. */
+static void structure(struct conn *c, int pairs, uint32_t position,
+                      const char *where)
+{
+	int64_t *v = bc_calloc((size_t)pairs * 4, sizeof(int64_t));
+	int n = 0;
+	for (int i = 0; v && i < pairs; i++) {
+		static const float rot[4] = {0, 0, 0, 1};
+		const float pos[3] = {0.05f * (float)(i % 7), 0.0f, 0.0f};
+		const float radius = 0.1f;
+		uint32_t id = 0x7F000000u + (uint32_t)i + position;
+		struct bc_proto_buf b;
+		struct bc_proto_edit_op ins = {.kind = BC_PROTO_EDIT_INSERT,
+		                               .node = root_id,
+		                               .position = position};
+		struct bc_proto_edit_op rem = {.kind = BC_PROTO_EDIT_REMOVE,
+		                               .node = id};
+		int rc;
+		bc_proto_buf_init(&b, 0);
+		if (bc_proto_scene_begin(&b, NULL, 1) ||
+		    bc_proto_scene_prim(&b, BC_PRIM_SPHERE, id, pos, rot, NULL,
+		                        1, &radius)) {
+			bc_proto_buf_finish(&b);
+			break;
+		}
+		ins.subtree.ptr = b.data;
+		ins.subtree.len = (uint32_t)b.len;
+		rc = timed_edit(c, &ins, &v[n], &v[pairs + n]);
+		bc_proto_buf_finish(&b);
+		if (rc ||
+		    timed_edit(c, &rem, &v[2 * pairs + n], &v[3 * pairs + n])) {
+			break;
+		}
+		n++;
+	}
+	if (n > 0) {
+		printf("structural spheres=%u at=%s pairs=%d", spheres, where,
+		       n);
+		print_pcts("insert_applied", v, n);
+		print_pcts("insert_frame", v + pairs, n);
+		print_pcts("remove_applied", v + 2 * pairs, n);
+		print_pcts("remove_frame", v + 3 * pairs, n);
+		printf("\n");
+	}
+	bc_free(v);
 }
 
 static void orbit(struct conn *c, int cameras)
@@ -148,6 +288,13 @@ static int run(const char *label, const char *const *opts, int edits,
 	}
 	drag(&c, id, 3, "warm-up");
 	drag(&c, id, edits, label);
+	if (structural > 0 && strcmp(label, "damage") == 0) {
+		settle(&c);
+		wait_idle(d.pid);
+		fprintf(stderr, "structural: timing %d pairs\n", structural);
+		structure(&c, structural, root_children, "end");
+		structure(&c, structural, root_children / 2, "middle");
+	}
 	if (cameras > 0) {
 		settle(&c);
 		orbit(&c, cameras);
@@ -171,12 +318,16 @@ int main(int argc, char **argv)
 	int cameras = argc > 3 ? atoi(argv[3]) : 60;
 	if (argc < 2) {
 		fprintf(stderr, "usage: bench_interactive PATH/TO/blobcastd "
-		                "[edits] [cameras] [spheres]\n");
+		                "[edits] [cameras] [spheres] [structural]\n");
 		return 2;
 	}
 	if (argc > 4) {
 		spheres = (uint32_t)atoi(argv[4]);
 	}
+	if (argc > 5) {
+		structural = atoi(argv[5]);
+	}
+	root_children = spheres;
 	daemon_path = argv[1];
 	signal(SIGPIPE, SIG_IGN);
 	(void)conn_view;
