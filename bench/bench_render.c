@@ -21,8 +21,11 @@
  * vector path (opts.simd off and auto) and with one and two threads, side
  * by side in one run (see frames_main).
  *
+ * With --big it times the cold and warm 1024x1024 frames of the two
+ * scenes of a million primitives (see big_main).
+ *
  * Usage: bench_render [--size N] [--threads T] [--reps R] [--quick]
- *                     [--frames]
+ *                     [--frames] [--big]
  *   --size N     frame edge (default 512)
  *   --threads T  threads for both backends (default 1: steadier on a
  *                shared machine; 0 = one per core; CPU time then sums
@@ -31,6 +34,7 @@
  *                --frames: rounds, the median is kept
  *   --quick      only the first three scenes (--frames: four of them)
  *   --frames     cold and warm frames, scalar and vector, 1 and 2 threads
+ *   --big        fig18 1 000 000 spheres and fig16 L6, 1024 by default
  */
 #include <inttypes.h>
 #include <math.h>
@@ -420,6 +424,97 @@ static int frames_main(uint32_t size, int reps, bool quick)
 	return 0;
 }
 
+/*
+ * --big: the scenes of a million primitives the scale goal names -- fig18
+ * with 1 000 000 smooth spheres and Fig. 16's level 6 (1 111 110
+ * primitives) -- at size x size (1024 by default here), the vector path
+ * with one and two threads: the cold frame (tile lists built) and the
+ * fastest of two warm frames, wall and process CPU time, per round, and
+ * the time the generator and the layout took.
+ */
+static int big_main(uint32_t size, int reps)
+{
+	static const struct scene big[] = {
+	    {"fig18 smooth spheres 1M",
+	     "fig18",
+	     {.count = 1000000,
+	      .kind = BC_GEN_KIND_SPHERES,
+	      .blend = BC_GEN_BLEND_SMOOTH},
+	     0,
+	     1},
+	    {"fig16 L6 smooth",
+	     "fig16",
+	     {.level = 6, .blend = BC_GEN_BLEND_SMOOTH},
+	     0,
+	     1},
+	};
+	static const int use[2] = {CONF_AUTO1, CONF_AUTO2};
+	char model[256], load[64];
+	cpu_model(model, sizeof(model));
+	load_avg(load, sizeof(load));
+	printf("tiled, vector path, frame %ux%u; CPU: %s, %ld online; load "
+	       "average at start: %s\n",
+	       size, size, model, sysconf(_SC_NPROCESSORS_ONLN), load);
+	printf("%-24s %8s %7s %-6s %5s | %8s %8s %7s | %8s %8s\n", "scene",
+	       "prims", "gen", "conf", "round", "cold", "cpu", "abuf", "warm",
+	       "cpu");
+	for (size_t s = 0; s < sizeof(big) / sizeof(big[0]); s++) {
+		struct bc_tree *t = bc_tree_create();
+		struct bc_camera cam;
+		struct bc_errinfo ei = {0};
+		struct bc_renderer *r[2] = {0};
+		struct bc_frame f = {0};
+		double g0 = clock_ms(CLOCK_MONOTONIC), gen;
+		if (!t || bc_gen(big[s].gen, &big[s].opts, t, &cam, &ei) ||
+		    bc_frame_init(&f, size, size)) {
+			fprintf(stderr, "bench_render: %s: %s\n", big[s].label,
+			        t ? ei.msg : "out of memory");
+			return 1;
+		}
+		gen = clock_ms(CLOCK_MONOTONIC) - g0;
+		for (int c = 0; c < 2; c++) {
+			struct bc_render_opts o = {.threads =
+			                               confs[use[c]].threads,
+			                           .simd = confs[use[c]].simd};
+			if (bc_renderer_create(&r[c], BC_BACKEND_TILED, &o,
+			                       &ei) ||
+			    bc_renderer_sync(r[c], t, NULL, &ei)) {
+				fprintf(stderr, "bench_render: %s\n", ei.msg);
+				return 1;
+			}
+		}
+		for (int i = 0; i < reps; i++) {
+			for (int c = 0; c < 2; c++) {
+				double cw, cc, ab, ww = INFINITY, wc = 0.0;
+				frame_timed(r[c], t, true, &cam, &f, &cw, &cc,
+				            &ab);
+				for (int k = 0; k < 2; k++) {
+					double w, cpu;
+					frame_timed(r[c], t, false, &cam, &f,
+					            &w, &cpu, NULL);
+					if (w < ww) {
+						ww = w;
+						wc = cpu;
+					}
+				}
+				printf("%-24s %8u %7.0f %-6s %5d | %8.1f %8.1f "
+				       "%7.1f | %8.1f %8.1f\n",
+				       big[s].label, bc_tree_prim_count(t), gen,
+				       confs[use[c]].name, i + 1, cw, cc, ab,
+				       ww, wc);
+				fflush(stdout);
+			}
+		}
+		bc_renderer_destroy(r[0]);
+		bc_renderer_destroy(r[1]);
+		bc_frame_finish(&f);
+		bc_tree_destroy(t);
+	}
+	load_avg(load, sizeof(load));
+	printf("load average at the end: %s\n", load);
+	return 0;
+}
+
 int main(int argc, char **argv)
 {
 	size_t nscenes = sizeof(scenes) / sizeof(scenes[0]);
@@ -428,7 +523,7 @@ int main(int argc, char **argv)
 	struct bc_render_opts opts = {.threads = 1};
 	double tiled256 = 0.0, tiled4096 = 0.0;
 	uint32_t nreps = 3;
-	bool quick = false, frames = false;
+	bool quick = false, frames = false, big = false;
 	const struct bc_opt opts_table[] = {
 	    {.name = "size",
 	     .kind = BC_OPT_U32,
@@ -461,6 +556,12 @@ int main(int argc, char **argv)
 	     .dst = &frames,
 	     .help = "cold and warm frames of tiled, simd off and auto, 1 "
 	             "and 2 threads (the median of R rounds)"},
+	    {.name = "big",
+	     .kind = BC_OPT_FLAG,
+	     .dst = &big,
+	     .help = "cold and warm frames of fig18 with 1 000 000 spheres "
+	             "and fig16 level 6, vector path, 1 and 2 threads "
+	             "(--size defaults to 1024 here)"},
 	    {.kind = BC_OPT_INVALID},
 	};
 	struct bc_args args = {.prog = "bench_render",
@@ -474,6 +575,10 @@ int main(int argc, char **argv)
 		                     args.pos[0]);
 	}
 	reps = (int)nreps;
+	if (big) {
+		return big_main(bc_args_given(&args, "size") ? size : 1024,
+		                reps);
+	}
 	if (frames) {
 		return frames_main(size, reps, quick);
 	}
