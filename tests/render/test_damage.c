@@ -194,6 +194,24 @@ static uint64_t diff_frames(const struct bc_frame *got,
 	return bad;
 }
 
+/* Draws the tiles marked in tiles into f (a region render), which must
+ * finish; false (and a failed check) when it cannot. */
+static bool draw_marked(struct bc_renderer *r, const struct bc_camera *cam,
+                        struct bc_frame *f, uint8_t *tiles,
+                        struct bc_render_stats *st)
+{
+	struct bc_errinfo ei = {0};
+	if (bc_renderer_render_region(
+	        r, cam, f, &(struct bc_render_region){.tiles = tiles}, st,
+	        &ei)) {
+		fprintf(stderr, "  region: %s\n", ei.msg);
+		CHECK(!"region render");
+		return false;
+	}
+	CHECK(!st->incomplete);
+	return true;
+}
+
 /* ---- Scenes ------------------------------------------------------------- */
 
 /* A generated scene (gen), or a random tree of randtree.h (rt_prims > 0),
@@ -667,14 +685,9 @@ static void damage_scene(enum bc_backend b, const struct scene *s, uint32_t n,
 				}
 			}
 		}
-		if (bc_renderer_render_region(
-		        r, &cam, &f, &(struct bc_render_region){.tiles = tiles},
-		        &st, &ei)) {
-			fprintf(stderr, "  region: %s\n", ei.msg);
-			CHECK(!"region render");
+		if (!draw_marked(r, &cam, &f, tiles, &st)) {
 			break;
 		}
-		CHECK(!st.incomplete);
 		ty->edits++;
 		ty->by_kind[e.kind]++;
 		ty->wholes += st.whole;
@@ -898,14 +911,9 @@ static void splice_scene(const struct scene *s, uint32_t n,
 		for (size_t k = 0; k < nt; k++) {
 			marked += tiles[k] != 0;
 		}
-		if (bc_renderer_render_region(
-		        r, &cam, &f, &(struct bc_render_region){.tiles = tiles},
-		        &st, &ei)) {
-			fprintf(stderr, "  region: %s\n", ei.msg);
-			CHECK(!"region render");
+		if (!draw_marked(r, &cam, &f, tiles, &st)) {
 			break;
 		}
-		CHECK(!st.incomplete);
 		ty->edits++;
 		ty->followed += follows;
 		ty->wholes += st.whole;
