@@ -209,11 +209,9 @@ static void from_lanes(struct bc__pk_ray *r, const struct bc__pk_lanes *ln,
 /* Index of the lowest set bit of x (x != 0). */
 static inline uint32_t lowest_bit(uint32_t x)
 {
-	uint32_t i = 0;
-	while (!((x >> i) & 1u)) {
-		i++;
-	}
-	return i;
+	/* One instruction (tzcnt or bsf); a loop over the bits was a
+	 * tenth of a gears frame on the vector path. */
+	return (uint32_t)__builtin_ctz(x);
 }
 
 /* Shades the hits of one range in its view, as bc__put_hit does, with
