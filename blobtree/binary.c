@@ -207,38 +207,53 @@ static void put_f32s(struct bc_buf *b, const float *f, uint32_t n)
 	}
 }
 
+/* The most bytes one node takes: a primitive with a colour and every
+ * parameter (a unary node or an operator takes fewer). */
+#define NODE_MAX_BYTES (1u + 4u + 12u + 16u + 1u + 12u + 1u + 4u * 255u)
+
+/* Writes n floats at p; returns the end. */
+static uint8_t *at_f32s(uint8_t *p, const float *f, uint32_t n)
+{
+	for (uint32_t i = 0; i < n; i++, p += 4) {
+		bc_put_f32(p, f[i]);
+	}
+	return p;
+}
+
+/* Node n's bytes, composed in one buffer and appended once (a million
+ * nodes' fields appended one by one took most of an encode). */
 static void put_node(struct bc_buf *b, const struct bc_scene_node *n)
 {
+	uint8_t w[NODE_MAX_BYTES], *p = w;
 	if (n->is_op && bc_op_is_unary(n->op.kind)) {
 		/* Unary: tag, id, nfloats, floats; its one child follows. */
 		uint32_t nf = bc_unary_info(n->op.kind)->nparams;
-		put_u8(b, (uint8_t)(BC_SCENE_TAG_OP | (uint32_t)n->op.kind));
-		put_u32(b, n->id);
-		put_u8(b, (uint8_t)nf);
-		put_f32s(b, n->unary.u, nf);
-		return;
-	}
-	if (n->is_op) {
-		put_u8(b, (uint8_t)(BC_SCENE_TAG_OP | (uint32_t)n->op.kind));
-		put_u32(b, n->id);
-		put_f32(b, n->op.blend);
-		put_f32(b, n->op.range);
-		put_u32(b, n->nchildren);
-		return;
-	}
-	{
+		*p++ = (uint8_t)(BC_SCENE_TAG_OP | (uint32_t)n->op.kind);
+		bc_put_le32(p, n->id);
+		p += 4;
+		*p++ = (uint8_t)nf;
+		p = at_f32s(p, n->unary.u, nf);
+	} else if (n->is_op) {
+		*p++ = (uint8_t)(BC_SCENE_TAG_OP | (uint32_t)n->op.kind);
+		bc_put_le32(p, n->id);
+		bc_put_f32(p + 4, n->op.blend);
+		bc_put_f32(p + 8, n->op.range);
+		bc_put_le32(p + 12, n->nchildren);
+		p += 16;
+	} else {
 		uint32_t nf = bc_scene_prim_nfloats(n->prim.kind);
-		put_u8(b, (uint8_t)n->prim.kind);
-		put_u32(b, n->id);
-		put_f32s(b, n->prim.translate, 3);
-		put_f32s(b, n->prim.rotate, 4);
-		put_u8(b, n->prim.has_color ? 1 : 0);
+		*p++ = (uint8_t)n->prim.kind;
+		bc_put_le32(p, n->id);
+		p = at_f32s(p + 4, n->prim.translate, 3);
+		p = at_f32s(p, n->prim.rotate, 4);
+		*p++ = n->prim.has_color ? 1 : 0;
 		if (n->prim.has_color) {
-			put_f32s(b, n->prim.color, 3);
+			p = at_f32s(p, n->prim.color, 3);
 		}
-		put_u8(b, (uint8_t)nf);
-		put_f32s(b, n->prim.params, nf);
+		*p++ = (uint8_t)nf;
+		p = at_f32s(p, n->prim.params, nf);
 	}
+	bc_buf_append(b, w, (size_t)(p - w));
 }
 
 /* The names table (PROTOCOL.md 8): count, then (id, name) by id. */
@@ -276,8 +291,17 @@ static int encode(const struct bc_tree *t, const struct bc_camera *cam,
 		return rc;
 	}
 	bc_buf_init(&b, SIZE_MAX);
-	/* A sphere node is 51 bytes; start near the final size. */
-	bc_buf_reserve(&b, 16 + 48 * (size_t)bc_tree_node_count(t));
+	/* The final size, but for unary nodes' floats and the names: one
+	 * allocation, no growth. */
+	{
+		uint32_t colored = 0, nodes = bc_tree_node_count(t);
+		uint32_t prims = bc_tree_prim_count(t);
+		uint64_t floats = 0;
+		bc_tree_counts(t, &colored, &floats);
+		bc_buf_reserve(&b, 64u + (size_t)(nodes - prims) * 17u +
+		                       (size_t)prims * 35u +
+		                       (size_t)colored * 12u + 4u * floats);
+	}
 	if (scene) {
 		put_u8(&b, (uint8_t)((cam ? BC_SCENE_FLAG_CAMERA : 0) |
 		                     (names ? BC_SCENE_FLAG_NAMES : 0)));
