@@ -4,7 +4,9 @@
  * (PROTOCOL.md section 8) here, then SCENE_LOAD into a fresh daemon
  * whose client already has a VIEW (1024x768 JPEG). Timed from the first
  * byte of the SCENE_LOAD sent to its SCENE_STATE received, to the first
- * FRAME of the new scene and to its still frame; the daemon's resident
+ * FRAME of the new scene and to its still frame, with the daemon's CPU
+ * time (user + system, all threads) until SCENE_STATE, which a busy
+ * machine does not inflate as it does the wall time; the daemon's resident
  * memory (VmRSS, VmHWM of /proc/PID/status) after the still frame, and
  * per primitive. Each size runs in `runs` fresh daemons; the medians are
  * printed.
@@ -26,8 +28,35 @@
 
 struct one {
 	int64_t state_ms, frame_ms, still_ms;
+	int64_t
+	    cpu_ms; /* the daemon's CPU time from SCENE_LOAD to SCENE_STATE */
 	long rss_kb, hwm_kb;
 };
+
+/* CPU time (user + system) pid has used, in ms; 0 when unreadable. */
+static int64_t cpu_of(pid_t pid)
+{
+	char path[64], buf[1024], *p;
+	unsigned long long ut = 0, st = 0;
+	FILE *f;
+	size_t n;
+	snprintf(path, sizeof(path), "/proc/%d/stat", (int)pid);
+	if (!(f = fopen(path, "r"))) {
+		return 0;
+	}
+	n = fread(buf, 1, sizeof(buf) - 1, f);
+	fclose(f);
+	buf[n] = '\0';
+	/* Fields 14 and 15, after the command's closing parenthesis. */
+	if (!(p = strrchr(buf, ')')) ||
+	    sscanf(p + 2,
+	           "%*c %*d %*d %*d %*d %*d %*u %*u %*u %*u %*u %llu %llu", &ut,
+	           &st) != 2) {
+		return 0;
+	}
+	return (int64_t)((ut + st) * 1000u /
+	                 (unsigned long long)sysconf(_SC_CLK_TCK));
+}
 
 /* VmRSS and VmHWM of pid, in KiB (0 when unreadable). */
 static void read_rss(pid_t pid, long *rss, long *hwm)
@@ -90,6 +119,7 @@ static int run_one(const uint8_t *bytes, size_t len, int k, struct one *o)
 	}
 	m.scene_load.scene.ptr = bytes;
 	m.scene_load.scene.len = (uint32_t)len;
+	o->cpu_ms = cpu_of(d.pid);
 	t0 = t_now_ms();
 	if (!conn_send(&c, &m) ||
 	    conn_expect(&c, BC_MSG_SCENE_STATE, 300000) != 1) {
@@ -97,6 +127,7 @@ static int run_one(const uint8_t *bytes, size_t len, int k, struct one *o)
 		goto out;
 	}
 	o->state_ms = t_now_ms() - t0;
+	o->cpu_ms = cpu_of(d.pid) - o->cpu_ms;
 	order = c.m.scene_state.order;
 	if (still_of(&c, order, t0, &o->frame_ms, &o->still_ms)) {
 		fprintf(stderr, "no frame of the loaded scene\n");
@@ -138,7 +169,7 @@ static int bench(uint32_t spheres, int runs)
 	uint32_t prims;
 	struct one o[MAX_RUNS];
 	int64_t st[MAX_RUNS], fr[MAX_RUNS], sl[MAX_RUNS], rss[MAX_RUNS],
-	    hwm[MAX_RUNS];
+	    hwm[MAX_RUNS], cpu[MAX_RUNS];
 	if (!t || bc_gen("fig18", &go, t, &cam, NULL) ||
 	    bc_scene_encode(t, &cam, &bytes, &len)) {
 		fprintf(stderr, "cannot make fig18 with %u spheres\n", spheres);
@@ -153,25 +184,29 @@ static int bench(uint32_t spheres, int runs)
 			return -1;
 		}
 		st[k] = o[k].state_ms;
+		cpu[k] = o[k].cpu_ms;
 		fr[k] = o[k].frame_ms;
 		sl[k] = o[k].still_ms;
 		rss[k] = o[k].rss_kb;
 		hwm[k] = o[k].hwm_kb;
-		printf("  run %d: spheres=%u state_ms=%lld first_frame_ms=%lld "
-		       "still_ms=%lld rss_mib=%.0f hwm_mib=%.0f\n",
-		       k + 1, spheres, (long long)st[k], (long long)fr[k],
-		       (long long)sl[k], (double)rss[k] / 1024.0,
-		       (double)hwm[k] / 1024.0);
+		printf("  run %d: spheres=%u state_ms=%lld daemon_cpu_ms=%lld "
+		       "first_frame_ms=%lld still_ms=%lld rss_mib=%.0f "
+		       "hwm_mib=%.0f\n",
+		       k + 1, spheres, (long long)st[k], (long long)cpu[k],
+		       (long long)fr[k], (long long)sl[k],
+		       (double)rss[k] / 1024.0, (double)hwm[k] / 1024.0);
 		fflush(stdout);
 	}
 	bc_free(bytes);
 	{
 		int64_t r = median(rss, runs), h = median(hwm, runs);
 		printf("load spheres=%u prims=%u bytes=%zu runs=%d "
-		       "state_ms=%lld first_frame_ms=%lld still_ms=%lld "
+		       "state_ms=%lld daemon_cpu_ms=%lld first_frame_ms=%lld "
+		       "still_ms=%lld "
 		       "rss_mib=%.0f hwm_mib=%.0f rss_bytes_per_prim=%.0f "
 		       "hwm_bytes_per_prim=%.0f\n",
 		       spheres, prims, len, runs, (long long)median(st, runs),
+		       (long long)median(cpu, runs),
 		       (long long)median(fr, runs), (long long)median(sl, runs),
 		       (double)r / 1024.0, (double)h / 1024.0,
 		       (double)r * 1024.0 / prims, (double)h * 1024.0 / prims);

@@ -15,6 +15,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <time.h>
 
 #include "blobcast/alloc.h"
@@ -1071,22 +1072,48 @@ struct snap_task {
 	struct bc_errinfo ei;
 };
 
-static void snap_run(struct bc_task *t)
+/* How much lower a snapshot's thread runs than the daemon's others. */
+#define SNAPSHOT_NICE 10
+
+static void snap_write(void *arg)
 {
-	struct snap_task *st = (struct snap_task *)t;
-	struct bc_session *s = t->s;
+	struct snap_task *st = arg;
+	struct bc_session *s = st->t.s;
 	uint8_t *hist = NULL;
 	size_t hlen = 0;
-	/* The session is busy: nothing changes its tree, history or
-	 * store. */
-	if (!bc_store_snapshot_is_due(s->store, BC_SRV_SNAPSHOT_EVERY)) {
-		return;
-	}
 	carry(s, &hist, &hlen);
 	st->rc = bc_store_snapshot_due_with(s->store, BC_SRV_SNAPSHOT_EVERY,
 	                                    s->tree, &s->camera, s->order, hist,
 	                                    hlen, &st->ei);
 	bc_free(hist);
+}
+
+static void snap_write_niced(void *arg)
+{
+	/* Linux: the calling thread's nice value only. Advice: a snapshot
+	 * that cannot lower itself is written all the same. */
+	(void)setpriority(PRIO_PROCESS, 0,
+	                  getpriority(PRIO_PROCESS, 0) + SNAPSHOT_NICE);
+	snap_write(arg);
+}
+
+/* The snapshot is written by a thread of its own at a lower priority (a
+ * million primitives' JSON is seconds of CPU; on two cores it held back
+ * the first frame of the scene just loaded), which this task waits for. */
+static void snap_run(struct bc_task *t)
+{
+	struct snap_task *st = (struct snap_task *)t;
+	uv_thread_t th;
+	/* The session is busy: nothing changes its tree, history or
+	 * store. */
+	if (!bc_store_snapshot_is_due(t->s->store, BC_SRV_SNAPSHOT_EVERY)) {
+		return;
+	}
+	if (uv_thread_create(&th, snap_write_niced, st) == 0) {
+		uv_thread_join(&th);
+	} else {
+		snap_write(st);
+	}
 }
 
 static void snap_done(struct bc_task *t)
