@@ -21,6 +21,7 @@
 #include "blobcast/blobtree.h"
 #include "blobcast/gen.h"
 #include "blobcast/scene.h"
+#include "latency.h"
 
 #define W 1024u
 #define H 768u
@@ -56,23 +57,6 @@ static int64_t cpu_of(pid_t pid)
 	}
 	return (int64_t)((ut + st) * 1000u /
 	                 (unsigned long long)sysconf(_SC_CLK_TCK));
-}
-
-/* VmRSS and VmHWM of pid, in KiB (0 when unreadable). */
-static void read_rss(pid_t pid, long *rss, long *hwm)
-{
-	char path[64], line[256];
-	FILE *f;
-	*rss = *hwm = 0;
-	snprintf(path, sizeof(path), "/proc/%d/status", (int)pid);
-	if (!(f = fopen(path, "r"))) {
-		return;
-	}
-	while (fgets(line, sizeof(line), f)) {
-		sscanf(line, "VmRSS: %ld", rss);
-		sscanf(line, "VmHWM: %ld", hwm);
-	}
-	fclose(f);
 }
 
 /* Reads frames until the still frame of order (or later). */
@@ -133,7 +117,7 @@ static int run_one(const uint8_t *bytes, size_t len, int k, struct one *o)
 		fprintf(stderr, "no frame of the loaded scene\n");
 		goto out;
 	}
-	read_rss(d.pid, &o->rss_kb, &o->hwm_kb);
+	latency_rss_of(d.pid, &o->rss_kb, &o->hwm_kb);
 	rc = 0;
 out:
 	conn_close(&c);
@@ -145,15 +129,9 @@ out:
 	return rc;
 }
 
-static int cmp_i64(const void *a, const void *b)
-{
-	int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
-	return (x > y) - (x < y);
-}
-
 static int64_t median(int64_t *v, int n)
 {
-	qsort(v, (size_t)n, sizeof(*v), cmp_i64);
+	qsort(v, (size_t)n, sizeof(*v), latency_cmp_i64);
 	return v[n / 2];
 }
 
