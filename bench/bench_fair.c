@@ -624,26 +624,6 @@ static void disarm_alarm(const char *scenario)
 	}
 }
 
-/* VmRSS and VmHWM of pid in KiB (-1 when unknown). */
-static void rss_of(pid_t pid, long *rss, long *hwm)
-{
-	char path[64], line[256];
-	FILE *f;
-	*rss = *hwm = -1;
-	snprintf(path, sizeof(path), "/proc/%d/status", (int)pid);
-	if (!(f = fopen(path, "r"))) {
-		return;
-	}
-	while (fgets(line, sizeof(line), f)) {
-		if (strncmp(line, "VmRSS:", 6) == 0) {
-			*rss = atol(line + 6);
-		} else if (strncmp(line, "VmHWM:", 6) == 0) {
-			*hwm = atol(line + 6);
-		}
-	}
-	fclose(f);
-}
-
 /* ---- Connections and messages -------------------------------------------- */
 
 /* Connects and says HELLO (every encoding, the server's frame limit).
@@ -2708,7 +2688,7 @@ static void scenario_memory(void)
 			       big ? MEM_BIG_DIM : MEM_SMALL_DIM, err);
 		}
 	}
-	rss_of(d.pid, &rss, &hwm);
+	latency_rss_of(d.pid, &rss, &hwm);
 	have_stats = get_stats(&c, BC_PROTO_STATS_LOAD, &st, err) == 0;
 	report("| views | frames | errors or timeouts |\n|---|---:|---:|\n"
 	       "| %d of %dx%d | %d | %d |\n| %d of %dx%d | %d | %d |\n\n",

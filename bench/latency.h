@@ -110,4 +110,24 @@ static inline int latency_load_fig18(struct conn *c, uint32_t count,
 	return conn_expect(c, BC_MSG_SCENE_STATE, 300000) == 1 ? 0 : -1;
 }
 
+/* VmRSS and VmHWM of process pid in KiB (-1 when unknown). */
+static inline void latency_rss_of(pid_t pid, long *rss, long *hwm)
+{
+	char path[64], line[256];
+	FILE *f;
+	*rss = *hwm = -1;
+	snprintf(path, sizeof(path), "/proc/%d/status", (int)pid);
+	if (!(f = fopen(path, "r"))) {
+		return;
+	}
+	while (fgets(line, sizeof(line), f)) {
+		if (strncmp(line, "VmRSS:", 6) == 0) {
+			*rss = atol(line + 6);
+		} else if (strncmp(line, "VmHWM:", 6) == 0) {
+			*hwm = atol(line + 6);
+		}
+	}
+	fclose(f);
+}
+
 #endif

@@ -24,6 +24,7 @@
 #include "blobcast/num.h"
 #include "blobcast/buf.h"
 #include "blobcast/bytes.h"
+#include "tree_impl.h"
 
 /* ---- pre-order walk ------------------------------------------------------ */
 
@@ -207,37 +208,75 @@ static void put_f32s(struct bc_buf *b, const float *f, uint32_t n)
 	}
 }
 
-static void put_node(struct bc_buf *b, const struct bc_scene_node *n)
+/* The most bytes one node takes: a primitive with a colour and every
+ * parameter (a unary node or an operator takes fewer). */
+#define NODE_MAX_BYTES (1u + 4u + 12u + 16u + 1u + 12u + 1u + 4u * 255u)
+
+/* Writes n floats at p; returns the end. */
+static uint8_t *at_f32s(uint8_t *p, const float *f, uint32_t n)
 {
-	if (n->is_op && bc_op_is_unary(n->op.kind)) {
+	for (uint32_t i = 0; i < n; i++, p += 4) {
+		bc_put_f32(p, f[i]);
+	}
+	return p;
+}
+
+/* Pool node nd's bytes, composed in one buffer and appended once (a
+ * million nodes' fields appended one by one took most of an encode). */
+static void put_node(struct bc_buf *b, const struct bc__node *nd)
+{
+	uint8_t w[NODE_MAX_BYTES], *p = w;
+	if (bc__node_unary(nd)) {
 		/* Unary: tag, id, nfloats, floats; its one child follows. */
-		uint32_t nf = bc_unary_info(n->op.kind)->nparams;
-		put_u8(b, (uint8_t)(BC_SCENE_TAG_OP | (uint32_t)n->op.kind));
-		put_u32(b, n->id);
-		put_u8(b, (uint8_t)nf);
-		put_f32s(b, n->unary.u, nf);
-		return;
-	}
-	if (n->is_op) {
-		put_u8(b, (uint8_t)(BC_SCENE_TAG_OP | (uint32_t)n->op.kind));
-		put_u32(b, n->id);
-		put_f32(b, n->op.blend);
-		put_f32(b, n->op.range);
-		put_u32(b, n->nchildren);
-		return;
-	}
-	{
-		uint32_t nf = bc_scene_prim_nfloats(n->prim.kind);
-		put_u8(b, (uint8_t)n->prim.kind);
-		put_u32(b, n->id);
-		put_f32s(b, n->prim.translate, 3);
-		put_f32s(b, n->prim.rotate, 4);
-		put_u8(b, n->prim.has_color ? 1 : 0);
-		if (n->prim.has_color) {
-			put_f32s(b, n->prim.color, 3);
+		uint32_t nf = bc_unary_info(nd->u.op.kind)->nparams;
+		*p++ = (uint8_t)(BC_SCENE_TAG_OP | (uint32_t)nd->u.op.kind);
+		bc_put_le32(p, nd->id);
+		p += 4;
+		*p++ = (uint8_t)nf;
+		p = at_f32s(p, nd->uparam, nf);
+	} else if (nd->is_op) {
+		*p++ = (uint8_t)(BC_SCENE_TAG_OP | (uint32_t)nd->u.op.kind);
+		bc_put_le32(p, nd->id);
+		bc_put_f32(p + 4, nd->u.op.blend);
+		bc_put_f32(p + 8, nd->u.op.range);
+		bc_put_le32(p + 12, nd->nchildren);
+		p += 16;
+	} else {
+		const struct bc_prim_data *pr = &nd->u.prim;
+		uint32_t nf = bc_scene_prim_nfloats(pr->kind);
+		*p++ = (uint8_t)pr->kind;
+		bc_put_le32(p, nd->id);
+		p = at_f32s(p + 4, pr->translate, 3);
+		p = at_f32s(p, pr->rotate, 4);
+		*p++ = pr->has_color ? 1 : 0;
+		if (pr->has_color) {
+			p = at_f32s(p, pr->color, 3);
 		}
-		put_u8(b, (uint8_t)nf);
-		put_f32s(b, n->prim.params, nf);
+		*p++ = (uint8_t)nf;
+		p = at_f32s(p, pr->params, nf);
+	}
+	bc_buf_append(b, w, (size_t)(p - w));
+}
+
+/* The nodes in pre-order, straight from the pool's child lists (the
+ * order the layout folds them in, and bc_scene_walk gives): no id lookup
+ * per node, and a decoded tree's pool is read front to back. */
+static void put_nodes(struct bc_buf *b, const struct bc_tree *t)
+{
+	uint32_t n = t->root;
+	for (;;) {
+		put_node(b, &t->pool[n]);
+		if (t->pool[n].is_op) {
+			n = t->pool[n].first_child;
+			continue;
+		}
+		while (n != t->root && t->pool[n].next == BC_NONE) {
+			n = t->pool[n].parent;
+		}
+		if (n == t->root) {
+			return;
+		}
+		n = t->pool[n].next;
 	}
 }
 
@@ -265,19 +304,26 @@ static void put_names(struct bc_buf *b, const struct bc_tree *t)
 static int encode(const struct bc_tree *t, const struct bc_camera *cam,
                   bool scene, uint8_t **out, size_t *len)
 {
-	struct bc_scene_walk w;
-	struct bc_scene_node n;
 	struct bc_buf b;
 	bool names = scene && bc_tree_name_count(t) > 0;
-	int rc;
 	*out = NULL;
 	*len = 0;
-	if ((rc = bc_scene_walk_init(&w, t))) {
-		return rc;
+	if (!bc_tree_lin(t) || bc_tree_node_count(t) == 0 ||
+	    t->root == BC_NONE) {
+		return BC_EINVAL;
 	}
 	bc_buf_init(&b, SIZE_MAX);
-	/* A sphere node is 51 bytes; start near the final size. */
-	bc_buf_reserve(&b, 16 + 48 * (size_t)bc_tree_node_count(t));
+	/* The final size, but for unary nodes' floats and the names: one
+	 * allocation, no growth. */
+	{
+		uint32_t colored = 0, nodes = bc_tree_node_count(t);
+		uint32_t prims = bc_tree_prim_count(t);
+		uint64_t floats = 0;
+		bc_tree_counts(t, &colored, &floats);
+		bc_buf_reserve(&b, 64u + (size_t)(nodes - prims) * 17u +
+		                       (size_t)prims * 35u +
+		                       (size_t)colored * 12u + 4u * floats);
+	}
 	if (scene) {
 		put_u8(&b, (uint8_t)((cam ? BC_SCENE_FLAG_CAMERA : 0) |
 		                     (names ? BC_SCENE_FLAG_NAMES : 0)));
@@ -289,10 +335,9 @@ static int encode(const struct bc_tree *t, const struct bc_camera *cam,
 		}
 	}
 	put_u32(&b, bc_tree_node_count(t));
-	while (!b.err && bc_scene_walk_next(&w, &n)) {
-		put_node(&b, &n);
+	if (!b.err) {
+		put_nodes(&b, t);
 	}
-	bc_scene_walk_finish(&w);
 	if (names && !b.err) {
 		put_names(&b, t);
 	}

@@ -28,7 +28,9 @@
 #include <math.h>
 #include <pthread.h>
 #include <stdarg.h>
+#include <stdbool.h>
 #include <stdio.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -980,6 +982,123 @@ static void sb_uint(struct bc_buf *b, uint32_t v)
 	sb_put(b, tmp, (size_t)n);
 }
 
+/* 10^k, 0 <= k <= 22: exact in a double. */
+static const double exact_pow10[23] = {
+    1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
+    1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+
+/* Whether the decimal n * 10^k (|k| <= 22) reads back as a (> 0) the way
+ * jansson reads it (strtod's correctly rounded double, then a float
+ * conversion): with n below 2^53 and 10^|k| exact, one multiplication or
+ * division is that same correctly rounded double. */
+static bool reads_back(uint64_t n, int k, float a)
+{
+	double v =
+	    k < 0 ? (double)n / exact_pow10[-k] : (double)n * exact_pow10[k];
+	return (float)v == a;
+}
+
+/* a (> 0) to p significant digits: *n (p digits) times 10^(*e - p + 1),
+ * *e the exponent of the first digit. Rounded from a double product, so a
+ * value within a hair of a half may round the other way; reads_back
+ * decides what is written. */
+static void to_digits(double a, int p, uint64_t *n, int *e)
+{
+	int x = (int)floor(log10(a)), s;
+	double scaled;
+	uint64_t top = (uint64_t)exact_pow10[p], low = top / 10u;
+	s = p - 1 - x;
+	scaled = s >= 0 ? (s <= 22 ? a * exact_pow10[s] : a * pow(10.0, s))
+	                : (-s <= 22 ? a / exact_pow10[-s] : a / pow(10.0, -s));
+	{
+		/* Halves to even, as printf rounds an exact half. */
+		double whole = floor(scaled), frac = scaled - whole;
+		*n = (uint64_t)whole;
+		*n += frac > 0.5 || (frac == 0.5 && (*n & 1u)) ? 1u : 0u;
+	}
+	if (*n >= top) {
+		*n = (*n + 5u) / 10u;
+		x++;
+	} else if (*n < low) {
+		/* log10 came out one high. */
+		*n = (uint64_t)(scaled * 10.0 + 0.5);
+		x--;
+	}
+	*e = x;
+}
+
+/* n (p digits) times 10^(e - p + 1) as printf's %.{p}g writes it. */
+static int g_text(char *out, bool neg, uint64_t n, int e, int p)
+{
+	char d[24];
+	int nd = p, k = 0;
+	for (int i = p - 1; i >= 0; i--) {
+		d[i] = (char)('0' + n % 10u);
+		n /= 10u;
+	}
+	while (nd > 1 && d[nd - 1] == '0') {
+		nd--;
+	}
+	if (neg) {
+		out[k++] = '-';
+	}
+	if (e < -4 || e >= p) {
+		int ae = e < 0 ? -e : e;
+		out[k++] = d[0];
+		if (nd > 1) {
+			out[k++] = '.';
+			memcpy(out + k, d + 1, (size_t)(nd - 1));
+			k += nd - 1;
+		}
+		out[k++] = 'e';
+		out[k++] = e < 0 ? '-' : '+';
+		if (ae >= 100) {
+			out[k++] = (char)('0' + ae / 100);
+		}
+		out[k++] = (char)('0' + ae / 10 % 10);
+		out[k++] = (char)('0' + ae % 10);
+	} else if (e >= 0) {
+		for (int i = 0; i <= e; i++) {
+			out[k++] = i < nd ? d[i] : '0';
+		}
+		if (nd > e + 1) {
+			out[k++] = '.';
+			memcpy(out + k, d + e + 1, (size_t)(nd - e - 1));
+			k += nd - e - 1;
+		}
+	} else {
+		out[k++] = '0';
+		out[k++] = '.';
+		for (int i = 0; i < -e - 1; i++) {
+			out[k++] = '0';
+		}
+		memcpy(out + k, d, (size_t)nd);
+		k += nd;
+	}
+	return k;
+}
+
+/* f (finite, not 0) as sb_float's printf would write it, without printf
+ * (which took two thirds of a million-primitive snapshot): six digits
+ * when they read back, else nine; 0 when this cannot tell (a value far
+ * from 1, or within a hair of a rounding half), and printf decides. */
+static int fast_float(char *out, float f)
+{
+	float a = fabsf(f);
+	uint64_t n;
+	int e;
+	for (int p = 6; p <= 9; p += 3) {
+		to_digits((double)a, p, &n, &e);
+		if (e - p + 1 < -22 || e - p + 1 > 22) {
+			return 0;
+		}
+		if (reads_back(n, e - p + 1, a)) {
+			return g_text(out, f < 0.0f, n, e, p);
+		}
+	}
+	return 0;
+}
+
 /* Writes f with the fewest digits that read back (as jansson reads: strtod,
  * then a float conversion) to the same bits: six significant digits when
  * they suffice (values typed by hand stay as typed), nine otherwise, which
@@ -991,6 +1110,10 @@ static void sb_float(struct bc_buf *b, float f)
 	if (f == 0.0f && signbit(f)) {
 		/* "-0" would read back as the integer 0. */
 		sb_puts(b, "-0.0");
+		return;
+	}
+	if (f != 0.0f && isfinite(f) && (n = fast_float(tmp, f)) > 0) {
+		sb_put(b, tmp, (size_t)n);
 		return;
 	}
 	n = snprintf(tmp, sizeof(tmp), "%.6g", (double)f);

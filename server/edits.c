@@ -401,8 +401,8 @@ static void prepare(struct bc_task *t)
 		l->rc = bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
 		return;
 	}
-	if ((l->rc = bc_scene_decode(l->scene.ptr, l->scene.len, l->tree,
-	                             &l->cam, &l->has_cam, ei))) {
+	if ((l->rc = bc__load_decode(l->scene.ptr, l->scene.len, l->tree,
+	                             l->copy, &l->cam, &l->has_cam, ei))) {
 		return;
 	}
 	if (bc_tree_node_count(l->tree) > BC_SRV_MAX_NODES) {
@@ -411,8 +411,7 @@ static void prepare(struct bc_task *t)
 		return;
 	}
 	if ((l->rc =
-	         check_scene_bytes(l->tree, l->t.s->ss->max_scene_bytes, ei)) ||
-	    (l->rc = bc_tree_copy(l->copy, l->tree, ei))) {
+	         check_scene_bytes(l->tree, l->t.s->ss->max_scene_bytes, ei))) {
 		return;
 	}
 	if (!(l->state = bc__state_msg(l->tree, &l->cam, l->order,
@@ -421,23 +420,15 @@ static void prepare(struct bc_task *t)
 		    bc_errinfo_set(ei, BC_ENOMEM, "cannot encode the scene");
 		return;
 	}
-	/* On disk before anyone hears of it: journaled, so that no state is
-	 * held by one snapshot alone (a damaged snapshot is recovered from
-	 * the one before it and the journals), then a snapshot, which starts
-	 * the next journal. A scene no snapshot could hold is refused before
-	 * either. Once journaled the load is safe: a failed snapshot is
-	 * tried again by the periodic ones. */
+	/* On disk before anyone hears of it: journaled, which makes it safe
+	 * (a restore replays the record). The snapshot that starts the next
+	 * journal follows on its own task once the load is answered
+	 * (bc_store_append_scene). A scene no snapshot could hold is refused
+	 * before either. */
 	if ((l->rc = bc_store_scene_depth_ok(l->tree, ei)) ||
 	    (l->rc = bc__journal_load(t->s->store, l->order, l->scene.ptr,
 	                              l->scene.len, ei))) {
 		return;
-	}
-	if (bc_store_snapshot(t->s->store, l->tree, &l->cam, l->order, ei)) {
-		bc_log(BC_LOG_WARN,
-		       "session %s: the load of edit %llu is journaled; its "
-		       "snapshot failed (%s)",
-		       t->s->name, (unsigned long long)l->order, ei->msg);
-		memset(ei, 0, sizeof(*ei));
 	}
 }
 

@@ -334,15 +334,21 @@ int bc__store_open_journal(struct bc_store_session *ss, struct bc_errinfo *ei)
 	return 0;
 }
 
-int bc_store_append(struct bc_store_session *ss, uint64_t order,
-                    const uint8_t *rec, size_t len, struct bc_errinfo *ei)
+/* Appends one record made of the n pieces parts[i] (sizes[i] bytes). */
+static int append_parts(struct bc_store_session *ss, uint64_t order,
+                        const uint8_t *const *parts, const size_t *sizes, int n,
+                        struct bc_errinfo *ei)
 {
 	uint8_t hdr[RECORD_HEADER];
-	const uint8_t *parts[2] = {hdr, rec};
-	size_t sizes[2] = {sizeof(hdr), len};
+	uLong crc = crc32(0L, Z_NULL, 0);
+	size_t len = 0;
 	if (ss->journal_fd < 0) {
 		return bc_errinfo_set(ei, BC_ESTATE,
 		                      "the session's journal is not open");
+	}
+	for (int i = 0; i < n; i++) {
+		len += sizes[i];
+		crc = crc32(crc, parts[i], (uInt)sizes[i]);
 	}
 	if (len > MAX_RECORD) {
 		return bc_errinfo_set(ei, BC_ELIMIT,
@@ -351,22 +357,23 @@ int bc_store_append(struct bc_store_session *ss, uint64_t order,
 	bc_put_le32(hdr, JOURNAL_MAGIC);
 	bc_put_le32(hdr + 4, (uint32_t)len);
 	bc_put_le64(hdr + 8, order);
-	bc_put_le32(hdr + 16, (uint32_t)crc32(0L, rec, (uInt)len));
+	bc_put_le32(hdr + 16, (uint32_t)crc);
 	if (bc__store_injected("journal-write", ss->path)) {
 		goto fail;
 	}
-	for (int i = 0; i < 2; i++) {
-		size_t done = 0;
-		while (done < sizes[i]) {
-			ssize_t n = write(ss->journal_fd, parts[i] + done,
-			                  sizes[i] - done);
-			if (n < 0 && errno == EINTR) {
+	for (int i = -1; i < n; i++) {
+		const uint8_t *p = i < 0 ? hdr : parts[i];
+		size_t size = i < 0 ? sizeof(hdr) : sizes[i], done = 0;
+		while (done < size) {
+			ssize_t k =
+			    write(ss->journal_fd, p + done, size - done);
+			if (k < 0 && errno == EINTR) {
 				continue;
 			}
-			if (n <= 0) {
+			if (k <= 0) {
 				goto fail;
 			}
-			done += (size_t)n;
+			done += (size_t)k;
 		}
 	}
 	if (fdatasync(ss->journal_fd) != 0) {
@@ -386,6 +393,26 @@ fail : {
 	}
 	return rc;
 }
+}
+
+int bc_store_append(struct bc_store_session *ss, uint64_t order,
+                    const uint8_t *rec, size_t len, struct bc_errinfo *ei)
+{
+	return append_parts(ss, order, &rec, &len, 1, ei);
+}
+
+int bc_store_append_scene(struct bc_store_session *ss, uint64_t order,
+                          const uint8_t *head, size_t hlen,
+                          const uint8_t *scene, size_t len,
+                          struct bc_errinfo *ei)
+{
+	const uint8_t *parts[2] = {head, scene};
+	size_t sizes[2] = {hlen, len};
+	int rc = append_parts(ss, order, parts, sizes, 2, ei);
+	if (rc == 0) {
+		ss->scene_journaled = true;
+	}
+	return rc;
 }
 
 uint64_t bc_store_journal_records(const struct bc_store_session *ss)

@@ -360,5 +360,11 @@ int bc__replay_record(void *ud, uint64_t order, const uint8_t *rec, size_t len);
  * two 0xff bytes (an op_count no EDIT has) and the scene encoding. */
 int bc__journal_load(struct bc_store_session *st, uint64_t order,
                      const uint8_t *scene, size_t len, struct bc_errinfo *ei);
+/* Decodes a SCENE_LOAD's scene into tree (camera and has_cam as
+ * bc_scene_decode) and into copy, the work layer's, on two threads when it
+ * is large. */
+int bc__load_decode(const uint8_t *scene, size_t len, struct bc_tree *tree,
+                    struct bc_tree *copy, struct bc_camera *cam, bool *has_cam,
+                    struct bc_errinfo *ei);
 
 #endif

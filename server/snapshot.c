@@ -155,6 +155,7 @@ int bc_store_snapshot_with(struct bc_store_session *ss, const struct bc_tree *t,
 	jfd = -1;
 	ss->base = order;
 	ss->records = 0;
+	ss->scene_journaled = false;
 	ss->size = lseek(ss->journal_fd, 0, SEEK_END);
 	ss->retry_at_ms = 0;
 	ss->backoff_ms = 0;
@@ -180,7 +181,7 @@ out:
 
 bool bc_store_snapshot_is_due(const struct bc_store_session *ss, uint64_t every)
 {
-	return ss->records >= every &&
+	return (ss->records >= every || ss->scene_journaled) &&
 	       bc_clock_ns() / 1000000u >= ss->retry_at_ms;
 }
 
@@ -200,7 +201,7 @@ int bc_store_snapshot_due_with(struct bc_store_session *ss, uint64_t every,
 {
 	uint64_t now = bc_clock_ns() / 1000000u;
 	int rc;
-	if (ss->records < every || now < ss->retry_at_ms) {
+	if (!bc_store_snapshot_is_due(ss, every)) {
 		return 0;
 	}
 	if ((rc = bc_store_snapshot_with(ss, t, cam, order, hist, hlen, ei))) {

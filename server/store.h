@@ -16,7 +16,8 @@
  * A restore never goes back in time. A snapshot that does not load is
  * recovered from the previous snapshot and the journals after it (a
  * SCENE_LOAD is journaled too, so that no state is held by one snapshot
- * alone); it is then kept as snap-N.json.damaged-TIME. When the files
+ * alone, and its snapshot follows its answer: bc_store_append_scene); it
+ * is then kept as snap-N.json.damaged-TIME. When the files
  * cannot give back every edit they acknowledged (records damaged,
  * missing or not applying, or a newest state no older file reaches), the
  * session is not served and its files are not touched: opening it fails
@@ -124,7 +125,8 @@ int bc_store_snapshot_with(struct bc_store_session *ss, const struct bc_tree *t,
                            const uint8_t *hist, size_t hlen,
                            struct bc_errinfo *ei);
 /* The periodic snapshot: taken when every or more records were journaled
- * since the last one, unless a failed attempt is still backing off
+ * since the last one, or a whole scene was (bc_store_append_scene),
+ * unless a failed attempt is still backing off
  * (BC_STORE_SNAPSHOT_RETRY_*). Returns 0 when nothing was due or it
  * succeeded; a failure is logged as an error and also returned. */
 int bc_store_snapshot_due(struct bc_store_session *ss, uint64_t every,
@@ -153,6 +155,15 @@ void bc_store_owner_read(const struct bc_store_session *ss,
 /* Appends one record and syncs it to disk before returning 0. */
 int bc_store_append(struct bc_store_session *ss, uint64_t order,
                     const uint8_t *rec, size_t len, struct bc_errinfo *ei);
+/* Appends a record that holds a whole scene (a SCENE_LOAD): head[0..hlen)
+ * then scene[0..len), as one record, synced as bc_store_append. Once it is
+ * on disk the scene is safe; the snapshot that takes its place becomes due
+ * at once (bc_store_snapshot_is_due), to be written after the load is
+ * answered rather than before, and the journal holds it until then. */
+int bc_store_append_scene(struct bc_store_session *ss, uint64_t order,
+                          const uint8_t *head, size_t hlen,
+                          const uint8_t *scene, size_t len,
+                          struct bc_errinfo *ei);
 
 /* Records appended since the last snapshot. */
 uint64_t bc_store_journal_records(const struct bc_store_session *ss);

@@ -24,6 +24,9 @@ struct bc_store_session {
 	int journal_fd;
 	uint64_t base; /* order of the snapshot the journal follows */
 	uint64_t records;
+	/* A record holding a whole scene (a load) was journaled since the
+	 * last snapshot: a snapshot is due at once. */
+	bool scene_journaled;
 	/* Restoring: acknowledged edits the journals could not give back
 	 * (damaged, missing or not applying records), and where a torn tail
 	 * starts in the journal read last (-1: none). */

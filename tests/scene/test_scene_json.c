@@ -8,7 +8,11 @@
  */
 #include <dirent.h>
 #include <fcntl.h>
+#include <math.h>
 #include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -141,6 +145,76 @@ static void awkward_floats_round_trip_exactly(void)
 	REQUIRE(bc_tree_pop_op(t, NULL) == 0);
 	REQUIRE(bc_tree_end(t, NULL) == 0);
 	check_json_round_trip(t, &cam);
+	bc_tree_destroy(t);
+}
+
+/* The text each float is written as: six significant digits when they
+ * read back, else nine (printf's %g forms), over magnitudes from 1e-25 to
+ * 1e6 (a parameter's bound), exact halves and integers. */
+static void floats_are_written_in_their_shortest_g_form(void)
+{
+	enum { SPHERES = 3000 };
+	struct bc_tree *t = bc_tree_create();
+	struct bc_op_data u = {BC_OP_UNION, 0, 0};
+	static float want[SPHERES][3];
+	uint64_t x = 88172645463325252ull;
+	char *text, *at;
+	REQUIRE(t);
+	bc_tree_begin(t);
+	REQUIRE(bc_tree_push_op(t, 0, &u, NULL) == 0);
+	for (int i = 0; i < SPHERES; i++) {
+		struct bc_prim_data p;
+		bc_prim_data_init(&p, BC_PRIM_SPHERE);
+		for (int k = 0; k < 3; k++) {
+			double m;
+			x ^= x << 13;
+			x ^= x >> 7;
+			x ^= x << 17;
+			m = (double)(x >> 11) / 9007199254740992.0;
+			switch (i % 3) {
+			case 0: /* any magnitude */
+				want[i][k] =
+				    (float)(m *
+				            pow(10.0, (double)(x % 31) - 25.0));
+				break;
+			case 1: /* exact halves and quarters near a million */
+				want[i][k] =
+				    (float)((double)(x % 8000000) / 8.0);
+				break;
+			default: /* typed by hand */
+				want[i][k] =
+				    (float)((double)(x % 2000001) / 1000.0 -
+				            1000.0);
+			}
+			if (x & 1u) {
+				want[i][k] = -want[i][k];
+			}
+			p.translate[k] = want[i][k];
+		}
+		REQUIRE(bc_tree_put_prim(t, 0, &p, NULL) == 0);
+	}
+	REQUIRE(bc_tree_pop_op(t, NULL) == 0);
+	REQUIRE(bc_tree_end(t, NULL) == 0);
+	REQUIRE((text = bc_scene_to_json(t, NULL)));
+	at = text;
+	for (int i = 0; i < SPHERES; i++) {
+		REQUIRE((at = strstr(at, "\"translate\": [")));
+		at += strlen("\"translate\": [");
+		for (int k = 0; k < 3; k++) {
+			char ref[40];
+			size_t n;
+			snprintf(ref, sizeof(ref), "%.6g", (double)want[i][k]);
+			if ((float)strtod(ref, NULL) != want[i][k]) {
+				snprintf(ref, sizeof(ref), "%.9g",
+				         (double)want[i][k]);
+			}
+			n = strlen(ref);
+			CHECK(strncmp(at, ref, n) == 0 &&
+			      (at[n] == ',' || at[n] == ']'));
+			at += n + (k < 2 ? 2 : 1);
+		}
+	}
+	bc_free(text);
 	bc_tree_destroy(t);
 }
 
@@ -600,6 +674,8 @@ static const struct bc_test tests[] = {
     {"random_trees_round_trip_through_json",
      random_trees_round_trip_through_json},
     {"awkward_floats_round_trip_exactly", awkward_floats_round_trip_exactly},
+    {"floats_are_written_in_their_shortest_g_form",
+     floats_are_written_in_their_shortest_g_form},
     {"defaults_and_assigned_ids", defaults_and_assigned_ids},
     {"bad_files_fail_with_path_and_reason",
      bad_files_fail_with_path_and_reason},

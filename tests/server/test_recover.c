@@ -5,6 +5,9 @@
  *    kill -9, the load and the 100 acknowledged edits after it come back
  *    (they used to restart from the snapshot before the load, at order 0,
  *    and order numbers were used again);
+ *  - a SCENE_LOAD is safe once answered: its snapshot is written after its
+ *    SCENE_STATE, and a kill -9 right after that answer restores the
+ *    loaded scene, whole, from the journal;
  *  - a session whose journal lost an acknowledged edit (a flipped record)
  *    is not served from what is left: JOIN is refused with EIO naming
  *    `blobcastd --check`, its files stay as they were, other sessions are
@@ -18,6 +21,7 @@
 
 #include "blobcast/alloc.h"
 #include "blobcast/blobtree.h"
+#include "blobcast/gen.h"
 #include "blobcast/scene.h"
 #include "test.h" /* before daemon.h: its test runner needs it */
 #include "daemon.h"
@@ -226,11 +230,67 @@ static void a_session_that_lost_an_edit_is_not_served(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
+/* The scene of session s as a joiner sees it, in the encoding without
+ * camera, and its order. */
+static void joined_bytes(const struct daemon *d, const char *s, uint64_t *order,
+                         uint8_t **bytes, size_t *len)
+{
+	struct conn j;
+	struct bc_tree *t;
+	REQUIRE(conn_open(&j, d) == 0);
+	REQUIRE(conn_hello(&j, "joiner") == 0);
+	REQUIRE(conn_join(&j, s, BC_PROTO_ROLE_VIEWER, false) == 0);
+	REQUIRE(conn_expect(&j, BC_MSG_SCENE_STATE, 60000) == 1);
+	*order = j.m.scene_state.order;
+	REQUIRE((t = scene_of(&j)));
+	REQUIRE(bc_tree_encode(t, bytes, len) == 0);
+	bc_tree_destroy(t);
+	conn_close(&j);
+}
+
+static void a_load_is_safe_once_answered(void)
+{
+	struct bc_gen_opts o = {.count = 20000,
+	                        .kind = BC_GEN_KIND_SPHERES,
+	                        .blend = BC_GEN_BLEND_SMOOTH};
+	struct bc_tree *t = bc_tree_create();
+	struct bc_camera cam;
+	struct daemon d;
+	struct conn a;
+	char dir[128];
+	uint8_t *want = NULL, *got = NULL;
+	size_t want_len = 0, got_len = 0;
+	uint64_t load_order, order;
+	snprintf(dir, sizeof(dir), "%s/answered", base_dir);
+	REQUIRE(t && bc_gen("fig18", &o, t, &cam, NULL) == 0);
+	REQUIRE(bc_tree_encode(t, &want, &want_len) == 0);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	editor(&a, &d, "kl", true);
+	/* Big enough that its snapshot is likely still being written. */
+	conn_load_tree(&a, t, &cam);
+	load_order = a.m.scene_state.order;
+	daemon_stop(&d, SIGKILL);
+	conn_close(&a);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	joined_bytes(&d, "kl", &order, &got, &got_len);
+	CHECK_EQ_INT(order, load_order);
+	CHECK(got_len == want_len && memcmp(got, want, want_len) == 0);
+	/* The next edit takes the next number. */
+	editor(&a, &d, "kl", false);
+	move_to(&a, 5, &order);
+	CHECK_EQ_INT(order, load_order + 1);
+	conn_close(&a);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+	bc_free(want);
+	bc_free(got);
+}
+
 static const struct bc_test tests[] = {
     {"a_damaged_load_snapshot_loses_nothing",
      a_damaged_load_snapshot_loses_nothing},
     {"a_session_that_lost_an_edit_is_not_served",
      a_session_that_lost_an_edit_is_not_served},
+    {"a_load_is_safe_once_answered", a_load_is_safe_once_answered},
 };
 
 int main(int argc, char **argv)

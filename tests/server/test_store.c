@@ -6,7 +6,8 @@
  * unchanged, checked and repaired on from its highest order; other
  * sessions carry on; a snapshot that failed at any step (injected) leaves
  * nothing on disk; periodic snapshots back off after a failure; journal write
- * failures are logged as errors.
+ * failures are logged as errors; a journaled whole scene is safe before
+ * the snapshot it makes due.
  */
 #include <dirent.h>
 #include <fcntl.h>
@@ -563,6 +564,80 @@ static void failures_back_off_and_are_logged_as_errors(void)
 	free(dir);
 }
 
+/* The last record a restore replays, whole. */
+struct last_record {
+	uint64_t order;
+	uint8_t rec[64];
+	size_t len;
+};
+
+static int keep_last(void *ud, uint64_t order, const uint8_t *rec, size_t len)
+{
+	struct last_record *l = ud;
+	l->order = order;
+	l->len = len < sizeof(l->rec) ? len : sizeof(l->rec);
+	memcpy(l->rec, rec, l->len);
+	return 0;
+}
+
+/* A record holding a whole scene (a SCENE_LOAD) is safe once appended:
+ * its snapshot, due at once, may come later or never (kill -9), and a
+ * restore gives the record back whole; the snapshot taken clears it. */
+static void a_journaled_scene_is_safe_before_its_snapshot(void)
+{
+	static const uint8_t head[2] = {0xff, 0xff};
+	static const char scene[] = "a-whole-scene";
+	char *dir = make_dir();
+	struct bc_store *st;
+	struct bc_store_session *ss;
+	struct bc_tree *t = default_tree();
+	struct bc_camera cam;
+	struct last_record last = {0};
+	struct replayed r;
+	uint64_t order;
+	bool created;
+	REQUIRE(dir && t);
+	make_session(dir, "a", 3, 0);
+	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
+	CHECK(!bc_store_snapshot_is_due(ss, 1000));
+	REQUIRE(bc_store_append_scene(ss, 4, head, sizeof(head),
+	                              (const uint8_t *)scene, strlen(scene),
+	                              NULL) == 0);
+	CHECK(bc_store_snapshot_is_due(ss, 1000));
+	/* No snapshot: as after a crash right after the load's answer. */
+	bc_store_session_close(ss);
+	bc_store_close(st);
+	REQUIRE(bc_store_open(&st, dir, NULL) == 0);
+	REQUIRE(bc_store_session_open(st, "a", &ss, t, &cam, &order, &created,
+	                              keep_last, &last, NULL) == 0);
+	CHECK_EQ_INT(order, 4);
+	CHECK_EQ_INT(last.order, 4);
+	REQUIRE(last.len == sizeof(head) + strlen(scene));
+	CHECK(memcmp(last.rec, head, sizeof(head)) == 0);
+	CHECK(memcmp(last.rec + sizeof(head), scene, strlen(scene)) == 0);
+	/* The snapshot, once taken, is no longer due. */
+	REQUIRE(bc_store_append_scene(ss, 5, head, sizeof(head),
+	                              (const uint8_t *)scene, strlen(scene),
+	                              NULL) == 0);
+	CHECK(bc_store_snapshot_is_due(ss, 1000));
+	CHECK_EQ_INT(bc_store_snapshot_due(ss, 1000, t, NULL, 5, NULL), 0);
+	CHECK(!bc_store_snapshot_is_due(ss, 1000));
+	CHECK_EQ_INT(bc_store_journal_records(ss), 0);
+	bc_store_session_close(ss);
+	bc_store_close(st);
+	memset(&last, 0, sizeof(last));
+	REQUIRE(bc_store_open(&st, dir, NULL) == 0);
+	REQUIRE(bc_store_session_open(st, "a", &ss, t, &cam, &order, &created,
+	                              keep_last, &last, NULL) == 0);
+	CHECK_EQ_INT(order, 5);
+	CHECK_EQ_INT(last.order, 0); /* nothing replayed after it */
+	bc_store_session_close(ss);
+	bc_store_close(st);
+	bc_tree_destroy(t);
+	rm_rf(dir);
+	free(dir);
+}
+
 static const struct bc_test tests[] = {
     {"a_flipped_payload_is_not_served", a_flipped_payload_is_not_served},
     {"a_flipped_length_field_is_not_served",
@@ -581,6 +656,8 @@ static const struct bc_test tests[] = {
      a_restore_keeps_the_previous_generation},
     {"failures_back_off_and_are_logged_as_errors",
      failures_back_off_and_are_logged_as_errors},
+    {"a_journaled_scene_is_safe_before_its_snapshot",
+     a_journaled_scene_is_safe_before_its_snapshot},
 };
 
 BC_TEST_MAIN(tests)
