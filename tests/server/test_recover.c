@@ -260,7 +260,7 @@ static void a_load_is_safe_once_answered(void)
 	char dir[128];
 	uint8_t *want = NULL, *got = NULL;
 	size_t want_len = 0, got_len = 0;
-	uint64_t load_order, order;
+	uint64_t load_order, order = 0;
 	snprintf(dir, sizeof(dir), "%s/answered", base_dir);
 	REQUIRE(t && bc_gen("fig18", &o, t, &cam, NULL) == 0);
 	REQUIRE(bc_tree_encode(t, &want, &want_len) == 0);
