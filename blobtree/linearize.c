@@ -15,7 +15,6 @@
 #define _DEFAULT_SOURCE
 #include "tree_impl.h"
 
-#include <malloc.h>
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
@@ -53,36 +52,22 @@ void bc__lin_free(struct bc_lin *l)
 }
 
 /* Arrays at least this big ask the kernel for huge pages: a million
- * primitives' tree touches ~100 000 pages of 4 KiB per array family, each
- * a page fault (with the pool and the id map, the faults were half of a
- * large scene's decode). */
+ * primitives' layout touches ~100 000 pages of 4 KiB, each a page fault
+ * (a quarter of a large SCENE_LOAD's time went to them). */
 #define HUGE_ARRAY_BYTES (4u << 20)
-
-void bc__advise_huge(void *p, size_t bytes)
-{
-#ifdef MADV_HUGEPAGE
-	if (p && bytes >= HUGE_ARRAY_BYTES) {
-		/* The whole block from its page: a big block is a mapping of
-		 * its own, ending where its usable size does, and advice on
-		 * part of it would split it in two, which a later realloc
-		 * could then no longer grow in place (mremap). */
-		uintptr_t a = (uintptr_t)p & ~(uintptr_t)4095u;
-		uintptr_t e =
-		    ((uintptr_t)p + malloc_usable_size(p)) & ~(uintptr_t)4095u;
-		/* Advice only: without huge pages the array works the same. */
-		(void)madvise((void *)a, e - a, MADV_HUGEPAGE);
-	}
-#else
-	(void)p;
-	(void)bytes;
-#endif
-}
 
 /* n elements of size bytes, zeroed when asked. */
 static void *lin_array(size_t n, size_t size, bool zero)
 {
 	void *p = zero ? bc_calloc(n, size) : bc_malloc(n * size);
-	bc__advise_huge(p, n * size);
+#ifdef MADV_HUGEPAGE
+	if (p && n * size >= HUGE_ARRAY_BYTES) {
+		uintptr_t a = ((uintptr_t)p + 4095u) & ~(uintptr_t)4095u;
+		uintptr_t e = ((uintptr_t)p + n * size) & ~(uintptr_t)4095u;
+		/* Advice only: without huge pages the array works the same. */
+		(void)madvise((void *)a, e - a, MADV_HUGEPAGE);
+	}
+#endif
 	return p;
 }
 

@@ -75,8 +75,6 @@ int bc__map_reserve(struct bc__idmap *m, uint32_t more)
 	bigger.count = 0;
 	bigger.keys = bc_calloc(cap, sizeof(uint32_t));
 	bigger.vals = bc_calloc(cap, sizeof(uint32_t));
-	bc__advise_huge(bigger.keys, cap * sizeof(uint32_t));
-	bc__advise_huge(bigger.vals, cap * sizeof(uint32_t));
 	if (!bigger.keys || !bigger.vals) {
 		bc_free(bigger.keys);
 		bc_free(bigger.vals);
@@ -150,7 +148,6 @@ static int pool_reserve(struct bc_tree *t, uint32_t more)
 	}
 	t->pool = grown;
 	t->cap = cap;
-	bc__advise_huge(grown, (size_t)cap * sizeof(*grown));
 	return 0;
 }
 

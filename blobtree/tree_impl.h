@@ -212,9 +212,6 @@ uint32_t bc__measure(struct bc_tree *t, uint32_t top);
  * (binary and unary: room for each to be either).
  * Returns 0 or BC_ENOMEM (l is then zeroed). */
 int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nops);
-/* Asks the kernel to back a big array (>= 4 MiB) with huge pages (advice
- * only; linearize.c). */
-void bc__advise_huge(void *p, size_t bytes);
 void bc__lin_free(struct bc_lin *l);
 /* Fills l (allocated for t's counts) from t's model; cannot fail. */
 void bc__lin_fill(struct bc_tree *t, struct bc_lin *l);
