@@ -11,14 +11,10 @@
  * an ancestor holds no other active operand) then finishes in O(log depth)
  * steps whatever the tree's shape. The climb tries the fast index first.
  */
-/* madvise (MADV_HUGEPAGE) is no POSIX call. */
-#define _DEFAULT_SOURCE
 #include "tree_impl.h"
 
 #include <math.h>
-#include <stdint.h>
 #include <string.h>
-#include <sys/mman.h>
 
 #include "blobcast/alloc.h"
 
@@ -51,26 +47,6 @@ void bc__lin_free(struct bc_lin *l)
 	memset(l, 0, sizeof(*l));
 }
 
-/* Arrays at least this big ask the kernel for huge pages: a million
- * primitives' layout touches ~100 000 pages of 4 KiB, each a page fault
- * (a quarter of a large SCENE_LOAD's time went to them). */
-#define HUGE_ARRAY_BYTES (4u << 20)
-
-/* n elements of size bytes, zeroed when asked. */
-static void *lin_array(size_t n, size_t size, bool zero)
-{
-	void *p = zero ? bc_calloc(n, size) : bc_malloc(n * size);
-#ifdef MADV_HUGEPAGE
-	if (p && n * size >= HUGE_ARRAY_BYTES) {
-		uintptr_t a = ((uintptr_t)p + 4095u) & ~(uintptr_t)4095u;
-		uintptr_t e = ((uintptr_t)p + n * size) & ~(uintptr_t)4095u;
-		/* Advice only: without huge pages the array works the same. */
-		(void)madvise((void *)a, e - a, MADV_HUGEPAGE);
-	}
-#endif
-	return p;
-}
-
 int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nops)
 {
 	size_t count = nprims ? 2u * (size_t)nprims - 1u : 0u;
@@ -86,30 +62,30 @@ int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nops)
 	l->count = (uint32_t)count;
 	l->nprims = nprims;
 	l->nparam = (uint32_t)nparam;
-	l->node = lin_array(2 * count, sizeof(uint32_t), true);
-	l->first = lin_array(count, sizeof(uint32_t), false);
-	l->fast = lin_array(count, sizeof(uint32_t), false);
-	l->jump = lin_array(count, sizeof(uint32_t), false);
-	l->kills = lin_array(count, sizeof(uint32_t), false);
-	l->depth = lin_array(count, sizeof(uint32_t), false);
-	l->node_id = lin_array(count, sizeof(uint32_t), false);
-	l->prim_of = lin_array(count, sizeof(uint32_t), false);
-	l->roi = lin_array(2 * count, sizeof(float), false);
-	l->prim_slot = lin_array(nprims, sizeof(uint32_t), false);
-	l->abv = lin_array(nprims, sizeof(struct bc_abv), true);
-	l->color = lin_array(nprims, sizeof(*l->color), false);
-	l->param = lin_array(4 * nparam, sizeof(float), true);
-	l->wrap = lin_array(count, sizeof(uint32_t), false);
-	l->wrap_top = lin_array(count, sizeof(uint32_t), false);
-	l->dom = lin_array(count, sizeof(uint32_t), false);
-	l->ucount = lin_array(count, sizeof(uint32_t), false);
-	l->unary_slot = lin_array(nun, sizeof(uint32_t), false);
-	l->unary_outer = lin_array(nun, sizeof(uint32_t), false);
-	l->unary_inner = lin_array(nun, sizeof(uint32_t), false);
-	l->unary_dom = lin_array(nun, sizeof(uint32_t), false);
-	l->unary_param = lin_array(nun, sizeof(uint32_t), false);
-	l->unary_kind = lin_array(nun, sizeof(uint32_t), false);
-	l->unary_id = lin_array(nun, sizeof(uint32_t), false);
+	l->node = bc_calloc(2 * count, sizeof(uint32_t));
+	l->first = bc_malloc(count * sizeof(uint32_t));
+	l->fast = bc_malloc(count * sizeof(uint32_t));
+	l->jump = bc_malloc(count * sizeof(uint32_t));
+	l->kills = bc_malloc(count * sizeof(uint32_t));
+	l->depth = bc_malloc(count * sizeof(uint32_t));
+	l->node_id = bc_malloc(count * sizeof(uint32_t));
+	l->prim_of = bc_malloc(count * sizeof(uint32_t));
+	l->roi = bc_malloc(2 * count * sizeof(float));
+	l->prim_slot = bc_malloc(nprims * sizeof(uint32_t));
+	l->abv = bc_calloc(nprims, sizeof(struct bc_abv));
+	l->color = bc_malloc(nprims * sizeof(*l->color));
+	l->param = bc_calloc(4 * nparam, sizeof(float));
+	l->wrap = bc_malloc(count * sizeof(uint32_t));
+	l->wrap_top = bc_malloc(count * sizeof(uint32_t));
+	l->dom = bc_malloc(count * sizeof(uint32_t));
+	l->ucount = bc_malloc(count * sizeof(uint32_t));
+	l->unary_slot = bc_malloc(nun * sizeof(uint32_t));
+	l->unary_outer = bc_malloc(nun * sizeof(uint32_t));
+	l->unary_inner = bc_malloc(nun * sizeof(uint32_t));
+	l->unary_dom = bc_malloc(nun * sizeof(uint32_t));
+	l->unary_param = bc_malloc(nun * sizeof(uint32_t));
+	l->unary_kind = bc_malloc(nun * sizeof(uint32_t));
+	l->unary_id = bc_malloc(nun * sizeof(uint32_t));
 	if (!l->wrap || !l->wrap_top || !l->dom || !l->ucount ||
 	    !l->unary_slot || !l->unary_outer || !l->unary_inner ||
 	    !l->unary_dom || !l->unary_param || !l->unary_kind ||
