@@ -62,6 +62,8 @@ int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nops)
 	l->count = (uint32_t)count;
 	l->nprims = nprims;
 	l->nparam = (uint32_t)nparam;
+	count = bc__lin_room(count);
+	nparam = bc__lin_room(nparam);
 	l->node = bc_calloc(2 * count, sizeof(uint32_t));
 	l->first = bc_malloc(count * sizeof(uint32_t));
 	l->fast = bc_malloc(count * sizeof(uint32_t));
@@ -71,9 +73,9 @@ int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nops)
 	l->node_id = bc_malloc(count * sizeof(uint32_t));
 	l->prim_of = bc_malloc(count * sizeof(uint32_t));
 	l->roi = bc_malloc(2 * count * sizeof(float));
-	l->prim_slot = bc_malloc(nprims * sizeof(uint32_t));
-	l->abv = bc_calloc(nprims, sizeof(struct bc_abv));
-	l->color = bc_malloc(nprims * sizeof(*l->color));
+	l->prim_slot = bc_malloc(bc__lin_room(nprims) * sizeof(uint32_t));
+	l->abv = bc_calloc(bc__lin_room(nprims), sizeof(struct bc_abv));
+	l->color = bc_malloc(bc__lin_room(nprims) * sizeof(*l->color));
 	l->param = bc_calloc(4 * nparam, sizeof(float));
 	l->wrap = bc_malloc(count * sizeof(uint32_t));
 	l->wrap_top = bc_malloc(count * sizeof(uint32_t));

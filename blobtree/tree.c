@@ -614,9 +614,9 @@ static void install_lin(struct bc_tree *t, struct bc_lin *fresh)
 	} else {
 		t->lin = *fresh;
 		t->has_lin = true;
-		t->lin_cap = fresh->count;
-		t->lin_kcap = fresh->nprims;
-		t->lin_pcap = fresh->nparam;
+		t->lin_cap = (uint32_t)bc__lin_room(fresh->count);
+		t->lin_kcap = (uint32_t)bc__lin_room(fresh->nprims);
+		t->lin_pcap = (uint32_t)bc__lin_room(fresh->nparam);
 		bc__lin_fill(t, &t->lin);
 	}
 	memset(fresh, 0, sizeof(*fresh));

@@ -128,6 +128,14 @@ static inline uint32_t bc__span_map(const struct bc__span *sp, uint32_t v)
 	return v - sp->del + sp->ins;
 }
 
+/* Entries a layout built whole allocates for n: room for the splices of
+ * the first structural edits (splice.c), so that the first one after a
+ * load does not grow every array at once. */
+static inline size_t bc__lin_room(size_t n)
+{
+	return n ? n + n / 32u + 64u : 0u;
+}
+
 /* Widens the dirty range [*lo, *hi) to hold [a, b). */
 static inline void bc__dirty_range(uint32_t *lo, uint32_t *hi, uint32_t a,
                                    uint32_t b)
