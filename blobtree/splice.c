@@ -170,21 +170,6 @@ static void log_shift(struct bc_tree *t, const struct splice *sp)
 
 /* ---- what the dirty record says of a splice ------------------------------ */
 
-/* Where the end of a half-open range goes through a splice. */
-static uint32_t span_map_end(const struct bc__span *sp, uint32_t v)
-{
-	if (v <= sp->at) {
-		return v;
-	}
-	if (v < sp->at + sp->del) {
-		return sp->at;
-	}
-	return v - sp->del + sp->ins;
-}
-
-/* The dirty record follows a splice of the primitives' indices: the
- * splice is listed (spliced, while there is room), and the range of dirty
- * primitives moves with them. A record of a whole layout stays one. */
 /* Whether the dirty record lists splices: a structure change that
  * starts with this one does. */
 static bool following(struct bc_tree *t)
@@ -197,20 +182,18 @@ static bool following(struct bc_tree *t)
 	return d->spliced;
 }
 
+/* The dirty record follows a splice of the primitives' indices: the
+ * splice is listed (spliced, while there is room), and the range of dirty
+ * primitives moves with them. A record of a whole layout stays one. */
 static void note_splice(struct bc_tree *t, const struct bc__span *k)
 {
 	struct bc_dirty *d = &t->dirty;
+	struct bc_dirty_splice sp = {.at = k->at, .del = k->del, .ins = k->ins};
 	bool listed = following(t);
 	if (k->del == 0 && k->ins == 0) {
 		return;
 	}
-	if (d->prim_lo < d->prim_hi) {
-		d->prim_lo = bc__span_map(k, d->prim_lo);
-		d->prim_hi = span_map_end(k, d->prim_hi);
-		if (d->prim_lo >= d->prim_hi) {
-			d->prim_lo = d->prim_hi = 0;
-		}
-	}
+	bc_dirty_splice_range(&sp, &d->prim_lo, &d->prim_hi);
 	if (!listed) {
 		return;
 	}
@@ -218,8 +201,7 @@ static void note_splice(struct bc_tree *t, const struct bc__span *k)
 		d->spliced = false;
 		return;
 	}
-	d->splice[d->nsplices++] =
-	    (struct bc_dirty_splice){.at = k->at, .del = k->del, .ins = k->ins};
+	d->splice[d->nsplices++] = sp;
 }
 
 /* Primitives k .. k + n - 1 go, or are placed again: their ABVs now are

@@ -1178,14 +1178,6 @@ nomem:
 	                      out->width, out->height);
 }
 
-/* Where the end of a half-open range of primitives goes through sp. */
-static uint32_t splice_end(const struct bc_dirty_splice *sp, uint32_t v)
-{
-	return v <= sp->at            ? v
-	       : v < sp->at + sp->del ? sp->at
-	                              : v - sp->del + sp->ins;
-}
-
 /* Tile t's candidates without primitives [lo, hi), those past hi moved
  * by shift; its list is dropped when it lost one, else renumbered. */
 static void follow_tile(struct bc__tiled_bufs *b, uint32_t t, uint32_t lo,
@@ -1252,15 +1244,7 @@ static int follow_splice(struct bc__tiled_bufs *b,
 		memset(&b->prims[k].rect, 0, sizeof(b->prims[k].rect));
 	}
 	b->nprims = n - sp->del + sp->ins;
-	if (b->dirty_lo < b->dirty_hi) {
-		b->dirty_lo = b->dirty_lo < lo   ? b->dirty_lo
-		              : b->dirty_lo < hi ? lo
-		                                 : b->dirty_lo + shift;
-		b->dirty_hi = splice_end(sp, b->dirty_hi);
-		if (b->dirty_lo >= b->dirty_hi) {
-			b->dirty_lo = b->dirty_hi = 0;
-		}
-	}
+	bc_dirty_splice_range(sp, &b->dirty_lo, &b->dirty_hi);
 	return 0;
 }
 

@@ -505,6 +505,25 @@ BC_API int bc_tree_copy(struct bc_tree *dst, const struct bc_tree *src,
 struct bc_dirty_splice {
 	uint32_t at, del, ins;
 };
+/* Moves the half-open range [*lo, *hi) of primitive indices through sp:
+ * indices past the splice shift with it, those it removed drop out, and a
+ * range it empties becomes [0, 0). */
+static inline void bc_dirty_splice_range(const struct bc_dirty_splice *sp,
+                                         uint32_t *lo, uint32_t *hi)
+{
+	uint32_t end = sp->at + sp->del;
+	if (*lo >= *hi) {
+		return;
+	}
+	*lo = *lo < sp->at ? *lo : *lo < end ? sp->at : *lo - sp->del + sp->ins;
+	*hi = *hi <= sp->at ? *hi
+	      : *hi < end   ? sp->at
+	                    : *hi - sp->del + sp->ins;
+	if (*lo >= *hi) {
+		*lo = *hi = 0;
+	}
+}
+
 /* Splices and gone ABVs one dirty record holds; past either, spliced is
  * cleared (everything changed). */
 #define BC_DIRTY_SPLICES 16
