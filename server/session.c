@@ -578,6 +578,13 @@ static void timer_closed(uv_handle_t *h)
 	bc__session_unref(h->data);
 }
 
+/* The sweep timer is part of the table: the table goes once the loop has
+ * closed it. */
+static void sweep_closed(uv_handle_t *h)
+{
+	bc_free(h->data);
+}
+
 /* Takes s out of the table: its copy goes, and it is freed once its
  * timers and tasks are done. */
 static void session_remove(struct bc_session *s)
@@ -860,7 +867,6 @@ void bc_sessions_free(struct bc_sessions *ss)
 	if (!ss) {
 		return;
 	}
-	uv_close((uv_handle_t *)&ss->sweep, NULL);
 	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
 		if (ss->sessions[i]) {
 			ss->sessions[i]->park_head = NULL;
@@ -869,8 +875,10 @@ void bc_sessions_free(struct bc_sessions *ss)
 		}
 	}
 	bc__index_free(ss->index);
-	/* The sessions themselves go as their handles close. */
-	bc_free(ss);
+	ss->index = NULL;
+	/* The sessions themselves go as their handles close, the table with
+	 * its sweep timer. */
+	uv_close((uv_handle_t *)&ss->sweep, sweep_closed);
 }
 
 void bc_sessions_stats(const struct bc_sessions *ss,

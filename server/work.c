@@ -725,8 +725,15 @@ static bool workers_left(struct bc_work *w, uint32_t wait_ms)
 	}
 }
 
-/* Frees everything once no worker runs. Called with the lock held; it is
- * released and destroyed. */
+/* The results handle is part of w: w goes once the loop has closed it. */
+static void results_closed(uv_handle_t *h)
+{
+	bc_free(h->data);
+}
+
+/* Frees everything once no worker runs, w itself when the loop has closed
+ * its results handle. Called with the lock held; it is released and
+ * destroyed. */
 static void free_all(struct bc_work *w)
 {
 	for (uint32_t i = 0; i < BC_SRV_MAX_FLOWS; i++) {
@@ -756,7 +763,7 @@ static void free_all(struct bc_work *w)
 	uv_mutex_destroy(&w->lock);
 	uv_cond_destroy(&w->cond);
 	bc_free(w->workers);
-	bc_free(w);
+	uv_close((uv_handle_t *)&w->results, results_closed);
 }
 
 bool bc_work_stop(struct bc_work *w, uint32_t wait_ms)
@@ -768,8 +775,9 @@ bool bc_work_stop(struct bc_work *w, uint32_t wait_ms)
 	w->quit = true;
 	uv_cond_broadcast(&w->cond);
 	uv_mutex_unlock(&w->lock);
-	uv_close((uv_handle_t *)&w->results, NULL);
 	if (!w->workers || !workers_left(w, wait_ms)) {
+		/* The caller ends the process: a worker may still post to
+		 * the results handle, so it stays open. */
 		bc_log(BC_LOG_WARN, "a render worker is still inside a "
 		                    "slice; not waiting for it");
 		return false;

@@ -153,11 +153,12 @@ int bc_work_start(struct bc_work **out, const struct bc_work_opts *opts,
                   struct bc_errinfo *ei);
 
 /* Tells the workers to stop at their next slice boundary and waits up to
- * wait_ms for them. Returns true when they stopped: everything is freed.
- * False when one is still inside a slice (a renderer call that does not
- * return): nothing is freed, and the process should exit without waiting
- * (what every session holds is already on disk). Closes the loop handles
- * either way. Accepts NULL (true). */
+ * wait_ms for them. Returns true when they stopped: everything is freed,
+ * the last of it once the loop has closed the work's handle (run the loop
+ * until it returns). False when one is still inside a slice (a renderer
+ * call that does not return): nothing is freed and the handle stays open,
+ * and the process should exit without waiting (what every session holds is
+ * already on disk). Accepts NULL (true). */
 bool bc_work_stop(struct bc_work *w, uint32_t wait_ms);
 
 /* ---- The render copy of session sid --------------------------------------
