@@ -491,6 +491,19 @@ static void frame_to(struct bc_member *m, const struct bc_work_done *d,
 	case BC_WORK_OOM:
 		m->dirty = true;
 		break;
+	case BC_WORK_FAILED:
+		/* Drawing it again would fail the same way: the client hears
+		 * why, and the view waits for its next change (PROTOCOL.md
+		 * 7.15, "Frames that cannot be drawn"). */
+		bc__send_error(m, 0,
+		               d->code == BC_ELIMIT || d->code == BC_EGL ||
+		                       d->code == BC_EDEPTH
+		                   ? d->code
+		                   : BC_EIO,
+		               "this view's frame could not be drawn (%s); "
+		               "the next VIEW, CAMERA or edit tries again",
+		               d->why[0] ? d->why : "no reason given");
+		break;
 	default:
 		break;
 	}

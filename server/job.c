@@ -978,6 +978,8 @@ bool bc__job_slice(struct bc_work *w, struct worker *wk, struct flow *f,
 	if (rc) {
 		bc_log(BC_LOG_ERROR, "session %u: frame %u failed: %s", f->sid,
 		       job->req.frame_no, ei.msg);
+		job->done.code = rc;
+		snprintf(job->done.why, sizeof(job->done.why), "%s", ei.msg);
 		bc__job_end(w, job,
 		            rc == BC_ENOMEM ? BC_WORK_OOM : BC_WORK_FAILED);
 	} else {

@@ -131,6 +131,7 @@ struct bc_work_done {
 	struct bc_shared *vframes[BC_PROTO_MAX_MEMBERS];
 	uint64_t vfailed;
 	char why[256]; /* as struct bc_errinfo's msg */
+	int code;      /* BC_WORK_FAILED: the renderer's or encoder's code */
 };
 
 /* Zero means default for every field but the loop and the callback. */

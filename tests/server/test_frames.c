@@ -13,8 +13,8 @@
 #include "blobcast/blobtree.h"
 #include "blobcast/render.h"
 #include "blobcast/scene.h"
+#include "test.h" /* before daemon.h: its scene helpers need it */
 #include "daemon.h"
-#include "test.h"
 
 /* The view's size: 96x72, but for the budget test (view_w, view_h). */
 static uint16_t view_w = 96u, view_h = 72u;
@@ -346,6 +346,65 @@ static void a_snapshot_carries_depth_and_ids_of_a_whole_render(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
+/* A frame the renderer cannot draw reaches the view's client as ERROR
+ * (seq 0, not fatal, the renderer's code and reason); the view is not
+ * drawn again until it changes, and a scene that can be drawn brings
+ * frames back (PROTOCOL.md 7.15, "Frames that cannot be drawn"). Here
+ * llvmpipe is the gl backend's driver: 2100 spheres in one spot make a
+ * tile list longer than its shaders may sort (ELIMIT). */
+static void a_frame_that_cannot_be_drawn_is_an_error(void)
+{
+	static const char *const opts[] = {"--backend", "gl",
+	                                   "--render-threads", "1", NULL};
+	enum { N = 2100 };
+	size_t cap = 200 + (size_t)N * 64, len;
+	char *json = malloc(cap);
+	struct daemon d;
+	struct conn a;
+	struct bc_msg ping = {.type = BC_MSG_PING};
+	char text[BC_PROTO_MAX_ERROR_TEXT + 1];
+	REQUIRE(json != NULL);
+	len = (size_t)snprintf(json, cap,
+	                       "{\"blobcast\": 1, \"root\": {\"type\": "
+	                       "\"union\", \"id\": 1, \"children\": [");
+	for (int i = 0; i < N; i++) {
+		len += (size_t)snprintf(
+		    json + len, cap - len,
+		    "%s{\"type\": \"sphere\", \"id\": %d, \"radius\": 1}",
+		    i ? ", " : "", i + 2);
+	}
+	snprintf(json + len, cap - len, "]}}");
+	REQUIRE(daemon_start_with(&d, "/tmp/bc-test-frames-d", opts) == 0);
+	REQUIRE(conn_open(&a, &d) == 0 &&
+	        conn_hello_enc(&a, "frames", 1u << (BC_PROTO_ENC_RAW - 1)) ==
+	            0);
+	REQUIRE(conn_join(&a, "default", BC_PROTO_ROLE_EDITOR, false) == 0);
+	REQUIRE(conn_view(&a, 64, 48, BC_PROTO_ENC_RAW));
+	REQUIRE(conn_expect(&a, BC_MSG_FRAME, 60000) == 1);
+	conn_load_json(&a, json);
+	free(json);
+	REQUIRE(conn_expect(&a, BC_MSG_ERROR, 60000) == 1);
+	CHECK_EQ_INT(a.m.seq, 0);
+	CHECK(a.m.error.code == (uint16_t)-BC_ELIMIT);
+	CHECK((a.m.flags & BC_PROTO_FLAG_FATAL) == 0);
+	snprintf(text, sizeof(text), "%.*s", (int)a.m.error.text.len,
+	         a.m.error.text.ptr);
+	CHECK(strstr(text, "could not be drawn") != NULL);
+	CHECK(strstr(text, "loop limit") != NULL);
+	/* Still a member, and not sent that frame again: a PING's PONG
+	 * comes before any other ERROR or FRAME. */
+	ping.seq = 77;
+	REQUIRE(conn_send(&a, &ping));
+	REQUIRE(conn_recv(&a, 10000) == 1);
+	CHECK_EQ_INT(a.m.type, BC_MSG_PONG);
+	/* A scene that can be drawn: frames again. */
+	conn_load_json(&a, "{\"blobcast\": 1, \"root\": {\"type\": "
+	                   "\"sphere\", \"id\": 1, \"radius\": 1}}");
+	REQUIRE(conn_expect(&a, BC_MSG_FRAME, 60000) == 1);
+	conn_close(&a);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
 static const struct bc_test tests[] = {
     {"pictures_refine_to_the_still_and_edits_patch_exactly",
      pictures_refine_to_the_still_and_edits_patch_exactly},
@@ -353,6 +412,8 @@ static const struct bc_test tests[] = {
      a_budget_cut_frame_is_a_complete_coarse_picture},
     {"a_snapshot_carries_depth_and_ids_of_a_whole_render",
      a_snapshot_carries_depth_and_ids_of_a_whole_render},
+    {"a_frame_that_cannot_be_drawn_is_an_error",
+     a_frame_that_cannot_be_drawn_is_an_error},
 };
 
 int main(int argc, char **argv)
@@ -360,7 +421,7 @@ int main(int argc, char **argv)
 	signal(SIGPIPE, SIG_IGN);
 	(void)conn_hello; /* daemon.h's all-encodings HELLO: not used here */
 	if (system("rm -rf /tmp/bc-test-frames-a /tmp/bc-test-frames-b "
-	           "/tmp/bc-test-frames-c") != 0) {
+	           "/tmp/bc-test-frames-c /tmp/bc-test-frames-d") != 0) {
 		return 1;
 	}
 	return bc_test_run(tests, sizeof(tests) / sizeof(tests[0]), argc, argv);
