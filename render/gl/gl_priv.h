@@ -33,10 +33,12 @@
 #define BC_GL_REFINE_REL 1.0e-5f
 #define BC_GL_AMBIENT 0.18f
 /* Fragments of one frame's A-buffer: each costs 56 bytes of GPU memory
- * (linked, sorted, scratch), so 2^22 is 224 MiB, and no buffer exceeds the
- * 128 MiB storage block size llvmpipe offers. A 4096-primitive scene at
- * 512^2 makes about 10^5. Frames beyond fail with BC_ELIMIT. */
-#define BC_GL_MAX_FRAGMENTS (1u << 22)
+ * (linked, sorted, scratch), so 2^24 is 896 MiB at most, reached only by
+ * frames that need it (capacity grows from BC_GL_MIN_FRAGMENTS). The
+ * driver's storage block size lowers it (llvmpipe's 128 MiB: about
+ * 5.6 * 10^6). A 4096-primitive scene at 512^2 makes about 10^5, a million
+ * fig18 spheres at 1024^2 4.5 * 10^6. Frames beyond fail with BC_ELIMIT. */
+#define BC_GL_MAX_FRAGMENTS (1u << 24)
 /* The first frame's fragment capacity; frames that need more grow it. */
 #define BC_GL_MIN_FRAGMENTS (1u << 16)
 /* Statistics buffer: slots as in common.glsl. */
