@@ -195,6 +195,11 @@ bool bc_renderer_follows(const struct bc_renderer *r,
 	       r->ops->follows_splices;
 }
 
+bool bc_renderer_wants_large_regions(const struct bc_renderer *r)
+{
+	return r && r->ops->whole_regions;
+}
+
 int bc_renderer_sync(struct bc_renderer *r, const struct bc_tree *t,
                      const struct bc_dirty *dirty, struct bc_errinfo *ei)
 {

@@ -225,6 +225,13 @@ static uint32_t tiles_for(const struct flow *f, const struct bc_job *job,
                           double ms)
 {
 	double rays, k;
+	if (bc_renderer_wants_large_regions(f->r)) {
+		/* Every call pays the whole frame's lists and readback (gl):
+		 * sized by its tracing, a slice of a big scene came down to
+		 * one tile, and a 1024x768 frame of 65 536 spheres took 50
+		 * minutes on llvmpipe. A pass in one call pays them once. */
+		return BC_SRV_SLICE_TILES_MAX;
+	}
 	if (f->ms_per_ray <= 0.0) {
 		return BC_SRV_SLICE_TILES_FIRST;
 	}
@@ -448,7 +455,7 @@ static void learn(const struct bc_work *w, struct flow *f, struct bc_job *job,
 	 * slice that comes out long holds a worker others may be waiting
 	 * for. */
 	per_tile = ntiles ? st->ms_total / (double)ntiles : 0.0;
-	if (per_tile > 0.0) {
+	if (per_tile > 0.0 && !bc_renderer_wants_large_regions(f->r)) {
 		double k = slice_target(w, job) / per_tile;
 		double most = 2.0 * (double)ntiles + 1.0;
 		k = k > most ? most : k;

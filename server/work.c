@@ -15,9 +15,10 @@
  * snapshots behind stills across sessions too, without starving them.
  *
  * Slices. The worker runs one slice of the flow's current job (job.c: a
- * few milliseconds of tiles, or of encoding) and puts the flow back; any
- * job gives way between slices. While the other workers wait for work and
- * no other flow has any, a slice's renderer call uses their cores too
+ * few milliseconds of tiles, or of encoding; a whole pass for a renderer
+ * whose every call pays a whole frame's setup, gl) and puts the flow
+ * back; any job gives way between slices. While the other workers wait for work
+ * and no other flow has any, a slice's renderer call uses their cores too
  * (team_of): one session alone gets the whole machine, slice by slice,
  * and is charged for every core it used. A slice that ran long (a new view of a
  * big scene builds its A-buffer in one renderer call) marks its flow, and while

@@ -1490,6 +1490,7 @@ const struct bc_backend_ops bc_backend_gl_ops = {
     .render = gl_render,
     .key = gl_key,
     .damage = gl_damage,
+    .whole_regions = true,
     .release = gl_release,
     .kept_bytes = gl_kept_bytes,
 };

@@ -668,6 +668,63 @@ static void gl_workers_are_scheduled_alike(void)
 	CHECK(bc_test_file_has(log, "gl: "));
 }
 
+/* Counts the lines of file that hold needle. */
+static int lines_with(const char *file, const char *needle)
+{
+	char line[1024];
+	int n = 0;
+	FILE *f = fopen(file, "r");
+	if (!f) {
+		return -1;
+	}
+	while (fgets(line, sizeof(line), f)) {
+		n += strstr(line, needle) != NULL;
+	}
+	fclose(f);
+	return n;
+}
+
+/* Every gl region call pays the A-buffer of every primitive, the scan of
+ * every tile and the planes' readback: the scheduler hands it a pass at a
+ * time. Sized by its tracing, as a tiled slice is, a slice of a big scene
+ * came down to one tile, and a frame to one call per tile (a 1024x768
+ * view of 65 536 spheres: 50 minutes on llvmpipe, and no still at all
+ * from a million spheres on a GPU). Here: 2048 spheres, 96x72 (108 tiles):
+ * the first still comes in a few calls, not hundreds. */
+static void a_gl_frame_is_drawn_in_few_calls(void)
+{
+	static const char *const opts[] = {
+	    "--backend", "gl", "--render-threads", "1", "--log", "debug", NULL};
+	struct daemon d;
+	struct conn a;
+	bool still = false;
+	char dir[96], log[128];
+	int calls;
+	snprintf(dir, sizeof(dir), "%s/glcalls", base_dir);
+	snprintf(log, sizeof(log), "%s/glcalls.log", base_dir);
+	daemon_log_path = log;
+	REQUIRE(daemon_start_with(&d, dir, opts) == 0);
+	daemon_log_path = NULL;
+	member(&a, &d, "glcalls", true, 96, 72, BC_PROTO_ENC_RAW);
+	load_gen(&a, "fig18", 2048, BC_GEN_BLEND_SMOOTH);
+	while (!still && conn_expect(&a, BC_MSG_FRAME, 120000) == 1) {
+		still = (a.m.flags & BC_PROTO_FLAG_STILL) != 0;
+	}
+	CHECK(still);
+	conn_close(&a);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+	/* One debug line per region call (job.c's render_slice); the
+	 * default scene's first frames count too. A pass per level (4),
+	 * refinements and retries: a dozen at most, where per-tile slices
+	 * made hundreds. */
+	calls = lines_with(log, " tiles, ");
+	CHECK(calls > 0);
+	CHECK(calls <= 24);
+	if (calls > 24) {
+		fprintf(stderr, "  %d region calls\n", calls);
+	}
+}
+
 static const struct bc_test tests[] = {
     {"a_quiet_session_keeps_its_share_beside_a_heavy_one",
      a_quiet_session_keeps_its_share_beside_a_heavy_one},
@@ -683,6 +740,7 @@ static const struct bc_test tests[] = {
     {"stats_tell_the_load", stats_tell_the_load},
     {"the_view_cache_stays_under_its_cap", the_view_cache_stays_under_its_cap},
     {"gl_workers_are_scheduled_alike", gl_workers_are_scheduled_alike},
+    {"a_gl_frame_is_drawn_in_few_calls", a_gl_frame_is_drawn_in_few_calls},
 };
 
 int main(int argc, char **argv)

@@ -250,6 +250,11 @@ int bc_renderer_sync(struct bc_renderer *r, const struct bc_tree *t,
 bool bc_renderer_follows(const struct bc_renderer *r,
                          const struct bc_dirty *dirty);
 
+/* Whether each bc_renderer_render_region call of r costs a whole frame's
+ * setup however few tiles it asks for (gl), so that a frame drawn in parts
+ * should be drawn in few, large ones. false for NULL. */
+bool bc_renderer_wants_large_regions(const struct bc_renderer *r);
+
 /* Draws the whole frame (every pixel) of the last synced tree. Returns 0,
  * BC_EINVAL (bad frame), BC_ERANGE (bad camera), BC_ESTATE (nothing synced)
  * or the backend's error. */

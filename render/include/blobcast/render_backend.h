@@ -64,6 +64,12 @@ struct bc_backend_ops {
 	 * keeps the frame key and damages only what bc_dirty says it can
 	 * reach. false: every structure change is a new generation. */
 	bool follows_splices;
+	/* Whether a region call pays a whole frame's setup whatever its
+	 * size (gl: the A-buffer pass over every primitive, the scan over
+	 * every tile, the planes' readback), so that a caller splitting a
+	 * frame should hand it large regions. false: a call costs about
+	 * what its tiles cost (tiled keeps its lists between calls). */
+	bool whole_regions;
 	/* Optional: frees what the backend keeps for its last view (see
 	 * bc_renderer_release). NULL: it keeps nothing. */
 	void (*release)(struct bc_renderer *r);
