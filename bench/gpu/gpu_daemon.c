@@ -38,6 +38,11 @@ static int settle(struct conn *c, int timeout_ms)
 			return 0;
 		}
 		if (c->m.type == BC_MSG_ERROR) {
+			fprintf(stderr,
+			        "bench_gpu: the daemon answered ERROR %u: "
+			        "%.*s\n",
+			        (unsigned)c->m.error.code,
+			        (int)c->m.error.text.len, c->m.error.text.ptr);
 			return -1;
 		}
 	}
@@ -130,13 +135,16 @@ int gpu_cmd_daemon(const struct gpu_opts *op)
 		for (int i = 0; i < 25; i++) {
 			drag[i] = 0.004f * (float)i;
 		}
+		/* 30 s, and 30 s more per 600 000 primitives (a million
+		 * take seconds to reach the renderer). */
+		int wait_s = 30 + (int)(count / 20000u);
 		send_view(&c, w, h);
-		if (settle(&c, 30000)) {
+		if (settle(&c, wait_s * 1000)) {
 			gpu_fail(
 			    &o,
-			    "%ux%u: no still frame from the daemon in 30 s "
+			    "%ux%u: no still frame from the daemon in %d s "
 			    "(its log says why)",
-			    w, h);
+			    w, h, wait_s);
 			break;
 		}
 		/* Warm-up edits, not counted. */

@@ -77,4 +77,20 @@ if env -i LD_LIBRARY_PATH="$lp" "$drv" verify "$work/bad/results.json" \
 	>/dev/null 2>&1; then
 	fail "verify accepted a failed step"
 fi
+echo "== --only runs the steps named, and says so of the others"
+env -i PATH=/usr/bin:/bin bash "$src/bench/gpu/run.sh" --local \
+	--kit "$work/kit" --out "$work/only" --only edit --edit-counts 64 \
+	>"$work/only.log" 2>&1 || fail "run.sh --only edit failed"
+grep -q '"edit":{"ran":true,"ok":true' "$work/only/results.json" ||
+	fail "--only edit did not run the edit step"
+! grep -q '"check":{"ran":true' "$work/only/results.json" ||
+	fail "--only edit ran the check step"
+grep -q "check: left out (--only edit)" "$work/only.log" ||
+	fail "--only did not say what it left out"
+grep -q "spheres smooth *64:" "$work/only.log" ||
+	fail "--edit-counts 64 was not the edit step's size"
+if env -i PATH=/usr/bin:/bin bash "$src/bench/gpu/run.sh" --local \
+	--kit "$work/kit" --out "$work/only2" --only tabel2 >/dev/null 2>&1; then
+	fail "run.sh accepted an unknown step in --only"
+fi
 echo "PASS: every step ran, $correct scenes correct"
