@@ -49,6 +49,7 @@
 #include "gl_priv.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -119,6 +120,17 @@ struct gl_renderer {
 	uint64_t upload_bytes;
 	bool upload_full;
 	uint32_t full_uploads;
+	/* The A-buffer kept between region calls of one view: built for
+	 * every tile with the frame constants lists_u (up to its region
+	 * fields), its tile table saved in lists_tiles (the tracer writes
+	 * the tiles' state words), its fragment count and longest list.
+	 * Any sync, a new size or new fragment buffers drop it. */
+	bool lists_kept;
+	struct bc__gl_frame_ubo lists_u;
+	GLuint lists_tiles;
+	size_t lists_tiles_size;
+	uint32_t lists_frags, lists_max;
+	uint32_t lists_builds, lists_reused;
 };
 
 /* The gl renderer behind the front's base (NULL stays NULL). */
@@ -371,6 +383,7 @@ static void release_gl(struct gl_renderer *r)
 	gl->DeleteBuffers(BC__GL_BUF_COUNT, r->bufs);
 	gl->DeleteBuffers(1, &r->ubo);
 	gl->DeleteBuffers(1, &r->pbo);
+	gl->DeleteBuffers(1, &r->lists_tiles);
 	gl->DeleteTextures(3, r->tex);
 	gl->DeleteQueries(Q_COUNT, r->queries);
 	gl->DeleteFramebuffers(1, &r->fbo);
@@ -436,6 +449,7 @@ static int gl_create(struct bc_renderer **out,
 	gl->GenBuffers(BC__GL_BUF_COUNT, r->bufs);
 	gl->GenBuffers(1, &r->ubo);
 	gl->GenBuffers(1, &r->pbo);
+	gl->GenBuffers(1, &r->lists_tiles);
 	gl->GenQueries(Q_COUNT, r->queries);
 	gl->BindBuffer(GL_UNIFORM_BUFFER, r->ubo);
 	gl->BufferData(GL_UNIFORM_BUFFER, sizeof(struct bc__gl_frame_ubo), NULL,
@@ -501,6 +515,7 @@ static int gl_sync(struct bc_renderer *base, const struct bc_tree *t,
 	}
 	t0 = bc_clock_ms();
 	r->upload_bytes = 0;
+	r->lists_kept = false; /* the lists were of the tree before */
 	l = bc_tree_lin(t);
 	if (l && l->nunary && !r->progs[BC__GL_PROG_TRACE_UNARY]) {
 		/* Built on the first tree with unary nodes. */
@@ -640,6 +655,7 @@ static void frag_buffers(struct gl_renderer *r, uint32_t cap, uint32_t slots)
 {
 	buf_alloc(r, BC__GL_BUF_LINKS, (size_t)cap * LINK_BYTES, NULL);
 	buf_alloc(r, BC__GL_BUF_SORTED, (size_t)cap * SORTED_BYTES, NULL);
+	r->lists_kept = false;
 	buf_alloc(r, BC__GL_BUF_SCRATCH,
 	          (size_t)cap * SCRATCH_BYTES +
 	              (size_t)slots * BC_GL_SLOT_WORDS * 4u,
@@ -863,25 +879,56 @@ static uint64_t mark_short(const struct gl_renderer *r, const struct plan *p,
 	return rays;
 }
 
+/* How draw gets the frame's A-buffer. */
+enum lists_use {
+	LISTS_REGION, /* built for the region's tiles only */
+	LISTS_ALL,    /* built for every tile, then kept */
+	LISTS_KEPT,   /* those kept from an earlier call of the view */
+};
+
+/* Whether u and the kept lists' frame constants describe the same view
+ * (everything before the region fields, and the window). */
+static bool same_view(const struct bc__gl_frame_ubo *u,
+                      const struct bc__gl_frame_ubo *k)
+{
+	return memcmp(u, k, offsetof(struct bc__gl_frame_ubo, region)) == 0 &&
+	       memcmp(u->window, k->window, sizeof(u->window)) == 0;
+}
+
 /* Issues the passes of one frame, up to the first tracing dispatch. */
 static void draw(struct gl_renderer *r, const struct bc__gl_frame_ubo *u,
-                 const struct plan *p, uint32_t nprims)
+                 const struct plan *p, uint32_t nprims, enum lists_use use)
 {
 	GladGLContext *gl = &r->ctx.gl;
 	static const uint32_t tile_init[4] = {0xffffffffu, 0u, 0u, 0u};
 	static const uint32_t zero = 0;
 	uint32_t tw = u->size[2], th = u->size[3];
+	size_t table = (size_t)tw * th * 16;
+	struct bc__gl_frame_ubo all = *u;
+	/* The lists of every tile are built with the region fields of a
+	 * whole frame, then traced with the call's. */
+	if (use == LISTS_ALL) {
+		all.region[2] = all.region[3] = 0;
+	}
 	gl->BindBuffer(GL_UNIFORM_BUFFER, r->ubo);
-	gl->BufferSubData(GL_UNIFORM_BUFFER, 0, sizeof(*u), u);
+	gl->BufferSubData(GL_UNIFORM_BUFFER, 0, sizeof(all), &all);
 	gl->BindBufferBase(GL_UNIFORM_BUFFER, 0, r->ubo);
 	for (int b = 0; b < BC__GL_BUF_COUNT; b++) {
 		gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, (GLuint)b,
 		                   r->bufs[b]);
 	}
-	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->bufs[BC__GL_BUF_TILES]);
-	gl->ClearBufferSubData(GL_SHADER_STORAGE_BUFFER, GL_RGBA32UI, 0,
-	                       (GLsizeiptr)((size_t)tw * th * 16),
-	                       GL_RGBA_INTEGER, GL_UNSIGNED_INT, tile_init);
+	if (use == LISTS_KEPT) {
+		gl->BindBuffer(GL_COPY_READ_BUFFER, r->lists_tiles);
+		gl->BindBuffer(GL_COPY_WRITE_BUFFER, r->bufs[BC__GL_BUF_TILES]);
+		gl->CopyBufferSubData(GL_COPY_READ_BUFFER, GL_COPY_WRITE_BUFFER,
+		                      0, 0, (GLsizeiptr)table);
+	} else {
+		gl->BindBuffer(GL_SHADER_STORAGE_BUFFER,
+		               r->bufs[BC__GL_BUF_TILES]);
+		gl->ClearBufferSubData(GL_SHADER_STORAGE_BUFFER, GL_RGBA32UI, 0,
+		                       (GLsizeiptr)table, GL_RGBA_INTEGER,
+		                       GL_UNSIGNED_INT, tile_init);
+	}
 	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->bufs[BC__GL_BUF_STATS]);
 	gl->ClearBufferData(GL_SHADER_STORAGE_BUFFER, GL_R32UI, GL_RED_INTEGER,
 	                    GL_UNSIGNED_INT, &zero);
@@ -898,7 +945,7 @@ static void draw(struct gl_renderer *r, const struct bc__gl_frame_ubo *u,
 	gl->QueryCounter(r->queries[Q_START], GL_TIMESTAMP);
 
 	/* A-buffer: imposters at one pixel per tile, no attachments. */
-	if (nprims > 0) {
+	if (nprims > 0 && use != LISTS_KEPT) {
 		gl->UseProgram(r->progs[BC__GL_PROG_ABUFFER]);
 		gl->BindFramebuffer(GL_FRAMEBUFFER, r->fbo);
 		gl->Viewport(0, 0, (GLsizei)tw, (GLsizei)th);
@@ -910,12 +957,32 @@ static void draw(struct gl_renderer *r, const struct bc__gl_frame_ubo *u,
 		gl->BindFramebuffer(GL_FRAMEBUFFER, 0);
 		gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
 	}
-	gl->UseProgram(r->progs[BC__GL_PROG_SCAN]);
-	gl->DispatchCompute(1, 1, 1);
-	gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-	gl->UseProgram(r->progs[BC__GL_PROG_SORT]);
-	gl->DispatchCompute(p->gx, p->gy, 1);
-	gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+	if (use != LISTS_KEPT) {
+		gl->UseProgram(r->progs[BC__GL_PROG_SCAN]);
+		gl->DispatchCompute(1, 1, 1);
+		gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+		gl->UseProgram(r->progs[BC__GL_PROG_SORT]);
+		gl->DispatchCompute(use == LISTS_ALL ? tw : p->gx,
+		                    use == LISTS_ALL ? th : p->gy, 1);
+		gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+	}
+	if (use == LISTS_ALL) {
+		/* Kept before the tracer writes the tiles' state words. */
+		if (r->lists_tiles_size < table) {
+			gl->BindBuffer(GL_COPY_WRITE_BUFFER, r->lists_tiles);
+			gl->BufferData(GL_COPY_WRITE_BUFFER, (GLsizeiptr)table,
+			               NULL, GL_DYNAMIC_COPY);
+			r->lists_tiles_size = table;
+		}
+		gl->BindBuffer(GL_COPY_READ_BUFFER, r->bufs[BC__GL_BUF_TILES]);
+		gl->BindBuffer(GL_COPY_WRITE_BUFFER, r->lists_tiles);
+		gl->CopyBufferSubData(GL_COPY_READ_BUFFER, GL_COPY_WRITE_BUFFER,
+		                      0, 0, (GLsizeiptr)table);
+		gl->BindBuffer(GL_UNIFORM_BUFFER, r->ubo);
+		gl->BufferSubData(GL_UNIFORM_BUFFER, 0, sizeof(*u), u);
+		gl->MemoryBarrier(GL_UNIFORM_BARRIER_BIT |
+		                  GL_BUFFER_UPDATE_BARRIER_BIT);
+	}
 	gl->QueryCounter(r->queries[Q_ABUFFER], GL_TIMESTAMP);
 
 	/* Tracing and shading. */
@@ -1088,6 +1155,7 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 	double t_start = bc_clock_ms();
 	uint32_t w, h, nprims, stat[BC_GL_STAT_WORDS], limit, ntiles;
 	size_t npix, short_bytes;
+	enum lists_use use;
 	int rc;
 	if (!r->tree || !r->synced) {
 		return bc_errinfo_set(ei, BC_ESTATE,
@@ -1144,7 +1212,20 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 		u.region[3] = plan.list ? 1u : 0u;
 		u.bound[0] = region->max_evals;
 		tiles = u.size[2] * u.size[3];
-		draw(r, &u, &plan, nprims);
+		/* The view's lists, kept from an earlier call, or built: for
+		 * every tile (and kept) unless the region is a few tiles of
+		 * it, such as an edit's damage. */
+		if (r->lists_kept && same_view(&u, &r->lists_u)) {
+			use = LISTS_KEPT;
+			r->lists_reused++;
+		} else if (!plan.list || (uint64_t)plan.nlist * 4 >= ntiles) {
+			use = LISTS_ALL;
+			r->lists_builds++;
+		} else {
+			use = LISTS_REGION;
+		}
+		r->lists_kept = false;
+		draw(r, &u, &plan, nprims, use);
 		if ((rc = bc__gl_check(&r->ctx, "drawing a frame", ei)) ||
 		    (rc = finish_tracing(r, &u, &plan, t_start, &dispatches,
 		                         &incomplete, ei))) {
@@ -1171,6 +1252,10 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 			goto done;
 		}
 		memcpy(stat, (const char *)map + 12 * npix, sizeof(stat));
+		if (use == LISTS_KEPT) {
+			stat[BC_GL_STAT_FRAGMENTS] = r->lists_frags;
+			stat[BC_GL_STAT_MAX_OVERLAP] = r->lists_max;
+		}
 		fits = stat[BC_GL_STAT_FRAGMENTS] <= r->frag_cap &&
 		       stat[BC_GL_STAT_NO_SLOT] == 0;
 		if (fits) {
@@ -1190,6 +1275,14 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 		r->ctx.info.dispatches = dispatches;
 		if (fits) {
 			stats->incomplete = incomplete;
+			if (use != LISTS_REGION) {
+				r->lists_kept = true;
+				r->lists_u = u;
+				r->lists_u.pool[3] =
+				    0; /* set when out of time */
+				r->lists_frags = stat[BC_GL_STAT_FRAGMENTS];
+				r->lists_max = stat[BC_GL_STAT_MAX_OVERLAP];
+			}
 			break;
 		}
 		/* Too many fragments or suspended tiles: both counts are
@@ -1408,6 +1501,11 @@ static void gl_release(struct bc_renderer *base)
 	gl->DeleteTextures(3, r->tex);
 	memset(r->tex, 0, sizeof(r->tex));
 	r->tex_w = r->tex_h = 0;
+	gl->BindBuffer(GL_COPY_WRITE_BUFFER, r->lists_tiles);
+	gl->BufferData(GL_COPY_WRITE_BUFFER, 0, NULL, GL_DYNAMIC_COPY);
+	gl->BindBuffer(GL_COPY_WRITE_BUFFER, 0);
+	r->lists_tiles_size = 0;
+	r->lists_kept = false;
 	gl->BindBuffer(GL_PIXEL_PACK_BUFFER, r->pbo);
 	gl->BufferData(GL_PIXEL_PACK_BUFFER, 0, NULL, GL_STREAM_READ);
 	gl->BindBuffer(GL_PIXEL_PACK_BUFFER, 0);
@@ -1433,7 +1531,7 @@ static size_t gl_kept_bytes(const struct bc_renderer *base)
 	                               BC__GL_BUF_REGION, BC__GL_BUF_SHORT};
 	const struct gl_renderer *r = (const struct gl_renderer *)base;
 	size_t n = 12 * (size_t)r->tex_w * r->tex_h + r->pbo_size +
-	           r->region_cap * sizeof(*r->region);
+	           r->lists_tiles_size + r->region_cap * sizeof(*r->region);
 	for (size_t i = 0; i < sizeof(per_view) / sizeof(per_view[0]); i++) {
 		if (r->buf_size[per_view[i]] > 64) {
 			n += r->buf_size[per_view[i]];
@@ -1454,6 +1552,8 @@ int bc_render_gl_info(const struct bc_renderer *base, struct bc_gl_info *out)
 	out->upload_bytes = r->upload_bytes;
 	out->upload_full = r->upload_full;
 	out->full_uploads = r->full_uploads;
+	out->lists_built = r->lists_builds;
+	out->lists_reused = r->lists_reused;
 	return 0;
 }
 

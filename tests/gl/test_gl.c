@@ -695,12 +695,19 @@ static uint32_t refine_vs_whole(struct bc_renderer *r,
 	struct bc_frame ref = {0}, acc = {0};
 	uint32_t tw = bc_render_tiles_x(w), th = bc_render_tiles_y(h);
 	uint8_t *half = calloc((size_t)tw * th, 1);
-	uint32_t bad = 0;
+	uint32_t bad = 0, calls = 0;
+	struct bc_gl_info before, after;
 	if (!half || bc_frame_init(&ref, w, h) || bc_frame_init(&acc, w, h)) {
 		bad = w * h;
 		goto out;
 	}
 	if (bc_renderer_render(r, cam, &ref, NULL, NULL)) {
+		bad = w * h;
+		goto out;
+	}
+	/* The whole frame built the view's A-buffer; every region call
+	 * below traces those lists without building them again. */
+	if (bc_render_gl_info(r, &before)) {
 		bad = w * h;
 		goto out;
 	}
@@ -719,6 +726,7 @@ static uint32_t refine_vs_whole(struct bc_renderer *r,
 				}
 				CHECK(!st.whole);
 				rays += st.rays;
+				calls++;
 				continue;
 			}
 			for (size_t i = 0; i < (size_t)tw * th; i++) {
@@ -732,6 +740,7 @@ static uint32_t refine_vs_whole(struct bc_renderer *r,
 				}
 				CHECK(!st.whole);
 				rays += st.rays;
+				calls++;
 				for (size_t i = 0; i < (size_t)tw * th; i++) {
 					half[i] = !half[i];
 				}
@@ -741,6 +750,9 @@ static uint32_t refine_vs_whole(struct bc_renderer *r,
 		bad += mismatches(&acc, &ref);
 		(*frames)++;
 	}
+	CHECK(bc_render_gl_info(r, &after) == 0);
+	CHECK_EQ_INT(after.lists_built, before.lists_built);
+	CHECK_EQ_INT(after.lists_reused - before.lists_reused, calls);
 out:
 	free(half);
 	bc_frame_finish(&ref);
@@ -788,6 +800,19 @@ static void test_refinement_equals_whole(void)
 			       info.suspensions);
 			bad += b;
 		}
+	}
+	/* A sync drops the kept lists: the next frame builds them. */
+	{
+		struct bc_gl_info a, b;
+		struct bc_frame f = {0};
+		REQUIRE(bc_frame_init(&f, 24, 16) == 0);
+		REQUIRE(bc_render_gl_info(r, &a) == 0);
+		REQUIRE(bc_renderer_sync(r, t, NULL, &ei) == 0);
+		REQUIRE(draw_region(r, &cam, &f, NULL, 0, false, NULL) == 0);
+		REQUIRE(bc_render_gl_info(r, &b) == 0);
+		CHECK_EQ_INT(b.lists_built, a.lists_built + 1);
+		CHECK_EQ_INT(b.lists_reused, a.lists_reused);
+		bc_frame_finish(&f);
 	}
 	/* The loop budget hook: refused below its floor, 0 restores the
 	 * driver's. (A budget small enough to suspend tiles mid-frame is

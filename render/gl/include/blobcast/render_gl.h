@@ -60,6 +60,8 @@ struct bc_gl_info {
 	/* Since creation, and the last sync. */
 	uint32_t program_builds; /* shader programs built (once, at create) */
 	uint32_t full_uploads;   /* syncs that uploaded the whole tree */
+	uint32_t lists_built;    /* A-buffers built for every tile and kept */
+	uint32_t lists_reused;   /* region calls that traced kept lists */
 	bool upload_full;        /* the last sync uploaded everything */
 	uint64_t upload_bytes;   /* bytes the last sync sent */
 };
