@@ -363,6 +363,7 @@ static void a_frame_that_cannot_be_drawn_is_an_error(void)
 	struct conn a;
 	struct bc_msg ping = {.type = BC_MSG_PING};
 	char text[BC_PROTO_MAX_ERROR_TEXT + 1];
+	int errors = 0;
 	REQUIRE(json != NULL);
 	len = (size_t)snprintf(json, cap,
 	                       "{\"blobcast\": 1, \"root\": {\"type\": "
@@ -391,12 +392,19 @@ static void a_frame_that_cannot_be_drawn_is_an_error(void)
 	         a.m.error.text.ptr);
 	CHECK(strstr(text, "could not be drawn") != NULL);
 	CHECK(strstr(text, "loop limit") != NULL);
-	/* Still a member, and not sent that frame again: a PING's PONG
-	 * comes before any other ERROR or FRAME. */
+	/* Still a member, and the frame is not tried again and again: by
+	 * the PONG of a PING at most one more ERROR came (a refinement the
+	 * default scene still owed may have been asked for). */
 	ping.seq = 77;
 	REQUIRE(conn_send(&a, &ping));
-	REQUIRE(conn_recv(&a, 10000) == 1);
-	CHECK_EQ_INT(a.m.type, BC_MSG_PONG);
+	for (;;) {
+		REQUIRE(conn_recv(&a, 10000) == 1);
+		if (a.m.type == BC_MSG_PONG) {
+			break;
+		}
+		errors += a.m.type == BC_MSG_ERROR;
+	}
+	CHECK(errors <= 1);
 	/* A scene that can be drawn: frames again. */
 	conn_load_json(&a, "{\"blobcast\": 1, \"root\": {\"type\": "
 	                   "\"sphere\", \"id\": 1, \"radius\": 1}}");
