@@ -8,6 +8,7 @@
  */
 #include "gl_priv.h"
 
+#include <pthread.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -152,6 +153,35 @@ static int check_limits(struct bc__gl_ctx *c, struct bc_errinfo *ei)
 	return bc__gl_check(c, "limits", ei);
 }
 
+/* ---- Software contexts ---------------------------------------------------
+ *
+ * Two render threads drawing with two llvmpipe contexts at once read memory
+ * Mesa had freed: a gl daemon with two workers and three sessions crashed
+ * inside swrast_dri.so once ASan filled freed memory (max_free_fill_size),
+ * and is clean with one worker. Whether the fault is Mesa's or a rule of
+ * EGL's we break is not known yet; until it is, the contexts of a software
+ * renderer take turns: a process-wide lock is held from binding to
+ * unbinding (and while a context is opened). llvmpipe spreads each draw
+ * over its own threads, so little is lost. Hardware contexts run at once. */
+
+static pthread_mutex_t soft_turn = PTHREAD_MUTEX_INITIALIZER;
+
+static void take_turn(struct bc__gl_ctx *c)
+{
+	if (!c->locked) {
+		pthread_mutex_lock(&soft_turn);
+		c->locked = true;
+	}
+}
+
+static void give_turn(struct bc__gl_ctx *c)
+{
+	if (c->locked) {
+		c->locked = false;
+		pthread_mutex_unlock(&soft_turn);
+	}
+}
+
 /* After the context is current: entry points, version, what was granted. */
 static int finish_open(struct bc__gl_ctx *c, struct bc_errinfo *ei)
 {
@@ -222,6 +252,8 @@ static int open_one(struct bc__gl_ctx *c, enum bc_gl_platform p, bool any,
 	bool debug = bc_log_level() >= BC_LOG_DEBUG;
 	int rc;
 	memset(&c->plat, 0, sizeof(c->plat));
+	/* Which renderer it is shows only once it is open. */
+	take_turn(c);
 	switch (p) {
 	case BC_GL_PLATFORM_DEVICE:
 	case BC_GL_PLATFORM_SURFACELESS:
@@ -246,12 +278,21 @@ static int open_one(struct bc__gl_ctx *c, enum bc_gl_platform p, bool any,
 		break;
 	}
 	if (rc) {
+		give_turn(c);
 		return rc;
 	}
 	if ((rc = finish_open(c, ei))) {
 		bc__gl_ctx_close(c);
+		return rc;
 	}
-	return rc;
+	c->serialize = c->info.software_device ||
+	               c->info.platform == BC_GL_PLATFORM_OSMESA ||
+	               strstr(c->info.renderer, "llvmpipe") ||
+	               strstr(c->info.renderer, "softpipe");
+	if (!c->serialize) {
+		give_turn(c);
+	}
+	return 0;
 }
 
 int bc__gl_ctx_open(struct bc__gl_ctx *c, enum bc_gl_platform platform,
@@ -295,20 +336,34 @@ void bc__gl_ctx_close(struct bc__gl_ctx *c)
 	bc__osmesa_close(&c->plat);
 #endif
 	memset(&c->plat, 0, sizeof(c->plat));
+	give_turn(c);
 }
 
 int bc__gl_ctx_bind(struct bc__gl_ctx *c, struct bc_errinfo *ei)
 {
+	int rc = 0;
+	bool bound = false;
+	if (c->serialize) {
+		take_turn(c);
+	}
 	if (c->plat.platform == BC_GL_PLATFORM_OSMESA) {
 #if defined(BLOBCAST_GL_OSMESA)
-		return bc__osmesa_bind(&c->plat, true, ei);
+		rc = bc__osmesa_bind(&c->plat, true, ei);
+		bound = true;
 #endif
 	} else if (c->plat.platform != BC_GL_PLATFORM_AUTO) {
 #if defined(BLOBCAST_GL_EGL)
-		return bc__egl_bind(&c->plat, true, ei);
+		rc = bc__egl_bind(&c->plat, true, ei);
+		bound = true;
 #endif
 	}
-	return bc_errinfo_set(ei, BC_ESTATE, "gl: no context");
+	if (!bound) {
+		rc = bc_errinfo_set(ei, BC_ESTATE, "gl: no context");
+	}
+	if (rc) {
+		give_turn(c);
+	}
+	return rc;
 }
 
 void bc__gl_ctx_unbind(struct bc__gl_ctx *c)
@@ -327,4 +382,5 @@ void bc__gl_ctx_unbind(struct bc__gl_ctx *c)
 	if (rc) {
 		bc_log(BC_LOG_WARN, "%s", ei.msg);
 	}
+	give_turn(c);
 }

@@ -130,6 +130,10 @@ struct bc__gl_ctx {
 	struct bc__gl_plat plat;
 	GladGLContext gl;
 	struct bc_gl_info info;
+	/* A software renderer (llvmpipe, softpipe, OSMesa): its contexts
+	 * are used one at a time in the process (context.c, "Software
+	 * contexts"); locked: this one holds that turn. */
+	bool serialize, locked;
 };
 
 /* Creates a context on platform (AUTO tries a hardware device, then
