@@ -76,6 +76,18 @@ void main()
 			  (uint(px1) - u_window.x) / BC_TILE + 1u,
 			  (uint(py1) - u_window.y) / BC_TILE + 1u);
 	}
+	// A region's list: only tiles inside the listed tiles' bounding box
+	// can be asked for, so the quad is clipped to it (u_bound.yz), and
+	// a primitive outside draws nothing. An edit's damage on a large
+	// scene then rasterizes what lies near it, not every imposter.
+	if (u_region.w == 1u) {
+		uvec4 box = uvec4(u_bound.y & 0xffffu, u_bound.y >> 16u,
+				  u_bound.z & 0xffffu, u_bound.z >> 16u);
+		r = uvec4(max(r.xy, box.xy), min(r.zw, box.zw));
+		if (r.x >= r.z || r.y >= r.w) {
+			return;
+		}
+	}
 	// Window y runs with the tile row here: the framebuffer is never
 	// shown, so tile row ty is window row ty.
 	emit_corner(float(r.x), float(r.y), m);

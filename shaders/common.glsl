@@ -124,6 +124,9 @@ layout(std140, binding = 0) uniform Frame {
 	uvec4 u_region;
 	// x: the most field evaluations one ray may spend (0: no bound); a ray
 	// that would go past it stops, undrawn, and its bit is set in b_short.
+	// y, z: with a tile list (u_region.w == 1), the listed tiles' bounding
+	// box in tiles, x0 | y0 << 16 and x1 | y1 << 16, half-open
+	// (abuffer.geom clips imposters to it).
 	uvec4 u_bound;
 	// The frame as a window of the whole view (blobcast/render.h's
 	// bc_frame_window): x0, y0, full width, full height; (0, 0, width,

@@ -695,6 +695,7 @@ struct plan {
 	bool list;       /* tiles from the Region buffer */
 	uint32_t nlist;  /* tiles listed */
 	uint32_t gx, gy; /* workgroups of a per-tile dispatch */
+	uint32_t box[4]; /* listed tiles' bounds: x0, y0, x1, y1 (half-open) */
 	uint32_t tiles;  /* tiles with a pixel to draw */
 	uint64_t rays;   /* pixels to draw */
 };
@@ -766,9 +767,15 @@ static int plan_region(struct gl_renderer *r,
 	if (p->list) {
 		uint32_t *bits = r->region + p->nlist;
 		memset(bits, 0, words * sizeof(*bits));
+		p->box[0] = tw;
+		p->box[1] = th;
 		for (uint32_t j = 0; j < p->nlist; j++) {
-			uint32_t i = r->region[j];
+			uint32_t i = r->region[j], x = i % tw, y = i / tw;
 			bits[i / 32] |= 1u << (i % 32);
+			p->box[0] = x < p->box[0] ? x : p->box[0];
+			p->box[1] = y < p->box[1] ? y : p->box[1];
+			p->box[2] = x + 1 > p->box[2] ? x + 1 : p->box[2];
+			p->box[3] = y + 1 > p->box[3] ? y + 1 : p->box[3];
 		}
 		p->gy = (p->nlist + tw - 1) / tw;
 	}
@@ -1211,6 +1218,8 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 		u.region[2] = plan.nlist;
 		u.region[3] = plan.list ? 1u : 0u;
 		u.bound[0] = region->max_evals;
+		u.bound[1] = plan.box[0] | plan.box[1] << 16;
+		u.bound[2] = plan.box[2] | plan.box[3] << 16;
 		tiles = u.size[2] * u.size[3];
 		/* The view's lists, kept from an earlier call, or built: for
 		 * every tile (and kept) unless the region is a few tiles of

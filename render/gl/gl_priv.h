@@ -109,7 +109,10 @@ struct bc__gl_frame_ubo {
 	uint32_t counts[4]; /* primitives, fragment capacity, debug mode */
 	uint32_t pool[4];   /* slot base (scratch words), slots, budget */
 	uint32_t region[4]; /* level, refine, tiles listed, list used */
-	uint32_t bound[4];  /* the region's max_evals (0: none), 0, 0, 0 */
+	/* The region's max_evals (0: none); with a tile list, the listed
+	 * tiles' bounding box, x0 | y0 << 16 and x1 | y1 << 16 (half-open,
+	 * in tiles); 0. */
+	uint32_t bound[4];
 	/* The frame as a window of the whole view: x0, y0, full width,
 	 * full height; (0, 0, width, height) for the whole view. */
 	uint32_t window[4];
