@@ -1056,26 +1056,45 @@ static int finish_tracing(struct gl_renderer *r, struct bc__gl_frame_ubo *u,
 /* Issues the copies of the planes and statistics into the readback
  * buffer, and of the Short words of a bounded frame (short_bytes of them;
  * 0: none). */
-static void read_back(struct gl_renderer *r, size_t npix, size_t short_bytes)
+static void read_back(struct gl_renderer *r, const struct plan *p, uint32_t w,
+                      uint32_t h, size_t short_bytes)
 {
 	GladGLContext *gl = &r->ctx.gl;
+	size_t npix = (size_t)w * h;
+	static const GLenum fmt[3] = {GL_RED_INTEGER, GL_RED, GL_RED_INTEGER};
+	static const GLenum type[3] = {GL_UNSIGNED_INT, GL_FLOAT,
+	                               GL_UNSIGNED_INT};
 	gl->MemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT |
 	                  GL_PIXEL_BUFFER_BARRIER_BIT |
 	                  GL_BUFFER_UPDATE_BARRIER_BIT);
 	gl->QueryCounter(r->queries[Q_TRACE], GL_TIMESTAMP);
 
-	/* Readback: every plane and the statistics into one buffer. */
+	/* Readback: the planes and the statistics into one buffer, plane k
+	 * at 4 * k * npix. A region's list reads only the rows of its
+	 * tiles' bounding box (4.5's glGetTextureSubImage), at the offsets a
+	 * whole plane would put them: an edit's damage on a 1080p view then
+	 * moves a few rows, not 25 MB. */
 	gl->BindBuffer(GL_PIXEL_PACK_BUFFER, r->pbo);
 	gl->PixelStorei(GL_PACK_ALIGNMENT, 4);
-	gl->BindTexture(GL_TEXTURE_2D, r->tex[0]);
-	gl->GetTexImage(GL_TEXTURE_2D, 0, GL_RED_INTEGER, GL_UNSIGNED_INT,
-	                (void *)0);
-	gl->BindTexture(GL_TEXTURE_2D, r->tex[1]);
-	gl->GetTexImage(GL_TEXTURE_2D, 0, GL_RED, GL_FLOAT,
-	                (void *)(uintptr_t)(4 * npix));
-	gl->BindTexture(GL_TEXTURE_2D, r->tex[2]);
-	gl->GetTexImage(GL_TEXTURE_2D, 0, GL_RED_INTEGER, GL_UNSIGNED_INT,
-	                (void *)(uintptr_t)(8 * npix));
+	for (int k = 0; k < 3; k++) {
+		size_t base = 4 * (size_t)k * npix;
+		if (p->list && gl->GetTextureSubImage) {
+			uint32_t y0 = p->box[1] * BC_GL_TILE;
+			uint32_t y1 = p->box[3] * BC_GL_TILE < h
+			                  ? p->box[3] * BC_GL_TILE
+			                  : h;
+			size_t bytes = 4 * (size_t)w * (y1 - y0);
+			gl->GetTextureSubImage(
+			    r->tex[k], 0, 0, (GLint)y0, 0, (GLsizei)w,
+			    (GLsizei)(y1 - y0), 1, fmt[k], type[k],
+			    (GLsizei)bytes,
+			    (void *)(uintptr_t)(base + 4 * (size_t)w * y0));
+		} else {
+			gl->BindTexture(GL_TEXTURE_2D, r->tex[k]);
+			gl->GetTexImage(GL_TEXTURE_2D, 0, fmt[k], type[k],
+			                (void *)(uintptr_t)base);
+		}
+	}
 	gl->BindTexture(GL_TEXTURE_2D, 0);
 	gl->BindBuffer(GL_PIXEL_PACK_BUFFER, 0);
 	gl->BindBuffer(GL_COPY_READ_BUFFER, r->bufs[BC__GL_BUF_STATS]);
@@ -1240,7 +1259,7 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 		                         &incomplete, ei))) {
 			goto done;
 		}
-		read_back(r, npix, short_bytes);
+		read_back(r, &plan, w, h, short_bytes);
 		if ((rc = wait_fence(r, ei))) {
 			goto done;
 		}
