@@ -62,6 +62,7 @@ struct t2_scene {
 	const char *gen;
 	struct bc_gen_opts o;
 	uint32_t n;
+	bool away; /* the camera turned round: every tile empty */
 };
 
 static int table2_scene(struct bc_renderer *r, const struct gpu_opts *op,
@@ -88,6 +89,12 @@ static int table2_scene(struct bc_renderer *r, const struct gpu_opts *op,
 	} else if (bc_gen(s->gen, &s->o, t, &cam, &ei)) {
 		why = ei.msg;
 	} else {
+		if (s->away) {
+			for (int i = 0; i < 3; i++) {
+				cam.target[i] =
+				    2.0f * cam.eye[i] - cam.target[i];
+			}
+		}
 		gen_ms = gpu_now_ms() - t0;
 		t0 = gpu_now_ms();
 		if (bc_renderer_sync(r, t, NULL, &ei)) {
@@ -212,11 +219,25 @@ int gpu_cmd_table2(const struct gpu_opts *op)
 	struct bc_renderer *r;
 	double start = gpu_now_ms();
 	int skipped = 0;
-	cap = 2 * (2 * op->ncounts + op->nlens + op->nlevels) + 1;
+	cap = 2 * (2 * op->ncounts + op->nlens + op->nlevels) + 3;
 	list = bc_calloc(cap, sizeof(*list));
 	if (!list || gpu_out_open(&o, op)) {
 		bc_free(list);
 		return 1;
+	}
+	/* The floor: what a frame costs with nothing in any tile (16
+	 * spheres behind the camera), and with one sphere. Against the
+	 * rows below they separate what every tile pays from what its
+	 * list costs. */
+	for (int f = 0; f < 2; f++) {
+		struct t2_scene *s = &list[n++];
+		snprintf(s->label, sizeof(s->label), "%s",
+		         f ? "floor: one sphere" : "floor: empty view");
+		s->gen = "fig18";
+		s->o.kind = BC_GEN_KIND_SPHERES;
+		s->o.blend = BC_GEN_BLEND_SHARP;
+		s->o.count = f ? 1 : 16;
+		s->away = f == 0;
 	}
 	for (int b = 0; b < 2; b++) {
 		const char *bn = b ? "smooth" : "sharp";
