@@ -34,6 +34,26 @@ static const char *daemon_path = BLOBCASTD_PATH;
 /* When set, the next daemons started write their log (stderr) to this
  * file, truncated at each start, for tests that check what was logged. */
 static const char *daemon_log_path;
+/* When set, the next daemons started run with ASan filling what they free
+ * (max_free_fill_size, added to ASAN_OPTIONS): memory read after it was
+ * freed then holds garbage instead of bytes that still look right, also
+ * where the reader is not instrumented (libuv, Mesa). */
+static bool daemon_fill_freed;
+
+/* In a daemon's child before exec: what the settings above ask of its
+ * environment. */
+static inline void daemon_child_env(void)
+{
+	const char *asan = getenv("ASAN_OPTIONS");
+	char fill[1024];
+	if (!daemon_fill_freed) {
+		return;
+	}
+	snprintf(fill, sizeof(fill),
+	         "%s%smax_free_fill_size=65536:free_fill_byte=190",
+	         asan ? asan : "", asan && *asan ? ":" : "");
+	setenv("ASAN_OPTIONS", fill, 1);
+}
 
 struct daemon {
 	pid_t pid;
@@ -94,6 +114,7 @@ static inline int daemon_start_with(struct daemon *d, const char *dir,
 	}
 	if (d->pid == 0) {
 		int devnull = open("/dev/null", O_WRONLY);
+		daemon_child_env();
 		if (daemon_log_path) {
 			int log = open(daemon_log_path,
 			               O_WRONLY | O_CREAT | O_TRUNC, 0600);

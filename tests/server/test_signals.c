@@ -81,6 +81,7 @@ static int start(struct daemon *d, const char *dir, const char *const *extra)
 		if (fd >= 0) {
 			dup2(fd, 2);
 		}
+		daemon_child_env();
 		execl(daemon_path, "blobcastd", "--listen", "none", "--unix",
 		      d->sock, "--data", d->dir, "--log", "info", more[0],
 		      more[1], more[2], more[3], (char *)NULL);
@@ -340,19 +341,10 @@ static const struct bc_test tests[] = {
 
 int main(int argc, char **argv)
 {
-	/* Under ASan, the daemons these tests stop fill what they free: a
-	 * handle freed before the loop has closed it (the work layer's and
-	 * the sessions table's once were) then fails libuv's close instead
-	 * of reading stale bytes that still look right. Not for every test:
-	 * llvmpipe trips over it in the gl daemons of others. */
-	{
-		const char *asan = getenv("ASAN_OPTIONS");
-		char opts[512];
-		snprintf(opts, sizeof(opts),
-		         "%s%smax_free_fill_size=65536:free_fill_byte=190",
-		         asan ? asan : "", asan && *asan ? ":" : "");
-		setenv("ASAN_OPTIONS", opts, 1);
-	}
+	/* The daemons these tests stop fill what they free: a handle freed
+	 * before the loop has closed it (the work layer's and the sessions
+	 * table's once were) then fails libuv's close. */
+	daemon_fill_freed = true;
 	/* daemon.h's helpers this file has no use for. */
 	(void)daemon_start;
 	(void)conn_view;
