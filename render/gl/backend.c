@@ -1304,10 +1304,11 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 		if (fits) {
 			stats->incomplete = incomplete;
 			if (use != LISTS_REGION) {
+				/* pool[3] is set when out of time, which
+				 * is no part of the view. */
 				r->lists_kept = true;
 				r->lists_u = u;
-				r->lists_u.pool[3] =
-				    0; /* set when out of time */
+				r->lists_u.pool[3] = 0;
 				r->lists_frags = stat[BC_GL_STAT_FRAGMENTS];
 				r->lists_max = stat[BC_GL_STAT_MAX_OVERLAP];
 			}
