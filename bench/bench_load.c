@@ -11,6 +11,12 @@
  * per primitive. Each size runs in `runs` fresh daemons; the medians are
  * printed.
  *
+ * A scene larger than one message (64 MiB, about 1.3 million spheres)
+ * goes in parts (PROTOCOL.md 7.10.1) to a daemon started with
+ * --max-scene 256, and its SCENE_STATE comes back in parts; a second
+ * client that did not announce PARTS then joins and must be told ENOTSUP
+ * (fatal), which the bench checks and prints.
+ *
  * Usage: bench_load PATH/TO/blobcastd [runs] [spheres ...]
  * (default: 3 runs of 100000, 700000 and 1000000 spheres)
  */
@@ -32,6 +38,7 @@ struct one {
 	int64_t
 	    cpu_ms; /* the daemon's CPU time from SCENE_LOAD to SCENE_STATE */
 	long rss_kb, hwm_kb;
+	int parts; /* the SCENE_STATE's parts (1: whole) */
 };
 
 /* CPU time (user + system) pid has used, in ms; 0 when unreadable. */
@@ -79,18 +86,80 @@ static int still_of(struct conn *c, uint64_t order, int64_t t0, int64_t *first,
 	return -1;
 }
 
+/* The SCENE_STATE answering author_seq, whole or in parts (assembled in
+ * p); its order in *order, the parts it came in in *nparts. */
+static int state_of(struct conn *c, struct bc_proto_parts *p,
+                    uint32_t author_seq, uint64_t *order, int *nparts)
+{
+	struct bc_msg whole;
+	struct bc_errinfo ei = {0};
+	*nparts = 0;
+	while (conn_recv(c, 300000) == 1) {
+		int rc = bc_proto_parts_add(p, &c->m, &whole, &ei);
+		*nparts += c->m.type == BC_MSG_SCENE_STATE;
+		if (rc < 0) {
+			fprintf(stderr, "bad SCENE_STATE parts: %s\n", ei.msg);
+			return -1;
+		}
+		if (rc == 1 && whole.type == BC_MSG_SCENE_STATE &&
+		    whole.scene_state.author_seq == author_seq) {
+			*order = whole.scene_state.order;
+			return 0;
+		}
+		if (rc == 1 && whole.type == BC_MSG_SCENE_STATE) {
+			*nparts = 0;
+		}
+	}
+	return -1;
+}
+
+/* A client without PARTS joining a session whose scene passes one
+ * message: ERROR ENOTSUP, fatal (PROTOCOL.md 4.1). */
+static int no_parts_refused(const struct daemon *d)
+{
+	struct conn c;
+	int ok = 0;
+	if (conn_open(&c, d) ||
+	    conn_hello_as(&c, "old", BC_PROTO_ENCODINGS_ALL, true,
+	                  BC_PROTO_FEATURES_READ & ~BC_PROTO_FEATURE_PARTS) ||
+	    !conn_send(
+	        &c, &(struct bc_msg){.type = BC_MSG_SESSION_JOIN,
+	                             .session = {.role = BC_PROTO_ROLE_VIEWER,
+	                                         .name = {"bench", 5}}})) {
+		return -1;
+	}
+	while (conn_recv(&c, 300000) == 1) {
+		if (c.m.type == BC_MSG_SCENE_STATE) {
+			break; /* sent whole: wrong */
+		}
+		if (c.m.type == BC_MSG_ERROR) {
+			ok = c.m.error.code == (uint16_t)-BC_ENOTSUP &&
+			     (c.m.flags & BC_PROTO_FLAG_FATAL);
+			break;
+		}
+	}
+	conn_close(&c);
+	return ok ? 0 : -1;
+}
+
 static int run_one(const uint8_t *bytes, size_t len, int k, struct one *o)
 {
+	static const char *const big[] = {"--max-scene", "256", NULL};
 	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
+	struct bc_proto_parts parts;
 	struct daemon d;
 	struct conn c;
 	char dir[64], cmd[160];
 	int64_t t0, first, still;
 	uint64_t order;
-	int rc = -1;
+	size_t piece = BC_PROTO_MAX_PAYLOAD - 4u;
+	bool in_parts = len > piece;
+	uint32_t seq = 0;
+	int rc = -1, nparts = 0;
 	snprintf(dir, sizeof(dir), "/tmp/bc-bench-load-%d-%d", (int)getpid(),
 	         k);
-	if (daemon_start(&d, dir) != 0) {
+	bc_proto_parts_init(&parts, 0, false);
+	if (daemon_start_with(&d, dir, in_parts ? big : NULL) != 0) {
 		fprintf(stderr, "cannot start %s\n", daemon_path);
 		return -1;
 	}
@@ -101,25 +170,39 @@ static int run_one(const uint8_t *bytes, size_t len, int k, struct one *o)
 		fprintf(stderr, "cannot join the daemon's session\n");
 		goto out;
 	}
-	m.scene_load.scene.ptr = bytes;
-	m.scene_load.scene.len = (uint32_t)len;
 	o->cpu_ms = cpu_of(d.pid);
 	t0 = t_now_ms();
-	if (!conn_send(&c, &m) ||
-	    conn_expect(&c, BC_MSG_SCENE_STATE, 300000) != 1) {
+	for (size_t at = 0; at < len; at += piece) {
+		size_t n = len - at < piece ? len - at : piece;
+		m.flags = (uint16_t)((at ? BC_PROTO_FLAG_CONT : 0u) |
+		                     (at + n < len ? BC_PROTO_FLAG_MORE : 0u));
+		m.scene_load.scene.ptr = bytes + at;
+		m.scene_load.scene.len = (uint32_t)n;
+		if (!(seq = conn_send(&c, &m))) {
+			break;
+		}
+	}
+	if (!seq || state_of(&c, &parts, seq, &order, &nparts)) {
 		fprintf(stderr, "no SCENE_STATE\n");
 		goto out;
 	}
 	o->state_ms = t_now_ms() - t0;
 	o->cpu_ms = cpu_of(d.pid) - o->cpu_ms;
-	order = c.m.scene_state.order;
+	o->parts = nparts;
+	bc_proto_parts_drop(&parts);
 	if (still_of(&c, order, t0, &o->frame_ms, &o->still_ms)) {
 		fprintf(stderr, "no frame of the loaded scene\n");
 		goto out;
 	}
 	latency_rss_of(d.pid, &o->rss_kb, &o->hwm_kb);
+	if (in_parts && no_parts_refused(&d)) {
+		fprintf(stderr,
+		        "a client without PARTS was not told ENOTSUP\n");
+		goto out;
+	}
 	rc = 0;
 out:
+	bc_proto_parts_finish(&parts);
 	conn_close(&c);
 	daemon_stop(&d, SIGTERM);
 	snprintf(cmd, sizeof(cmd), "rm -rf %s %s.sock", dir, dir);
@@ -167,11 +250,12 @@ static int bench(uint32_t spheres, int runs)
 		sl[k] = o[k].still_ms;
 		rss[k] = o[k].rss_kb;
 		hwm[k] = o[k].hwm_kb;
-		printf("  run %d: spheres=%u state_ms=%lld daemon_cpu_ms=%lld "
+		printf("  run %d: spheres=%u state_parts=%d state_ms=%lld "
+		       "daemon_cpu_ms=%lld "
 		       "first_frame_ms=%lld still_ms=%lld rss_mib=%.0f "
 		       "hwm_mib=%.0f\n",
-		       k + 1, spheres, (long long)st[k], (long long)cpu[k],
-		       (long long)fr[k], (long long)sl[k],
+		       k + 1, spheres, o[k].parts, (long long)st[k],
+		       (long long)cpu[k], (long long)fr[k], (long long)sl[k],
 		       (double)rss[k] / 1024.0, (double)hwm[k] / 1024.0);
 		fflush(stdout);
 	}

@@ -387,6 +387,7 @@ struct fz {
 	pthread_t th;
 	int fd;
 	struct bc_proto_reader r;
+	struct bc_proto_parts parts; /* a SCENE_STATE in parts (7.10.1) */
 	struct bc_msg m;
 	uint32_t seq;
 	bool in_session, closed, fatal;
@@ -591,6 +592,8 @@ static void fz_pump(struct fz *f)
 {
 	while (!f->closed) {
 		ssize_t n = recv(f->fd, f->in, sizeof(f->in), MSG_DONTWAIT);
+		struct bc_msg part;
+		struct bc_errinfo ei = {0};
 		int rc;
 		if (n >= 0) {
 			f->heard = true;
@@ -601,8 +604,22 @@ static void fz_pump(struct fz *f)
 				fz_bad(f);
 				return;
 			}
-			while ((rc = bc_proto_reader_next(&f->r, &f->m)) == 1) {
-				fz_handle(f);
+			while ((rc = bc_proto_reader_next(&f->r, &part)) == 1) {
+				/* Parts out of their order are a daemon bug. */
+				int pr = bc_proto_parts_add(&f->parts, &part,
+				                            &f->m, &ei);
+				if (pr < 0) {
+					if (atomic_fetch_add(&n_bad_answers,
+					                     1) < 10) {
+						printf("conn %d: %s\n",
+						       f->index, ei.msg);
+					}
+					f->closed = true;
+					return;
+				}
+				if (pr == 1) {
+					fz_handle(f);
+				}
 			}
 			if (rc < 0) {
 				fz_bad(f);
@@ -1247,6 +1264,27 @@ static void act_load(struct fz *f, bool mutated)
 	gen_scene(f, pm(&f->rng, 500), 1 + (int)rnd(&f->rng, 24), 100, 0);
 	m.scene_load.scene.ptr = f->sub.data;
 	m.scene_load.scene.len = (uint32_t)f->sub.len;
+	if (f->sub.len >= 2 && pm(&f->rng, 300)) {
+		/* In parts (PROTOCOL.md 7.10.1), cut anywhere; now and then
+		 * a part left out, so that a CONT comes with no scene begun
+		 * or the scene stays unfinished. */
+		size_t at = 0;
+		while (at < f->sub.len) {
+			size_t n =
+			    1 + rnd(&f->rng, (uint32_t)(f->sub.len - at));
+			m.flags =
+			    (uint16_t)((at ? BC_PROTO_FLAG_CONT : 0u) |
+			               (at + n < f->sub.len ? BC_PROTO_FLAG_MORE
+			                                    : 0u));
+			m.scene_load.scene.ptr = f->sub.data + at;
+			m.scene_load.scene.len = (uint32_t)n;
+			if (pm(&f->rng, 950)) {
+				fz_emit(f, &m, mutated);
+			}
+			at += n;
+		}
+		return;
+	}
 	fz_emit(f, &m, mutated);
 }
 
@@ -1489,6 +1527,7 @@ static int fz_open(struct fz *f)
 	fcntl(f->fd, F_SETFL, fcntl(f->fd, F_GETFL) | O_NONBLOCK);
 	bc_proto_reader_init(&f->r, &(struct bc_proto_reader_opts){
 	                                .side = BC_PROTO_SIDE_CLIENT});
+	bc_proto_parts_init(&f->parts, 0, false);
 	f->seq = 0;
 	f->in_session = f->closed = f->fatal = f->risky = false;
 	f->heard = false;
@@ -1510,6 +1549,7 @@ static void fz_close(struct fz *f, bool abortive)
 	close(f->fd);
 	f->fd = -1;
 	bc_proto_reader_finish(&f->r);
+	bc_proto_parts_finish(&f->parts);
 }
 
 /* Reads until the daemon closes, at most ms. */

@@ -51,8 +51,10 @@ static const struct bc__type_info types[BC_MSG_COUNT] = {
     [BC_MSG_SESSION_LEAVE] = {"SESSION_LEAVE", BC__FROM_CLIENT, 0, 0},
     [BC_MSG_SESSION_INFO] = {"SESSION_INFO", BC__FROM_SERVER, 0,
                              SESSION_INFO_MAX},
-    [BC_MSG_SCENE_LOAD] = {"SCENE_LOAD", BC__FROM_CLIENT, 0, BULK},
-    [BC_MSG_SCENE_STATE] = {"SCENE_STATE", BC__FROM_SERVER, 0, BULK},
+    [BC_MSG_SCENE_LOAD] = {"SCENE_LOAD", BC__FROM_CLIENT, BC_PROTO_FLAGS_PARTS,
+                           BULK},
+    [BC_MSG_SCENE_STATE] = {"SCENE_STATE", BC__FROM_SERVER,
+                            BC_PROTO_FLAGS_PARTS, BULK},
     [BC_MSG_EDIT] = {"EDIT", BC__FROM_CLIENT, BC_PROTO_FLAG_INTERACTING, BULK},
     [BC_MSG_EDIT_APPLIED] = {"EDIT_APPLIED", BC__FROM_SERVER,
                              BC_PROTO_FLAG_INTERACTING | BC_PROTO_FLAG_UNDO |
@@ -248,6 +250,11 @@ uint32_t bc_proto_msg_features(const struct bc_msg *m)
 		            : 0u) |
 		       ops_features(&m->edit_applied);
 	case BC_MSG_SCENE_STATE:
+		/* A part is not a scene alone: what its scene needs is the
+		 * sender's to know (the server scans the whole scene). */
+		if (m->flags & BC_PROTO_FLAGS_PARTS) {
+			return BC_PROTO_FEATURE_PARTS;
+		}
 		return bc_proto_scene_scan(m->scene_state.scene.ptr,
 		                           m->scene_state.scene.len, &info,
 		                           NULL) == 0

@@ -482,15 +482,15 @@ static void commit(struct bc_task *t)
 	load_free(l);
 }
 
-int bc_handle_scene_load(struct bc_member *m, const struct bc_msg *msg)
+/* Starts the load of msg's scene (a whole SCENE_LOAD, or the last part
+ * of one sent in parts, its pieces in owned, which this takes). */
+static int start_load(struct bc_member *m, const struct bc_msg *msg,
+                      uint8_t *owned)
 {
 	struct bc_session *s = m->session;
 	struct load *l;
-	int park;
-	if (bc__refuse_change(m, msg->seq, &park)) {
-		return park;
-	}
 	if (!(l = bc_calloc(1, sizeof(*l)))) {
+		bc_free(owned);
 		bc__send_error(m, msg->seq, BC_ENOMEM,
 		               "scene not loaded: out of memory");
 		return 0;
@@ -503,10 +503,12 @@ int bc_handle_scene_load(struct bc_member *m, const struct bc_msg *msg)
 	l->t.run = prepare;
 	l->t.done = commit;
 	l->t.holds_order = true;
-	/* The payload lives in the reader's buffer only until the next
-	 * message: a big one takes that buffer (a 35 MB copy took the loop
-	 * 22 ms), a small one is copied. */
-	if (l->scene.len >= BC_SRV_DETACH_BYTES) {
+	/* Parts come assembled in owned. A whole payload lives in the
+	 * reader's buffer only until the next message: a big one takes that
+	 * buffer (a 35 MB copy took the loop 22 ms; the scene stays where it
+	 * is in it), a small one is copied. */
+	l->owned = owned;
+	if (!l->owned && l->scene.len >= BC_SRV_DETACH_BYTES) {
 		l->owned = m->ss->link->detach(m->ss->link->ud, m->peer->ref);
 	}
 	if (!l->owned &&
@@ -524,4 +526,108 @@ int bc_handle_scene_load(struct bc_member *m, const struct bc_msg *msg)
 	}
 	bc__task_start(s, &l->t);
 	return bc__hold(s, m, msg->seq);
+}
+
+/* ---- SCENE_LOAD in parts (PROTOCOL.md 7.10.1) ------------------------------ */
+
+void bc__parts_drop(struct bc_member *m)
+{
+	m->ss->parts_bytes -= m->parts.len;
+	bc_proto_parts_drop(&m->parts);
+}
+
+/* Drops the unfinished scenes of other members that have had no part for
+ * BC_SRV_PART_STALE_MS, to make room for m's. */
+static void drop_stale_parts(struct bc_member *m)
+{
+	uint64_t now = bc__now_ms(m->ss);
+	for (uint32_t i = 0; i < BC_SRV_MAX_CONNECTIONS; i++) {
+		struct bc_member *o = m->ss->by_slot[i];
+		if (o && o != m && o->parts.open &&
+		    now - o->parts_ms >= BC_SRV_PART_STALE_MS) {
+			bc_log(BC_LOG_INFO,
+			       "member %u: an unfinished scene of %zu bytes "
+			       "dropped, no part for %u ms",
+			       o->member_id, o->parts.len,
+			       (unsigned)(now - o->parts_ms));
+			bc__parts_drop(o);
+		}
+	}
+}
+
+/* Takes a part of a SCENE_LOAD: 1 with the whole scene in *whole (its
+ * bytes then in *owned), 0 when more must come or the part was refused
+ * (answered). */
+static int take_part(struct bc_member *m, const struct bc_msg *msg,
+                     struct bc_msg *whole, uint8_t **owned)
+{
+	struct bc_sessions *ss = m->ss;
+	struct bc_errinfo ei = {0};
+	bool cont = (msg->flags & BC_PROTO_FLAG_CONT) != 0;
+	size_t piece = msg->scene_load.scene.len;
+	size_t had = m->parts.open ? m->parts.len : 0;
+	size_t pending_cap = BC_SRV_PARTS_PENDING_SCENES * ss->max_scene_bytes;
+	int rc;
+	if (!cont) {
+		bc__parts_drop(m); /* a first part drops an unfinished scene */
+		had = 0;
+	}
+	if (had + piece > ss->max_scene_bytes) {
+		bc__parts_drop(m);
+		bc__send_error(m, msg->seq, BC_ELIMIT,
+		               "scene not loaded: its parts pass this server's "
+		               "%zu bytes (--max-scene) at %zu bytes",
+		               ss->max_scene_bytes, had + piece);
+		return 0;
+	}
+	if ((cont ? m->parts.open : true) &&
+	    ss->parts_bytes + piece > pending_cap) {
+		drop_stale_parts(m);
+		if (ss->parts_bytes + piece > pending_cap) {
+			bc__parts_drop(m);
+			bc__send_error(
+			    m, msg->seq, BC_EBUSY,
+			    "scene not loaded: this server holds %zu "
+			    "bytes of scenes in parts, at most %zu; "
+			    "send it again later",
+			    ss->parts_bytes, pending_cap);
+			return 0;
+		}
+	}
+	had = m->parts.len;
+	rc = bc_proto_parts_add(&m->parts, msg, whole, &ei);
+	ss->parts_bytes = ss->parts_bytes - had + m->parts.len;
+	m->parts_ms = bc__now_ms(ss);
+	if (rc < 0) {
+		bc__send_error(m, msg->seq,
+		               rc == BC_EPROTO_LENGTH ? BC_ELIMIT : rc,
+		               "scene not loaded: %s", ei.msg);
+		return 0;
+	}
+	if (rc == 1) {
+		ss->parts_bytes -= m->parts.len;
+		*owned = bc_proto_parts_take(&m->parts);
+	}
+	return rc;
+}
+
+int bc_handle_scene_load(struct bc_member *m, const struct bc_msg *msg)
+{
+	struct bc_msg whole;
+	uint8_t *owned = NULL;
+	int park;
+	if (bc__refuse_change(m, msg->seq, &park)) {
+		if (!park) {
+			bc__parts_drop(m); /* refused: its scene is dropped */
+		}
+		return park;
+	}
+	if (msg->flags & BC_PROTO_FLAGS_PARTS) {
+		if (take_part(m, msg, &whole, &owned) != 1) {
+			return 0;
+		}
+		return start_load(m, &whole, owned);
+	}
+	bc__parts_drop(m); /* a whole scene replaces an unfinished one */
+	return start_load(m, msg, NULL);
 }

@@ -18,6 +18,7 @@
 #include "blobcast/alloc.h"
 #include "blobcast/bytes.h"
 #include "blobcast/log.h"
+#include "srv_limits.h"
 #include "store_impl.h"
 
 /* 'BCJ1' little-endian: the first bytes of every journal record. */
@@ -25,8 +26,10 @@
 #define RECORD_HEADER 20u
 /* A journal record carries one EDIT's operations (at most one protocol
  * payload) and, for its undo history, the operations that undo it (at
- * most the scene, at most BC_SRV_MAX_SCENE_BYTES = 64 MiB) and who made it. */
-#define MAX_RECORD (2u * 64u * 1024u * 1024u + 4096u)
+ * most the scene, at most BC_SRV_MAX_SCENE_BYTES_LIMIT) and who made it;
+ * or a SCENE_LOAD's scene (at most BC_SRV_MAX_SCENE_BYTES_LIMIT). */
+#define MAX_RECORD                                                             \
+	((size_t)BC_PROTO_MAX_PAYLOAD + BC_SRV_MAX_SCENE_BYTES_LIMIT + 4096u)
 
 /* Reads exactly n bytes at off; false on a short read. */
 static bool read_at(int fd, void *buf, size_t n, off_t off)

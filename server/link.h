@@ -88,6 +88,12 @@ struct bc_link {
 	 * big scene's SCENE_STATE), and no copy of it on the loop. */
 	void (*send_shared)(void *ud, struct bc_conn_ref to,
 	                    struct bc_shared *msg);
+	/* Queues a shared SCENE_STATE (bc_proto_scene_state_head, then the
+	 * scene) as parts whose payloads are at most part_max bytes
+	 * (PROTOCOL.md 7.10.1), one after another with nothing between them;
+	 * each part is a slice of msg behind a head of its own. */
+	void (*send_parts)(void *ud, struct bc_conn_ref to,
+	                   struct bc_shared *msg, uint32_t part_max);
 	/* Drops the FRAMEs and SNAPSHOT answers waiting for the connection
 	 * (not the one being written): it left its session, and nothing of
 	 * that session follows the OK or ERROR that says so. */

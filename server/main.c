@@ -191,11 +191,11 @@ struct cli {
 		     .kind = BC_OPT_U32,                                       \
 		     .dst = &(c)->max_scene_mib,                               \
 		     .lo = 1,                                                  \
-		     .hi = 64,                                                 \
+		     .hi = 256,                                                \
 		     .arg = "MIB",                                             \
 		     .help = "largest scene as sent, {range} (default\n"       \
-		             "64: the protocol's limit, about 1.7\n"           \
-		             "million spheres)"},                              \
+		             "64, about 1.7 million spheres; over 64\n"        \
+		             "only clients of scenes in parts get it)"},       \
 		    {.name = "config",                                         \
 		     .kind = BC_OPT_STRING,                                    \
 		     .dst = &(c)->config,                                      \

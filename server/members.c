@@ -20,6 +20,7 @@ void bc_member_init(struct bc_member *m, struct bc_sessions *ss,
 	memset(m, 0, sizeof(*m));
 	m->ss = ss;
 	m->peer = peer;
+	bc_proto_parts_init(&m->parts, ss->max_scene_bytes, true);
 	if (peer->ref.slot < BC_SRV_MAX_CONNECTIONS) {
 		ss->by_slot[peer->ref.slot] = m;
 	}
@@ -32,6 +33,7 @@ void bc_member_finish(struct bc_member *m)
 	}
 	bc__unpark(m);
 	bc__leave(m);
+	bc__parts_drop(m);
 	bc_vstream_unref(m->vstream);
 	m->vstream = NULL;
 	if (m->peer->ref.slot < BC_SRV_MAX_CONNECTIONS &&
@@ -69,10 +71,15 @@ void bc_member_answered(struct bc_member *m)
 static void cannot_serve(struct bc_member *m, uint32_t needs)
 {
 	const struct bc_link *l = m->ss->link;
+	uint32_t missing = needs & ~m->peer->features;
 	bc_link_error(l, m->peer->ref, 0, BC_ENOTSUP, true,
-	              "the session's scene uses node kinds that this client "
-	              "did not announce (features 0x%x, announced 0x%x): use "
-	              "a newer client",
+	              "%s (features 0x%x, announced 0x%x): use a newer "
+	              "client",
+	              missing == BC_PROTO_FEATURE_PARTS
+	                  ? "the session's scene is larger than one message "
+	                    "and this client did not announce scenes in parts"
+	                  : "the session's scene uses node kinds that this "
+	                    "client did not announce",
 	              needs, m->peer->features);
 	l->close(l->ud, m->peer->ref, "its client cannot decode the scene",
 	         true);
@@ -225,19 +232,28 @@ void bc__send_info(struct bc_session *s)
 	}
 }
 
-/* st, encoded once for every receiver. */
-static struct bc_shared *shared_msg(const struct bc_msg *st)
+/* st, encoded once for every receiver: the head of a whole SCENE_STATE
+ * and the scene. A scene whose SCENE_STATE passes one message's payload
+ * limit is kept the same way, to be sent only in parts (PROTOCOL.md
+ * 7.10.1): its head's length is never sent as it is. */
+static struct bc_shared *shared_state(const struct bc_msg *st)
 {
-	struct bc_proto_buf b;
-	struct bc_errinfo ei = {0};
-	struct bc_shared *msg = NULL;
-	bc_proto_buf_init(&b, 0);
-	if (bc_proto_encode(&b, st, &ei) == 0 && (msg = bc_shared_new(b.len))) {
-		memcpy(msg->data, b.data, b.len);
-		/* Who may be sent it (PROTOCOL.md 4). */
-		msg->needs = bc_proto_msg_features(st);
+	const struct bc_proto_bytes *scene = &st->scene_state.scene;
+	struct bc_shared *msg =
+	    bc_shared_new(BC_PROTO_SCENE_PART_HEAD + (size_t)scene->len);
+	if (!msg) {
+		return NULL;
 	}
-	bc_proto_buf_finish(&b);
+	bc_proto_scene_state_head(msg->data, 0, st->scene_state.order,
+	                          st->scene_state.author,
+	                          st->scene_state.author_seq, scene->len);
+	memcpy(msg->data + BC_PROTO_SCENE_PART_HEAD, scene->ptr, scene->len);
+	/* Who may be sent it (PROTOCOL.md 4). */
+	msg->needs = bc_proto_msg_features(st);
+	if (BC_PROTO_SCENE_STATE_FIXED + (uint64_t)scene->len >
+	    BC_PROTO_MAX_PAYLOAD) {
+		msg->needs |= BC_PROTO_FEATURE_PARTS;
+	}
 	return msg;
 }
 
@@ -257,13 +273,13 @@ struct bc_shared *bc__state_msg(const struct bc_tree *t,
 	st.scene_state.author_seq = author_seq;
 	st.scene_state.scene.ptr = bytes;
 	st.scene_state.scene.len = (uint32_t)len;
-	msg = shared_msg(&st);
+	msg = shared_state(&st);
 	if (msg && (msg->needs & BC_PROTO_FEATURE_NAMES)) {
 		/* The tree's bytes are the same without the names table,
 		 * which ends the scene (PROTOCOL.md 8). */
 		st.scene_state.scene.len =
 		    (uint32_t)bc_proto_scene_strip_names(bytes, len);
-		if (!(msg->older = shared_msg(&st))) {
+		if (!(msg->older = shared_state(&st))) {
 			bc_shared_unref(msg);
 			msg = NULL;
 		}
@@ -308,15 +324,22 @@ void bc__send_state_msg(struct bc_session *s, struct bc_member *to,
 	for (uint32_t i = 0; i < n; i++) {
 		uint32_t missing = msg->needs & ~members[i]->peer->features;
 		struct bc_shared *send = msg;
-		if (missing == BC_PROTO_FEATURE_NAMES && msg->older) {
+		const struct bc_peer *peer = members[i]->peer;
+		if ((missing & BC_PROTO_FEATURE_NAMES) && msg->older) {
 			/* Not granted NAMES: the scene without its names. */
 			send = msg->older;
-			missing = send->needs & ~members[i]->peer->features;
+			missing = send->needs & ~peer->features;
 		}
 		if (missing) {
-			cannot_serve(members[i], missing);
+			cannot_serve(members[i], send->needs);
+		} else if ((peer->features & BC_PROTO_FEATURE_PARTS) &&
+		           send->len - BC_PROTO_HEADER_SIZE >
+		               peer->max_frame_bytes) {
+			/* Granted PARTS: no message over its limit. */
+			l->send_parts(l->ud, peer->ref, send,
+			              peer->max_frame_bytes);
 		} else {
-			l->send_shared(l->ud, members[i]->peer->ref, send);
+			l->send_shared(l->ud, peer->ref, send);
 		}
 	}
 }
@@ -345,6 +368,7 @@ void bc__leave(struct bc_member *m)
 	}
 	bc__present_leave(m);
 	bc__frames_forget(m);
+	bc__parts_drop(m); /* an unfinished scene was for this session */
 	for (uint32_t i = 0; i < s->nmembers; i++) {
 		if (s->members[i] == m) {
 			s->members[i] = s->members[--s->nmembers];

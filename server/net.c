@@ -792,6 +792,72 @@ static void link_send_shared(void *ud, struct bc_conn_ref to,
 	}
 }
 
+/* msg (a SCENE_STATE's head and scene, members.c) in parts of at most
+ * part_max payload bytes: each a head of its own and a slice of msg. The
+ * queue's cap counts the parts as the one shared message they are. */
+static void queue_parts(struct bc_conn *c, struct bc_shared *msg,
+                        uint32_t part_max)
+{
+	const uint8_t *head = msg->data;
+	const uint8_t *scene = msg->data + BC_PROTO_SCENE_PART_HEAD;
+	size_t len = msg->len - BC_PROTO_SCENE_PART_HEAD, at = 0;
+	size_t piece_max = part_max - BC_PROTO_SCENE_STATE_FIXED;
+	size_t nparts = (len + piece_max - 1) / piece_max;
+	size_t total = msg->len + (nparts - 1) * BC_PROTO_SCENE_PART_HEAD;
+	size_t cap = c->frame_bytes + total + BC_SRV_QUEUE_BESIDE_FRAME;
+	uint64_t order = bc_get_le64(head + BC_PROTO_HEADER_SIZE);
+	uint32_t author = bc_get_le32(head + BC_PROTO_HEADER_SIZE + 8);
+	uint32_t author_seq = bc_get_le32(head + BC_PROTO_HEADER_SIZE + 12);
+	if (c->tls && !bc_tls_ready(c->tls)) {
+		return;
+	}
+	cap = cap > BC_SRV_MAX_CLIENT_QUEUE ? cap : BC_SRV_MAX_CLIENT_QUEUE;
+	if (c->queued + total > cap) {
+		bc_log(BC_LOG_WARN,
+		       "dropping client %u (%s): %zu bytes queued and a scene "
+		       "of %zu more to send, over %zu: it stopped reading",
+		       c->gen, c->name, c->queued, total, cap);
+		bc__conn_close(c, "output queue over its limit");
+		return;
+	}
+	for (size_t i = 0; i < nparts; i++) {
+		size_t piece = len - at < piece_max ? len - at : piece_max;
+		uint16_t flags =
+		    (uint16_t)((i > 0 ? BC_PROTO_FLAG_CONT : 0u) |
+		               (i + 1 < nparts ? BC_PROTO_FLAG_MORE : 0u));
+		struct write_req *w = bc_calloc(1, sizeof(*w));
+		if (!w || !(w->owned = bc_malloc(BC_PROTO_SCENE_PART_HEAD))) {
+			bc_free(w);
+			bc__conn_close(c, "out of memory");
+			return;
+		}
+		bc_proto_scene_state_head(w->owned, flags, order, author,
+		                          author_seq, (uint32_t)piece);
+		w->buf[0] =
+		    uv_buf_init((char *)w->owned, BC_PROTO_SCENE_PART_HEAD);
+		w->buf[1] =
+		    uv_buf_init((char *)scene + at, (unsigned int)piece);
+		w->nbufs = 2;
+		w->len = BC_PROTO_SCENE_PART_HEAD + piece;
+		msg->refs++;
+		w->shared = msg;
+		c->queued += w->len;
+		at += piece;
+		enqueue(c, w);
+	}
+}
+
+static void link_send_parts(void *ud, struct bc_conn_ref to,
+                            struct bc_shared *msg, uint32_t part_max)
+{
+	struct bc_conn *c = bc__conn_get(ud, to);
+	if (c && !c->closing && !c->draining &&
+	    part_max > BC_PROTO_SCENE_STATE_FIXED &&
+	    msg->len > BC_PROTO_SCENE_PART_HEAD) {
+		queue_parts(c, msg, part_max);
+	}
+}
+
 static void link_close(void *ud, struct bc_conn_ref to, const char *why,
                        bool flush)
 {
@@ -1160,6 +1226,7 @@ int bc_net_new(struct bc_net **out, uv_loop_t *loop,
 	    .send = link_send,
 	    .send_frame = link_send_frame,
 	    .send_shared = link_send_shared,
+	    .send_parts = link_send_parts,
 	    .forget_frames = link_forget_frames,
 	    .acks_on = link_acks_on,
 	    .frame_ack = link_frame_ack,

@@ -787,9 +787,10 @@ int bc_sessions_new(struct bc_sessions **out,
 	ss->video = opts->video;
 	ss->max_scene_bytes =
 	    opts->max_scene_bytes &&
-	            opts->max_scene_bytes < BC_SRV_MAX_SCENE_BYTES
+	            opts->max_scene_bytes < BC_SRV_MAX_SCENE_BYTES_LIMIT
 	        ? opts->max_scene_bytes
-	        : BC_SRV_MAX_SCENE_BYTES;
+	    : opts->max_scene_bytes ? BC_SRV_MAX_SCENE_BYTES_LIMIT
+	                            : BC_SRV_MAX_SCENE_BYTES;
 	if ((rc = bc__index_new(&ss->index, ss->store))) {
 		bc_free(ss);
 		return bc_errinfo_set(ei, rc, "cannot list the sessions");

@@ -76,6 +76,10 @@ struct bc_member {
 	uint32_t park_seq;
 	bool park_again; /* dispatch the request again (not held) */
 	struct bc_member *park_next;
+	/* A SCENE_LOAD in parts not finished yet (edits.c), and when its
+	 * last part came (loop clock, ms). */
+	struct bc_proto_parts parts;
+	uint64_t parts_ms;
 };
 
 struct bc_sessions_opts {

@@ -74,7 +74,8 @@ struct bc_sessions {
 	struct bc_work *work;
 	struct bc_store *store;
 	bool no_damage;
-	size_t max_scene_bytes; /* SCENE_STATE payload, at most 64 MiB */
+	size_t max_scene_bytes; /* SCENE_STATE payload (--max-scene) */
+	size_t parts_bytes;     /* of every member's unfinished SCENE_LOAD */
 	struct bc_video_opts video;
 	struct bc_session *sessions[BC_SRV_MAX_SESSIONS];
 	uint32_t nsessions;
@@ -157,6 +158,8 @@ int bc__state_limit(struct bc_session *s, bool old, const char *what,
 void bc__send_state(struct bc_session *s, struct bc_member *to, uint32_t author,
                     uint32_t author_seq);
 void bc__leave(struct bc_member *m);
+/* Drops m's unfinished SCENE_LOAD in parts, if any (edits.c). */
+void bc__parts_drop(struct bc_member *m);
 /* m joins s (its role asked, its request seq). Returns 0 or BC_PARK. */
 int bc__join(struct bc_member *m, struct bc_session *s, enum bc_proto_role role,
              uint32_t seq);

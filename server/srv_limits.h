@@ -114,14 +114,30 @@
 #define BC_SRV_QUEUE_BESIDE_FRAME (1024u * 1024u)
 
 /* Largest scene, as its SCENE_STATE payload (the scene encoding plus the
- * 16 bytes before it), by default: every member and joiner is sent the
- * whole scene in one message, so the protocol's payload limit is the
- * bound (about 1.7 million spheres; --max-scene lowers it). One encoding
- * is shared by every member it goes to, and a client's output queue takes
- * one such message beyond its cap (net.c). A SCENE_LOAD or a structural
- * EDIT that would pass it is refused (ELIMIT) before anything is applied
- * or saved. */
+ * 20 bytes before it), by default: 64 MiB, about 1.7 million spheres,
+ * which is also the most a client without scenes in parts (PROTOCOL.md
+ * 7.10.1) can be sent. --max-scene lowers it, or raises it up to
+ * BC_SRV_MAX_SCENE_BYTES_LIMIT: a larger scene then reaches only clients
+ * granted PARTS (the others are told why and closed), and costs about
+ * 1.2 KB of memory a primitive. One encoding is shared by every member it
+ * goes to, and a client's output queue takes one such message (or its
+ * parts) beyond its cap (net.c). A SCENE_LOAD or a structural EDIT that
+ * would pass it is refused (ELIMIT) before anything is applied or
+ * saved. */
 #define BC_SRV_MAX_SCENE_BYTES BC_PROTO_MAX_PAYLOAD
+/* The most --max-scene allows: every scene of the protocol's node limit
+ * (4194303 nodes: 2^21 spheres are 140 MB) fits, and the JSON snapshot of
+ * one of spheres stays under what restoring reads
+ * (BC_SCENE_JSON_MAX_BYTES). */
+#define BC_SRV_MAX_SCENE_BYTES_LIMIT (256u * 1024u * 1024u)
+
+/* SCENE_LOADs in parts (PROTOCOL.md 7.10.1) not finished yet, all clients
+ * together, in scene bytes received: twice the scene cap, so that two
+ * editors may send the largest scene at once. A part that would pass it
+ * is refused (EBUSY) once the unfinished scenes that have had no part for
+ * BC_SRV_PART_STALE_MS are dropped. */
+#define BC_SRV_PARTS_PENDING_SCENES 2u
+#define BC_SRV_PART_STALE_MS BC_SRV_MESSAGE_TIMEOUT_MS
 
 /* A client closed with at least this many bytes still queued had large
  * frames or scenes in flight: once they are freed the daemon returns its

@@ -969,6 +969,7 @@ int bc_client_connect(struct bc_client **out, const struct bc_client_opts *opts,
 	/* SCENE_STATE may be as large as any message, so the reader keeps the
 	 * protocol's limit; the server holds FRAMEs to max_frame_bytes. */
 	bc_proto_reader_init(&c->reader, &ro);
+	bc_proto_parts_init(&c->parts, 0, false);
 	bc_proto_buf_init(&c->out, 0);
 	deadline = deadline_after(c->timeout_ms);
 	/* The default timeout waits less for the TCP connect than for an
@@ -1028,6 +1029,7 @@ void bc_client_destroy(struct bc_client *c)
 		close(c->fd);
 	}
 	bc_proto_reader_finish(&c->reader);
+	bc_proto_parts_finish(&c->parts);
 	bc_proto_buf_finish(&c->out);
 	bc_tree_destroy(c->scene);
 	bc_free(c->chunk);
@@ -1249,6 +1251,7 @@ static void track(struct bc_client *c, const struct bc_msg *m)
 int bc_client_recv(struct bc_client *c, struct bc_msg *out, int timeout_ms)
 {
 	double deadline = deadline_after(timeout_ms);
+	struct bc_msg part;
 	int rc;
 	memset(out, 0, sizeof(*out));
 	/* A FATAL ERROR is handed out once; what follows is its code. */
@@ -1258,13 +1261,25 @@ int bc_client_recv(struct bc_client *c, struct bc_msg *out, int timeout_ms)
 	for (;;) {
 		size_t before = bc_proto_reader_pending(&c->reader);
 		long n;
-		rc = bc_proto_reader_next(&c->reader, out);
+		rc = bc_proto_reader_next(&c->reader, &part);
 		if (rc == 1) {
 			size_t size =
 			    before - bc_proto_reader_pending(&c->reader);
+			struct bc_errinfo ei = {0};
 			c->info.msgs_in++;
 			c->info.bytes_in += size;
 			c->info.last_msg_bytes = (uint32_t)size;
+			/* A scene in parts is handed out whole, once its last
+			 * part has come. */
+			rc = bc_proto_parts_add(&c->parts, &part, out, &ei);
+			if (rc < 0) {
+				return fail(c, rc,
+				            "bad scene from the server: %s",
+				            ei.msg);
+			}
+			if (rc == 0) {
+				continue;
+			}
 			track(c, out);
 			return 1;
 		}
@@ -1459,16 +1474,33 @@ int bc_client_load_scene(struct bc_client *c, const uint8_t *bytes, size_t len,
 	if (order) {
 		*order = 0;
 	}
-	if (len == 0 || len > BC_PROTO_MAX_PAYLOAD - 4u) {
-		return bc_errinfo_set(ei, BC_ELIMIT,
-		                      "a scene of %zu bytes does not fit one "
-		                      "message (1..%u)",
-		                      len, BC_PROTO_MAX_PAYLOAD - 4u);
+	/* One message when it fits the server's limit; else in parts, which
+	 * a server that granted PARTS accepts (PROTOCOL.md 7.10.1). */
+	size_t piece = c->info.max_payload > 4u ? c->info.max_payload - 4u
+	                                        : BC_PROTO_MAX_PAYLOAD - 4u;
+	bool parts = (c->info.features & BC_PROTO_FEATURE_PARTS) != 0;
+	if (len == 0 || len > BC_PROTO_MAX_SCENE_BYTES ||
+	    (len > piece && !parts)) {
+		return bc_errinfo_set(
+		    ei, BC_ELIMIT,
+		    "a scene of %zu bytes does not fit one message (1..%zu)%s",
+		    len, len > piece ? piece : (size_t)BC_PROTO_MAX_SCENE_BYTES,
+		    parts ? ""
+		          : " and the server does not take scenes in parts: "
+		            "load it from a file on the server instead");
 	}
-	m.scene_load.scene.ptr = bytes;
-	m.scene_load.scene.len = (uint32_t)len;
-	if ((rc = send_or_say(c, &m, &seq, ei)) ||
-	    (rc = bc_client_wait(c, BC_MSG_SCENE_STATE, seq, &m, 0, ei))) {
+	for (size_t at = 0; at < len; at += piece) {
+		size_t n = len - at < piece ? len - at : piece;
+		m.type = BC_MSG_SCENE_LOAD;
+		m.flags = (uint16_t)((at > 0 ? BC_PROTO_FLAG_CONT : 0u) |
+		                     (at + n < len ? BC_PROTO_FLAG_MORE : 0u));
+		m.scene_load.scene.ptr = bytes + at;
+		m.scene_load.scene.len = (uint32_t)n;
+		if ((rc = send_or_say(c, &m, &seq, ei))) {
+			return rc;
+		}
+	}
+	if ((rc = bc_client_wait(c, BC_MSG_SCENE_STATE, seq, &m, 0, ei))) {
 		return rc;
 	}
 	if (order) {

@@ -27,6 +27,8 @@ struct bc_client {
 	uint8_t encodings; /* what our HELLO announced */
 	uint32_t next_seq;
 	struct bc_proto_reader reader;
+	/* A SCENE_STATE arriving in parts (PROTOCOL.md 7.10.1). */
+	struct bc_proto_parts parts;
 	struct bc_proto_buf out;
 	uint8_t *chunk; /* BC_CLIENT_READ_CHUNK bytes */
 	struct bc_client_info info;

@@ -201,6 +201,8 @@ class Connection {
 
 	open() {
 		this.reader = new P.Reader({ side: 'client' });
+		/* A big scene's SCENE_STATE comes in parts (FEATURE.PARTS). */
+		this.parts = new P.SceneParts();
 		this.seq = 0;
 		/* websockify 0.10 relays binary frames under the 'binary'
 		 * subprotocol. */
@@ -223,7 +225,10 @@ class Connection {
 		try {
 			this.reader.feed(data);
 			for (let m; (m = this.reader.next());) {
-				this.onMessage(m);
+				const whole = this.parts.add(m);
+				if (whole) {
+					this.onMessage(whole);
+				}
 			}
 		} catch (e) {
 			/* A stream that broke the protocol cannot be resynchronized:

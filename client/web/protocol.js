@@ -32,6 +32,7 @@ const MAGIC = [0x42, 0x43, 0x53, 0x54]; /* "BCST" */
  * the same numbers. */
 export const LIMITS = Object.freeze({
 	MAX_PAYLOAD: 64 * 1024 * 1024,
+	MAX_SCENE_BYTES: 1024 * 1024 * 1024, /* a scene in parts, 7.10.1 */
 	HELLO_MAX_PAYLOAD: 4096,
 	READ_SLACK: 1024 * 1024,
 	MAX_NAME: 64,
@@ -87,6 +88,8 @@ export const FLAG = Object.freeze({
 	DEPTH: 0x0020,       /* FRAME, with SNAPSHOT only: a depth plane */
 	IDS: 0x0040,         /* FRAME, with SNAPSHOT only: an id plane */
 	KEY: 0x0080,         /* FRAME of encoding 4 only: an IDR, a start */
+	MORE: 0x0001,        /* SCENE_LOAD, SCENE_STATE: another part follows */
+	CONT: 0x0002,        /* SCENE_LOAD, SCENE_STATE: continues a scene */
 });
 
 /* SNAPSHOT's optional planes byte: the planes the answering FRAME carries
@@ -106,7 +109,7 @@ export const STATS_PARTS = Object.freeze({ LOAD: 0x01, RESET: 0x02, TLS: 0x04,
  * WELCOME says which it grants. */
 export const FEATURE = Object.freeze({ LEVELS: 0x01, UNDO: 0x02,
 	PRESENT: 0x04, KINDS: 0x08, TILES: 0x10, HISTORY: 0x20, NAMES: 0x40,
-	ACKS: 0x80, ALL: 0xff });
+	ACKS: 0x80, PARTS: 0x100, ALL: 0x1ff });
 
 /* FRAMEs of the view a client granted ACKS may leave unacknowledged
  * (PROTOCOL.md 7.27). */
@@ -238,6 +241,74 @@ export function errText(code) {
 	return e ? e[1] : 'unknown error';
 }
 
+/* Assembles a SCENE_STATE that a server sends in parts (header flags MORE
+ * and CONT, PROTOCOL.md 7.10.1) to a client granted FEATURE.PARTS. add(m)
+ * takes every decoded message in order and returns it, or null while a
+ * scene's parts are still coming; the last part comes back as one
+ * SCENE_STATE holding the whole scene, without the part flags. Parts out
+ * of their order throw EPROTO_FLAGS, a scene past MAX_SCENE_BYTES
+ * EPROTO_LENGTH (the server broke the protocol: the caller closes). */
+export class SceneParts {
+	constructor(max = L.MAX_SCENE_BYTES) {
+		this.max = max;
+		this.pieces = null; /* the parts so far, while a scene is open */
+		this.length = 0;
+		this.first = null;
+	}
+
+	add(m) {
+		const part = m.type === MSG.SCENE_STATE &&
+			(m.flags & (FLAG.MORE | FLAG.CONT)) !== 0;
+		if (!part) {
+			if (this.pieces) {
+				this.fail('EPROTO_FLAGS', `a ${typeName(m.type)} ` +
+					'came between the parts of a scene');
+			}
+			return m;
+		}
+		if (m.flags & FLAG.CONT) {
+			const f = this.first;
+			if (!this.pieces || f.order !== m.order ||
+			    f.author !== m.author || f.author_seq !== m.author_seq) {
+				this.fail('EPROTO_FLAGS', 'a SCENE_STATE part (CONT) ' +
+					'that continues no scene begun');
+			}
+		} else if (this.pieces) {
+			this.fail('EPROTO_FLAGS', 'a SCENE_STATE part began a ' +
+				'scene before the last one ended');
+		} else {
+			this.pieces = [];
+			this.length = 0;
+			this.first = m;
+		}
+		if (m.scene.length > this.max - this.length) {
+			this.fail('EPROTO_LENGTH', 'a scene in parts of more ' +
+				`than ${this.max} bytes`);
+		}
+		/* The reader's bytes are reused: keep a copy. */
+		this.pieces.push(m.scene.slice());
+		this.length += m.scene.length;
+		if (m.flags & FLAG.MORE) {
+			return null;
+		}
+		const scene = new Uint8Array(this.length);
+		let at = 0;
+		for (const p of this.pieces) {
+			scene.set(p, at);
+			at += p.length;
+		}
+		this.pieces = null;
+		this.first = null;
+		return { ...m, flags: m.flags & ~(FLAG.MORE | FLAG.CONT), scene };
+	}
+
+	fail(code, text) {
+		this.pieces = null;
+		this.first = null;
+		throw new ProtoError(code, text);
+	}
+}
+
 /* Every failure of this module: code is the symbolic name ("EPROTO_MAGIC"),
  * errno its number. */
 export class ProtoError extends Error {
@@ -276,8 +347,8 @@ T(8, 'SESSION_JOIN', FROM_CLIENT, 0, 1 + strMax(L.MAX_NAME));
 T(9, 'SESSION_LEAVE', FROM_CLIENT, 0, 0);
 T(10, 'SESSION_INFO', FROM_SERVER, 0, 4 + 4 + 1 + strMax(L.MAX_NAME) + 2 +
 	L.MAX_MEMBERS * (4 + 1 + strMax(L.MAX_NAME)));
-T(11, 'SCENE_LOAD', FROM_CLIENT, 0, BULK);
-T(12, 'SCENE_STATE', FROM_SERVER, 0, BULK);
+T(11, 'SCENE_LOAD', FROM_CLIENT, FLAG.MORE | FLAG.CONT, BULK);
+T(12, 'SCENE_STATE', FROM_SERVER, FLAG.MORE | FLAG.CONT, BULK);
 T(13, 'EDIT', FROM_CLIENT, FLAG.INTERACTING, BULK);
 T(14, 'EDIT_APPLIED', FROM_SERVER, FLAG.INTERACTING | FLAG.UNDO | FLAG.REDO,
 	BULK);

@@ -622,8 +622,9 @@ def gen_welcome():
     t.badp("max_dim 8193", wl(max_dim=8193), "ERANGE")
     t.badp("max_members 65", wl(max_members=65), "ERANGE")
     t.badp("max_edit_ops 0", wl(max_edit_ops=0), "ERANGE")
-    t.ok("every feature of this text granted", dict(base, features=0x7f))
-    t.badp("a feature this text does not define", wl(features=0x100),
+    t.ok("every feature of this text granted", dict(base, features=0x1ff))
+    t.ok("PARTS granted (bit 8)", dict(base, features=0x100))
+    t.badp("a feature this text does not define", wl(features=0x200),
            "EPROTO_FLAGS")
     t.badp("features cut short (2 bytes)", w_welcome(old) + b"\x0f\x00",
            "EPROTO_TRUNCATED")
@@ -829,6 +830,19 @@ def gen_scene_load():
           "ESTATE", reader=PRE_HELLO)
     t.bad("over a reader limit of 64 bytes", frame("SCENE_LOAD", p),
           "EPROTO_LENGTH", reader={"max_payload": 64})
+    # Scenes in parts (section 7.10.1): each part is a SCENE_LOAD of the
+    # usual layout; a piece may end anywhere in the encoding.
+    half = len(SCENE_SMALL) // 2
+    t.ok("first part of a scene in parts (MORE)",
+         dict(scene=SCENE_SMALL[:half].hex()), flags=0x0001, seq=7)
+    t.ok("middle part (MORE and CONT)", dict(scene="00"), flags=0x0003,
+         seq=8)
+    t.ok("last part (CONT)", dict(scene=SCENE_SMALL[half:].hex()),
+         flags=0x0002, seq=9)
+    t.badp("flag bit 2 is not defined for it", p, "EPROTO_FLAGS",
+           flags=0x0004)
+    t.badp("a part's piece of length 0", u32(0), "EPROTO_LENGTH",
+           flags=0x0002)
     t.dump("scene_load.json")
 
 
@@ -841,6 +855,23 @@ def gen_scene_state():
     t.common(p)
     t.badp("scene length 0", u64(1) + u32(0) + u32(0) + u32(0),
            "EPROTO_LENGTH")
+    # Parts (section 7.10.1): the same fields in every part, the pieces
+    # concatenated make the scene.
+    half = len(SCENE_SMALL) // 2
+    t.ok("first part of a scene in parts (MORE)",
+         dict(order="42", author=5, author_seq=9,
+              scene=SCENE_SMALL[:half].hex()), flags=0x0001, seq=0)
+    t.ok("last part (CONT)",
+         dict(order="42", author=5, author_seq=9,
+              scene=SCENE_SMALL[half:].hex()), flags=0x0002, seq=0)
+    t.badp("flag bit 2 is not defined for it", p, "EPROTO_FLAGS",
+           flags=0x0004)
+    first = frame("SCENE_STATE", u64(42) + u32(5) + u32(9)
+                  + blob(SCENE_SMALL[:half]), flags=0x0001, seq=0)
+    last = frame("SCENE_STATE", u64(42) + u32(5) + u32(9)
+                 + blob(SCENE_SMALL[half:]), flags=0x0002, seq=0)
+    t.bad("a scene in two parts, one after the other (a stream)",
+          first + last, None, reader=CLIENT, messages=2)
     t.dump("scene_state.json")
 
 

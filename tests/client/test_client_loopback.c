@@ -1039,6 +1039,119 @@ static void test_messages_larger_than_a_read(void)
 	bc_client_image_finish(&img);
 }
 
+/* ---- scenes in parts (PROTOCOL.md 7.10.1) ---------------------------------- */
+
+/* The largest payload the fake server takes: the smallest a WELCOME may
+ * say, so that a modest scene needs parts. */
+#define PARTS_MAX_PAYLOAD 4096u
+
+static void srv_state_part(struct fake *f, int fd, uint16_t flags,
+                           uint32_t author_seq, const uint8_t *piece, size_t n)
+{
+	struct bc_msg st = {.type = BC_MSG_SCENE_STATE, .flags = flags};
+	st.scene_state.order = 6;
+	st.scene_state.author = 3;
+	st.scene_state.author_seq = author_seq;
+	st.scene_state.scene.ptr = piece;
+	st.scene_state.scene.len = (uint32_t)n;
+	srv_send(f, fd, &st);
+}
+
+static void script_parts(struct fake *f, int fd)
+{
+	struct bc_msg m, w = {.type = BC_MSG_WELCOME};
+	struct bc_proto_parts p;
+	int nparts = 0, rc = 0;
+	if (!srv_expect(f, fd, BC_MSG_HELLO, &m)) {
+		return;
+	}
+	SCHECK(f, m.hello.has_features &&
+	              (m.hello.features & BC_PROTO_FEATURE_PARTS));
+	bc_proto_reader_hello_done(&f->r);
+	w.seq = m.seq;
+	w.welcome.version = BC_PROTO_VERSION;
+	w.welcome.connection_id = 7;
+	w.welcome.max_payload = PARTS_MAX_PAYLOAD;
+	w.welcome.max_frame_bytes = 1u << 20;
+	w.welcome.max_nodes = 100000;
+	w.welcome.max_dim = 4096;
+	w.welcome.max_members = 64;
+	w.welcome.max_edit_ops = 1024;
+	w.welcome.has_features = true;
+	w.welcome.features = BC_PROTO_FEATURE_PARTS;
+	srv_send(f, fd, &w);
+	if (!srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
+		return;
+	}
+	srv_session(f, fd, m.seq, 5);
+	/* The load: parts within the payload limit, one scene. */
+	bc_proto_parts_init(&p, 0, true);
+	while (rc == 0 && srv_expect(f, fd, BC_MSG_SCENE_LOAD, &m)) {
+		SCHECK(f, 4u + m.scene_load.scene.len <= PARTS_MAX_PAYLOAD);
+		SCHECK(f, (m.flags & BC_PROTO_FLAG_CONT) == (nparts ? 2 : 0));
+		nparts++;
+		rc = bc_proto_parts_add(&p, &m, &m, NULL);
+	}
+	SCHECK(f, rc == 1 && nparts >= 3);
+	if (rc == 1) {
+		/* Answered in parts of 5000 bytes, with the last part's seq. */
+		const uint8_t *b = m.scene_load.scene.ptr;
+		size_t len = m.scene_load.scene.len;
+		for (size_t at = 0; at < len; at += 5000) {
+			size_t n = len - at < 5000 ? len - at : 5000;
+			srv_state_part(
+			    f, fd,
+			    (uint16_t)((at ? BC_PROTO_FLAG_CONT : 0u) |
+			               (at + n < len ? BC_PROTO_FLAG_MORE
+			                             : 0u)),
+			    m.seq, b + at, n);
+		}
+		/* Then a broken one: a PING inside a scene's parts. */
+		srv_state_part(f, fd, BC_PROTO_FLAG_MORE, 0, b, 10);
+		m.type = BC_MSG_PING;
+		m.seq = 1;
+		m.flags = 0;
+		m.ping.stamp = 1;
+		srv_send(f, fd, &m);
+	}
+	bc_proto_parts_finish(&p);
+	/* The client closes on the broken stream. */
+	SCHECK(f, !srv_next(f, fd, &m) || m.type == BC_MSG_ERROR);
+}
+
+static void test_scenes_in_parts(void)
+{
+	struct fake f;
+	struct bc_client *c;
+	struct bc_errinfo ei = {0};
+	struct bc_msg m;
+	uint64_t order = 0;
+	size_t len;
+	uint8_t *bytes = scene_bytes(NULL, 2000, &len);
+	REQUIRE(len > 3 * PARTS_MAX_PAYLOAD);
+	REQUIRE(fake_start(&f, script_parts, false) == 0);
+	c = connect_to(&f, 5000);
+	if (c) {
+		CHECK(bc_client_info(c)->features & BC_PROTO_FEATURE_PARTS);
+		CHECK_EQ_INT(bc_client_info(c)->max_payload, PARTS_MAX_PAYLOAD);
+		REQUIRE(bc_client_join(c, "s1", 0, 0, &ei) == 0);
+		/* Sent in parts, answered in parts, mirrored whole. */
+		CHECK_EQ_INT(bc_client_load_scene(c, bytes, len, &order, &ei),
+		             0);
+		CHECK(order == 6);
+		REQUIRE(bc_client_scene(c, NULL) != NULL);
+		CHECK_EQ_INT(bc_tree_node_count(bc_client_scene(c, NULL)),
+		             2001);
+		/* Parts cut by another message: the server's fault. */
+		CHECK_EQ_INT(bc_client_recv(c, &m, 5000), BC_EPROTO_FLAGS);
+		CHECK_EQ_INT(bc_client_error(c, &ei), BC_EPROTO_FLAGS);
+		CHECK(strstr(ei.msg, "between the parts") != NULL);
+	}
+	bc_client_destroy(c);
+	fake_stop(&f);
+	bc_free(bytes);
+}
+
 /* ---- failures ------------------------------------------------------------------------------ */
 
 static void script_auth(struct fake *f, int fd)
@@ -1375,6 +1488,7 @@ static void test_allocation_failures_are_reported(void)
 }
 
 static const struct bc_test tests[] = {
+    {"scenes_in_parts", test_scenes_in_parts},
     {"handshake_join_or_create_and_stats",
      test_handshake_join_or_create_and_stats},
     {"session_errors_carry_server_text", test_session_errors_carry_server_text},

@@ -4,7 +4,10 @@
  * rest is cut into feed() calls; the rest is the stream. Oracles besides
  * the sanitizers: every message the reader returns re-encodes to exactly
  * the bytes it came from (the encoding is canonical), errors are sticky
- * and come with a reason.
+ * and come with a reason. Every message also goes through the assembler
+ * of scenes in parts (PROTOCOL.md 7.10.1), as a client or a server uses
+ * it: a scene it hands back whole is exactly its parts' pieces, and a
+ * refusal leaves no scene open.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -35,12 +38,16 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	data += 2;
 	size -= 2;
 	struct bc_proto_reader r;
+	struct bc_proto_parts parts;
 	struct bc_proto_buf b;
-	struct bc_msg m;
+	struct bc_msg m, whole;
+	size_t pieces = 0; /* bytes of the open scene's parts so far */
 	if (bc_proto_reader_init(&r, &opts) != 0) {
 		die("init refused valid options");
 	}
 	bc_proto_buf_init(&b, 0);
+	bc_proto_parts_init(&parts, ((o >> 4) & 1u) ? 300u : 0u,
+	                    opts.side == BC_PROTO_SIDE_SERVER);
 	size_t off = 0, msg = 0;
 	int rc = 0;
 	while (rc >= 0 && off < size) {
@@ -70,6 +77,36 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 				bc_proto_reader_hello_done(&r);
 			}
 			msg += len;
+			{
+				bool part = (m.type == BC_MSG_SCENE_LOAD ||
+				             m.type == BC_MSG_SCENE_STATE) &&
+				            (m.flags & BC_PROTO_FLAGS_PARTS);
+				uint32_t piece = m.type == BC_MSG_SCENE_LOAD
+				                     ? m.scene_load.scene.len
+				                     : m.scene_state.scene.len;
+				size_t before = parts.open ? pieces : 0;
+				struct bc_errinfo ei = {0};
+				int pr =
+				    bc_proto_parts_add(&parts, &m, &whole, &ei);
+				if (pr < 0 && (parts.open || !ei.msg[0])) {
+					die("a refused part left its scene "
+					    "open");
+				}
+				if (pr == 0) {
+					pieces = (m.flags & BC_PROTO_FLAG_CONT)
+					             ? before + piece
+					             : piece;
+				}
+				if (pr == 1 && part &&
+				    (whole.flags & BC_PROTO_FLAGS_PARTS ||
+				     (whole.type == BC_MSG_SCENE_LOAD
+				          ? whole.scene_load.scene.len
+				          : whole.scene_state.scene.len) !=
+				         before + piece)) {
+					die("a scene in parts is not its "
+					    "pieces");
+				}
+			}
 		}
 	}
 	if (rc >= 0) {
@@ -85,6 +122,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		}
 	}
 	bc_proto_buf_finish(&b);
+	bc_proto_parts_finish(&parts);
 	bc_proto_reader_finish(&r);
 	return 0;
 }

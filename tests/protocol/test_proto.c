@@ -1198,8 +1198,141 @@ static void test_client_state_machine(void)
 	      BC_EPROTO_TYPE);
 }
 
+/* Scenes in parts (PROTOCOL.md 7.10.1): the assembler gives back the
+ * scene whole from its pieces, and refuses parts out of their order. */
+static struct bc_msg state_part(uint16_t flags, const uint8_t *piece,
+                                uint32_t n, uint64_t order)
+{
+	struct bc_msg m = {.type = BC_MSG_SCENE_STATE, .flags = flags};
+	m.scene_state.order = order;
+	m.scene_state.author = 3;
+	m.scene_state.author_seq = 9;
+	m.scene_state.scene.ptr = piece;
+	m.scene_state.scene.len = n;
+	return m;
+}
+
+static int parts_run(struct bc_proto_parts *p, const struct bc_msg *ms, int n,
+                     struct bc_msg *out)
+{
+	int rc = 0;
+	for (int i = 0; i < n && rc >= 0; i++) {
+		rc = bc_proto_parts_add(p, &ms[i], out, NULL);
+	}
+	return rc;
+}
+
+static void test_scene_parts(void)
+{
+	uint8_t scene[100], head[BC_PROTO_SCENE_PART_HEAD];
+	uint8_t wire[BC_PROTO_SCENE_PART_HEAD + 33];
+	struct bc_proto_parts p;
+	struct bc_msg out, ping = {.type = BC_MSG_PING};
+	struct bc_proto_reader r;
+	for (int i = 0; i < 100; i++) {
+		scene[i] = (uint8_t)(i * 7);
+	}
+	/* Client side: MORE, MORE|CONT, CONT make one SCENE_STATE. */
+	{
+		struct bc_msg ms[3] = {
+		    state_part(BC_PROTO_FLAG_MORE, scene, 10, 5),
+		    state_part(BC_PROTO_FLAGS_PARTS, scene + 10, 1, 5),
+		    state_part(BC_PROTO_FLAG_CONT, scene + 11, 89, 5)};
+		bc_proto_parts_init(&p, 0, false);
+		CHECK_EQ_INT(bc_proto_parts_add(&p, &ms[0], &out, NULL), 0);
+		CHECK_EQ_INT(bc_proto_parts_add(&p, &ms[1], &out, NULL), 0);
+		CHECK_EQ_INT(bc_proto_parts_add(&p, &ms[2], &out, NULL), 1);
+		CHECK_EQ_INT(out.flags, 0);
+		CHECK(out.scene_state.order == 5);
+		CHECK_EQ_INT(out.scene_state.author_seq, 9);
+		CHECK_EQ_INT(out.scene_state.scene.len, 100);
+		CHECK(memcmp(out.scene_state.scene.ptr, scene, 100) == 0);
+		/* Other messages, and whole scenes, pass as they are. */
+		CHECK_EQ_INT(bc_proto_parts_add(&p, &ping, &out, NULL), 1);
+		CHECK_EQ_INT(out.type, BC_MSG_PING);
+		/* Out of order: the server's fault. */
+		{
+			struct bc_msg bad[][2] = {
+			    {state_part(BC_PROTO_FLAG_CONT, scene, 4, 5), ping},
+			    {ms[0], ping},
+			    {ms[0], ms[0]},
+			    {ms[0],
+			     state_part(BC_PROTO_FLAG_CONT, scene, 4, 6)},
+			    {ms[0], state_part(0, scene, 4, 5)}};
+			for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]);
+			     i++) {
+				struct bc_proto_parts q;
+				bc_proto_parts_init(&q, 0, false);
+				CHECK_EQ_INT(parts_run(&q, bad[i], 2, &out),
+				             BC_EPROTO_FLAGS);
+				CHECK(!q.open);
+				bc_proto_parts_finish(&q);
+			}
+		}
+		bc_proto_parts_finish(&p);
+	}
+	/* Past max: EPROTO_LENGTH, the scene dropped. */
+	{
+		struct bc_msg ms[2] = {
+		    state_part(BC_PROTO_FLAG_MORE, scene, 60, 1),
+		    state_part(BC_PROTO_FLAG_CONT, scene, 40, 1)};
+		bc_proto_parts_init(&p, 99, false);
+		CHECK_EQ_INT(parts_run(&p, ms, 2, &out), BC_EPROTO_LENGTH);
+		CHECK(!p.open && p.len == 0);
+		bc_proto_parts_finish(&p);
+	}
+	/* Server side (between): other messages may come between, a first
+	 * part drops an unfinished scene, a CONT with none is ESTATE, and the
+	 * scene's buffer can be taken. */
+	{
+		struct bc_msg a = {.type = BC_MSG_SCENE_LOAD,
+		                   .flags = BC_PROTO_FLAG_MORE};
+		struct bc_msg z = a;
+		uint8_t *taken;
+		a.scene_load.scene.ptr = scene;
+		a.scene_load.scene.len = 30;
+		z.flags = BC_PROTO_FLAG_CONT;
+		z.scene_load.scene.ptr = scene + 30;
+		z.scene_load.scene.len = 70;
+		bc_proto_parts_init(&p, 0, true);
+		CHECK_EQ_INT(bc_proto_parts_add(&p, &z, &out, NULL), BC_ESTATE);
+		CHECK_EQ_INT(bc_proto_parts_add(&p, &a, &out, NULL), 0);
+		CHECK_EQ_INT(bc_proto_parts_add(&p, &a, &out, NULL), 0);
+		CHECK_EQ_INT(p.len,
+		             30); /* the second first part started over */
+		CHECK_EQ_INT(bc_proto_parts_add(&p, &ping, &out, NULL), 1);
+		CHECK_EQ_INT(bc_proto_parts_add(&p, &z, &out, NULL), 1);
+		CHECK_EQ_INT(out.type, BC_MSG_SCENE_LOAD);
+		CHECK_EQ_INT(out.flags, 0);
+		CHECK_EQ_INT(out.scene_load.scene.len, 100);
+		taken = bc_proto_parts_take(&p);
+		CHECK(taken == out.scene_load.scene.ptr);
+		CHECK(memcmp(taken, scene, 100) == 0);
+		bc_free(taken);
+		bc_proto_parts_finish(&p);
+	}
+	/* A part's head, as the daemon writes it, then its piece: a
+	 * SCENE_STATE that decodes. */
+	bc_proto_scene_state_head(head, BC_PROTO_FLAGS_PARTS, 77, 4, 12, 33);
+	memcpy(wire, head, sizeof(head));
+	memcpy(wire + sizeof(head), scene, 33);
+	bc_proto_reader_init(&r, NULL);
+	CHECK_EQ_INT(bc_proto_reader_feed(&r, wire, sizeof(wire)), 0);
+	CHECK_EQ_INT(bc_proto_reader_next(&r, &out), 1);
+	CHECK_EQ_INT(out.type, BC_MSG_SCENE_STATE);
+	CHECK_EQ_INT(out.seq, 0);
+	CHECK_EQ_INT(out.flags, BC_PROTO_FLAGS_PARTS);
+	CHECK(out.scene_state.order == 77);
+	CHECK_EQ_INT(out.scene_state.author, 4);
+	CHECK_EQ_INT(out.scene_state.author_seq, 12);
+	CHECK_EQ_INT(out.scene_state.scene.len, 33);
+	CHECK(memcmp(out.scene_state.scene.ptr, scene, 33) == 0);
+	bc_proto_reader_finish(&r);
+}
+
 static const struct bc_test tests[] = {
     {"malformed_table", test_malformed_table},
+    {"scene_parts", test_scene_parts},
     {"round_trip_every_type", test_round_trip_every_type},
     {"zero_copy", test_zero_copy},
     {"detach", test_detach},

@@ -1632,7 +1632,256 @@ static void stats_link_section_measures_the_path(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
+/* ---- scenes in parts (7.10.1) ------------------------------------------- */
+
+/* HELLO with max_frame_bytes and features (all encodings). */
+static int hello_limit(struct conn *c, const char *name, uint32_t max_frame,
+                       uint32_t features)
+{
+	struct bc_msg m = {.type = BC_MSG_HELLO};
+	m.hello.version_min = 1;
+	m.hello.version_max = 1;
+	m.hello.encodings = BC_PROTO_ENCODINGS_ALL;
+	m.hello.max_frame_bytes = max_frame;
+	m.hello.client_name.ptr = name;
+	m.hello.client_name.len = (uint32_t)strlen(name);
+	m.hello.has_features = true;
+	m.hello.features = features;
+	if (!conn_send(c, &m) || conn_expect(c, BC_MSG_WELCOME, WAIT_MS) != 1 ||
+	    c->m.welcome.features != (features & BC_PROTO_FEATURES_ALL)) {
+		return -1;
+	}
+	return 0;
+}
+
+/* A union of n spheres (ids 1..n+1), bytes in b. */
+static void many_spheres(struct bc_proto_buf *b, uint32_t n)
+{
+	bc_proto_buf_init(b, 0);
+	bc_proto_scene_begin(b, NULL, n + 1);
+	bc_proto_scene_op(b, K_UNION, 1, 0.0f, 0.0f, n);
+	for (uint32_t i = 0; i < n; i++) {
+		sphere(b, 2 + i, 0.01f * (float)i);
+	}
+}
+
+/* A SCENE_LOAD part of piece bytes; returns its seq. */
+static uint32_t send_part(struct conn *c, uint16_t flags, const uint8_t *piece,
+                          size_t n)
+{
+	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD, .flags = flags};
+	m.scene_load.scene.ptr = piece;
+	m.scene_load.scene.len = (uint32_t)n;
+	return conn_send(c, &m);
+}
+
+/* The part just sent was taken: a PING after it comes back with no ERROR
+ * before it. */
+static bool taken(struct conn *c)
+{
+	uint32_t seq = send_empty(c, BC_MSG_PING);
+	int64_t end = t_now_ms() + WAIT_MS;
+	while (seq && t_now_ms() < end) {
+		if (conn_recv(c, 200) < 0 || c->m.type == BC_MSG_ERROR) {
+			return false;
+		}
+		if (c->m.type == BC_MSG_PONG && c->m.seq == seq) {
+			return true;
+		}
+	}
+	return false;
+}
+
+/* Receives a SCENE_STATE, whole or in parts, checking 7.10.1 on the way:
+ * parts one after another, each within limit bytes of payload, the same
+ * fields in each. Its scene in *scene (freed by the caller), its first
+ * part in c->m's fields; returns the parts (1: whole), or -1. */
+static int recv_state(struct conn *c, uint32_t limit, uint8_t **scene,
+                      size_t *len, uint64_t *order, uint32_t *author_seq)
+{
+	int parts = 0;
+	*scene = NULL;
+	*len = 0;
+	for (;;) {
+		uint16_t want;
+		uint8_t *grown;
+		if (parts == 0) {
+			if (conn_expect(c, BC_MSG_SCENE_STATE, WAIT_MS) != 1) {
+				return -1;
+			}
+		} else if (conn_recv(c, WAIT_MS) != 1 ||
+		           c->m.type != BC_MSG_SCENE_STATE) {
+			return -1; /* nothing else between the parts */
+		}
+		want = parts == 0 ? 0 : BC_PROTO_FLAG_CONT;
+		if ((c->m.flags & BC_PROTO_FLAG_CONT) != want ||
+		    BC_PROTO_SCENE_STATE_FIXED + c->m.scene_state.scene.len >
+		        limit ||
+		    (parts > 0 &&
+		     (c->m.scene_state.order != *order ||
+		      c->m.scene_state.author_seq != *author_seq))) {
+			return -1;
+		}
+		*order = c->m.scene_state.order;
+		*author_seq = c->m.scene_state.author_seq;
+		if (!(grown =
+		          realloc(*scene, *len + c->m.scene_state.scene.len))) {
+			return -1;
+		}
+		*scene = grown;
+		memcpy(*scene + *len, c->m.scene_state.scene.ptr,
+		       c->m.scene_state.scene.len);
+		*len += c->m.scene_state.scene.len;
+		parts++;
+		if (!(c->m.flags & BC_PROTO_FLAG_MORE)) {
+			return parts;
+		}
+	}
+}
+
+/* 7.10.1 and 4.1 PARTS: a SCENE_LOAD in parts, with other requests
+ * between them, is one load answered after its last part; SCENE_STATE
+ * comes in parts within a PARTS client's max_frame_bytes, whole to a
+ * client without PARTS; the refusals (ESTATE, ELIMIT, EBUSY) are not
+ * fatal and drop the scene. */
+static void scenes_travel_in_parts(void)
+{
+	const char *const small[] = {"--max-scene", "1", NULL};
+	const uint32_t all = BC_PROTO_FEATURES_READ;
+	const uint32_t limit = BC_PROTO_MIN_FRAME_BYTES;
+	struct daemon d;
+	struct conn a, b, v, j;
+	struct bc_proto_buf s;
+	struct node nodes[4];
+	uint8_t *got = NULL;
+	size_t len = 0, third;
+	uint64_t order = 0;
+	uint32_t seq, pseq, aseq = 0;
+	REQUIRE(start(&d, "parts", small) == 0);
+	/* a: editor, PARTS, 64 KiB; b: viewer without PARTS, 64 KiB;
+	 * v: viewer, PARTS, the server's limit. */
+	REQUIRE(conn_open(&a, &d) == 0);
+	REQUIRE(hello_limit(&a, "a", limit, all) == 0);
+	REQUIRE(conn_join(&a, "pt", BC_PROTO_ROLE_EDITOR, true) == 0);
+	REQUIRE(conn_expect(&a, BC_MSG_SCENE_STATE, WAIT_MS) == 1);
+	REQUIRE(conn_open(&b, &d) == 0);
+	REQUIRE(hello_limit(&b, "b", limit, all & ~BC_PROTO_FEATURE_PARTS) ==
+	        0);
+	REQUIRE(conn_join(&b, "pt", BC_PROTO_ROLE_VIEWER, false) == 0);
+	REQUIRE(conn_expect(&b, BC_MSG_SCENE_STATE, WAIT_MS) == 1);
+	REQUIRE(member(&v, &d, "v", "pt", BC_PROTO_ROLE_VIEWER, false) == 0);
+	/* 6000 spheres: more than three times the 64 KiB limit. */
+	many_spheres(&s, 6000);
+	REQUIRE(s.len > 3 * limit);
+	third = s.len / 3 + 1; /* pieces end inside nodes */
+	/* Parts with a PING between: the PONG comes first, then one answer
+	 * to the last part. */
+	CHECK(send_part(&a, BC_PROTO_FLAG_MORE, s.data, third));
+	pseq = send_empty(&a, BC_MSG_PING);
+	CHECK(answer(&a, pseq) == BC_MSG_PONG);
+	CHECK(send_part(&a, BC_PROTO_FLAGS_PARTS, s.data + third, third));
+	seq = send_part(&a, BC_PROTO_FLAG_CONT, s.data + 2 * third,
+	                s.len - 2 * third);
+	/* a: in parts, each within 64 KiB. */
+	CHECK(recv_state(&a, limit, &got, &len, &order, &aseq) >= 4);
+	CHECK_EQ_INT(aseq, seq);
+	CHECK_EQ_INT(walk_scene(got, len, nodes, 4), 6001);
+	free(got);
+	/* b (no PARTS): whole, past its max_frame_bytes, as before. */
+	CHECK_EQ_INT(
+	    recv_state(&b, BC_PROTO_MAX_PAYLOAD, &got, &len, &order, &aseq), 1);
+	CHECK(len > limit);
+	CHECK_EQ_INT(walk_scene(got, len, nodes, 4), 6001);
+	free(got);
+	/* v (PARTS, 64 MiB): whole. */
+	CHECK_EQ_INT(
+	    recv_state(&v, BC_PROTO_MAX_PAYLOAD, &got, &len, &order, &aseq), 1);
+	free(got);
+	/* A joiner granted PARTS with 64 KiB gets the kept state in parts. */
+	REQUIRE(conn_open(&j, &d) == 0);
+	REQUIRE(hello_limit(&j, "j", limit, all) == 0);
+	REQUIRE(conn_join(&j, "pt", BC_PROTO_ROLE_VIEWER, false) == 0);
+	CHECK(recv_state(&j, limit, &got, &len, &order, &aseq) >= 4);
+	CHECK_EQ_INT(walk_scene(got, len, nodes, 4), 6001);
+	free(got);
+	conn_close(&j);
+	/* A CONT with no scene begun: ESTATE, not fatal. */
+	seq = send_part(&a, BC_PROTO_FLAG_CONT, s.data, 10);
+	CHECK_EQ_INT(refused(&a, seq), -BC_ESTATE);
+	/* A first part drops the unfinished scene: the load is the second
+	 * one's (the test scene of 7 nodes). */
+	CHECK(send_part(&a, BC_PROTO_FLAG_MORE, s.data, third));
+	{
+		struct bc_proto_buf t;
+		test_scene(&t, 0);
+		CHECK(send_part(&a, BC_PROTO_FLAG_MORE, t.data, 5));
+		seq = send_part(&a, BC_PROTO_FLAG_CONT, t.data + 5, t.len - 5);
+		bc_proto_buf_finish(&t);
+	}
+	REQUIRE(conn_expect(&a, BC_MSG_SCENE_STATE, WAIT_MS) == 1);
+	CHECK_EQ_INT(a.m.flags, 0);
+	CHECK_EQ_INT(a.m.scene_state.author_seq, seq);
+	CHECK_EQ_INT(walk_state(&a, nodes, 4), 7);
+	/* Past --max-scene (1 MiB): ELIMIT at the part that passes it; the
+	 * rest of that scene is ESTATE. */
+	{
+		size_t big = 600u * 1024u;
+		uint8_t *junk = calloc(1, 1024u * 1024u);
+		REQUIRE(junk);
+		CHECK(send_part(&a, BC_PROTO_FLAG_MORE, junk, big));
+		seq = send_part(&a, BC_PROTO_FLAGS_PARTS, junk, big);
+		CHECK_EQ_INT(refused(&a, seq), -BC_ELIMIT);
+		seq = send_part(&a, BC_PROTO_FLAG_CONT, junk, 10);
+		CHECK_EQ_INT(refused(&a, seq), -BC_ESTATE);
+		/* The unfinished scenes of every client: at most 2 MiB. v is
+		 * a viewer (EPERM); two more editors hold 900 KB each. */
+		seq = send_part(&v, BC_PROTO_FLAG_MORE, junk, 10);
+		CHECK_EQ_INT(refused(&v, seq), -BC_EPERM);
+		{
+			struct conn e1, e2;
+			REQUIRE(member(&e1, &d, "e1", "pt",
+			               BC_PROTO_ROLE_EDITOR, false) == 0);
+			REQUIRE(member(&e2, &d, "e2", "pt",
+			               BC_PROTO_ROLE_EDITOR, false) == 0);
+			CHECK(send_part(&e1, BC_PROTO_FLAG_MORE, junk, 900000));
+			CHECK(taken(&e1));
+			CHECK(send_part(&e2, BC_PROTO_FLAG_MORE, junk, 900000));
+			CHECK(taken(&e2));
+			seq = send_part(&a, BC_PROTO_FLAG_MORE, junk, 400000);
+			CHECK_EQ_INT(refused(&a, seq), -BC_EBUSY);
+			/* After 10 s without a part, the others' unfinished
+			 * scenes make room (a wait of at least that long, not
+			 * a timing expectation); their next part is ESTATE. */
+			t_sleep_ms(10500);
+			CHECK(send_part(&a, BC_PROTO_FLAG_MORE, junk, 400000));
+			CHECK(taken(&a));
+			seq = send_part(&e2, BC_PROTO_FLAG_CONT, junk, 10);
+			CHECK_EQ_INT(refused(&e2, seq), -BC_ESTATE);
+			/* 0.4 + 0.9 MB held; 0.9 more passes 2 MiB ... */
+			CHECK(send_part(&e1, BC_PROTO_FLAG_MORE, junk, 900000));
+			CHECK(taken(&e1));
+			seq = send_part(&e2, BC_PROTO_FLAG_MORE, junk, 900000);
+			CHECK_EQ_INT(refused(&e2, seq), -BC_EBUSY);
+			/* ... until leaving the session drops e1's. */
+			seq = send_empty(&e1, BC_MSG_SESSION_LEAVE);
+			CHECK(answer(&e1, seq) == BC_MSG_OK);
+			CHECK(send_part(&e2, BC_PROTO_FLAG_MORE, junk, 900000));
+			CHECK(taken(&e2));
+			conn_close(&e1);
+			conn_close(&e2);
+		}
+		free(junk);
+	}
+	bc_proto_buf_finish(&s);
+	CHECK(alive(&a));
+	conn_close(&a);
+	conn_close(&b);
+	conn_close(&v);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
 static const struct bc_test tests[] = {
+    {"scenes_travel_in_parts", scenes_travel_in_parts},
     {"stats_link_section_measures_the_path",
      stats_link_section_measures_the_path},
     {"decoding_errors_are_fatal_with_seq_0",

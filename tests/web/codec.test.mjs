@@ -572,13 +572,13 @@ const entry = (id, name) => { const b = typeof name === 'string'
 
 test('FEATURE.NAMES: bit 6, in ALL, and the page announces it', () => {
 	assert.equal(P.FEATURE.NAMES, 0x40);
-	assert.equal(P.FEATURE.ALL, 0xff);
+	assert.equal(P.FEATURE.ALL, 0x1ff);
 	assert.equal(P.EDIT.NAME, 5);
 	assert.deepEqual(P.SCENE_FLAG, { CAMERA: 1, NAMES: 2, ALL: 3 });
 	const src = readFileSync(join(HERE, '..', '..', 'client', 'web',
 		'app.js'), 'utf8');
 	assert.match(src, /features: P\.FEATURE\.ALL/);
-	/* A WELCOME granting NAMES decodes; bit 8 is still undefined. */
+	/* A WELCOME granting NAMES decodes; bit 9 is still undefined. */
 	const welcome = { type: P.MSG.WELCOME, version: 1, connection_id: 1,
 		max_payload: 1 << 20, max_frame_bytes: 1 << 20, max_nodes: 100,
 		max_dim: 4096, max_members: 8, max_edit_ops: 100, server_id: 'x',
@@ -586,7 +586,7 @@ test('FEATURE.NAMES: bit 6, in ALL, and the page announces it', () => {
 	const r = new P.Reader({ side: 'client' });
 	r.feed(P.encode(welcome));
 	assert.equal(r.next().features, 0x60);
-	assert.throws(() => P.encode({ ...welcome, features: 0x100 }),
+	assert.throws(() => P.encode({ ...welcome, features: 0x200 }),
 		(e) => e.code === 'EPROTO_FLAGS');
 });
 
@@ -863,4 +863,60 @@ test('encoding 4 and FRAME_ACK: H.264 frames, the still encoding, acks', () => {
 		(e) => e.code === 'EPROTO_FLAGS');
 	assert.throws(() => P.encode({ ...fr, flags: 0, image_width: 3 }),
 		(e) => e.code === 'ERANGE');
+});
+
+test('FEATURE.PARTS: a SCENE_STATE in parts is handed on whole', () => {
+	assert.equal(P.FEATURE.PARTS, 0x100);
+	assert.ok(P.FEATURE.ALL & P.FEATURE.PARTS);
+	assert.equal(P.FLAG.MORE, 1);
+	assert.equal(P.FLAG.CONT, 2);
+	const vec = JSON.parse(readFileSync(join(HERE, '..', '..', 'protocol',
+		'vectors', 'scene.json'), 'utf8'));
+	const scene = Uint8Array.from(Buffer.from(vec.valid[1].hex, 'hex'));
+	const state = (flags, piece, extra = {}) => ({ type: P.MSG.SCENE_STATE,
+		seq: 0, flags, order: 7n, author: 3, author_seq: 11, scene: piece,
+		...extra });
+	/* Cut in three through the reader, as a server sends it: every
+	 * piece ends inside the encoding, the last part gives it back. */
+	const cuts = [0, 5, 9, scene.length];
+	const r = new P.Reader({ side: 'client' });
+	for (let i = 0; i + 1 < cuts.length; i++) {
+		const flags = (i > 0 ? P.FLAG.CONT : 0) |
+			(i + 2 < cuts.length ? P.FLAG.MORE : 0);
+		r.feed(P.encode(state(flags, scene.subarray(cuts[i],
+			cuts[i + 1]))));
+	}
+	const parts = new P.SceneParts();
+	const out = [];
+	for (let m; (m = r.next());) {
+		const whole = parts.add(m);
+		if (whole) {
+			out.push(whole);
+		}
+	}
+	assert.equal(out.length, 1);
+	assert.equal(out[0].flags, 0);
+	assert.equal(out[0].order, 7n);
+	assert.equal(out[0].author_seq, 11);
+	assert.deepEqual([...out[0].scene], [...scene]);
+	assert.deepEqual(P.parseScene(out[0].scene), P.parseScene(scene));
+	/* A whole SCENE_STATE and other messages pass as they are. */
+	const ping = { type: P.MSG.PING, seq: 1, flags: 0, stamp: 1n };
+	assert.equal(parts.add(ping), ping);
+	/* Out of order: each is the server's fault (EPROTO_FLAGS). */
+	const bad = (ms) => {
+		const p = new P.SceneParts();
+		assert.throws(() => ms.forEach((m) => p.add(m)),
+			(e) => e.code === 'EPROTO_FLAGS');
+	};
+	const a = scene.subarray(0, 5), b = scene.subarray(5);
+	bad([state(P.FLAG.CONT, b)]);
+	bad([state(P.FLAG.MORE, a), ping]);
+	bad([state(P.FLAG.MORE, a), state(P.FLAG.MORE, a)]);
+	bad([state(P.FLAG.MORE, a), state(P.FLAG.CONT, b, { order: 8n })]);
+	bad([state(P.FLAG.MORE, a), state(0, scene)]);
+	/* Past the limit: EPROTO_LENGTH. */
+	const small = new P.SceneParts(6);
+	assert.throws(() => [state(P.FLAG.MORE, a), state(P.FLAG.CONT, b)]
+		.forEach((m) => small.add(m)), (e) => e.code === 'EPROTO_LENGTH');
 });

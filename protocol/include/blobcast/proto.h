@@ -130,6 +130,13 @@ enum bc_msg_type {
  * field): the access unit is an IDR with its SPS and PPS in band, where a
  * decoder may start (PROTOCOL.md 7.15, "Encoding 4"). */
 #define BC_PROTO_FLAG_KEY 0x0080u
+/* SCENE_LOAD and SCENE_STATE (PROTOCOL.md 7.10.1): the message is one part
+ * of a scene sent in parts. MORE: another part of the same scene follows;
+ * CONT: this part continues the scene of the part before it. Neither: the
+ * message holds the whole scene, as in the first text. */
+#define BC_PROTO_FLAG_MORE 0x0001u
+#define BC_PROTO_FLAG_CONT 0x0002u
+#define BC_PROTO_FLAGS_PARTS (BC_PROTO_FLAG_MORE | BC_PROTO_FLAG_CONT)
 
 /* SNAPSHOT's optional planes byte: the planes the answer carries besides
  * colour. Other bits: BC_EPROTO_FLAGS. Colour only leaves the byte out (a
@@ -171,7 +178,11 @@ enum bc_msg_type {
  * at most BC_PROTO_ACK_WINDOW of its view's FRAMEs unacknowledged
  * (PROTOCOL.md 7.27). */
 #define BC_PROTO_FEATURE_ACKS 0x80u
-#define BC_PROTO_FEATURES_ALL 0xffu
+/* Scenes in parts (PROTOCOL.md 7.10.1): a SCENE_STATE that would pass the
+ * client's limit comes as several messages (header flags MORE and CONT);
+ * granted, the server also accepts SCENE_LOAD in parts. */
+#define BC_PROTO_FEATURE_PARTS 0x100u
+#define BC_PROTO_FEATURES_ALL 0x1ffu
 /* What a client that only reads may announce: every feature but ACKS,
  * which also binds the client to send FRAME_ACK for each FRAME. */
 #define BC_PROTO_FEATURES_READ (BC_PROTO_FEATURES_ALL & ~BC_PROTO_FEATURE_ACKS)
@@ -765,6 +776,59 @@ BC_API void bc_proto_buf_consume(struct bc_proto_buf *b, size_t n);
  * ...), with the reason in ei (which may be NULL). */
 BC_API int bc_proto_encode(struct bc_proto_buf *b, const struct bc_msg *m,
                            struct bc_errinfo *ei);
+
+/* ---- Scenes in parts (PROTOCOL.md 7.10.1) -------------------------------- */
+
+/* Assembles a scene sent in parts (header flags MORE and CONT) from
+ * SCENE_LOAD or SCENE_STATE messages, one scene at a time. */
+struct bc_proto_parts {
+	uint8_t *data; /* the pieces so far */
+	size_t len, cap, max;
+	bool open;    /* a part with MORE came last: the scene is unfinished */
+	bool between; /* other messages may come between the parts */
+	enum bc_msg_type type;
+	uint64_t order; /* a SCENE_STATE's fields, the same in every part */
+	uint32_t author, author_seq;
+};
+
+/* max: the most bytes a scene may have (0 or over it:
+ * BC_PROTO_MAX_SCENE_BYTES). between: a server's SCENE_LOAD, whose parts
+ * other requests may come between; a client reading SCENE_STATE passes
+ * false (a server sends the parts of one scene one after another).
+ * Allocates nothing. */
+BC_API void bc_proto_parts_init(struct bc_proto_parts *p, size_t max,
+                                bool between);
+/* Forgets an unfinished scene and frees the buffer. */
+BC_API void bc_proto_parts_drop(struct bc_proto_parts *p);
+BC_API void bc_proto_parts_finish(struct bc_proto_parts *p);
+/* Takes a decoded message m. Returns 1 when *out is whole: m itself when it
+ * is not a part, or the scene's last part with every piece in its scene
+ * field (pointing into p, valid until the next call) and MORE and CONT
+ * cleared; 0 when m was a part and more must come; or a negative code, the
+ * unfinished scene dropped: BC_ESTATE (between: a CONT part with no scene
+ * begun), BC_EPROTO_FLAGS (not between: a CONT part that continues
+ * nothing or a SCENE_STATE part whose order, author or author_seq differs
+ * from the first part's, a first part or another message inside a scene),
+ * BC_EPROTO_LENGTH (the scene would pass max), BC_ENOMEM. A whole
+ * SCENE_LOAD or SCENE_STATE when between drops an unfinished scene. */
+BC_API int bc_proto_parts_add(struct bc_proto_parts *p, const struct bc_msg *m,
+                              struct bc_msg *out, struct bc_errinfo *ei);
+/* The buffer of the scene just returned whole, for the caller to free
+ * with bc_free (p forgets it). */
+BC_API uint8_t *bc_proto_parts_take(struct bc_proto_parts *p);
+
+/* SCENE_STATE's fields before its scene bytes: order, author, author_seq
+ * and the byte range's length. */
+#define BC_PROTO_SCENE_STATE_FIXED 20u
+/* A SCENE_STATE part's bytes before its piece of the scene. */
+#define BC_PROTO_SCENE_PART_HEAD                                               \
+	(BC_PROTO_HEADER_SIZE + BC_PROTO_SCENE_STATE_FIXED)
+/* Writes BC_PROTO_SCENE_PART_HEAD bytes to out: the header (seq 0, the
+ * flags given, a payload of the fixed fields and piece bytes) and the
+ * fields before the piece, which the caller sends after them. */
+BC_API void bc_proto_scene_state_head(uint8_t *out, uint16_t flags,
+                                      uint64_t order, uint32_t author,
+                                      uint32_t author_seq, uint32_t piece);
 
 /* ---- The scene encoding (owned by blobtree; see PROTOCOL.md) --------------
  */

@@ -26,6 +26,14 @@
  * an authenticated peer can make the daemon hold per connection. */
 #define BC_PROTO_MAX_PAYLOAD (64u * 1024u * 1024u)
 
+/* Most bytes of one scene sent in parts (PROTOCOL.md 7.10.1), the sum of
+ * its parts' pieces. It holds every scene of the node limit
+ * (BC_PROTO_SCENE_MAX_NODES): 2^21 primitives of 79 bytes, as many
+ * operators of 17 bytes and a name of 64 bytes for every node come to
+ * 500 MB. A receiver refuses a scene that would pass it (EPROTO_LENGTH)
+ * before it buffers the part. */
+#define BC_PROTO_MAX_SCENE_BYTES (1024u * 1024u * 1024u)
+
 /* Largest payload accepted before the peer has said HELLO. The longest
  * valid HELLO is 1101 bytes (its strings at their limits); 4 KiB leaves room
  * and keeps what an unauthenticated peer can make the daemon buffer small. */

@@ -369,7 +369,10 @@ BC_API const struct bc_tree *bc_client_scene(const struct bc_client *c,
 
 /* Sends SCENE_LOAD with scene bytes (the binary encoding) and waits for the
  * SCENE_STATE that acknowledges it; *order (may be NULL, reset on entry)
- * receives the new edit order. */
+ * receives the new edit order. A scene over the server's max_payload goes
+ * in parts when the server granted BC_PROTO_FEATURE_PARTS (else BC_ELIMIT,
+ * nothing sent). A SCENE_STATE that comes in parts reaches the caller of
+ * bc_client_recv() whole, as one message. */
 BC_API int bc_client_load_scene(struct bc_client *c, const uint8_t *bytes,
                                 size_t len, uint64_t *order,
                                 struct bc_errinfo *ei);
