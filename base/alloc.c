@@ -4,6 +4,8 @@
  * threads and a client's reader allocate concurrently, and a test arming
  * the hook must not race with them.
  */
+/* madvise is not POSIX (posix_madvise has no POPULATE). */
+#define _DEFAULT_SOURCE
 #include "blobcast/alloc.h"
 
 #include <stdatomic.h>
@@ -11,6 +13,13 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
+/* Linux 5.14; older headers lack it, older kernels refuse it (EINVAL). */
+#ifndef MADV_POPULATE_WRITE
+#define MADV_POPULATE_WRITE 23
+#endif
 
 /* Set by the first bc_alloc_fail_after(); until then nothing is counted. */
 static atomic_bool hooked;
@@ -87,4 +96,24 @@ char *bc_strdup(const char *s)
 		memcpy(copy, s, n);
 	}
 	return copy;
+}
+
+bool bc_populate(void *p, size_t n)
+{
+	/* A first write to a page costs a trap; on virtual machines a large
+	 * one (about 10 us a page measured on the 2-core test machine: 1.4 s
+	 * for 512 MiB written page by page, 0.7 s after one populate). */
+	static long page;
+	uintptr_t lo, hi;
+	if (!p || n < BC_POPULATE_MIN) {
+		return false;
+	}
+	if (!page) {
+		long got = sysconf(_SC_PAGESIZE);
+		page = got > 0 ? got : 4096;
+	}
+	lo = ((uintptr_t)p + (uintptr_t)page - 1) & ~((uintptr_t)page - 1);
+	hi = ((uintptr_t)p + n) & ~((uintptr_t)page - 1);
+	return hi > lo &&
+	       madvise((void *)lo, hi - lo, MADV_POPULATE_WRITE) == 0;
 }

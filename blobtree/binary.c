@@ -753,6 +753,10 @@ static int decode_tree(struct bc_rd *r, bool names, struct bc_tree *t,
 	}
 
 	/* Pass 2: build; the builder validates parameters and ids. */
+	if ((rc = bc__tree_reserve(t, count))) {
+		rc = bc_errinfo_set(ei, rc, "scene: %s", bc_strerror(rc));
+		goto cleanup;
+	}
 	r->pos = start;
 	for (uint32_t i = 0; i < count; i++) {
 		uint32_t id;

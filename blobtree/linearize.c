@@ -47,6 +47,27 @@ void bc__lin_free(struct bc_lin *l)
 	memset(l, 0, sizeof(*l));
 }
 
+/* The parts of l's arrays the fill writes, backed by memory at once
+ * (bc_populate): a million-primitive layout is about 300 MB, and a fault
+ * per page of it cost more than the fill on a virtual machine. */
+static void populate(struct bc_lin *l)
+{
+	size_t n = l->count, np = l->nprims;
+	uint32_t *const per_node[] = {l->first,   l->fast,    l->jump,
+	                              l->kills,   l->depth,   l->node_id,
+	                              l->prim_of, l->wrap,    l->wrap_top,
+	                              l->dom,     l->ucount};
+	bc_populate(l->node, 2 * n * sizeof(uint32_t));
+	for (size_t i = 0; i < sizeof(per_node) / sizeof(per_node[0]); i++) {
+		bc_populate(per_node[i], n * sizeof(uint32_t));
+	}
+	bc_populate(l->roi, 2 * n * sizeof(float));
+	bc_populate(l->prim_slot, np * sizeof(uint32_t));
+	bc_populate(l->abv, np * sizeof(struct bc_abv));
+	bc_populate(l->color, np * sizeof(*l->color));
+	bc_populate(l->param, 4 * (size_t)l->nparam * sizeof(float));
+}
+
 int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nops)
 {
 	size_t count = nprims ? 2u * (size_t)nprims - 1u : 0u;
@@ -101,6 +122,7 @@ int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nops)
 		bc__lin_free(l);
 		return BC_ENOMEM;
 	}
+	populate(l);
 	return 0;
 }
 

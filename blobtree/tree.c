@@ -151,6 +151,20 @@ static int pool_reserve(struct bc_tree *t, uint32_t more)
 	return 0;
 }
 
+int bc__tree_reserve(struct bc_tree *t, uint32_t nodes)
+{
+	int rc;
+	if ((rc = pool_reserve(t, nodes)) ||
+	    (rc = bc__map_reserve(&t->ids, nodes))) {
+		return rc;
+	}
+	/* Written whole by the build that follows: no fault per page. */
+	bc_populate(t->pool + t->npool, (size_t)nodes * sizeof(*t->pool));
+	bc_populate(t->ids.keys, (size_t)t->ids.cap * sizeof(uint32_t));
+	bc_populate(t->ids.vals, (size_t)t->ids.cap * sizeof(uint32_t));
+	return 0;
+}
+
 /* Takes a node from the free chain or the end of the pool; room must have
  * been reserved. */
 static uint32_t pool_take(struct bc_tree *t)

@@ -52,6 +52,9 @@ struct bc__idmap {
 uint32_t bc__map_find(const struct bc__idmap *m, uint32_t id);
 void bc__map_put_nogrow(struct bc__idmap *m, uint32_t id, uint32_t val);
 int bc__map_reserve(struct bc__idmap *m, uint32_t more);
+/* Room for nodes more nodes in the pool and the id map, backed by memory
+ * now (bc_populate): for a builder that knows its node count. */
+int bc__tree_reserve(struct bc_tree *t, uint32_t nodes);
 void bc__map_del(struct bc__idmap *m, uint32_t id);
 
 /* Node names (names.c): kept apart from the nodes, which every primitive
