@@ -53,10 +53,9 @@ void bc__lin_free(struct bc_lin *l)
 static void populate(struct bc_lin *l)
 {
 	size_t n = l->count, np = l->nprims;
-	uint32_t *const per_node[] = {l->first,   l->fast,    l->jump,
-	                              l->kills,   l->depth,   l->node_id,
-	                              l->prim_of, l->wrap,    l->wrap_top,
-	                              l->dom,     l->ucount};
+	uint32_t *const per_node[] = {
+	    l->first,   l->fast, l->jump,     l->kills, l->depth, l->node_id,
+	    l->prim_of, l->wrap, l->wrap_top, l->dom,   l->ucount};
 	bc_populate(l->node, 2 * n * sizeof(uint32_t));
 	for (size_t i = 0; i < sizeof(per_node) / sizeof(per_node[0]); i++) {
 		bc_populate(per_node[i], n * sizeof(uint32_t));

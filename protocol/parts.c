@@ -87,9 +87,9 @@ static int append(struct bc_proto_parts *p, const struct bc_proto_bytes *b,
 int bc_proto_parts_add(struct bc_proto_parts *p, const struct bc_msg *m,
                        struct bc_msg *out, struct bc_errinfo *ei)
 {
-	bool part = (m->type == BC_MSG_SCENE_LOAD ||
-	             m->type == BC_MSG_SCENE_STATE) &&
-	            (m->flags & BC_PROTO_FLAGS_PARTS);
+	bool part =
+	    (m->type == BC_MSG_SCENE_LOAD || m->type == BC_MSG_SCENE_STATE) &&
+	    (m->flags & BC_PROTO_FLAGS_PARTS);
 	int rc;
 	if (!part) {
 		if (p->open && !p->between) {
@@ -117,7 +117,8 @@ int bc_proto_parts_add(struct bc_proto_parts *p, const struct bc_msg *m,
 			    was ? "a %s part (CONT) that does not continue the "
 			          "scene begun"
 			        : "a %s part (CONT) with no scene begun: its "
-			          "first part was refused, dropped or never sent",
+			          "first part was refused, dropped or never "
+			          "sent",
 			    bc_proto_type_name(m->type));
 		}
 	} else {
