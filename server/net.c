@@ -528,6 +528,25 @@ static bool frame_bufs(struct bc_conn *c, struct write_req *w,
 	return true;
 }
 
+/* Whether c's queue takes len more bytes: its cap is 32 MiB, or frame
+ * (the large frame and shared message it may hold) and a little beside
+ * it. A client past it stopped reading: it is closed. */
+static bool room_for(struct bc_conn *c, size_t frame, size_t len)
+{
+	size_t cap = frame + BC_SRV_QUEUE_BESIDE_FRAME > BC_SRV_MAX_CLIENT_QUEUE
+	                 ? frame + BC_SRV_QUEUE_BESIDE_FRAME
+	                 : BC_SRV_MAX_CLIENT_QUEUE;
+	if (c->queued + len <= cap) {
+		return true;
+	}
+	bc_log(BC_LOG_WARN,
+	       "dropping client %u (%s): %zu bytes queued and %zu more to "
+	       "send, over %zu: it stopped reading",
+	       c->gen, c->name, c->queued, len, cap);
+	bc__conn_close(c, "output queue over its limit");
+	return false;
+}
+
 /* What queue_bytes queues. */
 enum out_kind {
 	OUT_MESSAGE, /* bytes, or a shared whole message */
@@ -543,7 +562,7 @@ static void queue_bytes(struct bc_conn *c, uint8_t *owned,
 {
 	bool is_frame = kind != OUT_MESSAGE;
 	struct write_req *w;
-	size_t frame, cap;
+	size_t frame;
 	if (c->tls && !bc_tls_ready(c->tls)) {
 		/* Nothing can be said before the handshake (an ERROR for a
 		 * HELLO timeout): the connection is closed without it. */
@@ -559,16 +578,8 @@ static void queue_bytes(struct bc_conn *c, uint8_t *owned,
 	 * before the first has gone passes the cap. */
 	frame = (is_frame ? len : c->frame_bytes) +
 	        (shared && !is_frame ? len : 0u);
-	cap = frame + BC_SRV_QUEUE_BESIDE_FRAME > BC_SRV_MAX_CLIENT_QUEUE
-	          ? frame + BC_SRV_QUEUE_BESIDE_FRAME
-	          : BC_SRV_MAX_CLIENT_QUEUE;
-	if (c->queued + len > cap) {
+	if (!room_for(c, frame, len)) {
 		bc_free(owned);
-		bc_log(BC_LOG_WARN,
-		       "dropping client %u (%s): %zu bytes queued and %zu more "
-		       "to send, over %zu: it stopped reading",
-		       c->gen, c->name, c->queued, len, cap);
-		bc__conn_close(c, "output queue over its limit");
 		return;
 	}
 	if (!(w = bc_calloc(1, sizeof(*w)))) {
@@ -804,20 +815,11 @@ static void queue_parts(struct bc_conn *c, struct bc_shared *msg,
 	size_t piece_max = part_max - BC_PROTO_SCENE_STATE_FIXED;
 	size_t nparts = (len + piece_max - 1) / piece_max;
 	size_t total = msg->len + (nparts - 1) * BC_PROTO_SCENE_PART_HEAD;
-	size_t cap = c->frame_bytes + total + BC_SRV_QUEUE_BESIDE_FRAME;
 	uint64_t order = bc_get_le64(head + BC_PROTO_HEADER_SIZE);
 	uint32_t author = bc_get_le32(head + BC_PROTO_HEADER_SIZE + 8);
 	uint32_t author_seq = bc_get_le32(head + BC_PROTO_HEADER_SIZE + 12);
-	if (c->tls && !bc_tls_ready(c->tls)) {
-		return;
-	}
-	cap = cap > BC_SRV_MAX_CLIENT_QUEUE ? cap : BC_SRV_MAX_CLIENT_QUEUE;
-	if (c->queued + total > cap) {
-		bc_log(BC_LOG_WARN,
-		       "dropping client %u (%s): %zu bytes queued and a scene "
-		       "of %zu more to send, over %zu: it stopped reading",
-		       c->gen, c->name, c->queued, total, cap);
-		bc__conn_close(c, "output queue over its limit");
+	if ((c->tls && !bc_tls_ready(c->tls)) ||
+	    !room_for(c, c->frame_bytes + total, total)) {
 		return;
 	}
 	for (size_t i = 0; i < nparts; i++) {

@@ -128,20 +128,22 @@ static void srv_error(struct fake *f, int fd, uint32_t seq, int code,
 	srv_send(f, fd, &e);
 }
 
-/* HELLO -> WELCOME, the start of most scripts. */
-static int srv_hello(struct fake *f, int fd)
+/* HELLO (in *m) -> WELCOME with max_payload and, when the HELLO
+ * announced some, the features granted. */
+static int srv_hello_with(struct fake *f, int fd, uint32_t max_payload,
+                          uint32_t features, struct bc_msg *m)
 {
-	struct bc_msg m, w = {.type = BC_MSG_WELCOME};
-	if (!srv_expect(f, fd, BC_MSG_HELLO, &m)) {
+	struct bc_msg w = {.type = BC_MSG_WELCOME};
+	if (!srv_expect(f, fd, BC_MSG_HELLO, m)) {
 		return 0;
 	}
-	SCHECK(f, m.hello.version_min <= BC_PROTO_VERSION &&
-	              m.hello.version_max >= BC_PROTO_VERSION);
+	SCHECK(f, m->hello.version_min <= BC_PROTO_VERSION &&
+	              m->hello.version_max >= BC_PROTO_VERSION);
 	bc_proto_reader_hello_done(&f->r);
-	w.seq = m.seq;
+	w.seq = m->seq;
 	w.welcome.version = BC_PROTO_VERSION;
 	w.welcome.connection_id = 7;
-	w.welcome.max_payload = BC_PROTO_MAX_PAYLOAD;
+	w.welcome.max_payload = max_payload;
 	w.welcome.max_frame_bytes = 1u << 20;
 	w.welcome.max_nodes = 100000;
 	w.welcome.max_dim = 4096;
@@ -149,8 +151,17 @@ static int srv_hello(struct fake *f, int fd)
 	w.welcome.max_edit_ops = 1024;
 	w.welcome.server_id.ptr = "fake";
 	w.welcome.server_id.len = 4;
+	w.welcome.has_features = features && m->hello.has_features;
+	w.welcome.features = w.welcome.has_features ? features : 0;
 	srv_send(f, fd, &w);
 	return 1;
+}
+
+/* HELLO -> WELCOME, the start of most scripts. */
+static int srv_hello(struct fake *f, int fd)
+{
+	struct bc_msg m;
+	return srv_hello_with(f, fd, BC_PROTO_MAX_PAYLOAD, 0, &m);
 }
 
 static void *fake_main(void *arg)
@@ -1059,27 +1070,15 @@ static void srv_state_part(struct fake *f, int fd, uint16_t flags,
 
 static void script_parts(struct fake *f, int fd)
 {
-	struct bc_msg m, w = {.type = BC_MSG_WELCOME};
+	struct bc_msg m;
 	struct bc_proto_parts p;
 	int nparts = 0, rc = 0;
-	if (!srv_expect(f, fd, BC_MSG_HELLO, &m)) {
+	if (!srv_hello_with(f, fd, PARTS_MAX_PAYLOAD, BC_PROTO_FEATURE_PARTS,
+	                    &m)) {
 		return;
 	}
 	SCHECK(f, m.hello.has_features &&
 	              (m.hello.features & BC_PROTO_FEATURE_PARTS));
-	bc_proto_reader_hello_done(&f->r);
-	w.seq = m.seq;
-	w.welcome.version = BC_PROTO_VERSION;
-	w.welcome.connection_id = 7;
-	w.welcome.max_payload = PARTS_MAX_PAYLOAD;
-	w.welcome.max_frame_bytes = 1u << 20;
-	w.welcome.max_nodes = 100000;
-	w.welcome.max_dim = 4096;
-	w.welcome.max_members = 64;
-	w.welcome.max_edit_ops = 1024;
-	w.welcome.has_features = true;
-	w.welcome.features = BC_PROTO_FEATURE_PARTS;
-	srv_send(f, fd, &w);
 	if (!srv_expect(f, fd, BC_MSG_SESSION_JOIN, &m)) {
 		return;
 	}
