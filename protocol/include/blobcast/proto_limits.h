@@ -21,9 +21,10 @@
  * 10^6-node scene whose nodes average up to 67 bytes, which covers every
  * binary tree of 10^6 nodes even with the largest primitive records (500 000
  * primitives of 79 bytes plus 500 000 operators of 17 bytes = 48 MB), and a
- * raw RGBA frame of 4096 x 4096. Bigger scenes are loaded from files on the
- * server. A reader buffers at most one message, so this is also the memory
- * an authenticated peer can make the daemon hold per connection. */
+ * raw RGBA frame of 4096 x 4096. Bigger scenes travel in parts
+ * (PROTOCOL.md 7.10.1, BC_PROTO_MAX_SCENE_BYTES). A reader buffers at most one
+ * message, so this is also the memory an authenticated peer can make the daemon
+ * hold per connection. */
 #define BC_PROTO_MAX_PAYLOAD (64u * 1024u * 1024u)
 
 /* Most bytes of one scene sent in parts (PROTOCOL.md 7.10.1), the sum of
