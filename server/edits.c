@@ -384,6 +384,7 @@ struct load {
 	struct bc_author author;
 	uint8_t *owned; /* the payload's buffer or copy, for a task */
 	struct bc_proto_bytes scene;
+	struct bc_load_parts parts; /* or its parts, joined by the task */
 	uint64_t order;
 	struct bc_tree *tree, *copy;
 	struct bc_camera cam;
@@ -393,10 +394,43 @@ struct load {
 	struct bc_errinfo ei;
 };
 
+static void parts_free(struct bc_load_parts *p)
+{
+	for (uint32_t i = 0; i < p->n; i++) {
+		bc_free(p->v[i].owned);
+	}
+	bc_free(p->v);
+	memset(p, 0, sizeof(*p));
+}
+
+/* The scene of a load in parts, in one buffer (on the task: a scene of
+ * hundreds of megabytes is not copied on the loop). */
+static int join_parts(struct load *l)
+{
+	size_t at = 0;
+	if (!(l->owned = bc_malloc(l->parts.len))) {
+		return bc_errinfo_set(&l->ei, BC_ENOMEM,
+		                      "out of memory for a scene of %zu bytes",
+		                      l->parts.len);
+	}
+	bc_populate(l->owned, l->parts.len);
+	for (uint32_t i = 0; i < l->parts.n; i++) {
+		memcpy(l->owned + at, l->parts.v[i].ptr, l->parts.v[i].len);
+		at += l->parts.v[i].len;
+	}
+	l->scene.ptr = l->owned;
+	l->scene.len = (uint32_t)at;
+	parts_free(&l->parts);
+	return 0;
+}
+
 static void prepare(struct bc_task *t)
 {
 	struct load *l = (struct load *)t;
 	struct bc_errinfo *ei = &l->ei;
+	if (l->parts.n && (l->rc = join_parts(l))) {
+		return;
+	}
 	if (!(l->tree = bc_tree_create()) || !(l->copy = bc_tree_create())) {
 		l->rc = bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
 		return;
@@ -439,6 +473,7 @@ static void load_free(struct load *l)
 	bc__tree_free_later(l->t.s->kick.loop, l->copy);
 	bc_shared_unref(l->state);
 	bc_free(l->owned);
+	parts_free(&l->parts);
 	bc_free(l);
 }
 
@@ -482,15 +517,15 @@ static void commit(struct bc_task *t)
 	load_free(l);
 }
 
-/* Starts the load of msg's scene (a whole SCENE_LOAD, or the last part
- * of one sent in parts, its pieces in owned, which this takes). */
+/* Starts the load of msg's scene: a whole SCENE_LOAD, or the last part
+ * of one sent in parts, whose pieces (m->parts) this takes. */
 static int start_load(struct bc_member *m, const struct bc_msg *msg,
-                      uint8_t *owned)
+                      bool in_parts)
 {
 	struct bc_session *s = m->session;
 	struct load *l;
 	if (!(l = bc_calloc(1, sizeof(*l)))) {
-		bc_free(owned);
+		bc__parts_drop(m);
 		bc__send_error(m, msg->seq, BC_ENOMEM,
 		               "scene not loaded: out of memory");
 		return 0;
@@ -503,12 +538,20 @@ static int start_load(struct bc_member *m, const struct bc_msg *msg,
 	l->t.run = prepare;
 	l->t.done = commit;
 	l->t.holds_order = true;
-	/* Parts come assembled in owned. A whole payload lives in the
-	 * reader's buffer only until the next message: a big one takes that
-	 * buffer (a 35 MB copy took the loop 22 ms; the scene stays where it
-	 * is in it), a small one is copied. */
-	l->owned = owned;
-	if (!l->owned && l->scene.len >= BC_SRV_DETACH_BYTES) {
+	if (in_parts) {
+		/* Joined on the task. */
+		l->parts = m->parts;
+		l->scene.len = 0;
+		m->ss->parts_bytes -= m->parts.len;
+		memset(&m->parts, 0, sizeof(m->parts));
+		bc__task_start(s, &l->t);
+		return bc__hold(s, m, msg->seq);
+	}
+	/* A whole payload lives in the reader's buffer only until the next
+	 * message: a big one takes that buffer (a 35 MB copy took the loop
+	 * 22 ms; the scene stays where it is in it), a small one is
+	 * copied. */
+	if (l->scene.len >= BC_SRV_DETACH_BYTES) {
 		l->owned = m->ss->link->detach(m->ss->link->ud, m->peer->ref);
 	}
 	if (!l->owned &&
@@ -533,7 +576,61 @@ static int start_load(struct bc_member *m, const struct bc_msg *msg,
 void bc__parts_drop(struct bc_member *m)
 {
 	m->ss->parts_bytes -= m->parts.len;
-	bc_proto_parts_drop(&m->parts);
+	parts_free(&m->parts);
+}
+
+/* Keeps msg's piece in m->parts: a big one in the reader's buffer,
+ * handed over; a small one copied, joined to the copy before it. Returns
+ * 0 or BC_ENOMEM (the scene then dropped). */
+static int keep_piece(struct bc_member *m, const struct bc_msg *msg)
+{
+	struct bc_load_parts *p = &m->parts;
+	const struct bc_proto_bytes *b = &msg->scene_load.scene;
+	struct bc_load_piece *last = p->n ? &p->v[p->n - 1] : NULL;
+	uint8_t *owned = NULL;
+	if (b->len < BC_SRV_DETACH_BYTES && last && last->copy) {
+		if (last->len + b->len > last->room) {
+			/* Doubling: many tiny parts cost linear time. */
+			size_t room = 2 * (last->len + b->len);
+			uint8_t *grown = bc_realloc(last->owned, room);
+			if (!grown) {
+				return BC_ENOMEM;
+			}
+			last->owned = grown;
+			last->ptr = grown;
+			last->room = room;
+		}
+		memcpy(last->owned + last->len, b->ptr, b->len);
+		last->len += b->len;
+		p->len += b->len;
+		return 0;
+	}
+	if (p->n == p->cap) {
+		uint32_t cap = p->cap ? 2 * p->cap : 8;
+		struct bc_load_piece *v =
+		    bc_reallocarray(p->v, cap, sizeof(*v));
+		if (!v) {
+			return BC_ENOMEM;
+		}
+		p->v = v;
+		p->cap = cap;
+	}
+	if (b->len >= BC_SRV_DETACH_BYTES) {
+		owned = m->ss->link->detach(m->ss->link->ud, m->peer->ref);
+	}
+	p->v[p->n] =
+	    (struct bc_load_piece){owned, b->ptr, b->len, b->len, !owned};
+	if (!owned) {
+		if (!(owned = bc_malloc(b->len))) {
+			return BC_ENOMEM;
+		}
+		memcpy(owned, b->ptr, b->len);
+		p->v[p->n].owned = owned;
+		p->v[p->n].ptr = owned;
+	}
+	p->n++;
+	p->len += b->len;
+	return 0;
 }
 
 /* Drops the unfinished scenes of other members that have had no part for
@@ -555,33 +652,36 @@ static void drop_stale_parts(struct bc_member *m)
 	}
 }
 
-/* Takes a part of a SCENE_LOAD: 1 with the whole scene in *whole (its
- * bytes then in *owned), 0 when more must come or the part was refused
- * (answered). */
-static int take_part(struct bc_member *m, const struct bc_msg *msg,
-                     struct bc_msg *whole, uint8_t **owned)
+/* Takes a part of a SCENE_LOAD: true when it was the last, the whole
+ * scene then in m->parts; false when more must come or the part was
+ * refused (answered, its scene dropped). */
+static bool take_part(struct bc_member *m, const struct bc_msg *msg)
 {
 	struct bc_sessions *ss = m->ss;
-	struct bc_errinfo ei = {0};
 	bool cont = (msg->flags & BC_PROTO_FLAG_CONT) != 0;
 	size_t piece = msg->scene_load.scene.len;
-	size_t had = m->parts.open ? m->parts.len : 0;
 	size_t pending_cap = BC_SRV_PARTS_PENDING_SCENES * ss->max_scene_bytes;
-	int rc;
 	if (!cont) {
 		bc__parts_drop(m); /* a first part drops an unfinished scene */
-		had = 0;
+		m->parts.open = true;
+	} else if (!m->parts.open) {
+		bc__send_error(
+		    m, msg->seq, BC_ESTATE,
+		    "scene not loaded: a SCENE_LOAD part (CONT) with "
+		    "no scene begun: its first part was refused, "
+		    "dropped or never sent");
+		return false;
 	}
-	if (had + piece > ss->max_scene_bytes) {
+	if (m->parts.len + piece > ss->max_scene_bytes) {
+		size_t had = m->parts.len;
 		bc__parts_drop(m);
 		bc__send_error(m, msg->seq, BC_ELIMIT,
 		               "scene not loaded: its parts pass this server's "
 		               "%zu bytes (--max-scene) at %zu bytes",
 		               ss->max_scene_bytes, had + piece);
-		return 0;
+		return false;
 	}
-	if ((cont ? m->parts.open : true) &&
-	    ss->parts_bytes + piece > pending_cap) {
+	if (ss->parts_bytes + piece > pending_cap) {
 		drop_stale_parts(m);
 		if (ss->parts_bytes + piece > pending_cap) {
 			bc__parts_drop(m);
@@ -591,30 +691,26 @@ static int take_part(struct bc_member *m, const struct bc_msg *msg,
 			    "bytes of scenes in parts, at most %zu; "
 			    "send it again later",
 			    ss->parts_bytes, pending_cap);
-			return 0;
+			return false;
 		}
 	}
-	had = m->parts.len;
-	rc = bc_proto_parts_add(&m->parts, msg, whole, &ei);
-	ss->parts_bytes = ss->parts_bytes - had + m->parts.len;
 	m->parts_ms = bc__now_ms(ss);
-	if (rc < 0) {
-		bc__send_error(m, msg->seq,
-		               rc == BC_EPROTO_LENGTH ? BC_ELIMIT : rc,
-		               "scene not loaded: %s", ei.msg);
-		return 0;
+	if (keep_piece(m, msg)) {
+		bc__parts_drop(m);
+		bc__send_error(m, msg->seq, BC_ENOMEM,
+		               "scene not loaded: out of memory");
+		return false;
 	}
-	if (rc == 1) {
-		ss->parts_bytes -= m->parts.len;
-		*owned = bc_proto_parts_take(&m->parts);
+	ss->parts_bytes += piece;
+	if (msg->flags & BC_PROTO_FLAG_MORE) {
+		return false;
 	}
-	return rc;
+	m->parts.open = false;
+	return true;
 }
 
 int bc_handle_scene_load(struct bc_member *m, const struct bc_msg *msg)
 {
-	struct bc_msg whole;
-	uint8_t *owned = NULL;
 	int park;
 	if (bc__refuse_change(m, msg->seq, &park)) {
 		if (!park) {
@@ -623,11 +719,8 @@ int bc_handle_scene_load(struct bc_member *m, const struct bc_msg *msg)
 		return park;
 	}
 	if (msg->flags & BC_PROTO_FLAGS_PARTS) {
-		if (take_part(m, msg, &whole, &owned) != 1) {
-			return 0;
-		}
-		return start_load(m, &whole, owned);
+		return take_part(m, msg) ? start_load(m, msg, true) : 0;
 	}
 	bc__parts_drop(m); /* a whole scene replaces an unfinished one */
-	return start_load(m, msg, NULL);
+	return start_load(m, msg, false);
 }

@@ -20,7 +20,6 @@ void bc_member_init(struct bc_member *m, struct bc_sessions *ss,
 	memset(m, 0, sizeof(*m));
 	m->ss = ss;
 	m->peer = peer;
-	bc_proto_parts_init(&m->parts, ss->max_scene_bytes, true);
 	if (peer->ref.slot < BC_SRV_MAX_CONNECTIONS) {
 		ss->by_slot[peer->ref.slot] = m;
 	}

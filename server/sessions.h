@@ -35,6 +35,24 @@ struct bc_store;
  * requests (a PING, say) are answered after it, in order. */
 #define BC_HOLD 2
 
+/* A SCENE_LOAD arriving in parts (PROTOCOL.md 7.10.1, edits.c): its
+ * pieces as they came, a big one in the reader's buffer it arrived in
+ * (handed over, not copied on the loop), small ones gathered in copies.
+ * The load's task joins them. */
+struct bc_load_piece {
+	uint8_t *owned;     /* the buffer holding it, freed with it */
+	const uint8_t *ptr; /* its bytes, in owned */
+	size_t len;
+	size_t room; /* a copy's capacity, for the small pieces that join it */
+	bool copy;   /* owned is a copy that later small pieces may join */
+};
+struct bc_load_parts {
+	bool open; /* a part with MORE came last */
+	struct bc_load_piece *v;
+	uint32_t n, cap;
+	size_t len; /* the scene's bytes so far */
+};
+
 /* A client as the sessions layer keeps it (embedded in dispatch's client
  * state; bc_member_init and bc_member_finish bracket its life). */
 struct bc_member {
@@ -78,7 +96,7 @@ struct bc_member {
 	struct bc_member *park_next;
 	/* A SCENE_LOAD in parts not finished yet (edits.c), and when its
 	 * last part came (loop clock, ms). */
-	struct bc_proto_parts parts;
+	struct bc_load_parts parts;
 	uint64_t parts_ms;
 };
 

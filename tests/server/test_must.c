@@ -1746,7 +1746,7 @@ static int recv_state(struct conn *c, uint32_t limit, uint8_t **scene,
  * fatal and drop the scene. */
 static void scenes_travel_in_parts(void)
 {
-	const char *const small[] = {"--max-scene", "1", NULL};
+	const char *const small[] = {"--max-scene", "4", NULL};
 	const uint32_t all = BC_PROTO_FEATURES_READ;
 	const uint32_t limit = BC_PROTO_MIN_FRAME_BYTES;
 	struct daemon d;
@@ -1770,9 +1770,11 @@ static void scenes_travel_in_parts(void)
 	REQUIRE(conn_join(&b, "pt", BC_PROTO_ROLE_VIEWER, false) == 0);
 	REQUIRE(conn_expect(&b, BC_MSG_SCENE_STATE, WAIT_MS) == 1);
 	REQUIRE(member(&v, &d, "v", "pt", BC_PROTO_ROLE_VIEWER, false) == 0);
-	/* 6000 spheres: more than three times the 64 KiB limit. */
-	many_spheres(&s, 6000);
-	REQUIRE(s.len > 3 * limit);
+	/* 90000 spheres: parts of over 1 MiB, which the daemon keeps in the
+	 * buffers they arrived in (BC_SRV_DETACH_BYTES), and a SCENE_STATE
+	 * of many 64 KiB parts. */
+	many_spheres(&s, 90000);
+	REQUIRE(s.len > 3u * (1u << 20) && s.len < (4u << 20) - 4096u);
 	third = s.len / 3 + 1; /* pieces end inside nodes */
 	/* Parts with a PING between: the PONG comes first, then one answer
 	 * to the last part. */
@@ -1785,13 +1787,13 @@ static void scenes_travel_in_parts(void)
 	/* a: in parts, each within 64 KiB. */
 	CHECK(recv_state(&a, limit, &got, &len, &order, &aseq) >= 4);
 	CHECK_EQ_INT(aseq, seq);
-	CHECK_EQ_INT(walk_scene(got, len, nodes, 4), 6001);
+	CHECK_EQ_INT(walk_scene(got, len, nodes, 4), 90001);
 	free(got);
 	/* b (no PARTS): whole, past its max_frame_bytes, as before. */
 	CHECK_EQ_INT(
 	    recv_state(&b, BC_PROTO_MAX_PAYLOAD, &got, &len, &order, &aseq), 1);
 	CHECK(len > limit);
-	CHECK_EQ_INT(walk_scene(got, len, nodes, 4), 6001);
+	CHECK_EQ_INT(walk_scene(got, len, nodes, 4), 90001);
 	free(got);
 	/* v (PARTS, 64 MiB): whole. */
 	CHECK_EQ_INT(
@@ -1802,7 +1804,7 @@ static void scenes_travel_in_parts(void)
 	REQUIRE(hello_limit(&j, "j", limit, all) == 0);
 	REQUIRE(conn_join(&j, "pt", BC_PROTO_ROLE_VIEWER, false) == 0);
 	CHECK(recv_state(&j, limit, &got, &len, &order, &aseq) >= 4);
-	CHECK_EQ_INT(walk_scene(got, len, nodes, 4), 6001);
+	CHECK_EQ_INT(walk_scene(got, len, nodes, 4), 90001);
 	free(got);
 	conn_close(&j);
 	/* A CONT with no scene begun: ESTATE, not fatal. */
@@ -1822,19 +1824,19 @@ static void scenes_travel_in_parts(void)
 	CHECK_EQ_INT(a.m.flags, 0);
 	CHECK_EQ_INT(a.m.scene_state.author_seq, seq);
 	CHECK_EQ_INT(walk_state(&a, nodes, 4), 7);
-	/* Past --max-scene (1 MiB): ELIMIT at the part that passes it; the
+	/* Past --max-scene (4 MiB): ELIMIT at the part that passes it; the
 	 * rest of that scene is ESTATE. */
 	{
-		size_t big = 600u * 1024u;
-		uint8_t *junk = calloc(1, 1024u * 1024u);
+		size_t big = 2500u * 1024u;
+		uint8_t *junk = calloc(1, 4u << 20);
 		REQUIRE(junk);
 		CHECK(send_part(&a, BC_PROTO_FLAG_MORE, junk, big));
 		seq = send_part(&a, BC_PROTO_FLAGS_PARTS, junk, big);
 		CHECK_EQ_INT(refused(&a, seq), -BC_ELIMIT);
 		seq = send_part(&a, BC_PROTO_FLAG_CONT, junk, 10);
 		CHECK_EQ_INT(refused(&a, seq), -BC_ESTATE);
-		/* The unfinished scenes of every client: at most 2 MiB. v is
-		 * a viewer (EPERM); two more editors hold 900 KB each. */
+		/* The unfinished scenes of every client: at most 8 MiB. v is
+		 * a viewer (EPERM); two more editors hold 3.6 MB each. */
 		seq = send_part(&v, BC_PROTO_FLAG_MORE, junk, 10);
 		CHECK_EQ_INT(refused(&v, seq), -BC_EPERM);
 		{
@@ -1843,29 +1845,33 @@ static void scenes_travel_in_parts(void)
 			               BC_PROTO_ROLE_EDITOR, false) == 0);
 			REQUIRE(member(&e2, &d, "e2", "pt",
 			               BC_PROTO_ROLE_EDITOR, false) == 0);
-			CHECK(send_part(&e1, BC_PROTO_FLAG_MORE, junk, 900000));
+			CHECK(
+			    send_part(&e1, BC_PROTO_FLAG_MORE, junk, 3600000));
 			CHECK(taken(&e1));
-			CHECK(send_part(&e2, BC_PROTO_FLAG_MORE, junk, 900000));
+			CHECK(
+			    send_part(&e2, BC_PROTO_FLAG_MORE, junk, 3600000));
 			CHECK(taken(&e2));
-			seq = send_part(&a, BC_PROTO_FLAG_MORE, junk, 400000);
+			seq = send_part(&a, BC_PROTO_FLAG_MORE, junk, 1600000);
 			CHECK_EQ_INT(refused(&a, seq), -BC_EBUSY);
 			/* After 10 s without a part, the others' unfinished
 			 * scenes make room (a wait of at least that long, not
 			 * a timing expectation); their next part is ESTATE. */
 			t_sleep_ms(10500);
-			CHECK(send_part(&a, BC_PROTO_FLAG_MORE, junk, 400000));
+			CHECK(send_part(&a, BC_PROTO_FLAG_MORE, junk, 1600000));
 			CHECK(taken(&a));
 			seq = send_part(&e2, BC_PROTO_FLAG_CONT, junk, 10);
 			CHECK_EQ_INT(refused(&e2, seq), -BC_ESTATE);
-			/* 0.4 + 0.9 MB held; 0.9 more passes 2 MiB ... */
-			CHECK(send_part(&e1, BC_PROTO_FLAG_MORE, junk, 900000));
+			/* 1.6 + 3.6 MB held; 3.6 more passes 8 MiB ... */
+			CHECK(
+			    send_part(&e1, BC_PROTO_FLAG_MORE, junk, 3600000));
 			CHECK(taken(&e1));
-			seq = send_part(&e2, BC_PROTO_FLAG_MORE, junk, 900000);
+			seq = send_part(&e2, BC_PROTO_FLAG_MORE, junk, 3600000);
 			CHECK_EQ_INT(refused(&e2, seq), -BC_EBUSY);
 			/* ... until leaving the session drops e1's. */
 			seq = send_empty(&e1, BC_MSG_SESSION_LEAVE);
 			CHECK(answer(&e1, seq) == BC_MSG_OK);
-			CHECK(send_part(&e2, BC_PROTO_FLAG_MORE, junk, 900000));
+			CHECK(
+			    send_part(&e2, BC_PROTO_FLAG_MORE, junk, 3600000));
 			CHECK(taken(&e2));
 			conn_close(&e1);
 			conn_close(&e2);
