@@ -1486,8 +1486,8 @@ int bc_client_load_scene(struct bc_client *c, const uint8_t *bytes, size_t len,
 		    "a scene of %zu bytes does not fit one message (1..%zu)%s",
 		    len, len > piece ? piece : (size_t)BC_PROTO_MAX_SCENE_BYTES,
 		    parts ? ""
-		          : " and the server does not take scenes in parts: "
-		            "load it from a file on the server instead");
+		          : " and the server did not grant scenes in parts "
+		            "(PARTS): a server of an earlier protocol text");
 	}
 	for (size_t at = 0; at < len; at += piece) {
 		size_t n = len - at < piece ? len - at : piece;
