@@ -2,10 +2,11 @@
  * Scenes in parts (PROTOCOL.md 7.10.1): a scene whose SCENE_LOAD or
  * SCENE_STATE would pass a receiver's limit travels as several messages of
  * the same type, the first with header flag MORE, the middle ones with MORE
- * and CONT, the last with CONT. Here: the receiving side's assembly (the
- * client library's, and the daemon's for SCENE_LOAD) and the head of a
- * SCENE_STATE part, which the daemon writes in front of a slice of one
- * shared scene encoding.
+ * and CONT, the last with CONT. Here: the receiving side's assembly (a
+ * client's for SCENE_STATE; a server's for SCENE_LOAD, as the test
+ * servers use it -- blobcastd keeps big parts where they were read,
+ * server/edits.c) and the head of a SCENE_STATE part, which the daemon
+ * writes in front of a slice of one shared scene encoding.
  */
 #include <string.h>
 
@@ -156,15 +157,6 @@ int bc_proto_parts_add(struct bc_proto_parts *p, const struct bc_msg *m,
 		out->scene_state.scene.len = (uint32_t)p->len;
 	}
 	return 1;
-}
-
-uint8_t *bc_proto_parts_take(struct bc_proto_parts *p)
-{
-	uint8_t *data = p->data;
-	p->data = NULL;
-	p->len = p->cap = 0;
-	p->open = false;
-	return data;
 }
 
 void bc_proto_scene_state_head(uint8_t *out, uint16_t flags, uint64_t order,

@@ -813,9 +813,6 @@ BC_API void bc_proto_parts_finish(struct bc_proto_parts *p);
  * SCENE_LOAD or SCENE_STATE when between drops an unfinished scene. */
 BC_API int bc_proto_parts_add(struct bc_proto_parts *p, const struct bc_msg *m,
                               struct bc_msg *out, struct bc_errinfo *ei);
-/* The buffer of the scene just returned whole, for the caller to free
- * with bc_free (p forgets it). */
-BC_API uint8_t *bc_proto_parts_take(struct bc_proto_parts *p);
 
 /* SCENE_STATE's fields before its scene bytes: order, author, author_seq
  * and the byte range's length. */
