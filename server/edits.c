@@ -588,7 +588,7 @@ static int keep_piece(struct bc_member *m, const struct bc_msg *msg)
 	const struct bc_proto_bytes *b = &msg->scene_load.scene;
 	struct bc_load_piece *last = p->n ? &p->v[p->n - 1] : NULL;
 	uint8_t *owned = NULL;
-	if (b->len < BC_SRV_DETACH_BYTES && last && last->copy) {
+	if (b->len < BC_SRV_DETACH_BYTES && last && last->ptr == last->owned) {
 		if (last->len + b->len > last->room) {
 			/* Doubling: many tiny parts cost linear time. */
 			size_t room = 2 * (last->len + b->len);
@@ -618,8 +618,7 @@ static int keep_piece(struct bc_member *m, const struct bc_msg *msg)
 	if (b->len >= BC_SRV_DETACH_BYTES) {
 		owned = m->ss->link->detach(m->ss->link->ud, m->peer->ref);
 	}
-	p->v[p->n] =
-	    (struct bc_load_piece){owned, b->ptr, b->len, b->len, !owned};
+	p->v[p->n] = (struct bc_load_piece){owned, b->ptr, b->len, b->len};
 	if (!owned) {
 		if (!(owned = bc_malloc(b->len))) {
 			return BC_ENOMEM;

@@ -40,11 +40,12 @@ struct bc_store;
  * (handed over, not copied on the loop), small ones gathered in copies.
  * The load's task joins them. */
 struct bc_load_piece {
-	uint8_t *owned;     /* the buffer holding it, freed with it */
-	const uint8_t *ptr; /* its bytes, in owned */
+	uint8_t *owned; /* the buffer holding it, freed with it */
+	/* Its bytes, in owned: at its start for a copy (which later small
+	 * pieces may join), after the message's head in a reader's buffer. */
+	const uint8_t *ptr;
 	size_t len;
 	size_t room; /* a copy's capacity, for the small pieces that join it */
-	bool copy;   /* owned is a copy that later small pieces may join */
 };
 struct bc_load_parts {
 	bool open; /* a part with MORE came last */
