@@ -12,8 +12,12 @@
  * bisection) runs as a small resumable state machine per lane, in portable
  * C (packet.c): it says at which t it needs the field next, the kernel
  * evaluates every lane's request, and each lane consumes its own value.
- * Nothing crosses lanes, so a pixel's value does not depend on which other
- * pixels share its packet.
+ * The commonest transitions -- a ray's first value, an ordinary marching
+ * step, a bisection's next halving -- the kernel takes itself, lane-wise
+ * with the same float operations, so that such a lane does not leave the
+ * vector registers between samples (bc__pk_march_fn). Nothing crosses
+ * lanes, so a pixel's value does not depend on which other pixels share
+ * its packet.
  */
 #ifndef BLOBCAST_RENDER_CPU_PACKET_H
 #define BLOBCAST_RENDER_CPU_PACKET_H
@@ -57,6 +61,21 @@ struct bc__pk_lanes {
 	_Alignas(64) float mt1[BC_PK_MAX_LANES];
 	_Alignas(64) float mevals[BC_PK_MAX_LANES];
 	_Alignas(64) float mbudget[BC_PK_MAX_LANES];
+	/* Bisecting lanes (bc__pk_march_fn's `bisect`): bc__pk_ray's
+	 * bracket a, fa, b, fb and its iteration count i, their t[] being
+	 * the midpoint asked; mevals and mbudget as for marching lanes. */
+	_Alignas(64) float ba[BC_PK_MAX_LANES];
+	_Alignas(64) float bfa[BC_PK_MAX_LANES];
+	_Alignas(64) float bb[BC_PK_MAX_LANES];
+	_Alignas(64) float bfb[BC_PK_MAX_LANES];
+	_Alignas(64) float bi[BC_PK_MAX_LANES];
+};
+
+/* The frame's constants a kernel's steps use: the hit epsilon's terms
+ * (BC_CPU_HIT_FOOTPRINT * pix_angle, min_step) and the bisection's end
+ * (refine_tol), bc__frame_ctx's. */
+struct bc__pk_steps {
+	float eps_per_t, min_step, refine_tol;
 };
 
 /* Evaluates view v (not empty) of lin for the lanes whose bit is set in
@@ -65,20 +84,25 @@ typedef void (*bc__pk_eval_fn)(const struct bc_view *v,
                                const struct bc_lin *lin,
                                struct bc__pk_lanes *ln, uint32_t active);
 
-/* Evaluates as bc__pk_eval_fn, then takes the next step of every lane of
- * `march` (lanes waiting at a marching step, their state in the m* arrays)
- * whose step is ordinary (the relaxed sphere held, no crossing, not within
- * the hit epsilon, not at the interval's end, another sample within
- * mbudget) as packet.c's state machine would, with the same float
- * operations: t[] is then the next step. Returns the active lanes it did
- * not step (v[] holds their field, not yet divided by the Lipschitz
- * bound). eps_per_t and min_step are the frame's hit epsilon terms
- * (BC_CPU_HIT_FOOTPRINT * pix_angle, min_step). */
+/* Evaluates as bc__pk_eval_fn, then takes the next sample of the lanes
+ * whose next sample packet.c's state machine would decide without a
+ * branch of its own, with the same float operations:
+ *  - a lane of `march` (waiting at a marching step, or for its first
+ *    value with the state that value gives it: its state in the m*
+ *    arrays) whose step is ordinary (the relaxed sphere held, no crossing,
+ *    not within the hit epsilon, not at the interval's end);
+ *  - a lane of `bisect` (waiting at a bisection's midpoint, its bracket in
+ *    the b* arrays) whose bisection goes on (fewer than 40 halvings, the
+ *    bracket wider than refine_tol, its midpoint strictly inside);
+ * in both cases only with another sample within mbudget. t[] is then the
+ * next sample. Returns the active lanes it did not step (v[] holds their
+ * field, not yet divided by the Lipschitz bound); their m* and b* state
+ * is as it was. No lane is in both march and bisect. */
 typedef uint32_t (*bc__pk_march_fn)(const struct bc_view *v,
                                     const struct bc_lin *lin,
                                     struct bc__pk_lanes *ln, uint32_t active,
-                                    uint32_t march, float eps_per_t,
-                                    float min_step);
+                                    uint32_t march, uint32_t bisect,
+                                    const struct bc__pk_steps *st);
 
 struct bc__pk_kernel {
 	bc__pk_march_fn march;  /* NULL: trace one ray at a time (scalar) */
@@ -93,12 +117,14 @@ struct bc__pk_kernel bc__pk_kernel_for(enum bc_simd simd);
 #if defined(BLOBCAST_SIMD_X86)
 uint32_t bc__pk_march_avx2(const struct bc_view *v, const struct bc_lin *lin,
                            struct bc__pk_lanes *ln, uint32_t active,
-                           uint32_t march, float eps_per_t, float min_step);
+                           uint32_t march, uint32_t bisect,
+                           const struct bc__pk_steps *st);
 void bc__pk_eval_id_avx2(const struct bc_view *v, const struct bc_lin *lin,
                          struct bc__pk_lanes *ln, uint32_t active);
 uint32_t bc__pk_march_avx512(const struct bc_view *v, const struct bc_lin *lin,
                              struct bc__pk_lanes *ln, uint32_t active,
-                             uint32_t march, float eps_per_t, float min_step);
+                             uint32_t march, uint32_t bisect,
+                             const struct bc__pk_steps *st);
 void bc__pk_eval_id_avx512(const struct bc_view *v, const struct bc_lin *lin,
                            struct bc__pk_lanes *ln, uint32_t active);
 #endif
@@ -126,8 +152,13 @@ bool bc__pk_ray_start(struct bc__pk_ray *r, const struct bc__frame_ctx *fc,
 bool bc__pk_ray_feed(struct bc__pk_ray *r, const struct bc__frame_ctx *fc,
                      float value);
 
-/* The state that waits for the value at a marching step: such lanes may
- * take their ordinary steps in the kernel (bc__pk_march_fn). */
+/* The states that wait for the value at the start (t0), at a marching
+ * step (relaxed, or plain after a failed relaxed one) and at a
+ * bisection's midpoint: such lanes may take their next samples in the
+ * kernel (bc__pk_march_fn). */
+#define BC__PK_INIT 1
 #define BC__PK_STEP 2
+#define BC__PK_STEP2 3
+#define BC__PK_BISECT 5
 
 #endif

@@ -317,30 +317,76 @@ run(const struct bc_view *v, const struct bc_lin *lin, struct bc__pk_lanes *ln,
 	}
 }
 
+/* packet.c's bisect_head after a midpoint's value vn, for the lanes of
+ * `lanes`: the bracket's side the value falls on is replaced (an ordered
+ * test, so NaN moves a, as there), and the lanes whose bisection goes on
+ * within their budget take their next midpoint. Returns those lanes. */
+static inline uint32_t bisect_lanes(struct bc__pk_lanes *ln, uint32_t lanes,
+                                    vf vn, float refine_tol)
+{
+	vf q = vload(ln->t), a = vload(ln->ba), fa = vload(ln->bfa),
+	   b = vload(ln->bb), fb = vload(ln->bfb), i, m, evals;
+	vm neg = vlt(vn, vset1(0.0f)), go;
+	uint32_t go_bits;
+	a = vsel(neg, a, q);
+	fa = vsel(neg, fa, vn);
+	b = vsel(neg, q, b);
+	fb = vsel(neg, vn, fb);
+	i = vadd(vload(ln->bi), vset1(1.0f));
+	m = vmul(vset1(0.5f), vadd(a, b));
+	evals = vload(ln->mevals);
+	go = mand(
+	    mand(mfrombits(lanes),
+	         vlt(vadd(evals, vset1(1.0f)), vload(ln->mbudget))),
+	    mand(mand(vlt(i, vset1(40.0f)), vgt(vsub(b, a), vset1(refine_tol))),
+	         mand(vgt(m, a), vlt(m, b))));
+	go_bits = mtobits(go);
+	if (!go_bits) {
+		return 0;
+	}
+	vstore(ln->ba, vsel(go, a, vload(ln->ba)));
+	vstore(ln->bfa, vsel(go, fa, vload(ln->bfa)));
+	vstore(ln->bb, vsel(go, b, vload(ln->bb)));
+	vstore(ln->bfb, vsel(go, fb, vload(ln->bfb)));
+	vstore(ln->bi, vsel(go, i, vload(ln->bi)));
+	vstore(ln->t, vsel(go, m, q));
+	vstore(ln->mevals, vadd(evals, vsel(go, vset1(1.0f), vset1(0.0f))));
+	return go_bits;
+}
+
 uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
                   struct bc__pk_lanes *ln, uint32_t active, uint32_t march,
-                  float eps_per_t, float min_step)
+                  uint32_t bisect, const struct bc__pk_steps *st)
 {
 	vf zero = vset1(0.0f), vn, t, fv, tn, om, t1, eps, step, next;
 	vm fast;
-	uint32_t fast_bits;
-	run(v, lin, ln, active, false);
+	uint32_t fast_bits, bisected = 0;
 	march &= active;
-	if (!march) {
+	bisect &= active;
+	run(v, lin, ln, active, false);
+	if (!(march | bisect)) {
 		return active;
 	}
-	/* packet.c's step_check and march_head for an ordinary step (the
-	 * same expressions, in their order), lane-wise; the tree's own
-	 * Lipschitz bound (above 1 under twist and bend) divides the field
-	 * and the hit epsilon as trace.c's eval_at and bc__trace do. */
+	/* The value the state machine is fed (trace.c's eval_at): the field
+	 * over the tree's own Lipschitz bound (above 1 under twist and
+	 * bend), as bc__trace divides it. */
 	vn = vdiv(vmul(vload(ln->v), vset1(1.0f / BC_CPU_LIPSCHITZ)),
 	          vset1(lin->lip));
+	if (bisect) {
+		bisected = bisect_lanes(ln, bisect, vn, st->refine_tol);
+	}
+	if (!march) {
+		return active & ~bisected;
+	}
+	/* packet.c's step_check and march_head for an ordinary step (the
+	 * same expressions, in their order), lane-wise; the hit epsilon is
+	 * divided by the Lipschitz bound as in bc__trace. */
 	t = vload(ln->mt);
 	fv = vload(ln->mv);
 	tn = vload(ln->t);
 	om = vload(ln->momega);
 	t1 = vload(ln->mt1);
-	eps = vdiv(vmax(vmul(vset1(eps_per_t), tn), vset1(min_step)),
+	eps = vdiv(vmax(vmul(vset1(st->eps_per_t), tn), vset1(st->min_step)),
 	           vset1(lin->lip));
 	/* Not the fallback, vn >= 0 (not NaN), not within eps, not at t1,
 	 * and the next sample within the lane's budget: a lane whose bound
@@ -355,7 +401,7 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
 	                             vlt(vadd(fv, vabs(vn)), vsub(tn, t))))))));
 	fast_bits = mtobits(fast);
 	if (!fast_bits) {
-		return active;
+		return active & ~bisected;
 	}
 	step = vmax(vmul(om, vn), vmul(vset1(1.0e-6f), tn));
 	next = vmin(vadd(tn, step), t1);
@@ -366,7 +412,7 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
 	vstore(ln->t, vsel(fast, next, tn));
 	vstore(ln->mevals,
 	       vadd(vload(ln->mevals), vsel(fast, vset1(1.0f), zero)));
-	return active & ~fast_bits;
+	return active & ~(fast_bits | bisected);
 }
 
 void PK_EVAL_ID(const struct bc_view *v, const struct bc_lin *lin,

@@ -178,8 +178,8 @@ static void settle_px(const struct bc__tile_job *job,
 	px->left--;
 }
 
-/* Evaluations a marching lane may take in the kernel before the state
- * machine must see it again: what its bound leaves after `spent`, and at
+/* Evaluations a marching or bisecting lane may take in the kernel before the
+ * state machine must see it again: what its bound leaves after `spent`, and at
  * most 2^24, up to which the kernel's float count is exact. */
 static float lane_budget(const struct bc__frame_ctx *fc, uint32_t spent)
 {
@@ -207,14 +207,66 @@ static void to_lanes(const struct bc__pk_ray *r, struct bc__pk_lanes *ln,
 	ln->mbudget[i] = budget;
 }
 
+/* A ray just started (waiting for its value at t0) as a marching lane:
+ * the state its first value gives it in packet.c (t_prev = t = t0,
+ * v_prev = 0, the over-relaxed omega), so that the kernel's ordinary step
+ * from there is the one that value leads to; any other outcome (a value
+ * below zero or within the hit epsilon, t0 at t1) is the state machine's,
+ * from the start state. */
+static void start_lanes(const struct bc__pk_ray *r, struct bc__pk_lanes *ln,
+                        uint32_t i, float budget)
+{
+	ln->mt[i] = r->t0;
+	ln->mv[i] = 0.0f;
+	ln->mt_prev[i] = r->t0;
+	ln->mv_prev[i] = 0.0f;
+	ln->momega[i] = BC_CPU_OVERRELAX;
+	ln->mt1[i] = r->t1;
+	ln->mevals[i] = 0.0f;
+	ln->mbudget[i] = budget;
+}
+
+/* A lane the kernel stepped waits at an ordinary marching step (S_STEP),
+ * whichever state it entered in (the start, S_STEP, or S_STEP2 whose
+ * omega is 1). */
 static void from_lanes(struct bc__pk_ray *r, const struct bc__pk_lanes *ln,
                        uint32_t i)
 {
+	if (ln->mevals[i] > 0.0f) {
+		r->state = BC__PK_STEP;
+		r->omega = ln->momega[i];
+	}
 	r->t = ln->mt[i];
 	r->v = ln->mv[i];
 	r->t_prev = ln->mt_prev[i];
 	r->v_prev = ln->mv_prev[i];
 	r->tn = ln->t[i];
+	r->q = ln->t[i];
+	r->evals += (uint32_t)ln->mevals[i];
+}
+
+/* A bisecting lane's bracket moves between the ray and the packet's
+ * arrays the same way. */
+static void to_bisect_lanes(const struct bc__pk_ray *r, struct bc__pk_lanes *ln,
+                            uint32_t i, float budget)
+{
+	ln->ba[i] = r->a;
+	ln->bfa[i] = r->fa;
+	ln->bb[i] = r->b;
+	ln->bfb[i] = r->fb;
+	ln->bi[i] = (float)r->i;
+	ln->mevals[i] = 0.0f;
+	ln->mbudget[i] = budget;
+}
+
+static void from_bisect_lanes(struct bc__pk_ray *r,
+                              const struct bc__pk_lanes *ln, uint32_t i)
+{
+	r->a = ln->ba[i];
+	r->fa = ln->bfa[i];
+	r->b = ln->bb[i];
+	r->fb = ln->bfb[i];
+	r->i = (uint8_t)ln->bi[i];
 	r->q = ln->t[i];
 	r->evals += (uint32_t)ln->mevals[i];
 }
@@ -309,7 +361,14 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 	uint8_t queue[BC_CPU_TILE * BC_CPU_TILE];
 	uint8_t hit_px[BC_CPU_TILE * BC_CPU_TILE];
 	float hit_t[BC_CPU_TILE * BC_CPU_TILE];
-	uint32_t nq = 0, head = 0, nh = 0, active = 0, march = 0, slow;
+	uint32_t nq = 0, head = 0, nh = 0, active = 0, march = 0, bisect = 0;
+	uint32_t slow,
+	    lanes = k.lanes >= 32 ? UINT32_MAX : (1u << k.lanes) - 1u;
+	const struct bc__pk_steps st = {
+	    .eps_per_t = BC_CPU_HIT_FOOTPRINT * fc->pix_angle,
+	    .min_step = fc->min_step,
+	    .refine_tol = fc->refine_tol,
+	};
 	struct bc__pk_lanes ln;
 	struct bc__pk_ray ray[BC_PK_MAX_LANES];
 	uint8_t lane_px[BC_PK_MAX_LANES];
@@ -336,44 +395,48 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 		ln.dx[i] = ln.dy[i] = ln.dz[i] = 0.0f;
 	}
 	for (;;) {
-		/* Free lanes take the next pixels, in queue order. */
-		for (uint32_t i = 0; i < k.lanes && head < nq; i++) {
-			while (!((active >> i) & 1u) && head < nq) {
-				uint32_t p = queue[head++];
-				uint32_t x = job->x0 + p % BC_CPU_TILE;
-				uint32_t y = job->y0 + p / BC_CPU_TILE;
-				const float *d =
-				    job->dirs + 3 * ((size_t)y * w + x);
-				if (bc__pk_ray_start(&ray[i], fc, z_begin,
-				                     z_end)) {
-					/* An empty interval: a miss. */
-					px->has_pending[p] = false;
-					continue;
-				}
-				if (!within(fc, px->evals[p], 1)) {
-					cut(px, p);
-					continue;
-				}
-				lane_px[i] = (uint8_t)p;
-				ln.dx[i] = d[0];
-				ln.dy[i] = d[1];
-				ln.dz[i] = d[2];
-				ln.t[i] = ray[i].q;
-				active |= 1u << i;
+		/* Free lanes, lowest first, take the next pixels, in queue
+		 * order; a new ray's first value is a marching one. */
+		for (uint32_t free = lanes & ~active; free && head < nq;) {
+			uint32_t i = lowest_bit(free), p = queue[head++];
+			uint32_t x = job->x0 + p % BC_CPU_TILE;
+			uint32_t y = job->y0 + p / BC_CPU_TILE;
+			const float *d = job->dirs + 3 * ((size_t)y * w + x);
+			if (bc__pk_ray_start(&ray[i], fc, z_begin, z_end)) {
+				/* An empty interval: a miss. */
+				px->has_pending[p] = false;
+				continue;
 			}
+			if (!within(fc, px->evals[p], 1)) {
+				cut(px, p);
+				continue;
+			}
+			lane_px[i] = (uint8_t)p;
+			ln.dx[i] = d[0];
+			ln.dy[i] = d[1];
+			ln.dz[i] = d[2];
+			ln.t[i] = ray[i].q;
+			start_lanes(&ray[i], &ln, i,
+			            lane_budget(fc, px->evals[p]));
+			active |= 1u << i;
+			march |= 1u << i;
+			free &= free - 1u;
 		}
 		if (!active) {
 			break;
 		}
-		slow =
-		    k.march(&wk->view, fc->lin, &ln, active, march,
-		            BC_CPU_HIT_FOOTPRINT * fc->pix_angle, fc->min_step);
+		slow = k.march(&wk->view, fc->lin, &ln, active, march, bisect,
+		               &st);
 		for (uint32_t bits = slow; bits; bits &= bits - 1) {
 			uint32_t i = lowest_bit(bits), p;
 			struct bc__pk_ray *r = &ray[i];
 			if ((march >> i) & 1u) {
 				from_lanes(r, &ln, i);
+			} else if ((bisect >> i) & 1u) {
+				from_bisect_lanes(r, &ln, i);
 			}
+			march &= ~(1u << i);
+			bisect &= ~(1u << i);
 			/* trace.c's eval_at: the field over the bounds. */
 			p = lane_px[i];
 			if (!bc__pk_ray_feed(r, fc,
@@ -383,26 +446,28 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 				uint32_t spent = px->evals[p] + r->evals;
 				if (within(fc, spent, 1)) {
 					ln.t[i] = r->q;
-					if (r->state == BC__PK_STEP) {
+					if (r->state == BC__PK_STEP ||
+					    r->state == BC__PK_STEP2) {
 						to_lanes(
 						    r, &ln, i,
 						    lane_budget(fc, spent));
 						march |= 1u << i;
-					} else {
-						march &= ~(1u << i);
+					} else if (r->state == BC__PK_BISECT) {
+						to_bisect_lanes(
+						    r, &ln, i,
+						    lane_budget(fc, spent));
+						bisect |= 1u << i;
 					}
 					continue;
 				}
 				/* The bound stops the ray where the scalar
 				 * tracer's eval_at would. */
-				march &= ~(1u << i);
 				active &= ~(1u << i);
 				px->evals[p] = spent;
 				wk->evals += r->evals;
 				cut(px, p);
 				continue;
 			}
-			march &= ~(1u << i);
 			active &= ~(1u << i);
 			px->evals[p] += r->evals;
 			wk->evals += r->evals;

@@ -23,6 +23,7 @@
 #include "test.h"
 
 #include "../../render/cpu/abuffer.h"
+#include "../../render/cpu/packet.h"
 #include "blobtree/randtree.h"
 #include "compare.h"
 #include "scenes.h"
@@ -488,6 +489,241 @@ static void test_abuffer_abv_kernel_matches_scalar(void)
 	CHECK(hits > 4000);
 }
 
+/* ---- The kernel's own steps against the state machine ------------------ */
+
+/* Lane kinds of test_kernel_steps_match_state_machine: a ray waiting for
+ * its first value, at a relaxed marching step, at a plain one after a
+ * failed relaxed step, at a bisection's midpoint. */
+enum { K_START, K_STEP, K_STEP2, K_BISECT, K_KINDS };
+
+/* Ray i of the kernel steps test, made by feeding the state machine the
+ * values it asks for (the field of the one-sphere tree, or made up to
+ * steer it); false when it did not reach kind's state. */
+static bool steer_ray(struct bc__pk_ray *r, const struct bc__frame_ctx *fc,
+                      int kind, float ts, uint64_t *state)
+{
+	float t0 = ts - 1.5f * fabsf(ab_rand(state)), t1;
+	if (t0 < 0.0f || ab_rand(state) > 0.8f) {
+		t0 = ts + 0.05f * ab_rand(state); /* at the surface */
+	}
+	t1 = ab_rand(state) > 0.9f ? t0 : t0 + 3.0f * fabsf(ab_rand(state));
+	if (bc__pk_ray_start(r, fc, t0, t1)) {
+		return false;
+	}
+	if (kind == K_START) {
+		return true;
+	}
+	/* A positive first value that steps past the surface. */
+	if (bc__pk_ray_feed(r, fc,
+	                    (ts - t0 + 0.2f * fabsf(ab_rand(state))) / 1.7f) ||
+	    r->state != BC__PK_STEP) {
+		return false;
+	}
+	if (kind == K_STEP) {
+		return true;
+	}
+	if (kind == K_STEP2) {
+		/* Too small for the relaxed step taken. */
+		return !bc__pk_ray_feed(r, fc, 0.01f * r->v) &&
+		       r->state == BC__PK_STEP2;
+	}
+	if (bc__pk_ray_feed(r, fc, -0.5f * fabsf(ab_rand(state))) ||
+	    r->state != BC__PK_BISECT) {
+		return false;
+	}
+	if (ab_rand(state) > 0.6f) {
+		r->i = ab_rand(state) > 0.0f ? 39 : 38; /* near the limit */
+	}
+	return true;
+}
+
+/* The packet kernels take a ray's first value, its ordinary marching
+ * steps and its bisection's halvings themselves (packet.h). Lane by lane,
+ * what a kernel did must be what the state machine (packet.c) does with
+ * the same value, bit for bit: a lane it stepped holds the state the
+ * machine reaches and asks for the same next sample; a lane it left is
+ * untouched, and is one the machine ends or moves to another kind of
+ * state (or that had no sample left in its budget). Rays of a unit sphere
+ * seen from z = -5, in every kind of state, at every budget. */
+static void test_kernel_steps_match_state_machine(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_prim_data sp;
+	struct bc_errinfo ei = {0};
+	struct bc_frame f = {0};
+	struct bc_camera cam;
+	struct bc__frame_ctx fc;
+	struct bc_view view;
+	const struct bc_lin *l;
+	const uint32_t act[1] = {0};
+	const float eye[3] = {0.0f, 0.0f, -5.0f};
+	uint32_t widths = 0;
+	REQUIRE(t != NULL);
+	sc_sphere(&sp, 0.0f, 0.0f, 0.0f, 1.0f);
+	REQUIRE(bc_tree_begin(t) == 0 &&
+	        bc_tree_put_prim(t, 0, &sp, &ei) == 0 &&
+	        bc_tree_end(t, &ei) == 0);
+	l = bc_tree_lin(t);
+	REQUIRE(l != NULL);
+	sc_frame(l, &cam);
+	REQUIRE(bc_frame_init(&f, 64, 64) == 0);
+	bc__frame_setup(&fc, l, &cam, &f, BC_DEBUG_NONE);
+	bc_view_init(&view);
+	REQUIRE(bc_view_build(&view, l, act, 1) == 0);
+	for (size_t m = 1; m < NMODES; m++) {
+		struct bc__pk_kernel k = bc__pk_kernel_for(modes[m].simd);
+		const struct bc__pk_steps st = {BC_CPU_HIT_FOOTPRINT *
+		                                    fc.pix_angle,
+		                                fc.min_step, fc.refine_tol};
+		uint32_t stepped[K_KINDS] = {0}, left[K_KINDS] = {0};
+		uint64_t state = 99 + m;
+		if (!k.march) {
+			continue;
+		}
+		widths++;
+		for (int trial = 0; trial < 3000; trial++) {
+			struct bc__pk_lanes ln, before;
+			struct bc__pk_ray ray[BC_PK_MAX_LANES];
+			int kind[BC_PK_MAX_LANES];
+			float budget[BC_PK_MAX_LANES];
+			uint32_t active = 0, march = 0, bisect = 0, slow;
+			memset(&ln, 0, sizeof(ln));
+			for (uint32_t i = 0; i < k.lanes; i++) {
+				float d[3] = {0.3f * ab_rand(&state),
+				              0.3f * ab_rand(&state), 1.0f};
+				float b, disc, ts;
+				struct bc__pk_ray *r = &ray[i];
+				ab_unit(d);
+				/* Where the ray meets the sphere, or its
+				 * closest approach. */
+				b = eye[0] * d[0] + eye[1] * d[1] +
+				    eye[2] * d[2];
+				disc = b * b - (25.0f - 1.0f);
+				ts = disc > 0.0f ? -b - sqrtf(disc) : -b;
+				kind[i] =
+				    (int)((ab_rand(&state) + 1.0f) * 2.0f) %
+				    K_KINDS;
+				budget[i] =
+				    ab_rand(&state) > 0.8f
+				        ? (ab_rand(&state) > 0.0f ? 1.0f : 2.0f)
+				        : 1e6f;
+				if (!steer_ray(r, &fc, kind[i], ts, &state)) {
+					continue;
+				}
+				ln.ox[i] = eye[0];
+				ln.oy[i] = eye[1];
+				ln.oz[i] = eye[2];
+				ln.dx[i] = d[0];
+				ln.dy[i] = d[1];
+				ln.dz[i] = d[2];
+				ln.t[i] = r->q;
+				ln.mevals[i] = 0.0f;
+				ln.mbudget[i] = budget[i];
+				if (kind[i] == K_BISECT) {
+					ln.ba[i] = r->a;
+					ln.bfa[i] = r->fa;
+					ln.bb[i] = r->b;
+					ln.bfb[i] = r->fb;
+					ln.bi[i] = (float)r->i;
+					bisect |= 1u << i;
+				} else {
+					/* The start lane holds the state its
+					 * first value gives (tile_trace.c). */
+					bool st0 = kind[i] == K_START;
+					ln.mt[i] = st0 ? r->t0 : r->t;
+					ln.mv[i] = st0 ? 0.0f : r->v;
+					ln.mt_prev[i] = st0 ? r->t0 : r->t_prev;
+					ln.mv_prev[i] = st0 ? 0.0f : r->v_prev;
+					ln.momega[i] =
+					    st0 ? BC_CPU_OVERRELAX : r->omega;
+					ln.mt1[i] = r->t1;
+					march |= 1u << i;
+				}
+				active |= 1u << i;
+			}
+			before = ln;
+			slow =
+			    k.march(&view, l, &ln, active, march, bisect, &st);
+			CHECK((slow & ~active) == 0);
+			for (uint32_t i = 0; i < k.lanes; i++) {
+				struct bc__pk_ray ref = ray[i];
+				float value = ln.v[i] *
+				              (1.0f / BC_CPU_LIPSCHITZ) /
+				              l->lip;
+				bool done;
+				if (!((active >> i) & 1u)) {
+					continue;
+				}
+				done = bc__pk_ray_feed(&ref, &fc, value);
+				if ((slow >> i) & 1u) {
+					left[kind[i]]++;
+					/* Untouched, and not a step the kernel
+					 * should have taken. */
+					CHECK(memcmp(&ln.t[i], &before.t[i],
+					             4) == 0);
+					CHECK(memcmp(&ln.mt[i], &before.mt[i],
+					             4) == 0);
+					CHECK(memcmp(&ln.mv[i], &before.mv[i],
+					             4) == 0);
+					CHECK(memcmp(&ln.ba[i], &before.ba[i],
+					             4) == 0);
+					CHECK(memcmp(&ln.bb[i], &before.bb[i],
+					             4) == 0);
+					CHECK(ln.mevals[i] == 0.0f);
+					CHECK(done || budget[i] < 2.5f ||
+					      ref.state != (kind[i] == K_BISECT
+					                        ? BC__PK_BISECT
+					                        : BC__PK_STEP));
+					continue;
+				}
+				stepped[kind[i]]++;
+				CHECK(!done);
+				CHECK(budget[i] >= 2.0f);
+				CHECK(ln.mevals[i] == 1.0f);
+				CHECK(memcmp(&ln.t[i], &ref.q, 4) == 0);
+				if (kind[i] == K_BISECT) {
+					CHECK(ref.state == BC__PK_BISECT);
+					CHECK(memcmp(&ln.ba[i], &ref.a, 4) ==
+					      0);
+					CHECK(memcmp(&ln.bfa[i], &ref.fa, 4) ==
+					      0);
+					CHECK(memcmp(&ln.bb[i], &ref.b, 4) ==
+					      0);
+					CHECK(memcmp(&ln.bfb[i], &ref.fb, 4) ==
+					      0);
+					CHECK(ln.bi[i] == (float)ref.i);
+				} else {
+					CHECK(ref.state == BC__PK_STEP);
+					CHECK(memcmp(&ln.mt[i], &ref.t, 4) ==
+					      0);
+					CHECK(memcmp(&ln.mv[i], &ref.v, 4) ==
+					      0);
+					CHECK(memcmp(&ln.mt_prev[i],
+					             &ref.t_prev, 4) == 0);
+					CHECK(memcmp(&ln.mv_prev[i],
+					             &ref.v_prev, 4) == 0);
+					CHECK(ln.momega[i] == ref.omega);
+				}
+			}
+		}
+		printf("  %-6s stepped / left: start %u / %u, step %u / %u, "
+		       "step2 %u / %u, bisect %u / %u\n",
+		       modes[m].name, stepped[K_START], left[K_START],
+		       stepped[K_STEP], left[K_STEP], stepped[K_STEP2],
+		       left[K_STEP2], stepped[K_BISECT], left[K_BISECT]);
+		/* Every kind was met both ways. */
+		for (int kd = 0; kd < K_KINDS; kd++) {
+			CHECK(stepped[kd] > 100 && left[kd] > 100);
+		}
+	}
+	if (widths == 0) {
+		printf("  no packet kernel on this CPU: nothing to compare\n");
+	}
+	bc_view_finish(&view);
+	bc_frame_finish(&f);
+	bc_tree_destroy(t);
+}
+
 static const struct bc_test tests[] = {
     {"simd_matches_scalar_unary_nodes", test_simd_matches_scalar_unary_nodes},
     {"simd_matches_scalar_fig18", test_simd_matches_scalar_fig18},
@@ -498,6 +734,7 @@ static const struct bc_test tests[] = {
     {"region_equals_whole_with_simd", test_region_equals_whole_with_simd},
     {"abuffer_abv_kernel_matches_scalar",
      test_abuffer_abv_kernel_matches_scalar},
+    {"kernel_steps_match_state_machine", test_kernel_steps_match_state_machine},
     {"threads_do_not_change_simd_pixels",
      test_threads_do_not_change_simd_pixels},
 };
