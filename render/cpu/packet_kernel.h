@@ -177,22 +177,40 @@ static inline vf vblend_amount(vf f0, vf f1, vf beta)
 {
 	vf zero = vset1(0.0f);
 	vf h = vsub(vset1(1.0f), vdiv(vabs(vsub(f0, f1)), beta));
-	vf amount = vmul(vmul(vmul(vdiv(beta, vset1(6.0f)), h), h), h);
+	vf amount = vmul(vmul(vmul(vmul(beta, vset1(1.0f / 6.0f)), h), h), h);
 	return vsel(mand(vgt(beta, zero), vgt(h, zero)), amount, zero);
 }
 
-/* ops.c's transition (eq. 18): den = 6 r_o - beta > 0 was checked. */
-static inline vf vtransition(vf x, float beta, float den)
+/* The same for the operator's own beta > 0, the same in every lane:
+ * 1 / beta and beta / 6 come from the caller, so the lanes divide
+ * nothing. */
+static inline vf vblend_amount_k(vf f0, vf f1, float inv_beta, float beta_6)
 {
-	vf t = vsub(vset1(1.0f), vdiv(vmul(vset1(6.0f), x), vset1(den)));
+	vf zero = vset1(0.0f);
+	vf h = vsub(vset1(1.0f), vmul(vabs(vsub(f0, f1)), vset1(inv_beta)));
+	vf amount = vmul(vmul(vmul(vset1(beta_6), h), h), h);
+	return vsel(vgt(h, zero), amount, zero);
+}
+
+/* ops.c's transition (eq. 18): den = 6 r_o - beta > 0 was checked, and
+ * six_den is 6 / den. */
+static inline vf vtransition(vf x, float beta, float six_den)
+{
+	vf t = vsub(vset1(1.0f), vmul(x, vset1(six_den)));
 	return vsel(vgt(t, vset1(0.0f)), vmul(vset1(beta), t), vset1(0.0f));
 }
 
-/* ops.c's bc_op_eval. */
+/* ops.c's bc_op_eval. Its divisions by the operator's constants are
+ * products with their reciprocals here (a smooth operator divided five
+ * times per lane; now once, by the lane's own closing blend), which moves
+ * the value by a rounding at most: the vector field is the scalar one
+ * within the kernels' rounding, not bit for bit (test_simd). */
 static inline vf op_field(uint32_t kind, float blend, float range, vf f0, vf f1)
 {
 	float den = 6.0f * range - blend;
-	vf r = vset1(range), beta = vset1(blend);
+	float inv_beta, beta_6, six_den;
+	vf r = vset1(range), sharp, g, b;
+	vm in;
 	switch (kind) {
 	case BC_OP_UNION:
 		return vmin(f0, f1);
@@ -200,39 +218,37 @@ static inline vf op_field(uint32_t kind, float blend, float range, vf f0, vf f1)
 		return vmax(f0, f1);
 	case BC_OP_DIFFERENCE:
 		return vmax(f0, vneg(f1));
-	case BC_OP_SMOOTH_UNION: {
-		vf sharp = vmin(f0, f1), g, b;
-		vm in = mand(vle(f0, r), vle(f1, r));
-		if (!(den > 0.0f)) {
-			return sharp; /* b_r is 0: G is the sharp operator */
-		}
-		g = vsub(sharp, vblend_amount(f0, f1, beta));
-		b = vtransition(g, blend, den);
-		return vsel(in, vsub(sharp, vblend_amount(f0, f1, b)), sharp);
-	}
-	case BC_OP_SMOOTH_INTERSECTION: {
-		vf sharp = vmax(f0, f1), g, b;
-		vm in = mand(vle(vabs(f0), r), vle(vabs(f1), r));
-		if (!(den > 0.0f)) {
-			return sharp;
-		}
-		g = vadd(sharp, vblend_amount(f0, f1, beta));
-		b = vtransition(vabs(g), blend, den);
-		return vsel(in, vadd(sharp, vblend_amount(f0, f1, b)), sharp);
-	}
-	case BC_OP_SMOOTH_DIFFERENCE: {
-		vf nf1 = vneg(f1), sharp = vmax(f0, nf1), g, b;
-		vm in = mand(vle(vabs(f0), r), vle(vabs(f1), r));
-		if (!(den > 0.0f)) {
-			return sharp;
-		}
-		g = vadd(sharp, vblend_amount(f0, nf1, beta));
-		b = vtransition(vabs(g), blend, den);
-		return vsel(in, vadd(sharp, vblend_amount(f0, nf1, b)), sharp);
-	}
+	case BC_OP_SMOOTH_UNION:
+	case BC_OP_SMOOTH_INTERSECTION:
+	case BC_OP_SMOOTH_DIFFERENCE:
+		break;
 	default:
 		return vset1(INFINITY);
 	}
+	if (kind == BC_OP_SMOOTH_DIFFERENCE) {
+		f1 = vneg(f1);
+	}
+	sharp = kind == BC_OP_SMOOTH_UNION ? vmin(f0, f1) : vmax(f0, f1);
+	if (!(den > 0.0f) || !(blend > 0.0f)) {
+		/* b_r is 0, or no blend to close: G is the sharp operator
+		 * (ops.c's blend_amount is 0 for beta <= 0). */
+		return sharp;
+	}
+	inv_beta = 1.0f / blend;
+	beta_6 = blend / 6.0f;
+	six_den = 6.0f / den;
+	if (kind == BC_OP_SMOOTH_UNION) {
+		in = mand(vle(f0, r), vle(f1, r));
+		g = vsub(sharp, vblend_amount_k(f0, f1, inv_beta, beta_6));
+		b = vtransition(g, blend, six_den);
+		return vsel(in, vsub(sharp, vblend_amount(f0, f1, b)), sharp);
+	}
+	/* Intersection, and difference as the intersection with -f1: ops.c
+	 * tests |f1| against the range, the same for -f1. */
+	in = mand(vle(vabs(f0), r), vle(vabs(f1), r));
+	g = vadd(sharp, vblend_amount_k(f0, f1, inv_beta, beta_6));
+	b = vtransition(vabs(g), blend, six_den);
+	return vsel(in, vadd(sharp, vblend_amount(f0, f1, b)), sharp);
 }
 
 /* ops.c's follows_right: where the operator's value follows f1. */
