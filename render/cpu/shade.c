@@ -62,6 +62,42 @@ void bc__put_miss(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
 	}
 }
 
+void bc__put_miss_row(const struct bc__frame_ctx *fc, uint32_t x0, uint32_t y,
+                      uint64_t bits, uint32_t overlaps)
+{
+	struct bc_frame *out = fc->out;
+	size_t row = (size_t)y * out->width + x0;
+	uint8_t c[4];
+	if (fc->debug != BC_DEBUG_NONE) {
+		debug_colour(fc, 0, overlaps, c);
+	} else {
+		bc_shade_miss(bc_frame_view_row(out, y),
+		              bc_frame_view_height(out), c);
+	}
+	for (; bits; bits &= bits - 1u) {
+		size_t i = row + (size_t)__builtin_ctzll(bits);
+		memcpy(out->rgba + 4 * i, c, sizeof(c));
+		if (out->depth) {
+			out->depth[i] = INFINITY;
+		}
+		if (out->ids) {
+			out->ids[i] = 0;
+		}
+	}
+}
+
+void bc__put_miss_tile(const struct bc__frame_ctx *fc, uint32_t x0, uint32_t y0,
+                       uint32_t x1, uint32_t y1, uint64_t mask)
+{
+	uint64_t row = (1ull << (x1 - x0)) - 1u;
+	for (uint32_t y = y0; y < y1; y++) {
+		uint64_t bits = (mask >> ((y - y0) * BC_CPU_TILE)) & row;
+		if (bits) {
+			bc__put_miss_row(fc, x0, y, bits, 0);
+		}
+	}
+}
+
 void bc__put_hit(const struct bc__frame_ctx *fc, struct bc__field *f,
                  uint32_t x, uint32_t y, const float d[3], float t,
                  uint32_t overlaps)

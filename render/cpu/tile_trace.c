@@ -503,6 +503,12 @@ uint64_t bc__trace_tile(struct bc__tile_worker *wk,
 	uint32_t na = 0, next = 0;
 	float z_end = 0.0f;
 	wk->tile_view_state = 0; /* built again for this tile's list */
+	if (n == 0) {
+		/* Nothing listed (most of a frame's background): every
+		 * asked pixel misses without a sample. */
+		bc__put_miss_tile(fc, x0, y0, x1, y1, job->mask);
+		return 0;
+	}
 	px.left = 0;
 	px.cut = 0;
 	for (uint32_t p = 0; p < BC_CPU_TILE * BC_CPU_TILE; p++) {

@@ -868,14 +868,9 @@ static void skip_tile(struct tiled_frame *tf, uint32_t tx, uint32_t ty,
 	const struct bc__frame_ctx *fc = tf->fc;
 	uint32_t w = fc->out->width, h = fc->out->height;
 	uint32_t x0 = tx * BC_CPU_TILE, y0 = ty * BC_CPU_TILE;
-	for (uint32_t y = y0; y < y0 + BC_CPU_TILE && y < h; y++) {
-		for (uint32_t x = x0; x < x0 + BC_CPU_TILE && x < w; x++) {
-			if ((mask >> ((y - y0) * BC_CPU_TILE + (x - x0))) &
-			    1u) {
-				bc__put_miss(fc, x, y, 0, 0);
-			}
-		}
-	}
+	bc__put_miss_tile(fc, x0, y0,
+	                  x0 + BC_CPU_TILE < w ? x0 + BC_CPU_TILE : w,
+	                  y0 + BC_CPU_TILE < h ? y0 + BC_CPU_TILE : h, mask);
 	atomic_fetch_add(&tf->skipped, 1u);
 }
 
