@@ -5,7 +5,7 @@
  *   vf, vm            float vector of PK_LANES lanes, lane mask
  *   vset1 vload vstore vadd vsub vmul vdiv vfma(a, b, c) = a * b + c
  *   vmin vmax         a < b ? a : b and a > b ? a : b, as bc__minf/maxf
- *   vsqrt vabs vneg
+ *   vsqrt vabs vneg vfloor (floorf)
  *   vlt vle vgt       ordered comparisons (false on NaN)
  *   vge               ordered a >= b
  *   mand mnot mfrombits(bits) mtobits(m)
@@ -77,38 +77,112 @@ static vf scalar_sdf(uint32_t kind, const float *k, vf x, vf y, vf z,
 	return vload(out);
 }
 
+/* blobtree's bc_domain_apply for one domain node over the lanes: the same
+ * operations in the same order, lane-wise; twist and bend (a sine and a
+ * cosine per point) lane by lane. */
+static void domain_node(uint32_t kind, const float *rec, vf *px, vf *py, vf *pz,
+                        uint32_t active)
+{
+	vf *p[3] = {px, py, pz};
+	switch (kind) {
+	case BC_OP_ELONGATE:
+		for (int i = 0; i < 3; i++) {
+			*p[i] = vsub(*p[i], vmin(vmax(*p[i], vset1(-rec[i])),
+			                         vset1(rec[i])));
+		}
+		return;
+	case BC_OP_MIRROR: {
+		uint32_t mask = (uint32_t)rec[0];
+		for (int i = 0; i < 3; i++) {
+			if (mask & (1u << i)) {
+				*p[i] = vabs(*p[i]);
+			}
+		}
+		return;
+	}
+	case BC_OP_REPEAT:
+		for (int i = 0; i < 3; i++) {
+			float n = rec[3 + i], o;
+			vf id;
+			if (!(n > 1.0f)) {
+				continue;
+			}
+			o = 0.5f * (n - 1.0f);
+			id = vfloor(
+			    vadd(vadd(vdiv(*p[i], vset1(rec[i])), vset1(o)),
+			         vset1(0.5f)));
+			id = vmin(vmax(id, vset1(0.0f)), vset1(n - 1.0f));
+			*p[i] = vsub(*p[i],
+			             vmul(vset1(rec[i]), vsub(id, vset1(o))));
+		}
+		return;
+	case BC_OP_SCALE:
+		for (int i = 0; i < 3; i++) {
+			*p[i] = vmul(*p[i], vset1(rec[1]));
+		}
+		return;
+	default: {
+		_Alignas(64) float xs[PK_LANES], ys[PK_LANES], zs[PK_LANES];
+		vstore(xs, *px);
+		vstore(ys, *py);
+		vstore(zs, *pz);
+		for (uint32_t i = 0; i < PK_LANES; i++) {
+			if ((active >> i) & 1u) {
+				float q[3] = {xs[i], ys[i], zs[i]};
+				bc_domain_apply(kind, rec, q);
+				xs[i] = q[0];
+				ys[i] = q[1];
+				zs[i] = q[2];
+			}
+		}
+		*px = vload(xs);
+		*py = vload(ys);
+		*pz = vload(zs);
+		return;
+	}
+	}
+}
+
 /* The points (px, py, pz) mapped through the domain nodes from d (a unary
- * index, blobtree's bc_domain_map) lane by lane: the maps (twist's and
- * bend's rotations, repeat's cells) have no vector form here. */
+ * index) outward, outermost first: blobtree's bc_domain_map. */
 static void domain_lanes(const struct bc_lin *lin, uint32_t d, vf *px, vf *py,
                          vf *pz, uint32_t active)
 {
-	_Alignas(64) float xs[PK_LANES], ys[PK_LANES], zs[PK_LANES];
-	vstore(xs, *px);
-	vstore(ys, *py);
-	vstore(zs, *pz);
-	for (uint32_t i = 0; i < PK_LANES; i++) {
-		if ((active >> i) & 1u) {
-			const float p[3] = {xs[i], ys[i], zs[i]};
-			float q[3];
-			bc_domain_map(lin, d, p, q);
-			xs[i] = q[0];
-			ys[i] = q[1];
-			zs[i] = q[2];
-		}
+	uint32_t chain[BC_DOMAIN_MAX_CHAIN];
+	uint32_t n = 0;
+	for (; d != BC_NONE && n < BC_DOMAIN_MAX_CHAIN; d = lin->unary_dom[d]) {
+		chain[n++] = d;
 	}
-	*px = vload(xs);
-	*py = vload(ys);
-	*pz = vload(zs);
+	while (n-- > 0) {
+		uint32_t u = chain[n];
+		domain_node(lin->unary_kind[u],
+		            lin->param + 4u * (size_t)lin->unary_param[u], px,
+		            py, pz, active);
+	}
 }
 
-/* Unary node u's value map of f at the world points, lane by lane
- * (blobtree's bc_unary_value). */
+/* Unary node u's value map of f at the world points (blobtree's
+ * bc_unary_value): offset, onion and scale over the lanes, twist and bend
+ * (the distance from their axis in their own domain) lane by lane. */
 static vf unary_lanes(const struct bc_lin *lin, uint32_t u, vf f, vf px, vf py,
                       vf pz, uint32_t active)
 {
+	const float *rec = lin->param + 4u * (size_t)lin->unary_param[u];
 	_Alignas(64) float xs[PK_LANES], ys[PK_LANES], zs[PK_LANES],
 	    fs[PK_LANES];
+	switch (lin->unary_kind[u]) {
+	case BC_OP_OFFSET:
+		return vsub(f, vset1(rec[0]));
+	case BC_OP_ONION:
+		return vsub(vabs(f), vset1(rec[0]));
+	case BC_OP_SCALE:
+		return vmul(f, vset1(rec[0]));
+	case BC_OP_TWIST:
+	case BC_OP_BEND:
+		break;
+	default:
+		return f;
+	}
 	vstore(xs, px);
 	vstore(ys, py);
 	vstore(zs, pz);

@@ -25,6 +25,11 @@ static inline void vstore(float *p, vf a)
 {
 	_mm256_store_ps(p, a);
 }
+/* Rounded down to an integer (floorf). */
+static inline vf vfloor(vf a)
+{
+	return _mm256_floor_ps(a);
+}
 static inline vf vadd(vf a, vf b)
 {
 	return _mm256_add_ps(a, b);

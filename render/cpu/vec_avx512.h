@@ -25,6 +25,12 @@ static inline void vstore(float *p, vf a)
 {
 	_mm512_store_ps(p, a);
 }
+/* Rounded down to an integer (floorf). */
+static inline vf vfloor(vf a)
+{
+	return _mm512_roundscale_ps(a,
+	                            _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+}
 static inline vf vadd(vf a, vf b)
 {
 	return _mm512_add_ps(a, b);
