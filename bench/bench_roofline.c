@@ -33,6 +33,7 @@
 #include <time.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/args.h"
 #include "blobcast/blobtree.h"
 #include "blobcast/gen.h"
 #include "blobcast/render.h"
@@ -360,19 +361,31 @@ int main(int argc, char **argv)
 	     {.level = 3, .blend = BC_GEN_BLEND_SMOOTH}},
 	};
 	struct bc__pk_kernel k = bc__pk_kernel_for(BC_SIMD_AUTO);
-	int reps = 5;
+	uint32_t nreps = 5;
+	int reps;
 	double peak;
-	for (int i = 1; i < argc; i++) {
-		if (strcmp(argv[i], "--reps") == 0 && i + 1 < argc) {
-			reps = atoi(argv[++i]);
-		} else {
-			fprintf(stderr, "usage: bench_roofline [--reps R]\n");
-			return 2;
-		}
+	const struct bc_opt opts_table[] = {
+	    {.name = "reps",
+	     .kind = BC_OPT_U32,
+	     .dst = &nreps,
+	     .lo = 1,
+	     .hi = 1000,
+	     .arg = "R",
+	     .help = "timed repetitions of each rate, the best kept (default "
+	             "{default})"},
+	    {.kind = BC_OPT_INVALID},
+	};
+	struct bc_args args = {.prog = "bench_roofline",
+	                       .usage = "bench_roofline [options]",
+	                       .opts = opts_table};
+	if (bc_args_parse(&args, argc, argv)) {
+		return args.status;
 	}
-	if (reps < 1) {
-		reps = 1;
+	if (args.npos) {
+		return bc_args_error(&args, "unexpected argument '%s'",
+		                     args.pos[0]);
 	}
+	reps = (int)nreps;
 	if (!k.march) {
 		printf("no packet kernel on this CPU (the scalar path): "
 		       "nothing to measure\n");
