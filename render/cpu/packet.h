@@ -13,7 +13,8 @@
  * C (packet.c): it says at which t it needs the field next, the kernel
  * evaluates every lane's request, and each lane consumes its own value.
  * The commonest transitions -- a ray's first value, an ordinary marching
- * step, a bisection's next halving -- the kernel takes itself, lane-wise
+ * step, the plain step after an overshot relaxed one, a bisection's next
+ * halving -- the kernel takes itself, lane-wise
  * with the same float operations, so that such a lane does not leave the
  * vector registers between samples (bc__pk_march_fn). Nothing crosses
  * lanes, so a pixel's value does not depend on which other pixels share
@@ -90,7 +91,8 @@ typedef void (*bc__pk_eval_fn)(const struct bc_view *v,
  *  - a lane of `march` (waiting at a marching step, or for its first
  *    value with the state that value gives it: its state in the m*
  *    arrays) whose step is ordinary (the relaxed sphere held, no crossing,
- *    not within the hit epsilon, not at the interval's end);
+ *    not within the hit epsilon, not at the interval's end), or whose
+ *    relaxed step overshot (then the plain step from t, omega 1);
  *  - a lane of `bisect` (waiting at a bisection's midpoint, its bracket in
  *    the b* arrays) whose bisection goes on (fewer than 40 halvings, the
  *    bracket wider than refine_tol, its midpoint strictly inside);

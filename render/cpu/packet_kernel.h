@@ -448,9 +448,9 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
                   struct bc__pk_lanes *ln, uint32_t active, uint32_t march,
                   uint32_t bisect, const struct bc__pk_steps *st)
 {
-	vf zero = vset1(0.0f), vn, t, fv, tn, om, t1, eps, step, next;
-	vm fast;
-	uint32_t fast_bits, bisected = 0;
+	vf zero = vset1(0.0f), vn, t, fv, tn, om, t1, eps, step, next, plain;
+	vm room, relax, fast;
+	uint32_t fast_bits, relax_bits, bisected = 0;
 	march &= active;
 	bisect &= active;
 	run(v, lin, ln, active, false);
@@ -478,31 +478,35 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
 	t1 = vload(ln->mt1);
 	eps = vdiv(vmax(vmul(vset1(st->eps_per_t), tn), vset1(st->min_step)),
 	           vset1(lin->lip));
-	/* Not the fallback, vn >= 0 (not NaN), not within eps, not at t1,
-	 * and the next sample within the lane's budget: a lane whose bound
-	 * is spent goes back to the state machine, which stops it. */
-	fast = mand(
-	    mand(mfrombits(march),
-	         vlt(vadd(vload(ln->mevals), vset1(1.0f)), vload(ln->mbudget))),
-	    mand(vge(vn, zero),
-	         mand(vge(vn, eps),
-	              mand(vlt(tn, t1),
-	                   mnot(mand(vgt(om, vset1(1.0f)),
-	                             vlt(vadd(fv, vabs(vn)), vsub(tn, t))))))));
+	/* The relaxed step overshot (packet.c's S_STEP test, before any
+	 * other): the plain step from t instead, omega 1 from now on. */
+	room = mand(mfrombits(march), vlt(vadd(vload(ln->mevals), vset1(1.0f)),
+	                                  vload(ln->mbudget)));
+	relax = mand(room, mand(vgt(om, vset1(1.0f)),
+	                        vlt(vadd(fv, vabs(vn)), vsub(tn, t))));
+	/* Else an ordinary step: vn >= 0 (not NaN), not within eps, not at
+	 * t1. A lane whose bound is spent (not in room) goes back to the
+	 * state machine, which stops it. */
+	fast = mand(mand(room, mnot(relax)),
+	            mand(vge(vn, zero), mand(vge(vn, eps), vlt(tn, t1))));
+	relax_bits = mtobits(relax);
 	fast_bits = mtobits(fast);
-	if (!fast_bits) {
+	if (!(fast_bits | relax_bits)) {
 		return active & ~bisected;
 	}
 	step = vmax(vmul(om, vn), vmul(vset1(1.0e-6f), tn));
 	next = vmin(vadd(tn, step), t1);
+	plain = vmin(vadd(t, vmax(fv, vmul(vset1(1.0e-6f), t))), t1);
 	vstore(ln->mt_prev, vsel(fast, t, vload(ln->mt_prev)));
 	vstore(ln->mv_prev, vsel(fast, fv, vload(ln->mv_prev)));
 	vstore(ln->mt, vsel(fast, tn, t));
 	vstore(ln->mv, vsel(fast, vn, fv));
-	vstore(ln->t, vsel(fast, next, tn));
+	vstore(ln->momega, vsel(relax, vset1(1.0f), om));
+	vstore(ln->t, vsel(fast, next, vsel(relax, plain, tn)));
 	vstore(ln->mevals,
-	       vadd(vload(ln->mevals), vsel(fast, vset1(1.0f), zero)));
-	return active & ~(fast_bits | bisected);
+	       vadd(vload(ln->mevals),
+	            vsel(fast, vset1(1.0f), vsel(relax, vset1(1.0f), zero))));
+	return active & ~(fast_bits | relax_bits | bisected);
 }
 
 void PK_EVAL_ID(const struct bc_view *v, const struct bc_lin *lin,
