@@ -270,12 +270,13 @@ static struct kernel_rate kernel_rate(const struct bc_lin *l, int reps)
 			}
 			t0 = cpu_ms();
 			for (uint32_t j = 0; j < rounds; j++) {
+				uint32_t none = 0; /* no lane steps */
 				ln.t[j % k.lanes] = 1e-6f * (float)j;
 				(void)k.march(&view, l, &ln,
 				              k.lanes >= 32
 				                  ? UINT32_MAX
 				                  : (1u << k.lanes) - 1u,
-				              0, 0, &st);
+				              &none, &none, &none, &st);
 			}
 			ms += cpu_ms() - t0;
 			evals += (double)rounds * k.lanes;

@@ -18,7 +18,7 @@ enum state {
 	S_STEP = BC__PK_STEP,     /* value at the step tn (packet.h) */
 	S_STEP2 = BC__PK_STEP2,   /* value at the plain step after a failed
 	                             relaxed one */
-	S_REFINE,                 /* value at the secant probe q */
+	S_REFINE = BC__PK_REFINE, /* value at the secant probe q */
 	S_BISECT = BC__PK_BISECT, /* value at the midpoint q */
 	S_GOLD_C0,                /* closest(): first value, at c */
 	S_GOLD_E0,                /* closest(): second value, at e */

@@ -12,11 +12,13 @@
  * bisection) runs as a small resumable state machine per lane, in portable
  * C (packet.c): it says at which t it needs the field next, the kernel
  * evaluates every lane's request, and each lane consumes its own value.
- * The commonest transitions -- a ray's first value, an ordinary marching
- * step, the plain step after an overshot relaxed one, a bisection's next
- * halving -- the kernel takes itself, lane-wise
- * with the same float operations, so that such a lane does not leave the
- * vector registers between samples (bc__pk_march_fn). Nothing crosses
+ * Every transition that is arithmetic alone -- a ray's first value, its
+ * marching steps, the start and the rounds of its secant refinement, the
+ * start and the halvings of its bisection -- the kernel takes itself,
+ * lane-wise with the same float operations, so that such a lane does not
+ * leave the vector registers between samples (bc__pk_march_fn); a lane
+ * comes back to the state machine when its ray ends, runs out of budget,
+ * or turns to the golden-section search. Nothing crosses
  * lanes, so a pixel's value does not depend on which other pixels share
  * its packet.
  */
@@ -70,6 +72,12 @@ struct bc__pk_lanes {
 	_Alignas(64) float bb[BC_PK_MAX_LANES];
 	_Alignas(64) float bfb[BC_PK_MAX_LANES];
 	_Alignas(64) float bi[BC_PK_MAX_LANES];
+	/* Refining lanes (bc__pk_march_fn's `refine`): bc__pk_ray's t, v,
+	 * t_prev, v_prev in mt, mv, mt_prev, mv_prev, its round i, cap and
+	 * limit here, their t[] being the probe asked. */
+	_Alignas(64) float ri[BC_PK_MAX_LANES];
+	_Alignas(64) float rcap[BC_PK_MAX_LANES];
+	_Alignas(64) float rlimit[BC_PK_MAX_LANES];
 };
 
 /* The frame's constants a kernel's steps use: the hit epsilon's terms
@@ -86,24 +94,33 @@ typedef void (*bc__pk_eval_fn)(const struct bc_view *v,
                                struct bc__pk_lanes *ln, uint32_t active);
 
 /* Evaluates as bc__pk_eval_fn, then takes the next sample of the lanes
- * whose next sample packet.c's state machine would decide without a
- * branch of its own, with the same float operations:
- *  - a lane of `march` (waiting at a marching step, or for its first
- *    value with the state that value gives it: its state in the m*
- *    arrays) whose step is ordinary (the relaxed sphere held, no crossing,
- *    not within the hit epsilon, not at the interval's end), or whose
- *    relaxed step overshot (then the plain step from t, omega 1);
- *  - a lane of `bisect` (waiting at a bisection's midpoint, its bracket in
- *    the b* arrays) whose bisection goes on (fewer than 40 halvings, the
- *    bracket wider than refine_tol, its midpoint strictly inside);
- * in both cases only with another sample within mbudget. t[] is then the
- * next sample. Returns the active lanes it did not step (v[] holds their
- * field, not yet divided by the Lipschitz bound); their m* and b* state
- * is as it was. No lane is in both march and bisect. */
+ * whose next sample packet.c's state machine would decide by arithmetic
+ * alone, with the same float operations, each lane in one of three kinds
+ * (the masks *march, *bisect, *refine; no lane in two):
+ *  - marching (waiting at a relaxed or plain step, or for its first value
+ *    with the state that value gives it: its state in the m* arrays): an
+ *    ordinary step (no crossing, not within the hit epsilon, not at the
+ *    interval's end); the plain step from t after an overshot relaxed one
+ *    (omega 1 from then on); a refinement's first probe when within the
+ *    hit epsilon (the lane turns refining); a bisection's first midpoint
+ *    after a crossing (the lane turns bisecting);
+ *  - refining (waiting at a secant probe: the m* and r* arrays): the next
+ *    probe while the value drops without crossing, fewer than 8 rounds;
+ *    a bisection's first midpoint after a crossing;
+ *  - bisecting (waiting at a midpoint: the b* arrays): the next midpoint
+ *    while fewer than 40 halvings are done, the bracket is wider than
+ *    refine_tol and its midpoint strictly inside;
+ * each only with another sample within mbudget (mevals counts the samples
+ * taken here since the state machine saw the lane, whatever its kinds).
+ * t[] is then the next sample, and the masks say each lane's kind now.
+ * Returns the active lanes it did not step (v[] holds their field, not
+ * yet divided by the Lipschitz bound); their state is as it was, in the
+ * arrays of their kind. */
 typedef uint32_t (*bc__pk_march_fn)(const struct bc_view *v,
                                     const struct bc_lin *lin,
                                     struct bc__pk_lanes *ln, uint32_t active,
-                                    uint32_t march, uint32_t bisect,
+                                    uint32_t *march, uint32_t *bisect,
+                                    uint32_t *refine,
                                     const struct bc__pk_steps *st);
 
 struct bc__pk_kernel {
@@ -119,14 +136,14 @@ struct bc__pk_kernel bc__pk_kernel_for(enum bc_simd simd);
 #if defined(BLOBCAST_SIMD_X86)
 uint32_t bc__pk_march_avx2(const struct bc_view *v, const struct bc_lin *lin,
                            struct bc__pk_lanes *ln, uint32_t active,
-                           uint32_t march, uint32_t bisect,
+                           uint32_t *march, uint32_t *bisect, uint32_t *refine,
                            const struct bc__pk_steps *st);
 void bc__pk_eval_id_avx2(const struct bc_view *v, const struct bc_lin *lin,
                          struct bc__pk_lanes *ln, uint32_t active);
 uint32_t bc__pk_march_avx512(const struct bc_view *v, const struct bc_lin *lin,
                              struct bc__pk_lanes *ln, uint32_t active,
-                             uint32_t march, uint32_t bisect,
-                             const struct bc__pk_steps *st);
+                             uint32_t *march, uint32_t *bisect,
+                             uint32_t *refine, const struct bc__pk_steps *st);
 void bc__pk_eval_id_avx512(const struct bc_view *v, const struct bc_lin *lin,
                            struct bc__pk_lanes *ln, uint32_t active);
 #endif
@@ -161,6 +178,7 @@ bool bc__pk_ray_feed(struct bc__pk_ray *r, const struct bc__frame_ctx *fc,
 #define BC__PK_INIT 1
 #define BC__PK_STEP 2
 #define BC__PK_STEP2 3
+#define BC__PK_REFINE 4
 #define BC__PK_BISECT 5
 
 #endif

@@ -407,54 +407,48 @@ run(const struct bc_view *v, const struct bc_lin *lin, struct bc__pk_lanes *ln,
 	}
 }
 
-/* packet.c's bisect_head after a midpoint's value vn, for the lanes of
- * `lanes`: the bracket's side the value falls on is replaced (an ordered
- * test, so NaN moves a, as there), and the lanes whose bisection goes on
- * within their budget take their next midpoint. Returns those lanes. */
-static inline uint32_t bisect_lanes(struct bc__pk_lanes *ln, uint32_t lanes,
-                                    vf vn, float refine_tol)
+/* The lanes (of `lanes`) whose bisection starts on the bracket [a, b]
+ * (packet.c's bisect_start and bisect_head with i = 0) and goes on: b - a
+ * wider than refine_tol and the midpoint strictly inside. *m gets the
+ * midpoints. */
+static inline vm bisect_opens(vm lanes, vf a, vf b, float refine_tol, vf *m)
 {
-	vf q = vload(ln->t), a = vload(ln->ba), fa = vload(ln->bfa),
-	   b = vload(ln->bb), fb = vload(ln->bfb), i, m, evals;
-	vm neg = vlt(vn, vset1(0.0f)), go;
-	uint32_t go_bits;
-	a = vsel(neg, a, q);
-	fa = vsel(neg, fa, vn);
-	b = vsel(neg, q, b);
-	fb = vsel(neg, vn, fb);
-	i = vadd(vload(ln->bi), vset1(1.0f));
-	m = vmul(vset1(0.5f), vadd(a, b));
-	evals = vload(ln->mevals);
-	go = mand(
-	    mand(mfrombits(lanes),
-	         vlt(vadd(evals, vset1(1.0f)), vload(ln->mbudget))),
-	    mand(mand(vlt(i, vset1(40.0f)), vgt(vsub(b, a), vset1(refine_tol))),
-	         mand(vgt(m, a), vlt(m, b))));
-	go_bits = mtobits(go);
-	if (!go_bits) {
-		return 0;
-	}
-	vstore(ln->ba, vsel(go, a, vload(ln->ba)));
-	vstore(ln->bfa, vsel(go, fa, vload(ln->bfa)));
-	vstore(ln->bb, vsel(go, b, vload(ln->bb)));
-	vstore(ln->bfb, vsel(go, fb, vload(ln->bfb)));
-	vstore(ln->bi, vsel(go, i, vload(ln->bi)));
-	vstore(ln->t, vsel(go, m, q));
-	vstore(ln->mevals, vadd(evals, vsel(go, vset1(1.0f), vset1(0.0f))));
-	return go_bits;
+	*m = vmul(vset1(0.5f), vadd(a, b));
+	return mand(lanes, mand(vgt(vsub(b, a), vset1(refine_tol)),
+	                        mand(vgt(*m, a), vlt(*m, b))));
+}
+
+/* packet.c's refine_head's probe from (t, v) with (t_prev, v_prev) before
+ * it, i already counted: the secant's reach, or v itself on the first
+ * round (first) when the secant does not apply; *ok is false where the
+ * state machine would end the refinement instead. */
+static inline vf refine_probe(vf t, vf v, vf t_prev, vf v_prev, vm first,
+                              vf limit, float min_step, vm *ok)
+{
+	vm secant = mand(vgt(t, t_prev), vgt(v_prev, v));
+	vf reach = vsel(
+	    secant,
+	    vdiv(vmul(vmul(vset1(1.5f), v), vsub(t, t_prev)), vsub(v_prev, v)),
+	    v);
+	vf probe = vmin(vadd(t, vmax(reach, vset1(min_step))), limit);
+	*ok = mand(mfrombits(mtobits(secant) | mtobits(first)), vgt(probe, t));
+	return probe;
 }
 
 uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
-                  struct bc__pk_lanes *ln, uint32_t active, uint32_t march,
-                  uint32_t bisect, const struct bc__pk_steps *st)
+                  struct bc__pk_lanes *ln, uint32_t active, uint32_t *marchp,
+                  uint32_t *bisectp, uint32_t *refinep,
+                  const struct bc__pk_steps *st)
 {
-	vf zero = vset1(0.0f), vn, t, fv, tn, om, t1, eps, step, next, plain;
-	vm room, relax, fast;
-	uint32_t fast_bits, relax_bits, bisected = 0;
-	march &= active;
-	bisect &= active;
+	uint32_t march = *marchp & active, bisect = *bisectp & active,
+	         refine = *refinep & active, stepped;
+	vf zero = vset1(0.0f), one = vset1(1.0f), vn, q, t, fv, tp, vp, om, t1,
+	   eps, evals, a, fa, b, fb, bi, m_b, m_x, next, plain, cap, limit,
+	   probe_m, probe_r, ri, t_new;
+	vm room, mm, bm, rm, relax, cross, b_go, m_fast, m_refine, r_go,
+	    advance, ok_m, ok_r;
 	run(v, lin, ln, active, false);
-	if (!(march | bisect)) {
+	if (!(march | bisect | refine)) {
 		return active;
 	}
 	/* The value the state machine is fed (trace.c's eval_at): the field
@@ -462,51 +456,110 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
 	 * bend), as bc__trace divides it. */
 	vn = vdiv(vmul(vload(ln->v), vset1(1.0f / BC_CPU_LIPSCHITZ)),
 	          vset1(lin->lip));
-	if (bisect) {
-		bisected = bisect_lanes(ln, bisect, vn, st->refine_tol);
-	}
-	if (!march) {
-		return active & ~bisected;
-	}
-	/* packet.c's step_check and march_head for an ordinary step (the
-	 * same expressions, in their order), lane-wise; the hit epsilon is
-	 * divided by the Lipschitz bound as in bc__trace. */
+	q = vload(ln->t);
+	evals = vload(ln->mevals);
+	/* A lane whose bound has no further sample goes back to the state
+	 * machine, which stops it. */
+	room = vlt(vadd(evals, one), vload(ln->mbudget));
+	mm = mand(mfrombits(march), room);
+	bm = mand(mfrombits(bisect), room);
+	rm = mand(mfrombits(refine), room);
+	/* Marching and refining lanes: t, v, t_prev, v_prev. */
 	t = vload(ln->mt);
 	fv = vload(ln->mv);
-	tn = vload(ln->t);
-	om = vload(ln->momega);
+	tp = vload(ln->mt_prev);
+	vp = vload(ln->mv_prev);
 	t1 = vload(ln->mt1);
-	eps = vdiv(vmax(vmul(vset1(st->eps_per_t), tn), vset1(st->min_step)),
-	           vset1(lin->lip));
-	/* The relaxed step overshot (packet.c's S_STEP test, before any
-	 * other): the plain step from t instead, omega 1 from now on. */
-	room = mand(mfrombits(march), vlt(vadd(vload(ln->mevals), vset1(1.0f)),
-	                                  vload(ln->mbudget)));
-	relax = mand(room, mand(vgt(om, vset1(1.0f)),
-	                        vlt(vadd(fv, vabs(vn)), vsub(tn, t))));
-	/* Else an ordinary step: vn >= 0 (not NaN), not within eps, not at
-	 * t1. A lane whose bound is spent (not in room) goes back to the
-	 * state machine, which stops it. */
-	fast = mand(mand(room, mnot(relax)),
-	            mand(vge(vn, zero), mand(vge(vn, eps), vlt(tn, t1))));
-	relax_bits = mtobits(relax);
-	fast_bits = mtobits(fast);
-	if (!(fast_bits | relax_bits)) {
-		return active & ~bisected;
+
+	/* Bisection (S_BISECT, then bisect_head): the side of the bracket
+	 * the value falls on is replaced (an ordered test, so NaN moves a),
+	 * and the bisection goes on while fewer than 40 halvings are done. */
+	{
+		vm neg = vlt(vn, zero);
+		a = vsel(neg, vload(ln->ba), q);
+		fa = vsel(neg, vload(ln->bfa), vn);
+		b = vsel(neg, q, vload(ln->bb));
+		fb = vsel(neg, vn, vload(ln->bfb));
+		bi = vadd(vload(ln->bi), one);
+		b_go = bisect_opens(mand(bm, vlt(bi, vset1(40.0f))), a, b,
+		                    st->refine_tol, &m_b);
 	}
-	step = vmax(vmul(om, vn), vmul(vset1(1.0e-6f), tn));
-	next = vmin(vadd(tn, step), t1);
-	plain = vmin(vadd(t, vmax(fv, vmul(vset1(1.0e-6f), t))), t1);
-	vstore(ln->mt_prev, vsel(fast, t, vload(ln->mt_prev)));
-	vstore(ln->mv_prev, vsel(fast, fv, vload(ln->mv_prev)));
-	vstore(ln->mt, vsel(fast, tn, t));
-	vstore(ln->mv, vsel(fast, vn, fv));
-	vstore(ln->momega, vsel(relax, vset1(1.0f), om));
-	vstore(ln->t, vsel(fast, next, vsel(relax, plain, tn)));
-	vstore(ln->mevals,
-	       vadd(vload(ln->mevals),
-	            vsel(fast, vset1(1.0f), vsel(relax, vset1(1.0f), zero))));
-	return active & ~(fast_bits | relax_bits | bisected);
+
+	/* A marching lane (S_STEP, S_STEP2, or a start lane holding the state
+	 * its first value gives) whose relaxed step overshot takes the plain
+	 * step from t, omega 1 from then on (S_STEP's first test). */
+	om = vload(ln->momega);
+	relax =
+	    mand(mm, mand(vgt(om, one), vlt(vadd(fv, vabs(vn)), vsub(q, t))));
+	/* A value below zero after a step (step_check) or a refining probe
+	 * (S_REFINE) starts a bisection of [t, q]. A start lane (q == t)
+	 * would hit at t0 instead: the state machine's. */
+	cross = bisect_opens(
+	    mand(mand(mfrombits(mtobits(mm) | mtobits(rm)), mnot(relax)),
+	         mand(vlt(vn, zero), vgt(q, t))),
+	    t, q, st->refine_tol, &m_x);
+	/* Else a marching lane's new point (q, vn) (march_head): within the
+	 * hit epsilon a refinement starts (cap, limit, the first probe); else
+	 * an ordinary step, not at t1. */
+	eps = vdiv(vmax(vmul(vset1(st->eps_per_t), q), vset1(st->min_step)),
+	           vset1(lin->lip));
+	{
+		vm plain_lane = mand(mand(mm, mnot(relax)), vge(vn, zero));
+		vm within = vlt(vn, eps);
+		cap = vadd(
+		    q, vmul(vset1(64.0f * BC_CPU_LIPSCHITZ * lin->lip), eps));
+		limit = vmin(cap, t1);
+		probe_m = refine_probe(q, vn, t, fv, mfrombits(UINT32_MAX),
+		                       limit, st->min_step, &ok_m);
+		m_refine = mand(mand(plain_lane, within), ok_m);
+		m_fast = mand(mand(plain_lane, mnot(within)), vlt(q, t1));
+		next = vmin(
+		    vadd(q, vmax(vmul(om, vn), vmul(vset1(1.0e-6f), q))), t1);
+		plain = vmin(vadd(t, vmax(fv, vmul(vset1(1.0e-6f), t))), t1);
+	}
+	/* A refining lane (S_REFINE) whose probe came closer without
+	 * crossing: the probe is its new point, and refine_head's next probe
+	 * while fewer than 8 rounds are done. A value not below v goes to
+	 * the golden section: the state machine's. */
+	ri = vadd(vload(ln->ri), one);
+	probe_r = refine_probe(q, vn, t, fv, mfrombits(0), vload(ln->rlimit),
+	                       st->min_step, &ok_r);
+	r_go = mand(mand(mand(rm, vge(vn, zero)), vlt(vn, fv)),
+	            mand(vlt(ri, vset1(8.0f)), ok_r));
+
+	stepped = mtobits(b_go) | mtobits(relax) | mtobits(cross) |
+	          mtobits(m_refine) | mtobits(m_fast) | mtobits(r_go);
+	if (!stepped) {
+		return active;
+	}
+	/* Bisecting lanes: those that go on, and those that start. */
+	vstore(ln->ba, vsel(b_go, a, vsel(cross, t, vload(ln->ba))));
+	vstore(ln->bfa, vsel(b_go, fa, vsel(cross, fv, vload(ln->bfa))));
+	vstore(ln->bb, vsel(b_go, b, vsel(cross, q, vload(ln->bb))));
+	vstore(ln->bfb, vsel(b_go, fb, vsel(cross, vn, vload(ln->bfb))));
+	vstore(ln->bi, vsel(b_go, bi, vsel(cross, zero, vload(ln->bi))));
+	/* The new point of an ordinary step, a refinement's start or its
+	 * next round: t_prev, v_prev = t, v; t, v = q, vn. */
+	advance =
+	    mfrombits(mtobits(m_fast) | mtobits(m_refine) | mtobits(r_go));
+	vstore(ln->mt_prev, vsel(advance, t, tp));
+	vstore(ln->mv_prev, vsel(advance, fv, vp));
+	vstore(ln->mt, vsel(advance, q, t));
+	vstore(ln->mv, vsel(advance, vn, fv));
+	vstore(ln->momega, vsel(relax, one, om));
+	vstore(ln->ri, vsel(m_refine, zero, vsel(r_go, ri, vload(ln->ri))));
+	vstore(ln->rcap, vsel(m_refine, cap, vload(ln->rcap)));
+	vstore(ln->rlimit, vsel(m_refine, limit, vload(ln->rlimit)));
+	t_new = vsel(m_fast, next, vsel(relax, plain, q));
+	t_new = vsel(m_refine, probe_m, vsel(r_go, probe_r, t_new));
+	t_new = vsel(b_go, m_b, vsel(cross, m_x, t_new));
+	vstore(ln->t, t_new);
+	vstore(ln->mevals, vadd(evals, vsel(mfrombits(stepped), one, zero)));
+	/* The lanes that changed kind. */
+	*marchp = (*marchp & ~(mtobits(cross) | mtobits(m_refine)));
+	*bisectp = *bisectp | mtobits(cross);
+	*refinep = (*refinep & ~mtobits(cross)) | mtobits(m_refine);
+	return active & ~stepped;
 }
 
 void PK_EVAL_ID(const struct bc_view *v, const struct bc_lin *lin,

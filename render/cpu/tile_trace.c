@@ -262,11 +262,43 @@ static void to_bisect_lanes(const struct bc__pk_ray *r, struct bc__pk_lanes *ln,
 static void from_bisect_lanes(struct bc__pk_ray *r,
                               const struct bc__pk_lanes *ln, uint32_t i)
 {
+	r->state = BC__PK_BISECT; /* it may have turned so in the kernel */
 	r->a = ln->ba[i];
 	r->fa = ln->bfa[i];
 	r->b = ln->bb[i];
 	r->fb = ln->bfb[i];
 	r->i = (uint8_t)ln->bi[i];
+	r->q = ln->t[i];
+	r->evals += (uint32_t)ln->mevals[i];
+}
+
+/* A refining lane's state: its point and the one before in the marching
+ * arrays, its round, cap and limit in the r* ones. */
+static void to_refine_lanes(const struct bc__pk_ray *r, struct bc__pk_lanes *ln,
+                            uint32_t i, float budget)
+{
+	ln->mt[i] = r->t;
+	ln->mv[i] = r->v;
+	ln->mt_prev[i] = r->t_prev;
+	ln->mv_prev[i] = r->v_prev;
+	ln->ri[i] = (float)r->i;
+	ln->rcap[i] = r->cap;
+	ln->rlimit[i] = r->limit;
+	ln->mevals[i] = 0.0f;
+	ln->mbudget[i] = budget;
+}
+
+static void from_refine_lanes(struct bc__pk_ray *r,
+                              const struct bc__pk_lanes *ln, uint32_t i)
+{
+	r->state = BC__PK_REFINE; /* it may have turned so in the kernel */
+	r->t = ln->mt[i];
+	r->v = ln->mv[i];
+	r->t_prev = ln->mt_prev[i];
+	r->v_prev = ln->mv_prev[i];
+	r->i = (uint8_t)ln->ri[i];
+	r->cap = ln->rcap[i];
+	r->limit = ln->rlimit[i];
 	r->q = ln->t[i];
 	r->evals += (uint32_t)ln->mevals[i];
 }
@@ -361,7 +393,8 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 	uint8_t queue[BC_CPU_TILE * BC_CPU_TILE];
 	uint8_t hit_px[BC_CPU_TILE * BC_CPU_TILE];
 	float hit_t[BC_CPU_TILE * BC_CPU_TILE];
-	uint32_t nq = 0, head = 0, nh = 0, active = 0, march = 0, bisect = 0;
+	uint32_t nq = 0, head = 0, nh = 0, active = 0, march = 0, bisect = 0,
+	         refine = 0;
 	uint32_t slow,
 	    lanes = k.lanes >= 32 ? UINT32_MAX : (1u << k.lanes) - 1u;
 	const struct bc__pk_steps st = {
@@ -425,8 +458,8 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 		if (!active) {
 			break;
 		}
-		slow = k.march(&wk->view, fc->lin, &ln, active, march, bisect,
-		               &st);
+		slow = k.march(&wk->view, fc->lin, &ln, active, &march, &bisect,
+		               &refine, &st);
 		for (uint32_t bits = slow; bits; bits &= bits - 1) {
 			uint32_t i = lowest_bit(bits), p;
 			struct bc__pk_ray *r = &ray[i];
@@ -434,9 +467,12 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 				from_lanes(r, &ln, i);
 			} else if ((bisect >> i) & 1u) {
 				from_bisect_lanes(r, &ln, i);
+			} else if ((refine >> i) & 1u) {
+				from_refine_lanes(r, &ln, i);
 			}
 			march &= ~(1u << i);
 			bisect &= ~(1u << i);
+			refine &= ~(1u << i);
 			/* trace.c's eval_at: the field over the bounds. */
 			p = lane_px[i];
 			if (!bc__pk_ray_feed(r, fc,
@@ -457,6 +493,11 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 						    r, &ln, i,
 						    lane_budget(fc, spent));
 						bisect |= 1u << i;
+					} else if (r->state == BC__PK_REFINE) {
+						to_refine_lanes(
+						    r, &ln, i,
+						    lane_budget(fc, spent));
+						refine |= 1u << i;
 					}
 					continue;
 				}

@@ -493,14 +493,21 @@ static void test_abuffer_abv_kernel_matches_scalar(void)
 
 /* Lane kinds of test_kernel_steps_match_state_machine: a ray waiting for
  * its first value, at a relaxed marching step, at a plain one after a
- * failed relaxed step, at a bisection's midpoint. */
-enum { K_START, K_STEP, K_STEP2, K_BISECT, K_KINDS };
+ * failed relaxed step, at a bisection's midpoint, at a secant probe. */
+enum { K_START, K_STEP, K_STEP2, K_BISECT, K_REFINE, K_KINDS };
+
+/* The unit sphere's field at t along d from (0, 0, -5). */
+static float sphere_at(const float d[3], float t)
+{
+	float x = t * d[0], y = t * d[1], z = -5.0f + t * d[2];
+	return sqrtf(x * x + y * y + z * z) - 1.0f;
+}
 
 /* Ray i of the kernel steps test, made by feeding the state machine the
  * values it asks for (the field of the one-sphere tree, or made up to
  * steer it); false when it did not reach kind's state. */
 static bool steer_ray(struct bc__pk_ray *r, const struct bc__frame_ctx *fc,
-                      int kind, float ts, uint64_t *state)
+                      int kind, float ts, const float d[3], uint64_t *state)
 {
 	float t0 = ts - 1.5f * fabsf(ab_rand(state)), t1;
 	if (t0 < 0.0f || ab_rand(state) > 0.8f) {
@@ -511,6 +518,25 @@ static bool steer_ray(struct bc__pk_ray *r, const struct bc__frame_ctx *fc,
 		return false;
 	}
 	if (kind == K_START) {
+		return true;
+	}
+	if (kind == K_REFINE) {
+		/* A relaxed step past the surface, the plain one just before
+		 * it, and there the field's value, within the hit epsilon. */
+		float u = 0.02f * fabsf(ab_rand(state));
+		if (ts - t0 - u <= 0.0f ||
+		    bc__pk_ray_feed(r, fc, ts - t0 - u) ||
+		    r->state != BC__PK_STEP ||
+		    bc__pk_ray_feed(r, fc, 1e-3f * r->v) ||
+		    r->state != BC__PK_STEP2 ||
+		    bc__pk_ray_feed(r, fc,
+		                    sphere_at(d, r->tn) / BC_CPU_LIPSCHITZ) ||
+		    r->state != BC__PK_REFINE) {
+			return false;
+		}
+		if (ab_rand(state) > 0.6f) {
+			r->i = 7; /* the last round */
+		}
 		return true;
 	}
 	/* A positive first value that steps past the surface. */
@@ -537,6 +563,27 @@ static bool steer_ray(struct bc__pk_ray *r, const struct bc__frame_ctx *fc,
 	return true;
 }
 
+/* Whether lane i of every state array of a and b is the same, bit for
+ * bit. */
+static bool same_lane(const struct bc__pk_lanes *a,
+                      const struct bc__pk_lanes *b, uint32_t i)
+{
+	const float *fa[] = {a->t,       a->mt,     a->mv,     a->mt_prev,
+	                     a->mv_prev, a->momega, a->mevals, a->ba,
+	                     a->bfa,     a->bb,     a->bfb,    a->bi,
+	                     a->ri,      a->rcap,   a->rlimit};
+	const float *fb[] = {b->t,       b->mt,     b->mv,     b->mt_prev,
+	                     b->mv_prev, b->momega, b->mevals, b->ba,
+	                     b->bfa,     b->bb,     b->bfb,    b->bi,
+	                     b->ri,      b->rcap,   b->rlimit};
+	for (size_t k = 0; k < sizeof(fa) / sizeof(fa[0]); k++) {
+		if (memcmp(&fa[k][i], &fb[k][i], sizeof(float)) != 0) {
+			return false;
+		}
+	}
+	return true;
+}
+
 /* The packet kernels take a ray's first value, its ordinary marching
  * steps, the plain step after an overshot relaxed one and its
  * bisection's halvings themselves (packet.h). Lane by lane,
@@ -548,6 +595,7 @@ static bool steer_ray(struct bc__pk_ray *r, const struct bc__frame_ctx *fc,
  * seen from z = -5, in every kind of state, at every budget. */
 static void test_kernel_steps_match_state_machine(void)
 {
+	uint32_t was_march, was_bisect, was_refine;
 	struct bc_tree *t = bc_tree_create();
 	struct bc_prim_data sp;
 	struct bc_errinfo ei = {0};
@@ -587,7 +635,8 @@ static void test_kernel_steps_match_state_machine(void)
 			struct bc__pk_ray ray[BC_PK_MAX_LANES];
 			int kind[BC_PK_MAX_LANES];
 			float budget[BC_PK_MAX_LANES];
-			uint32_t active = 0, march = 0, bisect = 0, slow;
+			uint32_t active = 0, march = 0, bisect = 0, refine = 0,
+			         slow;
 			memset(&ln, 0, sizeof(ln));
 			for (uint32_t i = 0; i < k.lanes; i++) {
 				float d[3] = {0.3f * ab_rand(&state),
@@ -602,13 +651,14 @@ static void test_kernel_steps_match_state_machine(void)
 				disc = b * b - (25.0f - 1.0f);
 				ts = disc > 0.0f ? -b - sqrtf(disc) : -b;
 				kind[i] =
-				    (int)((ab_rand(&state) + 1.0f) * 2.0f) %
+				    (int)((ab_rand(&state) + 1.0f) * 2.5f) %
 				    K_KINDS;
 				budget[i] =
 				    ab_rand(&state) > 0.8f
 				        ? (ab_rand(&state) > 0.0f ? 1.0f : 2.0f)
 				        : 1e6f;
-				if (!steer_ray(r, &fc, kind[i], ts, &state)) {
+				if (!steer_ray(r, &fc, kind[i], ts, d,
+				               &state)) {
 					continue;
 				}
 				ln.ox[i] = eye[0];
@@ -620,7 +670,16 @@ static void test_kernel_steps_match_state_machine(void)
 				ln.t[i] = r->q;
 				ln.mevals[i] = 0.0f;
 				ln.mbudget[i] = budget[i];
-				if (kind[i] == K_BISECT) {
+				if (kind[i] == K_REFINE) {
+					ln.mt[i] = r->t;
+					ln.mv[i] = r->v;
+					ln.mt_prev[i] = r->t_prev;
+					ln.mv_prev[i] = r->v_prev;
+					ln.ri[i] = (float)r->i;
+					ln.rcap[i] = r->cap;
+					ln.rlimit[i] = r->limit;
+					refine |= 1u << i;
+				} else if (kind[i] == K_BISECT) {
 					ln.ba[i] = r->a;
 					ln.bfa[i] = r->fa;
 					ln.bb[i] = r->b;
@@ -643,40 +702,40 @@ static void test_kernel_steps_match_state_machine(void)
 				active |= 1u << i;
 			}
 			before = ln;
-			slow =
-			    k.march(&view, l, &ln, active, march, bisect, &st);
+			was_march = march;
+			was_bisect = bisect;
+			was_refine = refine;
+			slow = k.march(&view, l, &ln, active, &march, &bisect,
+			               &refine, &st);
 			CHECK((slow & ~active) == 0);
 			for (uint32_t i = 0; i < k.lanes; i++) {
 				struct bc__pk_ray ref = ray[i];
 				float value = ln.v[i] *
 				              (1.0f / BC_CPU_LIPSCHITZ) /
 				              l->lip;
+				uint32_t bit = 1u << i;
 				bool done;
-				if (!((active >> i) & 1u)) {
+				if (!(active & bit)) {
 					continue;
 				}
 				done = bc__pk_ray_feed(&ref, &fc, value);
-				if ((slow >> i) & 1u) {
+				if (slow & bit) {
 					left[kind[i]]++;
-					/* Untouched, and not a step the kernel
-					 * should have taken. */
-					CHECK(memcmp(&ln.t[i], &before.t[i],
-					             4) == 0);
-					CHECK(memcmp(&ln.mt[i], &before.mt[i],
-					             4) == 0);
-					CHECK(memcmp(&ln.mv[i], &before.mv[i],
-					             4) == 0);
-					CHECK(memcmp(&ln.ba[i], &before.ba[i],
-					             4) == 0);
-					CHECK(memcmp(&ln.bb[i], &before.bb[i],
-					             4) == 0);
-					CHECK(ln.mevals[i] == 0.0f);
+					/* Untouched, of the same kind, and not
+					 * a step the kernel should have taken.
+					 */
+					CHECK(same_lane(&ln, &before, i));
+					CHECK((march & bit) ==
+					          (was_march & bit) &&
+					      (bisect & bit) ==
+					          (was_bisect & bit) &&
+					      (refine & bit) ==
+					          (was_refine & bit));
 					CHECK(done || budget[i] < 2.5f ||
-					      (kind[i] == K_BISECT
-					           ? ref.state != BC__PK_BISECT
-					           : ref.state != BC__PK_STEP &&
-					                 ref.state !=
-					                     BC__PK_STEP2));
+					      (ref.state != BC__PK_STEP &&
+					       ref.state != BC__PK_STEP2 &&
+					       ref.state != BC__PK_BISECT &&
+					       ref.state != BC__PK_REFINE));
 					continue;
 				}
 				stepped[kind[i]]++;
@@ -684,7 +743,13 @@ static void test_kernel_steps_match_state_machine(void)
 				CHECK(budget[i] >= 2.0f);
 				CHECK(ln.mevals[i] == 1.0f);
 				CHECK(memcmp(&ln.t[i], &ref.q, 4) == 0);
-				if (kind[i] == K_BISECT) {
+				/* Of the kind the machine's state says, holding
+				 * that state. */
+				CHECK(((march & bit) != 0) +
+				          ((bisect & bit) != 0) +
+				          ((refine & bit) != 0) ==
+				      1);
+				if (bisect & bit) {
 					CHECK(ref.state == BC__PK_BISECT);
 					CHECK(memcmp(&ln.ba[i], &ref.a, 4) ==
 					      0);
@@ -695,28 +760,36 @@ static void test_kernel_steps_match_state_machine(void)
 					CHECK(memcmp(&ln.bfb[i], &ref.fb, 4) ==
 					      0);
 					CHECK(ln.bi[i] == (float)ref.i);
+					continue;
+				}
+				CHECK(memcmp(&ln.mt[i], &ref.t, 4) == 0);
+				CHECK(memcmp(&ln.mv[i], &ref.v, 4) == 0);
+				CHECK(memcmp(&ln.mt_prev[i], &ref.t_prev, 4) ==
+				      0);
+				CHECK(memcmp(&ln.mv_prev[i], &ref.v_prev, 4) ==
+				      0);
+				if (refine & bit) {
+					CHECK(ref.state == BC__PK_REFINE);
+					CHECK(ln.ri[i] == (float)ref.i);
+					CHECK(memcmp(&ln.rcap[i], &ref.cap,
+					             4) == 0);
+					CHECK(memcmp(&ln.rlimit[i], &ref.limit,
+					             4) == 0);
 				} else {
 					/* An ordinary step, or the plain one
 					 * after an overshot relaxed step. */
 					CHECK(ref.state == BC__PK_STEP ||
 					      ref.state == BC__PK_STEP2);
-					CHECK(memcmp(&ln.mt[i], &ref.t, 4) ==
-					      0);
-					CHECK(memcmp(&ln.mv[i], &ref.v, 4) ==
-					      0);
-					CHECK(memcmp(&ln.mt_prev[i],
-					             &ref.t_prev, 4) == 0);
-					CHECK(memcmp(&ln.mv_prev[i],
-					             &ref.v_prev, 4) == 0);
 					CHECK(ln.momega[i] == ref.omega);
 				}
 			}
 		}
 		printf("  %-6s stepped / left: start %u / %u, step %u / %u, "
-		       "step2 %u / %u, bisect %u / %u\n",
+		       "step2 %u / %u, bisect %u / %u, refine %u / %u\n",
 		       modes[m].name, stepped[K_START], left[K_START],
 		       stepped[K_STEP], left[K_STEP], stepped[K_STEP2],
-		       left[K_STEP2], stepped[K_BISECT], left[K_BISECT]);
+		       left[K_STEP2], stepped[K_BISECT], left[K_BISECT],
+		       stepped[K_REFINE], left[K_REFINE]);
 		/* Every kind was met both ways. */
 		for (int kd = 0; kd < K_KINDS; kd++) {
 			CHECK(stepped[kd] > 100 && left[kd] > 100);
