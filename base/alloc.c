@@ -56,6 +56,16 @@ void *bc_malloc(size_t size)
 	return malloc(size ? size : 1);
 }
 
+void *bc_malloc_lines(size_t size)
+{
+	void *p = NULL;
+	if (should_fail() ||
+	    posix_memalign(&p, BC_CACHE_LINE, size ? size : 1) != 0) {
+		return NULL;
+	}
+	return p;
+}
+
 void *bc_calloc(size_t n, size_t size)
 {
 	if (size && n > SIZE_MAX / size) {

@@ -881,11 +881,22 @@ static void phase_trace(void *arg, uint32_t thread)
 	struct bc__tile_worker *wk = &tf->b->workers[thread];
 	const struct bc__frame_ctx *fc = tf->fc;
 	uint32_t w = fc->out->width, h = fc->out->height;
-	uint32_t tile = 0, end = 0;
+	uint32_t tile = 0, end = 0, done = 0;
 	for (;;) {
 		uint32_t tx, ty;
 		struct bc__tile_job job;
 		uint64_t mask, cut;
+		if (done > 0 && tile + 1 >= end) {
+			/* The run's tiles are counted once it is drawn: a
+			 * shared counter added to per tile, each thread in
+			 * turn, cost more than a background tile's drawing. */
+			atomic_fetch_add(&tf->tiles_done, done);
+			done = 0;
+			if (thread == 0) {
+				bc__progress_tick(&tf->progress,
+				                  atomic_load(&tf->tiles_done));
+			}
+		}
 		if (!next_tile(tf, &tile, &end)) {
 			break;
 		}
@@ -923,11 +934,7 @@ static void phase_trace(void *arg, uint32_t thread)
 				fc->short_tiles[tile] = 1;
 			}
 		}
-		atomic_fetch_add(&tf->tiles_done, 1u);
-		if (thread == 0) {
-			bc__progress_tick(&tf->progress,
-			                  atomic_load(&tf->tiles_done));
-		}
+		done++;
 	}
 }
 

@@ -9,6 +9,7 @@
 
 #include <stdint.h>
 
+#include "blobcast/alloc.h"
 #include "cpu.h"
 
 /* A primitive's depth interval over a tile's rays: min entry, max exit. */
@@ -38,6 +39,9 @@ struct bc__tile_worker {
 	uint32_t *tile_act;
 	uint32_t tile_cap;
 	int tile_view_state;
+	/* Keeps the counters above, which a thread writes per tile, off the
+	 * cache lines of the next thread's (the workers lie side by side). */
+	char pad[BC_CACHE_LINE];
 };
 
 /* One tile's work. */

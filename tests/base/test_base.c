@@ -36,6 +36,23 @@ static void alloc_hook_fails_the_nth_call(void)
 	CHECK(bc_calloc((size_t)-1, 16) == NULL);
 }
 
+/* bc_malloc_lines gives whole cache lines, writable to the end, freed by
+ * bc_free, and the failure hook counts it like any allocation. */
+static void malloc_lines_starts_a_line(void)
+{
+	static const size_t sizes[] = {0, 1, 63, 64, 1000, 3u << 20};
+	for (size_t i = 0; i < sizeof(sizes) / sizeof(sizes[0]); i++) {
+		unsigned char *p = bc_malloc_lines(sizes[i]);
+		REQUIRE(p != NULL);
+		CHECK((uintptr_t)p % BC_CACHE_LINE == 0);
+		memset(p, 0xab, sizes[i]);
+		bc_free(p);
+	}
+	bc_alloc_fail_after(1);
+	CHECK(bc_malloc_lines(64) == NULL);
+	CHECK(bc_alloc_fail_after(0) == 1);
+}
+
 enum { ALLOC_THREADS = 4, ALLOC_EACH = 50000 };
 
 static void *allocate_many(void *arg)
@@ -185,6 +202,7 @@ static const struct bc_test tests[] = {
      populate_backs_pages_and_keeps_bytes},
     {"error_table_names_every_code", error_table_names_every_code},
     {"alloc_hook_fails_the_nth_call", alloc_hook_fails_the_nth_call},
+    {"malloc_lines_starts_a_line", malloc_lines_starts_a_line},
     {"alloc_hook_counts_every_thread", alloc_hook_counts_every_thread},
     {"log_escapes_control_characters", log_escapes_control_characters},
     {"log_escapes_long_messages_whole", log_escapes_long_messages_whole},

@@ -14,6 +14,11 @@
 /* Each returns NULL on failure (or when the failure hook says so); sizes that
  * overflow (n * size) fail instead of wrapping. bc_free(NULL) is a no-op. */
 BC_API void *bc_malloc(size_t size);
+/* bc_malloc at an address that is a multiple of BC_CACHE_LINE (freed with
+ * bc_free): for arrays that threads write in parts side by side, so that
+ * parts cut at multiples of the line share none. */
+BC_API void *bc_malloc_lines(size_t size);
+#define BC_CACHE_LINE 64u
 BC_API void *bc_calloc(size_t n, size_t size);
 BC_API void *bc_realloc(void *ptr, size_t size);
 /* Grows ptr to n elements of size bytes, failing on overflow. */
