@@ -192,17 +192,38 @@ static float lane_budget(const struct bc__frame_ctx *fc, uint32_t spent)
 	return (float)left;
 }
 
-/* A marching lane's state moves between the ray (the state machine's)
- * and the packet's arrays (the vector step's). */
+/* The kinds of lane the kernel steps (packet.h's bc__pk_march_fn). */
+enum lane_kind { LANE_MARCH, LANE_BISECT, LANE_REFINE };
+
+/* A lane's state moves between the ray (the state machine's) and the
+ * packet's arrays (the kernel's): a marching or refining lane keeps t, v,
+ * t_prev and v_prev in the m* arrays (a marching one its omega and t1
+ * there too, a refining one its round, cap and limit in the r* ones), a
+ * bisecting one its bracket in the b* ones; each starts with its budget
+ * and no sample counted. */
 static void to_lanes(const struct bc__pk_ray *r, struct bc__pk_lanes *ln,
-                     uint32_t i, float budget)
+                     uint32_t i, enum lane_kind kind, float budget)
 {
-	ln->mt[i] = r->t;
-	ln->mv[i] = r->v;
-	ln->mt_prev[i] = r->t_prev;
-	ln->mv_prev[i] = r->v_prev;
-	ln->momega[i] = r->omega;
-	ln->mt1[i] = r->t1;
+	if (kind == LANE_BISECT) {
+		ln->ba[i] = r->a;
+		ln->bfa[i] = r->fa;
+		ln->bb[i] = r->b;
+		ln->bfb[i] = r->fb;
+		ln->bi[i] = (float)r->i;
+	} else {
+		ln->mt[i] = r->t;
+		ln->mv[i] = r->v;
+		ln->mt_prev[i] = r->t_prev;
+		ln->mv_prev[i] = r->v_prev;
+		if (kind == LANE_MARCH) {
+			ln->momega[i] = r->omega;
+			ln->mt1[i] = r->t1;
+		} else {
+			ln->ri[i] = (float)r->i;
+			ln->rcap[i] = r->cap;
+			ln->rlimit[i] = r->limit;
+		}
+	}
 	ln->mevals[i] = 0.0f;
 	ln->mbudget[i] = budget;
 }
@@ -216,89 +237,45 @@ static void to_lanes(const struct bc__pk_ray *r, struct bc__pk_lanes *ln,
 static void start_lanes(const struct bc__pk_ray *r, struct bc__pk_lanes *ln,
                         uint32_t i, float budget)
 {
-	ln->mt[i] = r->t0;
-	ln->mv[i] = 0.0f;
-	ln->mt_prev[i] = r->t0;
-	ln->mv_prev[i] = 0.0f;
-	ln->momega[i] = BC_CPU_OVERRELAX;
-	ln->mt1[i] = r->t1;
-	ln->mevals[i] = 0.0f;
-	ln->mbudget[i] = budget;
+	struct bc__pk_ray head = *r;
+	head.t = head.t_prev = r->t0;
+	head.v = head.v_prev = 0.0f;
+	head.omega = BC_CPU_OVERRELAX;
+	to_lanes(&head, ln, i, LANE_MARCH, budget);
 }
 
-/* A lane the kernel stepped waits at an ordinary marching step (S_STEP),
- * whichever state it entered in (the start, S_STEP, or S_STEP2 whose
- * omega is 1). */
+/* The ray of a lane of that kind, back from the kernel (which may have
+ * turned it into that kind). A marching lane the kernel stepped waits at
+ * an ordinary step (S_STEP), whichever state it entered in (the start,
+ * S_STEP, or S_STEP2 whose omega is 1). */
 static void from_lanes(struct bc__pk_ray *r, const struct bc__pk_lanes *ln,
-                       uint32_t i)
+                       uint32_t i, enum lane_kind kind)
 {
-	if (ln->mevals[i] > 0.0f) {
-		r->state = BC__PK_STEP;
-		r->omega = ln->momega[i];
+	if (kind == LANE_BISECT) {
+		r->state = BC__PK_BISECT;
+		r->a = ln->ba[i];
+		r->fa = ln->bfa[i];
+		r->b = ln->bb[i];
+		r->fb = ln->bfb[i];
+		r->i = (uint8_t)ln->bi[i];
+	} else {
+		r->t = ln->mt[i];
+		r->v = ln->mv[i];
+		r->t_prev = ln->mt_prev[i];
+		r->v_prev = ln->mv_prev[i];
+		if (kind == LANE_REFINE) {
+			r->state = BC__PK_REFINE;
+			r->i = (uint8_t)ln->ri[i];
+			r->cap = ln->rcap[i];
+			r->limit = ln->rlimit[i];
+		} else {
+			r->tn = ln->t[i];
+			if (ln->mevals[i] > 0.0f) {
+				r->state = BC__PK_STEP;
+				r->omega = ln->momega[i];
+			}
+		}
 	}
-	r->t = ln->mt[i];
-	r->v = ln->mv[i];
-	r->t_prev = ln->mt_prev[i];
-	r->v_prev = ln->mv_prev[i];
-	r->tn = ln->t[i];
-	r->q = ln->t[i];
-	r->evals += (uint32_t)ln->mevals[i];
-}
-
-/* A bisecting lane's bracket moves between the ray and the packet's
- * arrays the same way. */
-static void to_bisect_lanes(const struct bc__pk_ray *r, struct bc__pk_lanes *ln,
-                            uint32_t i, float budget)
-{
-	ln->ba[i] = r->a;
-	ln->bfa[i] = r->fa;
-	ln->bb[i] = r->b;
-	ln->bfb[i] = r->fb;
-	ln->bi[i] = (float)r->i;
-	ln->mevals[i] = 0.0f;
-	ln->mbudget[i] = budget;
-}
-
-static void from_bisect_lanes(struct bc__pk_ray *r,
-                              const struct bc__pk_lanes *ln, uint32_t i)
-{
-	r->state = BC__PK_BISECT; /* it may have turned so in the kernel */
-	r->a = ln->ba[i];
-	r->fa = ln->bfa[i];
-	r->b = ln->bb[i];
-	r->fb = ln->bfb[i];
-	r->i = (uint8_t)ln->bi[i];
-	r->q = ln->t[i];
-	r->evals += (uint32_t)ln->mevals[i];
-}
-
-/* A refining lane's state: its point and the one before in the marching
- * arrays, its round, cap and limit in the r* ones. */
-static void to_refine_lanes(const struct bc__pk_ray *r, struct bc__pk_lanes *ln,
-                            uint32_t i, float budget)
-{
-	ln->mt[i] = r->t;
-	ln->mv[i] = r->v;
-	ln->mt_prev[i] = r->t_prev;
-	ln->mv_prev[i] = r->v_prev;
-	ln->ri[i] = (float)r->i;
-	ln->rcap[i] = r->cap;
-	ln->rlimit[i] = r->limit;
-	ln->mevals[i] = 0.0f;
-	ln->mbudget[i] = budget;
-}
-
-static void from_refine_lanes(struct bc__pk_ray *r,
-                              const struct bc__pk_lanes *ln, uint32_t i)
-{
-	r->state = BC__PK_REFINE; /* it may have turned so in the kernel */
-	r->t = ln->mt[i];
-	r->v = ln->mv[i];
-	r->t_prev = ln->mt_prev[i];
-	r->v_prev = ln->mv_prev[i];
-	r->i = (uint8_t)ln->ri[i];
-	r->cap = ln->rcap[i];
-	r->limit = ln->rlimit[i];
 	r->q = ln->t[i];
 	r->evals += (uint32_t)ln->mevals[i];
 }
@@ -464,11 +441,11 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 			uint32_t i = lowest_bit(bits), p;
 			struct bc__pk_ray *r = &ray[i];
 			if ((march >> i) & 1u) {
-				from_lanes(r, &ln, i);
+				from_lanes(r, &ln, i, LANE_MARCH);
 			} else if ((bisect >> i) & 1u) {
-				from_bisect_lanes(r, &ln, i);
+				from_lanes(r, &ln, i, LANE_BISECT);
 			} else if ((refine >> i) & 1u) {
-				from_refine_lanes(r, &ln, i);
+				from_lanes(r, &ln, i, LANE_REFINE);
 			}
 			march &= ~(1u << i);
 			bisect &= ~(1u << i);
@@ -485,17 +462,17 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 					if (r->state == BC__PK_STEP ||
 					    r->state == BC__PK_STEP2) {
 						to_lanes(
-						    r, &ln, i,
+						    r, &ln, i, LANE_MARCH,
 						    lane_budget(fc, spent));
 						march |= 1u << i;
 					} else if (r->state == BC__PK_BISECT) {
-						to_bisect_lanes(
-						    r, &ln, i,
+						to_lanes(
+						    r, &ln, i, LANE_BISECT,
 						    lane_budget(fc, spent));
 						bisect |= 1u << i;
 					} else if (r->state == BC__PK_REFINE) {
-						to_refine_lanes(
-						    r, &ln, i,
+						to_lanes(
+						    r, &ln, i, LANE_REFINE,
 						    lane_budget(fc, spent));
 						refine |= 1u << i;
 					}
