@@ -743,6 +743,9 @@ static void tile_quarters(const struct tiled_frame *tf, uint32_t tx,
 	}
 }
 
+/* How many candidates ahead tile_list asks for a primitive's bytes. */
+#define LIST_PREFETCH 8u
+
 /* The tile's list: for each candidate whose bounding sphere meets the
  * tile's cone, the rays of the quarters whose cones it meets are clipped
  * against the ABV; the hits make one fragment, min entry and max exit. */
@@ -760,6 +763,16 @@ static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
 		const struct ab_prim *p = &b->prims[k];
 		uint64_t lanes = 0;
 		float t[2] = {INFINITY, -INFINITY};
+		if (i + LIST_PREFETCH < b->cand_end[tile]) {
+			/* A tile's candidates lie anywhere in the primitive
+			 * array: ask for a later one's bytes (the cone test's
+			 * at its end, the ABV at its start) now, so that the
+			 * misses overlap. */
+			const struct ab_prim *later =
+			    &b->prims[b->cand[i + LIST_PREFETCH]];
+			__builtin_prefetch(&later->v);
+			__builtin_prefetch(&later->wide);
+		}
 		if (!cone_meets_sphere(&cones[0], p)) {
 			continue;
 		}
