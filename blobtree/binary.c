@@ -233,7 +233,7 @@ static void put_node(struct bc_buf *b, const struct bc__node *nd)
 		bc_put_le32(p, nd->id);
 		p += 4;
 		*p++ = (uint8_t)nf;
-		p = at_f32s(p, nd->uparam, nf);
+		p = at_f32s(p, nd->u.uparam, nf);
 	} else if (nd->is_op) {
 		*p++ = (uint8_t)(BC_SCENE_TAG_OP | (uint32_t)nd->u.op.kind);
 		bc_put_le32(p, nd->id);

@@ -211,7 +211,7 @@ static void write_prim_record(float *rec, const struct bc_prim_data *p)
 static void write_unary_record(float *rec, const struct bc__node *n)
 {
 	memset(rec, 0, 4 * BC_UNARY_RECORD_VEC4 * sizeof(float));
-	memcpy(rec, n->uparam, sizeof(n->uparam));
+	memcpy(rec, n->u.uparam, sizeof(n->u.uparam));
 	switch (n->u.op.kind) {
 	case BC_OP_TWIST:
 	case BC_OP_BEND:
@@ -219,7 +219,7 @@ static void write_unary_record(float *rec, const struct bc__node *n)
 		rec[2] = 1.0f;
 		break;
 	case BC_OP_SCALE:
-		rec[1] = 1.0f / n->uparam[0];
+		rec[1] = 1.0f / n->u.uparam[0];
 		break;
 	default:
 		break;

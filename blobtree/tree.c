@@ -749,7 +749,7 @@ int bc_tree_push_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
 	}
 	memset(&t->pool[n].u.op, 0, sizeof(t->pool[n].u.op));
 	t->pool[n].u.op.kind = u->kind;
-	memcpy(t->pool[n].uparam, u->u, sizeof(u->u));
+	memcpy(t->pool[n].u.uparam, u->u, sizeof(u->u));
 	t->nops++;
 	t->open[t->nopen++] = n;
 	return 0;
@@ -1084,7 +1084,7 @@ int bc_tree_set_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
 		return rc;
 	}
 	t->pool[n].u.op.kind = u->kind;
-	memcpy(t->pool[n].uparam, u->u, sizeof(u->u));
+	memcpy(t->pool[n].u.uparam, u->u, sizeof(u->u));
 	bc__lin_update_unary(t, &t->pool[n]);
 	first_slot = l->first[t->pool[n].slot];
 	k_lo = l->prim_of[first_slot];
@@ -1106,7 +1106,7 @@ bool bc_tree_get_unary(const struct bc_tree *t, uint32_t id,
 		return false;
 	}
 	out->kind = t->pool[n].u.op.kind;
-	memcpy(out->u, t->pool[n].uparam, sizeof(out->u));
+	memcpy(out->u, t->pool[n].u.uparam, sizeof(out->u));
 	return true;
 }
 
@@ -1153,8 +1153,7 @@ static uint32_t copy_node(struct bc_tree *t, const struct bc__node *sn,
 {
 	uint32_t m = pool_take(t);
 	t->pool[m].is_op = sn->is_op;
-	t->pool[m].u = sn->u;
-	memcpy(t->pool[m].uparam, sn->uparam, sizeof(sn->uparam));
+	t->pool[m].u = sn->u; /* with a unary node's parameters */
 	t->pool[m].auto_id = sn->auto_id;
 	t->pool[m].id = (sn->auto_id && !keep_ids) ? fresh_id(t) : sn->id;
 	bc__map_put_nogrow(&t->ids, t->pool[m].id, m);

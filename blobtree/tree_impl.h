@@ -26,12 +26,17 @@ struct bc__node {
 	uint32_t unary;  /* unary index (unary nodes only) */
 	uint32_t dchain; /* domain nodes above it (check_shape's scratch) */
 	uint32_t epoch;  /* splices slot, param and prim have followed */
+	/* A primitive's data, or an operator's; a unary node (u.op.kind
+	 * says it is one) keeps its parameters beside its op, in the room a
+	 * primitive's data takes (a node of every primitive paid for them
+	 * apart: 24 bytes a node, two trees of them in the daemon). */
 	union {
 		struct bc_prim_data prim;
-		struct bc_op_data op;
+		struct {
+			struct bc_op_data op;
+			float uparam[BC_UNARY_MAX_PARAMS];
+		};
 	} u;
-	/* A unary node's parameters (u.op.kind says it is one). */
-	float uparam[BC_UNARY_MAX_PARAMS];
 };
 
 static inline bool bc__node_unary(const struct bc__node *n)
