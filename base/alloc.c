@@ -113,14 +113,16 @@ bool bc_populate(void *p, size_t n)
 	/* A first write to a page costs a trap; on virtual machines a large
 	 * one (about 10 us a page measured on the 2-core test machine: 1.4 s
 	 * for 512 MiB written page by page, 0.7 s after one populate). */
-	static long page;
+	long page;
 	uintptr_t lo, hi;
 	if (!p || n < BC_POPULATE_MIN) {
 		return false;
 	}
-	if (!page) {
-		long got = sysconf(_SC_PAGESIZE);
-		page = got > 0 ? got : 4096;
+	/* Asked each time: decodes on two threads call this at once, and a
+	 * cached value would be a data race. */
+	page = sysconf(_SC_PAGESIZE);
+	if (page <= 0) {
+		page = 4096;
 	}
 	lo = ((uintptr_t)p + (uintptr_t)page - 1) & ~((uintptr_t)page - 1);
 	hi = ((uintptr_t)p + n) & ~((uintptr_t)page - 1);
