@@ -219,13 +219,10 @@ void bc__put_shaded(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
 /* Writes pixel (x, y) for a ray that missed after `evals` evaluations. */
 void bc__put_miss(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
                   uint32_t evals, uint32_t overlaps);
-/* bc__put_miss for the pixels x0 + i of row y whose bit i is set in bits,
- * none of them having taken an evaluation: one colour for all of them. */
-void bc__put_miss_row(const struct bc__frame_ctx *fc, uint32_t x0, uint32_t y,
-                      uint64_t bits, uint32_t overlaps);
-/* bc__put_miss_row for the pixels of tile [x0, x1) x [y0, y1) (at most
- * BC_CPU_TILE on a side) whose bit (y - y0) * BC_CPU_TILE + (x - x0) is
- * set in mask; overlaps 0. */
+/* bc__put_miss, no evaluation taken and overlaps 0, for the pixels of
+ * tile [x0, x1) x [y0, y1) (at most BC_CPU_TILE on a side) whose bit
+ * (y - y0) * BC_CPU_TILE + (x - x0) is set in mask, a row's colour
+ * computed once. */
 void bc__put_miss_tile(const struct bc__frame_ctx *fc, uint32_t x0, uint32_t y0,
                        uint32_t x1, uint32_t y1, uint64_t mask);
 

@@ -42,34 +42,17 @@ static void debug_colour(const struct bc__frame_ctx *fc, uint32_t evals,
 	}
 }
 
-void bc__put_miss(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
-                  uint32_t evals, uint32_t overlaps)
-{
-	struct bc_frame *out = fc->out;
-	size_t i = (size_t)y * out->width + x;
-	uint8_t *px = out->rgba + 4 * i;
-	if (fc->debug != BC_DEBUG_NONE) {
-		debug_colour(fc, evals, overlaps, px);
-	} else {
-		bc_shade_miss(bc_frame_view_row(out, y),
-		              bc_frame_view_height(out), px);
-	}
-	if (out->depth) {
-		out->depth[i] = INFINITY;
-	}
-	if (out->ids) {
-		out->ids[i] = 0;
-	}
-}
-
-void bc__put_miss_row(const struct bc__frame_ctx *fc, uint32_t x0, uint32_t y,
-                      uint64_t bits, uint32_t overlaps)
+/* Writes the pixels x0 + i of row y whose bit i is set in bits as misses
+ * after `evals` evaluations: one colour for all of them. */
+static void put_miss_row(const struct bc__frame_ctx *fc, uint32_t x0,
+                         uint32_t y, uint64_t bits, uint32_t evals,
+                         uint32_t overlaps)
 {
 	struct bc_frame *out = fc->out;
 	size_t row = (size_t)y * out->width + x0;
 	uint8_t c[4];
 	if (fc->debug != BC_DEBUG_NONE) {
-		debug_colour(fc, 0, overlaps, c);
+		debug_colour(fc, evals, overlaps, c);
 	} else {
 		bc_shade_miss(bc_frame_view_row(out, y),
 		              bc_frame_view_height(out), c);
@@ -86,6 +69,12 @@ void bc__put_miss_row(const struct bc__frame_ctx *fc, uint32_t x0, uint32_t y,
 	}
 }
 
+void bc__put_miss(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
+                  uint32_t evals, uint32_t overlaps)
+{
+	put_miss_row(fc, x, y, 1u, evals, overlaps);
+}
+
 void bc__put_miss_tile(const struct bc__frame_ctx *fc, uint32_t x0, uint32_t y0,
                        uint32_t x1, uint32_t y1, uint64_t mask)
 {
@@ -93,7 +82,7 @@ void bc__put_miss_tile(const struct bc__frame_ctx *fc, uint32_t x0, uint32_t y0,
 	for (uint32_t y = y0; y < y1; y++) {
 		uint64_t bits = (mask >> ((y - y0) * BC_CPU_TILE)) & row;
 		if (bits) {
-			bc__put_miss_row(fc, x0, y, bits, 0);
+			put_miss_row(fc, x0, y, bits, 0, 0);
 		}
 	}
 }
