@@ -172,9 +172,9 @@ bool bc__pk_ray_feed(struct bc__pk_ray *r, const struct bc__frame_ctx *fc,
                      float value);
 
 /* The states that wait for the value at the start (t0), at a marching
- * step (relaxed, or plain after a failed relaxed one) and at a
- * bisection's midpoint: such lanes may take their next samples in the
- * kernel (bc__pk_march_fn). */
+ * step (relaxed, or plain after a failed relaxed one), at a secant probe
+ * and at a bisection's midpoint: such lanes may take their next samples
+ * in the kernel (bc__pk_march_fn). */
 #define BC__PK_INIT 1
 #define BC__PK_STEP 2
 #define BC__PK_STEP2 3

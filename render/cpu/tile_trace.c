@@ -178,8 +178,8 @@ static void settle_px(const struct bc__tile_job *job,
 	px->left--;
 }
 
-/* Evaluations a marching or bisecting lane may take in the kernel before the
- * state machine must see it again: what its bound leaves after `spent`, and at
+/* Evaluations a lane may take in the kernel before the state machine
+ * must see it again: what its bound leaves after `spent`, and at
  * most 2^24, up to which the kernel's float count is exact. */
 static float lane_budget(const struct bc__frame_ctx *fc, uint32_t spent)
 {
@@ -193,7 +193,27 @@ static float lane_budget(const struct bc__frame_ctx *fc, uint32_t spent)
 }
 
 /* The kinds of lane the kernel steps (packet.h's bc__pk_march_fn). */
-enum lane_kind { LANE_MARCH, LANE_BISECT, LANE_REFINE };
+enum lane_kind { LANE_MARCH, LANE_BISECT, LANE_REFINE, LANE_KINDS };
+
+/* The kind of lane a ray waiting in `state` makes; false for a state
+ * only the state machine takes (the golden-section search). */
+static bool lane_kind_of(uint8_t state, enum lane_kind *kind)
+{
+	switch (state) {
+	case BC__PK_STEP:
+	case BC__PK_STEP2:
+		*kind = LANE_MARCH;
+		return true;
+	case BC__PK_BISECT:
+		*kind = LANE_BISECT;
+		return true;
+	case BC__PK_REFINE:
+		*kind = LANE_REFINE;
+		return true;
+	default:
+		return false;
+	}
+}
 
 /* A lane's state moves between the ray (the state machine's) and the
  * packet's arrays (the kernel's): a marching or refining lane keeps t, v,
@@ -370,9 +390,8 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 	uint8_t queue[BC_CPU_TILE * BC_CPU_TILE];
 	uint8_t hit_px[BC_CPU_TILE * BC_CPU_TILE];
 	float hit_t[BC_CPU_TILE * BC_CPU_TILE];
-	uint32_t nq = 0, head = 0, nh = 0, active = 0, march = 0, bisect = 0,
-	         refine = 0;
-	uint32_t slow,
+	uint32_t nq = 0, head = 0, nh = 0, active = 0, slow;
+	uint32_t kinds[LANE_KINDS] = {0}, /* the lanes of each kind */
 	    lanes = k.lanes >= 32 ? UINT32_MAX : (1u << k.lanes) - 1u;
 	const struct bc__pk_steps st = {
 	    .eps_per_t = BC_CPU_HIT_FOOTPRINT * fc->pix_angle,
@@ -429,27 +448,26 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 			start_lanes(&ray[i], &ln, i,
 			            lane_budget(fc, px->evals[p]));
 			active |= 1u << i;
-			march |= 1u << i;
+			kinds[LANE_MARCH] |= 1u << i;
 			free &= free - 1u;
 		}
 		if (!active) {
 			break;
 		}
-		slow = k.march(&wk->view, fc->lin, &ln, active, &march, &bisect,
-		               &refine, &st);
+		slow =
+		    k.march(&wk->view, fc->lin, &ln, active, &kinds[LANE_MARCH],
+		            &kinds[LANE_BISECT], &kinds[LANE_REFINE], &st);
 		for (uint32_t bits = slow; bits; bits &= bits - 1) {
 			uint32_t i = lowest_bit(bits), p;
 			struct bc__pk_ray *r = &ray[i];
-			if ((march >> i) & 1u) {
-				from_lanes(r, &ln, i, LANE_MARCH);
-			} else if ((bisect >> i) & 1u) {
-				from_lanes(r, &ln, i, LANE_BISECT);
-			} else if ((refine >> i) & 1u) {
-				from_lanes(r, &ln, i, LANE_REFINE);
+			enum lane_kind kind;
+			for (kind = LANE_MARCH; kind < LANE_KINDS; kind++) {
+				if ((kinds[kind] >> i) & 1u) {
+					from_lanes(r, &ln, i, kind);
+					kinds[kind] &= ~(1u << i);
+					break;
+				}
 			}
-			march &= ~(1u << i);
-			bisect &= ~(1u << i);
-			refine &= ~(1u << i);
 			/* trace.c's eval_at: the field over the bounds. */
 			p = lane_px[i];
 			if (!bc__pk_ray_feed(r, fc,
@@ -459,22 +477,11 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 				uint32_t spent = px->evals[p] + r->evals;
 				if (within(fc, spent, 1)) {
 					ln.t[i] = r->q;
-					if (r->state == BC__PK_STEP ||
-					    r->state == BC__PK_STEP2) {
+					if (lane_kind_of(r->state, &kind)) {
 						to_lanes(
-						    r, &ln, i, LANE_MARCH,
+						    r, &ln, i, kind,
 						    lane_budget(fc, spent));
-						march |= 1u << i;
-					} else if (r->state == BC__PK_BISECT) {
-						to_lanes(
-						    r, &ln, i, LANE_BISECT,
-						    lane_budget(fc, spent));
-						bisect |= 1u << i;
-					} else if (r->state == BC__PK_REFINE) {
-						to_lanes(
-						    r, &ln, i, LANE_REFINE,
-						    lane_budget(fc, spent));
-						refine |= 1u << i;
+						kinds[kind] |= 1u << i;
 					}
 					continue;
 				}
