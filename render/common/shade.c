@@ -8,13 +8,68 @@
 
 #include <math.h>
 #include <pthread.h>
+#include <stdbool.h>
 #include <string.h>
 
 #include "blobcast/vec.h"
-static inline float maxf(float a, float b)
+
+/* blobcast/shade_lanes.h's vocabulary, one float a lane. */
+typedef float vf;
+typedef bool vm;
+static inline vf vset1(float a)
+{
+	return a;
+}
+static inline vf vadd(vf a, vf b)
+{
+	return a + b;
+}
+static inline vf vsub(vf a, vf b)
+{
+	return a - b;
+}
+static inline vf vmul(vf a, vf b)
+{
+	return a * b;
+}
+static inline vf vdiv(vf a, vf b)
+{
+	return a / b;
+}
+static inline vf vsqrt(vf a)
+{
+	return sqrtf(a);
+}
+static inline vf vabs(vf a)
+{
+	return fabsf(a);
+}
+static inline vf vneg(vf a)
+{
+	return -a;
+}
+static inline vf vmax(vf a, vf b)
 {
 	return a > b ? a : b;
 }
+static inline vm vgt(vf a, vf b)
+{
+	return a > b;
+}
+static inline vm vle(vf a, vf b)
+{
+	return a <= b;
+}
+static inline vm mand(vm a, vm b)
+{
+	return a && b;
+}
+static inline vf vsel(vm m, vf a, vf b)
+{
+	return m ? a : b;
+}
+
+#include "blobcast/shade_lanes.h"
 
 /* The sRGB byte of linear c: the transfer function, rounded. This is the
  * definition; bc_shade_srgb8 gives the same bytes by table. */
@@ -153,47 +208,18 @@ void bc_shade_miss(uint32_t y, uint32_t height, uint8_t px[4])
 	px[3] = 255;
 }
 
+void bc_shade_put_lit(const float lit[3], uint8_t px[4])
+{
+	for (int c = 0; c < 3; c++) {
+		px[c] = srgb8_table(lit[c]);
+	}
+	px[3] = 255;
+}
+
 void bc_shade_hit(const struct bc_shade *s, const float grad[3],
                   const float d[3], const float albedo[3], uint8_t px[4])
 {
-	float n[3] = {grad[0], grad[1], grad[2]};
-	float hv[3] = {s->light[0] - d[0], s->light[1] - d[1],
-	               s->light[2] - d[2]};
-	float diff, spec;
-	if (!(isfinite(n[0]) && isfinite(n[1]) && isfinite(n[2])) ||
-	    bc_v3_dot(n, n) == 0.0f) {
-		/* No usable gradient (a sample fell outside every active
-		 * primitive): face the viewer. */
-		n[0] = -d[0];
-		n[1] = -d[1];
-		n[2] = -d[2];
-	}
-	bc_v3_normalize_div(n);
-	if (bc_v3_dot(n, d) > 0.0f) {
-		/* Seen from inside (the eye is in the solid): light the side
-		 * that faces us. */
-		n[0] = -n[0];
-		n[1] = -n[1];
-		n[2] = -n[2];
-	}
-	diff = maxf(bc_v3_dot(n, s->light), 0.0f);
-	bc_v3_normalize_div(hv);
-	if (diff > 0.0f) {
-		/* x^48 as (x^3)^16: five products instead of a powf call (2 %
-		 * of an svo frame); the highlight moves by a few ulps. */
-		float x = maxf(bc_v3_dot(n, hv), 0.0f);
-		spec = x * x * x;
-		for (int k = 0; k < 4; k++) {
-			spec *= spec;
-		}
-	} else {
-		spec = 0.0f;
-	}
-	for (int c = 0; c < 3; c++) {
-		float lit =
-		    albedo[c] * (s->ambient + (1.0f - s->ambient) * diff) +
-		    0.25f * spec;
-		px[c] = srgb8_table(lit);
-	}
-	px[3] = 255;
+	float lit[3];
+	bc__shade_lit(s, grad, d, albedo, lit);
+	bc_shade_put_lit(lit, px);
 }

@@ -216,6 +216,13 @@ void bc__put_hit(const struct bc__frame_ctx *fc, struct bc__field *f,
 void bc__put_shaded(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
                     const float d[3], float t, const float n[3], uint32_t prim,
                     uint32_t evals, uint32_t overlaps);
+/* bc__put_shaded without the debug views, for tracers that shaded the
+ * hit themselves (blobcast/shade_lanes.h): writes pixel (x, y) from its
+ * linear colour lit. */
+void bc__put_lit(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
+                 float t, const float lit[3], uint32_t prim);
+/* The albedo of primitive index prim (grey for BC_NONE). */
+const float *bc__albedo(const struct bc_lin *lin, uint32_t prim);
 /* Writes pixel (x, y) for a ray that missed after `evals` evaluations. */
 void bc__put_miss(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
                   uint32_t evals, uint32_t overlaps);

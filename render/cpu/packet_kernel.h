@@ -12,9 +12,10 @@
  *   vsel(m, a, b) = m ? a : b (bitwise)
  *   vbits(u)          every lane holds the bits of uint32_t u
  *
- * and PK_MARCH, PK_EVAL_ID, the kernels' names. Including it twice (AVX2 and
- * AVX-512) gives two kernels whose lanes do the same operations in the same
- * order.
+ * and PK_MARCH, PK_EVAL, PK_EVAL_ID, PK_SHADE, the kernels' names. Including it
+ * twice (AVX2 and AVX-512) gives two kernels whose lanes do the same
+ * operations in the same order. PK_SHADE's formulas are
+ * blobcast/shade_lanes.h's, on this vocabulary.
  *
  * The view is interpreted instruction by instruction: each primitive's
  * affine map and field and each operator are inlined vector code over the
@@ -27,6 +28,8 @@
 #include <math.h>
 #include <stdbool.h>
 #include <string.h>
+
+#include "blobcast/shade_lanes.h"
 
 static inline vf vclamp(vf v, vf lo, vf hi)
 {
@@ -562,8 +565,30 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
 	return active & ~stepped;
 }
 
+void PK_EVAL(const struct bc_view *v, const struct bc_lin *lin,
+             struct bc__pk_lanes *ln, uint32_t active)
+{
+	run(v, lin, ln, active, false);
+}
+
 void PK_EVAL_ID(const struct bc_view *v, const struct bc_lin *lin,
                 struct bc__pk_lanes *ln, uint32_t active)
 {
 	run(v, lin, ln, active, true);
+}
+
+void PK_SHADE(const struct bc_shade *s, struct bc__pk_shade *sh, uint32_t n)
+{
+	for (uint32_t i = 0; i < n; i += PK_LANES) {
+		vf g[3], d[3], albedo[3], lit[3];
+		for (int c = 0; c < 3; c++) {
+			g[c] = vload(sh->g[c] + i);
+			d[c] = vload(sh->d[c] + i);
+			albedo[c] = vload(sh->albedo[c] + i);
+		}
+		bc__shade_lit(s, g, d, albedo, lit);
+		for (int c = 0; c < 3; c++) {
+			vstore(sh->lit[c] + i, lit[c]);
+		}
+	}
 }

@@ -113,21 +113,18 @@ void bc__put_hit(const struct bc__frame_ctx *fc, struct bc__field *f,
 	bc__put_shaded(fc, x, y, d, t, n, prim, f->evals, overlaps);
 }
 
-void bc__put_shaded(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
-                    const float d[3], float t, const float n[3], uint32_t prim,
-                    uint32_t evals, uint32_t overlaps)
+const float *bc__albedo(const struct bc_lin *lin, uint32_t prim)
+{
+	static const float grey[3] = {0.7f, 0.7f, 0.7f};
+	return prim < lin->nprims ? lin->color[prim] : grey;
+}
+
+/* The depth and id planes of pixel i for a hit at t on primitive prim. */
+static void put_depth_id(const struct bc__frame_ctx *fc, size_t i, float t,
+                         uint32_t prim)
 {
 	const struct bc_lin *lin = fc->lin;
 	struct bc_frame *out = fc->out;
-	size_t i = (size_t)y * out->width + x;
-	uint8_t *px = out->rgba + 4 * i;
-	if (fc->debug != BC_DEBUG_NONE) {
-		debug_colour(fc, evals, overlaps, px);
-	} else {
-		static const float grey[3] = {0.7f, 0.7f, 0.7f};
-		bc_shade_hit(&fc->shade, n, d,
-		             prim < lin->nprims ? lin->color[prim] : grey, px);
-	}
 	if (out->depth) {
 		out->depth[i] = t;
 	}
@@ -135,4 +132,28 @@ void bc__put_shaded(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
 		out->ids[i] =
 		    prim < lin->nprims ? lin->node_id[lin->prim_slot[prim]] : 0;
 	}
+}
+
+void bc__put_shaded(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
+                    const float d[3], float t, const float n[3], uint32_t prim,
+                    uint32_t evals, uint32_t overlaps)
+{
+	struct bc_frame *out = fc->out;
+	size_t i = (size_t)y * out->width + x;
+	uint8_t *px = out->rgba + 4 * i;
+	if (fc->debug != BC_DEBUG_NONE) {
+		debug_colour(fc, evals, overlaps, px);
+	} else {
+		bc_shade_hit(&fc->shade, n, d, bc__albedo(fc->lin, prim), px);
+	}
+	put_depth_id(fc, i, t, prim);
+}
+
+void bc__put_lit(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
+                 float t, const float lit[3], uint32_t prim)
+{
+	struct bc_frame *out = fc->out;
+	size_t i = (size_t)y * out->width + x;
+	bc_shade_put_lit(lit, out->rgba + 4 * i);
+	put_depth_id(fc, i, t, prim);
 }

@@ -803,6 +803,116 @@ static void test_kernel_steps_match_state_machine(void)
 	bc_tree_destroy(t);
 }
 
+/* A gradient for the shading test: mostly random, sometimes one the
+ * shading must replace (zero, infinite, NaN) or an extreme length. */
+static void shade_grad(uint64_t *state, float g[3])
+{
+	float pick = ab_rand(state);
+	for (int c = 0; c < 3; c++) {
+		g[c] = ab_rand(state);
+	}
+	if (pick > 0.9f) {
+		g[0] = g[1] = g[2] = 0.0f;
+	} else if (pick > 0.8f) {
+		g[(int)(ab_rand(state) * 1.4f + 1.5f)] =
+		    ab_rand(state) > 0.0f ? INFINITY : -INFINITY;
+	} else if (pick > 0.7f) {
+		g[1] = NAN;
+	} else if (pick > 0.6f) {
+		g[2] *= 1e-42f; /* subnormal */
+		g[0] = g[1] = 0.0f;
+	} else if (pick > 0.5f) {
+		g[0] *= 3e37f; /* |g|^2 overflows */
+	}
+}
+
+/* The packet kernels shade a tile's hits (packet.h's bc__pk_shade_fn):
+ * each hit's bytes must be bc_shade_hit's, bit for bit, for gradients
+ * of every kind (unusable ones included), rays seen from inside and
+ * from outside, lit and unlit sides, random lights and albedos, and any
+ * count of hits (the lanes past the count are padding). */
+static void test_shade_kernel_matches_shade_hit(void)
+{
+	uint64_t state = 7;
+	uint32_t widths = 0, inside = 0, bad_grad = 0;
+	for (size_t m = 1; m < NMODES; m++) {
+		struct bc__pk_kernel k = bc__pk_kernel_for(modes[m].simd);
+		if (!k.shade) {
+			continue;
+		}
+		widths++;
+		for (int trial = 0; trial < 400; trial++) {
+			struct bc__pk_shade sh;
+			struct bc_shade s;
+			uint32_t n = 1 + (uint32_t)((ab_rand(&state) + 1.0f) *
+			                            0.5f * BC_PK_SHADE_MAX);
+			uint32_t nv = (n + k.lanes - 1) / k.lanes * k.lanes;
+			n = n > BC_PK_SHADE_MAX ? BC_PK_SHADE_MAX : n;
+			nv = nv > BC_PK_SHADE_MAX ? BC_PK_SHADE_MAX : nv;
+			for (int c = 0; c < 3; c++) {
+				s.light[c] = ab_rand(&state);
+			}
+			ab_unit(s.light);
+			s.ambient = 0.18f * (ab_rand(&state) + 1.0f);
+			(void)bc_shade_srgb8(0.5f); /* builds the table */
+			for (uint32_t i = 0; i < nv; i++) {
+				float g[3], d[3];
+				shade_grad(&state, g);
+				for (int c = 0; c < 3; c++) {
+					d[c] = ab_rand(&state);
+				}
+				ab_unit(d);
+				for (int c = 0; c < 3; c++) {
+					sh.g[c][i] = g[c];
+					sh.d[c][i] = d[c];
+					sh.albedo[c][i] =
+					    (ab_rand(&state) + 1.0f) * 0.6f;
+				}
+			}
+			k.shade(&s, &sh, n);
+			for (uint32_t i = 0; i < n; i++) {
+				float g[3] = {sh.g[0][i], sh.g[1][i],
+				              sh.g[2][i]};
+				float d[3] = {sh.d[0][i], sh.d[1][i],
+				              sh.d[2][i]};
+				float a[3] = {sh.albedo[0][i], sh.albedo[1][i],
+				              sh.albedo[2][i]};
+				float lit[3] = {sh.lit[0][i], sh.lit[1][i],
+				                sh.lit[2][i]};
+				uint8_t want[4], got[4];
+				bool usable =
+				    isfinite(g[0]) && isfinite(g[1]) &&
+				    isfinite(g[2]) &&
+				    g[0] * g[0] + g[1] * g[1] + g[2] * g[2] >
+				        0.0f;
+				bc_shade_hit(&s, g, d, a, want);
+				bc_shade_put_lit(lit, got);
+				if (memcmp(want, got, 4) != 0) {
+					fprintf(stderr,
+					        "  %s hit %u of %u: g (%g %g "
+					        "%g) gives %u %u %u, "
+					        "bc_shade_hit %u %u %u\n",
+					        modes[m].name, i, n, g[0], g[1],
+					        g[2], got[0], got[1], got[2],
+					        want[0], want[1], want[2]);
+				}
+				CHECK_MEMEQ(want, got, 4);
+				bad_grad += usable ? 0u : 1u;
+				inside += usable && g[0] * d[0] + g[1] * d[1] +
+				                            g[2] * d[2] >
+				                        0.0f;
+			}
+		}
+	}
+	if (widths == 0) {
+		fprintf(stderr, "  no vector kernel on this CPU\n");
+		return;
+	}
+	/* The cases the comparison must have met. */
+	CHECK(bad_grad > 100);
+	CHECK(inside > 100);
+}
+
 static const struct bc_test tests[] = {
     {"simd_matches_scalar_unary_nodes", test_simd_matches_scalar_unary_nodes},
     {"simd_matches_scalar_fig18", test_simd_matches_scalar_fig18},
@@ -814,6 +924,7 @@ static const struct bc_test tests[] = {
     {"abuffer_abv_kernel_matches_scalar",
      test_abuffer_abv_kernel_matches_scalar},
     {"kernel_steps_match_state_machine", test_kernel_steps_match_state_machine},
+    {"shade_kernel_matches_shade_hit", test_shade_kernel_matches_shade_hit},
     {"threads_do_not_change_simd_pixels",
      test_threads_do_not_change_simd_pixels},
 };

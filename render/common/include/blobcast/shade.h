@@ -24,9 +24,15 @@ void bc_shade_init(struct bc_shade *s, const struct bc_view_rays *vr);
 /* Writes the RGBA of a surface point seen along unit direction d with field
  * gradient grad (any length; zero or non-finite: the surface faces the
  * viewer; seen from inside: the side facing the viewer is lit) and linear
- * albedo. s must have been set by bc_shade_init. */
+ * albedo. s must have been set by bc_shade_init. The colour is
+ * blobcast/shade_lanes.h's, which shades several pixels at once. */
 void bc_shade_hit(const struct bc_shade *s, const float grad[3],
                   const float d[3], const float albedo[3], uint8_t px[4]);
+
+/* Writes the RGBA of linear colour lit (bc_shade_hit's bytes for the
+ * colour blobcast/shade_lanes.h computed). bc_shade_init must have been
+ * called once in the process (it builds the sRGB table). */
+void bc_shade_put_lit(const float lit[3], uint8_t px[4]);
 
 /* Writes the background of row y of an image height rows tall. */
 void bc_shade_miss(uint32_t y, uint32_t height, uint8_t px[4]);
