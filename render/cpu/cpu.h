@@ -112,14 +112,11 @@ static inline float bc__maxf(float a, float b)
 	return a > b ? a : b;
 }
 
-/* Bits set in x. */
+/* Bits set in x: a few instructions (a loop over the bits cost a full
+ * tile 64 rounds, 2-4 % of a gears frame). */
 static inline uint32_t bc__popcount64(uint64_t x)
 {
-	uint32_t n = 0;
-	for (; x; x &= x - 1) {
-		n++;
-	}
-	return n;
+	return (uint32_t)__builtin_popcountll(x);
 }
 
 /* ---- The field ---------------------------------------------------------- */

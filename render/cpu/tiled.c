@@ -209,6 +209,13 @@ static int grow_tiles(struct bc__tiled_bufs *b, size_t n)
 
 /* ---- One frame ---------------------------------------------------------- */
 
+/* The tiles [lo, hi) of a tile phase still to hand out from one thread's
+ * share, lo in the low half of the word: the owner's takes from the front
+ * and the other threads' from the back are each one compare-and-swap. */
+struct tile_span {
+	_Alignas(64) _Atomic uint64_t lohi;
+};
+
 struct tiled_frame {
 	const struct bc__frame_ctx *fc;
 	struct bc__tiled_bufs *b;
@@ -218,9 +225,10 @@ struct tiled_frame {
 	uint32_t nprims;
 	const struct bc_render_region *region;
 	uint32_t threads; /* the call's share of the renderer's threads */
-	/* Work counter of the running phase, and tiles traced: each on a
+	/* Work counter of the primitives' phase, and tiles traced: each on a
 	 * cache line of its own, away from the fields every thread reads. */
 	_Alignas(64) atomic_uint next;
+	struct tile_span spans[BC_POOL_MAX_THREADS]; /* see next_tile */
 	_Alignas(64) atomic_uint tiles_done;
 	struct bc__progress progress;
 	/* bc_clock_ms() past which no tile starts; 0: none. */
@@ -800,36 +808,80 @@ static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
  * then writes whole cache lines of the frame's planes and of the per-tile
  * arrays (an 8-pixel tile row is 32 bytes of colour, depth and ids), where
  * single tiles taken in turn by two threads had them share every line
- * between neighbours, and it takes the shared counter once per run
- * instead of once per tile. Runs of 8 tiles are a 64-pixel strip; the
- * last tiles of a phase go one at a time (next_tile). */
+ * between neighbours. Runs of 8 tiles are a 64-pixel strip; the last
+ * tiles of a share go one at a time, which evens out the threads' ends. */
 #define TILE_RUN 8u
 
-/* The next tile of the running phase for this thread: *tile + 1 within
- * its run while it lasts (*end), else the first of a new run. False when
- * the region's tiles are all taken. */
-static inline bool next_tile(struct tiled_frame *tf, uint32_t *tile,
-                             uint32_t *end)
+static inline uint64_t span_word(uint32_t lo, uint32_t hi)
 {
-	uint32_t run;
+	return (uint64_t)lo | (uint64_t)hi << 32;
+}
+
+/* Gives each of the phase's threads an equal share of the region's tiles,
+ * in order: thread i the i-th slice. */
+static void spans_init(struct tiled_frame *tf)
+{
+	uint32_t n = tf->threads < 1 ? 1u : tf->threads;
+	uint64_t count = tf->t1 - tf->t0;
+	n = n > BC_POOL_MAX_THREADS ? BC_POOL_MAX_THREADS : n;
+	for (uint32_t i = 0; i < BC_POOL_MAX_THREADS; i++) {
+		uint32_t lo = tf->t0 + (uint32_t)(count * i / n);
+		uint32_t hi = tf->t0 + (uint32_t)(count * (i + 1) / n);
+		atomic_init(&tf->spans[i].lohi,
+		            i < n ? span_word(lo, hi) : span_word(0, 0));
+	}
+}
+
+/* A run from span sp: its front for the owner, its back for another
+ * thread. False when it is empty. */
+static bool span_take(struct tile_span *sp, bool front, uint32_t *tile,
+                      uint32_t *end)
+{
+	uint64_t w = atomic_load_explicit(&sp->lohi, memory_order_relaxed);
+	for (;;) {
+		uint32_t lo = (uint32_t)w, hi = (uint32_t)(w >> 32), run;
+		if (lo >= hi) {
+			return false;
+		}
+		run = hi - lo > 2u * TILE_RUN ? TILE_RUN : 1u;
+		if (atomic_compare_exchange_weak_explicit(
+		        &sp->lohi, &w,
+		        front ? span_word(lo + run, hi)
+		              : span_word(lo, hi - run),
+		        memory_order_relaxed, memory_order_relaxed)) {
+			*tile = front ? lo : hi - run;
+			*end = *tile + run;
+			return true;
+		}
+	}
+}
+
+/* The next tile of the running phase for `thread`: *tile + 1 within its
+ * run while it lasts (*end), else the first of a new run from its own
+ * share, else from the back of another's. A thread thus draws the same
+ * tiles frame after frame, except where the shares' ends meet: the frame's
+ * cache lines stay in one core's cache (taking runs from one counter in
+ * turn, two threads swapped a third of them every frame, and writing a
+ * background row cost three times what it does on one thread). False when
+ * the region's tiles are all taken. */
+static inline bool next_tile(struct tiled_frame *tf, uint32_t thread,
+                             uint32_t *tile, uint32_t *end)
+{
+	uint32_t n = tf->threads < 1 ? 1u : tf->threads;
+	n = n > BC_POOL_MAX_THREADS ? BC_POOL_MAX_THREADS : n;
 	if (*tile + 1 < *end) {
 		++*tile;
 		return true;
 	}
-	/* The last runs are single tiles, which evens out the threads'
-	 * ends. Racing loads of the counter only choose a run's length:
-	 * the add hands out each tile once whatever they choose. */
-	run = atomic_load_explicit(&tf->next, memory_order_relaxed) +
-	                  2u * TILE_RUN * tf->threads <
-	              tf->t1
-	          ? TILE_RUN
-	          : 1u;
-	*tile = atomic_fetch_add(&tf->next, run);
-	if (*tile >= tf->t1) {
-		return false;
+	if (span_take(&tf->spans[thread], true, tile, end)) {
+		return true;
 	}
-	*end = *tile + run < tf->t1 ? *tile + run : tf->t1;
-	return true;
+	for (uint32_t k = 1; k < n; k++) {
+		if (span_take(&tf->spans[(thread + k) % n], false, tile, end)) {
+			return true;
+		}
+	}
+	return false;
 }
 
 /* Phase 2, per tile of the region not yet complete: its rays and cones
@@ -839,12 +891,11 @@ static void phase_lists(void *arg, uint32_t thread)
 	struct tiled_frame *tf = arg;
 	struct bc__tiled_bufs *b = tf->b;
 	uint32_t tile = 0, end = 0;
-	(void)thread;
 	for (;;) {
 		uint32_t tx, ty;
 		struct bc__ab_rays rays;
 		uint64_t quarter[4];
-		if (!next_tile(tf, &tile, &end)) {
+		if (!next_tile(tf, thread, &tile, &end)) {
 			break;
 		}
 		tx = tile % tf->tw;
@@ -910,7 +961,7 @@ static void phase_trace(void *arg, uint32_t thread)
 				                  atomic_load(&tf->tiles_done));
 			}
 		}
-		if (!next_tile(tf, &tile, &end)) {
+		if (!next_tile(tf, thread, &tile, &end)) {
 			break;
 		}
 		tx = tile % tf->tw;
@@ -1147,7 +1198,7 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 		}
 	}
 	if (todo > 0) {
-		atomic_store(&tf.next, tf.t0);
+		spans_init(&tf);
 		bc_pool_run(tf.threads, phase_lists, &tf);
 	}
 	for (uint32_t t = tf.t0; t < tf.t1; t++) {
@@ -1161,7 +1212,7 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 	}
 	t_ab = bc_clock_ms();
 	bc__progress_init(&tf.progress, r, tf.ntiles);
-	atomic_store(&tf.next, tf.t0);
+	spans_init(&tf);
 	bc_pool_run(tf.threads, phase_trace, &tf);
 	for (uint32_t i = 0; i < r->threads; i++) {
 		overflows += b->workers[i].overflows;
