@@ -269,15 +269,14 @@ bool bc__pk_ray_feed(struct bc__pk_ray *r, const struct bc__frame_ctx *fc,
 
 struct bc__pk_kernel bc__pk_kernel_for(enum bc_simd simd)
 {
-	struct bc__pk_kernel none = {NULL, NULL, NULL, NULL, 1};
+	struct bc__pk_kernel none = {NULL, NULL, NULL, 1};
 #if defined(BLOBCAST_SIMD_X86)
 #define AVX2                                                                   \
-	((struct bc__pk_kernel){bc__pk_march_avx2, bc__pk_eval_avx2,           \
-	                        bc__pk_eval_id_avx2, bc__pk_shade_avx2, 8})
+	((struct bc__pk_kernel){bc__pk_march_avx2, bc__pk_hits_avx2,           \
+	                        bc__pk_shade_avx2, 8})
 #define AVX512                                                                 \
-	((struct bc__pk_kernel){bc__pk_march_avx512, bc__pk_eval_avx512,       \
-	                        bc__pk_eval_id_avx512, bc__pk_shade_avx512,    \
-	                        16})
+	((struct bc__pk_kernel){bc__pk_march_avx512, bc__pk_hits_avx512,       \
+	                        bc__pk_shade_avx512, 16})
 	bool avx2, avx512;
 	__builtin_cpu_init();
 	avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");

@@ -123,28 +123,43 @@ typedef uint32_t (*bc__pk_march_fn)(const struct bc_view *v,
                                     uint32_t *refine,
                                     const struct bc__pk_steps *st);
 
-/* A tile's hits to shade (blobcast/shade_lanes.h), hit i in element i of
- * each array: its field gradient g, ray direction d and albedo in, its
- * linear colour lit out. */
+/* A tile's hits to shade, hit i in element i of each array: in, the hit
+ * point o and its difference step (bc__put_hit's p and h), the ray
+ * direction d; then, from bc__pk_hits_fn, the primitive there and the
+ * field gradient g; in again, the albedo; out of bc__pk_shade_fn, the
+ * linear colour lit. The kernels read whole vectors: the elements from
+ * the hit count up to the next multiple of their width must hold numbers
+ * (their results are computed and unused). */
 #define BC_PK_SHADE_MAX (BC_CPU_TILE * BC_CPU_TILE)
 struct bc__pk_shade {
-	_Alignas(64) float g[3][BC_PK_SHADE_MAX];
+	_Alignas(64) float o[3][BC_PK_SHADE_MAX];
+	_Alignas(64) float step[BC_PK_SHADE_MAX];
 	_Alignas(64) float d[3][BC_PK_SHADE_MAX];
+	_Alignas(64) uint32_t prim[BC_PK_SHADE_MAX];
+	_Alignas(64) float g[3][BC_PK_SHADE_MAX];
 	_Alignas(64) float albedo[3][BC_PK_SHADE_MAX];
 	_Alignas(64) float lit[3][BC_PK_SHADE_MAX];
 };
 
+/* bc__put_hit's samples of hits 0 .. n - 1 of sh (n <= BC_PK_SHADE_MAX)
+ * in view v, a lane a hit: prim[] the primitive deciding the field at o
+ * (bc_view_eval_id's), g[] the sum of tet[k] times the field at
+ * o + step tet[k] over its four tetrahedral offsets, in its order from 0,
+ * bit for bit. ln is scratch. */
+typedef void (*bc__pk_hits_fn)(const struct bc_view *v,
+                               const struct bc_lin *lin,
+                               struct bc__pk_lanes *ln, struct bc__pk_shade *sh,
+                               uint32_t n);
+
 /* Shades hits 0 .. n - 1 of sh (n <= BC_PK_SHADE_MAX) with s's light:
- * lit[][i] is bc__shade_lit's colour for hit i, bit for bit. The kernel
- * reads whole vectors: the elements from n up to the next multiple of its
- * width must hold numbers (their colours are computed and unused). */
+ * lit[][i] is blobcast/shade_lanes.h's colour for hit i, bit for bit the
+ * one bc_shade_hit computes. */
 typedef void (*bc__pk_shade_fn)(const struct bc_shade *s,
                                 struct bc__pk_shade *sh, uint32_t n);
 
 struct bc__pk_kernel {
-	bc__pk_march_fn march;  /* NULL: trace one ray at a time (scalar) */
-	bc__pk_eval_fn eval;    /* evaluation alone */
-	bc__pk_eval_fn eval_id; /* evaluation with id[] */
+	bc__pk_march_fn march; /* NULL: trace one ray at a time (scalar) */
+	bc__pk_hits_fn hits;
 	bc__pk_shade_fn shade;
 	uint32_t lanes;
 };
@@ -158,18 +173,16 @@ uint32_t bc__pk_march_avx2(const struct bc_view *v, const struct bc_lin *lin,
                            struct bc__pk_lanes *ln, uint32_t active,
                            uint32_t *march, uint32_t *bisect, uint32_t *refine,
                            const struct bc__pk_steps *st);
-void bc__pk_eval_avx2(const struct bc_view *v, const struct bc_lin *lin,
-                      struct bc__pk_lanes *ln, uint32_t active);
-void bc__pk_eval_id_avx2(const struct bc_view *v, const struct bc_lin *lin,
-                         struct bc__pk_lanes *ln, uint32_t active);
+void bc__pk_hits_avx2(const struct bc_view *v, const struct bc_lin *lin,
+                      struct bc__pk_lanes *ln, struct bc__pk_shade *sh,
+                      uint32_t n);
 uint32_t bc__pk_march_avx512(const struct bc_view *v, const struct bc_lin *lin,
                              struct bc__pk_lanes *ln, uint32_t active,
                              uint32_t *march, uint32_t *bisect,
                              uint32_t *refine, const struct bc__pk_steps *st);
-void bc__pk_eval_avx512(const struct bc_view *v, const struct bc_lin *lin,
-                        struct bc__pk_lanes *ln, uint32_t active);
-void bc__pk_eval_id_avx512(const struct bc_view *v, const struct bc_lin *lin,
-                           struct bc__pk_lanes *ln, uint32_t active);
+void bc__pk_hits_avx512(const struct bc_view *v, const struct bc_lin *lin,
+                        struct bc__pk_lanes *ln, struct bc__pk_shade *sh,
+                        uint32_t n);
 void bc__pk_shade_avx2(const struct bc_shade *s, struct bc__pk_shade *sh,
                        uint32_t n);
 void bc__pk_shade_avx512(const struct bc_shade *s, struct bc__pk_shade *sh,

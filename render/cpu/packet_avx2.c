@@ -9,8 +9,7 @@
 
 #define PK_LANES 8u
 #define PK_MARCH bc__pk_march_avx2
-#define PK_EVAL bc__pk_eval_avx2
-#define PK_EVAL_ID bc__pk_eval_id_avx2
+#define PK_HITS bc__pk_hits_avx2
 #define PK_SHADE bc__pk_shade_avx2
 
 #include "packet_kernel.h"

@@ -12,7 +12,7 @@
  *   vsel(m, a, b) = m ? a : b (bitwise)
  *   vbits(u)          every lane holds the bits of uint32_t u
  *
- * and PK_MARCH, PK_EVAL, PK_EVAL_ID, PK_SHADE, the kernels' names. Including it
+ * and PK_MARCH, PK_HITS, PK_SHADE, the kernels' names. Including it
  * twice (AVX2 and AVX-512) gives two kernels whose lanes do the same
  * operations in the same order. PK_SHADE's formulas are
  * blobcast/shade_lanes.h's, on this vocabulary.
@@ -565,16 +565,43 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
 	return active & ~stepped;
 }
 
-void PK_EVAL(const struct bc_view *v, const struct bc_lin *lin,
-             struct bc__pk_lanes *ln, uint32_t active)
+void PK_HITS(const struct bc_view *v, const struct bc_lin *lin,
+             struct bc__pk_lanes *ln, struct bc__pk_shade *sh, uint32_t n)
 {
-	run(v, lin, ln, active, false);
-}
-
-void PK_EVAL_ID(const struct bc_view *v, const struct bc_lin *lin,
-                struct bc__pk_lanes *ln, uint32_t active)
-{
-	run(v, lin, ln, active, true);
+	/* bc__put_hit's offsets, in its order. */
+	static const float tet[4][3] = {
+	    {1, -1, -1}, {-1, -1, 1}, {-1, 1, -1}, {1, 1, 1}};
+	for (uint32_t i = 0; i < n; i += PK_LANES) {
+		uint32_t m = n - i < PK_LANES ? n - i : PK_LANES;
+		uint32_t active = (uint32_t)((1ull << m) - 1u);
+		vf g[3] = {vset1(0.0f), vset1(0.0f), vset1(0.0f)};
+		vstore(ln->ox, vload(sh->o[0] + i));
+		vstore(ln->oy, vload(sh->o[1] + i));
+		vstore(ln->oz, vload(sh->o[2] + i));
+		vstore(ln->t, vload(sh->step + i));
+		/* The primitive at the hit: o + step 0. */
+		vstore(ln->dx, vset1(0.0f));
+		vstore(ln->dy, vset1(0.0f));
+		vstore(ln->dz, vset1(0.0f));
+		run(v, lin, ln, active, true);
+		memcpy(sh->prim + i, ln->id, sizeof(uint32_t) * PK_LANES);
+		/* o + step tet is exact in the fused multiply-add (step tet
+		 * is +-step): bc__put_hit's p + h tet. */
+		for (int k = 0; k < 4; k++) {
+			vf val;
+			vstore(ln->dx, vset1(tet[k][0]));
+			vstore(ln->dy, vset1(tet[k][1]));
+			vstore(ln->dz, vset1(tet[k][2]));
+			run(v, lin, ln, active, false);
+			val = vload(ln->v);
+			for (int c = 0; c < 3; c++) {
+				g[c] = vadd(g[c], vmul(vset1(tet[k][c]), val));
+			}
+		}
+		for (int c = 0; c < 3; c++) {
+			vstore(sh->g[c] + i, g[c]);
+		}
+	}
 }
 
 void PK_SHADE(const struct bc_shade *s, struct bc__pk_shade *sh, uint32_t n)

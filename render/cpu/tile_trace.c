@@ -308,31 +308,20 @@ static inline uint32_t lowest_bit(uint32_t x)
 	return (uint32_t)__builtin_ctz(x);
 }
 
-/* Shades the hits of one range in its view, as bc__put_hit does, with
- * the five samples of each (the primitive at the hit, then the four
- * tetrahedral differences) taken in packets, and the colours computed by
- * the kernel too (blobcast/shade_lanes.h). */
+/* Shades the hits of one range in its view as bc__put_hit does, the
+ * samples and the colours taken by the kernel, a lane a hit. */
 static void shade_packets(struct bc__tile_worker *wk,
                           const struct bc__tile_job *job,
                           struct bc__pk_kernel k, struct tile_px *px,
                           const uint8_t *hit_px, const float *hit_t,
                           uint32_t nh)
 {
-	/* bc__put_hit's offsets, in its order. */
-	static const float tet[4][3] = {
-	    {1, -1, -1}, {-1, -1, 1}, {-1, 1, -1}, {1, 1, 1}};
 	const struct bc__frame_ctx *fc = job->fc;
 	const float *eye = fc->vr.eye;
 	uint32_t w = fc->out->width;
-	uint32_t total = 4 * nh, nv = (nh + k.lanes - 1) / k.lanes * k.lanes;
-	uint32_t h = 0, s = 0;   /* the hit and difference of the next lane */
-	uint32_t ha = 0, sa = 0; /* the same, for the values back */
-	float g[3] = {0.0f, 0.0f, 0.0f}; /* hit ha's gradient so far */
+	uint32_t nv = (nh + k.lanes - 1) / k.lanes * k.lanes;
 	struct bc__pk_lanes ln;
 	struct bc__pk_shade sh;
-	float o[3][BC_PK_SHADE_MAX], step[BC_PK_SHADE_MAX];
-	uint32_t prim[BC_PK_SHADE_MAX];
-	/* Each hit's point, difference step and ray once. */
 	for (uint32_t i = 0; i < nv; i++) {
 		static const float pad[3] = {0.0f, 0.0f, 0.0f};
 		const float *d = pad; /* up to the kernel's width: unused */
@@ -345,71 +334,16 @@ static void shade_packets(struct bc__tile_worker *wk,
 		}
 		for (int c = 0; c < 3; c++) {
 			sh.d[c][i] = d[c];
-			o[c][i] = eye[c] + t * d[c];
-			sh.g[c][i] = 0.0f; /* the pad's stays 0 */
+			sh.o[c][i] = eye[c] + t * d[c];
 			sh.albedo[c][i] = 0.0f;
 		}
-		/* o + h tet is exact in the kernel's fused multiply-add
-		 * (h tet is +-h): bc__put_hit's p + h tet. */
-		step[i] = bc__maxf(BC_CPU_HIT_FOOTPRINT * fc->pix_angle * t,
-		                   fc->min_step);
+		sh.step[i] = bc__maxf(BC_CPU_HIT_FOOTPRINT * fc->pix_angle * t,
+		                      fc->min_step);
 	}
-	/* The primitive at each hit, a lane a hit (o + step 0). */
-	for (uint32_t h0 = 0; h0 < nh; h0 += k.lanes) {
-		uint32_t m = nh - h0 < k.lanes ? nh - h0 : k.lanes;
-		for (uint32_t i = 0; i < k.lanes; i++) {
-			ln.ox[i] = o[0][h0 + i];
-			ln.oy[i] = o[1][h0 + i];
-			ln.oz[i] = o[2][h0 + i];
-			ln.t[i] = step[h0 + i];
-			ln.dx[i] = ln.dy[i] = ln.dz[i] = 0.0f;
-		}
-		k.eval_id(&wk->view, fc->lin, &ln, (1u << m) - 1u);
-		for (uint32_t i = 0; i < m; i++) {
-			prim[h0 + i] = ln.id[i];
-		}
-	}
-	/* The four differences, four lanes a hit, by the kernel without
-	 * ids. */
-	for (uint32_t s0 = 0; s0 < total; s0 += k.lanes) {
-		uint32_t m = total - s0 < k.lanes ? total - s0 : k.lanes;
-		for (uint32_t i = 0; i < m; i++) {
-			ln.ox[i] = o[0][h];
-			ln.oy[i] = o[1][h];
-			ln.oz[i] = o[2][h];
-			ln.t[i] = step[h];
-			ln.dx[i] = tet[s][0];
-			ln.dy[i] = tet[s][1];
-			ln.dz[i] = tet[s][2];
-			if (++s == 4) {
-				s = 0;
-				h++;
-			}
-		}
-		for (uint32_t i = m; i < k.lanes; i++) {
-			ln.ox[i] = ln.oy[i] = ln.oz[i] = 0.0f;
-			ln.dx[i] = ln.dy[i] = ln.dz[i] = ln.t[i] = 0.0f;
-		}
-		k.eval(&wk->view, fc->lin, &ln, (1u << m) - 1u);
-		for (uint32_t i = 0; i < m; i++) {
-			/* Summed in registers, from 0 in bc__put_hit's
-			 * order, stored at the hit's last difference. */
-			for (int c = 0; c < 3; c++) {
-				g[c] += tet[sa][c] * ln.v[i];
-			}
-			if (++sa == 4) {
-				for (int c = 0; c < 3; c++) {
-					sh.g[c][ha] = g[c];
-					g[c] = 0.0f;
-				}
-				sa = 0;
-				ha++;
-			}
-		}
-	}
+	k.hits(&wk->view, fc->lin, &ln, &sh, nh);
 	if (fc->debug == BC_DEBUG_NONE) {
 		for (uint32_t i = 0; i < nh; i++) {
-			const float *a = bc__albedo(fc->lin, prim[i]);
+			const float *a = bc__albedo(fc->lin, sh.prim[i]);
 			for (int c = 0; c < 3; c++) {
 				sh.albedo[c][i] = a[c];
 			}
@@ -425,12 +359,12 @@ static void shade_packets(struct bc__tile_worker *wk,
 		if (fc->debug == BC_DEBUG_NONE) {
 			float lit[3] = {sh.lit[0][i], sh.lit[1][i],
 			                sh.lit[2][i]};
-			bc__put_lit(fc, x, y, hit_t[i], lit, prim[i]);
+			bc__put_lit(fc, x, y, hit_t[i], lit, sh.prim[i]);
 		} else {
 			float n[3] = {sh.g[0][i], sh.g[1][i], sh.g[2][i]};
 			bc__put_shaded(
 			    fc, x, y, job->dirs + 3 * ((size_t)y * w + x),
-			    hit_t[i], n, prim[i], px->evals[p], job->n);
+			    hit_t[i], n, sh.prim[i], px->evals[p], job->n);
 		}
 	}
 }

@@ -803,6 +803,112 @@ static void test_kernel_steps_match_state_machine(void)
 	bc_tree_destroy(t);
 }
 
+/* Compares kernel k's hit samples (packet.h's bc__pk_hits_fn) with the
+ * scalar evaluator's at random points of t's bounds: the primitive the
+ * view names there, and the sum of tet[k] times the field at the four
+ * tetrahedral offsets. The kernel's fields round their own way (fused
+ * multiply-adds), so values agree within a tolerance and primitives on
+ * all but near-ties. Adds the samples compared to *total. */
+static void check_hits(struct bc__pk_kernel k, const char *mode,
+                       const char *what, struct bc_tree *t, uint64_t *state,
+                       uint32_t *total)
+{
+	static const float tet[4][3] = {
+	    {1, -1, -1}, {-1, -1, 1}, {-1, 1, -1}, {1, 1, 1}};
+	const struct bc_lin *l = bc_tree_lin(t);
+	uint32_t *act = malloc(sizeof(uint32_t) * (l->nprims + 1u));
+	uint32_t compared = 0, same_prim = 0;
+	struct bc_view view;
+	struct bc__pk_lanes ln;
+	struct bc__pk_shade sh;
+	REQUIRE(act != NULL);
+	for (uint32_t i = 0; i < l->nprims; i++) {
+		act[i] = i;
+	}
+	bc_view_init(&view);
+	REQUIRE(bc_view_build(&view, l, act, l->nprims) == 0);
+	for (int trial = 0; trial < 30; trial++) {
+		uint32_t n = 1 + (uint32_t)((ab_rand(state) + 1.0f) * 0.5f *
+		                            (BC_PK_SHADE_MAX - 1));
+		uint32_t nv = (n + k.lanes - 1) / k.lanes * k.lanes;
+		for (uint32_t i = 0; i < nv; i++) {
+			for (int c = 0; c < 3; c++) {
+				float u = 0.5f * (ab_rand(state) + 1.0f);
+				sh.o[c][i] =
+				    l->lo[c] + u * (l->hi[c] - l->lo[c]);
+			}
+			sh.step[i] =
+			    l->size * (0.001f + 0.05f * fabsf(ab_rand(state)));
+		}
+		k.hits(&view, l, &ln, &sh, n);
+		for (uint32_t i = 0; i < n; i++) {
+			float o[3] = {sh.o[0][i], sh.o[1][i], sh.o[2][i]};
+			float g[3] = {0.0f, 0.0f, 0.0f}, scale = 1.0f;
+			uint32_t prim = BC_NONE;
+			(void)bc_view_eval_id(&view, l, o, &prim);
+			for (int s = 0; s < 4; s++) {
+				float q[3], v;
+				for (int c = 0; c < 3; c++) {
+					q[c] = o[c] + sh.step[i] * tet[s][c];
+				}
+				v = bc_view_eval(&view, l, q);
+				scale += fabsf(v);
+				for (int c = 0; c < 3; c++) {
+					g[c] += tet[s][c] * v;
+				}
+			}
+			for (int c = 0; c < 3; c++) {
+				CHECK_NEAR(sh.g[c][i], g[c], 1e-5f * scale);
+			}
+			same_prim += sh.prim[i] == prim;
+			compared++;
+		}
+	}
+	printf("  %-6s %-14s %u samples, %u with the same primitive\n", mode,
+	       what, compared, same_prim);
+	CHECK(same_prim >= compared - compared / 100u);
+	bc_view_finish(&view);
+	free(act);
+	*total += compared;
+}
+
+/* The packet kernels take a tile's hit samples for shading themselves
+ * (the primitive at the hit and bc__put_hit's tetrahedral differences):
+ * they must be the scalar evaluator's on Fig. 18 spheres and boxes and
+ * on random trees with unary and domain nodes (the kernels' lane-by-lane
+ * paths, under partial masks), for any hit count. */
+static void test_hits_kernel_matches_scalar(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	uint64_t state = 11;
+	uint32_t compared = 0;
+	REQUIRE(t != NULL);
+	for (size_t m = 1; m < NMODES; m++) {
+		struct bc__pk_kernel k = bc__pk_kernel_for(modes[m].simd);
+		if (!k.hits) {
+			continue;
+		}
+		REQUIRE(sc_fig18(t, 64, false, true, 3) == 0);
+		check_hits(k, modes[m].name, "fig18 spheres", t, &state,
+		           &compared);
+		REQUIRE(sc_fig18(t, 64, true, false, 4) == 0);
+		check_hits(k, modes[m].name, "fig18 boxes", t, &state,
+		           &compared);
+		rt_unary_rate = 0.4f;
+		for (uint64_t seed = 1; seed <= 4; seed++) {
+			REQUIRE(rt_build(t, 900 + seed, 12) == 0);
+			CHECK(bc_tree_lin(t)->nunary > 0 || seed > 1);
+			check_hits(k, modes[m].name, "random, unary", t, &state,
+			           &compared);
+		}
+		rt_unary_rate = 0.0f;
+	}
+	if (compared == 0) {
+		fprintf(stderr, "  no vector kernel on this CPU\n");
+	}
+	bc_tree_destroy(t);
+}
+
 /* A gradient for the shading test: mostly random, sometimes one the
  * shading must replace (zero, infinite, NaN) or an extreme length. */
 static void shade_grad(uint64_t *state, float g[3])
@@ -924,6 +1030,7 @@ static const struct bc_test tests[] = {
     {"abuffer_abv_kernel_matches_scalar",
      test_abuffer_abv_kernel_matches_scalar},
     {"kernel_steps_match_state_machine", test_kernel_steps_match_state_machine},
+    {"hits_kernel_matches_scalar", test_hits_kernel_matches_scalar},
     {"shade_kernel_matches_shade_hit", test_shade_kernel_matches_shade_hit},
     {"threads_do_not_change_simd_pixels",
      test_threads_do_not_change_simd_pixels},
