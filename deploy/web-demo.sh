@@ -139,14 +139,32 @@ pids+=($!)
 	--directory "$root/client/web" >/dev/null 2>&1 &
 pids+=($!)
 
-# Ready when both listen (websockify takes a moment to start).
-for _ in $(seq 50); do
-	if timeout 1 bash -c "exec 3<>/dev/tcp/127.0.0.1/$ws_port" 2>/dev/null &&
-		timeout 1 bash -c "exec 3<>/dev/tcp/127.0.0.1/$port" 2>/dev/null; then
+# Ready when both listen (websockify and Python take a moment to start,
+# seconds on a busy machine). The address is printed only then: a page
+# asked for earlier would not load.
+listens() {
+	timeout 1 bash -c "exec 3<>/dev/tcp/127.0.0.1/$1" 2>/dev/null
+}
+ready=
+for _ in $(seq 600); do
+	if listens "$ws_port" && listens "$port"; then
+		ready=1
 		break
 	fi
+	for pid in "${pids[@]}"; do
+		if ! kill -0 "$pid" 2>/dev/null; then
+			echo "web-demo: a server it started exited (is port" \
+				"$port or $ws_port taken? try --port)" >&2
+			exit 1
+		fi
+	done
 	sleep 0.1
 done
+if [ -z "$ready" ]; then
+	echo "web-demo: websockify on :$ws_port and the page server on" \
+		":$port did not listen within a minute" >&2
+	exit 1
+fi
 echo "blobcast web demo: http://127.0.0.1:$port/?session=$session&name=${USER:-guest}"
 echo "  ($started, websockify on :$ws_port; Ctrl-C stops what this started)"
 # Whichever exits first ends the demo.

@@ -123,7 +123,9 @@ while IFS= read -r line; do
     $cmd --port "$web_port" > demo.log 2>&1 &
     demo=$!
     i=0
-    while [ $i -lt 100 ] && ! grep -q '^blobcast web demo: http' demo.log; do
+    # web-demo.sh prints its address once its servers listen (it waits up
+    # to a minute for them on a busy machine).
+    while [ $i -lt 700 ] && ! grep -q '^blobcast web demo: http' demo.log; do
       kill -0 "$demo" 2> /dev/null || break
       sleep 0.1
       i=$((i + 1))
