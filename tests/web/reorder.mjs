@@ -71,7 +71,10 @@ async function picture(page, who) {
 		() => {
 			const s = window.blobcast.state();
 			const f = s.lastFrame;
-			return f && f.still && BigInt(f.order) >= BigInt(s.order) &&
+			/* Whole: on a busy machine a still frame may come cut by
+			 * the time budget (refining), its rest in frames after. */
+			return f && f.still && !f.refining &&
+				BigInt(f.order) >= BigInt(s.order) &&
 				f.width === s.view.width && f.height === s.view.height ? s
 				: null;
 		});
