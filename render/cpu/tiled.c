@@ -1276,9 +1276,25 @@ static void follow_tile(struct bc__tiled_bufs *b, uint32_t t, uint32_t lo,
  * primitives (an operand added to or taken from the end of the root's
  * operator, the usual edit of a big scene) touches only the tiles of
  * those that went; one before it takes a pass over every candidate, at
- * memory speed. */
+ * memory speed, shared by the renderer's threads. */
+/* A share of the tiles for follow_splice's pass over all of them. */
+struct follow_pass {
+	struct bc__tiled_bufs *b;
+	uint32_t ntiles, shares, lo, hi, shift;
+};
+
+static void follow_share(void *arg, uint32_t i)
+{
+	const struct follow_pass *f = arg;
+	uint32_t t0 = (uint32_t)((uint64_t)f->ntiles * i / f->shares);
+	uint32_t t1 = (uint32_t)((uint64_t)f->ntiles * (i + 1) / f->shares);
+	for (uint32_t t = t0; t < t1; t++) {
+		follow_tile(f->b, t, f->lo, f->hi, f->shift);
+	}
+}
+
 static int follow_splice(struct bc__tiled_bufs *b,
-                         const struct bc_dirty_splice *sp)
+                         const struct bc_dirty_splice *sp, uint32_t threads)
 {
 	uint32_t tw = (b->w + BC_CPU_TILE - 1) / BC_CPU_TILE;
 	uint32_t ntiles = tw * ((b->h + BC_CPU_TILE - 1) / BC_CPU_TILE);
@@ -1300,9 +1316,15 @@ static int follow_splice(struct bc__tiled_bufs *b,
 			}
 		}
 	} else {
-		for (uint32_t t = 0; t < ntiles; t++) {
-			follow_tile(b, t, lo, hi, shift);
+		/* Each tile's lists are its own: the renderer's threads
+		 * share the pass (about 9 ms at 700 000 spheres, 1024x768,
+		 * on one). */
+		struct follow_pass f = {b,  ntiles, threads ? threads : 1u,
+		                        lo, hi,     shift};
+		if (f.shares > BC_POOL_MAX_THREADS) {
+			f.shares = BC_POOL_MAX_THREADS;
 		}
+		bc_pool_run(f.shares, follow_share, &f);
 	}
 	memmove(b->prims + lo + sp->ins, b->prims + hi,
 	        (size_t)(n - hi) * sizeof(*b->prims));
@@ -1327,7 +1349,8 @@ static int tiled_sync(struct bc_renderer *base, const struct bc_tree *t,
 	}
 	if (dirty && dirty->structure && dirty->spliced && b->view_ok) {
 		for (uint32_t i = 0; i < dirty->nsplices && b->view_ok; i++) {
-			if (follow_splice(b, &dirty->splice[i])) {
+			if (follow_splice(b, &dirty->splice[i],
+			                  bc__cpu_of(base)->threads)) {
 				b->view_ok = false;
 			}
 		}
