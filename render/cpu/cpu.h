@@ -200,6 +200,9 @@ enum bc__trace_result bc__trace(struct bc__field *f,
                                 const float o[3], const float d[3], float t0,
                                 float t1, float *t_hit);
 
+/* bc__put_hit's tetrahedral offsets, in the order its samples are summed
+ * (the packet kernels take the same samples in the same order). */
+extern const float bc__tet[4][3];
 /* Writes pixel (x, y) of the frame for a ray d that hit at t in field f:
  * identity of the primitive, shaded colour (or the debug colour from the
  * evaluations counted in f, or from `overlaps`), depth and id. */

@@ -568,9 +568,6 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
 void PK_HITS(const struct bc_view *v, const struct bc_lin *lin,
              struct bc__pk_lanes *ln, struct bc__pk_shade *sh, uint32_t n)
 {
-	/* bc__put_hit's offsets, in its order. */
-	static const float tet[4][3] = {
-	    {1, -1, -1}, {-1, -1, 1}, {-1, 1, -1}, {1, 1, 1}};
 	for (uint32_t i = 0; i < n; i += PK_LANES) {
 		uint32_t m = n - i < PK_LANES ? n - i : PK_LANES;
 		uint32_t active = (uint32_t)((1ull << m) - 1u);
@@ -585,17 +582,19 @@ void PK_HITS(const struct bc_view *v, const struct bc_lin *lin,
 		vstore(ln->dz, vset1(0.0f));
 		run(v, lin, ln, active, true);
 		memcpy(sh->prim + i, ln->id, sizeof(uint32_t) * PK_LANES);
-		/* o + step tet is exact in the fused multiply-add (step tet
-		 * is +-step): bc__put_hit's p + h tet. */
+		/* bc__put_hit's differences, in its order. o + step tet is
+		 * exact in the fused multiply-add (step tet is +-step):
+		 * bc__put_hit's p + h tet. */
 		for (int k = 0; k < 4; k++) {
 			vf val;
-			vstore(ln->dx, vset1(tet[k][0]));
-			vstore(ln->dy, vset1(tet[k][1]));
-			vstore(ln->dz, vset1(tet[k][2]));
+			vstore(ln->dx, vset1(bc__tet[k][0]));
+			vstore(ln->dy, vset1(bc__tet[k][1]));
+			vstore(ln->dz, vset1(bc__tet[k][2]));
 			run(v, lin, ln, active, false);
 			val = vload(ln->v);
 			for (int c = 0; c < 3; c++) {
-				g[c] = vadd(g[c], vmul(vset1(tet[k][c]), val));
+				g[c] =
+				    vadd(g[c], vmul(vset1(bc__tet[k][c]), val));
 			}
 		}
 		for (int c = 0; c < 3; c++) {

@@ -87,13 +87,12 @@ void bc__put_miss_tile(const struct bc__frame_ctx *fc, uint32_t x0, uint32_t y0,
 	}
 }
 
+const float bc__tet[4][3] = {{1, -1, -1}, {-1, -1, 1}, {-1, 1, -1}, {1, 1, 1}};
+
 void bc__put_hit(const struct bc__frame_ctx *fc, struct bc__field *f,
                  uint32_t x, uint32_t y, const float d[3], float t,
                  uint32_t overlaps)
 {
-	/* Tetrahedral differences: four samples give the gradient. */
-	static const float tet[4][3] = {
-	    {1, -1, -1}, {-1, -1, 1}, {-1, 1, -1}, {1, 1, 1}};
 	const float *eye = fc->vr.eye;
 	float p[3] = {eye[0] + t * d[0], eye[1] + t * d[1], eye[2] + t * d[2]};
 	float n[3] = {0.0f, 0.0f, 0.0f}, h;
@@ -102,12 +101,14 @@ void bc__put_hit(const struct bc__frame_ctx *fc, struct bc__field *f,
 	/* Differences over the hit epsilon: the scale at which the surface
 	 * was resolved. */
 	h = bc__maxf(BC_CPU_HIT_FOOTPRINT * fc->pix_angle * t, fc->min_step);
+	/* Tetrahedral differences: four samples give the gradient. */
 	for (int k = 0; k < 4; k++) {
-		float q[3] = {p[0] + h * tet[k][0], p[1] + h * tet[k][1],
-		              p[2] + h * tet[k][2]};
+		float q[3] = {p[0] + h * bc__tet[k][0],
+		              p[1] + h * bc__tet[k][1],
+		              p[2] + h * bc__tet[k][2]};
 		float v = bc__field_eval(f, q);
 		for (int c = 0; c < 3; c++) {
-			n[c] += tet[k][c] * v;
+			n[c] += bc__tet[k][c] * v;
 		}
 	}
 	bc__put_shaded(fc, x, y, d, t, n, prim, f->evals, overlaps);

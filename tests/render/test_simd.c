@@ -813,8 +813,6 @@ static void check_hits(struct bc__pk_kernel k, const char *mode,
                        const char *what, struct bc_tree *t, uint64_t *state,
                        uint32_t *total)
 {
-	static const float tet[4][3] = {
-	    {1, -1, -1}, {-1, -1, 1}, {-1, 1, -1}, {1, 1, 1}};
 	const struct bc_lin *l = bc_tree_lin(t);
 	uint32_t *act = malloc(sizeof(uint32_t) * (l->nprims + 1u));
 	uint32_t compared = 0, same_prim = 0;
@@ -849,12 +847,13 @@ static void check_hits(struct bc__pk_kernel k, const char *mode,
 			for (int s = 0; s < 4; s++) {
 				float q[3], v;
 				for (int c = 0; c < 3; c++) {
-					q[c] = o[c] + sh.step[i] * tet[s][c];
+					q[c] =
+					    o[c] + sh.step[i] * bc__tet[s][c];
 				}
 				v = bc_view_eval(&view, l, q);
 				scale += fabsf(v);
 				for (int c = 0; c < 3; c++) {
-					g[c] += tet[s][c] * v;
+					g[c] += bc__tet[s][c] * v;
 				}
 			}
 			for (int c = 0; c < 3; c++) {
