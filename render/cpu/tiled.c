@@ -229,6 +229,7 @@ struct tiled_frame {
 	 * cache line of its own, away from the fields every thread reads. */
 	_Alignas(64) atomic_uint next;
 	struct tile_span spans[BC_POOL_MAX_THREADS]; /* see next_tile */
+	uint32_t nspans; /* the shares the pool runs: spans in use */
 	_Alignas(64) atomic_uint tiles_done;
 	struct bc__progress progress;
 	/* bc_clock_ms() past which no tile starts; 0: none. */
@@ -817,18 +818,24 @@ static inline uint64_t span_word(uint32_t lo, uint32_t hi)
 	return (uint64_t)lo | (uint64_t)hi << 32;
 }
 
-/* Gives each of the phase's threads an equal share of the region's tiles,
- * in order: thread i the i-th slice. */
+/* The shares bc_pool_run(threads, ...) runs, numbered 0 .. n - 1. */
+static inline uint32_t pool_shares(uint32_t threads)
+{
+	return threads < 1                     ? 1u
+	       : threads > BC_POOL_MAX_THREADS ? BC_POOL_MAX_THREADS
+	                                       : threads;
+}
+
+/* Gives each of the phase's shares an equal slice of the region's tiles,
+ * in order: share i the i-th. */
 static void spans_init(struct tiled_frame *tf)
 {
-	uint32_t n = tf->threads < 1 ? 1u : tf->threads;
 	uint64_t count = tf->t1 - tf->t0;
-	n = n > BC_POOL_MAX_THREADS ? BC_POOL_MAX_THREADS : n;
-	for (uint32_t i = 0; i < BC_POOL_MAX_THREADS; i++) {
-		uint32_t lo = tf->t0 + (uint32_t)(count * i / n);
-		uint32_t hi = tf->t0 + (uint32_t)(count * (i + 1) / n);
-		atomic_init(&tf->spans[i].lohi,
-		            i < n ? span_word(lo, hi) : span_word(0, 0));
+	tf->nspans = pool_shares(tf->threads);
+	for (uint32_t i = 0; i < tf->nspans; i++) {
+		uint32_t lo = tf->t0 + (uint32_t)(count * i / tf->nspans);
+		uint32_t hi = tf->t0 + (uint32_t)(count * (i + 1) / tf->nspans);
+		atomic_init(&tf->spans[i].lohi, span_word(lo, hi));
 	}
 }
 
@@ -867,8 +874,7 @@ static bool span_take(struct tile_span *sp, bool front, uint32_t *tile,
 static inline bool next_tile(struct tiled_frame *tf, uint32_t thread,
                              uint32_t *tile, uint32_t *end)
 {
-	uint32_t n = tf->threads < 1 ? 1u : tf->threads;
-	n = n > BC_POOL_MAX_THREADS ? BC_POOL_MAX_THREADS : n;
+	uint32_t n = tf->nspans;
 	if (*tile + 1 < *end) {
 		++*tile;
 		return true;
@@ -1268,15 +1274,6 @@ static void follow_tile(struct bc__tiled_bufs *b, uint32_t t, uint32_t lo,
 	}
 }
 
-/* The kept view follows one splice of the primitives' indices: the
- * primitives that went leave the candidate lists (and the lists of their
- * tiles are dropped), those past them are renumbered there and in the
- * kept lists, and the new ones get empty rectangles (their tiles come
- * with the dirty range, keep_view). A splice at the end of the
- * primitives (an operand added to or taken from the end of the root's
- * operator, the usual edit of a big scene) touches only the tiles of
- * those that went; one before it takes a pass over every candidate, at
- * memory speed, shared by the renderer's threads. */
 /* A share of the tiles for follow_splice's pass over all of them. */
 struct follow_pass {
 	struct bc__tiled_bufs *b;
@@ -1293,6 +1290,15 @@ static void follow_share(void *arg, uint32_t i)
 	}
 }
 
+/* The kept view follows one splice of the primitives' indices: the
+ * primitives that went leave the candidate lists (and the lists of their
+ * tiles are dropped), those past them are renumbered there and in the
+ * kept lists, and the new ones get empty rectangles (their tiles come
+ * with the dirty range, keep_view). A splice at the end of the
+ * primitives (an operand added to or taken from the end of the root's
+ * operator, the usual edit of a big scene) touches only the tiles of
+ * those that went; one before it takes a pass over every candidate, at
+ * memory speed, shared by the renderer's threads. */
 static int follow_splice(struct bc__tiled_bufs *b,
                          const struct bc_dirty_splice *sp, uint32_t threads)
 {
@@ -1319,11 +1325,12 @@ static int follow_splice(struct bc__tiled_bufs *b,
 		/* Each tile's lists are its own: the renderer's threads
 		 * share the pass (about 9 ms at 700 000 spheres, 1024x768,
 		 * on one). */
-		struct follow_pass f = {b,  ntiles, threads ? threads : 1u,
-		                        lo, hi,     shift};
-		if (f.shares > BC_POOL_MAX_THREADS) {
-			f.shares = BC_POOL_MAX_THREADS;
-		}
+		struct follow_pass f = {.b = b,
+		                        .ntiles = ntiles,
+		                        .shares = pool_shares(threads),
+		                        .lo = lo,
+		                        .hi = hi,
+		                        .shift = shift};
 		bc_pool_run(f.shares, follow_share, &f);
 	}
 	memmove(b->prims + lo + sp->ins, b->prims + hi,
