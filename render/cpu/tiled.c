@@ -1274,22 +1274,6 @@ static void follow_tile(struct bc__tiled_bufs *b, uint32_t t, uint32_t lo,
 	}
 }
 
-/* A share of the tiles for follow_splice's pass over all of them. */
-struct follow_pass {
-	struct bc__tiled_bufs *b;
-	uint32_t ntiles, shares, lo, hi, shift;
-};
-
-static void follow_share(void *arg, uint32_t i)
-{
-	const struct follow_pass *f = arg;
-	uint32_t t0 = (uint32_t)((uint64_t)f->ntiles * i / f->shares);
-	uint32_t t1 = (uint32_t)((uint64_t)f->ntiles * (i + 1) / f->shares);
-	for (uint32_t t = t0; t < t1; t++) {
-		follow_tile(f->b, t, f->lo, f->hi, f->shift);
-	}
-}
-
 /* The kept view follows one splice of the primitives' indices: the
  * primitives that went leave the candidate lists (and the lists of their
  * tiles are dropped), those past them are renumbered there and in the
@@ -1298,9 +1282,12 @@ static void follow_share(void *arg, uint32_t i)
  * primitives (an operand added to or taken from the end of the root's
  * operator, the usual edit of a big scene) touches only the tiles of
  * those that went; one before it takes a pass over every candidate, at
- * memory speed, shared by the renderer's threads. */
+ * memory speed. It runs on the caller's thread: a sync has no share of
+ * the cores from the daemon's scheduler (bc_render_region.threads is a
+ * render call's), so taking the pool here would run on cores it gave
+ * another session's work. */
 static int follow_splice(struct bc__tiled_bufs *b,
-                         const struct bc_dirty_splice *sp, uint32_t threads)
+                         const struct bc_dirty_splice *sp)
 {
 	uint32_t tw = (b->w + BC_CPU_TILE - 1) / BC_CPU_TILE;
 	uint32_t ntiles = tw * ((b->h + BC_CPU_TILE - 1) / BC_CPU_TILE);
@@ -1322,16 +1309,9 @@ static int follow_splice(struct bc__tiled_bufs *b,
 			}
 		}
 	} else {
-		/* Each tile's lists are its own: the renderer's threads
-		 * share the pass (about 9 ms at 700 000 spheres, 1024x768,
-		 * on one). */
-		struct follow_pass f = {.b = b,
-		                        .ntiles = ntiles,
-		                        .shares = pool_shares(threads),
-		                        .lo = lo,
-		                        .hi = hi,
-		                        .shift = shift};
-		bc_pool_run(f.shares, follow_share, &f);
+		for (uint32_t t = 0; t < ntiles; t++) {
+			follow_tile(b, t, lo, hi, shift);
+		}
 	}
 	memmove(b->prims + lo + sp->ins, b->prims + hi,
 	        (size_t)(n - hi) * sizeof(*b->prims));
@@ -1356,8 +1336,7 @@ static int tiled_sync(struct bc_renderer *base, const struct bc_tree *t,
 	}
 	if (dirty && dirty->structure && dirty->spliced && b->view_ok) {
 		for (uint32_t i = 0; i < dirty->nsplices && b->view_ok; i++) {
-			if (follow_splice(b, &dirty->splice[i],
-			                  bc__cpu_of(base)->threads)) {
+			if (follow_splice(b, &dirty->splice[i])) {
 				b->view_ok = false;
 			}
 		}
