@@ -88,6 +88,10 @@ struct batch {
 	const struct bc_proto_edit_op *op;
 	uint32_t nops;
 	bool heavy; /* applied on the task */
+	/* Its operations went to the render copy before the session's own
+	 * apply (bc_work_ops_early), which then waits for the verdict. */
+	bool early;
+	bool settled;
 	/* Only NAME operations: nothing that is drawn changes (the render
 	 * copy, the views and the scene's order stay). */
 	bool names_only;
@@ -151,10 +155,10 @@ static void batch_run(struct bc_task *t)
 	}
 }
 
-/* The render copy follows: the nodes' new states, or the operations. A
- * copy that cannot follow (out of memory, its queue over its cap) gets
- * the scene whole. */
-static void follow(struct bc_session *s, const struct batch *x)
+/* The render copy follows: the nodes' new states, or the operations, or,
+ * for a batch it took early, the word that it stands. A copy that cannot
+ * follow (out of memory, its queue over its cap) gets the scene whole. */
+static void follow(struct bc_session *s, struct batch *x)
 {
 	struct bc_work *w = s->ss->work;
 	struct bc_edit_saved *st = NULL;
@@ -163,6 +167,11 @@ static void follow(struct bc_session *s, const struct batch *x)
 	int rc;
 	if (x->names_only) {
 		return; /* names are not drawn: the copy needs none */
+	}
+	if (x->early) {
+		bc_work_settle(w, s->id, true);
+		x->settled = true;
+		return;
 	}
 	if (x->b.structural) {
 		rc = bc_work_ops(w, s->id, s->order, x->op, x->nops);
@@ -251,6 +260,10 @@ static void batch_commit(struct batch *x)
 
 static void batch_free(struct batch *x)
 {
+	if (x->early && !x->settled) {
+		/* Refused, undone, or its session gone: the copy undoes it. */
+		bc_work_settle(x->s->ss->work, x->s->id, false);
+	}
 	bc_edit_batch_finish(&x->b);
 	bc_ops_copy_finish(&x->ops);
 	bc_proto_buf_finish(&x->rec);
@@ -324,6 +337,13 @@ int bc__apply(struct bc_member *m, const struct bc_proto_edit_op *ops,
 	x->done = done;
 	x->ud = ud;
 	x->t0_ns = bc_clock_ns();
+	/* A structural batch goes to the render copy first, so that its
+	 * splice there runs while the session's own tree takes it and the
+	 * record is journaled, not after (a splice in the middle of a big
+	 * operator costs milliseconds per 100 000 operands). */
+	x->early = structural && !names_only &&
+	           bc_work_ops_early(s->ss->work, s->id, s->order + 1, x->op,
+	                             nops) == 0;
 	if (!x->heavy && batch_apply(x)) {
 		int rc = bc_errinfo_set(ei, x->rc, "%s", x->ei.msg);
 		batch_free(x);

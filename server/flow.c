@@ -15,6 +15,10 @@
  *    views keep their pictures and redraw the tiles the tree's dirty
  *    record says the change can reach, as for a parameter edit; else
  *    the pictures start over;
+ *  - a structural batch may also arrive before the session applies it
+ *    (bc_work_ops_early), so that the copy's splice runs beside the
+ *    session's instead of after it; it is kept undoable until its
+ *    verdict, and undone if the session refused or undid it;
  *  - a loaded or restored scene arrives whole.
  * Applying a parameter change marks, in each of the session's views, the
  * tiles the renderer says the edited primitives' ABVs reach before and
@@ -285,12 +289,76 @@ static void apply_states(struct bc_work *w, struct flow *f, const struct upd *u)
 	}
 }
 
+/* After a structural change of the copy: the views follow it tile by
+ * tile where the renderer follows its splices, else start over. */
+static void structure_changed(struct bc_work *w, struct flow *f)
+{
+	if (!f->broken && damage_spliced(w, f)) {
+		return;
+	}
+	f->fresh = true;
+	f->ms_per_ray = f->ms_abuffer = 0.0;
+	f->ray_bound = BC_SRV_RAY_EVALS;
+	bc__views_drop(w, f->sid);
+}
+
+/* An early batch (bc_work_ops_early): applied, and kept undoable until
+ * its verdict. A failure is not yet an error: the session's own apply of
+ * the same operations on the same tree fails alike, unless memory ran
+ * out here (the verdict tells). */
+static void apply_early(struct bc_work *w, struct flow *f, const struct upd *u)
+{
+	struct bc_errinfo ei = {0};
+	f->eb_order = f->order;
+	if (!f->tree || f->broken) {
+		f->eb_state = EB_SKIPPED;
+		return;
+	}
+	if (bc_edit_batch_apply(&f->eb, &f->tree, u->ops.ops, u->ops.n, &ei)) {
+		bc_log(BC_LOG_DEBUG, "session %u: early batch refused: %s",
+		       f->sid, ei.msg);
+		f->eb_state = EB_FAILED;
+		return;
+	}
+	f->eb_state = EB_APPLIED;
+	structure_changed(w, f);
+}
+
+/* The verdict on the early batch: kept, or undone on the copy. */
+static void settle_early(struct bc_work *w, struct flow *f, bool stands)
+{
+	enum early_state was = f->eb_state;
+	f->eb_state = EB_NONE;
+	if (was == EB_NONE) {
+		return; /* a scene replaced it before it came */
+	}
+	if (stands) {
+		bc_edit_batch_finish(&f->eb);
+		if (was == EB_FAILED) {
+			bc_log(BC_LOG_ERROR,
+			       "session %u: the render copy cannot follow a "
+			       "structural edit",
+			       f->sid);
+			f->broken = true;
+		}
+		return;
+	}
+	f->order = f->eb_order;
+	if (was == EB_APPLIED) {
+		bc_edit_batch_undo(&f->eb, &f->tree);
+		structure_changed(w, f);
+	}
+}
+
 static void apply_one(struct bc_work *w, struct flow *f, struct upd *u)
 {
 	struct bc_errinfo ei = {0};
 	struct bc_edit_batch b;
 	switch (u->kind) {
 	case UPD_SCENE:
+		/* A scene replaces an early batch's copy too. */
+		bc_edit_batch_finish(&f->eb);
+		f->eb_state = EB_NONE;
 		bc_tree_destroy(f->tree);
 		f->tree = u->tree;
 		u->tree = NULL;
@@ -308,6 +376,10 @@ static void apply_one(struct bc_work *w, struct flow *f, struct upd *u)
 		}
 		break;
 	case UPD_OPS:
+		if (u->early) {
+			apply_early(w, f, u);
+			break;
+		}
 		if (!f->tree || f->broken) {
 			break;
 		}
@@ -323,13 +395,7 @@ static void apply_one(struct bc_work *w, struct flow *f, struct upd *u)
 			f->broken = true;
 		}
 		bc_edit_batch_finish(&b);
-		if (!f->broken && damage_spliced(w, f)) {
-			break;
-		}
-		f->fresh = true;
-		f->ms_per_ray = f->ms_abuffer = 0.0;
-		f->ray_bound = BC_SRV_RAY_EVALS;
-		bc__views_drop(w, f->sid);
+		structure_changed(w, f);
 		break;
 	default:
 		break;
@@ -337,11 +403,24 @@ static void apply_one(struct bc_work *w, struct flow *f, struct upd *u)
 	f->order = u->order;
 }
 
-void bc__flow_apply(struct bc_work *w, struct flow *f, struct upd *list)
+void bc__flow_apply(struct bc_work *w, struct flow *f, struct upd *list,
+                    int settle)
 {
+	bool early = false;
+	for (const struct upd *u = list; u; u = u->next) {
+		early = early || (u->kind == UPD_OPS && u->early);
+	}
+	/* The verdict follows its batch, and comes before any change made
+	 * after it; its batch is in this list or was applied before. */
+	if (settle && !early) {
+		settle_early(w, f, settle > 0);
+	}
 	while (list) {
 		struct upd *next = list->next;
 		apply_one(w, f, list);
+		if (settle && list->kind == UPD_OPS && list->early) {
+			settle_early(w, f, settle > 0);
+		}
 		bc__upd_free(list);
 		list = next;
 	}
@@ -349,6 +428,8 @@ void bc__flow_apply(struct bc_work *w, struct flow *f, struct upd *list)
 
 void bc__flow_clear(struct bc_work *w, struct flow *f)
 {
+	bc_edit_batch_finish(&f->eb);
+	f->eb_state = EB_NONE;
 	bc__views_drop(w, f->sid);
 	bc_renderer_destroy(f->r);
 	atomic_fetch_sub(&w->kept_bytes, f->kept_bytes);

@@ -29,7 +29,11 @@
  * (flow.c); jobs run interactive class first, then stills, then snapshots,
  * each to its end, so a frame shows one state of the scene. A job that
  * may give way (job.c's bc__job_yieldable) is ended at a slice boundary
- * when retracted or when changes wait for its session.
+ * when retracted or when changes wait for its session. A structural
+ * batch may reach the copy before the session has applied and journaled
+ * it (bc_work_ops_early: the two splices then run at once); until its
+ * verdict (bc_work_settle) the flow takes no job, and an undone one is
+ * undone on the copy before the next.
  *
  * Stopping: the workers leave at their next slice boundary; bc_work_stop
  * waits a bounded time, since a renderer call does not return early.
@@ -89,7 +93,8 @@ static bool has_jobs(const struct flow *f)
 
 static bool has_work(const struct flow *f)
 {
-	return f->sid && (f->dropped || f->cur || f->uhead || has_jobs(f));
+	return f->sid && (f->dropped || f->cur || f->uhead || f->settle ||
+	                  (!f->early && has_jobs(f)));
 }
 
 /* The class of the next slice f would run. */
@@ -213,11 +218,11 @@ static void push_result(struct bc_work *w, struct bc_job *j)
  * jobs, or a slice of the current job. Runs without the lock. Returns
  * true when the job is over. */
 static bool run_turn(struct bc_work *w, struct worker *wk, struct flow *f,
-                     struct upd *changes, struct bc_job *job,
+                     struct upd *changes, int settle, struct bc_job *job,
                      enum bc_work_outcome stop)
 {
-	if (changes) {
-		bc__flow_apply(w, f, changes);
+	if (changes || settle) {
+		bc__flow_apply(w, f, changes, settle);
 	}
 	if (!job) {
 		return false;
@@ -229,14 +234,16 @@ static bool run_turn(struct bc_work *w, struct worker *wk, struct flow *f,
 	return bc__job_slice(w, wk, f, job);
 }
 
-/* Takes f's changes when it is between jobs, and its job to run. Called
- * with the lock held; *stop (not BC_WORK_DONE) tells to end the job
- * now: cancelled, or giving way where it may. */
+/* Takes f's changes (and the verdict on an early batch) when it is
+ * between jobs, and its job to run: none while an early batch waits for
+ * its verdict. Called with the lock held; *stop (not BC_WORK_DONE) tells
+ * to end the job now: cancelled, or giving way where it may. */
 static struct bc_job *take_turn(struct bc_work *w, struct flow *f,
-                                struct upd **changes,
+                                struct upd **changes, int *settle,
                                 enum bc_work_outcome *stop)
 {
 	*changes = NULL;
+	*settle = 0;
 	*stop = BC_WORK_DONE;
 	if (f->cur) {
 		if (f->cur->cancelled) {
@@ -250,7 +257,9 @@ static struct bc_job *take_turn(struct bc_work *w, struct flow *f,
 	*changes = f->uhead;
 	f->uhead = f->utail = NULL;
 	f->ubytes = 0;
-	f->cur = pop_job(w, f);
+	*settle = f->settle;
+	f->settle = 0;
+	f->cur = f->early ? NULL : pop_job(w, f);
 	return f->cur;
 }
 
@@ -330,6 +339,7 @@ static void worker_main(void *arg)
 		struct upd *changes;
 		struct bc_job *job;
 		enum bc_work_outcome stop;
+		int settle;
 		bool over, was_long, first;
 		double t0, ms;
 		if (!f) {
@@ -345,14 +355,14 @@ static void worker_main(void *arg)
 			continue;
 		}
 		first = !f->cur;
-		job = take_turn(w, f, &changes, &stop);
+		job = take_turn(w, f, &changes, &settle, &stop);
 		was_long = runs_long(f);
 		w->long_slices += was_long ? 1u : 0u;
 		wk->team = team_of(w);
 		wk->in_slice = true;
 		uv_mutex_unlock(&w->lock);
 		t0 = bc_clock_ms();
-		over = run_turn(w, wk, f, changes, job, stop);
+		over = run_turn(w, wk, f, changes, settle, job, stop);
 		ms = bc_clock_ms() - t0;
 		uv_mutex_lock(&w->lock);
 		wk->in_slice = false;
@@ -457,6 +467,56 @@ void bc_work_scene(struct bc_work *w, uint32_t sid, struct bc_tree *t,
 	if (bc__work_queue(w, sid, u)) {
 		bc_log(BC_LOG_ERROR, "session %u: no render slot", sid);
 	}
+}
+
+int bc_work_ops_early(struct bc_work *w, uint32_t sid, uint64_t order,
+                      const struct bc_proto_edit_op *ops, uint32_t n)
+{
+	struct upd *u = bc_calloc(1, sizeof(*u));
+	struct flow *f;
+	if (!u || bc_ops_copy(&u->ops, ops, n)) {
+		bc__upd_free(u);
+		return BC_ENOMEM;
+	}
+	u->kind = UPD_OPS;
+	u->early = true;
+	u->order = order;
+	u->bytes = sizeof(*u) + u->ops.bytes;
+	uv_mutex_lock(&w->lock);
+	if (!(f = flow_of(w, sid, false))) {
+		uv_mutex_unlock(&w->lock);
+		bc__upd_free(u);
+		return 0; /* no copy to follow */
+	}
+	if (f->early || f->ubytes + u->bytes > BC_SRV_FLOW_CHANGE_BYTES) {
+		uv_mutex_unlock(&w->lock);
+		bc__upd_free(u);
+		return BC_ELIMIT;
+	}
+	f->early = true;
+	bc__work_wake(w, f);
+	if (f->utail) {
+		f->utail->next = u;
+	} else {
+		f->uhead = u;
+	}
+	f->utail = u;
+	f->ubytes += u->bytes;
+	uv_cond_signal(&w->cond);
+	uv_mutex_unlock(&w->lock);
+	return 0;
+}
+
+void bc_work_settle(struct bc_work *w, uint32_t sid, bool stands)
+{
+	struct flow *f;
+	uv_mutex_lock(&w->lock);
+	if ((f = flow_of(w, sid, false)) && f->early) {
+		f->early = false;
+		f->settle = stands ? 1 : -1;
+		uv_cond_signal(&w->cond);
+	}
+	uv_mutex_unlock(&w->lock);
 }
 
 void bc_work_drop(struct bc_work *w, uint32_t sid)

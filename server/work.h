@@ -182,6 +182,19 @@ int bc_work_states(struct bc_work *w, uint32_t sid, uint64_t order,
  * with the edit module's own code. Returns 0 or BC_ENOMEM (as above). */
 int bc_work_ops(struct bc_work *w, uint32_t sid, uint64_t order,
                 const struct bc_proto_edit_op *ops, uint32_t n);
+/* A structural batch queued before the session applies it, so that the
+ * copy's splice runs beside the session's: the copy applies it at once,
+ * keeping what undoes it, and the session's jobs wait for the verdict,
+ * bc_work_settle (one early batch at a time). Returns 0 (also when the
+ * session has no copy), or BC_ENOMEM or BC_ELIMIT (the queue is full):
+ * nothing was queued, and the batch follows with bc_work_ops once it
+ * stands. */
+int bc_work_ops_early(struct bc_work *w, uint32_t sid, uint64_t order,
+                      const struct bc_proto_edit_op *ops, uint32_t n);
+/* The verdict on session sid's early batch: it stands (applied,
+ * journaled), or it was refused or undone, and so is undone on the copy.
+ * Every early batch gets one. */
+void bc_work_settle(struct bc_work *w, uint32_t sid, bool stands);
 /* The session is gone: its copy, views and jobs go at the next slice. */
 void bc_work_drop(struct bc_work *w, uint32_t sid);
 

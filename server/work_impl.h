@@ -41,6 +41,7 @@ struct upd {
 	uint32_t *index;
 	uint32_t index_cap;     /* a power of two, at least twice cap */
 	struct bc_ops_copy ops; /* UPD_OPS */
+	bool early;             /* UPD_OPS: queued before the session's apply */
 	size_t bytes;           /* what this change holds, for the flow's cap */
 };
 
@@ -74,6 +75,9 @@ struct views {
 	uint64_t clock;
 };
 
+/* What became of an early batch on the copy (struct flow's eb_state). */
+enum early_state { EB_NONE = 0, EB_APPLIED, EB_FAILED, EB_SKIPPED };
+
 /* A session's render side. */
 struct flow {
 	uint32_t sid; /* 0: slot free */
@@ -83,6 +87,11 @@ struct flow {
 	struct bc_job *qhead[JC_COUNT], *qtail[JC_COUNT];
 	struct bc_job *cur; /* started, not finished */
 	bool held;          /* a worker runs a slice of it now */
+	/* A structural batch queued ahead of the session's own apply
+	 * (bc_work_ops_early) waits for its verdict: the flow's jobs wait
+	 * meanwhile, so no frame shows a batch that may yet be undone. */
+	bool early;
+	int8_t settle; /* the verdict for the holder: 1 stands, -1 undone */
 	bool dropped;       /* the session is gone: freed by a worker */
 	double vruntime;    /* render ms, the scheduler's clock */
 	uint64_t render_us;
@@ -94,6 +103,12 @@ struct flow {
 	bool fresh;  /* the renderer has not seen this tree yet */
 	bool broken; /* a change could not be applied: no frames */
 	uint64_t order;
+	/* The early batch as the copy took it, until its verdict: applied
+	 * (eb holds what undoes it), failed, or not tried (no copy); and
+	 * the copy's order before it. */
+	enum early_state eb_state;
+	struct bc_edit_batch eb;
+	uint64_t eb_order;
 	/* Cost model of this scene's frames, for the coarse level and the
 	 * slice size: running averages of milliseconds per traced ray and
 	 * per A-buffer of a new view. */
@@ -218,8 +233,10 @@ void bc__flow_kept(struct bc_work *w, struct flow *f);
 /* ---- flow.c ---- */
 
 /* Applies the changes queued for f (taken from its queue by the caller),
- * coalesced, marking the tiles they damage in the session's views. */
-void bc__flow_apply(struct bc_work *w, struct flow *f, struct upd *list);
+ * coalesced, marking the tiles they damage in the session's views, and
+ * the verdict on an early batch taken with them (settle, 0: none). */
+void bc__flow_apply(struct bc_work *w, struct flow *f, struct upd *list,
+                    int settle);
 void bc__upd_free(struct upd *u);
 /* Frees the flow's copy, renderer and views (the holder, or stop). */
 void bc__flow_clear(struct bc_work *w, struct flow *f);

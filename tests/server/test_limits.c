@@ -370,6 +370,143 @@ static void a_scene_too_big_to_send_is_refused(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
+/* k spheres of radius 0.4 at (x, 0, 0), under a union when k > 1: a
+ * subtree to INSERT, with ids from id up. */
+static struct bc_proto_buf spheres_at(uint32_t k, float x, uint32_t id)
+{
+	const float t[3] = {x, 0, 0}, q[4] = {0, 0, 0, 1}, r = 0.4f;
+	struct bc_proto_buf b;
+	bc_proto_buf_init(&b, 0);
+	bc_proto_scene_begin(&b, NULL, k > 1 ? k + 1 : 1);
+	if (k > 1) {
+		bc_proto_scene_op(&b, BC_OP_UNION, id++, 0, 0, k);
+	}
+	for (uint32_t i = 0; i < k; i++) {
+		bc_proto_scene_prim(&b, BC_PRIM_SPHERE, id++, t, q, NULL, 1,
+		                    &r);
+	}
+	return b;
+}
+
+/* One EDIT of op; returns the ERROR's code, or 1 for EDIT_APPLIED. */
+static int edit_answer(struct conn *c, const struct bc_proto_edit_op *op)
+{
+	struct bc_msg m = {.type = BC_MSG_EDIT};
+	uint32_t seq;
+	m.edit.nops = 1;
+	m.edit.ops = op;
+	seq = conn_send(c, &m);
+	for (;;) {
+		if (conn_recv(c, 60000) != 1) {
+			return 0;
+		}
+		if (c->m.type == BC_MSG_ERROR && c->m.seq == seq) {
+			return c->m.error.code;
+		}
+		if (c->m.type == BC_MSG_EDIT_APPLIED &&
+		    c->m.edit_applied.author_seq == seq) {
+			return 1;
+		}
+	}
+}
+
+/* The raw pixels of a SNAPSHOT of c's view into px (n bytes); false when
+ * none came or its size differs. */
+static bool snapshot_raw(struct conn *c, uint8_t *px, size_t n)
+{
+	struct bc_msg m = {.type = BC_MSG_SNAPSHOT};
+	uint32_t seq;
+	m.snapshot.encoding = BC_PROTO_ENC_RAW;
+	seq = conn_send(c, &m);
+	for (;;) {
+		if (conn_recv(c, 60000) != 1) {
+			return false;
+		}
+		if (c->m.type == BC_MSG_FRAME && c->m.seq == seq &&
+		    (c->m.flags & BC_PROTO_FLAG_SNAPSHOT)) {
+			break;
+		}
+	}
+	if (c->m.frame.nrects != 1 || c->m.frame.rects[0].data.len != n) {
+		return false;
+	}
+	memcpy(px, c->m.frame.rects[0].data.ptr, n);
+	return true;
+}
+
+/* A structural edit reaches the render copy before the session has applied
+ * and journaled it (the two run at once); one the session then refuses
+ * is undone on the copy too: the pictures after it are those before it,
+ * bit for bit, and the session's next edits are drawn. The scene has over
+ * BC_SRV_HEAVY_NODES nodes (its structural edits apply on a task) and
+ * fits --max-scene 1 with a little room. */
+static void a_refused_structural_edit_is_not_drawn(void)
+{
+	enum { SIZE = 48 };
+	static const char *const cap[] = {"--max-scene", "1", NULL};
+	static uint8_t before[SIZE * SIZE * 4], after[SIZE * SIZE * 4];
+	const uint32_t n = ((1u << 20) - 4096u) / 39u;
+	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_INSERT};
+	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
+	const struct bc_lin *l;
+	struct bc_proto_buf b, sub;
+	struct bc_tree *t;
+	struct daemon d;
+	struct conn a;
+	char dir[64];
+	REQUIRE(n + 1 >= BC_SRV_HEAVY_NODES);
+	make_dir_name(dir, sizeof(dir), "refused");
+	REQUIRE(daemon_start_with(&d, dir, cap) == 0);
+	REQUIRE(conn_open(&a, &d) == 0);
+	REQUIRE(conn_hello(&a, "author") == 0);
+	REQUIRE(conn_join(&a, "s", BC_PROTO_ROLE_EDITOR, true) == 0);
+	REQUIRE(conn_expect(&a, BC_MSG_SCENE_STATE, 5000) == 1);
+	b = big_scene(n, true, 0);
+	m.scene_load.scene.ptr = b.data;
+	m.scene_load.scene.len = (uint32_t)b.len;
+	REQUIRE(conn_send(&a, &m));
+	REQUIRE(conn_expect(&a, BC_MSG_SCENE_STATE, 60000) == 1);
+	bc_proto_buf_finish(&b);
+	REQUIRE((t = scene_of(&a)));
+	REQUIRE(bc_tree_prim_count(t) == n);
+	l = bc_tree_lin(t);
+	op.node = l->node_id[l->count - 1]; /* the root union */
+	op.position = n;
+	bc_tree_destroy(t);
+	REQUIRE(conn_view(&a, SIZE, SIZE, BC_PROTO_ENC_RAW));
+	REQUIRE(snapshot_raw(&a, before, sizeof(before)));
+
+	/* 200 spheres beside the cloud: 7 800 bytes more than the cap. */
+	sub = spheres_at(200, 1.3f, 1u << 24);
+	op.subtree.ptr = sub.data;
+	op.subtree.len = (uint32_t)sub.len;
+	CHECK_EQ_INT(edit_answer(&a, &op), -BC_ELIMIT);
+	bc_proto_buf_finish(&sub);
+	REQUIRE(snapshot_raw(&a, after, sizeof(after)));
+	CHECK(memcmp(before, after, sizeof(before)) == 0);
+
+	/* One that fails on the copy as on the session's tree (no such
+	 * parent): nothing changes, and the copy still follows. */
+	sub = spheres_at(1, 1.3f, 1u << 24);
+	op.subtree.ptr = sub.data;
+	op.subtree.len = (uint32_t)sub.len;
+	op.node += 1000000u;
+	op.position = 0;
+	CHECK_EQ_INT(edit_answer(&a, &op), -BC_ENONODE);
+	REQUIRE(snapshot_raw(&a, after, sizeof(after)));
+	CHECK(memcmp(before, after, sizeof(before)) == 0);
+
+	/* One sphere fits, stands and is drawn. */
+	op.node -= 1000000u;
+	op.position = n;
+	CHECK_EQ_INT(edit_answer(&a, &op), 1);
+	bc_proto_buf_finish(&sub);
+	REQUIRE(snapshot_raw(&a, after, sizeof(after)));
+	CHECK(memcmp(before, after, sizeof(before)) != 0);
+	conn_close(&a);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
 /* Sends n SNAPSHOTs in one write (so the daemon reads them in one turn). */
 static void send_snapshots(struct conn *c, uint32_t n)
 {
@@ -861,6 +998,8 @@ static const struct bc_test tests[] = {
     {"a_snapshot_larger_than_the_queue_arrives",
      a_snapshot_larger_than_the_queue_arrives},
     {"a_scene_too_big_to_send_is_refused", a_scene_too_big_to_send_is_refused},
+    {"a_refused_structural_edit_is_not_drawn",
+     a_refused_structural_edit_is_not_drawn},
     {"a_client_queues_a_bounded_number_of_requests",
      a_client_queues_a_bounded_number_of_requests},
     {"the_jobs_of_a_client_that_left_are_dropped",
