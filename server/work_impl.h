@@ -91,9 +91,9 @@ struct flow {
 	 * (bc_work_ops_early) waits for its verdict: the flow's jobs wait
 	 * meanwhile, so no frame shows a batch that may yet be undone. */
 	bool early;
-	int8_t settle; /* the verdict for the holder: 1 stands, -1 undone */
-	bool dropped;       /* the session is gone: freed by a worker */
-	double vruntime;    /* render ms, the scheduler's clock */
+	int8_t settle;   /* the verdict for the holder: 1 stands, -1 undone */
+	bool dropped;    /* the session is gone: freed by a worker */
+	double vruntime; /* render ms, the scheduler's clock */
 	uint64_t render_us;
 	double long_ms;  /* the last slice, when it ran long */
 	double first_ms; /* the first slices of its jobs, running average */
