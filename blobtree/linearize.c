@@ -758,8 +758,6 @@ void bc__lin_fill(struct bc_tree *t, struct bc_lin *l)
 	uint32_t root, depth = 0, most = 0;
 	l->nesting = bc__measure(t, t->root);
 	bc__lin_emit(t, &fs, t->root);
-	/* Every node is up to date: no splice to follow. */
-	t->shift_base = t->epoch;
 	l->nunary = fs.unary;
 	l->nparam = fs.param;
 	l->lip = 1.0f;

@@ -150,20 +150,24 @@ static uint32_t prim_from(const struct bc_lin *l, uint32_t s)
 }
 
 /* Notes the splice for the model's nodes to follow when read (struct
- * bc_tree's shift log); a full log is first followed by every live node,
- * once per BC__SHIFTS splices. */
+ * bc_tree's shift log, a ring). First the next 1 / BC__SWEEP of the pool
+ * is brought up to date: a cursor that passes over the whole pool at
+ * least once per BC__SWEEP splices (a pool that grows meanwhile makes
+ * the shares larger), so a node lags at most about 2 * BC__SWEEP
+ * splices, and the entry the ring overwrites (BC__SHIFTS back) is
+ * followed by none. */
 static void log_shift(struct bc_tree *t, const struct splice *sp)
 {
-	if (t->epoch - t->shift_base == BC__SHIFTS) {
-		for (uint32_t i = 0; i < t->npool; i++) {
-			if (t->pool[i].live) {
-				bc__refresh(t, &t->pool[i]);
-				t->pool[i].epoch = 0;
-			}
+	uint32_t n = t->npool, i = t->sweep < n ? t->sweep : 0;
+	uint32_t share = n / BC__SWEEP + 1u;
+	for (uint32_t k = 0; k < share && k < n; k++) {
+		if (t->pool[i].live) {
+			bc__refresh(t, &t->pool[i]);
 		}
-		t->epoch = t->shift_base = 0;
+		i = i + 1u == n ? 0 : i + 1u;
 	}
-	t->shift[t->epoch - t->shift_base] =
+	t->sweep = i;
+	t->shift[t->epoch % BC__SHIFTS] =
 	    (struct bc__shift){.s = sp->s, .p = sp->p, .k = sp->k};
 	t->epoch++;
 }

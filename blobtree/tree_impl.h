@@ -85,10 +85,14 @@ struct bc__span {
 struct bc__shift {
 	struct bc__span s, p, k;
 };
-/* Splices a node's slot, param and prim may lag behind (the log below):
- * a splice then renumbers no node of the model, and a full pass brings
- * every node up to date once per this many splices. */
-#define BC__SHIFTS 32u
+/* Splices a node's slot, param and prim may lag behind (the log below, a
+ * ring): a splice then renumbers no node of the model. Each splice brings
+ * a share of the pool up to date (BC__SWEEP of it, splice.c), so that no
+ * node lags more than about 2 * BC__SWEEP splices, well within the ring.
+ * A full pass once per ring's worth of splices cost one edit in 32 some
+ * 40 ms at 700 000 nodes; the share costs each about 1 ms. */
+#define BC__SHIFTS 128u
+#define BC__SWEEP 32u
 
 struct bc_tree {
 	struct bc__node *pool;
@@ -113,9 +117,11 @@ struct bc_tree {
 	bool has_lin;
 	/* Room of lin's arrays: slots, primitives, records (vec4). */
 	uint32_t lin_cap, lin_kcap, lin_pcap;
-	/* The splices since shift_base: a node whose epoch is e still has
-	 * to follow shift[e - shift_base .. epoch - shift_base). */
-	uint32_t epoch, shift_base;
+	/* Splice e is shift[e % BC__SHIFTS]; a node whose epoch is e still
+	 * has to follow splices e .. epoch - 1 (unsigned: epoch may wrap,
+	 * and 2^32 is a multiple of the ring). sweep: the next pool entry
+	 * a splice brings up to date. */
+	uint32_t epoch, sweep;
 	struct bc__shift shift[BC__SHIFTS];
 	struct bc_dirty dirty;
 
@@ -166,8 +172,8 @@ static inline void bc__dirty_range(uint32_t *lo, uint32_t *hi, uint32_t a,
 static inline uint32_t bc__follow(const struct bc_tree *t, uint32_t v,
                                   uint32_t epoch, int i)
 {
-	for (uint32_t e = epoch; e < t->epoch; e++) {
-		const struct bc__shift *sh = &t->shift[e - t->shift_base];
+	for (uint32_t e = epoch; e != t->epoch; e++) {
+		const struct bc__shift *sh = &t->shift[e % BC__SHIFTS];
 		v = bc__span_map(i == 0 ? &sh->s : i == 1 ? &sh->p : &sh->k, v);
 	}
 	return v;

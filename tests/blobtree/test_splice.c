@@ -410,6 +410,64 @@ static void wide_operator_ends(void)
 	bc_tree_destroy(t);
 }
 
+/* A wide operator of thousands of operands, edited at random places many
+ * times: each splice brings only a share of the model's nodes up to date
+ * (the rest follow the splice log when read), so most nodes lag dozens
+ * of splices behind, and the log's ring wraps many times over. Every
+ * node's slot must still be where a full layout puts it. */
+static void many_splices_on_a_wide_operator(void)
+{
+	struct bc_tree *t = bc_tree_create(), *one = bc_tree_create();
+	struct bc_op_data u = {BC_OP_UNION, 0.0f, 0.0f};
+	struct bc_prim_data s;
+	const uint32_t n0 = 3000;
+	uint32_t id = 10;
+	const char *why = NULL;
+	REQUIRE(t && one);
+	rt_state = 11;
+	bc_tree_begin(t);
+	bc_tree_push_op(t, 1, &u, NULL);
+	for (uint32_t i = 0; i < n0; i++) {
+		rt_random_prim(&s);
+		bc_tree_put_prim(t, id++, &s, NULL);
+	}
+	bc_tree_pop_op(t, NULL);
+	REQUIRE(bc_tree_end(t, NULL) == 0);
+	for (int e = 0; e < 1200 && !why; e++) {
+		uint32_t c = bc_tree_child_count(t, 1);
+		if (rt_below(2) && c > n0 / 2) {
+			REQUIRE(bc_tree_remove(t,
+			                       bc_tree_child(t, 1, rt_below(c)),
+			                       NULL) == 0);
+		} else {
+			rt_random_prim(&s);
+			bc_tree_begin(one);
+			bc_tree_put_prim(one, id++, &s, NULL);
+			REQUIRE(bc_tree_end(one, NULL) == 0);
+			REQUIRE(bc_tree_insert(t, 1, rt_below(c + 1), one,
+			                       NULL) == 0);
+		}
+		if (e % 100 == 99) {
+			why = differs_from_full(t);
+		}
+		c = bc_tree_child_count(t, 1);
+		for (uint32_t k = 0; k < c && !why && e % 20 == 0; k++) {
+			uint32_t cid = bc_tree_child(t, 1, k);
+			uint32_t slot = bc_tree_slot(t, cid);
+			if (slot >= bc_tree_lin(t)->count ||
+			    bc_tree_lin(t)->node_id[slot] != cid) {
+				why = "a node's slot is not where it is";
+			}
+		}
+	}
+	if (why) {
+		fprintf(stderr, "  %s\n", why);
+	}
+	CHECK(why == NULL);
+	bc_tree_destroy(one);
+	bc_tree_destroy(t);
+}
+
 /* ---- batches refused part way ------------------------------------------ */
 
 static uint32_t next_id = 100000;
@@ -623,6 +681,7 @@ static const struct bc_test tests[] = {
     {"random_edits_equal_a_full_layout", random_edits_equal_a_full_layout},
     {"unary_subtrees_come_and_go", unary_subtrees_come_and_go},
     {"wide_operator_ends", wide_operator_ends},
+    {"many_splices_on_a_wide_operator", many_splices_on_a_wide_operator},
     {"refused_batches_leave_the_tree_as_it_was",
      refused_batches_leave_the_tree_as_it_was},
     {"allocation_failures_leave_the_tree_as_it_was",
