@@ -302,13 +302,22 @@ static void structure_changed(struct bc_work *w, struct flow *f)
 	bc__views_drop(w, f->sid);
 }
 
-/* An early batch (bc_work_ops_early): applied, and kept undoable until
- * its verdict. A failure is not yet an error: the session's own apply of
- * the same operations on the same tree fails alike, unless memory ran
- * out here (the verdict tells). */
+/* An early batch (bc_work_ops_early) whose verdict has not come:
+ * applied, and kept undoable until it does. A failure is not yet an
+ * error: the session's own apply of the same operations on the same tree
+ * fails alike, unless memory ran out here (the verdict tells). */
 static void apply_early(struct bc_work *w, struct flow *f, const struct upd *u)
 {
 	struct bc_errinfo ei = {0};
+	if (f->eb_state != EB_NONE) {
+		/* Cannot happen: a session has one early batch at a time,
+		 * and a batch's verdict is applied before the next batch. */
+		bc_log(BC_LOG_ERROR,
+		       "session %u: an early batch came before the verdict on "
+		       "the one before",
+		       f->sid);
+		bc_edit_batch_finish(&f->eb);
+	}
 	f->eb_order = f->order;
 	if (!f->tree || f->broken) {
 		f->eb_state = EB_SKIPPED;
@@ -376,7 +385,10 @@ static void apply_one(struct bc_work *w, struct flow *f, struct upd *u)
 		}
 		break;
 	case UPD_OPS:
-		if (u->early) {
+		if (u->early && u->verdict < 0) {
+			return; /* undone before it was taken: never applied */
+		}
+		if (u->early && !u->verdict) {
 			apply_early(w, f, u);
 			break;
 		}
@@ -406,21 +418,15 @@ static void apply_one(struct bc_work *w, struct flow *f, struct upd *u)
 void bc__flow_apply(struct bc_work *w, struct flow *f, struct upd *list,
                     int settle)
 {
-	bool early = false;
-	for (const struct upd *u = list; u; u = u->next) {
-		early = early || (u->kind == UPD_OPS && u->early);
-	}
-	/* The verdict follows its batch, and comes before any change made
-	 * after it; its batch is in this list or was applied before. */
-	if (settle && !early) {
+	/* The verdict is on a batch taken in an earlier turn (one still
+	 * queued carries its own), and every change in the list came after
+	 * it. */
+	if (settle) {
 		settle_early(w, f, settle > 0);
 	}
 	while (list) {
 		struct upd *next = list->next;
 		apply_one(w, f, list);
-		if (settle && list->kind == UPD_OPS && list->early) {
-			settle_early(w, f, settle > 0);
-		}
 		bc__upd_free(list);
 		list = next;
 	}

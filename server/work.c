@@ -510,10 +510,21 @@ int bc_work_ops_early(struct bc_work *w, uint32_t sid, uint64_t order,
 void bc_work_settle(struct bc_work *w, uint32_t sid, bool stands)
 {
 	struct flow *f;
+	struct upd *u;
 	uv_mutex_lock(&w->lock);
 	if ((f = flow_of(w, sid, false)) && f->early) {
 		f->early = false;
-		f->settle = stands ? 1 : -1;
+		/* Still queued: the verdict goes with the batch (an undone
+		 * one is then never applied). Else a worker took it, and
+		 * holds it until its next turn between jobs. */
+		for (u = f->uhead; u && !(u->early && !u->verdict);
+		     u = u->next) {
+		}
+		if (u) {
+			u->verdict = stands ? 1 : -1;
+		} else {
+			f->settle = stands ? 1 : -1;
+		}
 		uv_cond_signal(&w->cond);
 	}
 	uv_mutex_unlock(&w->lock);

@@ -42,7 +42,10 @@ struct upd {
 	uint32_t index_cap;     /* a power of two, at least twice cap */
 	struct bc_ops_copy ops; /* UPD_OPS */
 	bool early;             /* UPD_OPS: queued before the session's apply */
-	size_t bytes;           /* what this change holds, for the flow's cap */
+	/* An early batch's verdict when it came before a worker took the
+	 * change (bc_work_settle): 1 stands, -1 undone, 0 not yet. */
+	int8_t verdict;
+	size_t bytes; /* what this change holds, for the flow's cap */
 };
 
 /* A view kept by the cache: the full-size planes of one camera and size
@@ -91,7 +94,9 @@ struct flow {
 	 * (bc_work_ops_early) waits for its verdict: the flow's jobs wait
 	 * meanwhile, so no frame shows a batch that may yet be undone. */
 	bool early;
-	int8_t settle;   /* the verdict for the holder: 1 stands, -1 undone */
+	/* The verdict on the early batch a worker already took (it is
+	 * held, eb_state), for the holder: 1 stands, -1 undone. */
+	int8_t settle;
 	bool dropped;    /* the session is gone: freed by a worker */
 	double vruntime; /* render ms, the scheduler's clock */
 	uint64_t render_us;
@@ -232,9 +237,9 @@ void bc__flow_kept(struct bc_work *w, struct flow *f);
 
 /* ---- flow.c ---- */
 
-/* Applies the changes queued for f (taken from its queue by the caller),
- * coalesced, marking the tiles they damage in the session's views, and
- * the verdict on an early batch taken with them (settle, 0: none). */
+/* Applies the verdict on the early batch f holds (settle, 0: none), then
+ * the changes queued for f (taken from its queue by the caller),
+ * coalesced, marking the tiles they damage in the session's views. */
 void bc__flow_apply(struct bc_work *w, struct flow *f, struct upd *list,
                     int settle);
 void bc__upd_free(struct upd *u);
