@@ -74,9 +74,14 @@ struct cone {
  * relative to the eye, radius; root = sqrt(|v|^2 - radius^2), the cone
  * tests' term, when the eye is outside). */
 struct ab_prim {
-	struct bc_abv wide;
 	struct rect rect;
 	float v[3], radius, root;
+	/* The widening of its ABV in this view (widened_abv): a shape
+	 * other than a sphere is widened again from the layout's ABV when a
+	 * tile's list tests it (a sphere's is v and radius), so that a
+	 * primitive keeps 44 bytes here, not 120. */
+	float margin;
+	uint8_t shape; /* enum bc_abv_shape */
 	bool inside;
 };
 
@@ -326,23 +331,10 @@ static struct rect project_box(const struct tiled_frame *tf, const float lo[3],
  * depth ranges. Widening only adds primitives to views, which is always
  * safe. The epsilon grows with distance: the farthest point of the
  * primitive's bounding sphere sets it. */
-static void widened_abv(const struct bc__frame_ctx *fc,
-                        const struct bc_abv *abv, struct bc_abv *out,
-                        float lo[3], float hi[3])
+/* abv grown by m: a box's half extents, a sphere's or capsule's radius. */
+static void widen_by(const struct bc_abv *abv, float m, struct bc_abv *out)
 {
-	const float *eye = fc->vr.eye;
-	float far = 0.0f, r2 = 0.0f, m;
 	*out = *abv;
-	bc_abv_aabb(out, lo, hi);
-	for (int i = 0; i < 3; i++) {
-		float c = 0.5f * (lo[i] + hi[i]) - eye[i];
-		float e = 0.5f * (hi[i] - lo[i]);
-		far += c * c;
-		r2 += e * e;
-	}
-	far = sqrtf(far) + sqrtf(r2);
-	m = BC_CPU_LIPSCHITZ * fc->lin->lip *
-	    bc__maxf(BC_CPU_HIT_FOOTPRINT * fc->pix_angle * far, fc->min_step);
 	switch (out->shape) {
 	case BC_ABV_BOX:
 		for (int i = 0; i < 3; i++) {
@@ -353,10 +345,30 @@ static void widened_abv(const struct bc__frame_ctx *fc,
 		out->radius += m;
 		break;
 	}
+}
+
+static float widened_abv(const struct bc__frame_ctx *fc,
+                         const struct bc_abv *abv, struct bc_abv *out,
+                         float lo[3], float hi[3])
+{
+	const float *eye = fc->vr.eye;
+	float far = 0.0f, r2 = 0.0f, m;
+	bc_abv_aabb(abv, lo, hi);
+	for (int i = 0; i < 3; i++) {
+		float c = 0.5f * (lo[i] + hi[i]) - eye[i];
+		float e = 0.5f * (hi[i] - lo[i]);
+		far += c * c;
+		r2 += e * e;
+	}
+	far = sqrtf(far) + sqrtf(r2);
+	m = BC_CPU_LIPSCHITZ * fc->lin->lip *
+	    bc__maxf(BC_CPU_HIT_FOOTPRINT * fc->pix_angle * far, fc->min_step);
+	widen_by(abv, m, out);
 	for (int i = 0; i < 3; i++) {
 		lo[i] -= m;
 		hi[i] += m;
 	}
+	return m;
 }
 
 /* Does the sphere (centre relative to the eye v, radius r) meet the
@@ -413,10 +425,12 @@ static void prim_setup(const struct tiled_frame *tf, uint32_t k,
                        struct ab_prim *p)
 {
 	const struct bc__frame_ctx *fc = tf->fc;
+	struct bc_abv wide;
 	float lo[3], hi[3], c[3], dist2;
-	widened_abv(fc, &fc->lin->abv[k], &p->wide, lo, hi);
+	p->margin = widened_abv(fc, &fc->lin->abv[k], &wide, lo, hi);
+	p->shape = (uint8_t)wide.shape;
 	p->rect = project_box(tf, lo, hi);
-	bounding_sphere(&p->wide, lo, hi, c, &p->radius);
+	bounding_sphere(&wide, lo, hi, c, &p->radius);
 	for (int i = 0; i < 3; i++) {
 		p->v[i] = c[i] - fc->vr.eye[i];
 	}
@@ -765,6 +779,7 @@ static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
 	const struct bc__tiled_bufs *b = tf->b;
 	const struct cone *cones = &b->cones[CONES_PER_TILE * tile];
 	const float *eye = tf->fc->vr.eye;
+	const struct bc_abv *abv = tf->fc->lin->abv;
 	struct bc__frag *out = b->frags + b->cand_off[tile];
 	uint32_t n = 0;
 	for (uint32_t i = b->cand_off[tile]; i < b->cand_end[tile]; i++) {
@@ -775,12 +790,11 @@ static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
 		if (i + LIST_PREFETCH < b->cand_end[tile]) {
 			/* A tile's candidates lie anywhere in the primitive
 			 * array: ask for a later one's bytes (the cone test's
-			 * at its end, the ABV at its start) now, so that the
-			 * misses overlap. */
+			 * and the sphere's) now, so that the misses
+			 * overlap. */
 			const struct ab_prim *later =
 			    &b->prims[b->cand[i + LIST_PREFETCH]];
 			__builtin_prefetch(&later->v);
-			__builtin_prefetch(&later->wide);
 		}
 		if (!cone_meets_sphere(&cones[0], p)) {
 			continue;
@@ -793,10 +807,13 @@ static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
 		if (!lanes) {
 			continue;
 		}
-		if (p->wide.shape == BC_ABV_SPHERE) {
-			tf->kern.sphere(rays, lanes, p->v, p->wide.radius, t);
+		if (p->shape == BC_ABV_SPHERE) {
+			/* The sphere around a sphere is itself. */
+			tf->kern.sphere(rays, lanes, p->v, p->radius, t);
 		} else {
-			tf->kern.abv(rays, lanes, &p->wide, eye, t);
+			struct bc_abv wide;
+			widen_by(&abv[k], p->margin, &wide);
+			tf->kern.abv(rays, lanes, &wide, eye, t);
 		}
 		if (t[1] >= t[0]) {
 			out[n++] = (struct bc__frag){t[0], t[1], k};
