@@ -370,6 +370,28 @@ static void a_scene_too_big_to_send_is_refused(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
+/* A scene of n spheres of radius 0.05 scattered over [-1, 1]^3 under one
+ * union, with a camera: cheap to trace at any size. */
+static struct bc_proto_buf scattered(uint32_t n)
+{
+	static const float cam[10] = {0, 0, 5, 0, 0, 0, 0, 1, 0, 45};
+	const float q[4] = {0, 0, 0, 1}, r = 0.05f;
+	uint32_t x = 12345u;
+	struct bc_proto_buf b;
+	bc_proto_buf_init(&b, 0);
+	bc_proto_scene_begin(&b, cam, n + 1);
+	bc_proto_scene_op(&b, BC_OP_UNION, 0, 0, 0, n);
+	for (uint32_t i = 0; i < n; i++) {
+		float t[3];
+		for (int k = 0; k < 3; k++) {
+			x = x * 1664525u + 1013904223u;
+			t[k] = (float)(x >> 8) / (float)(1u << 23) - 1.0f;
+		}
+		bc_proto_scene_prim(&b, BC_PRIM_SPHERE, 0, t, q, NULL, 1, &r);
+	}
+	return b;
+}
+
 /* k spheres of radius 0.4 at (x, 0, 0), under a union when k > 1: a
  * subtree to INSERT, with ids from id up. */
 static struct bc_proto_buf spheres_at(uint32_t k, float x, uint32_t id)
@@ -388,14 +410,18 @@ static struct bc_proto_buf spheres_at(uint32_t k, float x, uint32_t id)
 	return b;
 }
 
-/* One EDIT of op; returns the ERROR's code, or 1 for EDIT_APPLIED. */
-static int edit_answer(struct conn *c, const struct bc_proto_edit_op *op)
+/* Sends one EDIT of op; returns its seq. */
+static uint32_t send_edit(struct conn *c, const struct bc_proto_edit_op *op)
 {
 	struct bc_msg m = {.type = BC_MSG_EDIT};
-	uint32_t seq;
 	m.edit.nops = 1;
 	m.edit.ops = op;
-	seq = conn_send(c, &m);
+	return conn_send(c, &m);
+}
+
+/* The answer to c's EDIT seq: the ERROR's code, or 1 for EDIT_APPLIED. */
+static int answer_of(struct conn *c, uint32_t seq)
+{
 	for (;;) {
 		if (conn_recv(c, 60000) != 1) {
 			return 0;
@@ -408,6 +434,11 @@ static int edit_answer(struct conn *c, const struct bc_proto_edit_op *op)
 			return 1;
 		}
 	}
+}
+
+static int edit_answer(struct conn *c, const struct bc_proto_edit_op *op)
+{
+	return answer_of(c, send_edit(c, op));
 }
 
 /* The raw pixels of a SNAPSHOT of c's view into px (n bytes); false when
@@ -437,22 +468,29 @@ static bool snapshot_raw(struct conn *c, uint8_t *px, size_t n)
 /* A structural edit reaches the render copy before the session has applied
  * and journaled it (the two run at once); one the session then refuses
  * is undone on the copy too: the pictures after it are those before it,
- * bit for bit, and the session's next edits are drawn. The scene has over
- * BC_SRV_HEAVY_NODES nodes (its structural edits apply on a task) and
- * fits --max-scene 1 with a little room. */
+ * bit for bit, and the session's next edits are drawn. Then the same
+ * edits while another member's snapshot holds the copy, so that their
+ * verdicts come while they still wait for it (the refused one is never
+ * applied there). The scene has over BC_SRV_HEAVY_NODES nodes (its
+ * structural edits apply on a task) and fits --max-scene 1 with a little
+ * room. */
 static void a_refused_structural_edit_is_not_drawn(void)
 {
 	enum { SIZE = 48 };
 	static const char *const cap[] = {"--max-scene", "1", NULL};
-	static uint8_t before[SIZE * SIZE * 4], after[SIZE * SIZE * 4];
+	static uint8_t before[SIZE * SIZE * 4], after[SIZE * SIZE * 4],
+	    with[SIZE * SIZE * 4];
 	const uint32_t n = ((1u << 20) - 4096u) / 39u;
 	struct bc_proto_edit_op op = {.kind = BC_PROTO_EDIT_INSERT};
+	struct bc_proto_edit_op rm = {.kind = BC_PROTO_EDIT_REMOVE};
 	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
+	struct bc_msg snap = {.type = BC_MSG_SNAPSHOT};
 	const struct bc_lin *l;
-	struct bc_proto_buf b, sub;
+	struct bc_proto_buf b, sub, big;
 	struct bc_tree *t;
 	struct daemon d;
-	struct conn a;
+	struct conn a, b2;
+	uint32_t seq, seq2;
 	char dir[64];
 	REQUIRE(n + 1 >= BC_SRV_HEAVY_NODES);
 	make_dir_name(dir, sizeof(dir), "refused");
@@ -461,7 +499,7 @@ static void a_refused_structural_edit_is_not_drawn(void)
 	REQUIRE(conn_hello(&a, "author") == 0);
 	REQUIRE(conn_join(&a, "s", BC_PROTO_ROLE_EDITOR, true) == 0);
 	REQUIRE(conn_expect(&a, BC_MSG_SCENE_STATE, 5000) == 1);
-	b = big_scene(n, true, 0);
+	b = scattered(n);
 	m.scene_load.scene.ptr = b.data;
 	m.scene_load.scene.len = (uint32_t)b.len;
 	REQUIRE(conn_send(&a, &m));
@@ -477,11 +515,10 @@ static void a_refused_structural_edit_is_not_drawn(void)
 	REQUIRE(snapshot_raw(&a, before, sizeof(before)));
 
 	/* 200 spheres beside the cloud: 7 800 bytes more than the cap. */
-	sub = spheres_at(200, 1.3f, 1u << 24);
-	op.subtree.ptr = sub.data;
-	op.subtree.len = (uint32_t)sub.len;
+	big = spheres_at(200, 1.3f, 1u << 24);
+	op.subtree.ptr = big.data;
+	op.subtree.len = (uint32_t)big.len;
 	CHECK_EQ_INT(edit_answer(&a, &op), -BC_ELIMIT);
-	bc_proto_buf_finish(&sub);
 	REQUIRE(snapshot_raw(&a, after, sizeof(after)));
 	CHECK(memcmp(before, after, sizeof(before)) == 0);
 
@@ -496,13 +533,41 @@ static void a_refused_structural_edit_is_not_drawn(void)
 	REQUIRE(snapshot_raw(&a, after, sizeof(after)));
 	CHECK(memcmp(before, after, sizeof(before)) == 0);
 
-	/* One sphere fits, stands and is drawn. */
+	/* One sphere fits, stands and is drawn; its removal is drawn. */
 	op.node -= 1000000u;
 	op.position = n;
 	CHECK_EQ_INT(edit_answer(&a, &op), 1);
-	bc_proto_buf_finish(&sub);
+	REQUIRE(snapshot_raw(&a, with, sizeof(with)));
+	CHECK(memcmp(before, with, sizeof(before)) != 0);
+	rm.node = 1u << 24;
+	CHECK_EQ_INT(edit_answer(&a, &rm), 1);
 	REQUIRE(snapshot_raw(&a, after, sizeof(after)));
-	CHECK(memcmp(before, after, sizeof(before)) != 0);
+	CHECK(memcmp(before, after, sizeof(before)) == 0);
+
+	/* The same two edits while another member's big snapshot holds the
+	 * render copy: their verdicts come before the copy takes them (the
+	 * refused one is never applied there), or after, depending on the
+	 * timing; either way the picture is the one with the sphere. */
+	REQUIRE(conn_open(&b2, &d) == 0);
+	REQUIRE(conn_hello(&b2, "viewer") == 0);
+	REQUIRE(conn_join(&b2, "s", BC_PROTO_ROLE_VIEWER, false) == 0);
+	REQUIRE(conn_view(&b2, 1024, 768, BC_PROTO_ENC_PNG));
+	snap.snapshot.encoding = BC_PROTO_ENC_RAW;
+	REQUIRE(conn_send(&b2, &snap));
+	t_sleep_ms(50); /* its job starts: the edits' copies wait */
+	op.subtree.ptr = big.data;
+	op.subtree.len = (uint32_t)big.len;
+	seq = send_edit(&a, &op);
+	op.subtree.ptr = sub.data;
+	op.subtree.len = (uint32_t)sub.len;
+	seq2 = send_edit(&a, &op);
+	CHECK_EQ_INT(answer_of(&a, seq), -BC_ELIMIT);
+	CHECK_EQ_INT(answer_of(&a, seq2), 1);
+	REQUIRE(snapshot_raw(&a, after, sizeof(after)));
+	CHECK(memcmp(with, after, sizeof(with)) == 0);
+	bc_proto_buf_finish(&sub);
+	bc_proto_buf_finish(&big);
+	conn_close(&b2);
 	conn_close(&a);
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
