@@ -167,8 +167,8 @@ int bc_work_states(struct bc_work *w, uint32_t sid, uint64_t order,
 
 /* ---- structural batches -------------------------------------------------- */
 
-int bc_work_ops(struct bc_work *w, uint32_t sid, uint64_t order,
-                const struct bc_proto_edit_op *ops, uint32_t n)
+static int queue_ops(struct bc_work *w, uint32_t sid, uint64_t order,
+                     const struct bc_proto_edit_op *ops, uint32_t n, bool early)
 {
 	struct upd *u = bc_calloc(1, sizeof(*u));
 	if (!u || bc_ops_copy(&u->ops, ops, n)) {
@@ -176,9 +176,22 @@ int bc_work_ops(struct bc_work *w, uint32_t sid, uint64_t order,
 		return BC_ENOMEM;
 	}
 	u->kind = UPD_OPS;
+	u->early = early;
 	u->order = order;
 	u->bytes = sizeof(*u) + u->ops.bytes;
 	return bc__work_queue(w, sid, u);
+}
+
+int bc_work_ops(struct bc_work *w, uint32_t sid, uint64_t order,
+                const struct bc_proto_edit_op *ops, uint32_t n)
+{
+	return queue_ops(w, sid, order, ops, n, false);
+}
+
+int bc_work_ops_early(struct bc_work *w, uint32_t sid, uint64_t order,
+                      const struct bc_proto_edit_op *ops, uint32_t n)
+{
+	return queue_ops(w, sid, order, ops, n, true);
 }
 
 /* ---- applying, on the worker holding the flow ---------------------------- */

@@ -422,7 +422,8 @@ int bc__work_queue(struct bc_work *w, uint32_t sid, struct upd *u)
 		return scene ? BC_ELIMIT : 0;
 	}
 	if (u->kind != UPD_SCENE &&
-	    f->ubytes + u->bytes > BC_SRV_FLOW_CHANGE_BYTES) {
+	    (f->ubytes + u->bytes > BC_SRV_FLOW_CHANGE_BYTES ||
+	     (u->early && f->early))) {
 		uv_mutex_unlock(&w->lock);
 		bc__upd_free(u);
 		return BC_ELIMIT;
@@ -445,6 +446,7 @@ int bc__work_queue(struct bc_work *w, uint32_t sid, struct upd *u)
 	}
 	f->utail = u;
 	f->ubytes += u->bytes;
+	f->early = f->early || u->early;
 	uv_cond_signal(&w->cond);
 	uv_mutex_unlock(&w->lock);
 	return 0;
@@ -467,44 +469,6 @@ void bc_work_scene(struct bc_work *w, uint32_t sid, struct bc_tree *t,
 	if (bc__work_queue(w, sid, u)) {
 		bc_log(BC_LOG_ERROR, "session %u: no render slot", sid);
 	}
-}
-
-int bc_work_ops_early(struct bc_work *w, uint32_t sid, uint64_t order,
-                      const struct bc_proto_edit_op *ops, uint32_t n)
-{
-	struct upd *u = bc_calloc(1, sizeof(*u));
-	struct flow *f;
-	if (!u || bc_ops_copy(&u->ops, ops, n)) {
-		bc__upd_free(u);
-		return BC_ENOMEM;
-	}
-	u->kind = UPD_OPS;
-	u->early = true;
-	u->order = order;
-	u->bytes = sizeof(*u) + u->ops.bytes;
-	uv_mutex_lock(&w->lock);
-	if (!(f = flow_of(w, sid, false))) {
-		uv_mutex_unlock(&w->lock);
-		bc__upd_free(u);
-		return 0; /* no copy to follow */
-	}
-	if (f->early || f->ubytes + u->bytes > BC_SRV_FLOW_CHANGE_BYTES) {
-		uv_mutex_unlock(&w->lock);
-		bc__upd_free(u);
-		return BC_ELIMIT;
-	}
-	f->early = true;
-	bc__work_wake(w, f);
-	if (f->utail) {
-		f->utail->next = u;
-	} else {
-		f->uhead = u;
-	}
-	f->utail = u;
-	f->ubytes += u->bytes;
-	uv_cond_signal(&w->cond);
-	uv_mutex_unlock(&w->lock);
-	return 0;
 }
 
 void bc_work_settle(struct bc_work *w, uint32_t sid, bool stands)

@@ -222,7 +222,8 @@ struct bc_work {
 
 /* Queues change u for session sid (a scene creates its flow). Returns 0,
  * or BC_ELIMIT when the flow's queued changes would pass
- * BC_SRV_FLOW_CHANGE_BYTES or no flow can be had (u freed). */
+ * BC_SRV_FLOW_CHANGE_BYTES, an early batch still waits for its verdict
+ * (u early too), or no flow can be had (u freed). */
 int bc__work_queue(struct bc_work *w, uint32_t sid, struct upd *u);
 /* A flow about to get work after none starts at most the wake credit
  * behind the others (work.c). Called with the lock held. */
