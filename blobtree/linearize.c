@@ -58,7 +58,9 @@ static void populate(struct bc_lin *l)
 	    l->prim_of, l->wrap, l->wrap_top, l->dom,   l->ucount};
 	bc_populate(l->node, 2 * n * sizeof(uint32_t));
 	for (size_t i = 0; i < sizeof(per_node) / sizeof(per_node[0]); i++) {
-		bc_populate(per_node[i], n * sizeof(uint32_t));
+		if (per_node[i]) {
+			bc_populate(per_node[i], n * sizeof(uint32_t));
+		}
 	}
 	bc_populate(l->roi, 2 * n * sizeof(float));
 	bc_populate(l->prim_slot, np * sizeof(uint32_t));
@@ -67,7 +69,7 @@ static void populate(struct bc_lin *l)
 	bc_populate(l->param, 4 * (size_t)l->nparam * sizeof(float));
 }
 
-int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nops)
+int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nops, bool unary)
 {
 	size_t count = nprims ? 2u * (size_t)nprims - 1u : 0u;
 	/* Room for every operator to be unary (the larger record); nparam
@@ -97,10 +99,18 @@ int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nops)
 	l->abv = bc_calloc(bc__lin_room(nprims), sizeof(struct bc_abv));
 	l->color = bc_malloc(bc__lin_room(nprims) * sizeof(*l->color));
 	l->param = bc_calloc(4 * nparam, sizeof(float));
-	l->wrap = bc_malloc(count * sizeof(uint32_t));
-	l->wrap_top = bc_malloc(count * sizeof(uint32_t));
-	l->dom = bc_malloc(count * sizeof(uint32_t));
-	l->ucount = bc_malloc(count * sizeof(uint32_t));
+	if (unary) {
+		/* 16 bytes a slot, 32 a primitive: none for the many
+		 * scenes without unary nodes. */
+		l->wrap = bc_malloc(count * sizeof(uint32_t));
+		l->wrap_top = bc_malloc(count * sizeof(uint32_t));
+		l->dom = bc_malloc(count * sizeof(uint32_t));
+		l->ucount = bc_malloc(count * sizeof(uint32_t));
+		if (!l->wrap || !l->wrap_top || !l->dom || !l->ucount) {
+			bc__lin_free(l);
+			return BC_ENOMEM;
+		}
+	}
 	l->unary_slot = bc_malloc(nun * sizeof(uint32_t));
 	l->unary_outer = bc_malloc(nun * sizeof(uint32_t));
 	l->unary_inner = bc_malloc(nun * sizeof(uint32_t));
@@ -108,8 +118,7 @@ int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nops)
 	l->unary_param = bc_malloc(nun * sizeof(uint32_t));
 	l->unary_kind = bc_malloc(nun * sizeof(uint32_t));
 	l->unary_id = bc_malloc(nun * sizeof(uint32_t));
-	if (!l->wrap || !l->wrap_top || !l->dom || !l->ucount ||
-	    !l->unary_slot || !l->unary_outer || !l->unary_inner ||
+	if (!l->unary_slot || !l->unary_outer || !l->unary_inner ||
 	    !l->unary_dom || !l->unary_param || !l->unary_kind ||
 	    !l->unary_id) {
 		bc__lin_free(l);
@@ -264,6 +273,9 @@ static const float default_color[3] = {0.78f, 0.78f, 0.80f};
 
 static void slot_init(struct bc_lin *l, uint32_t s)
 {
+	if (!l->wrap) {
+		return; /* no unary node: none kept */
+	}
 	l->wrap[s] = BC_NONE;
 	l->wrap_top[s] = BC_NONE;
 	l->dom[s] = BC_NONE;
@@ -447,9 +459,13 @@ static void propagate_base(struct bc_lin *l, uint32_t s)
 static void propagate(struct bc_lin *l, uint32_t s)
 {
 	uint32_t a = bc_lin_parent(l, s);
-	uint32_t d = a == BC_NONE ? BC_NONE : l->dom[a];
+	uint32_t d;
 	float lo, hi;
 	propagate_base(l, s);
+	if (!l->wrap) {
+		return; /* no unary node: the base rules are all */
+	}
+	d = a == BC_NONE ? BC_NONE : l->dom[a];
 	l->ucount[s] = 0;
 	if (a != BC_NONE) {
 		uint32_t w = l->wrap[a];
@@ -648,7 +664,7 @@ void bc__lin_place_abv(struct bc_tree *t, struct bc_lin *l, uint32_t k,
 	float lo[3], hi[3];
 	uint32_t s = l->prim_slot[k];
 	bc__abv_place(p, l->roi[2 * s + 1], &l->abv[k]);
-	for (uint32_t d = l->dom[s]; d != BC_NONE; d = l->unary_dom[d]) {
+	for (uint32_t d = bc_lin_dom(l, s); d != BC_NONE; d = l->unary_dom[d]) {
 		float r = abv_preimage(l, d, &l->abv[k]);
 		float *rec = l->param + 4u * (size_t)l->unary_param[d];
 		if ((l->unary_kind[d] == BC_OP_TWIST ||
@@ -712,7 +728,7 @@ static void compute_lips(struct bc_lin *l)
 	}
 	for (uint32_t k = 0; k < l->nprims; k++) {
 		float prod = 1.0f;
-		for (uint32_t d = l->dom[l->prim_slot[k]]; d != BC_NONE;
+		for (uint32_t d = bc_lin_dom(l, l->prim_slot[k]); d != BC_NONE;
 		     d = l->unary_dom[d]) {
 			float *rec = l->param + 4u * (size_t)l->unary_param[d];
 			if (!is_bend(l, d)) {
@@ -744,7 +760,8 @@ static void place_all_abvs(struct bc_tree *t, struct bc_lin *l)
 
 bool bc__lin_prim_bends(const struct bc_lin *l, const struct bc__node *n)
 {
-	for (uint32_t d = l->dom[n->slot]; d != BC_NONE; d = l->unary_dom[d]) {
+	for (uint32_t d = bc_lin_dom(l, n->slot); d != BC_NONE;
+	     d = l->unary_dom[d]) {
 		if (is_bend(l, d)) {
 			return true;
 		}

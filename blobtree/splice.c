@@ -75,10 +75,13 @@ int bc__splice_reserve(struct bc_tree *t, uint32_t count, uint32_t nprims,
 		GROW(l->node_id, c, sizeof(uint32_t));
 		GROW(l->prim_of, c, sizeof(uint32_t));
 		GROW(l->roi, c, 2 * sizeof(float));
-		GROW(l->wrap, c, sizeof(uint32_t));
-		GROW(l->wrap_top, c, sizeof(uint32_t));
-		GROW(l->dom, c, sizeof(uint32_t));
-		GROW(l->ucount, c, sizeof(uint32_t));
+		if (l->wrap) {
+			/* Kept by a layout whose tree had unary nodes. */
+			GROW(l->wrap, c, sizeof(uint32_t));
+			GROW(l->wrap_top, c, sizeof(uint32_t));
+			GROW(l->dom, c, sizeof(uint32_t));
+			GROW(l->ucount, c, sizeof(uint32_t));
+		}
 		t->lin_cap = c;
 	}
 	if (nprims > t->lin_kcap) {
@@ -263,10 +266,12 @@ static void apply(struct bc_tree *t, const struct splice *sp)
 	move_tail(l->node_id, sizeof(uint32_t), n, &sp->s);
 	move_tail(l->prim_of, sizeof(uint32_t), n, &sp->s);
 	move_tail(l->roi, 2 * sizeof(float), n, &sp->s);
-	move_tail(l->wrap, sizeof(uint32_t), n, &sp->s);
-	move_tail(l->wrap_top, sizeof(uint32_t), n, &sp->s);
-	move_tail(l->dom, sizeof(uint32_t), n, &sp->s);
-	move_tail(l->ucount, sizeof(uint32_t), n, &sp->s);
+	if (l->wrap) {
+		move_tail(l->wrap, sizeof(uint32_t), n, &sp->s);
+		move_tail(l->wrap_top, sizeof(uint32_t), n, &sp->s);
+		move_tail(l->dom, sizeof(uint32_t), n, &sp->s);
+		move_tail(l->ucount, sizeof(uint32_t), n, &sp->s);
+	}
 	move_tail(l->prim_slot, sizeof(uint32_t), np, &sp->k);
 	move_tail(l->abv, sizeof(struct bc_abv), np, &sp->k);
 	move_tail(l->color, sizeof(*l->color), np, &sp->k);
@@ -386,14 +391,14 @@ static bool relink(struct bc_tree *t, uint32_t lo, uint32_t top,
 		}
 		r0 = l->roi[2 * s];
 		r1 = l->roi[2 * s + 1];
-		uc = l->ucount[s];
-		dom = l->dom[s];
+		uc = bc_lin_ucount(l, s);
+		dom = bc_lin_dom(l, s);
 		fresh = s >= new_lo && s < new_hi;
 		bc__lin_propagate(l, s);
 		changed = !same_bits(r0, l->roi[2 * s]) ||
 		          !same_bits(r1, l->roi[2 * s + 1]) ||
 		          (kills & ~AGAIN) != l->kills[s] ||
-		          uc != l->ucount[s] || dom != l->dom[s];
+		          uc != bc_lin_ucount(l, s) || dom != bc_lin_dom(l, s);
 		if (!bc_lin_is_leaf(l, s)) {
 			if (changed) {
 				again(l, s - 1);

@@ -450,6 +450,8 @@ static void free_subtree(struct bc_tree *t, uint32_t top)
 			}
 			if (t->pool[n].is_op) {
 				t->nops--;
+				t->nunary_nodes -=
+				    bc__node_unary(&t->pool[n]) ? 1u : 0u;
 			} else {
 				t->nprims--;
 				count_prim(t, &t->pool[n].u.prim, -1);
@@ -751,6 +753,7 @@ int bc_tree_push_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
 	t->pool[n].u.op.kind = u->kind;
 	memcpy(t->pool[n].u.uparam, u->u, sizeof(u->u));
 	t->nops++;
+	t->nunary_nodes++;
 	t->open[t->nopen++] = n;
 	return 0;
 }
@@ -817,7 +820,8 @@ int bc_tree_end(struct bc_tree *t, struct bc_errinfo *ei)
 	if ((rc = check_shape(t, ei))) {
 		return rc;
 	}
-	if ((rc = bc__lin_alloc(&fresh, t->nprims, t->nops))) {
+	if ((rc = bc__lin_alloc(&fresh, t->nprims, t->nops,
+	                        t->nunary_nodes > 0))) {
 		return bc_errinfo_set(ei, rc, "tree: %s", bc_strerror(rc));
 	}
 	t->building = false;
@@ -1160,6 +1164,7 @@ static uint32_t copy_node(struct bc_tree *t, const struct bc__node *sn,
 	t->nnodes++;
 	if (sn->is_op) {
 		t->nops++;
+		t->nunary_nodes += bc__node_unary(sn) ? 1u : 0u;
 	} else {
 		t->nprims++;
 		count_prim(t, &sn->u.prim, 1);
@@ -1232,7 +1237,8 @@ static int prepare_graft(struct bc_tree *t, const struct bc_tree *sub,
 		                      BC_TREE_MAX_NODES);
 	}
 	if (fresh) {
-		rc = bc__lin_alloc(fresh, (uint32_t)prims, (uint32_t)ops);
+		rc = bc__lin_alloc(fresh, (uint32_t)prims, (uint32_t)ops,
+		                   t->nunary_nodes + sub->nunary_nodes > 0);
 	} else {
 		rc = bc__splice_reserve(
 		    t, (uint32_t)(2u * prims - 1u), (uint32_t)prims,
@@ -1358,6 +1364,7 @@ static void cut(struct bc_tree *t, uint32_t n)
 		}
 		bc__map_del(&t->ids, t->pool[p].id);
 		t->nops--;
+		t->nunary_nodes -= bc__node_unary(&t->pool[p]) ? 1u : 0u;
 		t->nnodes--;
 		pool_release(t, p);
 	}
@@ -1403,7 +1410,8 @@ int bc_tree_remove(struct bc_tree *t, uint32_t id, struct bc_errinfo *ei)
 	}
 	memset(&fresh, 0, sizeof(fresh));
 	if (p != BC_NONE && (rc = bc__lin_alloc(&fresh, t->nprims - st.prims,
-	                                        t->nops - st.ops - collapse))) {
+	                                        t->nops - st.ops - collapse,
+	                                        t->nunary_nodes > 0))) {
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
 	}
 	bc__names_drop_subtree(t, n);
@@ -1536,7 +1544,8 @@ int bc_tree_relayout(struct bc_tree *t, struct bc_errinfo *ei)
 	if (t->root == BC_NONE || t->building) {
 		return 0;
 	}
-	if ((rc = bc__lin_alloc(&fresh, t->nprims, t->nops))) {
+	if ((rc = bc__lin_alloc(&fresh, t->nprims, t->nops,
+	                        t->nunary_nodes > 0))) {
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
 	}
 	install_lin(t, &fresh);

@@ -101,6 +101,9 @@ struct bc_tree {
 	struct bc__idmap ids;
 	uint32_t root; /* pool index, BC_NONE when empty */
 	uint32_t nnodes, nprims, nops;
+	/* Unary and domain nodes among the nops: a layout of a tree without
+	 * any keeps no per-slot arrays for them (struct bc_lin's wrap). */
+	uint32_t nunary_nodes;
 	/* Primitives with a colour, and their shape floats in all
 	 * (bc_tree_counts). */
 	uint32_t ncolored;
@@ -231,9 +234,11 @@ uint32_t bc__measure(struct bc_tree *t, uint32_t top);
 /* linearize.c */
 
 /* Allocates the arrays of l for nprims primitives and nops operators
- * (binary and unary: room for each to be either).
+ * (binary and unary: room for each to be either); the per-slot arrays of
+ * unary and domain nodes (wrap, wrap_top, dom, ucount) only when unary
+ * (the tree may have such a node), else they stay NULL.
  * Returns 0 or BC_ENOMEM (l is then zeroed). */
-int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nops);
+int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nops, bool unary);
 void bc__lin_free(struct bc_lin *l);
 /* Fills l (allocated for t's counts) from t's model; cannot fail. */
 void bc__lin_fill(struct bc_tree *t, struct bc_lin *l);

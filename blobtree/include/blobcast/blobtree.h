@@ -617,6 +617,10 @@ struct bc_lin {
 	 * BC_UNARY_RECORD_VEC4 vec4s (bc_unary_record_* below).
 	 */
 	uint32_t nunary;
+	/* The per-slot arrays are NULL in a layout of a tree without unary
+	 * or domain nodes (every entry would be BC_NONE, or 0): read them
+	 * through bc_lin_wrap() and the like below, or after checking
+	 * nunary. */
 	uint32_t *wrap;     /* per slot: innermost wrapper, BC_NONE */
 	uint32_t *wrap_top; /* per slot: outermost wrapper, BC_NONE */
 	uint32_t *dom;      /* per slot: innermost domain node around it */
@@ -648,6 +652,26 @@ static inline uint32_t bc_lin_parent(const struct bc_lin *l, uint32_t slot)
 {
 	uint32_t a = l->node[2 * slot] & BC_WORD_ANCESTOR_MASK;
 	return a == BC_WORD_NO_ANCESTOR ? BC_NONE : a;
+}
+/* Slot s's innermost and outermost wrappers, its innermost domain node
+ * (BC_NONE for none) and its count of value-changing ancestors (struct
+ * bc_lin's per-slot unary arrays, which a layout without unary nodes
+ * does not keep). */
+static inline uint32_t bc_lin_wrap(const struct bc_lin *l, uint32_t s)
+{
+	return l->wrap ? l->wrap[s] : BC_NONE;
+}
+static inline uint32_t bc_lin_wrap_top(const struct bc_lin *l, uint32_t s)
+{
+	return l->wrap_top ? l->wrap_top[s] : BC_NONE;
+}
+static inline uint32_t bc_lin_dom(const struct bc_lin *l, uint32_t s)
+{
+	return l->dom ? l->dom[s] : BC_NONE;
+}
+static inline uint32_t bc_lin_ucount(const struct bc_lin *l, uint32_t s)
+{
+	return l->ucount ? l->ucount[s] : 0u;
 }
 static inline bool bc_lin_is_leaf(const struct bc_lin *l, uint32_t slot)
 {
