@@ -418,48 +418,98 @@ static void wide_operator_ends(void)
  * times: each splice brings only a share of the model's nodes up to date
  * (the rest follow the splice log when read), so most nodes lag dozens
  * of splices behind, and the log's ring wraps many times over. Every
- * node's slot must still be where a full layout puts it. */
+ * node's slot must still be where a full layout puts it. Some operands
+ * are unions of two spheres, a few a sphere in an offset node; the test
+ * keeps the operands' ids in order,
+ * and the child found at a position (walked in the model near the start,
+ * in the layout elsewhere) must be the one it keeps there, an inserted
+ * operand's first primitive where the operands before it end. */
 static void many_splices_on_a_wide_operator(void)
 {
 	struct bc_tree *t = bc_tree_create(), *one = bc_tree_create();
 	struct bc_op_data u = {BC_OP_UNION, 0.0f, 0.0f};
+	struct bc_unary off = {BC_OP_OFFSET, {0.01f}};
 	struct bc_prim_data s;
-	const uint32_t n0 = 3000;
-	uint32_t id = 10;
+	enum { N0 = 3000, EDITS = 1200 };
+	static uint32_t ids[N0 + EDITS], prims[N0 + EDITS];
+	uint32_t id = 10, c = N0;
 	const char *why = NULL;
 	REQUIRE(t && one);
 	rt_state = 11;
 	bc_tree_begin(t);
 	bc_tree_push_op(t, 1, &u, NULL);
-	for (uint32_t i = 0; i < n0; i++) {
+	for (uint32_t i = 0; i < N0; i++) {
 		rt_random_prim(&s);
+		ids[i] = id;
+		prims[i] = 1;
 		bc_tree_put_prim(t, id++, &s, NULL);
 	}
 	bc_tree_pop_op(t, NULL);
 	REQUIRE(bc_tree_end(t, NULL) == 0);
-	for (int e = 0; e < 1200 && !why; e++) {
-		uint32_t c = bc_tree_child_count(t, 1);
-		if (rt_below(2) && c > n0 / 2) {
-			REQUIRE(bc_tree_remove(t,
-			                       bc_tree_child(t, 1, rt_below(c)),
-			                       NULL) == 0);
+	for (int e = 0; e < EDITS && !why; e++) {
+		uint32_t at = rt_below(c + (c > N0 / 2 ? 0 : 1)), first = 0;
+		REQUIRE(c == bc_tree_child_count(t, 1));
+		if (rt_below(2) && c > N0 / 2) {
+			REQUIRE(bc_tree_remove(t, ids[at], NULL) == 0);
+			memmove(ids + at, ids + at + 1, (c - at - 1) * 4);
+			memmove(prims + at, prims + at + 1, (c - at - 1) * 4);
+			c--;
 		} else {
-			rt_random_prim(&s);
+			uint32_t two = rt_below(3) == 0;
+			/* Now and then an operand in an offset node: the
+			 * tree is then laid out whole until it goes. */
+			bool wrap = !two && rt_below(40) == 0;
+			at = rt_below(c + 1);
 			bc_tree_begin(one);
-			bc_tree_put_prim(one, id++, &s, NULL);
+			if (two) {
+				bc_tree_push_op(one, id++, &u, NULL);
+			}
+			if (wrap) {
+				bc_tree_push_unary(one, id++, &off, NULL);
+			}
+			memmove(ids + at + 1, ids + at, (c - at) * 4);
+			memmove(prims + at + 1, prims + at, (c - at) * 4);
+			ids[at] = two || wrap ? id - 1 : id;
+			prims[at] = 1 + two;
+			first = id;
+			for (uint32_t k = 0; k <= two; k++) {
+				rt_random_prim(&s);
+				bc_tree_put_prim(one, id++, &s, NULL);
+			}
+			if (two || wrap) {
+				bc_tree_pop_op(one, NULL);
+			}
 			REQUIRE(bc_tree_end(one, NULL) == 0);
-			REQUIRE(bc_tree_insert(t, 1, rt_below(c + 1), one,
-			                       NULL) == 0);
+			REQUIRE(bc_tree_insert(t, 1, at, one, NULL) == 0);
+			c++;
 		}
-		if (e % 100 == 99) {
+		for (uint32_t k = 0, before = 0; first && k <= at; k++) {
+			const struct bc_lin *l = bc_tree_lin(t);
+			if (k == at &&
+			    l->prim_of[bc_tree_slot(t, first)] != before) {
+				why = "an operand inserted at the wrong place";
+			}
+			before += prims[k];
+		}
+		for (int q = 0; q < 8 && !why; q++) {
+			uint32_t k =
+			    q < 2 ? (uint32_t)q * (c - 1) : rt_below(c);
+			if (bc_tree_child(t, 1, k) != ids[k]) {
+				why = "a child found at the wrong position";
+			}
+		}
+		if (e % 100 == 99 && !why) {
 			why = differs_from_full(t);
 		}
-		c = bc_tree_child_count(t, 1);
 		for (uint32_t k = 0; k < c && !why && e % 20 == 0; k++) {
-			uint32_t cid = bc_tree_child(t, 1, k);
-			uint32_t slot = bc_tree_slot(t, cid);
+			/* An offset node's slot is its child's. */
+			struct bc_unary un;
+			uint32_t slot = bc_tree_slot(t, ids[k]);
+			uint32_t want = bc_tree_get_unary(t, ids[k], &un)
+			                    ? bc_tree_child(t, ids[k], 0)
+			                    : ids[k];
 			if (slot >= bc_tree_lin(t)->count ||
-			    bc_tree_lin(t)->node_id[slot] != cid) {
+			    bc_tree_lin(t)->node_id[slot] != want) {
 				why = "a node's slot is not where it is";
 			}
 		}
