@@ -304,14 +304,14 @@ static void unlink_child(struct bc_tree *t, uint32_t child)
 	c->prev = BC_NONE;
 }
 
-/* Child number pos (0 < pos, or 0 < n) of parent, an operator of n >= 2
- * children, found in the layout: down the fold's chain of left operands
- * from its top slot (bc__lin_update_op's walk), then the node of the
- * child's top slot (a unary wrapper's child's, climbed). A step reads one
- * entry of `first`, two slots below the last for leaf children: a walk
- * over 350 000 operands in the model's nodes (a cache line each) took
- * about 5 ms, and every INSERT in the middle of a wide operator paid it,
- * in both of the daemon's trees. */
+/* Child number pos (pos < n) of parent, an operator of n >= 2 children
+ * whose layout is current, found in the layout: down the fold's chain of
+ * left operands from its top slot (bc__lin_update_op's walk), then the
+ * node of the child's top slot (a unary wrapper's child's, climbed). A
+ * step reads one entry of `first`, two slots below the last for leaf
+ * children: a walk over 350 000 operands in the model's nodes (a cache
+ * line each) took about 5 ms, and every INSERT in the middle of a wide
+ * operator paid it, in both of the daemon's trees. */
 static uint32_t child_at_lin(const struct bc_tree *t, uint32_t parent,
                              uint32_t pos)
 {
@@ -340,15 +340,16 @@ static uint32_t child_at(const struct bc_tree *t, uint32_t parent, uint32_t pos)
 	if (pos >= n) {
 		return BC_NONE;
 	}
-	if (pos > n / 2 && (!t->has_lin || t->building || n < 2)) {
+	if (t->has_lin && !t->building && n >= 2) {
+		if (pos >= n / 16) {
+			return child_at_lin(t, parent, pos);
+		}
+	} else if (pos > n / 2) {
 		c = t->pool[parent].last_child;
 		for (uint32_t k = n - 1; k > pos; k--) {
 			c = t->pool[c].prev;
 		}
 		return c;
-	}
-	if (pos >= n / 16 && t->has_lin && !t->building && n >= 2) {
-		return child_at_lin(t, parent, pos);
 	}
 	c = t->pool[parent].first_child;
 	while (c != BC_NONE && pos-- > 0) {
