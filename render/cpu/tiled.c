@@ -323,14 +323,6 @@ static struct rect project_box(const struct tiled_frame *tf, const float lo[3],
 	return r;
 }
 
-/* The world ABV of primitive k widened by the hit epsilon (times the
- * Lipschitz bound, since the tracer compares field / 1.45): a ray counts
- * as a hit where the field is below that, which can be just outside the
- * ABV itself when the ROI offset is 0 (sharp operators). Without the
- * margin such near hits, which naive tracing finds, would fall between
- * depth ranges. Widening only adds primitives to views, which is always
- * safe. The epsilon grows with distance: the farthest point of the
- * primitive's bounding sphere sets it. */
 /* abv grown by m: a box's half extents, a sphere's or capsule's radius. */
 static void widen_by(const struct bc_abv *abv, float m, struct bc_abv *out)
 {
@@ -347,6 +339,15 @@ static void widen_by(const struct bc_abv *abv, float m, struct bc_abv *out)
 	}
 }
 
+/* The world ABV of primitive k widened by the hit epsilon (times the
+ * Lipschitz bound, since the tracer compares field / 1.45): a ray counts
+ * as a hit where the field is below that, which can be just outside the
+ * ABV itself when the ROI offset is 0 (sharp operators). Without the
+ * margin such near hits, which naive tracing finds, would fall between
+ * depth ranges. Widening only adds primitives to views, which is always
+ * safe. The epsilon grows with distance: the farthest point of the
+ * primitive's bounding sphere sets it. Returns the margin; lo, hi: the
+ * widened ABV's bounding box. */
 static float widened_abv(const struct bc__frame_ctx *fc,
                          const struct bc_abv *abv, struct bc_abv *out,
                          float lo[3], float hi[3])
