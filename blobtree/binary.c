@@ -28,138 +28,76 @@
 
 /* ---- pre-order walk ------------------------------------------------------ */
 
-int bc_scene_walk_init(struct bc_scene_walk *w, const struct bc_tree *t)
+/* The walk follows the model's links (first child, next sibling, parent):
+ * O(1) a step however wide an operator is, no memory of its own, and the
+ * same for a bare tree as for a laid-out one. */
+static int walk_start(struct bc_scene_walk *w, const struct bc_tree *t,
+                      uint32_t top)
 {
-	const struct bc_lin *l = bc_tree_lin(t);
 	memset(w, 0, sizeof(*w));
-	if (!l || l->count == 0 || bc_tree_root(t) == 0) {
+	if (t->building || top == BC_NONE) {
 		return BC_EINVAL;
 	}
-	/* Every node is pushed exactly once; at most every node is open. */
-	w->todo = bc_calloc(bc_tree_node_count(t), sizeof(uint32_t));
-	w->left = bc_calloc(bc_tree_node_count(t), sizeof(uint32_t));
-	w->todo_wrap = bc_calloc(bc_tree_node_count(t), sizeof(uint32_t));
-	if (!w->todo || !w->left || !w->todo_wrap) {
-		bc_free(w->todo);
-		bc_free(w->left);
-		bc_free(w->todo_wrap);
-		memset(w, 0, sizeof(*w));
-		return BC_ENOMEM;
-	}
 	w->t = t;
-	w->l = l;
-	w->todo[0] = l->count - 1;
-	w->todo_wrap[0] = l->nunary ? l->wrap_top[l->count - 1] : BC_NONE;
-	w->ntodo = 1;
+	w->top = top;
+	w->next = top;
 	return 0;
+}
+
+int bc_scene_walk_init(struct bc_scene_walk *w, const struct bc_tree *t)
+{
+	return walk_start(w, t, t->root);
 }
 
 int bc_scene_walk_init_at(struct bc_scene_walk *w, const struct bc_tree *t,
                           uint32_t id)
 {
-	const struct bc_lin *l = bc_tree_lin(t);
-	struct bc_unary un;
-	uint32_t s = bc_tree_slot(t, id), room;
-	memset(w, 0, sizeof(*w));
-	if (!l || s == BC_NONE) {
-		return BC_EINVAL;
-	}
-	/* The subtree's slots, and at most every unary node, are pushed. */
-	room = s - l->first[s] + 1 + l->nunary;
-	w->todo = bc_calloc(room, sizeof(uint32_t));
-	w->left = bc_calloc(room, sizeof(uint32_t));
-	w->todo_wrap = bc_calloc(room, sizeof(uint32_t));
-	if (!w->todo || !w->left || !w->todo_wrap) {
-		bc_scene_walk_finish(w);
-		return BC_ENOMEM;
-	}
-	w->t = t;
-	w->l = l;
-	w->todo[0] = s;
-	/* A unary node starts with itself, then its inner wrappers; any
-	 * other node with its slot (the wrappers around it are above it). */
-	w->todo_wrap[0] = BC_NONE;
-	if (bc_tree_get_unary(t, id, &un)) {
-		for (uint32_t u = l->wrap[s]; u != BC_NONE;
-		     u = l->unary_outer[u]) {
-			if (l->unary_id[u] == id) {
-				w->todo_wrap[0] = u;
-			}
-		}
-	}
-	w->ntodo = 1;
-	return 0;
-}
-
-static void push_todo(struct bc_scene_walk *w, uint32_t s)
-{
-	w->todo_wrap[w->ntodo] = w->l->nunary ? w->l->wrap_top[s] : BC_NONE;
-	w->todo[w->ntodo++] = s;
+	return walk_start(w, t,
+	                  t->building ? BC_NONE : bc__map_find(&t->ids, id));
 }
 
 bool bc_scene_walk_next(struct bc_scene_walk *w, struct bc_scene_node *out)
 {
-	const struct bc_lin *l = w->l;
-	uint32_t s, id, k = 0;
+	const struct bc_tree *t = w->t;
+	const struct bc__node *nd;
+	uint32_t n = w->next;
 	memset(out, 0, sizeof(*out));
-	if (!w->ntodo) {
+	if (n == BC_NONE) {
 		return false;
 	}
+	nd = &t->pool[n];
+	out->id = nd->id;
 	out->index = w->index++;
-	out->depth = w->nopen;
-	if (w->nopen) {
-		w->left[w->nopen - 1]--;
-	}
-	if (w->todo_wrap[w->ntodo - 1] != BC_NONE) {
-		/* A unary node around the slot: it comes first, with the
-		 * slot's next inner wrapper (or the slot) as its child. */
-		uint32_t u = w->todo_wrap[w->ntodo - 1];
-		w->todo_wrap[w->ntodo - 1] = l->unary_inner[u];
-		out->id = l->unary_id[u];
-		bc_tree_get(w->t, out->id, NULL, &out->op);
-		bc_tree_get_unary(w->t, out->id, &out->unary);
-		out->is_op = true;
-		out->nchildren = 1;
-		w->left[w->nopen++] = 1;
-		return true;
-	}
-	s = w->todo[--w->ntodo];
-	id = l->node_id[s];
-	out->id = id;
-	bc_tree_get(w->t, id, &out->prim, &out->op);
-	if (!bc_lin_is_leaf(l, s)) {
-		/*
-		 * An n-ary operator is the left fold ((c0 op c1) op c2)...
-		 * whose binary nodes all carry its id. Post-order puts a binary
-		 * node's right operand just before it (ending at s - 1) and its
-		 * left operand just before that operand's first slot. Going
-		 * down the left spine meets the children last to first: pushed
-		 * in that order, c0 ends on top of the stack.
-		 */
-		while (!bc_lin_is_leaf(l, s) && l->node_id[s] == id) {
-			push_todo(w, s - 1);
-			s = l->first[s - 1] - 1;
-			k++;
+	out->depth = w->depth;
+	out->is_op = nd->is_op;
+	if (nd->is_op) {
+		out->nchildren = nd->nchildren;
+		if (bc__node_unary(nd)) {
+			out->op.kind = nd->u.op.kind;
+			out->unary.kind = nd->u.op.kind;
+			memcpy(out->unary.u, nd->u.uparam,
+			       sizeof(out->unary.u));
+		} else {
+			out->op = nd->u.op;
 		}
-		push_todo(w, s);
-		k++;
-		out->is_op = true;
-		out->nchildren = k;
-		w->left[w->nopen++] = k;
+		w->next = nd->first_child;
+		w->depth++;
 		return true;
 	}
-	while (w->nopen && w->left[w->nopen - 1] == 0) {
-		w->nopen--;
+	out->prim = nd->u.prim;
+	/* A leaf closes every operator it ends: up to the first ancestor
+	 * with a sibling after it, or to the walk's top. */
+	while (n != w->top && t->pool[n].next == BC_NONE) {
+		n = t->pool[n].parent;
 		out->closes++;
+		w->depth--;
 	}
+	w->next = n == w->top ? BC_NONE : t->pool[n].next;
 	return true;
 }
 
 void bc_scene_walk_finish(struct bc_scene_walk *w)
 {
-	bc_free(w->todo);
-	bc_free(w->left);
-	bc_free(w->todo_wrap);
 	memset(w, 0, sizeof(*w));
 }
 
@@ -308,8 +246,7 @@ static int encode(const struct bc_tree *t, const struct bc_camera *cam,
 	bool names = scene && bc_tree_name_count(t) > 0;
 	*out = NULL;
 	*len = 0;
-	if (!bc_tree_lin(t) || bc_tree_node_count(t) == 0 ||
-	    t->root == BC_NONE) {
+	if (t->building || bc_tree_node_count(t) == 0 || t->root == BC_NONE) {
 		return BC_EINVAL;
 	}
 	bc_buf_init(&b, SIZE_MAX);

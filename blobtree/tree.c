@@ -224,6 +224,7 @@ static void count_prim(struct bc_tree *t, const struct bc_prim_data *p,
 
 static void tree_clear(struct bc_tree *t)
 {
+	bool bare = t->bare;
 	bc_free(t->open);
 	bc_free(t->pool);
 	bc_free(t->ids.keys);
@@ -234,6 +235,7 @@ static void tree_clear(struct bc_tree *t)
 	t->root = BC_NONE;
 	t->free_head = BC_NONE;
 	t->next_id = 1;
+	t->bare = bare;
 }
 
 struct bc_tree *bc_tree_create(void)
@@ -245,6 +247,20 @@ struct bc_tree *bc_tree_create(void)
 		t->next_id = 1;
 	}
 	return t;
+}
+
+int bc_tree_set_layout(struct bc_tree *t, bool on)
+{
+	if (t->root != BC_NONE || t->building) {
+		return BC_ESTATE;
+	}
+	t->bare = !on;
+	return 0;
+}
+
+bool bc_tree_lays_out(const struct bc_tree *t)
+{
+	return !t->bare;
 }
 
 void bc_tree_destroy(struct bc_tree *t)
@@ -643,11 +659,63 @@ static bool reaches(const struct bc_tree *t, uint32_t target)
 }
 
 /* Can t (and the subtree sub grafted into it, when given) be edited by
- * splicing its layout (splice.c)? Not with unary nodes. */
+ * splicing its layout (splice.c)? Not with unary nodes. A bare tree takes
+ * the same path, measuring the model along the edited path only, and
+ * splices nothing (the splice_* wrappers below). */
 static bool splices(const struct bc_tree *t, const struct bc_tree *sub)
 {
+	if (t->bare) {
+		return t->nunary_nodes == 0 && (!sub || sub->nunary_nodes == 0);
+	}
 	return t->has_lin && t->lin.nunary == 0 &&
 	       (!sub || (sub->has_lin && sub->lin.nunary == 0));
+}
+
+/* Layout arrays for nprims primitives and nops operators in *fresh, none
+ * for a bare tree (*fresh zeroed). Returns 0 or BC_ENOMEM. */
+static int lin_alloc(const struct bc_tree *t, struct bc_lin *fresh,
+                     uint32_t nprims, uint32_t nops, bool unary)
+{
+	if (t->bare) {
+		memset(fresh, 0, sizeof(*fresh));
+		return 0;
+	}
+	return bc__lin_alloc(fresh, nprims, nops, unary);
+}
+
+/* The splices of splice.c, skipped by a bare tree (which has no layout to
+ * splice; its edits only count). */
+static bool splice_insert(struct bc_tree *t, uint32_t m, uint32_t px,
+                          uint32_t ox)
+{
+	return t->bare ? false : bc__splice_insert(t, m, px, ox);
+}
+static bool splice_remove(struct bc_tree *t, uint32_t c)
+{
+	return t->bare ? false : bc__splice_remove(t, c);
+}
+static void splice_note(struct bc_tree *t, uint32_t c, struct bc__block *b)
+{
+	if (t->bare) {
+		memset(b, 0, sizeof(*b));
+	} else {
+		bc__splice_note(t, c, b);
+	}
+}
+static bool splice_replace(struct bc_tree *t, const struct bc__block *b,
+                           uint32_t m, uint32_t px, uint32_t ox)
+{
+	return t->bare ? false : bc__splice_replace(t, b, m, px, ox);
+}
+static void splice_finish(struct bc_tree *t, bool touch)
+{
+	if (t->bare) {
+		t->dirty.structure = true;
+		t->dirty.edits++;
+	} else {
+		t->lin.nesting = t->nesting;
+		bc__splice_finish(t, touch);
+	}
 }
 
 /* Replaces t's layout with one built for the model's current counts. The
@@ -657,8 +725,11 @@ static void install_lin(struct bc_tree *t, struct bc_lin *fresh)
 	bc__lin_free(&t->lin);
 	t->has_lin = false;
 	t->lin_cap = t->lin_kcap = t->lin_pcap = 0;
+	t->nesting = 0;
 	if (t->root == BC_NONE) {
 		bc__lin_free(fresh);
+	} else if (t->bare) {
+		t->nesting = bc__measure(t, t->root);
 	} else {
 		t->lin = *fresh;
 		t->has_lin = true;
@@ -666,6 +737,7 @@ static void install_lin(struct bc_tree *t, struct bc_lin *fresh)
 		t->lin_kcap = (uint32_t)bc__lin_room(fresh->nprims);
 		t->lin_pcap = (uint32_t)bc__lin_room(fresh->nparam);
 		bc__lin_fill(t, &t->lin);
+		t->nesting = t->lin.nesting;
 	}
 	memset(fresh, 0, sizeof(*fresh));
 	/* Laid out whole: no splices to follow. */
@@ -852,8 +924,8 @@ int bc_tree_end(struct bc_tree *t, struct bc_errinfo *ei)
 	if ((rc = check_shape(t, ei))) {
 		return rc;
 	}
-	if ((rc = bc__lin_alloc(&fresh, t->nprims, t->nops,
-	                        t->nunary_nodes > 0))) {
+	if ((rc = lin_alloc(t, &fresh, t->nprims, t->nops,
+	                    t->nunary_nodes > 0))) {
 		return bc_errinfo_set(ei, rc, "tree: %s", bc_strerror(rc));
 	}
 	t->building = false;
@@ -885,7 +957,7 @@ uint32_t bc_tree_prim_count(const struct bc_tree *t)
 
 uint32_t bc_tree_nesting(const struct bc_tree *t)
 {
-	return t->has_lin ? t->lin.nesting : 0;
+	return (t->root == BC_NONE || t->building) ? 0 : t->nesting;
 }
 
 uint32_t bc_tree_root(const struct bc_tree *t)
@@ -950,10 +1022,19 @@ uint32_t bc_tree_child_index(const struct bc_tree *t, uint32_t id)
 		return 0;
 	}
 	if (!t->has_lin || t->building) {
-		for (k = 0; t->pool[n].prev != BC_NONE; k++) {
+		/* From both ends at once: the nearer one ends the walk (the
+		 * last child of a wide operator costs nothing). */
+		uint32_t b = n;
+		for (k = 0;; k++) {
+			if (t->pool[n].prev == BC_NONE) {
+				return k;
+			}
+			if (t->pool[b].next == BC_NONE) {
+				return t->pool[p].nchildren - 1u - k;
+			}
 			n = t->pool[n].prev;
+			b = t->pool[b].next;
 		}
-		return k;
 	}
 	/* Child i >= 1 is the right operand of the fold i levels up the
 	 * operator's left spine from its first fold; child 0 the left one. */
@@ -1036,6 +1117,10 @@ int bc_tree_set_prim(struct bc_tree *t, uint32_t id,
 	count_prim(t, &t->pool[n].u.prim, -1);
 	count_prim(t, &copy, 1);
 	t->pool[n].u.prim = copy;
+	if (!t->has_lin) {
+		t->dirty.edits++;
+		return 0;
+	}
 	bc__lin_update_prim(t, &t->pool[n]);
 	bc__dirty_range(&t->dirty.param_lo, &t->dirty.param_hi,
 	                t->pool[n].param,
@@ -1085,6 +1170,10 @@ int bc_tree_set_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
 		return rc;
 	}
 	t->pool[n].u.op = o;
+	if (!t->has_lin) {
+		t->dirty.edits++;
+		return 0;
+	}
 	bc__lin_update_op(t, &t->pool[n]);
 	/* The subtree's slots are [first, top]; its primitives are those with
 	 * indices from the first leaf's to the last leaf's. */
@@ -1121,6 +1210,10 @@ int bc_tree_set_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
 	}
 	t->pool[n].u.op.kind = u->kind;
 	memcpy(t->pool[n].u.uparam, u->u, sizeof(u->u));
+	if (!t->has_lin) {
+		t->dirty.edits++;
+		return 0;
+	}
 	bc__lin_update_unary(t, &t->pool[n]);
 	first_slot = l->first[t->pool[n].slot];
 	k_lo = l->prim_of[first_slot];
@@ -1246,7 +1339,7 @@ static int prepare_graft(struct bc_tree *t, const struct bc_tree *sub,
 {
 	struct subtree_stats st = {0};
 	uint64_t prims, ops;
-	int rc;
+	int rc = 0;
 	if (sub->building || sub->root == BC_NONE) {
 		return bc_errinfo_set(ei, BC_EINVAL,
 		                      "the subtree to graft is empty or "
@@ -1269,9 +1362,9 @@ static int prepare_graft(struct bc_tree *t, const struct bc_tree *sub,
 		                      BC_TREE_MAX_NODES);
 	}
 	if (fresh) {
-		rc = bc__lin_alloc(fresh, (uint32_t)prims, (uint32_t)ops,
-		                   t->nunary_nodes + sub->nunary_nodes > 0);
-	} else {
+		rc = lin_alloc(t, fresh, (uint32_t)prims, (uint32_t)ops,
+		               t->nunary_nodes + sub->nunary_nodes > 0);
+	} else if (!t->bare) {
 		rc = bc__splice_reserve(
 		    t, (uint32_t)(2u * prims - 1u), (uint32_t)prims,
 		    t->lin.nparam + BC_PRIM_RECORD_VEC4 * st.prims +
@@ -1349,11 +1442,11 @@ int bc_tree_insert(struct bc_tree *t, uint32_t parent_id, uint32_t pos,
 			bc__measure(t, t->root);
 			return rc;
 		}
-		touch = bc__splice_insert(t, m, sub->nprims, sub->nops);
-		if (nest > t->lin.nesting) {
-			t->lin.nesting = nest;
+		touch = splice_insert(t, m, sub->nprims, sub->nops);
+		if (nest > t->nesting) {
+			t->nesting = nest;
 		}
-		bc__splice_finish(t, touch);
+		splice_finish(t, touch);
 		bc__names_graft(t, sub);
 		return 0;
 	}
@@ -1425,9 +1518,9 @@ int bc_tree_remove(struct bc_tree *t, uint32_t id, struct bc_errinfo *ei)
 		/* Spliced out; the measures follow the path up (nesting
 		 * only looked for again when the deepest path may have
 		 * gone). */
-		uint32_t nest = t->lin.nesting, gp = t->pool[p].parent;
+		uint32_t nest = t->nesting, gp = t->pool[p].parent;
 		uint32_t deepest = depth_of(t, n) - 1u + st.depth;
-		bool touch = bc__splice_remove(t, n);
+		bool touch = splice_remove(t, n);
 		bc__names_drop_subtree(t, n);
 		if (collapse) {
 			bc__names_del(&t->names, t->pool[p].id);
@@ -1435,15 +1528,15 @@ int bc_tree_remove(struct bc_tree *t, uint32_t id, struct bc_errinfo *ei)
 		cut(t, n);
 		need_shrink(t, collapse ? gp : p);
 		if ((collapse || deepest >= nest) && !reaches(t, nest)) {
-			t->lin.nesting = bc__measure(t, t->root);
+			t->nesting = bc__measure(t, t->root);
 		}
-		bc__splice_finish(t, touch);
+		splice_finish(t, touch);
 		return 0;
 	}
 	memset(&fresh, 0, sizeof(fresh));
-	if (p != BC_NONE && (rc = bc__lin_alloc(&fresh, t->nprims - st.prims,
-	                                        t->nops - st.ops - collapse,
-	                                        t->nunary_nodes > 0))) {
+	if (p != BC_NONE && (rc = lin_alloc(t, &fresh, t->nprims - st.prims,
+	                                    t->nops - st.ops - collapse,
+	                                    t->nunary_nodes > 0))) {
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
 	}
 	bc__names_drop_subtree(t, n);
@@ -1465,7 +1558,7 @@ static int replace_spliced(struct bc_tree *t, uint32_t n, uint32_t m,
                            const struct bc_tree *sub, struct bc_errinfo *ei)
 {
 	uint32_t p = t->pool[m].parent, after = t->pool[m].next;
-	uint32_t nest = t->lin.nesting, pd = depth_of(t, p);
+	uint32_t nest = t->nesting, pd = depth_of(t, p);
 	uint32_t deepest = pd + bc__measure(t, m);
 	bool touch;
 	int rc;
@@ -1483,17 +1576,17 @@ static int replace_spliced(struct bc_tree *t, uint32_t n, uint32_t m,
 		bc__measure(t, t->root);
 		return rc;
 	}
-	touch = bc__splice_replace(t, blk, m, sub->nprims, sub->nops);
+	touch = splice_replace(t, blk, m, sub->nprims, sub->nops);
 	/* The replaced nodes' names go, reused ids included: the subtree's
 	 * own names are the new nodes'. */
 	bc__names_drop_subtree(t, n);
 	free_subtree(t, n);
 	if (deepest >= nest) {
-		t->lin.nesting = deepest;
+		t->nesting = deepest;
 	} else if (pd + gone->depth >= nest && !reaches(t, nest)) {
-		t->lin.nesting = bc__measure(t, t->root);
+		t->nesting = bc__measure(t, t->root);
 	}
-	bc__splice_finish(t, touch);
+	splice_finish(t, touch);
 	bc__names_graft(t, sub);
 	return 0;
 }
@@ -1528,7 +1621,7 @@ int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
 		return rc;
 	}
 	if (splice) {
-		bc__splice_note(t, n, &blk);
+		splice_note(t, n, &blk);
 		old_need = need_in_parent(t, n);
 	}
 	after = t->pool[n].next;
@@ -1576,8 +1669,8 @@ int bc_tree_relayout(struct bc_tree *t, struct bc_errinfo *ei)
 	if (t->root == BC_NONE || t->building) {
 		return 0;
 	}
-	if ((rc = bc__lin_alloc(&fresh, t->nprims, t->nops,
-	                        t->nunary_nodes > 0))) {
+	if ((rc = lin_alloc(t, &fresh, t->nprims, t->nops,
+	                    t->nunary_nodes > 0))) {
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
 	}
 	install_lin(t, &fresh);

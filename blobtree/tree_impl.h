@@ -116,6 +116,13 @@ struct bc_tree {
 	uint32_t nopen, open_cap;
 	bool building;
 
+	/* The model's nesting (bc_tree_nesting), kept by every edit whether
+	 * or not the tree is laid out. */
+	uint32_t nesting;
+	/* A bare tree (bc_tree_set_layout) keeps the model alone: has_lin
+	 * stays false, and structural edits measure the model (need,
+	 * nesting) without splicing or rebuilding any layout. */
+	bool bare;
 	struct bc_lin lin;
 	bool has_lin;
 	/* Room of lin's arrays: slots, primitives, records (vec4). */

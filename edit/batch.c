@@ -106,6 +106,8 @@ static int apply_on_copy(struct bc_edit_batch *b, struct bc_tree **tp,
 		bc_edit_batch_finish(b);
 		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
 	}
+	/* The copy is laid out, or bare, as the tree it replaces. */
+	bc_tree_set_layout(work, bc_tree_lays_out(t));
 	if ((rc = bc_tree_copy(work, t, ei))) {
 		bc_tree_destroy(work);
 		bc_edit_batch_finish(b);

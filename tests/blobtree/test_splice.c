@@ -731,6 +731,177 @@ static void allocation_failures_leave_the_tree_as_it_was(void)
 	bc_tree_destroy(t);
 }
 
+/* ---- a bare tree ------------------------------------------------------- */
+
+/* Scene bytes of a chain of `depth` unions, each with a primitive first
+ * and the next union second: every level adds one entry to the
+ * evaluation stack. */
+static int chain_bytes(uint32_t depth, uint8_t **out, size_t *len)
+{
+	struct bc_tree *sub = bc_tree_create();
+	struct bc_op_data op = {BC_OP_UNION, 0.0f, 0.0f};
+	struct bc_prim_data p;
+	int rc;
+	bc_tree_begin(sub);
+	for (uint32_t i = 0; i < depth; i++) {
+		bc_tree_push_op(sub, next_id++, &op, NULL);
+		rt_random_prim(&p);
+		bc_tree_put_prim(sub, next_id++, &p, NULL);
+	}
+	rt_random_prim(&p);
+	bc_tree_put_prim(sub, next_id++, &p, NULL);
+	for (uint32_t i = 0; i < depth; i++) {
+		bc_tree_pop_op(sub, NULL);
+	}
+	rc = bc_tree_end(sub, NULL);
+	if (!rc) {
+		rc = bc_scene_encode(sub, NULL, out, len);
+	}
+	bc_tree_destroy(sub);
+	return rc;
+}
+
+/* Why the bare tree b's model differs from the laid-out t's, or NULL:
+ * scene bytes, nesting, counts, and layouts of copies of both. */
+static const char *bare_differs(const struct bc_tree *t,
+                                const struct bc_tree *b, bool lay_out)
+{
+	uint8_t *x = NULL, *y = NULL;
+	size_t nx = 0, ny = 0;
+	const char *why = NULL;
+	if (!bc_tree_lays_out(t) || bc_tree_lays_out(b) || bc_tree_lin(b)) {
+		return "the bare tree was laid out, or the other not";
+	}
+	if (bc_tree_encode(t, &x, &nx) || bc_tree_encode(b, &y, &ny) ||
+	    nx != ny || memcmp(x, y, nx) != 0) {
+		why = "the models differ";
+	} else if (bc_tree_nesting(t) != bc_tree_nesting(b)) {
+		why = "nesting";
+	} else if (!counts_agree(b)) {
+		why = "colour or float counts";
+	}
+	bc_free(x);
+	bc_free(y);
+	for (int i = 0; i < 16 && !why && bc_tree_node_count(t) > 1; i++) {
+		/* Positions among siblings, and back (the model's walk). */
+		uint32_t id = random_node(t, true), p = bc_tree_parent(t, id);
+		uint32_t k = bc_tree_child_index(b, id);
+		if (k != bc_tree_child_index(t, id) ||
+		    bc_tree_child(b, p, k) != id) {
+			why = "a node's position among its siblings";
+		}
+	}
+	if (!why && lay_out) {
+		/* Full layouts of both (a parameter edit grows t's box and
+		 * never shrinks it, so t's own may be wider). */
+		struct bc_tree *ft = bc_tree_create(), *fb = bc_tree_create();
+		why = "copy failed";
+		if (ft && fb && bc_tree_copy(ft, t, NULL) == 0 &&
+		    bc_tree_copy(fb, b, NULL) == 0) {
+			why = lin_differs(ft, fb);
+		}
+		bc_tree_destroy(ft);
+		bc_tree_destroy(fb);
+	}
+	return why;
+}
+
+/* A bare tree (bc_tree_set_layout, a server session's) edited in lockstep
+ * with a laid-out one: random INSERT, REMOVE and REPLACE batches, chains
+ * deep enough for the evaluation stack to refuse some, parameter edits
+ * and undos. Every result, refusal and nesting must agree, and a layout
+ * of the bare tree's copy must equal one of the other's (unary nodes in
+ * one of the runs). */
+static void a_bare_tree_edits_as_a_laid_out_one(void)
+{
+	for (uint64_t seed = 11; seed <= 12; seed++) {
+		struct bc_tree *t = bc_tree_create(), *b = bc_tree_create();
+		struct bc_errinfo ea = {0}, eb = {0};
+		int refused = 0, undone = 0, edits = 1200;
+		const char *why = NULL;
+		rt_unary_rate = seed == 12 ? 0.1f : 0.0f;
+		REQUIRE(t && b && rt_build(t, seed, 30) == 0);
+		CHECK(bc_tree_lays_out(t));
+		CHECK_EQ_INT(bc_tree_set_layout(b, false), 0);
+		REQUIRE(bc_tree_copy(b, t, NULL) == 0);
+		/* Only an empty tree changes its mind. */
+		CHECK_EQ_INT(bc_tree_set_layout(b, true), BC_ESTATE);
+		why = bare_differs(t, b, true);
+		for (int e = 0; e < edits && !why; e++) {
+			struct bc_proto_edit_op op;
+			struct bc_edit_batch bt, bb;
+			uint8_t *owned = NULL;
+			size_t len = 0;
+			int rt, rb;
+			if (bc_tree_node_count(t) == 1 &&
+			    chain_bytes(2, &owned, &len) == 0) {
+				/* A lone primitive (a removal collapsed the
+				 * root): a tree again. */
+				op = (struct bc_proto_edit_op){
+				    .kind = BC_PROTO_EDIT_REPLACE,
+				    .node = bc_tree_root(t),
+				    .subtree = {owned, (uint32_t)len}};
+			} else if (rt_below(10) == 0 &&
+			           chain_bytes(80 + rt_below(48), &owned,
+			                       &len) == 0) {
+				/* Often into an earlier chain: too deep. */
+				uint32_t at = random_operator(t);
+				op = (struct bc_proto_edit_op){
+				    .kind = BC_PROTO_EDIT_INSERT,
+				    .node = at ? at : bc_tree_root(t),
+				    .position = 1,
+				    .subtree = {owned, (uint32_t)len}};
+			} else {
+				op = random_op(t, &owned);
+			}
+			rt = bc_edit_batch_apply(&bt, &t, &op, 1, &ea);
+			rb = bc_edit_batch_apply(&bb, &b, &op, 1, &eb);
+			if (rt != rb || (rt && strcmp(ea.msg, eb.msg) != 0)) {
+				fprintf(stderr, "  %d (%s) against %d (%s)\n",
+				        rt, ea.msg, rb, eb.msg);
+				why = "a result differs";
+			}
+			refused += rt != 0;
+			if (!rt && !rb && rt_below(5) == 0) {
+				bc_edit_batch_undo(&bt, &t);
+				bc_edit_batch_undo(&bb, &b);
+				undone++;
+			} else {
+				bc_edit_batch_finish(&bt);
+				bc_edit_batch_finish(&bb);
+			}
+			if (rt_below(4) == 0) {
+				/* A parameter edit, the same on both. */
+				uint32_t id = random_node(t, false);
+				struct bc_prim_data p;
+				if (bc_tree_get(t, id, &p, NULL) &&
+				    p.kind != BC_PRIM_INVALID) {
+					p.translate[0] += 0.25f;
+					p.has_color = !p.has_color;
+					CHECK_EQ_INT(
+					    bc_tree_set_prim(t, id, &p, NULL),
+					    bc_tree_set_prim(b, id, &p, NULL));
+				}
+			}
+			bc_free(owned);
+			if (!why) {
+				why = bare_differs(t, b, e % 25 == 0);
+			}
+			if (why) {
+				fprintf(stderr, "  seed %llu edit %d: %s\n",
+				        (unsigned long long)seed, e, why);
+			}
+		}
+		CHECK(why == NULL);
+
+		CHECK(refused > 5 && refused < edits / 5);
+		CHECK(undone > 50);
+		rt_unary_rate = 0.0f;
+		bc_tree_destroy(b);
+		bc_tree_destroy(t);
+	}
+}
+
 static const struct bc_test tests[] = {
     {"random_edits_equal_a_full_layout", random_edits_equal_a_full_layout},
     {"unary_subtrees_come_and_go", unary_subtrees_come_and_go},
@@ -740,5 +911,7 @@ static const struct bc_test tests[] = {
      refused_batches_leave_the_tree_as_it_was},
     {"allocation_failures_leave_the_tree_as_it_was",
      allocation_failures_leave_the_tree_as_it_was},
+    {"a_bare_tree_edits_as_a_laid_out_one",
+     a_bare_tree_edits_as_a_laid_out_one},
 };
 BC_TEST_MAIN(tests)

@@ -368,6 +368,17 @@ struct bc_tree;
  * bc_tree_destroy (which accepts NULL). */
 BC_API struct bc_tree *bc_tree_create(void);
 BC_API void bc_tree_destroy(struct bc_tree *t);
+/* A tree is laid out for the renderers (bc_tree_lin) unless told not to.
+ * A bare tree (on = false) keeps the model alone: everything but the
+ * layout works as before (bc_tree_lin and bc_tree_slot answer NULL and
+ * BC_NONE), at well under half the memory, and a structural edit costs
+ * the model's change alone (no layout spliced or rebuilt). A server
+ * session's tree is bare; its render copy is laid out. Only an empty tree
+ * changes (BC_ESTATE otherwise); it keeps the choice through
+ * bc_tree_begin and as bc_tree_copy's destination, and bc_tree_swap
+ * exchanges it with the contents. */
+BC_API int bc_tree_set_layout(struct bc_tree *t, bool on);
+BC_API bool bc_tree_lays_out(const struct bc_tree *t);
 
 /*
  * Building, in pre-order: bc_tree_begin() clears the tree; then operators are
@@ -496,7 +507,8 @@ BC_API int bc_tree_relayout(struct bc_tree *t, struct bc_errinfo *ei);
  * in O(1): a caller that edits a tree in place can hand the result out as
  * another object and keep the first, emptied, as the one it replaced. */
 BC_API void bc_tree_swap(struct bc_tree *a, struct bc_tree *b);
-/* Copies the whole tree src into dst (dst is cleared first). */
+/* Copies the whole tree src into dst (dst is cleared first, and laid out
+ * unless it is bare). */
 BC_API int bc_tree_copy(struct bc_tree *dst, const struct bc_tree *src,
                         struct bc_errinfo *ei);
 

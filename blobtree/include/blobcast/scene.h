@@ -135,8 +135,8 @@ BC_API uint32_t bc_scene_prim_nfloats(enum bc_prim kind);
 /*
  * Visits every node of a built tree in pre-order (the order of both
  * encodings) in time linear in the tree size, however wide its operators
- * are. The children of an n-ary operator are read from the linearized form
- * (its left fold), since asking the model for child k costs O(k).
+ * are, and without memory of its own: it follows the model's child lists
+ * (so it needs no layout: a bare tree walks too).
  */
 struct bc_scene_node {
 	uint32_t id;
@@ -155,27 +155,24 @@ struct bc_scene_node {
 
 struct bc_scene_walk {
 	const struct bc_tree *t;
-	const struct bc_lin *l;
-	uint32_t *todo;      /* top slots still to visit, next on top */
-	uint32_t *todo_wrap; /* per entry: its next unary wrapper to visit */
-	uint32_t ntodo;
+	uint32_t top;   /* where the walk started (model index) */
+	uint32_t next;  /* the node visited next, BC_NONE after the last */
+	uint32_t depth; /* next's depth below top */
 	uint32_t index;
-	uint32_t nopen;
-	uint32_t *left; /* per open operator: children still to visit */
 };
 
 /* Starts a walk over t (which must stay unchanged during the walk). Returns
- * 0, BC_EINVAL (empty or unfinished tree) or BC_ENOMEM. */
+ * 0 or BC_EINVAL (empty or unfinished tree). */
 BC_API int bc_scene_walk_init(struct bc_scene_walk *w, const struct bc_tree *t);
 /* The same over the subtree of node id only (depths from it, 0), in time
- * and memory of that subtree. Returns 0, BC_EINVAL (no such node, or no
- * layout) or BC_ENOMEM. */
+ * of that subtree. Returns 0 or BC_EINVAL (no such node). */
 BC_API int bc_scene_walk_init_at(struct bc_scene_walk *w,
                                  const struct bc_tree *t, uint32_t id);
 /* Fills *out with the next node; returns false after the last one. */
 BC_API bool bc_scene_walk_next(struct bc_scene_walk *w,
                                struct bc_scene_node *out);
-/* Frees the walk's memory; accepts a zeroed walk. */
+/* Ends the walk (it holds no memory; kept for callers that stop early);
+ * accepts a zeroed walk. */
 BC_API void bc_scene_walk_finish(struct bc_scene_walk *w);
 
 #endif
