@@ -451,7 +451,7 @@ static void prepare(struct bc_task *t)
 	if (l->parts.n && (l->rc = join_parts(l))) {
 		return;
 	}
-	if (!(l->tree = bc_tree_create()) || !(l->copy = bc_tree_create())) {
+	if (!(l->tree = bc__session_tree()) || !(l->copy = bc_tree_create())) {
 		l->rc = bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
 		return;
 	}

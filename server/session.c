@@ -273,6 +273,15 @@ static void twin_run(void *arg)
  * anew) took as long as its decode, one after the other; decoding the
  * bytes twice, at once, takes one decode's time on two cores and gives
  * the same tree, fresh ids included. */
+struct bc_tree *bc__session_tree(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	if (t) {
+		bc_tree_set_layout(t, false);
+	}
+	return t;
+}
+
 int bc__load_decode(const uint8_t *scene, size_t len, struct bc_tree *tree,
                     struct bc_tree *copy, struct bc_camera *cam, bool *has_cam,
                     struct bc_errinfo *ei)
@@ -308,7 +317,7 @@ static int replay_load(struct replay_ctx *ctx, const uint8_t *rec, size_t len)
 	    rec[1] != LOAD_RECORD_MAGIC) {
 		return 0;
 	}
-	if (!(t = bc_tree_create())) {
+	if (!(t = bc__session_tree())) {
 		return BC_ENOMEM;
 	}
 	if ((rc = bc_scene_decode(rec + LOAD_RECORD_MAGIC_LEN,
@@ -479,7 +488,7 @@ static void load_run(struct bc_task *t)
 	struct bc_session *s = t->s;
 	struct replay_ctx ctx = {&l->tree, &l->cam, bc__undo_new()};
 	bc_camera_default(&l->cam);
-	if (!(l->tree = bc_tree_create()) || !(l->copy = bc_tree_create())) {
+	if (!(l->tree = bc__session_tree()) || !(l->copy = bc_tree_create())) {
 		l->rc = bc_errinfo_set(&l->ei, BC_ENOMEM, "out of memory");
 		return;
 	}

@@ -363,6 +363,10 @@ int bc__replay_record(void *ud, uint64_t order, const uint8_t *rec, size_t len);
  * two 0xff bytes (an op_count no EDIT has) and the scene encoding. */
 int bc__journal_load(struct bc_store_session *st, uint64_t order,
                      const uint8_t *scene, size_t len, struct bc_errinfo *ei);
+/* A new, empty session tree: bare (bc_tree_set_layout), since nothing
+ * renders from it: the work layer's copy is laid out. The session keeps
+ * the model only, and its structural edits splice no layout. */
+struct bc_tree *bc__session_tree(void);
 /* Decodes a SCENE_LOAD's scene into tree (camera and has_cam as
  * bc_scene_decode) and into copy, the work layer's, on two threads when it
  * is large. */
