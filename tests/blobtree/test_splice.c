@@ -526,6 +526,18 @@ static void many_splices_on_a_wide_operator(void)
 
 static uint32_t next_id = 100000;
 
+/* Ends the builder of sub and encodes it into *out (scene bytes); sub
+ * goes. */
+static int end_bytes(struct bc_tree *sub, uint8_t **out, size_t *len)
+{
+	int rc = bc_tree_end(sub, NULL);
+	if (!rc) {
+		rc = bc_scene_encode(sub, NULL, out, len);
+	}
+	bc_tree_destroy(sub);
+	return rc;
+}
+
 /* Scene bytes of a random subtree of 1..3 primitives with new ids. */
 static int subtree_bytes(uint8_t **out, size_t *len)
 {
@@ -533,7 +545,6 @@ static int subtree_bytes(uint8_t **out, size_t *len)
 	struct bc_prim_data p;
 	struct bc_op_data op;
 	uint32_t n = 1 + rt_below(3);
-	int rc;
 	bc_tree_begin(sub);
 	if (n > 1) {
 		rt_random_op(&op);
@@ -546,12 +557,7 @@ static int subtree_bytes(uint8_t **out, size_t *len)
 	if (n > 1) {
 		bc_tree_pop_op(sub, NULL);
 	}
-	rc = bc_tree_end(sub, NULL);
-	if (!rc) {
-		rc = bc_scene_encode(sub, NULL, out, len);
-	}
-	bc_tree_destroy(sub);
-	return rc;
+	return end_bytes(sub, out, len);
 }
 
 static bool same_tree(const struct bc_tree *a, const struct bc_tree *b)
@@ -741,7 +747,6 @@ static int chain_bytes(uint32_t depth, uint8_t **out, size_t *len)
 	struct bc_tree *sub = bc_tree_create();
 	struct bc_op_data op = {BC_OP_UNION, 0.0f, 0.0f};
 	struct bc_prim_data p;
-	int rc;
 	bc_tree_begin(sub);
 	for (uint32_t i = 0; i < depth; i++) {
 		bc_tree_push_op(sub, next_id++, &op, NULL);
@@ -753,12 +758,7 @@ static int chain_bytes(uint32_t depth, uint8_t **out, size_t *len)
 	for (uint32_t i = 0; i < depth; i++) {
 		bc_tree_pop_op(sub, NULL);
 	}
-	rc = bc_tree_end(sub, NULL);
-	if (!rc) {
-		rc = bc_scene_encode(sub, NULL, out, len);
-	}
-	bc_tree_destroy(sub);
-	return rc;
+	return end_bytes(sub, out, len);
 }
 
 /* Why the bare tree b's model differs from the laid-out t's, or NULL:
