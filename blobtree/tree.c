@@ -188,8 +188,14 @@ static uint32_t pool_take(struct bc_tree *t)
 	return n;
 }
 
+static void kids_drop(struct bc_tree *t, uint32_t op, bool children);
+
 static void pool_release(struct bc_tree *t, uint32_t n)
 {
+	if (t->pool[n].kids & BC__KIDS_OP) {
+		/* Its children are gone, or going. */
+		kids_drop(t, n, false);
+	}
 	t->pool[n].live = false;
 	t->pool[n].next = t->free_head;
 	t->free_head = n;
@@ -229,6 +235,10 @@ static void tree_clear(struct bc_tree *t)
 	bc_free(t->pool);
 	bc_free(t->ids.keys);
 	bc_free(t->ids.vals);
+	for (uint32_t i = 0; i < t->nkids; i++) {
+		bc_free(t->kids[i].at);
+	}
+	bc_free(t->kids);
 	bc__lin_free(&t->lin);
 	bc__names_free(&t->names);
 	memset(t, 0, sizeof(*t));
@@ -272,12 +282,157 @@ void bc_tree_destroy(struct bc_tree *t)
 	bc_free(t);
 }
 
+/* ---- positions among a wide operator's children (bare trees) ----------- */
+
+static struct bc__kids *kids_of(const struct bc_tree *t, uint32_t op)
+{
+	if (!(t->pool[op].kids & BC__KIDS_OP)) {
+		return NULL;
+	}
+	for (uint32_t i = 0; i < t->nkids; i++) {
+		if (t->kids[i].op == op) {
+			return &t->kids[i];
+		}
+	}
+	return NULL;
+}
+
+/* Forgets op's index; its anchors' marks too when its children stay. */
+static void kids_drop(struct bc_tree *t, uint32_t op, bool children)
+{
+	struct bc__kids *k = kids_of(t, op);
+	if (!k) {
+		return;
+	}
+	for (uint32_t i = 0; children && i < k->n; i++) {
+		t->pool[k->at[i]].kids &= (uint8_t)~BC__KIDS_AT;
+	}
+	t->pool[op].kids &= (uint8_t)~BC__KIDS_OP;
+	bc_free(k->at);
+	*k = t->kids[--t->nkids];
+}
+
+/* Indexes operator op of a bare tree when it is wide (and not yet). Out
+ * of memory it stays without: its children are then walked. */
+static void kids_build(struct bc_tree *t, uint32_t op)
+{
+	uint32_t n = t->pool[op].nchildren, pos = 0, i = 0;
+	struct bc__kids *k;
+	uint32_t *at;
+	if (!t->bare || n < BC__KIDS_MIN || (t->pool[op].kids & BC__KIDS_OP)) {
+		return;
+	}
+	if (t->nkids == t->kids_cap) {
+		uint32_t cap = t->kids_cap ? 2u * t->kids_cap : 4u;
+		struct bc__kids *fresh =
+		    bc_realloc(t->kids, (size_t)cap * sizeof(*fresh));
+		if (!fresh) {
+			return;
+		}
+		t->kids = fresh;
+		t->kids_cap = cap;
+	}
+	k = &t->kids[t->nkids];
+	k->cap = n / BC__KIDS_STEP + 16u;
+	if (!(at = bc_malloc((size_t)k->cap * sizeof(*at)))) {
+		return;
+	}
+	for (uint32_t c = t->pool[op].first_child; c != BC_NONE;
+	     c = t->pool[c].next, pos++) {
+		if (pos % BC__KIDS_STEP == 0) {
+			at[i++] = c;
+			t->pool[c].kids |= BC__KIDS_AT;
+		}
+	}
+	k->op = op;
+	k->n = i;
+	k->at = at;
+	t->nkids++;
+	t->pool[op].kids |= BC__KIDS_OP;
+}
+
+/* Position of child c of the operator k indexes: counted back to the
+ * anchor at or before it (the first child is anchor 0). */
+static uint32_t kids_pos(const struct bc_tree *t, const struct bc__kids *k,
+                         uint32_t c)
+{
+	uint32_t steps = 0, i = 0;
+	while (!(t->pool[c].kids & BC__KIDS_AT)) {
+		c = t->pool[c].prev;
+		steps++;
+	}
+	while (k->at[i] != c) {
+		i++;
+	}
+	return i * BC__KIDS_STEP + steps;
+}
+
+/* Anchor i of k becomes node now. */
+static void kids_move(struct bc_tree *t, struct bc__kids *k, uint32_t i,
+                      uint32_t now)
+{
+	t->pool[k->at[i]].kids &= (uint8_t)~BC__KIDS_AT;
+	t->pool[now].kids |= BC__KIDS_AT;
+	k->at[i] = now;
+}
+
+/* A child was linked at position pos of the operator k indexes: every
+ * anchor from pos on is now the child before it (the new child for the
+ * anchor at pos), and a new last position of a multiple of the step
+ * takes an anchor. */
+static void kids_linked(struct bc_tree *t, struct bc__kids *k, uint32_t pos)
+{
+	const struct bc__node *p = &t->pool[k->op];
+	for (uint32_t i = (pos + BC__KIDS_STEP - 1u) / BC__KIDS_STEP; i < k->n;
+	     i++) {
+		kids_move(t, k, i, t->pool[k->at[i]].prev);
+	}
+	if ((p->nchildren - 1u) / BC__KIDS_STEP + 1u > k->n) {
+		if (k->n == k->cap) {
+			uint32_t cap = 2u * k->cap;
+			uint32_t *fresh =
+			    bc_realloc(k->at, (size_t)cap * sizeof(*fresh));
+			if (!fresh) {
+				kids_drop(t, k->op, true);
+				return;
+			}
+			k->at = fresh;
+			k->cap = cap;
+		}
+		k->at[k->n++] = p->last_child;
+		t->pool[p->last_child].kids |= BC__KIDS_AT;
+	}
+}
+
+/* Child c of the operator k indexes is about to be unlinked: every
+ * anchor from its position on becomes the child after it; one past the
+ * new end goes. */
+static void kids_unlinking(struct bc_tree *t, struct bc__kids *k, uint32_t c)
+{
+	uint32_t pos = kids_pos(t, k, c);
+	for (uint32_t i = (pos + BC__KIDS_STEP - 1u) / BC__KIDS_STEP; i < k->n;
+	     i++) {
+		uint32_t next = t->pool[k->at[i]].next;
+		if (next == BC_NONE) {
+			t->pool[k->at[i]].kids &= (uint8_t)~BC__KIDS_AT;
+			k->n = i;
+			break;
+		}
+		kids_move(t, k, i, next);
+	}
+}
+
 /* ---- model helpers ------------------------------------------------------ */
 
 static void link_child(struct bc_tree *t, uint32_t parent, uint32_t before,
                        uint32_t child)
 {
 	struct bc__node *p = &t->pool[parent], *c = &t->pool[child];
+	struct bc__kids *k = kids_of(t, parent);
+	uint32_t pos = 0;
+	if (k) {
+		pos = before == BC_NONE ? p->nchildren : kids_pos(t, k, before);
+	}
 	c->parent = parent;
 	c->next = before;
 	if (before == BC_NONE) {
@@ -298,12 +453,19 @@ static void link_child(struct bc_tree *t, uint32_t parent, uint32_t before,
 		t->pool[before].prev = child;
 	}
 	p->nchildren++;
+	if (k) {
+		kids_linked(t, k, pos);
+	}
 }
 
 static void unlink_child(struct bc_tree *t, uint32_t child)
 {
 	struct bc__node *c = &t->pool[child];
 	struct bc__node *p = &t->pool[c->parent];
+	struct bc__kids *k = kids_of(t, c->parent);
+	if (k) {
+		kids_unlinking(t, k, child);
+	}
 	if (c->prev != BC_NONE) {
 		t->pool[c->prev].next = c->next;
 	} else {
@@ -315,6 +477,9 @@ static void unlink_child(struct bc_tree *t, uint32_t child)
 		p->last_child = c->prev;
 	}
 	p->nchildren--;
+	if (k && p->nchildren < BC__KIDS_MIN / 2u) {
+		kids_drop(t, c->parent, true);
+	}
 	c->parent = BC_NONE;
 	c->next = BC_NONE;
 	c->prev = BC_NONE;
@@ -353,8 +518,17 @@ static uint32_t child_at_lin(const struct bc_tree *t, uint32_t parent,
 static uint32_t child_at(const struct bc_tree *t, uint32_t parent, uint32_t pos)
 {
 	uint32_t n = t->pool[parent].nchildren, c;
+	const struct bc__kids *kids = kids_of(t, parent);
 	if (pos >= n) {
 		return BC_NONE;
+	}
+	if (kids) {
+		/* A bare tree's wide operator: from the anchor before it. */
+		c = kids->at[pos / BC__KIDS_STEP];
+		for (uint32_t r = pos % BC__KIDS_STEP; r > 0; r--) {
+			c = t->pool[c].next;
+		}
+		return c;
 	}
 	if (t->has_lin && !t->building && n >= 2) {
 		if (pos >= n / 16) {
@@ -730,6 +904,11 @@ static void install_lin(struct bc_tree *t, struct bc_lin *fresh)
 		bc__lin_free(fresh);
 	} else if (t->bare) {
 		t->nesting = bc__measure(t, t->root);
+		for (uint32_t n = 0; n < t->npool; n++) {
+			if (t->pool[n].live && t->pool[n].is_op) {
+				kids_build(t, n);
+			}
+		}
 	} else {
 		t->lin = *fresh;
 		t->has_lin = true;
@@ -1020,6 +1199,9 @@ uint32_t bc_tree_child_index(const struct bc_tree *t, uint32_t id)
 	if (n == BC_NONE || (p = t->pool[n].parent) == BC_NONE ||
 	    bc__node_unary(&t->pool[p])) {
 		return 0;
+	}
+	if (kids_of(t, p)) {
+		return kids_pos(t, kids_of(t, p), n);
 	}
 	if (!t->has_lin || t->building) {
 		/* From both ends at once: the nearer one ends the walk (the
@@ -1430,6 +1612,7 @@ int bc_tree_insert(struct bc_tree *t, uint32_t parent_id, uint32_t pos,
 	before = child_at(t, p, pos);
 	m = copy_in(t, sub, sub->root, false);
 	link_child(t, p, before, m);
+	kids_build(t, p);
 	if (splice) {
 		/* The measures follow the path from m up (a graft only adds
 		 * nesting and need), then the layout is spliced. */

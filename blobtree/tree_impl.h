@@ -16,6 +16,11 @@ struct bc__node {
 	bool is_op;
 	bool live;
 	bool auto_id; /* id was assigned, not chosen by the scene */
+	/* Position index of a bare tree's wide operators (struct
+	 * bc__kids): BC__KIDS_OP on an operator that has one, BC__KIDS_AT
+	 * on a child that is one of its anchors. In the byte the three
+	 * flags above leave before the next word. */
+	uint8_t kids;
 	/* Set by linearization; next to the links and flags, so that the
 	 * pass a splice makes over the pool (splice.c) reads one cache line
 	 * of a node, not two. */
@@ -38,6 +43,9 @@ struct bc__node {
 		};
 	} u;
 };
+
+#define BC__KIDS_OP 1u
+#define BC__KIDS_AT 2u
 
 static inline bool bc__node_unary(const struct bc__node *n)
 {
@@ -85,6 +93,21 @@ struct bc__span {
 struct bc__shift {
 	struct bc__span s, p, k;
 };
+/* A bare tree has no layout to find child k of a wide operator in, and
+ * walking the child list to it took about 5 ms at the 350 000th child:
+ * an operator of BC__KIDS_MIN children or more keeps every BC__KIDS_STEP-th
+ * child (its anchors, at[i] at position i * BC__KIDS_STEP), which
+ * link_child and unlink_child keep current (a pass over the anchors, not
+ * the children). Child k is then at most BC__KIDS_STEP steps from an
+ * anchor, and a child's position as far from the anchor before it. */
+#define BC__KIDS_MIN 2048u
+#define BC__KIDS_STEP 256u
+struct bc__kids {
+	uint32_t op; /* pool index of the operator */
+	uint32_t n, cap;
+	uint32_t *at;
+};
+
 /* Splices a node's slot, param and prim may lag behind (the log below, a
  * ring): a splice then renumbers no node of the model. Each splice brings
  * a share of the pool up to date (BC__SWEEP of it, splice.c), so that no
@@ -123,6 +146,9 @@ struct bc_tree {
 	 * stays false, and structural edits measure the model (need,
 	 * nesting) without splicing or rebuilding any layout. */
 	bool bare;
+	/* The position indices of a bare tree's wide operators. */
+	struct bc__kids *kids;
+	uint32_t nkids, kids_cap;
 	struct bc_lin lin;
 	bool has_lin;
 	/* Room of lin's arrays: slots, primitives, records (vec4). */

@@ -902,6 +902,94 @@ static void a_bare_tree_edits_as_a_laid_out_one(void)
 	}
 }
 
+/* A bare tree's wide operator keeps an index of its children's
+ * positions (anchors every few hundred children): a union of 3 000
+ * spheres loses operands at random places until it is narrow enough to
+ * drop its index, then grows past the width that indexes it (2 048)
+ * again, with
+ * REPLACEs on the way; after every edit children found by position and
+ * positions found by child match a list kept beside it. */
+static void a_bare_wide_operator_finds_its_children(void)
+{
+	enum { N0 = 3000, EDITS = 12000 };
+	static uint32_t ids[2 * N0];
+	struct bc_tree *t = bc_tree_create(), *one = bc_tree_create();
+	struct bc_op_data u = {BC_OP_UNION, 0.0f, 0.0f};
+	struct bc_prim_data s;
+	uint32_t c = N0, id = 2;
+	const char *why = NULL;
+	bool shrinking = true, dropped = false;
+	REQUIRE(t && one && bc_tree_set_layout(t, false) == 0);
+	rt_state = 4242;
+	bc_tree_begin(t);
+	bc_tree_push_op(t, 1, &u, NULL);
+	for (uint32_t i = 0; i < N0; i++) {
+		rt_random_prim(&s);
+		ids[i] = id;
+		bc_tree_put_prim(t, id++, &s, NULL);
+	}
+	bc_tree_pop_op(t, NULL);
+	REQUIRE(bc_tree_end(t, NULL) == 0);
+	for (int e = 0; e < EDITS && !why; e++) {
+		uint32_t at, pick = rt_below(10);
+		if (shrinking && c < 900) {
+			shrinking = false;
+			dropped = true;
+		} else if (!shrinking && c > N0 - 500) {
+			break;
+		}
+		if (pick < (shrinking ? 8u : 2u)) {
+			at = rt_below(c);
+			REQUIRE(bc_tree_remove(t, ids[at], NULL) == 0);
+			memmove(ids + at, ids + at + 1, (c - at - 1) * 4);
+			c--;
+		} else {
+			at = pick == 9 ? rt_below(c) : rt_below(c + 1);
+			if (rt_below(4) == 0) {
+				at = rt_below(2) ? 0 : c - (pick == 9);
+			}
+			rt_random_prim(&s);
+			bc_tree_begin(one);
+			bc_tree_put_prim(one, id, &s, NULL);
+			REQUIRE(bc_tree_end(one, NULL) == 0);
+			if (pick == 9) {
+				/* In the same place. */
+				REQUIRE(bc_tree_replace(t, ids[at], one,
+				                        NULL) == 0);
+			} else {
+				REQUIRE(bc_tree_insert(t, 1, at, one, NULL) ==
+				        0);
+				memmove(ids + at + 1, ids + at, (c - at) * 4);
+				c++;
+			}
+			ids[at] = id++;
+		}
+		if (bc_tree_child_count(t, 1) != c) {
+			why = "the count";
+		}
+		for (int q = 0; q < 12 && !why; q++) {
+			uint32_t k = q < 4 ? (uint32_t)q * (c - 1) / 3
+			                   : (q < 6 ? at + (uint32_t)q - 5
+			                            : rt_below(c));
+			k = k < c ? k : c - 1;
+			if (bc_tree_child(t, 1, k) != ids[k]) {
+				why = "a child found at the wrong position";
+			} else if (bc_tree_child_index(t, ids[k]) != k) {
+				why = "a child's position";
+			}
+		}
+		if (why) {
+			fprintf(stderr, "  edit %d (%u children): %s\n", e, c,
+			        why);
+		}
+	}
+	CHECK(why == NULL);
+	CHECK(dropped && c > N0 - 500);
+	CHECK(bc_tree_lin(t) == NULL);
+	bc_tree_destroy(one);
+	bc_tree_destroy(t);
+}
+
 static const struct bc_test tests[] = {
     {"random_edits_equal_a_full_layout", random_edits_equal_a_full_layout},
     {"unary_subtrees_come_and_go", unary_subtrees_come_and_go},
@@ -913,5 +1001,7 @@ static const struct bc_test tests[] = {
      allocation_failures_leave_the_tree_as_it_was},
     {"a_bare_tree_edits_as_a_laid_out_one",
      a_bare_tree_edits_as_a_laid_out_one},
+    {"a_bare_wide_operator_finds_its_children",
+     a_bare_wide_operator_finds_its_children},
 };
 BC_TEST_MAIN(tests)
