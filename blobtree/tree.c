@@ -357,14 +357,16 @@ static uint32_t kids_pos(const struct bc_tree *t, const struct bc__kids *k,
                          uint32_t c)
 {
 	uint32_t steps = 0, i = 0;
-	while (!(t->pool[c].kids & BC__KIDS_AT)) {
+	while (!(t->pool[c].kids & BC__KIDS_AT) && t->pool[c].prev != BC_NONE) {
 		c = t->pool[c].prev;
 		steps++;
 	}
-	while (k->at[i] != c) {
+	while (i < k->n && k->at[i] != c) {
 		i++;
 	}
-	return i * BC__KIDS_STEP + steps;
+	/* The first child is anchor 0, so i < k->n always; the bound keeps
+	 * a broken index from reading past its anchors. */
+	return i < k->n ? i * BC__KIDS_STEP + steps : steps;
 }
 
 /* Anchor i of k becomes node now. */
