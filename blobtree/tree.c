@@ -494,7 +494,8 @@ static void unlink_child(struct bc_tree *t, uint32_t child)
  * step reads one entry of `first`, two slots below the last for leaf
  * children: a walk over 350 000 operands in the model's nodes (a cache
  * line each) took about 5 ms, and every INSERT in the middle of a wide
- * operator paid it, in both of the daemon's trees. */
+ * operator paid it (a bare tree has no layout: its wide operators keep
+ * anchors instead, struct bc__kids). */
 static uint32_t child_at_lin(const struct bc_tree *t, uint32_t parent,
                              uint32_t pos)
 {
