@@ -361,14 +361,14 @@ void bc__lin_emit(struct bc_tree *t, struct bc__fill *fs, uint32_t top)
 			nd->epoch = t->epoch;
 			if (bc__node_unary(nd)) {
 				struct bc_lin *l = fs->l;
-				nd->unary = fs->unary++;
+				nd->u.unary = fs->unary++;
 				fs->param += BC_UNARY_RECORD_VEC4;
 				write_unary_record(
 				    l->param + 4u * (size_t)nd->param, nd);
-				l->unary_param[nd->unary] = nd->param;
-				l->unary_kind[nd->unary] =
+				l->unary_param[nd->u.unary] = nd->param;
+				l->unary_kind[nd->u.unary] =
 				    (uint32_t)nd->u.op.kind;
-				l->unary_id[nd->unary] = nd->id;
+				l->unary_id[nd->u.unary] = nd->id;
 			} else {
 				fs->param += BC_OP_RECORD_VEC4;
 				write_op_record(fs->l->param +
@@ -386,7 +386,7 @@ void bc__lin_emit(struct bc_tree *t, struct bc__fill *fs, uint32_t top)
 			if (t->pool[p].first_child == n) {
 				t->pool[p].slot = t->pool[n].slot;
 				if (bc__node_unary(&t->pool[p])) {
-					add_wrapper(fs->l, t->pool[p].unary,
+					add_wrapper(fs->l, t->pool[p].u.unary,
 					            t->pool[p].slot);
 				}
 			} else {
@@ -843,7 +843,7 @@ void bc__lin_update_unary(struct bc_tree *t, const struct bc__node *n)
 {
 	struct bc_lin *l = &t->lin;
 	uint32_t first = l->first[n->slot];
-	l->unary_kind[n->unary] = (uint32_t)n->u.op.kind;
+	l->unary_kind[n->u.unary] = (uint32_t)n->u.op.kind;
 	write_unary_record(l->param + 4u * (size_t)n->param, n);
 	for (uint32_t s = n->slot + 1; s-- > first;) {
 		propagate(l, s);

@@ -709,28 +709,35 @@ static void remap_ids(struct bc_tree *t, uint32_t top)
 
 /* Checks a tree's nesting and evaluation stack against the limits (the one
  * check shared by the builder and the grafting edits). */
-/* Most domain nodes on one path from the root to a primitive. Pre-order:
- * a node's count is its parent's plus one when the parent is a domain
- * node (held in .dchain). */
-static uint32_t domain_chain(struct bc_tree *t)
+static uint32_t is_domain_node(const struct bc__node *n)
 {
-	uint32_t depth = 0, most = 0;
-	for (uint32_t n = t->root; n != BC_NONE;
-	     n = preorder_next(t, n, t->root, &depth)) {
-		uint32_t p = t->pool[n].parent, c = 0;
-		if (p != BC_NONE) {
-			c = t->pool[p].dchain +
-			    (bc__node_unary(&t->pool[p]) &&
-			             bc_op_is_domain(t->pool[p].u.op.kind)
-			         ? 1u
-			         : 0u);
+	return bc__node_unary(n) && bc_op_is_domain(n->u.op.kind) ? 1u : 0u;
+}
+
+/* Most domain nodes on one path from the root to a primitive: a walk in
+ * pre-order that counts the domain nodes above the node it is at, one up
+ * going down into a domain node's child, one down climbing back into it
+ * (nothing stored in the nodes). */
+static uint32_t domain_chain(const struct bc_tree *t)
+{
+	uint32_t n = t->root, chain = 0, most = 0;
+	for (;;) {
+		const struct bc__node *nd = &t->pool[n];
+		most = chain > most ? chain : most;
+		if (nd->is_op && nd->first_child != BC_NONE) {
+			chain += is_domain_node(nd);
+			n = nd->first_child;
+			continue;
 		}
-		t->pool[n].dchain = c;
-		if (c > most) {
-			most = c;
+		while (n != t->root && t->pool[n].next == BC_NONE) {
+			n = t->pool[n].parent;
+			chain -= is_domain_node(&t->pool[n]);
 		}
+		if (n == t->root) {
+			return most;
+		}
+		n = t->pool[n].next;
 	}
-	return most;
 }
 
 static int need_error(const struct bc_tree *t, struct bc_errinfo *ei)

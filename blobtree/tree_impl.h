@@ -24,13 +24,11 @@ struct bc__node {
 	/* Set by linearization; next to the links and flags, so that the
 	 * pass a splice makes over the pool (splice.c) reads one cache line
 	 * of a node, not two. */
-	uint32_t slot;   /* the node's top slot */
-	uint32_t param;  /* parameter record, vec4 units */
-	uint32_t prim;   /* primitive index (primitives only) */
-	uint32_t need;   /* evaluation stack entries of its subtree */
-	uint32_t unary;  /* unary index (unary nodes only) */
-	uint32_t dchain; /* domain nodes above it (check_shape's scratch) */
-	uint32_t epoch;  /* splices slot, param and prim have followed */
+	uint32_t slot;  /* the node's top slot */
+	uint32_t param; /* parameter record, vec4 units */
+	uint32_t prim;  /* primitive index (primitives only) */
+	uint32_t need;  /* evaluation stack entries of its subtree */
+	uint32_t epoch; /* splices slot, param and prim have followed */
 	/* A primitive's data, or an operator's; a unary node (u.op.kind
 	 * says it is one) keeps its parameters beside its op, in the room a
 	 * primitive's data takes (a node of every primitive paid for them
@@ -40,6 +38,7 @@ struct bc__node {
 		struct {
 			struct bc_op_data op;
 			float uparam[BC_UNARY_MAX_PARAMS];
+			uint32_t unary; /* unary index (set by linearization) */
 		};
 	} u;
 };
