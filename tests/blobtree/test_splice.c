@@ -414,6 +414,26 @@ static void wide_operator_ends(void)
 	bc_tree_destroy(t);
 }
 
+/* Builds in t a union (id 1) of n random primitives (seed) with ids
+ * first, first + 1, ..., written to ids; returns the next id, 0 when the
+ * tree does not build. */
+static uint32_t wide_union(struct bc_tree *t, uint64_t seed, uint32_t n,
+                           uint32_t first, uint32_t *ids)
+{
+	struct bc_op_data u = {BC_OP_UNION, 0.0f, 0.0f};
+	struct bc_prim_data s;
+	rt_state = seed;
+	bc_tree_begin(t);
+	bc_tree_push_op(t, 1, &u, NULL);
+	for (uint32_t i = 0; i < n; i++) {
+		rt_random_prim(&s);
+		ids[i] = first + i;
+		bc_tree_put_prim(t, first + i, &s, NULL);
+	}
+	bc_tree_pop_op(t, NULL);
+	return bc_tree_end(t, NULL) == 0 ? first + n : 0;
+}
+
 /* A wide operator of thousands of operands, edited at random places many
  * times: each splice brings only a share of the model's nodes up to date
  * (the rest follow the splice log when read), so most nodes lag dozens
@@ -435,17 +455,10 @@ static void many_splices_on_a_wide_operator(void)
 	uint32_t id = 10, c = N0;
 	const char *why = NULL;
 	REQUIRE(t && one);
-	rt_state = 11;
-	bc_tree_begin(t);
-	bc_tree_push_op(t, 1, &u, NULL);
+	REQUIRE((id = wide_union(t, 11, N0, id, ids)) != 0);
 	for (uint32_t i = 0; i < N0; i++) {
-		rt_random_prim(&s);
-		ids[i] = id;
 		prims[i] = 1;
-		bc_tree_put_prim(t, id++, &s, NULL);
 	}
-	bc_tree_pop_op(t, NULL);
-	REQUIRE(bc_tree_end(t, NULL) == 0);
 	for (int e = 0; e < EDITS && !why; e++) {
 		uint32_t at = rt_below(c + (c > N0 / 2 ? 0 : 1)), first = 0;
 		REQUIRE(c == bc_tree_child_count(t, 1));
@@ -914,22 +927,12 @@ static void a_bare_wide_operator_finds_its_children(void)
 	enum { N0 = 3000, EDITS = 12000 };
 	static uint32_t ids[2 * N0];
 	struct bc_tree *t = bc_tree_create(), *one = bc_tree_create();
-	struct bc_op_data u = {BC_OP_UNION, 0.0f, 0.0f};
 	struct bc_prim_data s;
 	uint32_t c = N0, id = 2;
 	const char *why = NULL;
 	bool shrinking = true, dropped = false;
 	REQUIRE(t && one && bc_tree_set_layout(t, false) == 0);
-	rt_state = 4242;
-	bc_tree_begin(t);
-	bc_tree_push_op(t, 1, &u, NULL);
-	for (uint32_t i = 0; i < N0; i++) {
-		rt_random_prim(&s);
-		ids[i] = id;
-		bc_tree_put_prim(t, id++, &s, NULL);
-	}
-	bc_tree_pop_op(t, NULL);
-	REQUIRE(bc_tree_end(t, NULL) == 0);
+	REQUIRE((id = wide_union(t, 4242, N0, id, ids)) != 0);
 	for (int e = 0; e < EDITS && !why; e++) {
 		uint32_t at, pick = rt_below(10);
 		if (shrinking && c < 900) {
