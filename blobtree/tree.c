@@ -707,8 +707,6 @@ static void remap_ids(struct bc_tree *t, uint32_t top)
 	}
 }
 
-/* Checks a tree's nesting and evaluation stack against the limits (the one
- * check shared by the builder and the grafting edits). */
 static uint32_t is_domain_node(const struct bc__node *n)
 {
 	return bc__node_unary(n) && bc_op_is_domain(n->u.op.kind) ? 1u : 0u;
@@ -750,6 +748,8 @@ static int need_error(const struct bc_tree *t, struct bc_errinfo *ei)
 	                      t->pool[t->root].need, BC_EVAL_STACK);
 }
 
+/* Checks a tree's nesting and evaluation stack against the limits (the one
+ * check shared by the builder and the grafting edits). */
 static int check_shape(struct bc_tree *t, struct bc_errinfo *ei)
 {
 	uint32_t depth = bc__measure(t, t->root);
@@ -1206,12 +1206,13 @@ uint32_t bc_tree_child_index(const struct bc_tree *t, uint32_t id)
 {
 	uint32_t n = bc__map_find(&t->ids, id), p, s, a, k;
 	const struct bc_lin *l = &t->lin;
+	const struct bc__kids *kids;
 	if (n == BC_NONE || (p = t->pool[n].parent) == BC_NONE ||
 	    bc__node_unary(&t->pool[p])) {
 		return 0;
 	}
-	if (kids_of(t, p)) {
-		return kids_pos(t, kids_of(t, p), n);
+	if ((kids = kids_of(t, p)) != NULL) {
+		return kids_pos(t, kids, n);
 	}
 	if (!t->has_lin || t->building) {
 		/* From both ends at once: the nearer one ends the walk (the
