@@ -843,16 +843,14 @@ static bool reaches(const struct bc_tree *t, uint32_t target)
 }
 
 /* Can t (and the subtree sub grafted into it, when given) be edited by
- * splicing its layout (splice.c)? Not with unary nodes. A bare tree takes
- * the same path, measuring the model along the edited path only, and
- * splices nothing (the splice_* wrappers below). */
+ * splicing its layout (splice.c)? Not with unary nodes in either (the
+ * splice reads sub's model, not its layout). A bare tree takes the same
+ * path, measuring the model along the edited path only, and splices
+ * nothing (the splice_* wrappers below). */
 static bool splices(const struct bc_tree *t, const struct bc_tree *sub)
 {
-	if (t->bare) {
-		return t->nunary_nodes == 0 && (!sub || sub->nunary_nodes == 0);
-	}
-	return t->has_lin && t->lin.nunary == 0 &&
-	       (!sub || (sub->has_lin && sub->lin.nunary == 0));
+	return (t->bare || t->has_lin) && t->nunary_nodes == 0 &&
+	       (!sub || sub->nunary_nodes == 0);
 }
 
 /* Layout arrays for nprims primitives and nops operators in *fresh, none
