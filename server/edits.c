@@ -479,11 +479,17 @@ static void prepare(struct bc_task *t)
 	 * journal follows on its own task once the load is answered
 	 * (bc_store_append_scene). A scene no snapshot could hold is refused
 	 * before either. */
-	if ((l->rc = bc_store_scene_depth_ok(l->tree, ei)) ||
-	    (l->rc = bc__journal_load(t->s->store, l->order, l->scene.ptr,
-	                              l->scene.len, ei))) {
-		return;
+	l->rc = bc_store_scene_depth_ok(l->tree, ei);
+	if (!l->rc) {
+		l->rc = bc__journal_load(t->s->store, l->order, l->scene.ptr,
+		                         l->scene.len, ei);
 	}
+	/* The bytes are in the trees and the journal now: freed here, off
+	 * the loop, before the old scene's trees (whose task gives the heap
+	 * back to the system, bc__tree_free_later). */
+	bc_free(l->owned);
+	l->owned = NULL;
+	l->scene = (struct bc_proto_bytes){0};
 }
 
 static void load_free(struct load *l)

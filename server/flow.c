@@ -372,6 +372,24 @@ static void settle_early(struct bc_work *w, struct flow *f, bool stands)
 	}
 }
 
+/* Frees f's copy of the scene. A big one's renderer buffers, sized for
+ * it, go too (the next scene builds everything again anyway), and the
+ * memory both held returns to the system: the worker that freed it would
+ * keep it resident in its arena. */
+static void drop_copy(struct bc_work *w, struct flow *f)
+{
+	bool big = f->tree && bc_tree_node_count(f->tree) >= BC_SRV_HEAVY_NODES;
+	if (big && f->r) {
+		bc_renderer_release(f->r);
+		bc__flow_kept(w, f);
+	}
+	bc_tree_destroy(f->tree);
+	f->tree = NULL;
+	if (big) {
+		bc_heap_give_back();
+	}
+}
+
 static void apply_one(struct bc_work *w, struct flow *f, struct upd *u)
 {
 	struct bc_errinfo ei = {0};
@@ -381,7 +399,7 @@ static void apply_one(struct bc_work *w, struct flow *f, struct upd *u)
 		/* A scene replaces an early batch's copy too. */
 		bc_edit_batch_finish(&f->eb);
 		f->eb_state = EB_NONE;
-		bc_tree_destroy(f->tree);
+		drop_copy(w, f);
 		f->tree = u->tree;
 		u->tree = NULL;
 		f->fresh = true;
@@ -453,7 +471,6 @@ void bc__flow_clear(struct bc_work *w, struct flow *f)
 	bc_renderer_destroy(f->r);
 	atomic_fetch_sub(&w->kept_bytes, f->kept_bytes);
 	f->kept_bytes = 0;
-	bc_tree_destroy(f->tree);
 	f->r = NULL;
-	f->tree = NULL;
+	drop_copy(w, f);
 }

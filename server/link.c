@@ -4,6 +4,7 @@
  */
 #include "link.h"
 
+#include <malloc.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
@@ -117,4 +118,11 @@ void bc_ops_copy_finish(struct bc_ops_copy *c)
 	bc_free(c->ops);
 	bc_free(c->blob);
 	memset(c, 0, sizeof(*c));
+}
+
+void bc_heap_give_back(void)
+{
+#if defined(__GLIBC__)
+	malloc_trim(0);
+#endif
 }

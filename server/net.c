@@ -35,7 +35,6 @@
 #include <linux/tcp.h>
 
 #if defined(__GLIBC__)
-#include <malloc.h>
 #endif
 
 #include "blobcast/alloc.h"
@@ -125,15 +124,9 @@ void bc__net_handle_closed(uv_handle_t *h)
 	bc_shared_unref(c->frame_next);
 	bc_tls_free(c->tls);
 	bc_free(c);
-	/* glibc keeps freed memory in its arenas unless asked to give it
-	 * back. */
-#if defined(__GLIBC__)
 	if (trim) {
-		malloc_trim(0);
+		bc_heap_give_back();
 	}
-#else
-	(void)trim;
-#endif
 }
 
 /* Takes c out of the resume queue. */

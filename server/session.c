@@ -82,6 +82,9 @@ static void tree_free_run(uv_work_t *req)
 {
 	struct tree_free *f = req->data;
 	bc_tree_destroy(f->t);
+	/* Only big trees come here: what they held goes back to the
+	 * system, not to this thread's arena. */
+	bc_heap_give_back();
 }
 
 static void tree_free_done(uv_work_t *req, int status)
