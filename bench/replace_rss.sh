@@ -16,7 +16,7 @@ rm -rf "$DIR" "$S" && mkdir "$DIR"
 "$D" --listen none --unix "$S" --data "$DIR" --log info 2>"$W/log" &
 P=$!
 trap 'kill $P 2>/dev/null' EXIT
-for i in $(seq 100); do [ -S "$S" ] && break; sleep 0.1; done
+for _ in $(seq 100); do [ -S "$S" ] && break; sleep 0.1; done
 rss() { awk '/VmRSS/{printf "%d", $2/1024}' /proc/$P/status; }
 hwm() { awk '/VmHWM/{printf "%d", $2/1024}' /proc/$P/status; }
 load() { "$C" --server "unix:$S" --timeout 0 load --session big "$1" >/dev/null; }
