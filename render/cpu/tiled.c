@@ -20,8 +20,10 @@
  * view, or a change of the tree's structure, drops them all; a parameter
  * edit (the sync hook's dirty primitives) drops the lists of the tiles in
  * its primitives' rectangles before and after the edit, which are the only
- * lists that can hold them. A list is computed from the tile alone, so it
- * is the same whichever render computes it. For the same reason a
+ * lists that can hold them; one whose candidates are built again (more
+ * primitives than a patch takes, BC_CPU_PATCH_PRIMS, or more than the room
+ * kept for patches) drops every list. A list is computed from the tile
+ * alone, so it is the same whichever render computes it. For the same reason a
  * release (bc_renderer_release) may drop everything kept: the renders
  * after it compute the lists again, the same lists.
  *
@@ -123,8 +125,8 @@ struct bc__tiled_bufs {
 	size_t tiles_cap;
 	uint32_t *cand, *scratch;
 	size_t cand_cap, cand_used, scratch_cap;
-	struct bc__frag *frags, *frags_alt;
-	size_t frags_cap, frags_alt_cap;
+	struct bc__frag *frags;
+	size_t frags_cap;
 	struct bc__tile_worker workers[BC_CPU_MAX_THREADS];
 };
 
@@ -160,7 +162,6 @@ void bc__tiled_free(struct bc__tiled_bufs *b)
 	bc_free(b->cand);
 	bc_free(b->scratch);
 	bc_free(b->frags);
-	bc_free(b->frags_alt);
 	for (uint32_t i = 0; i < BC_CPU_MAX_THREADS; i++) {
 		bc_view_finish(&b->workers[i].view);
 		bc_view_finish(&b->workers[i].tile_view);
@@ -475,12 +476,14 @@ static uint32_t slack(uint32_t n)
 }
 
 /* Builds the candidates of every tile from the primitives' rectangles
- * (counting sort, primitives increasing). With `relocate`, the lists of
- * the tiles in state TILE_LIST move to their tiles' new places (their
- * candidates are the same as before: callers dropped the lists of every
- * tile whose candidates changed). Returns 0, BC_ELIMIT or BC_ENOMEM. */
-static int build_cand(struct tiled_frame *tf, bool relocate,
-                      struct bc_errinfo *ei)
+ * (counting sort, primitives increasing) and drops every tile's list: a
+ * tile drawn again computes it from its candidates, the same list. (The
+ * lists kept through an edit of many primitives once moved to their
+ * tiles' new places, through a second array as big as the lists, 124 MB
+ * at a million spheres, that stayed: after an edit only the tiles it
+ * damaged are drawn again, and their lists are dropped anyway.) Returns
+ * 0, BC_ELIMIT or BC_ENOMEM. */
+static int build_cand(struct tiled_frame *tf, struct bc_errinfo *ei)
 {
 	struct bc__tiled_bufs *b = tf->b;
 	uint32_t *off = b->off_alt;
@@ -525,28 +528,7 @@ static int build_cand(struct tiled_frame *tf, bool relocate,
 			}
 		}
 	}
-	if (relocate) {
-		struct bc__frag *swap;
-		size_t cap;
-		if (grow((void **)&b->frags_alt, &b->frags_alt_cap, room,
-		         sizeof(*b->frags_alt))) {
-			return BC_ENOMEM;
-		}
-		for (uint32_t t = 0; t < tf->ntiles; t++) {
-			if (b->state[t] & TILE_LIST) {
-				memcpy(b->frags_alt + off[t],
-				       b->frags + b->cand_off[t],
-				       b->list_n[t] * sizeof(*b->frags));
-			}
-		}
-		swap = b->frags;
-		b->frags = b->frags_alt;
-		b->frags_alt = swap;
-		cap = b->frags_cap;
-		b->frags_cap = b->frags_alt_cap;
-		b->frags_alt_cap = cap;
-	} else if (grow((void **)&b->frags, &b->frags_cap, room,
-	                sizeof(*b->frags))) {
+	if (grow((void **)&b->frags, &b->frags_cap, room, sizeof(*b->frags))) {
 		return BC_ENOMEM;
 	}
 	b->off_alt = b->cand_off;
@@ -554,6 +536,7 @@ static int build_cand(struct tiled_frame *tf, bool relocate,
 	for (uint32_t t = 0; t < tf->ntiles; t++) {
 		b->cand_end[t] = b->cur[t]; /* the fill's cursor: the count */
 		b->cand_lim[t] = off[t + 1];
+		b->state[t] &= (uint8_t)~TILE_LIST;
 	}
 	b->cand_used = sum;
 	return 0;
@@ -1132,7 +1115,7 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 		b->view_ok = false;
 		rc = patch ? patch_cand(tf, lo, hi) : 1;
 		if (rc == 1) {
-			rc = build_cand(tf, true, ei);
+			rc = build_cand(tf, ei);
 		}
 		if (rc) {
 			return rc;
@@ -1153,7 +1136,7 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 	if (tf->nprims > 0) {
 		bc_pool_run(tf->threads, phase_prims, tf);
 	}
-	if ((rc = build_cand(tf, false, ei))) {
+	if ((rc = build_cand(tf, ei))) {
 		return rc;
 	}
 	b->cam = *cam;
@@ -1425,7 +1408,7 @@ static size_t tiled_kept_bytes(const struct bc_renderer *base)
 	}
 	n = sizeof(*b) + b->dirs_cap * sizeof(*b->dirs) +
 	    b->prims_cap * sizeof(*b->prims) + b->cand_cap * sizeof(*b->cand) +
-	    (b->frags_cap + b->frags_alt_cap) * sizeof(*b->frags);
+	    b->frags_cap * sizeof(*b->frags);
 	if (b->tiles_cap) {
 		n += b->tiles_cap * (sizeof(*b->state) + sizeof(*b->list_n) +
 		                     sizeof(*b->cur) +
