@@ -51,8 +51,12 @@
 #define BC_CPU_MAX_FRAGMENTS (1u << 24)
 /* Primitives a parameter edit may move for the tiled tracer to patch the
  * candidates of the tiles they cover instead of building every tile's
- * again (tiled.c, patch_cand): a drag moves one, a selection a few. */
+ * again (tiled.c, patch_cand): a drag moves one, a selection a few. An
+ * edit of more, whose primitives' indices span at most 1 /
+ * BC_CPU_PATCH_SHARE of the scene's, patches too where that costs less
+ * (patch_pays): a group of neighbouring primitives in a big scene. */
 #define BC_CPU_PATCH_PRIMS 64u
+#define BC_CPU_PATCH_SHARE 16u
 /* Debug colour ramps saturate here, clamped for readability like the
  * paper's Fig. 15 (whose overlap scale ends at a quarter of M_overlap):
  * field evaluations per ray, primitives per tile list. */

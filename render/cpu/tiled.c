@@ -654,6 +654,23 @@ static int patch_cand(struct tiled_frame *tf, uint32_t lo, uint32_t hi)
 	return 0;
 }
 
+/* Whether patching the candidates of the tiles marked in b->cur after
+ * primitives lo..hi-1 moved costs less than building every tile's: a
+ * patch passes over the range once for each marked tile (patched_list), a
+ * build over every candidate of every tile. A drag of one primitive, or
+ * of a selection of up to BC_CPU_PATCH_PRIMS, always patches. */
+static bool patch_pays(const struct tiled_frame *tf, uint32_t lo, uint32_t hi)
+{
+	uint64_t marked = 0;
+	if (hi - lo <= BC_CPU_PATCH_PRIMS) {
+		return true;
+	}
+	for (uint32_t t = 0; t < tf->ntiles; t++) {
+		marked += tf->b->cur[t] != 0;
+	}
+	return marked * (hi - lo) <= tf->b->cand_used;
+}
+
 /* The ray of pixel (dx, dy) of the tile, copied into d. */
 static const float *tile_ray(const struct bc__ab_rays *rays, uint32_t dx,
                              uint32_t dy, float d[3])
@@ -1092,7 +1109,8 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 		uint32_t hi =
 		    b->dirty_hi < tf->nprims ? b->dirty_hi : tf->nprims;
 		uint32_t lo = b->dirty_lo;
-		bool patch = hi - lo <= BC_CPU_PATCH_PRIMS;
+		bool patch = hi - lo <= BC_CPU_PATCH_PRIMS ||
+		             hi - lo <= tf->nprims / BC_CPU_PATCH_SHARE;
 		if (lo >= hi) {
 			return 0;
 		}
@@ -1113,7 +1131,8 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 		}
 		b->dirty_lo = b->dirty_hi = 0;
 		b->view_ok = false;
-		rc = patch ? patch_cand(tf, lo, hi) : 1;
+		rc = patch && patch_pays(tf, lo, hi) ? patch_cand(tf, lo, hi)
+		                                     : 1;
 		if (rc == 1) {
 			rc = build_cand(tf, ei);
 		}

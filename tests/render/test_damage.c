@@ -14,6 +14,11 @@
  * drawn tiles must equal the whole render, the others must keep the stale
  * pixels.
  *
+ * Groups: edits that move up to 1024 neighbouring spheres of 4096 at
+ * once (the tiled backend patches the candidates of their tiles where that
+ * costs less than building every tile's) are drawn the same way and must
+ * equal a whole render too.
+ *
  * Regions: pixels outside a region are left alone (a sentinel survives),
  * and a region into a frame of another rendering (fresh frame, new camera,
  * structural change, scene scale) draws the whole frame instead.
@@ -1346,6 +1351,100 @@ static void test_frame_key_follows_the_scene_scale(void)
 	key_backend(BC_BACKEND_NAIVE);
 }
 
+/* ---- Groups: an edit of many neighbouring primitives ------------------- */
+
+/* Moves primitives [first, first + n) of fig18's root union by d along x,
+ * marking in tiles the damage of their ABVs before and after. */
+static bool move_group(struct bc_tree *t, struct bc_renderer *r,
+                       const struct bc_camera *cam, uint32_t w, uint32_t h,
+                       uint32_t first, uint32_t n, float d, uint8_t *tiles)
+{
+	uint32_t root = bc_tree_root(t);
+	struct bc_errinfo ei = {0};
+	for (uint32_t k = first; k < first + n; k++) {
+		const struct bc_lin *l = bc_tree_lin(t);
+		uint32_t id = bc_tree_child(t, root, k);
+		struct bc_prim_data p;
+		if (!id || !bc_tree_get(t, id, &p, NULL) ||
+		    l->node_id[l->prim_slot[k]] != id) {
+			CHECK(!"fig18's child k is primitive k");
+			return false;
+		}
+		bc_renderer_damage(r, cam, w, h, &l->abv[k], tiles);
+		p.translate[0] += d;
+		if (bc_tree_set_prim(t, id, &p, &ei)) {
+			fprintf(stderr, "  move: %s\n", ei.msg);
+			CHECK(!"move");
+			return false;
+		}
+		bc_renderer_damage(r, cam, w, h, &bc_tree_lin(t)->abv[k],
+		                   tiles);
+	}
+	return true;
+}
+
+/* Groups of 65 to 256 neighbouring spheres of 4096 (more than
+ * BC_CPU_PATCH_PRIMS, within 1 / BC_CPU_PATCH_SHARE of the scene: the
+ * tiles' candidates are patched, not built again) and some of 1024 (built
+ * again) move; the marked tiles drawn into the last frame must equal a
+ * whole render of the new state, bit for bit. */
+static void test_tiled_group_edits_are_exact(void)
+{
+	struct bc_gen_opts o = {
+	    .count = 4096, .kind = SPHERES, .blend = SMOOTH};
+	struct bc_tree *t = bc_tree_create();
+	struct bc_renderer *r = NULL, *ref = NULL;
+	struct bc_render_opts ro = {.threads = 2};
+	struct bc_frame f = {0}, g = {0};
+	struct bc_render_stats st;
+	struct bc_camera cam;
+	struct bc_dirty dirty;
+	struct bc_errinfo ei = {0};
+	uint32_t w = 160, h = 120, drawn = 0;
+	size_t nt = ntiles(w, h);
+	uint8_t *tiles = calloc(nt, 1);
+	REQUIRE(t && tiles && bc_gen("fig18", &o, t, NULL, NULL) == 0);
+	frame_scene(bc_tree_lin(t), &cam);
+	bc_tree_take_dirty(t, &dirty);
+	REQUIRE(bc_frame_init(&f, w, h) == 0 && bc_frame_init(&g, w, h) == 0);
+	REQUIRE(bc_renderer_create(&r, BC_BACKEND_TILED, &ro, &ei) == 0 &&
+	        bc_renderer_create(&ref, BC_BACKEND_TILED, &ro, &ei) == 0);
+	REQUIRE(bc_renderer_sync(r, t, NULL, &ei) == 0);
+	REQUIRE(bc_renderer_render_region(
+	            r, &cam, &f, &(struct bc_render_region){.tiles = NULL}, &st,
+	            &ei) == 0);
+	for (int e = 0; e < 12; e++) {
+		uint32_t n = e % 4 == 3 ? 1024u : 65u + dmg_below(192);
+		uint32_t first = dmg_below(4096 - n + 1);
+		char what[80];
+		memset(tiles, 0, nt);
+		if (!move_group(t, r, &cam, w, h, first, n,
+		                dmg_float(-0.02f, 0.02f) * bc_tree_lin(t)->size,
+		                tiles)) {
+			break;
+		}
+		bc_tree_take_dirty(t, &dirty);
+		REQUIRE(bc_renderer_sync(r, t, &dirty, &ei) == 0);
+		if (!draw_marked(r, &cam, &f, tiles, &st)) {
+			break;
+		}
+		drawn += !st.whole;
+		REQUIRE(bc_renderer_sync(ref, t, NULL, &ei) == 0 &&
+		        bc_renderer_render(ref, &cam, &g, &st, &ei) == 0);
+		snprintf(what, sizeof(what), "%u spheres from %u moved", n,
+		         first);
+		CHECK(diff_frames(&f, &g, tiles, what) == 0);
+	}
+	/* A move that changes the scene's bounds redraws all of it. */
+	CHECK(drawn > 6);
+	bc_renderer_destroy(r);
+	bc_renderer_destroy(ref);
+	bc_frame_finish(&f);
+	bc_frame_finish(&g);
+	bc_tree_destroy(t);
+	free(tiles);
+}
+
 static const struct bc_test tests[] = {
     {"level_partition", test_level_partition},
     {"regions_leave_other_pixels_alone", test_regions_leave_other_pixels_alone},
@@ -1355,6 +1454,7 @@ static const struct bc_test tests[] = {
      test_frame_key_follows_the_scene_scale},
     {"tiled_damage_is_exact", test_tiled_damage_is_exact},
     {"tiled_follows_structural_edits", test_tiled_follows_structural_edits},
+    {"tiled_group_edits_are_exact", test_tiled_group_edits_are_exact},
     {"naive_damage_and_subsets_are_exact",
      test_naive_damage_and_subsets_are_exact},
     {"svo_damage_and_subsets_are_exact", test_svo_damage_and_subsets_are_exact},
