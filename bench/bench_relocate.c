@@ -27,6 +27,7 @@
 #include "blobcast/gen.h"
 #include "blobcast/render.h"
 #include "latency.h"
+#include "../tests/render/group.h"
 
 #define W 1024u
 #define H 768u
@@ -38,38 +39,6 @@ static void print_mem(const char *when, const struct bc_renderer *r)
 	printf("%s: VmRSS %ld MiB, VmHWM %ld MiB, renderer keeps %zu MiB\n",
 	       when, rss / 1024, hwm / 1024,
 	       bc_renderer_kept_bytes(r) / (1024u * 1024u));
-}
-
-/* Moves spheres [first, first + moved) of the root a little, marking the
- * tiles of their ABVs before and after in tiles. */
-static int move_run(struct bc_tree *t, struct bc_renderer *r,
-                    const struct bc_camera *cam, uint32_t first, uint32_t moved,
-                    float step, uint8_t *tiles)
-{
-	uint32_t root = bc_tree_root(t);
-	struct bc_errinfo ei = {0};
-	for (uint32_t k = first; k < first + moved; k++) {
-		const struct bc_lin *l = bc_tree_lin(t);
-		uint32_t id = bc_tree_child(t, root, k);
-		struct bc_prim_data p;
-		if (!id || !bc_tree_get(t, id, &p, NULL) ||
-		    l->node_id[l->prim_slot[k]] != id) {
-			fprintf(stderr,
-			        "child %u of the root is not primitive "
-			        "%u\n",
-			        k, k);
-			return -1;
-		}
-		bc_renderer_damage(r, cam, W, H, &l->abv[k], tiles);
-		p.translate[0] += step;
-		if (bc_tree_set_prim(t, id, &p, &ei)) {
-			fprintf(stderr, "edit: %s\n", ei.msg);
-			return -1;
-		}
-		bc_renderer_damage(r, cam, W, H, &bc_tree_lin(t)->abv[k],
-		                   tiles);
-	}
-	return 0;
 }
 
 int main(int argc, char **argv)
@@ -118,8 +87,9 @@ int main(int argc, char **argv)
 		uint32_t marked = 0;
 		float size = bc_tree_lin(t)->size;
 		memset(tiles, 0, nt);
-		if (move_run(t, r, &cam, first, moved,
-		             0.001f * bc_tree_lin(t)->size, tiles)) {
+		if (group_move(t, r, &cam, W, H, first, moved,
+		               0.001f * bc_tree_lin(t)->size, tiles, &ei)) {
+			fprintf(stderr, "edit %d: %s\n", e, ei.msg);
 			return 1;
 		}
 		for (size_t k = 0; k < nt; k++) {

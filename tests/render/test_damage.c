@@ -43,6 +43,7 @@
 #include "test.h"
 
 #include "blobtree/randtree.h"
+#include "group.h"
 
 /* ---- Small helpers ------------------------------------------------------ */
 
@@ -1353,36 +1354,6 @@ static void test_frame_key_follows_the_scene_scale(void)
 
 /* ---- Groups: an edit of many neighbouring primitives ------------------- */
 
-/* Moves primitives [first, first + n) of fig18's root union by d along x,
- * marking in tiles the damage of their ABVs before and after. */
-static bool move_group(struct bc_tree *t, struct bc_renderer *r,
-                       const struct bc_camera *cam, uint32_t w, uint32_t h,
-                       uint32_t first, uint32_t n, float d, uint8_t *tiles)
-{
-	uint32_t root = bc_tree_root(t);
-	struct bc_errinfo ei = {0};
-	for (uint32_t k = first; k < first + n; k++) {
-		const struct bc_lin *l = bc_tree_lin(t);
-		uint32_t id = bc_tree_child(t, root, k);
-		struct bc_prim_data p;
-		if (!id || !bc_tree_get(t, id, &p, NULL) ||
-		    l->node_id[l->prim_slot[k]] != id) {
-			CHECK(!"fig18's child k is primitive k");
-			return false;
-		}
-		bc_renderer_damage(r, cam, w, h, &l->abv[k], tiles);
-		p.translate[0] += d;
-		if (bc_tree_set_prim(t, id, &p, &ei)) {
-			fprintf(stderr, "  move: %s\n", ei.msg);
-			CHECK(!"move");
-			return false;
-		}
-		bc_renderer_damage(r, cam, w, h, &bc_tree_lin(t)->abv[k],
-		                   tiles);
-	}
-	return true;
-}
-
 /* Groups of 65 to 256 neighbouring spheres of 4096 (more than
  * BC_CPU_PATCH_PRIMS, within 1 / BC_CPU_PATCH_SHARE of the scene: the
  * tiles' candidates are patched, not built again) and some of 1024 (built
@@ -1418,9 +1389,11 @@ static void test_tiled_group_edits_are_exact(void)
 		uint32_t first = dmg_below(4096 - n + 1);
 		char what[80];
 		memset(tiles, 0, nt);
-		if (!move_group(t, r, &cam, w, h, first, n,
-		                dmg_float(-0.02f, 0.02f) * bc_tree_lin(t)->size,
-		                tiles)) {
+		if (group_move(t, r, &cam, w, h, first, n,
+		               dmg_float(-0.02f, 0.02f) * bc_tree_lin(t)->size,
+		               tiles, &ei)) {
+			fprintf(stderr, "  move: %s\n", ei.msg);
+			CHECK(!"group move");
 			break;
 		}
 		bc_tree_take_dirty(t, &dirty);
