@@ -1,13 +1,16 @@
 /*
- * The shared pieces of link.h: reference-counted frames and the ERROR and
- * OK messages every layer below transport sends.
+ * The shared pieces of link.h: reference-counted frames, the ERROR and
+ * OK messages every layer below transport sends, and the heap given back
+ * to the system after big frees.
  */
 #include "link.h"
 
-#include <malloc.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include "blobcast/alloc.h"
 #include "blobcast/log.h"

@@ -150,8 +150,9 @@ void bc_link_ok(const struct bc_link *l, struct bc_conn_ref to, uint32_t seq);
 /* Returns the allocator's free memory to the system. glibc keeps what a
  * thread freed in that thread's arena, resident, until asked: after a big
  * scene's trees, renderer or queued frames go, the daemon's RSS would
- * otherwise stay at their peak. It walks every arena (milliseconds on a
- * heap of a GiB): callers free something big first, off the loop. */
+ * otherwise stay at their peak. It walks every arena (up to ~20 ms on a
+ * heap of a GiB), so it follows big frees only: a heavy tree's, on the
+ * task or worker that freed it, and a client's with megabytes queued. */
 void bc_heap_give_back(void);
 
 #endif

@@ -34,9 +34,6 @@
 #include <linux/sockios.h>
 #include <linux/tcp.h>
 
-#if defined(__GLIBC__)
-#endif
-
 #include "blobcast/alloc.h"
 #include "blobcast/bytes.h"
 #include "blobcast/log.h"
