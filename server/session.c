@@ -256,6 +256,15 @@ int bc__journal_load(struct bc_store_session *st, uint64_t order,
 	                             len, ei);
 }
 
+struct bc_tree *bc__session_tree(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	if (t) {
+		bc_tree_set_layout(t, false);
+	}
+	return t;
+}
+
 /* The second decode of a large load, on a thread of its own. */
 struct twin {
 	const uint8_t *scene;
@@ -276,15 +285,6 @@ static void twin_run(void *arg)
  * anew) took as long as its decode, one after the other; decoding the
  * bytes twice, at once, takes one decode's time on two cores and gives
  * the same tree, fresh ids included. */
-struct bc_tree *bc__session_tree(void)
-{
-	struct bc_tree *t = bc_tree_create();
-	if (t) {
-		bc_tree_set_layout(t, false);
-	}
-	return t;
-}
-
 int bc__load_decode(const uint8_t *scene, size_t len, struct bc_tree *tree,
                     struct bc_tree *copy, struct bc_camera *cam, bool *has_cam,
                     struct bc_errinfo *ei)
