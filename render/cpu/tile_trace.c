@@ -30,8 +30,8 @@
 static int frag_cmp(const void *pa, const void *pb)
 {
 	const struct bc__frag *a = pa, *b = pb;
-	if (a->t0 != b->t0) {
-		return a->t0 < b->t0 ? -1 : 1;
+	if (a->q0 != b->q0) {
+		return a->q0 < b->q0 ? -1 : 1;
 	}
 	return (a->prim > b->prim) - (a->prim < b->prim);
 }
@@ -49,9 +49,10 @@ static bool frags_sorted(const struct bc__frag *list, uint32_t n)
 	return true;
 }
 
-/* Adds list entry e to the active set, keeping it sorted by primitive. */
+/* Adds list entry e (exit t1) to the active set, keeping it sorted by
+ * primitive. */
 static void activate(struct bc__tile_worker *wk, uint32_t *na,
-                     const struct bc__frag *e)
+                     const struct bc__frag *e, float t1)
 {
 	uint32_t i = *na;
 	while (i > 0 && wk->act[i - 1] > e->prim) {
@@ -60,7 +61,7 @@ static void activate(struct bc__tile_worker *wk, uint32_t *na,
 		i--;
 	}
 	wk->act[i] = e->prim;
-	wk->act_t1[i] = e->t1;
+	wk->act_t1[i] = t1;
 	(*na)++;
 }
 
@@ -515,6 +516,7 @@ uint64_t bc__trace_tile(struct bc__tile_worker *wk,
 	uint32_t x0 = job->x0, y0 = job->y0, x1 = job->x1, y1 = job->y1;
 	struct bc__frag *list = job->list;
 	uint32_t n = job->n;
+	struct bc__zq zq = job->zq;
 	struct bc__pk_kernel k = bc__pk_kernel_for(wk->simd);
 	struct tile_px px;
 	uint32_t na = 0, next = 0;
@@ -559,31 +561,37 @@ uint64_t bc__trace_tile(struct bc__tile_worker *wk,
 			if (next >= n) {
 				break;
 			}
-			z_begin = list[next].t0; /* eq. 21: skip empty space */
+			/* eq. 21: skip empty space */
+			z_begin = bc__frag_t0(zq, &list[next]);
 		} else {
 			z_begin = z_end;
 		}
 		while (next < n && fetched < BC_CPU_MAX_FETCH &&
 		       na < BC_CPU_M_OVERLAP &&
-		       (na == 0 || list[next].t0 <= max_exit)) {
-			activate(wk, &na, &list[next]);
-			max_exit = bc__maxf(max_exit, list[next].t1);
+		       (na == 0 || bc__frag_t0(zq, &list[next]) <= max_exit)) {
+			float t1 = bc__frag_t1(zq, &list[next]);
+			activate(wk, &na, &list[next], t1);
+			max_exit = bc__maxf(max_exit, t1);
 			next++;
 			fetched++;
 		}
 		if (na >= BC_CPU_M_OVERLAP && next < n &&
-		    list[next].t0 <= z_begin) {
+		    bc__frag_t0(zq, &list[next]) <= z_begin) {
 			/* Over M_overlap at this very depth: degrade (see
 			 * tiled.c's file comment). */
-			while (next < n && list[next].t0 <= z_begin) {
-				activate(wk, &na, &list[next]);
-				max_exit = bc__maxf(max_exit, list[next].t1);
+			while (next < n &&
+			       bc__frag_t0(zq, &list[next]) <= z_begin) {
+				float t1 = bc__frag_t1(zq, &list[next]);
+				activate(wk, &na, &list[next], t1);
+				max_exit = bc__maxf(max_exit, t1);
 				next++;
 			}
 			wk->overflows++;
 		}
 		/* eq. 22 */
-		z_end = next < n ? bc__minf(list[next].t0, max_exit) : max_exit;
+		z_end = next < n
+		            ? bc__minf(bc__frag_t0(zq, &list[next]), max_exit)
+		            : max_exit;
 		if (!(z_end > z_begin)) {
 			continue;
 		}

@@ -121,6 +121,7 @@ struct bc__tiled_bufs {
 	 * cand_used. off_alt and cur are scratch. */
 	uint8_t *state;
 	uint32_t *list_n, *cand_off, *cand_end, *cand_lim, *off_alt, *cur;
+	struct bc__zq *zq;  /* the depth scale of the tile's list */
 	struct cone *cones; /* CONES_PER_TILE per tile */
 	size_t tiles_cap;
 	uint32_t *cand, *scratch;
@@ -143,10 +144,12 @@ static void free_tiles(struct bc__tiled_bufs *b)
 	bc_free(b->cand_lim);
 	bc_free(b->off_alt);
 	bc_free(b->cur);
+	bc_free(b->zq);
 	bc_free(b->cones);
 	b->state = NULL;
 	b->list_n = b->cand_off = b->cand_end = b->cand_lim = NULL;
 	b->off_alt = b->cur = NULL;
+	b->zq = NULL;
 	b->cones = NULL;
 	b->tiles_cap = 0;
 }
@@ -168,6 +171,7 @@ void bc__tiled_free(struct bc__tiled_bufs *b)
 		bc_free(b->workers[i].tile_act);
 		bc_free(b->workers[i].act);
 		bc_free(b->workers[i].act_t1);
+		bc_free(b->workers[i].tz);
 	}
 	bc_free(b);
 }
@@ -203,9 +207,10 @@ static int grow_tiles(struct bc__tiled_bufs *b, size_t n)
 	b->cand_lim = bc_calloc(n, sizeof(*b->cand_lim));
 	b->off_alt = bc_calloc(n + 1, sizeof(*b->off_alt));
 	b->cur = bc_calloc(n, sizeof(*b->cur));
+	b->zq = bc_calloc(n, sizeof(*b->zq));
 	b->cones = bc_calloc(n * CONES_PER_TILE, sizeof(*b->cones));
 	if (!b->state || !b->list_n || !b->cand_off || !b->cand_end ||
-	    !b->cand_lim || !b->off_alt || !b->cur || !b->cones) {
+	    !b->cand_lim || !b->off_alt || !b->cur || !b->zq || !b->cones) {
 		free_tiles(b);
 		return BC_ENOMEM;
 	}
@@ -772,10 +777,12 @@ static void tile_quarters(const struct tiled_frame *tf, uint32_t tx,
 
 /* The tile's list: for each candidate whose bounding sphere meets the
  * tile's cone, the rays of the quarters whose cones it meets are clipped
- * against the ABV; the hits make one fragment, min entry and max exit. */
+ * against the ABV; the hits make one fragment, min entry and max exit,
+ * kept as floats in tz (room for the tile's candidates) until the last
+ * one sets the tile's depth scale. */
 static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
                           const struct bc__ab_rays *rays,
-                          const uint64_t quarter[4])
+                          const uint64_t quarter[4], float *tz)
 {
 	const struct bc__tiled_bufs *b = tf->b;
 	const struct cone *cones = &b->cones[CONES_PER_TILE * tile];
@@ -783,6 +790,8 @@ static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
 	const struct bc_abv *abv = tf->fc->lin->abv;
 	struct bc__frag *out = b->frags + b->cand_off[tile];
 	uint32_t n = 0;
+	float lo = INFINITY, hi = -INFINITY;
+	struct bc__zq z;
 	for (uint32_t i = b->cand_off[tile]; i < b->cand_end[tile]; i++) {
 		uint32_t k = b->cand[i];
 		const struct ab_prim *p = &b->prims[k];
@@ -817,9 +826,22 @@ static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
 			tf->kern.abv(rays, lanes, &wide, eye, t);
 		}
 		if (t[1] >= t[0]) {
-			out[n++] = (struct bc__frag){t[0], t[1], k};
+			tz[2 * n] = t[0];
+			tz[2 * n + 1] = t[1];
+			lo = bc__minf(lo, t[0]);
+			hi = bc__maxf(hi, t[1]);
+			out[n++].prim = k;
 		}
 	}
+	if (n == 0) {
+		return 0;
+	}
+	z = bc__zq_for(lo, hi);
+	for (uint32_t i = 0; i < n; i++) {
+		out[i].q0 = bc__zq_down(z, tz[2 * i]);
+		out[i].q1 = bc__zq_up(z, tz[2 * i + 1]);
+	}
+	b->zq[tile] = z;
 	return n;
 }
 
@@ -943,7 +965,8 @@ static void phase_lists(void *arg, uint32_t thread)
 				b->state[tile] |= TILE_CONES;
 			}
 			tile_quarters(tf, tx, ty, quarter);
-			b->list_n[tile] = tile_list(tf, tile, &rays, quarter);
+			b->list_n[tile] = tile_list(tf, tile, &rays, quarter,
+			                            b->workers[thread].tz);
 		}
 		b->state[tile] |= TILE_LIST;
 	}
@@ -1005,6 +1028,7 @@ static void phase_trace(void *arg, uint32_t thread)
 		    .dirs = tf->b->dirs,
 		    .list = tf->b->frags + tf->b->cand_off[tile],
 		    .n = tf->b->list_n[tile],
+		    .zq = tf->b->zq[tile],
 		    .x0 = tx * BC_CPU_TILE,
 		    .y0 = ty * BC_CPU_TILE,
 		    .x1 =
@@ -1031,6 +1055,27 @@ static int tiled_create(struct bc_renderer **out,
                         struct bc_errinfo *ei)
 {
 	return bc__cpu_create(out, BC__CPU_TILED, opts, ei);
+}
+
+/* Gives every worker room for the depths of `longest` fragments, here on
+ * the calling thread (tile_list's tz). */
+static int prepare_listers(struct bc__cpu *r, uint32_t longest)
+{
+	struct bc__tiled_bufs *b = r->tiled;
+	for (uint32_t i = 0; i < r->threads; i++) {
+		struct bc__tile_worker *wk = &b->workers[i];
+		if (wk->tz_cap < longest) {
+			float *tz =
+			    bc_malloc(2 * (size_t)longest * sizeof(*tz));
+			if (!tz) {
+				return BC_ENOMEM;
+			}
+			bc_free(wk->tz);
+			wk->tz = tz;
+			wk->tz_cap = longest;
+		}
+	}
+	return 0;
 }
 
 /* Gives every worker room for `longest` active primitives and a view of
@@ -1219,11 +1264,18 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 		return rc;
 	}
 	for (uint32_t t = tf.t0; t < tf.t1; t++) {
-		if (!region->tiles || region->tiles[t]) {
-			todo += (b->state[t] & TILE_DONE) != TILE_DONE;
+		if ((!region->tiles || region->tiles[t]) &&
+		    (b->state[t] & TILE_DONE) != TILE_DONE) {
+			uint32_t c = b->cand_end[t] - b->cand_off[t];
+			todo++;
+			longest = c > longest ? c : longest;
 		}
 	}
 	if (todo > 0) {
+		if ((rc = prepare_listers(r, longest))) {
+			goto nomem;
+		}
+		longest = 0;
 		spans_init(&tf);
 		bc_pool_run(tf.threads, phase_lists, &tf);
 	}
@@ -1430,7 +1482,7 @@ static size_t tiled_kept_bytes(const struct bc_renderer *base)
 	    b->frags_cap * sizeof(*b->frags);
 	if (b->tiles_cap) {
 		n += b->tiles_cap * (sizeof(*b->state) + sizeof(*b->list_n) +
-		                     sizeof(*b->cur) +
+		                     sizeof(*b->cur) + sizeof(*b->zq) +
 		                     CONES_PER_TILE * sizeof(*b->cones)) +
 		     2 * (b->tiles_cap + 1) * sizeof(*b->cand_off);
 	}
@@ -1439,6 +1491,7 @@ static size_t tiled_kept_bytes(const struct bc_renderer *base)
 		n +=
 		    (size_t)wk->cap * (sizeof(*wk->act) + sizeof(*wk->act_t1)) +
 		    (size_t)wk->tile_cap * sizeof(*wk->tile_act) +
+		    (size_t)wk->tz_cap * 2 * sizeof(*wk->tz) +
 		    ((size_t)wk->view.cap + wk->tile_view.cap) *
 		        sizeof(*wk->view.instr);
 	}
