@@ -1252,68 +1252,138 @@ static void write_op(struct bc_buf *b, const struct bc_tree *t,
 	sb_puts(b, ", \"children\": [\n");
 }
 
-char *bc_scene_to_json(const struct bc_tree *t, const struct bc_camera *cam)
+/* Pieces a sink receives: about this many bytes each. */
+#define JSON_PIECE (256u * 1024u)
+
+/* Writes the scene into b; with a sink, hands b's bytes to it whenever
+ * they pass JSON_PIECE and at the end, so b never holds more than a piece
+ * and a node. Returns 0, the sink's error or b's. */
+static int write_scene(const struct bc_tree *t, const struct bc_camera *cam,
+                       struct bc_buf *b, bc_scene_sink sink, void *ctx)
 {
 	struct bc_scene_walk w;
 	struct bc_scene_node n;
+	uint32_t rem[BC_SCENE_JSON_MAX_DEPTH], nopen = 0;
+	int rc;
+
+	if ((rc = bc_scene_walk_init(&w, t))) {
+		return rc;
+	}
+	sb_puts(b, "{\n  \"blobcast\": 1,\n");
+	if (cam) {
+		sb_puts(b, "  \"camera\": {\"eye\": ");
+		sb_floats(b, cam->eye, 3);
+		sb_member(b, "target", cam->target, 3);
+		sb_member(b, "up", cam->up, 3);
+		sb_member(b, "fov_y_deg", &cam->fov_y_deg, 1);
+		sb_puts(b, "},\n");
+	}
+	sb_puts(b, "  \"root\": ");
+	while (!b->err && !rc && bc_scene_walk_next(&w, &n)) {
+		if (sink && b->len >= JSON_PIECE) {
+			rc = sink(ctx, b->data, b->len);
+			b->len = 0;
+		}
+		if (n.depth) {
+			sb_indent(b, indent_of(n.depth));
+		}
+		if (n.is_op) {
+			write_op(b, t, &n);
+			rem[nopen++] = n.nchildren;
+			continue;
+		}
+		write_prim(b, t, &n);
+		/* A finished node: separate it from its next sibling, or
+		 * close every operator it was the last descendant of. */
+		while (nopen) {
+			if (--rem[nopen - 1] > 0) {
+				sb_puts(b, ",\n");
+				break;
+			}
+			nopen--;
+			sb_puts(b, "\n");
+			sb_indent(b, indent_of(nopen));
+			sb_puts(b, "]}");
+		}
+	}
+	bc_scene_walk_finish(&w);
+	sb_puts(b, "\n}\n");
+	if (!rc && b->err) {
+		rc = b->err;
+	}
+	if (!rc && sink && b->len) {
+		rc = sink(ctx, b->data, b->len);
+		b->len = 0;
+	}
+	return rc;
+}
+
+char *bc_scene_to_json(const struct bc_tree *t, const struct bc_camera *cam)
+{
 	struct bc_buf b;
 	uint8_t *text;
 	size_t len;
-	uint32_t rem[BC_SCENE_JSON_MAX_DEPTH], nopen = 0;
 
-	if (bc_tree_nesting(t) > BC_SCENE_JSON_MAX_DEPTH ||
-	    bc_scene_walk_init(&w, t)) {
+	if (bc_tree_nesting(t) > BC_SCENE_JSON_MAX_DEPTH) {
 		return NULL;
 	}
 	/* About 100 bytes per node: start near the final size. */
 	bc_buf_init(&b, SIZE_MAX);
 	bc_buf_reserve(&b, 256 + 100 * (size_t)bc_tree_node_count(t));
-	sb_puts(&b, "{\n  \"blobcast\": 1,\n");
-	if (cam) {
-		sb_puts(&b, "  \"camera\": {\"eye\": ");
-		sb_floats(&b, cam->eye, 3);
-		sb_member(&b, "target", cam->target, 3);
-		sb_member(&b, "up", cam->up, 3);
-		sb_member(&b, "fov_y_deg", &cam->fov_y_deg, 1);
-		sb_puts(&b, "},\n");
-	}
-	sb_puts(&b, "  \"root\": ");
-	while (!b.err && bc_scene_walk_next(&w, &n)) {
-		if (n.depth) {
-			sb_indent(&b, indent_of(n.depth));
-		}
-		if (n.is_op) {
-			write_op(&b, t, &n);
-			rem[nopen++] = n.nchildren;
-			continue;
-		}
-		write_prim(&b, t, &n);
-		/* A finished node: separate it from its next sibling, or
-		 * close every operator it was the last descendant of. */
-		while (nopen) {
-			if (--rem[nopen - 1] > 0) {
-				sb_puts(&b, ",\n");
-				break;
-			}
-			nopen--;
-			sb_puts(&b, "\n");
-			sb_indent(&b, indent_of(nopen));
-			sb_puts(&b, "]}");
-		}
-	}
-	sb_puts(&b, "\n}\n");
-	bc_scene_walk_finish(&w);
-	if (bc_buf_take(&b, &text, &len)) {
+	if (write_scene(t, cam, &b, NULL, NULL) ||
+	    bc_buf_take(&b, &text, &len)) {
+		bc_buf_finish(&b);
 		return NULL;
 	}
 	return (char *)text;
 }
 
+int bc_scene_write_json(const struct bc_tree *t, const struct bc_camera *cam,
+                        bc_scene_sink sink, void *ctx)
+{
+	struct bc_buf b;
+	int rc;
+	if (bc_tree_root(t) == 0) {
+		return BC_EINVAL;
+	}
+	if (bc_tree_nesting(t) > BC_SCENE_JSON_MAX_DEPTH) {
+		return BC_EDEPTH;
+	}
+	bc_buf_init(&b, SIZE_MAX);
+	if ((rc = bc_buf_reserve(&b, 2u * JSON_PIECE)) == 0) {
+		rc = write_scene(t, cam, &b, sink, ctx);
+	}
+	bc_buf_finish(&b);
+	return rc;
+}
+
+/* A file sink: write(2) until done; errno says why on BC_EIO. */
+static int fd_sink(void *ctx, const void *bytes, size_t len)
+{
+	int fd = *(int *)ctx;
+	const char *p = bytes;
+	while (len > 0) {
+		ssize_t n = write(fd, p, len);
+		if (n < 0 && errno == EINTR) {
+			continue;
+		}
+		if (n <= 0) {
+			if (n == 0) {
+				errno = EIO;
+			}
+			return BC_EIO;
+		}
+		p += n;
+		len -= (size_t)n;
+	}
+	return 0;
+}
+
 int bc_scene_save_json(const char *path, const struct bc_tree *t,
                        const struct bc_camera *cam, struct bc_errinfo *ei)
 {
-	char *text = NULL, *tmp = NULL, *dir = NULL, why[128];
-	size_t len, off = 0, plen = strlen(path);
+	char *tmp = NULL, *dir = NULL, why[128];
+	size_t plen = strlen(path);
 	int fd = -1, dfd, rc = 0;
 	char *slash;
 
@@ -1327,14 +1397,15 @@ int bc_scene_save_json(const char *path, const struct bc_tree *t,
 		    "the %u a JSON scene carries",
 		    path, bc_tree_nesting(t), BC_SCENE_JSON_MAX_DEPTH);
 	}
-	text = bc_scene_to_json(t, cam);
 	tmp = bc_malloc(plen + 48);
 	dir = bc_malloc(plen + 2);
-	if (!text || !tmp || !dir) {
+	if (tmp) {
+		tmp[0] = '\0'; /* no temporary file yet */
+	}
+	if (!tmp || !dir) {
 		rc = bc_errinfo_set(ei, BC_ENOMEM, "%s: out of memory", path);
 		goto cleanup;
 	}
-	len = strlen(text);
 	/* The temporary file sits beside the target so that rename() stays
 	 * within one file system and is atomic. O_EXCL with a pid-and-try
 	 * name keeps concurrent savers apart; open() honours the umask. */
@@ -1351,18 +1422,17 @@ int bc_scene_save_json(const char *path, const struct bc_tree *t,
 		rc = bc_errinfo_set(ei, BC_EIO, "%s: %s", tmp, why);
 		goto cleanup;
 	}
-	while (off < len) {
-		ssize_t n = write(fd, text + off, len - off);
-		if (n < 0 && errno == EINTR) {
-			continue;
-		}
-		if (n <= 0) {
+	/* The text goes to the file as it is made: a big scene's is never
+	 * whole in memory. */
+	if ((rc = bc_scene_write_json(t, cam, fd_sink, &fd))) {
+		if (rc == BC_EIO) {
 			errno_text(errno, why, sizeof(why));
 			rc = bc_errinfo_set(ei, BC_EIO, "%s: write: %s", tmp,
 			                    why);
-			goto cleanup;
+		} else {
+			rc = bc_errinfo_set(ei, rc, "%s: out of memory", path);
 		}
-		off += (size_t)n;
+		goto cleanup;
 	}
 	if (fsync(fd) != 0) {
 		errno_text(errno, why, sizeof(why));
@@ -1408,7 +1478,6 @@ cleanup:
 	if (rc && tmp && tmp[0]) {
 		unlink(tmp);
 	}
-	bc_free(text);
 	bc_free(tmp);
 	bc_free(dir);
 	return rc;

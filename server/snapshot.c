@@ -41,6 +41,23 @@ static bool write_all(int fd, const char *p, size_t len)
 	return true;
 }
 
+/* Where a snapshot's text goes: its file, counted against the limit a
+ * restore reads. */
+struct snap_sink {
+	int fd;
+	size_t len;
+};
+
+static int snap_put(void *ctx, const void *bytes, size_t len)
+{
+	struct snap_sink *s = ctx;
+	if (len > BC_SCENE_JSON_MAX_BYTES - s->len) {
+		return BC_ELIMIT;
+	}
+	s->len += len;
+	return write_all(s->fd, bytes, len) ? 0 : BC_EIO;
+}
+
 int bc_store_scene_depth_ok(const struct bc_tree *t, struct bc_errinfo *ei)
 {
 	uint32_t n = bc_tree_nesting(t);
@@ -55,12 +72,12 @@ int bc_store_scene_depth_ok(const struct bc_tree *t, struct bc_errinfo *ei)
 
 /*
  * Writes snap-ORDER.json and starts journal-ORDER.bin, or changes nothing
- * on disk: the text is made and its size checked against the reader's
- * limit first; then the temporary file is written and fsynced and the new
- * journal created, and only then is the snapshot renamed into place (the
- * step that makes it the session's state) and the directory fsynced. A
- * failure before the rename removes the temporary file and the new
- * journal; the old snapshot and journal stay the session's state.
+ * on disk: the text is written to the temporary file as it is made, its
+ * size checked against the reader's limit on the way, and fsynced; the
+ * new journal is created, and only then is the snapshot renamed into
+ * place (the step that makes it the session's state) and the directory
+ * fsynced. A failure before the rename removes the temporary file and the
+ * new journal; the old snapshot and journal stay the session's state.
  */
 int bc_store_snapshot(struct bc_store_session *ss, const struct bc_tree *t,
                       const struct bc_camera *cam, uint64_t order,
@@ -75,8 +92,7 @@ int bc_store_snapshot_with(struct bc_store_session *ss, const struct bc_tree *t,
                            struct bc_errinfo *ei)
 {
 	char file[PATH_LEN], tmp[PATH_LEN], jfile[PATH_LEN];
-	char *text = NULL;
-	size_t len;
+	struct snap_sink sink = {-1, 0};
 	int fd = -1, jfd = -1, rc = 0;
 	bool new_journal = false, renamed = false;
 	uint64_t previous = ss->base;
@@ -90,20 +106,6 @@ int bc_store_snapshot_with(struct bc_store_session *ss, const struct bc_tree *t,
 	if ((rc = bc_store_scene_depth_ok(t, ei))) {
 		return rc;
 	}
-	if (!(text = bc_scene_to_json(t, cam))) {
-		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
-	}
-	len = strlen(text);
-	/* What the daemon cannot read back is refused before anything is
-	 * replaced. */
-	if (len > BC_SCENE_JSON_MAX_BYTES ||
-	    bc__store_injected("snapshot-size", file)) {
-		rc = bc_errinfo_set(ei, BC_ELIMIT,
-		                    "the scene's snapshot would be %zu bytes, "
-		                    "over the %u a restore reads",
-		                    len, BC_SCENE_JSON_MAX_BYTES);
-		goto out;
-	}
 	fd = bc__store_injected("snapshot-create", tmp)
 	         ? -1
 	         : open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
@@ -111,9 +113,33 @@ int bc_store_snapshot_with(struct bc_store_session *ss, const struct bc_tree *t,
 		rc = bc__store_sys_error(ei, "cannot create", tmp);
 		goto out;
 	}
-	if (bc__store_injected("snapshot-write", tmp) ||
-	    !write_all(fd, text, len)) {
+	if (bc__store_injected("snapshot-write", tmp)) {
 		rc = bc__store_sys_error(ei, "cannot write", tmp);
+		goto out;
+	}
+	/* The text goes to the file as it is made (a million primitives
+	 * are some 170 MB of it, which the daemon held whole before), and
+	 * what the daemon could not read back is refused, the temporary
+	 * file removed, before anything is replaced. */
+	sink.fd = fd;
+	sink.len = bc__store_injected("snapshot-size", file)
+	               ? (size_t)BC_SCENE_JSON_MAX_BYTES
+	               : 0;
+	rc = bc_scene_write_json(t, cam, snap_put, &sink);
+	if (rc == BC_ELIMIT) {
+		rc = bc_errinfo_set(ei, BC_ELIMIT,
+		                    "the scene's snapshot would be over the "
+		                    "%u bytes a restore reads",
+		                    BC_SCENE_JSON_MAX_BYTES);
+		goto out;
+	}
+	if (rc == BC_EIO) {
+		rc = bc__store_sys_error(ei, "cannot write", tmp);
+		goto out;
+	}
+	if (rc) {
+		rc = bc_errinfo_set(ei, rc, "cannot write the snapshot: %s",
+		                    bc_strerror(rc));
 		goto out;
 	}
 	if (bc__store_injected("snapshot-fsync", tmp) || fsync(fd) != 0) {
@@ -175,7 +201,6 @@ out:
 			unlink(jfile);
 		}
 	}
-	bc_free(text);
 	return rc;
 }
 

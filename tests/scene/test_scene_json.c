@@ -617,6 +617,68 @@ static void default_scene_is_valid_and_framed(void)
 	bc_tree_destroy(t);
 }
 
+/* What a sink saw: the pieces' text joined, the longest piece, and the
+ * piece after which it fails (0: never). */
+struct pieces {
+	char *text;
+	size_t len, cap, longest;
+	int n, fail_at;
+};
+
+static int collect(void *ctx, const void *bytes, size_t len)
+{
+	struct pieces *p = ctx;
+	if (p->fail_at && p->n + 1 == p->fail_at) {
+		return BC_EIO;
+	}
+	if (p->len + len + 1 > p->cap) {
+		char *grown = bc_realloc(p->text, 2 * (p->len + len + 1));
+		if (!grown) {
+			return BC_ENOMEM;
+		}
+		p->text = grown;
+		p->cap = 2 * (p->len + len + 1);
+	}
+	memcpy(p->text + p->len, bytes, len);
+	p->len += len;
+	p->text[p->len] = '\0';
+	p->longest = len > p->longest ? len : p->longest;
+	p->n++;
+	return 0;
+}
+
+/* bc_scene_write_json hands the very text of bc_scene_to_json to its sink
+ * in bounded pieces (a snapshot of a million primitives is never whole
+ * in memory), stops at the sink's error, and refuses an empty tree. */
+static void streamed_text_is_the_whole_text_in_pieces(void)
+{
+	struct bc_tree *t = bc_tree_create(), *empty = bc_tree_create();
+	struct bc_gen_opts o = {.count = 20000,
+	                        .kind = BC_GEN_KIND_SPHERES,
+	                        .blend = BC_GEN_BLEND_SMOOTH};
+	struct bc_camera cam;
+	struct pieces p = {0}, q = {.fail_at = 3};
+	char *whole;
+	REQUIRE(t && empty);
+	REQUIRE(bc_gen("fig18", &o, t, &cam, NULL) == 0);
+	REQUIRE((whole = bc_scene_to_json(t, &cam)) != NULL);
+	CHECK_EQ_INT(bc_scene_write_json(t, &cam, collect, &p), 0);
+	printf("  %zu bytes in %d pieces, the longest %zu\n", p.len, p.n,
+	       p.longest);
+	REQUIRE(p.text != NULL);
+	CHECK(strcmp(p.text, whole) == 0);
+	CHECK(p.n > 4);
+	CHECK(p.longest <= 256u * 1024u + 4096u);
+	CHECK_EQ_INT(bc_scene_write_json(t, &cam, collect, &q), BC_EIO);
+	CHECK_EQ_INT(q.n, 2);
+	CHECK_EQ_INT(bc_scene_write_json(empty, NULL, collect, &p), BC_EINVAL);
+	bc_free(whole);
+	bc_free(p.text);
+	bc_free(q.text);
+	bc_tree_destroy(t);
+	bc_tree_destroy(empty);
+}
+
 /* Every allocation during parse (jansson's included) and write may fail:
  * each failure must come back as BC_ENOMEM (or NULL) with everything
  * freed -- ASan's leak checker watches -- until the run that succeeds. */
@@ -687,6 +749,8 @@ static const struct bc_test tests[] = {
      save_is_atomic_and_load_reads_it_back},
     {"default_scene_is_valid_and_framed", default_scene_is_valid_and_framed},
     {"allocation_failures_are_survived", allocation_failures_are_survived},
+    {"streamed_text_is_the_whole_text_in_pieces",
+     streamed_text_is_the_whole_text_in_pieces},
 };
 
 BC_TEST_MAIN(tests)

@@ -84,6 +84,16 @@ BC_API int bc_scene_load_json(const char *path, struct bc_tree *t,
  */
 BC_API char *bc_scene_to_json(const struct bc_tree *t,
                               const struct bc_camera *cam);
+/* Receives a scene's text in pieces: returns 0 to go on, or an error code
+ * that stops the writing and is returned by the writer. */
+typedef int (*bc_scene_sink)(void *ctx, const void *bytes, size_t len);
+/* Hands bc_scene_to_json()'s text to sink in pieces of about 256 KiB,
+ * holding no more of it in memory (a million primitives are some 170 MB
+ * of text). Returns 0, BC_EINVAL (empty tree), BC_EDEPTH, BC_ENOMEM, or
+ * the sink's error. */
+BC_API int bc_scene_write_json(const struct bc_tree *t,
+                               const struct bc_camera *cam, bc_scene_sink sink,
+                               void *ctx);
 /* Writes bc_scene_to_json()'s text to path atomically: a temporary file in
  * the same directory, fsync, rename over path, fsync of the directory.
  * Returns 0, BC_EINVAL (empty tree), BC_ENOMEM or BC_EIO with the reason. */
