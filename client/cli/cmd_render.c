@@ -24,6 +24,8 @@
 
 /* Most worker threads --threads accepts; the CPU backends cap lower. */
 #define MAX_THREADS 1024u
+/* Most bands --bands accepts (a band is at least 8 rows). */
+#define MAX_BANDS (BC_RENDER_MAX_DIM / BC_RENDER_TILE)
 
 struct args {
 	const char *scene;
@@ -33,6 +35,7 @@ struct args {
 	int backend_opt, debug, simd, gl_platform, range;
 	const char *out, *depth, *ids;
 	bool stats, quiet;
+	uint32_t bands; /* 0: as many as the frame needs */
 	struct bc_render_opts opts;
 };
 
@@ -153,6 +156,16 @@ static const struct bc_opt_name range_names[] = {{"ia", BC_RANGE_IA},
 		     .arg = "D",                                               \
 		     .help = "svo backend only: octree depth limit\n"          \
 		             "(default: the backend's)"},                      \
+		    {.name = "bands",                                          \
+		     .kind = BC_OPT_U32,                                       \
+		     .dst = &(a)->bands,                                       \
+		     .hi = MAX_BANDS,                                          \
+		     .arg = "N",                                               \
+		     .help = "draw the frame in N horizontal bands, each\n"    \
+		             "with its own A-buffer (the same pixels, less\n"  \
+		             "memory); 0 = as many as the frame needs: one,\n" \
+		             "or more when the tiled or gl backend's\n"        \
+		             "A-buffer would pass its limit (default 0)"},     \
 		    {.name = "stats",                                          \
 		     .kind = BC_OPT_FLAG,                                      \
 		     .dst = &(a)->stats,                                       \
@@ -313,12 +326,14 @@ int bc_cli_load_scene(const char *scene, struct bc_tree *t,
 struct progress {
 	bool tty;
 	int last;
+	uint32_t band, nbands; /* the band being drawn, of how many */
 };
 
 static void on_progress(void *user, uint32_t done, uint32_t total)
 {
 	struct progress *p = user;
-	int pct = total ? (int)(100.0 * done / total) : 100;
+	double part = total ? (double)done / total : 1.0;
+	int pct = (int)(100.0 * (p->band + part) / p->nbands);
 	if (p->tty) {
 		fprintf(stderr, "\rrender: %3d%%", pct);
 	} else if (pct / 10 > p->last / 10) {
@@ -328,12 +343,81 @@ static void on_progress(void *user, uint32_t done, uint32_t total)
 	p->last = pct;
 }
 
+/* Adds a band's stats to the frame's. */
+static void add_stats(struct bc_render_stats *sum,
+                      const struct bc_render_stats *s)
+{
+	sum->ms_total += s->ms_total;
+	sum->ms_abuffer += s->ms_abuffer;
+	sum->ms_trace += s->ms_trace;
+	sum->ms_upload += s->ms_upload;
+	sum->field_evals += s->field_evals;
+	sum->tiles += s->tiles;
+	sum->rays += s->rays;
+	sum->max_overlap = s->max_overlap > sum->max_overlap ? s->max_overlap
+	                                                     : sum->max_overlap;
+	sum->incomplete = sum->incomplete || s->incomplete;
+	sum->short_rays += s->short_rays;
+}
+
+/* Draws the frame in nb horizontal bands of a multiple of 8 rows (the
+ * last one shorter): each is a window of the whole view, so its pixels
+ * are the whole render's (bc_frame_window), and each builds an A-buffer
+ * of its own rows only. */
+static int render_bands(struct bc_renderer *r, uint32_t nb,
+                        struct progress *prog, const struct bc_camera *cam,
+                        struct bc_frame *frame, struct bc_render_stats *stats,
+                        struct bc_errinfo *ei)
+{
+	uint32_t w = frame->width, h = frame->height;
+	uint32_t rows = (h + nb - 1) / nb;
+	struct bc_frame band = {0};
+	int rc = 0;
+	rows = (rows + BC_RENDER_TILE - 1) / BC_RENDER_TILE * BC_RENDER_TILE;
+	prog->nbands = (h + rows - 1) / rows;
+	*stats = (struct bc_render_stats){0};
+	for (uint32_t y = 0; y < h && rc == 0; y += rows) {
+		uint32_t bh = h - y < rows ? h - y : rows;
+		struct bc_render_stats s = {0};
+		size_t px = (size_t)w * y;
+		if (band.height != bh) {
+			bc_frame_finish(&band);
+			if ((rc = bc_frame_init(&band, w, bh))) {
+				break;
+			}
+		}
+		prog->band = y / rows;
+		if ((rc = bc_frame_window(&band, 0, y, w, h)) ||
+		    (rc = bc_renderer_render(r, cam, &band, &s, ei))) {
+			break;
+		}
+		add_stats(stats, &s);
+		memcpy(frame->rgba + 4 * px, band.rgba, (size_t)4 * w * bh);
+		memcpy(frame->depth + px, band.depth,
+		       (size_t)w * bh * sizeof(*band.depth));
+		memcpy(frame->ids + px, band.ids,
+		       (size_t)w * bh * sizeof(*band.ids));
+	}
+	bc_frame_finish(&band);
+	if (rc == BC_ENOMEM) {
+		return bc_errinfo_set(ei, rc, "render: out of memory");
+	}
+	return rc;
+}
+
+/* Draws the frame in a->bands bands; with 0, whole, then in twice as
+ * many bands each time the backend's A-buffer is over its limit, down to
+ * bands of 8 rows. *bands is how many it took. */
 static int render(const struct args *a, const struct bc_tree *t,
                   const struct bc_camera *cam, struct bc_frame *frame,
-                  struct bc_render_stats *stats, struct bc_errinfo *ei)
+                  struct bc_render_stats *stats, uint32_t *bands,
+                  struct bc_errinfo *ei)
 {
 	struct bc_renderer *r = NULL;
-	struct progress prog = {isatty(STDERR_FILENO) == 1, 0};
+	struct progress prog = {isatty(STDERR_FILENO) == 1, 0, 0, 1};
+	bool grow = a->bands == 0 && (a->backend == BC_BACKEND_TILED ||
+	                              a->backend == BC_BACKEND_GL);
+	uint32_t nb = a->bands ? a->bands : 1;
 	int rc;
 	if ((rc = bc_renderer_create(&r, a->backend, &a->opts, ei))) {
 		return rc;
@@ -343,11 +427,31 @@ static int render(const struct args *a, const struct bc_tree *t,
 		bc_render_cpu_set_progress(r, on_progress, &prog);
 	}
 	if ((rc = bc_renderer_sync(r, t, NULL, ei)) == 0) {
-		rc = bc_renderer_render(r, cam, frame, stats, ei);
+		for (;;) {
+			rc = nb == 1
+			         ? bc_renderer_render(r, cam, frame, stats, ei)
+			         : render_bands(r, nb, &prog, cam, frame, stats,
+			                        ei);
+			if (rc != BC_ELIMIT || !grow ||
+			    frame->height / nb <= BC_RENDER_TILE) {
+				break;
+			}
+			nb *= 2;
+			if (!a->quiet) {
+				fprintf(stderr,
+				        "%s%s; drawing the frame in %u bands\n",
+				        prog.tty && prog.last ? "\n" : "",
+				        ei->msg[0] ? ei->msg : bc_strerror(rc),
+				        nb);
+				prog.last = 0;
+			}
+			*ei = (struct bc_errinfo){0};
+		}
 	}
 	if (prog.tty && prog.last) {
 		fputc('\n', stderr);
 	}
+	*bands = nb == 1 ? 1 : prog.nbands; /* bands of 8 rows at least */
 	bc_renderer_destroy(r);
 	return rc;
 }
@@ -360,6 +464,7 @@ int bc_cli_render(int argc, char **argv)
 	struct bc_camera cam;
 	struct bc_frame frame = {0};
 	struct bc_render_stats stats = {0};
+	uint32_t bands = 1;
 	int rc, status = 1;
 	if ((rc = parse(argc, argv, &a))) {
 		return rc < 0 ? 0 : rc;
@@ -378,7 +483,7 @@ int bc_cli_render(int argc, char **argv)
 		        a.size[1], bc_strerror(rc));
 		goto cleanup;
 	}
-	if ((rc = render(&a, t, &cam, &frame, &stats, &ei))) {
+	if ((rc = render(&a, t, &cam, &frame, &stats, &bands, &ei))) {
 		fprintf(stderr, "blobcast render: %s\n",
 		        ei.msg[0] ? ei.msg : bc_strerror(rc));
 		goto cleanup;
@@ -397,12 +502,12 @@ int bc_cli_render(int argc, char **argv)
 		fprintf(stderr,
 		        "render: backend %s, %ux%u, %u primitives: total %.2f "
 		        "ms, a-buffer %.2f ms, trace %.2f ms, upload %.2f ms, "
-		        "%llu field evaluations, max overlap %u%s\n",
+		        "%llu field evaluations, max overlap %u, %u band%s%s\n",
 		        bc_backend_name(a.backend), a.size[0], a.size[1],
 		        bc_tree_prim_count(t), stats.ms_total, stats.ms_abuffer,
 		        stats.ms_trace, stats.ms_upload,
 		        (unsigned long long)stats.field_evals,
-		        stats.max_overlap,
+		        stats.max_overlap, bands, bands == 1 ? "" : "s",
 		        stats.incomplete ? ", incomplete" : "");
 	} else if (!a.quiet) {
 		fprintf(stderr, "render: %s %ux%u in %.1f ms -> %s\n",

@@ -205,6 +205,59 @@ static void test_render_scene_file_and_stdin(void)
 	bc_tree_destroy(t);
 }
 
+/* Whether two image files hold the same pixels, bit for bit. */
+static bool same_pixels(const char *a, const char *b, enum bc_image_type type)
+{
+	struct bc_image x, y;
+	bool same;
+	if (bc_image_read(a, type, &x, NULL)) {
+		return false;
+	}
+	if (bc_image_read(b, type, &y, NULL)) {
+		bc_image_finish(&x);
+		return false;
+	}
+	same = x.width == y.width && x.height == y.height &&
+	       x.channels == y.channels &&
+	       memcmp(x.pixels, y.pixels,
+	              (size_t)x.width * x.height * x.channels *
+	                  (type == BC_IMAGE_U8 ? 1u : 4u)) == 0;
+	bc_image_finish(&x);
+	bc_image_finish(&y);
+	return same;
+}
+
+/* --bands N draws the frame in N windows of whole 8-row tiles (the last
+ * band shorter, a height not a multiple of 8): the colour, depth and ids
+ * are the whole frame's, bit for bit, and --stats counts the bands. */
+static void test_bands_draw_the_same_pixels(void)
+{
+	static const char *const backends[] = {"tiled", "naive"};
+	setup();
+	REQUIRE(dir[0]);
+	for (size_t b = 0; b < 2; b++) {
+		const char *png1 = path_in("b1.png"), *exr1 = path_in("b1.exr"),
+		           *tif1 = path_in("b1.tif"), *png5 = path_in("b5.png"),
+		           *exr5 = path_in("b5.exr"), *tif5 = path_in("b5.tif");
+		const char *whole[] = {
+		    "render",  "default",   "--size",    "101x77", "--out",
+		    png1,      "--depth",   exr1,        "--ids",  tif1,
+		    "--quiet", "--backend", backends[b], NULL};
+		const char *bands[] = {
+		    "render",  "default",   "--size",    "101x77",
+		    "--out",   png5,        "--depth",   exr5,
+		    "--ids",   tif5,        "--bands",   "5",
+		    "--stats", "--backend", backends[b], NULL};
+		CHECK_EQ_INT(run(NULL, whole), 0);
+		CHECK_EQ_INT(run(NULL, bands), 0);
+		CHECK(strstr(out, "5 bands") != NULL);
+		check_planes(png5, exr5, tif5, 101, 77);
+		CHECK(same_pixels(png1, png5, BC_IMAGE_U8));
+		CHECK(same_pixels(exr1, exr5, BC_IMAGE_F32));
+		CHECK(same_pixels(tif1, tif5, BC_IMAGE_U32));
+	}
+}
+
 struct bad {
 	const char *args[12];
 	const char *says; /* a substring of the message */
@@ -320,8 +373,8 @@ static void test_help_tells_every_option(void)
 	    "--size",    "--out",       "--depth",     "--ids",
 	    "--backend", "--debug",     "--threads",   "--gl-platform",
 	    "--range",   "--threshold", "--max-depth", "--stats",
-	    "--quiet",   "evals",       "overlaps",    "naive",
-	    "tiled",     "default",
+	    "--quiet",   "--bands",     "evals",       "overlaps",
+	    "naive",     "tiled",       "default",
 	};
 	const char *h1[] = {"render", "--help", NULL};
 	const char *h2[] = {"help", "render", NULL};
@@ -345,8 +398,10 @@ static void test_help_tells_every_option(void)
 
 static void test_cleanup(void)
 {
-	const char *names[] = {"d.png", "d.exr",  "d.tif",    "f.png",
-	                       "f.pfm", "f.tiff", "bad.json", "run.log"};
+	const char *names[] = {"d.png",  "d.exr",  "d.tif",    "f.png",
+	                       "f.pfm",  "f.tiff", "bad.json", "run.log",
+	                       "b1.png", "b1.exr", "b1.tif",   "b5.png",
+	                       "b5.exr", "b5.tif"};
 	for (size_t i = 0; i < sizeof(names) / sizeof(names[0]); i++) {
 		unlink(path_in(names[i]));
 	}
@@ -361,6 +416,7 @@ static const struct bc_test tests[] = {
      test_bad_arguments_exit_2_with_a_reason},
     {"runtime_failures_exit_1", test_runtime_failures_exit_1},
     {"help_tells_every_option", test_help_tells_every_option},
+    {"bands_draw_the_same_pixels", test_bands_draw_the_same_pixels},
     {"cleanup", test_cleanup},
 };
 
