@@ -39,6 +39,7 @@
 #include <jansson.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/io.h"
 #include "blobcast/num.h"
 #include "blobcast/buf.h"
 
@@ -1357,26 +1358,10 @@ int bc_scene_write_json(const struct bc_tree *t, const struct bc_camera *cam,
 	return rc;
 }
 
-/* A file sink: write(2) until done; errno says why on BC_EIO. */
+/* A file sink: errno says why on BC_EIO. */
 static int fd_sink(void *ctx, const void *bytes, size_t len)
 {
-	int fd = *(int *)ctx;
-	const char *p = bytes;
-	while (len > 0) {
-		ssize_t n = write(fd, p, len);
-		if (n < 0 && errno == EINTR) {
-			continue;
-		}
-		if (n <= 0) {
-			if (n == 0) {
-				errno = EIO;
-			}
-			return BC_EIO;
-		}
-		p += n;
-		len -= (size_t)n;
-	}
-	return 0;
+	return bc_write_all(*(int *)ctx, bytes, len) ? 0 : BC_EIO;
 }
 
 int bc_scene_save_json(const char *path, const struct bc_tree *t,

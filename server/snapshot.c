@@ -17,29 +17,10 @@
 #include "blobcast/alloc.h"
 #include "blobcast/bytes.h"
 #include "blobcast/clock.h"
+#include "blobcast/io.h"
 #include "blobcast/log.h"
 #include "blobcast/scene.h"
 #include "store_impl.h"
-
-/* Writes len bytes to fd; false on failure (errno set). */
-static bool write_all(int fd, const char *p, size_t len)
-{
-	size_t off = 0;
-	while (off < len) {
-		ssize_t n = write(fd, p + off, len - off);
-		if (n < 0 && errno == EINTR) {
-			continue;
-		}
-		if (n <= 0) {
-			if (n == 0) {
-				errno = EIO;
-			}
-			return false;
-		}
-		off += (size_t)n;
-	}
-	return true;
-}
 
 /* Where a snapshot's text goes: its file, counted against the limit a
  * restore reads. */
@@ -55,7 +36,7 @@ static int snap_put(void *ctx, const void *bytes, size_t len)
 		return BC_ELIMIT;
 	}
 	s->len += len;
-	return write_all(s->fd, bytes, len) ? 0 : BC_EIO;
+	return bc_write_all(s->fd, bytes, len) ? 0 : BC_EIO;
 }
 
 int bc_store_scene_depth_ok(const struct bc_tree *t, struct bc_errinfo *ei)
@@ -277,8 +258,8 @@ int bc__store_history_write(struct bc_store_session *ss, uint64_t order,
 		return bc__store_sys_error(ei, "cannot create", tmp);
 	}
 	ok = !bc__store_injected("history-write", tmp) &&
-	     write_all(fd, (const char *)hdr, sizeof(hdr)) &&
-	     write_all(fd, (const char *)p, len) && fsync(fd) == 0;
+	     bc_write_all(fd, hdr, sizeof(hdr)) && bc_write_all(fd, p, len) &&
+	     fsync(fd) == 0;
 	close(fd);
 	if (!ok || rename(tmp, file) != 0) {
 		int rc = bc__store_sys_error(ei, "cannot write", tmp);

@@ -1,0 +1,16 @@
+/*
+ * Writing a whole buffer to a file descriptor: the one loop that retries
+ * short writes and EINTR, for the files the project writes whole (scene
+ * files, snapshots, their history).
+ */
+#ifndef BLOBCAST_IO_H
+#define BLOBCAST_IO_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+/* Writes len bytes of p to fd. Returns false on failure with errno set
+ * (EIO when write(2) wrote nothing and said nothing). */
+bool bc_write_all(int fd, const void *p, size_t len);
+
+#endif
