@@ -164,8 +164,8 @@ static const struct bc_opt_name range_names[] = {{"ia", BC_RANGE_IA},
 		     .help = "draw the frame in N horizontal bands, each\n"    \
 		             "with its own A-buffer (the same pixels, less\n"  \
 		             "memory); 0 = as many as the frame needs: one,\n" \
-		             "or more when the tiled or gl backend's\n"        \
-		             "A-buffer would pass its limit (default 0)"},     \
+		             "or more when the tiled backend's A-buffer\n"     \
+		             "would pass its limit (default 0)"},              \
 		    {.name = "stats",                                          \
 		     .kind = BC_OPT_FLAG,                                      \
 		     .dst = &(a)->stats,                                       \
@@ -405,8 +405,8 @@ static int render_bands(struct bc_renderer *r, uint32_t nb,
 	return rc;
 }
 
-/* Draws the frame in a->bands bands; with 0, whole, then in twice as
- * many bands each time the backend's A-buffer is over its limit, down to
+/* Draws the frame in a->bands bands; with 0, whole, then (tiled) in
+ * twice as many bands each time its A-buffer is over its limit, down to
  * bands of 8 rows. *bands is how many it took. */
 static int render(const struct args *a, const struct bc_tree *t,
                   const struct bc_camera *cam, struct bc_frame *frame,
@@ -415,8 +415,10 @@ static int render(const struct args *a, const struct bc_tree *t,
 {
 	struct bc_renderer *r = NULL;
 	struct progress prog = {isatty(STDERR_FILENO) == 1, 0, 0, 1};
-	bool grow = a->bands == 0 && (a->backend == BC_BACKEND_TILED ||
-	                              a->backend == BC_BACKEND_GL);
+	/* The tiled backend's one ELIMIT is its A-buffer's: fewer rows
+	 * always help. gl's has other causes that bands do not cure (a
+	 * tile's overlap, llvmpipe's loop limits): --bands asks for them. */
+	bool grow = a->bands == 0 && a->backend == BC_BACKEND_TILED;
 	uint32_t nb = a->bands ? a->bands : 1;
 	int rc;
 	if ((rc = bc_renderer_create(&r, a->backend, &a->opts, ei))) {
