@@ -52,8 +52,7 @@ int bc_scene_walk_init(struct bc_scene_walk *w, const struct bc_tree *t)
 int bc_scene_walk_init_at(struct bc_scene_walk *w, const struct bc_tree *t,
                           uint32_t id)
 {
-	return walk_start(w, t,
-	                  t->building ? BC_NONE : bc__map_find(&t->ids, id));
+	return walk_start(w, t, t->building ? BC_NONE : bc__id_find(t, id));
 }
 
 bool bc_scene_walk_next(struct bc_scene_walk *w, struct bc_scene_node *out)

@@ -105,7 +105,7 @@ void bc__names_graft(struct bc_tree *t, const struct bc_tree *sub)
 {
 	for (uint32_t i = 0; i < sub->names.n; i++) {
 		const struct bc__name *e = &sub->names.v[i];
-		uint32_t n = bc__map_find(&sub->ids, e->id);
+		uint32_t n = bc__id_find(sub, e->id);
 		/* A node whose id sub chose itself gets a fresh one in t. */
 		if (n != BC_NONE && !sub->pool[n].auto_id) {
 			names_put(&t->names, e->id, e->text, e->len);
@@ -155,7 +155,7 @@ int bc_tree_set_name(struct bc_tree *t, uint32_t id, const char *name,
                      size_t len, struct bc_errinfo *ei)
 {
 	int rc;
-	if (id == 0 || bc__map_find(&t->ids, id) == BC_NONE) {
+	if (id == 0 || bc__id_find(t, id) == BC_NONE) {
 		return bc_errinfo_set(ei, BC_ENONODE, "no node with id %u", id);
 	}
 	if ((rc = bc__name_check(name, len, ei))) {

@@ -408,7 +408,7 @@ static bool relink(struct bc_tree *t, uint32_t lo, uint32_t top,
 		}
 		if (fresh || !same_bits(r1, l->roi[2 * s + 1])) {
 			uint32_t k = l->prim_of[s];
-			uint32_t n = bc__map_find(&t->ids, l->node_id[s]);
+			uint32_t n = bc__id_find(t, l->node_id[s]);
 			if (!fresh && touches_box(l, k)) {
 				touch = true;
 			}

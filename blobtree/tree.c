@@ -29,7 +29,7 @@ static uint32_t hash_id(uint32_t id)
 
 uint32_t bc__map_find(const struct bc__idmap *m, uint32_t id)
 {
-	if (!m->cap || id == 0) {
+	if (!m->count || id == 0) {
 		return BC_NONE;
 	}
 	for (uint32_t i = hash_id(id) & (m->cap - 1);;
@@ -154,14 +154,13 @@ static int pool_reserve(struct bc_tree *t, uint32_t more)
 int bc__tree_reserve(struct bc_tree *t, uint32_t nodes)
 {
 	int rc;
-	if ((rc = pool_reserve(t, nodes)) ||
-	    (rc = bc__map_reserve(&t->ids, nodes))) {
+	if ((rc = pool_reserve(t, nodes))) {
 		return rc;
 	}
-	/* Written whole by the build that follows: no fault per page. */
+	/* Written whole by the build that follows: no fault per page. The
+	 * id map grows with the nodes it holds (add_node), which are none
+	 * when the ids follow the pool (bc__id_find). */
 	bc_populate(t->pool + t->npool, (size_t)nodes * sizeof(*t->pool));
-	bc_populate(t->ids.keys, (size_t)t->ids.cap * sizeof(uint32_t));
-	bc_populate(t->ids.vals, (size_t)t->ids.cap * sizeof(uint32_t));
 	return 0;
 }
 
@@ -204,8 +203,7 @@ static void pool_release(struct bc_tree *t, uint32_t n)
 /* Returns an id not in use (ids wrap around past 2^32-1, skipping 0). */
 static uint32_t fresh_id(struct bc_tree *t)
 {
-	while (t->next_id == 0 ||
-	       bc__map_find(&t->ids, t->next_id) != BC_NONE) {
+	while (t->next_id == 0 || bc__id_find(t, t->next_id) != BC_NONE) {
 		t->next_id++;
 	}
 	return t->next_id++;
@@ -508,7 +506,7 @@ static uint32_t child_at_lin(const struct bc_tree *t, uint32_t parent,
 	/* f is the fold whose right operand is child pos (child 1 for pos
 	 * 0, whose left operand child 0 is). */
 	top = pos ? f - 1 : l->first[f - 1] - 1;
-	c = bc__map_find(&t->ids, l->node_id[top]);
+	c = bc__id_find(t, l->node_id[top]);
 	while (c != BC_NONE && t->pool[c].parent != parent) {
 		c = t->pool[c].parent;
 	}
@@ -670,8 +668,8 @@ static void free_subtree(struct bc_tree *t, uint32_t top)
 			}
 			/* A replacement may already map this id to its
 			 * own node. */
-			if (bc__map_find(&t->ids, t->pool[n].id) == n) {
-				bc__map_del(&t->ids, t->pool[n].id);
+			if (bc__id_find(t, t->pool[n].id) == n) {
+				bc__id_del(t, t->pool[n].id);
 			}
 			if (t->pool[n].is_op) {
 				t->nops--;
@@ -703,7 +701,7 @@ static void remap_ids(struct bc_tree *t, uint32_t top)
 	uint32_t depth = 0;
 	for (uint32_t n = top; n != BC_NONE;
 	     n = preorder_next(t, n, top, &depth)) {
-		bc__map_put_nogrow(&t->ids, t->pool[n].id, n);
+		bc__id_put(t, t->pool[n].id, n);
 	}
 }
 
@@ -986,7 +984,7 @@ static int add_node(struct bc_tree *t, uint32_t id, bool is_op,
 		return bc_errinfo_set(ei, BC_ELIMIT, "tree: more than %u nodes",
 		                      BC_TREE_MAX_NODES);
 	}
-	if (id != 0 && bc__map_find(&t->ids, id) != BC_NONE) {
+	if (id != 0 && bc__id_find(t, id) != BC_NONE) {
 		return bc_errinfo_set(ei, BC_EDUPID, "tree: duplicate id %u",
 		                      id);
 	}
@@ -997,7 +995,7 @@ static int add_node(struct bc_tree *t, uint32_t id, bool is_op,
 	t->pool[n].auto_id = id == 0;
 	t->pool[n].id = id ? id : fresh_id(t);
 	t->pool[n].is_op = is_op;
-	bc__map_put_nogrow(&t->ids, t->pool[n].id, n);
+	bc__id_put(t, t->pool[n].id, n);
 	if (t->nopen) {
 		link_child(t, t->open[t->nopen - 1], BC_NONE, n);
 	} else {
@@ -1155,7 +1153,7 @@ uint32_t bc_tree_root(const struct bc_tree *t)
 bool bc_tree_get(const struct bc_tree *t, uint32_t id,
                  struct bc_prim_data *prim, struct bc_op_data *op)
 {
-	uint32_t n = bc__map_find(&t->ids, id);
+	uint32_t n = bc__id_find(t, id);
 	if (prim) {
 		memset(prim, 0, sizeof(*prim));
 	}
@@ -1175,13 +1173,13 @@ bool bc_tree_get(const struct bc_tree *t, uint32_t id,
 
 uint32_t bc_tree_child_count(const struct bc_tree *t, uint32_t id)
 {
-	uint32_t n = bc__map_find(&t->ids, id);
+	uint32_t n = bc__id_find(t, id);
 	return n == BC_NONE ? 0 : t->pool[n].nchildren;
 }
 
 uint32_t bc_tree_child(const struct bc_tree *t, uint32_t id, uint32_t k)
 {
-	uint32_t n = bc__map_find(&t->ids, id), c;
+	uint32_t n = bc__id_find(t, id), c;
 	if (n == BC_NONE) {
 		return 0;
 	}
@@ -1202,7 +1200,7 @@ void bc_tree_counts(const struct bc_tree *t, uint32_t *colored,
 
 uint32_t bc_tree_child_index(const struct bc_tree *t, uint32_t id)
 {
-	uint32_t n = bc__map_find(&t->ids, id), p, s, a, k;
+	uint32_t n = bc__id_find(t, id), p, s, a, k;
 	const struct bc_lin *l = &t->lin;
 	const struct bc__kids *kids;
 	if (n == BC_NONE || (p = t->pool[n].parent) == BC_NONE ||
@@ -1240,7 +1238,7 @@ uint32_t bc_tree_child_index(const struct bc_tree *t, uint32_t id)
 
 uint32_t bc_tree_parent(const struct bc_tree *t, uint32_t id)
 {
-	uint32_t n = bc__map_find(&t->ids, id);
+	uint32_t n = bc__id_find(t, id);
 	if (n == BC_NONE || t->pool[n].parent == BC_NONE) {
 		return 0;
 	}
@@ -1249,7 +1247,7 @@ uint32_t bc_tree_parent(const struct bc_tree *t, uint32_t id)
 
 uint32_t bc_tree_slot(const struct bc_tree *t, uint32_t id)
 {
-	uint32_t n = bc__map_find(&t->ids, id);
+	uint32_t n = bc__id_find(t, id);
 	return (n == BC_NONE || !t->has_lin) ? BC_NONE
 	                                     : bc__slot(t, &t->pool[n]);
 }
@@ -1274,7 +1272,7 @@ const struct bc_dirty *bc_tree_dirty(const struct bc_tree *t)
 
 static uint32_t live_node(const struct bc_tree *t, uint32_t id)
 {
-	return t->building ? BC_NONE : bc__map_find(&t->ids, id);
+	return t->building ? BC_NONE : bc__id_find(t, id);
 }
 
 /* live_node, with the node's slot, param and prim brought up to date. */
@@ -1420,7 +1418,7 @@ int bc_tree_set_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
 bool bc_tree_get_unary(const struct bc_tree *t, uint32_t id,
                        struct bc_unary *out)
 {
-	uint32_t n = bc__map_find(&t->ids, id);
+	uint32_t n = bc__id_find(t, id);
 	memset(out, 0, sizeof(*out));
 	if (n == BC_NONE || !bc__node_unary(&t->pool[n])) {
 		return false;
@@ -1456,7 +1454,7 @@ static int check_ids(const struct bc_tree *t, const struct bc_tree *sub,
 		if (sn->auto_id) {
 			continue;
 		}
-		m = bc__map_find(&t->ids, sn->id);
+		m = bc__id_find(t, sn->id);
 		if (m != BC_NONE &&
 		    (allowed == BC_NONE || !within(t, m, allowed))) {
 			return bc_errinfo_set(ei, BC_EDUPID,
@@ -1476,7 +1474,7 @@ static uint32_t copy_node(struct bc_tree *t, const struct bc__node *sn,
 	t->pool[m].u = sn->u; /* with a unary node's parameters */
 	t->pool[m].auto_id = sn->auto_id;
 	t->pool[m].id = (sn->auto_id && !keep_ids) ? fresh_id(t) : sn->id;
-	bc__map_put_nogrow(&t->ids, t->pool[m].id, m);
+	bc__id_put(t, t->pool[m].id, m);
 	t->nnodes++;
 	if (sn->is_op) {
 		t->nops++;
@@ -1679,7 +1677,7 @@ static void cut(struct bc_tree *t, uint32_t n)
 			unlink_child(t, p);
 			link_child(t, gp, after, only);
 		}
-		bc__map_del(&t->ids, t->pool[p].id);
+		bc__id_del(t, t->pool[p].id);
 		t->nops--;
 		t->nunary_nodes -= bc__node_unary(&t->pool[p]) ? 1u : 0u;
 		t->nnodes--;

@@ -163,6 +163,35 @@ struct bc_tree {
 	struct bc__names names;
 };
 
+/* A node's id to its pool index. A node whose id is its pool index + 1
+ * -- every node of a scene built or loaded in order with ids counted from
+ * 1, the usual case, and nodes added after it with fresh ids -- is found
+ * at that index and takes no entry in the id map; the map holds the
+ * others, and is asked first, so that a replacement's node sharing the id
+ * of one still in place wins (free_subtree, remap_ids). A million-node
+ * scene kept a 16 MiB map per tree before. */
+static inline uint32_t bc__id_find(const struct bc_tree *t, uint32_t id)
+{
+	uint32_t n = bc__map_find(&t->ids, id);
+	if (n == BC_NONE && id != 0 && id - 1u < t->npool &&
+	    t->pool[id - 1u].live && t->pool[id - 1u].id == id) {
+		n = id - 1u;
+	}
+	return n;
+}
+/* Maps id to node n (room reserved with bc__map_reserve). */
+static inline void bc__id_put(struct bc_tree *t, uint32_t id, uint32_t n)
+{
+	if (id - 1u != n || bc__map_find(&t->ids, id) != BC_NONE) {
+		bc__map_put_nogrow(&t->ids, id, n);
+	}
+}
+/* Unmaps id (a node found in place needs nothing). */
+static inline void bc__id_del(struct bc_tree *t, uint32_t id)
+{
+	bc__map_del(&t->ids, id);
+}
+
 /* Where index v of one space points after a splice; an index into the
  * entries that went lands on `at` (for first[]: the next subtree moves
  * there). */

@@ -5,8 +5,12 @@
  * the same layout as building the edited scene afresh, and a failed edit
  * changes nothing.
  */
+#include <stdio.h>
+#include <string.h>
+
 #include "blobcast/alloc.h"
 #include "blobcast/blobtree.h"
+#include "blobcast/scene.h"
 #include "test.h"
 
 #include "randtree.h"
@@ -397,8 +401,151 @@ static void allocation_failures_are_clean(void)
 	CHECK(rounds < 10000);
 }
 
+/* ---- ids found in place and in the map ---------------------------------- */
+
+static uint32_t id_rng = 12345u;
+
+static uint32_t id_rand(uint32_t n)
+{
+	id_rng = id_rng * 1664525u + 1013904223u;
+	return (id_rng >> 8) % n;
+}
+
+/* A sphere whose radius tells its id apart. */
+static void id_sphere(struct bc_prim_data *p, uint32_t id)
+{
+	sphere(p, 0.01f + 1e-5f * (float)id, 0.01f * (float)(id % 97));
+}
+
+/* A sub-scene to insert: one sphere, or an operator over two (ids 0 ask
+ * the tree for fresh ones; root_id may reuse the id a replace frees). */
+static struct bc_tree *id_sub(uint32_t root_id, uint32_t a, uint32_t b, bool op)
+{
+	struct bc_tree *s = bc_tree_create();
+	struct bc_op_data u = {BC_OP_UNION, 0, 0};
+	struct bc_prim_data p;
+	int rc = s ? bc_tree_begin(s) : BC_ENOMEM;
+	if (op) {
+		rc = rc ? rc : bc_tree_push_op(s, root_id, &u, NULL);
+		id_sphere(&p, a);
+		rc = rc ? rc : bc_tree_put_prim(s, a, &p, NULL);
+		id_sphere(&p, b);
+		rc = rc ? rc : bc_tree_put_prim(s, b, &p, NULL);
+		rc = rc ? rc : bc_tree_pop_op(s, NULL);
+	} else {
+		id_sphere(&p, root_id);
+		rc = rc ? rc : bc_tree_put_prim(s, root_id, &p, NULL);
+	}
+	rc = rc ? rc : bc_tree_end(s, NULL);
+	if (rc) {
+		bc_tree_destroy(s);
+		return NULL;
+	}
+	return s;
+}
+
+/* Every node the pre-order walk (the model's links, not the ids) reaches
+ * is what bc_tree_get finds under its id, the counts agree, and ids seen
+ * before and gone are not found. Returns the mismatches. */
+static uint32_t id_check(const struct bc_tree *t, uint8_t *live, uint32_t nids)
+{
+	struct bc_scene_walk w;
+	struct bc_scene_node n;
+	uint32_t bad = 0, walked = 0;
+	memset(live, 0, nids);
+	if (bc_scene_walk_init(&w, t) == 0) {
+		while (bc_scene_walk_next(&w, &n)) {
+			struct bc_prim_data p;
+			struct bc_op_data o;
+			walked++;
+			if (n.id < nids) {
+				live[n.id] = 1;
+			}
+			if (!bc_tree_get(t, n.id, &p, &o) ||
+			    (n.is_op ? o.kind != n.op.kind
+			             : memcmp(&p, &n.prim, sizeof(p)) != 0)) {
+				bad++;
+			}
+		}
+		bc_scene_walk_finish(&w);
+	}
+	bad += walked != bc_tree_node_count(t);
+	for (uint32_t id = 1; id < nids; id++) {
+		bad += !live[id] && bc_tree_get(t, id, NULL, NULL);
+	}
+	return bad;
+}
+
+/* A tree loaded with ids in pre-order from 1 finds its nodes in place
+ * (no id map); inserts with fresh and chosen ids, removals and
+ * replacements whose root reuses the id of the node it replaces mix the
+ * two ways of finding a node, in laid-out and bare trees. */
+static void ids_found_in_place_and_in_the_map(void)
+{
+	enum { N = 300, STEPS = 3000, IDS = 20000 };
+	static uint8_t live[IDS];
+	for (int bare = 0; bare < 2; bare++) {
+		struct bc_tree *t = bc_tree_create();
+		struct bc_op_data u = {BC_OP_UNION, 0, 0};
+		struct bc_prim_data p;
+		uint32_t bad = 0, chosen = 10000;
+		REQUIRE(t != NULL);
+		REQUIRE(bc_tree_set_layout(t, !bare) == 0);
+		bc_tree_begin(t);
+		REQUIRE(bc_tree_push_op(t, 1, &u, NULL) == 0);
+		for (uint32_t id = 2; id <= N; id++) {
+			id_sphere(&p, id);
+			REQUIRE(bc_tree_put_prim(t, id, &p, NULL) == 0);
+		}
+		REQUIRE(bc_tree_pop_op(t, NULL) == 0);
+		REQUIRE(bc_tree_end(t, NULL) == 0);
+		bad += id_check(t, live, IDS);
+		for (int step = 0; step < STEPS; step++) {
+			uint32_t pick = 0, count = 0, kind = id_rand(3);
+			struct bc_tree *s = NULL;
+			/* A random live node other than the root. */
+			for (uint32_t id = 2; id < IDS; id++) {
+				if (live[id] && id_rand(++count) == 0) {
+					pick = id;
+				}
+			}
+			if (kind == 0 || pick == 0) {
+				/* Insert under the root: a fresh id, or one
+				 * chosen above any the tree assigns. */
+				bool fresh = id_rand(2) == 0;
+				s = id_sub(fresh ? 0 : chosen, 0, 0, false);
+				chosen += fresh ? 0 : 1;
+				CHECK_EQ_INT(
+				    bc_tree_insert(t, 1,
+				                   bc_tree_child_count(t, 1), s,
+				                   NULL),
+				    0);
+			} else if (kind == 1 && bc_tree_child_count(t, 1) > 2) {
+				(void)bc_tree_remove(t, pick, NULL);
+			} else if (kind == 2) {
+				/* The replacement's root takes pick's id. */
+				s = id_sub(pick, chosen, chosen + 1, true);
+				chosen += 2;
+				CHECK_EQ_INT(bc_tree_replace(t, pick, s, NULL),
+				             0);
+			}
+			bc_tree_destroy(s);
+			if (chosen + 2 >= IDS) {
+				break;
+			}
+			bad += id_check(t, live, IDS);
+		}
+		printf("  %s: %u nodes after %d edits, %u ids wrong\n",
+		       bare ? "bare" : "laid out", bc_tree_node_count(t), STEPS,
+		       bad);
+		CHECK_EQ_INT(bad, 0);
+		bc_tree_destroy(t);
+	}
+}
+
 static const struct bc_test tests[] = {
     {"layout_follows_the_paper", layout_follows_the_paper},
+    {"ids_found_in_place_and_in_the_map", ids_found_in_place_and_in_the_map},
     {"builder_rejects_malformed_trees", builder_rejects_malformed_trees},
     {"parameter_edit_rewrites_only_its_own_record",
      parameter_edit_rewrites_only_its_own_record},
