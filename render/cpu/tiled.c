@@ -59,10 +59,13 @@
 
 #include "abuffer.h"
 
-/* Tiles [x0, x1) x [y0, y1) a primitive may cover. */
+/* Tiles [x0, x1) x [y0, y1) a primitive may cover: 16 bits hold any
+ * frame's tile columns and rows (8 bytes a primitive, not 16). */
 struct rect {
-	uint32_t x0, y0, x1, y1;
+	uint16_t x0, y0, x1, y1;
 };
+_Static_assert(BC_RENDER_MAX_DIM / BC_CPU_TILE + 1u <= UINT16_MAX,
+               "a tile column or row must fit struct rect");
 
 /* Apex at the eye: every pixel ray of a block is within the half-angle
  * (given by its cosine and sine) of axis. */
@@ -81,7 +84,7 @@ struct ab_prim {
 	/* The widening of its ABV in this view (widened_abv): a shape
 	 * other than a sphere is widened again from the layout's ABV when a
 	 * tile's list tests it (a sphere's is v and radius), so that a
-	 * primitive keeps 44 bytes here, not 120. */
+	 * primitive keeps 36 bytes here, not 120. */
 	float margin;
 	uint8_t shape; /* enum bc_abv_shape */
 	bool inside;
@@ -284,7 +287,8 @@ static struct rect project_box(const struct tiled_frame *tf, const float lo[3],
 	float w = (float)vr->width, h = (float)vr->height;
 	uint32_t ox = vr->x0, oy = vr->y0;
 	float px0 = INFINITY, px1 = -INFINITY, py0 = INFINITY, py1 = -INFINITY;
-	struct rect all = {0, 0, tf->tw, tf->th}, none = {0, 0, 0, 0}, r;
+	struct rect all = {0, 0, (uint16_t)tf->tw, (uint16_t)tf->th};
+	struct rect none = {0, 0, 0, 0}, r;
 	int behind = 0;
 	for (int c = 0; c < 8; c++) {
 		float p[3] = {(c & 1) ? hi[0] : lo[0], (c & 2) ? hi[1] : lo[1],
@@ -322,10 +326,10 @@ static struct rect project_box(const struct tiled_frame *tf, const float lo[3],
 	if (!(px0 <= px1 && py0 <= py1)) {
 		return none;
 	}
-	r.x0 = ((uint32_t)px0 - ox) / BC_CPU_TILE;
-	r.y0 = ((uint32_t)py0 - oy) / BC_CPU_TILE;
-	r.x1 = ((uint32_t)px1 - ox) / BC_CPU_TILE + 1;
-	r.y1 = ((uint32_t)py1 - oy) / BC_CPU_TILE + 1;
+	r.x0 = (uint16_t)(((uint32_t)px0 - ox) / BC_CPU_TILE);
+	r.y0 = (uint16_t)(((uint32_t)py0 - oy) / BC_CPU_TILE);
+	r.x1 = (uint16_t)(((uint32_t)px1 - ox) / BC_CPU_TILE + 1);
+	r.y1 = (uint16_t)(((uint32_t)py1 - oy) / BC_CPU_TILE + 1);
 	return r;
 }
 
