@@ -608,8 +608,9 @@ static float abv_preimage(const struct bc_lin *l, uint32_t u,
 		float f = rec[0];
 		for (int i = 0; i < 3; i++) {
 			abv->center[i] *= f;
+			/* A capsule's end or a box's half extents: one field
+			 * (struct bc_abv's union), scaled once. */
 			abv->end[i] *= f;
-			abv->half[i] *= f;
 		}
 		abv->radius *= f;
 		return 0.0f;

@@ -285,10 +285,14 @@ enum bc_abv_shape {
  * space (an ABV: already transformed and offset by the ROI's upper bound). */
 struct bc_abv {
 	enum bc_abv_shape shape;
-	float center[3];  /* sphere and box centre, capsule end a */
-	float end[3];     /* capsule end b */
+	float center[3]; /* sphere and box centre, capsule end a */
+	/* One shape's, sharing their room: a layout keeps an ABV per
+	 * primitive (68 bytes, not 80). */
+	union {
+		float end[3];  /* capsule end b */
+		float half[3]; /* box half extents */
+	};
 	float axis[3][3]; /* box: unit axes (rows) */
-	float half[3];    /* box half extents */
 	float radius;     /* sphere and capsule radius */
 };
 
