@@ -177,7 +177,10 @@ try {
 	const mark = await b.evaluate((id) => document.querySelector(
 		`#members li[data-member="${id}"] .last`) !== null, edited.memberId);
 	assert.ok(mark, "B's member list marks alice as the last editor");
-	assert.ok(edited.latencies.length > 0, 'A measured edit -> frame');
+	/* The frame that answers A's last edit may come after the page
+	 * saw the edit applied (a loaded machine): wait for the sample. */
+	await until(a, 'A to measure edit -> frame', () =>
+		window.blobcast.state().latencies.length > 0);
 	const hud = await a.evaluate(() =>
 		document.getElementById('latency').textContent);
 	step(`B drew order ${remote.lastFrame.order} (edit order ` +
