@@ -794,7 +794,7 @@ static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
 	const struct bc_abv *abv = tf->fc->lin->abv;
 	struct bc__frag *out = b->frags + b->cand_off[tile];
 	uint32_t n = 0;
-	float lo = INFINITY, hi = -INFINITY;
+	float lo = INFINITY, hi = -INFINITY, inv;
 	struct bc__zq z;
 	for (uint32_t i = b->cand_off[tile]; i < b->cand_end[tile]; i++) {
 		uint32_t k = b->cand[i];
@@ -841,9 +841,10 @@ static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
 		return 0;
 	}
 	z = bc__zq_for(lo, hi);
+	inv = 1.0f / z.step;
 	for (uint32_t i = 0; i < n; i++) {
-		out[i].q0 = bc__zq_down(z, tz[2 * i]);
-		out[i].q1 = bc__zq_up(z, tz[2 * i + 1]);
+		out[i].q0 = bc__zq_down(z, inv, tz[2 * i]);
+		out[i].q1 = bc__zq_up(z, inv, tz[2 * i + 1]);
 	}
 	b->zq[tile] = z;
 	return n;

@@ -17,8 +17,9 @@
  * in steps of the tile's depth scale (struct bc__zq): 8 bytes where two
  * floats and the index took 12. A view of a million primitives keeps room
  * for some ten million between frames (its lists), 40 MB less now. The
- * steps round outward, so an interval only widens: a depth range holds
- * every primitive it held with the floats. */
+ * steps round outward (by at most three steps, a 20 000th of the tile's
+ * depth range), so an interval only widens: a depth range holds every
+ * primitive it held with the floats. */
 struct bc__frag {
 	uint16_t q0, q1;
 	uint32_t prim;
@@ -52,36 +53,32 @@ static inline struct bc__zq bc__zq_for(float lo, float hi)
 	return z;
 }
 
-/* The last step at or below t, and the first at or above it (t within
- * the scale's range). The division's rounding may put the first guess a
- * step off either way. */
-static inline uint16_t bc__zq_down(struct bc__zq z, float t)
+/* A step at or below t, and one at or above it, at most three steps
+ * away (t within the scale's range; inv is 1 / z.step). Why two steps of
+ * margin are enough: f = (t - base) * inv is within 0.02 of the exact
+ * quotient e (three roundings of at most 2^-24 of e <= 65535), so the
+ * truncated guess is floor(e) - 1, floor(e) or floor(e) + 1, and two
+ * steps down is at most e - 0.98 steps: bc__zq_at rounds at most 3 ulps
+ * of the depths' magnitude there, and a step is at least 4 of them. The
+ * same holds upward. No loops and no floor call (a library call in the
+ * baseline x86-64 build): a cold frame lists tens of millions. */
+static inline uint32_t bc__zq_guess(struct bc__zq z, float inv, float t)
 {
-	float f = floorf((t - z.base) / z.step);
-	uint32_t q = f <= 0.0f                ? 0u
-	             : f >= (float)BC__ZQ_MAX ? BC__ZQ_MAX
-	                                      : (uint32_t)f;
-	while (q > 0 && bc__zq_at(z, q) > t) {
-		q--;
+	float f = (t - z.base) * inv;
+	if (!(f > 0.0f)) {
+		return 0u; /* also NaN: 0 * inf when a list has one depth */
 	}
-	while (q < BC__ZQ_MAX && bc__zq_at(z, q + 1) <= t) {
-		q++;
-	}
-	return (uint16_t)q;
+	return f >= (float)BC__ZQ_MAX ? BC__ZQ_MAX : (uint32_t)f;
 }
-static inline uint16_t bc__zq_up(struct bc__zq z, float t)
+static inline uint16_t bc__zq_down(struct bc__zq z, float inv, float t)
 {
-	float f = ceilf((t - z.base) / z.step);
-	uint32_t q = f <= 0.0f                ? 0u
-	             : f >= (float)BC__ZQ_MAX ? BC__ZQ_MAX
-	                                      : (uint32_t)f;
-	while (q < BC__ZQ_MAX && bc__zq_at(z, q) < t) {
-		q++;
-	}
-	while (q > 0 && bc__zq_at(z, q - 1) >= t) {
-		q--;
-	}
-	return (uint16_t)q;
+	uint32_t q = bc__zq_guess(z, inv, t);
+	return (uint16_t)(q > 2u ? q - 2u : 0u);
+}
+static inline uint16_t bc__zq_up(struct bc__zq z, float inv, float t)
+{
+	uint32_t q = bc__zq_guess(z, inv, t) + 2u;
+	return (uint16_t)(q < BC__ZQ_MAX ? q : BC__ZQ_MAX);
 }
 
 static inline float bc__frag_t0(struct bc__zq z, const struct bc__frag *f)
