@@ -1,14 +1,21 @@
-/* Tests of the byte helpers, the bounded buffer, the clock and the vector
- * helpers of base/ (bytes.h, buf.h, clock.h, vec.h). */
+/* Tests of the byte helpers, the bounded buffer, the clock, the vector
+ * helpers and the whole-buffer write of base/ (bytes.h, buf.h, clock.h,
+ * vec.h, io.h). */
+#include <errno.h>
+#include <fcntl.h>
 #include <float.h>
 #include <stdint.h>
+#include <string.h>
 #include <time.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "blobcast/alloc.h"
 #include "blobcast/buf.h"
 #include "blobcast/bytes.h"
 #include "blobcast/clock.h"
 #include "blobcast/error.h"
+#include "blobcast/io.h"
 #include "blobcast/limits.h"
 #include "blobcast/vec.h"
 #include "test.h"
@@ -225,6 +232,50 @@ static void limits_hold_their_relations(void)
 	CHECK((uint64_t)BC_LIMIT_DIM * BC_LIMIT_DIM * 4u <= UINT32_MAX + 1ull);
 }
 
+/* bc_write_all writes a buffer larger than a pipe holds at once (the
+ * reader drains it in another process), and fails with errno on a
+ * descriptor that takes nothing. */
+static void write_all_writes_everything_or_says_why(void)
+{
+	enum { N = 1 << 20 };
+	static uint8_t out[N], in[N];
+	int fds[2], devnull = open("/dev/null", O_RDONLY);
+	size_t got = 0;
+	pid_t pid;
+	for (size_t i = 0; i < N; i++) {
+		out[i] = (uint8_t)(i * 131u + 7u);
+	}
+	REQUIRE(pipe(fds) == 0);
+	pid = fork();
+	REQUIRE(pid >= 0);
+	if (pid == 0) {
+		close(fds[0]);
+		_exit(bc_write_all(fds[1], out, N) ? 0 : 1);
+	}
+	close(fds[1]);
+	for (;;) {
+		ssize_t n = read(fds[0], in + got, N - got);
+		if (n <= 0) {
+			break;
+		}
+		got += (size_t)n;
+	}
+	close(fds[0]);
+	{
+		int status = 0;
+		CHECK(waitpid(pid, &status, 0) == pid);
+		CHECK(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+	}
+	CHECK_EQ_INT((int)got, N);
+	CHECK(memcmp(in, out, N) == 0);
+	REQUIRE(devnull >= 0);
+	errno = 0;
+	CHECK(!bc_write_all(devnull, out, 16)); /* opened for reading */
+	CHECK_EQ_INT(errno, EBADF);
+	CHECK(bc_write_all(devnull, out, 0)); /* nothing to write */
+	close(devnull);
+}
+
 static const struct bc_test tests[] = {
     {"le_put_get_round_trip_in_byte_order",
      le_put_get_round_trip_in_byte_order},
@@ -234,5 +285,7 @@ static const struct bc_test tests[] = {
     {"clock_is_monotonic", clock_is_monotonic},
     {"vec_helpers_follow_the_right_hand", vec_helpers_follow_the_right_hand},
     {"limits_hold_their_relations", limits_hold_their_relations},
+    {"write_all_writes_everything_or_says_why",
+     write_all_writes_everything_or_says_why},
 };
 BC_TEST_MAIN(tests)
