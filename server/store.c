@@ -22,6 +22,7 @@
 #include <unistd.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/io.h"
 #include "blobcast/log.h"
 #include "blobcast/scene.h"
 
@@ -695,7 +696,7 @@ int bc_store_owner_write(struct bc_store_session *ss, const char *owner,
 	    0) {
 		return bc__store_sys_error(ei, "cannot create", file);
 	}
-	ok = write(fd, owner, len) == (ssize_t)len && fsync(fd) == 0;
+	ok = bc_write_all(fd, owner, len) && fsync(fd) == 0;
 	close(fd);
 	if (!ok || bc__store_sync_dir(ss->path) != 0) {
 		return bc__store_sys_error(ei, "cannot write", file);
