@@ -1235,7 +1235,7 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 	struct bc__tiled_bufs *b;
 	const struct bc_lin *lin;
 	double t_start = bc_clock_ms(), t_ab;
-	uint32_t longest = 0, overflows = 0, todo = 0;
+	uint32_t longest = 0, widest = 0, overflows = 0, todo = 0;
 	int rc;
 	if (!r->tiled && !(r->tiled = bc_calloc(1, sizeof(*r->tiled)))) {
 		return bc_errinfo_set(ei, BC_ENOMEM, "render: out of memory");
@@ -1273,14 +1273,13 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 		    (b->state[t] & TILE_DONE) != TILE_DONE) {
 			uint32_t c = b->cand_end[t] - b->cand_off[t];
 			todo++;
-			longest = c > longest ? c : longest;
+			widest = c > widest ? c : widest;
 		}
 	}
 	if (todo > 0) {
-		if ((rc = prepare_listers(r, longest))) {
+		if ((rc = prepare_listers(r, widest))) {
 			goto nomem;
 		}
-		longest = 0;
 		spans_init(&tf);
 		bc_pool_run(tf.threads, phase_lists, &tf);
 	}
