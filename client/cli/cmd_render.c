@@ -162,10 +162,10 @@ static const struct bc_opt_name range_names[] = {{"ia", BC_RANGE_IA},
 		     .hi = MAX_BANDS,                                          \
 		     .arg = "N",                                               \
 		     .help = "draw the frame in N horizontal bands, each\n"    \
-		             "with its own A-buffer (the same pixels, less\n"  \
-		             "memory); 0 = as many as the frame needs: one,\n" \
-		             "or more when the tiled backend's A-buffer\n"     \
-		             "would pass its limit (default 0)"},              \
+		             "a window with its own A-buffer (the same\n"      \
+		             "pixels, less memory; 0 = one). The tiled\n"      \
+		             "backend bands a frame whose A-buffer would\n"    \
+		             "pass its limit by itself (default 0)"},          \
 		    {.name = "stats",                                          \
 		     .kind = BC_OPT_FLAG,                                      \
 		     .dst = &(a)->stats,                                       \
@@ -358,6 +358,7 @@ static void add_stats(struct bc_render_stats *sum,
 	                                                     : sum->max_overlap;
 	sum->incomplete = sum->incomplete || s->incomplete;
 	sum->short_rays += s->short_rays;
+	sum->bands += s->bands;
 }
 
 /* Draws the frame in nb horizontal bands of a multiple of 8 rows (the
@@ -405,9 +406,9 @@ static int render_bands(struct bc_renderer *r, uint32_t nb,
 	return rc;
 }
 
-/* Draws the frame in a->bands bands; with 0, whole, then (tiled) in
- * twice as many bands each time its A-buffer is over its limit, down to
- * bands of 8 rows. *bands is how many it took. */
+/* Draws the frame in a->bands windows (0: one). *bands is how many
+ * A-buffers it took: the windows, or the tiled backend's own bands of a
+ * frame whose lists pass its limit, if more. */
 static int render(const struct args *a, const struct bc_tree *t,
                   const struct bc_camera *cam, struct bc_frame *frame,
                   struct bc_render_stats *stats, uint32_t *bands,
@@ -415,11 +416,7 @@ static int render(const struct args *a, const struct bc_tree *t,
 {
 	struct bc_renderer *r = NULL;
 	struct progress prog = {isatty(STDERR_FILENO) == 1, 0, 0, 1};
-	/* The tiled backend's one ELIMIT is its A-buffer's: fewer rows
-	 * always help. gl's has other causes that bands do not cure (a
-	 * tile's overlap, llvmpipe's loop limits): --bands asks for them. */
-	bool grow = a->bands == 0 && a->backend == BC_BACKEND_TILED;
-	uint32_t nb = a->bands ? a->bands : 1;
+	uint32_t nb = a->bands ? a->bands : 1, windows;
 	int rc;
 	if ((rc = bc_renderer_create(&r, a->backend, &a->opts, ei))) {
 		return rc;
@@ -429,31 +426,15 @@ static int render(const struct args *a, const struct bc_tree *t,
 		bc_render_cpu_set_progress(r, on_progress, &prog);
 	}
 	if ((rc = bc_renderer_sync(r, t, NULL, ei)) == 0) {
-		for (;;) {
-			rc = nb == 1
-			         ? bc_renderer_render(r, cam, frame, stats, ei)
-			         : render_bands(r, nb, &prog, cam, frame, stats,
-			                        ei);
-			if (rc != BC_ELIMIT || !grow ||
-			    frame->height / nb <= BC_RENDER_TILE) {
-				break;
-			}
-			nb *= 2;
-			if (!a->quiet) {
-				fprintf(stderr,
-				        "%s%s; drawing the frame in %u bands\n",
-				        prog.tty && prog.last ? "\n" : "",
-				        ei->msg[0] ? ei->msg : bc_strerror(rc),
-				        nb);
-				prog.last = 0;
-			}
-			*ei = (struct bc_errinfo){0};
-		}
+		rc = nb == 1
+		         ? bc_renderer_render(r, cam, frame, stats, ei)
+		         : render_bands(r, nb, &prog, cam, frame, stats, ei);
 	}
 	if (prog.tty && prog.last) {
 		fputc('\n', stderr);
 	}
-	*bands = nb == 1 ? 1 : prog.nbands; /* bands of 8 rows at least */
+	windows = nb == 1 ? 1 : prog.nbands; /* bands of 8 rows at least */
+	*bands = stats->bands > windows ? stats->bands : windows;
 	bc_renderer_destroy(r);
 	return rc;
 }

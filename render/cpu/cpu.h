@@ -45,9 +45,12 @@
 #define BC_CPU_REFINE_REL 1.0e-5f
 /* Worker threads at most, whatever opts.threads asks. */
 #define BC_CPU_MAX_THREADS BC_POOL_MAX_THREADS
-/* Tile fragments (primitive x tile pairs) of one frame's A-buffer: 2^24
- * fragments are 200 MiB of lists, far above real scenes (a 4096-primitive
- * scene at 512^2 makes ~10^5). Frames beyond it fail with BC_ELIMIT. */
+/* Tile fragments (primitive x tile pairs) the A-buffer holds at once:
+ * 2^24 are 200 MiB of lists (candidates and fragments), far above most
+ * scenes (a 4096-primitive scene at 512^2 makes ~10^5). A view that
+ * needs more, a million spheres at 3840x2160, is drawn in bands of tile
+ * rows within it (tiled.c, draw_bands); only a single tile row over it
+ * fails, with BC_ELIMIT. opts.abuffer_limit lowers it. */
 #define BC_CPU_MAX_FRAGMENTS (1u << 24)
 /* Primitives a parameter edit may move for the tiled tracer to patch the
  * candidates of the tiles they cover instead of building every tile's

@@ -108,6 +108,19 @@ struct bc__tiled_bufs {
 	uint64_t generation;
 	const struct bc_lin *lin;
 	float min_step, pix_angle;
+	/* The view's lists passed the A-buffer's limit: its primitives'
+	 * rectangles are kept, its lists built a band of tile rows at a time
+	 * in every frame (draw_bands) and never kept. */
+	bool banded;
+	/* A banded view's primitives by tile row: those whose rectangle
+	 * holds row y, increasing, at row_prims[row_off[y] .. row_off[y +
+	 * 1]) (th + 1 offsets), so that a band's lists are built from its
+	 * rows' primitives, not from a pass over all of them (a region of a
+	 * few tiles in a million-sphere view). rows_ok false: not made for
+	 * the primitives' rectangles as they are. */
+	bool rows_ok;
+	uint32_t *row_off, *row_prims;
+	size_t row_off_cap, row_prims_cap;
 	/* Primitives whose ABVs changed since the lists were made (sync). */
 	uint32_t dirty_lo, dirty_hi;
 
@@ -165,6 +178,8 @@ void bc__tiled_free(struct bc__tiled_bufs *b)
 	bc_free(b->dirs);
 	bc_free(b->prims);
 	free_tiles(b);
+	bc_free(b->row_off);
+	bc_free(b->row_prims);
 	bc_free(b->cand);
 	bc_free(b->scratch);
 	bc_free(b->frags);
@@ -237,6 +252,8 @@ struct tiled_frame {
 	uint32_t tw, th, ntiles;
 	uint32_t t0, t1; /* the region's tiles are in [t0, t1) */
 	uint32_t nprims;
+	/* Fragments the A-buffer's lists may hold at once (opts). */
+	uint32_t limit;
 	const struct bc_render_region *region;
 	uint32_t threads; /* the call's share of the renderer's threads */
 	/* Work counter of the primitives' phase, and tiles traced: each on a
@@ -484,56 +501,157 @@ static uint32_t slack(uint32_t n)
 	return n / 4u + 4u;
 }
 
-/* Builds the candidates of every tile from the primitives' rectangles
- * (counting sort, primitives increasing) and drops every tile's list: a
- * tile drawn again computes it from its candidates, the same list. (The
- * lists kept through an edit of many primitives once moved to their
- * tiles' new places, through a second array as big as the lists, 124 MB
- * at a million spheres, that stayed: after an edit only the tiles it
- * damaged are drawn again, and their lists are dropped anyway.) Returns
- * 0, BC_ELIMIT or BC_ENOMEM. */
-static int build_cand(struct tiled_frame *tf, struct bc_errinfo *ei)
+/* build_cand's answer when the lists would pass the A-buffer's limit. */
+#define OVER_LIMIT 2
+
+/* Sorts the primitives into b's tile rows (row_off, row_prims) by
+ * counting. Returns 0 or BC_ENOMEM. */
+static int build_rows(struct tiled_frame *tf)
 {
 	struct bc__tiled_bufs *b = tf->b;
-	uint32_t *off = b->off_alt;
 	uint64_t sum = 0;
-	size_t room;
+	if (grow((void **)&b->row_off, &b->row_off_cap, tf->th + 1u,
+	         sizeof(*b->row_off))) {
+		return BC_ENOMEM;
+	}
+	memset(b->row_off, 0, (tf->th + 1u) * sizeof(*b->row_off));
+	for (uint32_t k = 0; k < tf->nprims; k++) {
+		const struct rect *r = &b->prims[k].rect;
+		for (uint32_t y = r->y0; r->x0 < r->x1 && y < r->y1; y++) {
+			b->row_off[y + 1]++;
+		}
+	}
+	for (uint32_t y = 0; y < tf->th; y++) {
+		sum += b->row_off[y + 1];
+		b->row_off[y + 1] = (uint32_t)sum;
+	}
+	if (sum > UINT32_MAX ||
+	    grow((void **)&b->row_prims, &b->row_prims_cap,
+	         sum ? (size_t)sum : 1u, sizeof(*b->row_prims))) {
+		return BC_ENOMEM;
+	}
+	for (uint32_t k = 0; k < tf->nprims; k++) {
+		const struct rect *r = &b->prims[k].rect;
+		for (uint32_t y = r->y0; r->x0 < r->x1 && y < r->y1; y++) {
+			b->row_prims[b->row_off[y]++] = k;
+		}
+	}
+	for (uint32_t y = tf->th; y > 0; y--) {
+		b->row_off[y] = b->row_off[y - 1];
+	}
+	b->row_off[0] = 0;
+	b->rows_ok = true;
+	return 0;
+}
+
+/* Counts in b->cur the candidates of each tile of rows [y0, y1): from
+ * the rows' primitives in a banded view, else from every primitive's
+ * rectangle (then 0 for the other tiles). */
+static void count_cand(struct tiled_frame *tf, uint32_t y0, uint32_t y1)
+{
+	struct bc__tiled_bufs *b = tf->b;
+	if (b->banded && b->rows_ok) {
+		memset(b->cur + (size_t)y0 * tf->tw, 0,
+		       (size_t)(y1 - y0) * tf->tw * sizeof(*b->cur));
+		for (uint32_t y = y0; y < y1; y++) {
+			uint32_t *row = b->cur + (size_t)y * tf->tw;
+			for (uint32_t i = b->row_off[y]; i < b->row_off[y + 1];
+			     i++) {
+				const struct rect *r =
+				    &b->prims[b->row_prims[i]].rect;
+				for (uint32_t tx = r->x0; tx < r->x1; tx++) {
+					row[tx]++;
+				}
+			}
+		}
+		return;
+	}
 	memset(b->cur, 0, tf->ntiles * sizeof(*b->cur));
 	for (uint32_t k = 0; k < tf->nprims; k++) {
 		const struct rect *r = &b->prims[k].rect;
-		for (uint32_t ty = r->y0; ty < r->y1; ty++) {
+		uint32_t ya = r->y0 > y0 ? r->y0 : y0;
+		uint32_t yb = r->y1 < y1 ? r->y1 : y1;
+		for (uint32_t ty = ya; ty < yb; ty++) {
 			uint32_t *row = b->cur + (size_t)ty * tf->tw;
 			for (uint32_t tx = r->x0; tx < r->x1; tx++) {
 				row[tx]++;
 			}
 		}
 	}
-	for (uint32_t t = 0; t < tf->ntiles; t++) {
+}
+
+/* The room the candidates counted in b->cur take in tile row y, slack
+ * included: what that row adds to a build of the rows around it. */
+static uint64_t row_room(const struct tiled_frame *tf, uint32_t y)
+{
+	const uint32_t *row = tf->b->cur + (size_t)y * tf->tw;
+	uint64_t sum = 0;
+	for (uint32_t tx = 0; tx < tf->tw; tx++) {
+		sum += row[tx] + slack(row[tx]);
+	}
+	return sum;
+}
+
+/* Builds the candidates of every tile of rows [y0, y1) (counting sort,
+ * primitives increasing) and drops their lists: a tile drawn again
+ * computes its list from its candidates, the same list. (The lists kept
+ * through an edit of many primitives once moved to their tiles' new
+ * places, through a second array as big as the lists, 124 MB at a
+ * million spheres, that stayed: after an edit only the tiles it damaged
+ * are drawn again, and their lists are dropped anyway.) A build of every
+ * row lays out every tile; a band's (b->banded) only the band's, whose
+ * rows' primitives it takes from the row index, and the other tiles'
+ * candidates and lists are left as they are, stale: only the band is
+ * drawn from them. Returns 0, OVER_LIMIT when the rows' lists would pass
+ * tf->limit fragments (nothing is built then), or BC_ENOMEM. */
+static int build_cand(struct tiled_frame *tf, uint32_t y0, uint32_t y1)
+{
+	struct bc__tiled_bufs *b = tf->b;
+	uint32_t *off = b->off_alt;
+	bool band = b->banded && b->rows_ok;
+	uint32_t t0 = band ? y0 * tf->tw : 0;
+	uint32_t t1 = band ? y1 * tf->tw : tf->ntiles;
+	uint64_t sum = 0;
+	size_t room;
+	count_cand(tf, y0, y1);
+	for (uint32_t t = t0; t < t1; t++) {
+		bool in = t >= y0 * tf->tw && t < y1 * tf->tw;
 		off[t] = (uint32_t)sum;
-		sum += b->cur[t] + slack(b->cur[t]);
+		sum += in ? b->cur[t] + slack(b->cur[t]) : 0u;
 		b->cur[t] = off[t];
-		if (sum > BC_CPU_MAX_FRAGMENTS) {
-			return bc_errinfo_set(
-			    ei, BC_ELIMIT,
-			    "render: over %u primitive-tile pairs exceed "
-			    "the A-buffer limit (fewer or smaller "
-			    "primitives, or a smaller frame)",
-			    BC_CPU_MAX_FRAGMENTS);
+		if (sum > tf->limit) {
+			return OVER_LIMIT;
 		}
 	}
-	off[tf->ntiles] = (uint32_t)sum;
+	off[t1] = (uint32_t)sum;
 	/* Room after the tiles for those a patch makes outgrow their own;
 	 * when it runs out, the next patch builds everything again. */
 	room = (size_t)sum + (size_t)sum / 8u + 1024u;
 	if (grow((void **)&b->cand, &b->cand_cap, room, sizeof(*b->cand))) {
 		return BC_ENOMEM;
 	}
-	for (uint32_t k = 0; k < tf->nprims; k++) {
-		const struct rect *r = &b->prims[k].rect;
-		for (uint32_t ty = r->y0; ty < r->y1; ty++) {
-			uint32_t *row = b->cur + (size_t)ty * tf->tw;
-			for (uint32_t tx = r->x0; tx < r->x1; tx++) {
-				b->cand[row[tx]++] = k;
+	if (band) {
+		for (uint32_t y = y0; y < y1; y++) {
+			uint32_t *row = b->cur + (size_t)y * tf->tw;
+			for (uint32_t i = b->row_off[y]; i < b->row_off[y + 1];
+			     i++) {
+				uint32_t k = b->row_prims[i];
+				const struct rect *r = &b->prims[k].rect;
+				for (uint32_t tx = r->x0; tx < r->x1; tx++) {
+					b->cand[row[tx]++] = k;
+				}
+			}
+		}
+	} else {
+		for (uint32_t k = 0; k < tf->nprims; k++) {
+			const struct rect *r = &b->prims[k].rect;
+			uint32_t ya = r->y0 > y0 ? r->y0 : y0;
+			uint32_t yb = r->y1 < y1 ? r->y1 : y1;
+			for (uint32_t ty = ya; ty < yb; ty++) {
+				uint32_t *row = b->cur + (size_t)ty * tf->tw;
+				for (uint32_t tx = r->x0; tx < r->x1; tx++) {
+					b->cand[row[tx]++] = k;
+				}
 			}
 		}
 	}
@@ -542,7 +660,7 @@ static int build_cand(struct tiled_frame *tf, struct bc_errinfo *ei)
 	}
 	b->off_alt = b->cand_off;
 	b->cand_off = off;
-	for (uint32_t t = 0; t < tf->ntiles; t++) {
+	for (uint32_t t = t0; t < t1; t++) {
 		b->cand_end[t] = b->cur[t]; /* the fill's cursor: the count */
 		b->cand_lim[t] = off[t + 1];
 		b->state[t] &= (uint8_t)~TILE_LIST;
@@ -1146,10 +1264,12 @@ static bool same_view(const struct bc__tiled_bufs *b, const struct bc__cpu *r,
 }
 
 /* Makes b's lists this frame's view's: all dropped for a new view, those
- * the dirty primitives can reach after parameter edits. Returns 0 or an
- * error, after which nothing is kept. */
+ * the dirty primitives can reach after parameter edits. Returns 0,
+ * OVER_LIMIT when the view's lists cannot all be kept at once (its
+ * primitives' rectangles are kept, and the frame is drawn in bands:
+ * draw_bands), or an error, after which nothing is kept. */
 static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
-                     const struct bc_camera *cam, struct bc_errinfo *ei)
+                     const struct bc_camera *cam)
 {
 	struct bc__tiled_bufs *b = tf->b;
 	const struct bc__frame_ctx *fc = tf->fc;
@@ -1159,10 +1279,11 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 		uint32_t hi =
 		    b->dirty_hi < tf->nprims ? b->dirty_hi : tf->nprims;
 		uint32_t lo = b->dirty_lo;
-		bool patch = hi - lo <= BC_CPU_PATCH_PRIMS ||
-		             hi - lo <= tf->nprims / BC_CPU_PATCH_SHARE;
+		bool patch =
+		    !b->banded && (hi - lo <= BC_CPU_PATCH_PRIMS ||
+		                   hi - lo <= tf->nprims / BC_CPU_PATCH_SHARE);
 		if (lo >= hi) {
-			return 0;
+			return b->banded ? OVER_LIMIT : 0;
 		}
 		if (patch) {
 			memset(b->cur, 0, tf->ntiles * sizeof(*b->cur));
@@ -1180,19 +1301,28 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 			}
 		}
 		b->dirty_lo = b->dirty_hi = 0;
+		if (b->banded) {
+			/* It stays banded until the view changes: trying
+			 * every row's lists again would cost a pass over
+			 * every pair at each edit of a drag. */
+			b->rows_ok = false;
+			return OVER_LIMIT;
+		}
 		b->view_ok = false;
 		rc = patch && patch_pays(tf, lo, hi) ? patch_cand(tf, lo, hi)
 		                                     : 1;
 		if (rc == 1) {
-			rc = build_cand(tf, ei);
+			rc = build_cand(tf, 0, tf->th);
 		}
-		if (rc) {
+		if (rc && rc != OVER_LIMIT) {
 			return rc;
 		}
+		b->banded = rc == OVER_LIMIT;
 		b->view_ok = true;
-		return 0;
+		return rc;
 	}
 	b->view_ok = false;
+	b->banded = b->rows_ok = false;
 	b->dirty_lo = b->dirty_hi = 0;
 	if (grow((void **)&b->dirs, &b->dirs_cap, 3 * npix, sizeof(float)) ||
 	    grow_tiles(b, tf->ntiles) ||
@@ -1205,9 +1335,11 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 	if (tf->nprims > 0) {
 		bc_pool_run(tf->threads, phase_prims, tf);
 	}
-	if ((rc = build_cand(tf, ei))) {
+	rc = build_cand(tf, 0, tf->th);
+	if (rc && rc != OVER_LIMIT) {
 		return rc;
 	}
+	b->banded = rc == OVER_LIMIT;
 	b->cam = *cam;
 	b->w = fc->out->width;
 	b->h = fc->out->height;
@@ -1221,7 +1353,153 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 	b->min_step = fc->min_step;
 	b->pix_angle = fc->pix_angle;
 	b->view_ok = true;
+	return rc;
+}
+
+/* Lists and traces the region's tiles in [tf->t0, tf->t1), whose
+ * candidates are built, adding the work to stats. Returns 0 or
+ * BC_ENOMEM. */
+static int draw_tiles(struct bc__cpu *r, struct tiled_frame *tf,
+                      struct bc_render_stats *stats)
+{
+	struct bc__tiled_bufs *b = tf->b;
+	const struct bc_render_region *region = tf->region;
+	double t_start = bc_clock_ms(), t_ab;
+	uint32_t longest = 0, widest = 0, overflows = 0, todo = 0;
+	int rc;
+	for (uint32_t t = tf->t0; t < tf->t1; t++) {
+		if ((!region->tiles || region->tiles[t]) &&
+		    (b->state[t] & TILE_DONE) != TILE_DONE) {
+			uint32_t c = b->cand_end[t] - b->cand_off[t];
+			todo++;
+			widest = c > widest ? c : widest;
+		}
+	}
+	if (todo > 0) {
+		if ((rc = prepare_listers(r, widest))) {
+			return rc;
+		}
+		spans_init(tf);
+		bc_pool_run(tf->threads, phase_lists, tf);
+	}
+	for (uint32_t t = tf->t0; t < tf->t1; t++) {
+		if ((!region->tiles || region->tiles[t]) &&
+		    b->list_n[t] > longest) {
+			longest = b->list_n[t];
+		}
+	}
+	if ((rc = prepare_workers(r, tf->fc->lin, longest))) {
+		return rc;
+	}
+	t_ab = bc_clock_ms();
+	spans_init(tf);
+	bc_pool_run(tf->threads, phase_trace, tf);
+	for (uint32_t i = 0; i < r->threads; i++) {
+		overflows += b->workers[i].overflows;
+	}
+	if (overflows) {
+		bc_log(BC_LOG_DEBUG,
+		       "render: %u depth ranges went over M_overlap=%u",
+		       overflows, BC_CPU_M_OVERLAP);
+	}
+	stats->ms_abuffer += t_ab - t_start;
+	stats->ms_trace += bc_clock_ms() - t_ab;
+	stats->max_overlap =
+	    longest > stats->max_overlap ? longest : stats->max_overlap;
+	for (uint32_t i = 0; i < r->threads; i++) {
+		stats->tiles += b->workers[i].tiles_asked;
+		stats->rays += b->workers[i].rays;
+		stats->field_evals += b->workers[i].evals;
+		stats->short_rays += b->workers[i].short_rays;
+	}
 	return 0;
+}
+
+/* Whether tile row y holds a tile of the region's. */
+static bool row_asked(const struct tiled_frame *tf, uint32_t y)
+{
+	uint32_t a = y * tf->tw, z = a + tf->tw;
+	a = a > tf->t0 ? a : tf->t0;
+	z = z < tf->t1 ? z : tf->t1;
+	if (!tf->region->tiles) {
+		return a < z;
+	}
+	for (uint32_t t = a; t < z; t++) {
+		if (tf->region->tiles[t]) {
+			return true;
+		}
+	}
+	return false;
+}
+
+/* Draws the region of a view whose lists would pass the A-buffer's
+ * limit all at once: in bands of whole tile rows, each band's lists
+ * within the limit, built, drawn and dropped in turn (the pixels are
+ * those of one pass: a tile's list is the same whichever band builds
+ * it). Rows the region does not touch are not built. A row whose lists
+ * alone pass the limit cannot be drawn: BC_ELIMIT. */
+static int draw_bands(struct bc__cpu *r, struct tiled_frame *tf,
+                      struct bc_render_stats *stats, struct bc_errinfo *ei)
+{
+	uint32_t t0 = tf->t0, t1 = tf->t1, nb = 0;
+	uint32_t y = t0 / tf->tw, y_end = (t1 + tf->tw - 1) / tf->tw;
+	uint32_t *band;
+	int rc = 0;
+	if (!tf->b->rows_ok && (rc = build_rows(tf))) {
+		return rc;
+	}
+	if (!(band = bc_malloc(2 * (size_t)tf->th * sizeof(*band)))) {
+		return BC_ENOMEM;
+	}
+	/* The bands, from one count of the region's rows: each as many rows
+	 * as fit. */
+	count_cand(tf, y, y_end);
+	while (y < y_end) {
+		uint32_t y1 = y;
+		uint64_t sum = 0;
+		if (!row_asked(tf, y)) {
+			y++;
+			continue;
+		}
+		while (y1 < y_end && row_asked(tf, y1) &&
+		       sum + row_room(tf, y1) <= tf->limit) {
+			sum += row_room(tf, y1++);
+		}
+		if (y1 == y) {
+			rc = bc_errinfo_set(
+			    ei, BC_ELIMIT,
+			    "render: tile row %u alone holds %llu "
+			    "primitive-tile pairs, over the A-buffer's limit "
+			    "of %u (fewer or smaller primitives, or a "
+			    "smaller frame)",
+			    y, (unsigned long long)row_room(tf, y), tf->limit);
+			goto out;
+		}
+		band[2 * nb] = y;
+		band[2 * nb + 1] = y1;
+		nb++;
+		y = y1;
+	}
+	for (uint32_t i = 0; i < nb && rc == 0; i++) {
+		uint32_t a = band[2 * i] * tf->tw, z = band[2 * i + 1] * tf->tw;
+		tf->t0 = a > t0 ? a : t0;
+		tf->t1 = z < t1 ? z : t1;
+		rc = build_cand(tf, band[2 * i], band[2 * i + 1]);
+		if (rc == OVER_LIMIT) {
+			/* The count above fitted these rows: unreachable. */
+			rc = bc_errinfo_set(ei, BC_ELIMIT,
+			                    "render: an A-buffer band over "
+			                    "its count");
+		} else if (rc == 0) {
+			rc = draw_tiles(r, tf, stats);
+		}
+	}
+	tf->t0 = t0;
+	tf->t1 = t1;
+	stats->bands = nb;
+out:
+	bc_free(band);
+	return rc;
 }
 
 static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
@@ -1234,8 +1512,8 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 	struct tiled_frame tf = {0};
 	struct bc__tiled_bufs *b;
 	const struct bc_lin *lin;
-	double t_start = bc_clock_ms(), t_ab;
-	uint32_t longest = 0, widest = 0, overflows = 0, todo = 0;
+	double t_start = bc_clock_ms();
+	uint32_t limit = base->opts.abuffer_limit;
 	int rc;
 	if (!r->tiled && !(r->tiled = bc_calloc(1, sizeof(*r->tiled)))) {
 		return bc_errinfo_set(ei, BC_ENOMEM, "render: out of memory");
@@ -1257,69 +1535,33 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 	tf.t1 = region->tile_count ? region->tile_first + region->tile_count
 	                           : tf.ntiles;
 	tf.nprims = lin ? lin->nprims : 0;
+	tf.limit = limit > 0 && limit < BC_CPU_MAX_FRAGMENTS
+	               ? limit
+	               : BC_CPU_MAX_FRAGMENTS;
 	atomic_init(&tf.next, 0u);
 	atomic_init(&tf.tiles_done, 0u);
 	atomic_init(&tf.skipped, 0u);
 	tf.deadline =
 	    base->opts.budget_ms ? t_start + base->opts.budget_ms : 0.0;
-	if ((rc = keep_view(r, &tf, cam, ei))) {
-		if (rc == BC_ENOMEM) {
-			goto nomem;
-		}
+	rc = keep_view(r, &tf, cam);
+	if (rc && rc != OVER_LIMIT) {
+		goto fail;
+	}
+	bc__progress_init(&tf.progress, r, tf.ntiles);
+	stats->ms_abuffer = bc_clock_ms() - t_start;
+	stats->bands = 1;
+	rc = rc == OVER_LIMIT ? draw_bands(r, &tf, stats, ei)
+	                      : draw_tiles(r, &tf, stats);
+	if (rc) {
+		goto fail;
+	}
+	stats->ms_total = bc_clock_ms() - t_start;
+	stats->incomplete = atomic_load(&tf.skipped) > 0;
+	return 0;
+fail:
+	if (rc != BC_ENOMEM) {
 		return rc;
 	}
-	for (uint32_t t = tf.t0; t < tf.t1; t++) {
-		if ((!region->tiles || region->tiles[t]) &&
-		    (b->state[t] & TILE_DONE) != TILE_DONE) {
-			uint32_t c = b->cand_end[t] - b->cand_off[t];
-			todo++;
-			widest = c > widest ? c : widest;
-		}
-	}
-	if (todo > 0) {
-		if ((rc = prepare_listers(r, widest))) {
-			goto nomem;
-		}
-		spans_init(&tf);
-		bc_pool_run(tf.threads, phase_lists, &tf);
-	}
-	for (uint32_t t = tf.t0; t < tf.t1; t++) {
-		if ((!region->tiles || region->tiles[t]) &&
-		    b->list_n[t] > longest) {
-			longest = b->list_n[t];
-		}
-	}
-	if ((rc = prepare_workers(r, lin, longest))) {
-		goto nomem;
-	}
-	t_ab = bc_clock_ms();
-	bc__progress_init(&tf.progress, r, tf.ntiles);
-	spans_init(&tf);
-	bc_pool_run(tf.threads, phase_trace, &tf);
-	for (uint32_t i = 0; i < r->threads; i++) {
-		overflows += b->workers[i].overflows;
-	}
-	if (overflows) {
-		bc_log(BC_LOG_DEBUG,
-		       "render: %u depth ranges went over M_overlap=%u",
-		       overflows, BC_CPU_M_OVERLAP);
-	}
-	{
-		double now = bc_clock_ms();
-		stats->ms_abuffer = t_ab - t_start;
-		stats->ms_trace = now - t_ab;
-		stats->ms_total = now - t_start;
-		stats->max_overlap = longest;
-		stats->incomplete = atomic_load(&tf.skipped) > 0;
-		for (uint32_t i = 0; i < r->threads; i++) {
-			stats->tiles += b->workers[i].tiles_asked;
-			stats->rays += b->workers[i].rays;
-			stats->field_evals += b->workers[i].evals;
-			stats->short_rays += b->workers[i].short_rays;
-		}
-	}
-	return 0;
-nomem:
 	return bc_errinfo_set(ei, BC_ENOMEM,
 	                      "render: out of memory for a "
 	                      "%ux%u frame",
@@ -1374,7 +1616,10 @@ static int follow_splice(struct bc__tiled_bufs *b,
 	              (size_t)n - sp->del + sp->ins + 1u, sizeof(*b->prims))) {
 		return BC_ENOMEM;
 	}
-	if (hi == n) {
+	if (b->banded) {
+		/* No lists are kept: the rows are sorted again. */
+		b->rows_ok = false;
+	} else if (hi == n) {
 		for (uint32_t k = lo; k < hi; k++) {
 			const struct rect *r = &b->prims[k].rect;
 			for (uint32_t ty = r->y0; ty < r->y1; ty++) {

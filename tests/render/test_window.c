@@ -14,6 +14,11 @@
  * crop too. The frame's key follows the window (a region drawn into a
  * frame of another window draws the whole frame), and bc_frame_window and
  * the front refuse windows that do not lie inside their view.
+ *
+ * The tiled backend's own bands (a view whose tile lists pass its
+ * A-buffer's limit is drawn a band of tile rows at a time) draw the
+ * pixels of one pass, whole, refined, as a range of tiles and after
+ * edits.
  */
 #include <stdint.h>
 #include <stdio.h>
@@ -385,7 +390,177 @@ static void test_frame_window_range(void)
 	bc_tree_destroy(t);
 }
 
+/* ---- A-buffer bands ----------------------------------------------------- */
+
+/* A tiled renderer whose A-buffer holds at most `limit` primitive-tile
+ * pairs at once, synced to t. */
+static struct bc_renderer *open_limited(enum bc_simd simd, uint32_t limit,
+                                        const struct bc_tree *t)
+{
+	struct bc_render_opts o = {.simd = simd, .abuffer_limit = limit};
+	struct bc_errinfo ei = {0};
+	struct bc_renderer *r = NULL;
+	if (bc_renderer_create(&r, BC_BACKEND_TILED, &o, &ei) ||
+	    bc_renderer_sync(r, t, NULL, &ei)) {
+		fprintf(stderr, "  tiled, limit %u: %s\n", limit, ei.msg);
+		bc_renderer_destroy(r);
+		return NULL;
+	}
+	return r;
+}
+
+/* Pixels of f that differ from whole in tiles [a, z) or from the
+ * sentinel outside them. */
+static uint32_t diff_tile_range(const struct bc_frame *f,
+                                const struct bc_frame *whole, uint32_t a,
+                                uint32_t z)
+{
+	uint32_t bad = 0, tw = bc_render_tiles_x(f->width);
+	for (uint32_t y = 0; y < f->height; y++) {
+		for (uint32_t x = 0; x < f->width; x++) {
+			size_t i = (size_t)y * f->width + x;
+			uint32_t t =
+			    (y / BC_RENDER_TILE) * tw + x / BC_RENDER_TILE;
+			bool in = t >= a && t < z;
+			const struct bc_frame *want = in ? whole : NULL;
+			if (want ? memcmp(f->rgba + 4 * i, want->rgba + 4 * i,
+			                  4) != 0 ||
+			               memcmp(&f->depth[i], &want->depth[i],
+			                      sizeof(float)) != 0 ||
+			               f->ids[i] != want->ids[i]
+			         : f->ids[i] != 0xdeadbeefu ||
+			               f->depth[i] != -1.0f) {
+				bad++;
+			}
+		}
+	}
+	return bad;
+}
+
+/* Moves the scene's k-th primitive by a fraction of the scene's size. */
+static int move_prim(struct bc_tree *t, uint32_t k, float by)
+{
+	const struct bc_lin *l = bc_tree_lin(t);
+	uint32_t id = l->node_id[l->prim_slot[k % l->nprims]];
+	struct bc_prim_data p;
+	if (!bc_tree_get(t, id, &p, NULL)) {
+		return BC_ENONODE;
+	}
+	p.translate[k % 3] += by * l->size;
+	return bc_tree_set_prim(t, id, &p, NULL);
+}
+
+/* A view whose tile lists pass the A-buffer's limit is drawn in bands of
+ * tile rows (opts.abuffer_limit lowers the limit to this small scene's
+ * size): whole, refined, as a range of tiles and after parameter and
+ * structural edits synced with their dirty ranges, the pixels equal a
+ * renderer's that holds every list at once, bit for bit. A tile row whose
+ * lists alone pass the limit is refused with BC_ELIMIT. */
+static void test_abuffer_bands_equal_one_pass(void)
+{
+	static const enum bc_simd simds[] = {BC_SIMD_OFF, BC_SIMD_AUTO};
+	struct bc_camera cam;
+	struct bc_tree *t = make_scene(&cam);
+	struct bc_frame f = {0}, g = {0};
+	struct bc_render_stats st;
+	struct bc_errinfo ei = {0};
+	REQUIRE(t);
+	if (!bc_backend_available(BC_BACKEND_TILED)) {
+		bc_tree_destroy(t);
+		BC_SKIP("tiled is not built in");
+	}
+	REQUIRE(bc_frame_init(&f, FULL_W, FULL_H) == 0);
+	REQUIRE(bc_frame_init(&g, FULL_W, FULL_H) == 0);
+	for (size_t s = 0; s < sizeof(simds) / sizeof(simds[0]); s++) {
+		struct bc_renderer *ref = open_limited(simds[s], 0, t), *r;
+		uint32_t limit = 16, a = 2 * 25 + 3, z = a + 60;
+		uint64_t rays = 0;
+		REQUIRE(ref);
+		REQUIRE(bc_renderer_render(ref, &cam, &g, &st, &ei) == 0);
+		CHECK_EQ_INT(st.bands, 1);
+		/* The smallest power of two the busiest row fits in. */
+		for (;; limit *= 2) {
+			REQUIRE(limit <= (1u << 20));
+			REQUIRE((r = open_limited(simds[s], limit, t)));
+			int rc = bc_renderer_render(r, &cam, &f, &st, &ei);
+			if (rc == 0) {
+				break;
+			}
+			CHECK_EQ_INT(rc, BC_ELIMIT);
+			CHECK(strstr(ei.msg, "tile row") != NULL);
+			ei = (struct bc_errinfo){0};
+			bc_renderer_destroy(r);
+		}
+		CHECK(limit > 16);
+		/* With room to spare for the edits below. */
+		bc_renderer_destroy(r);
+		REQUIRE((r = open_limited(simds[s], 2 * limit, t)));
+		fill_sentinel(&f);
+		REQUIRE(bc_renderer_render(r, &cam, &f, &st, &ei) == 0);
+		CHECK(st.bands >= 3);
+		CHECK_EQ_INT(st.rays, (uint64_t)FULL_W * FULL_H);
+		CHECK_EQ_INT(diff_crop(&f, &g, "bands, whole"), 0);
+		fprintf(stderr, "  simd %s: limit %u, %u bands\n",
+		        simds[s] == BC_SIMD_OFF ? "off" : "auto", 2 * limit,
+		        st.bands);
+		/* Refined from level 3: each level's call in bands. */
+		fill_sentinel(&f);
+		f.key = 0;
+		for (int level = (int)BC_RENDER_MAX_LEVEL; level >= 0;
+		     level--) {
+			struct bc_render_region rg = {
+			    .level = (uint32_t)level,
+			    .refine = level != (int)BC_RENDER_MAX_LEVEL};
+			CHECK(bc_renderer_render_region(r, &cam, &f, &rg, &st,
+			                                &ei) == 0);
+			rays += st.rays;
+		}
+		CHECK_EQ_INT(rays, (uint64_t)FULL_W * FULL_H);
+		CHECK_EQ_INT(diff_crop(&f, &g, "bands, refined"), 0);
+		/* A range of tiles starting and ending inside a row. */
+		fill_sentinel(&f);
+		f.key = 0;
+		CHECK(bc_renderer_render_region(
+		          r, &cam, &f,
+		          &(struct bc_render_region){.tile_first = a,
+		                                     .tile_count = z - a,
+		                                     .adopt_key = true},
+		          &st, &ei) == 0);
+		CHECK(!st.whole);
+		CHECK_EQ_INT(diff_tile_range(&f, &g, a, z), 0);
+		/* Parameter edits (the kept rectangles follow the dirty
+		 * primitives), then a structural one (a splice). */
+		for (uint32_t i = 0; i < 9; i++) {
+			struct bc_dirty dirty;
+			char what[48];
+			REQUIRE(move_prim(t, 5 * i + (uint32_t)s,
+			                  i % 2 ? 0.03f : -0.05f) == 0);
+			if (i == 8) {
+				const struct bc_lin *l = bc_tree_lin(t);
+				REQUIRE(bc_tree_remove(
+				            t, l->node_id[l->prim_slot[3]],
+				            NULL) == 0);
+			}
+			bc_tree_take_dirty(t, &dirty);
+			REQUIRE(bc_renderer_sync(r, t, &dirty, &ei) == 0);
+			REQUIRE(bc_renderer_sync(ref, t, NULL, &ei) == 0);
+			REQUIRE(bc_renderer_render(ref, &cam, &g, NULL, &ei) ==
+			        0);
+			REQUIRE(bc_renderer_render(r, &cam, &f, &st, &ei) == 0);
+			CHECK(st.bands >= 2);
+			snprintf(what, sizeof(what), "bands, edit %u", i);
+			CHECK_EQ_INT(diff_crop(&f, &g, what), 0);
+		}
+		bc_renderer_destroy(r);
+		bc_renderer_destroy(ref);
+	}
+	bc_frame_finish(&f);
+	bc_frame_finish(&g);
+	bc_tree_destroy(t);
+}
+
 static const struct bc_test tests[] = {
+    {"abuffer_bands_equal_one_pass", test_abuffer_bands_equal_one_pass},
     {"frame_window_range", test_frame_window_range},
     {"key_follows_the_window", test_key_follows_the_window},
     {"windows_equal_the_whole_render", test_windows_equal_the_whole_render},

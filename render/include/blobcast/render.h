@@ -116,6 +116,14 @@ struct bc_render_opts {
 	 * say incomplete (one pathological scene cannot stall a server). */
 	uint32_t budget_ms;
 	enum bc_simd simd;
+	/* Primitive-tile pairs the tiled backend's A-buffer lists may hold
+	 * at once; 0, or any value over 2^24: 2^24 (BC_CPU_MAX_FRAGMENTS). A
+	 * view whose lists would hold more is drawn in bands of whole tile
+	 * rows, each within the limit (the same pixels, bit for bit); the
+	 * limit bounds the lists' memory (12 bytes a pair, with room to
+	 * grow), and lowering it trades speed for memory: a banded view keeps
+	 * no lists between frames. */
+	uint32_t abuffer_limit;
 };
 
 /* Timings of one frame, milliseconds, and work counters. */
@@ -131,6 +139,9 @@ struct bc_render_stats {
 	bool incomplete;      /* cut short by a time budget */
 	bool whole;           /* a region was asked, the whole frame drawn */
 	uint64_t short_rays;  /* rays that ran out of max_evals, not drawn */
+	/* tiled: the bands of tile rows its A-buffer was built in (1 when
+	 * the view's lists fit at once; opts.abuffer_limit). */
+	uint32_t bands;
 };
 
 /*
