@@ -259,6 +259,8 @@ struct tiled_frame {
 	/* Work counter of the primitives' phase, and tiles traced: each on a
 	 * cache line of its own, away from the fields every thread reads. */
 	_Alignas(64) atomic_uint next;
+	/* The primitive-tile pairs of the rectangles phase_prims made. */
+	_Atomic uint64_t pairs;
 	struct tile_span spans[BC_POOL_MAX_THREADS]; /* see next_tile */
 	uint32_t nspans; /* the shares the pool runs: spans in use */
 	_Alignas(64) atomic_uint tiles_done;
@@ -471,6 +473,7 @@ static void prim_setup(const struct tiled_frame *tf, uint32_t k,
 static void phase_prims(void *arg, uint32_t thread)
 {
 	struct tiled_frame *tf = arg;
+	uint64_t pairs = 0;
 	(void)thread;
 	for (;;) {
 		uint32_t k0 = atomic_fetch_add(&tf->next, 256u);
@@ -478,9 +481,12 @@ static void phase_prims(void *arg, uint32_t thread)
 			break;
 		}
 		for (uint32_t k = k0; k < tf->nprims && k < k0 + 256u; k++) {
+			const struct rect *r = &tf->b->prims[k].rect;
 			prim_setup(tf, k, &tf->b->prims[k]);
+			pairs += (uint64_t)(r->x1 - r->x0) * (r->y1 - r->y0);
 		}
 	}
+	atomic_fetch_add(&tf->pairs, pairs);
 }
 
 /* Keeps only the state bits `keep` of the tiles of rectangle r. */
@@ -1332,10 +1338,15 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 	}
 	memset(b->state, 0, tf->ntiles * sizeof(*b->state));
 	atomic_store(&tf->next, 0u);
+	atomic_store(&tf->pairs, 0u);
 	if (tf->nprims > 0) {
 		bc_pool_run(tf->threads, phase_prims, tf);
 	}
-	rc = build_cand(tf, 0, tf->th);
+	/* Every tile's room is its candidates and at least 4 more (slack):
+	 * a view surely over the limit is banded without a count. */
+	rc = atomic_load(&tf->pairs) + 4u * (uint64_t)tf->ntiles > tf->limit
+	         ? OVER_LIMIT
+	         : build_cand(tf, 0, tf->th);
 	if (rc && rc != OVER_LIMIT) {
 		return rc;
 	}
@@ -1444,6 +1455,7 @@ static int draw_bands(struct bc__cpu *r, struct tiled_frame *tf,
 	uint32_t t0 = tf->t0, t1 = tf->t1, nb = 0;
 	uint32_t y = t0 / tf->tw, y_end = (t1 + tf->tw - 1) / tf->tw;
 	uint32_t *band;
+	double t_lists = bc_clock_ms();
 	int rc = 0;
 	if (!tf->b->rows_ok && (rc = build_rows(tf))) {
 		return rc;
@@ -1491,7 +1503,9 @@ static int draw_bands(struct bc__cpu *r, struct tiled_frame *tf,
 			                    "render: an A-buffer band over "
 			                    "its count");
 		} else if (rc == 0) {
+			stats->ms_abuffer += bc_clock_ms() - t_lists;
 			rc = draw_tiles(r, tf, stats);
+			t_lists = bc_clock_ms();
 		}
 	}
 	tf->t0 = t0;
