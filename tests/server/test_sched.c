@@ -122,8 +122,15 @@ static int64_t frame_reaching(struct conn *c, uint64_t order, int timeout_ms)
 	return -1;
 }
 
+/* How long an edit's answer and its frame may take before edit_frames
+ * gives up: far above any fair share, since a wait that ends early fails
+ * a test whatever the times say (a loaded 2-core machine drawing three
+ * llvmpipe sessions once took over 30 s for one edit's frame). */
+#define EDIT_WAIT_MS 120000
+
 /* Moves node 2 of c's session n times, each time waiting for the frame
  * that shows it: the edit -> frame times into ms. Returns how many came. */
+
 static int edit_frames(struct conn *c, int n, int64_t *ms)
 {
 	int got = 0;
@@ -132,14 +139,15 @@ static int edit_frames(struct conn *c, int n, int64_t *ms)
 		uint32_t seq = conn_move(c, 2, (i % 2) ? 0.05f : -0.05f, 0.5f,
 		                         0.0f, false);
 		uint64_t order = 0;
-		while (seq && conn_recv(c, 30000) == 1) {
+		while (seq && conn_recv(c, EDIT_WAIT_MS) == 1) {
 			if (c->m.type == BC_MSG_EDIT_APPLIED &&
 			    c->m.edit_applied.author_seq == seq) {
 				order = c->m.edit_applied.order;
 				break;
 			}
 		}
-		if (!order || (t1 = frame_reaching(c, order, 30000)) < 0) {
+		if (!order ||
+		    (t1 = frame_reaching(c, order, EDIT_WAIT_MS)) < 0) {
 			break;
 		}
 		ms[got++] = t1 - t0;
