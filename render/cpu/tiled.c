@@ -1742,7 +1742,10 @@ static size_t tiled_kept_bytes(const struct bc_renderer *base)
 	}
 	n = sizeof(*b) + b->dirs_cap * sizeof(*b->dirs) +
 	    b->prims_cap * sizeof(*b->prims) + b->cand_cap * sizeof(*b->cand) +
-	    b->frags_cap * sizeof(*b->frags);
+	    b->frags_cap * sizeof(*b->frags) +
+	    b->row_off_cap * sizeof(*b->row_off) +
+	    b->row_prims_cap * sizeof(*b->row_prims) +
+	    b->scratch_cap * sizeof(*b->scratch);
 	if (b->tiles_cap) {
 		n += b->tiles_cap * (sizeof(*b->state) + sizeof(*b->list_n) +
 		                     sizeof(*b->cur) + sizeof(*b->zq) +
