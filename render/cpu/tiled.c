@@ -550,13 +550,27 @@ static int build_rows(struct tiled_frame *tf)
 	return 0;
 }
 
+/* A banded view's rows [y0, y1) are sorted out from the row index when
+ * they are fewer than 1 / ROWS_SHARE of the view's (a daemon's slice of a
+ * few tiles), else from a pass over every primitive: that one reads the
+ * primitives in order, the index's entries of one row lie all over them
+ * (at 4K of a million spheres the index made a whole frame's lists 25 %
+ * slower). */
+#define ROWS_SHARE 4u
+
+static bool by_rows(const struct tiled_frame *tf, uint32_t y0, uint32_t y1)
+{
+	return tf->b->banded && tf->b->rows_ok &&
+	       (uint64_t)(y1 - y0) * ROWS_SHARE < tf->th;
+}
+
 /* Counts in b->cur the candidates of each tile of rows [y0, y1): from
- * the rows' primitives in a banded view, else from every primitive's
- * rectangle (then 0 for the other tiles). */
+ * the rows' primitives (by_rows), else from every primitive's rectangle
+ * (then 0 for the other tiles). */
 static void count_cand(struct tiled_frame *tf, uint32_t y0, uint32_t y1)
 {
 	struct bc__tiled_bufs *b = tf->b;
-	if (b->banded && b->rows_ok) {
+	if (by_rows(tf, y0, y1)) {
 		memset(b->cur + (size_t)y0 * tf->tw, 0,
 		       (size_t)(y1 - y0) * tf->tw * sizeof(*b->cur));
 		for (uint32_t y = y0; y < y1; y++) {
@@ -605,16 +619,17 @@ static uint64_t row_room(const struct tiled_frame *tf, uint32_t y)
  * places, through a second array as big as the lists, 124 MB at a
  * million spheres, that stayed: after an edit only the tiles it damaged
  * are drawn again, and their lists are dropped anyway.) A build of every
- * row lays out every tile; a band's (b->banded) only the band's, whose
- * rows' primitives it takes from the row index, and the other tiles'
- * candidates and lists are left as they are, stale: only the band is
- * drawn from them. Returns 0, OVER_LIMIT when the rows' lists would pass
- * tf->limit fragments (nothing is built then), or BC_ENOMEM. */
+ * row lays out every tile; a band's (b->banded) only the band's (its
+ * rows' primitives from the row index when by_rows says so), and the
+ * other tiles' candidates and lists are left as they are, stale: only
+ * the band is drawn from them. Returns 0, OVER_LIMIT when the rows'
+ * lists would pass tf->limit fragments (nothing is built then), or
+ * BC_ENOMEM. */
 static int build_cand(struct tiled_frame *tf, uint32_t y0, uint32_t y1)
 {
 	struct bc__tiled_bufs *b = tf->b;
 	uint32_t *off = b->off_alt;
-	bool band = b->banded && b->rows_ok;
+	bool band = b->banded;
 	uint32_t t0 = band ? y0 * tf->tw : 0;
 	uint32_t t1 = band ? y1 * tf->tw : tf->ntiles;
 	uint64_t sum = 0;
@@ -636,7 +651,7 @@ static int build_cand(struct tiled_frame *tf, uint32_t y0, uint32_t y1)
 	if (grow((void **)&b->cand, &b->cand_cap, room, sizeof(*b->cand))) {
 		return BC_ENOMEM;
 	}
-	if (band) {
+	if (by_rows(tf, y0, y1)) {
 		for (uint32_t y = y0; y < y1; y++) {
 			uint32_t *row = b->cur + (size_t)y * tf->tw;
 			for (uint32_t i = b->row_off[y]; i < b->row_off[y + 1];
@@ -1457,7 +1472,8 @@ static int draw_bands(struct bc__cpu *r, struct tiled_frame *tf,
 	uint32_t *band;
 	double t_lists = bc_clock_ms();
 	int rc = 0;
-	if (!tf->b->rows_ok && (rc = build_rows(tf))) {
+	if (!tf->b->rows_ok && (uint64_t)(y_end - y) * ROWS_SHARE < tf->th &&
+	    (rc = build_rows(tf))) {
 		return rc;
 	}
 	if (!(band = bc_malloc(2 * (size_t)tf->th * sizeof(*band)))) {
