@@ -119,6 +119,10 @@ struct bc__tiled_bufs {
 	 * few tiles in a million-sphere view). rows_ok false: not made for
 	 * the primitives' rectangles as they are. */
 	bool rows_ok;
+	/* The band whose candidates (and lists, TILE_LIST) are built:
+	 * rows [band_y0, band_y1), while band_ok. */
+	bool band_ok;
+	uint32_t band_y0, band_y1;
 	uint32_t *row_off, *row_prims;
 	size_t row_off_cap, row_prims_cap;
 	/* Primitives whose ABVs changed since the lists were made (sync). */
@@ -1326,7 +1330,7 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 			/* It stays banded until the view changes: trying
 			 * every row's lists again would cost a pass over
 			 * every pair at each edit of a drag. */
-			b->rows_ok = false;
+			b->rows_ok = b->band_ok = false;
 			return OVER_LIMIT;
 		}
 		b->view_ok = false;
@@ -1343,7 +1347,7 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 		return rc;
 	}
 	b->view_ok = false;
-	b->banded = b->rows_ok = false;
+	b->banded = b->rows_ok = b->band_ok = false;
 	b->dirty_lo = b->dirty_hi = 0;
 	if (grow((void **)&b->dirs, &b->dirs_cap, 3 * npix, sizeof(float)) ||
 	    grow_tiles(b, tf->ntiles) ||
@@ -1458,30 +1462,48 @@ static bool row_asked(const struct tiled_frame *tf, uint32_t y)
 	return false;
 }
 
+/* Rows a band made for a region of fewer rows takes at least, while the
+ * limit allows: the daemon draws a view in slices of tiles in row order
+ * (a few dozen tiles of a 480-tile row at 3840 pixels), and the slices
+ * after the one that made it find their rows' candidates and lists
+ * built (b->band_*). Made for one slice's rows only, the lists of each
+ * row were sorted out again for every slice of it. */
+#define BAND_MIN_ROWS 8u
+
 /* Draws the region of a view whose lists would pass the A-buffer's
  * limit all at once: in bands of whole tile rows, each band's lists
  * within the limit, built, drawn and dropped in turn (the pixels are
  * those of one pass: a tile's list is the same whichever band builds
- * it). Rows the region does not touch are not built. A row whose lists
- * alone pass the limit cannot be drawn: BC_ELIMIT. */
+ * it), except the last band's, kept for the next call. Rows the region
+ * does not touch are not built. A row whose lists alone pass the limit
+ * cannot be drawn: BC_ELIMIT. */
 static int draw_bands(struct bc__cpu *r, struct tiled_frame *tf,
                       struct bc_render_stats *stats, struct bc_errinfo *ei)
 {
+	struct bc__tiled_bufs *b = tf->b;
 	uint32_t t0 = tf->t0, t1 = tf->t1, nb = 0;
 	uint32_t y = t0 / tf->tw, y_end = (t1 + tf->tw - 1) / tf->tw;
+	uint32_t y_more = y + BAND_MIN_ROWS;
 	uint32_t *band;
 	double t_lists = bc_clock_ms();
 	int rc = 0;
-	if (!tf->b->rows_ok && (uint64_t)(y_end - y) * ROWS_SHARE < tf->th &&
+	if (b->band_ok && y >= b->band_y0 && y_end <= b->band_y1) {
+		/* An earlier call built these rows: their lists are kept
+		 * too. */
+		stats->bands = 1;
+		return draw_tiles(r, tf, stats);
+	}
+	y_more = y_more < y_end ? y_end : y_more < tf->th ? y_more : tf->th;
+	if (!b->rows_ok && (uint64_t)(y_more - y) * ROWS_SHARE < tf->th &&
 	    (rc = build_rows(tf))) {
 		return rc;
 	}
 	if (!(band = bc_malloc(2 * (size_t)tf->th * sizeof(*band)))) {
 		return BC_ENOMEM;
 	}
-	/* The bands, from one count of the region's rows: each as many rows
-	 * as fit. */
-	count_cand(tf, y, y_end);
+	/* The bands, from one count of the region's rows (and of those the
+	 * last band may take): each as many rows as fit. */
+	count_cand(tf, y, y_more);
 	while (y < y_end) {
 		uint32_t y1 = y;
 		uint64_t sum = 0;
@@ -1503,6 +1525,11 @@ static int draw_bands(struct bc__cpu *r, struct tiled_frame *tf,
 			    y, (unsigned long long)row_room(tf, y), tf->limit);
 			goto out;
 		}
+		while (y1 == y_end && y1 < y_more &&
+		       sum + row_room(tf, y1) <= tf->limit) {
+			sum += row_room(tf, y1++);
+			y_end = y1; /* the last band, for the next calls */
+		}
 		band[2 * nb] = y;
 		band[2 * nb + 1] = y1;
 		nb++;
@@ -1512,6 +1539,7 @@ static int draw_bands(struct bc__cpu *r, struct tiled_frame *tf,
 		uint32_t a = band[2 * i] * tf->tw, z = band[2 * i + 1] * tf->tw;
 		tf->t0 = a > t0 ? a : t0;
 		tf->t1 = z < t1 ? z : t1;
+		b->band_ok = false;
 		rc = build_cand(tf, band[2 * i], band[2 * i + 1]);
 		if (rc == OVER_LIMIT) {
 			/* The count above fitted these rows: unreachable. */
@@ -1519,8 +1547,11 @@ static int draw_bands(struct bc__cpu *r, struct tiled_frame *tf,
 			                    "render: an A-buffer band over "
 			                    "its count");
 		} else if (rc == 0) {
+			b->band_ok = true;
+			b->band_y0 = band[2 * i];
+			b->band_y1 = band[2 * i + 1];
 			stats->ms_abuffer += bc_clock_ms() - t_lists;
-			rc = draw_tiles(r, tf, stats);
+			rc = tf->t0 < tf->t1 ? draw_tiles(r, tf, stats) : 0;
 			t_lists = bc_clock_ms();
 		}
 	}
@@ -1647,8 +1678,9 @@ static int follow_splice(struct bc__tiled_bufs *b,
 		return BC_ENOMEM;
 	}
 	if (b->banded) {
-		/* No lists are kept: the rows are sorted again. */
-		b->rows_ok = false;
+		/* Only a band's lists are kept: dropped, and the rows
+		 * sorted again. */
+		b->rows_ok = b->band_ok = false;
 	} else if (hi == n) {
 		for (uint32_t k = lo; k < hi; k++) {
 			const struct rect *r = &b->prims[k].rect;

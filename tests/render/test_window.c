@@ -437,6 +437,36 @@ static uint32_t diff_tile_range(const struct bc_frame *f,
 	return bad;
 }
 
+/* Draws tiles [a, z) of the view into f, then the NEXT_TILES after them
+ * (the daemon's next slice, in the row the first call's band ended
+ * with: drawn from the lists that call kept), and returns the pixels
+ * that differ from whole in [a, z + NEXT_TILES) or from the sentinel
+ * elsewhere. */
+#define NEXT_TILES 5u
+
+static uint32_t draw_ranges(struct bc_renderer *r, const struct bc_camera *cam,
+                            struct bc_frame *f, const struct bc_frame *whole,
+                            uint32_t a, uint32_t z)
+{
+	struct bc_errinfo ei = {0};
+	struct bc_render_stats st;
+	uint32_t bad = 0;
+	fill_sentinel(f);
+	f->key = 0;
+	for (int i = 0; i < 2; i++) {
+		struct bc_render_region rg = {.tile_first = i ? z : a,
+		                              .tile_count =
+		                                  i ? NEXT_TILES : z - a,
+		                              .adopt_key = true};
+		if (bc_renderer_render_region(r, cam, f, &rg, &st, &ei) != 0) {
+			fprintf(stderr, "  range: %s\n", ei.msg);
+			return UINT32_MAX;
+		}
+		bad += st.whole;
+	}
+	return bad + diff_tile_range(f, whole, a, z + NEXT_TILES);
+}
+
 /* Moves the scene's k-th primitive by a fraction of the scene's size. */
 static int move_prim(struct bc_tree *t, uint32_t k, float by)
 {
@@ -517,25 +547,18 @@ static void test_abuffer_bands_equal_one_pass(void)
 		}
 		CHECK_EQ_INT(rays, (uint64_t)FULL_W * FULL_H);
 		CHECK_EQ_INT(diff_crop(&f, &g, "bands, refined"), 0);
-		/* A range of tiles starting and ending inside a row. */
-		fill_sentinel(&f);
-		f.key = 0;
-		CHECK(bc_renderer_render_region(
-		          r, &cam, &f,
-		          &(struct bc_render_region){.tile_first = a,
-		                                     .tile_count = z - a,
-		                                     .adopt_key = true},
-		          &st, &ei) == 0);
-		CHECK(!st.whole);
-		CHECK_EQ_INT(diff_tile_range(&f, &g, a, z), 0);
+		/* Ranges of tiles starting and ending inside a row. */
+		CHECK_EQ_INT(draw_ranges(r, &cam, &f, &g, a, z), 0);
 		/* Parameter edits (the kept rectangles follow the dirty
-		 * primitives), then a structural one (a splice). */
+		 * primitives), then a structural one alone (a splice that
+		 * leaves no dirty primitive). */
 		for (uint32_t i = 0; i < 9; i++) {
 			struct bc_dirty dirty;
 			char what[48];
-			REQUIRE(move_prim(t, 5 * i + (uint32_t)s,
-			                  i % 2 ? 0.03f : -0.05f) == 0);
-			if (i == 8) {
+			if (i < 8) {
+				REQUIRE(move_prim(t, 5 * i + (uint32_t)s,
+				                  i % 2 ? 0.12f : -0.15f) == 0);
+			} else {
 				const struct bc_lin *l = bc_tree_lin(t);
 				REQUIRE(bc_tree_remove(
 				            t, l->node_id[l->prim_slot[3]],
@@ -546,10 +569,15 @@ static void test_abuffer_bands_equal_one_pass(void)
 			REQUIRE(bc_renderer_sync(ref, t, NULL, &ei) == 0);
 			REQUIRE(bc_renderer_render(ref, &cam, &g, NULL, &ei) ==
 			        0);
+			/* Ranges first: the band the ranges kept before the
+			 * edit must not be drawn from. */
+			CHECK_EQ_INT(draw_ranges(r, &cam, &f, &g, a, z), 0);
 			REQUIRE(bc_renderer_render(r, &cam, &f, &st, &ei) == 0);
 			CHECK(st.bands >= 2);
 			snprintf(what, sizeof(what), "bands, edit %u", i);
 			CHECK_EQ_INT(diff_crop(&f, &g, what), 0);
+			/* The ranges' band is kept for the next edit. */
+			CHECK_EQ_INT(draw_ranges(r, &cam, &f, &g, a, z), 0);
 		}
 		bc_renderer_destroy(r);
 		bc_renderer_destroy(ref);
