@@ -110,7 +110,7 @@ struct bc__tiled_bufs {
 	float min_step, pix_angle;
 	/* The view's lists passed the A-buffer's limit: its primitives'
 	 * rectangles are kept, its lists built a band of tile rows at a time
-	 * in every frame (draw_bands) and never kept. */
+	 * (draw_bands), only the last band's kept for the next call. */
 	bool banded;
 	/* A banded view's primitives by tile row: those whose rectangle
 	 * holds row y, increasing, at row_prims[row_off[y] .. row_off[y +
@@ -568,40 +568,62 @@ static bool by_rows(const struct tiled_frame *tf, uint32_t y0, uint32_t y1)
 	       (uint64_t)(y1 - y0) * ROWS_SHARE < tf->th;
 }
 
-/* Counts in b->cur the candidates of each tile of rows [y0, y1): from
- * the rows' primitives (by_rows), else from every primitive's rectangle
- * (then 0 for the other tiles). */
-static void count_cand(struct tiled_frame *tf, uint32_t y0, uint32_t y1)
+/* Primitive k's tiles in one row (row: that row's cursors in b->cur,
+ * r its rectangle): counted, or, with cand, k written at each tile's
+ * cursor. */
+static inline void row_visit(uint32_t *row, const struct rect *r, uint32_t k,
+                             uint32_t *cand)
+{
+	for (uint32_t tx = r->x0; tx < r->x1; tx++) {
+		if (cand) {
+			cand[row[tx]++] = k;
+		} else {
+			row[tx]++;
+		}
+	}
+}
+
+/* Every primitive-tile pair of rows [y0, y1) through row_visit, in
+ * increasing primitive order per tile: from the rows' primitives
+ * (by_rows), else from a pass over every primitive's rectangle. */
+static void visit_rows(struct tiled_frame *tf, uint32_t y0, uint32_t y1,
+                       uint32_t *cand)
 {
 	struct bc__tiled_bufs *b = tf->b;
 	if (by_rows(tf, y0, y1)) {
-		memset(b->cur + (size_t)y0 * tf->tw, 0,
-		       (size_t)(y1 - y0) * tf->tw * sizeof(*b->cur));
 		for (uint32_t y = y0; y < y1; y++) {
 			uint32_t *row = b->cur + (size_t)y * tf->tw;
 			for (uint32_t i = b->row_off[y]; i < b->row_off[y + 1];
 			     i++) {
-				const struct rect *r =
-				    &b->prims[b->row_prims[i]].rect;
-				for (uint32_t tx = r->x0; tx < r->x1; tx++) {
-					row[tx]++;
-				}
+				uint32_t k = b->row_prims[i];
+				row_visit(row, &b->prims[k].rect, k, cand);
 			}
 		}
 		return;
 	}
-	memset(b->cur, 0, tf->ntiles * sizeof(*b->cur));
 	for (uint32_t k = 0; k < tf->nprims; k++) {
 		const struct rect *r = &b->prims[k].rect;
 		uint32_t ya = r->y0 > y0 ? r->y0 : y0;
 		uint32_t yb = r->y1 < y1 ? r->y1 : y1;
 		for (uint32_t ty = ya; ty < yb; ty++) {
-			uint32_t *row = b->cur + (size_t)ty * tf->tw;
-			for (uint32_t tx = r->x0; tx < r->x1; tx++) {
-				row[tx]++;
-			}
+			row_visit(b->cur + (size_t)ty * tf->tw, r, k, cand);
 		}
 	}
+}
+
+/* Counts in b->cur the candidates of each tile of rows [y0, y1), 0 for
+ * the other tiles (those of a banded view's other rows: left as they
+ * are). */
+static void count_cand(struct tiled_frame *tf, uint32_t y0, uint32_t y1)
+{
+	struct bc__tiled_bufs *b = tf->b;
+	if (b->banded) {
+		memset(b->cur + (size_t)y0 * tf->tw, 0,
+		       (size_t)(y1 - y0) * tf->tw * sizeof(*b->cur));
+	} else {
+		memset(b->cur, 0, tf->ntiles * sizeof(*b->cur));
+	}
+	visit_rows(tf, y0, y1, NULL);
 }
 
 /* The room the candidates counted in b->cur take in tile row y, slack
@@ -655,31 +677,7 @@ static int build_cand(struct tiled_frame *tf, uint32_t y0, uint32_t y1)
 	if (grow((void **)&b->cand, &b->cand_cap, room, sizeof(*b->cand))) {
 		return BC_ENOMEM;
 	}
-	if (by_rows(tf, y0, y1)) {
-		for (uint32_t y = y0; y < y1; y++) {
-			uint32_t *row = b->cur + (size_t)y * tf->tw;
-			for (uint32_t i = b->row_off[y]; i < b->row_off[y + 1];
-			     i++) {
-				uint32_t k = b->row_prims[i];
-				const struct rect *r = &b->prims[k].rect;
-				for (uint32_t tx = r->x0; tx < r->x1; tx++) {
-					b->cand[row[tx]++] = k;
-				}
-			}
-		}
-	} else {
-		for (uint32_t k = 0; k < tf->nprims; k++) {
-			const struct rect *r = &b->prims[k].rect;
-			uint32_t ya = r->y0 > y0 ? r->y0 : y0;
-			uint32_t yb = r->y1 < y1 ? r->y1 : y1;
-			for (uint32_t ty = ya; ty < yb; ty++) {
-				uint32_t *row = b->cur + (size_t)ty * tf->tw;
-				for (uint32_t tx = r->x0; tx < r->x1; tx++) {
-					b->cand[row[tx]++] = k;
-				}
-			}
-		}
-	}
+	visit_rows(tf, y0, y1, b->cand);
 	if (grow((void **)&b->frags, &b->frags_cap, room, sizeof(*b->frags))) {
 		return BC_ENOMEM;
 	}
