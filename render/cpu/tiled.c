@@ -1516,10 +1516,10 @@ static int draw_bands(struct bc__cpu *r, struct tiled_frame *tf,
 		if (y1 == y) {
 			rc = bc_errinfo_set(
 			    ei, BC_ELIMIT,
-			    "render: tile row %u alone holds %llu "
-			    "primitive-tile pairs, over the A-buffer's limit "
-			    "of %u (fewer or smaller primitives, or a "
-			    "smaller frame)",
+			    "render: tile row %u alone needs %llu A-buffer "
+			    "entries (its primitive-tile pairs and room to "
+			    "grow), over the limit of %u (fewer or smaller "
+			    "primitives, or a narrower frame)",
 			    y, (unsigned long long)row_room(tf, y), tf->limit);
 			goto out;
 		}
