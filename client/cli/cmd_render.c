@@ -35,7 +35,7 @@ struct args {
 	int backend_opt, debug, simd, gl_platform, range;
 	const char *out, *depth, *ids;
 	bool stats, quiet;
-	uint32_t bands; /* 0: as many as the frame needs */
+	uint32_t bands; /* windows; 0: one */
 	struct bc_render_opts opts;
 };
 
