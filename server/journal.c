@@ -17,6 +17,7 @@
 
 #include "blobcast/alloc.h"
 #include "blobcast/bytes.h"
+#include "blobcast/io.h"
 #include "blobcast/log.h"
 #include "srv_limits.h"
 #include "store_impl.h"
@@ -365,18 +366,9 @@ static int append_parts(struct bc_store_session *ss, uint64_t order,
 		goto fail;
 	}
 	for (int i = -1; i < n; i++) {
-		const uint8_t *p = i < 0 ? hdr : parts[i];
-		size_t size = i < 0 ? sizeof(hdr) : sizes[i], done = 0;
-		while (done < size) {
-			ssize_t k =
-			    write(ss->journal_fd, p + done, size - done);
-			if (k < 0 && errno == EINTR) {
-				continue;
-			}
-			if (k <= 0) {
-				goto fail;
-			}
-			done += (size_t)k;
+		if (!bc_write_all(ss->journal_fd, i < 0 ? hdr : parts[i],
+		                  i < 0 ? sizeof(hdr) : sizes[i])) {
+			goto fail;
 		}
 	}
 	if (fdatasync(ss->journal_fd) != 0) {
