@@ -611,18 +611,12 @@ static void visit_rows(struct tiled_frame *tf, uint32_t y0, uint32_t y1,
 	}
 }
 
-/* Counts in b->cur the candidates of each tile of rows [y0, y1), 0 for
- * the other tiles (those of a banded view's other rows: left as they
- * are). */
+/* Counts in b->cur the candidates of each tile of rows [y0, y1) (the
+ * other rows' entries are left as they are). */
 static void count_cand(struct tiled_frame *tf, uint32_t y0, uint32_t y1)
 {
-	struct bc__tiled_bufs *b = tf->b;
-	if (b->banded) {
-		memset(b->cur + (size_t)y0 * tf->tw, 0,
-		       (size_t)(y1 - y0) * tf->tw * sizeof(*b->cur));
-	} else {
-		memset(b->cur, 0, tf->ntiles * sizeof(*b->cur));
-	}
+	memset(tf->b->cur + (size_t)y0 * tf->tw, 0,
+	       (size_t)(y1 - y0) * tf->tw * sizeof(*tf->b->cur));
 	visit_rows(tf, y0, y1, NULL);
 }
 
@@ -638,8 +632,9 @@ static uint64_t row_room(const struct tiled_frame *tf, uint32_t y)
 	return sum;
 }
 
-/* Builds the candidates of every tile of rows [y0, y1) (counting sort,
- * primitives increasing) and drops their lists: a tile drawn again
+/* Builds the candidates of every tile of rows [y0, y1) from their counts
+ * in b->cur (count_cand; counting sort, primitives increasing) and drops
+ * their lists: a tile drawn again
  * computes its list from its candidates, the same list. (The lists kept
  * through an edit of many primitives once moved to their tiles' new
  * places, through a second array as big as the lists, 124 MB at a
@@ -655,16 +650,12 @@ static int build_cand(struct tiled_frame *tf, uint32_t y0, uint32_t y1)
 {
 	struct bc__tiled_bufs *b = tf->b;
 	uint32_t *off = b->off_alt;
-	bool band = b->banded;
-	uint32_t t0 = band ? y0 * tf->tw : 0;
-	uint32_t t1 = band ? y1 * tf->tw : tf->ntiles;
+	uint32_t t0 = y0 * tf->tw, t1 = y1 * tf->tw;
 	uint64_t sum = 0;
 	size_t room;
-	count_cand(tf, y0, y1);
 	for (uint32_t t = t0; t < t1; t++) {
-		bool in = t >= y0 * tf->tw && t < y1 * tf->tw;
 		off[t] = (uint32_t)sum;
-		sum += in ? b->cur[t] + slack(b->cur[t]) : 0u;
+		sum += b->cur[t] + slack(b->cur[t]);
 		b->cur[t] = off[t];
 		if (sum > tf->limit) {
 			return OVER_LIMIT;
@@ -1335,6 +1326,7 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 		rc = patch && patch_pays(tf, lo, hi) ? patch_cand(tf, lo, hi)
 		                                     : 1;
 		if (rc == 1) {
+			count_cand(tf, 0, tf->th);
 			rc = build_cand(tf, 0, tf->th);
 		}
 		if (rc && rc != OVER_LIMIT) {
@@ -1361,9 +1353,12 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 	}
 	/* Every tile's room is its candidates and at least 4 more (slack):
 	 * a view surely over the limit is banded without a count. */
-	rc = atomic_load(&tf->pairs) + 4u * (uint64_t)tf->ntiles > tf->limit
-	         ? OVER_LIMIT
-	         : build_cand(tf, 0, tf->th);
+	if (atomic_load(&tf->pairs) + 4u * (uint64_t)tf->ntiles > tf->limit) {
+		rc = OVER_LIMIT;
+	} else {
+		count_cand(tf, 0, tf->th);
+		rc = build_cand(tf, 0, tf->th);
+	}
 	if (rc && rc != OVER_LIMIT) {
 		return rc;
 	}
@@ -1500,7 +1495,9 @@ static int draw_bands(struct bc__cpu *r, struct tiled_frame *tf,
 		return BC_ENOMEM;
 	}
 	/* The bands, from one count of the region's rows (and of those the
-	 * last band may take): each as many rows as fit. */
+	 * last band may take): each as many rows as fit. A band's build
+	 * rewrites the counts of its own rows only, so the count serves
+	 * every band's build. */
 	count_cand(tf, y, y_more);
 	while (y < y_end) {
 		uint32_t y1 = y;
