@@ -562,10 +562,14 @@ static int build_rows(struct tiled_frame *tf)
  * slower). */
 #define ROWS_SHARE 4u
 
+static bool few_rows(const struct tiled_frame *tf, uint32_t y0, uint32_t y1)
+{
+	return (uint64_t)(y1 - y0) * ROWS_SHARE < tf->th;
+}
+
 static bool by_rows(const struct tiled_frame *tf, uint32_t y0, uint32_t y1)
 {
-	return tf->b->banded && tf->b->rows_ok &&
-	       (uint64_t)(y1 - y0) * ROWS_SHARE < tf->th;
+	return tf->b->banded && tf->b->rows_ok && few_rows(tf, y0, y1);
 }
 
 /* Primitive k's tiles in one row (row: that row's cursors in b->cur,
@@ -1487,8 +1491,7 @@ static int draw_bands(struct bc__cpu *r, struct tiled_frame *tf,
 		return draw_tiles(r, tf, stats);
 	}
 	y_more = y_more < y_end ? y_end : y_more < tf->th ? y_more : tf->th;
-	if (!b->rows_ok && (uint64_t)(y_more - y) * ROWS_SHARE < tf->th &&
-	    (rc = build_rows(tf))) {
+	if (!b->rows_ok && few_rows(tf, y, y_more) && (rc = build_rows(tf))) {
 		return rc;
 	}
 	if (!(band = bc_malloc(2 * (size_t)tf->th * sizeof(*band)))) {
