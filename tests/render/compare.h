@@ -11,6 +11,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "blobcast/alloc.h"
 #include "blobcast/render.h"
@@ -21,6 +22,23 @@ struct cmp {
 	double id_frac;   /* pixels hit by both with equal ids */
 	uint32_t both;
 };
+
+/* Pixel i of a and pixel j of b agree bit for bit: rgba, depth (as
+ * bytes, so NaN and infinity patterns count) and id. */
+static inline bool pixel_equal_at(const struct bc_frame *a, size_t i,
+                                  const struct bc_frame *b, size_t j)
+{
+	return memcmp(a->rgba + 4 * i, b->rgba + 4 * j, 4) == 0 &&
+	       memcmp(&a->depth[i], &b->depth[j], sizeof(float)) == 0 &&
+	       a->ids[i] == b->ids[j];
+}
+
+/* Pixel i of a and b agree bit for bit. */
+static inline bool pixel_equal(const struct bc_frame *a,
+                               const struct bc_frame *b, size_t i)
+{
+	return pixel_equal_at(a, i, b, i);
+}
 
 static inline int cmp_float(const void *a, const void *b)
 {

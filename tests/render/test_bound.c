@@ -37,6 +37,8 @@
 #include "scenes.h"
 #include "test.h"
 
+#include "compare.h"
+
 /* The heavy scenes' frame and bound. */
 #define HEAVY_W 64u
 #define HEAVY_H 64u
@@ -103,14 +105,6 @@ static int sentinel_planes(const struct bc_frame *f, size_t i)
 	memcpy(&bits, &f->depth[i], sizeof(bits));
 	return (memcmp(f->rgba + 4 * i, rgba, 4) == 0) +
 	       (bits == sentinel_nan) + (f->ids[i] == sentinel_id);
-}
-
-static bool pixel_equal(const struct bc_frame *a, const struct bc_frame *b,
-                        size_t i)
-{
-	return memcmp(a->rgba + 4 * i, b->rgba + 4 * i, 4) == 0 &&
-	       memcmp(&a->depth[i], &b->depth[i], sizeof(float)) == 0 &&
-	       a->ids[i] == b->ids[i];
 }
 
 /* Pixels of got that differ from want; the first one is reported. */

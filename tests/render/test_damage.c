@@ -43,6 +43,7 @@
 #include "test.h"
 
 #include "blobtree/randtree.h"
+#include "compare.h"
 #include "group.h"
 
 /* ---- Small helpers ------------------------------------------------------ */
@@ -149,14 +150,6 @@ static void fill_sentinel(struct bc_frame *f)
 		f->depth[i] = nan;
 		f->ids[i] = 0xdeadbeefu;
 	}
-}
-
-static bool pixel_equal(const struct bc_frame *a, const struct bc_frame *b,
-                        size_t i)
-{
-	return memcmp(a->rgba + 4 * i, b->rgba + 4 * i, 4) == 0 &&
-	       memcmp(&a->depth[i], &b->depth[i], sizeof(float)) == 0 &&
-	       a->ids[i] == b->ids[i];
 }
 
 static void print_pixel(const char *what, const struct bc_frame *f, size_t i)
@@ -539,12 +532,6 @@ struct tally {
 /* Damaged fractions of single-primitive edits of fig18 on tiled. */
 static float fig18_frac[1u << 16];
 static uint32_t fig18_nfrac;
-
-static int cmp_float(const void *a, const void *b)
-{
-	float x = *(const float *)a, y = *(const float *)b;
-	return (x > y) - (x < y);
-}
 
 /* One scene on one backend: n random edits, each drawn as damage into F
  * and compared with a whole render G. */

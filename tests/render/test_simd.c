@@ -200,15 +200,6 @@ static void test_simd_matches_scalar_over_m_overlap(void)
 	bc_tree_destroy(t);
 }
 
-/* Pixel i of a and b agree bit for bit (rgba, depth, id). */
-static bool pixel_equal(const struct bc_frame *a, const struct bc_frame *b,
-                        size_t i)
-{
-	return memcmp(a->rgba + 4 * i, b->rgba + 4 * i, 4) == 0 &&
-	       memcmp(&a->depth[i], &b->depth[i], sizeof(float)) == 0 &&
-	       a->ids[i] == b->ids[i];
-}
-
 static size_t frames_differ(const struct bc_frame *a, const struct bc_frame *b)
 {
 	size_t n = (size_t)a->width * a->height, bad = 0;

@@ -27,6 +27,7 @@
 #include <time.h>
 
 #include "blobcast/render.h"
+#include "compare.h"
 #include "scenes.h"
 #include "test.h"
 
@@ -128,11 +129,7 @@ static uint32_t diff_crop(const struct bc_frame *f,
 			size_t i = (size_t)y * f->width + x;
 			size_t j = (size_t)(f->win_y + y) * whole->width +
 			           f->win_x + x;
-			if (memcmp(f->rgba + 4 * i, whole->rgba + 4 * j, 4) ==
-			        0 &&
-			    memcmp(&f->depth[i], &whole->depth[j],
-			           sizeof(float)) == 0 &&
-			    f->ids[i] == whole->ids[j]) {
+			if (pixel_equal_at(f, i, whole, j)) {
 				continue;
 			}
 			if (bad++ < 4) {
@@ -415,23 +412,20 @@ static uint32_t diff_tile_range(const struct bc_frame *f,
                                 const struct bc_frame *whole, uint32_t a,
                                 uint32_t z)
 {
+	static const uint8_t sentinel_rgba[4] = {0x5a, 0x5a, 0x5a, 0x5a};
 	uint32_t bad = 0, tw = bc_render_tiles_x(f->width);
 	for (uint32_t y = 0; y < f->height; y++) {
 		for (uint32_t x = 0; x < f->width; x++) {
 			size_t i = (size_t)y * f->width + x;
 			uint32_t t =
 			    (y / BC_RENDER_TILE) * tw + x / BC_RENDER_TILE;
-			bool in = t >= a && t < z;
-			const struct bc_frame *want = in ? whole : NULL;
-			if (want ? memcmp(f->rgba + 4 * i, want->rgba + 4 * i,
-			                  4) != 0 ||
-			               memcmp(&f->depth[i], &want->depth[i],
-			                      sizeof(float)) != 0 ||
-			               f->ids[i] != want->ids[i]
-			         : f->ids[i] != 0xdeadbeefu ||
-			               f->depth[i] != -1.0f) {
-				bad++;
-			}
+			bool ok = t >= a && t < z
+			              ? pixel_equal(f, whole, i)
+			              : memcmp(f->rgba + 4 * i, sentinel_rgba,
+			                       4) == 0 &&
+			                    f->depth[i] == -1.0f &&
+			                    f->ids[i] == 0xdeadbeefu;
+			bad += !ok;
 		}
 	}
 	return bad;
