@@ -164,8 +164,9 @@ static const struct bc_opt_name range_names[] = {{"ia", BC_RANGE_IA},
 		     .help = "draw the frame in N horizontal bands, each\n"    \
 		             "a window with its own A-buffer (the same\n"      \
 		             "pixels, less memory; 0 = one). The tiled\n"      \
-		             "backend bands a frame whose A-buffer would\n"    \
-		             "pass its limit by itself (default 0)"},          \
+		             "and gl backends band a frame whose A-buffer\n"   \
+		             "would pass its limit by themselves (default\n"   \
+		             "0)"},                                            \
 		    {.name = "stats",                                          \
 		     .kind = BC_OPT_FLAG,                                      \
 		     .dst = &(a)->stats,                                       \
@@ -407,8 +408,8 @@ static int render_bands(struct bc_renderer *r, uint32_t nb,
 }
 
 /* Draws the frame in a->bands windows (0: one). *bands is how many
- * A-buffers it took: the windows, or the tiled backend's own bands of a
- * frame whose lists pass its limit, if more. */
+ * A-buffers it took: the windows, or the backend's own bands (tiled, gl)
+ * of a frame whose lists pass its limit, if more. */
 static int render(const struct args *a, const struct bc_tree *t,
                   const struct bc_camera *cam, struct bc_frame *frame,
                   struct bc_render_stats *stats, uint32_t *bands,

@@ -131,6 +131,14 @@ struct gl_renderer {
 	size_t lists_tiles_size;
 	uint32_t lists_frags, lists_max;
 	uint32_t lists_builds, lists_reused;
+	/* The last view whose lists passed the A-buffer's limit, drawn in
+	 * bands (draw_bands): its frame constants without capacity or
+	 * region, and the most fragments a call of it needed (0: none). A
+	 * whole frame of it goes to bands without first drawing every
+	 * tile's lists to count them. A sync that uploads the whole tree
+	 * forgets it. */
+	struct bc__gl_frame_ubo band_u;
+	uint32_t band_need;
 };
 
 /* The gl renderer behind the front's base (NULL stays NULL). */
@@ -534,6 +542,7 @@ static int gl_sync(struct bc_renderer *base, const struct bc_tree *t,
 	} else if (!dirty || dirty->structure || !r->synced || t != r->tree ||
 	           l->count != r->count || l->nprims != r->nprims ||
 	           l->nparam != r->nparam) {
+		r->band_need = 0;
 		rc = upload_all(r, l);
 	} else if (dirty->edits) {
 		rc = upload_dirty(r, l, dirty);
@@ -664,12 +673,16 @@ static void frag_buffers(struct gl_renderer *r, uint32_t cap, uint32_t slots)
 	r->slots = slots;
 }
 
-/* Largest fragment capacity: the limit, and the driver's storage block
- * size for the largest per-fragment buffer. */
+/* Largest fragment capacity: the limit (opts.abuffer_limit may lower
+ * it), and the driver's storage block size for the largest per-fragment
+ * buffer. */
 static uint32_t frag_limit(struct gl_renderer *r)
 {
 	GLint64 block = 0;
 	uint64_t most = BC_GL_MAX_FRAGMENTS;
+	if (r->base.opts.abuffer_limit && r->base.opts.abuffer_limit < most) {
+		most = r->base.opts.abuffer_limit;
+	}
 	r->ctx.gl.GetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &block);
 	if (block > 0) {
 		/* The scratch block also holds the suspension slots. */
@@ -1166,102 +1179,71 @@ static double query_ms(struct gl_renderer *r, int a, int b)
 	return tb > ta ? (double)(tb - ta) * 1e-6 : 0.0;
 }
 
-/* Draws region's pixels of the synced tree (see the file comment). The
- * front checked the frame, the camera and the level, and zeroed stats. */
-static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
-                     struct bc_frame *out,
+/* Draws plan's tiles of region into out: the A-buffer built for every tile
+ * and kept, taken from an earlier call of the view, or built for the
+ * plan's tiles alone (a region of a few tiles; always for a band, whose
+ * buffers the next band reuses). Adds to stats and to the context's
+ * counters of the frame. When the plan's lists pass the A-buffer's limit
+ * nothing is copied into out, *need is set to the fragments they need
+ * (0 otherwise) and 0 is returned. Returns 0 or an error. */
+static int draw_plan(struct gl_renderer *r, const struct bc_camera *cam,
                      const struct bc_render_region *region,
-                     struct bc_render_stats *stats, struct bc_errinfo *ei)
+                     const struct plan *plan, bool band, double t_start,
+                     struct bc_frame *out, struct bc_render_stats *stats,
+                     uint32_t *need, struct bc_errinfo *ei)
 {
-	struct gl_renderer *r = gl_of(base);
-	GladGLContext *gl;
+	GladGLContext *gl = &r->ctx.gl;
+	const struct bc_lin *l = bc_tree_lin(r->tree);
 	struct bc__gl_frame_ubo u;
-	struct plan plan;
-	const struct bc_lin *l;
-	double t_start = bc_clock_ms();
-	uint32_t w, h, nprims, stat[BC_GL_STAT_WORDS], limit, ntiles;
-	size_t npix, short_bytes;
+	uint32_t w = out->width, h = out->height;
+	uint32_t ntiles = bc_render_tiles_x(w) * bc_render_tiles_y(h);
+	uint32_t nprims = l ? r->nprims : 0, stat[BC_GL_STAT_WORDS], limit;
+	uint32_t retries = 0;
+	size_t npix = (size_t)w * h;
+	/* A bounded frame reads back which rays ran out. */
+	size_t short_bytes =
+	    region->max_evals ? (size_t)ntiles * BC_GL_SHORT_WORDS * 4 : 0;
 	enum lists_use use;
 	int rc;
-	if (!r->tree || !r->synced) {
-		return bc_errinfo_set(ei, BC_ESTATE,
-		                      "render: no tree synced yet");
-	}
-	w = out->width;
-	h = out->height;
-	npix = (size_t)w * h;
-	ntiles = bc_render_tiles_x(w) * bc_render_tiles_y(h);
-	/* A bounded frame reads back which rays ran out. */
-	short_bytes =
-	    region->max_evals ? (size_t)ntiles * BC_GL_SHORT_WORDS * 4 : 0;
-	if (plan_region(r, region, w, h, &plan)) {
-		return bc_errinfo_set(ei, BC_ENOMEM,
-		                      "gl: out of memory for a region");
-	}
-	if (plan.tiles == 0) {
-		return 0; /* no pixel asked: nothing to draw */
-	}
-	if ((rc = enter(r, ei))) {
-		return rc;
-	}
-	gl = &r->ctx.gl;
-	l = bc_tree_lin(r->tree);
-	nprims = l ? r->nprims : 0;
-	frame_buffers(r, w, h);
-	upload_region(r, &plan, w, h);
-	if (r->want_cap) {
-		limit = frag_limit(r);
-		frag_buffers(r, r->want_cap < limit ? r->want_cap : limit,
-		             r->slots);
-		r->want_cap = 0;
-	} else if (r->frag_cap == 0) {
-		uint32_t want = 4 * ((w + 7) / 8) * ((h + 7) / 8) + 4 * nprims;
-		frag_buffers(
-		    r, want > BC_GL_MIN_FRAGMENTS ? want : BC_GL_MIN_FRAGMENTS,
-		    r->slots);
-	}
-	if (r->budget && r->slots == 0) {
-		uint32_t tiles = ((w + 7) / 8) * ((h + 7) / 8);
-		frag_buffers(r, r->frag_cap,
-		             tiles < BC_GL_MIN_SLOTS ? tiles : BC_GL_MIN_SLOTS);
-	}
-	r->ctx.info.retries = 0;
+	*need = 0;
+	upload_region(r, plan, w, h);
 	for (;;) {
 		uint32_t dispatches = 0, tiles;
 		bool fits, incomplete = false;
 		void *map;
-		frame_setup(&u, l, cam, out, base->opts.debug, nprims,
+		frame_setup(&u, l, cam, out, r->base.opts.debug, nprims,
 		            r->frag_cap, r->slots, r->budget);
-		u.region[0] = plan.level;
-		u.region[1] = plan.refine ? 1u : 0u;
-		u.region[2] = plan.nlist;
-		u.region[3] = plan.list ? 1u : 0u;
+		u.region[0] = plan->level;
+		u.region[1] = plan->refine ? 1u : 0u;
+		u.region[2] = plan->nlist;
+		u.region[3] = plan->list ? 1u : 0u;
 		u.bound[0] = region->max_evals;
-		u.bound[1] = plan.box[0] | plan.box[1] << 16;
-		u.bound[2] = plan.box[2] | plan.box[3] << 16;
+		u.bound[1] = plan->box[0] | plan->box[1] << 16;
+		u.bound[2] = plan->box[2] | plan->box[3] << 16;
 		tiles = u.size[2] * u.size[3];
 		/* The view's lists, kept from an earlier call, or built: for
 		 * every tile (and kept) unless the region is a few tiles of
-		 * it, such as an edit's damage. */
-		if (r->lists_kept && same_view(&u, &r->lists_u)) {
+		 * it, such as an edit's damage, or a band. */
+		if (!band && r->lists_kept && same_view(&u, &r->lists_u)) {
 			use = LISTS_KEPT;
 			r->lists_reused++;
-		} else if (!plan.list || (uint64_t)plan.nlist * 4 >= ntiles) {
+		} else if (!band && (!plan->list ||
+		                     (uint64_t)plan->nlist * 4 >= ntiles)) {
 			use = LISTS_ALL;
 			r->lists_builds++;
 		} else {
 			use = LISTS_REGION;
 		}
 		r->lists_kept = false;
-		draw(r, &u, &plan, nprims, use);
+		draw(r, &u, plan, nprims, use);
 		if ((rc = bc__gl_check(&r->ctx, "drawing a frame", ei)) ||
-		    (rc = finish_tracing(r, &u, &plan, t_start, &dispatches,
+		    (rc = finish_tracing(r, &u, plan, t_start, &dispatches,
 		                         &incomplete, ei))) {
-			goto done;
+			return rc;
 		}
-		read_back(r, &plan, w, h, short_bytes);
+		read_back(r, plan, w, h, short_bytes);
 		if ((rc = wait_fence(r, ei))) {
-			goto done;
+			return rc;
 		}
 		gl->BindBuffer(GL_PIXEL_PACK_BUFFER, r->pbo);
 		map = gl->MapBufferRange(GL_PIXEL_PACK_BUFFER, 0,
@@ -1272,38 +1254,38 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 		if (!map) {
 			gl->BindBuffer(GL_PIXEL_PACK_BUFFER, 0);
 			rc = bc__gl_check(&r->ctx, "glMapBufferRange", ei);
-			if (!rc) {
-				rc = bc_errinfo_set(ei, BC_EGL,
-				                    "gl: glMapBufferRange "
-				                    "failed");
-			}
-			goto done;
+			return rc ? rc
+			          : bc_errinfo_set(
+			                ei, BC_EGL,
+			                "gl: glMapBufferRange failed");
 		}
 		memcpy(stat, (const char *)map + 12 * npix, sizeof(stat));
 		if (use == LISTS_KEPT) {
 			stat[BC_GL_STAT_FRAGMENTS] = r->lists_frags;
 			stat[BC_GL_STAT_MAX_OVERLAP] = r->lists_max;
 		}
+		limit = frag_limit(r);
 		fits = stat[BC_GL_STAT_FRAGMENTS] <= r->frag_cap &&
+		       stat[BC_GL_STAT_FRAGMENTS] <= limit &&
 		       stat[BC_GL_STAT_NO_SLOT] == 0;
 		if (fits) {
 			const char *shorts =
 			    short_bytes ? (const char *)map + 12 * npix +
 			                      BC_GL_STAT_WORDS * 4
 			                : NULL;
-			copy_region(r, &plan, map, shorts, out);
+			copy_region(r, plan, map, shorts, out);
 			if (shorts) {
-				stats->short_rays =
-				    mark_short(r, &plan, shorts, ntiles,
+				stats->short_rays +=
+				    mark_short(r, plan, shorts, ntiles,
 				               region->short_tiles);
 			}
 		}
 		gl->UnmapBuffer(GL_PIXEL_PACK_BUFFER);
 		gl->BindBuffer(GL_PIXEL_PACK_BUFFER, 0);
-		r->ctx.info.dispatches = dispatches;
+		r->ctx.info.dispatches += dispatches;
 		if (fits) {
-			stats->incomplete = incomplete;
-			if (use != LISTS_REGION) {
+			stats->incomplete = stats->incomplete || incomplete;
+			if (use == LISTS_ALL) {
 				/* pool[3] is set when out of time, which
 				 * is no part of the view. */
 				r->lists_kept = true;
@@ -1311,21 +1293,27 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 				r->lists_u.pool[3] = 0;
 				r->lists_frags = stat[BC_GL_STAT_FRAGMENTS];
 				r->lists_max = stat[BC_GL_STAT_MAX_OVERLAP];
+			} else if (use == LISTS_KEPT) {
+				r->lists_kept = true;
 			}
 			break;
 		}
 		/* Too many fragments or suspended tiles: both counts are
 		 * exact, so a draw with room for them (and some to spare)
-		 * fits. Two retries cover growing both. */
-		limit = frag_limit(r);
-		if (stat[BC_GL_STAT_FRAGMENTS] > limit ||
-		    r->ctx.info.retries >= 2) {
-			rc = bc_errinfo_set(ei, BC_ELIMIT,
-			                    "gl: %u A-buffer fragments exceed "
-			                    "the limit of %u (fewer or smaller "
-			                    "primitives, or a smaller frame)",
-			                    stat[BC_GL_STAT_FRAGMENTS], limit);
-			goto done;
+		 * fits. Two retries cover growing both. Past the limit the
+		 * caller draws in bands. */
+		if (stat[BC_GL_STAT_FRAGMENTS] > limit) {
+			*need = stat[BC_GL_STAT_FRAGMENTS];
+			r->ctx.info.retries += retries;
+			return 0;
+		}
+		if (retries >= 2) {
+			return bc_errinfo_set(
+			    ei, BC_ELIMIT,
+			    "gl: %u A-buffer fragments and %u "
+			    "suspended tiles still do not fit "
+			    "after growing the buffers twice",
+			    stat[BC_GL_STAT_FRAGMENTS], stat[BC_GL_STAT_SLOTS]);
 		}
 		{
 			uint64_t want =
@@ -1342,58 +1330,218 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 			frag_buffers(r, cap,
 			             slots < tiles ? (uint32_t)slots : tiles);
 		}
-		r->ctx.info.retries++;
+		retries++;
 	}
+	r->ctx.info.retries += retries;
 	if (r->budget &&
 	    stat[BC_GL_STAT_MAX_OVERLAP] > BC_GL_LLVMPIPE_SORT_MAX) {
-		rc = bc_errinfo_set(ei, BC_ELIMIT,
-		                    "gl: a tile lists %u primitives, more than "
-		                    "llvmpipe's loop limit lets one shader "
-		                    "sort (%u)",
-		                    stat[BC_GL_STAT_MAX_OVERLAP],
-		                    BC_GL_LLVMPIPE_SORT_MAX);
-		goto done;
+		return bc_errinfo_set(
+		    ei, BC_ELIMIT,
+		    "gl: a tile lists %u primitives, more than "
+		    "llvmpipe's loop limit lets one shader "
+		    "sort (%u)",
+		    stat[BC_GL_STAT_MAX_OVERLAP], BC_GL_LLVMPIPE_SORT_MAX);
 	}
 	if (stat[BC_GL_STAT_OVER_VIEW]) {
-		rc = bc_errinfo_set(ei, BC_ELIMIT,
-		                    "gl: %u depth ranges need more view "
-		                    "instructions (unary nodes) than a tile "
-		                    "holds",
-		                    stat[BC_GL_STAT_OVER_VIEW]);
-		goto done;
+		return bc_errinfo_set(ei, BC_ELIMIT,
+		                      "gl: %u depth ranges need more view "
+		                      "instructions (unary nodes) than a tile "
+		                      "holds",
+		                      stat[BC_GL_STAT_OVER_VIEW]);
 	}
 	if (stat[BC_GL_STAT_OVER_BUDGET]) {
-		rc =
-		    bc_errinfo_set(ei, BC_ELIMIT,
-		                   "gl: %u depth ranges need more loop "
-		                   "iterations than llvmpipe allows one shader "
-		                   "invocation (too many primitives meet at "
-		                   "one depth in one tile)",
-		                   stat[BC_GL_STAT_OVER_BUDGET]);
-		goto done;
+		return bc_errinfo_set(
+		    ei, BC_ELIMIT,
+		    "gl: %u depth ranges need more loop iterations than "
+		    "llvmpipe allows one shader invocation (too many "
+		    "primitives meet at one depth in one tile)",
+		    stat[BC_GL_STAT_OVER_BUDGET]);
 	}
-	r->ctx.info.fragments = stat[BC_GL_STAT_FRAGMENTS];
-	r->ctx.info.suspensions = stat[BC_GL_STAT_SLOTS];
-	r->ctx.info.ranges = stat[BC_GL_STAT_RANGES];
-	r->ctx.info.over_m = stat[BC_GL_STAT_OVER_M];
-	r->ctx.info.over_cache = stat[BC_GL_STAT_OVER_CACHE];
-	r->ctx.info.ranges_general = stat[BC_GL_STAT_GENERAL];
-	if (r->ctx.info.over_m) {
+	r->ctx.info.fragments += stat[BC_GL_STAT_FRAGMENTS];
+	r->ctx.info.suspensions += stat[BC_GL_STAT_SLOTS];
+	r->ctx.info.ranges += stat[BC_GL_STAT_RANGES];
+	r->ctx.info.over_m += stat[BC_GL_STAT_OVER_M];
+	r->ctx.info.over_cache += stat[BC_GL_STAT_OVER_CACHE];
+	r->ctx.info.ranges_general += stat[BC_GL_STAT_GENERAL];
+	if (stat[BC_GL_STAT_OVER_M]) {
 		bc_log(BC_LOG_DEBUG, "gl: %u depth ranges went over M_overlap",
-		       r->ctx.info.over_m);
+		       stat[BC_GL_STAT_OVER_M]);
 	}
-	stats->ms_abuffer = query_ms(r, Q_START, Q_ABUFFER);
-	stats->ms_trace = query_ms(r, Q_ABUFFER, Q_TRACE);
-	stats->ms_upload = r->upload_ms;
-	stats->max_overlap = stat[BC_GL_STAT_MAX_OVERLAP];
-	stats->tiles = plan.tiles;
-	stats->rays = plan.rays;
+	stats->ms_abuffer += query_ms(r, Q_START, Q_ABUFFER);
+	stats->ms_trace += query_ms(r, Q_ABUFFER, Q_TRACE);
+	stats->ms_upload += r->upload_ms;
+	if (stat[BC_GL_STAT_MAX_OVERLAP] > stats->max_overlap) {
+		stats->max_overlap = stat[BC_GL_STAT_MAX_OVERLAP];
+	}
+	stats->tiles += plan->tiles;
+	stats->rays += plan->rays;
 	for (uint32_t i = 0; i < BC_GL_STAT_EVAL_BUCKETS; i++) {
 		stats->field_evals += stat[BC_GL_STAT_EVALS + i];
 	}
 	r->upload_ms = 0.0;
-	rc = bc__gl_check(&r->ctx, "reading a frame back", ei);
-done:
+	return bc__gl_check(&r->ctx, "reading a frame back", ei);
+}
+
+/* Draws whole's tiles (the call's plan) in bands of whole tile rows, each
+ * drawn as a region of its own within the A-buffer's limit: a view whose
+ * lists together pass the limit (need: the fragments they need) is drawn
+ * a band at a time. A tile's list does not depend on the other tiles', so
+ * the pixels are those of one pass. Bands are sized from need's average
+ * over the rows, to fill three quarters of the limit; a band that still
+ * passes it is drawn again in fewer rows (in proportion), a band that
+ * fits lets the next one grow back (doubling), and a single tile row that
+ * passes it is refused. */
+static int draw_bands(struct gl_renderer *r, const struct bc_camera *cam,
+                      const struct bc_render_region *region,
+                      const struct plan *whole, uint32_t need, double t_start,
+                      struct bc_frame *out, struct bc_render_stats *stats,
+                      struct bc_errinfo *ei)
+{
+	uint32_t w = out->width, h = out->height, tw = bc_render_tiles_x(w);
+	uint32_t th = bc_render_tiles_y(h), limit = frag_limit(r);
+	uint32_t y = whole->list ? whole->box[1] : 0;
+	uint32_t y1 = whole->list ? whole->box[3] : th;
+	uint64_t aim =
+	    (uint64_t)limit / 4 * 3 > 0 ? (uint64_t)limit / 4 * 3 : 1;
+	uint64_t base = (uint64_t)(y1 - y) * aim / (need > 0 ? need : 1), per;
+	struct bc_render_region band = *region;
+	uint8_t *mask = bc_malloc((size_t)tw * th);
+	int rc = 0;
+	if (!mask) {
+		return bc_errinfo_set(ei, BC_ENOMEM,
+		                      "gl: out of memory for a band's tiles");
+	}
+	base = base > 0 ? base : 1;
+	per = base;
+	band.tiles = mask;
+	stats->bands = 0;
+	while (y < y1 && rc == 0) {
+		uint32_t n = per < y1 - y ? (uint32_t)per : y1 - y, got = 0;
+		struct plan p;
+		memset(mask, 0, (size_t)tw * th);
+		for (uint32_t i = y * tw; i < (y + n) * tw; i++) {
+			mask[i] = !region->tiles || region->tiles[i];
+		}
+		if (plan_region(r, &band, w, h, &p)) {
+			rc = bc_errinfo_set(ei, BC_ENOMEM,
+			                    "gl: out of memory for a region");
+			break;
+		}
+		if (p.tiles > 0 &&
+		    (rc = draw_plan(r, cam, &band, &p, true, t_start, out,
+		                    stats, &got, ei)) == 0 &&
+		    got > 0) {
+			if (n == 1) {
+				rc = bc_errinfo_set(
+				    ei, BC_ELIMIT,
+				    "gl: tile row %u alone needs %u A-buffer "
+				    "fragments, over the limit of %u (fewer "
+				    "or smaller primitives, or a narrower "
+				    "frame)",
+				    y, got, limit);
+				break;
+			}
+			per = (uint64_t)n * aim / got;
+			per = per < 1 ? 1 : per >= n ? n - 1u : per;
+			continue;
+		}
+		stats->bands += p.tiles > 0;
+		y += n;
+		per = 2 * (uint64_t)n < base ? 2 * (uint64_t)n : base;
+	}
+	bc_free(mask);
+	return rc;
+}
+
+/* Whether the view of cam and out is the one r last had to draw in bands
+ * (r->band_u: its frame constants with no capacity and no region). */
+static bool banded_view(struct gl_renderer *r, const struct bc_camera *cam,
+                        const struct bc_frame *out,
+                        struct bc__gl_frame_ubo *view)
+{
+	const struct bc_lin *l = bc_tree_lin(r->tree);
+	frame_setup(view, l, cam, out, r->base.opts.debug, l ? r->nprims : 0, 0,
+	            0, r->budget);
+	return r->band_need > 0 && same_view(view, &r->band_u);
+}
+
+/* Draws region's pixels of the synced tree (see the file comment). The
+ * front checked the frame, the camera and the level, and zeroed stats. */
+static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
+                     struct bc_frame *out,
+                     const struct bc_render_region *region,
+                     struct bc_render_stats *stats, struct bc_errinfo *ei)
+{
+	struct gl_renderer *r = gl_of(base);
+	struct bc__gl_frame_ubo view;
+	struct plan plan;
+	const struct bc_lin *l;
+	double t_start = bc_clock_ms();
+	uint32_t w, h, nprims, need = 0;
+	bool banded;
+	int rc = 0;
+	if (!r->tree || !r->synced) {
+		return bc_errinfo_set(ei, BC_ESTATE,
+		                      "render: no tree synced yet");
+	}
+	w = out->width;
+	h = out->height;
+	if (plan_region(r, region, w, h, &plan)) {
+		return bc_errinfo_set(ei, BC_ENOMEM,
+		                      "gl: out of memory for a region");
+	}
+	if (plan.tiles == 0) {
+		return 0; /* no pixel asked: nothing to draw */
+	}
+	if ((rc = enter(r, ei))) {
+		return rc;
+	}
+	l = bc_tree_lin(r->tree);
+	nprims = l ? r->nprims : 0;
+	frame_buffers(r, w, h);
+	if (r->want_cap) {
+		uint32_t limit = frag_limit(r);
+		frag_buffers(r, r->want_cap < limit ? r->want_cap : limit,
+		             r->slots);
+		r->want_cap = 0;
+	} else if (r->frag_cap == 0) {
+		uint64_t want = 4 * (uint64_t)((w + 7) / 8) * ((h + 7) / 8) +
+		                4 * (uint64_t)nprims;
+		uint32_t limit = frag_limit(r);
+		want = want > BC_GL_MIN_FRAGMENTS ? want : BC_GL_MIN_FRAGMENTS;
+		frag_buffers(r, want < limit ? (uint32_t)want : limit,
+		             r->slots);
+	}
+	if (r->budget && r->slots == 0) {
+		uint32_t tiles = ((w + 7) / 8) * ((h + 7) / 8);
+		frag_buffers(r, r->frag_cap,
+		             tiles < BC_GL_MIN_SLOTS ? tiles : BC_GL_MIN_SLOTS);
+	}
+	r->ctx.info.fragments = r->ctx.info.suspensions = 0;
+	r->ctx.info.ranges = r->ctx.info.over_m = r->ctx.info.over_cache = 0;
+	r->ctx.info.ranges_general = r->ctx.info.dispatches = 0;
+	r->ctx.info.retries = 0;
+	/* A view known to pass the limit: a whole frame goes to bands at
+	 * once, a region tries its own tiles' lists first. */
+	banded = banded_view(r, cam, out, &view);
+	if (banded && (!plan.list || (uint64_t)plan.nlist * 4 >=
+	                                 (uint64_t)bc_render_tiles_x(w) *
+	                                     bc_render_tiles_y(h))) {
+		need = r->band_need;
+	} else {
+		rc = draw_plan(r, cam, region, &plan, banded, t_start, out,
+		               stats, &need, ei);
+	}
+	if (rc == 0 && need > 0) {
+		if (!banded || need > r->band_need) {
+			r->band_u = view;
+			r->band_need = need;
+		}
+		rc = draw_bands(r, cam, region, &plan, need, t_start, out,
+		                stats, ei);
+	} else if (rc == 0) {
+		stats->bands = 1;
+	}
 	bc__gl_ctx_unbind(&r->ctx);
 	stats->ms_total = bc_clock_ms() - t_start;
 	return rc;

@@ -8,7 +8,8 @@
  * the three platforms draw the same, the debug modes and odd frame sizes
  * mean what they mean on the CPU, and frames assembled from regions
  * (refinement levels, tile masks, damage after random parameter edits)
- * equal whole renders bit for bit.
+ * equal whole renders bit for bit, and so does a view drawn in bands of
+ * tile rows because its lists pass the A-buffer's limit.
  *
  * Sizes stay small: llvmpipe shares two cores with everything else. Every
  * test is skipped (exit 77) only when no GL context can be created at all.
@@ -1210,6 +1211,78 @@ static void test_odd_sizes_and_empty_scene(void)
 	bc_renderer_destroy(r);
 }
 
+/* A view whose lists pass the A-buffer's limit (opts.abuffer_limit raised
+ * from a third of this view's fragments until each tile row fits) is
+ * drawn in bands of tile rows, the pixels of one pass bit for bit. The
+ * next whole frame of the view goes to bands at once: no A-buffer of
+ * every tile is built to count it again. A limit under one tile row's
+ * lists is refused with BC_ELIMIT.
+ * (tests/render/test_window.c compares bands with one pass in regions,
+ * refinement and edits, for tiled and gl alike.) */
+static void test_view_over_the_limit_in_bands(void)
+{
+	static const struct bc_gen_opts fig = {.count = 64,
+	                                       .kind = BC_GEN_KIND_SPHERES};
+	struct bc_renderer *r = open_gl(NULL, BC_DEBUG_NONE), *rb = NULL;
+	struct bc_tree *t = bc_tree_create();
+	struct bc_frame g = {0}, f = {0};
+	struct bc_errinfo ei = {0};
+	struct bc_render_stats st;
+	struct bc_gl_info info;
+	struct bc_camera cam;
+	uint32_t limit, built;
+	if (!r) {
+		bc_tree_destroy(t);
+		BC_SKIP("no GL context");
+	}
+	REQUIRE(t && bc_frame_init(&g, W, H) == 0 &&
+	        bc_frame_init(&f, W, H) == 0);
+	REQUIRE(bc_gen("fig18", &fig, t, &cam, &ei) == 0);
+	REQUIRE(draw(r, t, NULL, &cam, &g) == 0);
+	REQUIRE(bc_render_gl_info(r, &info) == 0);
+	REQUIRE(info.fragments > 30);
+	for (limit = info.fragments / 3;; limit += limit / 4) {
+		struct bc_render_opts o = {.abuffer_limit = limit};
+		REQUIRE(limit < info.fragments);
+		REQUIRE(bc_renderer_create(&rb, BC_BACKEND_GL, &o, &ei) == 0);
+		REQUIRE(bc_renderer_sync(rb, t, NULL, &ei) == 0);
+		if (bc_renderer_render(rb, &cam, &f, &st, &ei) == 0) {
+			break;
+		}
+		CHECK(strstr(ei.msg, "tile row") != NULL);
+		ei = (struct bc_errinfo){0};
+		bc_renderer_destroy(rb);
+	}
+	printf("  %u fragments, limit %u: %u bands\n", info.fragments, limit,
+	       st.bands);
+	CHECK(st.bands >= 3);
+	CHECK(frames_equal(&f, &g));
+	REQUIRE(bc_render_gl_info(rb, &info) == 0);
+	built = info.lists_built;
+	CHECK(info.fragments <= limit * st.bands);
+	memset(f.rgba, 0, 4 * (size_t)W * H);
+	REQUIRE(bc_renderer_render(rb, &cam, &f, &st, &ei) == 0);
+	CHECK(st.bands >= 3);
+	CHECK(frames_equal(&f, &g));
+	REQUIRE(bc_render_gl_info(rb, &info) == 0);
+	CHECK_EQ_INT(info.lists_built, built);
+	bc_renderer_destroy(rb);
+	/* One fragment: no row fits. */
+	{
+		struct bc_render_opts o = {.abuffer_limit = 1};
+		REQUIRE(bc_renderer_create(&rb, BC_BACKEND_GL, &o, &ei) == 0);
+		REQUIRE(bc_renderer_sync(rb, t, NULL, &ei) == 0);
+		CHECK_EQ_INT(bc_renderer_render(rb, &cam, &f, &st, &ei),
+		             BC_ELIMIT);
+		CHECK(strstr(ei.msg, "tile row") != NULL);
+		bc_renderer_destroy(rb);
+	}
+	bc_frame_finish(&g);
+	bc_frame_finish(&f);
+	bc_tree_destroy(t);
+	bc_renderer_destroy(r);
+}
+
 static void test_bad_calls_are_refused(void)
 {
 	struct bc_renderer *r = open_gl(NULL, BC_DEBUG_NONE);
@@ -1268,6 +1341,7 @@ static const struct bc_test tests[] = {
     {"odd_sizes_and_empty_scene", test_odd_sizes_and_empty_scene},
     {"refinement_equals_whole", test_refinement_equals_whole},
     {"damage_regions_equal_whole", test_damage_regions_equal_whole},
+    {"view_over_the_limit_in_bands", test_view_over_the_limit_in_bands},
     {"bad_calls_are_refused", test_bad_calls_are_refused},
 };
 

@@ -15,7 +15,7 @@
  * frame of another window draws the whole frame), and bc_frame_window and
  * the front refuse windows that do not lie inside their view.
  *
- * The tiled backend's own bands (a view whose tile lists pass its
+ * The A-buffer bands of tiled and gl (a view whose tile lists pass the
  * A-buffer's limit is drawn a band of tile rows at a time) draw the
  * pixels of one pass, whole, refined, as a range of tiles and after
  * edits.
@@ -389,17 +389,24 @@ static void test_frame_window_range(void)
 
 /* ---- A-buffer bands ----------------------------------------------------- */
 
-/* A tiled renderer whose A-buffer holds at most `limit` primitive-tile
- * pairs at once, synced to t. */
-static struct bc_renderer *open_limited(enum bc_simd simd, uint32_t limit,
+/* A renderer of s whose A-buffer holds at most `limit` primitive-tile
+ * pairs at once (0: the backend's own limit), synced to t; NULL when it
+ * cannot be made (a sync that fails is a failure). */
+static struct bc_renderer *open_limited(const struct setup *s, uint32_t limit,
                                         const struct bc_tree *t)
 {
-	struct bc_render_opts o = {.simd = simd, .abuffer_limit = limit};
+	struct bc_render_opts o = {.simd = s->simd, .abuffer_limit = limit};
 	struct bc_errinfo ei = {0};
 	struct bc_renderer *r = NULL;
-	if (bc_renderer_create(&r, BC_BACKEND_TILED, &o, &ei) ||
-	    bc_renderer_sync(r, t, NULL, &ei)) {
-		fprintf(stderr, "  tiled, limit %u: %s\n", limit, ei.msg);
+	if (bc_renderer_create(&r, s->backend, &o, &ei)) {
+		fprintf(stderr, "  %s, limit %u: %s\n", s->label, limit,
+		        ei.msg);
+		return NULL;
+	}
+	if (bc_renderer_sync(r, t, NULL, &ei)) {
+		fprintf(stderr, "  %s, limit %u: sync: %s\n", s->label, limit,
+		        ei.msg);
+		bc_test_failures++;
 		bc_renderer_destroy(r);
 		return NULL;
 	}
@@ -447,17 +454,29 @@ static uint32_t draw_ranges(struct bc_renderer *r, const struct bc_camera *cam,
 	uint32_t bad = 0;
 	fill_sentinel(f);
 	f->key = 0;
+	uint8_t *tiles = calloc((size_t)bc_render_tiles_x(f->width) *
+	                            bc_render_tiles_y(f->height),
+	                        1);
+	if (!tiles) {
+		return UINT32_MAX;
+	}
 	for (int i = 0; i < 2; i++) {
-		struct bc_render_region rg = {.tile_first = i ? z : a,
+		/* The range as a mask too: gl draws the tiles of a mask. */
+		struct bc_render_region rg = {.tiles = tiles,
+		                              .tile_first = i ? z : a,
 		                              .tile_count =
 		                                  i ? NEXT_TILES : z - a,
 		                              .adopt_key = true};
+		memset(tiles + a, 0, z - a);
+		memset(tiles + rg.tile_first, 1, rg.tile_count);
 		if (bc_renderer_render_region(r, cam, f, &rg, &st, &ei) != 0) {
 			fprintf(stderr, "  range: %s\n", ei.msg);
+			free(tiles);
 			return UINT32_MAX;
 		}
 		bad += st.whole;
 	}
+	free(tiles);
 	return bad + diff_tile_range(f, whole, a, z + NEXT_TILES);
 }
 
@@ -476,13 +495,16 @@ static int move_prim(struct bc_tree *t, uint32_t k, float by)
 
 /* A view whose tile lists pass the A-buffer's limit is drawn in bands of
  * tile rows (opts.abuffer_limit lowers the limit to this small scene's
- * size): whole, refined, as a range of tiles and after parameter and
- * structural edits synced with their dirty ranges, the pixels equal a
- * renderer's that holds every list at once, bit for bit. A tile row whose
- * lists alone pass the limit is refused with BC_ELIMIT. */
+ * size), in tiled (vector kernels off and on) and in gl where a context
+ * can be made: whole, refined, as a range of tiles and after parameter
+ * and structural edits synced with their dirty ranges, the pixels equal a
+ * renderer's of the same backend that holds every list at once, bit for
+ * bit. A tile row whose lists alone pass the limit is refused with
+ * BC_ELIMIT. */
 static void test_abuffer_bands_equal_one_pass(void)
 {
-	static const enum bc_simd simds[] = {BC_SIMD_OFF, BC_SIMD_AUTO};
+	static const struct setup *const banded[] = {&setups[1], &setups[2],
+	                                             &setups[4]};
 	struct bc_camera cam;
 	struct bc_tree *t = make_scene(&cam);
 	struct bc_frame f = {0}, g = {0};
@@ -495,17 +517,21 @@ static void test_abuffer_bands_equal_one_pass(void)
 	}
 	REQUIRE(bc_frame_init(&f, FULL_W, FULL_H) == 0);
 	REQUIRE(bc_frame_init(&g, FULL_W, FULL_H) == 0);
-	for (size_t s = 0; s < sizeof(simds) / sizeof(simds[0]); s++) {
-		struct bc_renderer *ref = open_limited(simds[s], 0, t), *r;
+	for (size_t s = 0; s < sizeof(banded) / sizeof(banded[0]); s++) {
+		const struct setup *su = banded[s];
+		struct bc_renderer *ref = open_limited(su, 0, t), *r;
 		uint32_t limit = 16, a = 2 * 25 + 3, z = a + 60;
 		uint64_t rays = 0;
+		if (!ref && su->backend == BC_BACKEND_GL) {
+			continue; /* no context here: said above */
+		}
 		REQUIRE(ref);
 		REQUIRE(bc_renderer_render(ref, &cam, &g, &st, &ei) == 0);
 		CHECK_EQ_INT(st.bands, 1);
 		/* The smallest power of two the busiest row fits in. */
 		for (;; limit *= 2) {
 			REQUIRE(limit <= (1u << 20));
-			REQUIRE((r = open_limited(simds[s], limit, t)));
+			REQUIRE((r = open_limited(su, limit, t)));
 			int rc = bc_renderer_render(r, &cam, &f, &st, &ei);
 			if (rc == 0) {
 				break;
@@ -518,15 +544,14 @@ static void test_abuffer_bands_equal_one_pass(void)
 		CHECK(limit > 16);
 		/* With room to spare for the edits below. */
 		bc_renderer_destroy(r);
-		REQUIRE((r = open_limited(simds[s], 2 * limit, t)));
+		REQUIRE((r = open_limited(su, 2 * limit, t)));
 		fill_sentinel(&f);
 		REQUIRE(bc_renderer_render(r, &cam, &f, &st, &ei) == 0);
 		CHECK(st.bands >= 3);
 		CHECK_EQ_INT(st.rays, (uint64_t)FULL_W * FULL_H);
 		CHECK_EQ_INT(diff_crop(&f, &g, "bands, whole"), 0);
-		fprintf(stderr, "  simd %s: limit %u, %u bands\n",
-		        simds[s] == BC_SIMD_OFF ? "off" : "auto", 2 * limit,
-		        st.bands);
+		fprintf(stderr, "  %s: limit %u, %u bands\n", su->label,
+		        2 * limit, st.bands);
 		/* Refined from level 3: each level's call in bands. */
 		fill_sentinel(&f);
 		f.key = 0;

@@ -116,13 +116,15 @@ struct bc_render_opts {
 	 * say incomplete (one pathological scene cannot stall a server). */
 	uint32_t budget_ms;
 	enum bc_simd simd;
-	/* Primitive-tile pairs the tiled backend's A-buffer lists may hold
-	 * at once; 0, or any value over 2^24: 2^24 (BC_CPU_MAX_FRAGMENTS). A
-	 * view whose lists would hold more is drawn in bands of whole tile
-	 * rows, each within the limit (the same pixels, bit for bit); the
-	 * limit bounds the lists' memory (12 bytes a pair, with room to
-	 * grow), and lowering it trades speed for memory: a banded view keeps
-	 * no lists between frames. */
+	/* Primitive-tile pairs the A-buffer lists of tiled and gl may hold
+	 * at once; 0, or any value over 2^24: 2^24 (BC_CPU_MAX_FRAGMENTS,
+	 * BC_GL_MAX_FRAGMENTS; gl's may be lower still, the driver's storage
+	 * block size). A view whose lists would hold more is drawn in bands
+	 * of whole tile rows, each within the limit (the same pixels, bit
+	 * for bit); the limit bounds the lists' memory (tiled 12 bytes a
+	 * pair, with room to grow; gl 56 bytes of GPU memory), and lowering
+	 * it trades speed for memory: a banded view keeps no lists between
+	 * frames. */
 	uint32_t abuffer_limit;
 };
 
@@ -139,8 +141,8 @@ struct bc_render_stats {
 	bool incomplete;      /* cut short by a time budget */
 	bool whole;           /* a region was asked, the whole frame drawn */
 	uint64_t short_rays;  /* rays that ran out of max_evals, not drawn */
-	/* tiled: the bands of tile rows its A-buffer was built in (1 when
-	 * the view's lists fit at once; opts.abuffer_limit). */
+	/* tiled, gl: the bands of tile rows the call's A-buffer was built
+	 * in (1 when the lists fit at once; opts.abuffer_limit). */
 	uint32_t bands;
 };
 
