@@ -1475,6 +1475,12 @@ static int draw_bands(struct gl_renderer *r, const struct bc_camera *cam,
 	base = base > 0 ? base : 1;
 	per = base;
 	band.tiles = mask;
+	/* Room for the limit at once: a band sized to three quarters of it
+	 * would otherwise overflow a smaller capacity, be drawn again and
+	 * cost its A-buffer twice. */
+	if (r->frag_cap < limit) {
+		frag_buffers(r, limit, r->slots);
+	}
 	stats->bands = 0;
 	while (y < y1 && rc == 0) {
 		uint32_t n = per < y1 - y ? (uint32_t)per : y1 - y, got = 0;
