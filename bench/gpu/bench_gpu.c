@@ -49,8 +49,10 @@ static const char usage[] =
     "  check   --dir DIR [--min-scenes N]  gl against the references\n"
     "  table2  [--size N] [--reps R] [--warmup W] [--counts LIST]\n"
     "          [--lens-counts LIST] [--levels LIST] [--budget-s S]\n"
+    "          [--smooth-spheres]\n"
     "          Zanni 2024 Table 2 (fig18, fig16) with the A-buffer / "
-    "tracing split\n"
+    "tracing split;\n"
+    "          --smooth-spheres: of fig18, smooth spheres only\n"
     "  edit    [--size N] [--counts LIST] [--edits E]  parameter edits "
     "on the GPU\n"
     "  daemon  --blobcastd PATH [--counts N] [--sizes WxH,...] [--edits "
@@ -65,6 +67,10 @@ static const char usage[] =
     "  --expect-hardware  fail at once (info: after reporting it) when the\n"
     "                 gl context is software (llvmpipe, surfaceless, "
     "OSMesa)\n"
+    "  --abuffer-limit N  the gl A-buffer's limit in fragments "
+    "(1..2^24;\n"
+    "                 default the backend's): views over it are drawn in "
+    "bands\n"
     "  --json FILE    the step's results as one JSON object\n"
     "  --md FILE      the step's results as Markdown\n"
     "LIST: comma-separated numbers (table2 --counts 16,64,256,1024,4096;\n"
@@ -139,6 +145,10 @@ int main(int argc, char **argv)
 			op.expect_hardware = true;
 			continue;
 		}
+		if (strcmp(a, "--smooth-spheres") == 0) {
+			op.smooth_spheres = true;
+			continue;
+		}
 		if (a[0] != '-' && strcmp(cmd, "verify") == 0 && !op.file) {
 			op.file = a;
 			continue;
@@ -186,6 +196,11 @@ int main(int argc, char **argv)
 			}
 		} else if (strcmp(a, "--sizes") == 0) {
 			bad = parse_sizes(v, &op) != 0;
+		} else if (strcmp(a, "--abuffer-limit") == 0) {
+			char *end;
+			unsigned long x = strtoul(v, &end, 10);
+			bad = *end != '\0' || x == 0 || x > (1ul << 24);
+			op.abuffer_limit = (uint32_t)x;
 		} else {
 			fprintf(stderr, "bench_gpu: unknown option %s\n%s", a,
 			        usage);

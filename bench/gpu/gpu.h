@@ -34,7 +34,13 @@ struct gpu_opts {
 	uint32_t sizes[GPU_MAX_LIST][2], nsizes;   /* daemon view sizes */
 	int min_scenes;
 	bool expect_hardware; /* refuse a software gl context */
-	const char *file;     /* verify */
+	/* table2: fig18 smooth spheres only (and the floors), not every
+	 * kind and blend (the big view's step). */
+	bool smooth_spheres;
+	/* gl: the A-buffer's limit (bc_render_opts.abuffer_limit), 0: the
+	 * backend's own. */
+	uint32_t abuffer_limit;
+	const char *file; /* verify */
 };
 
 struct gpu_out {

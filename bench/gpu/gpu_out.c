@@ -138,7 +138,8 @@ bool gpu_is_software(const struct bc_gl_info *info)
 struct bc_renderer *gpu_open_gl(const struct gpu_opts *op, struct gpu_out *o,
                                 struct bc_gl_info *info)
 {
-	struct bc_render_opts ro = {.gl_platform = op->platform};
+	struct bc_render_opts ro = {.gl_platform = op->platform,
+	                            .abuffer_limit = op->abuffer_limit};
 	struct bc_errinfo ei = {0};
 	struct bc_renderer *r = NULL;
 	if (bc_renderer_create(&r, BC_BACKEND_GL, &ro, &ei)) {

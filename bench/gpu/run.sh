@@ -14,6 +14,9 @@
 #            1024x768 JPEG, p50/p99
 #   bench_gl gl against the tiled CPU renderer side by side, and GPU
 #            tree updates against full uploads (bench/bench_gl.c)
+#   bigview  a view over the A-buffer's limit: a million fig18 smooth
+#            spheres at 4096x4096, drawn in bands of tile rows (last, so
+#            that it never takes the time of the others)
 # and writes results.json, results.md and run.log into the output folder.
 # Programs run under `env -i` with the kit's library path only.
 #
@@ -25,7 +28,8 @@
 #                 the same steps, to prove the scripts and the kit work
 #   --kit DIR     the kit (default: .gpu-kit at the repository root)
 #   --platform P  gl platform (default: device on a GPU host, auto --local)
-#   --only STEPS  run only these of check,table2,edit,daemon,bench_gl
+#   --only STEPS  run only these of check,table2,edit,daemon,bench_gl,
+#                 bigview
 #                 (comma-separated; loaders, libs and info always run): a
 #                 second, shorter call for what the first one left
 #   --edit-counts LIST   the edit step's scene sizes (default
@@ -98,6 +102,9 @@ if $local_run; then
 	edit_args=(--size 64 --counts 256 --edits 4)
 	daemon_args=(--counts 64 --sizes "128x96,96x64" --edits 4)
 	bench_gl_args=(--quick --size 64 --reps 1)
+	# A small view with the limit lowered so that it bands.
+	big_args=(--size 96 --counts 64 --lens-counts "" --levels ""
+		--smooth-spheres --reps 1 --warmup 0 --abuffer-limit 200)
 	hw_args=()
 else
 	mode=gpu
@@ -106,6 +113,8 @@ else
 	edit_args=(--size 1024 --counts "1024,65536,1048576" --edits 50)
 	daemon_args=(--counts 1024 --sizes "1920x1080,1024x768" --edits 100)
 	bench_gl_args=(--size 1024 --reps 5)
+	big_args=(--size 4096 --counts 1000000 --lens-counts "" --levels ""
+		--smooth-spheres --reps 3 --warmup 1 --budget-s 30)
 	# Every gl step refuses a software context at once.
 	hw_args=(--expect-hardware)
 fi
@@ -115,7 +124,7 @@ fi
 [ -z "$daemon_counts" ] || daemon_args+=(--counts "$daemon_counts")
 for s in ${only//,/ }; do
 	case $s in
-	check | table2 | edit | daemon | bench_gl) ;;
+	check | table2 | edit | daemon | bench_gl | bigview) ;;
 	*) echo "run.sh: --only: unknown step $s" >&2; usage ;;
 	esac
 done
@@ -372,6 +381,15 @@ if [ "$mode" = gpu ] && [ "${step_ok[info]}" != true ]; then
 else
 	text_step=1 run_step bench_gl 90 "$kit/bin/bench_gl" --platform "$platform" \
 		"${bench_gl_args[@]}"
+fi
+# A view over the A-buffer's limit, drawn in bands (table2's driver on one
+# scene: a million smooth spheres at 4096x4096 on a GPU).
+if [ "$mode" = gpu ] && [ "${step_ok[info]}" != true ]; then
+	not_run bigview "no hardware gl context (see the info step)"
+else
+	run_step bigview 90 "$drv" table2 --platform "$platform" "${hw_args[@]}" \
+		"${big_args[@]}" \
+		--json "$S/bigview.json" --md "$S/bigview.md"
 fi
 
 # The daemon's renderer, from its log: on a GPU host it must not be software.

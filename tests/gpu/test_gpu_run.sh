@@ -3,7 +3,8 @@
 #  - bench/gpu/pack.sh --build-dir BUILD packs a kit (small references) and
 #    its library check passes;
 #  - bench/gpu/run.sh --local runs every step from the kit in an empty
-#    environment (env -i) and exits 0;
+#    environment (env -i) and exits 0, the bigview step's scene drawn in
+#    bands of tile rows;
 #  - results.json parses, says every step ran and succeeded, and has at
 #    least 10 scenes, each correct (checked by bench_gpu verify and, apart
 #    from it, by counting in the file);
@@ -54,11 +55,14 @@ env -i LD_LIBRARY_PATH="$lp" "$drv" verify "$res" --min-scenes 10 ||
 correct=$(grep -o '"correct":true' "$res" | wc -l)
 [ "$correct" -ge 10 ] || fail "$correct scenes correct, 10 expected"
 ! grep -q '"correct":false' "$res" || fail "a scene is not correct"
-for step in loaders libs info check table2 edit daemon bench_gl; do
+for step in loaders libs info check table2 edit daemon bench_gl bigview; do
 	grep -q "\"$step\":{\"ran\":true,\"ok\":true" "$res" ||
 		fail "step $step did not run and succeed"
 done
 grep -q '"exact":true' "$res" || fail "the edit step's regions are not exact"
+# The big view's scene was drawn in bands (its limit lowered here).
+grep -Eq '"scene":"fig18 spheres smooth 64",[^}]*"bands":([2-9]|[1-9][0-9]+)[,}]' "$res" ||
+	fail "the bigview step drew no view in bands"
 grep -q '"gl_renderer":"[^"]' "$res" || fail "no GL_RENDERER in results.json"
 
 echo "== the checks can fail"
