@@ -19,17 +19,11 @@ set -u
 	echo "usage: bench/bench_big_view.sh BUILD_DIR [BUILD_DIR ...]" >&2
 	exit 2
 }
-scene=${BC_BIG_SCENE:-/tmp/bc-fig18-1m.json}
+# shellcheck source=bench/big_scene.sh
+. "$(dirname "$0")/big_scene.sh"
+big_scene_prepare bench_big_view "$1"
 size=${BC_SIZE:-3840x2160}
 edits=${BC_EDITS:-20}
-if [ ! -x /usr/bin/time ]; then
-	echo "bench_big_view: /usr/bin/time is missing (apt install time)" >&2
-	exit 1
-fi
-if [ ! -s "$scene" ]; then
-	"$1/client/blobcast" gen fig18 --count 1000000 --kind spheres \
-		--blend smooth --out "$scene" || exit 1
-fi
 dir=$(mktemp -d /tmp/bc-bigview.XXXXXX)
 pid=
 cleanup() {

@@ -21,16 +21,10 @@ set -u
 	echo "usage: bench/bench_gl_bands.sh BUILD_DIR [BUILD_DIR ...]" >&2
 	exit 2
 }
-scene=${BC_BIG_SCENE:-/tmp/bc-fig18-1m.json}
+# shellcheck source=bench/big_scene.sh
+. "$(dirname "$0")/big_scene.sh"
+big_scene_prepare bench_gl_bands "$1"
 sizes=${BC_SIZES:-1920x1080 2560x1440}
-if [ ! -x /usr/bin/time ]; then
-	echo "bench_gl_bands: /usr/bin/time is missing (apt install time)" >&2
-	exit 1
-fi
-if [ ! -s "$scene" ]; then
-	"$1/client/blobcast" gen fig18 --count 1000000 --kind spheres \
-		--blend smooth --out "$scene" || exit 1
-fi
 dir=$(mktemp -d /tmp/bc-glbands.XXXXXX)
 trap 'rm -rf "$dir"' EXIT INT TERM
 
