@@ -1362,8 +1362,10 @@ static int draw_plan(struct gl_renderer *r, const struct bc_camera *cam,
 		/* Too many fragments or suspended tiles: both counts are
 		 * exact, so a draw with room for them (and some to spare)
 		 * fits. Two retries cover growing both. Past the limit the
-		 * caller draws in bands. */
-		if (stat[BC_GL_STAT_FRAGMENTS] > limit) {
+		 * caller draws in bands, and a band past the capacity is
+		 * drawn in fewer rows rather than in larger buffers. */
+		if (stat[BC_GL_STAT_FRAGMENTS] > limit ||
+		    (band && stat[BC_GL_STAT_FRAGMENTS] > r->frag_cap)) {
 			*need = stat[BC_GL_STAT_FRAGMENTS];
 			r->ctx.info.retries += retries;
 			return 0;
@@ -1443,15 +1445,24 @@ static int draw_plan(struct gl_renderer *r, const struct bc_camera *cam,
 	return bc__gl_check(&r->ctx, "reading a frame back", ei);
 }
 
+/* The least room bands are drawn in, when the buffers the view has are
+ * smaller (a band of a few rows per pass over every imposter would be
+ * slow): 2^20 fragments (56 MiB), or an eighth of a lower limit. */
+#define BAND_MIN_ROOM (1u << 20)
+
 /* Draws whole's tiles (the call's plan) in bands of whole tile rows, each
  * drawn as a region of its own within the A-buffer's limit: a view whose
  * lists together pass the limit (need: the fragments they need) is drawn
  * a band at a time. A tile's list does not depend on the other tiles', so
- * the pixels are those of one pass. Bands are sized from need's average
- * over the rows, to fill three quarters of the limit; a band that still
- * passes it is drawn again in fewer rows (in proportion), a band that
- * fits lets the next one grow back (doubling), and a single tile row that
- * passes it is refused. */
+ * the pixels are those of one pass. Bands are drawn in the buffers the
+ * view has (at least BAND_MIN_ROOM or an eighth of the limit, at most the
+ * limit), not grown to the limit: at 2^24 fragments they would be 896 MiB, and
+ * the daemon counts what a renderer keeps against its cap on views (on llvmpipe
+ * it is host memory). Bands are sized from need's average over the rows to fill
+ * three quarters of that room, so that most fit it at once; a band that
+ * passes the limit is drawn again in fewer rows (in proportion), a band
+ * that fits lets the next one grow back (doubling), and a single tile row
+ * that passes the limit is refused. */
 static int draw_bands(struct gl_renderer *r, const struct bc_camera *cam,
                       const struct bc_render_region *region,
                       const struct plan *whole, uint32_t need, double t_start,
@@ -1462,9 +1473,9 @@ static int draw_bands(struct gl_renderer *r, const struct bc_camera *cam,
 	uint32_t th = bc_render_tiles_y(h), limit = frag_limit(r);
 	uint32_t y = whole->list ? whole->box[1] : 0;
 	uint32_t y1 = whole->list ? whole->box[3] : th;
-	uint64_t aim =
-	    (uint64_t)limit / 4 * 3 > 0 ? (uint64_t)limit / 4 * 3 : 1;
-	uint64_t base = (uint64_t)(y1 - y) * aim / (need > 0 ? need : 1), per;
+	uint32_t least = BAND_MIN_ROOM < limit / 8 ? BAND_MIN_ROOM : limit / 8;
+	uint32_t room = r->frag_cap > least ? r->frag_cap : least;
+	uint64_t aim, base, per;
 	struct bc_render_region band = *region;
 	uint8_t *mask = bc_malloc((size_t)tw * th);
 	int rc = 0;
@@ -1472,15 +1483,16 @@ static int draw_bands(struct gl_renderer *r, const struct bc_camera *cam,
 		return bc_errinfo_set(ei, BC_ENOMEM,
 		                      "gl: out of memory for a band's tiles");
 	}
+	room = room < limit ? room : limit;
+	room = room > 0 ? room : 1;
+	if (r->frag_cap < room) {
+		frag_buffers(r, room, r->slots);
+	}
+	aim = (uint64_t)room / 4 * 3 > 0 ? (uint64_t)room / 4 * 3 : 1;
+	base = (uint64_t)(y1 - y) * aim / (need > 0 ? need : 1);
 	base = base > 0 ? base : 1;
 	per = base;
 	band.tiles = mask;
-	/* Room for the limit at once: a band sized to three quarters of it
-	 * would otherwise overflow a smaller capacity, be drawn again and
-	 * cost its A-buffer twice. */
-	if (r->frag_cap < limit) {
-		frag_buffers(r, limit, r->slots);
-	}
 	stats->bands = 0;
 	while (y < y1 && rc == 0) {
 		uint32_t n = per < y1 - y ? (uint32_t)per : y1 - y, got = 0;
@@ -1498,7 +1510,7 @@ static int draw_bands(struct gl_renderer *r, const struct bc_camera *cam,
 		    (rc = draw_plan(r, cam, &band, &p, true, t_start, out,
 		                    stats, &got, ei)) == 0 &&
 		    got > 0) {
-			if (n == 1) {
+			if (n == 1 && got > limit) {
 				rc = bc_errinfo_set(
 				    ei, BC_ELIMIT,
 				    "gl: tile row %u alone needs %u A-buffer "
@@ -1507,6 +1519,15 @@ static int draw_bands(struct gl_renderer *r, const struct bc_camera *cam,
 				    "frame)",
 				    y, got, limit);
 				break;
+			}
+			if (n == 1) {
+				/* One row past the room: the room grows
+				 * to hold it, with some to spare. */
+				uint64_t more = (uint64_t)got + got / 2;
+				room = more < limit ? (uint32_t)more : limit;
+				frag_buffers(r, room, r->slots);
+				aim = (uint64_t)room / 4 * 3;
+				continue;
 			}
 			per = (uint64_t)n * aim / got;
 			per = per < 1 ? 1 : per >= n ? n - 1u : per;

@@ -1278,6 +1278,24 @@ static void test_view_over_the_limit_in_bands(void)
 	REQUIRE(bc_render_gl_info(rb, &info) == 0);
 	CHECK_EQ_INT(info.lists_built, built);
 	bc_renderer_destroy(rb);
+	/* Buffers a quarter of the limit: bands are drawn in them (fewer
+	 * rows where a band would pass them, larger buffers only for a row
+	 * that does), the same pixels. */
+	{
+		struct bc_render_opts o = {.abuffer_limit = limit};
+		uint32_t bands = 0;
+		REQUIRE(bc_renderer_create(&rb, BC_BACKEND_GL, &o, &ei) == 0);
+		REQUIRE(bc_renderer_sync(rb, t, NULL, &ei) == 0);
+		REQUIRE(bc_render_gl_set_capacity(rb, limit / 4) == 0);
+		memset(f.rgba, 0, 4 * (size_t)W * H);
+		REQUIRE(bc_renderer_render(rb, &cam, &f, &st, &ei) == 0);
+		bands = st.bands;
+		printf("  buffers of %u fragments: %u bands\n", limit / 4,
+		       bands);
+		CHECK(bands >= 6);
+		CHECK(frames_equal(&f, &g));
+		bc_renderer_destroy(rb);
+	}
 	/* One fragment: no row fits. */
 	{
 		struct bc_render_opts o = {.abuffer_limit = 1};
