@@ -340,6 +340,15 @@ void bc_renderer_release(struct bc_renderer *r)
 	}
 }
 
+void bc_renderer_set_progress(struct bc_renderer *r, bc_render_progress_fn fn,
+                              void *user)
+{
+	if (r) {
+		r->progress = fn;
+		r->progress_user = user;
+	}
+}
+
 size_t bc_renderer_kept_bytes(const struct bc_renderer *r)
 {
 	if (!r || !r->ops->kept_bytes) {

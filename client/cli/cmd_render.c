@@ -18,7 +18,6 @@
 #include "blobcast/blobtree.h"
 #include "blobcast/image.h"
 #include "blobcast/render.h"
-#include "blobcast/render_cpu.h"
 #include "blobcast/scene.h"
 #include "cli.h"
 
@@ -422,9 +421,8 @@ static int render(const struct args *a, const struct bc_tree *t,
 	if ((rc = bc_renderer_create(&r, a->backend, &a->opts, ei))) {
 		return rc;
 	}
-	if (!a->quiet && (a->backend == BC_BACKEND_NAIVE ||
-	                  a->backend == BC_BACKEND_TILED)) {
-		bc_render_cpu_set_progress(r, on_progress, &prog);
+	if (!a->quiet) {
+		bc_renderer_set_progress(r, on_progress, &prog);
 	}
 	if ((rc = bc_renderer_sync(r, t, NULL, ei)) == 0) {
 		rc = nb == 1

@@ -1,14 +1,13 @@
 /*
  * The parts of a CPU renderer that do not depend on how it traces: the
  * renderer object and its ops (create, destroy, key), the pixels a region
- * asks of a tile, and progress reports.
+ * asks of a tile.
  */
 #include "cpu.h"
 
 #include <string.h>
 
 #include "blobcast/alloc.h"
-#include "blobcast/clock.h"
 #include "blobcast/log.h"
 
 int bc__cpu_create(struct bc_renderer **out, enum bc__cpu_kind kind,
@@ -75,41 +74,4 @@ uint64_t bc__region_mask(const struct bc_render_region *region, uint32_t tx,
 		}
 	}
 	return mask;
-}
-
-void bc_render_cpu_set_progress(struct bc_renderer *base,
-                                bc_render_progress_fn fn, void *user)
-{
-	struct bc__cpu *r = bc__cpu_of(base);
-	if (r) {
-		r->progress = fn;
-		r->progress_user = user;
-	}
-}
-
-/* ---- progress ----------------------------------------------------------- */
-
-void bc__progress_init(struct bc__progress *p, const struct bc__cpu *r,
-                       uint32_t total)
-{
-	p->fn = r->progress;
-	p->user = r->progress_user;
-	p->total = total;
-	p->start = bc_clock_ms();
-	p->last = p->start;
-}
-
-void bc__progress_tick(struct bc__progress *p, uint32_t done)
-{
-	double now;
-	if (!p->fn) {
-		return;
-	}
-	now = bc_clock_ms();
-	/* Short frames stay quiet; long ones report four times a second. */
-	if (now - p->start < 1000.0 || now - p->last < 250.0) {
-		return;
-	}
-	p->last = now;
-	p->fn(p->user, done > p->total ? p->total : done, p->total);
 }

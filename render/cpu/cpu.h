@@ -2,7 +2,7 @@
  * What the two CPU backends share: the renderer object, the tracing
  * constants of Zanni 2024 §7, the field handle (the full tree or a pruned
  * view), sphere tracing, shading and pixel output (so naive and tiled write
- * identical pixels for identical hits), the worker threads and progress.
+ * identical pixels for identical hits) and the worker threads.
  */
 #ifndef BLOBCAST_RENDER_CPU_PRIV_H
 #define BLOBCAST_RENDER_CPU_PRIV_H
@@ -15,7 +15,6 @@
 #include "blobcast/render_backend.h"
 #include "blobcast/render_common.h"
 #include "blobcast/shade.h"
-#include "blobcast/render_cpu.h"
 
 /* ---- Constants ---------------------------------------------------------- */
 
@@ -82,8 +81,6 @@ struct bc__cpu {
 	struct bc_renderer base;
 	enum bc__cpu_kind kind;
 	uint32_t threads;
-	bc_render_progress_fn progress;
-	void *progress_user;
 	struct bc__tiled_bufs *tiled;
 };
 
@@ -243,19 +240,5 @@ void bc__put_miss_tile(const struct bc__frame_ctx *fc, uint32_t x0, uint32_t y0,
 /* Clips o + t d against the box [lo, hi]; t0 is clamped to >= 0. */
 bool bc__ray_box(const float lo[3], const float hi[3], const float o[3],
                  const float d[3], float *t0, float *t1);
-
-/* ---- Threads, time, progress -------------------------------------------- */
-
-struct bc__progress {
-	bc_render_progress_fn fn;
-	void *user;
-	uint32_t total;
-	double start, last;
-};
-void bc__progress_init(struct bc__progress *p, const struct bc__cpu *r,
-                       uint32_t total);
-/* Called by thread 0 only; reports at most every 250 ms after the first
- * second. */
-void bc__progress_tick(struct bc__progress *p, uint32_t done);
 
 #endif

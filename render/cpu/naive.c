@@ -20,7 +20,7 @@
 struct naive_frame {
 	const struct bc__frame_ctx *fc;
 	const struct bc_render_region *region;
-	struct bc__progress progress;
+	struct bc_render_progress progress;
 	atomic_uint next_band;
 	uint64_t evals[BC_CPU_MAX_THREADS];
 	uint64_t rays[BC_CPU_MAX_THREADS];
@@ -93,9 +93,9 @@ static void naive_rows(void *arg, uint32_t thread)
 			}
 		}
 		if (thread == 0) {
-			bc__progress_tick(&nf->progress,
-			                  BC_CPU_TILE *
-			                      atomic_load(&nf->next_band));
+			bc_render_progress_tick(
+			    &nf->progress,
+			    BC_CPU_TILE * atomic_load(&nf->next_band));
 		}
 	}
 	nf->evals[thread] = evals;
@@ -127,7 +127,7 @@ static int naive_render(struct bc_renderer *base, const struct bc_camera *cam,
 	nf.fc = &fc;
 	nf.region = region;
 	atomic_init(&nf.next_band, 0u);
-	bc__progress_init(&nf.progress, r, out->height);
+	bc_render_progress_init(&nf.progress, &r->base, out->height);
 	bc_pool_run(bc_render_region_threads(region, r->threads), naive_rows,
 	            &nf);
 	for (uint32_t i = 0; i < BC_CPU_MAX_THREADS; i++) {

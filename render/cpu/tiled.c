@@ -268,7 +268,7 @@ struct tiled_frame {
 	struct tile_span spans[BC_POOL_MAX_THREADS]; /* see next_tile */
 	uint32_t nspans; /* the shares the pool runs: spans in use */
 	_Alignas(64) atomic_uint tiles_done;
-	struct bc__progress progress;
+	struct bc_render_progress progress;
 	/* bc_clock_ms() past which no tile starts; 0: none. */
 	double deadline;
 	atomic_uint skipped; /* tiles left as background past the deadline */
@@ -1145,8 +1145,9 @@ static void phase_trace(void *arg, uint32_t thread)
 			atomic_fetch_add(&tf->tiles_done, done);
 			done = 0;
 			if (thread == 0) {
-				bc__progress_tick(&tf->progress,
-				                  atomic_load(&tf->tiles_done));
+				bc_render_progress_tick(
+				    &tf->progress,
+				    atomic_load(&tf->tiles_done));
 			}
 		}
 		if (!next_tile(tf, thread, &tile, &end)) {
@@ -1606,7 +1607,7 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 	if (rc && rc != OVER_LIMIT) {
 		goto fail;
 	}
-	bc__progress_init(&tf.progress, r, tf.ntiles);
+	bc_render_progress_init(&tf.progress, &r->base, tf.ntiles);
 	stats->ms_abuffer = bc_clock_ms() - t_start;
 	stats->bands = 1;
 	rc = rc == OVER_LIMIT ? draw_bands(r, &tf, stats, ei)

@@ -1462,7 +1462,8 @@ static int draw_plan(struct gl_renderer *r, const struct bc_camera *cam,
  * three quarters of that room, so that most fit it at once; a band that
  * passes the limit is drawn again in fewer rows (in proportion), a band
  * that fits lets the next one grow back (doubling), and a single tile row
- * that passes the limit is refused. */
+ * that passes the limit is refused. Reports progress by tile rows
+ * (bc_renderer_set_progress). */
 static int draw_bands(struct gl_renderer *r, const struct bc_camera *cam,
                       const struct bc_render_region *region,
                       const struct plan *whole, uint32_t need, double t_start,
@@ -1471,12 +1472,13 @@ static int draw_bands(struct gl_renderer *r, const struct bc_camera *cam,
 {
 	uint32_t w = out->width, h = out->height, tw = bc_render_tiles_x(w);
 	uint32_t th = bc_render_tiles_y(h), limit = frag_limit(r);
-	uint32_t y = whole->list ? whole->box[1] : 0;
+	uint32_t y0 = whole->list ? whole->box[1] : 0, y = y0;
 	uint32_t y1 = whole->list ? whole->box[3] : th;
 	uint32_t least = BAND_MIN_ROOM < limit / 8 ? BAND_MIN_ROOM : limit / 8;
 	uint32_t room = r->frag_cap > least ? r->frag_cap : least;
 	uint64_t aim, base, per;
 	struct bc_render_region band = *region;
+	struct bc_render_progress prog;
 	uint8_t *mask = bc_malloc((size_t)tw * th);
 	int rc = 0;
 	if (!mask) {
@@ -1494,6 +1496,10 @@ static int draw_bands(struct gl_renderer *r, const struct bc_camera *cam,
 	per = base;
 	band.tiles = mask;
 	stats->bands = 0;
+	/* Progress by tile rows (a banded frame of a million spheres on
+	 * llvmpipe takes minutes). */
+	bc_render_progress_init(&prog, &r->base, y1 - y0);
+	prog.start = t_start;
 	while (y < y1 && rc == 0) {
 		uint32_t n = per < y1 - y ? (uint32_t)per : y1 - y, got = 0;
 		struct plan p;
@@ -1535,6 +1541,7 @@ static int draw_bands(struct gl_renderer *r, const struct bc_camera *cam,
 		}
 		stats->bands += p.tiles > 0;
 		y += n;
+		bc_render_progress_tick(&prog, y - y0);
 		per = 2 * (uint64_t)n < base ? 2 * (uint64_t)n : base;
 	}
 	bc_free(mask);

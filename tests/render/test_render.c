@@ -19,7 +19,6 @@
 #include "blobcast/alloc.h"
 #include "blobcast/render.h"
 #include "blobcast/render_common.h"
-#include "blobcast/render_cpu.h"
 #include "blobcast/scene.h"
 #include "blobcast/shade.h"
 #include "test.h"
@@ -436,6 +435,60 @@ static void test_pool_runs_every_share_once(void)
 	}
 }
 
+/* Progress reports (bc_renderer_set_progress, paced by render_common's
+ * bc_render_progress): none in a call's first second, then at most one a
+ * quarter of a second, done clamped to total; a renderer without a
+ * callback reports nothing. The clock is moved by hand (start and last
+ * set back), so no timing of this machine enters. */
+struct progress_log {
+	uint32_t calls, done, total;
+};
+
+static void log_progress(void *user, uint32_t done, uint32_t total)
+{
+	struct progress_log *g = user;
+	g->calls++;
+	g->done = done;
+	g->total = total;
+}
+
+static void test_progress_is_paced(void)
+{
+	struct bc_render_opts o = {0};
+	struct bc_errinfo ei = {0};
+	struct bc_renderer *r = NULL;
+	struct bc_render_progress p;
+	struct progress_log g = {0};
+	REQUIRE(bc_renderer_create(&r, BC_BACKEND_NAIVE, &o, &ei) == 0);
+	bc_render_progress_init(&p, r, 10);
+	bc_render_progress_tick(&p, 3);
+	CHECK_EQ_INT(g.calls, 0); /* no callback */
+	bc_renderer_set_progress(r, log_progress, &g);
+	bc_render_progress_init(&p, r, 10);
+	bc_render_progress_tick(&p, 3);
+	CHECK_EQ_INT(g.calls, 0); /* the first second */
+	p.start -= 1500.0;
+	p.last = p.start;
+	bc_render_progress_tick(&p, 4);
+	CHECK_EQ_INT(g.calls, 1);
+	CHECK_EQ_INT(g.done, 4);
+	CHECK_EQ_INT(g.total, 10);
+	bc_render_progress_tick(&p, 5);
+	CHECK_EQ_INT(g.calls, 1); /* a quarter of a second apart */
+	p.last -= 300.0;
+	bc_render_progress_tick(&p, 12);
+	CHECK_EQ_INT(g.calls, 2);
+	CHECK_EQ_INT(g.done, 10); /* clamped */
+	bc_renderer_set_progress(r, NULL, NULL);
+	bc_render_progress_init(&p, r, 10);
+	p.start -= 1500.0;
+	p.last = p.start;
+	bc_render_progress_tick(&p, 4);
+	CHECK_EQ_INT(g.calls, 2);                         /* removed */
+	bc_renderer_set_progress(NULL, log_progress, &g); /* accepted */
+	bc_renderer_destroy(r);
+}
+
 static void test_renderer_reuse_follows_edits(void)
 {
 	struct bc_renderer *r = NULL;
@@ -700,6 +753,7 @@ static const struct bc_test tests[] = {
     {"centre_ray_points_at_target", test_centre_ray_points_at_target},
     {"threads_do_not_change_pixels", test_threads_do_not_change_pixels},
     {"pool_runs_every_share_once", test_pool_runs_every_share_once},
+    {"progress_is_paced", test_progress_is_paced},
     {"renderer_reuse_follows_edits", test_renderer_reuse_follows_edits},
     {"debug_modes", test_debug_modes},
     {"dispatcher_and_frames", test_dispatcher_and_frames},

@@ -298,6 +298,19 @@ void bc_renderer_release(struct bc_renderer *r);
  * backends that keep nothing (naive). */
 size_t bc_renderer_kept_bytes(const struct bc_renderer *r);
 
+/* Called from the rendering thread while a long call draws: `done` of
+ * `total` work items are finished (naive: rows; tiled: tiles; gl: the
+ * tile rows of a call drawn in A-buffer bands, the only gl calls that
+ * report; svo: none). Calls are at least a quarter of a second apart and
+ * none comes in a call's first second. */
+typedef void (*bc_render_progress_fn)(void *user, uint32_t done,
+                                      uint32_t total);
+
+/* Installs (or, with fn NULL, removes) r's progress callback. Accepts
+ * NULL. */
+void bc_renderer_set_progress(struct bc_renderer *r, bc_render_progress_fn fn,
+                              void *user);
+
 /* Marks (sets to 1) in tiles, ceil(width / 8) x ceil(height / 8) bytes,
  * every tile of a width x height frame through cam (the whole view: for a
  * window at an origin of multiples of 8, its tiles are the view's tiles

@@ -27,6 +27,9 @@ struct bc_renderer {
 	 * backend follows splice by splice): part of every frame's key, so
 	 * no region is drawn over a frame of another structure. */
 	uint64_t generation;
+	/* bc_renderer_set_progress's callback, NULL: none. */
+	bc_render_progress_fn progress;
+	void *progress_user;
 };
 
 struct bc_backend_ops {

@@ -1,8 +1,8 @@
 /*
- * What the CPU backends share besides shading (blobcast/shade.h): one
- * process-wide pool of worker threads, the clock frames are timed with,
- * and the scene scale that frame constants derive from. Only the render
- * modules include this.
+ * What the backends share besides shading (blobcast/shade.h): one
+ * process-wide pool of worker threads (CPU backends), the scene scale
+ * that frame constants derive from, and the pacing of progress reports.
+ * Only the render modules include this.
  */
 #ifndef BLOBCAST_RENDER_COMMON_H
 #define BLOBCAST_RENDER_COMMON_H
@@ -10,6 +10,7 @@
 #include <stdint.h>
 
 #include "blobcast/blobtree.h"
+#include "blobcast/render.h"
 
 /* Worker threads at most, whatever a renderer's opts.threads asks. */
 #define BC_POOL_MAX_THREADS 64u
@@ -36,5 +37,19 @@ uint32_t bc_pool_default_threads(void);
  * computation as it was (damage renders stay exact); 1 for an empty or
  * degenerate tree. */
 float bc_render_scale(const struct bc_lin *lin);
+
+/* One call's progress reports (bc_renderer_set_progress): init with the
+ * renderer and the call's work items, then tick with the items done;
+ * ticks report at most every 250 ms, and none in the call's first
+ * second. Ticks come from one thread. */
+struct bc_render_progress {
+	bc_render_progress_fn fn;
+	void *user;
+	uint32_t total;
+	double start, last;
+};
+void bc_render_progress_init(struct bc_render_progress *p,
+                             const struct bc_renderer *r, uint32_t total);
+void bc_render_progress_tick(struct bc_render_progress *p, uint32_t done);
 
 #endif
