@@ -37,7 +37,9 @@
  * frames that need it (capacity grows from BC_GL_MIN_FRAGMENTS). The
  * driver's storage block size lowers it (llvmpipe's 128 MiB: about
  * 5.6 * 10^6). A 4096-primitive scene at 512^2 makes about 10^5, a million
- * fig18 spheres at 1024^2 4.5 * 10^6. Frames beyond fail with BC_ELIMIT. */
+ * fig18 spheres at 1024^2 4.5 * 10^6. Calls beyond are drawn in bands of
+ * tile rows (backend.c, draw_bands); only a tile row beyond fails, with
+ * BC_ELIMIT. */
 #define BC_GL_MAX_FRAGMENTS (1u << 24)
 /* The first frame's fragment capacity; frames that need more grow it. */
 #define BC_GL_MIN_FRAGMENTS (1u << 16)
