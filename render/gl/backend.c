@@ -716,6 +716,14 @@ struct plan {
 	uint64_t rays;   /* pixels to draw */
 };
 
+/* Whether p asks for most of a frame of ntiles tiles (every tile, or a
+ * list of a quarter of them or more): such a call's lists are built for
+ * every tile, not for its own tiles alone. */
+static bool plan_wide(const struct plan *p, uint64_t ntiles)
+{
+	return !p->list || (uint64_t)p->nlist * 4 >= ntiles;
+}
+
 /* Pixels of a tile spanning [x0, x0 + n) (x0 a multiple of the tile) whose
  * coordinate is a multiple of 2^level. */
 static uint32_t level_count(uint32_t n, uint32_t level)
@@ -1026,6 +1034,19 @@ static void trace(struct gl_renderer *r, const struct bc__gl_frame_ubo *u,
 	gl->DispatchCompute(p->gx, p->gy, 1);
 }
 
+/* Word slot of the statistics buffer as the passes issued so far leave
+ * it (the host waits for them). The buffer stays bound to
+ * GL_SHADER_STORAGE_BUFFER. */
+static uint32_t stat_word(struct gl_renderer *r, uint32_t slot)
+{
+	GladGLContext *gl = &r->ctx.gl;
+	uint32_t v = 0;
+	gl->MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->bufs[BC__GL_BUF_STATS]);
+	gl->GetBufferSubData(GL_SHADER_STORAGE_BUFFER, 4 * slot, 4, &v);
+	return v;
+}
+
 /* Dispatches the tracing pass again while tiles are suspended (only with
  * a loop budget). Past the frame's time budget (counted from t_start) the
  * last dispatch tells suspended tiles to finish with what they found, and
@@ -1041,12 +1062,7 @@ static int finish_tracing(struct gl_renderer *r, struct bc__gl_frame_ubo *u,
 	*dispatches = 1;
 	*incomplete = false;
 	while (r->budget && !*incomplete) {
-		uint32_t suspended = 0;
-		gl->MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-		gl->BindBuffer(GL_SHADER_STORAGE_BUFFER,
-		               r->bufs[BC__GL_BUF_STATS]);
-		gl->GetBufferSubData(GL_SHADER_STORAGE_BUFFER,
-		                     4 * BC_GL_STAT_SUSPENDED, 4, &suspended);
+		uint32_t suspended = stat_word(r, BC_GL_STAT_SUSPENDED);
 		if (!suspended) {
 			break;
 		}
@@ -1272,7 +1288,6 @@ static int draw_plan(struct gl_renderer *r, const struct bc_camera *cam,
                      struct bc_frame *out, struct bc_render_stats *stats,
                      uint32_t *need, struct bc_errinfo *ei)
 {
-	GladGLContext *gl = &r->ctx.gl;
 	const struct bc_lin *l = bc_tree_lin(r->tree);
 	struct bc__gl_frame_ubo u;
 	uint32_t w = out->width, h = out->height;
@@ -1302,8 +1317,7 @@ static int draw_plan(struct gl_renderer *r, const struct bc_camera *cam,
 		if (!band && r->lists_kept && same_view(&u, &r->lists_u)) {
 			use = LISTS_KEPT;
 			r->lists_reused++;
-		} else if (!band && (!plan->list ||
-		                     (uint64_t)plan->nlist * 4 >= ntiles)) {
+		} else if (!band && plan_wide(plan, ntiles)) {
 			use = LISTS_ALL;
 			r->lists_builds++;
 		} else {
@@ -1325,12 +1339,8 @@ static int draw_plan(struct gl_renderer *r, const struct bc_camera *cam,
 			 * whose lists fit pays one round trip between host
 			 * and GPU before its tracing starts. */
 			memset(stat, 0, sizeof(stat));
-			gl->MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-			gl->BindBuffer(GL_SHADER_STORAGE_BUFFER,
-			               r->bufs[BC__GL_BUF_STATS]);
-			gl->GetBufferSubData(GL_SHADER_STORAGE_BUFFER,
-			                     4 * BC_GL_STAT_FRAGMENTS, 4,
-			                     &stat[BC_GL_STAT_FRAGMENTS]);
+			stat[BC_GL_STAT_FRAGMENTS] =
+			    stat_word(r, BC_GL_STAT_FRAGMENTS);
 			if ((rc = bc__gl_check(&r->ctx, "counting fragments",
 			                       ei))) {
 				return rc;
@@ -1619,9 +1629,8 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 	/* A view known to pass the limit: a whole frame goes to bands at
 	 * once, a region tries its own tiles' lists first. */
 	banded = banded_view(r, cam, out, &view);
-	if (banded && (!plan.list || (uint64_t)plan.nlist * 4 >=
-	                                 (uint64_t)bc_render_tiles_x(w) *
-	                                     bc_render_tiles_y(h))) {
+	if (banded && plan_wide(&plan, (uint64_t)bc_render_tiles_x(w) *
+	                                   bc_render_tiles_y(h))) {
 		need = r->band_need;
 	} else {
 		rc = draw_plan(r, cam, region, &plan, banded, t_start, out,
