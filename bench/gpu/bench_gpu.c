@@ -197,10 +197,9 @@ int main(int argc, char **argv)
 		} else if (strcmp(a, "--sizes") == 0) {
 			bad = parse_sizes(v, &op) != 0;
 		} else if (strcmp(a, "--abuffer-limit") == 0) {
-			char *end;
-			unsigned long x = strtoul(v, &end, 10);
-			bad = *end != '\0' || x == 0 || x > (1ul << 24);
-			op.abuffer_limit = (uint32_t)x;
+			uint32_t n = 0;
+			bad =
+			    parse_list(v, &op.abuffer_limit, &n) != 0 || n != 1;
 		} else {
 			fprintf(stderr, "bench_gpu: unknown option %s\n%s", a,
 			        usage);
