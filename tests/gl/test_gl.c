@@ -1222,6 +1222,22 @@ static void test_odd_sizes_and_empty_scene(void)
 	bc_renderer_destroy(r);
 }
 
+/* A gl renderer whose A-buffer holds at most limit fragments, synced to
+ * t; NULL (said why) when it cannot be made. */
+static struct bc_renderer *open_limited(uint32_t limit, const struct bc_tree *t)
+{
+	struct bc_render_opts o = {.abuffer_limit = limit};
+	struct bc_errinfo ei = {0};
+	struct bc_renderer *r = NULL;
+	if (bc_renderer_create(&r, BC_BACKEND_GL, &o, &ei) ||
+	    bc_renderer_sync(r, t, NULL, &ei)) {
+		fprintf(stderr, "  gl, limit %u: %s\n", limit, ei.msg);
+		bc_renderer_destroy(r);
+		return NULL;
+	}
+	return r;
+}
+
 /* A view whose lists pass the A-buffer's limit (opts.abuffer_limit raised
  * from a third of this view's fragments until each tile row fits) is
  * drawn in bands of tile rows, the pixels of one pass bit for bit. The
@@ -1253,10 +1269,8 @@ static void test_view_over_the_limit_in_bands(void)
 	REQUIRE(bc_render_gl_info(r, &info) == 0);
 	REQUIRE(info.fragments > 30);
 	for (limit = info.fragments / 3;; limit += limit / 4) {
-		struct bc_render_opts o = {.abuffer_limit = limit};
 		REQUIRE(limit < info.fragments);
-		REQUIRE(bc_renderer_create(&rb, BC_BACKEND_GL, &o, &ei) == 0);
-		REQUIRE(bc_renderer_sync(rb, t, NULL, &ei) == 0);
+		REQUIRE((rb = open_limited(limit, t)));
 		if (bc_renderer_render(rb, &cam, &f, &st, &ei) == 0) {
 			break;
 		}
@@ -1281,31 +1295,19 @@ static void test_view_over_the_limit_in_bands(void)
 	/* Buffers a quarter of the limit: bands are drawn in them (fewer
 	 * rows where a band would pass them, larger buffers only for a row
 	 * that does), the same pixels. */
-	{
-		struct bc_render_opts o = {.abuffer_limit = limit};
-		uint32_t bands = 0;
-		REQUIRE(bc_renderer_create(&rb, BC_BACKEND_GL, &o, &ei) == 0);
-		REQUIRE(bc_renderer_sync(rb, t, NULL, &ei) == 0);
-		REQUIRE(bc_render_gl_set_capacity(rb, limit / 4) == 0);
-		memset(f.rgba, 0, 4 * (size_t)W * H);
-		REQUIRE(bc_renderer_render(rb, &cam, &f, &st, &ei) == 0);
-		bands = st.bands;
-		printf("  buffers of %u fragments: %u bands\n", limit / 4,
-		       bands);
-		CHECK(bands >= 6);
-		CHECK(frames_equal(&f, &g));
-		bc_renderer_destroy(rb);
-	}
+	REQUIRE((rb = open_limited(limit, t)));
+	REQUIRE(bc_render_gl_set_capacity(rb, limit / 4) == 0);
+	memset(f.rgba, 0, 4 * (size_t)W * H);
+	REQUIRE(bc_renderer_render(rb, &cam, &f, &st, &ei) == 0);
+	printf("  buffers of %u fragments: %u bands\n", limit / 4, st.bands);
+	CHECK(st.bands >= 6);
+	CHECK(frames_equal(&f, &g));
+	bc_renderer_destroy(rb);
 	/* One fragment: no row fits. */
-	{
-		struct bc_render_opts o = {.abuffer_limit = 1};
-		REQUIRE(bc_renderer_create(&rb, BC_BACKEND_GL, &o, &ei) == 0);
-		REQUIRE(bc_renderer_sync(rb, t, NULL, &ei) == 0);
-		CHECK_EQ_INT(bc_renderer_render(rb, &cam, &f, &st, &ei),
-		             BC_ELIMIT);
-		CHECK(strstr(ei.msg, "tile row") != NULL);
-		bc_renderer_destroy(rb);
-	}
+	REQUIRE((rb = open_limited(1, t)));
+	CHECK_EQ_INT(bc_renderer_render(rb, &cam, &f, &st, &ei), BC_ELIMIT);
+	CHECK(strstr(ei.msg, "tile row") != NULL);
+	bc_renderer_destroy(rb);
 	bc_frame_finish(&g);
 	bc_frame_finish(&f);
 	bc_tree_destroy(t);
