@@ -238,8 +238,9 @@ static void put_names(struct bc_buf *b, const struct bc_tree *t)
 	bc_free(ids);
 }
 
+/* The encoding after head zero bytes (the caller's to fill). */
 static int encode(const struct bc_tree *t, const struct bc_camera *cam,
-                  bool scene, uint8_t **out, size_t *len)
+                  bool scene, size_t head, uint8_t **out, size_t *len)
 {
 	struct bc_buf b;
 	bool names = scene && bc_tree_name_count(t) > 0;
@@ -256,9 +257,13 @@ static int encode(const struct bc_tree *t, const struct bc_camera *cam,
 		uint32_t prims = bc_tree_prim_count(t);
 		uint64_t floats = 0;
 		bc_tree_counts(t, &colored, &floats);
-		bc_buf_reserve(&b, 64u + (size_t)(nodes - prims) * 17u +
-		                       (size_t)prims * 35u +
-		                       (size_t)colored * 12u + 4u * floats);
+		if (!bc_buf_reserve(&b,
+		                    head + 64u + (size_t)(nodes - prims) * 17u +
+		                        (size_t)prims * 35u +
+		                        (size_t)colored * 12u + 4u * floats)) {
+			memset(b.data, 0, head);
+			b.len = head;
+		}
 	}
 	if (scene) {
 		put_u8(&b, (uint8_t)((cam ? BC_SCENE_FLAG_CAMERA : 0) |
@@ -284,12 +289,18 @@ static int encode(const struct bc_tree *t, const struct bc_camera *cam,
 int bc_scene_encode(const struct bc_tree *t, const struct bc_camera *cam,
                     uint8_t **out, size_t *len)
 {
-	return encode(t, cam, true, out, len);
+	return encode(t, cam, true, 0, out, len);
+}
+
+int bc_scene_encode_after(const struct bc_tree *t, const struct bc_camera *cam,
+                          size_t head, uint8_t **out, size_t *len)
+{
+	return encode(t, cam, true, head, out, len);
 }
 
 int bc_tree_encode(const struct bc_tree *t, uint8_t **out, size_t *len)
 {
-	return encode(t, NULL, false, out, len);
+	return encode(t, NULL, false, 0, out, len);
 }
 
 /* ---- reading ------------------------------------------------------------- */

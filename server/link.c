@@ -27,6 +27,17 @@ struct bc_shared *bc_shared_new(size_t len)
 	return s;
 }
 
+struct bc_shared *bc_shared_adopt(uint8_t *buf, size_t total)
+{
+	/* bc_malloc's memory is aligned for any object. */
+	struct bc_shared *s = (struct bc_shared *)(void *)buf;
+	s->refs = 1;
+	s->needs = 0;
+	s->older = NULL;
+	s->len = total - BC_SHARED_HEAD;
+	return s;
+}
+
 void bc_shared_unref(struct bc_shared *s)
 {
 	if (s && --s->refs == 0) {

@@ -49,6 +49,13 @@ struct bc_shared {
 };
 /* Returns a buffer of len bytes with one reference, or NULL. */
 struct bc_shared *bc_shared_new(size_t len);
+/* Bytes of a bc_shared before its data. */
+#define BC_SHARED_HEAD offsetof(struct bc_shared, data)
+/* Makes buf (from bc_malloc or bc_realloc, total bytes, total > BC_SHARED_HEAD)
+ * a buffer of its last total - BC_SHARED_HEAD bytes with one reference, without
+ * a copy: for a message made after room for its bc_shared (a big scene's
+ * SCENE_STATE). */
+struct bc_shared *bc_shared_adopt(uint8_t *buf, size_t total);
 void bc_shared_unref(struct bc_shared *s);
 
 /* A client as the layers below transport know it, owned by dispatch: who

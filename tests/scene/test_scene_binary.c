@@ -144,6 +144,13 @@ static void check_binary_round_trip(const struct bc_tree *t,
 	/* Encoding is a function of the scene: the same bytes again. */
 	REQUIRE(bc_scene_encode(t, cam, &again, &len2) == 0);
 	CHECK(len == len2 && memcmp(buf, again, len) == 0);
+	bc_free(again);
+	/* After a head of the caller's: zeros, then the same bytes. */
+	REQUIRE(bc_scene_encode_after(t, cam, 37, &again, &len2) == 0);
+	CHECK(len2 == 37 + len && memcmp(buf, again + 37, len) == 0);
+	for (size_t i = 0; i < 37; i++) {
+		CHECK_EQ_INT(again[i], 0);
+	}
 	bc_free(buf);
 	bc_free(again);
 

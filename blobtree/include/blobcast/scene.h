@@ -120,6 +120,12 @@ BC_API const char *bc_scene_default_json(void);
 BC_API int bc_scene_encode(const struct bc_tree *t, const struct bc_camera *cam,
                            uint8_t **out, size_t *len);
 BC_API int bc_tree_encode(const struct bc_tree *t, uint8_t **out, size_t *len);
+/* bc_scene_encode after head zero bytes for the caller to fill (a message's
+ * header): *out holds *len bytes, the encoding from (*out)[head] on. A
+ * sender that frames a big scene then copies none of it. */
+BC_API int bc_scene_encode_after(const struct bc_tree *t,
+                                 const struct bc_camera *cam, size_t head,
+                                 uint8_t **out, size_t *len);
 
 /*
  * Decodes exactly buf[0..len) (trailing bytes are an error). bc_scene_decode
