@@ -56,6 +56,8 @@ struct bc_client_opts bc_cli_connect_opts(const struct bc_cli_call *a)
 	    .timeout_ms = a->timeout_ms,
 	    .ca_file = a->ca,
 	    .insecure = a->insecure,
+	    /* No command draws from the mirror (mesh copies it). */
+	    .bare_scene = true,
 	    .encodings = a->encoding == BC_PROTO_ENC_H264
 	                     ? BC_PROTO_ENCODINGS_ALL
 	                     : BC_PROTO_ENCODINGS_IMAGES};

@@ -1169,8 +1169,11 @@ static void track(struct bc_client *c, const struct bc_msg *m)
 		}
 		break;
 	case BC_MSG_SCENE_STATE: {
-		struct bc_tree *t = c->scene ? c->scene : bc_tree_create();
+		struct bc_tree *t = c->scene;
 		bool has_cam = false;
+		if (!t && (t = bc_tree_create())) {
+			bc_tree_set_layout(t, !c->opts.bare_scene);
+		}
 		c->info.order = m->scene_state.order;
 		c->scene = t;
 		if (!t) {

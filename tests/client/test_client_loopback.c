@@ -659,22 +659,37 @@ static void script_structural(struct fake *f, int fd)
 	SCHECK(f, !srv_next(f, fd, &m));
 }
 
-static void test_mirror_follows_structural_edits(void)
+/* The mirror follows the same edits laid out (by default) or bare
+ * (bc_client_opts.bare_scene), which differ only in the layout. */
+static void mirror_follows_structural_edits(bool bare)
 {
 	struct fake f;
-	struct bc_client *c;
+	struct bc_client *c = NULL;
 	struct bc_errinfo ei = {0};
 	struct bc_msg m;
 	struct bc_prim_data p;
 	const struct bc_tree *t;
 	REQUIRE(fake_start(&f, script_structural, false) == 0);
-	c = connect_to(&f, 5000);
+	if (bc_client_connect(&c,
+	                      &(struct bc_client_opts){.addr = f.addr,
+	                                               .name = "loopback-test",
+	                                               .timeout_ms = 5000,
+	                                               .bare_scene = bare},
+	                      &ei) != 0) {
+		fprintf(stderr, "  connect: %s\n", ei.msg);
+	}
+	CHECK(c != NULL);
 	if (c) {
 		REQUIRE(bc_client_join(c, "s1", 0, 0, &ei) == 0);
+		t = bc_client_scene(c, NULL);
+		REQUIRE(t != NULL);
+		CHECK_EQ_INT(bc_tree_lays_out(t), !bare);
+		CHECK_EQ_INT(bc_tree_lin(t) != NULL, !bare);
 		REQUIRE(bc_client_recv(c, &m, 5000) == 1);
 		CHECK_EQ_INT(m.type, BC_MSG_EDIT_APPLIED);
 		t = bc_client_scene(c, NULL);
 		REQUIRE(t != NULL);
+		CHECK_EQ_INT(bc_tree_lin(t) != NULL, !bare);
 		CHECK(!bc_tree_get(t, 4, NULL, NULL));
 		CHECK_EQ_INT(bc_tree_node_count(t), 3);
 		REQUIRE(bc_client_recv(c, &m, 5000) == 1);
@@ -692,12 +707,24 @@ static void test_mirror_follows_structural_edits(void)
 		        0);
 		REQUIRE(bc_client_scene(c, NULL) != NULL);
 		CHECK_EQ_INT(bc_tree_node_count(bc_client_scene(c, NULL)), 4);
+		CHECK_EQ_INT(bc_tree_lin(bc_client_scene(c, NULL)) != NULL,
+		             !bare);
 		REQUIRE(bc_client_recv(c, &m, 5000) == 1);
 		CHECK_EQ_INT(m.edit_applied.order, 11);
 		CHECK(bc_client_scene(c, NULL) == NULL);
 	}
 	bc_client_destroy(c);
 	fake_stop(&f);
+}
+
+static void test_mirror_follows_structural_edits(void)
+{
+	mirror_follows_structural_edits(false);
+}
+
+static void test_bare_mirror_follows_structural_edits(void)
+{
+	mirror_follows_structural_edits(true);
 }
 
 /* ---- presenting and the session camera ------------------------------------ */
@@ -1494,6 +1521,8 @@ static const struct bc_test tests[] = {
     {"edit_is_acknowledged_among_other_edits",
      test_edit_is_acknowledged_among_other_edits},
     {"mirror_follows_structural_edits", test_mirror_follows_structural_edits},
+    {"bare_mirror_follows_structural_edits",
+     test_bare_mirror_follows_structural_edits},
     {"frames_and_snapshot", test_frames_and_snapshot},
     {"messages_larger_than_a_read", test_messages_larger_than_a_read},
     {"auth_error_is_reported", test_auth_error_is_reported},
