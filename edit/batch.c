@@ -156,6 +156,7 @@ static int apply_in_place(struct bc_edit_batch *b, struct bc_tree **tp,
 	if (rc && put_back(t, &b->inv, n - i)) {
 		bc_tree_destroy(shell);
 		bc_edit_batch_finish(b);
+		b->lost = true;
 		return bc_errinfo_set(ei, BC_ENOMEM,
 		                      "out of memory putting the scene back "
 		                      "after a refused edit: reload the scene");
@@ -230,12 +231,13 @@ int bc_edit_batch_apply_undoable(struct bc_edit_batch *b, struct bc_tree **tp,
 	return batch_apply(b, tp, ops, n, true, ei);
 }
 
-void bc_edit_batch_undo(struct bc_edit_batch *b, struct bc_tree **tp)
+int bc_edit_batch_undo(struct bc_edit_batch *b, struct bc_tree **tp)
 {
+	int rc = 0;
 	if (b->structural && b->old && b->in_place) {
 		/* Applied in place: its notes put the tree back, which goes
 		 * into the caller's object again. */
-		put_back(*tp, &b->inv, 0);
+		rc = put_back(*tp, &b->inv, 0);
 		bc_tree_swap(b->old, *tp);
 		bc_tree_destroy(*tp);
 		*tp = b->old;
@@ -248,6 +250,7 @@ void bc_edit_batch_undo(struct bc_edit_batch *b, struct bc_tree **tp)
 		restore(*tp, b->saved, b->nsaved);
 	}
 	bc_edit_batch_finish(b);
+	return rc;
 }
 
 void bc_edit_batch_finish(struct bc_edit_batch *b)

@@ -596,29 +596,34 @@ static void copy_name(const char *name, char out[BC_TREE_NAME_MAX + 1])
 	memcpy(out + keep, MODEL_COPY_SUFFIX, sizeof(MODEL_COPY_SUFFIX));
 }
 
-/* Applies ops to a copy of t with the daemon's edit code, and checks the
- * result against the server's node limit. */
-static int dry_run(const struct bc_client *c, const struct bc_tree *t,
-                   const struct bc_proto_edit_op *ops, uint32_t n,
-                   struct bc_errinfo *ei)
+/* Applies ops to the mirror with the daemon's edit code, checks the
+ * result against the server's node limit, and puts the mirror back. In
+ * place, as the daemon applies a batch: a copy of a million-node mirror
+ * for each check cost more than the rest of the command. */
+static int dry_run(struct bc_client *c, const struct bc_proto_edit_op *ops,
+                   uint32_t n, struct bc_errinfo *ei)
 {
-	struct bc_tree *copy = bc_tree_create();
+	struct bc_edit_batch b;
 	struct bc_errinfo why = {0};
-	int rc;
-	if (!copy) {
-		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+	uint32_t nodes = 0;
+	int rc = bc_edit_batch_apply(&b, &c->scene, ops, n, &why);
+	if (!rc) {
+		nodes = bc_tree_node_count(c->scene);
+		b.lost = bc_edit_batch_undo(&b, &c->scene) != 0;
 	}
-	rc = bc_tree_copy(copy, t, &why);
-	for (uint32_t i = 0; !rc && i < n; i++) {
-		rc = bc_edit_apply_op(copy, &ops[i], &why);
+	if (b.lost) {
+		c->has_scene = false;
+		return bc_errinfo_set(ei, BC_ENOMEM,
+		                      "out of memory putting the scene mirror "
+		                      "back after checking an edit: join the "
+		                      "session again");
 	}
-	if (!rc && bc_tree_node_count(copy) > node_limit(c)) {
+	if (!rc && nodes > node_limit(c)) {
 		rc = bc_errinfo_set(&why, BC_ELIMIT,
-		                    "the scene would have %u nodes, more "
-		                    "than the server's %u",
-		                    bc_tree_node_count(copy), node_limit(c));
+		                    "the scene would have %u nodes, more than "
+		                    "the server's %u",
+		                    nodes, node_limit(c));
 	}
-	bc_tree_destroy(copy);
 	if (rc == BC_EDEPTH) {
 		return bc_errinfo_set(ei, rc,
 		                      "refused before sending: %.180s; keep "
@@ -640,9 +645,9 @@ static int dry_run(const struct bc_client *c, const struct bc_tree *t,
 }
 
 /* Checks ops on the mirror, sends them as one EDIT and fills out. */
-static int send_ops(struct bc_client *c, const struct bc_tree *t,
-                    const struct bc_proto_edit_op *ops, uint32_t n,
-                    struct bc_model_result *out, struct bc_errinfo *ei)
+static int send_ops(struct bc_client *c, const struct bc_proto_edit_op *ops,
+                    uint32_t n, struct bc_model_result *out,
+                    struct bc_errinfo *ei)
 {
 	struct bc_msg m = {.type = BC_MSG_EDIT};
 	size_t bytes = 0;
@@ -658,7 +663,7 @@ static int send_ops(struct bc_client *c, const struct bc_tree *t,
 		                      "smaller part of the tree",
 		                      bytes, bc_client_info(c)->max_payload);
 	}
-	if ((rc = dry_run(c, t, ops, n, ei))) {
+	if ((rc = dry_run(c, ops, n, ei))) {
 		return rc;
 	}
 	out->base_order = bc_client_info(c)->order;
@@ -694,7 +699,7 @@ static int send_on_node(struct bc_client *c, const struct bc_tree *t,
 		out->node = op->node;
 		out->parent = bc_tree_parent(t, op->node);
 		out->position = sv.index;
-		rc = send_ops(c, t, op, 1, out, ei);
+		rc = send_ops(c, op, 1, out, ei);
 	}
 	if (rc) {
 		reset(out);
@@ -715,10 +720,9 @@ static int new_builder(struct bc_tree **sub, struct bc_errinfo *ei)
  * (rc: how building it went; sub may be NULL after a failure): finishes
  * and encodes it, checks and sends ops (send_ops), frees sub. out, filled
  * by the caller, is reset on failure. */
-static int send_built(struct bc_client *c, const struct bc_tree *t,
-                      struct bc_tree *sub, int rc, struct bc_proto_edit_op *ops,
-                      uint32_t nops, struct bc_model_result *out,
-                      struct bc_errinfo *ei)
+static int send_built(struct bc_client *c, struct bc_tree *sub, int rc,
+                      struct bc_proto_edit_op *ops, uint32_t nops,
+                      struct bc_model_result *out, struct bc_errinfo *ei)
 {
 	uint8_t *bytes = NULL;
 	size_t len = 0;
@@ -729,7 +733,7 @@ static int send_built(struct bc_client *c, const struct bc_tree *t,
 	if (!rc) {
 		ops[nops - 1].subtree =
 		    (struct bc_proto_bytes){.ptr = bytes, .len = (uint32_t)len};
-		rc = send_ops(c, t, ops, nops, out, ei);
+		rc = send_ops(c, ops, nops, out, ei);
 	}
 	bc_free(bytes);
 	bc_tree_destroy(sub);
@@ -906,7 +910,7 @@ int bc_model_add(struct bc_client *c, const struct bc_model_add *a,
 		rc = put_new(sub, &nn, first, &child, pos, right, ei);
 	}
 	rc = rc ? rc : name_new(sub, first, a->name, ei);
-	return send_built(c, t, sub, rc, &op, 1, out, ei);
+	return send_built(c, sub, rc, &op, 1, out, ei);
 }
 
 /* The refusal for removing or moving the root (or a chain up to it). */
@@ -957,7 +961,7 @@ int bc_model_remove(struct bc_client *c, uint32_t node,
 	out->node = top;
 	out->parent = bc_tree_parent(t, top);
 	out->position = sv.index;
-	rc = send_ops(c, t, &op, 1, out, ei);
+	rc = send_ops(c, &op, 1, out, ei);
 	if (rc) {
 		reset(out);
 	}
@@ -1072,7 +1076,7 @@ int bc_model_move(struct bc_client *c, const struct bc_model_move *m,
 		                              .position = pos};
 		out->position = pos;
 	}
-	return send_built(c, t, sub, rc, ops, nops, out, ei);
+	return send_built(c, sub, rc, ops, nops, out, ei);
 }
 
 int bc_model_wrap(struct bc_client *c, const struct bc_model_wrap *w,
@@ -1142,7 +1146,7 @@ int bc_model_wrap(struct bc_client *c, const struct bc_model_wrap *w,
 	}
 	rc = rc ? rc : bc_tree_pop_op(sub, ei);
 	rc = rc ? rc : name_new(sub, first, w->name, ei);
-	return send_built(c, t, sub, rc, &op, 1, out, ei);
+	return send_built(c, sub, rc, &op, 1, out, ei);
 }
 
 int bc_model_duplicate(struct bc_client *c, const struct bc_model_duplicate *d,
@@ -1199,7 +1203,7 @@ int bc_model_duplicate(struct bc_client *c, const struct bc_model_duplicate *d,
 		    sub, first + depth_of(t, d->node) - depth_of(t, top), copy,
 		    strlen(copy), ei);
 	}
-	return send_built(c, t, sub, rc, &op, 1, out, ei);
+	return send_built(c, sub, rc, &op, 1, out, ei);
 }
 
 int bc_model_set_operator(struct bc_client *c, uint32_t node, const char *kind,

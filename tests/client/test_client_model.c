@@ -871,15 +871,31 @@ static int run_action(struct bc_client *c, int i, struct bc_model_result *r,
 	}
 }
 
+/* Whether c's mirror encodes to bytes[0..len). */
+static bool mirror_is(const struct bc_client *c, const uint8_t *bytes,
+                      size_t len)
+{
+	uint8_t *now = NULL;
+	size_t n = 0;
+	bool same = bc_scene_encode(mirror_of(c), NULL, &now, &n) == 0 &&
+	            n == len && memcmp(now, bytes, len) == 0;
+	bc_free(now);
+	return same;
+}
+
 /* Each action with its Nth allocation failing, for every N until it
  * succeeds: every failure is BC_ENOMEM, sends nothing and frees what it
- * took (LeakSanitizer checks at exit), and the connection goes on. */
+ * took (LeakSanitizer checks at exit), and the connection goes on. The
+ * mirror, which the dry run changes and puts back, is the scene before
+ * the action -- or, where putting it back ran out of memory, gone, with
+ * an error that says to join again (and joining again brings it back). */
 static void allocation_failures_free_everything(void)
 {
 	struct daemon d = {0};
 	struct bc_client *a = NULL;
 	struct bc_errinfo ei = {0};
 	struct bc_model_result r;
+	uint32_t dropped = 0;
 	char dir[160];
 	snprintf(dir, sizeof(dir), "%s/alloc", base_dir);
 	REQUIRE(daemon_start(&d, dir) == 0);
@@ -890,6 +906,10 @@ static void allocation_failures_free_everything(void)
 		int rc = -1;
 		for (n = 1; n < 1000 && rc != 0; n++) {
 			uint64_t out = bc_client_info(a)->msgs_out;
+			uint8_t *before = NULL;
+			size_t len = 0;
+			REQUIRE(bc_scene_encode(mirror_of(a), NULL, &before,
+			                        &len) == 0);
 			bc_alloc_fail_after(n);
 			rc = run_action(a, i, &r, &ei);
 			bc_alloc_fail_after(0);
@@ -898,13 +918,24 @@ static void allocation_failures_free_everything(void)
 				CHECK_EQ_INT(bc_client_info(a)->msgs_out, out);
 				CHECK_EQ_INT(r.seq, 0);
 			}
+			if (rc && !mirror_of(a)) {
+				CHECK(strstr(ei.msg, "join the session again"));
+				dropped++;
+				bc_client_destroy(a);
+				REQUIRE(connect_to(&d, "grace", &a) == 0);
+				REQUIRE(enter(a, "alloc", NULL) == 0);
+			}
+			CHECK(!rc || mirror_is(a, before, len));
+			bc_free(before);
 		}
 		CHECK_EQ_INT(rc, 0);
 		/* Every action allocates: a scratch tree, a walk, a
-		 * builder, the copy the dry run applies to. */
+		 * builder, the dry run's notes. */
 		CHECK(n > 4);
 		CHECK(rc || applied(a, &r) == 0);
 	}
+	/* Removing, moving and wrapping put back decoded subtrees. */
+	CHECK(dropped > 0);
 	CHECK_EQ_INT(bc_client_error(a, NULL), 0);
 	bc_client_destroy(a);
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));

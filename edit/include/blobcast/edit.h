@@ -124,6 +124,9 @@ struct bc_edit_batch {
 	/* Structural, bc_edit_batch_apply_undoable() or applied in place:
 	 * what undoes it. */
 	struct bc_edit_inverse inv;
+	/* Set by a failed apply that ran out of memory putting *tp back
+	 * (BC_ENOMEM): *tp is then a valid tree, but not the one before. */
+	bool lost;
 };
 
 /*
@@ -136,7 +139,8 @@ struct bc_edit_batch {
  * caller's object, emptied; where the notes cannot be kept the batch is
  * applied to a copy instead, and b->old is the whole tree before it. The
  * error's text starts with "operation i:". Returns 0 or a BC_E* code; on
- * failure *tp is as before and b holds nothing.
+ * failure b holds nothing and *tp is as before, unless putting it back ran
+ * out of memory (BC_ENOMEM with b->lost set).
  */
 int bc_edit_batch_apply(struct bc_edit_batch *b, struct bc_tree **tp,
                         const struct bc_proto_edit_op *ops, uint32_t n,
@@ -155,8 +159,9 @@ int bc_edit_batch_apply_undoable(struct bc_edit_batch *b, struct bc_tree **tp,
  * valid, into room the batch freed, so only memory can fail it, and only
  * for a structural batch applied in place (decoding the subtrees its
  * inverse puts back: memory in proportion to the change). b is then
- * empty. */
-void bc_edit_batch_undo(struct bc_edit_batch *b, struct bc_tree **tp);
+ * empty. Returns 0, or BC_ENOMEM when it failed so: *tp is then a valid
+ * tree but not the one before the batch (reload it). */
+int bc_edit_batch_undo(struct bc_edit_batch *b, struct bc_tree **tp);
 
 /* Frees what b holds (the old tree, the saved nodes, the inverse); accepts
  * a zeroed b. */

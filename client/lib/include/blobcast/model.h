@@ -12,9 +12,11 @@
  * to it), a result over the depth limits (BC_TREE_MAX_DEPTH, the
  * evaluation stack BC_EVAL_STACK, BC_DOMAIN_MAX_CHAIN domain nodes on a
  * path) or the node limit (the server's max_nodes), unknown kinds and
- * keys. The last check applies the operations to a copy of the mirror
- * with the daemon's own edit code, so what passes here is what the daemon
- * applies, unless another member's edit reaches it first.
+ * keys. The last check applies the operations to the mirror with the
+ * daemon's own edit code and puts it back, so what passes here is what
+ * the daemon applies, unless another member's edit reaches it first.
+ * (Should putting it back run out of memory, the mirror is dropped and
+ * the action fails with BC_ENOMEM: join the session again.)
  *
  * Each function sends the EDIT and returns without waiting: *out says the
  * EDIT's seq and the ids the action created. bc_client_wait_applied(c,
