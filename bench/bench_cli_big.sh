@@ -1,0 +1,122 @@
+#!/bin/sh
+# One-shot CLI commands on a big session, side by side: each BUILD_DIR's
+# blobcastd (a private one on a Unix socket) loads a million smooth fig18
+# spheres (big_scene.sh), then its `blobcast edit` (a primitive's
+# translate) and `blobcast add` (a sphere appended to the union) run
+# REPS times, the builds taking turns. Each command connects, joins (the
+# session's SCENE_STATE: sent by the daemon, taken in by the client),
+# checks and sends its edit and waits for its EDIT_APPLIED. Prints one
+# Markdown table row per build and command: medians of wall time, the
+# client's CPU time and peak resident memory (GNU time), and the daemon's
+# CPU time over the command (/proc/PID/stat).
+#
+#   bench/bench_cli_big.sh BUILD_DIR [BUILD_DIR...] [-- REPS]
+#
+# BUILD_DIRs are Release builds (ASan would measure the sanitizer); REPS
+# defaults to 5. $BC_BIG_SCENE: where the scene is made once.
+set -eu
+# shellcheck source=bench/big_scene.sh
+. "$(dirname "$0")/big_scene.sh"
+builds=
+reps=5
+while [ $# -gt 0 ]; do
+	case $1 in
+	--) reps=${2:?REPS after --}; break ;;
+	*) builds="$builds $1" ;;
+	esac
+	shift
+done
+if [ -z "$builds" ]; then
+	echo "usage: bench/bench_cli_big.sh BUILD_DIR [BUILD_DIR...] [-- REPS]" >&2
+	exit 2
+fi
+for b in $builds; do
+	for f in "$b/server/blobcastd" "$b/client/blobcast"; do
+		if [ ! -x "$f" ]; then
+			echo "bench_cli_big: $f is not built (cmake --build $b)" >&2
+			exit 1
+		fi
+	done
+done
+big_scene_prepare bench_cli_big "${builds%% *}"
+builds=${builds# }
+dir=$(mktemp -d /tmp/bc-clibig.XXXXXX)
+pids=
+cleanup() {
+	for p in $pids; do kill "$p" 2>/dev/null || :; done
+	wait 2>/dev/null || :
+	rm -rf "$dir"
+}
+trap cleanup EXIT INT TERM
+tck=$(getconf CLK_TCK)
+
+# Daemon k of build b: its socket and data under $dir/k.
+k=0
+for b in $builds; do
+	k=$((k + 1))
+	mkdir -p "$dir/$k"
+	"$b/server/blobcastd" --listen none --unix "$dir/$k/sock" \
+		--data "$dir/$k/data" 2>"$dir/$k/daemon.log" &
+	pids="$pids $!"
+	echo $! >"$dir/$k/pid"
+	i=0
+	until [ -S "$dir/$k/sock" ] &&
+		grep -q 'blobcastd: backend' "$dir/$k/daemon.log"; do
+		i=$((i + 1))
+		if [ $i -gt 400 ]; then
+			echo "bench_cli_big: blobcastd of $b did not start:" >&2
+			cat "$dir/$k/daemon.log" >&2
+			exit 1
+		fi
+		sleep 0.05
+	done
+	"$b/client/blobcast" --server "unix:$dir/$k/sock" --timeout 600000 \
+		load "$scene" --session big >/dev/null
+done
+
+cpu_ticks() { awk '{print $14 + $15}' "/proc/$(cat "$1/pid")/stat"; }
+
+# run K B NAME ARGS...: one command of build B against daemon K, its
+# figures appended to $dir/K/NAME.
+run() {
+	kd=$dir/$1
+	b=$2
+	name=$3
+	shift 3
+	t0=$(cpu_ticks "$kd")
+	/usr/bin/time -f '%e %U %S %M' -o "$kd/time" "$b/client/blobcast" \
+		--server "unix:$kd/sock" --timeout 600000 "$@" >/dev/null
+	# The daemon may still be sending frames or writing its journal.
+	sleep 0.3
+	t1=$(cpu_ticks "$kd")
+	read -r wall user sys kb <"$kd/time"
+	echo "$wall $user $sys $kb $(((t1 - t0) * 1000 / tck))" |
+		awk '{print $1, $2 + $3, int($4 / 1024), $5}' >>"$kd/$name"
+}
+
+r=0
+while [ $r -lt "$reps" ]; do
+	r=$((r + 1))
+	k=0
+	for b in $builds; do
+		k=$((k + 1))
+		run $k "$b" edit edit --session big 5 "translate=0,0.$r,0"
+		run $k "$b" add add --session big sphere radius=0.01
+	done
+done
+
+# median FILE COLUMN
+median() {
+	sort -n -k"$2" "$1" | awk -v c="$2" '{v[NR] = $c}
+		END {print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2}'
+}
+echo "| build | command | wall s | client CPU s | client peak MiB | daemon CPU ms |"
+echo "|---|---|---:|---:|---:|---:|"
+k=0
+for b in $builds; do
+	k=$((k + 1))
+	for name in edit add; do
+		f=$dir/$k/$name
+		echo "| $b | $name | $(median "$f" 1) | $(median "$f" 2) | $(median "$f" 3) | $(median "$f" 4) |"
+	done
+done
