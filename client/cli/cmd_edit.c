@@ -34,11 +34,15 @@ static int run_load(struct bc_cli_call *a)
 	uint8_t *bytes = NULL;
 	size_t len = 0;
 	uint64_t order;
+	uint32_t nodes;
 	int status = 0, rc;
 	if (!t) {
 		fprintf(stderr, "blobcast load: out of memory\n");
 		return BC_CLI_EXIT_FAIL;
 	}
+	/* The tree is only encoded: no layout (seconds and hundreds of MB
+	 * for a million spheres), and freed before the scene is sent. */
+	bc_tree_set_layout(t, false);
 	/* The file is read before connecting: a bad file is the caller's
 	 * mistake (status 2) and costs the server nothing. */
 	if (bc_scene_load_json(a->pos[0], t, &cam, &ei)) {
@@ -52,6 +56,9 @@ static int run_load(struct bc_cli_call *a)
 		status = BC_CLI_EXIT_FAIL;
 		goto out;
 	}
+	nodes = bc_tree_node_count(t);
+	bc_tree_destroy(t);
+	t = NULL;
 	if ((status = bc_cli_open_session(a, BC_PROTO_ROLE_EDITOR,
 	                                  BC_CLIENT_JOIN_ANY, &c))) {
 		goto out;
@@ -61,8 +68,7 @@ static int run_load(struct bc_cli_call *a)
 		goto out;
 	}
 	printf("session %s: loaded %s (%u nodes), edit order %llu\n",
-	       a->session, a->pos[0], bc_tree_node_count(t),
-	       (unsigned long long)order);
+	       a->session, a->pos[0], nodes, (unsigned long long)order);
 out:
 	bc_free(bytes);
 	bc_tree_destroy(t);

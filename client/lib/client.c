@@ -1530,6 +1530,10 @@ int bc_client_load_scene_file(struct bc_client *c, const char *path,
 	if (!t) {
 		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
 	}
+	/* The tree is only encoded: no layout (a million spheres' would
+	 * take seconds and hundreds of MB), and gone before the scene is
+	 * sent and its SCENE_STATE taken in. */
+	bc_tree_set_layout(t, false);
 	if ((rc = bc_scene_load_json(path, t, &cam, ei))) {
 		goto out;
 	}
@@ -1538,11 +1542,13 @@ int bc_client_load_scene_file(struct bc_client *c, const char *path,
 		                    path, bc_strerror(rc));
 		goto out;
 	}
-	if ((rc = bc_client_load_scene(c, bytes, len, order, ei))) {
-		goto out;
-	}
 	if (nodes) {
 		*nodes = bc_tree_node_count(t);
+	}
+	bc_tree_destroy(t);
+	t = NULL;
+	if ((rc = bc_client_load_scene(c, bytes, len, order, ei)) && nodes) {
+		*nodes = 0;
 	}
 out:
 	bc_free(bytes);
