@@ -730,6 +730,45 @@ static void allocation_failures_are_survived(void)
 	bc_tree_destroy(ref);
 }
 
+/* A document is read in an arena of 4 MiB blocks, where a request over
+ * a quarter of a block gets one of its own: a 3 MB string and a 200 000
+ * item array (1.6 MB of item pointers, grown by doubling) take that path,
+ * the first refused by its meaning, the second read whole; what was read
+ * before does not change what is read after. */
+static void big_pieces_of_a_document_are_read(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_errinfo ei = {0};
+	size_t n = 3u << 20, len = 0, cap = 64u + 32u * 200000u;
+	char *text = bc_malloc(n + 128u), *arr = bc_malloc(cap);
+	REQUIRE(t && text && arr);
+	len = (size_t)snprintf(text, 128u,
+	                       "{\"blobcast\": 1, \"root\": {\"type\": \"");
+	memset(text + len, 'q', n);
+	len += n;
+	len += (size_t)snprintf(text + len, 32u, "\", \"radius\": 1}}");
+	CHECK_EQ_INT(bc_scene_parse_json(text, len, t, NULL, &ei), BC_EENUM);
+	CHECK(strstr(ei.msg, "type") != NULL);
+	CHECK(tree_is_empty(t));
+	/* A union of 200 000 spheres, radius 0.5 at x = i. */
+	len = (size_t)snprintf(arr, cap,
+	                       "{\"blobcast\": 1, \"root\": {\"type\": "
+	                       "\"union\", \"children\": [");
+	for (uint32_t i = 0; i < 200000u; i++) {
+		len += (size_t)snprintf(
+		    arr + len, cap - len,
+		    "%s{\"type\":\"sphere\",\"radius\":0.5}", i ? "," : "");
+	}
+	len += (size_t)snprintf(arr + len, cap - len, "]}}");
+	REQUIRE(len < cap);
+	CHECK_EQ_INT(bc_scene_parse_json(arr, len, t, NULL, &ei), 0);
+	CHECK_EQ_INT(bc_tree_node_count(t), 200001);
+	CHECK_EQ_INT(bc_tree_child_count(t, bc_tree_root(t)), 200000);
+	bc_free(text);
+	bc_free(arr);
+	bc_tree_destroy(t);
+}
+
 static const struct bc_test tests[] = {
     {"every_generator_round_trips_through_json",
      every_generator_round_trips_through_json},
@@ -749,6 +788,7 @@ static const struct bc_test tests[] = {
      save_is_atomic_and_load_reads_it_back},
     {"default_scene_is_valid_and_framed", default_scene_is_valid_and_framed},
     {"allocation_failures_are_survived", allocation_failures_are_survived},
+    {"big_pieces_of_a_document_are_read", big_pieces_of_a_document_are_read},
     {"streamed_text_is_the_whole_text_in_pieces",
      streamed_text_is_the_whole_text_in_pieces},
 };
