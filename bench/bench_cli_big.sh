@@ -2,10 +2,12 @@
 # One-shot CLI commands on a big session, side by side: each BUILD_DIR's
 # blobcastd (a private one on a Unix socket) loads a million smooth fig18
 # spheres (big_scene.sh), then its `blobcast edit` (a primitive's
-# translate) and `blobcast add` (a sphere appended to the union) run
-# REPS times, the builds taking turns. Each command connects, joins (the
-# session's SCENE_STATE: sent by the daemon, taken in by the client),
-# checks and sends its edit and waits for its EDIT_APPLIED. Prints one
+# translate), `blobcast add` (a sphere appended to the union) and
+# `blobcast load` (the 166 MB JSON file again) run REPS times, the builds
+# taking turns. Each command connects, joins (the session's SCENE_STATE:
+# sent by the daemon, taken in by the client), checks and sends its edit
+# and waits for its EDIT_APPLIED (load: reads the file first, and waits
+# for the new scene's SCENE_STATE). Prints one
 # Markdown table row per build and command: medians of wall time, the
 # client's CPU time and peak resident memory (GNU time), and the daemon's
 # CPU time over the command (/proc/PID/stat).
@@ -102,6 +104,7 @@ while [ $r -lt "$reps" ]; do
 		k=$((k + 1))
 		run $k "$b" edit edit --session big 5 "translate=0,0.$r,0"
 		run $k "$b" add add --session big sphere radius=0.01
+		run $k "$b" load load "$scene" --session big
 	done
 done
 
@@ -115,7 +118,7 @@ echo "|---|---|---:|---:|---:|---:|"
 k=0
 for b in $builds; do
 	k=$((k + 1))
-	for name in edit add; do
+	for name in edit add load; do
 		f=$dir/$k/$name
 		echo "| $b | $name | $(median "$f" 1) | $(median "$f" 2) | $(median "$f" 3) | $(median "$f" 4) |"
 	done

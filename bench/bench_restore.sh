@@ -1,0 +1,119 @@
+#!/bin/sh
+# A daemon restarting with a big session, side by side: the first
+# BUILD_DIR's blobcastd loads a million smooth fig18 spheres
+# (big_scene.sh) into session "big" and stops, leaving its data
+# directory (the session's JSON snapshot); then each BUILD_DIR's
+# blobcastd starts on a copy of that directory REPS times, the builds
+# taking turns. It restores every session before it listens. Prints one
+# Markdown table row per build: medians of the seconds from start to
+# listening, the daemon's peak resident memory (VmHWM) and its resident
+# memory a second after it listens (VmRSS).
+#
+#   bench/bench_restore.sh BUILD_DIR [BUILD_DIR...] [-- REPS]
+#
+# BUILD_DIRs are Release builds; REPS defaults to 3. $BC_BIG_SCENE: where
+# the scene is made once.
+set -eu
+# shellcheck source=bench/big_scene.sh
+. "$(dirname "$0")/big_scene.sh"
+builds=
+reps=3
+while [ $# -gt 0 ]; do
+	case $1 in
+	--) reps=${2:?REPS after --}; break ;;
+	*) builds="$builds $1" ;;
+	esac
+	shift
+done
+if [ -z "$builds" ]; then
+	echo "usage: bench/bench_restore.sh BUILD_DIR [BUILD_DIR...] [-- REPS]" >&2
+	exit 2
+fi
+for b in $builds; do
+	for f in "$b/server/blobcastd" "$b/client/blobcast"; do
+		if [ ! -x "$f" ]; then
+			echo "bench_restore: $f is not built (cmake --build $b)" >&2
+			exit 1
+		fi
+	done
+done
+first=${builds# }
+first=${first%% *}
+big_scene_prepare bench_restore "$first"
+dir=$(mktemp -d /tmp/bc-restore.XXXXXX)
+pid=
+cleanup() {
+	[ -n "$pid" ] && kill "$pid" 2>/dev/null && wait "$pid" 2>/dev/null
+	rm -rf "$dir"
+}
+trap cleanup EXIT INT TERM
+
+# start B DATA: B's daemon on DATA; sets pid and the seconds it took to
+# listen in $dir/took.
+start() {
+	rm -f "$dir/sock"
+	t0=$(date +%s.%N)
+	"$1/server/blobcastd" --listen none --unix "$dir/sock" --data "$2" \
+		2>"$dir/daemon.log" &
+	pid=$!
+	until grep -q 'blobcastd: backend' "$dir/daemon.log"; do
+		if ! kill -0 "$pid" 2>/dev/null; then
+			echo "bench_restore: blobcastd of $1 did not start:" >&2
+			cat "$dir/daemon.log" >&2
+			exit 1
+		fi
+		sleep 0.02
+	done
+	t1=$(date +%s.%N)
+	echo "$t0 $t1" | awk '{printf "%.2f\n", $2 - $1}' >"$dir/took"
+}
+stop() {
+	kill "$pid" 2>/dev/null && wait "$pid" 2>/dev/null
+	pid=
+}
+
+start "$first" "$dir/data"
+"$first/client/blobcast" --server "unix:$dir/sock" --timeout 600000 \
+	load "$scene" --session big >/dev/null
+# The store writes the loaded scene's snapshot (order 1) after the load:
+# restoring should read it, not a journal.
+i=0
+until [ -s "$dir/data/sessions/big/snap-1.json" ]; do
+	i=$((i + 1))
+	if [ $i -gt 600 ]; then
+		echo "bench_restore: no snapshot of the session after 60 s" >&2
+		exit 1
+	fi
+	sleep 0.1
+done
+sleep 1
+stop
+
+r=0
+while [ $r -lt "$reps" ]; do
+	r=$((r + 1))
+	k=0
+	for b in $builds; do
+		k=$((k + 1))
+		rm -rf "$dir/copy"
+		cp -r "$dir/data" "$dir/copy"
+		start "$b" "$dir/copy"
+		sleep 1
+		echo "$(cat "$dir/took") $(awk '/^VmHWM/ {h = $2} /^VmRSS/ {r = $2}
+			END {print int(h / 1024), int(r / 1024)}' "/proc/$pid/status")" \
+			>>"$dir/$k"
+		stop
+	done
+done
+
+median() {
+	sort -n -k"$2" "$1" | awk -v c="$2" '{v[NR] = $c}
+		END {print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2}'
+}
+echo "| build | start to listening s | VmHWM MiB | VmRSS after MiB |"
+echo "|---|---:|---:|---:|"
+k=0
+for b in $builds; do
+	k=$((k + 1))
+	echo "| $b | $(median "$dir/$k" 1) | $(median "$dir/$k" 2) | $(median "$dir/$k" 3) |"
+done
