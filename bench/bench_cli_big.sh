@@ -19,29 +19,8 @@
 set -eu
 # shellcheck source=bench/big_scene.sh
 . "$(dirname "$0")/big_scene.sh"
-builds=
-reps=5
-while [ $# -gt 0 ]; do
-	case $1 in
-	--) reps=${2:?REPS after --}; break ;;
-	*) builds="$builds $1" ;;
-	esac
-	shift
-done
-if [ -z "$builds" ]; then
-	echo "usage: bench/bench_cli_big.sh BUILD_DIR [BUILD_DIR...] [-- REPS]" >&2
-	exit 2
-fi
-for b in $builds; do
-	for f in "$b/server/blobcastd" "$b/client/blobcast"; do
-		if [ ! -x "$f" ]; then
-			echo "bench_cli_big: $f is not built (cmake --build $b)" >&2
-			exit 1
-		fi
-	done
-done
+big_scene_builds bench_cli_big 5 "$@"
 big_scene_prepare bench_cli_big "${builds%% *}"
-builds=${builds# }
 dir=$(mktemp -d /tmp/bc-clibig.XXXXXX)
 pids=
 cleanup() {
@@ -108,11 +87,6 @@ while [ $r -lt "$reps" ]; do
 	done
 done
 
-# median FILE COLUMN
-median() {
-	sort -n -k"$2" "$1" | awk -v c="$2" '{v[NR] = $c}
-		END {print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2}'
-}
 echo "| build | command | wall s | client CPU s | client peak MiB | daemon CPU ms |"
 echo "|---|---|---:|---:|---:|---:|"
 k=0
@@ -120,6 +94,6 @@ for b in $builds; do
 	k=$((k + 1))
 	for name in edit add load; do
 		f=$dir/$k/$name
-		echo "| $b | $name | $(median "$f" 1) | $(median "$f" 2) | $(median "$f" 3) | $(median "$f" 4) |"
+		echo "| $b | $name | $(big_scene_median "$f" 1) | $(big_scene_median "$f" 2) | $(big_scene_median "$f" 3) | $(big_scene_median "$f" 4) |"
 	done
 done

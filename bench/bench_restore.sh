@@ -16,29 +16,8 @@
 set -eu
 # shellcheck source=bench/big_scene.sh
 . "$(dirname "$0")/big_scene.sh"
-builds=
-reps=3
-while [ $# -gt 0 ]; do
-	case $1 in
-	--) reps=${2:?REPS after --}; break ;;
-	*) builds="$builds $1" ;;
-	esac
-	shift
-done
-if [ -z "$builds" ]; then
-	echo "usage: bench/bench_restore.sh BUILD_DIR [BUILD_DIR...] [-- REPS]" >&2
-	exit 2
-fi
-for b in $builds; do
-	for f in "$b/server/blobcastd" "$b/client/blobcast"; do
-		if [ ! -x "$f" ]; then
-			echo "bench_restore: $f is not built (cmake --build $b)" >&2
-			exit 1
-		fi
-	done
-done
-first=${builds# }
-first=${first%% *}
+big_scene_builds bench_restore 3 "$@"
+first=${builds%% *}
 big_scene_prepare bench_restore "$first"
 dir=$(mktemp -d /tmp/bc-restore.XXXXXX)
 pid=
@@ -106,14 +85,10 @@ while [ $r -lt "$reps" ]; do
 	done
 done
 
-median() {
-	sort -n -k"$2" "$1" | awk -v c="$2" '{v[NR] = $c}
-		END {print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2}'
-}
 echo "| build | start to listening s | VmHWM MiB | VmRSS after MiB |"
 echo "|---|---:|---:|---:|"
 k=0
 for b in $builds; do
 	k=$((k + 1))
-	echo "| $b | $(median "$dir/$k" 1) | $(median "$dir/$k" 2) | $(median "$dir/$k" 3) |"
+	echo "| $b | $(big_scene_median "$dir/$k" 1) | $(big_scene_median "$dir/$k" 2) | $(big_scene_median "$dir/$k" 3) |"
 done
