@@ -75,17 +75,13 @@ run() {
 		awk '{print $1, $2 + $3, int($4 / 1024), $5}' >>"$kd/$name"
 }
 
-r=0
-while [ $r -lt "$reps" ]; do
-	r=$((r + 1))
-	k=0
-	for b in $builds; do
-		k=$((k + 1))
-		run $k "$b" edit edit --session big 5 "translate=0,0.$r,0"
-		run $k "$b" add add --session big sphere radius=0.01
-		run $k "$b" load load "$scene" --session big
-	done
-done
+# round K B R: build B's commands against daemon K.
+round() {
+	run "$1" "$2" edit edit --session big 5 "translate=0,0.$3,0"
+	run "$1" "$2" add add --session big sphere radius=0.01
+	run "$1" "$2" load load "$scene" --session big
+}
+big_scene_rounds round
 
 echo "| build | command | wall s | client CPU s | client peak MiB | daemon CPU ms |"
 echo "|---|---|---:|---:|---:|---:|"
@@ -94,6 +90,6 @@ for b in $builds; do
 	k=$((k + 1))
 	for name in edit add load; do
 		f=$dir/$k/$name
-		echo "| $b | $name | $(big_scene_median "$f" 1) | $(big_scene_median "$f" 2) | $(big_scene_median "$f" 3) | $(big_scene_median "$f" 4) |"
+		echo "| $b | $name | $(big_scene_medians "$f" 4) |"
 	done
 done

@@ -68,27 +68,23 @@ done
 sleep 1
 stop
 
-r=0
-while [ $r -lt "$reps" ]; do
-	r=$((r + 1))
-	k=0
-	for b in $builds; do
-		k=$((k + 1))
-		rm -rf "$dir/copy"
-		cp -r "$dir/data" "$dir/copy"
-		start "$b" "$dir/copy"
-		sleep 1
-		echo "$(cat "$dir/took") $(awk '/^VmHWM/ {h = $2} /^VmRSS/ {r = $2}
-			END {print int(h / 1024), int(r / 1024)}' "/proc/$pid/status")" \
-			>>"$dir/$k"
-		stop
-	done
-done
+# round K B R: build B's daemon restoring a copy of the data.
+round() {
+	rm -rf "$dir/copy"
+	cp -r "$dir/data" "$dir/copy"
+	start "$2" "$dir/copy"
+	sleep 1
+	echo "$(cat "$dir/took") $(awk '/^VmHWM/ {h = $2} /^VmRSS/ {r = $2}
+		END {print int(h / 1024), int(r / 1024)}' "/proc/$pid/status")" \
+		>>"$dir/$1"
+	stop
+}
+big_scene_rounds round
 
 echo "| build | start to listening s | VmHWM MiB | VmRSS after MiB |"
 echo "|---|---:|---:|---:|"
 k=0
 for b in $builds; do
 	k=$((k + 1))
-	echo "| $b | $(big_scene_median "$dir/$k" 1) | $(big_scene_median "$dir/$k" 2) | $(big_scene_median "$dir/$k" 3) |"
+	echo "| $b | $(big_scene_medians "$dir/$k" 3) |"
 done

@@ -51,8 +51,31 @@ big_scene_builds() {
 	done
 }
 
-# big_scene_median FILE COLUMN: the median of that column's numbers.
-big_scene_median() {
-	sort -n -k"$2" "$1" | awk -v c="$2" '{v[NR] = $c}
-		END {print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2}'
+# big_scene_rounds FUNC: calls FUNC K BUILD R for round R = 1..$reps and
+# each build of $builds (K its place in the list, from 1), the builds
+# taking turns.
+big_scene_rounds() {
+	r=0
+	while [ $r -lt "$reps" ]; do
+		r=$((r + 1))
+		k=0
+		for b in $builds; do
+			k=$((k + 1))
+			"$1" $k "$b" $r
+		done
+	done
+}
+
+# big_scene_medians FILE N: the medians of the first N columns of FILE's
+# numbers, as Markdown table cells ("a | b | c").
+big_scene_medians() {
+	c=1
+	cells=
+	while [ $c -le "$2" ]; do
+		m=$(sort -n -k"$c" "$1" | awk -v c="$c" '{v[NR] = $c}
+			END {print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2}')
+		cells="$cells${cells:+ | }$m"
+		c=$((c + 1))
+	done
+	echo "$cells"
 }
