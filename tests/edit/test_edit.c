@@ -678,6 +678,67 @@ static void inverse_is_never_bigger_than_the_scene(void)
 	bc_tree_destroy(mirror);
 }
 
+/* A structural batch with its Nth allocation failing, for N up to past
+ * what it and its undo allocate: a refused batch leaves the tree as it
+ * was, or says that it could not (b.lost, BC_ENOMEM); an undo puts it
+ * back, or says BC_ENOMEM. The batch inserts a sphere and removes a
+ * subtree; putting that subtree back decodes it again, which can run out
+ * of memory, whether the batch's third operation is refused or the
+ * batch is undone. */
+static void failures_say_when_the_tree_is_not_put_back(void)
+{
+	struct bc_tree *t = scene(), *before = scene();
+	struct bc_edit_batch b;
+	struct bc_errinfo ei = {0};
+	struct bc_proto_buf sub;
+	struct bc_proto_edit_op ops[3];
+	uint32_t lost = 0, undo_lost = 0, refused = 0, undone = 0;
+	sphere_bytes(&sub, 20);
+	ops[0] =
+	    (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_INSERT,
+	                              .node = 10,
+	                              .position = 0,
+	                              .subtree = {sub.data, (uint32_t)sub.len}};
+	ops[1] =
+	    (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_REMOVE, .node = 12};
+	ops[2] = (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_REMOVE,
+	                                   .node = 999}; /* refused */
+	for (uint32_t nops = 2; nops <= 3; nops++) {
+		for (unsigned long n = 1; n < 400; n++) {
+			int urc = 0;
+			bc_alloc_fail_after(n);
+			int rc = bc_edit_batch_apply(&b, &t, ops, nops, &ei);
+			if (rc == 0) {
+				urc = bc_edit_batch_undo(&b, &t);
+			}
+			bc_alloc_fail_after(0);
+			CHECK(rc == 0 || rc == BC_ENOMEM ||
+			      (nops == 3 && rc == BC_ENONODE));
+			refused += rc == BC_ENONODE;
+			undone += rc == 0 && urc == 0;
+			if (rc && b.lost) {
+				CHECK_EQ_INT(rc, BC_ENOMEM);
+				lost++;
+			} else if (urc) {
+				CHECK_EQ_INT(urc, BC_ENOMEM);
+				undo_lost++;
+			} else {
+				CHECK(same_bytes(t, before));
+			}
+			if ((rc && b.lost) || urc) {
+				bc_tree_destroy(t);
+				t = scene();
+			}
+		}
+	}
+	/* Every outcome came up, and the tree not put back among them. */
+	CHECK(refused > 0 && undone > 0);
+	CHECK(lost > 0 && undo_lost > 0);
+	bc_proto_buf_finish(&sub);
+	bc_tree_destroy(t);
+	bc_tree_destroy(before);
+}
+
 static const struct bc_test tests[] = {
     {"subtree_with_id_0_is_einval", subtree_with_id_0_is_einval},
     {"remove_root_is_einval", remove_root_is_einval},
@@ -701,6 +762,8 @@ static const struct bc_test tests[] = {
      saved_states_come_back_as_operations},
     {"inverse_is_never_bigger_than_the_scene",
      inverse_is_never_bigger_than_the_scene},
+    {"failures_say_when_the_tree_is_not_put_back",
+     failures_say_when_the_tree_is_not_put_back},
 };
 
 BC_TEST_MAIN(tests)
