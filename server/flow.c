@@ -340,6 +340,15 @@ static void apply_early(struct bc_work *w, struct flow *f, const struct upd *u)
 		bc_log(BC_LOG_DEBUG, "session %u: early batch refused: %s",
 		       f->sid, ei.msg);
 		f->eb_state = EB_FAILED;
+		if (f->eb.lost) {
+			/* Refused, and not put back: the copy is no longer
+			 * the session's scene. */
+			bc_log(BC_LOG_ERROR,
+			       "session %u: the render copy lost its scene: "
+			       "%s",
+			       f->sid, ei.msg);
+			f->broken = true;
+		}
 		return;
 	}
 	f->eb_state = EB_APPLIED;
@@ -367,7 +376,13 @@ static void settle_early(struct bc_work *w, struct flow *f, bool stands)
 	}
 	f->order = f->eb_order;
 	if (was == EB_APPLIED) {
-		bc_edit_batch_undo(&f->eb, &f->tree);
+		if (bc_edit_batch_undo(&f->eb, &f->tree)) {
+			bc_log(BC_LOG_ERROR,
+			       "session %u: the render copy cannot take back "
+			       "a refused edit (out of memory)",
+			       f->sid);
+			f->broken = true;
+		}
 		structure_changed(w, f);
 	}
 }
