@@ -73,6 +73,23 @@ bool bc__refuse_change(struct bc_member *m, uint32_t seq, int *park)
 	return false;
 }
 
+/* The session's tree is not what its journal holds (struct bc_session's
+ * lost). */
+static void lose(struct bc_session *s)
+{
+	if (!s->lost) {
+		s->lost = true;
+		bc_log(
+		    BC_LOG_ERROR,
+		    "session %s: out of memory taking back a refused change; "
+		    "its scene no longer matches its journal: changes and "
+		    "joins are refused until its members have left (it "
+		    "then loads again from what it saved) or a scene is "
+		    "loaded",
+		    s->name);
+	}
+}
+
 /* ---- one batch ------------------------------------------------------------- */
 
 /* A batch on its way. It is applied to a tree (the session's, in place,
@@ -96,6 +113,8 @@ struct batch {
 	 * copy, the views and the scene's order stay). */
 	bool names_only;
 	bool applied;
+	/* Refused, and the session's tree not put back (out of memory). */
+	bool lost;
 	struct bc_author author;
 	struct bc_change how;
 	bc_applied_fn done;
@@ -119,6 +138,7 @@ static int batch_apply(struct batch *x)
 	x->tree = s->tree;
 	if ((x->rc = bc_edit_batch_apply_undoable(&x->b, &x->tree, x->op,
 	                                          x->nops, &x->ei))) {
+		x->lost = x->b.lost;
 		return x->rc;
 	}
 	x->applied = true;
@@ -132,7 +152,7 @@ static int batch_apply(struct batch *x)
 	      (x->rc = bc_store_scene_depth_ok(x->tree, &x->ei)))) ||
 	    (x->rc = bc__undo_record_encode(&x->rec, &c, x->b.inv.ops,
 	                                    x->b.inv.nops, &x->ei))) {
-		bc_edit_batch_undo(&x->b, &x->tree);
+		x->lost = bc_edit_batch_undo(&x->b, &x->tree) != 0;
 		x->applied = false;
 	}
 	return x->rc;
@@ -150,7 +170,7 @@ static void batch_run(struct bc_task *t)
 	}
 	if ((x->rc = bc_store_append(s->store, s->order + 1, x->rec.data,
 	                             x->rec.len, &x->ei))) {
-		bc_edit_batch_undo(&x->b, &x->tree);
+		x->lost = bc_edit_batch_undo(&x->b, &x->tree) != 0;
 		x->applied = false;
 	}
 }
@@ -285,6 +305,9 @@ static void batch_done(struct bc_task *t)
 		}
 	} else if (x->rc) {
 		s->store_failed = s->store_failed || x->rc == BC_EIO;
+		if (x->lost) {
+			lose(s);
+		}
 		if (m) {
 			bc__send_error(m, x->author.seq, x->rc,
 			               "edit refused: %s", x->ei.msg);
@@ -302,6 +325,14 @@ int bc__apply(struct bc_member *m, const struct bc_proto_edit_op *ops,
 	struct bc_session *s = m->session;
 	struct batch *x;
 	bool structural = false, names_only = nops > 0, old = false;
+	if (s->lost) {
+		return bc_errinfo_set(
+		    ei, BC_ENOMEM,
+		    "the server ran out of memory and this session's scene no "
+		    "longer matches what it saved: changes wait until its "
+		    "members have left (it then loads again) or a scene is "
+		    "loaded");
+	}
 	for (uint32_t i = 0; i < nops; i++) {
 		names_only = names_only && ops[i].kind == BC_PROTO_EDIT_NAME;
 	}
@@ -346,6 +377,9 @@ int bc__apply(struct bc_member *m, const struct bc_proto_edit_op *ops,
 	                             nops) == 0;
 	if (!x->heavy && batch_apply(x)) {
 		int rc = bc_errinfo_set(ei, x->rc, "%s", x->ei.msg);
+		if (x->lost) {
+			lose(s);
+		}
 		batch_free(x);
 		return rc;
 	}
@@ -526,6 +560,7 @@ static void commit(struct bc_task *t)
 	}
 	bc__tree_free_later(s->ss->loop, s->tree);
 	s->tree = l->tree;
+	s->lost = false; /* the scene whole again, as saved */
 	s->camera = l->cam;
 	s->order = s->scene_order = l->order;
 	s->last_edit_ms = bc__unix_ms();

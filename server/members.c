@@ -477,6 +477,14 @@ int bc__join(struct bc_member *m, struct bc_session *s, enum bc_proto_role role,
 		               BC_PROTO_MAX_MEMBERS);
 		return 0;
 	}
+	if (s->lost) {
+		bc__send_error(m, seq, BC_EBUSY,
+		               "session %s is to load again from what it saved "
+		               "once its members have left (the server ran out "
+		               "of memory); try again in a minute",
+		               s->name);
+		return 0;
+	}
 	if (m->session) {
 		bc__leave(m);
 	}

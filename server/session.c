@@ -675,8 +675,10 @@ static void sweep_idle(uv_timer_t *t)
 	uint64_t now = bc__now_ms(ss);
 	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
 		struct bc_session *s = ss->sessions[i];
-		if (s && unloadable(s) &&
-		    now - s->empty_since_ms >= BC_SRV_SESSION_IDLE_MS) {
+		if (s && unloadable(s) && s->lost) {
+			bc__session_unload(s, "to load again what it saved");
+		} else if (s && unloadable(s) &&
+		           now - s->empty_since_ms >= BC_SRV_SESSION_IDLE_MS) {
 			bc__session_unload(s, "no members for 15 minutes");
 		}
 	}
@@ -850,7 +852,7 @@ void bc_sessions_save_all(struct bc_sessions *ss, uint32_t budget_ms)
 	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
 		struct bc_session *s = ss->sessions[i];
 		struct bc_errinfo ei = {0};
-		if (!s || !s->tree || s->store_failed || s->busy ||
+		if (!s || !s->tree || s->store_failed || s->lost || s->busy ||
 		    bc_store_journal_records(s->store) == 0) {
 			continue;
 		}
@@ -1145,7 +1147,8 @@ static void snap_done(struct bc_task *t)
 void bc__session_snapshot_due(struct bc_session *s)
 {
 	struct snap_task *st;
-	if (!bc_store_snapshot_is_due(s->store, BC_SRV_SNAPSHOT_EVERY) ||
+	if (s->lost ||
+	    !bc_store_snapshot_is_due(s->store, BC_SRV_SNAPSHOT_EVERY) ||
 	    s->ss->stopping || !(st = bc_calloc(1, sizeof(*st)))) {
 		return;
 	}

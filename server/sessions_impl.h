@@ -32,6 +32,12 @@ struct bc_session {
 	uint64_t scene_order; /* of the last change to the scene's nodes */
 	struct bc_store_session *store;
 	bool store_failed; /* a write failed: edits are refused */
+	/* Out of memory taking back a refused change left the tree unlike
+	 * what the journal holds (bc_edit_batch's lost): edits and joins are
+	 * refused, no snapshot is written, and once the last member has
+	 * left the session is unloaded, to load again from what it saved. A
+	 * scene loaded over it ends that. */
+	bool lost;
 	struct bc_member *members[BC_PROTO_MAX_MEMBERS];
 	uint32_t nmembers;
 	uint32_t next_member_id;
