@@ -158,6 +158,18 @@ static void forget(struct bc_conn *c)
 	unqueue_resume(c);
 }
 
+/* Takes c off the list of connections to close. */
+static void undoom(struct bc_conn *c)
+{
+	for (struct bc_conn **p = &c->net->doomed; *p; p = &(*p)->doomed_next) {
+		if (*p == c) {
+			*p = c->doomed_next;
+			break;
+		}
+	}
+	c->doomed_next = NULL;
+}
+
 void bc__conn_close(struct bc_conn *c, const char *why)
 {
 	struct bc_net *n = c->net;
@@ -166,7 +178,10 @@ void bc__conn_close(struct bc_conn *c, const char *why)
 	}
 	bc_log(BC_LOG_INFO, "connection %u (%s) closed: %s", c->gen, c->name,
 	       why);
-	if (!c->draining) {
+	if (c->doomed) {
+		undoom(c);
+		forget(c);
+	} else if (!c->draining) {
 		forget(c);
 	}
 	c->closing = true;
@@ -177,6 +192,39 @@ void bc__conn_close(struct bc_conn *c, const char *why)
 	c->handles_open = 2;
 	uv_close(&c->h.handle, bc__net_handle_closed);
 	uv_close((uv_handle_t *)&c->hello_timer, bc__net_handle_closed);
+}
+
+static void close_doomed(uv_idle_t *idle)
+{
+	struct bc_net *n = idle->data;
+	uv_idle_stop(idle);
+	while (n->doomed) {
+		struct bc_conn *c = n->doomed;
+		n->doomed = c->doomed_next;
+		c->doomed_next = NULL;
+		bc__conn_close(c, c->drain_why);
+	}
+}
+
+/* Closes c at the loop's next turn. A send that finds its client gone
+ * (its queue over the cap, out of memory) runs inside the sessions
+ * layer's work -- a join sending its scene goes on to the member's other
+ * answers -- and closing now would take the member out of its session
+ * under that work. Meanwhile c is draining: it takes no more output and
+ * reads nothing. */
+static void close_soon(struct bc_conn *c, const char *why)
+{
+	struct bc_net *n = c->net;
+	if (c->closing || c->doomed) {
+		return;
+	}
+	c->doomed = true;
+	c->draining = true;
+	c->drain_why = why;
+	uv_read_stop(&c->h.stream);
+	c->doomed_next = n->doomed;
+	n->doomed = c;
+	uv_idle_start(&n->doomer, close_doomed);
 }
 
 static void shutdown_done(uv_shutdown_t *req, int status)
@@ -330,6 +378,7 @@ static void finish(struct bc_conn *c, struct write_req *w, int status)
 	if (!c->closing) {
 		c->queued -= w->len;
 		c->frame_bytes -= w->frame ? w->len : 0;
+		c->shared_bytes -= w->shared && !w->frame ? w->len : 0;
 		if (status < 0) {
 			bc__conn_close(c, uv_strerror(status));
 		} else if (w->frame) {
@@ -520,7 +569,8 @@ static bool frame_bufs(struct bc_conn *c, struct write_req *w,
 
 /* Whether c's queue takes len more bytes: its cap is 32 MiB, or frame
  * (the large frame and shared message it may hold) and a little beside
- * it. A client past it stopped reading: it is closed. */
+ * it. A client past it stopped reading: it is closed (at the loop's next
+ * turn: close_soon). */
 static bool room_for(struct bc_conn *c, size_t frame, size_t len)
 {
 	size_t cap = frame + BC_SRV_QUEUE_BESIDE_FRAME > BC_SRV_MAX_CLIENT_QUEUE
@@ -533,8 +583,17 @@ static bool room_for(struct bc_conn *c, size_t frame, size_t len)
 	       "dropping client %u (%s): %zu bytes queued and %zu more to "
 	       "send, over %zu: it stopped reading",
 	       c->gen, c->name, c->queued, len, cap);
-	bc__conn_close(c, "output queue over its limit");
+	close_soon(c, "output queue over its limit");
 	return false;
+}
+
+/* What room_for lets beside the frame: the shared whole message queued
+ * (one: a second, before the first has gone, passes the cap), or the
+ * one of len bytes now queued when there is none. The messages after it
+ * (a join's answers behind its scene) are then the few bytes beside. */
+static size_t shared_room(const struct bc_conn *c, size_t len)
+{
+	return c->shared_bytes ? c->shared_bytes : len;
 }
 
 /* What queue_bytes queues. */
@@ -567,14 +626,14 @@ static void queue_bytes(struct bc_conn *c, uint8_t *owned,
 	 * one buffer for all) may come beside them, once: a second one
 	 * before the first has gone passes the cap. */
 	frame = (is_frame ? len : c->frame_bytes) +
-	        (shared && !is_frame ? len : 0u);
+	        shared_room(c, shared && !is_frame ? len : 0u);
 	if (!room_for(c, frame, len)) {
 		bc_free(owned);
 		return;
 	}
 	if (!(w = bc_calloc(1, sizeof(*w)))) {
 		bc_free(owned);
-		bc__conn_close(c, "out of memory");
+		close_soon(c, "out of memory");
 		return;
 	}
 	w->owned = owned;
@@ -589,12 +648,13 @@ static void queue_bytes(struct bc_conn *c, uint8_t *owned,
 	}
 	if (is_frame && !frame_bufs(c, w, shared, camera_seq)) {
 		write_req_free(w);
-		bc__conn_close(c, "out of memory");
+		close_soon(c, "out of memory");
 		return;
 	}
 	w->answer = kind == OUT_ANSWER;
 	c->queued += len;
 	c->frame_bytes += is_frame ? len : 0;
+	c->shared_bytes += shared && !is_frame ? len : 0;
 	enqueue(c, w);
 }
 
@@ -632,14 +692,14 @@ static void send_frame(struct bc_conn *c, struct bc_shared *frame,
 		       "dropping client %u (%s): a frame has waited %u ms, it "
 		       "stopped reading",
 		       c->gen, c->name, BC_SRV_STALL_MS);
-		bc__conn_close(c, "stopped reading");
+		close_soon(c, "stopped reading");
 		return;
 	}
 	if (c->frame_writing && answer) {
 		/* A SNAPSHOT's answer waits its turn, never spoiled. */
 		struct bc_answer *a = bc_calloc(1, sizeof(*a));
 		if (!a) {
-			bc__conn_close(c, "out of memory");
+			close_soon(c, "out of memory");
 			return;
 		}
 		frame->refs++;
@@ -809,7 +869,7 @@ static void queue_parts(struct bc_conn *c, struct bc_shared *msg,
 	uint32_t author = bc_get_le32(head + BC_PROTO_HEADER_SIZE + 8);
 	uint32_t author_seq = bc_get_le32(head + BC_PROTO_HEADER_SIZE + 12);
 	if ((c->tls && !bc_tls_ready(c->tls)) ||
-	    !room_for(c, c->frame_bytes + total, total)) {
+	    !room_for(c, c->frame_bytes + shared_room(c, total), total)) {
 		return;
 	}
 	for (size_t i = 0; i < nparts; i++) {
@@ -820,7 +880,7 @@ static void queue_parts(struct bc_conn *c, struct bc_shared *msg,
 		struct write_req *w = bc_calloc(1, sizeof(*w));
 		if (!w || !(w->owned = bc_malloc(BC_PROTO_SCENE_PART_HEAD))) {
 			bc_free(w);
-			bc__conn_close(c, "out of memory");
+			close_soon(c, "out of memory");
 			return;
 		}
 		bc_proto_scene_state_head(w->owned, flags, order, author,
@@ -834,6 +894,7 @@ static void queue_parts(struct bc_conn *c, struct bc_shared *msg,
 		msg->refs++;
 		w->shared = msg;
 		c->queued += w->len;
+		c->shared_bytes += w->len;
 		at += piece;
 		enqueue(c, w);
 	}
@@ -1229,6 +1290,8 @@ int bc_net_new(struct bc_net **out, uv_loop_t *loop,
 	};
 	uv_idle_init(loop, &n->resumer);
 	n->resumer.data = n;
+	uv_idle_init(loop, &n->doomer);
+	n->doomer.data = n;
 	uv_timer_init(loop, &n->stall_timer);
 	n->stall_timer.data = n;
 	*out = n;
@@ -1255,6 +1318,7 @@ void bc_net_close_all(struct bc_net *n)
 	}
 	uv_close((uv_handle_t *)&n->stall_timer, NULL);
 	uv_close((uv_handle_t *)&n->resumer, NULL);
+	uv_close((uv_handle_t *)&n->doomer, NULL);
 	if (n->has_tcp) {
 		uv_close((uv_handle_t *)&n->tcp_listener, NULL);
 	}

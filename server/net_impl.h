@@ -62,6 +62,11 @@ struct bc_conn {
 	bool authed;          /* HELLO accepted */
 	bool closing;
 	bool draining; /* shut down after the queued bytes are written */
+	/* To be closed at the loop's next turn (net.c, close_soon): set
+	 * with draining, so that it takes no more output and reads no more
+	 * meanwhile. */
+	bool doomed;
+	struct bc_conn *doomed_next;
 	uv_shutdown_t shutdown;
 	const char *drain_why;
 	uint32_t handles_open;
@@ -85,6 +90,9 @@ struct bc_conn {
 	bool writing;      /* a piece is with libuv */
 	bool shutdown_due; /* draining: shut down once the queue is empty */
 	size_t queued, frame_bytes;
+	/* Of queued, the shared whole messages (a big scene's SCENE_STATE,
+	 * whole or in parts): beside the frame, the cap's other exemption. */
+	size_t shared_bytes;
 	bool frame_writing;
 	uint64_t frame_started_ms; /* or when the kernel last took a piece */
 	struct bc_shared *frame_next;
@@ -117,6 +125,8 @@ struct bc_net {
 	uv_timer_t stall_timer; /* timeouts, clients that stopped reading */
 	uv_idle_t resumer;      /* parked connections to resume */
 	struct bc_conn *resume_head, *resume_tail;
+	uv_idle_t doomer; /* connections to close (close_soon) */
+	struct bc_conn *doomed;
 	struct bc_conn *clients[BC_SRV_MAX_CONNECTIONS];
 	uint32_t gens[BC_SRV_MAX_CONNECTIONS];
 	uint32_t nclients;
