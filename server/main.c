@@ -70,6 +70,7 @@ struct cli {
 	int backend, gl_platform, simd, log, video_encoder, x264_preset;
 	bool allow_plaintext, tls_allow_expired, no_damage, no_pace, repair;
 	uint32_t frame_budget_ms, render_threads, view_cache_mib, max_scene_mib;
+	uint32_t client_queue_mib;
 };
 
 /* The option table over c; --help is printed from it. */
@@ -196,6 +197,16 @@ struct cli {
 		     .help = "largest scene as sent, {range} (default\n"       \
 		             "64, about 1.7 million spheres; over 64\n"        \
 		             "only clients of scenes in parts get it)"},       \
+		    {.name = "client-queue",                                   \
+		     .kind = BC_OPT_U32,                                       \
+		     .dst = &(c)->client_queue_mib,                            \
+		     .lo = 1,                                                  \
+		     .hi = 1024,                                               \
+		     .arg = "MIB",                                             \
+		     .help = "output held for a client that has not\n"         \
+		             "read it, {range} (default 32); past it\n"        \
+		             "the client is dropped (a larger frame\n"         \
+		             "or scene still goes, one at a time)"},           \
 		    {.name = "config",                                         \
 		     .kind = BC_OPT_STRING,                                    \
 		     .dst = &(c)->config,                                      \
@@ -656,6 +667,7 @@ static void apply_cli(struct bc_srv_config *cfg, const struct cli *c,
 	cfg->render_threads = c->render_threads;
 	cfg->view_cache_mib = c->view_cache_mib;
 	cfg->max_scene_mib = c->max_scene_mib;
+	cfg->client_queue_mib = c->client_queue_mib;
 }
 
 /* Defaults for what neither gave, and the checks between options. Returns

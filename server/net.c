@@ -8,7 +8,7 @@
  * FRAMEs are written one at a time per client and a newer frame replaces
  * one not yet started (frame spoiling), so a slow client gets fewer frames,
  * never a growing backlog. A client whose queue still passes
- * BC_SRV_MAX_CLIENT_QUEUE is dropped alone.
+ * BC_SRV_MAX_CLIENT_QUEUE (--client-queue) is dropped alone.
  *
  * A message that must wait for its session (dispatch answers PARK) stays
  * where the reader decoded it: the connection reads nothing more and the
@@ -567,15 +567,18 @@ static bool frame_bufs(struct bc_conn *c, struct write_req *w,
 	return true;
 }
 
-/* Whether c's queue takes len more bytes: its cap is 32 MiB, or frame
- * (the large frame and shared message it may hold) and a little beside
- * it. A client past it stopped reading: it is closed (at the loop's next
- * turn: close_soon). */
+/* Whether c's queue takes len more bytes: its cap is 32 MiB
+ * (--client-queue), or frame (the large frame and shared message it may
+ * hold) and a little beside it. A client past it stopped reading: it is closed
+ * (at the loop's next turn: close_soon). */
 static bool room_for(struct bc_conn *c, size_t frame, size_t len)
 {
-	size_t cap = frame + BC_SRV_QUEUE_BESIDE_FRAME > BC_SRV_MAX_CLIENT_QUEUE
+	size_t most = c->net->cfg->client_queue_mib
+	                  ? (size_t)c->net->cfg->client_queue_mib << 20
+	                  : BC_SRV_MAX_CLIENT_QUEUE;
+	size_t cap = frame + BC_SRV_QUEUE_BESIDE_FRAME > most
 	                 ? frame + BC_SRV_QUEUE_BESIDE_FRAME
-	                 : BC_SRV_MAX_CLIENT_QUEUE;
+	                 : most;
 	if (c->queued + len <= cap) {
 		return true;
 	}

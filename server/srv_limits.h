@@ -82,7 +82,7 @@
 /* Bytes queued for one client (frames and messages not yet taken by the
  * kernel). Frames are spoiled, so only a client that stopped reading fills
  * this; 32 MiB holds several full-size PNG stills. Over it the client is
- * dropped, with the reason in the log. */
+ * dropped, with the reason in the log. The default of --client-queue. */
 #define BC_SRV_MAX_CLIENT_QUEUE (32u * 1024u * 1024u)
 
 /* A TLS certificate that expires within this many days is named in the

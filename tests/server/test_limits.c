@@ -392,6 +392,100 @@ static struct bc_proto_buf scattered(uint32_t n)
 	return b;
 }
 
+/* Sends the SCENE_LOAD of b from c and waits for its SCENE_STATE. */
+static void load_and_wait(struct conn *c, const struct bc_proto_buf *b)
+{
+	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
+	uint32_t seq;
+	m.scene_load.scene.ptr = b->data;
+	m.scene_load.scene.len = (uint32_t)b->len;
+	REQUIRE((seq = conn_send(c, &m)));
+	do {
+		REQUIRE(conn_expect(c, BC_MSG_SCENE_STATE, 60000) == 1);
+	} while (c->m.scene_state.author_seq != seq);
+}
+
+/* A daemon holding 1 MiB for a client (--client-queue) and a scene of
+ * 2 MiB: its SCENE_STATE, one buffer shared by every member, passes the
+ * cap alone and still reaches its author and every joiner, two at once
+ * too; a joiner that leaves in the middle of it harms nobody; and the cap
+ * still holds for a member that stopped reading: a second SCENE_STATE
+ * behind the first drops it. */
+static void a_scene_past_the_client_queue_reaches_its_members(void)
+{
+	static const char *const cap[] = {"--client-queue", "1", NULL};
+	const uint32_t n = (2u << 20) / 39u;
+	struct conn a, j[2], quitter, stuck;
+	struct bc_proto_buf b;
+	struct daemon d;
+	struct bc_tree *t;
+	char dir[64];
+	uint64_t order;
+	int rc;
+	make_dir_name(dir, sizeof(dir), "queuecap");
+	REQUIRE(daemon_start_with(&d, dir, cap) == 0);
+	REQUIRE(conn_open(&a, &d) == 0);
+	REQUIRE(conn_hello(&a, "author") == 0);
+	REQUIRE(conn_join(&a, "s", BC_PROTO_ROLE_EDITOR, true) == 0);
+	REQUIRE(conn_expect(&a, BC_MSG_SCENE_STATE, 5000) == 1);
+	b = scattered(n);
+	REQUIRE(b.len > (2u << 20) - 4096u);
+	load_and_wait(&a, &b);
+	order = a.m.scene_state.order;
+	REQUIRE((t = scene_of(&a)));
+	CHECK(bc_tree_prim_count(t) == n);
+	bc_tree_destroy(t);
+
+	for (int round = 0; round < 2; round++) {
+		/* One that leaves once the scene has begun to come. */
+		uint8_t some[4096];
+		REQUIRE(conn_open(&quitter, &d) == 0);
+		REQUIRE(conn_hello(&quitter, "quitter") == 0);
+		REQUIRE(conn_join(&quitter, "s", BC_PROTO_ROLE_VIEWER, false) ==
+		        0);
+		CHECK(recv(quitter.fd, some, sizeof(some), 0) > 0);
+		conn_close(&quitter);
+		/* Two joining at once. */
+		for (int k = 0; k < 2; k++) {
+			REQUIRE(conn_open(&j[k], &d) == 0);
+			REQUIRE(conn_hello(&j[k], "joiner") == 0);
+			REQUIRE(conn_join(&j[k], "s", BC_PROTO_ROLE_VIEWER,
+			                  false) == 0);
+		}
+		for (int k = 0; k < 2; k++) {
+			REQUIRE(conn_expect(&j[k], BC_MSG_SCENE_STATE, 60000) ==
+			        1);
+			CHECK(j[k].m.scene_state.order == order);
+			CHECK(j[k].m.scene_state.scene.len + 64u > b.len);
+			CHECK(ping(&j[k]) == 0);
+			conn_close(&j[k]);
+		}
+	}
+
+	/* A member that reads nothing: the scene loaded again comes behind
+	 * the first, still in its queue, and passes the cap. */
+	REQUIRE(conn_open(&stuck, &d) == 0);
+	REQUIRE(conn_hello(&stuck, "stuck") == 0);
+	REQUIRE(conn_join(&stuck, "s", BC_PROTO_ROLE_VIEWER, false) == 0);
+	t_sleep_ms(200); /* its scene is queued */
+	load_and_wait(&a, &b);
+	CHECK(a.m.scene_state.order > order);
+	CHECK(ping(&a) == 0);
+	{
+		int states = 0;
+		while ((rc = conn_recv(&stuck, 30000)) == 1) {
+			states += stuck.m.type == BC_MSG_SCENE_STATE;
+		}
+		CHECK_EQ_INT(rc, -1); /* closed, not a timeout */
+		CHECK(states <= 1);
+	}
+	conn_close(&stuck);
+	bc_proto_buf_finish(&b);
+	CHECK(ping(&a) == 0);
+	conn_close(&a);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
 /* k spheres of radius 0.4 at (x, 0, 0), under a union when k > 1: a
  * subtree to INSERT, with ids from id up. */
 static struct bc_proto_buf spheres_at(uint32_t k, float x, uint32_t id)
@@ -1063,6 +1157,8 @@ static const struct bc_test tests[] = {
     {"a_snapshot_larger_than_the_queue_arrives",
      a_snapshot_larger_than_the_queue_arrives},
     {"a_scene_too_big_to_send_is_refused", a_scene_too_big_to_send_is_refused},
+    {"a_scene_past_the_client_queue_reaches_its_members",
+     a_scene_past_the_client_queue_reaches_its_members},
     {"a_refused_structural_edit_is_not_drawn",
      a_refused_structural_edit_is_not_drawn},
     {"a_client_queues_a_bounded_number_of_requests",
