@@ -1,10 +1,10 @@
 #!/bin/sh
-# A daemon restarting with a big session, side by side: the first
+# A daemon restarting with a big session, side by side: each
 # BUILD_DIR's blobcastd loads a million smooth fig18 spheres
-# (big_scene.sh) into session "big" and stops, leaving its data
-# directory (the session's JSON snapshot); then each BUILD_DIR's
-# blobcastd starts on a copy of that directory REPS times, the builds
-# taking turns. It restores every session before it listens. Prints one
+# (big_scene.sh) into session "big" of a data directory of its own and
+# stops, leaving the session's snapshot (in the format that build
+# writes); then each starts on a copy of its directory REPS times, the
+# builds taking turns. It restores every session before it listens. Prints one
 # Markdown table row per build: medians of the seconds from start to
 # listening, the daemon's peak resident memory (VmHWM) and its resident
 # memory a second after it listens (VmRSS).
@@ -51,27 +51,39 @@ stop() {
 	pid=
 }
 
-start "$first" "$dir/data"
-"$first/client/blobcast" --server "unix:$dir/sock" --timeout 600000 \
-	load "$scene" --session big >/dev/null
-# The store writes the loaded scene's snapshot (order 1) after the load:
-# restoring should read it, not a journal.
-i=0
-until [ -s "$dir/data/sessions/big/snap-1.json" ]; do
-	i=$((i + 1))
-	if [ $i -gt 600 ]; then
-		echo "bench_restore: no snapshot of the session after 60 s" >&2
-		exit 1
-	fi
-	sleep 0.1
+# prepare K B: build B's daemon loads the scene into a data directory of
+# its own ($dir/dataK, in the snapshot format B writes) and stops.
+prepare() {
+	start "$2" "$dir/data$1"
+	"$2/client/blobcast" --server "unix:$dir/sock" --timeout 600000 \
+		load "$scene" --session big >/dev/null
+	# The store writes the loaded scene's snapshot (order 1) after the
+	# load: restoring should read it, not a journal.
+	i=0
+	until [ -s "$dir/data$1/sessions/big/snap-1.bin" ] ||
+		[ -s "$dir/data$1/sessions/big/snap-1.json" ]; do
+		i=$((i + 1))
+		if [ $i -gt 600 ]; then
+			echo "bench_restore: no snapshot of the session after 60 s" >&2
+			exit 1
+		fi
+		sleep 0.1
+	done
+	sleep 1
+	stop
+	echo "bench_restore: $2: the session's files $(du -sm \
+		"$dir/data$1/sessions/big" | cut -f1) MiB" >&2
+}
+k=0
+for b in $builds; do
+	k=$((k + 1))
+	prepare $k "$b"
 done
-sleep 1
-stop
 
-# round K B R: build B's daemon restoring a copy of the data.
+# round K B R: build B's daemon restoring a copy of its data.
 round() {
 	rm -rf "$dir/copy"
-	cp -r "$dir/data" "$dir/copy"
+	cp -r "$dir/data$1" "$dir/copy"
 	start "$2" "$dir/copy"
 	sleep 1
 	echo "$(cat "$dir/took") $(awk '/^VmHWM/ {h = $2} /^VmRSS/ {r = $2}

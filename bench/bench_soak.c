@@ -29,7 +29,7 @@
  * gives way to the next), to test the recovery rules of
  * docs/operations.md, "Data directory":
  *
- *  1. its newest snap-N.json is cut to half its size, when the previous
+ *  1. its newest snap-N.bin is cut to half its size, when the previous
  *     generation's snapshot is there: the older snapshot and the journals
  *     give back every edit;
  *  2. bytes are flipped inside a record in the middle of a journal-M.bin
@@ -1293,25 +1293,25 @@ static int tear_newest_snapshot(int s, const char *dir, char *what, size_t n)
 	uint64_t snaps[MAX_FILES];
 	char file[256];
 	struct stat st;
-	size_t ns = list_numbered(dir, "snap-", ".json", snaps, MAX_FILES);
+	size_t ns = list_numbered(dir, "snap-", ".bin", snaps, MAX_FILES);
 	if (ns < 2 || was_flipped(s, snaps[1])) {
 		return 1;
 	}
 	snprintf(file, sizeof(file), "%s/journal-%llu.bin", dir,
 	         (unsigned long long)snaps[1]);
 	if (stat(file, &st) != 0) {
-		printf("  note: %s has snap-%llu.json but not its journal\n",
+		printf("  note: %s has snap-%llu.bin but not its journal\n",
 		       busy_name[s], (unsigned long long)snaps[1]);
 		return 1;
 	}
-	snprintf(file, sizeof(file), "%s/snap-%llu.json", dir,
+	snprintf(file, sizeof(file), "%s/snap-%llu.bin", dir,
 	         (unsigned long long)snaps[0]);
 	if (stat(file, &st) != 0 || truncate(file, st.st_size / 2) != 0) {
 		return -1;
 	}
 	snprintf(what, n,
-	         "snap-%llu.json cut from %lld to %lld bytes "
-	         "(snap-%llu.json is there)",
+	         "snap-%llu.bin cut from %lld to %lld bytes "
+	         "(snap-%llu.bin is there)",
 	         (unsigned long long)snaps[0], (long long)st.st_size,
 	         (long long)(st.st_size / 2), (unsigned long long)snaps[1]);
 	return 0;
@@ -1349,7 +1349,7 @@ static int flip_covered_journal(int s, const char *dir, char *what, size_t n)
 {
 	uint64_t snaps[MAX_FILES], journals[MAX_FILES];
 	struct record r;
-	size_t ns = list_numbered(dir, "snap-", ".json", snaps, MAX_FILES);
+	size_t ns = list_numbered(dir, "snap-", ".bin", snaps, MAX_FILES);
 	size_t nj = list_numbered(dir, "journal-", ".bin", journals, MAX_FILES);
 	int rc;
 	for (size_t i = 0; ns > 0 && i < nj; i++) {
@@ -1376,7 +1376,7 @@ static int flip_live_journal(const char *dir, uint64_t *order, char *what,
 {
 	uint64_t snaps[MAX_FILES], journals[MAX_FILES];
 	struct record r;
-	size_t ns = list_numbered(dir, "snap-", ".json", snaps, MAX_FILES);
+	size_t ns = list_numbered(dir, "snap-", ".bin", snaps, MAX_FILES);
 	size_t nj = list_numbered(dir, "journal-", ".bin", journals, MAX_FILES);
 	int rc;
 	if (nj == 0 || (ns > 0 && journals[0] < snaps[0])) {

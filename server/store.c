@@ -323,7 +323,8 @@ void bc__store_tidy(const char *path, uint64_t keep)
 		uint64_t n;
 		size_t len = strlen(e->d_name);
 		bool old =
-		    (parse_numbered(e->d_name, "snap-", ".json", &n) ||
+		    (parse_numbered(e->d_name, "snap-", ".bin", &n) ||
+		     parse_numbered(e->d_name, "snap-", ".json", &n) ||
 		     parse_numbered(e->d_name, "journal-", ".bin", &n) ||
 		     parse_numbered(e->d_name, "history-", ".bin", &n)) &&
 		    n < keep;
@@ -339,8 +340,11 @@ void bc__store_tidy(const char *path, uint64_t keep)
 	closedir(d);
 }
 
-/* Snapshot orders in the session directory, newest first (at most cap). */
-static size_t list_snapshots(const char *path, uint64_t *orders, size_t cap)
+/* Snapshots in the session directory, newest first (at most cap): their
+ * orders, and whether each is a JSON scene file. Where one order has
+ * both, the binary one (written after the other) is read. */
+static size_t list_snapshots(const char *path, uint64_t *orders, bool *json,
+                             size_t cap)
 {
 	DIR *d = opendir(path);
 	struct dirent *e;
@@ -350,18 +354,30 @@ static size_t list_snapshots(const char *path, uint64_t *orders, size_t cap)
 	}
 	while ((e = readdir(d))) {
 		uint64_t v;
+		bool j = false;
 		size_t i;
-		if (!parse_numbered(e->d_name, "snap-", ".json", &v)) {
+		if (!parse_numbered(e->d_name, "snap-", ".bin", &v) &&
+		    !(j = parse_numbered(e->d_name, "snap-", ".json", &v))) {
+			continue;
+		}
+		for (i = 0; i < n && orders[i] != v; i++) {
+		}
+		if (i < n) {
+			/* The same order's other file: the binary one is
+			 * read. */
+			json[i] = json[i] && j;
 			continue;
 		}
 		/* Insertion into a short descending list. */
 		for (i = n; i > 0 && orders[i - 1] < v; i--) {
 			if (i < cap) {
 				orders[i] = orders[i - 1];
+				json[i] = json[i - 1];
 			}
 		}
 		if (i < cap) {
 			orders[i] = v;
+			json[i] = j;
 			if (n < cap) {
 				n++;
 			}
@@ -406,6 +422,7 @@ static uint64_t newest_journal(const char *path)
 /* What a restore read, for deciding whether it may be served. */
 struct restore {
 	uint64_t snaps[BC_STORE_SNAPSHOTS_TRIED];
+	bool json[BC_STORE_SNAPSHOTS_TRIED]; /* snap-N.json, not .bin */
 	size_t nsnaps, used; /* used: SIZE_MAX when none loads */
 	struct bc_store_check c;
 	uint64_t newest_journal; /* the highest N of the journal-N.bin files */
@@ -435,13 +452,13 @@ static int restore(struct bc_store_session *ss, struct bc_tree *t,
 	char file[PATH_LEN];
 	int rc;
 	r->used = SIZE_MAX;
-	r->nsnaps =
-	    list_snapshots(ss->path, r->snaps, BC_STORE_SNAPSHOTS_TRIED);
+	r->nsnaps = list_snapshots(ss->path, r->snaps, r->json,
+	                           BC_STORE_SNAPSHOTS_TRIED);
 	for (size_t i = 0; i < r->nsnaps; i++) {
 		struct bc_errinfo lei = {0};
-		bc__store_fmt_path(file, "%s/snap-%llu.json", ss->path,
-		                   (unsigned long long)r->snaps[i]);
-		if (bc_scene_load_json(file, t, cam, &lei) == 0) {
+		bc__store_snap_path(file, ss, r->snaps[i], r->json[i]);
+		if (bc__store_snapshot_read(file, r->json[i], t, cam, &lei) ==
+		    0) {
 			r->used = i;
 			break;
 		}
@@ -456,9 +473,10 @@ static int restore(struct bc_store_session *ss, struct bc_tree *t,
 		       file, lei.msg);
 		if (i == 0) {
 			snprintf(r->c.why, sizeof(r->c.why),
-			         "its newest snapshot snap-%llu.json does not "
+			         "its newest snapshot snap-%llu.%s does not "
 			         "load (%.300s)",
-			         (unsigned long long)r->snaps[i], lei.msg);
+			         (unsigned long long)r->snaps[i],
+			         r->json[i] ? "json" : "bin", lei.msg);
 		}
 	}
 	r->c.snapshots = (uint32_t)r->nsnaps;
@@ -531,8 +549,7 @@ static int settle(struct bc_store_session *ss, const struct restore *r,
 	char file[PATH_LEN], aside[PATH_LEN];
 	int rc;
 	for (size_t i = 0; i < r->used; i++) {
-		bc__store_fmt_path(file, "%s/snap-%llu.json", ss->path,
-		                   (unsigned long long)r->snaps[i]);
+		bc__store_snap_path(file, ss, r->snaps[i], r->json[i]);
 		if (bc__store_set_aside(file, aside) == 0) {
 			bc_log(BC_LOG_ERROR,
 			       "session %s: snapshot %s is kept as %s; the "

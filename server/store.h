@@ -1,7 +1,10 @@
 /*
  * Persistence of sessions under the data directory:
  *
- *   DIR/sessions/NAME/snap-ORDER.json   the scene after edit ORDER (atomic)
+ *   DIR/sessions/NAME/snap-ORDER.bin    the scene after edit ORDER (atomic;
+ *                                       snap-ORDER.json, a JSON scene
+ *                                       file, from earlier versions or an
+ *                                       operator, is read too)
  *   DIR/sessions/NAME/journal-ORDER.bin edits after that snapshot
  *   DIR/sessions/NAME/history-ORDER.bin the undo history as of it
  *   DIR/sessions/NAME/owner             who created the session
@@ -17,7 +20,7 @@
  * recovered from the previous snapshot and the journals after it (a
  * SCENE_LOAD is journaled too, so that no state is held by one snapshot
  * alone, and its snapshot follows its answer: bc_store_append_scene); it
- * is then kept as snap-N.json.damaged-TIME. When the files
+ * is then kept as snap-N.bin.damaged-TIME. When the files
  * cannot give back every edit they acknowledged (records damaged,
  * missing or not applying, or a newest state no older file reaches), the
  * session is not served and its files are not touched: opening it fails
@@ -40,6 +43,9 @@
 
 /* Snapshots tried, newest first, when restoring a session. */
 #define BC_STORE_SNAPSHOTS_TRIED 8u
+/* The largest snapshot written and read back (its scene's binary
+ * encoding; a scene as sent is at most 256 MiB, --max-scene). */
+#define BC_STORE_SNAPSHOT_MAX_BYTES (384u * 1024u * 1024u)
 /* After a periodic snapshot fails (disk full), the next is tried no sooner
  * than this, doubling per failure up to the maximum: a full disk must not
  * make every edit pay for a failed 1000-edit snapshot (measured: 0.03 ->
@@ -103,16 +109,17 @@ int bc_store_session_repair(struct bc_store *st, const char *name,
                             const struct bc_camera *cam, uint64_t order,
                             struct bc_errinfo *ei);
 
-/* 0 when a snapshot can hold scene t, else BC_EDEPTH with the reason: it
- * nests deeper than a JSON scene file holds (BC_SCENE_JSON_MAX_DEPTH). A
- * change that fails it is refused before it applies. */
+/* 0 when a session may hold scene t, else BC_EDEPTH with the reason: it
+ * nests deeper than a JSON scene file holds (BC_SCENE_JSON_MAX_DEPTH), so
+ * that a session's scene can always be saved as one (`blobcast scene`).
+ * A change that fails it is refused before it applies. */
 int bc_store_scene_depth_ok(const struct bc_tree *t, struct bc_errinfo *ei);
 
 /* Writes the whole scene as of order (atomic) and starts a new journal.
  * On failure nothing on disk has changed (the old snapshot and journal are
  * the state): BC_EIO, BC_ENOMEM, BC_ELIMIT (the snapshot would pass
- * BC_SCENE_JSON_MAX_BYTES, which restoring reads) or BC_EDEPTH (deeper
- * than a JSON snapshot holds). */
+ * BC_STORE_SNAPSHOT_MAX_BYTES, which restoring reads) or BC_EDEPTH
+ * (bc_store_scene_depth_ok). */
 int bc_store_snapshot(struct bc_store_session *ss, const struct bc_tree *t,
                       const struct bc_camera *cam, uint64_t order,
                       struct bc_errinfo *ei);

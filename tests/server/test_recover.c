@@ -77,9 +77,12 @@ static void joined_state(const struct daemon *d, const char *s, uint64_t *order,
 	conn_close(&j);
 }
 
+/* Empties the file at path, which must be there. */
 static void empty_file(const char *path)
 {
-	FILE *f = fopen(path, "w");
+	FILE *f;
+	REQUIRE(access(path, F_OK) == 0);
+	f = fopen(path, "w");
 	REQUIRE(f);
 	fclose(f);
 }
@@ -103,7 +106,7 @@ static void a_damaged_load_snapshot_loses_nothing(void)
 	conn_close(&a);
 	daemon_stop(&d, SIGKILL);
 	/* The snapshot the load wrote, emptied (a torn write, a bad disk). */
-	snprintf(snap, sizeof(snap), "%s/sessions/ld/snap-%llu.json", dir,
+	snprintf(snap, sizeof(snap), "%s/sessions/ld/snap-%llu.bin", dir,
 	         (unsigned long long)load_order);
 	empty_file(snap);
 	REQUIRE(daemon_start(&d, dir) == 0);

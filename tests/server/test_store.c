@@ -18,6 +18,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "blobcast/alloc.h"
 #include "blobcast/log.h"
 #include "blobcast/scene.h"
 #include "store.h"
@@ -333,8 +334,8 @@ static void a_corrupt_snapshot_spares_the_other_session(void)
 	REQUIRE(dir && t);
 	make_session(dir, "a", 5, 0);
 	make_session(dir, "b", 7, 0);
-	snprintf(file, sizeof(file), "%s/sessions/a/snap-0.json", dir);
-	write_file(file, "{\"blobcast\": 1, \"root\": {\"type\": \"sph");
+	snprintf(file, sizeof(file), "%s/sessions/a/snap-0.bin", dir);
+	write_file(file, "BCS1 and then not a scene");
 	REQUIRE(open_session(dir, "b", &st, &ss, t, &r, &order, &created) == 0);
 	CHECK_EQ_INT(order, 7);
 	bc_store_session_close(ss);
@@ -379,13 +380,13 @@ static void a_corrupt_snapshot_falls_back_to_the_previous(void)
 	REQUIRE(dir && t);
 	two_generations(dir, t);
 	snprintf(sdir, sizeof(sdir), "%s/sessions/a", dir);
-	snprintf(file, sizeof(file), "%s/snap-10.json", sdir);
-	write_file(file, "not json");
+	snprintf(file, sizeof(file), "%s/snap-10.bin", sdir);
+	write_file(file, "not a snapshot");
 	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
 	CHECK(!created);
 	CHECK_EQ_INT(order, 15);
 	CHECK_EQ_INT(r.n, 15);
-	CHECK_EQ_INT(count_named(sdir, "snap-10.json.damaged-"), 1);
+	CHECK_EQ_INT(count_named(sdir, "snap-10.bin.damaged-"), 1);
 	/* Later edits and restarts keep following that chain. */
 	REQUIRE(bc_store_append(ss, 16, (const uint8_t *)"more", 4, NULL) == 0);
 	bc_store_session_close(ss);
@@ -428,16 +429,133 @@ static void a_restore_keeps_the_previous_generation(void)
 	bc_store_close(st);
 	/* ... and the generation before its snapshot is still there. */
 	snprintf(sdir, sizeof(sdir), "%s/sessions/a", dir);
-	CHECK_EQ_INT(count_named(sdir, "snap-0.json"), 1);
+	CHECK_EQ_INT(count_named(sdir, "snap-0.bin"), 1);
 	CHECK_EQ_INT(count_named(sdir, "journal-0.bin"), 1);
 	/* The newest snapshot emptied, another restart: the previous
 	 * snapshot and the journals give back every edit. */
-	snprintf(file, sizeof(file), "%s/snap-10.json", sdir);
+	snprintf(file, sizeof(file), "%s/snap-10.bin", sdir);
 	write_file(file, "");
 	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
 	CHECK(!created);
 	CHECK_EQ_INT(order, 15);
 	CHECK_EQ_INT(r.n, 15);
+	bc_store_session_close(ss);
+	bc_store_close(st);
+	bc_tree_destroy(t);
+	rm_rf(dir);
+	free(dir);
+}
+
+/* One flipped byte anywhere in the newest snapshot (a float of the scene,
+ * its checksum, its length) is found: the previous snapshot and the
+ * journals give back every edit, and the damaged file is kept aside. */
+static void a_flipped_snapshot_byte_is_found(void)
+{
+	static const long at[] = {20, -1, 5, 9};
+	for (size_t i = 0; i < sizeof(at) / sizeof(at[0]); i++) {
+		char *dir = make_dir(), file[600], sdir[512];
+		struct bc_store *st;
+		struct bc_store_session *ss;
+		struct bc_tree *t = default_tree();
+		struct replayed r;
+		uint64_t order;
+		bool created;
+		REQUIRE(dir && t);
+		two_generations(dir, t);
+		snprintf(sdir, sizeof(sdir), "%s/sessions/a", dir);
+		snprintf(file, sizeof(file), "%s/snap-10.bin", sdir);
+		flip(file, at[i] < 0 ? file_size(file) / 2 : at[i], 1);
+		REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order,
+		                     &created) == 0);
+		CHECK_EQ_INT(order, 15);
+		CHECK_EQ_INT(r.n, 15);
+		CHECK_EQ_INT(count_named(sdir, "snap-10.bin.damaged-"), 1);
+		bc_store_session_close(ss);
+		bc_store_close(st);
+		bc_tree_destroy(t);
+		rm_rf(dir);
+		free(dir);
+	}
+}
+
+/* Scene and camera through a snapshot and back: the same bytes. */
+static void a_snapshot_gives_back_scene_and_camera(void)
+{
+	char *dir = make_dir();
+	struct bc_store *st;
+	struct bc_store_session *ss;
+	struct bc_tree *t = default_tree(), *back = bc_tree_create();
+	struct bc_camera cam = {{1.5f, -2.25f, 7},
+	                        {0.125f, 0, -1},
+	                        {0, 1, 0},
+	                        33.5f},
+	                 got;
+	uint8_t *a = NULL, *b = NULL;
+	size_t alen = 0, blen = 0;
+	uint64_t order;
+	bool created;
+	REQUIRE(dir && t && back);
+	REQUIRE(bc_store_open(&st, dir, NULL) == 0);
+	REQUIRE(bc_store_session_open(st, "a", &ss, back, &got, &order,
+	                              &created, collect, &(struct replayed){0},
+	                              NULL) == 0);
+	REQUIRE(bc_tree_set_name(t, bc_tree_lin(t)->node_id[0], "first", 5,
+	                         NULL) == 0);
+	REQUIRE(bc_store_snapshot(ss, t, &cam, 3, NULL) == 0);
+	bc_store_session_close(ss);
+	REQUIRE(bc_store_session_open(st, "a", &ss, back, &got, &order,
+	                              &created, collect, &(struct replayed){0},
+	                              NULL) == 0);
+	CHECK(!created);
+	CHECK_EQ_INT(order, 3);
+	CHECK(memcmp(&got, &cam, sizeof(cam)) == 0);
+	REQUIRE(bc_scene_encode(t, &cam, &a, &alen) == 0);
+	REQUIRE(bc_scene_encode(back, &got, &b, &blen) == 0);
+	CHECK(alen == blen && memcmp(a, b, alen) == 0);
+	bc_free(a);
+	bc_free(b);
+	bc_store_session_close(ss);
+	bc_store_close(st);
+	bc_tree_destroy(t);
+	bc_tree_destroy(back);
+	rm_rf(dir);
+	free(dir);
+}
+
+/* A data directory of an earlier version (JSON snapshots) restores; the
+ * next snapshot is binary, and one of the same order replaces the JSON
+ * file. */
+static void a_json_snapshot_of_an_earlier_version_restores(void)
+{
+	char *dir = make_dir(), file[600], sdir[512];
+	struct bc_store *st;
+	struct bc_store_session *ss;
+	struct bc_tree *t = bc_tree_create();
+	struct replayed r;
+	uint64_t order;
+	bool created;
+	REQUIRE(dir && t);
+	snprintf(sdir, sizeof(sdir), "%s/sessions", dir);
+	REQUIRE(mkdir(sdir, 0755) == 0);
+	snprintf(sdir, sizeof(sdir), "%s/sessions/a", dir);
+	REQUIRE(mkdir(sdir, 0755) == 0);
+	snprintf(file, sizeof(file), "%s/snap-4.json", sdir);
+	write_file(file, bc_scene_default_json());
+	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
+	CHECK(!created);
+	CHECK_EQ_INT(order, 4);
+	CHECK(bc_tree_prim_count(t) > 1);
+	REQUIRE(bc_store_snapshot(ss, t, NULL, 4, NULL) == 0);
+	CHECK_EQ_INT(count_named(sdir, "snap-4.json"), 0);
+	CHECK_EQ_INT(count_named(sdir, "snap-4.bin"), 1);
+	bc_store_session_close(ss);
+	bc_store_close(st);
+	/* A JSON file placed beside the binary one of its order is not
+	 * read: the binary one is. */
+	write_file(file, "not json");
+	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
+	CHECK_EQ_INT(order, 4);
+	CHECK_EQ_INT(count_named(sdir, ".damaged-"), 0);
 	bc_store_session_close(ss);
 	bc_store_close(st);
 	bc_tree_destroy(t);
@@ -654,6 +772,11 @@ static const struct bc_test tests[] = {
     {"a_failed_snapshot_leaves_no_trace", a_failed_snapshot_leaves_no_trace},
     {"a_restore_keeps_the_previous_generation",
      a_restore_keeps_the_previous_generation},
+    {"a_flipped_snapshot_byte_is_found", a_flipped_snapshot_byte_is_found},
+    {"a_snapshot_gives_back_scene_and_camera",
+     a_snapshot_gives_back_scene_and_camera},
+    {"a_json_snapshot_of_an_earlier_version_restores",
+     a_json_snapshot_of_an_earlier_version_restores},
     {"failures_back_off_and_are_logged_as_errors",
      failures_back_off_and_are_logged_as_errors},
     {"a_journaled_scene_is_safe_before_its_snapshot",

@@ -18,9 +18,10 @@
 #     so, a click selects a bar under a mirror under a twist and
 #     Alt+wheel steps the twist's rate, Q quits; the daemon's saved scene
 #     then holds the new position, radius, blend and twist rate, and the
-#     mirror and the bar as they were.
+#     mirror and the bar as they were (read back through a restarted
+#     daemon with the CLI BLOBCAST).
 #
-# usage: test_viewer.sh BLOBCAST-VIEW BLOBCASTD IMGCHECK [XPOKE]
+# usage: test_viewer.sh BLOBCAST-VIEW BLOBCASTD IMGCHECK [XPOKE [BLOBCAST]]
 # Exits 77 (skipped) when xvfb-run, the viewer or the daemon is missing;
 # part 3 is skipped (and said so) without XPOKE. BC_VIEWER_SCREENSHOT=FILE
 # copies part 3's screenshot there (docs/viewer.png).
@@ -43,6 +44,7 @@ VIEW=$(abspath "${1:-}")
 DAEMON=$(abspath "${2:-}")
 CHECK=$(abspath "${3:-}")
 XPOKE=$(abspath "${4:-}")
+CLI=$(abspath "${5:-}")
 
 # --- part 3, run inside xvfb-run by the outer script -------------------------
 # usage: test_viewer.sh --inner VIEW DAEMON CHECK XPOKE TMP PORT
@@ -225,24 +227,30 @@ cat > "$tmp/data/sessions/drag/snap-0.json" <<'EOF'
       "translate": [0, 1.6, 0], "color": [0.3, 0.8, 0.35]}]}]}]}}
 EOF
 
-"$DAEMON" --listen 127.0.0.1:0 --data "$tmp/data" --backend cpu --log warn \
-  > "$tmp/daemon.log" 2>&1 &
-daemon=$!
-port=
-i=0
-while [ $i -lt 100 ]; do
-  port=$(sed -n 's/^blobcastd: listening on 127\.0\.0\.1:\([0-9][0-9]*\)$/\1/p' \
-    "$tmp/daemon.log" 2>/dev/null | head -n 1)
-  [ -n "$port" ] && break
-  kill -0 "$daemon" 2>/dev/null || break
-  sleep 0.1
-  i=$((i + 1))
-done
-if [ -z "$port" ]; then
-  echo "FAIL: blobcastd did not start"
-  sed 's/^/    /' "$tmp/daemon.log"
-  exit 1
-fi
+# start_daemon LOG: blobcastd on the data directory, logging to LOG; sets
+# daemon and port, or fails the test.
+start_daemon() {
+  "$DAEMON" --listen 127.0.0.1:0 --data "$tmp/data" --backend cpu \
+    --log warn > "$1" 2>&1 &
+  daemon=$!
+  port=
+  i=0
+  while [ $i -lt 100 ]; do
+    port=$(sed -n \
+      's/^blobcastd: listening on 127\.0\.0\.1:\([0-9][0-9]*\)$/\1/p' \
+      "$1" 2>/dev/null | head -n 1)
+    [ -n "$port" ] && break
+    kill -0 "$daemon" 2>/dev/null || break
+    sleep 0.1
+    i=$((i + 1))
+  done
+  if [ -z "$port" ]; then
+    echo "FAIL: blobcastd did not start"
+    sed 's/^/    /' "$1"
+    exit 1
+  fi
+}
+start_daemon "$tmp/daemon.log"
 echo "blobcastd on 127.0.0.1:$port"
 
 # image_ok FILE W H: FILE is a W x H image with many colours and contrast.
@@ -367,11 +375,17 @@ else
 fi
 
 # --- the daemon saves on SIGTERM: what did the edits leave? ---------------------------
+# (The snapshot is binary: a daemon started on it again gives it back as
+# JSON through `blobcast scene`.)
 stop_daemon
 if [ -n "$XPOKE" ] && [ -x "$XPOKE" ]; then
-  last=$(ls "$tmp/data/sessions/drag" | sed -n 's/^snap-\([0-9]*\)\.json$/\1/p' |
+  last=$(ls "$tmp/data/sessions/drag" | sed -n 's/^snap-\([0-9]*\)\.bin$/\1/p' |
     sort -n | tail -n 1)
-  scene=$tmp/data/sessions/drag/snap-$last.json
+  scene=$tmp/saved.json
+  start_daemon "$tmp/daemon2.log"
+  "$CLI" scene --server "127.0.0.1:$port" --session drag > "$scene" ||
+    fail "blobcast scene of the restarted session failed"
+  stop_daemon
   sphere=$(grep '"id": 2,' "$scene" | sed -n \
     's/.*"radius": \([-0-9.e]*\).*"translate": \[\([^]]*\)\].*/\1 \2/p' |
     tr -d ',')
