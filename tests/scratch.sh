@@ -47,18 +47,26 @@ bc_need() {
   done
 }
 
-# start_daemon ADDR: starts $BLOBCASTD on ADDR (CPU backend, data in
-# $tmp/data, log in $tmp/daemon.log), sets $daemon and $port; exits 1
-# with the log when it does not start.
+# start_daemon ADDR [OPTION...]: starts $BLOBCASTD on ADDR (CPU backend,
+# data in $tmp/data, log appended to $tmp/daemon.log, the OPTIONs after
+# those), sets $daemon and $port; exits 1 with the log when it does not
+# start.
 start_daemon() {
-  "$BLOBCASTD" --listen "$1" --data "$tmp/data" --backend cpu --log warn \
-    >> "$tmp/daemon.log" 2>&1 &
+  bc_addr=$1
+  shift
+  # The port is read from what this start adds to the log (a restart
+  # must not take the previous daemon's).
+  bc_from=1
+  [ -f "$tmp/daemon.log" ] && bc_from=$(($(wc -c < "$tmp/daemon.log") + 1))
+  "$BLOBCASTD" --listen "$bc_addr" --data "$tmp/data" --backend cpu \
+    --log warn "$@" >> "$tmp/daemon.log" 2>&1 &
   daemon=$!
   port=
   i=0
   while [ $i -lt 100 ]; do
-    port=$(sed -n 's/^blobcastd: listening on 127\.0\.0\.1:\([0-9][0-9]*\)$/\1/p' \
-      "$tmp/daemon.log" | tail -n 1)
+    port=$(tail -c +"$bc_from" "$tmp/daemon.log" | sed -n \
+      's/^blobcastd: listening on 127\.0\.0\.1:\([0-9][0-9]*\)$/\1/p' |
+      tail -n 1)
     [ -n "$port" ] && break
     kill -0 "$daemon" 2>/dev/null || break
     sleep 0.1

@@ -227,30 +227,8 @@ cat > "$tmp/data/sessions/drag/snap-0.json" <<'EOF'
       "translate": [0, 1.6, 0], "color": [0.3, 0.8, 0.35]}]}]}]}}
 EOF
 
-# start_daemon LOG: blobcastd on the data directory, logging to LOG; sets
-# daemon and port, or fails the test.
-start_daemon() {
-  "$DAEMON" --listen 127.0.0.1:0 --data "$tmp/data" --backend cpu \
-    --log warn > "$1" 2>&1 &
-  daemon=$!
-  port=
-  i=0
-  while [ $i -lt 100 ]; do
-    port=$(sed -n \
-      's/^blobcastd: listening on 127\.0\.0\.1:\([0-9][0-9]*\)$/\1/p' \
-      "$1" 2>/dev/null | head -n 1)
-    [ -n "$port" ] && break
-    kill -0 "$daemon" 2>/dev/null || break
-    sleep 0.1
-    i=$((i + 1))
-  done
-  if [ -z "$port" ]; then
-    echo "FAIL: blobcastd did not start"
-    sed 's/^/    /' "$1"
-    exit 1
-  fi
-}
-start_daemon "$tmp/daemon.log"
+BLOBCASTD=$DAEMON
+start_daemon 127.0.0.1:0
 echo "blobcastd on 127.0.0.1:$port"
 
 # image_ok FILE W H: FILE is a W x H image with many colours and contrast.
@@ -382,7 +360,7 @@ if [ -n "$XPOKE" ] && [ -x "$XPOKE" ]; then
   last=$(ls "$tmp/data/sessions/drag" | sed -n 's/^snap-\([0-9]*\)\.bin$/\1/p' |
     sort -n | tail -n 1)
   scene=$tmp/saved.json
-  start_daemon "$tmp/daemon2.log"
+  start_daemon 127.0.0.1:0
   "$CLI" scene --server "127.0.0.1:$port" --session drag > "$scene" ||
     fail "blobcast scene of the restarted session failed"
   stop_daemon

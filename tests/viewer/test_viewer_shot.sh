@@ -61,24 +61,8 @@ cat > "$tmp/data/sessions/crawl/snap-0.json" <<'EOF'
    {"type": "box", "id": 2, "half_extents": [1, 1, 1]}]}}
 EOF
 
-"$DAEMON" --listen 127.0.0.1:0 --data "$tmp/data" --backend cpu \
-  --frame-budget 1 --log warn > "$tmp/daemon.log" 2>&1 &
-daemon=$!
-port=
-i=0
-while [ $i -lt 100 ]; do
-  port=$(sed -n 's/^blobcastd: listening on 127\.0\.0\.1:\([0-9][0-9]*\)$/\1/p' \
-    "$tmp/daemon.log" 2>/dev/null | head -n 1)
-  [ -n "$port" ] && break
-  kill -0 "$daemon" 2>/dev/null || break
-  sleep 0.1
-  i=$((i + 1))
-done
-if [ -z "$port" ]; then
-  echo "FAIL: blobcastd did not start"
-  sed 's/^/    /' "$tmp/daemon.log"
-  exit 1
-fi
+BLOBCASTD=$DAEMON
+start_daemon 127.0.0.1:0 --frame-budget 1
 echo "blobcastd --frame-budget 1 on 127.0.0.1:$port"
 
 # shot NAME SCREEN ARGS...: one viewer run under Xvfb (screen SCREEN) and
