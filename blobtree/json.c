@@ -21,6 +21,7 @@
  * read back to the same bits (at most 9, "%.9g").
  */
 #include "blobcast/scene.h"
+#include "file_impl.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -1454,24 +1455,14 @@ static int fd_sink(void *ctx, const void *bytes, size_t len)
 	return bc_write_all(*(int *)ctx, bytes, len) ? 0 : BC_EIO;
 }
 
-int bc_scene_save_json(const char *path, const struct bc_tree *t,
-                       const struct bc_camera *cam, struct bc_errinfo *ei)
+int bc__save_atomic(const char *path, bc__file_fill fill, void *ctx,
+                    struct bc_errinfo *ei)
 {
 	char *tmp = NULL, *dir = NULL, why[128];
 	size_t plen = strlen(path);
 	int fd = -1, dfd, rc = 0;
 	char *slash;
 
-	if (bc_tree_root(t) == 0) {
-		return bc_errinfo_set(ei, BC_EINVAL, "%s: empty scene", path);
-	}
-	if (bc_tree_nesting(t) > BC_SCENE_JSON_MAX_DEPTH) {
-		return bc_errinfo_set(
-		    ei, BC_EDEPTH,
-		    "%s: the scene nests %u levels, more than "
-		    "the %u a JSON scene carries",
-		    path, bc_tree_nesting(t), BC_SCENE_JSON_MAX_DEPTH);
-	}
 	tmp = bc_malloc(plen + 48);
 	dir = bc_malloc(plen + 2);
 	if (tmp) {
@@ -1497,9 +1488,7 @@ int bc_scene_save_json(const char *path, const struct bc_tree *t,
 		rc = bc_errinfo_set(ei, BC_EIO, "%s: %s", tmp, why);
 		goto cleanup;
 	}
-	/* The text goes to the file as it is made: a big scene's is never
-	 * whole in memory. */
-	if ((rc = bc_scene_write_json(t, cam, fd_sink, &fd))) {
+	if ((rc = fill(fd, ctx))) {
 		if (rc == BC_EIO) {
 			errno_text(errno, why, sizeof(why));
 			rc = bc_errinfo_set(ei, BC_EIO, "%s: write: %s", tmp,
@@ -1556,6 +1545,36 @@ cleanup:
 	bc_free(tmp);
 	bc_free(dir);
 	return rc;
+}
+
+struct json_fill {
+	const struct bc_tree *t;
+	const struct bc_camera *cam;
+};
+
+/* The text goes to the file as it is made: a big scene's is never whole
+ * in memory. */
+static int fill_json(int fd, void *ctx)
+{
+	const struct json_fill *j = ctx;
+	return bc_scene_write_json(j->t, j->cam, fd_sink, &fd);
+}
+
+int bc_scene_save_json(const char *path, const struct bc_tree *t,
+                       const struct bc_camera *cam, struct bc_errinfo *ei)
+{
+	if (bc_tree_root(t) == 0) {
+		return bc_errinfo_set(ei, BC_EINVAL, "%s: empty scene", path);
+	}
+	if (bc_tree_nesting(t) > BC_SCENE_JSON_MAX_DEPTH) {
+		return bc_errinfo_set(
+		    ei, BC_EDEPTH,
+		    "%s: the scene nests %u levels, more than "
+		    "the %u a JSON scene carries",
+		    path, bc_tree_nesting(t), BC_SCENE_JSON_MAX_DEPTH);
+	}
+	return bc__save_atomic(path, fill_json, &(struct json_fill){t, cam},
+	                       ei);
 }
 
 /* ---- the built-in scene ---------------------------------------------------

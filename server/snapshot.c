@@ -1,11 +1,12 @@
 /*
- * Writing a session's snapshot (see store.h for the layout): the scene in
- * its binary encoding (docs/scene-format.md) behind a checksummed header,
- * written to a temporary file, fsynced and renamed into place with the
- * journal that follows it created first, so a failure at any step leaves
- * the previous snapshot and journal as the state; reading one back (and
- * the JSON snapshots of earlier versions); and the periodic snapshot,
- * which backs off after a failure (a full disk).
+ * Writing a session's snapshot (see store.h for the layout): the scene as
+ * a binary scene file (blobcast/scene.h), written to a temporary file,
+ * fsynced and renamed into place with the journal that follows it
+ * created first, so a failure at any step leaves the previous snapshot
+ * and journal as the state; and the periodic snapshot, which backs off
+ * after a failure (a full disk). A million spheres are 40 MB of it
+ * (170 MB as JSON), read back without a JSON document, which took a
+ * restarting daemon to 1.4 GiB.
  */
 #include <errno.h>
 #include <fcntl.h>
@@ -24,86 +25,12 @@
 #include "blobcast/scene.h"
 #include "store_impl.h"
 
-/* snap-N.bin: 'BCS1', u32 length, u32 CRC32 of what follows, then the
- * scene's binary encoding with its camera. A million spheres are 40 MB
- * of it (some 170 MB as JSON), written in a fraction of the time and read
- * back without a JSON document, which took a restarting daemon to
- * 1.4 GiB. */
-#define SNAP_MAGIC 0x31534342u
-#define SNAP_HEADER 12u
-
-/* crc32 over any length (zlib's takes an unsigned int at a time). */
-static uint32_t crc_of(const uint8_t *p, size_t len)
-{
-	uLong c = crc32(0L, Z_NULL, 0);
-	while (len > 0) {
-		uInt k = len > (1u << 30) ? (1u << 30) : (uInt)len;
-		c = crc32(c, p, k);
-		p += k;
-		len -= k;
-	}
-	return (uint32_t)c;
-}
-
 bool bc__store_snap_path(char *buf, const struct bc_store_session *ss,
                          uint64_t order, bool json)
 {
 	return bc__store_fmt_path(buf, "%s/snap-%llu.%s", ss->path,
 	                          (unsigned long long)order,
 	                          json ? "json" : "bin");
-}
-
-int bc__store_snapshot_read(const char *file, bool json, struct bc_tree *t,
-                            struct bc_camera *cam, struct bc_errinfo *ei)
-{
-	uint8_t hdr[SNAP_HEADER], *p = NULL;
-	struct stat st;
-	uint32_t len;
-	int fd, rc;
-	if (json) {
-		return bc_scene_load_json(file, t, cam, ei);
-	}
-	bc_camera_default(cam);
-	bc_tree_begin(t);
-	if ((fd = open(file, O_RDONLY | O_CLOEXEC)) < 0) {
-		return bc__store_sys_error(ei, "cannot open", file);
-	}
-	if (fstat(fd, &st) != 0 || st.st_size < (off_t)SNAP_HEADER ||
-	    !bc_read_all(fd, hdr, sizeof(hdr)) ||
-	    bc_get_le32(hdr) != SNAP_MAGIC) {
-		close(fd);
-		return bc_errinfo_set(ei, BC_EPARSE,
-		                      "%s: not a snapshot (no header)", file);
-	}
-	len = bc_get_le32(hdr + 4);
-	if (len > BC_STORE_SNAPSHOT_MAX_BYTES ||
-	    (off_t)len != st.st_size - (off_t)SNAP_HEADER) {
-		close(fd);
-		return bc_errinfo_set(ei, BC_EPARSE,
-		                      "%s: %lld bytes, its header says %u "
-		                      "and a header",
-		                      file, (long long)st.st_size, len);
-	}
-	if (!(p = bc_malloc(len ? len : 1))) {
-		close(fd);
-		return bc_errinfo_set(ei, BC_ENOMEM, "%s: out of memory", file);
-	}
-	if (!bc_read_all(fd, p, len)) {
-		rc = bc__store_sys_error(ei, "cannot read", file);
-	} else if (crc_of(p, len) != bc_get_le32(hdr + 8)) {
-		rc = bc_errinfo_set(ei, BC_EPARSE,
-		                    "%s: damaged (its checksum does not match)",
-		                    file);
-	} else {
-		struct bc_errinfo dei = {0};
-		rc = bc_scene_decode(p, len, t, cam, NULL, &dei);
-		if (rc) {
-			rc = bc_errinfo_set(ei, rc, "%s: %s", file, dei.msg);
-		}
-	}
-	close(fd);
-	bc_free(p);
-	return rc;
 }
 
 int bc_store_scene_depth_ok(const struct bc_tree *t, struct bc_errinfo *ei)
@@ -143,30 +70,26 @@ static int write_snapshot(const char *tmp, const char *file,
 {
 	uint8_t *bytes = NULL;
 	size_t len = 0;
-	int fd, rc;
-	if ((rc = bc_scene_encode_after(t, cam, SNAP_HEADER, &bytes, &len))) {
-		return bc_errinfo_set(ei, rc, "cannot encode the snapshot: %s",
-		                      bc_strerror(rc));
-	}
-	len -= SNAP_HEADER;
-	if (len > BC_STORE_SNAPSHOT_MAX_BYTES ||
-	    bc__store_injected("snapshot-size", file)) {
+	int fd, rc = bc_scene_file_encode(t, cam, &bytes, &len);
+	if (rc == BC_ELIMIT ||
+	    (!rc && bc__store_injected("snapshot-size", file))) {
 		bc_free(bytes);
 		return bc_errinfo_set(ei, BC_ELIMIT,
 		                      "the scene's snapshot would be over the "
 		                      "%u bytes a restore reads",
-		                      BC_STORE_SNAPSHOT_MAX_BYTES);
+		                      BC_SCENE_FILE_MAX_BYTES);
 	}
-	bc_put_le32(bytes, SNAP_MAGIC);
-	bc_put_le32(bytes + 4, (uint32_t)len);
-	bc_put_le32(bytes + 8, crc_of(bytes + SNAP_HEADER, len));
+	if (rc) {
+		return bc_errinfo_set(ei, rc, "cannot encode the snapshot: %s",
+		                      bc_strerror(rc));
+	}
 	fd = bc__store_injected("snapshot-create", tmp)
 	         ? -1
 	         : open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
 	if (fd < 0) {
 		rc = bc__store_sys_error(ei, "cannot create", tmp);
 	} else if (bc__store_injected("snapshot-write", tmp) ||
-	           !bc_write_all(fd, bytes, SNAP_HEADER + len)) {
+	           !bc_write_all(fd, bytes, len)) {
 		rc = bc__store_sys_error(ei, "cannot write", tmp);
 	} else if (bc__store_injected("snapshot-fsync", tmp) ||
 	           fsync(fd) != 0) {

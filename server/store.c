@@ -457,8 +457,9 @@ static int restore(struct bc_store_session *ss, struct bc_tree *t,
 	for (size_t i = 0; i < r->nsnaps; i++) {
 		struct bc_errinfo lei = {0};
 		bc__store_snap_path(file, ss, r->snaps[i], r->json[i]);
-		if (bc__store_snapshot_read(file, r->json[i], t, cam, &lei) ==
-		    0) {
+		if ((r->json[i]
+		         ? bc_scene_load_json(file, t, cam, &lei)
+		         : bc_scene_load_binary(file, t, cam, &lei)) == 0) {
 			r->used = i;
 			break;
 		}

@@ -43,9 +43,6 @@
 
 /* Snapshots tried, newest first, when restoring a session. */
 #define BC_STORE_SNAPSHOTS_TRIED 8u
-/* The largest snapshot written and read back (its scene's binary
- * encoding; a scene as sent is at most 256 MiB, --max-scene). */
-#define BC_STORE_SNAPSHOT_MAX_BYTES (384u * 1024u * 1024u)
 /* After a periodic snapshot fails (disk full), the next is tried no sooner
  * than this, doubling per failure up to the maximum: a full disk must not
  * make every edit pay for a failed 1000-edit snapshot (measured: 0.03 ->
@@ -118,7 +115,7 @@ int bc_store_scene_depth_ok(const struct bc_tree *t, struct bc_errinfo *ei);
 /* Writes the whole scene as of order (atomic) and starts a new journal.
  * On failure nothing on disk has changed (the old snapshot and journal are
  * the state): BC_EIO, BC_ENOMEM, BC_ELIMIT (the snapshot would pass
- * BC_STORE_SNAPSHOT_MAX_BYTES, which restoring reads) or BC_EDEPTH
+ * BC_SCENE_FILE_MAX_BYTES, which restoring reads) or BC_EDEPTH
  * (bc_store_scene_depth_ok). */
 int bc_store_snapshot(struct bc_store_session *ss, const struct bc_tree *t,
                       const struct bc_camera *cam, uint64_t order,

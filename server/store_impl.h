@@ -78,11 +78,6 @@ int bc__store_history_write(struct bc_store_session *ss, uint64_t order,
 /* DIR/sessions/NAME/snap-ORDER.bin (or .json) into buf (PATH_LEN). */
 bool bc__store_snap_path(char *buf, const struct bc_store_session *ss,
                          uint64_t order, bool json);
-/* Reads a snapshot file (a JSON scene file when json) into t and cam,
- * which are reset first. 0, BC_ENOMEM, or another error in ei (the file
- * is missing, damaged or does not decode). */
-int bc__store_snapshot_read(const char *file, bool json, struct bc_tree *t,
-                            struct bc_camera *cam, struct bc_errinfo *ei);
 
 /* ---- journal.c ---- */
 

@@ -70,6 +70,7 @@ enum {
 	BC_CLI_O_OFFSET = 1u << 22,
 	BC_CLI_O_ANY = 1u << 23,
 	BC_CLI_O_RECORD = 1u << 24,
+	BC_CLI_O_BINARY = 1u << 25,
 };
 #define BC_CLI_O_CAMERA                                                        \
 	(BC_CLI_O_EYE | BC_CLI_O_TARGET | BC_CLI_O_UP | BC_CLI_O_FOV)
@@ -93,6 +94,7 @@ struct bc_cli_call {
 	uint32_t tile; /* snapshot --tile: tile edge, 0: as the size needs */
 	enum bc_proto_encoding encoding;
 	bool interacting, json;
+	bool binary; /* scene --binary: a binary scene file */
 	bool any; /* undo, redo --any: the session's change, whoever made it */
 	uint8_t downscale;
 	/* The modelling verbs (cmd_model.c): --parent (0: not given), and

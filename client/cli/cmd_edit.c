@@ -45,7 +45,7 @@ static int run_load(struct bc_cli_call *a)
 	bc_tree_set_layout(t, false);
 	/* The file is read before connecting: a bad file is the caller's
 	 * mistake (status 2) and costs the server nothing. */
-	if (bc_scene_load_json(a->pos[0], t, &cam, &ei)) {
+	if (bc_scene_load_file(a->pos[0], t, &cam, &ei)) {
 		bc_cli_explain(stderr, "blobcast load", ei.msg);
 		status = BC_CLI_EXIT_USAGE;
 		goto out;
@@ -81,11 +81,12 @@ const struct bc_cli_cmd bc_cli_cmd_load = {
     .opts = BC_CLI_O_SESSION,
     .min_pos = 1,
     .max_pos = 1,
-    .synopsis = "--session NAME SCENE.json",
-    .summary = "load a JSON scene into a session (created if missing)",
-    .help = "Loads SCENE.json (blobtree's JSON scene format, with its camera)\n"
-            "into session NAME, replacing its scene; every member sees it at\n"
-            "once. Creates the session when it does not exist.",
+    .synopsis = "--session NAME SCENE",
+    .summary = "load a scene file into a session (created if missing)",
+    .help = "Loads the scene file SCENE, with its camera, into session NAME,\n"
+            "replacing its scene; every member sees it at once. Creates the\n"
+            "session when it does not exist. SCENE is a JSON scene file or a\n"
+            "binary one ('blobcast scene --binary'; docs/scene-format.md).",
     .run = run_load};
 
 /* ---- edit ---------------------------------------------------------------- */

@@ -104,8 +104,9 @@ static int parse(int argc, char **argv, struct args *a, bool *done)
 	    .prog = "blobcast eval-bench",
 	    .usage = "blobcast eval-bench SCENE [options]",
 	    .about = "Measures interval pruning and pruned evaluation "
-	             "(render/svo,\nafter Chulkov 2025) on SCENE -- a JSON "
-	             "scene file, '-' for\nstdin, or 'default' -- and "
+	             "(render/svo,\nafter Chulkov 2025) on SCENE -- a scene "
+	             "file (JSON or binary),\n'-' for JSON on stdin, or "
+	             "'default' -- and "
 	             "prints the results as JSON.",
 	    .footer = "Times are on one thread. Output fields: terms (RPN "
 	              "length),\nprune_ms_per_voxel / prune_ms_per_node, "

@@ -180,8 +180,9 @@ static const struct bc_opt_name range_names[] = {{"ia", BC_RANGE_IA},
 
 static const char render_about[] =
     "Renders SCENE on this machine and writes the image files.\n"
-    "SCENE is a JSON scene file, '-' to read one from stdin, or\n"
-    "'default' for the built-in scene. The scene's camera is used.";
+    "SCENE is a scene file (JSON or binary), '-' to read a JSON one\n"
+    "from stdin, or 'default' for the built-in scene. The scene's\n"
+    "camera is used.";
 static const char render_footer[] =
     "Backend-only options are accepted with any backend and ignored by\n"
     "the others. Exit status: 0 done, 1 the scene could not be loaded\n"
@@ -320,7 +321,7 @@ int bc_cli_load_scene(const char *scene, struct bc_tree *t,
 		}
 		return rc;
 	}
-	return bc_scene_load_json(scene, t, cam, ei);
+	return bc_scene_load_file(scene, t, cam, ei);
 }
 
 struct progress {

@@ -1534,7 +1534,7 @@ int bc_client_load_scene_file(struct bc_client *c, const char *path,
 	 * take seconds and hundreds of MB), and gone before the scene is
 	 * sent and its SCENE_STATE taken in. */
 	bc_tree_set_layout(t, false);
-	if ((rc = bc_scene_load_json(path, t, &cam, ei))) {
+	if ((rc = bc_scene_load_file(path, t, &cam, ei))) {
 		goto out;
 	}
 	if ((rc = bc_scene_encode(t, &cam, &bytes, &len))) {

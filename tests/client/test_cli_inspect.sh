@@ -6,7 +6,8 @@
 #  - round trip: load -> scene -> load into another session -> scene gives
 #    the same file (every id and float survives), for a random scene with
 #    every primitive and operator kind; `nodes --json` lists its nodes in
-#    pre-order with their parents and types;
+#    pre-order with their parents and types; the same through a binary
+#    scene file (scene --binary, load, render), and a damaged one refused;
 #  - `nodes` lists ids, types, parents and parameters as edit keys;
 #  - watch names the author of an edit made with --name;
 #  - `watch --frames N` on a still session ends after --timeout with
@@ -76,6 +77,37 @@ for scene in random; do
     fail "$scene: load -> scene changed the scene"
   fi
 done
+# The same through a binary scene file: scene --binary -> load -> scene
+# gives the JSON file back; render takes it as it takes the JSON file; a
+# damaged one is refused, naming why; --binary needs --out.
+"$BLOBCAST" $S scene --session random-a --out "$tmp/random.bin" --binary \
+  > /dev/null || fail "scene --binary"
+[ "$(head -c 4 "$tmp/random.bin")" = BCS1 ] ||
+  fail "scene --binary did not write a binary scene file"
+[ "$(wc -c < "$tmp/random.bin")" -lt "$(wc -c < "$tmp/random.json")" ] ||
+  fail "the binary scene file is not smaller than the JSON one"
+"$BLOBCAST" $S load --session random-c "$tmp/random.bin" > /dev/null ||
+  fail "load of the binary scene file"
+"$BLOBCAST" $S scene --session random-c > "$tmp/random-c.json" ||
+  fail "scene random-c"
+cmp -s "$tmp/random.json" "$tmp/random-c.json" ||
+  fail "the scene changed through a binary scene file"
+"$BLOBCAST" render "$tmp/random.bin" --size 48x32 --out "$tmp/bin.png" \
+  > /dev/null 2>&1 || fail "render of the binary scene file"
+"$BLOBCAST" render "$tmp/random.json" --size 48x32 --out "$tmp/json.png" \
+  > /dev/null 2>&1 || fail "render of the JSON scene file"
+cmp -s "$tmp/bin.png" "$tmp/json.png" ||
+  fail "the binary and JSON scene files render differently"
+cp "$tmp/random.bin" "$tmp/bad.bin"
+printf 'X' | dd of="$tmp/bad.bin" bs=1 seek=40 conv=notrunc 2> /dev/null
+"$BLOBCAST" $S load --session random-d "$tmp/bad.bin" > "$tmp/out" 2>&1
+[ $? -eq 2 ] || fail "load of a damaged binary scene file did not exit 2"
+grep -q "checksum" "$tmp/out" ||
+  fail "load of a damaged scene file said: $(cat "$tmp/out")"
+"$BLOBCAST" $S scene --session random-a --binary > "$tmp/out" 2>&1
+[ $? -eq 2 ] || fail "scene --binary without --out was not refused"
+grep -q -- "--out FILE" "$tmp/out" ||
+  fail "scene --binary without --out said: $(cat "$tmp/out")"
 "$BLOBCAST" $S nodes --session random-b --json > "$tmp/random-b.nodes" ||
   fail "nodes --json"
 if command -v python3 > /dev/null 2>&1; then

@@ -3,14 +3,18 @@
  * camera first) and as a bare tree. Oracle: a refused input has a reason
  * and leaves the tree empty; an accepted one encodes to bytes of the same
  * length that decode again to the same structure, and writes to JSON that
- * parses back.
+ * parses back. Then as a binary scene file: the input itself (a header of
+ * its own, mostly refused), and the input behind a good header, which
+ * must get the very verdict the bare scene got.
  */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <zlib.h>
 
 #include "blobcast/alloc.h"
 #include "blobcast/blobtree.h"
+#include "blobcast/bytes.h"
 #include "blobcast/scene.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
@@ -79,10 +83,29 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	if (!t) {
 		die("out of memory");
 	}
-	rc = bc_scene_decode(data, size, t, &cam, &has, &ei);
+	int scene_rc;
+	uint8_t *file;
+	rc = scene_rc = bc_scene_decode(data, size, t, &cam, &has, &ei);
 	check_refusal(rc, &ei, t);
 	if (rc == 0) {
 		check_accepted(t, has ? &cam : NULL, size, true);
+	}
+	memset(&ei, 0, sizeof(ei));
+	check_refusal(bc_scene_file_decode(data, size, t, NULL, &ei), &ei, t);
+	if (size <= BC_SCENE_FILE_MAX_BYTES &&
+	    (file = bc_malloc(size + BC_SCENE_FILE_HEADER))) {
+		memcpy(file, BC_SCENE_FILE_MAGIC, 4);
+		bc_put_le32(file + 4, (uint32_t)size);
+		bc_put_le32(file + 8, (uint32_t)crc32(0L, data, (uInt)size));
+		memcpy(file + BC_SCENE_FILE_HEADER, data, size);
+		memset(&ei, 0, sizeof(ei));
+		rc = bc_scene_file_decode(file, size + BC_SCENE_FILE_HEADER, t,
+		                          NULL, &ei);
+		check_refusal(rc, &ei, t);
+		if (rc != scene_rc) {
+			die("a scene file's verdict is not its scene's");
+		}
+		bc_free(file);
 	}
 	memset(&ei, 0, sizeof(ei));
 	rc = bc_tree_decode(data, size, t, &ei);

@@ -8,6 +8,9 @@
  * every allocation failure in encode and decode is survived without leaks.
  */
 #include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
 
 #include "blobcast/alloc.h"
 #include "blobcast/blobtree.h"
@@ -957,6 +960,93 @@ static void allocation_failures_are_survived(void)
 	bc_tree_destroy(t);
 }
 
+/* A binary scene file: the scene and camera back, byte for byte, through
+ * bytes and through a file saved atomically; bc_scene_load_file takes it
+ * and a JSON file alike. */
+static void a_scene_file_round_trips(void)
+{
+	struct bc_tree *ref = bc_tree_create(), *t = bc_tree_create();
+	struct bc_gen_opts o = {.count = 40, .seed = 9};
+	struct bc_camera cam, got;
+	struct bc_errinfo ei = {0};
+	uint8_t *file = NULL, *a = NULL, *b = NULL;
+	size_t flen = 0, alen = 0, blen = 0;
+	char dir[] = "/tmp/bc-scenefile-XXXXXX", path[64], json[64];
+	REQUIRE(ref && t && mkdtemp(dir));
+	REQUIRE(bc_gen("random", &o, ref, &cam, NULL) == 0);
+	REQUIRE(bc_scene_file_encode(ref, &cam, &file, &flen) == 0);
+	REQUIRE(bc_scene_encode(ref, &cam, &a, &alen) == 0);
+	CHECK(flen == alen + BC_SCENE_FILE_HEADER);
+	CHECK(memcmp(file, BC_SCENE_FILE_MAGIC, 4) == 0);
+	CHECK(memcmp(file + BC_SCENE_FILE_HEADER, a, alen) == 0);
+	REQUIRE(bc_scene_file_decode(file, flen, t, &got, &ei) == 0);
+	CHECK_EQ_INT(tree_diff(ref, t), 0);
+	CHECK(memcmp(&got, &cam, sizeof(cam)) == 0);
+
+	snprintf(path, sizeof(path), "%s/s.bin", dir);
+	snprintf(json, sizeof(json), "%s/s.json", dir);
+	REQUIRE(bc_scene_save_binary(path, ref, &cam, &ei) == 0);
+	REQUIRE(bc_scene_save_json(json, ref, &cam, &ei) == 0);
+	for (int k = 0; k < 3; k++) {
+		const char *p = k == 2 ? json : path;
+		int rc = k == 0 ? bc_scene_load_binary(p, t, &got, &ei)
+		                : bc_scene_load_file(p, t, &got, &ei);
+		REQUIRE(rc == 0);
+		REQUIRE(bc_scene_encode(t, &got, &b, &blen) == 0);
+		CHECK(blen == alen && memcmp(a, b, alen) == 0);
+		bc_free(b);
+		b = NULL;
+	}
+	/* A JSON file is no binary one; a missing file says so. */
+	CHECK_EQ_INT(bc_scene_load_binary(json, t, &got, &ei), BC_EPARSE);
+	CHECK(strstr(ei.msg, "not a binary scene file") != NULL);
+	CHECK(tree_is_empty(t));
+	unlink(json);
+	CHECK_EQ_INT(bc_scene_load_binary(json, t, &got, &ei), BC_ENOTFOUND);
+	CHECK_EQ_INT(bc_scene_load_file(json, t, &got, &ei), BC_ENOTFOUND);
+	unlink(path);
+	rmdir(dir);
+	bc_free(file);
+	bc_free(a);
+	bc_tree_destroy(ref);
+	bc_tree_destroy(t);
+}
+
+/* Every byte of a scene file changed, and every length short of it, is
+ * refused (the checksum, the header's length or its magic), leaving the
+ * tree empty. */
+static void every_damaged_scene_file_is_refused(void)
+{
+	struct bc_tree *ref = bc_tree_create(), *t = bc_tree_create();
+	struct bc_gen_opts o = {.count = 12, .seed = 3};
+	struct bc_camera cam;
+	uint8_t *file = NULL;
+	size_t flen = 0;
+	REQUIRE(ref && t);
+	REQUIRE(bc_gen("random", &o, ref, &cam, NULL) == 0);
+	REQUIRE(bc_scene_file_encode(ref, &cam, &file, &flen) == 0);
+	for (size_t i = 0; i < flen; i++) {
+		for (int bit = 0; bit < 8; bit += 3) {
+			struct bc_errinfo ei = {0};
+			file[i] ^= (uint8_t)(1u << bit);
+			CHECK_EQ_INT(
+			    bc_scene_file_decode(file, flen, t, NULL, &ei),
+			    BC_EPARSE);
+			CHECK(tree_is_empty(t));
+			file[i] ^= (uint8_t)(1u << bit);
+		}
+	}
+	for (size_t n = 0; n < flen; n++) {
+		struct bc_errinfo ei = {0};
+		CHECK_EQ_INT(bc_scene_file_decode(file, n, t, NULL, &ei),
+		             BC_EPARSE);
+	}
+	CHECK_EQ_INT(bc_scene_file_decode(file, flen, t, NULL, NULL), 0);
+	bc_free(file);
+	bc_tree_destroy(ref);
+	bc_tree_destroy(t);
+}
+
 static const struct bc_test tests[] = {
     {"every_generator_round_trips_through_binary",
      every_generator_round_trips_through_binary},
@@ -973,6 +1063,9 @@ static const struct bc_test tests[] = {
     {"corrupted_encodings_never_crash", corrupted_encodings_never_crash},
     {"empty_trees_do_not_encode", empty_trees_do_not_encode},
     {"allocation_failures_are_survived", allocation_failures_are_survived},
+    {"a_scene_file_round_trips", a_scene_file_round_trips},
+    {"every_damaged_scene_file_is_refused",
+     every_damaged_scene_file_is_refused},
 };
 
 BC_TEST_MAIN(tests)

@@ -384,9 +384,9 @@ BC_API const struct bc_tree *bc_client_scene(const struct bc_client *c,
 BC_API int bc_client_load_scene(struct bc_client *c, const uint8_t *bytes,
                                 size_t len, uint64_t *order,
                                 struct bc_errinfo *ei);
-/* Reads a JSON scene file (blobtree's format), encodes it with its camera
- * and loads it as bc_client_load_scene() does. *nodes (may be NULL) receives
- * its node count. */
+/* Reads a scene file, JSON or binary (bc_scene_load_file), encodes it with its
+ * camera and loads it as bc_client_load_scene() does. *nodes (may be NULL)
+ * receives its node count. */
 BC_API int bc_client_load_scene_file(struct bc_client *c, const char *path,
                                      uint64_t *order, uint32_t *nodes,
                                      struct bc_errinfo *ei);

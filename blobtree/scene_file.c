@@ -1,0 +1,181 @@
+/*
+ * Binary scene files (see blobcast/scene.h): a checksummed header before
+ * the binary encoding, and the reader that takes a scene file in either
+ * form by its first bytes.
+ */
+#include "blobcast/scene.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include "blobcast/alloc.h"
+#include "blobcast/bytes.h"
+#include "blobcast/io.h"
+#include "file_impl.h"
+
+/* zlib's CRC32 over any length (crc32() takes an unsigned int at a
+ * time). */
+static uint32_t crc_of(const uint8_t *p, size_t len)
+{
+	uLong c = crc32(0L, Z_NULL, 0);
+	while (len > 0) {
+		uInt k = len > (1u << 30) ? (1u << 30) : (uInt)len;
+		c = crc32(c, p, k);
+		p += k;
+		len -= k;
+	}
+	return (uint32_t)c;
+}
+
+int bc_scene_file_encode(const struct bc_tree *t, const struct bc_camera *cam,
+                         uint8_t **out, size_t *len)
+{
+	size_t n;
+	int rc = bc_scene_encode_after(t, cam, BC_SCENE_FILE_HEADER, out, len);
+	if (rc) {
+		return rc;
+	}
+	n = *len - BC_SCENE_FILE_HEADER;
+	if (n > BC_SCENE_FILE_MAX_BYTES) {
+		bc_free(*out);
+		*out = NULL;
+		*len = 0;
+		return BC_ELIMIT;
+	}
+	memcpy(*out, BC_SCENE_FILE_MAGIC, 4);
+	bc_put_le32(*out + 4, (uint32_t)n);
+	bc_put_le32(*out + 8, crc_of(*out + BC_SCENE_FILE_HEADER, n));
+	return 0;
+}
+
+int bc_scene_file_decode(const uint8_t *buf, size_t len, struct bc_tree *t,
+                         struct bc_camera *cam, struct bc_errinfo *ei)
+{
+	uint32_t n;
+	if (cam) {
+		bc_camera_default(cam);
+	}
+	bc_tree_begin(t);
+	if (len < BC_SCENE_FILE_HEADER ||
+	    memcmp(buf, BC_SCENE_FILE_MAGIC, 4) != 0) {
+		return bc_errinfo_set(ei, BC_EPARSE,
+		                      "not a binary scene file (no \"%s\" "
+		                      "header)",
+		                      BC_SCENE_FILE_MAGIC);
+	}
+	n = bc_get_le32(buf + 4);
+	if (n > BC_SCENE_FILE_MAX_BYTES || n != len - BC_SCENE_FILE_HEADER) {
+		return bc_errinfo_set(ei, BC_EPARSE,
+		                      "%zu bytes after the header, which says "
+		                      "%u: the file is cut short or damaged",
+		                      len - BC_SCENE_FILE_HEADER, n);
+	}
+	if (crc_of(buf + BC_SCENE_FILE_HEADER, n) != bc_get_le32(buf + 8)) {
+		return bc_errinfo_set(ei, BC_EPARSE,
+		                      "damaged: its checksum does not match "
+		                      "its bytes");
+	}
+	return bc_scene_decode(buf + BC_SCENE_FILE_HEADER, n, t, cam, NULL, ei);
+}
+
+struct bytes_fill {
+	const uint8_t *p;
+	size_t len;
+};
+
+static int fill_bytes(int fd, void *ctx)
+{
+	const struct bytes_fill *b = ctx;
+	return bc_write_all(fd, b->p, b->len) ? 0 : BC_EIO;
+}
+
+int bc_scene_save_binary(const char *path, const struct bc_tree *t,
+                         const struct bc_camera *cam, struct bc_errinfo *ei)
+{
+	uint8_t *bytes = NULL;
+	size_t len = 0;
+	int rc = bc_scene_file_encode(t, cam, &bytes, &len);
+	if (rc == BC_EINVAL) {
+		return bc_errinfo_set(ei, rc, "%s: empty scene", path);
+	}
+	if (rc == BC_ELIMIT) {
+		return bc_errinfo_set(ei, rc,
+		                      "%s: the scene is over the %u bytes a "
+		                      "scene file holds",
+		                      path, BC_SCENE_FILE_MAX_BYTES);
+	}
+	if (rc) {
+		return bc_errinfo_set(ei, rc, "%s: out of memory", path);
+	}
+	rc = bc__save_atomic(path, fill_bytes, &(struct bytes_fill){bytes, len},
+	                     ei);
+	bc_free(bytes);
+	return rc;
+}
+
+int bc_scene_load_binary(const char *path, struct bc_tree *t,
+                         struct bc_camera *cam, struct bc_errinfo *ei)
+{
+	struct bc_errinfo dei = {0};
+	uint8_t *buf = NULL;
+	struct stat st;
+	size_t len;
+	int fd, rc;
+	if (cam) {
+		bc_camera_default(cam);
+	}
+	bc_tree_begin(t);
+	if ((fd = open(path, O_RDONLY | O_CLOEXEC)) < 0) {
+		return bc_errinfo_set(ei,
+		                      errno == ENOENT ? BC_ENOTFOUND : BC_EIO,
+		                      "%s: %s", path, strerror(errno));
+	}
+	if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+		close(fd);
+		return bc_errinfo_set(ei, BC_EIO, "%s: not a regular file",
+		                      path);
+	}
+	if ((uint64_t)st.st_size >
+	    (uint64_t)BC_SCENE_FILE_MAX_BYTES + BC_SCENE_FILE_HEADER) {
+		close(fd);
+		return bc_errinfo_set(ei, BC_ELIMIT,
+		                      "%s: %lld bytes, over the %u a scene "
+		                      "file holds",
+		                      path, (long long)st.st_size,
+		                      BC_SCENE_FILE_MAX_BYTES);
+	}
+	len = (size_t)st.st_size;
+	if (!(buf = bc_malloc(len ? len : 1))) {
+		close(fd);
+		return bc_errinfo_set(ei, BC_ENOMEM, "%s: out of memory", path);
+	}
+	if (!bc_read_all(fd, buf, len)) {
+		rc =
+		    bc_errinfo_set(ei, BC_EIO, "%s: %s", path, strerror(errno));
+	} else if ((rc = bc_scene_file_decode(buf, len, t, cam, &dei))) {
+		rc = bc_errinfo_set(ei, rc, "%s: %s", path, dei.msg);
+	}
+	close(fd);
+	bc_free(buf);
+	return rc;
+}
+
+int bc_scene_load_file(const char *path, struct bc_tree *t,
+                       struct bc_camera *cam, struct bc_errinfo *ei)
+{
+	char head[4];
+	bool binary = false;
+	int fd = open(path, O_RDONLY | O_CLOEXEC);
+	if (fd >= 0) {
+		binary = bc_read_all(fd, head, sizeof(head)) &&
+		         memcmp(head, BC_SCENE_FILE_MAGIC, 4) == 0;
+		close(fd);
+	}
+	/* (A file that cannot be opened: the JSON reader says why.) */
+	return binary ? bc_scene_load_binary(path, t, cam, ei)
+	              : bc_scene_load_json(path, t, cam, ei);
+}
