@@ -2353,6 +2353,43 @@ export function encodeScene({ camera = null, root }) {
 	return out;
 }
 
+/* ---- Binary scene files ------------------------------------------------------- */
+
+let crcTable = null;
+
+/* zlib's CRC-32 (the one gzip and PNG use) of bytes. */
+export function crc32(bytes) {
+	if (!crcTable) {
+		crcTable = new Uint32Array(256);
+		for (let i = 0; i < 256; i++) {
+			let c = i;
+			for (let k = 0; k < 8; k++) {
+				c = c & 1 ? 0xedb88320 ^ (c >>> 1) : c >>> 1;
+			}
+			crcTable[i] = c >>> 0;
+		}
+	}
+	let c = 0xffffffff;
+	for (let i = 0; i < bytes.length; i++) {
+		c = crcTable[(c ^ bytes[i]) & 0xff] ^ (c >>> 8);
+	}
+	return (c ^ 0xffffffff) >>> 0;
+}
+
+/* A binary scene file of a tree (docs/scene-format.md, "Binary scene
+ * file"): "BCS1", the length and CRC-32 of the scene bytes, then
+ * encodeScene's bytes, as `blobcast scene --binary` writes them. */
+export function encodeSceneFile(scene) {
+	const body = encodeScene(scene);
+	const out = new Uint8Array(12 + body.length);
+	const dv = new DataView(out.buffer);
+	out.set([0x42, 0x43, 0x53, 0x31], 0);
+	dv.setUint32(4, body.length, true);
+	dv.setUint32(8, crc32(body), true);
+	out.set(body, 12);
+	return out;
+}
+
 /* ---- Applying edits to a parsed scene ----------------------------------------- */
 
 /* Applies the operations of an EDIT_APPLIED (SET, INSERT, REMOVE, REPLACE,

@@ -6,7 +6,8 @@
  *  - zoom to fit (Home): the whole scene in view, from conservative boxes
  *    of the mirror's primitives (bounds.js);
  *  - downloads: a PNG of the view (the Picture panel's tiled snapshot at
- *    the view's size) and the scene as a JSON scene file (scenejson.js);
+ *    the view's size) and the scene as a JSON scene file (scenejson.js)
+ *    or a binary one (protocol.js encodeSceneFile);
  *  - the frame encoding (JPEG, PNG, raw, H.264 video, or H.264 with an
  *    exact PNG still) and JPEG quality, sent as VIEW (7.14); H.264 is
  *    offered only where WebCodecs decodes it (video.js); an encoding the
@@ -93,6 +94,7 @@ export class Review {
 		$('pngbtn').addEventListener('click', () => this.savePng()
 			.catch(() => {}));
 		$('jsonbtn').addEventListener('click', () => this.saveJson());
+		$('binbtn').addEventListener('click', () => this.saveBinary());
 		const enc = $('encoding');
 		for (const o of enc.options) {
 			o.dataset.label = o.textContent;
@@ -202,6 +204,23 @@ export class Review {
 		}
 		download(new Blob(parts, { type: 'application/json' }),
 			this.fileName('json'));
+	}
+
+	/* The mirror as a binary scene file (`blobcast scene --binary`). */
+	saveBinary() {
+		const s = this.app.scene;
+		let bytes;
+		try {
+			if (!s) {
+				throw new Error('no scene yet');
+			}
+			bytes = P.encodeSceneFile({ camera: s.camera, root: s.root });
+		} catch (e) {
+			this.app.say(`binary scene not saved: ${e.message}`);
+			return;
+		}
+		download(new Blob([bytes], { type: 'application/octet-stream' }),
+			this.fileName('bin'));
 	}
 
 	/* ---- frames ---- */
@@ -389,6 +408,7 @@ export class Review {
 		$('resetbtn').disabled = !joined;
 		$('fitbtn').disabled = !joined || !app.scene;
 		$('jsonbtn').disabled = !app.scene;
+		$('binbtn').disabled = !app.scene;
 		$('pngbtn').disabled = $('picturebtn').disabled;
 		const name = app.info?.name ?? null;
 		if (name && name !== this.listedFor && !this.sessions.busy) {

@@ -165,6 +165,22 @@ test('vectors: scene encoding', () => {
 	}
 });
 
+test('binary scene file: CRC-32 and header as blobtree writes them', () => {
+	/* The CRC-32 check value of the catalogue (zlib, gzip, PNG). */
+	assert.equal(P.crc32(new TextEncoder().encode('123456789')),
+		0xcbf43926);
+	assert.equal(P.crc32(new Uint8Array(0)), 0);
+	for (const e of load('scene.json').valid) {
+		const bytes = unhex(e.hex);
+		const file = P.encodeSceneFile(P.parseScene(bytes));
+		const dv = new DataView(file.buffer);
+		assert.deepEqual([...file.subarray(0, 4)], [0x42, 0x43, 0x53, 0x31]);
+		assert.equal(dv.getUint32(4, true), bytes.length, e.name);
+		assert.equal(dv.getUint32(8, true), P.crc32(bytes), e.name);
+		assert.deepEqual(file.subarray(12), bytes, e.name);
+	}
+});
+
 test('vectors: no unknown files, every type covered', () => {
 	const files = readdirSync(VECTORS).filter((f) => f.endsWith('.json'));
 	const known = new Set([...typeNames.map(fileOf), 'framing.json',

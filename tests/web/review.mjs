@@ -21,13 +21,14 @@
  *    nodes, an edit from the page, a session camera set by another
  *    client): the file equals `blobcast scene` of the session byte for
  *    byte; `blobcast load` takes it into another session whose scene is
- *    the same; blobcastd's own loader takes it from a data directory
+ *    the same; the binary button's file equals `blobcast scene --binary`
+ *    and loads back as the same scene; blobcastd's own loader takes it from a data directory
  *    (--check, then a start) and serves the same scene.
  * Exit status: 0 passed, 1 failed, 77 skipped (the message names what is
  * missing). Usage: node tests/web/review.mjs --blobcastd PATH --blobcast PATH
  */
 import assert from 'node:assert/strict';
-import { copyFileSync, mkdirSync, mkdtempSync, rmSync,
+import { copyFileSync, mkdirSync, mkdtempSync, readFileSync, rmSync,
 	writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
@@ -429,6 +430,25 @@ try {
 		.stdout;
 	assert.equal(text, fromCli, 'the download is what `blobcast scene` ' +
 		'writes');
+	/* The binary button: what `blobcast scene --binary` writes, byte
+	 * for byte, and `blobcast load` takes it back. */
+	const bin = await H.download(a, '#binbtn');
+	assert.match(bin.name, /^blobcast-rich-\d+\.bin$/);
+	const binCli = join(work, 'cli.bin');
+	r = await run(['scene', ...srv, '--session', 'rich', '--out', binCli,
+		'--binary']);
+	assert.equal(r.code, 0, `blobcast scene --binary: ${r.stderr}`);
+	assert.ok(Buffer.compare(bin.bytes, readFileSync(binCli)) === 0,
+		'the binary download is what `blobcast scene --binary` writes');
+	const binFile = join(work, 'download.bin');
+	writeFileSync(binFile, bin.bytes);
+	r = await run(['load', ...srv, '--session', 'copybin', binFile]);
+	assert.equal(r.code, 0, `blobcast load of the binary download: ${
+		r.stderr}`);
+	assert.equal((await run(['scene', ...srv, '--session', 'copybin']))
+		.stdout, text, 'the scene loaded from the binary download');
+	step(`binary button: ${bin.name} (${bin.bytes.length} bytes) equals ` +
+		'`blobcast scene --binary` and loads back as the same scene');
 	const file = join(work, 'download.json');
 	writeFileSync(file, json.bytes);
 	r = await run(['load', ...srv, '--session', 'copy', file]);
