@@ -195,14 +195,42 @@ static void put_node(struct bc_buf *b, const struct bc__node *nd)
 	bc_buf_append(b, w, (size_t)(p - w));
 }
 
+/* Where a streamed encoding goes (bc_scene_write_binary): b is handed to
+ * fn and emptied whenever it holds a piece. NULL: b holds it all. */
+#define PIECE_BYTES (256u * 1024u)
+struct pieces {
+	bc_scene_sink fn;
+	void *ctx;
+	int rc; /* the sink's error, which stops the writing */
+};
+
+/* Hands b to the sink (when there is one and b holds at least least
+ * bytes) and empties it. False once the writing must stop. */
+static bool pass_on(struct bc_buf *b, struct pieces *ps, size_t least)
+{
+	if (b->err) {
+		return false;
+	}
+	if (!ps || b->len < least || b->len == 0) {
+		return true;
+	}
+	ps->rc = ps->fn(ps->ctx, b->data, b->len);
+	b->len = 0;
+	return ps->rc == 0;
+}
+
 /* The nodes in pre-order, straight from the pool's child lists (the
  * order the layout folds them in, and bc_scene_walk gives): no id lookup
  * per node, and a decoded tree's pool is read front to back. */
-static void put_nodes(struct bc_buf *b, const struct bc_tree *t)
+static void put_nodes(struct bc_buf *b, const struct bc_tree *t,
+                      struct pieces *ps)
 {
 	uint32_t n = t->root;
 	for (;;) {
 		put_node(b, &t->pool[n]);
+		if (!pass_on(b, ps, PIECE_BYTES)) {
+			return;
+		}
 		if (t->pool[n].is_op) {
 			n = t->pool[n].first_child;
 			continue;
@@ -238,52 +266,81 @@ static void put_names(struct bc_buf *b, const struct bc_tree *t)
 	bc_free(ids);
 }
 
-/* The encoding after head zero bytes (the caller's to fill). */
-static int encode(const struct bc_tree *t, const struct bc_camera *cam,
-                  bool scene, size_t head, uint8_t **out, size_t *len)
+/* The encoding after head zero bytes (the caller's to fill) into b, or
+ * through ps in pieces (head 0). */
+static int encode_into(const struct bc_tree *t, const struct bc_camera *cam,
+                       bool scene, size_t head, struct bc_buf *b,
+                       struct pieces *ps)
 {
-	struct bc_buf b;
 	bool names = scene && bc_tree_name_count(t) > 0;
-	*out = NULL;
-	*len = 0;
 	if (t->building || bc_tree_node_count(t) == 0 || t->root == BC_NONE) {
 		return BC_EINVAL;
 	}
-	bc_buf_init(&b, SIZE_MAX);
 	/* The final size, but for unary nodes' floats and the names: one
-	 * allocation, no growth. */
+	 * allocation, no growth (a piece and a node when streamed). */
 	{
 		uint32_t colored = 0, nodes = bc_tree_node_count(t);
 		uint32_t prims = bc_tree_prim_count(t);
 		uint64_t floats = 0;
 		bc_tree_counts(t, &colored, &floats);
-		if (!bc_buf_reserve(&b,
-		                    head + 64u + (size_t)(nodes - prims) * 17u +
-		                        (size_t)prims * 35u +
-		                        (size_t)colored * 12u + 4u * floats)) {
-			memset(b.data, 0, head);
-			b.len = head;
+		if (!bc_buf_reserve(
+		        b, ps ? PIECE_BYTES + NODE_MAX_BYTES
+		              : head + 64u + (size_t)(nodes - prims) * 17u +
+		                    (size_t)prims * 35u +
+		                    (size_t)colored * 12u + 4u * floats)) {
+			memset(b->data, 0, head);
+			b->len = head;
 		}
 	}
 	if (scene) {
-		put_u8(&b, (uint8_t)((cam ? BC_SCENE_FLAG_CAMERA : 0) |
-		                     (names ? BC_SCENE_FLAG_NAMES : 0)));
+		put_u8(b, (uint8_t)((cam ? BC_SCENE_FLAG_CAMERA : 0) |
+		                    (names ? BC_SCENE_FLAG_NAMES : 0)));
 		if (cam) {
-			put_f32s(&b, cam->eye, 3);
-			put_f32s(&b, cam->target, 3);
-			put_f32s(&b, cam->up, 3);
-			put_f32(&b, cam->fov_y_deg);
+			put_f32s(b, cam->eye, 3);
+			put_f32s(b, cam->target, 3);
+			put_f32s(b, cam->up, 3);
+			put_f32(b, cam->fov_y_deg);
 		}
 	}
-	put_u32(&b, bc_tree_node_count(t));
-	if (!b.err) {
-		put_nodes(&b, t);
+	put_u32(b, bc_tree_node_count(t));
+	if (!b->err) {
+		put_nodes(b, t, ps);
 	}
-	if (names && !b.err) {
-		put_names(&b, t);
+	if (names && !b->err && (!ps || !ps->rc)) {
+		put_names(b, t);
+	}
+	if (ps && !ps->rc) {
+		pass_on(b, ps, 0);
 	}
 	/* No ceiling of its own: BC_ENOMEM is the failure left. */
+	return b->err ? b->err : ps ? ps->rc : 0;
+}
+
+static int encode(const struct bc_tree *t, const struct bc_camera *cam,
+                  bool scene, size_t head, uint8_t **out, size_t *len)
+{
+	struct bc_buf b;
+	int rc;
+	*out = NULL;
+	*len = 0;
+	bc_buf_init(&b, SIZE_MAX);
+	if ((rc = encode_into(t, cam, scene, head, &b, NULL))) {
+		bc_buf_finish(&b);
+		return rc;
+	}
 	return bc_buf_take(&b, out, len);
+}
+
+int bc_scene_write_binary(const struct bc_tree *t, const struct bc_camera *cam,
+                          bc_scene_sink sink, void *ctx)
+{
+	struct pieces ps = {sink, ctx, 0};
+	struct bc_buf b;
+	int rc;
+	bc_buf_init(&b, SIZE_MAX);
+	rc = encode_into(t, cam, true, 0, &b, &ps);
+	bc_buf_finish(&b);
+	return rc;
 }
 
 int bc_scene_encode(const struct bc_tree *t, const struct bc_camera *cam,

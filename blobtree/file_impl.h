@@ -11,9 +11,10 @@
 typedef int (*bc__file_fill)(int fd, void *ctx);
 
 /* Writes path atomically: fill writes a temporary file beside it, which
- * is fsynced and renamed over path, and the directory fsynced. Returns 0,
- * BC_ENOMEM or BC_EIO with the reason in ei; on failure path is as it
- * was and the temporary file is gone. */
+ * is fsynced and renamed over path, and the directory fsynced. Returns 0
+ * or fill's error (BC_EIO, BC_ENOMEM, BC_ELIMIT: a scene over
+ * BC_SCENE_FILE_MAX_BYTES) with the reason in ei; on failure path is as
+ * it was and the temporary file is gone. */
 int bc__save_atomic(const char *path, bc__file_fill fill, void *ctx,
                     struct bc_errinfo *ei);
 

@@ -1493,8 +1493,15 @@ int bc__save_atomic(const char *path, bc__file_fill fill, void *ctx,
 			errno_text(errno, why, sizeof(why));
 			rc = bc_errinfo_set(ei, BC_EIO, "%s: write: %s", tmp,
 			                    why);
+		} else if (rc == BC_ELIMIT) {
+			rc =
+			    bc_errinfo_set(ei, rc,
+			                   "%s: the scene is over the %u bytes "
+			                   "its file holds",
+			                   path, BC_SCENE_FILE_MAX_BYTES);
 		} else {
-			rc = bc_errinfo_set(ei, rc, "%s: out of memory", path);
+			rc = bc_errinfo_set(ei, rc, "%s: %s", path,
+			                    bc_strerror(rc));
 		}
 		goto cleanup;
 	}

@@ -82,39 +82,72 @@ int bc_scene_file_decode(const uint8_t *buf, size_t len, struct bc_tree *t,
 	return bc_scene_decode(buf + BC_SCENE_FILE_HEADER, n, t, cam, NULL, ei);
 }
 
-struct bytes_fill {
-	const uint8_t *p;
-	size_t len;
+/* The file's bytes after its header, as the encoder hands them: counted
+ * and summed for the header. */
+struct file_sink {
+	int fd;
+	uLong crc;
+	uint64_t len;
 };
 
-static int fill_bytes(int fd, void *ctx)
+static int file_put(void *ctx, const void *bytes, size_t len)
 {
-	const struct bytes_fill *b = ctx;
-	return bc_write_all(fd, b->p, b->len) ? 0 : BC_EIO;
+	struct file_sink *f = ctx;
+	if (len > BC_SCENE_FILE_MAX_BYTES - f->len) {
+		return BC_ELIMIT;
+	}
+	f->len += len;
+	f->crc = crc32(f->crc, bytes, (uInt)len);
+	return bc_write_all(f->fd, bytes, len) ? 0 : BC_EIO;
+}
+
+int bc_scene_file_write_fd(int fd, const struct bc_tree *t,
+                           const struct bc_camera *cam)
+{
+	struct file_sink f = {fd, crc32(0L, Z_NULL, 0), 0};
+	uint8_t head[BC_SCENE_FILE_HEADER] = {0};
+	int rc;
+	if (bc_tree_root(t) == 0) {
+		return BC_EINVAL;
+	}
+	/* Room for the header, written once the length and sum are known. */
+	if (!bc_write_all(fd, head, sizeof(head))) {
+		return BC_EIO;
+	}
+	if ((rc = bc_scene_write_binary(t, cam, file_put, &f))) {
+		return rc;
+	}
+	memcpy(head, BC_SCENE_FILE_MAGIC, 4);
+	bc_put_le32(head + 4, (uint32_t)f.len);
+	bc_put_le32(head + 8, (uint32_t)f.crc);
+	if (pwrite(fd, head, sizeof(head), 0) != (ssize_t)sizeof(head)) {
+		if (errno == 0) {
+			errno = EIO;
+		}
+		return BC_EIO;
+	}
+	return 0;
+}
+
+struct scene_ref {
+	const struct bc_tree *t;
+	const struct bc_camera *cam;
+};
+
+static int fill_file(int fd, void *ctx)
+{
+	const struct scene_ref *r = ctx;
+	return bc_scene_file_write_fd(fd, r->t, r->cam);
 }
 
 int bc_scene_save_binary(const char *path, const struct bc_tree *t,
                          const struct bc_camera *cam, struct bc_errinfo *ei)
 {
-	uint8_t *bytes = NULL;
-	size_t len = 0;
-	int rc = bc_scene_file_encode(t, cam, &bytes, &len);
-	if (rc == BC_EINVAL) {
-		return bc_errinfo_set(ei, rc, "%s: empty scene", path);
+	if (bc_tree_root(t) == 0) {
+		return bc_errinfo_set(ei, BC_EINVAL, "%s: empty scene", path);
 	}
-	if (rc == BC_ELIMIT) {
-		return bc_errinfo_set(ei, rc,
-		                      "%s: the scene is over the %u bytes a "
-		                      "scene file holds",
-		                      path, BC_SCENE_FILE_MAX_BYTES);
-	}
-	if (rc) {
-		return bc_errinfo_set(ei, rc, "%s: out of memory", path);
-	}
-	rc = bc__save_atomic(path, fill_bytes, &(struct bytes_fill){bytes, len},
-	                     ei);
-	bc_free(bytes);
-	return rc;
+	return bc__save_atomic(path, fill_file, &(struct scene_ref){t, cam},
+	                       ei);
 }
 
 int bc_scene_load_binary(const char *path, struct bc_tree *t,

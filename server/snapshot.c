@@ -62,43 +62,43 @@ int bc_store_snapshot(struct bc_store_session *ss, const struct bc_tree *t,
 	return bc_store_snapshot_with(ss, t, cam, order, NULL, 0, ei);
 }
 
-/* The snapshot's bytes, header and scene, into a new temporary file tmp
- * (file names the snapshot for the test hook), fsynced. */
+/* The snapshot, header and scene, into a new temporary file tmp (file
+ * names the snapshot for the test hook), streamed as it is encoded (a
+ * million spheres' 51 MB are never whole in memory), and fsynced. */
 static int write_snapshot(const char *tmp, const char *file,
                           const struct bc_tree *t, const struct bc_camera *cam,
                           struct bc_errinfo *ei)
 {
-	uint8_t *bytes = NULL;
-	size_t len = 0;
-	int fd, rc = bc_scene_file_encode(t, cam, &bytes, &len);
-	if (rc == BC_ELIMIT ||
-	    (!rc && bc__store_injected("snapshot-size", file))) {
-		bc_free(bytes);
+	int fd, rc = 0;
+	if (bc__store_injected("snapshot-size", file)) {
 		return bc_errinfo_set(ei, BC_ELIMIT,
 		                      "the scene's snapshot would be over the "
 		                      "%u bytes a restore reads",
 		                      BC_SCENE_FILE_MAX_BYTES);
 	}
-	if (rc) {
-		return bc_errinfo_set(ei, rc, "cannot encode the snapshot: %s",
-		                      bc_strerror(rc));
-	}
 	fd = bc__store_injected("snapshot-create", tmp)
 	         ? -1
-	         : open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+	         : open(tmp, O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
 	if (fd < 0) {
-		rc = bc__store_sys_error(ei, "cannot create", tmp);
-	} else if (bc__store_injected("snapshot-write", tmp) ||
-	           !bc_write_all(fd, bytes, len)) {
+		return bc__store_sys_error(ei, "cannot create", tmp);
+	}
+	if (bc__store_injected("snapshot-write", tmp)) {
 		rc = bc__store_sys_error(ei, "cannot write", tmp);
+	} else if ((rc = bc_scene_file_write_fd(fd, t, cam)) == BC_EIO) {
+		rc = bc__store_sys_error(ei, "cannot write", tmp);
+	} else if (rc == BC_ELIMIT) {
+		rc = bc_errinfo_set(ei, BC_ELIMIT,
+		                    "the scene's snapshot would be over the "
+		                    "%u bytes a restore reads",
+		                    BC_SCENE_FILE_MAX_BYTES);
+	} else if (rc) {
+		rc = bc_errinfo_set(ei, rc, "cannot write the snapshot: %s",
+		                    bc_strerror(rc));
 	} else if (bc__store_injected("snapshot-fsync", tmp) ||
 	           fsync(fd) != 0) {
 		rc = bc__store_sys_error(ei, "cannot sync", tmp);
 	}
-	if (fd >= 0) {
-		close(fd);
-	}
-	bc_free(bytes);
+	close(fd);
 	return rc;
 }
 

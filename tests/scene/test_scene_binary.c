@@ -1047,6 +1047,71 @@ static void every_damaged_scene_file_is_refused(void)
 	bc_tree_destroy(t);
 }
 
+/* What bc_scene_write_binary hands its sink. */
+struct pieces_got {
+	uint8_t *bytes;
+	size_t len, biggest;
+	int calls, fail_at; /* fail_at: the call that says BC_EIO, 0: none */
+};
+
+static int collect_piece(void *ctx, const void *p, size_t n)
+{
+	struct pieces_got *g = ctx;
+	if (++g->calls == g->fail_at) {
+		return BC_EIO;
+	}
+	if (!(g->bytes = bc_realloc(g->bytes, g->len + n))) {
+		return BC_ENOMEM;
+	}
+	memcpy(g->bytes + g->len, p, n);
+	g->len += n;
+	g->biggest = n > g->biggest ? n : g->biggest;
+	return 0;
+}
+
+/* The streamed encoding is bc_scene_encode's bytes in pieces of about
+ * 256 KiB; a sink's error stops it at once; a file written through a
+ * descriptor is bc_scene_file_encode's bytes. */
+static void a_streamed_encoding_is_the_same_bytes(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_gen_opts o = {.count = 20000};
+	struct bc_camera cam;
+	struct pieces_got g = {0}, stop = {.fail_at = 2};
+	uint8_t *whole = NULL, *file = NULL, *back = NULL;
+	size_t wlen = 0, flen = 0;
+	char path[] = "/tmp/bc-scenefile-XXXXXX";
+	int fd;
+	REQUIRE(t);
+	REQUIRE(bc_gen("fig18", &o, t, &cam, NULL) == 0);
+	REQUIRE(bc_tree_set_name(t, bc_tree_lin(t)->node_id[3], "third", 5,
+	                         NULL) == 0);
+	REQUIRE(bc_scene_encode(t, &cam, &whole, &wlen) == 0);
+	REQUIRE(wlen > 2u * 256u * 1024u);
+	CHECK_EQ_INT(bc_scene_write_binary(t, &cam, collect_piece, &g), 0);
+	CHECK(g.len == wlen && memcmp(g.bytes, whole, wlen) == 0);
+	CHECK(g.calls >= 3);
+	CHECK(g.biggest < 256u * 1024u + 2048u);
+	CHECK_EQ_INT(bc_scene_write_binary(t, &cam, collect_piece, &stop),
+	             BC_EIO);
+	CHECK_EQ_INT(stop.calls, 2);
+
+	REQUIRE((fd = mkstemp(path)) >= 0);
+	CHECK_EQ_INT(bc_scene_file_write_fd(fd, t, &cam), 0);
+	REQUIRE(bc_scene_file_encode(t, &cam, &file, &flen) == 0);
+	REQUIRE((back = bc_malloc(flen + 1)));
+	CHECK(pread(fd, back, flen + 1, 0) == (ssize_t)flen);
+	CHECK(memcmp(back, file, flen) == 0);
+	close(fd);
+	unlink(path);
+	bc_free(back);
+	bc_free(file);
+	bc_free(whole);
+	bc_free(g.bytes);
+	bc_free(stop.bytes);
+	bc_tree_destroy(t);
+}
+
 static const struct bc_test tests[] = {
     {"every_generator_round_trips_through_binary",
      every_generator_round_trips_through_binary},
@@ -1066,6 +1131,8 @@ static const struct bc_test tests[] = {
     {"a_scene_file_round_trips", a_scene_file_round_trips},
     {"every_damaged_scene_file_is_refused",
      every_damaged_scene_file_is_refused},
+    {"a_streamed_encoding_is_the_same_bytes",
+     a_streamed_encoding_is_the_same_bytes},
 };
 
 BC_TEST_MAIN(tests)

@@ -120,6 +120,12 @@ BC_API const char *bc_scene_default_json(void);
 BC_API int bc_scene_encode(const struct bc_tree *t, const struct bc_camera *cam,
                            uint8_t **out, size_t *len);
 BC_API int bc_tree_encode(const struct bc_tree *t, uint8_t **out, size_t *len);
+/* Hands bc_scene_encode()'s bytes to sink (scene.h's JSON section) in
+ * pieces of about 256 KiB, holding no more of them in memory. Returns 0,
+ * BC_EINVAL (empty tree), BC_ENOMEM, or the sink's error. */
+BC_API int bc_scene_write_binary(const struct bc_tree *t,
+                                 const struct bc_camera *cam,
+                                 bc_scene_sink sink, void *ctx);
 /* bc_scene_encode after head zero bytes for the caller to fill (a message's
  * header): *out holds *len bytes, the encoding from (*out)[head] on. A
  * sender that frames a big scene then copies none of it. */
@@ -171,6 +177,13 @@ BC_API int bc_scene_file_encode(const struct bc_tree *t,
 BC_API int bc_scene_file_decode(const uint8_t *buf, size_t len,
                                 struct bc_tree *t, struct bc_camera *cam,
                                 struct bc_errinfo *ei);
+/* Writes t as a binary scene file to fd, a new empty file open for
+ * writing (and reading: the header, written last, goes at its start with
+ * pwrite), the scene streamed as bc_scene_write_binary() hands it.
+ * Returns 0, BC_EINVAL (empty tree), BC_ELIMIT (over
+ * BC_SCENE_FILE_MAX_BYTES), BC_ENOMEM, or BC_EIO with errno set. */
+BC_API int bc_scene_file_write_fd(int fd, const struct bc_tree *t,
+                                  const struct bc_camera *cam);
 /* Writes t as a binary scene file at path, atomically as
  * bc_scene_save_json() does. Returns 0, BC_EINVAL, BC_ELIMIT, BC_ENOMEM or
  * BC_EIO with the reason. */
