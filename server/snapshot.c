@@ -48,12 +48,13 @@ int bc_store_scene_depth_ok(const struct bc_tree *t, struct bc_errinfo *ei)
 
 /*
  * Writes snap-ORDER.bin and starts journal-ORDER.bin, or changes nothing
- * on disk: the scene is encoded, refused when a restore would not read it
- * back, written to the temporary file and fsynced; the new journal is
- * created, and only then is the snapshot renamed into place (the step
- * that makes it the session's state) and the directory fsynced. A failure
- * before the rename removes the temporary file and the new journal; the
- * old snapshot and journal stay the session's state.
+ * on disk: the scene is streamed to the temporary file as it is encoded
+ * (refused once it passes what a restore reads) and fsynced; the new
+ * journal is created, and only then is the snapshot renamed into place
+ * (the step that makes it the session's state) and the directory
+ * fsynced. A failure before the rename removes the temporary file and
+ * the new journal; the old snapshot and journal stay the session's
+ * state.
  */
 int bc_store_snapshot(struct bc_store_session *ss, const struct bc_tree *t,
                       const struct bc_camera *cam, uint64_t order,
