@@ -916,6 +916,28 @@ static void empty_trees_do_not_encode(void)
 	bc_tree_destroy(t);
 }
 
+/* What bc_scene_write_binary hands its sink. */
+struct pieces_got {
+	uint8_t *bytes;
+	size_t len, biggest;
+	int calls, fail_at; /* fail_at: the call that says BC_EIO, 0: none */
+};
+
+static int collect_piece(void *ctx, const void *p, size_t n)
+{
+	struct pieces_got *g = ctx;
+	if (++g->calls == g->fail_at) {
+		return BC_EIO;
+	}
+	if (!(g->bytes = bc_realloc(g->bytes, g->len + n))) {
+		return BC_ENOMEM;
+	}
+	memcpy(g->bytes + g->len, p, n);
+	g->len += n;
+	g->biggest = n > g->biggest ? n : g->biggest;
+	return 0;
+}
+
 static void allocation_failures_are_survived(void)
 {
 	struct bc_tree *ref = bc_tree_create(), *t = bc_tree_create();
@@ -956,6 +978,41 @@ static void allocation_failures_are_survived(void)
 	CHECK(failures > 5);
 	CHECK_EQ_INT(tree_diff(ref, t), 0);
 	bc_free(bytes);
+	/* A scene file: encoded, streamed and decoded. */
+	for (int step = 0; step < 3; step++) {
+		struct bc_camera got;
+		uint8_t *file = NULL;
+		size_t flen = 0;
+		if (step == 2) {
+			REQUIRE(bc_scene_file_encode(ref, &cam, &file, &flen) ==
+			        0);
+		}
+		for (n = 1; n < 100000; n++) {
+			struct bc_errinfo ei = {0};
+			struct pieces_got g = {0};
+			int rc;
+			bc_alloc_fail_after(n);
+			rc = step == 0
+			         ? bc_scene_file_encode(ref, &cam, &bytes, &len)
+			     : step == 1 ? bc_scene_write_binary(
+			                       ref, &cam, collect_piece, &g)
+			                 : bc_scene_file_decode(file, flen, t,
+			                                        &got, &ei);
+			bc_alloc_fail_after(0);
+			bc_free(g.bytes);
+			if (rc == 0) {
+				break;
+			}
+			CHECK_EQ_INT(rc, BC_ENOMEM);
+			CHECK(step != 0 || bytes == NULL);
+			CHECK(step != 2 || tree_is_empty(t));
+		}
+		CHECK(n > 1);
+		bc_free(bytes);
+		bytes = NULL;
+		bc_free(file);
+	}
+	CHECK_EQ_INT(tree_diff(ref, t), 0);
 	bc_tree_destroy(ref);
 	bc_tree_destroy(t);
 }
@@ -1045,28 +1102,6 @@ static void every_damaged_scene_file_is_refused(void)
 	bc_free(file);
 	bc_tree_destroy(ref);
 	bc_tree_destroy(t);
-}
-
-/* What bc_scene_write_binary hands its sink. */
-struct pieces_got {
-	uint8_t *bytes;
-	size_t len, biggest;
-	int calls, fail_at; /* fail_at: the call that says BC_EIO, 0: none */
-};
-
-static int collect_piece(void *ctx, const void *p, size_t n)
-{
-	struct pieces_got *g = ctx;
-	if (++g->calls == g->fail_at) {
-		return BC_EIO;
-	}
-	if (!(g->bytes = bc_realloc(g->bytes, g->len + n))) {
-		return BC_ENOMEM;
-	}
-	memcpy(g->bytes + g->len, p, n);
-	g->len += n;
-	g->biggest = n > g->biggest ? n : g->biggest;
-	return 0;
 }
 
 /* The streamed encoding is bc_scene_encode's bytes in pieces of about
