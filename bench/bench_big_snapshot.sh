@@ -28,6 +28,8 @@ if [ ! -x /usr/bin/time ]; then
 	echo "bench_big_snapshot: /usr/bin/time is missing (apt install time)" >&2
 	exit 1
 fi
+# shellcheck source=bench/daemon.sh
+. "$(dirname "$0")/daemon.sh"
 dir=$(mktemp -d /tmp/bc-bigsnap.XXXXXX)
 pid=
 cleanup() {
@@ -37,22 +39,10 @@ cleanup() {
 trap cleanup EXIT INT TERM
 
 start_daemon() {
-	rm -rf "$dir/data" "$dir/sock"
+	rm -rf "$dir/data"
 	# shellcheck disable=SC2086
-	"$daemon" --listen none --unix "$dir/sock" --data "$dir/data" \
-		${BC_DAEMON_OPTS:-} 2>"$dir/daemon.log" &
-	pid=$!
-	i=0
-	until [ -S "$dir/sock" ] &&
-		grep -q 'blobcastd: backend' "$dir/daemon.log"; do
-		i=$((i + 1))
-		if [ $i -gt 400 ] || ! kill -0 "$pid" 2>/dev/null; then
-			echo "bench_big_snapshot: blobcastd did not start:" >&2
-			cat "$dir/daemon.log" >&2
-			exit 1
-		fi
-		sleep 0.05
-	done
+	bench_daemon_start bench_big_snapshot "$daemon" "$dir/sock" \
+		"$dir/data" "$dir/daemon.log" ${BC_DAEMON_OPTS:-}
 }
 stop_daemon() {
 	kill "$pid" 2>/dev/null && wait "$pid" 2>/dev/null

@@ -19,6 +19,8 @@
 set -eu
 # shellcheck source=bench/big_scene.sh
 . "$(dirname "$0")/big_scene.sh"
+# shellcheck source=bench/daemon.sh
+. "$(dirname "$0")/daemon.sh"
 big_scene_builds bench_cli_big 5 "$@"
 big_scene_prepare bench_cli_big "${builds%% *}"
 dir=$(mktemp -d /tmp/bc-clibig.XXXXXX)
@@ -36,21 +38,10 @@ k=0
 for b in $builds; do
 	k=$((k + 1))
 	mkdir -p "$dir/$k"
-	"$b/server/blobcastd" --listen none --unix "$dir/$k/sock" \
-		--data "$dir/$k/data" 2>"$dir/$k/daemon.log" &
-	pids="$pids $!"
-	echo $! >"$dir/$k/pid"
-	i=0
-	until [ -S "$dir/$k/sock" ] &&
-		grep -q 'blobcastd: backend' "$dir/$k/daemon.log"; do
-		i=$((i + 1))
-		if [ $i -gt 400 ]; then
-			echo "bench_cli_big: blobcastd of $b did not start:" >&2
-			cat "$dir/$k/daemon.log" >&2
-			exit 1
-		fi
-		sleep 0.05
-	done
+	bench_daemon_start bench_cli_big "$b/server/blobcastd" "$dir/$k/sock" \
+		"$dir/$k/data" "$dir/$k/daemon.log"
+	pids="$pids $pid"
+	echo "$pid" >"$dir/$k/pid"
 	"$b/client/blobcast" --server "unix:$dir/$k/sock" --timeout 600000 \
 		load "$scene" --session big >/dev/null
 done

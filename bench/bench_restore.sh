@@ -16,6 +16,8 @@
 set -eu
 # shellcheck source=bench/big_scene.sh
 . "$(dirname "$0")/big_scene.sh"
+# shellcheck source=bench/daemon.sh
+. "$(dirname "$0")/daemon.sh"
 big_scene_builds bench_restore 3 "$@"
 first=${builds%% *}
 big_scene_prepare bench_restore "$first"
@@ -30,19 +32,9 @@ trap cleanup EXIT INT TERM
 # start B DATA: B's daemon on DATA; sets pid and the seconds it took to
 # listen in $dir/took.
 start() {
-	rm -f "$dir/sock"
 	t0=$(date +%s.%N)
-	"$1/server/blobcastd" --listen none --unix "$dir/sock" --data "$2" \
-		2>"$dir/daemon.log" &
-	pid=$!
-	until grep -q 'blobcastd: backend' "$dir/daemon.log"; do
-		if ! kill -0 "$pid" 2>/dev/null; then
-			echo "bench_restore: blobcastd of $1 did not start:" >&2
-			cat "$dir/daemon.log" >&2
-			exit 1
-		fi
-		sleep 0.02
-	done
+	bench_daemon_start bench_restore "$1/server/blobcastd" "$dir/sock" "$2" \
+		"$dir/daemon.log"
 	t1=$(date +%s.%N)
 	echo "$t0 $t1" | awk '{printf "%.2f\n", $2 - $1}' >"$dir/took"
 }
