@@ -60,12 +60,17 @@ int bc_scene_file_decode(const uint8_t *buf, size_t len, struct bc_tree *t,
 		bc_camera_default(cam);
 	}
 	bc_tree_begin(t);
-	if (len < BC_SCENE_FILE_HEADER ||
-	    memcmp(buf, BC_SCENE_FILE_MAGIC, 4) != 0) {
+	if (len < 4 || memcmp(buf, BC_SCENE_FILE_MAGIC, 4) != 0) {
 		return bc_errinfo_set(ei, BC_EPARSE,
 		                      "not a binary scene file (no \"%s\" "
 		                      "header)",
 		                      BC_SCENE_FILE_MAGIC);
+	}
+	if (len < BC_SCENE_FILE_HEADER) {
+		return bc_errinfo_set(ei, BC_EPARSE,
+		                      "cut short: %zu bytes, less than its "
+		                      "%u-byte header",
+		                      len, BC_SCENE_FILE_HEADER);
 	}
 	n = bc_get_le32(buf + 4);
 	if (n > BC_SCENE_FILE_MAX_BYTES || n != len - BC_SCENE_FILE_HEADER) {

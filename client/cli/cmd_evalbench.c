@@ -105,7 +105,7 @@ static int parse(int argc, char **argv, struct args *a, bool *done)
 	    .usage = "blobcast eval-bench SCENE [options]",
 	    .about = "Measures interval pruning and pruned evaluation "
 	             "(render/svo,\nafter Chulkov 2025) on SCENE -- a scene "
-	             "file (JSON or binary),\n'-' for JSON on stdin, or "
+	             "file (JSON or binary),\n'-' for stdin, or "
 	             "'default' -- and "
 	             "prints the results as JSON.",
 	    .footer = "Times are on one thread. Output fields: terms (RPN "

@@ -142,7 +142,7 @@ static int parse(int argc, char **argv, struct mesh_args *a, bool *done)
 	             "[options]",
 	    .about =
 	        "Writes the surface of SCENE (a scene file, JSON or binary, "
-	        "'-'\nto read a JSON one from stdin, or 'default') or of a "
+	        "'-'\nto read one from stdin, or 'default') or of a "
 	        "live\nsession's scene as a triangle mesh that is a closed "
 	        "2-manifold:\nevery edge is used by exactly two triangles, in "
 	        "opposite\ndirections (no holes, no edge shared by more than "

@@ -180,9 +180,9 @@ static const struct bc_opt_name range_names[] = {{"ia", BC_RANGE_IA},
 
 static const char render_about[] =
     "Renders SCENE on this machine and writes the image files.\n"
-    "SCENE is a scene file (JSON or binary), '-' to read a JSON one\n"
-    "from stdin, or 'default' for the built-in scene. The scene's\n"
-    "camera is used.";
+    "SCENE is a scene file (JSON or binary), '-' to read one from\n"
+    "stdin, or 'default' for the built-in scene. The scene's camera\n"
+    "is used.";
 static const char render_footer[] =
     "Backend-only options are accepted with any backend and ignored by\n"
     "the others. Exit status: 0 done, 1 the scene could not be loaded\n"
@@ -259,7 +259,15 @@ static int parse(int argc, char **argv, struct args *a)
 	return 0;
 }
 
-/* Reads all of stdin, at most BC_SCENE_JSON_MAX_BYTES. */
+/* The most a scene on stdin may take: a JSON text, or a binary scene
+ * file with its header. */
+#define STDIN_MAX_BYTES                                                        \
+	(BC_SCENE_JSON_MAX_BYTES >                                             \
+	         BC_SCENE_FILE_MAX_BYTES + BC_SCENE_FILE_HEADER                \
+	     ? BC_SCENE_JSON_MAX_BYTES                                         \
+	     : BC_SCENE_FILE_MAX_BYTES + BC_SCENE_FILE_HEADER)
+
+/* Reads all of stdin, at most STDIN_MAX_BYTES. */
 static int read_stdin(char **text, size_t *len, struct bc_errinfo *ei)
 {
 	size_t cap = 1 << 16, n = 0;
@@ -271,16 +279,15 @@ static int read_stdin(char **text, size_t *len, struct bc_errinfo *ei)
 		size_t got;
 		if (n == cap) {
 			char *grown;
-			if (cap >= BC_SCENE_JSON_MAX_BYTES) {
+			if (cap >= STDIN_MAX_BYTES) {
 				bc_free(buf);
 				return bc_errinfo_set(ei, BC_ELIMIT,
 				                      "stdin: scene over %u "
 				                      "bytes",
-				                      BC_SCENE_JSON_MAX_BYTES);
+				                      STDIN_MAX_BYTES);
 			}
-			cap = cap * 2 > BC_SCENE_JSON_MAX_BYTES
-			          ? BC_SCENE_JSON_MAX_BYTES + 1
-			          : cap * 2;
+			cap = cap * 2 > STDIN_MAX_BYTES ? STDIN_MAX_BYTES + 1
+			                                : cap * 2;
 			if (!(grown = bc_realloc(buf, cap))) {
 				bc_free(buf);
 				return bc_errinfo_set(ei, BC_ENOMEM,
@@ -316,7 +323,14 @@ int bc_cli_load_scene(const char *scene, struct bc_tree *t,
 		size_t len = 0;
 		int rc = read_stdin(&text, &len, ei);
 		if (rc == 0) {
-			rc = bc_scene_parse_json(text, len, t, cam, ei);
+			/* A binary scene file by its first bytes, as
+			 * bc_scene_load_file tells them apart. */
+			bool binary = len >= 4 &&
+			              memcmp(text, BC_SCENE_FILE_MAGIC, 4) == 0;
+			rc = binary
+			         ? bc_scene_file_decode((const uint8_t *)text,
+			                                len, t, cam, ei)
+			         : bc_scene_parse_json(text, len, t, cam, ei);
 			bc_free(text);
 		}
 		return rc;

@@ -98,6 +98,11 @@ cmp -s "$tmp/random.json" "$tmp/random-c.json" ||
   > /dev/null 2>&1 || fail "render of the JSON scene file"
 cmp -s "$tmp/bin.png" "$tmp/json.png" ||
   fail "the binary and JSON scene files render differently"
+"$BLOBCAST" render - --size 48x32 --out "$tmp/stdin.png" \
+  < "$tmp/random.bin" > /dev/null 2>&1 ||
+  fail "render of a binary scene file from stdin"
+cmp -s "$tmp/stdin.png" "$tmp/json.png" ||
+  fail "the binary scene file from stdin renders differently"
 cp "$tmp/random.bin" "$tmp/bad.bin"
 printf 'X' | dd of="$tmp/bad.bin" bs=1 seek=40 conv=notrunc 2> /dev/null
 "$BLOBCAST" $S load --session random-d "$tmp/bad.bin" > "$tmp/out" 2>&1
