@@ -1,11 +1,21 @@
 /*
- * Writing scene files atomically, shared by the JSON writer (json.c) and
- * the binary scene file (scene_file.c).
+ * Reading scene files whole and writing them atomically, shared by the
+ * JSON reader and writer (json.c) and the binary scene file
+ * (scene_file.c).
  */
 #ifndef BLOBCAST_BLOBTREE_FILE_IMPL_H
 #define BLOBCAST_BLOBTREE_FILE_IMPL_H
 
+#include <stddef.h>
+
 #include "blobcast/error.h"
+
+/* Reads the regular file at path whole (refusing one over max bytes
+ * before reading it) into a bc_malloc'd, NUL-terminated buffer *out of
+ * *len bytes (fewer than its size if it shrank meanwhile). Returns 0,
+ * BC_ENOTFOUND, BC_EIO, BC_ELIMIT or BC_ENOMEM with the reason in ei. */
+int bc__read_file(const char *path, size_t max, char **out, size_t *len,
+                  struct bc_errinfo *ei);
 
 /* Fills the open file fd: 0, or a BC_E* code (BC_EIO with errno set). */
 typedef int (*bc__file_fill)(int fd, void *ctx);

@@ -978,18 +978,16 @@ static void errno_text(int err, char *buf, size_t cap)
 	}
 }
 
-int bc_scene_load_json(const char *path, struct bc_tree *t,
-                       struct bc_camera *cam, struct bc_errinfo *ei)
+int bc__read_file(const char *path, size_t max, char **out, size_t *len,
+                  struct bc_errinfo *ei)
 {
 	struct stat st;
 	char *text = NULL, why[128];
 	size_t got = 0, size;
-	int fd, rc;
+	int fd, rc = 0;
 
-	if (cam) {
-		bc_camera_default(cam);
-	}
-	bc_tree_begin(t);
+	*out = NULL;
+	*len = 0;
 	fd = open(path, O_RDONLY | O_CLOEXEC);
 	if (fd < 0) {
 		errno_text(errno, why, sizeof(why));
@@ -1001,10 +999,10 @@ int bc_scene_load_json(const char *path, struct bc_tree *t,
 		rc = bc_errinfo_set(ei, BC_EIO, "%s: not a regular file", path);
 		goto cleanup;
 	}
-	if ((uint64_t)st.st_size > BC_SCENE_JSON_MAX_BYTES) {
-		rc = bc_errinfo_set(
-		    ei, BC_ELIMIT, "%s: %lld bytes, over the %u byte limit",
-		    path, (long long)st.st_size, BC_SCENE_JSON_MAX_BYTES);
+	if ((uint64_t)st.st_size > max) {
+		rc = bc_errinfo_set(ei, BC_ELIMIT,
+		                    "%s: %lld bytes, over the %zu byte limit",
+		                    path, (long long)st.st_size, max);
 		goto cleanup;
 	}
 	size = (size_t)st.st_size;
@@ -1013,7 +1011,7 @@ int bc_scene_load_json(const char *path, struct bc_tree *t,
 		rc = bc_errinfo_set(ei, BC_ENOMEM, "%s: out of memory", path);
 		goto cleanup;
 	}
-	/* A file that shrinks while read is parsed as far as it goes; one
+	/* A file that shrinks while read is taken as far as it goes; one
 	 * that grows is read up to the size fstat gave. */
 	while (got < size) {
 		ssize_t n = read(fd, text + got, size - got);
@@ -1031,10 +1029,31 @@ int bc_scene_load_json(const char *path, struct bc_tree *t,
 		got += (size_t)n;
 	}
 	text[got] = '\0';
-	rc = bc_scene_parse_json(text, got, t, cam, ei);
+	*out = text;
+	*len = got;
+	text = NULL;
 cleanup:
 	bc_free(text);
 	close(fd);
+	return rc;
+}
+
+int bc_scene_load_json(const char *path, struct bc_tree *t,
+                       struct bc_camera *cam, struct bc_errinfo *ei)
+{
+	char *text;
+	size_t len;
+	int rc;
+	if (cam) {
+		bc_camera_default(cam);
+	}
+	bc_tree_begin(t);
+	if ((rc = bc__read_file(path, BC_SCENE_JSON_MAX_BYTES, &text, &len,
+	                        ei))) {
+		return rc;
+	}
+	rc = bc_scene_parse_json(text, len, t, cam, ei);
+	bc_free(text);
 	return rc;
 }
 

@@ -8,7 +8,6 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <unistd.h>
 #include <zlib.h>
 
@@ -31,6 +30,14 @@ static uint32_t crc_of(const uint8_t *p, size_t len)
 	return (uint32_t)c;
 }
 
+/* A scene file's header: magic, the scene's length and its CRC32. */
+static void put_header(uint8_t *h, uint32_t len, uint32_t crc)
+{
+	memcpy(h, BC_SCENE_FILE_MAGIC, 4);
+	bc_put_le32(h + 4, len);
+	bc_put_le32(h + 8, crc);
+}
+
 int bc_scene_file_encode(const struct bc_tree *t, const struct bc_camera *cam,
                          uint8_t **out, size_t *len)
 {
@@ -46,9 +53,7 @@ int bc_scene_file_encode(const struct bc_tree *t, const struct bc_camera *cam,
 		*len = 0;
 		return BC_ELIMIT;
 	}
-	memcpy(*out, BC_SCENE_FILE_MAGIC, 4);
-	bc_put_le32(*out + 4, (uint32_t)n);
-	bc_put_le32(*out + 8, crc_of(*out + BC_SCENE_FILE_HEADER, n));
+	put_header(*out, (uint32_t)n, crc_of(*out + BC_SCENE_FILE_HEADER, n));
 	return 0;
 }
 
@@ -122,9 +127,7 @@ int bc_scene_file_write_fd(int fd, const struct bc_tree *t,
 	if ((rc = bc_scene_write_binary(t, cam, file_put, &f))) {
 		return rc;
 	}
-	memcpy(head, BC_SCENE_FILE_MAGIC, 4);
-	bc_put_le32(head + 4, (uint32_t)f.len);
-	bc_put_le32(head + 8, (uint32_t)f.crc);
+	put_header(head, (uint32_t)f.len, (uint32_t)f.crc);
 	if (pwrite(fd, head, sizeof(head), 0) != (ssize_t)sizeof(head)) {
 		if (errno == 0) {
 			errno = EIO;
@@ -159,45 +162,22 @@ int bc_scene_load_binary(const char *path, struct bc_tree *t,
                          struct bc_camera *cam, struct bc_errinfo *ei)
 {
 	struct bc_errinfo dei = {0};
-	uint8_t *buf = NULL;
-	struct stat st;
+	char *buf;
 	size_t len;
-	int fd, rc;
+	int rc;
 	if (cam) {
 		bc_camera_default(cam);
 	}
 	bc_tree_begin(t);
-	if ((fd = open(path, O_RDONLY | O_CLOEXEC)) < 0) {
-		return bc_errinfo_set(ei,
-		                      errno == ENOENT ? BC_ENOTFOUND : BC_EIO,
-		                      "%s: %s", path, strerror(errno));
+	if ((rc = bc__read_file(
+	         path, (size_t)BC_SCENE_FILE_MAX_BYTES + BC_SCENE_FILE_HEADER,
+	         &buf, &len, ei))) {
+		return rc;
 	}
-	if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-		close(fd);
-		return bc_errinfo_set(ei, BC_EIO, "%s: not a regular file",
-		                      path);
-	}
-	if ((uint64_t)st.st_size >
-	    (uint64_t)BC_SCENE_FILE_MAX_BYTES + BC_SCENE_FILE_HEADER) {
-		close(fd);
-		return bc_errinfo_set(ei, BC_ELIMIT,
-		                      "%s: %lld bytes, over the %u a scene "
-		                      "file holds",
-		                      path, (long long)st.st_size,
-		                      BC_SCENE_FILE_MAX_BYTES);
-	}
-	len = (size_t)st.st_size;
-	if (!(buf = bc_malloc(len ? len : 1))) {
-		close(fd);
-		return bc_errinfo_set(ei, BC_ENOMEM, "%s: out of memory", path);
-	}
-	if (!bc_read_all(fd, buf, len)) {
-		rc =
-		    bc_errinfo_set(ei, BC_EIO, "%s: %s", path, strerror(errno));
-	} else if ((rc = bc_scene_file_decode(buf, len, t, cam, &dei))) {
+	if ((rc = bc_scene_file_decode((const uint8_t *)buf, len, t, cam,
+	                               &dei))) {
 		rc = bc_errinfo_set(ei, rc, "%s: %s", path, dei.msg);
 	}
-	close(fd);
 	bc_free(buf);
 	return rc;
 }
