@@ -675,10 +675,12 @@ static void sweep_idle(uv_timer_t *t)
 	uint64_t now = bc__now_ms(ss);
 	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
 		struct bc_session *s = ss->sessions[i];
-		if (s && unloadable(s) && s->lost) {
+		if (!s || !unloadable(s)) {
+			continue;
+		}
+		if (s->lost) {
 			bc__session_unload(s, "to load again what it saved");
-		} else if (s && unloadable(s) &&
-		           now - s->empty_since_ms >= BC_SRV_SESSION_IDLE_MS) {
+		} else if (now - s->empty_since_ms >= BC_SRV_SESSION_IDLE_MS) {
 			bc__session_unload(s, "no members for 15 minutes");
 		}
 	}
