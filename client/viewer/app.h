@@ -341,6 +341,10 @@ void bc_viewer_picture_drop(struct bc_viewer_app *a, const char *why);
  * frame's camera_seq, an EDIT not applied or applied but not shown. */
 double bc_viewer_pending_since(const struct bc_viewer_app *a);
 
+/* save.c: Ctrl+S (JSON) and Ctrl+Shift+S (binary) save the mirror's scene
+ * in the snapshot directory, saying where on the status line. */
+void bc_viewer_save_scene(struct bc_viewer_app *a, bool binary);
+
 /* input.c */
 void bc_viewer_input_install(struct bc_viewer_app *a);
 /* Applies mouse motion since the last turn (at most one camera or edit

@@ -9,7 +9,8 @@
  *    parameter, with Ctrl the blend of the operator above it, with Alt the
  *    main parameter of the innermost unary node above it that has one
  *    (unary.c: sizes scale, signed values step);
- *  - keys: S lossless snapshot, P window screenshot, O overlay, H the
+ *  - keys: S lossless snapshot, Ctrl-S the scene as a JSON file (with
+ *    Shift: binary; save.c), P window screenshot, O overlay, H the
  *    keys, R the session's camera, Home zoom to fit (Shift: the
  *    selection), Escape or Q quit; Ctrl-Z undo, Ctrl-Shift-Z or Ctrl-Y
  *    redo (sent without waiting; the answer shows on the overlay); F
@@ -384,7 +385,8 @@ static const char key_help[] =
     "R: the session's camera   Home: fit the scene (Shift: selection)\n"
     "Ctrl+Z: undo   Ctrl+Shift+Z, Ctrl+Y: redo\n"
     "F: follow the presenter   Shift+F: present\n"
-    "S: snapshot   P: screenshot   O: overlay   Q, Esc: quit";
+    "S: snapshot   P: screenshot   O: overlay   Q, Esc: quit\n"
+    "Ctrl+S: save the scene (JSON)   Ctrl+Shift+S: binary";
 
 bool bc_viewer_lower_panel(struct bc_viewer_app *a, char *out, size_t n)
 {
@@ -548,6 +550,12 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
 		return;
 	}
 	if (action != GLFW_PRESS) {
+		return;
+	}
+	/* Ctrl-S saves the scene as JSON, Ctrl-Shift-S as binary. */
+	if ((mods & GLFW_MOD_CONTROL) && !(mods & GLFW_MOD_ALT) &&
+	    key == GLFW_KEY_S) {
+		bc_viewer_save_scene(a, (mods & GLFW_MOD_SHIFT) != 0);
 		return;
 	}
 	switch (key) {

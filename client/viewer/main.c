@@ -199,8 +199,8 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o,
 	     .kind = BC_OPT_STRING,
 	     .dst = &o->snapshot_dir,
 	     .arg = "DIR",
-	     .help = "where S saves lossless snapshots\n"
-	             "(default {default})"},
+	     .help = "where S saves lossless snapshots and\n"
+	             "Ctrl-S scene files (default {default})"},
 	    {.name = "snapshot-size",
 	     .kind = BC_OPT_SIZE,
 	     .dst = c.snap,
@@ -273,7 +273,10 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o,
 	        "Keys: H lists them on the overlay. Home zooms to fit the "
 	        "whole\nscene (Shift+Home the selection), R goes back to the "
 	        "session's\ncamera; S snapshot, P screenshot, O overlay, Q or "
-	        "Escape quit;\nCtrl-Z undo, Ctrl-Shift-Z or Ctrl-Y redo; F "
+	        "Escape quit;\nCtrl-S saves the scene as JSON, Ctrl-Shift-S as "
+	        "a binary scene\nfile (in --snapshot-dir, named after the "
+	        "session and edit order);\nCtrl-Z undo, Ctrl-Shift-Z or Ctrl-Y "
+	        "redo; F "
 	        "follow the presenter\n(this window shows what the "
 	        "presenter's camera sees, at its own size;\nmoving the camera "
 	        "or F again stops), Shift-F present (members who\nfollow see "

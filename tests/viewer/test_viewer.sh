@@ -10,7 +10,9 @@
 #  3. with synthetic X events (viewer_xpoke): a press on a sphere picks it,
 #     a drag moves it, Shift+wheel grows it, Ctrl+wheel changes its
 #     operator's blend, S saves a lossless snapshot (and with
-#     --snapshot-size a 1100x300 picture in tiles), P a screenshot showing
+#     --snapshot-size a 1100x300 picture in tiles), Ctrl-S and
+#     Ctrl-Shift-S the scene as JSON and binary files (equal to the
+#     daemon's scene, read back below), P a screenshot showing
 #     the selection's outline, Ctrl-Z / Ctrl-Shift-Z / Ctrl-Y undo and
 #     redo the last step (the verbose undo/redo lines name the same edit),
 #     Shift-F presents and Shift-F again stops (the verbose presenter
@@ -176,6 +178,15 @@ if [ -n "$inner" ]; then
   [ -n "$ok" ] && wait_for '^frame 1 ' "$tmp/big.log" 300 || ok=
   [ -n "$ok" ] && poke wait 5000 key s
   [ -n "$ok" ] && wait_for '^snapshot .* 1100x300$' "$tmp/big.log" 600 || ok=
+  # Ctrl-S and Ctrl-Shift-S save the scene (checked against the daemon's
+  # below).
+  [ -n "$ok" ] && poke keydown Control_L key s keyup Control_L
+  [ -n "$ok" ] && wait_for '^scene .*/blobcast-drag-[0-9]*\.json order=' \
+    "$tmp/big.log" 200 || ok=
+  [ -n "$ok" ] && poke keydown Control_L keydown Shift_L key s \
+    keyup Shift_L keyup Control_L
+  [ -n "$ok" ] && wait_for '^scene .*/blobcast-drag-[0-9]*\.bin order=' \
+    "$tmp/big.log" 200 || ok=
   poke keydown q
   n=0
   while kill -0 "$vpid" 2>/dev/null && [ $n -lt 100 ]; do
@@ -310,7 +321,7 @@ else
   if xvfb-run -a -s "-screen 0 640x480x24" sh "$0" --inner "$VIEW" \
      "$DAEMON" "$CHECK" "$XPOKE" "$tmp" "$port"; then
     echo "ok   pick, drag, Shift+wheel, Ctrl+wheel, S, P, Ctrl-Z/Y, Shift-F," \
-      "Alt+wheel and Q"
+      "Alt+wheel, Ctrl-S and Q"
   else
     fail "direct manipulation"
   fi
@@ -363,6 +374,24 @@ if [ -n "$XPOKE" ] && [ -x "$XPOKE" ]; then
   start_daemon 127.0.0.1:0
   "$CLI" scene --server "127.0.0.1:$port" --session drag > "$scene" ||
     fail "blobcast scene of the restarted session failed"
+  # The scene files the second viewer saved (Ctrl-S, Ctrl-Shift-S) hold
+  # the daemon's scene at the last order: the JSON byte for byte, the
+  # binary one loaded into another session.
+  saved=$tmp/big/blobcast-drag-$last
+  if cmp -s "$saved.json" "$scene"; then
+    echo "ok   Ctrl-S saved the session's scene at order $last"
+  else
+    fail "Ctrl-S: $saved.json is not the daemon's scene at order $last"
+  fi
+  "$CLI" load --server "127.0.0.1:$port" --session back "$saved.bin" \
+    > /dev/null || fail "blobcast load of the Ctrl-Shift-S file failed"
+  "$CLI" scene --server "127.0.0.1:$port" --session back \
+    > "$tmp/back.json" || fail "blobcast scene of the loaded file failed"
+  if cmp -s "$tmp/back.json" "$scene"; then
+    echo "ok   Ctrl-Shift-S saved it as a binary scene file"
+  else
+    fail "Ctrl-Shift-S: $saved.bin does not load as the daemon's scene"
+  fi
   stop_daemon
   sphere=$(grep '"id": 2,' "$scene" | sed -n \
     's/.*"radius": \([-0-9.e]*\).*"translate": \[\([^]]*\)\].*/\1 \2/p' |
