@@ -1991,6 +1991,7 @@ class SceneCur {
 		this.pos = 0;
 		this.node = 0;
 		this.where = null; /* "name 3" once in the names table */
+		this.kids = 0; /* the child count of the operator scanned last */
 	}
 
 	left() {
@@ -2028,18 +2029,38 @@ class SceneCur {
 		return v;
 	}
 
+	/* Whether the next 16 bytes are the identity quaternion (0, 0, 0, 1),
+	 * bit for bit (a -0 is not 0: the bytes must encode back the same);
+	 * if so, they are passed over. */
+	identity() {
+		if (this.left() < 16) {
+			return false;
+		}
+		const dv = this.dv, p = this.pos;
+		if (dv.getUint32(p, true) || dv.getUint32(p + 4, true) ||
+			dv.getUint32(p + 8, true) ||
+			dv.getUint32(p + 12, true) !== 0x3f800000) {
+			return false;
+		}
+		this.pos += 16;
+		return true;
+	}
+
 	/* A group of n floats: its length is checked as a whole first, then
-	 * each float must be finite. */
+	 * each float must be finite (a float32 is finite when the number it
+	 * reads as is). The array is made at its size: one grown by push
+	 * keeps room for 17, and a million-primitive mirror holds four such
+	 * arrays a primitive (870 MiB of heap against 423). */
 	floats(n, what) {
 		this.need(4 * n, what);
-		const out = [];
+		const out = new Array(n);
 		for (let i = 0; i < n; i++) {
-			const u = this.dv.getUint32(this.pos, true);
+			const v = this.dv.getFloat32(this.pos, true);
 			this.pos += 4;
-			if (!bitsFinite(u)) {
+			if (!Number.isFinite(v)) {
 				this.fail('ENONFINITE', `${what}[${i}] is not finite`);
 			}
-			out.push(this.dv.getFloat32(this.pos - 4, true));
+			out[i] = v;
 		}
 		return out;
 	}
@@ -2061,8 +2082,9 @@ function scanOp(s, tag, id, after) {
 			s.fail('EPROTO_COUNT',
 				'a unary node needs its child after it');
 		}
-		return { isOp: true, unary: true, kind, id, params,
-			nchildren: 1 };
+		s.kids = 1;
+		return { isOp: true, unary: true, kind, id, params, parent: null,
+			children: null };
 	}
 	const [blend] = s.floats(1, 'blend');
 	const [range] = s.floats(1, 'range');
@@ -2076,15 +2098,22 @@ function scanOp(s, tag, id, after) {
 	if (kind <= 3 && (blend !== 0 || range !== 0)) {
 		s.fail('ERANGE', 'a sharp operator has blend and range 0');
 	}
-	return { isOp: true, kind, id, blend, range, nchildren: children };
+	s.kids = children;
+	return { isOp: true, kind, id, blend, range, parent: null,
+		children: null };
 }
+
+/* The rotation of most primitives, shared by every node that has it (a
+ * million-sphere mirror kept a million copies). Frozen: the model
+ * replaces a node's rotate, never writes into it (applyOps). */
+const IDENTITY_ROTATE = Object.freeze([0, 0, 0, 1]);
 
 function scanPrim(s, tag, id) {
 	if (tag === 0 || tag > L.PRIM_KIND_MAX) {
 		s.fail('EENUM', `primitive tag 0x${tag.toString(16)} is unknown`);
 	}
 	const translate = s.floats(3, 'translate');
-	const rotate = s.floats(4, 'rotate');
+	const rotate = s.identity() ? IDENTITY_ROTATE : s.floats(4, 'rotate');
 	const hasColor = s.u8('has_color');
 	if (hasColor > 1) {
 		s.fail('EPROTO_FLAGS', `has_color is ${hasColor}, not 0 or 1`);
@@ -2096,7 +2125,8 @@ function scanPrim(s, tag, id) {
 			`${L.MAX_PRIM_PARAMS}`);
 	}
 	const params = s.floats(nfloats, 'params');
-	return { isOp: false, kind: tag, id, translate, rotate, color, params };
+	return { isOp: false, kind: tag, id, translate, rotate, color, params,
+		parent: null };
 }
 
 /* The names table after a tree of count nodes (PROTOCOL.md 8, check 6):
@@ -2190,9 +2220,9 @@ function walkScene(bytes, visit) {
 		}
 		if (tag & OP_TAG) {
 			const n = scanOp(s, tag, id, count - 1 - s.node);
-			open.push(n.nchildren);
+			open.push(s.kids);
 			if (visit) {
-				visit(n);
+				visit(n, s.kids);
 			}
 			out.ops++;
 			continue;
@@ -2244,17 +2274,16 @@ export function scanScene(bytes) {
 export function parseScene(bytes) {
 	const byId = new Map();
 	let root = null;
-	const stack = []; /* [operator, children still expected] */
-	const info = walkScene(bytes, (n) => {
-		n.parent = null;
-		if (n.isOp) {
-			n.children = [];
-		}
+	/* Open operators, each with the index of its next child. Nodes come
+	 * in their final shape (scanPrim, scanOp) and each operator's
+	 * children array at its size, so that a million-node mirror is not
+	 * reshaped or regrown node by node. */
+	const stack = [];
+	const info = walkScene(bytes, (n, kids) => {
 		if (stack.length) {
 			const top = stack[stack.length - 1];
 			n.parent = top.op;
-			top.op.children.push(n);
-			top.left--;
+			top.op.children[top.next++] = n;
 		} else {
 			root = n;
 		}
@@ -2262,10 +2291,11 @@ export function parseScene(bytes) {
 			byId.set(n.id, n);
 		}
 		if (n.isOp) {
-			stack.push({ op: n, left: n.nchildren });
-			delete n.nchildren;
+			n.children = new Array(kids);
+			stack.push({ op: n, next: 0 });
 		}
-		while (stack.length && stack[stack.length - 1].left === 0) {
+		while (stack.length && stack[stack.length - 1].next ===
+			stack[stack.length - 1].op.children.length) {
 			stack.pop();
 		}
 	});

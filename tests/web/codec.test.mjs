@@ -539,6 +539,36 @@ test('applyOps: set, insert, remove, replace follow the server', () => {
 		depth: 2 });
 });
 
+test('parseScene: shared identity rotations, exact bytes back', () => {
+	/* Primitives without a rotation share one frozen [0, 0, 0, 1] (a
+	 * million-sphere mirror kept a copy each); a -0 in it, or any other
+	 * rotation, gets its own array, and every scene encodes back to its
+	 * bytes. An edit of one shared rotation moves no other primitive. */
+	const q = Math.SQRT1_2;
+	const prim = (id, rotate) => ({ isOp: false, kind: 1, id,
+		translate: [id, 0, 0], rotate, color: null, params: [0.5] });
+	const bytes = P.encodeScene({ root: { isOp: true, kind: 1, id: 1,
+		blend: 0, range: 0, children: [prim(2, [0, 0, 0, 1]),
+			prim(3, [0, 0, 0, 1]), prim(4, [-0, 0, 0, 1]),
+			prim(5, [0, q, 0, q])] } });
+	const s = P.parseScene(bytes);
+	const r = (id) => s.byId.get(id).rotate;
+	assert.equal(r(2), r(3));
+	assert.equal(Object.isFrozen(r(2)), true);
+	assert.notEqual(r(4), r(2));
+	assert.equal(Object.is(r(4)[0], -0), true);
+	assert.deepEqual(r(5), [0, Math.fround(q), 0, Math.fround(q)]);
+	assert.deepEqual(P.encodeScene(s), bytes);
+	P.applyOps(s, [{ kind: P.EDIT.SET, node: 2, fields: [
+		{ field: P.FIELD.ROTATE, values: [0, 0, q, q] }] }]);
+	assert.deepEqual(r(2), [0, 0, q, q]);
+	assert.deepEqual(r(3), [0, 0, 0, 1]);
+	/* Floats come in arrays of their own length. */
+	assert.equal(s.byId.get(2).translate.length, 3);
+	assert.equal(s.byId.get(2).params.length, 1);
+	assert.equal(s.root.children.length, 4);
+});
+
 test('applyOps: a REMOVE that leaves an operator one child collapses it', () => {
 	/* union 1 {sphere 100, sphere 101, union 5 {sphere 6, sphere 7}}:
 	 * removing 6 leaves union 5 one child, which takes its place, as
