@@ -29,36 +29,19 @@ static int run_load(struct bc_cli_call *a)
 {
 	struct bc_client *c = NULL;
 	struct bc_errinfo ei = {0};
-	struct bc_tree *t = bc_tree_create();
-	struct bc_camera cam;
 	uint8_t *bytes = NULL;
 	size_t len = 0;
 	uint64_t order;
 	uint32_t nodes;
 	int status = 0, rc;
-	if (!t) {
-		fprintf(stderr, "blobcast load: out of memory\n");
-		return BC_CLI_EXIT_FAIL;
-	}
-	/* The tree is only encoded: no layout (seconds and hundreds of MB
-	 * for a million spheres), and freed before the scene is sent. */
-	bc_tree_set_layout(t, false);
 	/* The file is read before connecting: a bad file is the caller's
 	 * mistake (status 2) and costs the server nothing. */
-	if (bc_scene_load_file(a->pos[0], t, &cam, &ei)) {
+	if ((rc = bc_client_read_scene_file(a->pos[0], &bytes, &len, &nodes,
+	                                    &ei))) {
 		bc_cli_explain(stderr, "blobcast load", ei.msg);
-		status = BC_CLI_EXIT_USAGE;
+		status = rc == BC_ENOMEM ? BC_CLI_EXIT_FAIL : BC_CLI_EXIT_USAGE;
 		goto out;
 	}
-	if ((rc = bc_scene_encode(t, &cam, &bytes, &len))) {
-		fprintf(stderr, "blobcast load: cannot encode %s: %s\n",
-		        a->pos[0], bc_strerror(rc));
-		status = BC_CLI_EXIT_FAIL;
-		goto out;
-	}
-	nodes = bc_tree_node_count(t);
-	bc_tree_destroy(t);
-	t = NULL;
 	if ((status = bc_cli_open_session(a, BC_PROTO_ROLE_EDITOR,
 	                                  BC_CLIENT_JOIN_ANY, &c))) {
 		goto out;
@@ -71,7 +54,6 @@ static int run_load(struct bc_cli_call *a)
 	       a->session, a->pos[0], nodes, (unsigned long long)order);
 out:
 	bc_free(bytes);
-	bc_tree_destroy(t);
 	bc_client_destroy(c);
 	return status;
 }

@@ -1512,18 +1512,14 @@ int bc_client_load_scene(struct bc_client *c, const uint8_t *bytes, size_t len,
 	return 0;
 }
 
-int bc_client_load_scene_file(struct bc_client *c, const char *path,
-                              uint64_t *order, uint32_t *nodes,
-                              struct bc_errinfo *ei)
+int bc_client_read_scene_file(const char *path, uint8_t **bytes, size_t *len,
+                              uint32_t *nodes, struct bc_errinfo *ei)
 {
 	struct bc_tree *t = bc_tree_create();
 	struct bc_camera cam;
-	uint8_t *bytes = NULL;
-	size_t len = 0;
 	int rc;
-	if (order) {
-		*order = 0;
-	}
+	*bytes = NULL;
+	*len = 0;
 	if (nodes) {
 		*nodes = 0;
 	}
@@ -1531,28 +1527,37 @@ int bc_client_load_scene_file(struct bc_client *c, const char *path,
 		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
 	}
 	/* The tree is only encoded: no layout (a million spheres' would
-	 * take seconds and hundreds of MB), and gone before the scene is
-	 * sent and its SCENE_STATE taken in. */
+	 * take seconds and hundreds of MB). */
 	bc_tree_set_layout(t, false);
-	if ((rc = bc_scene_load_file(path, t, &cam, ei))) {
-		goto out;
-	}
-	if ((rc = bc_scene_encode(t, &cam, &bytes, &len))) {
+	if (!(rc = bc_scene_load_file(path, t, &cam, ei)) &&
+	    (rc = bc_scene_encode(t, &cam, bytes, len))) {
 		rc = bc_errinfo_set(ei, rc, "%s: cannot encode the scene: %s",
 		                    path, bc_strerror(rc));
-		goto out;
 	}
-	if (nodes) {
+	if (!rc && nodes) {
 		*nodes = bc_tree_node_count(t);
 	}
 	bc_tree_destroy(t);
-	t = NULL;
-	if ((rc = bc_client_load_scene(c, bytes, len, order, ei)) && nodes) {
+	return rc;
+}
+
+int bc_client_load_scene_file(struct bc_client *c, const char *path,
+                              uint64_t *order, uint32_t *nodes,
+                              struct bc_errinfo *ei)
+{
+	uint8_t *bytes;
+	size_t len;
+	int rc;
+	if (order) {
+		*order = 0;
+	}
+	/* The file's tree is gone before the scene is sent and its
+	 * SCENE_STATE taken in. */
+	if (!(rc = bc_client_read_scene_file(path, &bytes, &len, nodes, ei)) &&
+	    (rc = bc_client_load_scene(c, bytes, len, order, ei)) && nodes) {
 		*nodes = 0;
 	}
-out:
 	bc_free(bytes);
-	bc_tree_destroy(t);
 	return rc;
 }
 

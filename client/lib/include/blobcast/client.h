@@ -384,9 +384,18 @@ BC_API const struct bc_tree *bc_client_scene(const struct bc_client *c,
 BC_API int bc_client_load_scene(struct bc_client *c, const uint8_t *bytes,
                                 size_t len, uint64_t *order,
                                 struct bc_errinfo *ei);
-/* Reads a scene file, JSON or binary (bc_scene_load_file), encodes it with its
- * camera and loads it as bc_client_load_scene() does. *nodes (may be NULL)
- * receives its node count. */
+/* Reads a scene file, JSON or binary (bc_scene_load_file), and encodes it
+ * with its camera: *bytes (bc_malloc'ed, the caller bc_free's) and *len are
+ * what bc_client_load_scene() sends, *nodes (may be NULL) its node count.
+ * Needs no connection, so a program can refuse a bad file before it
+ * connects. Returns 0, or the reading's or encoding's error with the
+ * reason (*bytes NULL). */
+BC_API int bc_client_read_scene_file(const char *path, uint8_t **bytes,
+                                     size_t *len, uint32_t *nodes,
+                                     struct bc_errinfo *ei);
+/* Reads a scene file as bc_client_read_scene_file() does and loads it as
+ * bc_client_load_scene() does. *nodes (may be NULL) receives its node
+ * count (0 unless loaded). */
 BC_API int bc_client_load_scene_file(struct bc_client *c, const char *path,
                                      uint64_t *order, uint32_t *nodes,
                                      struct bc_errinfo *ei);
