@@ -7,7 +7,9 @@
 # builds taking turns. It restores every session before it listens. Prints one
 # Markdown table row per build: medians of the seconds from start to
 # listening, the daemon's peak resident memory (VmHWM) and its resident
-# memory a second after it listens (VmRSS).
+# memory a second after it listens (VmRSS), then the seconds `blobcast
+# snapshot` takes for the restored session's first picture (1024x768)
+# and VmRSS after it.
 #
 #   bench/bench_restore.sh BUILD_DIR [BUILD_DIR...] [-- REPS]
 #
@@ -78,17 +80,26 @@ round() {
 	cp -r "$dir/data$1" "$dir/copy"
 	start "$2" "$dir/copy"
 	sleep 1
-	echo "$(cat "$dir/took") $(awk '/^VmHWM/ {h = $2} /^VmRSS/ {r = $2}
-		END {print int(h / 1024), int(r / 1024)}' "/proc/$pid/status")" \
-		>>"$dir/$1"
+	before=$(awk '/^VmHWM/ {h = $2} /^VmRSS/ {r = $2}
+		END {print int(h / 1024), int(r / 1024)}' "/proc/$pid/status")
+	# The first picture of the restored session (its first view).
+	t0=$(date +%s.%N)
+	"$2/client/blobcast" --server "unix:$dir/sock" --timeout 600000 \
+		snapshot --session big --size 1024x768 --out "$dir/first.png" \
+		>/dev/null
+	t1=$(date +%s.%N)
+	echo "$(cat "$dir/took") $before $(echo "$t0 $t1" |
+		awk '{printf "%.2f", $2 - $1}') $(awk '/^VmRSS/ {print int($2 / 1024)}' \
+		"/proc/$pid/status")" >>"$dir/$1"
 	stop
 }
 big_scene_rounds round
 
-echo "| build | start to listening s | VmHWM MiB | VmRSS after MiB |"
-echo "|---|---:|---:|---:|"
+echo "| build | start to listening s | VmHWM MiB | VmRSS after MiB |" \
+	"first snapshot s | VmRSS after it MiB |"
+echo "|---|---:|---:|---:|---:|---:|"
 k=0
 for b in $builds; do
 	k=$((k + 1))
-	echo "| $b | $(big_scene_medians "$dir/$k" 3) |"
+	echo "| $b | $(big_scene_medians "$dir/$k" 5) |"
 done

@@ -177,15 +177,16 @@ static void batch_run(struct bc_task *t)
 
 /* The render copy follows: the nodes' new states, or the operations, or,
  * for a batch it took early, the word that it stands. A copy that cannot
- * follow (out of memory, its queue over its cap) gets the scene whole. */
+ * follow (out of memory, its queue over its cap) is made again whole when
+ * the next frame wants it (bc__session_copy: on a task for a big scene,
+ * not on the loop). Without a copy there is nothing to follow. */
 static void follow(struct bc_session *s, struct batch *x)
 {
 	struct bc_work *w = s->ss->work;
 	struct bc_edit_saved *st = NULL;
-	struct bc_tree *copy;
 	uint32_t n = 0;
 	int rc;
-	if (x->names_only) {
+	if (x->names_only || !s->copied) {
 		return; /* names are not drawn: the copy needs none */
 	}
 	if (x->early) {
@@ -209,12 +210,11 @@ static void follow(struct bc_session *s, struct batch *x)
 	} else {
 		rc = BC_ENOMEM;
 	}
-	if (rc && (copy = bc_tree_create()) &&
-	    bc_tree_copy(copy, s->tree, NULL) == 0) {
-		bc_work_scene(w, s->id, copy, s->order);
-	} else if (rc) {
-		bc_tree_destroy(copy);
-		bc_log(BC_LOG_ERROR, "session %s: its render copy is behind",
+	if (rc) {
+		s->copied = false;
+		bc_log(BC_LOG_WARN,
+		       "session %s: its render copy could not follow an edit; "
+		       "it is made again",
 		       s->name);
 	}
 }
@@ -372,7 +372,7 @@ int bc__apply(struct bc_member *m, const struct bc_proto_edit_op *ops,
 	 * splice there runs while the session's own tree takes it and the
 	 * record is journaled, not after (a splice in the middle of a big
 	 * operator costs milliseconds per 100 000 operands). */
-	x->early = structural && !names_only &&
+	x->early = structural && !names_only && s->copied &&
 	           bc_work_ops_early(s->ss->work, s->id, s->order + 1, x->op,
 	                             nops) == 0;
 	if (!x->heavy && batch_apply(x)) {
@@ -566,6 +566,7 @@ static void commit(struct bc_task *t)
 	s->last_edit_ms = bc__unix_ms();
 	bc__session_changed(s);
 	bc_work_scene(s->ss->work, s->id, l->copy, s->order);
+	s->copied = true;
 	l->tree = l->copy = NULL;
 	bc__send_state_msg(s, NULL, l->state);
 	for (uint32_t i = 0; i < s->nmembers && l->has_cam; i++) {

@@ -19,7 +19,10 @@
  *    (bc_work_ops_early), so that the copy's splice runs beside the
  *    session's instead of after it; it is kept undoable until its
  *    verdict, and undone if the session refused or undid it;
- *  - a loaded or restored scene arrives whole.
+ *  - a loaded scene arrives whole, and so does the session's tree when a
+ *    member first wants a picture of a session that has no copy yet (a
+ *    restored one, or one whose copy could not follow an edit:
+ *    frames.c, bc__session_copy).
  * Applying a parameter change marks, in each of the session's views, the
  * tiles the renderer says the edited primitives' ABVs reach before and
  * after it (an operator's edit: every primitive of its subtree); the next

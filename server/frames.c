@@ -180,12 +180,114 @@ static void frame_req(struct bc_session *s, struct bc_member *m, bool still,
 	q->frame_no = ++s->ss->frame_no;
 }
 
+/* ---- the render copy, made when first wanted ------------------------------ */
+
+struct copy_task {
+	struct bc_task t;
+	struct bc_tree *copy;
+	int rc;
+};
+
+/* On the task: the session is busy, so its tree does not change. */
+static void copy_run(struct bc_task *t)
+{
+	struct copy_task *c = (struct copy_task *)t;
+	c->rc = bc_tree_copy(c->copy, t->s->tree, NULL);
+}
+
+static void copy_done(struct bc_task *t)
+{
+	struct copy_task *c = (struct copy_task *)t;
+	struct bc_session *s = t->s;
+	s->copying = false;
+	if (!s->removed && !c->rc) {
+		bc_work_scene(s->ss->work, s->id, c->copy, s->order);
+		c->copy = NULL;
+		s->copied = true;
+	} else if (!s->removed) {
+		/* Told to the first request parked behind the task; the
+		 * frames owed try again later. */
+		s->copy_rc = c->rc;
+		bc_log(BC_LOG_ERROR,
+		       "session %s: no memory for its render copy", s->name);
+		uv_timer_start(&s->kick, kick_due, BC_SRV_OOM_RETRY_MS, 0);
+	}
+	bc__tree_free_later(s->ss->loop, c->copy);
+	bc_free(c);
+	if (!s->removed && s->copied) {
+		bc__schedule(s);
+	}
+}
+
+int bc__session_copy(struct bc_session *s)
+{
+	struct copy_task *c;
+	struct bc_tree *t;
+	int rc;
+	if (s->copied) {
+		return 0;
+	}
+	if (s->copying) {
+		return BC_PARK;
+	}
+	if ((rc = s->copy_rc)) {
+		s->copy_rc = 0;
+		return rc;
+	}
+	if (!s->tree) {
+		return BC_ESTATE;
+	}
+	if (bc_tree_node_count(s->tree) < BC_SRV_HEAVY_NODES) {
+		if (!(t = bc_tree_create()) || bc_tree_copy(t, s->tree, NULL)) {
+			bc_tree_destroy(t);
+			bc_log(BC_LOG_ERROR,
+			       "session %s: no memory for its render copy",
+			       s->name);
+			return BC_ENOMEM;
+		}
+		bc_work_scene(s->ss->work, s->id, t, s->order);
+		s->copied = true;
+		return 0;
+	}
+	if (!(c = bc_calloc(1, sizeof(*c))) || !(c->copy = bc_tree_create())) {
+		bc_free(c);
+		return BC_ENOMEM;
+	}
+	c->t.run = copy_run;
+	c->t.done = copy_done;
+	c->t.holds_order = true;
+	s->copying = true;
+	bc__task_start(s, &c->t);
+	return BC_PARK;
+}
+
+/* Whether a frame can be asked for: the render copy is there, or is made
+ * now; else the frames stay owed (a task's end schedules them, a failed
+ * copy is tried again later). */
+static bool copy_ready(struct bc_session *s)
+{
+	int rc = bc__session_copy(s);
+	if (rc && rc != BC_PARK) {
+		uv_timer_start(&s->kick, kick_due, BC_SRV_OOM_RETRY_MS, 0);
+	}
+	return rc == 0;
+}
+
+/* ---- scheduling ------------------------------------------------------------ */
+
 void bc__schedule(struct bc_session *s)
 {
 	struct bc_sessions *ss = s->ss;
 	uint64_t now = bc__now_ms(ss), next_still = 0;
 	bool done[BC_PROTO_MAX_MEMBERS] = {0};
 	struct bc_job_req q;
+	bool owed = false;
+	for (uint32_t i = 0; i < s->nmembers && !owed; i++) {
+		owed = ready(s->members[i]);
+	}
+	if (!owed || !copy_ready(s)) {
+		return;
+	}
 	for (uint32_t i = 0; i < s->nmembers; i++) {
 		struct bc_member *m = s->members[i],
 		                 *group[BC_PROTO_MAX_MEMBERS];
@@ -692,6 +794,24 @@ static bool single_req(struct bc_member *m, uint32_t seq, enum bc_job_kind kind,
 	return true;
 }
 
+/* PICK and SNAPSHOT need the render copy: 0 when it is there, BC_PARK
+ * while it is made (the request comes again after), -1 when it cannot be
+ * (answered). */
+static int single_copy(struct bc_member *m, uint32_t seq)
+{
+	int rc = bc__session_copy(m->session);
+	if (rc == BC_PARK) {
+		return bc__park(m->session, m, seq);
+	}
+	if (rc) {
+		bc__send_error(m, seq, rc,
+		               "no memory for the session's render copy; try "
+		               "again later");
+		return -1;
+	}
+	return 0;
+}
+
 static void submit_single(struct bc_member *m, const struct bc_job_req *q)
 {
 	struct bc_job *job = bc_work_submit(m->ss->work, q);
@@ -713,11 +833,15 @@ static void submit_single(struct bc_member *m, const struct bc_job_req *q)
 int bc_handle_pick(struct bc_member *m, const struct bc_msg *msg)
 {
 	struct bc_job_req q;
+	int rc;
 	if (!m->session || !m->has_view || msg->pick.x >= m->view.width ||
 	    msg->pick.y >= m->view.height) {
 		bc__send_error(m, msg->seq, BC_ERANGE,
 		               "pick outside the view (send VIEW first)");
 		return 0;
+	}
+	if ((rc = single_copy(m, msg->seq))) {
+		return rc == BC_PARK ? rc : 0;
 	}
 	if (single_req(m, msg->seq, BC_JOB_PICK, &q)) {
 		q.pick_x = msg->pick.x;
@@ -731,6 +855,7 @@ int bc_handle_snapshot(struct bc_member *m, const struct bc_msg *msg)
 {
 	const struct bc_msg_snapshot *sn = &msg->snapshot;
 	struct bc_job_req q;
+	int rc;
 	if (!m->session || !m->has_view) {
 		bc__send_error(m, msg->seq, BC_ESTATE,
 		               "join a session and send VIEW before SNAPSHOT");
@@ -745,6 +870,9 @@ int bc_handle_snapshot(struct bc_member *m, const struct bc_msg *msg)
 	if (sn->has_tile && over_max_dim(m, msg->seq, "tile", sn->tile_width,
 	                                 sn->tile_height)) {
 		return 0;
+	}
+	if ((rc = single_copy(m, msg->seq))) {
+		return rc == BC_PARK ? rc : 0;
 	}
 	if (single_req(m, msg->seq, BC_JOB_SNAPSHOT, &q)) {
 		if (sn->has_tile) {

@@ -470,12 +470,12 @@ int bc__replay_record(void *ud, uint64_t order, const uint8_t *rec, size_t len)
 }
 
 /* Loading a session: its snapshot and journal read (or a new session made
- * with the default scene), and the work layer's copy of its tree. */
+ * with the default scene). */
 struct load_task {
 	struct bc_task t;
 	struct bc_store *store;
 	struct bc_store_session *st;
-	struct bc_tree *tree, *copy;
+	struct bc_tree *tree;
 	struct bc_camera cam;
 	uint64_t order;
 	bool created;
@@ -491,7 +491,7 @@ static void load_run(struct bc_task *t)
 	struct bc_session *s = t->s;
 	struct replay_ctx ctx = {&l->tree, &l->cam, bc__undo_new()};
 	bc_camera_default(&l->cam);
-	if (!(l->tree = bc__session_tree()) || !(l->copy = bc_tree_create())) {
+	if (!(l->tree = bc__session_tree())) {
 		l->rc = bc_errinfo_set(&l->ei, BC_ENOMEM, "out of memory");
 		return;
 	}
@@ -514,9 +514,6 @@ static void load_run(struct bc_task *t)
 	} else if (!l->rc) {
 		bc_store_owner_read(l->st, l->owner);
 	}
-	if (!l->rc) {
-		l->rc = bc_tree_copy(l->copy, l->tree, &l->ei);
-	}
 }
 
 static void load_free(struct load_task *l)
@@ -524,7 +521,6 @@ static void load_free(struct load_task *l)
 	bc__undo_free(l->undo);
 	bc_store_session_close(l->st);
 	bc__tree_free_later(l->t.s->kick.loop, l->tree);
-	bc__tree_free_later(l->t.s->kick.loop, l->copy);
 	bc_free(l);
 }
 
@@ -573,8 +569,9 @@ static void load_done(struct bc_task *t)
 	bc__undo_restored(l->undo);
 	s->undo = l->undo;
 	l->undo = NULL;
-	bc_work_scene(s->ss->work, s->id, l->copy, s->order);
-	l->tree = l->copy = NULL;
+	/* No render copy yet: the first member who wants a picture has it
+	 * made (bc__session_copy). */
+	l->tree = NULL;
 	l->st = NULL;
 	bc__index_note(s->ss->index, s);
 	bc_log(BC_LOG_INFO, "session %s: %u primitives, edit order %llu%s",

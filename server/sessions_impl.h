@@ -38,6 +38,13 @@ struct bc_session {
 	 * left the session is unloaded, to load again from what it saved. A
 	 * scene loaded over it ends that. */
 	bool lost;
+	/* The work layer holds a render copy of the tree (frames.c,
+	 * bc__session_copy): made when a member first wants a picture, not
+	 * at the load, so a session nobody looks at keeps its tree alone.
+	 * copying: a task makes it (the session busy); copy_rc: why the
+	 * last one failed, told once. */
+	bool copied, copying;
+	int copy_rc;
 	struct bc_member *members[BC_PROTO_MAX_MEMBERS];
 	uint32_t nmembers;
 	uint32_t next_member_id;
@@ -199,6 +206,11 @@ void bc__index_note(struct bc_index *ix, const struct bc_session *s);
 
 /* Starts a job for every member owed a frame (grouping equal ones). */
 void bc__schedule(struct bc_session *s);
+/* Makes sure the work layer holds s's render copy: 0 when it does (made
+ * now, on the loop, for a scene under BC_SRV_HEAVY_NODES), BC_PARK while
+ * a task makes it (the session busy until then), or the error of the
+ * last copy that failed (BC_ENOMEM), said once. */
+int bc__session_copy(struct bc_session *s);
 /* m's state changed in a way its queued frame does not show: the job is
  * retracted (latest wins) and m is owed a new one. */
 void bc__owe_frame(struct bc_member *m);

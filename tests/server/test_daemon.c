@@ -6,6 +6,7 @@
  */
 #include <dirent.h>
 
+#include "blobcast/alloc.h"
 #include "blobcast/blobtree.h"
 #include "blobcast/scene.h"
 #include "test.h" /* before daemon.h: its test runner needs it */
@@ -501,6 +502,111 @@ static void structural_edits_send_damage_only(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
+/* n spheres of radius 0.02 (ids 2..n+1) under union 1, all at x >= 8,
+ * outside the view of a camera at (0, 0, 6) looking at the origin: the
+ * middle of the picture is empty. bc_free's the text. */
+static char *far_spheres(uint32_t n)
+{
+	size_t cap = 256u + (size_t)n * 96u, len;
+	char *s = bc_malloc(cap);
+	if (!s) {
+		return NULL;
+	}
+	len = (size_t)snprintf(
+	    s, cap,
+	    "{\"blobcast\": 1, \"camera\": {\"eye\": [0, 0, 6], \"target\": "
+	    "[0, 0, 0], \"up\": [0, 1, 0], \"fov_y_deg\": 45}, \"root\": "
+	    "{\"type\": \"union\", \"id\": 1, \"children\": [");
+	for (uint32_t k = 0; k < n; k++) {
+		len += (size_t)snprintf(
+		    s + len, cap - len,
+		    "%s{\"type\": \"sphere\", \"id\": %u, \"radius\": 0.02, "
+		    "\"translate\": [%u, %u, 0]}",
+		    k ? ", " : "", k + 2u, 8u + k % 200u, k / 200u);
+	}
+	snprintf(s + len, cap - len, "]}}");
+	return s;
+}
+
+/* The first PICK_RESULT answering seq: its node (0 also when none
+ * came). */
+static uint32_t picked(struct conn *c, uint32_t seq)
+{
+	while (conn_expect(c, BC_MSG_PICK_RESULT, 60000) == 1) {
+		if (c->m.seq == seq) {
+			return c->m.pick_result.node;
+		}
+	}
+	return 0;
+}
+
+/* A session restored from disk has no render copy until a member wants a
+ * picture (frames.c, bc__session_copy): edits made before that are not
+ * sent anywhere, and the copy made then must hold them. A small scene's
+ * copy is made on the loop, a big one's (20 000 nodes or more) on a task
+ * with the session busy, the PICK sent at once behind the VIEW parked
+ * until it is there. Here sphere 2 moves into the empty middle of the
+ * view and grows, and sphere 3 is removed, before anyone looks; the first
+ * PICK in the middle must hit sphere 2 and the first still frame show
+ * the last order. */
+static void a_restored_session_is_drawn_with_edits_made_before_a_view(void)
+{
+	for (int big = 0; big < 2; big++) {
+		const char *name = big ? "lazy-big" : "lazy-small";
+		uint32_t n = big ? 20000u : 3u, id, seq;
+		struct bc_proto_field r = {
+		    .field = BC_PROTO_FIELD_PARAM0, .count = 1, .v = {0.8f}};
+		struct bc_proto_edit_op grow = {.kind = BC_PROTO_EDIT_SET,
+		                                .node = 2,
+		                                .nfields = 1,
+		                                .fields = &r},
+		                        cut = {.kind = BC_PROTO_EDIT_REMOVE,
+		                               .node = 3};
+		struct bc_msg pk = {.type = BC_MSG_PICK};
+		struct daemon d;
+		struct conn c;
+		char dir[64], *json = far_spheres(n);
+		uint64_t order;
+		REQUIRE(json != NULL);
+		make_dir_name(dir, sizeof(dir), name);
+		REQUIRE(daemon_start(&d, dir) == 0);
+		REQUIRE(conn_open(&c, &d) == 0 && conn_hello(&c, "a") == 0);
+		REQUIRE(conn_join(&c, name, BC_PROTO_ROLE_EDITOR, true) == 0);
+		conn_load_json(&c, json);
+		bc_free(json);
+		conn_close(&c);
+		REQUIRE(WIFEXITED(daemon_stop(&d, SIGTERM)));
+		REQUIRE(daemon_start(&d, dir) == 0);
+		REQUIRE(conn_open(&c, &d) == 0 && conn_hello(&c, "b") == 0);
+		REQUIRE(conn_join(&c, name, BC_PROTO_ROLE_EDITOR, false) == 0);
+		id = c.m.session_info.member_id;
+		REQUIRE(conn_expect(&c, BC_MSG_SCENE_STATE, 60000) == 1);
+		seq = conn_move(&c, 2, 0, 0, 0, false);
+		CHECK(conn_edit_answer(&c, id, seq) != 0);
+		{
+			struct bc_msg m = {.type = BC_MSG_EDIT};
+			m.edit.nops = 1;
+			m.edit.ops = &grow;
+			seq = conn_send(&c, &m);
+			CHECK(conn_edit_answer(&c, id, seq) != 0);
+			m.edit.ops = &cut;
+			seq = conn_send(&c, &m);
+			CHECK((order = conn_edit_answer(&c, id, seq)) != 0);
+		}
+		REQUIRE(conn_view(&c, 96, 64, BC_PROTO_ENC_PNG));
+		pk.pick.x = 48;
+		pk.pick.y = 32;
+		seq = conn_send(&c, &pk);
+		CHECK(picked(&c, seq) == 2);
+		do {
+			REQUIRE(conn_expect(&c, BC_MSG_FRAME, 60000) == 1);
+		} while (!(c.m.flags & BC_PROTO_FLAG_STILL));
+		CHECK(c.m.frame.order == order);
+		conn_close(&c);
+		CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+	}
+}
+
 static const struct bc_test tests[] = {
     {"members_see_the_same_edits_in_order",
      members_see_the_same_edits_in_order},
@@ -512,6 +618,8 @@ static const struct bc_test tests[] = {
     {"kill_9_loses_no_acknowledged_edit", kill_9_loses_no_acknowledged_edit},
     {"a_client_that_stops_reading_is_dropped",
      a_client_that_stops_reading_is_dropped},
+    {"a_restored_session_is_drawn_with_edits_made_before_a_view",
+     a_restored_session_is_drawn_with_edits_made_before_a_view},
 };
 
 int main(int argc, char **argv)
