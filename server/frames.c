@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/clock.h"
 #include "blobcast/edit.h"
 #include "blobcast/log.h"
 #include "sessions_impl.h"
@@ -185,6 +186,7 @@ static void frame_req(struct bc_session *s, struct bc_member *m, bool still,
 struct copy_task {
 	struct bc_task t;
 	struct bc_tree *copy;
+	double ms; /* what the copy took */
 	int rc;
 };
 
@@ -192,7 +194,9 @@ struct copy_task {
 static void copy_run(struct bc_task *t)
 {
 	struct copy_task *c = (struct copy_task *)t;
+	double t0 = bc_clock_ms();
 	c->rc = bc_tree_copy(c->copy, t->s->tree, NULL);
+	c->ms = bc_clock_ms() - t0;
 }
 
 static void copy_done(struct bc_task *t)
@@ -201,6 +205,11 @@ static void copy_done(struct bc_task *t)
 	struct bc_session *s = t->s;
 	s->copying = false;
 	if (!s->removed && !c->rc) {
+		/* The session was busy that long: say why. */
+		bc_log(BC_LOG_INFO,
+		       "session %s: render copy of %u nodes made for its first "
+		       "picture in %.0f ms",
+		       s->name, bc_tree_node_count(c->copy), c->ms);
 		bc_work_scene(s->ss->work, s->id, c->copy, s->order);
 		c->copy = NULL;
 		s->copied = true;
