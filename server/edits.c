@@ -186,13 +186,16 @@ static void follow(struct bc_session *s, struct batch *x)
 	struct bc_edit_saved *st = NULL;
 	uint32_t n = 0;
 	int rc;
-	if (x->names_only || !s->copied) {
+	if (x->names_only) {
 		return; /* names are not drawn: the copy needs none */
 	}
 	if (x->early) {
 		bc_work_settle(w, s->id, true);
 		x->settled = true;
 		return;
+	}
+	if (!s->copied) {
+		return; /* made from the tree when a picture is wanted */
 	}
 	if (x->b.structural) {
 		rc = bc_work_ops(w, s->id, s->order, x->op, x->nops);
