@@ -88,24 +88,39 @@ static struct bc_tree *default_tree(void)
 }
 
 /* Opens session name in dir, replaying into r. */
-static int open_session(const char *dir, const char *name, struct bc_store **st,
-                        struct bc_store_session **ss, struct bc_tree *t,
-                        struct replayed *r, uint64_t *order, bool *created)
+/* A store and one of its sessions, opened by open_session() with what it
+ * replayed, its order and whether it was made, and closed by shut(). */
+struct opened {
+	struct bc_store *st;
+	struct bc_store_session *ss;
+	struct replayed r;
+	uint64_t order;
+	bool created;
+};
+
+static int open_session(struct opened *o, const char *dir, const char *name,
+                        struct bc_tree *t)
 {
 	struct bc_camera cam;
 	struct bc_errinfo ei = {0};
-	int rc = bc_store_open(st, dir, &ei);
+	int rc = bc_store_open(&o->st, dir, &ei);
 	if (rc) {
 		return rc;
 	}
-	memset(r, 0, sizeof(*r));
-	rc = bc_store_session_open(*st, name, ss, t, &cam, order, created,
-	                           collect, r, &ei);
+	memset(&o->r, 0, sizeof(o->r));
+	rc = bc_store_session_open(o->st, name, &o->ss, t, &cam, &o->order,
+	                           &o->created, collect, &o->r, &ei);
 	if (rc) {
 		fprintf(stderr, "  open %s: %s\n", name, ei.msg);
-		bc_store_close(*st);
+		bc_store_close(o->st);
 	}
 	return rc;
+}
+
+static void shut(struct opened *o)
+{
+	bc_store_session_close(o->ss);
+	bc_store_close(o->st);
 }
 
 /* A session with a snapshot at 0 and records 1..n ("rec-K"; bad, when not
@@ -113,26 +128,20 @@ static int open_session(const char *dir, const char *name, struct bc_store **st,
 static void make_session(const char *dir, const char *name, uint32_t n,
                          uint32_t bad)
 {
-	struct bc_store *st;
-	struct bc_store_session *ss;
+	struct opened o;
 	struct bc_tree *t = default_tree();
-	struct replayed r;
-	uint64_t order;
-	bool created;
 	REQUIRE(t);
-	REQUIRE(open_session(dir, name, &st, &ss, t, &r, &order, &created) ==
-	        0);
-	CHECK(created);
-	REQUIRE(bc_store_snapshot(ss, t, NULL, 0, NULL) == 0);
+	REQUIRE(open_session(&o, dir, name, t) == 0);
+	CHECK(o.created);
+	REQUIRE(bc_store_snapshot(o.ss, t, NULL, 0, NULL) == 0);
 	for (uint32_t k = 1; k <= n; k++) {
 		char rec[64];
 		int len = snprintf(rec, sizeof(rec), "%srec-%u-padding-padding",
 		                   k == bad ? "X" : "", k);
-		REQUIRE(bc_store_append(ss, k, (const uint8_t *)rec,
+		REQUIRE(bc_store_append(o.ss, k, (const uint8_t *)rec,
 		                        (size_t)len, NULL) == 0);
 	}
-	bc_store_session_close(ss);
-	bc_store_close(st);
+	shut(&o);
 	bc_tree_destroy(t);
 }
 
@@ -192,18 +201,13 @@ static void refused_then_repaired(const char *dir, const char *name,
                                   uint64_t lost, bool loaded)
 {
 	char sdir[512], aside[512];
-	struct bc_store *st;
-	struct bc_store_session *ss;
+	struct opened o;
 	struct bc_tree *t = default_tree();
 	struct bc_store_check c;
-	struct replayed r;
-	uint64_t order;
-	bool created;
 	long size = file_size(file);
 	REQUIRE(t);
 	snprintf(sdir, sizeof(sdir), "%s/sessions/%s", dir, name);
-	CHECK_EQ_INT(open_session(dir, name, &st, &ss, t, &r, &order, &created),
-	             BC_EIO);
+	CHECK_EQ_INT(open_session(&o, dir, name, t), BC_EIO);
 	CHECK_EQ_INT(count_named(sdir, ".damaged-"), 0);
 	CHECK(file_size(file) == size);
 	check_session(dir, name, &c);
@@ -214,22 +218,20 @@ static void refused_then_repaired(const char *dir, const char *name,
 	CHECK(c.why[0] != '\0');
 	/* (A tree that a failed load left alone; the state is the test's.) */
 	bc_tree_destroy(t);
-	REQUIRE((t = default_tree()) && bc_store_open(&st, dir, NULL) == 0);
-	REQUIRE(bc_store_session_repair(st, name, t, NULL, c.frontier, NULL) ==
-	        0);
-	bc_store_close(st);
+	REQUIRE((t = default_tree()) && bc_store_open(&o.st, dir, NULL) == 0);
+	REQUIRE(bc_store_session_repair(o.st, name, t, NULL, c.frontier,
+	                                NULL) == 0);
+	bc_store_close(o.st);
 	snprintf(aside, sizeof(aside), "%s/sessions/.damaged", dir);
 	CHECK_EQ_INT(count_named(aside, name), 1);
 	/* It goes on after the highest order: none is used twice. */
-	REQUIRE(open_session(dir, name, &st, &ss, t, &r, &order, &created) ==
-	        0);
-	CHECK(!created);
-	CHECK_EQ_INT(order, frontier);
-	CHECK_EQ_INT(r.n, 0);
-	REQUIRE(bc_store_append(ss, frontier + 1, (const uint8_t *)"next", 4,
+	REQUIRE(open_session(&o, dir, name, t) == 0);
+	CHECK(!o.created);
+	CHECK_EQ_INT(o.order, frontier);
+	CHECK_EQ_INT(o.r.n, 0);
+	REQUIRE(bc_store_append(o.ss, frontier + 1, (const uint8_t *)"next", 4,
 	                        NULL) == 0);
-	bc_store_session_close(ss);
-	bc_store_close(st);
+	shut(&o);
 	check_session(dir, name, &c);
 	CHECK(c.whole);
 	CHECK_EQ_INT(c.order, frontier + 1);
@@ -291,21 +293,16 @@ static void a_record_that_does_not_apply_is_not_served(void)
 static void a_torn_tail_is_cut(void)
 {
 	char *dir = make_dir(), file[600];
-	struct bc_store *st;
-	struct bc_store_session *ss;
+	struct opened o;
 	struct bc_tree *t = default_tree();
-	struct replayed r;
-	uint64_t order;
-	bool created;
 	REQUIRE(dir && t);
 	make_session(dir, "a", 10, 0);
 	snprintf(file, sizeof(file), "%s/sessions/a/journal-0.bin", dir);
 	REQUIRE(truncate(file, record_offset(10) + 25) == 0);
-	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
-	CHECK_EQ_INT(r.n, 9);
-	CHECK_EQ_INT(order, 9);
-	bc_store_session_close(ss);
-	bc_store_close(st);
+	REQUIRE(open_session(&o, dir, "a", t) == 0);
+	CHECK_EQ_INT(o.r.n, 9);
+	CHECK_EQ_INT(o.order, 9);
+	shut(&o);
 	bc_tree_destroy(t);
 	rm_rf(dir);
 	free(dir);
@@ -325,21 +322,16 @@ static void write_file(const char *path, const char *text)
 static void a_corrupt_snapshot_spares_the_other_session(void)
 {
 	char *dir = make_dir(), file[600];
-	struct bc_store *st;
-	struct bc_store_session *ss;
+	struct opened o;
 	struct bc_tree *t = default_tree();
-	struct replayed r;
-	uint64_t order;
-	bool created;
 	REQUIRE(dir && t);
 	make_session(dir, "a", 5, 0);
 	make_session(dir, "b", 7, 0);
 	snprintf(file, sizeof(file), "%s/sessions/a/snap-0.bin", dir);
 	write_file(file, "BCS1 and then not a scene");
-	REQUIRE(open_session(dir, "b", &st, &ss, t, &r, &order, &created) == 0);
-	CHECK_EQ_INT(order, 7);
-	bc_store_session_close(ss);
-	bc_store_close(st);
+	REQUIRE(open_session(&o, dir, "b", t) == 0);
+	CHECK_EQ_INT(o.order, 7);
+	shut(&o);
 	refused_then_repaired(dir, "a", file, 5, 0, false);
 	bc_tree_destroy(t);
 	rm_rf(dir);
@@ -350,20 +342,15 @@ static void a_corrupt_snapshot_spares_the_other_session(void)
  * snapshot at 10 and edits 11..15 after it. */
 static void two_generations(const char *dir, struct bc_tree *t)
 {
-	struct bc_store *st;
-	struct bc_store_session *ss;
-	struct replayed r;
-	uint64_t order;
-	bool created;
+	struct opened o;
 	make_session(dir, "a", 10, 0);
-	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
-	REQUIRE(bc_store_snapshot(ss, t, NULL, 10, NULL) == 0);
+	REQUIRE(open_session(&o, dir, "a", t) == 0);
+	REQUIRE(bc_store_snapshot(o.ss, t, NULL, 10, NULL) == 0);
 	for (uint32_t k = 11; k <= 15; k++) {
-		REQUIRE(bc_store_append(ss, k, (const uint8_t *)"later", 5,
+		REQUIRE(bc_store_append(o.ss, k, (const uint8_t *)"later", 5,
 		                        NULL) == 0);
 	}
-	bc_store_session_close(ss);
-	bc_store_close(st);
+	shut(&o);
 }
 
 /* The newest snapshot corrupt -- not a snapshot at all, or one byte
@@ -375,12 +362,8 @@ static void a_corrupt_snapshot_falls_back_to_the_previous(void)
 	static const long at[] = {-2, 20, -1, 5, 9};
 	for (size_t i = 0; i < sizeof(at) / sizeof(at[0]); i++) {
 		char *dir = make_dir(), file[600], sdir[512];
-		struct bc_store *st;
-		struct bc_store_session *ss;
+		struct opened o;
 		struct bc_tree *t = default_tree();
-		struct replayed r;
-		uint64_t order;
-		bool created;
 		REQUIRE(dir && t);
 		two_generations(dir, t);
 		snprintf(sdir, sizeof(sdir), "%s/sessions/a", dir);
@@ -390,30 +373,24 @@ static void a_corrupt_snapshot_falls_back_to_the_previous(void)
 		} else {
 			flip(file, at[i] < 0 ? file_size(file) / 2 : at[i], 1);
 		}
-		REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order,
-		                     &created) == 0);
-		CHECK(!created);
-		CHECK_EQ_INT(order, 15);
-		CHECK_EQ_INT(r.n, 15);
+		REQUIRE(open_session(&o, dir, "a", t) == 0);
+		CHECK(!o.created);
+		CHECK_EQ_INT(o.order, 15);
+		CHECK_EQ_INT(o.r.n, 15);
 		CHECK_EQ_INT(count_named(sdir, "snap-10.bin.damaged-"), 1);
 		/* Later edits and restarts keep following that chain. */
-		REQUIRE(bc_store_append(ss, 16, (const uint8_t *)"more", 4,
+		REQUIRE(bc_store_append(o.ss, 16, (const uint8_t *)"more", 4,
 		                        NULL) == 0);
-		bc_store_session_close(ss);
-		bc_store_close(st);
-		REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order,
-		                     &created) == 0);
-		CHECK_EQ_INT(order, 16);
-		CHECK_EQ_INT(r.n, 16);
-		REQUIRE(bc_store_snapshot(ss, t, NULL, 16, NULL) == 0);
-		bc_store_session_close(ss);
-		bc_store_close(st);
-		REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order,
-		                     &created) == 0);
-		CHECK_EQ_INT(order, 16);
-		CHECK_EQ_INT(r.n, 0);
-		bc_store_session_close(ss);
-		bc_store_close(st);
+		shut(&o);
+		REQUIRE(open_session(&o, dir, "a", t) == 0);
+		CHECK_EQ_INT(o.order, 16);
+		CHECK_EQ_INT(o.r.n, 16);
+		REQUIRE(bc_store_snapshot(o.ss, t, NULL, 16, NULL) == 0);
+		shut(&o);
+		REQUIRE(open_session(&o, dir, "a", t) == 0);
+		CHECK_EQ_INT(o.order, 16);
+		CHECK_EQ_INT(o.r.n, 0);
+		shut(&o);
 		bc_tree_destroy(t);
 		rm_rf(dir);
 		free(dir);
@@ -427,19 +404,14 @@ static void a_corrupt_snapshot_falls_back_to_the_previous(void)
 static void a_restore_keeps_the_previous_generation(void)
 {
 	char *dir = make_dir(), file[600], sdir[512];
-	struct bc_store *st;
-	struct bc_store_session *ss;
+	struct opened o;
 	struct bc_tree *t = default_tree();
-	struct replayed r;
-	uint64_t order;
-	bool created;
 	REQUIRE(dir && t);
 	two_generations(dir, t);
 	/* A restart (as after kill -9): the session comes back whole... */
-	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
-	CHECK_EQ_INT(order, 15);
-	bc_store_session_close(ss);
-	bc_store_close(st);
+	REQUIRE(open_session(&o, dir, "a", t) == 0);
+	CHECK_EQ_INT(o.order, 15);
+	shut(&o);
 	/* ... and the generation before its snapshot is still there. */
 	snprintf(sdir, sizeof(sdir), "%s/sessions/a", dir);
 	CHECK_EQ_INT(count_named(sdir, "snap-0.bin"), 1);
@@ -448,12 +420,11 @@ static void a_restore_keeps_the_previous_generation(void)
 	 * snapshot and the journals give back every edit. */
 	snprintf(file, sizeof(file), "%s/snap-10.bin", sdir);
 	write_file(file, "");
-	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
-	CHECK(!created);
-	CHECK_EQ_INT(order, 15);
-	CHECK_EQ_INT(r.n, 15);
-	bc_store_session_close(ss);
-	bc_store_close(st);
+	REQUIRE(open_session(&o, dir, "a", t) == 0);
+	CHECK(!o.created);
+	CHECK_EQ_INT(o.order, 15);
+	CHECK_EQ_INT(o.r.n, 15);
+	shut(&o);
 	bc_tree_destroy(t);
 	rm_rf(dir);
 	free(dir);
@@ -509,12 +480,8 @@ static void a_snapshot_gives_back_scene_and_camera(void)
 static void a_json_snapshot_of_an_earlier_version_restores(void)
 {
 	char *dir = make_dir(), file[600], sdir[512];
-	struct bc_store *st;
-	struct bc_store_session *ss;
+	struct opened o;
 	struct bc_tree *t = bc_tree_create();
-	struct replayed r;
-	uint64_t order;
-	bool created;
 	REQUIRE(dir && t);
 	snprintf(sdir, sizeof(sdir), "%s/sessions", dir);
 	REQUIRE(mkdir(sdir, 0755) == 0);
@@ -522,23 +489,21 @@ static void a_json_snapshot_of_an_earlier_version_restores(void)
 	REQUIRE(mkdir(sdir, 0755) == 0);
 	snprintf(file, sizeof(file), "%s/snap-4.json", sdir);
 	write_file(file, bc_scene_default_json());
-	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
-	CHECK(!created);
-	CHECK_EQ_INT(order, 4);
+	REQUIRE(open_session(&o, dir, "a", t) == 0);
+	CHECK(!o.created);
+	CHECK_EQ_INT(o.order, 4);
 	CHECK(bc_tree_prim_count(t) > 1);
-	REQUIRE(bc_store_snapshot(ss, t, NULL, 4, NULL) == 0);
+	REQUIRE(bc_store_snapshot(o.ss, t, NULL, 4, NULL) == 0);
 	CHECK_EQ_INT(count_named(sdir, "snap-4.json"), 0);
 	CHECK_EQ_INT(count_named(sdir, "snap-4.bin"), 1);
-	bc_store_session_close(ss);
-	bc_store_close(st);
+	shut(&o);
 	/* A JSON file placed beside the binary one of its order is not
 	 * read: the binary one is. */
 	write_file(file, "not json");
-	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
-	CHECK_EQ_INT(order, 4);
+	REQUIRE(open_session(&o, dir, "a", t) == 0);
+	CHECK_EQ_INT(o.order, 4);
 	CHECK_EQ_INT(count_named(sdir, ".damaged-"), 0);
-	bc_store_session_close(ss);
-	bc_store_close(st);
+	shut(&o);
 	bc_tree_destroy(t);
 	rm_rf(dir);
 	free(dir);
@@ -569,38 +534,31 @@ static void a_failed_snapshot_leaves_no_trace(void)
 	                              "dir-fsync"};
 	for (size_t i = 0; i < sizeof(steps) / sizeof(steps[0]); i++) {
 		char *dir = make_dir(), sdir[512];
-		struct bc_store *st;
-		struct bc_store_session *ss;
+		struct opened o;
 		struct bc_tree *t = default_tree();
-		struct replayed r;
 		struct inject in = {steps[i], 0};
 		struct bc_errinfo ei = {0};
-		uint64_t order;
-		bool created, after = strcmp(steps[i], "dir-fsync") == 0;
+		bool after = strcmp(steps[i], "dir-fsync") == 0;
 		int rc;
 		REQUIRE(dir && t);
 		make_session(dir, "a", 10, 0);
-		REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order,
-		                     &created) == 0);
+		REQUIRE(open_session(&o, dir, "a", t) == 0);
 		bc_store_set_fail_hook(fail_step, &in);
-		rc = bc_store_snapshot(ss, t, NULL, 11, &ei);
+		rc = bc_store_snapshot(o.ss, t, NULL, 11, &ei);
 		bc_store_set_fail_hook(NULL, NULL);
 		CHECK(rc < 0);
 		snprintf(sdir, sizeof(sdir), "%s/sessions/a", dir);
 		CHECK_EQ_INT(count_named(sdir, "snap-11"), after ? 1 : 0);
 		CHECK_EQ_INT(count_named(sdir, "journal-11"), after ? 1 : 0);
 		CHECK_EQ_INT(count_named(sdir, ".tmp"), 0);
-		bc_store_session_close(ss);
-		bc_store_close(st);
-		REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order,
-		                     &created) == 0);
-		if (order != (after ? 11u : 10u)) {
+		shut(&o);
+		REQUIRE(open_session(&o, dir, "a", t) == 0);
+		if (o.order != (after ? 11u : 10u)) {
 			fprintf(stderr, "  step %s: order %llu\n", steps[i],
-			        (unsigned long long)order);
+			        (unsigned long long)o.order);
 		}
-		CHECK(order == (after ? 11u : 10u));
-		bc_store_session_close(ss);
-		bc_store_close(st);
+		CHECK(o.order == (after ? 11u : 10u));
+		shut(&o);
 		bc_tree_destroy(t);
 		rm_rf(dir);
 		free(dir);
@@ -624,40 +582,34 @@ static void count_errors(enum bc_log_level level, const char *file, int line,
 static void failures_back_off_and_are_logged_as_errors(void)
 {
 	char *dir = make_dir();
-	struct bc_store *st;
-	struct bc_store_session *ss;
+	struct opened o;
 	struct bc_tree *t = default_tree();
-	struct replayed r;
 	struct inject in = {"snapshot-create", 0};
-	uint64_t order;
-	bool created;
 	REQUIRE(dir && t);
 	make_session(dir, "a", 10, 0);
-	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
+	REQUIRE(open_session(&o, dir, "a", t) == 0);
 	bc_log_set_callback(count_errors);
 	bc_store_set_fail_hook(fail_step, &in);
-	CHECK(bc_store_snapshot_due(ss, 5, t, NULL, 10, NULL) < 0);
+	CHECK(bc_store_snapshot_due(o.ss, 5, t, NULL, 10, NULL) < 0);
 	in.calls = 0;
 	for (int i = 0; i < 100; i++) {
-		CHECK_EQ_INT(bc_store_snapshot_due(ss, 5, t, NULL, 10, NULL),
+		CHECK_EQ_INT(bc_store_snapshot_due(o.ss, 5, t, NULL, 10, NULL),
 		             0);
 	}
 	CHECK_EQ_INT(in.calls, 0);
 	CHECK(errors_logged >= 1);
 	errors_logged = 0;
 	in.step = "journal-write";
-	CHECK(bc_store_append(ss, 11, (const uint8_t *)"x", 1, NULL) < 0);
+	CHECK(bc_store_append(o.ss, 11, (const uint8_t *)"x", 1, NULL) < 0);
 	CHECK(errors_logged >= 1);
 	bc_store_set_fail_hook(NULL, NULL);
 	bc_log_set_callback(NULL);
 	/* The failed append left no half record. */
-	REQUIRE(bc_store_append(ss, 11, (const uint8_t *)"y", 1, NULL) == 0);
-	bc_store_session_close(ss);
-	bc_store_close(st);
-	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
-	CHECK_EQ_INT(order, 11);
-	bc_store_session_close(ss);
-	bc_store_close(st);
+	REQUIRE(bc_store_append(o.ss, 11, (const uint8_t *)"y", 1, NULL) == 0);
+	shut(&o);
+	REQUIRE(open_session(&o, dir, "a", t) == 0);
+	CHECK_EQ_INT(o.order, 11);
+	shut(&o);
 	bc_tree_destroy(t);
 	rm_rf(dir);
 	free(dir);
@@ -687,51 +639,44 @@ static void a_journaled_scene_is_safe_before_its_snapshot(void)
 	static const uint8_t head[2] = {0xff, 0xff};
 	static const char scene[] = "a-whole-scene";
 	char *dir = make_dir();
-	struct bc_store *st;
-	struct bc_store_session *ss;
+	struct opened o;
 	struct bc_tree *t = default_tree();
 	struct bc_camera cam;
 	struct last_record last = {0};
-	struct replayed r;
-	uint64_t order;
-	bool created;
 	REQUIRE(dir && t);
 	make_session(dir, "a", 3, 0);
-	REQUIRE(open_session(dir, "a", &st, &ss, t, &r, &order, &created) == 0);
-	CHECK(!bc_store_snapshot_is_due(ss, 1000));
-	REQUIRE(bc_store_append_scene(ss, 4, head, sizeof(head),
+	REQUIRE(open_session(&o, dir, "a", t) == 0);
+	CHECK(!bc_store_snapshot_is_due(o.ss, 1000));
+	REQUIRE(bc_store_append_scene(o.ss, 4, head, sizeof(head),
 	                              (const uint8_t *)scene, strlen(scene),
 	                              NULL) == 0);
-	CHECK(bc_store_snapshot_is_due(ss, 1000));
+	CHECK(bc_store_snapshot_is_due(o.ss, 1000));
 	/* No snapshot: as after a crash right after the load's answer. */
-	bc_store_session_close(ss);
-	bc_store_close(st);
-	REQUIRE(bc_store_open(&st, dir, NULL) == 0);
-	REQUIRE(bc_store_session_open(st, "a", &ss, t, &cam, &order, &created,
-	                              keep_last, &last, NULL) == 0);
-	CHECK_EQ_INT(order, 4);
+	shut(&o);
+	REQUIRE(bc_store_open(&o.st, dir, NULL) == 0);
+	REQUIRE(bc_store_session_open(o.st, "a", &o.ss, t, &cam, &o.order,
+	                              &o.created, keep_last, &last, NULL) == 0);
+	CHECK_EQ_INT(o.order, 4);
 	CHECK_EQ_INT(last.order, 4);
 	REQUIRE(last.len == sizeof(head) + strlen(scene));
 	CHECK(memcmp(last.rec, head, sizeof(head)) == 0);
 	CHECK(memcmp(last.rec + sizeof(head), scene, strlen(scene)) == 0);
 	/* The snapshot, once taken, is no longer due. */
-	REQUIRE(bc_store_append_scene(ss, 5, head, sizeof(head),
+	REQUIRE(bc_store_append_scene(o.ss, 5, head, sizeof(head),
 	                              (const uint8_t *)scene, strlen(scene),
 	                              NULL) == 0);
-	CHECK(bc_store_snapshot_is_due(ss, 1000));
-	CHECK_EQ_INT(bc_store_snapshot_due(ss, 1000, t, NULL, 5, NULL), 0);
-	CHECK(!bc_store_snapshot_is_due(ss, 1000));
-	CHECK_EQ_INT(bc_store_journal_records(ss), 0);
-	bc_store_session_close(ss);
-	bc_store_close(st);
+	CHECK(bc_store_snapshot_is_due(o.ss, 1000));
+	CHECK_EQ_INT(bc_store_snapshot_due(o.ss, 1000, t, NULL, 5, NULL), 0);
+	CHECK(!bc_store_snapshot_is_due(o.ss, 1000));
+	CHECK_EQ_INT(bc_store_journal_records(o.ss), 0);
+	shut(&o);
 	memset(&last, 0, sizeof(last));
-	REQUIRE(bc_store_open(&st, dir, NULL) == 0);
-	REQUIRE(bc_store_session_open(st, "a", &ss, t, &cam, &order, &created,
-	                              keep_last, &last, NULL) == 0);
-	CHECK_EQ_INT(order, 5);
+	REQUIRE(bc_store_open(&o.st, dir, NULL) == 0);
+	REQUIRE(bc_store_session_open(o.st, "a", &o.ss, t, &cam, &o.order,
+	                              &o.created, keep_last, &last, NULL) == 0);
+	CHECK_EQ_INT(o.order, 5);
 	CHECK_EQ_INT(last.order, 0); /* nothing replayed after it */
-	bc_store_session_close(ss);
-	bc_store_close(st);
+	shut(&o);
 	bc_tree_destroy(t);
 	rm_rf(dir);
 	free(dir);
