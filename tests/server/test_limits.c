@@ -15,6 +15,20 @@
 #include "daemon.h"
 #include "srv_limits.h"
 
+/* c opens a connection to d as client name and joins session "s" in role
+ * (creating it: create). 0 or -1. */
+static int enter(struct conn *c, const struct daemon *d, const char *name,
+                 enum bc_proto_role role, bool create)
+{
+	if (conn_open(c, d) != 0) {
+		return -1;
+	}
+	if (conn_hello(c, name) != 0) {
+		return -1;
+	}
+	return conn_join(c, "s", role, create);
+}
+
 static char base_dir[48];
 
 static void make_dir_name(char *out, size_t n, const char *what)
@@ -52,9 +66,7 @@ static void a_trickled_message_times_out(void)
 	int code = 0;
 	make_dir_name(dir, sizeof(dir), "trickle");
 	REQUIRE(daemon_start(&d, dir) == 0);
-	REQUIRE(conn_open(&member, &d) == 0);
-	REQUIRE(conn_hello(&member, "member") == 0);
-	REQUIRE(conn_join(&member, "s", BC_PROTO_ROLE_VIEWER, true) == 0);
+	REQUIRE(enter(&member, &d, "member", BC_PROTO_ROLE_VIEWER, true) == 0);
 	REQUIRE(conn_open(&slow, &d) == 0);
 	REQUIRE(conn_hello(&slow, "slow") == 0);
 	/* A PING (24 bytes) at a byte a second would take 24 s. */
@@ -98,9 +110,7 @@ static void an_idle_client_in_no_session_is_dropped(void)
 	fprintf(f, "{\"idle_timeout_ms\": 2000}\n");
 	fclose(f);
 	REQUIRE(daemon_start_with(&d, dir, extra) == 0);
-	REQUIRE(conn_open(&member, &d) == 0);
-	REQUIRE(conn_hello(&member, "member") == 0);
-	REQUIRE(conn_join(&member, "s", BC_PROTO_ROLE_VIEWER, true) == 0);
+	REQUIRE(enter(&member, &d, "member", BC_PROTO_ROLE_VIEWER, true) == 0);
 	REQUIRE(conn_open(&idle, &d) == 0);
 	REQUIRE(conn_hello(&idle, "idle") == 0);
 	t0 = t_now_ms();
@@ -318,9 +328,7 @@ static void a_scene_too_big_to_send_is_refused(void)
 	uint32_t n = (2u << 20) / 39u + 1000u;
 	make_dir_name(dir, sizeof(dir), "bigscene");
 	REQUIRE(daemon_start_with(&d, dir, cap) == 0);
-	REQUIRE(conn_open(&a, &d) == 0);
-	REQUIRE(conn_hello(&a, "author") == 0);
-	REQUIRE(conn_join(&a, "s", BC_PROTO_ROLE_EDITOR, true) == 0);
+	REQUIRE(enter(&a, &d, "author", BC_PROTO_ROLE_EDITOR, true) == 0);
 	REQUIRE(conn_expect(&a, BC_MSG_SCENE_STATE, 5000) == 1);
 	order = a.m.scene_state.order;
 	t = scene_of(&a);
@@ -353,10 +361,8 @@ static void a_scene_too_big_to_send_is_refused(void)
 	 * after a restart. */
 	CHECK(ping(&a) == 0);
 	for (int round = 0; round < 2; round++) {
-		REQUIRE(conn_open(&joiner, &d) == 0);
-		REQUIRE(conn_hello(&joiner, "joiner") == 0);
-		REQUIRE(conn_join(&joiner, "s", BC_PROTO_ROLE_VIEWER, false) ==
-		        0);
+		REQUIRE(enter(&joiner, &d, "joiner", BC_PROTO_ROLE_VIEWER,
+		              false) == 0);
 		REQUIRE(conn_expect(&joiner, BC_MSG_SCENE_STATE, 5000) == 1);
 		CHECK_EQ_INT(joiner.m.scene_state.order, order);
 		CHECK(ping(&joiner) == 0);
@@ -424,9 +430,7 @@ static void a_scene_past_the_client_queue_reaches_its_members(void)
 	int rc;
 	make_dir_name(dir, sizeof(dir), "queuecap");
 	REQUIRE(daemon_start_with(&d, dir, cap) == 0);
-	REQUIRE(conn_open(&a, &d) == 0);
-	REQUIRE(conn_hello(&a, "author") == 0);
-	REQUIRE(conn_join(&a, "s", BC_PROTO_ROLE_EDITOR, true) == 0);
+	REQUIRE(enter(&a, &d, "author", BC_PROTO_ROLE_EDITOR, true) == 0);
 	REQUIRE(conn_expect(&a, BC_MSG_SCENE_STATE, 5000) == 1);
 	b = scattered(n);
 	REQUIRE(b.len > (2u << 20) - 4096u);
@@ -439,10 +443,8 @@ static void a_scene_past_the_client_queue_reaches_its_members(void)
 	for (int round = 0; round < 2; round++) {
 		/* One that leaves once the scene has begun to come. */
 		uint8_t some[4096];
-		REQUIRE(conn_open(&quitter, &d) == 0);
-		REQUIRE(conn_hello(&quitter, "quitter") == 0);
-		REQUIRE(conn_join(&quitter, "s", BC_PROTO_ROLE_VIEWER, false) ==
-		        0);
+		REQUIRE(enter(&quitter, &d, "quitter", BC_PROTO_ROLE_VIEWER,
+		              false) == 0);
 		CHECK(recv(quitter.fd, some, sizeof(some), 0) > 0);
 		conn_close(&quitter);
 		/* Two joining at once. */
@@ -464,9 +466,7 @@ static void a_scene_past_the_client_queue_reaches_its_members(void)
 
 	/* A member that reads nothing: the scene loaded again comes behind
 	 * the first, still in its queue, and passes the cap. */
-	REQUIRE(conn_open(&stuck, &d) == 0);
-	REQUIRE(conn_hello(&stuck, "stuck") == 0);
-	REQUIRE(conn_join(&stuck, "s", BC_PROTO_ROLE_VIEWER, false) == 0);
+	REQUIRE(enter(&stuck, &d, "stuck", BC_PROTO_ROLE_VIEWER, false) == 0);
 	t_sleep_ms(200); /* its scene is queued */
 	load_and_wait(&a, &b);
 	CHECK(a.m.scene_state.order > order);
@@ -589,9 +589,7 @@ static void a_refused_structural_edit_is_not_drawn(void)
 	REQUIRE(n + 1 >= BC_SRV_HEAVY_NODES);
 	make_dir_name(dir, sizeof(dir), "refused");
 	REQUIRE(daemon_start_with(&d, dir, cap) == 0);
-	REQUIRE(conn_open(&a, &d) == 0);
-	REQUIRE(conn_hello(&a, "author") == 0);
-	REQUIRE(conn_join(&a, "s", BC_PROTO_ROLE_EDITOR, true) == 0);
+	REQUIRE(enter(&a, &d, "author", BC_PROTO_ROLE_EDITOR, true) == 0);
 	REQUIRE(conn_expect(&a, BC_MSG_SCENE_STATE, 5000) == 1);
 	b = scattered(n);
 	m.scene_load.scene.ptr = b.data;
@@ -642,9 +640,7 @@ static void a_refused_structural_edit_is_not_drawn(void)
 	 * render copy: their verdicts come before the copy takes them (the
 	 * refused one is never applied there), or after, depending on the
 	 * timing; either way the picture is the one with the sphere. */
-	REQUIRE(conn_open(&b2, &d) == 0);
-	REQUIRE(conn_hello(&b2, "viewer") == 0);
-	REQUIRE(conn_join(&b2, "s", BC_PROTO_ROLE_VIEWER, false) == 0);
+	REQUIRE(enter(&b2, &d, "viewer", BC_PROTO_ROLE_VIEWER, false) == 0);
 	REQUIRE(conn_view(&b2, 1024, 768, BC_PROTO_ENC_PNG));
 	snap.snapshot.encoding = BC_PROTO_ENC_RAW;
 	REQUIRE(conn_send(&b2, &snap));
