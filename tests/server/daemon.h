@@ -146,6 +146,26 @@ static inline int daemon_start_with(struct daemon *d, const char *dir,
 	return -1;
 }
 
+/* How many times a log file (daemon_log_path) holds text, in its first
+ * 64 KiB. */
+static inline unsigned daemon_log_count(const char *file, const char *text)
+{
+	static char buf[1 << 16];
+	FILE *f = fopen(file, "r");
+	unsigned count = 0;
+	size_t n;
+	if (!f) {
+		return 0;
+	}
+	n = fread(buf, 1, sizeof(buf) - 1, f);
+	fclose(f);
+	buf[n] = '\0';
+	for (const char *p = buf; (p = strstr(p, text)); p += strlen(text)) {
+		count++;
+	}
+	return count;
+}
+
 static inline int daemon_start(struct daemon *d, const char *dir)
 {
 	return daemon_start_with(d, dir, NULL);
