@@ -570,6 +570,8 @@ static void commit(struct bc_task *t)
 	bc__session_changed(s);
 	bc_work_scene(s->ss->work, s->id, l->copy, s->order);
 	s->copied = true;
+	/* Its copy is new: it stays for render_idle_ms from now. */
+	s->looked_ms = bc__now_ms(s->ss);
 	l->tree = l->copy = NULL;
 	bc__send_state_msg(s, NULL, l->state);
 	for (uint32_t i = 0; i < s->nmembers && l->has_cam; i++) {

@@ -414,6 +414,15 @@ static void apply_one(struct bc_work *w, struct flow *f, struct upd *u)
 	struct bc_edit_batch b;
 	switch (u->kind) {
 	case UPD_SCENE:
+		if (!u->tree) {
+			/* Nobody looks: the copy and everything drawn from
+			 * it go, the renderer too (the next scene lays its
+			 * lists out again anyway). */
+			bc__flow_clear(w, f);
+			f->fresh = true;
+			f->broken = false;
+			break;
+		}
 		/* A scene replaces an early batch's copy too. */
 		bc_edit_batch_finish(&f->eb);
 		f->eb_state = EB_NONE;

@@ -233,6 +233,7 @@ int bc__session_copy(struct bc_session *s)
 	struct copy_task *c;
 	struct bc_tree *t;
 	int rc;
+	s->looked_ms = bc__now_ms(s->ss);
 	if (s->copied) {
 		return 0;
 	}
@@ -268,6 +269,30 @@ int bc__session_copy(struct bc_session *s)
 	s->copying = true;
 	bc__task_start(s, &c->t);
 	return BC_PARK;
+}
+
+bool bc__session_copy_idle(struct bc_session *s, uint64_t now)
+{
+	if (!s->copied || s->busy) {
+		return false;
+	}
+	for (uint32_t i = 0; i < s->nmembers; i++) {
+		const struct bc_member *m = s->members[i];
+		if (m->has_view || m->job || m->requests) {
+			s->looked_ms = now;
+			return false;
+		}
+	}
+	if (now - s->looked_ms < s->ss->render_idle_ms) {
+		return false;
+	}
+	bc_log(BC_LOG_INFO,
+	       "session %s: render copy dropped, no picture wanted for %llu "
+	       "s; the next one makes it again",
+	       s->name, (unsigned long long)((now - s->looked_ms) / 1000u));
+	bc_work_scene(s->ss->work, s->id, NULL, s->order);
+	s->copied = false;
+	return true;
 }
 
 /* Whether a frame can be asked for: the render copy is there, or is made
@@ -396,8 +421,13 @@ void bc__frames_forget(struct bc_member *m)
 {
 	struct bc_session *s = m->session;
 	struct bc_job *job = m->job;
-	uint32_t dropped = forget_requests(m);
+	uint32_t dropped;
 	bool shared = false;
+	/* The wait before its session's copy goes starts now. */
+	if (s && (m->has_view || job || m->requests)) {
+		s->looked_ms = bc__now_ms(m->ss);
+	}
+	dropped = forget_requests(m);
 	m->ss->link->forget_frames(m->ss->link->ud, m->peer->ref);
 	m->answers_unsent = 0;
 	m->job = NULL;

@@ -70,7 +70,7 @@ struct cli {
 	int backend, gl_platform, simd, log, video_encoder, x264_preset;
 	bool allow_plaintext, tls_allow_expired, no_damage, no_pace, repair;
 	uint32_t frame_budget_ms, render_threads, view_cache_mib, max_scene_mib;
-	uint32_t client_queue_mib;
+	uint32_t client_queue_mib, render_idle_s;
 };
 
 /* The option table over c; --help is printed from it. */
@@ -197,6 +197,16 @@ struct cli {
 		     .help = "largest scene as sent, {range} (default\n"       \
 		             "64, about 1.7 million spheres; over 64\n"        \
 		             "only clients of scenes in parts get it)"},       \
+		    {.name = "render-idle",                                    \
+		     .kind = BC_OPT_U32,                                       \
+		     .dst = &(c)->render_idle_s,                               \
+		     .lo = 1,                                                  \
+		     .hi = 86400,                                              \
+		     .arg = "S",                                               \
+		     .help = "seconds a session's render state (about\n"       \
+		             "600 bytes a primitive) stays once nobody\n"      \
+		             "views it, {range} (default 300); the next\n"     \
+		             "picture builds it again"},                       \
 		    {.name = "client-queue",                                   \
 		     .kind = BC_OPT_U32,                                       \
 		     .dst = &(c)->client_queue_mib,                            \
@@ -668,6 +678,7 @@ static void apply_cli(struct bc_srv_config *cfg, const struct cli *c,
 	cfg->view_cache_mib = c->view_cache_mib;
 	cfg->max_scene_mib = c->max_scene_mib;
 	cfg->client_queue_mib = c->client_queue_mib;
+	cfg->render_idle_s = c->render_idle_s;
 }
 
 /* Defaults for what neither gave, and the checks between options. Returns
@@ -743,6 +754,7 @@ static int start(struct daemon *dm, struct bc_errinfo *ei)
 	             .store = dm->store,
 	             .no_damage = dm->cfg.no_damage,
 	             .max_scene_bytes = (size_t)dm->cfg.max_scene_mib << 20,
+	             .render_idle_ms = dm->cfg.render_idle_s * 1000u,
 	             .video =
 	                 {
 	                     .backend = dm->cfg.video_encoder,

@@ -672,6 +672,9 @@ static void sweep_idle(uv_timer_t *t)
 	uint64_t now = bc__now_ms(ss);
 	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
 		struct bc_session *s = ss->sessions[i];
+		if (s && !s->removed) {
+			bc__session_copy_idle(s, now);
+		}
 		if (!s || !unloadable(s)) {
 			continue;
 		}
@@ -786,7 +789,7 @@ int bc_sessions_new(struct bc_sessions **out,
 {
 	struct bc_sessions *ss = bc_calloc(1, sizeof(*ss));
 	struct bc_session *s;
-	uint32_t n;
+	uint32_t n, sweep_ms;
 	int rc;
 	*out = NULL;
 	if (!ss) {
@@ -808,11 +811,16 @@ int bc_sessions_new(struct bc_sessions **out,
 		bc_free(ss);
 		return bc_errinfo_set(ei, rc, "cannot list the sessions");
 	}
+	ss->render_idle_ms =
+	    opts->render_idle_ms ? opts->render_idle_ms : BC_SRV_RENDER_IDLE_MS;
+	sweep_ms = ss->render_idle_ms / 4u < BC_SRV_SESSION_SWEEP_MS
+	               ? ss->render_idle_ms / 4u
+	               : BC_SRV_SESSION_SWEEP_MS;
+	sweep_ms = sweep_ms < 50u ? 50u : sweep_ms;
 	*out = ss;
 	uv_timer_init(ss->loop, &ss->sweep);
 	ss->sweep.data = ss;
-	uv_timer_start(&ss->sweep, sweep_idle, BC_SRV_SESSION_SWEEP_MS,
-	               BC_SRV_SESSION_SWEEP_MS);
+	uv_timer_start(&ss->sweep, sweep_idle, sweep_ms, sweep_ms);
 	/* Sessions on disk load now up to the table's size; the others when
 	 * joined. */
 	n = bc__index_count(ss->index);

@@ -107,7 +107,8 @@ struct bc_sessions_opts {
 	struct bc_work *work;
 	struct bc_store *store;
 	bool no_damage;
-	size_t max_scene_bytes; /* 0: BC_SRV_MAX_SCENE_BYTES */
+	size_t max_scene_bytes;  /* 0: BC_SRV_MAX_SCENE_BYTES */
+	uint32_t render_idle_ms; /* 0: BC_SRV_RENDER_IDLE_MS */
 	/* How H.264 views are encoded: backend and preset (the preset
 	 * string must outlive the layer). */
 	struct bc_video_opts video;

@@ -45,6 +45,10 @@ struct bc_session {
 	 * last one failed, told once. */
 	bool copied, copying;
 	int copy_rc;
+	/* Loop clock: when a member last had a view or wanted a picture.
+	 * The copy goes once nobody has for ss->render_idle_ms
+	 * (bc__session_copy_idle). */
+	uint64_t looked_ms;
 	struct bc_member *members[BC_PROTO_MAX_MEMBERS];
 	uint32_t nmembers;
 	uint32_t next_member_id;
@@ -87,8 +91,9 @@ struct bc_sessions {
 	struct bc_work *work;
 	struct bc_store *store;
 	bool no_damage;
-	size_t max_scene_bytes; /* SCENE_STATE payload (--max-scene) */
-	size_t parts_bytes;     /* of every member's unfinished SCENE_LOAD */
+	size_t max_scene_bytes;  /* SCENE_STATE payload (--max-scene) */
+	uint32_t render_idle_ms; /* render copies unused this long go */
+	size_t parts_bytes;      /* of every member's unfinished SCENE_LOAD */
 	struct bc_video_opts video;
 	struct bc_session *sessions[BC_SRV_MAX_SESSIONS];
 	uint32_t nsessions;
@@ -211,6 +216,10 @@ void bc__schedule(struct bc_session *s);
  * a task makes it (the session busy until then), or the error of the
  * last copy that failed (BC_ENOMEM), said once. */
 int bc__session_copy(struct bc_session *s);
+/* Drops s's render copy when nobody has looked at s for render_idle_ms
+ * (no member has a view, a frame job, a PICK or a SNAPSHOT queued) and
+ * s is not busy. Returns true when it did. */
+bool bc__session_copy_idle(struct bc_session *s, uint64_t now);
 /* m's state changed in a way its queued frame does not show: the job is
  * retracted (latest wins) and m is owed a new one. */
 void bc__owe_frame(struct bc_member *m);

@@ -411,12 +411,12 @@ static void deliver(uv_async_t *async)
 
 int bc__work_queue(struct bc_work *w, uint32_t sid, struct upd *u)
 {
-	bool scene = u->kind == UPD_SCENE;
+	bool scene = u->kind == UPD_SCENE && u->tree;
 	struct flow *f;
 	uv_mutex_lock(&w->lock);
 	if (!(f = flow_of(w, sid, scene))) {
-		/* Without a flow there is no copy to follow (its session's
-		 * scene never came); only a scene makes one. */
+		/* Without a flow there is no copy to follow or drop (its
+		 * session's scene never came); only a scene makes one. */
 		uv_mutex_unlock(&w->lock);
 		bc__upd_free(u);
 		return scene ? BC_ELIMIT : 0;
@@ -465,7 +465,7 @@ void bc_work_scene(struct bc_work *w, uint32_t sid, struct bc_tree *t,
 	u->kind = UPD_SCENE;
 	u->tree = t;
 	u->order = order;
-	u->bytes = (size_t)bc_tree_node_count(t) * BC_SRV_NODE_BYTES;
+	u->bytes = t ? (size_t)bc_tree_node_count(t) * BC_SRV_NODE_BYTES : 0;
 	if (bc__work_queue(w, sid, u)) {
 		bc_log(BC_LOG_ERROR, "session %u: no render slot", sid);
 	}

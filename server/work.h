@@ -168,7 +168,11 @@ bool bc_work_stop(struct bc_work *w, uint32_t wait_ms);
  * rendered after it report. */
 
 /* Replaces the copy by tree t (taken), dropping every change still queued
- * and every view of the session: a loaded scene, a restored session. */
+ * and every view of the session: a loaded scene, a restored session. With
+ * t NULL the copy goes with the renderer's state for it and the views,
+ * and no other takes its place (nobody looks at the session: the caller
+ * has no job of it queued, and sends a scene before the next); the flow
+ * stays, with its share of render time. */
 void bc_work_scene(struct bc_work *w, uint32_t sid, struct bc_tree *t,
                    uint64_t order);
 /* The states nodes have after a parameter edit (bc_edit_saved of each,

@@ -540,33 +540,56 @@ static uint32_t picked(struct conn *c, uint32_t seq)
 	return 0;
 }
 
+/* Member c (id) of a session of far_spheres that has no render copy:
+ * sphere 2 moves into the empty middle of the view and grows, and sphere
+ * 3 is removed, with nobody looking; then c views (96x64) and PICKs the
+ * middle at once. The copy made for that picture must hold the edits:
+ * the PICK hits sphere 2 and the first still shows the last order. */
+static void edits_without_a_copy_are_drawn(struct conn *c, uint32_t id)
+{
+	struct bc_proto_field r = {
+	    .field = BC_PROTO_FIELD_PARAM0, .count = 1, .v = {0.8f}};
+	struct bc_proto_edit_op grow = {.kind = BC_PROTO_EDIT_SET,
+	                                .node = 2,
+	                                .nfields = 1,
+	                                .fields = &r},
+	                        cut = {.kind = BC_PROTO_EDIT_REMOVE, .node = 3};
+	struct bc_msg m = {.type = BC_MSG_EDIT}, pk = {.type = BC_MSG_PICK};
+	uint64_t order;
+	uint32_t seq = conn_move(c, 2, 0, 0, 0, false);
+	CHECK(conn_edit_answer(c, id, seq) != 0);
+	m.edit.nops = 1;
+	m.edit.ops = &grow;
+	seq = conn_send(c, &m);
+	CHECK(conn_edit_answer(c, id, seq) != 0);
+	m.edit.ops = &cut;
+	seq = conn_send(c, &m);
+	CHECK((order = conn_edit_answer(c, id, seq)) != 0);
+	REQUIRE(conn_view(c, 96, 64, BC_PROTO_ENC_PNG));
+	pk.pick.x = 48;
+	pk.pick.y = 32;
+	seq = conn_send(c, &pk);
+	CHECK(picked(c, seq) == 2);
+	do {
+		REQUIRE(conn_expect(c, BC_MSG_FRAME, 60000) == 1);
+	} while (!(c->m.flags & BC_PROTO_FLAG_STILL));
+	CHECK(c->m.frame.order == order);
+}
+
 /* A session restored from disk has no render copy until a member wants a
  * picture (frames.c, bc__session_copy): edits made before that are not
  * sent anywhere, and the copy made then must hold them. A small scene's
  * copy is made on the loop, a big one's (20 000 nodes or more) on a task
  * with the session busy, the PICK sent at once behind the VIEW parked
- * until it is there. Here sphere 2 moves into the empty middle of the
- * view and grows, and sphere 3 is removed, before anyone looks; the first
- * PICK in the middle must hit sphere 2 and the first still frame show
- * the last order. */
+ * until it is there. */
 static void a_restored_session_is_drawn_with_edits_made_before_a_view(void)
 {
 	for (int big = 0; big < 2; big++) {
 		const char *name = big ? "lazy-big" : "lazy-small";
-		uint32_t n = big ? 20000u : 3u, id, seq;
-		struct bc_proto_field r = {
-		    .field = BC_PROTO_FIELD_PARAM0, .count = 1, .v = {0.8f}};
-		struct bc_proto_edit_op grow = {.kind = BC_PROTO_EDIT_SET,
-		                                .node = 2,
-		                                .nfields = 1,
-		                                .fields = &r},
-		                        cut = {.kind = BC_PROTO_EDIT_REMOVE,
-		                               .node = 3};
-		struct bc_msg pk = {.type = BC_MSG_PICK};
 		struct daemon d;
 		struct conn c;
-		char dir[64], *json = far_spheres(n);
-		uint64_t order;
+		char dir[64], *json = far_spheres(big ? 20000u : 3u);
+		uint32_t id;
 		REQUIRE(json != NULL);
 		make_dir_name(dir, sizeof(dir), name);
 		REQUIRE(daemon_start(&d, dir) == 0);
@@ -581,27 +604,56 @@ static void a_restored_session_is_drawn_with_edits_made_before_a_view(void)
 		REQUIRE(conn_join(&c, name, BC_PROTO_ROLE_EDITOR, false) == 0);
 		id = c.m.session_info.member_id;
 		REQUIRE(conn_expect(&c, BC_MSG_SCENE_STATE, 60000) == 1);
-		seq = conn_move(&c, 2, 0, 0, 0, false);
-		CHECK(conn_edit_answer(&c, id, seq) != 0);
-		{
-			struct bc_msg m = {.type = BC_MSG_EDIT};
-			m.edit.nops = 1;
-			m.edit.ops = &grow;
-			seq = conn_send(&c, &m);
-			CHECK(conn_edit_answer(&c, id, seq) != 0);
-			m.edit.ops = &cut;
-			seq = conn_send(&c, &m);
-			CHECK((order = conn_edit_answer(&c, id, seq)) != 0);
-		}
-		REQUIRE(conn_view(&c, 96, 64, BC_PROTO_ENC_PNG));
-		pk.pick.x = 48;
-		pk.pick.y = 32;
-		seq = conn_send(&c, &pk);
-		CHECK(picked(&c, seq) == 2);
+		edits_without_a_copy_are_drawn(&c, id);
+		conn_close(&c);
+		CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+	}
+}
+
+/* --render-idle: once nobody has looked at a session for that long (its
+ * viewer left; an editor stays, without a view) its render copy goes
+ * (frames.c, bc__session_copy_idle), and the next picture makes it again
+ * with the edits made meanwhile, none of which reached a copy. The drop
+ * must be logged after the viewer left (the copy of the load may go
+ * before the view: nobody looked at it either). */
+static void a_render_copy_nobody_looks_at_goes_and_comes_back(void)
+{
+	static const char *const opts[] = {"--render-idle", "1", NULL};
+	static const char said[] = "render copy dropped";
+	for (int big = 0; big < 2; big++) {
+		const char *name = big ? "idle-big" : "idle-small";
+		struct daemon d;
+		struct conn c, v;
+		char dir[64], log[80], *json = far_spheres(big ? 20000u : 3u);
+		uint32_t id;
+		unsigned before;
+		int64_t end;
+		REQUIRE(json != NULL);
+		make_dir_name(dir, sizeof(dir), name);
+		snprintf(log, sizeof(log), "%s.log", dir);
+		daemon_log_path = log;
+		REQUIRE(daemon_start_with(&d, dir, opts) == 0);
+		daemon_log_path = NULL;
+		REQUIRE(conn_open(&c, &d) == 0 && conn_hello(&c, "a") == 0);
+		REQUIRE(conn_join(&c, name, BC_PROTO_ROLE_EDITOR, true) == 0);
+		id = c.m.session_info.member_id;
+		conn_load_json(&c, json);
+		bc_free(json);
+		REQUIRE(conn_open(&v, &d) == 0 && conn_hello(&v, "v") == 0);
+		REQUIRE(conn_join(&v, name, BC_PROTO_ROLE_VIEWER, false) == 0);
+		REQUIRE(conn_view(&v, 96, 64, BC_PROTO_ENC_PNG));
 		do {
-			REQUIRE(conn_expect(&c, BC_MSG_FRAME, 60000) == 1);
-		} while (!(c.m.flags & BC_PROTO_FLAG_STILL));
-		CHECK(c.m.frame.order == order);
+			REQUIRE(conn_expect(&v, BC_MSG_FRAME, 60000) == 1);
+		} while (!(v.m.flags & BC_PROTO_FLAG_STILL));
+		before = daemon_log_count(log, said);
+		conn_close(&v);
+		end = t_now_ms() + 30000;
+		while (daemon_log_count(log, said) == before &&
+		       t_now_ms() < end) {
+			t_sleep_ms(50);
+		}
+		CHECK(daemon_log_count(log, said) == before + 1);
+		edits_without_a_copy_are_drawn(&c, id);
 		conn_close(&c);
 		CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 	}
@@ -620,6 +672,8 @@ static const struct bc_test tests[] = {
      a_client_that_stops_reading_is_dropped},
     {"a_restored_session_is_drawn_with_edits_made_before_a_view",
      a_restored_session_is_drawn_with_edits_made_before_a_view},
+    {"a_render_copy_nobody_looks_at_goes_and_comes_back",
+     a_render_copy_nobody_looks_at_goes_and_comes_back},
 };
 
 int main(int argc, char **argv)

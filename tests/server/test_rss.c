@@ -271,6 +271,57 @@ static void a_restored_session_holds_no_copy_until_viewed(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
+/* --render-idle: once nobody has looked at a session for that long, its
+ * render copy and the renderer's lists drawn from it go (frames.c,
+ * bc__session_copy_idle), and their memory goes back to the system.
+ * 200 000 spheres loaded and drawn at 1024x768; the viewer leaves, an
+ * editor stays without a view. RSS must fall to within a third of its
+ * rise above the fresh daemon's (the session's own tree stays: about
+ * 150 bytes a sphere, a fifth of the rise); a view after that makes the
+ * copy again and is drawn. */
+static void a_render_copy_nobody_looks_at_gives_its_memory_back(void)
+{
+	static const char *const opts[] = {"--render-idle", "1", NULL};
+	struct daemon d;
+	struct conn c, v;
+	struct bc_camera cam;
+	struct bc_tree *t;
+	char dir[64];
+	long base, peak, after = -1, limit, again;
+	uint64_t order;
+	snprintf(dir, sizeof(dir), "%s/idle", base_dir);
+	REQUIRE(daemon_start_with(&d, dir, opts) == 0);
+	base = rss_mib(d.pid);
+	REQUIRE(base > 0 && (t = fig18(200000, &cam)) != NULL);
+	load_from_another(&d, true, t, &cam, &order);
+	REQUIRE(conn_open(&c, &d) == 0 && conn_hello(&c, "editor") == 0);
+	REQUIRE(conn_join(&c, "big", BC_PROTO_ROLE_EDITOR, false) == 0);
+	REQUIRE(conn_open(&v, &d) == 0 && conn_hello(&v, "viewer") == 0);
+	REQUIRE(conn_join(&v, "big", BC_PROTO_ROLE_VIEWER, false) == 0);
+	REQUIRE(conn_view(&v, 1024, 768, BC_PROTO_ENC_JPEG) != 0);
+	REQUIRE(still_frame(&v, order) == 0);
+	peak = rss_mib(d.pid);
+	conn_close(&v);
+	limit = base + (peak - base) / 3;
+	for (int64_t end = t_now_ms() + 10000; t_now_ms() < end;
+	     t_sleep_ms(200)) {
+		if ((after = rss_mib(d.pid)) >= 0 && after < limit) {
+			break;
+		}
+	}
+	REQUIRE(conn_view(&c, 1024, 768, BC_PROTO_ENC_JPEG) != 0);
+	REQUIRE(still_frame(&c, order) == 0);
+	again = rss_mib(d.pid);
+	printf("  RSS %ld MiB at the start, %ld MiB with 200 000 spheres "
+	       "drawn, %ld MiB once nobody looked, %ld MiB viewed again\n",
+	       base, peak, after, again);
+	CHECK(peak > base + 100);
+	CHECK(after >= 0 && after < limit);
+	CHECK(again > after + 50);
+	conn_close(&c);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
 static const struct bc_test tests[] = {
     {"stalled_members_give_their_memory_back",
      stalled_members_give_their_memory_back},
@@ -278,6 +329,8 @@ static const struct bc_test tests[] = {
      a_replaced_big_scene_gives_its_memory_back},
     {"a_restored_session_holds_no_copy_until_viewed",
      a_restored_session_holds_no_copy_until_viewed},
+    {"a_render_copy_nobody_looks_at_gives_its_memory_back",
+     a_render_copy_nobody_looks_at_gives_its_memory_back},
 };
 
 int main(int argc, char **argv)
