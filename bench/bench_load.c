@@ -17,7 +17,15 @@
  * client that did not announce PARTS then joins and must be told ENOTSUP
  * (fatal), which the bench checks and prints.
  *
- * Usage: bench_load PATH/TO/blobcastd [runs] [spheres ...]
+ * With --idle S the daemon runs with --render-idle S, and after the still
+ * frame a second member joins without a view and the first leaves:
+ * nobody looks, so the session's render copy and the renderer's lists go
+ * after S seconds. The lowest VmRSS of the S + 10 seconds after is
+ * reported (idle_rss_mib, and per primitive), then the second member asks
+ * for the same view: its first frame and its still, the copy made again
+ * (back_frame_ms, back_still_ms), and VmRSS after (back_rss_mib).
+ *
+ * Usage: bench_load [--idle S] PATH/TO/blobcastd [runs] [spheres ...]
  * (default: 3 runs of 100000, 700000 and 1000000 spheres)
  */
 #include <stdint.h>
@@ -39,7 +47,12 @@ struct one {
 	    cpu_ms; /* the daemon's CPU time from SCENE_LOAD to SCENE_STATE */
 	long rss_kb, hwm_kb;
 	int parts; /* the SCENE_STATE's parts (1: whole) */
+	/* --idle: the lowest VmRSS once nobody looked, and the view after. */
+	long idle_kb, back_kb;
+	int64_t back_frame_ms, back_still_ms;
 };
+
+static int idle_s; /* --idle S; 0: no idle phase */
 
 /* CPU time (user + system) pid has used, in ms; 0 when unreadable. */
 static int64_t cpu_of(pid_t pid)
@@ -142,9 +155,43 @@ static int no_parts_refused(const struct daemon *d)
 	return ok ? 0 : -1;
 }
 
+/* The idle phase (--idle): c, which views, leaves and member c2 stays
+ * without a view until the render copy has gone; then c2 views. */
+static int idle_phase(const struct daemon *d, struct conn *c, uint64_t order,
+                      struct one *o)
+{
+	struct conn c2;
+	long rss, hwm;
+	int64_t t0;
+	int rc = -1;
+	if (conn_open(&c2, d) || conn_hello(&c2, "bench-2") ||
+	    conn_join(&c2, "bench", BC_PROTO_ROLE_EDITOR, false)) {
+		return -1;
+	}
+	conn_close(c);
+	o->idle_kb = -1;
+	for (int64_t end = t_now_ms() + (idle_s + 10) * 1000; t_now_ms() < end;
+	     t_sleep_ms(100)) {
+		latency_rss_of(d->pid, &rss, &hwm);
+		if (o->idle_kb < 0 || rss < o->idle_kb) {
+			o->idle_kb = rss;
+		}
+	}
+	t0 = t_now_ms();
+	if (conn_view(&c2, W, H, BC_PROTO_ENC_JPEG) &&
+	    !still_of(&c2, order, t0, &o->back_frame_ms, &o->back_still_ms)) {
+		latency_rss_of(d->pid, &o->back_kb, &hwm);
+		rc = 0;
+	}
+	conn_close(&c2);
+	return rc;
+}
+
 static int run_one(const uint8_t *bytes, size_t len, int k, struct one *o)
 {
 	static const char *const big[] = {"--max-scene", "256", NULL};
+	char idle_arg[16];
+	const char *idle[] = {"--render-idle", idle_arg, NULL, NULL, NULL};
 	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
 	struct bc_proto_parts parts;
 	struct daemon d;
@@ -159,7 +206,15 @@ static int run_one(const uint8_t *bytes, size_t len, int k, struct one *o)
 	snprintf(dir, sizeof(dir), "/tmp/bc-bench-load-%d-%d", (int)getpid(),
 	         k);
 	bc_proto_parts_init(&parts, 0, false);
-	if (daemon_start_with(&d, dir, in_parts ? big : NULL) != 0) {
+	snprintf(idle_arg, sizeof(idle_arg), "%d", idle_s);
+	if (in_parts) {
+		idle[2] = big[0];
+		idle[3] = big[1];
+	}
+	if (daemon_start_with(&d, dir,
+	                      idle_s     ? idle
+	                      : in_parts ? big
+	                                 : NULL) != 0) {
 		fprintf(stderr, "cannot start %s\n", daemon_path);
 		return -1;
 	}
@@ -200,6 +255,10 @@ static int run_one(const uint8_t *bytes, size_t len, int k, struct one *o)
 		        "a client without PARTS was not told ENOTSUP\n");
 		goto out;
 	}
+	if (idle_s && idle_phase(&d, &c, order, o)) {
+		fprintf(stderr, "no frame after the idle phase\n");
+		goto out;
+	}
 	rc = 0;
 out:
 	bc_proto_parts_finish(&parts);
@@ -230,7 +289,8 @@ static int bench(uint32_t spheres, int runs)
 	uint32_t prims;
 	struct one o[MAX_RUNS];
 	int64_t st[MAX_RUNS], fr[MAX_RUNS], sl[MAX_RUNS], rss[MAX_RUNS],
-	    hwm[MAX_RUNS], cpu[MAX_RUNS];
+	    hwm[MAX_RUNS], cpu[MAX_RUNS], idle[MAX_RUNS], bf[MAX_RUNS],
+	    bs[MAX_RUNS], brss[MAX_RUNS];
 	if (!t || bc_gen("fig18", &go, t, &cam, NULL) ||
 	    bc_scene_encode(t, &cam, &bytes, &len)) {
 		fprintf(stderr, "cannot make fig18 with %u spheres\n", spheres);
@@ -250,6 +310,10 @@ static int bench(uint32_t spheres, int runs)
 		sl[k] = o[k].still_ms;
 		rss[k] = o[k].rss_kb;
 		hwm[k] = o[k].hwm_kb;
+		idle[k] = o[k].idle_kb;
+		bf[k] = o[k].back_frame_ms;
+		bs[k] = o[k].back_still_ms;
+		brss[k] = o[k].back_kb;
 		printf("  run %d: spheres=%u state_parts=%d state_ms=%lld "
 		       "daemon_cpu_ms=%lld "
 		       "first_frame_ms=%lld still_ms=%lld rss_mib=%.0f "
@@ -257,9 +321,26 @@ static int bench(uint32_t spheres, int runs)
 		       k + 1, spheres, o[k].parts, (long long)st[k],
 		       (long long)cpu[k], (long long)fr[k], (long long)sl[k],
 		       (double)rss[k] / 1024.0, (double)hwm[k] / 1024.0);
+		if (idle_s) {
+			printf("  run %d: idle_rss_mib=%.0f back_frame_ms=%lld "
+			       "back_still_ms=%lld back_rss_mib=%.0f\n",
+			       k + 1, (double)idle[k] / 1024.0,
+			       (long long)bf[k], (long long)bs[k],
+			       (double)brss[k] / 1024.0);
+		}
 		fflush(stdout);
 	}
 	bc_free(bytes);
+	if (idle_s) {
+		int64_t i = median(idle, runs);
+		printf("idle spheres=%u render_idle_s=%d idle_rss_mib=%.0f "
+		       "idle_bytes_per_prim=%.0f back_frame_ms=%lld "
+		       "back_still_ms=%lld back_rss_mib=%.0f\n",
+		       spheres, idle_s, (double)i / 1024.0,
+		       (double)i * 1024.0 / prims, (long long)median(bf, runs),
+		       (long long)median(bs, runs),
+		       (double)median(brss, runs) / 1024.0);
+	}
 	{
 		int64_t r = median(rss, runs), h = median(hwm, runs);
 		printf("load spheres=%u prims=%u bytes=%zu runs=%d "
@@ -279,11 +360,18 @@ static int bench(uint32_t spheres, int runs)
 int main(int argc, char **argv)
 {
 	static const uint32_t def[] = {100000, 700000, 1000000};
-	int runs = argc > 2 ? atoi(argv[2]) : 3;
-	if (argc < 2 || runs < 1 || runs > MAX_RUNS) {
+	int runs;
+	if (argc > 2 && strcmp(argv[1], "--idle") == 0) {
+		idle_s = atoi(argv[2]);
+		argc -= 2;
+		argv += 2;
+	}
+	runs = argc > 2 ? atoi(argv[2]) : 3;
+	if (argc < 2 || runs < 1 || runs > MAX_RUNS || idle_s < 0 ||
+	    idle_s > 600) {
 		fprintf(stderr,
-		        "usage: bench_load PATH/TO/blobcastd [runs 1-%d] "
-		        "[spheres ...]\n",
+		        "usage: bench_load [--idle S (1-600)] "
+		        "PATH/TO/blobcastd [runs 1-%d] [spheres ...]\n",
 		        MAX_RUNS);
 		return 2;
 	}
