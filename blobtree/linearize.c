@@ -215,9 +215,7 @@ static void write_prim_record(float *rec, const struct bc_prim_data *p)
 	bc_prim_pack(p, rec + 12);
 }
 
-/* A unary node's record: its parameters; the derived values of twist and
- * bend (R, L, r+) are written by the bounds pass. */
-static void write_unary_record(float *rec, const struct bc__node *n)
+void bc__unary_record(float *rec, const struct bc__node *n)
 {
 	memset(rec, 0, 4 * BC_UNARY_RECORD_VEC4 * sizeof(float));
 	memcpy(rec, n->u.uparam, sizeof(n->u.uparam));
@@ -363,7 +361,7 @@ void bc__lin_emit(struct bc_tree *t, struct bc__fill *fs, uint32_t top)
 				struct bc_lin *l = fs->l;
 				nd->u.unary = fs->unary++;
 				fs->param += BC_UNARY_RECORD_VEC4;
-				write_unary_record(
+				bc__unary_record(
 				    l->param + 4u * (size_t)nd->param, nd);
 				l->unary_param[nd->u.unary] = nd->param;
 				l->unary_kind[nd->u.unary] =
@@ -421,30 +419,56 @@ static void propagate_base(struct bc_lin *l, uint32_t s)
 	ro = bc_op_is_smooth(op) ? rec[1] : 0.0f;
 	lo = l->roi[2 * a];
 	hi = l->roi[2 * a + 1];
-	l->kills[s] = l->kills[a];
+	bc__roi_operand(op, ro, left, &lo, &hi);
+	l->roi[2 * s] = lo;
+	l->roi[2 * s + 1] = hi;
+	/* An intersection's operand, or a difference's right one (present
+	 * alone, it leaves the left missing, which makes the difference
+	 * missing), kills its operator. */
+	l->kills[s] =
+	    l->kills[a] + (bc_op_class(op) == BC_OPCLASS_INTERSECTION ||
+	                   (bc_op_class(op) != BC_OPCLASS_UNION && !left));
+}
+
+void bc__roi_operand(enum bc_op op, float ro, bool left, float *lo, float *hi)
+{
+	float l = *lo, h = *hi;
 	switch (bc_op_class(op)) {
 	case BC_OPCLASS_UNION:
-		l->roi[2 * s] = lo;
-		l->roi[2 * s + 1] = fmaxf(hi, ro);
+		*hi = fmaxf(h, ro);
 		break;
 	case BC_OPCLASS_INTERSECTION:
-		l->roi[2 * s] = fminf(lo, -ro);
-		l->roi[2 * s + 1] = hi;
-		l->kills[s]++;
+		*lo = fminf(l, -ro);
 		break;
 	case BC_OPCLASS_DIFFERENCE:
 	default:
 		if (left) {
-			l->roi[2 * s] = fminf(lo, -ro);
-			l->roi[2 * s + 1] = hi;
+			*lo = fminf(l, -ro);
 		} else {
 			/* The right operand is negated: its ROI flips. */
-			l->roi[2 * s] = -hi;
-			l->roi[2 * s + 1] = fmaxf(-lo, ro);
-			/* Present alone, a right operand leaves the left
-			 * missing, which makes the difference missing. */
-			l->kills[s]++;
+			*lo = -h;
+			*hi = fmaxf(-l, ro);
 		}
+		break;
+	}
+}
+
+void bc__roi_unary(enum bc_op kind, const float *rec, float *lo, float *hi)
+{
+	switch (kind) {
+	case BC_OP_OFFSET:
+		*lo = fminf(*lo, *lo + rec[0]);
+		*hi = fmaxf(*hi + rec[0], 0.0f);
+		break;
+	case BC_OP_ONION:
+		*hi = *hi + rec[0];
+		*lo = fminf(*lo, -*hi);
+		break;
+	case BC_OP_SCALE:
+		*lo *= rec[1];
+		*hi *= rec[1];
+		break;
+	default:
 		break;
 	}
 }
@@ -483,25 +507,9 @@ static void propagate(struct bc_lin *l, uint32_t s)
 		float *rec = l->param + 4u * (size_t)l->unary_param[u];
 		enum bc_op kind = (enum bc_op)l->unary_kind[u];
 		l->unary_dom[u] = d;
-		switch (kind) {
-		case BC_OP_OFFSET:
-			lo = fminf(lo, lo + rec[0]);
-			hi = fmaxf(hi + rec[0], 0.0f);
-			break;
-		case BC_OP_ONION:
-			hi = hi + rec[0];
-			lo = fminf(lo, -hi);
-			break;
-		case BC_OP_SCALE:
-			lo *= rec[1];
-			hi *= rec[1];
-			break;
-		case BC_OP_TWIST:
-		case BC_OP_BEND:
+		bc__roi_unary(kind, rec, &lo, &hi);
+		if (kind == BC_OP_TWIST || kind == BC_OP_BEND) {
 			rec[3] = hi;
-			break;
-		default:
-			break;
 		}
 		if (bc_op_is_domain(kind)) {
 			d = u;
@@ -598,11 +606,8 @@ static void abv_set_box(struct bc_abv *abv, const float lo[3],
  * preimage lies in the cylinder of the box's largest radius, whose height
  * is the box's. Returns that radius for twist and bend (0 otherwise).
  */
-static float abv_preimage(const struct bc_lin *l, uint32_t u,
-                          struct bc_abv *abv)
+float bc__abv_preimage(enum bc_op kind, const float *rec, struct bc_abv *abv)
 {
-	const float *rec = l->param + 4u * (size_t)l->unary_param[u];
-	enum bc_op kind = (enum bc_op)l->unary_kind[u];
 	float lo[3], hi[3], r = 0.0f;
 	if (kind == BC_OP_SCALE) {
 		float f = rec[0];
@@ -666,8 +671,9 @@ void bc__lin_place_abv(struct bc_tree *t, struct bc_lin *l, uint32_t k,
 	uint32_t s = l->prim_slot[k];
 	bc__abv_place(p, l->roi[2 * s + 1], &l->abv[k]);
 	for (uint32_t d = bc_lin_dom(l, s); d != BC_NONE; d = l->unary_dom[d]) {
-		float r = abv_preimage(l, d, &l->abv[k]);
 		float *rec = l->param + 4u * (size_t)l->unary_param[d];
+		float r = bc__abv_preimage((enum bc_op)l->unary_kind[d], rec,
+		                           &l->abv[k]);
 		if ((l->unary_kind[d] == BC_OP_TWIST ||
 		     l->unary_kind[d] == BC_OP_BEND) &&
 		    r > rec[1]) {
@@ -845,7 +851,7 @@ void bc__lin_update_unary(struct bc_tree *t, const struct bc__node *n)
 	struct bc_lin *l = &t->lin;
 	uint32_t first = l->first[n->slot];
 	l->unary_kind[n->u.unary] = (uint32_t)n->u.op.kind;
-	write_unary_record(l->param + 4u * (size_t)n->param, n);
+	bc__unary_record(l->param + 4u * (size_t)n->param, n);
 	for (uint32_t s = n->slot + 1; s-- > first;) {
 		propagate(l, s);
 	}

@@ -377,5 +377,18 @@ bool bc__lin_prim_bends(const struct bc_lin *l, const struct bc__node *n);
 /* Transforms a local bounding shape by p's rigid transform and offsets it. */
 void bc__abv_place(const struct bc_prim_data *p, float offset,
                    struct bc_abv *abv);
+/* The rules the layout and bc_tree_node_box share (paper eq. 13-16 and
+ * docs/scene-format.md): the ROI [lo, hi] of an operand of operator op
+ * (smooth range ro, 0 for a sharp one; left: the first operand) from the
+ * operator's; the ROI a unary node of kind (record rec) gives its child
+ * from its own; a unary node's record from its model node. */
+void bc__roi_operand(enum bc_op op, float ro, bool left, float *lo, float *hi);
+void bc__roi_unary(enum bc_op kind, const float *rec, float *lo, float *hi);
+void bc__unary_record(float *rec, const struct bc__node *n);
+/* Maps a bounding shape from a domain node's child frame to its input
+ * frame (kind, record rec): a shape holding every point whose mapped
+ * point lies in the given one. Returns the radius about the axis for
+ * twist and bend, 0 otherwise (linearize.c says how). */
+float bc__abv_preimage(enum bc_op kind, const float *rec, struct bc_abv *abv);
 
 #endif

@@ -725,6 +725,131 @@ static void mesh_through_unary_nodes_is_closed(void)
 	bc_tree_destroy(t);
 }
 
+/* Node id's box as the layout holds it: the AABB of its primitives'
+ * ABVs (consecutive in post-order below its slot; a node of one child,
+ * unary or not, takes no slot of its own). Returns false for no box. */
+static bool layout_box(const struct bc_tree *t, uint32_t id, float lo[3],
+                       float hi[3])
+{
+	const struct bc_lin *l = bc_tree_lin(t);
+	uint32_t slot, first, k0, n;
+	while (bc_tree_child_count(t, id) == 1) {
+		id = bc_tree_child(t, id, 0);
+	}
+	if (!l || (slot = bc_tree_slot(t, id)) >= l->count) {
+		return false;
+	}
+	first = l->first[slot];
+	k0 = l->prim_of[first];
+	n = (slot - first) / 2u + 1u;
+	for (int i = 0; i < 3; i++) {
+		lo[i] = INFINITY;
+		hi[i] = -INFINITY;
+	}
+	for (uint32_t k = k0; k < k0 + n; k++) {
+		float a[3], b[3];
+		bc_abv_aabb(&l->abv[k], a, b);
+		for (int i = 0; i < 3; i++) {
+			lo[i] = fminf(lo[i], a[i]);
+			hi[i] = fmaxf(hi[i], b[i]);
+		}
+	}
+	return true;
+}
+
+/* Every node of t: bc_tree_node_box of t and of bare, a copy without a
+ * layout, equal the layout's box bit for bit. Counts nodes and the
+ * mismatches. */
+static void boxes_match(const struct bc_tree *t, const struct bc_tree *bare,
+                        long *nodes, long *bad)
+{
+	uint32_t n = bc_tree_node_count(t);
+	for (uint32_t id = 1; id <= n + 1; id++) {
+		float lo[3], hi[3], mlo[3], mhi[3], blo[3], bhi[3];
+		int rc = bc_tree_node_box(t, id, mlo, mhi);
+		int brc = bc_tree_node_box(bare, id, blo, bhi);
+		if (!bc_tree_get(t, id, NULL, NULL)) {
+			*bad += rc != BC_ENOTFOUND || brc != BC_ENOTFOUND;
+			continue;
+		}
+		(*nodes)++;
+		if (rc || brc || !layout_box(t, id, lo, hi) ||
+		    memcmp(lo, mlo, sizeof(lo)) ||
+		    memcmp(hi, mhi, sizeof(hi)) ||
+		    memcmp(lo, blo, sizeof(lo)) ||
+		    memcmp(hi, bhi, sizeof(hi))) {
+			if (*bad < 5) {
+				printf("  node %u: rc %d/%d, layout [%g %g %g] "
+				       "[%g %g %g], model [%g %g %g] [%g %g "
+				       "%g]\n",
+				       id, rc, brc, lo[0], lo[1], lo[2], hi[0],
+				       hi[1], hi[2], mlo[0], mlo[1], mlo[2],
+				       mhi[0], mhi[1], mhi[2]);
+			}
+			(*bad)++;
+		}
+	}
+}
+
+/* bc_tree_node_box reads the model alone (the viewer's bare mirror asks
+ * it for Home, fit and Alt+wheel) and must give the layout's box of every
+ * node: random trees with every operator and unary kind, before and
+ * after parameter edits of primitives, operators and unary nodes. */
+static void node_boxes_from_the_model_equal_the_layouts(void)
+{
+	struct bc_tree *t = bc_tree_create(), *bare = bc_tree_create();
+	long nodes = 0, bad = 0;
+	REQUIRE(t && bare && bc_tree_set_layout(bare, false) == 0);
+	rt_unary_rate = 0.4f;
+	for (int tree = 0; tree < 300; tree++) {
+		REQUIRE(rt_build(t, 47000u + (uint64_t)tree,
+		                 1 + (uint32_t)(tree % 24)) == 0);
+		REQUIRE(bc_tree_copy(bare, t, NULL) == 0);
+		boxes_match(t, bare, &nodes, &bad);
+		for (int e = 0; e < 6; e++) {
+			uint32_t id = 1 + rt_below(bc_tree_node_count(t));
+			struct bc_prim_data p;
+			struct bc_op_data op;
+			struct bc_unary u;
+			if (!bc_tree_get(t, id, &p, &op)) {
+				continue;
+			}
+			if (p.kind != BC_PRIM_INVALID) {
+				struct bc_prim_data q;
+				rt_random_prim(&q);
+				if (q.kind == p.kind) {
+					p = q;
+				}
+				p.translate[0] += 0.25f;
+				REQUIRE(bc_tree_set_prim(t, id, &p, NULL) == 0);
+				REQUIRE(bc_tree_set_prim(bare, id, &p, NULL) ==
+				        0);
+			} else if (bc_tree_get_unary(t, id, &u)) {
+				enum bc_op kind = u.kind;
+				rt_random_unary(&u);
+				if (u.kind == kind) {
+					REQUIRE(bc_tree_set_unary(t, id, &u,
+					                          NULL) == 0);
+					REQUIRE(bc_tree_set_unary(bare, id, &u,
+					                          NULL) == 0);
+				}
+			} else {
+				rt_random_op(&op);
+				REQUIRE(bc_tree_set_op(t, id, &op, NULL) == 0);
+				REQUIRE(bc_tree_set_op(bare, id, &op, NULL) ==
+				        0);
+			}
+		}
+		boxes_match(t, bare, &nodes, &bad);
+	}
+	rt_unary_rate = 0.0f;
+	printf("  %ld node boxes, %ld unlike the layout's\n", nodes, bad);
+	CHECK(nodes > 10000);
+	CHECK(bad == 0);
+	bc_tree_destroy(t);
+	bc_tree_destroy(bare);
+}
+
 static const struct bc_test tests[] = {
     {"mesh_through_unary_nodes_is_closed", mesh_through_unary_nodes_is_closed},
     {"fields_match_closed_forms", fields_match_closed_forms},
@@ -744,5 +869,7 @@ static const struct bc_test tests[] = {
     {"edits_keep_one_child", edits_keep_one_child},
     {"primitive_edit_under_twist_updates_its_bound",
      primitive_edit_under_twist_updates_its_bound},
+    {"node_boxes_from_the_model_equal_the_layouts",
+     node_boxes_from_the_model_equal_the_layouts},
 };
 BC_TEST_MAIN(tests)

@@ -441,6 +441,14 @@ BC_API uint32_t bc_tree_parent(const struct bc_tree *t, uint32_t id);
  * last fold slot), BC_NONE for an unknown id. Its primitives are the
  * indices prim_of[first[slot]] .. + (slot - first[slot]) / 2. */
 BC_API uint32_t bc_tree_slot(const struct bc_tree *t, uint32_t id);
+/* The world box [lo, hi] of node id's surface: the AABB of the ABVs that
+ * a layout of t gives the primitives of its subtree (the same floats),
+ * read from the model, so a bare tree answers too (bounds.c); O(the
+ * subtree and the path to the root). A unary node's box is its
+ * subtree's. Returns 0, BC_ENOTFOUND (no such id), BC_ERANGE (no finite
+ * box: no primitive) or BC_ENOMEM. */
+BC_API int bc_tree_node_box(const struct bc_tree *t, uint32_t id, float lo[3],
+                            float hi[3]);
 
 /* ---- Names -------------------------------------------------------------- */
 
