@@ -135,41 +135,7 @@ void bc_viewer_move_in_plane(const struct bc_camera *cam, uint32_t height,
 bool bc_viewer_node_box(const struct bc_tree *t, uint32_t id, float lo[3],
                         float hi[3])
 {
-	const struct bc_lin *l = t ? bc_tree_lin(t) : NULL;
-	uint32_t slot, first, k0, n;
-	for (int i = 0; i < 3; i++) {
-		lo[i] = INFINITY;
-		hi[i] = -INFINITY;
-	}
-	/* A unary node takes no slot: its box is its child's (a chain of
-	 * them ends at an operator or a primitive). */
-	while (t && bc_tree_child_count(t, id) == 1) {
-		id = bc_tree_child(t, id, 0);
-	}
-	if (!l || (slot = bc_tree_slot(t, id)) >= l->count) {
-		return false;
-	}
-	/* The primitives below a slot are consecutive in post-order. */
-	first = l->first[slot];
-	k0 = l->prim_of[first];
-	n = (slot - first) / 2u + 1u;
-	if (k0 >= l->nprims || n > l->nprims - k0) {
-		return false;
-	}
-	for (uint32_t k = k0; k < k0 + n; k++) {
-		float a[3], b[3];
-		bc_abv_aabb(&l->abv[k], a, b);
-		for (int i = 0; i < 3; i++) {
-			lo[i] = fminf(lo[i], a[i]);
-			hi[i] = fmaxf(hi[i], b[i]);
-		}
-	}
-	for (int i = 0; i < 3; i++) {
-		if (!(isfinite(lo[i]) && isfinite(hi[i]) && lo[i] <= hi[i])) {
-			return false;
-		}
-	}
-	return true;
+	return t && bc_tree_node_box(t, id, lo, hi) == 0;
 }
 
 void bc_viewer_frame_box(struct bc_camera *cam, const float lo[3],

@@ -917,6 +917,10 @@ static int open_session(const struct bc_viewer_app *a, struct bc_client **c,
 	                               /* Frames are acknowledged once drawn
 	                                * (bc_viewer_frame_drawn). */
 	                               .acks = true,
+	                               /* The daemon draws: the mirror needs
+	                                * no layout (node boxes come from the
+	                                * model, bc_tree_node_box). */
+	                               .bare_scene = true,
 	                           },
 	                           ei);
 	*view_only_token = false;

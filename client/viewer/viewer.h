@@ -67,11 +67,12 @@ void bc_viewer_move_in_plane(const struct bc_camera *cam, uint32_t height,
                              const float origin[3], float z, float dx, float dy,
                              float out[3]);
 
-/* The world box of node id's subtree: around the ABVs (bc_lin, already
- * widened by repeats, mirrors and the operators' ranges) of the primitives
- * below it; a unary node's is its child's. The whole scene's is the
- * root's. Returns false (lo, hi then empty) when the tree has no
- * linearized form or id is unknown. */
+/* The world box of node id's subtree: around the ABVs a layout gives the
+ * primitives below it (widened by repeats, mirrors and the operators'
+ * ranges), read from the model so that a bare mirror answers too
+ * (bc_tree_node_box); a unary node's is its child's. The whole scene's is
+ * the root's. Returns false when t is NULL, id is unknown or the box is
+ * not finite. */
 bool bc_viewer_node_box(const struct bc_tree *t, uint32_t id, float lo[3],
                         float hi[3]);
 /* Zoom to fit: the sphere around the box [lo, hi] seen whole by a view of

@@ -137,10 +137,11 @@ struct bc_client_opts {
 	/* Keep the scene mirror bare (bc_tree_set_layout false): the model
 	 * alone, without the renderers' layout, so that bc_tree_lin() and
 	 * bc_tree_slot() of bc_client_scene() answer NULL and BC_NONE.
-	 * Everything else the mirror answers is the same; a big session's
-	 * SCENE_STATE then costs about half the time and memory to take in
-	 * (a million spheres: docs/benchmarks.md). For tools that read the
-	 * scene but draw nothing of their own (the CLI); false: laid out. */
+	 * Everything else the mirror answers is the same (bc_tree_node_box
+	 * too); a big session's SCENE_STATE then costs about half the time
+	 * and memory to take in (a million spheres: docs/benchmarks.md). For
+	 * programs that draw nothing of the scene themselves (the CLI, the
+	 * viewer); false: laid out. */
 	bool bare_scene;
 };
 
