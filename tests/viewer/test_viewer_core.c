@@ -594,13 +594,22 @@ static void test_unary_extent_in_node_units(void)
 
 /* A node's box holds the ABVs of the primitives below it; a unary node's
  * is its child's; the root's is the whole scene's, the linearized form's
- * own box. */
+ * own box. The viewer's mirror is bare (no layout): every node's box of
+ * a bare copy is the laid-out tree's. */
 static void test_node_box_holds_the_subtree(void)
 {
-	struct bc_tree *t = unary_tree();
+	struct bc_tree *t = unary_tree(), *bare = bc_tree_create();
 	const struct bc_lin *l;
 	float lo[3], hi[3], clo[3], chi[3];
-	REQUIRE(t);
+	REQUIRE(t && bare && bc_tree_set_layout(bare, false) == 0);
+	REQUIRE(bc_tree_copy(bare, t, NULL) == 0 && !bc_tree_lin(bare));
+	for (uint32_t id = 1; id <= bc_tree_node_count(t); id++) {
+		bool got = bc_viewer_node_box(t, id, lo, hi);
+		CHECK(bc_viewer_node_box(bare, id, clo, chi) == got);
+		CHECK(!got || (memcmp(lo, clo, sizeof(lo)) == 0 &&
+		               memcmp(hi, chi, sizeof(hi)) == 0));
+	}
+	bc_tree_destroy(bare);
 	l = bc_tree_lin(t);
 	REQUIRE(l);
 	REQUIRE(bc_viewer_node_box(t, 1, lo, hi));
