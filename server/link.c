@@ -134,6 +134,13 @@ void bc_ops_copy_finish(struct bc_ops_copy *c)
 	memset(c, 0, sizeof(*c));
 }
 
+void bc_heap_policy(void)
+{
+#if defined(__GLIBC__)
+	mallopt(M_ARENA_MAX, 1);
+#endif
+}
+
 void bc_heap_give_back(void)
 {
 #if defined(__GLIBC__)

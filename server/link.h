@@ -161,5 +161,17 @@ void bc_link_ok(const struct bc_link *l, struct bc_conn_ref to, uint32_t seq);
  * heap of a GiB), so it follows big frees only: a heavy tree's, on the
  * task or worker that freed it, and a client's with megabytes queued. */
 void bc_heap_give_back(void);
+/* One malloc arena for every thread of the daemon (glibc; called first
+ * in main). glibc gives each thread that allocates while another holds
+ * the lock an arena of its own, and a thread arena's free memory at its
+ * top goes back to the system only past a trim threshold that glibc
+ * raises to twice the largest block freed (up to 64 MiB), which
+ * bc_heap_give_back cannot lower: a big tree made on a task and freed
+ * later (a render copy that nobody looked at, a replaced scene) kept
+ * tens of megabytes resident, more at each cycle. With one arena it all
+ * goes back. The render threads allocate per frame and per job, not per
+ * ray (small blocks come from each thread's own cache): the orbit and
+ * drag figures did not move (docs/benchmarks.md, "One malloc arena"). */
+void bc_heap_policy(void);
 
 #endif

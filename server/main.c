@@ -27,6 +27,7 @@
 #include "blobcast/log.h"
 #include "config.h"
 #include "dispatch.h"
+#include "link.h"
 #include "sessions.h"
 #include "srv_limits.h"
 #include "store.h"
@@ -813,6 +814,7 @@ int main(int argc, char **argv)
 	const struct bc_opt opts[] = DAEMON_OPTS(&cli);
 	struct bc_args args = daemon_args(opts);
 	int rc = 1;
+	bc_heap_policy();
 	if (bc_args_parse(&args, argc, argv)) {
 		return args.status;
 	}

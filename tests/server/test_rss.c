@@ -273,12 +273,14 @@ static void a_restored_session_holds_no_copy_until_viewed(void)
 
 /* --render-idle: once nobody has looked at a session for that long, its
  * render copy and the renderer's lists drawn from it go (frames.c,
- * bc__session_copy_idle), and their memory goes back to the system.
- * 200 000 spheres loaded and drawn at 1024x768; the viewer leaves, an
- * editor stays without a view. RSS must fall to within a third of its
- * rise above the fresh daemon's (the session's own tree stays: about
- * 150 bytes a sphere, a fifth of the rise); a view after that makes the
- * copy again and is drawn. */
+ * bc__session_copy_idle), and their memory goes back to the system, each
+ * time. 200 000 spheres loaded; three times a viewer joins, draws them at
+ * 1024x768 and leaves, while an editor stays without a view. After each
+ * leave RSS must fall to within a third of the first view's rise above
+ * the fresh daemon's (the session's own tree stays: about 150 bytes a
+ * sphere, a fifth of the rise). The first copy comes from the load, the
+ * others from bc_tree_copy on a task: before the daemon kept one malloc
+ * arena (link.c, bc_heap_policy) the second and third left 106-108 MiB. */
 static void a_render_copy_nobody_looks_at_gives_its_memory_back(void)
 {
 	static const char *const opts[] = {"--render-idle", "1", NULL};
@@ -287,7 +289,7 @@ static void a_render_copy_nobody_looks_at_gives_its_memory_back(void)
 	struct bc_camera cam;
 	struct bc_tree *t;
 	char dir[64];
-	long base, peak, after = -1, limit, again;
+	long base, peak = 0, after[3] = {-1, -1, -1}, limit = 0;
 	uint64_t order;
 	snprintf(dir, sizeof(dir), "%s/idle", base_dir);
 	REQUIRE(daemon_start_with(&d, dir, opts) == 0);
@@ -296,28 +298,32 @@ static void a_render_copy_nobody_looks_at_gives_its_memory_back(void)
 	load_from_another(&d, true, t, &cam, &order);
 	REQUIRE(conn_open(&c, &d) == 0 && conn_hello(&c, "editor") == 0);
 	REQUIRE(conn_join(&c, "big", BC_PROTO_ROLE_EDITOR, false) == 0);
-	REQUIRE(conn_open(&v, &d) == 0 && conn_hello(&v, "viewer") == 0);
-	REQUIRE(conn_join(&v, "big", BC_PROTO_ROLE_VIEWER, false) == 0);
-	REQUIRE(conn_view(&v, 1024, 768, BC_PROTO_ENC_JPEG) != 0);
-	REQUIRE(still_frame(&v, order) == 0);
-	peak = rss_mib(d.pid);
-	conn_close(&v);
-	limit = base + (peak - base) / 3;
-	for (int64_t end = t_now_ms() + 10000; t_now_ms() < end;
-	     t_sleep_ms(200)) {
-		if ((after = rss_mib(d.pid)) >= 0 && after < limit) {
-			break;
+	for (int round = 0; round < 3; round++) {
+		REQUIRE(conn_open(&v, &d) == 0 &&
+		        conn_hello(&v, "viewer") == 0);
+		REQUIRE(conn_join(&v, "big", BC_PROTO_ROLE_VIEWER, false) == 0);
+		REQUIRE(conn_view(&v, 1024, 768, BC_PROTO_ENC_JPEG) != 0);
+		REQUIRE(still_frame(&v, order) == 0);
+		if (round == 0) {
+			peak = rss_mib(d.pid);
+			limit = base + (peak - base) / 3;
+		}
+		conn_close(&v);
+		for (int64_t end = t_now_ms() + 10000; t_now_ms() < end;
+		     t_sleep_ms(200)) {
+			after[round] = rss_mib(d.pid);
+			if (after[round] >= 0 && after[round] < limit) {
+				break;
+			}
 		}
 	}
-	REQUIRE(conn_view(&c, 1024, 768, BC_PROTO_ENC_JPEG) != 0);
-	REQUIRE(still_frame(&c, order) == 0);
-	again = rss_mib(d.pid);
 	printf("  RSS %ld MiB at the start, %ld MiB with 200 000 spheres "
-	       "drawn, %ld MiB once nobody looked, %ld MiB viewed again\n",
-	       base, peak, after, again);
+	       "drawn, %ld, %ld and %ld MiB each time nobody looked\n",
+	       base, peak, after[0], after[1], after[2]);
 	CHECK(peak > base + 100);
-	CHECK(after >= 0 && after < limit);
-	CHECK(again > after + 50);
+	for (int round = 0; round < 3; round++) {
+		CHECK(after[round] >= 0 && after[round] < limit);
+	}
 	conn_close(&c);
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
