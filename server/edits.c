@@ -443,7 +443,11 @@ struct load {
 	struct bc_proto_bytes scene;
 	struct bc_load_parts parts; /* or its parts, joined by the task */
 	uint64_t order;
+	/* copy: the render copy, decoded beside the tree when the flow
+	 * holds one or a member has a view (copy_wanted); else made when
+	 * someone first wants a picture (bc__session_copy). */
 	struct bc_tree *tree, *copy;
+	bool copy_wanted;
 	struct bc_camera cam;
 	bool has_cam;
 	struct bc_shared *state; /* the members' SCENE_STATE */
@@ -488,7 +492,8 @@ static void prepare(struct bc_task *t)
 	if (l->parts.n && (l->rc = join_parts(l))) {
 		return;
 	}
-	if (!(l->tree = bc__session_tree()) || !(l->copy = bc_tree_create())) {
+	if (!(l->tree = bc__session_tree()) ||
+	    (l->copy_wanted && !(l->copy = bc_tree_create()))) {
 		l->rc = bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
 		return;
 	}
@@ -568,9 +573,10 @@ static void commit(struct bc_task *t)
 	s->order = s->scene_order = l->order;
 	s->last_edit_ms = bc__unix_ms();
 	bc__session_changed(s);
+	/* Without a copy (nobody looks) the old scene's goes too. */
 	bc_work_scene(s->ss->work, s->id, l->copy, s->order);
-	s->copied = true;
-	/* Its copy is new: it stays for render_idle_ms from now. */
+	s->copied = l->copy != NULL;
+	/* A new copy stays for render_idle_ms from now. */
 	s->looked_ms = bc__now_ms(s->ss);
 	l->tree = l->copy = NULL;
 	bc__send_state_msg(s, NULL, l->state);
@@ -602,6 +608,10 @@ static int start_load(struct bc_member *m, const struct bc_msg *msg,
 	l->scene = msg->scene_load.scene;
 	l->cam = s->camera;
 	l->order = s->order + 1;
+	l->copy_wanted = s->copied;
+	for (uint32_t i = 0; i < s->nmembers; i++) {
+		l->copy_wanted = l->copy_wanted || s->members[i]->has_view;
+	}
 	l->t.run = prepare;
 	l->t.done = commit;
 	l->t.holds_order = true;

@@ -284,15 +284,19 @@ static void twin_run(void *arg)
 /* A copy of a million-node tree (bc_tree_copy builds and lays it out
  * anew) took as long as its decode, one after the other; decoding the
  * bytes twice, at once, takes one decode's time on two cores and gives
- * the same tree, fresh ids included. */
+ * the same tree, fresh ids included. Without a copy (NULL), once. */
 int bc__load_decode(const uint8_t *scene, size_t len, struct bc_tree *tree,
                     struct bc_tree *copy, struct bc_camera *cam, bool *has_cam,
                     struct bc_errinfo *ei)
 {
 	struct twin tw = {scene, len, copy, 0, {0}};
 	uv_thread_t th;
-	bool apart = len >= BC_SRV_DETACH_BYTES &&
-	             uv_thread_create(&th, twin_run, &tw) == 0;
+	bool apart;
+	if (!copy) {
+		return bc_scene_decode(scene, len, tree, cam, has_cam, ei);
+	}
+	apart = len >= BC_SRV_DETACH_BYTES &&
+	        uv_thread_create(&th, twin_run, &tw) == 0;
 	int rc = bc_scene_decode(scene, len, tree, cam, has_cam, ei);
 	if (apart) {
 		uv_thread_join(&th);

@@ -396,7 +396,7 @@ int bc__journal_load(struct bc_store_session *st, uint64_t order,
 struct bc_tree *bc__session_tree(void);
 /* Decodes a SCENE_LOAD's scene into tree (camera and has_cam as
  * bc_scene_decode) and into copy, the work layer's, on two threads when it
- * is large. */
+ * is large; copy may be NULL (no render copy wanted yet). */
 int bc__load_decode(const uint8_t *scene, size_t len, struct bc_tree *tree,
                     struct bc_tree *copy, struct bc_camera *cam, bool *has_cam,
                     struct bc_errinfo *ei);

@@ -278,9 +278,10 @@ static void a_restored_session_holds_no_copy_until_viewed(void)
  * 1024x768 and leaves, while an editor stays without a view. After each
  * leave RSS must fall to within a third of the first view's rise above
  * the fresh daemon's (the session's own tree stays: about 150 bytes a
- * sphere, a fifth of the rise). The first copy comes from the load, the
- * others from bc_tree_copy on a task: before the daemon kept one malloc
- * arena (link.c, bc_heap_policy) the second and third left 106-108 MiB. */
+ * sphere, a fifth of the rise). Each copy is made by bc_tree_copy on a
+ * task (the load, with nobody viewing, made none): before the daemon kept
+ * one malloc arena (link.c, bc_heap_policy) the second and third drops
+ * left 103 and 149 MiB. */
 static void a_render_copy_nobody_looks_at_gives_its_memory_back(void)
 {
 	static const char *const opts[] = {"--render-idle", "1", NULL};
