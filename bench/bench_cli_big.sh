@@ -23,28 +23,8 @@ set -eu
 . "$(dirname "$0")/daemon.sh"
 big_scene_builds bench_cli_big 5 "$@"
 big_scene_prepare bench_cli_big "${builds%% *}"
-dir=$(mktemp -d /tmp/bc-clibig.XXXXXX)
-pids=
-cleanup() {
-	for p in $pids; do kill "$p" 2>/dev/null || :; done
-	wait 2>/dev/null || :
-	rm -rf "$dir"
-}
-trap cleanup EXIT INT TERM
+big_scene_daemons bench_cli_big
 tck=$(getconf CLK_TCK)
-
-# Daemon k of build b: its socket and data under $dir/k.
-k=0
-for b in $builds; do
-	k=$((k + 1))
-	mkdir -p "$dir/$k"
-	bench_daemon_start bench_cli_big "$b/server/blobcastd" "$dir/$k/sock" \
-		"$dir/$k/data" "$dir/$k/daemon.log"
-	pids="$pids $pid"
-	echo "$pid" >"$dir/$k/pid"
-	"$b/client/blobcast" --server "unix:$dir/$k/sock" --timeout 600000 \
-		load "$scene" --session big >/dev/null
-done
 
 cpu_ticks() { awk '{print $14 + $15}' "/proc/$(cat "$1/pid")/stat"; }
 

@@ -24,31 +24,19 @@ if ! command -v xvfb-run >/dev/null; then
 	echo "bench_viewer_big: xvfb-run is missing (apt install xvfb)" >&2
 	exit 1
 fi
-dir=$(mktemp -d /tmp/bc-viewbig.XXXXXX)
-pids=
-cleanup() {
-	for p in $pids; do kill "$p" 2>/dev/null || :; done
-	wait 2>/dev/null || :
-	rm -rf "$dir"
-}
-trap cleanup EXIT INT TERM
-
-k=0
 for b in $builds; do
-	k=$((k + 1))
 	if [ ! -x "$b/client/viewer/blobcast-view" ]; then
 		echo "bench_viewer_big: $b/client/viewer/blobcast-view is not" \
 			"built" >&2
 		exit 1
 	fi
-	mkdir -p "$dir/$k"
-	bench_daemon_start bench_viewer_big "$b/server/blobcastd" \
-		"$dir/$k/sock" "$dir/$k/data" "$dir/$k/daemon.log"
-	pids="$pids $pid"
-	"$b/client/blobcast" --server "unix:$dir/$k/sock" --timeout 600000 \
-		load "$scene" --session big >/dev/null
-	# The daemon's copy and lists of this view are made before the
-	# runs: each run then times the viewer, not the first picture.
+done
+big_scene_daemons bench_viewer_big
+# The daemons' copies and lists of this view are made before the runs:
+# each run then times the viewer, not the first picture.
+k=0
+for b in $builds; do
+	k=$((k + 1))
 	"$b/client/blobcast" --server "unix:$dir/$k/sock" --timeout 600000 \
 		snapshot --session big --size 640x480 --out "$dir/$k/first.png"
 done

@@ -1,5 +1,6 @@
 # Sourced by the benches of a million-sphere scene (bench_big_view.sh,
-# bench_gl_bands.sh, bench_cli_big.sh, bench_restore.sh).
+# bench_gl_bands.sh, bench_cli_big.sh, bench_restore.sh,
+# bench_viewer_big.sh).
 #
 # big_scene_prepare NAME BUILD_DIR checks that
 # /usr/bin/time is there and makes the scene once with BUILD_DIR's
@@ -78,4 +79,33 @@ big_scene_medians() {
 		c=$((c + 1))
 	done
 	echo "$cells"
+}
+
+# big_scene_daemons NAME: a scratch directory $dir (removed at exit, with
+# the daemons), and for build K of $builds (from 1) a blobcastd of its
+# own on the Unix socket $dir/K/sock (bench_daemon_start of daemon.sh,
+# which the caller sources; its pid in $dir/K/pid) holding $scene in
+# session "big".
+big_scene_daemons() {
+	dir=$(mktemp -d "/tmp/bc-$1.XXXXXX")
+	pids=
+	trap big_scene_cleanup EXIT INT TERM
+	bsd_k=0
+	for bsd_b in $builds; do
+		bsd_k=$((bsd_k + 1))
+		mkdir -p "$dir/$bsd_k"
+		bench_daemon_start "$1" "$bsd_b/server/blobcastd" \
+			"$dir/$bsd_k/sock" "$dir/$bsd_k/data" "$dir/$bsd_k/daemon.log"
+		# shellcheck disable=SC2154 # pid: set by bench_daemon_start
+		pids="$pids $pid"
+		echo "$pid" >"$dir/$bsd_k/pid"
+		"$bsd_b/client/blobcast" --server "unix:$dir/$bsd_k/sock" \
+			--timeout 600000 load "$scene" --session big >/dev/null
+	done
+}
+
+big_scene_cleanup() {
+	for bsc_p in $pids; do kill "$bsc_p" 2>/dev/null || :; done
+	wait 2>/dev/null || :
+	rm -rf "$dir"
 }
