@@ -240,6 +240,13 @@ int bc__session_copy(struct bc_session *s)
 	if (s->copying) {
 		return BC_PARK;
 	}
+	if (s->busy) {
+		/* A task may be changing the tree (a big structural edit)
+		 * or about to replace it (a load): the copy waits for it,
+		 * as a parked request does, and the task's end schedules
+		 * the frames owed. */
+		return BC_PARK;
+	}
 	if ((rc = s->copy_rc)) {
 		s->copy_rc = 0;
 		return rc;

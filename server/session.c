@@ -213,6 +213,10 @@ static void task_after(uv_work_t *req, int status)
 	t->done(t); /* frees t */
 	if (!s->removed) {
 		resume_parked(s);
+		/* Frames whose render copy waited for the task. */
+		if (!s->busy) {
+			bc__schedule(s);
+		}
 		/* A load's snapshot comes after its SCENE_STATE, once the
 		 * members held behind the load were let go (the journal
 		 * record is what made the load safe). */

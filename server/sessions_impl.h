@@ -213,7 +213,8 @@ void bc__index_note(struct bc_index *ix, const struct bc_session *s);
 void bc__schedule(struct bc_session *s);
 /* Makes sure the work layer holds s's render copy: 0 when it does (made
  * now, on the loop, for a scene under BC_SRV_HEAVY_NODES), BC_PARK while
- * a task makes it (the session busy until then), or the error of the
+ * a task makes it (the session busy until then) or while another task
+ * holds the session (the copy is made after it), or the error of the
  * last copy that failed (BC_ENOMEM), said once. */
 int bc__session_copy(struct bc_session *s);
 /* Drops s's render copy when nobody has looked at s for render_idle_ms

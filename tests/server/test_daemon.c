@@ -673,6 +673,63 @@ static void a_render_copy_nobody_looks_at_goes_and_comes_back(void)
 	}
 }
 
+/* A VIEW and a PICK that come while a SCENE_LOAD is on its task (the
+ * session busy) must see the loaded scene: the render copy they want
+ * waits for the load (bc__session_copy). It used to be made at once, of
+ * the old tree, on a task beside the load's, and to reach the work layer
+ * after the load's own, so that the old scene was drawn and picked under
+ * the new order. 100 000 far spheres restored (no copy yet); member a
+ * loads one sphere in the middle of the view, and member b, joined
+ * without a view, sends VIEW and PICK right behind it. */
+static void a_view_during_a_load_sees_the_loaded_scene(void)
+{
+	static const char one[] =
+	    "{\"blobcast\": 1, \"camera\": {\"eye\": [0, 0, 6], \"target\": "
+	    "[0, 0, 0], \"up\": [0, 1, 0], \"fov_y_deg\": 45}, \"root\": "
+	    "{\"type\": \"sphere\", \"id\": 7, \"radius\": 1}}";
+	struct bc_msg ld = {.type = BC_MSG_SCENE_LOAD},
+	              pk = {.type = BC_MSG_PICK};
+	struct bc_camera cam;
+	struct bc_tree *t = bc_tree_create();
+	struct daemon d;
+	struct conn a, b;
+	char dir[64], *json = far_spheres(100000);
+	uint8_t *bytes = NULL;
+	size_t len = 0;
+	uint32_t seq;
+	REQUIRE(json && t);
+	REQUIRE(bc_scene_parse_json(one, sizeof(one) - 1, t, &cam, NULL) == 0);
+	REQUIRE(bc_scene_encode(t, &cam, &bytes, &len) == 0);
+	bc_tree_destroy(t);
+	make_dir_name(dir, sizeof(dir), "during");
+	REQUIRE(daemon_start(&d, dir) == 0);
+	REQUIRE(conn_open(&a, &d) == 0 && conn_hello(&a, "a") == 0);
+	REQUIRE(conn_join(&a, "during", BC_PROTO_ROLE_EDITOR, true) == 0);
+	conn_load_json(&a, json);
+	bc_free(json);
+	conn_close(&a);
+	REQUIRE(WIFEXITED(daemon_stop(&d, SIGTERM)));
+	REQUIRE(daemon_start(&d, dir) == 0);
+	REQUIRE(conn_open(&a, &d) == 0 && conn_hello(&a, "a") == 0);
+	REQUIRE(conn_join(&a, "during", BC_PROTO_ROLE_EDITOR, false) == 0);
+	REQUIRE(conn_expect(&a, BC_MSG_SCENE_STATE, 60000) == 1);
+	REQUIRE(conn_open(&b, &d) == 0 && conn_hello(&b, "b") == 0);
+	REQUIRE(conn_join(&b, "during", BC_PROTO_ROLE_VIEWER, false) == 0);
+	REQUIRE(conn_expect(&b, BC_MSG_SCENE_STATE, 60000) == 1);
+	ld.scene_load.scene.ptr = bytes;
+	ld.scene_load.scene.len = (uint32_t)len;
+	REQUIRE(conn_send(&a, &ld));
+	REQUIRE(conn_view(&b, 96, 64, BC_PROTO_ENC_PNG));
+	pk.pick.x = 48;
+	pk.pick.y = 32;
+	seq = conn_send(&b, &pk);
+	CHECK(picked(&b, seq) == 7);
+	bc_free(bytes);
+	conn_close(&a);
+	conn_close(&b);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
 static const struct bc_test tests[] = {
     {"members_see_the_same_edits_in_order",
      members_see_the_same_edits_in_order},
@@ -688,6 +745,8 @@ static const struct bc_test tests[] = {
      a_session_is_drawn_with_edits_made_before_a_view},
     {"a_render_copy_nobody_looks_at_goes_and_comes_back",
      a_render_copy_nobody_looks_at_goes_and_comes_back},
+    {"a_view_during_a_load_sees_the_loaded_scene",
+     a_view_during_a_load_sees_the_loaded_scene},
 };
 
 int main(int argc, char **argv)
