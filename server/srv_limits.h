@@ -27,13 +27,13 @@
 #define BC_SRV_SESSION_IDLE_MS (15u * 60u * 1000u)
 #define BC_SRV_SESSION_SWEEP_MS (60u * 1000u)
 
-/* A session's render copy (its laid-out twin of the scene, about 400
- * bytes a primitive, and the renderer's lists drawn from it, about 180
- * more at 1024x768) is dropped this long after a member last had a view
- * or asked for a picture (--render-idle); the next picture makes it again
- * (about 0.9 s a million primitives, the session busy meanwhile). The
- * sweep looks every BC_SRV_SESSION_SWEEP_MS, or every quarter of this when
- * that is shorter. */
+/* A session's render copy (its laid-out twin of the scene) and the
+ * renderer's lists drawn from it (together about 470 bytes a primitive:
+ * a million spheres at 1024x768, docs/benchmarks.md) are dropped this long
+ * after a member last had a view or asked for a picture (--render-idle); the
+ * next picture makes them again (the copy about 0.9 s a million primitives,
+ * the session busy meanwhile). The sweep looks every BC_SRV_SESSION_SWEEP_MS,
+ * or every quarter of this when that is shorter. */
 #define BC_SRV_RENDER_IDLE_MS (5u * 60u * 1000u)
 
 /* Nodes of a session's scene: the layout's own limit (22-bit ancestor
