@@ -278,14 +278,20 @@ int bc__session_copy(struct bc_session *s)
 	return BC_PARK;
 }
 
+/* Whether m looks at its session: it has a view, a frame job, or PICKs
+ * or SNAPSHOTs queued. */
+static bool looks(const struct bc_member *m)
+{
+	return m->has_view || m->job || m->requests;
+}
+
 bool bc__session_copy_idle(struct bc_session *s, uint64_t now)
 {
 	if (!s->copied || s->busy) {
 		return false;
 	}
 	for (uint32_t i = 0; i < s->nmembers; i++) {
-		const struct bc_member *m = s->members[i];
-		if (m->has_view || m->job || m->requests) {
+		if (looks(s->members[i])) {
 			s->looked_ms = now;
 			return false;
 		}
@@ -431,7 +437,7 @@ void bc__frames_forget(struct bc_member *m)
 	uint32_t dropped;
 	bool shared = false;
 	/* The wait before its session's copy goes starts now. */
-	if (s && (m->has_view || job || m->requests)) {
+	if (s && looks(m)) {
 		s->looked_ms = bc__now_ms(m->ss);
 	}
 	dropped = forget_requests(m);

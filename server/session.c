@@ -680,10 +680,11 @@ static void sweep_idle(uv_timer_t *t)
 	uint64_t now = bc__now_ms(ss);
 	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
 		struct bc_session *s = ss->sessions[i];
-		if (s && !s->removed) {
-			bc__session_copy_idle(s, now);
+		if (!s) {
+			continue; /* sessions leave the table as they go */
 		}
-		if (!s || !unloadable(s)) {
+		bc__session_copy_idle(s, now);
+		if (!unloadable(s)) {
 			continue;
 		}
 		if (s->lost) {
