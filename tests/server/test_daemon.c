@@ -576,6 +576,30 @@ static void edits_without_a_copy_are_drawn(struct conn *c, uint32_t id)
 	CHECK(c->m.frame.order == order);
 }
 
+/* Session name of daemon d (started on dir) gets scene json (freed here)
+ * from a member who creates it and leaves; with restart the daemon is
+ * then stopped and started again on dir. c joins it as an editor (its
+ * member id in *id) and takes its SCENE_STATE. */
+static void saved_then_joined(struct daemon *d, const char *dir,
+                              const char *name, char *json, bool restart,
+                              struct conn *c, uint32_t *id)
+{
+	REQUIRE(json != NULL);
+	REQUIRE(conn_open(c, d) == 0 && conn_hello(c, "a") == 0);
+	REQUIRE(conn_join(c, name, BC_PROTO_ROLE_EDITOR, true) == 0);
+	conn_load_json(c, json);
+	bc_free(json);
+	conn_close(c);
+	if (restart) {
+		REQUIRE(WIFEXITED(daemon_stop(d, SIGTERM)));
+		REQUIRE(daemon_start(d, dir) == 0);
+	}
+	REQUIRE(conn_open(c, d) == 0 && conn_hello(c, "b") == 0);
+	REQUIRE(conn_join(c, name, BC_PROTO_ROLE_EDITOR, false) == 0);
+	*id = c->m.session_info.member_id;
+	REQUIRE(conn_expect(c, BC_MSG_SCENE_STATE, 60000) == 1);
+}
+
 /* A session restored from disk, or loaded by a member without a view into
  * a session nobody views (edits.c decodes it once), has no render copy
  * until a member wants a picture (frames.c, bc__session_copy): edits made
@@ -592,27 +616,15 @@ static void a_session_is_drawn_with_edits_made_before_a_view(void)
 		const char *name = names[v];
 		struct daemon d;
 		struct conn c;
-		char dir[64], log[80], *json = far_spheres(v ? 20000u : 3u);
+		char dir[64], log[80];
 		uint32_t id;
-		REQUIRE(json != NULL);
 		make_dir_name(dir, sizeof(dir), name);
 		snprintf(log, sizeof(log), "%s.log", dir);
 		daemon_log_path = log;
 		REQUIRE(daemon_start(&d, dir) == 0);
 		daemon_log_path = NULL;
-		REQUIRE(conn_open(&c, &d) == 0 && conn_hello(&c, "a") == 0);
-		REQUIRE(conn_join(&c, name, BC_PROTO_ROLE_EDITOR, true) == 0);
-		conn_load_json(&c, json);
-		bc_free(json);
-		conn_close(&c);
-		if (v < 2) {
-			REQUIRE(WIFEXITED(daemon_stop(&d, SIGTERM)));
-			REQUIRE(daemon_start(&d, dir) == 0);
-		}
-		REQUIRE(conn_open(&c, &d) == 0 && conn_hello(&c, "b") == 0);
-		REQUIRE(conn_join(&c, name, BC_PROTO_ROLE_EDITOR, false) == 0);
-		id = c.m.session_info.member_id;
-		REQUIRE(conn_expect(&c, BC_MSG_SCENE_STATE, 60000) == 1);
+		saved_then_joined(&d, dir, name, far_spheres(v ? 20000u : 3u),
+		                  v < 2, &c, &id);
 		edits_without_a_copy_are_drawn(&c, id);
 		/* The load made none: the view had it made, on a task (of the
 		 * tree as then: 20 000 nodes, one sphere removed). */
@@ -693,27 +705,19 @@ static void a_view_during_a_load_sees_the_loaded_scene(void)
 	struct bc_tree *t = bc_tree_create();
 	struct daemon d;
 	struct conn a, b;
-	char dir[64], *json = far_spheres(100000);
+	char dir[64];
 	uint8_t *bytes = NULL;
 	size_t len = 0;
-	uint32_t seq;
-	REQUIRE(json && t);
+	uint32_t seq, id;
+	REQUIRE(t);
 	REQUIRE(bc_scene_parse_json(one, sizeof(one) - 1, t, &cam, NULL) == 0);
 	REQUIRE(bc_scene_encode(t, &cam, &bytes, &len) == 0);
 	bc_tree_destroy(t);
 	make_dir_name(dir, sizeof(dir), "during");
 	REQUIRE(daemon_start(&d, dir) == 0);
-	REQUIRE(conn_open(&a, &d) == 0 && conn_hello(&a, "a") == 0);
-	REQUIRE(conn_join(&a, "during", BC_PROTO_ROLE_EDITOR, true) == 0);
-	conn_load_json(&a, json);
-	bc_free(json);
-	conn_close(&a);
-	REQUIRE(WIFEXITED(daemon_stop(&d, SIGTERM)));
-	REQUIRE(daemon_start(&d, dir) == 0);
-	REQUIRE(conn_open(&a, &d) == 0 && conn_hello(&a, "a") == 0);
-	REQUIRE(conn_join(&a, "during", BC_PROTO_ROLE_EDITOR, false) == 0);
-	REQUIRE(conn_expect(&a, BC_MSG_SCENE_STATE, 60000) == 1);
-	REQUIRE(conn_open(&b, &d) == 0 && conn_hello(&b, "b") == 0);
+	saved_then_joined(&d, dir, "during", far_spheres(100000), true, &a,
+	                  &id);
+	REQUIRE(conn_open(&b, &d) == 0 && conn_hello(&b, "viewer") == 0);
 	REQUIRE(conn_join(&b, "during", BC_PROTO_ROLE_VIEWER, false) == 0);
 	REQUIRE(conn_expect(&b, BC_MSG_SCENE_STATE, 60000) == 1);
 	ld.scene_load.scene.ptr = bytes;
