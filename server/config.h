@@ -39,6 +39,7 @@ struct bc_srv_config {
 	uint32_t max_scene_mib;      /* 0: BC_SRV_MAX_SCENE_BYTES */
 	uint32_t client_queue_mib;   /* 0: BC_SRV_MAX_CLIENT_QUEUE */
 	uint32_t render_idle_s;      /* 0: BC_SRV_RENDER_IDLE_MS */
+	uint32_t scene_memory_mib;   /* 0: half of memory_limit() */
 	uint32_t message_timeout_ms; /* 0: BC_SRV_MESSAGE_TIMEOUT_MS */
 	uint32_t idle_timeout_ms;    /* 0: BC_SRV_IDLE_TIMEOUT_MS */
 	char *tls_cert, *tls_key;    /* PEM files: TLS on the TCP listener */

@@ -54,6 +54,39 @@ static int check_scene_bytes(const struct bc_tree *t, size_t cap,
 	return 0;
 }
 
+/* The node count in the head of scene encoding bytes (PROTOCOL.md 8:
+ * flags, a camera with bit 0, then the count), 0 where the bytes could
+ * not hold that many nodes of 5 bytes or more (the decoder refuses those
+ * with its own code). A count the decoder accepts is the scene's. */
+static uint32_t head_count(const uint8_t *head, size_t len, size_t total)
+{
+	size_t at = 1u + ((len && (head[0] & 1u)) ? 40u : 0u);
+	uint32_t n;
+	if (len < at + 4u) {
+		return 0;
+	}
+	n = (uint32_t)head[at] | (uint32_t)head[at + 1] << 8 |
+	    (uint32_t)head[at + 2] << 16 | (uint32_t)head[at + 3] << 24;
+	return n <= (total - at - 4u) / 5u ? n : 0u;
+}
+
+/* At most how many nodes a session's scene has after ops: those it has
+ * and every subtree they insert (room is taken for that before the batch
+ * applies, bc__room_take, and settled at its count after). */
+static uint64_t nodes_after(const struct bc_tree *t,
+                            const struct bc_proto_edit_op *op, uint32_t nops)
+{
+	uint64_t n = bc_tree_node_count(t);
+	for (uint32_t i = 0; i < nops; i++) {
+		const struct bc_proto_bytes *b = &op[i].subtree;
+		if (op[i].kind == BC_PROTO_EDIT_INSERT ||
+		    op[i].kind == BC_PROTO_EDIT_REPLACE) {
+			n += head_count(b->ptr, b->len, b->len);
+		}
+	}
+	return n;
+}
+
 bool bc__refuse_change(struct bc_member *m, uint32_t seq, int *park)
 {
 	struct bc_session *s = m->session;
@@ -120,6 +153,7 @@ struct batch {
 	bc_applied_fn done;
 	void *ud;
 	struct bc_tree *tree; /* the scene after the batch */
+	uint64_t taken;       /* room for the nodes it inserts */
 	struct bc_edit_batch b;
 	struct bc_proto_buf rec; /* the journal record (an EDIT message) */
 	uint64_t t0_ns;
@@ -264,6 +298,7 @@ static void batch_commit(struct batch *x)
 	struct bc_session *s = x->s;
 	double ms = (double)(bc_clock_ns() - x->t0_ns) / 1e6;
 	s->tree = x->tree;
+	bc__room_settle(s, &x->taken);
 	s->order++;
 	if (!x->names_only) {
 		s->scene_order = s->order;
@@ -283,6 +318,7 @@ static void batch_commit(struct batch *x)
 
 static void batch_free(struct batch *x)
 {
+	bc__room_give(x->s->ss, &x->taken);
 	if (x->early && !x->settled) {
 		/* Refused, undone, or its session gone: the copy undoes it. */
 		bc_work_settle(x->s->ss->work, x->s->id, false);
@@ -352,8 +388,14 @@ int bc__apply(struct bc_member *m, const struct bc_proto_edit_op *ops,
 		bc_free(x);
 		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
 	}
+	x->s = s;
 	for (uint32_t i = 0; i < nops; i++) {
 		structural = structural || ops[i].kind != BC_PROTO_EDIT_SET;
+	}
+	if (structural &&
+	    bc__room_take(s, nodes_after(s->tree, ops, nops), &x->taken, ei)) {
+		batch_free(x);
+		return ei->code;
 	}
 	/* A big scene's structural edit, or a long batch of SETs on it,
 	 * applies on the task: the session is busy meanwhile, so nothing on
@@ -361,7 +403,6 @@ int bc__apply(struct bc_member *m, const struct bc_proto_edit_op *ops,
 	x->heavy = bc_tree_node_count(s->tree) >= BC_SRV_HEAVY_NODES &&
 	           (structural || nops >= BC_SRV_HEAVY_SETS);
 	x->names_only = names_only;
-	x->s = s;
 	x->op = x->ops.ops;
 	x->nops = nops;
 	x->author = (struct bc_author){m->peer->ref, m->member_id, seq, {0}};
@@ -448,6 +489,8 @@ struct load {
 	 * someone first wants a picture (bc__session_copy). */
 	struct bc_tree *tree, *copy;
 	bool copy_wanted;
+	uint32_t nodes; /* the count its head gives */
+	uint64_t taken; /* room for them (bc__room_take) */
 	struct bc_camera cam;
 	bool has_cam;
 	struct bc_shared *state; /* the members' SCENE_STATE */
@@ -501,6 +544,12 @@ static void prepare(struct bc_task *t)
 	                             l->copy, &l->cam, &l->has_cam, ei))) {
 		return;
 	}
+	if (bc_tree_node_count(l->tree) != l->nodes) {
+		/* Cannot happen: the decoder holds the scene to its count. */
+		l->rc = bc_errinfo_set(ei, BC_ELIMIT,
+		                       "more nodes than its head counts");
+		return;
+	}
 	if (bc_tree_node_count(l->tree) > BC_SRV_MAX_NODES) {
 		l->rc = bc_errinfo_set(ei, BC_ELIMIT, "more than %u nodes",
 		                       BC_SRV_MAX_NODES);
@@ -536,6 +585,7 @@ static void prepare(struct bc_task *t)
 
 static void load_free(struct load *l)
 {
+	bc__room_give(l->t.s->ss, &l->taken);
 	/* A refused load of a big scene leaves two trees to free. */
 	bc__tree_free_later(l->t.s->kick.loop, l->tree);
 	bc__tree_free_later(l->t.s->kick.loop, l->copy);
@@ -568,6 +618,7 @@ static void commit(struct bc_task *t)
 	}
 	bc__tree_free_later(s->ss->loop, s->tree);
 	s->tree = l->tree;
+	bc__room_settle(s, &l->taken);
 	s->lost = false; /* the scene whole again, as saved */
 	s->camera = l->cam;
 	s->order = s->scene_order = l->order;
@@ -590,17 +641,50 @@ static void commit(struct bc_task *t)
 	load_free(l);
 }
 
+/* The node count in the head of the scene being loaded (head_count):
+ * whole in msg, or in m->parts's first pieces. */
+static uint32_t load_count(const struct bc_member *m, const struct bc_msg *msg,
+                           bool in_parts)
+{
+	uint8_t head[1u + 40u + 4u];
+	size_t n = 0;
+	if (!in_parts) {
+		const struct bc_proto_bytes *b = &msg->scene_load.scene;
+		return head_count(b->ptr, b->len, b->len);
+	}
+	for (uint32_t i = 0; i < m->parts.n && n < sizeof(head); i++) {
+		size_t k = m->parts.v[i].len < sizeof(head) - n
+		               ? m->parts.v[i].len
+		               : sizeof(head) - n;
+		memcpy(head + n, m->parts.v[i].ptr, k);
+		n += k;
+	}
+	return head_count(head, n, m->parts.len);
+}
+
 /* Starts the load of msg's scene: a whole SCENE_LOAD, or the last part
- * of one sent in parts, whose pieces (m->parts) this takes. */
+ * of one sent in parts, whose pieces (m->parts) this takes. Room for its
+ * nodes is taken first (a session without members may be unloaded for
+ * it). */
 static int start_load(struct bc_member *m, const struct bc_msg *msg,
                       bool in_parts)
 {
 	struct bc_session *s = m->session;
+	struct bc_errinfo ei = {0};
 	struct load *l;
 	if (!(l = bc_calloc(1, sizeof(*l)))) {
 		bc__parts_drop(m);
 		bc__send_error(m, msg->seq, BC_ENOMEM,
 		               "scene not loaded: out of memory");
+		return 0;
+	}
+	l->t.s = s;
+	l->nodes = load_count(m, msg, in_parts);
+	if (bc__room_take(s, l->nodes, &l->taken, &ei)) {
+		bc_free(l);
+		bc__parts_drop(m);
+		bc__send_error(m, msg->seq, ei.code, "scene not loaded: %s",
+		               ei.msg);
 		return 0;
 	}
 	l->author =
@@ -639,6 +723,7 @@ static int start_load(struct bc_member *m, const struct bc_msg *msg,
 		l->scene.ptr = l->owned;
 	}
 	if (!l->owned) {
+		bc__room_give(s->ss, &l->taken);
 		bc_free(l);
 		bc__send_error(m, msg->seq, BC_ENOMEM,
 		               "scene not loaded: out of memory");

@@ -71,7 +71,7 @@ struct cli {
 	int backend, gl_platform, simd, log, video_encoder, x264_preset;
 	bool allow_plaintext, tls_allow_expired, no_damage, no_pace, repair;
 	uint32_t frame_budget_ms, render_threads, view_cache_mib, max_scene_mib;
-	uint32_t client_queue_mib, render_idle_s;
+	uint32_t client_queue_mib, render_idle_s, scene_memory_mib;
 };
 
 /* The option table over c; --help is printed from it. */
@@ -208,6 +208,19 @@ struct cli {
 		             "470 bytes a primitive) stays once nobody\n"      \
 		             "views it, {range} (default 300); the next\n"     \
 		             "picture builds it again"},                       \
+		    {.name = "scene-memory",                                   \
+		     .kind = BC_OPT_U32,                                       \
+		     .dst = &(c)->scene_memory_mib,                            \
+		     .lo = 1,                                                  \
+		     .hi = 16777216,                                           \
+		     .arg = "MIB",                                             \
+		     .help = "memory for the scenes of all loaded\n"           \
+		             "sessions together, {range} (default:\n"          \
+		             "half the memory of the machine or of\n"          \
+		             "the daemon's cgroup), at 700 bytes a\n"          \
+		             "node; past it sessions without members\n"        \
+		             "are unloaded, then loads and edits that\n"       \
+		             "add nodes are refused (ELIMIT)"},                \
 		    {.name = "client-queue",                                   \
 		     .kind = BC_OPT_U32,                                       \
 		     .dst = &(c)->client_queue_mib,                            \
@@ -680,6 +693,7 @@ static void apply_cli(struct bc_srv_config *cfg, const struct cli *c,
 	cfg->max_scene_mib = c->max_scene_mib;
 	cfg->client_queue_mib = c->client_queue_mib;
 	cfg->render_idle_s = c->render_idle_s;
+	cfg->scene_memory_mib = c->scene_memory_mib;
 }
 
 /* Defaults for what neither gave, and the checks between options. Returns
@@ -720,6 +734,70 @@ static int settle_config(struct bc_srv_config *cfg)
 }
 
 /* Makes the layers bottom up and wires them. Returns 0 or an error. */
+/* The smallest limit in file of cgroup dir (under root) and the cgroups
+ * above it, if below lim. dir is changed. */
+static uint64_t cgroup_limit(const char *root, char *dir, const char *file,
+                             uint64_t lim)
+{
+	char path[700];
+	while (dir) {
+		size_t n = strlen(dir);
+		unsigned long long v;
+		FILE *m;
+		snprintf(path, sizeof(path), "%s%s/%s", root, dir, file);
+		if ((m = fopen(path, "r"))) {
+			if (fscanf(m, "%llu", &v) == 1 && v < lim) {
+				lim = v; /* "max" reads as no number */
+			}
+			fclose(m);
+		}
+		while (n > 0 && dir[n - 1] != '/') {
+			n--;
+		}
+		dir = n > 1 ? (dir[n - 1] = '\0', dir) : NULL;
+	}
+	return lim;
+}
+
+/* The memory this process may use: the machine's, or less where its
+ * cgroup or one above it has a limit (cgroup v2 memory.max: systemd's
+ * MemoryMax, a container's; v1 memory.limit_in_bytes). */
+static uint64_t memory_limit(void)
+{
+	uint64_t lim =
+	    (uint64_t)sysconf(_SC_PHYS_PAGES) * (uint64_t)sysconf(_SC_PAGESIZE);
+	char line[512];
+	FILE *f = fopen("/proc/self/cgroup", "r");
+	while (f && fgets(line, sizeof(line), f)) {
+		char *dir = strstr(line, ":/");
+		line[strcspn(line, "\n")] = '\0';
+		if (strncmp(line, "0::/", 4) == 0) {
+			lim = cgroup_limit("/sys/fs/cgroup", line + 3,
+			                   "memory.max", lim);
+		} else if (dir && strstr(line, ":memory:")) {
+			lim = cgroup_limit("/sys/fs/cgroup/memory", dir + 1,
+			                   "memory.limit_in_bytes", lim);
+		}
+	}
+	if (f) {
+		fclose(f);
+	}
+	return lim;
+}
+
+/* --scene-memory (MiB; 0: half of memory_limit()) as scene nodes. */
+static uint64_t scene_nodes(uint32_t mib)
+{
+	uint64_t bytes = mib ? (uint64_t)mib << 20 : memory_limit() / 2u;
+	uint64_t nodes = bytes / BC_SRV_NODE_COST;
+	bc_log(BC_LOG_INFO,
+	       "scenes: at most %llu nodes in all loaded sessions "
+	       "(--scene-memory %llu MiB, %u bytes a node)",
+	       (unsigned long long)nodes, (unsigned long long)(bytes >> 20),
+	       BC_SRV_NODE_COST);
+	return nodes ? nodes : 1u;
+}
+
 static int start(struct daemon *dm, struct bc_errinfo *ei)
 {
 	int rc;
@@ -756,6 +834,7 @@ static int start(struct daemon *dm, struct bc_errinfo *ei)
 	             .no_damage = dm->cfg.no_damage,
 	             .max_scene_bytes = (size_t)dm->cfg.max_scene_mib << 20,
 	             .render_idle_ms = dm->cfg.render_idle_s * 1000u,
+	             .scene_nodes = scene_nodes(dm->cfg.scene_memory_mib),
 	             .video =
 	                 {
 	                     .backend = dm->cfg.video_encoder,

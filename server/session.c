@@ -12,6 +12,7 @@
  * Also SESSION_CREATE, SESSION_JOIN, SESSION_LEAVE, SESSION_DELETE and
  * SESSION_LIST (from the index of sessions on disk, index.c).
  */
+#include <inttypes.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -489,6 +490,8 @@ struct load_task {
 	bool created;
 	struct bc_undo *undo; /* the history the journal gave back */
 	char owner[BC_STORE_OWNER_MAX + 1];
+	uint64_t taken; /* room for the tree (bc__room_take) */
+	bool roomed;
 	int rc;
 	struct bc_errinfo ei;
 };
@@ -526,6 +529,7 @@ static void load_run(struct bc_task *t)
 
 static void load_free(struct load_task *l)
 {
+	bc__room_give(l->t.s->ss, &l->taken);
 	bc__undo_free(l->undo);
 	bc_store_session_close(l->st);
 	bc__tree_free_later(l->t.s->kick.loop, l->tree);
@@ -536,7 +540,8 @@ static void load_free(struct load_task *l)
 static void load_failed(struct bc_session *s, const struct load_task *l)
 {
 	struct bc_sessions *ss = s->ss;
-	bc_log(BC_LOG_ERROR, "cannot load session %s: %s", s->name, l->ei.msg);
+	bc_log(l->rc == BC_ELIMIT ? BC_LOG_WARN : BC_LOG_ERROR,
+	       "cannot load session %s: %s", s->name, l->ei.msg);
 	while (s->park_head) {
 		struct bc_member *m = s->park_head;
 		s->park_head = m->park_next;
@@ -553,6 +558,17 @@ static void load_failed(struct bc_session *s, const struct load_task *l)
 	bc__session_unload(s, "its load failed");
 }
 
+/* Room for the scene read (a new session's default scene is always let
+ * in: it has a few dozen nodes). Sets l->rc when there is none. */
+static void load_room(struct bc_session *s, struct load_task *l)
+{
+	if (!l->roomed && !l->rc && !l->created) {
+		l->rc = bc__room_take(s, bc_tree_node_count(l->tree), &l->taken,
+		                      &l->ei);
+	}
+	l->roomed = true;
+}
+
 static void load_done(struct bc_task *t)
 {
 	struct load_task *l = (struct load_task *)t;
@@ -561,12 +577,14 @@ static void load_done(struct bc_task *t)
 		load_free(l);
 		return;
 	}
+	load_room(s, l);
 	if (l->rc) {
 		load_failed(s, l);
 		load_free(l);
 		return;
 	}
 	s->tree = l->tree;
+	bc__room_settle(s, &l->taken);
 	s->store = l->st;
 	s->camera = l->cam;
 	s->order = s->scene_order = l->order;
@@ -618,6 +636,8 @@ static void session_remove(struct bc_session *s)
 		e->loaded = NULL;
 	}
 	s->removed = true;
+	ss->nodes_held -= s->nodes;
+	s->nodes = 0;
 	bc_work_drop(ss->work, s->id);
 	uv_close((uv_handle_t *)&s->still_timer, timer_closed);
 	uv_close((uv_handle_t *)&s->kick, timer_closed);
@@ -647,12 +667,28 @@ bool bc__session_unload(struct bc_session *s, const char *why)
 	return true;
 }
 
+/* The session without members for longest that may be unloaded, other
+ * than keep; with holding, only one that holds nodes. NULL for none. */
+static struct bc_session *idlest(struct bc_sessions *ss,
+                                 const struct bc_session *keep, bool holding)
+{
+	struct bc_session *oldest = NULL;
+	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
+		struct bc_session *s = ss->sessions[i];
+		if (s && s != keep && unloadable(s) && (!holding || s->nodes) &&
+		    (!oldest || s->empty_since_ms < oldest->empty_since_ms)) {
+			oldest = s;
+		}
+	}
+	return oldest;
+}
+
 /* A free slot in the table, unloading the session that has been without
  * members longest when there is none; BC_SRV_MAX_SESSIONS when every
  * session is in use. */
 static uint32_t free_slot(struct bc_sessions *ss)
 {
-	struct bc_session *oldest = NULL;
+	struct bc_session *oldest;
 	uint32_t slot = 0;
 	while (slot < BC_SRV_MAX_SESSIONS && ss->sessions[slot]) {
 		slot++;
@@ -660,18 +696,88 @@ static uint32_t free_slot(struct bc_sessions *ss)
 	if (slot < BC_SRV_MAX_SESSIONS) {
 		return slot;
 	}
-	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
-		struct bc_session *s = ss->sessions[i];
-		if (unloadable(s) &&
-		    (!oldest || s->empty_since_ms < oldest->empty_since_ms)) {
-			oldest = s;
-			slot = i;
-		}
-	}
+	oldest = idlest(ss, NULL, false);
 	if (!oldest || !bc__session_unload(oldest, "its place is needed")) {
 		return BC_SRV_MAX_SESSIONS;
 	}
+	slot = 0;
+	while (ss->sessions[slot]) {
+		slot++;
+	}
 	return slot;
+}
+
+/* Nodes held by sessions that bc__room_take may unload for keep. */
+static uint64_t unloadable_nodes(struct bc_sessions *ss,
+                                 const struct bc_session *keep)
+{
+	uint64_t n = 0;
+	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
+		const struct bc_session *s = ss->sessions[i];
+		n += s && s != keep && unloadable(s) ? s->nodes : 0u;
+	}
+	return n;
+}
+
+int bc__room_take(struct bc_session *s, uint64_t after, uint64_t *taken,
+                  struct bc_errinfo *ei)
+{
+	struct bc_sessions *ss = s->ss;
+	uint64_t more = after > s->nodes ? after - s->nodes : 0;
+	*taken = 0;
+	if (!more) {
+		return 0; /* what takes nodes away is never refused for room */
+	}
+	if (after > ss->nodes_cap) {
+		return bc_errinfo_set(
+		    ei, BC_ELIMIT,
+		    "a scene of %" PRIu64 " nodes is more than this server "
+		    "holds in all (%" PRIu64 " nodes, --scene-memory)",
+		    after, ss->nodes_cap);
+	}
+	/* Nothing is unloaded for a change that would not fit even so. */
+	if (ss->starting && ss->nodes_held + more > ss->nodes_cap) {
+		return bc_errinfo_set(
+		    ei, BC_ELIMIT,
+		    "the sessions restored before it hold %" PRIu64
+		    " of the %" PRIu64
+		    " scene nodes this server allows (--scene-memory)",
+		    ss->nodes_held, ss->nodes_cap);
+	}
+	if (ss->nodes_held + more - unloadable_nodes(ss, s) > ss->nodes_cap) {
+		return bc_errinfo_set(
+		    ei, BC_ELIMIT,
+		    "sessions in use (with members or work under way) hold "
+		    "%" PRIu64 " of the %" PRIu64 " scene nodes this server "
+		    "allows (--scene-memory) and %" PRIu64 " more do not "
+		    "fit: members must leave sessions or make their scenes "
+		    "smaller first",
+		    ss->nodes_held - unloadable_nodes(ss, s), ss->nodes_cap,
+		    more);
+	}
+	while (ss->nodes_held + more > ss->nodes_cap) {
+		struct bc_session *o = idlest(ss, s, true);
+		if (!o || !bc__session_unload(o, "its memory is needed")) {
+			return bc_errinfo_set(ei, BC_ELIMIT, "no room");
+		}
+	}
+	ss->nodes_held += more;
+	*taken = more;
+	return 0;
+}
+
+void bc__room_give(struct bc_sessions *ss, uint64_t *taken)
+{
+	ss->nodes_held -= *taken;
+	*taken = 0;
+}
+
+void bc__room_settle(struct bc_session *s, uint64_t *taken)
+{
+	uint64_t n = s->tree ? bc_tree_node_count(s->tree) : 0;
+	bc__room_give(s->ss, taken);
+	s->ss->nodes_held = s->ss->nodes_held - s->nodes + n;
+	s->nodes = n;
 }
 
 static void sweep_idle(uv_timer_t *t)
@@ -761,6 +867,7 @@ static int session_open_now(struct bc_sessions *ss, const char *name,
 	}
 	l->t.s = s;
 	load_run(&l->t);
+	load_room(s, l);
 	if ((rc = l->rc)) {
 		bc_errinfo_set(ei, rc, "%s", l->ei.msg);
 		load_free(l);
@@ -822,6 +929,7 @@ int bc_sessions_new(struct bc_sessions **out,
 	}
 	ss->render_idle_ms =
 	    opts->render_idle_ms ? opts->render_idle_ms : BC_SRV_RENDER_IDLE_MS;
+	ss->nodes_cap = opts->scene_nodes ? opts->scene_nodes : UINT64_MAX;
 	sweep_ms = ss->render_idle_ms / 4u < BC_SRV_SESSION_SWEEP_MS
 	               ? ss->render_idle_ms / 4u
 	               : BC_SRV_SESSION_SWEEP_MS;
@@ -830,18 +938,24 @@ int bc_sessions_new(struct bc_sessions **out,
 	uv_timer_init(ss->loop, &ss->sweep);
 	ss->sweep.data = ss;
 	uv_timer_start(&ss->sweep, sweep_idle, sweep_ms, sweep_ms);
-	/* Sessions on disk load now up to the table's size; the others when
-	 * joined. */
+	/* Sessions on disk load now up to the table's size and the scene
+	 * memory; the others when joined. */
 	n = bc__index_count(ss->index);
+	ss->starting = true;
 	for (uint32_t i = 0; i < n && ss->nsessions + 1 < BC_SRV_MAX_SESSIONS;
 	     i++) {
 		struct bc_errinfo e = {0};
 		const char *name = bc__index_at(ss->index, i)->name;
-		if (session_open_now(ss, name, &s, &e)) {
+		if ((rc = session_open_now(ss, name, &s, &e)) == BC_ELIMIT) {
+			bc_log(BC_LOG_INFO,
+			       "session %s stays on disk until joined: %s",
+			       name, e.msg);
+		} else if (rc) {
 			bc_log(BC_LOG_ERROR, "cannot restore session %s: %s",
 			       name, e.msg);
 		}
 	}
+	ss->starting = false;
 	if (!bc__session_by_name(ss, "default", 7)) {
 		return session_open_now(ss, "default", &s, ei);
 	}

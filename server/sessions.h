@@ -109,6 +109,9 @@ struct bc_sessions_opts {
 	bool no_damage;
 	size_t max_scene_bytes;  /* 0: BC_SRV_MAX_SCENE_BYTES */
 	uint32_t render_idle_ms; /* 0: BC_SRV_RENDER_IDLE_MS */
+	/* Scene nodes all loaded sessions may hold together (--scene-memory
+	 * over BC_SRV_NODE_COST); 0: no cap. */
+	uint64_t scene_nodes;
 	/* How H.264 views are encoded: backend and preset (the preset
 	 * string must outlive the layer). */
 	struct bc_video_opts video;

@@ -83,6 +83,8 @@ struct bc_session {
 	 * members of an older protocol the whole scene (loop clock;
 	 * bc__state_limit). */
 	uint64_t camera_state_ms;
+	/* The nodes of its tree that ss->nodes_held counts (bc__room_*). */
+	uint64_t nodes;
 };
 
 struct bc_sessions {
@@ -94,6 +96,10 @@ struct bc_sessions {
 	size_t max_scene_bytes;  /* SCENE_STATE payload (--max-scene) */
 	uint32_t render_idle_ms; /* render copies unused this long go */
 	size_t parts_bytes;      /* of every member's unfinished SCENE_LOAD */
+	/* Scene nodes all loaded sessions may hold together (--scene-memory),
+	 * and those they hold with what changes under way have taken. */
+	uint64_t nodes_cap, nodes_held;
+	bool starting; /* restoring at start-up: nothing is unloaded */
 	struct bc_video_opts video;
 	struct bc_session *sessions[BC_SRV_MAX_SESSIONS];
 	uint32_t nsessions;
@@ -117,6 +123,18 @@ struct bc_task {
 };
 
 /* ---- session.c ---- */
+
+/* Room for scenes (--scene-memory; docs/operations.md). A change that
+ * leaves s with at most `after` nodes takes room for what it adds before
+ * it starts: sessions without members are unloaded for it, the longest
+ * without first, while the loaded sessions' nodes would pass the cap.
+ * Sets *taken (settled once the change is s's, or given back). Returns 0
+ * or BC_ELIMIT (ei says why and what to do). Loop only. */
+int bc__room_take(struct bc_session *s, uint64_t after, uint64_t *taken,
+                  struct bc_errinfo *ei);
+void bc__room_give(struct bc_sessions *ss, uint64_t *taken);
+/* s->tree is its scene now: the count follows it, taken given back. */
+void bc__room_settle(struct bc_session *s, uint64_t *taken);
 
 uint64_t bc__now_ms(const struct bc_sessions *ss);
 uint64_t bc__unix_ms(void);

@@ -19,6 +19,13 @@
  * unloaded after BC_SRV_SESSION_IDLE_MS, or at once, least recently used
  * first, when a CREATE or a JOIN needs its place; a JOIN loads it again. */
 #define BC_SRV_MAX_SESSIONS 64u
+/* What a loaded scene's node costs the daemon with a view drawn (its
+ * tree, render copy and the tiled tracer's lists: 675 bytes a primitive
+ * measured on a million spheres, docs/benchmarks.md), by which
+ * --scene-memory becomes a count of nodes all loaded sessions may hold;
+ * by default half the memory the daemon may use (its cgroup's limit,
+ * else the machine's). */
+#define BC_SRV_NODE_COST 700u
 
 /* A session with no members stays loaded this long (a member who drops and
  * reconnects finds it warm), then its memory goes back: everything it holds

@@ -1128,6 +1128,159 @@ static void a_large_load_does_not_hold_other_sessions(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
+/* Root union (id) of two unions of g1 and g2 spheres: 3 + g1 + g2 nodes,
+ * ids id.. in order (the first group's union is id + 1). */
+static struct bc_proto_buf two_groups(uint32_t g1, uint32_t g2, uint32_t id)
+{
+	const float t[3] = {0, 0, 0}, q[4] = {0, 0, 0, 1}, r = 0.4f;
+	const uint32_t g[2] = {g1, g2};
+	struct bc_proto_buf b;
+	bc_proto_buf_init(&b, 0);
+	bc_proto_scene_begin(&b, NULL, 3 + g1 + g2);
+	bc_proto_scene_op(&b, BC_OP_UNION, id++, 0, 0, 2);
+	for (int k = 0; k < 2; k++) {
+		bc_proto_scene_op(&b, BC_OP_UNION, id++, 0, 0, g[k]);
+		for (uint32_t i = 0; i < g[k]; i++) {
+			bc_proto_scene_prim(&b, BC_PRIM_SPHERE, id++, t, q,
+			                    NULL, 1, &r);
+		}
+	}
+	return b;
+}
+
+/* c's SCENE_LOAD of b: 1 when its SCENE_STATE came, else the ERROR's
+ * code (0: neither). */
+static int load_answer(struct conn *c, const struct bc_proto_buf *b)
+{
+	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
+	uint32_t seq;
+	m.scene_load.scene.ptr = b->data;
+	m.scene_load.scene.len = (uint32_t)b->len;
+	seq = conn_send(c, &m);
+	while (conn_recv(c, 60000) == 1) {
+		if (c->m.type == BC_MSG_ERROR && c->m.seq == seq) {
+			return c->m.error.code;
+		}
+		if (c->m.type == BC_MSG_SCENE_STATE &&
+		    c->m.scene_state.author_seq == seq) {
+			return 1;
+		}
+	}
+	return 0;
+}
+
+/* Whether the ERROR c received last holds text. */
+static bool error_says(const struct conn *c, const char *text)
+{
+	char buf[BC_PROTO_MAX_ERROR_TEXT + 1];
+	memcpy(buf, c->m.error.text.ptr, c->m.error.text.len);
+	buf[c->m.error.text.len] = '\0';
+	return strstr(buf, text) != NULL;
+}
+
+/* Nodes of the scene c received last (SCENE_STATE). */
+static uint32_t nodes_of(const struct conn *c)
+{
+	struct bc_tree *t = scene_of(c);
+	uint32_t n = t ? bc_tree_node_count(t) : 0;
+	bc_tree_destroy(t);
+	return n;
+}
+
+static int undo_answer(struct conn *c)
+{
+	struct bc_msg m = {.type = BC_MSG_UNDO};
+	return answer_of(c, conn_send(c, &m));
+}
+
+/* --scene-memory 1: 1 MiB at 700 bytes a node, 1497 nodes in all loaded
+ * sessions. A load, an INSERT and an UNDO that would pass it are refused
+ * (ELIMIT) while the sessions holding the nodes are in use, and nothing
+ * is unloaded for them; once those sessions have no members they are
+ * unloaded to make room, and a JOIN that loads a session is refused when
+ * no room can be made. A restart restores sessions up to the cap; the
+ * rest load when joined. */
+static void the_scene_memory_cap_holds_across_sessions(void)
+{
+	static const char *const cap[] = {"--scene-memory", "1", NULL};
+	struct bc_proto_edit_op ins = {.kind = BC_PROTO_EDIT_INSERT};
+	struct bc_proto_edit_op rm = {.kind = BC_PROTO_EDIT_REMOVE};
+	struct bc_proto_buf ga, gb, sub, one;
+	struct daemon d;
+	struct conn a, b;
+	char dir[64], log[80];
+	make_dir_name(dir, sizeof(dir), "room");
+	snprintf(log, sizeof(log), "%s.log", dir);
+	daemon_log_path = log;
+	REQUIRE(daemon_start_with(&d, dir, cap) == 0);
+	REQUIRE(conn_open(&a, &d) == 0 && conn_hello(&a, "a") == 0);
+	REQUIRE(conn_open(&b, &d) == 0 && conn_hello(&b, "b") == 0);
+	/* a: 703 nodes; b: 801 do not fit beside them. */
+	REQUIRE(conn_join(&a, "a", BC_PROTO_ROLE_EDITOR, true) == 0);
+	ga = two_groups(400, 300, 10000);
+	CHECK_EQ_INT(load_answer(&a, &ga), 1);
+	REQUIRE(conn_join(&b, "b", BC_PROTO_ROLE_EDITOR, true) == 0);
+	one = spheres_at(10, 1, 5000);
+	CHECK_EQ_INT(load_answer(&b, &one), 1);
+	bc_proto_buf_finish(&one);
+	gb = two_groups(400, 398, 20000);
+	CHECK_EQ_INT(load_answer(&b, &gb), -BC_ELIMIT);
+	CHECK(error_says(&b, "--scene-memory"));
+	CHECK_EQ_INT(daemon_log_count(log, "unloaded (its memory"), 0);
+	/* An INSERT of 791 nodes neither; one of a sphere does. */
+	sub = spheres_at(790, 0, 0);
+	one = spheres_at(1, 1, 0);
+	ins.node = 5000;
+	ins.subtree.ptr = sub.data;
+	ins.subtree.len = (uint32_t)sub.len;
+	CHECK_EQ_INT(edit_answer(&b, &ins), -BC_ELIMIT);
+	ins.subtree.ptr = one.data;
+	ins.subtree.len = (uint32_t)one.len;
+	CHECK_EQ_INT(edit_answer(&b, &ins), 1);
+	/* Once a is left, it goes for b's load (default before it). */
+	leave(&a);
+	CHECK_EQ_INT(load_answer(&b, &gb), 1);
+	CHECK_EQ_INT(daemon_log_count(log, "session a unloaded (its memory"),
+	             1);
+	/* a cannot load beside b's 801 nodes ... */
+	CHECK_EQ_INT(
+	    session_request(&a, BC_MSG_SESSION_JOIN, "a", BC_PROTO_ROLE_EDITOR),
+	    -BC_ELIMIT);
+	/* ... until b takes away its first group (401 nodes) */
+	rm.node = 20001;
+	CHECK_EQ_INT(edit_answer(&b, &rm), 1);
+	REQUIRE(conn_join(&a, "a", BC_PROTO_ROLE_EDITOR, false) == 0);
+	REQUIRE(conn_expect(&a, BC_MSG_SCENE_STATE, 10000) == 1);
+	CHECK_EQ_INT(nodes_of(&a), 703);
+	/* and b's UNDO, which would put them back, waits for a to go. */
+	CHECK_EQ_INT(undo_answer(&b), -BC_ELIMIT);
+	leave(&a);
+	CHECK_EQ_INT(undo_answer(&b), 1);
+	CHECK_EQ_INT(daemon_log_count(log, "session a unloaded (its memory"),
+	             2);
+	conn_close(&a);
+	conn_close(&b);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+	/* A restart restores a (703 nodes), not b (801) beside it; b loads
+	 * when joined, a unloaded for it. */
+	REQUIRE(daemon_start_with(&d, dir, cap) == 0);
+	daemon_log_path = NULL;
+	CHECK_EQ_INT(daemon_log_count(log, "stays on disk until joined"), 1);
+	CHECK_EQ_INT(daemon_log_count(log, "session b stays on disk"), 1);
+	REQUIRE(conn_open(&b, &d) == 0 && conn_hello(&b, "b") == 0);
+	REQUIRE(conn_join(&b, "b", BC_PROTO_ROLE_VIEWER, false) == 0);
+	REQUIRE(conn_expect(&b, BC_MSG_SCENE_STATE, 10000) == 1);
+	CHECK_EQ_INT(nodes_of(&b), 801);
+	CHECK_EQ_INT(daemon_log_count(log, "session a unloaded (its memory"),
+	             1);
+	conn_close(&b);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+	bc_proto_buf_finish(&ga);
+	bc_proto_buf_finish(&gb);
+	bc_proto_buf_finish(&sub);
+	bc_proto_buf_finish(&one);
+}
+
 static const struct bc_test tests[] = {
     {"a_trickled_message_times_out", a_trickled_message_times_out},
     {"an_idle_client_in_no_session_is_dropped",
@@ -1156,6 +1309,8 @@ static const struct bc_test tests[] = {
     {"a_deleted_session_is_gone_for_good", a_deleted_session_is_gone_for_good},
     {"a_large_load_does_not_hold_other_sessions",
      a_large_load_does_not_hold_other_sessions},
+    {"the_scene_memory_cap_holds_across_sessions",
+     the_scene_memory_cap_holds_across_sessions},
 };
 
 int main(int argc, char **argv)
