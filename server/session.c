@@ -732,7 +732,9 @@ int bc__room_take(struct bc_session *s, uint64_t after, uint64_t *taken,
 		return bc_errinfo_set(
 		    ei, BC_ELIMIT,
 		    "a scene of %" PRIu64 " nodes is more than this server "
-		    "holds in all (%" PRIu64 " nodes, --scene-memory)",
+		    "holds in all its sessions (%" PRIu64
+		    " nodes, --scene-memory): a smaller scene, or a server "
+		    "given more memory, takes it",
 		    after, ss->nodes_cap);
 	}
 	/* Nothing is unloaded for a change that would not fit even so. */
