@@ -25,6 +25,10 @@ int bc_cli_failed(const struct bc_cli_call *a, const struct bc_client *c,
 	enum bc_cli_stage stage =
 	    c ? BC_CLI_STAGE_SESSION : BC_CLI_STAGE_CONNECT;
 	const char *hint = bc_cli_hint(ei->code, stage, ei->msg);
+	size_t wl = what ? strlen(what) : 0;
+	if (what && strncmp(ei->msg, what, wl) == 0 && ei->msg[wl] == ':') {
+		what = NULL; /* the server's text says it already */
+	}
 	fprintf(stderr, "blobcast %s: %s%s%s (%s)\n", a->cmd, what ? what : "",
 	        what ? ": " : "", ei->msg[0] ? ei->msg : bc_strerror(ei->code),
 	        bc_err_name(ei->code));

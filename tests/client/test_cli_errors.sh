@@ -279,6 +279,28 @@ else
   echo "note: no openssl: the TLS checks are skipped"
 fi
 
+# --- a server's refusal, said once --------------------------------------------
+# A daemon whose scenes may hold 1 497 nodes (--scene-memory 1) refuses a
+# load of 2 000 spheres; the CLI says "scene not loaded" once, then the
+# server's reason and what to do.
+"$BLOBCASTD" --listen 127.0.0.1:0 --data "$tmp/small" --backend cpu \
+  --log warn --scene-memory 1 > "$tmp/small.log" 2>&1 &
+small=$!
+pids="$pids $small"
+if ! sport=$(wait_port "$tmp/small.log" "$small"); then
+  fail "the daemon with --scene-memory 1 did not start: $(cat "$tmp/small.log")"
+else
+  "$BLOBCAST" gen fig18 --count 2000 --kind spheres --out "$tmp/2000.json" ||
+    fail "gen fig18 --count 2000"
+  run 1 "scene not loaded: a scene of 2001 nodes is more than this server" \
+    load "$tmp/2000.json" --server "127.0.0.1:$sport" --session big
+  run 1 "--scene-memory" load "$tmp/2000.json" \
+    --server "127.0.0.1:$sport" --session big
+  if grep -q "not loaded: scene not loaded" "$tmp/out"; then
+    fail "the refusal says \"scene not loaded\" twice: $(cat "$tmp/out")"
+  fi
+fi
+
 # The daemons served on through all of it.
 run 0 "default" sessions $D $ED
 stop_all
