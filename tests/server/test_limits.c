@@ -398,17 +398,31 @@ static struct bc_proto_buf scattered(uint32_t n)
 	return b;
 }
 
-/* Sends the SCENE_LOAD of b from c and waits for its SCENE_STATE. */
-static void load_and_wait(struct conn *c, const struct bc_proto_buf *b)
+/* c's SCENE_LOAD of b: 1 when its SCENE_STATE came, else the ERROR's
+ * code (0: neither). */
+static int load_answer(struct conn *c, const struct bc_proto_buf *b)
 {
 	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
 	uint32_t seq;
 	m.scene_load.scene.ptr = b->data;
 	m.scene_load.scene.len = (uint32_t)b->len;
-	REQUIRE((seq = conn_send(c, &m)));
-	do {
-		REQUIRE(conn_expect(c, BC_MSG_SCENE_STATE, 60000) == 1);
-	} while (c->m.scene_state.author_seq != seq);
+	seq = conn_send(c, &m);
+	while (conn_recv(c, 60000) == 1) {
+		if (c->m.type == BC_MSG_ERROR && c->m.seq == seq) {
+			return c->m.error.code;
+		}
+		if (c->m.type == BC_MSG_SCENE_STATE &&
+		    c->m.scene_state.author_seq == seq) {
+			return 1;
+		}
+	}
+	return 0;
+}
+
+/* Sends the SCENE_LOAD of b from c and waits for its SCENE_STATE. */
+static void load_and_wait(struct conn *c, const struct bc_proto_buf *b)
+{
+	REQUIRE(load_answer(c, b) == 1);
 }
 
 /* A daemon holding 1 MiB for a client (--client-queue) and a scene of
@@ -1146,27 +1160,6 @@ static struct bc_proto_buf two_groups(uint32_t g1, uint32_t g2, uint32_t id)
 		}
 	}
 	return b;
-}
-
-/* c's SCENE_LOAD of b: 1 when its SCENE_STATE came, else the ERROR's
- * code (0: neither). */
-static int load_answer(struct conn *c, const struct bc_proto_buf *b)
-{
-	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
-	uint32_t seq;
-	m.scene_load.scene.ptr = b->data;
-	m.scene_load.scene.len = (uint32_t)b->len;
-	seq = conn_send(c, &m);
-	while (conn_recv(c, 60000) == 1) {
-		if (c->m.type == BC_MSG_ERROR && c->m.seq == seq) {
-			return c->m.error.code;
-		}
-		if (c->m.type == BC_MSG_SCENE_STATE &&
-		    c->m.scene_state.author_seq == seq) {
-			return 1;
-		}
-	}
-	return 0;
 }
 
 /* Whether the ERROR c received last holds text. */
