@@ -940,14 +940,25 @@ int bc_sessions_new(struct bc_sessions **out,
 	uv_timer_init(ss->loop, &ss->sweep);
 	ss->sweep.data = ss;
 	uv_timer_start(&ss->sweep, sweep_idle, sweep_ms, sweep_ms);
-	/* Sessions on disk load now up to the table's size and the scene
-	 * memory; the others when joined. */
-	n = bc__index_count(ss->index);
+	/* "default" first, always there unless its scene alone passes
+	 * --scene-memory (it then loads when joined, refused); then the
+	 * other sessions on disk up to the table's size and the scene
+	 * memory, the rest when joined. */
 	ss->starting = true;
-	for (uint32_t i = 0; i < n && ss->nsessions + 1 < BC_SRV_MAX_SESSIONS;
+	if ((rc = session_open_now(ss, "default", &s, ei)) == BC_ELIMIT) {
+		bc_log(BC_LOG_WARN, "session default stays on disk: %s",
+		       ei->msg);
+	} else if (rc) {
+		return rc;
+	}
+	n = bc__index_count(ss->index);
+	for (uint32_t i = 0; i < n && ss->nsessions < BC_SRV_MAX_SESSIONS;
 	     i++) {
 		struct bc_errinfo e = {0};
 		const char *name = bc__index_at(ss->index, i)->name;
+		if (strcmp(name, "default") == 0) {
+			continue;
+		}
 		if ((rc = session_open_now(ss, name, &s, &e)) == BC_ELIMIT) {
 			bc_log(BC_LOG_INFO,
 			       "session %s stays on disk until joined: %s",
@@ -958,9 +969,6 @@ int bc_sessions_new(struct bc_sessions **out,
 		}
 	}
 	ss->starting = false;
-	if (!bc__session_by_name(ss, "default", 7)) {
-		return session_open_now(ss, "default", &s, ei);
-	}
 	return 0;
 }
 

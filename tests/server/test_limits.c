@@ -1274,6 +1274,39 @@ static void the_scene_memory_cap_holds_across_sessions(void)
 	bc_proto_buf_finish(&one);
 }
 
+/* A daemon restarted with less --scene-memory than session "default"'s
+ * scene alone starts all the same, says so, and refuses a JOIN of it
+ * with ELIMIT, not an EIO or a daemon that does not start. */
+static void a_default_scene_past_the_budget_waits_on_disk(void)
+{
+	static const char *const roomy[] = {"--scene-memory", "2", NULL};
+	static const char *const tight[] = {"--scene-memory", "1", NULL};
+	struct bc_proto_buf big = spheres_at(2000, 0, 0);
+	struct daemon d;
+	struct conn a;
+	char dir[64], log[80];
+	make_dir_name(dir, sizeof(dir), "bigdefault");
+	snprintf(log, sizeof(log), "%s.log", dir);
+	REQUIRE(daemon_start_with(&d, dir, roomy) == 0);
+	REQUIRE(conn_open(&a, &d) == 0 && conn_hello(&a, "a") == 0);
+	REQUIRE(conn_join(&a, "default", BC_PROTO_ROLE_EDITOR, false) == 0);
+	CHECK_EQ_INT(load_answer(&a, &big), 1);
+	conn_close(&a);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+	daemon_log_path = log;
+	REQUIRE(daemon_start_with(&d, dir, tight) == 0);
+	daemon_log_path = NULL;
+	CHECK_EQ_INT(daemon_log_count(log, "session default stays on disk"), 1);
+	REQUIRE(conn_open(&a, &d) == 0 && conn_hello(&a, "a") == 0);
+	CHECK_EQ_INT(session_request(&a, BC_MSG_SESSION_JOIN, "default",
+	                             BC_PROTO_ROLE_VIEWER),
+	             -BC_ELIMIT);
+	CHECK(error_says(&a, "more than this server holds in all"));
+	conn_close(&a);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+	bc_proto_buf_finish(&big);
+}
+
 static const struct bc_test tests[] = {
     {"a_trickled_message_times_out", a_trickled_message_times_out},
     {"an_idle_client_in_no_session_is_dropped",
@@ -1304,6 +1337,8 @@ static const struct bc_test tests[] = {
      a_large_load_does_not_hold_other_sessions},
     {"the_scene_memory_cap_holds_across_sessions",
      the_scene_memory_cap_holds_across_sessions},
+    {"a_default_scene_past_the_budget_waits_on_disk",
+     a_default_scene_past_the_budget_waits_on_disk},
 };
 
 int main(int argc, char **argv)
