@@ -23,6 +23,7 @@
 #include <math.h>
 #include <stdbool.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "blobcast/alloc.h"
 #include "packet.h"
@@ -47,6 +48,44 @@ static bool frags_sorted(const struct bc__frag *list, uint32_t n)
 		}
 	}
 	return true;
+}
+
+/* Lists from this length on are sorted by counting, not by qsort. */
+#define RADIX_MIN 256u
+
+/* A list is listed in primitive order (its candidates are): two stable
+ * counting passes over its entries' bytes then give the order of (entry,
+ * primitive), qsort's, at a fraction of its time (sorting the lists of a
+ * million spheres' new view was a fifth of the frame). A short list, or
+ * one not in primitive order, takes qsort. */
+void bc__frags_sort(struct bc__frag *list, uint32_t n, struct bc__frag *tmp)
+{
+	uint32_t at[256];
+	bool by_prim = n >= RADIX_MIN && tmp;
+	for (uint32_t i = 1; by_prim && i < n; i++) {
+		by_prim = list[i - 1].prim < list[i].prim;
+	}
+	if (!by_prim) {
+		qsort(list, n, sizeof(*list), frag_cmp);
+		return;
+	}
+	for (unsigned shift = 0; shift < 16; shift += 8) {
+		const struct bc__frag *src = shift ? tmp : list;
+		struct bc__frag *dst = shift ? list : tmp;
+		uint32_t sum = 0;
+		memset(at, 0, sizeof(at));
+		for (uint32_t i = 0; i < n; i++) {
+			at[(src[i].q0 >> shift) & 255u]++;
+		}
+		for (uint32_t k = 0; k < 256; k++) {
+			uint32_t c = at[k];
+			at[k] = sum;
+			sum += c;
+		}
+		for (uint32_t i = 0; i < n; i++) {
+			dst[at[(src[i].q0 >> shift) & 255u]++] = src[i];
+		}
+	}
 }
 
 /* Adds list entry e (exit t1) to the active set, keeping it sorted by
@@ -541,7 +580,7 @@ uint64_t bc__trace_tile(struct bc__tile_worker *wk,
 		return 0;
 	}
 	if (n > 1 && !frags_sorted(list, n)) {
-		qsort(list, n, sizeof(*list), frag_cmp);
+		bc__frags_sort(list, n, n <= wk->sort_cap ? wk->sort : NULL);
 	}
 	while (px.left > 0) {
 		float z_begin, max_exit = -INFINITY;

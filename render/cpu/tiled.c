@@ -194,6 +194,7 @@ void bc__tiled_free(struct bc__tiled_bufs *b)
 		bc_free(b->workers[i].act);
 		bc_free(b->workers[i].act_t1);
 		bc_free(b->workers[i].tz);
+		bc_free(b->workers[i].sort);
 	}
 	bc_free(b);
 }
@@ -1249,6 +1250,16 @@ static int prepare_workers(struct bc__cpu *r, const struct bc_lin *lin,
 			wk->act_t1 = t1;
 			wk->cap = need;
 		}
+		if (wk->sort_cap < longest) {
+			struct bc__frag *sort =
+			    bc_malloc((size_t)longest * sizeof(*sort));
+			if (!sort) {
+				return BC_ENOMEM;
+			}
+			bc_free(wk->sort);
+			wk->sort = sort;
+			wk->sort_cap = longest;
+		}
 		if (longest > 0 && wk->view.cap < 2 * longest) {
 			/* A view of the first `longest` primitives reserves
 			 * what any active set of that size needs. */
@@ -1805,6 +1816,7 @@ static size_t tiled_kept_bytes(const struct bc_renderer *base)
 		    (size_t)wk->cap * (sizeof(*wk->act) + sizeof(*wk->act_t1)) +
 		    (size_t)wk->tile_cap * sizeof(*wk->tile_act) +
 		    (size_t)wk->tz_cap * 2 * sizeof(*wk->tz) +
+		    (size_t)wk->sort_cap * sizeof(*wk->sort) +
 		    ((size_t)wk->view.cap + wk->tile_view.cap) *
 		        sizeof(*wk->view.instr);
 	}

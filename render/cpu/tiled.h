@@ -90,6 +90,10 @@ static inline float bc__frag_t1(struct bc__zq z, const struct bc__frag *f)
 	return bc__zq_at(z, f->q1);
 }
 
+/* Sorts a tile's list (n fragments) by entry, then primitive, through tmp
+ * (room for n fragments, or NULL). */
+void bc__frags_sort(struct bc__frag *list, uint32_t n, struct bc__frag *tmp);
+
 /* One thread's scratch, reserved before a frame so tracing never
  * allocates. */
 struct bc__tile_worker {
@@ -101,6 +105,9 @@ struct bc__tile_worker {
 	 * before the tile's depth scale is known: 2 * tz_cap floats. */
 	float *tz;
 	uint32_t tz_cap;
+	/* Room to sort the longest list of the frame (tile_trace.c). */
+	struct bc__frag *sort;
+	uint32_t sort_cap;
 	uint64_t evals;
 	uint64_t short_rays;  /* rays that ran out of the frame's bound */
 	uint32_t tiles_asked; /* tiles of the region this thread took */

@@ -5,11 +5,14 @@
  * it, which the renders' agreement with `naive` only shows when the error
  * is large: these tests check the rounding itself, on depths of every
  * magnitude the renderer meets (behind the eye, a scene at the origin, one
- * a million units away, lists of one depth).
+ * a million units away, lists of one depth), and that a list sorts into
+ * one order however it is sorted.
  */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
 
 #include "test.h"
 #include "tiled.h"
@@ -123,12 +126,68 @@ static void test_steps_keep_the_order(void)
 	CHECK(z.step <= (t[N - 1] - t[0]) / (float)BC__ZQ_MAX * 1.001f);
 }
 
+static int by_entry_then_prim(const void *pa, const void *pb)
+{
+	const struct bc__frag *a = pa, *b = pb;
+	if (a->q0 != b->q0) {
+		return a->q0 < b->q0 ? -1 : 1;
+	}
+	return (a->prim > b->prim) - (a->prim < b->prim);
+}
+
+/* bc__frags_sort gives qsort's order by (entry, primitive): for lists in
+ * primitive order as they are listed (counted from 256 entries on), with
+ * entries spread over all 16 bits, bunched in a few steps or all equal;
+ * without room to count in; and for lists out of primitive order. */
+static void test_sorts_lists_as_qsort_does(void)
+{
+	static const uint32_t lens[] = {2, 255, 256, 257, 1000, 70000};
+	static const uint32_t spreads[] = {65536, 7, 1};
+	enum { MAX = 70000 };
+	struct bc__frag *a = malloc(MAX * sizeof(*a));
+	struct bc__frag *want = malloc(MAX * sizeof(*want));
+	struct bc__frag *c = malloc(MAX * sizeof(*c));
+	struct bc__frag *tmp = malloc(MAX * sizeof(*tmp));
+	REQUIRE(a && want && c && tmp);
+	for (size_t i = 0; i < sizeof(lens) / sizeof(lens[0]); i++) {
+		for (size_t s = 0; s < 3; s++) {
+			uint32_t n = lens[i], prim = 0;
+			for (uint32_t k = 0; k < n; k++) {
+				prim += 1u + (uint32_t)(uniform() * 50.0);
+				a[k].prim = prim;
+				a[k].q0 = (uint16_t)(uniform() * spreads[s]);
+				a[k].q1 = (uint16_t)k;
+			}
+			memcpy(want, a, n * sizeof(*a));
+			qsort(want, n, sizeof(*want), by_entry_then_prim);
+			for (int how = 0; how < 3; how++) {
+				memcpy(c, a, n * sizeof(*a));
+				for (uint32_t k = 0; how == 2 && k + 1 < n;
+				     k++) {
+					uint32_t j =
+					    k + (uint32_t)(uniform() * (n - k));
+					struct bc__frag x = c[k];
+					c[k] = c[j];
+					c[j] = x;
+				}
+				bc__frags_sort(c, n, how == 1 ? NULL : tmp);
+				CHECK(memcmp(c, want, n * sizeof(*c)) == 0);
+			}
+		}
+	}
+	free(a);
+	free(want);
+	free(c);
+	free(tmp);
+}
+
 static const struct bc_test tests[] = {
     {"fragment_is_eight_bytes", test_fragment_is_eight_bytes},
     {"steps_round_outward_at_every_magnitude",
      test_steps_round_outward_at_every_magnitude},
     {"degenerate_lists", test_degenerate_lists},
     {"steps_keep_the_order", test_steps_keep_the_order},
+    {"sorts_lists_as_qsort_does", test_sorts_lists_as_qsort_does},
 };
 
 BC_TEST_MAIN(tests)
