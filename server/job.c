@@ -857,15 +857,17 @@ static int start(struct bc_work *w, struct flow *f, struct bc_job *job,
 			return rc;
 		}
 	}
-	/* The renderer keeps state for one view: for another it would be
-	 * rebuilt anyway, so it goes first and the cap has room for it. */
+	/* The renderer keeps state for one view: for another size it would
+	 * be rebuilt anyway, so it goes first and the cap has room for it.
+	 * Another camera at the same size keeps its buffers, which the new
+	 * view's lists fill again (the renderer sees the camera change):
+	 * freed and asked for again, their pages were faulted in anew at
+	 * every step of an orbit, a sixth of a million spheres' frame. */
 	if (f->r && (f->rw != job->req.width || f->rh != job->req.height ||
-	             memcmp(&f->rwin, &job->req.win, sizeof(f->rwin)) ||
-	             memcmp(&f->rcam, &job->req.camera, sizeof(f->rcam)))) {
+	             memcmp(&f->rwin, &job->req.win, sizeof(f->rwin)))) {
 		bc_renderer_release(f->r);
 		bc__flow_kept(w, f);
 	}
-	f->rcam = job->req.camera;
 	f->rwin = job->req.win;
 	f->rw = job->req.width;
 	f->rh = job->req.height;

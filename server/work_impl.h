@@ -124,9 +124,8 @@ struct flow {
 	uint32_t ray_bound;
 	uint64_t render_calls; /* renderer calls of its slices */
 	size_t kept_bytes;     /* renderer state, counted in the cache */
-	/* The view the renderer keeps state for (bc_renderer_release when
-	 * another comes). */
-	struct bc_camera rcam;
+	/* The view size and window the renderer keeps state for
+	 * (bc_renderer_release when another comes). */
 	uint32_t rw, rh;
 	struct bc_job_window rwin;
 };
