@@ -413,6 +413,87 @@ static void a_frame_that_cannot_be_drawn_is_an_error(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
+/* Sends cam and returns the still of c's view after it (RGBA, VW x VH,
+ * malloc'ed; NULL when none came whole): the frames in between are
+ * read. Waits for no earlier frame: the caller had the last still. */
+static uint8_t *still_at(struct conn *c, const struct bc_camera *cam)
+{
+	uint8_t *img;
+	if (!send_camera(c, cam)) {
+		return NULL;
+	}
+	do {
+		if (conn_expect(c, BC_MSG_FRAME, 60000) != 1) {
+			return NULL;
+		}
+	} while (!(c->m.flags & BC_PROTO_FLAG_STILL));
+	if (bc_proto_flags_level(c->m.flags) != 0 || c->m.frame.nrects != 1 ||
+	    c->m.frame.rects[0].w != VW || c->m.frame.rects[0].h != VH ||
+	    !(img = malloc((size_t)VW * VH * 4u))) {
+		return NULL;
+	}
+	paste(c, img, VW);
+	return img;
+}
+
+/* An orbit keeps the renderer's buffers from camera to camera (job.c):
+ * each camera's still must be the picture a fresh start at that camera
+ * gives, for the CPU tracer (against a local render, at every camera)
+ * and for the gl backend (against a second daemon that starts there). */
+static void an_orbit_draws_each_camera_as_from_scratch(void)
+{
+	static const char *const gl[] = {"--backend", "gl", NULL};
+	static const char *const *const backends[] = {NULL, gl};
+	for (int k = 0; k < 2; k++) {
+		struct daemon d, fresh;
+		struct conn a, b;
+		struct bc_tree *t = NULL;
+		struct bc_camera cam, last;
+		uint8_t *img = NULL, *want;
+		test_camera(&cam);
+		REQUIRE(daemon_start_with(&d, "/tmp/bc-test-frames-e",
+		                          backends[k]) == 0);
+		join_with_view(&d, &a, &t, &cam);
+		do {
+			REQUIRE(conn_expect(&a, BC_MSG_FRAME, 60000) == 1);
+		} while (!(a.m.flags & BC_PROTO_FLAG_STILL));
+		for (int step = 1; step <= 5; step++) {
+			float ang = 0.35f * (float)step;
+			uint32_t w, h;
+			cam.eye[0] = 7.0f * sinf(ang);
+			cam.eye[2] = 7.0f * cosf(ang);
+			cam.eye[1] = 1.0f + 0.4f * (float)(step % 2);
+			free(img);
+			REQUIRE((img = still_at(&a, &cam)) != NULL);
+			if (k == 0) {
+				REQUIRE((want = local_picture(t, &cam, 0, &w,
+				                              &h)) != NULL);
+				CHECK(memcmp(img, want, (size_t)VW * VH * 4u) ==
+				      0);
+				free(want);
+			}
+		}
+		last = cam;
+		conn_close(&a);
+		CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+		/* A daemon that draws the last camera first. */
+		REQUIRE(daemon_start_with(&fresh, "/tmp/bc-test-frames-f",
+		                          backends[k]) == 0);
+		join_with_view(&fresh, &b, &t, &last);
+		do {
+			REQUIRE(conn_expect(&b, BC_MSG_FRAME, 60000) == 1);
+		} while (!(b.m.flags & BC_PROTO_FLAG_STILL));
+		REQUIRE(b.m.frame.nrects == 1);
+		CHECK(b.m.frame.rects[0].data.len == (size_t)VW * VH * 4u &&
+		      memcmp(b.m.frame.rects[0].data.ptr, img,
+		             (size_t)VW * VH * 4u) == 0);
+		free(img);
+		bc_tree_destroy(t);
+		conn_close(&b);
+		CHECK(WIFEXITED(daemon_stop(&fresh, SIGTERM)));
+	}
+}
+
 static const struct bc_test tests[] = {
     {"pictures_refine_to_the_still_and_edits_patch_exactly",
      pictures_refine_to_the_still_and_edits_patch_exactly},
@@ -422,6 +503,8 @@ static const struct bc_test tests[] = {
      a_snapshot_carries_depth_and_ids_of_a_whole_render},
     {"a_frame_that_cannot_be_drawn_is_an_error",
      a_frame_that_cannot_be_drawn_is_an_error},
+    {"an_orbit_draws_each_camera_as_from_scratch",
+     an_orbit_draws_each_camera_as_from_scratch},
 };
 
 int main(int argc, char **argv)
@@ -429,7 +512,8 @@ int main(int argc, char **argv)
 	signal(SIGPIPE, SIG_IGN);
 	(void)conn_hello; /* daemon.h's all-encodings HELLO: not used here */
 	if (system("rm -rf /tmp/bc-test-frames-a /tmp/bc-test-frames-b "
-	           "/tmp/bc-test-frames-c /tmp/bc-test-frames-d") != 0) {
+	           "/tmp/bc-test-frames-c /tmp/bc-test-frames-d "
+	           "/tmp/bc-test-frames-e /tmp/bc-test-frames-f") != 0) {
 		return 1;
 	}
 	return bc_test_run(tests, sizeof(tests) / sizeof(tests[0]), argc, argv);
