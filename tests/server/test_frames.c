@@ -474,6 +474,7 @@ static void an_orbit_draws_each_camera_as_from_scratch(void)
 			}
 		}
 		last = cam;
+		bc_tree_destroy(t);
 		conn_close(&a);
 		CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 		/* A daemon that draws the last camera first. */
