@@ -436,6 +436,19 @@ static uint8_t *still_at(struct conn *c, const struct bc_camera *cam)
 	return img;
 }
 
+/* Starts a daemon (dir, extra options) and has c join it with a view at
+ * cam, the scene in *t; returns after the first still. */
+static void start_at(struct daemon *d, const char *dir,
+                     const char *const *extra, struct conn *c,
+                     struct bc_tree **t, const struct bc_camera *cam)
+{
+	REQUIRE(daemon_start_with(d, dir, extra) == 0);
+	join_with_view(d, c, t, cam);
+	do {
+		REQUIRE(conn_expect(c, BC_MSG_FRAME, 60000) == 1);
+	} while (!(c->m.flags & BC_PROTO_FLAG_STILL));
+}
+
 /* An orbit keeps the renderer's buffers from camera to camera (job.c):
  * each camera's still must be the picture a fresh start at that camera
  * gives, for the CPU tracer (against a local render, at every camera)
@@ -451,12 +464,8 @@ static void an_orbit_draws_each_camera_as_from_scratch(void)
 		struct bc_camera cam, last;
 		uint8_t *img = NULL, *want;
 		test_camera(&cam);
-		REQUIRE(daemon_start_with(&d, "/tmp/bc-test-frames-e",
-		                          backends[k]) == 0);
-		join_with_view(&d, &a, &t, &cam);
-		do {
-			REQUIRE(conn_expect(&a, BC_MSG_FRAME, 60000) == 1);
-		} while (!(a.m.flags & BC_PROTO_FLAG_STILL));
+		start_at(&d, "/tmp/bc-test-frames-e", backends[k], &a, &t,
+		         &cam);
 		for (int step = 1; step <= 5; step++) {
 			float ang = 0.35f * (float)step;
 			uint32_t w, h;
@@ -478,12 +487,8 @@ static void an_orbit_draws_each_camera_as_from_scratch(void)
 		conn_close(&a);
 		CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 		/* A daemon that draws the last camera first. */
-		REQUIRE(daemon_start_with(&fresh, "/tmp/bc-test-frames-f",
-		                          backends[k]) == 0);
-		join_with_view(&fresh, &b, &t, &last);
-		do {
-			REQUIRE(conn_expect(&b, BC_MSG_FRAME, 60000) == 1);
-		} while (!(b.m.flags & BC_PROTO_FLAG_STILL));
+		start_at(&fresh, "/tmp/bc-test-frames-f", backends[k], &b, &t,
+		         &last);
 		REQUIRE(b.m.frame.nrects == 1);
 		CHECK(b.m.frame.rects[0].data.len == (size_t)VW * VH * 4u &&
 		      memcmp(b.m.frame.rects[0].data.ptr, img,
