@@ -134,20 +134,31 @@ struct bc__tiled_bufs {
 	size_t prims_cap;
 	/* Per tile: state, list length, candidates (primitives whose
 	 * rectangle holds it, increasing) at cand[cand_off[t] ..
-	 * cand_end[t]) with room up to cand_lim[t], and the list at frags +
-	 * cand_off[t]. A full build lays the tiles out in order, each with
-	 * some room to spare (slack); a patch (patch_cand) rewrites a tile's
-	 * candidates in place, or, when they outgrow its room, after
-	 * cand_used. off_alt and cur are scratch. */
+	 * cand_end[t]) with room up to cand_lim[t], and the list at
+	 * frags[frag_off[t] ..] in room of frag_room[t] fragments. A full
+	 * build lays the tiles out in order, each with some room to spare
+	 * (slack); a patch (patch_cand) rewrites a tile's candidates in
+	 * place, or, when they outgrow its room, after cand_used. off_alt
+	 * and cur are scratch. */
 	uint8_t *state;
 	uint32_t *list_n, *cand_off, *cand_end, *cand_lim, *off_alt, *cur;
+	uint32_t *frag_off, *frag_room;
 	struct bc__zq *zq;  /* the depth scale of the tile's list */
 	struct cone *cones; /* CONES_PER_TILE per tile */
 	size_t tiles_cap;
 	uint32_t *cand, *scratch;
 	size_t cand_cap, cand_used, scratch_cap;
+	/* The tiles' lists, each where place_list put it: a list that
+	 * fits its tile's room is written there, a longer one gets room of
+	 * its own after frags_used. A cone test drops about half of a
+	 * tile's candidates, so lists kept at their candidates' offsets (as
+	 * they were) left half of an array as big as the candidates, 8
+	 * bytes an entry, unused: 82 MB, 46 of them empty, for a million
+	 * spheres at 1024x768. Room of a tile is its own (frag_room 0:
+	 * none) until frags_reset; what lists that outgrew their room left
+	 * behind is given back when make_frag_room compacts. */
 	struct bc__frag *frags;
-	size_t frags_cap;
+	size_t frags_cap, frags_used;
 	struct bc__tile_worker workers[BC_CPU_MAX_THREADS];
 };
 
@@ -166,9 +177,11 @@ static void free_tiles(struct bc__tiled_bufs *b)
 	bc_free(b->cur);
 	bc_free(b->zq);
 	bc_free(b->cones);
+	bc_free(b->frag_off);
+	bc_free(b->frag_room);
 	b->state = NULL;
 	b->list_n = b->cand_off = b->cand_end = b->cand_lim = NULL;
-	b->off_alt = b->cur = NULL;
+	b->off_alt = b->cur = b->frag_off = b->frag_room = NULL;
 	b->zq = NULL;
 	b->cones = NULL;
 	b->tiles_cap = 0;
@@ -194,6 +207,7 @@ void bc__tiled_free(struct bc__tiled_bufs *b)
 		bc_free(b->workers[i].act);
 		bc_free(b->workers[i].act_t1);
 		bc_free(b->workers[i].tz);
+		bc_free(b->workers[i].lst);
 		bc_free(b->workers[i].sort);
 	}
 	bc_free(b);
@@ -232,13 +246,30 @@ static int grow_tiles(struct bc__tiled_bufs *b, size_t n)
 	b->cur = bc_calloc(n, sizeof(*b->cur));
 	b->zq = bc_calloc(n, sizeof(*b->zq));
 	b->cones = bc_calloc(n * CONES_PER_TILE, sizeof(*b->cones));
+	b->frag_off = bc_calloc(n, sizeof(*b->frag_off));
+	b->frag_room = bc_calloc(n, sizeof(*b->frag_room));
 	if (!b->state || !b->list_n || !b->cand_off || !b->cand_end ||
-	    !b->cand_lim || !b->off_alt || !b->cur || !b->zq || !b->cones) {
+	    !b->cand_lim || !b->off_alt || !b->cur || !b->zq || !b->cones ||
+	    !b->frag_off || !b->frag_room) {
 		free_tiles(b);
 		return BC_ENOMEM;
 	}
 	b->tiles_cap = n;
+	b->frags_used = 0; /* no tile holds room now */
 	return 0;
+}
+
+/* Drops every tile's list and its room: the kept lists start again at
+ * the front of b->frags. */
+static void frags_reset(struct bc__tiled_bufs *b)
+{
+	for (size_t t = 0; t < b->tiles_cap; t++) {
+		b->state[t] &= (uint8_t)~TILE_LIST;
+	}
+	if (b->tiles_cap) {
+		memset(b->frag_room, 0, b->tiles_cap * sizeof(*b->frag_room));
+	}
+	b->frags_used = 0;
 }
 
 /* ---- One frame ---------------------------------------------------------- */
@@ -273,6 +304,10 @@ struct tiled_frame {
 	/* bc_clock_ms() past which no tile starts; 0: none. */
 	double deadline;
 	atomic_uint skipped; /* tiles left as background past the deadline */
+	/* The lists phase's end of b->frags_used, and the room the lists
+	 * that did not fit b->frags asked for (place_list). */
+	_Alignas(64) _Atomic size_t frag_next;
+	_Atomic size_t frag_short;
 };
 
 /* The cone of the pixel rays through pixel centres [x0, x1] x [y0, y1]
@@ -512,6 +547,32 @@ static uint32_t slack(uint32_t n)
 	return n / 4u + 4u;
 }
 
+/* The room a tile's list of n fragments takes: less spare than a
+ * candidates' (slack), since a list is at most its candidates. */
+static uint32_t frag_slack(uint32_t n)
+{
+	return n / 8u + 4u;
+}
+
+/* Starts the kept lists again (frags_reset), with room for those of
+ * candidates that take `cands` entries, slack included: about half of a
+ * tile's candidates pass its cone test (0.46 for a million spheres at
+ * 1024x768, 0.44 for 100 000), and lists that need more are given it
+ * as they are made (make_frag_room). Room of more than the candidates
+ * (a wider view's before) is given back. Returns 0 or BC_ENOMEM. */
+static int frags_size(struct bc__tiled_bufs *b, uint64_t cands)
+{
+	size_t want = (size_t)(cands / 2u) + 1024u;
+	frags_reset(b);
+	if (b->frags_cap >= want && b->frags_cap <= 2u * want) {
+		return 0;
+	}
+	bc_free(b->frags);
+	b->frags = NULL;
+	b->frags_cap = 0;
+	return grow((void **)&b->frags, &b->frags_cap, want, sizeof(*b->frags));
+}
+
 /* build_cand's answer when the lists would pass the A-buffer's limit. */
 #define OVER_LIMIT 2
 
@@ -639,7 +700,8 @@ static uint64_t row_room(const struct tiled_frame *tf, uint32_t y)
 
 /* Builds the candidates of every tile of rows [y0, y1) from their counts
  * in b->cur (count_cand; counting sort, primitives increasing) and drops
- * their lists: a tile drawn again
+ * every tile's list (frags_size; a band's build leaves the other rows'
+ * candidates stale, their lists with them): a tile drawn again
  * computes its list from its candidates, the same list. (The lists kept
  * through an edit of many primitives once moved to their tiles' new
  * places, through a second array as big as the lists, 124 MB at a
@@ -674,7 +736,7 @@ static int build_cand(struct tiled_frame *tf, uint32_t y0, uint32_t y1)
 		return BC_ENOMEM;
 	}
 	visit_rows(tf, y0, y1, b->cand);
-	if (grow((void **)&b->frags, &b->frags_cap, room, sizeof(*b->frags))) {
+	if (frags_size(b, sum)) {
 		return BC_ENOMEM;
 	}
 	b->off_alt = b->cand_off;
@@ -682,7 +744,6 @@ static int build_cand(struct tiled_frame *tf, uint32_t y0, uint32_t y1)
 	for (uint32_t t = t0; t < t1; t++) {
 		b->cand_end[t] = b->cur[t]; /* the fill's cursor: the count */
 		b->cand_lim[t] = off[t + 1];
-		b->state[t] &= (uint8_t)~TILE_LIST;
 	}
 	b->cand_used = sum;
 	return 0;
@@ -774,8 +835,7 @@ static int patch_cand(struct tiled_frame *tf, uint32_t lo, uint32_t hi)
 			}
 		}
 	}
-	if (b->cand_used + need > b->cand_cap ||
-	    b->cand_used + need > b->frags_cap) {
+	if (b->cand_used + need > b->cand_cap) {
 		return 1;
 	}
 	if (grow_keep((void **)&b->scratch, &b->scratch_cap, longest + 1u,
@@ -916,20 +976,20 @@ static void tile_quarters(const struct tiled_frame *tf, uint32_t tx,
 /* How many candidates ahead tile_list asks for a primitive's bytes. */
 #define LIST_PREFETCH 8u
 
-/* The tile's list: for each candidate whose bounding sphere meets the
- * tile's cone, the rays of the quarters whose cones it meets are clipped
- * against the ABV; the hits make one fragment, min entry and max exit,
- * kept as floats in tz (room for the tile's candidates) until the last
- * one sets the tile's depth scale. */
+/* The tile's list, written at out: for each candidate whose bounding
+ * sphere meets the tile's cone, the rays of the quarters whose cones it
+ * meets are clipped against the ABV; the hits make one fragment, min
+ * entry and max exit, kept as floats in tz (room for the tile's
+ * candidates, as out) until the last one sets the tile's depth scale. */
 static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
                           const struct bc__ab_rays *rays,
-                          const uint64_t quarter[4], float *tz)
+                          const uint64_t quarter[4], float *tz,
+                          struct bc__frag *out)
 {
 	const struct bc__tiled_bufs *b = tf->b;
 	const struct cone *cones = &b->cones[CONES_PER_TILE * tile];
 	const float *eye = tf->fc->vr.eye;
 	const struct bc_abv *abv = tf->fc->lin->abv;
-	struct bc__frag *out = b->frags + b->cand_off[tile];
 	uint32_t n = 0;
 	float lo = INFINITY, hi = -INFINITY, inv;
 	struct bc__zq z;
@@ -1072,12 +1132,43 @@ static inline bool next_tile(struct tiled_frame *tf, uint32_t thread,
 	return false;
 }
 
+/* Keeps the tile's list of n fragments (lst): in the tile's room when it
+ * fits, else in room of its own taken from the end of the kept lists;
+ * when that is past b->frags, the room it would take is added to
+ * tf->frag_short and the list is not kept (false): it is made again once
+ * draw_tiles has made room (make_frag_room). */
+static bool place_list(struct tiled_frame *tf, uint32_t tile,
+                       const struct bc__frag *lst, uint32_t n)
+{
+	struct bc__tiled_bufs *b = tf->b;
+	if (n > b->frag_room[tile]) {
+		size_t room = (size_t)n + frag_slack(n);
+		size_t at =
+		    atomic_load_explicit(&tf->frag_next, memory_order_relaxed);
+		do {
+			if (room > b->frags_cap - at) {
+				atomic_fetch_add_explicit(&tf->frag_short, room,
+				                          memory_order_relaxed);
+				return false;
+			}
+		} while (!atomic_compare_exchange_weak_explicit(
+		    &tf->frag_next, &at, at + room, memory_order_relaxed,
+		    memory_order_relaxed));
+		b->frag_off[tile] = (uint32_t)at;
+		b->frag_room[tile] = (uint32_t)room;
+	}
+	memcpy(b->frags + b->frag_off[tile], lst, (size_t)n * sizeof(*lst));
+	b->list_n[tile] = n;
+	return true;
+}
+
 /* Phase 2, per tile of the region not yet complete: its rays and cones
  * (once per view), its list. */
 static void phase_lists(void *arg, uint32_t thread)
 {
 	struct tiled_frame *tf = arg;
 	struct bc__tiled_bufs *b = tf->b;
+	struct bc__tile_worker *wk = &b->workers[thread];
 	uint32_t tile = 0, end = 0;
 	for (;;) {
 		uint32_t tx, ty;
@@ -1100,6 +1191,7 @@ static void phase_lists(void *arg, uint32_t thread)
 		}
 		b->list_n[tile] = 0;
 		if (b->cand_end[tile] > b->cand_off[tile]) {
+			uint32_t n;
 			/* Tiles without candidates, often most of a frame's
 			 * background, need no cones. */
 			if (!(b->state[tile] & TILE_CONES)) {
@@ -1107,11 +1199,61 @@ static void phase_lists(void *arg, uint32_t thread)
 				b->state[tile] |= TILE_CONES;
 			}
 			tile_quarters(tf, tx, ty, quarter);
-			b->list_n[tile] = tile_list(tf, tile, &rays, quarter,
-			                            b->workers[thread].tz);
+			n = tile_list(tf, tile, &rays, quarter, wk->tz,
+			              wk->lst);
+			if (!place_list(tf, tile, wk->lst, n)) {
+				continue;
+			}
 		}
 		b->state[tile] |= TILE_LIST;
 	}
+}
+
+/* After a lists phase in which lists asking for `short_by` fragments of
+ * room did not fit b->frags: room for them, by compacting the kept lists
+ * into a new array when the room no tile holds (lists that outgrew their
+ * room left it behind) would give them that, or is a quarter of the used
+ * part, else by growing the array; counted in stats. Either way a
+ * quarter more than the lists need is left free, so the kept lists take
+ * at most about 1.25 times their room plus what drawing since left
+ * behind, and that less than what a compaction would give back.
+ * Returns 0 or BC_ENOMEM (nothing changed then). */
+static int make_frag_room(struct bc__tiled_bufs *b, size_t short_by,
+                          struct bc_render_stats *stats)
+{
+	size_t held = 0, live = 0, at = 0, left;
+	struct bc__frag *fresh;
+	for (size_t t = 0; t < b->tiles_cap; t++) {
+		held += b->frag_room[t];
+		live += (b->state[t] & TILE_LIST) ? b->frag_room[t] : 0u;
+	}
+	left = b->frags_used - held;
+	if (left < short_by && 4u * left < b->frags_used) {
+		stats->lists_grown++;
+		return grow_keep((void **)&b->frags, &b->frags_cap,
+		                 b->frags_used + short_by, sizeof(*b->frags));
+	}
+	fresh = bc_malloc((live + short_by + (live + short_by) / 4u + 1024u) *
+	                  sizeof(*fresh));
+	if (!fresh) {
+		return BC_ENOMEM;
+	}
+	for (size_t t = 0; t < b->tiles_cap; t++) {
+		if (!(b->state[t] & TILE_LIST)) {
+			b->frag_room[t] = 0;
+			continue;
+		}
+		memcpy(fresh + at, b->frags + b->frag_off[t],
+		       (size_t)b->list_n[t] * sizeof(*fresh));
+		b->frag_off[t] = (uint32_t)at;
+		at += b->frag_room[t];
+	}
+	stats->lists_compacted++;
+	bc_free(b->frags);
+	b->frags = fresh;
+	b->frags_cap = live + short_by + (live + short_by) / 4u + 1024u;
+	b->frags_used = at;
+	return 0;
 }
 
 /* Past the frame budget: the tile's asked pixels become background. */
@@ -1169,7 +1311,7 @@ static void phase_trace(void *arg, uint32_t thread)
 		job = (struct bc__tile_job){
 		    .fc = fc,
 		    .dirs = tf->b->dirs,
-		    .list = tf->b->frags + tf->b->cand_off[tile],
+		    .list = tf->b->frags + tf->b->frag_off[tile],
 		    .n = tf->b->list_n[tile],
 		    .zq = tf->b->zq[tile],
 		    .x0 = tx * BC_CPU_TILE,
@@ -1200,8 +1342,8 @@ static int tiled_create(struct bc_renderer **out,
 	return bc__cpu_create(out, BC__CPU_TILED, opts, ei);
 }
 
-/* Gives every worker room for the depths of `longest` fragments, here on
- * the calling thread (tile_list's tz). */
+/* Gives every worker room for the depths and the list of `longest`
+ * fragments, here on the calling thread (tile_list's tz and out). */
 static int prepare_listers(struct bc__cpu *r, uint32_t longest)
 {
 	struct bc__tiled_bufs *b = r->tiled;
@@ -1210,11 +1352,17 @@ static int prepare_listers(struct bc__cpu *r, uint32_t longest)
 		if (wk->tz_cap < longest) {
 			float *tz =
 			    bc_malloc(2 * (size_t)longest * sizeof(*tz));
-			if (!tz) {
+			struct bc__frag *lst =
+			    bc_malloc((size_t)longest * sizeof(*lst));
+			if (!tz || !lst) {
+				bc_free(tz);
+				bc_free(lst);
 				return BC_ENOMEM;
 			}
 			bc_free(wk->tz);
+			bc_free(wk->lst);
 			wk->tz = tz;
+			wk->lst = lst;
 			wk->tz_cap = longest;
 		}
 	}
@@ -1395,6 +1543,29 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 	return rc;
 }
 
+/* Phase 2 over the region: every tile's list made and kept, the room
+ * for those that did not fit made and the phase run again for them
+ * (their lists are the same again: it runs once more at most). Returns
+ * 0 or BC_ENOMEM. */
+static int list_tiles(struct tiled_frame *tf, struct bc_render_stats *stats)
+{
+	struct bc__tiled_bufs *b = tf->b;
+	size_t short_by = 0;
+	do {
+		int rc;
+		if (short_by && (rc = make_frag_room(b, short_by, stats))) {
+			return rc;
+		}
+		atomic_store(&tf->frag_next, b->frags_used);
+		atomic_store(&tf->frag_short, 0u);
+		spans_init(tf);
+		bc_pool_run(tf->threads, phase_lists, tf);
+		b->frags_used = atomic_load(&tf->frag_next);
+		short_by = atomic_load(&tf->frag_short);
+	} while (short_by);
+	return 0;
+}
+
 /* Lists and traces the region's tiles in [tf->t0, tf->t1), whose
  * candidates are built, adding the work to stats. Returns 0 or
  * BC_ENOMEM. */
@@ -1418,8 +1589,9 @@ static int draw_tiles(struct bc__cpu *r, struct tiled_frame *tf,
 		if ((rc = prepare_listers(r, widest))) {
 			return rc;
 		}
-		spans_init(tf);
-		bc_pool_run(tf->threads, phase_lists, tf);
+		if ((rc = list_tiles(tf, stats))) {
+			return rc;
+		}
 	}
 	for (uint32_t t = tf->t0; t < tf->t1; t++) {
 		if ((!region->tiles || region->tiles[t]) &&
@@ -1656,7 +1828,7 @@ static void follow_tile(struct bc__tiled_bufs *b, uint32_t t, uint32_t lo,
 		b->state[t] &= (uint8_t)~TILE_LIST;
 		b->cand_end[t] = w;
 	} else if ((b->state[t] & TILE_LIST) && shift) {
-		struct bc__frag *f = b->frags + o;
+		struct bc__frag *f = b->frags + b->frag_off[t];
 		for (uint32_t i = 0; i < b->list_n[t]; i++) {
 			f[i].prim += f[i].prim >= hi ? shift : 0u;
 		}
@@ -1805,9 +1977,11 @@ static size_t tiled_kept_bytes(const struct bc_renderer *base)
 	    b->row_prims_cap * sizeof(*b->row_prims) +
 	    b->scratch_cap * sizeof(*b->scratch);
 	if (b->tiles_cap) {
-		n += b->tiles_cap * (sizeof(*b->state) + sizeof(*b->list_n) +
-		                     sizeof(*b->cur) + sizeof(*b->zq) +
-		                     CONES_PER_TILE * sizeof(*b->cones)) +
+		n += b->tiles_cap *
+		         (sizeof(*b->state) + sizeof(*b->list_n) +
+		          sizeof(*b->cur) + sizeof(*b->zq) +
+		          sizeof(*b->frag_off) + sizeof(*b->frag_room) +
+		          CONES_PER_TILE * sizeof(*b->cones)) +
 		     2 * (b->tiles_cap + 1) * sizeof(*b->cand_off);
 	}
 	for (uint32_t i = 0; i < BC_CPU_MAX_THREADS; i++) {
@@ -1815,7 +1989,8 @@ static size_t tiled_kept_bytes(const struct bc_renderer *base)
 		n +=
 		    (size_t)wk->cap * (sizeof(*wk->act) + sizeof(*wk->act_t1)) +
 		    (size_t)wk->tile_cap * sizeof(*wk->tile_act) +
-		    (size_t)wk->tz_cap * 2 * sizeof(*wk->tz) +
+		    (size_t)wk->tz_cap *
+		        (2 * sizeof(*wk->tz) + sizeof(*wk->lst)) +
 		    (size_t)wk->sort_cap * sizeof(*wk->sort) +
 		    ((size_t)wk->view.cap + wk->tile_view.cap) *
 		        sizeof(*wk->view.instr);

@@ -102,8 +102,11 @@ struct bc__tile_worker {
 	float *act_t1; /* their exits */
 	uint32_t cap;  /* room in act and act_t1 */
 	/* The entry and exit of each fragment of the tile being listed,
-	 * before the tile's depth scale is known: 2 * tz_cap floats. */
+	 * before the tile's depth scale is known: 2 * tz_cap floats; and
+	 * the list itself (tz_cap fragments), until it has its place among
+	 * the kept lists (tiled.c, place_list). */
 	float *tz;
+	struct bc__frag *lst;
 	uint32_t tz_cap;
 	/* Room to sort the longest list of the frame (tile_trace.c). */
 	struct bc__frag *sort;

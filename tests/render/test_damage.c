@@ -1405,6 +1405,100 @@ static void test_tiled_group_edits_are_exact(void)
 	free(tiles);
 }
 
+#define SEED_LIST_ROOM 0x77u
+
+/* Flat boxes facing the camera, overlapping: a tile's cone test keeps
+ * most of its candidates (their rectangles are nearly their
+ * silhouettes), so that the lists take more room than a build keeps for
+ * them. Primitive k is child k of the root (group_move). */
+static void box_stack(struct bc_tree *t, uint32_t n)
+{
+	struct bc_op_data u = {.kind = BC_OP_UNION};
+	REQUIRE(bc_tree_begin(t) == 0 && bc_tree_push_op(t, 0, &u, NULL) == 0);
+	for (uint32_t k = 0; k < n; k++) {
+		struct bc_prim_data p;
+		bc_prim_data_init(&p, BC_PRIM_BOX);
+		p.params[0] = dmg_float(1.0f, 3.0f);
+		p.params[1] = dmg_float(1.0f, 3.0f);
+		p.params[2] = 0.2f;
+		p.translate[0] = dmg_float(-4.0f, 4.0f);
+		p.translate[1] = dmg_float(-3.0f, 3.0f);
+		p.translate[2] = dmg_float(-2.0f, 2.0f);
+		REQUIRE(bc_tree_put_prim(t, 0, &p, NULL) == 0);
+	}
+	REQUIRE(bc_tree_pop_op(t, NULL) == 0 && bc_tree_end(t, NULL) == 0);
+}
+
+/* Lists that outgrow the room kept for them: the first frame of
+ * box_stack's view grows the room, and moves of groups of boxes far
+ * across the frame, whose tiles' lists then outgrow their rooms and
+ * leave them behind, compact it (edits go on until it has twice, 400 at
+ * most). Every frame drawn from the kept lists equals a fresh
+ * renderer's. */
+static void test_tiled_lists_outgrow_their_room(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_renderer *r = NULL, *ref = NULL;
+	struct bc_render_opts ro = {.threads = 2};
+	struct bc_frame f = {0}, g = {0};
+	struct bc_render_stats st;
+	struct bc_camera cam;
+	struct bc_dirty dirty;
+	struct bc_errinfo ei = {0};
+	uint32_t w = 320, h = 240, n = 96, grown = 0, compacted = 0;
+	size_t nt = ntiles(w, h);
+	uint8_t *tiles = calloc(nt, 1);
+	dmg_state = SEED_LIST_ROOM; /* whichever tests ran before */
+	REQUIRE(t && tiles);
+	box_stack(t, n);
+	bc_camera_default(&cam);
+	memcpy(cam.eye, (float[3]){0.0f, 0.0f, 24.0f}, sizeof(cam.eye));
+	memset(cam.target, 0, sizeof(cam.target));
+	cam.fov_y_deg = 40.0f;
+	bc_tree_take_dirty(t, &dirty);
+	REQUIRE(bc_frame_init(&f, w, h) == 0 && bc_frame_init(&g, w, h) == 0);
+	REQUIRE(bc_renderer_create(&r, BC_BACKEND_TILED, &ro, &ei) == 0 &&
+	        bc_renderer_create(&ref, BC_BACKEND_TILED, &ro, &ei) == 0);
+	REQUIRE(bc_renderer_sync(r, t, NULL, &ei) == 0);
+	REQUIRE(bc_renderer_render(r, &cam, &f, &st, &ei) == 0);
+	grown += st.lists_grown;
+	compacted += st.lists_compacted;
+	for (int e = 0; e < 400 && (e < 40 || compacted < 2); e++) {
+		uint32_t m = 8u + dmg_below(9);
+		uint32_t first = dmg_below(n - m + 1);
+		float d = (e % 2 ? -1.0f : 1.0f) * dmg_float(3.0f, 6.0f);
+		char what[80];
+		memset(tiles, 0, nt);
+		if (group_move(t, r, &cam, w, h, first, m, d, tiles, &ei)) {
+			fprintf(stderr, "  move: %s\n", ei.msg);
+			CHECK(!"group move");
+			break;
+		}
+		bc_tree_take_dirty(t, &dirty);
+		REQUIRE(bc_renderer_sync(r, t, &dirty, &ei) == 0);
+		if (!draw_marked(r, &cam, &f, tiles, &st)) {
+			break;
+		}
+		grown += st.lists_grown;
+		compacted += st.lists_compacted;
+		REQUIRE(bc_renderer_sync(ref, t, NULL, &ei) == 0 &&
+		        bc_renderer_render(ref, &cam, &g, &st, &ei) == 0);
+		snprintf(what, sizeof(what), "%u boxes from %u moved by %g", m,
+		         first, (double)d);
+		CHECK(diff_frames(&f, &g, tiles, what) == 0);
+	}
+	fprintf(stderr, "  lists' room grown %u times, compacted %u times\n",
+	        grown, compacted);
+	CHECK(grown > 0);
+	CHECK(compacted > 0);
+	bc_renderer_destroy(r);
+	bc_renderer_destroy(ref);
+	bc_frame_finish(&f);
+	bc_frame_finish(&g);
+	bc_tree_destroy(t);
+	free(tiles);
+}
+
 static const struct bc_test tests[] = {
     {"level_partition", test_level_partition},
     {"regions_leave_other_pixels_alone", test_regions_leave_other_pixels_alone},
@@ -1415,6 +1509,7 @@ static const struct bc_test tests[] = {
     {"tiled_damage_is_exact", test_tiled_damage_is_exact},
     {"tiled_follows_structural_edits", test_tiled_follows_structural_edits},
     {"tiled_group_edits_are_exact", test_tiled_group_edits_are_exact},
+    {"tiled_lists_outgrow_their_room", test_tiled_lists_outgrow_their_room},
     {"naive_damage_and_subsets_are_exact",
      test_naive_damage_and_subsets_are_exact},
     {"svo_damage_and_subsets_are_exact", test_svo_damage_and_subsets_are_exact},

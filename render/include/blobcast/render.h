@@ -144,6 +144,11 @@ struct bc_render_stats {
 	/* tiled, gl: the bands of tile rows the call's A-buffer was built
 	 * in (1 when the lists fit at once; opts.abuffer_limit). */
 	uint32_t bands;
+	/* tiled: times the call's new tile lists did not fit the room kept
+	 * for lists, which was then grown, or compacted when lists that
+	 * outgrew their room had left enough of it behind; each time, the
+	 * tiles whose lists did not fit are listed again. */
+	uint32_t lists_grown, lists_compacted;
 };
 
 /*
