@@ -401,6 +401,72 @@ static void test_threads_do_not_change_pixels(void)
 	bc_tree_destroy(t);
 }
 
+/* A scene of more primitives than VISIT_SHARED_PRIMS (tiled.c): the pass
+ * over every primitive's rectangle that counts and writes the tiles'
+ * candidates runs in shares of the primitives, one per thread, and the
+ * frame must be the one thread's, bit for bit: whole, and in bands of
+ * rows under a small A-buffer limit (counted in shares, filled band by
+ * band in one pass); 3 and 7 shares split the primitives unevenly, 64
+ * give each about 300. Then drags of single spheres, patched into the
+ * kept candidates, draw what a fresh one-thread render does. */
+static void test_threads_do_not_change_a_big_scenes_lists(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_renderer *r = NULL;
+	struct bc_frame a = {0}, b = {0};
+	struct bc_camera cam;
+	struct bc_errinfo ei = {0};
+	static const uint32_t counts[] = {2, 3, 7, 64};
+	static const uint32_t limits[] = {0, 20000};
+	REQUIRE(t && sc_fig18(t, 20000, false, true, 11) == 0);
+	sc_frame(bc_tree_lin(t), &cam);
+	REQUIRE(bc_frame_init(&a, 203, 150) == 0 &&
+	        bc_frame_init(&b, 203, 150) == 0);
+	for (size_t l = 0; l < sizeof(limits) / sizeof(limits[0]); l++) {
+		struct bc_render_opts one = {.threads = 1,
+		                             .abuffer_limit = limits[l]};
+		struct bc_render_stats sa, sb;
+		REQUIRE(bc_render_once(BC_BACKEND_TILED, &one, t, &cam, &a, &sa,
+		                       &ei) == 0);
+		CHECK(limits[l] == 0 ? sa.bands == 1 : sa.bands > 2);
+		for (size_t c = 0; c < sizeof(counts) / sizeof(counts[0]);
+		     c++) {
+			struct bc_render_opts many = one;
+			many.threads = counts[c];
+			CHECK(bc_render_once(BC_BACKEND_TILED, &many, t, &cam,
+			                     &b, &sb, &ei) == 0);
+			CHECK(frames_equal(&a, &b));
+			CHECK(sb.tiles == sa.tiles && sb.bands == sa.bands);
+		}
+	}
+	/* A drag after a shared build: the patch merges the tiles' kept
+	 * candidates, which must be increasing as one pass leaves them. */
+	REQUIRE(bc_renderer_create(&r, BC_BACKEND_TILED,
+	                           &(struct bc_render_opts){.threads = 2},
+	                           &ei) == 0);
+	REQUIRE(bc_renderer_sync(r, t, NULL, &ei) == 0 &&
+	        bc_renderer_render(r, &cam, &b, NULL, &ei) == 0);
+	for (uint32_t k = 0; k < 20000; k += 4999) {
+		uint32_t id = bc_tree_child(t, bc_tree_root(t), k);
+		struct bc_prim_data p;
+		struct bc_dirty dirty;
+		REQUIRE(bc_tree_get(t, id, &p, NULL));
+		p.translate[0] += 0.02f * bc_tree_lin(t)->size;
+		REQUIRE(bc_tree_set_prim(t, id, &p, &ei) == 0);
+		bc_tree_take_dirty(t, &dirty);
+		REQUIRE(bc_renderer_sync(r, t, &dirty, &ei) == 0 &&
+		        bc_renderer_render(r, &cam, &b, NULL, &ei) == 0);
+		REQUIRE(bc_render_once(BC_BACKEND_TILED,
+		                       &(struct bc_render_opts){.threads = 1},
+		                       t, &cam, &a, NULL, &ei) == 0);
+		CHECK(frames_equal(&a, &b));
+	}
+	bc_renderer_destroy(r);
+	bc_frame_finish(&a);
+	bc_frame_finish(&b);
+	bc_tree_destroy(t);
+}
+
 /* One renderer, several frames and an edit in between: buffers kept from
  * the previous frame must not leak into the next. */
 struct pool_count {
@@ -752,6 +818,8 @@ static const struct bc_test tests[] = {
     {"depth_of_sphere_is_analytic", test_depth_of_sphere_is_analytic},
     {"centre_ray_points_at_target", test_centre_ray_points_at_target},
     {"threads_do_not_change_pixels", test_threads_do_not_change_pixels},
+    {"threads_do_not_change_a_big_scenes_lists",
+     test_threads_do_not_change_a_big_scenes_lists},
     {"pool_runs_every_share_once", test_pool_runs_every_share_once},
     {"progress_is_paced", test_progress_is_paced},
     {"renderer_reuse_follows_edits", test_renderer_reuse_follows_edits},
