@@ -1341,6 +1341,86 @@ static void test_frame_key_follows_the_scene_scale(void)
 
 /* ---- Groups: an edit of many neighbouring primitives ------------------- */
 
+/* A renderer following group moves (group_move) of a scene, and a second
+ * one that renders each new state whole. */
+struct group_run {
+	struct bc_tree *t;
+	struct bc_renderer *r, *ref;
+	struct bc_camera cam;
+	struct bc_frame f, g;
+	uint32_t w, h;
+	size_t nt;
+	uint8_t *tiles;
+	struct bc_render_stats st; /* r's last frame */
+};
+
+/* Two-thread renderers of t through cam at w x h, r's first frame
+ * drawn. */
+static void group_start(struct group_run *gr, struct bc_tree *t,
+                        const struct bc_camera *cam, uint32_t w, uint32_t h)
+{
+	struct bc_render_opts ro = {.threads = 2};
+	struct bc_dirty dirty;
+	struct bc_errinfo ei = {0};
+	memset(gr, 0, sizeof(*gr));
+	gr->t = t;
+	gr->cam = *cam;
+	gr->w = w;
+	gr->h = h;
+	gr->nt = ntiles(w, h);
+	gr->tiles = calloc(gr->nt, 1);
+	REQUIRE(gr->tiles);
+	bc_tree_take_dirty(t, &dirty);
+	REQUIRE(bc_frame_init(&gr->f, w, h) == 0 &&
+	        bc_frame_init(&gr->g, w, h) == 0);
+	REQUIRE(bc_renderer_create(&gr->r, BC_BACKEND_TILED, &ro, &ei) == 0 &&
+	        bc_renderer_create(&gr->ref, BC_BACKEND_TILED, &ro, &ei) == 0);
+	REQUIRE(bc_renderer_sync(gr->r, t, NULL, &ei) == 0);
+	REQUIRE(
+	    bc_renderer_render_region(gr->r, &gr->cam, &gr->f,
+	                              &(struct bc_render_region){.tiles = NULL},
+	                              &gr->st, &ei) == 0);
+}
+
+/* Moves primitives [first, first + n) by d along x, draws r's marked
+ * tiles and holds them to ref's whole render of the new state (what
+ * names the move in a failure). Returns false when the move or the draw
+ * failed (checked). */
+static bool group_step(struct group_run *gr, uint32_t first, uint32_t n,
+                       float d, const char *what)
+{
+	struct bc_dirty dirty;
+	struct bc_render_stats st;
+	struct bc_errinfo ei = {0};
+	memset(gr->tiles, 0, gr->nt);
+	if (group_move(gr->t, gr->r, &gr->cam, gr->w, gr->h, first, n, d,
+	               gr->tiles, &ei)) {
+		fprintf(stderr, "  move: %s\n", ei.msg);
+		CHECK(!"group move");
+		return false;
+	}
+	bc_tree_take_dirty(gr->t, &dirty);
+	if (bc_renderer_sync(gr->r, gr->t, &dirty, &ei) ||
+	    !draw_marked(gr->r, &gr->cam, &gr->f, gr->tiles, &gr->st) ||
+	    bc_renderer_sync(gr->ref, gr->t, NULL, &ei) ||
+	    bc_renderer_render(gr->ref, &gr->cam, &gr->g, &st, &ei)) {
+		CHECK(!"sync or draw");
+		return false;
+	}
+	CHECK(diff_frames(&gr->f, &gr->g, gr->tiles, what) == 0);
+	return true;
+}
+
+static void group_end(struct group_run *gr)
+{
+	bc_renderer_destroy(gr->r);
+	bc_renderer_destroy(gr->ref);
+	bc_frame_finish(&gr->f);
+	bc_frame_finish(&gr->g);
+	bc_tree_destroy(gr->t);
+	free(gr->tiles);
+}
+
 /* Groups of 65 to 256 neighbouring spheres of 4096 (more than
  * BC_CPU_PATCH_PRIMS, within 1 / BC_CPU_PATCH_SHARE of the scene: the
  * tiles' candidates are patched, not built again) and some of 1024 (built
@@ -1351,58 +1431,28 @@ static void test_tiled_group_edits_are_exact(void)
 	struct bc_gen_opts o = {
 	    .count = 4096, .kind = SPHERES, .blend = SMOOTH};
 	struct bc_tree *t = bc_tree_create();
-	struct bc_renderer *r = NULL, *ref = NULL;
-	struct bc_render_opts ro = {.threads = 2};
-	struct bc_frame f = {0}, g = {0};
-	struct bc_render_stats st;
+	struct group_run gr;
 	struct bc_camera cam;
-	struct bc_dirty dirty;
-	struct bc_errinfo ei = {0};
-	uint32_t w = 160, h = 120, drawn = 0;
-	size_t nt = ntiles(w, h);
-	uint8_t *tiles = calloc(nt, 1);
-	REQUIRE(t && tiles && bc_gen("fig18", &o, t, NULL, NULL) == 0);
+	uint32_t drawn = 0;
+	REQUIRE(t && bc_gen("fig18", &o, t, NULL, NULL) == 0);
 	frame_scene(bc_tree_lin(t), &cam);
-	bc_tree_take_dirty(t, &dirty);
-	REQUIRE(bc_frame_init(&f, w, h) == 0 && bc_frame_init(&g, w, h) == 0);
-	REQUIRE(bc_renderer_create(&r, BC_BACKEND_TILED, &ro, &ei) == 0 &&
-	        bc_renderer_create(&ref, BC_BACKEND_TILED, &ro, &ei) == 0);
-	REQUIRE(bc_renderer_sync(r, t, NULL, &ei) == 0);
-	REQUIRE(bc_renderer_render_region(
-	            r, &cam, &f, &(struct bc_render_region){.tiles = NULL}, &st,
-	            &ei) == 0);
+	group_start(&gr, t, &cam, 160, 120);
 	for (int e = 0; e < 12; e++) {
 		uint32_t n = e % 4 == 3 ? 1024u : 65u + dmg_below(192);
 		uint32_t first = dmg_below(4096 - n + 1);
 		char what[80];
-		memset(tiles, 0, nt);
-		if (group_move(t, r, &cam, w, h, first, n,
-		               dmg_float(-0.02f, 0.02f) * bc_tree_lin(t)->size,
-		               tiles, &ei)) {
-			fprintf(stderr, "  move: %s\n", ei.msg);
-			CHECK(!"group move");
-			break;
-		}
-		bc_tree_take_dirty(t, &dirty);
-		REQUIRE(bc_renderer_sync(r, t, &dirty, &ei) == 0);
-		if (!draw_marked(r, &cam, &f, tiles, &st)) {
-			break;
-		}
-		drawn += !st.whole;
-		REQUIRE(bc_renderer_sync(ref, t, NULL, &ei) == 0 &&
-		        bc_renderer_render(ref, &cam, &g, &st, &ei) == 0);
 		snprintf(what, sizeof(what), "%u spheres from %u moved", n,
 		         first);
-		CHECK(diff_frames(&f, &g, tiles, what) == 0);
+		if (!group_step(&gr, first, n,
+		                dmg_float(-0.02f, 0.02f) * bc_tree_lin(t)->size,
+		                what)) {
+			break;
+		}
+		drawn += !gr.st.whole;
 	}
 	/* A move that changes the scene's bounds redraws all of it. */
 	CHECK(drawn > 6);
-	bc_renderer_destroy(r);
-	bc_renderer_destroy(ref);
-	bc_frame_finish(&f);
-	bc_frame_finish(&g);
-	bc_tree_destroy(t);
-	free(tiles);
+	group_end(&gr);
 }
 
 #define SEED_LIST_ROOM 0x77u
@@ -1438,65 +1488,37 @@ static void box_stack(struct bc_tree *t, uint32_t n)
 static void test_tiled_lists_outgrow_their_room(void)
 {
 	struct bc_tree *t = bc_tree_create();
-	struct bc_renderer *r = NULL, *ref = NULL;
-	struct bc_render_opts ro = {.threads = 2};
-	struct bc_frame f = {0}, g = {0};
-	struct bc_render_stats st;
+	struct group_run gr;
 	struct bc_camera cam;
-	struct bc_dirty dirty;
-	struct bc_errinfo ei = {0};
-	uint32_t w = 320, h = 240, n = 96, grown = 0, compacted = 0;
-	size_t nt = ntiles(w, h);
-	uint8_t *tiles = calloc(nt, 1);
+	uint32_t n = 96, grown = 0, compacted = 0;
 	dmg_state = SEED_LIST_ROOM; /* whichever tests ran before */
-	REQUIRE(t && tiles);
+	REQUIRE(t);
 	box_stack(t, n);
 	bc_camera_default(&cam);
 	memcpy(cam.eye, (float[3]){0.0f, 0.0f, 24.0f}, sizeof(cam.eye));
 	memset(cam.target, 0, sizeof(cam.target));
 	cam.fov_y_deg = 40.0f;
-	bc_tree_take_dirty(t, &dirty);
-	REQUIRE(bc_frame_init(&f, w, h) == 0 && bc_frame_init(&g, w, h) == 0);
-	REQUIRE(bc_renderer_create(&r, BC_BACKEND_TILED, &ro, &ei) == 0 &&
-	        bc_renderer_create(&ref, BC_BACKEND_TILED, &ro, &ei) == 0);
-	REQUIRE(bc_renderer_sync(r, t, NULL, &ei) == 0);
-	REQUIRE(bc_renderer_render(r, &cam, &f, &st, &ei) == 0);
-	grown += st.lists_grown;
-	compacted += st.lists_compacted;
+	group_start(&gr, t, &cam, 320, 240);
+	grown += gr.st.lists_grown;
+	compacted += gr.st.lists_compacted;
 	for (int e = 0; e < 400 && (e < 40 || compacted < 2); e++) {
 		uint32_t m = 8u + dmg_below(9);
 		uint32_t first = dmg_below(n - m + 1);
 		float d = (e % 2 ? -1.0f : 1.0f) * dmg_float(3.0f, 6.0f);
 		char what[80];
-		memset(tiles, 0, nt);
-		if (group_move(t, r, &cam, w, h, first, m, d, tiles, &ei)) {
-			fprintf(stderr, "  move: %s\n", ei.msg);
-			CHECK(!"group move");
-			break;
-		}
-		bc_tree_take_dirty(t, &dirty);
-		REQUIRE(bc_renderer_sync(r, t, &dirty, &ei) == 0);
-		if (!draw_marked(r, &cam, &f, tiles, &st)) {
-			break;
-		}
-		grown += st.lists_grown;
-		compacted += st.lists_compacted;
-		REQUIRE(bc_renderer_sync(ref, t, NULL, &ei) == 0 &&
-		        bc_renderer_render(ref, &cam, &g, &st, &ei) == 0);
 		snprintf(what, sizeof(what), "%u boxes from %u moved by %g", m,
 		         first, (double)d);
-		CHECK(diff_frames(&f, &g, tiles, what) == 0);
+		if (!group_step(&gr, first, m, d, what)) {
+			break;
+		}
+		grown += gr.st.lists_grown;
+		compacted += gr.st.lists_compacted;
 	}
 	fprintf(stderr, "  lists' room grown %u times, compacted %u times\n",
 	        grown, compacted);
 	CHECK(grown > 0);
 	CHECK(compacted > 0);
-	bc_renderer_destroy(r);
-	bc_renderer_destroy(ref);
-	bc_frame_finish(&f);
-	bc_frame_finish(&g);
-	bc_tree_destroy(t);
-	free(tiles);
+	group_end(&gr);
 }
 
 static const struct bc_test tests[] = {
