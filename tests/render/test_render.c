@@ -467,6 +467,53 @@ static void test_threads_do_not_change_a_big_scenes_lists(void)
 	bc_tree_destroy(t);
 }
 
+/* A renderer gives back what it kept for a view of many more pairs
+ * (the eye inside a cloud of spheres, each close one covering many
+ * tiles) when it draws a view of fewer: after it, it keeps less than
+ * twice what a fresh renderer keeps for the view, and draws what that
+ * one draws. */
+static void test_a_narrower_view_gives_room_back(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_renderer *r = NULL, *fresh = NULL;
+	struct bc_render_opts ro = {.threads = 2};
+	struct bc_frame a = {0}, b = {0};
+	struct bc_camera cam, inside;
+	struct bc_errinfo ei = {0};
+	size_t out0, in, out1, out_fresh;
+	REQUIRE(t && sc_fig18(t, 4096, false, true, 12) == 0);
+	sc_frame(bc_tree_lin(t), &cam);
+	inside = cam;
+	for (int i = 0; i < 3; i++) {
+		inside.eye[i] =
+		    cam.target[i] + 0.05f * (cam.eye[i] - cam.target[i]);
+	}
+	REQUIRE(bc_frame_init(&a, 320, 240) == 0 &&
+	        bc_frame_init(&b, 320, 240) == 0);
+	REQUIRE(bc_renderer_create(&r, BC_BACKEND_TILED, &ro, &ei) == 0 &&
+	        bc_renderer_create(&fresh, BC_BACKEND_TILED, &ro, &ei) == 0);
+	REQUIRE(bc_renderer_sync(r, t, NULL, &ei) == 0 &&
+	        bc_renderer_sync(fresh, t, NULL, &ei) == 0);
+	REQUIRE(bc_renderer_render(r, &cam, &a, NULL, &ei) == 0);
+	out0 = bc_renderer_kept_bytes(r);
+	REQUIRE(bc_renderer_render(r, &inside, &a, NULL, &ei) == 0);
+	in = bc_renderer_kept_bytes(r);
+	REQUIRE(bc_renderer_render(r, &cam, &a, NULL, &ei) == 0);
+	out1 = bc_renderer_kept_bytes(r);
+	REQUIRE(bc_renderer_render(fresh, &cam, &b, NULL, &ei) == 0);
+	out_fresh = bc_renderer_kept_bytes(fresh);
+	fprintf(stderr, "  kept: %zu, inside %zu, back %zu, fresh %zu\n", out0,
+	        in, out1, out_fresh);
+	CHECK(in > 4 * out_fresh);
+	CHECK(out1 < 2 * out_fresh);
+	CHECK(frames_equal(&a, &b));
+	bc_renderer_destroy(r);
+	bc_renderer_destroy(fresh);
+	bc_frame_finish(&a);
+	bc_frame_finish(&b);
+	bc_tree_destroy(t);
+}
+
 /* One renderer, several frames and an edit in between: buffers kept from
  * the previous frame must not leak into the next. */
 struct pool_count {
@@ -820,6 +867,7 @@ static const struct bc_test tests[] = {
     {"threads_do_not_change_pixels", test_threads_do_not_change_pixels},
     {"threads_do_not_change_a_big_scenes_lists",
      test_threads_do_not_change_a_big_scenes_lists},
+    {"a_narrower_view_gives_room_back", test_a_narrower_view_gives_room_back},
     {"pool_runs_every_share_once", test_pool_runs_every_share_once},
     {"progress_is_paced", test_progress_is_paced},
     {"renderer_reuse_follows_edits", test_renderer_reuse_follows_edits},
