@@ -1521,6 +1521,54 @@ static void test_tiled_lists_outgrow_their_room(void)
 	group_end(&gr);
 }
 
+/* An allocation that fails anywhere in box_stack's first frame (the
+ * sweep fails each of its allocations in turn, the growth of the lists'
+ * room among them) fails the call with BC_ENOMEM, and the next call of
+ * the same renderer draws the frame a renderer without failures
+ * draws. */
+static void test_tiled_list_room_survives_allocation_failures(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_render_opts ro = {.threads = 2};
+	struct bc_frame f = {0}, g = {0};
+	struct bc_render_stats st;
+	struct bc_camera cam;
+	struct bc_errinfo ei = {0};
+	unsigned long n;
+	int rc = -1;
+	dmg_state = SEED_LIST_ROOM;
+	REQUIRE(t);
+	box_stack(t, 96);
+	bc_camera_default(&cam);
+	memcpy(cam.eye, (float[3]){0.0f, 0.0f, 24.0f}, sizeof(cam.eye));
+	memset(cam.target, 0, sizeof(cam.target));
+	cam.fov_y_deg = 40.0f;
+	REQUIRE(bc_frame_init(&f, 320, 240) == 0 &&
+	        bc_frame_init(&g, 320, 240) == 0);
+	REQUIRE(bc_render_once(BC_BACKEND_TILED, &ro, t, &cam, &g, &st, &ei) ==
+	        0);
+	REQUIRE(st.lists_grown > 0);
+	for (n = 1; n < 400 && rc != 0; n++) {
+		struct bc_renderer *r = NULL;
+		REQUIRE(bc_renderer_create(&r, BC_BACKEND_TILED, &ro, &ei) ==
+		            0 &&
+		        bc_renderer_sync(r, t, NULL, &ei) == 0);
+		bc_alloc_fail_after(n);
+		rc = bc_renderer_render(r, &cam, &f, &st, &ei);
+		bc_alloc_fail_after(0);
+		CHECK(rc == 0 || rc == BC_ENOMEM);
+		CHECK(bc_renderer_render(r, &cam, &f, &st, &ei) == 0);
+		CHECK(memcmp(f.rgba, g.rgba, (size_t)320 * 240 * 4) == 0 &&
+		      memcmp(f.ids, g.ids, (size_t)320 * 240 * 4) == 0);
+		bc_renderer_destroy(r);
+	}
+	CHECK_EQ_INT(rc, 0);
+	CHECK(n > 10);
+	bc_frame_finish(&f);
+	bc_frame_finish(&g);
+	bc_tree_destroy(t);
+}
+
 static const struct bc_test tests[] = {
     {"level_partition", test_level_partition},
     {"regions_leave_other_pixels_alone", test_regions_leave_other_pixels_alone},
@@ -1532,6 +1580,8 @@ static const struct bc_test tests[] = {
     {"tiled_follows_structural_edits", test_tiled_follows_structural_edits},
     {"tiled_group_edits_are_exact", test_tiled_group_edits_are_exact},
     {"tiled_lists_outgrow_their_room", test_tiled_lists_outgrow_their_room},
+    {"tiled_list_room_survives_allocation_failures",
+     test_tiled_list_room_survives_allocation_failures},
     {"naive_damage_and_subsets_are_exact",
      test_naive_damage_and_subsets_are_exact},
     {"svo_damage_and_subsets_are_exact", test_svo_damage_and_subsets_are_exact},
