@@ -152,10 +152,10 @@ struct bc__tiled_bufs {
 	 * fits its tile's room is written there, a longer one gets room of
 	 * its own after frags_used. A cone test drops about half of a
 	 * tile's candidates, so lists kept at their candidates' offsets (as
-	 * they were) left half of an array as big as the candidates, 8
-	 * bytes an entry, unused: 82 MB, 46 of them empty, for a million
-	 * spheres at 1024x768. Room of a tile is its own (frag_room 0:
-	 * none) until frags_reset; what lists that outgrew their room left
+	 * they were) left most of an array as big as the candidates and
+	 * their slack, 8 bytes an entry, unused: 83 MB for 27 MB of lists
+	 * at a million spheres, 1024x768. Room of a tile is its own (frag_room
+	 * 0: none) until frags_reset; what lists that outgrew their room left
 	 * behind is given back when make_frag_room compacts. */
 	struct bc__frag *frags;
 	size_t frags_cap, frags_used;
