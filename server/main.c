@@ -205,7 +205,7 @@ struct cli {
 		     .hi = 86400,                                              \
 		     .arg = "S",                                               \
 		     .help = "seconds a session's render state (about\n"       \
-		             "460 bytes a primitive) stays once nobody\n"      \
+		             "450 bytes a primitive) stays once nobody\n"      \
 		             "views it, {range} (default 300); the next\n"     \
 		             "picture builds it again"},                       \
 		    {.name = "scene-memory",                                   \

@@ -35,7 +35,7 @@
 #define BC_SRV_SESSION_SWEEP_MS (60u * 1000u)
 
 /* A session's render copy (its laid-out twin of the scene) and the
- * renderer's lists drawn from it (together about 460 bytes a primitive:
+ * renderer's lists drawn from it (together about 450 bytes a primitive:
  * a million spheres at 1024x768, docs/benchmarks.md) are dropped this long
  * after a member last had a view or asked for a picture (--render-idle); the
  * next picture makes them again (the copy about 0.9 s a million primitives,

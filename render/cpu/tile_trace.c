@@ -358,7 +358,6 @@ static void shade_packets(struct bc__tile_worker *wk,
 {
 	const struct bc__frame_ctx *fc = job->fc;
 	const float *eye = fc->vr.eye;
-	uint32_t w = fc->out->width;
 	uint32_t nv = (nh + k.lanes - 1) / k.lanes * k.lanes;
 	struct bc__pk_lanes ln;
 	struct bc__pk_shade sh;
@@ -369,7 +368,7 @@ static void shade_packets(struct bc__tile_worker *wk,
 		if (i < nh) {
 			uint32_t x = job->x0 + hit_px[i] % BC_CPU_TILE;
 			uint32_t y = job->y0 + hit_px[i] / BC_CPU_TILE;
-			d = job->dirs + 3 * ((size_t)y * w + x);
+			d = bc__job_dir(job, x, y);
 			t = hit_t[i];
 		}
 		for (int c = 0; c < 3; c++) {
@@ -402,9 +401,9 @@ static void shade_packets(struct bc__tile_worker *wk,
 			bc__put_lit(fc, x, y, hit_t[i], lit, sh.prim[i]);
 		} else {
 			float n[3] = {sh.g[0][i], sh.g[1][i], sh.g[2][i]};
-			bc__put_shaded(
-			    fc, x, y, job->dirs + 3 * ((size_t)y * w + x),
-			    hit_t[i], n, sh.prim[i], px->evals[p], job->n);
+			bc__put_shaded(fc, x, y, bc__job_dir(job, x, y),
+			               hit_t[i], n, sh.prim[i], px->evals[p],
+			               job->n);
 		}
 	}
 }
@@ -418,7 +417,6 @@ static void trace_range_packets(struct bc__tile_worker *wk,
                                 float z_begin, float z_end)
 {
 	const struct bc__frame_ctx *fc = job->fc;
-	uint32_t w = fc->out->width;
 	uint8_t queue[BC_CPU_TILE * BC_CPU_TILE];
 	uint8_t hit_px[BC_CPU_TILE * BC_CPU_TILE];
 	float hit_t[BC_CPU_TILE * BC_CPU_TILE];
@@ -442,7 +440,7 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 			}
 			if (px->has_pending[p] && z_begin > px->pending[p]) {
 				settle_px(job, wk, px, p, x, y,
-				          job->dirs + 3 * ((size_t)y * w + x));
+				          bc__job_dir(job, x, y));
 				continue;
 			}
 			queue[nq++] = (uint8_t)p;
@@ -462,7 +460,7 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 			uint32_t i = lowest_bit(free), p = queue[head++];
 			uint32_t x = job->x0 + p % BC_CPU_TILE;
 			uint32_t y = job->y0 + p / BC_CPU_TILE;
-			const float *d = job->dirs + 3 * ((size_t)y * w + x);
+			const float *d = bc__job_dir(job, x, y);
 			if (bc__pk_ray_start(&ray[i], fc, z_begin, z_end)) {
 				/* An empty interval: a miss. */
 				px->has_pending[p] = false;
@@ -551,7 +549,6 @@ uint64_t bc__trace_tile(struct bc__tile_worker *wk,
 {
 	const struct bc__frame_ctx *fc = job->fc;
 	const struct bc_lin *lin = fc->lin;
-	uint32_t w = fc->out->width;
 	uint32_t x0 = job->x0, y0 = job->y0, x1 = job->x1, y1 = job->y1;
 	struct bc__frag *list = job->list;
 	uint32_t n = job->n;
@@ -648,8 +645,7 @@ uint64_t bc__trace_tile(struct bc__tile_worker *wk,
 		for (uint32_t y = y0; y < y1; y++) {
 			for (uint32_t x = x0; x < x1; x++) {
 				uint32_t p = (y - y0) * BC_CPU_TILE + (x - x0);
-				const float *d =
-				    job->dirs + 3 * ((size_t)y * w + x);
+				const float *d = bc__job_dir(job, x, y);
 				float t = 0.0f;
 				enum bc__trace_result res;
 				if (px.done[p]) {
@@ -687,7 +683,7 @@ uint64_t bc__trace_tile(struct bc__tile_worker *wk,
 			}
 			if (px.has_pending[p]) {
 				settle_px(job, wk, &px, p, x, y,
-				          job->dirs + 3 * ((size_t)y * w + x));
+				          bc__job_dir(job, x, y));
 			} else {
 				bc__put_miss(fc, x, y, px.evals[p], n);
 			}

@@ -90,13 +90,12 @@ struct ab_prim {
 	bool inside;
 };
 
-/* A tile's state bits within the kept view: dirs written, cones computed
- * (tiles with candidates only), list computed; a tile with dirs and list
- * needs nothing more. */
-#define TILE_RAYS 1u
+/* A tile's state bits within the kept view: cones computed (tiles with
+ * candidates only), list computed; a tile with its list needs nothing
+ * more. */
 #define TILE_CONES 2u
 #define TILE_LIST 4u
-#define TILE_DONE (TILE_RAYS | TILE_LIST)
+#define TILE_DONE TILE_LIST
 
 struct bc__tiled_bufs {
 	/* The view everything below was made for (bc__cpu_key's scale
@@ -128,8 +127,6 @@ struct bc__tiled_bufs {
 	/* Primitives whose ABVs changed since the lists were made (sync). */
 	uint32_t dirty_lo, dirty_hi;
 
-	float *dirs; /* 3 per pixel, valid in TILE_RAYS tiles */
-	size_t dirs_cap;
 	struct ab_prim *prims;
 	size_t prims_cap;
 	/* Per tile: state, list length, candidates (primitives whose
@@ -196,7 +193,6 @@ void bc__tiled_free(struct bc__tiled_bufs *b)
 	if (!b) {
 		return;
 	}
-	bc_free(b->dirs);
 	bc_free(b->prims);
 	free_tiles(b);
 	bc_free(b->row_off);
@@ -999,23 +995,23 @@ static const float *tile_ray(const struct bc__ab_rays *rays, uint32_t dx,
 	return d;
 }
 
-/* The tile's ray directions into the frame's, for the tracer. */
-static void tile_dirs(const struct tiled_frame *tf, uint32_t tx, uint32_t ty,
-                      const struct bc__ab_rays *rays)
+/* The tile's ray directions for the tracer (struct bc__tile_job's dirs:
+ * 3 per pixel of the tile, in rows of BC_CPU_TILE), from its rays by
+ * quarter. They are made again for each tile traced, the same bits as
+ * its lists' rays (one kernel, one view), where the view kept them for
+ * every pixel: 12 bytes a pixel (25 MB at 1920x1080, 100 at 3840x2160)
+ * for each view a daemon keeps, against about 0.1 microsecond a tile. */
+static void tile_dirs(const struct bc__ab_rays *rays,
+                      float d[3 * BC_CPU_TILE * BC_CPU_TILE])
 {
-	uint32_t w = tf->fc->out->width, h = tf->fc->out->height;
-	uint32_t x0 = tx * BC_CPU_TILE, y0 = ty * BC_CPU_TILE;
 	for (uint32_t q = 0; q < 4; q++) {
 		for (uint32_t l = 0; l < BC__AB_QUARTER_RAYS; l++) {
-			uint32_t x = x0 + (q & 1u) * QUARTER + (l & 3u);
-			uint32_t y = y0 + (q >> 1) * QUARTER + (l >> 2);
-			float *d = tf->b->dirs + 3 * ((size_t)y * w + x);
-			if (x >= w || y >= h) {
-				continue;
-			}
-			d[0] = rays->d[q][0][l];
-			d[1] = rays->d[q][1][l];
-			d[2] = rays->d[q][2][l];
+			uint32_t dx = (q & 1u) * QUARTER + (l & 3u);
+			uint32_t dy = (q >> 1) * QUARTER + (l >> 2);
+			float *o = d + 3 * (dy * BC_CPU_TILE + dx);
+			o[0] = rays->d[q][0][l];
+			o[1] = rays->d[q][1][l];
+			o[2] = rays->d[q][2][l];
 		}
 	}
 }
@@ -1287,10 +1283,6 @@ static void phase_lists(void *arg, uint32_t thread)
 		}
 		tf->kern.dirs(&tf->fc->vr, tx * BC_CPU_TILE, ty * BC_CPU_TILE,
 		              &rays);
-		if (!(b->state[tile] & TILE_RAYS)) {
-			tile_dirs(tf, tx, ty, &rays);
-			b->state[tile] |= TILE_RAYS;
-		}
 		b->list_n[tile] = 0;
 		if (b->cand_end[tile] > b->cand_off[tile]) {
 			uint32_t n;
@@ -1379,6 +1371,8 @@ static void phase_trace(void *arg, uint32_t thread)
 	const struct bc__frame_ctx *fc = tf->fc;
 	uint32_t w = fc->out->width, h = fc->out->height;
 	uint32_t tile = 0, end = 0, done = 0;
+	struct bc__ab_rays rays;
+	float dirs[3 * BC_CPU_TILE * BC_CPU_TILE];
 	for (;;) {
 		uint32_t tx, ty;
 		struct bc__tile_job job;
@@ -1410,9 +1404,12 @@ static void phase_trace(void *arg, uint32_t thread)
 			skip_tile(tf, tx, ty, mask);
 			continue;
 		}
+		tf->kern.dirs(&fc->vr, tx * BC_CPU_TILE, ty * BC_CPU_TILE,
+		              &rays);
+		tile_dirs(&rays, dirs);
 		job = (struct bc__tile_job){
 		    .fc = fc,
-		    .dirs = tf->b->dirs,
+		    .dirs = dirs,
 		    .list = tf->b->frags + tf->b->frag_off[tile],
 		    .n = tf->b->list_n[tile],
 		    .zq = tf->b->zq[tile],
@@ -1553,7 +1550,6 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 {
 	struct bc__tiled_bufs *b = tf->b;
 	const struct bc__frame_ctx *fc = tf->fc;
-	size_t npix = (size_t)fc->out->width * fc->out->height;
 	int rc;
 	if (same_view(b, r, fc, cam)) {
 		uint32_t hi =
@@ -1605,8 +1601,7 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 	b->view_ok = false;
 	b->banded = b->rows_ok = b->band_ok = false;
 	b->dirty_lo = b->dirty_hi = 0;
-	if (grow((void **)&b->dirs, &b->dirs_cap, 3 * npix, sizeof(float)) ||
-	    grow_tiles(b, tf->ntiles) ||
+	if (grow_tiles(b, tf->ntiles) ||
 	    grow((void **)&b->prims, &b->prims_cap, tf->nprims ? tf->nprims : 1,
 	         sizeof(*b->prims))) {
 		return BC_ENOMEM;
@@ -2072,9 +2067,8 @@ static size_t tiled_kept_bytes(const struct bc_renderer *base)
 	if (!b) {
 		return 0;
 	}
-	n = sizeof(*b) + b->dirs_cap * sizeof(*b->dirs) +
-	    b->prims_cap * sizeof(*b->prims) + b->cand_cap * sizeof(*b->cand) +
-	    b->frags_cap * sizeof(*b->frags) +
+	n = sizeof(*b) + b->prims_cap * sizeof(*b->prims) +
+	    b->cand_cap * sizeof(*b->cand) + b->frags_cap * sizeof(*b->frags) +
 	    b->row_off_cap * sizeof(*b->row_off) +
 	    b->row_prims_cap * sizeof(*b->row_prims) +
 	    b->share_cap * sizeof(*b->share_cur) +

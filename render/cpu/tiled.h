@@ -133,7 +133,9 @@ struct bc__tile_worker {
 /* One tile's work. */
 struct bc__tile_job {
 	const struct bc__frame_ctx *fc;
-	const float *dirs;     /* unit ray directions, 3 per frame pixel */
+	/* Unit ray directions, 3 per pixel of the tile, in rows of
+	 * BC_CPU_TILE pixels from (x0, y0): bc__job_dir. */
+	const float *dirs;
 	struct bc__frag *list; /* the tile's fragments (sorted in place) */
 	uint32_t n;
 	struct bc__zq zq;        /* their depth scale */
@@ -143,6 +145,14 @@ struct bc__tile_job {
 	 * value: the depth ranges follow from the list alone. */
 	uint64_t mask;
 };
+
+/* The unit ray direction of the job's pixel (x, y) (frame coordinates). */
+static inline const float *bc__job_dir(const struct bc__tile_job *job,
+                                       uint32_t x, uint32_t y)
+{
+	return job->dirs +
+	       3 * ((size_t)(y - job->y0) * BC_CPU_TILE + (x - job->x0));
+}
 
 /* Walks the tile's depth ranges (paper §6.2, eq. 21-22) and sphere traces
  * its masked pixels in each range's pruned view; writes their colour,
