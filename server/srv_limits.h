@@ -331,18 +331,21 @@
 #define BC_SRV_STOP_SAVE_MS 1000u
 #define BC_SRV_STOP_WORKERS_MS 300u
 
-/* Views whose planes (colour, depth, ids: 12 bytes a pixel) the work
- * layer keeps for damage renders and refinement: a few per member of a
- * busy session, least recently used dropped first, and at most
- * BC_SRV_VIEW_BYTES in all, the renderers' own per-view state (up to 16
- * bytes a pixel) counted in (about 14 views of 1920x1080 without it). */
+/* Views whose planes (colour, 4 bytes a pixel; depth and ids only for a
+ * snapshot that asks for them) the work layer keeps for damage renders
+ * and refinement: a few per member of a busy session, least recently
+ * used dropped first, and at most BC_SRV_VIEW_BYTES in all, the
+ * renderers' own per-view state counted in. */
 #define BC_SRV_MAX_VIEWS 32u
 #define BC_SRV_VIEW_BYTES (384u * 1024u * 1024u)
 /* What a renderer keeps per pixel of the view it last drew (the tiled
- * backend: 12 bytes of ray directions and its tile lists, 14.4 bytes a
- * pixel measured at 2048^2): counted against BC_SRV_VIEW_BYTES before a
- * new view is drawn, so that the cap holds while it is built. */
-#define BC_SRV_RENDERER_BYTES_PX 16u
+ * backend: its tile lists and per-tile state, 2.9-5.1 bytes a pixel
+ * measured for the default scene and fig18 with 1 024 spheres, 640x480
+ * to 2048^2; it kept 12 more of ray directions before the tracer made
+ * them per tile): counted against BC_SRV_VIEW_BYTES before a new view is
+ * drawn, so that the cap holds while it is built. Big scenes keep more
+ * (lists per primitive), counted once drawn. */
+#define BC_SRV_RENDERER_BYTES_PX 6u
 
 /* Milliseconds the first, coarse picture of a new view should take: the
  * worker picks the finest level its cost model says fits, so a
