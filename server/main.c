@@ -733,7 +733,6 @@ static int settle_config(struct bc_srv_config *cfg)
 	return 0;
 }
 
-/* Makes the layers bottom up and wires them. Returns 0 or an error. */
 /* The smallest limit in file of cgroup dir (under root) and the cgroups
  * above it, if below lim. dir is changed. */
 static uint64_t cgroup_limit(const char *root, char *dir, const char *file,
@@ -798,6 +797,7 @@ static uint64_t scene_nodes(uint32_t mib)
 	return nodes ? nodes : 1u;
 }
 
+/* Makes the layers bottom up and wires them. Returns 0 or an error. */
 static int start(struct daemon *dm, struct bc_errinfo *ei)
 {
 	int rc;

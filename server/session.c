@@ -723,7 +723,7 @@ int bc__room_take(struct bc_session *s, uint64_t after, uint64_t *taken,
                   struct bc_errinfo *ei)
 {
 	struct bc_sessions *ss = s->ss;
-	uint64_t more = after > s->nodes ? after - s->nodes : 0;
+	uint64_t more = after > s->nodes ? after - s->nodes : 0, in_use;
 	*taken = 0;
 	if (!more) {
 		return 0; /* what takes nodes away is never refused for room */
@@ -746,7 +746,8 @@ int bc__room_take(struct bc_session *s, uint64_t after, uint64_t *taken,
 		    " scene nodes this server allows (--scene-memory)",
 		    ss->nodes_held, ss->nodes_cap);
 	}
-	if (ss->nodes_held + more - unloadable_nodes(ss, s) > ss->nodes_cap) {
+	in_use = ss->nodes_held - unloadable_nodes(ss, s);
+	if (in_use + more > ss->nodes_cap) {
 		return bc_errinfo_set(
 		    ei, BC_ELIMIT,
 		    "sessions in use (with members or work under way) hold "
@@ -754,8 +755,7 @@ int bc__room_take(struct bc_session *s, uint64_t after, uint64_t *taken,
 		    "allows (--scene-memory) and %" PRIu64 " more do not "
 		    "fit: members must leave sessions or make their scenes "
 		    "smaller first",
-		    ss->nodes_held - unloadable_nodes(ss, s), ss->nodes_cap,
-		    more);
+		    in_use, ss->nodes_cap, more);
 	}
 	while (ss->nodes_held + more > ss->nodes_cap) {
 		struct bc_session *o = idlest(ss, s, true);
