@@ -165,7 +165,8 @@ static int idle_phase(const struct daemon *d, struct conn *c, uint64_t order,
 	int64_t t0;
 	int rc = -1;
 	if (conn_open(&c2, d) || conn_hello(&c2, "bench-2") ||
-	    conn_join(&c2, "bench", BC_PROTO_ROLE_EDITOR, false)) {
+	    conn_join(&c2, "bench", BC_PROTO_ROLE_EDITOR, false) ||
+	    conn_expect(&c2, BC_MSG_SCENE_STATE, 60000) != 1) {
 		return -1;
 	}
 	conn_close(c);

@@ -206,8 +206,10 @@ struct cli {
 		     .arg = "S",                                               \
 		     .help = "seconds a session's render state (about\n"       \
 		             "450 bytes a primitive) stays once nobody\n"      \
-		             "views it, {range} (default 300); the next\n"     \
-		             "picture builds it again"},                       \
+		             "views it, and its scene encoded for\n"           \
+		             "joiners (about 50) once nobody joins,\n"         \
+		             "{range} (default 300); the next picture\n"       \
+		             "or join makes them again"},                      \
 		    {.name = "scene-memory",                                   \
 		     .kind = BC_OPT_U32,                                       \
 		     .dst = &(c)->scene_memory_mib,                            \

@@ -128,7 +128,27 @@ static struct bc_shared *state_now(struct bc_session *s)
 		    bc__state_msg(s->tree, &s->camera, s->order, 0, 0);
 		s->state_order = s->order;
 	}
+	s->state_used_ms = bc__now_ms(s->ss);
 	return s->state_msg;
+}
+
+bool bc__session_state_idle(struct bc_session *s, uint64_t now)
+{
+	uint32_t nodes = s->tree ? bc_tree_node_count(s->tree) : 0;
+	if (!s->state_msg || now - s->state_used_ms < s->ss->render_idle_ms) {
+		return false;
+	}
+	bc_log(BC_LOG_DEBUG,
+	       "session %s: its scene encoded for joiners dropped, none for "
+	       "%llu s",
+	       s->name, (unsigned long long)((now - s->state_used_ms) / 1000u));
+	bc__session_changed(s);
+	if (nodes >= BC_SRV_HEAVY_NODES) {
+		/* Unless a member's queue still holds it, tens of MB go:
+		 * back to the system, not kept in the heap. */
+		bc_heap_give_back();
+	}
+	return true;
 }
 
 void bc__send(struct bc_member *m, const struct bc_msg *msg)
@@ -433,6 +453,7 @@ static void state_done(struct bc_task *t)
 		bc__session_changed(s);
 		s->state_msg = st->msg;
 		s->state_order = st->order;
+		s->state_used_ms = bc__now_ms(s->ss);
 		st->msg = NULL;
 	} else if (!st->msg) {
 		bc_log(BC_LOG_ERROR, "session %s: cannot encode the scene",
@@ -501,6 +522,7 @@ int bc__join(struct bc_member *m, struct bc_session *s, enum bc_proto_role role,
 	m->shown.view = 0;
 	bc__send_info(s);
 	if (s->state_msg && s->state_order == s->order) {
+		s->state_used_ms = bc__now_ms(s->ss);
 		bc__send_state_msg(s, m, s->state_msg);
 	} else {
 		bc__send_state(s, m, 0, 0);

@@ -792,6 +792,7 @@ static void sweep_idle(uv_timer_t *t)
 			continue; /* sessions leave the table as they go */
 		}
 		bc__session_copy_idle(s, now);
+		bc__session_state_idle(s, now);
 		if (!unloadable(s)) {
 			continue;
 		}

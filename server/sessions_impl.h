@@ -76,9 +76,12 @@ struct bc_session {
 	 * dispatched again, joins instead of finding the name taken. */
 	struct bc_conn_ref creator;
 	/* SCENE_STATE of a big scene, encoded on a task for joiners, while
-	 * the order stays state_order. */
+	 * the order stays state_order and it was last sent (loop clock,
+	 * state_used_ms) less than ss->render_idle_ms ago
+	 * (bc__session_state_idle): about 51 bytes a primitive. */
 	struct bc_shared *state_msg;
 	uint64_t state_order;
+	uint64_t state_used_ms;
 	/* When a SESSION_CAMERA or a change made only of NAMEs last sent
 	 * members of an older protocol the whole scene (loop clock;
 	 * bc__state_limit). */
@@ -196,6 +199,9 @@ void bc__send_state(struct bc_session *s, struct bc_member *to, uint32_t author,
 void bc__leave(struct bc_member *m);
 /* Drops m's unfinished SCENE_LOAD in parts, if any (edits.c). */
 void bc__parts_drop(struct bc_member *m);
+/* Drops the SCENE_STATE s keeps for joiners once none has been sent it
+ * for ss->render_idle_ms. Returns true when it did. */
+bool bc__session_state_idle(struct bc_session *s, uint64_t now);
 /* m joins s (its role asked, its request seq). Returns 0 or BC_PARK. */
 int bc__join(struct bc_member *m, struct bc_session *s, enum bc_proto_role role,
              uint32_t seq);

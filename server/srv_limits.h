@@ -39,8 +39,10 @@
  * a million spheres at 1024x768, docs/benchmarks.md) are dropped this long
  * after a member last had a view or asked for a picture (--render-idle); the
  * next picture makes them again (the copy about 0.9 s a million primitives,
- * the session busy meanwhile). The sweep looks every BC_SRV_SESSION_SWEEP_MS,
- * or every quarter of this when that is shorter. */
+ * the session busy meanwhile). The SCENE_STATE a big session keeps encoded
+ * for joiners (about 51 bytes a primitive) goes this long after it was
+ * last sent. The sweep looks every BC_SRV_SESSION_SWEEP_MS, or every
+ * quarter of this when that is shorter. */
 #define BC_SRV_RENDER_IDLE_MS (5u * 60u * 1000u)
 
 /* Nodes of a session's scene: the layout's own limit (22-bit ancestor

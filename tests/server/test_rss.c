@@ -329,6 +329,60 @@ static void a_render_copy_nobody_looks_at_gives_its_memory_back(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
+/* The SCENE_STATE a big session keeps encoded for joiners (members.c,
+ * bc__session_state_idle; about 51 bytes a sphere) goes once nobody has
+ * joined for --render-idle, and the next joiner is sent the same bytes,
+ * encoded again. 200 000 spheres loaded; a member joins and reads its
+ * SCENE_STATE; RSS must then fall by at least half the scene's size
+ * within 10 s. Kept until the next change before (e0fe4bb), RSS did not
+ * fall at all. */
+static void a_scene_kept_for_joiners_goes_when_unused(void)
+{
+	static const char *const opts[] = {"--render-idle", "1", NULL};
+	struct daemon d;
+	struct conn c, c2;
+	struct bc_camera cam;
+	struct bc_tree *t;
+	char dir[64];
+	uint8_t *first = NULL;
+	uint32_t len = 0;
+	long joined, after = -1, drop;
+	uint64_t order;
+	snprintf(dir, sizeof(dir), "%s/state", base_dir);
+	REQUIRE(daemon_start_with(&d, dir, opts) == 0);
+	REQUIRE((t = fig18(200000, &cam)) != NULL);
+	load_from_another(&d, true, t, &cam, &order);
+	REQUIRE(conn_open(&c, &d) == 0 && conn_hello(&c, "first") == 0);
+	REQUIRE(conn_join(&c, "big", BC_PROTO_ROLE_EDITOR, false) == 0);
+	REQUIRE(conn_expect(&c, BC_MSG_SCENE_STATE, 60000) == 1);
+	len = c.m.scene_state.scene.len;
+	REQUIRE((first = malloc(len)) != NULL);
+	memcpy(first, c.m.scene_state.scene.ptr, len);
+	joined = rss_mib(d.pid);
+	drop = (long)(len >> 20) / 2;
+	for (int64_t end = t_now_ms() + 10000; t_now_ms() < end;
+	     t_sleep_ms(200)) {
+		if ((after = rss_mib(d.pid)) >= 0 && after <= joined - drop) {
+			break;
+		}
+	}
+	printf("  RSS %ld MiB once a member joined 200 000 spheres (a "
+	       "SCENE_STATE of %u bytes), %ld MiB after\n",
+	       joined, len, after);
+	CHECK(joined > 0 && drop > 2);
+	CHECK(after >= 0 && after <= joined - drop);
+	REQUIRE(conn_open(&c2, &d) == 0 && conn_hello(&c2, "second") == 0);
+	REQUIRE(conn_join(&c2, "big", BC_PROTO_ROLE_VIEWER, false) == 0);
+	REQUIRE(conn_expect(&c2, BC_MSG_SCENE_STATE, 60000) == 1);
+	CHECK(c2.m.scene_state.order == order);
+	CHECK(c2.m.scene_state.scene.len == len &&
+	      memcmp(c2.m.scene_state.scene.ptr, first, len) == 0);
+	free(first);
+	conn_close(&c2);
+	conn_close(&c);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
 static const struct bc_test tests[] = {
     {"stalled_members_give_their_memory_back",
      stalled_members_give_their_memory_back},
@@ -338,6 +392,8 @@ static const struct bc_test tests[] = {
      a_restored_session_holds_no_copy_until_viewed},
     {"a_render_copy_nobody_looks_at_gives_its_memory_back",
      a_render_copy_nobody_looks_at_gives_its_memory_back},
+    {"a_scene_kept_for_joiners_goes_when_unused",
+     a_scene_kept_for_joiners_goes_when_unused},
 };
 
 int main(int argc, char **argv)
