@@ -299,47 +299,49 @@ static void add_wrapper(struct bc_lin *l, uint32_t u, uint32_t s)
 static void emit_leaf(struct bc_tree *t, struct bc__fill *fs, uint32_t n)
 {
 	struct bc__node *nd = &t->pool[n];
+	struct bc__lay *y = &t->lay[n];
 	struct bc_lin *l = fs->l;
 	uint32_t s = fs->slot++;
-	nd->slot = s;
-	nd->epoch = t->epoch;
-	nd->prim = fs->prim++;
-	nd->param = fs->param;
+	y->slot = s;
+	y->epoch = t->epoch;
+	y->prim = fs->prim++;
+	y->param = fs->param;
 	fs->param += BC_PRIM_RECORD_VEC4;
 	set_word(l, s, true, (uint32_t)nd->u.prim.kind);
-	l->node[2 * s + 1] = nd->param;
+	l->node[2 * s + 1] = y->param;
 	l->first[s] = s;
 	l->node_id[s] = nd->id;
-	l->prim_of[s] = nd->prim;
-	l->prim_slot[nd->prim] = s;
+	l->prim_of[s] = y->prim;
+	l->prim_slot[y->prim] = s;
 	slot_init(l, s);
-	write_prim_record(l->param + 4u * (size_t)nd->param, &nd->u.prim);
-	memcpy(l->color[nd->prim],
+	write_prim_record(l->param + 4u * (size_t)y->param, &nd->u.prim);
+	memcpy(l->color[y->prim],
 	       nd->u.prim.has_color ? nd->u.prim.color : default_color,
 	       sizeof(l->color[0]));
 }
 
-/* Folds operator p's subtree so far (top slot p->slot) with its next child
- * c, just emitted: the binary node ((...) op c). */
-void bc__lin_fold(struct bc_lin *l, const struct bc__node *p, uint32_t left,
-                  uint32_t right, uint32_t o)
+/* Folds operator p's subtree so far (top slot left) with its next child
+ * c, just emitted (top slot right): the binary node ((...) op c). */
+void bc__lin_fold(struct bc_lin *l, const struct bc__node *p, uint32_t param,
+                  uint32_t left, uint32_t right, uint32_t o)
 {
 	bc__lin_set_parent(l, left, o, true);
 	bc__lin_set_parent(l, right, o, false);
 	set_word(l, o, false, op_type_byte(p->u.op.kind));
-	l->node[2 * o + 1] = p->param;
+	l->node[2 * o + 1] = param;
 	l->first[o] = l->first[left];
 	l->node_id[o] = p->id;
 	l->prim_of[o] = BC_NONE;
 	slot_init(l, o);
 }
 
-static void emit_fold(struct bc__fill *fs, struct bc__node *p,
-                      const struct bc__node *c)
+static void emit_fold(struct bc_tree *t, struct bc__fill *fs, uint32_t p,
+                      uint32_t c)
 {
 	uint32_t o = fs->slot++;
-	bc__lin_fold(fs->l, p, p->slot, c->slot, o);
-	p->slot = o;
+	bc__lin_fold(fs->l, &t->pool[p], t->lay[p].param, t->lay[p].slot,
+	             t->lay[c].slot, o);
+	t->lay[p].slot = o;
 }
 
 /*
@@ -355,22 +357,23 @@ void bc__lin_emit(struct bc_tree *t, struct bc__fill *fs, uint32_t top)
 	for (;;) {
 		while (t->pool[n].is_op) {
 			struct bc__node *nd = &t->pool[n];
-			nd->param = fs->param;
-			nd->epoch = t->epoch;
+			struct bc__lay *y = &t->lay[n];
+			y->param = fs->param;
+			y->epoch = t->epoch;
 			if (bc__node_unary(nd)) {
 				struct bc_lin *l = fs->l;
 				nd->u.unary = fs->unary++;
 				fs->param += BC_UNARY_RECORD_VEC4;
 				bc__unary_record(
-				    l->param + 4u * (size_t)nd->param, nd);
-				l->unary_param[nd->u.unary] = nd->param;
+				    l->param + 4u * (size_t)y->param, nd);
+				l->unary_param[nd->u.unary] = y->param;
 				l->unary_kind[nd->u.unary] =
 				    (uint32_t)nd->u.op.kind;
 				l->unary_id[nd->u.unary] = nd->id;
 			} else {
 				fs->param += BC_OP_RECORD_VEC4;
 				write_op_record(fs->l->param +
-				                    4u * (size_t)nd->param,
+				                    4u * (size_t)y->param,
 				                &nd->u.op);
 			}
 			n = nd->first_child;
@@ -382,13 +385,13 @@ void bc__lin_emit(struct bc_tree *t, struct bc__fill *fs, uint32_t top)
 				return;
 			}
 			if (t->pool[p].first_child == n) {
-				t->pool[p].slot = t->pool[n].slot;
+				t->lay[p].slot = t->lay[n].slot;
 				if (bc__node_unary(&t->pool[p])) {
 					add_wrapper(fs->l, t->pool[p].u.unary,
-					            t->pool[p].slot);
+					            t->lay[p].slot);
 				}
 			} else {
-				emit_fold(fs, &t->pool[p], &t->pool[n]);
+				emit_fold(t, fs, p, n);
 			}
 			if (t->pool[n].next != BC_NONE) {
 				n = t->pool[n].next;
@@ -765,9 +768,10 @@ static void place_all_abvs(struct bc_tree *t, struct bc_lin *l)
 	compute_lips(l);
 }
 
-bool bc__lin_prim_bends(const struct bc_lin *l, const struct bc__node *n)
+bool bc__lin_prim_bends(const struct bc_tree *t, const struct bc__node *n)
 {
-	for (uint32_t d = bc_lin_dom(l, n->slot); d != BC_NONE;
+	const struct bc_lin *l = &t->lin;
+	for (uint32_t d = bc_lin_dom(l, bc__lay(t, n)->slot); d != BC_NONE;
 	     d = l->unary_dom[d]) {
 		if (is_bend(l, d)) {
 			return true;
@@ -785,7 +789,7 @@ void bc__lin_fill(struct bc_tree *t, struct bc_lin *l)
 	l->nunary = fs.unary;
 	l->nparam = fs.param;
 	l->lip = 1.0f;
-	root = t->pool[t->root].slot;
+	root = t->lay[t->root].slot;
 	l->node[2 * root] &= ~(BC_WORD_LEFT | BC_WORD_ANCESTOR_MASK);
 	l->node[2 * root] |= BC_WORD_NO_ANCESTOR;
 
@@ -809,32 +813,34 @@ void bc__lin_fill(struct bc_tree *t, struct bc_lin *l)
 void bc__lin_update_prim(struct bc_tree *t, const struct bc__node *n)
 {
 	struct bc_lin *l = &t->lin;
-	write_prim_record(l->param + 4u * (size_t)n->param, &n->u.prim);
-	memcpy(l->color[n->prim],
+	const struct bc__lay *y = bc__lay(t, n);
+	write_prim_record(l->param + 4u * (size_t)y->param, &n->u.prim);
+	memcpy(l->color[y->prim],
 	       n->u.prim.has_color ? n->u.prim.color : default_color,
 	       sizeof(l->color[0]));
-	if (bc__lin_prim_bends(l, n)) {
+	if (bc__lin_prim_bends(t, n)) {
 		/* Its twist and bend ancestors' radii (and so bounds) may
 		 * shrink as well as grow: recomputed over the tree. */
 		place_all_abvs(t, l);
 		return;
 	}
-	bc__lin_place_abv(t, l, n->prim, &n->u.prim);
+	bc__lin_place_abv(t, l, y->prim, &n->u.prim);
 	bc__lin_update_size(l);
 }
 
 void bc__lin_update_op(struct bc_tree *t, const struct bc__node *n)
 {
 	struct bc_lin *l = &t->lin;
-	uint32_t o = n->slot, first = l->first[n->slot];
+	const struct bc__lay *y = bc__lay(t, n);
+	uint32_t o = y->slot, first = l->first[y->slot];
 	uint32_t type = op_type_byte(n->u.op.kind);
 	/* The fold's slots: the top, then down the chain of left children. */
 	for (uint32_t i = 0; i + 1 < n->nchildren; i++) {
 		set_word(l, o, false, type);
 		o = l->first[o - 1] - 1;
 	}
-	write_op_record(l->param + 4u * (size_t)n->param, &n->u.op);
-	for (uint32_t s = n->slot; s-- > first;) {
+	write_op_record(l->param + 4u * (size_t)y->param, &n->u.op);
+	for (uint32_t s = y->slot; s-- > first;) {
 		propagate(l, s);
 	}
 	place_subtree(t, l, (uint32_t)(n - t->pool));
@@ -849,10 +855,11 @@ void bc__lin_update_op(struct bc_tree *t, const struct bc__node *n)
 void bc__lin_update_unary(struct bc_tree *t, const struct bc__node *n)
 {
 	struct bc_lin *l = &t->lin;
-	uint32_t first = l->first[n->slot];
+	const struct bc__lay *y = bc__lay(t, n);
+	uint32_t first = l->first[y->slot];
 	l->unary_kind[n->u.unary] = (uint32_t)n->u.op.kind;
-	bc__unary_record(l->param + 4u * (size_t)n->param, n);
-	for (uint32_t s = n->slot + 1; s-- > first;) {
+	bc__unary_record(l->param + 4u * (size_t)y->param, n);
+	for (uint32_t s = y->slot + 1; s-- > first;) {
 		propagate(l, s);
 	}
 	/* Radii and Lipschitz bounds of twist and bend depend on ABVs

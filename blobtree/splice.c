@@ -506,8 +506,8 @@ bool bc__splice_insert(struct bc_tree *t, uint32_t m, uint32_t px, uint32_t ox)
 		fs.param = sp.p.at;
 		bc__lin_emit(t, &fs, m);
 		f = s0 + sx;
-		bc__refresh(t, &t->pool[p]);
-		bc__lin_fold(l, &t->pool[p], s0 - 1, f - 1, f);
+		bc__lin_fold(l, &t->pool[p], bc__refresh(t, &t->pool[p])->param,
+		             s0 - 1, f - 1, f);
 		again(l, s0 - 1);
 		if (next == BC_NONE) {
 			/* f is P's new top, where the old one was. */
@@ -516,8 +516,7 @@ bool bc__splice_insert(struct bc_tree *t, uint32_t m, uint32_t px, uint32_t ox)
 			      a == BC_WORD_NO_ANCESTOR
 			          ? a
 			          : bc__span_map(&sp.s, a));
-			bc__refresh(t, &t->pool[p]);
-			t->pool[p].slot = f;
+			bc__refresh(t, &t->pool[p])->slot = f;
 		} else {
 			bc__lin_set_parent(
 			    l, f, bc__slot(t, &t->pool[next]) + 1, true);
@@ -540,10 +539,10 @@ bool bc__splice_insert(struct bc_tree *t, uint32_t m, uint32_t px, uint32_t ox)
 		fs.param = sp.p.at;
 		bc__lin_emit(t, &fs, m);
 		c0top = bc__slot(t, &t->pool[c0]);
-		bc__refresh(t, &t->pool[p]);
 		f = c0top + 1;
 		refirst(l, first + sx, c0top);
-		bc__lin_fold(l, &t->pool[p], first + sx - 1, c0top, f);
+		bc__lin_fold(l, &t->pool[p], bc__refresh(t, &t->pool[p])->param,
+		             first + sx - 1, c0top, f);
 		again(l, c0top);
 		bc__lin_set_parent(
 		    l, f, bc__slot(t, &t->pool[t->pool[c0].next]) + 1, true);
@@ -641,8 +640,7 @@ bool bc__splice_remove(struct bc_tree *t, uint32_t c)
 			      a == BC_WORD_NO_ANCESTOR
 			          ? a
 			          : bc__span_map(&one.s, a));
-			bc__refresh(t, &t->pool[p]);
-			t->pool[p].slot = top;
+			bc__refresh(t, &t->pool[p])->slot = top;
 		}
 	} else if (nkids >= 3) {
 		/* The first child and the fold (c op c1) go: c1 is first. */

@@ -142,9 +142,17 @@ static int pool_reserve(struct bc_tree *t, uint32_t more)
 	while (cap < need) {
 		cap *= 2;
 	}
+	if (!t->bare) {
+		struct bc__lay *lay =
+		    bc_reallocarray(t->lay, cap, sizeof(*t->lay));
+		if (!lay) {
+			return BC_ENOMEM;
+		}
+		t->lay = lay;
+	}
 	grown = bc_reallocarray(t->pool, cap, sizeof(*grown));
 	if (!grown) {
-		return BC_ENOMEM;
+		return BC_ENOMEM; /* lay larger than cap: harmless */
 	}
 	t->pool = grown;
 	t->cap = cap;
@@ -161,6 +169,9 @@ int bc__tree_reserve(struct bc_tree *t, uint32_t nodes)
 	 * id map grows with the nodes it holds (add_node), which are none
 	 * when the ids follow the pool (bc__id_find). */
 	bc_populate(t->pool + t->npool, (size_t)nodes * sizeof(*t->pool));
+	if (t->lay) {
+		bc_populate(t->lay + t->npool, (size_t)nodes * sizeof(*t->lay));
+	}
 	return 0;
 }
 
@@ -182,8 +193,11 @@ static uint32_t pool_take(struct bc_tree *t)
 	t->pool[n].next = BC_NONE;
 	t->pool[n].prev = BC_NONE;
 	t->pool[n].live = true;
-	/* No splice to follow: its layout fields are written before read. */
-	t->pool[n].epoch = t->epoch;
+	if (t->lay) {
+		/* No splice to follow: its place is written before read. */
+		memset(&t->lay[n], 0, sizeof(t->lay[n]));
+		t->lay[n].epoch = t->epoch;
+	}
 	return n;
 }
 
@@ -231,6 +245,7 @@ static void tree_clear(struct bc_tree *t)
 	bool bare = t->bare;
 	bc_free(t->open);
 	bc_free(t->pool);
+	bc_free(t->lay);
 	bc_free(t->ids.keys);
 	bc_free(t->ids.vals);
 	for (uint32_t i = 0; i < t->nkids; i++) {
@@ -1279,7 +1294,7 @@ static uint32_t live_node(const struct bc_tree *t, uint32_t id)
 static uint32_t live_node_now(struct bc_tree *t, uint32_t id)
 {
 	uint32_t n = live_node(t, id);
-	if (n != BC_NONE) {
+	if (n != BC_NONE && t->lay) {
 		bc__refresh(t, &t->pool[n]);
 	}
 	return n;
@@ -1311,16 +1326,15 @@ int bc_tree_set_prim(struct bc_tree *t, uint32_t id,
 		return 0;
 	}
 	bc__lin_update_prim(t, &t->pool[n]);
-	bc__dirty_range(&t->dirty.param_lo, &t->dirty.param_hi,
-	                t->pool[n].param,
-	                t->pool[n].param + BC_PRIM_RECORD_VEC4);
-	if (bc__lin_prim_bends(&t->lin, &t->pool[n])) {
+	bc__dirty_range(&t->dirty.param_lo, &t->dirty.param_hi, t->lay[n].param,
+	                t->lay[n].param + BC_PRIM_RECORD_VEC4);
+	if (bc__lin_prim_bends(t, &t->pool[n])) {
 		/* The bounds of its twist and bend ancestors changed. */
 		bc__dirty_range(&t->dirty.param_lo, &t->dirty.param_hi, 0,
 		                t->lin.nparam);
 	}
-	bc__dirty_range(&t->dirty.prim_lo, &t->dirty.prim_hi, t->pool[n].prim,
-	                t->pool[n].prim + 1);
+	bc__dirty_range(&t->dirty.prim_lo, &t->dirty.prim_hi, t->lay[n].prim,
+	                t->lay[n].prim + 1);
 	t->dirty.edits++;
 	return 0;
 }
@@ -1366,15 +1380,15 @@ int bc_tree_set_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
 	bc__lin_update_op(t, &t->pool[n]);
 	/* The subtree's slots are [first, top]; its primitives are those with
 	 * indices from the first leaf's to the last leaf's. */
-	first_slot = l->first[t->pool[n].slot];
+	first_slot = l->first[t->lay[n].slot];
 	/* The leftmost slot is a leaf; a binary subtree of s slots has
 	 * (s + 1) / 2 leaves, all consecutive primitives. */
 	k_lo = l->prim_of[first_slot];
-	k_hi = k_lo + (t->pool[n].slot - first_slot) / 2 + 1;
+	k_hi = k_lo + (t->lay[n].slot - first_slot) / 2 + 1;
 	bc__dirty_range(&t->dirty.slot_lo, &t->dirty.slot_hi, first_slot,
-	                t->pool[n].slot + 1);
-	bc__dirty_range(&t->dirty.param_lo, &t->dirty.param_hi,
-	                t->pool[n].param, t->pool[n].param + BC_OP_RECORD_VEC4);
+	                t->lay[n].slot + 1);
+	bc__dirty_range(&t->dirty.param_lo, &t->dirty.param_hi, t->lay[n].param,
+	                t->lay[n].param + BC_OP_RECORD_VEC4);
 	bc__dirty_range(&t->dirty.prim_lo, &t->dirty.prim_hi, k_lo, k_hi);
 	t->dirty.edits++;
 	return 0;
@@ -1404,9 +1418,9 @@ int bc_tree_set_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
 		return 0;
 	}
 	bc__lin_update_unary(t, &t->pool[n]);
-	first_slot = l->first[t->pool[n].slot];
+	first_slot = l->first[t->lay[n].slot];
 	k_lo = l->prim_of[first_slot];
-	k_hi = k_lo + (t->pool[n].slot - first_slot) / 2 + 1;
+	k_hi = k_lo + (t->lay[n].slot - first_slot) / 2 + 1;
 	/* Its record, and the bounds of every twist and bend (conservatively
 	 * the whole parameter range: these trees are small). */
 	bc__dirty_range(&t->dirty.param_lo, &t->dirty.param_hi, 0, l->nparam);

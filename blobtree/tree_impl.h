@@ -21,14 +21,7 @@ struct bc__node {
 	 * on a child that is one of its anchors. In the byte the three
 	 * flags above leave before the next word. */
 	uint8_t kids;
-	/* Set by linearization; next to the links and flags, so that the
-	 * pass a splice makes over the pool (splice.c) reads one cache line
-	 * of a node, not two. */
-	uint32_t slot;  /* the node's top slot */
-	uint32_t param; /* parameter record, vec4 units */
-	uint32_t prim;  /* primitive index (primitives only) */
-	uint32_t need;  /* evaluation stack entries of its subtree */
-	uint32_t epoch; /* splices slot, param and prim have followed */
+	uint32_t need; /* evaluation stack entries of its subtree */
 	/* A primitive's data, or an operator's; a unary node (u.op.kind
 	 * says it is one) keeps its parameters beside its op, in the room a
 	 * primitive's data takes (a node of every primitive paid for them
@@ -41,6 +34,16 @@ struct bc__node {
 			uint32_t unary; /* unary index (set by linearization) */
 		};
 	} u;
+};
+
+/* Where a node of a laid-out tree is in its layout (struct bc_tree's lay,
+ * beside the pool, index for index): set by linearization. A bare tree
+ * keeps none (16 bytes a node: a tenth of a session's tree). */
+struct bc__lay {
+	uint32_t slot;  /* the node's top slot */
+	uint32_t param; /* parameter record, vec4 units */
+	uint32_t prim;  /* primitive index (primitives only) */
+	uint32_t epoch; /* splices slot, param and prim have followed */
 };
 
 #define BC__KIDS_OP 1u
@@ -118,6 +121,9 @@ struct bc__kids {
 
 struct bc_tree {
 	struct bc__node *pool;
+	/* Layout places of the pool's nodes, cap of them; NULL in a bare
+	 * tree. */
+	struct bc__lay *lay;
 	uint32_t npool, cap;
 	uint32_t free_head; /* chain of dead pool entries through .next */
 	struct bc__idmap ids;
@@ -243,30 +249,44 @@ static inline uint32_t bc__follow(const struct bc_tree *t, uint32_t v,
 	return v;
 }
 
+/* The layout place of pool node n (of a tree that is not bare), as
+ * stored: read it through bc__slot and the like, or after bc__refresh. */
+static inline struct bc__lay *bc__lay(const struct bc_tree *t,
+                                      const struct bc__node *n)
+{
+	return &t->lay[n - t->pool];
+}
+
 /* Node n's slot, record and primitive index as of now. */
 static inline uint32_t bc__slot(const struct bc_tree *t,
                                 const struct bc__node *n)
 {
-	return bc__follow(t, n->slot, n->epoch, 0);
+	const struct bc__lay *y = bc__lay(t, n);
+	return bc__follow(t, y->slot, y->epoch, 0);
 }
 static inline uint32_t bc__param(const struct bc_tree *t,
                                  const struct bc__node *n)
 {
-	return bc__follow(t, n->param, n->epoch, 1);
+	const struct bc__lay *y = bc__lay(t, n);
+	return bc__follow(t, y->param, y->epoch, 1);
 }
 static inline uint32_t bc__prim(const struct bc_tree *t,
                                 const struct bc__node *n)
 {
-	return bc__follow(t, n->prim, n->epoch, 2);
+	const struct bc__lay *y = bc__lay(t, n);
+	return bc__follow(t, y->prim, y->epoch, 2);
 }
-/* Brings node n's slot, param and prim up to date (then they may be read
- * and written directly). */
-static inline void bc__refresh(struct bc_tree *t, struct bc__node *n)
+/* Brings node n's slot, param and prim up to date, and returns them
+ * (which may then be read and written directly). */
+static inline struct bc__lay *bc__refresh(struct bc_tree *t,
+                                          const struct bc__node *n)
 {
-	n->slot = bc__slot(t, n);
-	n->param = bc__param(t, n);
-	n->prim = bc__prim(t, n);
-	n->epoch = t->epoch;
+	struct bc__lay *y = bc__lay(t, n);
+	y->slot = bc__slot(t, n);
+	y->param = bc__param(t, n);
+	y->prim = bc__prim(t, n);
+	y->epoch = t->epoch;
+	return y;
 }
 
 /* names.c */
@@ -312,9 +332,10 @@ struct bc__fill {
  * node words (but top's ancestor), records, colours, and each node's
  * slot, param, prim and unary. */
 void bc__lin_emit(struct bc_tree *t, struct bc__fill *fs, uint32_t top);
-/* Writes slot o as a fold of operator p over slots left and right. */
-void bc__lin_fold(struct bc_lin *l, const struct bc__node *p, uint32_t left,
-                  uint32_t right, uint32_t o);
+/* Writes slot o as a fold of operator p (its record at param) over slots
+ * left and right. */
+void bc__lin_fold(struct bc_lin *l, const struct bc__node *p, uint32_t param,
+                  uint32_t left, uint32_t right, uint32_t o);
 void bc__lin_set_parent(struct bc_lin *l, uint32_t child, uint32_t parent,
                         bool left);
 /* Slot s's ROI, kill and value counts, depth, fast and jump pointers from
@@ -373,7 +394,7 @@ void bc__lin_update_op(struct bc_tree *t, const struct bc__node *n);
  * the domain nodes' Lipschitz bounds. */
 void bc__lin_update_unary(struct bc_tree *t, const struct bc__node *n);
 /* Is primitive n under a twist or bend (whose bounds its ABV feeds)? */
-bool bc__lin_prim_bends(const struct bc_lin *l, const struct bc__node *n);
+bool bc__lin_prim_bends(const struct bc_tree *t, const struct bc__node *n);
 /* Transforms a local bounding shape by p's rigid transform and offsets it. */
 void bc__abv_place(const struct bc_prim_data *p, float offset,
                    struct bc_abv *abv);
