@@ -841,14 +841,14 @@ static int decode(const uint8_t *buf, size_t len, bool scene, struct bc_tree *t,
 		names = (flags & BC_SCENE_FLAG_NAMES) != 0;
 		with_cam = (flags & BC_SCENE_FLAG_CAMERA) != 0;
 		if (with_cam) {
-			float f[10];
+			float f[BC_SCENE_CAMERA_BYTES / 4u];
 			if (bc_rd_left(&r) < sizeof(f)) {
 				return bc_errinfo_set(
 				    ei, BC_EPROTO_TRUNCATED,
 				    "camera: needs %zu bytes, %zu left",
 				    sizeof(f), bc_rd_left(&r));
 			}
-			for (int i = 0; i < 10; i++) {
+			for (int i = 0; i < (int)(sizeof(f) / 4u); i++) {
 				f[i] = bc_rd_f32(&r);
 				if (!isfinite(f[i])) {
 					return bc_errinfo_set(
@@ -892,4 +892,24 @@ int bc_tree_decode(const uint8_t *buf, size_t len, struct bc_tree *t,
                    struct bc_errinfo *ei)
 {
 	return decode(buf, len, false, t, NULL, NULL, ei);
+}
+
+uint32_t bc_scene_head_count(const uint8_t *head, size_t len, size_t total)
+{
+	size_t at = 1u;
+	uint32_t n;
+	if (len > total) {
+		len = total;
+	}
+	if (len && (head[0] & BC_SCENE_FLAG_CAMERA)) {
+		at += BC_SCENE_CAMERA_BYTES;
+	}
+	if (len < at + 4u) {
+		return 0;
+	}
+	n = bc_get_le32(head + at);
+	return n <= BC_TREE_MAX_NODES &&
+	               n <= (total - at - 4u) / BC_SCENE_NODE_MIN_BYTES
+	           ? n
+	           : 0u;
 }

@@ -27,7 +27,7 @@
 #define COLOR_BYTES 12u
 /* SCENE_STATE's fields before the scene, the scene's flags, camera and
  * node count. */
-#define STATE_FIXED_BYTES (16u + 1u + 40u + 4u)
+#define STATE_FIXED_BYTES (16u + BC_SCENE_HEAD_MAX_BYTES)
 
 /* Whether t's SCENE_STATE (the session's camera always included) would pass
  * cap bytes (the daemon's --max-scene): such a scene could be sent to no
@@ -54,22 +54,6 @@ static int check_scene_bytes(const struct bc_tree *t, size_t cap,
 	return 0;
 }
 
-/* The node count in the head of scene encoding bytes (PROTOCOL.md 8:
- * flags, a camera with bit 0, then the count), 0 where the bytes could
- * not hold that many nodes of 5 bytes or more (the decoder refuses those
- * with its own code). A count the decoder accepts is the scene's. */
-static uint32_t head_count(const uint8_t *head, size_t len, size_t total)
-{
-	size_t at = 1u + ((len && (head[0] & 1u)) ? 40u : 0u);
-	uint32_t n;
-	if (len < at + 4u) {
-		return 0;
-	}
-	n = (uint32_t)head[at] | (uint32_t)head[at + 1] << 8 |
-	    (uint32_t)head[at + 2] << 16 | (uint32_t)head[at + 3] << 24;
-	return n <= (total - at - 4u) / 5u ? n : 0u;
-}
-
 /* At most how many nodes a session's scene has after ops: those it has
  * and every subtree they insert (room is taken for that before the batch
  * applies, bc__room_take, and settled at its count after). */
@@ -81,7 +65,7 @@ static uint64_t nodes_after(const struct bc_tree *t,
 		const struct bc_proto_bytes *b = &op[i].subtree;
 		if (op[i].kind == BC_PROTO_EDIT_INSERT ||
 		    op[i].kind == BC_PROTO_EDIT_REPLACE) {
-			n += head_count(b->ptr, b->len, b->len);
+			n += bc_scene_head_count(b->ptr, b->len, b->len);
 		}
 	}
 	return n;
@@ -641,16 +625,16 @@ static void commit(struct bc_task *t)
 	load_free(l);
 }
 
-/* The node count in the head of the scene being loaded (head_count):
- * whole in msg, or in m->parts's first pieces. */
+/* The node count in the head of the scene being loaded
+ * (bc_scene_head_count): whole in msg, or in m->parts's first pieces. */
 static uint32_t load_count(const struct bc_member *m, const struct bc_msg *msg,
                            bool in_parts)
 {
-	uint8_t head[1u + 40u + 4u];
+	uint8_t head[BC_SCENE_HEAD_MAX_BYTES];
 	size_t n = 0;
 	if (!in_parts) {
 		const struct bc_proto_bytes *b = &msg->scene_load.scene;
-		return head_count(b->ptr, b->len, b->len);
+		return bc_scene_head_count(b->ptr, b->len, b->len);
 	}
 	for (uint32_t i = 0; i < m->parts.n && n < sizeof(head); i++) {
 		size_t k = m->parts.v[i].len < sizeof(head) - n
@@ -659,7 +643,7 @@ static uint32_t load_count(const struct bc_member *m, const struct bc_msg *msg,
 		memcpy(head + n, m->parts.v[i].ptr, k);
 		n += k;
 	}
-	return head_count(head, n, m->parts.len);
+	return bc_scene_head_count(head, n, m->parts.len);
 }
 
 /* Starts the load of msg's scene: a whole SCENE_LOAD, or the last part

@@ -5,7 +5,8 @@
  * length that decode again to the same structure, and writes to JSON that
  * parses back. Then as a binary scene file: the input itself (a header of
  * its own, mostly refused), and the input behind a good header, which
- * must get the very verdict the bare scene got.
+ * must get the very verdict the bare scene got. The count read from an
+ * accepted scene's head (bc_scene_head_count) must be its node count.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -89,6 +90,17 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	check_refusal(rc, &ei, t);
 	if (rc == 0) {
 		check_accepted(t, has ? &cam : NULL, size, true);
+		/* What the daemon sizes the scene by, from its head. */
+		if (bc_scene_head_count(data,
+		                        size < BC_SCENE_HEAD_MAX_BYTES
+		                            ? size
+		                            : BC_SCENE_HEAD_MAX_BYTES,
+		                        size) != bc_tree_node_count(t)) {
+			die("the head's count is not the decoded scene's");
+		}
+	} else if (bc_scene_head_count(data, size, size) >
+	           size / BC_SCENE_NODE_MIN_BYTES) {
+		die("the head's count passes the bytes");
 	}
 	memset(&ei, 0, sizeof(ei));
 	check_refusal(bc_scene_file_decode(data, size, t, NULL, &ei), &ei, t);

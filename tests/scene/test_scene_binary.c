@@ -1147,6 +1147,58 @@ static void a_streamed_encoding_is_the_same_bytes(void)
 	bc_tree_destroy(t);
 }
 
+/* bc_scene_head_count, which the daemon sizes a scene by before decoding
+ * it (also from the first part of a scene in parts), reads the count the
+ * decoder builds, with the camera or without, from the head alone, and
+ * gives 0 where the decoder refuses the count for the bytes. */
+static void the_head_count_is_what_the_decoder_builds(void)
+{
+	static const struct {
+		void (*make)(struct bw *w);
+		const char *what;
+	} bad[] = {
+	    {b_empty, "empty"},
+	    {b_camera_short, "camera cut"},
+	    {b_count_short, "node_count cut"},
+	    {b_count_zero, "node_count 0"},
+	    {b_count_max, "node_count 2^32-1"},
+	    {b_count_far_over_bytes, "node_count over the bytes left"},
+	};
+	struct bc_tree *t = bc_tree_create();
+	struct bc_camera cam;
+	REQUIRE(t);
+	REQUIRE(bc_gen("comb", &(struct bc_gen_opts){.count = 1000}, t, &cam,
+	               NULL) == 0);
+	for (int with = 0; with < 2; with++) {
+		uint8_t *buf = NULL;
+		size_t len = 0, head = with ? BC_SCENE_HEAD_MAX_BYTES : 5u;
+		uint32_t n = bc_tree_node_count(t);
+		REQUIRE(bc_scene_encode(t, with ? &cam : NULL, &buf, &len) ==
+		        0);
+		CHECK_EQ_INT(bc_scene_head_count(buf, len, len), n);
+		CHECK_EQ_INT(bc_scene_head_count(buf, head, len), n);
+		CHECK_EQ_INT(bc_scene_head_count(buf, head - 1u, len), 0);
+		/* Fewer bytes than n nodes of the smallest size. */
+		CHECK_EQ_INT(
+		    bc_scene_head_count(
+		        buf, head, head + BC_SCENE_NODE_MIN_BYTES * n - 1u),
+		    0);
+		CHECK_EQ_INT(bc_scene_head_count(
+		                 buf, head, head + BC_SCENE_NODE_MIN_BYTES * n),
+		             n);
+		bc_free(buf);
+	}
+	for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); i++) {
+		struct bw w = {0};
+		bad[i].make(&w);
+		if (bc_scene_head_count(w.b, w.n, w.n) != 0) {
+			printf("  %s: counted\n", bad[i].what);
+			CHECK(!"a count the decoder refuses was read");
+		}
+	}
+	bc_tree_destroy(t);
+}
+
 static const struct bc_test tests[] = {
     {"every_generator_round_trips_through_binary",
      every_generator_round_trips_through_binary},
@@ -1168,6 +1220,8 @@ static const struct bc_test tests[] = {
      every_damaged_scene_file_is_refused},
     {"a_streamed_encoding_is_the_same_bytes",
      a_streamed_encoding_is_the_same_bytes},
+    {"the_head_count_is_what_the_decoder_builds",
+     the_head_count_is_what_the_decoder_builds},
 };
 
 BC_TEST_MAIN(tests)

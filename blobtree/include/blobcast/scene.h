@@ -52,6 +52,12 @@
  * table follows the tree (PROTOCOL.md 8). */
 #define BC_SCENE_FLAG_CAMERA 0x01u
 #define BC_SCENE_FLAG_NAMES 0x02u
+/* The camera a scene's flags announce: eye, target, up, fov_y_deg (ten
+ * little-endian f32). */
+#define BC_SCENE_CAMERA_BYTES 40u
+/* Bytes from a binary scene's start to the end of its node count, at
+ * most: flags, camera, node_count (bc_scene_head_count). */
+#define BC_SCENE_HEAD_MAX_BYTES (1u + BC_SCENE_CAMERA_BYTES + 4u)
 /* Smallest names table entry: id, length and one byte. */
 #define BC_SCENE_NAME_MIN_BYTES 7u
 /* Tag bit that marks an operator node in the binary form. */
@@ -147,6 +153,18 @@ BC_API int bc_scene_decode(const uint8_t *buf, size_t len, struct bc_tree *t,
                            struct bc_errinfo *ei);
 BC_API int bc_tree_decode(const uint8_t *buf, size_t len, struct bc_tree *t,
                           struct bc_errinfo *ei);
+/*
+ * The node count a binary scene of total bytes announces, read from its
+ * first len bytes (head; len may be less than total: the start of a scene
+ * that comes in parts): the count bc_scene_decode would build, checked
+ * against the bytes as it checks it (at most BC_TREE_MAX_NODES, at
+ * BC_SCENE_NODE_MIN_BYTES a node). 0 when head ends before the count or
+ * the bytes could not hold that many nodes (the decoder refuses those);
+ * nothing else is checked. For sizing what a scene will take before
+ * decoding it.
+ */
+BC_API uint32_t bc_scene_head_count(const uint8_t *head, size_t len,
+                                    size_t total);
 
 /* ---- Scene files -------------------------------------------------------- */
 
