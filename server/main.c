@@ -347,7 +347,124 @@ static int config_tokens(struct bc_srv_config *cfg, const char *path,
 	return 0;
 }
 
+/* A configuration file's key for a command-line option of kind number,
+ * flag or choice (its name with '_' for '-', "render_idle" for
+ * --render-idle) is read into the option's own destination under the
+ * option's own rules: opts is the daemon's table over the file's struct
+ * cli (the command line's, merged later, wins: take_file_options).
+ * backend and gl_platform, strings here since the first configuration
+ * files, and the options that are no setting (--config, --check,
+ * --repair) are not read here. Returns 1 when key names none of these
+ * options, else 0 (*seen marks it) or BC_EPARSE with ei set. */
+static int config_option(const struct bc_opt *opts, const char *path,
+                         const char *key, json_t *val, uint64_t *seen,
+                         struct bc_errinfo *ei)
+{
+	char name[32];
+	int i = 0;
+	size_t n = strlen(key);
+	if (n >= sizeof(name) || strchr(key, '-')) {
+		return 1;
+	}
+	for (size_t k = 0; k <= n; k++) {
+		name[k] = key[k] == '_' ? '-' : key[k];
+	}
+	while (opts[i].kind != BC_OPT_INVALID && strcmp(opts[i].name, name)) {
+		i++;
+	}
+	if (opts[i].kind == BC_OPT_INVALID || !strcmp(name, "backend") ||
+	    !strcmp(name, "gl-platform") || !strcmp(name, "repair") ||
+	    (opts[i].kind != BC_OPT_U32 && opts[i].kind != BC_OPT_FLAG &&
+	     opts[i].kind != BC_OPT_ENUM)) {
+		return 1;
+	}
+	if (opts[i].kind == BC_OPT_FLAG) {
+		if (!json_is_boolean(val)) {
+			return bc_errinfo_set(ei, BC_EPARSE,
+			                      "%s: %s: expected true or false",
+			                      path, key);
+		}
+		*(bool *)opts[i].dst = json_is_true(val);
+	} else if (opts[i].kind == BC_OPT_U32) {
+		json_int_t v =
+		    json_is_integer(val) ? json_integer_value(val) : -1;
+		double lo = opts[i].lo, hi = opts[i].hi;
+		if (lo == 0 && hi == 0) {
+			hi = UINT32_MAX;
+		}
+		if (v < (json_int_t)lo || v > (json_int_t)hi) {
+			return bc_errinfo_set(
+			    ei, BC_EPARSE,
+			    "%s: %s: expected a whole number in "
+			    "%.0f..%.0f (as --%s)",
+			    path, key, lo, hi, name);
+		}
+		*(uint32_t *)opts[i].dst = (uint32_t)v;
+	} else {
+		const struct bc_opt_name *c = opts[i].names;
+		const char *v = json_string_value(val);
+		while (v && c->name && strcmp(c->name, v)) {
+			c++;
+		}
+		if (!v || !c->name) {
+			char list[256] = "";
+			for (c = opts[i].names; c->name; c++) {
+				size_t at = strlen(list);
+				snprintf(list + at, sizeof(list) - at, "%s%s",
+				         at ? ", " : "", c->name);
+			}
+			return bc_errinfo_set(ei, BC_EPARSE,
+			                      "%s: %s: expected one of %s",
+			                      path, key, list);
+		}
+		*(int *)opts[i].dst = c->value;
+	}
+	*seen |= 1ull << i;
+	return 0;
+}
+
+/* The configuration file's string keys, into cfg (the command line's
+ * strings point into argv, the file's are copies). Returns 0 or an error
+ * in ei: an unknown key (or an option's name with '-', which keys write
+ * as '_'), a value that is no string, an unknown backend. */
+static int config_string(struct bc_srv_config *cfg, const char *path,
+                         const char *key, json_t *val, struct bc_errinfo *ei)
+{
+	static const char *const keys[] = {"listen",      "unix",     "data",
+	                                   "server_id",   "tls_cert", "tls_key",
+	                                   "gl_platform", "backend"};
+	char **dst[] = {&cfg->listen,     &cfg->unix_path, &cfg->data_dir,
+	                &cfg->server_id,  &cfg->tls_cert,  &cfg->tls_key,
+	                &cfg->gl_platform};
+	size_t i = 0;
+	while (i < sizeof(keys) / sizeof(keys[0]) && strcmp(keys[i], key)) {
+		i++;
+	}
+	if (i == sizeof(keys) / sizeof(keys[0])) {
+		return bc_errinfo_set(
+		    ei, BC_EPARSE, "%s: unknown key %s%s", path, key,
+		    strchr(key, '-') ? " (keys write an option's '-' as '_')"
+		                     : "");
+	}
+	if (!json_is_string(val)) {
+		return bc_errinfo_set(ei, BC_EPARSE,
+		                      "%s: %s: expected a string", path, key);
+	}
+	if (i < sizeof(dst) / sizeof(dst[0])) {
+		return set_str(dst[i], json_string_value(val));
+	}
+	cfg->backend = parse_backend(json_string_value(val));
+	if (cfg->backend == BC_BACKEND_INVALID) {
+		return bc_errinfo_set(ei, BC_EPARSE, "%s: unknown backend %s",
+		                      path, json_string_value(val));
+	}
+	return 0;
+}
+
+/* Reads the configuration file at path into cfg, and the keys of
+ * command-line options (config_option) into the destinations of opts. */
 static int load_config(struct bc_srv_config *cfg, const char *path,
+                       const struct bc_opt *opts, uint64_t *seen,
                        struct bc_errinfo *ei)
 {
 	json_error_t jerr;
@@ -405,38 +522,13 @@ static int load_config(struct bc_srv_config *cfg, const char *path,
 			    json_is_true(val);
 			continue;
 		}
-		if (!json_is_string(val)) {
-			rc = bc_errinfo_set(ei, BC_EPARSE,
-			                    "%s: %s: expected a string", path,
-			                    key);
-			goto out;
-		}
-		if (strcmp(key, "listen") == 0) {
-			rc = set_str(&cfg->listen, json_string_value(val));
-		} else if (strcmp(key, "unix") == 0) {
-			rc = set_str(&cfg->unix_path, json_string_value(val));
-		} else if (strcmp(key, "data") == 0) {
-			rc = set_str(&cfg->data_dir, json_string_value(val));
-		} else if (strcmp(key, "server_id") == 0) {
-			rc = set_str(&cfg->server_id, json_string_value(val));
-		} else if (strcmp(key, "tls_cert") == 0) {
-			rc = set_str(&cfg->tls_cert, json_string_value(val));
-		} else if (strcmp(key, "tls_key") == 0) {
-			rc = set_str(&cfg->tls_key, json_string_value(val));
-		} else if (strcmp(key, "gl_platform") == 0) {
-			rc = set_str(&cfg->gl_platform, json_string_value(val));
-		} else if (strcmp(key, "backend") == 0) {
-			cfg->backend = parse_backend(json_string_value(val));
-			if (cfg->backend == BC_BACKEND_INVALID) {
-				rc = bc_errinfo_set(
-				    ei, BC_EPARSE, "%s: unknown backend %s",
-				    path, json_string_value(val));
+		if ((rc = config_option(opts, path, key, val, seen, ei)) <= 0) {
+			if (rc) {
+				goto out;
 			}
-		} else {
-			rc = bc_errinfo_set(ei, BC_EPARSE, "%s: unknown key %s",
-			                    path, key);
+			continue;
 		}
-		if (rc) {
+		if ((rc = config_string(cfg, path, key, val, ei))) {
 			goto out;
 		}
 	}
@@ -545,6 +637,10 @@ static void on_sighup(uv_signal_t *sig, int signum)
 	struct bc_errinfo ei = {0};
 	struct bc_token *old_tokens;
 	uint32_t old_ntokens;
+	/* The file's other settings are checked, not applied. */
+	struct cli unused = {0};
+	const struct bc_opt opts[] = DAEMON_OPTS(&unused);
+	uint64_t seen = 0;
 	(void)signum;
 	if (dm->stopping) {
 		return;
@@ -556,7 +652,7 @@ static void on_sighup(uv_signal_t *sig, int signum)
 		reload_tls(dm);
 		return;
 	}
-	if (load_config(&fresh, dm->config_path, &ei)) {
+	if (load_config(&fresh, dm->config_path, opts, &seen, &ei)) {
 		bc_log(BC_LOG_ERROR, "SIGHUP: %s; keeping the %u tokens in use",
 		       ei.msg[0] ? ei.msg : bc_strerror(ei.code),
 		       dm->cfg.ntokens);
@@ -647,6 +743,33 @@ static void job_done(void *ud, const struct bc_work_done *d)
 	if (dm->ss) {
 		bc_sessions_job_done(dm->ss, d);
 	}
+}
+
+/* The options the configuration file gave (fseen, in fopts' destinations)
+ * that the command line did not (cseen) become the command line's (in
+ * opts'). Returns 0 (the log level taken too). */
+static int take_file_options(const struct bc_opt *opts,
+                             const struct bc_opt *fopts, uint64_t fseen,
+                             uint64_t cseen)
+{
+	for (int i = 0; opts[i].kind != BC_OPT_INVALID; i++) {
+		if (!(fseen >> i & 1u) || (cseen >> i & 1u)) {
+			continue;
+		}
+		if (opts[i].kind == BC_OPT_FLAG) {
+			*(bool *)opts[i].dst = *(const bool *)fopts[i].dst;
+		} else if (opts[i].kind == BC_OPT_U32) {
+			*(uint32_t *)opts[i].dst =
+			    *(const uint32_t *)fopts[i].dst;
+		} else if (opts[i].kind == BC_OPT_ENUM) {
+			*(int *)opts[i].dst = *(const int *)fopts[i].dst;
+			if (!strcmp(opts[i].name, "log")) {
+				bc_log_init((enum bc_log_level) *
+				            (const int *)opts[i].dst);
+			}
+		}
+	}
+	return 0;
 }
 
 /* Command-line options over the file's (c: what the command line gave). */
@@ -891,9 +1014,11 @@ int main(int argc, char **argv)
 {
 	static struct daemon dm;
 	struct bc_errinfo ei = {0};
-	struct cli cli = {.log = BC_LOG_INFO};
+	struct cli cli = {.log = BC_LOG_INFO}, fcli = {0};
 	const struct bc_opt opts[] = DAEMON_OPTS(&cli);
+	const struct bc_opt fopts[] = DAEMON_OPTS(&fcli);
 	struct bc_args args = daemon_args(opts);
+	uint64_t fseen = 0;
 	int rc = 1;
 	bc_heap_policy();
 	if (bc_args_parse(&args, argc, argv)) {
@@ -911,7 +1036,9 @@ int main(int argc, char **argv)
 		return bc_args_error(&args, "--repair goes with --check DIR");
 	}
 	dm.config_path = cli.config;
-	if (cli.config && load_config(&dm.cfg, cli.config, &ei)) {
+	if (cli.config &&
+	    (load_config(&dm.cfg, cli.config, fopts, &fseen, &ei) ||
+	     take_file_options(opts, fopts, fseen, args.seen))) {
 		fprintf(stderr, "blobcastd: %s\n", ei.msg);
 		goto out;
 	}

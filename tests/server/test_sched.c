@@ -740,6 +740,39 @@ static void a_gl_frame_is_drawn_in_few_calls(void)
 	}
 }
 
+/* The configuration file takes every setting the command line does, by
+ * the option's name with '_' for '-' and in its range (docs/operations.md,
+ * "Configuration file"), and the command line wins: render_threads and
+ * view_cache from the file show in STATS's load section; --view-cache on
+ * the command line replaces the file's. */
+static void the_configuration_file_gives_the_options(void)
+{
+	const char *opts[] = {"--config", NULL, NULL, NULL, NULL};
+	char dir[96], cfg[128];
+	struct daemon d;
+	struct conn c;
+	FILE *f;
+	snprintf(dir, sizeof(dir), "%s/config", base_dir);
+	snprintf(cfg, sizeof(cfg), "%s/config.json", base_dir);
+	REQUIRE((f = fopen(cfg, "w")) != NULL);
+	fprintf(f, "{\"render_threads\": 3, \"view_cache\": 64, "
+	           "\"no_pace\": true, \"simd\": \"off\"}\n");
+	fclose(f);
+	opts[1] = cfg;
+	for (int cli = 0; cli < 2; cli++) {
+		opts[2] = cli ? "--view-cache" : NULL;
+		opts[3] = cli ? "32" : NULL;
+		REQUIRE(daemon_start_with(&d, dir, opts) == 0);
+		REQUIRE(conn_open(&c, &d) == 0 && conn_hello(&c, "cfg") == 0);
+		get_stats(&c, BC_PROTO_STATS_LOAD);
+		CHECK(c.m.stats.has_load);
+		CHECK_EQ_INT(c.m.stats.load.render_workers, 3);
+		CHECK(c.m.stats.load.view_cap == (cli ? 32u : 64u) << 20);
+		conn_close(&c);
+		CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+	}
+}
+
 static const struct bc_test tests[] = {
     {"a_quiet_session_keeps_its_share_beside_a_heavy_one",
      a_quiet_session_keeps_its_share_beside_a_heavy_one},
@@ -753,6 +786,8 @@ static const struct bc_test tests[] = {
     {"a_long_batch_of_sets_on_a_big_scene_applies_whole",
      a_long_batch_of_sets_on_a_big_scene_applies_whole},
     {"stats_tell_the_load", stats_tell_the_load},
+    {"the_configuration_file_gives_the_options",
+     the_configuration_file_gives_the_options},
     {"the_view_cache_stays_under_its_cap", the_view_cache_stays_under_its_cap},
     {"gl_workers_are_scheduled_alike", gl_workers_are_scheduled_alike},
     {"a_gl_frame_is_drawn_in_few_calls", a_gl_frame_is_drawn_in_few_calls},
