@@ -59,8 +59,33 @@ fail() {
 free_port() {
   python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'
 }
+# web-demo.sh takes --port P and P + 1 (its websockify): a port whose
+# next one is free too, held while looking, outside the range the kernel
+# hands out for other tests' connections (one once took P + 1).
+free_pair() {
+  python3 - <<'PY'
+import random, socket
+lo, hi = map(int, open("/proc/sys/net/ipv4/ip_local_port_range").read().split())
+for _ in range(200):
+    p = random.randrange(20000, lo - 1) if lo > 20002 else random.randrange(hi + 1, 65534)
+    held = []
+    try:
+        for q in (p, p + 1):
+            s = socket.socket()
+            s.bind(("127.0.0.1", q))
+            held.append(s)
+    except OSError:
+        continue
+    finally:
+        for s in held:
+            s.close()
+    if len(held) == 2:
+        print(p)
+        break
+PY
+}
 port=$(free_port)
-web_port=$(free_port)
+web_port=$(free_pair)
 export BLOBCAST_SERVER="127.0.0.1:$port"
 
 # The block: lines between "## Using it", its ```sh and the closing ```.
