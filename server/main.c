@@ -237,7 +237,10 @@ struct cli {
 		     .kind = BC_OPT_STRING,                                    \
 		     .dst = &(c)->config,                                      \
 		     .arg = "FILE",                                            \
-		     .help = "JSON configuration (docs/operations.md);\n"      \
+		     .help = "JSON configuration (docs/operations.md):\n"      \
+		             "tokens, timeouts, and every option here\n"       \
+		             "but --config, --check and --repair as a\n"       \
+		             "key with '_' for '-' (\"render_idle\": 600);\n"  \
 		             "options given here override it"},                \
 		    {.name = "server-id",                                      \
 		     .kind = BC_OPT_STRING,                                    \
