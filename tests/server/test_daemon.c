@@ -619,7 +619,10 @@ static void a_session_is_drawn_with_edits_made_before_a_view(void)
 		const char *name = names[v];
 		struct daemon d;
 		struct conn c;
-		char dir[64], log[80];
+		/* Static: a test that stops at a REQUIRE leaves
+		 * daemon_log_path pointing here for the next one. */
+		static char log[80];
+		char dir[64];
 		uint32_t id;
 		make_dir_name(dir, sizeof(dir), name);
 		snprintf(log, sizeof(log), "%s.log", dir);
@@ -653,7 +656,8 @@ static void a_render_copy_nobody_looks_at_goes_and_comes_back(void)
 		const char *name = big ? "idle-big" : "idle-small";
 		struct daemon d;
 		struct conn c, v;
-		char dir[64], log[80], *json = far_spheres(big ? 20000u : 3u);
+		static char log[80]; /* outlives a REQUIRE (above) */
+		char dir[64], *json = far_spheres(big ? 20000u : 3u);
 		uint32_t id;
 		unsigned before;
 		int64_t end;

@@ -794,7 +794,10 @@ static void the_jobs_of_a_client_that_left_are_dropped(void)
 {
 	struct daemon d;
 	struct conn a, b;
-	char dir[64], log[80];
+	/* Static: a test that stops at a REQUIRE leaves daemon_log_path
+	 * pointing here for the next one. */
+	static char log[80];
+	char dir[64];
 	uint32_t snaps = 0, busy = 0;
 	int64_t end;
 	make_dir_name(dir, sizeof(dir), "gone");
@@ -1207,7 +1210,10 @@ static void the_scene_memory_cap_holds_across_sessions(void)
 	struct bc_proto_buf ga, gb, sub, one;
 	struct daemon d;
 	struct conn a, b;
-	char dir[64], log[80];
+	/* Static: a test that stops at a REQUIRE leaves daemon_log_path
+	 * pointing here for the next one. */
+	static char log[80];
+	char dir[64];
 	make_dir_name(dir, sizeof(dir), "room");
 	snprintf(log, sizeof(log), "%s.log", dir);
 	daemon_log_path = log;
@@ -1297,7 +1303,10 @@ static void a_default_scene_past_the_budget_waits_on_disk(void)
 	struct bc_proto_buf big = spheres_at(2000, 0, 0);
 	struct daemon d;
 	struct conn a;
-	char dir[64], log[80];
+	/* Static: a test that stops at a REQUIRE leaves daemon_log_path
+	 * pointing here for the next one. */
+	static char log[80];
+	char dir[64];
 	make_dir_name(dir, sizeof(dir), "bigdefault");
 	snprintf(log, sizeof(log), "%s.log", dir);
 	REQUIRE(daemon_start_with(&d, dir, roomy) == 0);

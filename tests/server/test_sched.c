@@ -650,7 +650,10 @@ static void gl_workers_are_scheduled_alike(void)
 	struct conn a, b, crawl;
 	int64_t ms[3];
 	bool incomplete = false;
-	char dir[96], log[128];
+	/* Static: a test that stops at a REQUIRE leaves daemon_log_path
+	 * pointing here for the next one. */
+	static char log[128];
+	char dir[96];
 	snprintf(dir, sizeof(dir), "%s/gl", base_dir);
 	snprintf(log, sizeof(log), "%s/gl.log", base_dir);
 	/* The daemon fills what it frees: two workers drawing with
@@ -713,7 +716,10 @@ static void a_gl_frame_is_drawn_in_few_calls(void)
 	struct daemon d;
 	struct conn a;
 	bool still = false;
-	char dir[96], log[128];
+	/* Static: a test that stops at a REQUIRE leaves daemon_log_path
+	 * pointing here for the next one. */
+	static char log[128];
+	char dir[96];
 	int calls;
 	snprintf(dir, sizeof(dir), "%s/glcalls", base_dir);
 	snprintf(log, sizeof(log), "%s/glcalls.log", base_dir);
