@@ -750,10 +750,10 @@ static void job_done(void *ud, const struct bc_work_done *d)
 
 /* The options the configuration file gave (fseen, in fopts' destinations)
  * that the command line did not (cseen) become the command line's (in
- * opts'). Returns 0 (the log level taken too). */
-static int take_file_options(const struct bc_opt *opts,
-                             const struct bc_opt *fopts, uint64_t fseen,
-                             uint64_t cseen)
+ * opts'), the log level taken at once. */
+static void take_file_options(const struct bc_opt *opts,
+                              const struct bc_opt *fopts, uint64_t fseen,
+                              uint64_t cseen)
 {
 	for (int i = 0; opts[i].kind != BC_OPT_INVALID; i++) {
 		if (!(fseen >> i & 1u) || (cseen >> i & 1u)) {
@@ -772,7 +772,6 @@ static int take_file_options(const struct bc_opt *opts,
 			}
 		}
 	}
-	return 0;
 }
 
 /* Command-line options over the file's (c: what the command line gave). */
@@ -1040,11 +1039,11 @@ int main(int argc, char **argv)
 	}
 	dm.config_path = cli.config;
 	if (cli.config &&
-	    (load_config(&dm.cfg, cli.config, fopts, &fseen, &ei) ||
-	     take_file_options(opts, fopts, fseen, args.seen))) {
+	    load_config(&dm.cfg, cli.config, fopts, &fseen, &ei)) {
 		fprintf(stderr, "blobcastd: %s\n", ei.msg);
 		goto out;
 	}
+	take_file_options(opts, fopts, fseen, args.seen);
 	apply_cli(&dm.cfg, &cli, &args);
 	if (settle_config(&dm.cfg)) {
 		goto out;
