@@ -87,8 +87,7 @@ static void bounds_f32(const struct bc_opt *o, float *lo, float *hi)
 	*hi = (float)o->hi;
 }
 
-/* Writes the option's range as text ("1..8192") into buf. */
-static void range_text(const struct bc_opt *o, char *buf, size_t cap)
+void bc_opt_range_text(const struct bc_opt *o, char *buf, size_t cap)
 {
 	uint64_t lo, hi;
 	float flo, fhi;
@@ -114,8 +113,7 @@ static void range_text(const struct bc_opt *o, char *buf, size_t cap)
 	}
 }
 
-/* Writes the ENUM's names joined by sep into buf. */
-static void choices_text(const struct bc_opt *o, const char *sep, char *buf,
+void bc_opt_choices_text(const struct bc_opt *o, const char *sep, char *buf,
                          size_t cap)
 {
 	size_t len = 0;
@@ -130,14 +128,12 @@ static void choices_text(const struct bc_opt *o, const char *sep, char *buf,
 	}
 }
 
-static int set_value(struct bc_args *a, const struct bc_opt *o, const char *val)
+int bc_opt_set(const struct bc_opt *o, const char *val)
 {
-	char range[96], choices[256];
 	uint64_t lo, hi, u64;
 	uint32_t u32, wh[2];
 	float flo, fhi, f, v[3];
-	int rc = 0;
-	range_text(o, range, sizeof(range));
+	int rc;
 	switch (o->kind) {
 	case BC_OPT_U32:
 		bounds_u64(o, UINT32_MAX, &lo, &hi);
@@ -145,49 +141,36 @@ static int set_value(struct bc_args *a, const struct bc_opt *o, const char *val)
 		    0) {
 			*(uint32_t *)o->dst = u32;
 		}
-		break;
+		return rc;
 	case BC_OPT_U64:
 		bounds_u64(o, UINT64_MAX, &lo, &hi);
 		if ((rc = bc_num_u64(val, lo, hi, &u64)) == 0) {
 			*(uint64_t *)o->dst = u64;
 		}
-		break;
+		return rc;
 	case BC_OPT_F32:
 		bounds_f32(o, &flo, &fhi);
 		if ((rc = bc_num_f32(val, flo, fhi, &f)) == 0) {
 			*(float *)o->dst = f;
 		}
-		break;
+		return rc;
 	case BC_OPT_SIZE:
 		bounds_u64(o, UINT32_MAX, &lo, &hi);
 		rc = bc_num_size(val, (uint32_t)lo, (uint32_t)hi, &wh[0],
 		                 &wh[1]);
 		if (rc == 0) {
 			memcpy(o->dst, wh, sizeof(wh));
-		} else if (rc == BC_EINVAL) {
-			return fail(a,
-			            "--%s '%s' is not WxH (two whole "
-			            "numbers)",
-			            o->name, val);
-		} else {
-			return fail(a,
-			            "--%s '%s' is out of range (width and "
-			            "height %s)",
-			            o->name, val, range);
 		}
-		return 0;
+		return rc;
 	case BC_OPT_VEC3:
 		if (bc_num_vec3(val, v)) {
-			return fail(a,
-			            "--%s '%s' is not x,y,z (three finite "
-			            "numbers)",
-			            o->name, val);
+			return BC_EINVAL;
 		}
 		memcpy(o->dst, v, sizeof(v));
 		return 0;
 	case BC_OPT_STRING:
 		if (!val[0] && !(o->flags & BC_OPT_EMPTY)) {
-			return fail(a, "--%s needs a non-empty value", o->name);
+			return BC_EINVAL;
 		}
 		*(const char **)o->dst = val;
 		return 0;
@@ -199,11 +182,44 @@ static int set_value(struct bc_args *a, const struct bc_opt *o, const char *val)
 				return 0;
 			}
 		}
-		choices_text(o, ", ", choices, sizeof(choices));
-		return fail(a, "--%s '%s' is not one of %s", o->name, val,
-		            choices);
+		return BC_ERANGE;
 	default:
 		assert(!"option kind without a value");
+		return BC_EINVAL;
+	}
+}
+
+/* bc_opt_set, its refusal worded for the command line. */
+static int set_value(struct bc_args *a, const struct bc_opt *o, const char *val)
+{
+	char range[96], choices[256];
+	int rc = bc_opt_set(o, val);
+	if (!rc) {
+		return 0;
+	}
+	bc_opt_range_text(o, range, sizeof(range));
+	switch (o->kind) {
+	case BC_OPT_SIZE:
+		return fail(a,
+		            rc == BC_EINVAL ? "--%s '%s' is not WxH (two whole "
+		                              "numbers)"
+		                            : "--%s '%s' is out of range (width "
+		                              "and height %s)",
+		            o->name, val, range);
+	case BC_OPT_VEC3:
+		return fail(a, "--%s '%s' is not x,y,z (three finite numbers)",
+		            o->name, val);
+	case BC_OPT_STRING:
+		return fail(a, "--%s needs a non-empty value", o->name);
+	case BC_OPT_ENUM:
+		bc_opt_choices_text(o, ", ", choices, sizeof(choices));
+		return fail(a, "--%s '%s' is not one of %s", o->name, val,
+		            choices);
+	case BC_OPT_U32:
+	case BC_OPT_U64:
+	case BC_OPT_F32:
+		break;
+	default:
 		return fail(a, "--%s: bad option table", o->name);
 	}
 	if (rc == BC_EINVAL) {
@@ -211,11 +227,7 @@ static int set_value(struct bc_args *a, const struct bc_opt *o, const char *val)
 		            o->kind == BC_OPT_F32 ? "a finite decimal number"
 		                                  : "a whole decimal number");
 	}
-	if (rc) {
-		return fail(a, "--%s '%s' is out of range (%s)", o->name, val,
-		            range);
-	}
-	return 0;
+	return fail(a, "--%s '%s' is out of range (%s)", o->name, val, range);
 }
 
 const struct bc_opt *bc_args_find(const struct bc_opt *opts, const char *arg,
@@ -369,7 +381,7 @@ static void print_text(FILE *out, const char *text, int indent,
 	char buf[256];
 	for (const char *p = text; *p; p++) {
 		if (o && strncmp(p, "{range}", 7) == 0) {
-			range_text(o, buf, sizeof(buf));
+			bc_opt_range_text(o, buf, sizeof(buf));
 			fputs(buf, out);
 			p += 6;
 		} else if (o && strncmp(p, "{default}", 9) == 0) {
@@ -377,7 +389,7 @@ static void print_text(FILE *out, const char *text, int indent,
 			fputs(buf, out);
 			p += 8;
 		} else if (o && strncmp(p, "{choices}", 9) == 0) {
-			choices_text(o, " | ", buf, sizeof(buf));
+			bc_opt_choices_text(o, " | ", buf, sizeof(buf));
 			fputs(buf, out);
 			p += 8;
 		} else if (*p == '\n') {

@@ -389,38 +389,29 @@ static int config_option(const struct bc_opt *opts, const char *path,
 		}
 		*(bool *)opts[i].dst = json_is_true(val);
 	} else if (opts[i].kind == BC_OPT_U32) {
-		json_int_t v =
-		    json_is_integer(val) ? json_integer_value(val) : -1;
-		double lo = opts[i].lo, hi = opts[i].hi;
-		if (lo == 0 && hi == 0) {
-			hi = UINT32_MAX;
+		/* The number as text, under the option's own bounds: a
+		 * value that is no whole number is refused as one out of
+		 * range would be. */
+		char num[32] = "-";
+		char range[96];
+		if (json_is_integer(val)) {
+			snprintf(num, sizeof(num), "%" JSON_INTEGER_FORMAT,
+			         json_integer_value(val));
 		}
-		if (v < (json_int_t)lo || v > (json_int_t)hi) {
-			return bc_errinfo_set(
-			    ei, BC_EPARSE,
-			    "%s: %s: expected a whole number in "
-			    "%.0f..%.0f (as --%s)",
-			    path, key, lo, hi, name);
-		}
-		*(uint32_t *)opts[i].dst = (uint32_t)v;
-	} else {
-		const struct bc_opt_name *c = opts[i].names;
-		const char *v = json_string_value(val);
-		while (v && c->name && strcmp(c->name, v)) {
-			c++;
-		}
-		if (!v || !c->name) {
-			char list[256] = "";
-			for (c = opts[i].names; c->name; c++) {
-				size_t at = strlen(list);
-				snprintf(list + at, sizeof(list) - at, "%s%s",
-				         at ? ", " : "", c->name);
-			}
+		if (bc_opt_set(&opts[i], num)) {
+			bc_opt_range_text(&opts[i], range, sizeof(range));
 			return bc_errinfo_set(ei, BC_EPARSE,
-			                      "%s: %s: expected one of %s",
-			                      path, key, list);
+			                      "%s: %s: expected a whole number "
+			                      "in %s (as --%s)",
+			                      path, key, range, name);
 		}
-		*(int *)opts[i].dst = c->value;
+	} else if (!json_is_string(val) ||
+	           bc_opt_set(&opts[i], json_string_value(val))) {
+		char list[256];
+		bc_opt_choices_text(&opts[i], ", ", list, sizeof(list));
+		return bc_errinfo_set(ei, BC_EPARSE,
+		                      "%s: %s: expected one of %s", path, key,
+		                      list);
 	}
 	*seen |= 1ull << i;
 	return 0;

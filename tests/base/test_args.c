@@ -471,6 +471,36 @@ static void args_hidden_options_parse_but_stay_out_of_help(void)
 	CHECK(bc_args_given(&a, "quiet"));
 }
 
+/* bc_opt_set: one option's value from text, as a configuration file gives
+ * it, under the rules the parser applies; a refusal leaves dst alone. */
+static void args_one_value_under_the_tables_rules(void)
+{
+	struct cmd c = {.threads = 4, .mode = 1};
+	struct bc_opt opts[10];
+	char buf[64];
+	table(&c, opts);
+	CHECK_EQ_INT(bc_opt_set(&opts[1], "64"), 0);
+	CHECK_EQ_INT((int)c.threads, 64);
+	CHECK_EQ_INT(bc_opt_set(&opts[1], "65"), BC_ERANGE);
+	CHECK_EQ_INT(bc_opt_set(&opts[1], "-1"), BC_EINVAL);
+	CHECK_EQ_INT(bc_opt_set(&opts[1], "8 "), BC_EINVAL);
+	CHECK_EQ_INT((int)c.threads, 64);
+	CHECK_EQ_INT(bc_opt_set(&opts[3], "180"), BC_ERANGE);
+	CHECK_EQ_INT(bc_opt_set(&opts[5], "8193x1"), BC_ERANGE);
+	CHECK_EQ_INT(bc_opt_set(&opts[5], "8x"), BC_EINVAL);
+	CHECK_EQ_INT(bc_opt_set(&opts[4], ""), BC_EINVAL);
+	CHECK_EQ_INT(bc_opt_set(&opts[7], "exact"), 0);
+	CHECK_EQ_INT(c.mode, 2);
+	CHECK_EQ_INT(bc_opt_set(&opts[7], "slow"), BC_ERANGE);
+	CHECK_EQ_INT(c.mode, 2);
+	bc_opt_range_text(&opts[1], buf, sizeof(buf));
+	CHECK_STREQ(buf, "0..64");
+	bc_opt_range_text(&opts[2], buf, sizeof(buf));
+	CHECK_STREQ(buf, "0..18446744073709551615");
+	bc_opt_choices_text(&opts[7], ", ", buf, sizeof(buf));
+	CHECK_STREQ(buf, "fast, exact");
+}
+
 static const struct bc_test tests[] = {
     {"num_integers_are_plain_decimal", num_integers_are_plain_decimal},
     {"num_floats_are_finite_decimal", num_floats_are_finite_decimal},
@@ -484,5 +514,7 @@ static const struct bc_test tests[] = {
     {"args_help_comes_from_the_table", args_help_comes_from_the_table},
     {"args_hidden_options_parse_but_stay_out_of_help",
      args_hidden_options_parse_but_stay_out_of_help},
+    {"args_one_value_under_the_tables_rules",
+     args_one_value_under_the_tables_rules},
 };
 BC_TEST_MAIN(tests)

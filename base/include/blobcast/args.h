@@ -112,6 +112,21 @@ int bc_args_parse(struct bc_args *a, int argc, char **argv);
 const struct bc_opt *bc_args_find(const struct bc_opt *opts, const char *arg,
                                   const char **val, int *index);
 
+/* Sets o's destination from the text val under o's own rules (its range,
+ * its choices), as the parser does for "--name val": for a program that
+ * reads the same settings from elsewhere (a configuration file). Returns
+ * 0, BC_EINVAL (val is not that kind of value) or BC_ERANGE (out of
+ * range, not one of the choices); dst is left alone on a refusal. */
+int bc_opt_set(const struct bc_opt *o, const char *val);
+
+/* Writes a numeric option's range ("1..8192", "any" for other kinds) into
+ * buf, as "{range}" in the help. */
+void bc_opt_range_text(const struct bc_opt *o, char *buf, size_t cap);
+
+/* Writes an ENUM's names joined by sep into buf. */
+void bc_opt_choices_text(const struct bc_opt *o, const char *sep, char *buf,
+                         size_t cap);
+
 /* Whether the option with this long name was given. */
 bool bc_args_given(const struct bc_args *a, const char *name);
 
