@@ -71,6 +71,19 @@ static uint64_t nodes_after(const struct bc_tree *t,
 	return n;
 }
 
+/* m's change needs the room that session w's work keeps back
+ * (bc__room_busy): the request waits behind that work and comes again
+ * when it ends. */
+static int wait_for_room(struct bc_member *m, struct bc_session *w,
+                         uint32_t seq, const char *what)
+{
+	bc_log(BC_LOG_INFO,
+	       "session %s: %s waits for the room session %s holds until "
+	       "its work ends",
+	       m->session->name, what, w->name);
+	return bc__park(w, m, seq);
+}
+
 bool bc__refuse_change(struct bc_member *m, uint32_t seq, int *park)
 {
 	struct bc_session *s = m->session;
@@ -425,9 +438,15 @@ int bc_handle_edit(struct bc_member *m, const struct bc_msg *msg)
 	struct bc_errinfo ei = {0};
 	struct bc_change how = {.flags =
 	                            msg->flags & BC_PROTO_FLAG_INTERACTING};
+	struct bc_session *s = m->session, *w;
 	int rc, park;
 	if (bc__refuse_change(m, msg->seq, &park)) {
 		return park;
+	}
+	if (s->tree && !s->lost &&
+	    (w = bc__room_busy(s, nodes_after(s->tree, msg->edit.ops,
+	                                      msg->edit.nops)))) {
+		return wait_for_room(m, w, msg->seq, "an edit");
 	}
 	rc = bc__apply(m, msg->edit.ops, msg->edit.nops, msg->seq, &how,
 	               bc__undo_applied, NULL, &ei);
@@ -625,25 +644,38 @@ static void commit(struct bc_task *t)
 	load_free(l);
 }
 
+/* The node count in the head of a scene sent in parts
+ * (bc_scene_head_count): in p's first pieces, then in last (NULL: none),
+ * a piece not taken into p yet. */
+static uint32_t parts_count(const struct bc_load_parts *p,
+                            const struct bc_proto_bytes *last)
+{
+	uint8_t head[BC_SCENE_HEAD_MAX_BYTES];
+	size_t n = 0, total = p->len + (last ? last->len : 0);
+	for (uint32_t i = 0; i <= p->n && n < sizeof(head); i++) {
+		const uint8_t *ptr = i < p->n ? p->v[i].ptr : NULL;
+		size_t len = i < p->n ? p->v[i].len : 0;
+		if (i == p->n && last) {
+			ptr = last->ptr;
+			len = last->len;
+		}
+		len = len < sizeof(head) - n ? len : sizeof(head) - n;
+		if (len) {
+			memcpy(head + n, ptr, len);
+			n += len;
+		}
+	}
+	return bc_scene_head_count(head, n, total);
+}
+
 /* The node count in the head of the scene being loaded
  * (bc_scene_head_count): whole in msg, or in m->parts's first pieces. */
 static uint32_t load_count(const struct bc_member *m, const struct bc_msg *msg,
                            bool in_parts)
 {
-	uint8_t head[BC_SCENE_HEAD_MAX_BYTES];
-	size_t n = 0;
-	if (!in_parts) {
-		const struct bc_proto_bytes *b = &msg->scene_load.scene;
-		return bc_scene_head_count(b->ptr, b->len, b->len);
-	}
-	for (uint32_t i = 0; i < m->parts.n && n < sizeof(head); i++) {
-		size_t k = m->parts.v[i].len < sizeof(head) - n
-		               ? m->parts.v[i].len
-		               : sizeof(head) - n;
-		memcpy(head + n, m->parts.v[i].ptr, k);
-		n += k;
-	}
-	return bc_scene_head_count(head, n, m->parts.len);
+	const struct bc_proto_bytes *b = &msg->scene_load.scene;
+	return in_parts ? parts_count(&m->parts, NULL)
+	                : bc_scene_head_count(b->ptr, b->len, b->len);
 }
 
 /* Starts the load of msg's scene: a whole SCENE_LOAD, or the last part
@@ -856,12 +888,25 @@ static bool take_part(struct bc_member *m, const struct bc_msg *msg)
 
 int bc_handle_scene_load(struct bc_member *m, const struct bc_msg *msg)
 {
+	const struct bc_proto_bytes *b = &msg->scene_load.scene;
+	struct bc_session *w = NULL;
 	int park;
 	if (bc__refuse_change(m, msg->seq, &park)) {
 		if (!park) {
 			bc__parts_drop(m); /* refused: its scene is dropped */
 		}
 		return park;
+	}
+	/* Waiting for room comes before the scene (or its last part) is
+	 * taken: the request comes again whole. */
+	if (!(msg->flags & BC_PROTO_FLAGS_PARTS)) {
+		w = bc__room_busy(m->session,
+		                  bc_scene_head_count(b->ptr, b->len, b->len));
+	} else if (!(msg->flags & BC_PROTO_FLAG_MORE) && m->parts.open) {
+		w = bc__room_busy(m->session, parts_count(&m->parts, b));
+	}
+	if (w) {
+		return wait_for_room(m, w, msg->seq, "a scene load");
 	}
 	if (msg->flags & BC_PROTO_FLAGS_PARTS) {
 		return take_part(m, msg) ? start_load(m, msg, true) : 0;

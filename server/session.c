@@ -768,6 +768,31 @@ int bc__room_take(struct bc_session *s, uint64_t after, uint64_t *taken,
 	return 0;
 }
 
+struct bc_session *bc__room_busy(struct bc_session *s, uint64_t after)
+{
+	struct bc_sessions *ss = s->ss;
+	struct bc_session *most = NULL;
+	uint64_t more = after > s->nodes ? after - s->nodes : 0, in_use, soon = 0;
+	if (!more || after > ss->nodes_cap || ss->starting) {
+		return NULL;
+	}
+	in_use = ss->nodes_held - unloadable_nodes(ss, s);
+	if (in_use + more <= ss->nodes_cap) {
+		return NULL;
+	}
+	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
+		struct bc_session *o = ss->sessions[i];
+		/* A session being read from disk holds no nodes yet, and one
+		 * whose storage failed never unloads. */
+		if (o && o != s && o->nmembers == 0 && o->busy && o->nodes &&
+		    !o->store_failed) {
+			soon += o->nodes;
+			most = !most || o->nodes > most->nodes ? o : most;
+		}
+	}
+	return in_use - soon + more <= ss->nodes_cap ? most : NULL;
+}
+
 void bc__room_give(struct bc_sessions *ss, uint64_t *taken)
 {
 	ss->nodes_held -= *taken;

@@ -135,6 +135,14 @@ struct bc_task {
  * or BC_ELIMIT (ei says why and what to do). Loop only. */
 int bc__room_take(struct bc_session *s, uint64_t after, uint64_t *taken,
                   struct bc_errinfo *ei);
+/* The session whose work under way keeps back the room a change of s to
+ * `after` nodes needs: a session without members, busy (a snapshot, an
+ * edit its last member left running), that can be unloaded once that work
+ * ends, and whose nodes with those of the sessions idle already make the
+ * room. The request parks behind it (bc__park) and takes the room when it
+ * comes again, instead of a refusal a second too early. NULL where the room
+ * is there now, or would not be even so (bc__room_take then says why). */
+struct bc_session *bc__room_busy(struct bc_session *s, uint64_t after);
 void bc__room_give(struct bc_sessions *ss, uint64_t *taken);
 /* s->tree is its scene now: the count follows it, taken given back. */
 void bc__room_settle(struct bc_session *s, uint64_t *taken);

@@ -531,8 +531,8 @@ static uint32_t send_edit(struct conn *c, const struct bc_proto_edit_op *op)
 	return conn_send(c, &m);
 }
 
-/* The answer to c's EDIT seq: the ERROR's code, or APPLIED for
- * EDIT_APPLIED. */
+/* The answer to c's EDIT or SCENE_LOAD seq: the ERROR's code, or APPLIED
+ * for its EDIT_APPLIED or SCENE_STATE. */
 static int answer_of(struct conn *c, uint32_t seq)
 {
 	for (;;) {
@@ -542,8 +542,10 @@ static int answer_of(struct conn *c, uint32_t seq)
 		if (c->m.type == BC_MSG_ERROR && c->m.seq == seq) {
 			return c->m.error.code;
 		}
-		if (c->m.type == BC_MSG_EDIT_APPLIED &&
-		    c->m.edit_applied.author_seq == seq) {
+		if ((c->m.type == BC_MSG_EDIT_APPLIED &&
+		     c->m.edit_applied.author_seq == seq) ||
+		    (c->m.type == BC_MSG_SCENE_STATE &&
+		     c->m.scene_state.author_seq == seq)) {
 			return APPLIED;
 		}
 	}
@@ -1293,6 +1295,147 @@ static void the_scene_memory_cap_holds_across_sessions(void)
 	bc_proto_buf_finish(&one);
 }
 
+/* Whether SESSION_LIST (sent by c) lists session name loaded, without
+ * members, with prims primitives. */
+static bool listed_memberless(struct conn *c, const char *name,
+                              uint32_t prims)
+{
+	struct bc_msg m = {.type = BC_MSG_SESSION_LIST};
+	const struct bc_msg_sessions *l = &c->m.sessions;
+	if (!conn_send(c, &m) || conn_expect(c, BC_MSG_SESSIONS, 5000) != 1) {
+		return false;
+	}
+	for (uint32_t i = 0; i < l->nsessions; i++) {
+		const struct bc_proto_session_entry *e = &l->sessions[i];
+		if (e->name.len == strlen(name) &&
+		    memcmp(e->name.ptr, name, e->name.len) == 0) {
+			return (e->flags & BC_PROTO_SESSION_LOADED) &&
+			       e->members == 0 && e->prims == prims;
+		}
+	}
+	return false;
+}
+
+/* A message sent but for its last byte (send_last sends it): however big,
+ * the daemon then has it whole at once. */
+struct held_msg {
+	struct bc_proto_buf b;
+	uint32_t seq;
+};
+
+static void send_but_last(struct conn *c, struct bc_msg *m,
+                          struct held_msg *h)
+{
+	h->seq = m->seq = ++c->seq;
+	bc_proto_buf_init(&h->b, 0);
+	REQUIRE(bc_proto_encode(&h->b, m, NULL) == 0);
+	REQUIRE(send_raw(c, h->b.data, h->b.len - 1) == 0);
+}
+
+static void send_last(struct conn *c, struct held_msg *h)
+{
+	REQUIRE(send_raw(c, h->b.data + h->b.len - 1, 1) == 0);
+	bc_proto_buf_finish(&h->b);
+}
+
+/* c loads b into its session and leaves it at once (both sent before any
+ * answer is read) while w holds a message but for its last byte; once
+ * o (a third client) sees the session loaded without members, w's last
+ * byte goes. The snapshot of the load runs on a task then, which keeps
+ * the session busy (not unloadable) for a while: w's message comes in
+ * that while unless the snapshot is quicker than SESSION_LIST's round
+ * trip. c's answers are read. */
+static void load_leave_send(struct conn *c, const char *name,
+                            const struct bc_proto_buf *b, uint32_t prims,
+                            struct conn *o, struct conn *w,
+                            struct held_msg *h)
+{
+	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
+	struct bc_msg l = {.type = BC_MSG_SESSION_LEAVE};
+	int64_t end = t_now_ms() + 30000;
+	uint32_t seq;
+	m.scene_load.scene.ptr = b->data;
+	m.scene_load.scene.len = (uint32_t)b->len;
+	REQUIRE(conn_send(c, &m));
+	REQUIRE((seq = conn_send(c, &l)));
+	while (!listed_memberless(o, name, prims) && t_now_ms() < end) {
+	}
+	CHECK(t_now_ms() < end);
+	send_last(w, h);
+	while (conn_recv(c, 30000) == 1) {
+		if (c->m.type == BC_MSG_OK && c->m.seq == seq) {
+			return;
+		}
+	}
+	CHECK(!"no OK for SESSION_LEAVE");
+}
+
+/* --scene-memory 100: 149 796 nodes. Session a is loaded with 100 001
+ * nodes and left at once; b's load of 60 001 then needs a's room. Where
+ * it comes while a's snapshot runs, it waits for that work to end and
+ * takes the room then (a unloaded), where it was refused with ELIMIT.
+ * Then the same for an INSERT: session c takes a's place, and b's INSERT
+ * of 60 000 spheres needs c's room. The daemon's log says when a request
+ * waited (the test prints how many did: the snapshot may be quicker than
+ * a round trip); the answer is the same either way. */
+static void a_change_waits_for_the_room_a_snapshot_holds(void)
+{
+	static const char *const cap[] = {"--scene-memory", "100", NULL};
+	struct bc_proto_edit_op ins = {.kind = BC_PROTO_EDIT_INSERT};
+	struct bc_proto_buf big, mid, two;
+	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
+	struct held_msg h;
+	struct daemon d;
+	struct conn a, b, o;
+	static char log[80];
+	char dir[64];
+	make_dir_name(dir, sizeof(dir), "wait-room");
+	snprintf(log, sizeof(log), "%s.log", dir);
+	daemon_log_path = log;
+	REQUIRE(daemon_start_with(&d, dir, cap) == 0);
+	REQUIRE(conn_open(&a, &d) == 0 && conn_hello(&a, "a") == 0);
+	REQUIRE(conn_open(&b, &d) == 0 && conn_hello(&b, "b") == 0);
+	REQUIRE(conn_open(&o, &d) == 0 && conn_hello(&o, "o") == 0);
+	REQUIRE(conn_join(&b, "b", BC_PROTO_ROLE_EDITOR, true) == 0);
+	big = spheres_at(100000, 0, 10000);
+	mid = spheres_at(60000, 1, 200000);
+	two = spheres_at(2, 2, 300000);
+	REQUIRE(conn_join(&a, "a", BC_PROTO_ROLE_EDITOR, true) == 0);
+	m.scene_load.scene.ptr = mid.data;
+	m.scene_load.scene.len = (uint32_t)mid.len;
+	send_but_last(&b, &m, &h);
+	load_leave_send(&a, "a", &big, 100000, &o, &b, &h);
+	CHECK_EQ_INT(answer_of(&b, h.seq), APPLIED);
+	CHECK_EQ_INT(daemon_log_count(log, "session a unloaded (its memory"),
+	             1);
+	/* b back to two spheres; c takes a's place, and b's INSERT of
+	 * 60 000 needs c's room. */
+	CHECK_EQ_INT(load_answer(&b, &two), APPLIED);
+	REQUIRE(conn_join(&a, "c", BC_PROTO_ROLE_EDITOR, true) == 0);
+	memset(&m, 0, sizeof(m));
+	m.type = BC_MSG_EDIT;
+	m.edit.nops = 1;
+	m.edit.ops = &ins;
+	ins.node = 300000;
+	ins.subtree.ptr = mid.data;
+	ins.subtree.len = (uint32_t)mid.len;
+	send_but_last(&b, &m, &h);
+	load_leave_send(&a, "c", &big, 100000, &o, &b, &h);
+	CHECK_EQ_INT(answer_of(&b, h.seq), APPLIED);
+	CHECK_EQ_INT(daemon_log_count(log, "session c unloaded (its memory"),
+	             1);
+	printf("# requests that waited for a snapshot's room: %d of 2\n",
+	       daemon_log_count(log, "until its work ends"));
+	conn_close(&a);
+	conn_close(&b);
+	conn_close(&o);
+	daemon_log_path = NULL;
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+	bc_proto_buf_finish(&big);
+	bc_proto_buf_finish(&mid);
+	bc_proto_buf_finish(&two);
+}
+
 /* A daemon restarted with less --scene-memory than session "default"'s
  * scene alone starts all the same, says so, and refuses a JOIN of it
  * with ELIMIT, not an EIO or a daemon that does not start. */
@@ -1359,6 +1502,8 @@ static const struct bc_test tests[] = {
      a_large_load_does_not_hold_other_sessions},
     {"the_scene_memory_cap_holds_across_sessions",
      the_scene_memory_cap_holds_across_sessions},
+    {"a_change_waits_for_the_room_a_snapshot_holds",
+     a_change_waits_for_the_room_a_snapshot_holds},
     {"a_default_scene_past_the_budget_waits_on_disk",
      a_default_scene_past_the_budget_waits_on_disk},
 };
