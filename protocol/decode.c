@@ -757,6 +757,7 @@ static int dec_pick_result(struct dec *d, struct bc_msg_pick_result *p)
 #define STATS_LOAD_BYTES 44u
 #define STATS_TLS_BYTES 9u
 #define STATS_LINK_BYTES 32u
+#define STATS_MEMORY_BYTES 28u
 
 static int dec_stats_load(struct dec *d, struct bc_proto_load *l)
 {
@@ -787,24 +788,26 @@ static int dec_stats(struct dec *d, struct bc_msg_stats *s)
 	TRY(rd_f32_nonneg(d, "edit_ms_avg", &s->edit_ms_avg));
 	TRY(rd_f32_nonneg(d, "fps", &s->fps));
 	/* The sections follow only when the client asked for them, in the
-	 * order load, TLS, link: the payload's length tells which (every sum
-	 * of 44, 9 and 32 differs); anything else is bytes after the last
-	 * field. */
+	 * order load, TLS, link, memory: the payload's length tells which
+	 * (every sum of 44, 9, 32 and 28 differs); anything else is bytes
+	 * after the last field. */
 	left = bc_rd_left(&d->c);
-	bool load = false, tls = false, link = false;
-	for (unsigned k = 0; k < 8; k++) {
+	bool load = false, tls = false, link = false, memory = false;
+	for (unsigned k = 0; k < 16; k++) {
 		if (left == ((k & 1u) ? STATS_LOAD_BYTES : 0u) +
 		                ((k & 2u) ? STATS_TLS_BYTES : 0u) +
-		                ((k & 4u) ? STATS_LINK_BYTES : 0u)) {
+		                ((k & 4u) ? STATS_LINK_BYTES : 0u) +
+		                ((k & 8u) ? STATS_MEMORY_BYTES : 0u)) {
 			load = (k & 1u) != 0;
 			tls = (k & 2u) != 0;
 			link = (k & 4u) != 0;
+			memory = (k & 8u) != 0;
 			break;
 		}
-		if (k == 7) {
+		if (k == 15) {
 			return fail(d, BC_EPROTO_TRAILING,
 			            "%zu bytes after the last field, not a "
-			            "load, TLS or link section",
+			            "load, TLS, link or memory section",
 			            left);
 		}
 	}
@@ -831,6 +834,14 @@ static int dec_stats(struct dec *d, struct bc_msg_stats *s)
 		TRY(rd_u32(d, "unacked_bytes", &l->unacked_bytes));
 		TRY(rd_u32(d, "frames_paced", &l->frames_paced));
 		TRY(rd_u64(d, "frames_spoiled", &l->frames_spoiled));
+	}
+	if (memory) {
+		struct bc_proto_memory *mm = &s->memory;
+		s->has_memory = true;
+		TRY(rd_u64(d, "scene_nodes", &mm->scene_nodes));
+		TRY(rd_u64(d, "scene_nodes_cap", &mm->scene_nodes_cap));
+		TRY(rd_u64(d, "session_nodes", &mm->session_nodes));
+		TRY(rd_u32(d, "sessions_loaded", &mm->sessions_loaded));
 	}
 	return 0;
 }

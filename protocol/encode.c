@@ -374,6 +374,13 @@ static void w_body(struct bc__w *w, const struct bc_msg *m)
 			bc__put_u32(w, l->frames_paced);
 			bc__put_u64(w, l->frames_spoiled);
 		}
+		if (s->has_memory) {
+			const struct bc_proto_memory *mm = &s->memory;
+			bc__put_u64(w, mm->scene_nodes);
+			bc__put_u64(w, mm->scene_nodes_cap);
+			bc__put_u64(w, mm->session_nodes);
+			bc__put_u32(w, mm->sessions_loaded);
+		}
 		break;
 	}
 	case BC_MSG_GET_STATS:

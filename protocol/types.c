@@ -27,9 +27,9 @@
 #define SESSION_ENTRY_MAX (STR_MAX(BC_PROTO_MAX_NAME) + 2u + 4u + 8u + 8u + 1u)
 #define SESSIONS_MAX (2u + BC_PROTO_MAX_SESSIONS_LISTED * SESSION_ENTRY_MAX)
 #define BULK BC_PROTO_MAX_PAYLOAD
-/* STATS: the client's figures, then the optional load, TLS and link
- * sections. */
-#define STATS_MAX (64u + 44u + 9u + 32u)
+/* STATS: the client's figures, then the optional load, TLS, link and
+ * memory sections. */
+#define STATS_MAX (64u + 44u + 9u + 32u + 28u)
 /* A HISTORY entry: order, time, built_on, state, flags, author, what. */
 #define HISTORY_ENTRY_MAX                                                      \
 	(8u + 8u + 8u + 1u + 1u + STR_MAX(BC_PROTO_MAX_NAME) +                 \

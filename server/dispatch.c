@@ -293,6 +293,14 @@ static enum bc_dispatch_result stats(struct bc_dispatch *d, struct client *c,
 		st.stats.has_link = true;
 		d->link->link_info(d->link->ud, c->peer.ref, &st.stats.link);
 	}
+	if (msg->get_stats.parts & BC_PROTO_STATS_MEMORY) {
+		st.stats.has_memory = true;
+		st.stats.memory.scene_nodes = ss.nodes_held;
+		st.stats.memory.scene_nodes_cap = ss.nodes_cap;
+		st.stats.memory.session_nodes =
+		    bc_member_session_nodes(&c->member);
+		st.stats.memory.sessions_loaded = ss.sessions;
+	}
 	d->link->send(d->link->ud, c->peer.ref, &st);
 	if (msg->get_stats.parts & BC_PROTO_STATS_RESET) {
 		d->turn_max_ns = d->request_max_ns = 0;

@@ -1070,6 +1070,8 @@ void bc_sessions_stats(const struct bc_sessions *ss,
 	out->render_ms_avg = ss->render_ms_avg;
 	out->encode_ms_last = ss->encode_ms_last;
 	out->encode_ms_avg = ss->encode_ms_avg;
+	out->nodes_held = ss->nodes_held;
+	out->nodes_cap = ss->nodes_cap;
 }
 
 /* ---- requests ------------------------------------------------------------ */
@@ -1347,4 +1349,9 @@ double bc_member_edit_ms(const struct bc_member *m)
 uint32_t bc_member_session_id(const struct bc_member *m)
 {
 	return m->session ? m->session->id : 0;
+}
+
+uint64_t bc_member_session_nodes(const struct bc_member *m)
+{
+	return m->session ? m->session->nodes : 0;
 }

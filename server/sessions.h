@@ -157,8 +157,11 @@ void bc_member_answered(struct bc_member *m);
 /* ---- figures for STATS ---------------------------------------------------- */
 
 struct bc_sessions_stats {
-	uint32_t sessions;
+	uint32_t sessions; /* loaded */
 	double render_ms_last, render_ms_avg, encode_ms_last, encode_ms_avg;
+	/* Scene nodes the loaded sessions hold (with the room changes under
+	 * way have taken) and --scene-memory's cap on them. */
+	uint64_t nodes_held, nodes_cap;
 };
 void bc_sessions_stats(const struct bc_sessions *ss,
                        struct bc_sessions_stats *out);
@@ -166,6 +169,9 @@ void bc_sessions_stats(const struct bc_sessions *ss,
 uint64_t bc_member_order(const struct bc_member *m);
 double bc_member_edit_ms(const struct bc_member *m);
 uint32_t bc_member_session_id(const struct bc_member *m);
+/* The nodes of the member's session's scene (0 without one, or while it
+ * is read from disk). */
+uint64_t bc_member_session_nodes(const struct bc_member *m);
 
 /* ---- request handlers (dispatch.c's table) --------------------------------
  * Each returns 0 or BC_PARK; refusals are answered ERROR inside. */

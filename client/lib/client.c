@@ -1672,6 +1672,15 @@ int bc_client_stats_parts(struct bc_client *c, uint8_t parts,
 	m.get_stats.parts = parts;
 	int rc;
 	memset(out, 0, sizeof(*out));
+	if ((parts & BC_PROTO_STATS_MEMORY) &&
+	    !(c->info.features & BC_PROTO_FEATURE_MEMORY)) {
+		/* A server that does not know the part closes the
+		 * connection for it (EPROTO_FLAGS). */
+		return bc_errinfo_set(ei, BC_ENOTSUP,
+		                      "the server does not tell its scene "
+		                      "memory (it did not grant MEMORY: an "
+		                      "earlier blobcastd)");
+	}
 	if ((rc = send_or_say(c, &m, &seq, ei)) ||
 	    (rc = bc_client_wait(c, BC_MSG_STATS, seq, &m, 0, ei))) {
 		return rc;

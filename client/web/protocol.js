@@ -99,17 +99,19 @@ export const FLAG = Object.freeze({
  * only. */
 export const PLANE = Object.freeze({ DEPTH: 0x01, IDS: 0x02, ALL: 0x03 });
 
-/* GET_STATS parts: the daemon's load section, a reset of its maxima, and
- * the TLS section (the certificate's end of validity). */
+/* GET_STATS parts: the daemon's load section, a reset of its maxima, the
+ * TLS section (the certificate's end of validity), the link section and
+ * the memory section (scene nodes held and their cap; asked only of a
+ * server that granted FEATURE.MEMORY). */
 export const STATS_PARTS = Object.freeze({ LOAD: 0x01, RESET: 0x02, TLS: 0x04,
-	LINK: 0x08, ALL: 0x0f });
+	LINK: 0x08, MEMORY: 0x10, ALL: 0x1f });
 
 /* Features (PROTOCOL.md 4): what version 1 gained after its first text; a
  * server sends each only to a client that announced it in HELLO, and
  * WELCOME says which it grants. */
 export const FEATURE = Object.freeze({ LEVELS: 0x01, UNDO: 0x02,
 	PRESENT: 0x04, KINDS: 0x08, TILES: 0x10, HISTORY: 0x20, NAMES: 0x40,
-	ACKS: 0x80, PARTS: 0x100, ALL: 0x1ff });
+	ACKS: 0x80, PARTS: 0x100, MEMORY: 0x200, ALL: 0x3ff });
 
 /* FRAMEs of the view a client granted ACKS may leave unacknowledged
  * (PROTOCOL.md 7.27). */
@@ -361,7 +363,8 @@ T(18, 'PICK', FROM_CLIENT, 0, 4);
 T(19, 'PICK_RESULT', FROM_SERVER, 0, 24);
 T(20, 'SNAPSHOT', FROM_CLIENT, 0, 14);
 T(21, 'GET_STATS', FROM_CLIENT, 0, 1);
-T(22, 'STATS', FROM_SERVER, 0, 64 + 44 + 9 + 32); /* + load, TLS, link */
+/* + load, TLS, link, memory */
+T(22, 'STATS', FROM_SERVER, 0, 64 + 44 + 9 + 32 + 28);
 T(23, 'SESSION_DELETE', FROM_CLIENT, 0, strMax(L.MAX_NAME));
 T(24, 'UNDO', FROM_CLIENT, 0, 1);
 T(25, 'REDO', FROM_CLIENT, 0, 1);
@@ -825,10 +828,13 @@ function decFrame(d, flags, m) {
 
 const STATS_FLOATS = ['render_ms_last', 'render_ms_avg', 'encode_ms_last',
 	'encode_ms_avg', 'edit_ms_avg', 'fps'];
-/* STATS's optional load, TLS and link sections (PROTOCOL.md 7.18). */
+/* STATS's optional load, TLS, link and memory sections (PROTOCOL.md
+ * 7.18). */
 const STATS_LOAD_BYTES = 44;
 const STATS_TLS_BYTES = 9;
 const STATS_LINK_BYTES = 32;
+const STATS_MEMORY_BYTES = 28;
+const MEMORY_U64 = ['scene_nodes', 'scene_nodes_cap', 'session_nodes'];
 const LOAD_F32 = ['loop_turn_max_ms', 'loop_request_max_ms'];
 const LOAD_U32 = ['render_workers', 'jobs_queued', 'jobs_running'];
 const LOAD_U64 = ['view_bytes', 'view_cap', 'session_render_us'];
@@ -1163,15 +1169,16 @@ function decBody(d, m) {
 		for (const k of STATS_FLOATS) {
 			m[k] = d.f32nonneg(k);
 		}
-		/* The load, TLS and link sections answer a GET_STATS that
-		 * asked for them, in that order: the length tells which
-		 * (every sum of 44, 9 and 32 differs). */
+		/* The load, TLS, link and memory sections answer a
+		 * GET_STATS that asked for them, in that order: the length
+		 * tells which (every sum of 44, 9, 32 and 28 differs). */
 		const left = d.left();
 		let sections = -1;
-		for (let k = 0; k < 8; k++) {
+		for (let k = 0; k < 16; k++) {
 			if (left === ((k & 1) ? STATS_LOAD_BYTES : 0) +
 			    ((k & 2) ? STATS_TLS_BYTES : 0) +
-			    ((k & 4) ? STATS_LINK_BYTES : 0)) {
+			    ((k & 4) ? STATS_LINK_BYTES : 0) +
+			    ((k & 8) ? STATS_MEMORY_BYTES : 0)) {
 				sections = k;
 				break;
 			}
@@ -1209,6 +1216,13 @@ function decBody(d, m) {
 			m.unacked_bytes = d.u32('unacked_bytes');
 			m.frames_paced = d.u32('frames_paced');
 			m.frames_spoiled = d.u64('frames_spoiled');
+		}
+		if (sections & 8) {
+			m.has_memory = true;
+			for (const k of MEMORY_U64) {
+				m[k] = d.u64(k);
+			}
+			m.sessions_loaded = d.u32('sessions_loaded');
 		}
 		break;
 	default:
@@ -1866,6 +1880,12 @@ function encBody(w, m) {
 			w.u32('unacked_bytes', m.unacked_bytes);
 			w.u32('frames_paced', m.frames_paced);
 			w.u64('frames_spoiled', m.frames_spoiled);
+		}
+		if (m.has_memory) {
+			for (const k of MEMORY_U64) {
+				w.u64(k, m[k]);
+			}
+			w.u32('sessions_loaded', m.sessions_loaded);
 		}
 		break;
 	default:

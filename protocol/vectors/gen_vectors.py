@@ -82,7 +82,8 @@ TYPE_MAX = {
     "SCENE_LOAD": MAX_PAYLOAD, "SCENE_STATE": MAX_PAYLOAD,
     "EDIT": MAX_PAYLOAD, "EDIT_APPLIED": MAX_PAYLOAD,
     "CAMERA": 40, "VIEW": 9, "FRAME": MAX_PAYLOAD, "PICK": 4,
-    "PICK_RESULT": 24, "SNAPSHOT": 14, "GET_STATS": 1, "STATS": 64 + 44 + 9 + 32,
+    "PICK_RESULT": 24, "SNAPSHOT": 14, "GET_STATS": 1,
+    "STATS": 64 + 44 + 9 + 32 + 28,
     "SESSION_DELETE": strmax(MAX_NAME), "UNDO": 1, "REDO": 1,
     "SESSION_LIST": 0,
     "SESSIONS": 2 + MAX_SESSIONS_LISTED * (strmax(MAX_NAME) + 2 + 4 + 8 + 8 + 1),
@@ -424,11 +425,15 @@ def w_stats(f):
     # The TLS section likewise, after the load section when both.
     if f.get("has_tls"):
         b += u64(int(f["tls_not_after_ms"])) + u8(f["tls_expiring"])
-    # The link section last.
+    # The link section after those.
     if f.get("has_link"):
         b += (u32(f["rtt_us"]) + u32(f["min_rtt_us"])
               + u64(int(f["delivery_bps"])) + u32(f["unacked_bytes"])
               + u32(f["frames_paced"]) + u64(int(f["frames_spoiled"])))
+    # The memory section last.
+    if f.get("has_memory"):
+        b += (u64(int(f["scene_nodes"])) + u64(int(f["scene_nodes_cap"]))
+              + u64(int(f["session_nodes"])) + u32(f["sessions_loaded"]))
     return b
 
 
@@ -622,9 +627,10 @@ def gen_welcome():
     t.badp("max_dim 8193", wl(max_dim=8193), "ERANGE")
     t.badp("max_members 65", wl(max_members=65), "ERANGE")
     t.badp("max_edit_ops 0", wl(max_edit_ops=0), "ERANGE")
-    t.ok("every feature of this text granted", dict(base, features=0x1ff))
+    t.ok("every feature of this text granted", dict(base, features=0x3ff))
     t.ok("PARTS granted (bit 8)", dict(base, features=0x100))
-    t.badp("a feature this text does not define", wl(features=0x200),
+    t.ok("MEMORY granted (bit 9)", dict(base, features=0x200))
+    t.badp("a feature this text does not define", wl(features=0x400),
            "EPROTO_FLAGS")
     t.badp("features cut short (2 bytes)", w_welcome(old) + b"\x0f\x00",
            "EPROTO_TRUNCATED")
@@ -1601,6 +1607,20 @@ def gen_stats():
                           delivery_bps="0")), seq=68)
     t.badp("link section one byte short", k[:-1], "EPROTO_TRAILING")
     t.badp("link section one byte long", k + u8(0), "EPROTO_TRAILING")
+    mem_f = dict(has_memory=True, scene_nodes="100001",
+                 scene_nodes_cap="149796", session_nodes="60001",
+                 sessions_loaded=3)
+    m = t.ok("with the memory section", dict(base, **mem_f), seq=69)
+    t.ok("with every section, memory last",
+         dict(load, has_tls=True, tls_not_after_ms="1796083200000",
+              tls_expiring=0, **link_f, **mem_f), seq=70)
+    t.ok("memory section outside a session, past the cap",
+         dict(base, **dict(mem_f, scene_nodes="149800",
+                           session_nodes="0")), seq=71)
+    t.ok("with the link and memory sections", dict(base, **link_f, **mem_f),
+         seq=72)
+    t.badp("memory section one byte short", m[:-1], "EPROTO_TRAILING")
+    t.badp("memory section one byte long", m + u8(0), "EPROTO_TRAILING")
     t.dump("stats.json")
 
 
@@ -1613,12 +1633,14 @@ def gen_get_stats():
     t.ok("load, reset and TLS", dict(parts=7), seq=16)
     t.ok("link", dict(parts=8), seq=17)
     t.ok("every part", dict(parts=15), seq=18)
+    t.ok("memory", dict(parts=16), seq=19)
+    t.ok("every part, memory too", dict(parts=31), seq=20)
     # parts is an optional byte, so Table.common's shortened and
     # lengthened payloads are written out here.
     t.badp("parts 0", u8(0), "ERANGE")
     t.badp("reset without load", u8(2), "ERANGE")
     t.badp("TLS and reset without load", u8(6), "ERANGE")
-    t.badp("parts bit 4", u8(0x11), "EPROTO_FLAGS")
+    t.badp("parts bit 5", u8(0x21), "EPROTO_FLAGS")
     t.badp("parts 0xff", u8(0xff), "EPROTO_FLAGS")
     t.badp("one trailing byte", p + b"\x00", "EPROTO_LENGTH")
     t.bad("length = type maximum + 1", header("GET_STATS", 2),

@@ -464,7 +464,9 @@ static void sample(enum bc_msg_type t, struct bc_msg *m)
 		    1764748800000u,
 		    1,
 		    true,
-		    {50000u, 48000u, 1250000u, 65536u, 3u, 9u}};
+		    {50000u, 48000u, 1250000u, 65536u, 3u, 9u},
+		    true,
+		    {100001u, 149796u, 60001u, 3u}};
 		break;
 	case BC_MSG_SESSION_DELETE:
 		m->session_delete.name = S("old-review");

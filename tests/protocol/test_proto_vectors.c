@@ -406,6 +406,15 @@ static void build(enum bc_msg_type type, const json_t *f, struct bc_msg *m)
 			k->frames_paced = (uint32_t)jint(f, "frames_paced");
 			k->frames_spoiled = jint(f, "frames_spoiled");
 		}
+		s->has_memory = json_is_true(json_object_get(f, "has_memory"));
+		if (s->has_memory) {
+			struct bc_proto_memory *mm = &s->memory;
+			mm->scene_nodes = jint(f, "scene_nodes");
+			mm->scene_nodes_cap = jint(f, "scene_nodes_cap");
+			mm->session_nodes = jint(f, "session_nodes");
+			mm->sessions_loaded =
+			    (uint32_t)jint(f, "sessions_loaded");
+		}
 		break;
 	}
 	case BC_MSG_GET_STATS:

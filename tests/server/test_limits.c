@@ -1436,6 +1436,76 @@ static void a_change_waits_for_the_room_a_snapshot_holds(void)
 	bc_proto_buf_finish(&two);
 }
 
+/* GET_STATS's MEMORY part (c's answer in c->m). */
+static bool memory_stats(struct conn *c, uint8_t parts)
+{
+	struct bc_msg m = {.type = BC_MSG_GET_STATS};
+	uint32_t seq;
+	m.get_stats.parts = parts;
+	seq = conn_send(c, &m);
+	while (conn_recv(c, 10000) == 1) {
+		if (c->m.type == BC_MSG_STATS && c->m.seq == seq) {
+			return c->m.stats.has_memory;
+		}
+	}
+	return false;
+}
+
+/* STATS's memory section (PROTOCOL.md 7.18) at --scene-memory 1 (1 497
+ * nodes): the cap, the nodes all loaded sessions hold and the asker's
+ * session's; a load moves both by its nodes, and an unload gives them
+ * back. The WELCOME granted MEMORY (conn_hello checks every feature it
+ * announced was granted); the section comes after the others. */
+static void stats_tell_the_scene_memory(void)
+{
+	static const char *const cap[] = {"--scene-memory", "1", NULL};
+	const struct bc_proto_memory *ma, *mo;
+	struct bc_proto_buf g = two_groups(400, 300, 10000);
+	struct bc_proto_buf gn = two_groups(400, 398, 20000);
+	struct daemon d;
+	struct conn a, o;
+	uint64_t before;
+	char dir[64];
+	make_dir_name(dir, sizeof(dir), "memory-stats");
+	REQUIRE(daemon_start_with(&d, dir, cap) == 0);
+	REQUIRE(conn_open(&a, &d) == 0 && conn_hello(&a, "a") == 0);
+	REQUIRE(conn_open(&o, &d) == 0 && conn_hello(&o, "o") == 0);
+	ma = &a.m.stats.memory;
+	mo = &o.m.stats.memory;
+	/* Outside a session: only session default is loaded. */
+	REQUIRE(memory_stats(&o, BC_PROTO_STATS_MEMORY));
+	CHECK(!o.m.stats.has_load && !o.m.stats.has_link);
+	CHECK_EQ_INT(mo->scene_nodes_cap, 1497);
+	CHECK(mo->scene_nodes > 0 && mo->scene_nodes < 100);
+	CHECK_EQ_INT(mo->session_nodes, 0);
+	CHECK_EQ_INT(mo->sessions_loaded, 1);
+	before = mo->scene_nodes;
+	REQUIRE(conn_join(&a, "m", BC_PROTO_ROLE_EDITOR, true) == 0);
+	CHECK_EQ_INT(load_answer(&a, &g), APPLIED);
+	REQUIRE(memory_stats(&a, BC_PROTO_STATS_MEMORY));
+	CHECK_EQ_INT(ma->session_nodes, 703);
+	CHECK_EQ_INT(ma->scene_nodes, before + 703);
+	CHECK_EQ_INT(ma->sessions_loaded, 2);
+	/* Every part: the memory section last, the same figures. */
+	REQUIRE(memory_stats(&a, BC_PROTO_STATS_PARTS_ALL));
+	CHECK(a.m.stats.has_load && a.m.stats.has_tls && a.m.stats.has_link);
+	CHECK_EQ_INT(ma->scene_nodes, before + 703);
+	CHECK_EQ_INT(ma->scene_nodes_cap, 1497);
+	/* Left, default and m are unloaded for n's 801 nodes: theirs go. */
+	leave(&a);
+	REQUIRE(conn_join(&a, "n", BC_PROTO_ROLE_EDITOR, true) == 0);
+	CHECK_EQ_INT(load_answer(&a, &gn), APPLIED);
+	REQUIRE(memory_stats(&o, BC_PROTO_STATS_MEMORY));
+	CHECK_EQ_INT(mo->scene_nodes, 801);
+	CHECK_EQ_INT(mo->session_nodes, 0);
+	CHECK_EQ_INT(mo->sessions_loaded, 1);
+	conn_close(&a);
+	conn_close(&o);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+	bc_proto_buf_finish(&g);
+	bc_proto_buf_finish(&gn);
+}
+
 /* A daemon restarted with less --scene-memory than session "default"'s
  * scene alone starts all the same, says so, and refuses a JOIN of it
  * with ELIMIT, not an EIO or a daemon that does not start. */
@@ -1504,6 +1574,7 @@ static const struct bc_test tests[] = {
      the_scene_memory_cap_holds_across_sessions},
     {"a_change_waits_for_the_room_a_snapshot_holds",
      a_change_waits_for_the_room_a_snapshot_holds},
+    {"stats_tell_the_scene_memory", stats_tell_the_scene_memory},
     {"a_default_scene_past_the_budget_waits_on_disk",
      a_default_scene_past_the_budget_waits_on_disk},
 };

@@ -36,7 +36,8 @@ const fileOf = (name) => name.toLowerCase() + '.json';
 const U64 = new Set(['order', 'stamp', 'uptime_ms', 'frames', 'bytes',
 	'target_order', 'last_edit_ms', 'view_bytes', 'view_cap',
 	'session_render_us', 'tls_not_after_ms', 'time_ms', 'built_on',
-	'delivery_bps', 'frames_spoiled']);
+	'delivery_bps', 'frames_spoiled', 'scene_nodes', 'scene_nodes_cap',
+	'session_nodes']);
 const BYTES = new Set(['scene', 'subtree', 'data']);
 
 function fromJson(v, key) {
@@ -618,13 +619,13 @@ const entry = (id, name) => { const b = typeof name === 'string'
 
 test('FEATURE.NAMES: bit 6, in ALL, and the page announces it', () => {
 	assert.equal(P.FEATURE.NAMES, 0x40);
-	assert.equal(P.FEATURE.ALL, 0x1ff);
+	assert.equal(P.FEATURE.ALL, 0x3ff);
 	assert.equal(P.EDIT.NAME, 5);
 	assert.deepEqual(P.SCENE_FLAG, { CAMERA: 1, NAMES: 2, ALL: 3 });
 	const src = readFileSync(join(HERE, '..', '..', 'client', 'web',
 		'app.js'), 'utf8');
 	assert.match(src, /features: P\.FEATURE\.ALL/);
-	/* A WELCOME granting NAMES decodes; bit 9 is still undefined. */
+	/* A WELCOME granting NAMES decodes; bit 10 is still undefined. */
 	const welcome = { type: P.MSG.WELCOME, version: 1, connection_id: 1,
 		max_payload: 1 << 20, max_frame_bytes: 1 << 20, max_nodes: 100,
 		max_dim: 4096, max_members: 8, max_edit_ops: 100, server_id: 'x',
@@ -632,7 +633,7 @@ test('FEATURE.NAMES: bit 6, in ALL, and the page announces it', () => {
 	const r = new P.Reader({ side: 'client' });
 	r.feed(P.encode(welcome));
 	assert.equal(r.next().features, 0x60);
-	assert.throws(() => P.encode({ ...welcome, features: 0x200 }),
+	assert.throws(() => P.encode({ ...welcome, features: 0x400 }),
 		(e) => e.code === 'EPROTO_FLAGS');
 });
 

@@ -155,7 +155,11 @@ enum bc_msg_type {
 /* LINK asks for the link section: what the server's TCP measures of the
  * path to this client, and how many frames waited for it. */
 #define BC_PROTO_STATS_LINK 0x08u
-#define BC_PROTO_STATS_PARTS_ALL 0x0fu
+/* MEMORY asks for the memory section: the scene nodes all sessions hold
+ * and their cap (asked only of a server that granted
+ * BC_PROTO_FEATURE_MEMORY). */
+#define BC_PROTO_STATS_MEMORY 0x10u
+#define BC_PROTO_STATS_PARTS_ALL 0x1fu
 
 /* Features (PROTOCOL.md 4): what version 1 gained after its first text
  * (2026-11-22), each sent by a server only to a client that announced it
@@ -182,7 +186,10 @@ enum bc_msg_type {
  * client's limit comes as several messages (header flags MORE and CONT);
  * granted, the server also accepts SCENE_LOAD in parts. */
 #define BC_PROTO_FEATURE_PARTS 0x100u
-#define BC_PROTO_FEATURES_ALL 0x1ffu
+/* A request form: granted, the client may ask GET_STATS for the memory
+ * section (BC_PROTO_STATS_MEMORY, PROTOCOL.md 7.18). */
+#define BC_PROTO_FEATURE_MEMORY 0x200u
+#define BC_PROTO_FEATURES_ALL 0x3ffu
 /* What a client that only reads may announce: every feature but ACKS,
  * which also binds the client to send FRAME_ACK for each FRAME. */
 #define BC_PROTO_FEATURES_READ (BC_PROTO_FEATURES_ALL & ~BC_PROTO_FEATURE_ACKS)
@@ -561,6 +568,14 @@ struct bc_proto_link {
 	uint64_t frames_spoiled; /* frames a newer one replaced unsent */
 };
 
+/* STATS's memory section (PROTOCOL.md 7.18): scene nodes. */
+struct bc_proto_memory {
+	uint64_t scene_nodes;     /* held by all loaded sessions' scenes */
+	uint64_t scene_nodes_cap; /* the most they may hold together */
+	uint64_t session_nodes;   /* the client's session's (0: none) */
+	uint32_t sessions_loaded;
+};
+
 struct bc_msg_stats {
 	uint64_t uptime_ms;
 	uint64_t frames; /* FRAMEs sent to this client */
@@ -581,6 +596,8 @@ struct bc_msg_stats {
 	uint8_t tls_expiring;
 	bool has_link; /* the link section follows (asked by LINK) */
 	struct bc_proto_link link;
+	bool has_memory; /* the memory section follows (asked by MEMORY) */
+	struct bc_proto_memory memory;
 };
 
 /* PRESENT and FOLLOW: on 1 starts presenting (following), 0 stops; other

@@ -453,8 +453,10 @@ BC_API int bc_client_session_camera(struct bc_client *c,
 BC_API int bc_client_stats(struct bc_client *c, struct bc_msg_stats *out,
                            struct bc_errinfo *ei);
 /* The same asking for parts (BC_PROTO_STATS_LOAD, optionally with
- * BC_PROTO_STATS_RESET; BC_PROTO_STATS_TLS): out->has_load and
- * out->has_tls tell which sections came. */
+ * BC_PROTO_STATS_RESET; BC_PROTO_STATS_TLS, BC_PROTO_STATS_LINK;
+ * BC_PROTO_STATS_MEMORY only of a server that granted
+ * BC_PROTO_FEATURE_MEMORY): out->has_load, has_tls, has_link and
+ * has_memory tell which sections came. */
 BC_API int bc_client_stats_parts(struct bc_client *c, uint8_t parts,
                                  struct bc_msg_stats *out,
                                  struct bc_errinfo *ei);
