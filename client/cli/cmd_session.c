@@ -202,6 +202,28 @@ static void put_time(char *buf, size_t n, uint64_t ms)
 	}
 }
 
+/* The line under the table: the nodes the loaded sessions' scenes hold
+ * against the server's cap, from STATS's memory section, where the
+ * server grants it (PROTOCOL.md 7.18; an earlier server does not). */
+static int print_scene_memory(struct bc_cli_call *a, struct bc_client *c)
+{
+	struct bc_errinfo ei = {0};
+	struct bc_msg_stats st;
+	if (!(bc_client_info(c)->features & BC_PROTO_FEATURE_MEMORY)) {
+		return 0;
+	}
+	if (bc_client_stats_parts(c, BC_PROTO_STATS_MEMORY, &st, &ei)) {
+		return bc_cli_failed(a, c, "stats", &ei);
+	}
+	printf("scene memory: %llu of %llu nodes held by the %u loaded "
+	       "session%s (the server's --scene-memory)\n",
+	       (unsigned long long)st.memory.scene_nodes,
+	       (unsigned long long)st.memory.scene_nodes_cap,
+	       st.memory.sessions_loaded,
+	       st.memory.sessions_loaded == 1 ? "" : "s");
+	return 0;
+}
+
 static int run_sessions(struct bc_cli_call *a)
 {
 	struct bc_client *c = NULL;
@@ -260,6 +282,7 @@ static int run_sessions(struct bc_cli_call *a)
 			       s->members, prims, order, when,
 			       s->loaded ? "loaded" : "on disk");
 		}
+		status = print_scene_memory(a, c);
 	}
 	bc_free(list);
 	bc_client_destroy(c);
@@ -278,7 +301,10 @@ const struct bc_cli_cmd bc_cli_cmd_sessions = {
         "primitives, last edit order, when it last changed (UTC) and whether\n"
         "it is loaded or only on disk. For a session on disk that the server\n"
         "has not loaded since it started, '-' stands for what it does not\n"
-        "know without loading it. At most 1024 sessions are listed.",
+        "know without loading it. At most 1024 sessions are listed. A line\n"
+        "under the table says how many scene nodes the loaded sessions hold\n"
+        "of the most the server lets them hold together (blobcastd\n"
+        "--scene-memory; a server older than that figure leaves it out).",
     .texts =
         (const struct bc_cli_opt_text[]){{"json", NULL,
                                           "one JSON array of objects: name, "

@@ -78,6 +78,7 @@ export class Review {
 			name: () => app.cfg.name,
 			canSend: () => !!app.welcome && app.conn.ws?.readyState ===
 				WebSocket.OPEN,
+			features: () => app.welcome?.features ?? 0,
 			send: (type, fields) => app.conn.send(type, fields),
 			socket: () => app.conn.ws,
 			current: () => (app.info ? app.info.name : ''),

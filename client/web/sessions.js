@@ -63,6 +63,16 @@ export function describe(e, now) {
 		`edit ${e.order}${when}`;
 }
 
+/* The status line's part about scene memory, from STATS's memory
+ * section (PROTOCOL.md 7.18): the nodes the loaded sessions hold of the
+ * most the daemon lets them hold together (blobcastd --scene-memory). */
+export function describeMemory(m) {
+	const held = Number(m.scene_nodes), cap = Number(m.scene_nodes_cap);
+	const pct = cap > 0 ? Math.round(100 * held / cap) : 0;
+	return `scene memory ${held.toLocaleString('en')} of ` +
+		`${cap.toLocaleString('en')} nodes (${pct} %)`;
+}
+
 /* A refusal from the daemon: code is its name ("EPERM"), text its
  * sentence. */
 export class Refusal extends Error {
@@ -86,6 +96,7 @@ export class Channel {
 		this.seq = 0;
 		this.want = null;
 		this.ws = null;
+		this.features = 0; /* granted in WELCOME */
 	}
 
 	/* Connects and says HELLO; resolves with WELCOME. */
@@ -103,7 +114,10 @@ export class Channel {
 				version_max: 1, encodings: 0, max_frame_bytes: 0,
 				client_name: this.name, token: this.token,
 				features: P.FEATURE.ALL & ~P.FEATURE.ACKS }, (m) => m.type ===
-				P.MSG.WELCOME).then(resolve, reject);
+				P.MSG.WELCOME).then((w) => {
+				this.features = w.features ?? 0;
+				resolve(w);
+			}, reject);
 			this.want = { accept: () => false, resolve, reject,
 				seq: -1, timer: setTimeout(() => this.settle(null,
 					new Error(`no answer from ${this.url} in ` +
@@ -319,15 +333,28 @@ export class SessionPanel {
 	}
 
 	async list() {
-		const m = await this.run('listing the sessions', (ch) =>
-			ch.ask(P.MSG.SESSION_LIST, {}, (a, seq) => a.type ===
-				P.MSG.SESSIONS && a.seq === seq), true);
+		let mem = null;
+		const m = await this.run('listing the sessions', async (ch) => {
+			const l = await ch.ask(P.MSG.SESSION_LIST, {}, (a, seq) =>
+				a.type === P.MSG.SESSIONS && a.seq === seq);
+			/* The scene memory, from a daemon that tells it. */
+			const granted = ch === this.link ? this.ctx.features()
+				: ch.features;
+			if (granted & P.FEATURE.MEMORY) {
+				mem = await ch.ask(P.MSG.GET_STATS, {
+					parts: P.STATS_PARTS.MEMORY }, (a, seq) =>
+					a.type === P.MSG.STATS && a.seq === seq);
+			}
+			return l;
+		}, true);
 		this.entries = m.sessions;
+		this.memory = mem?.has_memory ? mem : null;
 		const n = m.sessions.length;
 		/* A daemon with more lists the first ones by name (7.21). */
-		this.setStatus(n >= P.LIMITS.MAX_SESSIONS_LISTED ? `the first ${n} ` +
-			'sessions of this daemon, by name' : `${n} session` +
-			`${n === 1 ? '' : 's'} on this daemon`);
+		this.setStatus((n >= P.LIMITS.MAX_SESSIONS_LISTED ? `the first ` +
+			`${n} sessions of this daemon, by name` : `${n} session` +
+			`${n === 1 ? '' : 's'} on this daemon`) + (this.memory
+			? ` · ${describeMemory(this.memory)}` : ''));
 		this.render();
 		return m.sessions;
 	}

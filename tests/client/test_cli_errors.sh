@@ -126,6 +126,10 @@ run 1 "must be > 0 (ERANGE)" edit $D $ED --session default "$cyl" \
 run 1 "ENOSESSION" edit $D $ED --session nosuch "$cyl" radius=0.1
 run 1 "'blobcast sessions' lists the sessions" \
   edit $D $ED --session nosuch "$cyl" radius=0.1
+# The line under the sessions table: the scene memory held and its cap.
+run 0 "scene memory:" sessions $D $ED
+run 0 "nodes held by the 1 loaded session (the server's --scene-memory)" \
+  sessions $D $ED
 run 1 "ESTATE" redo $D $ED --session default
 # 2: usage, before anything is sent; a mistyped key gets a suggestion.
 run 2 "has no \"raduis\"" edit $D $ED --session default "$cyl" raduis=0.1

@@ -230,6 +230,11 @@ try {
 
 	/* ---- the session list ---- */
 	await listed(a, ['default']);
+	/* Its status line: the sessions, and the daemon's scene memory
+	 * (STATS's memory section). */
+	await until(a, 'the scene memory in the list\'s status line', () =>
+		/^\d+ sessions? on this daemon · scene memory [\d,]+ of [\d,]+ nodes \(\d+ %\)$/
+			.test(document.getElementById('sessioninfo').textContent));
 	await a.fill('#sessionname', '.bad');
 	await a.click('#sessionform button');
 	assert.match(await a.textContent('#sessioninfo'), /not starting with/);

@@ -25,7 +25,8 @@ import { fileURLToPath } from 'node:url';
 import { JSON_MAX_DEPTH, OPTIONAL, formatFloat, formatG, sceneToJson }
 	from '../../client/web/scenejson.js';
 import { PRIMS } from '../../client/web/prims.js';
-import { ago, describe, nameProblem } from '../../client/web/sessions.js';
+import { ago, describe, describeMemory, nameProblem }
+	from '../../client/web/sessions.js';
 import * as P from '../../client/web/protocol.js';
 import { runCli, treeFromJson } from './scenetree.mjs';
 
@@ -208,4 +209,10 @@ test('session names and list lines', () => {
 	assert.equal(describe({ name: 'b', members: 0, prims: 0, order: 0n,
 		last_edit_ms: 0n, flags: 0 }, now),
 	'0 members · on disk, not loaded yet');
+	/* STATS's memory section, as the list's status line tells it. */
+	assert.equal(describeMemory({ scene_nodes: 100001n,
+		scene_nodes_cap: 149796n, session_nodes: 0n, sessions_loaded: 2 }),
+	'scene memory 100,001 of 149,796 nodes (67 %)');
+	assert.equal(describeMemory({ scene_nodes: 30n, scene_nodes_cap: 0n }),
+		'scene memory 30 of 0 nodes (0 %)');
 });
