@@ -25,6 +25,8 @@ struct scan {
 	struct bc_errinfo *ei;
 	uint32_t node;     /* index of the node being read */
 	uint32_t features; /* BC_PROTO_FEATURE_KINDS when it uses them */
+	bool (*visit)(void *ud, uint32_t id); /* bc_proto_scene_scan_ids */
+	void *ud;
 };
 
 static int sfail(struct scan *s, int code, const char *fmt,
@@ -229,6 +231,9 @@ static int scan_nodes(struct scan *s, uint32_t count, struct open_stack *o,
 		if (id == 0) {
 			out->zero_ids++;
 		}
+		if (s->visit && !s->visit(s->ud, id)) {
+			return sfail(s, BC_ENOMEM, "out of memory");
+		}
 		if (o->n) {
 			o->v[o->n - 1]--;
 		}
@@ -311,10 +316,8 @@ static int scan_names(struct scan *s, uint32_t nodes, uint32_t *count)
 	return 0;
 }
 
-int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
-                        struct bc_proto_scene_info *info, struct bc_errinfo *ei)
+static int scan_scene(struct scan s, struct bc_proto_scene_info *info)
 {
-	struct scan s = {.c = bc_rd_init(bytes, len), .ei = ei};
 	struct bc_proto_scene_info out = {0};
 	struct open_stack o = {0};
 	int rc;
@@ -365,6 +368,24 @@ int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
 		*info = out;
 	}
 	return 0;
+}
+
+int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
+                        struct bc_proto_scene_info *info, struct bc_errinfo *ei)
+{
+	return scan_scene((struct scan){.c = bc_rd_init(bytes, len), .ei = ei},
+	                  info);
+}
+
+int bc_proto_scene_scan_ids(const uint8_t *bytes, size_t len,
+                            bool (*visit)(void *ud, uint32_t id), void *ud,
+                            struct bc_errinfo *ei)
+{
+	return scan_scene((struct scan){.c = bc_rd_init(bytes, len),
+	                                .ei = ei,
+	                                .visit = visit,
+	                                .ud = ud},
+	                  NULL);
 }
 
 /* ---- Writers ----------------------------------------------------------------

@@ -1,6 +1,6 @@
 /*
  * The scene encoding at the protocol level: the writers and the structural
- * scanner agree on random trees; nesting is refused exactly past
+ * scanner agree on random trees (their counts, and the ids it visits); nesting is refused exactly past
  * BC_PROTO_SCENE_MAX_DEPTH; and a SCENE_LOAD of a 10^6-node scene encodes,
  * travels through the reader in socket-sized pieces, and decodes to the
  * same bytes, which scan to the same counts.
@@ -83,6 +83,21 @@ static int write_tree(struct bc_proto_buf *b, uint32_t n, uint32_t d,
 	return rc;
 }
 
+/* bc_proto_scene_scan_ids's visitor: checks the ids come 1, 2, ... (the
+ * writer numbers nodes in the encoding's order), stopping at stop_at. */
+struct id_walk {
+	uint32_t next, stop_at;
+	bool in_order;
+};
+
+static bool visit_id(void *ud, uint32_t id)
+{
+	struct id_walk *w = ud;
+	w->in_order = w->in_order && id == w->next + 1;
+	w->next++;
+	return w->next != w->stop_at;
+}
+
 static void test_random_trees_scan_to_their_counts(void)
 {
 	for (int iter = 0; iter < 300; iter++) {
@@ -113,6 +128,18 @@ static void test_random_trees_scan_to_their_counts(void)
 		CHECK(rc == 0);
 		CHECK(info.nodes == n && info.prims == c.prims &&
 		      info.ops == c.ops && info.depth == c.depth);
+		/* The ids, each once in the encoding's order; a visit that
+		 * says stop ends the scan there. */
+		{
+			struct id_walk w = {0, 0, true};
+			CHECK(bc_proto_scene_scan_ids(b.data, b.len, visit_id,
+			                              &w, NULL) == 0);
+			CHECK(w.in_order && w.next == n);
+			w = (struct id_walk){0, 1 + rnd(n), true};
+			CHECK(bc_proto_scene_scan_ids(b.data, b.len, visit_id,
+			                              &w, NULL) == BC_ENOMEM);
+			CHECK(w.in_order && w.next == w.stop_at);
+		}
 		/* Every proper prefix is refused, none crashes. */
 		for (size_t cut = 0; cut < b.len; cut += 1 + b.len / 50) {
 			CHECK(bc_proto_scene_scan(b.data, cut, NULL, NULL) < 0);

@@ -252,6 +252,55 @@ static void three_editors_built_on_is_skipped_then_refused(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
+/* An INSERT of a group: its inner nodes are the change's too. alice
+ * inserts a union of two spheres (ids 9001..9003) under the root; bob's
+ * edit of a sphere inside it builds on her insert, so her UNDO of it is
+ * refused naming bob until he takes his back. */
+static void an_edit_inside_an_inserted_group_builds_on_it(void)
+{
+	static const float t[3] = {0, 0, 0}, q[4] = {0, 0, 0, 1}, r = 0.2f;
+	struct bc_proto_edit_op ins = {.kind = BC_PROTO_EDIT_INSERT};
+	struct bc_msg m = {.type = BC_MSG_EDIT};
+	struct bc_proto_buf g;
+	struct bc_scene_walk w = {0};
+	struct bc_scene_node root;
+	struct bc_tree *tree;
+	struct daemon d;
+	struct conn alice, bob;
+	uint64_t o1, o2;
+	char dir[64];
+	snprintf(dir, sizeof(dir), "%s/inserted", base_dir);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	enter(&alice, &d, "alice", "inserted", true);
+	REQUIRE((tree = scene_of(&alice)) && bc_scene_walk_init(&w, tree) == 0 &&
+	        bc_scene_walk_next(&w, &root) && root.is_op);
+	bc_scene_walk_finish(&w);
+	bc_tree_destroy(tree);
+	enter(&bob, &d, "bob", "inserted", false);
+	bc_proto_buf_init(&g, 0);
+	REQUIRE(bc_proto_scene_begin(&g, NULL, 3) == 0 &&
+	        bc_proto_scene_op(&g, BC_OP_UNION, 9001, 0, 0, 2) == 0 &&
+	        bc_proto_scene_prim(&g, BC_PRIM_SPHERE, 9002, t, q, NULL, 1,
+	                            &r) == 0 &&
+	        bc_proto_scene_prim(&g, BC_PRIM_SPHERE, 9003, t, q, NULL, 1,
+	                            &r) == 0);
+	ins.node = root.id;
+	ins.subtree.ptr = g.data;
+	ins.subtree.len = (uint32_t)g.len;
+	m.edit.nops = 1;
+	m.edit.ops = &ins;
+	o1 = answer(&alice, conn_send(&alice, &m));
+	REQUIRE(o1 > 0);
+	o2 = move(&bob, 9003, 0.5f); /* inside alice's group */
+	undo_refused(&alice, false, BC_PROTO_UNDO_MINE, BC_ESTATE, "bob");
+	undo_takes(&bob, false, BC_PROTO_UNDO_MINE, o2, "bob");
+	undo_takes(&alice, false, BC_PROTO_UNDO_MINE, o1, "alice");
+	bc_proto_buf_finish(&g);
+	conn_close(&alice);
+	conn_close(&bob);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
 static void session_undo_is_the_owners_or_presenters(void)
 {
 	struct daemon d;
@@ -461,6 +510,8 @@ static const struct bc_test tests[] = {
     {"two_editors_each_undo_their_own", two_editors_each_undo_their_own},
     {"three_editors_built_on_is_skipped_then_refused",
      three_editors_built_on_is_skipped_then_refused},
+    {"an_edit_inside_an_inserted_group_builds_on_it",
+     an_edit_inside_an_inserted_group_builds_on_it},
     {"session_undo_is_the_owners_or_presenters",
      session_undo_is_the_owners_or_presenters},
     {"history_survives_sigterm_and_kill9", history_survives_sigterm_and_kill9},

@@ -879,6 +879,15 @@ BC_API int bc_proto_scene_scan(const uint8_t *bytes, size_t len,
                                struct bc_proto_scene_info *info,
                                struct bc_errinfo *ei);
 
+/* bc_proto_scene_scan that also calls visit(ud, id) with each node's id,
+ * in the order of the encoding (an id of 0 too), as the scan reads it:
+ * the ids of a subtree without building it. A visit that returns false
+ * stops the scan (BC_ENOMEM); ids of bytes that fail later were visited
+ * up to the failure. */
+BC_API int bc_proto_scene_scan_ids(const uint8_t *bytes, size_t len,
+                                   bool (*visit)(void *ud, uint32_t id),
+                                   void *ud, struct bc_errinfo *ei);
+
 /* Writers for the scene encoding, for clients and tests that build scene
  * bytes without blobtree: begin, then every node in pre-order. camera is
  * NULL or the 10 floats eye[3] target[3] up[3] fov_y_deg. color is NULL or
