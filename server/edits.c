@@ -84,6 +84,17 @@ static int wait_for_room(struct bc_member *m, struct bc_session *w,
 	return bc__park(w, m, seq);
 }
 
+int bc__change_waits(struct bc_member *m, const struct bc_proto_edit_op *ops,
+                     uint32_t nops, uint32_t seq, const char *what)
+{
+	struct bc_session *s = m->session, *w;
+	if (!s->tree || s->lost ||
+	    !(w = bc__room_busy(s, nodes_after(s->tree, ops, nops)))) {
+		return 0;
+	}
+	return wait_for_room(m, w, seq, what);
+}
+
 bool bc__refuse_change(struct bc_member *m, uint32_t seq, int *park)
 {
 	struct bc_session *s = m->session;
@@ -443,15 +454,13 @@ int bc_handle_edit(struct bc_member *m, const struct bc_msg *msg)
 	struct bc_errinfo ei = {0};
 	struct bc_change how = {.flags =
 	                            msg->flags & BC_PROTO_FLAG_INTERACTING};
-	struct bc_session *s = m->session, *w;
 	int rc, park;
 	if (bc__refuse_change(m, msg->seq, &park)) {
 		return park;
 	}
-	if (s->tree && !s->lost &&
-	    (w = bc__room_busy(s, nodes_after(s->tree, msg->edit.ops,
-	                                      msg->edit.nops)))) {
-		return wait_for_room(m, w, msg->seq, "an edit");
+	if ((park = bc__change_waits(m, msg->edit.ops, msg->edit.nops,
+	                             msg->seq, "an edit"))) {
+		return park;
 	}
 	rc = bc__apply(m, msg->edit.ops, msg->edit.nops, msg->seq, &how,
 	               bc__undo_applied, NULL, &ei);

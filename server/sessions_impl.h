@@ -143,6 +143,12 @@ int bc__room_take(struct bc_session *s, uint64_t after, uint64_t *taken,
  * comes again, instead of a refusal a second too early. NULL where the room
  * is there now, or would not be even so (bc__room_take then says why). */
 struct bc_session *bc__room_busy(struct bc_session *s, uint64_t after);
+/* Whether m's change ops (an EDIT's, or an UNDO's or REDO's, request seq)
+ * must wait for the room a session's work holds (bc__room_busy): then
+ * it is parked behind that work (the log says so, naming the change
+ * `what`) and this returns BC_PARK; else 0. */
+int bc__change_waits(struct bc_member *m, const struct bc_proto_edit_op *ops,
+                     uint32_t nops, uint32_t seq, const char *what);
 void bc__room_give(struct bc_sessions *ss, uint64_t *taken);
 /* s->tree is its scene now: the count follows it, taken given back. */
 void bc__room_settle(struct bc_session *s, uint64_t *taken);

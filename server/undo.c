@@ -722,6 +722,11 @@ static int apply_step(struct bc_member *m, struct step *st, bool redo,
 		ops = states.ops;
 		nops = states.nops;
 	}
+	if ((rc = bc__change_waits(m, ops, nops, seq,
+	                           redo ? "a redo" : "an undo"))) {
+		bc_edit_inverse_finish(&states);
+		return rc;
+	}
 	how.flags = redo ? BC_PROTO_FLAG_REDO : BC_PROTO_FLAG_UNDO;
 	how.target_order = st->order;
 	how.kind = redo ? BC_UNDO_REDO : BC_UNDO_UNDO;

@@ -1375,13 +1375,15 @@ static void load_leave_send(struct conn *c, const char *name,
  * it comes while a's snapshot runs, it waits for that work to end and
  * takes the room then (a unloaded), where it was refused with ELIMIT.
  * Then the same for an INSERT: session c takes a's place, and b's INSERT
- * of 60 000 spheres needs c's room. The daemon's log says when a request
+ * of 60 000 spheres needs c's room; and for an UNDO that puts them back
+ * after b removed them, with session e's room. The daemon's log says when a request
  * waited (the test prints how many did: the snapshot may be quicker than
  * a round trip); the answer is the same either way. */
 static void a_change_waits_for_the_room_a_snapshot_holds(void)
 {
 	static const char *const cap[] = {"--scene-memory", "100", NULL};
 	struct bc_proto_edit_op ins = {.kind = BC_PROTO_EDIT_INSERT};
+	struct bc_proto_edit_op rm = {.kind = BC_PROTO_EDIT_REMOVE};
 	struct bc_proto_buf big, mid, two;
 	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
 	struct held_msg h;
@@ -1424,7 +1426,19 @@ static void a_change_waits_for_the_room_a_snapshot_holds(void)
 	CHECK_EQ_INT(answer_of(&b, h.seq), APPLIED);
 	CHECK_EQ_INT(daemon_log_count(log, "session c unloaded (its memory"),
 	             1);
-	printf("# requests that waited for a snapshot's room: %d of 2\n",
+	/* And an UNDO that puts 60 001 nodes back: b removes the group it
+	 * inserted, session e takes the room, b's UNDO needs e's. */
+	rm.node = 200000;
+	CHECK_EQ_INT(edit_answer(&b, &rm), APPLIED);
+	REQUIRE(conn_join(&a, "e", BC_PROTO_ROLE_EDITOR, true) == 0);
+	memset(&m, 0, sizeof(m));
+	m.type = BC_MSG_UNDO;
+	send_but_last(&b, &m, &h);
+	load_leave_send(&a, "e", &big, 100000, &o, &b, &h);
+	CHECK_EQ_INT(answer_of(&b, h.seq), APPLIED);
+	CHECK_EQ_INT(daemon_log_count(log, "session e unloaded (its memory"),
+	             1);
+	printf("# requests that waited for a snapshot's room: %d of 3\n",
 	       daemon_log_count(log, "until its work ends"));
 	conn_close(&a);
 	conn_close(&b);
