@@ -12,6 +12,7 @@
  * one prepared on a task) and UNDO/REDO's entry point.
  */
 #include <inttypes.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "blobcast/alloc.h"
@@ -54,21 +55,88 @@ static int check_scene_bytes(const struct bc_tree *t, size_t cap,
 	return 0;
 }
 
-/* At most how many nodes a session's scene has after ops: those it has
- * and every subtree they insert (room is taken for that before the batch
- * applies, bc__room_take, and settled at its count after). */
+/* The nodes of node id's subtree in t (the root's: all of them). */
+static uint64_t subtree_nodes(const struct bc_tree *t, uint32_t id)
+{
+	struct bc_scene_walk w = {0};
+	struct bc_scene_node n;
+	uint64_t k = 0;
+	if (id == bc_tree_root(t)) {
+		return bc_tree_node_count(t);
+	}
+	if (bc_scene_walk_init_at(&w, t, id)) {
+		return 0;
+	}
+	while (bc_scene_walk_next(&w, &n)) {
+		k++;
+	}
+	bc_scene_walk_finish(&w);
+	return k;
+}
+
+static int cmp_id(const void *a, const void *b)
+{
+	uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+	return x < y ? -1 : x > y;
+}
+
+/* At least how many of t's nodes ops take away, never more than they do:
+ * each REMOVE's or REPLACE's target that is in t and not inside another
+ * target (whose subtree holds it) counts its subtree in t. A subtree an
+ * earlier operation moved out of a target (a REMOVE and an INSERT of the
+ * same ids, as `blobcast move` sends) comes back in that INSERT's count;
+ * a target the batch made itself is not in t; an operator a REMOVE leaves
+ * with one child goes too, uncounted. */
+static uint64_t nodes_taken(const struct bc_tree *t,
+                            const struct bc_proto_edit_op *op, uint32_t nops)
+{
+	uint32_t ids[BC_PROTO_MAX_EDIT_OPS], k = 0, kept = 0;
+	uint64_t n = 0;
+	for (uint32_t i = 0; i < nops && i < BC_PROTO_MAX_EDIT_OPS; i++) {
+		if ((op[i].kind == BC_PROTO_EDIT_REMOVE ||
+		     op[i].kind == BC_PROTO_EDIT_REPLACE) &&
+		    bc_tree_get(t, op[i].node, NULL, NULL)) {
+			ids[k++] = op[i].node;
+		}
+	}
+	qsort(ids, k, sizeof(ids[0]), cmp_id);
+	for (uint32_t i = 0; i < k; i++) {
+		if (kept == 0 || ids[i] != ids[kept - 1]) {
+			ids[kept++] = ids[i];
+		}
+	}
+	for (uint32_t i = 0; i < kept; i++) {
+		bool inner = false;
+		for (uint32_t p = bc_tree_parent(t, ids[i]); p && !inner;
+		     p = bc_tree_parent(t, p)) {
+			inner = bsearch(&p, ids, kept, sizeof(ids[0]), cmp_id);
+		}
+		n += inner ? 0 : subtree_nodes(t, ids[i]);
+	}
+	return n;
+}
+
+/* At most how many nodes a session's scene has after ops: those it has,
+ * with every subtree they insert and less those they take away
+ * (nodes_taken; a REPLACE of the root by a union holding it, as `blobcast
+ * wrap` sends, adds two nodes, not the scene's count). Room is taken for
+ * that before the batch applies (bc__room_take) and settled at the count
+ * after. */
 static uint64_t nodes_after(const struct bc_tree *t,
                             const struct bc_proto_edit_op *op, uint32_t nops)
 {
-	uint64_t n = bc_tree_node_count(t);
+	uint64_t n = bc_tree_node_count(t), added = 0, taken;
 	for (uint32_t i = 0; i < nops; i++) {
 		const struct bc_proto_bytes *b = &op[i].subtree;
 		if (op[i].kind == BC_PROTO_EDIT_INSERT ||
 		    op[i].kind == BC_PROTO_EDIT_REPLACE) {
-			n += bc_scene_head_count(b->ptr, b->len, b->len);
+			added += bc_scene_head_count(b->ptr, b->len, b->len);
 		}
 	}
-	return n;
+	/* Only a batch that adds nodes takes room: one that adds none
+	 * is not worth a walk of what it removes. */
+	taken = added ? nodes_taken(t, op, nops) : 0;
+	return n + added - (taken < n ? taken : n);
 }
 
 /* m's change needs the room that session w's work keeps back

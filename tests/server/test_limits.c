@@ -1520,6 +1520,95 @@ static void stats_tell_the_scene_memory(void)
 	bc_proto_buf_finish(&gn);
 }
 
+/* Spheres g (ids id + 1 ..) under a union of id, as scene bytes. */
+static void put_group(struct bc_proto_buf *b, uint32_t g, uint32_t id)
+{
+	const float t[3] = {0, 0, 0}, q[4] = {0, 0, 0, 1}, r = 0.4f;
+	bc_proto_scene_op(b, BC_OP_UNION, id++, 0, 0, g);
+	for (uint32_t i = 0; i < g; i++) {
+		bc_proto_scene_prim(b, BC_PRIM_SPHERE, id++, t, q, NULL, 1, &r);
+	}
+}
+
+/* two_groups(g1, g2, id) wrapped in a union wid with a sphere wid + 1:
+ * the subtree of a REPLACE of its root, as `blobcast wrap` sends. */
+static struct bc_proto_buf wrapped(uint32_t g1, uint32_t g2, uint32_t id,
+                                   uint32_t wid)
+{
+	const float t[3] = {0, 0, 0}, q[4] = {0, 0, 0, 1}, r = 0.4f;
+	struct bc_proto_buf b;
+	bc_proto_buf_init(&b, 0);
+	bc_proto_scene_begin(&b, NULL, 5 + g1 + g2);
+	bc_proto_scene_op(&b, BC_OP_UNION, wid, 0, 0, 2);
+	bc_proto_scene_op(&b, BC_OP_UNION, id, 0, 0, 2);
+	put_group(&b, g1, id + 1);
+	put_group(&b, g2, id + 2 + g1);
+	bc_proto_scene_prim(&b, BC_PRIM_SPHERE, wid + 1, t, q, NULL, 1, &r);
+	return b;
+}
+
+/* The room a change takes counts what it takes away: at --scene-memory 1
+ * (1 497 nodes), a scene of 1 000 wrapped whole (a REPLACE of its root
+ * by a union holding it: 1 002 nodes after) and a group of 901 moved (a
+ * REMOVE and an INSERT of the same ids) apply; they were refused as
+ * scenes of 2 002 and 1 903 nodes. A REPLACE that does make the scene
+ * pass the cap is refused still. */
+static void a_wrap_or_move_takes_no_room_for_what_it_removes(void)
+{
+	static const char *const cap[] = {"--scene-memory", "1", NULL};
+	struct bc_proto_buf g = two_groups(900, 97, 20000);
+	struct bc_proto_buf w = wrapped(900, 97, 20000, 30000);
+	struct bc_proto_buf moved, big;
+	struct bc_proto_edit_op ops[2] = {{.kind = BC_PROTO_EDIT_REMOVE},
+	                                  {.kind = BC_PROTO_EDIT_INSERT}};
+	struct bc_msg m = {.type = BC_MSG_EDIT};
+	struct daemon d;
+	struct conn a;
+	char dir[64];
+	make_dir_name(dir, sizeof(dir), "room-taken");
+	REQUIRE(daemon_start_with(&d, dir, cap) == 0);
+	REQUIRE(conn_open(&a, &d) == 0 && conn_hello(&a, "a") == 0);
+	REQUIRE(conn_join(&a, "w", BC_PROTO_ROLE_EDITOR, true) == 0);
+	CHECK_EQ_INT(load_answer(&a, &g), APPLIED);
+	ops[0] = (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_REPLACE,
+	                                   .node = 20000,
+	                                   .subtree = {w.data, (uint32_t)w.len}};
+	CHECK_EQ_INT(edit_answer(&a, &ops[0]), APPLIED);
+	/* Group 20001 (901 nodes) into group 20902, first. */
+	bc_proto_buf_init(&moved, 0);
+	bc_proto_scene_begin(&moved, NULL, 901);
+	put_group(&moved, 900, 20001);
+	ops[0] = (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_REMOVE,
+	                                   .node = 20001};
+	ops[1] = (struct bc_proto_edit_op){
+	    .kind = BC_PROTO_EDIT_INSERT,
+	    .node = 20902,
+	    .position = 0,
+	    .subtree = {moved.data, (uint32_t)moved.len}};
+	m.edit.nops = 2;
+	m.edit.ops = ops;
+	CHECK_EQ_INT(answer_of(&a, conn_send(&a, &m)), APPLIED);
+	REQUIRE(memory_stats(&a, BC_PROTO_STATS_MEMORY));
+	/* 1 002, less union 20000 that the REMOVE left with one child. */
+	CHECK_EQ_INT(a.m.stats.memory.session_nodes, 1001);
+	/* The whole scene for a group of 1 600 spheres: 1 601 nodes. */
+	bc_proto_buf_init(&big, 0);
+	bc_proto_scene_begin(&big, NULL, 1601);
+	put_group(&big, 1600, 40000);
+	ops[0] = (struct bc_proto_edit_op){
+	    .kind = BC_PROTO_EDIT_REPLACE,
+	    .node = 30000,
+	    .subtree = {big.data, (uint32_t)big.len}};
+	CHECK_EQ_INT(edit_answer(&a, &ops[0]), -BC_ELIMIT);
+	CHECK(error_says(&a, "a scene of 1601 nodes"));
+	conn_close(&a);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+	bc_proto_buf_finish(&g);
+	bc_proto_buf_finish(&w);
+	bc_proto_buf_finish(&moved);
+	bc_proto_buf_finish(&big);
+}
+
 /* A daemon restarted with less --scene-memory than session "default"'s
  * scene alone starts all the same, says so, and refuses a JOIN of it
  * with ELIMIT, not an EIO or a daemon that does not start. */
@@ -1589,6 +1678,8 @@ static const struct bc_test tests[] = {
     {"a_change_waits_for_the_room_a_snapshot_holds",
      a_change_waits_for_the_room_a_snapshot_holds},
     {"stats_tell_the_scene_memory", stats_tell_the_scene_memory},
+    {"a_wrap_or_move_takes_no_room_for_what_it_removes",
+     a_wrap_or_move_takes_no_room_for_what_it_removes},
     {"a_default_scene_past_the_budget_waits_on_disk",
      a_default_scene_past_the_budget_waits_on_disk},
 };
