@@ -569,6 +569,39 @@ static void load_room(struct bc_session *s, struct load_task *l)
 	l->roomed = true;
 }
 
+/* A load refused room that session w's work holds (bc__room_busy): the
+ * requests parked behind the load (the JOINs that asked for it) wait
+ * behind w's work instead of hearing ELIMIT, and come again when it ends,
+ * loading s afresh then; s is unloaded meanwhile. False where waiting
+ * would not make the room. */
+static bool load_waits(struct bc_session *s, const struct load_task *l)
+{
+	struct bc_session *w;
+	if (l->rc != BC_ELIMIT || !l->tree ||
+	    !(w = bc__room_busy(s, bc_tree_node_count(l->tree)))) {
+		return false;
+	}
+	bc_log(BC_LOG_INFO,
+	       "session %s: its load waits for the room session %s holds "
+	       "until its work ends",
+	       s->name, w->name);
+	while (s->park_head) {
+		struct bc_member *m = s->park_head;
+		s->park_head = m->park_next;
+		m->parked = NULL;
+		m->park_next = NULL;
+		if (m->park_again) {
+			(void)wait_for(w, m, m->park_seq, true);
+		} else {
+			s->ss->link->resume(s->ss->link->ud, m->peer->ref,
+			                    false);
+		}
+	}
+	s->park_tail = NULL;
+	bc__session_unload(s, "its room is held by another's work");
+	return true;
+}
+
 static void load_done(struct bc_task *t)
 {
 	struct load_task *l = (struct load_task *)t;
@@ -578,6 +611,10 @@ static void load_done(struct bc_task *t)
 		return;
 	}
 	load_room(s, l);
+	if (l->rc && load_waits(s, l)) {
+		load_free(l);
+		return;
+	}
 	if (l->rc) {
 		load_failed(s, l);
 		load_free(l);

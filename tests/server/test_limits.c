@@ -1375,8 +1375,9 @@ static void load_leave_send(struct conn *c, const char *name,
  * it comes while a's snapshot runs, it waits for that work to end and
  * takes the room then (a unloaded), where it was refused with ELIMIT.
  * Then the same for an INSERT: session c takes a's place, and b's INSERT
- * of 60 000 spheres needs c's room; and for an UNDO that puts them back
- * after b removed them, with session e's room. The daemon's log says when a request
+ * of 60 000 spheres needs c's room; for an UNDO that puts them back after
+ * b removed them, with session e's room; and for a JOIN that loads b's
+ * session from disk, with f's. The daemon's log says when a request
  * waited (the test prints how many did: the snapshot may be quicker than
  * a round trip); the answer is the same either way. */
 static void a_change_waits_for_the_room_a_snapshot_holds(void)
@@ -1384,7 +1385,7 @@ static void a_change_waits_for_the_room_a_snapshot_holds(void)
 	static const char *const cap[] = {"--scene-memory", "100", NULL};
 	struct bc_proto_edit_op ins = {.kind = BC_PROTO_EDIT_INSERT};
 	struct bc_proto_edit_op rm = {.kind = BC_PROTO_EDIT_REMOVE};
-	struct bc_proto_buf big, mid, two;
+	struct bc_proto_buf big, mid, two, huge, thousand;
 	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
 	struct held_msg h;
 	struct daemon d;
@@ -1402,6 +1403,8 @@ static void a_change_waits_for_the_room_a_snapshot_holds(void)
 	big = spheres_at(100000, 0, 10000);
 	mid = spheres_at(60000, 1, 200000);
 	two = spheres_at(2, 2, 300000);
+	huge = spheres_at(149000, 0, 400000);
+	thousand = spheres_at(999, 3, 600000);
 	REQUIRE(conn_join(&a, "a", BC_PROTO_ROLE_EDITOR, true) == 0);
 	m.scene_load.scene.ptr = mid.data;
 	m.scene_load.scene.len = (uint32_t)mid.len;
@@ -1438,7 +1441,25 @@ static void a_change_waits_for_the_room_a_snapshot_holds(void)
 	CHECK_EQ_INT(answer_of(&b, h.seq), APPLIED);
 	CHECK_EQ_INT(daemon_log_count(log, "session e unloaded (its memory"),
 	             1);
-	printf("# requests that waited for a snapshot's room: %d of 3\n",
+	/* And a JOIN that loads a session from disk: b (1 000 nodes now)
+	 * left and unloaded for session f's 149 001, b's JOIN of it needs
+	 * f's room. */
+	CHECK_EQ_INT(load_answer(&b, &thousand), APPLIED);
+	leave(&b);
+	memset(&m, 0, sizeof(m));
+	m.type = BC_MSG_SESSION_JOIN;
+	m.session.role = BC_PROTO_ROLE_EDITOR;
+	m.session.name.ptr = "b";
+	m.session.name.len = 1;
+	send_but_last(&b, &m, &h);
+	REQUIRE(conn_join(&a, "f", BC_PROTO_ROLE_EDITOR, true) == 0);
+	load_leave_send(&a, "f", &huge, 149000, &o, &b, &h);
+	CHECK(conn_expect(&b, BC_MSG_SESSION_INFO, 30000) == 1);
+	REQUIRE(conn_expect(&b, BC_MSG_SCENE_STATE, 30000) == 1);
+	CHECK_EQ_INT(nodes_of(&b), 1000);
+	CHECK_EQ_INT(daemon_log_count(log, "session f unloaded (its memory"),
+	             1);
+	printf("# requests that waited for a snapshot's room: %d of 4\n",
 	       daemon_log_count(log, "until its work ends"));
 	conn_close(&a);
 	conn_close(&b);
@@ -1448,6 +1469,8 @@ static void a_change_waits_for_the_room_a_snapshot_holds(void)
 	bc_proto_buf_finish(&big);
 	bc_proto_buf_finish(&mid);
 	bc_proto_buf_finish(&two);
+	bc_proto_buf_finish(&huge);
+	bc_proto_buf_finish(&thousand);
 }
 
 /* GET_STATS's MEMORY part (c's answer in c->m). */
