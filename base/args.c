@@ -201,10 +201,11 @@ static int set_value(struct bc_args *a, const struct bc_opt *o, const char *val)
 	switch (o->kind) {
 	case BC_OPT_SIZE:
 		return fail(a,
-		            rc == BC_EINVAL ? "--%s '%s' is not WxH (two whole "
-		                              "numbers)"
-		                            : "--%s '%s' is out of range (width "
-		                              "and height %s)",
+		            rc == BC_EINVAL
+		                ? "--%s '%s' is not WxH (two whole "
+		                  "numbers)"
+		                : "--%s '%s' is out of range (width "
+		                  "and height %s)",
 		            o->name, val, range);
 	case BC_OPT_VEC3:
 		return fail(a, "--%s '%s' is not x,y,z (three finite numbers)",

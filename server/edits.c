@@ -526,8 +526,8 @@ int bc_handle_edit(struct bc_member *m, const struct bc_msg *msg)
 	if (bc__refuse_change(m, msg->seq, &park)) {
 		return park;
 	}
-	if ((park = bc__change_waits(m, msg->edit.ops, msg->edit.nops,
-	                             msg->seq, "an edit"))) {
+	if ((park = bc__change_waits(m, msg->edit.ops, msg->edit.nops, msg->seq,
+	                             "an edit"))) {
 		return park;
 	}
 	rc = bc__apply(m, msg->edit.ops, msg->edit.nops, msg->seq, &how,

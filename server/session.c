@@ -134,16 +134,26 @@ void bc__session_unref(struct bc_session *s)
 /* Resumes the members parked behind s, in order, while it is free: each
  * one's request comes again in a later loop turn (and parks again if s is
  * busy by then). */
-static void resume_parked(struct bc_session *s)
+/* The first member parked behind s, taken out of the queue (NULL when
+ * none is). */
+static struct bc_member *pop_parked(struct bc_session *s)
 {
-	while (s->park_head && !s->busy) {
-		struct bc_member *m = s->park_head;
+	struct bc_member *m = s->park_head;
+	if (m) {
 		s->park_head = m->park_next;
 		if (!s->park_head) {
 			s->park_tail = NULL;
 		}
 		m->parked = NULL;
 		m->park_next = NULL;
+	}
+	return m;
+}
+
+static void resume_parked(struct bc_session *s)
+{
+	struct bc_member *m;
+	while (!s->busy && (m = pop_parked(s))) {
 		s->ss->link->resume(s->ss->link->ud, m->peer->ref,
 		                    m->park_again);
 	}
@@ -542,11 +552,8 @@ static void load_failed(struct bc_session *s, const struct load_task *l)
 	struct bc_sessions *ss = s->ss;
 	bc_log(l->rc == BC_ELIMIT ? BC_LOG_WARN : BC_LOG_ERROR,
 	       "cannot load session %s: %s", s->name, l->ei.msg);
-	while (s->park_head) {
-		struct bc_member *m = s->park_head;
-		s->park_head = m->park_next;
-		m->parked = NULL;
-		m->park_next = NULL;
+	struct bc_member *m;
+	while ((m = pop_parked(s))) {
 		if (m->park_again) {
 			bc__send_error(m, m->park_seq, l->rc,
 			               "cannot load session %s: %s", s->name,
@@ -554,7 +561,6 @@ static void load_failed(struct bc_session *s, const struct load_task *l)
 		}
 		ss->link->resume(ss->link->ud, m->peer->ref, false);
 	}
-	s->park_tail = NULL;
 	bc__session_unload(s, "its load failed");
 }
 
@@ -576,6 +582,7 @@ static void load_room(struct bc_session *s, struct load_task *l)
  * would not make the room. */
 static bool load_waits(struct bc_session *s, const struct load_task *l)
 {
+	struct bc_member *m;
 	struct bc_session *w;
 	if (l->rc != BC_ELIMIT || !l->tree ||
 	    !(w = bc__room_busy(s, bc_tree_node_count(l->tree)))) {
@@ -585,11 +592,7 @@ static bool load_waits(struct bc_session *s, const struct load_task *l)
 	       "session %s: its load waits for the room session %s holds "
 	       "until its work ends",
 	       s->name, w->name);
-	while (s->park_head) {
-		struct bc_member *m = s->park_head;
-		s->park_head = m->park_next;
-		m->parked = NULL;
-		m->park_next = NULL;
+	while ((m = pop_parked(s))) {
 		if (m->park_again) {
 			(void)wait_for(w, m, m->park_seq, true);
 		} else {
@@ -597,7 +600,6 @@ static bool load_waits(struct bc_session *s, const struct load_task *l)
 			                    false);
 		}
 	}
-	s->park_tail = NULL;
 	bc__session_unload(s, "its room is held by another's work");
 	return true;
 }
@@ -809,7 +811,8 @@ struct bc_session *bc__room_busy(struct bc_session *s, uint64_t after)
 {
 	struct bc_sessions *ss = s->ss;
 	struct bc_session *most = NULL;
-	uint64_t more = after > s->nodes ? after - s->nodes : 0, in_use, soon = 0;
+	uint64_t more = after > s->nodes ? after - s->nodes : 0, in_use,
+	         soon = 0;
 	if (!more || after > ss->nodes_cap || ss->starting) {
 		return NULL;
 	}

@@ -1,9 +1,9 @@
 /*
  * The scene encoding at the protocol level: the writers and the structural
- * scanner agree on random trees (their counts, and the ids it visits); nesting is refused exactly past
- * BC_PROTO_SCENE_MAX_DEPTH; and a SCENE_LOAD of a 10^6-node scene encodes,
- * travels through the reader in socket-sized pieces, and decodes to the
- * same bytes, which scan to the same counts.
+ * scanner agree on random trees (their counts, and the ids it visits); nesting
+ * is refused exactly past BC_PROTO_SCENE_MAX_DEPTH; and a SCENE_LOAD of a
+ * 10^6-node scene encodes, travels through the reader in socket-sized pieces,
+ * and decodes to the same bytes, which scan to the same counts.
  */
 #include <stdint.h>
 

@@ -1297,8 +1297,7 @@ static void the_scene_memory_cap_holds_across_sessions(void)
 
 /* Whether SESSION_LIST (sent by c) lists session name loaded, without
  * members, with prims primitives. */
-static bool listed_memberless(struct conn *c, const char *name,
-                              uint32_t prims)
+static bool listed_memberless(struct conn *c, const char *name, uint32_t prims)
 {
 	struct bc_msg m = {.type = BC_MSG_SESSION_LIST};
 	const struct bc_msg_sessions *l = &c->m.sessions;
@@ -1323,8 +1322,7 @@ struct held_msg {
 	uint32_t seq;
 };
 
-static void send_but_last(struct conn *c, struct bc_msg *m,
-                          struct held_msg *h)
+static void send_but_last(struct conn *c, struct bc_msg *m, struct held_msg *h)
 {
 	h->seq = m->seq = ++c->seq;
 	bc_proto_buf_init(&h->b, 0);
@@ -1347,8 +1345,7 @@ static void send_last(struct conn *c, struct held_msg *h)
  * trip. c's answers are read. */
 static void load_leave_send(struct conn *c, const char *name,
                             const struct bc_proto_buf *b, uint32_t prims,
-                            struct conn *o, struct conn *w,
-                            struct held_msg *h)
+                            struct conn *o, struct conn *w, struct held_msg *h)
 {
 	struct bc_msg m = {.type = BC_MSG_SCENE_LOAD};
 	struct bc_msg l = {.type = BC_MSG_SESSION_LEAVE};
@@ -1593,9 +1590,10 @@ static void a_wrap_or_move_takes_no_room_for_what_it_removes(void)
 	REQUIRE(conn_open(&a, &d) == 0 && conn_hello(&a, "a") == 0);
 	REQUIRE(conn_join(&a, "w", BC_PROTO_ROLE_EDITOR, true) == 0);
 	CHECK_EQ_INT(load_answer(&a, &g), APPLIED);
-	ops[0] = (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_REPLACE,
-	                                   .node = 20000,
-	                                   .subtree = {w.data, (uint32_t)w.len}};
+	ops[0] =
+	    (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_REPLACE,
+	                              .node = 20000,
+	                              .subtree = {w.data, (uint32_t)w.len}};
 	CHECK_EQ_INT(edit_answer(&a, &ops[0]), APPLIED);
 	/* Group 20001 (901 nodes) into group 20902, first. */
 	bc_proto_buf_init(&moved, 0);
@@ -1618,10 +1616,10 @@ static void a_wrap_or_move_takes_no_room_for_what_it_removes(void)
 	bc_proto_buf_init(&big, 0);
 	bc_proto_scene_begin(&big, NULL, 1601);
 	put_group(&big, 1600, 40000);
-	ops[0] = (struct bc_proto_edit_op){
-	    .kind = BC_PROTO_EDIT_REPLACE,
-	    .node = 30000,
-	    .subtree = {big.data, (uint32_t)big.len}};
+	ops[0] =
+	    (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_REPLACE,
+	                              .node = 30000,
+	                              .subtree = {big.data, (uint32_t)big.len}};
 	CHECK_EQ_INT(edit_answer(&a, &ops[0]), -BC_ELIMIT);
 	CHECK(error_says(&a, "a scene of 1601 nodes"));
 	conn_close(&a);

@@ -272,7 +272,8 @@ static void an_edit_inside_an_inserted_group_builds_on_it(void)
 	snprintf(dir, sizeof(dir), "%s/inserted", base_dir);
 	REQUIRE(daemon_start(&d, dir) == 0);
 	enter(&alice, &d, "alice", "inserted", true);
-	REQUIRE((tree = scene_of(&alice)) && bc_scene_walk_init(&w, tree) == 0 &&
+	REQUIRE((tree = scene_of(&alice)) &&
+	        bc_scene_walk_init(&w, tree) == 0 &&
 	        bc_scene_walk_next(&w, &root) && root.is_op);
 	bc_scene_walk_finish(&w);
 	bc_tree_destroy(tree);
