@@ -156,7 +156,9 @@ int bc__change_waits(struct bc_member *m, const struct bc_proto_edit_op *ops,
                      uint32_t nops, uint32_t seq, const char *what)
 {
 	struct bc_session *s = m->session, *w;
-	if (!s->tree || s->lost ||
+	/* Most of the time nothing is finishing: the change's count (a
+	 * walk of what it removes) is left to bc__apply. */
+	if (!s->tree || s->lost || !bc__room_finishing(s) ||
 	    !(w = bc__room_busy(s, nodes_after(s->tree, ops, nops)))) {
 		return 0;
 	}

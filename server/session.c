@@ -807,12 +807,36 @@ int bc__room_take(struct bc_session *s, uint64_t after, uint64_t *taken,
 	return 0;
 }
 
+/* The sessions other than s whose room comes free when their work ends
+ * (without members, busy, holding nodes: a session being read from disk
+ * holds none yet, and one whose storage failed never unloads): their
+ * nodes in *soon, and the one holding most, or NULL for none. */
+static struct bc_session *finishing(const struct bc_session *s, uint64_t *soon)
+{
+	struct bc_session *most = NULL;
+	*soon = 0;
+	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
+		struct bc_session *o = s->ss->sessions[i];
+		if (o && o != s && o->nmembers == 0 && o->busy && o->nodes &&
+		    !o->store_failed) {
+			*soon += o->nodes;
+			most = !most || o->nodes > most->nodes ? o : most;
+		}
+	}
+	return most;
+}
+
+bool bc__room_finishing(const struct bc_session *s)
+{
+	uint64_t soon;
+	return finishing(s, &soon) != NULL;
+}
+
 struct bc_session *bc__room_busy(struct bc_session *s, uint64_t after)
 {
 	struct bc_sessions *ss = s->ss;
-	struct bc_session *most = NULL;
-	uint64_t more = after > s->nodes ? after - s->nodes : 0, in_use,
-	         soon = 0;
+	struct bc_session *most;
+	uint64_t more = after > s->nodes ? after - s->nodes : 0, in_use, soon;
 	if (!more || after > ss->nodes_cap || ss->starting) {
 		return NULL;
 	}
@@ -820,16 +844,7 @@ struct bc_session *bc__room_busy(struct bc_session *s, uint64_t after)
 	if (in_use + more <= ss->nodes_cap) {
 		return NULL;
 	}
-	for (uint32_t i = 0; i < BC_SRV_MAX_SESSIONS; i++) {
-		struct bc_session *o = ss->sessions[i];
-		/* A session being read from disk holds no nodes yet, and one
-		 * whose storage failed never unloads. */
-		if (o && o != s && o->nmembers == 0 && o->busy && o->nodes &&
-		    !o->store_failed) {
-			soon += o->nodes;
-			most = !most || o->nodes > most->nodes ? o : most;
-		}
-	}
+	most = finishing(s, &soon);
 	return in_use - soon + more <= ss->nodes_cap ? most : NULL;
 }
 

@@ -143,6 +143,9 @@ int bc__room_take(struct bc_session *s, uint64_t after, uint64_t *taken,
  * comes again, instead of a refusal a second too early. NULL where the room
  * is there now, or would not be even so (bc__room_take then says why). */
 struct bc_session *bc__room_busy(struct bc_session *s, uint64_t after);
+/* Whether any session's room comes free when its work ends (the cheap
+ * test before counting a change's nodes for bc__room_busy). */
+bool bc__room_finishing(const struct bc_session *s);
 /* Whether m's change ops (an EDIT's, or an UNDO's or REDO's, request seq)
  * must wait for the room a session's work holds (bc__room_busy): then
  * it is parked behind that work (the log says so, naming the change
