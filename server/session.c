@@ -131,9 +131,6 @@ void bc__session_unref(struct bc_session *s)
 	}
 }
 
-/* Resumes the members parked behind s, in order, while it is free: each
- * one's request comes again in a later loop turn (and parks again if s is
- * busy by then). */
 /* The first member parked behind s, taken out of the queue (NULL when
  * none is). */
 static struct bc_member *pop_parked(struct bc_session *s)
@@ -150,6 +147,9 @@ static struct bc_member *pop_parked(struct bc_session *s)
 	return m;
 }
 
+/* Resumes the members parked behind s, in order, while it is free: each
+ * one's request comes again in a later loop turn (and parks again if s is
+ * busy by then). */
 static void resume_parked(struct bc_session *s)
 {
 	struct bc_member *m;

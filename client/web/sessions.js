@@ -348,13 +348,12 @@ export class SessionPanel {
 			return l;
 		}, true);
 		this.entries = m.sessions;
-		this.memory = mem?.has_memory ? mem : null;
 		const n = m.sessions.length;
 		/* A daemon with more lists the first ones by name (7.21). */
 		this.setStatus((n >= P.LIMITS.MAX_SESSIONS_LISTED ? `the first ` +
 			`${n} sessions of this daemon, by name` : `${n} session` +
-			`${n === 1 ? '' : 's'} on this daemon`) + (this.memory
-			? ` · ${describeMemory(this.memory)}` : ''));
+			`${n === 1 ? '' : 's'} on this daemon`) + (mem?.has_memory
+			? ` · ${describeMemory(mem)}` : ''));
 		this.render();
 		return m.sessions;
 	}
