@@ -13,11 +13,11 @@
  * time, for the types and attribute tokens. The library stays loaded until
  * the process ends: LLVM registers process-wide state (options, signal
  * handlers) that does not survive dlclose, and a context may be created
- * again later. Sanitizer builds link it as well (render/gl/CMakeLists.txt):
- * with LLVM loaded by dlopen, LeakSanitizer's exit-time check crashed in
- * its stop-the-world tracer (signal 11, test_gl), and linked it does not;
- * the dlopen below then finds the library already loaded and the same
- * code runs in both builds.
+ * again later. Sanitizer builds open it the same way; their programs start
+ * with the options of base/asan_defaults.c, without which LeakSanitizer's
+ * exit-time check crashed once libLLVM had come by dlopen, and a test that
+ * renders through OSMesa there names the library in its LeakSanitizer
+ * suppressions (tests/gl/lsan.supp) for the state it keeps.
  */
 #include <GL/osmesa.h>
 #include <dlfcn.h>
