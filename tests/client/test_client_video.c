@@ -431,6 +431,18 @@ static int collect(struct bc_client *c, struct bc_client_image *img,
 	                      k->want);
 }
 
+/* rc, after saying what failed (a view of w x h, at what) when it is an
+ * error. */
+static int said(int rc, uint16_t w, uint16_t h, const char *what,
+                const struct bc_errinfo *ei)
+{
+	if (rc) {
+		fprintf(stderr, "  %ux%u%s: %s (%s)\n", w, h, what, ei->msg,
+		        bc_err_name(rc));
+	}
+	return rc;
+}
+
 /* Moves the camera (interacting) at least moves times, and on until the
  * first frame of the camera last sent is a moving frame, collecting each:
  * on a busy machine the daemon may draw a camera's still as its first
@@ -517,12 +529,7 @@ static void view_against_daemon(const struct daemon *d, uint16_t w, uint16_t h,
 	REQUIRE(bc_client_camera(c, &cam, false, NULL, &ei) == 0);
 	REQUIRE(bc_client_view(c, &view, NULL, &ei) == 0);
 	k.ack = acks;
-	rc = collect(c, &img, &k, &ei);
-	if (rc) {
-		fprintf(stderr, "  %ux%u: %s (%s)\n", w, h, ei.msg,
-		        bc_err_name(rc));
-	}
-	REQUIRE(rc == 0);
+	REQUIRE(said(collect(c, &img, &k, &ei), w, h, "", &ei) == 0);
 	/* The first frame after VIEW is KEY, and so is the still. */
 	CHECK(k.first_flags & BC_PROTO_FLAG_KEY);
 	CHECK(img.flags & BC_PROTO_FLAG_KEY);
@@ -542,11 +549,7 @@ static void view_against_daemon(const struct daemon *d, uint16_t w, uint16_t h,
 		k.want = BC_PROTO_FLAG_STILL;
 		rc = collect(c, &img, &k, &ei);
 	}
-	if (rc) {
-		fprintf(stderr, "  %ux%u drag: %s (%s)\n", w, h, ei.msg,
-		        bc_err_name(rc));
-	}
-	REQUIRE(rc == 0);
+	REQUIRE(said(rc, w, h, " drag", &ei) == 0);
 	REQUIRE(k.moving != NULL);
 	db = snapshot_psnr(c, &img, k.moving);
 	printf("  %ux%u moving frame %u: PSNR %.2f dB against a raw "
@@ -580,12 +583,8 @@ static void view_against_daemon(const struct daemon *d, uint16_t w, uint16_t h,
 	printf("  %ux%u PNG still: PSNR %.2f dB against a raw snapshot\n", w, h,
 	       db);
 	CHECK(db == 99.0);
-	rc = drag_until_moving(c, &cam, -0.2f, 1, &img, &k, &ei);
-	if (rc) {
-		fprintf(stderr, "  %ux%u move after the PNG still: %s (%s)\n",
-		        w, h, ei.msg, bc_err_name(rc));
-	}
-	REQUIRE(rc == 0);
+	REQUIRE(said(drag_until_moving(c, &cam, -0.2f, 1, &img, &k, &ei), w, h,
+	             " move after the PNG still", &ei) == 0);
 	CHECK_EQ_INT(img.encoding, BC_PROTO_ENC_H264);
 	CHECK(img.complete);
 	collect_free(&k);
