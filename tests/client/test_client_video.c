@@ -456,12 +456,14 @@ static int drag_until_moving(struct bc_client *c, struct bc_camera *cam,
 		uint32_t seq = 0;
 		int rc;
 		/* The extra moves go back and forth around the last. */
-		cam->eye[1] += i < moves         ? step
-		               : (i - moves) % 2 ? step
-		                                 : -step;
-		if ((rc = bc_client_camera(c, cam, true, &seq, ei)) ||
-		    (k->camera_seq = seq, k->want = 0,
-		     rc = collect(c, img, k, ei))) {
+		bool back = i >= moves && (i - moves) % 2 == 0;
+		cam->eye[1] += back ? -step : step;
+		if ((rc = bc_client_camera(c, cam, true, &seq, ei))) {
+			return rc;
+		}
+		k->camera_seq = seq;
+		k->want = 0;
+		if ((rc = collect(c, img, k, ei))) {
 			return rc;
 		}
 		if (i + 1 >= moves && !(k->last_flags & BC_PROTO_FLAG_STILL)) {
