@@ -74,18 +74,6 @@ static int await_applied(struct editor *e, uint32_t seq, int ms)
 	return -1;
 }
 
-/* Takes every EDIT_APPLIED e has been sent so far into its mirror. */
-static void catch_up(struct editor *e)
-{
-	struct bc_errinfo ei = {0};
-	while (conn_recv(&e->c, 300) == 1) {
-		if (e->c.m.type == BC_MSG_EDIT_APPLIED) {
-			CHECK(bc_edit_replay(&e->mirror, &e->c.m.edit_applied,
-			                     &ei) == 0);
-		}
-	}
-}
-
 static void join(struct editor *e, const struct daemon *d, const char *name,
                  bool create)
 {
@@ -113,6 +101,24 @@ static bool same_tree(const struct bc_tree *a, const struct bc_tree *b)
 	return same;
 }
 
+/* Takes the EDIT_APPLIED messages e is sent into its mirror until the
+ * mirror equals want, or 30 s pass (a broadcast to a member is not an
+ * answer to anything it asked, so no PING can say it has arrived). The
+ * caller then checks the mirror: a missing edit fails there, and an extra
+ * one fails the next state check. */
+static void catch_up(struct editor *e, const struct bc_tree *want)
+{
+	struct bc_errinfo ei = {0};
+	int64_t end = t_now_ms() + 30000;
+	while (!same_tree(e->mirror, want) && t_now_ms() < end) {
+		if (conn_recv(&e->c, 100) == 1 &&
+		    e->c.m.type == BC_MSG_EDIT_APPLIED) {
+			CHECK(bc_edit_replay(&e->mirror, &e->c.m.edit_applied,
+			                     &ei) == 0);
+		}
+	}
+}
+
 /* The session's scene as a joiner gets it, or NULL. */
 static struct bc_tree *joiner_scene(const struct daemon *d)
 {
@@ -136,8 +142,8 @@ static void check_state(const struct daemon *d, struct editor *a,
 {
 	struct bc_tree *j = joiner_scene(d);
 	REQUIRE(j);
-	catch_up(a);
-	catch_up(b);
+	catch_up(a, j);
+	catch_up(b, j);
 	CHECK(same_tree(a->mirror, j));
 	CHECK(same_tree(b->mirror, j));
 	if (want) {
