@@ -274,7 +274,7 @@ int bc__store_history_give(struct bc_store_session *ss, bc_store_replay_fn fn,
 	char file[PATH_LEN];
 	uint8_t hdr[HISTORY_HEADER], *p = NULL;
 	struct stat st;
-	uint32_t len;
+	uint32_t len = 0;
 	bool ok;
 	int fd;
 	bc__store_fmt_path(file, "%s/history-%llu.bin", ss->path,

@@ -99,7 +99,7 @@ static bool have(const char *tool)
 }
 
 struct sess {
-	char name[16];
+	char name[24];
 	int node;       /* the daemon that holds it */
 	uint64_t order; /* the last acknowledged edit */
 	float radius;   /* what that edit set */

@@ -481,7 +481,7 @@ static void mirrors_equal_a_joiners_state(void)
 	int64_t t0 = t_now_ms();
 	REQUIRE(start(&d, "mirror") == 0);
 	for (int i = 0; i < EDITORS; i++) {
-		char name[8];
+		char name[16];
 		snprintf(name, sizeof(name), "e%d", i);
 		memset(&m[i], 0, sizeof(m[i]));
 		REQUIRE(conn_open(&m[i].c, &d) == 0);
