@@ -74,6 +74,32 @@ static inline int64_t t_now_ms(void)
 	return (int64_t)ts.tv_sec * 1000 + ts.tv_nsec / 1000000;
 }
 
+/* The port of the TCP listener on 127.0.0.1 that a daemon whose stderr
+ * goes to log announced ("blobcastd: listening on 127.0.0.1:PORT"), or 0
+ * when the line has not come within 30 s. The daemon announces once it
+ * listens on every address, so one that already answers on its Unix
+ * socket may not have written the line yet (a loaded machine showed it). */
+static inline int daemon_log_port(const char *log)
+{
+	static const char needle[] = "blobcastd: listening on 127.0.0.1:";
+	int64_t end = t_now_ms() + 30000;
+	do {
+		char buf[8192];
+		FILE *f = fopen(log, "r");
+		size_t n = f ? fread(buf, 1, sizeof(buf) - 1, f) : 0;
+		const char *p;
+		if (f) {
+			fclose(f);
+		}
+		buf[n] = '\0';
+		if ((p = strstr(buf, needle))) {
+			return atoi(p + strlen(needle));
+		}
+		t_sleep_ms(25);
+	} while (t_now_ms() < end);
+	return 0;
+}
+
 /* The daemons started and not yet stopped: a test that ends early (a
  * failed REQUIRE) leaves its daemon to daemon_tests_run, which kills it,
  * rather than running on after the test program. */

@@ -131,10 +131,9 @@ static int daemon_start_tcp_config(struct daemon *d, const char *dir,
 {
 	const char *extra[] = {"--listen", "127.0.0.1:0",
 	                       config ? "--config" : NULL, config, NULL};
-	char log[80], line[256];
-	int saved = dup(2), fd, port = 0;
+	char log[80];
+	int saved = dup(2), fd;
 	const char *verbose = getenv("BLOBCAST_TEST_VERBOSE");
-	FILE *f;
 	snprintf(log, sizeof(log), "%s.stderr", dir);
 	fd = open(log, O_WRONLY | O_CREAT | O_TRUNC, 0600);
 	if (fd < 0 || saved < 0) {
@@ -152,20 +151,7 @@ static int daemon_start_tcp_config(struct daemon *d, const char *dir,
 	}
 	dup2(saved, 2);
 	close(saved);
-	if (fd != 0 || !(f = fopen(log, "r"))) {
-		return 0;
-	}
-	while (fgets(line, sizeof(line), f)) {
-		const char *p =
-		    strstr(line, "blobcastd: listening on 127.0.0.1:");
-		if (p) {
-			port = atoi(p + strlen("blobcastd: listening on "
-			                       "127.0.0.1:"));
-			break;
-		}
-	}
-	fclose(f);
-	return port;
+	return fd == 0 ? daemon_log_port(log) : 0;
 }
 
 static int daemon_start_tcp(struct daemon *d, const char *dir)

@@ -632,7 +632,7 @@ static void tokens_refuse_hello_and_the_editor_role(void)
 	/* Static: a test that stops at a REQUIRE leaves daemon_log_path
 	 * pointing here for the next one. */
 	static char log[96];
-	char cfg[96], line[256];
+	char cfg[96];
 	const char *extra[] = {"--listen", "127.0.0.1:0", "--config", cfg,
 	                       NULL};
 	FILE *f;
@@ -648,14 +648,7 @@ static void tokens_refuse_hello_and_the_editor_role(void)
 	daemon_log_path = log;
 	REQUIRE(start(&d, "tokens", extra) == 0);
 	daemon_log_path = NULL;
-	REQUIRE((f = fopen(log, "r")));
-	while (fgets(line, sizeof(line), f)) {
-		const char *p = strstr(line, "listening on 127.0.0.1:");
-		if (p) {
-			port = atoi(p + strlen("listening on 127.0.0.1:"));
-		}
-	}
-	fclose(f);
+	port = daemon_log_port(log);
 	REQUIRE(port > 0);
 
 	tcp_open(&c, port);

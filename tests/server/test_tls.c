@@ -78,27 +78,6 @@ static bool make_certs(void)
 	          d, ec, ec, ec) == 0;
 }
 
-/* The port a daemon whose stderr went to log printed. */
-static int port_from_log(const char *log)
-{
-	for (int tries = 0; tries < 200; tries++) {
-		char buf[8192];
-		FILE *f = fopen(log, "r");
-		size_t n = f ? fread(buf, 1, sizeof(buf) - 1, f) : 0;
-		const char *p;
-		if (f) {
-			fclose(f);
-		}
-		buf[n] = '\0';
-		if ((p = strstr(buf, "blobcastd: listening on 127.0.0.1:"))) {
-			return atoi(
-			    p + strlen("blobcastd: listening on 127.0.0.1:"));
-		}
-		t_sleep_ms(25);
-	}
-	return -1;
-}
-
 static struct daemon tls_d, plain_d;
 static int tls_port, plain_port;
 static char tls_log[128], plain_log[128];
@@ -811,7 +790,7 @@ int main(int argc, char **argv)
 	extra[2] = "--config";
 	extra[3] = cfg;
 	if (daemon_start_with(&tls_d, dir, extra) ||
-	    (tls_port = port_from_log(tls_log)) <= 0) {
+	    (tls_port = daemon_log_port(tls_log)) <= 0) {
 		fprintf(stderr, "the TLS daemon did not start (%s)\n", tls_log);
 		if (tls_d.pid > 0) {
 			daemon_stop(&tls_d, SIGKILL);
@@ -823,7 +802,7 @@ int main(int argc, char **argv)
 	daemon_log_path = plain_log;
 	extra[2] = NULL;
 	if (daemon_start_with(&plain_d, dir, extra) ||
-	    (plain_port = port_from_log(plain_log)) <= 0) {
+	    (plain_port = daemon_log_port(plain_log)) <= 0) {
 		fprintf(stderr, "the plain daemon did not start (%s)\n",
 		        plain_log);
 		daemon_stop(&tls_d, SIGTERM);
