@@ -18,10 +18,15 @@
  * tracer crashed every time without this option. Before it, sanitizer
  * builds linked libOSMesa so that libLLVM's TLS was static, and paid about
  * 90 ms of libLLVM's relocation at every start of every program.
+ *
+ * handle_sigill=1: UBSan's checks trap with an illegal instruction
+ * (BLOBCAST_UBSAN_TRAP, the default of sanitizer builds); with this option
+ * AddressSanitizer reports the trap with the stack, whose first frame is
+ * the file and line of the check that failed, instead of the bare signal.
  */
 const char *__asan_default_options(void);
 
 const char *__asan_default_options(void)
 {
-	return "intercept_tls_get_addr=0";
+	return "intercept_tls_get_addr=0:handle_sigill=1";
 }
