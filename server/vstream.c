@@ -51,15 +51,23 @@ static bool try_module(const char *path)
 	return true;
 }
 
-/* $BLOBCASTD_H264_MODULE; beside an installed blobcastd
- * (BIN/../LIBDIR/blobcast/); where the build tree put it. */
+/* $BLOBCASTD_H264_MODULE ("none": no module, no FFmpeg loaded); beside an
+ * installed blobcastd (BIN/../LIBDIR/blobcast/); where the build tree put
+ * it. */
 static void load(void)
 {
 	char exe[PATH_MAX], path[PATH_MAX + 128];
-	ssize_t n = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
+	const char *env = getenv(BC_SRV_H264_ENV);
+	ssize_t n;
+	if (env && strcmp(env, "none") == 0) {
+		snprintf(load_why, sizeof(load_why), "%s is none",
+		         BC_SRV_H264_ENV);
+		return;
+	}
+	n = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
 	snprintf(load_why, sizeof(load_why), "no %s found (set %s to its path)",
 	         BC_SRV_H264_FILE, BC_SRV_H264_ENV);
-	if (try_module(getenv(BC_SRV_H264_ENV))) {
+	if (try_module(env)) {
 		return;
 	}
 	if (n > 0) {

@@ -342,6 +342,58 @@ static void test_views_h264_cannot_serve(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 }
 
+/* Whether the process pid has a shared object whose path holds name. */
+static bool maps_hold(pid_t pid, const char *name)
+{
+	char path[64], line[512];
+	bool found = false;
+	FILE *f;
+	snprintf(path, sizeof(path), "/proc/%d/maps", (int)pid);
+	if (!(f = fopen(path, "r"))) {
+		return false;
+	}
+	while (!found && fgets(line, sizeof(line), f)) {
+		found = strstr(line, name) != NULL;
+	}
+	fclose(f);
+	return found;
+}
+
+/* BLOBCASTD_H264_MODULE=none: the daemon loads no FFmpeg library, refuses
+ * a view of encoding 4 with ENOTSUP (not fatal) and serves JPEG; a daemon
+ * started as the other tests' has libavcodec loaded before any view. */
+static void test_module_none_loads_no_ffmpeg(void)
+{
+	char dir[96];
+	const char *was = getenv("BLOBCASTD_H264_MODULE");
+	char *saved = was ? strdup(was) : NULL;
+	struct daemon d;
+	struct conn c;
+	snprintf(dir, sizeof(dir), "%s/with", base_dir);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	CHECK(maps_hold(d.pid, "libavcodec"));
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+
+	snprintf(dir, sizeof(dir), "%s/none", base_dir);
+	setenv("BLOBCASTD_H264_MODULE", "none", 1);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	if (saved) {
+		setenv("BLOBCASTD_H264_MODULE", saved, 1);
+	} else {
+		unsetenv("BLOBCASTD_H264_MODULE");
+	}
+	free(saved);
+	CHECK(!maps_hold(d.pid, "libavcodec"));
+	enter(&c, &d, 0x0f, BC_PROTO_FEATURES_READ);
+	expect_error(&c, view(&c, 64, 64, BC_PROTO_ENC_H264, 0, 1), BC_ENOTSUP);
+	REQUIRE(view(&c, 64, 64, BC_PROTO_ENC_JPEG, 0, 1));
+	REQUIRE(next_frame(&c, 20000));
+	CHECK(c.m.frame.encoding == BC_PROTO_ENC_JPEG);
+	CHECK(!maps_hold(d.pid, "libavcodec"));
+	conn_close(&c);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
 /* --video-encoder nvenc on a machine whose nvenc does not open: the view
  * goes on in JPEG after ECODEC; a client with H.264 alone gets ECODEC
  * and no frames. Where nvenc opens, the frames are H.264. */
@@ -468,6 +520,7 @@ static const struct bc_test tests[] = {
     {"png_still_keeps_the_stream", test_png_still_keeps_the_stream},
     {"two_members_two_streams", test_two_members_two_streams},
     {"views_h264_cannot_serve", test_views_h264_cannot_serve},
+    {"module_none_loads_no_ffmpeg", test_module_none_loads_no_ffmpeg},
     {"encoder_failure_falls_back", test_encoder_failure_falls_back},
     {"acks_hold_two_frames", test_acks_hold_two_frames},
 };
