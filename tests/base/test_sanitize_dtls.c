@@ -20,6 +20,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "self_child.h"
 #include "test.h"
 
 #ifndef BC_DTLS_MODULE
@@ -88,44 +89,13 @@ static int child(int leak)
 	return 0;
 }
 
-/* Runs this program in child mode; *status and err (the child's standard
- * error, NUL-terminated) come back. The environment's ASAN_OPTIONS is
- * replaced so that leak checking is on whatever the caller set. */
-static int run_child(const char *mode, int *status, char *err, size_t cap)
-{
-	char path[] = "/tmp/bc-dtls.XXXXXX";
-	int fd = mkstemp(path);
-	pid_t pid;
-	ssize_t n;
-	if (fd < 0) {
-		return -1;
-	}
-	unlink(path);
-	pid = fork();
-	if (pid == 0) {
-		dup2(fd, 2);
-		setenv("ASAN_OPTIONS", "detect_leaks=1", 1);
-		unsetenv("LSAN_OPTIONS");
-		execl("/proc/self/exe", "test_sanitize_dtls", "--child", mode,
-		      (char *)NULL);
-		_exit(127);
-	}
-	if (pid < 0 || waitpid(pid, status, 0) != pid) {
-		close(fd);
-		return -1;
-	}
-	n = pread(fd, err, cap - 1, 0);
-	err[n > 0 ? n : 0] = '\0';
-	close(fd);
-	return 0;
-}
-
 static char err[1 << 16];
 
 static void threads_with_dynamic_tls_end_cleanly(void)
 {
 	int st = 0;
-	REQUIRE(run_child("clean", &st, err, sizeof(err)) == 0);
+	REQUIRE(self_child("test_sanitize_dtls", "clean", "detect_leaks=1", &st,
+	                   err, sizeof(err)) == 0);
 	if (!WIFEXITED(st) || WEXITSTATUS(st) != 0) {
 		fprintf(stderr, "  child's standard error:\n%s\n", err);
 	}
@@ -140,7 +110,8 @@ static void threads_with_dynamic_tls_end_cleanly(void)
 static void a_leak_is_still_reported(void)
 {
 	int st = 0;
-	REQUIRE(run_child("leak", &st, err, sizeof(err)) == 0);
+	REQUIRE(self_child("test_sanitize_dtls", "leak", "detect_leaks=1", &st,
+	                   err, sizeof(err)) == 0);
 	CHECK(strstr(err, "Tracer caught") == NULL);
 	CHECK(strstr(err, "detected memory leaks") != NULL);
 	CHECK(strstr(err, "4096 byte(s) in 1 object(s)") != NULL);

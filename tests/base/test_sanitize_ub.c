@@ -11,9 +11,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
+#include "self_child.h"
 #include "test.h"
 
 /* Inputs the compiler cannot see through. */
@@ -51,44 +50,14 @@ static int child(const char *mode)
 	return 0;
 }
 
-/* Runs this program as a child in mode; *status and its standard output
- * and error (NUL-terminated) come back. */
-static int run_child(const char *mode, int *status, char *out, size_t cap)
-{
-	char path[] = "/tmp/bc-ub.XXXXXX";
-	int fd = mkstemp(path);
-	pid_t pid;
-	ssize_t n;
-	if (fd < 0) {
-		return -1;
-	}
-	unlink(path);
-	fflush(stdout);
-	pid = fork();
-	if (pid == 0) {
-		dup2(fd, 1);
-		dup2(fd, 2);
-		execl("/proc/self/exe", "test_sanitize_ub", "--child", mode,
-		      (char *)NULL);
-		_exit(127);
-	}
-	if (pid < 0 || waitpid(pid, status, 0) != pid) {
-		close(fd);
-		return -1;
-	}
-	n = pread(fd, out, cap - 1, 0);
-	out[n > 0 ? n : 0] = '\0';
-	close(fd);
-	return 0;
-}
-
 static char out[1 << 16];
 
 /* The child in mode stops with a report naming fn in this file. */
 static void stops_and_says_where(const char *mode, const char *fn)
 {
 	int st = 0;
-	REQUIRE(run_child(mode, &st, out, sizeof(out)) == 0);
+	REQUIRE(self_child("test_sanitize_ub", mode, NULL, &st, out,
+	                   sizeof(out)) == 0);
 	CHECK(!(WIFEXITED(st) && WEXITSTATUS(st) == 0));
 	CHECK(strstr(out, "survived") == NULL);
 	CHECK(strstr(out, fn) != NULL);
@@ -116,7 +85,8 @@ static void an_index_past_the_end_stops(void)
 static void defined_code_runs_on(void)
 {
 	int st = 0;
-	REQUIRE(run_child("none", &st, out, sizeof(out)) == 0);
+	REQUIRE(self_child("test_sanitize_ub", "none", NULL, &st, out,
+	                   sizeof(out)) == 0);
 	CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 0);
 	CHECK(strstr(out, "survived 0") != NULL);
 	CHECK(strstr(out, "ERROR") == NULL &&
