@@ -93,12 +93,9 @@ static int start(struct daemon *d, const char *dir, const char *const *extra)
 /* The port of the daemon's TCP listener on 127.0.0.1, 0 if none. */
 static int tcp_port(const struct daemon *d)
 {
-	static char buf[1 << 16];
-	const char *needle = "blobcastd: listening on 127.0.0.1:";
-	const char *at;
-	read_log(d, buf, sizeof(buf));
-	at = strstr(buf, needle);
-	return at ? atoi(at + strlen(needle)) : 0;
+	char path[128];
+	log_path(path, sizeof(path), d);
+	return daemon_log_port(path);
 }
 
 static int tcp_open(struct conn *c, int port)
