@@ -6,12 +6,12 @@
  * through its exit-time check (its tracer crashed there, signal 11, every
  * time with the runtime's own defaults), report nothing when nothing leaked
  * and still report a real leak.
- * Each case runs in a child process of this program; the parent reads its
- * exit status and its standard error. Built only in sanitizer builds.
+ * Each case runs in a child process of this program (self_child.h); the
+ * parent reads its exit status and what it wrote. Built only in sanitizer
+ * builds.
  */
 #define _GNU_SOURCE
 #include <dlfcn.h>
-#include <fcntl.h>
 #include <pthread.h>
 #include <stdint.h>
 #include <stdio.h>
