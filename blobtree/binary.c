@@ -83,7 +83,7 @@ bool bc_scene_walk_next(struct bc_scene_walk *w, struct bc_scene_node *out)
 		w->depth++;
 		return true;
 	}
-	out->prim = nd->u.prim;
+	bc__prim_read(t, nd, &out->prim);
 	/* A leaf closes every operator it ends: up to the first ancestor
 	 * with a sibling after it, or to the walk's top. */
 	while (n != w->top && t->pool[n].next == BC_NONE) {
@@ -160,7 +160,8 @@ static uint8_t *at_f32s(uint8_t *p, const float *f, uint32_t n)
 
 /* Pool node nd's bytes, composed in one buffer and appended once (a
  * million nodes' fields appended one by one took most of an encode). */
-static void put_node(struct bc_buf *b, const struct bc__node *nd)
+static void put_node(struct bc_buf *b, const struct bc_tree *t,
+                     const struct bc__node *nd)
 {
 	uint8_t w[NODE_MAX_BYTES], *p = w;
 	if (bc__node_unary(nd)) {
@@ -179,8 +180,11 @@ static void put_node(struct bc_buf *b, const struct bc__node *nd)
 		bc_put_le32(p + 12, nd->nchildren);
 		p += 16;
 	} else {
-		const struct bc_prim_data *pr = &nd->u.prim;
-		uint32_t nf = bc_scene_prim_nfloats(pr->kind);
+		struct bc_prim_data prd;
+		const struct bc_prim_data *pr = &prd;
+		uint32_t nf;
+		bc__prim_read(t, nd, &prd);
+		nf = bc_scene_prim_nfloats(pr->kind);
 		*p++ = (uint8_t)pr->kind;
 		bc_put_le32(p, nd->id);
 		p = at_f32s(p + 4, pr->translate, 3);
@@ -227,7 +231,7 @@ static void put_nodes(struct bc_buf *b, const struct bc_tree *t,
 {
 	uint32_t n = t->root;
 	for (;;) {
-		put_node(b, &t->pool[n]);
+		put_node(b, t, &t->pool[n]);
 		if (!pass_on(b, ps, PIECE_BYTES)) {
 			return;
 		}

@@ -79,7 +79,9 @@ static void add_prim(struct walk *w, const struct bc__node *n, float hi)
 {
 	struct bc_abv abv;
 	float a[3], b[3];
-	bc__abv_place(&n->u.prim, hi, &abv);
+	struct bc_prim_data p;
+	bc__prim_read(w->t, n, &p);
+	bc__abv_place(&p, hi, &abv);
 	for (uint32_t d = w->ndom; d-- > 0;) {
 		(void)bc__abv_preimage(w->dom[d].kind, w->dom[d].rec, &abv);
 	}

@@ -302,21 +302,22 @@ static void emit_leaf(struct bc_tree *t, struct bc__fill *fs, uint32_t n)
 	struct bc__lay *y = &t->lay[n];
 	struct bc_lin *l = fs->l;
 	uint32_t s = fs->slot++;
+	struct bc_prim_data pd;
+	bc__prim_read(t, nd, &pd);
 	y->slot = s;
 	y->epoch = t->epoch;
 	y->prim = fs->prim++;
 	y->param = fs->param;
 	fs->param += BC_PRIM_RECORD_VEC4;
-	set_word(l, s, true, (uint32_t)nd->u.prim.kind);
+	set_word(l, s, true, (uint32_t)pd.kind);
 	l->node[2 * s + 1] = y->param;
 	l->first[s] = s;
 	l->node_id[s] = nd->id;
 	l->prim_of[s] = y->prim;
 	l->prim_slot[y->prim] = s;
 	slot_init(l, s);
-	write_prim_record(l->param + 4u * (size_t)y->param, &nd->u.prim);
-	memcpy(l->color[y->prim],
-	       nd->u.prim.has_color ? nd->u.prim.color : default_color,
+	write_prim_record(l->param + 4u * (size_t)y->param, &pd);
+	memcpy(l->color[y->prim], pd.has_color ? pd.color : default_color,
 	       sizeof(l->color[0]));
 }
 
@@ -707,8 +708,9 @@ static void place_subtree(struct bc_tree *t, struct bc_lin *l, uint32_t top)
 		while (t->pool[n].is_op) {
 			n = t->pool[n].first_child;
 		}
-		bc__lin_place_abv(t, l, bc__prim(t, &t->pool[n]),
-		                  &t->pool[n].u.prim);
+		struct bc_prim_data pd;
+		bc__prim_read(t, &t->pool[n], &pd);
+		bc__lin_place_abv(t, l, bc__prim(t, &t->pool[n]), &pd);
 		while (n != top && t->pool[n].next == BC_NONE) {
 			n = t->pool[n].parent;
 		}
@@ -814,9 +816,10 @@ void bc__lin_update_prim(struct bc_tree *t, const struct bc__node *n)
 {
 	struct bc_lin *l = &t->lin;
 	const struct bc__lay *y = bc__lay(t, n);
-	write_prim_record(l->param + 4u * (size_t)y->param, &n->u.prim);
-	memcpy(l->color[y->prim],
-	       n->u.prim.has_color ? n->u.prim.color : default_color,
+	struct bc_prim_data pd;
+	bc__prim_read(t, n, &pd);
+	write_prim_record(l->param + 4u * (size_t)y->param, &pd);
+	memcpy(l->color[y->prim], pd.has_color ? pd.color : default_color,
 	       sizeof(l->color[0]));
 	if (bc__lin_prim_bends(t, n)) {
 		/* Its twist and bend ancestors' radii (and so bounds) may
@@ -824,7 +827,7 @@ void bc__lin_update_prim(struct bc_tree *t, const struct bc__node *n)
 		place_all_abvs(t, l);
 		return;
 	}
-	bc__lin_place_abv(t, l, y->prim, &n->u.prim);
+	bc__lin_place_abv(t, l, y->prim, &pd);
 	bc__lin_update_size(l);
 }
 

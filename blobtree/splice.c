@@ -417,7 +417,9 @@ static bool relink(struct bc_tree *t, uint32_t lo, uint32_t top,
 			}
 			bc__dirty_range(&t->dirty.prim_lo, &t->dirty.prim_hi, k,
 			                k + 1);
-			bc__lin_place_abv(t, l, k, &t->pool[n].u.prim);
+			struct bc_prim_data pd;
+			bc__prim_read(t, &t->pool[n], &pd);
+			bc__lin_place_abv(t, l, k, &pd);
 		}
 	}
 	return touch;

@@ -121,17 +121,55 @@ void bc__map_del(struct bc__idmap *m, uint32_t id)
 
 /* ---- pool --------------------------------------------------------------- */
 
+/* Room for `more` chunks of the xpar store (struct bc_tree): the same
+ * count as the pool's nodes, since any of them may be a primitive of two
+ * or more parameters. Room nobody writes costs address space only. */
+static int xpar_reserve(struct bc_tree *t, uint32_t more)
+{
+	uint32_t free_count = 0;
+	uint64_t need;
+	uint32_t cap;
+	float *grown;
+	for (uint32_t f = t->xpar_free; f != BC_NONE && free_count < more;) {
+		free_count++;
+		memcpy(&f, &t->xpar[(size_t)f * BC__XPAR_FLOATS], sizeof(f));
+	}
+	need = (uint64_t)t->nxpar + (more - free_count);
+	if (need <= t->xpar_cap) {
+		return 0;
+	}
+	if (need > 2u * (uint64_t)BC_TREE_MAX_NODES) {
+		return BC_ELIMIT;
+	}
+	cap = t->xpar_cap ? t->xpar_cap : 64;
+	while (cap < need) {
+		cap *= 2;
+	}
+	grown =
+	    bc_reallocarray(t->xpar, cap, BC__XPAR_FLOATS * sizeof(*t->xpar));
+	if (!grown) {
+		return BC_ENOMEM;
+	}
+	t->xpar = grown;
+	t->xpar_cap = cap;
+	return 0;
+}
+
 static int pool_reserve(struct bc_tree *t, uint32_t more)
 {
 	uint32_t free_count = 0;
 	uint64_t need;
 	uint32_t cap;
 	struct bc__node *grown;
+	int rc;
 	for (uint32_t f = t->free_head; f != BC_NONE && free_count < more;
 	     f = t->pool[f].next) {
 		free_count++;
 	}
 	need = (uint64_t)t->npool + (more - free_count);
+	if ((rc = xpar_reserve(t, more))) {
+		return rc;
+	}
 	if (need <= t->cap) {
 		return 0;
 	}
@@ -193,6 +231,7 @@ static uint32_t pool_take(struct bc_tree *t)
 	t->pool[n].next = BC_NONE;
 	t->pool[n].prev = BC_NONE;
 	t->pool[n].live = true;
+	t->pool[n].u.prim.xpar = BC_NONE; /* no chunk until prim_write */
 	if (t->lay) {
 		/* No splice to follow: its place is written before read. */
 		memset(&t->lay[n], 0, sizeof(t->lay[n]));
@@ -209,9 +248,69 @@ static void pool_release(struct bc_tree *t, uint32_t n)
 		/* Its children are gone, or going. */
 		kids_drop(t, n, false);
 	}
+	if (!t->pool[n].is_op && t->pool[n].u.prim.xpar != BC_NONE) {
+		uint32_t x = t->pool[n].u.prim.xpar;
+		memcpy(&t->xpar[(size_t)x * BC__XPAR_FLOATS], &t->xpar_free,
+		       sizeof(x));
+		t->xpar_free = x;
+		t->pool[n].u.prim.xpar = BC_NONE;
+	}
 	t->pool[n].live = false;
 	t->pool[n].next = t->free_head;
 	t->free_head = n;
+}
+
+/* Writes p into primitive node n: fresh, a node just taken (it takes a
+ * chunk of the xpar store if p's kind has two or more parameters, from
+ * room reserved with the node); otherwise a node of p's kind already,
+ * which keeps its chunk. */
+static void prim_write(struct bc_tree *t, struct bc__node *n,
+                       const struct bc_prim_data *p, bool fresh)
+{
+	struct bc__prim_room *r = &n->u.prim;
+	uint32_t np = bc_scene_prim_nfloats(p->kind);
+	if (fresh) {
+		r->xpar = BC_NONE;
+		if (np > 1) {
+			if (t->xpar_free != BC_NONE) {
+				r->xpar = t->xpar_free;
+				memcpy(
+				    &t->xpar_free,
+				    &t->xpar[(size_t)r->xpar * BC__XPAR_FLOATS],
+				    sizeof(t->xpar_free));
+			} else {
+				r->xpar = t->nxpar++;
+			}
+		}
+	}
+	n->pkind = (uint8_t)p->kind;
+	n->has_color = p->has_color;
+	r->p0 = p->params[0];
+	if (r->xpar != BC_NONE) {
+		memcpy(&t->xpar[(size_t)r->xpar * BC__XPAR_FLOATS],
+		       &p->params[1], BC__XPAR_FLOATS * sizeof(float));
+	}
+	memcpy(r->translate, p->translate, sizeof(r->translate));
+	memcpy(r->rotate, p->rotate, sizeof(r->rotate));
+	memcpy(r->color, p->color, sizeof(r->color));
+}
+
+void bc__prim_read(const struct bc_tree *t, const struct bc__node *n,
+                   struct bc_prim_data *out)
+{
+	const struct bc__prim_room *r = &n->u.prim;
+	memset(out, 0, sizeof(*out));
+	out->kind = (enum bc_prim)n->pkind;
+	out->has_color = n->has_color;
+	out->params[0] = r->p0;
+	if (r->xpar != BC_NONE) {
+		memcpy(&out->params[1],
+		       &t->xpar[(size_t)r->xpar * BC__XPAR_FLOATS],
+		       BC__XPAR_FLOATS * sizeof(float));
+	}
+	memcpy(out->translate, r->translate, sizeof(r->translate));
+	memcpy(out->rotate, r->rotate, sizeof(r->rotate));
+	memcpy(out->color, r->color, sizeof(r->color));
 }
 
 /* Returns an id not in use (ids wrap around past 2^32-1, skipping 0). */
@@ -225,15 +324,15 @@ static uint32_t fresh_id(struct bc_tree *t)
 
 /* Adds (sign 1) or takes away (-1) primitive p from the counts the scene
  * encoding follows (bc_tree_counts). */
-static void count_prim(struct bc_tree *t, const struct bc_prim_data *p,
+static void count_prim(struct bc_tree *t, enum bc_prim kind, bool has_color,
                        int sign)
 {
-	uint32_t floats = bc_scene_prim_nfloats(p->kind);
+	uint32_t floats = bc_scene_prim_nfloats(kind);
 	if (sign > 0) {
-		t->ncolored += p->has_color ? 1u : 0u;
+		t->ncolored += has_color ? 1u : 0u;
 		t->nfloats += floats;
 	} else {
-		t->ncolored -= p->has_color ? 1u : 0u;
+		t->ncolored -= has_color ? 1u : 0u;
 		t->nfloats -= floats;
 	}
 }
@@ -246,6 +345,7 @@ static void tree_clear(struct bc_tree *t)
 	bc_free(t->open);
 	bc_free(t->pool);
 	bc_free(t->lay);
+	bc_free(t->xpar);
 	bc_free(t->ids.keys);
 	bc_free(t->ids.vals);
 	for (uint32_t i = 0; i < t->nkids; i++) {
@@ -257,6 +357,7 @@ static void tree_clear(struct bc_tree *t)
 	memset(t, 0, sizeof(*t));
 	t->root = BC_NONE;
 	t->free_head = BC_NONE;
+	t->xpar_free = BC_NONE;
 	t->next_id = 1;
 	t->bare = bare;
 }
@@ -267,6 +368,7 @@ struct bc_tree *bc_tree_create(void)
 	if (t) {
 		t->root = BC_NONE;
 		t->free_head = BC_NONE;
+		t->xpar_free = BC_NONE;
 		t->next_id = 1;
 	}
 	return t;
@@ -692,7 +794,8 @@ static void free_subtree(struct bc_tree *t, uint32_t top)
 				    bc__node_unary(&t->pool[n]) ? 1u : 0u;
 			} else {
 				t->nprims--;
-				count_prim(t, &t->pool[n].u.prim, -1);
+				count_prim(t, (enum bc_prim)t->pool[n].pkind,
+				           t->pool[n].has_color, -1);
 			}
 			t->nnodes--;
 			pool_release(t, n);
@@ -1099,9 +1202,9 @@ int bc_tree_put_prim(struct bc_tree *t, uint32_t id,
 	    (rc = add_node(t, id, false, ei, &n))) {
 		return rc;
 	}
-	t->pool[n].u.prim = copy;
+	prim_write(t, &t->pool[n], &copy, true);
 	t->nprims++;
-	count_prim(t, &copy, 1);
+	count_prim(t, copy.kind, copy.has_color, 1);
 	return 0;
 }
 
@@ -1181,7 +1284,7 @@ bool bc_tree_get(const struct bc_tree *t, uint32_t id,
 	if (t->pool[n].is_op && op) {
 		*op = t->pool[n].u.op;
 	} else if (!t->pool[n].is_op && prim) {
-		*prim = t->pool[n].u.prim;
+		bc__prim_read(t, &t->pool[n], prim);
 	}
 	return true;
 }
@@ -1309,7 +1412,7 @@ int bc_tree_set_prim(struct bc_tree *t, uint32_t id,
 	if (n == BC_NONE) {
 		return bc_errinfo_set(ei, BC_ENONODE, "no node with id %u", id);
 	}
-	if (t->pool[n].is_op || t->pool[n].u.prim.kind != p->kind) {
+	if (t->pool[n].is_op || t->pool[n].pkind != (uint8_t)p->kind) {
 		return bc_errinfo_set(ei, BC_EINVAL,
 		                      "node %u is not a primitive of that "
 		                      "kind: replace it instead",
@@ -1318,9 +1421,9 @@ int bc_tree_set_prim(struct bc_tree *t, uint32_t id,
 	if ((rc = bc_prim_validate(&copy, ei))) {
 		return rc;
 	}
-	count_prim(t, &t->pool[n].u.prim, -1);
-	count_prim(t, &copy, 1);
-	t->pool[n].u.prim = copy;
+	count_prim(t, copy.kind, t->pool[n].has_color, -1);
+	count_prim(t, copy.kind, copy.has_color, 1);
+	prim_write(t, &t->pool[n], &copy, false);
 	if (!t->has_lin) {
 		t->dirty.edits++;
 		return 0;
@@ -1480,12 +1583,18 @@ static int check_ids(const struct bc_tree *t, const struct bc_tree *sub,
 }
 
 /* Copies one node of sub into t (room reserved, ids checked). */
-static uint32_t copy_node(struct bc_tree *t, const struct bc__node *sn,
-                          bool keep_ids)
+static uint32_t copy_node(struct bc_tree *t, const struct bc_tree *sub,
+                          const struct bc__node *sn, bool keep_ids)
 {
 	uint32_t m = pool_take(t);
 	t->pool[m].is_op = sn->is_op;
-	t->pool[m].u = sn->u; /* with a unary node's parameters */
+	if (sn->is_op) {
+		t->pool[m].u = sn->u; /* with a unary node's parameters */
+	} else {
+		struct bc_prim_data p;
+		bc__prim_read(sub, sn, &p);
+		prim_write(t, &t->pool[m], &p, true);
+	}
 	t->pool[m].auto_id = sn->auto_id;
 	t->pool[m].id = (sn->auto_id && !keep_ids) ? fresh_id(t) : sn->id;
 	bc__id_put(t, t->pool[m].id, m);
@@ -1495,7 +1604,7 @@ static uint32_t copy_node(struct bc_tree *t, const struct bc__node *sn,
 		t->nunary_nodes += bc__node_unary(sn) ? 1u : 0u;
 	} else {
 		t->nprims++;
-		count_prim(t, &sn->u.prim, 1);
+		count_prim(t, (enum bc_prim)sn->pkind, sn->has_color, 1);
 	}
 	return m;
 }
@@ -1505,12 +1614,13 @@ static uint32_t copy_node(struct bc_tree *t, const struct bc__node *sn,
 static uint32_t copy_in(struct bc_tree *t, const struct bc_tree *sub,
                         uint32_t top, bool keep_ids)
 {
-	uint32_t n = top, m = copy_node(t, &sub->pool[top], keep_ids);
+	uint32_t n = top, m = copy_node(t, sub, &sub->pool[top], keep_ids);
 	uint32_t root = m;
 	for (;;) {
 		if (sub->pool[n].is_op && sub->pool[n].first_child != BC_NONE) {
 			uint32_t c = sub->pool[n].first_child;
-			uint32_t cm = copy_node(t, &sub->pool[c], keep_ids);
+			uint32_t cm =
+			    copy_node(t, sub, &sub->pool[c], keep_ids);
 			link_child(t, m, BC_NONE, cm);
 			n = c;
 			m = cm;
@@ -1526,7 +1636,7 @@ static uint32_t copy_in(struct bc_tree *t, const struct bc_tree *sub,
 		n = sub->pool[n].next;
 		{
 			uint32_t pm = t->pool[m].parent;
-			m = copy_node(t, &sub->pool[n], keep_ids);
+			m = copy_node(t, sub, &sub->pool[n], keep_ids);
 			link_child(t, pm, BC_NONE, m);
 		}
 	}

@@ -7,27 +7,46 @@
 
 #include "blobcast/blobtree.h"
 
-/* One node of the editable n-ary model, in a pool addressed by index. */
+/* A primitive's data as a pool node keeps it: 48 bytes, where struct
+ * bc_prim_data takes 80 (eight parameters, of which a sphere uses one).
+ * The first parameter float is here; a kind of two or more (a box's
+ * three half extents, bc_scene_prim_nfloats) keeps the others in
+ * a chunk of the tree's xpar store (struct bc_tree), which it takes when
+ * the node is made and gives back when the node goes (a parameter edit
+ * keeps the kind, so it never takes one). Kind and colour flag are in
+ * the node's header. Read and written whole through bc__prim_read and
+ * prim_write (tree.c). */
+struct bc__prim_room {
+	float p0;
+	uint32_t xpar; /* chunk index; BC_NONE for a kind of one parameter */
+	float translate[3];
+	float rotate[4];
+	float color[3];
+};
+#define BC__XPAR_FLOATS (BC_PRIM_MAX_PARAMS - 1)
+
+/* One node of the editable n-ary model, in a pool addressed by index: 84
+ * bytes (a million-sphere model, bare, about 90 bytes a primitive). */
 struct bc__node {
 	uint32_t id;
 	uint32_t parent; /* pool index, BC_NONE for the root or detached */
 	uint32_t first_child, last_child, next, prev; /* pool indices */
 	uint32_t nchildren;
-	bool is_op;
-	bool live;
-	bool auto_id; /* id was assigned, not chosen by the scene */
+	uint32_t need; /* evaluation stack entries of its subtree */
+	bool is_op : 1;
+	bool live : 1;
+	bool auto_id : 1;   /* id was assigned, not chosen by the scene */
+	bool has_color : 1; /* a primitive's: its colour is its own */
 	/* Position index of a bare tree's wide operators (struct
 	 * bc__kids): BC__KIDS_OP on an operator that has one, BC__KIDS_AT
-	 * on a child that is one of its anchors. In the byte the three
-	 * flags above leave before the next word. */
+	 * on a child that is one of its anchors. */
 	uint8_t kids;
-	uint32_t need; /* evaluation stack entries of its subtree */
+	uint8_t pkind; /* a primitive's enum bc_prim */
 	/* A primitive's data, or an operator's; a unary node (u.op.kind
 	 * says it is one) keeps its parameters beside its op, in the room a
-	 * primitive's data takes (a node of every primitive paid for them
-	 * apart: 24 bytes a node, two trees of them in the daemon). */
+	 * primitive's data takes. */
 	union {
-		struct bc_prim_data prim;
+		struct bc__prim_room prim;
 		struct {
 			struct bc_op_data op;
 			float uparam[BC_UNARY_MAX_PARAMS];
@@ -35,6 +54,11 @@ struct bc__node {
 		};
 	} u;
 };
+_Static_assert(BC_PRIM_COUNT <= 256, "a primitive's kind is one byte");
+
+/* Pool node n's primitive data, whole (n must be a primitive). */
+void bc__prim_read(const struct bc_tree *t, const struct bc__node *n,
+                   struct bc_prim_data *out);
 
 /* Where a node of a laid-out tree is in its layout (struct bc_tree's lay,
  * beside the pool, index for index): set by linearization. A bare tree
@@ -126,6 +150,14 @@ struct bc_tree {
 	struct bc__lay *lay;
 	uint32_t npool, cap;
 	uint32_t free_head; /* chain of dead pool entries through .next */
+	/* Parameters past the first of primitives of two or more (struct
+	 * bc__prim_room): chunks of BC__XPAR_FLOATS floats, nxpar of them
+	 * in use or on the free chain (through a chunk's first word, from
+	 * xpar_free), room for xpar_cap. pool_reserve reserves a chunk for
+	 * every node it reserves; pages of that room nobody writes are not
+	 * resident, so a scene of spheres costs none. */
+	float *xpar;
+	uint32_t nxpar, xpar_cap, xpar_free;
 	struct bc__idmap ids;
 	uint32_t root; /* pool index, BC_NONE when empty */
 	uint32_t nnodes, nprims, nops;
