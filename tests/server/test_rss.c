@@ -227,7 +227,7 @@ static void a_replaced_big_scene_gives_its_memory_back(void)
 }
 
 /* A session restored at start-up keeps its tree alone until a member
- * wants a picture: the render copy (about 400 bytes a sphere) is made
+ * wants a picture: the render copy (about 365 bytes a sphere) is made
  * then (frames.c, bc__session_copy), not at the load. 200 000 spheres are
  * saved, the daemon restarted; a member joins and edits without a view
  * (RSS must stay within 20 MiB), then asks for a 64x48 view: the copy
