@@ -121,29 +121,41 @@ void bc__map_del(struct bc__idmap *m, uint32_t id)
 
 /* ---- pool --------------------------------------------------------------- */
 
-/* Room for `more` chunks of the xpar store (struct bc_tree): the same
- * count as the pool's nodes, since any of them may be a primitive of two
- * or more parameters. Room nobody writes costs address space only. */
-static int xpar_reserve(struct bc_tree *t, uint32_t more)
+/* The room an array of `have` entries grows to for `need` (doubling, from
+ * 64): *cap, 0 when it holds them already; BC_ELIMIT past what a tree
+ * can hold. */
+static int grown_cap(uint32_t have, uint64_t need, uint32_t *cap)
 {
-	uint32_t free_count = 0;
-	uint64_t need;
-	uint32_t cap;
-	float *grown;
-	for (uint32_t f = t->xpar_free; f != BC_NONE && free_count < more;) {
-		free_count++;
-		memcpy(&f, &t->xpar[(size_t)f * BC__XPAR_FLOATS], sizeof(f));
-	}
-	need = (uint64_t)t->nxpar + (more - free_count);
-	if (need <= t->xpar_cap) {
+	*cap = 0;
+	if (need <= have) {
 		return 0;
 	}
 	if (need > 2u * (uint64_t)BC_TREE_MAX_NODES) {
 		return BC_ELIMIT;
 	}
-	cap = t->xpar_cap ? t->xpar_cap : 64;
-	while (cap < need) {
-		cap *= 2;
+	*cap = have ? have : 64;
+	while (*cap < need) {
+		*cap *= 2;
+	}
+	return 0;
+}
+
+/* Room for `more` chunks of the xpar store (struct bc_tree): the same
+ * count as the pool's nodes, since any of them may be a primitive of two
+ * or more parameters. Room nobody writes costs address space only. */
+static int xpar_reserve(struct bc_tree *t, uint32_t more)
+{
+	uint32_t free_count = 0, cap;
+	float *grown;
+	int rc;
+	for (uint32_t f = t->xpar_free; f != BC_NONE && free_count < more;) {
+		free_count++;
+		memcpy(&f, &t->xpar[(size_t)f * BC__XPAR_FLOATS], sizeof(f));
+	}
+	if ((rc = grown_cap(t->xpar_cap,
+	                    (uint64_t)t->nxpar + (more - free_count), &cap)) ||
+	    cap == 0) {
+		return rc;
 	}
 	grown =
 	    bc_reallocarray(t->xpar, cap, BC__XPAR_FLOATS * sizeof(*t->xpar));
@@ -157,28 +169,18 @@ static int xpar_reserve(struct bc_tree *t, uint32_t more)
 
 static int pool_reserve(struct bc_tree *t, uint32_t more)
 {
-	uint32_t free_count = 0;
-	uint64_t need;
-	uint32_t cap;
+	uint32_t free_count = 0, cap;
 	struct bc__node *grown;
 	int rc;
 	for (uint32_t f = t->free_head; f != BC_NONE && free_count < more;
 	     f = t->pool[f].next) {
 		free_count++;
 	}
-	need = (uint64_t)t->npool + (more - free_count);
-	if ((rc = xpar_reserve(t, more))) {
+	if ((rc = xpar_reserve(t, more)) ||
+	    (rc = grown_cap(t->cap, (uint64_t)t->npool + (more - free_count),
+	                    &cap)) ||
+	    cap == 0) {
 		return rc;
-	}
-	if (need <= t->cap) {
-		return 0;
-	}
-	if (need > 2u * (uint64_t)BC_TREE_MAX_NODES) {
-		return BC_ELIMIT;
-	}
-	cap = t->cap ? t->cap : 64;
-	while (cap < need) {
-		cap *= 2;
 	}
 	if (!t->bare) {
 		struct bc__lay *lay =
