@@ -22,6 +22,7 @@
 #include "blobcast/log.h"
 #include "config.h"
 #include "srv_limits.h"
+#include "vstream.h"
 
 struct bc_dispatch;
 struct client;
@@ -193,6 +194,10 @@ static enum bc_dispatch_result hello(struct bc_dispatch *d, struct client *c,
 	c->peer.name[h->client_name.len] = '\0';
 	/* 0: the client wants no frames; its VIEWs are refused (EINVAL). */
 	c->peer.encodings = h->encodings;
+	if (h->encodings & (1u << (BC_PROTO_ENC_H264 - 1))) {
+		/* FFmpeg's libraries load while the client joins. */
+		bc_vstream_preload();
+	}
 	/* No frame is larger than the protocol's payload limit, whatever the
 	 * client accepts. */
 	c->peer.max_frame_bytes =

@@ -780,13 +780,55 @@ static bool video_view_ok(struct bc_member *m, const struct bc_msg *msg)
 	return true;
 }
 
+struct module_task {
+	struct bc_task t;
+	struct bc_errinfo ei;
+	int rc;
+};
+
+static void module_run(struct bc_task *t)
+{
+	struct module_task *mt = (struct module_task *)t;
+	mt->rc = bc_vstream_load(&mt->ei);
+}
+
+/* The log says once why encoding 4 is refused (a module found at the
+ * start that did not open). */
+static void module_done(struct bc_task *t)
+{
+	static bool told;
+	struct module_task *mt = (struct module_task *)t;
+	if (mt->rc && !told) {
+		told = true;
+		bc_log(BC_LOG_WARN, "%s; views of encoding 4 are refused",
+		       mt->ei.msg);
+	}
+	bc_free(mt);
+}
+
+/* The first VIEW of encoding 4 in the daemon's life: the H.264 module
+ * opens on a task (FFmpeg's libraries: tens of milliseconds, up to a
+ * second sanitized) while the VIEW waits parked behind it, and the rest of
+ * m's session with it; other sessions go on. Returns BC_PARK, or 0 when
+ * there was no memory for the task (the module is then opened here). */
+static int open_video_module(struct bc_member *m, uint32_t seq)
+{
+	struct module_task *mt = bc_calloc(1, sizeof(*mt));
+	if (!mt) {
+		(void)bc_vstream_load(NULL);
+		return 0;
+	}
+	mt->t.run = module_run;
+	mt->t.done = module_done;
+	mt->t.holds_order = true;
+	bc__task_start(m->session, &mt->t);
+	return bc__park(m->session, m, seq);
+}
+
 int bc_handle_view(struct bc_member *m, const struct bc_msg *msg)
 {
 	const struct bc_msg_view *v = &msg->view;
 	if (over_max_dim(m, msg->seq, "view", v->width, v->height)) {
-		return 0;
-	}
-	if (v->encoding == BC_PROTO_ENC_H264 && !video_view_ok(m, msg)) {
 		return 0;
 	}
 	if (!(m->peer->encodings & (1u << (v->encoding - 1))) ||
@@ -795,6 +837,13 @@ int bc_handle_view(struct bc_member *m, const struct bc_msg *msg)
 		bc__send_error(m, msg->seq, BC_EINVAL,
 		               "the view asks for an encoding the client's "
 		               "HELLO did not list");
+		return 0;
+	}
+	if (v->encoding == BC_PROTO_ENC_H264 && !bc_vstream_loaded() &&
+	    open_video_module(m, msg->seq) == BC_PARK) {
+		return BC_PARK;
+	}
+	if (v->encoding == BC_PROTO_ENC_H264 && !video_view_ok(m, msg)) {
 		return 0;
 	}
 	/* Every VIEW of encoding 4 starts a stream: its first frame is an

@@ -1047,12 +1047,12 @@ int main(int argc, char **argv)
 	dm.loop = uv_default_loop();
 	/* dispatch reports the loop's busy turns from its idle time. */
 	uv_loop_configure(dm.loop, UV_METRICS_IDLE_TIME);
-	/* The H.264 encoder's module, opened before anything listens: no
-	 * client waits for FFmpeg's libraries to load, and without the module
-	 * encoding 4 is refused. */
+	/* The H.264 encoder's module: looked for now, so that the log says
+	 * at once when encoding 4 will be refused; opened when a client
+	 * first asks for it (frames.c). */
 	{
 		struct bc_errinfo vei = {0};
-		if (bc_vstream_load(&vei)) {
+		if (bc_vstream_find(&vei)) {
 			bc_log(BC_LOG_WARN,
 			       "%s; views of encoding 4 are refused", vei.msg);
 		}

@@ -21,7 +21,43 @@
 
 static pthread_once_t load_once = PTHREAD_ONCE_INIT;
 static const struct bc_srv_h264_ops *ops;
+static atomic_bool load_done;
 static char load_why[640];
+
+/* Where the module may be, in the order they are tried: $BLOBCASTD_H264_
+ * MODULE, beside an installed blobcastd (BIN/../LIBDIR/blobcast/), where
+ * the build tree put it. Returns how many (0 for "none"); why says what
+ * a failure to find any should. */
+#define MODULE_PATHS 3
+static uint32_t module_paths(char paths[MODULE_PATHS][PATH_MAX + 128],
+                             char *why, size_t why_len)
+{
+	char exe[PATH_MAX];
+	const char *env = getenv(BC_SRV_H264_ENV);
+	uint32_t n = 0;
+	ssize_t len;
+	if (env && strcmp(env, "none") == 0) {
+		snprintf(why, why_len, "%s is none", BC_SRV_H264_ENV);
+		return 0;
+	}
+	snprintf(why, why_len, "no %s found (set %s to its path)",
+	         BC_SRV_H264_FILE, BC_SRV_H264_ENV);
+	if (env && *env) {
+		snprintf(paths[n++], sizeof(paths[0]), "%s", env);
+	}
+	len = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
+	if (len > 0) {
+		char *slash;
+		exe[len] = '\0';
+		if ((slash = strrchr(exe, '/'))) {
+			*slash = '\0';
+			snprintf(paths[n++], sizeof(paths[0]), "%s/%s", exe,
+			         BC_SRV_H264_INSTALLED);
+		}
+	}
+	snprintf(paths[n++], sizeof(paths[0]), "%s", BC_SRV_H264_BUILT);
+	return n;
+}
 
 /* Opens path and takes its table; true when it is this build's module. */
 static bool try_module(const char *path)
@@ -34,7 +70,7 @@ static bool try_module(const char *path)
 	}
 	if (!(handle = dlopen(path, RTLD_NOW | RTLD_LOCAL))) {
 		const char *e = dlerror();
-		snprintf(load_why, sizeof(load_why), "%s", e ? e : path);
+		snprintf(load_why, sizeof(load_why), "%.600s", e ? e : path);
 		return false;
 	}
 	if ((sym = dlsym(handle, BC_SRV_H264_ENTRY))) {
@@ -43,7 +79,7 @@ static bool try_module(const char *path)
 	o = entry ? entry() : NULL;
 	if (!o || o->abi != BC_SRV_H264_ABI) {
 		snprintf(load_why, sizeof(load_why),
-		         "%s is not this build's H.264 module", path);
+		         "%.560s is not this build's H.264 module", path);
 		dlclose(handle);
 		return false;
 	}
@@ -51,38 +87,27 @@ static bool try_module(const char *path)
 	return true;
 }
 
-/* $BLOBCASTD_H264_MODULE ("none": no module, no FFmpeg loaded); beside an
- * installed blobcastd (BIN/../LIBDIR/blobcast/); where the build tree put
- * it. */
+/* The first module of module_paths that is this build's ("none": no
+ * module, no FFmpeg loaded). */
 static void load(void)
 {
-	char exe[PATH_MAX], path[PATH_MAX + 128];
-	const char *env = getenv(BC_SRV_H264_ENV);
-	ssize_t n;
-	if (env && strcmp(env, "none") == 0) {
-		snprintf(load_why, sizeof(load_why), "%s is none",
-		         BC_SRV_H264_ENV);
-		return;
+	char paths[MODULE_PATHS][PATH_MAX + 128];
+	uint32_t n = module_paths(paths, load_why, sizeof(load_why));
+	for (uint32_t i = 0; i < n && !try_module(paths[i]); i++) {
 	}
-	n = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
-	snprintf(load_why, sizeof(load_why), "no %s found (set %s to its path)",
-	         BC_SRV_H264_FILE, BC_SRV_H264_ENV);
-	if (try_module(env)) {
-		return;
-	}
-	if (n > 0) {
-		char *slash;
-		exe[n] = '\0';
-		if ((slash = strrchr(exe, '/'))) {
-			*slash = '\0';
-			snprintf(path, sizeof(path), "%s/%s", exe,
-			         BC_SRV_H264_INSTALLED);
-			if (try_module(path)) {
-				return;
-			}
+	atomic_store_explicit(&load_done, true, memory_order_release);
+}
+
+int bc_vstream_find(struct bc_errinfo *ei)
+{
+	char paths[MODULE_PATHS][PATH_MAX + 128], why[640];
+	uint32_t n = module_paths(paths, why, sizeof(why));
+	for (uint32_t i = 0; i < n; i++) {
+		if (access(paths[i], R_OK) == 0) {
+			return 0;
 		}
 	}
-	try_module(BC_SRV_H264_BUILT);
+	return bc_errinfo_set(ei, BC_ENOTSUP, "H.264 encoder: %s", why);
 }
 
 int bc_vstream_load(struct bc_errinfo *ei)
@@ -91,6 +116,35 @@ int bc_vstream_load(struct bc_errinfo *ei)
 	return ops ? 0
 	           : bc_errinfo_set(ei, BC_ENOTSUP, "H.264 encoder: %s",
 	                            load_why);
+}
+
+bool bc_vstream_loaded(void)
+{
+	return atomic_load_explicit(&load_done, memory_order_acquire);
+}
+
+static void *preload_run(void *arg)
+{
+	(void)arg;
+	(void)bc_vstream_load(NULL);
+	return NULL;
+}
+
+void bc_vstream_preload(void)
+{
+	static atomic_flag started = ATOMIC_FLAG_INIT;
+	pthread_attr_t attr;
+	pthread_t th;
+	if (bc_vstream_loaded() || atomic_flag_test_and_set(&started) ||
+	    pthread_attr_init(&attr) != 0) {
+		return;
+	}
+	/* Not joined: a daemon that stops meanwhile does not wait for it.
+	 * Without the thread the first VIEW of encoding 4 loads it. */
+	if (pthread_attr_setdetachstate(&attr, PTHREAD_CREATE_DETACHED) == 0) {
+		(void)pthread_create(&th, &attr, preload_run, NULL);
+	}
+	pthread_attr_destroy(&attr);
 }
 
 bool bc_vstream_can_encode(enum bc_video_backend backend)

@@ -25,11 +25,26 @@
 
 struct bc_vstream;
 
-/* Opens the encoder module (h264_module.h) once per process; blobcastd
- * calls it at its start, so that no request pays for it. Returns 0, or
- * BC_ENOTSUP with where it looked and what to do in ei (NULL allowed):
- * encoding 4 is then refused. Thread-safe. */
+/* Looks for the encoder module (h264_module.h) without opening it:
+ * blobcastd calls it at its start, so that its log says before anyone
+ * asks when encoding 4 will be refused. Returns 0 when a module file is
+ * there (opening it may still fail: bc_vstream_load says why), or
+ * BC_ENOTSUP with where it looked and what to do in ei (NULL allowed). */
+int bc_vstream_find(struct bc_errinfo *ei);
+/* Opens the encoder module once per process: FFmpeg's libraries, tens of
+ * milliseconds, and some 15 MB resident that a daemon nobody asks for
+ * video from never pays. The first VIEW of encoding 4 has it opened on a
+ * task (frames.c) and waits parked, so that the loop never waits for it.
+ * Returns 0, or BC_ENOTSUP with where it looked and what to do in ei
+ * (NULL allowed): encoding 4 is then refused. Thread-safe. */
 int bc_vstream_load(struct bc_errinfo *ei);
+/* Whether bc_vstream_load has been done, whatever it found: then it and
+ * bc_vstream_can_encode answer at once. */
+bool bc_vstream_loaded(void);
+/* Starts bc_vstream_load on a thread of its own, once (a HELLO that lists
+ * H.264: the load goes on while the client joins, and its VIEW seldom
+ * waits). Returns at once. */
+void bc_vstream_preload(void);
 /* Whether an H.264 view can be served: the module is there and has an
  * encoder that backend tries. */
 bool bc_vstream_can_encode(enum bc_video_backend backend);

@@ -359,19 +359,58 @@ static bool maps_hold(pid_t pid, const char *name)
 	return found;
 }
 
+/* Whether pid maps name within ms (polled). */
+static bool maps_hold_within(pid_t pid, const char *name, int ms)
+{
+	int64_t end = t_now_ms() + ms;
+	while (!maps_hold(pid, name)) {
+		if (t_now_ms() > end) {
+			return false;
+		}
+		t_sleep_ms(20);
+	}
+	return true;
+}
+
 /* BLOBCASTD_H264_MODULE=none: the daemon loads no FFmpeg library, refuses
- * a view of encoding 4 with ENOTSUP (not fatal) and serves JPEG; a daemon
- * started as the other tests' has libavcodec loaded before any view. */
+ * a view of encoding 4 with ENOTSUP (not fatal) and serves JPEG. A daemon
+ * started as the other tests' opens the module when a client's HELLO
+ * lists H.264 (the first view of encoding 4 waits for it): not at its
+ * start, not for a JPEG client, nor for its view of encoding 4 (EINVAL:
+ * its HELLO did not list it). */
 static void test_module_none_loads_no_ffmpeg(void)
 {
 	char dir[96];
 	const char *was = getenv("BLOBCASTD_H264_MODULE");
 	char *saved = was ? strdup(was) : NULL;
 	struct daemon d;
-	struct conn c;
+	struct conn c, jpeg;
 	snprintf(dir, sizeof(dir), "%s/with", base_dir);
 	REQUIRE(daemon_start(&d, dir) == 0);
+	CHECK(!maps_hold(d.pid, "libavcodec"));
+	enter(&jpeg, &d, 0x01, BC_PROTO_FEATURES_READ);
+	REQUIRE(view(&jpeg, 64, 64, BC_PROTO_ENC_JPEG, 0, 1));
+	REQUIRE(next_frame(&jpeg, 20000));
+	expect_error(&jpeg, view(&jpeg, 64, 64, BC_PROTO_ENC_H264, 0, 1),
+	             BC_EINVAL);
+	CHECK(!maps_hold(d.pid, "libavcodec"));
+	enter(&c, &d, 0x0f, BC_PROTO_FEATURES_READ);
+	REQUIRE(view(&c, 64, 64, BC_PROTO_ENC_H264, 0, 1));
+	REQUIRE(next_frame(&c, 20000));
+	CHECK(c.m.frame.encoding == BC_PROTO_ENC_H264);
 	CHECK(maps_hold(d.pid, "libavcodec"));
+	conn_close(&c);
+	conn_close(&jpeg);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+
+	/* A HELLO that lists H.264 is enough, no view needed. */
+	snprintf(dir, sizeof(dir), "%s/hello", base_dir);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	REQUIRE(conn_open(&c, &d) == 0);
+	REQUIRE(conn_hello_as(&c, "v", 0x0f, true, BC_PROTO_FEATURES_READ) ==
+	        0);
+	CHECK(maps_hold_within(d.pid, "libavcodec", 30000));
+	conn_close(&c);
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 
 	snprintf(dir, sizeof(dir), "%s/none", base_dir);
