@@ -1077,5 +1077,6 @@ out:
 	bc_net_free(dm.net);
 	bc_store_close(dm.store);
 	config_free(&dm.cfg);
+	bc_vstream_settle();
 	return rc;
 }

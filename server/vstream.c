@@ -130,21 +130,27 @@ static void *preload_run(void *arg)
 	return NULL;
 }
 
+/* The preload thread (loop thread only: bc_vstream_preload and
+ * bc_vstream_settle). */
+static bool preload_started;
+static pthread_t preload_thread;
+
 void bc_vstream_preload(void)
 {
-	static atomic_flag started = ATOMIC_FLAG_INIT;
-	pthread_attr_t attr;
-	pthread_t th;
-	if (bc_vstream_loaded() || atomic_flag_test_and_set(&started) ||
-	    pthread_attr_init(&attr) != 0) {
+	if (bc_vstream_loaded() || preload_started) {
 		return;
 	}
-	/* Not joined: a daemon that stops meanwhile does not wait for it.
-	 * Without the thread the first VIEW of encoding 4 loads it. */
-	if (pthread_attr_setdetachstate(&attr, PTHREAD_CREATE_DETACHED) == 0) {
-		(void)pthread_create(&th, &attr, preload_run, NULL);
+	/* Without the thread the first VIEW of encoding 4 loads it. */
+	preload_started =
+	    pthread_create(&preload_thread, NULL, preload_run, NULL) == 0;
+}
+
+void bc_vstream_settle(void)
+{
+	if (preload_started) {
+		pthread_join(preload_thread, NULL);
+		preload_started = false;
 	}
-	pthread_attr_destroy(&attr);
 }
 
 bool bc_vstream_can_encode(enum bc_video_backend backend)

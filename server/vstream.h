@@ -45,6 +45,9 @@ bool bc_vstream_loaded(void);
  * H.264: the load goes on while the client joins, and its VIEW seldom
  * waits). Returns at once. */
 void bc_vstream_preload(void);
+/* Waits for the preload thread, if one was started (the daemon's end: no
+ * thread left inside dlopen while the process exits). */
+void bc_vstream_settle(void);
 /* Whether an H.264 view can be served: the module is there and has an
  * encoder that backend tries. */
 bool bc_vstream_can_encode(enum bc_video_backend backend);
