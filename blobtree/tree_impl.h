@@ -55,6 +55,9 @@ struct bc__node {
 	} u;
 };
 _Static_assert(BC_PRIM_COUNT <= 256, "a primitive's kind is one byte");
+/* Two of these a primitive in the daemon (the session's tree and the
+ * render copy): docs/benchmarks.md, "A pool node in 84 bytes". */
+_Static_assert(sizeof(struct bc__node) <= 84, "a pool node grew");
 
 /* Pool node n's primitive data, whole (n must be a primitive). */
 void bc__prim_read(const struct bc_tree *t, const struct bc__node *n,

@@ -277,8 +277,8 @@ static void a_restored_session_holds_no_copy_until_viewed(void)
  * time. 200 000 spheres loaded; three times a viewer joins, draws them at
  * 1024x768 and leaves, while an editor stays without a view. After each
  * leave RSS must fall to within a third of the first view's rise above
- * the fresh daemon's (the session's own tree stays: about 150 bytes a
- * sphere, a fifth of the rise). Each copy is made by bc_tree_copy on a
+ * the fresh daemon's (the session's own tree stays: about 90 bytes a
+ * sphere, a small part of the rise). Each copy is made by bc_tree_copy on a
  * task (the load, with nobody viewing, made none): before the daemon kept
  * one malloc arena (link.c, bc_heap_policy) the second and third drops
  * left 103 and 149 MiB. */
