@@ -810,10 +810,12 @@ static void module_done(struct bc_task *t)
  * opens on a task (FFmpeg's libraries: tens of milliseconds, up to a
  * second sanitized) while the VIEW waits parked behind it, and the rest of
  * m's session with it; other sessions go on. Returns BC_PARK, or 0 when
- * there was no memory for the task (the module is then opened here). */
+ * the module was opened here: a VIEW before the client joined (no session
+ * to park behind; the load its HELLO began is waited for), or no memory
+ * for the task. */
 static int open_video_module(struct bc_member *m, uint32_t seq)
 {
-	struct module_task *mt = bc_calloc(1, sizeof(*mt));
+	struct module_task *mt = m->session ? bc_calloc(1, sizeof(*mt)) : NULL;
 	if (!mt) {
 		(void)bc_vstream_load(NULL);
 		return 0;

@@ -413,6 +413,20 @@ static void test_module_none_loads_no_ffmpeg(void)
 	conn_close(&c);
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 
+	/* A first VIEW of encoding 4 before the client joins a session (no
+	 * session to wait in), then the join: H.264 frames. */
+	snprintf(dir, sizeof(dir), "%s/early", base_dir);
+	REQUIRE(daemon_start(&d, dir) == 0);
+	REQUIRE(conn_open(&c, &d) == 0);
+	REQUIRE(conn_hello_as(&c, "v", 0x0f, true, BC_PROTO_FEATURES_READ) ==
+	        0);
+	REQUIRE(view(&c, 64, 64, BC_PROTO_ENC_H264, 0, 1));
+	REQUIRE(conn_join(&c, "default", BC_PROTO_ROLE_EDITOR, false) == 0);
+	REQUIRE(next_frame(&c, 20000));
+	CHECK(c.m.frame.encoding == BC_PROTO_ENC_H264);
+	conn_close(&c);
+	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+
 	snprintf(dir, sizeof(dir), "%s/none", base_dir);
 	setenv("BLOBCASTD_H264_MODULE", "none", 1);
 	REQUIRE(daemon_start(&d, dir) == 0);
