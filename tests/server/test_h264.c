@@ -372,6 +372,18 @@ static bool maps_hold_within(pid_t pid, const char *name, int ms)
 	return true;
 }
 
+/* A daemon started in base_dir/name, and c's HELLO to it listing every
+ * encoding (H.264 among them). */
+static void h264_hello_to_a_new_daemon(struct daemon *d, struct conn *c,
+                                       const char *name)
+{
+	char dir[96];
+	snprintf(dir, sizeof(dir), "%s/%s", base_dir, name);
+	REQUIRE(daemon_start(d, dir) == 0);
+	REQUIRE(conn_open(c, d) == 0);
+	REQUIRE(conn_hello_as(c, "v", 0x0f, true, BC_PROTO_FEATURES_READ) == 0);
+}
+
 /* BLOBCASTD_H264_MODULE=none: the daemon loads no FFmpeg library, refuses
  * a view of encoding 4 with ENOTSUP (not fatal) and serves JPEG. A daemon
  * started as the other tests' opens the module when a client's HELLO
@@ -404,22 +416,14 @@ static void test_module_none_loads_no_ffmpeg(void)
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 
 	/* A HELLO that lists H.264 is enough, no view needed. */
-	snprintf(dir, sizeof(dir), "%s/hello", base_dir);
-	REQUIRE(daemon_start(&d, dir) == 0);
-	REQUIRE(conn_open(&c, &d) == 0);
-	REQUIRE(conn_hello_as(&c, "v", 0x0f, true, BC_PROTO_FEATURES_READ) ==
-	        0);
+	h264_hello_to_a_new_daemon(&d, &c, "hello");
 	CHECK(maps_hold_within(d.pid, "libavcodec", 30000));
 	conn_close(&c);
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
 
 	/* A first VIEW of encoding 4 before the client joins a session (no
 	 * session to wait in), then the join: H.264 frames. */
-	snprintf(dir, sizeof(dir), "%s/early", base_dir);
-	REQUIRE(daemon_start(&d, dir) == 0);
-	REQUIRE(conn_open(&c, &d) == 0);
-	REQUIRE(conn_hello_as(&c, "v", 0x0f, true, BC_PROTO_FEATURES_READ) ==
-	        0);
+	h264_hello_to_a_new_daemon(&d, &c, "early");
 	REQUIRE(view(&c, 64, 64, BC_PROTO_ENC_H264, 0, 1));
 	REQUIRE(conn_join(&c, "default", BC_PROTO_ROLE_EDITOR, false) == 0);
 	REQUIRE(next_frame(&c, 20000));
