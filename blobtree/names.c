@@ -103,7 +103,7 @@ void bc__names_drop_subtree(struct bc_tree *t, uint32_t top)
 
 void bc__names_graft(struct bc_tree *t, const struct bc_tree *sub)
 {
-	for (uint32_t i = 0; i < sub->names.n; i++) {
+	for (uint32_t i = 0; i < sub->names.n && !t->nameless; i++) {
 		const struct bc__name *e = &sub->names.v[i];
 		uint32_t n = bc__id_find(sub, e->id);
 		/* A node whose id sub chose itself gets a fresh one in t. */
@@ -160,6 +160,9 @@ int bc_tree_set_name(struct bc_tree *t, uint32_t id, const char *name,
 	}
 	if ((rc = bc__name_check(name, len, ei))) {
 		return rc;
+	}
+	if (t->nameless) {
+		return 0;
 	}
 	if (len == 0) {
 		bc__names_del(&t->names, id);

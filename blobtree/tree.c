@@ -343,7 +343,7 @@ static void count_prim(struct bc_tree *t, enum bc_prim kind, bool has_color,
 
 static void tree_clear(struct bc_tree *t)
 {
-	bool bare = t->bare;
+	bool bare = t->bare, nameless = t->nameless;
 	bc_free(t->open);
 	bc_free(t->pool);
 	bc_free(t->lay);
@@ -362,6 +362,7 @@ static void tree_clear(struct bc_tree *t)
 	t->xpar_free = BC_NONE;
 	t->next_id = 1;
 	t->bare = bare;
+	t->nameless = nameless;
 }
 
 struct bc_tree *bc_tree_create(void)
@@ -388,6 +389,15 @@ int bc_tree_set_layout(struct bc_tree *t, bool on)
 bool bc_tree_lays_out(const struct bc_tree *t)
 {
 	return !t->bare;
+}
+
+int bc_tree_set_names(struct bc_tree *t, bool keep)
+{
+	if (t->root != BC_NONE || t->building) {
+		return BC_ESTATE;
+	}
+	t->nameless = !keep;
+	return 0;
 }
 
 void bc_tree_destroy(struct bc_tree *t)
@@ -1735,7 +1745,7 @@ int bc_tree_insert(struct bc_tree *t, uint32_t parent_id, uint32_t pos,
 	if ((rc = check_ids(t, sub, sub->root, BC_NONE, ei))) {
 		return rc;
 	}
-	if ((rc = bc__names_reserve(&t->names, sub->names.n))) {
+	if (!t->nameless && (rc = bc__names_reserve(&t->names, sub->names.n))) {
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
 	}
 	if ((rc = prepare_graft(t, sub, depth_of(t, p), &none,
@@ -1927,7 +1937,7 @@ int bc_tree_replace(struct bc_tree *t, uint32_t id, const struct bc_tree *sub,
 	if ((rc = check_ids(t, sub, sub->root, n, ei))) {
 		return rc;
 	}
-	if ((rc = bc__names_reserve(&t->names, sub->names.n))) {
+	if (!t->nameless && (rc = bc__names_reserve(&t->names, sub->names.n))) {
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
 	}
 	subtree_stats(t, n, &gone);
@@ -2016,7 +2026,7 @@ int bc_tree_copy(struct bc_tree *dst, const struct bc_tree *src,
 	if ((rc = prepare_graft(dst, src, 0, &none, &fresh, ei))) {
 		return rc;
 	}
-	if ((rc = bc__names_copy(&dst->names, &src->names))) {
+	if (!dst->nameless && (rc = bc__names_copy(&dst->names, &src->names))) {
 		bc__lin_free(&fresh);
 		tree_clear(dst);
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));

@@ -186,6 +186,8 @@ struct bc_tree {
 	 * stays false, and structural edits measure the model (need,
 	 * nesting) without splicing or rebuilding any layout. */
 	bool bare;
+	/* bc_tree_set_names(t, false): names are checked, not kept. */
+	bool nameless;
 	/* The position indices of a bare tree's wide operators. */
 	struct bc__kids *kids;
 	uint32_t nkids, kids_cap;

@@ -623,7 +623,7 @@ static void prepare(struct bc_task *t)
 		return;
 	}
 	if (!(l->tree = bc__session_tree()) ||
-	    (l->copy_wanted && !(l->copy = bc_tree_create()))) {
+	    (l->copy_wanted && !(l->copy = bc__copy_tree()))) {
 		l->rc = bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
 		return;
 	}

@@ -255,7 +255,7 @@ int bc__session_copy(struct bc_session *s)
 		return BC_ESTATE;
 	}
 	if (bc_tree_node_count(s->tree) < BC_SRV_HEAVY_NODES) {
-		if (!(t = bc_tree_create()) || bc_tree_copy(t, s->tree, NULL)) {
+		if (!(t = bc__copy_tree()) || bc_tree_copy(t, s->tree, NULL)) {
 			bc_tree_destroy(t);
 			bc_log(BC_LOG_ERROR,
 			       "session %s: no memory for its render copy",
@@ -266,7 +266,7 @@ int bc__session_copy(struct bc_session *s)
 		s->copied = true;
 		return 0;
 	}
-	if (!(c = bc_calloc(1, sizeof(*c))) || !(c->copy = bc_tree_create())) {
+	if (!(c = bc_calloc(1, sizeof(*c))) || !(c->copy = bc__copy_tree())) {
 		bc_free(c);
 		return BC_ENOMEM;
 	}

@@ -280,6 +280,15 @@ struct bc_tree *bc__session_tree(void)
 	return t;
 }
 
+struct bc_tree *bc__copy_tree(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	if (t) {
+		bc_tree_set_names(t, false);
+	}
+	return t;
+}
+
 /* The second decode of a large load, on a thread of its own. */
 struct twin {
 	const uint8_t *scene;

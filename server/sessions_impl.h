@@ -436,6 +436,9 @@ int bc__journal_load(struct bc_store_session *st, uint64_t order,
  * renders from it: the work layer's copy is laid out. The session keeps
  * the model only, and its structural edits splice no layout. */
 struct bc_tree *bc__session_tree(void);
+/* A new, empty tree for the work layer's render copy: laid out, and
+ * without names (bc_tree_set_names), which no renderer reads. */
+struct bc_tree *bc__copy_tree(void);
 /* Decodes a SCENE_LOAD's scene into tree (camera and has_cam as
  * bc_scene_decode) and into copy, the work layer's, on two threads when it
  * is large; copy may be NULL (no render copy wanted yet). */

@@ -6,7 +6,8 @@
  * subtree's, a copy keeps them; the binary and JSON encodings carry them
  * bit for bit (quotes, backslashes, control characters, non-ASCII); bad
  * names are refused with their codes; and the operations that undo a
- * batch give every name back, through a mirror replaying them.
+ * batch give every name back, through a mirror replaying them. A tree
+ * told to keep none (a server's render copy) keeps none.
  */
 #include <string.h>
 
@@ -261,11 +262,66 @@ static void allocation_failures_keep_the_tree(void)
 	bc_tree_destroy(t);
 }
 
+/* A tree told to keep no names (a server's render copy): a copy, a parse,
+ * INSERT, REPLACE and NAME bring none, while every edit applies as in a
+ * tree with names, refusals included, and the layout is the same; the
+ * choice survives being emptied, and only an empty tree changes it. */
+static void a_nameless_tree_keeps_none(void)
+{
+	struct bc_tree *t = load(), *c = bc_tree_create(), *named_copy;
+	struct bc_errinfo ei = {0};
+	struct bc_proto_buf b;
+	struct bc_proto_edit_op op = {0};
+	REQUIRE(c && (named_copy = bc_tree_create()));
+	CHECK_EQ_INT(bc_tree_set_names(t, false), BC_ESTATE);
+	REQUIRE(bc_tree_set_names(c, false) == 0);
+	REQUIRE(bc_tree_copy(c, t, NULL) == 0);
+	CHECK_EQ_INT(bc_tree_name_count(c), 0);
+	CHECK(named(c, 1, NULL) && named(c, 2, NULL));
+	CHECK_EQ_INT(bc_tree_node_count(c), bc_tree_node_count(t));
+	REQUIRE(bc_tree_copy(named_copy, t, NULL) == 0);
+	/* Edits apply alike; names are checked, not kept. */
+	op = (struct bc_proto_edit_op){
+	    .kind = BC_PROTO_EDIT_INSERT, .node = 1, .position = 0};
+	op.subtree = sphere_scene(40, "forty", &b);
+	CHECK_EQ_INT(bc_edit_apply_op(c, &op, &ei), 0);
+	CHECK_EQ_INT(bc_edit_apply_op(named_copy, &op, &ei), 0);
+	bc_proto_buf_finish(&b);
+	CHECK(named(c, 40, NULL) && named(named_copy, 40, "forty"));
+	op = (struct bc_proto_edit_op){.kind = BC_PROTO_EDIT_NAME, .node = 5};
+	op.name.ptr = "five";
+	op.name.len = 4;
+	CHECK_EQ_INT(bc_edit_apply_op(c, &op, &ei), 0);
+	CHECK(named(c, 5, NULL));
+	op.node = 99;
+	CHECK_EQ_INT(bc_edit_apply_op(c, &op, &ei), BC_ENONODE);
+	CHECK_EQ_INT(bc_tree_set_name(c, 5, "a\0b", 3, &ei), BC_ESTRING);
+	CHECK_EQ_INT(bc_tree_name_count(c), 0);
+	{
+		const struct bc_lin *x = bc_tree_lin(c),
+		                    *y = bc_tree_lin(named_copy);
+		REQUIRE(x && y);
+		CHECK(x->count == y->count && x->nparam == y->nparam &&
+		      memcmp(x->node, y->node,
+		             2u * x->count * sizeof(uint32_t)) == 0 &&
+		      memcmp(x->param, y->param,
+		             4u * x->nparam * sizeof(float)) == 0);
+	}
+	/* Emptied and filled again by a parse: still none. */
+	REQUIRE(bc_scene_parse_json(json, strlen(json), c, NULL, &ei) == 0);
+	CHECK_EQ_INT(bc_tree_name_count(c), 0);
+	CHECK_EQ_INT(bc_tree_node_count(c), bc_tree_node_count(t));
+	bc_tree_destroy(named_copy);
+	bc_tree_destroy(c);
+	bc_tree_destroy(t);
+}
+
 static const struct bc_test tests[] = {
     {"names_are_set_read_and_taken_away", names_are_set_read_and_taken_away},
     {"encodings_carry_names_bit_for_bit", encodings_carry_names_bit_for_bit},
     {"edits_move_names_with_their_nodes", edits_move_names_with_their_nodes},
     {"allocation_failures_keep_the_tree", allocation_failures_keep_the_tree},
+    {"a_nameless_tree_keeps_none", a_nameless_tree_keeps_none},
 };
 
 BC_TEST_MAIN(tests)

@@ -471,6 +471,13 @@ BC_API uint32_t bc_tree_name_count(const struct bc_tree *t);
  * caller bc_free's (*n set; NULL with *n 0 when none, or out of memory:
  * then *n is the count). */
 BC_API uint32_t *bc_tree_name_ids(const struct bc_tree *t, uint32_t *n);
+/* A tree keeps its nodes' names unless told not to (keep = false): then
+ * bc_tree_set_name checks its arguments as before and keeps nothing,
+ * grafts and copies bring none, and bc_tree_name answers NULL. A server's
+ * render copy, which nothing asks for names, keeps none (a name costs
+ * some 90 bytes with its map entry). Only an empty tree changes
+ * (BC_ESTATE otherwise); it keeps the choice as bc_tree_set_layout's. */
+BC_API int bc_tree_set_names(struct bc_tree *t, bool keep);
 
 /* ---- Edits -------------------------------------------------------------- */
 
