@@ -25,7 +25,11 @@
  * for the same view: its first frame and its still, the copy made again
  * (back_frame_ms, back_still_ms), and VmRSS after (back_rss_mib).
  *
- * Usage: bench_load [--idle S] PATH/TO/blobcastd [runs] [spheres ...]
+ * With --named every node has a name ("node 123456", as an imported model's
+ * parts may): the session keeps them, its render copy does not.
+ *
+ * Usage: bench_load [--idle S] [--named] PATH/TO/blobcastd [runs]
+ *                   [spheres ...]
  * (default: 3 runs of 100000, 700000 and 1000000 spheres)
  */
 #include <stdint.h>
@@ -53,6 +57,21 @@ struct one {
 };
 
 static int idle_s; /* --idle S; 0: no idle phase */
+static bool named; /* --named */
+
+/* Names every node of t "node ID"; false when one could not be. */
+static bool name_all(struct bc_tree *t)
+{
+	uint32_t n = bc_tree_node_count(t);
+	for (uint32_t id = 1; id <= n; id++) {
+		char name[24];
+		int len = snprintf(name, sizeof(name), "node %u", id);
+		if (bc_tree_set_name(t, id, name, (size_t)len, NULL)) {
+			return false;
+		}
+	}
+	return true;
+}
 
 /* CPU time (user + system) pid has used, in ms; 0 when unreadable. */
 static int64_t cpu_of(pid_t pid)
@@ -293,7 +312,7 @@ static int bench(uint32_t spheres, int runs)
 	    hwm[MAX_RUNS], cpu[MAX_RUNS], idle[MAX_RUNS], bf[MAX_RUNS],
 	    bs[MAX_RUNS], brss[MAX_RUNS];
 	if (!t || bc_gen("fig18", &go, t, &cam, NULL) ||
-	    bc_scene_encode(t, &cam, &bytes, &len)) {
+	    (named && !name_all(t)) || bc_scene_encode(t, &cam, &bytes, &len)) {
 		fprintf(stderr, "cannot make fig18 with %u spheres\n", spheres);
 		bc_tree_destroy(t);
 		return -1;
@@ -344,12 +363,13 @@ static int bench(uint32_t spheres, int runs)
 	}
 	{
 		int64_t r = median(rss, runs), h = median(hwm, runs);
-		printf("load spheres=%u prims=%u bytes=%zu runs=%d "
+		printf("load spheres=%u named=%d prims=%u bytes=%zu runs=%d "
 		       "state_ms=%lld daemon_cpu_ms=%lld first_frame_ms=%lld "
 		       "still_ms=%lld "
 		       "rss_mib=%.0f hwm_mib=%.0f rss_bytes_per_prim=%.0f "
 		       "hwm_bytes_per_prim=%.0f\n",
-		       spheres, prims, len, runs, (long long)median(st, runs),
+		       spheres, named ? 1 : 0, prims, len, runs,
+		       (long long)median(st, runs),
 		       (long long)median(cpu, runs),
 		       (long long)median(fr, runs), (long long)median(sl, runs),
 		       (double)r / 1024.0, (double)h / 1024.0,
@@ -362,16 +382,24 @@ int main(int argc, char **argv)
 {
 	static const uint32_t def[] = {100000, 700000, 1000000};
 	int runs;
-	if (argc > 2 && strcmp(argv[1], "--idle") == 0) {
-		idle_s = atoi(argv[2]);
-		argc -= 2;
-		argv += 2;
+	for (;;) {
+		if (argc > 2 && strcmp(argv[1], "--idle") == 0) {
+			idle_s = atoi(argv[2]);
+			argc -= 2;
+			argv += 2;
+		} else if (argc > 1 && strcmp(argv[1], "--named") == 0) {
+			named = true;
+			argc--;
+			argv++;
+		} else {
+			break;
+		}
 	}
 	runs = argc > 2 ? atoi(argv[2]) : 3;
 	if (argc < 2 || runs < 1 || runs > MAX_RUNS || idle_s < 0 ||
 	    idle_s > 600) {
 		fprintf(stderr,
-		        "usage: bench_load [--idle S (1-600)] "
+		        "usage: bench_load [--idle S (1-600)] [--named] "
 		        "PATH/TO/blobcastd [runs 1-%d] [spheres ...]\n",
 		        MAX_RUNS);
 		return 2;
