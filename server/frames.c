@@ -841,12 +841,14 @@ int bc_handle_view(struct bc_member *m, const struct bc_msg *msg)
 		               "HELLO did not list");
 		return 0;
 	}
-	if (v->encoding == BC_PROTO_ENC_H264 && !bc_vstream_loaded() &&
-	    open_video_module(m, msg->seq) == BC_PARK) {
-		return BC_PARK;
-	}
-	if (v->encoding == BC_PROTO_ENC_H264 && !video_view_ok(m, msg)) {
-		return 0;
+	if (v->encoding == BC_PROTO_ENC_H264) {
+		if (!bc_vstream_loaded() &&
+		    open_video_module(m, msg->seq) == BC_PARK) {
+			return BC_PARK;
+		}
+		if (!video_view_ok(m, msg)) {
+			return 0;
+		}
 	}
 	/* Every VIEW of encoding 4 starts a stream: its first frame is an
 	 * IDR (PROTOCOL.md 7.15). */
