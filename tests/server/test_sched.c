@@ -378,8 +378,12 @@ static void answers_keep_the_order_of_requests(void)
  * answered after a share of a loop turn, not after the burst: its round
  * trip stays under a sixth of the burst's time (a ratio, so load on the
  * machine moves both; measured 1/20 with the share, and 2/3 when the
- * daemon handled all it read of the burst at once). */
-static void a_burst_of_requests_leaves_others_their_turn(void)
+ * daemon handled all it read of the burst at once). One round trip is one
+ * sample, which a stall of this process on a loaded machine can stretch
+ * (40 ms against a 182 ms burst, seen once): up to three fresh daemons
+ * try, and one must show it; a daemon without the share fails all three.
+ * *fair: whether this try showed it. */
+static void burst_once(int attempt, bool *fair)
 {
 	enum { BURST = 100000 };
 	struct daemon d;
@@ -391,7 +395,7 @@ static void a_burst_of_requests_leaves_others_their_turn(void)
 	uint32_t last = 0, b_seq = 0, answers = 0;
 	int64_t t0, b_sent = 0, b_rtt = -1, burst_ms = -1;
 	char dir[96];
-	snprintf(dir, sizeof(dir), "%s/burst", base_dir);
+	snprintf(dir, sizeof(dir), "%s/burst%d", base_dir, attempt);
 	REQUIRE(daemon_start(&d, dir) == 0);
 	REQUIRE(conn_open(&a, &d) == 0 && conn_hello(&a, "burst") == 0);
 	REQUIRE(conn_open(&b, &d) == 0 && conn_hello(&b, "calm") == 0);
@@ -441,11 +445,20 @@ static void a_burst_of_requests_leaves_others_their_turn(void)
 	CHECK(burst_ms > 0);
 	CHECK_EQ_INT(answers, BURST); /* every one, before the PONG */
 	CHECK(b_rtt >= 0);
-	CHECK(b_rtt * 6 < burst_ms);
+	*fair = b_rtt >= 0 && b_rtt * 6 < burst_ms;
 	bc_proto_buf_finish(&buf);
 	conn_close(&a);
 	conn_close(&b);
 	CHECK(WIFEXITED(daemon_stop(&d, SIGTERM)));
+}
+
+static void a_burst_of_requests_leaves_others_their_turn(void)
+{
+	bool fair = false;
+	for (int i = 0; i < 3 && !fair; i++) {
+		burst_once(i, &fair);
+	}
+	CHECK(fair);
 }
 
 /* The tree of the SCENE_STATE in c->m, or NULL. */
