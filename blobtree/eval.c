@@ -26,9 +26,28 @@
 
 #include "blobcast/alloc.h"
 
+void bc_prim_record_long(uint32_t kind, const float *rec,
+                         float out[4 * BC_PRIM_RECORD_VEC4])
+{
+	if (kind != BC_PRIM_SPHERE) {
+		memcpy(out, rec, 4 * BC_PRIM_RECORD_VEC4 * sizeof(float));
+		return;
+	}
+	memset(out, 0, 4 * BC_PRIM_RECORD_VEC4 * sizeof(float));
+	for (int i = 0; i < 3; i++) {
+		out[4 * i + i] = 1.0f;
+		out[4 * i + 3] = -rec[i];
+	}
+	out[12] = rec[3];
+}
+
 static inline float eval_record(uint32_t kind, const float *rec,
                                 const float p[3])
 {
+	if (kind == BC_PRIM_SPHERE) {
+		return bc_prim_sdf(BC_PRIM_SPHERE, rec + 3, p[0] - rec[0],
+		                   p[1] - rec[1], p[2] - rec[2]);
+	}
 	float x = rec[0] * p[0] + rec[1] * p[1] + rec[2] * p[2] + rec[3];
 	float y = rec[4] * p[0] + rec[5] * p[1] + rec[6] * p[2] + rec[7];
 	float z = rec[8] * p[0] + rec[9] * p[1] + rec[10] * p[2] + rec[11];

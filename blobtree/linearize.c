@@ -69,13 +69,13 @@ static void populate(struct bc_lin *l)
 	bc_populate(l->param, 4 * (size_t)l->nparam * sizeof(float));
 }
 
-int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nops, bool unary)
+int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint64_t prim_recs,
+                  uint32_t nops, bool unary)
 {
 	size_t count = nprims ? 2u * (size_t)nprims - 1u : 0u;
 	/* Room for every operator to be unary (the larger record); nparam
 	 * becomes what the fill uses. */
-	size_t nparam = (size_t)BC_PRIM_RECORD_VEC4 * nprims +
-	                (size_t)BC_UNARY_RECORD_VEC4 * nops;
+	size_t nparam = (size_t)prim_recs + (size_t)BC_UNARY_RECORD_VEC4 * nops;
 	size_t nun = nops ? nops : 1u;
 	memset(l, 0, sizeof(*l));
 	if (nprims == 0) {
@@ -198,10 +198,16 @@ void bc__abv_place(const struct bc_prim_data *p, float offset,
 	}
 }
 
-/* World-to-local affine rows (R^T, -R^T t) and packed shape data. */
+/* World-to-local affine rows (R^T, -R^T t) and packed shape data; for a
+ * sphere its centre and radius (bc_prim_record_vec4). */
 static void write_prim_record(float *rec, const struct bc_prim_data *p)
 {
 	float m[3][3];
+	if (p->kind == BC_PRIM_SPHERE) {
+		memcpy(rec, p->translate, sizeof(p->translate));
+		rec[3] = p->params[0];
+		return;
+	}
 	quat_matrix(p->rotate, m);
 	for (int i = 0; i < 3; i++) {
 		/* Row i of R^T is column i of R: local axis i in world. */
@@ -308,7 +314,7 @@ static void emit_leaf(struct bc_tree *t, struct bc__fill *fs, uint32_t n)
 	y->epoch = t->epoch;
 	y->prim = fs->prim++;
 	y->param = fs->param;
-	fs->param += BC_PRIM_RECORD_VEC4;
+	fs->param += bc_prim_record_vec4((uint32_t)pd.kind);
 	set_word(l, s, true, (uint32_t)pd.kind);
 	l->node[2 * s + 1] = y->param;
 	l->first[s] = s;

@@ -469,10 +469,18 @@ static uint32_t last_leaf(const struct bc_tree *t, uint32_t n)
 	return n;
 }
 
+/* Where the records of the subtree at pool node n end: after its
+ * rightmost leaf's, whose size its kind gives. */
+static uint32_t records_end(struct bc_tree *t, uint32_t n)
+{
+	const struct bc__node *leaf = &t->pool[last_leaf(t, n)];
+	return bc__param(t, leaf) + bc_prim_record_vec4(leaf->pkind);
+}
+
 /* ---- insert ------------------------------------------------------------- */
 
 /*
- * Pool node m (px primitives, ox operators, no unary nodes) was linked as
+ * Pool node m (px primitives, records of rx vec4, no unary nodes) was linked as
  * a child of operator P. Its slots come in as a block with one new fold
  * f = (left op m): after the fold of the child before it, or, for the
  * first child, before the old first child c0, whose fold (m op c0) comes
@@ -481,13 +489,12 @@ static uint32_t last_leaf(const struct bc_tree *t, uint32_t n)
  * Returns whether an ABV that touched the box changed (the first child
  * changes sides).
  */
-bool bc__splice_insert(struct bc_tree *t, uint32_t m, uint32_t px, uint32_t ox)
+bool bc__splice_insert(struct bc_tree *t, uint32_t m, uint32_t px, uint32_t rx)
 {
 	struct bc_lin *l = &t->lin;
 	uint32_t p = t->pool[m].parent, prev = t->pool[m].prev;
 	uint32_t next = t->pool[m].next;
-	uint32_t sx = 2 * px - 1,
-	         rx = BC_PRIM_RECORD_VEC4 * px + BC_OP_RECORD_VEC4 * ox;
+	uint32_t sx = 2 * px - 1;
 	struct bc__fill fs = {.l = l};
 	uint32_t f, lo, block;
 	bool touch;
@@ -499,8 +506,7 @@ bool bc__splice_insert(struct bc_tree *t, uint32_t m, uint32_t px, uint32_t ox)
 		uint32_t w = l->node[2 * old_top];
 		struct splice sp = {
 		    .s = {s0, 0, sx + 1},
-		    .p = {bc__param(t, &t->pool[last]) + BC_PRIM_RECORD_VEC4, 0,
-		          rx},
+		    .p = {records_end(t, last), 0, rx},
 		    .k = {bc__prim(t, &t->pool[last]) + 1, 0, px}};
 		apply(t, &sp);
 		fs.slot = s0;
@@ -575,7 +581,7 @@ void bc__splice_note(struct bc_tree *t, uint32_t c, struct bc__block *b)
 	b->first = l->first[b->top];
 	b->word = l->node[2 * b->top];
 	b->param = bc__param(t, &t->pool[c]);
-	b->pend = bc__param(t, &t->pool[last_leaf(t, c)]) + BC_PRIM_RECORD_VEC4;
+	b->pend = records_end(t, c);
 	b->k = l->prim_of[b->first];
 	b->nprims = (b->top - b->first) / 2 + 1;
 	b->touch = false;
@@ -585,17 +591,15 @@ void bc__splice_note(struct bc_tree *t, uint32_t c, struct bc__block *b)
 }
 
 bool bc__splice_replace(struct bc_tree *t, const struct bc__block *b,
-                        uint32_t m, uint32_t px, uint32_t ox)
+                        uint32_t m, uint32_t px, uint32_t rx)
 {
 	struct bc_lin *l = &t->lin;
 	uint32_t sx = 2 * px - 1, a = b->word & BC_WORD_ANCESTOR_MASK;
 	struct bc__fill fs = {
 	    .l = l, .slot = b->first, .prim = b->k, .param = b->param};
-	struct splice sp = {
-	    .s = {b->first, b->top - b->first + 1, sx},
-	    .p = {b->param, b->pend - b->param,
-	          BC_PRIM_RECORD_VEC4 * px + BC_OP_RECORD_VEC4 * ox},
-	    .k = {b->k, b->nprims, px}};
+	struct splice sp = {.s = {b->first, b->top - b->first + 1, sx},
+	                    .p = {b->param, b->pend - b->param, rx},
+	                    .k = {b->k, b->nprims, px}};
 	note_gone(t, b->k, b->nprims);
 	apply(t, &sp);
 	bc__lin_emit(t, &fs, m);

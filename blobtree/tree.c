@@ -330,12 +330,15 @@ static void count_prim(struct bc_tree *t, enum bc_prim kind, bool has_color,
                        int sign)
 {
 	uint32_t floats = bc_scene_prim_nfloats(kind);
+	uint32_t sphere = kind == BC_PRIM_SPHERE ? 1u : 0u;
 	if (sign > 0) {
 		t->ncolored += has_color ? 1u : 0u;
 		t->nfloats += floats;
+		t->nspheres += sphere;
 	} else {
 		t->ncolored -= has_color ? 1u : 0u;
 		t->nfloats -= floats;
+		t->nspheres -= sphere;
 	}
 }
 
@@ -689,7 +692,7 @@ static uint32_t depth_of(const struct bc_tree *t, uint32_t n)
 }
 
 struct subtree_stats {
-	uint32_t nodes, prims, ops, depth;
+	uint32_t nodes, prims, ops, depth, spheres;
 };
 
 /*
@@ -732,6 +735,8 @@ static void subtree_stats(const struct bc_tree *t, uint32_t top,
 			st->ops++;
 		} else {
 			st->prims++;
+			st->spheres +=
+			    t->pool[n].pkind == BC_PRIM_SPHERE ? 1u : 0u;
 		}
 	}
 }
@@ -981,24 +986,35 @@ static bool splices(const struct bc_tree *t, const struct bc_tree *sub)
 	       (!sub || sub->nunary_nodes == 0);
 }
 
-/* Layout arrays for nprims primitives and nops operators in *fresh, none
- * for a bare tree (*fresh zeroed). Returns 0 or BC_ENOMEM. */
+/* Layout arrays for nprims primitives (nspheres of them spheres) and nops
+ * operators in *fresh, none for a bare tree (*fresh zeroed). Returns 0 or
+ * BC_ENOMEM. */
 static int lin_alloc(const struct bc_tree *t, struct bc_lin *fresh,
-                     uint32_t nprims, uint32_t nops, bool unary)
+                     uint32_t nprims, uint32_t nspheres, uint32_t nops,
+                     bool unary)
 {
 	if (t->bare) {
 		memset(fresh, 0, sizeof(*fresh));
 		return 0;
 	}
-	return bc__lin_alloc(fresh, nprims, nops, unary);
+	return bc__lin_alloc(fresh, nprims, bc__prim_recs(nprims, nspheres),
+	                     nops, unary);
+}
+
+/* Vec4s of the records of sub's primitives and binary operators (a
+ * splice sees no unary node). */
+static uint32_t tree_recs(const struct bc_tree *sub)
+{
+	return (uint32_t)(bc__prim_recs(sub->nprims, sub->nspheres) +
+	                  BC_OP_RECORD_VEC4 * (uint64_t)sub->nops);
 }
 
 /* The splices of splice.c, skipped by a bare tree (which has no layout to
  * splice; its edits only count). */
 static bool splice_insert(struct bc_tree *t, uint32_t m, uint32_t px,
-                          uint32_t ox)
+                          uint32_t rx)
 {
-	return t->bare ? false : bc__splice_insert(t, m, px, ox);
+	return t->bare ? false : bc__splice_insert(t, m, px, rx);
 }
 static bool splice_remove(struct bc_tree *t, uint32_t c)
 {
@@ -1013,9 +1029,9 @@ static void splice_note(struct bc_tree *t, uint32_t c, struct bc__block *b)
 	}
 }
 static bool splice_replace(struct bc_tree *t, const struct bc__block *b,
-                           uint32_t m, uint32_t px, uint32_t ox)
+                           uint32_t m, uint32_t px, uint32_t rx)
 {
-	return t->bare ? false : bc__splice_replace(t, b, m, px, ox);
+	return t->bare ? false : bc__splice_replace(t, b, m, px, rx);
 }
 static void splice_finish(struct bc_tree *t, bool touch)
 {
@@ -1239,7 +1255,7 @@ int bc_tree_end(struct bc_tree *t, struct bc_errinfo *ei)
 	if ((rc = check_shape(t, ei))) {
 		return rc;
 	}
-	if ((rc = lin_alloc(t, &fresh, t->nprims, t->nops,
+	if ((rc = lin_alloc(t, &fresh, t->nprims, t->nspheres, t->nops,
 	                    t->nunary_nodes > 0))) {
 		return bc_errinfo_set(ei, rc, "tree: %s", bc_strerror(rc));
 	}
@@ -1442,7 +1458,7 @@ int bc_tree_set_prim(struct bc_tree *t, uint32_t id,
 	}
 	bc__lin_update_prim(t, &t->pool[n]);
 	bc__dirty_range(&t->dirty.param_lo, &t->dirty.param_hi, t->lay[n].param,
-	                t->lay[n].param + BC_PRIM_RECORD_VEC4);
+	                t->lay[n].param + bc_prim_record_vec4(copy.kind));
 	if (bc__lin_prim_bends(t, &t->pool[n])) {
 		/* The bounds of its twist and bend ancestors changed. */
 		bc__dirty_range(&t->dirty.param_lo, &t->dirty.param_hi, 0,
@@ -1663,7 +1679,7 @@ static int prepare_graft(struct bc_tree *t, const struct bc_tree *sub,
                          struct bc_lin *fresh, struct bc_errinfo *ei)
 {
 	struct subtree_stats st = {0};
-	uint64_t prims, ops;
+	uint64_t prims, spheres, ops;
 	int rc = 0;
 	if (sub->building || sub->root == BC_NONE) {
 		return bc_errinfo_set(ei, BC_EINVAL,
@@ -1680,6 +1696,7 @@ static int prepare_graft(struct bc_tree *t, const struct bc_tree *sub,
 		                      BC_TREE_MAX_DEPTH);
 	}
 	prims = (uint64_t)t->nprims - gone->prims + st.prims;
+	spheres = (uint64_t)t->nspheres - gone->spheres + st.spheres;
 	ops = (uint64_t)t->nops - gone->ops + st.ops;
 	if (2u * prims - 1u > BC_TREE_MAX_NODES) {
 		return bc_errinfo_set(ei, BC_ELIMIT,
@@ -1687,13 +1704,15 @@ static int prepare_graft(struct bc_tree *t, const struct bc_tree *sub,
 		                      BC_TREE_MAX_NODES);
 	}
 	if (fresh) {
-		rc = lin_alloc(t, fresh, (uint32_t)prims, (uint32_t)ops,
+		rc = lin_alloc(t, fresh, (uint32_t)prims, (uint32_t)spheres,
+		               (uint32_t)ops,
 		               t->nunary_nodes + sub->nunary_nodes > 0);
 	} else if (!t->bare) {
 		rc = bc__splice_reserve(
 		    t, (uint32_t)(2u * prims - 1u), (uint32_t)prims,
-		    t->lin.nparam + BC_PRIM_RECORD_VEC4 * st.prims +
-		        BC_OP_RECORD_VEC4 * st.ops);
+		    (uint32_t)(t->lin.nparam +
+		               bc__prim_recs(st.prims, st.spheres) +
+		               BC_OP_RECORD_VEC4 * (uint64_t)st.ops));
 	}
 	if (rc) {
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
@@ -1768,7 +1787,7 @@ int bc_tree_insert(struct bc_tree *t, uint32_t parent_id, uint32_t pos,
 			bc__measure(t, t->root);
 			return rc;
 		}
-		touch = splice_insert(t, m, sub->nprims, sub->nops);
+		touch = splice_insert(t, m, sub->nprims, tree_recs(sub));
 		if (nest > t->nesting) {
 			t->nesting = nest;
 		}
@@ -1861,6 +1880,7 @@ int bc_tree_remove(struct bc_tree *t, uint32_t id, struct bc_errinfo *ei)
 	}
 	memset(&fresh, 0, sizeof(fresh));
 	if (p != BC_NONE && (rc = lin_alloc(t, &fresh, t->nprims - st.prims,
+	                                    t->nspheres - st.spheres,
 	                                    t->nops - st.ops - collapse,
 	                                    t->nunary_nodes > 0))) {
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
@@ -1902,7 +1922,7 @@ static int replace_spliced(struct bc_tree *t, uint32_t n, uint32_t m,
 		bc__measure(t, t->root);
 		return rc;
 	}
-	touch = splice_replace(t, blk, m, sub->nprims, sub->nops);
+	touch = splice_replace(t, blk, m, sub->nprims, tree_recs(sub));
 	/* The replaced nodes' names go, reused ids included: the subtree's
 	 * own names are the new nodes'. */
 	bc__names_drop_subtree(t, n);
@@ -1995,7 +2015,7 @@ int bc_tree_relayout(struct bc_tree *t, struct bc_errinfo *ei)
 	if (t->root == BC_NONE || t->building) {
 		return 0;
 	}
-	if ((rc = lin_alloc(t, &fresh, t->nprims, t->nops,
+	if ((rc = lin_alloc(t, &fresh, t->nprims, t->nspheres, t->nops,
 	                    t->nunary_nodes > 0))) {
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
 	}

@@ -171,6 +171,9 @@ struct bc_tree {
 	 * (bc_tree_counts). */
 	uint32_t ncolored;
 	uint64_t nfloats;
+	/* Spheres among the nprims: their records are shorter
+	 * (bc_prim_record_vec4). */
+	uint32_t nspheres;
 	uint32_t next_id;
 
 	/* Builder state: the open operators, innermost last (grown on the heap:
@@ -247,6 +250,14 @@ static inline uint32_t bc__span_map(const struct bc__span *sp, uint32_t v)
 		return sp->at;
 	}
 	return v - sp->del + sp->ins;
+}
+
+/* Vec4s of the records of prims primitives of which spheres are spheres
+ * (bc_prim_record_vec4). */
+static inline uint64_t bc__prim_recs(uint64_t prims, uint64_t spheres)
+{
+	return BC_PRIM_RECORD_VEC4 * prims -
+	       (BC_PRIM_RECORD_VEC4 - BC_SPHERE_RECORD_VEC4) * spheres;
 }
 
 /* Entries a layout built whole allocates for n: room for the splices of
@@ -356,7 +367,8 @@ uint32_t bc__measure(struct bc_tree *t, uint32_t top);
  * unary and domain nodes (wrap, wrap_top, dom, ucount) only when unary
  * (the tree may have such a node), else they stay NULL.
  * Returns 0 or BC_ENOMEM (l is then zeroed). */
-int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nops, bool unary);
+int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint64_t prim_recs,
+                  uint32_t nops, bool unary);
 void bc__lin_free(struct bc_lin *l);
 /* Fills l (allocated for t's counts) from t's model; cannot fail. */
 void bc__lin_fill(struct bc_tree *t, struct bc_lin *l);
@@ -397,10 +409,10 @@ void bc__lin_update_size(struct bc_lin *l);
  * larger). */
 int bc__splice_reserve(struct bc_tree *t, uint32_t count, uint32_t nprims,
                        uint32_t nparam);
-/* Pool node m, with px primitives and ox operators and no unary node, was
- * just linked under a binary operator: splices it into t->lin (room
- * reserved). Returns whether the box must be measured again. */
-bool bc__splice_insert(struct bc_tree *t, uint32_t m, uint32_t px, uint32_t ox);
+/* Pool node m, with px primitives, records of rx vec4 in all and no unary
+ * node, was just linked under a binary operator: splices it into t->lin
+ * (room reserved). Returns whether the box must be measured again. */
+bool bc__splice_insert(struct bc_tree *t, uint32_t m, uint32_t px, uint32_t rx);
 /* Pool node c (not the root) is about to be cut: splices it, and its
  * parent when that is left with one child, out of t->lin. Returns whether
  * the box must be measured again. */
@@ -414,11 +426,11 @@ struct bc__block {
 };
 /* Notes where pool node c's subtree lies. */
 void bc__splice_note(struct bc_tree *t, uint32_t c, struct bc__block *b);
-/* Pool node m (px primitives, ox operators, no unary node) took the place
- * of the subtree noted in b: splices it in there (room reserved). Returns
- * whether the box must be measured again. */
+/* Pool node m (px primitives, records of rx vec4, no unary node) took the
+ * place of the subtree noted in b: splices it in there (room reserved).
+ * Returns whether the box must be measured again. */
 bool bc__splice_replace(struct bc_tree *t, const struct bc__block *b,
-                        uint32_t m, uint32_t px, uint32_t ox);
+                        uint32_t m, uint32_t px, uint32_t rx);
 /* After any of these, the model final: the box (measured again when touch), the
  * stack (the root's need), the dirty state. */
 void bc__splice_finish(struct bc_tree *t, bool touch);

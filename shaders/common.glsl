@@ -45,6 +45,7 @@
 #define BC_WORD_TYPE_MASK 0xffu
 #define BC_WORD_ANCESTOR_MASK 0x3fffffu
 #define BC_PRIM_RECORD_VEC4 5u
+#define BC_SPHERE_RECORD_VEC4 1u
 
 // enum bc_op and enum bc_op_class.
 #define BC_OP_UNION 1u

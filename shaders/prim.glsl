@@ -420,8 +420,22 @@ float bc_prim_sdf(uint kind, vec4 k0, vec4 k1, vec3 p)
 	}
 }
 
-// Field of the primitive whose record is r0..r2 (world-to-local rows) and
-// k0, k1 (packed shape), at world point p.
+// Vec4s of a leaf's record (blobtree.h's bc_prim_record_vec4): a sphere's
+// is (centre, radius), every other kind's the rows and packed shape below.
+uint bc_record_vec4(uint kind)
+{
+	return kind == BC_PRIM_SPHERE ? BC_SPHERE_RECORD_VEC4
+				      : BC_PRIM_RECORD_VEC4;
+}
+
+// Field of the sphere whose record is r0 (centre, radius) at world point p.
+float bc_sphere_record(vec4 r0, vec3 p)
+{
+	return length(p - r0.xyz) - r0.w;
+}
+
+// Field of the primitive (not a sphere) whose record is r0..r2
+// (world-to-local rows) and k0, k1 (packed shape), at world point p.
 float bc_prim_record(uint kind, vec4 r0, vec4 r1, vec4 r2, vec4 k0, vec4 k1,
 		     vec3 p)
 {

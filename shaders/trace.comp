@@ -372,7 +372,8 @@ bool build_view(uint na)
 	bool over = false;
 	g_work += 2u * min(nview, BC_VIEW_SHARED);
 	for (uint i = 0u; i < min(nview, BC_VIEW_SHARED); i++) {
-		uint size = (s_view[i].x & VI_LEAF) != 0u ? BC_PRIM_RECORD_VEC4
+		uint size = (s_view[i].x & VI_LEAF) != 0u
+				? bc_record_vec4(s_view[i].x & VI_KIND_MASK)
 			  : (s_view[i].x & VI_UNARY) != 0u ? 2u : 1u;
 		if (used + size <= BC_CACHE_VEC4) {
 			s_vcache[i] = used;
@@ -483,7 +484,8 @@ void fill_cache(uint lid)
 			continue;
 		}
 		uvec2 in_ = s_view[i];
-		uint size = (in_.x & VI_LEAF) != 0u ? BC_PRIM_RECORD_VEC4 : 1u;
+		uint size = (in_.x & VI_LEAF) != 0u
+				? bc_record_vec4(in_.x & VI_KIND_MASK) : 1u;
 		for (uint j = 0u; j < size; j++) {
 			s_cache[c + j] = b_param[in_.y + j];
 		}
@@ -513,10 +515,16 @@ float field_fast(vec3 p, out uint prim)
 		uint c = s_vcache[i];
 		uint kind = in_.x & VI_KIND_MASK;
 		if ((in_.x & VI_LEAF) != 0u) {
-			float v = bc_prim_record(kind, s_cache[c],
-						 s_cache[c + 1u], s_cache[c + 2u],
-						 s_cache[c + 3u], s_cache[c + 4u],
-						 p);
+			float v;
+			if (kind == BC_PRIM_SPHERE) {
+				v = bc_sphere_record(s_cache[c], p);
+			} else {
+				v = bc_prim_record(kind, s_cache[c],
+						   s_cache[c + 1u],
+						   s_cache[c + 2u],
+						   s_cache[c + 3u],
+						   s_cache[c + 4u], p);
+			}
 			s5 = s4;
 			s4 = s3;
 			s3 = s2;
@@ -582,11 +590,16 @@ float field_general(vec3 p, out uint prim)
 				uint s = b_prim[in_.x >> VI_PRIM_SHIFT].info.x;
 				q = bc_domain_map(bc_slot_unary(s).y, p);
 			}
-			float v = bc_prim_record(kind, record(i, in_, 0u),
-						 record(i, in_, 1u),
-						 record(i, in_, 2u),
-						 record(i, in_, 3u),
-						 record(i, in_, 4u), q);
+			float v;
+			if (kind == BC_PRIM_SPHERE) {
+				v = bc_sphere_record(record(i, in_, 0u), q);
+			} else {
+				v = bc_prim_record(kind, record(i, in_, 0u),
+						   record(i, in_, 1u),
+						   record(i, in_, 2u),
+						   record(i, in_, 3u),
+						   record(i, in_, 4u), q);
+			}
 			if (depth > 0u) {
 				uint s = min(depth - 1u, BC_EVAL_STACK - 1u);
 				st[s] = top;

@@ -199,12 +199,18 @@ static vf unary_lanes(const struct bc_lin *lin, uint32_t u, vf f, vf px, vf py,
 	return vload(fs);
 }
 
-/* The field of a primitive record (affine map, then packed shape) at the
- * world points (px, py, pz). */
+/* The field of a primitive record (affine map, then packed shape; a
+ * sphere's centre and radius) at the world points (px, py, pz). */
 static inline vf prim_field(uint32_t kind, const float *rec, vf px, vf py,
                             vf pz, uint32_t active)
 {
-	const float *k = rec + 12;
+	const float *k;
+	if (kind == BC_PRIM_SPHERE) {
+		return vsub(vlen3(vsub(px, vset1(rec[0])),
+		                  vsub(py, vset1(rec[1])),
+		                  vsub(pz, vset1(rec[2]))),
+		            vset1(rec[3]));
+	}
 	vf x = vfma(
 	    vset1(rec[0]), px,
 	    vfma(vset1(rec[1]), py, vfma(vset1(rec[2]), pz, vset1(rec[3]))));
@@ -214,9 +220,8 @@ static inline vf prim_field(uint32_t kind, const float *rec, vf px, vf py,
 	vf z = vfma(
 	    vset1(rec[8]), px,
 	    vfma(vset1(rec[9]), py, vfma(vset1(rec[10]), pz, vset1(rec[11]))));
+	k = rec + 12;
 	switch (kind) {
-	case BC_PRIM_SPHERE:
-		return vsub(vlen3(x, y, z), vset1(k[0]));
 	case BC_PRIM_BOX:
 		return vsub(vbox_d(vsub(vabs(x), vset1(k[0])),
 		                   vsub(vabs(y), vset1(k[1])),

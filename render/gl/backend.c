@@ -70,7 +70,8 @@ _Static_assert(BC_PRIM_REVOLVE_STAR == 32 && BC_PRIM_COUNT == 33,
                "shaders/prim.glsl primitive kinds");
 _Static_assert(BC_ABV_CAPSULE == 3, "shaders/common.glsl ABV shapes");
 _Static_assert(BC_DEBUG_OVERLAPS == 2, "shaders/common.glsl debug modes");
-_Static_assert(BC_PRIM_RECORD_VEC4 == 5 && BC_OP_RECORD_VEC4 == 1,
+_Static_assert(BC_PRIM_RECORD_VEC4 == 5 && BC_SPHERE_RECORD_VEC4 == 1 &&
+                   BC_OP_RECORD_VEC4 == 1,
                "shaders/common.glsl record sizes");
 _Static_assert(BC_PRIM_PACKED == 8, "shaders/prim.glsl packed parameters");
 _Static_assert(BC_EVAL_STACK == 130, "shaders/common.glsl BC_EVAL_STACK");

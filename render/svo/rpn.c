@@ -17,6 +17,9 @@
 
 #include "blobcast/alloc.h"
 
+_Static_assert(BC_SVO_PRIM_REC == 4 * BC_PRIM_RECORD_VEC4,
+               "an svo record is a layout record in the long form");
+
 /* Position of the lowest bit of a power of two, indexed by the top five bits
  * of its product with the de Bruijn sequence 0x077CB531. */
 const uint8_t bc__svo_debruijn_lo[32] = {
@@ -157,8 +160,7 @@ int bc_svo_rpn_init(struct bc_svo_rpn *out, const struct bc_lin *l)
 			tm->first = t;
 			tm->prim = l->prim_of[s];
 			tm->rec = prec;
-			memcpy(out->rec + prec, src,
-			       BC_SVO_PRIM_REC * sizeof(float));
+			bc_prim_record_long(tm->kind, src, out->rec + prec);
 			{
 				const struct bc_prim_info *info =
 				    bc_prim_info((enum bc_prim)tm->kind);

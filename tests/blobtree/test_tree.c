@@ -81,8 +81,10 @@ static void layout_follows_the_paper(void)
 	CHECK_EQ_INT(l->node[2 * 2 + 1], l->node[2 * 6 + 1]);
 	CHECK_EQ_INT(l->first[6], 0);
 	CHECK_EQ_INT(l->first[5], 3);
+	/* Four spheres: a vec4 each, (centre, radius). */
 	CHECK_EQ_INT(l->nparam,
-	             4 * BC_PRIM_RECORD_VEC4 + 2 * BC_OP_RECORD_VEC4);
+	             4 * BC_SPHERE_RECORD_VEC4 + 2 * BC_OP_RECORD_VEC4);
+	CHECK(bc_lin_param(l, 0)[0] == -1.0f && bc_lin_param(l, 0)[3] == 0.5f);
 	/* ROIs (eq. 13-16): root [0,0]; under the sharp union [0,0]; the
 	 * difference's left child [min(0,-ro), 0], right [-0, max(0, ro)]. */
 	CHECK(l->roi[2 * 6] == 0.0f && l->roi[2 * 6 + 1] == 0.0f);
@@ -218,7 +220,7 @@ static void parameter_edit_rewrites_only_its_own_record(void)
 		CHECK_EQ_INT(dirty.prim_lo, k);
 		CHECK_EQ_INT(dirty.prim_hi, k + 1);
 		CHECK_EQ_INT(dirty.param_hi - dirty.param_lo,
-		             BC_PRIM_RECORD_VEC4);
+		             bc_prim_record_vec4(p.kind));
 		CHECK_EQ_INT(dirty.param_lo, l->node[2 * s + 1]);
 		for (uint32_t v = 0; v < l->nparam; v++) {
 			bool inside = v >= dirty.param_lo && v < dirty.param_hi;
@@ -674,6 +676,79 @@ static void prim_data_kept_through_edits(void)
 	}
 }
 
+/* A sphere's record is its centre and radius, one vec4, whatever its
+ * rotation: its field is |p - c| - r, bit for bit, and the long form
+ * (bc_prim_record_long: identity rows) evaluates to the same. Beside it a
+ * box keeps the affine rows and shape (5 vec4), and a parameter edit of
+ * each rewrites exactly its own record. */
+static void a_sphere_record_is_one_vec4(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_op_data u = {BC_OP_UNION, 0, 0};
+	struct bc_prim_data sp, bx;
+	const struct bc_lin *l;
+	struct bc_dirty d;
+	float lng[4 * BC_PRIM_RECORD_VEC4];
+	REQUIRE(t);
+	bc_prim_data_init(&sp, BC_PRIM_SPHERE);
+	sp.params[0] = 0.4f;
+	sp.translate[0] = 0.3f;
+	sp.translate[1] = -0.2f;
+	sp.translate[2] = 0.7f;
+	sp.rotate[0] = 0.6f; /* 0.6^2 + 0.8^2 = 1 */
+	sp.rotate[3] = 0.8f;
+	bc_prim_data_init(&bx, BC_PRIM_BOX);
+	bx.params[0] = bx.params[1] = bx.params[2] = 0.3f;
+	bx.translate[0] = -1.0f;
+	bc_tree_begin(t);
+	REQUIRE(bc_tree_push_op(t, 1, &u, NULL) == 0);
+	REQUIRE(bc_tree_put_prim(t, 2, &sp, NULL) == 0);
+	REQUIRE(bc_tree_put_prim(t, 3, &bx, NULL) == 0);
+	REQUIRE(bc_tree_pop_op(t, NULL) == 0);
+	REQUIRE(bc_tree_end(t, NULL) == 0);
+	l = bc_tree_lin(t);
+	REQUIRE(l);
+	CHECK_EQ_INT(l->nparam, BC_SPHERE_RECORD_VEC4 + BC_PRIM_RECORD_VEC4 +
+	                            BC_OP_RECORD_VEC4);
+	CHECK_EQ_INT(l->node[2 * 1 + 1] - l->node[2 * 0 + 1], 1);
+	for (int i = 0; i < 3; i++) {
+		CHECK(bc_lin_param(l, 0)[i] == sp.translate[i]);
+	}
+	CHECK(bc_lin_param(l, 0)[3] == sp.params[0]);
+	bc_prim_record_long(BC_PRIM_SPHERE, bc_lin_param(l, 0), lng);
+	for (int k = 0; k < 200; k++) {
+		float p[3] = {(float)(k % 7) * 0.3f - 1.0f,
+		              (float)(k % 11) * 0.2f - 1.0f,
+		              (float)(k % 13) * 0.15f - 0.9f};
+		float x = p[0] - sp.translate[0], y = p[1] - sp.translate[1],
+		      z = p[2] - sp.translate[2];
+		float want = sqrtf(x * x + y * y + z * z) - sp.params[0];
+		float ax =
+		    lng[0] * p[0] + lng[1] * p[1] + lng[2] * p[2] + lng[3];
+		float ay =
+		    lng[4] * p[0] + lng[5] * p[1] + lng[6] * p[2] + lng[7];
+		float az =
+		    lng[8] * p[0] + lng[9] * p[1] + lng[10] * p[2] + lng[11];
+		CHECK(bc_eval_prim(l, 0, p) == want);
+		CHECK(bc_prim_sdf(BC_PRIM_SPHERE, lng + 12, ax, ay, az) ==
+		      want);
+	}
+	/* Parameter edits: each record alone, at its own size. */
+	bc_tree_take_dirty(t, &d);
+	sp.params[0] = 0.5f;
+	REQUIRE(bc_tree_set_prim(t, 2, &sp, NULL) == 0);
+	bc_tree_take_dirty(t, &d);
+	CHECK_EQ_INT(d.param_lo, l->node[2 * 0 + 1]);
+	CHECK_EQ_INT(d.param_hi - d.param_lo, BC_SPHERE_RECORD_VEC4);
+	CHECK(bc_lin_param(l, 0)[3] == 0.5f);
+	bx.params[0] = 0.35f;
+	REQUIRE(bc_tree_set_prim(t, 3, &bx, NULL) == 0);
+	bc_tree_take_dirty(t, &d);
+	CHECK_EQ_INT(d.param_lo, l->node[2 * 1 + 1]);
+	CHECK_EQ_INT(d.param_hi - d.param_lo, BC_PRIM_RECORD_VEC4);
+	bc_tree_destroy(t);
+}
+
 static const struct bc_test tests[] = {
     {"layout_follows_the_paper", layout_follows_the_paper},
     {"ids_found_in_place_and_in_the_map", ids_found_in_place_and_in_the_map},
@@ -687,5 +762,6 @@ static const struct bc_test tests[] = {
      structural_edits_equal_a_fresh_build},
     {"allocation_failures_are_clean", allocation_failures_are_clean},
     {"prim_data_kept_through_edits", prim_data_kept_through_edits},
+    {"a_sphere_record_is_one_vec4", a_sphere_record_is_one_vec4},
 };
 BC_TEST_MAIN(tests)

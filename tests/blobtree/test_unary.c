@@ -668,7 +668,7 @@ static void primitive_edit_under_twist_updates_its_bound(void)
 	s.params[0] = 0.45f;
 	REQUIRE(bc_tree_set_prim(t, 3, &s, &ei) == 0);
 	bc_tree_take_dirty(t, &d);
-	CHECK_EQ_INT(d.param_hi - d.param_lo, BC_PRIM_RECORD_VEC4);
+	CHECK_EQ_INT(d.param_hi - d.param_lo, bc_prim_record_vec4(s.kind));
 	bc_tree_destroy(t);
 }
 

@@ -423,9 +423,10 @@ static void test_param_edit_equals_fresh_load(void)
 	CHECK(!info.upload_full);
 	CHECK_EQ_INT(info.full_uploads, 1);
 	CHECK_EQ_INT(info.program_builds, 1);
-	/* The record (5 vec4), the primitive's entry (32 bytes) and its ABV
-	 * (112 bytes): nothing else. */
-	CHECK_EQ_INT(info.upload_bytes, 80 + 32 + 112);
+	/* The record (5 vec4, a sphere's 1), the primitive's entry (32
+	 * bytes) and its ABV (112 bytes): nothing else. */
+	CHECK_EQ_INT(info.upload_bytes,
+	             16 * bc_prim_record_vec4(p.kind) + 32 + 112);
 	REQUIRE(fresh(t, &cam, &b) == 0);
 	CHECK(frames_equal(&a, &b));
 

@@ -605,9 +605,25 @@ BC_API const struct bc_dirty *bc_tree_dirty(const struct bc_tree *t);
 
 /* Parameter record sizes, in vec4 (16-byte) units. A primitive's record is
  * the world-to-local affine map (three rows: R^T and -R^T t) followed by
- * its packed shape data; an operator's is (blend, range, 0, 0). */
+ * its packed shape data, except a sphere's: (centre, radius), one vec4, as
+ * no rotation moves a sphere (a million spheres keep 64 MB less). An
+ * operator's is (blend, range, 0, 0). A leaf's size follows from its kind
+ * (bc_prim_record_vec4), which its node word holds. */
 #define BC_PRIM_RECORD_VEC4 5
+#define BC_SPHERE_RECORD_VEC4 1
 #define BC_OP_RECORD_VEC4 1
+
+static inline uint32_t bc_prim_record_vec4(uint32_t kind)
+{
+	return kind == BC_PRIM_SPHERE ? BC_SPHERE_RECORD_VEC4
+	                              : BC_PRIM_RECORD_VEC4;
+}
+
+/* Writes primitive kind's record rec in the long form (affine rows, then
+ * packed shape: 4 * BC_PRIM_RECORD_VEC4 floats) into out: a sphere's as
+ * the identity rows, minus its centre, and its radius. */
+BC_API void bc_prim_record_long(uint32_t kind, const float *rec,
+                                float out[4 * BC_PRIM_RECORD_VEC4]);
 
 struct bc_lin {
 	uint32_t count;  /* linearized (binary) nodes, post-order slots */
