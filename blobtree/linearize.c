@@ -31,6 +31,7 @@ void bc__lin_free(struct bc_lin *l)
 	bc_free(l->roi);
 	bc_free(l->prim_slot);
 	bc_free(l->abv);
+	bc_free(l->sabv);
 	bc_free(l->color);
 	bc_free(l->param);
 	bc_free(l->wrap);
@@ -64,18 +65,25 @@ static void populate(struct bc_lin *l)
 	}
 	bc_populate(l->roi, 2 * n * sizeof(float));
 	bc_populate(l->prim_slot, np * sizeof(uint32_t));
-	bc_populate(l->abv, np * sizeof(struct bc_abv));
+	if (l->abv) {
+		bc_populate(l->abv, np * sizeof(struct bc_abv));
+	} else {
+		bc_populate(l->sabv, np * sizeof(*l->sabv));
+	}
 	bc_populate(l->color, np * sizeof(*l->color));
 	bc_populate(l->param, 4 * (size_t)l->nparam * sizeof(float));
 }
 
-int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint64_t prim_recs,
+int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nspheres,
                   uint32_t nops, bool unary)
 {
 	size_t count = nprims ? 2u * (size_t)nprims - 1u : 0u;
 	/* Room for every operator to be unary (the larger record); nparam
 	 * becomes what the fill uses. */
-	size_t nparam = (size_t)prim_recs + (size_t)BC_UNARY_RECORD_VEC4 * nops;
+	size_t nparam = (size_t)bc__prim_recs(nprims, nspheres) +
+	                (size_t)BC_UNARY_RECORD_VEC4 * nops;
+	/* Spheres alone, which no unary node maps: sphere ABVs alone. */
+	bool sabv = nspheres == nprims && !unary;
 	size_t nun = nops ? nops : 1u;
 	memset(l, 0, sizeof(*l));
 	if (nprims == 0) {
@@ -96,7 +104,11 @@ int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint64_t prim_recs,
 	l->prim_of = bc_malloc(count * sizeof(uint32_t));
 	l->roi = bc_malloc(2 * count * sizeof(float));
 	l->prim_slot = bc_malloc(bc__lin_room(nprims) * sizeof(uint32_t));
-	l->abv = bc_calloc(bc__lin_room(nprims), sizeof(struct bc_abv));
+	if (sabv) {
+		l->sabv = bc_calloc(bc__lin_room(nprims), sizeof(*l->sabv));
+	} else {
+		l->abv = bc_calloc(bc__lin_room(nprims), sizeof(struct bc_abv));
+	}
 	l->color = bc_malloc(bc__lin_room(nprims) * sizeof(*l->color));
 	l->param = bc_calloc(4 * nparam, sizeof(float));
 	if (unary) {
@@ -126,7 +138,7 @@ int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint64_t prim_recs,
 	}
 	if (!l->node || !l->first || !l->fast || !l->jump || !l->kills ||
 	    !l->depth || !l->node_id || !l->prim_of || !l->roi ||
-	    !l->prim_slot || !l->abv || !l->color || !l->param) {
+	    !l->prim_slot || (!l->abv && !l->sabv) || !l->color || !l->param) {
 		bc__lin_free(l);
 		return BC_ENOMEM;
 	}
@@ -679,23 +691,48 @@ void bc__lin_place_abv(struct bc_tree *t, struct bc_lin *l, uint32_t k,
 {
 	float lo[3], hi[3];
 	uint32_t s = l->prim_slot[k];
-	bc__abv_place(p, l->roi[2 * s + 1], &l->abv[k]);
+	struct bc_abv a;
+	bc__abv_place(p, l->roi[2 * s + 1], &a);
 	for (uint32_t d = bc_lin_dom(l, s); d != BC_NONE; d = l->unary_dom[d]) {
 		float *rec = l->param + 4u * (size_t)l->unary_param[d];
-		float r = bc__abv_preimage((enum bc_op)l->unary_kind[d], rec,
-		                           &l->abv[k]);
+		float r =
+		    bc__abv_preimage((enum bc_op)l->unary_kind[d], rec, &a);
 		if ((l->unary_kind[d] == BC_OP_TWIST ||
 		     l->unary_kind[d] == BC_OP_BEND) &&
 		    r > rec[1]) {
 			rec[1] = r;
 		}
 	}
-	bc_abv_aabb(&l->abv[k], lo, hi);
+	bc__lin_set_abv(l, k, &a);
+	bc_abv_aabb(&a, lo, hi);
 	for (int i = 0; i < 3; i++) {
 		l->lo[i] = fminf(l->lo[i], lo[i]);
 		l->hi[i] = fmaxf(l->hi[i], hi[i]);
 	}
 	(void)t;
+}
+
+void bc__lin_set_abv(struct bc_lin *l, uint32_t k, const struct bc_abv *a)
+{
+	if (l->abv) {
+		l->abv[k] = *a;
+		return;
+	}
+	/* Spheres alone (bc__lin_alloc): a sphere's ABV is a sphere. Any
+	 * other shape would be kept as the sphere around its box. */
+	if (a->shape == BC_ABV_SPHERE) {
+		memcpy(l->sabv[k], a->center, sizeof(a->center));
+		l->sabv[k][3] = a->radius;
+	} else {
+		float lo[3], hi[3], e2 = 0.0f;
+		bc_abv_aabb(a, lo, hi);
+		for (int i = 0; i < 3; i++) {
+			float e = 0.5f * (hi[i] - lo[i]);
+			l->sabv[k][i] = lo[i] + e;
+			e2 += e * e;
+		}
+		l->sabv[k][3] = sqrtf(e2);
+	}
 }
 
 void bc__lin_update_size(struct bc_lin *l)

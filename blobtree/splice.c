@@ -60,8 +60,26 @@ static uint32_t roomy(uint32_t cap, uint32_t need)
 	return c > UINT32_MAX ? UINT32_MAX : (uint32_t)c;
 }
 
+/* A layout of spheres alone (struct bc_lin's sabv) that a splice brings
+ * another kind into keeps whole ABVs from then on: converted once, here,
+ * in room for cap primitives. */
+static int whole_abvs(struct bc_lin *l, uint32_t cap)
+{
+	struct bc_abv *abv = bc_calloc(cap, sizeof(*abv));
+	if (!abv) {
+		return BC_ENOMEM;
+	}
+	for (uint32_t k = 0; k < l->nprims; k++) {
+		bc_lin_abv(l, k, &abv[k]);
+	}
+	bc_free(l->sabv);
+	l->sabv = NULL;
+	l->abv = abv;
+	return 0;
+}
+
 int bc__splice_reserve(struct bc_tree *t, uint32_t count, uint32_t nprims,
-                       uint32_t nparam)
+                       uint32_t nparam, bool others)
 {
 	struct bc_lin *l = &t->lin;
 	if (count > t->lin_cap) {
@@ -87,9 +105,19 @@ int bc__splice_reserve(struct bc_tree *t, uint32_t count, uint32_t nprims,
 	if (nprims > t->lin_kcap) {
 		uint32_t c = roomy(t->lin_kcap, nprims);
 		GROW(l->prim_slot, c, sizeof(uint32_t));
-		GROW(l->abv, c, sizeof(struct bc_abv));
+		if (l->abv) {
+			GROW(l->abv, c, sizeof(struct bc_abv));
+		} else {
+			GROW(l->sabv, c, sizeof(*l->sabv));
+		}
 		GROW(l->color, c, sizeof(*l->color));
 		t->lin_kcap = c;
+	}
+	if (others && l->sabv) {
+		int rc = whole_abvs(l, t->lin_kcap);
+		if (rc) {
+			return rc;
+		}
 	}
 	if (nparam > t->lin_pcap) {
 		uint32_t c = roomy(t->lin_pcap, nparam);
@@ -223,8 +251,9 @@ static void note_gone(struct bc_tree *t, uint32_t k, uint32_t n)
 		d->spliced = false;
 		return;
 	}
-	memcpy(d->gone + d->ngone, t->lin.abv + k, n * sizeof(*d->gone));
-	d->ngone += n;
+	for (uint32_t i = 0; i < n; i++) {
+		bc_lin_abv(&t->lin, k + i, &d->gone[d->ngone++]);
+	}
 }
 
 /* An operand that reaches no pixel leaves a union's value alone, but
@@ -273,7 +302,11 @@ static void apply(struct bc_tree *t, const struct splice *sp)
 		move_tail(l->ucount, sizeof(uint32_t), n, &sp->s);
 	}
 	move_tail(l->prim_slot, sizeof(uint32_t), np, &sp->k);
-	move_tail(l->abv, sizeof(struct bc_abv), np, &sp->k);
+	if (l->abv) {
+		move_tail(l->abv, sizeof(struct bc_abv), np, &sp->k);
+	} else {
+		move_tail(l->sabv, sizeof(*l->sabv), np, &sp->k);
+	}
 	move_tail(l->color, sizeof(*l->color), np, &sp->k);
 	move_tail(l->param, 4 * sizeof(float), nr, &sp->p);
 	l->count = n - sp->s.del + sp->s.ins;
@@ -327,7 +360,9 @@ static void apply(struct bc_tree *t, const struct splice *sp)
 static bool touches_box(const struct bc_lin *l, uint32_t k)
 {
 	float lo[3], hi[3];
-	bc_abv_aabb(&l->abv[k], lo, hi);
+	struct bc_abv a;
+	bc_lin_abv(l, k, &a);
+	bc_abv_aabb(&a, lo, hi);
 	for (int i = 0; i < 3; i++) {
 		if (lo[i] <= l->lo[i] || hi[i] >= l->hi[i]) {
 			return true;
@@ -437,7 +472,9 @@ void bc__splice_finish(struct bc_tree *t, bool touch)
 		}
 		for (uint32_t k = 0; k < l->nprims; k++) {
 			float lo[3], hi[3];
-			bc_abv_aabb(&l->abv[k], lo, hi);
+			struct bc_abv a;
+			bc_lin_abv(l, k, &a);
+			bc_abv_aabb(&a, lo, hi);
 			for (int i = 0; i < 3; i++) {
 				l->lo[i] = fminf(l->lo[i], lo[i]);
 				l->hi[i] = fmaxf(l->hi[i], hi[i]);

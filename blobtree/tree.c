@@ -997,8 +997,7 @@ static int lin_alloc(const struct bc_tree *t, struct bc_lin *fresh,
 		memset(fresh, 0, sizeof(*fresh));
 		return 0;
 	}
-	return bc__lin_alloc(fresh, nprims, bc__prim_recs(nprims, nspheres),
-	                     nops, unary);
+	return bc__lin_alloc(fresh, nprims, nspheres, nops, unary);
 }
 
 /* Vec4s of the records of sub's primitives and binary operators (a
@@ -1712,7 +1711,8 @@ static int prepare_graft(struct bc_tree *t, const struct bc_tree *sub,
 		    t, (uint32_t)(2u * prims - 1u), (uint32_t)prims,
 		    (uint32_t)(t->lin.nparam +
 		               bc__prim_recs(st.prims, st.spheres) +
-		               BC_OP_RECORD_VEC4 * (uint64_t)st.ops));
+		               BC_OP_RECORD_VEC4 * (uint64_t)st.ops),
+		    st.spheres < st.prims);
 	}
 	if (rc) {
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));

@@ -362,13 +362,17 @@ uint32_t bc__measure(struct bc_tree *t, uint32_t top);
 
 /* linearize.c */
 
-/* Allocates the arrays of l for nprims primitives and nops operators
+/* Allocates the arrays of l for nprims primitives (nspheres of them
+ * spheres: their records are shorter, and spheres alone keep sphere ABVs
+ * alone, struct bc_lin's sabv) and nops operators
  * (binary and unary: room for each to be either); the per-slot arrays of
  * unary and domain nodes (wrap, wrap_top, dom, ucount) only when unary
  * (the tree may have such a node), else they stay NULL.
  * Returns 0 or BC_ENOMEM (l is then zeroed). */
-int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint64_t prim_recs,
+int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nspheres,
                   uint32_t nops, bool unary);
+/* Stores primitive k's world ABV (l's abv or, for spheres alone, sabv). */
+void bc__lin_set_abv(struct bc_lin *l, uint32_t k, const struct bc_abv *a);
 void bc__lin_free(struct bc_lin *l);
 /* Fills l (allocated for t's counts) from t's model; cannot fail. */
 void bc__lin_fill(struct bc_tree *t, struct bc_lin *l);
@@ -405,10 +409,11 @@ void bc__lin_update_size(struct bc_lin *l);
  * (the file's comment). */
 
 /* Room in t->lin's arrays for count slots, nprims primitives and nparam
- * records. Returns 0 or BC_ENOMEM (the arrays as they were, some maybe
- * larger). */
+ * records; others: primitives other than spheres come (a layout of
+ * spheres alone keeps whole ABVs from then on). Returns 0 or BC_ENOMEM
+ * (the arrays as they were, some maybe larger). */
 int bc__splice_reserve(struct bc_tree *t, uint32_t count, uint32_t nprims,
-                       uint32_t nparam);
+                       uint32_t nparam, bool others);
 /* Pool node m, with px primitives, records of rx vec4 in all and no unary
  * node, was just linked under a binary operator: splices it into t->lin
  * (room reserved). Returns whether the box must be measured again. */

@@ -218,16 +218,19 @@ static void damage_begin(const struct flow *f, uint32_t id, struct damage *d)
 	d->n = (s - l->first[s]) / 2 + 1;
 	if (d->n <= BC_SRV_DAMAGE_PRIMS &&
 	    (d->old = bc_calloc(d->n, sizeof(*d->old)))) {
-		memcpy(d->old, l->abv + d->k0, d->n * sizeof(*d->old));
+		for (uint32_t k = 0; k < d->n; k++) {
+			bc_lin_abv(l, d->k0 + k, &d->old[k]);
+		}
 	}
 }
 
-/* Marks in each view the tiles the ABVs a[0..na) and b[0..nb) can reach
- * (all of them when `all`). */
+/* Marks in each view the tiles the ABVs a[0..na) and l's of primitives
+ * k0 .. k0 + nb - 1 can reach (all of them when `all`). */
 static void mark_views(struct bc_work *w, const struct flow *f,
                        struct view **views, uint32_t nviews,
                        const struct bc_abv *a, uint32_t na,
-                       const struct bc_abv *b, uint32_t nb, bool all)
+                       const struct bc_lin *l, uint32_t k0, uint32_t nb,
+                       bool all)
 {
 	for (uint32_t i = 0; i < nviews; i++) {
 		struct view *v = views[i];
@@ -244,8 +247,10 @@ static void mark_views(struct bc_work *w, const struct flow *f,
 			                   v->height, &a[k], v->damage);
 		}
 		for (uint32_t k = 0; k < nb; k++) {
+			struct bc_abv b;
+			bc_lin_abv(l, k0 + k, &b);
 			bc_renderer_damage(f->r, &v->camera, v->width,
-			                   v->height, &b[k], v->damage);
+			                   v->height, &b, v->damage);
 		}
 	}
 }
@@ -254,8 +259,8 @@ static void damage_end(struct bc_work *w, const struct flow *f,
                        struct view **views, uint32_t nviews, struct damage *d)
 {
 	const struct bc_lin *l = bc_tree_lin(f->tree);
-	mark_views(w, f, views, nviews, d->old, d->n, l ? l->abv + d->k0 : NULL,
-	           d->n, !d->old || !l);
+	mark_views(w, f, views, nviews, d->old, d->n, l, d->k0, d->n,
+	           !d->old || !l);
 	bc_free(d->old);
 	d->old = NULL;
 }
@@ -282,7 +287,7 @@ static bool damage_spliced(struct bc_work *w, struct flow *f)
 	}
 	n = d.prim_hi - d.prim_lo;
 	nviews = bc__views_of(w, f->sid, views);
-	mark_views(w, f, views, nviews, d.gone, d.ngone, l->abv + d.prim_lo, n,
+	mark_views(w, f, views, nviews, d.gone, d.ngone, l, d.prim_lo, n,
 	           n > BC_SRV_DAMAGE_PRIMS);
 	for (uint32_t i = 0; i < nviews; i++) {
 		bc__view_release(w, views[i]);

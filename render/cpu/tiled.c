@@ -499,9 +499,10 @@ static void prim_setup(const struct tiled_frame *tf, uint32_t k,
                        struct ab_prim *p)
 {
 	const struct bc__frame_ctx *fc = tf->fc;
-	struct bc_abv wide;
+	struct bc_abv abv, wide;
 	float lo[3], hi[3], c[3], dist2;
-	p->margin = widened_abv(fc, &fc->lin->abv[k], &wide, lo, hi);
+	bc_lin_abv(fc->lin, k, &abv);
+	p->margin = widened_abv(fc, &abv, &wide, lo, hi);
 	p->shape = (uint8_t)wide.shape;
 	p->rect = project_box(tf, lo, hi);
 	bounding_sphere(&wide, lo, hi, c, &p->radius);
@@ -1096,7 +1097,7 @@ static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
 	const struct bc__tiled_bufs *b = tf->b;
 	const struct cone *cones = &b->cones[CONES_PER_TILE * tile];
 	const float *eye = tf->fc->vr.eye;
-	const struct bc_abv *abv = tf->fc->lin->abv;
+	const struct bc_lin *lin = tf->fc->lin;
 	uint32_t n = 0;
 	float lo = INFINITY, hi = -INFINITY, inv;
 	struct bc__zq z;
@@ -1129,8 +1130,9 @@ static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
 			/* The sphere around a sphere is itself. */
 			tf->kern.sphere(rays, lanes, p->v, p->radius, t);
 		} else {
-			struct bc_abv wide;
-			widen_by(&abv[k], p->margin, &wide);
+			struct bc_abv abv, wide;
+			bc_lin_abv(lin, k, &abv);
+			widen_by(&abv, p->margin, &wide);
 			tf->kern.abv(rays, lanes, &wide, eye, t);
 		}
 		if (t[1] >= t[0]) {

@@ -74,7 +74,8 @@ static void sign_props(int ntrees, float rate)
 			uint32_t n = 0;
 			random_box(l, lo, hi);
 			for (uint32_t k = 0; k < l->nprims; k++) {
-				if (bc_abv_meets_box(&l->abv[k], lo, hi)) {
+				struct bc_abv a = bc_lin_abv_of(l, k);
+				if (bc_abv_meets_box(&a, lo, hi)) {
 					active[n++] = k;
 				}
 			}
@@ -155,7 +156,8 @@ static void drop_props(int ntrees, float rate)
 		for (int s = 0; s < 60; s++) {
 			float p[3], full, sparse;
 			random_point(l->lo, l->hi, p);
-			if (bc_abv_meets_box(&l->abv[drop], p, p)) {
+			struct bc_abv a = bc_lin_abv_of(l, drop);
+			if (bc_abv_meets_box(&a, p, p)) {
 				continue;
 			}
 			full = bc_eval_full(l, p);

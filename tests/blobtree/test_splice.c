@@ -74,9 +74,18 @@ static const char *lin_differs(const struct bc_tree *ta,
 		}
 	}
 	if (!same(a->prim_slot, b->prim_slot, k * 4) ||
-	    !same(a->abv, b->abv, k * sizeof(*a->abv)) ||
 	    !same(a->color, b->color, k * sizeof(*a->color))) {
-		return "primitive slots, ABVs or colours";
+		return "primitive slots or colours";
+	}
+	/* A layout of spheres alone that a splice brought another kind into
+	 * keeps whole ABVs, one laid out again may not: the ABVs must
+	 * agree. */
+	for (size_t i = 0; i < k; i++) {
+		struct bc_abv x = bc_lin_abv_of(a, (uint32_t)i),
+		              y = bc_lin_abv_of(b, (uint32_t)i);
+		if (!same(&x, &y, sizeof(x))) {
+			return "ABVs";
+		}
 	}
 	if (!same(a->param, b->param, 4 * (size_t)a->nparam * sizeof(float))) {
 		return "parameter records";
@@ -217,7 +226,7 @@ static void prims_of(const struct bc_tree *t, struct prims *p)
 	REQUIRE(p->n <= 1024);
 	for (uint32_t k = 0; k < p->n; k++) {
 		p->id[k] = l->node_id[l->prim_slot[k]];
-		p->abv[k] = l->abv[k];
+		p->abv[k] = bc_lin_abv_of(l, k);
 	}
 }
 

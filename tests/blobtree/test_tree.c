@@ -91,7 +91,7 @@ static void layout_follows_the_paper(void)
 	CHECK(l->roi[2 * 3] == -0.3f && l->roi[2 * 3 + 1] == 0.0f);
 	CHECK(l->roi[2 * 4] == 0.0f && l->roi[2 * 4 + 1] == 0.3f);
 	/* ABV of D is its sphere grown by r+ = 0.3. */
-	CHECK_NEAR(l->abv[3].radius, 0.25f + 0.3f, 1e-6f);
+	CHECK_NEAR(bc_lin_abv_of(l, 3).radius, 0.25f + 0.3f, 1e-6f);
 	CHECK_EQ_INT(l->kills[4], 1);
 	CHECK_EQ_INT(l->kills[3], 0);
 	bc_tree_destroy(t);
@@ -166,7 +166,8 @@ static int lin_diff(const struct bc_lin *a, const struct bc_lin *b)
 	diffs += memcmp(a->param, b->param, 16u * a->nparam) != 0;
 	diffs += memcmp(a->color, b->color, 12u * a->nprims) != 0;
 	for (uint32_t k = 0; k < a->nprims; k++) {
-		diffs += memcmp(&a->abv[k], &b->abv[k], sizeof(a->abv[k])) != 0;
+		struct bc_abv x = bc_lin_abv_of(a, k), y = bc_lin_abv_of(b, k);
+		diffs += memcmp(&x, &y, sizeof(x)) != 0;
 	}
 	return diffs;
 }
@@ -749,6 +750,101 @@ static void a_sphere_record_is_one_vec4(void)
 	bc_tree_destroy(t);
 }
 
+/* One primitive (id 0: the tree picks) as the whole of sub. */
+static void one_prim(struct bc_tree *sub, const struct bc_prim_data *p)
+{
+	bc_tree_begin(sub);
+	bc_tree_put_prim(sub, 0, p, NULL);
+	REQUIRE(bc_tree_end(sub, NULL) == 0);
+}
+
+/* The layout of t against one laid out whole from a copy of it. */
+static int differs_from_a_copy(const struct bc_tree *t)
+{
+	struct bc_tree *fresh = bc_tree_create();
+	int diffs = 1000;
+	if (fresh && bc_tree_copy(fresh, t, NULL) == 0) {
+		diffs = lin_diff(bc_tree_lin(fresh), bc_tree_lin(t));
+	}
+	bc_tree_destroy(fresh);
+	return diffs;
+}
+
+/* A layout of spheres alone keeps their ABVs as centre and radius (16
+ * bytes, not 68), read back as the sphere ABVs a full layout places; a
+ * parameter edit and a spliced sphere keep that form, a spliced box turns
+ * it into whole ABVs once (equal to a full layout's), the box's removal
+ * leaves them so until a layout whole picks again, and a unary node's
+ * layout keeps whole ABVs. */
+static void spheres_alone_keep_sphere_abvs(void)
+{
+	struct bc_tree *t = bc_tree_create(), *sub = bc_tree_create();
+	struct bc_op_data u = {BC_OP_SMOOTH_UNION, 0.2f, 0.3f};
+	struct bc_prim_data p;
+	const struct bc_lin *l;
+	uint32_t box;
+	REQUIRE(t && sub);
+	bc_tree_begin(t);
+	REQUIRE(bc_tree_push_op(t, 1, &u, NULL) == 0);
+	for (uint32_t i = 0; i < 40; i++) {
+		sphere(&p, 0.1f + 0.01f * (float)i, 0.2f * (float)i);
+		p.translate[1] = (float)(i % 3);
+		REQUIRE(bc_tree_put_prim(t, 2 + i, &p, NULL) == 0);
+	}
+	REQUIRE(bc_tree_pop_op(t, NULL) == 0);
+	REQUIRE(bc_tree_end(t, NULL) == 0);
+	l = bc_tree_lin(t);
+	CHECK(l->sabv && !l->abv);
+	for (uint32_t k = 0; k < l->nprims; k++) {
+		struct bc_abv a = bc_lin_abv_of(l, k);
+		CHECK(a.shape == BC_ABV_SPHERE);
+		CHECK_NEAR(a.radius, 0.1f + 0.01f * (float)k + 0.3f, 1e-6f);
+	}
+	REQUIRE(bc_tree_get(t, 7, &p, NULL));
+	p.params[0] = 0.9f;
+	REQUIRE(bc_tree_set_prim(t, 7, &p, NULL) == 0);
+	sphere(&p, 0.5f, -3.0f);
+	one_prim(sub, &p);
+	REQUIRE(bc_tree_insert(t, 1, 5, sub, NULL) == 0);
+	l = bc_tree_lin(t);
+	CHECK(l->sabv && !l->abv);
+	CHECK_EQ_INT(differs_from_a_copy(t), 0);
+	bc_prim_data_init(&p, BC_PRIM_BOX);
+	p.params[0] = p.params[1] = p.params[2] = 0.3f;
+	one_prim(sub, &p);
+	REQUIRE(bc_tree_insert(t, 1, 10, sub, NULL) == 0);
+	l = bc_tree_lin(t);
+	CHECK(l->abv && !l->sabv);
+	CHECK_EQ_INT(differs_from_a_copy(t), 0);
+	box = bc_tree_child(t, 1, 10);
+	CHECK(bc_tree_get(t, box, &p, NULL) && p.kind == BC_PRIM_BOX);
+	REQUIRE(bc_tree_remove(t, box, NULL) == 0);
+	l = bc_tree_lin(t);
+	CHECK(l->abv && !l->sabv);
+	CHECK_EQ_INT(differs_from_a_copy(t), 0);
+	REQUIRE(bc_tree_relayout(t, NULL) == 0);
+	l = bc_tree_lin(t);
+	CHECK(l->sabv && !l->abv);
+	CHECK_EQ_INT(differs_from_a_copy(t), 0);
+	{
+		struct bc_unary off;
+		bc_unary_init(&off, BC_OP_OFFSET);
+		off.u[0] = 0.1f;
+		bc_tree_begin(sub);
+		REQUIRE(bc_tree_push_unary(sub, 0, &off, NULL) == 0);
+		sphere(&p, 0.2f, 5.0f);
+		REQUIRE(bc_tree_put_prim(sub, 0, &p, NULL) == 0);
+		REQUIRE(bc_tree_pop_op(sub, NULL) == 0);
+		REQUIRE(bc_tree_end(sub, NULL) == 0);
+	}
+	REQUIRE(bc_tree_insert(t, 1, 0, sub, NULL) == 0);
+	l = bc_tree_lin(t);
+	CHECK(l->abv && !l->sabv);
+	CHECK_EQ_INT(differs_from_a_copy(t), 0);
+	bc_tree_destroy(sub);
+	bc_tree_destroy(t);
+}
+
 static const struct bc_test tests[] = {
     {"layout_follows_the_paper", layout_follows_the_paper},
     {"ids_found_in_place_and_in_the_map", ids_found_in_place_and_in_the_map},
@@ -763,5 +859,6 @@ static const struct bc_test tests[] = {
     {"allocation_failures_are_clean", allocation_failures_are_clean},
     {"prim_data_kept_through_edits", prim_data_kept_through_edits},
     {"a_sphere_record_is_one_vec4", a_sphere_record_is_one_vec4},
+    {"spheres_alone_keep_sphere_abvs", spheres_alone_keep_sphere_abvs},
 };
 BC_TEST_MAIN(tests)

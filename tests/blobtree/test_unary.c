@@ -424,7 +424,8 @@ static void abvs_contain_every_point_within_the_roi(void)
 				p[j] = rt_float(l->lo[j] - 0.2f * ext,
 				                l->hi[j] + 0.2f * ext);
 			}
-			if (bc_abv_meets_box(&l->abv[k], p, p)) {
+			struct bc_abv a = bc_lin_abv_of(l, k);
+			if (bc_abv_meets_box(&a, p, p)) {
 				continue;
 			}
 			checked++;
@@ -748,7 +749,8 @@ static bool layout_box(const struct bc_tree *t, uint32_t id, float lo[3],
 	}
 	for (uint32_t k = k0; k < k0 + n; k++) {
 		float a[3], b[3];
-		bc_abv_aabb(&l->abv[k], a, b);
+		struct bc_abv v = bc_lin_abv_of(l, k);
+		bc_abv_aabb(&v, a, b);
 		for (int i = 0; i < 3; i++) {
 			lo[i] = fminf(lo[i], a[i]);
 			hi[i] = fmaxf(hi[i], b[i]);

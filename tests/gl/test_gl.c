@@ -884,12 +884,13 @@ static void test_refinement_equals_whole(void)
  * after an edit. */
 static void mark_damage(struct bc_renderer *r, const struct bc_camera *cam,
                         uint32_t w, uint32_t h, const struct bc_abv *before,
-                        const struct bc_abv *after, uint32_t k0, uint32_t k1,
+                        const struct bc_lin *after, uint32_t k0, uint32_t k1,
                         uint8_t *tiles)
 {
 	for (uint32_t k = k0; k < k1; k++) {
+		struct bc_abv a = bc_lin_abv_of(after, k);
 		bc_renderer_damage(r, cam, w, h, &before[k], tiles);
-		bc_renderer_damage(r, cam, w, h, &after[k], tiles);
+		bc_renderer_damage(r, cam, w, h, &a, tiles);
 	}
 }
 
@@ -1004,7 +1005,9 @@ static void test_damage_regions_equal_whole(void)
 			struct bc_render_stats st;
 			struct bc_dirty dirty;
 			uint32_t k0, k1, lo, hi, b;
-			memcpy(before, l->abv, l->nprims * sizeof(*before));
+			for (uint32_t k = 0; k < l->nprims; k++) {
+				before[k] = bc_lin_abv_of(l, k);
+			}
 			tried++;
 			if (random_edit(t, &k0, &k1)) {
 				refused++;
@@ -1021,8 +1024,7 @@ static void test_damage_regions_equal_whole(void)
 			         ? dirty.prim_hi
 			         : k1;
 			memset(tiles, 0, ntiles);
-			mark_damage(r, &cam, w, h, before, l->abv, lo, hi,
-			            tiles);
+			mark_damage(r, &cam, w, h, before, l, lo, hi, tiles);
 			REQUIRE(draw_region(r, &cam, &acc, tiles, 0, false,
 			                    &st) == 0);
 			ms_region += st.ms_total;

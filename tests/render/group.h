@@ -26,6 +26,7 @@ static inline int group_move(struct bc_tree *t, struct bc_renderer *r,
 		const struct bc_lin *l = bc_tree_lin(t);
 		uint32_t id = bc_tree_child(t, root, k);
 		struct bc_prim_data p;
+		struct bc_abv a;
 		int rc;
 		if (!id || !bc_tree_get(t, id, &p, NULL) ||
 		    l->node_id[l->prim_slot[k]] != id) {
@@ -34,13 +35,14 @@ static inline int group_move(struct bc_tree *t, struct bc_renderer *r,
 			                      "primitive %u",
 			                      k, k);
 		}
-		bc_renderer_damage(r, cam, w, h, &l->abv[k], tiles);
+		a = bc_lin_abv_of(l, k);
+		bc_renderer_damage(r, cam, w, h, &a, tiles);
 		p.translate[0] += d;
 		if ((rc = bc_tree_set_prim(t, id, &p, ei))) {
 			return rc;
 		}
-		bc_renderer_damage(r, cam, w, h, &bc_tree_lin(t)->abv[k],
-		                   tiles);
+		a = bc_lin_abv_of(bc_tree_lin(t), k);
+		bc_renderer_damage(r, cam, w, h, &a, tiles);
 	}
 	return 0;
 }

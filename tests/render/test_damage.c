@@ -598,7 +598,9 @@ static void damage_scene(enum bc_backend b, const struct scene *s, uint32_t n,
 		struct bc_dirty dirty;
 		struct edit e;
 		uint64_t bad, marked = 0;
-		memcpy(old, l->abv, l->nprims * sizeof(*old));
+		for (uint32_t k = 0; k < l->nprims; k++) {
+			old[k] = bc_lin_abv_of(l, k);
+		}
 		if (random_edit(t, ids, nids, size, &e) != 0) {
 			ty->skipped++;
 			continue;
@@ -613,8 +615,9 @@ static void damage_scene(enum bc_backend b, const struct scene *s, uint32_t n,
 		}
 		memset(tiles, 0, nt);
 		for (uint32_t k = dirty.prim_lo; k < dirty.prim_hi; k++) {
+			struct bc_abv now = bc_lin_abv_of(l, k);
 			bc_renderer_damage(r, &cam, w, h, &old[k], tiles);
-			bc_renderer_damage(r, &cam, w, h, &l->abv[k], tiles);
+			bc_renderer_damage(r, &cam, w, h, &now, tiles);
 		}
 		for (size_t k = 0; k < nt; k++) {
 			marked += tiles[k] != 0;
@@ -899,7 +902,8 @@ static void splice_scene(const struct scene *s, uint32_t n,
 		}
 		for (uint32_t k = dirty.prim_lo; follows && k < dirty.prim_hi;
 		     k++) {
-			bc_renderer_damage(r, &cam, w, h, &l->abv[k], tiles);
+			struct bc_abv now = bc_lin_abv_of(l, k);
+			bc_renderer_damage(r, &cam, w, h, &now, tiles);
 		}
 		for (size_t k = 0; k < nt; k++) {
 			marked += tiles[k] != 0;
@@ -1284,7 +1288,8 @@ static void key_backend(enum bc_backend b)
 	id = 0;
 	for (uint32_t k = 0; k < l->nprims; k++) {
 		float lo[3], hi[3];
-		bc_abv_aabb(&l->abv[k], lo, hi);
+		struct bc_abv a = bc_lin_abv_of(l, k);
+		bc_abv_aabb(&a, lo, hi);
 		if (hi[0] == l->hi[0]) {
 			id = l->node_id[l->prim_slot[k]];
 		}

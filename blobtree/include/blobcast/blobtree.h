@@ -641,8 +641,14 @@ struct bc_lin {
 	float *roi;        /* 2 per slot: r-, r+ (paper eq. 13-16) */
 	/* Per primitive. */
 	uint32_t *prim_slot; /* slot of primitive k */
-	struct bc_abv *abv;  /* world ABV of primitive k */
-	float (*color)[3];   /* colour of primitive k */
+	/* World ABV of primitive k: read it through bc_lin_abv(). A layout
+	 * of spheres alone, without unary nodes, whose ABVs are all spheres,
+	 * keeps their centres and radii in sabv (16 bytes a primitive) and
+	 * abv is NULL; any other keeps the whole ABV in abv (68 bytes) and
+	 * sabv is NULL. */
+	struct bc_abv *abv;
+	float (*sabv)[4];
+	float (*color)[3]; /* colour of primitive k */
 	/* Parameter records: vec4 stride, nparam vec4s. */
 	float *param;
 	uint32_t nparam;
@@ -728,6 +734,24 @@ static inline uint32_t bc_lin_type(const struct bc_lin *l, uint32_t slot)
 {
 	return (l->node[2 * slot] >> BC_WORD_TYPE_SHIFT) & BC_WORD_TYPE_MASK;
 }
+/* Primitive k's world ABV. */
+static inline struct bc_abv bc_lin_abv_of(const struct bc_lin *l, uint32_t k)
+{
+	if (l->abv) {
+		return l->abv[k];
+	}
+	return (struct bc_abv){
+	    .shape = BC_ABV_SPHERE,
+	    .center = {l->sabv[k][0], l->sabv[k][1], l->sabv[k][2]},
+	    .radius = l->sabv[k][3]};
+}
+/* The same, written to *out. */
+static inline void bc_lin_abv(const struct bc_lin *l, uint32_t k,
+                              struct bc_abv *out)
+{
+	*out = bc_lin_abv_of(l, k);
+}
+
 /* Primitive kind of a leaf, operator kind of an operator slot. */
 static inline uint32_t bc_lin_kind(const struct bc_lin *l, uint32_t slot)
 {
