@@ -74,7 +74,7 @@ bool bc_scene_walk_next(struct bc_scene_walk *w, struct bc_scene_node *out)
 		if (bc__node_unary(nd)) {
 			out->op.kind = nd->u.op.kind;
 			out->unary.kind = nd->u.op.kind;
-			memcpy(out->unary.u, nd->u.uparam,
+			memcpy(out->unary.u, bc__uparam(t, nd),
 			       sizeof(out->unary.u));
 		} else {
 			out->op = nd->u.op;
@@ -171,7 +171,7 @@ static void put_node(struct bc_buf *b, const struct bc_tree *t,
 		bc_put_le32(p, nd->id);
 		p += 4;
 		*p++ = (uint8_t)nf;
-		p = at_f32s(p, nd->u.uparam, nf);
+		p = at_f32s(p, bc__uparam(t, nd), nf);
 	} else if (nd->is_op) {
 		*p++ = (uint8_t)(BC_SCENE_TAG_OP | (uint32_t)nd->u.op.kind);
 		bc_put_le32(p, nd->id);

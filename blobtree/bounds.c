@@ -64,7 +64,7 @@ static void enter_unary(struct walk *w, const struct bc__node *n, float *lo,
                         float *hi)
 {
 	float rec[4 * BC_UNARY_RECORD_VEC4];
-	bc__unary_record(rec, n);
+	bc__unary_record(rec, w->t, n);
 	bc__roi_unary(n->u.op.kind, rec, lo, hi);
 	if (bc_op_is_domain(n->u.op.kind)) {
 		w->dom[w->ndom].kind = n->u.op.kind;

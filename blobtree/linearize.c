@@ -233,10 +233,12 @@ static void write_prim_record(float *rec, const struct bc_prim_data *p)
 	bc_prim_pack(p, rec + 12);
 }
 
-void bc__unary_record(float *rec, const struct bc__node *n)
+void bc__unary_record(float *rec, const struct bc_tree *t,
+                      const struct bc__node *n)
 {
+	const float *u = bc__uparam(t, n);
 	memset(rec, 0, 4 * BC_UNARY_RECORD_VEC4 * sizeof(float));
-	memcpy(rec, n->u.uparam, sizeof(n->u.uparam));
+	memcpy(rec, u, BC_UNARY_MAX_PARAMS * sizeof(float));
 	switch (n->u.op.kind) {
 	case BC_OP_TWIST:
 	case BC_OP_BEND:
@@ -244,7 +246,7 @@ void bc__unary_record(float *rec, const struct bc__node *n)
 		rec[2] = 1.0f;
 		break;
 	case BC_OP_SCALE:
-		rec[1] = 1.0f / n->u.uparam[0];
+		rec[1] = 1.0f / u[0];
 		break;
 	default:
 		break;
@@ -384,7 +386,7 @@ void bc__lin_emit(struct bc_tree *t, struct bc__fill *fs, uint32_t top)
 				nd->u.unary = fs->unary++;
 				fs->param += BC_UNARY_RECORD_VEC4;
 				bc__unary_record(
-				    l->param + 4u * (size_t)y->param, nd);
+				    l->param + 4u * (size_t)y->param, t, nd);
 				l->unary_param[nd->u.unary] = y->param;
 				l->unary_kind[nd->u.unary] =
 				    (uint32_t)nd->u.op.kind;
@@ -904,7 +906,7 @@ void bc__lin_update_unary(struct bc_tree *t, const struct bc__node *n)
 	const struct bc__lay *y = bc__lay(t, n);
 	uint32_t first = l->first[y->slot];
 	l->unary_kind[n->u.unary] = (uint32_t)n->u.op.kind;
-	bc__unary_record(l->param + 4u * (size_t)y->param, n);
+	bc__unary_record(l->param + 4u * (size_t)y->param, t, n);
 	for (uint32_t s = y->slot + 1; s-- > first;) {
 		propagate(l, s);
 	}

@@ -140,22 +140,16 @@ static int grown_cap(uint32_t have, uint64_t need, uint32_t *cap)
 	return 0;
 }
 
-/* Room for `more` chunks of the xpar store (struct bc_tree): the same
- * count as the pool's nodes, since any of them may be a primitive of two
- * or more parameters. Room nobody writes costs address space only. */
-static int xpar_reserve(struct bc_tree *t, uint32_t more)
+/* Room for a chunk of the xpar store (struct bc_tree) for each of the
+ * pool's cap nodes: any of them may come to need one (a primitive of two
+ * or more parameters, or rotated, or a unary node), and each takes one at
+ * most, so that a chunk is there whenever a node asks (xpar_take). Room
+ * nobody writes costs address space only. */
+static int xpar_reserve(struct bc_tree *t, uint32_t cap)
 {
-	uint32_t free_count = 0, cap;
 	float *grown;
-	int rc;
-	for (uint32_t f = t->xpar_free; f != BC_NONE && free_count < more;) {
-		free_count++;
-		memcpy(&f, &t->xpar[(size_t)f * BC__XPAR_FLOATS], sizeof(f));
-	}
-	if ((rc = grown_cap(t->xpar_cap,
-	                    (uint64_t)t->nxpar + (more - free_count), &cap)) ||
-	    cap == 0) {
-		return rc;
+	if (cap <= t->xpar_cap) {
+		return 0;
 	}
 	grown =
 	    bc_reallocarray(t->xpar, cap, BC__XPAR_FLOATS * sizeof(*t->xpar));
@@ -167,6 +161,30 @@ static int xpar_reserve(struct bc_tree *t, uint32_t more)
 	return 0;
 }
 
+/* A chunk, from the free chain or the store's end (room reserved). */
+static uint32_t xpar_take(struct bc_tree *t)
+{
+	uint32_t x;
+	if (t->xpar_free != BC_NONE) {
+		x = t->xpar_free;
+		memcpy(&t->xpar_free, &t->xpar[(size_t)x * BC__XPAR_FLOATS],
+		       sizeof(t->xpar_free));
+	} else {
+		x = t->nxpar++;
+	}
+	return x;
+}
+
+static float *xpar_at(const struct bc_tree *t, uint32_t x)
+{
+	return &t->xpar[(size_t)x * BC__XPAR_FLOATS];
+}
+
+const float *bc__uparam(const struct bc_tree *t, const struct bc__node *n)
+{
+	return xpar_at(t, n->xpar);
+}
+
 static int pool_reserve(struct bc_tree *t, uint32_t more)
 {
 	uint32_t free_count = 0, cap;
@@ -176,10 +194,9 @@ static int pool_reserve(struct bc_tree *t, uint32_t more)
 	     f = t->pool[f].next) {
 		free_count++;
 	}
-	if ((rc = xpar_reserve(t, more)) ||
-	    (rc = grown_cap(t->cap, (uint64_t)t->npool + (more - free_count),
+	if ((rc = grown_cap(t->cap, (uint64_t)t->npool + (more - free_count),
 	                    &cap)) ||
-	    cap == 0) {
+	    cap == 0 || (rc = xpar_reserve(t, cap))) {
 		return rc;
 	}
 	if (!t->bare) {
@@ -233,7 +250,7 @@ static uint32_t pool_take(struct bc_tree *t)
 	t->pool[n].next = BC_NONE;
 	t->pool[n].prev = BC_NONE;
 	t->pool[n].live = true;
-	t->pool[n].u.prim.xpar = BC_NONE; /* no chunk until prim_write */
+	t->pool[n].xpar = BC_NONE; /* no chunk until asked for */
 	if (t->lay) {
 		/* No splice to follow: its place is written before read. */
 		memset(&t->lay[n], 0, sizeof(t->lay[n]));
@@ -250,50 +267,45 @@ static void pool_release(struct bc_tree *t, uint32_t n)
 		/* Its children are gone, or going. */
 		kids_drop(t, n, false);
 	}
-	if (!t->pool[n].is_op && t->pool[n].u.prim.xpar != BC_NONE) {
-		uint32_t x = t->pool[n].u.prim.xpar;
-		memcpy(&t->xpar[(size_t)x * BC__XPAR_FLOATS], &t->xpar_free,
-		       sizeof(x));
+	if (t->pool[n].xpar != BC_NONE) {
+		uint32_t x = t->pool[n].xpar;
+		memcpy(xpar_at(t, x), &t->xpar_free, sizeof(x));
 		t->xpar_free = x;
-		t->pool[n].u.prim.xpar = BC_NONE;
+		t->pool[n].xpar = BC_NONE;
 	}
 	t->pool[n].live = false;
 	t->pool[n].next = t->free_head;
 	t->free_head = n;
 }
 
-/* Writes p into primitive node n: fresh, a node just taken (it takes a
- * chunk of the xpar store if p's kind has two or more parameters, from
- * room reserved with the node); otherwise a node of p's kind already,
- * which keeps its chunk. */
+static const float identity_rotation[4] = {0.0f, 0.0f, 0.0f, 1.0f};
+
+/* Writes p into primitive node n: fresh, a node just taken; otherwise a
+ * node of p's kind already. It takes a chunk of the xpar store (room
+ * reserved with the pool) when p's kind has two or more parameters or p
+ * a rotation other than the identity (bit for bit) and it has none, and
+ * keeps one it has. */
 static void prim_write(struct bc_tree *t, struct bc__node *n,
                        const struct bc_prim_data *p, bool fresh)
 {
 	struct bc__prim_room *r = &n->u.prim;
-	uint32_t np = bc_scene_prim_nfloats(p->kind);
+	bool chunk = bc_scene_prim_nfloats(p->kind) > 1 ||
+	             memcmp(p->rotate, identity_rotation, sizeof(p->rotate));
 	if (fresh) {
-		r->xpar = BC_NONE;
-		if (np > 1) {
-			if (t->xpar_free != BC_NONE) {
-				r->xpar = t->xpar_free;
-				memcpy(
-				    &t->xpar_free,
-				    &t->xpar[(size_t)r->xpar * BC__XPAR_FLOATS],
-				    sizeof(t->xpar_free));
-			} else {
-				r->xpar = t->nxpar++;
-			}
-		}
+		n->xpar = BC_NONE;
+	}
+	if (chunk && n->xpar == BC_NONE) {
+		n->xpar = xpar_take(t);
 	}
 	n->pkind = (uint8_t)p->kind;
 	n->has_color = p->has_color;
 	r->p0 = p->params[0];
-	if (r->xpar != BC_NONE) {
-		memcpy(&t->xpar[(size_t)r->xpar * BC__XPAR_FLOATS],
-		       &p->params[1], BC__XPAR_FLOATS * sizeof(float));
+	if (n->xpar != BC_NONE) {
+		float *x = xpar_at(t, n->xpar);
+		memcpy(x, &p->params[1], BC__XPAR_PARAMS * sizeof(float));
+		memcpy(x + BC__XPAR_PARAMS, p->rotate, sizeof(p->rotate));
 	}
 	memcpy(r->translate, p->translate, sizeof(r->translate));
-	memcpy(r->rotate, p->rotate, sizeof(r->rotate));
 	memcpy(r->color, p->color, sizeof(r->color));
 }
 
@@ -305,13 +317,14 @@ void bc__prim_read(const struct bc_tree *t, const struct bc__node *n,
 	out->kind = (enum bc_prim)n->pkind;
 	out->has_color = n->has_color;
 	out->params[0] = r->p0;
-	if (r->xpar != BC_NONE) {
-		memcpy(&out->params[1],
-		       &t->xpar[(size_t)r->xpar * BC__XPAR_FLOATS],
-		       BC__XPAR_FLOATS * sizeof(float));
+	if (n->xpar != BC_NONE) {
+		const float *x = xpar_at(t, n->xpar);
+		memcpy(&out->params[1], x, BC__XPAR_PARAMS * sizeof(float));
+		memcpy(out->rotate, x + BC__XPAR_PARAMS, sizeof(out->rotate));
+	} else {
+		memcpy(out->rotate, identity_rotation, sizeof(out->rotate));
 	}
 	memcpy(out->translate, r->translate, sizeof(r->translate));
-	memcpy(out->rotate, r->rotate, sizeof(r->rotate));
 	memcpy(out->color, r->color, sizeof(r->color));
 }
 
@@ -1185,7 +1198,8 @@ int bc_tree_push_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
 	}
 	memset(&t->pool[n].u.op, 0, sizeof(t->pool[n].u.op));
 	t->pool[n].u.op.kind = u->kind;
-	memcpy(t->pool[n].u.uparam, u->u, sizeof(u->u));
+	t->pool[n].xpar = xpar_take(t);
+	memcpy(xpar_at(t, t->pool[n].xpar), u->u, sizeof(u->u));
 	t->nops++;
 	t->nunary_nodes++;
 	t->open[t->nopen++] = n;
@@ -1542,7 +1556,7 @@ int bc_tree_set_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
 		return rc;
 	}
 	t->pool[n].u.op.kind = u->kind;
-	memcpy(t->pool[n].u.uparam, u->u, sizeof(u->u));
+	memcpy(xpar_at(t, t->pool[n].xpar), u->u, sizeof(u->u));
 	if (!t->has_lin) {
 		t->dirty.edits++;
 		return 0;
@@ -1568,7 +1582,7 @@ bool bc_tree_get_unary(const struct bc_tree *t, uint32_t id,
 		return false;
 	}
 	out->kind = t->pool[n].u.op.kind;
-	memcpy(out->u, t->pool[n].u.uparam, sizeof(out->u));
+	memcpy(out->u, bc__uparam(t, &t->pool[n]), sizeof(out->u));
 	return true;
 }
 
@@ -1616,7 +1630,14 @@ static uint32_t copy_node(struct bc_tree *t, const struct bc_tree *sub,
 	uint32_t m = pool_take(t);
 	t->pool[m].is_op = sn->is_op;
 	if (sn->is_op) {
-		t->pool[m].u = sn->u; /* with a unary node's parameters */
+		t->pool[m].u = sn->u;
+		if (sn->xpar != BC_NONE) {
+			/* A unary node's parameters. */
+			t->pool[m].xpar = xpar_take(t);
+			memcpy(xpar_at(t, t->pool[m].xpar),
+			       xpar_at(sub, sn->xpar),
+			       BC__XPAR_FLOATS * sizeof(float));
+		}
 	} else {
 		struct bc_prim_data p;
 		bc__prim_read(sub, sn, &p);

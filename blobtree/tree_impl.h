@@ -7,26 +7,33 @@
 
 #include "blobcast/blobtree.h"
 
-/* A primitive's data as a pool node keeps it: 48 bytes, where struct
- * bc_prim_data takes 80 (eight parameters, of which a sphere uses one).
- * The first parameter float is here; a kind of two or more (a box's
- * three half extents, bc_scene_prim_nfloats) keeps the others in
- * a chunk of the tree's xpar store (struct bc_tree), which it takes when
- * the node is made and gives back when the node goes (a parameter edit
- * keeps the kind, so it never takes one). Kind and colour flag are in
- * the node's header. Read and written whole through bc__prim_read and
- * prim_write (tree.c). */
+/* A primitive's data as a pool node keeps it: 28 bytes, where struct
+ * bc_prim_data takes 80 (eight parameters, of which a sphere uses one,
+ * and a rotation, which most primitives of a big scene leave alone). The
+ * first parameter float, translation and colour are here; a kind of two
+ * or more parameters (a box's three half extents,
+ * bc_scene_prim_nfloats) or a primitive with a rotation other than the
+ * identity keeps the other parameters and the rotation in a chunk of the
+ * tree's xpar store (struct bc_tree, BC__XPAR_FLOATS), taken when the
+ * node needs it and given back when the node goes; the store keeps room
+ * for a chunk for every pool node, so that an edit that rotates a sphere
+ * cannot fail for memory. Kind and colour flag are in the node's
+ * header. Read and written whole through bc__prim_read and prim_write
+ * (tree.c). A unary node keeps its parameters in a chunk too. */
 struct bc__prim_room {
 	float p0;
-	uint32_t xpar; /* chunk index; BC_NONE for a kind of one parameter */
 	float translate[3];
-	float rotate[4];
 	float color[3];
 };
-#define BC__XPAR_FLOATS (BC_PRIM_MAX_PARAMS - 1)
+/* A chunk: a primitive's parameters past the first, then its rotation;
+ * or a unary node's parameters. */
+#define BC__XPAR_PARAMS (BC_PRIM_MAX_PARAMS - 1)
+#define BC__XPAR_FLOATS (BC__XPAR_PARAMS + 4)
+_Static_assert(BC_UNARY_MAX_PARAMS <= BC__XPAR_FLOATS,
+               "a unary node's parameters fit a chunk");
 
-/* One node of the editable n-ary model, in a pool addressed by index: 84
- * bytes (a million-sphere model, bare, about 90 bytes a primitive). */
+/* One node of the editable n-ary model, in a pool addressed by index: 68
+ * bytes (a million-sphere model, bare, about 72 bytes a primitive). */
 struct bc__node {
 	uint32_t id;
 	uint32_t parent; /* pool index, BC_NONE for the root or detached */
@@ -42,26 +49,29 @@ struct bc__node {
 	 * on a child that is one of its anchors. */
 	uint8_t kids;
 	uint8_t pkind; /* a primitive's enum bc_prim */
-	/* A primitive's data, or an operator's; a unary node (u.op.kind
-	 * says it is one) keeps its parameters beside its op, in the room a
-	 * primitive's data takes. */
+	/* Its chunk of the xpar store (struct bc__prim_room), BC_NONE. */
+	uint32_t xpar;
+	/* A primitive's data, or an operator's (a unary node, u.op.kind
+	 * says it is one, keeps its parameters in its chunk). */
 	union {
 		struct bc__prim_room prim;
 		struct {
 			struct bc_op_data op;
-			float uparam[BC_UNARY_MAX_PARAMS];
 			uint32_t unary; /* unary index (set by linearization) */
 		};
 	} u;
 };
 _Static_assert(BC_PRIM_COUNT <= 256, "a primitive's kind is one byte");
 /* Two of these a primitive in the daemon (the session's tree and the
- * render copy): docs/benchmarks.md, "A pool node in 84 bytes". */
-_Static_assert(sizeof(struct bc__node) <= 84, "a pool node grew");
+ * render copy): docs/benchmarks.md, "A pool node in 84 bytes" and "A
+ * rotation in the chunk". */
+_Static_assert(sizeof(struct bc__node) <= 68, "a pool node grew");
 
 /* Pool node n's primitive data, whole (n must be a primitive). */
 void bc__prim_read(const struct bc_tree *t, const struct bc__node *n,
                    struct bc_prim_data *out);
+/* Unary node n's parameters (BC_UNARY_MAX_PARAMS floats, its chunk). */
+const float *bc__uparam(const struct bc_tree *t, const struct bc__node *n);
 
 /* Where a node of a laid-out tree is in its layout (struct bc_tree's lay,
  * beside the pool, index for index): set by linearization. A bare tree
@@ -153,12 +163,13 @@ struct bc_tree {
 	struct bc__lay *lay;
 	uint32_t npool, cap;
 	uint32_t free_head; /* chain of dead pool entries through .next */
-	/* Parameters past the first of primitives of two or more (struct
-	 * bc__prim_room): chunks of BC__XPAR_FLOATS floats, nxpar of them
-	 * in use or on the free chain (through a chunk's first word, from
-	 * xpar_free), room for xpar_cap. pool_reserve reserves a chunk for
-	 * every node it reserves; pages of that room nobody writes are not
-	 * resident, so a scene of spheres costs none. */
+	/* Parameters past the first and rotations of the primitives that
+	 * need them, and unary nodes' parameters (struct bc__prim_room):
+	 * chunks of BC__XPAR_FLOATS floats, nxpar of them in use or on the
+	 * free chain (through a chunk's first word, from xpar_free), room for
+	 * xpar_cap, which pool_reserve keeps at least the pool's (each node
+	 * takes one at most); pages of that room nobody writes are not
+	 * resident, so a scene of unrotated spheres costs none. */
 	float *xpar;
 	uint32_t nxpar, xpar_cap, xpar_free;
 	struct bc__idmap ids;
@@ -459,7 +470,8 @@ void bc__abv_place(const struct bc_prim_data *p, float offset,
  * from its own; a unary node's record from its model node. */
 void bc__roi_operand(enum bc_op op, float ro, bool left, float *lo, float *hi);
 void bc__roi_unary(enum bc_op kind, const float *rec, float *lo, float *hi);
-void bc__unary_record(float *rec, const struct bc__node *n);
+void bc__unary_record(float *rec, const struct bc_tree *t,
+                      const struct bc__node *n);
 /* Maps a bounding shape from a domain node's child frame to its input
  * frame (kind, record rec): a shape holding every point whose mapped
  * point lies in the given one. Returns the radius about the axis for

@@ -589,12 +589,27 @@ static bool same_prim(const struct bc_prim_data *p,
 	return true;
 }
 
-/* A node keeps a primitive's parameters past the first in a chunk of a
- * store beside the pool, taken when the node is made and given back when
+/* rt_random_prim's primitive, rotated or not (whatever its kind) by a
+ * coin's toss. */
+static void any_prim(struct bc_prim_data *p)
+{
+	rt_random_prim(p);
+	if (rt_below(2)) {
+		rt_random_quat(p->rotate);
+	} else {
+		memset(p->rotate, 0, sizeof(p->rotate));
+		p->rotate[3] = 1.0f;
+	}
+}
+
+/* A node keeps a primitive's parameters past the first and its rotation
+ * in a chunk of a store beside the pool, taken when the node is made or a
+ * parameter edit rotates a primitive that had none, and given back when
  * it goes: 3000 random inserts, removals, replacements (of another kind)
  * and parameter edits over primitives of one to seven parameter floats,
- * laid out and bare, and every live primitive reads back as it was last
- * set, and the layout equals a fresh build's after each step. */
+ * rotated or not, laid out and bare, and every live primitive reads back
+ * as it was last set, and the layout equals a fresh build's after each
+ * step. */
 static void prim_data_kept_through_edits(void)
 {
 	enum { NIDS = 4000, STEPS = 3000 };
@@ -610,7 +625,7 @@ static void prim_data_kept_through_edits(void)
 		REQUIRE(bc_tree_begin(t) == 0);
 		REQUIRE(bc_tree_push_op(t, 1, &u, NULL) == 0);
 		for (; next < 10; next++) {
-			rt_random_prim(&want[next]);
+			any_prim(&want[next]);
 			REQUIRE(bc_tree_put_prim(t, next, &want[next], NULL) ==
 			        0);
 			live[next] = 1;
@@ -628,7 +643,7 @@ static void prim_data_kept_through_edits(void)
 					id = i;
 				}
 			}
-			rt_random_prim(&p);
+			any_prim(&p);
 			if (what == 0 && next < NIDS) {
 				REQUIRE((sub = prim_sub(next, &p)) != NULL);
 				REQUIRE(bc_tree_insert(t, 1,
@@ -650,7 +665,7 @@ static void prim_data_kept_through_edits(void)
 			} else {
 				struct bc_prim_data q;
 				do {
-					rt_random_prim(&q);
+					any_prim(&q);
 				} while (q.kind != want[id].kind);
 				REQUIRE(bc_tree_set_prim(t, id, &q, NULL) == 0);
 				want[id] = q;
