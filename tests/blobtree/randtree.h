@@ -47,11 +47,18 @@ static void rt_random_quat(float q[4])
 	}
 }
 
+/* The share of primitives drawn from every kind below; the others are
+ * spheres (a layout of spheres alone keeps sphere ABVs alone). */
+static float rt_other_kinds = 1.0f;
+
 static void rt_random_prim(struct bc_prim_data *p)
 {
 	static const enum bc_prim kinds[] = {BC_PRIM_SPHERE, BC_PRIM_BOX,
 	                                     BC_PRIM_CAPSULE, BC_PRIM_TORUS};
 	enum bc_prim kind = kinds[rt_below(4)];
+	if (rt_other_kinds < 1.0f && rt_float(0.0f, 1.0f) >= rt_other_kinds) {
+		kind = BC_PRIM_SPHERE;
+	}
 	memset(p, 0, sizeof(*p));
 	p->kind = kind;
 	p->rotate[3] = 1.0f;
