@@ -161,23 +161,22 @@ static int xpar_reserve(struct bc_tree *t, uint32_t cap)
 	return 0;
 }
 
+static float *xpar_at(const struct bc_tree *t, uint32_t x)
+{
+	return &t->xpar[(size_t)x * BC__XPAR_FLOATS];
+}
+
 /* A chunk, from the free chain or the store's end (room reserved). */
 static uint32_t xpar_take(struct bc_tree *t)
 {
 	uint32_t x;
 	if (t->xpar_free != BC_NONE) {
 		x = t->xpar_free;
-		memcpy(&t->xpar_free, &t->xpar[(size_t)x * BC__XPAR_FLOATS],
-		       sizeof(t->xpar_free));
+		memcpy(&t->xpar_free, xpar_at(t, x), sizeof(t->xpar_free));
 	} else {
 		x = t->nxpar++;
 	}
 	return x;
-}
-
-static float *xpar_at(const struct bc_tree *t, uint32_t x)
-{
-	return &t->xpar[(size_t)x * BC__XPAR_FLOATS];
 }
 
 const float *bc__uparam(const struct bc_tree *t, const struct bc__node *n)
@@ -1730,10 +1729,7 @@ static int prepare_graft(struct bc_tree *t, const struct bc_tree *sub,
 	} else if (!t->bare) {
 		rc = bc__splice_reserve(
 		    t, (uint32_t)(2u * prims - 1u), (uint32_t)prims,
-		    (uint32_t)(t->lin.nparam +
-		               bc__prim_recs(st.prims, st.spheres) +
-		               BC_OP_RECORD_VEC4 * (uint64_t)st.ops),
-		    st.spheres < st.prims);
+		    t->lin.nparam + tree_recs(sub), st.spheres < st.prims);
 	}
 	if (rc) {
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
