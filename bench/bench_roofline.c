@@ -216,7 +216,7 @@ static struct kernel_rate kernel_rate(const struct bc_lin *l, int reps)
 		return best;
 	}
 	for (uint32_t i = 0; i < l->nprims; i++) {
-		struct bc_abv a = bc_lin_abv_of(l, i);
+		struct bc_abv a = bc_lin_abv(l, i);
 		bc_abv_aabb(&a, lo[i], hi[i]);
 	}
 	bc_view_init(&view);

@@ -70,7 +70,7 @@ static int whole_abvs(struct bc_lin *l, uint32_t cap)
 		return BC_ENOMEM;
 	}
 	for (uint32_t k = 0; k < l->nprims; k++) {
-		bc_lin_abv(l, k, &abv[k]);
+		abv[k] = bc_lin_abv(l, k);
 	}
 	bc_free(l->sabv);
 	l->sabv = NULL;
@@ -252,7 +252,7 @@ static void note_gone(struct bc_tree *t, uint32_t k, uint32_t n)
 		return;
 	}
 	for (uint32_t i = 0; i < n; i++) {
-		bc_lin_abv(&t->lin, k + i, &d->gone[d->ngone++]);
+		d->gone[d->ngone++] = bc_lin_abv(&t->lin, k + i);
 	}
 }
 
@@ -361,7 +361,7 @@ static bool touches_box(const struct bc_lin *l, uint32_t k)
 {
 	float lo[3], hi[3];
 	struct bc_abv a;
-	bc_lin_abv(l, k, &a);
+	a = bc_lin_abv(l, k);
 	bc_abv_aabb(&a, lo, hi);
 	for (int i = 0; i < 3; i++) {
 		if (lo[i] <= l->lo[i] || hi[i] >= l->hi[i]) {
@@ -473,7 +473,7 @@ void bc__splice_finish(struct bc_tree *t, bool touch)
 		for (uint32_t k = 0; k < l->nprims; k++) {
 			float lo[3], hi[3];
 			struct bc_abv a;
-			bc_lin_abv(l, k, &a);
+			a = bc_lin_abv(l, k);
 			bc_abv_aabb(&a, lo, hi);
 			for (int i = 0; i < 3; i++) {
 				l->lo[i] = fminf(l->lo[i], lo[i]);

@@ -219,7 +219,7 @@ static void damage_begin(const struct flow *f, uint32_t id, struct damage *d)
 	if (d->n <= BC_SRV_DAMAGE_PRIMS &&
 	    (d->old = bc_calloc(d->n, sizeof(*d->old)))) {
 		for (uint32_t k = 0; k < d->n; k++) {
-			bc_lin_abv(l, d->k0 + k, &d->old[k]);
+			d->old[k] = bc_lin_abv(l, d->k0 + k);
 		}
 	}
 }
@@ -248,7 +248,7 @@ static void mark_views(struct bc_work *w, const struct flow *f,
 		}
 		for (uint32_t k = 0; k < nb; k++) {
 			struct bc_abv b;
-			bc_lin_abv(l, k0 + k, &b);
+			b = bc_lin_abv(l, k0 + k);
 			bc_renderer_damage(f->r, &v->camera, v->width,
 			                   v->height, &b, v->damage);
 		}

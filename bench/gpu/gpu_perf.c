@@ -361,7 +361,7 @@ static int edit_scene(struct bc_renderer *r, const struct gpu_opts *op,
 		uint32_t k =
 		    (uint32_t)(((uint64_t)i * 2654435761u) % l->nprims);
 		uint32_t id = l->node_id[l->prim_slot[k]];
-		struct bc_abv before = bc_lin_abv_of(l, k), after;
+		struct bc_abv before = bc_lin_abv(l, k), after;
 		struct bc_prim_data p;
 		struct bc_render_region reg = {.tiles = tiles};
 		double t0;
@@ -383,7 +383,7 @@ static int edit_scene(struct bc_renderer *r, const struct gpu_opts *op,
 		bytes += (double)info.upload_bytes;
 		memset(tiles, 0, (size_t)tw * th);
 		bc_renderer_damage(r, &cam, op->size, op->size, &before, tiles);
-		after = bc_lin_abv_of(bc_tree_lin(t), k);
+		after = bc_lin_abv(bc_tree_lin(t), k);
 		bc_renderer_damage(r, &cam, op->size, op->size, &after, tiles);
 		for (size_t j = 0; j < (size_t)tw * th; j++) {
 			marked += tiles[j] ? 1u : 0u;

@@ -501,7 +501,7 @@ static void prim_setup(const struct tiled_frame *tf, uint32_t k,
 	const struct bc__frame_ctx *fc = tf->fc;
 	struct bc_abv abv, wide;
 	float lo[3], hi[3], c[3], dist2;
-	bc_lin_abv(fc->lin, k, &abv);
+	abv = bc_lin_abv(fc->lin, k);
 	p->margin = widened_abv(fc, &abv, &wide, lo, hi);
 	p->shape = (uint8_t)wide.shape;
 	p->rect = project_box(tf, lo, hi);
@@ -1131,7 +1131,7 @@ static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
 			tf->kern.sphere(rays, lanes, p->v, p->radius, t);
 		} else {
 			struct bc_abv abv, wide;
-			bc_lin_abv(lin, k, &abv);
+			abv = bc_lin_abv(lin, k);
 			widen_by(&abv, p->margin, &wide);
 			tf->kern.abv(rays, lanes, &wide, eye, t);
 		}

@@ -217,7 +217,7 @@ static void fill_abvs(const struct bc_lin *l, uint32_t lo, uint32_t hi,
 		struct bc_abv abv;
 		const struct bc_abv *a = &abv;
 		float blo[3], bhi[3];
-		bc_lin_abv(l, k, &abv);
+		abv = bc_lin_abv(l, k);
 		memset(out, 0, BC_GL_ABV_FLOATS * sizeof(float));
 		bc_abv_aabb(a, blo, bhi);
 		for (int i = 0; i < 3; i++) {

@@ -74,7 +74,7 @@ static void sign_props(int ntrees, float rate)
 			uint32_t n = 0;
 			random_box(l, lo, hi);
 			for (uint32_t k = 0; k < l->nprims; k++) {
-				struct bc_abv a = bc_lin_abv_of(l, k);
+				struct bc_abv a = bc_lin_abv(l, k);
 				if (bc_abv_meets_box(&a, lo, hi)) {
 					active[n++] = k;
 				}
@@ -156,7 +156,7 @@ static void drop_props(int ntrees, float rate)
 		for (int s = 0; s < 60; s++) {
 			float p[3], full, sparse;
 			random_point(l->lo, l->hi, p);
-			struct bc_abv a = bc_lin_abv_of(l, drop);
+			struct bc_abv a = bc_lin_abv(l, drop);
 			if (bc_abv_meets_box(&a, p, p)) {
 				continue;
 			}

@@ -81,8 +81,8 @@ static const char *lin_differs(const struct bc_tree *ta,
 	 * keeps whole ABVs, one laid out again may not: the ABVs must
 	 * agree. */
 	for (size_t i = 0; i < k; i++) {
-		struct bc_abv x = bc_lin_abv_of(a, (uint32_t)i),
-		              y = bc_lin_abv_of(b, (uint32_t)i);
+		struct bc_abv x = bc_lin_abv(a, (uint32_t)i),
+		              y = bc_lin_abv(b, (uint32_t)i);
 		if (!same(&x, &y, sizeof(x))) {
 			return "ABVs";
 		}
@@ -226,7 +226,7 @@ static void prims_of(const struct bc_tree *t, struct prims *p)
 	REQUIRE(p->n <= 1024);
 	for (uint32_t k = 0; k < p->n; k++) {
 		p->id[k] = l->node_id[l->prim_slot[k]];
-		p->abv[k] = bc_lin_abv_of(l, k);
+		p->abv[k] = bc_lin_abv(l, k);
 	}
 }
 

@@ -91,7 +91,7 @@ static void layout_follows_the_paper(void)
 	CHECK(l->roi[2 * 3] == -0.3f && l->roi[2 * 3 + 1] == 0.0f);
 	CHECK(l->roi[2 * 4] == 0.0f && l->roi[2 * 4 + 1] == 0.3f);
 	/* ABV of D is its sphere grown by r+ = 0.3. */
-	CHECK_NEAR(bc_lin_abv_of(l, 3).radius, 0.25f + 0.3f, 1e-6f);
+	CHECK_NEAR(bc_lin_abv(l, 3).radius, 0.25f + 0.3f, 1e-6f);
 	CHECK_EQ_INT(l->kills[4], 1);
 	CHECK_EQ_INT(l->kills[3], 0);
 	bc_tree_destroy(t);
@@ -166,7 +166,7 @@ static int lin_diff(const struct bc_lin *a, const struct bc_lin *b)
 	diffs += memcmp(a->param, b->param, 16u * a->nparam) != 0;
 	diffs += memcmp(a->color, b->color, 12u * a->nprims) != 0;
 	for (uint32_t k = 0; k < a->nprims; k++) {
-		struct bc_abv x = bc_lin_abv_of(a, k), y = bc_lin_abv_of(b, k);
+		struct bc_abv x = bc_lin_abv(a, k), y = bc_lin_abv(b, k);
 		diffs += memcmp(&x, &y, sizeof(x)) != 0;
 	}
 	return diffs;
@@ -811,7 +811,7 @@ static void spheres_alone_keep_sphere_abvs(void)
 	l = bc_tree_lin(t);
 	CHECK(l->sabv && !l->abv);
 	for (uint32_t k = 0; k < l->nprims; k++) {
-		struct bc_abv a = bc_lin_abv_of(l, k);
+		struct bc_abv a = bc_lin_abv(l, k);
 		CHECK(a.shape == BC_ABV_SPHERE);
 		CHECK_NEAR(a.radius, 0.1f + 0.01f * (float)k + 0.3f, 1e-6f);
 	}

@@ -424,7 +424,7 @@ static void abvs_contain_every_point_within_the_roi(void)
 				p[j] = rt_float(l->lo[j] - 0.2f * ext,
 				                l->hi[j] + 0.2f * ext);
 			}
-			struct bc_abv a = bc_lin_abv_of(l, k);
+			struct bc_abv a = bc_lin_abv(l, k);
 			if (bc_abv_meets_box(&a, p, p)) {
 				continue;
 			}
@@ -749,7 +749,7 @@ static bool layout_box(const struct bc_tree *t, uint32_t id, float lo[3],
 	}
 	for (uint32_t k = k0; k < k0 + n; k++) {
 		float a[3], b[3];
-		struct bc_abv v = bc_lin_abv_of(l, k);
+		struct bc_abv v = bc_lin_abv(l, k);
 		bc_abv_aabb(&v, a, b);
 		for (int i = 0; i < 3; i++) {
 			lo[i] = fminf(lo[i], a[i]);

@@ -888,7 +888,7 @@ static void mark_damage(struct bc_renderer *r, const struct bc_camera *cam,
                         uint8_t *tiles)
 {
 	for (uint32_t k = k0; k < k1; k++) {
-		struct bc_abv a = bc_lin_abv_of(after, k);
+		struct bc_abv a = bc_lin_abv(after, k);
 		bc_renderer_damage(r, cam, w, h, &before[k], tiles);
 		bc_renderer_damage(r, cam, w, h, &a, tiles);
 	}
@@ -1006,7 +1006,7 @@ static void test_damage_regions_equal_whole(void)
 			struct bc_dirty dirty;
 			uint32_t k0, k1, lo, hi, b;
 			for (uint32_t k = 0; k < l->nprims; k++) {
-				before[k] = bc_lin_abv_of(l, k);
+				before[k] = bc_lin_abv(l, k);
 			}
 			tried++;
 			if (random_edit(t, &k0, &k1)) {

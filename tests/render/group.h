@@ -35,13 +35,13 @@ static inline int group_move(struct bc_tree *t, struct bc_renderer *r,
 			                      "primitive %u",
 			                      k, k);
 		}
-		a = bc_lin_abv_of(l, k);
+		a = bc_lin_abv(l, k);
 		bc_renderer_damage(r, cam, w, h, &a, tiles);
 		p.translate[0] += d;
 		if ((rc = bc_tree_set_prim(t, id, &p, ei))) {
 			return rc;
 		}
-		a = bc_lin_abv_of(bc_tree_lin(t), k);
+		a = bc_lin_abv(bc_tree_lin(t), k);
 		bc_renderer_damage(r, cam, w, h, &a, tiles);
 	}
 	return 0;

@@ -599,7 +599,7 @@ static void damage_scene(enum bc_backend b, const struct scene *s, uint32_t n,
 		struct edit e;
 		uint64_t bad, marked = 0;
 		for (uint32_t k = 0; k < l->nprims; k++) {
-			old[k] = bc_lin_abv_of(l, k);
+			old[k] = bc_lin_abv(l, k);
 		}
 		if (random_edit(t, ids, nids, size, &e) != 0) {
 			ty->skipped++;
@@ -615,7 +615,7 @@ static void damage_scene(enum bc_backend b, const struct scene *s, uint32_t n,
 		}
 		memset(tiles, 0, nt);
 		for (uint32_t k = dirty.prim_lo; k < dirty.prim_hi; k++) {
-			struct bc_abv now = bc_lin_abv_of(l, k);
+			struct bc_abv now = bc_lin_abv(l, k);
 			bc_renderer_damage(r, &cam, w, h, &old[k], tiles);
 			bc_renderer_damage(r, &cam, w, h, &now, tiles);
 		}
@@ -902,7 +902,7 @@ static void splice_scene(const struct scene *s, uint32_t n,
 		}
 		for (uint32_t k = dirty.prim_lo; follows && k < dirty.prim_hi;
 		     k++) {
-			struct bc_abv now = bc_lin_abv_of(l, k);
+			struct bc_abv now = bc_lin_abv(l, k);
 			bc_renderer_damage(r, &cam, w, h, &now, tiles);
 		}
 		for (size_t k = 0; k < nt; k++) {
@@ -1288,7 +1288,7 @@ static void key_backend(enum bc_backend b)
 	id = 0;
 	for (uint32_t k = 0; k < l->nprims; k++) {
 		float lo[3], hi[3];
-		struct bc_abv a = bc_lin_abv_of(l, k);
+		struct bc_abv a = bc_lin_abv(l, k);
 		bc_abv_aabb(&a, lo, hi);
 		if (hi[0] == l->hi[0]) {
 			id = l->node_id[l->prim_slot[k]];

@@ -141,7 +141,7 @@ static void deep_chain_sparse_agrees_with_full(void)
 		nnear = 0;
 		for (uint32_t k = 0; k < l->nprims; k++) {
 			float lo[3], hi[3];
-			struct bc_abv a = bc_lin_abv_of(l, k);
+			struct bc_abv a = bc_lin_abv(l, k);
 			bc_abv_aabb(&a, lo, hi);
 			if (p[0] >= lo[0] && p[0] <= hi[0] && p[1] >= lo[1] &&
 			    p[1] <= hi[1] && p[2] >= lo[2] && p[2] <= hi[2]) {

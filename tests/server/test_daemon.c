@@ -41,7 +41,7 @@ static uint32_t smallest_prim_id(const struct bc_tree *t)
 	float best_vol = INFINITY;
 	for (uint32_t k = 0; k < l->nprims; k++) {
 		float lo[3], hi[3], vol;
-		struct bc_abv a = bc_lin_abv_of(l, k);
+		struct bc_abv a = bc_lin_abv(l, k);
 		bc_abv_aabb(&a, lo, hi);
 		vol = (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
 		if (vol < best_vol) {

@@ -735,7 +735,7 @@ static inline uint32_t bc_lin_type(const struct bc_lin *l, uint32_t slot)
 	return (l->node[2 * slot] >> BC_WORD_TYPE_SHIFT) & BC_WORD_TYPE_MASK;
 }
 /* Primitive k's world ABV. */
-static inline struct bc_abv bc_lin_abv_of(const struct bc_lin *l, uint32_t k)
+static inline struct bc_abv bc_lin_abv(const struct bc_lin *l, uint32_t k)
 {
 	if (l->abv) {
 		return l->abv[k];
@@ -744,12 +744,6 @@ static inline struct bc_abv bc_lin_abv_of(const struct bc_lin *l, uint32_t k)
 	    .shape = BC_ABV_SPHERE,
 	    .center = {l->sabv[k][0], l->sabv[k][1], l->sabv[k][2]},
 	    .radius = l->sabv[k][3]};
-}
-/* The same, written to *out. */
-static inline void bc_lin_abv(const struct bc_lin *l, uint32_t k,
-                              struct bc_abv *out)
-{
-	*out = bc_lin_abv_of(l, k);
 }
 
 /* Primitive kind of a leaf, operator kind of an operator slot. */
