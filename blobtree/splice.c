@@ -360,8 +360,7 @@ static void apply(struct bc_tree *t, const struct splice *sp)
 static bool touches_box(const struct bc_lin *l, uint32_t k)
 {
 	float lo[3], hi[3];
-	struct bc_abv a;
-	a = bc_lin_abv(l, k);
+	struct bc_abv a = bc_lin_abv(l, k);
 	bc_abv_aabb(&a, lo, hi);
 	for (int i = 0; i < 3; i++) {
 		if (lo[i] <= l->lo[i] || hi[i] >= l->hi[i]) {
@@ -472,8 +471,7 @@ void bc__splice_finish(struct bc_tree *t, bool touch)
 		}
 		for (uint32_t k = 0; k < l->nprims; k++) {
 			float lo[3], hi[3];
-			struct bc_abv a;
-			a = bc_lin_abv(l, k);
+			struct bc_abv a = bc_lin_abv(l, k);
 			bc_abv_aabb(&a, lo, hi);
 			for (int i = 0; i < 3; i++) {
 				l->lo[i] = fminf(l->lo[i], lo[i]);
@@ -508,7 +506,7 @@ static uint32_t last_leaf(const struct bc_tree *t, uint32_t n)
 
 /* Where the records of the subtree at pool node n end: after its
  * rightmost leaf's, whose size its kind gives. */
-static uint32_t records_end(struct bc_tree *t, uint32_t n)
+static uint32_t records_end(const struct bc_tree *t, uint32_t n)
 {
 	const struct bc__node *leaf = &t->pool[last_leaf(t, n)];
 	return bc__param(t, leaf) + bc_prim_record_vec4(leaf->pkind);
