@@ -600,8 +600,7 @@ static int region(struct build *b, const uint32_t c0[3], const uint32_t c1[3],
 			}
 			region_box(b, d0, d1, clo, chi);
 			for (uint32_t i = 0; i < n && !inside; i++) {
-				struct bc_abv abv;
-				abv = bc_lin_abv(b->l, act[i]);
+				struct bc_abv abv = bc_lin_abv(b->l, act[i]);
 				if (bc_abv_meets_box(&abv, clo, chi)) {
 					b->act[depth + 1][m2++] = act[i];
 				}

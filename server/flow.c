@@ -247,8 +247,7 @@ static void mark_views(struct bc_work *w, const struct flow *f,
 			                   v->height, &a[k], v->damage);
 		}
 		for (uint32_t k = 0; k < nb; k++) {
-			struct bc_abv b;
-			b = bc_lin_abv(l, k0 + k);
+			struct bc_abv b = bc_lin_abv(l, k0 + k);
 			bc_renderer_damage(f->r, &v->camera, v->width,
 			                   v->height, &b, v->damage);
 		}

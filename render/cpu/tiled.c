@@ -499,9 +499,8 @@ static void prim_setup(const struct tiled_frame *tf, uint32_t k,
                        struct ab_prim *p)
 {
 	const struct bc__frame_ctx *fc = tf->fc;
-	struct bc_abv abv, wide;
+	struct bc_abv abv = bc_lin_abv(fc->lin, k), wide;
 	float lo[3], hi[3], c[3], dist2;
-	abv = bc_lin_abv(fc->lin, k);
 	p->margin = widened_abv(fc, &abv, &wide, lo, hi);
 	p->shape = (uint8_t)wide.shape;
 	p->rect = project_box(tf, lo, hi);
@@ -1130,8 +1129,7 @@ static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
 			/* The sphere around a sphere is itself. */
 			tf->kern.sphere(rays, lanes, p->v, p->radius, t);
 		} else {
-			struct bc_abv abv, wide;
-			abv = bc_lin_abv(lin, k);
+			struct bc_abv abv = bc_lin_abv(lin, k), wide;
 			widen_by(&abv, p->margin, &wide);
 			tf->kern.abv(rays, lanes, &wide, eye, t);
 		}

@@ -214,10 +214,8 @@ static void fill_abvs(const struct bc_lin *l, uint32_t lo, uint32_t hi,
                       float *out)
 {
 	for (uint32_t k = lo; k < hi; k++, out += BC_GL_ABV_FLOATS) {
-		struct bc_abv abv;
-		const struct bc_abv *a = &abv;
+		const struct bc_abv abv = bc_lin_abv(l, k), *a = &abv;
 		float blo[3], bhi[3];
-		abv = bc_lin_abv(l, k);
 		memset(out, 0, BC_GL_ABV_FLOATS * sizeof(float));
 		bc_abv_aabb(a, blo, bhi);
 		for (int i = 0; i < 3; i++) {

@@ -236,8 +236,7 @@ int bc_svo_rpn_init(struct bc_svo_rpn *out, const struct bc_lin *l)
 	}
 	for (uint32_t k = 0; k < l->nprims; k++) {
 		float lo[3], hi[3], d2 = 0.0f;
-		struct bc_abv abv;
-		abv = bc_lin_abv(l, k);
+		struct bc_abv abv = bc_lin_abv(l, k);
 		bc_abv_aabb(&abv, lo, hi);
 		for (int i = 0; i < 3; i++) {
 			d2 += (hi[i] - lo[i]) * (hi[i] - lo[i]);
