@@ -74,19 +74,29 @@ struct cone {
 	float cos_h, sin_h;
 };
 
-/* What the A-buffer needs of a primitive in one view: its widened ABV, its
- * tile rectangle, and its bounding sphere seen from the eye (centre v
- * relative to the eye, radius; root = sqrt(|v|^2 - radius^2), the cone
- * tests' term, when the eye is outside). */
+/* What the A-buffer keeps of a primitive in one view: its tile
+ * rectangle, the widening of its ABV (widened_abv) and of its bounding
+ * sphere seen from the eye (struct seen) the term that takes a square
+ * root, 20 bytes. The sphere's centre and radius are made again from the
+ * layout's ABV and the margin when a tile's list tests the primitive
+ * (prim_seen), the same floats prim_setup made from them: a million
+ * primitives kept 36 bytes each here when they were kept too, and making
+ * the root again as well cost a cold frame's lists 4-7 % more time
+ * (docs/benchmarks.md, "A view's primitive in 20 bytes"). */
 struct ab_prim {
 	struct rect rect;
-	float v[3], radius, root;
-	/* The widening of its ABV in this view (widened_abv): a shape
-	 * other than a sphere is widened again from the layout's ABV when a
-	 * tile's list tests it (a sphere's is v and radius), so that a
-	 * primitive keeps 36 bytes here, not 120. */
 	float margin;
-	uint8_t shape; /* enum bc_abv_shape */
+	float root;
+	uint8_t shape; /* enum bc_abv_shape of the widened ABV */
+	bool inside;
+};
+_Static_assert(sizeof(struct ab_prim) <= 20, "a view's primitive grew");
+
+/* A primitive's widened ABV's bounding sphere seen from the eye: centre v
+ * relative to the eye, radius; when the eye is outside (inside false),
+ * root = sqrt(|v|^2 - radius^2), the cone tests' term. */
+struct seen {
+	float v[3], radius, root;
 	bool inside;
 };
 
@@ -450,8 +460,7 @@ static float widened_abv(const struct bc__frame_ctx *fc,
  * around v, so they meet when the angle between v and the axis is at most
  * half + asin(r / dist), i.e. (both angles below pi) when
  * dot(v, axis) >= cos_h sqrt(dist^2 - r^2) - sin_h r. */
-static inline bool cone_meets_sphere(const struct cone *c,
-                                     const struct ab_prim *p)
+static inline bool cone_meets_sphere(const struct cone *c, const struct seen *p)
 {
 	if (p->inside) {
 		return true;
@@ -460,16 +469,19 @@ static inline bool cone_meets_sphere(const struct cone *c,
 	       c->cos_h * p->root - c->sin_h * p->radius;
 }
 
-/* A sphere around the (world) shape: tighter than the AABB's for spheres
- * and capsules, which makes the cone tests sharper. */
-static void bounding_sphere(const struct bc_abv *abv, const float lo[3],
-                            const float hi[3], float c[3], float *r)
+/* A sphere around the (world) shape abv widened by m (widen_by, whose
+ * AABB is abv's grown by m): tighter than the AABB's for spheres and
+ * capsules, which makes the cone tests sharper. The widened shape's own
+ * floats, without a copy of the ABV: a tile's list makes it for every
+ * candidate. */
+static void bounding_sphere(const struct bc_abv *abv, float m, float c[3],
+                            float *r)
 {
-	float e2 = 0.0f;
+	float e2 = 0.0f, lo[3], hi[3];
 	switch (abv->shape) {
 	case BC_ABV_SPHERE:
 		memcpy(c, abv->center, sizeof(abv->center));
-		*r = abv->radius;
+		*r = abv->radius + m;
 		return;
 	case BC_ABV_CAPSULE:
 		for (int i = 0; i < 3; i++) {
@@ -477,15 +489,23 @@ static void bounding_sphere(const struct bc_abv *abv, const float lo[3],
 			c[i] = abv->center[i] + e;
 			e2 += e * e;
 		}
-		*r = sqrtf(e2) + abv->radius;
+		*r = sqrtf(e2) + (abv->radius + m);
 		return;
 	case BC_ABV_BOX:
 		memcpy(c, abv->center, sizeof(abv->center));
-		*r = sqrtf(bc_v3_dot(abv->half, abv->half));
+		for (int i = 0; i < 3; i++) {
+			float h = abv->half[i] + m;
+			e2 += h * h;
+		}
+		*r = sqrtf(e2);
 		return;
 	default:
+		bc_abv_aabb(abv, lo, hi);
 		for (int i = 0; i < 3; i++) {
-			float e = 0.5f * (hi[i] - lo[i]);
+			float e;
+			lo[i] -= m;
+			hi[i] += m;
+			e = 0.5f * (hi[i] - lo[i]);
 			c[i] = lo[i] + e;
 			e2 += e * e;
 		}
@@ -500,17 +520,33 @@ static void prim_setup(const struct tiled_frame *tf, uint32_t k,
 {
 	const struct bc__frame_ctx *fc = tf->fc;
 	struct bc_abv abv = bc_lin_abv(fc->lin, k), wide;
-	float lo[3], hi[3], c[3], dist2;
+	float lo[3], hi[3], c[3], r, v[3], dist2;
 	p->margin = widened_abv(fc, &abv, &wide, lo, hi);
 	p->shape = (uint8_t)wide.shape;
 	p->rect = project_box(tf, lo, hi);
-	bounding_sphere(&wide, lo, hi, c, &p->radius);
-	for (int i = 0; i < 3; i++) {
-		p->v[i] = c[i] - fc->vr.eye[i];
+	bounding_sphere(&abv, p->margin, c, &r);
+	bc_v3_sub(c, fc->vr.eye, v);
+	dist2 = bc_v3_dot(v, v);
+	p->inside = dist2 <= r * r;
+	p->root = p->inside ? 0.0f : sqrtf(dist2 - r * r);
+}
+
+/* Primitive k's bounding sphere seen from the eye, p its terms. */
+static inline void prim_seen(const struct bc__frame_ctx *fc, uint32_t k,
+                             const struct ab_prim *p, struct seen *s)
+{
+	const struct bc_lin *lin = fc->lin;
+	float c[3];
+	if (lin->sabv) {
+		/* Spheres alone: the sphere around a sphere is itself. */
+		memcpy(c, lin->sabv[k], sizeof(c));
+		s->radius = lin->sabv[k][3] + p->margin;
+	} else {
+		bounding_sphere(&lin->abv[k], p->margin, c, &s->radius);
 	}
-	dist2 = bc_v3_dot(p->v, p->v);
-	p->inside = dist2 <= p->radius * p->radius;
-	p->root = p->inside ? 0.0f : sqrtf(dist2 - p->radius * p->radius);
+	bc_v3_sub(c, fc->vr.eye, s->v);
+	s->root = p->root;
+	s->inside = p->inside;
 }
 
 /* Phase 1 of a new view, per primitive: prim_setup. */
@@ -1102,35 +1138,39 @@ static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
 	struct bc__zq z;
 	for (uint32_t i = b->cand_off[tile]; i < b->cand_end[tile]; i++) {
 		uint32_t k = b->cand[i];
-		const struct ab_prim *p = &b->prims[k];
 		uint64_t lanes = 0;
 		float t[2] = {INFINITY, -INFINITY};
+		struct seen sp;
 		if (i + LIST_PREFETCH < b->cand_end[tile]) {
 			/* A tile's candidates lie anywhere in the primitive
-			 * array: ask for a later one's bytes (the cone test's
-			 * and the sphere's) now, so that the misses
+			 * arrays: ask for a later one's bytes (its margin and
+			 * its ABV's centre and radius) now, so that the misses
 			 * overlap. */
-			const struct ab_prim *later =
-			    &b->prims[b->cand[i + LIST_PREFETCH]];
-			__builtin_prefetch(&later->v);
+			uint32_t later = b->cand[i + LIST_PREFETCH];
+			__builtin_prefetch(&b->prims[later]);
+			__builtin_prefetch(
+			    lin->sabv ? (const void *)lin->sabv[later]
+			              : (const void *)&lin->abv[later]);
 		}
-		if (!cone_meets_sphere(&cones[0], p)) {
+		prim_seen(tf->fc, k, &b->prims[k], &sp);
+		if (!cone_meets_sphere(&cones[0], &sp)) {
 			continue;
 		}
 		for (uint32_t q = 0; q < 4; q++) {
-			if (quarter[q] && cone_meets_sphere(&cones[1 + q], p)) {
+			if (quarter[q] &&
+			    cone_meets_sphere(&cones[1 + q], &sp)) {
 				lanes |= quarter[q];
 			}
 		}
 		if (!lanes) {
 			continue;
 		}
-		if (p->shape == BC_ABV_SPHERE) {
+		if (b->prims[k].shape == BC_ABV_SPHERE) {
 			/* The sphere around a sphere is itself. */
-			tf->kern.sphere(rays, lanes, p->v, p->radius, t);
+			tf->kern.sphere(rays, lanes, sp.v, sp.radius, t);
 		} else {
-			struct bc_abv abv = bc_lin_abv(lin, k), wide;
-			widen_by(&abv, p->margin, &wide);
+			struct bc_abv wide;
+			widen_by(&lin->abv[k], b->prims[k].margin, &wide);
 			tf->kern.abv(rays, lanes, &wide, eye, t);
 		}
 		if (t[1] >= t[0]) {
