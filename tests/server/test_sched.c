@@ -376,13 +376,14 @@ static void answers_keep_the_order_of_requests(void)
 /* A client that sends a burst of 100 000 SESSION_LISTs at once and then a
  * PING gets its PONG after all of them, and another client's PING is
  * answered after a share of a loop turn, not after the burst: its round
- * trip stays under a sixth of the burst's time (a ratio, so load on the
+ * trip stays under a third of the burst's time (a ratio, so load on the
  * machine moves both; measured 1/20 with the share, and 2/3 when the
  * daemon handled all it read of the burst at once). One round trip is one
  * sample, which a stall of this process on a loaded machine can stretch
- * (40 ms against a 182 ms burst, seen once): up to three fresh daemons
- * try, and one must show it; a daemon without the share fails all three.
- * *fair: whether this try showed it. */
+ * (40 ms against a 182 ms burst, seen once; a sixth failed three tries in
+ * a row once, the suite running three tests on two cores): up to five
+ * fresh daemons try, and one must show it; a daemon without the share
+ * fails all five. *fair: whether this try showed it. */
 static void burst_once(int attempt, bool *fair)
 {
 	enum { BURST = 100000 };
@@ -445,7 +446,7 @@ static void burst_once(int attempt, bool *fair)
 	CHECK(burst_ms > 0);
 	CHECK_EQ_INT(answers, BURST); /* every one, before the PONG */
 	CHECK(b_rtt >= 0);
-	*fair = b_rtt >= 0 && b_rtt * 6 < burst_ms;
+	*fair = b_rtt >= 0 && b_rtt * 3 < burst_ms;
 	bc_proto_buf_finish(&buf);
 	conn_close(&a);
 	conn_close(&b);
@@ -455,7 +456,7 @@ static void burst_once(int attempt, bool *fair)
 static void a_burst_of_requests_leaves_others_their_turn(void)
 {
 	bool fair = false;
-	for (int i = 0; i < 3 && !fair; i++) {
+	for (int i = 0; i < 5 && !fair; i++) {
 		burst_once(i, &fair);
 	}
 	CHECK(fair);
