@@ -70,7 +70,7 @@ bool bc_scene_walk_next(struct bc_scene_walk *w, struct bc_scene_node *out)
 	out->depth = w->depth;
 	out->is_op = nd->is_op;
 	if (nd->is_op) {
-		out->nchildren = nd->nchildren;
+		out->nchildren = nd->u.nchildren;
 		if (bc__node_unary(nd)) {
 			out->op.kind = nd->u.op.kind;
 			out->unary.kind = nd->u.op.kind;
@@ -79,7 +79,7 @@ bool bc_scene_walk_next(struct bc_scene_walk *w, struct bc_scene_node *out)
 		} else {
 			out->op = nd->u.op;
 		}
-		w->next = nd->first_child;
+		w->next = nd->u.first_child;
 		w->depth++;
 		return true;
 	}
@@ -177,7 +177,7 @@ static void put_node(struct bc_buf *b, const struct bc_tree *t,
 		bc_put_le32(p, nd->id);
 		bc_put_f32(p + 4, nd->u.op.blend);
 		bc_put_f32(p + 8, nd->u.op.range);
-		bc_put_le32(p + 12, nd->nchildren);
+		bc_put_le32(p + 12, nd->u.nchildren);
 		p += 16;
 	} else {
 		struct bc_prim_data prd;
@@ -236,7 +236,7 @@ static void put_nodes(struct bc_buf *b, const struct bc_tree *t,
 			return;
 		}
 		if (t->pool[n].is_op) {
-			n = t->pool[n].first_child;
+			n = t->pool[n].u.first_child;
 			continue;
 		}
 		while (n != t->root && t->pool[n].next == BC_NONE) {

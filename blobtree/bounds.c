@@ -51,11 +51,11 @@ static void operand_roi(const struct bc__node *p, uint32_t c, float *lo,
                         float *hi)
 {
 	enum bc_op op = p->u.op.kind;
-	if (p->nchildren < 2) {
+	if (p->u.nchildren < 2) {
 		return; /* a unary node: no rule of an operator */
 	}
 	bc__roi_operand(op, bc_op_is_smooth(op) ? p->u.op.range : 0.0f,
-	                p->first_child == c, lo, hi);
+	                p->u.first_child == c, lo, hi);
 }
 
 /* Unary node n on the way down: its rule on [lo, hi], and its record on
@@ -102,19 +102,19 @@ static void walk_subtree(struct walk *w, uint32_t n, float lo, float hi)
 		const struct bc__node *nd = &pool[n];
 		if (!nd->is_op) {
 			add_prim(w, nd, hi);
-		} else if (nd->first_child != BC_NONE) {
+		} else if (nd->u.first_child != BC_NONE) {
 			if (bc__node_unary(nd)) {
 				enter_unary(w, nd, &lo, &hi);
-			} else if (nd->nchildren > 1) {
+			} else if (nd->u.nchildren > 1) {
 				w->fr[w->nfr++] = (struct frame){
 				    .op = n,
-				    .next = pool[nd->first_child].next,
+				    .next = pool[nd->u.first_child].next,
 				    .lo = lo,
 				    .hi = hi,
 				    .ndom = w->ndom};
 			}
-			operand_roi(nd, nd->first_child, &lo, &hi);
-			n = nd->first_child;
+			operand_roi(nd, nd->u.first_child, &lo, &hi);
+			n = nd->u.first_child;
 			continue;
 		}
 		/* Up to the innermost operator with an operand left. */

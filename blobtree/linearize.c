@@ -397,7 +397,7 @@ void bc__lin_emit(struct bc_tree *t, struct bc__fill *fs, uint32_t top)
 				                    4u * (size_t)y->param,
 				                &nd->u.op);
 			}
-			n = nd->first_child;
+			n = nd->u.first_child;
 		}
 		emit_leaf(t, fs, n);
 		for (;;) {
@@ -405,7 +405,7 @@ void bc__lin_emit(struct bc_tree *t, struct bc__fill *fs, uint32_t top)
 			if (n == top) {
 				return;
 			}
-			if (t->pool[p].first_child == n) {
+			if (t->pool[p].u.first_child == n) {
 				t->lay[p].slot = t->lay[n].slot;
 				if (bc__node_unary(&t->pool[p])) {
 					add_wrapper(fs->l, t->pool[p].u.unary,
@@ -751,7 +751,7 @@ static void place_subtree(struct bc_tree *t, struct bc_lin *l, uint32_t top)
 	uint32_t n = top;
 	for (;;) {
 		while (t->pool[n].is_op) {
-			n = t->pool[n].first_child;
+			n = t->pool[n].u.first_child;
 		}
 		struct bc_prim_data pd;
 		bc__prim_read(t, &t->pool[n], &pd);
@@ -883,7 +883,7 @@ void bc__lin_update_op(struct bc_tree *t, const struct bc__node *n)
 	uint32_t o = y->slot, first = l->first[y->slot];
 	uint32_t type = op_type_byte(n->u.op.kind);
 	/* The fold's slots: the top, then down the chain of left children. */
-	for (uint32_t i = 0; i + 1 < n->nchildren; i++) {
+	for (uint32_t i = 0; i + 1 < n->u.nchildren; i++) {
 		set_word(l, o, false, type);
 		o = l->first[o - 1] - 1;
 	}

@@ -87,8 +87,8 @@ void bc__names_drop_subtree(struct bc_tree *t, uint32_t top)
 	/* Pre-order through the links; the subtree may be detached. */
 	for (;;) {
 		bc__names_del(&t->names, t->pool[n].id);
-		if (t->pool[n].is_op && t->pool[n].first_child != BC_NONE) {
-			n = t->pool[n].first_child;
+		if (t->pool[n].is_op && t->pool[n].u.first_child != BC_NONE) {
+			n = t->pool[n].u.first_child;
 			continue;
 		}
 		while (n != top && t->pool[n].next == BC_NONE) {

@@ -499,7 +499,7 @@ static void adopt(struct bc_lin *l, uint32_t s, uint32_t w, uint32_t a)
 static uint32_t last_leaf(const struct bc_tree *t, uint32_t n)
 {
 	while (t->pool[n].is_op) {
-		n = t->pool[n].last_child;
+		n = t->pool[n].u.last_child;
 	}
 	return n;
 }
@@ -648,7 +648,7 @@ bool bc__splice_replace(struct bc_tree *t, const struct bc__block *b,
 bool bc__splice_remove(struct bc_tree *t, uint32_t c)
 {
 	struct bc_lin *l = &t->lin;
-	uint32_t p = t->pool[c].parent, nkids = t->pool[p].nchildren;
+	uint32_t p = t->pool[c].parent, nkids = t->pool[p].u.nchildren;
 	uint32_t prev = t->pool[c].prev, next = t->pool[c].next;
 	struct bc__block b;
 	uint32_t ctop, cf, cparam, px, klo, pend, ptop, w, a, top;

@@ -244,8 +244,8 @@ static uint32_t pool_take(struct bc_tree *t)
 	}
 	memset(&t->pool[n], 0, sizeof(t->pool[n]));
 	t->pool[n].parent = BC_NONE;
-	t->pool[n].first_child = BC_NONE;
-	t->pool[n].last_child = BC_NONE;
+	t->pool[n].u.first_child = BC_NONE;
+	t->pool[n].u.last_child = BC_NONE;
 	t->pool[n].next = BC_NONE;
 	t->pool[n].prev = BC_NONE;
 	t->pool[n].live = true;
@@ -458,7 +458,7 @@ static void kids_drop(struct bc_tree *t, uint32_t op, bool children)
  * of memory it stays without: its children are then walked. */
 static void kids_build(struct bc_tree *t, uint32_t op)
 {
-	uint32_t n = t->pool[op].nchildren, pos = 0, i = 0;
+	uint32_t n = t->pool[op].u.nchildren, pos = 0, i = 0;
 	struct bc__kids *k;
 	uint32_t *at;
 	if (!t->bare || n < BC__KIDS_MIN || (t->pool[op].kids & BC__KIDS_OP)) {
@@ -479,7 +479,7 @@ static void kids_build(struct bc_tree *t, uint32_t op)
 	if (!(at = bc_malloc((size_t)k->cap * sizeof(*at)))) {
 		return;
 	}
-	for (uint32_t c = t->pool[op].first_child; c != BC_NONE;
+	for (uint32_t c = t->pool[op].u.first_child; c != BC_NONE;
 	     c = t->pool[c].next, pos++) {
 		if (pos % BC__KIDS_STEP == 0) {
 			at[i++] = c;
@@ -531,7 +531,7 @@ static void kids_linked(struct bc_tree *t, struct bc__kids *k, uint32_t pos)
 	     i++) {
 		kids_move(t, k, i, t->pool[k->at[i]].prev);
 	}
-	if ((p->nchildren - 1u) / BC__KIDS_STEP + 1u > k->n) {
+	if ((p->u.nchildren - 1u) / BC__KIDS_STEP + 1u > k->n) {
 		if (k->n == k->cap) {
 			uint32_t cap = 2u * k->cap;
 			uint32_t *fresh =
@@ -543,8 +543,8 @@ static void kids_linked(struct bc_tree *t, struct bc__kids *k, uint32_t pos)
 			k->at = fresh;
 			k->cap = cap;
 		}
-		k->at[k->n++] = p->last_child;
-		t->pool[p->last_child].kids |= BC__KIDS_AT;
+		k->at[k->n++] = p->u.last_child;
+		t->pool[p->u.last_child].kids |= BC__KIDS_AT;
 	}
 }
 
@@ -575,28 +575,29 @@ static void link_child(struct bc_tree *t, uint32_t parent, uint32_t before,
 	struct bc__kids *k = kids_of(t, parent);
 	uint32_t pos = 0;
 	if (k) {
-		pos = before == BC_NONE ? p->nchildren : kids_pos(t, k, before);
+		pos =
+		    before == BC_NONE ? p->u.nchildren : kids_pos(t, k, before);
 	}
 	c->parent = parent;
 	c->next = before;
 	if (before == BC_NONE) {
-		c->prev = p->last_child;
-		if (p->last_child != BC_NONE) {
-			t->pool[p->last_child].next = child;
+		c->prev = p->u.last_child;
+		if (p->u.last_child != BC_NONE) {
+			t->pool[p->u.last_child].next = child;
 		} else {
-			p->first_child = child;
+			p->u.first_child = child;
 		}
-		p->last_child = child;
+		p->u.last_child = child;
 	} else {
 		c->prev = t->pool[before].prev;
 		if (c->prev != BC_NONE) {
 			t->pool[c->prev].next = child;
 		} else {
-			p->first_child = child;
+			p->u.first_child = child;
 		}
 		t->pool[before].prev = child;
 	}
-	p->nchildren++;
+	p->u.nchildren++;
 	if (k) {
 		kids_linked(t, k, pos);
 	}
@@ -613,15 +614,15 @@ static void unlink_child(struct bc_tree *t, uint32_t child)
 	if (c->prev != BC_NONE) {
 		t->pool[c->prev].next = c->next;
 	} else {
-		p->first_child = c->next;
+		p->u.first_child = c->next;
 	}
 	if (c->next != BC_NONE) {
 		t->pool[c->next].prev = c->prev;
 	} else {
-		p->last_child = c->prev;
+		p->u.last_child = c->prev;
 	}
-	p->nchildren--;
-	if (k && p->nchildren < BC__KIDS_MIN / 2u) {
+	p->u.nchildren--;
+	if (k && p->u.nchildren < BC__KIDS_MIN / 2u) {
 		kids_drop(t, c->parent, true);
 	}
 	c->parent = BC_NONE;
@@ -642,7 +643,7 @@ static uint32_t child_at_lin(const struct bc_tree *t, uint32_t parent,
                              uint32_t pos)
 {
 	const struct bc_lin *l = &t->lin;
-	uint32_t n = t->pool[parent].nchildren;
+	uint32_t n = t->pool[parent].u.nchildren;
 	uint32_t f = bc__slot(t, &t->pool[parent]), top, c;
 	for (uint32_t i = n - 1; i > (pos ? pos : 1u); i--) {
 		f = l->first[f - 1] - 1;
@@ -662,7 +663,7 @@ static uint32_t child_at_lin(const struct bc_tree *t, uint32_t parent,
  * wide operator costs nothing). */
 static uint32_t child_at(const struct bc_tree *t, uint32_t parent, uint32_t pos)
 {
-	uint32_t n = t->pool[parent].nchildren, c;
+	uint32_t n = bc__nkids(&t->pool[parent]), c;
 	const struct bc__kids *kids = kids_of(t, parent);
 	if (pos >= n) {
 		return BC_NONE;
@@ -680,13 +681,13 @@ static uint32_t child_at(const struct bc_tree *t, uint32_t parent, uint32_t pos)
 			return child_at_lin(t, parent, pos);
 		}
 	} else if (pos > n / 2) {
-		c = t->pool[parent].last_child;
+		c = t->pool[parent].u.last_child;
 		for (uint32_t k = n - 1; k > pos; k--) {
 			c = t->pool[c].prev;
 		}
 		return c;
 	}
-	c = t->pool[parent].first_child;
+	c = t->pool[parent].u.first_child;
 	while (c != BC_NONE && pos-- > 0) {
 		c = t->pool[c].next;
 	}
@@ -719,9 +720,9 @@ struct subtree_stats {
 static uint32_t preorder_next(const struct bc_tree *t, uint32_t n, uint32_t top,
                               uint32_t *depth)
 {
-	if (t->pool[n].is_op && t->pool[n].first_child != BC_NONE) {
+	if (t->pool[n].is_op && t->pool[n].u.first_child != BC_NONE) {
 		(*depth)++;
-		return t->pool[n].first_child;
+		return t->pool[n].u.first_child;
 	}
 	while (n != top) {
 		if (t->pool[n].next != BC_NONE) {
@@ -758,7 +759,7 @@ uint32_t bc__measure(struct bc_tree *t, uint32_t top)
 	uint32_t n = top, depth = 1, most = 0;
 	for (;;) {
 		while (t->pool[n].is_op) {
-			n = t->pool[n].first_child;
+			n = t->pool[n].u.first_child;
 			depth++;
 		}
 		if (depth > most) {
@@ -780,7 +781,7 @@ uint32_t bc__measure(struct bc_tree *t, uint32_t top)
 			/* The fold ((c0 op c1) op c2)...: a right operand is
 			 * evaluated above its left one. */
 			{
-				uint32_t c = t->pool[p].first_child;
+				uint32_t c = t->pool[p].u.first_child;
 				uint32_t need = t->pool[c].need;
 				for (c = t->pool[c].next; c != BC_NONE;
 				     c = t->pool[c].next) {
@@ -801,8 +802,9 @@ static void free_subtree(struct bc_tree *t, uint32_t top)
 {
 	uint32_t n = top;
 	for (;;) {
-		while (t->pool[n].is_op && t->pool[n].first_child != BC_NONE) {
-			n = t->pool[n].first_child;
+		while (t->pool[n].is_op &&
+		       t->pool[n].u.first_child != BC_NONE) {
+			n = t->pool[n].u.first_child;
 		}
 		for (;;) {
 			uint32_t next = t->pool[n].next, p = t->pool[n].parent;
@@ -810,7 +812,7 @@ static void free_subtree(struct bc_tree *t, uint32_t top)
 			if (!last && p != BC_NONE) {
 				/* Detach n so that its parent looks like a
 				 * leaf once its last child is gone. */
-				t->pool[p].first_child = next;
+				t->pool[p].u.first_child = next;
 			}
 			/* A replacement may already map this id to its
 			 * own node. */
@@ -867,9 +869,9 @@ static uint32_t domain_chain(const struct bc_tree *t)
 	for (;;) {
 		const struct bc__node *nd = &t->pool[n];
 		most = chain > most ? chain : most;
-		if (nd->is_op && nd->first_child != BC_NONE) {
+		if (nd->is_op && nd->u.first_child != BC_NONE) {
 			chain += is_domain_node(nd);
-			n = nd->first_child;
+			n = nd->u.first_child;
 			continue;
 		}
 		while (n != t->root && t->pool[n].next == BC_NONE) {
@@ -923,7 +925,7 @@ static int check_shape(struct bc_tree *t, struct bc_errinfo *ei)
 static uint32_t need_in_parent(const struct bc_tree *t, uint32_t c)
 {
 	uint32_t p = t->pool[c].parent;
-	return t->pool[c].need + (t->pool[p].first_child == c ? 0u : 1u);
+	return t->pool[c].need + (t->pool[p].u.first_child == c ? 0u : 1u);
 }
 
 /* Pool node m (measured) was linked: its ancestors' needs grow with what
@@ -937,7 +939,8 @@ static void need_grow(struct bc_tree *t, uint32_t m)
 		if (v > need) {
 			need = v;
 		}
-		if (c == m && next != BC_NONE && t->pool[p].first_child == m &&
+		if (c == m && next != BC_NONE &&
+		    t->pool[p].u.first_child == m &&
 		    (v = need_in_parent(t, next)) > need) {
 			need = v;
 		}
@@ -958,7 +961,7 @@ static void need_shrink(struct bc_tree *t, uint32_t a)
 {
 	while (a != BC_NONE) {
 		uint32_t old = t->pool[a].need, need = 0;
-		for (uint32_t c = t->pool[a].first_child;
+		for (uint32_t c = t->pool[a].u.first_child;
 		     c != BC_NONE && need < old; c = t->pool[c].next) {
 			uint32_t v = need_in_parent(t, c);
 			if (v > need) {
@@ -1112,7 +1115,7 @@ static int add_node(struct bc_tree *t, uint32_t id, bool is_op,
 		                      "tree: a scene has exactly one root");
 	}
 	if (t->nopen && bc__node_unary(&t->pool[t->open[t->nopen - 1]]) &&
-	    t->pool[t->open[t->nopen - 1]].nchildren >= 1) {
+	    t->pool[t->open[t->nopen - 1]].u.nchildren >= 1) {
 		uint32_t u = t->open[t->nopen - 1];
 		return bc_errinfo_set(ei, BC_EINVAL,
 		                      "tree: %s node %u takes exactly one "
@@ -1213,20 +1216,20 @@ int bc_tree_pop_op(struct bc_tree *t, struct bc_errinfo *ei)
 	}
 	n = t->open[t->nopen - 1];
 	if (bc__node_unary(&t->pool[n])) {
-		if (t->pool[n].nchildren != 1) {
+		if (t->pool[n].u.nchildren != 1) {
 			return bc_errinfo_set(ei, BC_EINVAL,
 			                      "tree: %s node %u needs exactly "
 			                      "one child",
 			                      bc_op_name(t->pool[n].u.op.kind),
 			                      t->pool[n].id);
 		}
-	} else if (t->pool[n].nchildren < 2) {
+	} else if (t->pool[n].u.nchildren < 2) {
 		return bc_errinfo_set(ei, BC_EINVAL,
 		                      "tree: operator %u (%s) needs two or "
 		                      "more children, has %u",
 		                      t->pool[n].id,
 		                      bc_op_name(t->pool[n].u.op.kind),
-		                      t->pool[n].nchildren);
+		                      t->pool[n].u.nchildren);
 	}
 	t->nopen--;
 	return 0;
@@ -1332,7 +1335,7 @@ bool bc_tree_get(const struct bc_tree *t, uint32_t id,
 uint32_t bc_tree_child_count(const struct bc_tree *t, uint32_t id)
 {
 	uint32_t n = bc__id_find(t, id);
-	return n == BC_NONE ? 0 : t->pool[n].nchildren;
+	return n == BC_NONE ? 0 : bc__nkids(&t->pool[n]);
 }
 
 uint32_t bc_tree_child(const struct bc_tree *t, uint32_t id, uint32_t k)
@@ -1377,7 +1380,7 @@ uint32_t bc_tree_child_index(const struct bc_tree *t, uint32_t id)
 				return k;
 			}
 			if (t->pool[b].next == BC_NONE) {
-				return t->pool[p].nchildren - 1u - k;
+				return t->pool[p].u.nchildren - 1u - k;
 			}
 			n = t->pool[n].prev;
 			b = t->pool[b].next;
@@ -1390,7 +1393,7 @@ uint32_t bc_tree_child_index(const struct bc_tree *t, uint32_t id)
 		return 0;
 	}
 	a = bc_lin_parent(l, s);
-	k = t->pool[p].nchildren;
+	k = t->pool[p].u.nchildren;
 	return k - 1u - (l->depth[a] - l->depth[bc__slot(t, &t->pool[p])]);
 }
 
@@ -1629,7 +1632,9 @@ static uint32_t copy_node(struct bc_tree *t, const struct bc_tree *sub,
 	uint32_t m = pool_take(t);
 	t->pool[m].is_op = sn->is_op;
 	if (sn->is_op) {
-		t->pool[m].u = sn->u;
+		/* Its children are linked as they are copied. */
+		t->pool[m].u.op = sn->u.op;
+		t->pool[m].u.unary = sn->u.unary;
 		if (sn->xpar != BC_NONE) {
 			/* A unary node's parameters. */
 			t->pool[m].xpar = xpar_take(t);
@@ -1664,8 +1669,9 @@ static uint32_t copy_in(struct bc_tree *t, const struct bc_tree *sub,
 	uint32_t n = top, m = copy_node(t, sub, &sub->pool[top], keep_ids);
 	uint32_t root = m;
 	for (;;) {
-		if (sub->pool[n].is_op && sub->pool[n].first_child != BC_NONE) {
-			uint32_t c = sub->pool[n].first_child;
+		if (sub->pool[n].is_op &&
+		    sub->pool[n].u.first_child != BC_NONE) {
+			uint32_t c = sub->pool[n].u.first_child;
 			uint32_t cm =
 			    copy_node(t, sub, &sub->pool[c], keep_ids);
 			link_child(t, m, BC_NONE, cm);
@@ -1769,11 +1775,11 @@ int bc_tree_insert(struct bc_tree *t, uint32_t parent_id, uint32_t pos,
 		                      parent_id,
 		                      bc_op_name(t->pool[p].u.op.kind));
 	}
-	if (pos > t->pool[p].nchildren) {
+	if (pos > t->pool[p].u.nchildren) {
 		return bc_errinfo_set(ei, BC_ERANGE,
 		                      "position %u beyond the %u children of "
 		                      "node %u",
-		                      pos, t->pool[p].nchildren, parent_id);
+		                      pos, t->pool[p].u.nchildren, parent_id);
 	}
 	if (sub->building || sub->root == BC_NONE) {
 		return bc_errinfo_set(ei, BC_EINVAL, "the subtree is empty");
@@ -1838,8 +1844,8 @@ static void cut(struct bc_tree *t, uint32_t n)
 	}
 	unlink_child(t, n);
 	free_subtree(t, n);
-	if (t->pool[p].nchildren == 1) {
-		uint32_t only = t->pool[p].first_child;
+	if (t->pool[p].u.nchildren == 1) {
+		uint32_t only = t->pool[p].u.first_child;
 		uint32_t gp = t->pool[p].parent;
 		uint32_t after = t->pool[p].next;
 		unlink_child(t, only);
@@ -1875,7 +1881,7 @@ int bc_tree_remove(struct bc_tree *t, uint32_t id, struct bc_errinfo *ei)
 	}
 	subtree_stats(t, n, &st);
 	p = t->pool[n].parent;
-	collapse = (p != BC_NONE && t->pool[p].nchildren == 2) ? 1 : 0;
+	collapse = (p != BC_NONE && t->pool[p].u.nchildren == 2) ? 1 : 0;
 	if (p != BC_NONE && splices(t, NULL)) {
 		/* Spliced out; the measures follow the path up (nesting
 		 * only looked for again when the deepest path may have

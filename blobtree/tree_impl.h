@@ -32,14 +32,16 @@ struct bc__prim_room {
 _Static_assert(BC_UNARY_MAX_PARAMS <= BC__XPAR_FLOATS,
                "a unary node's parameters fit a chunk");
 
-/* One node of the editable n-ary model, in a pool addressed by index: 68
- * bytes (a million-sphere model, bare, about 72 bytes a primitive). */
+/* One node of the editable n-ary model, in a pool addressed by index: 56
+ * bytes (a million-sphere model, bare, about 60 bytes a primitive). An
+ * operator's children (first, last, count) share the room of a
+ * primitive's data, which they are not: read them through bc__first,
+ * bc__last and bc__nkids, which give a primitive none. */
 struct bc__node {
 	uint32_t id;
-	uint32_t parent; /* pool index, BC_NONE for the root or detached */
-	uint32_t first_child, last_child, next, prev; /* pool indices */
-	uint32_t nchildren;
-	uint32_t need; /* evaluation stack entries of its subtree */
+	uint32_t parent;     /* pool index, BC_NONE for the root or detached */
+	uint32_t next, prev; /* siblings: pool indices, BC_NONE at the ends */
+	uint32_t need;       /* evaluation stack entries of its subtree */
 	bool is_op : 1;
 	bool live : 1;
 	bool auto_id : 1;   /* id was assigned, not chosen by the scene */
@@ -52,20 +54,39 @@ struct bc__node {
 	/* Its chunk of the xpar store (struct bc__prim_room), BC_NONE. */
 	uint32_t xpar;
 	/* A primitive's data, or an operator's (a unary node, u.op.kind
-	 * says it is one, keeps its parameters in its chunk). */
+	 * says it is one, keeps its parameters in its chunk) and its
+	 * children (pool indices, BC_NONE when it has none). */
 	union {
 		struct bc__prim_room prim;
 		struct {
 			struct bc_op_data op;
 			uint32_t unary; /* unary index (set by linearization) */
+			uint32_t first_child, last_child;
+			uint32_t nchildren;
 		};
 	} u;
 };
 _Static_assert(BC_PRIM_COUNT <= 256, "a primitive's kind is one byte");
 /* Two of these a primitive in the daemon (the session's tree and the
- * render copy): docs/benchmarks.md, "A pool node in 84 bytes" and "A
- * rotation in the chunk". */
-_Static_assert(sizeof(struct bc__node) <= 68, "a pool node grew");
+ * render copy): docs/benchmarks.md, "A pool node in 84 bytes", "A
+ * rotation in the chunk" and "An operator's children in a primitive's
+ * room". */
+_Static_assert(sizeof(struct bc__node) <= 56, "a pool node grew");
+
+/* Node n's first and last child and their count: none for a primitive,
+ * whose data has their room. */
+static inline uint32_t bc__first(const struct bc__node *n)
+{
+	return n->is_op ? n->u.first_child : BC_NONE;
+}
+static inline uint32_t bc__last(const struct bc__node *n)
+{
+	return n->is_op ? n->u.last_child : BC_NONE;
+}
+static inline uint32_t bc__nkids(const struct bc__node *n)
+{
+	return n->is_op ? n->u.nchildren : 0u;
+}
 
 /* Pool node n's primitive data, whole (n must be a primitive). */
 void bc__prim_read(const struct bc_tree *t, const struct bc__node *n,

@@ -14,18 +14,18 @@
 #define BC_SRV_MAX_CONNECTIONS 256u
 
 /* Live (loaded) sessions. Each keeps a scene (up to BC_SRV_MAX_NODES
- * nodes, about 72 bytes a primitive in the model, 235 in the render
+ * nodes, about 60 bytes a primitive in the model, 223 in the render
  * copy's layout while someone looks) and a renderer. Sessions on disk are not
  * limited: one with no members is unloaded after BC_SRV_SESSION_IDLE_MS, or at
  * once, least recently used first, when a CREATE or a JOIN needs its place; a
  * JOIN loads it again. */
 #define BC_SRV_MAX_SESSIONS 64u
 /* What a loaded scene's node costs the daemon with a view drawn (its
- * tree, render copy and the tiled tracer's lists: 407 bytes a primitive
- * measured on a million spheres, 429 before a view's primitive took 20
- * bytes, 575 before a sphere's record took one vec4, spheres alone kept
- * sphere ABVs and nodes their rotations in chunks, 640 before the 84-byte
- * pool node; docs/benchmarks.md), by which
+ * tree, render copy and the tiled tracer's lists: 383 bytes a primitive
+ * measured on a million spheres, 407 before the 56-byte pool node, 429
+ * before a view's primitive took 20 bytes, 575 before a sphere's record took
+ * one vec4, spheres alone kept sphere ABVs and nodes their rotations in chunks,
+ * 640 before the 84-byte pool node; docs/benchmarks.md), by which
  * --scene-memory becomes a count of nodes all loaded sessions may hold;
  * by default half the memory the daemon may use (its cgroup's limit,
  * else the machine's). */
@@ -39,7 +39,7 @@
 #define BC_SRV_SESSION_SWEEP_MS (60u * 1000u)
 
 /* A session's render copy (its laid-out twin of the scene) and the
- * renderer's lists drawn from it (together about 315 bytes a primitive:
+ * renderer's lists drawn from it (together about 303 bytes a primitive:
  * a million spheres at 1024x768, docs/benchmarks.md) are dropped this long
  * after a member last had a view or asked for a picture (--render-idle); the
  * next picture makes them again (the copy about 0.9 s a million primitives,

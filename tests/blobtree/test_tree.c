@@ -860,6 +860,70 @@ static void spheres_alone_keep_sphere_abvs(void)
 	bc_tree_destroy(t);
 }
 
+/* A primitive has no children, whatever its data: an operator's children
+ * share the room of a primitive's data in a pool node (tree_impl.h), so
+ * a coloured primitive, whose colour floats lie where an operator's child
+ * count is, must still count none, and give no child. An operator
+ * copied in from another tree (an INSERT's subtree) starts with none of
+ * that tree's children and gains its own; the primitives in it keep
+ * their data. Checked bare and laid out. */
+static void primitives_have_no_children(void)
+{
+	for (int bare = 0; bare < 2; bare++) {
+		struct bc_tree *t = bc_tree_create(), *sub = bc_tree_create();
+		struct bc_op_data u = {BC_OP_UNION, 0, 0};
+		struct bc_op_data s = {BC_OP_SMOOTH_UNION, 0.2f, 0.3f};
+		struct bc_prim_data p, back;
+		REQUIRE(t && sub);
+		if (bare) {
+			REQUIRE(bc_tree_set_layout(t, false) == 0);
+		}
+		sphere(&p, 0.3f, 0.0f);
+		p.has_color = true;
+		p.color[0] = 0.25f;
+		p.color[1] = 0.5f;
+		p.color[2] = 0.75f;
+		bc_tree_begin(t);
+		REQUIRE(bc_tree_push_op(t, 1, &u, NULL) == 0);
+		REQUIRE(bc_tree_put_prim(t, 2, &p, NULL) == 0);
+		REQUIRE(bc_tree_put_prim(t, 3, &p, NULL) == 0);
+		REQUIRE(bc_tree_pop_op(t, NULL) == 0);
+		REQUIRE(bc_tree_end(t, NULL) == 0);
+		CHECK_EQ_INT(bc_tree_child_count(t, 1), 2);
+		CHECK_EQ_INT(bc_tree_child_count(t, 2), 0);
+		CHECK_EQ_INT(bc_tree_child(t, 2, 0), 0);
+		/* A smooth union of three coloured spheres, copied in. */
+		bc_tree_begin(sub);
+		REQUIRE(bc_tree_push_op(sub, 10, &s, NULL) == 0);
+		for (uint32_t i = 0; i < 3; i++) {
+			sphere(&p, 0.2f, 1.0f + (float)i);
+			p.has_color = true;
+			p.color[2] = 0.125f * (float)(i + 1);
+			REQUIRE(bc_tree_put_prim(sub, 11 + i, &p, NULL) == 0);
+		}
+		REQUIRE(bc_tree_pop_op(sub, NULL) == 0);
+		REQUIRE(bc_tree_end(sub, NULL) == 0);
+		REQUIRE(bc_tree_insert(t, 1, 1, sub, NULL) == 0);
+		CHECK_EQ_INT(bc_tree_child_count(t, 1), 3);
+		CHECK_EQ_INT(bc_tree_child(t, 1, 1), 10);
+		CHECK_EQ_INT(bc_tree_child_count(t, 10), 3);
+		for (uint32_t i = 0; i < 3; i++) {
+			CHECK_EQ_INT(bc_tree_child(t, 10, i), 11 + i);
+			CHECK_EQ_INT(bc_tree_child_count(t, 11 + i), 0);
+			CHECK_EQ_INT(bc_tree_parent(t, 11 + i), 10);
+			REQUIRE(bc_tree_get(t, 11 + i, &back, NULL));
+			CHECK(back.has_color &&
+			      back.color[2] == 0.125f * (float)(i + 1));
+			CHECK(back.translate[0] == 1.0f + (float)i);
+		}
+		if (!bare) {
+			CHECK_EQ_INT(differs_from_a_copy(t), 0);
+		}
+		bc_tree_destroy(sub);
+		bc_tree_destroy(t);
+	}
+}
+
 static const struct bc_test tests[] = {
     {"layout_follows_the_paper", layout_follows_the_paper},
     {"ids_found_in_place_and_in_the_map", ids_found_in_place_and_in_the_map},
@@ -875,5 +939,6 @@ static const struct bc_test tests[] = {
     {"prim_data_kept_through_edits", prim_data_kept_through_edits},
     {"a_sphere_record_is_one_vec4", a_sphere_record_is_one_vec4},
     {"spheres_alone_keep_sphere_abvs", spheres_alone_keep_sphere_abvs},
+    {"primitives_have_no_children", primitives_have_no_children},
 };
 BC_TEST_MAIN(tests)
