@@ -21,8 +21,9 @@
  * JOIN loads it again. */
 #define BC_SRV_MAX_SESSIONS 64u
 /* What a loaded scene's node costs the daemon with a view drawn (its
- * tree, render copy and the tiled tracer's lists: 383 bytes a primitive
- * measured on a million spheres, 407 before the 56-byte pool node, 429
+ * tree, render copy and the tiled tracer's lists: 378 bytes a primitive
+ * measured on a million spheres, 383 before a view's primitive took 16
+ * bytes, 407 before the 56-byte pool node, 429
  * before a view's primitive took 20 bytes, 575 before a sphere's record took
  * one vec4, spheres alone kept sphere ABVs and nodes their rotations in chunks,
  * 640 before the 84-byte pool node; docs/benchmarks.md), by which
@@ -39,7 +40,7 @@
 #define BC_SRV_SESSION_SWEEP_MS (60u * 1000u)
 
 /* A session's render copy (its laid-out twin of the scene) and the
- * renderer's lists drawn from it (together about 303 bytes a primitive:
+ * renderer's lists drawn from it (together about 298 bytes a primitive:
  * a million spheres at 1024x768, docs/benchmarks.md) are dropped this long
  * after a member last had a view or asked for a picture (--render-idle); the
  * next picture makes them again (the copy about 0.9 s a million primitives,

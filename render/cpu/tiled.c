@@ -77,20 +77,22 @@ struct cone {
 /* What the A-buffer keeps of a primitive in one view: its tile
  * rectangle, the widening of its ABV (widened_abv) and of its bounding
  * sphere seen from the eye (struct seen) the term that takes a square
- * root, 20 bytes. The sphere's centre and radius are made again from the
- * layout's ABV and the margin when a tile's list tests the primitive
- * (prim_seen), the same floats prim_setup made from them: a million
- * primitives kept 36 bytes each here when they were kept too, and making
- * the root again as well cost a cold frame's lists 4-7 % more time
- * (docs/benchmarks.md, "A view's primitive in 20 bytes"). */
+ * root (ROOT_INSIDE when the eye is inside the sphere), 16 bytes. The
+ * sphere's centre and radius are made again from the layout's ABV (whose
+ * shape the widening keeps) and the margin when a tile's list tests the
+ * primitive (prim_seen), the same floats prim_setup made from them: a
+ * million primitives kept 36 bytes each here when they were kept too,
+ * and making the root again as well cost a cold frame's lists 4-7 % more
+ * time (docs/benchmarks.md, "A view's primitive in 16 bytes"). */
 struct ab_prim {
 	struct rect rect;
 	float margin;
 	float root;
-	uint8_t shape; /* enum bc_abv_shape of the widened ABV */
-	bool inside;
 };
-_Static_assert(sizeof(struct ab_prim) <= 20, "a view's primitive grew");
+_Static_assert(sizeof(struct ab_prim) <= 16, "a view's primitive grew");
+/* ab_prim's root where the eye is inside the bounding sphere (a root is
+ * never negative). */
+#define ROOT_INSIDE (-1.0f)
 
 /* A primitive's widened ABV's bounding sphere seen from the eye: centre v
  * relative to the eye, radius; when the eye is outside (inside false),
@@ -522,13 +524,11 @@ static void prim_setup(const struct tiled_frame *tf, uint32_t k,
 	struct bc_abv abv = bc_lin_abv(fc->lin, k), wide;
 	float lo[3], hi[3], c[3], r, v[3], dist2;
 	p->margin = widened_abv(fc, &abv, &wide, lo, hi);
-	p->shape = (uint8_t)wide.shape;
 	p->rect = project_box(tf, lo, hi);
 	bounding_sphere(&abv, p->margin, c, &r);
 	bc_v3_sub(c, fc->vr.eye, v);
 	dist2 = bc_v3_dot(v, v);
-	p->inside = dist2 <= r * r;
-	p->root = p->inside ? 0.0f : sqrtf(dist2 - r * r);
+	p->root = dist2 <= r * r ? ROOT_INSIDE : sqrtf(dist2 - r * r);
 }
 
 /* Primitive k's bounding sphere seen from the eye, p its terms. */
@@ -545,8 +545,8 @@ static inline void prim_seen(const struct bc__frame_ctx *fc, uint32_t k,
 		bounding_sphere(&lin->abv[k], p->margin, c, &s->radius);
 	}
 	bc_v3_sub(c, fc->vr.eye, s->v);
-	s->root = p->root;
-	s->inside = p->inside;
+	s->inside = p->root == ROOT_INSIDE;
+	s->root = s->inside ? 0.0f : p->root;
 }
 
 /* Phase 1 of a new view, per primitive: prim_setup. */
@@ -1165,7 +1165,7 @@ static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
 		if (!lanes) {
 			continue;
 		}
-		if (b->prims[k].shape == BC_ABV_SPHERE) {
+		if (lin->sabv || lin->abv[k].shape == BC_ABV_SPHERE) {
 			/* The sphere around a sphere is itself. */
 			tf->kern.sphere(rays, lanes, sp.v, sp.radius, t);
 		} else {
