@@ -789,7 +789,7 @@ uint32_t bc__measure(struct bc_tree *t, uint32_t top)
 						need = t->pool[c].need + 1u;
 					}
 				}
-				t->pool[p].need = need;
+				t->pool[p].need = bc__need(need);
 			}
 			n = p;
 		}
@@ -887,12 +887,14 @@ static uint32_t domain_chain(const struct bc_tree *t)
 
 static int need_error(const struct bc_tree *t, struct bc_errinfo *ei)
 {
+	uint32_t need = t->pool[t->root].need;
 	return bc_errinfo_set(ei, BC_EDEPTH,
 	                      "tree: evaluating it needs a stack of "
-	                      "%u entries, more than %u (operators "
+	                      "%u%s entries, more than %u (operators "
 	                      "nested too deep in right operands; "
 	                      "left-nested chains may be any depth)",
-	                      t->pool[t->root].need, BC_EVAL_STACK);
+	                      need, need == BC__NEED_MAX ? " or more" : "",
+	                      BC_EVAL_STACK);
 }
 
 /* Checks a tree's nesting and evaluation stack against the limits (the one
@@ -944,10 +946,10 @@ static void need_grow(struct bc_tree *t, uint32_t m)
 		    (v = need_in_parent(t, next)) > need) {
 			need = v;
 		}
-		if (need == t->pool[p].need) {
+		if (bc__need(need) == t->pool[p].need) {
 			return;
 		}
-		t->pool[p].need = need;
+		t->pool[p].need = bc__need(need);
 		c = p;
 		p = t->pool[p].parent;
 	}
@@ -968,10 +970,10 @@ static void need_shrink(struct bc_tree *t, uint32_t a)
 				need = v;
 			}
 		}
-		if (need == old) {
+		if (bc__need(need) == old) {
 			return;
 		}
-		t->pool[a].need = need;
+		t->pool[a].need = bc__need(need);
 		a = t->pool[a].parent;
 	}
 }

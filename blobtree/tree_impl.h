@@ -32,8 +32,8 @@ struct bc__prim_room {
 _Static_assert(BC_UNARY_MAX_PARAMS <= BC__XPAR_FLOATS,
                "a unary node's parameters fit a chunk");
 
-/* One node of the editable n-ary model, in a pool addressed by index: 56
- * bytes (a million-sphere model, bare, about 60 bytes a primitive). An
+/* One node of the editable n-ary model, in a pool addressed by index: 52
+ * bytes (a million-sphere model, bare, about 56 bytes a primitive). An
  * operator's children (first, last, count) share the room of a
  * primitive's data, which they are not: read them through bc__first,
  * bc__last and bc__nkids, which give a primitive none. */
@@ -41,7 +41,6 @@ struct bc__node {
 	uint32_t id;
 	uint32_t parent;     /* pool index, BC_NONE for the root or detached */
 	uint32_t next, prev; /* siblings: pool indices, BC_NONE at the ends */
-	uint32_t need;       /* evaluation stack entries of its subtree */
 	bool is_op : 1;
 	bool live : 1;
 	bool auto_id : 1;   /* id was assigned, not chosen by the scene */
@@ -51,6 +50,10 @@ struct bc__node {
 	 * on a child that is one of its anchors. */
 	uint8_t kids;
 	uint8_t pkind; /* a primitive's enum bc_prim */
+	/* Evaluation stack entries of its subtree, BC__NEED_MAX for that
+	 * many or more (bc__need): far past BC_EVAL_STACK, which no tree
+	 * may pass. */
+	uint8_t need;
 	/* Its chunk of the xpar store (struct bc__prim_room), BC_NONE. */
 	uint32_t xpar;
 	/* A primitive's data, or an operator's (a unary node, u.op.kind
@@ -71,7 +74,17 @@ _Static_assert(BC_PRIM_COUNT <= 256, "a primitive's kind is one byte");
  * render copy): docs/benchmarks.md, "A pool node in 84 bytes", "A
  * rotation in the chunk" and "An operator's children in a primitive's
  * room". */
-_Static_assert(sizeof(struct bc__node) <= 56, "a pool node grew");
+_Static_assert(sizeof(struct bc__node) <= 52, "a pool node grew");
+
+#define BC__NEED_MAX 255u
+_Static_assert(BC_EVAL_STACK < BC__NEED_MAX,
+               "a node's need saturates past the stack a tree may need");
+/* A need as a node keeps it: v, or BC__NEED_MAX for v and more (the
+ * same verdict against BC_EVAL_STACK). */
+static inline uint8_t bc__need(uint32_t v)
+{
+	return (uint8_t)(v < BC__NEED_MAX ? v : BC__NEED_MAX);
+}
 
 /* Node n's first and last child and their count: none for a primitive,
  * whose data has their room. */

@@ -282,6 +282,85 @@ static void right_nesting_is_bounded_by_the_eval_stack(void)
 	bc_tree_destroy(t);
 }
 
+/* n unions nested in right operands, u(s, u(s, ... u(s, s))): the
+ * operators get ids id0, id0 + 2, ..., their left spheres the ids between,
+ * the last sphere id0 + 2n; need n + 1. */
+static void right_chain(struct bc_tree *t, uint32_t n, uint32_t id0)
+{
+	struct bc_op_data u = {BC_OP_UNION, 0.0f, 0.0f};
+	struct bc_prim_data p;
+	uint32_t id = id0;
+	int rc = 0;
+	sphere_at(&p, 0.0f, 0.0f);
+	bc_tree_begin(t);
+	for (uint32_t i = 0; i < n && !rc; i++) {
+		rc = bc_tree_push_op(t, id++, &u, NULL);
+		rc = rc ? rc : bc_tree_put_prim(t, id++, &p, NULL);
+	}
+	rc = rc ? rc : bc_tree_put_prim(t, id++, &p, NULL);
+	for (uint32_t i = 0; i < n && !rc; i++) {
+		rc = bc_tree_pop_op(t, NULL);
+	}
+	REQUIRE(rc == 0 && bc_tree_end(t, NULL) == 0);
+}
+
+/* A node keeps its need in a byte, saturated far past BC_EVAL_STACK: a
+ * graft whose need passes the byte's range (130 entries onto 129 right
+ * operands deep: 259) is refused as one just past the stack is, saying
+ * "or more", and changes nothing; a replacement that shrinks the need,
+ * and a graft after it, are measured exactly. Laid out and bare. */
+static void a_need_past_a_byte_is_refused_alike(void)
+{
+	for (int bare = 0; bare < 2; bare++) {
+		struct bc_tree *t = bc_tree_create(), *sub = bc_tree_create();
+		struct bc_prim_data p;
+		struct bc_errinfo ei = {0};
+		uint32_t n = BC_EVAL_STACK - 1;
+		REQUIRE(t && sub);
+		if (bare) {
+			REQUIRE(bc_tree_set_layout(t, false) == 0);
+		}
+		right_chain(t, n, 1);
+		right_chain(sub, n, 100000);
+		CHECK(bare || bc_tree_lin(t)->stack == BC_EVAL_STACK);
+		/* The deepest sphere, 2n + 1, becomes a 130-entry subtree. */
+		CHECK_EQ_INT(bc_tree_replace(t, 2 * n + 1, sub, &ei),
+		             BC_EDEPTH);
+		CHECK(strstr(ei.msg, "255 or more entries") != NULL);
+		CHECK(bc_tree_get(t, 2 * n + 1, NULL, NULL));
+		CHECK(!bc_tree_get(t, 100000, NULL, NULL));
+		CHECK(bare || bc_tree_lin(t)->stack == BC_EVAL_STACK);
+		CHECK(round_trips(t));
+		/* The union at level 60 (id 119) becomes one sphere: 59
+		 * unions above it, a need of 60. */
+		bc_tree_destroy(sub);
+		sub = bc_tree_create();
+		REQUIRE(sub);
+		sphere_at(&p, 1.0f, 0.0f);
+		bc_tree_begin(sub);
+		REQUIRE(bc_tree_put_prim(sub, 200000, &p, NULL) == 0);
+		REQUIRE(bc_tree_end(sub, NULL) == 0);
+		CHECK_EQ_INT(bc_tree_replace(t, 119, sub, &ei), 0);
+		CHECK(bare || bc_tree_lin(t)->stack == 60);
+		/* 59 + 71 = 130 fits; 59 + 72 does not. */
+		bc_tree_destroy(sub);
+		sub = bc_tree_create();
+		REQUIRE(sub);
+		right_chain(sub, 71, 300000);
+		CHECK_EQ_INT(bc_tree_replace(t, 200000, sub, &ei), BC_EDEPTH);
+		CHECK(strstr(ei.msg, "131 entries") != NULL);
+		bc_tree_destroy(sub);
+		sub = bc_tree_create();
+		REQUIRE(sub);
+		right_chain(sub, 70, 300000);
+		CHECK_EQ_INT(bc_tree_replace(t, 200000, sub, &ei), 0);
+		CHECK(bare || bc_tree_lin(t)->stack == BC_EVAL_STACK);
+		CHECK(round_trips(t));
+		bc_tree_destroy(sub);
+		bc_tree_destroy(t);
+	}
+}
+
 /* JSON carries BC_SCENE_JSON_MAX_DEPTH levels (jansson's parser limit);
  * the writer refuses deeper trees rather than write what cannot be read. */
 static void json_carries_chains_up_to_its_limit(void)
@@ -335,6 +414,8 @@ static const struct bc_test tests[] = {
     {"deep_chain_edits", deep_chain_edits},
     {"graft_reaches_the_limit_and_not_past",
      graft_reaches_the_limit_and_not_past},
+    {"a_need_past_a_byte_is_refused_alike",
+     a_need_past_a_byte_is_refused_alike},
     {"right_nesting_is_bounded_by_the_eval_stack",
      right_nesting_is_bounded_by_the_eval_stack},
     {"json_carries_chains_up_to_its_limit",
