@@ -236,56 +236,12 @@ static void graft_reaches_the_limit_and_not_past(void)
 	bc_tree_destroy(t);
 }
 
-/* Right operands nested past the evaluation stack are refused by the
- * builder and by edits, which then change nothing. */
-static void right_nesting_is_bounded_by_the_eval_stack(void)
-{
-	struct bc_tree *t = bc_tree_create(), *sub = bc_tree_create();
-	struct bc_op_data u = {BC_OP_UNION, 0.0f, 0.0f};
-	struct bc_prim_data p;
-	struct bc_errinfo ei = {0};
-	uint32_t n = BC_EVAL_STACK, id = 1;
-	int rc = 0;
-	REQUIRE(t && sub);
-	sphere_at(&p, 0.0f, 0.0f);
-	bc_tree_begin(t);
-	for (uint32_t i = 0; i < n && !rc; i++) {
-		rc = bc_tree_push_op(t, id++, &u, NULL);
-		rc = rc ? rc : bc_tree_put_prim(t, id++, &p, NULL);
-	}
-	rc = rc ? rc : bc_tree_put_prim(t, id++, &p, NULL);
-	for (uint32_t i = 0; i < n && !rc; i++) {
-		rc = bc_tree_pop_op(t, NULL);
-	}
-	CHECK_EQ_INT(rc, 0);
-	CHECK_EQ_INT(bc_tree_end(t, &ei), BC_EDEPTH);
-	CHECK(strstr(ei.msg, "stack") != NULL);
-	/* One level less fits; grafting a pair onto its deepest right
-	 * operand does not. */
-	bc_tree_begin(t);
-	id = 1;
-	for (uint32_t i = 0; i + 1 < n && !rc; i++) {
-		rc = bc_tree_push_op(t, id++, &u, NULL);
-		rc = rc ? rc : bc_tree_put_prim(t, id++, &p, NULL);
-	}
-	rc = rc ? rc : bc_tree_put_prim(t, id++, &p, NULL);
-	for (uint32_t i = 0; i + 1 < n && !rc; i++) {
-		rc = bc_tree_pop_op(t, NULL);
-	}
-	REQUIRE(rc == 0 && bc_tree_end(t, &ei) == 0);
-	CHECK_EQ_INT(bc_tree_lin(t)->stack, BC_EVAL_STACK);
-	sub_pair(sub, 90000);
-	CHECK_EQ_INT(bc_tree_replace(t, id - 1, sub, &ei), BC_EDEPTH);
-	CHECK_EQ_INT(bc_tree_lin(t)->stack, BC_EVAL_STACK);
-	CHECK(round_trips(t));
-	bc_tree_destroy(sub);
-	bc_tree_destroy(t);
-}
-
 /* n unions nested in right operands, u(s, u(s, ... u(s, s))): the
  * operators get ids id0, id0 + 2, ..., their left spheres the ids between,
- * the last sphere id0 + 2n; need n + 1. */
-static void right_chain(struct bc_tree *t, uint32_t n, uint32_t id0)
+ * the last sphere id0 + 2n; need n + 1. Returns bc_tree_end's answer,
+ * or the builder's error before it. */
+static int right_chain(struct bc_tree *t, uint32_t n, uint32_t id0,
+                       struct bc_errinfo *ei)
 {
 	struct bc_op_data u = {BC_OP_UNION, 0.0f, 0.0f};
 	struct bc_prim_data p;
@@ -301,7 +257,29 @@ static void right_chain(struct bc_tree *t, uint32_t n, uint32_t id0)
 	for (uint32_t i = 0; i < n && !rc; i++) {
 		rc = bc_tree_pop_op(t, NULL);
 	}
-	REQUIRE(rc == 0 && bc_tree_end(t, NULL) == 0);
+	return rc ? rc : bc_tree_end(t, ei);
+}
+
+/* Right operands nested past the evaluation stack are refused by the
+ * builder and by edits, which then change nothing. */
+static void right_nesting_is_bounded_by_the_eval_stack(void)
+{
+	struct bc_tree *t = bc_tree_create(), *sub = bc_tree_create();
+	struct bc_errinfo ei = {0};
+	uint32_t n = BC_EVAL_STACK;
+	REQUIRE(t && sub);
+	CHECK_EQ_INT(right_chain(t, n, 1, &ei), BC_EDEPTH);
+	CHECK(strstr(ei.msg, "stack") != NULL);
+	/* One level less fits; grafting a pair onto its deepest right
+	 * operand (sphere 2 (n - 1) + 1) does not. */
+	REQUIRE(right_chain(t, n - 1, 1, &ei) == 0);
+	CHECK_EQ_INT(bc_tree_lin(t)->stack, BC_EVAL_STACK);
+	sub_pair(sub, 90000);
+	CHECK_EQ_INT(bc_tree_replace(t, 2 * (n - 1) + 1, sub, &ei), BC_EDEPTH);
+	CHECK_EQ_INT(bc_tree_lin(t)->stack, BC_EVAL_STACK);
+	CHECK(round_trips(t));
+	bc_tree_destroy(sub);
+	bc_tree_destroy(t);
 }
 
 /* A node keeps its need in a byte, saturated far past BC_EVAL_STACK: a
@@ -320,8 +298,8 @@ static void a_need_past_a_byte_is_refused_alike(void)
 		if (bare) {
 			REQUIRE(bc_tree_set_layout(t, false) == 0);
 		}
-		right_chain(t, n, 1);
-		right_chain(sub, n, 100000);
+		REQUIRE(right_chain(t, n, 1, NULL) == 0);
+		REQUIRE(right_chain(sub, n, 100000, NULL) == 0);
 		CHECK(bare || bc_tree_lin(t)->stack == BC_EVAL_STACK);
 		/* The deepest sphere, 2n + 1, becomes a 130-entry subtree. */
 		CHECK_EQ_INT(bc_tree_replace(t, 2 * n + 1, sub, &ei),
@@ -346,13 +324,13 @@ static void a_need_past_a_byte_is_refused_alike(void)
 		bc_tree_destroy(sub);
 		sub = bc_tree_create();
 		REQUIRE(sub);
-		right_chain(sub, 71, 300000);
+		REQUIRE(right_chain(sub, 71, 300000, NULL) == 0);
 		CHECK_EQ_INT(bc_tree_replace(t, 200000, sub, &ei), BC_EDEPTH);
 		CHECK(strstr(ei.msg, "131 entries") != NULL);
 		bc_tree_destroy(sub);
 		sub = bc_tree_create();
 		REQUIRE(sub);
-		right_chain(sub, 70, 300000);
+		REQUIRE(right_chain(sub, 70, 300000, NULL) == 0);
 		CHECK_EQ_INT(bc_tree_replace(t, 200000, sub, &ei), 0);
 		CHECK(bare || bc_tree_lin(t)->stack == BC_EVAL_STACK);
 		CHECK(round_trips(t));
