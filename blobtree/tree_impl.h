@@ -35,8 +35,9 @@ _Static_assert(BC_UNARY_MAX_PARAMS <= BC__XPAR_FLOATS,
 /* One node of the editable n-ary model, in a pool addressed by index: 52
  * bytes (a million-sphere model, bare, about 56 bytes a primitive). An
  * operator's children (first, last, count) share the room of a
- * primitive's data, which they are not: read them through bc__first,
- * bc__last and bc__nkids, which give a primitive none. */
+ * primitive's data, which has none: they are read on operators only, and
+ * where a node may be either (a public call's id) through bc__nkids,
+ * which gives a primitive none. */
 struct bc__node {
 	uint32_t id;
 	uint32_t parent;     /* pool index, BC_NONE for the root or detached */
@@ -86,16 +87,8 @@ static inline uint8_t bc__need(uint32_t v)
 	return (uint8_t)(v < BC__NEED_MAX ? v : BC__NEED_MAX);
 }
 
-/* Node n's first and last child and their count: none for a primitive,
- * whose data has their room. */
-static inline uint32_t bc__first(const struct bc__node *n)
-{
-	return n->is_op ? n->u.first_child : BC_NONE;
-}
-static inline uint32_t bc__last(const struct bc__node *n)
-{
-	return n->is_op ? n->u.last_child : BC_NONE;
-}
+/* Node n's number of children: none for a primitive, whose data has the
+ * room of an operator's count. */
 static inline uint32_t bc__nkids(const struct bc__node *n)
 {
 	return n->is_op ? n->u.nchildren : 0u;

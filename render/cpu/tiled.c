@@ -74,16 +74,17 @@ struct cone {
 	float cos_h, sin_h;
 };
 
-/* What the A-buffer keeps of a primitive in one view: its tile
- * rectangle, the widening of its ABV (widened_abv) and of its bounding
- * sphere seen from the eye (struct seen) the term that takes a square
- * root (ROOT_INSIDE when the eye is inside the sphere), 16 bytes. The
- * sphere's centre and radius are made again from the layout's ABV (whose
- * shape the widening keeps) and the margin when a tile's list tests the
- * primitive (prim_seen), the same floats prim_setup made from them: a
- * million primitives kept 36 bytes each here when they were kept too,
- * and making the root again as well cost a cold frame's lists 4-7 % more
- * time (docs/benchmarks.md, "A view's primitive in 16 bytes"). */
+/* What the A-buffer keeps of a primitive in one view, 16 bytes: its tile
+ * rectangle, the widening of its ABV (widened_abv), and the one term of
+ * its bounding sphere seen from the eye (struct seen) that takes a square
+ * root (ROOT_INSIDE when the eye is inside the sphere). The sphere's
+ * centre and radius are made again from the layout's ABV (whose shape the
+ * widening keeps) and the margin when a tile's list tests the primitive
+ * (prim_seen), the same floats prim_setup made from them: a million
+ * primitives kept 36 bytes each here when they were kept too, and making
+ * the root again as well cost a cold frame's lists 4-7 % more time
+ * (docs/benchmarks.md, "A view's primitive in 20 bytes" and "... in 16
+ * bytes"). */
 struct ab_prim {
 	struct rect rect;
 	float margin;
