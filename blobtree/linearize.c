@@ -325,8 +325,8 @@ static void emit_leaf(struct bc_tree *t, struct bc__fill *fs, uint32_t n)
 	struct bc_prim_data pd;
 	bc__prim_read(t, nd, &pd);
 	y->slot = s;
-	y->epoch = t->epoch;
-	y->prim = fs->prim++;
+	bc__lay_mark(t, y);
+	bc__lay_prim(y, fs->prim++);
 	y->param = fs->param;
 	fs->param += bc_prim_record_vec4((uint32_t)pd.kind);
 	set_word(l, s, true, (uint32_t)pd.kind);
@@ -380,7 +380,7 @@ void bc__lin_emit(struct bc_tree *t, struct bc__fill *fs, uint32_t top)
 			struct bc__node *nd = &t->pool[n];
 			struct bc__lay *y = &t->lay[n];
 			y->param = fs->param;
-			y->epoch = t->epoch;
+			bc__lay_mark(t, y);
 			if (bc__node_unary(nd)) {
 				struct bc_lin *l = fs->l;
 				nd->u.unary = fs->unary++;

@@ -253,7 +253,7 @@ static uint32_t pool_take(struct bc_tree *t)
 	if (t->lay) {
 		/* No splice to follow: its place is written before read. */
 		memset(&t->lay[n], 0, sizeof(t->lay[n]));
-		t->lay[n].epoch = t->epoch;
+		bc__lay_mark(t, &t->lay[n]);
 	}
 	return n;
 }

@@ -102,13 +102,19 @@ const float *bc__uparam(const struct bc_tree *t, const struct bc__node *n);
 
 /* Where a node of a laid-out tree is in its layout (struct bc_tree's lay,
  * beside the pool, index for index): set by linearization. A bare tree
- * keeps none (16 bytes a node: a tenth of a session's tree). */
+ * keeps none (12 bytes a node). */
 struct bc__lay {
 	uint32_t slot;  /* the node's top slot */
 	uint32_t param; /* parameter record, vec4 units */
-	uint32_t prim;  /* primitive index (primitives only) */
-	uint32_t epoch; /* splices slot, param and prim have followed */
+	/* Primitive index (primitives only), and the low byte of the count
+	 * of splices slot, param and prim have followed (bc__lay_epoch):
+	 * a node lags fewer splices than the shift log holds. Written
+	 * through bc__lay_prim and bc__lay_mark. */
+	uint32_t prim : 24;
+	uint32_t epoch : 8;
 };
+_Static_assert(BC_TREE_MAX_NODES < (1u << 24),
+               "a primitive index fits a layout place's 24 bits");
 
 #define BC__KIDS_OP 1u
 #define BC__KIDS_AT 2u
@@ -343,24 +349,42 @@ static inline struct bc__lay *bc__lay(const struct bc_tree *t,
 	return &t->lay[n - t->pool];
 }
 
+/* The splice a layout place has followed up to (its epoch byte: it lags
+ * fewer than BC__SHIFTS <= 256 splices), and the marks that it follows
+ * every splice so far and that its primitive index is k. */
+_Static_assert(BC__SHIFTS <= 256u, "a place's epoch byte tells its lag");
+static inline uint32_t bc__lay_epoch(const struct bc_tree *t,
+                                     const struct bc__lay *y)
+{
+	return t->epoch - ((t->epoch - (uint32_t)y->epoch) & 0xffu);
+}
+static inline void bc__lay_mark(const struct bc_tree *t, struct bc__lay *y)
+{
+	y->epoch = t->epoch & 0xffu;
+}
+static inline void bc__lay_prim(struct bc__lay *y, uint32_t k)
+{
+	y->prim = k & 0xffffffu;
+}
+
 /* Node n's slot, record and primitive index as of now. */
 static inline uint32_t bc__slot(const struct bc_tree *t,
                                 const struct bc__node *n)
 {
 	const struct bc__lay *y = bc__lay(t, n);
-	return bc__follow(t, y->slot, y->epoch, 0);
+	return bc__follow(t, y->slot, bc__lay_epoch(t, y), 0);
 }
 static inline uint32_t bc__param(const struct bc_tree *t,
                                  const struct bc__node *n)
 {
 	const struct bc__lay *y = bc__lay(t, n);
-	return bc__follow(t, y->param, y->epoch, 1);
+	return bc__follow(t, y->param, bc__lay_epoch(t, y), 1);
 }
 static inline uint32_t bc__prim(const struct bc_tree *t,
                                 const struct bc__node *n)
 {
 	const struct bc__lay *y = bc__lay(t, n);
-	return bc__follow(t, y->prim, y->epoch, 2);
+	return bc__follow(t, y->prim, bc__lay_epoch(t, y), 2);
 }
 /* Brings node n's slot, param and prim up to date, and returns them
  * (which may then be read and written directly). */
@@ -368,10 +392,11 @@ static inline struct bc__lay *bc__refresh(struct bc_tree *t,
                                           const struct bc__node *n)
 {
 	struct bc__lay *y = bc__lay(t, n);
-	y->slot = bc__slot(t, n);
-	y->param = bc__param(t, n);
-	y->prim = bc__prim(t, n);
-	y->epoch = t->epoch;
+	uint32_t slot = bc__slot(t, n), param = bc__param(t, n);
+	bc__lay_prim(y, bc__prim(t, n));
+	y->slot = slot;
+	y->param = param;
+	bc__lay_mark(t, y);
 	return y;
 }
 

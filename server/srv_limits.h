@@ -14,15 +14,16 @@
 #define BC_SRV_MAX_CONNECTIONS 256u
 
 /* Live (loaded) sessions. Each keeps a scene (up to BC_SRV_MAX_NODES
- * nodes, about 56 bytes a primitive in the model, 219 in the render
+ * nodes, about 56 bytes a primitive in the model, 215 in the render
  * copy's layout while someone looks) and a renderer. Sessions on disk are not
  * limited: one with no members is unloaded after BC_SRV_SESSION_IDLE_MS, or at
  * once, least recently used first, when a CREATE or a JOIN needs its place; a
  * JOIN loads it again. */
 #define BC_SRV_MAX_SESSIONS 64u
 /* What a loaded scene's node costs the daemon with a view drawn (its
- * tree, render copy and the tiled tracer's lists: 370 bytes a primitive
- * measured on a million spheres, 378 before the 52-byte pool node, 383
+ * tree, render copy and the tiled tracer's lists: 366 bytes a primitive
+ * measured on a million spheres, 370 before 12-byte layout places, 378
+ * before the 52-byte pool node, 383
  * before a view's primitive took 16
  * bytes, 407 before the 56-byte pool node, 429
  * before a view's primitive took 20 bytes, 575 before a sphere's record took
@@ -41,7 +42,7 @@
 #define BC_SRV_SESSION_SWEEP_MS (60u * 1000u)
 
 /* A session's render copy (its laid-out twin of the scene) and the
- * renderer's lists drawn from it (together about 294 bytes a primitive:
+ * renderer's lists drawn from it (together about 290 bytes a primitive:
  * a million spheres at 1024x768, docs/benchmarks.md) are dropped this long
  * after a member last had a view or asked for a picture (--render-idle); the
  * next picture makes them again (the copy about 0.9 s a million primitives,
