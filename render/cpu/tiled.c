@@ -143,7 +143,8 @@ struct bc__tiled_bufs {
 	struct ab_prim *prims;
 	size_t prims_cap;
 	/* Per tile: state, list length, candidates (primitives whose
-	 * rectangle holds it, increasing) at cand[cand_off[t] ..
+	 * rectangle holds it and whose bounding sphere meets its whole-tile
+	 * cone, increasing: row_visit) at cand[cand_off[t] ..
 	 * cand_end[t]) with room up to cand_lim[t], and the list at
 	 * frags[frag_off[t] ..] in room of frag_room[t] fragments. A full
 	 * build lays the tiles out in order, each with some room to spare
@@ -244,10 +245,23 @@ static int grow(void **p, size_t *cap, size_t n, size_t size)
 	return 0;
 }
 
-/* Room for n tiles in every per-tile array (contents not kept). */
+/* Room for n elements as grow gives it, the room given back first when
+ * it is more than twice that (a bigger view's before). */
+static int fit(void **p, size_t *cap, size_t n, size_t size)
+{
+	if (*cap > 2u * n) {
+		bc_free(*p);
+		*p = NULL;
+		*cap = 0;
+	}
+	return grow(p, cap, n, size);
+}
+
+/* Room for n tiles in every per-tile array (contents not kept), the
+ * room of more than twice as many (a bigger frame's) given back. */
 static int grow_tiles(struct bc__tiled_bufs *b, size_t n)
 {
-	if (n <= b->tiles_cap) {
+	if (n <= b->tiles_cap && b->tiles_cap <= 2u * n) {
 		return 0;
 	}
 	free_tiles(b);
@@ -596,14 +610,16 @@ static uint32_t frag_slack(uint32_t n)
 }
 
 /* Starts the kept lists again (frags_reset), with room for those of
- * candidates that take `cands` entries, slack included: about half of a
- * tile's candidates pass its cone test (0.46 for a million spheres at
- * 1024x768, 0.44 for 100 000), and lists that need more are given it
- * as they are made (make_frag_room). Room of more than the candidates
- * (a wider view's before) is given back. Returns 0 or BC_ENOMEM. */
+ * candidates that take `cands` entries, slack included: three quarters
+ * of that. The candidates met the tile's cone already (row_visit); most
+ * make a fragment (a million spheres at 1024x768: 3.36 million of 4.12,
+ * and the lists with their spare 0.73 of the candidates' room, slack
+ * included), and lists that need more are given it as they are made
+ * (make_frag_room). Room of more than twice
+ * that (a wider view's before) is given back. Returns 0 or BC_ENOMEM. */
 static int frags_size(struct bc__tiled_bufs *b, uint64_t cands)
 {
-	size_t want = (size_t)(cands / 2u) + 1024u;
+	size_t want = (size_t)(cands - cands / 4u) + 1024u;
 	frags_reset(b);
 	if (b->frags_cap >= want && b->frags_cap <= 2u * want) {
 		return 0;
@@ -676,17 +692,44 @@ static bool by_rows(const struct tiled_frame *tf, uint32_t y0, uint32_t y1)
 }
 
 /* Primitive k's tiles in one row (row: that row's cursors in b->cur,
- * r its rectangle): counted, or, with cand, k written at each tile's
- * cursor. */
-static inline void row_visit(uint32_t *row, const struct rect *r, uint32_t k,
-                             uint32_t *cand)
+ * cones: that row's tiles' cones, r its rectangle, sp its bounding
+ * sphere seen from the eye) whose whole-tile cone meets that sphere:
+ * counted, or, with cand, k written at each tile's cursor. A tile's list
+ * tests that cone first (tile_list), so the candidates it drops would
+ * never make a fragment: at a million spheres, 1024x768, 44 % of the
+ * pairs of tile and rectangle, and as many entries of b->cand. */
+static inline void row_visit(uint32_t *row, const struct cone *cones,
+                             const struct rect *r, const struct seen *sp,
+                             uint32_t k, uint32_t *cand)
 {
 	for (uint32_t tx = r->x0; tx < r->x1; tx++) {
+		if (!cone_meets_sphere(&cones[CONES_PER_TILE * tx], sp)) {
+			continue;
+		}
 		if (cand) {
 			cand[row[tx]++] = k;
 		} else {
 			row[tx]++;
 		}
+	}
+}
+
+/* Primitive k's pairs in rows [ya, yb) through row_visit, cur the
+ * cursors of every tile. */
+static inline void prim_visit(const struct tiled_frame *tf, uint32_t *cur,
+                              uint32_t k, uint32_t ya, uint32_t yb,
+                              uint32_t *cand)
+{
+	const struct ab_prim *p = &tf->b->prims[k];
+	struct seen sp;
+	if (ya >= yb || p->rect.x0 >= p->rect.x1) {
+		return;
+	}
+	prim_seen(tf->fc, k, p, &sp);
+	for (uint32_t ty = ya; ty < yb; ty++) {
+		size_t row = (size_t)ty * tf->tw;
+		row_visit(cur + row, tf->b->cones + CONES_PER_TILE * row,
+		          &p->rect, &sp, k, cand);
 	}
 }
 
@@ -699,11 +742,10 @@ static void visit_rows(struct tiled_frame *tf, uint32_t y0, uint32_t y1,
 	struct bc__tiled_bufs *b = tf->b;
 	if (by_rows(tf, y0, y1)) {
 		for (uint32_t y = y0; y < y1; y++) {
-			uint32_t *row = b->cur + (size_t)y * tf->tw;
 			for (uint32_t i = b->row_off[y]; i < b->row_off[y + 1];
 			     i++) {
-				uint32_t k = b->row_prims[i];
-				row_visit(row, &b->prims[k].rect, k, cand);
+				prim_visit(tf, b->cur, b->row_prims[i], y,
+				           y + 1, cand);
 			}
 		}
 		return;
@@ -712,9 +754,7 @@ static void visit_rows(struct tiled_frame *tf, uint32_t y0, uint32_t y1,
 		const struct rect *r = &b->prims[k].rect;
 		uint32_t ya = r->y0 > y0 ? r->y0 : y0;
 		uint32_t yb = r->y1 < y1 ? r->y1 : y1;
-		for (uint32_t ty = ya; ty < yb; ty++) {
-			row_visit(b->cur + (size_t)ty * tf->tw, r, k, cand);
-		}
+		prim_visit(tf, b->cur, k, ya, yb, cand);
 	}
 }
 
@@ -759,9 +799,7 @@ static void phase_visit(void *arg, uint32_t share)
 	}
 	for (uint32_t k = k0; k < k1; k++) {
 		const struct rect *r = &b->prims[k].rect;
-		for (uint32_t ty = r->y0; ty < r->y1; ty++) {
-			row_visit(cur + (size_t)ty * tf->tw, r, k, v->cand);
-		}
+		prim_visit(tf, cur, k, r->y0, r->y1, v->cand);
 	}
 }
 
@@ -776,8 +814,8 @@ static void count_cand(struct tiled_frame *tf, uint32_t y0, uint32_t y1)
 	tf->visit_shares = 0;
 	if (n > 1 && tf->nprims >= VISIT_SHARED_PRIMS && y0 == 0 &&
 	    y1 == tf->th && !by_rows(tf, y0, y1) &&
-	    grow((void **)&b->share_cur, &b->share_cap, (size_t)n * tf->ntiles,
-	         sizeof(*b->share_cur)) == 0) {
+	    fit((void **)&b->share_cur, &b->share_cap, (size_t)n * tf->ntiles,
+	        sizeof(*b->share_cur)) == 0) {
 		struct visit_run v = {.tf = tf, .n = n, .cand = NULL};
 		bc_pool_run(n, phase_visit, &v);
 		for (uint32_t t = 0; t < tf->ntiles; t++) {
@@ -925,8 +963,9 @@ static void rect_mark(struct tiled_frame *tf, const struct rect *r)
 
 /* Candidates of marked tile t after primitives lo..hi-1 moved: the old
  * ones outside that range, with those of the range whose rectangle now
- * holds t in their place (so the list stays increasing), written at out
- * when out is not NULL. Returns the count. */
+ * holds t and whose bounding sphere meets its whole-tile cone (as
+ * row_visit keeps them) in their place (so the list stays increasing),
+ * written at out when out is not NULL. Returns the count. */
 static uint32_t patched_list(const struct tiled_frame *tf, uint32_t t,
                              uint32_t lo, uint32_t hi, uint32_t *out)
 {
@@ -938,7 +977,12 @@ static uint32_t patched_list(const struct tiled_frame *tf, uint32_t t,
 		}
 	}
 	for (uint32_t k = lo; k < hi; k++) {
-		if (rect_has(&b->prims[k].rect, tx, ty)) {
+		struct seen sp;
+		if (!rect_has(&b->prims[k].rect, tx, ty)) {
+			continue;
+		}
+		prim_seen(tf->fc, k, &b->prims[k], &sp);
+		if (cone_meets_sphere(&b->cones[CONES_PER_TILE * t], &sp)) {
 			if (out) {
 				out[n] = k;
 			}
@@ -1073,7 +1117,28 @@ static void block_cone(const struct bc_view_rays *vr,
 	          (float)by1 - 0.5f, corner, c);
 }
 
-/* The tile's cones: the whole tile's, then its quarters'. */
+/* The whole tile's cone. Its corner rays come from bc_view_rays_dir,
+ * the same bits as the kernel's rays for those pixels (abuffer.h), as
+ * block_cone would take them: 4 rays, not the tile's 64, for every tile
+ * of a new view (phase_cones). */
+static void tile_cone(const struct tiled_frame *tf, uint32_t tx, uint32_t ty)
+{
+	const struct bc__frame_ctx *fc = tf->fc;
+	struct cone *c = &tf->b->cones[CONES_PER_TILE * (ty * tf->tw + tx)];
+	uint32_t w = fc->out->width, h = fc->out->height;
+	uint32_t x0 = tx * BC_CPU_TILE, y0 = ty * BC_CPU_TILE;
+	float x1 = (float)(x0 + BC_CPU_TILE < w ? x0 + BC_CPU_TILE : w) - 0.5f;
+	float y1 = (float)(y0 + BC_CPU_TILE < h ? y0 + BC_CPU_TILE : h) - 0.5f;
+	float fx0 = (float)x0 + 0.5f, fy0 = (float)y0 + 0.5f, d[4][3];
+	const float *corner[4] = {d[0], d[1], d[2], d[3]};
+	bc_view_rays_dir(&fc->vr, fx0, fy0, d[0]);
+	bc_view_rays_dir(&fc->vr, x1, fy0, d[1]);
+	bc_view_rays_dir(&fc->vr, fx0, y1, d[2]);
+	bc_view_rays_dir(&fc->vr, x1, y1, d[3]);
+	make_cone(&fc->vr, fx0, fy0, x1, y1, corner, c);
+}
+
+/* The tile's quarters' cones. */
 static void tile_cones(const struct tiled_frame *tf, uint32_t tx, uint32_t ty,
                        const struct bc__ab_rays *rays)
 {
@@ -1083,7 +1148,6 @@ static void tile_cones(const struct tiled_frame *tf, uint32_t tx, uint32_t ty,
 	uint32_t x0 = tx * BC_CPU_TILE, y0 = ty * BC_CPU_TILE;
 	uint32_t x1 = x0 + BC_CPU_TILE < w ? x0 + BC_CPU_TILE : w;
 	uint32_t y1 = y0 + BC_CPU_TILE < h ? y0 + BC_CPU_TILE : h;
-	block_cone(&fc->vr, rays, x0, y0, x0, y0, x1, y1, &c[0]);
 	for (uint32_t q = 0; q < 4; q++) {
 		uint32_t qx0 = x0 + (q & 1u) * QUARTER;
 		uint32_t qy0 = y0 + (q >> 1) * QUARTER;
@@ -1120,11 +1184,11 @@ static void tile_quarters(const struct tiled_frame *tf, uint32_t tx,
 /* How many candidates ahead tile_list asks for a primitive's bytes. */
 #define LIST_PREFETCH 8u
 
-/* The tile's list, written at out: for each candidate whose bounding
- * sphere meets the tile's cone, the rays of the quarters whose cones it
- * meets are clipped against the ABV; the hits make one fragment, min
- * entry and max exit, kept as floats in tz (room for the tile's
- * candidates, as out) until the last one sets the tile's depth scale. */
+/* The tile's list, written at out: for each candidate (whose bounding
+ * sphere meets the tile's cone: row_visit), the rays of the quarters
+ * whose cones it meets are clipped against the ABV; the hits make one fragment,
+ * min entry and max exit, kept as floats in tz (room for the tile's candidates,
+ * as out) until the last one sets the tile's depth scale. */
 static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
                           const struct bc__ab_rays *rays,
                           const uint64_t quarter[4], float *tz,
@@ -1154,9 +1218,6 @@ static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
 			              : (const void *)&lin->abv[later]);
 		}
 		prim_seen(tf->fc, k, &b->prims[k], &sp);
-		if (!cone_meets_sphere(&cones[0], &sp)) {
-			continue;
-		}
 		for (uint32_t q = 0; q < 4; q++) {
 			if (quarter[q] &&
 			    cone_meets_sphere(&cones[1 + q], &sp)) {
@@ -1302,7 +1363,24 @@ static bool place_list(struct tiled_frame *tf, uint32_t tile,
 	return true;
 }
 
-/* Phase 2, per tile of the region not yet complete: its rays and cones
+/* Phase 1b of a new view, per tile of the frame: its whole-tile cone,
+ * which the candidates' build tests (row_visit). */
+static void phase_cones(void *arg, uint32_t thread)
+{
+	struct tiled_frame *tf = arg;
+	(void)thread;
+	for (;;) {
+		uint32_t t0 = atomic_fetch_add(&tf->next, 64u);
+		if (t0 >= tf->ntiles) {
+			break;
+		}
+		for (uint32_t t = t0; t < tf->ntiles && t < t0 + 64u; t++) {
+			tile_cone(tf, t % tf->tw, t / tf->tw);
+		}
+	}
+}
+
+/* Phase 2, per tile of the region not yet complete: its rays and quarter cones
  * (once per view), its list. */
 static void phase_lists(void *arg, uint32_t thread)
 {
@@ -1329,7 +1407,7 @@ static void phase_lists(void *arg, uint32_t thread)
 		if (b->cand_end[tile] > b->cand_off[tile]) {
 			uint32_t n;
 			/* Tiles without candidates, often most of a frame's
-			 * background, need no cones. */
+			 * background, need no quarter cones. */
 			if (!(b->state[tile] & TILE_CONES)) {
 				tile_cones(tf, tx, ty, &rays);
 				b->state[tile] |= TILE_CONES;
@@ -1644,8 +1722,8 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 	b->banded = b->rows_ok = b->band_ok = false;
 	b->dirty_lo = b->dirty_hi = 0;
 	if (grow_tiles(b, tf->ntiles) ||
-	    grow((void **)&b->prims, &b->prims_cap, tf->nprims ? tf->nprims : 1,
-	         sizeof(*b->prims))) {
+	    fit((void **)&b->prims, &b->prims_cap, tf->nprims ? tf->nprims : 1,
+	        sizeof(*b->prims))) {
 		return BC_ENOMEM;
 	}
 	memset(b->state, 0, tf->ntiles * sizeof(*b->state));
@@ -1653,6 +1731,8 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 	atomic_store(&tf->pairs, 0u);
 	if (tf->nprims > 0) {
 		bc_pool_run(tf->threads, phase_prims, tf);
+		atomic_store(&tf->next, 0u);
+		bc_pool_run(tf->threads, phase_cones, tf);
 	}
 	/* Every tile's room is its candidates and at least 4 more (slack):
 	 * a view surely over the limit is banded without a count. */
@@ -2121,7 +2201,9 @@ static size_t tiled_kept_bytes(const struct bc_renderer *base)
 		          sizeof(*b->cur) + sizeof(*b->zq) +
 		          sizeof(*b->frag_off) + sizeof(*b->frag_room) +
 		          CONES_PER_TILE * sizeof(*b->cones)) +
-		     2 * (b->tiles_cap + 1) * sizeof(*b->cand_off);
+		     2 * (b->tiles_cap + 1) * sizeof(*b->cand_off) +
+		     b->tiles_cap *
+		         (sizeof(*b->cand_end) + sizeof(*b->cand_lim));
 	}
 	for (uint32_t i = 0; i < BC_CPU_MAX_THREADS; i++) {
 		const struct bc__tile_worker *wk = &b->workers[i];

@@ -1462,22 +1462,21 @@ static void test_tiled_group_edits_are_exact(void)
 
 #define SEED_LIST_ROOM 0x77u
 
-/* Flat boxes facing the camera, overlapping: a tile's cone test keeps
- * most of its candidates (their rectangles are nearly their
- * silhouettes), so that the lists take more room than a build keeps for
- * them. Primitive k is child k of the root (group_move). */
-static void box_stack(struct bc_tree *t, uint32_t n)
+/* Big spheres, overlapping: nearly every tile that a sphere's bounding
+ * sphere can be seen in (its candidates, row_visit) is covered by it, so
+ * that the lists take more room than a build keeps for them (about
+ * three quarters of their candidates' room: frags_size). Primitive k is
+ * child k of the root (group_move). */
+static void sphere_stack(struct bc_tree *t, uint32_t n)
 {
 	struct bc_op_data u = {.kind = BC_OP_UNION};
 	REQUIRE(bc_tree_begin(t) == 0 && bc_tree_push_op(t, 0, &u, NULL) == 0);
 	for (uint32_t k = 0; k < n; k++) {
 		struct bc_prim_data p;
-		bc_prim_data_init(&p, BC_PRIM_BOX);
-		p.params[0] = dmg_float(1.0f, 3.0f);
-		p.params[1] = dmg_float(1.0f, 3.0f);
-		p.params[2] = 0.2f;
-		p.translate[0] = dmg_float(-4.0f, 4.0f);
-		p.translate[1] = dmg_float(-3.0f, 3.0f);
+		bc_prim_data_init(&p, BC_PRIM_SPHERE);
+		p.params[0] = dmg_float(5.0f, 7.0f);
+		p.translate[0] = dmg_float(-3.0f, 3.0f);
+		p.translate[1] = dmg_float(-2.0f, 2.0f);
 		p.translate[2] = dmg_float(-2.0f, 2.0f);
 		REQUIRE(bc_tree_put_prim(t, 0, &p, NULL) == 0);
 	}
@@ -1485,7 +1484,7 @@ static void box_stack(struct bc_tree *t, uint32_t n)
 }
 
 /* Lists that outgrow the room kept for them: the first frame of
- * box_stack's view grows the room, and moves of groups of boxes far
+ * sphere_stack's view grows the room, and moves of groups of spheres far
  * across the frame, whose tiles' lists then outgrow their rooms and
  * leave them behind, compact it (edits go on until it has twice, 400 at
  * most). Every frame drawn from the kept lists equals a fresh
@@ -1498,7 +1497,7 @@ static void test_tiled_lists_outgrow_their_room(void)
 	uint32_t n = 96, grown = 0, compacted = 0;
 	dmg_state = SEED_LIST_ROOM; /* whichever tests ran before */
 	REQUIRE(t);
-	box_stack(t, n);
+	sphere_stack(t, n);
 	bc_camera_default(&cam);
 	memcpy(cam.eye, (float[3]){0.0f, 0.0f, 24.0f}, sizeof(cam.eye));
 	memset(cam.target, 0, sizeof(cam.target));
@@ -1511,8 +1510,8 @@ static void test_tiled_lists_outgrow_their_room(void)
 		uint32_t first = dmg_below(n - m + 1);
 		float d = (e % 2 ? -1.0f : 1.0f) * dmg_float(3.0f, 6.0f);
 		char what[80];
-		snprintf(what, sizeof(what), "%u boxes from %u moved by %g", m,
-		         first, (double)d);
+		snprintf(what, sizeof(what), "%u spheres from %u moved by %g",
+		         m, first, (double)d);
 		if (!group_step(&gr, first, m, d, what)) {
 			break;
 		}
@@ -1526,7 +1525,7 @@ static void test_tiled_lists_outgrow_their_room(void)
 	group_end(&gr);
 }
 
-/* An allocation that fails anywhere in box_stack's first frame (the
+/* An allocation that fails anywhere in sphere_stack's first frame (the
  * sweep fails each of its allocations in turn, the growth of the lists'
  * room among them) fails the call with BC_ENOMEM, and the next call of
  * the same renderer draws the frame a renderer without failures
@@ -1543,7 +1542,7 @@ static void test_tiled_list_room_survives_allocation_failures(void)
 	int rc = -1;
 	dmg_state = SEED_LIST_ROOM;
 	REQUIRE(t);
-	box_stack(t, 96);
+	sphere_stack(t, 96);
 	bc_camera_default(&cam);
 	memcpy(cam.eye, (float[3]){0.0f, 0.0f, 24.0f}, sizeof(cam.eye));
 	memset(cam.target, 0, sizeof(cam.target));
