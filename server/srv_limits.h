@@ -21,8 +21,9 @@
  * JOIN loads it again. */
 #define BC_SRV_MAX_SESSIONS 64u
 /* What a loaded scene's node costs the daemon with a view drawn (its
- * tree, render copy and the tiled tracer's lists: 366 bytes a primitive
- * measured on a million spheres, 370 before 12-byte layout places, 378
+ * tree, render copy and the tiled tracer's lists: 350 bytes a primitive
+ * measured on a million spheres, 366 before a tile's candidates were
+ * those its cone can see, 370 before 12-byte layout places, 378
  * before the 52-byte pool node, 383
  * before a view's primitive took 16
  * bytes, 407 before the 56-byte pool node, 429
@@ -42,7 +43,7 @@
 #define BC_SRV_SESSION_SWEEP_MS (60u * 1000u)
 
 /* A session's render copy (its laid-out twin of the scene) and the
- * renderer's lists drawn from it (together about 290 bytes a primitive:
+ * renderer's lists drawn from it (together about 275 bytes a primitive:
  * a million spheres at 1024x768, docs/benchmarks.md) are dropped this long
  * after a member last had a view or asked for a picture (--render-idle); the
  * next picture makes them again (the copy about 0.9 s a million primitives,
