@@ -564,26 +564,6 @@ static inline void prim_seen(const struct bc__frame_ctx *fc, uint32_t k,
 	s->root = s->inside ? 0.0f : p->root;
 }
 
-/* Phase 1 of a new view, per primitive: prim_setup. */
-static void phase_prims(void *arg, uint32_t thread)
-{
-	struct tiled_frame *tf = arg;
-	uint64_t pairs = 0;
-	(void)thread;
-	for (;;) {
-		uint32_t k0 = atomic_fetch_add(&tf->next, 256u);
-		if (k0 >= tf->nprims) {
-			break;
-		}
-		for (uint32_t k = k0; k < tf->nprims && k < k0 + 256u; k++) {
-			const struct rect *r = &tf->b->prims[k].rect;
-			prim_setup(tf, k, &tf->b->prims[k]);
-			pairs += (uint64_t)(r->x1 - r->x0) * (r->y1 - r->y0);
-		}
-	}
-	atomic_fetch_add(&tf->pairs, pairs);
-}
-
 /* Keeps only the state bits `keep` of the tiles of rectangle r. */
 static void rect_state_and(struct tiled_frame *tf, const struct rect *r,
                            uint8_t keep)
@@ -1120,7 +1100,7 @@ static void block_cone(const struct bc_view_rays *vr,
 /* The whole tile's cone. Its corner rays come from bc_view_rays_dir,
  * the same bits as the kernel's rays for those pixels (abuffer.h), as
  * block_cone would take them: 4 rays, not the tile's 64, for every tile
- * of a new view (phase_cones). */
+ * of a new view (phase_prims). */
 static void tile_cone(const struct tiled_frame *tf, uint32_t tx, uint32_t ty)
 {
 	const struct bc__frame_ctx *fc = tf->fc;
@@ -1363,21 +1343,35 @@ static bool place_list(struct tiled_frame *tf, uint32_t tile,
 	return true;
 }
 
-/* Phase 1b of a new view, per tile of the frame: its whole-tile cone,
- * which the candidates' build tests (row_visit). */
-static void phase_cones(void *arg, uint32_t thread)
+/* Phase 1 of a new view: prim_setup per primitive (in runs of 256), then
+ * every tile's whole cone (tile_cone, in runs of 64), which the
+ * candidates' build tests (row_visit). */
+static void phase_prims(void *arg, uint32_t thread)
 {
 	struct tiled_frame *tf = arg;
+	uint32_t runs = (tf->nprims + 255u) / 256u;
+	uint64_t pairs = 0;
 	(void)thread;
 	for (;;) {
-		uint32_t t0 = atomic_fetch_add(&tf->next, 64u);
-		if (t0 >= tf->ntiles) {
+		uint32_t u = atomic_fetch_add(&tf->next, 1u), t0;
+		if (u < runs) {
+			for (uint32_t k = u * 256u;
+			     k < tf->nprims && k < (u + 1u) * 256u; k++) {
+				const struct rect *r = &tf->b->prims[k].rect;
+				prim_setup(tf, k, &tf->b->prims[k]);
+				pairs +=
+				    (uint64_t)(r->x1 - r->x0) * (r->y1 - r->y0);
+			}
+			continue;
+		}
+		if ((t0 = (u - runs) * 64u) >= tf->ntiles) {
 			break;
 		}
 		for (uint32_t t = t0; t < tf->ntiles && t < t0 + 64u; t++) {
 			tile_cone(tf, t % tf->tw, t / tf->tw);
 		}
 	}
+	atomic_fetch_add(&tf->pairs, pairs);
 }
 
 /* Phase 2, per tile of the region not yet complete: its rays and quarter cones
@@ -1731,8 +1725,6 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 	atomic_store(&tf->pairs, 0u);
 	if (tf->nprims > 0) {
 		bc_pool_run(tf->threads, phase_prims, tf);
-		atomic_store(&tf->next, 0u);
-		bc_pool_run(tf->threads, phase_cones, tf);
 	}
 	/* Every tile's room is its candidates and at least 4 more (slack):
 	 * a view surely over the limit is banded without a count. */
