@@ -1,10 +1,13 @@
 #!/bin/sh
-# A view too big for the tiled A-buffer at once (2^24 primitive-tile
-# pairs): a million smooth fig18 spheres at 3840x2160, through
-# `blobcast render` (local) and through blobcastd (a SNAPSHOT of the
-# view, twice, and a drag of one sphere in a view of that size), with
-# one or more builds side by side so that each row of one build is
-# measured next to the others'.
+# A big view: a million smooth fig18 spheres at 3840x2160, whose 23.6
+# million pairs of tile and primitive rectangle pass the tiled
+# A-buffer's limit (2^24) and were drawn in bands, until the tiles'
+# candidates were the pairs their cones keep (11.8 million: it fits at
+# once now; a bigger $BC_SIZE or scene bands). Through `blobcast render`
+# (local) and through blobcastd (a SNAPSHOT of the view, twice, and a
+# drag of one sphere in a view of that size), with one or more builds
+# side by side so that each row of one build is measured next to the
+# others'.
 #
 #   bench/bench_big_view.sh BUILD_DIR [BUILD_DIR ...]
 #

@@ -374,6 +374,8 @@ static void add_stats(struct bc_render_stats *sum,
 	sum->incomplete = sum->incomplete || s->incomplete;
 	sum->short_rays += s->short_rays;
 	sum->bands += s->bands;
+	sum->ab_pairs += s->ab_pairs;
+	sum->ab_candidates += s->ab_candidates;
 }
 
 /* Draws the frame in nb horizontal bands of a multiple of 8 rows (the
@@ -496,16 +498,24 @@ int bc_cli_render(int argc, char **argv)
 		goto cleanup;
 	}
 	if (a.stats) {
-		fprintf(stderr,
-		        "render: backend %s, %ux%u, %u primitives: total %.2f "
-		        "ms, a-buffer %.2f ms, trace %.2f ms, upload %.2f ms, "
-		        "%llu field evaluations, max overlap %u, %u band%s%s\n",
-		        bc_backend_name(a.backend), a.size[0], a.size[1],
-		        bc_tree_prim_count(t), stats.ms_total, stats.ms_abuffer,
-		        stats.ms_trace, stats.ms_upload,
-		        (unsigned long long)stats.field_evals,
-		        stats.max_overlap, bands, bands == 1 ? "" : "s",
-		        stats.incomplete ? ", incomplete" : "");
+		char pairs[96] = "";
+		if (stats.ab_pairs) {
+			snprintf(pairs, sizeof(pairs),
+			         ", %llu tile pairs, %llu candidates",
+			         (unsigned long long)stats.ab_pairs,
+			         (unsigned long long)stats.ab_candidates);
+		}
+		fprintf(
+		    stderr,
+		    "render: backend %s, %ux%u, %u primitives: total %.2f "
+		    "ms, a-buffer %.2f ms, trace %.2f ms, upload %.2f ms, "
+		    "%llu field evaluations, max overlap %u, %u band%s%s%s\n",
+		    bc_backend_name(a.backend), a.size[0], a.size[1],
+		    bc_tree_prim_count(t), stats.ms_total, stats.ms_abuffer,
+		    stats.ms_trace, stats.ms_upload,
+		    (unsigned long long)stats.field_evals, stats.max_overlap,
+		    bands, bands == 1 ? "" : "s", pairs,
+		    stats.incomplete ? ", incomplete" : "");
 	} else if (!a.quiet) {
 		fprintf(stderr, "render: %s %ux%u in %.1f ms -> %s\n",
 		        bc_backend_name(a.backend), a.size[0], a.size[1],

@@ -143,8 +143,9 @@ struct bc__tiled_bufs {
 	struct ab_prim *prims;
 	size_t prims_cap;
 	/* Per tile: state, list length, candidates (primitives whose
-	 * rectangle holds it and whose bounding sphere meets its whole-tile
-	 * cone, increasing: row_visit) at cand[cand_off[t] ..
+	 * rectangle holds it and, but in a band's, whose bounding sphere
+	 * meets its whole-tile cone, increasing: visit_rows) at
+	 * cand[cand_off[t] ..
 	 * cand_end[t]) with room up to cand_lim[t], and the list at
 	 * frags[frag_off[t] ..] in room of frag_room[t] fragments. A full
 	 * build lays the tiles out in order, each with some room to spare
@@ -323,8 +324,10 @@ struct tiled_frame {
 	/* Work counter of the primitives' phase, and tiles traced: each on a
 	 * cache line of its own, away from the fields every thread reads. */
 	_Alignas(64) atomic_uint next;
-	/* The primitive-tile pairs of the rectangles phase_prims made. */
+	/* The primitive-tile pairs of the rectangles phase_prims made, and
+	 * the candidates a build of every row kept of them (build_cand). */
 	_Atomic uint64_t pairs;
+	uint64_t cands;
 	struct tile_span spans[BC_POOL_MAX_THREADS]; /* see next_tile */
 	uint32_t nspans; /* the shares the pool runs: spans in use */
 	_Alignas(64) atomic_uint tiles_done;
@@ -591,15 +594,16 @@ static uint32_t frag_slack(uint32_t n)
 
 /* Starts the kept lists again (frags_reset), with room for those of
  * candidates that take `cands` entries, slack included: three quarters
- * of that. The candidates met the tile's cone already (row_visit); most
- * make a fragment (a million spheres at 1024x768: 3.36 million of 4.12,
- * and the lists with their spare 0.73 of the candidates' room, slack
- * included), and lists that need more are given it as they are made
- * (make_frag_room). Room of more than twice
- * that (a wider view's before) is given back. Returns 0 or BC_ENOMEM. */
-static int frags_size(struct bc__tiled_bufs *b, uint64_t cands)
+ * of that when they met the tiles' cones already (coned, visit_rows), of
+ * which most make a fragment (a million spheres at 1024x768: 3.36
+ * million of 4.12, and the lists with their spare 0.73 of the
+ * candidates' room, slack included), else half (a band's: the cone test
+ * keeps about half). Lists that need more are given it as they are made
+ * (make_frag_room). Room of more than twice that (a wider view's
+ * before) is given back. Returns 0 or BC_ENOMEM. */
+static int frags_size(struct bc__tiled_bufs *b, uint64_t cands, bool coned)
 {
-	size_t want = (size_t)(cands - cands / 4u) + 1024u;
+	size_t want = (size_t)(coned ? cands - cands / 4u : cands / 2u) + 1024u;
 	frags_reset(b);
 	if (b->frags_cap >= want && b->frags_cap <= 2u * want) {
 		return 0;
@@ -612,6 +616,15 @@ static int frags_size(struct bc__tiled_bufs *b, uint64_t cands)
 
 /* build_cand's answer when the lists would pass the A-buffer's limit. */
 #define OVER_LIMIT 2
+
+/* A new view whose primitives' rectangles make more pairs of tile and
+ * rectangle than this many times the A-buffer's limit is drawn in bands
+ * without counting its candidates. The cone test keeps about half of the
+ * pairs (a million spheres: 56 % at 1024x768, and 3840x2160, whose 23.6
+ * million pairs banded it before the count, fits), fewer where the eye
+ * is among the primitives; the count costs a cone test a pair, which
+ * past this is more than a view that fits would save. */
+#define PAIRS_COUNTED 4u
 
 /* Sorts the primitives into b's tile rows (row_off, row_prims) by
  * counting. Returns 0 or BC_ENOMEM. */
@@ -673,17 +686,18 @@ static bool by_rows(const struct tiled_frame *tf, uint32_t y0, uint32_t y1)
 
 /* Primitive k's tiles in one row (row: that row's cursors in b->cur,
  * cones: that row's tiles' cones, r its rectangle, sp its bounding
- * sphere seen from the eye) whose whole-tile cone meets that sphere:
- * counted, or, with cand, k written at each tile's cursor. A tile's list
- * tests that cone first (tile_list), so the candidates it drops would
- * never make a fragment: at a million spheres, 1024x768, 44 % of the
- * pairs of tile and rectangle, and as many entries of b->cand. */
+ * sphere seen from the eye, or NULL) whose whole-tile cone meets that
+ * sphere (every one without sp): counted, or, with cand, k written at
+ * each tile's cursor. A tile's list tests that cone first (tile_list),
+ * so the candidates it drops would never make a fragment: at a million
+ * spheres, 1024x768, 44 % of the pairs of tile and rectangle, and as
+ * many entries of b->cand. */
 static inline void row_visit(uint32_t *row, const struct cone *cones,
                              const struct rect *r, const struct seen *sp,
                              uint32_t k, uint32_t *cand)
 {
 	for (uint32_t tx = r->x0; tx < r->x1; tx++) {
-		if (!cone_meets_sphere(&cones[CONES_PER_TILE * tx], sp)) {
+		if (sp && !cone_meets_sphere(&cones[CONES_PER_TILE * tx], sp)) {
 			continue;
 		}
 		if (cand) {
@@ -695,37 +709,53 @@ static inline void row_visit(uint32_t *row, const struct cone *cones,
 }
 
 /* Primitive k's pairs in rows [ya, yb) through row_visit, cur the
- * cursors of every tile. */
+ * cursors of every tile; with cone, only those whose tile's cone meets
+ * its bounding sphere. */
 static inline void prim_visit(const struct tiled_frame *tf, uint32_t *cur,
                               uint32_t k, uint32_t ya, uint32_t yb,
-                              uint32_t *cand)
+                              uint32_t *cand, bool cone)
 {
 	const struct ab_prim *p = &tf->b->prims[k];
 	struct seen sp;
 	if (ya >= yb || p->rect.x0 >= p->rect.x1) {
 		return;
 	}
-	prim_seen(tf->fc, k, p, &sp);
+	if (cone) {
+		prim_seen(tf->fc, k, p, &sp);
+	}
 	for (uint32_t ty = ya; ty < yb; ty++) {
 		size_t row = (size_t)ty * tf->tw;
 		row_visit(cur + row, tf->b->cones + CONES_PER_TILE * row,
-		          &p->rect, &sp, k, cand);
+		          &p->rect, cone ? &sp : NULL, k, cand);
 	}
 }
 
+/* Whether the candidates' count and fill test the tiles' cones: those
+ * of a view kept whole are, a banded view's are not. A banded view
+ * builds its bands' candidates again at each call (a drag's rows among
+ * them), where the cone tests cost such a drag at 3840x2160 half as much
+ * again, and the tiles' lists test the cone as well (tile_list). The
+ * count and the fill of one build must agree. */
+static bool coned(const struct tiled_frame *tf)
+{
+	return !tf->b->banded;
+}
+
 /* Every primitive-tile pair of rows [y0, y1) through row_visit, in
- * increasing primitive order per tile: from the rows' primitives
- * (by_rows), else from a pass over every primitive's rectangle. */
+ * increasing primitive order per tile, cone-tested when coned: from the
+ * rows' primitives (by_rows), else from a pass over every primitive's
+ * rectangle. */
 static void visit_rows(struct tiled_frame *tf, uint32_t y0, uint32_t y1,
                        uint32_t *cand)
 {
 	struct bc__tiled_bufs *b = tf->b;
+	bool cone = coned(tf);
 	if (by_rows(tf, y0, y1)) {
 		for (uint32_t y = y0; y < y1; y++) {
 			for (uint32_t i = b->row_off[y]; i < b->row_off[y + 1];
 			     i++) {
 				prim_visit(tf, b->cur, b->row_prims[i], y,
-				           y + 1, cand);
+				           y + 1, cand, cone);
 			}
 		}
 		return;
@@ -734,7 +764,7 @@ static void visit_rows(struct tiled_frame *tf, uint32_t y0, uint32_t y1,
 		const struct rect *r = &b->prims[k].rect;
 		uint32_t ya = r->y0 > y0 ? r->y0 : y0;
 		uint32_t yb = r->y1 < y1 ? r->y1 : y1;
-		prim_visit(tf, b->cur, k, ya, yb, cand);
+		prim_visit(tf, b->cur, k, ya, yb, cand, cone);
 	}
 }
 
@@ -779,7 +809,7 @@ static void phase_visit(void *arg, uint32_t share)
 	}
 	for (uint32_t k = k0; k < k1; k++) {
 		const struct rect *r = &b->prims[k].rect;
-		prim_visit(tf, cur, k, r->y0, r->y1, v->cand);
+		prim_visit(tf, cur, k, r->y0, r->y1, v->cand, coned(tf));
 	}
 }
 
@@ -867,10 +897,11 @@ static int build_cand(struct tiled_frame *tf, uint32_t y0, uint32_t y1)
 	struct bc__tiled_bufs *b = tf->b;
 	uint32_t *off = b->off_alt;
 	uint32_t t0 = y0 * tf->tw, t1 = y1 * tf->tw;
-	uint64_t sum = 0;
+	uint64_t sum = 0, kept = 0;
 	size_t room;
 	for (uint32_t t = t0; t < t1; t++) {
 		off[t] = (uint32_t)sum;
+		kept += b->cur[t];
 		sum += b->cur[t] + slack(b->cur[t]);
 		b->cur[t] = off[t];
 		if (sum > tf->limit) {
@@ -878,6 +909,9 @@ static int build_cand(struct tiled_frame *tf, uint32_t y0, uint32_t y1)
 		}
 	}
 	off[t1] = (uint32_t)sum;
+	if (y0 == 0 && y1 == tf->th && coned(tf)) {
+		tf->cands = kept;
+	}
 	/* Room after the tiles for those a patch makes outgrow their own;
 	 * when it runs out, the next patch builds everything again. */
 	room = (size_t)sum + (size_t)sum / 8u + 1024u;
@@ -897,7 +931,7 @@ static int build_cand(struct tiled_frame *tf, uint32_t y0, uint32_t y1)
 	} else {
 		visit_rows(tf, y0, y1, b->cand);
 	}
-	if (frags_size(b, sum)) {
+	if (frags_size(b, sum, coned(tf))) {
 		return BC_ENOMEM;
 	}
 	b->off_alt = b->cand_off;
@@ -943,9 +977,10 @@ static void rect_mark(struct tiled_frame *tf, const struct rect *r)
 
 /* Candidates of marked tile t after primitives lo..hi-1 moved: the old
  * ones outside that range, with those of the range whose rectangle now
- * holds t and whose bounding sphere meets its whole-tile cone (as
- * row_visit keeps them) in their place (so the list stays increasing),
- * written at out when out is not NULL. Returns the count. */
+ * holds t and whose bounding sphere meets its whole-tile cone (as a
+ * build of every row keeps them) in their place (so the list stays
+ * increasing), written at out when out is not NULL. Returns the
+ * count. */
 static uint32_t patched_list(const struct tiled_frame *tf, uint32_t t,
                              uint32_t lo, uint32_t hi, uint32_t *out)
 {
@@ -1164,9 +1199,10 @@ static void tile_quarters(const struct tiled_frame *tf, uint32_t tx,
 /* How many candidates ahead tile_list asks for a primitive's bytes. */
 #define LIST_PREFETCH 8u
 
-/* The tile's list, written at out: for each candidate (whose bounding
- * sphere meets the tile's cone: row_visit), the rays of the quarters
- * whose cones it meets are clipped against the ABV; the hits make one fragment,
+/* The tile's list, written at out: for each candidate whose bounding
+ * sphere meets the tile's cone (every kept candidate does: visit_rows),
+ * the rays of the quarters whose cones it meets are clipped against the
+ * ABV; the hits make one fragment,
  * min entry and max exit, kept as floats in tz (room for the tile's candidates,
  * as out) until the last one sets the tile's depth scale. */
 static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
@@ -1198,6 +1234,9 @@ static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
 			              : (const void *)&lin->abv[later]);
 		}
 		prim_seen(tf->fc, k, &b->prims[k], &sp);
+		if (!cone_meets_sphere(&cones[0], &sp)) {
+			continue; /* a band's candidate (visit_rows) */
+		}
 		for (uint32_t q = 0; q < 4; q++) {
 			if (quarter[q] &&
 			    cone_meets_sphere(&cones[1 + q], &sp)) {
@@ -1345,7 +1384,7 @@ static bool place_list(struct tiled_frame *tf, uint32_t tile,
 
 /* Phase 1 of a new view: prim_setup per primitive (in runs of 256), then
  * every tile's whole cone (tile_cone, in runs of 64), which the
- * candidates' build tests (row_visit). */
+ * candidates' build tests (visit_rows). */
 static void phase_prims(void *arg, uint32_t thread)
 {
 	struct tiled_frame *tf = arg;
@@ -1726,9 +1765,13 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 	if (tf->nprims > 0) {
 		bc_pool_run(tf->threads, phase_prims, tf);
 	}
-	/* Every tile's room is its candidates and at least 4 more (slack):
-	 * a view surely over the limit is banded without a count. */
-	if (atomic_load(&tf->pairs) + 4u * (uint64_t)tf->ntiles > tf->limit) {
+	/* Every tile's room is its candidates and at least 4 more (slack),
+	 * and the candidates are the pairs of tile and rectangle that pass
+	 * the tile's cone test (visit_rows): a view whose pairs pass the
+	 * limit may still fit, and is counted unless they pass it
+	 * PAIRS_COUNTED times over. */
+	if (atomic_load(&tf->pairs) + 4u * (uint64_t)tf->ntiles >
+	    (uint64_t)tf->limit * PAIRS_COUNTED) {
 		rc = OVER_LIMIT;
 	} else {
 		count_cand(tf, 0, tf->th);
@@ -2003,6 +2046,8 @@ static int tiled_render(struct bc_renderer *base, const struct bc_camera *cam,
 	}
 	bc_render_progress_init(&tf.progress, &r->base, tf.ntiles);
 	stats->ms_abuffer = bc_clock_ms() - t_start;
+	stats->ab_pairs = atomic_load(&tf.pairs);
+	stats->ab_candidates = tf.cands;
 	stats->bands = 1;
 	rc = rc == OVER_LIMIT ? draw_bands(r, &tf, stats, ei)
 	                      : draw_tiles(r, &tf, stats);

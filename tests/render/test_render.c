@@ -513,6 +513,65 @@ static void test_a_narrower_view_gives_room_back(void)
 	bc_tree_destroy(t);
 }
 
+/* A new view's candidates are the pairs of tile and rectangle that pass
+ * the tile's cone test: with the eye inside a cloud of spheres, those
+ * that straddle the eye plane cover every tile's rectangle and few
+ * tiles' cones. Such a view whose pairs pass the A-buffer's limit but
+ * whose candidates (and their slack, a quarter and 4 a tile) fit is
+ * drawn at once, not in bands, and a limit below its candidates bands
+ * it; the pixels are the same every way. */
+static void test_a_view_whose_candidates_fit_is_not_banded(void)
+{
+	struct bc_tree *t = bc_tree_create();
+	struct bc_frame a = {0}, b = {0};
+	struct bc_camera cam, inside;
+	struct bc_render_stats st = {0};
+	struct bc_errinfo ei = {0};
+	const uint64_t ntiles = (320 / 8) * (240 / 8);
+	uint64_t pairs, cands, room;
+	REQUIRE(t && sc_fig18(t, 4096, false, true, 12) == 0);
+	sc_frame(bc_tree_lin(t), &cam);
+	inside = cam;
+	for (int i = 0; i < 3; i++) {
+		inside.eye[i] =
+		    cam.target[i] + 0.3f * (cam.eye[i] - cam.target[i]);
+	}
+	REQUIRE(bc_frame_init(&a, 320, 240) == 0 &&
+	        bc_frame_init(&b, 320, 240) == 0);
+	REQUIRE(bc_render_once(BC_BACKEND_TILED,
+	                       &(struct bc_render_opts){.threads = 2}, t,
+	                       &inside, &a, &st, &ei) == 0);
+	pairs = st.ab_pairs;
+	cands = st.ab_candidates;
+	room = cands + cands / 4u + 4u * ntiles;
+	fprintf(stderr, "  pairs %llu, candidates %llu, room %llu\n",
+	        (unsigned long long)pairs, (unsigned long long)cands,
+	        (unsigned long long)room);
+	CHECK(st.bands == 1);
+	/* The view this test needs: its pairs pass the room its candidates
+	 * take, and not 4 times over (PAIRS_COUNTED). */
+	REQUIRE(cands > 0 && pairs + 4u * ntiles > room &&
+	        pairs + 4u * ntiles <= 4u * room);
+	REQUIRE(
+	    bc_render_once(BC_BACKEND_TILED,
+	                   &(struct bc_render_opts){
+	                       .threads = 2, .abuffer_limit = (uint32_t)room},
+	                   t, &inside, &b, &st, &ei) == 0);
+	CHECK(st.bands == 1);
+	CHECK(st.ab_candidates == cands);
+	CHECK(frames_equal(&a, &b));
+	REQUIRE(bc_render_once(BC_BACKEND_TILED,
+	                       &(struct bc_render_opts){
+	                           .threads = 2,
+	                           .abuffer_limit = (uint32_t)(room * 3 / 4)},
+	                       t, &inside, &b, &st, &ei) == 0);
+	CHECK(st.bands > 1);
+	CHECK(frames_equal(&a, &b));
+	bc_frame_finish(&a);
+	bc_frame_finish(&b);
+	bc_tree_destroy(t);
+}
+
 /* One renderer, several frames and an edit in between: buffers kept from
  * the previous frame must not leak into the next. */
 struct pool_count {
@@ -867,6 +926,8 @@ static const struct bc_test tests[] = {
     {"threads_do_not_change_a_big_scenes_lists",
      test_threads_do_not_change_a_big_scenes_lists},
     {"a_narrower_view_gives_room_back", test_a_narrower_view_gives_room_back},
+    {"a_view_whose_candidates_fit_is_not_banded",
+     test_a_view_whose_candidates_fit_is_not_banded},
     {"pool_runs_every_share_once", test_pool_runs_every_share_once},
     {"progress_is_paced", test_progress_is_paced},
     {"renderer_reuse_follows_edits", test_renderer_reuse_follows_edits},

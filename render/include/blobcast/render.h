@@ -149,6 +149,12 @@ struct bc_render_stats {
 	 * outgrew their room had left enough of it behind; each time, the
 	 * tiles whose lists did not fit are listed again. */
 	uint32_t lists_grown, lists_compacted;
+	/* tiled: the pairs of tile and primitive that a new view's
+	 * primitives' rectangles of tiles make, and of a call that built
+	 * every tile's candidates at once (a new view, or an edit of many
+	 * primitives), the candidates kept (those whose bounding sphere the
+	 * tile's cone meets); 0 otherwise (a banded view's). */
+	uint64_t ab_pairs, ab_candidates;
 };
 
 /*
