@@ -620,11 +620,14 @@ static int frags_size(struct bc__tiled_bufs *b, uint64_t cands, bool coned)
 /* A new view whose primitives' rectangles make more pairs of tile and
  * rectangle than this many times the A-buffer's limit is drawn in bands
  * without counting its candidates. The cone test keeps about half of the
- * pairs (a million spheres: 56 % at 1024x768, and 3840x2160, whose 23.6
- * million pairs banded it before the count, fits), fewer where the eye
- * is among the primitives; the count costs a cone test a pair, which
- * past this is more than a view that fits would save. */
-#define PAIRS_COUNTED 4u
+ * pairs (a million spheres: 56 % at 1024x768, 50 % at 3840x2160, whose
+ * 23.6 million pairs banded it before the count and whose candidates
+ * fit), fewer where the eye is among the primitives; with their slack,
+ * a quarter more, candidates of half the pairs fit up to about 1.6
+ * times the limit. A count costs a cone test a pair, in vain where the
+ * view bands anyway: at 4096x4096, 62 million pairs, it cost the frame
+ * 7 %. */
+#define PAIRS_COUNTED 2u
 
 /* Sorts the primitives into b's tile rows (row_off, row_prims) by
  * counting. Returns 0 or BC_ENOMEM. */
@@ -1768,8 +1771,8 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 	/* Every tile's room is its candidates and at least 4 more (slack),
 	 * and the candidates are the pairs of tile and rectangle that pass
 	 * the tile's cone test (visit_rows): a view whose pairs pass the
-	 * limit may still fit, and is counted unless they pass it
-	 * PAIRS_COUNTED times over. */
+	 * limit may still fit, and is counted unless they pass
+	 * PAIRS_COUNTED times it. */
 	if (atomic_load(&tf->pairs) + 4u * (uint64_t)tf->ntiles >
 	    (uint64_t)tf->limit * PAIRS_COUNTED) {
 		rc = OVER_LIMIT;
