@@ -1203,11 +1203,12 @@ static void tile_quarters(const struct tiled_frame *tf, uint32_t tx,
 #define LIST_PREFETCH 8u
 
 /* The tile's list, written at out: for each candidate whose bounding
- * sphere meets the tile's cone (every kept candidate does: visit_rows),
- * the rays of the quarters whose cones it meets are clipped against the
- * ABV; the hits make one fragment,
- * min entry and max exit, kept as floats in tz (room for the tile's candidates,
- * as out) until the last one sets the tile's depth scale. */
+ * sphere meets the tile's cone (every candidate of a view kept whole
+ * does, a band's may not: visit_rows), the rays of the quarters whose
+ * cones it meets are clipped against the ABV; the hits make one
+ * fragment, min entry and max exit, kept as floats in tz (room for the
+ * tile's candidates, as out) until the last one sets the tile's depth
+ * scale. */
 static uint32_t tile_list(const struct tiled_frame *tf, uint32_t tile,
                           const struct bc__ab_rays *rays,
                           const uint64_t quarter[4], float *tz,
