@@ -617,17 +617,12 @@ static int frags_size(struct bc__tiled_bufs *b, uint64_t cands, bool coned)
 /* build_cand's answer when the lists would pass the A-buffer's limit. */
 #define OVER_LIMIT 2
 
-/* A new view whose primitives' rectangles make more pairs of tile and
- * rectangle than this many times the A-buffer's limit is drawn in bands
- * without counting its candidates. The cone test keeps about half of the
- * pairs (a million spheres: 56 % at 1024x768, 50 % at 3840x2160, whose
- * 23.6 million pairs banded it before the count and whose candidates
- * fit), fewer where the eye is among the primitives; with their slack,
- * a quarter more, candidates of half the pairs fit up to about 1.6
- * times the limit. A count costs a cone test a pair, in vain where the
- * view bands anyway: at 4096x4096, 62 million pairs, it cost the frame
- * 7 %. */
-#define PAIRS_COUNTED 2u
+/* How a new view whose primitives' rectangles make more pairs of tile
+ * and rectangle than the A-buffer's limit is judged (surely_over): the
+ * cone tests of about SAMPLE_PRIMS primitives spread over all of them,
+ * and of at most SAMPLE_PAIRS pairs. */
+#define SAMPLE_PRIMS 4096u
+#define SAMPLE_PAIRS (1u << 21)
 
 /* Sorts the primitives into b's tile rows (row_off, row_prims) by
  * counting. Returns 0 or BC_ENOMEM. */
@@ -1697,6 +1692,54 @@ static bool same_view(const struct bc__tiled_bufs *b, const struct bc__cpu *r,
 	       memcmp(&b->pix_angle, &fc->pix_angle, sizeof(float)) == 0;
 }
 
+/* Whether a new view's candidates (after phase_prims) would surely pass
+ * the A-buffer's limit, so that it is banded without a count. A tile's
+ * room is its candidates, a quarter more and 4 (slack), and its
+ * candidates are the pairs of tile and rectangle that pass the tile's
+ * cone test (visit_rows): a view whose pairs pass the limit may still
+ * fit. The share of the pairs that pass is taken from every step-th
+ * primitive's (SAMPLE_PRIMS of them, SAMPLE_PAIRS pairs at most: 1.6
+ * and 6.4 ms at 3840x2160 and 4096x4096 of a million spheres on a busy
+ * machine): about half at a million spheres (56 % at
+ * 1024x768, 50 % at 3840x2160, whose 23.6 million pairs banded it before
+ * and whose 11.8 million candidates fit), less where the eye is among
+ * the primitives. A view estimated within an eighth over the limit is
+ * counted, and banded after the count if it does not fit: a count costs
+ * a cone test a pair (at 4096x4096, 62 million pairs, 7 % of the
+ * frame). */
+static bool surely_over(const struct tiled_frame *tf)
+{
+	const struct bc__tiled_bufs *b = tf->b;
+	uint64_t pairs = atomic_load(&tf->pairs),
+	         fixed = 4u * (uint64_t)tf->ntiles;
+	uint64_t seen = 0, kept = 0, est;
+	uint32_t step = tf->nprims / SAMPLE_PRIMS + 1u;
+	if (pairs + fixed <= tf->limit) {
+		return false;
+	}
+	for (uint32_t k = 0; k < tf->nprims && seen < SAMPLE_PAIRS; k += step) {
+		const struct ab_prim *p = &b->prims[k];
+		struct seen sp;
+		if (p->rect.x0 >= p->rect.x1 || p->rect.y0 >= p->rect.y1) {
+			continue;
+		}
+		prim_seen(tf->fc, k, p, &sp);
+		for (uint32_t ty = p->rect.y0; ty < p->rect.y1; ty++) {
+			const struct cone *c =
+			    b->cones + CONES_PER_TILE * ((size_t)ty * tf->tw);
+			for (uint32_t tx = p->rect.x0; tx < p->rect.x1; tx++) {
+				kept += cone_meets_sphere(
+				    &c[CONES_PER_TILE * tx], &sp);
+			}
+		}
+		seen += (uint64_t)(p->rect.x1 - p->rect.x0) *
+		        (p->rect.y1 - p->rect.y0);
+	}
+	est = seen ? (uint64_t)((double)pairs * (double)kept / (double)seen)
+	           : pairs;
+	return est + est / 4u + fixed > tf->limit + tf->limit / 8u;
+}
+
 /* Makes b's lists this frame's view's: all dropped for a new view, those
  * the dirty primitives can reach after parameter edits. Returns 0,
  * OVER_LIMIT when the view's lists cannot all be kept at once (its
@@ -1769,13 +1812,7 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 	if (tf->nprims > 0) {
 		bc_pool_run(tf->threads, phase_prims, tf);
 	}
-	/* Every tile's room is its candidates and at least 4 more (slack),
-	 * and the candidates are the pairs of tile and rectangle that pass
-	 * the tile's cone test (visit_rows): a view whose pairs pass the
-	 * limit may still fit, and is counted unless they pass
-	 * PAIRS_COUNTED times it. */
-	if (atomic_load(&tf->pairs) + 4u * (uint64_t)tf->ntiles >
-	    (uint64_t)tf->limit * PAIRS_COUNTED) {
+	if (surely_over(tf)) {
 		rc = OVER_LIMIT;
 	} else {
 		count_cand(tf, 0, tf->th);
