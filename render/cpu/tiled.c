@@ -973,44 +973,154 @@ static void rect_mark(struct tiled_frame *tf, const struct rect *r)
 	}
 }
 
-/* Candidates of marked tile t after primitives lo..hi-1 moved: the old
- * ones outside that range, with those of the range whose rectangle now
- * holds t and whose bounding sphere meets its whole-tile cone (as a
- * build of every row keeps them) in their place (so the list stays
- * increasing), written at out when out is not NULL. Returns the
- * count. */
-static uint32_t patched_list(const struct tiled_frame *tf, uint32_t t,
-                             uint32_t lo, uint32_t hi, uint32_t *out)
+/* An increasing list (old[0 .. n)) after primitives lo..hi-1 moved: the
+ * old entries outside that range, with those of the range that `in` says
+ * now belong (at `where`) in their place, so that it stays increasing;
+ * written at out when out is not NULL. Returns the count. */
+static uint32_t merge_moved(const struct tiled_frame *tf, const uint32_t *old,
+                            uint32_t n_old, uint32_t lo, uint32_t hi,
+                            bool (*in)(const struct tiled_frame *, uint32_t,
+                                       uint32_t),
+                            uint32_t where, uint32_t *out)
 {
-	const struct bc__tiled_bufs *b = tf->b;
-	uint32_t n = 0, i = b->cand_off[t], tx = t % tf->tw, ty = t / tf->tw;
-	for (; i < b->cand_end[t] && b->cand[i] < lo; i++, n++) {
+	uint32_t n = 0, i = 0;
+	for (; i < n_old && old[i] < lo; i++, n++) {
 		if (out) {
-			out[n] = b->cand[i];
+			out[n] = old[i];
 		}
 	}
 	for (uint32_t k = lo; k < hi; k++) {
-		struct seen sp;
-		if (!rect_has(&b->prims[k].rect, tx, ty)) {
-			continue;
-		}
-		prim_seen(tf->fc, k, &b->prims[k], &sp);
-		if (cone_meets_sphere(&b->cones[CONES_PER_TILE * t], &sp)) {
+		if (in(tf, k, where)) {
 			if (out) {
 				out[n] = k;
 			}
 			n++;
 		}
 	}
-	for (; i < b->cand_end[t]; i++) {
-		if (b->cand[i] >= hi) {
+	for (; i < n_old; i++) {
+		if (old[i] >= hi) {
 			if (out) {
-				out[n] = b->cand[i];
+				out[n] = old[i];
 			}
 			n++;
 		}
 	}
 	return n;
+}
+
+/* Whether primitive k is a candidate of tile t: its rectangle holds it
+ * and its bounding sphere meets the tile's whole cone (as a build of
+ * every row keeps them). */
+static bool in_tile(const struct tiled_frame *tf, uint32_t k, uint32_t t)
+{
+	const struct ab_prim *p = &tf->b->prims[k];
+	struct seen sp;
+	if (!rect_has(&p->rect, t % tf->tw, t / tf->tw)) {
+		return false;
+	}
+	prim_seen(tf->fc, k, p, &sp);
+	return cone_meets_sphere(&tf->b->cones[CONES_PER_TILE * t], &sp);
+}
+
+/* Whether primitive k is in tile row y of the row index (build_rows). */
+static bool in_row(const struct tiled_frame *tf, uint32_t k, uint32_t y)
+{
+	const struct rect *r = &tf->b->prims[k].rect;
+	return r->x0 < r->x1 && y >= r->y0 && y < r->y1;
+}
+
+/* Candidates of marked tile t after primitives lo..hi-1 moved. */
+static uint32_t patched_list(const struct tiled_frame *tf, uint32_t t,
+                             uint32_t lo, uint32_t hi, uint32_t *out)
+{
+	const struct bc__tiled_bufs *b = tf->b;
+	return merge_moved(tf, b->cand + b->cand_off[t],
+	                   b->cand_end[t] - b->cand_off[t], lo, hi, in_tile, t,
+	                   out);
+}
+
+/* Row y's primitives after primitives lo..hi-1 moved. */
+static uint32_t patched_row(const struct tiled_frame *tf, uint32_t y,
+                            uint32_t lo, uint32_t hi, uint32_t *out)
+{
+	const struct bc__tiled_bufs *b = tf->b;
+	return merge_moved(tf, b->row_prims + b->row_off[y],
+	                   b->row_off[y + 1] - b->row_off[y], lo, hi, in_row, y,
+	                   out);
+}
+
+/* Marks the rows of rectangle r in b->cur (a banded view's rows to
+ * patch). */
+static void rows_mark(struct tiled_frame *tf, const struct rect *r)
+{
+	for (uint32_t ty = r->y0; r->x0 < r->x1 && ty < r->y1; ty++) {
+		tf->b->cur[ty] = 1;
+	}
+}
+
+/* After a parameter edit moved primitives lo..hi-1 of a banded view, the
+ * rows marked in b->cur (those their old and new rectangles hold) are
+ * sorted again in place, and the other rows' primitives moved to their
+ * new offsets, where build_rows made the whole index again: a pass over
+ * every primitive that was most of a drag's time at 4096x4096 of a
+ * million spheres. The marked rows are written in b->scratch first, then
+ * the other rows moved, those that move towards the start in increasing
+ * order and the others in decreasing order (neither overwrites a row not
+ * yet moved), and the marked rows copied in. Returns 0 or BC_ENOMEM
+ * (the index is as it was then). */
+static int patch_rows(struct tiled_frame *tf, uint32_t lo, uint32_t hi)
+{
+	struct bc__tiled_bufs *b = tf->b;
+	uint32_t *off = b->off_alt; /* the new offsets, th + 1 */
+	uint64_t sum = 0, marked = 0;
+	size_t at = 0;
+	for (uint32_t y = 0; y < tf->th; y++) {
+		uint32_t n = b->cur[y] ? patched_row(tf, y, lo, hi, NULL)
+		                       : b->row_off[y + 1] - b->row_off[y];
+		off[y] = (uint32_t)sum;
+		sum += n;
+		marked += b->cur[y] ? n : 0u;
+	}
+	off[tf->th] = (uint32_t)sum;
+	if (sum > UINT32_MAX ||
+	    grow_keep((void **)&b->row_prims, &b->row_prims_cap,
+	              sum ? (size_t)sum : 1u, sizeof(*b->row_prims)) ||
+	    grow_keep((void **)&b->scratch, &b->scratch_cap, marked + 1u,
+	              sizeof(*b->scratch))) {
+		return BC_ENOMEM;
+	}
+	for (uint32_t y = 0; y < tf->th; y++) {
+		if (b->cur[y]) {
+			at += patched_row(tf, y, lo, hi, b->scratch + at);
+		}
+	}
+	for (uint32_t y = 0; y < tf->th; y++) {
+		if (!b->cur[y] && off[y] < b->row_off[y]) {
+			memmove(b->row_prims + off[y],
+			        b->row_prims + b->row_off[y],
+			        (size_t)(off[y + 1] - off[y]) *
+			            sizeof(*b->row_prims));
+		}
+	}
+	for (uint32_t y = tf->th; y-- > 0;) {
+		if (!b->cur[y] && off[y] > b->row_off[y]) {
+			memmove(b->row_prims + off[y],
+			        b->row_prims + b->row_off[y],
+			        (size_t)(off[y + 1] - off[y]) *
+			            sizeof(*b->row_prims));
+		}
+	}
+	at = 0;
+	for (uint32_t y = 0; y < tf->th; y++) {
+		if (b->cur[y]) {
+			size_t n = off[y + 1] - off[y];
+			memcpy(b->row_prims + off[y], b->scratch + at,
+			       n * sizeof(*b->row_prims));
+			at += n;
+		}
+	}
+	memcpy(b->row_off, off, (tf->th + 1u) * sizeof(*off));
+	return 0;
 }
 
 /* After a parameter edit moved primitives lo..hi-1, the candidates of the
@@ -1758,22 +1868,28 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 		bool patch =
 		    !b->banded && (hi - lo <= BC_CPU_PATCH_PRIMS ||
 		                   hi - lo <= tf->nprims / BC_CPU_PATCH_SHARE);
+		/* A banded view's row index, patched for a few primitives. */
+		bool rows =
+		    b->banded && b->rows_ok && hi - lo <= BC_CPU_PATCH_PRIMS;
 		if (lo >= hi) {
 			return b->banded ? OVER_LIMIT : 0;
 		}
-		if (patch) {
+		if (patch || rows) {
 			memset(b->cur, 0, tf->ntiles * sizeof(*b->cur));
 		}
 		for (uint32_t k = lo; k < hi; k++) {
 			struct ab_prim *p = &b->prims[k];
-			rect_state_and(tf, &p->rect, (uint8_t)~TILE_LIST);
-			if (patch) {
-				rect_mark(tf, &p->rect);
-			}
-			prim_setup(tf, k, p);
-			rect_state_and(tf, &p->rect, (uint8_t)~TILE_LIST);
-			if (patch) {
-				rect_mark(tf, &p->rect);
+			for (int after = 0; after < 2; after++) {
+				rect_state_and(tf, &p->rect,
+				               (uint8_t)~TILE_LIST);
+				if (patch) {
+					rect_mark(tf, &p->rect);
+				} else if (rows) {
+					rows_mark(tf, &p->rect);
+				}
+				if (!after) {
+					prim_setup(tf, k, p);
+				}
 			}
 		}
 		b->dirty_lo = b->dirty_hi = 0;
@@ -1781,7 +1897,8 @@ static int keep_view(struct bc__cpu *r, struct tiled_frame *tf,
 			/* It stays banded until the view changes: trying
 			 * every row's lists again would cost a pass over
 			 * every pair at each edit of a drag. */
-			b->rows_ok = b->band_ok = false;
+			b->band_ok = false;
+			b->rows_ok = rows && patch_rows(tf, lo, hi) == 0;
 			return OVER_LIMIT;
 		}
 		b->view_ok = false;

@@ -606,8 +606,77 @@ static void test_abuffer_bands_equal_one_pass(void)
 	bc_tree_destroy(t);
 }
 
+/* A banded view whose calls draw a few tile rows at a time (the
+ * daemon's slices) keeps a row index of its primitives; a drag's moves
+ * patch it (the rows the moved primitives' old and new rectangles hold),
+ * where it was sorted again from every primitive at each edit. After
+ * each of a drag's moves, ranges of two tile rows here and there equal a
+ * one-pass renderer's whole frame, bit for bit. */
+static void test_bands_follow_a_drag(void)
+{
+	static const struct setup *const banded[] = {&setups[1], &setups[2]};
+	struct bc_tree *t = bc_tree_create();
+	struct bc_camera cam;
+	struct bc_frame f = {0}, g = {0};
+	struct bc_render_stats st;
+	struct bc_errinfo ei = {0};
+	const uint32_t w = 160, h = 480, tw = w / 8, th = h / 8;
+	REQUIRE(t && sc_fig18(t, 400, false, true, 5) == 0);
+	sc_frame(bc_tree_lin(t), &cam);
+	REQUIRE(bc_frame_init(&f, w, h) == 0 && bc_frame_init(&g, w, h) == 0);
+	for (size_t s = 0; s < sizeof(banded) / sizeof(banded[0]); s++) {
+		const struct setup *su = banded[s];
+		struct bc_renderer *ref = open_limited(su, 0, t), *r = NULL;
+		uint32_t limit = 64;
+		REQUIRE(ref);
+		REQUIRE(bc_renderer_render(ref, &cam, &g, &st, &ei) == 0);
+		/* Twice the smallest power of two the busiest row fits. */
+		for (;; limit *= 2) {
+			REQUIRE(limit <= (1u << 22));
+			REQUIRE((r = open_limited(su, limit, t)));
+			if (bc_renderer_render(r, &cam, &f, &st, &ei) == 0) {
+				break;
+			}
+			ei = (struct bc_errinfo){0};
+			bc_renderer_destroy(r);
+		}
+		bc_renderer_destroy(r);
+		REQUIRE((r = open_limited(su, 2 * limit, t)));
+		REQUIRE(bc_renderer_render(r, &cam, &f, &st, &ei) == 0);
+		CHECK(st.bands >= 3);
+		for (uint32_t i = 0; i < 16; i++) {
+			struct bc_dirty dirty;
+			uint32_t y = (7u * i) % (th - 2), a = y * tw;
+			if (i > 0) {
+				REQUIRE(move_prim(t, 37u * i,
+				                  i % 2 ? 0.03f : -0.04f) == 0);
+				bc_tree_take_dirty(t, &dirty);
+				REQUIRE(bc_renderer_sync(r, t, &dirty, &ei) ==
+				        0);
+				REQUIRE(bc_renderer_sync(ref, t, NULL, &ei) ==
+				        0);
+				REQUIRE(bc_renderer_render(ref, &cam, &g, NULL,
+				                           &ei) == 0);
+			}
+			if (draw_ranges(r, &cam, &f, &g, a,
+			                a + 2 * tw - NEXT_TILES) != 0) {
+				fprintf(stderr,
+				        "  %s: move %u, rows %u-%u differ\n",
+				        su->label, i, y, y + 1);
+				bc_test_failures++;
+			}
+		}
+		bc_renderer_destroy(r);
+		bc_renderer_destroy(ref);
+	}
+	bc_frame_finish(&f);
+	bc_frame_finish(&g);
+	bc_tree_destroy(t);
+}
+
 static const struct bc_test tests[] = {
     {"abuffer_bands_equal_one_pass", test_abuffer_bands_equal_one_pass},
+    {"bands_follow_a_drag", test_bands_follow_a_drag},
     {"frame_window_range", test_frame_window_range},
     {"key_follows_the_window", test_key_follows_the_window},
     {"windows_equal_the_whole_render", test_windows_equal_the_whole_render},
