@@ -42,10 +42,19 @@ while [ $j -lt 100 ] && ! grep -q '^frame 1 ' "$tmp/watch"; do
   j=$((j + 1))
 done
 grep -q '^frame 1 ' "$tmp/watch" || fail "watch: no first frame"
-# Three edits: three more pictures of the stream.
+# Three edits: three more pictures of the stream. Each waits for the
+# picture of the one before: edits that come while a picture is still
+# to be drawn share the next one (a busy machine made two of them one).
+n=0
 for r in 0.15 0.17 0.19; do
   "$BLOBCAST" $S edit --session default 50 radius=$r > /dev/null ||
     fail "edit radius=$r"
+  n=$((n + 1))
+  j=0
+  while [ $j -lt 100 ] && ! grep -q "^frame .* order=$n " "$tmp/watch"; do
+    sleep 0.1
+    j=$((j + 1))
+  done
 done
 wait "$watcher"
 status=$?
