@@ -913,15 +913,11 @@ static int build_cand(struct tiled_frame *tf, uint32_t y0, uint32_t y1)
 	/* Room after the tiles for those a patch makes outgrow their own;
 	 * when it runs out, the next patch builds everything again. */
 	room = (size_t)sum + (size_t)sum / 8u + 1024u;
-	if (y0 == 0 && y1 == tf->th && b->cand_cap > 2u * room) {
-		/* A view of many more pairs before (a camera zoomed in on a
-		 * big scene): its room is given back, as frags_size gives
-		 * the lists'. */
-		bc_free(b->cand);
-		b->cand = NULL;
-		b->cand_cap = 0;
-	}
-	if (grow((void **)&b->cand, &b->cand_cap, room, sizeof(*b->cand))) {
+	/* A build of every row gives back the room of a view of many more
+	 * pairs before (a camera zoomed in on a big scene: fit), as
+	 * frags_size gives the lists'; a band's keeps it. */
+	if ((y0 == 0 && y1 == tf->th ? fit : grow)(
+	        (void **)&b->cand, &b->cand_cap, room, sizeof(*b->cand))) {
 		return BC_ENOMEM;
 	}
 	if (tf->visit_shares && y0 == 0 && y1 == tf->th) {
