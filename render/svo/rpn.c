@@ -531,6 +531,16 @@ static inline void lanes_step(const struct bc_svo_rpn *r, uint32_t i,
 			                            : 0.0f;
 		}
 		*sp = s + 1;
+	} else if (t->type == BC_SVO_TERM_PRIM && t->kind == BC_PRIM_SPHERE) {
+		/* A sphere's rows are the identity (bc_prim_record_long):
+		 * p + (-c) per axis, the floats of the whole map (1 * p plus
+		 * zeros) and of eval.c's p - c, without nine products. */
+		for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
+			float x = px[j] + rec[3], y = py[j] + rec[7],
+			      z = pz[j] + rec[11];
+			st[s][j] = sqrtf(x * x + y * y + z * z) - rec[12];
+		}
+		*sp = s + 1;
 	} else if (t->type == BC_SVO_TERM_PRIM) {
 		float x[BC__SVO_LANES], y[BC__SVO_LANES], z[BC__SVO_LANES];
 		for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
@@ -541,20 +551,11 @@ static inline void lanes_step(const struct bc_svo_rpn *r, uint32_t i,
 			z[j] = rec[8] * px[j] + rec[9] * py[j] +
 			       rec[10] * pz[j] + rec[11];
 		}
-		if (t->kind == BC_PRIM_SPHERE) {
-			for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
-				st[s][j] = sqrtf(x[j] * x[j] + y[j] * y[j] +
-				                 z[j] * z[j]) -
-				           rec[12];
-			}
-		} else {
-			for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
-				st[s][j] = (live >> j) & 1u
-				               ? bc_prim_sdf(
-				                     (enum bc_prim)t->kind,
-				                     rec + 12, x[j], y[j], z[j])
-				               : 0.0f;
-			}
+		for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
+			st[s][j] = (live >> j) & 1u
+			               ? bc_prim_sdf((enum bc_prim)t->kind,
+			                             rec + 12, x[j], y[j], z[j])
+			               : 0.0f;
 		}
 		*sp = s + 1;
 	} else if (t->type == BC_SVO_TERM_NEG) {

@@ -127,14 +127,17 @@ static inline float bc__svo_prim_eval_at(const struct bc_svo_rpn *r,
                                          const float p[3])
 {
 	const float *rec = r->rec + t->rec;
+	if (t->kind == BC_PRIM_SPHERE) {
+		/* The commonest kind without the call and the switch:
+		 * prim.c's formula, operation for operation, at p + (-c)
+		 * (a sphere's rows are the identity, bc_prim_record_long:
+		 * the floats of the whole map, and of eval.c's p - c). */
+		float x = p[0] + rec[3], y = p[1] + rec[7], z = p[2] + rec[11];
+		return sqrtf(x * x + y * y + z * z) - rec[12];
+	}
 	float x = rec[0] * p[0] + rec[1] * p[1] + rec[2] * p[2] + rec[3];
 	float y = rec[4] * p[0] + rec[5] * p[1] + rec[6] * p[2] + rec[7];
 	float z = rec[8] * p[0] + rec[9] * p[1] + rec[10] * p[2] + rec[11];
-	if (t->kind == BC_PRIM_SPHERE) {
-		/* The commonest kind without the call and the switch:
-		 * prim.c's formula, operation for operation. */
-		return sqrtf(x * x + y * y + z * z) - rec[12];
-	}
 	return bc_prim_sdf((enum bc_prim)t->kind, rec + 12, x, y, z);
 }
 
