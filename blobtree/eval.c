@@ -241,7 +241,7 @@ static float full(const struct bc_lin *l, const float p[3], uint32_t *prim)
 		const float *rec = bc_lin_param(l, s);
 		if (bc_lin_is_leaf(l, s)) {
 			val[sp] = eval_leaf(l, s, kind, rec, p, &c);
-			who[sp++] = l->prim_of[s];
+			who[sp++] = bc_lin_leaf_prim(l, s);
 		} else {
 			float f1 = val[--sp];
 			float f0 = val[sp - 1];
@@ -350,7 +350,7 @@ static inline bool value_wrapped(const struct bc_lin *l, uint32_t x, uint32_t a)
 static inline bool may_climb(const struct bc_lin *l, uint32_t a, uint32_t q,
                              uint32_t lo)
 {
-	return a < q && l->first[a] >= lo;
+	return a < q && bc_lin_first(l, a) >= lo;
 }
 
 /* Combines the two top entries as the operands of slot a (both complete). */
@@ -448,7 +448,7 @@ int bc_view_build(struct bc_view *v, const struct bc_lin *l,
 			 * pointers below took in two dozen steps at a
 			 * million primitives, each a cache miss. */
 			if (q != UINT32_MAX && q - 1 > x) {
-				uint32_t c = q - 1, fc = l->first[c];
+				uint32_t c = q - 1, fc = bc_lin_first(l, c);
 				if (fc <= x && fc >= lo &&
 				    !value_wrapped(l, x, c)) {
 					x = c;
@@ -535,7 +535,7 @@ static float run(const struct bc_view *v, const struct bc_lin *l,
 			    bc_unary_value(l, in->slot, val[sp - 1], p);
 		} else if (in->leaf) {
 			val[sp] = eval_leaf(l, in->slot, in->kind, rec, p, &c);
-			who[sp++] = l->prim_of[in->slot];
+			who[sp++] = bc_lin_leaf_prim(l, in->slot);
 		} else {
 			float f1 = val[--sp];
 			float f0 = val[sp - 1];

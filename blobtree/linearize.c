@@ -21,13 +21,12 @@
 void bc__lin_free(struct bc_lin *l)
 {
 	bc_free(l->node);
-	bc_free(l->first);
+	bc_free(l->lead);
 	bc_free(l->fast);
 	bc_free(l->jump);
 	bc_free(l->kills);
 	bc_free(l->depth);
 	bc_free(l->node_id);
-	bc_free(l->prim_of);
 	bc_free(l->roi);
 	bc_free(l->prim_slot);
 	bc_free(l->abv);
@@ -55,8 +54,8 @@ static void populate(struct bc_lin *l)
 {
 	size_t n = l->count, np = l->nprims;
 	uint32_t *const per_node[] = {
-	    l->first,   l->fast, l->jump,     l->kills, l->depth, l->node_id,
-	    l->prim_of, l->wrap, l->wrap_top, l->dom,   l->ucount};
+	    l->lead,    l->fast, l->jump,     l->kills, l->depth,
+	    l->node_id, l->wrap, l->wrap_top, l->dom,   l->ucount};
 	bc_populate(l->node, 2 * n * sizeof(uint32_t));
 	for (size_t i = 0; i < sizeof(per_node) / sizeof(per_node[0]); i++) {
 		if (per_node[i]) {
@@ -95,13 +94,12 @@ int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nspheres,
 	count = bc__lin_room(count);
 	nparam = bc__lin_room(nparam);
 	l->node = bc_calloc(2 * count, sizeof(uint32_t));
-	l->first = bc_malloc(count * sizeof(uint32_t));
+	l->lead = bc_malloc(count * sizeof(uint32_t));
 	l->fast = bc_malloc(count * sizeof(uint32_t));
 	l->jump = bc_malloc(count * sizeof(uint32_t));
 	l->kills = bc_malloc(count * sizeof(uint32_t));
 	l->depth = bc_malloc(count * sizeof(uint32_t));
 	l->node_id = bc_malloc(count * sizeof(uint32_t));
-	l->prim_of = bc_malloc(count * sizeof(uint32_t));
 	l->roi = bc_malloc(2 * count * sizeof(float));
 	l->prim_slot = bc_malloc(bc__lin_room(nprims) * sizeof(uint32_t));
 	if (sabv) {
@@ -136,9 +134,9 @@ int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nspheres,
 		bc__lin_free(l);
 		return BC_ENOMEM;
 	}
-	if (!l->node || !l->first || !l->fast || !l->jump || !l->kills ||
-	    !l->depth || !l->node_id || !l->prim_of || !l->roi ||
-	    !l->prim_slot || (!l->abv && !l->sabv) || !l->color || !l->param) {
+	if (!l->node || !l->lead || !l->fast || !l->jump || !l->kills ||
+	    !l->depth || !l->node_id || !l->roi || !l->prim_slot ||
+	    (!l->abv && !l->sabv) || !l->color || !l->param) {
 		bc__lin_free(l);
 		return BC_ENOMEM;
 	}
@@ -331,9 +329,8 @@ static void emit_leaf(struct bc_tree *t, struct bc__fill *fs, uint32_t n)
 	fs->param += bc_prim_record_vec4((uint32_t)pd.kind);
 	set_word(l, s, true, (uint32_t)pd.kind);
 	l->node[2 * s + 1] = y->param;
-	l->first[s] = s;
+	l->lead[s] = y->prim;
 	l->node_id[s] = nd->id;
-	l->prim_of[s] = y->prim;
 	l->prim_slot[y->prim] = s;
 	slot_init(l, s);
 	write_prim_record(l->param + 4u * (size_t)y->param, &pd);
@@ -350,9 +347,8 @@ void bc__lin_fold(struct bc_lin *l, const struct bc__node *p, uint32_t param,
 	bc__lin_set_parent(l, right, o, false);
 	set_word(l, o, false, op_type_byte(p->u.op.kind));
 	l->node[2 * o + 1] = param;
-	l->first[o] = l->first[left];
+	l->lead[o] = bc_lin_first(l, left);
 	l->node_id[o] = p->id;
-	l->prim_of[o] = BC_NONE;
 	slot_init(l, o);
 }
 
@@ -880,12 +876,12 @@ void bc__lin_update_op(struct bc_tree *t, const struct bc__node *n)
 {
 	struct bc_lin *l = &t->lin;
 	const struct bc__lay *y = bc__lay(t, n);
-	uint32_t o = y->slot, first = l->first[y->slot];
+	uint32_t o = y->slot, first = bc_lin_first(l, y->slot);
 	uint32_t type = op_type_byte(n->u.op.kind);
 	/* The fold's slots: the top, then down the chain of left children. */
 	for (uint32_t i = 0; i + 1 < n->u.nchildren; i++) {
 		set_word(l, o, false, type);
-		o = l->first[o - 1] - 1;
+		o = bc_lin_first(l, o - 1) - 1;
 	}
 	write_op_record(l->param + 4u * (size_t)y->param, &n->u.op);
 	for (uint32_t s = y->slot; s-- > first;) {
@@ -904,7 +900,7 @@ void bc__lin_update_unary(struct bc_tree *t, const struct bc__node *n)
 {
 	struct bc_lin *l = &t->lin;
 	const struct bc__lay *y = bc__lay(t, n);
-	uint32_t first = l->first[y->slot];
+	uint32_t first = bc_lin_first(l, y->slot);
 	l->unary_kind[n->u.unary] = (uint32_t)n->u.op.kind;
 	bc__unary_record(l->param + 4u * (size_t)y->param, t, n);
 	for (uint32_t s = y->slot + 1; s-- > first;) {

@@ -85,13 +85,12 @@ int bc__splice_reserve(struct bc_tree *t, uint32_t count, uint32_t nprims,
 	if (count > t->lin_cap) {
 		uint32_t c = roomy(t->lin_cap, count);
 		GROW(l->node, c, 2 * sizeof(uint32_t));
-		GROW(l->first, c, sizeof(uint32_t));
+		GROW(l->lead, c, sizeof(uint32_t));
 		GROW(l->fast, c, sizeof(uint32_t));
 		GROW(l->jump, c, sizeof(uint32_t));
 		GROW(l->kills, c, sizeof(uint32_t));
 		GROW(l->depth, c, sizeof(uint32_t));
 		GROW(l->node_id, c, sizeof(uint32_t));
-		GROW(l->prim_of, c, sizeof(uint32_t));
 		GROW(l->roi, c, 2 * sizeof(float));
 		if (l->wrap) {
 			/* Kept by a layout whose tree had unary nodes. */
@@ -130,8 +129,8 @@ int bc__splice_reserve(struct bc_tree *t, uint32_t count, uint32_t nprims,
 /* ---- moving and renumbering --------------------------------------------- */
 
 /* One splice of slots, records (vec4 units) and primitives. keep_first:
- * first[] values equal to s.at keep pointing there (an operand inserted
- * at the very left of a subtree becomes its first slot). */
+ * operators' first slots (lead[]) equal to s.at keep pointing there (an
+ * operand inserted at the very left of a subtree becomes its first slot). */
 struct splice {
 	struct bc__span s, p, k;
 	bool keep_first;
@@ -268,8 +267,8 @@ static void note_operands(struct bc_tree *t, uint32_t op, uint32_t top)
 	if (op == BC_OP_UNION || op == BC_OP_SMOOTH_UNION) {
 		return;
 	}
-	first = l->first[top];
-	k = l->prim_of[first];
+	first = bc_lin_first(l, top);
+	k = bc_lin_leaf_prim(l, first);
 	bc__dirty_range(&t->dirty.prim_lo, &t->dirty.prim_hi, k,
 	                k + (top - first) / 2 + 1);
 }
@@ -287,13 +286,12 @@ static void apply(struct bc_tree *t, const struct splice *sp)
 	uint32_t tail, ktail;
 	note_splice(t, &sp->k);
 	move_tail(l->node, 2 * sizeof(uint32_t), n, &sp->s);
-	move_tail(l->first, sizeof(uint32_t), n, &sp->s);
+	move_tail(l->lead, sizeof(uint32_t), n, &sp->s);
 	move_tail(l->fast, sizeof(uint32_t), n, &sp->s);
 	move_tail(l->jump, sizeof(uint32_t), n, &sp->s);
 	move_tail(l->kills, sizeof(uint32_t), n, &sp->s);
 	move_tail(l->depth, sizeof(uint32_t), n, &sp->s);
 	move_tail(l->node_id, sizeof(uint32_t), n, &sp->s);
-	move_tail(l->prim_of, sizeof(uint32_t), n, &sp->s);
 	move_tail(l->roi, 2 * sizeof(float), n, &sp->s);
 	if (l->wrap) {
 		move_tail(l->wrap, sizeof(uint32_t), n, &sp->s);
@@ -339,10 +337,12 @@ static void apply(struct bc_tree *t, const struct splice *sp)
 	renumber(l->jump + tail, l->count - tail, 1, &sp->s);
 	/* First slots, records and primitives, past the point. */
 	renumber(l->node + 2 * (size_t)tail + 1, l->count - tail, 2, &sp->p);
-	renumber(l->prim_of + tail, l->count - tail, 1, &sp->k);
 	for (uint32_t s = tail; s < l->count; s++) {
-		if (!(sp->keep_first && l->first[s] == sp->s.at)) {
-			l->first[s] = bc__span_map(&sp->s, l->first[s]);
+		uint32_t *v = &l->lead[s];
+		if (bc_lin_is_leaf(l, s)) {
+			renumber(v, 1, 1, &sp->k); /* its primitive */
+		} else if (!(sp->keep_first && *v == sp->s.at)) {
+			*v = bc__span_map(&sp->s, *v); /* its first slot */
 		}
 	}
 	/* Primitives past the point: past the new ones, or found in the
@@ -384,13 +384,16 @@ static void again(struct bc_lin *l, uint32_t s)
 	l->kills[s] |= AGAIN;
 }
 
-/* first[] of slots lo..hi (whose operands are there too) from the bottom
- * up: an operator's left operand ends where its right one starts. */
+/* First slots of the operators of slots lo..hi (whose operands are there too)
+ * from the bottom up: an operator's left operand ends where its right one
+ * starts. */
 static void refirst(struct bc_lin *l, uint32_t lo, uint32_t hi)
 {
 	for (uint32_t s = lo; s <= hi; s++) {
-		l->first[s] =
-		    bc_lin_is_leaf(l, s) ? s : l->first[l->first[s - 1] - 1];
+		if (!bc_lin_is_leaf(l, s)) {
+			l->lead[s] =
+			    bc_lin_first(l, bc_lin_first(l, s - 1) - 1);
+		}
 	}
 }
 
@@ -436,12 +439,12 @@ static bool relink(struct bc_tree *t, uint32_t lo, uint32_t top,
 		if (!bc_lin_is_leaf(l, s)) {
 			if (changed) {
 				again(l, s - 1);
-				again(l, l->first[s - 1] - 1);
+				again(l, bc_lin_first(l, s - 1) - 1);
 			}
 			continue;
 		}
 		if (fresh || !same_bits(r1, l->roi[2 * s + 1])) {
-			uint32_t k = l->prim_of[s];
+			uint32_t k = bc_lin_leaf_prim(l, s);
 			uint32_t n = bc__id_find(t, l->node_id[s]);
 			if (!fresh && touches_box(l, k)) {
 				touch = true;
@@ -564,16 +567,16 @@ bool bc__splice_insert(struct bc_tree *t, uint32_t m, uint32_t px, uint32_t rx)
 			bc__lin_set_parent(
 			    l, f, bc__slot(t, &t->pool[next]) + 1, true);
 		}
-		lo = l->first[s0 - 1];
+		lo = bc_lin_first(l, s0 - 1);
 		block = s0;
 	} else {
 		uint32_t c0 = next, c0top = bc__slot(t, &t->pool[c0]);
-		uint32_t first = l->first[c0top];
+		uint32_t first = bc_lin_first(l, c0top);
 		struct splice fold = {.s = {c0top + 1, 0, 1}};
 		struct splice sp = {
 		    .s = {first, 0, sx},
 		    .p = {bc__param(t, &t->pool[p]) + BC_OP_RECORD_VEC4, 0, rx},
-		    .k = {l->prim_of[first], 0, px},
+		    .k = {bc_lin_leaf_prim(l, first), 0, px},
 		    .keep_first = true};
 		apply(t, &fold);
 		apply(t, &sp);
@@ -613,11 +616,11 @@ void bc__splice_note(struct bc_tree *t, uint32_t c, struct bc__block *b)
 {
 	struct bc_lin *l = &t->lin;
 	b->top = bc__slot(t, &t->pool[c]);
-	b->first = l->first[b->top];
+	b->first = bc_lin_first(l, b->top);
 	b->word = l->node[2 * b->top];
 	b->param = bc__param(t, &t->pool[c]);
 	b->pend = records_end(t, c);
-	b->k = l->prim_of[b->first];
+	b->k = bc_lin_leaf_prim(l, b->first);
 	b->nprims = (b->top - b->first) / 2 + 1;
 	b->touch = false;
 	for (uint32_t k = b->k; k < b->k + b->nprims && !b->touch; k++) {
@@ -720,7 +723,7 @@ bool bc__splice_remove(struct bc_tree *t, uint32_t c)
 		}
 		adopt(l, top, w, a);
 	}
-	touch = relink(t, l->first[top], top, 0, 0) || touch;
+	touch = relink(t, bc_lin_first(l, top), top, 0, 0) || touch;
 	note_operands(t, t->pool[p].u.op.kind,
 	              nkids >= 3 ? bc__slot(t, &t->pool[p]) : top);
 	return touch;

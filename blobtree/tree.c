@@ -646,11 +646,11 @@ static uint32_t child_at_lin(const struct bc_tree *t, uint32_t parent,
 	uint32_t n = t->pool[parent].u.nchildren;
 	uint32_t f = bc__slot(t, &t->pool[parent]), top, c;
 	for (uint32_t i = n - 1; i > (pos ? pos : 1u); i--) {
-		f = l->first[f - 1] - 1;
+		f = bc_lin_first(l, f - 1) - 1;
 	}
 	/* f is the fold whose right operand is child pos (child 1 for pos
 	 * 0, whose left operand child 0 is). */
-	top = pos ? f - 1 : l->first[f - 1] - 1;
+	top = pos ? f - 1 : bc_lin_first(l, f - 1) - 1;
 	c = bc__id_find(t, l->node_id[top]);
 	while (c != BC_NONE && t->pool[c].parent != parent) {
 		c = t->pool[c].parent;
@@ -1528,10 +1528,10 @@ int bc_tree_set_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
 	bc__lin_update_op(t, &t->pool[n]);
 	/* The subtree's slots are [first, top]; its primitives are those with
 	 * indices from the first leaf's to the last leaf's. */
-	first_slot = l->first[t->lay[n].slot];
+	first_slot = bc_lin_first(l, t->lay[n].slot);
 	/* The leftmost slot is a leaf; a binary subtree of s slots has
 	 * (s + 1) / 2 leaves, all consecutive primitives. */
-	k_lo = l->prim_of[first_slot];
+	k_lo = bc_lin_leaf_prim(l, first_slot);
 	k_hi = k_lo + (t->lay[n].slot - first_slot) / 2 + 1;
 	bc__dirty_range(&t->dirty.slot_lo, &t->dirty.slot_hi, first_slot,
 	                t->lay[n].slot + 1);
@@ -1566,8 +1566,8 @@ int bc_tree_set_unary(struct bc_tree *t, uint32_t id, const struct bc_unary *u,
 		return 0;
 	}
 	bc__lin_update_unary(t, &t->pool[n]);
-	first_slot = l->first[t->lay[n].slot];
-	k_lo = l->prim_of[first_slot];
+	first_slot = bc_lin_first(l, t->lay[n].slot);
+	k_lo = bc_lin_leaf_prim(l, first_slot);
 	k_hi = k_lo + (t->lay[n].slot - first_slot) / 2 + 1;
 	/* Its record, and the bounds of every twist and bend (conservatively
 	 * the whole parameter range: these trees are small). */

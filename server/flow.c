@@ -214,8 +214,8 @@ static void damage_begin(const struct flow *f, uint32_t id, struct damage *d)
 	if (!l || s == BC_NONE) {
 		return;
 	}
-	d->k0 = l->prim_of[l->first[s]];
-	d->n = (s - l->first[s]) / 2 + 1;
+	d->k0 = bc_lin_first_prim(l, s);
+	d->n = (s - bc_lin_first(l, s)) / 2 + 1;
 	if (d->n <= BC_SRV_DAMAGE_PRIMS &&
 	    (d->old = bc_calloc(d->n, sizeof(*d->old)))) {
 		for (uint32_t k = 0; k < d->n; k++) {

@@ -377,7 +377,8 @@ run(const struct bc_view *v, const struct bc_lin *lin, struct bc__pk_lanes *ln,
 			    lin, in->slot, stack[sp - 1], px, py, pz, active);
 		} else if (in->leaf) {
 			if (with_id) {
-				who[sp] = vbits(lin->prim_of[in->slot]);
+				who[sp] =
+				    vbits(bc_lin_leaf_prim(lin, in->slot));
 			}
 			if (lin->nunary && lin->dom[in->slot] != BC_NONE) {
 				/* Under domain nodes: the primitive sees the

@@ -188,7 +188,7 @@ static void fill_topo(const struct bc_lin *l, uint32_t lo, uint32_t hi,
                       uint32_t *out)
 {
 	for (uint32_t s = lo; s < hi; s++, out += 4) {
-		out[0] = l->first[s];
+		out[0] = bc_lin_first(l, s);
 		out[1] = l->fast[s];
 		out[2] = l->jump[s];
 		out[3] = l->kills[s];
@@ -351,9 +351,9 @@ static int upload_dirty(struct gl_renderer *r, const struct bc_lin *l,
 		 * range is that subtree, whose leaves are consecutive
 		 * primitives: the first leaf is slot_lo, and a subtree of
 		 * m slots has (m + 1) / 2 leaves. */
-		uint32_t k0 = l->prim_of[l->first[shi - 1]];
-		uint32_t k1 = k0 + (shi - l->first[shi - 1] + 1) / 2;
-		if (slo < l->first[shi - 1]) {
+		uint32_t k0 = bc_lin_first_prim(l, shi - 1);
+		uint32_t k1 = k0 + (shi - bc_lin_first(l, shi - 1) + 1) / 2;
+		if (slo < bc_lin_first(l, shi - 1)) {
 			/* Several edited subtrees merged into one range:
 			 * refresh every primitive rather than work out
 			 * which. */

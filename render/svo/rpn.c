@@ -158,7 +158,7 @@ int bc_svo_rpn_init(struct bc_svo_rpn *out, const struct bc_lin *l)
 			tm->type = BC_SVO_TERM_PRIM;
 			tm->kind = (uint8_t)bc_lin_kind(l, s);
 			tm->first = t;
-			tm->prim = l->prim_of[s];
+			tm->prim = bc_lin_leaf_prim(l, s);
 			tm->rec = prec;
 			bc_prim_record_long(tm->kind, src, out->rec + prec);
 			{

@@ -52,14 +52,13 @@ static const char *lin_differs(const struct bc_tree *ta,
 	if (!same(a->node, b->node, 2 * n * sizeof(uint32_t))) {
 		return "node words";
 	}
-	if (!same(a->first, b->first, n * 4) ||
-	    !same(a->fast, b->fast, n * 4) || !same(a->jump, b->jump, n * 4) ||
+	if (!same(a->lead, b->lead, n * 4) || !same(a->fast, b->fast, n * 4) ||
+	    !same(a->jump, b->jump, n * 4) ||
 	    !same(a->kills, b->kills, n * 4) ||
 	    !same(a->depth, b->depth, n * 4)) {
 		return "first, fast, jump, kills or depth";
 	}
 	if (!same(a->node_id, b->node_id, n * 4) ||
-	    !same(a->prim_of, b->prim_of, n * 4) ||
 	    !same(a->roi, b->roi, 2 * n * sizeof(float))) {
 		return "ids, primitive indices or ROIs";
 	}
@@ -536,7 +535,7 @@ static void many_splices_on_a_wide_operator(void)
 		for (uint32_t k = 0, before = 0; first && k <= at; k++) {
 			const struct bc_lin *l = bc_tree_lin(t);
 			if (k == at &&
-			    l->prim_of[bc_tree_slot(t, first)] != before) {
+			    bc_lin_prim(l, bc_tree_slot(t, first)) != before) {
 				why = "an operand inserted at the wrong place";
 			}
 			before += prims[k];

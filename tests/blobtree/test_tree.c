@@ -79,8 +79,17 @@ static void layout_follows_the_paper(void)
 	CHECK_EQ_INT(bc_lin_type(l, 5) >> 6, BC_OPCLASS_DIFFERENCE);
 	/* Both fold slots of the union share one parameter record. */
 	CHECK_EQ_INT(l->node[2 * 2 + 1], l->node[2 * 6 + 1]);
-	CHECK_EQ_INT(l->first[6], 0);
-	CHECK_EQ_INT(l->first[5], 3);
+	CHECK_EQ_INT(bc_lin_first(l, 6), 0);
+	CHECK_EQ_INT(bc_lin_first(l, 5), 3);
+	/* A leaf is its own first slot and has a primitive; an operator has
+	 * none, and its subtree's primitives start at its first leaf's. */
+	CHECK_EQ_INT(bc_lin_first(l, 4), 4);
+	CHECK_EQ_INT(bc_lin_prim(l, 0), 0);
+	CHECK_EQ_INT(bc_lin_prim(l, 4), 3);
+	CHECK_EQ_INT(bc_lin_prim(l, 5), BC_NONE);
+	CHECK_EQ_INT(bc_lin_first_prim(l, 5), 2);
+	CHECK_EQ_INT(bc_lin_first_prim(l, 6), 0);
+	CHECK_EQ_INT(bc_lin_first_prim(l, 3), 2);
 	/* Four spheres: a vec4 each, (centre, radius). */
 	CHECK_EQ_INT(l->nparam,
 	             4 * BC_SPHERE_RECORD_VEC4 + 2 * BC_OP_RECORD_VEC4);
@@ -157,7 +166,7 @@ static int lin_diff(const struct bc_lin *a, const struct bc_lin *b)
 		return 1000;
 	}
 	diffs += memcmp(a->node, b->node, 8u * a->count) != 0;
-	diffs += memcmp(a->first, b->first, 4u * a->count) != 0;
+	diffs += memcmp(a->lead, b->lead, 4u * a->count) != 0;
 	diffs += memcmp(a->jump, b->jump, 4u * a->count) != 0;
 	diffs += memcmp(a->fast, b->fast, 4u * a->count) != 0;
 	diffs += memcmp(a->kills, b->kills, 4u * a->count) != 0;
@@ -217,7 +226,7 @@ static void parameter_edit_rewrites_only_its_own_record(void)
 		while (l->node_id[s] != id) {
 			s++;
 		}
-		k = l->prim_of[s];
+		k = bc_lin_prim(l, s);
 		CHECK_EQ_INT(dirty.prim_lo, k);
 		CHECK_EQ_INT(dirty.prim_hi, k + 1);
 		CHECK_EQ_INT(dirty.param_hi - dirty.param_lo,
@@ -261,11 +270,11 @@ static void operator_edit_equals_a_fresh_build(void)
 		{
 			const struct bc_lin *l = bc_tree_lin(t);
 			uint32_t s = bc_tree_slot(t, id), leaves = 0;
-			for (uint32_t x = l->first[s]; x <= s; x++) {
+			for (uint32_t x = bc_lin_first(l, s); x <= s; x++) {
 				leaves += bc_lin_is_leaf(l, x) ? 1u : 0u;
 			}
 			CHECK_EQ_INT(dirty.prim_hi - dirty.prim_lo, leaves);
-			CHECK_EQ_INT(dirty.prim_lo, l->prim_of[l->first[s]]);
+			CHECK_EQ_INT(dirty.prim_lo, bc_lin_first_prim(l, s));
 		}
 		REQUIRE(bc_tree_copy(fresh, t, NULL) == 0);
 		CHECK(lin_diff(bc_tree_lin(fresh), bc_tree_lin(t)) == 0);

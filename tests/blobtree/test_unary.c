@@ -740,8 +740,8 @@ static bool layout_box(const struct bc_tree *t, uint32_t id, float lo[3],
 	if (!l || (slot = bc_tree_slot(t, id)) >= l->count) {
 		return false;
 	}
-	first = l->first[slot];
-	k0 = l->prim_of[first];
+	first = bc_lin_first(l, slot);
+	k0 = bc_lin_prim(l, first);
 	n = (slot - first) / 2u + 1u;
 	for (int i = 0; i < 3; i++) {
 		lo[i] = INFINITY;

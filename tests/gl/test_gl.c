@@ -912,8 +912,8 @@ static int random_edit(struct bc_tree *t, uint32_t *k0, uint32_t *k1)
 		return -1;
 	}
 	top = bc_tree_slot(t, id);
-	*k0 = l->prim_of[l->first[top]];
-	*k1 = *k0 + (top - l->first[top]) / 2 + 1;
+	*k0 = bc_lin_first_prim(l, top);
+	*k1 = *k0 + (top - bc_lin_first(l, top)) / 2 + 1;
 	if (p.kind != BC_PRIM_INVALID) {
 		bool far = rt_below(3) == 0;
 		for (int i = 0; i < 3; i++) {

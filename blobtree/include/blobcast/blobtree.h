@@ -439,7 +439,8 @@ BC_API uint32_t bc_tree_child_index(const struct bc_tree *t, uint32_t id);
 BC_API uint32_t bc_tree_parent(const struct bc_tree *t, uint32_t id);
 /* Returns node id's top slot in the linearized form (an n-ary operator's
  * last fold slot), BC_NONE for an unknown id. Its primitives are the
- * indices prim_of[first[slot]] .. + (slot - first[slot]) / 2. */
+ * indices bc_lin_first_prim(l, slot) .. + (slot - bc_lin_first(l, slot)) / 2.
+ */
 BC_API uint32_t bc_tree_slot(const struct bc_tree *t, uint32_t id);
 /* The world box [lo, hi] of node id's surface: the AABB of the ABVs that
  * a layout of t gives the primitives of its subtree (the same floats),
@@ -629,15 +630,18 @@ struct bc_lin {
 	uint32_t count;  /* linearized (binary) nodes, post-order slots */
 	uint32_t nprims; /* primitives, in post-order */
 	/* Per slot. */
-	uint32_t *node;    /* 2 per slot: GPU node word, parameter offset */
-	uint32_t *first;   /* leftmost slot of the subtree */
+	uint32_t *node; /* 2 per slot: GPU node word, parameter offset */
+	/* An operator slot's leftmost slot of its subtree, a leaf slot's
+	 * primitive index (a leaf is its own first slot, an operator has no
+	 * primitive: one array, not two, 8 bytes a primitive). Read it
+	 * through bc_lin_first() and bc_lin_prim(). */
+	uint32_t *lead;
 	uint32_t *fast;    /* paper's fast ancestor: top of the run of same-side
 	                      edges above the slot, BC_NONE at the root */
 	uint32_t *jump;    /* skew-binary jump pointer, BC_NONE at the root */
 	uint32_t *kills;   /* number of operand-killing edges up to the root */
 	uint32_t *depth;   /* binary depth, 0 at the root */
 	uint32_t *node_id; /* stable id of the scene node it comes from */
-	uint32_t *prim_of; /* primitive index of a leaf, BC_NONE for ops */
 	float *roi;        /* 2 per slot: r-, r+ (paper eq. 13-16) */
 	/* Per primitive. */
 	uint32_t *prim_slot; /* slot of primitive k */
@@ -733,6 +737,27 @@ static inline bool bc_lin_is_leaf(const struct bc_lin *l, uint32_t slot)
 static inline uint32_t bc_lin_type(const struct bc_lin *l, uint32_t slot)
 {
 	return (l->node[2 * slot] >> BC_WORD_TYPE_SHIFT) & BC_WORD_TYPE_MASK;
+}
+/* Leftmost slot of slot's subtree (the slot itself for a leaf). */
+static inline uint32_t bc_lin_first(const struct bc_lin *l, uint32_t slot)
+{
+	return bc_lin_is_leaf(l, slot) ? slot : l->lead[slot];
+}
+/* Primitive index of leaf slot `slot` (which must be a leaf). */
+static inline uint32_t bc_lin_leaf_prim(const struct bc_lin *l, uint32_t slot)
+{
+	return l->lead[slot];
+}
+/* Primitive index of a leaf slot, BC_NONE for an operator's. */
+static inline uint32_t bc_lin_prim(const struct bc_lin *l, uint32_t slot)
+{
+	return bc_lin_is_leaf(l, slot) ? l->lead[slot] : BC_NONE;
+}
+/* The first primitive of slot's subtree: its primitives are this one and
+ * the (slot - bc_lin_first(l, slot)) / 2 after it. */
+static inline uint32_t bc_lin_first_prim(const struct bc_lin *l, uint32_t slot)
+{
+	return l->lead[bc_lin_first(l, slot)];
 }
 /* Primitive k's world ABV. */
 static inline struct bc_abv bc_lin_abv(const struct bc_lin *l, uint32_t k)
