@@ -385,8 +385,8 @@ static void combine(struct bc_view *v, const struct bc_lin *l,
 static void settle(struct bc_view *v, const struct bc_lin *l, struct entry *top,
                    uint32_t x)
 {
-	if (x != top->slot && l->kills[top->slot] != l->kills[x] &&
-	    !top->missing) {
+	if (x != top->slot &&
+	    bc_lin_kills(l, top->slot) != bc_lin_kills(l, x) && !top->missing) {
 		top->missing = true;
 		v->n = top->start;
 	}

@@ -25,6 +25,7 @@ void bc__lin_free(struct bc_lin *l)
 	bc_free(l->fast);
 	bc_free(l->jump);
 	bc_free(l->kills);
+	bc_free(l->marks);
 	bc_free(l->depth);
 	bc_free(l->node_id);
 	bc_free(l->roi);
@@ -74,7 +75,7 @@ static void populate(struct bc_lin *l)
 }
 
 int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nspheres,
-                  uint32_t nops, bool unary)
+                  uint32_t nops, bool unary, bool kills)
 {
 	size_t count = nprims ? 2u * (size_t)nprims - 1u : 0u;
 	/* Room for every operator to be unary (the larger record); nparam
@@ -97,7 +98,14 @@ int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nspheres,
 	l->lead = bc_malloc(count * sizeof(uint32_t));
 	l->fast = bc_malloc(count * sizeof(uint32_t));
 	l->jump = bc_malloc(count * sizeof(uint32_t));
-	l->kills = bc_malloc(count * sizeof(uint32_t));
+	if (kills) {
+		l->kills = bc_malloc(count * sizeof(uint32_t));
+		if (!l->kills) {
+			bc__lin_free(l);
+			return BC_ENOMEM;
+		}
+	}
+	l->marks = bc_calloc((count + 63u) / 64u, sizeof(uint64_t));
 	l->depth = bc_malloc(count * sizeof(uint32_t));
 	l->node_id = bc_malloc(count * sizeof(uint32_t));
 	l->roi = bc_malloc(2 * count * sizeof(float));
@@ -134,7 +142,7 @@ int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nspheres,
 		bc__lin_free(l);
 		return BC_ENOMEM;
 	}
-	if (!l->node || !l->lead || !l->fast || !l->jump || !l->kills ||
+	if (!l->node || !l->lead || !l->fast || !l->jump || !l->marks ||
 	    !l->depth || !l->node_id || !l->roi || !l->prim_slot ||
 	    (!l->abv && !l->sabv) || !l->color || !l->param) {
 		bc__lin_free(l);
@@ -431,7 +439,9 @@ static void propagate_base(struct bc_lin *l, uint32_t s)
 	if (a == BC_NONE) {
 		l->roi[2 * s] = 0.0f;
 		l->roi[2 * s + 1] = 0.0f;
-		l->kills[s] = 0;
+		if (l->kills) {
+			l->kills[s] = 0;
+		}
 		return;
 	}
 	op = (enum bc_op)bc_lin_kind(l, a);
@@ -445,9 +455,11 @@ static void propagate_base(struct bc_lin *l, uint32_t s)
 	/* An intersection's operand, or a difference's right one (present
 	 * alone, it leaves the left missing, which makes the difference
 	 * missing), kills its operator. */
-	l->kills[s] =
-	    l->kills[a] + (bc_op_class(op) == BC_OPCLASS_INTERSECTION ||
-	                   (bc_op_class(op) != BC_OPCLASS_UNION && !left));
+	if (l->kills) {
+		l->kills[s] = l->kills[a] +
+		              (bc_op_class(op) == BC_OPCLASS_INTERSECTION ||
+		               (bc_op_class(op) != BC_OPCLASS_UNION && !left));
+	}
 }
 
 void bc__roi_operand(enum bc_op op, float ro, bool left, float *lo, float *hi)

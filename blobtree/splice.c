@@ -78,17 +78,40 @@ static int whole_abvs(struct bc_lin *l, uint32_t cap)
 	return 0;
 }
 
+/* The marks' words for cap slots. */
+static size_t mark_words(uint32_t cap)
+{
+	return ((size_t)cap + 63u) / 64u;
+}
+
+int bc__lin_want_kills(struct bc_tree *t)
+{
+	struct bc_lin *l = &t->lin;
+	if (!t->has_lin || l->kills) {
+		return 0;
+	}
+	/* No intersection or difference so far: every count is 0. */
+	l->kills = bc_calloc(t->lin_cap ? t->lin_cap : 1u, sizeof(uint32_t));
+	return l->kills ? 0 : BC_ENOMEM;
+}
+
 int bc__splice_reserve(struct bc_tree *t, uint32_t count, uint32_t nprims,
-                       uint32_t nparam, bool others)
+                       uint32_t nparam, bool others, bool kills)
 {
 	struct bc_lin *l = &t->lin;
 	if (count > t->lin_cap) {
 		uint32_t c = roomy(t->lin_cap, count);
+		size_t had = mark_words(t->lin_cap);
 		GROW(l->node, c, 2 * sizeof(uint32_t));
 		GROW(l->lead, c, sizeof(uint32_t));
 		GROW(l->fast, c, sizeof(uint32_t));
 		GROW(l->jump, c, sizeof(uint32_t));
-		GROW(l->kills, c, sizeof(uint32_t));
+		if (l->kills) {
+			GROW(l->kills, c, sizeof(uint32_t));
+		}
+		GROW(l->marks, mark_words(c), sizeof(uint64_t));
+		memset(l->marks + had, 0,
+		       (mark_words(c) - had) * sizeof(uint64_t));
 		GROW(l->depth, c, sizeof(uint32_t));
 		GROW(l->node_id, c, sizeof(uint32_t));
 		GROW(l->roi, c, 2 * sizeof(float));
@@ -114,6 +137,12 @@ int bc__splice_reserve(struct bc_tree *t, uint32_t count, uint32_t nprims,
 	}
 	if (others && l->sabv) {
 		int rc = whole_abvs(l, t->lin_kcap);
+		if (rc) {
+			return rc;
+		}
+	}
+	if (kills) {
+		int rc = bc__lin_want_kills(t);
 		if (rc) {
 			return rc;
 		}
@@ -289,7 +318,9 @@ static void apply(struct bc_tree *t, const struct splice *sp)
 	move_tail(l->lead, sizeof(uint32_t), n, &sp->s);
 	move_tail(l->fast, sizeof(uint32_t), n, &sp->s);
 	move_tail(l->jump, sizeof(uint32_t), n, &sp->s);
-	move_tail(l->kills, sizeof(uint32_t), n, &sp->s);
+	if (l->kills) {
+		move_tail(l->kills, sizeof(uint32_t), n, &sp->s);
+	}
 	move_tail(l->depth, sizeof(uint32_t), n, &sp->s);
 	move_tail(l->node_id, sizeof(uint32_t), n, &sp->s);
 	move_tail(l->roi, 2 * sizeof(float), n, &sp->s);
@@ -375,13 +406,19 @@ static bool same_bits(float a, float b)
 	return memcmp(&a, &b, sizeof(a)) == 0;
 }
 
-/* In kills[], during relink(): the slot's ROI and counts must be computed
- * again (kill counts stay far below: at most the tree's depth). */
-#define AGAIN 0x80000000u
-
+/* Marks slot s for relink(): its ROI and counts must be computed again. */
 static void again(struct bc_lin *l, uint32_t s)
 {
-	l->kills[s] |= AGAIN;
+	l->marks[s / 64u] |= 1ull << (s % 64u);
+}
+
+/* Whether slot s was marked (again), and clears the mark. */
+static bool take_mark(struct bc_lin *l, uint32_t s)
+{
+	uint64_t bit = 1ull << (s % 64u);
+	bool marked = (l->marks[s / 64u] & bit) != 0;
+	l->marks[s / 64u] &= ~bit;
+	return marked;
 }
 
 /* First slots of the operators of slots lo..hi (whose operands are there too)
@@ -400,7 +437,7 @@ static void refirst(struct bc_lin *l, uint32_t lo, uint32_t hi)
 /*
  * The subtree of slots [lo, top], whose top's parent is final, from the
  * top down: depth and pointers everywhere (a depth changed), ROIs and
- * counts where marked AGAIN (the top, the new slots [new_lo, new_hi), and
+ * counts where marked (again(): the top, the new slots [new_lo, new_hi), and
  * what the caller marked: slots whose parent or side changed), and below
  * every slot whose ROI or counts came out different, as the full layout
  * computes them (bc__lin_pointers, bc__lin_propagate). ABVs of new
@@ -421,11 +458,12 @@ static bool relink(struct bc_tree *t, uint32_t lo, uint32_t top,
 	bc__lin_pointers_down(l, lo, top);
 	for (uint32_t s = top + 1; s-- > lo;) {
 		float r0, r1;
-		uint32_t kills = l->kills[s], uc, dom;
+		uint32_t kills, uc, dom;
 		bool fresh, changed;
-		if (!(kills & AGAIN)) {
+		if (!take_mark(l, s)) {
 			continue;
 		}
+		kills = bc_lin_kills(l, s);
 		r0 = l->roi[2 * s];
 		r1 = l->roi[2 * s + 1];
 		uc = bc_lin_ucount(l, s);
@@ -434,7 +472,7 @@ static bool relink(struct bc_tree *t, uint32_t lo, uint32_t top,
 		bc__lin_propagate(l, s);
 		changed = !same_bits(r0, l->roi[2 * s]) ||
 		          !same_bits(r1, l->roi[2 * s + 1]) ||
-		          (kills & ~AGAIN) != l->kills[s] ||
+		          kills != bc_lin_kills(l, s) ||
 		          uc != bc_lin_ucount(l, s) || dom != bc_lin_dom(l, s);
 		if (!bc_lin_is_leaf(l, s)) {
 			if (changed) {

@@ -706,6 +706,7 @@ static uint32_t depth_of(const struct bc_tree *t, uint32_t n)
 
 struct subtree_stats {
 	uint32_t nodes, prims, ops, depth, spheres;
+	uint32_t kill_ops; /* intersections and differences */
 };
 
 /*
@@ -746,6 +747,8 @@ static void subtree_stats(const struct bc_tree *t, uint32_t top,
 		}
 		if (t->pool[n].is_op) {
 			st->ops++;
+			st->kill_ops +=
+			    bc__op_kills(t->pool[n].u.op.kind) ? 1u : 0u;
 		} else {
 			st->prims++;
 			st->spheres +=
@@ -1003,18 +1006,33 @@ static bool splices(const struct bc_tree *t, const struct bc_tree *sub)
 	       (!sub || sub->nunary_nodes == 0);
 }
 
+/* Does t's model hold an intersection or a difference? */
+static bool model_kills(const struct bc_tree *t)
+{
+	for (uint32_t n = 0; n < t->npool; n++) {
+		const struct bc__node *nd = &t->pool[n];
+		if (nd->live && nd->is_op && bc__op_kills(nd->u.op.kind)) {
+			return true;
+		}
+	}
+	return false;
+}
+
 /* Layout arrays for nprims primitives (nspheres of them spheres) and nops
- * operators in *fresh, none for a bare tree (*fresh zeroed). Returns 0 or
+ * operators in *fresh, none for a bare tree (*fresh zeroed); kill counts
+ * where t's model (nodes about to go included) or a subtree about to come
+ * (sub_kills) has an intersection or a difference. Returns 0 or
  * BC_ENOMEM. */
 static int lin_alloc(const struct bc_tree *t, struct bc_lin *fresh,
                      uint32_t nprims, uint32_t nspheres, uint32_t nops,
-                     bool unary)
+                     bool unary, bool sub_kills)
 {
 	if (t->bare) {
 		memset(fresh, 0, sizeof(*fresh));
 		return 0;
 	}
-	return bc__lin_alloc(fresh, nprims, nspheres, nops, unary);
+	return bc__lin_alloc(fresh, nprims, nspheres, nops, unary,
+	                     sub_kills || model_kills(t));
 }
 
 /* Vec4s of the records of sub's primitives and binary operators (a
@@ -1273,7 +1291,7 @@ int bc_tree_end(struct bc_tree *t, struct bc_errinfo *ei)
 		return rc;
 	}
 	if ((rc = lin_alloc(t, &fresh, t->nprims, t->nspheres, t->nops,
-	                    t->nunary_nodes > 0))) {
+	                    t->nunary_nodes > 0, false))) {
 		return bc_errinfo_set(ei, rc, "tree: %s", bc_strerror(rc));
 	}
 	t->building = false;
@@ -1520,6 +1538,9 @@ int bc_tree_set_op(struct bc_tree *t, uint32_t id, const struct bc_op_data *op,
 	if ((rc = bc_op_validate(&o, ei))) {
 		return rc;
 	}
+	if (bc__op_kills(o.kind) && (rc = bc__lin_want_kills(t))) {
+		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
+	}
 	t->pool[n].u.op = o;
 	if (!t->has_lin) {
 		t->dirty.edits++;
@@ -1731,13 +1752,14 @@ static int prepare_graft(struct bc_tree *t, const struct bc_tree *sub,
 		                      BC_TREE_MAX_NODES);
 	}
 	if (fresh) {
-		rc = lin_alloc(t, fresh, (uint32_t)prims, (uint32_t)spheres,
-		               (uint32_t)ops,
-		               t->nunary_nodes + sub->nunary_nodes > 0);
+		rc = lin_alloc(
+		    t, fresh, (uint32_t)prims, (uint32_t)spheres, (uint32_t)ops,
+		    t->nunary_nodes + sub->nunary_nodes > 0, st.kill_ops > 0);
 	} else if (!t->bare) {
-		rc = bc__splice_reserve(
-		    t, (uint32_t)(2u * prims - 1u), (uint32_t)prims,
-		    t->lin.nparam + tree_recs(sub), st.spheres < st.prims);
+		rc = bc__splice_reserve(t, (uint32_t)(2u * prims - 1u),
+		                        (uint32_t)prims,
+		                        t->lin.nparam + tree_recs(sub),
+		                        st.spheres<st.prims, st.kill_ops> 0);
 	}
 	if (rc) {
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
@@ -1907,7 +1929,7 @@ int bc_tree_remove(struct bc_tree *t, uint32_t id, struct bc_errinfo *ei)
 	if (p != BC_NONE && (rc = lin_alloc(t, &fresh, t->nprims - st.prims,
 	                                    t->nspheres - st.spheres,
 	                                    t->nops - st.ops - collapse,
-	                                    t->nunary_nodes > 0))) {
+	                                    t->nunary_nodes > 0, false))) {
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
 	}
 	bc__names_drop_subtree(t, n);
@@ -2041,7 +2063,7 @@ int bc_tree_relayout(struct bc_tree *t, struct bc_errinfo *ei)
 		return 0;
 	}
 	if ((rc = lin_alloc(t, &fresh, t->nprims, t->nspheres, t->nops,
-	                    t->nunary_nodes > 0))) {
+	                    t->nunary_nodes > 0, false))) {
 		return bc_errinfo_set(ei, rc, "%s", bc_strerror(rc));
 	}
 	install_lin(t, &fresh);

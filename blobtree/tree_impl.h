@@ -430,10 +430,17 @@ uint32_t bc__measure(struct bc_tree *t, uint32_t top);
  * alone, struct bc_lin's sabv) and nops operators
  * (binary and unary: room for each to be either); the per-slot arrays of
  * unary and domain nodes (wrap, wrap_top, dom, ucount) only when unary
- * (the tree may have such a node), else they stay NULL.
+ * (the tree may have such a node), else they stay NULL; kill counts only
+ * when kills (the tree may have an intersection or a difference).
  * Returns 0 or BC_ENOMEM (l is then zeroed). */
 int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nspheres,
-                  uint32_t nops, bool unary);
+                  uint32_t nops, bool unary, bool kills);
+/* Whether operator kind op kills an operand (intersection, difference):
+ * a layout with one keeps kill counts (struct bc_lin's kills). */
+static inline bool bc__op_kills(enum bc_op op)
+{
+	return bc_op_class(op) != BC_OPCLASS_UNION;
+}
 /* Stores primitive k's world ABV (l's abv or, for spheres alone, sabv). */
 void bc__lin_set_abv(struct bc_lin *l, uint32_t k, const struct bc_abv *a);
 void bc__lin_free(struct bc_lin *l);
@@ -473,10 +480,15 @@ void bc__lin_update_size(struct bc_lin *l);
 
 /* Room in t->lin's arrays for count slots, nprims primitives and nparam
  * records; others: primitives other than spheres come (a layout of
- * spheres alone keeps whole ABVs from then on). Returns 0 or BC_ENOMEM
- * (the arrays as they were, some maybe larger). */
+ * spheres alone keeps whole ABVs from then on); kills: an intersection or
+ * a difference comes (a layout without kill counts gets them, all 0 so
+ * far). Returns 0 or BC_ENOMEM (the arrays as they were, some maybe
+ * larger). */
 int bc__splice_reserve(struct bc_tree *t, uint32_t count, uint32_t nprims,
-                       uint32_t nparam, bool others);
+                       uint32_t nparam, bool others, bool kills);
+/* Gives t->lin kill counts, all 0 (a layout without them, about to take
+ * an intersection or a difference). Returns 0 or BC_ENOMEM. */
+int bc__lin_want_kills(struct bc_tree *t);
 /* Pool node m, with px primitives, records of rx vec4 in all and no unary
  * node, was just linked under a binary operator: splices it into t->lin
  * (room reserved). Returns whether the box must be measured again. */

@@ -191,7 +191,7 @@ static void fill_topo(const struct bc_lin *l, uint32_t lo, uint32_t hi,
 		out[0] = bc_lin_first(l, s);
 		out[1] = l->fast[s];
 		out[2] = l->jump[s];
-		out[3] = l->kills[s];
+		out[3] = bc_lin_kills(l, s);
 	}
 }
 

@@ -101,8 +101,9 @@ static void layout_follows_the_paper(void)
 	CHECK(l->roi[2 * 4] == 0.0f && l->roi[2 * 4 + 1] == 0.3f);
 	/* ABV of D is its sphere grown by r+ = 0.3. */
 	CHECK_NEAR(bc_lin_abv(l, 3).radius, 0.25f + 0.3f, 1e-6f);
-	CHECK_EQ_INT(l->kills[4], 1);
-	CHECK_EQ_INT(l->kills[3], 0);
+	CHECK(l->kills != NULL);
+	CHECK_EQ_INT(bc_lin_kills(l, 4), 1);
+	CHECK_EQ_INT(bc_lin_kills(l, 3), 0);
 	bc_tree_destroy(t);
 }
 
@@ -169,7 +170,12 @@ static int lin_diff(const struct bc_lin *a, const struct bc_lin *b)
 	diffs += memcmp(a->lead, b->lead, 4u * a->count) != 0;
 	diffs += memcmp(a->jump, b->jump, 4u * a->count) != 0;
 	diffs += memcmp(a->fast, b->fast, 4u * a->count) != 0;
-	diffs += memcmp(a->kills, b->kills, 4u * a->count) != 0;
+	for (uint32_t s = 0; s < a->count; s++) {
+		if (bc_lin_kills(a, s) != bc_lin_kills(b, s)) {
+			diffs++;
+			break;
+		}
+	}
 	diffs += memcmp(a->node_id, b->node_id, 4u * a->count) != 0;
 	diffs += memcmp(a->roi, b->roi, 8u * a->count) != 0;
 	diffs += memcmp(a->param, b->param, 16u * a->nparam) != 0;
@@ -869,6 +875,77 @@ static void spheres_alone_keep_sphere_abvs(void)
 	bc_tree_destroy(t);
 }
 
+/* A layout whose tree has no intersection or difference keeps no kill
+ * counts (all 0, 8 bytes a primitive); an intersection spliced in, an
+ * operator turned into a difference, or one laid out whole gives it
+ * counts equal to a full layout's. Removing the last one leaves the counts
+ * (all 0 again) until a layout whole drops them. */
+static void kill_counts_only_where_an_operand_can_die(void)
+{
+	struct bc_tree *t = bc_tree_create(), *sub = bc_tree_create();
+	struct bc_op_data u = {BC_OP_SMOOTH_UNION, 0.2f, 0.3f};
+	struct bc_op_data in = {BC_OP_INTERSECTION, 0.0f, 0.0f};
+	struct bc_prim_data p;
+	const struct bc_lin *l;
+	uint32_t cut;
+	REQUIRE(t && sub);
+	bc_tree_begin(t);
+	REQUIRE(bc_tree_push_op(t, 1, &u, NULL) == 0);
+	REQUIRE(bc_tree_push_op(t, 2, &u, NULL) == 0);
+	for (uint32_t i = 0; i < 20; i++) {
+		sphere(&p, 0.3f, 0.2f * (float)i);
+		REQUIRE(bc_tree_put_prim(t, 10 + i, &p, NULL) == 0);
+	}
+	REQUIRE(bc_tree_pop_op(t, NULL) == 0);
+	sphere(&p, 0.4f, 1.0f);
+	REQUIRE(bc_tree_put_prim(t, 3, &p, NULL) == 0);
+	REQUIRE(bc_tree_pop_op(t, NULL) == 0);
+	REQUIRE(bc_tree_end(t, NULL) == 0);
+	l = bc_tree_lin(t);
+	CHECK(l->kills == NULL);
+	for (uint32_t s = 0; s < l->count; s++) {
+		CHECK_EQ_INT(bc_lin_kills(l, s), 0);
+	}
+	/* An intersection of two spheres spliced in at the union's front. */
+	bc_tree_begin(sub);
+	REQUIRE(bc_tree_push_op(sub, 0, &in, NULL) == 0);
+	sphere(&p, 0.5f, -1.0f);
+	REQUIRE(bc_tree_put_prim(sub, 0, &p, NULL) == 0);
+	sphere(&p, 0.5f, -0.6f);
+	REQUIRE(bc_tree_put_prim(sub, 0, &p, NULL) == 0);
+	REQUIRE(bc_tree_pop_op(sub, NULL) == 0);
+	REQUIRE(bc_tree_end(sub, NULL) == 0);
+	REQUIRE(bc_tree_insert(t, 1, 0, sub, NULL) == 0);
+	l = bc_tree_lin(t);
+	CHECK(l->kills != NULL);
+	CHECK_EQ_INT(differs_from_a_copy(t), 0);
+	cut = bc_tree_child(t, 1, 0);
+	CHECK_EQ_INT(bc_lin_kills(l, bc_tree_slot(t, cut) - 1), 1);
+	CHECK_EQ_INT(bc_lin_kills(l, bc_tree_slot(t, cut)), 0);
+	/* Gone again: the counts stay, all 0, until a whole layout. */
+	REQUIRE(bc_tree_remove(t, cut, NULL) == 0);
+	l = bc_tree_lin(t);
+	CHECK(l->kills != NULL);
+	CHECK_EQ_INT(differs_from_a_copy(t), 0);
+	REQUIRE(bc_tree_relayout(t, NULL) == 0);
+	CHECK(bc_tree_lin(t)->kills == NULL);
+	/* The inner union made a difference by an operator edit. */
+	{
+		struct bc_op_data d = {BC_OP_SMOOTH_DIFFERENCE, 0.1f, 0.15f};
+		uint32_t top;
+		REQUIRE(bc_tree_set_op(t, 2, &d, NULL) == 0);
+		l = bc_tree_lin(t);
+		CHECK(l->kills != NULL);
+		CHECK_EQ_INT(differs_from_a_copy(t), 0);
+		/* Its right operand (the last sphere) dies with it. */
+		top = bc_tree_slot(t, 2);
+		CHECK_EQ_INT(bc_lin_kills(l, top - 1), 1);
+		CHECK_EQ_INT(bc_lin_kills(l, top), 0);
+	}
+	bc_tree_destroy(sub);
+	bc_tree_destroy(t);
+}
+
 /* A primitive has no children, whatever its data: an operator's children
  * share the room of a primitive's data in a pool node (tree_impl.h), so
  * a coloured primitive, whose colour floats lie where an operator's child
@@ -948,6 +1025,8 @@ static const struct bc_test tests[] = {
     {"prim_data_kept_through_edits", prim_data_kept_through_edits},
     {"a_sphere_record_is_one_vec4", a_sphere_record_is_one_vec4},
     {"spheres_alone_keep_sphere_abvs", spheres_alone_keep_sphere_abvs},
+    {"kill_counts_only_where_an_operand_can_die",
+     kill_counts_only_where_an_operand_can_die},
     {"primitives_have_no_children", primitives_have_no_children},
 };
 BC_TEST_MAIN(tests)

@@ -636,10 +636,15 @@ struct bc_lin {
 	 * primitive: one array, not two, 8 bytes a primitive). Read it
 	 * through bc_lin_first() and bc_lin_prim(). */
 	uint32_t *lead;
-	uint32_t *fast;    /* paper's fast ancestor: top of the run of same-side
-	                      edges above the slot, BC_NONE at the root */
-	uint32_t *jump;    /* skew-binary jump pointer, BC_NONE at the root */
-	uint32_t *kills;   /* number of operand-killing edges up to the root */
+	uint32_t *fast; /* paper's fast ancestor: top of the run of same-side
+	                   edges above the slot, BC_NONE at the root */
+	uint32_t *jump; /* skew-binary jump pointer, BC_NONE at the root */
+	/* Number of operand-killing edges up to the root (the right operand
+	 * of a difference, either of an intersection): NULL in a layout
+	 * whose tree has no intersection or difference, where every count
+	 * is 0 (8 bytes a primitive for the union-only scenes big scenes
+	 * mostly are). Read it through bc_lin_kills(). */
+	uint32_t *kills;
 	uint32_t *depth;   /* binary depth, 0 at the root */
 	uint32_t *node_id; /* stable id of the scene node it comes from */
 	float *roi;        /* 2 per slot: r-, r+ (paper eq. 13-16) */
@@ -688,6 +693,9 @@ struct bc_lin {
 	uint32_t *unary_param; /* record offset, vec4 units */
 	uint32_t *unary_kind;  /* enum bc_op */
 	uint32_t *unary_id;    /* stable id */
+	/* A splice's scratch (blobtree/splice.c): one bit a slot, all clear
+	 * between edits. */
+	uint64_t *marks;
 	/* Lipschitz bound of the whole field relative to its primitives' own
 	 * (1 without twist or bend; docs/scene-format.md): the tracers divide
 	 * every step by it. */
@@ -729,6 +737,10 @@ static inline uint32_t bc_lin_dom(const struct bc_lin *l, uint32_t s)
 static inline uint32_t bc_lin_ucount(const struct bc_lin *l, uint32_t s)
 {
 	return l->ucount ? l->ucount[s] : 0u;
+}
+static inline uint32_t bc_lin_kills(const struct bc_lin *l, uint32_t s)
+{
+	return l->kills ? l->kills[s] : 0u;
 }
 static inline bool bc_lin_is_leaf(const struct bc_lin *l, uint32_t slot)
 {
