@@ -28,7 +28,8 @@ void bc__lin_free(struct bc_lin *l)
 	bc_free(l->marks);
 	bc_free(l->depth);
 	bc_free(l->node_id);
-	bc_free(l->roi);
+	bc_free(l->roi_lo);
+	bc_free(l->roi_hi);
 	bc_free(l->prim_slot);
 	bc_free(l->abv);
 	bc_free(l->sabv);
@@ -63,7 +64,10 @@ static void populate(struct bc_lin *l)
 			bc_populate(per_node[i], n * sizeof(uint32_t));
 		}
 	}
-	bc_populate(l->roi, 2 * n * sizeof(float));
+	if (l->roi_lo) {
+		bc_populate(l->roi_lo, n * sizeof(float));
+	}
+	bc_populate(l->roi_hi, n * sizeof(float));
 	bc_populate(l->prim_slot, np * sizeof(uint32_t));
 	if (l->abv) {
 		bc_populate(l->abv, np * sizeof(struct bc_abv));
@@ -98,6 +102,14 @@ int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nspheres,
 	l->lead = bc_malloc(count * sizeof(uint32_t));
 	l->fast = bc_malloc(count * sizeof(uint32_t));
 	l->jump = bc_malloc(count * sizeof(uint32_t));
+	if (kills || unary) {
+		/* Without either every r- is 0. */
+		l->roi_lo = bc_malloc(count * sizeof(float));
+		if (!l->roi_lo) {
+			bc__lin_free(l);
+			return BC_ENOMEM;
+		}
+	}
 	if (kills) {
 		l->kills = bc_malloc(count * sizeof(uint32_t));
 		if (!l->kills) {
@@ -108,7 +120,7 @@ int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nspheres,
 	l->marks = bc_calloc((count + 63u) / 64u, sizeof(uint64_t));
 	l->depth = bc_malloc(count * sizeof(uint32_t));
 	l->node_id = bc_malloc(count * sizeof(uint32_t));
-	l->roi = bc_malloc(2 * count * sizeof(float));
+	l->roi_hi = bc_malloc(count * sizeof(float));
 	l->prim_slot = bc_malloc(bc__lin_room(nprims) * sizeof(uint32_t));
 	if (sabv) {
 		l->sabv = bc_calloc(bc__lin_room(nprims), sizeof(*l->sabv));
@@ -143,7 +155,7 @@ int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nspheres,
 		return BC_ENOMEM;
 	}
 	if (!l->node || !l->lead || !l->fast || !l->jump || !l->marks ||
-	    !l->depth || !l->node_id || !l->roi || !l->prim_slot ||
+	    !l->depth || !l->node_id || !l->roi_hi || !l->prim_slot ||
 	    (!l->abv && !l->sabv) || !l->color || !l->param) {
 		bc__lin_free(l);
 		return BC_ENOMEM;
@@ -437,8 +449,10 @@ static void propagate_base(struct bc_lin *l, uint32_t s)
 	enum bc_op op;
 	float ro, lo, hi;
 	if (a == BC_NONE) {
-		l->roi[2 * s] = 0.0f;
-		l->roi[2 * s + 1] = 0.0f;
+		if (l->roi_lo) {
+			l->roi_lo[s] = 0.0f;
+		}
+		l->roi_hi[s] = 0.0f;
 		if (l->kills) {
 			l->kills[s] = 0;
 		}
@@ -447,11 +461,13 @@ static void propagate_base(struct bc_lin *l, uint32_t s)
 	op = (enum bc_op)bc_lin_kind(l, a);
 	rec = bc_lin_param(l, a);
 	ro = bc_op_is_smooth(op) ? rec[1] : 0.0f;
-	lo = l->roi[2 * a];
-	hi = l->roi[2 * a + 1];
+	lo = bc_lin_roi_lo(l, a);
+	hi = l->roi_hi[a];
 	bc__roi_operand(op, ro, left, &lo, &hi);
-	l->roi[2 * s] = lo;
-	l->roi[2 * s + 1] = hi;
+	if (l->roi_lo) {
+		l->roi_lo[s] = lo;
+	}
+	l->roi_hi[s] = hi;
 	/* An intersection's operand, or a difference's right one (present
 	 * alone, it leaves the left missing, which makes the difference
 	 * missing), kills its operator. */
@@ -533,8 +549,8 @@ static void propagate(struct bc_lin *l, uint32_t s)
 			}
 		}
 	}
-	lo = l->roi[2 * s];
-	hi = l->roi[2 * s + 1];
+	lo = l->roi_lo[s];
+	hi = l->roi_hi[s];
 	for (uint32_t u = l->wrap_top[s]; u != BC_NONE; u = l->unary_inner[u]) {
 		float *rec = l->param + 4u * (size_t)l->unary_param[u];
 		enum bc_op kind = (enum bc_op)l->unary_kind[u];
@@ -547,8 +563,8 @@ static void propagate(struct bc_lin *l, uint32_t s)
 			d = u;
 		}
 	}
-	l->roi[2 * s] = lo;
-	l->roi[2 * s + 1] = hi;
+	l->roi_lo[s] = lo;
+	l->roi_hi[s] = hi;
 	l->dom[s] = d;
 }
 
@@ -702,7 +718,7 @@ void bc__lin_place_abv(struct bc_tree *t, struct bc_lin *l, uint32_t k,
 	float lo[3], hi[3];
 	uint32_t s = l->prim_slot[k];
 	struct bc_abv a;
-	bc__abv_place(p, l->roi[2 * s + 1], &a);
+	bc__abv_place(p, l->roi_hi[s], &a);
 	for (uint32_t d = bc_lin_dom(l, s); d != BC_NONE; d = l->unary_dom[d]) {
 		float *rec = l->param + 4u * (size_t)l->unary_param[d];
 		float r =

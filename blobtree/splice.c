@@ -90,7 +90,15 @@ int bc__lin_want_kills(struct bc_tree *t)
 	if (!t->has_lin || l->kills) {
 		return 0;
 	}
-	/* No intersection or difference so far: every count is 0. */
+	/* No intersection or difference so far (and no unary node: this
+	 * layout splices): every count and every r- is 0. */
+	if (!l->roi_lo) {
+		l->roi_lo =
+		    bc_calloc(t->lin_cap ? t->lin_cap : 1u, sizeof(float));
+		if (!l->roi_lo) {
+			return BC_ENOMEM;
+		}
+	}
 	l->kills = bc_calloc(t->lin_cap ? t->lin_cap : 1u, sizeof(uint32_t));
 	return l->kills ? 0 : BC_ENOMEM;
 }
@@ -114,7 +122,10 @@ int bc__splice_reserve(struct bc_tree *t, uint32_t count, uint32_t nprims,
 		       (mark_words(c) - had) * sizeof(uint64_t));
 		GROW(l->depth, c, sizeof(uint32_t));
 		GROW(l->node_id, c, sizeof(uint32_t));
-		GROW(l->roi, c, 2 * sizeof(float));
+		if (l->roi_lo) {
+			GROW(l->roi_lo, c, sizeof(float));
+		}
+		GROW(l->roi_hi, c, sizeof(float));
 		if (l->wrap) {
 			/* Kept by a layout whose tree had unary nodes. */
 			GROW(l->wrap, c, sizeof(uint32_t));
@@ -323,7 +334,10 @@ static void apply(struct bc_tree *t, const struct splice *sp)
 	}
 	move_tail(l->depth, sizeof(uint32_t), n, &sp->s);
 	move_tail(l->node_id, sizeof(uint32_t), n, &sp->s);
-	move_tail(l->roi, 2 * sizeof(float), n, &sp->s);
+	if (l->roi_lo) {
+		move_tail(l->roi_lo, sizeof(float), n, &sp->s);
+	}
+	move_tail(l->roi_hi, sizeof(float), n, &sp->s);
 	if (l->wrap) {
 		move_tail(l->wrap, sizeof(uint32_t), n, &sp->s);
 		move_tail(l->wrap_top, sizeof(uint32_t), n, &sp->s);
@@ -464,14 +478,14 @@ static bool relink(struct bc_tree *t, uint32_t lo, uint32_t top,
 			continue;
 		}
 		kills = bc_lin_kills(l, s);
-		r0 = l->roi[2 * s];
-		r1 = l->roi[2 * s + 1];
+		r0 = bc_lin_roi_lo(l, s);
+		r1 = l->roi_hi[s];
 		uc = bc_lin_ucount(l, s);
 		dom = bc_lin_dom(l, s);
 		fresh = s >= new_lo && s < new_hi;
 		bc__lin_propagate(l, s);
-		changed = !same_bits(r0, l->roi[2 * s]) ||
-		          !same_bits(r1, l->roi[2 * s + 1]) ||
+		changed = !same_bits(r0, bc_lin_roi_lo(l, s)) ||
+		          !same_bits(r1, l->roi_hi[s]) ||
 		          kills != bc_lin_kills(l, s) ||
 		          uc != bc_lin_ucount(l, s) || dom != bc_lin_dom(l, s);
 		if (!bc_lin_is_leaf(l, s)) {
@@ -481,7 +495,7 @@ static bool relink(struct bc_tree *t, uint32_t lo, uint32_t top,
 			}
 			continue;
 		}
-		if (fresh || !same_bits(r1, l->roi[2 * s + 1])) {
+		if (fresh || !same_bits(r1, l->roi_hi[s])) {
 			uint32_t k = bc_lin_leaf_prim(l, s);
 			uint32_t n = bc__id_find(t, l->node_id[s]);
 			if (!fresh && touches_box(l, k)) {

@@ -431,7 +431,8 @@ uint32_t bc__measure(struct bc_tree *t, uint32_t top);
  * (binary and unary: room for each to be either); the per-slot arrays of
  * unary and domain nodes (wrap, wrap_top, dom, ucount) only when unary
  * (the tree may have such a node), else they stay NULL; kill counts only
- * when kills (the tree may have an intersection or a difference).
+ * when kills (the tree may have an intersection or a difference), r- only
+ * when kills or unary (without both, every r- is 0).
  * Returns 0 or BC_ENOMEM (l is then zeroed). */
 int bc__lin_alloc(struct bc_lin *l, uint32_t nprims, uint32_t nspheres,
                   uint32_t nops, bool unary, bool kills);
@@ -486,8 +487,9 @@ void bc__lin_update_size(struct bc_lin *l);
  * larger). */
 int bc__splice_reserve(struct bc_tree *t, uint32_t count, uint32_t nprims,
                        uint32_t nparam, bool others, bool kills);
-/* Gives t->lin kill counts, all 0 (a layout without them, about to take
- * an intersection or a difference). Returns 0 or BC_ENOMEM. */
+/* Gives t->lin kill counts and r- (struct bc_lin's kills, roi_lo), all 0
+ * (a layout without them, about to take an intersection or a
+ * difference). Returns 0 or BC_ENOMEM. */
 int bc__lin_want_kills(struct bc_tree *t);
 /* Pool node m, with px primitives, records of rx vec4 in all and no unary
  * node, was just linked under a binary operator: splices it into t->lin

@@ -60,13 +60,17 @@ static const char *lin_differs(const struct bc_tree *ta,
 	/* Kill counts may be kept or not (none for a tree laid out without
 	 * an intersection or a difference): the values must agree. */
 	for (uint32_t s = 0; s < n; s++) {
+		float lo_a = bc_lin_roi_lo(a, s), lo_b = bc_lin_roi_lo(b, s);
 		if (bc_lin_kills(a, s) != bc_lin_kills(b, s)) {
 			return "kills";
 		}
+		if (!same(&lo_a, &lo_b, sizeof(lo_a))) {
+			return "ROIs (r-)";
+		}
 	}
 	if (!same(a->node_id, b->node_id, n * 4) ||
-	    !same(a->roi, b->roi, 2 * n * sizeof(float))) {
-		return "ids, primitive indices or ROIs";
+	    !same(a->roi_hi, b->roi_hi, n * sizeof(float))) {
+		return "ids or ROIs (r+)";
 	}
 	/* A layout may keep these arrays or not (none for a tree that had no
 	 * unary node when it was laid out): the values must agree. */

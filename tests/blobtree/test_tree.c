@@ -96,9 +96,9 @@ static void layout_follows_the_paper(void)
 	CHECK(bc_lin_param(l, 0)[0] == -1.0f && bc_lin_param(l, 0)[3] == 0.5f);
 	/* ROIs (eq. 13-16): root [0,0]; under the sharp union [0,0]; the
 	 * difference's left child [min(0,-ro), 0], right [-0, max(0, ro)]. */
-	CHECK(l->roi[2 * 6] == 0.0f && l->roi[2 * 6 + 1] == 0.0f);
-	CHECK(l->roi[2 * 3] == -0.3f && l->roi[2 * 3 + 1] == 0.0f);
-	CHECK(l->roi[2 * 4] == 0.0f && l->roi[2 * 4 + 1] == 0.3f);
+	CHECK(bc_lin_roi_lo(l, 6) == 0.0f && l->roi_hi[6] == 0.0f);
+	CHECK(bc_lin_roi_lo(l, 3) == -0.3f && l->roi_hi[3] == 0.0f);
+	CHECK(bc_lin_roi_lo(l, 4) == 0.0f && l->roi_hi[4] == 0.3f);
 	/* ABV of D is its sphere grown by r+ = 0.3. */
 	CHECK_NEAR(bc_lin_abv(l, 3).radius, 0.25f + 0.3f, 1e-6f);
 	CHECK(l->kills != NULL);
@@ -171,13 +171,15 @@ static int lin_diff(const struct bc_lin *a, const struct bc_lin *b)
 	diffs += memcmp(a->jump, b->jump, 4u * a->count) != 0;
 	diffs += memcmp(a->fast, b->fast, 4u * a->count) != 0;
 	for (uint32_t s = 0; s < a->count; s++) {
-		if (bc_lin_kills(a, s) != bc_lin_kills(b, s)) {
+		float lo_a = bc_lin_roi_lo(a, s), lo_b = bc_lin_roi_lo(b, s);
+		if (bc_lin_kills(a, s) != bc_lin_kills(b, s) ||
+		    memcmp(&lo_a, &lo_b, sizeof(lo_a)) != 0) {
 			diffs++;
 			break;
 		}
 	}
 	diffs += memcmp(a->node_id, b->node_id, 4u * a->count) != 0;
-	diffs += memcmp(a->roi, b->roi, 8u * a->count) != 0;
+	diffs += memcmp(a->roi_hi, b->roi_hi, 4u * a->count) != 0;
 	diffs += memcmp(a->param, b->param, 16u * a->nparam) != 0;
 	diffs += memcmp(a->color, b->color, 12u * a->nprims) != 0;
 	for (uint32_t k = 0; k < a->nprims; k++) {
@@ -875,11 +877,11 @@ static void spheres_alone_keep_sphere_abvs(void)
 	bc_tree_destroy(t);
 }
 
-/* A layout whose tree has no intersection or difference keeps no kill
- * counts (all 0, 8 bytes a primitive); an intersection spliced in, an
- * operator turned into a difference, or one laid out whole gives it
- * counts equal to a full layout's. Removing the last one leaves the counts
- * (all 0 again) until a layout whole drops them. */
+/* A layout whose tree has no intersection or difference (nor unary node)
+ * keeps no kill counts and no r- (all 0: 16 bytes a primitive); an
+ * intersection spliced in, an operator turned into a difference, or one
+ * laid out whole gives it both, equal to a full layout's. Removing the
+ * last one leaves them (all 0 again) until a layout whole drops them. */
 static void kill_counts_only_where_an_operand_can_die(void)
 {
 	struct bc_tree *t = bc_tree_create(), *sub = bc_tree_create();
@@ -902,7 +904,7 @@ static void kill_counts_only_where_an_operand_can_die(void)
 	REQUIRE(bc_tree_pop_op(t, NULL) == 0);
 	REQUIRE(bc_tree_end(t, NULL) == 0);
 	l = bc_tree_lin(t);
-	CHECK(l->kills == NULL);
+	CHECK(l->kills == NULL && l->roi_lo == NULL);
 	for (uint32_t s = 0; s < l->count; s++) {
 		CHECK_EQ_INT(bc_lin_kills(l, s), 0);
 	}
@@ -917,7 +919,7 @@ static void kill_counts_only_where_an_operand_can_die(void)
 	REQUIRE(bc_tree_end(sub, NULL) == 0);
 	REQUIRE(bc_tree_insert(t, 1, 0, sub, NULL) == 0);
 	l = bc_tree_lin(t);
-	CHECK(l->kills != NULL);
+	CHECK(l->kills != NULL && l->roi_lo != NULL);
 	CHECK_EQ_INT(differs_from_a_copy(t), 0);
 	cut = bc_tree_child(t, 1, 0);
 	CHECK_EQ_INT(bc_lin_kills(l, bc_tree_slot(t, cut) - 1), 1);
@@ -928,14 +930,14 @@ static void kill_counts_only_where_an_operand_can_die(void)
 	CHECK(l->kills != NULL);
 	CHECK_EQ_INT(differs_from_a_copy(t), 0);
 	REQUIRE(bc_tree_relayout(t, NULL) == 0);
-	CHECK(bc_tree_lin(t)->kills == NULL);
+	CHECK(bc_tree_lin(t)->kills == NULL && bc_tree_lin(t)->roi_lo == NULL);
 	/* The inner union made a difference by an operator edit. */
 	{
 		struct bc_op_data d = {BC_OP_SMOOTH_DIFFERENCE, 0.1f, 0.15f};
 		uint32_t top;
 		REQUIRE(bc_tree_set_op(t, 2, &d, NULL) == 0);
 		l = bc_tree_lin(t);
-		CHECK(l->kills != NULL);
+		CHECK(l->kills != NULL && l->roi_lo != NULL);
 		CHECK_EQ_INT(differs_from_a_copy(t), 0);
 		/* Its right operand (the last sphere) dies with it. */
 		top = bc_tree_slot(t, 2);

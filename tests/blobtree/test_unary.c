@@ -429,8 +429,7 @@ static void abvs_contain_every_point_within_the_roi(void)
 				continue;
 			}
 			checked++;
-			if (!(bc_eval_prim(l, k, p) >
-			      l->roi[2 * s + 1] - 1e-5f)) {
+			if (!(bc_eval_prim(l, k, p) > l->roi_hi[s] - 1e-5f)) {
 				bad++;
 			}
 		}

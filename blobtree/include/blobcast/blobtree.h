@@ -647,7 +647,10 @@ struct bc_lin {
 	uint32_t *kills;
 	uint32_t *depth;   /* binary depth, 0 at the root */
 	uint32_t *node_id; /* stable id of the scene node it comes from */
-	float *roi;        /* 2 per slot: r-, r+ (paper eq. 13-16) */
+	/* Per slot: the ROI [r-, r+] (paper eq. 13-16). r- is NULL where
+	 * every r- is 0 (a layout without intersection, difference or unary
+	 * node: 4 bytes a slot); read it through bc_lin_roi_lo(). */
+	float *roi_lo, *roi_hi;
 	/* Per primitive. */
 	uint32_t *prim_slot; /* slot of primitive k */
 	/* World ABV of primitive k: read it through bc_lin_abv(). A layout
@@ -741,6 +744,10 @@ static inline uint32_t bc_lin_ucount(const struct bc_lin *l, uint32_t s)
 static inline uint32_t bc_lin_kills(const struct bc_lin *l, uint32_t s)
 {
 	return l->kills ? l->kills[s] : 0u;
+}
+static inline float bc_lin_roi_lo(const struct bc_lin *l, uint32_t s)
+{
+	return l->roi_lo ? l->roi_lo[s] : 0.0f;
 }
 static inline bool bc_lin_is_leaf(const struct bc_lin *l, uint32_t slot)
 {
