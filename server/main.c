@@ -205,7 +205,7 @@ struct cli {
 		     .hi = 86400,                                              \
 		     .arg = "S",                                               \
 		     .help = "seconds a session's render state (about\n"       \
-		             "275 bytes a primitive) stays once nobody\n"      \
+		             "250 bytes a primitive) stays once nobody\n"      \
 		             "views it, and its scene encoded for\n"           \
 		             "joiners (about 50) once nobody joins,\n"         \
 		             "{range} (default 300); the next picture\n"       \

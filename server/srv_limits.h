@@ -21,8 +21,9 @@
  * JOIN loads it again. */
 #define BC_SRV_MAX_SESSIONS 64u
 /* What a loaded scene's node costs the daemon with a view drawn (its
- * tree, render copy and the tiled tracer's lists: 350 bytes a primitive
- * measured on a million spheres, 366 before a tile's candidates were
+ * tree, render copy and the tiled tracer's lists: 326 bytes a primitive
+ * measured on a million spheres, 350 before a union's layout slot took
+ * 32 bytes, 366 before a tile's candidates were
  * those its cone can see, 370 before 12-byte layout places, 378
  * before the 52-byte pool node, 383
  * before a view's primitive took 16
@@ -43,7 +44,7 @@
 #define BC_SRV_SESSION_SWEEP_MS (60u * 1000u)
 
 /* A session's render copy (its laid-out twin of the scene) and the
- * renderer's lists drawn from it (together about 275 bytes a primitive:
+ * renderer's lists drawn from it (together about 250 bytes a primitive:
  * a million spheres at 1024x768, docs/benchmarks.md) are dropped this long
  * after a member last had a view or asked for a picture (--render-idle); the
  * next picture makes them again (the copy about 0.9 s a million primitives,
