@@ -95,9 +95,15 @@ static void rt_random_prim(struct bc_prim_data *p)
 	p->color[2] = rt_float(0.0f, 1.0f);
 }
 
+/* Whether the binary operators drawn are unions alone (sharp or smooth);
+ * false: any binary kind. */
+static bool rt_unions_only;
+
 static void rt_random_op(struct bc_op_data *op)
 {
-	op->kind = (enum bc_op)(1 + rt_below(BC_OP_FIRST_UNARY - 1));
+	op->kind = rt_unions_only
+	               ? (rt_below(2) ? BC_OP_UNION : BC_OP_SMOOTH_UNION)
+	               : (enum bc_op)(1 + rt_below(BC_OP_FIRST_UNARY - 1));
 	op->blend = bc_op_is_smooth(op->kind) ? rt_float(0.05f, 0.4f) : 0.0f;
 	op->range =
 	    bc_op_is_smooth(op->kind) ? op->blend * rt_float(1.2f, 2.0f) : 0.0f;

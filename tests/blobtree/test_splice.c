@@ -24,9 +24,10 @@ static bool same(const void *a, const void *b, size_t bytes)
 }
 
 /* Where a's layout differs from b's, or NULL: every array, bit for bit,
- * every scalar, and the slot each node id maps to. */
-static const char *lin_differs(const struct bc_tree *ta,
-                               const struct bc_tree *tb)
+ * every scalar, and the slot each node id maps to; box_grown: a's box
+ * need only hold b's (a parameter edit followed it). */
+static const char *lin_differs_box(const struct bc_tree *ta,
+                                   const struct bc_tree *tb, bool box_grown)
 {
 	const struct bc_lin *a = bc_tree_lin(ta), *b = bc_tree_lin(tb);
 	size_t n, k, u;
@@ -43,11 +44,21 @@ static const char *lin_differs(const struct bc_tree *ta,
 	if (a->stack != b->stack || a->nesting != b->nesting) {
 		return "stack or nesting";
 	}
-	if (!same(a->lo, b->lo, sizeof(a->lo)) ||
-	    !same(a->hi, b->hi, sizeof(a->hi)) ||
-	    !same(&a->size, &b->size, sizeof(a->size)) ||
-	    !same(&a->lip, &b->lip, sizeof(a->lip))) {
-		return "box or Lipschitz bound";
+	if (box_grown) {
+		/* A parameter edit only grows the box (a shrinking ABV would
+		 * need every other measured again): it holds the exact one. */
+		for (int i = 0; i < 3; i++) {
+			if (!(a->lo[i] <= b->lo[i] && a->hi[i] >= b->hi[i])) {
+				return "box (not holding the exact one)";
+			}
+		}
+	} else if (!same(a->lo, b->lo, sizeof(a->lo)) ||
+	           !same(a->hi, b->hi, sizeof(a->hi)) ||
+	           !same(&a->size, &b->size, sizeof(a->size))) {
+		return "box";
+	}
+	if (!same(&a->lip, &b->lip, sizeof(a->lip))) {
+		return "Lipschitz bound";
 	}
 	if (!same(a->node, b->node, 2 * n * sizeof(uint32_t))) {
 		return "node words";
@@ -117,6 +128,12 @@ static const char *lin_differs(const struct bc_tree *ta,
 	return NULL;
 }
 
+static const char *lin_differs(const struct bc_tree *ta,
+                               const struct bc_tree *tb)
+{
+	return lin_differs_box(ta, tb, false);
+}
+
 /* Whether bc_tree_counts agrees with a walk over t's nodes. */
 static bool counts_agree(const struct bc_tree *t)
 {
@@ -139,18 +156,24 @@ static bool counts_agree(const struct bc_tree *t)
 }
 
 /* t's layout against a full layout of a copy of t. */
-static const char *differs_from_full(const struct bc_tree *t)
+static const char *differs_from_full_box(const struct bc_tree *t,
+                                         bool box_grown)
 {
 	struct bc_tree *full = bc_tree_create();
 	const char *why = "copy failed";
 	if (full && bc_tree_copy(full, t, NULL) == 0) {
-		why = lin_differs(t, full);
+		why = lin_differs_box(t, full, box_grown);
 	}
 	if (!why && !counts_agree(t)) {
 		why = "colour or float counts";
 	}
 	bc_tree_destroy(full);
 	return why;
+}
+
+static const char *differs_from_full(const struct bc_tree *t)
+{
+	return differs_from_full_box(t, false);
 }
 
 /* A random node id of t (a slot's), the root's excluded when asked. */
@@ -368,6 +391,71 @@ static void random_edits_equal_a_full_layout(void)
 	for (uint64_t seed = 1; seed <= 4; seed++) {
 		run_edits(seed, 0.0f, 2500, 1);
 	}
+}
+
+/* Trees of unions keep no kill counts and no r- (struct bc_lin's kills
+ * and roi_lo); random splices of union subtrees, of subtrees with any
+ * operator (one in sixteen), and operators edited into any kind (one edit
+ * in twenty) bring them in, and every layout, before and after, equals a
+ * full one (its box holding the full one's once an operator edit shrank
+ * an ABV). A whole layout of a tree of unions again drops them. 16 runs
+ * of 100 edits. */
+static void unions_take_kill_counts_when_an_operand_can_die(void)
+{
+	struct bc_tree *t = bc_tree_create(), *sub = bc_tree_create();
+	int without = 0, with = 0;
+	bool grown = false;
+	REQUIRE(t && sub);
+	for (uint64_t seed = 21; seed <= 36; seed++) {
+		rt_unions_only = true;
+		REQUIRE(rt_build(t, seed, 24) == 0);
+		CHECK(bc_tree_lin(t)->kills == NULL &&
+		      bc_tree_lin(t)->roi_lo == NULL);
+		for (int e = 0; e < 100; e++) {
+			const char *why;
+			rt_unions_only = rt_below(16) != 0;
+			if (rt_below(20) == 0) {
+				struct bc_op_data op;
+				uint32_t id = random_operator(t);
+				rt_unions_only = false;
+				rt_random_op(&op);
+				if (id) {
+					REQUIRE(bc_tree_set_op(t, id, &op,
+					                       NULL) == 0);
+					grown = true;
+				}
+			} else {
+				/* A splice measures the box again only
+				 * where an ABV on it changed: one grown by
+				 * an operator edit may stay so. */
+				(void)random_edit(t, sub);
+			}
+			if (bc_tree_lin(t)->kills) {
+				with++;
+			} else {
+				without++;
+			}
+			if ((why = differs_from_full_box(t, grown)) != NULL) {
+				fprintf(stderr, "  seed %llu edit %d: %s\n",
+				        (unsigned long long)seed, e, why);
+				CHECK(why == NULL);
+				break;
+			}
+		}
+		grown = false;
+		rt_unions_only = true;
+		REQUIRE(rt_build(t, seed + 100, 24) == 0);
+		REQUIRE(bc_tree_relayout(t, NULL) == 0);
+		CHECK(bc_tree_lin(t)->kills == NULL &&
+		      bc_tree_lin(t)->roi_lo == NULL);
+	}
+	rt_unions_only = false;
+	/* Both kinds of layout were edited. */
+	CHECK(without > 300 && with > 300);
+	printf("  %d edits of layouts without kill counts, %d with\n", without,
+	       with);
+	bc_tree_destroy(sub);
+	bc_tree_destroy(t);
 }
 
 /* Trees of spheres alone keep sphere ABVs alone through their splices
@@ -1042,6 +1130,8 @@ static void a_bare_wide_operator_finds_its_children(void)
 static const struct bc_test tests[] = {
     {"random_edits_equal_a_full_layout", random_edits_equal_a_full_layout},
     {"spheres_alone_splice_as_laid_out", spheres_alone_splice_as_laid_out},
+    {"unions_take_kill_counts_when_an_operand_can_die",
+     unions_take_kill_counts_when_an_operand_can_die},
     {"unary_subtrees_come_and_go", unary_subtrees_come_and_go},
     {"wide_operator_ends", wide_operator_ends},
     {"many_splices_on_a_wide_operator", many_splices_on_a_wide_operator},
