@@ -230,6 +230,10 @@ const float *bc__albedo(const struct bc_lin *lin, uint32_t prim);
 /* Writes pixel (x, y) for a ray that missed after `evals` evaluations. */
 void bc__put_miss(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
                   uint32_t evals, uint32_t overlaps);
+/* bc__put_miss for the pixels x0 + i of row y whose bit i is set in
+ * bits, outside the debug views (which colour each by its own count). */
+void bc__put_miss_row(const struct bc__frame_ctx *fc, uint32_t x0, uint32_t y,
+                      uint64_t bits);
 /* bc__put_miss, no evaluation taken and overlaps 0, for the pixels of
  * tile [x0, x1) x [y0, y1) (at most BC_CPU_TILE on a side) whose bit
  * (y - y0) * BC_CPU_TILE + (x - x0) is set in mask, a row's colour

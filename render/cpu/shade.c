@@ -57,15 +57,29 @@ static void put_miss_row(const struct bc__frame_ctx *fc, uint32_t x0,
 		bc_shade_miss(bc_frame_view_row(out, y),
 		              bc_frame_view_height(out), c);
 	}
-	for (; bits; bits &= bits - 1u) {
-		size_t i = row + (size_t)__builtin_ctzll(bits);
-		memcpy(out->rgba + 4 * i, c, sizeof(c));
-		if (out->depth) {
-			out->depth[i] = INFINITY;
+	/* Run by run of set bits (a tile row is mostly one): plain loops
+	 * over consecutive pixels, which the compiler makes stores of
+	 * several at once, where a store a bit cost a vector frame of gears
+	 * 8 % of its time. */
+	uint8_t *rgba = out->rgba + 4 * row;
+	float *depth = out->depth ? out->depth + row : NULL;
+	uint32_t *ids = out->ids ? out->ids + row : NULL;
+	while (bits) {
+		uint32_t a = (uint32_t)__builtin_ctzll(bits), b;
+		uint64_t rest = ~bits >> a;
+		b = a + (rest ? (uint32_t)__builtin_ctzll(rest) : 64u - a);
+		for (uint32_t x = a; x < b; x++) {
+			memcpy(rgba + 4 * x, c, sizeof(c));
 		}
-		if (out->ids) {
-			out->ids[i] = 0;
+		if (depth) {
+			for (uint32_t x = a; x < b; x++) {
+				depth[x] = INFINITY;
+			}
 		}
+		if (ids) {
+			memset(ids + a, 0, (b - a) * sizeof(ids[0]));
+		}
+		bits = b < 64u ? bits & ~((2ull << (b - 1u)) - 1u) : 0u;
 	}
 }
 
@@ -73,6 +87,12 @@ void bc__put_miss(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
                   uint32_t evals, uint32_t overlaps)
 {
 	put_miss_row(fc, x, y, 1u, evals, overlaps);
+}
+
+void bc__put_miss_row(const struct bc__frame_ctx *fc, uint32_t x0, uint32_t y,
+                      uint64_t bits)
+{
+	put_miss_row(fc, x0, y, bits, 0, 0);
 }
 
 void bc__put_miss_tile(const struct bc__frame_ctx *fc, uint32_t x0, uint32_t y0,

@@ -676,6 +676,7 @@ uint64_t bc__trace_tile(struct bc__tile_worker *wk,
 		}
 	}
 	for (uint32_t y = y0; y < y1; y++) {
+		uint64_t miss = 0;
 		for (uint32_t x = x0; x < x1; x++) {
 			uint32_t p = (y - y0) * BC_CPU_TILE + (x - x0);
 			if (px.done[p]) {
@@ -684,9 +685,15 @@ uint64_t bc__trace_tile(struct bc__tile_worker *wk,
 			if (px.has_pending[p]) {
 				settle_px(job, wk, &px, p, x, y,
 				          bc__job_dir(job, x, y));
-			} else {
+			} else if (fc->debug != BC_DEBUG_NONE) {
+				/* Coloured by its own counts. */
 				bc__put_miss(fc, x, y, px.evals[p], n);
+			} else {
+				miss |= 1ull << (x - x0);
 			}
+		}
+		if (miss) {
+			bc__put_miss_row(fc, x0, y, miss);
 		}
 	}
 	return px.cut;
