@@ -64,6 +64,20 @@ uint64_t bc__region_mask(const struct bc_render_region *region, uint32_t tx,
 	    !region->tiles[(size_t)ty * bc_render_tiles_x(width) + tx]) {
 		return 0;
 	}
+	if (region->level == 0 && !region->refine) {
+		/* Every pixel of the tile inside the frame (bc_render_level_has
+		 * at level 0 without refinement): a full frame's every tile, so
+		 * no loop over its pixels (2 % of a warm vector frame). */
+		uint32_t w =
+		    width - x0 < BC_CPU_TILE ? width - x0 : BC_CPU_TILE;
+		uint32_t h =
+		    height - y0 < BC_CPU_TILE ? height - y0 : BC_CPU_TILE;
+		uint64_t row = (1ull << w) - 1u;
+		for (uint32_t y = 0; y < h; y++) {
+			mask |= row << (y * BC_CPU_TILE);
+		}
+		return mask;
+	}
 	for (uint32_t y = y0; y < y0 + BC_CPU_TILE && y < height; y++) {
 		for (uint32_t x = x0; x < x0 + BC_CPU_TILE && x < width; x++) {
 			if (bc_render_level_has(x, y, region->level,
