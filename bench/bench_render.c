@@ -25,7 +25,7 @@
  * scenes of a million primitives (see big_main).
  *
  * Usage: bench_render [--size N] [--threads T] [--reps R] [--quick]
- *                     [--frames] [--big]
+ *                     [--frames [--scene TEXT] [--loop N]] [--big]
  *   --size N     frame edge (default 512)
  *   --threads T  threads for both backends (default 1: steadier on a
  *                shared machine; 0 = one per core; CPU time then sums
@@ -34,6 +34,9 @@
  *                --frames: rounds, the median is kept
  *   --quick      only the first three scenes (--frames: four of them)
  *   --frames     cold and warm frames, scalar and vector, 1 and 2 threads
+ *   --scene TEXT --frames of the scenes whose name holds TEXT only
+ *   --loop N     --frames: N warm vector frames a scene, one thread, and
+ *                their CPU time instead of the table (for a profiler)
  *   --big        fig18 1 000 000 spheres and fig16 L6, 1024 by default
  */
 #include <inttypes.h>
@@ -269,7 +272,39 @@ static uint64_t frame_diff(const struct bc_frame *a, const struct bc_frame *b)
  * (cpu 2 / cpu 1) beside it. `same` checks that 1 and 2 threads drew the
  * same pixels, bit for bit, and that the cold frame equals the warm one.
  */
-static int frames_main(uint32_t size, int reps, bool quick)
+/* Frees a scene's renderers and frames (one per configuration), the
+ * cold frame kept and the tree. */
+static void scene_finish(struct bc_renderer **r, struct bc_frame *f,
+                         struct bc_frame *cold, struct bc_tree *t)
+{
+	for (int c = 0; c < CONF_COUNT; c++) {
+		bc_renderer_destroy(r[c]);
+		bc_frame_finish(&f[c]);
+	}
+	bc_frame_finish(cold);
+	bc_tree_destroy(t);
+}
+
+/* --frames --loop: n warm frames of scene s's vector path, one thread
+ * (CONF_AUTO1's renderer r, its view drawn once), by process CPU time:
+ * what a profiler samples (`perf record`) and a change's before and
+ * after compares. */
+static void warm_loop(const char *label, struct bc_renderer *r,
+                      const struct bc_tree *t, const struct bc_camera *cam,
+                      struct bc_frame *f, uint32_t n)
+{
+	double sum = 0.0;
+	for (uint32_t k = 0; k < n; k++) {
+		double w, cpu;
+		frame_timed(r, t, false, cam, f, &w, &cpu, NULL);
+		sum += cpu;
+	}
+	printf("%-26s %s: %u warm frames, %.1f ms of CPU (%.2f ms a frame)\n",
+	       label, confs[CONF_AUTO1].name, n, sum, sum / (double)n);
+}
+
+static int frames_main(uint32_t size, int reps, bool quick, const char *only,
+                       uint32_t loop)
 {
 	const int warm = 3;
 	char model[256], load[64];
@@ -305,7 +340,8 @@ static int frames_main(uint32_t size, int reps, bool quick)
 		struct bc_frame f[CONF_COUNT] = {{0}}, cold = {0};
 		double med[CONF_COUNT][5];
 		uint64_t diff_thr = 0, diff_cold = 0;
-		if (!scenes[s].frames || (quick && scenes[s].frames < 2)) {
+		if (!scenes[s].frames || (quick && scenes[s].frames < 2) ||
+		    (only && !strstr(scenes[s].label, only))) {
 			continue;
 		}
 		t = bc_tree_create();
@@ -337,6 +373,12 @@ static int frames_main(uint32_t size, int reps, bool quick)
 			}
 			frame_timed(r[c], t, false, &cam, &f[c], &w, &cpu,
 			            NULL);
+		}
+		if (loop) {
+			warm_loop(scenes[s].label, r[CONF_AUTO1], t, &cam,
+			          &f[CONF_AUTO1], loop);
+			scene_finish(r, f, &cold, t);
+			continue; /* no table */
 		}
 		for (int i = 0; i < reps; i++) {
 			for (int c = 0; c < CONF_COUNT; c++) {
@@ -400,12 +442,7 @@ static int frames_main(uint32_t size, int reps, bool quick)
 		       "", diff_thr ? "DIFFER" : "yes",
 		       diff_cold ? "DIFFER" : "yes");
 		fflush(stdout);
-		for (int c = 0; c < CONF_COUNT; c++) {
-			bc_renderer_destroy(r[c]);
-			bc_frame_finish(&f[c]);
-		}
-		bc_frame_finish(&cold);
-		bc_tree_destroy(t);
+		scene_finish(r, f, &cold, t);
 		if (diff_thr || diff_cold) {
 			fprintf(stderr, "bench_render: %s: frames differ\n",
 			        scenes[s].label);
@@ -524,6 +561,8 @@ int main(int argc, char **argv)
 	double tiled256 = 0.0, tiled4096 = 0.0;
 	uint32_t nreps = 3;
 	bool quick = false, frames = false, big = false;
+	const char *only = NULL;
+	uint32_t loop = 0;
 	const struct bc_opt opts_table[] = {
 	    {.name = "size",
 	     .kind = BC_OPT_U32,
@@ -556,6 +595,20 @@ int main(int argc, char **argv)
 	     .dst = &frames,
 	     .help = "cold and warm frames of tiled, simd off and auto, 1 "
 	             "and 2 threads (the median of R rounds)"},
+	    {.name = "scene",
+	     .kind = BC_OPT_STRING,
+	     .dst = &only,
+	     .arg = "TEXT",
+	     .help = "--frames: only the scenes whose name holds TEXT "
+	             "(\"gears\", \"4096\")"},
+	    {.name = "loop",
+	     .kind = BC_OPT_U32,
+	     .dst = &loop,
+	     .hi = 100000,
+	     .arg = "N",
+	     .help = "--frames: instead of the table, N warm frames of "
+	             "each scene's vector path, one thread, and their CPU "
+	             "time (for a profiler; default 0: the table)"},
 	    {.name = "big",
 	     .kind = BC_OPT_FLAG,
 	     .dst = &big,
@@ -580,7 +633,7 @@ int main(int argc, char **argv)
 		                reps);
 	}
 	if (frames) {
-		return frames_main(size, reps, quick);
+		return frames_main(size, reps, quick, only, loop);
 	}
 	if (quick) {
 		nscenes = 3;
