@@ -286,7 +286,12 @@ static inline vf vtransition(vf x, float beta, float six_den)
  * products with their reciprocals here (a smooth operator divided five
  * times per lane; now once, by the lane's own closing blend), which moves
  * the value by a rounding at most: the vector field is the scalar one
- * within the kernels' rounding, not bit for bit (test_simd). */
+ * within the kernels' rounding, not bit for bit (test_simd). Where no lane
+ * lies within the blend range of both operands the blend is the sharp
+ * operator in every lane (the final select would pick it), and its
+ * arithmetic, a division among it, is skipped: most operator
+ * instructions of a tile's list combine operands far apart, as the
+ * scalar bc_op_eval's early return finds per ray. */
 static inline vf op_field(uint32_t kind, float blend, float range, vf f0, vf f1)
 {
 	float den = 6.0f * range - blend;
@@ -321,6 +326,9 @@ static inline vf op_field(uint32_t kind, float blend, float range, vf f0, vf f1)
 	six_den = 6.0f / den;
 	if (kind == BC_OP_SMOOTH_UNION) {
 		in = mand(vle(f0, r), vle(f1, r));
+		if (!mtobits(in)) {
+			return sharp;
+		}
 		g = vsub(sharp, vblend_amount_k(f0, f1, inv_beta, beta_6));
 		b = vtransition(g, blend, six_den);
 		return vsel(in, vsub(sharp, vblend_amount(f0, f1, b)), sharp);
@@ -328,6 +336,9 @@ static inline vf op_field(uint32_t kind, float blend, float range, vf f0, vf f1)
 	/* Intersection, and difference as the intersection with -f1: ops.c
 	 * tests |f1| against the range, the same for -f1. */
 	in = mand(vle(vabs(f0), r), vle(vabs(f1), r));
+	if (!mtobits(in)) {
+		return sharp;
+	}
 	g = vadd(sharp, vblend_amount_k(f0, f1, inv_beta, beta_6));
 	b = vtransition(vabs(g), blend, six_den);
 	return vsel(in, vadd(sharp, vblend_amount(f0, f1, b)), sharp);
