@@ -1539,11 +1539,11 @@ static void phase_lists(void *arg, uint32_t thread)
 		    (tf->region->tiles && !tf->region->tiles[tile])) {
 			continue;
 		}
-		tf->kern.dirs(&tf->fc->vr, tx * BC_CPU_TILE, ty * BC_CPU_TILE,
-		              &rays);
 		b->list_n[tile] = 0;
 		if (b->cand_end[tile] > b->cand_off[tile]) {
 			uint32_t n;
+			tf->kern.dirs(&tf->fc->vr, tx * BC_CPU_TILE,
+			              ty * BC_CPU_TILE, &rays);
 			/* Tiles without candidates, often most of a frame's
 			 * background, need no quarter cones. */
 			if (!(b->state[tile] & TILE_CONES)) {
@@ -1662,9 +1662,14 @@ static void phase_trace(void *arg, uint32_t thread)
 			skip_tile(tf, tx, ty, mask);
 			continue;
 		}
-		tf->kern.dirs(&fc->vr, tx * BC_CPU_TILE, ty * BC_CPU_TILE,
-		              &rays);
-		tile_dirs(&rays, dirs);
+		if (tf->b->list_n[tile] > 0) {
+			/* A tile without a list misses everywhere
+			 * (bc__trace_tile) and needs no rays: most of a
+			 * small scene's frame. */
+			tf->kern.dirs(&fc->vr, tx * BC_CPU_TILE,
+			              ty * BC_CPU_TILE, &rays);
+			tile_dirs(&rays, dirs);
+		}
 		job = (struct bc__tile_job){
 		    .fc = fc,
 		    .dirs = dirs,
