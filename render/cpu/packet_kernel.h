@@ -474,8 +474,12 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
 	/* The value the state machine is fed (trace.c's eval_at): the field
 	 * over the tree's own Lipschitz bound (above 1 under twist and
 	 * bend), as bc__trace divides it. */
-	vn = vdiv(vmul(vload(ln->v), vset1(1.0f / BC_CPU_LIPSCHITZ)),
-	          vset1(lin->lip));
+	vn = vmul(vload(ln->v), vset1(1.0f / BC_CPU_LIPSCHITZ));
+	if (lin->lip != 1.0f) {
+		/* x / 1 is x: a division (the slowest instruction here)
+		 * only where a twist or bend raised the bound. */
+		vn = vdiv(vn, vset1(lin->lip));
+	}
 	q = vload(ln->t);
 	evals = vload(ln->mevals);
 	/* A lane whose bound has no further sample goes back to the state
@@ -521,17 +525,27 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
 	/* Else a marching lane's new point (q, vn) (march_head): within the
 	 * hit epsilon a refinement starts (cap, limit, the first probe); else
 	 * an ordinary step, not at t1. */
-	eps = vdiv(vmax(vmul(vset1(st->eps_per_t), q), vset1(st->min_step)),
-	           vset1(lin->lip));
+	eps = vmax(vmul(vset1(st->eps_per_t), q), vset1(st->min_step));
+	if (lin->lip != 1.0f) {
+		eps = vdiv(eps, vset1(lin->lip));
+	}
 	{
 		vm plain_lane = mand(mand(mm, mnot(relax)), vge(vn, zero));
 		vm within = vlt(vn, eps);
 		cap = vadd(
 		    q, vmul(vset1(64.0f * BC_CPU_LIPSCHITZ * lin->lip), eps));
 		limit = vmin(cap, t1);
-		probe_m = refine_probe(q, vn, t, fv, mfrombits(UINT32_MAX),
-		                       limit, st->min_step, &ok_m);
-		m_refine = mand(mand(plain_lane, within), ok_m);
+		vm start = mand(plain_lane, within);
+		/* The probes (a division each) only where a lane takes one:
+		 * most rounds start no refinement and continue none. */
+		probe_m = zero;
+		ok_m = mfrombits(0);
+		if (mtobits(start)) {
+			probe_m =
+			    refine_probe(q, vn, t, fv, mfrombits(UINT32_MAX),
+			                 limit, st->min_step, &ok_m);
+		}
+		m_refine = mand(start, ok_m);
 		m_fast = mand(mand(plain_lane, mnot(within)), vlt(q, t1));
 		next = vmin(
 		    vadd(q, vmax(vmul(om, vn), vmul(vset1(1.0e-6f), q))), t1);
@@ -542,8 +556,12 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
 	 * while fewer than 8 rounds are done. A value not below v goes to
 	 * the golden section: the state machine's. */
 	ri = vadd(vload(ln->ri), one);
-	probe_r = refine_probe(q, vn, t, fv, mfrombits(0), vload(ln->rlimit),
-	                       st->min_step, &ok_r);
+	probe_r = zero;
+	ok_r = mfrombits(0);
+	if (mtobits(rm)) {
+		probe_r = refine_probe(q, vn, t, fv, mfrombits(0),
+		                       vload(ln->rlimit), st->min_step, &ok_r);
+	}
 	r_go = mand(mand(mand(rm, vge(vn, zero)), vlt(vn, fv)),
 	            mand(vlt(ri, vset1(8.0f)), ok_r));
 
