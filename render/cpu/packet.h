@@ -113,14 +113,18 @@ typedef void (*bc__pk_eval_fn)(const struct bc_view *v,
  * each only with another sample within mbudget (mevals counts the samples
  * taken here since the state machine saw the lane, whatever its kinds).
  * t[] is then the next sample, and the masks say each lane's kind now.
- * Returns the active lanes it did not step (v[] holds their field, not
- * yet divided by the Lipschitz bound); their state is as it was, in the
- * arrays of their kind. */
+ * A bisecting lane whose bisection ends at this value (the same tests,
+ * with that sample within mbudget) is finished here as the state machine
+ * would finish it, a hit: it leaves `bisect` for *hit, t[] holds the
+ * hit's depth (packet.c's bisect_head, bit for bit) and mevals counts
+ * the value. Returns the active lanes it neither stepped nor finished
+ * (v[] holds their field, not yet divided by the Lipschitz bound); their
+ * state is as it was, in the arrays of their kind. */
 typedef uint32_t (*bc__pk_march_fn)(const struct bc_view *v,
                                     const struct bc_lin *lin,
                                     struct bc__pk_lanes *ln, uint32_t active,
                                     uint32_t *march, uint32_t *bisect,
-                                    uint32_t *refine,
+                                    uint32_t *refine, uint32_t *hit,
                                     const struct bc__pk_steps *st);
 
 /* A tile's hits to shade, hit i in element i of each array: in, the hit
@@ -172,14 +176,15 @@ struct bc__pk_kernel bc__pk_kernel_for(enum bc_simd simd);
 uint32_t bc__pk_march_avx2(const struct bc_view *v, const struct bc_lin *lin,
                            struct bc__pk_lanes *ln, uint32_t active,
                            uint32_t *march, uint32_t *bisect, uint32_t *refine,
-                           const struct bc__pk_steps *st);
+                           uint32_t *hit, const struct bc__pk_steps *st);
 void bc__pk_hits_avx2(const struct bc_view *v, const struct bc_lin *lin,
                       struct bc__pk_lanes *ln, struct bc__pk_shade *sh,
                       uint32_t n);
 uint32_t bc__pk_march_avx512(const struct bc_view *v, const struct bc_lin *lin,
                              struct bc__pk_lanes *ln, uint32_t active,
                              uint32_t *march, uint32_t *bisect,
-                             uint32_t *refine, const struct bc__pk_steps *st);
+                             uint32_t *refine, uint32_t *hit,
+                             const struct bc__pk_steps *st);
 void bc__pk_hits_avx512(const struct bc_view *v, const struct bc_lin *lin,
                         struct bc__pk_lanes *ln, struct bc__pk_shade *sh,
                         uint32_t n);

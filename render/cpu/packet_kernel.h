@@ -457,17 +457,18 @@ static inline vf refine_probe(vf t, vf v, vf t_prev, vf v_prev, vm first,
 
 uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
                   struct bc__pk_lanes *ln, uint32_t active, uint32_t *marchp,
-                  uint32_t *bisectp, uint32_t *refinep,
+                  uint32_t *bisectp, uint32_t *refinep, uint32_t *hitp,
                   const struct bc__pk_steps *st)
 {
 	uint32_t march = *marchp & active, bisect = *bisectp & active,
-	         refine = *refinep & active, stepped;
+	         refine = *refinep & active, stepped, ended;
 	vf zero = vset1(0.0f), one = vset1(1.0f), vn, q, t, fv, tp, vp, om, t1,
 	   eps, evals, a, fa, b, fb, bi, m_b, m_x, next, plain, cap, limit,
 	   probe_m, probe_r, ri, t_new;
-	vm room, mm, bm, rm, relax, cross, b_go, m_fast, m_refine, r_go,
+	vm room, mm, bm, rm, relax, cross, b_go, b_end, m_fast, m_refine, r_go,
 	    advance, ok_m, ok_r;
 	run(v, lin, ln, active, false);
+	*hitp = 0;
 	if (!(march | bisect | refine)) {
 		return active;
 	}
@@ -507,6 +508,10 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
 		bi = vadd(vload(ln->bi), one);
 		b_go = bisect_opens(mand(bm, vlt(bi, vset1(40.0f))), a, b,
 		                    st->refine_tol, &m_b);
+		/* The others end here: bisect_head's last interpolation,
+		 * a division, where a lane takes it. */
+		b_end = mand(bm, mnot(b_go));
+		ended = mtobits(b_end);
 	}
 
 	/* A marching lane (S_STEP, S_STEP2, or a start lane holding the state
@@ -566,7 +571,7 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
 	            mand(vlt(ri, vset1(8.0f)), ok_r));
 
 	stepped = mtobits(b_go) | mtobits(relax) | mtobits(cross) |
-	          mtobits(m_refine) | mtobits(m_fast) | mtobits(r_go);
+	          mtobits(m_refine) | mtobits(m_fast) | mtobits(r_go) | ended;
 	if (!stepped) {
 		return active;
 	}
@@ -591,11 +596,22 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
 	t_new = vsel(m_fast, next, vsel(relax, plain, q));
 	t_new = vsel(m_refine, probe_m, vsel(r_go, probe_r, t_new));
 	t_new = vsel(b_go, m_b, vsel(cross, m_x, t_new));
+	if (ended) {
+		/* fa - fb > 0 and finite: the chord's zero, clamped into
+		 * [a, b]; else a (in the machine's order of operations). */
+		vf den = vsub(fa, fb);
+		vf th = vadd(a, vdiv(vmul(vsub(b, a), fa), den));
+		th = vsel(vlt(th, a), a, vsel(vgt(th, b), b, th));
+		th = vsel(mand(vgt(den, zero), vlt(den, vset1(INFINITY))), th,
+		          a);
+		t_new = vsel(b_end, th, t_new);
+	}
 	vstore(ln->t, t_new);
 	vstore(ln->mevals, vadd(evals, vsel(mfrombits(stepped), one, zero)));
-	/* The lanes that changed kind. */
+	/* The lanes that changed kind, and those that hit. */
 	*marchp = (*marchp & ~(mtobits(cross) | mtobits(m_refine)));
-	*bisectp = *bisectp | mtobits(cross);
+	*bisectp = (*bisectp | mtobits(cross)) & ~ended;
+	*hitp = ended;
 	*refinep = (*refinep & ~mtobits(cross)) | mtobits(m_refine);
 	return active & ~stepped;
 }

@@ -408,6 +408,29 @@ static void shade_packets(struct bc__tile_worker *wk,
 	}
 }
 
+/* A lane's ray r, traced to its result, for pixel p: its evaluations
+ * counted, a hit queued for shading (or cut where the bound leaves no
+ * room for the shading's samples), a ray that reached the range's end
+ * near a surface left pending for the next range. */
+static inline void lane_done(const struct bc__frame_ctx *fc,
+                             struct bc__tile_worker *wk, struct tile_px *px,
+                             uint32_t p, const struct bc__pk_ray *r,
+                             uint8_t *hit_px, float *hit_t, uint32_t *nh)
+{
+	px->evals[p] += r->evals;
+	wk->evals += r->evals;
+	px->has_pending[p] = r->res == BC__TRACE_NEAR_END;
+	px->pending[p] = r->t_hit;
+	if (r->res == BC__TRACE_HIT && !within(fc, px->evals[p], SHADE_EVALS)) {
+		cut(px, p);
+	} else if (r->res == BC__TRACE_HIT) {
+		hit_px[*nh] = (uint8_t)p;
+		hit_t[(*nh)++] = r->t_hit;
+		px->done[p] = true;
+		px->left--;
+	}
+}
+
 /* Traces the tile's pixels that are still open through [z_begin, z_end]
  * in the range's view, in packets of kernel k's width, and shades those
  * that hit. */
@@ -420,7 +443,7 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 	uint8_t queue[BC_CPU_TILE * BC_CPU_TILE];
 	uint8_t hit_px[BC_CPU_TILE * BC_CPU_TILE];
 	float hit_t[BC_CPU_TILE * BC_CPU_TILE];
-	uint32_t nq = 0, head = 0, nh = 0, active = 0, slow;
+	uint32_t nq = 0, head = 0, nh = 0, active = 0, slow, ended;
 	uint32_t kinds[LANE_KINDS] = {0}, /* the lanes of each kind */
 	    lanes = k.lanes >= 32 ? UINT32_MAX : (1u << k.lanes) - 1u;
 	const struct bc__pk_steps st = {
@@ -484,9 +507,21 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 		if (!active) {
 			break;
 		}
-		slow =
-		    k.march(&wk->view, fc->lin, &ln, active, &kinds[LANE_MARCH],
-		            &kinds[LANE_BISECT], &kinds[LANE_REFINE], &st);
+		slow = k.march(&wk->view, fc->lin, &ln, active,
+		               &kinds[LANE_MARCH], &kinds[LANE_BISECT],
+		               &kinds[LANE_REFINE], &ended, &st);
+		/* Bisections the kernel ended: hits, as the state machine
+		 * would have finished them (from_lanes and a feed spared). */
+		for (uint32_t bits = ended; bits; bits &= bits - 1) {
+			uint32_t i = lowest_bit(bits);
+			struct bc__pk_ray *r = &ray[i];
+			r->evals += (uint32_t)ln.mevals[i];
+			r->res = BC__TRACE_HIT;
+			r->t_hit = ln.t[i];
+			active &= ~(1u << i);
+			lane_done(fc, wk, px, lane_px[i], r, hit_px, hit_t,
+			          &nh);
+		}
 		for (uint32_t bits = slow; bits; bits &= bits - 1) {
 			uint32_t i = lowest_bit(bits), p;
 			struct bc__pk_ray *r = &ray[i];
@@ -524,19 +559,7 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 				continue;
 			}
 			active &= ~(1u << i);
-			px->evals[p] += r->evals;
-			wk->evals += r->evals;
-			px->has_pending[p] = r->res == BC__TRACE_NEAR_END;
-			px->pending[p] = r->t_hit;
-			if (r->res == BC__TRACE_HIT &&
-			    !within(fc, px->evals[p], SHADE_EVALS)) {
-				cut(px, p);
-			} else if (r->res == BC__TRACE_HIT) {
-				hit_px[nh] = (uint8_t)p;
-				hit_t[nh++] = r->t_hit;
-				px->done[p] = true;
-				px->left--;
-			}
+			lane_done(fc, wk, px, p, r, hit_px, hit_t, &nh);
 		}
 	}
 	if (nh > 0) {

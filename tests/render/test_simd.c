@@ -577,10 +577,12 @@ static bool same_lane(const struct bc__pk_lanes *a,
 
 /* The packet kernels take a ray's first value, its ordinary marching
  * steps, the plain step after an overshot relaxed one and its
- * bisection's halvings themselves (packet.h). Lane by lane,
+ * bisection's halvings themselves, and end a bisection with its hit
+ * (packet.h). Lane by lane,
  * what a kernel did must be what the state machine (packet.c) does with
  * the same value, bit for bit: a lane it stepped holds the state the
- * machine reaches and asks for the same next sample; a lane it left is
+ * machine reaches and asks for the same next sample; a lane it ended is
+ * the machine's hit at the same depth; a lane it left is
  * untouched, and is one the machine ends or moves to another kind of
  * state (or that had no sample left in its budget). Rays of a unit sphere
  * seen from z = -5, in every kind of state, at every budget. */
@@ -616,6 +618,7 @@ static void test_kernel_steps_match_state_machine(void)
 		                                    fc.pix_angle,
 		                                fc.min_step, fc.refine_tol};
 		uint32_t stepped[K_KINDS] = {0}, left[K_KINDS] = {0};
+		uint32_t finished = 0;
 		uint64_t state = 99 + m;
 		if (!k.march) {
 			continue;
@@ -627,7 +630,7 @@ static void test_kernel_steps_match_state_machine(void)
 			int kind[BC_PK_MAX_LANES];
 			float budget[BC_PK_MAX_LANES];
 			uint32_t active = 0, march = 0, bisect = 0, refine = 0,
-			         slow;
+			         slow, hit;
 			memset(&ln, 0, sizeof(ln));
 			for (uint32_t i = 0; i < k.lanes; i++) {
 				float d[3] = {0.3f * ab_rand(&state),
@@ -697,8 +700,10 @@ static void test_kernel_steps_match_state_machine(void)
 			was_bisect = bisect;
 			was_refine = refine;
 			slow = k.march(&view, l, &ln, active, &march, &bisect,
-			               &refine, &st);
+			               &refine, &hit, &st);
 			CHECK((slow & ~active) == 0);
+			CHECK((hit & ~was_bisect) == 0 && (hit & slow) == 0 &&
+			      (hit & bisect) == 0);
 			for (uint32_t i = 0; i < k.lanes; i++) {
 				struct bc__pk_ray ref = ray[i];
 				float value = ln.v[i] *
@@ -710,6 +715,16 @@ static void test_kernel_steps_match_state_machine(void)
 					continue;
 				}
 				done = bc__pk_ray_feed(&ref, &fc, value);
+				if (hit & bit) {
+					/* A bisection ended: the machine's
+					 * hit, at the same depth. */
+					finished++;
+					CHECK(done && ref.res == BC__TRACE_HIT);
+					CHECK(memcmp(&ln.t[i], &ref.t_hit, 4) ==
+					      0);
+					CHECK(ln.mevals[i] == 1.0f);
+					continue;
+				}
 				if (slow & bit) {
 					left[kind[i]]++;
 					/* Untouched, of the same kind, and not
@@ -722,6 +737,11 @@ static void test_kernel_steps_match_state_machine(void)
 					          (was_bisect & bit) &&
 					      (refine & bit) ==
 					          (was_refine & bit));
+					/* A bisection with a sample left
+					 * in its budget goes on or ends in
+					 * the kernel. */
+					CHECK(kind[i] != K_BISECT ||
+					      budget[i] < 1.5f);
 					CHECK(done || budget[i] < 2.5f ||
 					      (ref.state != BC__PK_STEP &&
 					       ref.state != BC__PK_STEP2 &&
@@ -781,10 +801,13 @@ static void test_kernel_steps_match_state_machine(void)
 		       stepped[K_STEP], left[K_STEP], stepped[K_STEP2],
 		       left[K_STEP2], stepped[K_BISECT], left[K_BISECT],
 		       stepped[K_REFINE], left[K_REFINE]);
-		/* Every kind was met both ways. */
+		/* Every kind was met both ways, and bisections ended. */
 		for (int kd = 0; kd < K_KINDS; kd++) {
 			CHECK(stepped[kd] > 100 && left[kd] > 100);
 		}
+		printf("  %-6s bisections ended in the kernel: %u\n",
+		       modes[m].name, finished);
+		CHECK(finished > 100);
 	}
 	if (widths == 0) {
 		printf("  no packet kernel on this CPU: nothing to compare\n");
