@@ -117,15 +117,16 @@ typedef void (*bc__pk_eval_fn)(const struct bc_view *v,
  * with that sample within mbudget) is finished here as the state machine
  * would finish it, a hit: it leaves `bisect` for *hit, t[] holds the
  * hit's depth (packet.c's bisect_head, bit for bit) and mevals counts
- * the value. Returns the active lanes it neither stepped nor finished
+ * the value. A marching lane whose new point is at the interval's end,
+ * not within the hit epsilon, is the machine's miss: it leaves `march`
+ * for *miss (mevals counting the value). Returns the active lanes it
+ * neither stepped nor finished
  * (v[] holds their field, not yet divided by the Lipschitz bound); their
  * state is as it was, in the arrays of their kind. */
-typedef uint32_t (*bc__pk_march_fn)(const struct bc_view *v,
-                                    const struct bc_lin *lin,
-                                    struct bc__pk_lanes *ln, uint32_t active,
-                                    uint32_t *march, uint32_t *bisect,
-                                    uint32_t *refine, uint32_t *hit,
-                                    const struct bc__pk_steps *st);
+typedef uint32_t (*bc__pk_march_fn)(
+    const struct bc_view *v, const struct bc_lin *lin, struct bc__pk_lanes *ln,
+    uint32_t active, uint32_t *march, uint32_t *bisect, uint32_t *refine,
+    uint32_t *hit, uint32_t *miss, const struct bc__pk_steps *st);
 
 /* A tile's hits to shade, hit i in element i of each array: in, the hit
  * point o and its difference step (bc__put_hit's p and h), the ray
@@ -176,14 +177,15 @@ struct bc__pk_kernel bc__pk_kernel_for(enum bc_simd simd);
 uint32_t bc__pk_march_avx2(const struct bc_view *v, const struct bc_lin *lin,
                            struct bc__pk_lanes *ln, uint32_t active,
                            uint32_t *march, uint32_t *bisect, uint32_t *refine,
-                           uint32_t *hit, const struct bc__pk_steps *st);
+                           uint32_t *hit, uint32_t *miss,
+                           const struct bc__pk_steps *st);
 void bc__pk_hits_avx2(const struct bc_view *v, const struct bc_lin *lin,
                       struct bc__pk_lanes *ln, struct bc__pk_shade *sh,
                       uint32_t n);
 uint32_t bc__pk_march_avx512(const struct bc_view *v, const struct bc_lin *lin,
                              struct bc__pk_lanes *ln, uint32_t active,
                              uint32_t *march, uint32_t *bisect,
-                             uint32_t *refine, uint32_t *hit,
+                             uint32_t *refine, uint32_t *hit, uint32_t *miss,
                              const struct bc__pk_steps *st);
 void bc__pk_hits_avx512(const struct bc_view *v, const struct bc_lin *lin,
                         struct bc__pk_lanes *ln, struct bc__pk_shade *sh,

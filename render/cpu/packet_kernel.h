@@ -458,10 +458,10 @@ static inline vf refine_probe(vf t, vf v, vf t_prev, vf v_prev, vm first,
 uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
                   struct bc__pk_lanes *ln, uint32_t active, uint32_t *marchp,
                   uint32_t *bisectp, uint32_t *refinep, uint32_t *hitp,
-                  const struct bc__pk_steps *st)
+                  uint32_t *missp, const struct bc__pk_steps *st)
 {
 	uint32_t march = *marchp & active, bisect = *bisectp & active,
-	         refine = *refinep & active, stepped, ended;
+	         refine = *refinep & active, stepped, ended, missed;
 	vf zero = vset1(0.0f), one = vset1(1.0f), vn, q, t, fv, tp, vp, om, t1,
 	   eps, evals, a, fa, b, fb, bi, m_b, m_x, next, plain, cap, limit,
 	   probe_m, probe_r, ri, t_new;
@@ -469,6 +469,7 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
 	    advance, ok_m, ok_r;
 	run(v, lin, ln, active, false);
 	*hitp = 0;
+	*missp = 0;
 	if (!(march | bisect | refine)) {
 		return active;
 	}
@@ -552,6 +553,10 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
 		}
 		m_refine = mand(start, ok_m);
 		m_fast = mand(mand(plain_lane, mnot(within)), vlt(q, t1));
+		/* At the interval's end and not near a surface: march_head's
+		 * miss. */
+		missed = mtobits(
+		    mand(mand(plain_lane, mnot(within)), mnot(vlt(q, t1))));
 		next = vmin(
 		    vadd(q, vmax(vmul(om, vn), vmul(vset1(1.0e-6f), q))), t1);
 		plain = vmin(vadd(t, vmax(fv, vmul(vset1(1.0e-6f), t))), t1);
@@ -571,7 +576,8 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
 	            mand(vlt(ri, vset1(8.0f)), ok_r));
 
 	stepped = mtobits(b_go) | mtobits(relax) | mtobits(cross) |
-	          mtobits(m_refine) | mtobits(m_fast) | mtobits(r_go) | ended;
+	          mtobits(m_refine) | mtobits(m_fast) | mtobits(r_go) | ended |
+	          missed;
 	if (!stepped) {
 		return active;
 	}
@@ -609,9 +615,10 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
 	vstore(ln->t, t_new);
 	vstore(ln->mevals, vadd(evals, vsel(mfrombits(stepped), one, zero)));
 	/* The lanes that changed kind, and those that hit. */
-	*marchp = (*marchp & ~(mtobits(cross) | mtobits(m_refine)));
+	*marchp = *marchp & ~(mtobits(cross) | mtobits(m_refine) | missed);
 	*bisectp = (*bisectp | mtobits(cross)) & ~ended;
 	*hitp = ended;
+	*missp = missed;
 	*refinep = (*refinep & ~mtobits(cross)) | mtobits(m_refine);
 	return active & ~stepped;
 }

@@ -443,7 +443,7 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 	uint8_t queue[BC_CPU_TILE * BC_CPU_TILE];
 	uint8_t hit_px[BC_CPU_TILE * BC_CPU_TILE];
 	float hit_t[BC_CPU_TILE * BC_CPU_TILE];
-	uint32_t nq = 0, head = 0, nh = 0, active = 0, slow, ended;
+	uint32_t nq = 0, head = 0, nh = 0, active = 0, slow, ended, missed;
 	uint32_t kinds[LANE_KINDS] = {0}, /* the lanes of each kind */
 	    lanes = k.lanes >= 32 ? UINT32_MAX : (1u << k.lanes) - 1u;
 	const struct bc__pk_steps st = {
@@ -509,15 +509,17 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 		}
 		slow = k.march(&wk->view, fc->lin, &ln, active,
 		               &kinds[LANE_MARCH], &kinds[LANE_BISECT],
-		               &kinds[LANE_REFINE], &ended, &st);
-		/* Bisections the kernel ended: hits, as the state machine
-		 * would have finished them (from_lanes and a feed spared). */
-		for (uint32_t bits = ended; bits; bits &= bits - 1) {
+		               &kinds[LANE_REFINE], &ended, &missed, &st);
+		/* Bisections the kernel ended (hits) and marches that reached
+		 * the range's end (misses), as the state machine would have
+		 * finished them (from_lanes and a feed spared). */
+		for (uint32_t bits = ended | missed; bits; bits &= bits - 1) {
 			uint32_t i = lowest_bit(bits);
 			struct bc__pk_ray *r = &ray[i];
+			bool hit = (ended >> i) & 1u;
 			r->evals += (uint32_t)ln.mevals[i];
-			r->res = BC__TRACE_HIT;
-			r->t_hit = ln.t[i];
+			r->res = hit ? BC__TRACE_HIT : BC__TRACE_MISS;
+			r->t_hit = hit ? ln.t[i] : 0.0f;
 			active &= ~(1u << i);
 			lane_done(fc, wk, px, lane_px[i], r, hit_px, hit_t,
 			          &nh);

@@ -577,12 +577,12 @@ static bool same_lane(const struct bc__pk_lanes *a,
 
 /* The packet kernels take a ray's first value, its ordinary marching
  * steps, the plain step after an overshot relaxed one and its
- * bisection's halvings themselves, and end a bisection with its hit
- * (packet.h). Lane by lane,
+ * bisection's halvings themselves, and end a bisection with its hit and
+ * a march at its interval's end with a miss (packet.h). Lane by lane,
  * what a kernel did must be what the state machine (packet.c) does with
  * the same value, bit for bit: a lane it stepped holds the state the
  * machine reaches and asks for the same next sample; a lane it ended is
- * the machine's hit at the same depth; a lane it left is
+ * the machine's hit at the same depth, or its miss; a lane it left is
  * untouched, and is one the machine ends or moves to another kind of
  * state (or that had no sample left in its budget). Rays of a unit sphere
  * seen from z = -5, in every kind of state, at every budget. */
@@ -618,7 +618,7 @@ static void test_kernel_steps_match_state_machine(void)
 		                                    fc.pix_angle,
 		                                fc.min_step, fc.refine_tol};
 		uint32_t stepped[K_KINDS] = {0}, left[K_KINDS] = {0};
-		uint32_t finished = 0;
+		uint32_t finished = 0, missed = 0;
 		uint64_t state = 99 + m;
 		if (!k.march) {
 			continue;
@@ -630,7 +630,7 @@ static void test_kernel_steps_match_state_machine(void)
 			int kind[BC_PK_MAX_LANES];
 			float budget[BC_PK_MAX_LANES];
 			uint32_t active = 0, march = 0, bisect = 0, refine = 0,
-			         slow, hit;
+			         slow, hit, miss;
 			memset(&ln, 0, sizeof(ln));
 			for (uint32_t i = 0; i < k.lanes; i++) {
 				float d[3] = {0.3f * ab_rand(&state),
@@ -700,10 +700,12 @@ static void test_kernel_steps_match_state_machine(void)
 			was_bisect = bisect;
 			was_refine = refine;
 			slow = k.march(&view, l, &ln, active, &march, &bisect,
-			               &refine, &hit, &st);
+			               &refine, &hit, &miss, &st);
 			CHECK((slow & ~active) == 0);
 			CHECK((hit & ~was_bisect) == 0 && (hit & slow) == 0 &&
 			      (hit & bisect) == 0);
+			CHECK((miss & ~was_march) == 0 && (miss & slow) == 0 &&
+			      (miss & march) == 0);
 			for (uint32_t i = 0; i < k.lanes; i++) {
 				struct bc__pk_ray ref = ray[i];
 				float value = ln.v[i] *
@@ -722,6 +724,15 @@ static void test_kernel_steps_match_state_machine(void)
 					CHECK(done && ref.res == BC__TRACE_HIT);
 					CHECK(memcmp(&ln.t[i], &ref.t_hit, 4) ==
 					      0);
+					CHECK(ln.mevals[i] == 1.0f);
+					continue;
+				}
+				if (miss & bit) {
+					/* A march at the interval's end: the
+					 * machine's miss. */
+					missed++;
+					CHECK(done &&
+					      ref.res == BC__TRACE_MISS);
 					CHECK(ln.mevals[i] == 1.0f);
 					continue;
 				}
@@ -805,9 +816,10 @@ static void test_kernel_steps_match_state_machine(void)
 		for (int kd = 0; kd < K_KINDS; kd++) {
 			CHECK(stepped[kd] > 100 && left[kd] > 100);
 		}
-		printf("  %-6s bisections ended in the kernel: %u\n",
-		       modes[m].name, finished);
-		CHECK(finished > 100);
+		printf("  %-6s ended in the kernel: %u bisections, %u "
+		       "marches\n",
+		       modes[m].name, finished, missed);
+		CHECK(finished > 100 && missed > 100);
 	}
 	if (widths == 0) {
 		printf("  no packet kernel on this CPU: nothing to compare\n");
