@@ -783,8 +783,13 @@ static inline uint32_t pool_shares(uint32_t threads)
  * each rectangle once in all, as the one pass did. That pass was the one
  * part of a new view's A-buffer left on one thread: 5 % of the samples
  * of an orbit of a million spheres on 2 threads, and a larger part of a
- * frame with more. */
-#define VISIT_SHARED_PRIMS 16384u
+ * frame with more. From 16384 primitives at first; at 1024 and 4096 (a
+ * 512^2 view of fig18) a shared pass takes the A-buffer's wall time on 2
+ * threads from 1.9 to 1.7-1.8 and from 3.5 to 3.2 ms (of 3.1 and 5.9 on
+ * one): once the tracing got faster, the cold frame's one-thread part
+ * held its 2-thread speedup near 1.9. Below that the pool's extra run
+ * costs about what the pass saves. */
+#define VISIT_SHARED_PRIMS 1024u
 
 struct visit_run {
 	struct tiled_frame *tf;
