@@ -271,13 +271,14 @@ static struct kernel_rate kernel_rate(const struct bc_lin *l, int reps)
 			}
 			t0 = cpu_ms();
 			for (uint32_t j = 0; j < rounds; j++) {
-				uint32_t none = 0, hit, miss; /* none steps */
+				/* No lane of a kind that steps. */
+				struct bc__pk_kinds none = {{0}, 0, 0};
 				ln.t[j % k.lanes] = 1e-6f * (float)j;
-				(void)k.march(
-				    &view, l, &ln,
-				    k.lanes >= 32 ? UINT32_MAX
+				(void)k.march(&view, l, &ln,
+				              k.lanes >= 32
+				                  ? UINT32_MAX
 				                  : (1u << k.lanes) - 1u,
-				    &none, &none, &none, &hit, &miss, &st);
+				              &none, &st);
 			}
 			ms += cpu_ms() - t0;
 			evals += (double)rounds * k.lanes;

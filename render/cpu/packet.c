@@ -14,21 +14,21 @@
 
 enum state {
 	S_DONE = 0,
-	S_INIT = BC__PK_INIT,     /* value at t0 */
-	S_STEP = BC__PK_STEP,     /* value at the step tn (packet.h) */
-	S_STEP2 = BC__PK_STEP2,   /* value at the plain step after a failed
-	                             relaxed one */
-	S_REFINE = BC__PK_REFINE, /* value at the secant probe q */
-	S_BISECT = BC__PK_BISECT, /* value at the midpoint q */
-	S_GOLD_C0,                /* closest(): first value, at c */
-	S_GOLD_E0,                /* closest(): second value, at e */
-	S_GOLD_C,                 /* closest(): new value at c */
-	S_GOLD_E,                 /* closest(): new value at e */
+	S_INIT = BC__PK_INIT,       /* value at t0 */
+	S_STEP = BC__PK_STEP,       /* value at the step tn (packet.h) */
+	S_STEP2 = BC__PK_STEP2,     /* value at the plain step after a failed
+	                               relaxed one */
+	S_REFINE = BC__PK_REFINE,   /* value at the secant probe q */
+	S_BISECT = BC__PK_BISECT,   /* value at the midpoint q */
+	S_GOLD_C0 = BC__PK_GOLD_C0, /* closest(): first value, at c */
+	S_GOLD_E0 = BC__PK_GOLD_E0, /* closest(): second value, at e */
+	S_GOLD_C = BC__PK_GOLD_C,   /* closest(): new value at c */
+	S_GOLD_E = BC__PK_GOLD_E,   /* closest(): new value at e */
 };
 
 /* The states packet.h names are these, and none other takes their values. */
 _Static_assert(S_STEP2 == S_STEP + 1 && S_REFINE + 1 == S_BISECT &&
-                   S_GOLD_C0 == S_BISECT + 1,
+                   S_GOLD_C0 == S_BISECT + 1 && S_GOLD_E == S_GOLD_C0 + 3,
                "packet.h's state numbers");
 
 /* Golden section ratio of trace.c's closest(). */

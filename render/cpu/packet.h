@@ -14,11 +14,13 @@
  * evaluates every lane's request, and each lane consumes its own value.
  * Every transition that is arithmetic alone -- a ray's first value, its
  * marching steps, the start and the rounds of its secant refinement, the
- * start and the halvings of its bisection -- the kernel takes itself,
- * lane-wise with the same float operations, so that such a lane does not
- * leave the vector registers between samples (bc__pk_march_fn); a lane
- * comes back to the state machine when its ray ends, runs out of budget,
- * or turns to the golden-section search. Nothing crosses
+ * start and the halvings of its bisection, the golden-section search of a
+ * closest approach, and the ends of a bisection, a search and a march --
+ * the kernel takes itself, lane-wise with the same float operations, so
+ * that such a lane does not leave the vector registers between samples
+ * (bc__pk_march_fn); a lane comes back to the state machine when its
+ * secant refinement ends, its value is not a number or its budget runs
+ * out. Nothing crosses
  * lanes, so a pixel's value does not depend on which other pixels share
  * its packet.
  */
@@ -78,6 +80,33 @@ struct bc__pk_lanes {
 	_Alignas(64) float ri[BC_PK_MAX_LANES];
 	_Alignas(64) float rcap[BC_PK_MAX_LANES];
 	_Alignas(64) float rlimit[BC_PK_MAX_LANES];
+	/* Golden-section lanes (kind BC__PK_LANE_GOLD): bc__pk_ray's a, fa,
+	 * b, c, e, vc, ve and i, and which value t[] asks for (gph: 0, 1, 2,
+	 * 3 for the states BC__PK_GOLD_C0, _E0, _C, _E). */
+	_Alignas(64) float ga[BC_PK_MAX_LANES];
+	_Alignas(64) float gfa[BC_PK_MAX_LANES];
+	_Alignas(64) float gb[BC_PK_MAX_LANES];
+	_Alignas(64) float gc[BC_PK_MAX_LANES];
+	_Alignas(64) float ge[BC_PK_MAX_LANES];
+	_Alignas(64) float gvc[BC_PK_MAX_LANES];
+	_Alignas(64) float gve[BC_PK_MAX_LANES];
+	_Alignas(64) float gi[BC_PK_MAX_LANES];
+	_Alignas(64) float gph[BC_PK_MAX_LANES];
+};
+
+/* The kinds of lane the kernel steps, and the masks of a packet's lanes
+ * of each kind (bc__pk_march_fn): in and out, each lane in one kind at
+ * most; hit and miss are out only. */
+enum {
+	BC__PK_LANE_MARCH,
+	BC__PK_LANE_BISECT,
+	BC__PK_LANE_REFINE,
+	BC__PK_LANE_GOLD,
+	BC__PK_LANE_KINDS
+};
+struct bc__pk_kinds {
+	uint32_t of[BC__PK_LANE_KINDS];
+	uint32_t hit, miss;
 };
 
 /* The frame's constants a kernel's steps use: the hit epsilon's terms
@@ -95,8 +124,8 @@ typedef void (*bc__pk_eval_fn)(const struct bc_view *v,
 
 /* Evaluates as bc__pk_eval_fn, then takes the next sample of the lanes
  * whose next sample packet.c's state machine would decide by arithmetic
- * alone, with the same float operations, each lane in one of three kinds
- * (the masks *march, *bisect, *refine; no lane in two):
+ * alone, with the same float operations, each lane in one of four kinds
+ * (k->of[], no lane in two):
  *  - marching (waiting at a relaxed or plain step, or for its first value
  *    with the state that value gives it: its state in the m* arrays): an
  *    ordinary step (no crossing, not within the hit epsilon, not at the
@@ -110,6 +139,10 @@ typedef void (*bc__pk_eval_fn)(const struct bc_view *v,
  *  - bisecting (waiting at a midpoint: the b* arrays): the next midpoint
  *    while fewer than 40 halvings are done, the bracket is wider than
  *    refine_tol and its midpoint strictly inside;
+ *  - searching (golden section of a closest approach, waiting at c or e:
+ *    the g* arrays): the next sample while fewer than 6 rounds are done;
+ *    a bisection's first midpoint after a crossing. A refining lane whose
+ *    probe did not come closer starts the search here too;
  * each only with another sample within mbudget (mevals counts the samples
  * taken here since the state machine saw the lane, whatever its kinds).
  * t[] is then the next sample, and the masks say each lane's kind now.
@@ -117,16 +150,18 @@ typedef void (*bc__pk_eval_fn)(const struct bc_view *v,
  * with that sample within mbudget) is finished here as the state machine
  * would finish it, a hit: it leaves `bisect` for *hit, t[] holds the
  * hit's depth (packet.c's bisect_head, bit for bit) and mevals counts
- * the value. A marching lane whose new point is at the interval's end,
- * not within the hit epsilon, is the machine's miss: it leaves `march`
- * for *miss (mevals counting the value). Returns the active lanes it
- * neither stepped nor finished
+ * the value; so is a searching lane whose sixth round ends (gold_head's
+ * closer sample). A marching lane whose new point is at the interval's
+ * end, not within the hit epsilon, is the machine's miss: it leaves
+ * `march` for k->miss (mevals counting the value). Returns the active
+ * lanes it neither stepped nor finished
  * (v[] holds their field, not yet divided by the Lipschitz bound); their
  * state is as it was, in the arrays of their kind. */
-typedef uint32_t (*bc__pk_march_fn)(
-    const struct bc_view *v, const struct bc_lin *lin, struct bc__pk_lanes *ln,
-    uint32_t active, uint32_t *march, uint32_t *bisect, uint32_t *refine,
-    uint32_t *hit, uint32_t *miss, const struct bc__pk_steps *st);
+typedef uint32_t (*bc__pk_march_fn)(const struct bc_view *v,
+                                    const struct bc_lin *lin,
+                                    struct bc__pk_lanes *ln, uint32_t active,
+                                    struct bc__pk_kinds *k,
+                                    const struct bc__pk_steps *st);
 
 /* A tile's hits to shade, hit i in element i of each array: in, the hit
  * point o and its difference step (bc__put_hit's p and h), the ray
@@ -176,16 +211,14 @@ struct bc__pk_kernel bc__pk_kernel_for(enum bc_simd simd);
 #if defined(BLOBCAST_SIMD_X86)
 uint32_t bc__pk_march_avx2(const struct bc_view *v, const struct bc_lin *lin,
                            struct bc__pk_lanes *ln, uint32_t active,
-                           uint32_t *march, uint32_t *bisect, uint32_t *refine,
-                           uint32_t *hit, uint32_t *miss,
+                           struct bc__pk_kinds *k,
                            const struct bc__pk_steps *st);
 void bc__pk_hits_avx2(const struct bc_view *v, const struct bc_lin *lin,
                       struct bc__pk_lanes *ln, struct bc__pk_shade *sh,
                       uint32_t n);
 uint32_t bc__pk_march_avx512(const struct bc_view *v, const struct bc_lin *lin,
                              struct bc__pk_lanes *ln, uint32_t active,
-                             uint32_t *march, uint32_t *bisect,
-                             uint32_t *refine, uint32_t *hit, uint32_t *miss,
+                             struct bc__pk_kinds *k,
                              const struct bc__pk_steps *st);
 void bc__pk_hits_avx512(const struct bc_view *v, const struct bc_lin *lin,
                         struct bc__pk_lanes *ln, struct bc__pk_shade *sh,
@@ -220,13 +253,18 @@ bool bc__pk_ray_feed(struct bc__pk_ray *r, const struct bc__frame_ctx *fc,
                      float value);
 
 /* The states that wait for the value at the start (t0), at a marching
- * step (relaxed, or plain after a failed relaxed one), at a secant probe
- * and at a bisection's midpoint: such lanes may take their next samples
+ * step (relaxed, or plain after a failed relaxed one), at a secant probe,
+ * at a bisection's midpoint and at a golden-section sample (the first at
+ * c, then at e, then at c or e): such lanes may take their next samples
  * in the kernel (bc__pk_march_fn). */
 #define BC__PK_INIT 1
 #define BC__PK_STEP 2
 #define BC__PK_STEP2 3
 #define BC__PK_REFINE 4
 #define BC__PK_BISECT 5
+#define BC__PK_GOLD_C0 6
+#define BC__PK_GOLD_E0 7
+#define BC__PK_GOLD_C 8
+#define BC__PK_GOLD_E 9
 
 #endif

@@ -455,22 +455,34 @@ static inline vf refine_probe(vf t, vf v, vf t_prev, vf v_prev, vm first,
 	return probe;
 }
 
-uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
-                  struct bc__pk_lanes *ln, uint32_t active, uint32_t *marchp,
-                  uint32_t *bisectp, uint32_t *refinep, uint32_t *hitp,
-                  uint32_t *missp, const struct bc__pk_steps *st)
+/* Lanes where a equals b (the golden-section phases, small whole numbers
+ * held as floats). */
+static inline vm veq(vf a, vf b)
 {
-	uint32_t march = *marchp & active, bisect = *bisectp & active,
-	         refine = *refinep & active, stepped, ended, missed;
+	return mand(vle(a, b), vge(a, b));
+}
+
+uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
+                  struct bc__pk_lanes *ln, uint32_t active,
+                  struct bc__pk_kinds *k, const struct bc__pk_steps *st)
+{
+	uint32_t march = k->of[BC__PK_LANE_MARCH] & active,
+	         bisect = k->of[BC__PK_LANE_BISECT] & active,
+	         refine = k->of[BC__PK_LANE_REFINE] & active,
+	         gold = k->of[BC__PK_LANE_GOLD] & active, stepped, ended,
+	         missed;
 	vf zero = vset1(0.0f), one = vset1(1.0f), vn, q, t, fv, tp, vp, om, t1,
 	   eps, evals, a, fa, b, fb, bi, m_b, m_x, next, plain, cap, limit,
-	   probe_m, probe_r, ri, t_new;
-	vm room, mm, bm, rm, relax, cross, b_go, b_end, m_fast, m_refine, r_go,
-	    advance, ok_m, ok_r;
+	   probe_m, probe_r, ri, t_new, g_t = zero, g_hit = zero, g_m = zero,
+	   g_a = zero, g_fa = zero;
+	vm room, mm, bm, rm, gm, relax, cross, b_go, b_end, m_fast, m_refine,
+	    r_go, advance, ok_m, ok_r, g_enter,
+	    g_cross = mfrombits(0), g_c0 = mfrombits(0), g_fin = mfrombits(0),
+	    g_go = mfrombits(0);
 	run(v, lin, ln, active, false);
-	*hitp = 0;
-	*missp = 0;
-	if (!(march | bisect | refine)) {
+	k->hit = 0;
+	k->miss = 0;
+	if (!(march | bisect | refine | gold)) {
 		return active;
 	}
 	/* The value the state machine is fed (trace.c's eval_at): the field
@@ -490,6 +502,7 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
 	mm = mand(mfrombits(march), room);
 	bm = mand(mfrombits(bisect), room);
 	rm = mand(mfrombits(refine), room);
+	gm = mand(mfrombits(gold), room);
 	/* Marching and refining lanes: t, v, t_prev, v_prev. */
 	t = vload(ln->mt);
 	fv = vload(ln->mv);
@@ -575,18 +588,98 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
 	r_go = mand(mand(mand(rm, vge(vn, zero)), vlt(vn, fv)),
 	            mand(vlt(ri, vset1(8.0f)), ok_r));
 
+	/* The golden-section search (S_GOLD_*, packet.c's gold_start and
+	 * gold_head): a refining lane whose probe did not come closer
+	 * starts it on [t_prev or t, q]; a searching lane takes its value at
+	 * c (phases 0 and 2) or e (1 and 3), crosses into a bisection of
+	 * [a, there] where it is below zero, or goes on to the next round, or
+	 * ends at the closer sample after the sixth. A value that is not a
+	 * number is the machine's. */
+	g_enter = mand(mand(rm, vge(vn, zero)), mnot(vlt(vn, fv)));
+	if (mtobits(g_enter) | gold) {
+		const vf gr = vset1(0.618034f);
+		vm back = vlt(tp, t), pos, is_c0, is_e0, is_c, head, left;
+		vf ea = vsel(back, tp, t), efa = vsel(back, vp, fv);
+		vf ph = vload(ln->gph), ga = vload(ln->ga),
+		   gfa = vload(ln->gfa);
+		vf gb = vload(ln->gb), gc = vload(ln->gc), ge = vload(ln->ge);
+		vf gvc, gve, gi, nb, na, nfa, nc, ne, nv;
+		pos = mand(gm, vge(vn, zero));
+		g_cross = bisect_opens(mand(gm, vlt(vn, zero)), ga, q,
+		                       st->refine_tol, &g_m);
+		is_c0 = veq(ph, zero);
+		is_e0 = veq(ph, one);
+		is_c =
+		    mfrombits(mtobits(is_c0) | mtobits(veq(ph, vset1(2.0f))));
+		/* S_GOLD_C0 takes vc and asks for e; the others take their
+		 * value and run gold_head, E0 from round 0. */
+		g_c0 = mand(pos, is_c0);
+		head = mand(pos, mnot(is_c0));
+		gvc = vsel(is_c, vn, vload(ln->gvc));
+		gve = vsel(is_c, vload(ln->gve), vn);
+		gi = vsel(is_e0, zero, vadd(vload(ln->gi), one));
+		g_fin = mand(head, vge(gi, vset1(6.0f)));
+		g_go = mand(head, mnot(g_fin));
+		/* gold_head. Left: b = e, e = c, ve = vc, c = b - G (b - a).
+		 * Right: a = c, fa = vc, c = e, vc = ve, e = a + G (b - a). */
+		left = vlt(gvc, gve);
+		nb = vsel(left, ge, gb);
+		na = vsel(left, ga, gc);
+		nfa = vsel(left, gfa, gvc);
+		nc = vsel(left, vsub(nb, vmul(gr, vsub(nb, na))), ge);
+		ne = vsel(left, gc, vadd(na, vmul(gr, vsub(nb, na))));
+		nv = vsel(left, gvc, gve);
+		g_hit = vsel(left, gc, ge);
+		g_t = vsel(g_c0, ge, vsel(left, nc, ne));
+		/* Entering lanes: gold_start's bracket, asking for c. */
+		gc = vsub(q, vmul(gr, vsub(q, ea)));
+		ge = vadd(ea, vmul(gr, vsub(q, ea)));
+		g_t = vsel(g_enter, gc, g_t);
+		vstore(ln->ga, vsel(g_enter, ea, vsel(g_go, na, ga)));
+		vstore(ln->gfa, vsel(g_enter, efa, vsel(g_go, nfa, gfa)));
+		vstore(ln->gb, vsel(g_enter, q, vsel(g_go, nb, gb)));
+		vstore(ln->gc,
+		       vsel(g_enter, gc, vsel(g_go, nc, vload(ln->gc))));
+		vstore(ln->ge,
+		       vsel(g_enter, ge, vsel(g_go, ne, vload(ln->ge))));
+		vstore(ln->gvc, vsel(g_go, nv, vsel(g_c0, vn, vload(ln->gvc))));
+		vstore(ln->gve, vsel(g_go, nv, vload(ln->gve)));
+		vstore(ln->gi, vsel(g_go, gi, vload(ln->gi)));
+		vstore(
+		    ln->gph,
+		    vsel(g_enter, zero,
+		         vsel(g_c0, one,
+		              vsel(g_go, vsel(left, vset1(2.0f), vset1(3.0f)),
+		                   ph))));
+		/* A crossing's bisection starts from the bracket's a. */
+		g_a = ga;
+		g_fa = gfa;
+	}
+
+	ended |= mtobits(g_fin);
 	stepped = mtobits(b_go) | mtobits(relax) | mtobits(cross) |
 	          mtobits(m_refine) | mtobits(m_fast) | mtobits(r_go) | ended |
-	          missed;
+	          missed | mtobits(g_enter) | mtobits(g_cross) | mtobits(g_c0) |
+	          mtobits(g_go);
 	if (!stepped) {
 		return active;
 	}
-	/* Bisecting lanes: those that go on, and those that start. */
-	vstore(ln->ba, vsel(b_go, a, vsel(cross, t, vload(ln->ba))));
-	vstore(ln->bfa, vsel(b_go, fa, vsel(cross, fv, vload(ln->bfa))));
-	vstore(ln->bb, vsel(b_go, b, vsel(cross, q, vload(ln->bb))));
-	vstore(ln->bfb, vsel(b_go, fb, vsel(cross, vn, vload(ln->bfb))));
-	vstore(ln->bi, vsel(b_go, bi, vsel(cross, zero, vload(ln->bi))));
+	/* Bisecting lanes: those that go on, and those that start (from a
+	 * march or a refinement, at [t, q]; from a search, at [a, q]). */
+	vstore(ln->ba, vsel(b_go, a,
+	                    vsel(cross, t, vsel(g_cross, g_a, vload(ln->ba)))));
+	vstore(ln->bfa,
+	       vsel(b_go, fa,
+	            vsel(cross, fv, vsel(g_cross, g_fa, vload(ln->bfa)))));
+	vstore(ln->bb, vsel(b_go, b,
+	                    vsel(mfrombits(mtobits(cross) | mtobits(g_cross)),
+	                         q, vload(ln->bb))));
+	vstore(ln->bfb, vsel(b_go, fb,
+	                     vsel(mfrombits(mtobits(cross) | mtobits(g_cross)),
+	                          vn, vload(ln->bfb))));
+	vstore(ln->bi, vsel(b_go, bi,
+	                    vsel(mfrombits(mtobits(cross) | mtobits(g_cross)),
+	                         zero, vload(ln->bi))));
 	/* The new point of an ordinary step, a refinement's start or its
 	 * next round: t_prev, v_prev = t, v; t, v = q, vn. */
 	advance =
@@ -602,7 +695,11 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
 	t_new = vsel(m_fast, next, vsel(relax, plain, q));
 	t_new = vsel(m_refine, probe_m, vsel(r_go, probe_r, t_new));
 	t_new = vsel(b_go, m_b, vsel(cross, m_x, t_new));
-	if (ended) {
+	t_new =
+	    vsel(mfrombits(mtobits(g_enter) | mtobits(g_c0) | mtobits(g_go)),
+	         g_t, vsel(g_cross, g_m, t_new));
+	t_new = vsel(g_fin, g_hit, t_new);
+	if (mtobits(b_end)) {
 		/* fa - fb > 0 and finite: the chord's zero, clamped into
 		 * [a, b]; else a (in the machine's order of operations). */
 		vf den = vsub(fa, fb);
@@ -614,12 +711,20 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
 	}
 	vstore(ln->t, t_new);
 	vstore(ln->mevals, vadd(evals, vsel(mfrombits(stepped), one, zero)));
-	/* The lanes that changed kind, and those that hit. */
-	*marchp = *marchp & ~(mtobits(cross) | mtobits(m_refine) | missed);
-	*bisectp = (*bisectp | mtobits(cross)) & ~ended;
-	*hitp = ended;
-	*missp = missed;
-	*refinep = (*refinep & ~mtobits(cross)) | mtobits(m_refine);
+	/* The lanes that changed kind, and those that hit or missed. */
+	k->of[BC__PK_LANE_MARCH] &=
+	    ~(mtobits(cross) | mtobits(m_refine) | missed);
+	k->of[BC__PK_LANE_BISECT] =
+	    (k->of[BC__PK_LANE_BISECT] | mtobits(cross) | mtobits(g_cross)) &
+	    ~mtobits(b_end);
+	k->of[BC__PK_LANE_REFINE] =
+	    (k->of[BC__PK_LANE_REFINE] & ~(mtobits(cross) | mtobits(g_enter))) |
+	    mtobits(m_refine);
+	k->of[BC__PK_LANE_GOLD] =
+	    (k->of[BC__PK_LANE_GOLD] & ~(mtobits(g_cross) | mtobits(g_fin))) |
+	    mtobits(g_enter);
+	k->hit = ended;
+	k->miss = missed;
 	return active & ~stepped;
 }
 

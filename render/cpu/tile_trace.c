@@ -233,13 +233,24 @@ static float lane_budget(const struct bc__frame_ctx *fc, uint32_t spent)
 }
 
 /* The kinds of lane the kernel steps (packet.h's bc__pk_march_fn). */
-enum lane_kind { LANE_MARCH, LANE_BISECT, LANE_REFINE, LANE_KINDS };
+#define LANE_MARCH BC__PK_LANE_MARCH
+#define LANE_BISECT BC__PK_LANE_BISECT
+#define LANE_REFINE BC__PK_LANE_REFINE
+#define LANE_GOLD BC__PK_LANE_GOLD
+#define LANE_KINDS BC__PK_LANE_KINDS
 
 /* The kind of lane a ray waiting in `state` makes; false for a state
- * only the state machine takes (the golden-section search). */
-static bool lane_kind_of(uint8_t state, enum lane_kind *kind)
+ * only the state machine takes (none waits in one now: a start lane is
+ * a marching one, start_lanes). */
+static bool lane_kind_of(uint8_t state, int *kind)
 {
 	switch (state) {
+	case BC__PK_GOLD_C0:
+	case BC__PK_GOLD_E0:
+	case BC__PK_GOLD_C:
+	case BC__PK_GOLD_E:
+		*kind = LANE_GOLD;
+		return true;
 	case BC__PK_STEP:
 	case BC__PK_STEP2:
 		*kind = LANE_MARCH;
@@ -259,12 +270,23 @@ static bool lane_kind_of(uint8_t state, enum lane_kind *kind)
  * packet's arrays (the kernel's): a marching or refining lane keeps t, v,
  * t_prev and v_prev in the m* arrays (a marching one its omega and t1
  * there too, a refining one its round, cap and limit in the r* ones), a
- * bisecting one its bracket in the b* ones; each starts with its budget
+ * bisecting one its bracket in the b* ones, a searching one its bracket,
+ * samples, round and phase in the g* ones; each starts with its budget
  * and no sample counted. */
 static void to_lanes(const struct bc__pk_ray *r, struct bc__pk_lanes *ln,
-                     uint32_t i, enum lane_kind kind, float budget)
+                     uint32_t i, int kind, float budget)
 {
-	if (kind == LANE_BISECT) {
+	if (kind == LANE_GOLD) {
+		ln->ga[i] = r->a;
+		ln->gfa[i] = r->fa;
+		ln->gb[i] = r->b;
+		ln->gc[i] = r->c;
+		ln->ge[i] = r->e;
+		ln->gvc[i] = r->vc;
+		ln->gve[i] = r->ve;
+		ln->gi[i] = (float)r->i;
+		ln->gph[i] = (float)(r->state - BC__PK_GOLD_C0);
+	} else if (kind == LANE_BISECT) {
 		ln->ba[i] = r->a;
 		ln->bfa[i] = r->fa;
 		ln->bb[i] = r->b;
@@ -309,9 +331,19 @@ static void start_lanes(const struct bc__pk_ray *r, struct bc__pk_lanes *ln,
  * an ordinary step (S_STEP), whichever state it entered in (the start,
  * S_STEP, or S_STEP2 whose omega is 1). */
 static void from_lanes(struct bc__pk_ray *r, const struct bc__pk_lanes *ln,
-                       uint32_t i, enum lane_kind kind)
+                       uint32_t i, int kind)
 {
-	if (kind == LANE_BISECT) {
+	if (kind == LANE_GOLD) {
+		r->state = (uint8_t)(BC__PK_GOLD_C0 + (int)ln->gph[i]);
+		r->a = ln->ga[i];
+		r->fa = ln->gfa[i];
+		r->b = ln->gb[i];
+		r->c = ln->gc[i];
+		r->e = ln->ge[i];
+		r->vc = ln->gvc[i];
+		r->ve = ln->gve[i];
+		r->i = (uint8_t)ln->gi[i];
+	} else if (kind == LANE_BISECT) {
 		r->state = BC__PK_BISECT;
 		r->a = ln->ba[i];
 		r->fa = ln->bfa[i];
@@ -443,9 +475,9 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 	uint8_t queue[BC_CPU_TILE * BC_CPU_TILE];
 	uint8_t hit_px[BC_CPU_TILE * BC_CPU_TILE];
 	float hit_t[BC_CPU_TILE * BC_CPU_TILE];
-	uint32_t nq = 0, head = 0, nh = 0, active = 0, slow, ended, missed;
-	uint32_t kinds[LANE_KINDS] = {0}, /* the lanes of each kind */
-	    lanes = k.lanes >= 32 ? UINT32_MAX : (1u << k.lanes) - 1u;
+	uint32_t nq = 0, head = 0, nh = 0, active = 0, slow, ended, missed,
+	         lanes = k.lanes >= 32 ? UINT32_MAX : (1u << k.lanes) - 1u;
+	struct bc__pk_kinds kinds = {{0}, 0, 0}; /* the lanes of each kind */
 	const struct bc__pk_steps st = {
 	    .eps_per_t = BC_CPU_HIT_FOOTPRINT * fc->pix_angle,
 	    .min_step = fc->min_step,
@@ -501,15 +533,15 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 			start_lanes(&ray[i], &ln, i,
 			            lane_budget(fc, px->evals[p]));
 			active |= 1u << i;
-			kinds[LANE_MARCH] |= 1u << i;
+			kinds.of[LANE_MARCH] |= 1u << i;
 			free &= free - 1u;
 		}
 		if (!active) {
 			break;
 		}
-		slow = k.march(&wk->view, fc->lin, &ln, active,
-		               &kinds[LANE_MARCH], &kinds[LANE_BISECT],
-		               &kinds[LANE_REFINE], &ended, &missed, &st);
+		slow = k.march(&wk->view, fc->lin, &ln, active, &kinds, &st);
+		ended = kinds.hit;
+		missed = kinds.miss;
 		/* Bisections the kernel ended (hits) and marches that reached
 		 * the range's end (misses), as the state machine would have
 		 * finished them (from_lanes and a feed spared). */
@@ -527,11 +559,11 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 		for (uint32_t bits = slow; bits; bits &= bits - 1) {
 			uint32_t i = lowest_bit(bits), p;
 			struct bc__pk_ray *r = &ray[i];
-			enum lane_kind kind;
+			int kind;
 			for (kind = LANE_MARCH; kind < LANE_KINDS; kind++) {
-				if ((kinds[kind] >> i) & 1u) {
+				if ((kinds.of[kind] >> i) & 1u) {
 					from_lanes(r, &ln, i, kind);
-					kinds[kind] &= ~(1u << i);
+					kinds.of[kind] &= ~(1u << i);
 					break;
 				}
 			}
@@ -548,7 +580,7 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 						to_lanes(
 						    r, &ln, i, kind,
 						    lane_budget(fc, spent));
-						kinds[kind] |= 1u << i;
+						kinds.of[kind] |= 1u << i;
 					}
 					continue;
 				}

@@ -484,14 +484,40 @@ static void test_abuffer_abv_kernel_matches_scalar(void)
 
 /* Lane kinds of test_kernel_steps_match_state_machine: a ray waiting for
  * its first value, at a relaxed marching step, at a plain one after a
- * failed relaxed step, at a bisection's midpoint, at a secant probe. */
-enum { K_START, K_STEP, K_STEP2, K_BISECT, K_REFINE, K_KINDS };
+ * failed relaxed step, at a bisection's midpoint, at a secant probe, at a
+ * golden-section sample. */
+enum { K_START, K_STEP, K_STEP2, K_BISECT, K_REFINE, K_GOLD, K_KINDS };
 
 /* The unit sphere's field at t along d from (0, 0, -5). */
 static float sphere_at(const float d[3], float t)
 {
 	float x = t * d[0], y = t * d[1], z = -5.0f + t * d[2];
 	return sqrtf(x * x + y * y + z * z) - 1.0f;
+}
+
+/* A refining ray r made to search its closest approach: a probe that did
+ * not come closer starts the golden section (S_GOLD_C0), and zero to
+ * three of its samples, the sphere's field there, take it on; some
+ * searches are put at their last round. */
+static bool steer_gold(struct bc__pk_ray *r, const struct bc__frame_ctx *fc,
+                       const float d[3], uint64_t *state)
+{
+	int more = (int)(fabsf(ab_rand(state)) * 4.0f);
+	if (bc__pk_ray_feed(r, fc, r->v * (1.0f + fabsf(ab_rand(state)))) ||
+	    r->state != BC__PK_GOLD_C0) {
+		return false;
+	}
+	for (int j = 0; j < more; j++) {
+		if (bc__pk_ray_feed(r, fc,
+		                    sphere_at(d, r->q) / BC_CPU_LIPSCHITZ) ||
+		    r->state < BC__PK_GOLD_C0) {
+			return false;
+		}
+	}
+	if (r->state >= BC__PK_GOLD_C && ab_rand(state) > 0.3f) {
+		r->i = 5; /* the next value ends the search */
+	}
+	return true;
 }
 
 /* Ray i of the kernel steps test, made by feeding the state machine the
@@ -511,7 +537,7 @@ static bool steer_ray(struct bc__pk_ray *r, const struct bc__frame_ctx *fc,
 	if (kind == K_START) {
 		return true;
 	}
-	if (kind == K_REFINE) {
+	if (kind == K_REFINE || kind == K_GOLD) {
 		/* A relaxed step past the surface, the plain one just before
 		 * it, and there the field's value, within the hit epsilon. */
 		float u = 0.02f * fabsf(ab_rand(state));
@@ -524,6 +550,9 @@ static bool steer_ray(struct bc__pk_ray *r, const struct bc__frame_ctx *fc,
 		                    sphere_at(d, r->tn) / BC_CPU_LIPSCHITZ) ||
 		    r->state != BC__PK_REFINE) {
 			return false;
+		}
+		if (kind == K_GOLD) {
+			return steer_gold(r, fc, d, state);
 		}
 		if (ab_rand(state) > 0.6f) {
 			r->i = 7; /* the last round */
@@ -559,14 +588,16 @@ static bool steer_ray(struct bc__pk_ray *r, const struct bc__frame_ctx *fc,
 static bool same_lane(const struct bc__pk_lanes *a,
                       const struct bc__pk_lanes *b, uint32_t i)
 {
-	const float *fa[] = {a->t,       a->mt,     a->mv,     a->mt_prev,
-	                     a->mv_prev, a->momega, a->mevals, a->ba,
-	                     a->bfa,     a->bb,     a->bfb,    a->bi,
-	                     a->ri,      a->rcap,   a->rlimit};
-	const float *fb[] = {b->t,       b->mt,     b->mv,     b->mt_prev,
-	                     b->mv_prev, b->momega, b->mevals, b->ba,
-	                     b->bfa,     b->bb,     b->bfb,    b->bi,
-	                     b->ri,      b->rcap,   b->rlimit};
+	const float *fa[] = {
+	    a->t,      a->mt,   a->mv,     a->mt_prev, a->mv_prev, a->momega,
+	    a->mevals, a->ba,   a->bfa,    a->bb,      a->bfb,     a->bi,
+	    a->ri,     a->rcap, a->rlimit, a->ga,      a->gfa,     a->gb,
+	    a->gc,     a->ge,   a->gvc,    a->gve,     a->gi,      a->gph};
+	const float *fb[] = {
+	    b->t,      b->mt,   b->mv,     b->mt_prev, b->mv_prev, b->momega,
+	    b->mevals, b->ba,   b->bfa,    b->bb,      b->bfb,     b->bi,
+	    b->ri,     b->rcap, b->rlimit, b->ga,      b->gfa,     b->gb,
+	    b->gc,     b->ge,   b->gvc,    b->gve,     b->gi,      b->gph};
 	for (size_t k = 0; k < sizeof(fa) / sizeof(fa[0]); k++) {
 		if (memcmp(&fa[k][i], &fb[k][i], sizeof(float)) != 0) {
 			return false;
@@ -588,7 +619,7 @@ static bool same_lane(const struct bc__pk_lanes *a,
  * seen from z = -5, in every kind of state, at every budget. */
 static void test_kernel_steps_match_state_machine(void)
 {
-	uint32_t was_march, was_bisect, was_refine;
+	uint32_t was_march, was_bisect, was_refine, was_gold;
 	struct bc_tree *t = bc_tree_create();
 	struct bc_prim_data sp;
 	struct bc_errinfo ei = {0};
@@ -618,19 +649,20 @@ static void test_kernel_steps_match_state_machine(void)
 		                                    fc.pix_angle,
 		                                fc.min_step, fc.refine_tol};
 		uint32_t stepped[K_KINDS] = {0}, left[K_KINDS] = {0};
-		uint32_t finished = 0, missed = 0;
+		uint32_t finished = 0, missed = 0, searched = 0;
 		uint64_t state = 99 + m;
 		if (!k.march) {
 			continue;
 		}
 		widths++;
-		for (int trial = 0; trial < 3000; trial++) {
+		for (int trial = 0; trial < 6000; trial++) {
 			struct bc__pk_lanes ln, before;
 			struct bc__pk_ray ray[BC_PK_MAX_LANES];
 			int kind[BC_PK_MAX_LANES];
 			float budget[BC_PK_MAX_LANES];
 			uint32_t active = 0, march = 0, bisect = 0, refine = 0,
-			         slow, hit, miss;
+			         gold = 0, slow, hit, miss;
+			struct bc__pk_kinds kk;
 			memset(&ln, 0, sizeof(ln));
 			for (uint32_t i = 0; i < k.lanes; i++) {
 				float d[3] = {0.3f * ab_rand(&state),
@@ -645,7 +677,7 @@ static void test_kernel_steps_match_state_machine(void)
 				disc = b * b - (25.0f - 1.0f);
 				ts = disc > 0.0f ? -b - sqrtf(disc) : -b;
 				kind[i] =
-				    (int)((ab_rand(&state) + 1.0f) * 2.5f) %
+				    (int)((ab_rand(&state) + 1.0f) * 3.0f) %
 				    K_KINDS;
 				budget[i] =
 				    ab_rand(&state) > 0.8f
@@ -664,7 +696,19 @@ static void test_kernel_steps_match_state_machine(void)
 				ln.t[i] = r->q;
 				ln.mevals[i] = 0.0f;
 				ln.mbudget[i] = budget[i];
-				if (kind[i] == K_REFINE) {
+				if (kind[i] == K_GOLD) {
+					ln.ga[i] = r->a;
+					ln.gfa[i] = r->fa;
+					ln.gb[i] = r->b;
+					ln.gc[i] = r->c;
+					ln.ge[i] = r->e;
+					ln.gvc[i] = r->vc;
+					ln.gve[i] = r->ve;
+					ln.gi[i] = (float)r->i;
+					ln.gph[i] =
+					    (float)(r->state - BC__PK_GOLD_C0);
+					gold |= 1u << i;
+				} else if (kind[i] == K_REFINE) {
 					ln.mt[i] = r->t;
 					ln.mv[i] = r->v;
 					ln.mt_prev[i] = r->t_prev;
@@ -699,11 +743,20 @@ static void test_kernel_steps_match_state_machine(void)
 			was_march = march;
 			was_bisect = bisect;
 			was_refine = refine;
-			slow = k.march(&view, l, &ln, active, &march, &bisect,
-			               &refine, &hit, &miss, &st);
+			was_gold = gold;
+			kk = (struct bc__pk_kinds){
+			    {march, bisect, refine, gold}, 0, 0};
+			slow = k.march(&view, l, &ln, active, &kk, &st);
+			march = kk.of[BC__PK_LANE_MARCH];
+			bisect = kk.of[BC__PK_LANE_BISECT];
+			refine = kk.of[BC__PK_LANE_REFINE];
+			gold = kk.of[BC__PK_LANE_GOLD];
+			hit = kk.hit;
+			miss = kk.miss;
 			CHECK((slow & ~active) == 0);
-			CHECK((hit & ~was_bisect) == 0 && (hit & slow) == 0 &&
-			      (hit & bisect) == 0);
+			CHECK((hit & ~(was_bisect | was_gold)) == 0 &&
+			      (hit & slow) == 0 &&
+			      (hit & (bisect | gold)) == 0);
 			CHECK((miss & ~was_march) == 0 && (miss & slow) == 0 &&
 			      (miss & march) == 0);
 			for (uint32_t i = 0; i < k.lanes; i++) {
@@ -718,9 +771,10 @@ static void test_kernel_steps_match_state_machine(void)
 				}
 				done = bc__pk_ray_feed(&ref, &fc, value);
 				if (hit & bit) {
-					/* A bisection ended: the machine's
-					 * hit, at the same depth. */
+					/* A bisection or a search ended: the
+					 * machine's hit, at the same depth. */
 					finished++;
+					searched += (was_gold & bit) != 0;
 					CHECK(done && ref.res == BC__TRACE_HIT);
 					CHECK(memcmp(&ln.t[i], &ref.t_hit, 4) ==
 					      0);
@@ -747,17 +801,25 @@ static void test_kernel_steps_match_state_machine(void)
 					      (bisect & bit) ==
 					          (was_bisect & bit) &&
 					      (refine & bit) ==
-					          (was_refine & bit));
+					          (was_refine & bit) &&
+					      (gold & bit) == (was_gold & bit));
 					/* A bisection with a sample left
 					 * in its budget goes on or ends in
 					 * the kernel. */
 					CHECK(kind[i] != K_BISECT ||
 					      budget[i] < 1.5f);
+					/* A search too, but for a value that
+					 * is not a number or a crossing too
+					 * narrow to bisect (the machine's). */
+					CHECK(kind[i] != K_GOLD ||
+					      budget[i] < 1.5f ||
+					      !(value >= 0.0f));
 					CHECK(done || budget[i] < 2.5f ||
 					      (ref.state != BC__PK_STEP &&
 					       ref.state != BC__PK_STEP2 &&
 					       ref.state != BC__PK_BISECT &&
-					       ref.state != BC__PK_REFINE));
+					       ref.state != BC__PK_REFINE &&
+					       ref.state < BC__PK_GOLD_C0));
 					continue;
 				}
 				stepped[kind[i]]++;
@@ -769,8 +831,36 @@ static void test_kernel_steps_match_state_machine(void)
 				 * that state. */
 				CHECK(((march & bit) != 0) +
 				          ((bisect & bit) != 0) +
-				          ((refine & bit) != 0) ==
+				          ((refine & bit) != 0) +
+				          ((gold & bit) != 0) ==
 				      1);
+				if (gold & bit) {
+					CHECK(ref.state >= BC__PK_GOLD_C0 &&
+					      ln.gph[i] ==
+					          (float)(ref.state -
+					                  BC__PK_GOLD_C0));
+					CHECK(memcmp(&ln.ga[i], &ref.a, 4) ==
+					      0);
+					CHECK(memcmp(&ln.gfa[i], &ref.fa, 4) ==
+					      0);
+					CHECK(memcmp(&ln.gb[i], &ref.b, 4) ==
+					      0);
+					CHECK(memcmp(&ln.gc[i], &ref.c, 4) ==
+					      0);
+					CHECK(memcmp(&ln.ge[i], &ref.e, 4) ==
+					      0);
+					/* vc and ve as far as the phase
+					 * has them. */
+					CHECK(ref.state == BC__PK_GOLD_C0 ||
+					      memcmp(&ln.gvc[i], &ref.vc, 4) ==
+					          0);
+					CHECK(ref.state < BC__PK_GOLD_C ||
+					      memcmp(&ln.gve[i], &ref.ve, 4) ==
+					          0);
+					CHECK(ref.state < BC__PK_GOLD_C ||
+					      ln.gi[i] == (float)ref.i);
+					continue;
+				}
 				if (bisect & bit) {
 					CHECK(ref.state == BC__PK_BISECT);
 					CHECK(memcmp(&ln.ba[i], &ref.a, 4) ==
@@ -816,10 +906,12 @@ static void test_kernel_steps_match_state_machine(void)
 		for (int kd = 0; kd < K_KINDS; kd++) {
 			CHECK(stepped[kd] > 100 && left[kd] > 100);
 		}
-		printf("  %-6s ended in the kernel: %u bisections, %u "
-		       "marches\n",
-		       modes[m].name, finished, missed);
-		CHECK(finished > 100 && missed > 100);
+		printf("  %-6s ended in the kernel: %u bisections and "
+		       "searches (%u searches), %u marches; %u / %u "
+		       "searches stepped / left\n",
+		       modes[m].name, finished, searched, missed,
+		       stepped[K_GOLD], left[K_GOLD]);
+		CHECK(finished > 100 && missed > 100 && searched > 100);
 	}
 	if (widths == 0) {
 		printf("  no packet kernel on this CPU: nothing to compare\n");
