@@ -583,6 +583,12 @@ static bool steer_ray(struct bc__pk_ray *r, const struct bc__frame_ctx *fc,
 	return true;
 }
 
+/* Whether two floats are the same bit for bit. */
+static bool same_bits(float a, float b)
+{
+	return memcmp(&a, &b, sizeof(a)) == 0;
+}
+
 /* Whether lane i of every state array of a and b is the same, bit for
  * bit. */
 static bool same_lane(const struct bc__pk_lanes *a,
@@ -839,24 +845,17 @@ static void test_kernel_steps_match_state_machine(void)
 					      ln.gph[i] ==
 					          (float)(ref.state -
 					                  BC__PK_GOLD_C0));
-					CHECK(memcmp(&ln.ga[i], &ref.a, 4) ==
-					      0);
-					CHECK(memcmp(&ln.gfa[i], &ref.fa, 4) ==
-					      0);
-					CHECK(memcmp(&ln.gb[i], &ref.b, 4) ==
-					      0);
-					CHECK(memcmp(&ln.gc[i], &ref.c, 4) ==
-					      0);
-					CHECK(memcmp(&ln.ge[i], &ref.e, 4) ==
-					      0);
+					CHECK(same_bits(ln.ga[i], ref.a) &&
+					      same_bits(ln.gfa[i], ref.fa) &&
+					      same_bits(ln.gb[i], ref.b) &&
+					      same_bits(ln.gc[i], ref.c) &&
+					      same_bits(ln.ge[i], ref.e));
 					/* vc and ve as far as the phase
 					 * has them. */
 					CHECK(ref.state == BC__PK_GOLD_C0 ||
-					      memcmp(&ln.gvc[i], &ref.vc, 4) ==
-					          0);
+					      same_bits(ln.gvc[i], ref.vc));
 					CHECK(ref.state < BC__PK_GOLD_C ||
-					      memcmp(&ln.gve[i], &ref.ve, 4) ==
-					          0);
+					      same_bits(ln.gve[i], ref.ve));
 					CHECK(ref.state < BC__PK_GOLD_C ||
 					      ln.gi[i] == (float)ref.i);
 					continue;
