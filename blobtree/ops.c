@@ -337,11 +337,11 @@ static float transition(float x, float beta, float range)
  * NaN or signed zero can occur. */
 static inline float op_min(float a, float b)
 {
-	return (b < a) | (a != a) ? b : a;
+	return ((b < a) | (a != a)) ? b : a;
 }
 static inline float op_max(float a, float b)
 {
-	return (b > a) | (a != a) ? b : a;
+	return ((b > a) | (a != a)) ? b : a;
 }
 
 static float g_union(float f0, float f1, float beta)
