@@ -184,7 +184,7 @@ int bc_opt_set(const struct bc_opt *o, const char *val)
 		}
 		return BC_ERANGE;
 	default:
-		assert(!"option kind without a value");
+		assert(0 && "option kind without a value");
 		return BC_EINVAL;
 	}
 }

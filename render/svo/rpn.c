@@ -587,13 +587,13 @@ static inline void lanes_step(const struct bc_svo_rpn *r, uint32_t i,
 		 * loops free of branches, so they vectorize. */
 		if (t->kind == BC_OP_UNION) {
 			for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
-				f0[j] = (f1[j] < f0[j]) | (f0[j] != f0[j])
+				f0[j] = ((f1[j] < f0[j]) | (f0[j] != f0[j]))
 				            ? f1[j]
 				            : f0[j];
 			}
 		} else if (t->kind == BC_OP_INTERSECTION) {
 			for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
-				f0[j] = (f1[j] > f0[j]) | (f0[j] != f0[j])
+				f0[j] = ((f1[j] > f0[j]) | (f0[j] != f0[j]))
 				            ? f1[j]
 				            : f0[j];
 			}

@@ -59,7 +59,8 @@ static void draw(uint8_t *px, uint32_t w, uint32_t h, double cx, double cy)
 		for (uint32_t x = 0; x < w; x++) {
 			uint8_t *p = px + ((size_t)y * w + x) * 4u;
 			double dx = x - cx, dy = y - cy;
-			double r = sqrt(dx * dx + dy * dy), in = r < h / 3.0;
+			double r = sqrt(dx * dx + dy * dy);
+			bool in = r < h / 3.0;
 			double s = in ? 1.0 - r / h : 0.0;
 			p[0] =
 			    (uint8_t)(in ? 60 + 180 * s : 30 + 100.0 * x / w);

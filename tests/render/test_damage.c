@@ -204,7 +204,7 @@ static bool draw_marked(struct bc_renderer *r, const struct bc_camera *cam,
 	        r, cam, f, &(struct bc_render_region){.tiles = tiles}, st,
 	        &ei)) {
 		fprintf(stderr, "  region: %s\n", ei.msg);
-		CHECK(!"region render");
+		CHECK(0 && "region render");
 		return false;
 	}
 	CHECK(!st->incomplete);
@@ -566,12 +566,12 @@ static void damage_scene(enum bc_backend b, const struct scene *s, uint32_t n,
 	nt = ntiles(w, h);
 	REQUIRE(t);
 	if (build_scene(s, t) != 0) {
-		CHECK(!"scene builds");
+		CHECK(0 && "scene builds");
 		goto done;
 	}
 	l = bc_tree_lin(t);
 	if (!l) {
-		CHECK(!"scene not empty");
+		CHECK(0 && "scene not empty");
 		goto done;
 	}
 	size = l->size;
@@ -583,7 +583,7 @@ static void damage_scene(enum bc_backend b, const struct scene *s, uint32_t n,
 	if (!old || !tiles || !subset || bc_frame_init(&f, w, h) ||
 	    bc_frame_init(&g, w, h) || bc_frame_init(&stale, w, h) ||
 	    bc_frame_init(&sub, w, h)) {
-		CHECK(!"memory");
+		CHECK(0 && "memory");
 		goto done;
 	}
 	if (bc_renderer_create(&r, b, NULL, &ei) ||
@@ -591,7 +591,7 @@ static void damage_scene(enum bc_backend b, const struct scene *s, uint32_t n,
 	    bc_renderer_sync(r, t, NULL, &ei) ||
 	    bc_renderer_render(r, &cam, &f, &st, &ei)) {
 		fprintf(stderr, "  %s: %s\n", s->label, ei.msg);
-		CHECK(!"first frame");
+		CHECK(0 && "first frame");
 		goto done;
 	}
 	for (uint32_t i = 0; i < n; i++) {
@@ -610,7 +610,7 @@ static void damage_scene(enum bc_backend b, const struct scene *s, uint32_t n,
 		REQUIRE(bc_tree_lin(t) == l);
 		if (bc_renderer_sync(r, t, &dirty, &ei)) {
 			fprintf(stderr, "  sync: %s\n", ei.msg);
-			CHECK(!"sync");
+			CHECK(0 && "sync");
 			break;
 		}
 		memset(tiles, 0, nt);
@@ -629,7 +629,7 @@ static void damage_scene(enum bc_backend b, const struct scene *s, uint32_t n,
 		if (bc_renderer_sync(ref, t, NULL, &ei) ||
 		    bc_renderer_render(ref, &cam, &g, &st, &ei)) {
 			fprintf(stderr, "  render: %s\n", ei.msg);
-			CHECK(!"whole render");
+			CHECK(0 && "whole render");
 			break;
 		}
 		CHECK(!st.incomplete);
@@ -647,7 +647,7 @@ static void damage_scene(enum bc_backend b, const struct scene *s, uint32_t n,
 			        r, &cam, &sub,
 			        &(struct bc_render_region){.tiles = subset},
 			        &st, &ei)) {
-				CHECK(!"subset render");
+				CHECK(0 && "subset render");
 				break;
 			}
 			ty->subset_frames++;
@@ -853,7 +853,7 @@ static void splice_scene(const struct scene *s, uint32_t n,
 	uint8_t *tiles = bc_calloc(nt, 1);
 	REQUIRE(t && sub && tiles);
 	if (build_scene(s, t) != 0 || !bc_tree_lin(t)) {
-		CHECK(!"scene builds");
+		CHECK(0 && "scene builds");
 		goto done;
 	}
 	frame_scene(bc_tree_lin(t), &cam);
@@ -863,7 +863,7 @@ static void splice_scene(const struct scene *s, uint32_t n,
 	    bc_renderer_create(&ref, BC_BACKEND_TILED, NULL, &ei) ||
 	    bc_renderer_sync(r, t, NULL, &ei) ||
 	    bc_renderer_render(r, &cam, &f, &st, &ei)) {
-		CHECK(!"first frame");
+		CHECK(0 && "first frame");
 		goto done;
 	}
 	for (uint32_t i = 0; i < n; i++) {
@@ -892,7 +892,7 @@ static void splice_scene(const struct scene *s, uint32_t n,
 		    bc_renderer_sync(ref, t, NULL, &ei) ||
 		    bc_renderer_render(ref, &cam, &g, &st, &ei)) {
 			fprintf(stderr, "  %s: %s\n", s->label, ei.msg);
-			CHECK(!"sync and whole render");
+			CHECK(0 && "sync and whole render");
 			break;
 		}
 		memset(tiles, !follows, nt);
@@ -1401,7 +1401,7 @@ static bool group_step(struct group_run *gr, uint32_t first, uint32_t n,
 	if (group_move(gr->t, gr->r, &gr->cam, gr->w, gr->h, first, n, d,
 	               gr->tiles, &ei)) {
 		fprintf(stderr, "  move: %s\n", ei.msg);
-		CHECK(!"group move");
+		CHECK(0 && "group move");
 		return false;
 	}
 	bc_tree_take_dirty(gr->t, &dirty);
@@ -1409,7 +1409,7 @@ static bool group_step(struct group_run *gr, uint32_t first, uint32_t n,
 	    !draw_marked(gr->r, &gr->cam, &gr->f, gr->tiles, &gr->st) ||
 	    bc_renderer_sync(gr->ref, gr->t, NULL, &ei) ||
 	    bc_renderer_render(gr->ref, &gr->cam, &gr->g, &st, &ei)) {
-		CHECK(!"sync or draw");
+		CHECK(0 && "sync or draw");
 		return false;
 	}
 	CHECK(diff_frames(&gr->f, &gr->g, gr->tiles, what) == 0);

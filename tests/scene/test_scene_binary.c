@@ -1193,7 +1193,7 @@ static void the_head_count_is_what_the_decoder_builds(void)
 		bad[i].make(&w);
 		if (bc_scene_head_count(w.b, w.n, w.n) != 0) {
 			printf("  %s: counted\n", bad[i].what);
-			CHECK(!"a count the decoder refuses was read");
+			CHECK(0 && "a count the decoder refuses was read");
 		}
 	}
 	bc_tree_destroy(t);

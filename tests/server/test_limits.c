@@ -909,7 +909,7 @@ static void leave(struct conn *c)
 			return;
 		}
 	}
-	CHECK(!"no OK for SESSION_LEAVE");
+	CHECK(0 && "no OK for SESSION_LEAVE");
 }
 
 static void a_viewer_token_cannot_create_or_delete_sessions(void)
@@ -1350,7 +1350,7 @@ static void load_leave_send(struct conn *c, const char *name,
 			return;
 		}
 	}
-	CHECK(!"no OK for SESSION_LEAVE");
+	CHECK(0 && "no OK for SESSION_LEAVE");
 }
 
 /* --scene-memory 100: 149 796 nodes. Session a is loaded with 100 001

@@ -910,7 +910,7 @@ static void full_sessions_and_a_full_server_are_elimit(void)
 			break;
 		}
 		if (c[n].m.type != BC_MSG_SESSION_INFO) {
-			CHECK(!"no answer to SESSION_CREATE");
+			CHECK(0 && "no answer to SESSION_CREATE");
 			n++;
 			break;
 		}

@@ -71,7 +71,7 @@ static long stall(const struct daemon *d, struct conn *members, long base)
 		m.snapshot.encoding = BC_PROTO_ENC_RAW;
 		m.snapshot.planes = BC_PROTO_PLANES_ALL;
 		if (conn_open(c, d) != 0) {
-			CHECK(!"cannot connect");
+			CHECK(0 && "cannot connect");
 			return -1;
 		}
 		setsockopt(c->fd, SOL_SOCKET, SO_RCVBUF, &small, sizeof(small));
@@ -80,7 +80,7 @@ static long stall(const struct daemon *d, struct conn *members, long base)
 		    conn_join(c, "default", BC_PROTO_ROLE_VIEWER, false) != 0 ||
 		    !conn_view(c, SIZE, SIZE, BC_PROTO_ENC_PNG) ||
 		    !conn_send(c, &m)) {
-			CHECK(!"a stalled member could not join");
+			CHECK(0 && "a stalled member could not join");
 			return -1;
 		}
 	}

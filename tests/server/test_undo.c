@@ -52,7 +52,7 @@ static int await_applied(struct editor *e, uint32_t seq, int ms)
 		}
 		root = bc_tree_root(e->mirror);
 		if (bc_edit_replay(&e->mirror, &e->c.m.edit_applied, &ei)) {
-			CHECK(!"an EDIT_APPLIED does not replay");
+			CHECK(0 && "an EDIT_APPLIED does not replay");
 			return -1;
 		}
 		if (e->c.m.edit_applied.author == e->member &&
@@ -419,7 +419,7 @@ static void undo_redo_one(const struct daemon *d, struct editor *alice,
 		fprintf(stderr, "  edit refused: %.*s\n",
 		        (int)alice->c.m.error.text.len,
 		        alice->c.m.error.text.ptr);
-		CHECK(!"the edit applies");
+		CHECK(0 && "the edit applies");
 		bc_tree_destroy(before);
 		return;
 	}

@@ -106,7 +106,7 @@ static void undo_refused(struct conn *c, bool redo, uint8_t scope, int code,
 	if (has && !strstr(text, has)) {
 		fprintf(stderr, "  error text \"%s\" lacks \"%s\"\n", text,
 		        has);
-		CHECK(!"the error names what it should");
+		CHECK(0 && "the error names what it should");
 	}
 }
 

@@ -836,6 +836,8 @@ static void test_rendered(void)
 static char log_seen[512];
 
 static void log_capture(enum bc_log_level level, const char *file, int line,
+                        const char *fmt, va_list args) BC__PRINTF(4, 0);
+static void log_capture(enum bc_log_level level, const char *file, int line,
                         const char *fmt, va_list args)
 {
 	char msg[512];
