@@ -19,8 +19,9 @@
  * the kernel takes itself, lane-wise with the same float operations, so
  * that such a lane does not leave the vector registers between samples
  * (bc__pk_march_fn); a lane comes back to the state machine when its
- * secant refinement ends, its value is not a number or its budget runs
- * out. Nothing crosses
+ * secant refinement ends, its budget runs out, or in the rare cases
+ * bc__pk_march_fn lists (a value that is not a number, a crossing too
+ * narrow to bisect, a hit at the very start). Nothing crosses
  * lanes, so a pixel's value does not depend on which other pixels share
  * its packet.
  */
@@ -153,7 +154,10 @@ typedef void (*bc__pk_eval_fn)(const struct bc_view *v,
  * the value; so is a searching lane whose sixth round ends (gold_head's
  * closer sample). A marching lane whose new point is at the interval's
  * end, not within the hit epsilon, is the machine's miss: it leaves
- * `march` for k->miss (mevals counting the value). Returns the active
+ * `march` for k->miss (mevals counting the value). The rest is the state
+ * machine's: a value that is not a number, a crossing too narrow to
+ * bisect, a start lane already inside, the end of a secant refinement,
+ * a lane without budget for another sample. Returns the active
  * lanes it neither stepped nor finished
  * (v[] holds their field, not yet divided by the Lipschitz bound); their
  * state is as it was, in the arrays of their kind. */

@@ -576,8 +576,8 @@ uint32_t PK_MARCH(const struct bc_view *v, const struct bc_lin *lin,
 	}
 	/* A refining lane (S_REFINE) whose probe came closer without
 	 * crossing: the probe is its new point, and refine_head's next probe
-	 * while fewer than 8 rounds are done. A value not below v goes to
-	 * the golden section: the state machine's. */
+	 * while fewer than 8 rounds are done. A value not below v starts
+	 * the golden section (below). */
 	ri = vadd(vload(ln->ri), one);
 	probe_r = zero;
 	ok_r = mfrombits(0);
