@@ -232,13 +232,6 @@ static float lane_budget(const struct bc__frame_ctx *fc, uint32_t spent)
 	return (float)left;
 }
 
-/* The kinds of lane the kernel steps (packet.h's bc__pk_march_fn). */
-#define LANE_MARCH BC__PK_LANE_MARCH
-#define LANE_BISECT BC__PK_LANE_BISECT
-#define LANE_REFINE BC__PK_LANE_REFINE
-#define LANE_GOLD BC__PK_LANE_GOLD
-#define LANE_KINDS BC__PK_LANE_KINDS
-
 /* The kind of lane a ray waiting in `state` makes; false for a state
  * only the state machine takes (none waits in one now: a start lane is
  * a marching one, start_lanes). */
@@ -249,17 +242,17 @@ static bool lane_kind_of(uint8_t state, int *kind)
 	case BC__PK_GOLD_E0:
 	case BC__PK_GOLD_C:
 	case BC__PK_GOLD_E:
-		*kind = LANE_GOLD;
+		*kind = BC__PK_LANE_GOLD;
 		return true;
 	case BC__PK_STEP:
 	case BC__PK_STEP2:
-		*kind = LANE_MARCH;
+		*kind = BC__PK_LANE_MARCH;
 		return true;
 	case BC__PK_BISECT:
-		*kind = LANE_BISECT;
+		*kind = BC__PK_LANE_BISECT;
 		return true;
 	case BC__PK_REFINE:
-		*kind = LANE_REFINE;
+		*kind = BC__PK_LANE_REFINE;
 		return true;
 	default:
 		return false;
@@ -276,7 +269,7 @@ static bool lane_kind_of(uint8_t state, int *kind)
 static void to_lanes(const struct bc__pk_ray *r, struct bc__pk_lanes *ln,
                      uint32_t i, int kind, float budget)
 {
-	if (kind == LANE_GOLD) {
+	if (kind == BC__PK_LANE_GOLD) {
 		ln->ga[i] = r->a;
 		ln->gfa[i] = r->fa;
 		ln->gb[i] = r->b;
@@ -286,7 +279,7 @@ static void to_lanes(const struct bc__pk_ray *r, struct bc__pk_lanes *ln,
 		ln->gve[i] = r->ve;
 		ln->gi[i] = (float)r->i;
 		ln->gph[i] = (float)(r->state - BC__PK_GOLD_C0);
-	} else if (kind == LANE_BISECT) {
+	} else if (kind == BC__PK_LANE_BISECT) {
 		ln->ba[i] = r->a;
 		ln->bfa[i] = r->fa;
 		ln->bb[i] = r->b;
@@ -297,7 +290,7 @@ static void to_lanes(const struct bc__pk_ray *r, struct bc__pk_lanes *ln,
 		ln->mv[i] = r->v;
 		ln->mt_prev[i] = r->t_prev;
 		ln->mv_prev[i] = r->v_prev;
-		if (kind == LANE_MARCH) {
+		if (kind == BC__PK_LANE_MARCH) {
 			ln->momega[i] = r->omega;
 			ln->mt1[i] = r->t1;
 		} else {
@@ -323,7 +316,7 @@ static void start_lanes(const struct bc__pk_ray *r, struct bc__pk_lanes *ln,
 	head.t = head.t_prev = r->t0;
 	head.v = head.v_prev = 0.0f;
 	head.omega = BC_CPU_OVERRELAX;
-	to_lanes(&head, ln, i, LANE_MARCH, budget);
+	to_lanes(&head, ln, i, BC__PK_LANE_MARCH, budget);
 }
 
 /* The ray of a lane of that kind, back from the kernel (which may have
@@ -333,7 +326,7 @@ static void start_lanes(const struct bc__pk_ray *r, struct bc__pk_lanes *ln,
 static void from_lanes(struct bc__pk_ray *r, const struct bc__pk_lanes *ln,
                        uint32_t i, int kind)
 {
-	if (kind == LANE_GOLD) {
+	if (kind == BC__PK_LANE_GOLD) {
 		r->state = (uint8_t)(BC__PK_GOLD_C0 + (int)ln->gph[i]);
 		r->a = ln->ga[i];
 		r->fa = ln->gfa[i];
@@ -343,7 +336,7 @@ static void from_lanes(struct bc__pk_ray *r, const struct bc__pk_lanes *ln,
 		r->vc = ln->gvc[i];
 		r->ve = ln->gve[i];
 		r->i = (uint8_t)ln->gi[i];
-	} else if (kind == LANE_BISECT) {
+	} else if (kind == BC__PK_LANE_BISECT) {
 		r->state = BC__PK_BISECT;
 		r->a = ln->ba[i];
 		r->fa = ln->bfa[i];
@@ -355,7 +348,7 @@ static void from_lanes(struct bc__pk_ray *r, const struct bc__pk_lanes *ln,
 		r->v = ln->mv[i];
 		r->t_prev = ln->mt_prev[i];
 		r->v_prev = ln->mv_prev[i];
-		if (kind == LANE_REFINE) {
+		if (kind == BC__PK_LANE_REFINE) {
 			r->state = BC__PK_REFINE;
 			r->i = (uint8_t)ln->ri[i];
 			r->cap = ln->rcap[i];
@@ -475,7 +468,7 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 	uint8_t queue[BC_CPU_TILE * BC_CPU_TILE];
 	uint8_t hit_px[BC_CPU_TILE * BC_CPU_TILE];
 	float hit_t[BC_CPU_TILE * BC_CPU_TILE];
-	uint32_t nq = 0, head = 0, nh = 0, active = 0, slow, ended, missed,
+	uint32_t nq = 0, head = 0, nh = 0, active = 0, slow,
 	         lanes = k.lanes >= 32 ? UINT32_MAX : (1u << k.lanes) - 1u;
 	struct bc__pk_kinds kinds = {{0}, 0, 0}; /* the lanes of each kind */
 	const struct bc__pk_steps st = {
@@ -533,22 +526,21 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 			start_lanes(&ray[i], &ln, i,
 			            lane_budget(fc, px->evals[p]));
 			active |= 1u << i;
-			kinds.of[LANE_MARCH] |= 1u << i;
+			kinds.of[BC__PK_LANE_MARCH] |= 1u << i;
 			free &= free - 1u;
 		}
 		if (!active) {
 			break;
 		}
 		slow = k.march(&wk->view, fc->lin, &ln, active, &kinds, &st);
-		ended = kinds.hit;
-		missed = kinds.miss;
 		/* Bisections the kernel ended (hits) and marches that reached
 		 * the range's end (misses), as the state machine would have
 		 * finished them (from_lanes and a feed spared). */
-		for (uint32_t bits = ended | missed; bits; bits &= bits - 1) {
+		for (uint32_t bits = kinds.hit | kinds.miss; bits;
+		     bits &= bits - 1) {
 			uint32_t i = lowest_bit(bits);
 			struct bc__pk_ray *r = &ray[i];
-			bool hit = (ended >> i) & 1u;
+			bool hit = (kinds.hit >> i) & 1u;
 			r->evals += (uint32_t)ln.mevals[i];
 			r->res = hit ? BC__TRACE_HIT : BC__TRACE_MISS;
 			r->t_hit = hit ? ln.t[i] : 0.0f;
@@ -560,7 +552,8 @@ static void trace_range_packets(struct bc__tile_worker *wk,
 			uint32_t i = lowest_bit(bits), p;
 			struct bc__pk_ray *r = &ray[i];
 			int kind;
-			for (kind = LANE_MARCH; kind < LANE_KINDS; kind++) {
+			for (kind = BC__PK_LANE_MARCH; kind < BC__PK_LANE_KINDS;
+			     kind++) {
 				if ((kinds.of[kind] >> i) & 1u) {
 					from_lanes(r, &ln, i, kind);
 					kinds.of[kind] &= ~(1u << i);
