@@ -331,43 +331,30 @@ static float transition(float x, float beta, float range)
 	return t > 0.0f ? beta * t : 0.0f;
 }
 
-/* fminf's and fmaxf's values (the other operand where one is NaN) without
- * their library calls: the scalar tracers evaluate an operator at every
- * sample, and GCC calls libm for fminf and fmaxf unless told that no
- * NaN or signed zero can occur. */
-static inline float op_min(float a, float b)
-{
-	return ((b < a) | (a != a)) ? b : a;
-}
-static inline float op_max(float a, float b)
-{
-	return ((b > a) | (a != a)) ? b : a;
-}
-
 static float g_union(float f0, float f1, float beta)
 {
-	return op_min(f0, f1) - blend_amount(f0, f1, beta);
+	return bc_op_min(f0, f1) - blend_amount(f0, f1, beta);
 }
 
 static float g_inter(float f0, float f1, float beta)
 {
-	return op_max(f0, f1) + blend_amount(f0, f1, beta);
+	return bc_op_max(f0, f1) + blend_amount(f0, f1, beta);
 }
 
 static float g_diff(float f0, float f1, float beta)
 {
-	return op_max(f0, -f1) + blend_amount(f0, -f1, beta);
+	return bc_op_max(f0, -f1) + blend_amount(f0, -f1, beta);
 }
 
 float bc_op_eval(enum bc_op kind, float blend, float range, float f0, float f1)
 {
 	switch (kind) {
 	case BC_OP_UNION:
-		return op_min(f0, f1);
+		return bc_op_min(f0, f1);
 	case BC_OP_INTERSECTION:
-		return op_max(f0, f1);
+		return bc_op_max(f0, f1);
 	case BC_OP_DIFFERENCE:
-		return op_max(f0, -f1);
+		return bc_op_max(f0, -f1);
 	case BC_OP_SMOOTH_UNION:
 		/* R_o = (-inf, r_o]: eq. 12 and 17. */
 		if (f0 <= range && f1 <= range) {
@@ -375,7 +362,7 @@ float bc_op_eval(enum bc_op kind, float blend, float range, float f0, float f1)
 			    transition(g_union(f0, f1, blend), blend, range);
 			return g_union(f0, f1, b);
 		}
-		return op_min(f0, f1);
+		return bc_op_min(f0, f1);
 	case BC_OP_SMOOTH_INTERSECTION:
 		/* R_o = [-r_o, r_o]; b_r takes |g| (§4). */
 		if (fabsf(f0) <= range && fabsf(f1) <= range) {
@@ -383,14 +370,14 @@ float bc_op_eval(enum bc_op kind, float blend, float range, float f0, float f1)
 			                     blend, range);
 			return g_inter(f0, f1, b);
 		}
-		return op_max(f0, f1);
+		return bc_op_max(f0, f1);
 	case BC_OP_SMOOTH_DIFFERENCE:
 		if (fabsf(f0) <= range && fabsf(f1) <= range) {
 			float b = transition(fabsf(g_diff(f0, f1, blend)),
 			                     blend, range);
 			return g_diff(f0, f1, b);
 		}
-		return op_max(f0, -f1);
+		return bc_op_max(f0, -f1);
 	default:
 		return INFINITY;
 	}

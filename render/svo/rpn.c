@@ -393,9 +393,9 @@ static inline void step(const struct bc_svo_rpn *r, uint32_t i, float *st,
 		/* Sharp operators inline, as fminf and fmaxf answer (a NaN
 		 * operand yields the other); blends through ops.c. */
 		if (t->kind == BC_OP_UNION) {
-			st[s - 2] = f1 < f0 || f0 != f0 ? f1 : f0;
+			st[s - 2] = bc_op_min(f0, f1);
 		} else if (t->kind == BC_OP_INTERSECTION) {
-			st[s - 2] = f1 > f0 || f0 != f0 ? f1 : f0;
+			st[s - 2] = bc_op_max(f0, f1);
 		} else {
 			st[s - 2] = bc_op_eval((enum bc_op)t->kind, rec[0],
 			                       rec[1], f0, f1);
@@ -583,19 +583,15 @@ static inline void lanes_step(const struct bc_svo_rpn *r, uint32_t i,
 				    right ? who[s - 1][j] : who[s - 2][j];
 			}
 		}
-		/* step()'s sharp operators; | rather than || keeps the
-		 * loops free of branches, so they vectorize. */
+		/* step()'s sharp operators, as selects (bc_op_min), so the
+		 * loops vectorize. */
 		if (t->kind == BC_OP_UNION) {
 			for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
-				f0[j] = ((f1[j] < f0[j]) | (f0[j] != f0[j]))
-				            ? f1[j]
-				            : f0[j];
+				f0[j] = bc_op_min(f0[j], f1[j]);
 			}
 		} else if (t->kind == BC_OP_INTERSECTION) {
 			for (uint32_t j = 0; j < BC__SVO_LANES; j++) {
-				f0[j] = ((f1[j] > f0[j]) | (f0[j] != f0[j]))
-				            ? f1[j]
-				            : f0[j];
+				f0[j] = bc_op_max(f0[j], f1[j]);
 			}
 		} else {
 			for (uint32_t j = 0; j < BC__SVO_LANES; j++) {

@@ -212,6 +212,19 @@ BC_API const struct bc_unary_info *bc_unary_info(enum bc_op kind);
 BC_API float bc_op_eval(enum bc_op kind, float blend, float range, float f0,
                         float f1);
 
+/* The sharp union's and intersection's values: fminf's and fmaxf's (the
+ * other operand where one is NaN) without their library calls, which GCC
+ * makes unless told that no NaN or signed zero occurs. bc_op_eval's, and
+ * the svo lanes' (written as selects, so loops of them vectorize). */
+static inline float bc_op_min(float a, float b)
+{
+	return ((b < a) | (a != a)) ? b : a;
+}
+static inline float bc_op_max(float a, float b)
+{
+	return ((b > a) | (a != a)) ? b : a;
+}
+
 /* ---- Model data -------------------------------------------------------- */
 
 struct bc_prim_data {
