@@ -186,7 +186,10 @@ static const char render_about[] =
 static const char render_footer[] =
     "Backend-only options are accepted with any backend and ignored by\n"
     "the others. Exit status: 0 done, 1 the scene could not be loaded\n"
-    "or rendered or an image written, 2 bad arguments.";
+    "or rendered or an image written, 2 bad arguments.\n"
+    "Environment: SOURCE_DATE_EPOCH (seconds since 1970, UTC), when set,\n"
+    "is the time .tif and .exr files state instead of the time of\n"
+    "writing, so that one scene rendered twice gives the same bytes.";
 
 static struct bc_args render_args(const struct bc_opt *opts)
 {

@@ -16,7 +16,9 @@ extern "C" {
 
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <exception>
 #include <memory>
 #include <string>
@@ -115,6 +117,43 @@ int write_pfm(const char *path, const struct bc_image *img,
 	return 0;
 }
 
+/* The time a written file states (TIFF DateTime, EXR capDate): that of
+ * SOURCE_DATE_EPOCH when it is set (seconds since 1970, UTC), so that the
+ * same scene rendered twice gives the same bytes, as reproducible build
+ * tools expect; left to OpenImageIO (the time of writing) when it is not.
+ * Returns 0, or BC_EINVAL for a value that is not such a number. */
+int source_date(std::string &out, struct bc_errinfo *ei)
+{
+	const char *v = std::getenv("SOURCE_DATE_EPOCH");
+	char *end = nullptr;
+	char text[32];
+	struct tm tm;
+	out.clear();
+	if (!v) {
+		return 0;
+	}
+	errno = 0;
+	unsigned long long secs = std::strtoull(v, &end, 10);
+	/* Up to year 9999: the tag holds four digits of year. */
+	if (!*v || *v < '0' || *v > '9' || *end || errno ||
+	    secs > 253402300799ull) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+				      "SOURCE_DATE_EPOCH='%s' is not a count "
+				      "of seconds since 1970-01-01 UTC up to "
+				      "year 9999; unset it to stamp files with "
+				      "the time of writing",
+				      v);
+	}
+	time_t t = static_cast<time_t>(secs);
+	if (!gmtime_r(&t, &tm) ||
+	    std::strftime(text, sizeof(text), "%Y:%m:%d %H:%M:%S", &tm) != 19) {
+		return bc_errinfo_set(ei, BC_EINVAL,
+				      "SOURCE_DATE_EPOCH='%s': no date", v);
+	}
+	out = text;
+	return 0;
+}
+
 int write_image(const char *path, const struct bc_image *img,
 		struct bc_errinfo *ei)
 {
@@ -160,6 +199,13 @@ int write_image(const char *path, const struct bc_image *img,
 	/* Our RGBA is straight (unassociated) alpha: without this hint
 	 * OpenImageIO would divide colour by alpha when writing PNG. */
 	spec.attribute("oiio:UnassociatedAlpha", 1);
+	std::string date;
+	if (int rc = source_date(date, ei)) {
+		return rc;
+	}
+	if (!date.empty()) {
+		spec.attribute("DateTime", date);
+	}
 	if (!out->open(path, spec)) {
 		return bc_errinfo_set(ei, BC_EIO, "%s: cannot open for writing: %s",
 				      path, first_line(out->geterror()).c_str());

@@ -4,6 +4,7 @@
  * exr/tif/pfm, uint32 tif/exr), formats that would lose samples are refused
  * by name, and the reader bounds what a file header may ask for.
  */
+#include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -184,6 +185,80 @@ static void test_jpeg_keeps_colour_drops_alpha(void)
 	unlink(path);
 }
 
+/* Reads up to cap bytes of path into buf; returns how many (0 when it
+ * cannot be read). */
+static size_t slurp(const char *path, char *buf, size_t cap)
+{
+	FILE *f = fopen(path, "rb");
+	size_t n;
+	if (!f) {
+		return 0;
+	}
+	n = fread(buf, 1, cap, f);
+	fclose(f);
+	return n;
+}
+
+static bool has_text(const char *buf, size_t n, const char *text)
+{
+	size_t k = strlen(text);
+	for (size_t i = 0; i + k <= n; i++) {
+		if (!memcmp(buf + i, text, k)) {
+			return true;
+		}
+	}
+	return false;
+}
+
+/* TIFF and OpenEXR files state when they were written; with
+ * SOURCE_DATE_EPOCH set they state that time instead, so that writing the
+ * same image twice gives the same bytes; a value that is not a count of
+ * seconds is refused, naming the variable, and nothing is written. */
+static void test_source_date_epoch_makes_files_reproducible(void)
+{
+	static const char *names[] = {"date.tif", "date.exr"};
+	static char a[1 << 16], b[1 << 16];
+	float v[W * H];
+	for (int i = 0; i < W * H; i++) {
+		v[i] = (float)i;
+	}
+	REQUIRE(setenv("SOURCE_DATE_EPOCH", "1700000000", 1) == 0);
+	for (size_t n = 0; n < 2; n++) {
+		struct bc_errinfo ei = {0};
+		const char *path = tmp_path(names[n]);
+		size_t na, nb;
+		REQUIRE(path);
+		CHECK_EQ_INT(bc_image_write_float(path, W, H, v, &ei), 0);
+		na = slurp(path, a, sizeof(a));
+		/* A second apart at least: a stamp of the time of writing
+		 * would differ. */
+		sleep(1);
+		CHECK_EQ_INT(bc_image_write_float(path, W, H, v, &ei), 0);
+		nb = slurp(path, b, sizeof(b));
+		CHECK(na > 0 && na < sizeof(a));
+		CHECK_EQ_INT(na, nb);
+		CHECK(na == nb && !memcmp(a, b, na));
+		/* 1 700 000 000 s after the epoch, in UTC. */
+		CHECK(has_text(a, na, "2023:11:14 22:13:20"));
+		unlink(path);
+	}
+	for (size_t n = 0; n < 2; n++) {
+		static const char *bad[] = {"-1", "12x", "", " 5",
+		                            "99999999999999999999"};
+		const char *path = tmp_path(names[n]);
+		REQUIRE(path);
+		for (size_t k = 0; k < sizeof(bad) / sizeof(bad[0]); k++) {
+			struct bc_errinfo ei = {0};
+			REQUIRE(setenv("SOURCE_DATE_EPOCH", bad[k], 1) == 0);
+			CHECK_EQ_INT(bc_image_write_float(path, W, H, v, &ei),
+			             BC_EINVAL);
+			CHECK(strstr(ei.msg, "SOURCE_DATE_EPOCH") != NULL);
+			CHECK(access(path, F_OK) != 0);
+		}
+	}
+	REQUIRE(unsetenv("SOURCE_DATE_EPOCH") == 0);
+}
+
 static void test_reader_refuses_oversized_header(void)
 {
 	/* A PFM header is text: claim 70000 x 70000 floats with no data. The
@@ -212,6 +287,8 @@ static const struct bc_test tests[] = {
     {"unknown_extension_and_missing_file",
      test_unknown_extension_and_missing_file},
     {"jpeg_keeps_colour_drops_alpha", test_jpeg_keeps_colour_drops_alpha},
+    {"source_date_epoch_makes_files_reproducible",
+     test_source_date_epoch_makes_files_reproducible},
     {"reader_refuses_oversized_header", test_reader_refuses_oversized_header},
 };
 
