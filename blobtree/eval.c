@@ -132,11 +132,9 @@ void bc_domain_map(const struct bc_lin *l, uint32_t d, const float p[3],
 	}
 }
 
-float bc_unary_value(const struct bc_lin *l, uint32_t u, float f,
-                     const float p[3])
+float bc_unary_apply(uint32_t kind, const float *rec, float f, const float q[3])
 {
-	const float *rec = l->param + 4u * (size_t)l->unary_param[u];
-	switch (l->unary_kind[u]) {
+	switch (kind) {
 	case BC_OP_OFFSET:
 		return f - rec[0];
 	case BC_OP_ONION:
@@ -150,22 +148,30 @@ float bc_unary_value(const struct bc_lin *l, uint32_t u, float f,
 		 * with the distance r from the axis, so a step of value / L
 		 * stays safe out there; the value stays above the ROI bound
 		 * (docs/scene-format.md). */
-		float q[3], r;
-		bc_domain_map(l, l->unary_dom[u], p, q);
-		r = l->unary_kind[u] == BC_OP_TWIST
-		        ? sqrtf(q[0] * q[0] + q[2] * q[2])
-		        : sqrtf(q[0] * q[0] + q[1] * q[1]);
+		float r = kind == BC_OP_TWIST
+		              ? sqrtf(q[0] * q[0] + q[2] * q[2])
+		              : sqrtf(q[0] * q[0] + q[1] * q[1]);
 		if (r > rec[1] && f > 0.0f) {
-			return f *
-			       bc_unary_own_lip(l->unary_kind[u], rec[0],
-			                        rec[1]) /
-			       bc_unary_own_lip(l->unary_kind[u], rec[0], r);
+			return f * bc_unary_own_lip(kind, rec[0], rec[1]) /
+			       bc_unary_own_lip(kind, rec[0], r);
 		}
 		return f;
 	}
 	default:
 		return f;
 	}
+}
+
+float bc_unary_value(const struct bc_lin *l, uint32_t u, float f,
+                     const float p[3])
+{
+	uint32_t kind = l->unary_kind[u];
+	float q[3] = {0.0f, 0.0f, 0.0f};
+	if (bc_unary_reads_point(kind)) {
+		bc_domain_map(l, l->unary_dom[u], p, q);
+	}
+	return bc_unary_apply(kind, l->param + 4u * (size_t)l->unary_param[u],
+	                      f, q);
 }
 
 /* The point mapped through the domain chain from d last (d the innermost

@@ -66,31 +66,12 @@ void bc__svo_domain_map(const struct bc_svo_rpn *r, uint32_t d,
 float bc__svo_unary_value(const struct bc_svo_rpn *r, uint32_t u, float f,
                           const float p[3])
 {
-	const float *rec = r->urec + (size_t)u * BC_SVO_UNARY_REC;
-	switch (r->ukind[u]) {
-	case BC_OP_OFFSET:
-		return f - rec[0];
-	case BC_OP_ONION:
-		return fabsf(f) - rec[0];
-	case BC_OP_SCALE:
-		return f * rec[0];
-	case BC_OP_TWIST:
-	case BC_OP_BEND: {
-		float q[3], rad;
+	float q[3] = {0.0f, 0.0f, 0.0f};
+	if (bc_unary_reads_point(r->ukind[u])) {
 		bc__svo_domain_map(r, r->udom[u], p, q);
-		rad = r->ukind[u] == BC_OP_TWIST
-		          ? sqrtf(q[0] * q[0] + q[2] * q[2])
-		          : sqrtf(q[0] * q[0] + q[1] * q[1]);
-		if (rad > rec[1] && f > 0.0f) {
-			return f *
-			       bc_unary_own_lip(r->ukind[u], rec[0], rec[1]) /
-			       bc_unary_own_lip(r->ukind[u], rec[0], rad);
-		}
-		return f;
 	}
-	default:
-		return f;
-	}
+	return bc_unary_apply(r->ukind[u],
+	                      r->urec + (size_t)u * BC_SVO_UNARY_REC, f, q);
 }
 
 int bc_svo_rpn_init(struct bc_svo_rpn *out, const struct bc_lin *l)

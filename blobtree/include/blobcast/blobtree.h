@@ -825,6 +825,17 @@ BC_API void bc_domain_apply(uint32_t kind, const float *rec, float p[3]);
  * BC_NONE: no map) outward: the point the slots below d see. */
 BC_API void bc_domain_map(const struct bc_lin *l, uint32_t d, const float p[3],
                           float out[3]);
+/* The value map of a unary node of kind `kind` whose record is rec, over
+ * its child's value f; q is the point in the node's frame (the world
+ * point mapped through the domain chain around it), read by twist and
+ * bend only (bc_unary_reads_point). The one implementation; the svo tape
+ * calls it too. Identity for the pure domain nodes. */
+BC_API float bc_unary_apply(uint32_t kind, const float *rec, float f,
+                            const float q[3]);
+static inline bool bc_unary_reads_point(uint32_t kind)
+{
+	return kind == BC_OP_TWIST || kind == BC_OP_BEND;
+}
 /* Applies unary node u's value map to its child's value f at world point
  * p (identity for the pure domain nodes). */
 BC_API float bc_unary_value(const struct bc_lin *l, uint32_t u, float f,
