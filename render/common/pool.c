@@ -32,10 +32,12 @@
 #include <sched.h>
 #include <stdatomic.h>
 #include <stdbool.h>
+#include <string.h>
 #include <time.h>
 #include <unistd.h>
 
 #include "blobcast/log.h"
+#include "blobcast/render_backend.h"
 
 struct pool {
 	pthread_mutex_t run_lock; /* one run at a time */
@@ -234,4 +236,19 @@ float bc_render_scale(const struct bc_lin *lin)
 		return 1.0f;
 	}
 	return exp2f(ceilf(log2f(lin->size)));
+}
+
+uint64_t bc_render_scale_key(struct bc_renderer *r, const struct bc_camera *cam,
+                             uint32_t width, uint32_t height)
+{
+	const struct bc_lin *l = r->tree ? bc_tree_lin(r->tree) : NULL;
+	float scale = bc_render_scale(l);
+	float lip = l ? l->lip : 1.0f;
+	uint32_t bits, lbits;
+	(void)cam;
+	(void)width;
+	(void)height;
+	memcpy(&bits, &scale, sizeof(bits));
+	memcpy(&lbits, &lip, sizeof(lbits));
+	return (uint64_t)bits | ((uint64_t)lbits << 32);
 }

@@ -38,23 +38,6 @@ void bc__cpu_destroy(struct bc_renderer *base)
 	bc_free(r);
 }
 
-uint64_t bc__cpu_key(struct bc_renderer *r, const struct bc_camera *cam,
-                     uint32_t width, uint32_t height)
-{
-	const struct bc_lin *l = r->tree ? bc_tree_lin(r->tree) : NULL;
-	float scale = bc_render_scale(l);
-	/* The tree's Lipschitz bound divides every step: a parameter edit
-	 * under a twist or bend that changes it changes every pixel. */
-	float lip = l ? l->lip : 1.0f;
-	uint32_t bits, lbits;
-	(void)cam;
-	(void)width;
-	(void)height;
-	memcpy(&bits, &scale, sizeof(bits));
-	memcpy(&lbits, &lip, sizeof(lbits));
-	return (uint64_t)bits | ((uint64_t)lbits << 32);
-}
-
 uint64_t bc__region_mask(const struct bc_render_region *region, uint32_t tx,
                          uint32_t ty, uint32_t width, uint32_t height)
 {

@@ -92,10 +92,6 @@ static inline struct bc__cpu *bc__cpu_of(struct bc_renderer *r)
 int bc__cpu_create(struct bc_renderer **out, enum bc__cpu_kind kind,
                    const struct bc_render_opts *opts, struct bc_errinfo *ei);
 void bc__cpu_destroy(struct bc_renderer *r);
-/* The backends' key hook: the frame constants derive from the scene's
- * scale (blobcast/render_common.h). */
-uint64_t bc__cpu_key(struct bc_renderer *r, const struct bc_camera *cam,
-                     uint32_t width, uint32_t height);
 /* Reads the region's tile byte for tile t (NULL tiles: all). Returns the
  * mask of the tile's 64 pixels (bit (y % 8) * 8 + x % 8) the region
  * traces, 0 for none; bits of pixels beyond the frame's edge are clear. */
@@ -240,9 +236,5 @@ void bc__put_miss_row(const struct bc__frame_ctx *fc, uint32_t x0, uint32_t y,
  * computed once. */
 void bc__put_miss_tile(const struct bc__frame_ctx *fc, uint32_t x0, uint32_t y0,
                        uint32_t x1, uint32_t y1, uint64_t mask);
-
-/* Clips o + t d against the box [lo, hi]; t0 is clamped to >= 0. */
-bool bc__ray_box(const float lo[3], const float hi[3], const float o[3],
-                 const float d[3], float *t0, float *t1);
 
 #endif

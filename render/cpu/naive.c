@@ -36,9 +36,9 @@ static bool naive_pixel(const struct bc__frame_ctx *fc, uint32_t x, uint32_t y,
 	uint32_t overlaps = lin ? lin->nprims : 0;
 	struct bc__field f = {lin, NULL, 0, fc->max_evals};
 	enum bc__trace_result res = BC__TRACE_MISS;
-	float d[3], t0, t1, t = 0.0f;
+	float d[3], t0 = 0.0f, t1 = INFINITY, t = 0.0f;
 	bc_view_rays_dir(&fc->vr, (float)x + 0.5f, (float)y + 0.5f, d);
-	if (lin && bc__ray_box(lin->lo, lin->hi, fc->vr.eye, d, &t0, &t1)) {
+	if (lin && bc_ray_box_clip(lin->lo, lin->hi, fc->vr.eye, d, &t0, &t1)) {
 		res = bc__trace(&f, fc, fc->vr.eye, d, t0, t1, &t);
 	}
 	/* Near the end of the scene's box counts: no surface lies beyond
@@ -148,7 +148,7 @@ const struct bc_backend_ops bc_backend_naive_ops = {
     .create = naive_create,
     .destroy = bc__cpu_destroy,
     .render = naive_render,
-    .key = bc__cpu_key,
+    .key = bc_render_scale_key,
     /* No damage hook: a step of the full tree's sphere tracing is the
      * distance to the nearest surface, wherever it is, so every pixel
      * can depend on every primitive. */

@@ -12,9 +12,9 @@
  * the range walk below needs.
  *
  * Lists kept. A tile's list depends only on the view (camera, frame size,
- * the frame constants of bc__cpu_key) and the ABVs of the primitives whose
- * rectangles hold the tile, not on the pixels asked of it. So the lists and
- * the ray directions are kept between renders of one view and each render
+ * the frame constants of bc_render_scale_key) and the ABVs of the primitives
+ * whose rectangles hold the tile, not on the pixels asked of it. So the lists
+ * and the ray directions are kept between renders of one view and each render
  * computes them only for the tiles of its region that lack them: the
  * refinement levels and bands of a view compute every list once. A new
  * view, or a change of the tree's structure, drops them all; a parameter
@@ -111,7 +111,7 @@ struct seen {
 #define TILE_DONE TILE_LIST
 
 struct bc__tiled_bufs {
-	/* The view everything below was made for (bc__cpu_key's scale
+	/* The view everything below was made for (bc_render_scale_key's scale
 	 * through min_step). view_ok false: nothing is kept. */
 	bool view_ok;
 	struct bc_camera cam;
@@ -2426,7 +2426,7 @@ const struct bc_backend_ops bc_backend_tiled_ops = {
     .destroy = bc__cpu_destroy,
     .sync = tiled_sync,
     .render = tiled_render,
-    .key = bc__cpu_key,
+    .key = bc_render_scale_key,
     .damage = tiled_damage,
     .follows_splices = true,
     .release = tiled_release,

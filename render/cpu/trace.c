@@ -242,28 +242,3 @@ enum bc__trace_result bc__trace(struct bc__field *f,
 		v = vn;
 	}
 }
-
-bool bc__ray_box(const float lo[3], const float hi[3], const float o[3],
-                 const float d[3], float *t0, float *t1)
-{
-	float a = 0.0f, b = INFINITY;
-	for (int i = 0; i < 3; i++) {
-		if (d[i] != 0.0f) {
-			float inv = 1.0f / d[i];
-			float ta = (lo[i] - o[i]) * inv,
-			      tb = (hi[i] - o[i]) * inv;
-			if (ta > tb) {
-				float s = ta;
-				ta = tb;
-				tb = s;
-			}
-			a = bc__maxf(a, ta);
-			b = bc__minf(b, tb);
-		} else if (o[i] < lo[i] || o[i] > hi[i]) {
-			return false;
-		}
-	}
-	*t0 = a;
-	*t1 = b;
-	return a <= b;
-}

@@ -1652,24 +1652,6 @@ static int gl_render(struct bc_renderer *base, const struct bc_camera *cam,
 	return rc;
 }
 
-/* The backend's own frame constants: the scene scale the minimal step,
- * the bisection tolerance and the A-buffer's margins derive from. */
-static uint64_t gl_key(struct bc_renderer *base, const struct bc_camera *cam,
-                       uint32_t width, uint32_t height)
-{
-	const struct bc_lin *l = base->tree ? bc_tree_lin(base->tree) : NULL;
-	float scale = bc_render_scale(l);
-	/* The tree's Lipschitz bound divides every step (render/cpu's key). */
-	float lip = l ? l->lip : 1.0f;
-	uint32_t bits, lbits;
-	(void)cam;
-	(void)width;
-	(void)height;
-	memcpy(&bits, &scale, sizeof(bits));
-	memcpy(&lbits, &lip, sizeof(lbits));
-	return (uint64_t)bits | ((uint64_t)lbits << 32);
-}
-
 /* The tiles abuffer.geom can give a primitive of world ABV abv: its AABB
  * widened by the hit margin (common.glsl's bc_abv_margin), projected, and
  * rounded out to tiles, with the shader's pixel of margin and one more
@@ -1870,7 +1852,9 @@ const struct bc_backend_ops bc_backend_gl_ops = {
     .destroy = gl_destroy,
     .sync = gl_sync,
     .render = gl_render,
-    .key = gl_key,
+    /* The scene scale the minimal step, the bisection tolerance and the
+     * A-buffer's margins derive from, and the Lipschitz bound. */
+    .key = bc_render_scale_key,
     .damage = gl_damage,
     .whole_regions = true,
     .release = gl_release,

@@ -31,6 +31,7 @@
 #include <string.h>
 
 #include "blobcast/alloc.h"
+#include "blobcast/render_common.h"
 
 /* Bisection depth at most: a segment halves per level, and 2^-40 of any
  * leaf is below float resolution. */
@@ -784,32 +785,6 @@ static float settle(struct ray_field *rf, float th, float ta, float tb)
 	return closest(rf, before, before_v, after);
 }
 
-/* The ray's parameter interval inside the box, clipped to [t0, t1]. */
-static bool clip(const float lo[3], const float hi[3], const float o[3],
-                 const float d[3], float *t0, float *t1)
-{
-	float a = *t0, b = *t1;
-	for (int i = 0; i < 3; i++) {
-		if (d[i] != 0.0f) {
-			float inv = 1.0f / d[i];
-			float ta = (lo[i] - o[i]) * inv,
-			      tb = (hi[i] - o[i]) * inv;
-			if (ta > tb) {
-				float s = ta;
-				ta = tb;
-				tb = s;
-			}
-			a = maxf(a, ta);
-			b = minf(b, tb);
-		} else if (o[i] < lo[i] || o[i] > hi[i]) {
-			return false;
-		}
-	}
-	*t0 = a;
-	*t1 = b;
-	return a <= b;
-}
-
 /* The node's box halves: octant oct (bit i set: the upper half on axis
  * i) of the box lo..hi whose mid planes are mid. */
 static inline void child_box(const float lo[3], const float hi[3],
@@ -1000,7 +975,7 @@ bool bc_svo_cast(struct bc_svo_caster *c, const float o[3], const float d[3],
 	uint32_t down = reciprocal(d, inv);
 	memset(hit, 0, sizeof(*hit));
 	hit->prim = BC_NONE;
-	if (!clip(s->lo, s->hi, o, d, &ta, &tb)) {
+	if (!bc_ray_box_clip(s->lo, s->hi, o, d, &ta, &tb)) {
 		return false;
 	}
 	st[0].node = 0;
@@ -1436,7 +1411,8 @@ uint32_t bc_svo_cast_packet(struct bc_svo_caster *c, const float o[3],
 			ta0[l] = t0;
 			tb0[l] = t1;
 			down[l] = reciprocal(d[l], il);
-			if (clip(s->lo, s->hi, o, d[l], &ta0[l], &tb0[l])) {
+			if (bc_ray_box_clip(s->lo, s->hi, o, d[l], &ta0[l],
+			                    &tb0[l])) {
 				live |= 1u << l;
 				sgn |= down[l];
 				st[0].ta[l] = ta0[l];

@@ -7,6 +7,7 @@
 #ifndef BLOBCAST_RENDER_COMMON_H
 #define BLOBCAST_RENDER_COMMON_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "blobcast/blobtree.h"
@@ -37,6 +38,44 @@ uint32_t bc_pool_default_threads(void);
  * computation as it was (damage renders stay exact); 1 for an empty or
  * degenerate tree. */
 float bc_render_scale(const struct bc_lin *lin);
+
+/* The key hook (render_backend.h) of the backends whose frame constants
+ * derive from the scene's scale above and the tree's Lipschitz bound,
+ * which divides every step (a parameter edit under a twist or bend that
+ * changes it changes every pixel): both, bit for bit. */
+uint64_t bc_render_scale_key(struct bc_renderer *r, const struct bc_camera *cam,
+                             uint32_t width, uint32_t height);
+
+/* Narrows [*t0, *t1] to the parameters t at which o + t d is inside the
+ * box [lo, hi] (slabs; on an axis the ray runs parallel to, all of them
+ * or none). Returns whether any is left; on a parallel axis that misses,
+ * false with *t0, *t1 as they were. The comparisons are plain (no NaN
+ * handling): box and ray are finite. */
+static inline bool bc_ray_box_clip(const float lo[3], const float hi[3],
+                                   const float o[3], const float d[3],
+                                   float *t0, float *t1)
+{
+	float a = *t0, b = *t1;
+	for (int i = 0; i < 3; i++) {
+		if (d[i] != 0.0f) {
+			float inv = 1.0f / d[i];
+			float ta = (lo[i] - o[i]) * inv,
+			      tb = (hi[i] - o[i]) * inv;
+			if (ta > tb) {
+				float s = ta;
+				ta = tb;
+				tb = s;
+			}
+			a = a > ta ? a : ta;
+			b = b < tb ? b : tb;
+		} else if (o[i] < lo[i] || o[i] > hi[i]) {
+			return false;
+		}
+	}
+	*t0 = a;
+	*t1 = b;
+	return a <= b;
+}
 
 /* One call's progress reports (bc_renderer_set_progress): init with the
  * renderer and the call's work items, then tick with the items done;
