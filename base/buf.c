@@ -100,6 +100,22 @@ int bc_buf_printf(struct bc_buf *b, const char *fmt, ...)
 	return 0;
 }
 
+size_t bc_str_appendf(char *buf, size_t cap, size_t len, const char *fmt, ...)
+{
+	va_list ap;
+	int n;
+	if (len + 1 >= cap) {
+		return len;
+	}
+	va_start(ap, fmt);
+	n = vsnprintf(buf + len, cap - len, fmt, ap);
+	va_end(ap);
+	if (n < 0) {
+		return len;
+	}
+	return (size_t)n < cap - len ? len + (size_t)n : cap - 1;
+}
+
 int bc_buf_take(struct bc_buf *b, uint8_t **out, size_t *len)
 {
 	*out = NULL;

@@ -209,26 +209,6 @@ static void quote_untrusted(char *out, size_t cap, const char *s)
 	out[i] = '\0';
 }
 
-/* snprintf at buf + len that never runs past cap; returns the new length. */
-static size_t append(char *buf, size_t cap, size_t len, const char *fmt, ...)
-    JSON_PRINTF(4, 5);
-
-static size_t append(char *buf, size_t cap, size_t len, const char *fmt, ...)
-{
-	va_list ap;
-	int n;
-	if (len + 1 >= cap) {
-		return len;
-	}
-	va_start(ap, fmt);
-	n = vsnprintf(buf + len, cap - len, fmt, ap);
-	va_end(ap);
-	if (n < 0) {
-		return len;
-	}
-	return (size_t)n < cap - len ? len + (size_t)n : cap - 1;
-}
-
 /*
  * Records code with "PATH: reason" where PATH is the current node's path,
  * then .key and [elem] when given (elem < 0: none). A path too long for the
@@ -253,25 +233,25 @@ static int jfail(struct jctx *c, int code, const char *key, long elem,
 	path[0] = '\0';
 	if (!c->in_tree && key) {
 		/* A top-level key: the path is the key itself. */
-		plen = append(path, sizeof(path), plen, "%s", key);
+		plen = bc_str_appendf(path, sizeof(path), plen, "%s", key);
 		key = NULL;
 	} else {
 		uint32_t d = 1;
-		plen = append(path, sizeof(path), plen, "root");
+		plen = bc_str_appendf(path, sizeof(path), plen, "root");
 		if (c->depth > PATH_LEVELS) {
 			d = c->depth - PATH_LEVELS + 1;
-			plen = append(path, sizeof(path), plen, "...");
+			plen = bc_str_appendf(path, sizeof(path), plen, "...");
 		}
 		for (; d <= c->depth; d++) {
-			plen = append(path, sizeof(path), plen, ".children[%u]",
-			              c->idx[d]);
+			plen = bc_str_appendf(path, sizeof(path), plen,
+			                      ".children[%u]", c->idx[d]);
 		}
 	}
 	if (key) {
-		plen = append(path, sizeof(path), plen, ".%s", key);
+		plen = bc_str_appendf(path, sizeof(path), plen, ".%s", key);
 	}
 	if (elem >= 0) {
-		plen = append(path, sizeof(path), plen, "[%ld]", elem);
+		plen = bc_str_appendf(path, sizeof(path), plen, "[%ld]", elem);
 	}
 	rlen = strlen(reason);
 	budget = rlen + 3 < sizeof(reason) ? sizeof(reason) - 3 - rlen : 0;

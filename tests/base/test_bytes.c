@@ -144,6 +144,32 @@ static void buf_out_of_memory_is_sticky(void)
 }
 
 /* The clock moves forward and ms is ns / 10^6. */
+/* bc_str_appendf writes within its array, cut and terminated at its end,
+ * and reports the length it reached. */
+static void str_appendf_stays_within_cap(void)
+{
+	char s[8];
+	size_t len = 0;
+	memset(s, 'x', sizeof(s));
+	len = bc_str_appendf(s, sizeof(s), len, "%d", 12);
+	CHECK_EQ_INT(len, 2);
+	CHECK_STREQ(s, "12");
+	len = bc_str_appendf(s, sizeof(s), len, "%s", "abc");
+	CHECK_EQ_INT(len, 5);
+	CHECK_STREQ(s, "12abc");
+	/* Cut: 7 bytes and the NUL, length cap - 1. */
+	len = bc_str_appendf(s, sizeof(s), len, "%s", "defgh");
+	CHECK_EQ_INT(len, 7);
+	CHECK_STREQ(s, "12abcde");
+	/* Full: nothing more is written. */
+	CHECK_EQ_INT(bc_str_appendf(s, sizeof(s), len, "%s", "z"), 7);
+	CHECK_STREQ(s, "12abcde");
+	/* No room at all, or a length past the array: unchanged. */
+	CHECK_EQ_INT(bc_str_appendf(s, 0, 0, "%s", "z"), 0);
+	CHECK_EQ_INT(bc_str_appendf(s, sizeof(s), 9, "%s", "z"), 9);
+	CHECK_STREQ(s, "12abcde");
+}
+
 static void clock_is_monotonic(void)
 {
 	uint64_t a = bc_clock_ns(), b;
@@ -282,6 +308,7 @@ static const struct bc_test tests[] = {
     {"rd_cursor_is_bounded_and_sticky", rd_cursor_is_bounded_and_sticky},
     {"buf_ceiling_fails_and_sticks", buf_ceiling_fails_and_sticks},
     {"buf_out_of_memory_is_sticky", buf_out_of_memory_is_sticky},
+    {"str_appendf_stays_within_cap", str_appendf_stays_within_cap},
     {"clock_is_monotonic", clock_is_monotonic},
     {"vec_helpers_follow_the_right_hand", vec_helpers_follow_the_right_hand},
     {"limits_hold_their_relations", limits_hold_their_relations},

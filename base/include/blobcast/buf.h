@@ -14,8 +14,10 @@
 
 #if defined(__GNUC__)
 #define BC__BUF_PRINTF __attribute__((format(printf, 2, 3)))
+#define BC__STR_PRINTF __attribute__((format(printf, 4, 5)))
 #else
 #define BC__BUF_PRINTF
+#define BC__STR_PRINTF
 #endif
 
 /* data[0..len) is the contents; cap the bytes allocated; max the ceiling
@@ -44,5 +46,12 @@ int bc_buf_printf(struct bc_buf *b, const char *fmt, ...) BC__BUF_PRINTF;
  * counted and needs no room under max). On a sticky error returns it, sets
  * *out to NULL and *len to 0. */
 int bc_buf_take(struct bc_buf *b, uint8_t **out, size_t *len);
+
+/* For text of a fixed size (an error's reason, a panel's lines): writes
+ * printf output at buf + len, never past cap bytes, cut there and always
+ * NUL-terminated. Returns the new length: cap - 1 when cut, len when
+ * nothing fits or the format fails. */
+size_t bc_str_appendf(char *buf, size_t cap, size_t len, const char *fmt,
+                      ...) BC__STR_PRINTF;
 
 #endif
