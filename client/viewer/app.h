@@ -1,8 +1,9 @@
 /*
  * The state of one blobcast-view window, shared by its files: main.c
- * (options, start-up, the loop, drawing), net.c (messages from the server,
- * sending camera, view and edits), input.c (mouse and keyboard) and
- * modelling.c (adding, deleting, duplicating, wrapping, regrouping).
+ * (options, start-up, the loop, drawing, joining another session), net.c
+ * (messages from the server, sending camera, view and edits), input.c
+ * (mouse and keyboard) and modelling.c (adding, deleting, duplicating,
+ * wrapping, regrouping).
  * Everything runs on the main thread except the socket watcher of main.c,
  * which only polls the socket and wakes the loop.
  */
@@ -211,6 +212,10 @@ struct bc_viewer_app {
 
 	/* H: the keys listed along the bottom of the overlay. */
 	bool help;
+	/* L: the daemon's sessions, one to join; and the name of the session
+	 * joined from it, which o.session then points to. */
+	struct bc_viewer_sessions sessions;
+	char session_name[BC_PROTO_MAX_NAME + 1];
 
 	char status[200];
 	double status_at, stats_at;
@@ -297,7 +302,17 @@ void bc_viewer_model_refused(struct bc_viewer_app *a, uint32_t seq);
 const char *bc_viewer_node_text(const struct bc_tree *t, uint32_t id, char *out,
                                 size_t n);
 
+/* main.c: joins session `name` over a new connection (the window's
+ * address, token and role) and, once joined, leaves the one it is in
+ * for it, starting afresh as a reconnect does; when the join fails the
+ * window stays where it is and the overlay says why. */
+void bc_viewer_switch_session(struct bc_viewer_app *a, const char *name);
+
 /* net.c */
+/* L and F5: asks the daemon for its sessions (SESSION_LIST) and, when it
+ * granted MEMORY, its scene memory (GET_STATS); the answers fill
+ * a->sessions as they come (bc_viewer_pump). */
+void bc_viewer_sessions_ask(struct bc_viewer_app *a);
 /* Handles messages already received or readable, at most
  * BC_VIEWER_MSGS_PER_TURN. Returns 1 when more may be waiting, 0 when
  * drained, or the connection's negative error (the reason is shown). */

@@ -29,6 +29,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include <time.h>
 
 #include "app.h"
 
@@ -384,14 +385,27 @@ static const char key_help[] =
     "K: operator kind (Shift+K: sharp/smooth)   F2: name the selection\n"
     "R: the session's camera   Home: fit the scene (Shift: selection)\n"
     "Ctrl+Z: undo   Ctrl+Shift+Z, Ctrl+Y: redo\n"
-    "F: follow the presenter   Shift+F: present\n"
+    "F: follow the presenter   Shift+F: present   L: sessions\n"
     "S: snapshot   P: screenshot   O: overlay   Q, Esc: quit\n"
     "Ctrl+S: save the scene (JSON)   Ctrl+Shift+S: binary";
+
+/* Unix time in ms, for the sessions panel's ages. */
+static uint64_t unix_ms(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_REALTIME, &ts);
+	return (uint64_t)ts.tv_sec * 1000u + (uint64_t)ts.tv_nsec / 1000000u;
+}
 
 bool bc_viewer_lower_panel(struct bc_viewer_app *a, char *out, size_t n)
 {
 	if (!n) {
 		return false;
+	}
+	if (a->sessions.open) {
+		bc_viewer_sessions_text(&a->sessions, a->o.session, unix_ms(),
+		                        out, n);
+		return true;
 	}
 	if (a->rename.open) {
 		bc_viewer_model_rename_text(a, out, n);
@@ -488,6 +502,52 @@ static bool palette_key(struct bc_viewer_app *a, int key, int mods)
 	return true;
 }
 
+/* Keys while the sessions panel is open; returns false for the keys it
+ * leaves to the rest (Q still quits, H lists the keys, A opens the add
+ * palette instead). */
+static bool sessions_key(struct bc_viewer_app *a, int key, int mods)
+{
+	char name[BC_PROTO_MAX_NAME + 1];
+	const char *chosen;
+	if (mods & (GLFW_MOD_CONTROL | GLFW_MOD_ALT | GLFW_MOD_SUPER)) {
+		return false;
+	}
+	a->redraw = true;
+	switch (key) {
+	case GLFW_KEY_UP:
+	case GLFW_KEY_DOWN:
+		bc_viewer_sessions_move(&a->sessions,
+		                        key == GLFW_KEY_UP ? -1 : 1);
+		break;
+	case GLFW_KEY_PAGE_UP:
+	case GLFW_KEY_PAGE_DOWN:
+		bc_viewer_sessions_move(&a->sessions,
+		                        (key == GLFW_KEY_PAGE_UP ? -1 : 1) *
+		                            (int)BC_VIEWER_SESSIONS_ROWS);
+		break;
+	case GLFW_KEY_F5:
+		bc_viewer_sessions_ask(a);
+		break;
+	case GLFW_KEY_ENTER:
+	case GLFW_KEY_KP_ENTER:
+		if (!(chosen = bc_viewer_sessions_chosen(&a->sessions))) {
+			bc_viewer_status(a, "no session listed to join");
+			break;
+		}
+		/* The rows may change while joining: the name is copied. */
+		snprintf(name, sizeof(name), "%s", chosen);
+		bc_viewer_switch_session(a, name);
+		break;
+	case GLFW_KEY_ESCAPE:
+	case GLFW_KEY_L:
+		a->sessions.open = false;
+		break;
+	default:
+		return false;
+	}
+	return true;
+}
+
 /* Keys while the name entry is open: all of them, so that nothing typed
  * into a name acts as a shortcut (the text itself comes through on_char). */
 static void rename_key(struct bc_viewer_app *a, int key)
@@ -526,6 +586,7 @@ static void palette_open(struct bc_viewer_app *a, enum bc_viewer_pal_section s)
 		return;
 	}
 	bc_viewer_palette_open(&a->palette, s);
+	a->sessions.open = false;
 	a->redraw = true;
 }
 
@@ -541,6 +602,9 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
 		return;
 	}
 	if (a->palette.open && palette_key(a, key, mods)) {
+		return;
+	}
+	if (a->sessions.open && sessions_key(a, key, mods)) {
 		return;
 	}
 	/* Ctrl-Z undo, Ctrl-Shift-Z or Ctrl-Y redo (held: repeated). */
@@ -577,6 +641,12 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
 	case GLFW_KEY_H:
 		a->help = !a->help;
 		a->redraw = true;
+		break;
+	case GLFW_KEY_L:
+		/* The daemon's sessions, asked for each time it opens. */
+		a->sessions.open = true;
+		a->redraw = true;
+		bc_viewer_sessions_ask(a);
 		break;
 	case GLFW_KEY_R:
 		a->cam = a->scene_cam;

@@ -280,7 +280,9 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o,
 	        "follow the presenter\n(this window shows what the "
 	        "presenter's camera sees, at its own size;\nmoving the camera "
 	        "or F again stops), Shift-F present (members who\nfollow see "
-	        "this window's camera; Shift-F again stops).\n\n"
+	        "this window's camera; Shift-F again stops); L lists\nthe "
+	        "daemon's sessions (Up/Down, Enter joins the one chosen, F5 "
+	        "asks\nagain, L or Escape closes).\n\n"
 	        "Modelling, one edit each (every member sees it at once, and "
 	        "it "
 	        "undoes\nas one step): Up and Down select the parent of the "
@@ -896,16 +898,16 @@ static int joined(struct bc_client *c, struct bc_viewer_roster *roster,
 	return rc;
 }
 
-/* Connects and joins the session of the options: an editor creates it
- * when missing, a viewer needs it to exist. Without --role, a token that
- * grants viewing only (EPERM for the editor role) joins as a viewer:
- * *view_only_token then says so. Returns 0 or the error with its reason in
- * ei; *c is set either way (NULL when connecting failed). */
-static int open_session(const struct bc_viewer_app *a, struct bc_client **c,
-                        struct bc_viewer_roster *roster, bool *view_only_token,
-                        struct bc_errinfo *ei)
+/* Connects and joins session s with the options' address, token and
+ * role: an editor creates it when missing, a viewer needs it to exist.
+ * Without --role, a token that grants viewing only (EPERM for the editor
+ * role) joins as a viewer: *view_only_token then says so. Returns 0 or
+ * the error with its reason in ei; *c is set either way (NULL when
+ * connecting failed). */
+static int open_session(const struct bc_viewer_app *a, const char *s,
+                        struct bc_client **c, struct bc_viewer_roster *roster,
+                        bool *view_only_token, struct bc_errinfo *ei)
 {
-	const char *s = a->o.session;
 	int rc = bc_client_connect(c,
 	                           &(struct bc_client_opts){
 	                               .addr = a->o.server,
@@ -970,6 +972,102 @@ static void lost(struct bc_viewer_app *a, int code, double now)
 	}
 }
 
+/* The joined connection c (its roster taken) replaces the window's
+ * (which is destroyed): everything tied to the old one's sequence numbers
+ * starts afresh, the scene's camera is the new mirror's, and the VIEW
+ * goes out. Returns 0, or -1 when the new connection failed at once
+ * (then lost()). */
+static int adopt(struct bc_viewer_app *a, struct bc_client *c,
+                 const struct bc_viewer_roster *roster, double now)
+{
+	struct bc_errinfo ei = {0};
+	struct bc_camera scene_cam;
+	bc_client_destroy(a->c);
+	a->c = c;
+	a->roster = *roster;
+	bc_viewer_edits_init(&a->edits);
+	a->model_seq = 0;
+	a->model_select = 0;
+	a->drag.mode = BC_VIEWER_DRAG_NONE;
+	a->wheel.what = BC_VIEWER_WHEEL_NONE;
+	a->snapshot_seq = 0;
+	a->undo_seq = 0;
+	a->turn_pending = false;
+	a->cam_seq = 0;
+	a->view_sent_at = 0.0;
+	a->frame_got = a->frame_acked = 0;
+	a->awaiting_key = false;
+	a->sessions.asked = 0;
+	if (bc_client_scene(a->c, &scene_cam)) {
+		a->scene_cam = scene_cam;
+	}
+	a->offline = false;
+	a->gave_up = false;
+	/* The daemon starts a member on the scene's camera: ours goes along
+	 * with the view. */
+	if (bc_viewer_send_view(a) || watch_start(a)) {
+		bc_client_error(a->c, &ei);
+		lost(a, ei.code ? ei.code : BC_EIO, now);
+		return -1;
+	}
+	return 0;
+}
+
+void bc_viewer_switch_session(struct bc_viewer_app *a, const char *name)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	struct bc_viewer_roster roster;
+	bool view_only = false;
+	char title[BC_PROTO_MAX_NAME + 32];
+	int rc;
+	if (!a->offline && strcmp(name, a->o.session) == 0) {
+		bc_viewer_status(a, "this window is in session %s already",
+		                 name);
+		return;
+	}
+	bc_viewer_status(a, "joining session %s...", name);
+	if ((rc = open_session(a, name, &c, &roster, &view_only, &ei))) {
+		bc_client_destroy(c);
+		bc_viewer_status(a, "cannot join session %s: %s (%s)", name,
+		                 ei.msg, bc_err_name(rc));
+		if (a->o.verbose) {
+			printf("switch %s failed %s\n", name, bc_err_name(rc));
+			fflush(stdout);
+		}
+		return;
+	}
+	/* Joined: the old connection goes (the daemon drops that member),
+	 * and with it what belonged to its session. */
+	watch_stop(a);
+	bc_viewer_picture_drop(a, "another session was joined");
+	snprintf(a->session_name, sizeof(a->session_name), "%s", name);
+	a->o.session = a->session_name;
+	a->view_only_token = view_only;
+	a->selected = a->sel_leaf = a->mark = 0;
+	a->palette.open = false;
+	a->rename.open = false;
+	a->sessions.open = false;
+	bc_client_backoff_reset(&a->retry, bc_viewer_now_ms());
+	if (adopt(a, c, &roster, bc_viewer_now_ms())) {
+		return;
+	}
+	a->cam = a->scene_cam;
+	bc_viewer_camera_changed(a, false);
+	snprintf(title, sizeof(title), "blobcast-view: %s", name);
+	glfwSetWindowTitle(a->win, title);
+	a->stats_at = 0.0;
+	a->redraw = true;
+	bc_viewer_status(a, "joined session %s as %s", name,
+	                 role_name(bc_client_info(a->c)->role));
+	if (a->o.verbose) {
+		printf("joined %s role=%s%s\n", name,
+		       role_name(bc_client_info(a->c)->role),
+		       view_only ? " token=viewer" : "");
+		fflush(stdout);
+	}
+}
+
 /* One attempt to reconnect (bc_client_rejoin: the dead connection's
  * address, options and session). On success the new connection replaces
  * the dead one (whose scene mirror the overlay read meanwhile) and
@@ -978,7 +1076,6 @@ static void reconnect(struct bc_viewer_app *a, double now)
 {
 	struct bc_client *c = NULL;
 	struct bc_errinfo ei = {0};
-	struct bc_camera scene_cam;
 	struct bc_viewer_roster roster;
 	int rc = bc_client_rejoin(a->c, BC_VIEWER_RETRY_TIMEOUT_MS, &c, &ei);
 	if (!rc) {
@@ -1002,30 +1099,7 @@ static void reconnect(struct bc_viewer_app *a, double now)
 		return;
 	}
 	bc_viewer_picture_drop(a, "the connection was lost");
-	bc_client_destroy(a->c);
-	a->c = c;
-	a->roster = roster;
-	bc_viewer_edits_init(&a->edits);
-	a->model_seq = 0;
-	a->model_select = 0;
-	a->drag.mode = BC_VIEWER_DRAG_NONE;
-	a->wheel.what = BC_VIEWER_WHEEL_NONE;
-	a->snapshot_seq = 0;
-	a->turn_pending = false;
-	a->cam_seq = 0;
-	a->view_sent_at = 0.0;
-	a->frame_got = a->frame_acked = 0;
-	a->awaiting_key = false;
-	if (bc_client_scene(a->c, &scene_cam)) {
-		a->scene_cam = scene_cam;
-	}
-	a->offline = false;
-	a->gave_up = false;
-	/* The daemon starts a member on the scene's camera: ours goes along
-	 * with the view. */
-	if (bc_viewer_send_view(a) || watch_start(a)) {
-		bc_client_error(a->c, &ei);
-		lost(a, ei.code ? ei.code : BC_EIO, now);
+	if (adopt(a, c, &roster, now)) {
 		return;
 	}
 	bc_viewer_camera_changed(a, false);
@@ -1166,8 +1240,8 @@ int main(int argc, char **argv)
 		goto cleanup;
 	}
 
-	if ((rc = open_session(a, &a->c, &a->roster, &a->view_only_token,
-	                       &ei))) {
+	if ((rc = open_session(a, a->o.session, &a->c, &a->roster,
+	                       &a->view_only_token, &ei))) {
 		fprintf(stderr, "blobcast-view: %s: %s\n",
 		        a->o.server ? a->o.server : "127.0.0.1:7878", ei.msg);
 		goto cleanup;

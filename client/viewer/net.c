@@ -760,6 +760,52 @@ static void got_error(struct bc_viewer_app *a, const struct bc_msg *m)
 	}
 }
 
+void bc_viewer_sessions_ask(struct bc_viewer_app *a)
+{
+	struct bc_msg list = {.type = BC_MSG_SESSION_LIST};
+	struct bc_msg stats = {.type = BC_MSG_GET_STATS};
+	uint32_t seq = 0;
+	if (a->offline) {
+		bc_viewer_status(a, "no connection to ask for the sessions");
+		return;
+	}
+	a->sessions.listed = false;
+	a->redraw = true;
+	if (bc_client_send(a->c, &list, &seq)) {
+		return; /* the pump reports the lost connection */
+	}
+	a->sessions.asked = seq;
+	/* A daemon that did not grant MEMORY would close the connection for
+	 * the part (PROTOCOL.md 7.18). */
+	if (bc_client_info(a->c)->features & BC_PROTO_FEATURE_MEMORY) {
+		stats.get_stats.parts = BC_PROTO_STATS_MEMORY;
+		bc_client_send(a->c, &stats, NULL);
+	}
+}
+
+/* SESSIONS: the panel's rows; with --verbose a line for each. */
+static void got_sessions(struct bc_viewer_app *a, const struct bc_msg *m)
+{
+	struct bc_viewer_sessions *s = &a->sessions;
+	if (m->seq != s->asked) {
+		return; /* an answer to an earlier ask */
+	}
+	s->asked = 0;
+	bc_viewer_sessions_take(s, &m->sessions, a->o.session);
+	a->redraw = true;
+	if (a->o.verbose) {
+		printf("sessions %u\n", s->listed_n);
+		for (uint32_t i = 0; i < s->n; i++) {
+			const struct bc_viewer_session_row *r = &s->row[i];
+			printf("session %s members=%u prims=%u order=%llu "
+			       "loaded=%d\n",
+			       r->name, r->members, r->prims,
+			       (unsigned long long)r->order, r->loaded);
+		}
+		fflush(stdout);
+	}
+}
+
 int bc_viewer_pump(struct bc_viewer_app *a)
 {
 	for (int i = 0; i < BC_VIEWER_MSGS_PER_TURN; i++) {
@@ -809,6 +855,13 @@ int bc_viewer_pump(struct bc_viewer_app *a)
 			break;
 		case BC_MSG_ERROR:
 			got_error(a, &m);
+			break;
+		case BC_MSG_SESSIONS:
+			got_sessions(a, &m);
+			break;
+		case BC_MSG_STATS:
+			bc_viewer_sessions_stats(&a->sessions, &m.stats);
+			a->redraw = a->redraw || a->sessions.open;
 			break;
 		case BC_MSG_PRESENTER:
 			got_presenter(a, &m);

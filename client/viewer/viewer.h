@@ -15,7 +15,8 @@
  *    downscaled interactive image;
  *  - shot.c: when --screenshot stops waiting for a finished picture, and
  *    the VIEW size a framebuffer asks for under the daemon's max_dim;
- *  - font.c: a 5x7 bitmap font turned into triangles.
+ *  - font.c: a 5x7 bitmap font turned into triangles;
+ *  - sessions.c: the sessions panel (the daemon's sessions, one to join).
  */
 #ifndef BLOBCAST_VIEWER_H
 #define BLOBCAST_VIEWER_H
@@ -207,6 +208,58 @@ bool bc_viewer_palette_jump(struct bc_viewer_palette *p, char letter);
  * Returns out. */
 const char *bc_viewer_palette_text(const struct bc_viewer_palette *p, char *out,
                                    size_t n);
+
+/* ---- sessions.c ---------------------------------------------------------- */
+
+/* Sessions kept of one SESSIONS answer (the daemon lists up to 1024). */
+#define BC_VIEWER_SESSIONS_MAX 256u
+/* Sessions the panel shows at once around its cursor. */
+#define BC_VIEWER_SESSIONS_ROWS 9u
+
+struct bc_viewer_session_row {
+	char name[BC_PROTO_MAX_NAME + 1];
+	uint32_t members, prims;
+	uint64_t order, last_edit_ms; /* last_edit_ms: Unix ms, 0 unknown */
+	bool loaded, known;
+};
+
+/* The sessions panel (L): the daemon's sessions as its last SESSIONS
+ * answer listed them (SESSION_LIST, PROTOCOL.md 7.21), and the scene
+ * memory its last STATS told (7.18), for a person to pick one to join. */
+struct bc_viewer_sessions {
+	bool open;
+	uint32_t asked; /* the SESSION_LIST on its way (its seq; 0: none) */
+	bool listed;    /* an answer came since the panel opened */
+	uint32_t n, listed_n; /* rows kept; sessions the answer listed */
+	uint32_t cur;         /* the row Enter joins */
+	struct bc_viewer_session_row row[BC_VIEWER_SESSIONS_MAX];
+	bool has_memory;
+	struct bc_proto_memory memory;
+};
+
+/* Keeps a SESSIONS answer: the first BC_VIEWER_SESSIONS_MAX rows, names
+ * cut at BC_PROTO_MAX_NAME bytes with any byte outside printable ASCII
+ * as '?', the cursor on the session named current (the window's own) or
+ * on the first. */
+void bc_viewer_sessions_take(struct bc_viewer_sessions *s,
+                             const struct bc_msg_sessions *m,
+                             const char *current);
+/* Keeps STATS's memory section, when it has one. */
+void bc_viewer_sessions_stats(struct bc_viewer_sessions *s,
+                              const struct bc_msg_stats *st);
+/* Moves the cursor by delta rows, round from the last to the first. */
+void bc_viewer_sessions_move(struct bc_viewer_sessions *s, int delta);
+/* The session under the cursor, NULL when none is listed. */
+const char *bc_viewer_sessions_chosen(const struct bc_viewer_sessions *s);
+/* The panel: a line of keys, a line that counts the sessions (and the
+ * scene memory the daemon told), then BC_VIEWER_SESSIONS_ROWS sessions
+ * around the cursor, "> review  2 members  1024 shapes  order 17  changed
+ * 12 s ago" (the cursor's), the window's own marked "(this window)", one
+ * the daemon has not loaded "on disk, not loaded yet"; now_ms is the Unix
+ * time in ms, for the ages. Returns out. */
+const char *bc_viewer_sessions_text(const struct bc_viewer_sessions *s,
+                                    const char *current, uint64_t now_ms,
+                                    char *out, size_t n);
 
 /* ---- meter.c ------------------------------------------------------------- */
 

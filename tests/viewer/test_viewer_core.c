@@ -694,6 +694,137 @@ static void test_frame_box_fits_the_view(void)
 	}
 }
 
+/* Counts the lines of text (the panel's). */
+static uint32_t text_lines(const char *text)
+{
+	uint32_t n = 1;
+	for (const char *c = text; *c; c++) {
+		n += *c == '\n';
+	}
+	return n;
+}
+
+/* The sessions panel keeps a SESSIONS answer, puts the cursor on the
+ * window's own session, moves it round, and says each session as the
+ * page does: members, shapes, order and age of a loaded one, "on disk,
+ * not loaded yet" for another, "(this window)" for its own; the scene
+ * memory STATS told; at most BC_VIEWER_SESSIONS_ROWS rows around the
+ * cursor; and of an answer longer than it keeps, how many it shows. */
+static void test_sessions_panel_lists_and_chooses(void)
+{
+	static struct bc_viewer_sessions s;
+	static struct bc_proto_session_entry e[300];
+	static char names[300][16];
+	char text[2048];
+	const uint64_t now = 1800000000000ull;
+	struct bc_msg_stats st = {0};
+	struct bc_msg_sessions m = {.nsessions = 3, .sessions = e};
+	char long_name[BC_PROTO_MAX_NAME + 1];
+	memset(long_name, 'n', BC_PROTO_MAX_NAME);
+	long_name[BC_PROTO_MAX_NAME] = '\0';
+	memset(&s, 0, sizeof(s));
+	bc_viewer_sessions_text(&s, "beta", now, text, sizeof(text));
+	CHECK(strstr(text, "asking the daemon") != NULL);
+	CHECK(bc_viewer_sessions_chosen(&s) == NULL);
+	bc_viewer_sessions_move(&s, 1); /* nothing listed: nothing moves */
+	CHECK_EQ_INT(s.cur, 0);
+
+	e[0] = (struct bc_proto_session_entry){
+	    .name = {"alpha", 5},
+	    .members = 2,
+	    .prims = 1024000,
+	    .order = 17,
+	    .last_edit_ms = now - 3u * 60u * 1000u - 5u,
+	    .flags = BC_PROTO_SESSION_LOADED | BC_PROTO_SESSION_KNOWN};
+	e[1] =
+	    (struct bc_proto_session_entry){.name = {"beta", 4}, .members = 1};
+	e[2] = (struct bc_proto_session_entry){
+	    .name = {long_name, BC_PROTO_MAX_NAME},
+	    .members = 0,
+	    .prims = 1,
+	    .order = 0,
+	    .last_edit_ms = now - 12000u,
+	    .flags = BC_PROTO_SESSION_LOADED | BC_PROTO_SESSION_KNOWN};
+	bc_viewer_sessions_take(&s, &m, "beta");
+	CHECK_EQ_INT(s.n, 3);
+	CHECK_EQ_INT(s.cur, 1);
+	CHECK_STREQ(bc_viewer_sessions_chosen(&s), "beta");
+	CHECK_STREQ(s.row[2].name, long_name);
+	st.has_memory = true;
+	st.memory.scene_nodes = 100001;
+	st.memory.scene_nodes_cap = 149796;
+	bc_viewer_sessions_stats(&s, &st);
+	bc_viewer_sessions_text(&s, "beta", now, text, sizeof(text));
+	CHECK(strstr(text, "3 sessions on this daemon  scene memory 100,001 "
+	                   "of 149,796 nodes (67 %)") != NULL);
+	CHECK(strstr(text, "\n  alpha  2 members  1,024,000 shapes  order 17  "
+	                   "changed 3 min ago\n") != NULL);
+	CHECK(strstr(text, "\n> beta  1 member  on disk, not loaded yet  "
+	                   "(this window)\n") != NULL);
+	CHECK(strstr(text, "1 shape  order 0  changed 12 s ago") != NULL);
+	CHECK(strstr(text, long_name) != NULL);
+	CHECK_EQ_INT(text_lines(text), 5);
+	/* A STATS without the memory section keeps what the last said. */
+	st.has_memory = false;
+	bc_viewer_sessions_stats(&s, &st);
+	CHECK(s.has_memory && s.memory.scene_nodes == 100001);
+
+	bc_viewer_sessions_move(&s, 1);
+	CHECK_STREQ(bc_viewer_sessions_chosen(&s), long_name);
+	bc_viewer_sessions_move(&s, 1);
+	CHECK_STREQ(bc_viewer_sessions_chosen(&s), "alpha");
+	bc_viewer_sessions_move(&s, -1);
+	CHECK_STREQ(bc_viewer_sessions_chosen(&s), long_name);
+	/* A name with a line break and a byte past ASCII: shown as '?'. */
+	e[1].name = (struct bc_proto_str){"be\nt\xc3", 5};
+	bc_viewer_sessions_take(&s, &m, "beta");
+	CHECK_STREQ(s.row[1].name, "be?t?");
+	bc_viewer_sessions_text(&s, NULL, now, text, sizeof(text));
+	CHECK_EQ_INT(text_lines(text), 5);
+	/* A session the answer does not name: the cursor on the first. */
+	bc_viewer_sessions_take(&s, &m, "gone");
+	CHECK_EQ_INT(s.cur, 0);
+
+	/* 300 sessions: BC_VIEWER_SESSIONS_MAX kept, the rows around the
+	 * cursor shown, the window full at the end. */
+	for (uint32_t i = 0; i < 300; i++) {
+		snprintf(names[i], sizeof(names[i]), "s%03u", i);
+		e[i] = (struct bc_proto_session_entry){
+		    .name = {names[i], (uint32_t)strlen(names[i])}};
+	}
+	m.nsessions = 300;
+	bc_viewer_sessions_take(&s, &m, "s250");
+	CHECK_EQ_INT(s.n, BC_VIEWER_SESSIONS_MAX);
+	CHECK_EQ_INT(s.listed_n, 300);
+	CHECK_EQ_INT(s.cur, 250);
+	bc_viewer_sessions_text(&s, "s250", now, text, sizeof(text));
+	CHECK(
+	    strstr(text, "300 sessions on this daemon (the first 256 shown)") !=
+	    NULL);
+	CHECK_EQ_INT(text_lines(text), 2 + BC_VIEWER_SESSIONS_ROWS);
+	/* The cursor in the middle: 246 .. 254. */
+	CHECK(strstr(text, "\n> s250 ") != NULL);
+	CHECK(strstr(text, "\n  s246 ") != NULL);
+	CHECK(strstr(text, "\n  s254 ") != NULL);
+	CHECK(strstr(text, "s245") == NULL && strstr(text, "s255") == NULL);
+	/* Near the end the window stays full: 247 .. 255. */
+	bc_viewer_sessions_move(&s, 3);
+	bc_viewer_sessions_text(&s, "s250", now, text, sizeof(text));
+	CHECK(strstr(text, "\n> s253 ") != NULL);
+	CHECK(strstr(text, "\n  s247 ") != NULL);
+	CHECK(strstr(text, "\n  s255 ") != NULL);
+	CHECK(strstr(text, "s246") == NULL);
+	CHECK_EQ_INT(text_lines(text), 2 + BC_VIEWER_SESSIONS_ROWS);
+	bc_viewer_sessions_take(&s, &m, "s299"); /* not kept: the first */
+	CHECK_EQ_INT(s.cur, 0);
+	bc_viewer_sessions_text(&s, NULL, now, text, sizeof(text));
+	CHECK(strstr(text, "\n> s000 ") != NULL);
+	CHECK(strstr(text, "s008") != NULL && strstr(text, "s009") == NULL);
+	/* A small buffer is cut, never overrun. */
+	bc_viewer_sessions_text(&s, NULL, now, text, 40);
+	CHECK_EQ_INT(strlen(text), 39);
+}
+
 /* The palette lists every primitive, operator and unary kind once, by
  * its scene-file name; the cursor moves round, by section and by
  * initial; the panel marks the cursor's entry. */
@@ -1581,6 +1712,7 @@ static const struct bc_test tests[] = {
     {"node_box_holds_the_subtree", test_node_box_holds_the_subtree},
     {"frame_box_fits_the_view", test_frame_box_fits_the_view},
     {"palette_lists_every_kind", test_palette_lists_every_kind},
+    {"sessions_panel_lists_and_chooses", test_sessions_panel_lists_and_chooses},
     {"meter_counts_the_last_second", test_meter_counts_the_last_second},
     {"edits_one_in_flight", test_edits_one_in_flight},
     {"edits_refused", test_edits_refused},
