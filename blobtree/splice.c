@@ -170,10 +170,16 @@ int bc__splice_reserve(struct bc_tree *t, uint32_t count, uint32_t nprims,
 
 /* One splice of slots, records (vec4 units) and primitives. keep_first:
  * operators' first slots (lead[]) equal to s.at keep pointing there (an
- * operand inserted at the very left of a subtree becomes its first slot). */
+ * operand inserted at the very left of a subtree becomes its first slot).
+ * relinked: the caller's relink() computes the fast and jump pointers of
+ * the slots from relink_lo on again (its range runs past the point), so
+ * apply() need not renumber those before the point: at the root's wide
+ * operator that is every slot, a pass over the whole layout saved. */
 struct splice {
 	struct bc__span s, p, k;
 	bool keep_first;
+	bool relinked;
+	uint32_t relink_lo;
 };
 
 static void move_tail(void *base, size_t size, uint32_t n,
@@ -364,6 +370,14 @@ static void apply(struct bc_tree *t, const struct splice *sp)
 		return;
 	}
 
+	if (sp->s.del == 0 && sp->s.at == n) {
+		/* Slots added after every other (an operand appended to the
+		 * root's operator, the usual edit of a big scene): no stored
+		 * index reaches the point, and nothing moved. The new slots'
+		 * and their ancestors' pointers are the caller's (relink). */
+		log_shift(t, sp);
+		return;
+	}
 	/* Pointers up, everywhere but the new entries. */
 	for (uint32_t s = 0; s < l->count; s++) {
 		uint32_t w = l->node[2 * s], a = w & BC_WORD_ANCESTOR_MASK;
@@ -376,8 +390,13 @@ static void apply(struct bc_tree *t, const struct splice *sp)
 			                 bc__span_map(&sp->s, a);
 		}
 	}
-	renumber(l->fast, sp->s.at, 1, &sp->s);
-	renumber(l->jump, sp->s.at, 1, &sp->s);
+	{
+		uint32_t keep = sp->relinked && sp->relink_lo < sp->s.at
+		                    ? sp->relink_lo
+		                    : sp->s.at;
+		renumber(l->fast, keep, 1, &sp->s);
+		renumber(l->jump, keep, 1, &sp->s);
+	}
 	renumber(l->fast + tail, l->count - tail, 1, &sp->s);
 	renumber(l->jump + tail, l->count - tail, 1, &sp->s);
 	/* First slots, records and primitives, past the point. */
@@ -426,13 +445,30 @@ static void again(struct bc_lin *l, uint32_t s)
 	l->marks[s / 64u] |= 1ull << (s % 64u);
 }
 
-/* Whether slot s was marked (again), and clears the mark. */
-static bool take_mark(struct bc_lin *l, uint32_t s)
+/* Clears slot s's mark (again). */
+static void clear_mark(struct bc_lin *l, uint32_t s)
 {
-	uint64_t bit = 1ull << (s % 64u);
-	bool marked = (l->marks[s / 64u] & bit) != 0;
-	l->marks[s / 64u] &= ~bit;
-	return marked;
+	l->marks[s / 64u] &= ~(1ull << (s % 64u));
+}
+
+/* The highest marked slot in [lo, s], BC_NONE when none: a word of the
+ * bitmap at a time, so that a relink over a million slots with a few
+ * marks reads 16 000 words, not a million bits one by one. */
+static uint32_t prev_mark(const struct bc_lin *l, uint32_t s, uint32_t lo)
+{
+	uint32_t w = s / 64u;
+	uint64_t bits = l->marks[w] & (~0ull >> (63u - s % 64u));
+	for (;;) {
+		if (bits) {
+			uint32_t hit =
+			    w * 64u + 63u - (uint32_t)__builtin_clzll(bits);
+			return hit >= lo ? hit : BC_NONE;
+		}
+		if (w * 64u <= lo) {
+			return BC_NONE;
+		}
+		bits = l->marks[--w];
+	}
 }
 
 /* First slots of the operators of slots lo..hi (whose operands are there too)
@@ -470,13 +506,13 @@ static bool relink(struct bc_tree *t, uint32_t lo, uint32_t top,
 	/* Depth and pointers need only the parent's, and so do ROIs and
 	 * counts: two passes, the second reading the marks only. */
 	bc__lin_pointers_down(l, lo, top);
-	for (uint32_t s = top + 1; s-- > lo;) {
+	/* Marks are only ever set below the slot at hand. */
+	for (uint32_t s = prev_mark(l, top, lo); s != BC_NONE;
+	     s = s > lo ? prev_mark(l, s - 1u, lo) : BC_NONE) {
 		float r0, r1;
 		uint32_t kills, uc, dom;
 		bool fresh, changed;
-		if (!take_mark(l, s)) {
-			continue;
-		}
+		clear_mark(l, s);
 		kills = bc_lin_kills(l, s);
 		r0 = bc_lin_roi_lo(l, s);
 		r1 = l->roi_hi[s];
@@ -594,10 +630,14 @@ bool bc__splice_insert(struct bc_tree *t, uint32_t m, uint32_t px, uint32_t rx)
 		              (t->pool[prev].prev != BC_NONE ? 1u : 0u);
 		uint32_t old_top = bc__slot(t, &t->pool[p]);
 		uint32_t w = l->node[2 * old_top];
+		/* relink() below takes [first of s0 - 1, f]; what lies before
+		 * the point keeps its first slot. */
 		struct splice sp = {
 		    .s = {s0, 0, sx + 1},
 		    .p = {records_end(t, last), 0, rx},
-		    .k = {bc__prim(t, &t->pool[last]) + 1, 0, px}};
+		    .k = {bc__prim(t, &t->pool[last]) + 1, 0, px},
+		    .relinked = true,
+		    .relink_lo = bc_lin_first(l, s0 - 1)};
 		apply(t, &sp);
 		fs.slot = s0;
 		fs.prim = sp.k.at;
@@ -722,10 +762,13 @@ bool bc__splice_remove(struct bc_tree *t, uint32_t c)
 	a = w & BC_WORD_ANCESTOR_MASK;
 	note_gone(t, klo, px);
 	if (nkids >= 3 && prev != BC_NONE) {
-		/* c's block and its fold go; the fold below takes over. */
+		/* c's block and its fold go; the fold below takes over, and
+		 * relink() below takes [first of cf - 1, cf - 1]. */
 		one = (struct splice){.s = {cf, ctop - cf + 2, 0},
 		                      .p = {cparam, pend - cparam, 0},
-		                      .k = {klo, px, 0}};
+		                      .k = {klo, px, 0},
+		                      .relinked = true,
+		                      .relink_lo = bc_lin_first(l, cf - 1)};
 		apply(t, &one);
 		top = cf - 1;
 		if (next != BC_NONE) {
