@@ -11,8 +11,8 @@
  *
  *  - structural (when asked): one sphere INSERTed at the end of the root
  *    union, then REMOVEd, again and again, then the same in the middle of
- *    its operands: edit -> EDIT_APPLIED and edit -> the FRAME that
- *    reflects it, p50 / p99 of each kind.
+ *    its operands and at its start: edit -> EDIT_APPLIED and edit -> the
+ *    FRAME that reflects it, p50 / p99 of each kind.
  *
  * Usage: bench_interactive PATH/TO/blobcastd [edits] [cameras] [spheres]
  *                          [structural]
@@ -294,6 +294,7 @@ static int run(const char *label, const char *const *opts, int edits,
 		fprintf(stderr, "structural: timing %d pairs\n", structural);
 		structure(&c, structural, root_children, "end");
 		structure(&c, structural, root_children / 2, "middle");
+		structure(&c, structural, 0, "start");
 	}
 	if (cameras > 0) {
 		settle(&c);

@@ -174,12 +174,15 @@ int bc__splice_reserve(struct bc_tree *t, uint32_t count, uint32_t nprims,
  * relinked: the caller's relink() computes the fast and jump pointers of
  * the slots from relink_lo on again (its range runs past the point), so
  * apply() need not renumber those before the point: at the root's wide
- * operator that is every slot, a pass over the whole layout saved. */
+ * operator that is every slot, a pass over the whole layout saved.
+ * unlogged: the caller logs the shift for the model's nodes itself (it
+ * stands for two, bc__splice_insert). */
 struct splice {
 	struct bc__span s, p, k;
 	bool keep_first;
 	bool relinked;
 	uint32_t relink_lo;
+	bool unlogged;
 };
 
 static void move_tail(void *base, size_t size, uint32_t n,
@@ -375,7 +378,9 @@ static void apply(struct bc_tree *t, const struct splice *sp)
 		 * root's operator, the usual edit of a big scene): no stored
 		 * index reaches the point, and nothing moved. The new slots'
 		 * and their ancestors' pointers are the caller's (relink). */
-		log_shift(t, sp);
+		if (!sp->unlogged) {
+			log_shift(t, sp);
+		}
 		return;
 	}
 	/* Pointers up, everywhere but the new entries. */
@@ -414,7 +419,82 @@ static void apply(struct bc_tree *t, const struct splice *sp)
 	ktail = sp->k.del || sp->k.ins ? sp->k.at + sp->k.ins
 	                               : prim_from(l, sp->s.at);
 	renumber(l->prim_slot + ktail, l->nprims - ktail, 1, &sp->s);
-	log_shift(t, sp);
+	if (!sp->unlogged) {
+		log_shift(t, sp);
+	}
+}
+
+/* Moves per-slot entry [from, from + n) of every array to `to`. */
+static void slots_move(struct bc_lin *l, uint32_t to, uint32_t from, uint32_t n)
+{
+	uint32_t *const four[] = {l->lead,  l->fast,    l->jump, l->kills,
+	                          l->depth, l->node_id, l->wrap, l->wrap_top,
+	                          l->dom,   l->ucount};
+	float *const fl[] = {l->roi_lo, l->roi_hi};
+	memmove(l->node + 2 * (size_t)to, l->node + 2 * (size_t)from,
+	        2 * (size_t)n * sizeof(uint32_t));
+	for (size_t i = 0; i < sizeof(four) / sizeof(four[0]); i++) {
+		if (four[i]) {
+			memmove(four[i] + to, four[i] + from,
+			        (size_t)n * sizeof(uint32_t));
+		}
+	}
+	for (size_t i = 0; i < sizeof(fl) / sizeof(fl[0]); i++) {
+		if (fl[i]) {
+			memmove(fl[i] + to, fl[i] + from,
+			        (size_t)n * sizeof(float));
+		}
+	}
+}
+
+/* The n slots of a subtree that a splice put one place too far, at s + 1
+ * .. s + n after a spare slot at s, back to s .. s + n - 1 (the spare after
+ * them): their entries move, and their ancestors among them and the slots
+ * of their primitives, from kp on, come one lower. Nothing outside points
+ * into a subtree but at its first slot (ancestors lie after it). Their
+ * first slots, fast and jump pointers the caller computes again
+ * (refirst(), relink()). */
+static void pull_back(struct bc_lin *l, uint32_t s, uint32_t n, uint32_t kp)
+{
+	uint32_t lo = s + 1, hi = s + 1 + n;
+	slots_move(l, s, s + 1, n);
+	for (uint32_t i = s; i < s + n; i++) {
+		uint32_t w = l->node[2 * i], a = w & BC_WORD_ANCESTOR_MASK;
+		if (a != BC_WORD_NO_ANCESTOR && a >= lo && a < hi) {
+			l->node[2 * i] =
+			    (w & ~BC_WORD_ANCESTOR_MASK) | (a - 1u);
+		}
+	}
+	for (uint32_t k = kp; k < kp + (n + 1u) / 2u; k++) {
+		l->prim_slot[k]--;
+	}
+}
+
+/* The n slots of a subtree at s .. s + n - 1, one place to the right, over
+ * the slot after them (which goes): their entries move, and what among
+ * them points into them (ancestors, operators' first slots) and the slots
+ * of their primitives, from kp on, come one higher; s is left for the
+ * caller's splice to take out. Nothing outside points into a subtree but
+ * at its first slot; their fast and jump pointers the caller computes
+ * again (relink()). */
+static void push_forward(struct bc_lin *l, uint32_t s, uint32_t n, uint32_t kp)
+{
+	uint32_t lo = s, hi = s + n;
+	slots_move(l, s + 1, s, n);
+	for (uint32_t i = s + 1; i <= s + n; i++) {
+		uint32_t w = l->node[2 * i], a = w & BC_WORD_ANCESTOR_MASK;
+		if (a != BC_WORD_NO_ANCESTOR && a >= lo && a < hi) {
+			l->node[2 * i] =
+			    (w & ~BC_WORD_ANCESTOR_MASK) | (a + 1u);
+		}
+		if (!bc_lin_is_leaf(l, i) && l->lead[i] >= lo &&
+		    l->lead[i] < hi) {
+			l->lead[i]++;
+		}
+	}
+	for (uint32_t k = kp; k < kp + (n + 1u) / 2u; k++) {
+		l->prim_slot[k]++;
+	}
 }
 
 /* ---- what depends on the place in the tree ------------------------------ */
@@ -670,8 +750,18 @@ bool bc__splice_insert(struct bc_tree *t, uint32_t m, uint32_t px, uint32_t rx)
 		    .p = {bc__param(t, &t->pool[p]) + BC_OP_RECORD_VEC4, 0, rx},
 		    .k = {bc_lin_leaf_prim(l, first), 0, px},
 		    .keep_first = true};
-		apply(t, &fold);
-		apply(t, &sp);
+		/* The block before c0 and the fold after it, in one move of
+		 * the arrays' tail, not two: everything from first on moves
+		 * sx + 1 places, then c0's slots come back one, to where the
+		 * block ends, and the spare slot after them is the fold's.
+		 * The model's nodes follow the two splices this stands for. */
+		struct splice both = sp;
+		both.s.ins = sx + 1;
+		both.unlogged = true;
+		apply(t, &both);
+		pull_back(l, first + sx, c0top - first + 1, sp.k.at + px);
+		log_shift(t, &fold);
+		log_shift(t, &sp);
 		fs.slot = first;
 		fs.prim = sp.k.at;
 		fs.param = sp.p.at;
@@ -782,14 +872,24 @@ bool bc__splice_remove(struct bc_tree *t, uint32_t c)
 			bc__refresh(t, &t->pool[p])->slot = top;
 		}
 	} else if (nkids >= 3) {
-		/* The first child and the fold (c op c1) go: c1 is first. */
-		one = (struct splice){
-		    .s = {bc__slot(t, &t->pool[next]) + 1, 1, 0}};
+		/* The first child and the fold (c op c1) go: c1 is first.
+		 * Both in one move of the arrays' tail, not two: c1's slots
+		 * first take the fold's place, one to the right, so that c's
+		 * block and the slot they left are one run to take out. The
+		 * model's nodes follow the two splices this stands for. */
+		uint32_t c1top = bc__slot(t, &t->pool[next]);
+		struct splice both;
+		one = (struct splice){.s = {c1top + 1, 1, 0}};
 		two = (struct splice){.s = {cf, ctop - cf + 1, 0},
 		                      .p = {cparam, pend - cparam, 0},
 		                      .k = {klo, px, 0}};
-		apply(t, &one);
-		apply(t, &two);
+		both = two;
+		both.s.del++;
+		both.unlogged = true;
+		push_forward(l, ctop + 1, c1top - ctop, klo + px);
+		apply(t, &both);
+		log_shift(t, &one);
+		log_shift(t, &two);
 		top = bc__slot(t, &t->pool[next]);
 		bc__lin_set_parent(
 		    l, top, bc__slot(t, &t->pool[t->pool[next].next]) + 1,
