@@ -723,6 +723,11 @@ static void got_follow_camera(struct bc_viewer_app *a, const struct bc_msg *m)
 
 static void got_error(struct bc_viewer_app *a, const struct bc_msg *m)
 {
+	if (m->seq && m->seq == a->sessions.asked) {
+		/* The panel stops waiting; the status says why. */
+		a->sessions.asked = 0;
+		a->redraw = true;
+	}
 	if (m->seq && m->seq == a->undo_seq) {
 		a->undo_seq = 0;
 		if (-(int)m->error.code == BC_ESTATE) {

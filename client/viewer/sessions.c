@@ -149,7 +149,10 @@ const char *bc_viewer_sessions_text(const struct bc_viewer_sessions *s,
 	    "Sessions: Enter joins, Up/Down, F5 asks again, L or Esc "
 	    "closes\n");
 	if (!s->listed) {
-		bc_str_appendf(out, n, len, "asking the daemon...");
+		bc_str_appendf(out, n, len, "%s",
+		               s->asked ? "asking the daemon..."
+		                        : "no list came (the status line "
+		                          "says why); F5 asks again");
 		return out;
 	}
 	len = bc_str_appendf(out, n, len, "%u session%s on this daemon",

@@ -255,8 +255,9 @@ const char *bc_viewer_sessions_chosen(const struct bc_viewer_sessions *s);
  * scene memory the daemon told), then BC_VIEWER_SESSIONS_ROWS sessions
  * around the cursor, "> review  2 members  1024 shapes  order 17  changed
  * 12 s ago" (the cursor's), the window's own marked "(this window)", one
- * the daemon has not loaded "on disk, not loaded yet"; now_ms is the Unix
- * time in ms, for the ages. Returns out. */
+ * the daemon has not loaded "on disk, not loaded yet"; before an answer,
+ * that one is awaited (asked) or that none came (the daemon refused);
+ * now_ms is the Unix time in ms, for the ages. Returns out. */
 const char *bc_viewer_sessions_text(const struct bc_viewer_sessions *s,
                                     const char *current, uint64_t now_ms,
                                     char *out, size_t n);

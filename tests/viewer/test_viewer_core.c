@@ -724,6 +724,9 @@ static void test_sessions_panel_lists_and_chooses(void)
 	long_name[BC_PROTO_MAX_NAME] = '\0';
 	memset(&s, 0, sizeof(s));
 	bc_viewer_sessions_text(&s, "beta", now, text, sizeof(text));
+	CHECK(strstr(text, "no list came") != NULL);
+	s.asked = 7;
+	bc_viewer_sessions_text(&s, "beta", now, text, sizeof(text));
 	CHECK(strstr(text, "asking the daemon") != NULL);
 	CHECK(bc_viewer_sessions_chosen(&s) == NULL);
 	bc_viewer_sessions_move(&s, 1); /* nothing listed: nothing moves */
