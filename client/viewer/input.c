@@ -502,6 +502,77 @@ static bool palette_key(struct bc_viewer_app *a, int key, int mods)
 	return true;
 }
 
+/* Keys while a new session's name is typed: all of them (the text comes
+ * through on_char). */
+static void session_name_key(struct bc_viewer_app *a, int key)
+{
+	struct bc_viewer_sessions *s = &a->sessions;
+	char name[BC_PROTO_MAX_NAME + 1];
+	s->opened = false;
+	switch (key) {
+	case GLFW_KEY_ENTER:
+	case GLFW_KEY_KP_ENTER:
+		if (!s->name_len) {
+			bc_viewer_status(a,
+			                 "type the new session's name first");
+			break;
+		}
+		s->naming = false;
+		snprintf(name, sizeof(name), "%s", s->name);
+		/* An editor's join creates a session that does not exist. */
+		bc_viewer_switch_session(a, name);
+		break;
+	case GLFW_KEY_ESCAPE:
+		s->naming = false;
+		bc_viewer_status(a, "no new session");
+		break;
+	case GLFW_KEY_BACKSPACE:
+		bc_viewer_sessions_name_back(s);
+		break;
+	default:
+		break;
+	}
+}
+
+/* Delete in the panel: the first press on a session asks for a second,
+ * which deletes it for everyone (SESSION_DELETE; the daemon keeps its
+ * files aside). The window's own session is not deleted from here. */
+static void session_delete_key(struct bc_viewer_app *a)
+{
+	struct bc_viewer_sessions *s = &a->sessions;
+	const char *chosen = bc_viewer_sessions_chosen(s);
+	struct bc_msg m = {.type = BC_MSG_SESSION_DELETE};
+	uint32_t seq = 0;
+	if (!chosen) {
+		bc_viewer_status(a, "no session listed to delete");
+		return;
+	}
+	if (strcmp(chosen, a->o.session) == 0) {
+		bc_viewer_status(a,
+		                 "this window is in session %s: join another "
+		                 "to delete it",
+		                 chosen);
+		return;
+	}
+	if (!bc_viewer_may_edit(a, "deleting a session") || s->delete_seq) {
+		return;
+	}
+	if (strcmp(s->doomed, chosen) != 0) {
+		snprintf(s->doomed, sizeof(s->doomed), "%s", chosen);
+		bc_viewer_status(a,
+		                 "Delete again deletes session %s for "
+		                 "everyone (the daemon keeps its files aside)",
+		                 chosen);
+		return;
+	}
+	m.session_delete.name.ptr = s->doomed;
+	m.session_delete.name.len = (uint32_t)strlen(s->doomed);
+	if (bc_client_send(a->c, &m, &seq) == 0) {
+		s->delete_seq = seq;
+		bc_viewer_status(a, "deleting session %s...", s->doomed);
+	}
+}
+
 /* Keys while the sessions panel is open; returns false for the keys it
  * leaves to the rest (Q still quits, H lists the keys, A opens the add
  * palette instead). */
@@ -509,11 +580,27 @@ static bool sessions_key(struct bc_viewer_app *a, int key, int mods)
 {
 	char name[BC_PROTO_MAX_NAME + 1];
 	const char *chosen;
+	if (a->sessions.naming) {
+		session_name_key(a, key);
+		a->redraw = true;
+		return true;
+	}
 	if (mods & (GLFW_MOD_CONTROL | GLFW_MOD_ALT | GLFW_MOD_SUPER)) {
 		return false;
 	}
 	a->redraw = true;
 	switch (key) {
+	case GLFW_KEY_N:
+		if (bc_viewer_may_edit(a, "creating a session")) {
+			a->sessions.naming = true;
+			a->sessions.opened = true;
+			a->sessions.name_len = 0;
+			a->sessions.name[0] = '\0';
+		}
+		break;
+	case GLFW_KEY_DELETE:
+		session_delete_key(a);
+		break;
 	case GLFW_KEY_UP:
 	case GLFW_KEY_DOWN:
 		bc_viewer_sessions_move(&a->sessions,
@@ -575,6 +662,20 @@ static void on_char(GLFWwindow *w, unsigned int codepoint)
 	struct bc_viewer_app *a = glfwGetWindowUserPointer(w);
 	if (a->rename.open) {
 		bc_viewer_model_rename_char(a, codepoint);
+	} else if (a->sessions.open && a->sessions.naming) {
+		bool opened = a->sessions.opened;
+		a->sessions.opened = false;
+		if (opened && (codepoint == 'n' || codepoint == 'N')) {
+			return; /* the N that opened the entry */
+		}
+		if (!bc_viewer_sessions_name_char(&a->sessions, codepoint)) {
+			bc_viewer_status(
+			    a,
+			    "session names use letters, digits, '-', '_' and "
+			    "'.', not starting with '.', at most %u bytes",
+			    BC_PROTO_MAX_NAME);
+		}
+		a->redraw = true;
 	}
 }
 

@@ -723,6 +723,10 @@ static void got_follow_camera(struct bc_viewer_app *a, const struct bc_msg *m)
 
 static void got_error(struct bc_viewer_app *a, const struct bc_msg *m)
 {
+	if (m->seq && m->seq == a->sessions.delete_seq) {
+		a->sessions.delete_seq = 0;
+		a->sessions.doomed[0] = '\0';
+	}
 	if (m->seq && m->seq == a->sessions.asked) {
 		/* The panel stops waiting; the status says why. */
 		a->sessions.asked = 0;
@@ -863,6 +867,17 @@ int bc_viewer_pump(struct bc_viewer_app *a)
 			break;
 		case BC_MSG_SESSIONS:
 			got_sessions(a, &m);
+			break;
+		case BC_MSG_OK:
+			if (m.seq && m.seq == a->sessions.delete_seq) {
+				/* The SESSION_DELETE went through: the list
+				 * is asked for again. */
+				bc_viewer_status(a, "deleted session %s",
+				                 a->sessions.doomed);
+				a->sessions.delete_seq = 0;
+				a->sessions.doomed[0] = '\0';
+				bc_viewer_sessions_ask(a);
+			}
 			break;
 		case BC_MSG_STATS:
 			bc_viewer_sessions_stats(&a->sessions, &m.stats);

@@ -22,6 +22,9 @@ void bc_viewer_sessions_take(struct bc_viewer_sessions *s,
 	s->listed_n = m->nsessions;
 	s->listed = true;
 	s->cur = 0;
+	if (!s->delete_seq) {
+		s->doomed[0] = '\0'; /* a first Delete is for one row */
+	}
 	for (uint32_t i = 0; i < n; i++) {
 		const struct bc_proto_session_entry *e = &m->sessions[i];
 		struct bc_viewer_session_row *r = &s->row[i];
@@ -59,9 +62,32 @@ void bc_viewer_sessions_stats(struct bc_viewer_sessions *s,
 	}
 }
 
+bool bc_viewer_sessions_name_char(struct bc_viewer_sessions *s, uint32_t cp)
+{
+	bool ok = (cp >= 'a' && cp <= 'z') || (cp >= 'A' && cp <= 'Z') ||
+	          (cp >= '0' && cp <= '9') || cp == '-' || cp == '_' ||
+	          (cp == '.' && s->name_len > 0);
+	if (!ok || s->name_len >= BC_PROTO_MAX_NAME) {
+		return false;
+	}
+	s->name[s->name_len++] = (char)cp;
+	s->name[s->name_len] = '\0';
+	return true;
+}
+
+void bc_viewer_sessions_name_back(struct bc_viewer_sessions *s)
+{
+	if (s->name_len > 0) {
+		s->name[--s->name_len] = '\0';
+	}
+}
+
 void bc_viewer_sessions_move(struct bc_viewer_sessions *s, int delta)
 {
 	int64_t n = s->n, c;
+	if (!s->delete_seq) {
+		s->doomed[0] = '\0';
+	}
 	if (n == 0) {
 		return;
 	}
@@ -108,7 +134,7 @@ static void age(uint64_t now, uint64_t then, char *out, size_t n)
 }
 
 static void row_text(const struct bc_viewer_session_row *r, bool cursor,
-                     bool own, uint64_t now, char *out, size_t n)
+                     bool own, bool doomed, uint64_t now, char *out, size_t n)
 {
 	size_t len = 0;
 	len = bc_str_appendf(out, n, len, "%c %s  %u member%s",
@@ -130,7 +156,11 @@ static void row_text(const struct bc_viewer_session_row *r, bool cursor,
 		}
 	}
 	if (own) {
-		bc_str_appendf(out, n, len, "  (this window)");
+		len = bc_str_appendf(out, n, len, "  (this window)");
+	}
+	if (doomed) {
+		bc_str_appendf(out, n, len,
+		               "  - Delete again deletes it for everyone");
 	}
 }
 
@@ -144,10 +174,17 @@ const char *bc_viewer_sessions_text(const struct bc_viewer_sessions *s,
 		return out;
 	}
 	out[0] = '\0';
-	len = bc_str_appendf(
-	    out, n, len,
-	    "Sessions: Enter joins, Up/Down, F5 asks again, L or Esc "
-	    "closes\n");
+	if (s->naming) {
+		bc_str_appendf(out, n, len,
+		               "New session: %s_\n(letters, digits, - _ and ., "
+		               "not starting with .; Enter creates and joins "
+		               "it, Esc cancels)",
+		               s->name);
+		return out;
+	}
+	len = bc_str_appendf(out, n, len,
+	                     "Sessions: Enter joins, N new, Delete deletes, "
+	                     "F5 asks again, L or Esc closes\n");
 	if (!s->listed) {
 		bc_str_appendf(out, n, len, "%s",
 		               s->asked ? "asking the daemon..."
@@ -182,9 +219,10 @@ const char *bc_viewer_sessions_text(const struct bc_viewer_sessions *s,
 	}
 	for (uint32_t i = first;
 	     i < s->n && i < first + BC_VIEWER_SESSIONS_ROWS; i++) {
-		char line[BC_PROTO_MAX_NAME + 160];
+		char line[BC_PROTO_MAX_NAME + 200];
 		row_text(&s->row[i], i == s->cur,
 		         current && strcmp(s->row[i].name, current) == 0,
+		         s->doomed[0] && strcmp(s->row[i].name, s->doomed) == 0,
 		         now_ms, line, sizeof(line));
 		len = bc_str_appendf(out, n, len, "\n%s", line);
 	}

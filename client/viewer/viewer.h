@@ -235,6 +235,16 @@ struct bc_viewer_sessions {
 	struct bc_viewer_session_row row[BC_VIEWER_SESSIONS_MAX];
 	bool has_memory;
 	struct bc_proto_memory memory;
+	/* N: the name of a new session being typed (name_len bytes); opened
+	 * true until the N's own character (which follows its key) is
+	 * passed over. */
+	bool naming, opened;
+	uint32_t name_len;
+	char name[BC_PROTO_MAX_NAME + 1];
+	/* Delete pressed once on this session ("": none): a second press
+	 * deletes it. The SESSION_DELETE on its way (its seq; 0: none). */
+	char doomed[BC_PROTO_MAX_NAME + 1];
+	uint32_t delete_seq;
 };
 
 /* Keeps a SESSIONS answer: the first BC_VIEWER_SESSIONS_MAX rows, names
@@ -247,8 +257,16 @@ void bc_viewer_sessions_take(struct bc_viewer_sessions *s,
 /* Keeps STATS's memory section, when it has one. */
 void bc_viewer_sessions_stats(struct bc_viewer_sessions *s,
                               const struct bc_msg_stats *st);
-/* Moves the cursor by delta rows, round from the last to the first. */
+/* Moves the cursor by delta rows, round from the last to the first (and
+ * forgets a first Delete). */
 void bc_viewer_sessions_move(struct bc_viewer_sessions *s, int delta);
+/* A character typed into the new session's name: the protocol's session
+ * names are letters, digits, '-', '_' and '.', not starting with '.', at
+ * most BC_PROTO_MAX_NAME bytes (PROTOCOL.md 7.6). Returns false (name
+ * unchanged) for one that would break that. */
+bool bc_viewer_sessions_name_char(struct bc_viewer_sessions *s, uint32_t cp);
+/* Backspace in the name: takes its last character off. */
+void bc_viewer_sessions_name_back(struct bc_viewer_sessions *s);
 /* The session under the cursor, NULL when none is listed. */
 const char *bc_viewer_sessions_chosen(const struct bc_viewer_sessions *s);
 /* The panel: a line of keys, a line that counts the sessions (and the
@@ -257,7 +275,8 @@ const char *bc_viewer_sessions_chosen(const struct bc_viewer_sessions *s);
  * 12 s ago" (the cursor's), the window's own marked "(this window)", one
  * the daemon has not loaded "on disk, not loaded yet"; before an answer,
  * that one is awaited (asked) or that none came (the daemon refused);
- * now_ms is the Unix time in ms, for the ages. Returns out. */
+ * while a new session's name is typed, that entry instead; now_ms is the
+ * Unix time in ms, for the ages. Returns out. */
 const char *bc_viewer_sessions_text(const struct bc_viewer_sessions *s,
                                     const char *current, uint64_t now_ms,
                                     char *out, size_t n);

@@ -826,6 +826,58 @@ static void test_sessions_panel_lists_and_chooses(void)
 	/* A small buffer is cut, never overrun. */
 	bc_viewer_sessions_text(&s, NULL, now, text, 40);
 	CHECK_EQ_INT(strlen(text), 39);
+
+	/* A first Delete marks the row; moving or a new list forgets it. */
+	snprintf(s.doomed, sizeof(s.doomed), "%s", "s001");
+	bc_viewer_sessions_text(&s, NULL, now, text, sizeof(text));
+	CHECK(strstr(text, "s001  0 members  on disk, not loaded yet  - "
+	                   "Delete again deletes it for everyone") != NULL);
+	bc_viewer_sessions_move(&s, 1);
+	CHECK(s.doomed[0] == '\0');
+	snprintf(s.doomed, sizeof(s.doomed), "%s", "s001");
+	s.delete_seq = 9; /* on its way: kept for the answer's words */
+	bc_viewer_sessions_move(&s, 1);
+	bc_viewer_sessions_take(&s, &m, NULL);
+	CHECK_STREQ(s.doomed, "s001");
+	s.delete_seq = 0;
+	bc_viewer_sessions_take(&s, &m, NULL);
+	CHECK(s.doomed[0] == '\0');
+}
+
+/* N: a new session's name takes the protocol's characters only, never
+ * a '.' first, at most BC_PROTO_MAX_NAME bytes; Backspace takes one off;
+ * the panel shows the entry while it is open. */
+static void test_sessions_panel_new_name(void)
+{
+	static struct bc_viewer_sessions s;
+	char text[512];
+	memset(&s, 0, sizeof(s));
+	s.naming = true;
+	CHECK(!bc_viewer_sessions_name_char(&s, '.'));
+	CHECK(bc_viewer_sessions_name_char(&s, 'r'));
+	CHECK(bc_viewer_sessions_name_char(&s, 'E'));
+	CHECK(bc_viewer_sessions_name_char(&s, '-'));
+	CHECK(bc_viewer_sessions_name_char(&s, '2'));
+	CHECK(bc_viewer_sessions_name_char(&s, '.'));
+	CHECK(bc_viewer_sessions_name_char(&s, '_'));
+	CHECK(!bc_viewer_sessions_name_char(&s, ' '));
+	CHECK(!bc_viewer_sessions_name_char(&s, '/'));
+	CHECK(!bc_viewer_sessions_name_char(&s, 0xe9)); /* é */
+	CHECK_STREQ(s.name, "rE-2._");
+	bc_viewer_sessions_name_back(&s);
+	CHECK_STREQ(s.name, "rE-2.");
+	bc_viewer_sessions_text(&s, NULL, 0, text, sizeof(text));
+	CHECK(strncmp(text, "New session: rE-2._\n", 20) == 0);
+	while (s.name_len) {
+		bc_viewer_sessions_name_back(&s);
+	}
+	bc_viewer_sessions_name_back(&s); /* nothing left: nothing happens */
+	CHECK_EQ_INT(s.name_len, 0);
+	for (uint32_t i = 0; i < BC_PROTO_MAX_NAME; i++) {
+		CHECK(bc_viewer_sessions_name_char(&s, 'x'));
+	}
+	CHECK(!bc_viewer_sessions_name_char(&s, 'x'));
+	CHECK_EQ_INT(strlen(s.name), BC_PROTO_MAX_NAME);
 }
 
 /* The palette lists every primitive, operator and unary kind once, by
@@ -1716,6 +1768,7 @@ static const struct bc_test tests[] = {
     {"frame_box_fits_the_view", test_frame_box_fits_the_view},
     {"palette_lists_every_kind", test_palette_lists_every_kind},
     {"sessions_panel_lists_and_chooses", test_sessions_panel_lists_and_chooses},
+    {"sessions_panel_new_name", test_sessions_panel_new_name},
     {"meter_counts_the_last_second", test_meter_counts_the_last_second},
     {"edits_one_in_flight", test_edits_one_in_flight},
     {"edits_refused", test_edits_refused},

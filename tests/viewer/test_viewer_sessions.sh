@@ -12,7 +12,10 @@
 #  4. an edit from the window now reaches beta (D duplicates the picked
 #     shape there), not alpha;
 #  5. Enter on the window's own session says so and keeps the connection;
-#     Q quits with the panel open.
+#  6. N, a name and Enter create a session and join it;
+#  7. Delete on the window's own session is refused; on another, a first
+#     press only asks, a second deletes it (the daemon and the panel's
+#     list lose it); Q quits with the panel open.
 #
 # usage: test_viewer_sessions.sh BLOBCAST-VIEW BLOBCASTD IMGCHECK XPOKE CLI
 # Exits 77 (skipped) when xvfb-run or one of the programs is missing.
@@ -108,8 +111,8 @@ if [ -n "$ok" ]; then
   rows=$(tail -n +"$((mark + 1))" "$L" | grep '^session ' | cut -d' ' -f2)
   a=$(echo "$rows" | grep -n '^alpha$' | cut -d: -f1)
   b=$(echo "$rows" | grep -n '^beta$' | cut -d: -f1)
-  n=$(echo "$rows" | wc -l)
-  steps=$(((b - a + n) % n))
+  rowcount=$(echo "$rows" | wc -l)
+  steps=$(((b - a + rowcount) % rowcount))
   keys=
   i=0
   while [ $i -lt "$steps" ]; do
@@ -158,10 +161,68 @@ if [ -n "$ok" ]; then
   tail -n +"$((mark + 1))" "$L" | grep -q '^joined ' &&
     fail "Enter on the own session joined again"
 fi
+
+# 6. N, "gamma", Enter: a new session, created by the join.
+if [ -n "$ok" ]; then
+  mark=$(vl_lines "$L")
+  vl_poke key n key g key a key m key m key a key Return || ok=
+  [ -n "$ok" ] && { vl_wait_after "$L" "$mark" '^joined gamma role=editor$' 100 ||
+    ok=; }
+fi
+if [ -n "$ok" ]; then
+  [ "$(members_of gamma)" = 1 ] || fail "gamma was not created with the window in it"
+  [ "$(members_of beta)" = 0 ] || fail "beta still has a member"
+fi
+
+# 7. Delete on the window's own session is refused; on alpha, twice,
+#    deletes it for everyone.
+if [ -n "$ok" ]; then
+  mark=$(vl_lines "$L")
+  vl_poke key l || ok=
+  [ -n "$ok" ] && { vl_wait_after "$L" "$mark" '^session gamma ' 100 || ok=; }
+fi
+if [ -n "$ok" ]; then
+  rows=$(tail -n +"$((mark + 1))" "$L" | grep '^session ' | cut -d' ' -f2)
+  a=$(echo "$rows" | grep -n '^alpha$' | cut -d: -f1)
+  g=$(echo "$rows" | grep -n '^gamma$' | cut -d: -f1)
+  # (not n: the waiting functions use it)
+  rowcount=$(echo "$rows" | wc -l)
+  mark=$(vl_lines "$L")
+  vl_poke key Delete || ok=
+  [ -n "$ok" ] && { vl_wait_after "$L" "$mark" \
+    '^status this window is in session gamma: join another to delete it$' \
+    100 || ok=; }
+fi
+if [ -n "$ok" ]; then
+  steps=$(((a - g + rowcount) % rowcount))
+  keys=
+  i=0
+  while [ $i -lt "$steps" ]; do
+    keys="$keys key Down"
+    i=$((i + 1))
+  done
+  mark=$(vl_lines "$L")
+  # shellcheck disable=SC2086
+  vl_poke $keys key Delete || ok=
+  [ -n "$ok" ] && { vl_wait_after "$L" "$mark" \
+    '^status Delete again deletes session alpha for everyone' 100 || ok=; }
+  [ -n "$ok" ] && [ "$(members_of alpha)" = 0 ] ||
+    fail "a first Delete changed alpha"
+  mark=$(vl_lines "$L")
+  [ -n "$ok" ] && { vl_poke key Delete || ok=; }
+  [ -n "$ok" ] && { vl_wait_after "$L" "$mark" '^status deleted session alpha$' \
+    100 || ok=; }
+  [ -n "$ok" ] && { vl_wait_after "$L" "$mark" '^sessions ' 100 || ok=; }
+fi
+if [ -n "$ok" ]; then
+  [ -z "$(members_of alpha)" ] || fail "alpha is still listed by the daemon"
+  tail -n +"$((mark + 1))" "$L" | grep -q '^session alpha ' &&
+    fail "the panel still lists alpha after deleting it"
+fi
 vl_quit || ok=
 [ -n "$ok" ] || fail "a step failed"
 if [ "$failures" -eq 0 ]; then
-  echo "ok   L lists the daemon's sessions, Enter joins another, edits follow"
+  echo "ok   L lists the daemon's sessions, Enter joins, N creates, Delete twice deletes"
   echo "all checks passed"
   exit 0
 fi
