@@ -2236,13 +2236,28 @@ fail:
 static void follow_tile(struct bc__tiled_bufs *b, uint32_t t, uint32_t lo,
                         uint32_t hi, uint32_t shift)
 {
-	uint32_t o = b->cand_off[t], w = o;
-	for (uint32_t i = o; i < b->cand_end[t]; i++) {
-		uint32_t k = b->cand[i];
+	uint32_t o = b->cand_off[t], w = o, end = b->cand_end[t];
+	uint32_t *c = b->cand, gone = 0;
+	/* Most tiles lose no candidate (an insertion loses none, a removal
+	 * only the tiles of what went): a look for one, then the renumbering
+	 * in place, both loops without branches that the compiler turns
+	 * into vector code, the pass over every candidate a splice before
+	 * the end costs (follow_splice). */
+	for (uint32_t i = o; i < end; i++) {
+		gone |= (uint32_t)(c[i] - lo < hi - lo);
+	}
+	if (!gone) {
+		for (uint32_t i = o; i < end; i++) {
+			c[i] += c[i] >= hi ? shift : 0u;
+		}
+		w = end;
+	}
+	for (uint32_t i = o; gone && i < end; i++) {
+		uint32_t k = c[i];
 		if (k >= lo && k < hi) {
 			continue;
 		}
-		b->cand[w++] = k >= hi ? k + shift : k;
+		c[w++] = k >= hi ? k + shift : k;
 	}
 	if (w != b->cand_end[t]) {
 		b->state[t] &= (uint8_t)~TILE_LIST;
