@@ -333,6 +333,13 @@ static void apply(struct bc_tree *t, const struct splice *sp)
 	struct bc_lin *l = &t->lin;
 	uint32_t n = l->count, np = l->nprims, nr = l->nparam;
 	uint32_t tail, ktail;
+	/* A splice at the very end of all three spaces moves no entry that
+	 * stays, so no node of the model has an index to follow: it needs
+	 * no place in the shift log, and the log's sweep (a share of the
+	 * pool brought up to date, some 8 % of an end edit at a million)
+	 * is spared. */
+	bool at_end = sp->s.at + sp->s.del == n && sp->p.at + sp->p.del == nr &&
+	              sp->k.at + sp->k.del == np;
 	note_splice(t, &sp->k);
 	move_tail(l->node, 2 * sizeof(uint32_t), n, &sp->s);
 	move_tail(l->lead, sizeof(uint32_t), n, &sp->s);
@@ -378,7 +385,7 @@ static void apply(struct bc_tree *t, const struct splice *sp)
 		 * root's operator, the usual edit of a big scene): no stored
 		 * index reaches the point, and nothing moved. The new slots'
 		 * and their ancestors' pointers are the caller's (relink). */
-		if (!sp->unlogged) {
+		if (!sp->unlogged && !at_end) {
 			log_shift(t, sp);
 		}
 		return;
@@ -419,7 +426,7 @@ static void apply(struct bc_tree *t, const struct splice *sp)
 	ktail = sp->k.del || sp->k.ins ? sp->k.at + sp->k.ins
 	                               : prim_from(l, sp->s.at);
 	renumber(l->prim_slot + ktail, l->nprims - ktail, 1, &sp->s);
-	if (!sp->unlogged) {
+	if (!sp->unlogged && !at_end) {
 		log_shift(t, sp);
 	}
 }
