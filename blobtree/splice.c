@@ -454,53 +454,30 @@ static void slots_move(struct bc_lin *l, uint32_t to, uint32_t from, uint32_t n)
 	}
 }
 
-/* The n slots of a subtree that a splice put one place too far, at s + 1
- * .. s + n after a spare slot at s, back to s .. s + n - 1 (the spare after
- * them): their entries move, and their ancestors among them and the slots
- * of their primitives, from kp on, come one lower. Nothing outside points
- * into a subtree but at its first slot (ancestors lie after it). Their
- * first slots, fast and jump pointers the caller computes again
- * (refirst(), relink()). */
-static void pull_back(struct bc_lin *l, uint32_t s, uint32_t n, uint32_t kp)
+/* The n slots of a subtree at from .. from + n - 1 move one place: up,
+ * over the slot after them, or down, over the slot before them. Their
+ * entries, what among them points into them (ancestors, operators' first
+ * slots) and the slots of their primitives, from kp on, follow. Nothing
+ * outside points into a subtree but at its first slot (ancestors lie
+ * after it), which the caller sets (refirst(), keep_first), as it
+ * computes their fast and jump pointers again (relink()). */
+static void nudge(struct bc_lin *l, uint32_t from, uint32_t n, uint32_t kp,
+                  bool up)
 {
-	uint32_t lo = s + 1, hi = s + 1 + n;
-	slots_move(l, s, s + 1, n);
-	for (uint32_t i = s; i < s + n; i++) {
+	uint32_t to = up ? from + 1u : from - 1u;
+	uint32_t d = to - from; /* +1 or -1, modulo 2^32 */
+	slots_move(l, to, from, n);
+	for (uint32_t i = to; i < to + n; i++) {
 		uint32_t w = l->node[2 * i], a = w & BC_WORD_ANCESTOR_MASK;
-		if (a != BC_WORD_NO_ANCESTOR && a >= lo && a < hi) {
-			l->node[2 * i] =
-			    (w & ~BC_WORD_ANCESTOR_MASK) | (a - 1u);
+		if (a != BC_WORD_NO_ANCESTOR && a - from < n) {
+			l->node[2 * i] = (w & ~BC_WORD_ANCESTOR_MASK) | (a + d);
+		}
+		if (!bc_lin_is_leaf(l, i) && l->lead[i] - from < n) {
+			l->lead[i] += d;
 		}
 	}
 	for (uint32_t k = kp; k < kp + (n + 1u) / 2u; k++) {
-		l->prim_slot[k]--;
-	}
-}
-
-/* The n slots of a subtree at s .. s + n - 1, one place to the right, over
- * the slot after them (which goes): their entries move, and what among
- * them points into them (ancestors, operators' first slots) and the slots
- * of their primitives, from kp on, come one higher; s is left for the
- * caller's splice to take out. Nothing outside points into a subtree but
- * at its first slot; their fast and jump pointers the caller computes
- * again (relink()). */
-static void push_forward(struct bc_lin *l, uint32_t s, uint32_t n, uint32_t kp)
-{
-	uint32_t lo = s, hi = s + n;
-	slots_move(l, s + 1, s, n);
-	for (uint32_t i = s + 1; i <= s + n; i++) {
-		uint32_t w = l->node[2 * i], a = w & BC_WORD_ANCESTOR_MASK;
-		if (a != BC_WORD_NO_ANCESTOR && a >= lo && a < hi) {
-			l->node[2 * i] =
-			    (w & ~BC_WORD_ANCESTOR_MASK) | (a + 1u);
-		}
-		if (!bc_lin_is_leaf(l, i) && l->lead[i] >= lo &&
-		    l->lead[i] < hi) {
-			l->lead[i]++;
-		}
-	}
-	for (uint32_t k = kp; k < kp + (n + 1u) / 2u; k++) {
-		l->prim_slot[k]++;
+		l->prim_slot[k] += d;
 	}
 }
 
@@ -766,7 +743,8 @@ bool bc__splice_insert(struct bc_tree *t, uint32_t m, uint32_t px, uint32_t rx)
 		both.s.ins = sx + 1;
 		both.unlogged = true;
 		apply(t, &both);
-		pull_back(l, first + sx, c0top - first + 1, sp.k.at + px);
+		nudge(l, first + sx + 1, c0top - first + 1, sp.k.at + px,
+		      false);
 		log_shift(t, &fold);
 		log_shift(t, &sp);
 		fs.slot = first;
@@ -893,7 +871,7 @@ bool bc__splice_remove(struct bc_tree *t, uint32_t c)
 		both = two;
 		both.s.del++;
 		both.unlogged = true;
-		push_forward(l, ctop + 1, c1top - ctop, klo + px);
+		nudge(l, ctop + 1, c1top - ctop, klo + px, true);
 		apply(t, &both);
 		log_shift(t, &one);
 		log_shift(t, &two);
