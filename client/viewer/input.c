@@ -507,7 +507,6 @@ static bool palette_key(struct bc_viewer_app *a, int key, int mods)
 static void session_name_key(struct bc_viewer_app *a, int key)
 {
 	struct bc_viewer_sessions *s = &a->sessions;
-	char name[BC_PROTO_MAX_NAME + 1];
 	s->opened = false;
 	switch (key) {
 	case GLFW_KEY_ENTER:
@@ -518,9 +517,8 @@ static void session_name_key(struct bc_viewer_app *a, int key)
 			break;
 		}
 		s->naming = false;
-		snprintf(name, sizeof(name), "%s", s->name);
 		/* An editor's join creates a session that does not exist. */
-		bc_viewer_switch_session(a, name);
+		bc_viewer_switch_session(a, s->name);
 		break;
 	case GLFW_KEY_ESCAPE:
 		s->naming = false;
@@ -578,7 +576,6 @@ static void session_delete_key(struct bc_viewer_app *a)
  * palette instead). */
 static bool sessions_key(struct bc_viewer_app *a, int key, int mods)
 {
-	char name[BC_PROTO_MAX_NAME + 1];
 	const char *chosen;
 	if (a->sessions.naming) {
 		session_name_key(a, key);
@@ -621,9 +618,7 @@ static bool sessions_key(struct bc_viewer_app *a, int key, int mods)
 			bc_viewer_status(a, "no session listed to join");
 			break;
 		}
-		/* The rows may change while joining: the name is copied. */
-		snprintf(name, sizeof(name), "%s", chosen);
-		bc_viewer_switch_session(a, name);
+		bc_viewer_switch_session(a, chosen);
 		break;
 	case GLFW_KEY_ESCAPE:
 	case GLFW_KEY_L:

@@ -68,6 +68,22 @@ print(sum(1 for n in json.load(open(sys.argv[1]))
           if n["type"] not in ("union",)))' "$tmp/nodes.json"
 }
 
+# down_keys MARK FROM TO: the xpoke words that move the panel's cursor
+# from session FROM to session TO, Down at a time (round), in the list
+# the panel printed after line MARK of the log.
+down_keys() {
+  rows=$(tail -n +"$(($1 + 1))" "$L" | grep '^session ' | cut -d' ' -f2)
+  from=$(echo "$rows" | grep -n "^$2\$" | cut -d: -f1)
+  to=$(echo "$rows" | grep -n "^$3\$" | cut -d: -f1)
+  # (not n: the waiting functions use it)
+  rowcount=$(echo "$rows" | wc -l)
+  i=$(((to - from + rowcount) % rowcount))
+  while [ "$i" -gt 0 ]; do
+    printf ' key Down'
+    i=$((i - 1))
+  done
+}
+
 L=$tmp/v.log
 vl_view "$L" --session alpha --size 240x180 --no-overlay --encoding png
 ok=1
@@ -108,17 +124,7 @@ fi
 
 # 3. Down to beta (the cursor starts on alpha), Enter joins it.
 if [ -n "$ok" ]; then
-  rows=$(tail -n +"$((mark + 1))" "$L" | grep '^session ' | cut -d' ' -f2)
-  a=$(echo "$rows" | grep -n '^alpha$' | cut -d: -f1)
-  b=$(echo "$rows" | grep -n '^beta$' | cut -d: -f1)
-  rowcount=$(echo "$rows" | wc -l)
-  steps=$(((b - a + rowcount) % rowcount))
-  keys=
-  i=0
-  while [ $i -lt "$steps" ]; do
-    keys="$keys key Down"
-    i=$((i + 1))
-  done
+  keys=$(down_keys "$mark" alpha beta)
   mark=$(vl_lines "$L")
   # shellcheck disable=SC2086
   vl_poke $keys key Return || ok=
@@ -182,11 +188,7 @@ if [ -n "$ok" ]; then
   [ -n "$ok" ] && { vl_wait_after "$L" "$mark" '^session gamma ' 100 || ok=; }
 fi
 if [ -n "$ok" ]; then
-  rows=$(tail -n +"$((mark + 1))" "$L" | grep '^session ' | cut -d' ' -f2)
-  a=$(echo "$rows" | grep -n '^alpha$' | cut -d: -f1)
-  g=$(echo "$rows" | grep -n '^gamma$' | cut -d: -f1)
-  # (not n: the waiting functions use it)
-  rowcount=$(echo "$rows" | wc -l)
+  keys=$(down_keys "$mark" gamma alpha)
   mark=$(vl_lines "$L")
   vl_poke key Delete || ok=
   [ -n "$ok" ] && { vl_wait_after "$L" "$mark" \
@@ -194,13 +196,6 @@ if [ -n "$ok" ]; then
     100 || ok=; }
 fi
 if [ -n "$ok" ]; then
-  steps=$(((a - g + rowcount) % rowcount))
-  keys=
-  i=0
-  while [ $i -lt "$steps" ]; do
-    keys="$keys key Down"
-    i=$((i + 1))
-  done
   mark=$(vl_lines "$L")
   # shellcheck disable=SC2086
   vl_poke $keys key Delete || ok=
