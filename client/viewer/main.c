@@ -999,6 +999,8 @@ static int adopt(struct bc_viewer_app *a, struct bc_client *c,
 	a->frame_got = a->frame_acked = 0;
 	a->awaiting_key = false;
 	a->sessions.asked = 0;
+	a->sessions.delete_seq = 0; /* its OK would come on the old one */
+	a->sessions.doomed[0] = '\0';
 	if (bc_client_scene(a->c, &scene_cam)) {
 		a->scene_cam = scene_cam;
 	}
