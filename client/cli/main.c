@@ -78,7 +78,7 @@ static void more_help(FILE *out)
 
 /* What main parses before the command word. */
 struct globals {
-	const char *server, *token, *name, *timeout, *ca;
+	const char *server, *session, *token, *name, *timeout, *ca;
 	bool insecure, version;
 };
 
@@ -94,6 +94,11 @@ struct globals {
 		         "(HOST:PORT, tls://HOST:PORT, ws[s]://HOST/PATH\n"    \
 		         "or unix:PATH; default $BLOBCAST_SERVER, else\n"      \
 		         "127.0.0.1:7878)"},                                   \
+		    {.name = "session",                                        \
+		     .kind = BC_OPT_STRING,                                    \
+		     .dst = &(g)->session,                                     \
+		     .arg = "NAME",                                            \
+		     .help = "the session of the commands that take one"},     \
 		    {.name = "token",                                          \
 		     .kind = BC_OPT_STRING,                                    \
 		     .dst = &(g)->token,                                       \
@@ -201,18 +206,16 @@ static int help(const char *cmd)
 
 /* The global options given, as "--NAME=VALUE" words for the command's
  * parser (the attached form keeps an empty value or one that starts with
- * '-' a value). Returns how many were written to words (at most 6) and
+ * '-' a value). Returns how many were written to words (at most 7) and
  * sets *first to the first one's name. */
-static int global_words(const struct globals *g, char buf[6][320], char **words,
+static int global_words(const struct globals *g, char buf[7][320], char **words,
                         const char **first)
 {
 	const struct {
 		const char *name, *value;
-	} strs[] = {{"server", g->server},
-	            {"token", g->token},
-	            {"name", g->name},
-	            {"timeout", g->timeout},
-	            {"ca", g->ca}};
+	} strs[] = {{"server", g->server},   {"session", g->session},
+	            {"token", g->token},     {"name", g->name},
+	            {"timeout", g->timeout}, {"ca", g->ca}};
 	int n = 0;
 	*first = NULL;
 	for (size_t i = 0; i < sizeof(strs) / sizeof(strs[0]); i++) {
@@ -241,7 +244,7 @@ int main(int argc, char **argv)
 	struct globals g = {0};
 	const struct bc_opt opts[] = MAIN_OPTS(&g);
 	struct bc_args a = main_args(opts);
-	char buf[6][320], *words[6];
+	char buf[7][320], *words[7];
 	const char *first;
 	int status, nwords;
 	char **sub;

@@ -232,6 +232,18 @@ same --name 01234567890123456789012345678901234567890123456789012345678901234 \
   --name 01234567890123456789012345678901234567890123456789012345678901234
 same --server host:0 edit --session s 1 radius=1 -- \
   edit --server host:0 --session s 1 radius=1
+# --session too: every server command that takes a session takes it
+# before the command word; one that takes none says so either way.
+same --session s --timeout 50 --server 127.0.0.1:1 nodes -- \
+  nodes --session s --timeout 50 --server 127.0.0.1:1
+same --session s sessions --server 127.0.0.1:1 -- \
+  sessions --session s --server 127.0.0.1:1
+expect 2 "--session does not apply to sessions" --session s sessions
+expect 2 "--session applies to the server commands only, not 'gen'" \
+  --session s gen fig18
+expect 2 "--session is longer than 64 bytes" \
+  --session 01234567890123456789012345678901234567890123456789012345678901234 \
+  nodes --server 127.0.0.1:1
 expect 2 "--timeout '-5' is not a whole decimal number" \
   --timeout -5 load --session s a.json
 expect 2 "--token applies to the server commands only, not 'render'" \
