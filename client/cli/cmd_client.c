@@ -472,8 +472,9 @@ int bc_cli_client(const char *subcommand, int argc, char **argv)
 		}
 	}
 	if (pa.npos > k->max_pos) {
-		return bc_args_error(&pa, "unexpected argument '%s'",
-		                     pa.pos[k->max_pos]);
+		return bc_args_error(&pa,
+		                     "unexpected argument '%s' (usage: %s %s)",
+		                     pa.pos[k->max_pos], prog, k->synopsis);
 	}
 	if (pa.npos < k->min_pos) {
 		return bc_args_error(&pa, "missing arguments (usage: %s %s)",

@@ -74,6 +74,9 @@ expect 2 "blobcast load: missing arguments (usage: blobcast load" \
   load --session s
 expect 2 "blobcast load: unexpected argument 'b.json'" \
   load --session s a.json b.json
+# A parent given as a second id: the usage says where it goes.
+expect 2 "unexpected argument '1' (usage: blobcast move --session NAME ID --parent ID" \
+  move --session s 7 1
 expect 2 "blobcast edit: missing arguments" edit --session s 5
 expect 2 "not a node id" edit --session s 0 radius=1
 expect 2 "not a node id" edit --session s x radius=1
