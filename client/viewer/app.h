@@ -5,7 +5,8 @@
  * (mouse and keyboard) and modelling.c (adding, deleting, duplicating,
  * wrapping, regrouping).
  * Everything runs on the main thread except the socket watcher of main.c,
- * which only polls the socket and wakes the loop.
+ * which only polls the socket and wakes the loop, and the mesher of
+ * save.c, which meshes a copy of the scene of its own.
  */
 #ifndef BLOBCAST_VIEWER_APP_H
 #define BLOBCAST_VIEWER_APP_H
@@ -20,6 +21,7 @@
 #include <GLFW/glfw3.h>
 
 #include "blobcast/client.h"
+#include "blobcast/mesh.h"
 #include "viewer.h"
 #include "viewer_gl.h"
 
@@ -95,6 +97,25 @@ enum bc_viewer_wheel {
 	BC_VIEWER_WHEEL_BLEND, /* Ctrl: the parent operator's blend */
 	BC_VIEWER_WHEEL_UNARY, /* Alt: the unary node above's parameter */
 	BC_VIEWER_WHEEL_COUNT
+};
+
+/* Ctrl+M and Ctrl+Shift+M (save.c): the session's solid as a mesh file,
+ * made on a thread of its own from a copy of the mirror, so that the
+ * window goes on drawing; one at a time. */
+struct bc_viewer_mesher {
+	pthread_t thread;
+	bool busy;            /* a thread started and not joined yet */
+	atomic_bool done;     /* ... and it has finished */
+	atomic_uint permille; /* how far it is */
+	/* The thread's alone until done: its copy of the scene (bare), the
+	 * file, and what became of it. */
+	struct bc_tree *tree;
+	enum bc_mesh_format format;
+	char path[4096];
+	int rc;
+	struct bc_errinfo ei;
+	uint32_t nverts, ntris;
+	double started, said; /* when it started; last progress shown */
 };
 
 struct bc_viewer_app {
@@ -209,6 +230,8 @@ struct bc_viewer_app {
 	struct bc_client_image big_img;
 	bool screenshot_now;
 	unsigned shots;
+	/* Ctrl+M: the mesh being made. */
+	struct bc_viewer_mesher mesher;
 
 	/* H: the keys listed along the bottom of the overlay. */
 	bool help;
@@ -359,6 +382,16 @@ double bc_viewer_pending_since(const struct bc_viewer_app *a);
 /* save.c: Ctrl+S (JSON) and Ctrl+Shift+S (binary) save the mirror's scene
  * in the snapshot directory, saying where on the status line. */
 void bc_viewer_save_scene(struct bc_viewer_app *a, bool binary);
+/* Starts meshing the session's solid (the scene as the mirror holds it,
+ * `blobcast mesh`'s defaults) into blobcast-SESSION-ORDER.glb, or .obj,
+ * in the snapshot directory, on a thread; the status line follows it. */
+void bc_viewer_save_mesh(struct bc_viewer_app *a, bool obj);
+/* The mesher's turn of the loop: when it has finished, joins it and says
+ * what it wrote; while it runs, shows how far it is. Returns the ms until
+ * it wants the next turn, -1 when none runs. */
+double bc_viewer_mesh_poll(struct bc_viewer_app *a, double now);
+/* Waits for a mesh being made (the window is closing). */
+void bc_viewer_mesh_wait(struct bc_viewer_app *a);
 
 /* input.c */
 void bc_viewer_input_install(struct bc_viewer_app *a);

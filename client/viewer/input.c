@@ -10,7 +10,8 @@
  *    main parameter of the innermost unary node above it that has one
  *    (unary.c: sizes scale, signed values step);
  *  - keys: S lossless snapshot, Ctrl-S the scene as a JSON file (with
- *    Shift: binary; save.c), P window screenshot, O overlay, H the
+ *    Shift: binary; save.c), Ctrl-M its mesh as glTF (with Shift: OBJ;
+ *    save.c, on a thread), P window screenshot, O overlay, H the
  *    keys, R the session's camera, Home zoom to fit (Shift: the
  *    selection), Escape or Q quit; Ctrl-Z undo, Ctrl-Shift-Z or Ctrl-Y
  *    redo (sent without waiting; the answer shows on the overlay); F
@@ -387,7 +388,8 @@ static const char key_help[] =
     "Ctrl+Z: undo   Ctrl+Shift+Z, Ctrl+Y: redo\n"
     "F: follow the presenter   Shift+F: present   L: sessions\n"
     "S: snapshot   P: screenshot   O: overlay   Q, Esc: quit\n"
-    "Ctrl+S: save the scene (JSON)   Ctrl+Shift+S: binary";
+    "Ctrl+S: save the scene (JSON)   Ctrl+Shift+S: binary\n"
+    "Ctrl+M: save its mesh (glTF)   Ctrl+Shift+M: OBJ";
 
 /* Unix time in ms, for the sessions panel's ages. */
 static uint64_t unix_ms(void)
@@ -712,10 +714,15 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
 	if (action != GLFW_PRESS) {
 		return;
 	}
-	/* Ctrl-S saves the scene as JSON, Ctrl-Shift-S as binary. */
+	/* Ctrl-S saves the scene as JSON, Ctrl-Shift-S as binary; Ctrl-M
+	 * its solid as a glTF mesh, Ctrl-Shift-M as OBJ. */
 	if ((mods & GLFW_MOD_CONTROL) && !(mods & GLFW_MOD_ALT) &&
-	    key == GLFW_KEY_S) {
-		bc_viewer_save_scene(a, (mods & GLFW_MOD_SHIFT) != 0);
+	    (key == GLFW_KEY_S || key == GLFW_KEY_M)) {
+		if (key == GLFW_KEY_S) {
+			bc_viewer_save_scene(a, (mods & GLFW_MOD_SHIFT) != 0);
+		} else {
+			bc_viewer_save_mesh(a, (mods & GLFW_MOD_SHIFT) != 0);
+		}
 		return;
 	}
 	switch (key) {

@@ -199,8 +199,9 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o,
 	     .kind = BC_OPT_STRING,
 	     .dst = &o->snapshot_dir,
 	     .arg = "DIR",
-	     .help = "where S saves lossless snapshots and\n"
-	             "Ctrl-S scene files (default {default})"},
+	     .help = "where S saves lossless snapshots,\n"
+	             "Ctrl-S scene files and Ctrl-M meshes\n"
+	             "(default {default})"},
 	    {.name = "snapshot-size",
 	     .kind = BC_OPT_SIZE,
 	     .dst = c.snap,
@@ -275,8 +276,10 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o,
 	        "session's\ncamera; S snapshot, P screenshot, O overlay, Q or "
 	        "Escape quit;\nCtrl-S saves the scene as JSON, Ctrl-Shift-S as "
 	        "a binary scene\nfile (in --snapshot-dir, named after the "
-	        "session and edit order);\nCtrl-Z undo, Ctrl-Shift-Z or Ctrl-Y "
-	        "redo; F "
+	        "session and edit order);\nCtrl-M its solid as a glTF mesh, "
+	        "Ctrl-Shift-M as OBJ (the mesh\n`blobcast mesh --session` "
+	        "writes, made while the window goes on);\nCtrl-Z undo, "
+	        "Ctrl-Shift-Z or Ctrl-Y redo; F "
 	        "follow the presenter\n(this window shows what the "
 	        "presenter's camera sees, at its own size;\nmoving the camera "
 	        "or F again stops), Shift-F present (members who\nfollow see "
@@ -1119,7 +1122,7 @@ static void reconnect(struct bc_viewer_app *a, double now)
 static void run(struct bc_viewer_app *a)
 {
 	while (!a->quit && !glfwWindowShouldClose(a->win)) {
-		double now, due, wait;
+		double now, due, wait, mesh_due;
 		int more = 0;
 		if (!a->offline) {
 			more = bc_viewer_pump(a);
@@ -1155,6 +1158,10 @@ static void run(struct bc_viewer_app *a)
 			                             : 0.0;
 		} else {
 			due = -1.0;
+		}
+		mesh_due = bc_viewer_mesh_poll(a, now);
+		if (mesh_due >= 0.0 && (due < 0.0 || mesh_due < due)) {
+			due = mesh_due;
 		}
 		if (now - a->stats_at >= BC_VIEWER_STATS_EVERY_MS) {
 			update_title(a, now);
@@ -1295,6 +1302,7 @@ int main(int argc, char **argv)
 	bc_viewer_shot_start(&a->shot, bc_viewer_now_ms());
 	run(a);
 cleanup:
+	bc_viewer_mesh_wait(a);
 	watch_stop(a);
 	if (a->gl_ready) {
 		bc_viewer_gl_finish(&a->gl);

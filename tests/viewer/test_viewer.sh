@@ -12,7 +12,9 @@
 #     operator's blend, S saves a lossless snapshot (and with
 #     --snapshot-size a 1100x300 picture in tiles), Ctrl-S and
 #     Ctrl-Shift-S the scene as JSON and binary files (equal to the
-#     daemon's scene, read back below), P a screenshot showing
+#     daemon's scene, read back below), Ctrl-M and Ctrl-Shift-M its
+#     solid as glTF and OBJ meshes (equal to `blobcast mesh --session`'s
+#     of the daemon's scene), P a screenshot showing
 #     the selection's outline, Ctrl-Z / Ctrl-Shift-Z / Ctrl-Y undo and
 #     redo the last step (the verbose undo/redo lines name the same edit),
 #     Shift-F presents and Shift-F again stops (the verbose presenter
@@ -187,6 +189,18 @@ if [ -n "$inner" ]; then
     keyup Shift_L keyup Control_L
   [ -n "$ok" ] && wait_for '^scene .*/blobcast-drag-[0-9]*\.bin order=' \
     "$tmp/big.log" 200 || ok=
+  # Ctrl-M and Ctrl-Shift-M: the solid as glTF and OBJ meshes, made on a
+  # thread while the window goes on (compared with `blobcast mesh
+  # --session` below).
+  [ -n "$ok" ] && poke keydown Control_L key m keyup Control_L
+  [ -n "$ok" ] && wait_for \
+    '^mesh .*/blobcast-drag-[0-9]*\.glb vertices=[1-9][0-9]* triangles=[1-9]' \
+    "$tmp/big.log" 600 || ok=
+  [ -n "$ok" ] && poke keydown Control_L keydown Shift_L key m \
+    keyup Shift_L keyup Control_L
+  [ -n "$ok" ] && wait_for \
+    '^mesh .*/blobcast-drag-[0-9]*\.obj vertices=[1-9][0-9]* triangles=[1-9]' \
+    "$tmp/big.log" 600 || ok=
   poke keydown q
   n=0
   while kill -0 "$vpid" 2>/dev/null && [ $n -lt 100 ]; do
@@ -321,7 +335,7 @@ else
   if xvfb-run -a -s "-screen 0 640x480x24" sh "$0" --inner "$VIEW" \
      "$DAEMON" "$CHECK" "$XPOKE" "$tmp" "$port"; then
     echo "ok   pick, drag, Shift+wheel, Ctrl+wheel, S, P, Ctrl-Z/Y, Shift-F," \
-      "Alt+wheel, Ctrl-S and Q"
+      "Alt+wheel, Ctrl-S, Ctrl-M and Q"
   else
     fail "direct manipulation"
   fi
@@ -392,6 +406,18 @@ if [ -n "$XPOKE" ] && [ -x "$XPOKE" ]; then
   else
     fail "Ctrl-Shift-S: $saved.bin does not load as the daemon's scene"
   fi
+  # Ctrl-M and Ctrl-Shift-M wrote the meshes `blobcast mesh --session`
+  # writes of that scene, byte for byte.
+  for ext in glb obj; do
+    "$CLI" mesh --server "127.0.0.1:$port" --session drag --quiet \
+      --out "$tmp/ref.$ext" || fail "blobcast mesh --session drag failed"
+    if [ -s "$saved.$ext" ] && cmp -s "$saved.$ext" "$tmp/ref.$ext"; then
+      echo "ok   Ctrl-M saved the session's mesh as .$ext" \
+        "($(wc -c < "$tmp/ref.$ext") bytes)"
+    else
+      fail "Ctrl-M: $saved.$ext is not blobcast mesh's .$ext of the scene"
+    fi
+  done
   stop_daemon
   sphere=$(grep '"id": 2,' "$scene" | sed -n \
     's/.*"radius": \([-0-9.e]*\).*"translate": \[\([^]]*\)\].*/\1 \2/p' |
