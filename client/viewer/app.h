@@ -239,6 +239,8 @@ struct bc_viewer_app {
 	 * joined from it, which o.session then points to. */
 	struct bc_viewer_sessions sessions;
 	char session_name[BC_PROTO_MAX_NAME + 1];
+	/* I: the session's changes that undo and redo can take. */
+	struct bc_viewer_history history;
 
 	char status[200];
 	double status_at, stats_at;
@@ -363,8 +365,13 @@ void bc_viewer_edit(struct bc_viewer_app *a, const struct bc_viewer_edit *e);
 /* Sends PICK for window pixel (x, y); returns its seq or 0. */
 uint32_t bc_viewer_pick(struct bc_viewer_app *a, double x, double y);
 /* Sends UNDO (redo false) or REDO without waiting for the answer: the
- * EDIT_APPLIED every member gets, or ERROR ESTATE ("nothing to undo"). */
-void bc_viewer_undo(struct bc_viewer_app *a, bool redo);
+ * EDIT_APPLIED every member gets, or an ERROR whose words the status line
+ * shows ("nothing to undo: no change of yours is left"). Of this
+ * window's own changes (its client name's, PROTOCOL.md 7.20), or with any
+ * the session's newest, whoever made it (scope SESSION: the session's
+ * owner or the presenter). A daemon without per-person undo (no
+ * HISTORY) takes the session's newest either way, and any is not sent. */
+void bc_viewer_undo(struct bc_viewer_app *a, bool redo, bool any);
 /* F: follow the presenter, or stop following (FOLLOW, not waiting). */
 void bc_viewer_follow_toggle(struct bc_viewer_app *a);
 /* Shift-F: present, or stop presenting (PRESENT, not waiting). */
@@ -392,6 +399,14 @@ void bc_viewer_save_mesh(struct bc_viewer_app *a, bool obj);
 double bc_viewer_mesh_poll(struct bc_viewer_app *a, double now);
 /* Waits for a mesh being made (the window is closing). */
 void bc_viewer_mesh_wait(struct bc_viewer_app *a);
+/* Sends HISTORY_GET for the history panel (not waiting: the answer fills
+ * it), or says on the status line why not (no connection, a daemon
+ * without per-person undo and history). */
+void bc_viewer_history_ask(struct bc_viewer_app *a);
+/* The history panel's turn of the loop: while it is open, asks again
+ * when the session's order moved since its answer, at most once a
+ * second. Returns the ms until it wants the next turn, -1 when none. */
+double bc_viewer_history_poll(struct bc_viewer_app *a, double now);
 
 /* input.c */
 void bc_viewer_input_install(struct bc_viewer_app *a);

@@ -14,8 +14,11 @@
  *    save.c, on a thread), P window screenshot, O overlay, H the
  *    keys, R the session's camera, Home zoom to fit (Shift: the
  *    selection), Escape or Q quit; Ctrl-Z undo, Ctrl-Shift-Z or Ctrl-Y
- *    redo (sent without waiting; the answer shows on the overlay); F
+ *    redo of this window's own changes, with Alt of the session's
+ *    newest (sent without waiting; the answer shows on the overlay); F
  *    follow the presenter (again: stop), Shift-F present (again: stop);
+ *    I the history panel (history.c; Up/Down, PgUp/PgDn, Home/End
+ *    scroll it, F5 asks again, I or Escape closes);
  *  - modelling (modelling.c does the edits): Up and Down walk the
  *    selection up the tree and back, A opens the add palette (W on its
  *    unary kinds), which then takes the keys until Enter or Escape,
@@ -385,8 +388,9 @@ static const char key_help[] =
     "Delete, X: delete   M: mark an operator   G: move under the mark\n"
     "K: operator kind (Shift+K: sharp/smooth)   F2: name the selection\n"
     "R: the session's camera   Home: fit the scene (Shift: selection)\n"
-    "Ctrl+Z: undo   Ctrl+Shift+Z, Ctrl+Y: redo\n"
+    "Ctrl+Z: undo yours   Ctrl+Shift+Z, Ctrl+Y: redo   +Alt: anyone's\n"
     "F: follow the presenter   Shift+F: present   L: sessions\n"
+    "I: the history of changes (who, what, when, undone)\n"
     "S: snapshot   P: screenshot   O: overlay   Q, Esc: quit\n"
     "Ctrl+S: save the scene (JSON)   Ctrl+Shift+S: binary\n"
     "Ctrl+M: save its mesh (glTF)   Ctrl+Shift+M: OBJ";
@@ -407,6 +411,10 @@ bool bc_viewer_lower_panel(struct bc_viewer_app *a, char *out, size_t n)
 	if (a->sessions.open) {
 		bc_viewer_sessions_text(&a->sessions, a->o.session, unix_ms(),
 		                        out, n);
+		return true;
+	}
+	if (a->history.open) {
+		bc_viewer_history_text(&a->history, unix_ms(), out, n);
 		return true;
 	}
 	if (a->rename.open) {
@@ -632,6 +640,44 @@ static bool sessions_key(struct bc_viewer_app *a, int key, int mods)
 	return true;
 }
 
+/* Keys while the history panel is open; returns false for the keys it
+ * leaves to the rest (Ctrl-Z still undoes: the panel follows). */
+static bool history_key(struct bc_viewer_app *a, int key, int mods)
+{
+	struct bc_viewer_history *h = &a->history;
+	if (mods & (GLFW_MOD_CONTROL | GLFW_MOD_ALT | GLFW_MOD_SUPER)) {
+		return false;
+	}
+	a->redraw = true;
+	switch (key) {
+	case GLFW_KEY_UP:
+	case GLFW_KEY_DOWN:
+		bc_viewer_history_scroll(h, key == GLFW_KEY_UP ? -1 : 1);
+		break;
+	case GLFW_KEY_PAGE_UP:
+	case GLFW_KEY_PAGE_DOWN:
+		bc_viewer_history_scroll(h, (key == GLFW_KEY_PAGE_UP ? -1 : 1) *
+		                                (int)BC_VIEWER_HISTORY_ROWS);
+		break;
+	case GLFW_KEY_HOME:
+	case GLFW_KEY_END:
+		bc_viewer_history_scroll(h, key == GLFW_KEY_HOME
+		                                ? -(int)BC_PROTO_MAX_HISTORY
+		                                : (int)BC_PROTO_MAX_HISTORY);
+		break;
+	case GLFW_KEY_F5:
+		bc_viewer_history_ask(a);
+		break;
+	case GLFW_KEY_ESCAPE:
+	case GLFW_KEY_I:
+		h->open = false;
+		break;
+	default:
+		return false;
+	}
+	return true;
+}
+
 /* Keys while the name entry is open: all of them, so that nothing typed
  * into a name acts as a shortcut (the text itself comes through on_char). */
 static void rename_key(struct bc_viewer_app *a, int key)
@@ -705,10 +751,15 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
 	if (a->sessions.open && sessions_key(a, key, mods)) {
 		return;
 	}
-	/* Ctrl-Z undo, Ctrl-Shift-Z or Ctrl-Y redo (held: repeated). */
-	if ((mods & GLFW_MOD_CONTROL) && !(mods & GLFW_MOD_ALT) &&
+	if (a->history.open && history_key(a, key, mods)) {
+		return;
+	}
+	/* Ctrl-Z undo, Ctrl-Shift-Z or Ctrl-Y redo (held: repeated): this
+	 * window's own changes; with Alt too, the session's newest. */
+	if ((mods & GLFW_MOD_CONTROL) &&
 	    (key == GLFW_KEY_Z || key == GLFW_KEY_Y)) {
-		bc_viewer_undo(a, key == GLFW_KEY_Y || (mods & GLFW_MOD_SHIFT));
+		bc_viewer_undo(a, key == GLFW_KEY_Y || (mods & GLFW_MOD_SHIFT),
+		               (mods & GLFW_MOD_ALT) != 0);
 		return;
 	}
 	if (action != GLFW_PRESS) {
@@ -745,8 +796,17 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
 		a->help = !a->help;
 		a->redraw = true;
 		break;
+	case GLFW_KEY_I:
+		/* The session's changes, asked for each time it opens. */
+		a->history.open = true;
+		a->history.listed = false;
+		a->history.asked = 0;
+		a->sessions.open = false;
+		bc_viewer_history_ask(a);
+		break;
 	case GLFW_KEY_L:
 		/* The daemon's sessions, asked for each time it opens. */
+		a->history.open = false;
 		a->sessions.open = true;
 		a->redraw = true;
 		bc_viewer_sessions_ask(a);

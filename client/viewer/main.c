@@ -278,15 +278,20 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o,
 	        "a binary scene\nfile (in --snapshot-dir, named after the "
 	        "session and edit order);\nCtrl-M its solid as a glTF mesh, "
 	        "Ctrl-Shift-M as OBJ (the mesh\n`blobcast mesh --session` "
-	        "writes, made while the window goes on);\nCtrl-Z undo, "
-	        "Ctrl-Shift-Z or Ctrl-Y redo; F "
+	        "writes, made while the window goes on);\nCtrl-Z undoes "
+	        "your own newest change, Ctrl-Shift-Z or Ctrl-Y redoes\n"
+	        "it; with Alt too, the session's newest whoever made it "
+	        "(its owner\nor the presenter only); F "
 	        "follow the presenter\n(this window shows what the "
 	        "presenter's camera sees, at its own size;\nmoving the camera "
 	        "or F again stops), Shift-F present (members who\nfollow see "
 	        "this window's camera; Shift-F again stops); L lists\nthe "
 	        "daemon's sessions (Up/Down, Enter joins the one chosen, N "
 	        "names\na new one to create, Delete twice deletes another, "
-	        "F5 asks again,\nL or Escape closes).\n\n"
+	        "F5 asks again,\nL or Escape closes); I shows the history of "
+	        "the session's changes\n(who, what, when, undone; \"<- your "
+	        "undo\" on the one Ctrl-Z takes;\nUp/Down, PgUp/PgDn scroll, "
+	        "F5 asks again, I or Escape closes).\n\n"
 	        "Modelling, one edit each (every member sees it at once, and "
 	        "it "
 	        "undoes\nas one step): Up and Down select the parent of the "
@@ -1004,6 +1009,10 @@ static int adopt(struct bc_viewer_app *a, struct bc_client *c,
 	a->sessions.asked = 0;
 	a->sessions.delete_seq = 0; /* its OK would come on the old one */
 	a->sessions.doomed[0] = '\0';
+	/* Another session's history, or the same one's after a reconnect:
+	 * asked again on the new connection when the panel is open. */
+	a->history.asked = 0;
+	a->history.listed = false;
 	if (bc_client_scene(a->c, &scene_cam)) {
 		a->scene_cam = scene_cam;
 	}
@@ -1015,6 +1024,9 @@ static int adopt(struct bc_viewer_app *a, struct bc_client *c,
 		bc_client_error(a->c, &ei);
 		lost(a, ei.code ? ei.code : BC_EIO, now);
 		return -1;
+	}
+	if (a->history.open) {
+		bc_viewer_history_ask(a);
 	}
 	return 0;
 }
@@ -1122,7 +1134,7 @@ static void reconnect(struct bc_viewer_app *a, double now)
 static void run(struct bc_viewer_app *a)
 {
 	while (!a->quit && !glfwWindowShouldClose(a->win)) {
-		double now, due, wait, mesh_due;
+		double now, due, wait, poll_due;
 		int more = 0;
 		if (!a->offline) {
 			more = bc_viewer_pump(a);
@@ -1159,9 +1171,14 @@ static void run(struct bc_viewer_app *a)
 		} else {
 			due = -1.0;
 		}
-		mesh_due = bc_viewer_mesh_poll(a, now);
-		if (mesh_due >= 0.0 && (due < 0.0 || mesh_due < due)) {
-			due = mesh_due;
+		/* The mesher's and the history panel's turns. */
+		poll_due = bc_viewer_mesh_poll(a, now);
+		if (poll_due >= 0.0 && (due < 0.0 || poll_due < due)) {
+			due = poll_due;
+		}
+		poll_due = bc_viewer_history_poll(a, now);
+		if (poll_due >= 0.0 && (due < 0.0 || poll_due < due)) {
+			due = poll_due;
 		}
 		if (now - a->stats_at >= BC_VIEWER_STATS_EVERY_MS) {
 			update_title(a, now);

@@ -239,12 +239,24 @@ uint32_t bc_viewer_pick(struct bc_viewer_app *a, double x, double y)
 	return seq;
 }
 
-void bc_viewer_undo(struct bc_viewer_app *a, bool redo)
+void bc_viewer_undo(struct bc_viewer_app *a, bool redo, bool any)
 {
 	struct bc_msg m = {.type = redo ? BC_MSG_REDO : BC_MSG_UNDO};
 	uint32_t seq = 0;
 	if (!bc_viewer_may_edit(a, redo ? "redo" : "undo")) {
 		return;
+	}
+	if (any) {
+		if (!(bc_client_info(a->c)->features &
+		      BC_PROTO_FEATURE_HISTORY)) {
+			/* A scope byte would be refused (ENOTSUP). */
+			bc_viewer_status(a,
+			                 "this daemon has no per-person undo: "
+			                 "Ctrl+Z already takes the session's "
+			                 "newest change");
+			return;
+		}
+		m.undo.scope = BC_PROTO_UNDO_SESSION;
 	}
 	if (bc_client_send(a->c, &m, &seq)) {
 		bc_viewer_status(a, "%s not sent", redo ? "REDO" : "UNDO");
@@ -732,11 +744,17 @@ static void got_error(struct bc_viewer_app *a, const struct bc_msg *m)
 		a->sessions.asked = 0;
 		a->redraw = true;
 	}
+	if (m->seq && m->seq == a->history.asked) {
+		a->history.asked = 0;
+		a->redraw = true;
+	}
 	if (m->seq && m->seq == a->undo_seq) {
 		a->undo_seq = 0;
 		if (-(int)m->error.code == BC_ESTATE) {
-			bc_viewer_status(a, "nothing to %s",
-			                 a->undo_redo ? "redo" : "undo");
+			/* The daemon's words say why: nothing of yours left,
+			 * or built on by someone (named). */
+			bc_viewer_status(a, "%.*s", (int)m->error.text.len,
+			                 m->error.text.ptr);
 			return;
 		}
 	}
@@ -815,6 +833,74 @@ static void got_sessions(struct bc_viewer_app *a, const struct bc_msg *m)
 	}
 }
 
+/* Asks again at most this often while the session's order moves (ms), as
+ * the page's History panel does. */
+#define HISTORY_EVERY_MS 1000.0
+
+void bc_viewer_history_ask(struct bc_viewer_app *a)
+{
+	struct bc_msg m = {.type = BC_MSG_HISTORY_GET};
+	uint32_t seq = 0;
+	a->redraw = true;
+	if (a->offline) {
+		bc_viewer_status(a, "no connection to ask for the history");
+		return;
+	}
+	if (!(bc_client_info(a->c)->features & BC_PROTO_FEATURE_HISTORY)) {
+		bc_viewer_status(a, "this daemon keeps no history (it has no "
+		                    "per-person undo)");
+		return;
+	}
+	if (bc_client_send(a->c, &m, &seq)) {
+		return; /* the pump reports the lost connection */
+	}
+	a->history.asked = seq;
+	a->history.asked_at = bc_viewer_now_ms();
+}
+
+double bc_viewer_history_poll(struct bc_viewer_app *a, double now)
+{
+	struct bc_viewer_history *h = &a->history;
+	double due;
+	if (!h->open || h->asked || !h->listed || a->offline ||
+	    bc_client_info(a->c)->order == h->order) {
+		return -1.0;
+	}
+	due = h->asked_at + HISTORY_EVERY_MS - now;
+	if (due > 0.0) {
+		return due;
+	}
+	bc_viewer_history_ask(a);
+	return -1.0;
+}
+
+/* HISTORY: the panel's rows; with --verbose a line for the list and one
+ * for each change. */
+static void got_history(struct bc_viewer_app *a, const struct bc_msg *m)
+{
+	struct bc_viewer_history *h = &a->history;
+	if (m->seq != h->asked) {
+		return; /* an answer to an earlier ask */
+	}
+	h->asked = 0;
+	bc_viewer_history_take(h, &m->history);
+	a->redraw = true;
+	if (a->o.verbose) {
+		printf("history %u order=%llu\n", h->n,
+		       (unsigned long long)h->order);
+		for (uint32_t i = 0; i < h->n; i++) {
+			const struct bc_viewer_change_row *r = &h->row[i];
+			printf("change %llu %s author=%s yours=%d next=%d "
+			       "built_on=%llu what=%s\n",
+			       (unsigned long long)r->order,
+			       r->undone ? "undone" : "applied", r->author,
+			       r->yours, r->next,
+			       (unsigned long long)r->built_on, r->what);
+		}
+		fflush(stdout);
+	}
+}
+
 int bc_viewer_pump(struct bc_viewer_app *a)
 {
 	for (int i = 0; i < BC_VIEWER_MSGS_PER_TURN; i++) {
@@ -867,6 +953,9 @@ int bc_viewer_pump(struct bc_viewer_app *a)
 			break;
 		case BC_MSG_SESSIONS:
 			got_sessions(a, &m);
+			break;
+		case BC_MSG_HISTORY:
+			got_history(a, &m);
 			break;
 		case BC_MSG_OK:
 			if (m.seq && m.seq == a->sessions.delete_seq) {

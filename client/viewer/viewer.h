@@ -17,6 +17,7 @@
  *    the VIEW size a framebuffer asks for under the daemon's max_dim;
  *  - font.c: a 5x7 bitmap font turned into triangles;
  *  - sessions.c: the sessions panel (the daemon's sessions, one to join).
+ *  - history.c: the history panel (the session's changes undo can take).
  */
 #ifndef BLOBCAST_VIEWER_H
 #define BLOBCAST_VIEWER_H
@@ -280,6 +281,48 @@ const char *bc_viewer_sessions_chosen(const struct bc_viewer_sessions *s);
 const char *bc_viewer_sessions_text(const struct bc_viewer_sessions *s,
                                     const char *current, uint64_t now_ms,
                                     char *out, size_t n);
+
+/* ---- history.c ----------------------------------------------------------- */
+
+/* Changes the history panel shows at once. */
+#define BC_VIEWER_HISTORY_ROWS 9u
+
+struct bc_viewer_change_row {
+	uint64_t order, time_ms, built_on; /* time_ms: Unix ms, 0 unknown */
+	bool undone, yours, next;
+	char author[BC_PROTO_MAX_NAME + 1];
+	char what[BC_PROTO_MAX_HISTORY_TEXT + 1];
+};
+
+/* The history panel (I): the session's changes that undo and redo can
+ * still take, newest first, as the daemon's last HISTORY answer listed
+ * them (HISTORY_GET, PROTOCOL.md 7.26), scrolled by a person. */
+struct bc_viewer_history {
+	bool open;
+	uint32_t asked;  /* the HISTORY_GET on its way (its seq; 0: none) */
+	double asked_at; /* when it went (the loop's ms) */
+	bool listed;     /* an answer came since the panel opened */
+	uint64_t order;  /* the session's order the answer was made at */
+	uint32_t n;      /* changes listed */
+	uint32_t top;    /* the first row shown */
+	struct bc_viewer_change_row row[BC_PROTO_MAX_HISTORY];
+};
+
+/* Keeps a HISTORY answer (every entry: at most BC_PROTO_MAX_HISTORY),
+ * author and text with any byte outside printable ASCII as '?'; the rows
+ * shown start at the newest. */
+void bc_viewer_history_take(struct bc_viewer_history *h,
+                            const struct bc_msg_history *m);
+/* Scrolls the rows shown by delta, held within the list. */
+void bc_viewer_history_scroll(struct bc_viewer_history *h, int delta);
+/* The panel: a line of keys, a line that counts the changes, then
+ * BC_VIEWER_HISTORY_ROWS changes from the first shown, as `blobcast
+ * history` words them: "  17  14:03:22  applied  alice (you)  SET node
+ * 12 translate  built on by 19  <- your undo" (UTC; the date too when it
+ * is not today's, at now_ms, Unix ms); before an answer, that one is
+ * awaited, or that none came (the status line says why). Returns out. */
+const char *bc_viewer_history_text(const struct bc_viewer_history *h,
+                                   uint64_t now_ms, char *out, size_t n);
 
 /* ---- meter.c ------------------------------------------------------------- */
 

@@ -847,6 +847,105 @@ static void test_sessions_panel_lists_and_chooses(void)
 /* N: a new session's name takes the protocol's characters only, never
  * a '.' first, at most BC_PROTO_MAX_NAME bytes; Backspace takes one off;
  * the panel shows the entry while it is open. */
+/* The history panel: rows as `blobcast history` words them, text
+ * outside printable ASCII made safe, scrolling held within the list. */
+static void test_history_panel_rows(void)
+{
+	static struct bc_viewer_history h;
+	static struct bc_proto_history_entry e[BC_PROTO_MAX_HISTORY];
+	char text[4096], line[64];
+	/* 2027-01-15 08:00:00 UTC. */
+	const uint64_t now = 1800000000000ull;
+	struct bc_msg_history m = {.order = 42, .nentries = 3, .entries = e};
+	char long_what[BC_PROTO_MAX_HISTORY_TEXT + 1];
+	memset(long_what, 'w', BC_PROTO_MAX_HISTORY_TEXT);
+	long_what[BC_PROTO_MAX_HISTORY_TEXT] = '\0';
+	memset(&h, 0, sizeof(h));
+	bc_viewer_history_text(&h, now, text, sizeof(text));
+	CHECK(strstr(text, "no history came") != NULL);
+	h.asked = 3;
+	bc_viewer_history_text(&h, now, text, sizeof(text));
+	CHECK(strstr(text, "asking the daemon") != NULL);
+
+	e[0] = (struct bc_proto_history_entry){
+	    .order = 42,
+	    .time_ms = now - 5000u,
+	    .state = BC_PROTO_HISTORY_APPLIED,
+	    .flags = BC_PROTO_HISTORY_YOURS | BC_PROTO_HISTORY_NEXT,
+	    .author = {"alice", 5},
+	    .what = {"SET node 12 translate", 21}};
+	e[1] = (struct bc_proto_history_entry){
+	    .order = 40,
+	    .time_ms = now - 2u * 86400000u,
+	    .built_on = 42,
+	    .state = BC_PROTO_HISTORY_UNDONE,
+	    .author = {"b\x01"
+	               "b\xc3\xa9",
+	               5},
+	    .what = {long_what, BC_PROTO_MAX_HISTORY_TEXT}};
+	e[2] = (struct bc_proto_history_entry){
+	    .order = 7,
+	    .state = BC_PROTO_HISTORY_UNDONE,
+	    .flags = BC_PROTO_HISTORY_YOURS | BC_PROTO_HISTORY_NEXT,
+	    .author = {"alice", 5},
+	    .what = {"INSERT under node 1", 19}};
+	bc_viewer_history_take(&h, &m);
+	CHECK_EQ_INT(h.n, 3);
+	CHECK(h.listed);
+	CHECK_STREQ(h.row[1].author, "b?b??");
+	CHECK_EQ_INT(strlen(h.row[1].what), BC_PROTO_MAX_HISTORY_TEXT);
+	bc_viewer_history_text(&h, now, text, sizeof(text));
+	CHECK(strstr(text, "3 changes undo and redo can take, newest first; "
+	                   "the session is at edit order 42") != NULL);
+	CHECK(strstr(text, "    42  07:59:55  applied  alice (you)  SET node "
+	                   "12 translate  <- your undo\n") != NULL);
+	CHECK(strstr(text, "    40  2027-01-13 08:00:00  undone   b?b??  ") !=
+	      NULL);
+	CHECK(strstr(text, "  built on by 42\n") != NULL);
+	CHECK(strstr(text, "     7  --:--:--  undone   alice (you)  INSERT "
+	                   "under node 1  <- your redo") != NULL);
+	/* The newest first, in the order the daemon listed them. */
+	CHECK(strstr(text, "    42 ") < strstr(text, "    40 "));
+	CHECK(strstr(text, "    40 ") < strstr(text, "     7 "));
+	CHECK(strstr(text, "shown)") == NULL);
+
+	/* A full list: rows from the first shown, scrolling held. */
+	for (uint32_t i = 0; i < BC_PROTO_MAX_HISTORY; i++) {
+		e[i] = (struct bc_proto_history_entry){
+		    .order = 1000u - i,
+		    .time_ms = now,
+		    .author = {"carol", 5},
+		    .what = {"SET node 3 radius", 17}};
+	}
+	m.nentries = BC_PROTO_MAX_HISTORY;
+	bc_viewer_history_take(&h, &m);
+	CHECK_EQ_INT(h.n, BC_PROTO_MAX_HISTORY);
+	bc_viewer_history_scroll(&h, -1);
+	CHECK_EQ_INT(h.top, 0);
+	bc_viewer_history_scroll(&h, 5);
+	CHECK_EQ_INT(h.top, 5);
+	bc_viewer_history_text(&h, now, text, sizeof(text));
+	CHECK(strstr(text, "(6-14 shown)") != NULL);
+	CHECK(strstr(text, "   995  ") != NULL);
+	CHECK(strstr(text, "   996  ") == NULL);
+	snprintf(line, sizeof(line), "   %u  ",
+	         995u - BC_VIEWER_HISTORY_ROWS + 1u);
+	CHECK(strstr(text, line) != NULL);
+	snprintf(line, sizeof(line), "   %u  ", 995u - BC_VIEWER_HISTORY_ROWS);
+	CHECK(strstr(text, line) == NULL);
+	bc_viewer_history_scroll(&h, 1000);
+	CHECK_EQ_INT(h.top, BC_PROTO_MAX_HISTORY - BC_VIEWER_HISTORY_ROWS);
+	bc_viewer_history_text(&h, now, text, sizeof(text));
+	CHECK(strstr(text, "   801  ") != NULL); /* the oldest */
+	/* A small buffer is cut, never overrun. */
+	memset(text, 'x', sizeof(text));
+	bc_viewer_history_text(&h, now, text, 40);
+	CHECK_EQ_INT(strlen(text), 39);
+	/* An answer taken again starts from the newest. */
+	bc_viewer_history_take(&h, &m);
+	CHECK_EQ_INT(h.top, 0);
+}
+
 static void test_sessions_panel_new_name(void)
 {
 	static struct bc_viewer_sessions s;
@@ -1769,6 +1868,7 @@ static const struct bc_test tests[] = {
     {"palette_lists_every_kind", test_palette_lists_every_kind},
     {"sessions_panel_lists_and_chooses", test_sessions_panel_lists_and_chooses},
     {"sessions_panel_new_name", test_sessions_panel_new_name},
+    {"history_panel_rows", test_history_panel_rows},
     {"meter_counts_the_last_second", test_meter_counts_the_last_second},
     {"edits_one_in_flight", test_edits_one_in_flight},
     {"edits_refused", test_edits_refused},
