@@ -300,6 +300,11 @@ void bc_viewer_model_duplicate(struct bc_viewer_app *a);
 void bc_viewer_model_mark(struct bc_viewer_app *a);
 /* G: moves the selection under the marked operator. */
 void bc_viewer_model_regroup(struct bc_viewer_app *a);
+/* Alt+Up, Alt+Down: the selection (with the unary nodes wrapping it) one
+ * place earlier (up) or later among its siblings, one MOVE under the same
+ * operator, as the page's; at either end nothing is sent and the status
+ * line says so. */
+void bc_viewer_model_reorder(struct bc_viewer_app *a, bool up);
 /* K (Shift: sharp <-> smooth): the selected operator's next kind. */
 void bc_viewer_model_op_kind(struct bc_viewer_app *a, bool smooth);
 /* F2: opens the name entry on the selection, holding its name. */

@@ -386,6 +386,7 @@ static const char key_help[] =
     "click: select a shape   Up/Down: its parent / back down\n"
     "A: add (palette)   W: wrap the selection   D: duplicate\n"
     "Delete, X: delete   M: mark an operator   G: move under the mark\n"
+    "Alt+Up/Down: move the selection a place among its siblings\n"
     "K: operator kind (Shift+K: sharp/smooth)   F2: name the selection\n"
     "R: the session's camera   Home: fit the scene (Shift: selection)\n"
     "Ctrl+Z: undo yours   Ctrl+Shift+Z, Ctrl+Y: redo   +Alt: anyone's\n"
@@ -821,7 +822,11 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
 		break;
 	case GLFW_KEY_UP:
 	case GLFW_KEY_DOWN:
-		select_step(a, key == GLFW_KEY_UP);
+		if (mods & GLFW_MOD_ALT) {
+			bc_viewer_model_reorder(a, key == GLFW_KEY_UP);
+		} else {
+			select_step(a, key == GLFW_KEY_UP);
+		}
 		break;
 	case GLFW_KEY_A:
 		palette_open(a, BC_VIEWER_PAL_SHAPE);

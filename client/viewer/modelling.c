@@ -1,6 +1,7 @@
 /*
  * Modelling from the keyboard: the add palette's choice, delete,
- * duplicate, and regrouping the selection under a marked operator. Each
+ * duplicate, regrouping the selection under a marked operator and moving
+ * it a place among its siblings (Alt+Up, Alt+Down). Each
  * action is one EDIT built, checked against the scene mirror and sent by
  * libblobcast's modelling calls (blobcast/model.h), so every member sees
  * it at once and it undoes as one step; what the library refuses before
@@ -326,6 +327,69 @@ void bc_viewer_model_regroup(struct bc_viewer_app *a)
 	}
 	sent(a, &r, a->selected, "move");
 	bc_viewer_status(a, "moved #%u under #%u", r.node, a->mark);
+}
+
+void bc_viewer_model_reorder(struct bc_viewer_app *a, bool up)
+{
+	struct bc_errinfo ei = {0};
+	struct bc_model_result r;
+	const struct bc_tree *t = ready(a, "reordering");
+	struct bc_op_data op = {.kind = BC_OP_INVALID};
+	uint32_t top, parent, idx, n;
+	bool first_changes;
+	char words[96];
+	if (!t) {
+		return;
+	}
+	if (!a->selected) {
+		bc_viewer_status(a, "reordering: click a shape first");
+		return;
+	}
+	/* What moves is the top of the unary chain around the selection. */
+	top = a->selected;
+	while ((parent = bc_tree_parent(t, top)) &&
+	       classify(t, parent, NULL) == NODE_UNARY) {
+		top = parent;
+	}
+	if (!parent) {
+		bc_viewer_status(a, "reordering: the root has no siblings");
+		return;
+	}
+	idx = bc_tree_child_index(t, top);
+	n = bc_tree_child_count(t, parent);
+	if (up ? idx == 0 : idx + 1u >= n) {
+		bc_viewer_status(
+		    a,
+		    "reordering: #%u is already the %s child "
+		    "of %s; nothing sent",
+		    top, up ? "first" : "last",
+		    bc_viewer_node_text(t, parent, words, sizeof(words)));
+		return;
+	}
+	/* Positions count the gaps between the children as they are now:
+	 * one place later is past the next sibling. */
+	if (bc_model_move(
+	        a->c,
+	        &(struct bc_model_move){.node = top,
+	                                .parent = parent,
+	                                .has_position = true,
+	                                .position = up ? idx - 1u : idx + 2u},
+	        &r, &ei)) {
+		refused(a, "reordering", &ei);
+		return;
+	}
+	sent(a, &r, a->selected, "reorder");
+	classify(t, parent, &op);
+	/* The first child of a difference is the shape the others cut:
+	 * a new first child changes the shape, which the page says too. */
+	first_changes = (op.kind == BC_OP_DIFFERENCE ||
+	                 op.kind == BC_OP_SMOOTH_DIFFERENCE) &&
+	                (idx == 0 || (up && idx == 1u));
+	bc_viewer_status(a, "moved #%u to place %u of %u under #%u%s", r.node,
+	                 (up ? idx - 1u : idx + 1u) + 1u, n, parent,
+	                 first_changes ? ": a difference's first child is "
+	                                 "the shape the others cut"
+	                               : "");
 }
 
 /* K: the next kind of the selected operator, union -> intersection ->

@@ -18,7 +18,9 @@
 #     pixel;
 #  5. K on union 4 makes it an intersection at the daemon, K twice more
 #     a difference and a union again; a click on the empty centre selects
-#     nothing.
+#     nothing;
+#  6. on the left sphere, Alt+Down makes it the root's second child at
+#     the daemon, Alt+Up its first again; Alt+Up once more sends nothing.
 # Each action is one EDIT: one "model" line and one "applied" line with
 # its seq, and the verbose lines name the new ids.
 #
@@ -161,10 +163,35 @@ if [ -n "$ok" ]; then
   n=$(grep -c '^model ' "$L")
   [ "$n" -eq 9 ] || fail "$n model actions, not 9"
 fi
+# 6. Alt+Down moves the left sphere one place later among the root's
+# children, Alt+Up back; Alt+Up on the first child sends nothing.
+# kids: the root's children in order, at the daemon.
+kids() {
+  nodes "$1"
+  awk '$3 == 1 { printf "%s ", $1 }' "$tmp/$1.txt"
+}
+pick 62 90 2
+act reorder keydown Alt_L key Down keyup Alt_L
+if [ -n "$ok" ]; then
+  [ "$(kids reordered)" = "3 2 4 " ] ||
+    fail "Alt+Down: the root's children are $(kids reordered), not 3 2 4"
+fi
+act reorder keydown Alt_L key Up keyup Alt_L
+if [ -n "$ok" ]; then
+  [ "$(kids restored)" = "2 3 4 " ] ||
+    fail "Alt+Up: the root's children are $(kids restored), not 2 3 4"
+  mark=$(vl_lines "$L")
+  vl_poke keydown Alt_L key Up keyup Alt_L || ok=
+  [ -n "$ok" ] && { vl_wait_after "$L" "$mark" \
+    '^status reordering: #2 is already the first child of .*; nothing sent$' \
+    100 || ok=; }
+  [ "$(grep -c '^model ' "$L")" -eq 11 ] ||
+    fail "Alt+Up on the first child sent an edit"
+fi
 vl_quit || ok=
 [ -n "$ok" ] || fail "a step failed"
 if [ "$failures" -eq 0 ]; then
-  echo "ok   add, wrap, regroup, duplicate, delete and operator kinds, one EDIT each"
+  echo "ok   add, wrap, regroup, reorder, duplicate, delete and operator kinds, one EDIT each"
   echo "all checks passed"
   exit 0
 fi
