@@ -217,6 +217,8 @@ struct bc_viewer_app {
 	/* The last UNDO or REDO sent (Ctrl-Z, Ctrl-Shift-Z, Ctrl-Y) that the
 	 * server has not answered yet (0: none), and which of the two. */
 	uint32_t undo_seq;
+	/* Shift+R: the SESSION_CAMERA on its way (its seq; 0: none). */
+	uint32_t session_cam_seq;
 	bool undo_redo;
 
 	/* F: follow whoever presents (kept across reconnects; moving our
@@ -377,6 +379,10 @@ uint32_t bc_viewer_pick(struct bc_viewer_app *a, double x, double y);
  * owner or the presenter). A daemon without per-person undo (no
  * HISTORY) takes the session's newest either way, and any is not sent. */
 void bc_viewer_undo(struct bc_viewer_app *a, bool redo, bool any);
+/* Shift+R: this window's camera becomes the session's (SESSION_CAMERA,
+ * editors; not waiting: SESSION_CAMERA_SET tells every member, and the
+ * status line says who set it). */
+void bc_viewer_set_session_camera(struct bc_viewer_app *a);
 /* F: follow the presenter, or stop following (FOLLOW, not waiting). */
 void bc_viewer_follow_toggle(struct bc_viewer_app *a);
 /* Shift-F: present, or stop presenting (PRESENT, not waiting). */

@@ -388,7 +388,8 @@ static const char key_help[] =
     "Delete, X: delete   M: mark an operator   G: move under the mark\n"
     "Alt+Up/Down: move the selection a place among its siblings\n"
     "K: operator kind (Shift+K: sharp/smooth)   F2: name the selection\n"
-    "R: the session's camera   Home: fit the scene (Shift: selection)\n"
+    "R: the session's camera (Shift+R: make this view it)\n"
+    "Home: fit the scene (Shift: selection)\n"
     "Ctrl+Z: undo yours   Ctrl+Shift+Z, Ctrl+Y: redo   +Alt: anyone's\n"
     "F: follow the presenter   Shift+F: present   L: sessions\n"
     "I: the history of changes (who, what, when, undone)\n"
@@ -813,6 +814,10 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
 		bc_viewer_sessions_ask(a);
 		break;
 	case GLFW_KEY_R:
+		if (mods & GLFW_MOD_SHIFT) {
+			bc_viewer_set_session_camera(a);
+			break;
+		}
 		a->cam = a->scene_cam;
 		bc_viewer_camera_changed(a, false);
 		bc_viewer_status(a, "the session's camera");

@@ -273,8 +273,10 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o,
 	        "are passed over).\n\n"
 	        "Keys: H lists them on the overlay. Home zooms to fit the "
 	        "whole\nscene (Shift+Home the selection), R goes back to the "
-	        "session's\ncamera; S snapshot, P screenshot, O overlay, Q or "
-	        "Escape quit;\nCtrl-S saves the scene as JSON, Ctrl-Shift-S as "
+	        "session's\ncamera, Shift-R makes this view the session's "
+	        "camera (editors;\njoiners start from it); S snapshot, P "
+	        "screenshot, O overlay, Q or\nEscape quit;\nCtrl-S saves the "
+	        "scene as JSON, Ctrl-Shift-S as "
 	        "a binary scene\nfile (in --snapshot-dir, named after the "
 	        "session and edit order);\nCtrl-M its solid as a glTF mesh, "
 	        "Ctrl-Shift-M as OBJ (the mesh\n`blobcast mesh --session` "
@@ -1002,6 +1004,7 @@ static int adopt(struct bc_viewer_app *a, struct bc_client *c,
 	a->wheel.what = BC_VIEWER_WHEEL_NONE;
 	a->snapshot_seq = 0;
 	a->undo_seq = 0;
+	a->session_cam_seq = 0;
 	a->turn_pending = false;
 	a->cam_seq = 0;
 	a->view_sent_at = 0.0;

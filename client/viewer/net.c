@@ -266,6 +266,21 @@ void bc_viewer_undo(struct bc_viewer_app *a, bool redo, bool any)
 	a->undo_redo = redo;
 }
 
+void bc_viewer_set_session_camera(struct bc_viewer_app *a)
+{
+	struct bc_msg m = {.type = BC_MSG_SESSION_CAMERA};
+	uint32_t seq = 0;
+	if (!bc_viewer_may_edit(a, "setting the session's camera")) {
+		return;
+	}
+	bc_edit_camera_to_msg(&a->cam, &m.session_camera);
+	if (bc_client_send(a->c, &m, &seq)) {
+		bc_viewer_status(a, "SESSION_CAMERA not sent");
+		return;
+	}
+	a->session_cam_seq = seq;
+}
+
 void bc_viewer_picture_drop(struct bc_viewer_app *a, const char *why)
 {
 	if (!a->big) {
@@ -744,6 +759,9 @@ static void got_error(struct bc_viewer_app *a, const struct bc_msg *m)
 		a->sessions.asked = 0;
 		a->redraw = true;
 	}
+	if (m->seq && m->seq == a->session_cam_seq) {
+		a->session_cam_seq = 0;
+	}
 	if (m->seq && m->seq == a->history.asked) {
 		a->history.asked = 0;
 		a->redraw = true;
@@ -901,6 +919,36 @@ static void got_history(struct bc_viewer_app *a, const struct bc_msg *m)
 	}
 }
 
+/* SESSION_CAMERA_SET: R goes to the session's new camera; the status
+ * line says who set it. */
+static void got_session_camera(struct bc_viewer_app *a,
+                               const struct bc_msg_session_camera_set *cs)
+{
+	char name[BC_PROTO_MAX_NAME + 16];
+	bool mine = cs->author == bc_client_info(a->c)->member_id &&
+	            cs->author_seq == a->session_cam_seq && a->session_cam_seq;
+	bc_edit_camera_from_msg(&cs->camera, &a->scene_cam);
+	bc_viewer_roster_edit(&a->roster, cs->author, cs->order);
+	if (mine) {
+		a->session_cam_seq = 0;
+		bc_viewer_status(a,
+		                 "the session's camera is now this view "
+		                 "(edit order %llu): joiners start here, R "
+		                 "comes back here",
+		                 (unsigned long long)cs->order);
+	} else {
+		bc_viewer_status(
+		    a, "%s set the session's camera (R goes there)",
+		    member_name(&a->roster, cs->author, name, sizeof(name)));
+	}
+	if (a->o.verbose) {
+		printf("session_camera order=%llu by=%u\n",
+		       (unsigned long long)cs->order, cs->author);
+		fflush(stdout);
+	}
+	a->redraw = true;
+}
+
 int bc_viewer_pump(struct bc_viewer_app *a)
 {
 	for (int i = 0; i < BC_VIEWER_MSGS_PER_TURN; i++) {
@@ -978,16 +1026,9 @@ int bc_viewer_pump(struct bc_viewer_app *a)
 		case BC_MSG_FOLLOW_CAMERA:
 			got_follow_camera(a, &m);
 			break;
-		case BC_MSG_SESSION_CAMERA_SET: {
-			/* R goes to the session's new camera. */
-			bc_edit_camera_from_msg(&m.session_camera_set.camera,
-			                        &a->scene_cam);
-			bc_viewer_roster_edit(&a->roster,
-			                      m.session_camera_set.author,
-			                      m.session_camera_set.order);
-			a->redraw = true;
+		case BC_MSG_SESSION_CAMERA_SET:
+			got_session_camera(a, &m.session_camera_set);
 			break;
-		}
 		default:
 			break;
 		}

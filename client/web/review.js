@@ -2,7 +2,9 @@
  * What a reviewer needs around the picture, on the page's toolbar and
  * header:
  *  - camera reset (R): back to the session's camera (the one the scene
- *    carries, PROTOCOL.md 7.25), or bc_camera_default() without one;
+ *    carries, PROTOCOL.md 7.25), or bc_camera_default() without one; and
+ *    set (Shift-R, editors): this view becomes the session's camera
+ *    (SESSION_CAMERA);
  *  - zoom to fit (Home): the whole scene in view, from conservative boxes
  *    of the mirror's primitives (bounds.js);
  *  - downloads: a PNG of the view (the Picture panel's tiled snapshot at
@@ -72,6 +74,7 @@ export class Review {
 		this.refused = new Set(); /* encodings the daemon refused */
 		this.viewAsk = null; /* { seq, back: { encoding, quality } } */
 		this.listedFor = null; /* the session the list was asked in */
+		this.camAsk = 0; /* the SESSION_CAMERA on its way (its seq) */
 		this.sessions = new SessionPanel({
 			url: () => app.cfg.ws,
 			token: () => app.cfg.token,
@@ -91,6 +94,8 @@ export class Review {
 
 	installToolbar() {
 		$('resetbtn').addEventListener('click', () => this.resetCamera());
+		$('setcambtn').addEventListener('click', () =>
+			this.setSessionCamera());
 		$('fitbtn').addEventListener('click', () => this.fit());
 		$('pngbtn').addEventListener('click', () => this.savePng()
 			.catch(() => {}));
@@ -126,9 +131,13 @@ export class Review {
 			if (e.key === 'Home') {
 				e.preventDefault();
 				this.fit();
-			} else if (e.key.toLowerCase() === 'r' && !e.shiftKey) {
+			} else if (e.key.toLowerCase() === 'r') {
 				e.preventDefault();
-				this.resetCamera();
+				if (e.shiftKey) {
+					this.setSessionCamera();
+				} else {
+					this.resetCamera();
+				}
 			}
 		});
 	}
@@ -146,6 +155,23 @@ export class Review {
 		}
 		this.app.camera.set(this.sessionCamera());
 		this.app.sendCamera(false);
+	}
+
+	/* This view becomes the session's camera (SESSION_CAMERA, 7.25): the
+	 * one joiners start from, reset comes back to and the scene is saved
+	 * with. The daemon's SESSION_CAMERA_SET tells every member (the page
+	 * says who set it); a refusal is said here. */
+	setSessionCamera() {
+		const app = this.app;
+		if (!app.info) {
+			return;
+		}
+		if (app.info.role !== P.ROLE.EDITOR) {
+			app.say('setting the session\'s camera needs the editor role');
+			return;
+		}
+		this.camAsk = app.conn.send(P.MSG.SESSION_CAMERA,
+			app.camera.msg());
 	}
 
 	/* The scene's box, or null (no scene, or nothing to show). */
@@ -312,6 +338,11 @@ export class Review {
 			 * page has taken the message (not at the next tick). */
 			setTimeout(() => this.update(), 0);
 		}
+		if (m.type === P.MSG.SESSION_CAMERA_SET &&
+				m.author === app.info?.member_id &&
+				m.author_seq === this.camAsk) {
+			this.camAsk = 0;
+		}
 		if (m.type === P.MSG.SESSION_CAMERA_SET && app.scene) {
 			/* The mirror keeps the session's camera (7.25): reset goes
 			 * there. */
@@ -320,6 +351,12 @@ export class Review {
 		}
 		if (m.type !== P.MSG.ERROR) {
 			return false;
+		}
+		if (m.seq && m.seq === this.camAsk) {
+			this.camAsk = 0;
+			app.say(`the session's camera was not set: ${m.text} ` +
+				`(${P.errName(m.code)})`);
+			return true;
 		}
 		const ask = this.viewAsk;
 		if (ask && m.seq && m.seq === ask.seq) {
@@ -407,6 +444,8 @@ export class Review {
 		el.title = t.warn || 'how this page is connected';
 		const joined = !!app.info;
 		$('resetbtn').disabled = !joined;
+		$('setcambtn').disabled = !joined ||
+			app.info.role !== P.ROLE.EDITOR;
 		$('fitbtn').disabled = !joined || !app.scene;
 		$('jsonbtn').disabled = !app.scene;
 		$('binbtn').disabled = !app.scene;

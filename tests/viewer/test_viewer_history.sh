@@ -1,5 +1,6 @@
 #!/bin/sh
-# The history panel and the two undo scopes of blobcast-view, under Xvfb,
+# The history panel, the two undo scopes and Shift-R (the session's
+# camera) of blobcast-view, under Xvfb,
 # against a private blobcastd; `blobcast` (the CLI, as bob and as alice)
 # makes changes beside the window (named alice):
 #  1. bob changes a sphere; the window's Ctrl-Z takes back its own changes
@@ -13,7 +14,9 @@
 #  4. Ctrl-Alt-Z (the session's newest, whoever made it) is refused with
 #     EPERM while alice neither owns the session nor presents; after
 #     Shift-F (present) it takes back bob's change;
-#  5. Escape closes the panel without quitting; Q then quits.
+#  5. after a wheel zoom, Shift-R makes the view the session's camera:
+#     the daemon's scene (blobcast scene) carries the new eye;
+#  6. Escape closes the panel without quitting; Q then quits.
 #
 # usage: test_viewer_history.sh BLOBCAST-VIEW BLOBCASTD IMGCHECK XPOKE CLI
 # Exits 77 (skipped) when xvfb-run or one of the programs is missing.
@@ -151,7 +154,25 @@ if [ -n "$ok" ]; then
     fail "Ctrl-Alt-Z did not take back bob's change"; }
 fi
 
-# 5. Escape closes the panel, not the window.
+# 5. A wheel zoom, then Shift-R: the view becomes the session's camera at
+# the daemon (its scene carries it), and the status line says so.
+if [ -n "$ok" ]; then
+  mark=$(vl_lines "$L")
+  vl_poke move 120 90 wheel 2 sleep 500 keydown Shift_L key r keyup Shift_L ||
+    ok=
+  [ -n "$ok" ] && { vl_wait_after "$L" "$mark" \
+    '^session_camera order=[0-9]+ by=[0-9]+$' 100 || ok=; }
+  [ -n "$ok" ] && { vl_wait_after "$L" "$mark" \
+    "^status the session's camera is now this view" 100 || ok=; }
+  eye=$(cli scene --session hist | python3 -c '
+import json, sys
+print(" ".join(str(v) for v in json.load(sys.stdin)["camera"]["eye"]))')
+  echo "$eye" | awk '{ exit !(($3 < 5.99 || $3 > 6.01) && $1 > -0.01 &&
+    $1 < 0.01 && $2 > -0.01 && $2 < 0.01) }' ||
+    fail "Shift-R: the daemon's camera eye is $eye, not the zoomed view's"
+fi
+
+# 6. Escape closes the panel, not the window.
 if [ -n "$ok" ]; then
   mark=$(vl_lines "$L")
   vl_poke key Escape sleep 300 || ok=
@@ -161,7 +182,8 @@ vl_quit || ok=
 [ -n "$ok" ] || fail "a step failed"
 if [ "$failures" -eq 0 ]; then
   echo "ok   Ctrl-Z takes back alice's own change only, I lists the" \
-    "daemon's history and follows it, Ctrl-Alt-Z needs the presenter"
+    "daemon's history and follows it, Ctrl-Alt-Z needs the presenter," \
+    "Shift-R sets the session's camera"
   echo "all checks passed"
   exit 0
 fi

@@ -12,6 +12,9 @@
  *  - camera: after a zoom far out, zoom-to-fit (Home) makes the scene
  *    cover a much larger share of the picture with its box inside the
  *    view; reset (R) brings back the session's camera and its picture;
+ *    set (Shift-R) makes a zoomed view the session's camera at the daemon
+ *    (`blobcast scene` carries it) and R then comes back to it; the
+ *    button is off for the viewer token;
  *  - frames: the encoding control switches the FRAMEs between PNG, raw
  *    and JPEG; the header's PNG button downloads a PNG of the view size;
  *    against a stand-in server that refuses raw frames (the page's
@@ -278,6 +281,8 @@ try {
 	await listed(b, ['default', 'review-a'], ['nope']);
 	step('viewer token: delete and create refused (EPERM), shown, nothing ' +
 		'changed');
+	assert.ok(await b.isDisabled('#setcambtn'),
+		'a viewer cannot set the session\'s camera');
 	await b.close();
 
 	/* ---- camera: far, fit, reset (PNG frames: exact pixels) ---- */
@@ -330,6 +335,33 @@ try {
 		'first picture');
 	step(`R (reset): the session's camera and its picture again (mean ` +
 		`difference ${diff.toFixed(3)}; ${(100 * back.share).toFixed(1)} %)`);
+
+	/* ---- set (Shift-R): this view becomes the session's camera ---- */
+	await a.mouse.move(box.x + box.w / 2, box.y + box.h / 2);
+	await a.mouse.wheel(0, 300);
+	await a.waitForTimeout(300);
+	await settled(a, 'the zoomed still');
+	const mine = (await a.evaluate(() => window.blobcast.state())).camera;
+	const near = (u, v) => u.every((x, k) => Math.abs(x - v[k]) < 1e-4);
+	assert.ok(!near(mine.eye, sessionCam.eye), 'the view moved');
+	await a.press('#view', 'Shift+R');
+	await until(a, 'the session camera is the view', (eye) => window
+		.blobcast.sessionCamera().eye.every((x, k) =>
+			Math.abs(x - eye[k]) < 1e-4), mine.eye);
+	const sceneNow = await run(['scene', ...srv, '--session', 'review-a']);
+	assert.equal(sceneNow.code, 0, `blobcast scene: ${sceneNow.stderr}`);
+	const daemonCam = JSON.parse(sceneNow.stdout).camera;
+	assert.ok(near(daemonCam.eye, mine.eye) &&
+		near(daemonCam.target, mine.target), `the daemon's camera ` +
+		`${JSON.stringify(daemonCam)}, the view's ${JSON.stringify(mine)}`);
+	await a.mouse.wheel(0, 300);
+	await a.waitForTimeout(300);
+	await a.press('#view', 'r');
+	await until(a, 'R back to the camera set', (eye) => window.blobcast
+		.state().camera.eye.every((x, k) => Math.abs(x - eye[k]) < 1e-4),
+	mine.eye);
+	step('Shift-R (set): the view became the session\'s camera at the ' +
+		'daemon (blobcast scene), and R comes back to it');
 
 	/* ---- frames: encoding control, PNG download ---- */
 	const encoded = async (enc, name) => {
