@@ -185,6 +185,15 @@ struct bc_viewer_app {
 		char text[BC_TREE_NAME_MAX + 1];
 	} rename;
 
+	/* Ctrl+O (load.c): the path of a scene file to load, being typed;
+	 * while open, the entry takes every key until Enter or Escape. path
+	 * holds len bytes of UTF-8, NUL-terminated. */
+	struct {
+		bool open;
+		size_t len;
+		char path[1024];
+	} load;
+
 	/* Frames. */
 	uint64_t nframes; /* shown, snapshots excluded */
 	/* FRAME_ACK (when the server granted ACKS): the newest frame_no
@@ -410,6 +419,22 @@ void bc_viewer_save_mesh(struct bc_viewer_app *a, bool obj);
 double bc_viewer_mesh_poll(struct bc_viewer_app *a, double now);
 /* Waits for a mesh being made (the window is closing). */
 void bc_viewer_mesh_wait(struct bc_viewer_app *a);
+/* Ctrl+O (load.c): opens the entry for a scene file's path (editors). */
+void bc_viewer_load_open(struct bc_viewer_app *a);
+/* A character typed into it (a Unicode code point, kept as UTF-8). */
+void bc_viewer_load_char(struct bc_viewer_app *a, uint32_t cp);
+/* Backspace: its last character off. */
+void bc_viewer_load_back(struct bc_viewer_app *a);
+/* Enter: reads the file (JSON or binary, as `blobcast load`) and loads
+ * it into the session, waiting for the daemon's answer; a file that does
+ * not read keeps the entry open, saying why. */
+void bc_viewer_load_send(struct bc_viewer_app *a);
+/* The entry's text for the lower panel. */
+void bc_viewer_load_text(const struct bc_viewer_app *a, char *out, size_t n);
+/* The session's scene was replaced by this window's load: the camera
+ * follows a scene that carries one, as for anyone's load (net.c). */
+void bc_viewer_scene_loaded(struct bc_viewer_app *a, bool has_camera);
+
 /* Sends HISTORY_GET for the history panel (not waiting: the answer fills
  * it), or says on the status line why not (no connection, a daemon
  * without per-person undo and history). */

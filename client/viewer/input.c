@@ -395,7 +395,8 @@ static const char key_help[] =
     "I: the history of changes (who, what, when, undone)\n"
     "S: snapshot   P: screenshot   O: overlay   Q, Esc: quit\n"
     "Ctrl+S: save the scene (JSON)   Ctrl+Shift+S: binary\n"
-    "Ctrl+M: save its mesh (glTF)   Ctrl+Shift+M: OBJ";
+    "Ctrl+M: save its mesh (glTF)   Ctrl+Shift+M: OBJ\n"
+    "Ctrl+O: load a scene file into the session";
 
 /* Unix time in ms, for the sessions panel's ages. */
 static uint64_t unix_ms(void)
@@ -421,6 +422,10 @@ bool bc_viewer_lower_panel(struct bc_viewer_app *a, char *out, size_t n)
 	}
 	if (a->rename.open) {
 		bc_viewer_model_rename_text(a, out, n);
+		return true;
+	}
+	if (a->load.open) {
+		bc_viewer_load_text(a, out, n);
 		return true;
 	}
 	if (a->palette.open) {
@@ -702,11 +707,34 @@ static void rename_key(struct bc_viewer_app *a, int key)
 	}
 }
 
+/* Keys while the load entry is open: all of them, as the name entry's. */
+static void load_key(struct bc_viewer_app *a, int key)
+{
+	switch (key) {
+	case GLFW_KEY_ENTER:
+	case GLFW_KEY_KP_ENTER:
+		bc_viewer_load_send(a);
+		break;
+	case GLFW_KEY_ESCAPE:
+		a->load.open = false;
+		a->redraw = true;
+		bc_viewer_status(a, "loading cancelled");
+		break;
+	case GLFW_KEY_BACKSPACE:
+		bc_viewer_load_back(a);
+		break;
+	default:
+		break;
+	}
+}
+
 static void on_char(GLFWwindow *w, unsigned int codepoint)
 {
 	struct bc_viewer_app *a = glfwGetWindowUserPointer(w);
 	if (a->rename.open) {
 		bc_viewer_model_rename_char(a, codepoint);
+	} else if (a->load.open) {
+		bc_viewer_load_char(a, codepoint);
 	} else if (a->sessions.open && a->sessions.naming) {
 		bool opened = a->sessions.opened;
 		a->sessions.opened = false;
@@ -747,6 +775,10 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
 		rename_key(a, key);
 		return;
 	}
+	if (a->load.open) {
+		load_key(a, key);
+		return;
+	}
 	if (a->palette.open && palette_key(a, key, mods)) {
 		return;
 	}
@@ -776,6 +808,11 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
 		} else {
 			bc_viewer_save_mesh(a, (mods & GLFW_MOD_SHIFT) != 0);
 		}
+		return;
+	}
+	/* Ctrl-O: a scene file's path to load into the session. */
+	if ((mods & GLFW_MOD_CONTROL) && key == GLFW_KEY_O) {
+		bc_viewer_load_open(a);
 		return;
 	}
 	switch (key) {

@@ -657,6 +657,20 @@ static void got_scene(struct bc_viewer_app *a, const struct bc_msg *m)
 	a->redraw = true;
 }
 
+void bc_viewer_scene_loaded(struct bc_viewer_app *a, bool has_camera)
+{
+	struct bc_camera cam;
+	const struct bc_tree *t = bc_client_scene(a->c, &cam);
+	if (t && has_camera) {
+		a->cam = cam;
+		a->scene_cam = cam;
+	}
+	forget_gone(a, t);
+	bc_viewer_roster_edit(&a->roster, bc_client_info(a->c)->member_id,
+	                      bc_client_info(a->c)->order);
+	a->redraw = true;
+}
+
 static void got_applied(struct bc_viewer_app *a, const struct bc_msg *m)
 {
 	const struct bc_msg_edit_applied *e = &m->edit_applied;

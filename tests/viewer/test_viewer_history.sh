@@ -1,6 +1,6 @@
 #!/bin/sh
-# The history panel, the two undo scopes and Shift-R (the session's
-# camera) of blobcast-view, under Xvfb,
+# The history panel, the two undo scopes, Shift-R (the session's camera)
+# and Ctrl-O (loading a scene file) of blobcast-view, under Xvfb,
 # against a private blobcastd; `blobcast` (the CLI, as bob and as alice)
 # makes changes beside the window (named alice):
 #  1. bob changes a sphere; the window's Ctrl-Z takes back its own changes
@@ -16,7 +16,10 @@
 #     Shift-F (present) it takes back bob's change;
 #  5. after a wheel zoom, Shift-R makes the view the session's camera:
 #     the daemon's scene (blobcast scene) carries the new eye;
-#  6. Escape closes the panel without quitting; Q then quits.
+#  6. Ctrl-O: a path that does not read is refused before anything is
+#     sent; other.json then loads: the session's scene equals `blobcast
+#     load`'s of the same file, and the history starts again;
+#  7. Escape closes the panel without quitting; Q then quits.
 #
 # usage: test_viewer_history.sh BLOBCAST-VIEW BLOBCASTD IMGCHECK XPOKE CLI
 # Exits 77 (skipped) when xvfb-run or one of the programs is missing.
@@ -172,7 +175,54 @@ print(" ".join(str(v) for v in json.load(sys.stdin)["camera"]["eye"]))')
     fail "Shift-R: the daemon's camera eye is $eye, not the zoomed view's"
 fi
 
-# 6. Escape closes the panel, not the window.
+# 6. Ctrl-O: a path that does not read is refused before anything is sent
+# (the entry stays open); other.json then loads: the session's scene is
+# `blobcast load`'s of the same file, and its history starts again.
+cat > "$tmp/other.json" <<'JSON'
+{"blobcast": 1,
+ "camera": {"eye": [0, 1, 8], "target": [0, 0, 0], "up": [0, 1, 0],
+            "fov_y_deg": 40},
+ "root": {"type": "smooth_union", "id": 1, "blend": 0.25, "children": [
+   {"type": "sphere", "id": 2, "radius": 0.5, "translate": [-1, 0, 0]},
+   {"type": "box", "id": 3, "half_extents": [0.4, 0.3, 0.2],
+    "translate": [1, 0, 0], "color": [0.2, 0.6, 0.9]},
+   {"type": "sphere", "id": 7, "radius": 0.3, "translate": [0, 1, 0]}]}}
+JSON
+# typed WORD: key names typing WORD (letters, digits and '.').
+typed() {
+  echo "$1" | sed 's/./& /g; s/\./period/g' | awk '{ for (i = 1; i <= NF;
+    i++) printf "key %s ", $i }'
+}
+if [ -n "$ok" ]; then
+  mark=$(vl_lines "$L")
+  # shellcheck disable=SC2046
+  vl_poke keydown Control_L key o keyup Control_L $(typed nothere.json) \
+    key Return || ok=
+  [ -n "$ok" ] && { vl_wait_after "$L" "$mark" \
+    '^status not loaded: .*nothere\.json' 100 || ok=; }
+  i=0
+  while [ -n "$ok" ] && [ $i -lt 12 ]; do
+    vl_poke key BackSpace || ok=
+    i=$((i + 1))
+  done
+  # shellcheck disable=SC2046
+  [ -n "$ok" ] && { vl_poke $(typed other.json) key Return || ok=; }
+  [ -n "$ok" ] && { vl_wait_after "$L" "$mark" \
+    '^load other\.json nodes=4 order=[0-9]+$' 100 || ok=; }
+fi
+if [ -n "$ok" ]; then
+  cli load --session ref "$tmp/other.json" > /dev/null || fail "blobcast load"
+  cli scene --session hist > "$tmp/hist.json" &&
+    cli scene --session ref > "$tmp/ref.json" || fail "blobcast scene"
+  cmp -s "$tmp/hist.json" "$tmp/ref.json" ||
+    fail "Ctrl-O: the session's scene is not blobcast load's of the file"
+  cli history --session hist --json > "$tmp/h.json" || fail "blobcast history"
+  python3 -c 'import json, sys
+sys.exit(len(json.load(open(sys.argv[1]))["changes"]) != 0)' "$tmp/h.json" ||
+    fail "the history did not start again: $(cat "$tmp/h.json")"
+fi
+
+# 7. Escape closes the panel, not the window.
 if [ -n "$ok" ]; then
   mark=$(vl_lines "$L")
   vl_poke key Escape sleep 300 || ok=
@@ -183,7 +233,7 @@ vl_quit || ok=
 if [ "$failures" -eq 0 ]; then
   echo "ok   Ctrl-Z takes back alice's own change only, I lists the" \
     "daemon's history and follows it, Ctrl-Alt-Z needs the presenter," \
-    "Shift-R sets the session's camera"
+    "Shift-R sets the session's camera, Ctrl-O loads a file"
   echo "all checks passed"
   exit 0
 fi
