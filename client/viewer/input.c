@@ -411,15 +411,8 @@ bool bc_viewer_lower_panel(struct bc_viewer_app *a, char *out, size_t n)
 	if (!n) {
 		return false;
 	}
-	if (a->sessions.open) {
-		bc_viewer_sessions_text(&a->sessions, a->o.session, unix_ms(),
-		                        out, n);
-		return true;
-	}
-	if (a->history.open) {
-		bc_viewer_history_text(&a->history, unix_ms(), out, n);
-		return true;
-	}
+	/* In the order on_key hands them the keys: the one typed into is the
+	 * one shown. */
 	if (a->rename.open) {
 		bc_viewer_model_rename_text(a, out, n);
 		return true;
@@ -430,6 +423,15 @@ bool bc_viewer_lower_panel(struct bc_viewer_app *a, char *out, size_t n)
 	}
 	if (a->palette.open) {
 		bc_viewer_palette_text(&a->palette, out, n);
+		return true;
+	}
+	if (a->sessions.open) {
+		bc_viewer_sessions_text(&a->sessions, a->o.session, unix_ms(),
+		                        out, n);
+		return true;
+	}
+	if (a->history.open) {
+		bc_viewer_history_text(&a->history, unix_ms(), out, n);
 		return true;
 	}
 	if (a->help) {
