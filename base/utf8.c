@@ -55,3 +55,30 @@ size_t bc_utf8_check(const uint8_t *p, size_t n)
 	}
 	return n;
 }
+
+size_t bc_utf8_encode(uint32_t cp, char out[4])
+{
+	if (cp < 0x80u) {
+		out[0] = (char)cp;
+		return 1;
+	}
+	if (cp < 0x800u) {
+		out[0] = (char)(0xc0u | (cp >> 6));
+		out[1] = (char)(0x80u | (cp & 0x3fu));
+		return 2;
+	}
+	if ((cp >= 0xd800u && cp < 0xe000u) || cp > 0x10ffffu) {
+		return 0;
+	}
+	if (cp < 0x10000u) {
+		out[0] = (char)(0xe0u | (cp >> 12));
+		out[1] = (char)(0x80u | ((cp >> 6) & 0x3fu));
+		out[2] = (char)(0x80u | (cp & 0x3fu));
+		return 3;
+	}
+	out[0] = (char)(0xf0u | (cp >> 18));
+	out[1] = (char)(0x80u | ((cp >> 12) & 0x3fu));
+	out[2] = (char)(0x80u | ((cp >> 6) & 0x3fu));
+	out[3] = (char)(0x80u | (cp & 0x3fu));
+	return 4;
+}

@@ -419,6 +419,10 @@ void bc_viewer_save_mesh(struct bc_viewer_app *a, bool obj);
 double bc_viewer_mesh_poll(struct bc_viewer_app *a, double now);
 /* Waits for a mesh being made (the window is closing). */
 void bc_viewer_mesh_wait(struct bc_viewer_app *a);
+/* Writes text into out as the overlay can draw it: printable ASCII as it
+ * is, every other character (a whole UTF-8 sequence) as one '?'
+ * (modelling.c). */
+void bc_viewer_drawable(const char *text, char *out, size_t n);
 /* Ctrl+O (load.c): opens the entry for a scene file's path (editors). */
 void bc_viewer_load_open(struct bc_viewer_app *a);
 /* A character typed into it (a Unicode code point, kept as UTF-8). */

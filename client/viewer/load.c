@@ -15,6 +15,7 @@
 
 #include "app.h"
 #include "blobcast/alloc.h"
+#include "blobcast/bytes.h"
 
 void bc_viewer_load_open(struct bc_viewer_app *a)
 {
@@ -31,28 +32,8 @@ void bc_viewer_load_char(struct bc_viewer_app *a, uint32_t cp)
 {
 	char u[4];
 	size_t n;
-	if (cp < 0x20u || cp == 0x7fu || cp > 0x10ffffu ||
-	    (cp >= 0xd800u && cp <= 0xdfffu)) {
+	if (cp < 0x20u || cp == 0x7fu || !(n = bc_utf8_encode(cp, u))) {
 		return;
-	}
-	if (cp < 0x80u) {
-		u[0] = (char)cp;
-		n = 1;
-	} else if (cp < 0x800u) {
-		u[0] = (char)(0xc0u | (cp >> 6));
-		u[1] = (char)(0x80u | (cp & 0x3fu));
-		n = 2;
-	} else if (cp < 0x10000u) {
-		u[0] = (char)(0xe0u | (cp >> 12));
-		u[1] = (char)(0x80u | ((cp >> 6) & 0x3fu));
-		u[2] = (char)(0x80u | (cp & 0x3fu));
-		n = 3;
-	} else {
-		u[0] = (char)(0xf0u | (cp >> 18));
-		u[1] = (char)(0x80u | ((cp >> 12) & 0x3fu));
-		u[2] = (char)(0x80u | ((cp >> 6) & 0x3fu));
-		u[3] = (char)(0x80u | (cp & 0x3fu));
-		n = 4;
 	}
 	if (a->load.len + n >= sizeof(a->load.path)) {
 		bc_viewer_status(a, "the path is too long");
@@ -126,19 +107,8 @@ void bc_viewer_load_send(struct bc_viewer_app *a)
 
 void bc_viewer_load_text(const struct bc_viewer_app *a, char *out, size_t n)
 {
-	/* The panel's font draws printable ASCII: any other character (a
-	 * whole UTF-8 sequence) shows as one '?'. */
 	char shown[sizeof(a->load.path)];
-	size_t k = 0;
-	for (const unsigned char *p = (const unsigned char *)a->load.path;
-	     *p && k + 1 < sizeof(shown); p++) {
-		if (*p >= 0x20u && *p < 0x7fu) {
-			shown[k++] = (char)*p;
-		} else if ((*p & 0xc0u) != 0x80u) {
-			shown[k++] = '?';
-		}
-	}
-	shown[k] = '\0';
+	bc_viewer_drawable(a->load.path, shown, sizeof(shown));
 	snprintf(out, n,
 	         "Load a scene file (JSON or binary) into session %s: %s_\n"
 	         "It replaces the scene for every member, and the undo "

@@ -26,6 +26,7 @@
 #include <string.h>
 
 #include "app.h"
+#include "blobcast/bytes.h"
 #include "blobcast/model.h"
 
 /* What node id is: a primitive, a binary operator or a unary node. */
@@ -47,9 +48,7 @@ static enum node_class classify(const struct bc_tree *t, uint32_t id,
 	return bc_op_is_unary(op.kind) ? NODE_UNARY : NODE_OP;
 }
 
-/* Writes name into out as the overlay can draw it: printable ASCII as
- * it is, every other character (a whole UTF-8 sequence) as one '?'. */
-static void drawable(const char *name, char *out, size_t n)
+void bc_viewer_drawable(const char *name, char *out, size_t n)
 {
 	size_t used = 0;
 	for (const unsigned char *p = (const unsigned char *)name;
@@ -75,7 +74,7 @@ const char *bc_viewer_name_text(const struct bc_tree *t, uint32_t id, char *out,
 	}
 	out[0] = '\0';
 	if (name) {
-		drawable(name, shown, sizeof(shown));
+		bc_viewer_drawable(name, shown, sizeof(shown));
 		snprintf(out, n, " \"%s\"", shown);
 	}
 	return out;
@@ -471,29 +470,10 @@ void bc_viewer_model_rename_char(struct bc_viewer_app *a, uint32_t cp)
 	char u[4];
 	size_t k;
 	/* C0 and C1 controls have no place in a label; surrogates are not
-	 * characters. */
+	 * characters (bc_utf8_encode gives them no bytes). */
 	if (cp < 0x20u || (cp >= 0x7fu && cp < 0xa0u) ||
-	    (cp >= 0xd800u && cp < 0xe000u) || cp > 0x10ffffu) {
+	    !(k = bc_utf8_encode(cp, u))) {
 		return;
-	}
-	if (cp < 0x80u) {
-		u[0] = (char)cp;
-		k = 1;
-	} else if (cp < 0x800u) {
-		u[0] = (char)(0xc0u | (cp >> 6));
-		u[1] = (char)(0x80u | (cp & 0x3fu));
-		k = 2;
-	} else if (cp < 0x10000u) {
-		u[0] = (char)(0xe0u | (cp >> 12));
-		u[1] = (char)(0x80u | ((cp >> 6) & 0x3fu));
-		u[2] = (char)(0x80u | (cp & 0x3fu));
-		k = 3;
-	} else {
-		u[0] = (char)(0xf0u | (cp >> 18));
-		u[1] = (char)(0x80u | ((cp >> 12) & 0x3fu));
-		u[2] = (char)(0x80u | ((cp >> 6) & 0x3fu));
-		u[3] = (char)(0x80u | (cp & 0x3fu));
-		k = 4;
 	}
 	if (a->rename.len + k > BC_TREE_NAME_MAX) {
 		bc_viewer_status(a, "a name has at most %u bytes of UTF-8",
@@ -534,7 +514,7 @@ void bc_viewer_model_rename_send(struct bc_viewer_app *a)
 	sent(a, &r, a->selected, "rename");
 	if (a->rename.len) {
 		char shown[BC_TREE_NAME_MAX + 1];
-		drawable(a->rename.text, shown, sizeof(shown));
+		bc_viewer_drawable(a->rename.text, shown, sizeof(shown));
 		bc_viewer_status(a, "named #%u \"%s\"", node, shown);
 	} else {
 		bc_viewer_status(a, "took the name of #%u away", node);
@@ -546,7 +526,7 @@ void bc_viewer_model_rename_text(const struct bc_viewer_app *a, char *out,
 {
 	const struct bc_tree *t = bc_client_scene(a->c, NULL);
 	char words[160], shown[BC_TREE_NAME_MAX + 1];
-	drawable(a->rename.text, shown, sizeof(shown));
+	bc_viewer_drawable(a->rename.text, shown, sizeof(shown));
 	snprintf(out, n,
 	         "Name %s (%zu of %u bytes)\n"
 	         "> %s_\n"

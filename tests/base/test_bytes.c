@@ -144,6 +144,49 @@ static void buf_out_of_memory_is_sticky(void)
 }
 
 /* The clock moves forward and ms is ns / 10^6. */
+/* bc_utf8_encode writes every character as strict UTF-8 that
+ * bc_utf8_check takes whole, at the length of RFC 3629's table, and no
+ * bytes for surrogates or code points above U+10FFFF. */
+static void utf8_encode_round_trips(void)
+{
+	static const uint32_t edges[] = {0x01,   0x7f,    0x80,     0x7ff,
+	                                 0x800,  0xd7ff,  0xe000,   0xfffd,
+	                                 0xffff, 0x10000, 0x10ffff, 0xe9};
+	char u[4] = {'x', 'x', 'x', 'x'};
+	for (size_t i = 0; i < sizeof(edges) / sizeof(edges[0]); i++) {
+		uint32_t cp = edges[i];
+		size_t n = bc_utf8_encode(cp, u);
+		size_t want = cp < 0x80u      ? 1
+		              : cp < 0x800u   ? 2
+		              : cp < 0x10000u ? 3
+		                              : 4;
+		CHECK_EQ_INT(n, want);
+		CHECK_EQ_INT(bc_utf8_check((const uint8_t *)u, n), n);
+	}
+	CHECK_EQ_INT(bc_utf8_encode(0xe9, u), 2);
+	CHECK(memcmp(u, "\xc3\xa9", 2) == 0);
+	CHECK_EQ_INT(bc_utf8_encode(0x1f600, u), 4);
+	CHECK(memcmp(u, "\xf0\x9f\x98\x80", 4) == 0);
+	for (uint32_t cp = 0xd800; cp < 0xe000; cp += 0x7f) {
+		CHECK_EQ_INT(bc_utf8_encode(cp, u), 0);
+	}
+	CHECK_EQ_INT(bc_utf8_encode(0xdfff, u), 0);
+	CHECK_EQ_INT(bc_utf8_encode(0x110000, u), 0);
+	CHECK_EQ_INT(bc_utf8_encode(0xffffffffu, u), 0);
+	/* Every character of the first three planes, each checked whole. */
+	for (uint32_t cp = 1; cp < 0x30000u; cp++) {
+		size_t n = bc_utf8_encode(cp, u);
+		if (cp >= 0xd800u && cp < 0xe000u) {
+			continue;
+		}
+		if (n == 0 || bc_utf8_check((const uint8_t *)u, n) != n) {
+			CHECK_EQ_INT(cp,
+			             0); /* names the first one that fails */
+			break;
+		}
+	}
+}
+
 /* bc_str_appendf writes within its array, cut and terminated at its end,
  * and reports the length it reached. */
 static void str_appendf_stays_within_cap(void)
@@ -309,6 +352,7 @@ static const struct bc_test tests[] = {
     {"buf_ceiling_fails_and_sticks", buf_ceiling_fails_and_sticks},
     {"buf_out_of_memory_is_sticky", buf_out_of_memory_is_sticky},
     {"str_appendf_stays_within_cap", str_appendf_stays_within_cap},
+    {"utf8_encode_round_trips", utf8_encode_round_trips},
     {"clock_is_monotonic", clock_is_monotonic},
     {"vec_helpers_follow_the_right_hand", vec_helpers_follow_the_right_hand},
     {"limits_hold_their_relations", limits_hold_their_relations},

@@ -154,5 +154,9 @@ static inline int bc_rd_bytes(struct bc_rd *r, void *out, size_t n)
  * (overlong forms, surrogates, code points above U+10FFFF, truncated
  * sequences) or is NUL; n when the whole string is valid. */
 size_t bc_utf8_check(const uint8_t *p, size_t n);
+/* Writes code point cp as UTF-8 into out; returns its length (1..4), or
+ * 0 for what is no character (a surrogate, above U+10FFFF), out then
+ * untouched. */
+size_t bc_utf8_encode(uint32_t cp, char out[4]);
 
 #endif
