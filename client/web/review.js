@@ -14,6 +14,10 @@
  *    exact PNG still) and JPEG quality, sent as VIEW (7.14); H.264 is
  *    offered only where WebCodecs decodes it (video.js); an encoding the
  *    daemon refuses is marked and the control goes back;
+ *  - load (editors): a scene file, JSON or binary, read by sceneload.js
+ *    as `blobcast load` reads it and sent as SCENE_LOAD (in parts when it
+ *    is bigger than one message), after the person confirms that it
+ *    replaces the scene for everyone;
  *  - the token state in the header: editor, viewer, view only (a
  *    viewer-only token), with or without a token, refused, and the
  *    warnings that go with them;
@@ -25,6 +29,7 @@
 import * as P from './protocol.js';
 import { DEFAULT_CAMERA, fitCamera, treeBox } from './bounds.js';
 import { sceneJsonParts } from './scenejson.js';
+import { readSceneFile, sceneParts } from './sceneload.js';
 import { SessionPanel } from './sessions.js';
 
 const $ = (id) => document.getElementById(id);
@@ -75,6 +80,9 @@ export class Review {
 		this.viewAsk = null; /* { seq, back: { encoding, quality } } */
 		this.listedFor = null; /* the session the list was asked in */
 		this.camAsk = 0; /* the SESSION_CAMERA on its way (its seq) */
+		/* The load on its way: { name, nodes, seqs } (its parts' seqs;
+		 * the last one's is the load's), or null. */
+		this.loadAsk = null;
 		this.sessions = new SessionPanel({
 			url: () => app.cfg.ws,
 			token: () => app.cfg.token,
@@ -101,6 +109,15 @@ export class Review {
 			.catch(() => {}));
 		$('jsonbtn').addEventListener('click', () => this.saveJson());
 		$('binbtn').addEventListener('click', () => this.saveBinary());
+		$('loadbtn').addEventListener('click', () => $('loadfile').click());
+		$('loadfile').addEventListener('change', () => {
+			const file = $('loadfile').files[0];
+			$('loadfile').value = '';
+			if (file) {
+				this.loadFile(file).catch((e) => this.app.say(
+					`${file.name} not loaded: ${e.message}`));
+			}
+		});
 		const enc = $('encoding');
 		for (const o of enc.options) {
 			o.dataset.label = o.textContent;
@@ -172,6 +189,61 @@ export class Review {
 		}
 		this.camAsk = app.conn.send(P.MSG.SESSION_CAMERA,
 			app.camera.msg());
+	}
+
+	/* Loads a scene file (a File or Blob with a name) into the session:
+	 * read and checked here first (a file the CLI would refuse is refused
+	 * with its reason, and nothing is sent), then confirmed, then sent as
+	 * SCENE_LOAD, in parts when it passes the daemon's max_payload (a
+	 * daemon that did not grant PARTS refuses it here, as the library
+	 * does). The daemon's SCENE_STATE or ERROR says what became of it. */
+	async loadFile(file) {
+		const app = this.app;
+		if (!app.info) {
+			return;
+		}
+		if (app.info.role !== P.ROLE.EDITOR) {
+			app.say('loading a scene needs the editor role');
+			return;
+		}
+		if (this.loadAsk) {
+			app.say(`${this.loadAsk.name} is still being loaded`);
+			return;
+		}
+		let scene;
+		try {
+			scene = readSceneFile(new Uint8Array(await file.arrayBuffer()));
+		} catch (e) {
+			app.say(`${file.name} not loaded: ${e.message}`);
+			return;
+		}
+		const w = app.welcome;
+		/* A part's payload: the scene piece behind its u32 length. */
+		const parts = sceneParts(scene.bytes, (w?.max_payload ?? 0) - 4);
+		if (parts.length > 1 && !(w.features & P.FEATURE.PARTS)) {
+			app.say(`${file.name} not loaded: ${scene.bytes.length} bytes ` +
+				'need several messages, and this daemon does not take a ' +
+				'scene in parts');
+			return;
+		}
+		if (!window.confirm(`Load ${file.name} (${scene.nodes} nodes) into ` +
+			`session ${app.info.name}? It replaces the scene for every ` +
+			'member, and the undo history starts again.')) {
+			app.say(`${file.name}: not loaded`);
+			return;
+		}
+		const seqs = [];
+		for (const part of parts) {
+			const seq = app.conn.send(P.MSG.SCENE_LOAD, { scene: part.scene },
+				part.flags);
+			if (!seq) {
+				app.say(`${file.name} not loaded: the connection is gone`);
+				return;
+			}
+			seqs.push(seq);
+		}
+		this.loadAsk = { name: file.name, nodes: scene.nodes, seqs };
+		app.say(`loading ${file.name} (${scene.nodes} nodes)...`);
 	}
 
 	/* The scene's box, or null (no scene, or nothing to show). */
@@ -349,8 +421,23 @@ export class Review {
 			app.scene.camera = { eye: m.eye.slice(), target: m.target
 				.slice(), up: m.up.slice(), fov_y_deg: m.fov_y_deg };
 		}
+		const load = this.loadAsk;
+		if (load && m.type === P.MSG.SCENE_STATE &&
+				m.author === app.info?.member_id &&
+				m.author_seq === load.seqs[load.seqs.length - 1]) {
+			this.loadAsk = null;
+			app.say(`loaded ${load.name}: ${load.nodes} nodes, edit order ` +
+				`${m.order} (the undo history starts here)`);
+		}
 		if (m.type !== P.MSG.ERROR) {
 			return false;
+		}
+		if (load && m.seq &&
+				load.seqs.includes(m.seq)) {
+			this.loadAsk = null;
+			app.say(`${load.name} not loaded: ${m.text} ` +
+				`(${P.errName(m.code)})`);
+			return true;
 		}
 		if (m.seq && m.seq === this.camAsk) {
 			this.camAsk = 0;
@@ -446,6 +533,7 @@ export class Review {
 		$('resetbtn').disabled = !joined;
 		$('setcambtn').disabled = !joined ||
 			app.info.role !== P.ROLE.EDITOR;
+		$('loadbtn').disabled = !joined || app.info.role !== P.ROLE.EDITOR;
 		$('fitbtn').disabled = !joined || !app.scene;
 		$('jsonbtn').disabled = !app.scene;
 		$('binbtn').disabled = !app.scene;

@@ -20,6 +20,12 @@
  *    against a stand-in server that refuses raw frames (the page's
  *    WebSocket answered by this script), the control marks raw refused
  *    and goes back to the encoding the server still sends;
+ *  - load: a hand-made JSON file (defaults, ids and camera left out,
+ *    names, unary nodes), the scene with every kind and a binary file,
+ *    each loaded from the page (file input, confirmed), make the session
+ *    `blobcast load` makes of the same file, byte for byte (`blobcast
+ *    scene`); a bad shape is refused by the daemon with its words, a
+ *    duplicate key by the page before anything is sent;
  *  - the JSON button downloads the scene (every primitive kind, unary
  *    nodes, an edit from the page, a session camera set by another
  *    client): the file equals `blobcast scene` of the session byte for
@@ -509,6 +515,56 @@ try {
 	assert.equal(loaded.stdout, text, 'blobcastd serves the same scene');
 	step('blobcastd --check and a start take the download as a session\'s ' +
 		'snapshot: the same scene');
+
+	/* ---- load: scene files from the page, against `blobcast load` ---- */
+	const handmade = join(work, 'handmade.json');
+	writeFileSync(handmade, JSON.stringify({ blobcast: 1,
+		root: { type: 'smooth_union', blend: 0.2, name: 'top', children: [
+			{ type: 'box', half_extents: [1, 0.5, 0.25],
+				rotate: [0, 0.3826, 0, 0.9239] },
+			{ type: 'sphere', id: 2, radius: 0.5, translate: [0.1, 0.2, 0.3],
+				color: [0.25, 0.5, 1] },
+			{ type: 'twist', rate: 0.5, children: [
+				{ type: 'mirror', id: 1, axes: 'zx', children: [
+					{ type: 'cylinder', radius: 0.2, half_height: 1,
+						name: 'pin' }] }] }] } }));
+	const shape = join(work, 'shape.json');
+	writeFileSync(shape, JSON.stringify({ blobcast: 1,
+		root: { type: 'sphere', radius: -1 } }));
+	const loadFrom = async (path, want) => {
+		/* openPage's pages accept every dialog: the confirm. */
+		await a.setInputFiles('#loadfile', path);
+		return until(a, `the page's answer to ${path}`, (re) =>
+			new RegExp(re).test(document.getElementById('message')
+				.textContent), want.source, 60000);
+	};
+	for (const f of [handmade, scene, binFile]) {
+		const name = f.split('/').pop();
+		await loadFrom(f, new RegExp(`^loaded ${name.replace('.', '\\.')}: ` +
+			'\\d+ nodes, edit order \\d+'));
+		r = await run(['load', ...srv, '--session', 'viacli', f]);
+		assert.equal(r.code, 0, `blobcast load ${name}: ${r.stderr}`);
+		const fromPage = await run(['scene', ...srv, '--session', 'rich']);
+		const fromCli = await run(['scene', ...srv, '--session', 'viacli']);
+		assert.equal(fromPage.stdout, fromCli.stdout, `${name} loaded from ` +
+			'the page is not the scene `blobcast load` makes of it');
+	}
+	step('load: a hand-made file (defaults, ids and camera left out, ' +
+		'names, unary nodes), every kind, and a binary file, each the ' +
+		'session `blobcast load` of the same file makes, byte for byte');
+	const before = (await run(['scene', ...srv, '--session', 'rich'])).stdout;
+	await loadFrom(shape, /^shape\.json not loaded: .*radius -1.*\(ERANGE\)$/);
+	const bad = join(work, 'bad.json');
+	writeFileSync(bad, '{"blobcast": 1, "root": {"type": "sphere", ' +
+		'"radius": 1, "radius": 2}}');
+	await a.setInputFiles('#loadfile', bad);
+	await until(a, 'the page refusing a duplicate key', () =>
+		/^bad\.json not loaded: line 1 column \d+: duplicate object key/
+			.test(document.getElementById('message').textContent));
+	assert.equal((await run(['scene', ...srv, '--session', 'rich'])).stdout,
+		before, 'a refused load changed the scene');
+	step('load: a bad shape refused by the daemon (ERANGE, its words), a ' +
+		'duplicate key refused by the page before sending; the scene stays');
 } catch (e) {
 	failed = true;
 	console.error(`FAIL: ${e.stack || e}\n${H.logs()}`);
