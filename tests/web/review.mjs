@@ -289,6 +289,8 @@ try {
 		'changed');
 	assert.ok(await b.isDisabled('#setcambtn'),
 		'a viewer cannot set the session\'s camera');
+	assert.ok(await b.isDisabled('#loadbtn'), 'a viewer cannot load');
+	assert.ok(!(await a.isDisabled('#loadbtn')), 'an editor can load');
 	await b.close();
 
 	/* ---- camera: far, fit, reset (PNG frames: exact pixels) ---- */
