@@ -192,6 +192,13 @@ function nameOf(obj, path) {
 	if (typeof v !== 'string') {
 		fail('EPARSE', `${path}.name`, `expected a string, got ${kindOf(v)}`);
 	}
+	/* A lone surrogate (a "\ud800" escape) is no UTF-8: jansson refuses
+	 * it where TextEncoder would make it U+FFFD. */
+	if (/[\ud800-\udbff](?![\udc00-\udfff])|(?:^|[^\ud800-\udbff])[\udc00-\udfff]/
+		.test(v)) {
+		fail('EPARSE', `${path}.name`, 'not valid UTF-8 (a lone ' +
+			'surrogate)');
+	}
 	const bytes = new TextEncoder().encode(v).length;
 	if (bytes === 0) {
 		fail('ERANGE', `${path}.name`, `a name is 1..${NAME_MAX} bytes; ` +

@@ -137,6 +137,8 @@ const GOOD = {
 		radius: 1 } },
 	name_64: { blobcast: 1, root: { type: 'sphere', radius: 1,
 		name: 'é'.repeat(32) } },
+	name_pair: '{"blobcast": 1, "root": {"type": "sphere", "radius": 1, ' +
+		'"name": "\\ud83d\\ude00"}}',
 	range: { blobcast: 1, root: { type: 'smooth_union', blend: 0.1,
 		range: 0.2, children: [{ type: 'sphere', radius: 1 },
 			{ type: 'sphere', radius: 1 }] } },
@@ -193,6 +195,10 @@ const BAD = {
 		name: 'n'.repeat(65) } },
 	name_number: { blobcast: 1, root: { type: 'sphere', radius: 1,
 		name: 5 } },
+	name_surrogate: '{"blobcast": 1, "root": {"type": "sphere", ' +
+		'"radius": 1, "name": "a\\ud800b"}}',
+	name_nul: '{"blobcast": 1, "root": {"type": "sphere", "radius": 1, ' +
+		'"name": "a\\u0000b"}}',
 	camera_key: { blobcast: 1, camera: { eyes: [0, 0, 1] },
 		root: { type: 'sphere', radius: 1 } },
 	dup_key: '{"blobcast": 1, "root": {"type": "sphere", "radius": 1, ' +
