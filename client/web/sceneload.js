@@ -535,7 +535,10 @@ export function readSceneFile(bytes) {
 	}
 	let text;
 	try {
-		text = new TextDecoder('utf-8', { fatal: true }).decode(bytes);
+		/* A byte order mark stays in the text (and JSON.parse refuses
+		 * it, as jansson does). */
+		text = new TextDecoder('utf-8', { fatal: true, ignoreBOM: true })
+			.decode(bytes);
 	} catch {
 		fail('EPARSE', '', 'neither a binary scene file nor UTF-8 text');
 	}

@@ -131,6 +131,7 @@ test('defaults, ids given by the reader, names', () => {
 
 const GOOD = {
 	minimal: { blobcast: 1, root: { type: 'sphere', radius: 1 } },
+	spaces: ' \n{"blobcast": 1, "root": {"type": "sphere", "radius": 1}}\n\n ',
 	camera_part: { blobcast: 1, camera: { fov_y_deg: 30 },
 		root: { type: 'sphere', radius: 1 } },
 	big_id: { blobcast: 1, root: { type: 'sphere', id: 4294967295,
@@ -207,6 +208,7 @@ const BAD = {
 		'"sphere", "radius": 1}}',
 	nan: '{"blobcast": 1, "root": {"type": "sphere", "radius": NaN}}',
 	trailing: '{"blobcast": 1, "root": {"type": "sphere", "radius": 1}} x',
+	bom: '\ufeff{"blobcast": 1, "root": {"type": "sphere", "radius": 1}}',
 	not_object: '[1, 2]',
 	children_object: { blobcast: 1, root: { type: 'union',
 		children: { a: 1 } } },
