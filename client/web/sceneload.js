@@ -213,7 +213,7 @@ function nameOf(obj, path) {
 
 /* One node's own fields (not its children), shaped as parseScene makes
  * them; children holds the JSON children still to read. */
-function readNode(obj, path, raw, id) {
+function readNode(obj, path, id) {
 	if (obj === null || typeof obj !== 'object' || Array.isArray(obj)) {
 		fail('EPARSE', path, `expected an object, got ${kindOf(obj)}`);
 	}
@@ -381,11 +381,9 @@ function readCamera(obj) {
 }
 
 /* { camera, root, nodes } of a JSON scene file's text, nodes shaped as
- * parseScene makes them (encodeScene takes them). Throws SceneFileError. */
+ * parseScene makes them (encodeScene takes them); the text's size limit
+ * is readSceneFile's, on its bytes. Throws SceneFileError. */
 export function sceneFromJson(text) {
-	if (text.length > JSON_MAX_BYTES) {
-		fail('ELIMIT', '', `the text is over ${JSON_MAX_BYTES} bytes`);
-	}
 	let doc;
 	try {
 		doc = JSON.parse(text);
@@ -470,8 +468,7 @@ export function sceneFromJson(text) {
 	};
 	/* Pre-order, as the reader builds: a node's id before its children's. */
 	let nodes = 0;
-	const first = readNode(doc.root, 'root', rawFor.get(doc.root),
-		ids.get(doc.root) || freshId());
+	const first = readNode(doc.root, 'root', ids.get(doc.root) || freshId());
 	nodes++;
 	const todo = [{ ...first, path: 'root', depth: 1, i: 0 }];
 	while (todo.length) {
@@ -487,7 +484,7 @@ export function sceneFromJson(text) {
 			fail('EDEPTH', path, `a JSON scene nests at most ` +
 				`${JSON_MAX_DEPTH} levels (use the binary form)`);
 		}
-		const r = readNode(o, path, rawFor.get(o), ids.get(o) || freshId());
+		const r = readNode(o, path, ids.get(o) || freshId());
 		nodes++;
 		r.n.parent = t.n;
 		t.n.children[i] = r.n;
