@@ -435,9 +435,12 @@ void bc_viewer_load_back(struct bc_viewer_app *a);
 void bc_viewer_load_send(struct bc_viewer_app *a);
 /* The entry's text for the lower panel. */
 void bc_viewer_load_text(const struct bc_viewer_app *a, char *out, size_t n);
-/* The session's scene was replaced by this window's load: the camera
- * follows a scene that carries one, as for anyone's load (net.c). */
-void bc_viewer_scene_loaded(struct bc_viewer_app *a, bool has_camera);
+/* The session's scene was replaced (anyone's load, or this window's,
+ * whose SCENE_STATE the library's wait took in): the camera follows a
+ * scene that carries one, the selection forgets nodes that went, and the
+ * member line names author (0: none) at order (net.c). */
+void bc_viewer_scene_loaded(struct bc_viewer_app *a, bool has_camera,
+                            uint32_t author, uint64_t order);
 
 /* Sends HISTORY_GET for the history panel (not waiting: the answer fills
  * it), or says on the status line why not (no connection, a daemon

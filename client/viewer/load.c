@@ -93,7 +93,8 @@ void bc_viewer_load_send(struct bc_viewer_app *a)
 		return;
 	}
 	a->load.open = false;
-	bc_viewer_scene_loaded(a, has_camera);
+	bc_viewer_scene_loaded(a, has_camera, bc_client_info(a->c)->member_id,
+	                       order);
 	bc_viewer_status(a,
 	                 "loaded %s: %u nodes, edit order %llu (the undo "
 	                 "history starts here)",

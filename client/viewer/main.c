@@ -1137,10 +1137,16 @@ static void reconnect(struct bc_viewer_app *a, double now)
 	}
 }
 
+/* The nearer of two waits in ms, where a negative one is none. */
+static double sooner(double due, double other)
+{
+	return other >= 0.0 && (due < 0.0 || other < due) ? other : due;
+}
+
 static void run(struct bc_viewer_app *a)
 {
 	while (!a->quit && !glfwWindowShouldClose(a->win)) {
-		double now, due, wait, poll_due;
+		double now, due, wait;
 		int more = 0;
 		if (!a->offline) {
 			more = bc_viewer_pump(a);
@@ -1168,9 +1174,7 @@ static void run(struct bc_viewer_app *a)
 			bc_viewer_drag_step(a, false);
 			maybe_turn(a, now);
 			due = bc_viewer_send_due(a, now);
-			if (shot_due >= 0.0 && (due < 0.0 || shot_due < due)) {
-				due = shot_due;
-			}
+			due = sooner(due, shot_due);
 		} else if (!a->gave_up) {
 			due = a->retry.next_at > now ? a->retry.next_at - now
 			                             : 0.0;
@@ -1178,14 +1182,8 @@ static void run(struct bc_viewer_app *a)
 			due = -1.0;
 		}
 		/* The mesher's and the history panel's turns. */
-		poll_due = bc_viewer_mesh_poll(a, now);
-		if (poll_due >= 0.0 && (due < 0.0 || poll_due < due)) {
-			due = poll_due;
-		}
-		poll_due = bc_viewer_history_poll(a, now);
-		if (poll_due >= 0.0 && (due < 0.0 || poll_due < due)) {
-			due = poll_due;
-		}
+		due = sooner(due, bc_viewer_mesh_poll(a, now));
+		due = sooner(due, bc_viewer_history_poll(a, now));
 		if (now - a->stats_at >= BC_VIEWER_STATS_EVERY_MS) {
 			update_title(a, now);
 			a->redraw = a->redraw || a->o.overlay;

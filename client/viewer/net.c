@@ -635,40 +635,33 @@ static void forget_gone(struct bc_viewer_app *a, const struct bc_tree *t)
 	}
 }
 
-static void got_scene(struct bc_viewer_app *a, const struct bc_msg *m)
+void bc_viewer_scene_loaded(struct bc_viewer_app *a, bool has_camera,
+                            uint32_t author, uint64_t order)
 {
-	struct bc_proto_scene_info si;
 	struct bc_camera cam;
 	const struct bc_tree *t = bc_client_scene(a->c, &cam);
 	/* A scene that carries a camera resets every member's camera on the
 	 * server: follow it. */
-	if (t &&
-	    bc_proto_scene_scan(m->scene_state.scene.ptr,
-	                        m->scene_state.scene.len, &si, NULL) == 0 &&
-	    si.has_camera) {
-		a->cam = cam;
-		a->scene_cam = cam;
-	}
-	forget_gone(a, t);
-	if (m->scene_state.author) {
-		bc_viewer_roster_edit(&a->roster, m->scene_state.author,
-		                      m->scene_state.order);
-	}
-	a->redraw = true;
-}
-
-void bc_viewer_scene_loaded(struct bc_viewer_app *a, bool has_camera)
-{
-	struct bc_camera cam;
-	const struct bc_tree *t = bc_client_scene(a->c, &cam);
 	if (t && has_camera) {
 		a->cam = cam;
 		a->scene_cam = cam;
 	}
 	forget_gone(a, t);
-	bc_viewer_roster_edit(&a->roster, bc_client_info(a->c)->member_id,
-	                      bc_client_info(a->c)->order);
+	if (author) {
+		bc_viewer_roster_edit(&a->roster, author, order);
+	}
 	a->redraw = true;
+}
+
+static void got_scene(struct bc_viewer_app *a, const struct bc_msg *m)
+{
+	struct bc_proto_scene_info si;
+	bool has_camera =
+	    bc_proto_scene_scan(m->scene_state.scene.ptr,
+	                        m->scene_state.scene.len, &si, NULL) == 0 &&
+	    si.has_camera;
+	bc_viewer_scene_loaded(a, has_camera, m->scene_state.author,
+	                       m->scene_state.order);
 }
 
 static void got_applied(struct bc_viewer_app *a, const struct bc_msg *m)
