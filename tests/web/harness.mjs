@@ -346,11 +346,24 @@ export async function until(page, what, fn, arg, ms, pollMs) {
 
 /* A point on node id's outliner row (scrolled into view), a third of
  * the way across and at fraction f of its height, in page
- * coordinates. */
+ * coordinates. The outliner redraws its rows whenever the mirror
+ * changes (another member's edit, a refusal), so the row is found,
+ * scrolled to and measured in one turn of the page's own loop: a row
+ * found by one call and measured by the next may have been replaced
+ * in between. */
 export async function rowPoint(page, id, f = 0.5) {
-	const row = page.locator(`#outliner .row[data-id="${id}"]`);
-	await row.scrollIntoViewIfNeeded();
-	const box = await row.boundingBox();
+	const sel = `#outliner .row[data-id="${id}"]`;
+	await page.locator(sel).waitFor({ state: 'attached', timeout: 20000 });
+	const box = await page.evaluate((s) => {
+		const row = document.querySelector(s);
+		if (!row) {
+			return null;
+		}
+		row.scrollIntoView({ block: 'nearest' });
+		const r = row.getBoundingClientRect();
+		return r.width > 0 && r.height > 0 ?
+			{ x: r.x, y: r.y, width: r.width, height: r.height } : null;
+	}, sel);
 	if (!box) {
 		throw new Error(`row #${id} is not drawn`);
 	}
