@@ -5,8 +5,9 @@
  * (mouse and keyboard) and modelling.c (adding, deleting, duplicating,
  * wrapping, regrouping).
  * Everything runs on the main thread except the socket watcher of main.c,
- * which only polls the socket and wakes the loop, and the mesher of
- * save.c, which meshes a copy of the scene of its own.
+ * which only polls the socket and wakes the loop, the mesher of save.c,
+ * which meshes a copy of the scene of its own, and the reader of load.c,
+ * which reads a scene file.
  */
 #ifndef BLOBCAST_VIEWER_APP_H
 #define BLOBCAST_VIEWER_APP_H
@@ -118,6 +119,27 @@ struct bc_viewer_mesher {
 	double started, said; /* when it started; last progress shown */
 };
 
+/* Ctrl+O's reading of a scene file (load.c): a big JSON scene takes
+ * seconds to read and check (a million spheres: about 5 s), so a thread of
+ * its own does it while the window goes on; the loop sends what it read.
+ * One at a time. */
+struct bc_viewer_reader {
+	pthread_t thread;
+	bool busy;        /* a thread started and not joined yet */
+	bool ready;       /* joined, read: sent in the loop's next turn */
+	bool cancelled;   /* Escape: what it reads is dropped, not sent */
+	atomic_bool done; /* the thread has finished */
+	/* The thread's alone until done: the file, and what it read. */
+	char path[1024];
+	uint8_t *bytes; /* the scene's encoding, as SCENE_LOAD sends it */
+	size_t len;
+	uint32_t nodes;
+	bool has_camera;
+	int rc;
+	struct bc_errinfo ei;
+	double started, said; /* when it started; last progress shown */
+};
+
 struct bc_viewer_app {
 	struct bc_viewer_opts o;
 	GLFWwindow *win;
@@ -192,6 +214,8 @@ struct bc_viewer_app {
 		bool open;
 		size_t len;
 		char path[1024];
+		/* The file being read (Enter), on a thread of its own. */
+		struct bc_viewer_reader reader;
 	} load;
 
 	/* Frames. */
@@ -429,10 +453,18 @@ void bc_viewer_load_open(struct bc_viewer_app *a);
 void bc_viewer_load_char(struct bc_viewer_app *a, uint32_t cp);
 /* Backspace: its last character off. */
 void bc_viewer_load_back(struct bc_viewer_app *a);
-/* Enter: reads the file (JSON or binary, as `blobcast load`) and loads
- * it into the session, waiting for the daemon's answer; a file that does
- * not read keeps the entry open, saying why. */
+/* Enter: starts reading the file (JSON or binary, as `blobcast load`) on
+ * the reader's thread; bc_viewer_load_poll sends it. */
 void bc_viewer_load_send(struct bc_viewer_app *a);
+/* Escape: closes the entry; a file being read is dropped when read. */
+void bc_viewer_load_cancel(struct bc_viewer_app *a);
+/* The reader's turn of the loop: progress on the status line; once the
+ * file is read, loads it into the session, waiting for the daemon's
+ * answer (a file that did not read keeps the entry open, saying why).
+ * Returns the milliseconds until it wants its next turn, or -1. */
+double bc_viewer_load_poll(struct bc_viewer_app *a, double now);
+/* Waits for a file being read (the window is closing). */
+void bc_viewer_load_wait(struct bc_viewer_app *a);
 /* The entry's text for the lower panel. */
 void bc_viewer_load_text(const struct bc_viewer_app *a, char *out, size_t n);
 /* The session's scene was replaced (anyone's load, or this window's,

@@ -718,9 +718,7 @@ static void load_key(struct bc_viewer_app *a, int key)
 		bc_viewer_load_send(a);
 		break;
 	case GLFW_KEY_ESCAPE:
-		a->load.open = false;
-		a->redraw = true;
-		bc_viewer_status(a, "loading cancelled");
+		bc_viewer_load_cancel(a);
 		break;
 	case GLFW_KEY_BACKSPACE:
 		bc_viewer_load_back(a);

@@ -282,7 +282,8 @@ static int parse_args(int argc, char **argv, struct bc_viewer_opts *o,
 	        "Ctrl-Shift-M as OBJ (the mesh\n`blobcast mesh --session` "
 	        "writes, made while the window goes on);\nCtrl-O loads a scene "
 	        "file into the session (type its path; it replaces the\n"
-	        "scene for everyone, as `blobcast load`);\nCtrl-Z undoes "
+	        "scene for everyone, as `blobcast load`; read while the window "
+	        "goes on);\nCtrl-Z undoes "
 	        "your own newest change, Ctrl-Shift-Z or Ctrl-Y redoes\n"
 	        "it; with Alt too, the session's newest whoever made it "
 	        "(its owner\nor the presenter only); F "
@@ -1181,8 +1182,10 @@ static void run(struct bc_viewer_app *a)
 		} else {
 			due = -1.0;
 		}
-		/* The mesher's and the history panel's turns. */
+		/* The mesher's, the reader's and the history panel's
+		 * turns. */
 		due = sooner(due, bc_viewer_mesh_poll(a, now));
+		due = sooner(due, bc_viewer_load_poll(a, now));
 		due = sooner(due, bc_viewer_history_poll(a, now));
 		if (now - a->stats_at >= BC_VIEWER_STATS_EVERY_MS) {
 			update_title(a, now);
@@ -1324,6 +1327,7 @@ int main(int argc, char **argv)
 	run(a);
 cleanup:
 	bc_viewer_mesh_wait(a);
+	bc_viewer_load_wait(a);
 	watch_stop(a);
 	if (a->gl_ready) {
 		bc_viewer_gl_finish(&a->gl);

@@ -17,8 +17,10 @@
 #  5. after a wheel zoom, Shift-R makes the view the session's camera:
 #     the daemon's scene (blobcast scene) carries the new eye;
 #  6. Ctrl-O: a path that does not read is refused before anything is
-#     sent; other.json then loads: the session's scene equals `blobcast
-#     load`'s of the same file, and the history starts again;
+#     sent; Escape right after Enter drops the file being read (nothing
+#     sent, the history kept); other.json then loads, read first on the
+#     reader's thread: the session's scene equals `blobcast load`'s of
+#     the same file, and the history starts again;
 #  7. Escape closes the panel without quitting; Q then quits.
 #
 # usage: test_viewer_history.sh BLOBCAST-VIEW BLOBCASTD IMGCHECK XPOKE CLI
@@ -205,10 +207,41 @@ if [ -n "$ok" ]; then
     vl_poke key BackSpace || ok=
     i=$((i + 1))
   done
+  # Escape right after Enter: while the file is still being read (the
+  # usual case) nothing is sent and the session keeps its history; if
+  # the read and the load were quicker than the key, the load stands.
+  mark=$(vl_lines "$L")
   # shellcheck disable=SC2046
-  [ -n "$ok" ] && { vl_poke $(typed other.json) key Return || ok=; }
+  [ -n "$ok" ] && { vl_poke $(typed other.json) key Return key Escape ||
+    ok=; }
+  [ -n "$ok" ] && { vl_wait_after "$L" "$mark" \
+    '^status loading cancelled: other\.json is not sent$|^load other\.json ' \
+    100 || ok=; }
+  if [ -n "$ok" ] && tail -n +"$((mark + 1))" "$L" |
+    grep -q '^status loading cancelled: other\.json is not sent$'; then
+    sleep 0.5
+    tail -n +"$((mark + 1))" "$L" | grep -q '^load other\.json ' &&
+      fail "Escape while reading: the file was loaded all the same"
+    cli history --session hist --json > "$tmp/h0.json" ||
+      fail "blobcast history"
+    python3 -c 'import json, sys
+sys.exit(len(json.load(open(sys.argv[1]))["changes"]) == 0)' "$tmp/h0.json" ||
+      fail "Escape while reading: the session's history started again"
+  fi
+  # Ctrl-O again: read on the reader's thread (the status line says so),
+  # then loaded.
+  mark=$(vl_lines "$L")
+  # shellcheck disable=SC2046
+  [ -n "$ok" ] && { vl_poke keydown Control_L key o keyup Control_L \
+    $(typed other.json) key Return || ok=; }
   [ -n "$ok" ] && { vl_wait_after "$L" "$mark" \
     '^load other\.json nodes=4 order=[0-9]+$' 100 || ok=; }
+  [ -n "$ok" ] && { tail -n +"$((mark + 1))" "$L" |
+    grep -q '^status reading other\.json \.\.\.$' ||
+    fail "Ctrl-O: no \"reading other.json ...\" before the load"; }
+  [ -n "$ok" ] && { tail -n +"$((mark + 1))" "$L" |
+    grep -q '^status loading other\.json (4 nodes): waiting for the daemon$' ||
+    fail "Ctrl-O: no \"waiting for the daemon\" before the load"; }
 fi
 if [ -n "$ok" ]; then
   cli load --session ref "$tmp/other.json" > /dev/null || fail "blobcast load"
