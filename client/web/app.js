@@ -1961,6 +1961,9 @@ class App {
 			videoOk: this.videoOk,
 			video: this.video.state(),
 			acks: this.acks ? this.acks.state() : null,
+			/* A scene file from the page: 'reading' (in a worker, or
+			 * here where none could), 'loading' (sent) or ''. */
+			loading: this.review.loading().state,
 		};
 	}
 }

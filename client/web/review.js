@@ -15,9 +15,10 @@
  *    offered only where WebCodecs decodes it (video.js); an encoding the
  *    daemon refuses is marked and the control goes back;
  *  - load (editors): a scene file, JSON or binary, read by sceneload.js
- *    as `blobcast load` reads it and sent as SCENE_LOAD (in parts when it
- *    is bigger than one message), after the person confirms that it
- *    replaces the scene for everyone;
+ *    as `blobcast load` reads it, in a worker (sceneworker.js) so that
+ *    the page stays live through a big file, and sent as SCENE_LOAD (in
+ *    parts when it is bigger than one message), after the person
+ *    confirms that it replaces the scene for everyone;
  *  - the token state in the header: editor, viewer, view only (a
  *    viewer-only token), with or without a token, refused, and the
  *    warnings that go with them;
@@ -64,6 +65,59 @@ function typing(e) {
 		.includes(t.tagName));
 }
 
+/* A file's size for the page's messages ("21.7 MB": SI units). */
+function sizeText(n) {
+	if (n < 1000) {
+		return `${n} bytes`;
+	}
+	return n < 1e6 ? `${(n / 1e3).toFixed(1)} kB`
+		: `${(n / 1e6).toFixed(1)} MB`;
+}
+
+/* Reads a scene file (a File or Blob) as readSceneFile does, in a module
+ * worker (sceneworker.js) that gets the file's bytes and hands the scene
+ * bytes back, both transferred: a big JSON file takes seconds to read,
+ * which on the page's thread would stop its frames, input and messages.
+ * Calls started() once the worker has the bytes. Resolves with { bytes,
+ * nodes }, or rejects with an Error carrying the reader's message (a
+ * SceneFileError's, the same text). Resolves with null where no worker
+ * did the work: none in this browser, or one that failed before
+ * answering (its script not loaded, as from a page opened from a file:
+ * URL); the bytes went to it, so the caller reads the file again on the
+ * page. */
+async function readInWorker(file, started) {
+	const buf = await file.arrayBuffer();
+	let w;
+	try {
+		w = new Worker(new URL('./sceneworker.js', import.meta.url),
+			{ type: 'module' });
+	} catch {
+		return null;
+	}
+	return new Promise((resolve, reject) => {
+		w.onmessage = (e) => {
+			w.terminate();
+			if (typeof e.data?.error === 'string') {
+				reject(new Error(e.data.error));
+			} else {
+				resolve({ bytes: e.data.bytes, nodes: e.data.nodes });
+			}
+		};
+		w.onerror = (e) => {
+			/* Said nowhere: the page reads the file itself. */
+			e.preventDefault();
+			w.terminate();
+			resolve(null);
+		};
+		w.onmessageerror = () => {
+			w.terminate();
+			resolve(null);
+		};
+		w.postMessage(buf, [buf]);
+		started();
+	});
+}
+
 /* Saves a Blob as a download named name. */
 function download(blob, name) {
 	const a = document.createElement('a');
@@ -83,6 +137,12 @@ export class Review {
 		/* The load on its way: { name, nodes, seqs } (its parts' seqs;
 		 * the last one's is the load's), or null. */
 		this.loadAsk = null;
+		/* The file being read before that: { name, reader } (reader:
+		 * '' while its bytes are fetched, 'worker' once a worker reads
+		 * them, 'page' where none could), or null; and the last read
+		 * done: { name, reader, nodes (0: refused), ms }. */
+		this.reading = null;
+		this.lastRead = null;
 		this.sessions = new SessionPanel({
 			url: () => app.cfg.ws,
 			token: () => app.cfg.token,
@@ -191,12 +251,38 @@ export class Review {
 			app.camera.msg());
 	}
 
+	/* Reads and checks a scene file as readSceneFile does, in a worker
+	 * where one can, else here; keeps this.reading while it does. Returns
+	 * { bytes, nodes }; throws the reader's error. */
+	async readScene(file) {
+		const read = { name: file.name, reader: '' };
+		const start = performance.now();
+		this.reading = read;
+		let scene = null;
+		try {
+			scene = await readInWorker(file, () => {
+				read.reader = 'worker';
+			});
+			if (!scene) {
+				read.reader = 'page';
+				scene = readSceneFile(new Uint8Array(await file
+					.arrayBuffer()));
+			}
+			return scene;
+		} finally {
+			this.reading = null;
+			this.lastRead = { ...read, nodes: scene?.nodes ?? 0,
+				ms: Math.round(performance.now() - start) };
+		}
+	}
+
 	/* Loads a scene file (a File or Blob with a name) into the session:
-	 * read and checked here first (a file the CLI would refuse is refused
-	 * with its reason, and nothing is sent), then confirmed, then sent as
-	 * SCENE_LOAD, in parts when it passes the daemon's max_payload (a
-	 * daemon that did not grant PARTS refuses it here, as the library
-	 * does). The daemon's SCENE_STATE or ERROR says what became of it. */
+	 * read and checked first (a file the CLI would refuse is refused with
+	 * its reason, and nothing is sent), in a worker so that the page
+	 * stays live meanwhile, then confirmed, then sent as SCENE_LOAD, in
+	 * parts when it passes the daemon's max_payload (a daemon that did
+	 * not grant PARTS refuses it here, as the library does). The daemon's
+	 * SCENE_STATE or ERROR says what became of it. */
 	async loadFile(file) {
 		const app = this.app;
 		if (!app.info) {
@@ -206,15 +292,26 @@ export class Review {
 			app.say('loading a scene needs the editor role');
 			return;
 		}
+		if (this.reading) {
+			app.say(`${this.reading.name} is still being read; load ` +
+				'another once it is');
+			return;
+		}
 		if (this.loadAsk) {
 			app.say(`${this.loadAsk.name} is still being loaded`);
 			return;
 		}
+		app.say(`reading ${file.name} (${sizeText(file.size)})...`);
 		let scene;
 		try {
-			scene = readSceneFile(new Uint8Array(await file.arrayBuffer()));
+			scene = await this.readScene(file);
 		} catch (e) {
 			app.say(`${file.name} not loaded: ${e.message}`);
+			return;
+		}
+		if (!app.info) {
+			/* The connection went while the file was read. */
+			app.say(`${file.name} not loaded: the connection is gone`);
 			return;
 		}
 		const w = app.welcome;
@@ -552,6 +649,16 @@ export class Review {
 		this.sessions.update();
 	}
 
+	/* { state, name, reader, last } (api's loading). */
+	loading() {
+		const now = this.reading ?? this.loadAsk;
+		const state = this.reading ? 'reading' : this.loadAsk ? 'loading'
+			: '';
+		return { state, name: now?.name ?? '',
+			reader: this.reading?.reader ?? '',
+			last: this.lastRead ? { ...this.lastRead } : null };
+	}
+
 	/* For tests and the console (window.blobcast). */
 	api() {
 		return {
@@ -563,6 +670,11 @@ export class Review {
 			/* Encodings the daemon refused (EINVAL, or ENOTSUP for
 			 * H.264). */
 			refusedEncodings: () => [...this.refused],
+			/* The scene file being loaded: state 'reading' (its bytes
+			 * being read, by reader: 'worker' or 'page'; '' while they
+			 * are fetched), 'loading' (sent, the daemon's answer
+			 * awaited) or ''; last: the last read done. */
+			loading: () => this.loading(),
 			sessions: () => ({ status: this.sessions.status,
 				busy: this.sessions.busy,
 				names: this.sessions.entries?.map((e) => e.name) ?? null }),

@@ -25,7 +25,12 @@
  *    each loaded from the page (file input, confirmed), make the session
  *    `blobcast load` makes of the same file, byte for byte (`blobcast
  *    scene`); a bad shape is refused by the daemon with its words, a
- *    duplicate key by the page before anything is sent;
+ *    duplicate key by the page before anything is sent; each read in the
+ *    page's worker (sceneworker.js), and on the page itself where the
+ *    worker fails; a big JSON file (131072 spheres) is read in the worker
+ *    while the page answers and its animation frames keep coming, a
+ *    second load meanwhile is refused, and it makes the session
+ *    `blobcast load` makes;
  *  - the JSON button downloads the scene (every primitive kind, unary
  *    nodes, an edit from the page, a session camera set by another
  *    client): the file equals `blobcast scene` of the session byte for
@@ -38,7 +43,7 @@
  */
 import assert from 'node:assert/strict';
 import { copyFileSync, mkdirSync, mkdtempSync, readFileSync, rmSync,
-	writeFileSync } from 'node:fs';
+	statSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 
@@ -46,6 +51,10 @@ import * as P from '../../client/web/protocol.js';
 import * as H from './harness.mjs';
 
 const DEADLINE_MS = 150000;
+/* The big JSON file's spheres: 21.7 MB that take the page's reader a
+ * second or more, long enough to watch the read from outside the
+ * worker. */
+const BIG_COUNT = 131072;
 const EDITOR = 'ed-51c0d2e9';
 const VIEWER = 'vw-7a44b1f3';
 const W = 400, H2 = 260; /* the pages' size (the view is a little less) */
@@ -540,20 +549,59 @@ try {
 			new RegExp(re).test(document.getElementById('message')
 				.textContent), want.source, 60000);
 	};
+	/* The last read the page did: { name, reader, nodes, ms }. */
+	const lastRead = () => a.evaluate(() => window.blobcast.loading().last);
+	/* The session rich (loaded from the page) is what `blobcast load` of
+	 * file makes, byte for byte (`blobcast scene`, through files: a big
+	 * scene is more than execFile keeps of a child's output). */
+	const sameAsCli = async (file) => {
+		const name = file.split('/').pop();
+		r = await run(['load', ...srv, '--session', 'viacli', file]);
+		assert.equal(r.code, 0, `blobcast load ${name}: ${r.stderr}`);
+		const out = {};
+		for (const s of ['rich', 'viacli']) {
+			out[s] = join(work, `scene-${s}.json`);
+			r = await run(['scene', ...srv, '--session', s, '--out',
+				out[s]]);
+			assert.equal(r.code, 0, `blobcast scene ${s}: ${r.stderr}`);
+		}
+		assert.ok(Buffer.compare(readFileSync(out.rich),
+			readFileSync(out.viacli)) === 0, `${name} loaded from the ` +
+			'page is not the scene `blobcast load` makes of it');
+	};
+	const loadedRe = (name) => new RegExp(`^loaded ${name.replace('.',
+		'\\.')}: \\d+ nodes, edit order \\d+`);
 	for (const f of [handmade, scene, binFile]) {
 		const name = f.split('/').pop();
-		await loadFrom(f, new RegExp(`^loaded ${name.replace('.', '\\.')}: ` +
-			'\\d+ nodes, edit order \\d+'));
-		r = await run(['load', ...srv, '--session', 'viacli', f]);
-		assert.equal(r.code, 0, `blobcast load ${name}: ${r.stderr}`);
-		const fromPage = await run(['scene', ...srv, '--session', 'rich']);
-		const fromCli = await run(['scene', ...srv, '--session', 'viacli']);
-		assert.equal(fromPage.stdout, fromCli.stdout, `${name} loaded from ` +
-			'the page is not the scene `blobcast load` makes of it');
+		await loadFrom(f, loadedRe(name));
+		assert.deepEqual(await lastRead().then((l) => [l.name, l.reader]),
+			[name, 'worker'], `${name} read in the worker`);
+		await sameAsCli(f);
 	}
 	step('load: a hand-made file (defaults, ids and camera left out, ' +
-		'names, unary nodes), every kind, and a binary file, each the ' +
-		'session `blobcast load` of the same file makes, byte for byte');
+		'names, unary nodes), every kind, and a binary file, each read ' +
+		'in the worker and the session `blobcast load` of the same file ' +
+		'makes, byte for byte');
+	/* A worker whose script does not load (as from a page opened from a
+	 * file: URL): the page reads the file itself, to the same session. */
+	await a.evaluate(() => {
+		const W = window.Worker;
+		window.realWorker = W;
+		window.Worker = class extends W {
+			constructor(url, opts) {
+				super(new URL('./no-such-worker.js', url), opts);
+			}
+		};
+	});
+	await loadFrom(handmade, loadedRe('handmade.json'));
+	assert.deepEqual(await lastRead().then((l) => [l.name, l.reader]),
+		['handmade.json', 'page'], 'read on the page without a worker');
+	await sameAsCli(handmade);
+	await a.evaluate(() => {
+		window.Worker = window.realWorker;
+	});
+	step('load: a worker that fails to start: the page reads the file ' +
+		'itself, to the same session');
 	const before = (await run(['scene', ...srv, '--session', 'rich'])).stdout;
 	await loadFrom(shape, /^shape\.json not loaded: .*radius -1.*\(ERANGE\)$/);
 	const bad = join(work, 'bad.json');
@@ -563,10 +611,76 @@ try {
 	await until(a, 'the page refusing a duplicate key', () =>
 		/^bad\.json not loaded: line 1 column \d+: duplicate object key/
 			.test(document.getElementById('message').textContent));
+	assert.deepEqual(await lastRead().then((l) => [l.name, l.reader,
+		l.nodes]), ['bad.json', 'worker', 0], 'refused by the worker\'s read');
 	assert.equal((await run(['scene', ...srv, '--session', 'rich'])).stdout,
 		before, 'a refused load changed the scene');
 	step('load: a bad shape refused by the daemon (ERANGE, its words), a ' +
-		'duplicate key refused by the page before sending; the scene stays');
+		'duplicate key refused by the page (its worker) before sending; ' +
+		'the scene stays');
+
+	/* ---- load: a big JSON file, read off the page's thread ---- */
+	const big = join(work, 'big.json');
+	r = await run(['gen', 'fig18', '--count', String(BIG_COUNT), '--kind',
+		'spheres', '--blend', 'smooth', '--out', big]);
+	assert.equal(r.code, 0, `blobcast gen: ${r.stderr}`);
+	const mb = (statSync(big).size / 1e6).toFixed(1);
+	/* Animation frames the page runs while its worker reads the file
+	 * (until the read is done): a page whose own thread were reading
+	 * would run none. */
+	await a.evaluate(() => {
+		const t = { frames: 0, done: false };
+		window.readTicks = t;
+		const tick = () => {
+			const l = window.blobcast.loading();
+			if (l.state === 'reading' && l.reader === 'worker') {
+				t.frames++;
+			} else if (l.last?.name === 'big.json') {
+				t.done = true;
+				return;
+			}
+			requestAnimationFrame(tick);
+		};
+		requestAnimationFrame(tick);
+	});
+	await a.setInputFiles('#loadfile', big);
+	/* The page answers while the worker reads, and refuses a second file
+	 * meanwhile (tried in the same turn of its loop that saw the read). */
+	const during = await until(a, 'the page answering during the read',
+		() => {
+			const l = window.blobcast.loading();
+			if (l.state !== 'reading' || l.reader !== 'worker') {
+				return null;
+			}
+			const said = document.getElementById('message').textContent;
+			const dt = new DataTransfer();
+			dt.items.add(new File(['{}'], 'second.json'));
+			const input = document.getElementById('loadfile');
+			input.files = dt.files;
+			input.dispatchEvent(new Event('change'));
+			return { l, said, state: window.blobcast.state().loading,
+				second: document.getElementById('message').textContent };
+		});
+	assert.deepEqual([during.l.name, during.l.reader, during.state],
+		['big.json', 'worker', 'reading']);
+	assert.equal(during.said, `reading big.json (${mb} MB)...`);
+	assert.equal(during.second, 'big.json is still being read; load ' +
+		'another once it is');
+	await until(a, 'the page\'s answer to big.json', (re) =>
+		new RegExp(re).test(document.getElementById('message')
+			.textContent), loadedRe('big.json').source, 60000);
+	const ticks = await until(a, 'the end of the read', () =>
+		window.readTicks.done && window.readTicks);
+	const bigRead = await lastRead();
+	assert.deepEqual([bigRead.name, bigRead.reader, bigRead.nodes],
+		['big.json', 'worker', BIG_COUNT + 1]);
+	assert.ok(ticks.frames >= 3, `${ticks.frames} animation frames ` +
+		'during the read');
+	await sameAsCli(big);
+	step(`load: big.json (${BIG_COUNT} spheres, ${mb} MB) read in the ` +
+		`worker in ${bigRead.ms} ms, ${ticks.frames} animation frames ` +
+		'meanwhile, the page answering and refusing a second file; the ' +
+		'session `blobcast load` makes, byte for byte');
 } catch (e) {
 	failed = true;
 	console.error(`FAIL: ${e.stack || e}\n${H.logs()}`);
