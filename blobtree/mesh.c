@@ -493,13 +493,15 @@ static void region_box(const struct build *b, const uint32_t c0[3],
 	}
 }
 
-static void progress(struct build *b, uint64_t cells)
+/* Counts cells done: BC_ECLOSED when the caller asks the build to stop. */
+static int progress(struct build *b, uint64_t cells)
 {
 	b->done_cells += cells;
 	if (b->o && b->o->progress) {
 		b->o->progress(b->o->ctx, b->share * (double)b->done_cells /
 		                              (double)b->total_cells);
 	}
+	return b->o && b->o->stop && b->o->stop(b->o->ctx) ? BC_ECLOSED : 0;
 }
 
 /* Whether region cells [c0, c1) reach the box's boundary. */
@@ -535,12 +537,10 @@ static int region(struct build *b, const uint32_t c0[3], const uint32_t c1[3],
 	uint64_t cells =
 	    (uint64_t)(c1[0] - c0[0]) * (c1[1] - c0[1]) * (c1[2] - c0[2]);
 	if (inside && !touches_boundary(b, c0, c1)) {
-		progress(b, cells);
-		return 0; /* all inside, away from the box's faces */
+		return progress(b, cells); /* inside, away from the faces */
 	}
 	if (n == 0 && !inside) {
-		progress(b, cells);
-		return 0; /* nothing reaches here: +inf, outside */
+		return progress(b, cells); /* nothing reaches: outside */
 	}
 	region_box(b, c0, c1, lo, hi);
 	for (int a = 0; a < 3; a++) {
@@ -561,8 +561,7 @@ static int region(struct build *b, const uint32_t c0[3], const uint32_t c1[3],
 			 * against them: the cap, from the known sign (this
 			 * view gives the colours). */
 			if (!(f < 0.0f) || !touches_boundary(b, c0, c1)) {
-				progress(b, cells);
-				return 0;
+				return progress(b, cells);
 			}
 			inside = true;
 		}
@@ -572,9 +571,10 @@ static int region(struct build *b, const uint32_t c0[3], const uint32_t c1[3],
 			return BC_ELIMIT; /* levels counts every halving */
 		}
 		b->m->cells_visited += cells;
-		rc = leaf(b, c0, inside);
-		progress(b, cells);
-		return rc;
+		if ((rc = leaf(b, c0, inside))) {
+			return rc;
+		}
+		return progress(b, cells);
 	}
 	/* Eight children, halving the longest sides (multiples of BLOCK). */
 	{
@@ -638,6 +638,16 @@ int bc_mesh_build(struct bc_mesh *m, const struct bc_tree *t,
 	for (int a = 0; a < 3 && opts; a++) {
 		given |= opts->lo[a] != 0.0f || opts->hi[a] != 0.0f;
 	}
+	if (!given && res < BC_MESH_MIN_SCENE_RESOLUTION) {
+		/* The longest side is res - 4 cells of scene and two of
+		 * margin at each end: under 5 there is no scene left. */
+		return bc_errinfo_set(
+		    ei, BC_ERANGE,
+		    "mesh: resolution %u leaves no cell for the "
+		    "scene inside the box's two-cell margins: "
+		    "give %u or more, or a box of its own",
+		    res, BC_MESH_MIN_SCENE_RESOLUTION);
+	}
 	for (int a = 0; a < 3; a++) {
 		lo[a] = given ? opts->lo[a] : l->lo[a];
 		hi[a] = given ? opts->hi[a] : l->hi[a];
@@ -685,6 +695,10 @@ int bc_mesh_build(struct bc_mesh *m, const struct bc_tree *t,
 			b.act[0][k] = k;
 		}
 		rc = region(&b, zero, b.n, 0, l->nprims, false);
+	}
+	if (rc == 0 && !(opts && opts->raw) && opts && opts->stop &&
+	    opts->stop(opts->ctx)) {
+		rc = BC_ECLOSED;
 	}
 	if (rc == 0 && !(opts && opts->raw)) {
 		rc = bc_mesh_collapse_short(m, COLLAPSE * b.cell, PASSES,

@@ -349,17 +349,45 @@ static int write_glb(const struct bc_mesh *m, FILE *f, struct bc_errinfo *ei)
 	return 0;
 }
 
-int bc_mesh_write(const struct bc_mesh *m, const char *path,
-                  enum bc_mesh_format format, struct bc_errinfo *ei)
+/* Writes m to f in format (checked by the caller). */
+static int write_format(const struct bc_mesh *m, FILE *f,
+                        enum bc_mesh_format format, struct bc_errinfo *ei)
 {
-	size_t plen = path ? strlen(path) : 0;
-	char *tmp;
-	FILE *f;
-	int rc = 0;
+	switch (format) {
+	case BC_MESH_FORMAT_OBJ:
+		write_obj(m, f);
+		return 0;
+	case BC_MESH_FORMAT_PLY:
+		write_ply(m, f);
+		return 0;
+	case BC_MESH_FORMAT_STL:
+		write_stl(m, f);
+		return 0;
+	default:
+		return write_glb(m, f, ei);
+	}
+}
+
+static int check_format(enum bc_mesh_format format, struct bc_errinfo *ei)
+{
 	if (format <= BC_MESH_FORMAT_INVALID ||
 	    format >= BC_MESH_FORMAT_COUNT) {
 		return bc_errinfo_set(ei, BC_EINVAL, "mesh: unknown format");
 	}
+	return 0;
+}
+
+/* Writes path atomically: a temporary file beside it, filled by fill(f,
+ * arg), flushed to disk and renamed over it; nothing is left on failure. */
+static int write_atomic(const char *path,
+                        int (*fill)(FILE *f, const void *arg,
+                                    struct bc_errinfo *ei),
+                        const void *arg, struct bc_errinfo *ei)
+{
+	size_t plen = path ? strlen(path) : 0;
+	char *tmp;
+	FILE *f;
+	int rc;
 	if (!path || !plen) {
 		return bc_errinfo_set(ei, BC_EINVAL, "mesh: no file name");
 	}
@@ -375,20 +403,7 @@ int bc_mesh_write(const struct bc_mesh *m, const char *path,
 		bc_free(tmp);
 		return rc;
 	}
-	switch (format) {
-	case BC_MESH_FORMAT_OBJ:
-		write_obj(m, f);
-		break;
-	case BC_MESH_FORMAT_PLY:
-		write_ply(m, f);
-		break;
-	case BC_MESH_FORMAT_STL:
-		write_stl(m, f);
-		break;
-	default:
-		rc = write_glb(m, f, ei);
-		break;
-	}
+	rc = fill(f, arg, ei);
 	if (rc == 0 && (fflush(f) != 0 || ferror(f) || fsync(fileno(f)) != 0)) {
 		rc = bc_errinfo_set(ei, BC_EIO, "%s: %s", tmp, strerror(errno));
 	}
@@ -403,5 +418,76 @@ int bc_mesh_write(const struct bc_mesh *m, const char *path,
 		(void)remove(tmp);
 	}
 	bc_free(tmp);
+	return rc;
+}
+
+struct mesh_in {
+	const struct bc_mesh *m;
+	enum bc_mesh_format format;
+};
+
+static int fill_mesh(FILE *f, const void *arg, struct bc_errinfo *ei)
+{
+	const struct mesh_in *in = arg;
+	return write_format(in->m, f, in->format, ei);
+}
+
+int bc_mesh_write(const struct bc_mesh *m, const char *path,
+                  enum bc_mesh_format format, struct bc_errinfo *ei)
+{
+	struct mesh_in in = {m, format};
+	int rc = check_format(format, ei);
+	return rc ? rc : write_atomic(path, fill_mesh, &in, ei);
+}
+
+struct bytes_in {
+	const uint8_t *p;
+	size_t len;
+};
+
+static int fill_bytes(FILE *f, const void *arg, struct bc_errinfo *ei)
+{
+	const struct bytes_in *in = arg;
+	(void)ei;
+	fwrite(in->p, 1, in->len, f); /* ferror() is checked after */
+	return 0;
+}
+
+int bc_mesh_write_file(const char *path, const uint8_t *bytes, size_t len,
+                       struct bc_errinfo *ei)
+{
+	struct bytes_in in = {bytes, len};
+	return write_atomic(path, fill_bytes, &in, ei);
+}
+
+int bc_mesh_write_mem(const struct bc_mesh *m, enum bc_mesh_format format,
+                      size_t head, uint8_t **out, size_t *len,
+                      struct bc_errinfo *ei)
+{
+	char *buf = NULL;
+	size_t size = 0;
+	FILE *f;
+	int rc;
+	*out = NULL;
+	*len = 0;
+	if ((rc = check_format(format, ei))) {
+		return rc;
+	}
+	if (!(f = open_memstream(&buf, &size))) {
+		return bc_errinfo_set(ei, BC_ENOMEM, "mesh: out of memory");
+	}
+	rc = write_format(m, f, format, ei);
+	if ((fclose(f) != 0 || !buf) && rc == 0) {
+		rc = bc_errinfo_set(ei, BC_ENOMEM, "mesh: out of memory");
+	}
+	/* The caller's memory comes from bc_malloc, with its head. */
+	if (rc == 0 && !(*out = bc_malloc(head + size))) {
+		rc = bc_errinfo_set(ei, BC_ENOMEM, "mesh: out of memory");
+	}
+	if (rc == 0) {
+		memcpy(*out + head, buf, size);
+		*len = head + size;
+	}
+	free(buf);
 	return rc;
 }

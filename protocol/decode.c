@@ -925,6 +925,46 @@ static int dec_undo(struct dec *d, struct bc_msg_undo *u)
 	return 0;
 }
 
+/* MESH's and MESH_DATA's first fields: format, options and resolution
+ * (lo: the one value under the least also allowed, a MESH's 0, which asks
+ * for the default; BC_PROTO_MIN_MESH_RESOLUTION for MESH_DATA). */
+static int dec_mesh_head(struct dec *d, enum bc_proto_mesh_format *format,
+                         uint8_t *options, uint16_t *resolution, unsigned lo)
+{
+	uint8_t v;
+	TRY(rd_u8(d, "format", &v));
+	if (v == 0 || v >= BC_PROTO_MESH_FORMAT_COUNT) {
+		return fail(d, BC_EENUM, "format = %u is not a mesh format",
+		            (unsigned)v);
+	}
+	*format = (enum bc_proto_mesh_format)v;
+	TRY(rd_u8(d, "options", options));
+	if (*options & ~BC_PROTO_MESH_OPTIONS_ALL) {
+		return fail(d, BC_EPROTO_FLAGS,
+		            "options 0x%02x has undefined bits",
+		            (unsigned)*options);
+	}
+	TRY(rd_u16(d, "resolution", resolution));
+	if ((*resolution < BC_PROTO_MIN_MESH_RESOLUTION && *resolution != lo) ||
+	    *resolution > BC_PROTO_MAX_MESH_RESOLUTION) {
+		return fail(d, BC_ERANGE, "resolution = %u is outside %u..%u%s",
+		            (unsigned)*resolution, BC_PROTO_MIN_MESH_RESOLUTION,
+		            BC_PROTO_MAX_MESH_RESOLUTION,
+		            lo == 0 ? " (0: the default)" : "");
+	}
+	return 0;
+}
+
+static int dec_mesh_data(struct dec *d, struct bc_msg_mesh_data *md)
+{
+	TRY(dec_mesh_head(d, &md->format, &md->options, &md->resolution,
+	                  BC_PROTO_MIN_MESH_RESOLUTION));
+	TRY(rd_u64(d, "order", &md->order));
+	TRY(rd_u32(d, "vertices", &md->vertices));
+	TRY(rd_u32(d, "triangles", &md->triangles));
+	return rd_blob(d, "file", &md->file);
+}
+
 static int dec_body(struct dec *d, struct bc_msg *m)
 {
 	switch (m->type) {
@@ -1017,6 +1057,11 @@ static int dec_body(struct dec *d, struct bc_msg *m)
 	case BC_MSG_FRAME_ACK:
 		return rd_u32_range(d, "frame_no", 1, UINT32_MAX,
 		                    &m->frame_ack.frame_no);
+	case BC_MSG_MESH:
+		return dec_mesh_head(d, &m->mesh.format, &m->mesh.options,
+		                     &m->mesh.resolution, 0);
+	case BC_MSG_MESH_DATA:
+		return dec_mesh_data(d, &m->mesh_data);
 	case BC_MSG_PICK:
 		TRY(rd_u16(d, "x", &m->pick.x));
 		return rd_u16(d, "y", &m->pick.y);

@@ -308,6 +308,22 @@ static void w_body(struct bc__w *w, const struct bc_msg *m)
 	case BC_MSG_FRAME_ACK:
 		bc__put_u32(w, m->frame_ack.frame_no);
 		break;
+	case BC_MSG_MESH:
+		w_enum(w, "format", (int)m->mesh.format,
+		       BC_PROTO_MESH_FORMAT_COUNT);
+		bc__put_u8(w, m->mesh.options);
+		bc__put_u16(w, m->mesh.resolution);
+		break;
+	case BC_MSG_MESH_DATA:
+		w_enum(w, "format", (int)m->mesh_data.format,
+		       BC_PROTO_MESH_FORMAT_COUNT);
+		bc__put_u8(w, m->mesh_data.options);
+		bc__put_u16(w, m->mesh_data.resolution);
+		bc__put_u64(w, m->mesh_data.order);
+		bc__put_u32(w, m->mesh_data.vertices);
+		bc__put_u32(w, m->mesh_data.triangles);
+		w_blob(w, "file", m->mesh_data.file);
+		break;
 	case BC_MSG_PICK:
 		bc__put_u16(w, m->pick.x);
 		bc__put_u16(w, m->pick.y);

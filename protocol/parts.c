@@ -177,3 +177,24 @@ void bc_proto_scene_state_head(uint8_t *out, uint16_t flags, uint64_t order,
 	bc_put_le32(out + 28, author_seq);
 	bc_put_le32(out + 32, piece);
 }
+
+void bc_proto_mesh_data_head(uint8_t *out, uint32_t seq,
+                             const struct bc_msg_mesh_data *md)
+{
+	out[0] = BC_PROTO_MAGIC0;
+	out[1] = BC_PROTO_MAGIC1;
+	out[2] = BC_PROTO_MAGIC2;
+	out[3] = BC_PROTO_MAGIC3;
+	out[4] = BC_PROTO_VERSION;
+	out[5] = (uint8_t)BC_MSG_MESH_DATA;
+	bc_put_le16(out + 6, 0);
+	bc_put_le32(out + 8, BC_PROTO_MESH_DATA_FIXED + md->file.len);
+	bc_put_le32(out + 12, seq);
+	out[16] = (uint8_t)md->format;
+	out[17] = md->options;
+	bc_put_le16(out + 18, md->resolution);
+	bc_put_le64(out + 20, md->order);
+	bc_put_le32(out + 28, md->vertices);
+	bc_put_le32(out + 32, md->triangles);
+	bc_put_le32(out + 36, md->file.len);
+}

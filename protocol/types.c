@@ -92,6 +92,8 @@ static const struct bc__type_info types[BC_MSG_COUNT] = {
     [BC_MSG_HISTORY_GET] = {"HISTORY_GET", BC__FROM_CLIENT, 0, 0},
     [BC_MSG_HISTORY] = {"HISTORY", BC__FROM_SERVER, 0, HISTORY_MAX},
     [BC_MSG_FRAME_ACK] = {"FRAME_ACK", BC__FROM_CLIENT, 0, 4},
+    [BC_MSG_MESH] = {"MESH", BC__FROM_CLIENT, 0, 4},
+    [BC_MSG_MESH_DATA] = {"MESH_DATA", BC__FROM_SERVER, 0, BULK},
 };
 
 const struct bc__type_info *bc__type_info(unsigned type)
@@ -194,6 +196,7 @@ int bc_proto_client_may_send(enum bc_proto_stage stage, enum bc_proto_role role,
 	case BC_MSG_PRESENT:
 	case BC_MSG_FOLLOW:
 	case BC_MSG_HISTORY_GET:
+	case BC_MSG_MESH:
 		return stage == BC_PROTO_STAGE_SESSION ? 0 : BC_ESTATE;
 	case BC_MSG_SCENE_LOAD:
 	case BC_MSG_EDIT:

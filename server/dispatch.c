@@ -91,6 +91,7 @@ static const struct route routes[BC_MSG_COUNT] = {
     [BC_MSG_SESSION_CAMERA] = {bc_handle_session_camera, NULL},
     [BC_MSG_HISTORY_GET] = {bc_handle_history, NULL},
     [BC_MSG_FRAME_ACK] = {NULL, frame_ack},
+    [BC_MSG_MESH] = {bc_handle_mesh, NULL},
 };
 
 static struct client *client_of(struct bc_dispatch *d, struct bc_conn_ref ref)

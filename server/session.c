@@ -1119,6 +1119,7 @@ void bc_sessions_free(struct bc_sessions *ss)
 			session_remove(ss->sessions[i]);
 		}
 	}
+	bc__meshes_free(ss);
 	bc__index_free(ss->index);
 	ss->index = NULL;
 	/* The sessions themselves go as their handles close, the table with

@@ -191,5 +191,6 @@ int bc_handle_snapshot(struct bc_member *m, const struct bc_msg *msg);
 int bc_handle_present(struct bc_member *m, const struct bc_msg *msg);
 int bc_handle_follow(struct bc_member *m, const struct bc_msg *msg);
 int bc_handle_session_camera(struct bc_member *m, const struct bc_msg *msg);
+int bc_handle_mesh(struct bc_member *m, const struct bc_msg *msg);
 
 #endif

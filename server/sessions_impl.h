@@ -113,6 +113,7 @@ struct bc_sessions {
 	uint32_t frame_no;
 	double render_ms_last, render_ms_avg, encode_ms_last, encode_ms_avg;
 	bool stopping;
+	struct bc_meshes *meshes; /* MESH (meshes.c), made when first asked */
 };
 
 /* Work for a session on libuv's thread pool: run off the loop, done on it
@@ -184,6 +185,12 @@ void bc__session_snapshot_due(struct bc_session *s);
 void bc__session_changed(struct bc_session *s);
 /* Unloads s when it has no members and nothing waits; true if it did. */
 bool bc__session_unload(struct bc_session *s, const char *why);
+
+/* ---- meshes.c ---- */
+
+/* Stops the meshing thread (a mesh under way stops) and drops the meshes
+ * not answered yet. */
+void bc__meshes_free(struct bc_sessions *ss);
 
 /* ---- members.c ---- */
 

@@ -195,6 +195,15 @@
  * snapshots once held another session's client for 178 s). */
 #define BC_SRV_MAX_CLIENT_REQUESTS 8u
 
+/* MESH (meshes.c, PROTOCOL.md 7.28): meshes in the daemon at once, from
+ * request to answer (one a client; over them: EBUSY), and the finest grid
+ * it makes (above: ELIMIT). One thread meshes, behind the renders; two
+ * keep one waiting while another is made. 512 cells along the longest
+ * side mesh fig18's 1024 spheres in about 10 s on one core into a 100 MB
+ * glTF file; finer is the client's to make (`blobcast mesh`). */
+#define BC_SRV_MESHES 2u
+#define BC_SRV_MESH_MAX_RESOLUTION 512u
+
 /* Undo history of a session: steps kept (a drag is one step) and the
  * memory they may hold (a parameter step the earlier states of its nodes;
  * a structural step the operations that undo it with the subtrees they put

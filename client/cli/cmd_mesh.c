@@ -12,6 +12,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "blobcast/alloc.h"
 #include "blobcast/args.h"
 #include "blobcast/blobtree.h"
 #include "blobcast/clock.h"
@@ -27,6 +28,8 @@ struct mesh_args {
 	uint32_t resolution;
 	float lo[3], hi[3];
 	bool bounds, quiet, raw;
+	bool on_daemon; /* the daemon meshes (MESH) */
+	bool timeout_given;
 	/* A live session instead of SCENE: the client commands' options. */
 	struct bc_cli_call call;
 };
@@ -94,6 +97,14 @@ static int parse(int argc, char **argv, struct mesh_args *a, bool *done)
 	     .arg = "NAME",
 	     .help = "mesh the scene of live session NAME instead\n"
 	             "of SCENE (joined as a viewer, then left)"},
+	    {.name = "on-daemon",
+	     .kind = BC_OPT_FLAG,
+	     .dst = &a->on_daemon,
+	     .help = "with --session: the daemon makes the mesh\n"
+	             "(the same file) and sends it, for a machine\n"
+	             "too small to mesh; up to the daemon's finest\n"
+	             "grid (blobcastd: 512), no --bounds; the wait\n"
+	             "has no limit unless --timeout is given"},
 	    {.name = "server",
 	     .kind = BC_OPT_STRING,
 	     .dst = &c->server,
@@ -190,9 +201,17 @@ static int parse(int argc, char **argv, struct mesh_args *a, bool *done)
 		}
 		c->cmd = "mesh";
 		c->timeout_ms = (int)timeout_ms;
+		a->timeout_given = bc_args_given(&p, "timeout");
+		if (a->on_daemon && bounds) {
+			return bc_args_error(&p,
+			                     "--bounds: the daemon meshes "
+			                     "the scene's own box; leave out "
+			                     "--on-daemon to mesh another");
+		}
 	} else {
-		const char *only[] = {"server",  "token", "name",
-		                      "timeout", "ca",    "insecure"};
+		const char *only[] = {"server",   "token", "name",
+		                      "timeout",  "ca",    "insecure",
+		                      "on-daemon"};
 		if (p.npos == 0) {
 			return bc_args_error(&p, "SCENE (or --session NAME) is "
 			                         "required");
@@ -285,6 +304,47 @@ static int session_scene(struct mesh_args *a, struct bc_tree *t)
 	return status;
 }
 
+/* --on-daemon: the session's mesh as the daemon makes it, written to
+ * a->out. Returns the exit status after saying what happened. */
+static int daemon_mesh(struct mesh_args *a)
+{
+	struct bc_client *c = NULL;
+	struct bc_errinfo ei = {0};
+	struct bc_client_mesh m = {0};
+	double t0 = bc_clock_ms();
+	int status = bc_cli_open_session(&a->call, BC_PROTO_ROLE_VIEWER,
+	                                 BC_CLIENT_JOIN_EXISTING, &c);
+	if (status) {
+		goto out;
+	}
+	if (!a->quiet) {
+		fprintf(stderr, "meshing on the daemon ...\n");
+	}
+	if (bc_client_mesh(c, (int)a->format, a->raw ? BC_PROTO_MESH_RAW : 0u,
+	                   (uint16_t)a->resolution,
+	                   a->timeout_given ? a->call.timeout_ms : -1, &m,
+	                   &ei)) {
+		status = bc_cli_failed(&a->call, c, NULL, &ei);
+		goto out;
+	}
+	if (bc_mesh_write_file(a->out, m.file, m.len, &ei)) {
+		fprintf(stderr, "blobcast mesh: %s\n", ei.msg);
+		status = BC_CLI_EXIT_FAIL;
+		goto out;
+	}
+	if (!a->quiet) {
+		fprintf(stderr,
+		        "meshing: done on the daemon. %s: %u vertices, %u "
+		        "triangles, resolution %u, edit order %llu, %.1f ms\n",
+		        a->out, m.vertices, m.triangles, (unsigned)m.resolution,
+		        (unsigned long long)m.order, bc_clock_ms() - t0);
+	}
+out:
+	bc_free(m.file);
+	bc_client_destroy(c);
+	return status;
+}
+
 int bc_cli_mesh(int argc, char **argv)
 {
 	struct mesh_args a;
@@ -299,6 +359,9 @@ int bc_cli_mesh(int argc, char **argv)
 	int status = parse(argc, argv, &a, &stop);
 	if (stop) {
 		return status;
+	}
+	if (a.on_daemon) {
+		return daemon_mesh(&a);
 	}
 	status = 1;
 	memset(&m, 0, sizeof(m));

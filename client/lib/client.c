@@ -1927,6 +1927,40 @@ int bc_client_history(struct bc_client *c, struct bc_client_change **out,
 	return 0;
 }
 
+int bc_client_mesh(struct bc_client *c, int format, uint8_t options,
+                   uint16_t resolution, int timeout_ms,
+                   struct bc_client_mesh *out, struct bc_errinfo *ei)
+{
+	struct bc_msg m = {.type = BC_MSG_MESH};
+	uint32_t seq;
+	int rc;
+	memset(out, 0, sizeof(*out));
+	if (!(c->info.features & BC_PROTO_FEATURE_MESH)) {
+		return bc_errinfo_set(ei, BC_ENOTSUP,
+		                      "the server does not make meshes (it is "
+		                      "older than this client): mesh here "
+		                      "instead");
+	}
+	m.mesh.format = (enum bc_proto_mesh_format)format;
+	m.mesh.options = options;
+	m.mesh.resolution = resolution;
+	if ((rc = send_or_say(c, &m, &seq, ei)) ||
+	    (rc = bc_client_wait(c, BC_MSG_MESH_DATA, seq, &m, timeout_ms,
+	                         ei))) {
+		return rc;
+	}
+	if (!(out->file = bc_malloc(m.mesh_data.file.len))) {
+		return bc_errinfo_set(ei, BC_ENOMEM, "out of memory");
+	}
+	memcpy(out->file, m.mesh_data.file.ptr, m.mesh_data.file.len);
+	out->len = m.mesh_data.file.len;
+	out->vertices = m.mesh_data.vertices;
+	out->triangles = m.mesh_data.triangles;
+	out->resolution = m.mesh_data.resolution;
+	out->order = m.mesh_data.order;
+	return 0;
+}
+
 int bc_client_sessions(struct bc_client *c, struct bc_client_session **out,
                        size_t *n, struct bc_errinfo *ei)
 {

@@ -42,6 +42,9 @@ export const LIMITS = Object.freeze({
 	MAX_SESSIONS_LISTED: 1024,
 	MAX_HISTORY: 200,
 	MAX_HISTORY_TEXT: 128,
+	MAX_MESH_RESOLUTION: 4096, /* MESH's grid; 0 asks for the default */
+	MIN_MESH_RESOLUTION: 5,
+	MESH_DEFAULT_RESOLUTION: 128,
 	MAX_DIM: 8192,
 	MIN_FRAME_BYTES: 64 * 1024,
 	MAX_RECTS: 4096,
@@ -72,7 +75,7 @@ export const MSG = Object.freeze({
 	SESSION_DELETE: 23, UNDO: 24, REDO: 25, SESSION_LIST: 26, SESSIONS: 27,
 	PRESENT: 28, FOLLOW: 29, PRESENTER: 30, FOLLOW_CAMERA: 31,
 	SESSION_CAMERA: 32, SESSION_CAMERA_SET: 33, HISTORY_GET: 34,
-	HISTORY: 35, FRAME_ACK: 36,
+	HISTORY: 35, FRAME_ACK: 36, MESH: 37, MESH_DATA: 38,
 });
 
 /* Header flag bits; each is defined for some types only. */
@@ -111,7 +114,12 @@ export const STATS_PARTS = Object.freeze({ LOAD: 0x01, RESET: 0x02, TLS: 0x04,
  * WELCOME says which it grants. */
 export const FEATURE = Object.freeze({ LEVELS: 0x01, UNDO: 0x02,
 	PRESENT: 0x04, KINDS: 0x08, TILES: 0x10, HISTORY: 0x20, NAMES: 0x40,
-	ACKS: 0x80, PARTS: 0x100, MEMORY: 0x200, ALL: 0x3ff });
+	ACKS: 0x80, PARTS: 0x100, MEMORY: 0x200, MESH: 0x400, ALL: 0x7ff });
+
+/* MESH's file formats and options (PROTOCOL.md 7.28): RAW keeps every
+ * triangle (no edge collapse). */
+export const MESH_FORMAT = Object.freeze({ OBJ: 1, PLY: 2, STL: 3, GLB: 4 });
+export const MESH_OPTION = Object.freeze({ RAW: 0x01, ALL: 0x01 });
 
 /* FRAMEs of the view a client granted ACKS may leave unacknowledged
  * (PROTOCOL.md 7.27). */
@@ -382,6 +390,8 @@ T(34, 'HISTORY_GET', FROM_CLIENT, 0, 0);
 T(35, 'HISTORY', FROM_SERVER, 0, 8 + 2 + L.MAX_HISTORY *
 	(8 + 8 + 8 + 1 + 1 + strMax(L.MAX_NAME) + strMax(L.MAX_HISTORY_TEXT)));
 T(36, 'FRAME_ACK', FROM_CLIENT, 0, 4);
+T(37, 'MESH', FROM_CLIENT, 0, 4);
+T(38, 'MESH_DATA', FROM_SERVER, 0, BULK);
 
 function typeInfo(type) {
 	return Number.isInteger(type) ? TYPES[type] ?? null : null;
@@ -862,6 +872,25 @@ function decCamera(d, m) {
 	}
 }
 
+/* MESH's and MESH_DATA's first fields; lo is the one resolution under the
+ * least also allowed (a MESH's 0 asks for the default). */
+function decMeshHead(d, m, lo) {
+	m.format = d.u8('format');
+	if (m.format < MESH_FORMAT.OBJ || m.format > MESH_FORMAT.GLB) {
+		d.fail('EENUM', `format ${m.format} is not a mesh format`);
+	}
+	m.options = d.u8('options');
+	if (m.options & ~MESH_OPTION.ALL) {
+		d.fail('EPROTO_FLAGS', `options ${m.options} has undefined bits`);
+	}
+	m.resolution = d.u16('resolution');
+	if ((m.resolution < L.MIN_MESH_RESOLUTION && m.resolution !== lo) ||
+	    m.resolution > L.MAX_MESH_RESOLUTION) {
+		d.fail('ERANGE', `resolution ${m.resolution} is outside ` +
+			`${L.MIN_MESH_RESOLUTION}..${L.MAX_MESH_RESOLUTION}`);
+	}
+}
+
 function decBody(d, m) {
 	switch (m.type) {
 	case MSG.HELLO: {
@@ -1106,6 +1135,16 @@ function decBody(d, m) {
 		break;
 	case MSG.FRAME:
 		decFrame(d, m.flags, m);
+		break;
+	case MSG.MESH:
+		decMeshHead(d, m, 0);
+		break;
+	case MSG.MESH_DATA:
+		decMeshHead(d, m, L.MIN_MESH_RESOLUTION);
+		m.order = d.u64('order');
+		m.vertices = d.u32('vertices');
+		m.triangles = d.u32('triangles');
+		m.file = d.blob('file');
 		break;
 	case MSG.PICK:
 		m.x = d.u16('x');
@@ -1822,6 +1861,18 @@ function encBody(w, m) {
 			w.u16('rect.w', r.w);
 			w.u16('rect.h', r.h);
 			w.blob('rect.data', r.data);
+		}
+		break;
+	case MSG.MESH:
+	case MSG.MESH_DATA:
+		w.u8('format', m.format, 'EENUM');
+		w.u8('options', m.options, 'EPROTO_FLAGS');
+		w.u16('resolution', m.resolution);
+		if (m.type === MSG.MESH_DATA) {
+			w.u64('order', m.order);
+			w.u32('vertices', m.vertices);
+			w.u32('triangles', m.triangles);
+			w.blob('file', m.file);
 		}
 		break;
 	case MSG.PICK:

@@ -29,7 +29,8 @@ TYPES = {
     "SESSION_DELETE": 23, "UNDO": 24, "REDO": 25, "SESSION_LIST": 26,
     "SESSIONS": 27, "PRESENT": 28, "FOLLOW": 29, "PRESENTER": 30,
     "FOLLOW_CAMERA": 31, "SESSION_CAMERA": 32, "SESSION_CAMERA_SET": 33,
-    "HISTORY_GET": 34, "HISTORY": 35, "FRAME_ACK": 36,
+    "HISTORY_GET": 34, "HISTORY": 35, "FRAME_ACK": 36, "MESH": 37,
+    "MESH_DATA": 38,
 }
 MAX_PAYLOAD = 64 * 1024 * 1024
 HELLO_MAX_PAYLOAD = 4096
@@ -89,7 +90,7 @@ TYPE_MAX = {
     "SESSIONS": 2 + MAX_SESSIONS_LISTED * (strmax(MAX_NAME) + 2 + 4 + 8 + 8 + 1),
     "PRESENT": 1, "FOLLOW": 1, "PRESENTER": 5, "FOLLOW_CAMERA": 44,
     "SESSION_CAMERA": 40, "SESSION_CAMERA_SET": 56,
-    "HISTORY_GET": 0, "FRAME_ACK": 4,
+    "HISTORY_GET": 0, "FRAME_ACK": 4, "MESH": 4, "MESH_DATA": MAX_PAYLOAD,
     "HISTORY": 8 + 2 + MAX_HISTORY * (8 + 8 + 8 + 1 + 1 + strmax(MAX_NAME)
                                       + strmax(MAX_HISTORY_TEXT)),
 }
@@ -437,6 +438,15 @@ def w_stats(f):
     return b
 
 
+def w_mesh(f):
+    return u8(f["format"]) + u8(f["options"]) + u16(f["resolution"])
+
+
+def w_mesh_data(f):
+    return (w_mesh(f) + u64(int(f["order"])) + u32(f["vertices"])
+            + u32(f["triangles"]) + blob(bytes.fromhex(f["file"])))
+
+
 def w_get_stats(f):
     # parts is optional and left out when 0 (the client's figures only).
     return u8(f["parts"]) if f["parts"] else b""
@@ -458,6 +468,7 @@ WRITERS = {
     "FOLLOW_CAMERA": w_follow_camera, "SESSION_CAMERA": w_camera,
     "SESSION_CAMERA_SET": w_session_camera_set,
     "HISTORY_GET": w_empty, "HISTORY": w_history,
+    "MESH": w_mesh, "MESH_DATA": w_mesh_data,
 }
 
 # ---- Vector tables -----------------------------------------------------------
@@ -627,10 +638,11 @@ def gen_welcome():
     t.badp("max_dim 8193", wl(max_dim=8193), "ERANGE")
     t.badp("max_members 65", wl(max_members=65), "ERANGE")
     t.badp("max_edit_ops 0", wl(max_edit_ops=0), "ERANGE")
-    t.ok("every feature of this text granted", dict(base, features=0x3ff))
+    t.ok("every feature of this text granted", dict(base, features=0x7ff))
     t.ok("PARTS granted (bit 8)", dict(base, features=0x100))
     t.ok("MEMORY granted (bit 9)", dict(base, features=0x200))
-    t.badp("a feature this text does not define", wl(features=0x400),
+    t.ok("MESH granted (bit 10)", dict(base, features=0x400))
+    t.badp("a feature this text does not define", wl(features=0x800),
            "EPROTO_FLAGS")
     t.badp("features cut short (2 bytes)", w_welcome(old) + b"\x0f\x00",
            "EPROTO_TRUNCATED")
@@ -1490,6 +1502,66 @@ def gen_frame_ack():
     t.dump("frame_ack.json")
 
 
+def gen_mesh():
+    t = Table("MESH")
+    p = t.ok("glTF binary at the default resolution",
+             dict(format=4, options=0, resolution=0), seq=80)
+    t.ok("OBJ, raw, 5 cells", dict(format=1, options=1, resolution=5),
+         seq=81)
+    t.ok("PLY at 4096", dict(format=2, options=0, resolution=4096), seq=82)
+    t.ok("STL at 300", dict(format=3, options=0, resolution=300), seq=83)
+    t.common(p)
+    t.badp("format 0", w_mesh(dict(format=0, options=0, resolution=0)),
+           "EENUM")
+    t.badp("format 5", w_mesh(dict(format=5, options=0, resolution=0)),
+           "EENUM")
+    t.badp("options bit 1", w_mesh(dict(format=4, options=2,
+                                        resolution=0)), "EPROTO_FLAGS")
+    t.badp("resolution 1", w_mesh(dict(format=4, options=0,
+                                       resolution=1)), "ERANGE")
+    t.badp("resolution 4: no cell inside the margins",
+           w_mesh(dict(format=4, options=0, resolution=4)), "ERANGE")
+    t.badp("resolution 4097", w_mesh(dict(format=4, options=0,
+                                          resolution=4097)), "ERANGE")
+    t.bad("sent by the wrong side", frame("MESH", p), "EPROTO_TYPE",
+          reader={"side": "client"})
+    t.bad("refused by a server before HELLO", frame("MESH", p),
+          "ESTATE", reader={"side": "server", "await_hello": True})
+    t.dump("mesh.json")
+
+
+def gen_mesh_data():
+    t = Table("MESH_DATA")
+    obj = b"v 0 0 0 1 1 1\nv 1 0 0 1 1 1\nv 0 1 0 1 1 1\nv 0 0 1 1 1 1\n" \
+        b"f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+    base = dict(format=1, options=0, resolution=128, order="12",
+                vertices=4, triangles=4, file=obj.hex())
+    p = t.ok("a tetrahedron as OBJ", base, seq=80)
+    t.ok("raw glTF bytes at 5 cells, order 0",
+         dict(base, format=4, options=1, resolution=5, order="0",
+              file="676c5446"), seq=81)
+    t.ok("an empty mesh: STL's 84 bytes",
+         dict(base, format=3, resolution=4096, order=str(2 ** 64 - 1),
+              vertices=0, triangles=0, file=(b"\0" * 84).hex()), seq=82)
+    t.common(p)
+
+    def md(**kw):
+        return w_mesh_data(dict(base, **kw))
+    t.badp("format 0", md(format=0), "EENUM")
+    t.badp("format 5", md(format=5), "EENUM")
+    t.badp("options bit 7", md(options=0x80), "EPROTO_FLAGS")
+    t.badp("resolution 0 (a MESH's default is never an answer)",
+           md(resolution=0), "ERANGE")
+    t.badp("resolution 4", md(resolution=4), "ERANGE")
+    t.badp("resolution 4097", md(resolution=4097), "ERANGE")
+    t.badp("an empty file (bytes has at least one)",
+           w_mesh(base) + u64(12) + u32(4) + u32(4) + u32(0),
+           "EPROTO_LENGTH")
+    t.bad("refused by a server reader", frame("MESH_DATA", p),
+          "EPROTO_TYPE", reader=SERVER)
+    t.dump("mesh_data.json")
+
+
 def gen_snapshot():
     t = Table("SNAPSHOT")
     # planes is an optional second byte, so the cases of Table.common
@@ -1688,7 +1760,7 @@ def gen_framing():
     bad("version 255, header cut after it", MAGIC + u8(255),
         "EPROTO_VERSION")
     bad("type 0", header(0, 0), "EPROTO_TYPE")
-    bad("type 37", header(37, 0), "EPROTO_TYPE")
+    bad("type 39", header(39, 0), "EPROTO_TYPE")
     bad("type 255", header(255, 0), "EPROTO_TYPE")
     bad("unknown type is reported before the rest of the header",
         MAGIC + u8(1) + u8(99), "EPROTO_TYPE")
@@ -1983,6 +2055,8 @@ def main():
     gen_empty("HISTORY_GET", "client")
     gen_history()
     gen_frame_ack()
+    gen_mesh()
+    gen_mesh_data()
     gen_framing()
     gen_scene()
     gen_earlier()

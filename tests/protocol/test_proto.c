@@ -437,6 +437,20 @@ static void sample(enum bc_msg_type t, struct bc_msg *m)
 	case BC_MSG_FRAME_ACK:
 		m->frame_ack.frame_no = 41;
 		break;
+	case BC_MSG_MESH:
+		m->mesh = (struct bc_msg_mesh){BC_PROTO_MESH_GLB,
+		                               BC_PROTO_MESH_RAW, 256};
+		break;
+	case BC_MSG_MESH_DATA:
+		m->mesh_data = (struct bc_msg_mesh_data){
+		    BC_PROTO_MESH_OBJ,
+		    0,
+		    128,
+		    9,
+		    3,
+		    1,
+		    {image_bytes, sizeof(image_bytes)}};
+		break;
 	case BC_MSG_PICK_RESULT:
 		m->pick_result = (struct bc_msg_pick_result){
 		    10, 20, 4, {1.5f, -0.5f, 2.0f}, 4.25f};
@@ -1327,8 +1341,30 @@ static void test_scene_parts(void)
 	bc_proto_reader_finish(&r);
 }
 
+/* A MESH_DATA's head, as the daemon writes it before a file it made
+ * there, then the file: the bytes the encoder makes of the same message. */
+static void test_mesh_data_head(void)
+{
+	static const uint8_t file[] = "# blobcast mesh: 0 vertices, 0 "
+	                              "triangles\n";
+	struct bc_msg m = {.type = BC_MSG_MESH_DATA, .seq = 91};
+	struct bc_proto_buf b;
+	uint8_t wire[BC_PROTO_MESH_DATA_HEAD + sizeof(file)];
+	m.mesh_data = (struct bc_msg_mesh_data){
+	    BC_PROTO_MESH_GLB,   BC_PROTO_MESH_RAW, 4096, UINT64_MAX - 1, 7, 9,
+	    {file, sizeof(file)}};
+	bc_proto_mesh_data_head(wire, m.seq, &m.mesh_data);
+	memcpy(wire + BC_PROTO_MESH_DATA_HEAD, file, sizeof(file));
+	bc_proto_buf_init(&b, 0);
+	REQUIRE(bc_proto_encode(&b, &m, NULL) == 0);
+	CHECK_EQ_INT(b.len, sizeof(wire));
+	CHECK(b.len == sizeof(wire) && memcmp(b.data, wire, b.len) == 0);
+	bc_proto_buf_finish(&b);
+}
+
 static const struct bc_test tests[] = {
     {"malformed_table", test_malformed_table},
+    {"mesh_data_head", test_mesh_data_head},
     {"scene_parts", test_scene_parts},
     {"round_trip_every_type", test_round_trip_every_type},
     {"zero_copy", test_zero_copy},

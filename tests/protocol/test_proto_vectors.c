@@ -310,6 +310,21 @@ static void build(enum bc_msg_type type, const json_t *f, struct bc_msg *m)
 	case BC_MSG_FRAME_ACK:
 		m->frame_ack.frame_no = (uint32_t)jint(f, "frame_no");
 		break;
+	case BC_MSG_MESH:
+		m->mesh.format = (enum bc_proto_mesh_format)jint(f, "format");
+		m->mesh.options = (uint8_t)jint(f, "options");
+		m->mesh.resolution = (uint16_t)jint(f, "resolution");
+		break;
+	case BC_MSG_MESH_DATA:
+		m->mesh_data.format =
+		    (enum bc_proto_mesh_format)jint(f, "format");
+		m->mesh_data.options = (uint8_t)jint(f, "options");
+		m->mesh_data.resolution = (uint16_t)jint(f, "resolution");
+		m->mesh_data.order = jint(f, "order");
+		m->mesh_data.vertices = (uint32_t)jint(f, "vertices");
+		m->mesh_data.triangles = (uint32_t)jint(f, "triangles");
+		m->mesh_data.file = jbytes(f, "file");
+		break;
 	case BC_MSG_FRAME: {
 		struct bc_msg_frame *fr = &m->frame;
 		fr->frame_no = (uint32_t)jint(f, "frame_no");
@@ -630,6 +645,17 @@ static int msg_eq(const struct bc_msg *a, const struct bc_msg *b)
 	}
 	case BC_MSG_FRAME_ACK:
 		return a->frame_ack.frame_no == b->frame_ack.frame_no;
+	case BC_MSG_MESH:
+		return memcmp(&a->mesh, &b->mesh, sizeof(a->mesh)) == 0;
+	case BC_MSG_MESH_DATA: {
+		const struct bc_msg_mesh_data *x = &a->mesh_data;
+		const struct bc_msg_mesh_data *y = &b->mesh_data;
+		return x->format == y->format && x->options == y->options &&
+		       x->resolution == y->resolution && x->order == y->order &&
+		       x->vertices == y->vertices &&
+		       x->triangles == y->triangles &&
+		       bytes_eq(x->file, y->file);
+	}
 	case BC_MSG_PICK:
 		return a->pick.x == b->pick.x && a->pick.y == b->pick.y;
 	case BC_MSG_PICK_RESULT:

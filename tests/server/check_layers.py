@@ -32,7 +32,7 @@ FILES = {
     "session": "sessions", "members": "sessions", "index": "sessions",
     "frames": "sessions", "edits": "sessions", "undo": "sessions",
     "present": "sessions", "store": "sessions", "snapshot": "sessions",
-    "journal": "sessions", "check": "sessions",
+    "journal": "sessions", "check": "sessions", "meshes": "sessions",
     "work": "work", "flow": "work", "views": "work", "job": "work",
     "encode": "work", "vstream": "work",
     "link": "shared",

@@ -412,7 +412,7 @@ static const struct bad bads[] = {
     {"magic", 0, 4, 1, 0, 8, "\0\0\0\0\0\0\0\0", 8, -BC_EPROTO_MAGIC},
     {"version 2", 0, 4, 2, 0, 8, "\0\0\0\0\0\0\0\0", 8, -BC_EPROTO_VERSION},
     {"type 0", 1, 0, 1, 0, 0, NULL, 0, -BC_EPROTO_TYPE},
-    {"type 37", 1, 37, 1, 0, 0, NULL, 0, -BC_EPROTO_TYPE},
+    {"type 39", 1, 39, 1, 0, 0, NULL, 0, -BC_EPROTO_TYPE},
     {"type 255", 0, 255, 1, 0, 0, NULL, 0, -BC_EPROTO_TYPE},
     /* 3.1 step 3, 5: a type clients never send. */
     {"WELCOME from a client", 1, 2, 1, 0, 0, NULL, 0, -BC_EPROTO_TYPE},

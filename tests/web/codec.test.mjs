@@ -38,7 +38,7 @@ const U64 = new Set(['order', 'stamp', 'uptime_ms', 'frames', 'bytes',
 	'session_render_us', 'tls_not_after_ms', 'time_ms', 'built_on',
 	'delivery_bps', 'frames_spoiled', 'scene_nodes', 'scene_nodes_cap',
 	'session_nodes']);
-const BYTES = new Set(['scene', 'subtree', 'data']);
+const BYTES = new Set(['scene', 'subtree', 'data', 'file']);
 
 function fromJson(v, key) {
 	if (Array.isArray(v)) {
@@ -190,7 +190,7 @@ test('vectors: no unknown files, every type covered', () => {
 		assert.ok(known.has(f), `unknown vector file ${f}`);
 	}
 	assert.equal(files.length, typeNames.length + 2);
-	assert.equal(typeNames.length, 36);
+	assert.equal(typeNames.length, 38);
 });
 
 /* ---- Properties the page relies on -------------------------------------- */
@@ -314,7 +314,7 @@ test('encoder refuses what the decoder refuses', () => {
 		[{ ...cam, fov_y_deg: 180 }, 'ERANGE'],
 		[{ ...cam, eye: [0, 5] }, 'EPROTO_COUNT'],
 		[{ ...cam, flags: 2 }, 'EPROTO_FLAGS'],
-		[{ ...cam, type: 37 }, 'EPROTO_TYPE'],
+		[{ ...cam, type: 39 }, 'EPROTO_TYPE'],
 		[{ ...cam, type: 0 }, 'EPROTO_TYPE'],
 		[{ ...cam, seq: -1 }, 'ERANGE'],
 		[{ type: P.MSG.SESSION_JOIN, role: 3, name: 'x' }, 'EENUM'],
@@ -440,7 +440,8 @@ test('error names and numbers match error.h', () => {
 	assert.equal(new P.ProtoError('EDEPTH', 'x').errno, 21);
 	assert.equal(P.typeName(17), 'FRAME');
 	assert.equal(P.typeName(36), 'FRAME_ACK');
-	assert.equal(P.typeName(37), null);
+	assert.equal(P.typeName(38), 'MESH_DATA');
+	assert.equal(P.typeName(39), null);
 });
 
 test('utf8Check: the strict rules of the C codec', () => {
@@ -619,13 +620,13 @@ const entry = (id, name) => { const b = typeof name === 'string'
 
 test('FEATURE.NAMES: bit 6, in ALL, and the page announces it', () => {
 	assert.equal(P.FEATURE.NAMES, 0x40);
-	assert.equal(P.FEATURE.ALL, 0x3ff);
+	assert.equal(P.FEATURE.ALL, 0x7ff);
 	assert.equal(P.EDIT.NAME, 5);
 	assert.deepEqual(P.SCENE_FLAG, { CAMERA: 1, NAMES: 2, ALL: 3 });
 	const src = readFileSync(join(HERE, '..', '..', 'client', 'web',
 		'app.js'), 'utf8');
 	assert.match(src, /features: P\.FEATURE\.ALL/);
-	/* A WELCOME granting NAMES decodes; bit 10 is still undefined. */
+	/* A WELCOME granting NAMES decodes; bit 11 is still undefined. */
 	const welcome = { type: P.MSG.WELCOME, version: 1, connection_id: 1,
 		max_payload: 1 << 20, max_frame_bytes: 1 << 20, max_nodes: 100,
 		max_dim: 4096, max_members: 8, max_edit_ops: 100, server_id: 'x',
@@ -633,7 +634,7 @@ test('FEATURE.NAMES: bit 6, in ALL, and the page announces it', () => {
 	const r = new P.Reader({ side: 'client' });
 	r.feed(P.encode(welcome));
 	assert.equal(r.next().features, 0x60);
-	assert.throws(() => P.encode({ ...welcome, features: 0x400 }),
+	assert.throws(() => P.encode({ ...welcome, features: 0x800 }),
 		(e) => e.code === 'EPROTO_FLAGS');
 });
 

@@ -22,6 +22,9 @@
  * already make a mesh of tens of millions of triangles. */
 #define BC_MESH_MAX_RESOLUTION 4096u
 #define BC_MESH_DEFAULT_RESOLUTION 128u
+/* The least resolution of a scene's own box: its longest side is the
+ * scene's in res - 4 cells and two cells of margin at each end. */
+#define BC_MESH_MIN_SCENE_RESOLUTION 5u
 
 struct bc_mesh_opts {
 	/* Cells along the longest side of the box (0: default). */
@@ -35,6 +38,9 @@ struct bc_mesh_opts {
 	bool raw;
 	/* Called now and then with the fraction done (may be NULL). */
 	void (*progress)(void *ctx, double done);
+	/* Asked as often (may be NULL): true stops the build, which then
+	 * returns BC_ECLOSED. */
+	bool (*stop)(void *ctx);
 	void *ctx;
 };
 
@@ -51,8 +57,8 @@ struct bc_mesh {
 
 /* Meshes the surface of t into *m (init/finish on caller memory;
  * bc_mesh_finish frees). Returns 0, BC_EINVAL (empty tree, or a box with
- * no volume), BC_ERANGE (resolution above BC_MESH_MAX_RESOLUTION) or
- * BC_ENOMEM, with the reason in ei. */
+ * no volume), BC_ERANGE (resolution above BC_MESH_MAX_RESOLUTION),
+ * BC_ENOMEM or BC_ECLOSED (opts->stop), with the reason in ei. */
 int bc_mesh_build(struct bc_mesh *m, const struct bc_tree *t,
                   const struct bc_mesh_opts *opts, struct bc_errinfo *ei);
 void bc_mesh_finish(struct bc_mesh *m);
@@ -79,5 +85,16 @@ enum bc_mesh_format bc_mesh_format_named(const char *name);
  * with the reason in ei. */
 int bc_mesh_write(const struct bc_mesh *m, const char *path,
                   enum bc_mesh_format format, struct bc_errinfo *ei);
+/* Writes a mesh file made elsewhere (len bytes; a server's MESH_DATA) to
+ * path as bc_mesh_write does: atomically. Returns 0, BC_EINVAL, BC_ENOMEM
+ * or BC_EIO with the reason in ei. */
+int bc_mesh_write_file(const char *path, const uint8_t *bytes, size_t len,
+                       struct bc_errinfo *ei);
+/* The same bytes in memory: *out (bc_free) holds head bytes left for the
+ * caller (a message's head), then the file; *len counts both. Returns 0,
+ * BC_EINVAL, BC_ERANGE or BC_ENOMEM as bc_mesh_write. */
+int bc_mesh_write_mem(const struct bc_mesh *m, enum bc_mesh_format format,
+                      size_t head, uint8_t **out, size_t *len,
+                      struct bc_errinfo *ei);
 
 #endif

@@ -80,6 +80,8 @@ enum bc_msg_type {
 	BC_MSG_HISTORY_GET = 34,        /* client -> server */
 	BC_MSG_HISTORY = 35,            /* server -> client */
 	BC_MSG_FRAME_ACK = 36,          /* client -> server (feature ACKS) */
+	BC_MSG_MESH = 37,               /* client -> server (feature MESH) */
+	BC_MSG_MESH_DATA = 38,          /* server -> client */
 	BC_MSG_COUNT
 };
 
@@ -189,7 +191,10 @@ enum bc_msg_type {
 /* A request form: granted, the client may ask GET_STATS for the memory
  * section (BC_PROTO_STATS_MEMORY, PROTOCOL.md 7.18). */
 #define BC_PROTO_FEATURE_MEMORY 0x200u
-#define BC_PROTO_FEATURES_ALL 0x3ffu
+/* A request form: granted, the client may send MESH, which the server
+ * answers with MESH_DATA (PROTOCOL.md 7.28). */
+#define BC_PROTO_FEATURE_MESH 0x400u
+#define BC_PROTO_FEATURES_ALL 0x7ffu
 /* What a client that only reads may announce: every feature but ACKS,
  * which also binds the client to send FRAME_ACK for each FRAME. */
 #define BC_PROTO_FEATURES_READ (BC_PROTO_FEATURES_ALL & ~BC_PROTO_FEATURE_ACKS)
@@ -513,6 +518,38 @@ struct bc_msg_frame_ack {
 	uint32_t frame_no;
 };
 
+/* MESH's file formats (PROTOCOL.md 7.28), numbered as blobtree's
+ * enum bc_mesh_format. */
+enum bc_proto_mesh_format {
+	BC_PROTO_MESH_INVALID = 0,
+	BC_PROTO_MESH_OBJ = 1,
+	BC_PROTO_MESH_PLY = 2,
+	BC_PROTO_MESH_STL = 3,
+	BC_PROTO_MESH_GLB = 4,
+	BC_PROTO_MESH_FORMAT_COUNT
+};
+/* MESH options: RAW keeps every triangle (no edge collapse). */
+#define BC_PROTO_MESH_RAW 0x01u
+#define BC_PROTO_MESH_OPTIONS_ALL 0x01u
+
+/* MESH: the session's solid as a mesh file. resolution 0 asks for
+ * BC_PROTO_MESH_DEFAULT_RESOLUTION. */
+struct bc_msg_mesh {
+	enum bc_proto_mesh_format format;
+	uint8_t options;     /* BC_PROTO_MESH_* */
+	uint16_t resolution; /* 0, or 2..BC_PROTO_MAX_MESH_RESOLUTION */
+};
+
+/* MESH_DATA: the answer, the file whole. */
+struct bc_msg_mesh_data {
+	enum bc_proto_mesh_format format;
+	uint8_t options;
+	uint16_t resolution; /* the one used */
+	uint64_t order;      /* the session's order the mesh is of */
+	uint32_t vertices, triangles;
+	struct bc_proto_bytes file;
+};
+
 struct bc_msg_pick_result {
 	uint16_t x, y;
 	uint32_t node;     /* primitive hit, 0 on a miss */
@@ -669,6 +706,8 @@ struct bc_msg {
 		struct bc_msg_undo undo; /* UNDO and REDO */
 		struct bc_msg_history history;
 		struct bc_msg_frame_ack frame_ack;
+		struct bc_msg_mesh mesh;
+		struct bc_msg_mesh_data mesh_data;
 	};
 };
 
@@ -843,6 +882,19 @@ BC_API int bc_proto_parts_add(struct bc_proto_parts *p, const struct bc_msg *m,
 BC_API void bc_proto_scene_state_head(uint8_t *out, uint16_t flags,
                                       uint64_t order, uint32_t author,
                                       uint32_t author_seq, uint32_t piece);
+
+/* MESH_DATA's fixed fields: format, options, resolution, order, vertices,
+ * triangles and the file's length. */
+#define BC_PROTO_MESH_DATA_FIXED 24u
+/* A MESH_DATA's bytes before its file. */
+#define BC_PROTO_MESH_DATA_HEAD                                                \
+	(BC_PROTO_HEADER_SIZE + BC_PROTO_MESH_DATA_FIXED)
+/* Writes BC_PROTO_MESH_DATA_HEAD bytes to out: the header (seq, no flags,
+ * a payload of the fixed fields and md->file.len bytes) and the fields
+ * before the file, which the caller sends after them (md->file.ptr is not
+ * read). */
+BC_API void bc_proto_mesh_data_head(uint8_t *out, uint32_t seq,
+                                    const struct bc_msg_mesh_data *md);
 
 /* ---- The scene encoding (owned by blobtree; see PROTOCOL.md) --------------
  */

@@ -80,6 +80,13 @@
  * undo and 100 to redo (PROTOCOL.md 7.20), and a list longer than that is
  * more than a person reads. */
 #define BC_PROTO_MAX_HISTORY 200u
+
+/* MESH resolution: blobcast mesh's largest grid (blobtree's
+ * BC_MESH_MAX_RESOLUTION); 0 in a MESH asks for the default. */
+#define BC_PROTO_MAX_MESH_RESOLUTION 4096u
+/* ... and the least: two cells of margin each way and one of scene. */
+#define BC_PROTO_MIN_MESH_RESOLUTION 5u
+#define BC_PROTO_MESH_DEFAULT_RESOLUTION 128u
 /* A HISTORY entry's description ("SET node 12 translate, rotate"). */
 #define BC_PROTO_MAX_HISTORY_TEXT 128u
 

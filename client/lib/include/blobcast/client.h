@@ -343,6 +343,27 @@ struct bc_client_change {
 	char what[BC_PROTO_MAX_HISTORY_TEXT + 1]; /* "SET node 12 translate" */
 };
 
+/* A mesh the server made of the session's solid (MESH, PROTOCOL.md 7.28):
+ * the file `blobcast mesh` writes of the same scene. */
+struct bc_client_mesh {
+	uint8_t *file; /* bc_malloc'ed, the caller bc_free's */
+	size_t len;
+	uint32_t vertices, triangles;
+	uint16_t resolution; /* the one used */
+	uint64_t order;      /* the session's order the mesh is of */
+};
+
+/* Asks the server to mesh the session's solid in format (an enum
+ * bc_proto_mesh_format) with options (BC_PROTO_MESH_*) at resolution (0:
+ * the default, 128) and waits for the file, up to timeout_ms (0: the
+ * client's timeout; negative: none; meshing takes seconds). Any role, in a
+ * session. BC_ENOTSUP when the server does not mesh (older than this
+ * client); the server's ELIMIT, EBUSY, EINVAL, ENOMEM negated, with its
+ * words in ei. */
+BC_API int bc_client_mesh(struct bc_client *c, int format, uint8_t options,
+                          uint16_t resolution, int timeout_ms,
+                          struct bc_client_mesh *out, struct bc_errinfo *ei);
+
 /* The session's undo history, newest first, at most BC_PROTO_MAX_HISTORY
  * (HISTORY_GET): *out receives a bc_malloc'ed array of *n entries (NULL
  * when none) the caller bc_free's; *order (may be NULL) the session's
