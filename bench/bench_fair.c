@@ -11,6 +11,7 @@
  *            alone, beside three heavy sessions, and in the 2 s after
  *            they leave; the daemon's loop maxima over the heavy phase;
  *  twist     the probe beside a session whose scene is slow to trace;
+ *  mesh      the probe beside a client that keeps the daemon meshing;
  *  capacity  1 to 16 sessions, each dragging a sphere;
  *  scaling   one orbiting client, --render-threads 1 against 2;
  *  loop      one structural edit of the largest scene the daemon takes;
@@ -1917,6 +1918,130 @@ out:
 	disarm_alarm(sc);
 }
 
+/* ---- mesh ----------------------------------------------------------------- */
+
+/* The mesher's scene and grid: fig18's 1024 smooth spheres at the
+ * daemon's finest grid, seconds of work each. */
+#define MESH_SPHERES 1024u
+#define MESH_RESOLUTION 128u
+
+/* The mesh client: MESH after MESH until until_us; how many came back,
+ * their bytes, and the first error. */
+static void mesh_loop(struct conn *c, int64_t until_us, int *done,
+                      uint64_t *bytes, char *err)
+{
+	while (now_us() < until_us && !err[0]) {
+		struct bc_msg m = {.type = BC_MSG_MESH};
+		uint32_t seq;
+		m.mesh.format = BC_PROTO_MESH_GLB;
+		m.mesh.resolution = MESH_RESOLUTION;
+		if (!(seq = conn_send(c, &m))) {
+			seterr(err, "the MESH could not be sent");
+			return;
+		}
+		for (;;) {
+			int rc = conn_recv(c, 1000);
+			if (rc < 0) {
+				closed_text(c, err, ERRLEN);
+				return;
+			}
+			if (rc == 1 && c->m.type == BC_MSG_MESH_DATA &&
+			    c->m.seq == seq) {
+				(*done)++;
+				*bytes += c->m.mesh_data.file.len;
+				break;
+			}
+			if (rc == 1 && c->m.type == BC_MSG_ERROR) {
+				error_text(c, err, ERRLEN);
+				return;
+			}
+		}
+	}
+}
+
+static void scenario_mesh(void)
+{
+	const char *sc = "mesh";
+	struct daemon d;
+	struct probe probe;
+	struct conn mc = {.fd = -1};
+	struct scene big = {0};
+	struct phase a = {.name = "alone", .label = "probe alone"};
+	struct phase b = {.name = "meshing",
+	                  .label = "probe beside the meshing"};
+	char why[ERRLEN], err[ERRLEN] = "";
+	bool exited;
+	uint32_t member;
+	uint64_t bytes = 0;
+	int done = 0;
+	int64_t s_us = seconds_us(opt.seconds), t0;
+	memset(&probe, 0, sizeof(probe));
+	probe.c.fd = -1;
+	report("\n### mesh\n\n");
+	report("The probe (as in fairness) alone for %.0f s, then for %.0f s "
+	       "beside a client in a session of fig18 %u smooth that asks "
+	       "for its glTF mesh at %u cells (MESH) again as soon as one "
+	       "comes back. The daemon is killed (SIGKILL) at the end.\n\n",
+	       opt.seconds, opt.seconds, MESH_SPHERES, MESH_RESOLUTION);
+	arm_alarm(3 * opt.seconds + 60);
+	if (fair_start(&d, NULL, why, &exited)) {
+		error_line("%s: %s", sc, why);
+		fair_stop(&d, sc, true);
+		disarm_alarm(sc);
+		return;
+	}
+	if (probe_setup(&probe, &d, "probe", "probe", PROBE_SPHERES, PROBE_W,
+	                PROBE_H, false)) {
+		error_line("%s: %s", sc, probe.err);
+		goto out;
+	}
+	if (client_session(&mc, &d, "mesher", "mesher", true, &member, err) ||
+	    scene_fig18(&big, MESH_SPHERES, BC_GEN_BLEND_SMOOTH, err) ||
+	    scene_load(&mc, &big, SMALL_LOAD_MS, err)) {
+		error_line("%s: %s", sc, err);
+		goto out;
+	}
+	t_sleep_ms(500);
+	progress("mesh: probe alone for %.0f s", opt.seconds);
+	probe_start(&probe);
+	a.from = now_us();
+	sleep_until(a.from + s_us);
+	a.to = now_us();
+	progress("mesh: beside the meshing for %.0f s", opt.seconds);
+	b.from = t0 = now_us();
+	mesh_loop(&mc, b.from + s_us, &done, &bytes, err);
+	b.to = now_us();
+	probe_stop(&probe);
+	phase_measure(&a, &probe);
+	phase_measure(&b, &probe);
+	report("- mesh client: %d meshes of %.1f MB each in %.1f s "
+	       "(the last one may end after the probe's phase)\n",
+	       done, done ? (double)bytes / done / 1e6 : 0.0,
+	       (double)(now_us() - t0) / 1e6);
+	if (err[0]) {
+		report("- mesh client: %s\n", err);
+	}
+	report("\n");
+	phase_table_head();
+	phase_row(&a);
+	phase_row(&b);
+	report("\n");
+	phase_results(sc, &a);
+	phase_results(sc, &b);
+	report("RESULT scenario=%s what=meshes done=%d bytes=%" PRIu64 "\n", sc,
+	       done, bytes);
+	report("%s %s: meshes made: %d (at least one)\n",
+	       done >= 1 ? "PASS" : "FAIL", sc, done);
+	probe_bounds(sc, &a, &b);
+out:
+	report_client_error("probe", probe.err);
+	probe_finish(&probe);
+	conn_close(&mc);
+	scene_finish(&big);
+	fair_stop(&d, sc, false);
+	disarm_alarm(sc);
+}
+
 /* ---- capacity ------------------------------------------------------------ */
 
 static int cmp_double(const void *a, const void *b)
@@ -2740,8 +2865,9 @@ struct scenario {
 
 static const struct scenario scenarios[] = {
     {"fairness", scenario_fairness}, {"twist", scenario_twist},
-    {"capacity", scenario_capacity}, {"scaling", scenario_scaling},
-    {"loop", scenario_loop},         {"memory", scenario_memory},
+    {"mesh", scenario_mesh},         {"capacity", scenario_capacity},
+    {"scaling", scenario_scaling},   {"loop", scenario_loop},
+    {"memory", scenario_memory},
 };
 #define NSCENARIOS (sizeof(scenarios) / sizeof(scenarios[0]))
 
@@ -2803,6 +2929,11 @@ static void usage(FILE *f)
 	    "waits\n"
 	    "            for its first FRAME (bound 5 s) and the probe "
 	    "bounds.\n"
+	    "  mesh      the probe alone for S s, then for S s beside a "
+	    "client\n"
+	    "            asking for fig18 1024 smooth's glTF mesh at 256 "
+	    "cells\n"
+	    "            (MESH) again as each comes: the probe bounds.\n"
 	    "  capacity  1, 2, 4, 8, 16 sessions (a fresh daemon each), "
 	    "each\n"
 	    "            fig18 1024 smooth dragging a sphere at 20 Hz in a\n"

@@ -30,6 +30,10 @@
 #include "blobcast/mesh.h"
 #include "sessions_impl.h"
 
+/* The meshing thread's nice value: the lowest priority, behind the loop
+ * and the render workers. */
+#define MESH_NICE 19
+
 /* One MESH, from its request to its answer. */
 struct mesh_job {
 	struct bc_task t; /* the copy */
@@ -126,7 +130,7 @@ static void *mesh_main(void *arg)
 	struct bc_meshes *ms = arg;
 	/* Renders first: this thread gets what CPU they leave (a nice 19
 	 * thread against a busy one at 0: about 1.5 %, never none). */
-	if (setpriority(PRIO_PROCESS, (id_t)gettid(), 19) != 0) {
+	if (setpriority(PRIO_PROCESS, (id_t)gettid(), MESH_NICE) != 0) {
 		bc_log(BC_LOG_WARN, "the meshing thread keeps its priority");
 	}
 	pthread_mutex_lock(&ms->mu);

@@ -198,11 +198,14 @@
 /* MESH (meshes.c, PROTOCOL.md 7.28): meshes in the daemon at once, from
  * request to answer (one a client; over them: EBUSY), and the finest grid
  * it makes (above: ELIMIT). One thread meshes, behind the renders; two
- * keep one waiting while another is made. 512 cells along the longest
- * side mesh fig18's 1024 spheres in about 10 s on one core into a 100 MB
- * glTF file; finer is the client's to make (`blobcast mesh`). */
+ * keep one waiting while another is made. At 512 cells along the longest
+ * side fig18's 1024 smooth spheres took 76 s beside a probe and made
+ * 14.9 M triangles, a 387 MB glTF file (and as much again in the mesh
+ * itself) that no message can carry (64 MiB); at 256 they make a glTF
+ * file of about 25 MB (bench_fair --scenario mesh, docs/benchmarks.md).
+ * Finer is the client's to make (`blobcast mesh`). */
 #define BC_SRV_MESHES 2u
-#define BC_SRV_MESH_MAX_RESOLUTION 512u
+#define BC_SRV_MESH_MAX_RESOLUTION 256u
 
 /* Undo history of a session: steps kept (a drag is one step) and the
  * memory they may hold (a parameter step the earlier states of its nodes;

@@ -103,7 +103,7 @@ static int parse(int argc, char **argv, struct mesh_args *a, bool *done)
 	     .help = "with --session: the daemon makes the mesh\n"
 	             "(the same file) and sends it, for a machine\n"
 	             "too small to mesh; up to the daemon's finest\n"
-	             "grid (blobcastd: 512), no --bounds; the wait\n"
+	             "grid (blobcastd: 256), no --bounds; the wait\n"
 	             "has no limit unless --timeout is given"},
 	    {.name = "server",
 	     .kind = BC_OPT_STRING,

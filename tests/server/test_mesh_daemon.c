@@ -203,13 +203,13 @@ static void test_later_requests_and_ebusy(void)
 	enter(&b, &d, "bob");
 	enter(&c, &d, "carol");
 	/* Sent together: alice's two MESHes and PING, bob's MESH, carol's
-	 * MESH. A mesh at 384 takes the daemon well over the time these
+	 * MESH. A mesh at 256 takes the daemon well over the time these
 	 * take to arrive. */
-	first = send_mesh(&a, BC_PROTO_MESH_GLB, 0, 384);
+	first = send_mesh(&a, BC_PROTO_MESH_GLB, 0, 256);
 	second = send_mesh(&a, BC_PROTO_MESH_GLB, 0, 32);
 	ping.ping.stamp = 77;
 	pinged = conn_send(&a, &ping);
-	other = send_mesh(&b, BC_PROTO_MESH_STL, 0, 384);
+	other = send_mesh(&b, BC_PROTO_MESH_STL, 0, 256);
 	/* carol's after bob's MESH is in: both slots taken. */
 	REQUIRE(conn_send(&b, &ping));
 	REQUIRE(conn_expect(&b, BC_MSG_PONG, 10000) == 1);
@@ -261,11 +261,11 @@ static void test_refusals(void)
 	expect_refusal(&old, seq, BC_ENOTSUP);
 	REQUIRE(conn_send(&old, &ping));
 	CHECK(conn_expect(&old, BC_MSG_PONG, 5000) == 1);
-	/* Over the daemon's bound (512): ELIMIT. */
+	/* Over the daemon's bound (256): ELIMIT. */
 	enter(&a, &d, "alice");
-	seq = send_mesh(&a, BC_PROTO_MESH_GLB, 0, 513);
+	seq = send_mesh(&a, BC_PROTO_MESH_GLB, 0, 257);
 	expect_refusal(&a, seq, BC_ELIMIT);
-	CHECK(strstr(a.m.error.text.ptr, "512") != NULL);
+	CHECK(strstr(a.m.error.text.ptr, "256") != NULL);
 	/* A file over the client's max_frame_bytes (64 KiB): ELIMIT. */
 	enter_as(&small, &d, "small", BC_PROTO_FEATURES_READ,
 	         BC_PROTO_MIN_FRAME_BYTES);
@@ -298,7 +298,7 @@ static void test_stop_while_meshing(void)
 	snprintf(dir, sizeof(dir), "%s/stop", base_dir);
 	REQUIRE(daemon_start(&d, dir) == 0);
 	enter(&a, &d, "alice");
-	REQUIRE(send_mesh(&a, BC_PROTO_MESH_GLB, 0, 512));
+	REQUIRE(send_mesh(&a, BC_PROTO_MESH_GLB, 0, 256));
 	REQUIRE(conn_send(&a, &ping));
 	REQUIRE(conn_expect(&a, BC_MSG_PONG, 10000) == 1);
 	CHECK_EQ_INT(daemon_stop(&d, SIGTERM), 0);
