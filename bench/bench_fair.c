@@ -1920,8 +1920,8 @@ out:
 
 /* ---- mesh ----------------------------------------------------------------- */
 
-/* The mesher's scene and grid: fig18's 1024 smooth spheres at the
- * daemon's finest grid, seconds of work each. */
+/* The mesher's scene and grid: fig18's 1024 smooth spheres at the page's
+ * default grid, a 23 MB glTF file each, seconds of work. */
 #define MESH_SPHERES 1024u
 #define MESH_RESOLUTION 128u
 
@@ -2931,7 +2931,7 @@ static void usage(FILE *f)
 	    "bounds.\n"
 	    "  mesh      the probe alone for S s, then for S s beside a "
 	    "client\n"
-	    "            asking for fig18 1024 smooth's glTF mesh at 256 "
+	    "            asking for fig18 1024 smooth's glTF mesh at 128 "
 	    "cells\n"
 	    "            (MESH) again as each comes: the probe bounds.\n"
 	    "  capacity  1, 2, 4, 8, 16 sessions (a fresh daemon each), "
