@@ -554,6 +554,7 @@ class App {
 			resolve(null);
 		}
 		this.picture?.fail(`the connection was lost (${why})`);
+		this.review.lost(why);
 		this.reset();
 		this.renderPanel();
 		this.showPending();
@@ -652,10 +653,14 @@ class App {
 	}
 
 	say(text) {
+		/* The title shows the whole of a long message (the daemon's
+		 * words) where the header cuts it short. */
 		$('message').textContent = text;
+		$('message').title = text;
 		clearTimeout(this.sayTimer);
 		this.sayTimer = setTimeout(() => {
 			$('message').textContent = '';
+			$('message').title = '';
 		}, 6000);
 	}
 
@@ -665,6 +670,9 @@ class App {
 			m.acks = this.acks;
 			this.acks.got(m.frame_no, performance.now());
 		}
+		/* review.js takes the answers to its own requests: among them
+		 * a MESH's MESH_DATA or ERROR, matched by seq, which may come
+		 * after the answers to later requests (PROTOCOL.md 7.28). */
 		if (this.review.saw(m) || this.history.saw(m)) {
 			return;
 		}

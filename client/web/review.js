@@ -10,6 +10,9 @@
  *  - downloads: a PNG of the view (the Picture panel's tiled snapshot at
  *    the view's size) and the scene as a JSON scene file (scenejson.js)
  *    or a binary one (protocol.js encodeSceneFile);
+ *  - the session's solid as a mesh file (glb, OBJ, PLY or STL), made by
+ *    the daemon (MESH, PROTOCOL.md 7.28) while the page goes on: the
+ *    file `blobcast mesh --session` writes, byte for byte;
  *  - the frame encoding (JPEG, PNG, raw, H.264 video, or H.264 with an
  *    exact PNG still) and JPEG quality, sent as VIEW (7.14); H.264 is
  *    offered only where WebCodecs decodes it (video.js); an encoding the
@@ -24,8 +27,9 @@
  *    warnings that go with them;
  *  - the session list (sessions.js).
  * The page (app.js) calls saw(m) with every message before handling it
- * (true: an answer to this module's own requests) and update()
- * on its overlay tick; everything else starts from here.
+ * (true: an answer to this module's own requests), lost(why) when its
+ * connection goes and update() on its overlay tick; everything else
+ * starts from here.
  */
 import * as P from './protocol.js';
 import { DEFAULT_CAMERA, fitCamera, treeBox } from './bounds.js';
@@ -57,6 +61,31 @@ const choiceName = (encoding, still) => FRAME_CHOICES.find((f) =>
 	f.encoding === encoding && f.still === still)?.name ?? 'jpeg';
 const choiceValue = (encoding, still) => (still ? `${encoding}+${still}`
 	: String(encoding));
+
+/* The mesh file formats of the mesh control (PROTOCOL.md 7.28), by the
+ * name its choices carry, which is also the file's extension. */
+const MESH_FORMATS = Object.freeze([
+	{ name: 'glb', format: P.MESH_FORMAT.GLB, type: 'model/gltf-binary' },
+	{ name: 'obj', format: P.MESH_FORMAT.OBJ, type: 'model/obj' },
+	{ name: 'ply', format: P.MESH_FORMAT.PLY,
+		type: 'application/octet-stream' },
+	{ name: 'stl', format: P.MESH_FORMAT.STL, type: 'model/stl' },
+]);
+
+const meshFormat = (format) => MESH_FORMATS.find((f) =>
+	f.format === format);
+
+/* What a mesh asked for, as the page says it: "glb, 128" or "obj, 48,
+ * raw". */
+const meshWhat = (ask) => `${meshFormat(ask.format).name}, ` +
+	`${ask.resolution}${ask.options & P.MESH_OPTION.RAW ? ', raw' : ''}`;
+
+/* The grid blobcastd meshes at most (BC_SRV_MESH_MAX_RESOLUTION; its
+ * ELIMIT above), as index.html's field and its title say too. The
+ * daemon does not announce it, and another may allow more, up to the
+ * protocol's MAX_MESH_RESOLUTION: the page sends what is typed within
+ * that and lets the daemon say no in its words. */
+const DAEMON_MESH_RESOLUTION = 256;
 
 /* Keys typed into a field keep their meaning there. */
 function typing(e) {
@@ -143,6 +172,18 @@ export class Review {
 		 * done: { name, reader, nodes (0: refused), ms }. */
 		this.reading = null;
 		this.lastRead = null;
+		/* The mesh on its way: { seq, format, options, resolution }
+		 * (the MESH's), or null; the last one saved: { name, format,
+		 * resolution, raw, vertices, triangles, order, bytes }; the last
+		 * one not made: { code (a name, or 'lost'), text }. */
+		this.meshAsk = null;
+		this.lastMesh = null;
+		this.meshError = null;
+		/* What the page said of the last mesh, kept in the button's
+		 * title: the header's message is cut short and goes. */
+		this.meshNote = '';
+		/* This daemon refused MESH (ENOTSUP) though it granted it. */
+		this.meshRefused = false;
 		this.sessions = new SessionPanel({
 			url: () => app.cfg.ws,
 			token: () => app.cfg.token,
@@ -169,6 +210,8 @@ export class Review {
 			.catch(() => {}));
 		$('jsonbtn').addEventListener('click', () => this.saveJson());
 		$('binbtn').addEventListener('click', () => this.saveBinary());
+		$('meshbtn').dataset.title = $('meshbtn').title;
+		$('meshbtn').addEventListener('click', () => this.saveMesh());
 		$('loadbtn').addEventListener('click', () => $('loadfile').click());
 		$('loadfile').addEventListener('change', () => {
 			const file = $('loadfile').files[0];
@@ -365,8 +408,10 @@ export class Review {
 
 	/* ---- downloads ---- */
 
-	fileName(ext) {
-		return `blobcast-${this.app.cfg.session}-${this.app.order}.${ext}`;
+	/* blobcast-SESSION-ORDER.EXT, of the page's edit order or the one
+	 * given (what a mesh is of). */
+	fileName(ext, order = this.app.order) {
+		return `blobcast-${this.app.cfg.session}-${order}.${ext}`;
 	}
 
 	/* A PNG of this view's size, through the Picture panel's tiles. */
@@ -417,6 +462,119 @@ export class Review {
 		}
 		download(new Blob([bytes], { type: 'application/octet-stream' }),
 			this.fileName('bin'));
+	}
+
+	/* Asks the daemon for a mesh of the session's solid in the format,
+	 * resolution and raw option of the mesh control (MESH, PROTOCOL.md
+	 * 7.28); any role may. Meshing takes the daemon seconds for a big
+	 * scene: the page goes on meanwhile, and its MESH_DATA, which may
+	 * come after the answers to later requests, is matched by its seq
+	 * (saw). One at a time, as the daemon takes one per client. */
+	saveMesh() {
+		const app = this.app;
+		if (!app.info) {
+			return;
+		}
+		if (!this.meshGranted()) {
+			app.say(this.meshOff());
+			return;
+		}
+		if (this.meshAsk) {
+			app.say(`the mesh (${meshWhat(this.meshAsk)}) is still being ` +
+				'made on the daemon: one at a time');
+			return;
+		}
+		const L = P.LIMITS;
+		const typed = $('meshres').value.trim();
+		const resolution = typed === '' ? L.MESH_DEFAULT_RESOLUTION
+			: Number(typed);
+		if (!Number.isInteger(resolution) ||
+			resolution < L.MIN_MESH_RESOLUTION ||
+			resolution > L.MAX_MESH_RESOLUTION) {
+			app.say(`mesh resolution: a whole number of cells from ` +
+				`${L.MIN_MESH_RESOLUTION} to ${DAEMON_MESH_RESOLUTION} ` +
+				`(finer meshes: blobcast mesh on a machine)`);
+			return;
+		}
+		$('meshres').value = String(resolution);
+		const f = MESH_FORMATS.find((x) => x.name === $('meshformat')
+			.value) ?? MESH_FORMATS[0];
+		const ask = { seq: 0, format: f.format, resolution,
+			options: $('meshraw').checked ? P.MESH_OPTION.RAW : 0 };
+		ask.seq = app.conn.send(P.MSG.MESH, { format: ask.format,
+			options: ask.options, resolution: ask.resolution });
+		if (!ask.seq) {
+			app.say('mesh not asked for: the connection is gone');
+			return;
+		}
+		this.meshAsk = ask;
+		app.say(`meshing on the daemon (${meshWhat(ask)})...`);
+		this.update();
+	}
+
+	/* The daemon's answer m (MESH_DATA) to the mesh on its way: saved
+	 * as blobcast-SESSION-ORDER.EXT, with the order the mesh is of. */
+	meshDone(m) {
+		this.meshAsk = null;
+		const f = meshFormat(m.format);
+		const name = this.fileName(f.name, m.order);
+		download(new Blob([m.file], { type: f.type }), name);
+		this.lastMesh = { name, format: f.name, resolution: m.resolution,
+			raw: !!(m.options & P.MESH_OPTION.RAW), vertices: m.vertices,
+			triangles: m.triangles, order: String(m.order),
+			bytes: m.file.length };
+		this.meshError = null;
+		this.meshSay(`saved ${name}: ${m.triangles} triangles, edit order ` +
+			`${m.order} (${sizeText(m.file.length)})`);
+		this.update();
+	}
+
+	/* The daemon's ERROR m for the mesh on its way: its words say what
+	 * to do (a lower resolution, later, another format). */
+	meshRefusal(m) {
+		const ask = this.meshAsk;
+		this.meshAsk = null;
+		if (m.code === P.ERR.ENOTSUP) {
+			this.meshRefused = true;
+		}
+		this.meshError = { code: P.errName(m.code), text: m.text };
+		this.meshSay(`mesh (${meshWhat(ask)}) not made: ${m.text} ` +
+			`(${P.errName(m.code)})`);
+		this.update();
+	}
+
+	/* The page's connection went (why): a mesh on its way will never
+	 * come to the next one, so it is forgotten, saying so. */
+	lost(why) {
+		const ask = this.meshAsk;
+		this.meshRefused = false;
+		if (!ask) {
+			return;
+		}
+		this.meshAsk = null;
+		this.meshError = { code: 'lost', text: why };
+		this.meshSay(`mesh (${meshWhat(ask)}) not made: the connection ` +
+			`was lost (${why}); ask again once the page is back`);
+	}
+
+	/* Says text of the last mesh, and keeps it for the button. */
+	meshSay(text) {
+		this.meshNote = text;
+		this.app.say(text);
+	}
+
+	/* Whether this daemon makes meshes for the page (it granted MESH,
+	 * PROTOCOL.md 4.1, and has not refused one). */
+	meshGranted() {
+		return !!((this.app.welcome?.features ?? 0) & P.FEATURE.MESH) &&
+			!this.meshRefused;
+	}
+
+	/* Why the mesh control is off, for its title and a message. */
+	meshOff() {
+		return 'this daemon does not make meshes (it did not grant MESH: ' +
+			'an earlier blobcastd): make one on a machine with blobcast ' +
+			'mesh --session';
 	}
 
 	/* ---- frames ---- */
@@ -518,6 +676,15 @@ export class Review {
 			app.scene.camera = { eye: m.eye.slice(), target: m.target
 				.slice(), up: m.up.slice(), fov_y_deg: m.fov_y_deg };
 		}
+		const mesh = this.meshAsk;
+		if (mesh && m.seq === mesh.seq && m.type === P.MSG.MESH_DATA) {
+			this.meshDone(m);
+			return true;
+		}
+		if (m.type === P.MSG.MESH_DATA) {
+			/* The answer to a mesh the page gave up on: not for it. */
+			return true;
+		}
 		const load = this.loadAsk;
 		if (load && m.type === P.MSG.SCENE_STATE &&
 				m.author === app.info?.member_id &&
@@ -534,6 +701,10 @@ export class Review {
 			this.loadAsk = null;
 			app.say(`${load.name} not loaded: ${m.text} ` +
 				`(${P.errName(m.code)})`);
+			return true;
+		}
+		if (mesh && m.seq && m.seq === mesh.seq) {
+			this.meshRefusal(m);
 			return true;
 		}
 		if (m.seq && m.seq === this.camAsk) {
@@ -635,6 +806,7 @@ export class Review {
 		$('jsonbtn').disabled = !app.scene;
 		$('binbtn').disabled = !app.scene;
 		$('pngbtn').disabled = $('picturebtn').disabled;
+		this.renderMesh();
 		const name = app.info?.name ?? null;
 		if (name && name !== this.listedFor && !this.sessions.busy) {
 			/* Each session joined: what else is there. */
@@ -647,6 +819,41 @@ export class Review {
 			this.sessions.refresh().catch(() => {});
 		}
 		this.sessions.update();
+	}
+
+	/* The mesh control: any role, while joined to a daemon that makes
+	 * meshes (else off, its title saying why); the button says when a
+	 * mesh is on its way. */
+	renderMesh() {
+		const on = !!this.app.info && this.meshGranted();
+		const ask = this.meshAsk;
+		const b = $('meshbtn');
+		const title = !this.app.info || on ? (ask ? `the daemon is ` +
+			`making the mesh (${meshWhat(ask)}); one at a time`
+			: b.dataset.title + (this.meshNote ? `\nlast: ${this.meshNote}`
+				: '')) : this.meshOff();
+		const label = ask ? 'meshing…' : 'save';
+		if (b.title !== title || b.textContent !== label) {
+			b.title = title;
+			b.textContent = label;
+		}
+		b.disabled = !on;
+		b.setAttribute('aria-busy', ask ? 'true' : 'false');
+		for (const id of ['meshformat', 'meshres', 'meshraw']) {
+			$(id).disabled = !on;
+		}
+	}
+
+	/* { granted, pending, last, error } (api's mesh). */
+	mesh() {
+		const ask = this.meshAsk;
+		const pending = ask ? { seq: ask.seq,
+			format: meshFormat(ask.format).name,
+			resolution: ask.resolution,
+			raw: !!(ask.options & P.MESH_OPTION.RAW) } : null;
+		return { granted: this.meshGranted(), pending,
+			last: this.lastMesh ? { ...this.lastMesh } : null,
+			error: this.meshError ? { ...this.meshError } : null };
 	}
 
 	/* { state, name, reader, last } (api's loading). */
@@ -675,6 +882,13 @@ export class Review {
 			 * are fetched), 'loading' (sent, the daemon's answer
 			 * awaited) or ''; last: the last read done. */
 			loading: () => this.loading(),
+			/* The mesh download: granted (the daemon makes meshes),
+			 * pending (the MESH on its way: { seq, format, resolution,
+			 * raw }, or null), last (the last one saved: { name,
+			 * format, resolution, raw, vertices, triangles, order,
+			 * bytes }) and error (the last one not made: { code, text
+			 * }, code 'lost' when the connection went first). */
+			mesh: () => this.mesh(),
 			sessions: () => ({ status: this.sessions.status,
 				busy: this.sessions.busy,
 				names: this.sessions.entries?.map((e) => e.name) ?? null }),
