@@ -201,9 +201,10 @@
  * keep one waiting while another is made. At 512 cells along the longest
  * side fig18's 1024 smooth spheres took 76 s beside a probe and made
  * 14.9 M triangles, a 387 MB glTF file (and as much again in the mesh
- * itself) that no message can carry (64 MiB); at 256 they make a glTF
- * file of about 25 MB (bench_fair --scenario mesh, docs/benchmarks.md).
- * Finer is the client's to make (`blobcast mesh`). */
+ * itself) that no message can carry (64 MiB); at 256 still 95 MB, while
+ * the default scene makes 9.4 MB in a second (docs/benchmarks.md,
+ * "Meshing on the daemon"). Finer is the client's to make (`blobcast
+ * mesh`). */
 #define BC_SRV_MESHES 2u
 #define BC_SRV_MESH_MAX_RESOLUTION 256u
 
