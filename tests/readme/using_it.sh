@@ -12,7 +12,8 @@
 #    answer, then is stopped.
 # Every command must exit 0; then the files the README promises are
 # checked: review.png (1024x768), review.json (loads back into another
-# session), s.png/s.exr/s.tif, the viewer's screenshot, watch's frame line.
+# session), review.glb (what `blobcast mesh` makes here of review.json),
+# s.png/s.exr/s.tif, the viewer's screenshot, watch's frame line.
 #
 # usage: using_it.sh BUILD_DIR SOURCE_DIR
 # Exits 77 (skipped) naming what is missing: a program the README runs that
@@ -187,13 +188,17 @@ png_size() {
 [ "$(png_size review.png 2> /dev/null)" = "1024 768" ] ||
   fail "review.png is not a 1024x768 PNG"
 [ -s view.png ] || fail "the viewer saved no screenshot"
-for f in s.json s.png s.exr s.tif review.json; do
+for f in s.json s.png s.exr s.tif review.json review.glb; do
   [ -s "$f" ] || fail "$f was not written"
 done
 grep -q '^frame 1 .* level=0 ' out.* || fail "watch printed no frame"
 grep -q '^id  *type  *parent' out.* || fail "nodes printed no listing"
 "$BUILD/client/blobcast" load --session copy review.json > /dev/null ||
   fail "review.json does not load back"
+"$BUILD/client/blobcast" mesh review.json --out here.glb --quiet ||
+  fail "blobcast mesh of review.json failed"
+cmp -s review.glb here.glb ||
+  fail "the daemon's review.glb is not blobcast mesh's of review.json"
 
 if [ "$failures" -ne 0 ]; then
   echo "$failures check(s) failed"
