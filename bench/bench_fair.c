@@ -1792,24 +1792,109 @@ out:
 	disarm_alarm(sc);
 }
 
+/* ---- the probe beside another client (twist, mesh) ------------------------ */
+
+/* A scenario of two phases: the probe alone for --seconds, then beside
+ * another client (c, in a session of its own with scene s loaded) doing
+ * what the scenario measures. */
+struct beside {
+	const char *sc;
+	struct daemon d;
+	bool up; /* the daemon started */
+	struct probe probe;
+	struct conn c;
+	struct scene s;
+	struct phase a, b;
+	char err[ERRLEN]; /* the other client's first error */
+};
+
+/* Starts the daemon, the probe and client (its session and w->s, made
+ * by the caller), then runs the probe alone (phase a). False after saying
+ * why; beside_finish cleans up either way. */
+static bool beside_start(struct beside *w, const char *client, double alarm_s)
+{
+	char why[ERRLEN];
+	bool exited;
+	uint32_t member;
+	int64_t s_us = seconds_us(opt.seconds);
+	w->a = (struct phase){.name = "alone", .label = "probe alone"};
+	w->probe.c.fd = -1;
+	w->c.fd = -1;
+	arm_alarm(alarm_s);
+	if (fair_start(&w->d, NULL, why, &exited)) {
+		error_line("%s: %s", w->sc, why);
+		fair_stop(&w->d, w->sc, true);
+		return false;
+	}
+	w->up = true;
+	if (probe_setup(&w->probe, &w->d, "probe", "probe", PROBE_SPHERES,
+	                PROBE_W, PROBE_H, false)) {
+		error_line("%s: %s", w->sc, w->probe.err);
+		return false;
+	}
+	if (client_session(&w->c, &w->d, client, client, true, &member,
+	                   w->err) ||
+	    scene_load(&w->c, &w->s, SMALL_LOAD_MS, w->err)) {
+		error_line("%s: %s", w->sc, w->err);
+		return false;
+	}
+	t_sleep_ms(500);
+	progress("%s: probe alone for %.0f s", w->sc, opt.seconds);
+	probe_start(&w->probe);
+	w->a.from = now_us();
+	sleep_until(w->a.from + s_us);
+	w->a.to = now_us();
+	return true;
+}
+
+/* Phase b has ended: the probe stops, both phases are measured. */
+static void beside_measure(struct beside *w)
+{
+	w->b.to = now_us();
+	probe_stop(&w->probe);
+	phase_measure(&w->a, &w->probe);
+	phase_measure(&w->b, &w->probe);
+}
+
+/* The other client's error line, then the phases' table and RESULTs. */
+static void beside_tables(const struct beside *w, const char *client)
+{
+	if (w->err[0]) {
+		report("- %s client: %s\n", client, w->err);
+	}
+	report("\n");
+	phase_table_head();
+	phase_row(&w->a);
+	phase_row(&w->b);
+	report("\n");
+	phase_results(w->sc, &w->a);
+	phase_results(w->sc, &w->b);
+}
+
+static void beside_finish(struct beside *w)
+{
+	report_client_error("probe", w->probe.err);
+	probe_finish(&w->probe);
+	conn_close(&w->c);
+	scene_finish(&w->s);
+	if (w->up) {
+		fair_stop(&w->d, w->sc, false);
+	}
+	disarm_alarm(w->sc);
+}
+
 /* ---- twist --------------------------------------------------------------- */
 
 static void scenario_twist(void)
 {
-	const char *sc = "twist";
-	struct daemon d;
-	struct probe probe;
-	struct conn tw = {.fd = -1};
-	struct scene twist = {0};
-	struct phase a = {.name = "alone", .label = "probe alone"};
-	struct phase b = {.name = "twist", .label = "probe beside the twist"};
-	char why[ERRLEN], err[ERRLEN] = "";
-	bool exited, have_frame = false;
-	uint32_t member;
+	static struct beside w;
+	bool have_frame = false;
 	uint16_t flags = 0;
-	int64_t s_us = seconds_us(opt.seconds), t_view = 0, first = 0;
-	memset(&probe, 0, sizeof(probe));
-	probe.c.fd = -1;
+	int64_t s_us = seconds_us(opt.seconds), first = 0;
+	memset(&w, 0, sizeof(w));
+	w.sc = "twist";
+	w.b =
+	    (struct phase){.name = "twist", .label = "probe beside the twist"};
 	report("\n### twist\n\n");
 	report("The probe (as in fairness) alone for %.0f s, then beside a "
 	       "session whose scene is twist(sphere) at rate %s and whose "
@@ -1818,54 +1903,35 @@ static void scenario_twist(void)
 	       "most. The daemon is killed (SIGKILL) at the end.\n\n",
 	       opt.seconds, TWIST_RATE_NAME, TWIST_W, TWIST_H,
 	       TWIST_BOUND_MS / 1000.0, opt.seconds);
-	arm_alarm(2 * opt.seconds);
-	if (fair_start(&d, NULL, why, &exited)) {
-		error_line("%s: %s", sc, why);
-		fair_stop(&d, sc, true);
-		disarm_alarm(sc);
+	if (scene_twist(&w.s, w.err)) {
+		error_line("%s: %s", w.sc, w.err);
 		return;
 	}
-	if (probe_setup(&probe, &d, "probe", "probe", PROBE_SPHERES, PROBE_W,
-	                PROBE_H, false)) {
-		error_line("%s: %s", sc, probe.err);
-		goto out;
+	if (!beside_start(&w, "twist", 2 * opt.seconds)) {
+		beside_finish(&w);
+		return;
 	}
-	if (client_session(&tw, &d, "twist", "twist", true, &member, err) ||
-	    scene_twist(&twist, err) ||
-	    scene_load(&tw, &twist, SMALL_LOAD_MS, err)) {
-		error_line("%s: %s", sc, err);
-		goto out;
-	}
-	t_sleep_ms(500);
-	progress("twist: probe alone for %.0f s", opt.seconds);
-	probe_start(&probe);
-	a.from = now_us();
-	sleep_until(a.from + s_us);
-	a.to = now_us();
 	progress("twist: the twist session's view, for %.0f s at most",
 	         opt.seconds);
-	b.from = t_view = now_us();
-	if (!conn_view(&tw, TWIST_W, TWIST_H, BC_PROTO_ENC_JPEG)) {
-		seterr(err, "the twist client's VIEW could not be sent");
+	w.b.from = now_us();
+	if (!conn_view(&w.c, TWIST_W, TWIST_H, BC_PROTO_ENC_JPEG)) {
+		seterr(w.err, "the twist client's VIEW could not be sent");
 	}
-	while (now_us() < b.from + s_us) {
-		int rc = conn_recv(&tw, ms_until(b.from + s_us, 100));
+	while (now_us() < w.b.from + s_us) {
+		int rc = conn_recv(&w.c, ms_until(w.b.from + s_us, 100));
 		if (rc < 0) {
-			closed_text(&tw, err, sizeof(err));
+			closed_text(&w.c, w.err, sizeof(w.err));
 			break;
 		}
-		if (rc == 1 && tw.m.type == BC_MSG_FRAME && !have_frame) {
+		if (rc == 1 && w.c.m.type == BC_MSG_FRAME && !have_frame) {
 			have_frame = true;
-			first = now_us() - t_view;
-			flags = tw.m.flags;
-		} else if (rc == 1 && tw.m.type == BC_MSG_ERROR) {
-			error_text(&tw, err, sizeof(err));
+			first = now_us() - w.b.from;
+			flags = w.c.m.flags;
+		} else if (rc == 1 && w.c.m.type == BC_MSG_ERROR) {
+			error_text(&w.c, w.err, sizeof(w.err));
 		}
 	}
-	b.to = now_us();
-	probe_stop(&probe);
-	phase_measure(&a, &probe);
-	phase_measure(&b, &probe);
+	beside_measure(&w);
 	if (have_frame) {
 		report("- twist session: first FRAME after %.1f ms (level %u%s)"
 		       "\n",
@@ -1875,17 +1941,8 @@ static void scenario_twist(void)
 	} else {
 		report("- twist session: no frame in %.0f s\n", opt.seconds);
 	}
-	if (err[0]) {
-		report("- twist client: %s\n", err);
-	}
-	report("\n");
-	phase_table_head();
-	phase_row(&a);
-	phase_row(&b);
-	report("\n");
-	phase_results(sc, &a);
-	phase_results(sc, &b);
-	report("RESULT scenario=%s what=twist_first_frame frame=%d", sc,
+	beside_tables(&w, "twist");
+	report("RESULT scenario=%s what=twist_first_frame frame=%d", w.sc,
 	       have_frame);
 	if (have_frame) {
 		report(" ms=%.1f level=%u incomplete=%d\n", (double)first / 1e3,
@@ -1895,27 +1952,21 @@ static void scenario_twist(void)
 		report(" waited_s=%.0f\n", opt.seconds);
 	}
 	if (have_frame) {
-		bound(sc, "the twist session's first frame", true,
+		bound(w.sc, "the twist session's first frame", true,
 		      (double)first / 1e3, TWIST_BOUND_MS, NULL);
 	} else {
 		/* The wait is --seconds: below the bound it cannot show
 		 * the bound met, and says so. */
 		report("FAIL %s: the twist session's first frame: no frame in "
 		       "%.0f s (bound %.0f s)%s\n",
-		       sc, opt.seconds, TWIST_BOUND_MS / 1000.0,
+		       w.sc, opt.seconds, TWIST_BOUND_MS / 1000.0,
 		       opt.seconds * 1000.0 < TWIST_BOUND_MS
 		           ? "; --seconds is below the bound, so it is not "
 		             "decided"
 		           : "");
 	}
-	probe_bounds(sc, &a, &b);
-out:
-	report_client_error("probe", probe.err);
-	probe_finish(&probe);
-	conn_close(&tw);
-	scene_finish(&twist);
-	fair_stop(&d, sc, false);
-	disarm_alarm(sc);
+	probe_bounds(w.sc, &w.a, &w.b);
+	beside_finish(&w);
 }
 
 /* ---- mesh ----------------------------------------------------------------- */
@@ -1961,85 +2012,43 @@ static void mesh_loop(struct conn *c, int64_t until_us, int *done,
 
 static void scenario_mesh(void)
 {
-	const char *sc = "mesh";
-	struct daemon d;
-	struct probe probe;
-	struct conn mc = {.fd = -1};
-	struct scene big = {0};
-	struct phase a = {.name = "alone", .label = "probe alone"};
-	struct phase b = {.name = "meshing",
-	                  .label = "probe beside the meshing"};
-	char why[ERRLEN], err[ERRLEN] = "";
-	bool exited;
-	uint32_t member;
+	static struct beside w;
 	uint64_t bytes = 0;
 	int done = 0;
-	int64_t s_us = seconds_us(opt.seconds), t0;
-	memset(&probe, 0, sizeof(probe));
-	probe.c.fd = -1;
+	memset(&w, 0, sizeof(w));
+	w.sc = "mesh";
+	w.b = (struct phase){.name = "meshing",
+	                     .label = "probe beside the meshing"};
 	report("\n### mesh\n\n");
 	report("The probe (as in fairness) alone for %.0f s, then for %.0f s "
 	       "beside a client in a session of fig18 %u smooth that asks "
 	       "for its glTF mesh at %u cells (MESH) again as soon as one "
 	       "comes back. The daemon is killed (SIGKILL) at the end.\n\n",
 	       opt.seconds, opt.seconds, MESH_SPHERES, MESH_RESOLUTION);
-	arm_alarm(3 * opt.seconds + 60);
-	if (fair_start(&d, NULL, why, &exited)) {
-		error_line("%s: %s", sc, why);
-		fair_stop(&d, sc, true);
-		disarm_alarm(sc);
+	if (scene_fig18(&w.s, MESH_SPHERES, BC_GEN_BLEND_SMOOTH, w.err)) {
+		error_line("%s: %s", w.sc, w.err);
 		return;
 	}
-	if (probe_setup(&probe, &d, "probe", "probe", PROBE_SPHERES, PROBE_W,
-	                PROBE_H, false)) {
-		error_line("%s: %s", sc, probe.err);
-		goto out;
+	if (!beside_start(&w, "mesher", 3 * opt.seconds + 60)) {
+		beside_finish(&w);
+		return;
 	}
-	if (client_session(&mc, &d, "mesher", "mesher", true, &member, err) ||
-	    scene_fig18(&big, MESH_SPHERES, BC_GEN_BLEND_SMOOTH, err) ||
-	    scene_load(&mc, &big, SMALL_LOAD_MS, err)) {
-		error_line("%s: %s", sc, err);
-		goto out;
-	}
-	t_sleep_ms(500);
-	progress("mesh: probe alone for %.0f s", opt.seconds);
-	probe_start(&probe);
-	a.from = now_us();
-	sleep_until(a.from + s_us);
-	a.to = now_us();
 	progress("mesh: beside the meshing for %.0f s", opt.seconds);
-	b.from = t0 = now_us();
-	mesh_loop(&mc, b.from + s_us, &done, &bytes, err);
-	b.to = now_us();
-	probe_stop(&probe);
-	phase_measure(&a, &probe);
-	phase_measure(&b, &probe);
+	w.b.from = now_us();
+	mesh_loop(&w.c, w.b.from + seconds_us(opt.seconds), &done, &bytes,
+	          w.err);
+	beside_measure(&w);
 	report("- mesh client: %d meshes of %.1f MB each in %.1f s "
 	       "(the last one may end after the probe's phase)\n",
 	       done, done ? (double)bytes / done / 1e6 : 0.0,
-	       (double)(now_us() - t0) / 1e6);
-	if (err[0]) {
-		report("- mesh client: %s\n", err);
-	}
-	report("\n");
-	phase_table_head();
-	phase_row(&a);
-	phase_row(&b);
-	report("\n");
-	phase_results(sc, &a);
-	phase_results(sc, &b);
-	report("RESULT scenario=%s what=meshes done=%d bytes=%" PRIu64 "\n", sc,
-	       done, bytes);
+	       (double)(w.b.to - w.b.from) / 1e6);
+	beside_tables(&w, "mesh");
+	report("RESULT scenario=%s what=meshes done=%d bytes=%" PRIu64 "\n",
+	       w.sc, done, bytes);
 	report("%s %s: meshes made: %d (at least one)\n",
-	       done >= 1 ? "PASS" : "FAIL", sc, done);
-	probe_bounds(sc, &a, &b);
-out:
-	report_client_error("probe", probe.err);
-	probe_finish(&probe);
-	conn_close(&mc);
-	scene_finish(&big);
-	fair_stop(&d, sc, false);
-	disarm_alarm(sc);
+	       done >= 1 ? "PASS" : "FAIL", w.sc, done);
+	probe_bounds(w.sc, &w.a, &w.b);
+	beside_finish(&w);
 }
 
 /* ---- capacity ------------------------------------------------------------ */
