@@ -54,6 +54,8 @@ static const char main_about[] =
     "Local commands:\n"
     "  render      render a scene file to images on this machine\n"
     "  mesh        write a closed mesh (.obj .ply .stl .glb) of a scene\n"
+    "              or a live session's (--session; --on-daemon: the\n"
+    "              daemon makes it)\n"
     "  gen         print a generated scene (the paper's synthetic\n"
     "              families and more) as JSON\n"
     "  eval-bench  measure interval pruning and pruned evaluation\n"
