@@ -3,8 +3,9 @@
 # a session (the catalogue, every primitive kind, loaded with `blobcast
 # load`) meshes to the same bytes as its scene file, and that mesh is a
 # closed 2-manifold (tests/blobtree/check_mesh.py); an edit made in the
-# session shows in the next mesh; a session that does not exist is refused
-# with status 1 and its name.
+# session shows in the next mesh; --on-daemon gives the same files in
+# every format, and its refusals; a session that does not exist is
+# refused with status 1 and its name.
 #
 # usage: test_cli_mesh.sh BLOBCAST BLOBCASTD
 # Exits 77 (skipped) when a program has not been built or python3 is
@@ -85,6 +86,25 @@ n_edit=$(sed -n 's/.*triangles=\([0-9]*\) .*/\1/p' "$tmp/check")
 if [ -z "$n_edit" ] || [ "$n_edit" -le "$n_live" ]; then
   fail "a bigger sphere gave $n_edit triangles, before $n_live"
 fi
+
+# --on-daemon: the daemon's file is the same, the edited session's at
+# every format; its options' refusals (usage, 2) and the daemon's (1).
+for f in glb obj ply stl; do
+  blob 0 mesh $U --session m --resolution 40 --on-daemon --quiet \
+    --out "$tmp/daemon.$f"
+  blob 0 mesh $U --session m --resolution 40 --quiet --out "$tmp/here.$f"
+  cmp -s "$tmp/daemon.$f" "$tmp/here.$f" ||
+    fail "--on-daemon: the daemon's .$f differs from the one made here"
+done
+blob 2 mesh "$tmp/cat.json" --on-daemon --out "$tmp/x.glb" &&
+  grep -q -- "--on-daemon applies with --session only" "$tmp/out" ||
+  fail "--on-daemon without --session: not said so"
+blob 2 mesh $U --session m --on-daemon --bounds 0,0,0,1,1,1 \
+  --out "$tmp/x.glb"
+blob 1 mesh $U --session m --on-daemon --resolution 300 --out "$tmp/x.glb" &&
+  grep -q "ELIMIT" "$tmp/out" && grep -q "256" "$tmp/out" ||
+  fail "--on-daemon at 300 cells: no ELIMIT naming the daemon's 256"
+[ -e "$tmp/x.glb" ] && fail "a refused mesh left $tmp/x.glb"
 
 blob 1 mesh $U --session nosuch --out "$tmp/x.obj" &&
   ! grep -q nosuch "$tmp/out" && fail "the refusal does not name the session"
