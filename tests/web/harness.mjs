@@ -17,6 +17,8 @@ import { tmpdir } from 'node:os';
 import { dirname, extname, join, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
 
+import * as P from '../../client/web/protocol.js';
+
 export const HERE = dirname(fileURLToPath(import.meta.url));
 export const ROOT = resolve(HERE, '..', '..');
 export const WEB = join(ROOT, 'client', 'web');
@@ -440,4 +442,38 @@ export function runCli(cli, args, ms = 15000) {
 	return new Promise((resolve) => execFile(cli, args, { timeout: ms },
 		(err, stdout, stderr) => resolve({ code: err ? err.code : 0,
 			stdout, stderr })));
+}
+
+/* A stand-in for blobcastd on a page's WebSocket (routeWebSocket's ws),
+ * for what a test wants of a daemon that is not blobcastd. Each message
+ * the page sends goes to each(m, send) first (send encodes a message and
+ * sends it to the page); then HELLO gets a WELCOME granting features(m)
+ * (undefined: no features field, an earlier daemon's), SESSION_JOIN a
+ * SESSION_INFO with the page as the one member, named member, and
+ * SESSION_LIST an empty SESSIONS. Returns send. */
+export function standInDaemon(ws, { features = () => undefined,
+	member = 'dave', each = () => {} } = {}) {
+	const r = new P.Reader({ side: 'server' });
+	const send = (m) => ws.send(Buffer.from(P.encode({ seq: 0, flags: 0,
+		...m })));
+	ws.onMessage((msg) => {
+		r.feed(typeof msg === 'string' ? Buffer.from(msg) : msg);
+		for (let m; (m = r.next());) {
+			each(m, send);
+			if (m.type === P.MSG.HELLO) {
+				send({ type: P.MSG.WELCOME, seq: m.seq, version: 1,
+					connection_id: 1, max_payload: P.LIMITS.MAX_PAYLOAD,
+					max_frame_bytes: P.LIMITS.MAX_PAYLOAD, max_nodes: 1000,
+					max_dim: 4096, max_members: 8, max_edit_ops: 64,
+					server_id: 'stand-in', features: features(m) });
+			} else if (m.type === P.MSG.SESSION_JOIN) {
+				send({ type: P.MSG.SESSION_INFO, session_id: 1,
+					member_id: 1, role: m.role, name: m.name,
+					members: [{ id: 1, role: m.role, name: member }] });
+			} else if (m.type === P.MSG.SESSION_LIST) {
+				send({ type: P.MSG.SESSIONS, seq: m.seq, sessions: [] });
+			}
+		}
+	});
+	return send;
 }

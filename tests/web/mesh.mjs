@@ -151,35 +151,6 @@ async function downloaded(page, click) {
 		.path()) };
 }
 
-/* A stand-in for a daemon on a page's WebSocket that grants every
- * feature but MESH (an earlier blobcastd). */
-function standIn(ws) {
-	const r = new P.Reader({ side: 'server' });
-	const send = (m) => ws.send(Buffer.from(P.encode(m)));
-	ws.onMessage((msg) => {
-		r.feed(typeof msg === 'string' ? Buffer.from(msg) : msg);
-		for (let m; (m = r.next());) {
-			if (m.type === P.MSG.HELLO) {
-				send({ type: P.MSG.WELCOME, seq: m.seq, flags: 0,
-					version: 1, connection_id: 1,
-					max_payload: P.LIMITS.MAX_PAYLOAD,
-					max_frame_bytes: P.LIMITS.MAX_PAYLOAD, max_nodes: 1000,
-					max_dim: 4096, max_members: 8, max_edit_ops: 64,
-					server_id: 'stand-in',
-					features: P.FEATURE.ALL & ~P.FEATURE.MESH });
-			} else if (m.type === P.MSG.SESSION_JOIN) {
-				send({ type: P.MSG.SESSION_INFO, seq: 0, flags: 0,
-					session_id: 1, member_id: 1, role: m.role,
-					name: m.name, members: [{ id: 1, role: m.role,
-						name: 'dave' }] });
-			} else if (m.type === P.MSG.SESSION_LIST) {
-				send({ type: P.MSG.SESSIONS, seq: m.seq, flags: 0,
-					sessions: [] });
-			}
-		}
-	});
-}
-
 try {
 	const stack = await H.startStack(daemon);
 	const srv = ['--server', `127.0.0.1:${stack.d.port}`, '--session',
@@ -380,14 +351,16 @@ try {
 	assert.ok(fromBob.bytes.equals(glbNow), 'bob\'s glb is the CLI\'s');
 	step(`bob, a viewer, saved ${fromBob.name}, the CLI's bytes`);
 
-	/* A daemon that does not grant MESH. */
+	/* A daemon that grants every feature but MESH (an earlier
+	 * blobcastd). */
 	const dave = await browser.newPage({ viewport: { width: 980,
 		height: 560 } });
 	dave.on('pageerror', (e) => {
 		console.error(`page dave: ${e.message}`);
 		failed = true;
 	});
-	await dave.routeWebSocket(/.*/, (ws) => standIn(ws));
+	await dave.routeWebSocket(/.*/, (ws) => H.standInDaemon(ws, {
+		features: () => P.FEATURE.ALL & ~P.FEATURE.MESH }));
 	await dave.goto(`http://127.0.0.1:${stack.web.port}/?ws=` +
 		'ws://127.0.0.1:9/&session=s&name=dave');
 	const off = await until(dave, 'the mesh control off', () => {

@@ -150,36 +150,14 @@ const coverage = (page, keep, than) => page.evaluate(([k, t]) => {
  * asking for raw frames (ERROR EINVAL, as blobcastd refuses an encoding
  * a client did not announce); views: the VIEWs it took. */
 function refusingServer(ws, views) {
-	const r = new P.Reader({ side: 'server' });
-	const send = (m) => ws.send(Buffer.from(P.encode(m)));
-	ws.onMessage((msg) => {
-		r.feed(typeof msg === 'string' ? Buffer.from(msg) : msg);
-		for (let m; (m = r.next());) {
-			if (m.type === P.MSG.HELLO) {
-				send({ type: P.MSG.WELCOME, seq: m.seq, flags: 0,
-					version: 1, connection_id: 1,
-					max_payload: P.LIMITS.MAX_PAYLOAD,
-					max_frame_bytes: P.LIMITS.MAX_PAYLOAD, max_nodes: 1000,
-					max_dim: 4096, max_members: 8, max_edit_ops: 64,
-					server_id: 'stand-in' });
-			} else if (m.type === P.MSG.SESSION_JOIN) {
-				send({ type: P.MSG.SESSION_INFO, seq: 0, flags: 0,
-					session_id: 1, member_id: 1, role: m.role,
-					name: m.name, members: [{ id: 1, role: m.role,
-						name: 'dave' }] });
-			} else if (m.type === P.MSG.SESSION_LIST) {
-				send({ type: P.MSG.SESSIONS, seq: m.seq, flags: 0,
-					sessions: [] });
-			} else if (m.type === P.MSG.VIEW && m.encoding ===
-				P.ENC.RAW) {
-				send({ type: P.MSG.ERROR, seq: m.seq, flags: 0,
-					code: P.ERR.EINVAL, text: 'encoding 3 was not in ' +
-						'your HELLO' });
-			} else if (m.type === P.MSG.VIEW) {
-				views.push(m.encoding);
-			}
+	H.standInDaemon(ws, { each: (m, send) => {
+		if (m.type === P.MSG.VIEW && m.encoding === P.ENC.RAW) {
+			send({ type: P.MSG.ERROR, seq: m.seq, code: P.ERR.EINVAL,
+				text: 'encoding 3 was not in your HELLO' });
+		} else if (m.type === P.MSG.VIEW) {
+			views.push(m.encoding);
 		}
-	});
+	} });
 }
 
 /* The screen position of world point p with the page's camera (its

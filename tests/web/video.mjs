@@ -187,31 +187,17 @@ function encodeUnits(page, w, h, c0, c1) {
 /* The server's side of the page's connection: WELCOME granting ACKS,
  * SESSION_INFO; keeps HELLO, the VIEWs and the FRAME_ACKs in st. */
 function standIn(ws, st) {
-	const r = new P.Reader({ side: 'server' });
-	ws.onMessage((msg) => {
-		r.feed(typeof msg === 'string' ? Buffer.from(msg) : msg);
-		for (let m; (m = r.next());) {
+	H.standInDaemon(ws, { member: 'video',
+		features: (hello) => hello.features & P.FEATURE.ACKS,
+		each: (m) => {
 			if (m.type === P.MSG.HELLO) {
 				st.hello = m;
-				ws.send(Buffer.from(P.encode({ type: P.MSG.WELCOME,
-					seq: m.seq, version: 1, connection_id: 1,
-					max_payload: P.LIMITS.MAX_PAYLOAD,
-					max_frame_bytes: P.LIMITS.MAX_PAYLOAD,
-					max_nodes: 1000, max_dim: 4096, max_members: 8,
-					max_edit_ops: 64, server_id: 'stand-in',
-					features: m.features & P.FEATURE.ACKS })));
-			} else if (m.type === P.MSG.SESSION_JOIN) {
-				ws.send(Buffer.from(P.encode({ type: P.MSG.SESSION_INFO,
-					seq: 0, session_id: 1, member_id: 1, role: m.role,
-					name: m.name, members: [{ id: 1, role: m.role,
-						name: 'video' }] })));
 			} else if (m.type === P.MSG.VIEW) {
 				st.views.push(m);
 			} else if (m.type === P.MSG.FRAME_ACK) {
 				st.acks.push(m.frame_no);
 			}
-		}
-	});
+		} });
 	st.send = (bytes) => ws.send(Buffer.from(bytes));
 }
 
