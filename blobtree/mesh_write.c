@@ -7,6 +7,7 @@
  * beside its target and renamed over it, so a reader never sees half a
  * file.
  */
+#define _GNU_SOURCE /* fopencookie */
 #include "mesh_impl.h"
 
 #include <errno.h>
@@ -460,12 +461,37 @@ int bc_mesh_write_file(const char *path, const uint8_t *bytes, size_t len,
 	return write_atomic(path, fill_bytes, &in, ei);
 }
 
+/* A stream into memory from bc_malloc, grown as it is written: the
+ * caller's buffer itself, head bytes left at its start (open_memstream's
+ * would be a second buffer of the file's size, copied after). */
+struct membuf {
+	uint8_t *p;
+	size_t len, cap;
+};
+
+static ssize_t membuf_write(void *cookie, const char *buf, size_t n)
+{
+	struct membuf *b = cookie;
+	if (n > b->cap - b->len) {
+		size_t cap = b->cap * 2 > b->len + n ? b->cap * 2 : b->len + n;
+		uint8_t *p = bc_realloc(b->p, cap);
+		if (!p) {
+			return -1; /* the stream's error: ferror() */
+		}
+		b->p = p;
+		b->cap = cap;
+	}
+	memcpy(b->p + b->len, buf, n);
+	b->len += n;
+	return (ssize_t)n;
+}
+
 int bc_mesh_write_mem(const struct bc_mesh *m, enum bc_mesh_format format,
                       size_t head, uint8_t **out, size_t *len,
                       struct bc_errinfo *ei)
 {
-	char *buf = NULL;
-	size_t size = 0;
+	struct membuf b = {NULL, head, head + 65536};
+	cookie_io_functions_t io = {.write = membuf_write};
 	FILE *f;
 	int rc;
 	*out = NULL;
@@ -473,21 +499,20 @@ int bc_mesh_write_mem(const struct bc_mesh *m, enum bc_mesh_format format,
 	if ((rc = check_format(format, ei))) {
 		return rc;
 	}
-	if (!(f = open_memstream(&buf, &size))) {
+	if (!(b.p = bc_malloc(b.cap)) || !(f = fopencookie(&b, "w", io))) {
+		bc_free(b.p);
 		return bc_errinfo_set(ei, BC_ENOMEM, "mesh: out of memory");
 	}
 	rc = write_format(m, f, format, ei);
-	if ((fclose(f) != 0 || !buf) && rc == 0) {
+	if ((fflush(f) != 0 || ferror(f)) && rc == 0) {
 		rc = bc_errinfo_set(ei, BC_ENOMEM, "mesh: out of memory");
 	}
-	/* The caller's memory comes from bc_malloc, with its head. */
-	if (rc == 0 && !(*out = bc_malloc(head + size))) {
-		rc = bc_errinfo_set(ei, BC_ENOMEM, "mesh: out of memory");
+	fclose(f);
+	if (rc) {
+		bc_free(b.p);
+		return rc;
 	}
-	if (rc == 0) {
-		memcpy(*out + head, buf, size);
-		*len = head + size;
-	}
-	free(buf);
-	return rc;
+	*out = b.p;
+	*len = b.len;
+	return 0;
 }
