@@ -493,6 +493,12 @@ static void region_box(const struct build *b, const uint32_t c0[3],
 	}
 }
 
+/* Whether the caller asks the build to stop (opts->stop). */
+static bool stop_asked(const struct build *b)
+{
+	return b->o && b->o->stop && b->o->stop(b->o->ctx);
+}
+
 /* Counts cells done: BC_ECLOSED when the caller asks the build to stop. */
 static int progress(struct build *b, uint64_t cells)
 {
@@ -501,7 +507,7 @@ static int progress(struct build *b, uint64_t cells)
 		b->o->progress(b->o->ctx, b->share * (double)b->done_cells /
 		                              (double)b->total_cells);
 	}
-	return b->o && b->o->stop && b->o->stop(b->o->ctx) ? BC_ECLOSED : 0;
+	return stop_asked(b) ? BC_ECLOSED : 0;
 }
 
 /* Whether region cells [c0, c1) reach the box's boundary. */
@@ -516,12 +522,13 @@ static bool touches_boundary(const struct build *b, const uint32_t c0[3],
 	return false;
 }
 
-static void collapse_progress(void *ctx, double done)
+static bool collapse_progress(void *ctx, double done)
 {
 	struct build *b = ctx;
 	if (b->o && b->o->progress) {
 		b->o->progress(b->o->ctx, b->share + (1.0 - b->share) * done);
 	}
+	return stop_asked(b);
 }
 
 /* Region cells [c0, c1), primitives b->act[depth][0..n). inside: an
@@ -695,10 +702,6 @@ int bc_mesh_build(struct bc_mesh *m, const struct bc_tree *t,
 			b.act[0][k] = k;
 		}
 		rc = region(&b, zero, b.n, 0, l->nprims, false);
-	}
-	if (rc == 0 && !(opts && opts->raw) && opts && opts->stop &&
-	    opts->stop(opts->ctx)) {
-		rc = BC_ECLOSED;
 	}
 	if (rc == 0 && !(opts && opts->raw)) {
 		rc = bc_mesh_collapse_short(m, COLLAPSE * b.cell, PASSES,

@@ -197,7 +197,7 @@ static void compact(struct bc_mesh *m, uint32_t *map)
 }
 
 int bc_mesh_collapse_short(struct bc_mesh *m, float max_len, int passes,
-                           void (*progress)(void *ctx, double done), void *ctx)
+                           bool (*progress)(void *ctx, double done), void *ctx)
 {
 	struct pass p = {.m = m};
 	struct cand *cand = NULL;
@@ -282,8 +282,9 @@ int bc_mesh_collapse_short(struct bc_mesh *m, float max_len, int passes,
 			        try_collapse(&p, cand[i].v, cand[i].u);
 		}
 		compact(m, map);
-		if (progress) {
-			progress(ctx, (double)(pass + 1) / passes);
+		if (progress && progress(ctx, (double)(pass + 1) / passes)) {
+			rc = BC_ECLOSED;
+			break;
 		}
 		if (done * 100u < nc || done == 0) {
 			break;

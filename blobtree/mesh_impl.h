@@ -25,9 +25,10 @@ static inline void bc_mesh_cross3(const float *a, const float *b,
 /* Collapses edges shorter than max_len of the closed 2-manifold m, in at
  * most passes passes, keeping it a closed 2-manifold of the same topology
  * with no flat or flipped triangle (mesh_collapse.c says how); progress
- * (may be NULL) hears the fraction of the passes done. Returns 0 or
- * BC_ENOMEM (m is then a closed 2-manifold still, partly thinned). */
+ * (may be NULL) hears the fraction of the passes done after each, and
+ * stops the rest by answering true. Returns 0, BC_ENOMEM or BC_ECLOSED
+ * (stopped; m is a closed 2-manifold still, partly thinned, either way). */
 int bc_mesh_collapse_short(struct bc_mesh *m, float max_len, int passes,
-                           void (*progress)(void *ctx, double done), void *ctx);
+                           bool (*progress)(void *ctx, double done), void *ctx);
 
 #endif

@@ -388,7 +388,119 @@ static void bad_arguments_are_refused(void)
 	bc_tree_destroy(e);
 }
 
+/* bc_mesh_write_mem: the bytes bc_mesh_write puts in the file, in every
+ * format, after head bytes left for the caller; and a mesh of tens of
+ * thousands of triangles, so that the memory stream grows many times. */
+static void memory_files_are_the_files(void)
+{
+	struct bc_tree *t = one_sphere(0.7f);
+	struct bc_mesh m;
+	struct bc_errinfo ei = {0};
+	char dir[] = "/tmp/bc_mesh_XXXXXX", path[64];
+	REQUIRE(t && mkdtemp(dir));
+	REQUIRE(bc_mesh_build(&m, t, &(struct bc_mesh_opts){.resolution = 120},
+	                      &ei) == 0);
+	CHECK(m.ntris > 20000);
+	for (int f = BC_MESH_FORMAT_OBJ; f < BC_MESH_FORMAT_COUNT; f++) {
+		uint8_t *mem = NULL, *file;
+		size_t len = 0, n = 0;
+		snprintf(path, sizeof(path), "%s/m", dir);
+		REQUIRE(bc_mesh_write(&m, path, (enum bc_mesh_format)f, &ei) ==
+		        0);
+		REQUIRE((file = slurp(path, &n)));
+		REQUIRE(bc_mesh_write_mem(&m, (enum bc_mesh_format)f, 7, &mem,
+		                          &len, &ei) == 0);
+		CHECK_EQ_INT(len, n + 7);
+		CHECK(len == n + 7 && memcmp(mem + 7, file, n) == 0);
+		free(file);
+		bc_free(mem);
+		unlink(path);
+	}
+	CHECK(bc_mesh_write_mem(&m, BC_MESH_FORMAT_INVALID, 0,
+	                        &(uint8_t *){NULL}, &(size_t){0},
+	                        &ei) == BC_EINVAL);
+	rmdir(dir);
+	bc_mesh_finish(&m);
+	bc_tree_destroy(t);
+}
+
+/* A scene's own box needs 5 cells along its longest side (two of
+ * margin each way); a given box does not. */
+static void a_scene_box_needs_five_cells(void)
+{
+	struct bc_tree *t = one_sphere(1.0f);
+	struct bc_mesh m;
+	struct bc_errinfo ei = {0};
+	REQUIRE(t);
+	CHECK(bc_mesh_build(&m, t, &(struct bc_mesh_opts){.resolution = 4},
+	                    &ei) == BC_ERANGE);
+	CHECK(strstr(ei.msg, "5 or more") != NULL);
+	REQUIRE(bc_mesh_build(&m, t, &(struct bc_mesh_opts){.resolution = 5},
+	                      &ei) == 0);
+	/* One cell of scene (its 2-wide box) inside the margins. */
+	CHECK(m.cell >= 2.0f && m.cell < 2.5f);
+	bc_mesh_finish(&m);
+	REQUIRE(bc_mesh_build(&m, t,
+	                      &(struct bc_mesh_opts){.resolution = 2,
+	                                             .lo = {-2, -2, -2},
+	                                             .hi = {2, 2, 2}},
+	                      &ei) == 0);
+	CHECK(m.cell == 2.0f);
+	bc_mesh_finish(&m);
+	bc_tree_destroy(t);
+}
+
+/* What stop_at sees: the last progress, and the fraction it stops at. */
+struct stopper {
+	double last, at;
+};
+
+static void note_progress(void *ctx, double done)
+{
+	((struct stopper *)ctx)->last = done;
+}
+
+static bool stop_at(void *ctx)
+{
+	const struct stopper *s = ctx;
+	return s->last >= s->at;
+}
+
+/* opts->stop: asked in the grid's regions and between the collapse's
+ * passes; true ends the build with BC_ECLOSED and an empty mesh. */
+static void a_stop_ends_the_build(void)
+{
+	struct bc_tree *t = one_sphere(0.7f);
+	struct bc_mesh m;
+	struct bc_errinfo ei = {0};
+	/* In the grid (its share of the progress is 0.6), at once. */
+	struct stopper grid = {0.0, 0.0};
+	/* After the grid: in the collapse, after its first pass. */
+	struct stopper collapse = {0.0, 0.61};
+	struct bc_mesh_opts o = {
+	    .resolution = 64, .progress = note_progress, .stop = stop_at};
+	REQUIRE(t);
+	o.ctx = &grid;
+	CHECK(bc_mesh_build(&m, t, &o, &ei) == BC_ECLOSED);
+	CHECK_EQ_INT(m.ntris, 0);
+	CHECK(grid.last < 0.6);
+	o.ctx = &collapse;
+	CHECK(bc_mesh_build(&m, t, &o, &ei) == BC_ECLOSED);
+	CHECK_EQ_INT(m.ntris, 0);
+	CHECK(collapse.last > 0.6 && collapse.last < 1.0);
+	/* Never stopped: the whole mesh. */
+	collapse = (struct stopper){0.0, 2.0};
+	REQUIRE(bc_mesh_build(&m, t, &o, &ei) == 0);
+	CHECK(m.ntris > 0);
+	CHECK(collapse.last == 1.0);
+	bc_mesh_finish(&m);
+	bc_tree_destroy(t);
+}
+
 static const struct bc_test tests[] = {
+    {"memory_files_are_the_files", memory_files_are_the_files},
+    {"a_scene_box_needs_five_cells", a_scene_box_needs_five_cells},
+    {"a_stop_ends_the_build", a_stop_ends_the_build},
     {"sphere_is_a_closed_genus_0_manifold",
      sphere_is_a_closed_genus_0_manifold},
     {"scenes_mesh_closed_near_the_surface",
