@@ -7,7 +7,7 @@
  * Everything runs on the main thread except the socket watcher of main.c,
  * which only polls the socket and wakes the loop, the mesher of save.c,
  * which meshes a copy of the scene of its own, and the reader of load.c,
- * which reads a scene file.
+ * which reads a scene file (both threads of worker.c).
  */
 #ifndef BLOBCAST_VIEWER_APP_H
 #define BLOBCAST_VIEWER_APP_H
@@ -100,13 +100,34 @@ enum bc_viewer_wheel {
 	BC_VIEWER_WHEEL_COUNT
 };
 
+/* A thread of the window's own for one long piece of work (worker.c):
+ * the mesher's, the reader's. */
+#define BC_VIEWER_WORKER_SAY_MS 250.0 /* progress shown at most this often */
+struct bc_viewer_worker {
+	pthread_t thread;
+	bool busy;            /* started and not joined yet */
+	atomic_bool done;     /* run has returned */
+	double started, said; /* when it started; progress last shown */
+	void (*run)(void *arg);
+	void *arg;
+};
+/* Starts run(arg) on a thread of its own: 0, or -1 (no thread). */
+int bc_viewer_worker_start(struct bc_viewer_worker *w, void (*run)(void *arg),
+                           void *arg);
+/* True when the work has ended and its thread was joined now. */
+bool bc_viewer_worker_reap(struct bc_viewer_worker *w);
+/* Joins a started thread, waiting for its work (the window is closing). */
+void bc_viewer_worker_join(struct bc_viewer_worker *w);
+/* Whether progress is due again at now (then marked said). */
+bool bc_viewer_worker_say_due(struct bc_viewer_worker *w, double now);
+/* Milliseconds from now until progress is due again. */
+double bc_viewer_worker_next(const struct bc_viewer_worker *w, double now);
+
 /* Ctrl+M and Ctrl+Shift+M (save.c): the session's solid as a mesh file,
  * made on a thread of its own from a copy of the mirror, so that the
  * window goes on drawing; one at a time. */
 struct bc_viewer_mesher {
-	pthread_t thread;
-	bool busy;            /* a thread started and not joined yet */
-	atomic_bool done;     /* ... and it has finished */
+	struct bc_viewer_worker w;
 	atomic_uint permille; /* how far it is */
 	/* The thread's alone until done: its copy of the scene (bare), the
 	 * file, and what became of it. */
@@ -116,7 +137,6 @@ struct bc_viewer_mesher {
 	int rc;
 	struct bc_errinfo ei;
 	uint32_t nverts, ntris;
-	double started, said; /* when it started; last progress shown */
 };
 
 /* Ctrl+O's reading of a scene file (load.c): a big JSON scene takes
@@ -124,11 +144,9 @@ struct bc_viewer_mesher {
  * its own does it while the window goes on; the loop sends what it read.
  * One at a time. */
 struct bc_viewer_reader {
-	pthread_t thread;
-	bool busy;        /* a thread started and not joined yet */
-	bool ready;       /* joined, read: sent in the loop's next turn */
-	bool cancelled;   /* Escape: what it reads is dropped, not sent */
-	atomic_bool done; /* the thread has finished */
+	struct bc_viewer_worker w;
+	bool ready;     /* joined, read: sent in the loop's next turn */
+	bool cancelled; /* Escape: what it reads is dropped, not sent */
 	/* The thread's alone until done: the file, and what it read. */
 	char path[1024];
 	uint8_t *bytes; /* the scene's encoding, as SCENE_LOAD sends it */
@@ -137,7 +155,6 @@ struct bc_viewer_reader {
 	bool has_camera;
 	int rc;
 	struct bc_errinfo ei;
-	double started, said; /* when it started; last progress shown */
 };
 
 struct bc_viewer_app {

@@ -20,9 +20,6 @@
 #include "blobcast/alloc.h"
 #include "blobcast/bytes.h"
 
-/* The progress shown on the status line at most this often (ms). */
-#define READ_SAY_EVERY_MS 250.0
-
 void bc_viewer_load_open(struct bc_viewer_app *a)
 {
 	if (!bc_viewer_may_edit(a, "loading a scene")) {
@@ -66,8 +63,8 @@ void bc_viewer_load_back(struct bc_viewer_app *a)
 	a->redraw = true;
 }
 
-/* The thread: reads and checks the file, and encodes its scene. */
-static void *read_main(void *arg)
+/* The reader's work: reads and checks the file, and encodes its scene. */
+static void read_main(void *arg)
 {
 	struct bc_viewer_reader *r = arg;
 	struct bc_proto_scene_info si;
@@ -76,16 +73,12 @@ static void *read_main(void *arg)
 	r->has_camera = !r->rc &&
 	                bc_proto_scene_scan(r->bytes, r->len, &si, NULL) == 0 &&
 	                si.has_camera;
-	atomic_store(&r->done, true);
-	/* Wakes the loop, which joins this thread (thread-safe in GLFW). */
-	glfwPostEmptyEvent();
-	return NULL;
 }
 
 void bc_viewer_load_send(struct bc_viewer_app *a)
 {
 	struct bc_viewer_reader *r = &a->load.reader;
-	if (r->busy || r->ready) {
+	if (r->w.busy || r->ready) {
 		bc_viewer_status(a, "%s is still being read", r->path);
 		return;
 	}
@@ -104,13 +97,10 @@ void bc_viewer_load_send(struct bc_viewer_app *a)
 	r->rc = 0;
 	memset(&r->ei, 0, sizeof(r->ei));
 	r->cancelled = false;
-	atomic_store(&r->done, false);
-	r->started = r->said = bc_viewer_now_ms();
-	if (pthread_create(&r->thread, NULL, read_main, r)) {
+	if (bc_viewer_worker_start(&r->w, read_main, r)) {
 		bc_viewer_status(a, "not loaded: no thread to read it on");
 		return;
 	}
-	r->busy = true;
 	a->redraw = true;
 	bc_viewer_status(a, "reading %s ...", r->path);
 }
@@ -120,7 +110,7 @@ void bc_viewer_load_cancel(struct bc_viewer_app *a)
 	struct bc_viewer_reader *r = &a->load.reader;
 	a->load.open = false;
 	a->redraw = true;
-	if (r->busy || r->ready) {
+	if (r->w.busy || r->ready) {
 		r->cancelled = true;
 		bc_viewer_status(a, "loading cancelled: %s is not sent",
 		                 r->path);
@@ -160,13 +150,6 @@ static void send_read(struct bc_viewer_app *a)
 	}
 }
 
-/* Joins the reader's thread (waiting for it when it still runs). */
-static void read_join(struct bc_viewer_reader *r)
-{
-	pthread_join(r->thread, NULL);
-	r->busy = false;
-}
-
 static void read_drop(struct bc_viewer_reader *r)
 {
 	bc_free(r->bytes);
@@ -186,18 +169,16 @@ double bc_viewer_load_poll(struct bc_viewer_app *a, double now)
 		read_drop(r);
 		return -1.0;
 	}
-	if (!r->busy) {
-		return -1.0;
-	}
-	if (!atomic_load(&r->done)) {
-		if (now - r->said >= READ_SAY_EVERY_MS) {
-			bc_viewer_status(a, "reading %s: %.1f s", r->path,
-			                 (now - r->started) / 1e3);
-			r->said = now;
+	if (!bc_viewer_worker_reap(&r->w)) {
+		if (!r->w.busy) {
+			return -1.0;
 		}
-		return r->said + READ_SAY_EVERY_MS - now;
+		if (bc_viewer_worker_say_due(&r->w, now)) {
+			bc_viewer_status(a, "reading %s: %.1f s", r->path,
+			                 (now - r->w.started) / 1e3);
+		}
+		return bc_viewer_worker_next(&r->w, now);
 	}
-	read_join(r);
 	if (r->cancelled) {
 		read_drop(r);
 		return -1.0;
@@ -218,15 +199,13 @@ double bc_viewer_load_poll(struct bc_viewer_app *a, double now)
 void bc_viewer_load_wait(struct bc_viewer_app *a)
 {
 	struct bc_viewer_reader *r = &a->load.reader;
-	if (r->busy) {
-		if (!atomic_load(&r->done)) {
-			fprintf(stderr,
-			        "blobcast-view: waiting for %s to be read "
-			        "(it is not loaded) ...\n",
-			        r->path);
-		}
-		read_join(r);
+	if (r->w.busy && !atomic_load(&r->w.done)) {
+		fprintf(stderr,
+		        "blobcast-view: waiting for %s to be read (it is not "
+		        "loaded) ...\n",
+		        r->path);
 	}
+	bc_viewer_worker_join(&r->w);
 	read_drop(r);
 }
 
@@ -235,7 +214,7 @@ void bc_viewer_load_text(const struct bc_viewer_app *a, char *out, size_t n)
 	const struct bc_viewer_reader *r = &a->load.reader;
 	char shown[sizeof(a->load.path)];
 	bc_viewer_drawable(a->load.path, shown, sizeof(shown));
-	if (r->busy || r->ready) {
+	if (r->w.busy || r->ready) {
 		char file[sizeof(r->path)];
 		bc_viewer_drawable(r->path, file, sizeof(file));
 		snprintf(out, n,

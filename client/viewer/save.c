@@ -99,9 +99,6 @@ void bc_viewer_save_scene(struct bc_viewer_app *a, bool binary)
 
 /* ---- the mesher ------------------------------------------------------------ */
 
-/* The progress shown on the status line at most this often (ms). */
-#define MESH_SAY_EVERY_MS 250.0
-
 static void mesh_progress(void *ctx, double done)
 {
 	struct bc_viewer_mesher *m = ctx;
@@ -109,8 +106,8 @@ static void mesh_progress(void *ctx, double done)
 	atomic_store(&m->permille, (unsigned)(d * 1000.0));
 }
 
-/* The thread: lays its copy out, meshes it and writes the file. */
-static void *mesh_main(void *arg)
+/* The mesher's work: lays its copy out, meshes it and writes the file. */
+static void mesh_main(void *arg)
 {
 	struct bc_viewer_mesher *m = arg;
 	struct bc_tree *laid = bc_tree_create();
@@ -131,10 +128,6 @@ static void *mesh_main(void *arg)
 	bc_tree_destroy(laid);
 	bc_tree_destroy(m->tree);
 	m->tree = NULL;
-	atomic_store(&m->done, true);
-	/* Wakes the loop, which joins this thread (thread-safe in GLFW). */
-	glfwPostEmptyEvent();
-	return NULL;
 }
 
 void bc_viewer_save_mesh(struct bc_viewer_app *a, bool obj)
@@ -142,7 +135,7 @@ void bc_viewer_save_mesh(struct bc_viewer_app *a, bool obj)
 	struct bc_viewer_mesher *m = &a->mesher;
 	struct bc_errinfo ei = {0};
 	const char *what = obj ? "OBJ mesh" : "glTF mesh";
-	if (m->busy) {
+	if (m->w.busy) {
 		bc_viewer_status(a,
 		                 "%s not started: %s is still being made "
 		                 "(%u %%)",
@@ -169,35 +162,28 @@ void bc_viewer_save_mesh(struct bc_viewer_app *a, bool obj)
 	m->rc = 0;
 	memset(&m->ei, 0, sizeof(m->ei));
 	m->nverts = m->ntris = 0;
-	atomic_store(&m->done, false);
 	atomic_store(&m->permille, 0u);
-	m->started = m->said = bc_viewer_now_ms();
-	if (pthread_create(&m->thread, NULL, mesh_main, m)) {
+	if (bc_viewer_worker_start(&m->w, mesh_main, m)) {
 		bc_viewer_status(a, "%s not saved: no thread for it", what);
 		bc_tree_destroy(m->tree);
 		m->tree = NULL;
 		return;
 	}
-	m->busy = true;
 	bc_viewer_status(a, "meshing %s ...", base_name(m->path));
 }
 
-/* Joins the mesher's thread (waiting for it when it still runs) and says
- * what became of its file: on the status line, and on stderr too when
- * loud (the window is closing). */
-static void mesh_join(struct bc_viewer_app *a, bool loud)
+/* Says what became of the mesher's file, its thread joined: on the status
+ * line, and on stderr too when loud (the window is closing). */
+static void mesh_said(struct bc_viewer_app *a, bool loud)
 {
 	struct bc_viewer_mesher *m = &a->mesher;
-	double now;
-	pthread_join(m->thread, NULL);
-	now = bc_viewer_now_ms();
-	m->busy = false;
+	double now = bc_viewer_now_ms();
 	if (m->rc) {
 		bc_viewer_status(a, "mesh not saved: %s", m->ei.msg);
 	} else {
 		bc_viewer_status(a, "saved %s (%u triangles, %.1f s)",
 		                 base_name(m->path), m->ntris,
-		                 (now - m->started) / 1e3);
+		                 (now - m->w.started) / 1e3);
 		if (a->o.verbose) {
 			printf("mesh %s vertices=%u triangles=%u\n", m->path,
 			       m->nverts, m->ntris);
@@ -212,32 +198,31 @@ static void mesh_join(struct bc_viewer_app *a, bool loud)
 double bc_viewer_mesh_poll(struct bc_viewer_app *a, double now)
 {
 	struct bc_viewer_mesher *m = &a->mesher;
-	if (!m->busy) {
+	if (bc_viewer_worker_reap(&m->w)) {
+		mesh_said(a, false);
+	}
+	if (!m->w.busy) {
 		return -1.0;
 	}
-	if (atomic_load(&m->done)) {
-		mesh_join(a, false);
-		return -1.0;
-	}
-	if (now - m->said >= MESH_SAY_EVERY_MS) {
+	if (bc_viewer_worker_say_due(&m->w, now)) {
 		bc_viewer_status(a, "meshing %s: %u %%", base_name(m->path),
 		                 atomic_load(&m->permille) / 10u);
-		m->said = now;
 	}
-	return m->said + MESH_SAY_EVERY_MS - now;
+	return bc_viewer_worker_next(&m->w, now);
 }
 
 void bc_viewer_mesh_wait(struct bc_viewer_app *a)
 {
 	struct bc_viewer_mesher *m = &a->mesher;
 	bool waits;
-	if (!m->busy) {
+	if (!m->w.busy) {
 		return;
 	}
-	waits = !atomic_load(&m->done);
+	waits = !atomic_load(&m->w.done);
 	if (waits) {
 		fprintf(stderr, "blobcast-view: finishing %s (%u %%) ...\n",
 		        m->path, atomic_load(&m->permille) / 10u);
 	}
-	mesh_join(a, waits);
+	bc_viewer_worker_join(&m->w);
+	mesh_said(a, waits);
 }
